@@ -1,0 +1,70 @@
+//! The library's error type.
+
+use std::path::PathBuf;
+
+/// Everything that can go wrong in the library. Non-convergence of an identification is not an
+/// error: it is reported as a termination reason.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// An input file (robot, scenario, measurement, pose list) is malformed or holds a value
+    /// out of range. `place` names the key, joint or line.
+    #[error("{}: {place}: {msg}", file.display())]
+    File {
+        /// The offending file.
+        file: PathBuf,
+        /// Where in the file: a key path such as `joints[2].limits` or `line 14`.
+        place: String,
+        /// What is wrong and what is allowed.
+        msg: String,
+    },
+    /// A setting (from a scenario, the command line or an API call) is out of range.
+    #[error("setting `{key}`: {msg}")]
+    Setting {
+        /// The setting's key, e.g. `tracker.mpe_a_um`.
+        key: String,
+        /// What is wrong and what is allowed.
+        msg: String,
+    },
+    /// A computation could not be carried out (e.g. too few reachable poses in a box).
+    #[error("{0}")]
+    Compute(String),
+    /// Reading or writing a file failed.
+    #[error("{}: {source}", path.display())]
+    Io {
+        /// The file or folder.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+}
+
+/// The library's result type.
+pub type Result<T> = std::result::Result<T, Error>;
+
+impl Error {
+    /// An error about a setting.
+    pub fn setting(key: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::Setting {
+            key: key.into(),
+            msg: msg.into(),
+        }
+    }
+
+    /// An error about a place in an input file.
+    pub fn file(file: impl Into<PathBuf>, place: impl Into<String>, msg: impl Into<String>) -> Self {
+        Error::File {
+            file: file.into(),
+            place: place.into(),
+            msg: msg.into(),
+        }
+    }
+
+    /// An I/O error on a path.
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}

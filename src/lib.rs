@@ -1,0 +1,14 @@
+//! calbench: a simulation-driven benchmark harness for the kinematic calibration of
+//! industrial robots.
+//!
+//! The crate follows the data flow of the project's design: robot models and forward
+//! kinematics ([`kinematics`]), the identification Jacobian ([`jacobian`]) and
+//! identifiability analysis, the virtual measurement, identification methods, measurement-pose
+//! selection, the Monte-Carlo harness and its reports.
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod math;
+pub mod rng;
+
+pub use error::{Error, Result};
