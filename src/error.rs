@@ -52,7 +52,11 @@ impl Error {
     }
 
     /// An error about a place in an input file.
-    pub fn file(file: impl Into<PathBuf>, place: impl Into<String>, msg: impl Into<String>) -> Self {
+    pub fn file(
+        file: impl Into<PathBuf>,
+        place: impl Into<String>,
+        msg: impl Into<String>,
+    ) -> Self {
         Error::File {
             file: file.into(),
             place: place.into(),

@@ -12,3 +12,9 @@ pub mod math;
 pub mod rng;
 
 pub use error::{Error, Result};
+pub mod commands;
+pub mod identifiability;
+pub mod jacobian;
+pub mod kinematics;
+pub mod robots;
+pub mod sampling;

@@ -1,0 +1,170 @@
+//! The analytic identification Jacobian (SPEC §2; Li 2018 eqs. 6–12, Ban eqs. 3–11,
+//! Guo 2024 eq. 7).
+//!
+//! Every parameter enters the chain as one elementary operation about or along a local axis
+//! ([`crate::kinematics::Op`]), so its column is a unit twist: for a rotation about the unit
+//! axis `w` through the point `o` (both in the world, taken just before the operation), the
+//! end point moves by `w × (p − o)` and the end frame turns by `w`; for a translation along `w`
+//! the end point moves by `w`. With the base parameters at zero the base columns are exactly
+//! Li 2018's base-frame fitting-error columns `[I, −[p]×]` (eqs. 8–11).
+//!
+//! Rows per pose: 3 (position, mm per unit parameter) or 6 (position, then the small rotation
+//! of the tool frame in the world, rad per unit parameter).
+
+use nalgebra::DMatrix;
+
+use crate::kinematics::{Chain, Param, Robot};
+use crate::math::{Real, Vec3};
+
+/// What is measured per pose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Measure {
+    /// The target point: 3 rows per pose.
+    Position,
+    /// The target point and the frame's orientation: 6 rows per pose.
+    Pose,
+}
+
+impl Measure {
+    /// Rows per pose.
+    pub fn rows(self) -> usize {
+        match self {
+            Measure::Position => 3,
+            Measure::Pose => 6,
+        }
+    }
+}
+
+/// Maps flat parameter indices to Jacobian columns, for a chosen parameter list.
+#[derive(Clone, Debug)]
+pub struct Columns {
+    of_param: Vec<Option<usize>>,
+    params: Vec<Param>,
+}
+
+impl Columns {
+    /// Columns for `params` (in that order) of a robot with `dof` joints.
+    pub fn new(params: &[Param], dof: usize) -> Columns {
+        let mut of_param = vec![None; 5 * dof + 12];
+        for (c, p) in params.iter().enumerate() {
+            of_param[p.index(dof)] = Some(c);
+        }
+        Columns {
+            of_param,
+            params: params.to_vec(),
+        }
+    }
+
+    /// The parameters, one per column.
+    pub fn params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// Number of columns.
+    pub fn len(&self) -> usize {
+        self.params.len()
+    }
+
+    /// Whether there are no columns.
+    pub fn is_empty(&self) -> bool {
+        self.params.is_empty()
+    }
+}
+
+/// Writes the Jacobian rows of one pose at joint values `q` into `out` starting at row `row0`
+/// and returns the tool frame. Allocation-free.
+pub fn pose_rows(
+    chain: &Chain,
+    cols: &Columns,
+    q: &[Real],
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+) -> crate::math::Frame {
+    // Axis, origin and kind of every operation carrying a column, recorded on the way out.
+    const MAX_OPS: usize = 5 * 16 + 12;
+    let mut rec: [(Vec3, Vec3, bool, usize); MAX_OPS] =
+        [(Vec3::zeros(), Vec3::zeros(), false, 0); MAX_OPS];
+    let mut n = 0;
+    let end = chain.walk(q, |op, r, p| {
+        if let Some(c) = cols.of_param[op.param] {
+            rec[n] = (
+                r.column(op.kind.axis()).into(),
+                *p,
+                op.kind.is_rotation(),
+                c,
+            );
+            n += 1;
+        }
+    });
+    let pe = end.pos;
+    for &(w, o, rot, c) in &rec[..n] {
+        let (dp, dw) = if rot {
+            (w.cross(&(pe - o)), w)
+        } else {
+            (w, Vec3::zeros())
+        };
+        for k in 0..3 {
+            out[(row0 + k, c)] = dp[k];
+        }
+        if measure == Measure::Pose {
+            for k in 0..3 {
+                out[(row0 + 3 + k, c)] = dw[k];
+            }
+        }
+    }
+    end
+}
+
+/// The stacked identification Jacobian of `robot` over poses `qs` (internal units) for the
+/// parameters of `cols`: `rows(measure) · m` × `cols.len()`.
+pub fn jacobian(
+    robot: &Robot,
+    cols: &Columns,
+    qs: &[Vec<Real>],
+    measure: Measure,
+) -> DMatrix<Real> {
+    let chain = robot.chain();
+    let rows = measure.rows();
+    let mut j = DMatrix::zeros(rows * qs.len(), cols.len());
+    for (i, q) in qs.iter().enumerate() {
+        pose_rows(&chain, cols, q, measure, &mut j, rows * i);
+    }
+    j
+}
+
+/// The same Jacobian by central finite differences of forward kinematics (step `h` in mm or
+/// rad): the independent check of [`jacobian`]. Orientation rows use the rotation vector of
+/// `R(x+h) · R(x−h)ᵀ / 2h`.
+pub fn jacobian_fd(
+    robot: &Robot,
+    cols: &Columns,
+    qs: &[Vec<Real>],
+    measure: Measure,
+    h: Real,
+) -> DMatrix<Real> {
+    let rows = measure.rows();
+    let n = robot.dof();
+    let mut j = DMatrix::zeros(rows * qs.len(), cols.len());
+    for (c, p) in cols.params().iter().enumerate() {
+        let mut plus = robot.clone();
+        plus.values[p.index(n)] += h;
+        let mut minus = robot.clone();
+        minus.values[p.index(n)] -= h;
+        let (cp, cm) = (plus.chain(), minus.chain());
+        for (i, q) in qs.iter().enumerate() {
+            let (fp, fm) = (cp.fk(q), cm.fk(q));
+            let dp = (fp.pos - fm.pos) / (2.0 * h);
+            for k in 0..3 {
+                j[(rows * i + k, c)] = dp[k];
+            }
+            if measure == Measure::Pose {
+                let dw = crate::math::rotation_vector(&(fp.rot * fm.rot.transpose())) / (2.0 * h);
+                for k in 0..3 {
+                    j[(rows * i + 3 + k, c)] = dw[k];
+                }
+            }
+        }
+    }
+    j
+}
