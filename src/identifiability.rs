@@ -54,10 +54,7 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
     let mut used = vec![false; k];
     loop {
         let mut best: Option<(usize, Real)> = None;
-        for c in 0..k {
-            if used[c] {
-                continue;
-            }
+        for (c, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
             let n = r.column(c).norm();
             if best.is_none_or(|(_, bn)| n > bn * (1.0 + 1e-12)) {
                 best = Some((c, n));
@@ -70,12 +67,9 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
         used[c] = true;
         chosen.push(c);
         let qv: DVector<Real> = r.column(c) / n;
-        for o in 0..k {
-            if !used[o] {
-                let d = qv.dot(&r.column(o));
-                let mut col = r.column_mut(o);
-                col.axpy(-d, &qv, 1.0);
-            }
+        for (o, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
+            let d = qv.dot(&r.column(o));
+            r.column_mut(o).axpy(-d, &qv, 1.0);
         }
     }
     chosen

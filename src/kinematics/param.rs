@@ -2,6 +2,9 @@
 
 use std::fmt;
 
+/// A name prefix and the constructor of its parameter kind.
+type Maker = (&'static str, fn(usize) -> Param);
+
 /// Parameters per joint in the flat vector: θ, d, a, α, β.
 pub const PARAMS_PER_JOINT: usize = 5;
 
@@ -87,7 +90,7 @@ impl Param {
             return PART.iter().position(|p| *p == c).map(Param::Tool);
         }
         // Longest prefixes first: "alpha" before "a".
-        let kinds: [(&str, fn(usize) -> Param); 5] = [
+        let kinds: [Maker; 5] = [
             ("theta", Param::Theta),
             ("alpha", Param::Alpha),
             ("beta", Param::Beta),
