@@ -12,6 +12,7 @@ pub mod math;
 pub mod rng;
 
 pub use error::{Error, Result};
+pub mod check;
 pub mod commands;
 pub mod identifiability;
 pub mod jacobian;
