@@ -120,8 +120,8 @@ pub struct Identified {
     /// `σ0² (JᵀPJ)⁻¹` at the solution; NaN entries when `JᵀPJ` is singular or there is no
     /// redundancy.
     pub covariance: DMatrix<Real>,
-    /// Unit-weight standard deviation `sqrt(vᵀPv / (n − t))` at the solution, n counting the
-    /// rows of points with non-zero weight (for [`Method::Igg3`] with [`Sigma0::Mad`], the
+    /// Unit-weight standard deviation `sqrt(vᵀPv / (n − t))` at the solution, n counting each
+    /// row with its point's weight (for [`Method::Igg3`] with [`Sigma0::Mad`], the
     /// MAD-based value); NaN when `n ≤ t`.
     pub sigma0: Real,
     /// Root mean square over points of the residual norm per point, `sqrt(Σ|v_i|² / m)`,
@@ -289,9 +289,9 @@ pub(crate) fn finish(
     let rows = work.rows;
     let cost = work.evaluate(p, &x, &weights);
     work.normal(&weights);
-    let n_eff = rows * weights.iter().filter(|&&w| w > 0.0).count();
-    let classical = if n_eff > t && cost.is_finite() {
-        (cost / (n_eff - t) as Real).sqrt()
+    let n_eff = rows as Real * weights.iter().sum::<Real>();
+    let classical = if n_eff > t as Real && cost.is_finite() {
+        (cost / (n_eff - t as Real)).sqrt()
     } else {
         Real::NAN
     };

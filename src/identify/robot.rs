@@ -18,6 +18,28 @@ use crate::jacobian::{pose_rows, Columns, Measure};
 use crate::kinematics::{Param, Robot};
 use crate::math::{rotation_vector, Mat3, Real, Vec3};
 
+/// The rotation vector of `r`, robust for rotations near the identity, where
+/// [`rotation_vector`] (through `acos` of the trace) can return NaN when rounding pushes the
+/// trace above 3: the angle is `atan2(|v|, (tr R − 1)/2)` with `v` the axial vector of the
+/// skew part. Near π it falls back to [`rotation_vector`].
+fn small_rotation_vector(r: &Mat3) -> Vec3 {
+    let v = 0.5
+        * Vec3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let s = v.norm();
+    let c = 0.5 * (r.trace() - 1.0);
+    if c < 0.0 {
+        return rotation_vector(r);
+    }
+    if s == 0.0 {
+        return Vec3::zeros();
+    }
+    v * (s.atan2(c) / s)
+}
+
 /// Measured data for identification.
 #[derive(Clone, Debug, Default)]
 pub struct RobotData {
@@ -181,12 +203,34 @@ impl Problem for RobotProblem<'_> {
             }
             if self.measure == Measure::Pose {
                 if let Some(rots) = &self.data.rotations {
-                    let dw = rotation_vector(&(rots[i] * f.rot.transpose()));
+                    let dw = small_rotation_vector(&(rots[i] * f.rot.transpose()));
                     for k in 0..3 {
                         r[rows * i + 3 + k] = dw[k];
                     }
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{rot_x, rpy_matrix};
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn small_rotation_vector_matches_known_rotations() {
+        assert_relative_eq!(
+            small_rotation_vector(&rot_x(0.3)),
+            Vec3::new(0.3, 0.0, 0.0),
+            epsilon = 1e-15
+        );
+        let r = rpy_matrix([0.2, -0.1, 0.4]);
+        assert_relative_eq!(small_rotation_vector(&r), rotation_vector(&r), epsilon = 1e-14);
+        // A product of a rotation and its transpose: rounding may push the trace past 3.
+        let r = rpy_matrix([0.7, 1.1, -2.3]);
+        let v = small_rotation_vector(&(r * r.transpose()));
+        assert!(v.iter().all(|x| x.is_finite() && x.abs() < 1e-15));
     }
 }

@@ -11,7 +11,10 @@
 //! `|v_i|` is the norm of its r = 3 (or 6) residual rows, so `u_i` is the RMS of the point's
 //! rows in units of σ0 (about 1 for a normal point). σ0 is either
 //! - [`Sigma0::Classical`]: Li's `σ0 = sqrt(vᵀPv / (n − t))` with the weights of the
-//!   previous iteration, n counting the rows of points whose weight is not zero; or
+//!   previous iteration, where n counts each row with its weight, `n = r Σ_i p̄_i` (with n
+//!   the plain row count, down-weighted points keep their share of the redundancy while
+//!   their residuals leave `vᵀPv`, and σ0 shrinks from one reweighting to the next until
+//!   good points are rejected too); or
 //! - [`Sigma0::Mad`]: `1.4826 · median |v_k|` over all residual rows (zero-centred MAD).
 //!
 //! When σ0 falls below `1e-9` times the RMS point residual at the start (consistent,
@@ -148,16 +151,14 @@ pub(crate) fn point_weights(
     let sigma0 = match o.sigma0 {
         Sigma0::Classical => {
             let mut s = 0.0;
-            let mut n = 0usize;
+            let mut n = 0.0;
             for (i, &wi) in w.iter().enumerate() {
-                if wi > 0.0 {
-                    n += rows;
-                    let e2: Real = (0..rows).map(|k| r[i * rows + k].powi(2)).sum();
-                    s += wi * e2;
-                }
+                n += rows as Real * wi;
+                let e2: Real = (0..rows).map(|k| r[i * rows + k].powi(2)).sum();
+                s += wi * e2;
             }
-            if n > t {
-                (s / (n - t) as Real).sqrt()
+            if n > t as Real {
+                (s / (n - t as Real)).sqrt()
             } else {
                 Real::NAN
             }

@@ -150,6 +150,35 @@ fn bad_input_is_reported_not_panicked() {
     assert_eq!(out.termination, Termination::Singular);
 }
 
+#[test]
+fn robot_problem_rejects_inconsistent_input() {
+    let nominal = robots::irb2600();
+    let qs = vec![vec![0.0; 6]; 3];
+    let data = RobotData {
+        qs: qs.clone(),
+        points: vec![Vec3::zeros(); 3],
+        rotations: None,
+    };
+    let ok = [Param::D(1), Param::A(2)];
+    assert!(RobotProblem::new(&nominal, &ok, &data, Measure::Position).is_ok());
+    // β does not exist in standard DH; a repeated parameter; no parameters.
+    assert!(RobotProblem::new(&nominal, &[Param::Beta(1)], &data, Measure::Position).is_err());
+    assert!(RobotProblem::new(&nominal, &[Param::A(1), Param::A(1)], &data, Measure::Position).is_err());
+    assert!(RobotProblem::new(&nominal, &[], &data, Measure::Position).is_err());
+    // Full pose without orientations.
+    assert!(RobotProblem::new(&nominal, &ok, &data, Measure::Pose).is_err());
+    // Lengths that disagree; a joint vector of the wrong length.
+    let short = RobotData {
+        qs: qs.clone(),
+        points: vec![Vec3::zeros(); 2],
+        rotations: None,
+    };
+    assert!(RobotProblem::new(&nominal, &ok, &short, Measure::Position).is_err());
+    let mut bad_q = data.clone();
+    bad_q.qs[1].pop();
+    assert!(RobotProblem::new(&nominal, &ok, &bad_q, Measure::Position).is_err());
+}
+
 // ---------------------------------------------------------------------------------------
 // Simulated robots.
 
@@ -337,6 +366,7 @@ fn igg3_resists_outliers() {
         let (_, ls_dirty) = run(&s, &dirty, &ls);
         let (out, igg3) = run(&s, &dirty, &Method::Igg3(RobustOptions::default()));
         assert_eq!(out.termination, Termination::Converged);
+        println!("seed {seed}: ls clean {ls_clean}, ls dirty {ls_dirty}, igg3 {igg3} mm");
         assert!(
             igg3 <= 1.2 * ls_clean,
             "seed {seed}: igg3 {igg3} vs clean ls {ls_clean} (dirty ls {ls_dirty})"
@@ -376,23 +406,53 @@ fn param_error(s: &Setup, x: &DVector<Real>) -> Real {
         .sqrt()
 }
 
+/// Poses crowded into a small joint region (±0.15 rad around one configuration) make the
+/// normal equations strongly ill-conditioned (cond ~1e13 unscaled). With realistic random
+/// errors (normal, σ = 0.05 mm and 0.005 rad) and 0.02 mm noise, ridge (every ξ rule) has a
+/// lower parameter error than LS, summed over 8 seeds. (With the paper set's 0.05 rad errors
+/// the shrinkage towards the nominal robot costs more than it saves, and LS wins.)
 #[test]
 fn ridge_beats_ls_on_crowded_poses() {
-    let s = paper_setup();
-    let (mut e_ls, mut e_ridge) = (0.0, 0.0);
+    let base = paper_setup();
     let centre = [0.3, 0.2, -0.3, 0.5, 0.6, 0.4];
-    for seed in 0..5 {
+    let rules = [XiRule::DoubleH, XiRule::Gcv, XiRule::LCurve];
+    let mut e_ls = 0.0;
+    let mut e_ridge = [0.0; 3];
+    for seed in 0..8 {
         let mut r = rng::from_seed(200 + seed);
+        let unit = Normal::new(0.0, 1.0).expect("unit");
+        let errors: Vec<Real> = base
+            .params
+            .iter()
+            .map(|p| unit.sample(&mut r) * if p.is_length() { 0.05 } else { 0.005 })
+            .collect();
+        let pairs: Vec<(Param, Real)> = base.params.iter().copied().zip(errors.iter().copied()).collect();
+        let s = Setup {
+            truth: base.nominal.with_errors(&pairs),
+            nominal: base.nominal.clone(),
+            params: base.params.clone(),
+            errors,
+        };
         let qs: Vec<Vec<Real>> = (0..30)
             .map(|_| centre.iter().map(|c| c + r.random_range(-0.15..0.15)).collect())
             .collect();
-        let data = measure(&s.truth, qs, 0.01, &mut r);
+        let data = measure(&s.truth, qs, 0.02, &mut r);
         let (ls, _) = run(&s, &data, &Method::Ls(LsOptions::default()));
-        let (ridge, _) = run(&s, &data, &Method::Ridge(RidgeOptions::default()));
+        assert_eq!(ls.termination, Termination::Converged);
+        assert!(ls.condition_number > 1e10, "cond {}", ls.condition_number);
         e_ls += param_error(&s, &ls.x);
-        e_ridge += param_error(&s, &ridge.x);
+        for (k, xi) in rules.iter().enumerate() {
+            let o = RidgeOptions {
+                xi: xi.clone(),
+                ..Default::default()
+            };
+            let (ridge, _) = run(&s, &data, &Method::Ridge(o));
+            e_ridge[k] += param_error(&s, &ridge.x);
+        }
     }
-    assert!(e_ridge < e_ls, "ridge {e_ridge} vs ls {e_ls}");
+    for (k, e) in e_ridge.iter().enumerate() {
+        assert!(*e < 0.9 * e_ls, "{:?}: ridge {e} vs ls {e_ls}", rules[k]);
+    }
 }
 
 /// Cramér–Rao check: the LS covariance over 500 seeds against σ²(JᵀJ)⁻¹.
@@ -427,4 +487,5 @@ fn ls_covariance_meets_cramer_rao() {
     println!("trace ratio empirical / CRB = {ratio}");
     assert!((ratio - 1.0).abs() < 0.15, "ratio {ratio}");
 }
+
 
