@@ -3,8 +3,8 @@
 
 use calbench::identifiability::analyse;
 use calbench::identify::{
-    identify, LmOptions, LsOptions, Method, RidgeOptions, RobotData, RobotProblem,
-    RobustOptions, XiRule,
+    identify, LmOptions, LsOptions, Method, RidgeOptions, RobotData, RobotProblem, RobustOptions,
+    XiRule,
 };
 use calbench::jacobian::{jacobian, Columns, Measure};
 use calbench::kinematics::Param;

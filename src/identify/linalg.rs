@@ -30,7 +30,7 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
         for k in 0..j {
             d -= a[(j, k)] * a[(j, k)];
         }
-        if !(d > PIVOT_TOL * ajj) {
+        if d.is_nan() || d <= PIVOT_TOL * ajj {
             return false;
         }
         let l = d.sqrt();
@@ -102,6 +102,9 @@ mod tests {
     fn reports_a_singular_matrix() {
         let a = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 4.0]);
         let mut w = DMatrix::zeros(2, 2);
-        assert!(!cholesky_in_place(&mut { w.copy_from(&a); w }));
+        assert!(!cholesky_in_place(&mut {
+            w.copy_from(&a);
+            w
+        }));
     }
 }

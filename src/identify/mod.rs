@@ -179,7 +179,10 @@ fn check_method(m: &Method) -> Option<&'static str> {
             pos(o.eps) && xi_ok(&o.xi) && pos(o.k0) && o.k1.is_finite() && o.k1 > o.k0
         }
         Method::Lm(o) => {
-            pos(o.eps) && nonneg(o.mu) && pos(o.lambda0) && o.lambda_factor.is_finite()
+            pos(o.eps)
+                && nonneg(o.mu)
+                && pos(o.lambda0)
+                && o.lambda_factor.is_finite()
                 && o.lambda_factor > 1.0
         }
     };

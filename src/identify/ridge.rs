@@ -119,7 +119,7 @@ pub(crate) fn choose_xi(
     }
     let eig = ns.symmetric_eigen();
     let lmax = eig.eigenvalues.iter().fold(0.0 as Real, |a, &b| a.max(b));
-    if !(lmax > 0.0) || !lmax.is_finite() {
+    if lmax.is_nan() || lmax <= 0.0 || !lmax.is_finite() {
         return 0.0;
     }
     let h = eig.eigenvectors.tr_mul(&gs);
@@ -166,7 +166,10 @@ pub(crate) fn choose_xi(
             let pts: Vec<(Real, Real)> = (0..GRID)
                 .map(|k| {
                     let (rho2, eta2, _) = curve(&comps, rho0, grid(lmax, k));
-                    (0.5 * rho2.max(Real::MIN_POSITIVE).ln(), 0.5 * eta2.max(Real::MIN_POSITIVE).ln())
+                    (
+                        0.5 * rho2.max(Real::MIN_POSITIVE).ln(),
+                        0.5 * eta2.max(Real::MIN_POSITIVE).ln(),
+                    )
                 })
                 .collect();
             let mut best = (0.0, grid(lmax, 0));

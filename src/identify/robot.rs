@@ -109,12 +109,17 @@ impl<'a> RobotProblem<'a> {
             if q.len() != dof {
                 return Err(Error::setting(
                     "data",
-                    format!("point {i}: {} joint values for a {dof}-joint robot", q.len()),
+                    format!(
+                        "point {i}: {} joint values for a {dof}-joint robot",
+                        q.len()
+                    ),
                 ));
             }
-            if q.iter().any(|v| !v.is_finite()) || data.points[i].iter().any(|v| !v.is_finite())
-            {
-                return Err(Error::setting("data", format!("point {i}: value not finite")));
+            if q.iter().any(|v| !v.is_finite()) || data.points[i].iter().any(|v| !v.is_finite()) {
+                return Err(Error::setting(
+                    "data",
+                    format!("point {i}: value not finite"),
+                ));
             }
         }
         match (&data.rotations, measure) {
@@ -227,7 +232,11 @@ mod tests {
             epsilon = 1e-15
         );
         let r = rpy_matrix([0.2, -0.1, 0.4]);
-        assert_relative_eq!(small_rotation_vector(&r), rotation_vector(&r), epsilon = 1e-14);
+        assert_relative_eq!(
+            small_rotation_vector(&r),
+            rotation_vector(&r),
+            epsilon = 1e-14
+        );
         // A product of a rotation and its transpose: rounding may push the trace past 3.
         let r = rpy_matrix([0.7, 1.1, -2.3]);
         let v = small_rotation_vector(&(r * r.transpose()));

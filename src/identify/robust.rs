@@ -170,7 +170,7 @@ pub(crate) fn point_weights(
         }
     };
     let mad = (o.sigma0 == Sigma0::Mad).then_some(sigma0);
-    if !(sigma0 > 1e-9 * rms0) || !sigma0.is_finite() {
+    if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
         w.fill(1.0);
         return WeightStats { mad };
     }

@@ -105,7 +105,11 @@ fn linear_problem_matches_the_normal_equations() {
             ..Default::default()
         };
         let out = identify(&p, &x0, &Method::Lm(o));
-        assert_eq!(out.termination, Termination::Converged, "adaptive {adaptive}");
+        assert_eq!(
+            out.termination,
+            Termination::Converged,
+            "adaptive {adaptive}"
+        );
         approx::assert_relative_eq!(out.x, ls_truth, epsilon = 1e-9);
     }
 }
@@ -163,7 +167,13 @@ fn robot_problem_rejects_inconsistent_input() {
     assert!(RobotProblem::new(&nominal, &ok, &data, Measure::Position).is_ok());
     // β does not exist in standard DH; a repeated parameter; no parameters.
     assert!(RobotProblem::new(&nominal, &[Param::Beta(1)], &data, Measure::Position).is_err());
-    assert!(RobotProblem::new(&nominal, &[Param::A(1), Param::A(1)], &data, Measure::Position).is_err());
+    assert!(RobotProblem::new(
+        &nominal,
+        &[Param::A(1), Param::A(1)],
+        &data,
+        Measure::Position
+    )
+    .is_err());
     assert!(RobotProblem::new(&nominal, &[], &data, Measure::Position).is_err());
     // Full pose without orientations.
     assert!(RobotProblem::new(&nominal, &ok, &data, Measure::Pose).is_err());
@@ -310,7 +320,12 @@ fn all_methods() -> Vec<Method> {
 fn noise_free_data_recovers_the_paper_errors() {
     let s = paper_setup();
     let mut r = rng::from_seed(5);
-    let data = measure(&s.truth, uniform_joint_poses(&s.nominal, 50, &mut r), 0.0, &mut r);
+    let data = measure(
+        &s.truth,
+        uniform_joint_poses(&s.nominal, 50, &mut r),
+        0.0,
+        &mut r,
+    );
     let before = validation_rms(&s.truth, &s.nominal);
     assert!(before > 10.0, "paper errors move the tool by {before} mm");
     for m in all_methods() {
@@ -343,7 +358,11 @@ fn full_pose_data_recovers_the_errors() {
         qs,
     };
     let p = RobotProblem::new(&nominal, &params, &data, Measure::Pose).expect("problem");
-    let out = identify(&p, &DVector::zeros(params.len()), &Method::Ls(LsOptions::default()));
+    let out = identify(
+        &p,
+        &DVector::zeros(params.len()),
+        &Method::Ls(LsOptions::default()),
+    );
     assert_eq!(out.termination, Termination::Converged);
     for (x, (_, e)) in out.x.iter().zip(&pairs) {
         assert!((x - e).abs() < 1e-7, "{x} vs {e}");
@@ -372,7 +391,11 @@ fn igg3_resists_outliers() {
             "seed {seed}: igg3 {igg3} vs clean ls {ls_clean} (dirty ls {ls_dirty})"
         );
         // The outliers (the first five points) are rejected or strongly down-weighted.
-        assert!(out.weights[..5].iter().all(|&w| w < 0.2), "{:?}", out.weights);
+        assert!(
+            out.weights[..5].iter().all(|&w| w < 0.2),
+            "{:?}",
+            out.weights
+        );
         if ls_dirty > 2.0 * ls_clean {
             worse += 1;
         }
@@ -426,7 +449,12 @@ fn ridge_beats_ls_on_crowded_poses() {
             .iter()
             .map(|p| unit.sample(&mut r) * if p.is_length() { 0.05 } else { 0.005 })
             .collect();
-        let pairs: Vec<(Param, Real)> = base.params.iter().copied().zip(errors.iter().copied()).collect();
+        let pairs: Vec<(Param, Real)> = base
+            .params
+            .iter()
+            .copied()
+            .zip(errors.iter().copied())
+            .collect();
         let s = Setup {
             truth: base.nominal.with_errors(&pairs),
             nominal: base.nominal.clone(),
@@ -434,7 +462,12 @@ fn ridge_beats_ls_on_crowded_poses() {
             errors,
         };
         let qs: Vec<Vec<Real>> = (0..30)
-            .map(|_| centre.iter().map(|c| c + r.random_range(-0.15..0.15)).collect())
+            .map(|_| {
+                centre
+                    .iter()
+                    .map(|c| c + r.random_range(-0.15..0.15))
+                    .collect()
+            })
             .collect();
         let data = measure(&s.truth, qs, 0.02, &mut r);
         let (ls, _) = run(&s, &data, &Method::Ls(LsOptions::default()));
@@ -456,7 +489,7 @@ fn ridge_beats_ls_on_crowded_poses() {
 }
 
 /// Cramér–Rao check: the LS covariance over 500 seeds against σ²(JᵀJ)⁻¹.
-/// Slow (~1 min): `cargo test --lib identify::tests::ls_covariance_meets_cramer_rao -- --ignored`.
+/// Run with `cargo test --lib identify::tests::ls_covariance_meets_cramer_rao -- --ignored`.
 #[test]
 #[ignore]
 fn ls_covariance_meets_cramer_rao() {
@@ -487,5 +520,3 @@ fn ls_covariance_meets_cramer_rao() {
     println!("trace ratio empirical / CRB = {ratio}");
     assert!((ratio - 1.0).abs() < 0.15, "ratio {ratio}");
 }
-
-
