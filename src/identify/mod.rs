@@ -252,8 +252,17 @@ impl Work {
                 self.pj.rows_mut(i * rows, rows).scale_mut(wi);
             }
         }
-        self.n.gemm_tr(1.0, &self.pj, &self.j, 0.0);
-        self.g.gemv_tr(1.0, &self.pj, &self.r, 0.0);
+        // Lower triangle by column dot products (contiguous, column-major), then mirrored.
+        let t = self.j.ncols();
+        for a in 0..t {
+            let ca = self.pj.column(a);
+            for b in 0..=a {
+                let v = ca.dot(&self.j.column(b));
+                self.n[(a, b)] = v;
+                self.n[(b, a)] = v;
+            }
+            self.g[a] = ca.dot(&self.r);
+        }
     }
 }
 
