@@ -15,6 +15,7 @@ pub use error::{Error, Result};
 pub mod check;
 pub mod commands;
 pub mod identifiability;
+pub mod identify;
 pub mod jacobian;
 pub mod kinematics;
 pub mod robots;

@@ -1,0 +1,88 @@
+//! Identification on the irb2600: 50 random poses, noise-free measurements of the paper set
+//! (every length +0.5 mm, every angle +0.05 rad on the position-identifiable parameters).
+
+use calbench::identifiability::analyse;
+use calbench::identify::{
+    identify, LmOptions, LsOptions, Method, RidgeOptions, RobotData, RobotProblem, RobustOptions,
+    XiRule,
+};
+use calbench::jacobian::{jacobian, Columns, Measure};
+use calbench::kinematics::Param;
+use calbench::math::Real;
+use calbench::rng;
+use calbench::robots;
+use calbench::sampling::uniform_joint_poses;
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use nalgebra::DVector;
+
+fn bench(c: &mut Criterion) {
+    let nominal = robots::irb2600();
+    let mut r = rng::from_seed(11);
+    let rich = uniform_joint_poses(&nominal, 200, &mut r);
+    let cand = analyse(&nominal, &nominal.params(), &rich, Measure::Position).identifiable;
+    // Drop columns that vanish at the nominal robot (θ6 with a zero tool).
+    let j = jacobian(&nominal, &Columns::new(&cand, 6), &rich, Measure::Position);
+    let params: Vec<Param> = cand
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| j.column(*k).norm() > 1e-6)
+        .map(|(_, p)| *p)
+        .collect();
+    let pairs: Vec<(Param, Real)> = params
+        .iter()
+        .map(|&p| (p, if p.is_length() { 0.5 } else { 0.05 }))
+        .collect();
+    let truth = nominal.with_errors(&pairs);
+    let qs = uniform_joint_poses(&nominal, 50, &mut r);
+    let chain = truth.chain();
+    let data = RobotData {
+        points: qs.iter().map(|q| chain.fk(q).pos).collect(),
+        qs,
+        rotations: None,
+    };
+    let problem = RobotProblem::new(&nominal, &params, &data, Measure::Position).expect("problem");
+    let x0 = DVector::zeros(params.len());
+    let methods = [
+        ("ls", Method::Ls(LsOptions::default())),
+        ("ridge-double-h", Method::Ridge(RidgeOptions::default())),
+        (
+            "ridge-gcv",
+            Method::Ridge(RidgeOptions {
+                xi: XiRule::Gcv,
+                ..Default::default()
+            }),
+        ),
+        (
+            "ridge-l-curve",
+            Method::Ridge(RidgeOptions {
+                xi: XiRule::LCurve,
+                ..Default::default()
+            }),
+        ),
+        ("igg3", Method::Igg3(RobustOptions::default())),
+        ("lm", Method::Lm(LmOptions::default())),
+        (
+            "lm-adaptive",
+            Method::Lm(LmOptions {
+                adaptive: true,
+                ..Default::default()
+            }),
+        ),
+    ];
+    let mut g = c.benchmark_group("identify-irb2600-50");
+    for (name, m) in &methods {
+        let out = identify(&problem, &x0, m);
+        eprintln!(
+            "{name}: {} after {} iterations",
+            out.termination.as_str(),
+            out.iterations
+        );
+        g.bench_with_input(BenchmarkId::from_parameter(name), m, |b, m| {
+            b.iter(|| identify(&problem, &x0, m))
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,110 @@
+//! Allocation-free dense Cholesky factorisation for the normal equations.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::math::Real;
+
+/// Relative pivot below which a normal matrix counts as singular.
+pub(crate) const PIVOT_TOL: Real = 1e-12;
+
+/// Factorises the symmetric matrix `a = L Lᵀ` in place (L in the lower triangle). Returns
+/// false when a pivot is not positive or falls below [`PIVOT_TOL`] times its own diagonal
+/// entry (numerically singular; the test is invariant to column scaling, so mm and rad
+/// columns compare), or when `a` is not finite.
+pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
+    let n = a.nrows();
+    let mut dmax: Real = 0.0;
+    for i in 0..n {
+        let d = a[(i, i)];
+        if !d.is_finite() {
+            return false;
+        }
+        dmax = dmax.max(d.abs());
+    }
+    if dmax == 0.0 {
+        return n == 0;
+    }
+    for j in 0..n {
+        let ajj = a[(j, j)];
+        let mut d = ajj;
+        for k in 0..j {
+            d -= a[(j, k)] * a[(j, k)];
+        }
+        if d.is_nan() || d <= PIVOT_TOL * ajj {
+            return false;
+        }
+        let l = d.sqrt();
+        a[(j, j)] = l;
+        for i in j + 1..n {
+            let mut s = a[(i, j)];
+            for k in 0..j {
+                s -= a[(i, k)] * a[(j, k)];
+            }
+            a[(i, j)] = s / l;
+        }
+    }
+    true
+}
+
+/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`].
+pub(crate) fn cholesky_solve(l: &DMatrix<Real>, b: &mut DVector<Real>) {
+    let n = l.nrows();
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= l[(i, k)] * b[k];
+        }
+        b[i] = s / l[(i, i)];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in i + 1..n {
+            s -= l[(k, i)] * b[k];
+        }
+        b[i] = s / l[(i, i)];
+    }
+}
+
+/// Solves `a x = b` for symmetric positive definite `a` (copied into `work`); the answer goes
+/// to `x`. Returns false when `a` is numerically singular.
+pub(crate) fn solve_spd(
+    a: &DMatrix<Real>,
+    b: &DVector<Real>,
+    work: &mut DMatrix<Real>,
+    x: &mut DVector<Real>,
+) -> bool {
+    work.copy_from(a);
+    if !cholesky_in_place(work) {
+        return false;
+    }
+    x.copy_from(b);
+    cholesky_solve(work, x);
+    x.iter().all(|v| v.is_finite())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn solves_a_known_spd_system() {
+        // A = [[4,2,0],[2,5,1],[0,1,3]], x = [1,-2,3] → b = A x = [0,-5,7].
+        let a = DMatrix::from_row_slice(3, 3, &[4.0, 2.0, 0.0, 2.0, 5.0, 1.0, 0.0, 1.0, 3.0]);
+        let b = DVector::from_vec(vec![0.0, -5.0, 7.0]);
+        let mut w = DMatrix::zeros(3, 3);
+        let mut x = DVector::zeros(3);
+        assert!(solve_spd(&a, &b, &mut w, &mut x));
+        assert_relative_eq!(x, DVector::from_vec(vec![1.0, -2.0, 3.0]), epsilon = 1e-12);
+    }
+
+    #[test]
+    fn reports_a_singular_matrix() {
+        let a = DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 4.0]);
+        let mut w = DMatrix::zeros(2, 2);
+        assert!(!cholesky_in_place(&mut {
+            w.copy_from(&a);
+            w
+        }));
+    }
+}

@@ -1,0 +1,174 @@
+//! Levenberg–Marquardt (Guo 2024 eq. 8; Ban, LM with adaptive damping).
+//!
+//! Each iteration solves `(JᵀJ + μ M) Δx = Jᵀ ΔP` with `ΔP = measured − model(x)` and
+//! `M = I`, or `M = diag(JᵀJ)` with Marquardt's scaling ([`LmOptions::marquardt`]).
+//!
+//! - Fixed damping (Guo 2024 eq. 8, `μ = 1`): every step is taken; stop when `max |Δx| < ε`.
+//! - Adaptive damping (Ban: `λ0 = 0.01`, `ε = 1e-5`, `kmax = 50`): a step is accepted when it
+//!   lowers `|ΔP|²`, and λ is then divided by the factor (10); otherwise λ is multiplied by it
+//!   and the step is solved again. Stop when an accepted step has `max |Δx| < ε`
+//!   ([`super::Termination::Converged`], also when a step that small no longer lowers the
+//!   cost), after `kmax` iterations, or when λ exceeds 1e16 without a lower cost
+//!   ([`super::Termination::NoProgress`]).
+
+use nalgebra::DVector;
+
+use super::linalg::solve_spd;
+use super::{finish, max_abs, Identified, Problem, Termination, Work, DIVERGENCE_FACTOR};
+use crate::math::Real;
+
+/// Settings of [`super::Method::Lm`].
+#[derive(Clone, Debug)]
+pub struct LmOptions {
+    /// Fixed damping μ (Guo 2024 eq. 8). Default 1.
+    pub mu: Real,
+    /// Adaptive damping (Ban) instead of the fixed μ. Default false.
+    pub adaptive: bool,
+    /// Initial λ of the adaptive form. Default 0.01 (Ban).
+    pub lambda0: Real,
+    /// Factor by which λ falls after a good step and grows after a bad one. Default 10.
+    pub lambda_factor: Real,
+    /// Marquardt's scaling `M = diag(JᵀJ)` instead of `I`. Default false.
+    pub marquardt: bool,
+    /// Stop when `max |Δx| < eps` (mm or rad). Default 1e-5 (Ban's ε).
+    pub eps: Real,
+    /// Iteration limit kmax. Default 50 (Ban).
+    pub max_iter: usize,
+}
+
+impl Default for LmOptions {
+    fn default() -> Self {
+        LmOptions {
+            mu: 1.0,
+            adaptive: false,
+            lambda0: 0.01,
+            lambda_factor: 10.0,
+            marquardt: false,
+            eps: 1e-5,
+            max_iter: 50,
+        }
+    }
+}
+
+/// Adds `damping · M` to the diagonal of `work.n` (which must hold `JᵀJ`), writing into `a`.
+fn damp(work: &mut Work, damping: Real, marquardt: bool) {
+    let t = work.n.nrows();
+    for k in 0..t {
+        let m = if marquardt {
+            work.n[(k, k)].max(Real::MIN_POSITIVE)
+        } else {
+            1.0
+        };
+        work.n[(k, k)] += damping * m;
+    }
+}
+
+fn undamp(work: &mut Work, damping: Real, marquardt: bool, diag: &DVector<Real>) {
+    let t = work.n.nrows();
+    for k in 0..t {
+        let m = if marquardt {
+            diag[k].max(Real::MIN_POSITIVE)
+        } else {
+            1.0
+        };
+        work.n[(k, k)] -= damping * m;
+    }
+}
+
+pub(crate) fn run(p: &dyn Problem, x0: &DVector<Real>, o: &LmOptions) -> Identified {
+    if o.adaptive {
+        return adaptive(p, x0, o);
+    }
+    let mut work = Work::new(p);
+    let w = vec![1.0; p.n_points()];
+    let mut x = x0.clone();
+    let mut cost0 = Real::NAN;
+    let mut termination = Termination::MaxIterations;
+    let mut iterations = 0;
+    for it in 0..o.max_iter {
+        let cost = work.evaluate(p, &x, &w);
+        if !cost.is_finite() || (it > 0 && cost > DIVERGENCE_FACTOR * cost0) {
+            termination = Termination::Diverged;
+            break;
+        }
+        if it == 0 {
+            cost0 = cost.max(Real::MIN_POSITIVE);
+        }
+        work.normal(&w);
+        damp(&mut work, o.mu, o.marquardt);
+        if !solve_spd(&work.n, &work.g, &mut work.a, &mut work.dx) {
+            termination = Termination::Singular;
+            break;
+        }
+        x += &work.dx;
+        iterations = it + 1;
+        if max_abs(&work.dx) < o.eps {
+            termination = Termination::Converged;
+            break;
+        }
+    }
+    finish(p, &mut work, x, w, iterations, termination, None, None)
+}
+
+fn adaptive(p: &dyn Problem, x0: &DVector<Real>, o: &LmOptions) -> Identified {
+    let mut work = Work::new(p);
+    let mut trial = Work::new(p);
+    let w = vec![1.0; p.n_points()];
+    let t = x0.len();
+    let mut x = x0.clone();
+    let mut x_try = x0.clone();
+    let mut diag = DVector::zeros(t);
+    let mut cost = work.evaluate(p, &x, &w);
+    let mut termination = Termination::MaxIterations;
+    let mut iterations = 0;
+    let mut lambda = o.lambda0;
+    if !cost.is_finite() {
+        termination = Termination::Diverged;
+    } else {
+        work.normal(&w);
+        'outer: for _ in 0..o.max_iter {
+            for k in 0..t {
+                diag[k] = work.n[(k, k)];
+            }
+            loop {
+                damp(&mut work, lambda, o.marquardt);
+                let ok = solve_spd(&work.n, &work.g, &mut work.a, &mut work.dx);
+                undamp(&mut work, lambda, o.marquardt, &diag);
+                let step = max_abs(&work.dx);
+                if ok {
+                    x_try.copy_from(&x);
+                    x_try += &work.dx;
+                    let c = trial.evaluate(p, &x_try, &w);
+                    if c.is_finite() && c < cost {
+                        std::mem::swap(&mut x, &mut x_try);
+                        std::mem::swap(&mut work, &mut trial);
+                        work.dx.copy_from(&trial.dx);
+                        cost = c;
+                        lambda /= o.lambda_factor;
+                        iterations += 1;
+                        work.normal(&w);
+                        if step < o.eps {
+                            termination = Termination::Converged;
+                            break 'outer;
+                        }
+                        break;
+                    }
+                    if step < o.eps {
+                        termination = Termination::Converged;
+                        break 'outer;
+                    }
+                }
+                lambda *= o.lambda_factor;
+                if lambda > 1e16 {
+                    termination = if ok {
+                        Termination::NoProgress
+                    } else {
+                        Termination::Singular
+                    };
+                    break 'outer;
+                }
+            }
+        }
+    }
+    finish(p, &mut work, x, w, iterations, termination, None, None)
+}

@@ -1,0 +1,245 @@
+//! The kinematic identification problem of a robot: measured tool points (and orientations)
+//! at known joint values, unknown errors of chosen parameters (SPEC §2, §4).
+//!
+//! The unknown `x` holds the errors added to the nominal values of the chosen parameters
+//! (mm, rad); the model is the forward kinematics of the robot with those errors, and the
+//! Jacobian is the analytic one of [`crate::jacobian`] (Li 2018 eqs. 6–12). The residual of
+//! a point is `p_meas − p_model(x)`; for full poses the orientation rows are
+//! `rotation_vector(R_meas · R_model(x)ᵀ)`, the small rotation in the world that matches the
+//! orientation rows of [`crate::jacobian::pose_rows`].
+
+use std::cell::RefCell;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::Problem;
+use crate::error::Error;
+use crate::jacobian::{pose_rows, Columns, Measure};
+use crate::kinematics::{Param, Robot};
+use crate::math::{rotation_vector, Mat3, Real, Vec3};
+
+/// The rotation vector of `r`, robust for rotations near the identity, where
+/// [`rotation_vector`] (through `acos` of the trace) can return NaN when rounding pushes the
+/// trace above 3: the angle is `atan2(|v|, (tr R − 1)/2)` with `v` the axial vector of the
+/// skew part. Near π it falls back to [`rotation_vector`].
+fn small_rotation_vector(r: &Mat3) -> Vec3 {
+    let v = 0.5
+        * Vec3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let s = v.norm();
+    let c = 0.5 * (r.trace() - 1.0);
+    if c < 0.0 {
+        return rotation_vector(r);
+    }
+    if s == 0.0 {
+        return Vec3::zeros();
+    }
+    v * (s.atan2(c) / s)
+}
+
+/// Measured data for identification.
+#[derive(Clone, Debug, Default)]
+pub struct RobotData {
+    /// Joint values per point, internal units (rad, mm).
+    pub qs: Vec<Vec<Real>>,
+    /// Measured tool points, mm, in the robot's world (base-frame) coordinates.
+    pub points: Vec<Vec3>,
+    /// Measured tool orientations in the world, needed for [`Measure::Pose`].
+    pub rotations: Option<Vec<Mat3>>,
+}
+
+/// A [`Problem`] over a robot's parameter errors.
+#[derive(Debug)]
+pub struct RobotProblem<'a> {
+    nominal: &'a Robot,
+    params: Vec<Param>,
+    index: Vec<usize>,
+    cols: Columns,
+    data: &'a RobotData,
+    measure: Measure,
+    /// Working copy of the robot whose values are set at each evaluation.
+    work: RefCell<Robot>,
+}
+
+impl<'a> RobotProblem<'a> {
+    /// The problem of identifying the errors of `params` of `nominal` from `data`.
+    ///
+    /// Fails when `params` is empty, repeats a parameter or names one the robot's model does
+    /// not have, when the data's lengths disagree, a joint vector has the wrong length, a
+    /// value is not finite, or `measure` is [`Measure::Pose`] without rotations.
+    pub fn new(
+        nominal: &'a Robot,
+        params: &[Param],
+        data: &'a RobotData,
+        measure: Measure,
+    ) -> crate::Result<Self> {
+        if params.is_empty() {
+            return Err(Error::setting("params", "no parameters to identify"));
+        }
+        let known = nominal.params();
+        for (i, p) in params.iter().enumerate() {
+            if !known.contains(p) {
+                return Err(Error::setting(
+                    "params",
+                    format!("`{p}` is not a parameter of robot `{}`", nominal.name),
+                ));
+            }
+            if params[..i].contains(p) {
+                return Err(Error::setting("params", format!("`{p}` is listed twice")));
+            }
+        }
+        if data.qs.len() != data.points.len() {
+            return Err(Error::setting(
+                "data",
+                format!(
+                    "{} joint vectors but {} measured points",
+                    data.qs.len(),
+                    data.points.len()
+                ),
+            ));
+        }
+        if data.qs.is_empty() {
+            return Err(Error::setting("data", "no measured points"));
+        }
+        let dof = nominal.dof();
+        for (i, q) in data.qs.iter().enumerate() {
+            if q.len() != dof {
+                return Err(Error::setting(
+                    "data",
+                    format!(
+                        "point {i}: {} joint values for a {dof}-joint robot",
+                        q.len()
+                    ),
+                ));
+            }
+            if q.iter().any(|v| !v.is_finite()) || data.points[i].iter().any(|v| !v.is_finite()) {
+                return Err(Error::setting(
+                    "data",
+                    format!("point {i}: value not finite"),
+                ));
+            }
+        }
+        match (&data.rotations, measure) {
+            (None, Measure::Pose) => {
+                return Err(Error::setting(
+                    "measure",
+                    "full-pose identification needs measured orientations",
+                ))
+            }
+            (Some(r), _) if r.len() != data.points.len() => {
+                return Err(Error::setting(
+                    "data",
+                    format!(
+                        "{} orientations but {} measured points",
+                        r.len(),
+                        data.points.len()
+                    ),
+                ))
+            }
+            (Some(r), Measure::Pose) if r.iter().any(|m| m.iter().any(|v| !v.is_finite())) => {
+                return Err(Error::setting("data", "orientation not finite"))
+            }
+            _ => {}
+        }
+        Ok(RobotProblem {
+            nominal,
+            params: params.to_vec(),
+            index: params.iter().map(|p| p.index(dof)).collect(),
+            cols: Columns::new(params, dof),
+            data,
+            measure,
+            work: RefCell::new(nominal.clone()),
+        })
+    }
+
+    /// The parameters, one per entry of `x`.
+    pub fn params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// The measure (rows per point).
+    pub fn measure(&self) -> Measure {
+        self.measure
+    }
+
+    /// The compensated robot: the nominal robot with the errors `x` added.
+    pub fn robot_with(&self, x: &DVector<Real>) -> Robot {
+        let mut r = self.nominal.clone();
+        for (&i, &v) in self.index.iter().zip(x.iter()) {
+            r.values[i] += v;
+        }
+        r
+    }
+}
+
+impl Problem for RobotProblem<'_> {
+    fn n_params(&self) -> usize {
+        self.params.len()
+    }
+
+    fn n_points(&self) -> usize {
+        self.data.points.len()
+    }
+
+    fn rows_per_point(&self) -> usize {
+        self.measure.rows()
+    }
+
+    /// Forward kinematics and the analytic Jacobian at `nominal + x`. Allocates only the
+    /// compiled chain (one small vector per call).
+    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        let chain = {
+            let mut rb = self.work.borrow_mut();
+            rb.values.copy_from_slice(&self.nominal.values);
+            for (&i, &v) in self.index.iter().zip(x.iter()) {
+                rb.values[i] += v;
+            }
+            rb.chain()
+        };
+        let rows = self.measure.rows();
+        for (i, q) in self.data.qs.iter().enumerate() {
+            let f = pose_rows(&chain, &self.cols, q, self.measure, j, rows * i);
+            let dp = self.data.points[i] - f.pos;
+            for k in 0..3 {
+                r[rows * i + k] = dp[k];
+            }
+            if self.measure == Measure::Pose {
+                if let Some(rots) = &self.data.rotations {
+                    let dw = small_rotation_vector(&(rots[i] * f.rot.transpose()));
+                    for k in 0..3 {
+                        r[rows * i + 3 + k] = dw[k];
+                    }
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{rot_x, rpy_matrix};
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn small_rotation_vector_matches_known_rotations() {
+        assert_relative_eq!(
+            small_rotation_vector(&rot_x(0.3)),
+            Vec3::new(0.3, 0.0, 0.0),
+            epsilon = 1e-15
+        );
+        let r = rpy_matrix([0.2, -0.1, 0.4]);
+        assert_relative_eq!(
+            small_rotation_vector(&r),
+            rotation_vector(&r),
+            epsilon = 1e-14
+        );
+        // A product of a rotation and its transpose: rounding may push the trace past 3.
+        let r = rpy_matrix([0.7, 1.1, -2.3]);
+        let v = small_rotation_vector(&(r * r.transpose()));
+        assert!(v.iter().all(|x| x.is_finite() && x.abs() < 1e-15));
+    }
+}
