@@ -16,7 +16,7 @@ pub mod commands;
 pub mod identifiability;
 pub mod jacobian;
 pub mod kinematics;
+pub mod registration;
 pub mod robots;
 pub mod sampling;
-pub mod registration;
 pub mod sim;

@@ -56,7 +56,11 @@ pub fn register_svd(
             "registration needs at least 3 points, got {m}"
         )));
     }
-    if base.iter().chain(measured).any(|p| !p.iter().all(|v| v.is_finite())) {
+    if base
+        .iter()
+        .chain(measured)
+        .any(|p| !p.iter().all(|v| v.is_finite()))
+    {
         return Err(Error::Compute("registration: a point is not finite".into()));
     }
     let w: Vec<Real> = match weights {
@@ -99,7 +103,7 @@ pub fn register_svd(
     };
     // Singular values are sorted in decreasing order by nalgebra.
     let s = svd.singular_values;
-    if !(s[1] > 1e-12 * s[0].max(Real::MIN_POSITIVE)) {
+    if s[1].is_nan() || s[1] <= 1e-12 * s[0].max(Real::MIN_POSITIVE) {
         return Err(Error::Compute(
             "registration: the points are (nearly) collinear; the rotation is undetermined".into(),
         ));
@@ -192,7 +196,10 @@ mod tests {
     fn reflection_prone_data_give_a_rotation() {
         let f = known();
         // Coplanar: all on the plane z = 100 of the base frame.
-        let base: Vec<Vec3> = cloud(12, 2).iter().map(|p| Vec3::new(p.x, p.y, 100.0)).collect();
+        let base: Vec<Vec3> = cloud(12, 2)
+            .iter()
+            .map(|p| Vec3::new(p.x, p.y, 100.0))
+            .collect();
         let measured: Vec<Vec3> = base.iter().map(|b| f.apply_inverse(b)).collect();
         let r = register_svd(&base, &measured, None).unwrap();
         assert_relative_eq!(r.frame.rot.determinant(), 1.0, epsilon = 1e-12);
@@ -206,7 +213,11 @@ mod tests {
         let mirror: Vec<Vec3> = base.iter().map(|p| Vec3::new(-p.x, p.y, p.z)).collect();
         let r = register_svd(&base, &mirror, None).unwrap();
         assert_relative_eq!(r.frame.rot.determinant(), 1.0, epsilon = 1e-12);
-        assert_relative_eq!(r.frame.rot * r.frame.rot.transpose(), Matrix3::identity(), epsilon = 1e-12);
+        assert_relative_eq!(
+            r.frame.rot * r.frame.rot.transpose(),
+            Matrix3::identity(),
+            epsilon = 1e-12
+        );
     }
 
     #[test]
@@ -214,7 +225,9 @@ mod tests {
         let a = cloud(5, 4);
         assert!(register_svd(&a, &a[..4], None).is_err());
         assert!(register_svd(&a[..2], &a[..2], None).is_err());
-        let line: Vec<Vec3> = (0..5).map(|i| Vec3::new(i as Real, 2.0 * i as Real, 0.0)).collect();
+        let line: Vec<Vec3> = (0..5)
+            .map(|i| Vec3::new(i as Real, 2.0 * i as Real, 0.0))
+            .collect();
         assert!(register_svd(&line, &line, None).is_err());
         assert!(register_svd(&a, &a, Some(&[0.0; 5])).is_err());
         assert!(register_svd(&a, &a, Some(&[1.0, -1.0, 1.0, 1.0, 1.0])).is_err());

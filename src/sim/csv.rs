@@ -38,12 +38,20 @@ pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurement) -> Result
             let _ = write!(s, "{},", fixed(v, 9));
         }
         let p = m.points.get(i).ok_or_else(|| {
-            Error::Compute(format!("measurement has {} poses but {} points", m.qs.len(), m.points.len()))
+            Error::Compute(format!(
+                "measurement has {} poses but {} points",
+                m.qs.len(),
+                m.points.len()
+            ))
         })?;
         let _ = write!(s, "{},{},{}", fixed(p.x, 9), fixed(p.y, 9), fixed(p.z, 9));
         if let Some(qs) = &m.quats {
             let qq = qs.get(i).ok_or_else(|| {
-                Error::Compute(format!("measurement has {} poses but {} quaternions", m.qs.len(), qs.len()))
+                Error::Compute(format!(
+                    "measurement has {} poses but {} quaternions",
+                    m.qs.len(),
+                    qs.len()
+                ))
             })?;
             for v in qq {
                 let _ = write!(s, ",{}", fixed(*v, 12));
@@ -90,9 +98,8 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
         .trim(::csv::Trim::All)
         .comment(Some(b'#'))
         .from_reader(std::io::BufReader::new(file));
-    let bad = |line: u64, place: &str, msg: String| {
-        Error::file(path, format!("line {line}{place}"), msg)
-    };
+    let bad =
+        |line: u64, place: &str, msg: String| Error::file(path, format!("line {line}{place}"), msg);
     let header = rd
         .headers()
         .map_err(|e| bad(1, "", format!("cannot read the header: {e}")))?
@@ -100,7 +107,11 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
     let header_line = 1;
     let names: Vec<String> = header.iter().map(str::to_string).collect();
     if names.iter().all(|n| n.is_empty()) {
-        return Err(bad(header_line, "", "empty file: expected a header row q1,…,qn,x,y,z".into()));
+        return Err(bad(
+            header_line,
+            "",
+            "empty file: expected a header row q1,…,qn,x,y,z".into(),
+        ));
     }
     let dof = robot.dof();
     let qnames: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
@@ -118,21 +129,42 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
             ));
         }
         if names[..i].contains(n) {
-            return Err(bad(header_line, &format!(", column {n}"), format!("column \"{n}\" appears twice")));
+            return Err(bad(
+                header_line,
+                &format!(", column {n}"),
+                format!("column \"{n}\" appears twice"),
+            ));
         }
     }
     let missing = |n: &str| {
-        bad(header_line, "", format!("missing column \"{n}\" (robot \"{}\" has {dof} joints)", robot.name))
+        bad(
+            header_line,
+            "",
+            format!(
+                "missing column \"{n}\" (robot \"{}\" has {dof} joints)",
+                robot.name
+            ),
+        )
     };
-    let qcol: Vec<usize> = qnames.iter().map(|n| find(n).ok_or_else(|| missing(n))).collect::<Result<_>>()?;
+    let qcol: Vec<usize> = qnames
+        .iter()
+        .map(|n| find(n).ok_or_else(|| missing(n)))
+        .collect::<Result<_>>()?;
     let (xcol, qtcol) = if measured {
-        let x: Vec<usize> = XYZ.iter().map(|n| find(n).ok_or_else(|| missing(n))).collect::<Result<_>>()?;
+        let x: Vec<usize> = XYZ
+            .iter()
+            .map(|n| find(n).ok_or_else(|| missing(n)))
+            .collect::<Result<_>>()?;
         let present = QUAT.iter().filter(|n| find(n).is_some()).count();
         let q = match present {
             0 => None,
             4 => Some(QUAT.iter().filter_map(|n| find(n)).collect::<Vec<usize>>()),
             _ => {
-                let n = QUAT.iter().find(|n| find(n).is_none()).copied().unwrap_or("qw");
+                let n = QUAT
+                    .iter()
+                    .find(|n| find(n).is_none())
+                    .copied()
+                    .unwrap_or("qw");
                 return Err(missing(n));
             }
         };
@@ -163,14 +195,25 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
             return Err(bad(
                 line,
                 "",
-                format!("{} fields, expected {} as in the header", rec.len(), names.len()),
+                format!(
+                    "{} fields, expected {} as in the header",
+                    rec.len(),
+                    names.len()
+                ),
             ));
         }
         let num = |c: usize| -> Result<Real> {
             let t = rec.get(c).unwrap_or("");
-            t.parse::<Real>().ok().filter(|v| v.is_finite()).ok_or_else(|| {
-                bad(line, &format!(", column {}", names[c]), format!("\"{t}\" is not a finite number"))
-            })
+            t.parse::<Real>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    bad(
+                        line,
+                        &format!(", column {}", names[c]),
+                        format!("\"{t}\" is not a finite number"),
+                    )
+                })
         };
         for (j, &c) in qcol.iter().enumerate() {
             quser[j] = num(c)?;
@@ -181,7 +224,10 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
                 return Err(bad(
                     line,
                     &format!(", column {}", qnames[j]),
-                    format!("{} is outside the joint limits [{}, {}]", quser[j], lim_lo[j], lim_hi[j]),
+                    format!(
+                        "{} is outside the joint limits [{}, {}]",
+                        quser[j], lim_lo[j], lim_hi[j]
+                    ),
                 ));
             }
         }
@@ -230,7 +276,11 @@ mod tests {
         let r = crate::robots::tx60();
         let qs = uniform_joint_poses(&r, 12, &mut stream(1, "poses"));
         let t = Tracker::new(&TrackerSettings {
-            measure: if pose { MeasureSetting::Pose } else { MeasureSetting::Position },
+            measure: if pose {
+                MeasureSetting::Pose
+            } else {
+                MeasureSetting::Position
+            },
             angle_noise_deg: 0.01,
             ..Default::default()
         })
@@ -297,7 +347,10 @@ mod tests {
         let h = "q1,q2,q3,q4,q5,q6,x,y,z\n";
         let ok = "0,0,0,0,0,0,1,2,3\n";
         let s = read_err(&format!("{h}{ok}{ok}0,0,0,zero,0,0,1,2,3\n"));
-        assert!(s.contains("line 4") && s.contains("column q4") && s.contains("zero"), "{s}");
+        assert!(
+            s.contains("line 4") && s.contains("column q4") && s.contains("zero"),
+            "{s}"
+        );
         let s = read_err(&format!("{h}{ok}0,0,0,0,0,0,1,NaN,3\n"));
         assert!(s.contains("line 3") && s.contains("column y"), "{s}");
         let s = read_err(&format!("{h}{ok}0,0,0,0,0,1,2,3\n"));
@@ -306,8 +359,11 @@ mod tests {
         assert!(s.contains("missing column \"q6\""), "{s}");
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,w\n");
         assert!(s.contains("unknown column \"w\""), "{s}");
-        let s = read_err(&format!("{h}0,0,0,0,0,400,1,2,3\n"));
-        assert!(s.contains("line 2") && s.contains("column q6") && s.contains("limits"), "{s}");
+        let s = read_err(&format!("{h}0,400,0,0,0,0,1,2,3\n"));
+        assert!(
+            s.contains("line 2") && s.contains("column q2") && s.contains("limits"),
+            "{s}"
+        );
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx,qy,qz\n0,0,0,0,0,0,1,2,3,1,1,0,0\n");
         assert!(s.contains("line 2") && s.contains("unit quaternion"), "{s}");
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx\n");
@@ -317,7 +373,11 @@ mod tests {
     #[test]
     fn columns_in_any_order_with_comments_and_blank_lines() {
         let p = tmp("order.csv");
-        std::fs::write(&p, "# exported\nx,y,z,q1,q2,q3,q4,q5,q6\n\n1,2,3,10,20,30,40,50,60\n").unwrap();
+        std::fs::write(
+            &p,
+            "# exported\nx,y,z,q1,q2,q3,q4,q5,q6\n\n1,2,3,10,20,30,40,50,60\n",
+        )
+        .unwrap();
         let r = crate::robots::irb2600();
         let d = read_measurements(&p, &r).unwrap();
         assert_eq!(d.points, vec![Vec3::new(1.0, 2.0, 3.0)]);

@@ -204,7 +204,9 @@ mod tests {
             count: Some(51),
             ..o
         };
-        assert!(measure_poses(&robot, &qs, &t, Some(&too_many), None, &mut stream(2, "n")).is_err());
+        assert!(
+            measure_poses(&robot, &qs, &t, Some(&too_many), None, &mut stream(2, "n")).is_err()
+        );
     }
 
     #[test]
@@ -231,7 +233,11 @@ mod tests {
         let m = measure_poses(&robot, &qs, &t, None, Some(&sag), &mut stream(3, "n")).unwrap();
         for (i, q) in qs.iter().enumerate() {
             assert_relative_eq!(m.sag_mm[i][2], -0.25, epsilon = 1e-9);
-            assert_relative_eq!(m.true_points[i], robot.fk(q).pos - Vec3::new(0.0, 0.0, 0.25), epsilon = 1e-9);
+            assert_relative_eq!(
+                m.true_points[i],
+                robot.fk(q).pos - Vec3::new(0.0, 0.0, 0.25),
+                epsilon = 1e-9
+            );
         }
     }
 

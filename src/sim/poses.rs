@@ -87,9 +87,7 @@ pub fn sample_region_keyed(
 
 fn grid(robot: &Robot, k: usize, n: usize, key: &str, rng: &mut Rng) -> Result<Vec<Vec<Real>>> {
     let dof = robot.dof();
-    let total = u32::try_from(dof)
-        .ok()
-        .and_then(|d| k.checked_pow(d));
+    let total = u32::try_from(dof).ok().and_then(|d| k.checked_pow(d));
     if let Some(g) = total {
         if n > g {
             return Err(Error::setting(
@@ -204,7 +202,8 @@ mod tests {
     #[test]
     fn grid_points_are_distinct_cell_centres() {
         let r = crate::robots::irb2600();
-        let qs = sample_region(&r, &Region::Grid { per_joint: 2 }, 64, &mut stream(3, "p")).unwrap();
+        let qs =
+            sample_region(&r, &Region::Grid { per_joint: 2 }, 64, &mut stream(3, "p")).unwrap();
         assert_eq!(qs.len(), 64); // the whole 2^6 grid
         for (j, joint) in r.joints.iter().enumerate() {
             let (lo, hi) = joint.limits;
@@ -214,12 +213,17 @@ mod tests {
                 qs.iter().filter(|q| (q[j] - quarter).abs() < 1e-12).count(),
                 32
             );
-            assert_eq!(qs.iter().filter(|q| (q[j] - three).abs() < 1e-12).count(), 32);
+            assert_eq!(
+                qs.iter().filter(|q| (q[j] - three).abs() < 1e-12).count(),
+                32
+            );
         }
-        let e = sample_region(&r, &Region::Grid { per_joint: 2 }, 65, &mut stream(3, "p")).unwrap_err();
+        let e =
+            sample_region(&r, &Region::Grid { per_joint: 2 }, 65, &mut stream(3, "p")).unwrap_err();
         assert_eq!(key_of(&e), "calibration.region");
         // A huge grid still gives distinct points.
-        let qs = sample_region(&r, &Region::Grid { per_joint: 50 }, 30, &mut stream(3, "p")).unwrap();
+        let qs =
+            sample_region(&r, &Region::Grid { per_joint: 50 }, 30, &mut stream(3, "p")).unwrap();
         assert_eq!(qs.len(), 30);
     }
 }

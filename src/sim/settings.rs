@@ -54,7 +54,9 @@ impl<'de> Deserialize<'de> for ParamSelection {
             Many(Vec<String>),
         }
         match Raw::deserialize(d).map_err(|_| {
-            serde::de::Error::custom("expected \"identifiable\", \"all\" or a list of parameter names")
+            serde::de::Error::custom(
+                "expected \"identifiable\", \"all\" or a list of parameter names",
+            )
         })? {
             Raw::One(s) if s == "identifiable" => Ok(ParamSelection::Identifiable),
             Raw::One(s) if s == "all" => Ok(ParamSelection::All),
@@ -274,10 +276,11 @@ impl OutlierSettings {
 }
 
 /// Where measurement poses are drawn (`region` of `[calibration]` and `[validation]`).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Region {
-    /// Uniformly within the joint limits.
+    /// Uniformly within the joint limits (the default).
+    #[default]
     Joint,
     /// Joint configurations whose tool point lies in an axis-aligned box of the base frame
     /// (Qiao 2021 §4: a 1000 mm cube centred at (550, 0, 550) mm; Ban: an 800 mm cube).
@@ -293,12 +296,6 @@ pub enum Region {
         /// Values per joint (≥ 1).
         per_joint: usize,
     },
-}
-
-impl Default for Region {
-    fn default() -> Self {
-        Region::Joint
-    }
 }
 
 impl Region {
@@ -365,7 +362,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(e.kind, ErrorKind::Normal);
-        assert_eq!(e.params, ParamSelection::List(vec!["a1".into(), "d2".into()]));
+        assert_eq!(
+            e.params,
+            ParamSelection::List(vec!["a1".into(), "d2".into()])
+        );
         e.check().unwrap();
         let t: TrackerSettings =
             toml::from_str("pose = [1.0, 2.0, 3.0, 0.0, 0.0, 90.0]\nmeasure = \"pose\"").unwrap();
@@ -457,6 +457,9 @@ mod tests {
             center_mm: [0.0; 3],
             size_mm: [1.0, 0.0, 1.0],
         };
-        assert_eq!(key_of(r.check("validation.region").unwrap_err()), "validation.region");
+        assert_eq!(
+            key_of(r.check("validation.region").unwrap_err()),
+            "validation.region"
+        );
     }
 }

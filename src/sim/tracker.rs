@@ -137,7 +137,11 @@ mod tests {
         let world = Frame::from_xyz_rpy([800.0, -200.0, 1200.0], [0.1, 0.2, 0.3]);
         let (p, q) = t.measure(&world, &mut stream(1, "noise"));
         // Hand computation: p = Rᵀ (x − t) with R = Rz(170°) Ry(−20°) Rx(10°).
-        let r = rpy_matrix([10f64.to_radians(), (-20f64).to_radians(), 170f64.to_radians()]);
+        let r = rpy_matrix([
+            10f64.to_radians(),
+            (-20f64).to_radians(),
+            170f64.to_radians(),
+        ]);
         let want = r.transpose() * (world.pos - Vec3::new(2500.0, 300.0, 400.0));
         assert_relative_eq!(p, want, epsilon = 1e-9);
         let rm = quaternion_matrix(&q.unwrap());
@@ -175,7 +179,10 @@ mod tests {
             }
             let sd = (ss / (3 * n) as Real).sqrt();
             let want = (0.015 + 0.006 * range / 1000.0) / 2.0;
-            assert!((sd / want - 1.0).abs() < 0.02, "range {range}: σ {sd} vs {want}");
+            assert!(
+                (sd / want - 1.0).abs() < 0.02,
+                "range {range}: σ {sd} vs {want}"
+            );
             // Unbiased: the mean error is within 5 standard errors of zero.
             assert!((sum / n as Real).amax() < 5.0 * want / (n as Real).sqrt());
         }

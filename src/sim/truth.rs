@@ -41,7 +41,11 @@ pub fn identifiable_params(robot: &Robot, measure: Measure) -> Vec<Param> {
 
 /// The parameters selected by `sel` for `robot`: refuses names that are not parameters of
 /// the robot's model (key `errors.params`).
-pub fn selected_params(robot: &Robot, sel: &ParamSelection, measure: Measure) -> Result<Vec<Param>> {
+pub fn selected_params(
+    robot: &Robot,
+    sel: &ParamSelection,
+    measure: Measure,
+) -> Result<Vec<Param>> {
     match sel {
         ParamSelection::Identifiable => Ok(identifiable_params(robot, measure)),
         ParamSelection::All => Ok(robot
@@ -53,19 +57,17 @@ pub fn selected_params(robot: &Robot, sel: &ParamSelection, measure: Measure) ->
             let all = robot.params();
             let mut out: Vec<Param> = Vec::with_capacity(names.len());
             for n in names {
-                let p = Param::parse(n)
-                    .filter(|p| all.contains(p))
-                    .ok_or_else(|| {
-                        Error::setting(
-                            "errors.params",
-                            format!(
-                                "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
-                                robot.name,
-                                robot.convention.as_str(),
-                                robot.dof()
-                            ),
-                        )
-                    })?;
+                let p = Param::parse(n).filter(|p| all.contains(p)).ok_or_else(|| {
+                    Error::setting(
+                        "errors.params",
+                        format!(
+                            "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
+                            robot.name,
+                            robot.convention.as_str(),
+                            robot.dof()
+                        ),
+                    )
+                })?;
                 if out.contains(&p) {
                     return Err(Error::setting(
                         "errors.params",
@@ -102,7 +104,11 @@ pub fn true_errors(
     Ok(params
         .into_iter()
         .map(|p| {
-            let size = if p.is_length() { s.length_mm } else { s.angle_rad };
+            let size = if p.is_length() {
+                s.length_mm
+            } else {
+                s.angle_rad
+            };
             let e = match s.kind {
                 ErrorKind::Paper => size,
                 ErrorKind::Normal => size * rng.sample::<Real, _>(StandardNormal),
@@ -129,7 +135,11 @@ mod tests {
         let e = true_errors(&r, &s, Measure::Position, &mut stream(1, "errors")).unwrap();
         assert_eq!(
             e,
-            vec![(Param::A(0), 0.5), (Param::Alpha(1), 0.05), (Param::Tool(2), 0.5)]
+            vec![
+                (Param::A(0), 0.5),
+                (Param::Alpha(1), 0.05),
+                (Param::Tool(2), 0.5)
+            ]
         );
     }
 
@@ -142,7 +152,10 @@ mod tests {
                 ..Default::default()
             };
             let e = true_errors(&r, &s, Measure::Position, &mut stream(1, "e")).unwrap_err();
-            assert!(matches!(&e, Error::Setting { key, .. } if key == "errors.params"), "{e}");
+            assert!(
+                matches!(&e, Error::Setting { key, .. } if key == "errors.params"),
+                "{e}"
+            );
             assert!(e.to_string().contains(bad), "{e}");
         }
     }
@@ -157,7 +170,11 @@ mod tests {
         }
         assert!(ids.iter().all(|p| !matches!(p, Param::Base(_))));
         // θ6 and the tool point are coupled for position data (SPEC §2): not both.
-        assert!(!(ids.contains(&Param::Theta(5)) && ids.contains(&Param::Tool(0)) && ids.contains(&Param::Tool(1))));
+        assert!(
+            !(ids.contains(&Param::Theta(5))
+                && ids.contains(&Param::Tool(0))
+                && ids.contains(&Param::Tool(1)))
+        );
         // Its size equals the rank of the analysis and the call is deterministic.
         assert_eq!(ids, identifiable_params(&r, Measure::Position));
         let pose = identifiable_params(&r, Measure::Pose);
@@ -199,6 +216,8 @@ mod tests {
             kind: ErrorKind::None,
             ..Default::default()
         };
-        assert!(true_errors(&r, &none, Measure::Position, &mut rng).unwrap().is_empty());
+        assert!(true_errors(&r, &none, Measure::Position, &mut rng)
+            .unwrap()
+            .is_empty());
     }
 }
