@@ -18,5 +18,7 @@ pub mod identifiability;
 pub mod identify;
 pub mod jacobian;
 pub mod kinematics;
+pub mod registration;
 pub mod robots;
 pub mod sampling;
+pub mod sim;

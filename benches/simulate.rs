@@ -1,0 +1,60 @@
+//! Measuring 50 poses with the simulated tracker (no sag), position and full pose, with
+//! outliers; and the two registrations of 50 points.
+
+use calbench::registration::{register_svd, register_wsvd};
+use calbench::rng::stream;
+use calbench::sampling::uniform_joint_poses;
+use calbench::sim::{measure_poses, MeasureSetting, OutlierSettings, Tracker, TrackerSettings};
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
+use std::hint::black_box;
+
+fn simulate(c: &mut Criterion) {
+    let robot = calbench::robots::irb2600();
+    let qs = uniform_joint_poses(&robot, 50, &mut stream(1, "poses"));
+    let outliers = OutlierSettings {
+        count: Some(4),
+        ..Default::default()
+    };
+    let mut g = c.benchmark_group("measure_50_poses");
+    for (name, measure) in [
+        ("position", MeasureSetting::Position),
+        ("pose", MeasureSetting::Pose),
+    ] {
+        let tracker = Tracker::new(&TrackerSettings {
+            measure,
+            angle_noise_deg: 0.01,
+            ..Default::default()
+        })
+        .expect("valid tracker settings");
+        g.bench_with_input(BenchmarkId::from_parameter(name), &tracker, |b, t| {
+            let mut rng = stream(2, "noise");
+            b.iter(|| {
+                measure_poses(&robot, black_box(&qs), t, Some(&outliers), None, &mut rng)
+                    .expect("measurement")
+            })
+        });
+    }
+    g.finish();
+
+    let tracker = Tracker::new(&TrackerSettings::default()).expect("valid tracker settings");
+    let m = measure_poses(
+        &robot,
+        &qs,
+        &tracker,
+        Some(&outliers),
+        None,
+        &mut stream(3, "noise"),
+    )
+    .expect("measurement");
+    let mut g = c.benchmark_group("register_50_points");
+    g.bench_function("svd", |b| {
+        b.iter(|| register_svd(black_box(&m.true_points), &m.points, None).expect("svd"))
+    });
+    g.bench_function("wsvd", |b| {
+        b.iter(|| register_wsvd(black_box(&m.true_points), &m.points).expect("wsvd"))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, simulate);
+criterion_main!(benches);

@@ -1,0 +1,465 @@
+//! The scenario sections of the virtual measurement (FORMATS.md: `[errors]`, `[tracker]`,
+//! `[outliers]` and the `region` of `[calibration]` / `[validation]`), as serde structs with
+//! the documented defaults and a `check` that refuses bad values naming the key.
+//!
+//! Every struct denies unknown keys, so a typo in a scenario is refused by name.
+
+use serde::{Deserialize, Deserializer};
+
+use crate::error::{Error, Result};
+use crate::jacobian::Measure;
+use crate::kinematics::Param;
+use crate::math::Real;
+
+/// Refuses a non-finite or negative number.
+fn non_negative(key: &str, v: Real) -> Result<()> {
+    if !v.is_finite() || v < 0.0 {
+        return Err(Error::setting(key, format!("must be ≥ 0, got {v}")));
+    }
+    Ok(())
+}
+
+/// How the true robot's parameter errors are drawn (SPEC §3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ErrorKind {
+    /// Guo 2024 §4.2: every length error `+length_mm`, every angle error `+angle_rad`.
+    Paper,
+    /// Gaussian, σ = `length_mm` for lengths and `angle_rad` for angles.
+    Normal,
+    /// Uniform in ±`length_mm` / ±`angle_rad`.
+    Uniform,
+    /// No error: the true robot is the nominal one.
+    None,
+}
+
+/// Which parameters carry an injected error: `"identifiable"`, `"all"` or a list of names.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ParamSelection {
+    /// The joint and tool parameters identifiable from the measured quantity (see
+    /// [`crate::sim::truth::identifiable_params`]).
+    Identifiable,
+    /// Every joint and tool parameter of the robot's model (base excluded).
+    All,
+    /// The named parameters (`theta1`, `d2`, `tool.x`, …).
+    List(Vec<String>),
+}
+
+impl<'de> Deserialize<'de> for ParamSelection {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            One(String),
+            Many(Vec<String>),
+        }
+        match Raw::deserialize(d).map_err(|_| {
+            serde::de::Error::custom(
+                "expected \"identifiable\", \"all\" or a list of parameter names",
+            )
+        })? {
+            Raw::One(s) if s == "identifiable" => Ok(ParamSelection::Identifiable),
+            Raw::One(s) if s == "all" => Ok(ParamSelection::All),
+            Raw::One(s) => Err(serde::de::Error::custom(format!(
+                "expected \"identifiable\", \"all\" or a list of parameter names, got \"{s}\""
+            ))),
+            Raw::Many(v) => Ok(ParamSelection::List(v)),
+        }
+    }
+}
+
+/// `[errors]`: the true robot = nominal + these errors (SPEC §3; Guo 2024 §4.2).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ErrorSettings {
+    /// How errors are drawn; default `"paper"`.
+    pub kind: ErrorKind,
+    /// Length error (mm): the value for `paper`, σ for `normal`, half-width for `uniform`;
+    /// default 0.5.
+    pub length_mm: Real,
+    /// Angle error (rad), same meaning; default 0.05.
+    pub angle_rad: Real,
+    /// Which parameters get an error; default `"identifiable"`.
+    pub params: ParamSelection,
+}
+
+impl Default for ErrorSettings {
+    fn default() -> Self {
+        ErrorSettings {
+            kind: ErrorKind::Paper,
+            length_mm: 0.5,
+            angle_rad: 0.05,
+            params: ParamSelection::Identifiable,
+        }
+    }
+}
+
+impl ErrorSettings {
+    /// Refuses negative or non-finite sizes, an empty list, names that are not parameter
+    /// names and duplicates (keys `errors.length_mm`, `errors.angle_rad`, `errors.params`).
+    /// Whether a name exists in a given robot is checked by
+    /// [`crate::sim::truth::true_errors`].
+    pub fn check(&self) -> Result<()> {
+        non_negative("errors.length_mm", self.length_mm)?;
+        non_negative("errors.angle_rad", self.angle_rad)?;
+        if let ParamSelection::List(names) = &self.params {
+            if names.is_empty() {
+                return Err(Error::setting(
+                    "errors.params",
+                    "the list is empty; give parameter names or \"identifiable\"",
+                ));
+            }
+            let mut seen = Vec::with_capacity(names.len());
+            for n in names {
+                let p = Param::parse(n).ok_or_else(|| {
+                    Error::setting(
+                        "errors.params",
+                        format!(
+                            "unknown parameter \"{n}\" (names are theta1, d1, a1, alpha1, beta1, …, \
+                             base.x … base.rz, tool.x … tool.rz)"
+                        ),
+                    )
+                })?;
+                if seen.contains(&p) {
+                    return Err(Error::setting(
+                        "errors.params",
+                        format!("\"{n}\" is listed twice"),
+                    ));
+                }
+                seen.push(p);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What the tracker measures.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MeasureSetting {
+    /// The target point only.
+    Position,
+    /// The target point and the orientation of the tool frame (6-DOF probe).
+    Pose,
+}
+
+impl MeasureSetting {
+    /// The matching Jacobian row layout.
+    pub fn measure(self) -> Measure {
+        match self {
+            MeasureSetting::Position => Measure::Position,
+            MeasureSetting::Pose => Measure::Pose,
+        }
+    }
+}
+
+/// `[tracker]`: the simulated laser tracker (SPEC §3; Li 2018 §3 and Qiao 2021 §4: Leica
+/// AT901/AT960, MPE = 15 µm + 6 µm/m).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct TrackerSettings {
+    /// The tracker frame in the robot base frame: x, y, z in mm, rx, ry, rz in degrees
+    /// (fixed X-Y-Z, as in robot files); default `[2500, 0, 500, 0, 0, 180]`.
+    pub pose: [Real; 6],
+    /// Constant part of the MPE, µm; default 15.
+    pub mpe_a_um: Real,
+    /// Range-proportional part of the MPE, µm per m; default 6.
+    pub mpe_b_um_per_m: Real,
+    /// Coverage factor: σ = MPE / coverage; default 2.
+    pub coverage: Real,
+    /// Position or full pose; default position.
+    pub measure: MeasureSetting,
+    /// Orientation noise per axis (σ, degrees) for `pose`; default 0.
+    pub angle_noise_deg: Real,
+}
+
+impl Default for TrackerSettings {
+    fn default() -> Self {
+        TrackerSettings {
+            pose: [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0],
+            mpe_a_um: 15.0,
+            mpe_b_um_per_m: 6.0,
+            coverage: 2.0,
+            measure: MeasureSetting::Position,
+            angle_noise_deg: 0.0,
+        }
+    }
+}
+
+impl TrackerSettings {
+    /// Refuses a non-finite pose, negative MPE terms or angle noise, and a coverage ≤ 0.
+    pub fn check(&self) -> Result<()> {
+        if let Some(v) = self.pose.iter().find(|v| !v.is_finite()) {
+            return Err(Error::setting(
+                "tracker.pose",
+                format!("must be 6 finite numbers, got {v}"),
+            ));
+        }
+        non_negative("tracker.mpe_a_um", self.mpe_a_um)?;
+        non_negative("tracker.mpe_b_um_per_m", self.mpe_b_um_per_m)?;
+        if !self.coverage.is_finite() || self.coverage <= 0.0 {
+            return Err(Error::setting(
+                "tracker.coverage",
+                format!("must be > 0, got {}", self.coverage),
+            ));
+        }
+        non_negative("tracker.angle_noise_deg", self.angle_noise_deg)?;
+        Ok(())
+    }
+}
+
+/// `[outliers]`: gross errors added to some measured points (SPEC §3; Ban §3: 2..16 of 50
+/// points, magnitudes 0–0.2 … 0–1.0 mm).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct OutlierSettings {
+    /// Number of displaced points (exclusive with `fraction`); default none (0 outliers).
+    pub count: Option<usize>,
+    /// Fraction of displaced points in [0, 1], rounded to the nearest count.
+    pub fraction: Option<Real>,
+    /// Range of the displacement magnitude, mm; default `[0.5, 1.0]`.
+    pub magnitude_mm: [Real; 2],
+}
+
+impl Default for OutlierSettings {
+    fn default() -> Self {
+        OutlierSettings {
+            count: None,
+            fraction: None,
+            magnitude_mm: [0.5, 1.0],
+        }
+    }
+}
+
+impl OutlierSettings {
+    /// Refuses `count` together with `fraction`, a fraction outside [0, 1] and a magnitude
+    /// range that is not `0 ≤ lo ≤ hi` (finite).
+    pub fn check(&self) -> Result<()> {
+        if self.count.is_some() && self.fraction.is_some() {
+            return Err(Error::setting(
+                "outliers.fraction",
+                "give either outliers.count or outliers.fraction, not both",
+            ));
+        }
+        if let Some(f) = self.fraction {
+            if !(0.0..=1.0).contains(&f) {
+                return Err(Error::setting(
+                    "outliers.fraction",
+                    format!("must be in [0, 1], got {f}"),
+                ));
+            }
+        }
+        let [lo, hi] = self.magnitude_mm;
+        if !lo.is_finite() || !hi.is_finite() || lo < 0.0 || hi < lo {
+            return Err(Error::setting(
+                "outliers.magnitude_mm",
+                format!("must be [lo, hi] with 0 ≤ lo ≤ hi, got [{lo}, {hi}]"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The number of outliers among `n` measured points; a count larger than `n` is refused
+    /// (key `outliers.count`).
+    pub fn count_for(&self, n: usize) -> Result<usize> {
+        self.check()?;
+        match (self.count, self.fraction) {
+            (Some(c), _) if c > n => Err(Error::setting(
+                "outliers.count",
+                format!("{c} outliers asked for but only {n} poses are measured"),
+            )),
+            (Some(c), _) => Ok(c),
+            (None, Some(f)) => Ok(((f * n as Real).round() as usize).min(n)),
+            (None, None) => Ok(0),
+        }
+    }
+}
+
+/// Where measurement poses are drawn (`region` of `[calibration]` and `[validation]`).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
+pub enum Region {
+    /// Uniformly within the joint limits (the default).
+    #[default]
+    Joint,
+    /// Joint configurations whose tool point lies in an axis-aligned box of the base frame
+    /// (Qiao 2021 §4: a 1000 mm cube centred at (550, 0, 550) mm; Ban: an 800 mm cube).
+    Box {
+        /// Centre of the box, mm.
+        center_mm: [Real; 3],
+        /// Edge lengths of the box, mm.
+        size_mm: [Real; 3],
+    },
+    /// A regular grid of `per_joint` values per joint (cell centres of the joint ranges);
+    /// the poses are drawn without repetition from the grid.
+    Grid {
+        /// Values per joint (≥ 1).
+        per_joint: usize,
+    },
+}
+
+impl Region {
+    /// Refuses a non-finite centre, box sizes ≤ 0 and a grid of 0 values per joint; `key`
+    /// names the setting (`calibration.region` or `validation.region`).
+    pub fn check(&self, key: &str) -> Result<()> {
+        match self {
+            Region::Joint => Ok(()),
+            Region::Box { center_mm, size_mm } => {
+                if center_mm.iter().any(|v| !v.is_finite()) {
+                    return Err(Error::setting(
+                        key,
+                        format!("center_mm must be finite, got {center_mm:?}"),
+                    ));
+                }
+                if size_mm.iter().any(|v| !v.is_finite() || *v <= 0.0) {
+                    return Err(Error::setting(
+                        key,
+                        format!("size_mm must be > 0, got {size_mm:?}"),
+                    ));
+                }
+                Ok(())
+            }
+            Region::Grid { per_joint } => {
+                if *per_joint == 0 {
+                    return Err(Error::setting(key, "per_joint must be ≥ 1, got 0"));
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn key_of(e: Error) -> String {
+        match e {
+            Error::Setting { key, .. } => key,
+            other => panic!("expected a setting error, got {other}"),
+        }
+    }
+
+    #[test]
+    fn defaults_match_formats() {
+        let t: TrackerSettings = toml::from_str("").unwrap();
+        assert_eq!(t, TrackerSettings::default());
+        assert_eq!(t.pose, [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]);
+        assert_eq!((t.mpe_a_um, t.mpe_b_um_per_m, t.coverage), (15.0, 6.0, 2.0));
+        let e: ErrorSettings = toml::from_str("").unwrap();
+        assert_eq!(e.kind, ErrorKind::Paper);
+        assert_eq!(e.params, ParamSelection::Identifiable);
+        let o: OutlierSettings = toml::from_str("").unwrap();
+        assert_eq!(o.count_for(50).unwrap(), 0);
+        t.check().unwrap();
+        e.check().unwrap();
+    }
+
+    #[test]
+    fn formats_examples_parse() {
+        let e: ErrorSettings = toml::from_str(
+            "kind = \"normal\"\nlength_mm = 0.1\nangle_rad = 0.001\nparams = [\"a1\", \"d2\"]",
+        )
+        .unwrap();
+        assert_eq!(e.kind, ErrorKind::Normal);
+        assert_eq!(
+            e.params,
+            ParamSelection::List(vec!["a1".into(), "d2".into()])
+        );
+        e.check().unwrap();
+        let t: TrackerSettings =
+            toml::from_str("pose = [1.0, 2.0, 3.0, 0.0, 0.0, 90.0]\nmeasure = \"pose\"").unwrap();
+        assert_eq!(t.measure.measure(), Measure::Pose);
+        #[derive(Deserialize)]
+        struct R {
+            region: Region,
+        }
+        let r: R = toml::from_str(
+            "region = { kind = \"box\", center_mm = [550.0, 0.0, 550.0], size_mm = [1000.0, 1000.0, 1000.0] }",
+        )
+        .unwrap();
+        assert!(matches!(r.region, Region::Box { .. }));
+        let r: R = toml::from_str("region = { kind = \"joint\" }").unwrap();
+        assert_eq!(r.region, Region::Joint);
+        let r: R = toml::from_str("region = { kind = \"grid\", per_joint = 3 }").unwrap();
+        assert_eq!(r.region, Region::Grid { per_joint: 3 });
+        let o: OutlierSettings = toml::from_str("fraction = 0.1").unwrap();
+        assert_eq!(o.count_for(50).unwrap(), 5);
+    }
+
+    #[test]
+    fn negative_noise_is_refused_with_its_key() {
+        let t = TrackerSettings {
+            mpe_a_um: -1.0,
+            ..Default::default()
+        };
+        let e = t.check().unwrap_err();
+        assert!(e.to_string().contains("must be ≥ 0, got -1"), "{e}");
+        assert_eq!(key_of(e), "tracker.mpe_a_um");
+        let t = TrackerSettings {
+            coverage: 0.0,
+            ..Default::default()
+        };
+        assert_eq!(key_of(t.check().unwrap_err()), "tracker.coverage");
+        let e = ErrorSettings {
+            length_mm: Real::NAN,
+            ..Default::default()
+        };
+        assert_eq!(key_of(e.check().unwrap_err()), "errors.length_mm");
+    }
+
+    #[test]
+    fn more_outliers_than_poses_are_refused() {
+        let o = OutlierSettings {
+            count: Some(100),
+            ..Default::default()
+        };
+        o.check().unwrap();
+        assert_eq!(key_of(o.count_for(40).unwrap_err()), "outliers.count");
+        assert_eq!(o.count_for(100).unwrap(), 100);
+        let o = OutlierSettings {
+            magnitude_mm: [1.0, 0.5],
+            ..Default::default()
+        };
+        assert_eq!(key_of(o.check().unwrap_err()), "outliers.magnitude_mm");
+        let o = OutlierSettings {
+            count: Some(1),
+            fraction: Some(0.1),
+            ..Default::default()
+        };
+        assert_eq!(key_of(o.check().unwrap_err()), "outliers.fraction");
+    }
+
+    #[test]
+    fn unknown_keys_and_names_are_refused() {
+        let e = toml::from_str::<TrackerSettings>("mpe_a = 3.0").unwrap_err();
+        assert!(e.to_string().contains("mpe_a"), "{e}");
+        let e = toml::from_str::<OutlierSettings>("cont = 3").unwrap_err();
+        assert!(e.to_string().contains("cont"), "{e}");
+        let e = toml::from_str::<ErrorSettings>("params = \"some\"").unwrap_err();
+        assert!(e.to_string().contains("identifiable"), "{e}");
+        #[derive(Deserialize, Debug)]
+        #[allow(dead_code)]
+        struct R {
+            region: Region,
+        }
+        let e = toml::from_str::<R>("region = { kind = \"box\", center_mm = [0.0, 0.0, 0.0], size_mm = [1.0, 1.0, 1.0], sise = 2 }")
+            .unwrap_err();
+        assert!(e.to_string().contains("sise"), "{e}");
+        let s = ErrorSettings {
+            params: ParamSelection::List(vec!["a1".into(), "thetta2".into()]),
+            ..Default::default()
+        };
+        let e = s.check().unwrap_err();
+        assert!(e.to_string().contains("thetta2"), "{e}");
+        assert_eq!(key_of(e), "errors.params");
+        let r = Region::Box {
+            center_mm: [0.0; 3],
+            size_mm: [1.0, 0.0, 1.0],
+        };
+        assert_eq!(
+            key_of(r.check("validation.region").unwrap_err()),
+            "validation.region"
+        );
+    }
+}

@@ -1,0 +1,223 @@
+//! The true robot's parameter errors (SPEC §3).
+//!
+//! The paper set of Guo 2024 §4.2 puts +0.5 mm on every length and +0.05 rad on every angle
+//! parameter; random sets draw each error from a normal or uniform law whose size depends on
+//! the parameter's type (length or angle). Errors go on the joint and tool parameters only:
+//! the base pose is the business of the registration (the tracker frame is unknown to the
+//! calibration), so base errors would only duplicate the tracker pose.
+
+use rand::Rng as _;
+use rand_distr::StandardNormal;
+
+use super::settings::{ErrorKind, ErrorSettings, ParamSelection};
+use crate::error::{Error, Result};
+use crate::identifiability::analyse;
+use crate::jacobian::Measure;
+use crate::kinematics::{Param, Robot};
+use crate::math::Real;
+use crate::rng::{stream, Rng};
+use crate::sampling::uniform_joint_poses;
+
+/// Poses in the fixed random set used to decide identifiability.
+pub const IDENTIFIABILITY_POSES: usize = 200;
+/// Seed of that pose set (fixed, so the answer depends on the robot and measure only).
+pub const IDENTIFIABILITY_SEED: u64 = 0x1D_E4_71_F1;
+
+/// The joint and tool parameters of `robot` (base excluded, held at its nominal value)
+/// that are identifiable from `measure` data: [`crate::identifiability::analyse`] over
+/// [`IDENTIFIABILITY_POSES`] joint configurations drawn uniformly within the limits with a
+/// fixed seed (Li 2018 §2: QR removal of dependent columns). Deterministic, so callers may
+/// cache it per (robot, measure).
+pub fn identifiable_params(robot: &Robot, measure: Measure) -> Vec<Param> {
+    let params: Vec<Param> = robot
+        .params()
+        .into_iter()
+        .filter(|p| !matches!(p, Param::Base(_)))
+        .collect();
+    let mut rng = stream(IDENTIFIABILITY_SEED, "identifiable-params");
+    let qs = uniform_joint_poses(robot, IDENTIFIABILITY_POSES, &mut rng);
+    analyse(robot, &params, &qs, measure).identifiable
+}
+
+/// The parameters selected by `sel` for `robot`: refuses names that are not parameters of
+/// the robot's model (key `errors.params`).
+pub fn selected_params(
+    robot: &Robot,
+    sel: &ParamSelection,
+    measure: Measure,
+) -> Result<Vec<Param>> {
+    match sel {
+        ParamSelection::Identifiable => Ok(identifiable_params(robot, measure)),
+        ParamSelection::All => Ok(robot
+            .params()
+            .into_iter()
+            .filter(|p| !matches!(p, Param::Base(_)))
+            .collect()),
+        ParamSelection::List(names) => {
+            let all = robot.params();
+            let mut out: Vec<Param> = Vec::with_capacity(names.len());
+            for n in names {
+                let p = Param::parse(n).filter(|p| all.contains(p)).ok_or_else(|| {
+                    Error::setting(
+                        "errors.params",
+                        format!(
+                            "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
+                            robot.name,
+                            robot.convention.as_str(),
+                            robot.dof()
+                        ),
+                    )
+                })?;
+                if out.contains(&p) {
+                    return Err(Error::setting(
+                        "errors.params",
+                        format!("\"{n}\" is listed twice"),
+                    ));
+                }
+                out.push(p);
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// The injected errors (parameter, mm or rad) of the true robot `nominal + errors`
+/// (SPEC §3): for `paper`, `+length_mm` on lengths and `+angle_rad` on angles (Guo 2024
+/// §4.2); for `normal`, N(0, σ²) with σ = `length_mm` / `angle_rad`; for `uniform`,
+/// U(−h, h) with the same half-widths; for `none`, no errors (an empty list). The parameters
+/// come in flat-vector order for `identifiable`/`all` and in list order otherwise.
+pub fn true_errors(
+    nominal: &Robot,
+    s: &ErrorSettings,
+    measure: Measure,
+    rng: &mut Rng,
+) -> Result<Vec<(Param, Real)>> {
+    s.check()?;
+    if s.kind == ErrorKind::None {
+        // Still refuse names that do not exist in this robot.
+        if let ParamSelection::List(_) = s.params {
+            selected_params(nominal, &s.params, measure)?;
+        }
+        return Ok(Vec::new());
+    }
+    let params = selected_params(nominal, &s.params, measure)?;
+    Ok(params
+        .into_iter()
+        .map(|p| {
+            let size = if p.is_length() {
+                s.length_mm
+            } else {
+                s.angle_rad
+            };
+            let e = match s.kind {
+                ErrorKind::Paper => size,
+                ErrorKind::Normal => size * rng.sample::<Real, _>(StandardNormal),
+                ErrorKind::Uniform => size * (2.0 * rng.random::<Real>() - 1.0),
+                ErrorKind::None => 0.0,
+            };
+            (p, e)
+        })
+        .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::stream;
+
+    #[test]
+    fn paper_set_on_named_parameters() {
+        let r = crate::robots::irb2600();
+        let s = ErrorSettings {
+            params: ParamSelection::List(vec!["a1".into(), "alpha2".into(), "tool.z".into()]),
+            ..Default::default()
+        };
+        let e = true_errors(&r, &s, Measure::Position, &mut stream(1, "errors")).unwrap();
+        assert_eq!(
+            e,
+            vec![
+                (Param::A(0), 0.5),
+                (Param::Alpha(1), 0.05),
+                (Param::Tool(2), 0.5)
+            ]
+        );
+    }
+
+    #[test]
+    fn unknown_or_foreign_names_are_refused_naming_the_key() {
+        let r = crate::robots::irb2600(); // standard DH: no β
+        for bad in ["beta2", "theta7", "nonsense"] {
+            let s = ErrorSettings {
+                params: ParamSelection::List(vec![bad.into()]),
+                ..Default::default()
+            };
+            let e = true_errors(&r, &s, Measure::Position, &mut stream(1, "e")).unwrap_err();
+            assert!(
+                matches!(&e, Error::Setting { key, .. } if key == "errors.params"),
+                "{e}"
+            );
+            assert!(e.to_string().contains(bad), "{e}");
+        }
+    }
+
+    #[test]
+    fn identifiable_set_excludes_known_dependencies() {
+        let r = crate::robots::irb2600();
+        let ids = identifiable_params(&r, Measure::Position);
+        // Tool orientation never moves the target point.
+        for c in 3..6 {
+            assert!(!ids.contains(&Param::Tool(c)));
+        }
+        assert!(ids.iter().all(|p| !matches!(p, Param::Base(_))));
+        // θ6 and the tool point are coupled for position data (SPEC §2): not both.
+        assert!(
+            !(ids.contains(&Param::Theta(5))
+                && ids.contains(&Param::Tool(0))
+                && ids.contains(&Param::Tool(1)))
+        );
+        // Its size equals the rank of the analysis and the call is deterministic.
+        assert_eq!(ids, identifiable_params(&r, Measure::Position));
+        let pose = identifiable_params(&r, Measure::Pose);
+        assert!(pose.len() > ids.len());
+    }
+
+    #[test]
+    fn random_sets_have_the_set_spread() {
+        let r = crate::robots::tx60();
+        let mut rng = stream(9, "errors");
+        let (mut ls, mut nl, mut amax) = (0.0, 0, 0.0f64);
+        for _ in 0..200 {
+            let s = ErrorSettings {
+                kind: ErrorKind::Normal,
+                length_mm: 0.1,
+                angle_rad: 0.001,
+                params: ParamSelection::All,
+            };
+            for (p, e) in true_errors(&r, &s, Measure::Pose, &mut rng).unwrap() {
+                if p.is_length() {
+                    ls += e * e;
+                    nl += 1;
+                }
+            }
+            let u = ErrorSettings {
+                kind: ErrorKind::Uniform,
+                ..s
+            };
+            for (p, e) in true_errors(&r, &u, Measure::Pose, &mut rng).unwrap() {
+                if !p.is_length() {
+                    amax = amax.max(e.abs());
+                }
+            }
+        }
+        let sd = (ls / nl as Real).sqrt();
+        assert!((sd / 0.1 - 1.0).abs() < 0.05, "{sd}");
+        assert!(amax <= 0.001 && amax > 0.00099);
+        let none = ErrorSettings {
+            kind: ErrorKind::None,
+            ..Default::default()
+        };
+        assert!(true_errors(&r, &none, Measure::Position, &mut rng)
+            .unwrap()
+            .is_empty());
+    }
+}
