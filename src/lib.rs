@@ -13,10 +13,10 @@ pub mod rng;
 
 pub use error::{Error, Result};
 pub mod commands;
+pub mod compliance;
 pub mod identifiability;
 pub mod jacobian;
 pub mod kinematics;
+pub mod physics;
 pub mod robots;
 pub mod sampling;
-pub mod compliance;
-pub mod physics;
