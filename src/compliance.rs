@@ -267,8 +267,8 @@ impl Compliance {
     fn torques(&self, robot: &Robot, m: &Masses, out: &mut [Real]) {
         let n = robot.dof();
         let g = Vec3::new(0.0, 0.0, -GRAVITY);
-        for j in 0..n {
-            out[j] = 0.0;
+        for (j, out_j) in out.iter_mut().enumerate().take(n) {
+            *out_j = 0.0;
             if robot.joints[j].kind != JointType::Revolute {
                 continue;
             }
@@ -278,7 +278,7 @@ impl Compliance {
             for i in j..n {
                 t += (m.points[i] - o).cross(&(g * self.link_mass[i]));
             }
-            out[j] = z.dot(&t) * 1e-3; // N·mm → N·m
+            *out_j = z.dot(&t) * 1e-3; // N·mm → N·m
         }
     }
 
@@ -312,8 +312,8 @@ impl Compliance {
         let m = self.masses(chain, q);
         let mut dc = [0.0; 16];
         self.torques(robot, &m, &mut dc[..n]);
-        for j in 0..n {
-            dc[j] /= self.stiffness[j];
+        for (d, k) in dc.iter_mut().zip(&self.stiffness) {
+            *d /= k;
         }
         Self::to_joint_values(robot, q, &dc[..n], dq);
     }

@@ -131,7 +131,7 @@ pub fn settle(bodies: &[SpringBody], tool: &Frame) -> Result<Settled> {
             if m > 0.0 {
                 let local = pose.inverse_transform_point(Vector::new(p.x, p.y, p.z) * 1e-3);
                 let i = 0.4 * m * POINT_RADIUS * POINT_RADIUS;
-                mp = mp + MassProperties::new(local, m, Vector::splat(i));
+                mp += MassProperties::new(local, m, Vector::splat(i));
             }
         }
         let body = RigidBodyBuilder::dynamic()
