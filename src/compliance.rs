@@ -503,6 +503,13 @@ mod tests {
     }
 
     #[test]
+    fn compliance_is_send_and_sync() {
+        fn check<T: Send + Sync>() {}
+        check::<Compliance>();
+        check::<ComplianceSettings>();
+    }
+
+    #[test]
     fn zero_mass_gives_zero_sag() {
         let robot = load("irb2600").unwrap();
         let mut qs = uniform_joint_poses(&robot, 5, &mut stream(3, "zero-mass"));
@@ -596,6 +603,9 @@ mod tests {
                 let a = lin.deflected_with_chain(&robot, &chain, q).unwrap();
                 let b = rap.deflected_with_chain(&robot, &chain, q).unwrap();
                 worst = worst.max((a.pos - b.pos).norm());
+                // ‖R_a − R_b‖_F ≈ √2 × the angle between the orientations.
+                let rot_err = (a.rot - b.rot).norm();
+                assert!(rot_err < 2e-7, "orientation differs by {rot_err} rad");
                 sag = sag.max((a.pos - chain.fk(q).pos).norm());
             }
             eprintln!(
