@@ -16,5 +16,6 @@ pub mod commands;
 pub mod identifiability;
 pub mod jacobian;
 pub mod kinematics;
+pub mod poses;
 pub mod robots;
 pub mod sampling;
