@@ -160,8 +160,9 @@ mod tests {
     #[test]
     fn hand_built_d_optimal_exchange() {
         // k = 2, one row per pose. Candidates: e1, e1, 2·e2, e1 + e2 (small), e2.
-        // O1 = sqrt(det JᵀJ)^(1/2)... start {0, 1} is singular (value 0); adding 2 (2·e2)
-        // gives the largest det; removing 0 or 1 (duplicates) — tie to the lower position.
+        // Start {0, 1} is singular (O1 = 0); adding 2 (2·e2) gives the largest O1; removing
+        // 0 or 1 (duplicates) ties, and the lower position goes. Next round: adding 0 and
+        // removing either e1 ties with the current value, so the exchange rule stops.
         let rows: [[Real; 2]; 5] = [[1.0, 0.0], [1.0, 0.0], [0.0, 2.0], [0.1, 0.1], [0.0, 1.0]];
         let blocks = rows
             .iter()
@@ -181,7 +182,10 @@ mod tests {
 
     #[test]
     fn never_lowers_the_objective_and_ends_at_a_local_optimum() {
-        let robot = crate::robots::irb2600();
+        let mut robot = crate::robots::irb2600();
+        // A target point off the flange axis, so θ6 acts on the position.
+        robot.set(crate::kinematics::Param::Tool(0), 80.0);
+        robot.set(crate::kinematics::Param::Tool(2), 120.0);
         let ident = crate::identifiability::analyse(
             &robot,
             &robot.params(),

@@ -280,11 +280,15 @@ pub struct Selection {
 }
 
 /// The objective of a Gram matrix `a = JᵀJ` over `m` poses: singular values of J are
-/// sqrt(eig(JᵀJ)) (symmetric eigenvalues of the small k × k matrix).
+/// sqrt(eig(JᵀJ)) (symmetric eigenvalues of the small k × k matrix). A set with
+/// cond(J) above about 3e6 counts as rank-deficient (objective 0).
 pub(crate) fn objective_of_gram(a: &DMatrix<Real>, objective: Objective, m: usize) -> Real {
     let mut ev = a.symmetric_eigenvalues();
+    // Eigenvalues of JᵀJ carry an absolute error of a few ε·λmax: below 1e-13·λmax (σ below
+    // about 3e-7·σmax) they are noise, and the set counts as rank-deficient.
+    let floor = 1e-13 * ev.iter().fold(0.0 as Real, |a, &b| a.max(b));
     for e in ev.iter_mut() {
-        *e = e.max(0.0).sqrt();
+        *e = if *e > floor { e.sqrt() } else { 0.0 };
     }
     let v = indices::objective_value(objective, ev.as_slice(), m);
     if v.is_nan() {
