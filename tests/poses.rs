@@ -41,12 +41,19 @@ fn detmax_ide_beats_detmax_beats_best_random() {
         })
         .fold(f64::NEG_INFINITY, f64::max);
     let (f_dm, f_di) = (dm.scores.composite, di.scores.composite);
-    assert!(f_dm >= best_random, "detmax {f_dm} < best random {best_random}");
+    assert!(
+        f_dm >= best_random,
+        "detmax {f_dm} < best random {best_random}"
+    );
     assert!(f_di >= f_dm - 1e-9, "detmax-ide {f_di} < detmax {f_dm}");
     // The DETMAX stage of DETMAX-IDE is the same search: its trace starts like DETMAX's.
     assert_eq!(&di.trace[..dm.trace.len()], &dm.trace[..]);
     assert!(di.trace.windows(2).all(|w| w[1] >= w[0]));
-    assert!(dm.termination.contains("exchange rule"), "{}", dm.termination);
+    assert!(
+        dm.termination.contains("exchange rule"),
+        "{}",
+        dm.termination
+    );
     // Scores are computed independently (SVD of J) and agree with the last trace value.
     assert!((di.trace.last().unwrap() - f_di).abs() < 1e-7);
     for sel in [&dm, &di] {

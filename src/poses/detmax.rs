@@ -220,7 +220,10 @@ mod tests {
                 s.push(c);
                 (brute_robot(&model, &cands, &s), c)
             })
-            .fold((Real::NEG_INFINITY, 0), |a, b| if b.0 > a.0 { b } else { a });
+            .fold(
+                (Real::NEG_INFINITY, 0),
+                |a, b| if b.0 > a.0 { b } else { a },
+            );
         let mut plus = res.set.clone();
         plus.push(best_add.1);
         for pos in 0..m {

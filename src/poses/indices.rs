@@ -55,8 +55,9 @@ fn full_rank(sv: &[Real]) -> bool {
 }
 
 fn max_min(sv: &[Real]) -> (Real, Real) {
-    sv.iter()
-        .fold((0.0 as Real, Real::INFINITY), |(a, b), &s| (a.max(s), b.min(s)))
+    sv.iter().fold((0.0 as Real, Real::INFINITY), |(a, b), &s| {
+        (a.max(s), b.min(s))
+    })
 }
 
 /// O1 (eq. 9), computed through logarithms so that large k does not overflow.
@@ -115,7 +116,7 @@ pub fn entropy_weights(sv: &[Real]) -> [Real; 3] {
     let s6 = entropy(sv.iter().map(|s| 1.0 / (s * s)), k);
     let d = [1.0 - s1, 1.0 - s5, 1.0 - s6];
     let total: Real = d.iter().sum();
-    if !(total > 1e-300) || !total.is_finite() {
+    if total.is_nan() || total <= 1e-300 || !total.is_finite() {
         return [1.0 / 3.0; 3];
     }
     [d[0] / total, d[1] / total, d[2] / total]
@@ -135,7 +136,11 @@ pub fn composite(sv: &[Real], m: usize) -> Real {
     }
     let [w1, w5, w6] = entropy_weights(sv);
     let a = (w1 * o1(sv, m)).atan();
-    let b = if w5 > 0.0 { (o5(sv) / w5).atan() } else { PI / 2.0 };
+    let b = if w5 > 0.0 {
+        (o5(sv) / w5).atan()
+    } else {
+        PI / 2.0
+    };
     let c = if w6 > 0.0 {
         (o6(sv) / w6.sqrt()).atan()
     } else {

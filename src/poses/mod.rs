@@ -368,7 +368,9 @@ fn check_count(model: &dyn PoseModel, n_candidates: usize, count: usize) -> crat
     if count < need {
         return Err(Error::setting(
             "calibration.count",
-            format!("{count} poses give fewer rows than the {k} parameters: at least {need} needed"),
+            format!(
+                "{count} poses give fewer rows than the {k} parameters: at least {need} needed"
+            ),
         ));
     }
     if count > n_candidates {
@@ -556,7 +558,9 @@ mod tests {
     #[test]
     fn gram_eigen_path_agrees_with_svd_scores() {
         let robot = crate::robots::irb2600();
-        let params: Vec<Param> = (0..6).flat_map(|j| [Param::Theta(j), Param::A(j)]).collect();
+        let params: Vec<Param> = (0..6)
+            .flat_map(|j| [Param::Theta(j), Param::A(j)])
+            .collect();
         let model = RobotPoseModel::new(&robot, &params, Measure::Position);
         let mut rng = crate::rng::from_seed(3);
         let qs = crate::sampling::uniform_joint_poses(&robot, 12, &mut rng);
@@ -569,7 +573,10 @@ mod tests {
             (Objective::O6, s.o6),
         ] {
             let got = ev.value(&model, &flat, o);
-            assert!((got - want).abs() <= 1e-7 * want.abs(), "{o}: {got} vs {want}");
+            assert!(
+                (got - want).abs() <= 1e-7 * want.abs(),
+                "{o}: {got} vs {want}"
+            );
         }
     }
 
@@ -581,13 +588,41 @@ mod tests {
         let mut rng = crate::rng::from_seed(1);
         let cands = crate::sampling::uniform_joint_poses(&robot, 10, &mut rng);
         // Too few poses for 4 parameters (need 2), too many for the pool.
-        assert!(select(&model, &cands, Strategy::Detmax, &SelectOptions::new(1), &mut rng).is_err());
-        assert!(select(&model, &cands, Strategy::Detmax, &SelectOptions::new(11), &mut rng).is_err());
+        assert!(select(
+            &model,
+            &cands,
+            Strategy::Detmax,
+            &SelectOptions::new(1),
+            &mut rng
+        )
+        .is_err());
+        assert!(select(
+            &model,
+            &cands,
+            Strategy::Detmax,
+            &SelectOptions::new(11),
+            &mut rng
+        )
+        .is_err());
         let mut bad = cands.clone();
         bad[3][2] = 1e9;
-        assert!(select(&model, &bad, Strategy::Random, &SelectOptions::new(3), &mut rng).is_err());
+        assert!(select(
+            &model,
+            &bad,
+            Strategy::Random,
+            &SelectOptions::new(3),
+            &mut rng
+        )
+        .is_err());
         bad[3] = vec![0.0; 2];
-        assert!(select(&model, &bad, Strategy::Random, &SelectOptions::new(3), &mut rng).is_err());
+        assert!(select(
+            &model,
+            &bad,
+            Strategy::Random,
+            &SelectOptions::new(3),
+            &mut rng
+        )
+        .is_err());
         let mut o = SelectOptions::new(3);
         o.ide.population = 3;
         assert!(select(&model, &cands, Strategy::Ide, &o, &mut rng).is_err());

@@ -72,7 +72,7 @@ pub fn separate(
     for (name, idx) in &blocks {
         let g = sub_gcn(idx);
         table.push((name.to_string(), g));
-        if !(g <= threshold) {
+        if g.is_nan() || g > threshold {
             offending.push((*name, idx.clone()));
         }
     }
