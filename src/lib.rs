@@ -21,6 +21,7 @@ pub mod jacobian;
 pub mod kinematics;
 pub mod registration;
 pub mod physics;
+pub mod poses;
 pub mod robots;
 pub mod sampling;
 pub mod sim;

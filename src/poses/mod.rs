@@ -1,0 +1,632 @@
+//! Measurement-pose selection (SPEC §5; Guo 2024, `papers/guo2024-detmax-ide-pose-optimization.txt`).
+//!
+//! - [`indices`]: observability indices O1–O6, the entropy-weighted composite (eqs. 9–15), GCN
+//!   (eq. 14);
+//! - [`separation`]: ill-conditioned parameter separation by branch and bound / backward
+//!   elimination over the θ/α/a/d/β blocks (§3.1, tables 1–3);
+//! - [`detmax`]: the DETMAX exchange algorithm (§3.2 steps 1–3);
+//! - [`ide`]: the improved differential evolution (eqs. 19–26).
+//!
+//! [`select`] runs one [`Strategy`] over a candidate pool; [`objective_curve`] is Guo's fig. 7
+//! (objective against pose count). A [`PoseModel`] gives the Jacobian rows of one pose; the
+//! caller chooses its parameters (the identifiable ones, or those kept by [`separate`]) and
+//! any column scaling (the indices depend on the units of the columns).
+
+pub mod detmax;
+pub mod ide;
+pub mod indices;
+pub mod separation;
+
+use std::cell::RefCell;
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::{DMatrix, DMatrixViewMut};
+use rand::seq::index::sample;
+
+pub use ide::IdeOptions;
+pub use indices::{score, Scores};
+pub use separation::{separate, Separation};
+
+use crate::jacobian::{pose_rows, Columns, Measure};
+use crate::kinematics::{Chain, Param, Robot};
+use crate::math::Real;
+use crate::rng::Rng;
+use crate::Error;
+
+/// The Jacobian rows of one measurement pose: what pose selection optimises over.
+pub trait PoseModel: Sync {
+    /// Number of joint values per pose.
+    fn dof(&self) -> usize;
+    /// Number of parameters (Jacobian columns), k.
+    fn n_params(&self) -> usize;
+    /// Jacobian rows per pose (3 for positions, 6 for full poses).
+    fn rows_per_pose(&self) -> usize;
+    /// Joint limits (lower, upper) per joint, in the units of the poses.
+    fn limits(&self) -> &[(Real, Real)];
+    /// Writes the `rows_per_pose × n_params` Jacobian block of pose `q` into `out`.
+    fn jacobian_block(&self, q: &[Real], out: &mut DMatrixViewMut<Real>);
+}
+
+/// A [`PoseModel`] over a robot's identification Jacobian ([`crate::jacobian::pose_rows`],
+/// Guo 2024 eq. 7), with optional column scaling.
+#[derive(Clone, Debug)]
+pub struct RobotPoseModel {
+    chain: Chain,
+    cols: Columns,
+    measure: Measure,
+    limits: Vec<(Real, Real)>,
+    scale: Option<Vec<Real>>,
+}
+
+thread_local! {
+    static SCRATCH: RefCell<DMatrix<Real>> = RefCell::new(DMatrix::zeros(0, 0));
+}
+
+impl RobotPoseModel {
+    /// The model of `robot` for the parameters `params` (in that order) and `measure`; poses
+    /// are joint values in internal units (rad, mm) within the robot's joint limits. The
+    /// coupled-axis constraint of Guo's 3T2R arm (eq. 16, last line) is not modelled: only
+    /// the per-joint limits bound the search.
+    pub fn new(robot: &Robot, params: &[Param], measure: Measure) -> Self {
+        RobotPoseModel {
+            chain: robot.chain(),
+            cols: Columns::new(params, robot.dof()),
+            measure,
+            limits: robot.joints.iter().map(|j| j.limits).collect(),
+            scale: None,
+        }
+    }
+
+    /// The same model with column `c` multiplied by `scale[c]` (e.g. the inverse column norms
+    /// of [`crate::identifiability::scale_columns`] over a reference pose set, so that mm and
+    /// rad columns compare). Fails when the length differs from the parameter count or a
+    /// factor is not finite and positive.
+    pub fn with_column_scale(mut self, scale: Vec<Real>) -> crate::Result<Self> {
+        if scale.len() != self.cols.len() {
+            return Err(Error::setting(
+                "column_scale",
+                format!("{} factors for {} parameters", scale.len(), self.cols.len()),
+            ));
+        }
+        if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
+            return Err(Error::setting(
+                "column_scale",
+                "every factor must be finite and positive",
+            ));
+        }
+        self.scale = Some(scale);
+        Ok(self)
+    }
+
+    /// The parameters, one per column.
+    pub fn params(&self) -> &[Param] {
+        self.cols.params()
+    }
+}
+
+impl PoseModel for RobotPoseModel {
+    fn dof(&self) -> usize {
+        self.limits.len()
+    }
+    fn n_params(&self) -> usize {
+        self.cols.len()
+    }
+    fn rows_per_pose(&self) -> usize {
+        self.measure.rows()
+    }
+    fn limits(&self) -> &[(Real, Real)] {
+        &self.limits
+    }
+    fn jacobian_block(&self, q: &[Real], out: &mut DMatrixViewMut<Real>) {
+        let (r, k) = (self.measure.rows(), self.cols.len());
+        SCRATCH.with(|s| {
+            let mut s = s.borrow_mut();
+            if s.shape() != (r, k) {
+                *s = DMatrix::zeros(r, k);
+            } else {
+                s.fill(0.0);
+            }
+            pose_rows(&self.chain, &self.cols, q, self.measure, &mut s, 0);
+            if let Some(sc) = &self.scale {
+                for (mut c, f) in s.column_iter_mut().zip(sc) {
+                    c *= *f;
+                }
+            }
+            out.copy_from(&*s);
+        });
+    }
+}
+
+/// The objective maximised by DETMAX and IDE (Guo 2024 eq. 15, or a single index).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Objective {
+    /// The entropy-weighted composite index (eqs. 12–15); `"composite"`.
+    Composite,
+    /// O1 (eq. 9, D-optimal); `"o1"`.
+    O1,
+    /// O6 (eq. 11, A-optimal); `"o6"`.
+    O6,
+}
+
+impl Objective {
+    /// The name used in scenario files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Objective::Composite => "composite",
+            Objective::O1 => "o1",
+            Objective::O6 => "o6",
+        }
+    }
+}
+
+impl fmt::Display for Objective {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for Objective {
+    type Err = Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "composite" => Ok(Objective::Composite),
+            "o1" => Ok(Objective::O1),
+            "o6" => Ok(Objective::O6),
+            _ => Err(Error::setting(
+                "calibration.objective",
+                format!("unknown objective `{s}`; allowed: composite, o1, o6"),
+            )),
+        }
+    }
+}
+
+/// How poses are chosen from the candidates.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Strategy {
+    /// A uniformly random subset of the candidates; `"random"`.
+    Random,
+    /// DETMAX exchange from the first `count` candidates (Guo 2024 §3.2); `"detmax"`.
+    Detmax,
+    /// IDE (eqs. 19–26) from a random subset of the candidates; `"ide"`.
+    Ide,
+    /// DETMAX, then IDE from the DETMAX set; `"detmax-ide"`.
+    DetmaxIde,
+}
+
+impl Strategy {
+    /// The name used in scenario files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Strategy::Random => "random",
+            Strategy::Detmax => "detmax",
+            Strategy::Ide => "ide",
+            Strategy::DetmaxIde => "detmax-ide",
+        }
+    }
+}
+
+impl fmt::Display for Strategy {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for Strategy {
+    type Err = Error;
+    fn from_str(s: &str) -> crate::Result<Self> {
+        match s {
+            "random" => Ok(Strategy::Random),
+            "detmax" => Ok(Strategy::Detmax),
+            "ide" => Ok(Strategy::Ide),
+            "detmax-ide" => Ok(Strategy::DetmaxIde),
+            _ => Err(Error::setting(
+                "calibration.strategies",
+                format!("unknown strategy `{s}`; allowed: random, detmax, ide, detmax-ide"),
+            )),
+        }
+    }
+}
+
+/// Settings of [`select`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SelectOptions {
+    /// Number of poses to choose, M.
+    pub count: usize,
+    /// The objective to maximise.
+    pub objective: Objective,
+    /// Settings of the IDE stage.
+    pub ide: IdeOptions,
+    /// Upper bound on DETMAX exchanges (each is one add and one remove).
+    pub detmax_max_exchanges: usize,
+}
+
+impl Default for SelectOptions {
+    /// 60 poses (Guo 2024 §4.2), composite objective, default IDE, at most 500 exchanges.
+    fn default() -> Self {
+        SelectOptions {
+            count: 60,
+            objective: Objective::Composite,
+            ide: IdeOptions::default(),
+            detmax_max_exchanges: 500,
+        }
+    }
+}
+
+impl SelectOptions {
+    /// The defaults with `count` poses.
+    pub fn new(count: usize) -> Self {
+        SelectOptions {
+            count,
+            ..Default::default()
+        }
+    }
+}
+
+/// The chosen poses and how they were found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Selection {
+    /// The chosen poses (joint values in the model's units).
+    pub poses: Vec<Vec<Real>>,
+    /// For each pose, its index among the candidates; `None` for a pose created by IDE.
+    pub indices: Vec<Option<usize>>,
+    /// The indices of the chosen set ([`score`]).
+    pub scores: Scores,
+    /// The objective after each iteration: the start, then each DETMAX exchange, then each
+    /// IDE generation.
+    pub trace: Vec<Real>,
+    /// Why the search stopped.
+    pub termination: String,
+}
+
+/// The objective of a Gram matrix `a = JᵀJ` over `m` poses: singular values of J are
+/// sqrt(eig(JᵀJ)) (symmetric eigenvalues of the small k × k matrix). A set with
+/// cond(J) above about 3e6 counts as rank-deficient (objective 0).
+pub(crate) fn objective_of_gram(a: &DMatrix<Real>, objective: Objective, m: usize) -> Real {
+    let mut ev = a.symmetric_eigenvalues();
+    // Eigenvalues of JᵀJ carry an absolute error of a few ε·λmax: below 1e-13·λmax (σ below
+    // about 3e-7·σmax) they are noise, and the set counts as rank-deficient.
+    let floor = 1e-13 * ev.iter().fold(0.0 as Real, |a, &b| a.max(b));
+    for e in ev.iter_mut() {
+        *e = if *e > floor { e.sqrt() } else { 0.0 };
+    }
+    let v = indices::objective_value(objective, ev.as_slice(), m);
+    if v.is_nan() {
+        Real::NEG_INFINITY
+    } else {
+        v
+    }
+}
+
+/// Reusable buffers for evaluating pose sets.
+pub(crate) struct Evaluator {
+    block: DMatrix<Real>,
+    gram: DMatrix<Real>,
+}
+
+impl Evaluator {
+    pub(crate) fn new(model: &dyn PoseModel) -> Self {
+        let (r, k) = (model.rows_per_pose(), model.n_params());
+        Evaluator {
+            block: DMatrix::zeros(r, k),
+            gram: DMatrix::zeros(k, k),
+        }
+    }
+
+    /// The objective of the poses stored flat in `poses` (`dof` values each).
+    pub(crate) fn value(
+        &mut self,
+        model: &dyn PoseModel,
+        poses: &[Real],
+        objective: Objective,
+    ) -> Real {
+        let dof = model.dof();
+        self.gram.fill(0.0);
+        let m = poses.len() / dof.max(1);
+        for q in poses.chunks_exact(dof) {
+            let mut v = self.block.as_view_mut();
+            model.jacobian_block(q, &mut v);
+            self.gram.gemm_tr(1.0, &self.block, &self.block, 1.0);
+        }
+        objective_of_gram(&self.gram, objective, m)
+    }
+}
+
+/// Checks the candidates: right length, finite, within the limits.
+fn check_candidates(model: &dyn PoseModel, candidates: &[Vec<Real>]) -> crate::Result<()> {
+    let lim = model.limits();
+    for (i, q) in candidates.iter().enumerate() {
+        if q.len() != model.dof() {
+            return Err(Error::setting(
+                "candidates",
+                format!(
+                    "pose {i} has {} joint values, the robot has {}",
+                    q.len(),
+                    model.dof()
+                ),
+            ));
+        }
+        for (j, (&v, &(lo, hi))) in q.iter().zip(lim).enumerate() {
+            if !v.is_finite() || v < lo - 1e-9 || v > hi + 1e-9 {
+                return Err(Error::setting(
+                    "candidates",
+                    format!("pose {i}, joint {}: {v} is outside [{lo}, {hi}]", j + 1),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn check_count(model: &dyn PoseModel, n_candidates: usize, count: usize) -> crate::Result<()> {
+    let r = model.rows_per_pose();
+    let k = model.n_params();
+    if k == 0 {
+        return Err(Error::setting("params", "no parameters to observe"));
+    }
+    let need = k.div_ceil(r.max(1));
+    if count < need {
+        return Err(Error::setting(
+            "calibration.count",
+            format!(
+                "{count} poses give fewer rows than the {k} parameters: at least {need} needed"
+            ),
+        ));
+    }
+    if count > n_candidates {
+        return Err(Error::setting(
+            "calibration.count",
+            format!("{count} poses requested from {n_candidates} candidates"),
+        ));
+    }
+    Ok(())
+}
+
+/// Chooses `opts.count` measurement poses from `candidates` (joint values in the model's
+/// units, within its limits) by `strategy`, maximising `opts.objective` (Guo 2024 §3.2).
+///
+/// - `Random`: a uniformly random subset;
+/// - `Detmax`: [`detmax::detmax`] from the first `count` candidates (the paper's start);
+/// - `Ide`: [`ide::ide`] from a random subset;
+/// - `DetmaxIde`: DETMAX, then IDE from the DETMAX set.
+///
+/// Randomness comes only from `rng`; the result is the same for any number of rayon threads.
+/// Errors: bad candidates, too few poses for the parameter count, more poses than
+/// candidates, bad IDE settings.
+pub fn select(
+    model: &dyn PoseModel,
+    candidates: &[Vec<Real>],
+    strategy: Strategy,
+    opts: &SelectOptions,
+    rng: &mut Rng,
+) -> crate::Result<Selection> {
+    check_candidates(model, candidates)?;
+    check_count(model, candidates.len(), opts.count)?;
+    if matches!(strategy, Strategy::Ide | Strategy::DetmaxIde) {
+        opts.ide.check()?;
+    }
+    let m = opts.count;
+    let (idx, mut trace, mut termination) = match strategy {
+        Strategy::Random | Strategy::Ide => {
+            let idx: Vec<usize> = sample(rng, candidates.len(), m).into_vec();
+            (idx, Vec::new(), String::new())
+        }
+        Strategy::Detmax | Strategy::DetmaxIde => {
+            let res = detmax::detmax(
+                model,
+                candidates,
+                (0..m).collect(),
+                opts.objective,
+                opts.detmax_max_exchanges,
+            );
+            (res.set, res.trace, res.termination)
+        }
+    };
+    let mut poses: Vec<Vec<Real>> = idx.iter().map(|&i| candidates[i].clone()).collect();
+    let mut indices: Vec<Option<usize>> = idx.iter().map(|&i| Some(i)).collect();
+    if matches!(strategy, Strategy::Ide | Strategy::DetmaxIde) {
+        let res = ide::ide(model, &poses, &indices, opts.objective, &opts.ide, rng);
+        if trace.is_empty() {
+            trace.push(res.start_value);
+        }
+        trace.extend_from_slice(&res.trace);
+        termination = if termination.is_empty() {
+            res.termination
+        } else {
+            format!("{termination}; {}", res.termination)
+        };
+        poses = res.poses;
+        indices = res.indices;
+    }
+    if strategy == Strategy::Random {
+        let mut ev = Evaluator::new(model);
+        let flat: Vec<Real> = poses.iter().flatten().copied().collect();
+        trace.push(ev.value(model, &flat, opts.objective));
+        termination = "random subset".to_string();
+    }
+    let scores = score(model, &poses);
+    Ok(Selection {
+        poses,
+        indices,
+        scores,
+        trace,
+        termination,
+    })
+}
+
+/// The objective against the pose count (Guo 2024 fig. 7): one random ordering of the
+/// candidates is drawn from `rng`, and for each `c` in `counts` the first `c` poses of it are
+/// scored with `opts.objective`. A count with fewer rows than parameters scores 0.
+/// Errors: a count of 0 or above the number of candidates, bad candidates.
+pub fn objective_curve(
+    model: &dyn PoseModel,
+    candidates: &[Vec<Real>],
+    counts: &[usize],
+    opts: &SelectOptions,
+    rng: &mut Rng,
+) -> crate::Result<Vec<(usize, Real)>> {
+    check_candidates(model, candidates)?;
+    for &c in counts {
+        if c == 0 || c > candidates.len() {
+            return Err(Error::setting(
+                "counts",
+                format!("{c} poses: allowed 1..={}", candidates.len()),
+            ));
+        }
+    }
+    let order = sample(rng, candidates.len(), candidates.len()).into_vec();
+    let mut ev = Evaluator::new(model);
+    let mut flat = Vec::with_capacity(candidates.len() * model.dof());
+    Ok(counts
+        .iter()
+        .map(|&c| {
+            flat.clear();
+            for &i in &order[..c] {
+                flat.extend_from_slice(&candidates[i]);
+            }
+            let v = ev.value(model, &flat, opts.objective).max(0.0);
+            (c, v)
+        })
+        .collect())
+}
+
+#[cfg(test)]
+pub(crate) mod test_models {
+    use super::*;
+
+    /// A model whose pose `[i]` has the fixed Jacobian block `blocks[i]` (for hand-built
+    /// tests); limits `[0, n − 1]`.
+    pub struct TableModel {
+        pub blocks: Vec<DMatrix<Real>>,
+        pub limits: Vec<(Real, Real)>,
+    }
+
+    impl TableModel {
+        pub fn new(blocks: Vec<DMatrix<Real>>) -> Self {
+            let n = blocks.len() as Real;
+            TableModel {
+                blocks,
+                limits: vec![(0.0, n - 1.0)],
+            }
+        }
+        pub fn candidates(&self) -> Vec<Vec<Real>> {
+            (0..self.blocks.len()).map(|i| vec![i as Real]).collect()
+        }
+    }
+
+    impl PoseModel for TableModel {
+        fn dof(&self) -> usize {
+            1
+        }
+        fn n_params(&self) -> usize {
+            self.blocks[0].ncols()
+        }
+        fn rows_per_pose(&self) -> usize {
+            self.blocks[0].nrows()
+        }
+        fn limits(&self) -> &[(Real, Real)] {
+            &self.limits
+        }
+        fn jacobian_block(&self, q: &[Real], out: &mut DMatrixViewMut<Real>) {
+            let i = (q[0].round().max(0.0) as usize).min(self.blocks.len() - 1);
+            out.copy_from(&self.blocks[i]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_parse_and_round_trip() {
+        for s in [
+            Strategy::Random,
+            Strategy::Detmax,
+            Strategy::Ide,
+            Strategy::DetmaxIde,
+        ] {
+            assert_eq!(s.as_str().parse::<Strategy>().ok(), Some(s));
+        }
+        for o in [Objective::Composite, Objective::O1, Objective::O6] {
+            assert_eq!(o.to_string().parse::<Objective>().ok(), Some(o));
+        }
+        assert!("DETMAX".parse::<Strategy>().is_err());
+        assert!("o2".parse::<Objective>().is_err());
+    }
+
+    #[test]
+    fn gram_eigen_path_agrees_with_svd_scores() {
+        let robot = crate::robots::irb2600();
+        let params: Vec<Param> = (0..6)
+            .flat_map(|j| [Param::Theta(j), Param::A(j)])
+            .collect();
+        let model = RobotPoseModel::new(&robot, &params, Measure::Position);
+        let mut rng = crate::rng::from_seed(3);
+        let qs = crate::sampling::uniform_joint_poses(&robot, 12, &mut rng);
+        let s = score(&model, &qs);
+        let flat: Vec<Real> = qs.iter().flatten().copied().collect();
+        let mut ev = Evaluator::new(&model);
+        for (o, want) in [
+            (Objective::Composite, s.composite),
+            (Objective::O1, s.o1),
+            (Objective::O6, s.o6),
+        ] {
+            let got = ev.value(&model, &flat, o);
+            assert!(
+                (got - want).abs() <= 1e-7 * want.abs(),
+                "{o}: {got} vs {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_inputs_are_errors() {
+        let robot = crate::robots::irb2600();
+        let params = vec![Param::A(0), Param::A(1), Param::D(0), Param::Theta(1)];
+        let model = RobotPoseModel::new(&robot, &params, Measure::Position);
+        let mut rng = crate::rng::from_seed(1);
+        let cands = crate::sampling::uniform_joint_poses(&robot, 10, &mut rng);
+        // Too few poses for 4 parameters (need 2), too many for the pool.
+        assert!(select(
+            &model,
+            &cands,
+            Strategy::Detmax,
+            &SelectOptions::new(1),
+            &mut rng
+        )
+        .is_err());
+        assert!(select(
+            &model,
+            &cands,
+            Strategy::Detmax,
+            &SelectOptions::new(11),
+            &mut rng
+        )
+        .is_err());
+        let mut bad = cands.clone();
+        bad[3][2] = 1e9;
+        assert!(select(
+            &model,
+            &bad,
+            Strategy::Random,
+            &SelectOptions::new(3),
+            &mut rng
+        )
+        .is_err());
+        bad[3] = vec![0.0; 2];
+        assert!(select(
+            &model,
+            &bad,
+            Strategy::Random,
+            &SelectOptions::new(3),
+            &mut rng
+        )
+        .is_err());
+        let mut o = SelectOptions::new(3);
+        o.ide.population = 3;
+        assert!(select(&model, &cands, Strategy::Ide, &o, &mut rng).is_err());
+        assert!(model.clone().with_column_scale(vec![1.0; 3]).is_err());
+        assert!(objective_curve(&model, &cands, &[0], &o, &mut rng).is_err());
+    }
+}
