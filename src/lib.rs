@@ -18,3 +18,5 @@ pub mod jacobian;
 pub mod kinematics;
 pub mod robots;
 pub mod sampling;
+pub mod errmodel;
+pub mod metaheur;
