@@ -146,7 +146,7 @@ pub fn rows_into(
         }
         ErrorModel::DirectFk => {
             let dp = pm - t.pos;
-            let dw = rotation_vector(&(rm * t.rot.transpose()));
+            let dw = log_rotation(&(rm * t.rot.transpose()));
             for k in 0..3 {
                 r[row0 + k] = dp[k];
                 r[row0 + 3 + k] = dw[k];
@@ -154,6 +154,27 @@ pub fn rows_into(
         }
     }
     t
+}
+
+/// The rotation vector of `r`, robust near the identity (atan2 of the skew part's norm and
+/// the trace, so no `acos` of a value rounded above 1).
+fn log_rotation(r: &crate::math::Mat3) -> Vec3 {
+    let s = Vec3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    ) * 0.5;
+    let sin = s.norm();
+    let cos = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+    if sin < 1e-300 {
+        return if cos > 0.0 { s } else { rotation_vector(r) };
+    }
+    let angle = sin.atan2(cos);
+    if angle > 3.0 {
+        // Near π the skew part loses the axis: fall back to the general logarithm.
+        return rotation_vector(r);
+    }
+    s * (angle / sin)
 }
 
 /// One pose's residual and Jacobian of `model` for `robot` (the linearisation point) and the
@@ -263,6 +284,11 @@ pub fn identify(
     let mut last_step = 0.0;
     for _ in 0..iterations {
         let (r, j) = stack(model, &robot, params, qs, measured)?;
+        if r.iter().chain(j.iter()).any(|v| !v.is_finite()) {
+            return Err(Error::Compute(format!(
+                "{model} identification diverged (non-finite residual or Jacobian)"
+            )));
+        }
         let dx = j
             .svd(true, true)
             .solve(&r, 1e-12)

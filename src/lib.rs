@@ -13,10 +13,10 @@ pub mod rng;
 
 pub use error::{Error, Result};
 pub mod commands;
+pub mod errmodel;
 pub mod identifiability;
 pub mod jacobian;
 pub mod kinematics;
+pub mod metaheur;
 pub mod robots;
 pub mod sampling;
-pub mod errmodel;
-pub mod metaheur;

@@ -1016,8 +1016,7 @@ impl<'a> MetaProblem<'a> {
             total += (self.points[j] - p).norm();
             if let Some(rots) = &self.rotations {
                 let dr = rots[j] - r;
-                total +=
-                    self.k * (dr.column(0).norm() + dr.column(1).norm() + dr.column(2).norm());
+                total += self.k * (dr.column(0).norm() + dr.column(1).norm() + dr.column(2).norm());
             }
         }
         total
@@ -1066,4 +1065,340 @@ pub fn poses_in_cube(
         )));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::stream;
+    use approx::assert_relative_eq;
+
+    fn sphere(x: &[Real]) -> Real {
+        let c = [1.0, -2.0, 0.5, 3.0, -1.0];
+        x.iter().zip(c).map(|(a, b)| (a - b) * (a - b)).sum()
+    }
+
+    fn rosenbrock(x: &[Real]) -> Real {
+        (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2)
+    }
+
+    fn dist(x: &[Real], c: &[Real]) -> Real {
+        x.iter()
+            .zip(c)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<Real>()
+            .sqrt()
+    }
+
+    #[test]
+    fn halton_matches_radical_inverse_by_hand() {
+        assert_relative_eq!(halton(0, 2), 0.0);
+        assert_relative_eq!(halton(1, 2), 0.5);
+        assert_relative_eq!(halton(2, 2), 0.25);
+        assert_relative_eq!(halton(3, 2), 0.75);
+        assert_relative_eq!(halton(6, 2), 0.375, epsilon = 1e-15); // 110b → .011b
+        assert_relative_eq!(halton(1, 3), 1.0 / 3.0, epsilon = 1e-15);
+        assert_relative_eq!(halton(5, 3), 7.0 / 9.0, epsilon = 1e-15); // 12₃ → .21₃
+        assert_eq!(primes(6), vec![2, 3, 5, 7, 11, 13]);
+        let b = Bounds {
+            lower: vec![-1.0, 10.0, 0.0],
+            upper: vec![1.0, 20.0, 5.0],
+        };
+        let pop = halton_population(4, &b);
+        assert_eq!(pop.len(), 4);
+        // Point 0 is (h(1,2), h(1,3), h(1,5)) = (1/2, 1/3, 1/5) scaled.
+        assert_relative_eq!(pop[0][0], 0.0, epsilon = 1e-15);
+        assert_relative_eq!(pop[0][1], 10.0 + 10.0 / 3.0, epsilon = 1e-12);
+        assert_relative_eq!(pop[0][2], 1.0, epsilon = 1e-12);
+        assert_relative_eq!(pop[1][0], -0.5, epsilon = 1e-15);
+        for p in &pop {
+            for i in 0..3 {
+                assert!(p[i] >= b.lower[i] && p[i] <= b.upper[i]);
+            }
+        }
+    }
+
+    #[test]
+    fn swarms_find_the_sphere_minimum() {
+        let b = Bounds::symmetric(&[5.0; 5]);
+        let c = [1.0, -2.0, 0.5, 3.0, -1.0];
+        let o = PsoOptions {
+            iterations: 300,
+            ..Default::default()
+        };
+        let r = pso(&sphere, &b, &o, &mut stream(3, "pso")).unwrap();
+        assert!(dist(&r.x, &c) < 1e-4, "pso {:?}", r.x);
+        let o = BasPsoOptions {
+            iterations: 300,
+            ..Default::default()
+        };
+        let r = bas_pso(&sphere, &b, &o, &mut stream(3, "bas_pso")).unwrap();
+        assert!(dist(&r.x, &c) < 1e-4, "bas_pso {:?}", r.x);
+        assert_eq!(r.evaluations, 40 + 300 * 3 * 40);
+        assert_eq!(r.trace.len(), 300);
+        assert!(r.trace.windows(2).all(|w| w[1] <= w[0]));
+        let o = BasOptions {
+            iterations: 3000,
+            ..Default::default()
+        };
+        let r = bas(&sphere, &b, &o, &mut stream(3, "bas")).unwrap();
+        assert!(dist(&r.x, &c) < 1e-2, "bas {:?}", r.x);
+        assert_relative_eq!(r.fitness, sphere(&r.x));
+    }
+
+    #[test]
+    fn swarms_find_the_rosenbrock_minimum() {
+        let b = Bounds::symmetric(&[2.0, 2.0]);
+        let o = PsoOptions {
+            iterations: 400,
+            ..Default::default()
+        };
+        let r = pso(&rosenbrock, &b, &o, &mut stream(4, "pso")).unwrap();
+        assert!(dist(&r.x, &[1.0, 1.0]) < 1e-3, "pso {:?}", r.x);
+        let o = BasPsoOptions {
+            iterations: 400,
+            ..Default::default()
+        };
+        let r = bas_pso(&rosenbrock, &b, &o, &mut stream(4, "bas_pso")).unwrap();
+        assert!(dist(&r.x, &[1.0, 1.0]) < 1e-3, "bas_pso {:?}", r.x);
+        let o = BasOptions {
+            iterations: 5000,
+            ..Default::default()
+        };
+        let r = bas(&rosenbrock, &b, &o, &mut stream(4, "bas")).unwrap();
+        assert!(dist(&r.x, &[1.0, 1.0]) < 0.1, "bas {:?} {}", r.x, r.fitness);
+    }
+
+    #[test]
+    fn results_depend_on_the_seed_only() {
+        let b = Bounds::symmetric(&[5.0; 5]);
+        let o = BasPsoOptions {
+            iterations: 50,
+            ..Default::default()
+        };
+        let a = bas_pso(&sphere, &b, &o, &mut stream(9, "x")).unwrap();
+        let seq = BasPsoOptions {
+            parallel: false,
+            ..o.clone()
+        };
+        let s = bas_pso(&sphere, &b, &seq, &mut stream(9, "x")).unwrap();
+        assert_eq!(a, s);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(3)
+            .build()
+            .unwrap();
+        let t = pool.install(|| bas_pso(&sphere, &b, &o, &mut stream(9, "x")).unwrap());
+        assert_eq!(a, t);
+        let other = bas_pso(&sphere, &b, &o, &mut stream(10, "x")).unwrap();
+        assert_ne!(a.x, other.x);
+        let po = PsoOptions {
+            iterations: 50,
+            ..Default::default()
+        };
+        let p1 = pso(&sphere, &b, &po, &mut stream(9, "x")).unwrap();
+        let p2 = pso(&sphere, &b, &po, &mut stream(9, "x")).unwrap();
+        assert_eq!(p1, p2);
+        let bo = BasOptions {
+            iterations: 50,
+            ..Default::default()
+        };
+        let b1 = bas(&sphere, &b, &bo, &mut stream(9, "x")).unwrap();
+        let b2 = bas(&sphere, &b, &bo, &mut stream(9, "x")).unwrap();
+        assert_eq!(b1, b2);
+    }
+
+    fn key(e: Error) -> String {
+        match e {
+            Error::Setting { key, .. } => key,
+            other => panic!("not a setting error: {other}"),
+        }
+    }
+
+    #[test]
+    fn bad_options_are_refused_by_name() {
+        let b = Bounds::symmetric(&[1.0; 3]);
+        let mut rng = stream(1, "x");
+        let e = |o: PsoOptions, rng: &mut Rng| key(pso(&sphere, &b, &o, rng).unwrap_err());
+        assert_eq!(
+            e(
+                PsoOptions {
+                    population: 0,
+                    ..Default::default()
+                },
+                &mut rng
+            ),
+            "pso.population"
+        );
+        assert_eq!(
+            e(
+                PsoOptions {
+                    c1: Real::NAN,
+                    ..Default::default()
+                },
+                &mut rng
+            ),
+            "pso.c1"
+        );
+        assert_eq!(
+            e(
+                PsoOptions {
+                    c1: 1.0,
+                    c2: 1.0,
+                    ..Default::default()
+                },
+                &mut rng
+            ),
+            "pso.velocity"
+        );
+        let o = BasPsoOptions {
+            population: 0,
+            ..Default::default()
+        };
+        assert_eq!(
+            key(bas_pso(&sphere, &b, &o, &mut rng).unwrap_err()),
+            "bas_pso.population"
+        );
+        let o = BasPsoOptions {
+            antenna: Real::INFINITY,
+            ..Default::default()
+        };
+        assert_eq!(
+            key(bas_pso(&sphere, &b, &o, &mut rng).unwrap_err()),
+            "bas_pso.antenna"
+        );
+        let o = BasOptions {
+            decay: 1.0,
+            ..Default::default()
+        };
+        assert_eq!(
+            key(bas(&sphere, &b, &o, &mut rng).unwrap_err()),
+            "bas.decay"
+        );
+        let o = BasOptions {
+            iterations: 0,
+            ..Default::default()
+        };
+        assert_eq!(
+            key(bas(&sphere, &b, &o, &mut rng).unwrap_err()),
+            "bas.iterations"
+        );
+        let inverted = Bounds {
+            lower: vec![0.0, 1.0],
+            upper: vec![1.0, 0.0],
+        };
+        let r = pso(&sphere, &inverted, &PsoOptions::default(), &mut rng);
+        assert_eq!(key(r.unwrap_err()), "bounds");
+        let nan = Bounds {
+            lower: vec![Real::NAN],
+            upper: vec![1.0],
+        };
+        let r = bas(&sphere, &nan, &BasOptions::default(), &mut rng);
+        assert_eq!(key(r.unwrap_err()), "bounds");
+        let ragged = Bounds {
+            lower: vec![0.0],
+            upper: vec![1.0, 2.0],
+        };
+        let r = bas_pso(&sphere, &ragged, &BasPsoOptions::default(), &mut rng);
+        assert_eq!(key(r.unwrap_err()), "bounds");
+    }
+
+    #[test]
+    fn nan_fitness_counts_as_worst() {
+        let b = Bounds::symmetric(&[2.0; 2]);
+        let f = |x: &[Real]| if x[0] < 0.0 { Real::NAN } else { sphere(x) };
+        let o = PsoOptions {
+            iterations: 100,
+            ..Default::default()
+        };
+        let r = pso(&f, &b, &o, &mut stream(2, "x")).unwrap();
+        assert!(r.fitness.is_finite() && r.x[0] >= 0.0);
+    }
+
+    #[test]
+    fn qiao_term_by_hand() {
+        let m = Frame::from_xyz_rpy([1.0, 2.0, 3.0], [0.0, 0.0, 0.0]);
+        let t = Frame {
+            rot: crate::math::rot_z(0.1),
+            pos: Vec3::new(4.0, 6.0, 3.0),
+        };
+        // |Δp| = 5; Rz(0.1) moves n and o each by 2 sin(0.05), a not at all.
+        let expect = 5.0 + 10.0 * 2.0 * (2.0 * (0.05 as Real).sin());
+        assert_relative_eq!(qiao_term(&m, &t, 10.0), expect, epsilon = 1e-12);
+        assert_relative_eq!(qiao_fitness(&[m, m], &[t, t], 10.0), 2.0 * expect);
+    }
+
+    fn random_x(n: usize, rng: &mut Rng, scale: Real) -> Vec<Real> {
+        (0..n)
+            .map(|_| scale * rng.random_range(-1.0..1.0))
+            .collect()
+    }
+
+    #[test]
+    fn problem_fitness_matches_forward_kinematics() {
+        // Independent truth: the robot with the errors applied, through Chain::fk.
+        let mut rng = stream(5, "t");
+        for name in ["tx60", "irb2600-mdh", "guo-3t2r"] {
+            let nominal = crate::robots::load(name).unwrap();
+            let params = nominal.params();
+            let qs = crate::sampling::uniform_joint_poses(&nominal, 7, &mut rng);
+            let x_true = random_x(params.len(), &mut rng, 0.05);
+            let p0 = MetaProblem::new(
+                &nominal,
+                params.clone(),
+                qs.clone(),
+                vec![Vec3::zeros(); qs.len()],
+                None,
+                1.0,
+            )
+            .unwrap();
+            let truth = p0.frames(&x_true).unwrap();
+            let full = MetaProblem::from_frames(&nominal, params.clone(), qs.clone(), &truth, 37.0)
+                .unwrap();
+            let points = truth.iter().map(|f| f.pos).collect();
+            let pos =
+                MetaProblem::new(&nominal, params.clone(), qs.clone(), points, None, 37.0).unwrap();
+            assert!(full.fitness(&x_true) < 1e-9, "{name}");
+            for _ in 0..3 {
+                let x = random_x(params.len(), &mut rng, 0.05);
+                let model = full.frames(&x).unwrap();
+                assert_relative_eq!(
+                    full.fitness(&x),
+                    qiao_fitness(&truth, &model, 37.0),
+                    max_relative = 1e-10
+                );
+                let by_points: Real = truth
+                    .iter()
+                    .zip(&model)
+                    .map(|(t, m)| (t.pos - m.pos).norm())
+                    .sum();
+                assert_relative_eq!(pos.fitness(&x), by_points, max_relative = 1e-10);
+            }
+            assert_eq!(full.fitness(&[0.0]), Real::INFINITY);
+        }
+    }
+
+    #[test]
+    fn problem_refuses_bad_inputs() {
+        let nominal = crate::robots::load("tx60").unwrap();
+        let q = vec![vec![0.0; 6]];
+        let pts = vec![Vec3::zeros()];
+        let mk = |params: Vec<Param>, qs: Vec<Vec<Real>>, pts: Vec<Vec3>, k: Real| {
+            key(MetaProblem::new(&nominal, params, qs, pts, None, k).unwrap_err())
+        };
+        assert_eq!(mk(vec![], q.clone(), pts.clone(), 1.0), "params");
+        assert_eq!(
+            mk(vec![Param::A(0), Param::A(0)], q.clone(), pts.clone(), 1.0),
+            "params"
+        );
+        assert_eq!(mk(vec![Param::A(9)], q.clone(), pts.clone(), 1.0), "params");
+        assert_eq!(
+            mk(vec![Param::A(0)], q.clone(), vec![], 1.0),
+            "measurements"
+        );
+        assert_eq!(
+            mk(vec![Param::A(0)], vec![vec![0.0; 5]], pts.clone(), 1.0),
+            "poses"
+        );
+        assert_eq!(mk(vec![Param::A(0)], q.clone(), pts.clone(), -1.0), "k");
+    }
 }
