@@ -92,6 +92,7 @@ impl std::fmt::Display for ErrorModel {
 /// rows of `j`, one column per entry of `cols`) of `model` at joint values `q`, for the
 /// robot compiled in `chain`, against the measured tool frame `measured` (world). Returns the
 /// model frame. Allocation-free; `r` and `j` must have room for the rows.
+#[allow(clippy::too_many_arguments)]
 pub fn rows_into(
     model: ErrorModel,
     chain: &Chain,

@@ -1112,8 +1112,8 @@ mod tests {
         assert_relative_eq!(pop[0][2], 1.0, epsilon = 1e-12);
         assert_relative_eq!(pop[1][0], -0.5, epsilon = 1e-15);
         for p in &pop {
-            for i in 0..3 {
-                assert!(p[i] >= b.lower[i] && p[i] <= b.upper[i]);
+            for (i, v) in p.iter().enumerate() {
+                assert!(*v >= b.lower[i] && *v <= b.upper[i]);
             }
         }
     }
