@@ -1,0 +1,377 @@
+//! Pose-error models for Jacobian-based identification and Qiao's accuracy figures (SPEC §4
+//! last bullet, §6; Qiao 2021, `papers/qiao2021-bas-pso-tx60.txt`, §2.2–2.3, §4.1–4.2).
+//!
+//! Qiao compares three ways to relate a measured pose `T_m = [R_m P_m; 0 1]` to the model
+//! pose `T = [R P; 0 1]` of the current parameters (columns of `R`: n, o, a):
+//!
+//! | model | residual `r` (measured − model) | Jacobian `∂(model)/∂η` | Qiao |
+//! |---|---|---|---|
+//! | [`ErrorModel::Differential`] | `[P_m − P; n_m − n; o_m − o; a_m − a]` (12 rows) | `[J_p; −[n]×J_ω; −[o]×J_ω; −[a]×J_ω]` | §2.2, eq. 5 |
+//! | [`ErrorModel::CoordinateTransfer`] | `[d; δ]` of `Δ = T_m T⁻¹ − I ≈ [[δ]× d; 0 0]`: `d = P_m − R_m Rᵀ P`, `δ = vee((R_m Rᵀ − R Rᵀ_m)/2)` (6 rows) | `[J_p + [P]×J_ω; J_ω]` | §2.3, eqs. 6–11 |
+//! | [`ErrorModel::DirectFk`] | `[P_m − P; log(R_m Rᵀ)]` (6 rows, exact rotation vector) | `[J_p; J_ω]` | §4.2 "model 3" |
+//!
+//! `J_p`, `J_ω` are the tool-point and tool-rotation columns of [`crate::jacobian`] (exact first
+//! derivatives of forward kinematics). The three Jacobians are exact derivatives of their
+//! residuals at `T_m = T`, so one linearised step of each gives the same correction to first
+//! order in the parameter errors; they differ at second order through the residual maps: the
+//! differential model compares matrix entries (its rotation rows are not a rotation), the
+//! coordinate-transfer model drops the second-order part of `R_m Rᵀ` twice (in `δ` and
+//! through `R_m Rᵀ P` in `d`, Qiao §4.2's "two neglects"), the direct model is exact in the
+//! residual. Iterated to convergence (Gauss–Newton, [`identify`]) on noise-free data all three
+//! reach the true parameters; their one-step results differ.
+//!
+//! Residual rows are unweighted, as in Qiao: mm for positions, rad or dimensionless for
+//! orientation.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{Error, Result};
+use crate::jacobian::{pose_rows, Columns, Measure};
+use crate::kinematics::{Chain, Param, Robot};
+use crate::math::{matrix_rpy, rotation_vector, Frame, Real, Vec3};
+
+/// The pose-error model of an identification (see the module docs for the formulas).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum ErrorModel {
+    /// Differential transformation of the pose matrix (Qiao §2.2, eq. 5): 12 rows per pose.
+    Differential,
+    /// Coordinate-error transfer through the link frames (Qiao §2.3, eqs. 6–11): 6 rows.
+    CoordinateTransfer,
+    /// Direct identification on forward kinematics (Qiao §4.2, error model 3): 6 rows.
+    DirectFk,
+}
+
+impl ErrorModel {
+    /// The three models.
+    pub const ALL: [ErrorModel; 3] = [
+        ErrorModel::Differential,
+        ErrorModel::CoordinateTransfer,
+        ErrorModel::DirectFk,
+    ];
+
+    /// Residual rows per pose.
+    pub fn rows(self) -> usize {
+        match self {
+            ErrorModel::Differential => 12,
+            ErrorModel::CoordinateTransfer | ErrorModel::DirectFk => 6,
+        }
+    }
+
+    /// The setting's name: `differential`, `coordinate_transfer` or `direct_fk`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ErrorModel::Differential => "differential",
+            ErrorModel::CoordinateTransfer => "coordinate_transfer",
+            ErrorModel::DirectFk => "direct_fk",
+        }
+    }
+
+    /// Parses a setting value (see [`ErrorModel::as_str`]); errors name `key`.
+    pub fn parse(key: &str, s: &str) -> Result<ErrorModel> {
+        ErrorModel::ALL
+            .into_iter()
+            .find(|m| m.as_str() == s)
+            .ok_or_else(|| {
+                Error::setting(
+                    key,
+                    format!(
+                        "\"{s}\" is not an error model (differential, coordinate_transfer, direct_fk)"
+                    ),
+                )
+            })
+    }
+}
+
+impl std::fmt::Display for ErrorModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Writes one pose's residual (rows `row0..row0 + model.rows()` of `r`) and Jacobian (same
+/// rows of `j`, one column per entry of `cols`) of `model` at joint values `q`, for the
+/// robot compiled in `chain`, against the measured tool frame `measured` (world). Returns the
+/// model frame. Allocation-free; `r` and `j` must have room for the rows.
+#[allow(clippy::too_many_arguments)]
+pub fn rows_into(
+    model: ErrorModel,
+    chain: &Chain,
+    cols: &Columns,
+    q: &[Real],
+    measured: &Frame,
+    r: &mut DVector<Real>,
+    j: &mut DMatrix<Real>,
+    row0: usize,
+) -> Frame {
+    let t = pose_rows(chain, cols, q, Measure::Pose, j, row0);
+    let (rm, pm) = (&measured.rot, &measured.pos);
+    match model {
+        ErrorModel::Differential => {
+            let dp = pm - t.pos;
+            for k in 0..3 {
+                r[row0 + k] = dp[k];
+            }
+            for c in 0..3 {
+                let d = rm.column(c) - t.rot.column(c);
+                for k in 0..3 {
+                    r[row0 + 3 + 3 * c + k] = d[k];
+                }
+            }
+            for col in 0..cols.len() {
+                let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
+                for c in 0..3 {
+                    // ∂(column c) = ω × column c.
+                    let d = w.cross(&t.rot.column(c).into_owned());
+                    for k in 0..3 {
+                        j[(row0 + 3 + 3 * c + k, col)] = d[k];
+                    }
+                }
+            }
+        }
+        ErrorModel::CoordinateTransfer => {
+            let re = rm * t.rot.transpose();
+            let d = pm - re * t.pos;
+            let s = (re - re.transpose()) * 0.5;
+            let delta = Vec3::new(s[(2, 1)], s[(0, 2)], s[(1, 0)]);
+            for k in 0..3 {
+                r[row0 + k] = d[k];
+                r[row0 + 3 + k] = delta[k];
+            }
+            for col in 0..cols.len() {
+                let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
+                let extra = t.pos.cross(&w);
+                for k in 0..3 {
+                    j[(row0 + k, col)] += extra[k];
+                }
+            }
+        }
+        ErrorModel::DirectFk => {
+            let dp = pm - t.pos;
+            let dw = log_rotation(&(rm * t.rot.transpose()));
+            for k in 0..3 {
+                r[row0 + k] = dp[k];
+                r[row0 + 3 + k] = dw[k];
+            }
+        }
+    }
+    t
+}
+
+/// The rotation vector of `r`, robust near the identity (atan2 of the skew part's norm and
+/// the trace, so no `acos` of a value rounded above 1).
+fn log_rotation(r: &crate::math::Mat3) -> Vec3 {
+    let s = Vec3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    ) * 0.5;
+    let sin = s.norm();
+    let cos = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+    if sin < 1e-300 {
+        return if cos > 0.0 { s } else { rotation_vector(r) };
+    }
+    let angle = sin.atan2(cos);
+    if angle > 3.0 {
+        // Near π the skew part loses the axis: fall back to the general logarithm.
+        return rotation_vector(r);
+    }
+    s * (angle / sin)
+}
+
+/// One pose's residual and Jacobian of `model` for `robot` (the linearisation point) and the
+/// parameters `params`, against the measured tool frame (world). `out_r` must hold
+/// `model.rows()` values and `out_j` be `model.rows()` × `params.len()`. Compiles the chain
+/// per call: stacked identification should use [`rows_into`] or [`stack`].
+pub fn residual_and_jacobian(
+    model: ErrorModel,
+    robot: &Robot,
+    params: &[Param],
+    q: &[Real],
+    measured: &Frame,
+    out_r: &mut [Real],
+    out_j: &mut DMatrix<Real>,
+) -> Result<()> {
+    let rows = model.rows();
+    if out_r.len() != rows || out_j.nrows() != rows || out_j.ncols() != params.len() {
+        return Err(Error::setting(
+            "error_model",
+            format!(
+                "{model} needs a residual of {rows} and a Jacobian of {rows}×{}",
+                params.len()
+            ),
+        ));
+    }
+    check_pose(robot, q, 0)?;
+    let mut r = DVector::zeros(rows);
+    let cols = Columns::new(params, robot.dof());
+    rows_into(model, &robot.chain(), &cols, q, measured, &mut r, out_j, 0);
+    out_r.copy_from_slice(r.as_slice());
+    Ok(())
+}
+
+fn check_pose(robot: &Robot, q: &[Real], i: usize) -> Result<()> {
+    if q.len() != robot.dof() || q.iter().any(|v| !v.is_finite()) {
+        return Err(Error::setting(
+            "poses",
+            format!("pose {i}: expected {} finite joint values", robot.dof()),
+        ));
+    }
+    Ok(())
+}
+
+/// The stacked residual and Jacobian of `model` over all poses.
+pub fn stack(
+    model: ErrorModel,
+    robot: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measured: &[Frame],
+) -> Result<(DVector<Real>, DMatrix<Real>)> {
+    if qs.len() != measured.len() {
+        return Err(Error::setting(
+            "measurements",
+            format!("{} poses but {} measured frames", qs.len(), measured.len()),
+        ));
+    }
+    for (i, q) in qs.iter().enumerate() {
+        check_pose(robot, q, i)?;
+    }
+    let rows = model.rows();
+    let mut r = DVector::zeros(rows * qs.len());
+    let mut j = DMatrix::zeros(rows * qs.len(), params.len());
+    let cols = Columns::new(params, robot.dof());
+    let chain = robot.chain();
+    for (i, (q, m)) in qs.iter().zip(measured).enumerate() {
+        rows_into(model, &chain, &cols, q, m, &mut r, &mut j, rows * i);
+    }
+    Ok((r, j))
+}
+
+/// The result of [`identify`].
+#[derive(Clone, Debug)]
+pub struct ModelFit {
+    /// Identified errors of the parameters, in their order (mm, rad).
+    pub x: Vec<Real>,
+    /// The robot with the errors applied.
+    pub robot: Robot,
+    /// Norm of the last correction step.
+    pub last_step: Real,
+}
+
+/// Gauss–Newton identification with `model`: `iterations` steps of
+/// `Δx = J⁺ r` (least squares by SVD), re-linearised at the corrected robot each step.
+/// One step is the classical one-shot linear identification Qiao's error models 1 and 2 stand
+/// for.
+pub fn identify(
+    model: ErrorModel,
+    nominal: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measured: &[Frame],
+    iterations: usize,
+) -> Result<ModelFit> {
+    if iterations == 0 {
+        return Err(Error::setting("iterations", "must be at least 1"));
+    }
+    let all = nominal.params();
+    if let Some(p) = params.iter().find(|p| !all.contains(p)) {
+        return Err(Error::setting(
+            "params",
+            format!("{p} is not a parameter of robot {}", nominal.name),
+        ));
+    }
+    let mut x = vec![0.0; params.len()];
+    let mut robot = nominal.clone();
+    let mut last_step = 0.0;
+    for _ in 0..iterations {
+        let (r, j) = stack(model, &robot, params, qs, measured)?;
+        if r.iter().chain(j.iter()).any(|v| !v.is_finite()) {
+            return Err(Error::Compute(format!(
+                "{model} identification diverged (non-finite residual or Jacobian)"
+            )));
+        }
+        let dx = j
+            .svd(true, true)
+            .solve(&r, 1e-12)
+            .map_err(|e| Error::Compute(format!("least squares failed: {e}")))?;
+        last_step = dx.norm();
+        for (xi, d) in x.iter_mut().zip(dx.iter()) {
+            *xi += d;
+        }
+        let errs: Vec<(Param, Real)> = params.iter().copied().zip(x.iter().copied()).collect();
+        robot = nominal.with_errors(&errs);
+    }
+    Ok(ModelFit {
+        x,
+        robot,
+        last_step,
+    })
+}
+
+/// Qiao 2021's accuracy figures (§4.1–4.2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseErrorStats {
+    /// ACPE of each run, mm: `(1/M) Σ_j √(Δx² + Δy² + Δz²)` over the M points (§4.1).
+    pub acpe_mm: Vec<Real>,
+    /// ACAE of each run, degrees: `(1/M) Σ_j √(Δα² + Δβ² + Δγ²)` (§4.1), with Δα, Δβ, Δγ the
+    /// differences of the fixed X-Y-Z angles (wrapped to ±180°).
+    pub acae_deg: Vec<Real>,
+    /// APE, mm: `(1/(NM)) Σ_i Σ_j √(Δx² + Δy² + Δz²)` over N runs and M points (§4.2).
+    pub ape: Real,
+    /// AAE, degrees: `(1/(NM)) Σ_i Σ_j √(Δα² + Δβ² + Δγ²)` (§4.2).
+    pub aae: Real,
+}
+
+fn wrap(a: Real) -> Real {
+    use std::f64::consts::PI;
+    let mut w = (a + PI).rem_euclid(2.0 * PI) - PI;
+    if w <= -PI {
+        w += 2.0 * PI;
+    }
+    w
+}
+
+/// ACPE (mm) and ACAE (deg) of model frames against true frames (Qiao §4.1).
+pub fn acpe_acae(truth: &[Frame], model: &[Frame]) -> Result<(Real, Real)> {
+    if truth.is_empty() || truth.len() != model.len() {
+        return Err(Error::setting(
+            "frames",
+            format!(
+                "need as many model frames as true ones (at least one), got {} and {}",
+                model.len(),
+                truth.len()
+            ),
+        ));
+    }
+    let (mut p, mut a) = (0.0, 0.0);
+    for (t, m) in truth.iter().zip(model) {
+        p += (t.pos - m.pos).norm();
+        let (rt, rm) = (matrix_rpy(&t.rot), matrix_rpy(&m.rot));
+        let d: Real = (0..3).map(|i| wrap(rt[i] - rm[i]).powi(2)).sum();
+        a += d.sqrt();
+    }
+    let m = truth.len() as Real;
+    Ok((p / m, (a / m).to_degrees()))
+}
+
+/// ACPE/ACAE of each run and APE/AAE over all runs (Qiao §4.1–4.2) of model frames
+/// (`runs[i][j]`: run i, point j) against the true frames.
+pub fn pose_errors(truth: &[Frame], runs: &[Vec<Frame>]) -> Result<PoseErrorStats> {
+    if runs.is_empty() {
+        return Err(Error::setting("runs", "need at least one run"));
+    }
+    let mut acpe_mm = Vec::with_capacity(runs.len());
+    let mut acae_deg = Vec::with_capacity(runs.len());
+    for run in runs {
+        let (p, a) = acpe_acae(truth, run)?;
+        acpe_mm.push(p);
+        acae_deg.push(a);
+    }
+    let n = runs.len() as Real;
+    Ok(PoseErrorStats {
+        ape: acpe_mm.iter().sum::<Real>() / n,
+        aae: acae_deg.iter().sum::<Real>() / n,
+        acpe_mm,
+        acae_deg,
+    })
+}
