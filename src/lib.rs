@@ -18,3 +18,4 @@ pub mod jacobian;
 pub mod kinematics;
 pub mod robots;
 pub mod sampling;
+pub mod report;
