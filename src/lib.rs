@@ -16,6 +16,6 @@ pub mod commands;
 pub mod identifiability;
 pub mod jacobian;
 pub mod kinematics;
+pub mod report;
 pub mod robots;
 pub mod sampling;
-pub mod report;

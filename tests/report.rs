@@ -31,7 +31,11 @@ fn check_outputs(stem: &Path, title_in_svg: &str) -> String {
     assert_eq!((w, h), PLOT_SIZE, "PNG dimensions");
     // A blank 960×600 white image compresses to well under 3 kB; text and lines add more.
     assert!(png.len() > 5_000, "PNG too small: {} bytes", png.len());
-    assert_eq!(&png[png.len() - 8..png.len() - 4], b"IEND", "PNG ends with IEND");
+    assert_eq!(
+        &png[png.len() - 8..png.len() - 4],
+        b"IEND",
+        "PNG ends with IEND"
+    );
 
     let svg = std::fs::read_to_string(stem.with_extension("svg")).expect("svg written");
     assert!(svg.starts_with("<svg"), "SVG starts with <svg");
@@ -62,7 +66,10 @@ fn grouped_bars_writes_png_and_svg() {
     let svg = check_outputs(&stem, "η per parameter");
     // Every category and series name is drawn as text.
     for s in ["a2", "alpha2", "tool.x", "ls", "ridge", "igg3", "η (%)"] {
-        assert!(svg.contains(&format!(">\n{s}\n<")) || svg.contains(s), "{s}");
+        assert!(
+            svg.contains(&format!(">\n{s}\n<")) || svg.contains(s),
+            "{s}"
+        );
     }
     // 15 bars + 3 legend swatches, each a filled <rect>, plus the background.
     let rects = svg.matches("<rect").count();
@@ -84,8 +91,12 @@ fn grouped_bars_many_categories_rotated_labels() {
 #[test]
 fn before_after_writes_png_and_svg() {
     let dir = scratch("before-after");
-    let before: Vec<f64> = (0..40).map(|i| 1.0 + 0.3 * ((i as f64) * 0.7).sin()).collect();
-    let after: Vec<f64> = (0..40).map(|i| 0.05 + 0.02 * ((i as f64) * 1.3).cos()).collect();
+    let before: Vec<f64> = (0..40)
+        .map(|i| 1.0 + 0.3 * ((i as f64) * 0.7).sin())
+        .collect();
+    let after: Vec<f64> = (0..40)
+        .map(|i| 0.05 + 0.02 * ((i as f64) * 1.3).cos())
+        .collect();
     let stem = dir.join("validation");
     before_after(&stem, "Validation error", &before, &after).unwrap();
     let svg = check_outputs(&stem, "Validation error");
@@ -116,7 +127,9 @@ fn traces_linear_and_log() {
     let series = vec![
         (
             "pso".to_string(),
-            (0..200).map(|i| 10.0 * (-(i as f64) / 30.0).exp()).collect(),
+            (0..200)
+                .map(|i| 10.0 * (-(i as f64) / 30.0).exp())
+                .collect(),
         ),
         (
             "bas-pso".to_string(),
@@ -125,7 +138,15 @@ fn traces_linear_and_log() {
     ];
     for log_y in [false, true] {
         let stem = dir.join(format!("fitness-{log_y}"));
-        traces(&stem, "Fitness per iteration", "iteration", "fitness", &series, log_y).unwrap();
+        traces(
+            &stem,
+            "Fitness per iteration",
+            "iteration",
+            "fitness",
+            &series,
+            log_y,
+        )
+        .unwrap();
         let svg = check_outputs(&stem, "Fitness per iteration");
         assert!(svg.contains("<polyline"), "lines drawn");
     }
@@ -186,7 +207,10 @@ fn non_finite_data_is_skipped() {
         "NaN bars",
         "η",
         &cats,
-        &[("ls".into(), vec![nan, 3.0, inf]), ("lm".into(), vec![nan; 3])],
+        &[
+            ("ls".into(), vec![nan, 3.0, inf]),
+            ("lm".into(), vec![nan; 3]),
+        ],
     )
     .unwrap();
     check_outputs(&d("bars"), "NaN bars");
@@ -196,7 +220,10 @@ fn non_finite_data_is_skipped() {
         &d("box"),
         "NaN box",
         "mm",
-        &[("ls".into(), vec![nan, inf, -inf]), ("lm".into(), vec![1.0, nan, 2.0])],
+        &[
+            ("ls".into(), vec![nan, inf, -inf]),
+            ("lm".into(), vec![1.0, nan, 2.0]),
+        ],
     )
     .unwrap();
     check_outputs(&d("box"), "NaN box");
@@ -212,14 +239,30 @@ fn non_finite_data_is_skipped() {
     .unwrap();
     check_outputs(&d("tr"), "NaN traces");
     // A constant series (zero-width range) and a single point.
-    traces(&d("tr1"), "Flat trace", "it", "f", &[("a".into(), vec![2.0; 5])], false).unwrap();
+    traces(
+        &d("tr1"),
+        "Flat trace",
+        "it",
+        "f",
+        &[("a".into(), vec![2.0; 5])],
+        false,
+    )
+    .unwrap();
     check_outputs(&d("tr1"), "Flat trace");
     sweep(
         &d("sw"),
         "NaN sweep",
         "x",
         "y",
-        &[("a".into(), vec![(nan, 1.0, 0.1), (1.0, nan, 0.1), (2.0, 1.0, nan), (3.0, 1.5, inf)])],
+        &[(
+            "a".into(),
+            vec![
+                (nan, 1.0, 0.1),
+                (1.0, nan, 0.1),
+                (2.0, 1.0, nan),
+                (3.0, 1.5, inf),
+            ],
+        )],
     )
     .unwrap();
     check_outputs(&d("sw"), "NaN sweep");
@@ -255,7 +298,15 @@ fn title_is_escaped_in_svg() {
 fn stem_keeps_its_dots() {
     let dir = scratch("dots");
     let stem = dir.join("eta.v2");
-    traces(&stem, "Dots", "i", "f", &[("a".into(), vec![1.0, 0.5])], false).unwrap();
+    traces(
+        &stem,
+        "Dots",
+        "i",
+        "f",
+        &[("a".into(), vec![1.0, 0.5])],
+        false,
+    )
+    .unwrap();
     assert!(dir.join("eta.v2.png").is_file());
     assert!(dir.join("eta.v2.svg").is_file());
 }

@@ -17,5 +17,6 @@ pub mod plots;
 
 pub use markdown::{fmt_num, table};
 pub use plots::{
-    before_after, box_plot, box_stats, grouped_bars, sweep, traces, BoxStats, PLOT_SIZE,
+    before_after, box_plot, box_stats, grouped_bars, sweep, traces, BoxStats, SweepSeries,
+    PLOT_SIZE,
 };

@@ -12,8 +12,10 @@ use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use plotters::coord::ranged1d::{AsRangedCoord, DefaultFormatting, KeyPointHint, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle, FontTransform};
 
 use super::markdown::fmt_num;
@@ -69,7 +71,8 @@ fn with_suffix(stem: &Path, ext: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-type DrawResult<DB> = std::result::Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+type DrawResult<DB> =
+    std::result::Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
 /// A figure that can be drawn on any plotters back end (so one description gives both the
 /// PNG and the SVG).
@@ -130,8 +133,16 @@ fn span(values: impl Iterator<Item = Real>, include_zero: bool) -> Range<Real> {
         return lo - d..hi + d;
     }
     let pad = 0.05 * width;
-    let lo = if include_zero && lo == 0.0 { 0.0 } else { lo - pad };
-    let hi = if include_zero && hi == 0.0 { 0.0 } else { hi + pad };
+    let lo = if include_zero && lo == 0.0 {
+        0.0
+    } else {
+        lo - pad
+    };
+    let hi = if include_zero && hi == 0.0 {
+        0.0
+    } else {
+        hi + pad
+    };
     lo..hi
 }
 
@@ -238,6 +249,59 @@ fn y_fmt(v: &Real) -> String {
     fmt_num(*v, 3)
 }
 
+/// Integer tick labels (point or iteration numbers); blank between integers.
+fn int_fmt(v: &Real) -> String {
+    let r = v.round();
+    if (v - r).abs() < 1e-6 {
+        format!("{}", r as i64)
+    } else {
+        String::new()
+    }
+}
+
+/// The fraction of the plot height kept free at the top for a legend of `entries` lines.
+fn legend_fraction(entries: usize) -> Real {
+    if entries == 0 {
+        0.0
+    } else {
+        ((entries as Real * 22.0 + 24.0) / 470.0).min(0.5)
+    }
+}
+
+/// Raises the top of a linear range so the data stay below a legend of `entries` lines.
+fn with_headroom(r: Range<Real>, entries: usize) -> Range<Real> {
+    let f = legend_fraction(entries);
+    let hi = r.start + (r.end - r.start) / (1.0 - f);
+    r.start..if hi.is_finite() { hi } else { r.end }
+}
+
+/// The same for a logarithmic range (headroom in decades).
+fn with_log_headroom(r: Range<Real>, entries: usize) -> Range<Real> {
+    let f = legend_fraction(entries);
+    let hi = r.start * (r.end / r.start).powf(1.0 / (1.0 - f));
+    r.start..if hi.is_finite() { hi } else { r.end }
+}
+
+/// Writes category names under a categorical x axis, turned a quarter turn so that long
+/// lists fit: each name starts just below its tick and runs downwards. (plotters centres a
+/// rotated axis label on its tick, which puts half of it over the plot.)
+fn rotated_category_labels<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    chart: &ChartContext<'_, DB, Cartesian2d<Categories, RangedCoordf64>>,
+    names: &[String],
+    y_bottom: Real,
+) -> DrawResult<DB> {
+    let style = TextStyle::from((FAMILY, 14).into_font())
+        .transform(FontTransform::Rotate90)
+        .pos(Pos::new(HPos::Left, VPos::Center))
+        .color(&BLACK);
+    for (i, name) in names.iter().enumerate() {
+        let (px, py) = chart.backend_coord(&(i as Real, y_bottom));
+        root.draw_text(name, &style, (px, py + 10))?;
+    }
+    Ok(())
+}
+
 // ---------------------------------------------------------------------------------------------
 // Grouped bars
 
@@ -259,27 +323,34 @@ impl Figure for GroupedBars<'_> {
             .unwrap_or(0)
             .max(self.categories.len());
         let (x_area, rotate) = category_label_layout(self.categories);
-        let y = span(self.series.iter().flat_map(|(_, v)| finite(v)), true);
+        let y = with_headroom(
+            span(self.series.iter().flat_map(|(_, v)| finite(v)), true),
+            self.series.len(),
+        );
+        let y_bottom = y.start;
         let mut chart =
             chart_builder(root, self.title, x_area).build_cartesian_2d(Categories { n }, y)?;
         let names = self.categories;
-        let x_fmt = |v: &Real| category_label(names, *v);
-        let mut mesh = chart.configure_mesh();
-        mesh.disable_x_mesh()
+        let x_fmt = |v: &Real| {
+            if rotate {
+                String::new()
+            } else {
+                category_label(names, *v)
+            }
+        };
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
             .x_labels(n.max(1))
             .x_label_formatter(&x_fmt)
             .y_label_formatter(&y_fmt)
             .y_desc(self.y_label)
             .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14));
+            .label_style((FAMILY, 14))
+            .draw()?;
         if rotate {
-            mesh.x_label_style(
-                (FAMILY, 14)
-                    .into_font()
-                    .transform(FontTransform::Rotate90),
-            );
+            rotated_category_labels(root, &chart, names, y_bottom)?;
         }
-        mesh.draw()?;
 
         let m = self.series.len().max(1) as Real;
         let w = 0.8 / m;
@@ -348,22 +419,14 @@ impl Figure for BeforeAfter<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         root.fill(&WHITE)?;
         let n = self.before.len().max(self.after.len()).max(1);
-        let y = span(finite(self.before).chain(finite(self.after)), true);
+        let y = with_headroom(span(finite(self.before).chain(finite(self.after)), true), 2);
         let mut chart =
             chart_builder(root, self.title, 50).build_cartesian_2d(0.5..n as Real + 0.5, y)?;
-        let x_fmt = |v: &Real| {
-            let r = v.round();
-            if (v - r).abs() < 1e-6 {
-                format!("{}", r as i64)
-            } else {
-                String::new()
-            }
-        };
         chart
             .configure_mesh()
             .x_desc("validation point")
             .y_desc("error (mm)")
-            .x_label_formatter(&x_fmt)
+            .x_label_formatter(&int_fmt)
             .y_label_formatter(&y_fmt)
             .axis_desc_style((FAMILY, 17))
             .label_style((FAMILY, 14))
@@ -379,7 +442,10 @@ impl Figure for BeforeAfter<'_> {
                 .filter(|(_, y)| y.is_finite())
                 .map(|(i, &y)| ((i + 1) as Real, y))
                 .collect();
-            chart.draw_series(LineSeries::new(pts.iter().copied(), c.mix(0.6).stroke_width(1)))?;
+            chart.draw_series(LineSeries::new(
+                pts.iter().copied(),
+                c.mix(0.6).stroke_width(1),
+            ))?;
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?
                 .label(format!("{name} (rms {} mm)", fmt_num(rms(v), 3)))
@@ -443,7 +509,12 @@ pub fn box_stats(v: &[Real]) -> Option<BoxStats> {
     let iqr = q3 - q1;
     let (fence_lo, fence_hi) = (q1 - 1.5 * iqr, q3 + 1.5 * iqr);
     let lo = s.iter().copied().find(|&x| x >= fence_lo).unwrap_or(q1);
-    let hi = s.iter().rev().copied().find(|&x| x <= fence_hi).unwrap_or(q3);
+    let hi = s
+        .iter()
+        .rev()
+        .copied()
+        .find(|&x| x <= fence_hi)
+        .unwrap_or(q3);
     Some(BoxStats {
         q1,
         median,
@@ -466,25 +537,29 @@ impl Figure for BoxPlot<'_> {
         let n = names.len();
         let (x_area, rotate) = category_label_layout(&names);
         let y = span(self.groups.iter().flat_map(|(_, v)| finite(v)), false);
+        let y_bottom = y.start;
         let mut chart =
             chart_builder(root, self.title, x_area).build_cartesian_2d(Categories { n }, y)?;
-        let x_fmt = |v: &Real| category_label(&names, *v);
-        let mut mesh = chart.configure_mesh();
-        mesh.disable_x_mesh()
+        let x_fmt = |v: &Real| {
+            if rotate {
+                String::new()
+            } else {
+                category_label(&names, *v)
+            }
+        };
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
             .x_labels(n.max(1))
             .x_label_formatter(&x_fmt)
             .y_label_formatter(&y_fmt)
             .y_desc(self.y_label)
             .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14));
+            .label_style((FAMILY, 14))
+            .draw()?;
         if rotate {
-            mesh.x_label_style(
-                (FAMILY, 14)
-                    .into_font()
-                    .transform(FontTransform::Rotate90),
-            );
+            rotated_category_labels(root, &chart, &names, y_bottom)?;
         }
-        mesh.draw()?;
 
         for (g, (_, v)) in self.groups.iter().enumerate() {
             let Some(b) = box_stats(v) else { continue };
@@ -553,7 +628,11 @@ impl Traces<'_> {
         y.is_finite() && (!self.log_y || y > 0.0)
     }
 
-    fn draw_with<DB: DrawingBackend, Y>(&self, root: &DrawingArea<DB, Shift>, y: Y) -> DrawResult<DB>
+    fn draw_with<DB: DrawingBackend, Y>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        y: Y,
+    ) -> DrawResult<DB>
     where
         Y: AsRangedCoord<Value = Real>,
         Y::CoordDescType: ValueFormatter<Real>,
@@ -565,6 +644,7 @@ impl Traces<'_> {
             .configure_mesh()
             .x_desc(self.x_label)
             .y_desc(self.y_label)
+            .x_label_formatter(&int_fmt)
             .y_label_formatter(&y_fmt)
             .axis_desc_style((FAMILY, 17))
             .label_style((FAMILY, 14))
@@ -593,10 +673,11 @@ impl Figure for Traces<'_> {
             .iter()
             .flat_map(|(_, v)| v.iter().copied())
             .filter(|&y| self.keep(y));
+        let m = self.series.len();
         if self.log_y {
-            self.draw_with(root, log_span(ys).log_scale())
+            self.draw_with(root, with_log_headroom(log_span(ys), m).log_scale())
         } else {
-            self.draw_with(root, span(ys, false))
+            self.draw_with(root, with_headroom(span(ys, false), m))
         }
     }
 }
@@ -628,11 +709,14 @@ pub fn traces(
 // ---------------------------------------------------------------------------------------------
 // Sweep
 
+/// One series of a [`sweep`] plot: its name and its points `(x, mean, std)`.
+pub type SweepSeries = (String, Vec<(Real, Real, Real)>);
+
 struct Sweep<'d> {
     title: &'d str,
     x_label: &'d str,
     y_label: &'d str,
-    series: &'d [(String, Vec<(Real, Real, Real)>)],
+    series: &'d [SweepSeries],
 }
 
 /// The drawable points of a sweep series, sorted by x: (x, mean, |std| or 0 if non-finite).
@@ -652,11 +736,12 @@ impl Figure for Sweep<'_> {
         let pts: Vec<Vec<(Real, Real, Real)>> =
             self.series.iter().map(|(_, v)| sweep_points(v)).collect();
         let x = span(pts.iter().flatten().map(|p| p.0), false);
-        let y = span(
-            pts.iter()
-                .flatten()
-                .flat_map(|&(_, m, s)| [m - s, m + s]),
-            false,
+        let y = with_headroom(
+            span(
+                pts.iter().flatten().flat_map(|&(_, m, s)| [m - s, m + s]),
+                false,
+            ),
+            self.series.len(),
         );
         let mut chart = chart_builder(root, self.title, 50).build_cartesian_2d(x, y)?;
         let x_fmt = |v: &Real| fmt_num(*v, 3);
@@ -676,11 +761,15 @@ impl Figure for Sweep<'_> {
                 c.stroke_width(2),
             ))?;
             chart.draw_series(
-                p.iter()
-                    .map(|&(x, m, sd)| ErrorBar::new_vertical(x, m - sd, m, m + sd, c.filled(), 10)),
+                p.iter().map(|&(x, m, sd)| {
+                    ErrorBar::new_vertical(x, m - sd, m, m + sd, c.filled(), 10)
+                }),
             )?;
             chart
-                .draw_series(p.iter().map(|&(x, m, _)| Circle::new((x, m), 4, c.filled())))?
+                .draw_series(
+                    p.iter()
+                        .map(|&(x, m, _)| Circle::new((x, m), 4, c.filled())),
+                )?
                 .label(name.as_str())
                 .legend(move |(x, y)| Circle::new((x + 7, y), 4, c.filled()));
         }
@@ -698,7 +787,7 @@ pub fn sweep(
     title: &str,
     x_label: &str,
     y_label: &str,
-    series: &[(String, Vec<(Real, Real, Real)>)],
+    series: &[SweepSeries],
 ) -> Result<()> {
     render(
         stem,
