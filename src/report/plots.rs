@@ -375,10 +375,11 @@ impl Figure for GroupedBars<'_> {
     }
 }
 
-/// Grouped bar chart: one group per category (parameter), one bar per series (method) —
-/// the identification accuracy η per parameter per method of Guo 2024, fig. 8 (η of
-/// SPEC's Guo 2024 eq. for the relative parameter error). Bars start at zero; a value
-/// missing from a series (or non-finite) leaves a gap. Writes `<stem>.png` and `<stem>.svg`.
+/// Grouped bar chart: one group per category (parameter), one bar per series (method or pose
+/// set) — the identification accuracy η_i = (1 − |x_i − x̂_i| / |x_i|) · 100 % per parameter
+/// (Guo 2024, eq. 29) as in Guo 2024, fig. 8. Bars start at zero; a value missing from a
+/// series (or non-finite) leaves a gap. Long category lists are written a quarter turn under
+/// the axis. Writes `<stem>.png` and `<stem>.svg`.
 pub fn grouped_bars(
     stem: &Path,
     title: &str,
@@ -592,9 +593,10 @@ impl Figure for BoxPlot<'_> {
     }
 }
 
-/// Box plot of one sample per group — the validation RMS over Monte-Carlo trials per method.
-/// Boxes from [`box_stats`] (quartiles, Tukey whiskers); values beyond the whiskers are drawn
-/// as circles. A group with no finite value is left empty. Writes `<stem>.png` and
+/// Box plot of one sample per group — the validation RMS over Monte-Carlo trials per method,
+/// the spread of repeated stochastic identifications that Qiao 2021, fig. 7 reports for
+/// BAS-PSO. Boxes from [`box_stats`] (quartiles, Tukey whiskers); values beyond the whiskers
+/// are drawn as circles. A group with no finite value is left empty. Writes `<stem>.png` and
 /// `<stem>.svg`.
 pub fn box_plot(
     stem: &Path,
@@ -682,10 +684,11 @@ impl Figure for Traces<'_> {
     }
 }
 
-/// Objective or fitness per iteration, one line per series (the convergence curves of
-/// Qiao 2021's BAS / PSO / BAS-PSO and of Guo 2024's DETMAX-IDE, or the LM objective of
-/// Ban). Value `i` (0-based) is iteration `i`. With `log_y` the y axis is logarithmic and
-/// values ≤ 0 are skipped like non-finite ones. Writes `<stem>.png` and `<stem>.svg`.
+/// Objective or fitness per iteration, one line per series: the convergence curves of
+/// BAS / PSO / BAS-PSO (Qiao 2021, fig. 4), of DETMAX-IDE (Guo 2024, eqs. 19–26, iterations to
+/// convergence in SPEC §7) or the LM objective (Ban, fig. 2 flow). Value `i` (0-based) is
+/// iteration `i`. With `log_y` the y axis is logarithmic and values ≤ 0 are skipped like
+/// non-finite ones. Writes `<stem>.png` and `<stem>.svg`.
 pub fn traces(
     stem: &Path,
     title: &str,
@@ -778,10 +781,10 @@ impl Figure for Sweep<'_> {
 }
 
 /// A metric against a swept setting, one line per series with ± one standard deviation error
-/// bars (the sweeps of Guo 2024 over the pose count and of Li 2018 over the noise level).
-/// Each point is `(x, mean, std)`; points are joined in increasing x; a point with a
-/// non-finite x or mean is skipped, a non-finite std draws no bar. Writes `<stem>.png` and
-/// `<stem>.svg`.
+/// bars: Guo 2024, fig. 7 (objective against the pose count), Ban, fig. 3 (mean absolute
+/// error of SVD and weighted-SVD registration against outlier count and size). Each point is
+/// `(x, mean, std)`; points are joined in increasing x; a point with a non-finite x or mean is
+/// skipped, a non-finite std draws no bar. Writes `<stem>.png` and `<stem>.svg`.
 pub fn sweep(
     stem: &Path,
     title: &str,
