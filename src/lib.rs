@@ -24,6 +24,7 @@ pub mod registration;
 pub mod physics;
 pub mod poses;
 pub mod metaheur;
+pub mod report;
 pub mod robots;
 pub mod sampling;
 pub mod sim;
