@@ -13,7 +13,7 @@ use rand_distr::{Distribution, Normal};
 
 use super::study::Study;
 use crate::error::Result;
-use crate::identify::{identify, RobotData, RobotProblem, Termination};
+use crate::identify::{identify, Identified, RobotData, RobotProblem, Termination};
 use crate::jacobian::{jacobian, Columns, Measure};
 use crate::kinematics::{Param, Robot};
 use crate::math::{rotation_vector, Frame, Mat3, Real, Vec3};
@@ -130,8 +130,22 @@ fn to_base(m: &Measurement, frame: &Frame) -> RobotData {
     }
 }
 
-/// Registration and identification of one method on one measurement. Returns the
-/// compensated robot, iterations and termination.
+/// A compensated robot and how it was obtained.
+pub struct Calibrated {
+    /// The nominal robot with the identified errors added.
+    pub robot: Robot,
+    /// The registration: measured (instrument) coordinates → base frame.
+    pub frame: Frame,
+    /// The identification's result (errors in the order of the parameters passed).
+    pub identified: Identified,
+}
+
+/// Registration and identification of one method on one measurement (SPEC §3
+/// "Registration", §4). With `svd` and `wsvd` registration and identification alternate
+/// (three rounds): the first fit absorbs part of the kinematic error into the frame, and a
+/// refit on the identified model removes it. With `identify` the SVD frame is a first
+/// estimate and the base parameters (which must then be among `params`) absorb the rest
+/// (Li 2018). With `known` the frame is `known`.
 pub fn calibrate(
     nominal: &Robot,
     params: &[Param],
@@ -140,7 +154,7 @@ pub fn calibrate(
     registration: Registration,
     known: &Frame,
     method: &crate::identify::Method,
-) -> Result<(Robot, DVector<Real>, usize, Termination)> {
+) -> Result<Calibrated> {
     let chain = nominal.chain();
     let nominal_points: Vec<Vec3> = m.qs.iter().map(|q| chain.fk(q).pos).collect();
     let mut frame = match registration {
@@ -151,33 +165,35 @@ pub fn calibrate(
         }
     };
     let x0 = DVector::zeros(params.len());
-    // Svd and wsvd alternate registration and identification: the first fit absorbs part of
-    // the kinematic error into the frame, and a refit on the identified model removes it.
     let rounds = match registration {
         Registration::Svd | Registration::Wsvd => 3,
         _ => 1,
     };
-    let mut last = None;
-    for round in 0..rounds {
+    let mut round = 0;
+    loop {
         let data = to_base(m, &frame);
         let problem = RobotProblem::new(nominal, params, &data, measure)?;
-        let r = identify(&problem, &x0, method);
-        let robot = problem.robot_with(&r.x);
-        if round + 1 < rounds {
-            let c = robot.chain();
-            let model: Vec<Vec3> = m.qs.iter().map(|q| c.fk(q).pos).collect();
-            frame = match registration {
-                Registration::Wsvd => register_wsvd(&model, &m.points)?.frame,
-                _ => register_svd(&model, &m.points, None)?.frame,
-            };
+        let identified = identify(&problem, &x0, method);
+        let robot = problem.robot_with(&identified.x);
+        round += 1;
+        if round >= rounds {
+            return Ok(Calibrated {
+                robot,
+                frame,
+                identified,
+            });
         }
-        last = Some((robot, r.x, r.iterations, r.termination));
+        let c = robot.chain();
+        let model: Vec<Vec3> = m.qs.iter().map(|q| c.fk(q).pos).collect();
+        frame = match registration {
+            Registration::Wsvd => register_wsvd(&model, &m.points)?.frame,
+            _ => register_svd(&model, &m.points, None)?.frame,
+        };
     }
-    Ok(last.expect("at least one round"))
 }
 
 /// Position (mm) and orientation (deg) errors of `model` against the true frames.
-fn validation_errors(model: &Robot, qs: &[Vec<Real>], truth: &[Frame]) -> (Vec<Real>, Vec<Real>) {
+pub fn validation_errors(model: &Robot, qs: &[Vec<Real>], truth: &[Frame]) -> (Vec<Real>, Vec<Real>) {
     let c = model.chain();
     qs.iter()
         .zip(truth)
@@ -219,12 +235,40 @@ fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
     n.try_inverse().map(|inv| inv.trace()).filter(|t| t.is_finite())
 }
 
+/// The injected errors and the true robot of trial `index`.
+pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
+    let seed = rng::trial_seed(study.scenario.seed, index as u64);
+    let errors = draw_errors(study, &mut rng::stream(seed, "errors"));
+    let robot = study.nominal.with_errors(&errors);
+    (errors, robot)
+}
+
+/// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
+/// fresh draw from the trial's seed.
+pub fn calibration_poses(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<Real>>> {
+    let sc = &study.scenario;
+    if let Some(set) = &study.fixed[si] {
+        return Ok(set.poses.clone());
+    }
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let name = sc.calibration.strategies[si].name();
+    let mut gp = rng::stream(seed, &format!("poses/{name}"));
+    sample_region(&study.nominal, &sc.calibration.region, sc.calibration.count, &mut gp)
+}
+
+/// The validation poses of trial `index`.
+pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
+    let sc = &study.scenario;
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let mut gv = rng::stream(seed, "validation");
+    sample_region(&study.nominal, &sc.validation.region, sc.validation.count, &mut gv)
+}
+
 /// Runs trial `index` of `study`.
 pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let sc = &study.scenario;
     let seed = rng::trial_seed(sc.seed, index as u64);
-    let errors = draw_errors(study, &mut rng::stream(seed, "errors"));
-    let truth_robot = study.nominal.with_errors(&errors);
+    let (errors, truth_robot) = true_robot(study, index);
     let truth: Vec<Real> = study
         .params
         .iter()
@@ -237,8 +281,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         sag.as_ref().map(|f| f as &(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync));
 
     // Validation: fresh poses, true frames of the sagging true arm, free of tracker noise.
-    let mut gv = rng::stream(seed, "validation");
-    let vqs = sample_region(&study.nominal, &sc.validation.region, sc.validation.count, &mut gv)?;
+    let vqs = validation_poses(study, index)?;
     let vtruth: Vec<Frame> = vqs
         .iter()
         .map(|q| match &sag_ref {
@@ -251,14 +294,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
 
     let mut outcomes = Vec::new();
     let mut crb = Vec::new();
-    for (si, strategy) in sc.calibration.strategies.iter().enumerate() {
-        let qs = match (&study.fixed[si], strategy) {
-            (Some(set), _) => set.poses.clone(),
-            (None, _) => {
-                let mut gp = rng::stream(seed, &format!("poses/{}", strategy.name()));
-                sample_region(&study.nominal, &sc.calibration.region, sc.calibration.count, &mut gp)?
-            }
-        };
+    for si in 0..sc.calibration.strategies.len() {
+        let qs = calibration_poses(study, si, index)?;
         let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
         let mut gm = rng::stream(seed, "measure");
         let m = measure_poses(&truth_robot, &qs, &study.tracker, outliers, sag_ref, &mut gm)?;
@@ -276,9 +313,10 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let (identified, after_p, after_a, iterations, termination) = match res {
-                Ok((robot, x, it, term)) => {
-                    let (p, a) = validation_errors(&robot, &vqs, &vtruth);
-                    (x.iter().copied().collect(), p, a, it, term)
+                Ok(c) => {
+                    let (p, a) = validation_errors(&c.robot, &vqs, &vtruth);
+                    let r = c.identified;
+                    (r.x.iter().copied().collect(), p, a, r.iterations, r.termination)
                 }
                 Err(_) => (
                     vec![Real::NAN; study.params.len()],
