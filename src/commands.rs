@@ -1,9 +1,21 @@
 //! The commands behind the `calbench` binary, one function each. They print to stdout and
 //! write files; `main.rs` only parses arguments and reports errors.
 
+use std::path::{Path, PathBuf};
+
 use serde_json::json;
 
+use crate::check::{compare, read_json, Regression};
 use crate::error::{Error, Result};
+use crate::identify::Method;
+use crate::kinematics::{Param, Robot};
+use crate::math::{Frame, Mat3};
+use crate::montecarlo::trial::{self, ErrorStats};
+use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
+use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
+use crate::report::markdown::{fmt_num, table as markdown_table};
+use crate::scenario::{Registration, Scenario, METHOD_NAMES};
+use crate::sim::{measure_poses, read_measurements, sample_region, write_measurements, Measurement};
 use crate::identifiability::analyse;
 use crate::jacobian::Measure;
 use crate::kinematics::robot_to_toml;
@@ -144,4 +156,453 @@ pub fn identifiability(
         );
     }
     Ok(())
+}
+
+fn create_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
+}
+
+fn write_file(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+fn to_json_text(v: &serde_json::Value) -> Result<String> {
+    serde_json::to_string_pretty(v)
+        .map(|s| s + "\n")
+        .map_err(|e| Error::Compute(e.to_string()))
+}
+
+/// `calbench simulate SCENARIO [--trial I] --out DIR`: the measurement of one trial, as a
+/// tracker would deliver it (FORMATS.md), with the truth beside it.
+pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
+    let sc = Scenario::load(scenario)?;
+    if trial >= sc.trials {
+        return Err(Error::setting(
+            "--trial",
+            format!("trial {trial} does not exist: the scenario has {} trials (0-based)", sc.trials),
+        ));
+    }
+    let study = Study::new(sc)?;
+    let sc = &study.scenario;
+    let (errors, truth) = trial::true_robot(&study, trial);
+    let seed = crate::rng::trial_seed(sc.seed, trial as u64);
+    let qs = trial::calibration_poses(&study, 0, trial)?;
+    let vqs = trial::validation_poses(&study, trial)?;
+    let sag = study
+        .compliance
+        .as_ref()
+        .map(|c| move |r: &Robot, q: &[Real]| -> Result<Frame> { c.deflected(r, q) });
+    let sag_ref: Option<&(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync)> = sag
+        .as_ref()
+        .map(|f| f as &(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync));
+    let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
+    let m = measure_poses(
+        &truth,
+        &qs,
+        &study.tracker,
+        outliers,
+        sag_ref,
+        &mut crate::rng::stream(seed, "measure"),
+    )?;
+    let v = measure_poses(
+        &truth,
+        &vqs,
+        &study.tracker,
+        None,
+        sag_ref,
+        &mut crate::rng::stream(seed, "measure/validation"),
+    )?;
+    create_dir(out)?;
+    write_measurements(&out.join("measurements.csv"), &study.nominal, &m)?;
+    write_measurements(&out.join("validation.csv"), &study.nominal, &v)?;
+    let errs: serde_json::Map<String, serde_json::Value> = errors
+        .iter()
+        .map(|(p, e)| (p.to_string(), json!(e)))
+        .collect();
+    let truth_json = json!({
+        "scenario": sc.name,
+        "trial": trial,
+        "seed": seed,
+        "robot": study.nominal.name,
+        "calibration_poses": sc.calibration.strategies[0].name(),
+        "errors": errs,
+        "tracker_pose": sc.tracker.pose,
+        "outliers": m.outliers,
+        "sag_mm": m.sag_mm,
+        "validation_sag_mm": v.sag_mm,
+    });
+    write_file(&out.join("truth.json"), &to_json_text(&truth_json)?)?;
+    println!(
+        "{} calibration and {} validation poses of trial {trial} written to {}",
+        m.qs.len(),
+        v.qs.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+/// Parses an identification method name with its default options.
+pub fn parse_method(name: &str) -> Result<Method> {
+    Ok(match name {
+        "ls" => Method::Ls(Default::default()),
+        "ridge" => Method::Ridge(Default::default()),
+        "igg3" => Method::Igg3(Default::default()),
+        "lm" => Method::Lm(Default::default()),
+        _ => {
+            return Err(Error::setting(
+                "--method",
+                format!("unknown method \"{name}\"; allowed: {}", METHOD_NAMES.join(", ")),
+            ))
+        }
+    })
+}
+
+fn stats_json(s: &ErrorStats) -> serde_json::Value {
+    json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
+}
+
+/// `calbench identify --robot R --data CSV --method M [--registration …] [--validate CSV]
+/// --out DIR`: identification on a measurement file, real or simulated.
+pub fn identify_file(
+    robot: &str,
+    data: &Path,
+    method: &str,
+    registration: &str,
+    validate: Option<&Path>,
+    out: &Path,
+) -> Result<()> {
+    let nominal = robots::load(robot)?;
+    let method = parse_method(method)?;
+    let registration = Registration::parse(registration)?;
+    let d = read_measurements(data, &nominal)?;
+    let measure = if d.quats.is_some() {
+        Measure::Pose
+    } else {
+        Measure::Position
+    };
+    let val = validate
+        .map(|p| read_measurements(p, &nominal))
+        .transpose()?;
+    let with_base = registration == Registration::Identify;
+    let candidates: Vec<Param> = nominal
+        .params()
+        .into_iter()
+        .filter(|p| with_base || !matches!(p, Param::Base(_)))
+        .collect();
+    let mut params = study::identifiable(&nominal, &candidates, measure);
+    params.sort_by_key(|p| p.index(nominal.dof()));
+    let m = Measurement {
+        qs: d.qs.clone(),
+        points: d.points.clone(),
+        quats: d.quats.clone(),
+        outliers: Vec::new(),
+        sag_mm: Vec::new(),
+        true_points: Vec::new(),
+    };
+    // For real data "known" means the points are already in the base frame.
+    let c = trial::calibrate(
+        &nominal,
+        &params,
+        measure,
+        &m,
+        registration,
+        &Frame::identity(),
+        &method,
+    )?;
+    create_dir(out)?;
+    let r = &c.identified;
+    let names: Vec<String> = params.iter().map(|p| p.to_string()).collect();
+    let errors: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .zip(r.x.iter())
+        .map(|(n, x)| (n.clone(), json!(x)))
+        .collect();
+    let cov: Vec<Vec<Real>> = (0..r.covariance.nrows())
+        .map(|i| r.covariance.row(i).iter().copied().collect())
+        .collect();
+    let (xyz, rpy) = c.frame.to_xyz_rpy();
+    let mut j = json!({
+        "robot": nominal.name,
+        "data": data.display().to_string(),
+        "method": method.name(),
+        "registration": registration.as_str(),
+        "registration_frame": {"xyz_mm": xyz, "rpy_rad": rpy},
+        "parameters": names,
+        "errors": errors,
+        "covariance": cov,
+        "condition_number": r.condition_number,
+        "sigma0": r.sigma0,
+        "rms_residual_mm": r.rms_residual,
+        "iterations": r.iterations,
+        "termination": r.termination.as_str(),
+    });
+    // Residuals per point before (nominal) and after (compensated), and the final weights.
+    let (cn, cc) = (nominal.chain(), c.robot.chain());
+    let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
+    for (i, (q, p)) in d.qs.iter().zip(&d.points).enumerate() {
+        let pb = c.frame.apply(p);
+        let w = r.weights.get(i).copied().unwrap_or(1.0);
+        csv += &format!(
+            "{i},{},{},{}\n",
+            (pb - cn.fk(q).pos).norm(),
+            (pb - cc.fk(q).pos).norm(),
+            w
+        );
+    }
+    write_file(&out.join("residuals.csv"), &csv)?;
+    if let Some(v) = &val {
+        let truth: Vec<Frame> = v
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Frame {
+                rot: v
+                    .quats
+                    .as_ref()
+                    .map_or(Mat3::identity(), |qs| c.frame.rot * quat_matrix(&qs[i])),
+                pos: c.frame.apply(p),
+            })
+            .collect();
+        let (bp, ba) = trial::validation_errors(&nominal, &v.qs, &truth);
+        let (ap, aa) = trial::validation_errors(&c.robot, &v.qs, &truth);
+        let (b, a) = (ErrorStats::of(&bp), ErrorStats::of(&ap));
+        j["validation_before_mm"] = stats_json(&b);
+        j["validation_after_mm"] = stats_json(&a);
+        if v.quats.is_some() {
+            j["validation_before_deg"] = stats_json(&ErrorStats::of(&ba));
+            j["validation_after_deg"] = stats_json(&ErrorStats::of(&aa));
+        }
+        println!("validation error (mm)   mean      rms       max       std");
+        for (label, s) in [("before", b), ("after", a)] {
+            println!(
+                "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
+                s.mean, s.rms, s.max, s.std
+            );
+        }
+    }
+    write_file(&out.join("identified.json"), &to_json_text(&j)?)?;
+    let mut compensated = c.robot.clone();
+    compensated.name = format!("{}-calibrated", nominal.name);
+    write_file(&out.join("robot.toml"), &robot_to_toml(&compensated))?;
+    println!(
+        "{} on {} points: {} after {} iterations; written to {}",
+        method.name(),
+        d.qs.len(),
+        r.termination.as_str(),
+        r.iterations,
+        out.display()
+    );
+    Ok(())
+}
+
+fn quat_matrix(q: &[Real; 4]) -> Mat3 {
+    nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
+        .to_rotation_matrix()
+        .into_inner()
+}
+
+/// `calbench poses SCENARIO --strategy S [--count M] [--curve A,B,…] --out DIR`: choose a
+/// calibration pose set on the scenario's nominal robot (Guo 2024 §3).
+pub fn poses(
+    scenario: &Path,
+    strategy: &str,
+    count: Option<usize>,
+    curve: Option<&str>,
+    out: &Path,
+) -> Result<()> {
+    let sc = Scenario::load(scenario)?;
+    let strategy: Optimiser = strategy.parse()?;
+    let nominal = sc.robot()?;
+    let measure = sc.tracker.measure();
+    let c = &sc.calibration;
+    let count = count.unwrap_or(c.count);
+    if count == 0 || count > c.candidates {
+        return Err(Error::setting(
+            "--count",
+            format!("must be between 1 and calibration.candidates ({})", c.candidates),
+        ));
+    }
+    let candidates: Vec<Param> = nominal
+        .params()
+        .into_iter()
+        .filter(|p| !matches!(p, Param::Base(_)))
+        .collect();
+    let mut params = study::identifiable(&nominal, &candidates, measure);
+    params.sort_by_key(|p| p.index(nominal.dof()));
+    let mut g = crate::rng::stream(sc.seed, "poses-command");
+    let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
+    let mut separation = None;
+    if c.separate {
+        let s = crate::poses::separate(&nominal, &params, &pool, measure, c.separate_threshold);
+        params = s.kept.clone();
+        separation = Some(s);
+    }
+    let model = RobotPoseModel::new(&nominal, &params, measure);
+    let mut opts = SelectOptions::new(count);
+    opts.objective = c.objective;
+    let sel = crate::poses::select(&model, &pool, strategy, &opts, &mut g)?;
+    create_dir(out)?;
+    let mut csv = (1..=nominal.dof())
+        .map(|i| format!("q{i}"))
+        .collect::<Vec<_>>()
+        .join(",")
+        + "\n";
+    for q in &sel.poses {
+        let u = nominal.q_to_user(q);
+        csv += &u.iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(",");
+        csv.push('\n');
+    }
+    write_file(&out.join("poses.csv"), &csv)?;
+    let mut scores = serde_json::to_value(&sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
+    scores["strategy"] = json!(strategy_name(strategy));
+    scores["count"] = json!(sel.poses.len());
+    scores["parameters"] = json!(params.iter().map(|p| p.to_string()).collect::<Vec<_>>());
+    scores["termination"] = json!(sel.termination);
+    if let Some(s) = &separation {
+        scores["separation"] = json!({
+            "removed": s.removed.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+            "gcn": s.table.iter().map(|(k, v)| json!({"block": k, "gcn": v})).collect::<Vec<_>>(),
+        });
+    }
+    write_file(&out.join("scores.json"), &to_json_text(&scores)?)?;
+    let mut trace = String::from("iteration,objective\n");
+    for (i, f) in sel.trace.iter().enumerate() {
+        trace += &format!("{i},{f}\n");
+    }
+    write_file(&out.join("trace.csv"), &trace)?;
+    println!(
+        "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",
+        sel.poses.len(),
+        pool.len(),
+        strategy_name(strategy),
+        sel.scores.composite,
+        sel.scores.o1,
+        sel.scores.gcn,
+        sel.scores.condition_number
+    );
+    if let Some(list) = curve {
+        let counts: Vec<usize> = list
+            .split(',')
+            .map(|s| {
+                s.trim()
+                    .parse::<usize>()
+                    .ok()
+                    .filter(|&n| n >= 1 && n <= pool.len())
+                    .ok_or_else(|| Error::setting("--curve", format!("\"{s}\" is not a pose count in 1..={}", pool.len())))
+            })
+            .collect::<Result<_>>()?;
+        let pts = crate::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
+        let mut text = String::from("count,objective\n");
+        println!("objective against pose count (Guo 2024 fig. 7):");
+        for (n, f) in &pts {
+            println!("  {n:>5} {f:.6}");
+            text += &format!("{n},{f}\n");
+        }
+        write_file(&out.join("curve.csv"), &text)?;
+    }
+    Ok(())
+}
+
+fn strategy_name(s: Optimiser) -> &'static str {
+    match s {
+        Optimiser::Random => "random",
+        Optimiser::Detmax => "detmax",
+        Optimiser::Ide => "ide",
+        Optimiser::DetmaxIde => "detmax-ide",
+    }
+}
+
+/// Prints the main table of a run.
+fn print_table(r: &RunResult) {
+    let mut rows = Vec::new();
+    for b in &r.blocks {
+        for e in &b.entries {
+            let mut row = Vec::new();
+            if let Some(v) = &b.sweep_value {
+                row.push(v.to_string());
+            }
+            row.extend([
+                e.method.clone(),
+                e.poses.clone(),
+                fmt_num(e.eta_mean_pct, 4),
+                fmt_num(e.validation_before_mm.mean, 4),
+                fmt_num(e.validation_after_mm.mean, 4),
+                fmt_num(e.validation_after_mm.rms, 4),
+                fmt_num(e.validation_after_mm.max, 4),
+                e.failures.to_string(),
+            ]);
+            rows.push(row);
+        }
+    }
+    let mut headers = vec![
+        "method",
+        "poses",
+        "η mean %",
+        "before mean mm",
+        "after mean mm",
+        "after RMS mm",
+        "after max mm",
+        "failures",
+    ];
+    if r.scenario.sweep.is_some() {
+        headers.insert(0, "swept value");
+    }
+    print!("{}", markdown_table(&headers, &rows));
+}
+
+/// `calbench run SCENARIO [--trials N] [--seed S] [--threads T] [--out DIR]`, and the default
+/// study when `scenario` is `None`.
+pub fn run(
+    scenario: Option<&Path>,
+    trials: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+) -> Result<()> {
+    let mut sc = match scenario {
+        Some(p) => Scenario::load(p)?,
+        None => Scenario::default_study()?,
+    };
+    if let Some(n) = trials {
+        sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
+    }
+    if let Some(s) = seed {
+        let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
+        sc = sc.with_override("seed", toml::Value::Integer(s))?;
+    }
+    if threads == Some(0) {
+        return Err(Error::setting("--threads", "must be at least 1"));
+    }
+    eprintln!(
+        "running {}: {} trials{}",
+        sc.name,
+        sc.trials,
+        sc.sweep
+            .as_ref()
+            .map_or(String::new(), |s| format!(" × {} values of {}", s.values.len(), s.key))
+    );
+    let opts = RunOptions {
+        threads,
+        out,
+        progress: true,
+    };
+    let r = montecarlo::run(sc, &opts)?;
+    print_table(&r);
+    println!(
+        "\n{} trials in {:.1} s; report: {}",
+        r.scenario.trials * r.blocks.len(),
+        r.seconds,
+        r.out.join("report.md").display()
+    );
+    Ok(())
+}
+
+/// `calbench check SUMMARY --baseline BASELINE [--tolerance X]`: returns the regressions.
+pub fn check(summary: &Path, baseline: &Path, tolerance: Real) -> Result<Vec<Regression>> {
+    if !(tolerance.is_finite() && tolerance >= 0.0) {
+        return Err(Error::setting("--tolerance", "must be a number ≥ 0"));
+    }
+    let s = read_json(summary)?;
+    let b = read_json(baseline)?;
+    Ok(compare(&s, &b, tolerance))
 }

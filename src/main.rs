@@ -52,6 +52,83 @@ enum Command {
         #[arg(long)]
         json: bool,
     },
+    /// Run a Monte-Carlo study (a scenario file); writes results/<name>/ or --out.
+    Run {
+        /// The scenario file.
+        scenario: PathBuf,
+        /// Override the number of trials.
+        #[arg(long)]
+        trials: Option<usize>,
+        /// Override the master seed.
+        #[arg(long)]
+        seed: Option<u64>,
+        /// Worker threads (default: one per core).
+        #[arg(long)]
+        threads: Option<usize>,
+        /// Output folder.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Regression guard: compare a summary.json with a baseline.
+    Check {
+        /// The summary.json of a run.
+        summary: PathBuf,
+        /// The baseline summary.json.
+        #[arg(long)]
+        baseline: PathBuf,
+        /// Allowed relative worsening of each metric (0.05 = 5 %).
+        #[arg(long, default_value_t = 0.05)]
+        tolerance: f64,
+    },
+    /// Write the simulated measurement of one trial of a scenario.
+    Simulate {
+        /// The scenario file.
+        scenario: PathBuf,
+        /// The trial (0-based).
+        #[arg(long, default_value_t = 0)]
+        trial: usize,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Identify the kinematic errors from a measurement file (real or simulated).
+    Identify {
+        /// Built-in robot name or robot file.
+        #[arg(long)]
+        robot: String,
+        /// The measurement CSV (q1..qn,x,y,z[,qw,qx,qy,qz]).
+        #[arg(long)]
+        data: PathBuf,
+        /// ls | ridge | igg3 | lm.
+        #[arg(long)]
+        method: String,
+        /// svd | wsvd | identify | known (known: the points are in the base frame).
+        #[arg(long, default_value = "identify")]
+        registration: String,
+        /// A validation measurement CSV.
+        #[arg(long)]
+        validate: Option<PathBuf>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Choose calibration poses for a scenario's robot (random, detmax, ide, detmax-ide).
+    Poses {
+        /// The scenario file.
+        scenario: PathBuf,
+        /// random | detmax | ide | detmax-ide.
+        #[arg(long)]
+        strategy: String,
+        /// Number of poses (default: calibration.count).
+        #[arg(long)]
+        count: Option<usize>,
+        /// Print the objective against these pose counts (e.g. 20,40,60,80).
+        #[arg(long)]
+        curve: Option<String>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
 }
 
 fn main() {
@@ -64,10 +141,63 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        None => {
-            println!("calbench: run `calbench --help` for the commands");
-            Ok(())
+        None => Ok(commands::run(None, None, None, None, None)?),
+        Some(Command::Run {
+            scenario,
+            trials,
+            seed,
+            threads,
+            out,
+        }) => Ok(commands::run(Some(&scenario), trials, seed, threads, out)?),
+        Some(Command::Check {
+            summary,
+            baseline,
+            tolerance,
+        }) => {
+            let regressions = commands::check(&summary, &baseline, tolerance)?;
+            if regressions.is_empty() {
+                println!("no regression beyond tolerance {tolerance}");
+                Ok(())
+            } else {
+                for r in &regressions {
+                    eprintln!("regression: {r}");
+                }
+                anyhow::bail!("{} metric(s) regressed", regressions.len())
+            }
         }
+        Some(Command::Simulate {
+            scenario,
+            trial,
+            out,
+        }) => Ok(commands::simulate(&scenario, trial, &out)?),
+        Some(Command::Identify {
+            robot,
+            data,
+            method,
+            registration,
+            validate,
+            out,
+        }) => Ok(commands::identify_file(
+            &robot,
+            &data,
+            &method,
+            &registration,
+            validate.as_deref(),
+            &out,
+        )?),
+        Some(Command::Poses {
+            scenario,
+            strategy,
+            count,
+            curve,
+            out,
+        }) => Ok(commands::poses(
+            &scenario,
+            &strategy,
+            count,
+            curve.as_deref(),
+            &out,
+        )?),
         Some(Command::Robots { name }) => Ok(commands::robots(name.as_deref())?),
         Some(Command::Fk { robot, q, json }) => Ok(commands::fk(&robot, &q, json)?),
         Some(Command::Identifiability {
@@ -81,6 +211,3 @@ fn run(cli: Cli) -> Result<()> {
         )?),
     }
 }
-
-#[allow(dead_code)]
-fn _unused(_: PathBuf) {}

@@ -1,0 +1,319 @@
+//! The files of a run: `summary.json`, `trials.csv`, `report.md` and the plots (FORMATS.md
+//! `run`). Writers only read results that are already computed.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::{json, Value};
+
+use super::{toml_to_json, RunResult};
+use crate::error::{Error, Result};
+use crate::math::Real;
+use crate::report::markdown::{fmt_num, table};
+use crate::report::plots;
+
+fn write(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// `summary.json` as a JSON value.
+pub fn summary(r: &RunResult) -> Value {
+    let sc = &r.scenario;
+    let first = &r.blocks[0].study;
+    let mut optimised = serde_json::Map::new();
+    for (si, s) in first.scenario.calibration.strategies.iter().enumerate() {
+        if let Some(set) = &first.fixed[si] {
+            optimised.insert(
+                s.name().to_string(),
+                json!({"poses": set.poses.len(), "iterations": set.trace.len(),
+                       "final_objective": set.trace.last(), "scores": set.scores}),
+            );
+        }
+    }
+    let results: Vec<Value> = r
+        .blocks
+        .iter()
+        .flat_map(|b| b.entries.iter().map(|e| serde_json::to_value(e).unwrap_or(Value::Null)))
+        .collect();
+    let mut s = json!({
+        "scenario": sc.name,
+        "description": sc.description,
+        "robot": first.nominal.name,
+        "trials": sc.trials,
+        "seed": sc.seed,
+        "measure": match first.measure { crate::jacobian::Measure::Position => "position", crate::jacobian::Measure::Pose => "pose" },
+        "registration": sc.registration.as_str(),
+        "parameters": first.params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+        "error_parameters": first.error_params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+        "fixed_pose_sets": optimised,
+        "results": results,
+    });
+    if let Some(sw) = &sc.sweep {
+        s["sweep_key"] = json!(sw.key);
+        s["sweep_values"] = Value::Array(sw.values.iter().map(toml_to_json).collect());
+    }
+    s
+}
+
+fn num(v: Real) -> String {
+    if v.is_finite() {
+        format!("{v}")
+    } else {
+        String::new()
+    }
+}
+
+/// `trials.csv`: one row per trial × strategy × method (× swept value).
+pub fn trials_csv(r: &RunResult) -> String {
+    let first = &r.blocks[0].study;
+    let names: Vec<String> = first.params.iter().map(|p| p.to_string()).collect();
+    let pose = first.measure == crate::jacobian::Measure::Pose;
+    let mut head = vec!["trial".to_string()];
+    if r.scenario.sweep.is_some() {
+        head.push("sweep_value".into());
+    }
+    head.extend(
+        [
+            "method", "poses", "eta_mean_pct", "before_mean_mm", "before_rms_mm", "before_max_mm",
+            "after_mean_mm", "after_rms_mm", "after_max_mm",
+        ]
+        .map(String::from),
+    );
+    if pose {
+        head.extend(["before_mean_deg", "before_rms_deg", "after_mean_deg", "after_rms_deg"].map(String::from));
+    }
+    head.extend(["iterations", "termination"].map(String::from));
+    head.extend(names.iter().map(|n| format!("true_{n}")));
+    head.extend(names.iter().map(|n| format!("identified_{n}")));
+    let mut out = head.join(",") + "\n";
+    for b in &r.blocks {
+        let sc = &b.study.scenario;
+        for t in &b.trials {
+            for o in &t.outcomes {
+                let mut row = vec![t.index.to_string()];
+                if let Some(v) = &b.sweep_value {
+                    row.push(v.to_string().replace(',', ";"));
+                }
+                let etas: Vec<Real> = t
+                    .truth
+                    .iter()
+                    .zip(&o.identified)
+                    .filter_map(|(&x, &y)| super::stats::eta(x, y))
+                    .collect();
+                let eta_mean = if etas.is_empty() { Real::NAN } else { etas.iter().sum::<Real>() / etas.len() as Real };
+                row.push(sc.methods[o.method].label.clone());
+                row.push(sc.calibration.strategies[o.strategy].name().into());
+                for v in [
+                    eta_mean, o.before_mm.mean, o.before_mm.rms, o.before_mm.max, o.after_mm.mean,
+                    o.after_mm.rms, o.after_mm.max,
+                ] {
+                    row.push(num(v));
+                }
+                if pose {
+                    let (bd, ad) = (o.before_deg.unwrap_or_default(), o.after_deg.unwrap_or_default());
+                    for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
+                        row.push(num(v));
+                    }
+                }
+                row.push(o.iterations.to_string());
+                row.push(o.termination.as_str().into());
+                row.extend(t.truth.iter().map(|&v| num(v)));
+                row.extend(o.identified.iter().map(|&v| num(v)));
+                out += &row.join(",");
+                out.push('\n');
+            }
+        }
+    }
+    out
+}
+
+/// `report.md`: the tables a paper would print, and the plots.
+pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
+    let sc = &r.scenario;
+    let first = &r.blocks[0].study;
+    let mut s = String::new();
+    let _ = writeln!(s, "# {}\n\n{}\n", sc.name, sc.description);
+    let _ = writeln!(
+        s,
+        "Robot `{}`, {} trials from seed {}, {} measurement, registration `{}`, {} calibration and {} validation poses per trial. Identified parameters: {}.\n",
+        first.nominal.name,
+        sc.trials,
+        sc.seed,
+        if first.measure == crate::jacobian::Measure::Pose { "full-pose" } else { "position" },
+        sc.registration.as_str(),
+        sc.calibration.count,
+        sc.validation.count,
+        first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
+    );
+    let pose = first.measure == crate::jacobian::Measure::Pose;
+    let mut headers = vec!["method", "poses"];
+    if sc.sweep.is_some() {
+        headers.insert(0, "swept value");
+    }
+    headers.extend(["η mean %", "before mean mm", "before RMS mm", "before max mm", "after mean mm", "after RMS mm", "after max mm", "improvement %"]);
+    if pose {
+        headers.extend(["before mean °", "after mean °"]);
+    }
+    headers.extend(["CRB ratio", "failures", "ms / identification"]);
+    let mut rows = Vec::new();
+    for b in &r.blocks {
+        for e in &b.entries {
+            let mut row = Vec::new();
+            if let Some(v) = &b.sweep_value {
+                row.push(v.to_string());
+            }
+            row.push(e.method.clone());
+            row.push(e.poses.clone());
+            for v in [
+                e.eta_mean_pct,
+                e.validation_before_mm.mean,
+                e.validation_before_mm.rms,
+                e.validation_before_mm.max,
+                e.validation_after_mm.mean,
+                e.validation_after_mm.rms,
+                e.validation_after_mm.max,
+                e.improvement_pct,
+            ] {
+                row.push(fmt_num(v, 4));
+            }
+            if pose {
+                row.push(fmt_num(e.validation_before_deg.map_or(Real::NAN, |d| d.mean), 4));
+                row.push(fmt_num(e.validation_after_deg.map_or(Real::NAN, |d| d.mean), 4));
+            }
+            row.push(fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3));
+            row.push(e.failures.to_string());
+            row.push(fmt_num(e.seconds_per_identification * 1e3, 3));
+            rows.push(row);
+        }
+    }
+    s += "## Validation errors and identification accuracy\n\n";
+    s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
+    s += &table(&headers, &rows);
+    s += "\n## Identification accuracy η per parameter (mean %, Guo 2024 eq. 29)\n\n";
+    let b0 = &r.blocks[0];
+    let params: Vec<String> = b0.entries.first().map(|e| e.eta.keys().cloned().collect()).unwrap_or_default();
+    let cols: Vec<String> = b0.entries.iter().map(|e| format!("{} / {}", e.method, e.poses)).collect();
+    let mut h: Vec<&str> = vec!["parameter"];
+    h.extend(cols.iter().map(String::as_str));
+    let eta_rows: Vec<Vec<String>> = params
+        .iter()
+        .map(|p| {
+            let mut row = vec![format!("`{p}`")];
+            row.extend(b0.entries.iter().map(|e| fmt_num(e.eta.get(p).map_or(Real::NAN, |x| x.mean), 4)));
+            row
+        })
+        .collect();
+    s += &table(&h, &eta_rows);
+    if r.blocks.len() > 1 {
+        s += "\n(η table of the first swept value.)\n";
+    }
+    s += "\n## Plots\n\n";
+    for (file, caption) in plots_written {
+        let _ = writeln!(s, "![{caption}]({file})\n");
+    }
+    s += "## What the metrics mean\n\n";
+    s += "- **η** = (1 − |x − x̂| / |x|) · 100 % per parameter with a non-zero injected error x (Guo 2024 eq. 29); 100 % is exact recovery.\n";
+    s += "- **before / after**: position error |Δp| at the validation poses of the nominal and of the compensated robot; mean (MAE), RMS, max.\n";
+    s += "- **improvement** = (before − after) / before of the mean error.\n";
+    s += "- **CRB ratio**: trace of the empirical covariance of the identified errors over trials divided by the mean Cramér–Rao trace (JᵀWJ)⁻¹ of the tracker noise; ≈ 1 for an efficient estimator under Gaussian noise, above 1 with outliers and sag.\n";
+    s += "- **failures**: identifications that diverged, were singular or gave non-finite values.\n";
+    s
+}
+
+/// Renders the plots; returns (file name, caption) of each PNG.
+pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
+    let out = &r.out;
+    let mut done = Vec::new();
+    let b0 = &r.blocks[0];
+    // η per parameter per method × strategy (Guo 2024 fig. 8).
+    let params: Vec<String> = b0.entries.first().map(|e| e.eta.keys().cloned().collect()).unwrap_or_default();
+    let series: Vec<(String, Vec<Real>)> = b0
+        .entries
+        .iter()
+        .map(|e| {
+            (
+                format!("{} / {}", e.method, e.poses),
+                params.iter().map(|p| e.eta.get(p).map_or(Real::NAN, |x| x.mean)).collect(),
+            )
+        })
+        .collect();
+    plots::grouped_bars(&out.join("eta"), "Identification accuracy per parameter", "mean η (%)", &params, &series)?;
+    done.push(("eta.png".into(), "η per parameter and method".into()));
+    // Validation error per point, trial 0, the first method and strategy (Li 2018 fig. 3).
+    if let Some(o) = b0.trials.first().and_then(|t| t.outcomes.first()) {
+        if let Some((before, after)) = &o.per_point {
+            let sc = &b0.study.scenario;
+            let title = format!(
+                "Validation errors, trial 0, {} on {} poses",
+                sc.methods[o.method].label,
+                sc.calibration.strategies[o.strategy].name()
+            );
+            plots::before_after(&out.join("validation_trial0"), &title, before, after)?;
+            done.push(("validation_trial0.png".into(), "validation error per point before and after compensation, trial 0".into()));
+        }
+    }
+    // Validation RMS over trials per method × strategy.
+    let groups: Vec<(String, Vec<Real>)> = b0
+        .entries
+        .iter()
+        .enumerate()
+        .map(|(k, e)| {
+            let (si, mi) = (k / b0.study.scenario.methods.len(), k % b0.study.scenario.methods.len());
+            let v = b0
+                .trials
+                .iter()
+                .flat_map(|t| t.outcomes.iter().filter(|o| o.strategy == si && o.method == mi).map(|o| o.after_mm.rms))
+                .collect();
+            (format!("{} / {}", e.method, e.poses), v)
+        })
+        .collect();
+    plots::box_plot(&out.join("validation_rms"), "Validation RMS after compensation over trials", "RMS (mm)", &groups)?;
+    done.push(("validation_rms.png".into(), "validation RMS over trials".into()));
+    // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
+    let traces: Vec<(String, Vec<Real>)> = b0
+        .study
+        .scenario
+        .calibration
+        .strategies
+        .iter()
+        .zip(&b0.study.fixed)
+        .filter_map(|(s, f)| f.as_ref().filter(|f| !f.trace.is_empty()).map(|f| (s.name().to_string(), f.trace.clone())))
+        .collect();
+    if !traces.is_empty() {
+        plots::traces(&out.join("objective_trace"), "Pose-set objective per iteration", "iteration", "objective", &traces, false)?;
+        done.push(("objective_trace.png".into(), "pose optimisation objective per iteration".into()));
+    }
+    // Sweeps: validation RMS after compensation against the swept value.
+    if let Some(sw) = &r.scenario.sweep {
+        let xs: Vec<Option<Real>> = r.blocks.iter().map(|b| b.sweep_value.as_ref().and_then(|v| v.as_float().or(v.as_integer().map(|i| i as Real)))).collect();
+        if xs.iter().all(Option::is_some) {
+            let mut series: Vec<(String, Vec<(Real, Real, Real)>)> = Vec::new();
+            for (k, e) in b0.entries.iter().enumerate() {
+                let pts = r
+                    .blocks
+                    .iter()
+                    .zip(&xs)
+                    .map(|(b, x)| {
+                        let e = &b.entries[k];
+                        (x.unwrap_or(0.0), e.validation_after_mm.rms, e.validation_after_mm.std)
+                    })
+                    .collect();
+                series.push((format!("{} / {}", e.method, e.poses), pts));
+            }
+            plots::sweep(&out.join("sweep"), "Validation RMS after compensation", &sw.key, "RMS (mm)", &series)?;
+            done.push(("sweep.png".into(), format!("validation RMS against {}", sw.key)));
+        }
+    }
+    Ok(done)
+}
+
+/// Writes every output file of a run into its folder.
+pub fn write_all(r: &RunResult) -> Result<()> {
+    std::fs::create_dir_all(&r.out).map_err(|e| Error::io(&r.out, e))?;
+    let s = serde_json::to_string_pretty(&summary(r)).map_err(|e| Error::Compute(e.to_string()))?;
+    write(&r.out.join("summary.json"), &(s + "\n"))?;
+    write(&r.out.join("trials.csv"), &trials_csv(r))?;
+    let plots = write_plots(r)?;
+    write(&r.out.join("report.md"), &report_md(r, &plots))?;
+    Ok(())
+}

@@ -1,0 +1,154 @@
+//! A study prepared for its trials: everything that depends only on the scenario and the
+//! nominal robot — the identified parameter set, the tracker, the compliance model and the
+//! optimised pose sets — computed once (FORMATS.md `run`; Guo 2024 §3 for the optimised sets).
+
+use crate::compliance::Compliance;
+use crate::error::{Error, Result};
+use crate::identifiability::analyse;
+use crate::jacobian::Measure;
+use crate::kinematics::{Param, Robot};
+use crate::math::Real;
+use crate::poses::{self, RobotPoseModel, SelectOptions};
+use crate::rng;
+use crate::sampling::uniform_joint_poses;
+use crate::scenario::{PoseStrategy, Registration, Scenario};
+use crate::sim::settings::{ErrorKind, ParamSelection, Region};
+use crate::sim::tracker::Tracker;
+use crate::sim::{read_pose_list, sample_region};
+
+/// Poses used to decide which parameters are identifiable: many, spread over the joint
+/// ranges, from a fixed seed so every study of a robot agrees.
+const IDENTIFIABILITY_POSES: usize = 200;
+
+/// A calibration pose set fixed for the whole study (optimised, grid or file).
+#[derive(Clone, Debug)]
+pub struct FixedSet {
+    /// Joint values (internal units).
+    pub poses: Vec<Vec<Real>>,
+    /// The optimiser's objective per iteration (empty when not optimised).
+    pub trace: Vec<Real>,
+    /// The optimiser's scores of the chosen set, as JSON (empty for grid and file sets).
+    pub scores: Option<serde_json::Value>,
+}
+
+/// A scenario made ready to run.
+pub struct Study {
+    /// The checked scenario.
+    pub scenario: Scenario,
+    /// The nominal robot.
+    pub nominal: Robot,
+    /// Position or full pose.
+    pub measure: Measure,
+    /// The parameters identified (identifiable ones of the joint, tool and — when the
+    /// registration is identified — base parameters).
+    pub params: Vec<Param>,
+    /// The parameters that carry injected errors.
+    pub error_params: Vec<Param>,
+    /// The simulated tracker.
+    pub tracker: Tracker,
+    /// Gravity sag, if modelled.
+    pub compliance: Option<Compliance>,
+    /// Per calibration strategy: the fixed pose set, or `None` when drawn per trial.
+    pub fixed: Vec<Option<FixedSet>>,
+}
+
+/// The identifiable parameters among `candidates` for `robot`.
+pub fn identifiable(robot: &Robot, candidates: &[Param], measure: Measure) -> Vec<Param> {
+    let mut g = rng::stream(0x1D, "identifiability");
+    let qs = uniform_joint_poses(robot, IDENTIFIABILITY_POSES, &mut g);
+    analyse(robot, candidates, &qs, measure).identifiable
+}
+
+impl Study {
+    /// Prepares `scenario`: loads the robot, picks the parameters, builds the tracker and the
+    /// compliance model, and optimises the fixed pose sets.
+    pub fn new(scenario: Scenario) -> Result<Study> {
+        let nominal = scenario.robot()?;
+        let measure = scenario.tracker.measure();
+        let with_base = scenario.registration == Registration::Identify;
+        let candidates: Vec<Param> = nominal
+            .params()
+            .into_iter()
+            .filter(|p| with_base || !matches!(p, Param::Base(_)))
+            .collect();
+        let mut params = identifiable(&nominal, &candidates, measure);
+        params.sort_by_key(|p| p.index(nominal.dof()));
+        let error_params = match (&scenario.errors.kind, &scenario.errors.params) {
+            (ErrorKind::None, _) => Vec::new(),
+            (_, ParamSelection::Identifiable) => params
+                .iter()
+                .copied()
+                .filter(|p| !matches!(p, Param::Base(_)))
+                .collect(),
+            (_, ParamSelection::List(names)) => names
+                .iter()
+                .map(|n| {
+                    Param::parse(n)
+                        .filter(|p| nominal.params().contains(p))
+                        .ok_or_else(|| {
+                            Error::setting("errors.params", format!("no parameter \"{n}\""))
+                        })
+                })
+                .collect::<Result<_>>()?,
+        };
+        let tracker = Tracker::new(&scenario.tracker)?;
+        let compliance = Compliance::new(&scenario.compliance, &nominal, scenario.builtin())?;
+
+        let mut fixed = Vec::new();
+        for (i, s) in scenario.calibration.strategies.iter().enumerate() {
+            let c = &scenario.calibration;
+            let set = match s {
+                PoseStrategy::Random | PoseStrategy::Box => None,
+                PoseStrategy::File(path) => {
+                    let poses = read_pose_list(path, &nominal)?;
+                    Some(FixedSet {
+                        poses,
+                        trace: Vec::new(),
+                        scores: None,
+                    })
+                }
+                PoseStrategy::Grid => {
+                    let dof = nominal.dof() as f64;
+                    let per_joint = ((c.count as f64).powf(1.0 / dof).ceil() as usize).max(2);
+                    let mut g = rng::stream(scenario.seed, "grid");
+                    let mut poses = sample_region(&nominal, &Region::Grid { per_joint }, c.count, &mut g)?;
+                    poses.truncate(c.count);
+                    Some(FixedSet {
+                        poses,
+                        trace: Vec::new(),
+                        scores: None,
+                    })
+                }
+                PoseStrategy::Optimised(strategy) => {
+                    let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));
+                    let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
+                    let opt_params = if c.separate {
+                        poses::separate(&nominal, &params, &pool, measure, c.separate_threshold).kept
+                    } else {
+                        params.clone()
+                    };
+                    let model = RobotPoseModel::new(&nominal, &opt_params, measure);
+                    let mut opts = SelectOptions::new(c.count);
+                    opts.objective = c.objective;
+                    let sel = poses::select(&model, &pool, *strategy, &opts, &mut g)?;
+                    Some(FixedSet {
+                        poses: sel.poses,
+                        trace: sel.trace,
+                        scores: serde_json::to_value(&sel.scores).ok(),
+                    })
+                }
+            };
+            fixed.push(set);
+        }
+        Ok(Study {
+            scenario,
+            nominal,
+            measure,
+            params,
+            error_params,
+            tracker,
+            compliance,
+            fixed,
+        })
+    }
+}

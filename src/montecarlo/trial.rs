@@ -1,0 +1,350 @@
+//! One Monte-Carlo trial: a true robot, its measurement for each calibration strategy, every
+//! method's identification, and the validation of each compensated robot.
+//!
+//! Within a trial every method and strategy sees the same true robot; each strategy's
+//! measurement draws its noise and outliers from the same stream, so the draws line up pose
+//! by pose (SPEC §3, FORMATS.md `run`).
+
+use std::time::Instant;
+
+use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
+use rand::Rng as _;
+use rand_distr::{Distribution, Normal};
+
+use super::study::Study;
+use crate::error::Result;
+use crate::identify::{identify, Identified, RobotData, RobotProblem, Termination};
+use crate::jacobian::{jacobian, Columns, Measure};
+use crate::kinematics::{Param, Robot};
+use crate::math::{rotation_vector, Frame, Mat3, Real, Vec3};
+use crate::registration::{register_svd, register_wsvd};
+use crate::rng::{self, Rng};
+use crate::scenario::Registration;
+use crate::sim::settings::ErrorKind;
+use crate::sim::{measure_poses, sample_region, Measurement};
+
+/// Mean, RMS, max and standard deviation of a set of errors.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct ErrorStats {
+    /// Mean (MAE).
+    pub mean: Real,
+    /// Root mean square.
+    pub rms: Real,
+    /// Maximum.
+    pub max: Real,
+    /// Standard deviation (population).
+    pub std: Real,
+}
+
+impl ErrorStats {
+    /// The statistics of `v` (all zero for an empty slice).
+    pub fn of(v: &[Real]) -> ErrorStats {
+        if v.is_empty() {
+            return ErrorStats::default();
+        }
+        let n = v.len() as Real;
+        let mean = v.iter().sum::<Real>() / n;
+        let rms = (v.iter().map(|x| x * x).sum::<Real>() / n).sqrt();
+        let max = v.iter().cloned().fold(0.0, Real::max);
+        let std = (v.iter().map(|x| (x - mean) * (x - mean)).sum::<Real>() / n).sqrt();
+        ErrorStats { mean, rms, max, std }
+    }
+}
+
+/// What one method on one strategy's measurement gave in one trial.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// Index into the scenario's methods.
+    pub method: usize,
+    /// Index into the scenario's strategies.
+    pub strategy: usize,
+    /// Identified errors, one per study parameter (mm, rad).
+    pub identified: Vec<Real>,
+    /// Validation position errors (mm) before compensation: statistics.
+    pub before_mm: ErrorStats,
+    /// … after compensation.
+    pub after_mm: ErrorStats,
+    /// Validation orientation errors (deg) before and after, for full-pose data.
+    pub before_deg: Option<ErrorStats>,
+    /// … after.
+    pub after_deg: Option<ErrorStats>,
+    /// Per-point validation errors before and after (kept for trial 0's plot only).
+    pub per_point: Option<(Vec<Real>, Vec<Real>)>,
+    /// Iterations of the identification.
+    pub iterations: usize,
+    /// How it ended.
+    pub termination: Termination,
+    /// Wall time of registration and identification (s). Not part of the reproducible output.
+    pub seconds: Real,
+}
+
+/// One trial's results.
+#[derive(Clone, Debug)]
+pub struct TrialResult {
+    /// Trial index.
+    pub index: usize,
+    /// The injected errors, one per study parameter (0 where none was injected).
+    pub truth: Vec<Real>,
+    /// The Cramér–Rao trace per strategy (`None` without tracker noise).
+    pub crb_trace: Vec<Option<Real>>,
+    /// One outcome per strategy × method.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// Draws the injected errors (SPEC §3 "True robot"; Guo 2024 §4.2 for the paper set).
+fn draw_errors(study: &Study, g: &mut Rng) -> Vec<(Param, Real)> {
+    let e = &study.scenario.errors;
+    let size = |p: &Param| if p.is_length() { e.length_mm } else { e.angle_rad };
+    study
+        .error_params
+        .iter()
+        .map(|p| {
+            let v = match e.kind {
+                ErrorKind::None => 0.0,
+                ErrorKind::Paper => size(p),
+                ErrorKind::Normal => {
+                    Normal::new(0.0, size(p)).map_or(0.0, |n| n.sample(g))
+                }
+                ErrorKind::Uniform => size(p) * (2.0 * g.random::<Real>() - 1.0),
+            };
+            (*p, v)
+        })
+        .collect()
+}
+
+fn quat_matrix(q: &[Real; 4]) -> Mat3 {
+    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
+        .to_rotation_matrix()
+        .into_inner()
+}
+
+/// Brings the measured points (and frames) into the base frame with `frame`.
+fn to_base(m: &Measurement, frame: &Frame) -> RobotData {
+    RobotData {
+        qs: m.qs.clone(),
+        points: m.points.iter().map(|p| frame.apply(p)).collect(),
+        rotations: m
+            .quats
+            .as_ref()
+            .map(|qs| qs.iter().map(|q| frame.rot * quat_matrix(q)).collect()),
+    }
+}
+
+/// A compensated robot and how it was obtained.
+pub struct Calibrated {
+    /// The nominal robot with the identified errors added.
+    pub robot: Robot,
+    /// The registration: measured (instrument) coordinates → base frame.
+    pub frame: Frame,
+    /// The identification's result (errors in the order of the parameters passed).
+    pub identified: Identified,
+}
+
+/// Registration and identification of one method on one measurement (SPEC §3
+/// "Registration", §4). With `svd` and `wsvd` registration and identification alternate
+/// (three rounds): the first fit absorbs part of the kinematic error into the frame, and a
+/// refit on the identified model removes it. With `identify` the SVD frame is a first
+/// estimate and the base parameters (which must then be among `params`) absorb the rest
+/// (Li 2018). With `known` the frame is `known`.
+pub fn calibrate(
+    nominal: &Robot,
+    params: &[Param],
+    measure: Measure,
+    m: &Measurement,
+    registration: Registration,
+    known: &Frame,
+    method: &crate::identify::Method,
+) -> Result<Calibrated> {
+    let chain = nominal.chain();
+    let nominal_points: Vec<Vec3> = m.qs.iter().map(|q| chain.fk(q).pos).collect();
+    let mut frame = match registration {
+        Registration::Known => *known,
+        Registration::Wsvd => register_wsvd(&nominal_points, &m.points)?.frame,
+        Registration::Svd | Registration::Identify => {
+            register_svd(&nominal_points, &m.points, None)?.frame
+        }
+    };
+    let x0 = DVector::zeros(params.len());
+    let rounds = match registration {
+        Registration::Svd | Registration::Wsvd => 3,
+        _ => 1,
+    };
+    let mut round = 0;
+    loop {
+        let data = to_base(m, &frame);
+        let problem = RobotProblem::new(nominal, params, &data, measure)?;
+        let identified = identify(&problem, &x0, method);
+        let robot = problem.robot_with(&identified.x);
+        round += 1;
+        if round >= rounds {
+            return Ok(Calibrated {
+                robot,
+                frame,
+                identified,
+            });
+        }
+        let c = robot.chain();
+        let model: Vec<Vec3> = m.qs.iter().map(|q| c.fk(q).pos).collect();
+        frame = match registration {
+            Registration::Wsvd => register_wsvd(&model, &m.points)?.frame,
+            _ => register_svd(&model, &m.points, None)?.frame,
+        };
+    }
+}
+
+/// Position (mm) and orientation (deg) errors of `model` against the true frames.
+pub fn validation_errors(model: &Robot, qs: &[Vec<Real>], truth: &[Frame]) -> (Vec<Real>, Vec<Real>) {
+    let c = model.chain();
+    qs.iter()
+        .zip(truth)
+        .map(|(q, t)| {
+            let f = c.fk(q);
+            let dp = (f.pos - t.pos).norm();
+            let da = rotation_vector(&(f.rot * t.rot.transpose())).norm().to_degrees();
+            (dp, da)
+        })
+        .unzip()
+}
+
+/// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
+/// base frame, with the nominal Jacobian), or `None` without noise.
+fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
+    let cols = Columns::new(&study.params, study.nominal.dof());
+    let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
+    let rows = study.measure.rows();
+    let chain = study.nominal.chain();
+    let tracker_at = study.tracker.frame().pos;
+    for (i, q) in qs.iter().enumerate() {
+        let range = (chain.fk(q).pos - tracker_at).norm();
+        let s = study.tracker.sigma_mm(range);
+        if s <= 0.0 {
+            return None;
+        }
+        let mut block = j.rows_mut(rows * i, 3);
+        block /= s;
+        if rows == 6 {
+            let sa = study.scenario.tracker.angle_noise_deg.to_radians();
+            if sa <= 0.0 {
+                return None;
+            }
+            let mut b = j.rows_mut(rows * i + 3, 3);
+            b /= sa;
+        }
+    }
+    let n: DMatrix<Real> = j.transpose() * &j;
+    n.try_inverse().map(|inv| inv.trace()).filter(|t| t.is_finite())
+}
+
+/// The injected errors and the true robot of trial `index`.
+pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
+    let seed = rng::trial_seed(study.scenario.seed, index as u64);
+    let errors = draw_errors(study, &mut rng::stream(seed, "errors"));
+    let robot = study.nominal.with_errors(&errors);
+    (errors, robot)
+}
+
+/// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
+/// fresh draw from the trial's seed.
+pub fn calibration_poses(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<Real>>> {
+    let sc = &study.scenario;
+    if let Some(set) = &study.fixed[si] {
+        return Ok(set.poses.clone());
+    }
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let name = sc.calibration.strategies[si].name();
+    let mut gp = rng::stream(seed, &format!("poses/{name}"));
+    sample_region(&study.nominal, &sc.calibration.region, sc.calibration.count, &mut gp)
+}
+
+/// The validation poses of trial `index`.
+pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
+    let sc = &study.scenario;
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let mut gv = rng::stream(seed, "validation");
+    sample_region(&study.nominal, &sc.validation.region, sc.validation.count, &mut gv)
+}
+
+/// Runs trial `index` of `study`.
+pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
+    let sc = &study.scenario;
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let (errors, truth_robot) = true_robot(study, index);
+    let truth: Vec<Real> = study
+        .params
+        .iter()
+        .map(|p| errors.iter().find(|(q, _)| q == p).map_or(0.0, |e| e.1))
+        .collect();
+    let sag = study.compliance.as_ref().map(|c| {
+        move |r: &Robot, q: &[Real]| -> Result<Frame> { c.deflected(r, q) }
+    });
+    let sag_ref: Option<&(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync)> =
+        sag.as_ref().map(|f| f as &(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync));
+
+    // Validation: fresh poses, true frames of the sagging true arm, free of tracker noise.
+    let vqs = validation_poses(study, index)?;
+    let vtruth: Vec<Frame> = vqs
+        .iter()
+        .map(|q| match &sag_ref {
+            Some(f) => f(&truth_robot, q),
+            None => Ok(truth_robot.fk(q)),
+        })
+        .collect::<Result<_>>()?;
+    let (before_p, before_a) = validation_errors(&study.nominal, &vqs, &vtruth);
+    let full_pose = study.measure == Measure::Pose;
+
+    let mut outcomes = Vec::new();
+    let mut crb = Vec::new();
+    for si in 0..sc.calibration.strategies.len() {
+        let qs = calibration_poses(study, si, index)?;
+        let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
+        let mut gm = rng::stream(seed, "measure");
+        let m = measure_poses(&truth_robot, &qs, &study.tracker, outliers, sag_ref, &mut gm)?;
+        crb.push(crb_trace(study, &qs));
+        for (mi, spec) in sc.methods.iter().enumerate() {
+            let t0 = Instant::now();
+            let res = calibrate(
+                &study.nominal,
+                &study.params,
+                study.measure,
+                &m,
+                sc.registration,
+                &study.tracker.frame(),
+                &spec.method,
+            );
+            let seconds = t0.elapsed().as_secs_f64();
+            let (identified, after_p, after_a, iterations, termination) = match res {
+                Ok(c) => {
+                    let (p, a) = validation_errors(&c.robot, &vqs, &vtruth);
+                    let r = c.identified;
+                    (r.x.iter().copied().collect(), p, a, r.iterations, r.termination)
+                }
+                Err(_) => (
+                    vec![Real::NAN; study.params.len()],
+                    vec![Real::NAN; vqs.len()],
+                    vec![Real::NAN; vqs.len()],
+                    0,
+                    Termination::InvalidInput,
+                ),
+            };
+            outcomes.push(Outcome {
+                method: mi,
+                strategy: si,
+                identified,
+                before_mm: ErrorStats::of(&before_p),
+                after_mm: ErrorStats::of(&after_p),
+                before_deg: full_pose.then(|| ErrorStats::of(&before_a)),
+                after_deg: full_pose.then(|| ErrorStats::of(&after_a)),
+                per_point: (index == 0).then(|| (before_p.clone(), after_p.clone())),
+                iterations,
+                termination,
+                seconds,
+            });
+        }
+    }
+    Ok(TrialResult {
+        index,
+        truth,
+        crb_trace: crb,
+        outcomes,
+    })
+}

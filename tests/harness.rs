@@ -1,0 +1,179 @@
+//! The Monte-Carlo harness end to end: files and keys, thread-count determinism, the
+//! regression guard, and the CI baseline.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use calbench::check::{compare, read_json};
+use calbench::montecarlo::{run, RunOptions};
+use calbench::scenario::Scenario;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+const TINY: &str = r#"
+name = "tiny"
+description = "a tiny study for the tests"
+seed = 5
+trials = 4
+[robot]
+builtin = "irb2600"
+[errors]
+kind = "paper"
+[tracker]
+pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]
+[outliers]
+count = 2
+magnitude_mm = [0.5, 1.0]
+[compliance]
+model = "linear"
+[calibration]
+count = 30
+strategies = ["random", "detmax"]
+candidates = 150
+[validation]
+count = 20
+[[methods]]
+name = "ls"
+[[methods]]
+name = "lm"
+"#;
+
+fn tiny() -> Scenario {
+    Scenario::parse(TINY, None).unwrap()
+}
+
+fn run_to(s: Scenario, out: &Path, threads: usize) {
+    run(
+        s,
+        &RunOptions {
+            threads: Some(threads),
+            out: Some(out.to_path_buf()),
+            progress: false,
+        },
+    )
+    .unwrap();
+}
+
+#[test]
+fn tiny_study_writes_every_file_with_finite_values() {
+    let out = tmp("tiny");
+    run_to(tiny(), &out, 2);
+    for f in ["summary.json", "trials.csv", "report.md", "eta.png", "eta.svg", "validation_trial0.png", "validation_rms.svg", "objective_trace.png"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let s = read_json(&out.join("summary.json")).unwrap();
+    for k in ["scenario", "trials", "seed", "results"] {
+        assert!(s.get(k).is_some(), "summary lacks {k}");
+    }
+    let results = s["results"].as_array().unwrap();
+    assert_eq!(results.len(), 4);
+    for e in results {
+        for k in ["method", "poses", "eta_mean_pct", "eta", "validation_before_mm", "validation_after_mm", "param_rmse", "crb_ratio", "failures", "seconds_per_identification"] {
+            assert!(e.get(k).is_some(), "entry lacks {k}");
+        }
+        for k in ["mean", "rms", "max", "std"] {
+            let b = e["validation_before_mm"][k].as_f64().unwrap();
+            let a = e["validation_after_mm"][k].as_f64().unwrap();
+            assert!(b.is_finite() && a.is_finite() && a < b, "{k}: before {b} after {a}");
+        }
+        assert!(e["eta_mean_pct"].as_f64().unwrap().is_finite());
+    }
+    let csv = std::fs::read_to_string(out.join("trials.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 4 * 2 * 2);
+}
+
+#[test]
+fn one_and_two_threads_give_the_same_bytes() {
+    let (a, b) = (tmp("threads1"), tmp("threads2"));
+    run_to(tiny(), &a, 1);
+    run_to(tiny(), &b, 2);
+    let read = |d: &Path, f: &str| std::fs::read_to_string(d.join(f)).unwrap();
+    assert_eq!(read(&a, "trials.csv"), read(&b, "trials.csv"));
+    let strip = |d: &Path| {
+        read(&d, "summary.json")
+            .lines()
+            .filter(|l| !l.contains("seconds_per_identification"))
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    assert_eq!(strip(&a), strip(&b));
+}
+
+#[test]
+fn noise_free_study_recovers_the_injected_errors() {
+    let text = TINY
+        .replace("[tracker]\n", "[tracker]\nmpe_a_um = 0.0\nmpe_b_um_per_m = 0.0\n")
+        .replace("count = 2\n", "count = 0\n")
+        .replace("model = \"linear\"", "model = \"none\"");
+    let out = tmp("noisefree");
+    run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
+    let s = read_json(&out.join("summary.json")).unwrap();
+    for e in s["results"].as_array().unwrap() {
+        let rms = e["validation_after_mm"]["rms"].as_f64().unwrap();
+        let eta = e["eta_mean_pct"].as_f64().unwrap();
+        assert!(rms < 1e-4, "{}: after RMS {rms}", e["method"]);
+        assert!(eta > 99.99, "{}: η {eta}", e["method"]);
+    }
+}
+
+#[test]
+fn check_fails_on_a_worsened_summary() {
+    let out = tmp("check");
+    run_to(tiny(), &out, 2);
+    let s = read_json(&out.join("summary.json")).unwrap();
+    assert!(compare(&s, &s, 0.0).is_empty());
+    let mut worse = s.clone();
+    let rms = worse["results"][0]["validation_after_mm"]["rms"].as_f64().unwrap();
+    worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 1.5);
+    let path = out.join("worse.json");
+    std::fs::write(&path, serde_json::to_string(&worse).unwrap()).unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(["check", path.to_str().unwrap(), "--baseline", out.join("summary.json").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("validation_after_mm.rms"), "{err}");
+    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(["check", out.join("summary.json").to_str().unwrap(), "--baseline", out.join("summary.json").to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(o.status.success());
+}
+
+/// The regression guard CI runs: the small study `scenarios/ci-guard.toml` against
+/// `results/baselines/ci-guard.json`. After a deliberate change of results, refresh the
+/// baseline with `cargo run --release -- run scenarios/ci-guard.toml --out results/ci-guard`
+/// and copy its `summary.json` there.
+#[test]
+fn ci_guard_matches_the_baseline() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let s = Scenario::load(&root.join("scenarios/ci-guard.toml")).unwrap();
+    let out = tmp("ci-guard");
+    run_to(s, &out, 2);
+    let now = read_json(&out.join("summary.json")).unwrap();
+    let base = read_json(&root.join("results/baselines/ci-guard.json")).unwrap();
+    let r = compare(&now, &base, 0.02);
+    assert!(r.is_empty(), "regressions: {}", r.iter().map(|r| r.to_string()).collect::<Vec<_>>().join("; "));
+}
+
+#[test]
+fn bad_scenarios_are_refused_naming_the_key() {
+    let cases = [
+        (TINY.replace("[outliers]\n", "[outliers]\ncuont = 3\n"), "cuont"),
+        (TINY.replace("name = \"lm\"", "name = \"lmm\""), "lmm"),
+        (TINY.replace("\"detmax\"", "\"detmx\""), "detmx"),
+        (TINY.replace("count = 2\n", "count = 99\n"), "outliers.count"),
+        (TINY.replace("[tracker]\n", "[tracker]\nmpe_a_um = -1.0\n"), "mpe_a_um"),
+    ];
+    for (text, key) in cases {
+        let e = Scenario::parse(&text, Some(Path::new("bad.toml"))).err().unwrap_or_else(|| panic!("accepted: {key}"));
+        let m = e.to_string();
+        assert!(m.contains(key), "message `{m}` lacks `{key}`");
+    }
+}
