@@ -8,14 +8,16 @@ use serde_json::json;
 use crate::check::{compare, read_json, Regression};
 use crate::error::{Error, Result};
 use crate::identify::Method;
-use crate::kinematics::{Param, Robot};
+use crate::kinematics::Param;
 use crate::math::{Frame, Mat3};
 use crate::montecarlo::trial::{self, ErrorStats};
 use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
 use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
 use crate::report::markdown::{fmt_num, table as markdown_table};
 use crate::scenario::{Registration, Scenario, METHOD_NAMES};
-use crate::sim::{measure_poses, read_measurements, sample_region, write_measurements, Measurement};
+use crate::sim::csv::{read_measurements, write_measurements};
+use crate::sim::poses::sample_region;
+use crate::sim::{measure_poses, Measurement};
 use crate::identifiability::analyse;
 use crate::jacobian::Measure;
 use crate::kinematics::robot_to_toml;
@@ -188,13 +190,8 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
     let seed = crate::rng::trial_seed(sc.seed, trial as u64);
     let qs = trial::calibration_poses(&study, 0, trial)?;
     let vqs = trial::validation_poses(&study, trial)?;
-    let sag = study
-        .compliance
-        .as_ref()
-        .map(|c| move |r: &Robot, q: &[Real]| -> Result<Frame> { c.deflected(r, q) });
-    let sag_ref: Option<&(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync)> = sag
-        .as_ref()
-        .map(|f| f as &(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync));
+    let sag = trial::sag_fn(&study);
+    let sag_ref = sag.as_deref();
     let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
     let m = measure_poses(
         &truth,
@@ -413,7 +410,7 @@ pub fn poses(
     let sc = Scenario::load(scenario)?;
     let strategy: Optimiser = strategy.parse()?;
     let nominal = sc.robot()?;
-    let measure = sc.tracker.measure();
+    let measure = sc.tracker.measure.measure();
     let c = &sc.calibration;
     let count = count.unwrap_or(c.count);
     if count == 0 || count > c.candidates {

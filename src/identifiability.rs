@@ -32,13 +32,20 @@ pub struct Identifiability {
     pub condition_number: Real,
 }
 
-/// Scales each column of `j` to unit norm in place and returns the norms.
+/// Scales each column of `j` to unit norm in place and returns the norms. A column whose
+/// norm is at rounding level (below 1e-9 of the largest column norm, plus 1e-12) is a
+/// parameter with no effect: it is set to zero rather than blown up to unit norm, so it
+/// counts as unidentifiable.
 pub fn scale_columns(j: &mut DMatrix<Real>) -> Vec<Real> {
+    let largest = j.column_iter().map(|c| c.norm()).fold(0.0, Real::max);
+    let floor = 1e-9 * largest + 1e-12;
     let mut norms = Vec::with_capacity(j.ncols());
     for mut c in j.column_iter_mut() {
         let n = c.norm();
-        if n > 0.0 {
+        if n > floor {
             c /= n;
+        } else {
+            c.fill(0.0);
         }
         norms.push(n);
     }

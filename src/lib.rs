@@ -28,3 +28,5 @@ pub mod report;
 pub mod robots;
 pub mod sampling;
 pub mod sim;
+pub mod scenario;
+pub mod montecarlo;

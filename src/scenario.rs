@@ -19,7 +19,8 @@ use crate::kinematics::Robot;
 use crate::math::Real;
 use crate::poses::{Objective, Strategy as Optimiser};
 use crate::robots;
-use crate::sim::settings::{ErrorSettings, OutlierSettings, Region, TrackerSettings};
+use crate::kinematics::Param;
+use crate::sim::settings::{ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings};
 
 /// The scenario file, as written. Unknown keys are refused by serde.
 #[derive(Deserialize)]
@@ -512,7 +513,17 @@ impl Scenario {
         // Settings that need the robot: joint counts of lists, parameter names.
         let robot = scenario.robot()?;
         check(scenario.compliance.check(robot.dof()))?;
-        check(scenario.errors.check_robot(&robot))?;
+        if let ParamSelection::List(names) = &scenario.errors.params {
+            let known = robot.params();
+            for n in names {
+                if !Param::parse(n).is_some_and(|p| known.contains(&p)) {
+                    return Err(ferr(
+                        "errors.params",
+                        format!("robot `{}` has no parameter \"{n}\"", robot.name),
+                    ));
+                }
+            }
+        }
         if let Some(sw) = &scenario.sweep {
             for v in &sw.values {
                 scenario.with_override(&sw.key, v.clone())?;
@@ -751,7 +762,7 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
                 };
             }
             if let Some(x) = parse_xi(t)? {
-                o.ridge.xi = x;
+                o.xi = x;
             }
             if let Some(e) = get_positive(t, "eps")? {
                 o.eps = e;

@@ -14,7 +14,7 @@ use crate::sampling::uniform_joint_poses;
 use crate::scenario::{PoseStrategy, Registration, Scenario};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
-use crate::sim::{read_pose_list, sample_region};
+use crate::sim::poses::{read_pose_list, sample_region};
 
 /// Poses used to decide which parameters are identifiable: many, spread over the joint
 /// ranges, from a fixed seed so every study of a robot agrees.
@@ -64,7 +64,7 @@ impl Study {
     /// compliance model, and optimises the fixed pose sets.
     pub fn new(scenario: Scenario) -> Result<Study> {
         let nominal = scenario.robot()?;
-        let measure = scenario.tracker.measure();
+        let measure = scenario.tracker.measure.measure();
         let with_base = scenario.registration == Registration::Identify;
         let candidates: Vec<Param> = nominal
             .params()
@@ -78,6 +78,11 @@ impl Study {
             (_, ParamSelection::Identifiable) => params
                 .iter()
                 .copied()
+                .filter(|p| !matches!(p, Param::Base(_)))
+                .collect(),
+            (_, ParamSelection::All) => nominal
+                .params()
+                .into_iter()
                 .filter(|p| !matches!(p, Param::Base(_)))
                 .collect(),
             (_, ParamSelection::List(names)) => names

@@ -21,7 +21,8 @@ use crate::registration::{register_svd, register_wsvd};
 use crate::rng::{self, Rng};
 use crate::scenario::Registration;
 use crate::sim::settings::ErrorKind;
-use crate::sim::{measure_poses, sample_region, Measurement};
+use crate::sim::poses::{sample_region, sample_region_keyed};
+use crate::sim::{measure_poses, Measurement, SagFn};
 
 /// Mean, RMS, max and standard deviation of a set of errors.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -261,7 +262,20 @@ pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
     let sc = &study.scenario;
     let seed = rng::trial_seed(sc.seed, index as u64);
     let mut gv = rng::stream(seed, "validation");
-    sample_region(&study.nominal, &sc.validation.region, sc.validation.count, &mut gv)
+    sample_region_keyed(
+        &study.nominal,
+        &sc.validation.region,
+        sc.validation.count,
+        "validation.region",
+        &mut gv,
+    )
+}
+
+/// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.
+pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
+    study.compliance.clone().map(|c| {
+        Box::new(move |r: &Robot, q: &[Real]| c.deflected(r, q)) as Box<SagFn>
+    })
 }
 
 /// Runs trial `index` of `study`.
@@ -274,11 +288,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         .iter()
         .map(|p| errors.iter().find(|(q, _)| q == p).map_or(0.0, |e| e.1))
         .collect();
-    let sag = study.compliance.as_ref().map(|c| {
-        move |r: &Robot, q: &[Real]| -> Result<Frame> { c.deflected(r, q) }
-    });
-    let sag_ref: Option<&(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync)> =
-        sag.as_ref().map(|f| f as &(dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync));
+    let sag = sag_fn(study);
+    let sag_ref = sag.as_deref();
 
     // Validation: fresh poses, true frames of the sagging true arm, free of tracker noise.
     let vqs = validation_poses(study, index)?;
