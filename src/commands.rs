@@ -7,22 +7,21 @@ use serde_json::json;
 
 use crate::check::{compare, read_json, Regression};
 use crate::error::{Error, Result};
+use crate::identifiability::analyse;
 use crate::identify::Method;
-use crate::kinematics::Param;
+use crate::jacobian::Measure;
+use crate::kinematics::robot_to_toml;
+use crate::math::Real;
 use crate::math::{Frame, Mat3};
 use crate::montecarlo::trial::{self, ErrorStats};
 use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
 use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
 use crate::report::markdown::{fmt_num, table as markdown_table};
+use crate::robots::{self, BUILTINS};
 use crate::scenario::{Registration, Scenario, METHOD_NAMES};
 use crate::sim::csv::{read_measurements, write_measurements};
 use crate::sim::poses::sample_region;
 use crate::sim::{measure_poses, Measurement};
-use crate::identifiability::analyse;
-use crate::jacobian::Measure;
-use crate::kinematics::robot_to_toml;
-use crate::math::Real;
-use crate::robots::{self, BUILTINS};
 
 /// `calbench robots [NAME]`.
 pub fn robots(name: Option<&str>) -> Result<()> {
@@ -181,7 +180,10 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
     if trial >= sc.trials {
         return Err(Error::setting(
             "--trial",
-            format!("trial {trial} does not exist: the scenario has {} trials (0-based)", sc.trials),
+            format!(
+                "trial {trial} does not exist: the scenario has {} trials (0-based)",
+                sc.trials
+            ),
         ));
     }
     let study = Study::new(sc)?;
@@ -248,7 +250,10 @@ pub fn parse_method(name: &str) -> Result<Method> {
         _ => {
             return Err(Error::setting(
                 "--method",
-                format!("unknown method \"{name}\"; allowed: {}", METHOD_NAMES.join(", ")),
+                format!(
+                    "unknown method \"{name}\"; allowed: {}",
+                    METHOD_NAMES.join(", ")
+                ),
             ))
         }
     })
@@ -281,13 +286,7 @@ pub fn identify_file(
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
     let with_base = registration == Registration::Identify;
-    let candidates: Vec<Param> = nominal
-        .params()
-        .into_iter()
-        .filter(|p| with_base || !matches!(p, Param::Base(_)))
-        .collect();
-    let mut params = study::identifiable(&nominal, &candidates, measure);
-    params.sort_by_key(|p| p.index(nominal.dof()));
+    let params = study::identified_params(&nominal, measure, with_base);
     let m = Measurement {
         qs: d.qs.clone(),
         points: d.points.clone(),
@@ -416,16 +415,13 @@ pub fn poses(
     if count == 0 || count > c.candidates {
         return Err(Error::setting(
             "--count",
-            format!("must be between 1 and calibration.candidates ({})", c.candidates),
+            format!(
+                "must be between 1 and calibration.candidates ({})",
+                c.candidates
+            ),
         ));
     }
-    let candidates: Vec<Param> = nominal
-        .params()
-        .into_iter()
-        .filter(|p| !matches!(p, Param::Base(_)))
-        .collect();
-    let mut params = study::identifiable(&nominal, &candidates, measure);
-    params.sort_by_key(|p| p.index(nominal.dof()));
+    let mut params = study::identified_params(&nominal, measure, false);
     let mut g = crate::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
     let mut separation = None;
@@ -446,11 +442,15 @@ pub fn poses(
         + "\n";
     for q in &sel.poses {
         let u = nominal.q_to_user(q);
-        csv += &u.iter().map(|v| format!("{v}")).collect::<Vec<_>>().join(",");
+        csv += &u
+            .iter()
+            .map(|v| format!("{v}"))
+            .collect::<Vec<_>>()
+            .join(",");
         csv.push('\n');
     }
     write_file(&out.join("poses.csv"), &csv)?;
-    let mut scores = serde_json::to_value(&sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
+    let mut scores = serde_json::to_value(sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
     scores["strategy"] = json!(strategy_name(strategy));
     scores["count"] = json!(sel.poses.len());
     scores["parameters"] = json!(params.iter().map(|p| p.to_string()).collect::<Vec<_>>());
@@ -485,7 +485,12 @@ pub fn poses(
                     .parse::<usize>()
                     .ok()
                     .filter(|&n| n >= 1 && n <= pool.len())
-                    .ok_or_else(|| Error::setting("--curve", format!("\"{s}\" is not a pose count in 1..={}", pool.len())))
+                    .ok_or_else(|| {
+                        Error::setting(
+                            "--curve",
+                            format!("\"{s}\" is not a pose count in 1..={}", pool.len()),
+                        )
+                    })
             })
             .collect::<Result<_>>()?;
         let pts = crate::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
@@ -574,9 +579,11 @@ pub fn run(
         "running {}: {} trials{}",
         sc.name,
         sc.trials,
-        sc.sweep
-            .as_ref()
-            .map_or(String::new(), |s| format!(" × {} values of {}", s.values.len(), s.key))
+        sc.sweep.as_ref().map_or(String::new(), |s| format!(
+            " × {} values of {}",
+            s.values.len(),
+            s.key
+        ))
     );
     let opts = RunOptions {
         threads,

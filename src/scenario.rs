@@ -14,13 +14,17 @@ use serde::Deserialize;
 
 use crate::compliance::ComplianceSettings;
 use crate::error::{Error, Result};
-use crate::identify::{LmOptions, LsOptions, Method, RidgeOptions, RobustOptions, Sigma0, WeightFn, XiRule};
+use crate::identify::{
+    LmOptions, LsOptions, Method, RidgeOptions, RobustOptions, Sigma0, WeightFn, XiRule,
+};
+use crate::kinematics::Param;
 use crate::kinematics::Robot;
 use crate::math::Real;
 use crate::poses::{Objective, Strategy as Optimiser};
 use crate::robots;
-use crate::kinematics::Param;
-use crate::sim::settings::{ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings};
+use crate::sim::settings::{
+    ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
+};
 
 /// The scenario file, as written. Unknown keys are refused by serde.
 #[derive(Deserialize)]
@@ -191,7 +195,15 @@ pub enum PoseStrategy {
 }
 
 /// The strategy names accepted in `calibration.strategies`.
-pub const STRATEGY_NAMES: &[&str] = &["random", "box", "grid", "file", "detmax", "ide", "detmax-ide"];
+pub const STRATEGY_NAMES: &[&str] = &[
+    "random",
+    "box",
+    "grid",
+    "file",
+    "detmax",
+    "ide",
+    "detmax-ide",
+];
 
 impl PoseStrategy {
     /// The name used in files and reports.
@@ -321,7 +333,9 @@ impl Scenario {
     }
 
     fn from_table(table: toml::Table, path: Option<&Path>) -> Result<Scenario> {
-        let shown = path.unwrap_or(Path::new("<built-in default scenario>")).to_path_buf();
+        let shown = path
+            .unwrap_or(Path::new("<built-in default scenario>"))
+            .to_path_buf();
         let ferr = |place: &str, msg: String| Error::file(&shown, place, msg);
         let raw: RawScenario = toml::Value::Table(table.clone())
             .try_into()
@@ -333,7 +347,10 @@ impl Scenario {
         let check = |r: Result<()>| r.map_err(|e| ferr("setting", e.to_string()));
 
         if raw.name.trim().is_empty() || raw.name.contains(['/', '\\']) {
-            return Err(ferr("name", "must be a non-empty name without slashes".into()));
+            return Err(ferr(
+                "name",
+                "must be a non-empty name without slashes".into(),
+            ));
         }
         if raw.trials == 0 {
             return Err(ferr("trials", "must be at least 1".into()));
@@ -398,7 +415,10 @@ impl Scenario {
                     ))
                 }
             };
-            if strategies.iter().any(|x: &PoseStrategy| x.name() == st.name()) {
+            if strategies
+                .iter()
+                .any(|x: &PoseStrategy| x.name() == st.name())
+            {
                 return Err(ferr(
                     &format!("calibration.strategies[{i}]"),
                     format!("\"{s}\" is listed twice"),
@@ -450,7 +470,10 @@ impl Scenario {
         if raw.methods.is_empty() {
             return Err(ferr(
                 "methods",
-                format!("give at least one [[methods]]; allowed names: {}", METHOD_NAMES.join(", ")),
+                format!(
+                    "give at least one [[methods]]; allowed names: {}",
+                    METHOD_NAMES.join(", ")
+                ),
             ));
         }
         let mut methods = Vec::new();
@@ -459,7 +482,10 @@ impl Scenario {
             if methods.iter().any(|x: &MethodSpec| x.label == m.label) {
                 return Err(ferr(
                     &format!("methods[{i}].label"),
-                    format!("\"{}\" is used twice: give each method a distinct `label`", m.label),
+                    format!(
+                        "\"{}\" is used twice: give each method a distinct `label`",
+                        m.label
+                    ),
                 ));
             }
             methods.push(m);
@@ -565,9 +591,10 @@ impl Scenario {
             return Err(Error::setting(key, "methods cannot be swept or overridden"));
         }
         let mut parts: Vec<&str> = key.split('.').collect();
-        let last = parts.pop().filter(|s| !s.is_empty()).ok_or_else(|| {
-            Error::setting("sweep.key", format!("\"{key}\" is not a dotted key"))
-        })?;
+        let last = parts
+            .pop()
+            .filter(|s| !s.is_empty())
+            .ok_or_else(|| Error::setting("sweep.key", format!("\"{key}\" is not a dotted key")))?;
         let mut t = &mut table;
         for p in parts {
             t = t
@@ -624,7 +651,10 @@ fn get_count(t: &toml::Table, k: &str) -> std::result::Result<Option<usize>, Met
         None => Ok(None),
         Some(v) => match v.as_integer() {
             Some(i) if i >= 1 => Ok(Some(i as usize)),
-            _ => Err((k.to_string(), format!("must be a whole number ≥ 1, got {v}"))),
+            _ => Err((
+                k.to_string(),
+                format!("must be a whole number ≥ 1, got {v}"),
+            )),
         },
     }
 }
@@ -685,7 +715,10 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
         other => {
             return Err((
                 "name".into(),
-                format!("unknown method \"{other}\"; allowed: {}", METHOD_NAMES.join(", ")),
+                format!(
+                    "unknown method \"{other}\"; allowed: {}",
+                    METHOD_NAMES.join(", ")
+                ),
             ))
         }
     };
@@ -734,7 +767,10 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
                 o.k1 = x;
             }
             if o.k1 <= o.k0 {
-                return Err(("k1".into(), format!("must exceed k0 ({}), got {}", o.k0, o.k1)));
+                return Err((
+                    "k1".into(),
+                    format!("must exceed k0 ({}), got {}", o.k0, o.k1),
+                ));
             }
             if let Some(s) = get_str(t, "sigma0")? {
                 o.sigma0 = match s {

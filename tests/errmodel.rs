@@ -92,6 +92,7 @@ fn residuals_vanish_on_the_model_pose() {
 
 /// One linearised step of each model from the nominal robot; returns the estimates and the
 /// validation ACPE/ACAE of each.
+#[allow(clippy::type_complexity)]
 fn one_step(len: Real, ang: Real) -> (Vec<Vec<Real>>, Vec<(Real, Real)>, Vec<Real>) {
     let (nominal, qs) = setup(50, 3);
     let (_, val) = setup(30, 4);

@@ -63,7 +63,16 @@ fn run_to(s: Scenario, out: &Path, threads: usize) {
 fn tiny_study_writes_every_file_with_finite_values() {
     let out = tmp("tiny");
     run_to(tiny(), &out, 2);
-    for f in ["summary.json", "trials.csv", "report.md", "eta.png", "eta.svg", "validation_trial0.png", "validation_rms.svg", "objective_trace.png"] {
+    for f in [
+        "summary.json",
+        "trials.csv",
+        "report.md",
+        "eta.png",
+        "eta.svg",
+        "validation_trial0.png",
+        "validation_rms.svg",
+        "objective_trace.png",
+    ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
     let s = read_json(&out.join("summary.json")).unwrap();
@@ -73,13 +82,27 @@ fn tiny_study_writes_every_file_with_finite_values() {
     let results = s["results"].as_array().unwrap();
     assert_eq!(results.len(), 4);
     for e in results {
-        for k in ["method", "poses", "eta_mean_pct", "eta", "validation_before_mm", "validation_after_mm", "param_rmse", "crb_ratio", "failures", "seconds_per_identification"] {
+        for k in [
+            "method",
+            "poses",
+            "eta_mean_pct",
+            "eta",
+            "validation_before_mm",
+            "validation_after_mm",
+            "param_rmse",
+            "crb_ratio",
+            "failures",
+            "seconds_per_identification",
+        ] {
             assert!(e.get(k).is_some(), "entry lacks {k}");
         }
         for k in ["mean", "rms", "max", "std"] {
             let b = e["validation_before_mm"][k].as_f64().unwrap();
             let a = e["validation_after_mm"][k].as_f64().unwrap();
-            assert!(b.is_finite() && a.is_finite() && a < b, "{k}: before {b} after {a}");
+            assert!(
+                b.is_finite() && a.is_finite() && a < b,
+                "{k}: before {b} after {a}"
+            );
         }
         assert!(e["eta_mean_pct"].as_f64().unwrap().is_finite());
     }
@@ -95,7 +118,7 @@ fn one_and_two_threads_give_the_same_bytes() {
     let read = |d: &Path, f: &str| std::fs::read_to_string(d.join(f)).unwrap();
     assert_eq!(read(&a, "trials.csv"), read(&b, "trials.csv"));
     let strip = |d: &Path| {
-        read(&d, "summary.json")
+        read(d, "summary.json")
             .lines()
             .filter(|l| !l.contains("seconds_per_identification"))
             .collect::<Vec<_>>()
@@ -107,7 +130,10 @@ fn one_and_two_threads_give_the_same_bytes() {
 #[test]
 fn noise_free_study_recovers_the_injected_errors() {
     let text = TINY
-        .replace("[tracker]\n", "[tracker]\nmpe_a_um = 0.0\nmpe_b_um_per_m = 0.0\n")
+        .replace(
+            "[tracker]\n",
+            "[tracker]\nmpe_a_um = 0.0\nmpe_b_um_per_m = 0.0\n",
+        )
         .replace("count = 2\n", "count = 0\n")
         .replace("model = \"linear\"", "model = \"none\"");
     let out = tmp("noisefree");
@@ -128,19 +154,31 @@ fn check_fails_on_a_worsened_summary() {
     let s = read_json(&out.join("summary.json")).unwrap();
     assert!(compare(&s, &s, 0.0).is_empty());
     let mut worse = s.clone();
-    let rms = worse["results"][0]["validation_after_mm"]["rms"].as_f64().unwrap();
+    let rms = worse["results"][0]["validation_after_mm"]["rms"]
+        .as_f64()
+        .unwrap();
     worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 1.5);
     let path = out.join("worse.json");
     std::fs::write(&path, serde_json::to_string(&worse).unwrap()).unwrap();
     let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(["check", path.to_str().unwrap(), "--baseline", out.join("summary.json").to_str().unwrap()])
+        .args([
+            "check",
+            path.to_str().unwrap(),
+            "--baseline",
+            out.join("summary.json").to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("validation_after_mm.rms"), "{err}");
     let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(["check", out.join("summary.json").to_str().unwrap(), "--baseline", out.join("summary.json").to_str().unwrap()])
+        .args([
+            "check",
+            out.join("summary.json").to_str().unwrap(),
+            "--baseline",
+            out.join("summary.json").to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     assert!(o.status.success());
@@ -159,20 +197,38 @@ fn ci_guard_matches_the_baseline() {
     let now = read_json(&out.join("summary.json")).unwrap();
     let base = read_json(&root.join("results/baselines/ci-guard.json")).unwrap();
     let r = compare(&now, &base, 0.02);
-    assert!(r.is_empty(), "regressions: {}", r.iter().map(|r| r.to_string()).collect::<Vec<_>>().join("; "));
+    assert!(
+        r.is_empty(),
+        "regressions: {}",
+        r.iter()
+            .map(|r| r.to_string())
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
 }
 
 #[test]
 fn bad_scenarios_are_refused_naming_the_key() {
     let cases = [
-        (TINY.replace("[outliers]\n", "[outliers]\ncuont = 3\n"), "cuont"),
+        (
+            TINY.replace("[outliers]\n", "[outliers]\ncuont = 3\n"),
+            "cuont",
+        ),
         (TINY.replace("name = \"lm\"", "name = \"lmm\""), "lmm"),
         (TINY.replace("\"detmax\"", "\"detmx\""), "detmx"),
-        (TINY.replace("count = 2\n", "count = 99\n"), "outliers.count"),
-        (TINY.replace("[tracker]\n", "[tracker]\nmpe_a_um = -1.0\n"), "mpe_a_um"),
+        (
+            TINY.replace("count = 2\n", "count = 99\n"),
+            "outliers.count",
+        ),
+        (
+            TINY.replace("[tracker]\n", "[tracker]\nmpe_a_um = -1.0\n"),
+            "mpe_a_um",
+        ),
     ];
     for (text, key) in cases {
-        let e = Scenario::parse(&text, Some(Path::new("bad.toml"))).err().unwrap_or_else(|| panic!("accepted: {key}"));
+        let e = Scenario::parse(&text, Some(Path::new("bad.toml")))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {key}"));
         let m = e.to_string();
         assert!(m.contains(key), "message `{m}` lacks `{key}`");
     }

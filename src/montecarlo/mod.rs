@@ -104,7 +104,10 @@ pub fn run(scenario: Scenario, opts: &RunOptions) -> Result<RunResult> {
     let mut blocks = Vec::new();
     for (value, plan) in plans {
         if let Some(v) = &value {
-            bar.set_message(format!("{} = {v}", scenario.sweep.as_ref().map_or("", |s| &s.key)));
+            bar.set_message(format!(
+                "{} = {v}",
+                scenario.sweep.as_ref().map_or("", |s| &s.key)
+            ));
         }
         let study = pool.install(|| Study::new(plan))?;
         let trials = pool.install(|| run_trials(&study, &bar))?;

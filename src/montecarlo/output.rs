@@ -33,7 +33,11 @@ pub fn summary(r: &RunResult) -> Value {
     let results: Vec<Value> = r
         .blocks
         .iter()
-        .flat_map(|b| b.entries.iter().map(|e| serde_json::to_value(e).unwrap_or(Value::Null)))
+        .flat_map(|b| {
+            b.entries
+                .iter()
+                .map(|e| serde_json::to_value(e).unwrap_or(Value::Null))
+        })
         .collect();
     let mut s = json!({
         "scenario": sc.name,
@@ -74,13 +78,28 @@ pub fn trials_csv(r: &RunResult) -> String {
     }
     head.extend(
         [
-            "method", "poses", "eta_mean_pct", "before_mean_mm", "before_rms_mm", "before_max_mm",
-            "after_mean_mm", "after_rms_mm", "after_max_mm",
+            "method",
+            "poses",
+            "eta_mean_pct",
+            "before_mean_mm",
+            "before_rms_mm",
+            "before_max_mm",
+            "after_mean_mm",
+            "after_rms_mm",
+            "after_max_mm",
         ]
         .map(String::from),
     );
     if pose {
-        head.extend(["before_mean_deg", "before_rms_deg", "after_mean_deg", "after_rms_deg"].map(String::from));
+        head.extend(
+            [
+                "before_mean_deg",
+                "before_rms_deg",
+                "after_mean_deg",
+                "after_rms_deg",
+            ]
+            .map(String::from),
+        );
     }
     head.extend(["iterations", "termination"].map(String::from));
     head.extend(names.iter().map(|n| format!("true_{n}")));
@@ -100,17 +119,29 @@ pub fn trials_csv(r: &RunResult) -> String {
                     .zip(&o.identified)
                     .filter_map(|(&x, &y)| super::stats::eta(x, y))
                     .collect();
-                let eta_mean = if etas.is_empty() { Real::NAN } else { etas.iter().sum::<Real>() / etas.len() as Real };
+                let eta_mean = if etas.is_empty() {
+                    Real::NAN
+                } else {
+                    etas.iter().sum::<Real>() / etas.len() as Real
+                };
                 row.push(sc.methods[o.method].label.clone());
                 row.push(sc.calibration.strategies[o.strategy].name().into());
                 for v in [
-                    eta_mean, o.before_mm.mean, o.before_mm.rms, o.before_mm.max, o.after_mm.mean,
-                    o.after_mm.rms, o.after_mm.max,
+                    eta_mean,
+                    o.before_mm.mean,
+                    o.before_mm.rms,
+                    o.before_mm.max,
+                    o.after_mm.mean,
+                    o.after_mm.rms,
+                    o.after_mm.max,
                 ] {
                     row.push(num(v));
                 }
                 if pose {
-                    let (bd, ad) = (o.before_deg.unwrap_or_default(), o.after_deg.unwrap_or_default());
+                    let (bd, ad) = (
+                        o.before_deg.unwrap_or_default(),
+                        o.after_deg.unwrap_or_default(),
+                    );
                     for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
                         row.push(num(v));
                     }
@@ -150,7 +181,16 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     if sc.sweep.is_some() {
         headers.insert(0, "swept value");
     }
-    headers.extend(["η mean %", "before mean mm", "before RMS mm", "before max mm", "after mean mm", "after RMS mm", "after max mm", "improvement %"]);
+    headers.extend([
+        "η mean %",
+        "before mean mm",
+        "before RMS mm",
+        "before max mm",
+        "after mean mm",
+        "after RMS mm",
+        "after max mm",
+        "improvement %",
+    ]);
     if pose {
         headers.extend(["before mean °", "after mean °"]);
     }
@@ -177,8 +217,14 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
                 row.push(fmt_num(v, 4));
             }
             if pose {
-                row.push(fmt_num(e.validation_before_deg.map_or(Real::NAN, |d| d.mean), 4));
-                row.push(fmt_num(e.validation_after_deg.map_or(Real::NAN, |d| d.mean), 4));
+                row.push(fmt_num(
+                    e.validation_before_deg.map_or(Real::NAN, |d| d.mean),
+                    4,
+                ));
+                row.push(fmt_num(
+                    e.validation_after_deg.map_or(Real::NAN, |d| d.mean),
+                    4,
+                ));
             }
             row.push(fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3));
             row.push(e.failures.to_string());
@@ -191,15 +237,27 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     s += &table(&headers, &rows);
     s += "\n## Identification accuracy η per parameter (mean %, Guo 2024 eq. 29)\n\n";
     let b0 = &r.blocks[0];
-    let params: Vec<String> = b0.entries.first().map(|e| e.eta.keys().cloned().collect()).unwrap_or_default();
-    let cols: Vec<String> = b0.entries.iter().map(|e| format!("{} / {}", e.method, e.poses)).collect();
+    let params: Vec<String> = b0
+        .entries
+        .first()
+        .map(|e| e.eta.keys().cloned().collect())
+        .unwrap_or_default();
+    let cols: Vec<String> = b0
+        .entries
+        .iter()
+        .map(|e| format!("{} / {}", e.method, e.poses))
+        .collect();
     let mut h: Vec<&str> = vec!["parameter"];
     h.extend(cols.iter().map(String::as_str));
     let eta_rows: Vec<Vec<String>> = params
         .iter()
         .map(|p| {
             let mut row = vec![format!("`{p}`")];
-            row.extend(b0.entries.iter().map(|e| fmt_num(e.eta.get(p).map_or(Real::NAN, |x| x.mean), 4)));
+            row.extend(
+                b0.entries
+                    .iter()
+                    .map(|e| fmt_num(e.eta.get(p).map_or(Real::NAN, |x| x.mean), 4)),
+            );
             row
         })
         .collect();
@@ -216,7 +274,8 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     s += "- **before / after**: position error |Δp| at the validation poses of the nominal and of the compensated robot; mean (MAE), RMS, max.\n";
     s += "- **improvement** = (before − after) / before of the mean error.\n";
     s += "- **CRB ratio**: trace of the empirical covariance of the identified errors over trials divided by the mean Cramér–Rao trace (JᵀWJ)⁻¹ of the tracker noise; ≈ 1 for an efficient estimator under Gaussian noise, above 1 with outliers and sag.\n";
-    s += "- **failures**: identifications that diverged, were singular or gave non-finite values.\n";
+    s +=
+        "- **failures**: identifications that diverged, were singular or gave non-finite values.\n";
     s
 }
 
@@ -226,18 +285,31 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
     // η per parameter per method × strategy (Guo 2024 fig. 8).
-    let params: Vec<String> = b0.entries.first().map(|e| e.eta.keys().cloned().collect()).unwrap_or_default();
+    let params: Vec<String> = b0
+        .entries
+        .first()
+        .map(|e| e.eta.keys().cloned().collect())
+        .unwrap_or_default();
     let series: Vec<(String, Vec<Real>)> = b0
         .entries
         .iter()
         .map(|e| {
             (
                 format!("{} / {}", e.method, e.poses),
-                params.iter().map(|p| e.eta.get(p).map_or(Real::NAN, |x| x.mean)).collect(),
+                params
+                    .iter()
+                    .map(|p| e.eta.get(p).map_or(Real::NAN, |x| x.mean))
+                    .collect(),
             )
         })
         .collect();
-    plots::grouped_bars(&out.join("eta"), "Identification accuracy per parameter", "mean η (%)", &params, &series)?;
+    plots::grouped_bars(
+        &out.join("eta"),
+        "Identification accuracy per parameter",
+        "mean η (%)",
+        &params,
+        &series,
+    )?;
     done.push(("eta.png".into(), "η per parameter and method".into()));
     // Validation error per point, trial 0, the first method and strategy (Li 2018 fig. 3).
     if let Some(o) = b0.trials.first().and_then(|t| t.outcomes.first()) {
@@ -249,7 +321,10 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
                 sc.calibration.strategies[o.strategy].name()
             );
             plots::before_after(&out.join("validation_trial0"), &title, before, after)?;
-            done.push(("validation_trial0.png".into(), "validation error per point before and after compensation, trial 0".into()));
+            done.push((
+                "validation_trial0.png".into(),
+                "validation error per point before and after compensation, trial 0".into(),
+            ));
         }
     }
     // Validation RMS over trials per method × strategy.
@@ -258,17 +333,33 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
         .iter()
         .enumerate()
         .map(|(k, e)| {
-            let (si, mi) = (k / b0.study.scenario.methods.len(), k % b0.study.scenario.methods.len());
+            let (si, mi) = (
+                k / b0.study.scenario.methods.len(),
+                k % b0.study.scenario.methods.len(),
+            );
             let v = b0
                 .trials
                 .iter()
-                .flat_map(|t| t.outcomes.iter().filter(|o| o.strategy == si && o.method == mi).map(|o| o.after_mm.rms))
+                .flat_map(|t| {
+                    t.outcomes
+                        .iter()
+                        .filter(|o| o.strategy == si && o.method == mi)
+                        .map(|o| o.after_mm.rms)
+                })
                 .collect();
             (format!("{} / {}", e.method, e.poses), v)
         })
         .collect();
-    plots::box_plot(&out.join("validation_rms"), "Validation RMS after compensation over trials", "RMS (mm)", &groups)?;
-    done.push(("validation_rms.png".into(), "validation RMS over trials".into()));
+    plots::box_plot(
+        &out.join("validation_rms"),
+        "Validation RMS after compensation over trials",
+        "RMS (mm)",
+        &groups,
+    )?;
+    done.push((
+        "validation_rms.png".into(),
+        "validation RMS over trials".into(),
+    ));
     // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
     let traces: Vec<(String, Vec<Real>)> = b0
         .study
@@ -277,17 +368,39 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
         .strategies
         .iter()
         .zip(&b0.study.fixed)
-        .filter_map(|(s, f)| f.as_ref().filter(|f| !f.trace.is_empty()).map(|f| (s.name().to_string(), f.trace.clone())))
+        .filter_map(|(s, f)| {
+            f.as_ref()
+                .filter(|f| !f.trace.is_empty())
+                .map(|f| (s.name().to_string(), f.trace.clone()))
+        })
         .collect();
     if !traces.is_empty() {
-        plots::traces(&out.join("objective_trace"), "Pose-set objective per iteration", "iteration", "objective", &traces, false)?;
-        done.push(("objective_trace.png".into(), "pose optimisation objective per iteration".into()));
+        plots::traces(
+            &out.join("objective_trace"),
+            "Pose-set objective per iteration",
+            "iteration",
+            "objective",
+            &traces,
+            false,
+        )?;
+        done.push((
+            "objective_trace.png".into(),
+            "pose optimisation objective per iteration".into(),
+        ));
     }
     // Sweeps: validation RMS after compensation against the swept value.
     if let Some(sw) = &r.scenario.sweep {
-        let xs: Vec<Option<Real>> = r.blocks.iter().map(|b| b.sweep_value.as_ref().and_then(|v| v.as_float().or(v.as_integer().map(|i| i as Real)))).collect();
+        let xs: Vec<Option<Real>> = r
+            .blocks
+            .iter()
+            .map(|b| {
+                b.sweep_value
+                    .as_ref()
+                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as Real)))
+            })
+            .collect();
         if xs.iter().all(Option::is_some) {
-            let mut series: Vec<(String, Vec<(Real, Real, Real)>)> = Vec::new();
+            let mut series: Vec<plots::SweepSeries> = Vec::new();
             for (k, e) in b0.entries.iter().enumerate() {
                 let pts = r
                     .blocks
@@ -295,13 +408,26 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
                     .zip(&xs)
                     .map(|(b, x)| {
                         let e = &b.entries[k];
-                        (x.unwrap_or(0.0), e.validation_after_mm.rms, e.validation_after_mm.std)
+                        (
+                            x.unwrap_or(0.0),
+                            e.validation_after_mm.rms,
+                            e.validation_after_mm.std,
+                        )
                     })
                     .collect();
                 series.push((format!("{} / {}", e.method, e.poses), pts));
             }
-            plots::sweep(&out.join("sweep"), "Validation RMS after compensation", &sw.key, "RMS (mm)", &series)?;
-            done.push(("sweep.png".into(), format!("validation RMS against {}", sw.key)));
+            plots::sweep(
+                &out.join("sweep"),
+                "Validation RMS after compensation",
+                &sw.key,
+                "RMS (mm)",
+                &series,
+            )?;
+            done.push((
+                "sweep.png".into(),
+                format!("validation RMS against {}", sw.key),
+            ));
         }
     }
     Ok(done)

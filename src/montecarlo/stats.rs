@@ -138,8 +138,14 @@ pub fn aggregate(
     let mut rmse = BTreeMap::new();
     let mut emp_trace = 0.0;
     for (k, name) in names.iter().enumerate() {
-        let errs: Vec<Real> = ok.iter().map(|(t, o)| o.identified[k] - t.truth[k]).collect();
-        rmse.insert(name.clone(), (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt());
+        let errs: Vec<Real> = ok
+            .iter()
+            .map(|(t, o)| o.identified[k] - t.truth[k])
+            .collect();
+        rmse.insert(
+            name.clone(),
+            (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt(),
+        );
         emp_trace += std(&errs).powi(2);
         let etas: Vec<Real> = ok
             .iter()
@@ -157,7 +163,10 @@ pub fn aggregate(
         }
     }
     let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
-    let crbs: Vec<Real> = ok.iter().filter_map(|(t, _)| t.crb_trace[strategy]).collect();
+    let crbs: Vec<Real> = ok
+        .iter()
+        .filter_map(|(t, _)| t.crb_trace[strategy])
+        .collect();
     let crb_ratio = (ok.len() >= 2 && crbs.len() == ok.len())
         .then(|| emp_trace * ok.len() as Real / (ok.len() - 1) as Real / mean(&crbs));
     let before = average_stats(&ok.iter().map(|(_, o)| o.before_mm).collect::<Vec<_>>());
@@ -168,7 +177,9 @@ pub fn aggregate(
     };
     let mut terminations = BTreeMap::new();
     for (_, o) in &outs {
-        *terminations.entry(o.termination.as_str().to_string()).or_insert(0) += 1;
+        *terminations
+            .entry(o.termination.as_str().to_string())
+            .or_insert(0) += 1;
     }
     Entry {
         method: labels.0.to_string(),
@@ -185,7 +196,11 @@ pub fn aggregate(
         crb_ratio,
         failures,
         terminations,
-        iterations_mean: mean(&ok.iter().map(|(_, o)| o.iterations as Real).collect::<Vec<_>>()),
+        iterations_mean: mean(
+            &ok.iter()
+                .map(|(_, o)| o.iterations as Real)
+                .collect::<Vec<_>>(),
+        ),
         seconds_per_identification: mean(&outs.iter().map(|(_, o)| o.seconds).collect::<Vec<_>>()),
     }
 }

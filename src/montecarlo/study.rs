@@ -12,9 +12,9 @@ use crate::poses::{self, RobotPoseModel, SelectOptions};
 use crate::rng;
 use crate::sampling::uniform_joint_poses;
 use crate::scenario::{PoseStrategy, Registration, Scenario};
+use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
-use crate::sim::poses::{read_pose_list, sample_region};
 
 /// Poses used to decide which parameters are identifiable: many, spread over the joint
 /// ranges, from a fixed seed so every study of a robot agrees.
@@ -59,6 +59,25 @@ pub fn identifiable(robot: &Robot, candidates: &[Param], measure: Measure) -> Ve
     analyse(robot, candidates, &qs, measure).identifiable
 }
 
+/// The parameters to identify: the identifiable ones among the joint and tool parameters
+/// and, with `with_base`, the six base parameters, in flat-vector order. The base parameters
+/// are offered first, so a joint parameter that only duplicates the registration (d1 with
+/// base.z, θ1 with base.rz) is the one left out: it cannot be told apart from the tracker's
+/// placement, so no error is injected on it or identified for it.
+pub fn identified_params(robot: &Robot, measure: Measure, with_base: bool) -> Vec<Param> {
+    let all = robot.params();
+    let base = all.iter().copied().filter(|p| matches!(p, Param::Base(_)));
+    let rest = all.iter().copied().filter(|p| !matches!(p, Param::Base(_)));
+    let candidates: Vec<Param> = if with_base {
+        base.chain(rest).collect()
+    } else {
+        rest.collect()
+    };
+    let mut params = identifiable(robot, &candidates, measure);
+    params.sort_by_key(|p| p.index(robot.dof()));
+    params
+}
+
 impl Study {
     /// Prepares `scenario`: loads the robot, picks the parameters, builds the tracker and the
     /// compliance model, and optimises the fixed pose sets.
@@ -66,13 +85,7 @@ impl Study {
         let nominal = scenario.robot()?;
         let measure = scenario.tracker.measure.measure();
         let with_base = scenario.registration == Registration::Identify;
-        let candidates: Vec<Param> = nominal
-            .params()
-            .into_iter()
-            .filter(|p| with_base || !matches!(p, Param::Base(_)))
-            .collect();
-        let mut params = identifiable(&nominal, &candidates, measure);
-        params.sort_by_key(|p| p.index(nominal.dof()));
+        let params = identified_params(&nominal, measure, with_base);
         let error_params = match (&scenario.errors.kind, &scenario.errors.params) {
             (ErrorKind::None, _) => Vec::new(),
             (_, ParamSelection::Identifiable) => params
@@ -116,7 +129,8 @@ impl Study {
                     let dof = nominal.dof() as f64;
                     let per_joint = ((c.count as f64).powf(1.0 / dof).ceil() as usize).max(2);
                     let mut g = rng::stream(scenario.seed, "grid");
-                    let mut poses = sample_region(&nominal, &Region::Grid { per_joint }, c.count, &mut g)?;
+                    let mut poses =
+                        sample_region(&nominal, &Region::Grid { per_joint }, c.count, &mut g)?;
                     poses.truncate(c.count);
                     Some(FixedSet {
                         poses,
@@ -128,7 +142,8 @@ impl Study {
                     let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));
                     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
                     let opt_params = if c.separate {
-                        poses::separate(&nominal, &params, &pool, measure, c.separate_threshold).kept
+                        poses::separate(&nominal, &params, &pool, measure, c.separate_threshold)
+                            .kept
                     } else {
                         params.clone()
                     };
@@ -139,7 +154,7 @@ impl Study {
                     Some(FixedSet {
                         poses: sel.poses,
                         trace: sel.trace,
-                        scores: serde_json::to_value(&sel.scores).ok(),
+                        scores: serde_json::to_value(sel.scores).ok(),
                     })
                 }
             };

@@ -20,8 +20,8 @@ use crate::math::{rotation_vector, Frame, Mat3, Real, Vec3};
 use crate::registration::{register_svd, register_wsvd};
 use crate::rng::{self, Rng};
 use crate::scenario::Registration;
-use crate::sim::settings::ErrorKind;
 use crate::sim::poses::{sample_region, sample_region_keyed};
+use crate::sim::settings::ErrorKind;
 use crate::sim::{measure_poses, Measurement, SagFn};
 
 /// Mean, RMS, max and standard deviation of a set of errors.
@@ -48,7 +48,12 @@ impl ErrorStats {
         let rms = (v.iter().map(|x| x * x).sum::<Real>() / n).sqrt();
         let max = v.iter().cloned().fold(0.0, Real::max);
         let std = (v.iter().map(|x| (x - mean) * (x - mean)).sum::<Real>() / n).sqrt();
-        ErrorStats { mean, rms, max, std }
+        ErrorStats {
+            mean,
+            rms,
+            max,
+            std,
+        }
     }
 }
 
@@ -95,7 +100,13 @@ pub struct TrialResult {
 /// Draws the injected errors (SPEC §3 "True robot"; Guo 2024 §4.2 for the paper set).
 fn draw_errors(study: &Study, g: &mut Rng) -> Vec<(Param, Real)> {
     let e = &study.scenario.errors;
-    let size = |p: &Param| if p.is_length() { e.length_mm } else { e.angle_rad };
+    let size = |p: &Param| {
+        if p.is_length() {
+            e.length_mm
+        } else {
+            e.angle_rad
+        }
+    };
     study
         .error_params
         .iter()
@@ -103,9 +114,7 @@ fn draw_errors(study: &Study, g: &mut Rng) -> Vec<(Param, Real)> {
             let v = match e.kind {
                 ErrorKind::None => 0.0,
                 ErrorKind::Paper => size(p),
-                ErrorKind::Normal => {
-                    Normal::new(0.0, size(p)).map_or(0.0, |n| n.sample(g))
-                }
+                ErrorKind::Normal => Normal::new(0.0, size(p)).map_or(0.0, |n| n.sample(g)),
                 ErrorKind::Uniform => size(p) * (2.0 * g.random::<Real>() - 1.0),
             };
             (*p, v)
@@ -194,14 +203,20 @@ pub fn calibrate(
 }
 
 /// Position (mm) and orientation (deg) errors of `model` against the true frames.
-pub fn validation_errors(model: &Robot, qs: &[Vec<Real>], truth: &[Frame]) -> (Vec<Real>, Vec<Real>) {
+pub fn validation_errors(
+    model: &Robot,
+    qs: &[Vec<Real>],
+    truth: &[Frame],
+) -> (Vec<Real>, Vec<Real>) {
     let c = model.chain();
     qs.iter()
         .zip(truth)
         .map(|(q, t)| {
             let f = c.fk(q);
             let dp = (f.pos - t.pos).norm();
-            let da = rotation_vector(&(f.rot * t.rot.transpose())).norm().to_degrees();
+            let da = rotation_vector(&(f.rot * t.rot.transpose()))
+                .norm()
+                .to_degrees();
             (dp, da)
         })
         .unzip()
@@ -233,7 +248,9 @@ fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
         }
     }
     let n: DMatrix<Real> = j.transpose() * &j;
-    n.try_inverse().map(|inv| inv.trace()).filter(|t| t.is_finite())
+    n.try_inverse()
+        .map(|inv| inv.trace())
+        .filter(|t| t.is_finite())
 }
 
 /// The injected errors and the true robot of trial `index`.
@@ -254,7 +271,12 @@ pub fn calibration_poses(study: &Study, si: usize, index: usize) -> Result<Vec<V
     let seed = rng::trial_seed(sc.seed, index as u64);
     let name = sc.calibration.strategies[si].name();
     let mut gp = rng::stream(seed, &format!("poses/{name}"));
-    sample_region(&study.nominal, &sc.calibration.region, sc.calibration.count, &mut gp)
+    sample_region(
+        &study.nominal,
+        &sc.calibration.region,
+        sc.calibration.count,
+        &mut gp,
+    )
 }
 
 /// The validation poses of trial `index`.
@@ -273,9 +295,10 @@ pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
 
 /// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.
 pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
-    study.compliance.clone().map(|c| {
-        Box::new(move |r: &Robot, q: &[Real]| c.deflected(r, q)) as Box<SagFn>
-    })
+    study
+        .compliance
+        .clone()
+        .map(|c| Box::new(move |r: &Robot, q: &[Real]| c.deflected(r, q)) as Box<SagFn>)
 }
 
 /// Runs trial `index` of `study`.
@@ -309,7 +332,14 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         let qs = calibration_poses(study, si, index)?;
         let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
         let mut gm = rng::stream(seed, "measure");
-        let m = measure_poses(&truth_robot, &qs, &study.tracker, outliers, sag_ref, &mut gm)?;
+        let m = measure_poses(
+            &truth_robot,
+            &qs,
+            &study.tracker,
+            outliers,
+            sag_ref,
+            &mut gm,
+        )?;
         crb.push(crb_trace(study, &qs));
         for (mi, spec) in sc.methods.iter().enumerate() {
             let t0 = Instant::now();
@@ -325,9 +355,19 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             let seconds = t0.elapsed().as_secs_f64();
             let (identified, after_p, after_a, iterations, termination) = match res {
                 Ok(c) => {
-                    let (p, a) = validation_errors(&c.robot, &vqs, &vtruth);
+                    // The compensated robot lives in the registered frame: bring the truth
+                    // there through the true tracker placement (identity for `known`).
+                    let map = c.frame.compose(&study.tracker.frame().inverse());
+                    let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
+                    let (p, a) = validation_errors(&c.robot, &vqs, &seen);
                     let r = c.identified;
-                    (r.x.iter().copied().collect(), p, a, r.iterations, r.termination)
+                    (
+                        r.x.iter().copied().collect(),
+                        p,
+                        a,
+                        r.iterations,
+                        r.termination,
+                    )
                 }
                 Err(_) => (
                     vec![Real::NAN; study.params.len()],
