@@ -19,7 +19,7 @@ use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
 use crate::report::markdown::{fmt_num, table as markdown_table};
 use crate::robots::{self, BUILTINS};
 use crate::scenario::{Registration, Scenario, METHOD_NAMES};
-use crate::sim::csv::{read_measurements, write_measurements};
+use crate::sim::csv::{read_measurements, write_measurements, write_pose_list};
 use crate::sim::poses::sample_region;
 use crate::sim::{measure_poses, Measurement};
 
@@ -435,21 +435,7 @@ pub fn poses(
     opts.objective = c.objective;
     let sel = crate::poses::select(&model, &pool, strategy, &opts, &mut g)?;
     create_dir(out)?;
-    let mut csv = (1..=nominal.dof())
-        .map(|i| format!("q{i}"))
-        .collect::<Vec<_>>()
-        .join(",")
-        + "\n";
-    for q in &sel.poses {
-        let u = nominal.q_to_user(q);
-        csv += &u
-            .iter()
-            .map(|v| format!("{v}"))
-            .collect::<Vec<_>>()
-            .join(",");
-        csv.push('\n');
-    }
-    write_file(&out.join("poses.csv"), &csv)?;
+    write_pose_list(&out.join("poses.csv"), &nominal, &sel.poses)?;
     let mut scores = serde_json::to_value(sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
     scores["strategy"] = json!(strategy_name(strategy));
     scores["count"] = json!(sel.poses.len());

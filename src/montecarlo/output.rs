@@ -50,6 +50,7 @@ pub fn summary(r: &RunResult) -> Value {
         "parameters": first.params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
         "error_parameters": first.error_params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
         "fixed_pose_sets": optimised,
+        "timing": "timing.json",
         "results": results,
     });
     if let Some(sw) = &sc.sweep {
@@ -439,6 +440,19 @@ pub fn write_all(r: &RunResult) -> Result<()> {
     let s = serde_json::to_string_pretty(&summary(r)).map_err(|e| Error::Compute(e.to_string()))?;
     write(&r.out.join("summary.json"), &(s + "\n"))?;
     write(&r.out.join("trials.csv"), &trials_csv(r))?;
+    let timing: Vec<Value> = r
+        .blocks
+        .iter()
+        .flat_map(|b| {
+            b.entries.iter().map(|e| {
+                json!({"method": e.method, "poses": e.poses, "sweep_value": e.sweep_value,
+                       "seconds_per_identification": e.seconds_per_identification})
+            })
+        })
+        .collect();
+    let t = json!({"run_seconds": r.seconds, "results": timing});
+    let t = serde_json::to_string_pretty(&t).map_err(|e| Error::Compute(e.to_string()))?;
+    write(&r.out.join("timing.json"), &(t + "\n"))?;
     let plots = write_plots(r)?;
     write(&r.out.join("report.md"), &report_md(r, &plots))?;
     Ok(())

@@ -23,20 +23,16 @@ const XYZ: [&str; 3] = ["x", "y", "z"];
 /// Writes `m` as a measurement CSV. Numbers have a fixed format (9 decimals for joint values
 /// and points, 12 for quaternions), so equal measurements give identical bytes.
 pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurement) -> Result<()> {
-    let dof = robot.dof();
     let mut s = String::with_capacity(64 * (m.qs.len() + 1));
-    for j in 1..=dof {
-        let _ = write!(s, "q{j},");
-    }
-    s.push_str("x,y,z");
+    joint_header(&mut s, robot.dof());
+    s.push_str(",x,y,z");
     if m.quats.is_some() {
         s.push_str(",qw,qx,qy,qz");
     }
     s.push('\n');
     for (i, q) in m.qs.iter().enumerate() {
-        for v in robot.q_to_user(q) {
-            let _ = write!(s, "{},", fixed(v, 9));
-        }
+        joint_cells(&mut s, robot, q);
+        s.push(',');
         let p = m.points.get(i).ok_or_else(|| {
             Error::Compute(format!(
                 "measurement has {} poses but {} points",
@@ -60,6 +56,30 @@ pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurement) -> Result
         s.push('\n');
     }
     std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
+/// Writes a pose list (the measurement CSV without the measured columns): `q1..qn` in the
+/// robot's units, in the same fixed format as [`write_measurements`], so the poses a
+/// measurement of this list records are the very values of the list.
+pub fn write_pose_list(path: &Path, robot: &Robot, qs: &[Vec<Real>]) -> Result<()> {
+    let mut s = String::with_capacity(16 * robot.dof() * (qs.len() + 1));
+    joint_header(&mut s, robot.dof());
+    s.push('\n');
+    for q in qs {
+        joint_cells(&mut s, robot, q);
+        s.push('\n');
+    }
+    std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
+fn joint_header(s: &mut String, dof: usize) {
+    let names: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
+    s.push_str(&names.join(","));
+}
+
+fn joint_cells(s: &mut String, robot: &Robot, q: &[Real]) {
+    let cells: Vec<String> = robot.q_to_user(q).iter().map(|&v| fixed(v, 9)).collect();
+    s.push_str(&cells.join(","));
 }
 
 /// `v` with `d` decimals, negative zero written as zero.
