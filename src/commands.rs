@@ -8,7 +8,6 @@ use serde_json::json;
 use crate::check::{compare, read_json, Regression};
 use crate::error::{Error, Result};
 use crate::identifiability::analyse;
-use crate::identify::Method;
 use crate::jacobian::Measure;
 use crate::kinematics::robot_to_toml;
 use crate::math::Real;
@@ -18,7 +17,7 @@ use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
 use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
 use crate::report::markdown::{fmt_num, table as markdown_table};
 use crate::robots::{self, BUILTINS};
-use crate::scenario::{Registration, Scenario, METHOD_NAMES};
+use crate::scenario::{Registration, Scenario};
 use crate::sim::csv::{read_measurements, write_measurements, write_pose_list};
 use crate::sim::poses::sample_region;
 use crate::sim::{measure_poses, Measurement};
@@ -240,25 +239,6 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Parses an identification method name with its default options.
-pub fn parse_method(name: &str) -> Result<Method> {
-    Ok(match name {
-        "ls" => Method::Ls(Default::default()),
-        "ridge" => Method::Ridge(Default::default()),
-        "igg3" => Method::Igg3(Default::default()),
-        "lm" => Method::Lm(Default::default()),
-        _ => {
-            return Err(Error::setting(
-                "--method",
-                format!(
-                    "unknown method \"{name}\"; allowed: {}",
-                    METHOD_NAMES.join(", ")
-                ),
-            ))
-        }
-    })
-}
-
 fn stats_json(s: &ErrorStats) -> serde_json::Value {
     json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
 }
@@ -274,7 +254,7 @@ pub fn identify_file(
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
-    let method = parse_method(method)?;
+    let method = crate::scenario::method_by_name(method)?.method;
     let registration = Registration::parse(registration)?;
     let d = read_measurements(data, &nominal)?;
     let measure = if d.quats.is_some() {
@@ -304,6 +284,7 @@ pub fn identify_file(
         registration,
         &Frame::identity(),
         &method,
+        &mut crate::rng::stream(0, "identify"),
     )?;
     create_dir(out)?;
     let r = &c.identified;

@@ -125,7 +125,26 @@ pub fn matrix_rpy(r: &Mat3) -> [Real; 3] {
 }
 
 /// The rotation vector (axis · angle, rad) of a rotation matrix: the matrix logarithm.
+///
+/// The angle comes from `atan2(|v|, (tr R − 1)/2)` with `v` the axial vector of the skew
+/// part, which stays finite and accurate near the identity (where `acos` of a rounded trace
+/// slightly above 3 would give NaN); near π the quaternion route of nalgebra is used.
 pub fn rotation_vector(r: &Mat3) -> Vec3 {
+    let v = 0.5
+        * Vec3::new(
+            r[(2, 1)] - r[(1, 2)],
+            r[(0, 2)] - r[(2, 0)],
+            r[(1, 0)] - r[(0, 1)],
+        );
+    let s = v.norm();
+    let c = 0.5 * (r.trace() - 1.0);
+    if c > -0.9 {
+        let angle = s.atan2(c);
+        if s < 1e-300 {
+            return Vec3::zeros();
+        }
+        return v * (angle / s);
+    }
     nalgebra::Rotation3::from_matrix_unchecked(*r).scaled_axis()
 }
 
@@ -138,6 +157,27 @@ pub fn skew(v: &Vec3) -> Mat3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn rotation_vector_near_identity_and_pi() {
+        for w in [
+            Vec3::new(1e-12, -2e-12, 3e-13),
+            Vec3::new(0.3, -0.2, 0.5),
+            Vec3::new(0.0, 3.1, 0.0),
+            Vec3::new(1e-9, 0.0, 0.0),
+        ] {
+            let r = nalgebra::Rotation3::from_scaled_axis(w).into_inner();
+            let back = rotation_vector(&r);
+            assert!(
+                (back - w).norm() < 1e-9 * (1.0 + w.norm()),
+                "{w:?} -> {back:?}"
+            );
+        }
+        // A rounded identity with trace just above 3 gives zero, not NaN.
+        let mut r = Mat3::identity();
+        r[(0, 0)] = 1.0 + 1e-16;
+        assert!(rotation_vector(&r).iter().all(|x| x.is_finite()));
+    }
     use approx::assert_relative_eq;
 
     #[test]

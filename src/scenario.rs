@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::compliance::ComplianceSettings;
+use crate::errmodel::ErrorModel;
 use crate::error::{Error, Result};
 use crate::identify::{
     LmOptions, LsOptions, Method, RidgeOptions, RobustOptions, Sigma0, WeightFn, XiRule,
@@ -20,6 +21,7 @@ use crate::identify::{
 use crate::kinematics::Param;
 use crate::kinematics::Robot;
 use crate::math::Real;
+use crate::metaheur::{BasOptions, BasPsoOptions, PsoOptions};
 use crate::poses::{Objective, Strategy as Optimiser};
 use crate::robots;
 use crate::sim::settings::{
@@ -250,7 +252,64 @@ pub struct Validation {
 }
 
 /// The method names accepted in `[[methods]]`.
-pub const METHOD_NAMES: &[&str] = &["ls", "ridge", "igg3", "lm"];
+pub const METHOD_NAMES: &[&str] = &["ls", "ridge", "igg3", "lm", "bas", "pso", "bas-pso"];
+
+/// A derivative-free search of Qiao 2021 (eqs. 12–14) with its options.
+#[derive(Clone, Debug)]
+pub enum MetaAlgorithm {
+    /// Beetle antennae search.
+    Bas(BasOptions),
+    /// Particle swarm optimisation.
+    Pso(PsoOptions),
+    /// The BAS-PSO hybrid.
+    BasPso(BasPsoOptions),
+}
+
+/// A metaheuristic identification: the search, the fitness weight k of eq. 14 and the
+/// search box (± `bound_mm` on lengths, ± `bound_rad` on angles, around the nominal values).
+#[derive(Clone, Debug)]
+pub struct MetaSpec {
+    /// The search and its options.
+    pub algorithm: MetaAlgorithm,
+    /// Weight of the orientation terms in the fitness (Qiao eq. 14), mm.
+    pub k: Real,
+    /// Half-width of the search box on length parameters, mm.
+    pub bound_mm: Real,
+    /// Half-width of the search box on angle parameters, rad.
+    pub bound_rad: Real,
+}
+
+/// How a method identifies the errors.
+#[derive(Clone, Debug)]
+pub enum Identifier {
+    /// A Jacobian-based method (LS, ridge, IGG3, LM) on the analytic identification Jacobian.
+    Jacobian(Method),
+    /// Gauss–Newton least squares on one of Qiao 2021's three pose-error models
+    /// (§2.2–2.3, §4.2; full-pose data only), `iterations` steps.
+    ErrorModel {
+        /// The pose-error model.
+        model: ErrorModel,
+        /// Gauss–Newton steps.
+        iterations: usize,
+    },
+    /// A derivative-free search (Qiao 2021).
+    Meta(MetaSpec),
+}
+
+impl Identifier {
+    /// The method's name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Identifier::Jacobian(m) => m.name(),
+            Identifier::ErrorModel { .. } => "ls",
+            Identifier::Meta(m) => match m.algorithm {
+                MetaAlgorithm::Bas(_) => "bas",
+                MetaAlgorithm::Pso(_) => "pso",
+                MetaAlgorithm::BasPso(_) => "bas-pso",
+            },
+        }
+    }
+}
 
 /// One identification method of the study, with a label for reports (`label`, defaulting to
 /// the method's name).
@@ -259,7 +318,7 @@ pub struct MethodSpec {
     /// The name in reports, `summary.json` and `trials.csv`.
     pub label: String,
     /// The method and its options.
-    pub method: Method,
+    pub method: Identifier,
 }
 
 /// A swept setting: the dotted key and its values.
@@ -479,6 +538,15 @@ impl Scenario {
         let mut methods = Vec::new();
         for (i, t) in raw.methods.iter().enumerate() {
             let m = parse_method(t).map_err(|(k, msg)| ferr(&format!("methods[{i}].{k}"), msg))?;
+            if matches!(m.method, Identifier::ErrorModel { .. })
+                && raw.tracker.measure.measure() != crate::jacobian::Measure::Pose
+            {
+                return Err(ferr(
+                    &format!("methods[{i}].error_model"),
+                    "the pose-error models need full-pose data: set tracker.measure = \"pose\""
+                        .into(),
+                ));
+            }
             if methods.iter().any(|x: &MethodSpec| x.label == m.label) {
                 return Err(ferr(
                     &format!("methods[{i}].label"),
@@ -708,7 +776,38 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
         )
     })?;
     let allowed: &[&str] = match name {
-        "ls" => &["eps", "max_iter"],
+        "ls" => &["eps", "max_iter", "error_model", "iterations"],
+        "bas" => &[
+            "iterations",
+            "antenna",
+            "step",
+            "decay",
+            "k",
+            "bound_mm",
+            "bound_rad",
+        ],
+        "pso" => &[
+            "population",
+            "iterations",
+            "c1",
+            "c2",
+            "k",
+            "bound_mm",
+            "bound_rad",
+        ],
+        "bas-pso" => &[
+            "population",
+            "iterations",
+            "c1",
+            "c2",
+            "c3",
+            "antenna",
+            "step",
+            "decay",
+            "k",
+            "bound_mm",
+            "bound_rad",
+        ],
         "ridge" => &["xi", "eps", "max_iter"],
         "igg3" => &["k0", "k1", "sigma0", "weight", "xi", "eps", "max_iter"],
         "lm" => &["mu", "adaptive", "marquardt", "lambda0", "eps", "max_iter"],
@@ -734,6 +833,26 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
         }
     }
     let label = get_str(t, "label")?.unwrap_or(name).to_string();
+    if name == "ls" {
+        if let Some(m) = get_str(t, "error_model")? {
+            let model = ErrorModel::parse("error_model", m)
+                .map_err(|e| ("error_model".to_string(), e.to_string()))?;
+            let iterations = get_count(t, "iterations")?.unwrap_or(10);
+            return Ok(MethodSpec {
+                label,
+                method: Identifier::ErrorModel { model, iterations },
+            });
+        }
+        if t.contains_key("iterations") {
+            return Err(("iterations".into(), "only with error_model".into()));
+        }
+    }
+    if matches!(name, "bas" | "pso" | "bas-pso") {
+        return Ok(MethodSpec {
+            label,
+            method: Identifier::Meta(parse_meta(name, t)?),
+        });
+    }
     let method = match name {
         "ls" => {
             let mut o = LsOptions::default();
@@ -831,5 +950,72 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
             Method::Lm(o)
         }
     };
-    Ok(MethodSpec { label, method })
+    Ok(MethodSpec {
+        label,
+        method: Identifier::Jacobian(method),
+    })
+}
+
+/// A method by name with its default options (for `calbench identify --method`).
+pub fn method_by_name(name: &str) -> Result<MethodSpec> {
+    let mut t = toml::Table::new();
+    t.insert("name".into(), toml::Value::String(name.into()));
+    parse_method(&t).map_err(|(_, msg)| Error::setting("--method", msg))
+}
+
+/// Options of `bas`, `pso` and `bas-pso` (Qiao 2021 eqs. 12–14); the defaults are the
+/// options structs' own.
+fn parse_meta(name: &str, t: &toml::Table) -> std::result::Result<MetaSpec, MethodError> {
+    let real = |k: &str, v: &mut Real| -> std::result::Result<(), MethodError> {
+        if let Some(x) = get_positive(t, k)? {
+            *v = x;
+        }
+        Ok(())
+    };
+    let count = |k: &str, v: &mut usize| -> std::result::Result<(), MethodError> {
+        if let Some(x) = get_count(t, k)? {
+            *v = x;
+        }
+        Ok(())
+    };
+    let algorithm = match name {
+        "bas" => {
+            let mut o = BasOptions::default();
+            count("iterations", &mut o.iterations)?;
+            real("antenna", &mut o.antenna)?;
+            real("step", &mut o.step)?;
+            real("decay", &mut o.decay)?;
+            MetaAlgorithm::Bas(o)
+        }
+        "pso" => {
+            let mut o = PsoOptions::default();
+            count("population", &mut o.population)?;
+            count("iterations", &mut o.iterations)?;
+            real("c1", &mut o.c1)?;
+            real("c2", &mut o.c2)?;
+            MetaAlgorithm::Pso(o)
+        }
+        _ => {
+            let mut o = BasPsoOptions::default();
+            count("population", &mut o.population)?;
+            count("iterations", &mut o.iterations)?;
+            real("c1", &mut o.c1)?;
+            real("c2", &mut o.c2)?;
+            real("c3", &mut o.c3)?;
+            real("antenna", &mut o.antenna)?;
+            real("step", &mut o.step)?;
+            real("decay", &mut o.decay)?;
+            MetaAlgorithm::BasPso(o)
+        }
+    };
+    let mut spec = MetaSpec {
+        algorithm,
+        k: crate::metaheur::DEFAULT_K,
+        bound_mm: 2.0,
+        bound_rad: 0.02,
+    };
+    real("k", &mut spec.k)?;
+    real("bound_mm", &mut spec.bound_mm)?;
+    real("bound_rad", &mut spec.bound_rad)?;
+    Ok(spec)
 }

@@ -17,9 +17,10 @@ use crate::identify::{identify, Identified, RobotData, RobotProblem, Termination
 use crate::jacobian::{jacobian, Columns, Measure};
 use crate::kinematics::{Param, Robot};
 use crate::math::{rotation_vector, Frame, Mat3, Real, Vec3};
+use crate::metaheur::MetaProblem;
 use crate::registration::{register_svd, register_wsvd};
 use crate::rng::{self, Rng};
-use crate::scenario::Registration;
+use crate::scenario::{Identifier, MetaAlgorithm, Registration};
 use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::settings::ErrorKind;
 use crate::sim::{measure_poses, Measurement, SagFn};
@@ -76,6 +77,8 @@ pub struct Outcome {
     pub after_deg: Option<ErrorStats>,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
+    /// A metaheuristic's best fitness per iteration (trial 0 only).
+    pub trace: Option<Vec<Real>>,
     /// Iterations of the identification.
     pub iterations: usize,
     /// How it ended.
@@ -148,6 +151,96 @@ pub struct Calibrated {
     pub frame: Frame,
     /// The identification's result (errors in the order of the parameters passed).
     pub identified: Identified,
+    /// Best fitness per iteration of a metaheuristic (Qiao 2021 fig. 4); empty otherwise.
+    pub trace: Vec<Real>,
+}
+
+/// An identification result for methods that are not Jacobian-based: no weights,
+/// covariance or condition number.
+fn plain_result(
+    x: Vec<Real>,
+    iterations: usize,
+    termination: Termination,
+    points: usize,
+) -> Identified {
+    Identified {
+        x: DVector::from_vec(x),
+        iterations,
+        termination,
+        weights: vec![1.0; points],
+        condition_number: Real::NAN,
+        covariance: DMatrix::zeros(0, 0),
+        sigma0: Real::NAN,
+        rms_residual: Real::NAN,
+        ridge_xi: None,
+    }
+}
+
+/// Runs one identifier on data already in the base frame.
+fn run_identifier(
+    nominal: &Robot,
+    params: &[Param],
+    measure: Measure,
+    data: &RobotData,
+    method: &Identifier,
+    rng: &mut Rng,
+) -> Result<(Identified, Robot, Vec<Real>)> {
+    let n = data.qs.len();
+    match method {
+        Identifier::Jacobian(m) => {
+            let problem = RobotProblem::new(nominal, params, data, measure)?;
+            let r = identify(&problem, &DVector::zeros(params.len()), m);
+            let robot = problem.robot_with(&r.x);
+            Ok((r, robot, Vec::new()))
+        }
+        Identifier::ErrorModel { model, iterations } => {
+            let rots = data.rotations.as_ref().ok_or_else(|| {
+                crate::Error::Compute("the pose-error models need full-pose data".into())
+            })?;
+            let frames: Vec<Frame> = data
+                .points
+                .iter()
+                .zip(rots)
+                .map(|(p, r)| Frame { rot: *r, pos: *p })
+                .collect();
+            let fit =
+                crate::errmodel::identify(*model, nominal, params, &data.qs, &frames, *iterations)?;
+            let term = if fit.last_step < 1e-9 {
+                Termination::Converged
+            } else {
+                Termination::MaxIterations
+            };
+            Ok((
+                plain_result(fit.x, *iterations, term, n),
+                fit.robot,
+                Vec::new(),
+            ))
+        }
+        Identifier::Meta(spec) => {
+            let problem = MetaProblem::new(
+                nominal,
+                params.to_vec(),
+                data.qs.clone(),
+                data.points.clone(),
+                data.rotations.clone(),
+                spec.k,
+            )?;
+            let bounds = problem.bounds(spec.bound_mm, spec.bound_rad);
+            let f = |x: &[Real]| problem.fitness(x);
+            let r = match &spec.algorithm {
+                MetaAlgorithm::Bas(o) => crate::metaheur::bas(&f, &bounds, o, rng)?,
+                MetaAlgorithm::Pso(o) => crate::metaheur::pso(&f, &bounds, o, rng)?,
+                MetaAlgorithm::BasPso(o) => crate::metaheur::bas_pso(&f, &bounds, o, rng)?,
+            };
+            let robot = problem.robot(&r.x)?;
+            let it = r.iterations;
+            Ok((
+                plain_result(r.x, it, Termination::MaxIterations, n),
+                robot,
+                r.trace,
+            ))
+        }
+    }
 }
 
 /// Registration and identification of one method on one measurement (SPEC §3
@@ -163,7 +256,8 @@ pub fn calibrate(
     m: &Measurement,
     registration: Registration,
     known: &Frame,
-    method: &crate::identify::Method,
+    method: &Identifier,
+    rng: &mut Rng,
 ) -> Result<Calibrated> {
     let chain = nominal.chain();
     let nominal_points: Vec<Vec3> = m.qs.iter().map(|q| chain.fk(q).pos).collect();
@@ -174,7 +268,6 @@ pub fn calibrate(
             register_svd(&nominal_points, &m.points, None)?.frame
         }
     };
-    let x0 = DVector::zeros(params.len());
     let rounds = match registration {
         Registration::Svd | Registration::Wsvd => 3,
         _ => 1,
@@ -182,15 +275,15 @@ pub fn calibrate(
     let mut round = 0;
     loop {
         let data = to_base(m, &frame);
-        let problem = RobotProblem::new(nominal, params, &data, measure)?;
-        let identified = identify(&problem, &x0, method);
-        let robot = problem.robot_with(&identified.x);
+        let (identified, robot, trace) =
+            run_identifier(nominal, params, measure, &data, method, rng)?;
         round += 1;
         if round >= rounds {
             return Ok(Calibrated {
                 robot,
                 frame,
                 identified,
+                trace,
             });
         }
         let c = robot.chain();
@@ -351,8 +444,10 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 sc.registration,
                 &study.tracker.frame(),
                 &spec.method,
+                &mut rng::stream(seed, &format!("method/{}", spec.label)),
             );
             let seconds = t0.elapsed().as_secs_f64();
+            let mut trace = None;
             let (identified, after_p, after_a, iterations, termination) = match res {
                 Ok(c) => {
                     // The compensated robot lives in the registered frame: bring the truth
@@ -360,6 +455,9 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     let map = c.frame.compose(&study.tracker.frame().inverse());
                     let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
                     let (p, a) = validation_errors(&c.robot, &vqs, &seen);
+                    if index == 0 && !c.trace.is_empty() {
+                        trace = Some(c.trace);
+                    }
                     let r = c.identified;
                     (
                         r.x.iter().copied().collect(),
@@ -385,6 +483,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 after_mm: ErrorStats::of(&after_p),
                 before_deg: full_pose.then(|| ErrorStats::of(&before_a)),
                 after_deg: full_pose.then(|| ErrorStats::of(&after_a)),
+                trace,
                 per_point: (index == 0).then(|| (before_p.clone(), after_p.clone())),
                 iterations,
                 termination,
