@@ -16,6 +16,30 @@ fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 
+/// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
+/// `method / poses`.
+fn fitness_traces(b: &super::Block) -> Vec<(String, Vec<Real>)> {
+    let sc = &b.study.scenario;
+    b.trials
+        .first()
+        .map(|t| {
+            t.outcomes
+                .iter()
+                .filter_map(|o| {
+                    o.trace.as_ref().map(|tr| {
+                        let label = format!(
+                            "{} / {}",
+                            sc.methods[o.method].label,
+                            sc.calibration.strategies[o.strategy].name()
+                        );
+                        (label, tr.clone())
+                    })
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// `summary.json` as a JSON value.
 pub fn summary(r: &RunResult) -> Value {
     let sc = &r.scenario;
@@ -39,6 +63,11 @@ pub fn summary(r: &RunResult) -> Value {
                 .map(|e| serde_json::to_value(e).unwrap_or(Value::Null))
         })
         .collect();
+    let b0 = &r.blocks[0];
+    let mut convergence = serde_json::Map::new();
+    for (label, trace) in fitness_traces(b0) {
+        convergence.insert(label, json!(trace));
+    }
     let mut s = json!({
         "scenario": sc.name,
         "description": sc.description,
@@ -50,6 +79,7 @@ pub fn summary(r: &RunResult) -> Value {
         "parameters": first.params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
         "error_parameters": first.error_params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
         "fixed_pose_sets": optimised,
+        "fitness_trace_trial0": convergence,
         "timing": "timing.json",
         "results": results,
     });
@@ -387,6 +417,22 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
         done.push((
             "objective_trace.png".into(),
             "pose optimisation objective per iteration".into(),
+        ));
+    }
+    // Metaheuristics' convergence (Qiao 2021 fig. 4).
+    let fit = fitness_traces(b0);
+    if !fit.is_empty() {
+        plots::traces(
+            &out.join("fitness_trace"),
+            "Best fitness per iteration, trial 0",
+            "iteration",
+            "fitness (eq. 14)",
+            &fit,
+            true,
+        )?;
+        done.push((
+            "fitness_trace.png".into(),
+            "metaheuristic convergence, trial 0".into(),
         ));
     }
     // Sweeps: validation RMS after compensation against the swept value.

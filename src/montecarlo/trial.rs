@@ -249,6 +249,7 @@ fn run_identifier(
 /// refit on the identified model removes it. With `identify` the SVD frame is a first
 /// estimate and the base parameters (which must then be among `params`) absorb the rest
 /// (Li 2018). With `known` the frame is `known`.
+#[allow(clippy::too_many_arguments)]
 pub fn calibrate(
     nominal: &Robot,
     params: &[Param],
