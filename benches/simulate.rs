@@ -1,10 +1,14 @@
 //! Measuring 50 poses with the simulated tracker (no sag), position and full pose, with
 //! outliers; and the two registrations of 50 points.
 
+use calbench::compliance::{Compliance, ComplianceModel, ComplianceSettings};
+use calbench::kinematics::Robot;
 use calbench::registration::{register_svd, register_wsvd};
 use calbench::rng::stream;
 use calbench::sampling::uniform_joint_poses;
-use calbench::sim::{measure_poses, MeasureSetting, OutlierSettings, Tracker, TrackerSettings};
+use calbench::sim::{
+    measure_poses, MeasureSetting, OutlierSettings, SagFn, Tracker, TrackerSettings,
+};
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::hint::black_box;
 
@@ -36,7 +40,40 @@ fn simulate(c: &mut Criterion) {
     }
     g.finish();
 
+    // 50 poses with gravity sag: none, linear and rapier (default irb2600 stiffness/masses).
     let tracker = Tracker::new(&TrackerSettings::default()).expect("valid tracker settings");
+    let mut g = c.benchmark_group("measure_50_poses_sag");
+    g.sample_size(10);
+    for model in [
+        ComplianceModel::None,
+        ComplianceModel::Linear,
+        ComplianceModel::Rapier,
+    ] {
+        let settings = ComplianceSettings {
+            model,
+            ..Default::default()
+        };
+        let comp = Compliance::new(&settings, &robot, calbench::robots::builtin("irb2600"))
+            .expect("compliance");
+        let sag =
+            comp.map(|c| Box::new(move |r: &Robot, q: &[f64]| c.deflected(r, q)) as Box<SagFn>);
+        g.bench_function(format!("{model:?}").to_lowercase(), |b| {
+            let mut rng = stream(2, "noise");
+            b.iter(|| {
+                measure_poses(
+                    &robot,
+                    black_box(&qs),
+                    &tracker,
+                    None,
+                    sag.as_deref(),
+                    &mut rng,
+                )
+                .expect("measurement")
+            })
+        });
+    }
+    g.finish();
+
     let m = measure_poses(
         &robot,
         &qs,
