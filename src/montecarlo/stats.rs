@@ -46,7 +46,8 @@ pub struct Entry {
     pub validation_after_deg: Option<ErrorStats>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     pub improvement_pct: Real,
-    /// RMSE over trials of each identified parameter error (mm, rad).
+    /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
+    /// which absorb the registration's error, are left out.
     pub param_rmse: BTreeMap<String, Real>,
     /// Trace of the empirical covariance of the estimates over the mean Cramér–Rao trace
     /// σ²(JᵀWJ)⁻¹ (`null` without tracker noise or with fewer than 2 trials).
@@ -145,6 +146,10 @@ pub fn aggregate(
     let mut rmse = BTreeMap::new();
     let mut emp_trace = 0.0;
     for (k, name) in names.iter().enumerate() {
+        // Base parameters absorb the registration's error: nuisance, not compared.
+        if name.starts_with("base.") {
+            continue;
+        }
         let errs: Vec<Real> = ok
             .iter()
             .map(|(t, o)| o.identified[k] - t.truth[k])
