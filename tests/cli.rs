@@ -1,0 +1,96 @@
+//! The file-level commands end to end: `simulate` reruns give the same bytes, and
+//! `identify` on its output writes a compensated robot that every command loads.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn calbench(args: &[&str]) -> std::process::Output {
+    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "calbench {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn scenario() -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios/ci-guard.toml")
+        .display()
+        .to_string()
+}
+
+#[test]
+fn simulate_reruns_are_byte_identical() {
+    let (a, b) = (tmp("sim-a"), tmp("sim-b"));
+    for d in [&a, &b] {
+        calbench(&[
+            "simulate",
+            &scenario(),
+            "--trial",
+            "3",
+            "--out",
+            d.to_str().unwrap(),
+        ]);
+    }
+    for f in ["measurements.csv", "validation.csv", "truth.json"] {
+        let (x, y) = (
+            std::fs::read(a.join(f)).unwrap(),
+            std::fs::read(b.join(f)).unwrap(),
+        );
+        assert!(!x.is_empty() && x == y, "{f} differs between reruns");
+    }
+    let truth: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(a.join("truth.json")).unwrap()).unwrap();
+    assert_eq!(truth["outliers"].as_array().unwrap().len(), 2);
+    assert_eq!(truth["sag_mm"].as_array().unwrap().len(), 40);
+}
+
+#[test]
+fn identify_on_simulated_data_compensates_and_writes_a_loadable_robot() {
+    let sim = tmp("id-sim");
+    let out = tmp("id-out");
+    calbench(&["simulate", &scenario(), "--out", sim.to_str().unwrap()]);
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        sim.join("measurements.csv").to_str().unwrap(),
+        "--method",
+        "igg3",
+        "--validate",
+        sim.join("validation.csv").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("validation error"));
+    let j: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("identified.json")).unwrap()).unwrap();
+    let before = j["validation_before_mm"]["rms"].as_f64().unwrap();
+    let after = j["validation_after_mm"]["rms"].as_f64().unwrap();
+    assert!(after < 0.01 * before, "validation RMS {before} → {after}");
+    let robot = out.join("robot.toml");
+    let o = calbench(&[
+        "fk",
+        "--robot",
+        robot.to_str().unwrap(),
+        "--q",
+        "10,20,30,40,50,60",
+        "--json",
+    ]);
+    let fk: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(fk["position_mm"].as_array().unwrap().len(), 3);
+    let csv = std::fs::read_to_string(out.join("residuals.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 41);
+}
