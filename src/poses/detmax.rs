@@ -8,16 +8,20 @@
 //! lowers the objective; an exchange is made only when it raises the objective by more than a
 //! relative 1e-12 (so equal-valued sets cannot cycle).
 //!
-//! Cost: the Jacobian blocks of all candidates are computed once; the Gram matrix JᵀJ of the
-//! set is updated by the rank-`rows_per_pose` term BᵀB of a candidate, and the singular values
-//! of J are sqrt(eig(JᵀJ)) from a symmetric eigen-decomposition of the k × k matrix, instead
-//! of an SVD of the tall J. The candidate scan runs on rayon and reduces by (value, index)
-//! with ties to the lower index, so the result does not depend on the thread count.
+//! Cost: the Jacobian blocks of all candidates are computed once; the singular values of J are
+//! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. Each scan
+//! (add, then remove) eigen-decomposes the Gram matrix of the current set once, JᵀJ = QΛQᵀ;
+//! the spectrum of JᵀJ ± BᵀB for a candidate block B is then that of Λ ± WWᵀ, W = QᵀBᵀ,
+//! found by `rows_per_pose` rank-1 secular-equation steps in O(k²) each ([`super::secular`])
+//! instead of an O(k³) eigen-decomposition per candidate. The candidate scan runs on rayon and
+//! reduces by (value, index) with ties to the lower index, so the result does not depend on the
+//! thread count.
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
-use super::{objective_of_gram, Objective, PoseModel};
+use super::secular::SpectrumUpdate;
+use super::{objective_of_eigenvalues, objective_of_gram, Objective, PoseModel};
 use crate::math::Real;
 
 /// What [`detmax`] found.
@@ -48,6 +52,55 @@ fn better(x: (Real, usize), y: (Real, usize)) -> (Real, usize) {
     }
 }
 
+/// The eigen-decomposition of a symmetric `a`: eigenvalues ascending, and Q with the matching
+/// eigenvectors as columns.
+fn sorted_eigen(a: &DMatrix<Real>) -> (Vec<Real>, DMatrix<Real>) {
+    let k = a.nrows();
+    let e = a.clone().symmetric_eigen();
+    let mut idx: Vec<usize> = (0..k).collect();
+    idx.sort_by(|&x, &y| e.eigenvalues[x].total_cmp(&e.eigenvalues[y]));
+    let lam = idx.iter().map(|&i| e.eigenvalues[i]).collect();
+    let q = DMatrix::from_fn(k, k, |r, c| e.eigenvectors[(r, idx[c])]);
+    (lam, q)
+}
+
+/// Buffers of one rayon worker in a scan.
+struct ScanBuf {
+    upd: SpectrumUpdate,
+    w: DMatrix<Real>,
+    ev: Vec<Real>,
+}
+
+impl ScanBuf {
+    fn new(k: usize, r: usize) -> Self {
+        ScanBuf {
+            upd: SpectrumUpdate::new(),
+            w: DMatrix::zeros(k, r),
+            ev: vec![0.0; k],
+        }
+    }
+
+    /// The objective of QΛQᵀ + `sign`·BᵀB over `m` poses, for candidate `c` (Bᵀ = columns
+    /// `r·c .. r·c + r` of `blocks_t`).
+    #[allow(clippy::too_many_arguments)]
+    fn value(
+        &mut self,
+        lam: &[Real],
+        q: &DMatrix<Real>,
+        blocks_t: &DMatrix<Real>,
+        r: usize,
+        c: usize,
+        sign: Real,
+        objective: Objective,
+        m: usize,
+    ) -> Real {
+        self.w.gemm_tr(1.0, q, &blocks_t.columns(r * c, r), 0.0);
+        self.upd
+            .eigenvalues(lam, self.w.as_slice(), sign, &mut self.ev);
+        objective_of_eigenvalues(&mut self.ev, objective, m)
+    }
+}
+
 /// The Gram matrix JᵀJ of the candidates in `set`.
 fn gram(blocks: &DMatrix<Real>, r: usize, set: &[usize], out: &mut DMatrix<Real>) {
     out.fill(0.0);
@@ -73,6 +126,7 @@ pub fn detmax(
         model.jacobian_block(q, &mut v);
     }
     let blocks = blocks;
+    let blocks_t = blocks.transpose();
     let m = start.len();
     let mut set = start;
     let mut in_set = vec![false; n];
@@ -89,15 +143,15 @@ pub fn detmax(
             break format!("detmax: {max_exchanges} exchanges (limit)");
         }
         // (1) Add the best candidate.
+        let (lam, q) = sorted_eigen(&a);
         let (_, added) = (0..n)
             .into_par_iter()
             .filter(|&c| !in_set[c])
             .map_init(
-                || DMatrix::<Real>::zeros(k, k),
+                || ScanBuf::new(k, r),
                 |buf, c| {
-                    buf.copy_from(&a);
-                    add_block(buf, &blocks, r, c, 1.0);
-                    (objective_of_gram(buf, objective, m + 1), c)
+                    let v = buf.value(&lam, &q, &blocks_t, r, c, 1.0, objective, m + 1);
+                    (v, c)
                 },
             )
             .reduce(|| (Real::NEG_INFINITY, usize::MAX), better);
@@ -108,14 +162,14 @@ pub fn detmax(
         add_block(&mut a_plus, &blocks, r, added, 1.0);
         // (2) Remove the pose whose removal leaves the best set; removing the one just
         // added restores the current set and its value exactly, and wins ties.
+        let (lam, q) = sorted_eigen(&a_plus);
         let (best_other, removed_pos) = (0..m)
             .into_par_iter()
             .map_init(
-                || DMatrix::<Real>::zeros(k, k),
+                || ScanBuf::new(k, r),
                 |buf, pos| {
-                    buf.copy_from(&a_plus);
-                    add_block(buf, &blocks, r, set[pos], -1.0);
-                    (objective_of_gram(buf, objective, m), pos)
+                    let v = buf.value(&lam, &q, &blocks_t, r, set[pos], -1.0, objective, m);
+                    (v, pos)
                 },
             )
             .reduce(|| (Real::NEG_INFINITY, usize::MAX), better);
