@@ -15,8 +15,8 @@
 pub mod detmax;
 pub mod ide;
 pub mod indices;
-pub mod secular;
 pub mod separation;
+pub mod symeig;
 
 use std::cell::RefCell;
 use std::fmt;
