@@ -353,6 +353,79 @@ mod tests {
         }
     }
 
+    /// The former DETMAX scans (a nalgebra eigen-decomposition of each candidate's Gram
+    /// matrix), sequentially: the exchange sequence must be the same.
+    fn reference_detmax(
+        model: &dyn PoseModel,
+        cands: &[Vec<Real>],
+        mut set: Vec<usize>,
+        o: Objective,
+    ) -> (Vec<usize>, Vec<Real>) {
+        let (r, k, n, m) = (
+            model.rows_per_pose(),
+            model.n_params(),
+            cands.len(),
+            set.len(),
+        );
+        let mut blocks = DMatrix::zeros(r * n, k);
+        for (i, q) in cands.iter().enumerate() {
+            model.jacobian_block(q, &mut blocks.rows_mut(r * i, r));
+        }
+        let mut a = DMatrix::zeros(k, k);
+        gram(&blocks, r, &set, &mut a);
+        let mut trace = vec![objective_of_gram(&a, o, m)];
+        loop {
+            let mut best = (Real::NEG_INFINITY, usize::MAX);
+            for c in (0..n).filter(|c| !set.contains(c)) {
+                let mut b = a.clone();
+                add_block(&mut b, &blocks, r, c, 1.0);
+                best = better(best, (objective_of_gram(&b, o, m + 1), c));
+            }
+            let mut plus = a.clone();
+            add_block(&mut plus, &blocks, r, best.1, 1.0);
+            let mut rm = (Real::NEG_INFINITY, usize::MAX);
+            for (pos, &c) in set.iter().enumerate() {
+                let mut b = plus.clone();
+                add_block(&mut b, &blocks, r, c, -1.0);
+                rm = better(rm, (objective_of_gram(&b, o, m), pos));
+            }
+            let value = trace[trace.len() - 1];
+            if !(rm.0 > value && rm.0 - value > 1e-12 * value.abs().max(1e-300)) {
+                return (set, trace);
+            }
+            set[rm.1] = best.1;
+            gram(&blocks, r, &set, &mut a);
+            trace.push(objective_of_gram(&a, o, m));
+        }
+    }
+
+    #[test]
+    fn same_exchanges_as_the_dense_eigen_path() {
+        let mut robot = crate::robots::irb2600();
+        robot.set(crate::kinematics::Param::Tool(0), 80.0);
+        robot.set(crate::kinematics::Param::Tool(2), 120.0);
+        let ident = crate::identifiability::analyse(
+            &robot,
+            &robot.params(),
+            &crate::sampling::uniform_joint_poses(&robot, 60, &mut crate::rng::from_seed(1)),
+            crate::jacobian::Measure::Position,
+        )
+        .identifiable;
+        let model =
+            super::super::RobotPoseModel::new(&robot, &ident, crate::jacobian::Measure::Position);
+        let cands =
+            crate::sampling::uniform_joint_poses(&robot, 150, &mut crate::rng::from_seed(3));
+        for o in [Objective::Composite, Objective::O1, Objective::O6] {
+            let res = detmax(&model, &cands, (0..20).collect(), o, 1000);
+            let (set, trace) = reference_detmax(&model, &cands, (0..20).collect(), o);
+            assert!(res.exchanges > 3, "{o}");
+            assert_eq!(res.set, set, "{o}");
+            for (x, y) in res.trace.iter().zip(&trace) {
+                assert!((x - y).abs() <= 1e-12 * y.abs(), "{o}: {x} vs {y}");
+            }
+        }
+    }
+
     fn brute_robot(
         model: &super::super::RobotPoseModel,
         cands: &[Vec<Real>],
