@@ -12,7 +12,7 @@
 //! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. For each
 //! candidate the lower triangle of JᵀJ ± BᵀB is formed in a per-worker buffer and its
 //! eigenvalues found by the allocation-free Householder + implicit-QL solver of
-//! [`super::symeig`] (about 3× faster than nalgebra's generic `symmetric_eigenvalues` at
+//! [`super::symeig`] (about 2× faster than nalgebra's generic `symmetric_eigenvalues` at
 //! k = 26). The candidate scan runs on rayon and reduces by (value, index) with ties to the
 //! lower index, so the result does not depend on the thread count.
 
