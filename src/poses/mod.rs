@@ -16,6 +16,7 @@ pub mod detmax;
 pub mod ide;
 pub mod indices;
 pub mod separation;
+pub mod symeig;
 
 use std::cell::RefCell;
 use std::fmt;
@@ -284,13 +285,19 @@ pub struct Selection {
 /// cond(J) above about 3e6 counts as rank-deficient (objective 0).
 pub(crate) fn objective_of_gram(a: &DMatrix<Real>, objective: Objective, m: usize) -> Real {
     let mut ev = a.symmetric_eigenvalues();
+    objective_of_eigenvalues(ev.as_mut_slice(), objective, m)
+}
+
+/// The objective from the eigenvalues `ev` of JᵀJ over `m` poses (overwritten by the
+/// singular values): the second half of [`objective_of_gram`].
+pub(crate) fn objective_of_eigenvalues(ev: &mut [Real], objective: Objective, m: usize) -> Real {
     // Eigenvalues of JᵀJ carry an absolute error of a few ε·λmax: below 1e-13·λmax (σ below
     // about 3e-7·σmax) they are noise, and the set counts as rank-deficient.
     let floor = 1e-13 * ev.iter().fold(0.0 as Real, |a, &b| a.max(b));
     for e in ev.iter_mut() {
         *e = if *e > floor { e.sqrt() } else { 0.0 };
     }
-    let v = indices::objective_value(objective, ev.as_slice(), m);
+    let v = indices::objective_value(objective, ev, m);
     if v.is_nan() {
         Real::NEG_INFINITY
     } else {
