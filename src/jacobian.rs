@@ -81,36 +81,45 @@ pub fn pose_rows(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
-    // Axis, origin and kind of every operation carrying a column, recorded on the way out.
+    // Translation columns are written on the way out; a rotation column's `w × (pe − o)`
+    // needs the end point, so its axis `w` and origin `o` are recorded (only those: no
+    // large scratch array to clear per pose) and the column written once `pe` is known.
     const MAX_OPS: usize = 5 * 16 + 12;
-    let mut rec: [(Vec3, Vec3, bool, usize); MAX_OPS] =
-        [(Vec3::zeros(), Vec3::zeros(), false, 0); MAX_OPS];
+    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
+    let mut rot_cols = [0usize; MAX_OPS];
     let mut n = 0;
+    let pose = measure == Measure::Pose;
     let end = chain.walk(q, |op, r, p| {
         if let Some(c) = cols.of_param[op.param] {
-            rec[n] = (
-                r.column(op.kind.axis()).into(),
-                *p,
-                op.kind.is_rotation(),
-                c,
-            );
-            n += 1;
+            let w: Vec3 = r.column(op.kind.axis()).into();
+            let mut col = out.column_mut(c);
+            if op.kind.is_rotation() {
+                if pose {
+                    for k in 0..3 {
+                        col[row0 + 3 + k] = w[k];
+                    }
+                }
+                axes[n] = (w, *p);
+                rot_cols[n] = c;
+                n += 1;
+            } else {
+                for k in 0..3 {
+                    col[row0 + k] = w[k];
+                }
+                if pose {
+                    for k in 0..3 {
+                        col[row0 + 3 + k] = 0.0;
+                    }
+                }
+            }
         }
     });
     let pe = end.pos;
-    for &(w, o, rot, c) in &rec[..n] {
-        let (dp, dw) = if rot {
-            (w.cross(&(pe - o)), w)
-        } else {
-            (w, Vec3::zeros())
-        };
+    for ((w, o), &c) in axes[..n].iter().zip(&rot_cols[..n]) {
+        let dp = w.cross(&(pe - o));
+        let mut col = out.column_mut(c);
         for k in 0..3 {
-            out[(row0 + k, c)] = dp[k];
-        }
-        if measure == Measure::Pose {
-            for k in 0..3 {
-                out[(row0 + 3 + k, c)] = dw[k];
-            }
+            col[row0 + k] = dp[k];
         }
     }
     end

@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 use super::Problem;
 use crate::error::Error;
 use crate::jacobian::{pose_rows, Columns, Measure};
-use crate::kinematics::{Param, Robot};
+use crate::kinematics::{Chain, Param, Robot};
 use crate::math::{rotation_vector, Mat3, Real, Vec3};
 
 /// The rotation vector of `r`, robust for rotations near the identity, where
@@ -60,8 +60,9 @@ pub struct RobotProblem<'a> {
     cols: Columns,
     data: &'a RobotData,
     measure: Measure,
-    /// Working copy of the robot whose values are set at each evaluation.
-    work: RefCell<Robot>,
+    /// Working parameter values and the chain compiled from them, updated in place at each
+    /// evaluation.
+    work: RefCell<(Vec<Real>, Chain)>,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -151,7 +152,7 @@ impl<'a> RobotProblem<'a> {
             cols: Columns::new(params, dof),
             data,
             measure,
-            work: RefCell::new(nominal.clone()),
+            work: RefCell::new((nominal.values.clone(), nominal.chain())),
         })
     }
 
@@ -188,30 +189,33 @@ impl Problem for RobotProblem<'_> {
         self.measure.rows()
     }
 
-    /// Forward kinematics and the analytic Jacobian at `nominal + x`. Allocates only the
-    /// compiled chain (one small vector per call).
+    /// Forward kinematics and the analytic Jacobian at `nominal + x`, from the tool frame
+    /// [`pose_rows`] returns (one chain walk per point). Allocation-free: the chain is
+    /// updated in place ([`Chain::set_values`]).
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
-        let chain = {
-            let mut rb = self.work.borrow_mut();
-            rb.values.copy_from_slice(&self.nominal.values);
-            for (&i, &v) in self.index.iter().zip(x.iter()) {
-                rb.values[i] += v;
-            }
-            rb.chain()
-        };
+        let mut guard = self.work.borrow_mut();
+        let (values, chain) = &mut *guard;
+        values.copy_from_slice(&self.nominal.values);
+        for (&i, &v) in self.index.iter().zip(x.iter()) {
+            values[i] += v;
+        }
+        chain.set_values(values);
+        let chain = &*chain;
         let rows = self.measure.rows();
-        for (i, q) in self.data.qs.iter().enumerate() {
-            let f = pose_rows(&chain, &self.cols, q, self.measure, j, rows * i);
-            let dp = self.data.points[i] - f.pos;
+        let rots = match self.measure {
+            Measure::Pose => self.data.rotations.as_deref(),
+            Measure::Position => None,
+        };
+        for (i, (q, pm)) in self.data.qs.iter().zip(&self.data.points).enumerate() {
+            let f = pose_rows(chain, &self.cols, q, self.measure, j, rows * i);
+            let dp = pm - f.pos;
             for k in 0..3 {
                 r[rows * i + k] = dp[k];
             }
-            if self.measure == Measure::Pose {
-                if let Some(rots) = &self.data.rotations {
-                    let dw = small_rotation_vector(&(rots[i] * f.rot.transpose()));
-                    for k in 0..3 {
-                        r[rows * i + 3 + k] = dw[k];
-                    }
+            if let Some(rots) = rots {
+                let dw = small_rotation_vector(&(rots[i] * f.rot.transpose()));
+                for k in 0..3 {
+                    r[rows * i + 3 + k] = dw[k];
                 }
             }
         }

@@ -146,6 +146,25 @@ impl Chain {
         }
     }
 
+    /// Sets every operation's constant part from the flat parameter vector `values` (the
+    /// layout of [`Robot::values`] for the robot the chain was compiled from), in place and
+    /// without allocating: the same chain as [`Chain::new`] of that robot with those values.
+    /// Only the sines and cosines of the operations whose value changed are recomputed.
+    ///
+    /// `values` shorter than the chain's largest parameter index leaves the chain unchanged.
+    pub fn set_values(&mut self, values: &[Real]) {
+        if self.ops.iter().any(|op| op.param >= values.len()) {
+            return;
+        }
+        for op in &mut self.ops {
+            let v = values[op.param];
+            if v.to_bits() != op.value.to_bits() {
+                op.value = v;
+                op.sc = v.sin_cos();
+            }
+        }
+    }
+
     /// The operations, base first.
     pub fn ops(&self) -> &[Op] {
         &self.ops
@@ -215,6 +234,25 @@ mod tests {
     use super::*;
     use crate::math::{rot_x, rot_y, rot_z};
     use approx::assert_relative_eq;
+
+    #[test]
+    fn set_values_equals_a_fresh_chain() {
+        let nominal = crate::robots::irb2600();
+        let mut chain = nominal.chain();
+        let mut other = nominal.clone();
+        for (k, v) in other.values.iter_mut().enumerate() {
+            *v += 0.01 * (k as Real + 1.0);
+        }
+        chain.set_values(&other.values);
+        let fresh = other.chain();
+        assert_eq!(chain.ops(), fresh.ops());
+        let q = [0.1, -0.4, 0.3, 1.0, -0.7, 0.2];
+        assert_eq!(chain.fk(&q).pos, fresh.fk(&q).pos);
+        assert_ne!(chain.fk(&q).pos, nominal.fk(&q).pos);
+        // Too short a vector changes nothing.
+        chain.set_values(&[0.0; 3]);
+        assert_eq!(chain.ops(), fresh.ops());
+    }
 
     #[test]
     fn elementary_ops_match_rotation_matrices() {
