@@ -333,9 +333,9 @@ pub(crate) fn finish(
     let m = weights.len() as Real;
     let rms_residual = (work.r.norm_squared() / m).sqrt();
     let (condition_number, covariance) = if work.n.iter().all(|v| v.is_finite()) {
-        let eig = work.n.clone().symmetric_eigen();
-        let (mx, mn) = eig
-            .eigenvalues
+        // Eigenvalues only: the condition number needs no eigenvectors.
+        let eigenvalues = work.n.symmetric_eigenvalues();
+        let (mx, mn) = eigenvalues
             .iter()
             .fold((Real::NEG_INFINITY, Real::INFINITY), |(a, b), &e| {
                 (a.max(e), b.min(e))

@@ -14,7 +14,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::Problem;
 use crate::error::Error;
-use crate::jacobian::{pose_rows, Columns, Measure};
+use crate::jacobian::{pose_rows_vars, Columns, Measure};
 use crate::kinematics::{Chain, Param, Robot};
 use crate::math::{rotation_vector, Mat3, Real, Vec3};
 
@@ -63,6 +63,8 @@ pub struct RobotProblem<'a> {
     /// Working parameter values and the chain compiled from them, updated in place at each
     /// evaluation.
     work: RefCell<(Vec<Real>, Chain)>,
+    /// The chain variables of every pose and their sines and cosines ([`Chain::variables`]).
+    vars: Vec<([Real; 16], [(Real, Real); 16])>,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -145,6 +147,8 @@ impl<'a> RobotProblem<'a> {
             }
             _ => {}
         }
+        let chain = nominal.chain();
+        let vars = data.qs.iter().map(|q| chain.variables(q)).collect();
         Ok(RobotProblem {
             nominal,
             params: params.to_vec(),
@@ -152,7 +156,8 @@ impl<'a> RobotProblem<'a> {
             cols: Columns::new(params, dof),
             data,
             measure,
-            work: RefCell::new((nominal.values.clone(), nominal.chain())),
+            work: RefCell::new((nominal.values.clone(), chain)),
+            vars,
         })
     }
 
@@ -190,7 +195,8 @@ impl Problem for RobotProblem<'_> {
     }
 
     /// Forward kinematics and the analytic Jacobian at `nominal + x`, from the tool frame
-    /// [`pose_rows`] returns (one chain walk per point). Allocation-free: the chain is
+    /// [`pose_rows_vars`] returns (one chain walk per point, the joints' sines and cosines
+    /// computed once in [`RobotProblem::new`]). Allocation-free: the chain is
     /// updated in place ([`Chain::set_values`]).
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
         let mut guard = self.work.borrow_mut();
@@ -206,8 +212,8 @@ impl Problem for RobotProblem<'_> {
             Measure::Pose => self.data.rotations.as_deref(),
             Measure::Position => None,
         };
-        for (i, (q, pm)) in self.data.qs.iter().zip(&self.data.points).enumerate() {
-            let f = pose_rows(chain, &self.cols, q, self.measure, j, rows * i);
+        for (i, (v, pm)) in self.vars.iter().zip(&self.data.points).enumerate() {
+            let f = pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i);
             let dp = pm - f.pos;
             for k in 0..3 {
                 r[rows * i + k] = dp[k];
