@@ -81,7 +81,9 @@ pub fn pose_rows(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
-    let mut rec = Rows::new(cols, measure, out, row0);
+    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
+    let mut rot_cols = [0usize; MAX_OPS];
+    let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
     let end = chain.walk(q, |op, r, p| rec.visit(op, r, p));
     rec.finish(&end.pos);
     end
@@ -97,39 +99,48 @@ pub fn pose_rows_vars(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
-    let mut rec = Rows::new(cols, measure, out, row0);
+    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
+    let mut rot_cols = [0usize; MAX_OPS];
+    let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
     let end = chain.walk_vars(&vars.0, &vars.1, |op, r, p| rec.visit(op, r, p));
     rec.finish(&end.pos);
     end
 }
 
-/// Most operations of a chain (16 joints).
-const MAX_OPS: usize = 5 * 16 + 12;
+/// Most rotation operations of a chain: three per joint (16 joints), six for base and tool.
+const MAX_OPS: usize = 3 * 16 + 6;
 
 /// Writes one pose's rows during a chain walk. Translation columns are written on the way
 /// out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w` and origin `o`
-/// are recorded (only those: no large scratch array to clear per pose) and the column written
-/// by [`Rows::finish`].
+/// are recorded (in arrays of the caller's stack frame, so the
+/// writer is small to move) and the column written by [`Rows::finish`].
 struct Rows<'a> {
     cols: &'a Columns,
     pose: bool,
     out: &'a mut DMatrix<Real>,
     row0: usize,
-    axes: [(Vec3, Vec3); MAX_OPS],
-    rot_cols: [usize; MAX_OPS],
+    axes: &'a mut [(Vec3, Vec3); MAX_OPS],
+    rot_cols: &'a mut [usize; MAX_OPS],
     n: usize,
 }
 
 impl<'a> Rows<'a> {
     #[inline(always)]
-    fn new(cols: &'a Columns, measure: Measure, out: &'a mut DMatrix<Real>, row0: usize) -> Self {
+    fn new(
+        cols: &'a Columns,
+        measure: Measure,
+        out: &'a mut DMatrix<Real>,
+        row0: usize,
+        axes: &'a mut [(Vec3, Vec3); MAX_OPS],
+        rot_cols: &'a mut [usize; MAX_OPS],
+    ) -> Self {
         Rows {
             cols,
             pose: measure == Measure::Pose,
             out,
             row0,
-            axes: [(Vec3::zeros(), Vec3::zeros()); MAX_OPS],
-            rot_cols: [0; MAX_OPS],
+            axes,
+            rot_cols,
             n: 0,
         }
     }
