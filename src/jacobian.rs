@@ -13,7 +13,7 @@
 
 use nalgebra::DMatrix;
 
-use crate::kinematics::{Chain, Op, Param, Robot};
+use crate::kinematics::{Chain, ChainVars, Op, Param, Robot};
 use crate::math::{Mat3, Real, Vec3};
 
 /// What is measured per pose.
@@ -94,7 +94,7 @@ pub fn pose_rows(
 pub fn pose_rows_vars(
     chain: &Chain,
     cols: &Columns,
-    vars: &([Real; 16], [(Real, Real); 16]),
+    vars: &ChainVars,
     measure: Measure,
     out: &mut DMatrix<Real>,
     row0: usize,

@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector};
 use super::Problem;
 use crate::error::Error;
 use crate::jacobian::{pose_rows_vars, Columns, Measure};
-use crate::kinematics::{Chain, Param, Robot};
+use crate::kinematics::{Chain, ChainVars, Param, Robot};
 use crate::math::{rotation_vector, Mat3, Real, Vec3};
 
 /// The rotation vector of `r`, robust for rotations near the identity, where
@@ -64,7 +64,7 @@ pub struct RobotProblem<'a> {
     /// evaluation.
     work: RefCell<(Vec<Real>, Chain)>,
     /// The chain variables of every pose and their sines and cosines ([`Chain::variables`]).
-    vars: Vec<([Real; 16], [(Real, Real); 16])>,
+    vars: Vec<ChainVars>,
 }
 
 impl<'a> RobotProblem<'a> {

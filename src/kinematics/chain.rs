@@ -51,6 +51,9 @@ pub struct Op {
     sc: (Real, Real),
 }
 
+/// The chain variables of one pose and their (sin, cos), from [`Chain::variables`].
+pub type ChainVars = ([Real; 16], [(Real, Real); 16]);
+
 /// A robot compiled into elementary operations for one set of parameter values.
 #[derive(Clone, Debug)]
 pub struct Chain {
@@ -212,7 +215,7 @@ impl Chain {
     /// The chain variables of joint values `q` (internal units, `q.len()` ≤ 16) and their
     /// sines and cosines, for [`Chain::walk_vars`]: with fixed joint values these are computed
     /// once and reused whatever the parameter values.
-    pub fn variables(&self, q: &[Real]) -> ([Real; 16], [(Real, Real); 16]) {
+    pub fn variables(&self, q: &[Real]) -> ChainVars {
         let c = self.vars(q);
         let mut sc = [(0.0, 1.0); 16];
         for (k, v) in c.iter().take(q.len()).enumerate() {
