@@ -13,8 +13,8 @@
 
 use nalgebra::DMatrix;
 
-use crate::kinematics::{Chain, Param, Robot};
-use crate::math::{Real, Vec3};
+use crate::kinematics::{Chain, ChainVars, Op, Param, Robot};
+use crate::math::{Mat3, Real, Vec3};
 
 /// What is measured per pose.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -81,39 +81,110 @@ pub fn pose_rows(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
-    // Axis, origin and kind of every operation carrying a column, recorded on the way out.
-    const MAX_OPS: usize = 5 * 16 + 12;
-    let mut rec: [(Vec3, Vec3, bool, usize); MAX_OPS] =
-        [(Vec3::zeros(), Vec3::zeros(), false, 0); MAX_OPS];
-    let mut n = 0;
-    let end = chain.walk(q, |op, r, p| {
-        if let Some(c) = cols.of_param[op.param] {
-            rec[n] = (
-                r.column(op.kind.axis()).into(),
-                *p,
-                op.kind.is_rotation(),
-                c,
-            );
-            n += 1;
+    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
+    let mut rot_cols = [0usize; MAX_OPS];
+    let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
+    let end = chain.walk(q, |op, r, p| rec.visit(op, r, p));
+    rec.finish(&end.pos);
+    end
+}
+
+/// [`pose_rows`] from the precomputed chain variables of a pose ([`Chain::variables`]), for
+/// repeated evaluations at the same joint values (see [`Chain::walk_vars`]). Allocation-free.
+pub fn pose_rows_vars(
+    chain: &Chain,
+    cols: &Columns,
+    vars: &ChainVars,
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+) -> crate::math::Frame {
+    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
+    let mut rot_cols = [0usize; MAX_OPS];
+    let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
+    let end = chain.walk_vars(&vars.0, &vars.1, |op, r, p| rec.visit(op, r, p));
+    rec.finish(&end.pos);
+    end
+}
+
+/// Most rotation operations of a chain: three per joint (16 joints), six for base and tool.
+const MAX_OPS: usize = 3 * 16 + 6;
+
+/// Writes one pose's rows during a chain walk. Translation columns are written on the way
+/// out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w` and origin `o`
+/// are recorded (in arrays of the caller's stack frame, so the
+/// writer is small to move) and the column written by [`Rows::finish`].
+struct Rows<'a> {
+    cols: &'a Columns,
+    pose: bool,
+    out: &'a mut DMatrix<Real>,
+    row0: usize,
+    axes: &'a mut [(Vec3, Vec3); MAX_OPS],
+    rot_cols: &'a mut [usize; MAX_OPS],
+    n: usize,
+}
+
+impl<'a> Rows<'a> {
+    #[inline(always)]
+    fn new(
+        cols: &'a Columns,
+        measure: Measure,
+        out: &'a mut DMatrix<Real>,
+        row0: usize,
+        axes: &'a mut [(Vec3, Vec3); MAX_OPS],
+        rot_cols: &'a mut [usize; MAX_OPS],
+    ) -> Self {
+        Rows {
+            cols,
+            pose: measure == Measure::Pose,
+            out,
+            row0,
+            axes,
+            rot_cols,
+            n: 0,
         }
-    });
-    let pe = end.pos;
-    for &(w, o, rot, c) in &rec[..n] {
-        let (dp, dw) = if rot {
-            (w.cross(&(pe - o)), w)
-        } else {
-            (w, Vec3::zeros())
+    }
+
+    #[inline(always)]
+    fn visit(&mut self, op: &Op, r: &Mat3, p: &Vec3) {
+        let Some(c) = self.cols.of_param[op.param] else {
+            return;
         };
-        for k in 0..3 {
-            out[(row0 + k, c)] = dp[k];
-        }
-        if measure == Measure::Pose {
+        let row0 = self.row0;
+        let w: Vec3 = r.column(op.kind.axis()).into();
+        let mut col = self.out.column_mut(c);
+        if op.kind.is_rotation() {
+            if self.pose {
+                for k in 0..3 {
+                    col[row0 + 3 + k] = w[k];
+                }
+            }
+            self.axes[self.n] = (w, *p);
+            self.rot_cols[self.n] = c;
+            self.n += 1;
+        } else {
             for k in 0..3 {
-                out[(row0 + 3 + k, c)] = dw[k];
+                col[row0 + k] = w[k];
+            }
+            if self.pose {
+                for k in 0..3 {
+                    col[row0 + 3 + k] = 0.0;
+                }
             }
         }
     }
-    end
+
+    #[inline(always)]
+    fn finish(self, pe: &Vec3) {
+        let n = self.n;
+        for ((w, o), &c) in self.axes[..n].iter().zip(&self.rot_cols[..n]) {
+            let dp = w.cross(&(pe - o));
+            let mut col = self.out.column_mut(c);
+            for k in 0..3 {
+                col[self.row0 + k] = dp[k];
+            }
+        }
+    }
 }
 
 /// The stacked identification Jacobian of `robot` over poses `qs` (internal units) for the

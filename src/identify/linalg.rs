@@ -46,22 +46,28 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
     true
 }
 
-/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`].
+/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`]. Both sweeps
+/// run down contiguous columns of `L` (column-major): the forward one as column updates,
+/// the backward one as column dot products.
 pub(crate) fn cholesky_solve(l: &DMatrix<Real>, b: &mut DVector<Real>) {
     let n = l.nrows();
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[(i, k)] * b[k];
+    let ls = l.as_slice();
+    let bs = b.as_mut_slice();
+    for k in 0..n {
+        let col = &ls[k * n..(k + 1) * n];
+        let v = bs[k] / col[k];
+        bs[k] = v;
+        for (bi, li) in bs[k + 1..].iter_mut().zip(&col[k + 1..]) {
+            *bi -= li * v;
         }
-        b[i] = s / l[(i, i)];
     }
     for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in i + 1..n {
-            s -= l[(k, i)] * b[k];
+        let col = &ls[i * n..(i + 1) * n];
+        let mut s = bs[i];
+        for (lk, bk) in col[i + 1..].iter().zip(&bs[i + 1..]) {
+            s -= lk * bk;
         }
-        b[i] = s / l[(i, i)];
+        bs[i] = s / col[i];
     }
 }
 

@@ -22,7 +22,7 @@ pub mod ridge;
 pub mod robot;
 pub mod robust;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use crate::math::Real;
 
@@ -243,28 +243,50 @@ impl Work {
         weighted_cost(&self.r, self.rows, w)
     }
 
-    /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`.
+    /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: `N` is
+    /// one blocked matrix product (nalgebra's `gemm`, which hands dynamic sizes to
+    /// `matrixmultiply`) of a transposed view of `J`, mirrored from its lower triangle so it is
+    /// exactly symmetric; with all weights 1 `P J` is not formed.
     pub fn normal(&mut self, w: &[Real]) {
         let rows = self.rows;
-        self.pj.copy_from(&self.j);
-        for (i, &wi) in w.iter().enumerate() {
-            if wi != 1.0 {
-                self.pj.rows_mut(i * rows, rows).scale_mut(wi);
+        let unit = w.iter().all(|&wi| wi == 1.0);
+        if !unit {
+            self.pj.copy_from(&self.j);
+            for (i, &wi) in w.iter().enumerate() {
+                if wi != 1.0 {
+                    self.pj.rows_mut(i * rows, rows).scale_mut(wi);
+                }
             }
         }
-        // Lower triangle by column dot products (contiguous, column-major), then mirrored.
-        let t = self.j.ncols();
-        for a in 0..t {
-            let ca = self.pj.column(a);
-            for b in 0..=a {
-                let v = ca.dot(&self.j.column(b));
-                self.n[(a, b)] = v;
-                self.n[(b, a)] = v;
+        let pj = if unit { &self.j } else { &self.pj };
+        let (m, t) = self.j.shape();
+        if t > GEMM_MIN && m > GEMM_MIN {
+            // Jᵀ as a t × m view of J's column-major storage (row stride m, column stride 1).
+            let jt = DMatrixView::from_slice_with_strides(self.j.as_slice(), t, m, m, 1);
+            self.n.gemm(1.0, &jt, pj, 0.0);
+            for a in 0..t {
+                for b in 0..a {
+                    self.n[(b, a)] = self.n[(a, b)];
+                }
             }
-            self.g[a] = ca.dot(&self.r);
+        } else {
+            // Small problems: lower triangle by column dot products, mirrored.
+            for a in 0..t {
+                let ca = pj.column(a);
+                for b in 0..=a {
+                    let v = ca.dot(&self.j.column(b));
+                    self.n[(a, b)] = v;
+                    self.n[(b, a)] = v;
+                }
+            }
         }
+        pj.tr_mul_to(&self.r, &mut self.g);
     }
 }
+
+/// Sizes above which nalgebra's `gemm` uses `matrixmultiply` (its `SMALL_DIM`); below, its
+/// fallback does not accept the strided transposed view, so [`Work::normal`] uses dot products.
+const GEMM_MIN: usize = 5;
 
 /// `Σ_i w_i |r_i|²` over points.
 pub(crate) fn weighted_cost(r: &DVector<Real>, rows: usize, w: &[Real]) -> Real {
@@ -311,9 +333,9 @@ pub(crate) fn finish(
     let m = weights.len() as Real;
     let rms_residual = (work.r.norm_squared() / m).sqrt();
     let (condition_number, covariance) = if work.n.iter().all(|v| v.is_finite()) {
-        let eig = work.n.clone().symmetric_eigen();
-        let (mx, mn) = eig
-            .eigenvalues
+        // Eigenvalues only: the condition number needs no eigenvectors.
+        let eigenvalues = work.n.symmetric_eigenvalues();
+        let (mx, mn) = eigenvalues
             .iter()
             .fold((Real::NEG_INFINITY, Real::INFINITY), |(a, b), &e| {
                 (a.max(e), b.min(e))

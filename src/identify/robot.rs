@@ -14,8 +14,8 @@ use nalgebra::{DMatrix, DVector};
 
 use super::Problem;
 use crate::error::Error;
-use crate::jacobian::{pose_rows, Columns, Measure};
-use crate::kinematics::{Param, Robot};
+use crate::jacobian::{pose_rows_vars, Columns, Measure};
+use crate::kinematics::{Chain, ChainVars, Param, Robot};
 use crate::math::{rotation_vector, Mat3, Real, Vec3};
 
 /// The rotation vector of `r`, robust for rotations near the identity, where
@@ -60,8 +60,11 @@ pub struct RobotProblem<'a> {
     cols: Columns,
     data: &'a RobotData,
     measure: Measure,
-    /// Working copy of the robot whose values are set at each evaluation.
-    work: RefCell<Robot>,
+    /// Working parameter values and the chain compiled from them, updated in place at each
+    /// evaluation.
+    work: RefCell<(Vec<Real>, Chain)>,
+    /// The chain variables of every pose and their sines and cosines ([`Chain::variables`]).
+    vars: Vec<ChainVars>,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -144,6 +147,8 @@ impl<'a> RobotProblem<'a> {
             }
             _ => {}
         }
+        let chain = nominal.chain();
+        let vars = data.qs.iter().map(|q| chain.variables(q)).collect();
         Ok(RobotProblem {
             nominal,
             params: params.to_vec(),
@@ -151,7 +156,8 @@ impl<'a> RobotProblem<'a> {
             cols: Columns::new(params, dof),
             data,
             measure,
-            work: RefCell::new(nominal.clone()),
+            work: RefCell::new((nominal.values.clone(), chain)),
+            vars,
         })
     }
 
@@ -188,30 +194,34 @@ impl Problem for RobotProblem<'_> {
         self.measure.rows()
     }
 
-    /// Forward kinematics and the analytic Jacobian at `nominal + x`. Allocates only the
-    /// compiled chain (one small vector per call).
+    /// Forward kinematics and the analytic Jacobian at `nominal + x`, from the tool frame
+    /// [`pose_rows_vars`] returns (one chain walk per point, the joints' sines and cosines
+    /// computed once in [`RobotProblem::new`]). Allocation-free: the chain is
+    /// updated in place ([`Chain::set_values`]).
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
-        let chain = {
-            let mut rb = self.work.borrow_mut();
-            rb.values.copy_from_slice(&self.nominal.values);
-            for (&i, &v) in self.index.iter().zip(x.iter()) {
-                rb.values[i] += v;
-            }
-            rb.chain()
-        };
+        let mut guard = self.work.borrow_mut();
+        let (values, chain) = &mut *guard;
+        values.copy_from_slice(&self.nominal.values);
+        for (&i, &v) in self.index.iter().zip(x.iter()) {
+            values[i] += v;
+        }
+        chain.set_values(values);
+        let chain = &*chain;
         let rows = self.measure.rows();
-        for (i, q) in self.data.qs.iter().enumerate() {
-            let f = pose_rows(&chain, &self.cols, q, self.measure, j, rows * i);
-            let dp = self.data.points[i] - f.pos;
+        let rots = match self.measure {
+            Measure::Pose => self.data.rotations.as_deref(),
+            Measure::Position => None,
+        };
+        for (i, (v, pm)) in self.vars.iter().zip(&self.data.points).enumerate() {
+            let f = pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i);
+            let dp = pm - f.pos;
             for k in 0..3 {
                 r[rows * i + k] = dp[k];
             }
-            if self.measure == Measure::Pose {
-                if let Some(rots) = &self.data.rotations {
-                    let dw = small_rotation_vector(&(rots[i] * f.rot.transpose()));
-                    for k in 0..3 {
-                        r[rows * i + 3 + k] = dw[k];
-                    }
+            if let Some(rots) = rots {
+                let dw = small_rotation_vector(&(rots[i] * f.rot.transpose()));
+                for k in 0..3 {
+                    r[rows * i + 3 + k] = dw[k];
                 }
             }
         }
