@@ -20,6 +20,7 @@ use crate::robots::{self, BUILTINS};
 use crate::scenario::{Registration, Scenario};
 use crate::sim::csv::{read_measurements, write_measurements, write_pose_list};
 use crate::sim::poses::sample_region;
+use crate::sim::tracker::quaternion_matrix;
 use crate::sim::{measure_poses, Measurement};
 
 /// `calbench robots [NAME]`.
@@ -333,10 +334,9 @@ pub fn identify_file(
             .iter()
             .enumerate()
             .map(|(i, p)| Frame {
-                rot: v
-                    .quats
-                    .as_ref()
-                    .map_or(Mat3::identity(), |qs| c.frame.rot * quat_matrix(&qs[i])),
+                rot: v.quats.as_ref().map_or(Mat3::identity(), |qs| {
+                    c.frame.rot * quaternion_matrix(&qs[i])
+                }),
                 pos: c.frame.apply(p),
             })
             .collect();
@@ -370,12 +370,6 @@ pub fn identify_file(
         out.display()
     );
     Ok(())
-}
-
-fn quat_matrix(q: &[Real; 4]) -> Mat3 {
-    nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
-        .to_rotation_matrix()
-        .into_inner()
 }
 
 /// `calbench poses SCENARIO --strategy S [--count M] [--curve A,B,…] --out DIR`: choose a

@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-use nalgebra::{DMatrix, DVector, Quaternion, UnitQuaternion};
+use nalgebra::{DMatrix, DVector};
 use rand::Rng as _;
 use rand_distr::{Distribution, Normal};
 
@@ -16,13 +16,14 @@ use crate::error::Result;
 use crate::identify::{identify, Identified, RobotData, RobotProblem, Termination};
 use crate::jacobian::{jacobian, Columns, Measure};
 use crate::kinematics::{Param, Robot};
-use crate::math::{rotation_vector, Frame, Mat3, Real, Vec3};
+use crate::math::{rotation_vector, Frame, Real, Vec3};
 use crate::metaheur::MetaProblem;
 use crate::registration::{register_svd, register_wsvd};
 use crate::rng::{self, Rng};
 use crate::scenario::{Identifier, MetaAlgorithm, Registration};
 use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::settings::ErrorKind;
+use crate::sim::tracker::quaternion_matrix;
 use crate::sim::{measure_poses, Measurement, SagFn};
 
 /// Mean, RMS, max and standard deviation of a set of errors.
@@ -125,21 +126,16 @@ fn draw_errors(study: &Study, g: &mut Rng) -> Vec<(Param, Real)> {
         .collect()
 }
 
-fn quat_matrix(q: &[Real; 4]) -> Mat3 {
-    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
-        .to_rotation_matrix()
-        .into_inner()
-}
-
 /// Brings the measured points (and frames) into the base frame with `frame`.
 fn to_base(m: &Measurement, frame: &Frame) -> RobotData {
     RobotData {
         qs: m.qs.clone(),
         points: m.points.iter().map(|p| frame.apply(p)).collect(),
-        rotations: m
-            .quats
-            .as_ref()
-            .map(|qs| qs.iter().map(|q| frame.rot * quat_matrix(q)).collect()),
+        rotations: m.quats.as_ref().map(|qs| {
+            qs.iter()
+                .map(|q| frame.rot * quaternion_matrix(q))
+                .collect()
+        }),
     }
 }
 
