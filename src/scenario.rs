@@ -18,7 +18,6 @@ use crate::error::{Error, Result};
 use crate::identify::{
     LmOptions, LsOptions, Method, RidgeOptions, RobustOptions, Sigma0, WeightFn, XiRule,
 };
-use crate::kinematics::Param;
 use crate::kinematics::Robot;
 use crate::math::Real;
 use crate::metaheur::{BasOptions, BasPsoOptions, PsoOptions};
@@ -27,6 +26,7 @@ use crate::robots;
 use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
+use crate::sim::truth::selected_params;
 
 /// The scenario file, as written. Unknown keys are refused by serde.
 #[derive(Deserialize)]
@@ -607,16 +607,9 @@ impl Scenario {
         // Settings that need the robot: joint counts of lists, parameter names.
         let robot = scenario.robot()?;
         check(scenario.compliance.check(robot.dof()))?;
-        if let ParamSelection::List(names) = &scenario.errors.params {
-            let known = robot.params();
-            for n in names {
-                if !Param::parse(n).is_some_and(|p| known.contains(&p)) {
-                    return Err(ferr(
-                        "errors.params",
-                        format!("robot `{}` has no parameter \"{n}\"", robot.name),
-                    ));
-                }
-            }
+        if let ParamSelection::List(_) = &scenario.errors.params {
+            let measure = scenario.tracker.measure.measure();
+            check(selected_params(&robot, &scenario.errors.params, measure).map(|_| ()))?;
         }
         if let Some(sw) = &scenario.sweep {
             for v in &sw.values {

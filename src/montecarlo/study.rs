@@ -3,7 +3,7 @@
 //! optimised pose sets — computed once (FORMATS.md `run`; Guo 2024 §3 for the optimised sets).
 
 use crate::compliance::Compliance;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::identifiability::analyse;
 use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
@@ -15,6 +15,7 @@ use crate::scenario::{PoseStrategy, Registration, Scenario};
 use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
+use crate::sim::truth::selected_params;
 
 /// Poses used to decide which parameters are identifiable: many, spread over the joint
 /// ranges, from a fixed seed so every study of a robot agrees.
@@ -93,21 +94,7 @@ impl Study {
                 .copied()
                 .filter(|p| !matches!(p, Param::Base(_)))
                 .collect(),
-            (_, ParamSelection::All) => nominal
-                .params()
-                .into_iter()
-                .filter(|p| !matches!(p, Param::Base(_)))
-                .collect(),
-            (_, ParamSelection::List(names)) => names
-                .iter()
-                .map(|n| {
-                    Param::parse(n)
-                        .filter(|p| nominal.params().contains(p))
-                        .ok_or_else(|| {
-                            Error::setting("errors.params", format!("no parameter \"{n}\""))
-                        })
-                })
-                .collect::<Result<_>>()?,
+            (_, sel) => selected_params(&nominal, sel, measure)?,
         };
         let tracker = Tracker::new(&scenario.tracker)?;
         let compliance = Compliance::new(&scenario.compliance, &nominal, scenario.builtin())?;

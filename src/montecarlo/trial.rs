@@ -8,8 +8,6 @@
 use std::time::Instant;
 
 use nalgebra::{DMatrix, DVector};
-use rand::Rng as _;
-use rand_distr::{Distribution, Normal};
 
 use super::study::Study;
 use crate::error::Result;
@@ -22,8 +20,8 @@ use crate::registration::{register_svd, register_wsvd};
 use crate::rng::{self, Rng};
 use crate::scenario::{Identifier, MetaAlgorithm, Registration};
 use crate::sim::poses::{sample_region, sample_region_keyed};
-use crate::sim::settings::ErrorKind;
 use crate::sim::tracker::quaternion_matrix;
+use crate::sim::truth::draw_errors;
 use crate::sim::{measure_poses, Measurement, SagFn};
 
 /// Mean, RMS, max and standard deviation of a set of errors.
@@ -99,31 +97,6 @@ pub struct TrialResult {
     pub crb_trace: Vec<Option<Real>>,
     /// One outcome per strategy × method.
     pub outcomes: Vec<Outcome>,
-}
-
-/// Draws the injected errors (SPEC §3 "True robot"; Guo 2024 §4.2 for the paper set).
-fn draw_errors(study: &Study, g: &mut Rng) -> Vec<(Param, Real)> {
-    let e = &study.scenario.errors;
-    let size = |p: &Param| {
-        if p.is_length() {
-            e.length_mm
-        } else {
-            e.angle_rad
-        }
-    };
-    study
-        .error_params
-        .iter()
-        .map(|p| {
-            let v = match e.kind {
-                ErrorKind::None => 0.0,
-                ErrorKind::Paper => size(p),
-                ErrorKind::Normal => Normal::new(0.0, size(p)).map_or(0.0, |n| n.sample(g)),
-                ErrorKind::Uniform => size(p) * (2.0 * g.random::<Real>() - 1.0),
-            };
-            (*p, v)
-        })
-        .collect()
 }
 
 /// Brings the measured points (and frames) into the base frame with `frame`.
@@ -346,7 +319,11 @@ fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
 /// The injected errors and the true robot of trial `index`.
 pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
     let seed = rng::trial_seed(study.scenario.seed, index as u64);
-    let errors = draw_errors(study, &mut rng::stream(seed, "errors"));
+    let errors = draw_errors(
+        &study.error_params,
+        &study.scenario.errors,
+        &mut rng::stream(seed, "errors"),
+    );
     let robot = study.nominal.with_errors(&errors);
     (errors, robot)
 }

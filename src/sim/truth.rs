@@ -101,9 +101,14 @@ pub fn true_errors(
         return Ok(Vec::new());
     }
     let params = selected_params(nominal, &s.params, measure)?;
-    Ok(params
-        .into_iter()
-        .map(|p| {
+    Ok(draw_errors(&params, s, rng))
+}
+
+/// The errors of `params` drawn as `s` says (see [`true_errors`]), in the order of `params`.
+pub fn draw_errors(params: &[Param], s: &ErrorSettings, rng: &mut Rng) -> Vec<(Param, Real)> {
+    params
+        .iter()
+        .map(|&p| {
             let size = if p.is_length() {
                 s.length_mm
             } else {
@@ -117,7 +122,7 @@ pub fn true_errors(
             };
             (p, e)
         })
-        .collect())
+        .collect()
 }
 
 #[cfg(test)]
