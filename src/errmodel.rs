@@ -4,31 +4,41 @@
 //! Qiao compares three ways to relate a measured pose `T_m = [R_m P_m; 0 1]` to the model
 //! pose `T = [R P; 0 1]` of the current parameters (columns of `R`: n, o, a):
 //!
-//! | model | residual `r` (measured − model) | Jacobian `∂(model)/∂η` | Qiao |
+//! | model | residual `r` (measured − model) | `−∂r/∂η` | Qiao |
 //! |---|---|---|---|
-//! | [`ErrorModel::Differential`] | `[P_m − P; n_m − n; o_m − o; a_m − a]` (12 rows) | `[J_p; −[n]×J_ω; −[o]×J_ω; −[a]×J_ω]` | §2.2, eq. 5 |
-//! | [`ErrorModel::CoordinateTransfer`] | `[d; δ]` of `Δ = T_m T⁻¹ − I ≈ [[δ]× d; 0 0]`: `d = P_m − R_m Rᵀ P`, `δ = vee((R_m Rᵀ − R Rᵀ_m)/2)` (6 rows) | `[J_p + [P]×J_ω; J_ω]` | §2.3, eqs. 6–11 |
-//! | [`ErrorModel::DirectFk`] | `[P_m − P; log(R_m Rᵀ)]` (6 rows, exact rotation vector) | `[J_p; J_ω]` | §4.2 "model 3" |
+//! | [`ErrorModel::Differential`] | `[P_m − P; n_m − n; o_m − o; a_m − a]` (12 rows) | `[J_p; [ω]×n; [ω]×o; [ω]×a]`, `ω = J_ω` | §2.2, eq. 5 |
+//! | [`ErrorModel::CoordinateTransfer`] | `[d; δ]` of `Δ = T_m T⁻¹ − I ≈ [[δ]× d; 0 0]`: `d = P_m − R_e P`, `δ = vee((R_e − R_eᵀ)/2)`, `R_e = R_m Rᵀ` (6 rows) | `[R_e(J_p + [P]×J_ω); ½(tr R_e·I − R_eᵀ)J_ω]`, at `R_e = I` eq. 11's `[J_p + [P]×J_ω; J_ω]` | §2.3, eqs. 6–11 |
+//! | [`ErrorModel::DirectFk`] | `[P_m − P; φ]`, `φ = log(R_m Rᵀ)` (6 rows, exact rotation vector) | `[J_p; J_r⁻¹(φ)J_ω]` | §4.2 "model 3" |
 //!
 //! `J_p`, `J_ω` are the tool-point and tool-rotation columns of [`crate::jacobian`] (exact first
-//! derivatives of forward kinematics). The three Jacobians are exact derivatives of their
-//! residuals at `T_m = T`, so one linearised step of each gives the same correction to first
-//! order in the parameter errors; they differ at second order through the residual maps: the
-//! differential model compares matrix entries (its rotation rows are not a rotation), the
-//! coordinate-transfer model drops the second-order part of `R_m Rᵀ` twice (in `δ` and
-//! through `R_m Rᵀ P` in `d`, Qiao §4.2's "two neglects"), the direct model is exact in the
-//! residual. Iterated to convergence (Gauss–Newton, [`identify`]) on noise-free data all three
-//! reach the true parameters; their one-step results differ.
+//! derivatives of forward kinematics, `∂R = [J_ω ∂η]× R`), `J_r` the right Jacobian of SO(3).
+//! The Jacobians are exact derivatives of the residuals at any linearisation point (tested
+//! against finite differences), so Gauss–Newton ([`identify`]) converges to the least-squares
+//! minimum of each model's residual, and on noise-free data all three reach the true
+//! parameters.
 //!
-//! Residual rows are unweighted, as in Qiao: mm for positions, rad or dimensionless for
-//! orientation.
+//! At `T_m = T` the three Jacobians predict the same first-order change of the pose: the
+//! models agree to first order and differ only in the coordinates in which they measure the
+//! error. Those coordinates matter in two ways. Linearised once at the nominal parameters
+//! (Qiao's models 1 and 2), each model keeps its own second-order error: the differential
+//! model compares matrix entries (its rotation rows are not a rotation), the
+//! coordinate-transfer model drops second-order parts of `R_m Rᵀ` in `δ` and through
+//! `R_m Rᵀ P` in `d` (Qiao §4.2's "two neglects"); the direct model neglects nothing once
+//! iterated. And with measurement noise, the coordinate-transfer position rows carry the
+//! orientation noise times the lever arm `|P|` (about 1 m), which makes that model the
+//! noisiest of the three: with tracker-like noise the order is coordinate transfer worst,
+//! then differential, then direct identification on the forward kinematics, as Qiao reports
+//! (see the tests).
+//!
+//! Residual rows are in mm for positions and rad (or dimensionless) for orientation; the
+//! orientation rows are weighted by a factor `k` as in Qiao's fitness (eq. 14), see [`stack`].
 
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
 use crate::jacobian::{pose_rows, Columns, Measure};
 use crate::kinematics::{Chain, Param, Robot};
-use crate::math::{matrix_rpy, rotation_vector, Frame, Real, Vec3};
+use crate::math::{matrix_rpy, rotation_vector, skew, Frame, Mat3, Real, Vec3};
 
 /// The pose-error model of an identification (see the module docs for the formulas).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -137,45 +147,55 @@ pub fn rows_into(
                 r[row0 + k] = d[k];
                 r[row0 + 3 + k] = delta[k];
             }
+            // Exact derivatives at any R_e = R_m Rᵀ (with ∂R = [ω]×R): ∂d = −R_e(J_p + P × ω)
+            // and ∂δ = −½(tr R_e·I − R_eᵀ)ω; both reduce to Qiao's eq. 11 at R_e = I.
+            let g = (Mat3::identity() * re.trace() - re.transpose()) * 0.5;
             for col in 0..cols.len() {
                 let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
-                let extra = t.pos.cross(&w);
+                let v = Vec3::new(j[(row0, col)], j[(row0 + 1, col)], j[(row0 + 2, col)])
+                    + t.pos.cross(&w);
+                let (jp, jw) = (re * v, g * w);
                 for k in 0..3 {
-                    j[(row0 + k, col)] += extra[k];
+                    j[(row0 + k, col)] = jp[k];
+                    j[(row0 + 3 + k, col)] = jw[k];
                 }
             }
         }
         ErrorModel::DirectFk => {
             let dp = pm - t.pos;
-            let dw = log_rotation(&(rm * t.rot.transpose()));
+            let phi = rotation_vector(&(rm * t.rot.transpose()));
             for k in 0..3 {
                 r[row0 + k] = dp[k];
-                r[row0 + 3 + k] = dw[k];
+                r[row0 + 3 + k] = phi[k];
+            }
+            // R → exp([ω]×)R turns R_e = R_m Rᵀ into R_e exp(−[ω]×), whose logarithm is
+            // φ − J_r⁻¹(φ)ω to first order (J_r: right Jacobian of SO(3)).
+            let g = right_jacobian_inverse(&phi);
+            for col in 0..cols.len() {
+                let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
+                let jw = g * w;
+                for k in 0..3 {
+                    j[(row0 + 3 + k, col)] = jw[k];
+                }
             }
         }
     }
     t
 }
 
-/// The rotation vector of `r`, robust near the identity (atan2 of the skew part's norm and
-/// the trace, so no `acos` of a value rounded above 1).
-fn log_rotation(r: &crate::math::Mat3) -> Vec3 {
-    let s = Vec3::new(
-        r[(2, 1)] - r[(1, 2)],
-        r[(0, 2)] - r[(2, 0)],
-        r[(1, 0)] - r[(0, 1)],
-    ) * 0.5;
-    let sin = s.norm();
-    let cos = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
-    if sin < 1e-300 {
-        return if cos > 0.0 { s } else { rotation_vector(r) };
-    }
-    let angle = sin.atan2(cos);
-    if angle > 3.0 {
-        // Near π the skew part loses the axis: fall back to the general logarithm.
-        return rotation_vector(r);
-    }
-    s * (angle / sin)
+/// The inverse right Jacobian of SO(3) at the rotation vector `phi`:
+/// `log(exp([φ]×) exp([δ]×)) = φ + J_r⁻¹(φ) δ + O(δ²)`, with
+/// `J_r⁻¹(φ) = I + ½[φ]× + (1/θ² − (1 + cos θ)/(2θ sin θ))[φ]×²`, θ = |φ|
+/// (series `1/12 + θ²/720` near 0).
+fn right_jacobian_inverse(phi: &Vec3) -> Mat3 {
+    let th = phi.norm();
+    let c = if th < 1e-4 {
+        1.0 / 12.0 + th * th / 720.0
+    } else {
+        1.0 / (th * th) - (1.0 + th.cos()) / (2.0 * th * th.sin())
+    };
+    let k = skew(phi);
+    Mat3::identity() + k * 0.5 + k * k * c
 }
 
 /// One pose's residual and Jacobian of `model` for `robot` (the linearisation point) and the
@@ -219,14 +239,28 @@ fn check_pose(robot: &Robot, q: &[Real], i: usize) -> Result<()> {
     Ok(())
 }
 
-/// The stacked residual and Jacobian of `model` over all poses.
+/// The stacked residual and Jacobian of `model` over all poses, with the orientation rows
+/// (all rows after the first three of each pose) multiplied by `k`.
+///
+/// `k` plays the part of the weighting factor of Qiao's fitness (eq. 14), which balances
+/// orientation errors (rad, or dimensionless matrix entries) against position errors (mm):
+/// with `k = 1` one radian counts as one millimetre, which leaves the orientation data almost
+/// unused; [`crate::metaheur::DEFAULT_K`] (100 mm) puts the two on a comparable footing for
+/// a tracker measuring about 15 µm and 0.005°.
 pub fn stack(
     model: ErrorModel,
     robot: &Robot,
     params: &[Param],
     qs: &[Vec<Real>],
     measured: &[Frame],
+    k: Real,
 ) -> Result<(DVector<Real>, DMatrix<Real>)> {
+    if !(k.is_finite() && k > 0.0) {
+        return Err(Error::setting(
+            "k",
+            format!("must be a finite positive weight, got {k}"),
+        ));
+    }
     if qs.len() != measured.len() {
         return Err(Error::setting(
             "measurements",
@@ -244,6 +278,12 @@ pub fn stack(
     for (i, (q, m)) in qs.iter().zip(measured).enumerate() {
         rows_into(model, &chain, &cols, q, m, &mut r, &mut j, rows * i);
     }
+    if k != 1.0 {
+        for row in (0..r.len()).filter(|row| row % rows >= 3) {
+            r[row] *= k;
+            j.row_mut(row).scale_mut(k);
+        }
+    }
     Ok((r, j))
 }
 
@@ -259,9 +299,15 @@ pub struct ModelFit {
 }
 
 /// Gauss–Newton identification with `model`: `iterations` steps of
-/// `Δx = J⁺ r` (least squares by SVD), re-linearised at the corrected robot each step.
-/// One step is the classical one-shot linear identification Qiao's error models 1 and 2 stand
-/// for.
+/// `Δx = J⁺ r` (least squares by SVD, orientation rows weighted by `k`, see [`stack`]),
+/// re-linearised at the corrected robot each step.
+///
+/// One step from the nominal robot is the linear identification of Qiao's error models 1
+/// and 2 (their Jacobians carry the nominal parameters, §2.2–2.3); iterated to convergence,
+/// [`ErrorModel::DirectFk`] is the identification on the forward kinematics without
+/// neglected terms of §4.2 (model 3). The Jacobians are exact derivatives of the residuals
+/// everywhere, so each model's iteration converges to the least-squares minimum of its own
+/// residual.
 pub fn identify(
     model: ErrorModel,
     nominal: &Robot,
@@ -269,6 +315,7 @@ pub fn identify(
     qs: &[Vec<Real>],
     measured: &[Frame],
     iterations: usize,
+    k: Real,
 ) -> Result<ModelFit> {
     if iterations == 0 {
         return Err(Error::setting("iterations", "must be at least 1"));
@@ -284,7 +331,7 @@ pub fn identify(
     let mut robot = nominal.clone();
     let mut last_step = 0.0;
     for _ in 0..iterations {
-        let (r, j) = stack(model, &robot, params, qs, measured)?;
+        let (r, j) = stack(model, &robot, params, qs, measured, k)?;
         if r.iter().chain(j.iter()).any(|v| !v.is_finite()) {
             return Err(Error::Compute(format!(
                 "{model} identification diverged (non-finite residual or Jacobian)"

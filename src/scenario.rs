@@ -285,12 +285,15 @@ pub enum Identifier {
     /// A Jacobian-based method (LS, ridge, IGG3, LM) on the analytic identification Jacobian.
     Jacobian(Method),
     /// Gauss–Newton least squares on one of Qiao 2021's three pose-error models
-    /// (§2.2–2.3, §4.2; full-pose data only), `iterations` steps.
+    /// (§2.2–2.3, §4.2; full-pose data only), `iterations` steps, orientation rows weighted
+    /// by `k` (eq. 14's weighting).
     ErrorModel {
         /// The pose-error model.
         model: ErrorModel,
         /// Gauss–Newton steps.
         iterations: usize,
+        /// Weight of the orientation rows against the position rows (mm per rad).
+        k: Real,
     },
     /// A derivative-free search (Qiao 2021).
     Meta(MetaSpec),
@@ -769,7 +772,7 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
         )
     })?;
     let allowed: &[&str] = match name {
-        "ls" => &["eps", "max_iter", "error_model", "iterations"],
+        "ls" => &["eps", "max_iter", "error_model", "iterations", "k"],
         "bas" => &[
             "iterations",
             "antenna",
@@ -831,13 +834,20 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
             let model = ErrorModel::parse("error_model", m)
                 .map_err(|e| ("error_model".to_string(), e.to_string()))?;
             let iterations = get_count(t, "iterations")?.unwrap_or(10);
+            let k = get_positive(t, "k")?.unwrap_or(crate::metaheur::DEFAULT_K);
             return Ok(MethodSpec {
                 label,
-                method: Identifier::ErrorModel { model, iterations },
+                method: Identifier::ErrorModel {
+                    model,
+                    iterations,
+                    k,
+                },
             });
         }
-        if t.contains_key("iterations") {
-            return Err(("iterations".into(), "only with error_model".into()));
+        for key in ["iterations", "k"] {
+            if t.contains_key(key) {
+                return Err((key.into(), "only with error_model".into()));
+            }
         }
     }
     if matches!(name, "bas" | "pso" | "bas-pso") {

@@ -224,6 +224,18 @@ fn bad_scenarios_are_refused_naming_the_key() {
             TINY.replace("[tracker]\n", "[tracker]\nmpe_a_um = -1.0\n"),
             "mpe_a_um",
         ),
+        // The orientation weight belongs to the pose-error models only, and must be positive.
+        (
+            TINY.replace("name = \"ls\"", "name = \"ls\"\nk = 100.0"),
+            "methods[0].k",
+        ),
+        (
+            TINY.replace(
+                "name = \"ls\"",
+                "name = \"ls\"\nerror_model = \"direct_fk\"\nk = 0.0",
+            ),
+            "methods[0].k",
+        ),
     ];
     for (text, key) in cases {
         let e = Scenario::parse(&text, Some(Path::new("bad.toml")))

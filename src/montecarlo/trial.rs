@@ -162,7 +162,11 @@ fn run_identifier(
             let robot = problem.robot_with(&r.x);
             Ok((r, robot, Vec::new()))
         }
-        Identifier::ErrorModel { model, iterations } => {
+        Identifier::ErrorModel {
+            model,
+            iterations,
+            k,
+        } => {
             let rots = data.rotations.as_ref().ok_or_else(|| {
                 crate::Error::Compute("the pose-error models need full-pose data".into())
             })?;
@@ -172,8 +176,15 @@ fn run_identifier(
                 .zip(rots)
                 .map(|(p, r)| Frame { rot: *r, pos: *p })
                 .collect();
-            let fit =
-                crate::errmodel::identify(*model, nominal, params, &data.qs, &frames, *iterations)?;
+            let fit = crate::errmodel::identify(
+                *model,
+                nominal,
+                params,
+                &data.qs,
+                &frames,
+                *iterations,
+                *k,
+            )?;
             let term = if fit.last_step < 1e-9 {
                 Termination::Converged
             } else {
