@@ -20,7 +20,7 @@ use crate::identify::{
 };
 use crate::kinematics::Robot;
 use crate::math::Real;
-use crate::metaheur::{BasOptions, BasPsoOptions, PsoOptions};
+use crate::metaheur::{BasOptions, BasPsoOptions, BasStart, PsoOptions, Velocity};
 use crate::poses::{Objective, Strategy as Optimiser};
 use crate::robots;
 use crate::sim::settings::{
@@ -283,7 +283,13 @@ pub struct MetaSpec {
 #[derive(Clone, Debug)]
 pub enum Identifier {
     /// A Jacobian-based method (LS, ridge, IGG3, LM) on the analytic identification Jacobian.
-    Jacobian(Method),
+    Jacobian {
+        /// The method and its options.
+        method: Method,
+        /// Weight of the orientation rows of full-pose data (mm per rad; see
+        /// [`crate::identify::RobotProblem::with_orientation_weight`]).
+        k: Real,
+    },
     /// Gauss–Newton least squares on one of Qiao 2021's three pose-error models
     /// (§2.2–2.3, §4.2; full-pose data only), `iterations` steps, orientation rows weighted
     /// by `k` (eq. 14's weighting).
@@ -303,7 +309,7 @@ impl Identifier {
     /// The method's name.
     pub fn name(&self) -> &'static str {
         match self {
-            Identifier::Jacobian(m) => m.name(),
+            Identifier::Jacobian { method, .. } => method.name(),
             Identifier::ErrorModel { .. } => "ls",
             Identifier::Meta(m) => match m.algorithm {
                 MetaAlgorithm::Bas(_) => "bas",
@@ -541,9 +547,16 @@ impl Scenario {
         let mut methods = Vec::new();
         for (i, t) in raw.methods.iter().enumerate() {
             let m = parse_method(t).map_err(|(k, msg)| ferr(&format!("methods[{i}].{k}"), msg))?;
-            if matches!(m.method, Identifier::ErrorModel { .. })
-                && raw.tracker.measure.measure() != crate::jacobian::Measure::Pose
-            {
+            let position_only = raw.tracker.measure.measure() != crate::jacobian::Measure::Pose;
+            if position_only && t.contains_key("k") {
+                return Err(ferr(
+                    &format!("methods[{i}].k"),
+                    "k weighs orientation against position errors; the tracker measures \
+                     positions only (set tracker.measure = \"pose\" or drop k)"
+                        .into(),
+                ));
+            }
+            if matches!(m.method, Identifier::ErrorModel { .. }) && position_only {
                 return Err(ferr(
                     &format!("methods[{i}].error_model"),
                     "the pose-error models need full-pose data: set tracker.measure = \"pose\""
@@ -778,6 +791,9 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
             "antenna",
             "step",
             "decay",
+            "antenna_floor",
+            "step_floor",
+            "start",
             "k",
             "bound_mm",
             "bound_rad",
@@ -787,6 +803,8 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
             "iterations",
             "c1",
             "c2",
+            "max_velocity",
+            "inertia",
             "k",
             "bound_mm",
             "bound_rad",
@@ -800,13 +818,25 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
             "antenna",
             "step",
             "decay",
+            "antenna_floor",
+            "step_floor",
+            "max_velocity",
+            "inertia",
             "k",
             "bound_mm",
             "bound_rad",
         ],
-        "ridge" => &["xi", "eps", "max_iter"],
-        "igg3" => &["k0", "k1", "sigma0", "weight", "xi", "eps", "max_iter"],
-        "lm" => &["mu", "adaptive", "marquardt", "lambda0", "eps", "max_iter"],
+        "ridge" => &["xi", "eps", "max_iter", "k"],
+        "igg3" => &["k0", "k1", "sigma0", "weight", "xi", "eps", "max_iter", "k"],
+        "lm" => &[
+            "mu",
+            "adaptive",
+            "marquardt",
+            "lambda0",
+            "eps",
+            "max_iter",
+            "k",
+        ],
         other => {
             return Err((
                 "name".into(),
@@ -844,10 +874,8 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
                 },
             });
         }
-        for key in ["iterations", "k"] {
-            if t.contains_key(key) {
-                return Err((key.into(), "only with error_model".into()));
-            }
+        if t.contains_key("iterations") {
+            return Err(("iterations".into(), "only with error_model".into()));
         }
     }
     if matches!(name, "bas" | "pso" | "bas-pso") {
@@ -955,7 +983,10 @@ fn parse_method(t: &toml::Table) -> std::result::Result<MethodSpec, MethodError>
     };
     Ok(MethodSpec {
         label,
-        method: Identifier::Jacobian(method),
+        method: Identifier::Jacobian {
+            method,
+            k: get_positive(t, "k")?.unwrap_or(crate::metaheur::DEFAULT_K),
+        },
     })
 }
 
@@ -981,6 +1012,41 @@ fn parse_meta(name: &str, t: &toml::Table) -> std::result::Result<MetaSpec, Meth
         }
         Ok(())
     };
+    // The floors d0, δ0 of eq. 13 may be zero (pure geometric decay).
+    let floor = |k: &str, v: &mut Real| -> std::result::Result<(), MethodError> {
+        if let Some(x) = get_real(t, k)? {
+            if x < 0.0 {
+                return Err((k.into(), format!("must be at least 0, got {x}")));
+            }
+            *v = x;
+        }
+        Ok(())
+    };
+    // Velocity rule of the swarms: Clerc's constriction (eq. 12) unless `inertia = [w0, w1]`.
+    let velocity = |v: &mut Velocity| -> std::result::Result<(), MethodError> {
+        if let Some(x) = t.get("inertia") {
+            let w: Vec<Real> = x
+                .as_array()
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|e| e.as_float().or_else(|| e.as_integer().map(|i| i as Real)))
+                        .filter(|e| e.is_finite() && *e >= 0.0)
+                        .collect()
+                })
+                .unwrap_or_default();
+            if w.len() != 2 || x.as_array().map_or(0, |a| a.len()) != 2 {
+                return Err((
+                    "inertia".into(),
+                    format!("must be [start, end], two weights at least 0, got {x}"),
+                ));
+            }
+            *v = Velocity::Inertia {
+                start: w[0],
+                end: w[1],
+            };
+        }
+        Ok(())
+    };
     let algorithm = match name {
         "bas" => {
             let mut o = BasOptions::default();
@@ -988,6 +1054,20 @@ fn parse_meta(name: &str, t: &toml::Table) -> std::result::Result<MetaSpec, Meth
             real("antenna", &mut o.antenna)?;
             real("step", &mut o.step)?;
             real("decay", &mut o.decay)?;
+            floor("antenna_floor", &mut o.antenna_floor)?;
+            floor("step_floor", &mut o.step_floor)?;
+            if let Some(x) = get_str(t, "start")? {
+                o.start = match x {
+                    "centre" | "center" => BasStart::Centre,
+                    "halton" => BasStart::Halton,
+                    other => {
+                        return Err((
+                            "start".into(),
+                            format!("\"{other}\" is not a start (centre, halton)"),
+                        ))
+                    }
+                };
+            }
             MetaAlgorithm::Bas(o)
         }
         "pso" => {
@@ -996,6 +1076,8 @@ fn parse_meta(name: &str, t: &toml::Table) -> std::result::Result<MetaSpec, Meth
             count("iterations", &mut o.iterations)?;
             real("c1", &mut o.c1)?;
             real("c2", &mut o.c2)?;
+            real("max_velocity", &mut o.max_velocity)?;
+            velocity(&mut o.velocity)?;
             MetaAlgorithm::Pso(o)
         }
         _ => {
@@ -1008,6 +1090,10 @@ fn parse_meta(name: &str, t: &toml::Table) -> std::result::Result<MetaSpec, Meth
             real("antenna", &mut o.antenna)?;
             real("step", &mut o.step)?;
             real("decay", &mut o.decay)?;
+            floor("antenna_floor", &mut o.antenna_floor)?;
+            floor("step_floor", &mut o.step_floor)?;
+            real("max_velocity", &mut o.max_velocity)?;
+            velocity(&mut o.velocity)?;
             MetaAlgorithm::BasPso(o)
         }
     };

@@ -236,6 +236,18 @@ fn bad_scenarios_are_refused_naming_the_key() {
             ),
             "methods[0].k",
         ),
+        (
+            TINY.replace("name = \"lm\"", "name = \"bas\"\nstep_floor = -1.0"),
+            "methods[1].step_floor",
+        ),
+        (
+            TINY.replace("name = \"lm\"", "name = \"bas\"\nstart = \"random\""),
+            "methods[1].start",
+        ),
+        (
+            TINY.replace("name = \"lm\"", "name = \"pso\"\ninertia = [0.9]"),
+            "methods[1].inertia",
+        ),
     ];
     for (text, key) in cases {
         let e = Scenario::parse(&text, Some(Path::new("bad.toml")))
@@ -244,4 +256,38 @@ fn bad_scenarios_are_refused_naming_the_key() {
         let m = e.to_string();
         assert!(m.contains(key), "message `{m}` lacks `{key}`");
     }
+}
+
+#[test]
+fn metaheuristic_schedules_and_velocity_rules_are_settable() {
+    use calbench::metaheur::{BasStart, Velocity};
+    use calbench::scenario::{Identifier, MetaAlgorithm};
+    let text = TINY.replace(
+        "name = \"lm\"",
+        "name = \"bas\"\nstart = \"halton\"\nantenna_floor = 0.0\nstep_floor = 2e-4\n\
+         [[methods]]\nname = \"bas-pso\"\ninertia = [0.9, 0.4]\nmax_velocity = 0.3\nstep_floor = 0",
+    );
+    let s = Scenario::parse(&text, None).unwrap();
+    let Identifier::Meta(bas) = &s.methods[1].method else {
+        panic!("bas")
+    };
+    let MetaAlgorithm::Bas(o) = &bas.algorithm else {
+        panic!("bas")
+    };
+    assert_eq!(o.start, BasStart::Halton);
+    assert_eq!((o.antenna_floor, o.step_floor), (0.0, 2e-4));
+    let Identifier::Meta(hybrid) = &s.methods[2].method else {
+        panic!("bas-pso")
+    };
+    let MetaAlgorithm::BasPso(o) = &hybrid.algorithm else {
+        panic!("bas-pso")
+    };
+    assert_eq!(
+        o.velocity,
+        Velocity::Inertia {
+            start: 0.9,
+            end: 0.4
+        }
+    );
+    assert_eq!((o.max_velocity, o.step_floor), (0.3, 0.0));
 }

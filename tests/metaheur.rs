@@ -5,7 +5,8 @@ use calbench::jacobian::Measure;
 use calbench::kinematics::{Param, Robot};
 use calbench::math::{Frame, Real};
 use calbench::metaheur::{
-    bas, bas_pso, poses_in_cube, pso, BasOptions, BasPsoOptions, MetaProblem, PsoOptions, DEFAULT_K,
+    bas, bas_pso, poses_in_cube, pso, BasOptions, BasPsoOptions, BasStart, MetaProblem, PsoOptions,
+    DEFAULT_K,
 };
 use calbench::rng::stream;
 
@@ -155,7 +156,16 @@ fn pso_and_bas_reduce_tx60_errors() {
     let r = bas(&f, &b, &o, &mut stream(1, "bas")).unwrap();
     let after = acpe(&c, &r.x);
     eprintln!("bas: ACPE/ACAE {before:?} -> {after:?}");
-    // A single beetle in 24 dimensions is weak (Qiao §3.1: "easily trapped"): from its random
-    // Halton start it need not reach the nominal model's fitness, but it must descend.
+    // One beetle from the nominal parameters also cuts ACPE and ACAE by 90 % (Qiao's BAS
+    // reaches 0.0977 mm from 0.312 mm, a 69 % cut, on real data).
+    assert!(after.0 < 0.1 * before.0, "{before:?} -> {after:?}");
+    assert!(after.1 < 0.1 * before.1, "{before:?} -> {after:?}");
+    // From a random Halton point in 24 dimensions it must still descend (Qiao §3.1: a single
+    // beetle is "easily trapped").
+    let halton = BasOptions {
+        start: BasStart::Halton,
+        ..o
+    };
+    let r = bas(&f, &b, &halton, &mut stream(1, "bas")).unwrap();
     assert!(r.fitness < 0.5 * r.trace[0], "{} {}", r.fitness, r.trace[0]);
 }

@@ -371,6 +371,86 @@ fn full_pose_data_recovers_the_errors() {
 }
 
 #[test]
+fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses() {
+    let nominal = robots::irb2600();
+    let mut r = rng::from_seed(4);
+    let rich = uniform_joint_poses(&nominal, 200, &mut r);
+    let params = identifiable(&nominal, &rich, Measure::Pose);
+    let g = Normal::new(0.0, 1.0).expect("unit");
+    let (sp, sa) = (0.015, 0.005f64.to_radians());
+    let mut err = [0.0; 2];
+    for draw in 0..6 {
+        let pairs: Vec<(Param, Real)> = params
+            .iter()
+            .map(|&p| {
+                (
+                    p,
+                    g.sample(&mut r) * if p.is_length() { 0.2 } else { 0.002 },
+                )
+            })
+            .collect();
+        let truth = nominal.with_errors(&pairs);
+        let qs = uniform_joint_poses(&nominal, 30, &mut r);
+        let ct = truth.chain();
+        let mut v3 = || Vec3::new(g.sample(&mut r), g.sample(&mut r), g.sample(&mut r));
+        let (mut points, mut rotations) = (Vec::new(), Vec::new());
+        for q in &qs {
+            let f = ct.fk(q);
+            points.push(f.pos + v3() * sp);
+            rotations.push(nalgebra::Rotation3::new(v3() * sa).into_inner() * f.rot);
+        }
+        let data = RobotData {
+            qs,
+            points,
+            rotations: Some(rotations),
+        };
+        let plain = RobotProblem::new(&nominal, &params, &data, Measure::Pose).expect("problem");
+        let k = sp / sa;
+        let weighted = RobotProblem::new(&nominal, &params, &data, Measure::Pose)
+            .expect("problem")
+            .with_orientation_weight(k)
+            .expect("weight");
+        if draw == 0 {
+            // Exactly the orientation rows are scaled, residual and Jacobian alike.
+            let n = 6 * data.qs.len();
+            let x = DVector::from_element(params.len(), 1e-4);
+            let (mut r1, mut j1) = (DVector::zeros(n), DMatrix::zeros(n, params.len()));
+            let (mut rk, mut jk) = (r1.clone(), j1.clone());
+            plain.evaluate(&x, &mut r1, &mut j1);
+            weighted.evaluate(&x, &mut rk, &mut jk);
+            for row in 0..n {
+                let w = if row % 6 >= 3 { k } else { 1.0 };
+                assert_eq!(rk[row], w * r1[row]);
+                for c in 0..params.len() {
+                    assert_eq!(jk[(row, c)], w * j1[(row, c)]);
+                }
+            }
+        }
+        let ls = Method::Ls(LsOptions::default());
+        for (e, p) in err.iter_mut().zip([&plain, &weighted]) {
+            let out = identify(p, &DVector::zeros(params.len()), &ls);
+            // Relative parameter error, lengths and angles each on their own scale.
+            *e += out
+                .x
+                .iter()
+                .zip(&pairs)
+                .map(|(x, (p, t))| ((x - t) / if p.is_length() { 0.2 } else { 0.002 }).powi(2))
+                .sum::<Real>()
+                .sqrt();
+        }
+    }
+    // With a radian counted as a millimetre the orientation data are nearly lost; the matched
+    // weight σ_position / σ_orientation estimates the parameters better.
+    println!("parameter error: k = 1 {}, matched k {}", err[0], err[1]);
+    assert!(err[1] < 0.8 * err[0], "{err:?}");
+    let data = measure(&nominal, rich, 0.0, &mut r);
+    for bad in [0.0, -1.0, Real::NAN, Real::INFINITY] {
+        let p = RobotProblem::new(&nominal, &params, &data, Measure::Position).expect("problem");
+        assert!(p.with_orientation_weight(bad).is_err(), "{bad}");
+    }
+}
+
+#[test]
 fn igg3_resists_outliers() {
     let s = paper_setup();
     let mut worse = 0;

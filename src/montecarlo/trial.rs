@@ -156,9 +156,10 @@ fn run_identifier(
 ) -> Result<(Identified, Robot, Vec<Real>)> {
     let n = data.qs.len();
     match method {
-        Identifier::Jacobian(m) => {
-            let problem = RobotProblem::new(nominal, params, data, measure)?;
-            let r = identify(&problem, &DVector::zeros(params.len()), m);
+        Identifier::Jacobian { method, k } => {
+            let problem =
+                RobotProblem::new(nominal, params, data, measure)?.with_orientation_weight(*k)?;
+            let r = identify(&problem, &DVector::zeros(params.len()), method);
             let robot = problem.robot_with(&r.x);
             Ok((r, robot, Vec::new()))
         }
