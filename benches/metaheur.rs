@@ -1,6 +1,8 @@
 //! BAS, PSO and BAS-PSO on the TX60 with 50 noise-free full-pose measurements (Qiao 2021 §4):
-//! one fitness evaluation, and each search with a fixed budget.
+//! one fitness evaluation, and each search with a fixed budget; and the three pose-error
+//! models (Qiao §2.2–2.3, §4.2), one linear step and Gauss–Newton to convergence.
 
+use calbench::errmodel::{identify, ErrorModel};
 use calbench::kinematics::Param;
 use calbench::math::{Frame, Real};
 use calbench::metaheur::{
@@ -35,6 +37,20 @@ fn bench(c: &mut Criterion) {
     let qs =
         poses_in_cube(&nominal, 50, [550.0, 0.0, 550.0], 1000.0, 200_000, &mut rng).expect("poses");
     let measured: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
+    let mut g = c.benchmark_group("errmodel_tx60_50_poses");
+    for model in ErrorModel::ALL {
+        for steps in [1, 5] {
+            let id = BenchmarkId::new(model.as_str(), steps);
+            g.bench_with_input(id, &steps, |bch, &steps| {
+                bch.iter(|| {
+                    identify(model, &nominal, &params, &qs, &measured, steps, DEFAULT_K)
+                        .expect("identify")
+                })
+            });
+        }
+    }
+    g.finish();
+
     let p = MetaProblem::from_frames(&nominal, params, qs, &measured, DEFAULT_K).expect("problem");
     let b = p.bounds(0.5, 0.005);
     let f = |x: &[Real]| p.fitness(x);
