@@ -393,12 +393,20 @@ pub fn acpe_acae(truth: &[Frame], model: &[Frame]) -> Result<(Real, Real)> {
     let (mut p, mut a) = (0.0, 0.0);
     for (t, m) in truth.iter().zip(model) {
         p += (t.pos - m.pos).norm();
-        let (rt, rm) = (matrix_rpy(&t.rot), matrix_rpy(&m.rot));
-        let d: Real = (0..3).map(|i| wrap(rt[i] - rm[i]).powi(2)).sum();
-        a += d.sqrt();
+        a += attitude_error_deg(t, m);
     }
     let m = truth.len() as Real;
-    Ok((p / m, (a / m).to_degrees()))
+    Ok((p / m, a / m))
+}
+
+/// One pose's attitude error as Qiao's ACAE counts it (§4.1), degrees:
+/// `√(Δα² + Δβ² + Δγ²)` of the differences of the fixed X-Y-Z angles (wrapped to ±180°).
+/// Unlike the angle of `R_m R_tᵀ` it depends on the frames' orientation, and grows near the
+/// angles' singularity (β = ±90°).
+pub fn attitude_error_deg(truth: &Frame, model: &Frame) -> Real {
+    let (rt, rm) = (matrix_rpy(&truth.rot), matrix_rpy(&model.rot));
+    let d: Real = (0..3).map(|i| wrap(rt[i] - rm[i]).powi(2)).sum();
+    d.sqrt().to_degrees()
 }
 
 /// ACPE/ACAE of each run and APE/AAE over all runs (Qiao §4.1–4.2) of model frames

@@ -299,3 +299,19 @@ fn model_names_round_trip() {
     }
     assert!(ErrorModel::parse("error_model", "dh").is_err());
 }
+
+#[test]
+fn harness_validation_errors_are_qiao_acpe_and_acae() {
+    // The harness's per-pose errors average to Qiao's ACPE and ACAE (FORMATS.md).
+    let (nominal, qs) = setup(10, 6);
+    let params = qiao24();
+    let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
+    let truth: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
+    let model: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
+    let (p, a) = calbench::montecarlo::trial::validation_errors(&nominal, &qs, &truth);
+    let (acpe, acae) = acpe_acae(&truth, &model).unwrap();
+    let mean = |v: &[Real]| v.iter().sum::<Real>() / v.len() as Real;
+    assert_relative_eq!(mean(&p), acpe, epsilon = 1e-12);
+    assert_relative_eq!(mean(&a), acae, epsilon = 1e-12);
+    assert!(acae > 0.01);
+}

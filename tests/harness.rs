@@ -291,3 +291,29 @@ fn metaheuristic_schedules_and_velocity_rules_are_settable() {
     );
     assert_eq!((o.max_velocity, o.step_floor), (0.3, 0.0));
 }
+
+#[test]
+fn full_pose_study_reports_qiao_acae() {
+    let text = TINY
+        .replace(
+            "[tracker]\n",
+            "[tracker]\nmeasure = \"pose\"\nangle_noise_deg = 0.005\n",
+        )
+        .replace(
+            "strategies = [\"random\", \"detmax\"]",
+            "strategies = [\"random\"]",
+        );
+    let out = tmp("tiny-pose");
+    run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
+    let s = read_json(&out.join("summary.json")).unwrap();
+    for e in s["results"].as_array().unwrap() {
+        // Orientation errors before and after, whose means are Qiao's ACAE.
+        let (b, a) = (
+            e["validation_before_deg"]["mean"].as_f64().unwrap(),
+            e["validation_after_deg"]["mean"].as_f64().unwrap(),
+        );
+        assert!(a.is_finite() && a < b, "{b} -> {a}");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("after mean °"));
+}

@@ -10,11 +10,12 @@ use std::time::Instant;
 use nalgebra::{DMatrix, DVector};
 
 use super::study::Study;
+use crate::errmodel::attitude_error_deg;
 use crate::error::Result;
 use crate::identify::{identify, Identified, RobotData, RobotProblem, Termination};
 use crate::jacobian::{jacobian, Columns, Measure};
 use crate::kinematics::{Param, Robot};
-use crate::math::{rotation_vector, Frame, Real, Vec3};
+use crate::math::{Frame, Real, Vec3};
 use crate::metaheur::MetaProblem;
 use crate::registration::{register_svd, register_wsvd};
 use crate::rng::{self, Rng};
@@ -277,7 +278,10 @@ pub fn calibrate(
     }
 }
 
-/// Position (mm) and orientation (deg) errors of `model` against the true frames.
+/// Position (mm) and orientation (deg) errors of `model` against the true frames, per pose:
+/// `|Δp|` and Qiao 2021's attitude error `√(Δα² + Δβ² + Δγ²)` of the fixed X-Y-Z angles
+/// ([`crate::errmodel::attitude_error_deg`]), whose means over the poses are Qiao's ACPE and
+/// ACAE (§4.1; FORMATS.md "summary.json").
 pub fn validation_errors(
     model: &Robot,
     qs: &[Vec<Real>],
@@ -288,11 +292,7 @@ pub fn validation_errors(
         .zip(truth)
         .map(|(q, t)| {
             let f = c.fk(q);
-            let dp = (f.pos - t.pos).norm();
-            let da = rotation_vector(&(f.rot * t.rot.transpose()))
-                .norm()
-                .to_degrees();
-            (dp, da)
+            ((f.pos - t.pos).norm(), attitude_error_deg(t, &f))
         })
         .unzip()
 }
