@@ -244,7 +244,7 @@ fn stats_json(s: &ErrorStats) -> serde_json::Value {
     json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
 }
 
-/// `calbench identify --robot R --data CSV --method M [--registration …] [--validate CSV]
+/// `calbench identify --robot R --data CSV --method M [--registration …] [--validate CSV] [--k K]
 /// --out DIR`: identification on a measurement file, real or simulated.
 pub fn identify_file(
     robot: &str,
@@ -252,10 +252,11 @@ pub fn identify_file(
     method: &str,
     registration: &str,
     validate: Option<&Path>,
+    k: Option<Real>,
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
-    let method = crate::scenario::method_by_name(method)?.method;
+    let mut method = crate::scenario::method_by_name(method)?.method;
     let registration = Registration::parse(registration)?;
     let d = read_measurements(data, &nominal)?;
     let measure = if d.quats.is_some() {
@@ -263,6 +264,17 @@ pub fn identify_file(
     } else {
         Measure::Position
     };
+    if let Some(k) = k {
+        if measure == Measure::Position {
+            return Err(Error::setting(
+                "--k",
+                "weighs orientation against position errors; the data hold positions only",
+            ));
+        }
+        method
+            .set_orientation_weight(k)
+            .map_err(|e| Error::setting("--k", e.to_string()))?;
+    }
     let val = validate
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;

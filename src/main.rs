@@ -99,7 +99,7 @@ enum Command {
         /// The measurement CSV (q1..qn,x,y,z[,qw,qx,qy,qz]).
         #[arg(long)]
         data: PathBuf,
-        /// ls | ridge | igg3 | lm.
+        /// ls | ridge | igg3 | lm | bas | pso | bas-pso (default options).
         #[arg(long)]
         method: String,
         /// svd | wsvd | identify | known (known: the points are in the base frame).
@@ -108,6 +108,10 @@ enum Command {
         /// A validation measurement CSV.
         #[arg(long)]
         validate: Option<PathBuf>,
+        /// Full-pose data only: weight of orientation against position errors, mm per rad
+        /// (default 100; about σ_position / σ_orientation of the instrument).
+        #[arg(long)]
+        k: Option<f64>,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -176,6 +180,7 @@ fn run(cli: Cli) -> Result<()> {
             method,
             registration,
             validate,
+            k,
             out,
         }) => Ok(commands::identify_file(
             &robot,
@@ -183,6 +188,7 @@ fn run(cli: Cli) -> Result<()> {
             &method,
             &registration,
             validate.as_deref(),
+            k,
             &out,
         )?),
         Some(Command::Poses {

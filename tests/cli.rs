@@ -94,3 +94,43 @@ fn identify_on_simulated_data_compensates_and_writes_a_loadable_robot() {
     let csv = std::fs::read_to_string(out.join("residuals.csv")).unwrap();
     assert_eq!(csv.lines().count(), 41);
 }
+
+#[test]
+fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
+    let qiao = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/qiao2021-tx60.toml");
+    let (pose, pos) = (tmp("k-pose"), tmp("k-pos"));
+    calbench(&[
+        "simulate",
+        qiao.to_str().unwrap(),
+        "--out",
+        pose.to_str().unwrap(),
+    ]);
+    calbench(&["simulate", &scenario(), "--out", pos.to_str().unwrap()]);
+    let id = |sim: &Path, robot: &str, k: &str, out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_calbench"))
+            .args([
+                "identify",
+                "--robot",
+                robot,
+                "--data",
+                sim.join("measurements.csv").to_str().unwrap(),
+                "--method",
+                "lm",
+                "--validate",
+                sim.join("validation.csv").to_str().unwrap(),
+                "--k",
+                k,
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap()
+    };
+    let o = id(&pose, "tx60", "150", &tmp("k-out"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for (sim, robot, k) in [(&pose, "tx60", "0"), (&pos, "irb2600", "100")] {
+        let o = id(sim, robot, k, &tmp("k-bad"));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains("--k"), "k = {k}: {err}");
+    }
+}
