@@ -9,21 +9,12 @@ use calbench::metaheur::{
     bas, bas_pso, poses_in_cube, pso, BasOptions, BasPsoOptions, MetaProblem, PsoOptions, DEFAULT_K,
 };
 use calbench::rng::stream;
+use calbench::robots::tx60_qiao_params;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
-
-fn qiao24() -> Vec<Param> {
-    let mut v = Vec::new();
-    for j in 0..6 {
-        v.extend([Param::Theta(j), Param::D(j), Param::A(j), Param::Alpha(j)]);
-    }
-    v.retain(|p| *p != Param::D(1));
-    v.push(Param::Beta(1));
-    v
-}
 
 fn bench(c: &mut Criterion) {
     let nominal = calbench::robots::load("tx60").expect("tx60");
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let errs: Vec<(Param, Real)> = params
         .iter()
         .enumerate()

@@ -12,6 +12,7 @@ use crate::jacobian::Measure;
 use crate::kinematics::robot_to_toml;
 use crate::math::Real;
 use crate::math::{Frame, Mat3};
+use crate::montecarlo::output::{entry_table, Column};
 use crate::montecarlo::trial::{self, ErrorStats};
 use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
 use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
@@ -489,39 +490,17 @@ fn strategy_name(s: Optimiser) -> &'static str {
 
 /// Prints the main table of a run.
 fn print_table(r: &RunResult) {
-    let mut rows = Vec::new();
-    for b in &r.blocks {
-        for e in &b.entries {
-            let mut row = Vec::new();
-            if let Some(v) = &b.sweep_value {
-                row.push(v.to_string());
-            }
-            row.extend([
-                e.method.clone(),
-                e.poses.clone(),
-                fmt_num(e.eta_mean_pct, 4),
-                fmt_num(e.validation_before_mm.mean, 4),
-                fmt_num(e.validation_after_mm.mean, 4),
-                fmt_num(e.validation_after_mm.rms, 4),
-                fmt_num(e.validation_after_mm.max, 4),
-                e.failures.to_string(),
-            ]);
-            rows.push(row);
-        }
-    }
-    let mut headers = vec![
-        "method",
-        "poses",
-        "η mean %",
-        "before mean mm",
-        "after mean mm",
-        "after RMS mm",
-        "after max mm",
-        "failures",
+    let columns: [Column; 6] = [
+        ("η mean %", |e| fmt_num(e.eta_mean_pct, 4)),
+        ("before mean mm", |e| {
+            fmt_num(e.validation_before_mm.mean, 4)
+        }),
+        ("after mean mm", |e| fmt_num(e.validation_after_mm.mean, 4)),
+        ("after RMS mm", |e| fmt_num(e.validation_after_mm.rms, 4)),
+        ("after max mm", |e| fmt_num(e.validation_after_mm.max, 4)),
+        ("failures", |e| e.failures.to_string()),
     ];
-    if r.scenario.sweep.is_some() {
-        headers.insert(0, "swept value");
-    }
+    let (headers, rows) = entry_table(r, &columns);
     print!("{}", markdown_table(&headers, &rows));
 }
 

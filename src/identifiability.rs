@@ -82,6 +82,19 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
     chosen
 }
 
+/// Poses in the fixed random set of [`identifiable_generic`].
+pub const GENERIC_POSES: usize = 200;
+
+/// The identifiable subset of `candidates` (in their order) for a generic pose set:
+/// [`analyse`] over [`GENERIC_POSES`] joint configurations drawn uniformly within the limits
+/// from a fixed seed (Li 2018 §2: QR removal of dependent columns). The answer depends on
+/// the robot, the candidates and the measure only, so every study of a robot agrees.
+pub fn identifiable_generic(robot: &Robot, candidates: &[Param], measure: Measure) -> Vec<Param> {
+    let mut g = crate::rng::stream(0x1D, "identifiability");
+    let qs = crate::sampling::uniform_joint_poses(robot, GENERIC_POSES, &mut g);
+    analyse(robot, candidates, &qs, measure).identifiable
+}
+
 /// Analyses which of `params` are identifiable from the Jacobian over poses `qs`.
 pub fn analyse(
     robot: &Robot,

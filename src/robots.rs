@@ -195,6 +195,19 @@ pub fn tx60() -> Robot {
     )
 }
 
+/// The 24 TX60 parameters Qiao 2021 identifies (§3.2): θ, d, a, α of every joint except
+/// d2 (joints 2 and 3 are parallel, so d2 is not identifiable and β2 describes their
+/// relative tilt instead), plus β2, in that order.
+pub fn tx60_qiao_params() -> Vec<Param> {
+    let mut v = Vec::new();
+    for j in 0..6 {
+        v.extend([Param::Theta(j), Param::D(j), Param::A(j), Param::Alpha(j)]);
+    }
+    v.retain(|p| *p != Param::D(1));
+    v.push(Param::Beta(1));
+    v
+}
+
 /// An approximation of Guo 2024's 3T2R arm (papers/guo2024-detmax-ide-pose-optimization.txt,
 /// §1.1 and fig. 1). The paper gives the structure but not the geometry.
 ///

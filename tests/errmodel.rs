@@ -8,19 +8,9 @@ use calbench::kinematics::{Param, Robot};
 use calbench::math::{rot_x, Frame, Real, Vec3};
 use calbench::metaheur::{poses_in_cube, DEFAULT_K as K};
 use calbench::rng::stream;
+use calbench::robots::tx60_qiao_params;
 use nalgebra::DMatrix;
 use rand_distr::{Distribution, Normal};
-
-/// Qiao's 24 TX60 parameters (§3.2): θ, d, a, α of every joint without d2, plus β2.
-fn qiao24() -> Vec<Param> {
-    let mut v = Vec::new();
-    for j in 0..6 {
-        v.extend([Param::Theta(j), Param::D(j), Param::A(j), Param::Alpha(j)]);
-    }
-    v.retain(|p| *p != Param::D(1));
-    v.push(Param::Beta(1));
-    v
-}
 
 fn errors(params: &[Param], len: Real, ang: Real) -> Vec<(Param, Real)> {
     params
@@ -46,7 +36,7 @@ fn jacobians_are_minus_the_derivative_of_the_residuals() {
     // both where the model pose meets the measured one and away from it (a linearisation
     // point 0.5 mm / 0.005 rad off), so that iterated Gauss–Newton is exact for every model.
     let (nominal, qs) = setup(3, 1);
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
     let at = nominal.with_errors(&errors(&params, -0.2, -0.002));
     let h = 1e-6;
@@ -83,7 +73,7 @@ fn jacobians_are_minus_the_derivative_of_the_residuals() {
 #[test]
 fn residuals_vanish_on_the_model_pose() {
     let (nominal, qs) = setup(2, 2);
-    let params = qiao24();
+    let params = tx60_qiao_params();
     for model in ErrorModel::ALL {
         let measured: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
         let (r, j) = stack(model, &nominal, &params, &qs, &measured, K).unwrap();
@@ -99,7 +89,7 @@ fn residuals_vanish_on_the_model_pose() {
 fn one_step(len: Real, ang: Real) -> (Vec<Vec<Real>>, Vec<(Real, Real)>, Vec<Real>) {
     let (nominal, qs) = setup(50, 3);
     let (_, val) = setup(30, 4);
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let errs = errors(&params, len, ang);
     let real = nominal.with_errors(&errs);
     let measured: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
@@ -163,7 +153,7 @@ fn models_agree_to_first_order_and_differ_for_large_errors() {
 /// noise σ `sp` mm per axis and `sa` rad per axis.
 fn qiao_comparison(len: Real, ang: Real, sp: Real, sa: Real, draws: u64) -> [(Real, Real); 3] {
     let (nominal, _) = setup(1, 0);
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let g = Normal::new(0.0, 1.0).unwrap();
     let runs = [
         (ErrorModel::CoordinateTransfer, 1),
@@ -236,7 +226,7 @@ fn models_rank_as_qiao_reports() {
 #[test]
 fn iterated_models_recover_noise_free_errors() {
     let (nominal, qs) = setup(50, 5);
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let errs = errors(&params, 0.5, 0.005);
     let real = nominal.with_errors(&errs);
     let measured: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
@@ -304,7 +294,7 @@ fn model_names_round_trip() {
 fn harness_validation_errors_are_qiao_acpe_and_acae() {
     // The harness's per-pose errors average to Qiao's ACPE and ACAE (FORMATS.md).
     let (nominal, qs) = setup(10, 6);
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
     let truth: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     let model: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();

@@ -9,19 +9,7 @@ use calbench::metaheur::{
     DEFAULT_K,
 };
 use calbench::rng::stream;
-
-/// Qiao's 24 TX60 parameters (§3.2): θ, d, a, α of every joint without d2 (dependent on the
-/// parallel joints 2/3), plus β2. With the base known and full-pose data they are all
-/// identifiable (checked below), and they mix mm and rad as in the paper.
-fn qiao24() -> Vec<Param> {
-    let mut v = Vec::new();
-    for j in 0..6 {
-        v.extend([Param::Theta(j), Param::D(j), Param::A(j), Param::Alpha(j)]);
-    }
-    v.retain(|p| *p != Param::D(1));
-    v.push(Param::Beta(1));
-    v
-}
+use calbench::robots::tx60_qiao_params;
 
 /// Errors of 0.1 mm / 0.001 rad (Qiao's pre-calibration ACPE/ACAE of 0.312 mm / 0.221° is of
 /// this order), scaled 1, −0.6, 0.8, −1, 0.4 in turn.
@@ -46,7 +34,7 @@ struct Case {
 
 fn case() -> Case {
     let nominal = calbench::robots::load("tx60").unwrap();
-    let params = qiao24();
+    let params = tx60_qiao_params();
     let truth = injected(&params);
     let errs: Vec<(Param, Real)> = params.iter().copied().zip(truth.iter().copied()).collect();
     let real = nominal.with_errors(&errs);

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
+use super::stats::Entry;
 use super::{toml_to_json, RunResult};
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -96,6 +97,37 @@ fn num(v: Real) -> String {
     } else {
         String::new()
     }
+}
+
+/// A column of a results table: its header and how an entry fills it.
+pub type Column = (&'static str, fn(&Entry) -> String);
+
+/// The headers and rows of a table with one row per results entry: the swept value (for
+/// sweeps), the method, the poses, then `columns`.
+pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let mut headers = Vec::new();
+    if r.scenario.sweep.is_some() {
+        headers.push("swept value");
+    }
+    headers.extend(["method", "poses"]);
+    headers.extend(columns.iter().map(|c| c.0));
+    let mut rows = Vec::new();
+    for b in &r.blocks {
+        for e in &b.entries {
+            let mut row = Vec::new();
+            if let Some(v) = &b.sweep_value {
+                row.push(v.to_string());
+            }
+            row.extend([e.method.clone(), e.poses.clone()]);
+            row.extend(columns.iter().map(|c| (c.1)(e)));
+            rows.push(row);
+        }
+    }
+    (headers, rows)
+}
+
+fn fmt_deg(d: Option<super::trial::ErrorStats>) -> String {
+    fmt_num(d.map_or(Real::NAN, |d| d.mean), 4)
 }
 
 /// `trials.csv`: one row per trial × strategy × method (× swept value).
@@ -208,61 +240,38 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
     let pose = first.measure == crate::jacobian::Measure::Pose;
-    let mut headers = vec!["method", "poses"];
-    if sc.sweep.is_some() {
-        headers.insert(0, "swept value");
-    }
-    headers.extend([
-        "η mean %",
-        "before mean mm",
-        "before RMS mm",
-        "before max mm",
-        "after mean mm",
-        "after RMS mm",
-        "after max mm",
-        "improvement %",
-    ]);
+    let mut columns: Vec<Column> = vec![
+        ("η mean %", |e| fmt_num(e.eta_mean_pct, 4)),
+        ("before mean mm", |e| {
+            fmt_num(e.validation_before_mm.mean, 4)
+        }),
+        ("before RMS mm", |e| fmt_num(e.validation_before_mm.rms, 4)),
+        ("before max mm", |e| fmt_num(e.validation_before_mm.max, 4)),
+        ("after mean mm", |e| fmt_num(e.validation_after_mm.mean, 4)),
+        ("after RMS mm", |e| fmt_num(e.validation_after_mm.rms, 4)),
+        ("after max mm", |e| fmt_num(e.validation_after_mm.max, 4)),
+        ("improvement %", |e| fmt_num(e.improvement_pct, 4)),
+    ];
     if pose {
-        headers.extend(["before mean °", "after mean °"]);
+        columns.extend([
+            (
+                "before mean °",
+                (|e| fmt_deg(e.validation_before_deg)) as fn(&Entry) -> String,
+            ),
+            ("after mean °", |e| fmt_deg(e.validation_after_deg)),
+        ]);
     }
-    headers.extend(["CRB ratio", "failures", "ms / identification"]);
-    let mut rows = Vec::new();
-    for b in &r.blocks {
-        for e in &b.entries {
-            let mut row = Vec::new();
-            if let Some(v) = &b.sweep_value {
-                row.push(v.to_string());
-            }
-            row.push(e.method.clone());
-            row.push(e.poses.clone());
-            for v in [
-                e.eta_mean_pct,
-                e.validation_before_mm.mean,
-                e.validation_before_mm.rms,
-                e.validation_before_mm.max,
-                e.validation_after_mm.mean,
-                e.validation_after_mm.rms,
-                e.validation_after_mm.max,
-                e.improvement_pct,
-            ] {
-                row.push(fmt_num(v, 4));
-            }
-            if pose {
-                row.push(fmt_num(
-                    e.validation_before_deg.map_or(Real::NAN, |d| d.mean),
-                    4,
-                ));
-                row.push(fmt_num(
-                    e.validation_after_deg.map_or(Real::NAN, |d| d.mean),
-                    4,
-                ));
-            }
-            row.push(fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3));
-            row.push(e.failures.to_string());
-            row.push(fmt_num(e.seconds_per_identification * 1e3, 3));
-            rows.push(row);
-        }
-    }
+    columns.extend([
+        (
+            "CRB ratio",
+            (|e| fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3)) as fn(&Entry) -> String,
+        ),
+        ("failures", |e| e.failures.to_string()),
+        ("ms / identification", |e| {
+            fmt_num(e.seconds_per_identification * 1e3, 3)
+        }),
+    ]);
+    let (headers, rows) = entry_table(r, &columns);
     s += "## Validation errors and identification accuracy\n\n";
     s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
     s += &table(&headers, &rows);

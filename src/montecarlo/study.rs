@@ -4,22 +4,17 @@
 
 use crate::compliance::Compliance;
 use crate::error::Result;
-use crate::identifiability::analyse;
+use crate::identifiability::identifiable_generic;
 use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
 use crate::math::Real;
 use crate::poses::{self, RobotPoseModel, SelectOptions};
 use crate::rng;
-use crate::sampling::uniform_joint_poses;
 use crate::scenario::{PoseStrategy, Registration, Scenario};
 use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
 use crate::sim::truth::selected_params;
-
-/// Poses used to decide which parameters are identifiable: many, spread over the joint
-/// ranges, from a fixed seed so every study of a robot agrees.
-const IDENTIFIABILITY_POSES: usize = 200;
 
 /// A calibration pose set fixed for the whole study (optimised, grid or file).
 #[derive(Clone, Debug)]
@@ -53,13 +48,6 @@ pub struct Study {
     pub fixed: Vec<Option<FixedSet>>,
 }
 
-/// The identifiable parameters among `candidates` for `robot`.
-pub fn identifiable(robot: &Robot, candidates: &[Param], measure: Measure) -> Vec<Param> {
-    let mut g = rng::stream(0x1D, "identifiability");
-    let qs = uniform_joint_poses(robot, IDENTIFIABILITY_POSES, &mut g);
-    analyse(robot, candidates, &qs, measure).identifiable
-}
-
 /// The parameters to identify: the identifiable ones among the joint and tool parameters
 /// and, with `with_base`, the six base parameters, in flat-vector order. The base parameters
 /// are offered first, so a joint parameter that only duplicates the registration (d1 with
@@ -74,7 +62,7 @@ pub fn identified_params(robot: &Robot, measure: Measure, with_base: bool) -> Ve
     } else {
         rest.collect()
     };
-    let mut params = identifiable(robot, &candidates, measure);
+    let mut params = identifiable_generic(robot, &candidates, measure);
     params.sort_by_key(|p| p.index(robot.dof()));
     params
 }

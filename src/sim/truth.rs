@@ -11,32 +11,23 @@ use rand_distr::StandardNormal;
 
 use super::settings::{ErrorKind, ErrorSettings, ParamSelection};
 use crate::error::{Error, Result};
-use crate::identifiability::analyse;
+use crate::identifiability::identifiable_generic;
 use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
 use crate::math::Real;
-use crate::rng::{stream, Rng};
-use crate::sampling::uniform_joint_poses;
-
-/// Poses in the fixed random set used to decide identifiability.
-pub const IDENTIFIABILITY_POSES: usize = 200;
-/// Seed of that pose set (fixed, so the answer depends on the robot and measure only).
-pub const IDENTIFIABILITY_SEED: u64 = 0x1D_E4_71_F1;
+use crate::rng::Rng;
 
 /// The joint and tool parameters of `robot` (base excluded, held at its nominal value)
-/// that are identifiable from `measure` data: [`crate::identifiability::analyse`] over
-/// [`IDENTIFIABILITY_POSES`] joint configurations drawn uniformly within the limits with a
-/// fixed seed (Li 2018 §2: QR removal of dependent columns). Deterministic, so callers may
-/// cache it per (robot, measure).
+/// that are identifiable from `measure` data
+/// ([`crate::identifiability::identifiable_generic`]). Deterministic, so callers may cache
+/// it per (robot, measure).
 pub fn identifiable_params(robot: &Robot, measure: Measure) -> Vec<Param> {
     let params: Vec<Param> = robot
         .params()
         .into_iter()
         .filter(|p| !matches!(p, Param::Base(_)))
         .collect();
-    let mut rng = stream(IDENTIFIABILITY_SEED, "identifiable-params");
-    let qs = uniform_joint_poses(robot, IDENTIFIABILITY_POSES, &mut rng);
-    analyse(robot, &params, &qs, measure).identifiable
+    identifiable_generic(robot, &params, measure)
 }
 
 /// The parameters selected by `sel` for `robot`: refuses names that are not parameters of
