@@ -317,3 +317,17 @@ fn full_pose_study_reports_qiao_acae() {
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("after mean °"));
 }
+
+#[test]
+fn every_shipped_scenario_loads() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let mut n = 0;
+    for f in std::fs::read_dir(&dir).unwrap() {
+        let p = f.unwrap().path();
+        if p.extension().is_some_and(|e| e == "toml") {
+            Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            n += 1;
+        }
+    }
+    assert!(n >= 6, "{n} scenarios");
+}
