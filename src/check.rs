@@ -54,6 +54,7 @@ impl fmt::Display for Regression {
 /// parameter name.
 const METRICS: &[(&str, Better)] = &[
     ("eta_mean_pct", Better::Higher),
+    ("eta_median_pct", Better::Higher),
     ("validation_after_mm.mean", Better::Lower),
     ("validation_after_mm.rms", Better::Lower),
     ("validation_after_mm.max", Better::Lower),

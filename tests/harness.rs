@@ -86,6 +86,7 @@ fn tiny_study_writes_every_file_with_finite_values() {
             "method",
             "poses",
             "eta_mean_pct",
+            "eta_median_pct",
             "eta",
             "validation_before_mm",
             "validation_after_mm",

@@ -242,6 +242,7 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     let pose = first.measure == crate::jacobian::Measure::Pose;
     let mut columns: Vec<Column> = vec![
         ("η mean %", |e| fmt_num(e.eta_mean_pct, 4)),
+        ("η median %", |e| fmt_num(e.eta_median_pct, 4)),
         ("before mean mm", |e| {
             fmt_num(e.validation_before_mm.mean, 4)
         }),

@@ -31,6 +31,9 @@ pub struct Entry {
     pub sweep_value: Option<serde_json::Value>,
     /// Mean over parameters of the mean η (%).
     pub eta_mean_pct: Real,
+    /// Mean over parameters of the median η (%): with random errors a draw near zero makes
+    /// one trial's η hugely negative, which the mean follows and the median does not.
+    pub eta_median_pct: Real,
     /// η per parameter with a non-zero injected error.
     pub eta: BTreeMap<String, EtaStats>,
     /// Validation position errors before compensation (mm), each statistic averaged over
@@ -175,6 +178,7 @@ pub fn aggregate(
         }
     }
     let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
+    let eta_median_pct = mean(&eta_map.values().map(|e| e.median).collect::<Vec<_>>());
     let crbs: Vec<Real> = ok
         .iter()
         .filter_map(|(t, _)| t.crb_trace[strategy])
@@ -198,6 +202,7 @@ pub fn aggregate(
         poses: labels.1.to_string(),
         sweep_value,
         eta_mean_pct,
+        eta_median_pct,
         eta: eta_map,
         validation_before_mm: before,
         validation_after_mm: after,
