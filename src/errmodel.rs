@@ -38,7 +38,9 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::{Error, Result};
 use crate::jacobian::{pose_rows, Columns, Measure};
 use crate::kinematics::{Chain, Param, Robot};
-use crate::math::{matrix_rpy, rotation_vector, skew, Frame, Mat3, Real, Vec3};
+use crate::math::{
+    matrix_rpy, rotation_vector, so3_right_jacobian_inverse, Frame, Mat3, Real, Vec3,
+};
 
 /// The pose-error model of an identification (see the module docs for the formulas).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -170,7 +172,7 @@ pub fn rows_into(
             }
             // R → exp([ω]×)R turns R_e = R_m Rᵀ into R_e exp(−[ω]×), whose logarithm is
             // φ − J_r⁻¹(φ)ω to first order (J_r: right Jacobian of SO(3)).
-            let g = right_jacobian_inverse(&phi);
+            let g = so3_right_jacobian_inverse(&phi);
             for col in 0..cols.len() {
                 let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
                 let jw = g * w;
@@ -181,21 +183,6 @@ pub fn rows_into(
         }
     }
     t
-}
-
-/// The inverse right Jacobian of SO(3) at the rotation vector `phi`:
-/// `log(exp([φ]×) exp([δ]×)) = φ + J_r⁻¹(φ) δ + O(δ²)`, with
-/// `J_r⁻¹(φ) = I + ½[φ]× + (1/θ² − (1 + cos θ)/(2θ sin θ))[φ]×²`, θ = |φ|
-/// (series `1/12 + θ²/720` near 0).
-fn right_jacobian_inverse(phi: &Vec3) -> Mat3 {
-    let th = phi.norm();
-    let c = if th < 1e-4 {
-        1.0 / 12.0 + th * th / 720.0
-    } else {
-        1.0 / (th * th) - (1.0 + th.cos()) / (2.0 * th * th.sin())
-    };
-    let k = skew(phi);
-    Mat3::identity() + k * 0.5 + k * k * c
 }
 
 /// One pose's residual and Jacobian of `model` for `robot` (the linearisation point) and the

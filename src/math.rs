@@ -148,6 +148,21 @@ pub fn rotation_vector(r: &Mat3) -> Vec3 {
     nalgebra::Rotation3::from_matrix_unchecked(*r).scaled_axis()
 }
 
+/// The inverse right Jacobian of SO(3) at the rotation vector `phi`:
+/// `log(exp([φ]×) exp([δ]×)) = φ + J_r⁻¹(φ) δ + O(δ²)`, with
+/// `J_r⁻¹(φ) = I + ½[φ]× + (1/θ² − (1 + cos θ)/(2θ sin θ))[φ]×²`, θ = |φ|
+/// (series `1/12 + θ²/720` near 0).
+pub fn so3_right_jacobian_inverse(phi: &Vec3) -> Mat3 {
+    let th = phi.norm();
+    let c = if th < 1e-4 {
+        1.0 / 12.0 + th * th / 720.0
+    } else {
+        1.0 / (th * th) - (1.0 + th.cos()) / (2.0 * th * th.sin())
+    };
+    let k = skew(phi);
+    Mat3::identity() + k * 0.5 + k * k * c
+}
+
 /// The skew-symmetric matrix `[v]×` with `[v]× w = v × w`.
 #[inline]
 pub fn skew(v: &Vec3) -> Mat3 {

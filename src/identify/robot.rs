@@ -5,8 +5,9 @@
 //! (mm, rad); the model is the forward kinematics of the robot with those errors, and the
 //! Jacobian is the analytic one of [`crate::jacobian`] (Li 2018 eqs. 6–12). The residual of
 //! a point is `p_meas − p_model(x)`; for full poses the orientation rows are
-//! `rotation_vector(R_meas · R_model(x)ᵀ)`, the small rotation in the world that matches the
-//! orientation rows of [`crate::jacobian::pose_rows`].
+//! `φ = rotation_vector(R_meas · R_model(x)ᵀ)`, the rotation in the world that matches the
+//! orientation rows `J_ω` of [`crate::jacobian::pose_rows`], whose exact derivative
+//! `J_r⁻¹(φ) J_ω` ([`crate::math::so3_right_jacobian_inverse`]) the Jacobian carries.
 
 use std::cell::RefCell;
 
@@ -16,7 +17,7 @@ use super::Problem;
 use crate::error::Error;
 use crate::jacobian::{pose_rows_vars, Columns, Measure};
 use crate::kinematics::{Chain, ChainVars, Param, Robot};
-use crate::math::{rotation_vector, Mat3, Real, Vec3};
+use crate::math::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
 
 /// Measured data for identification.
 #[derive(Clone, Debug, Default)]
@@ -223,9 +224,15 @@ impl Problem for RobotProblem<'_> {
                 for k in 0..3 {
                     r[rows * i + 3 + k] = w * dw[k];
                 }
-                if w != 1.0 {
+                // The exact derivative of the logarithm away from a zero residual:
+                // R → exp([ω]×)R moves φ = log(R_m Rᵀ) by −J_r⁻¹(φ)ω.
+                let g = so3_right_jacobian_inverse(&dw) * w;
+                let row = rows * i + 3;
+                for c in 0..j.ncols() {
+                    let om = Vec3::new(j[(row, c)], j[(row + 1, c)], j[(row + 2, c)]);
+                    let v = g * om;
                     for k in 0..3 {
-                        j.row_mut(rows * i + 3 + k).scale_mut(w);
+                        j[(row + k, c)] = v[k];
                     }
                 }
             }

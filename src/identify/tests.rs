@@ -420,9 +420,10 @@ fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses(
             weighted.evaluate(&x, &mut rk, &mut jk);
             for row in 0..n {
                 let w = if row % 6 >= 3 { k } else { 1.0 };
-                assert_eq!(rk[row], w * r1[row]);
+                assert!((rk[row] - w * r1[row]).abs() <= 1e-12 * (w * r1[row]).abs());
                 for c in 0..params.len() {
-                    assert_eq!(jk[(row, c)], w * j1[(row, c)]);
+                    let want = w * j1[(row, c)];
+                    assert!((jk[(row, c)] - want).abs() <= 1e-12 * (1.0 + want.abs()));
                 }
             }
         }
@@ -447,6 +448,62 @@ fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses(
     for bad in [0.0, -1.0, Real::NAN, Real::INFINITY] {
         let p = RobotProblem::new(&nominal, &params, &data, Measure::Position).expect("problem");
         assert!(p.with_orientation_weight(bad).is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn full_pose_jacobian_is_minus_the_derivative_of_the_residual_away_from_the_fit() {
+    // Independent truth: central differences of the residual, at a point 0.2 mm / 0.02 rad
+    // away from the measured robot, so the orientation residuals are far from zero and the
+    // logarithm's derivative J_r⁻¹(φ) matters.
+    let nominal = robots::irb2600();
+    let mut r = rng::from_seed(5);
+    let rich = uniform_joint_poses(&nominal, 200, &mut r);
+    let params = identifiable(&nominal, &rich, Measure::Pose);
+    let pairs: Vec<(Param, Real)> = params
+        .iter()
+        .map(|&p| (p, if p.is_length() { 0.5 } else { 0.05 }))
+        .collect();
+    let ct = nominal.with_errors(&pairs).chain();
+    let qs = uniform_joint_poses(&nominal, 5, &mut r);
+    let data = RobotData {
+        points: qs.iter().map(|q| ct.fk(q).pos).collect(),
+        rotations: Some(qs.iter().map(|q| ct.fk(q).rot).collect()),
+        qs,
+    };
+    let p = RobotProblem::new(&nominal, &params, &data, Measure::Pose)
+        .expect("problem")
+        .with_orientation_weight(100.0)
+        .expect("weight");
+    let n = 6 * data.qs.len();
+    let x = DVector::from_iterator(
+        params.len(),
+        params
+            .iter()
+            .map(|q| if q.is_length() { 0.2 } else { -0.02 }),
+    );
+    let (mut r0, mut j) = (DVector::zeros(n), DMatrix::zeros(n, params.len()));
+    p.evaluate(&x, &mut r0, &mut j);
+    assert!(r0.amax() > 1.0, "the residual should be far from zero");
+    let h = 1e-6;
+    let mut scratch = DMatrix::zeros(n, params.len());
+    for c in 0..params.len() {
+        let (mut rp, mut rm) = (DVector::zeros(n), DVector::zeros(n));
+        let mut xp = x.clone();
+        xp[c] += h;
+        p.evaluate(&xp, &mut rp, &mut scratch);
+        let mut xm = x.clone();
+        xm[c] -= h;
+        p.evaluate(&xm, &mut rm, &mut scratch);
+        for row in 0..n {
+            let fd = -(rp[row] - rm[row]) / (2.0 * h);
+            assert!(
+                (fd - j[(row, c)]).abs() < 1e-5 * (1.0 + fd.abs()),
+                "{} row {row}: analytic {} fd {fd}",
+                params[c],
+                j[(row, c)]
+            );
+        }
     }
 }
 
