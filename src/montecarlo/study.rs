@@ -25,6 +25,8 @@ pub struct FixedSet {
     pub trace: Vec<Real>,
     /// The optimiser's scores of the chosen set, as JSON (empty for grid and file sets).
     pub scores: Option<serde_json::Value>,
+    /// The Cramér–Rao trace of the set (the same in every trial; `None` without noise).
+    pub crb_trace: Option<Real>,
 }
 
 /// A scenario made ready to run.
@@ -98,6 +100,7 @@ impl Study {
                         poses,
                         trace: Vec::new(),
                         scores: None,
+                        crb_trace: None,
                     })
                 }
                 PoseStrategy::Grid => {
@@ -111,6 +114,7 @@ impl Study {
                         poses,
                         trace: Vec::new(),
                         scores: None,
+                        crb_trace: None,
                     })
                 }
                 PoseStrategy::Optimised(strategy) => {
@@ -130,12 +134,13 @@ impl Study {
                         poses: sel.poses,
                         trace: sel.trace,
                         scores: serde_json::to_value(sel.scores).ok(),
+                        crb_trace: None,
                     })
                 }
             };
             fixed.push(set);
         }
-        Ok(Study {
+        let mut study = Study {
             scenario,
             nominal,
             measure,
@@ -144,6 +149,20 @@ impl Study {
             tracker,
             compliance,
             fixed,
-        })
+        };
+        let traces: Vec<Option<Real>> = study
+            .fixed
+            .iter()
+            .map(|f| {
+                f.as_ref()
+                    .and_then(|f| super::trial::crb_trace(&study, &f.poses))
+            })
+            .collect();
+        for (f, t) in study.fixed.iter_mut().zip(traces) {
+            if let Some(f) = f {
+                f.crb_trace = t;
+            }
+        }
+        Ok(study)
     }
 }

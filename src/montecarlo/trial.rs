@@ -299,7 +299,7 @@ pub fn validation_errors(
 
 /// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
 /// base frame, with the nominal Jacobian), or `None` without noise.
-fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
+pub(super) fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
     let cols = Columns::new(&study.params, study.nominal.dof());
     let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
     let rows = study.measure.rows();
@@ -419,7 +419,10 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             sag_ref,
             &mut gm,
         )?;
-        crb.push(crb_trace(study, &qs));
+        crb.push(match &study.fixed[si] {
+            Some(set) => set.crb_trace,
+            None => crb_trace(study, &qs),
+        });
         for (mi, spec) in sc.methods.iter().enumerate() {
             let t0 = Instant::now();
             let res = calibrate(
