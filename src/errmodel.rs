@@ -35,12 +35,10 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{Error, Result};
-use crate::jacobian::{pose_rows, Columns, Measure};
+use crate::error::{finite_positive, Error, Result};
+use crate::jacobian::{log_orientation_rows, pose_rows, Columns, Measure};
 use crate::kinematics::{Chain, Param, Robot};
-use crate::math::{
-    matrix_rpy, rotation_vector, so3_right_jacobian_inverse, Frame, Mat3, Real, Vec3,
-};
+use crate::math::{matrix_rpy, Frame, Mat3, Real, Vec3};
 
 /// The pose-error model of an identification (see the module docs for the formulas).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -165,21 +163,10 @@ pub fn rows_into(
         }
         ErrorModel::DirectFk => {
             let dp = pm - t.pos;
-            let phi = rotation_vector(&(rm * t.rot.transpose()));
             for k in 0..3 {
                 r[row0 + k] = dp[k];
-                r[row0 + 3 + k] = phi[k];
             }
-            // R → exp([ω]×)R turns R_e = R_m Rᵀ into R_e exp(−[ω]×), whose logarithm is
-            // φ − J_r⁻¹(φ)ω to first order (J_r: right Jacobian of SO(3)).
-            let g = so3_right_jacobian_inverse(&phi);
-            for col in 0..cols.len() {
-                let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
-                let jw = g * w;
-                for k in 0..3 {
-                    j[(row0 + 3 + k, col)] = jw[k];
-                }
-            }
+            log_orientation_rows(rm, &t.rot, 1.0, r, j, row0 + 3);
         }
     }
     t
@@ -242,12 +229,7 @@ pub fn stack(
     measured: &[Frame],
     k: Real,
 ) -> Result<(DVector<Real>, DMatrix<Real>)> {
-    if !(k.is_finite() && k > 0.0) {
-        return Err(Error::setting(
-            "k",
-            format!("must be a finite positive weight, got {k}"),
-        ));
-    }
+    finite_positive("k", k)?;
     if qs.len() != measured.len() {
         return Err(Error::setting(
             "measurements",

@@ -72,3 +72,15 @@ impl Error {
         }
     }
 }
+
+/// Refuses a setting `v` unless it is finite and positive (the error names `key`).
+pub fn finite_positive(key: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::setting(
+            key,
+            format!("must be finite and positive, got {v}"),
+        ))
+    }
+}

@@ -11,10 +11,10 @@
 //! Rows per pose: 3 (position, mm per unit parameter) or 6 (position, then the small rotation
 //! of the tool frame in the world, rad per unit parameter).
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DVector};
 
 use crate::kinematics::{Chain, ChainVars, Op, Param, Robot};
-use crate::math::{Mat3, Real, Vec3};
+use crate::math::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
 
 /// What is measured per pose.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,6 +68,34 @@ impl Columns {
     /// Whether there are no columns.
     pub fn is_empty(&self) -> bool {
         self.params.is_empty()
+    }
+}
+
+/// The orientation rows of one full pose, rows `row..row + 3`: writes the residual
+/// `k·φ`, `φ = log(R_m Rᵀ)` (the rotation in the world from the model orientation `model` to
+/// the measured one `measured`) into `r`, and turns the rotation rows `J_ω` that
+/// [`pose_rows`] wrote into `j` into `k·J_r⁻¹(φ)J_ω`, the exact derivative of the model side:
+/// `R → exp([ω]×)R` turns `R_m Rᵀ` into `R_m Rᵀ exp(−[ω]×)`, whose logarithm is
+/// `φ − J_r⁻¹(φ)ω` to first order ([`crate::math::so3_right_jacobian_inverse`]).
+/// Allocation-free.
+pub fn log_orientation_rows(
+    measured: &Mat3,
+    model: &Mat3,
+    k: Real,
+    r: &mut DVector<Real>,
+    j: &mut DMatrix<Real>,
+    row: usize,
+) {
+    let phi = rotation_vector(&(measured * model.transpose()));
+    for i in 0..3 {
+        r[row + i] = k * phi[i];
+    }
+    let g = so3_right_jacobian_inverse(&phi) * k;
+    for c in 0..j.ncols() {
+        let w = g * Vec3::new(j[(row, c)], j[(row + 1, c)], j[(row + 2, c)]);
+        for i in 0..3 {
+            j[(row + i, c)] = w[i];
+        }
     }
 }
 

@@ -31,7 +31,7 @@
 use rand::Rng as _;
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
+use crate::error::{finite_positive, Error, Result};
 use crate::jacobian::Measure;
 use crate::kinematics::{Chain, OpKind, Param, Robot};
 use crate::math::{Frame, Mat3, Real, Vec3};
@@ -282,17 +282,6 @@ pub struct MetaResult {
 /// The fitness to minimise.
 pub type Fitness<'f> = dyn Fn(&[Real]) -> Real + Sync + 'f;
 
-fn finite_positive(key: &str, v: Real) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::setting(
-            key,
-            format!("must be finite and positive, got {v}"),
-        ))
-    }
-}
-
 fn finite_non_negative(key: &str, v: Real) -> Result<()> {
     if v.is_finite() && v >= 0.0 {
         Ok(())
@@ -441,12 +430,11 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
     check_target("bas.target", o.target)?;
 
     let n = b.dim();
-    let ps = primes(n);
     let mut y: Vec<Real> = match o.start {
         BasStart::Centre => vec![0.5; n],
         BasStart::Halton => {
             let start = rng.random_range(0..HALTON_SKIP) + 1;
-            ps.iter().map(|&p| halton(start, p)).collect()
+            primes(n).iter().map(|&p| halton(start, p)).collect()
         }
     };
     let mut x = vec![0.0; n];

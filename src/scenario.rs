@@ -309,12 +309,7 @@ impl Identifier {
     /// Sets the weight of orientation against position rows on full-pose data (mm per rad;
     /// the scenario key `k`). Fails unless `k` is finite and positive.
     pub fn set_orientation_weight(&mut self, k: Real) -> Result<()> {
-        if !(k.is_finite() && k > 0.0) {
-            return Err(Error::setting(
-                "k",
-                format!("must be a finite positive weight, got {k}"),
-            ));
-        }
+        crate::error::finite_positive("k", k)?;
         match self {
             Identifier::Jacobian { k: w, .. } | Identifier::ErrorModel { k: w, .. } => *w = k,
             Identifier::Meta(m) => m.k = k,

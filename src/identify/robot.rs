@@ -5,9 +5,8 @@
 //! (mm, rad); the model is the forward kinematics of the robot with those errors, and the
 //! Jacobian is the analytic one of [`crate::jacobian`] (Li 2018 eqs. 6–12). The residual of
 //! a point is `p_meas − p_model(x)`; for full poses the orientation rows are
-//! `φ = rotation_vector(R_meas · R_model(x)ᵀ)`, the rotation in the world that matches the
-//! orientation rows `J_ω` of [`crate::jacobian::pose_rows`], whose exact derivative
-//! `J_r⁻¹(φ) J_ω` ([`crate::math::so3_right_jacobian_inverse`]) the Jacobian carries.
+//! `φ = log(R_meas · R_model(x)ᵀ)` with its exact derivative `J_r⁻¹(φ) J_ω`
+//! ([`crate::jacobian::log_orientation_rows`]), weighted against the position rows.
 
 use std::cell::RefCell;
 
@@ -15,9 +14,9 @@ use nalgebra::{DMatrix, DVector};
 
 use super::Problem;
 use crate::error::Error;
-use crate::jacobian::{pose_rows_vars, Columns, Measure};
+use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
 use crate::kinematics::{Chain, ChainVars, Param, Robot};
-use crate::math::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
+use crate::math::{Mat3, Real, Vec3};
 
 /// Measured data for identification.
 #[derive(Clone, Debug, Default)]
@@ -151,12 +150,7 @@ impl<'a> RobotProblem<'a> {
     /// (about 150 mm/rad for a tracker with 15 µm and 0.005°). Fails unless `k` is finite
     /// and positive.
     pub fn with_orientation_weight(mut self, k: Real) -> crate::Result<Self> {
-        if !(k.is_finite() && k > 0.0) {
-            return Err(Error::setting(
-                "k",
-                format!("must be a finite positive weight, got {k}"),
-            ));
-        }
+        crate::error::finite_positive("k", k)?;
         self.orientation_weight = k;
         Ok(self)
     }
@@ -220,21 +214,7 @@ impl Problem for RobotProblem<'_> {
             }
             if let Some(rots) = rots {
                 let w = self.orientation_weight;
-                let dw = rotation_vector(&(rots[i] * f.rot.transpose()));
-                for k in 0..3 {
-                    r[rows * i + 3 + k] = w * dw[k];
-                }
-                // The exact derivative of the logarithm away from a zero residual:
-                // R → exp([ω]×)R moves φ = log(R_m Rᵀ) by −J_r⁻¹(φ)ω.
-                let g = so3_right_jacobian_inverse(&dw) * w;
-                let row = rows * i + 3;
-                for c in 0..j.ncols() {
-                    let om = Vec3::new(j[(row, c)], j[(row + 1, c)], j[(row + 2, c)]);
-                    let v = g * om;
-                    for k in 0..3 {
-                        j[(row + k, c)] = v[k];
-                    }
-                }
+                log_orientation_rows(&rots[i], &f.rot, w, r, j, rows * i + 3);
             }
         }
     }
