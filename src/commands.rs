@@ -12,11 +12,11 @@ use crate::jacobian::Measure;
 use crate::kinematics::robot_to_toml;
 use crate::math::Real;
 use crate::math::{Frame, Mat3};
-use crate::montecarlo::output::{entry_table, Column};
+use crate::montecarlo::output::entry_table;
 use crate::montecarlo::trial::{self, ErrorStats};
 use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
 use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
-use crate::report::markdown::{fmt_num, table as markdown_table};
+use crate::report::markdown::table as markdown_table;
 use crate::robots::{self, BUILTINS};
 use crate::scenario::{Registration, Scenario};
 use crate::sim::csv::{read_measurements, write_measurements, write_pose_list};
@@ -490,15 +490,14 @@ fn strategy_name(s: Optimiser) -> &'static str {
 
 /// Prints the main table of a run.
 fn print_table(r: &RunResult) {
-    let columns: [Column; 6] = [
-        ("η mean %", |e| fmt_num(e.eta_mean_pct, 4)),
-        ("before mean mm", |e| {
-            fmt_num(e.validation_before_mm.mean, 4)
-        }),
-        ("after mean mm", |e| fmt_num(e.validation_after_mm.mean, 4)),
-        ("after RMS mm", |e| fmt_num(e.validation_after_mm.rms, 4)),
-        ("after max mm", |e| fmt_num(e.validation_after_mm.max, 4)),
-        ("failures", |e| e.failures.to_string()),
+    use crate::montecarlo::output::columns::*;
+    let columns = [
+        ETA_MEAN,
+        BEFORE_MEAN,
+        AFTER_MEAN,
+        AFTER_RMS,
+        AFTER_MAX,
+        FAILURES,
     ];
     let (headers, rows) = entry_table(r, &columns);
     print!("{}", markdown_table(&headers, &rows));

@@ -338,25 +338,36 @@ fn noise_free_data_recovers_the_paper_errors() {
     }
 }
 
-#[test]
-fn full_pose_data_recovers_the_errors() {
-    // Full-pose residuals: the orientation rows must be consistent with the Jacobian's.
+/// Noise-free full-pose data of the IRB2600 with the paper error set (+0.5 mm / +0.05 rad)
+/// on the parameters identifiable from full poses, at `poses` random poses drawn after the
+/// identifiability poses from `seed`: the nominal robot, the parameters, the injected errors
+/// and the data.
+fn exact_full_pose_data(
+    seed: u64,
+    poses: usize,
+) -> (Robot, Vec<Param>, Vec<(Param, Real)>, RobotData) {
     let nominal = robots::irb2600();
-    let mut r = rng::from_seed(3);
+    let mut r = rng::from_seed(seed);
     let rich = uniform_joint_poses(&nominal, 200, &mut r);
     let params = identifiable(&nominal, &rich, Measure::Pose);
     let pairs: Vec<(Param, Real)> = params
         .iter()
         .map(|&p| (p, if p.is_length() { 0.5 } else { 0.05 }))
         .collect();
-    let truth = nominal.with_errors(&pairs);
-    let qs = uniform_joint_poses(&nominal, 30, &mut r);
-    let ct = truth.chain();
+    let ct = nominal.with_errors(&pairs).chain();
+    let qs = uniform_joint_poses(&nominal, poses, &mut r);
     let data = RobotData {
         points: qs.iter().map(|q| ct.fk(q).pos).collect(),
         rotations: Some(qs.iter().map(|q| ct.fk(q).rot).collect()),
         qs,
     };
+    (nominal, params, pairs, data)
+}
+
+#[test]
+fn full_pose_data_recovers_the_errors() {
+    // Full-pose residuals: the orientation rows must be consistent with the Jacobian's.
+    let (nominal, params, pairs, data) = exact_full_pose_data(3, 30);
     let p = RobotProblem::new(&nominal, &params, &data, Measure::Pose).expect("problem");
     let out = identify(
         &p,
@@ -456,21 +467,7 @@ fn full_pose_jacobian_is_minus_the_derivative_of_the_residual_away_from_the_fit(
     // Independent truth: central differences of the residual, at a point 0.2 mm / 0.02 rad
     // away from the measured robot, so the orientation residuals are far from zero and the
     // logarithm's derivative J_r⁻¹(φ) matters.
-    let nominal = robots::irb2600();
-    let mut r = rng::from_seed(5);
-    let rich = uniform_joint_poses(&nominal, 200, &mut r);
-    let params = identifiable(&nominal, &rich, Measure::Pose);
-    let pairs: Vec<(Param, Real)> = params
-        .iter()
-        .map(|&p| (p, if p.is_length() { 0.5 } else { 0.05 }))
-        .collect();
-    let ct = nominal.with_errors(&pairs).chain();
-    let qs = uniform_joint_poses(&nominal, 5, &mut r);
-    let data = RobotData {
-        points: qs.iter().map(|q| ct.fk(q).pos).collect(),
-        rotations: Some(qs.iter().map(|q| ct.fk(q).rot).collect()),
-        qs,
-    };
+    let (nominal, params, _, data) = exact_full_pose_data(5, 5);
     let p = RobotProblem::new(&nominal, &params, &data, Measure::Pose)
         .expect("problem")
         .with_orientation_weight(100.0)

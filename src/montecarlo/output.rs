@@ -102,6 +102,51 @@ fn num(v: Real) -> String {
 /// A column of a results table: its header and how an entry fills it.
 pub type Column = (&'static str, fn(&Entry) -> String);
 
+/// The columns of the results tables (the printed one and the report's take these in
+/// different selections).
+pub mod columns {
+    use super::{fmt_num, Column, Real};
+
+    /// Mean η.
+    pub const ETA_MEAN: Column = ("η mean %", |e| fmt_num(e.eta_mean_pct, 4));
+    /// Median η.
+    pub const ETA_MEDIAN: Column = ("η median %", |e| fmt_num(e.eta_median_pct, 4));
+    /// Mean validation error before compensation.
+    pub const BEFORE_MEAN: Column = ("before mean mm", |e| {
+        fmt_num(e.validation_before_mm.mean, 4)
+    });
+    /// RMS validation error before compensation.
+    pub const BEFORE_RMS: Column = ("before RMS mm", |e| fmt_num(e.validation_before_mm.rms, 4));
+    /// Largest validation error before compensation.
+    pub const BEFORE_MAX: Column = ("before max mm", |e| fmt_num(e.validation_before_mm.max, 4));
+    /// Mean validation error after compensation.
+    pub const AFTER_MEAN: Column = ("after mean mm", |e| fmt_num(e.validation_after_mm.mean, 4));
+    /// RMS validation error after compensation.
+    pub const AFTER_RMS: Column = ("after RMS mm", |e| fmt_num(e.validation_after_mm.rms, 4));
+    /// Largest validation error after compensation.
+    pub const AFTER_MAX: Column = ("after max mm", |e| fmt_num(e.validation_after_mm.max, 4));
+    /// Improvement of the mean error.
+    pub const IMPROVEMENT: Column = ("improvement %", |e| fmt_num(e.improvement_pct, 4));
+    /// Mean orientation error before compensation (full pose).
+    pub const BEFORE_DEG: Column = ("before mean °", |e| {
+        fmt_num(e.validation_before_deg.map_or(Real::NAN, |d| d.mean), 4)
+    });
+    /// Mean orientation error after compensation (full pose).
+    pub const AFTER_DEG: Column = ("after mean °", |e| {
+        fmt_num(e.validation_after_deg.map_or(Real::NAN, |d| d.mean), 4)
+    });
+    /// Ratio to the Cramér–Rao bound.
+    pub const CRB_RATIO: Column = ("CRB ratio", |e| {
+        fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3)
+    });
+    /// Failed identifications.
+    pub const FAILURES: Column = ("failures", |e| e.failures.to_string());
+    /// Wall time per identification.
+    pub const MS_PER_IDENTIFICATION: Column = ("ms / identification", |e| {
+        fmt_num(e.seconds_per_identification * 1e3, 3)
+    });
+}
+
 /// The headers and rows of a table with one row per results entry: the swept value (for
 /// sweeps), the method, the poses, then `columns`.
 pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<&'static str>, Vec<Vec<String>>) {
@@ -124,10 +169,6 @@ pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<&'static str>, Vec
         }
     }
     (headers, rows)
-}
-
-fn fmt_deg(d: Option<super::trial::ErrorStats>) -> String {
-    fmt_num(d.map_or(Real::NAN, |d| d.mean), 4)
 }
 
 /// `trials.csv`: one row per trial × strategy × method (× swept value).
@@ -240,39 +281,23 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
     let pose = first.measure == crate::jacobian::Measure::Pose;
-    let mut columns: Vec<Column> = vec![
-        ("η mean %", |e| fmt_num(e.eta_mean_pct, 4)),
-        ("η median %", |e| fmt_num(e.eta_median_pct, 4)),
-        ("before mean mm", |e| {
-            fmt_num(e.validation_before_mm.mean, 4)
-        }),
-        ("before RMS mm", |e| fmt_num(e.validation_before_mm.rms, 4)),
-        ("before max mm", |e| fmt_num(e.validation_before_mm.max, 4)),
-        ("after mean mm", |e| fmt_num(e.validation_after_mm.mean, 4)),
-        ("after RMS mm", |e| fmt_num(e.validation_after_mm.rms, 4)),
-        ("after max mm", |e| fmt_num(e.validation_after_mm.max, 4)),
-        ("improvement %", |e| fmt_num(e.improvement_pct, 4)),
+    use columns::*;
+    let mut cols = vec![
+        ETA_MEAN,
+        ETA_MEDIAN,
+        BEFORE_MEAN,
+        BEFORE_RMS,
+        BEFORE_MAX,
+        AFTER_MEAN,
+        AFTER_RMS,
+        AFTER_MAX,
+        IMPROVEMENT,
     ];
     if pose {
-        columns.extend([
-            (
-                "before mean °",
-                (|e| fmt_deg(e.validation_before_deg)) as fn(&Entry) -> String,
-            ),
-            ("after mean °", |e| fmt_deg(e.validation_after_deg)),
-        ]);
+        cols.extend([BEFORE_DEG, AFTER_DEG]);
     }
-    columns.extend([
-        (
-            "CRB ratio",
-            (|e| fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3)) as fn(&Entry) -> String,
-        ),
-        ("failures", |e| e.failures.to_string()),
-        ("ms / identification", |e| {
-            fmt_num(e.seconds_per_identification * 1e3, 3)
-        }),
-    ]);
-    let (headers, rows) = entry_table(r, &columns);
+    cols.extend([CRB_RATIO, FAILURES, MS_PER_IDENTIFICATION]);
+    let (headers, rows) = entry_table(r, &cols);
     s += "## Validation errors and identification accuracy\n\n";
     s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
     s += &table(&headers, &rows);
