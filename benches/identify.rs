@@ -3,8 +3,7 @@
 
 use calbench::identifiability::analyse;
 use calbench::identify::{
-    identify, LmOptions, LsOptions, Method, RidgeOptions, RobotData, RobotProblem, RobustOptions,
-    XiRule,
+    solve, LmOptions, LsOptions, RidgeOptions, RobotProblem, RobustOptions, Solver, XiRule,
 };
 use calbench::jacobian::{jacobian, Columns, Measure};
 use calbench::kinematics::Param;
@@ -35,35 +34,32 @@ fn bench(c: &mut Criterion) {
     let truth = nominal.with_errors(&pairs);
     let qs = uniform_joint_poses(&nominal, 50, &mut r);
     let chain = truth.chain();
-    let data = RobotData {
-        points: qs.iter().map(|q| chain.fk(q).pos).collect(),
-        qs,
-        rotations: None,
-    };
-    let problem = RobotProblem::new(&nominal, &params, &data, Measure::Position).expect("problem");
+    let points: Vec<_> = qs.iter().map(|q| chain.fk(q).pos).collect();
+    let problem = RobotProblem::new(&nominal, &params, &qs, &points, None, Measure::Position)
+        .expect("problem");
     let x0 = DVector::zeros(params.len());
-    let methods = [
-        ("ls", Method::Ls(LsOptions::default())),
-        ("ridge-double-h", Method::Ridge(RidgeOptions::default())),
+    let methods: [(&str, Box<dyn Solver>); 7] = [
+        ("ls", Box::new(LsOptions::default())),
+        ("ridge-double-h", Box::new(RidgeOptions::default())),
         (
             "ridge-gcv",
-            Method::Ridge(RidgeOptions {
+            Box::new(RidgeOptions {
                 xi: XiRule::Gcv,
                 ..Default::default()
             }),
         ),
         (
             "ridge-l-curve",
-            Method::Ridge(RidgeOptions {
+            Box::new(RidgeOptions {
                 xi: XiRule::LCurve,
                 ..Default::default()
             }),
         ),
-        ("igg3", Method::Igg3(RobustOptions::default())),
-        ("lm", Method::Lm(LmOptions::default())),
+        ("igg3", Box::new(RobustOptions::default())),
+        ("lm", Box::new(LmOptions::default())),
         (
             "lm-adaptive",
-            Method::Lm(LmOptions {
+            Box::new(LmOptions {
                 adaptive: true,
                 ..Default::default()
             }),
@@ -71,14 +67,14 @@ fn bench(c: &mut Criterion) {
     ];
     let mut g = c.benchmark_group("identify-irb2600-50");
     for (name, m) in &methods {
-        let out = identify(&problem, &x0, m);
+        let out = solve(m.as_ref(), &problem, &x0);
         eprintln!(
             "{name}: {} after {} iterations",
             out.termination.as_str(),
             out.iterations
         );
-        g.bench_with_input(BenchmarkId::from_parameter(name), m, |b, m| {
-            b.iter(|| identify(&problem, &x0, m))
+        g.bench_function(BenchmarkId::from_parameter(name), |b| {
+            b.iter(|| solve(m.as_ref(), &problem, &x0))
         });
     }
     g.finish();

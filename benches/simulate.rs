@@ -1,9 +1,9 @@
 //! Measuring 50 poses with the simulated tracker (no sag), position and full pose, with
 //! outliers; and the two registrations of 50 points.
 
+use calbench::calibrate::registration::{register_svd, register_wsvd};
 use calbench::compliance::{Compliance, ComplianceModel, ComplianceSettings};
 use calbench::kinematics::Robot;
-use calbench::registration::{register_svd, register_wsvd};
 use calbench::rng::stream;
 use calbench::sampling::uniform_joint_poses;
 use calbench::sim::{
@@ -85,10 +85,10 @@ fn simulate(c: &mut Criterion) {
     .expect("measurement");
     let mut g = c.benchmark_group("register_50_points");
     g.bench_function("svd", |b| {
-        b.iter(|| register_svd(black_box(&m.true_points), &m.points, None).expect("svd"))
+        b.iter(|| register_svd(black_box(&m.truth.true_points), &m.data.points, None).expect("svd"))
     });
     g.bench_function("wsvd", |b| {
-        b.iter(|| register_wsvd(black_box(&m.true_points), &m.points).expect("wsvd"))
+        b.iter(|| register_wsvd(black_box(&m.truth.true_points), &m.data.points).expect("wsvd"))
     });
     g.finish();
 }

@@ -41,7 +41,8 @@ use crate::kinematics::{Chain, Param, Robot};
 use crate::math::{matrix_rpy, Frame, Mat3, Real, Vec3};
 
 /// The pose-error model of an identification (see the module docs for the formulas).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum ErrorModel {
     /// Differential transformation of the pose matrix (Qiao §2.2, eq. 5): 12 rows per pose.
     Differential,
@@ -69,26 +70,7 @@ impl ErrorModel {
 
     /// The setting's name: `differential`, `coordinate_transfer` or `direct_fk`.
     pub fn as_str(self) -> &'static str {
-        match self {
-            ErrorModel::Differential => "differential",
-            ErrorModel::CoordinateTransfer => "coordinate_transfer",
-            ErrorModel::DirectFk => "direct_fk",
-        }
-    }
-
-    /// Parses a setting value (see [`ErrorModel::as_str`]); errors name `key`.
-    pub fn parse(key: &str, s: &str) -> Result<ErrorModel> {
-        ErrorModel::ALL
-            .into_iter()
-            .find(|m| m.as_str() == s)
-            .ok_or_else(|| {
-                Error::setting(
-                    key,
-                    format!(
-                        "\"{s}\" is not an error model (differential, coordinate_transfer, direct_fk)"
-                    ),
-                )
-            })
+        crate::names::static_name(&self)
     }
 }
 

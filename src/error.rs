@@ -84,3 +84,24 @@ pub fn finite_positive(key: &str, v: f64) -> Result<()> {
         ))
     }
 }
+
+/// Checks that setting `key` is finite and at least 0.
+pub fn finite_non_negative(key: &str, v: f64) -> Result<()> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::setting(
+            key,
+            format!("must be finite and non-negative, got {v}"),
+        ))
+    }
+}
+
+/// Checks that the count `key` is at least 1.
+pub fn check_count(key: &str, n: usize) -> Result<()> {
+    if n == 0 {
+        Err(Error::setting(key, "must be at least 1"))
+    } else {
+        Ok(())
+    }
+}

@@ -12,21 +12,27 @@ pub mod math;
 pub mod rng;
 
 pub use error::{Error, Result};
+pub mod calibrate;
 pub mod check;
-pub mod commands;
 pub mod compliance;
 pub mod errmodel;
 pub mod identifiability;
 pub mod identify;
 pub mod jacobian;
 pub mod kinematics;
+pub mod measurement;
 pub mod metaheur;
 pub mod montecarlo;
+pub mod names;
 pub mod physics;
 pub mod poses;
-pub mod registration;
 pub mod report;
 pub mod robots;
 pub mod sampling;
 pub mod scenario;
 pub mod sim;
+
+/// The README's Rust examples ("Adding a method"), compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -5,7 +5,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
-use calbench::commands;
+mod cli;
+
+use cli as commands;
 
 /// Simulation-driven benchmark harness for the kinematic calibration of industrial robots.
 #[derive(Parser)]

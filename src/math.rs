@@ -169,6 +169,22 @@ pub fn skew(v: &Vec3) -> Mat3 {
     Mat3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }
 
+/// The unit quaternion `[qw, qx, qy, qz]` of a rotation matrix, with qw ≥ 0.
+pub fn quaternion(r: &Mat3) -> [Real; 4] {
+    let q = nalgebra::UnitQuaternion::from_rotation_matrix(
+        &nalgebra::Rotation3::from_matrix_unchecked(*r),
+    );
+    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
+    [s * q.w, s * q.i, s * q.j, s * q.k]
+}
+
+/// The rotation matrix of a unit quaternion `[qw, qx, qy, qz]` (normalised first).
+pub fn quaternion_matrix(q: &[Real; 4]) -> Mat3 {
+    nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
+        .to_rotation_matrix()
+        .into_inner()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -31,7 +31,7 @@
 use rand::Rng as _;
 use rayon::prelude::*;
 
-use crate::error::{finite_positive, Error, Result};
+use crate::error::{check_count, finite_non_negative, finite_positive, Error, Result};
 use crate::jacobian::Measure;
 use crate::kinematics::{Chain, OpKind, Param, Robot};
 use crate::math::{Frame, Mat3, Real, Vec3};
@@ -127,7 +127,8 @@ pub enum Velocity {
 /// iterations and ends at 0.02–0.05 mm. With a floor of 0.02 % it freezes after about 150
 /// iterations; from a random Halton start in 24 dimensions it ends worse than the nominal
 /// model (2.2–2.8 mm).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct BasOptions {
     /// Iterations (3 fitness evaluations each). Default 2000.
     pub iterations: usize,
@@ -147,13 +148,28 @@ pub struct BasOptions {
     pub start: BasStart,
 }
 
-/// The starting point of [`bas`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The starting point of [`bas`] (`start = "centre"` or `"halton"`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum BasStart {
     /// The centre of the search box: the nominal parameters for [`MetaProblem::bounds`].
+    #[serde(alias = "center")]
     Centre,
     /// A Halton point with a random index (Qiao's initialisation of the swarms).
     Halton,
+}
+
+impl BasOptions {
+    /// Checks the option values (keys as in the scenario).
+    pub fn check(&self) -> Result<()> {
+        check_count("iterations", self.iterations)?;
+        finite_positive("antenna", self.antenna)?;
+        finite_positive("step", self.step)?;
+        check_decay("decay", self.decay)?;
+        finite_non_negative("antenna_floor", self.antenna_floor)?;
+        finite_non_negative("step_floor", self.step_floor)?;
+        check_target("target", self.target)
+    }
 }
 
 impl Default for BasOptions {
@@ -172,7 +188,8 @@ impl Default for BasOptions {
 }
 
 /// Options of [`pso`]. Velocities are fractions of each coordinate's range.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct PsoOptions {
     /// Number of particles. Default 40.
     pub population: usize,
@@ -182,11 +199,14 @@ pub struct PsoOptions {
     pub c1: Real,
     /// Social learning factor `c2` (Qiao eq. 12). Default 2.05 (Clerc), so `K ≈ 0.7298`.
     pub c2: Real,
-    /// Velocity damping. Default [`Velocity::Constriction`] (Qiao eq. 12).
+    /// Velocity damping. Default [`Velocity::Constriction`] (Qiao eq. 12); the key
+    /// `inertia = [start, end]` selects [`Velocity::Inertia`].
+    #[serde(rename = "inertia", deserialize_with = "inertia")]
     pub velocity: Velocity,
     /// Largest velocity component. Default 0.5.
     pub max_velocity: Real,
     /// Evaluate the swarm's fitness values in parallel (results do not change). Default true.
+    #[serde(skip, default = "yes")]
     pub parallel: bool,
     /// Stop as soon as the best fitness is at or below this. Default −∞ (never).
     pub target: Real,
@@ -211,7 +231,8 @@ impl Default for PsoOptions {
 /// coordinate's range. Qiao gives the form of the update and the 0.95 decay but no values of
 /// `c1`, `c2`, `c3`, `d`, `δ`: the defaults are Clerc's `c1 = c2 = 2.05` and this
 /// implementation's choice for the rest.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct BasPsoOptions {
     /// Number of particles. Default 40.
     pub population: usize,
@@ -233,11 +254,14 @@ pub struct BasPsoOptions {
     pub antenna_floor: Real,
     /// `δ0` of eq. 13 (the step tends to `δ0 / (1 − decay)`). Default 1e-6.
     pub step_floor: Real,
-    /// Velocity damping. Default [`Velocity::Constriction`] (Qiao eq. 12).
+    /// Velocity damping. Default [`Velocity::Constriction`] (Qiao eq. 12); the key
+    /// `inertia = [start, end]` selects [`Velocity::Inertia`].
+    #[serde(rename = "inertia", deserialize_with = "inertia")]
     pub velocity: Velocity,
     /// Largest velocity component. Default 0.5.
     pub max_velocity: Real,
     /// Evaluate fitness values in parallel (results do not change). Default true.
+    #[serde(skip, default = "yes")]
     pub parallel: bool,
     /// Stop as soon as the best fitness is at or below this. Default −∞ (never).
     pub target: Real,
@@ -264,6 +288,16 @@ impl Default for BasPsoOptions {
     }
 }
 
+fn yes() -> bool {
+    true
+}
+
+/// `inertia = [start, end]`: the inertia weights of [`Velocity::Inertia`].
+fn inertia<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Velocity, D::Error> {
+    let [start, end] = <[Real; 2] as serde::Deserialize>::deserialize(d)?;
+    Ok(Velocity::Inertia { start, end })
+}
+
 /// The outcome of a search. Running out of iterations is the normal end, not an error.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MetaResult {
@@ -277,29 +311,12 @@ pub struct MetaResult {
     pub evaluations: usize,
     /// Number of iterations run.
     pub iterations: usize,
+    /// The search stopped because the best fitness reached the target.
+    pub reached_target: bool,
 }
 
 /// The fitness to minimise.
 pub type Fitness<'f> = dyn Fn(&[Real]) -> Real + Sync + 'f;
-
-fn finite_non_negative(key: &str, v: Real) -> Result<()> {
-    if v.is_finite() && v >= 0.0 {
-        Ok(())
-    } else {
-        Err(Error::setting(
-            key,
-            format!("must be finite and non-negative, got {v}"),
-        ))
-    }
-}
-
-fn check_count(key: &str, n: usize) -> Result<()> {
-    if n == 0 {
-        Err(Error::setting(key, "must be at least 1"))
-    } else {
-        Ok(())
-    }
-}
 
 fn check_decay(key: &str, v: Real) -> Result<()> {
     if v.is_finite() && (0.0..1.0).contains(&v) {
@@ -421,13 +438,7 @@ fn offset(y: &[Real], b: &[Real], s: Real, out: &mut [Real]) {
 /// Li's minimising BAS is used here.
 pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<MetaResult> {
     b.check()?;
-    check_count("bas.iterations", o.iterations)?;
-    finite_positive("bas.antenna", o.antenna)?;
-    finite_positive("bas.step", o.step)?;
-    check_decay("bas.decay", o.decay)?;
-    finite_non_negative("bas.antenna_floor", o.antenna_floor)?;
-    finite_non_negative("bas.step_floor", o.step_floor)?;
-    check_target("bas.target", o.target)?;
+    o.check()?;
 
     let n = b.dim();
     let mut y: Vec<Real> = match o.start {
@@ -481,6 +492,7 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
     }
     Ok(MetaResult {
         x: best_x,
+        reached_target: best_f <= o.target,
         fitness: best_f,
         iterations: trace.len(),
         trace,
@@ -514,18 +526,18 @@ struct Swarm {
     beetle: Option<(Real, Real, Real, Real, Real, Real)>,
 }
 
-fn check_swarm(prefix: &str, s: &Swarm) -> Result<()> {
-    check_count(&format!("{prefix}.population"), s.population)?;
-    check_count(&format!("{prefix}.iterations"), s.iterations)?;
-    finite_non_negative(&format!("{prefix}.c1"), s.c1)?;
-    finite_non_negative(&format!("{prefix}.c2"), s.c2)?;
-    finite_positive(&format!("{prefix}.max_velocity"), s.max_velocity)?;
-    check_target(&format!("{prefix}.target"), s.target)?;
+fn check_swarm(s: &Swarm) -> Result<()> {
+    check_count("population", s.population)?;
+    check_count("iterations", s.iterations)?;
+    finite_non_negative("c1", s.c1)?;
+    finite_non_negative("c2", s.c2)?;
+    finite_positive("max_velocity", s.max_velocity)?;
+    check_target("target", s.target)?;
     match s.velocity {
         Velocity::Constriction => {
             if s.c1 + s.c2 <= 4.0 {
                 return Err(Error::setting(
-                    format!("{prefix}.velocity"),
+                    "c1",
                     format!(
                         "the constriction factor needs c1 + c2 > 4, got {}",
                         s.c1 + s.c2
@@ -534,17 +546,17 @@ fn check_swarm(prefix: &str, s: &Swarm) -> Result<()> {
             }
         }
         Velocity::Inertia { start, end } => {
-            finite_non_negative(&format!("{prefix}.velocity.start"), start)?;
-            finite_non_negative(&format!("{prefix}.velocity.end"), end)?;
+            finite_non_negative("inertia[0]", start)?;
+            finite_non_negative("inertia[1]", end)?;
         }
     }
     if let Some((c3, d, delta, decay, d0, delta0)) = s.beetle {
-        finite_non_negative(&format!("{prefix}.c3"), c3)?;
-        finite_positive(&format!("{prefix}.antenna"), d)?;
-        finite_positive(&format!("{prefix}.step"), delta)?;
-        check_decay(&format!("{prefix}.decay"), decay)?;
-        finite_non_negative(&format!("{prefix}.antenna_floor"), d0)?;
-        finite_non_negative(&format!("{prefix}.step_floor"), delta0)?;
+        finite_non_negative("c3", c3)?;
+        finite_positive("antenna", d)?;
+        finite_positive("step", delta)?;
+        check_decay("decay", decay)?;
+        finite_non_negative("antenna_floor", d0)?;
+        finite_non_negative("step_floor", delta0)?;
     }
     Ok(())
 }
@@ -567,20 +579,31 @@ fn evaluate(f: &Fitness, xs: &[Vec<Real>], out: &mut [Real], parallel: bool) {
 /// [0, 1] per coordinate, `x_b` the particle's best and `x_g` the swarm's best; Halton
 /// initial population, zero initial velocities.
 pub fn pso(f: &Fitness, b: &Bounds, o: &PsoOptions, rng: &mut Rng) -> Result<MetaResult> {
-    let s = Swarm {
-        population: o.population,
-        iterations: o.iterations,
-        c1: o.c1,
-        c2: o.c2,
-        velocity: o.velocity,
-        max_velocity: o.max_velocity,
-        parallel: o.parallel,
-        target: o.target,
-        beetle: None,
-    };
     b.check()?;
-    check_swarm("pso", &s)?;
-    swarm(f, b, &s, rng)
+    o.check()?;
+    swarm(f, b, &o.swarm(), rng)
+}
+
+impl PsoOptions {
+    /// Checks the option values (keys as in the scenario).
+    pub fn check(&self) -> Result<()> {
+        check_swarm(&self.swarm())
+    }
+
+    fn swarm(&self) -> Swarm {
+        let o = self;
+        Swarm {
+            population: o.population,
+            iterations: o.iterations,
+            c1: o.c1,
+            c2: o.c2,
+            velocity: o.velocity,
+            max_velocity: o.max_velocity,
+            parallel: o.parallel,
+            target: o.target,
+            beetle: None,
+        }
+    }
 }
 
 /// Qiao 2021's BAS-PSO (§3.1, eqs. 12–13): each particle `i` updates
@@ -590,27 +613,38 @@ pub fn pso(f: &Fitness, b: &Bounds, o: &PsoOptions, rng: &mut Rng) -> Result<Met
 /// `d ← decay·d + d0`, `δ ← decay·δ + δ0` after every iteration. Halton initial population.
 /// The antenna points count as evaluations and may become the best point.
 pub fn bas_pso(f: &Fitness, b: &Bounds, o: &BasPsoOptions, rng: &mut Rng) -> Result<MetaResult> {
-    let s = Swarm {
-        population: o.population,
-        iterations: o.iterations,
-        c1: o.c1,
-        c2: o.c2,
-        velocity: o.velocity,
-        max_velocity: o.max_velocity,
-        parallel: o.parallel,
-        target: o.target,
-        beetle: Some((
-            o.c3,
-            o.antenna,
-            o.step,
-            o.decay,
-            o.antenna_floor,
-            o.step_floor,
-        )),
-    };
     b.check()?;
-    check_swarm("bas_pso", &s)?;
-    swarm(f, b, &s, rng)
+    o.check()?;
+    swarm(f, b, &o.swarm(), rng)
+}
+
+impl BasPsoOptions {
+    /// Checks the option values (keys as in the scenario).
+    pub fn check(&self) -> Result<()> {
+        check_swarm(&self.swarm())
+    }
+
+    fn swarm(&self) -> Swarm {
+        let o = self;
+        Swarm {
+            population: o.population,
+            iterations: o.iterations,
+            c1: o.c1,
+            c2: o.c2,
+            velocity: o.velocity,
+            max_velocity: o.max_velocity,
+            parallel: o.parallel,
+            target: o.target,
+            beetle: Some((
+                o.c3,
+                o.antenna,
+                o.step,
+                o.decay,
+                o.antenna_floor,
+                o.step_floor,
+            )),
+        }
+    }
 }
 
 fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult> {
@@ -747,6 +781,7 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
     }
     Ok(MetaResult {
         x: gbest_x,
+        reached_target: gbest_f <= s.target,
         fitness: gbest_f,
         iterations: trace.len(),
         trace,
@@ -1237,7 +1272,7 @@ mod tests {
                 },
                 &mut rng
             ),
-            "pso.population"
+            "population"
         );
         assert_eq!(
             e(
@@ -1247,7 +1282,7 @@ mod tests {
                 },
                 &mut rng
             ),
-            "pso.c1"
+            "c1"
         );
         assert_eq!(
             e(
@@ -1258,7 +1293,7 @@ mod tests {
                 },
                 &mut rng
             ),
-            "pso.velocity"
+            "c1"
         );
         let o = BasPsoOptions {
             population: 0,
@@ -1266,7 +1301,7 @@ mod tests {
         };
         assert_eq!(
             key(bas_pso(&sphere, &b, &o, &mut rng).unwrap_err()),
-            "bas_pso.population"
+            "population"
         );
         let o = BasPsoOptions {
             antenna: Real::INFINITY,
@@ -1274,23 +1309,20 @@ mod tests {
         };
         assert_eq!(
             key(bas_pso(&sphere, &b, &o, &mut rng).unwrap_err()),
-            "bas_pso.antenna"
+            "antenna"
         );
         let o = BasOptions {
             decay: 1.0,
             ..Default::default()
         };
-        assert_eq!(
-            key(bas(&sphere, &b, &o, &mut rng).unwrap_err()),
-            "bas.decay"
-        );
+        assert_eq!(key(bas(&sphere, &b, &o, &mut rng).unwrap_err()), "decay");
         let o = BasOptions {
             iterations: 0,
             ..Default::default()
         };
         assert_eq!(
             key(bas(&sphere, &b, &o, &mut rng).unwrap_err()),
-            "bas.iterations"
+            "iterations"
         );
         let inverted = Bounds {
             lower: vec![0.0, 1.0],

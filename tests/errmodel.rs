@@ -285,9 +285,12 @@ fn accuracy_figures_by_hand() {
 #[test]
 fn model_names_round_trip() {
     for m in ErrorModel::ALL {
-        assert_eq!(ErrorModel::parse("error_model", m.as_str()).unwrap(), m);
+        assert_eq!(
+            calbench::names::parse::<ErrorModel>("error_model", m.as_str()).unwrap(),
+            m
+        );
     }
-    assert!(ErrorModel::parse("error_model", "dh").is_err());
+    assert!(calbench::names::parse::<ErrorModel>("error_model", "dh").is_err());
 }
 
 #[test]
@@ -298,7 +301,7 @@ fn harness_validation_errors_are_qiao_acpe_and_acae() {
     let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
     let truth: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     let model: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
-    let (p, a) = calbench::montecarlo::trial::validation_errors(&nominal, &qs, &truth);
+    let (p, a) = calbench::calibrate::validation_errors(&nominal, &qs, &truth);
     let (acpe, acae) = acpe_acae(&truth, &model).unwrap();
     let mean = |v: &[Real]| v.iter().sum::<Real>() / v.len() as Real;
     assert_relative_eq!(mean(&p), acpe, epsilon = 1e-12);

@@ -48,7 +48,7 @@ fn tiny() -> Scenario {
 }
 
 fn run_to(s: Scenario, out: &Path, threads: usize) {
-    run(
+    let r = run(
         s,
         &RunOptions {
             threads: Some(threads),
@@ -57,6 +57,7 @@ fn run_to(s: Scenario, out: &Path, threads: usize) {
         },
     )
     .unwrap();
+    calbench::report::write_all(&r).unwrap();
 }
 
 #[test]
@@ -261,36 +262,28 @@ fn bad_scenarios_are_refused_naming_the_key() {
 
 #[test]
 fn metaheuristic_schedules_and_velocity_rules_are_settable() {
-    use calbench::metaheur::{BasStart, Velocity};
-    use calbench::scenario::{Identifier, MetaAlgorithm};
     let text = TINY.replace(
         "name = \"lm\"",
         "name = \"bas\"\nstart = \"halton\"\nantenna_floor = 0.0\nstep_floor = 2e-4\n\
          [[methods]]\nname = \"bas-pso\"\ninertia = [0.9, 0.4]\nmax_velocity = 0.3\nstep_floor = 0",
     );
     let s = Scenario::parse(&text, None).unwrap();
-    let Identifier::Meta(bas) = &s.methods[1].method else {
-        panic!("bas")
-    };
-    let MetaAlgorithm::Bas(o) = &bas.algorithm else {
-        panic!("bas")
-    };
-    assert_eq!(o.start, BasStart::Halton);
-    assert_eq!((o.antenna_floor, o.step_floor), (0.0, 2e-4));
-    let Identifier::Meta(hybrid) = &s.methods[2].method else {
-        panic!("bas-pso")
-    };
-    let MetaAlgorithm::BasPso(o) = &hybrid.algorithm else {
-        panic!("bas-pso")
-    };
-    assert_eq!(
-        o.velocity,
-        Velocity::Inertia {
-            start: 0.9,
-            end: 0.4
-        }
+    // The options as the method holds them (its Debug form).
+    let bas = format!("{:?}", s.methods[1].method);
+    assert_eq!(s.methods[1].name(), "bas");
+    assert!(bas.contains("start: Halton"), "{bas}");
+    assert!(
+        bas.contains("antenna_floor: 0.0, step_floor: 0.0002"),
+        "{bas}"
     );
-    assert_eq!((o.max_velocity, o.step_floor), (0.3, 0.0));
+    let hybrid = format!("{:?}", s.methods[2].method);
+    assert_eq!(s.methods[2].name(), "bas-pso");
+    assert!(
+        hybrid.contains("velocity: Inertia { start: 0.9, end: 0.4 }"),
+        "{hybrid}"
+    );
+    assert!(hybrid.contains("max_velocity: 0.3"), "{hybrid}");
+    assert!(hybrid.contains("step_floor: 0.0"), "{hybrid}");
 }
 
 #[test]

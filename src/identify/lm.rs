@@ -12,13 +12,19 @@
 //!   ([`super::Termination::NoProgress`]).
 
 use nalgebra::DVector;
+use serde::Deserialize;
 
 use super::linalg::solve_spd;
-use super::{finish, max_abs, Identified, Problem, Termination, Work, DIVERGENCE_FACTOR};
+use super::robot::identify_robot;
+use super::solver::{finish, max_abs, LeastSquares, Solver, Work, DIVERGENCE_FACTOR};
+use super::{CalibrationProblem, Identified, Method, Termination};
+use crate::error::{check_count, finite_non_negative, finite_positive, Error, Result};
 use crate::math::Real;
+use crate::rng::Rng;
 
-/// Settings of [`super::Method::Lm`].
-#[derive(Clone, Debug)]
+/// Options of `lm` (FORMATS.md `[[methods]]`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct LmOptions {
     /// Fixed damping μ (Guo 2024 eq. 8). Default 1.
     pub mu: Real,
@@ -75,7 +81,37 @@ fn undamp(work: &mut Work, damping: Real, marquardt: bool, diag: &DVector<Real>)
     }
 }
 
-pub(crate) fn run(p: &dyn Problem, x0: &DVector<Real>, o: &LmOptions) -> Identified {
+impl Method for LmOptions {
+    fn name(&self) -> &'static str {
+        "lm"
+    }
+
+    fn check(&self) -> Result<()> {
+        finite_positive("eps", self.eps)?;
+        check_count("max_iter", self.max_iter)?;
+        finite_non_negative("mu", self.mu)?;
+        finite_positive("lambda0", self.lambda0)?;
+        if !(self.lambda_factor.is_finite() && self.lambda_factor > 1.0) {
+            return Err(Error::setting(
+                "lambda_factor",
+                format!("must be finite and above 1, got {}", self.lambda_factor),
+            ));
+        }
+        Ok(())
+    }
+
+    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
+        identify_robot(self, problem)
+    }
+}
+
+impl Solver for LmOptions {
+    fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
+        levenberg_marquardt(p, x0, self)
+    }
+}
+
+fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
     if o.adaptive {
         return adaptive(p, x0, o);
     }
@@ -110,7 +146,7 @@ pub(crate) fn run(p: &dyn Problem, x0: &DVector<Real>, o: &LmOptions) -> Identif
     finish(p, &mut work, x, w, iterations, termination, None, None)
 }
 
-fn adaptive(p: &dyn Problem, x0: &DVector<Real>, o: &LmOptions) -> Identified {
+fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
     let mut work = Work::new(p);
     let mut trial = Work::new(p);
     let w = vec![1.0; p.n_points()];
@@ -170,5 +206,6 @@ fn adaptive(p: &dyn Problem, x0: &DVector<Real>, o: &LmOptions) -> Identified {
             }
         }
     }
+    work.evaluations += trial.evaluations;
     finish(p, &mut work, x, w, iterations, termination, None, None)
 }

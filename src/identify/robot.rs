@@ -12,31 +12,22 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::Problem;
+use super::solver::{solve, LeastSquares, Solver};
+use super::{CalibrationProblem, Identified};
 use crate::error::Error;
 use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
 use crate::kinematics::{Chain, ChainVars, Param, Robot};
 use crate::math::{Mat3, Real, Vec3};
 
-/// Measured data for identification.
-#[derive(Clone, Debug, Default)]
-pub struct RobotData {
-    /// Joint values per point, internal units (rad, mm).
-    pub qs: Vec<Vec<Real>>,
-    /// Measured tool points, mm, in the robot's world (base-frame) coordinates.
-    pub points: Vec<Vec3>,
-    /// Measured tool orientations in the world, needed for [`Measure::Pose`].
-    pub rotations: Option<Vec<Mat3>>,
-}
-
-/// A [`Problem`] over a robot's parameter errors.
+/// A [`LeastSquares`] problem over a robot's parameter errors.
 #[derive(Debug)]
 pub struct RobotProblem<'a> {
     nominal: &'a Robot,
     params: Vec<Param>,
     index: Vec<usize>,
     cols: Columns,
-    data: &'a RobotData,
+    points: &'a [Vec3],
+    rotations: Option<&'a [Mat3]>,
     measure: Measure,
     /// Working parameter values and the chain compiled from them, updated in place at each
     /// evaluation.
@@ -48,7 +39,9 @@ pub struct RobotProblem<'a> {
 }
 
 impl<'a> RobotProblem<'a> {
-    /// The problem of identifying the errors of `params` of `nominal` from `data`.
+    /// The problem of identifying the errors of `params` of `nominal` from the tool points
+    /// `points` (mm, base frame) and, for full poses, the tool rotations `rotations` measured
+    /// at the joint values `qs`.
     ///
     /// Fails when `params` is empty, repeats a parameter or names one the robot's model does
     /// not have, when the data's lengths disagree, a joint vector has the wrong length, a
@@ -56,7 +49,9 @@ impl<'a> RobotProblem<'a> {
     pub fn new(
         nominal: &'a Robot,
         params: &[Param],
-        data: &'a RobotData,
+        qs: &[Vec<Real>],
+        points: &'a [Vec3],
+        rotations: Option<&'a [Mat3]>,
         measure: Measure,
     ) -> crate::Result<Self> {
         if params.is_empty() {
@@ -74,21 +69,21 @@ impl<'a> RobotProblem<'a> {
                 return Err(Error::setting("params", format!("`{p}` is listed twice")));
             }
         }
-        if data.qs.len() != data.points.len() {
+        if qs.len() != points.len() {
             return Err(Error::setting(
                 "data",
                 format!(
                     "{} joint vectors but {} measured points",
-                    data.qs.len(),
-                    data.points.len()
+                    qs.len(),
+                    points.len()
                 ),
             ));
         }
-        if data.qs.is_empty() {
+        if qs.is_empty() {
             return Err(Error::setting("data", "no measured points"));
         }
         let dof = nominal.dof();
-        for (i, q) in data.qs.iter().enumerate() {
+        for (i, q) in qs.iter().enumerate() {
             if q.len() != dof {
                 return Err(Error::setting(
                     "data",
@@ -98,27 +93,27 @@ impl<'a> RobotProblem<'a> {
                     ),
                 ));
             }
-            if q.iter().any(|v| !v.is_finite()) || data.points[i].iter().any(|v| !v.is_finite()) {
+            if q.iter().any(|v| !v.is_finite()) || points[i].iter().any(|v| !v.is_finite()) {
                 return Err(Error::setting(
                     "data",
                     format!("point {i}: value not finite"),
                 ));
             }
         }
-        match (&data.rotations, measure) {
+        match (rotations, measure) {
             (None, Measure::Pose) => {
                 return Err(Error::setting(
                     "measure",
                     "full-pose identification needs measured orientations",
                 ))
             }
-            (Some(r), _) if r.len() != data.points.len() => {
+            (Some(r), _) if r.len() != points.len() => {
                 return Err(Error::setting(
                     "data",
                     format!(
                         "{} orientations but {} measured points",
                         r.len(),
-                        data.points.len()
+                        points.len()
                     ),
                 ))
             }
@@ -128,13 +123,14 @@ impl<'a> RobotProblem<'a> {
             _ => {}
         }
         let chain = nominal.chain();
-        let vars = data.qs.iter().map(|q| chain.variables(q)).collect();
+        let vars = qs.iter().map(|q| chain.variables(q)).collect();
         Ok(RobotProblem {
             nominal,
             params: params.to_vec(),
             index: params.iter().map(|p| p.index(dof)).collect(),
             cols: Columns::new(params, dof),
-            data,
+            points,
+            rotations,
             measure,
             work: RefCell::new((nominal.values.clone(), chain)),
             vars,
@@ -175,13 +171,13 @@ impl<'a> RobotProblem<'a> {
     }
 }
 
-impl Problem for RobotProblem<'_> {
+impl LeastSquares for RobotProblem<'_> {
     fn n_params(&self) -> usize {
         self.params.len()
     }
 
     fn n_points(&self) -> usize {
-        self.data.points.len()
+        self.points.len()
     }
 
     fn rows_per_point(&self) -> usize {
@@ -203,10 +199,10 @@ impl Problem for RobotProblem<'_> {
         let chain = &*chain;
         let rows = self.measure.rows();
         let rots = match self.measure {
-            Measure::Pose => self.data.rotations.as_deref(),
+            Measure::Pose => self.rotations,
             Measure::Position => None,
         };
-        for (i, (v, pm)) in self.vars.iter().zip(&self.data.points).enumerate() {
+        for (i, (v, pm)) in self.vars.iter().zip(self.points).enumerate() {
             let f = pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i);
             let dp = pm - f.pos;
             for k in 0..3 {
@@ -218,4 +214,23 @@ impl Problem for RobotProblem<'_> {
             }
         }
     }
+}
+
+/// Runs the Jacobian-based `solver` on a calibration problem: the errors of
+/// `problem.params` from zero, on the base-frame data, orientation rows weighted by
+/// `problem.k`. Fails when the problem is inconsistent (see [`RobotProblem::new`]).
+pub fn identify_robot(
+    solver: &dyn Solver,
+    problem: &CalibrationProblem,
+) -> crate::Result<Identified> {
+    let rp = RobotProblem::new(
+        problem.nominal,
+        problem.params,
+        problem.poses(),
+        &problem.points,
+        problem.rotations.as_deref(),
+        problem.measure,
+    )?
+    .with_orientation_weight(problem.k)?;
+    Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
 }

@@ -28,34 +28,20 @@
 //! - Tukey's biweight with cut-off `c = k1`: `(1 − (u/c)²)²` for `u < c`, `0` beyond.
 
 use nalgebra::DVector;
+use serde::Deserialize;
 
-use super::ls::{gauss_newton, RidgeCfg};
-use super::ridge::XiRule;
-use super::{Identified, Problem};
+use super::robot::identify_robot;
+use super::solver::{gauss_newton, LeastSquares, RidgeCfg, Solver};
+use super::weights::{RobustCfg, Sigma0, WeightFn};
+use super::xi::XiRule;
+use super::{CalibrationProblem, Identified, Method};
+use crate::error::{check_count, finite_positive, Error, Result};
 use crate::math::Real;
+use crate::rng::Rng;
 
-/// The weight function of the robust iterations.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum WeightFn {
-    /// IGG3 (Li 2018 eq. 18): normal, suspicious and rejected segments.
-    Igg3,
-    /// Huber's weights with threshold k0.
-    Huber,
-    /// Tukey's biweight with cut-off k1.
-    Tukey,
-}
-
-/// How the unit-weight standard deviation σ0 is estimated.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Sigma0 {
-    /// `sqrt(vᵀPv / (n − t))` (Li 2018 §2.2).
-    Classical,
-    /// `1.4826 · median |v_k|` over the residual rows.
-    Mad,
-}
-
-/// Settings of [`super::Method::Igg3`].
-#[derive(Clone, Debug)]
+/// Options of `igg3` (FORMATS.md `[[methods]]`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
 pub struct RobustOptions {
     /// Weight function. Default [`WeightFn::Igg3`].
     pub weight: WeightFn,
@@ -90,143 +76,42 @@ impl Default for RobustOptions {
     }
 }
 
-impl WeightFn {
-    /// The weight of a point with standardised residual `u ≥ 0`.
-    pub fn weight(self, u: Real, k0: Real, k1: Real) -> Real {
-        match self {
-            WeightFn::Igg3 => {
-                if u <= k0 {
-                    1.0
-                } else if u <= k1 {
-                    let d = (k1 - u) / (k1 - k0);
-                    k0 / u * d * d
-                } else {
-                    0.0
-                }
-            }
-            WeightFn::Huber => {
-                if u <= k0 {
-                    1.0
-                } else {
-                    k0 / u
-                }
-            }
-            WeightFn::Tukey => {
-                if u < k1 {
-                    let a = u / k1;
-                    (1.0 - a * a) * (1.0 - a * a)
-                } else {
-                    0.0
-                }
-            }
+impl Method for RobustOptions {
+    fn name(&self) -> &'static str {
+        "igg3"
+    }
+
+    fn check(&self) -> Result<()> {
+        finite_positive("k0", self.k0)?;
+        finite_positive("k1", self.k1)?;
+        if self.k1 <= self.k0 {
+            return Err(Error::setting(
+                "k1",
+                format!("must exceed k0 ({}), got {}", self.k0, self.k1),
+            ));
         }
+        self.xi.check("xi")?;
+        finite_positive("eps", self.eps)?;
+        check_count("max_iter", self.max_iter)
+    }
+
+    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
+        identify_robot(self, problem)
     }
 }
 
-pub(crate) fn run(p: &dyn Problem, x0: &DVector<Real>, o: &RobustOptions) -> Identified {
-    let cfg = RidgeCfg {
-        xi: &o.xi,
-        scale: o.scale,
-    };
-    gauss_newton(p, x0, o.eps, o.max_iter, Some(cfg), Some(o))
-}
-
-/// What the reweighting found.
-pub(crate) struct WeightStats {
-    /// The MAD-based σ0, when that estimate is in use.
-    pub mad: Option<Real>,
-}
-
-/// Recomputes the point weights `w` from the residuals `r` (`rows` per point, `t` unknowns).
-/// `rms0` is the RMS point residual at the start. Allocation-free once `buf` has capacity.
-pub(crate) fn point_weights(
-    r: &DVector<Real>,
-    rows: usize,
-    t: usize,
-    o: &RobustOptions,
-    rms0: Real,
-    w: &mut [Real],
-    buf: &mut Vec<Real>,
-) -> WeightStats {
-    let sigma0 = match o.sigma0 {
-        Sigma0::Classical => {
-            let mut s = 0.0;
-            let mut n = 0.0;
-            for (i, &wi) in w.iter().enumerate() {
-                n += rows as Real * wi;
-                let e2: Real = (0..rows).map(|k| r[i * rows + k].powi(2)).sum();
-                s += wi * e2;
-            }
-            if n > t as Real {
-                (s / (n - t as Real)).sqrt()
-            } else {
-                Real::NAN
-            }
-        }
-        Sigma0::Mad => {
-            buf.clear();
-            buf.extend(r.iter().map(|v| v.abs()));
-            1.4826 * median(buf)
-        }
-    };
-    let mad = (o.sigma0 == Sigma0::Mad).then_some(sigma0);
-    if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
-        w.fill(1.0);
-        return WeightStats { mad };
-    }
-    let scale = sigma0 * (rows as Real).sqrt();
-    for (i, wi) in w.iter_mut().enumerate() {
-        let e: Real = (0..rows)
-            .map(|k| r[i * rows + k].powi(2))
-            .sum::<Real>()
-            .sqrt();
-        *wi = o.weight.weight(e / scale, o.k0, o.k1);
-    }
-    WeightStats { mad }
-}
-
-/// Median of `v` (reorders it); NaN when empty.
-fn median(v: &mut [Real]) -> Real {
-    if v.is_empty() {
-        return Real::NAN;
-    }
-    v.sort_unstable_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use approx::assert_relative_eq;
-
-    #[test]
-    fn igg3_weights_match_the_three_segments() {
-        let f = WeightFn::Igg3;
-        assert_relative_eq!(f.weight(1.0, 1.5, 2.5), 1.0);
-        assert_relative_eq!(f.weight(1.5, 1.5, 2.5), 1.0);
-        // u = 2: (1.5/2)·((2.5 − 2)/(1))² = 0.75 · 0.25.
-        assert_relative_eq!(f.weight(2.0, 1.5, 2.5), 0.1875, epsilon = 1e-15);
-        assert_relative_eq!(f.weight(2.5, 1.5, 2.5), 0.0);
-        assert_relative_eq!(f.weight(3.0, 1.5, 2.5), 0.0);
-    }
-
-    #[test]
-    fn huber_and_tukey_weights_by_hand() {
-        assert_relative_eq!(WeightFn::Huber.weight(1.0, 1.5, 2.5), 1.0);
-        assert_relative_eq!(WeightFn::Huber.weight(3.0, 1.5, 2.5), 0.5);
-        // Tukey, c = 2.5, u = 1.25: (1 − 0.25)² = 0.5625.
-        assert_relative_eq!(WeightFn::Tukey.weight(1.25, 1.5, 2.5), 0.5625);
-        assert_relative_eq!(WeightFn::Tukey.weight(2.6, 1.5, 2.5), 0.0);
-    }
-
-    #[test]
-    fn median_of_even_and_odd_lists() {
-        assert_relative_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
-        assert_relative_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+impl Solver for RobustOptions {
+    fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
+        let cfg = RidgeCfg {
+            xi: &self.xi,
+            scale: self.scale,
+        };
+        let robust = RobustCfg {
+            weight: self.weight,
+            k0: self.k0,
+            k1: self.k1,
+            sigma0: self.sigma0,
+        };
+        gauss_newton(p, x0, self.eps, self.max_iter, Some(cfg), Some(&robust))
     }
 }

@@ -13,13 +13,39 @@ use crate::rng::{self, Rng};
 use crate::robots;
 use crate::sampling::uniform_joint_poses;
 
+/// Measured data in the base frame, for [`RobotProblem`].
+#[derive(Clone, Debug, Default)]
+struct RobotData {
+    qs: Vec<Vec<Real>>,
+    points: Vec<Vec3>,
+    rotations: Option<Vec<crate::math::Mat3>>,
+}
+
+impl RobotData {
+    fn problem<'a>(
+        &'a self,
+        nominal: &'a Robot,
+        params: &[Param],
+        measure: Measure,
+    ) -> crate::Result<RobotProblem<'a>> {
+        RobotProblem::new(
+            nominal,
+            params,
+            &self.qs,
+            &self.points,
+            self.rotations.as_deref(),
+            measure,
+        )
+    }
+}
+
 /// A linear problem `model(x) = A x` with data `b`, 1 row per point.
 struct Linear {
     a: DMatrix<Real>,
     b: DVector<Real>,
 }
 
-impl Problem for Linear {
+impl LeastSquares for Linear {
     fn n_params(&self) -> usize {
         self.a.ncols()
     }
@@ -60,7 +86,7 @@ fn linear_problem_matches_the_normal_equations() {
     let s2 = r.norm_squared() / 3.0;
     let cov_truth = ata.clone().try_inverse().expect("regular") * s2;
 
-    let out = identify(&p, &x0, &Method::Ls(LsOptions::default()));
+    let out = solve(&LsOptions::default(), &p, &x0);
     assert_eq!(out.termination, Termination::Converged);
     assert!(out.iterations <= 2, "{} iterations", out.iterations);
     approx::assert_relative_eq!(out.x, ls_truth, epsilon = 1e-12);
@@ -81,7 +107,7 @@ fn linear_problem_matches_the_normal_equations() {
         scale: false,
         ..Default::default()
     };
-    let out = identify(&p, &x0, &Method::Ridge(o));
+    let out = solve(&o, &p, &x0);
     assert_eq!(out.termination, Termination::Converged);
     approx::assert_relative_eq!(out.x, ridge_truth, epsilon = 1e-10);
     assert_eq!(out.ridge_xi, Some(xi));
@@ -93,7 +119,7 @@ fn linear_problem_matches_the_normal_equations() {
         xi: XiRule::Fixed(xi),
         ..Default::default()
     };
-    let out = identify(&p, &x0, &Method::Ridge(o));
+    let out = solve(&o, &p, &x0);
     approx::assert_relative_eq!(out.x, scaled_truth, epsilon = 1e-10);
 
     // LM, fixed and adaptive, reach the least-squares answer.
@@ -104,7 +130,7 @@ fn linear_problem_matches_the_normal_equations() {
             max_iter: 200,
             ..Default::default()
         };
-        let out = identify(&p, &x0, &Method::Lm(o));
+        let out = solve(&o, &p, &x0);
         assert_eq!(
             out.termination,
             Termination::Converged,
@@ -125,7 +151,7 @@ fn hoerl_kennard_baldwin_xi_by_hand() {
         max_iter: 1,
         ..Default::default()
     };
-    let out = identify(&p, &DVector::zeros(2), &Method::Ridge(o));
+    let out = solve(&o, &p, &DVector::zeros(2));
     let xi = 2.0 * (5.0 / 2.0) / 25.0;
     approx::assert_relative_eq!(out.ridge_xi.expect("ridge"), xi, epsilon = 1e-12);
     approx::assert_relative_eq!(out.x[0], 3.0 / (1.0 + xi), epsilon = 1e-12);
@@ -134,23 +160,23 @@ fn hoerl_kennard_baldwin_xi_by_hand() {
 #[test]
 fn bad_input_is_reported_not_panicked() {
     let p = linear();
-    let out = identify(&p, &DVector::zeros(2), &Method::Ls(LsOptions::default()));
+    let out = solve(&LsOptions::default(), &p, &DVector::zeros(2));
     assert_eq!(out.termination, Termination::InvalidInput);
     let nan = DVector::from_vec(vec![0.0, Real::NAN, 0.0]);
-    let out = identify(&p, &nan, &Method::Ls(LsOptions::default()));
+    let out = solve(&LsOptions::default(), &p, &nan);
     assert_eq!(out.termination, Termination::InvalidInput);
     let o = RobustOptions {
         k0: 3.0,
         k1: 2.0,
         ..Default::default()
     };
-    let out = identify(&p, &DVector::zeros(3), &Method::Igg3(o));
+    let out = solve(&o, &p, &DVector::zeros(3));
     assert_eq!(out.termination.as_str(), "invalid-input");
     // A rank-deficient problem: two equal columns.
     let mut q = linear();
     let c = q.a.column(0).into_owned();
     q.a.set_column(1, &c);
-    let out = identify(&q, &DVector::zeros(3), &Method::Ls(LsOptions::default()));
+    let out = solve(&LsOptions::default(), &q, &DVector::zeros(3));
     assert_eq!(out.termination, Termination::Singular);
 }
 
@@ -164,29 +190,27 @@ fn robot_problem_rejects_inconsistent_input() {
         rotations: None,
     };
     let ok = [Param::D(1), Param::A(2)];
-    assert!(RobotProblem::new(&nominal, &ok, &data, Measure::Position).is_ok());
+    assert!(data.problem(&nominal, &ok, Measure::Position).is_ok());
     // β does not exist in standard DH; a repeated parameter; no parameters.
-    assert!(RobotProblem::new(&nominal, &[Param::Beta(1)], &data, Measure::Position).is_err());
-    assert!(RobotProblem::new(
-        &nominal,
-        &[Param::A(1), Param::A(1)],
-        &data,
-        Measure::Position
-    )
-    .is_err());
-    assert!(RobotProblem::new(&nominal, &[], &data, Measure::Position).is_err());
+    assert!(data
+        .problem(&nominal, &[Param::Beta(1)], Measure::Position)
+        .is_err());
+    assert!(data
+        .problem(&nominal, &[Param::A(1), Param::A(1)], Measure::Position)
+        .is_err());
+    assert!(data.problem(&nominal, &[], Measure::Position).is_err());
     // Full pose without orientations.
-    assert!(RobotProblem::new(&nominal, &ok, &data, Measure::Pose).is_err());
+    assert!(data.problem(&nominal, &ok, Measure::Pose).is_err());
     // Lengths that disagree; a joint vector of the wrong length.
     let short = RobotData {
         qs: qs.clone(),
         points: vec![Vec3::zeros(); 2],
         rotations: None,
     };
-    assert!(RobotProblem::new(&nominal, &ok, &short, Measure::Position).is_err());
+    assert!(short.problem(&nominal, &ok, Measure::Position).is_err());
     let mut bad_q = data.clone();
     bad_q.qs[1].pop();
-    assert!(RobotProblem::new(&nominal, &ok, &bad_q, Measure::Position).is_err());
+    assert!(bad_q.problem(&nominal, &ok, Measure::Position).is_err());
 }
 
 // ---------------------------------------------------------------------------------------
@@ -278,37 +302,39 @@ fn validation_rms(truth: &Robot, robot: &Robot) -> Real {
     (s / qs.len() as Real).sqrt()
 }
 
-fn run(s: &Setup, data: &RobotData, m: &Method) -> (Identified, Real) {
-    let p = RobotProblem::new(&s.nominal, &s.params, data, Measure::Position).expect("problem");
-    let out = identify(&p, &DVector::zeros(s.params.len()), m);
+fn run(s: &Setup, data: &RobotData, m: &dyn Solver) -> (Identified, Real) {
+    let p = data
+        .problem(&s.nominal, &s.params, Measure::Position)
+        .expect("problem");
+    let out = solve(m, &p, &DVector::zeros(s.params.len()));
     let rms = validation_rms(&s.truth, &p.robot_with(&out.x));
     (out, rms)
 }
 
-fn all_methods() -> Vec<Method> {
-    let ridge = |xi| {
-        Method::Ridge(RidgeOptions {
+fn all_methods() -> Vec<Box<dyn Solver>> {
+    let ridge = |xi| -> Box<dyn Solver> {
+        Box::new(RidgeOptions {
             xi,
             ..Default::default()
         })
     };
     vec![
-        Method::Ls(LsOptions::default()),
+        Box::new(LsOptions::default()),
         ridge(XiRule::Fixed(1e-12)),
         ridge(XiRule::DoubleH),
         ridge(XiRule::Gcv),
         ridge(XiRule::LCurve),
-        Method::Igg3(RobustOptions::default()),
-        Method::Igg3(RobustOptions {
+        Box::new(RobustOptions::default()),
+        Box::new(RobustOptions {
             sigma0: Sigma0::Mad,
             ..Default::default()
         }),
-        Method::Lm(LmOptions::default()),
-        Method::Lm(LmOptions {
+        Box::new(LmOptions::default()),
+        Box::new(LmOptions {
             adaptive: true,
             ..Default::default()
         }),
-        Method::Lm(LmOptions {
+        Box::new(LmOptions {
             adaptive: true,
             marquardt: true,
             ..Default::default()
@@ -329,7 +355,7 @@ fn noise_free_data_recovers_the_paper_errors() {
     let before = validation_rms(&s.truth, &s.nominal);
     assert!(before > 10.0, "paper errors move the tool by {before} mm");
     for m in all_methods() {
-        let (out, rms) = run(&s, &data, &m);
+        let (out, rms) = run(&s, &data, m.as_ref());
         assert_eq!(out.termination, Termination::Converged, "{m:?}");
         assert!(rms < 1e-4, "{m:?}: validation RMS {rms} mm");
         for (k, (&x, &e)) in out.x.iter().zip(&s.errors).enumerate() {
@@ -368,12 +394,10 @@ fn exact_full_pose_data(
 fn full_pose_data_recovers_the_errors() {
     // Full-pose residuals: the orientation rows must be consistent with the Jacobian's.
     let (nominal, params, pairs, data) = exact_full_pose_data(3, 30);
-    let p = RobotProblem::new(&nominal, &params, &data, Measure::Pose).expect("problem");
-    let out = identify(
-        &p,
-        &DVector::zeros(params.len()),
-        &Method::Ls(LsOptions::default()),
-    );
+    let p = data
+        .problem(&nominal, &params, Measure::Pose)
+        .expect("problem");
+    let out = solve(&LsOptions::default(), &p, &DVector::zeros(params.len()));
     assert_eq!(out.termination, Termination::Converged);
     for (x, (_, e)) in out.x.iter().zip(&pairs) {
         assert!((x - e).abs() < 1e-7, "{x} vs {e}");
@@ -415,9 +439,12 @@ fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses(
             points,
             rotations: Some(rotations),
         };
-        let plain = RobotProblem::new(&nominal, &params, &data, Measure::Pose).expect("problem");
+        let plain = data
+            .problem(&nominal, &params, Measure::Pose)
+            .expect("problem");
         let k = sp / sa;
-        let weighted = RobotProblem::new(&nominal, &params, &data, Measure::Pose)
+        let weighted = data
+            .problem(&nominal, &params, Measure::Pose)
             .expect("problem")
             .with_orientation_weight(k)
             .expect("weight");
@@ -438,9 +465,9 @@ fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses(
                 }
             }
         }
-        let ls = Method::Ls(LsOptions::default());
+        let ls = LsOptions::default();
         for (e, p) in err.iter_mut().zip([&plain, &weighted]) {
-            let out = identify(p, &DVector::zeros(params.len()), &ls);
+            let out = solve(&ls, p, &DVector::zeros(params.len()));
             // Relative parameter error, lengths and angles each on their own scale.
             *e += out
                 .x
@@ -457,7 +484,9 @@ fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses(
     assert!(err[1] < 0.8 * err[0], "{err:?}");
     let data = measure(&nominal, rich, 0.0, &mut r);
     for bad in [0.0, -1.0, Real::NAN, Real::INFINITY] {
-        let p = RobotProblem::new(&nominal, &params, &data, Measure::Position).expect("problem");
+        let p = data
+            .problem(&nominal, &params, Measure::Position)
+            .expect("problem");
         assert!(p.with_orientation_weight(bad).is_err(), "{bad}");
     }
 }
@@ -468,7 +497,8 @@ fn full_pose_jacobian_is_minus_the_derivative_of_the_residual_away_from_the_fit(
     // away from the measured robot, so the orientation residuals are far from zero and the
     // logarithm's derivative J_r⁻¹(φ) matters.
     let (nominal, params, _, data) = exact_full_pose_data(5, 5);
-    let p = RobotProblem::new(&nominal, &params, &data, Measure::Pose)
+    let p = data
+        .problem(&nominal, &params, Measure::Pose)
         .expect("problem")
         .with_orientation_weight(100.0)
         .expect("weight");
@@ -514,10 +544,10 @@ fn igg3_resists_outliers() {
         let clean = measure(&s.truth, qs, 0.01, &mut r);
         let mut dirty = clean.clone();
         add_outliers(&mut dirty, 5, &mut r);
-        let ls = Method::Ls(LsOptions::default());
+        let ls = LsOptions::default();
         let (_, ls_clean) = run(&s, &clean, &ls);
         let (_, ls_dirty) = run(&s, &dirty, &ls);
-        let (out, igg3) = run(&s, &dirty, &Method::Igg3(RobustOptions::default()));
+        let (out, igg3) = run(&s, &dirty, &RobustOptions::default());
         assert_eq!(out.termination, Termination::Converged);
         println!("seed {seed}: ls clean {ls_clean}, ls dirty {ls_dirty}, igg3 {igg3} mm");
         assert!(
@@ -538,7 +568,7 @@ fn igg3_resists_outliers() {
                 weight: wf,
                 ..Default::default()
             };
-            let (out, rms) = run(&s, &dirty, &Method::Igg3(o));
+            let (out, rms) = run(&s, &dirty, &o);
             assert_eq!(out.termination, Termination::Converged, "{wf:?}");
             assert!(rms < ls_dirty, "{wf:?}: {rms} vs ls {ls_dirty}");
         }
@@ -604,7 +634,7 @@ fn ridge_beats_ls_on_crowded_poses() {
             })
             .collect();
         let data = measure(&s.truth, qs, 0.02, &mut r);
-        let (ls, _) = run(&s, &data, &Method::Ls(LsOptions::default()));
+        let (ls, _) = run(&s, &data, &LsOptions::default());
         assert_eq!(ls.termination, Termination::Converged);
         assert!(ls.condition_number > 1e10, "cond {}", ls.condition_number);
         e_ls += param_error(&s, &ls.x);
@@ -613,7 +643,7 @@ fn ridge_beats_ls_on_crowded_poses() {
                 xi: xi.clone(),
                 ..Default::default()
             };
-            let (ridge, _) = run(&s, &data, &Method::Ridge(o));
+            let (ridge, _) = run(&s, &data, &o);
             e_ridge[k] += param_error(&s, &ridge.x);
         }
     }
@@ -638,7 +668,7 @@ fn ls_covariance_meets_cramer_rao() {
     for seed in 0..trials {
         let mut r = rng::from_seed(10_000 + seed);
         let data = measure(&s.truth, qs.clone(), sigma, &mut r);
-        let (out, _) = run(&s, &data, &Method::Ls(LsOptions::default()));
+        let (out, _) = run(&s, &data, &LsOptions::default());
         assert_eq!(out.termination, Termination::Converged);
         let e = &out.x - DVector::from_column_slice(&s.errors);
         sum += &e;

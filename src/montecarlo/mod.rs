@@ -1,11 +1,17 @@
 //! The Monte-Carlo harness (FORMATS.md `run`): a scenario's trials in parallel with rayon,
-//! each from its own seed, aggregated into `summary.json`, `trials.csv`, `report.md` and plots.
+//! each from its own seed, aggregated per method and pose strategy. It returns values; the
+//! files (`summary.json`, `trials.csv`, `report.md`, plots) are written by
+//! [`crate::report::write_all`].
+//!
+//! - [`study`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
+//!   sets);
+//! - [`trial`]: one trial (true robot, measurements, every method's calibration, validation);
+//! - [`stats`]: the aggregation into [`Entry`] values.
 //!
 //! Determinism: trial i draws everything from `rng::trial_seed(seed, i)` and results are
 //! collected in trial order, so the output is the same whatever the thread count (timing
 //! fields excepted).
 
-pub mod output;
 pub mod stats;
 pub mod study;
 pub mod trial;
@@ -74,7 +80,8 @@ pub fn run_trials(study: &Study, bar: &ProgressBar) -> Result<Vec<TrialResult>> 
         .collect()
 }
 
-/// Runs `scenario` and writes its outputs.
+/// Runs `scenario` (every sweep value, every trial) and returns the results; nothing is
+/// written.
 pub fn run(scenario: Scenario, opts: &RunOptions) -> Result<RunResult> {
     let t0 = std::time::Instant::now();
     let out = opts
@@ -133,12 +140,10 @@ pub fn run(scenario: Scenario, opts: &RunOptions) -> Result<RunResult> {
         });
     }
     bar.finish_and_clear();
-    let result = RunResult {
+    Ok(RunResult {
         scenario,
         blocks,
         out,
         seconds: t0.elapsed().as_secs_f64(),
-    };
-    output::write_all(&result)?;
-    Ok(result)
+    })
 }

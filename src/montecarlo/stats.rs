@@ -4,7 +4,8 @@
 use serde::Serialize;
 use std::collections::BTreeMap;
 
-use super::trial::{ErrorStats, TrialResult};
+use super::trial::{Outcome, TrialResult};
+use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::math::Real;
 
@@ -126,7 +127,7 @@ pub fn aggregate(
     labels: (&str, &str),
     sweep_value: Option<serde_json::Value>,
 ) -> Entry {
-    let outs: Vec<(&TrialResult, &super::trial::Outcome)> = trials
+    let outs: Vec<(&TrialResult, &Outcome)> = trials
         .iter()
         .filter_map(|t| {
             t.outcomes
@@ -135,7 +136,7 @@ pub fn aggregate(
                 .map(|o| (t, o))
         })
         .collect();
-    let usable = |o: &super::trial::Outcome| {
+    let usable = |o: &Outcome| {
         !matches!(
             o.termination,
             Termination::Diverged | Termination::Singular | Termination::InvalidInput
@@ -187,7 +188,7 @@ pub fn aggregate(
         .then(|| emp_trace * ok.len() as Real / (ok.len() - 1) as Real / mean(&crbs));
     let before = average_stats(&ok.iter().map(|(_, o)| o.before_mm).collect::<Vec<_>>());
     let after = average_stats(&ok.iter().map(|(_, o)| o.after_mm).collect::<Vec<_>>());
-    let deg = |f: fn(&super::trial::Outcome) -> Option<ErrorStats>| {
+    let deg = |f: fn(&Outcome) -> Option<ErrorStats>| {
         let v: Vec<ErrorStats> = ok.iter().filter_map(|(_, o)| f(o)).collect();
         (!v.is_empty()).then(|| average_stats(&v))
     };

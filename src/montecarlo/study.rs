@@ -6,6 +6,7 @@ use crate::compliance::Compliance;
 use crate::error::Result;
 use crate::identifiability::identifiable_generic;
 use crate::jacobian::Measure;
+use crate::jacobian::{jacobian, Columns};
 use crate::kinematics::{Param, Robot};
 use crate::math::Real;
 use crate::poses::{self, RobotPoseModel, SelectOptions};
@@ -15,6 +16,7 @@ use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
 use crate::sim::truth::selected_params;
+use nalgebra::DMatrix;
 
 /// A calibration pose set fixed for the whole study (optimised, grid or file).
 #[derive(Clone, Debug)]
@@ -153,10 +155,7 @@ impl Study {
         let traces: Vec<Option<Real>> = study
             .fixed
             .iter()
-            .map(|f| {
-                f.as_ref()
-                    .and_then(|f| super::trial::crb_trace(&study, &f.poses))
-            })
+            .map(|f| f.as_ref().and_then(|f| crb_trace(&study, &f.poses)))
             .collect();
         for (f, t) in study.fixed.iter_mut().zip(traces) {
             if let Some(f) = f {
@@ -165,4 +164,35 @@ impl Study {
         }
         Ok(study)
     }
+}
+
+/// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
+/// base frame, with the nominal Jacobian), or `None` without noise.
+pub fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
+    let cols = Columns::new(&study.params, study.nominal.dof());
+    let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
+    let rows = study.measure.rows();
+    let chain = study.nominal.chain();
+    let tracker_at = study.tracker.frame().pos;
+    for (i, q) in qs.iter().enumerate() {
+        let range = (chain.fk(q).pos - tracker_at).norm();
+        let s = study.tracker.sigma_mm(range);
+        if s <= 0.0 {
+            return None;
+        }
+        let mut block = j.rows_mut(rows * i, 3);
+        block /= s;
+        if rows == 6 {
+            let sa = study.scenario.tracker.angle_noise_deg.to_radians();
+            if sa <= 0.0 {
+                return None;
+            }
+            let mut b = j.rows_mut(rows * i + 3, 3);
+            b /= sa;
+        }
+    }
+    let n: DMatrix<Real> = j.transpose() * &j;
+    n.try_inverse()
+        .map(|inv| inv.trace())
+        .filter(|t| t.is_finite())
 }

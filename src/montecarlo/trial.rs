@@ -7,56 +7,17 @@
 
 use std::time::Instant;
 
-use nalgebra::{DMatrix, DVector};
-
-use super::study::Study;
-use crate::errmodel::attitude_error_deg;
+use super::study::{crb_trace, Study};
+use crate::calibrate::{calibrate, validation_errors, ErrorStats};
 use crate::error::Result;
-use crate::identify::{identify, Identified, RobotData, RobotProblem, Termination};
-use crate::jacobian::{jacobian, Columns, Measure};
+use crate::identify::Termination;
+use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
-use crate::math::{Frame, Real, Vec3};
-use crate::metaheur::MetaProblem;
-use crate::registration::{register_svd, register_wsvd};
-use crate::rng::{self, Rng};
-use crate::scenario::{Identifier, MetaAlgorithm, Registration};
+use crate::math::{Frame, Real};
+use crate::rng;
 use crate::sim::poses::{sample_region, sample_region_keyed};
-use crate::sim::tracker::quaternion_matrix;
 use crate::sim::truth::draw_errors;
-use crate::sim::{measure_poses, Measurement, SagFn};
-
-/// Mean, RMS, max and standard deviation of a set of errors.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
-pub struct ErrorStats {
-    /// Mean (MAE).
-    pub mean: Real,
-    /// Root mean square.
-    pub rms: Real,
-    /// Maximum.
-    pub max: Real,
-    /// Standard deviation (population).
-    pub std: Real,
-}
-
-impl ErrorStats {
-    /// The statistics of `v` (all zero for an empty slice).
-    pub fn of(v: &[Real]) -> ErrorStats {
-        if v.is_empty() {
-            return ErrorStats::default();
-        }
-        let n = v.len() as Real;
-        let mean = v.iter().sum::<Real>() / n;
-        let rms = (v.iter().map(|x| x * x).sum::<Real>() / n).sqrt();
-        let max = v.iter().cloned().fold(0.0, Real::max);
-        let std = (v.iter().map(|x| (x - mean) * (x - mean)).sum::<Real>() / n).sqrt();
-        ErrorStats {
-            mean,
-            rms,
-            max,
-            std,
-        }
-    }
-}
+use crate::sim::{measure_poses, SagFn};
 
 /// What one method on one strategy's measurement gave in one trial.
 #[derive(Clone, Debug)]
@@ -98,234 +59,6 @@ pub struct TrialResult {
     pub crb_trace: Vec<Option<Real>>,
     /// One outcome per strategy × method.
     pub outcomes: Vec<Outcome>,
-}
-
-/// Brings the measured points (and frames) into the base frame with `frame`.
-fn to_base(m: &Measurement, frame: &Frame) -> RobotData {
-    RobotData {
-        qs: m.qs.clone(),
-        points: m.points.iter().map(|p| frame.apply(p)).collect(),
-        rotations: m.quats.as_ref().map(|qs| {
-            qs.iter()
-                .map(|q| frame.rot * quaternion_matrix(q))
-                .collect()
-        }),
-    }
-}
-
-/// A compensated robot and how it was obtained.
-pub struct Calibrated {
-    /// The nominal robot with the identified errors added.
-    pub robot: Robot,
-    /// The registration: measured (instrument) coordinates → base frame.
-    pub frame: Frame,
-    /// The identification's result (errors in the order of the parameters passed).
-    pub identified: Identified,
-    /// Best fitness per iteration of a metaheuristic (Qiao 2021 fig. 4); empty otherwise.
-    pub trace: Vec<Real>,
-}
-
-/// An identification result for methods that are not Jacobian-based: no weights,
-/// covariance or condition number.
-fn plain_result(
-    x: Vec<Real>,
-    iterations: usize,
-    termination: Termination,
-    points: usize,
-) -> Identified {
-    Identified {
-        x: DVector::from_vec(x),
-        iterations,
-        termination,
-        weights: vec![1.0; points],
-        condition_number: Real::NAN,
-        covariance: DMatrix::zeros(0, 0),
-        sigma0: Real::NAN,
-        rms_residual: Real::NAN,
-        ridge_xi: None,
-    }
-}
-
-/// Runs one identifier on data already in the base frame.
-fn run_identifier(
-    nominal: &Robot,
-    params: &[Param],
-    measure: Measure,
-    data: &RobotData,
-    method: &Identifier,
-    rng: &mut Rng,
-) -> Result<(Identified, Robot, Vec<Real>)> {
-    let n = data.qs.len();
-    match method {
-        Identifier::Jacobian { method, k } => {
-            let problem =
-                RobotProblem::new(nominal, params, data, measure)?.with_orientation_weight(*k)?;
-            let r = identify(&problem, &DVector::zeros(params.len()), method);
-            let robot = problem.robot_with(&r.x);
-            Ok((r, robot, Vec::new()))
-        }
-        Identifier::ErrorModel {
-            model,
-            iterations,
-            k,
-        } => {
-            let rots = data.rotations.as_ref().ok_or_else(|| {
-                crate::Error::Compute("the pose-error models need full-pose data".into())
-            })?;
-            let frames: Vec<Frame> = data
-                .points
-                .iter()
-                .zip(rots)
-                .map(|(p, r)| Frame { rot: *r, pos: *p })
-                .collect();
-            let fit = crate::errmodel::identify(
-                *model,
-                nominal,
-                params,
-                &data.qs,
-                &frames,
-                *iterations,
-                *k,
-            )?;
-            let term = if fit.last_step < 1e-9 {
-                Termination::Converged
-            } else {
-                Termination::MaxIterations
-            };
-            Ok((
-                plain_result(fit.x, *iterations, term, n),
-                fit.robot,
-                Vec::new(),
-            ))
-        }
-        Identifier::Meta(spec) => {
-            let problem = MetaProblem::new(
-                nominal,
-                params.to_vec(),
-                data.qs.clone(),
-                data.points.clone(),
-                data.rotations.clone(),
-                spec.k,
-            )?;
-            let bounds = problem.bounds(spec.bound_mm, spec.bound_rad);
-            let f = |x: &[Real]| problem.fitness(x);
-            let r = match &spec.algorithm {
-                MetaAlgorithm::Bas(o) => crate::metaheur::bas(&f, &bounds, o, rng)?,
-                MetaAlgorithm::Pso(o) => crate::metaheur::pso(&f, &bounds, o, rng)?,
-                MetaAlgorithm::BasPso(o) => crate::metaheur::bas_pso(&f, &bounds, o, rng)?,
-            };
-            let robot = problem.robot(&r.x)?;
-            let it = r.iterations;
-            Ok((
-                plain_result(r.x, it, Termination::MaxIterations, n),
-                robot,
-                r.trace,
-            ))
-        }
-    }
-}
-
-/// Registration and identification of one method on one measurement (SPEC §3
-/// "Registration", §4). With `svd` and `wsvd` registration and identification alternate
-/// (three rounds): the first fit absorbs part of the kinematic error into the frame, and a
-/// refit on the identified model removes it. With `identify` the SVD frame is a first
-/// estimate and the base parameters (which must then be among `params`) absorb the rest
-/// (Li 2018). With `known` the frame is `known`.
-#[allow(clippy::too_many_arguments)]
-pub fn calibrate(
-    nominal: &Robot,
-    params: &[Param],
-    measure: Measure,
-    m: &Measurement,
-    registration: Registration,
-    known: &Frame,
-    method: &Identifier,
-    rng: &mut Rng,
-) -> Result<Calibrated> {
-    let chain = nominal.chain();
-    let nominal_points: Vec<Vec3> = m.qs.iter().map(|q| chain.fk(q).pos).collect();
-    let mut frame = match registration {
-        Registration::Known => *known,
-        Registration::Wsvd => register_wsvd(&nominal_points, &m.points)?.frame,
-        Registration::Svd | Registration::Identify => {
-            register_svd(&nominal_points, &m.points, None)?.frame
-        }
-    };
-    let rounds = match registration {
-        Registration::Svd | Registration::Wsvd => 3,
-        _ => 1,
-    };
-    let mut round = 0;
-    loop {
-        let data = to_base(m, &frame);
-        let (identified, robot, trace) =
-            run_identifier(nominal, params, measure, &data, method, rng)?;
-        round += 1;
-        if round >= rounds {
-            return Ok(Calibrated {
-                robot,
-                frame,
-                identified,
-                trace,
-            });
-        }
-        let c = robot.chain();
-        let model: Vec<Vec3> = m.qs.iter().map(|q| c.fk(q).pos).collect();
-        frame = match registration {
-            Registration::Wsvd => register_wsvd(&model, &m.points)?.frame,
-            _ => register_svd(&model, &m.points, None)?.frame,
-        };
-    }
-}
-
-/// Position (mm) and orientation (deg) errors of `model` against the true frames, per pose:
-/// `|Δp|` and Qiao 2021's attitude error `√(Δα² + Δβ² + Δγ²)` of the fixed X-Y-Z angles
-/// ([`crate::errmodel::attitude_error_deg`]), whose means over the poses are Qiao's ACPE and
-/// ACAE (§4.1; FORMATS.md "summary.json").
-pub fn validation_errors(
-    model: &Robot,
-    qs: &[Vec<Real>],
-    truth: &[Frame],
-) -> (Vec<Real>, Vec<Real>) {
-    let c = model.chain();
-    qs.iter()
-        .zip(truth)
-        .map(|(q, t)| {
-            let f = c.fk(q);
-            ((f.pos - t.pos).norm(), attitude_error_deg(t, &f))
-        })
-        .unzip()
-}
-
-/// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
-/// base frame, with the nominal Jacobian), or `None` without noise.
-pub(super) fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
-    let cols = Columns::new(&study.params, study.nominal.dof());
-    let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
-    let rows = study.measure.rows();
-    let chain = study.nominal.chain();
-    let tracker_at = study.tracker.frame().pos;
-    for (i, q) in qs.iter().enumerate() {
-        let range = (chain.fk(q).pos - tracker_at).norm();
-        let s = study.tracker.sigma_mm(range);
-        if s <= 0.0 {
-            return None;
-        }
-        let mut block = j.rows_mut(rows * i, 3);
-        block /= s;
-        if rows == 6 {
-            let sa = study.scenario.tracker.angle_noise_deg.to_radians();
-            if sa <= 0.0 {
-                return None;
-            }
-            let mut b = j.rows_mut(rows * i + 3, 3);
-            b /= sa;
-        }
-    }
-    let n: DMatrix<Real> = j.transpose() * &j;
-    n.try_inverse()
-        .map(|inv| inv.trace())
-        .filter(|t| t.is_finite())
 }
 
 /// The injected errors and the true robot of trial `index`.
@@ -428,11 +161,10 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             let res = calibrate(
                 &study.nominal,
                 &study.params,
-                study.measure,
-                &m,
+                &m.data,
                 sc.registration,
                 &study.tracker.frame(),
-                &spec.method,
+                spec,
                 &mut rng::stream(seed, &format!("method/{}", spec.label)),
             );
             let seconds = t0.elapsed().as_secs_f64();
@@ -444,8 +176,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     let map = c.frame.compose(&study.tracker.frame().inverse());
                     let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
                     let (p, a) = validation_errors(&c.robot, &vqs, &seen);
-                    if index == 0 && !c.trace.is_empty() {
-                        trace = Some(c.trace);
+                    if index == 0 {
+                        trace = c.identified.trace.clone().filter(|t| !t.is_empty());
                     }
                     let r = c.identified;
                     (

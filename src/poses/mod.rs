@@ -20,7 +20,6 @@ pub mod symeig;
 
 use std::cell::RefCell;
 use std::fmt;
-use std::str::FromStr;
 
 use nalgebra::{DMatrix, DMatrixViewMut};
 use rand::seq::index::sample;
@@ -140,7 +139,8 @@ impl PoseModel for RobotPoseModel {
 }
 
 /// The objective maximised by DETMAX and IDE (Guo 2024 eq. 15, or a single index).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum Objective {
     /// The entropy-weighted composite index (eqs. 12–15); `"composite"`.
     Composite,
@@ -153,11 +153,7 @@ pub enum Objective {
 impl Objective {
     /// The name used in scenario files.
     pub fn as_str(self) -> &'static str {
-        match self {
-            Objective::Composite => "composite",
-            Objective::O1 => "o1",
-            Objective::O6 => "o6",
-        }
+        crate::names::static_name(&self)
     }
 }
 
@@ -167,23 +163,9 @@ impl fmt::Display for Objective {
     }
 }
 
-impl FromStr for Objective {
-    type Err = Error;
-    fn from_str(s: &str) -> crate::Result<Self> {
-        match s {
-            "composite" => Ok(Objective::Composite),
-            "o1" => Ok(Objective::O1),
-            "o6" => Ok(Objective::O6),
-            _ => Err(Error::setting(
-                "calibration.objective",
-                format!("unknown objective `{s}`; allowed: composite, o1, o6"),
-            )),
-        }
-    }
-}
-
 /// How poses are chosen from the candidates.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
 pub enum Strategy {
     /// A uniformly random subset of the candidates; `"random"`.
     Random,
@@ -198,34 +180,13 @@ pub enum Strategy {
 impl Strategy {
     /// The name used in scenario files and on the command line.
     pub fn as_str(self) -> &'static str {
-        match self {
-            Strategy::Random => "random",
-            Strategy::Detmax => "detmax",
-            Strategy::Ide => "ide",
-            Strategy::DetmaxIde => "detmax-ide",
-        }
+        crate::names::static_name(&self)
     }
 }
 
 impl fmt::Display for Strategy {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.as_str())
-    }
-}
-
-impl FromStr for Strategy {
-    type Err = Error;
-    fn from_str(s: &str) -> crate::Result<Self> {
-        match s {
-            "random" => Ok(Strategy::Random),
-            "detmax" => Ok(Strategy::Detmax),
-            "ide" => Ok(Strategy::Ide),
-            "detmax-ide" => Ok(Strategy::DetmaxIde),
-            _ => Err(Error::setting(
-                "calibration.strategies",
-                format!("unknown strategy `{s}`; allowed: random, detmax, ide, detmax-ide"),
-            )),
-        }
     }
 }
 
@@ -553,13 +514,20 @@ mod tests {
             Strategy::Ide,
             Strategy::DetmaxIde,
         ] {
-            assert_eq!(s.as_str().parse::<Strategy>().ok(), Some(s));
+            assert_eq!(
+                crate::names::parse::<Strategy>("s", s.as_str()).ok(),
+                Some(s)
+            );
         }
         for o in [Objective::Composite, Objective::O1, Objective::O6] {
-            assert_eq!(o.to_string().parse::<Objective>().ok(), Some(o));
+            assert_eq!(
+                crate::names::parse::<Objective>("o", &o.to_string()).ok(),
+                Some(o)
+            );
         }
-        assert!("DETMAX".parse::<Strategy>().is_err());
-        assert!("o2".parse::<Objective>().is_err());
+        assert_eq!(Strategy::DetmaxIde.as_str(), "detmax-ide");
+        assert!(crate::names::parse::<Strategy>("s", "DETMAX").is_err());
+        assert!(crate::names::parse::<Objective>("o", "o2").is_err());
     }
 
     #[test]

@@ -1,5 +1,6 @@
-//! Report rendering for the Monte-Carlo harness (FORMATS.md, `run` outputs: `report.md` and
-//! plots as PNG and SVG).
+//! Every writer of calbench's output files (FORMATS.md): [`run`] writes a run's
+//! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
+//! `calbench identify`.
 //!
 //! The report only reads results that are already computed (DESIGN.md). [`plots`] draws the
 //! figures of the source papers — η per parameter per method (Guo 2024, fig. 8), validation
@@ -12,11 +13,14 @@
 //! family `sans-serif`), so plots render the same on every machine without system font
 //! libraries, and the same data gives the same bytes.
 
+pub mod identified;
 pub mod markdown;
 pub mod plots;
+pub mod run;
 
 pub use markdown::{fmt_num, table};
 pub use plots::{
     before_after, box_plot, box_stats, grouped_bars, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,
 };
+pub use run::{columns, entry_table, summary, trials_csv, write_all, Column};

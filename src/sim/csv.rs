@@ -12,22 +12,27 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use super::Measurement;
 use crate::error::{Error, Result};
 use crate::kinematics::Robot;
 use crate::math::{Real, Vec3};
+use crate::measurement::Measurements;
 
 const QUAT: [&str; 4] = ["qw", "qx", "qy", "qz"];
 const XYZ: [&str; 3] = ["x", "y", "z"];
+/// The optional per-point standard deviation column (mm).
+const SIGMA: &str = "sigma_mm";
 
 /// Writes `m` as a measurement CSV. Numbers have a fixed format (9 decimals for joint values
 /// and points, 12 for quaternions), so equal measurements give identical bytes.
-pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurement) -> Result<()> {
+pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurements) -> Result<()> {
     let mut s = String::with_capacity(64 * (m.qs.len() + 1));
     joint_header(&mut s, robot.dof());
     s.push_str(",x,y,z");
     if m.quats.is_some() {
         s.push_str(",qw,qx,qy,qz");
+    }
+    if m.sigma_mm.is_some() {
+        s.push_str(",sigma_mm");
     }
     s.push('\n');
     for (i, q) in m.qs.iter().enumerate() {
@@ -52,6 +57,16 @@ pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurement) -> Result
             for v in qq {
                 let _ = write!(s, ",{}", fixed(*v, 12));
             }
+        }
+        if let Some(sd) = &m.sigma_mm {
+            let v = sd.get(i).ok_or_else(|| {
+                Error::Compute(format!(
+                    "measurement has {} poses but {} standard deviations",
+                    m.qs.len(),
+                    sd.len()
+                ))
+            })?;
+            let _ = write!(s, ",{}", fixed(*v, 9));
         }
         s.push('\n');
     }
@@ -92,25 +107,14 @@ fn fixed(v: Real, d: usize) -> String {
     }
 }
 
-/// Measured data as read from a CSV.
-#[derive(Clone, Debug, PartialEq)]
-pub struct MeasuredData {
-    /// Joint values (internal units: rad, mm).
-    pub qs: Vec<Vec<Real>>,
-    /// Measured points in the instrument's frame, mm.
-    pub points: Vec<Vec3>,
-    /// Measured orientations `[qw, qx, qy, qz]` (unit), when the file has them.
-    pub quats: Option<Vec<[Real; 4]>>,
-}
-
 /// Reads a measurement CSV for `robot` (see the module docs for what is refused).
-pub fn read_measurements(path: &Path, robot: &Robot) -> Result<MeasuredData> {
+pub fn read_measurements(path: &Path, robot: &Robot) -> Result<Measurements> {
     read_table(path, robot, true)
 }
 
 /// Reads a measurement CSV (`measured`) or a pose list (measured columns optional and
 /// ignored).
-pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<MeasuredData> {
+pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<Measurements> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut rd = ::csv::ReaderBuilder::new()
         .has_headers(true)
@@ -138,13 +142,16 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
     let find = |n: &str| names.iter().position(|h| h == n);
     // Unknown and repeated columns.
     for (i, n) in names.iter().enumerate() {
-        let known = qnames.contains(n) || XYZ.contains(&n.as_str()) || QUAT.contains(&n.as_str());
+        let known = qnames.contains(n)
+            || XYZ.contains(&n.as_str())
+            || QUAT.contains(&n.as_str())
+            || n == SIGMA;
         if !known {
             return Err(bad(
                 header_line,
                 &format!(", column {}", i + 1),
                 format!(
-                    "unknown column \"{n}\" (expected q1…q{dof}, x, y, z and optionally qw, qx, qy, qz)"
+                    "unknown column \"{n}\" (expected q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm)"
                 ),
             ));
         }
@@ -192,6 +199,8 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
     } else {
         (Vec::new(), None)
     };
+    let sigma_col = if measured { find(SIGMA) } else { None };
+    let mut sigma = Vec::new();
     let mut qs = Vec::new();
     let mut points = Vec::new();
     let mut quats = Vec::new();
@@ -270,11 +279,23 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
             }
             quats.push(qq.map(|v| v / n));
         }
+        if let Some(c) = sigma_col {
+            let v = num(c)?;
+            if v <= 0.0 {
+                return Err(bad(
+                    line,
+                    &format!(", column {SIGMA}"),
+                    format!("{v} is not a positive standard deviation"),
+                ));
+            }
+            sigma.push(v);
+        }
     }
-    Ok(MeasuredData {
+    Ok(Measurements {
         qs,
         points,
         quats: qtcol.map(|_| quats),
+        sigma_mm: sigma_col.map(|_| sigma),
     })
 }
 
@@ -292,7 +313,7 @@ mod tests {
         d.join(name)
     }
 
-    fn measurement(pose: bool) -> (Robot, Measurement) {
+    fn measurement(pose: bool) -> (Robot, Measurements) {
         let r = crate::robots::tx60();
         let qs = uniform_joint_poses(&r, 12, &mut stream(1, "poses"));
         let t = Tracker::new(&TrackerSettings {
@@ -306,7 +327,7 @@ mod tests {
         })
         .unwrap();
         let m = measure_poses(&r, &qs, &t, None, None, &mut stream(1, "noise")).unwrap();
-        (r, m)
+        (r, m.data)
     }
 
     #[test]
@@ -333,12 +354,7 @@ mod tests {
                 }
             }
             // Rewriting what was read gives the same bytes.
-            let again = Measurement {
-                qs: d.qs,
-                points: d.points,
-                quats: d.quats,
-                ..m.clone()
-            };
+            let again = d.clone();
             let p2 = tmp(&format!("rt2-{pose}.csv"));
             write_measurements(&p2, &r, &again).unwrap();
             assert_eq!(std::fs::read(&p).unwrap(), std::fs::read(&p2).unwrap());
@@ -360,6 +376,24 @@ mod tests {
         let s = e.to_string();
         assert!(s.contains("bad.csv"), "{s}");
         s
+    }
+
+    #[test]
+    fn standard_deviations_round_trip_and_must_be_positive() {
+        let (r, mut m) = measurement(false);
+        m.sigma_mm = Some((0..m.len()).map(|i| 0.01 + 0.001 * i as Real).collect());
+        let p = tmp("sigma.csv");
+        write_measurements(&p, &r, &m).unwrap();
+        let d = read_measurements(&p, &r).unwrap();
+        let (a, b) = (d.sigma_mm.unwrap(), m.sigma_mm.unwrap());
+        for (x, y) in a.iter().zip(&b) {
+            assert_relative_eq!(*x, *y, epsilon = 1e-12);
+        }
+        let h = "q1,q2,q3,q4,q5,q6,x,y,z,sigma_mm\n";
+        let s = read_err(&format!(
+            "{h}0,0,0,0,0,0,1,2,3,0.01\n0,0,0,0,0,0,1,2,3,-1\n"
+        ));
+        assert!(s.contains("line 3") && s.contains("column sigma_mm"), "{s}");
     }
 
     #[test]

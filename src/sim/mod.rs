@@ -30,17 +30,12 @@ use rand_distr::StandardNormal;
 use crate::error::{Error, Result};
 use crate::kinematics::Robot;
 use crate::math::{Frame, Real, Vec3};
+pub use crate::measurement::Measurements;
 use crate::rng::Rng;
 
-/// One simulated measurement campaign.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Measurement {
-    /// Joint values of each pose (internal units: rad, mm).
-    pub qs: Vec<Vec<Real>>,
-    /// Measured target points in the tracker frame (mm), noise and outliers included.
-    pub points: Vec<Vec3>,
-    /// Measured orientations `[qw, qx, qy, qz]` in the tracker frame, for full-pose data.
-    pub quats: Option<Vec<[Real; 4]>>,
+/// What only a simulation knows about a measurement, kept beside the [`Measurements`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SimTruth {
     /// Rows displaced as gross outliers, sorted.
     pub outliers: Vec<usize>,
     /// Gravity sag of the target point per pose, `[dx, dy, dz]` in the base frame (mm);
@@ -48,6 +43,16 @@ pub struct Measurement {
     pub sag_mm: Vec<[Real; 3]>,
     /// Noise-free target points in the base frame (mm), sag included.
     pub true_points: Vec<Vec3>,
+}
+
+/// One simulated measurement campaign: the data an instrument would deliver and the truth
+/// behind them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Simulated {
+    /// The measurements, as a real tracker would deliver them.
+    pub data: Measurements,
+    /// The simulation's truth.
+    pub truth: SimTruth,
 }
 
 /// The signature of a sag model: the deflected tool frame (in the base frame) of the true
@@ -65,7 +70,7 @@ pub fn measure_poses(
     outliers: Option<&OutlierSettings>,
     sag: Option<&SagFn>,
     rng: &mut Rng,
-) -> Result<Measurement> {
+) -> Result<Simulated> {
     let n_out = match outliers {
         Some(o) => o.count_for(qs.len())?,
         None => 0,
@@ -103,13 +108,18 @@ pub fn measure_poses(
         Some(o) => add_outliers(&mut points, n_out, o.magnitude_mm, rng),
         None => Vec::new(),
     };
-    Ok(Measurement {
-        qs: qs.to_vec(),
-        points,
-        quats: full_pose.then_some(quats),
-        outliers,
-        sag_mm,
-        true_points,
+    Ok(Simulated {
+        data: Measurements {
+            qs: qs.to_vec(),
+            points,
+            quats: full_pose.then_some(quats),
+            sigma_mm: None,
+        },
+        truth: SimTruth {
+            outliers,
+            sag_mm,
+            true_points,
+        },
     })
 }
 
@@ -171,12 +181,12 @@ mod tests {
         let m = measure_poses(&robot, &qs, &t, None, None, &mut stream(1, "noise")).unwrap();
         for (i, q) in qs.iter().enumerate() {
             let p = robot.fk(q).pos;
-            assert_relative_eq!(t.frame().apply(&m.points[i]), p, epsilon = 1e-9);
-            assert_relative_eq!(m.true_points[i], p, epsilon = 1e-12);
-            assert_eq!(m.sag_mm[i], [0.0; 3]);
+            assert_relative_eq!(t.frame().apply(&m.data.points[i]), p, epsilon = 1e-9);
+            assert_relative_eq!(m.truth.true_points[i], p, epsilon = 1e-12);
+            assert_eq!(m.truth.sag_mm[i], [0.0; 3]);
         }
-        assert!(m.quats.is_none());
-        assert!(m.outliers.is_empty());
+        assert!(m.data.quats.is_none());
+        assert!(m.truth.outliers.is_empty());
     }
 
     #[test]
@@ -190,11 +200,11 @@ mod tests {
             magnitude_mm: [0.5, 1.0],
         };
         let m = measure_poses(&robot, &qs, &t, Some(&o), None, &mut stream(2, "noise")).unwrap();
-        assert_eq!(m.outliers.len(), 8);
-        assert!(m.outliers.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!(m.truth.outliers.len(), 8);
+        assert!(m.truth.outliers.windows(2).all(|w| w[0] < w[1]));
         for i in 0..qs.len() {
-            let d = (t.frame().apply(&m.points[i]) - m.true_points[i]).norm();
-            if m.outliers.contains(&i) {
+            let d = (t.frame().apply(&m.data.points[i]) - m.truth.true_points[i]).norm();
+            if m.truth.outliers.contains(&i) {
                 assert!((0.5 - 1e-9..=1.0 + 1e-9).contains(&d), "row {i}: {d}");
             } else {
                 assert!(d < 1e-9, "row {i} moved by {d}");
@@ -232,9 +242,9 @@ mod tests {
         };
         let m = measure_poses(&robot, &qs, &t, None, Some(&sag), &mut stream(3, "n")).unwrap();
         for (i, q) in qs.iter().enumerate() {
-            assert_relative_eq!(m.sag_mm[i][2], -0.25, epsilon = 1e-9);
+            assert_relative_eq!(m.truth.sag_mm[i][2], -0.25, epsilon = 1e-9);
             assert_relative_eq!(
-                m.true_points[i],
+                m.truth.true_points[i],
                 robot.fk(q).pos - Vec3::new(0.0, 0.0, 0.25),
                 epsilon = 1e-9
             );
@@ -255,7 +265,7 @@ mod tests {
         let b = measure_poses(&robot, &qs, &t, None, None, &mut stream(4, "noise")).unwrap();
         let c = measure_poses(&robot, &qs, &t, None, None, &mut stream(5, "noise")).unwrap();
         assert_eq!(a, b);
-        assert_ne!(a.points, c.points);
-        assert_eq!(a.quats.as_ref().map(Vec::len), Some(10));
+        assert_ne!(a.data.points, c.data.points);
+        assert_eq!(a.data.quats.as_ref().map(Vec::len), Some(10));
     }
 }

@@ -15,7 +15,7 @@ use rand_distr::StandardNormal;
 use super::settings::TrackerSettings;
 use crate::error::Result;
 use crate::jacobian::Measure;
-use crate::math::{Frame, Mat3, Real, Vec3};
+use crate::math::{Frame, Real, Vec3};
 use crate::rng::Rng;
 
 /// A laser tracker with its pose in the robot base frame and its noise model.
@@ -94,25 +94,12 @@ impl Tracker {
     }
 }
 
-/// The unit quaternion `[qw, qx, qy, qz]` of a rotation matrix, with qw ≥ 0.
-pub fn quaternion(r: &Mat3) -> [Real; 4] {
-    let q = nalgebra::UnitQuaternion::from_rotation_matrix(
-        &nalgebra::Rotation3::from_matrix_unchecked(*r),
-    );
-    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-    [s * q.w, s * q.i, s * q.j, s * q.k]
-}
-
-/// The rotation matrix of a unit quaternion `[qw, qx, qy, qz]` (normalised first).
-pub fn quaternion_matrix(q: &[Real; 4]) -> Mat3 {
-    nalgebra::UnitQuaternion::from_quaternion(nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]))
-        .to_rotation_matrix()
-        .into_inner()
-}
+pub use crate::math::{quaternion, quaternion_matrix};
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::Mat3;
     use crate::math::{rotation_vector, rpy_matrix};
     use crate::rng::stream;
     use approx::assert_relative_eq;

@@ -1,28 +1,29 @@
-//! The commands behind the `calbench` binary, one function each. They print to stdout and
-//! write files; `main.rs` only parses arguments and reports errors.
+//! The commands of the `calbench` binary, one function each: they call the library, print
+//! to stdout and write files through [`calbench::report`]; `main.rs` parses arguments and
+//! reports errors.
 
 use std::path::{Path, PathBuf};
 
 use serde_json::json;
 
-use crate::check::{compare, read_json, Regression};
-use crate::error::{Error, Result};
-use crate::identifiability::analyse;
-use crate::jacobian::Measure;
-use crate::kinematics::robot_to_toml;
-use crate::math::Real;
-use crate::math::{Frame, Mat3};
-use crate::montecarlo::output::entry_table;
-use crate::montecarlo::trial::{self, ErrorStats};
-use crate::montecarlo::{self, study, RunOptions, RunResult, Study};
-use crate::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
-use crate::report::markdown::table as markdown_table;
-use crate::robots::{self, BUILTINS};
-use crate::scenario::{Registration, Scenario};
-use crate::sim::csv::{read_measurements, write_measurements, write_pose_list};
-use crate::sim::poses::sample_region;
-use crate::sim::tracker::quaternion_matrix;
-use crate::sim::{measure_poses, Measurement};
+use calbench::calibrate::{calibrate, Registration};
+use calbench::check::{compare, read_json, Regression};
+use calbench::error::{Error, Result};
+use calbench::identifiability::analyse;
+use calbench::identify::method_by_name;
+use calbench::jacobian::Measure;
+use calbench::kinematics::robot_to_toml;
+use calbench::math::{Frame, Real};
+use calbench::montecarlo::{self, study, trial, RunOptions, RunResult, Study};
+use calbench::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
+use calbench::report::identified::{validate_file, write_identified, IdentifyRecord};
+use calbench::report::markdown::table as markdown_table;
+use calbench::report::{entry_table, write_all};
+use calbench::robots::{self, BUILTINS};
+use calbench::scenario::Scenario;
+use calbench::sim::csv::{read_measurements, write_measurements, write_pose_list};
+use calbench::sim::measure_poses;
+use calbench::sim::poses::sample_region;
 
 /// `calbench robots [NAME]`.
 pub fn robots(name: Option<&str>) -> Result<()> {
@@ -127,11 +128,11 @@ pub fn identifiability(
     if poses == 0 {
         return Err(Error::setting("--poses", "must be at least 1"));
     }
-    let mut rng = crate::rng::stream(seed, "identifiability");
-    let qs = crate::sampling::uniform_joint_poses(&robot, poses, &mut rng);
+    let mut rng = calbench::rng::stream(seed, "identifiability");
+    let qs = calbench::sampling::uniform_joint_poses(&robot, poses, &mut rng);
     let a = analyse(&robot, &robot.params(), &qs, measure);
     let names =
-        |v: &[crate::kinematics::Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
+        |v: &[calbench::kinematics::Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     if json {
         let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
         println!(
@@ -190,7 +191,7 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
     let study = Study::new(sc)?;
     let sc = &study.scenario;
     let (errors, truth) = trial::true_robot(&study, trial);
-    let seed = crate::rng::trial_seed(sc.seed, trial as u64);
+    let seed = calbench::rng::trial_seed(sc.seed, trial as u64);
     let qs = trial::calibration_poses(&study, 0, trial)?;
     let vqs = trial::validation_poses(&study, trial)?;
     let sag = trial::sag_fn(&study);
@@ -202,7 +203,7 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         &study.tracker,
         outliers,
         sag_ref,
-        &mut crate::rng::stream(seed, "measure"),
+        &mut calbench::rng::stream(seed, "measure"),
     )?;
     let v = measure_poses(
         &truth,
@@ -210,11 +211,11 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         &study.tracker,
         None,
         sag_ref,
-        &mut crate::rng::stream(seed, "measure/validation"),
+        &mut calbench::rng::stream(seed, "measure/validation"),
     )?;
     create_dir(out)?;
-    write_measurements(&out.join("measurements.csv"), &study.nominal, &m)?;
-    write_measurements(&out.join("validation.csv"), &study.nominal, &v)?;
+    write_measurements(&out.join("measurements.csv"), &study.nominal, &m.data)?;
+    write_measurements(&out.join("validation.csv"), &study.nominal, &v.data)?;
     let errs: serde_json::Map<String, serde_json::Value> = errors
         .iter()
         .map(|(p, e)| (p.to_string(), json!(e)))
@@ -227,22 +228,18 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         "calibration_poses": sc.calibration.strategies[0].name(),
         "errors": errs,
         "tracker_pose": sc.tracker.pose,
-        "outliers": m.outliers,
-        "sag_mm": m.sag_mm,
-        "validation_sag_mm": v.sag_mm,
+        "outliers": m.truth.outliers,
+        "sag_mm": m.truth.sag_mm,
+        "validation_sag_mm": v.truth.sag_mm,
     });
     write_file(&out.join("truth.json"), &to_json_text(&truth_json)?)?;
     println!(
         "{} calibration and {} validation poses of trial {trial} written to {}",
-        m.qs.len(),
-        v.qs.len(),
+        m.data.len(),
+        v.data.len(),
         out.display()
     );
     Ok(())
-}
-
-fn stats_json(s: &ErrorStats) -> serde_json::Value {
-    json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
 }
 
 /// `calbench identify --robot R --data CSV --method M [--registration …] [--validate CSV] [--k K]
@@ -257,14 +254,10 @@ pub fn identify_file(
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
-    let mut method = crate::scenario::method_by_name(method)?.method;
-    let registration = Registration::parse(registration)?;
+    let mut spec = method_by_name(method)?;
+    let registration: Registration = calbench::names::parse("--registration", registration)?;
     let d = read_measurements(data, &nominal)?;
-    let measure = if d.quats.is_some() {
-        Measure::Pose
-    } else {
-        Measure::Position
-    };
+    let measure = d.measure();
     if let Some(k) = k {
         if measure == Measure::Position {
             return Err(Error::setting(
@@ -272,112 +265,50 @@ pub fn identify_file(
                 "weighs orientation against position errors; the data hold positions only",
             ));
         }
-        method
-            .set_orientation_weight(k)
-            .map_err(|e| Error::setting("--k", e.to_string()))?;
+        calbench::error::finite_positive("--k", k)?;
+        spec.k = k;
     }
     let val = validate
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
     let with_base = registration == Registration::Identify;
     let params = study::identified_params(&nominal, measure, with_base);
-    let m = Measurement {
-        qs: d.qs.clone(),
-        points: d.points.clone(),
-        quats: d.quats.clone(),
-        outliers: Vec::new(),
-        sag_mm: Vec::new(),
-        true_points: Vec::new(),
-    };
     // For real data "known" means the points are already in the base frame.
-    let c = trial::calibrate(
+    let c = calibrate(
         &nominal,
         &params,
-        measure,
-        &m,
+        &d,
         registration,
         &Frame::identity(),
-        &method,
-        &mut crate::rng::stream(0, "identify"),
+        &spec,
+        &mut calbench::rng::stream(0, "identify"),
     )?;
-    create_dir(out)?;
-    let r = &c.identified;
-    let names: Vec<String> = params.iter().map(|p| p.to_string()).collect();
-    let errors: serde_json::Map<String, serde_json::Value> = names
-        .iter()
-        .zip(r.x.iter())
-        .map(|(n, x)| (n.clone(), json!(x)))
-        .collect();
-    let cov: Vec<Vec<Real>> = (0..r.covariance.nrows())
-        .map(|i| r.covariance.row(i).iter().copied().collect())
-        .collect();
-    let (xyz, rpy) = c.frame.to_xyz_rpy();
-    let mut j = json!({
-        "robot": nominal.name,
-        "data": data.display().to_string(),
-        "method": method.name(),
-        "registration": registration.as_str(),
-        "registration_frame": {"xyz_mm": xyz, "rpy_rad": rpy},
-        "parameters": names,
-        "errors": errors,
-        "covariance": cov,
-        "condition_number": r.condition_number,
-        "sigma0": r.sigma0,
-        "rms_residual_mm": r.rms_residual,
-        "iterations": r.iterations,
-        "termination": r.termination.as_str(),
-    });
-    // Residuals per point before (nominal) and after (compensated), and the final weights.
-    let (cn, cc) = (nominal.chain(), c.robot.chain());
-    let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
-    for (i, (q, p)) in d.qs.iter().zip(&d.points).enumerate() {
-        let pb = c.frame.apply(p);
-        let w = r.weights.get(i).copied().unwrap_or(1.0);
-        csv += &format!(
-            "{i},{},{},{}\n",
-            (pb - cn.fk(q).pos).norm(),
-            (pb - cc.fk(q).pos).norm(),
-            w
-        );
-    }
-    write_file(&out.join("residuals.csv"), &csv)?;
-    if let Some(v) = &val {
-        let truth: Vec<Frame> = v
-            .points
-            .iter()
-            .enumerate()
-            .map(|(i, p)| Frame {
-                rot: v.quats.as_ref().map_or(Mat3::identity(), |qs| {
-                    c.frame.rot * quaternion_matrix(&qs[i])
-                }),
-                pos: c.frame.apply(p),
-            })
-            .collect();
-        let (bp, ba) = trial::validation_errors(&nominal, &v.qs, &truth);
-        let (ap, aa) = trial::validation_errors(&c.robot, &v.qs, &truth);
-        let (b, a) = (ErrorStats::of(&bp), ErrorStats::of(&ap));
-        j["validation_before_mm"] = stats_json(&b);
-        j["validation_after_mm"] = stats_json(&a);
-        if v.quats.is_some() {
-            j["validation_before_deg"] = stats_json(&ErrorStats::of(&ba));
-            j["validation_after_deg"] = stats_json(&ErrorStats::of(&aa));
-        }
+    let validation = val.as_ref().map(|v| validate_file(&nominal, &c, v));
+    let record = IdentifyRecord {
+        nominal: &nominal,
+        data_path: data,
+        data: &d,
+        method: spec.name(),
+        registration,
+        params: &params,
+        calibrated: &c,
+        validation: validation.as_ref(),
+    };
+    write_identified(out, &record)?;
+    if let Some(v) = &validation {
         println!("validation error (mm)   mean      rms       max       std");
-        for (label, s) in [("before", b), ("after", a)] {
+        for (label, s) in [("before", v.before_mm), ("after", v.after_mm)] {
             println!(
                 "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
                 s.mean, s.rms, s.max, s.std
             );
         }
     }
-    write_file(&out.join("identified.json"), &to_json_text(&j)?)?;
-    let mut compensated = c.robot.clone();
-    compensated.name = format!("{}-calibrated", nominal.name);
-    write_file(&out.join("robot.toml"), &robot_to_toml(&compensated))?;
+    let r = &c.identified;
     println!(
         "{} on {} points: {} after {} iterations; written to {}",
-        method.name(),
-        d.qs.len(),
+        spec.name(),
+        d.len(),
         r.termination.as_str(),
         r.iterations,
         out.display()
@@ -395,7 +326,7 @@ pub fn poses(
     out: &Path,
 ) -> Result<()> {
     let sc = Scenario::load(scenario)?;
-    let strategy: Optimiser = strategy.parse()?;
+    let strategy: Optimiser = calbench::names::parse("--strategy", strategy)?;
     let nominal = sc.robot()?;
     let measure = sc.tracker.measure.measure();
     let c = &sc.calibration;
@@ -410,22 +341,22 @@ pub fn poses(
         ));
     }
     let mut params = study::identified_params(&nominal, measure, false);
-    let mut g = crate::rng::stream(sc.seed, "poses-command");
+    let mut g = calbench::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
     let mut separation = None;
     if c.separate {
-        let s = crate::poses::separate(&nominal, &params, &pool, measure, c.separate_threshold);
+        let s = calbench::poses::separate(&nominal, &params, &pool, measure, c.separate_threshold);
         params = s.kept.clone();
         separation = Some(s);
     }
     let model = RobotPoseModel::new(&nominal, &params, measure);
     let mut opts = SelectOptions::new(count);
     opts.objective = c.objective;
-    let sel = crate::poses::select(&model, &pool, strategy, &opts, &mut g)?;
+    let sel = calbench::poses::select(&model, &pool, strategy, &opts, &mut g)?;
     create_dir(out)?;
     write_pose_list(&out.join("poses.csv"), &nominal, &sel.poses)?;
     let mut scores = serde_json::to_value(sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
-    scores["strategy"] = json!(strategy_name(strategy));
+    scores["strategy"] = json!(strategy.as_str());
     scores["count"] = json!(sel.poses.len());
     scores["parameters"] = json!(params.iter().map(|p| p.to_string()).collect::<Vec<_>>());
     scores["termination"] = json!(sel.termination);
@@ -445,7 +376,7 @@ pub fn poses(
         "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",
         sel.poses.len(),
         pool.len(),
-        strategy_name(strategy),
+        strategy.as_str(),
         sel.scores.composite,
         sel.scores.o1,
         sel.scores.gcn,
@@ -467,7 +398,7 @@ pub fn poses(
                     })
             })
             .collect::<Result<_>>()?;
-        let pts = crate::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
+        let pts = calbench::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
         let mut text = String::from("count,objective\n");
         println!("objective against pose count (Guo 2024 fig. 7):");
         for (n, f) in &pts {
@@ -479,18 +410,9 @@ pub fn poses(
     Ok(())
 }
 
-fn strategy_name(s: Optimiser) -> &'static str {
-    match s {
-        Optimiser::Random => "random",
-        Optimiser::Detmax => "detmax",
-        Optimiser::Ide => "ide",
-        Optimiser::DetmaxIde => "detmax-ide",
-    }
-}
-
 /// Prints the main table of a run.
 fn print_table(r: &RunResult) {
-    use crate::montecarlo::output::columns::*;
+    use calbench::report::columns::*;
     let columns = [
         ETA_MEAN,
         BEFORE_MEAN,
@@ -542,6 +464,7 @@ pub fn run(
         progress: true,
     };
     let r = montecarlo::run(sc, &opts)?;
+    write_all(&r)?;
     print_table(&r);
     println!(
         "\n{} trials in {:.1} s; report: {}",

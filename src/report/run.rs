@@ -6,12 +6,12 @@ use std::path::Path;
 
 use serde_json::{json, Value};
 
-use super::stats::Entry;
-use super::{toml_to_json, RunResult};
+use super::markdown::{fmt_num, table};
+use super::plots;
 use crate::error::{Error, Result};
 use crate::math::Real;
-use crate::report::markdown::{fmt_num, table};
-use crate::report::plots;
+use crate::montecarlo::stats::{eta, Entry};
+use crate::montecarlo::{toml_to_json, Block, RunResult};
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
@@ -19,7 +19,7 @@ fn write(path: &Path, text: &str) -> Result<()> {
 
 /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
 /// `method / poses`.
-fn fitness_traces(b: &super::Block) -> Vec<(String, Vec<Real>)> {
+fn fitness_traces(b: &Block) -> Vec<(String, Vec<Real>)> {
     let sc = &b.study.scenario;
     b.trials
         .first()
@@ -221,7 +221,7 @@ pub fn trials_csv(r: &RunResult) -> String {
                     .truth
                     .iter()
                     .zip(&o.identified)
-                    .filter_map(|(&x, &y)| super::stats::eta(x, y))
+                    .filter_map(|(&x, &y)| eta(x, y))
                     .collect();
                 let eta_mean = if etas.is_empty() {
                     Real::NAN

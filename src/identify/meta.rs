@@ -1,0 +1,149 @@
+//! The derivative-free searches of Qiao 2021 (BAS, PSO, BAS-PSO; §3, eqs. 12–14) as
+//! identification methods: each searches the errors of the problem's parameters in a box of
+//! ± `bound_mm` (lengths) and ± `bound_rad` (angles) around the nominal values, minimising
+//! Qiao's fitness (eq. 14, [`crate::metaheur::MetaProblem::fitness`]). The searches
+//! themselves are in [`crate::metaheur`].
+
+use serde::Deserialize;
+
+use super::{CalibrationProblem, Identified, Method, Termination};
+use crate::error::{finite_positive, Result};
+use crate::math::Real;
+use crate::metaheur::{
+    bas, bas_pso, pso, BasOptions, BasPsoOptions, Bounds, Fitness, MetaProblem, MetaResult,
+    PsoOptions,
+};
+use crate::rng::Rng;
+
+/// A search over a box: the options of one of [`bas`], [`pso`], [`bas_pso`].
+pub trait Search: std::fmt::Debug + Send + Sync {
+    /// The method's name in scenarios.
+    const NAME: &'static str;
+    /// Checks the option values.
+    fn check(&self) -> Result<()>;
+    /// Minimises `f` over `b`.
+    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult>;
+}
+
+impl Search for BasOptions {
+    const NAME: &'static str = "bas";
+    fn check(&self) -> Result<()> {
+        BasOptions::check(self)
+    }
+    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
+        bas(f, b, self, rng)
+    }
+}
+
+impl Search for PsoOptions {
+    const NAME: &'static str = "pso";
+    fn check(&self) -> Result<()> {
+        PsoOptions::check(self)
+    }
+    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
+        pso(f, b, self, rng)
+    }
+}
+
+impl Search for BasPsoOptions {
+    const NAME: &'static str = "bas-pso";
+    fn check(&self) -> Result<()> {
+        BasPsoOptions::check(self)
+    }
+    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
+        bas_pso(f, b, self, rng)
+    }
+}
+
+/// Options of `bas`, `pso` and `bas-pso` (FORMATS.md `[[methods]]`): the search's own
+/// options and the search box. Deserialised from one table: `bound_mm` and `bound_rad`
+/// here, every other key into the search's options (which refuse unknown keys).
+#[derive(Clone, Debug)]
+pub struct Metaheuristic<S> {
+    /// The search and its options.
+    pub search: S,
+    /// Half-width of the search box on length parameters, mm. Default 2.
+    pub bound_mm: Real,
+    /// Half-width of the search box on angle parameters, rad. Default 0.02.
+    pub bound_rad: Real,
+}
+
+impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut t = toml::Table::deserialize(d)?;
+        let mut bound = |key: &str, default: Real| match t.remove(key) {
+            None => Ok(default),
+            Some(v) => Real::deserialize(v).map_err(D::Error::custom),
+        };
+        let bound_mm = bound("bound_mm", default_bound_mm())?;
+        let bound_rad = bound("bound_rad", default_bound_rad())?;
+        let search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
+        Ok(Metaheuristic {
+            search,
+            bound_mm,
+            bound_rad,
+        })
+    }
+}
+
+fn default_bound_mm() -> Real {
+    2.0
+}
+
+fn default_bound_rad() -> Real {
+    0.02
+}
+
+impl<S: Default> Default for Metaheuristic<S> {
+    fn default() -> Self {
+        Metaheuristic {
+            search: S::default(),
+            bound_mm: default_bound_mm(),
+            bound_rad: default_bound_rad(),
+        }
+    }
+}
+
+impl<S: Search> Method for Metaheuristic<S> {
+    fn name(&self) -> &'static str {
+        S::NAME
+    }
+
+    fn check(&self) -> Result<()> {
+        self.search.check()?;
+        finite_positive("bound_mm", self.bound_mm)?;
+        finite_positive("bound_rad", self.bound_rad)
+    }
+
+    /// The search's best point; [`Termination::TargetReached`] when it stopped at its target
+    /// fitness, else [`Termination::MaxIterations`]. The trace is the best fitness per
+    /// iteration (Qiao 2021 fig. 4).
+    fn identify(&self, problem: &CalibrationProblem, rng: &mut Rng) -> Result<Identified> {
+        let mp = MetaProblem::new(
+            problem.nominal,
+            problem.params.to_vec(),
+            problem.poses().to_vec(),
+            problem.points.clone(),
+            problem.rotations.clone(),
+            problem.k,
+        )?;
+        let bounds = mp.bounds(self.bound_mm, self.bound_rad);
+        let f = |x: &[Real]| mp.fitness(x);
+        let r = self.search.search(&f, &bounds, rng)?;
+        let termination = if r.reached_target {
+            Termination::TargetReached
+        } else {
+            Termination::MaxIterations
+        };
+        let mut out = Identified::plain(
+            r.x,
+            r.iterations,
+            r.evaluations,
+            termination,
+            problem.data.len(),
+        );
+        out.trace = Some(r.trace);
+        Ok(out)
+    }
+}

@@ -1,0 +1,76 @@
+//! Least squares on one of Qiao 2021's three pose-error models (§2.2–2.3, §4.2; full-pose
+//! data only): `ls` with the key `error_model`. The models and their Jacobians are in
+//! [`crate::errmodel`]; this file makes them a [`Method`].
+
+use serde::Deserialize;
+
+use super::{CalibrationProblem, Identified, Method, Termination};
+use crate::errmodel::ErrorModel;
+use crate::error::{check_count, Error, Result};
+use crate::math::Frame;
+use crate::rng::Rng;
+
+/// Options of `ls` with `error_model` (FORMATS.md `[[methods]]`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoseErrorLs {
+    /// The pose-error model.
+    pub error_model: ErrorModel,
+    /// Gauss–Newton steps. Default 10 (1 is Qiao's linear identification of models 1–2).
+    #[serde(default = "default_iterations")]
+    pub iterations: usize,
+}
+
+fn default_iterations() -> usize {
+    10
+}
+
+/// The last step below which the Gauss–Newton iteration counts as converged.
+const STEP_TOLERANCE: f64 = 1e-9;
+
+impl Method for PoseErrorLs {
+    fn name(&self) -> &'static str {
+        "ls"
+    }
+
+    fn check(&self) -> Result<()> {
+        check_count("iterations", self.iterations)
+    }
+
+    /// Runs all `iterations` Gauss–Newton steps ([`crate::errmodel::identify`]); the result
+    /// is [`Termination::Converged`] when the last step's norm is below 1e-9, else
+    /// [`Termination::MaxIterations`].
+    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
+        let rots = problem
+            .rotations
+            .as_ref()
+            .ok_or_else(|| Error::Compute("the pose-error models need full-pose data".into()))?;
+        let frames: Vec<Frame> = problem
+            .points
+            .iter()
+            .zip(rots)
+            .map(|(p, r)| Frame { rot: *r, pos: *p })
+            .collect();
+        let fit = crate::errmodel::identify(
+            self.error_model,
+            problem.nominal,
+            problem.params,
+            problem.poses(),
+            &frames,
+            self.iterations,
+            problem.k,
+        )?;
+        let termination = if fit.last_step < STEP_TOLERANCE {
+            Termination::Converged
+        } else {
+            Termination::MaxIterations
+        };
+        Ok(Identified::plain(
+            fit.x,
+            self.iterations,
+            self.iterations,
+            termination,
+            problem.data.len(),
+        ))
+    }
+}

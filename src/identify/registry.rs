@@ -1,0 +1,259 @@
+//! The identification methods by name, and a scenario's `[[methods]]` entry read into a
+//! [`MethodSpec`] (FORMATS.md `[[methods]]`).
+//!
+//! Every method's options are one struct: `#[derive(Deserialize)]` with
+//! `deny_unknown_fields` and `Default`, checked by its [`Method::check`]. An entry's common
+//! keys (`name`, `label`, `k`) are read here; every other key goes to the options struct. A
+//! bad entry is refused with the key and what is wrong.
+
+use std::sync::Arc;
+
+use serde::de::DeserializeOwned;
+
+use super::meta::Metaheuristic;
+use super::{LmOptions, LsOptions, Method, PoseErrorLs, RidgeOptions, RobustOptions};
+use crate::error::{finite_positive, Error, Result};
+use crate::math::Real;
+use crate::metaheur::{BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
+
+/// A refused `[[methods]]` entry: the key (empty when the entry as a whole is wrong) and
+/// what is wrong.
+pub type EntryError = (String, String);
+
+/// Reads a method's options from the entry's table (common keys removed) and checks them.
+pub type Build = fn(&toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError>;
+
+/// A registered method: its name in scenarios, a one-line summary and its reader.
+pub struct MethodEntry {
+    /// `name = "…"` in `[[methods]]`.
+    pub name: &'static str,
+    /// What it is, for `--help` texts and error messages.
+    pub summary: &'static str,
+    /// Reads and checks the options.
+    pub build: Build,
+}
+
+/// Every identification method. Adding a method: one file with its options struct
+/// implementing [`Method`], and one line here.
+pub const METHODS: &[MethodEntry] = &[
+    MethodEntry {
+        name: "ls",
+        summary: "Gauss–Newton least squares (Li 2018 eq. 13); with error_model, on a pose-error model (Qiao 2021)",
+        build: ls,
+    },
+    MethodEntry {
+        name: "ridge",
+        summary: "ridge estimation (Li 2018 eq. 14)",
+        build: options::<RidgeOptions>,
+    },
+    MethodEntry {
+        name: "igg3",
+        summary: "IGG3 robust ridge (Li 2018 §2.2)",
+        build: options::<RobustOptions>,
+    },
+    MethodEntry {
+        name: "lm",
+        summary: "Levenberg–Marquardt (Guo 2024 eq. 8; Ban)",
+        build: options::<LmOptions>,
+    },
+    MethodEntry {
+        name: "bas",
+        summary: "beetle antennae search (Qiao 2021 eq. 13)",
+        build: options::<Metaheuristic<BasOptions>>,
+    },
+    MethodEntry {
+        name: "pso",
+        summary: "particle swarm (Qiao 2021 eq. 12)",
+        build: options::<Metaheuristic<PsoOptions>>,
+    },
+    MethodEntry {
+        name: "bas-pso",
+        summary: "BAS-PSO hybrid (Qiao 2021 eqs. 12–13)",
+        build: options::<Metaheuristic<BasPsoOptions>>,
+    },
+];
+
+/// The names of [`METHODS`], comma-separated.
+pub fn method_names() -> String {
+    METHODS
+        .iter()
+        .map(|m| m.name)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `ls` is plain Gauss–Newton, or with the key `error_model` least squares on a pose-error
+/// model.
+fn ls(t: &toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError> {
+    if t.contains_key("error_model") {
+        options::<PoseErrorLs>(t)
+    } else {
+        options::<LsOptions>(t)
+    }
+}
+
+/// The reader of a method whose options struct is `M`.
+pub fn options<M: Method + DeserializeOwned + 'static>(
+    t: &toml::Table,
+) -> std::result::Result<Arc<dyn Method>, EntryError> {
+    let m: M = deserialize_named(t)?;
+    m.check().map_err(split)?;
+    Ok(Arc::new(m))
+}
+
+/// Deserialises `t`; on failure names the key: the first whose removal makes the rest
+/// deserialise (an unknown key, or a value of the wrong type).
+fn deserialize_named<T: DeserializeOwned>(t: &toml::Table) -> std::result::Result<T, EntryError> {
+    let text = |e: toml::de::Error| e.to_string().trim_end().to_string();
+    match T::deserialize(toml::Value::Table(t.clone())) {
+        Ok(v) => Ok(v),
+        Err(e) => {
+            for k in t.keys() {
+                let mut rest = t.clone();
+                let v = rest.remove(k);
+                if T::deserialize(toml::Value::Table(rest)).is_ok() {
+                    let mut one = toml::Table::new();
+                    one.insert(k.clone(), v.unwrap_or(toml::Value::Boolean(false)));
+                    let msg = match T::deserialize(toml::Value::Table(one)) {
+                        Err(e1) => text(e1),
+                        Ok(_) => text(e),
+                    };
+                    return Err((k.clone(), msg));
+                }
+            }
+            // A required key with a bad value: the key that fails alone for another reason
+            // than the missing required ones.
+            for (k, v) in t {
+                let mut one = toml::Table::new();
+                one.insert(k.clone(), v.clone());
+                if let Err(e1) = T::deserialize(toml::Value::Table(one)) {
+                    let msg = text(e1);
+                    if !msg.contains("missing field") {
+                        return Err((k.clone(), msg));
+                    }
+                }
+            }
+            Err((String::new(), text(e)))
+        }
+    }
+}
+
+/// A setting error as (key, message).
+fn split(e: Error) -> EntryError {
+    match e {
+        Error::Setting { key, msg } => (key, msg),
+        other => (String::new(), other.to_string()),
+    }
+}
+
+/// One identification method of a study, with its label and orientation weight.
+#[derive(Clone, Debug)]
+pub struct MethodSpec {
+    /// The name in reports, `summary.json` and `trials.csv` (`label`, default the name).
+    pub label: String,
+    /// Weight of orientation against position residuals on full-pose data, mm per rad (key
+    /// `k`, default [`DEFAULT_K`]).
+    pub k: Real,
+    /// The method with its options.
+    pub method: Arc<dyn Method>,
+}
+
+impl MethodSpec {
+    /// Reads one `[[methods]]` entry: `name`, optional `label` and `k`, and the method's
+    /// options.
+    pub fn from_table(t: &toml::Table) -> std::result::Result<MethodSpec, EntryError> {
+        let string = |k: &str| match t.get(k) {
+            None => Ok(None),
+            Some(toml::Value::String(s)) => Ok(Some(s.clone())),
+            Some(v) => Err((k.to_string(), format!("must be a string, got {v}"))),
+        };
+        let name = string("name")?.ok_or_else(|| {
+            (
+                "name".to_string(),
+                format!("missing; allowed: {}", method_names()),
+            )
+        })?;
+        let entry = METHODS.iter().find(|m| m.name == name).ok_or_else(|| {
+            (
+                "name".to_string(),
+                format!("unknown method \"{name}\"; allowed: {}", method_names()),
+            )
+        })?;
+        let label = string("label")?.unwrap_or_else(|| name.clone());
+        let k = match t.get("k") {
+            None => DEFAULT_K,
+            Some(v) => {
+                let k = v
+                    .as_float()
+                    .or_else(|| v.as_integer().map(|i| i as Real))
+                    .ok_or_else(|| ("k".to_string(), format!("must be a number, got {v}")))?;
+                finite_positive("k", k).map_err(split)?;
+                k
+            }
+        };
+        let mut rest = t.clone();
+        for common in ["name", "label", "k"] {
+            rest.remove(common);
+        }
+        let method = (entry.build)(&rest)?;
+        Ok(MethodSpec { label, k, method })
+    }
+
+    /// The method's name.
+    pub fn name(&self) -> &'static str {
+        self.method.name()
+    }
+}
+
+/// A method by name with its default options (`calbench identify --method`).
+pub fn method_by_name(name: &str) -> Result<MethodSpec> {
+    let mut t = toml::Table::new();
+    t.insert("name".into(), toml::Value::String(name.into()));
+    MethodSpec::from_table(&t).map_err(|(_, msg)| Error::setting("--method", msg))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn entry(text: &str) -> std::result::Result<MethodSpec, EntryError> {
+        MethodSpec::from_table(&toml::from_str(text).unwrap())
+    }
+
+    #[test]
+    fn every_registered_method_builds_with_its_defaults() {
+        for m in METHODS {
+            let spec = method_by_name(m.name).unwrap();
+            assert_eq!(spec.name(), m.name);
+            assert_eq!(spec.label, m.name);
+        }
+    }
+
+    #[test]
+    fn options_are_read_and_bad_keys_named() {
+        let s = entry("name = \"igg3\"\nlabel = \"robust\"\nk0 = 2\nweight = \"huber\"").unwrap();
+        assert_eq!(s.label, "robust");
+        assert!(format!("{:?}", s.method).contains("Huber"));
+        let (k, msg) = entry("name = \"ls\"\nepsilon = 1").unwrap_err();
+        assert_eq!(k, "epsilon");
+        assert!(msg.contains("eps"), "{msg}");
+        let (k, _) = entry("name = \"lm\"\neps = \"small\"").unwrap_err();
+        assert_eq!(k, "eps");
+        let (k, msg) = entry("name = \"igg3\"\nk0 = 3\nk1 = 2").unwrap_err();
+        assert_eq!(k, "k1");
+        assert!(msg.contains("exceed"), "{msg}");
+        let (k, _) = entry("name = \"bas\"\nbound_mm = -1").unwrap_err();
+        assert_eq!(k, "bound_mm");
+        let (k, _) = entry("name = \"pso\"\nvelocity = 2").unwrap_err();
+        assert_eq!(k, "velocity");
+        let (k, _) = entry("name = \"ridge\"\nxi = \"wide\"").unwrap_err();
+        assert_eq!(k, "xi");
+        let (k, _) = entry("name = \"nope\"").unwrap_err();
+        assert_eq!(k, "name");
+        let (k, _) = entry("name = \"ls\"\nk = 0").unwrap_err();
+        assert_eq!(k, "k");
+        assert!(entry("name = \"ls\"\nerror_model = \"direct_fk\"\niterations = 3").is_ok());
+        let (k, _) = entry("name = \"ls\"\nerror_model = \"dh\"").unwrap_err();
+        assert_eq!(k, "error_model");
+    }
+}

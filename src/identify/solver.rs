@@ -1,0 +1,361 @@
+//! The nonlinear least-squares engine under the Jacobian-based methods (SPEC §4): the
+//! [`LeastSquares`] problem trait, the shared buffers and normal equations, the Gauss–Newton
+//! iteration of LS, ridge and the robust ridge (Li 2018 eqs. 13–14, §2.2), and the statistics
+//! of a solution ([`finish`]).
+//!
+//! A solver is any [`Solver`]: it runs on a [`LeastSquares`] problem from a start `x0` and
+//! returns an [`Identified`]. [`solve`] checks the problem and the options first, so a
+//! solver never sees inconsistent sizes or a non-finite start.
+
+use nalgebra::{DMatrix, DMatrixView, DVector};
+
+use super::linalg::{self, solve_spd};
+use super::weights::{point_weights, RobustCfg, Sigma0};
+use super::xi::{choose_xi, XiRule};
+use super::{Identified, Method, Termination};
+use crate::math::Real;
+
+/// A nonlinear least-squares problem: residuals of `n_points` points with `rows_per_point`
+/// rows each, over `n_params` unknowns.
+pub trait LeastSquares {
+    /// Number of unknowns `t`.
+    fn n_params(&self) -> usize;
+    /// Number of measured points (each carries one weight in the robust methods).
+    fn n_points(&self) -> usize;
+    /// Rows of the residual per point (3 for positions, 6 for full poses).
+    fn rows_per_point(&self) -> usize;
+    /// r = measured − model(x) (length n_points·rows), j = ∂model/∂x
+    /// (`n_points·rows × n_params`). Both buffers come with the right sizes.
+    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>);
+}
+
+/// A Jacobian-based method: it solves any [`LeastSquares`] problem.
+pub trait Solver: Method {
+    /// Runs from `x0` on a problem [`solve`] has checked.
+    fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified;
+}
+
+/// Runs `solver` on `p` from `x0`.
+///
+/// Never panics on bad input: inconsistent sizes, a non-finite start or invalid options give
+/// [`Termination::InvalidInput`] with `x = x0`.
+pub fn solve(solver: &dyn Solver, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
+    if check_problem(p, x0).is_some() || solver.check().is_err() {
+        return invalid(p, x0);
+    }
+    solver.run(p, x0)
+}
+
+fn check_problem(p: &dyn LeastSquares, x0: &DVector<Real>) -> Option<&'static str> {
+    let t = p.n_params();
+    if t == 0 || p.rows_per_point() == 0 || p.n_points() == 0 {
+        return Some("empty problem");
+    }
+    if x0.len() != t {
+        return Some("x0 has the wrong length");
+    }
+    if x0.iter().any(|v| !v.is_finite()) {
+        return Some("x0 is not finite");
+    }
+    if p.n_points() * p.rows_per_point() < t {
+        return Some("fewer residual rows than unknowns");
+    }
+    None
+}
+
+fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
+    let t = x0.len();
+    Identified {
+        x: x0.clone(),
+        iterations: 0,
+        termination: Termination::InvalidInput,
+        weights: vec![1.0; p.n_points()],
+        condition_number: Real::NAN,
+        covariance: DMatrix::from_element(t, t, Real::NAN),
+        sigma0: Real::NAN,
+        rms_residual: Real::NAN,
+        ridge_xi: None,
+        evaluations: 0,
+        trace: None,
+    }
+}
+
+/// Buffers shared by the solvers: residual, Jacobian, weighted Jacobian, normal equations.
+pub(crate) struct Work {
+    pub rows: usize,
+    pub r: DVector<Real>,
+    pub j: DMatrix<Real>,
+    /// `P J` (rows scaled by their point's weight).
+    pub pj: DMatrix<Real>,
+    /// `JᵀPJ`.
+    pub n: DMatrix<Real>,
+    /// `JᵀP r`.
+    pub g: DVector<Real>,
+    /// Factorisation buffer.
+    pub a: DMatrix<Real>,
+    /// Step.
+    pub dx: DVector<Real>,
+    /// Evaluations of the problem so far.
+    pub evaluations: usize,
+}
+
+impl Work {
+    pub fn new(p: &dyn LeastSquares) -> Work {
+        let (m, t) = (p.n_points() * p.rows_per_point(), p.n_params());
+        Work {
+            rows: p.rows_per_point(),
+            r: DVector::zeros(m),
+            j: DMatrix::zeros(m, t),
+            pj: DMatrix::zeros(m, t),
+            n: DMatrix::zeros(t, t),
+            g: DVector::zeros(t),
+            a: DMatrix::zeros(t, t),
+            dx: DVector::zeros(t),
+            evaluations: 0,
+        }
+    }
+
+    /// Evaluates the problem at `x` and returns the weighted cost `rᵀPr` (non-finite when the
+    /// model is).
+    pub fn evaluate(&mut self, p: &dyn LeastSquares, x: &DVector<Real>, w: &[Real]) -> Real {
+        p.evaluate(x, &mut self.r, &mut self.j);
+        self.evaluations += 1;
+        weighted_cost(&self.r, self.rows, w)
+    }
+
+    /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: `N` is
+    /// one blocked matrix product (nalgebra's `gemm`, which hands dynamic sizes to
+    /// `matrixmultiply`) of a transposed view of `J`, mirrored from its lower triangle so it is
+    /// exactly symmetric; with all weights 1 `P J` is not formed.
+    pub fn normal(&mut self, w: &[Real]) {
+        let rows = self.rows;
+        let unit = w.iter().all(|&wi| wi == 1.0);
+        if !unit {
+            self.pj.copy_from(&self.j);
+            for (i, &wi) in w.iter().enumerate() {
+                if wi != 1.0 {
+                    self.pj.rows_mut(i * rows, rows).scale_mut(wi);
+                }
+            }
+        }
+        let pj = if unit { &self.j } else { &self.pj };
+        let (m, t) = self.j.shape();
+        if t > GEMM_MIN && m > GEMM_MIN {
+            // Jᵀ as a t × m view of J's column-major storage (row stride m, column stride 1).
+            let jt = DMatrixView::from_slice_with_strides(self.j.as_slice(), t, m, m, 1);
+            self.n.gemm(1.0, &jt, pj, 0.0);
+            for a in 0..t {
+                for b in 0..a {
+                    self.n[(b, a)] = self.n[(a, b)];
+                }
+            }
+        } else {
+            // Small problems: lower triangle by column dot products, mirrored.
+            for a in 0..t {
+                let ca = pj.column(a);
+                for b in 0..=a {
+                    let v = ca.dot(&self.j.column(b));
+                    self.n[(a, b)] = v;
+                    self.n[(b, a)] = v;
+                }
+            }
+        }
+        pj.tr_mul_to(&self.r, &mut self.g);
+    }
+}
+
+/// Sizes above which nalgebra's `gemm` uses `matrixmultiply` (its `SMALL_DIM`); below, its
+/// fallback does not accept the strided transposed view, so [`Work::normal`] uses dot products.
+const GEMM_MIN: usize = 5;
+
+/// `Σ_i w_i |r_i|²` over points.
+pub(crate) fn weighted_cost(r: &DVector<Real>, rows: usize, w: &[Real]) -> Real {
+    let mut c = 0.0;
+    for (i, &wi) in w.iter().enumerate() {
+        let mut s = 0.0;
+        for k in 0..rows {
+            s += r[i * rows + k] * r[i * rows + k];
+        }
+        c += wi * s;
+    }
+    c
+}
+
+/// `max |v_i|`.
+pub(crate) fn max_abs(v: &DVector<Real>) -> Real {
+    v.iter().fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// The statistics of the solution: evaluates at `x`, forms `JᵀPJ` and fills [`Identified`].
+/// `sigma0` overrides the classical unit-weight standard deviation (the MAD option).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn finish(
+    p: &dyn LeastSquares,
+    work: &mut Work,
+    x: DVector<Real>,
+    weights: Vec<Real>,
+    iterations: usize,
+    termination: Termination,
+    ridge_xi: Option<Real>,
+    sigma0: Option<Real>,
+) -> Identified {
+    let t = x.len();
+    let rows = work.rows;
+    let evaluations = work.evaluations;
+    let cost = work.evaluate(p, &x, &weights);
+    work.normal(&weights);
+    let n_eff = rows as Real * weights.iter().sum::<Real>();
+    let classical = if n_eff > t as Real && cost.is_finite() {
+        (cost / (n_eff - t as Real)).sqrt()
+    } else {
+        Real::NAN
+    };
+    let sigma0 = sigma0.unwrap_or(classical);
+    let m = weights.len() as Real;
+    let rms_residual = (work.r.norm_squared() / m).sqrt();
+    let (condition_number, covariance) = if work.n.iter().all(|v| v.is_finite()) {
+        // Eigenvalues only: the condition number needs no eigenvectors.
+        let eigenvalues = work.n.symmetric_eigenvalues();
+        let (mx, mn) = eigenvalues
+            .iter()
+            .fold((Real::NEG_INFINITY, Real::INFINITY), |(a, b), &e| {
+                (a.max(e), b.min(e))
+            });
+        let cond = if mn > 0.0 && mn > mx * 1e-300 {
+            mx / mn
+        } else {
+            Real::INFINITY
+        };
+        let mut cov = DMatrix::from_element(t, t, Real::NAN);
+        if cond.is_finite() {
+            work.a.copy_from(&work.n);
+            if linalg::cholesky_in_place(&mut work.a) {
+                for c in 0..t {
+                    work.dx.fill(0.0);
+                    work.dx[c] = 1.0;
+                    linalg::cholesky_solve(&work.a, &mut work.dx);
+                    for k in 0..t {
+                        cov[(k, c)] = sigma0 * sigma0 * work.dx[k];
+                    }
+                }
+            }
+        }
+        (cond, cov)
+    } else {
+        (Real::NAN, DMatrix::from_element(t, t, Real::NAN))
+    };
+    Identified {
+        x,
+        iterations,
+        termination,
+        weights,
+        condition_number,
+        covariance,
+        sigma0,
+        rms_residual,
+        ridge_xi,
+        evaluations,
+        trace: None,
+    }
+}
+
+/// Cost growth beyond which an iteration counts as diverged.
+pub(crate) const DIVERGENCE_FACTOR: Real = 1e12;
+
+/// Ridge settings as the engine sees them.
+pub(crate) struct RidgeCfg<'a> {
+    pub xi: &'a XiRule,
+    pub scale: bool,
+}
+
+/// The Gauss–Newton engine: plain (Li eq. 13), ridge-penalised towards `x0` (eq. 14) and
+/// iteratively reweighted (§2.2).
+///
+/// With a ridge, iteration k solves `(JᵀPJ + ξ_k D) δx = JᵀP E − ξ_k D (x − x0)`: the
+/// Gauss–Newton step of `EᵀPE + ξ (x − x0)ᵀ D (x − x0)`. From `x = x0` this is exactly Li's
+/// eq. 14; the penalty on the total `x − x0` (rather than on each increment) keeps the
+/// shrinkage when the iterations converge, instead of relaxing to the least-squares answer.
+/// `D = diag(JᵀPJ)` at `x0` (column scaling, so ξ is relative to unit-norm columns) or `I`.
+///
+/// With robust weights, the points first all weigh 1 until the step falls below ε; from
+/// then on each iteration reweighs every point from the residuals at the current `x` and
+/// stops when a reweighted step falls below ε.
+pub(crate) fn gauss_newton(
+    p: &dyn LeastSquares,
+    x0: &DVector<Real>,
+    eps: Real,
+    max_iter: usize,
+    ridge: Option<RidgeCfg>,
+    robust: Option<&RobustCfg>,
+) -> Identified {
+    let t = x0.len();
+    let mut work = Work::new(p);
+    let mut w = vec![1.0; p.n_points()];
+    let mut x = x0.clone();
+    let mut d = DVector::from_element(t, 1.0);
+    let mut dev = DVector::zeros(t);
+    let mut sort_buf: Vec<Real> = Vec::with_capacity(work.r.len());
+    let mut reweighting = false;
+    let mut cost0 = Real::NAN;
+    let mut rms0 = Real::NAN;
+    let mut xi_used = None;
+    let mut termination = Termination::MaxIterations;
+    let mut iterations = 0;
+    let mut sigma_mad = None;
+    for it in 0..max_iter {
+        let cost = work.evaluate(p, &x, &w);
+        if !cost.is_finite() {
+            termination = Termination::Diverged;
+            break;
+        }
+        if it == 0 {
+            cost0 = cost;
+            rms0 = (work.r.norm_squared() / w.len() as Real).sqrt();
+        } else if cost > DIVERGENCE_FACTOR * cost0.max(Real::MIN_POSITIVE) {
+            termination = Termination::Diverged;
+            break;
+        }
+        if let (true, Some(ro)) = (reweighting, robust) {
+            let s = point_weights(&work.r, work.rows, t, ro, rms0, &mut w, &mut sort_buf);
+            sigma_mad = s.mad;
+        }
+        work.normal(&w);
+        if let Some(rc) = &ridge {
+            if it == 0 && rc.scale {
+                for k in 0..t {
+                    let v = work.n[(k, k)];
+                    d[k] = if v > 0.0 && v.is_finite() { v } else { 1.0 };
+                }
+            }
+            dev.copy_from(&x);
+            dev -= x0;
+            let cost_now = weighted_cost(&work.r, work.rows, &w);
+            let n_rows = work.rows * w.iter().filter(|&&v| v > 0.0).count();
+            let xi = choose_xi(rc.xi, &work.n, &work.g, cost_now, &dev, &d, n_rows);
+            xi_used = Some(xi);
+            for k in 0..t {
+                work.n[(k, k)] += xi * d[k];
+                work.g[k] -= xi * d[k] * dev[k];
+            }
+        }
+        if !solve_spd(&work.n, &work.g, &mut work.a, &mut work.dx) {
+            termination = Termination::Singular;
+            break;
+        }
+        x += &work.dx;
+        iterations = it + 1;
+        if max_abs(&work.dx) < eps {
+            if robust.is_some() && !reweighting {
+                reweighting = true;
+                continue;
+            }
+            termination = Termination::Converged;
+            break;
+        }
+    }
+    let sigma0 = match robust {
+        Some(ro) if ro.sigma0 == Sigma0::Mad => sigma_mad,
+        _ => None,
+    };
+    finish(p, &mut work, x, w, iterations, termination, xi_used, sigma0)
+}

@@ -1,0 +1,175 @@
+//! Robust point weights (Li 2018 §2.2, eqs. 15–18): the weight functions, the σ0 estimates
+//! and the reweighting step of the robust ridge ([`super::robust`]); see there for the
+//! formulas.
+
+use nalgebra::DVector;
+
+use crate::math::Real;
+
+/// The weight function of the robust iterations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WeightFn {
+    /// IGG3 (Li 2018 eq. 18): normal, suspicious and rejected segments.
+    Igg3,
+    /// Huber's weights with threshold k0.
+    Huber,
+    /// Tukey's biweight with cut-off k1.
+    Tukey,
+}
+
+/// How the unit-weight standard deviation σ0 is estimated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Sigma0 {
+    /// `sqrt(vᵀPv / (n − t))` (Li 2018 §2.2).
+    Classical,
+    /// `1.4826 · median |v_k|` over the residual rows.
+    Mad,
+}
+
+/// The robust part of the settings, as the engine ([`super::solver`]) sees it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RobustCfg {
+    /// Weight function.
+    pub weight: WeightFn,
+    /// Lower threshold.
+    pub k0: Real,
+    /// Upper threshold.
+    pub k1: Real,
+    /// σ0 estimate.
+    pub sigma0: Sigma0,
+}
+
+impl WeightFn {
+    /// The weight of a point with standardised residual `u ≥ 0`.
+    pub fn weight(self, u: Real, k0: Real, k1: Real) -> Real {
+        match self {
+            WeightFn::Igg3 => {
+                if u <= k0 {
+                    1.0
+                } else if u <= k1 {
+                    let d = (k1 - u) / (k1 - k0);
+                    k0 / u * d * d
+                } else {
+                    0.0
+                }
+            }
+            WeightFn::Huber => {
+                if u <= k0 {
+                    1.0
+                } else {
+                    k0 / u
+                }
+            }
+            WeightFn::Tukey => {
+                if u < k1 {
+                    let a = u / k1;
+                    (1.0 - a * a) * (1.0 - a * a)
+                } else {
+                    0.0
+                }
+            }
+        }
+    }
+}
+
+/// What the reweighting found.
+pub(crate) struct WeightStats {
+    /// The MAD-based σ0, when that estimate is in use.
+    pub mad: Option<Real>,
+}
+
+/// Recomputes the point weights `w` from the residuals `r` (`rows` per point, `t` unknowns).
+/// `rms0` is the RMS point residual at the start. Allocation-free once `buf` has capacity.
+pub(crate) fn point_weights(
+    r: &DVector<Real>,
+    rows: usize,
+    t: usize,
+    o: &RobustCfg,
+    rms0: Real,
+    w: &mut [Real],
+    buf: &mut Vec<Real>,
+) -> WeightStats {
+    let sigma0 = match o.sigma0 {
+        Sigma0::Classical => {
+            let mut s = 0.0;
+            let mut n = 0.0;
+            for (i, &wi) in w.iter().enumerate() {
+                n += rows as Real * wi;
+                let e2: Real = (0..rows).map(|k| r[i * rows + k].powi(2)).sum();
+                s += wi * e2;
+            }
+            if n > t as Real {
+                (s / (n - t as Real)).sqrt()
+            } else {
+                Real::NAN
+            }
+        }
+        Sigma0::Mad => {
+            buf.clear();
+            buf.extend(r.iter().map(|v| v.abs()));
+            1.4826 * median(buf)
+        }
+    };
+    let mad = (o.sigma0 == Sigma0::Mad).then_some(sigma0);
+    if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
+        w.fill(1.0);
+        return WeightStats { mad };
+    }
+    let scale = sigma0 * (rows as Real).sqrt();
+    for (i, wi) in w.iter_mut().enumerate() {
+        let e: Real = (0..rows)
+            .map(|k| r[i * rows + k].powi(2))
+            .sum::<Real>()
+            .sqrt();
+        *wi = o.weight.weight(e / scale, o.k0, o.k1);
+    }
+    WeightStats { mad }
+}
+
+/// Median of `v` (reorders it); NaN when empty.
+fn median(v: &mut [Real]) -> Real {
+    if v.is_empty() {
+        return Real::NAN;
+    }
+    v.sort_unstable_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn igg3_weights_match_the_three_segments() {
+        let f = WeightFn::Igg3;
+        assert_relative_eq!(f.weight(1.0, 1.5, 2.5), 1.0);
+        assert_relative_eq!(f.weight(1.5, 1.5, 2.5), 1.0);
+        // u = 2: (1.5/2)·((2.5 − 2)/(1))² = 0.75 · 0.25.
+        assert_relative_eq!(f.weight(2.0, 1.5, 2.5), 0.1875, epsilon = 1e-15);
+        assert_relative_eq!(f.weight(2.5, 1.5, 2.5), 0.0);
+        assert_relative_eq!(f.weight(3.0, 1.5, 2.5), 0.0);
+    }
+
+    #[test]
+    fn huber_and_tukey_weights_by_hand() {
+        assert_relative_eq!(WeightFn::Huber.weight(1.0, 1.5, 2.5), 1.0);
+        assert_relative_eq!(WeightFn::Huber.weight(3.0, 1.5, 2.5), 0.5);
+        // Tukey, c = 2.5, u = 1.25: (1 − 0.25)² = 0.5625.
+        assert_relative_eq!(WeightFn::Tukey.weight(1.25, 1.5, 2.5), 0.5625);
+        assert_relative_eq!(WeightFn::Tukey.weight(2.6, 1.5, 2.5), 0.0);
+    }
+
+    #[test]
+    fn median_of_even_and_odd_lists() {
+        assert_relative_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_relative_eq!(median(&mut [4.0, 1.0, 3.0, 2.0]), 2.5);
+    }
+}

@@ -1,0 +1,148 @@
+//! The files of `calbench identify` (FORMATS.md `identify`): `identified.json`,
+//! `residuals.csv` and the compensated `robot.toml`.
+
+use std::path::Path;
+
+use serde_json::{json, Value};
+
+use crate::calibrate::{validation_errors, Calibrated, ErrorStats, Registration};
+use crate::error::{Error, Result};
+use crate::kinematics::{robot_to_toml, Param, Robot};
+use crate::math::{quaternion_matrix, Frame, Mat3, Real};
+use crate::measurement::Measurements;
+
+/// Validation of a compensated robot on a measurement file: position errors before
+/// (nominal) and after (compensated) and, for full-pose files, orientation errors.
+pub struct FileValidation {
+    /// Position errors of the nominal robot (mm).
+    pub before_mm: ErrorStats,
+    /// Position errors of the compensated robot (mm).
+    pub after_mm: ErrorStats,
+    /// Orientation errors before and after (deg), for full-pose files.
+    pub deg: Option<(ErrorStats, ErrorStats)>,
+}
+
+/// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
+/// registration.
+pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileValidation {
+    let truth: Vec<Frame> = v
+        .points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| Frame {
+            rot: v.quats.as_ref().map_or(Mat3::identity(), |qs| {
+                c.frame.rot * quaternion_matrix(&qs[i])
+            }),
+            pos: c.frame.apply(p),
+        })
+        .collect();
+    let (bp, ba) = validation_errors(nominal, &v.qs, &truth);
+    let (ap, aa) = validation_errors(&c.robot, &v.qs, &truth);
+    FileValidation {
+        before_mm: ErrorStats::of(&bp),
+        after_mm: ErrorStats::of(&ap),
+        deg: v
+            .quats
+            .is_some()
+            .then(|| (ErrorStats::of(&ba), ErrorStats::of(&aa))),
+    }
+}
+
+fn stats_json(s: &ErrorStats) -> Value {
+    json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
+}
+
+/// What an identification on a file is written from.
+pub struct IdentifyRecord<'a> {
+    /// The nominal robot.
+    pub nominal: &'a Robot,
+    /// The measurement file.
+    pub data_path: &'a Path,
+    /// The measurements.
+    pub data: &'a Measurements,
+    /// The method's name.
+    pub method: &'a str,
+    /// The registration used.
+    pub registration: Registration,
+    /// The identified parameters.
+    pub params: &'a [Param],
+    /// The calibration.
+    pub calibrated: &'a Calibrated,
+    /// The validation on a separate file, if any.
+    pub validation: Option<&'a FileValidation>,
+}
+
+/// `identified.json`.
+pub fn identified_json(r: &IdentifyRecord) -> Value {
+    let id = &r.calibrated.identified;
+    let names: Vec<String> = r.params.iter().map(|p| p.to_string()).collect();
+    let errors: serde_json::Map<String, Value> = names
+        .iter()
+        .zip(id.x.iter())
+        .map(|(n, x)| (n.clone(), json!(x)))
+        .collect();
+    let cov: Vec<Vec<Real>> = (0..id.covariance.nrows())
+        .map(|i| id.covariance.row(i).iter().copied().collect())
+        .collect();
+    let (xyz, rpy) = r.calibrated.frame.to_xyz_rpy();
+    let mut j = json!({
+        "robot": r.nominal.name,
+        "data": r.data_path.display().to_string(),
+        "method": r.method,
+        "registration": r.registration.as_str(),
+        "registration_frame": {"xyz_mm": xyz, "rpy_rad": rpy},
+        "parameters": names,
+        "errors": errors,
+        "covariance": cov,
+        "condition_number": id.condition_number,
+        "sigma0": id.sigma0,
+        "rms_residual_mm": id.rms_residual,
+        "iterations": id.iterations,
+        "termination": id.termination.as_str(),
+    });
+    if let Some(v) = r.validation {
+        j["validation_before_mm"] = stats_json(&v.before_mm);
+        j["validation_after_mm"] = stats_json(&v.after_mm);
+        if let Some((b, a)) = &v.deg {
+            j["validation_before_deg"] = stats_json(b);
+            j["validation_after_deg"] = stats_json(a);
+        }
+    }
+    j
+}
+
+/// `residuals.csv`: per point, the residual before (nominal) and after (compensated) in the
+/// registered frame, and the final weight.
+pub fn residuals_csv(r: &IdentifyRecord) -> String {
+    let c = r.calibrated;
+    let (cn, cc) = (r.nominal.chain(), c.robot.chain());
+    let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
+    for (i, (q, p)) in r.data.qs.iter().zip(&r.data.points).enumerate() {
+        let pb = c.frame.apply(p);
+        let w = c.identified.weights.get(i).copied().unwrap_or(1.0);
+        csv += &format!(
+            "{i},{},{},{}\n",
+            (pb - cn.fk(q).pos).norm(),
+            (pb - cc.fk(q).pos).norm(),
+            w
+        );
+    }
+    csv
+}
+
+/// Writes `residuals.csv`, `identified.json` and `robot.toml` (the compensated robot, named
+/// `<nominal>-calibrated`) into `out`.
+pub fn write_identified(out: &Path, r: &IdentifyRecord) -> Result<()> {
+    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    write(&out.join("residuals.csv"), &residuals_csv(r))?;
+    let text = serde_json::to_string_pretty(&identified_json(r))
+        .map_err(|e| Error::Compute(e.to_string()))?;
+    write(&out.join("identified.json"), &(text + "\n"))?;
+    let mut compensated = r.calibrated.robot.clone();
+    compensated.name = format!("{}-calibrated", r.nominal.name);
+    write(&out.join("robot.toml"), &robot_to_toml(&compensated))
+}
+
+fn write(path: &Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
