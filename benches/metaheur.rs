@@ -56,7 +56,10 @@ fn bench(c: &mut Criterion) {
     let it = 300;
     g.bench_with_input(BenchmarkId::new("bas_pso", it), &it, |bch, &it| {
         let o = BasPsoOptions {
-            iterations: it,
+            swarm: PsoOptions {
+                iterations: it,
+                ..Default::default()
+            },
             ..Default::default()
         };
         bch.iter(|| bas_pso(&f, &b, &o, &mut stream(1, "m")).expect("bas_pso"))

@@ -227,21 +227,24 @@ impl Default for PsoOptions {
     }
 }
 
-/// Options of [`bas_pso`] (Qiao eqs. 12–13). Widths and velocities are fractions of each
-/// coordinate's range. Qiao gives the form of the update and the 0.95 decay but no values of
-/// `c1`, `c2`, `c3`, `d`, `δ`: the defaults are Clerc's `c1 = c2 = 2.05` and this
-/// implementation's choice for the rest.
-#[derive(Clone, Debug, serde::Deserialize)]
-#[serde(deny_unknown_fields, default)]
+/// Options of [`bas_pso`] (Qiao eqs. 12–13): the swarm's options (the keys of `pso`) and the
+/// beetle term. Widths and velocities are fractions of each coordinate's range. Qiao gives
+/// the form of the update and the 0.95 decay but no values of `c1`, `c2`, `c3`, `d`, `δ`: the
+/// defaults are Clerc's `c1 = c2 = 2.05` and this implementation's choice for the rest. Read
+/// from one table: the keys of [`BeetleTerm`] go to `beetle`, every other key to `swarm`.
+#[derive(Clone, Debug, Default)]
 pub struct BasPsoOptions {
-    /// Number of particles. Default 40.
-    pub population: usize,
-    /// Iterations (three evaluations per particle each). Default 500.
-    pub iterations: usize,
-    /// Cognitive learning factor `c1`. Default 2.05.
-    pub c1: Real,
-    /// Social learning factor `c2`. Default 2.05.
-    pub c2: Real,
+    /// The swarm (population, iterations — three evaluations per particle each —, c1, c2,
+    /// velocity, max_velocity, target).
+    pub swarm: PsoOptions,
+    /// The beetle velocity `B` of eq. 12 and its schedules (eq. 13).
+    pub beetle: BeetleTerm,
+}
+
+/// The beetle term of BAS-PSO (Qiao eqs. 12–13).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BeetleTerm {
     /// Weight `c3` of the beetle velocity `B` (eq. 12). Default 1.0.
     pub c3: Real,
     /// Initial antenna width `d` (eq. 13). Default 0.1.
@@ -254,37 +257,41 @@ pub struct BasPsoOptions {
     pub antenna_floor: Real,
     /// `δ0` of eq. 13 (the step tends to `δ0 / (1 − decay)`). Default 1e-6.
     pub step_floor: Real,
-    /// Velocity damping. Default [`Velocity::Constriction`] (Qiao eq. 12); the key
-    /// `inertia = [start, end]` selects [`Velocity::Inertia`].
-    #[serde(rename = "inertia", deserialize_with = "inertia")]
-    pub velocity: Velocity,
-    /// Largest velocity component. Default 0.5.
-    pub max_velocity: Real,
-    /// Evaluate fitness values in parallel (results do not change). Default true.
-    #[serde(skip, default = "yes")]
-    pub parallel: bool,
-    /// Stop as soon as the best fitness is at or below this. Default −∞ (never).
-    pub target: Real,
 }
 
-impl Default for BasPsoOptions {
+impl Default for BeetleTerm {
     fn default() -> Self {
-        BasPsoOptions {
-            population: 40,
-            iterations: 500,
-            c1: 2.05,
-            c2: 2.05,
+        BeetleTerm {
             c3: 1.0,
             antenna: 0.1,
             step: 0.1,
             decay: 0.95,
             antenna_floor: 1e-6,
             step_floor: 1e-6,
-            velocity: Velocity::Constriction,
-            max_velocity: 0.5,
-            parallel: true,
-            target: Real::NEG_INFINITY,
         }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for BasPsoOptions {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut swarm = toml::Table::deserialize(d)?;
+        let beetle = crate::names::take_keys(
+            &mut swarm,
+            &[
+                "c3",
+                "antenna",
+                "step",
+                "decay",
+                "antenna_floor",
+                "step_floor",
+            ],
+        );
+        Ok(BasPsoOptions {
+            swarm: PsoOptions::deserialize(toml::Value::Table(swarm)).map_err(D::Error::custom)?,
+            beetle: BeetleTerm::deserialize(toml::Value::Table(beetle))
+                .map_err(D::Error::custom)?,
+        })
     }
 }
 
@@ -522,8 +529,8 @@ struct Swarm {
     max_velocity: Real,
     parallel: bool,
     target: Real,
-    /// BAS term: (c3, antenna, step, decay, antenna_floor, step_floor).
-    beetle: Option<(Real, Real, Real, Real, Real, Real)>,
+    /// The beetle term of BAS-PSO.
+    beetle: Option<BeetleTerm>,
 }
 
 fn check_swarm(s: &Swarm) -> Result<()> {
@@ -550,13 +557,13 @@ fn check_swarm(s: &Swarm) -> Result<()> {
             finite_non_negative("inertia[1]", end)?;
         }
     }
-    if let Some((c3, d, delta, decay, d0, delta0)) = s.beetle {
-        finite_non_negative("c3", c3)?;
-        finite_positive("antenna", d)?;
-        finite_positive("step", delta)?;
-        check_decay("decay", decay)?;
-        finite_non_negative("antenna_floor", d0)?;
-        finite_non_negative("step_floor", delta0)?;
+    if let Some(b) = s.beetle {
+        finite_non_negative("c3", b.c3)?;
+        finite_positive("antenna", b.antenna)?;
+        finite_positive("step", b.step)?;
+        check_decay("decay", b.decay)?;
+        finite_non_negative("antenna_floor", b.antenna_floor)?;
+        finite_non_negative("step_floor", b.step_floor)?;
     }
     Ok(())
 }
@@ -591,16 +598,15 @@ impl PsoOptions {
     }
 
     fn swarm(&self) -> Swarm {
-        let o = self;
         Swarm {
-            population: o.population,
-            iterations: o.iterations,
-            c1: o.c1,
-            c2: o.c2,
-            velocity: o.velocity,
-            max_velocity: o.max_velocity,
-            parallel: o.parallel,
-            target: o.target,
+            population: self.population,
+            iterations: self.iterations,
+            c1: self.c1,
+            c2: self.c2,
+            velocity: self.velocity,
+            max_velocity: self.max_velocity,
+            parallel: self.parallel,
+            target: self.target,
             beetle: None,
         }
     }
@@ -625,24 +631,9 @@ impl BasPsoOptions {
     }
 
     fn swarm(&self) -> Swarm {
-        let o = self;
         Swarm {
-            population: o.population,
-            iterations: o.iterations,
-            c1: o.c1,
-            c2: o.c2,
-            velocity: o.velocity,
-            max_velocity: o.max_velocity,
-            parallel: o.parallel,
-            target: o.target,
-            beetle: Some((
-                o.c3,
-                o.antenna,
-                o.step,
-                o.decay,
-                o.antenna_floor,
-                o.step_floor,
-            )),
+            beetle: Some(self.beetle),
+            ..self.swarm.swarm()
         }
     }
 }
@@ -690,7 +681,7 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
         }
         Velocity::Inertia { .. } => 1.0,
     };
-    let (mut d, mut delta) = s.beetle.map_or((0.0, 0.0), |bt| (bt.1, bt.2));
+    let (mut d, mut delta) = s.beetle.map_or((0.0, 0.0), |bt| (bt.antenna, bt.step));
     let mut trace = Vec::with_capacity(s.iterations);
     for it in 0..s.iterations {
         let w = match s.velocity {
@@ -704,7 +695,7 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
                 start + (end - start) * t
             }
         };
-        if let Some((c3, ..)) = s.beetle {
+        if let Some(BeetleTerm { c3, .. }) = s.beetle {
             // Directions drawn in particle order, then the antennae evaluated.
             for i in 0..m {
                 random_direction(rng, &mut dirs[i]);
@@ -770,9 +761,9 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
                 gbest_x.copy_from_slice(&xs[i]);
             }
         }
-        if let Some((_, _, _, decay, d0, delta0)) = s.beetle {
-            d = decay * d + d0;
-            delta = decay * delta + delta0;
+        if let Some(bt) = s.beetle {
+            d = bt.decay * d + bt.antenna_floor;
+            delta = bt.decay * delta + bt.step_floor;
         }
         trace.push(gbest_f);
         if gbest_f <= s.target {
@@ -1174,7 +1165,10 @@ mod tests {
         let r = pso(&sphere, &b, &o, &mut stream(3, "pso")).unwrap();
         assert!(dist(&r.x, &c) < 1e-4, "pso {:?}", r.x);
         let o = BasPsoOptions {
-            iterations: 300,
+            swarm: PsoOptions {
+                iterations: 300,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let r = bas_pso(&sphere, &b, &o, &mut stream(3, "bas_pso")).unwrap();
@@ -1201,7 +1195,10 @@ mod tests {
         let r = pso(&rosenbrock, &b, &o, &mut stream(4, "pso")).unwrap();
         assert!(dist(&r.x, &[1.0, 1.0]) < 1e-3, "pso {:?}", r.x);
         let o = BasPsoOptions {
-            iterations: 400,
+            swarm: PsoOptions {
+                iterations: 400,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let r = bas_pso(&rosenbrock, &b, &o, &mut stream(4, "bas_pso")).unwrap();
@@ -1218,12 +1215,18 @@ mod tests {
     fn results_depend_on_the_seed_only() {
         let b = Bounds::symmetric(&[5.0; 5]);
         let o = BasPsoOptions {
-            iterations: 50,
+            swarm: PsoOptions {
+                iterations: 50,
+                ..Default::default()
+            },
             ..Default::default()
         };
         let a = bas_pso(&sphere, &b, &o, &mut stream(9, "x")).unwrap();
         let seq = BasPsoOptions {
-            parallel: false,
+            swarm: PsoOptions {
+                parallel: false,
+                ..o.swarm.clone()
+            },
             ..o.clone()
         };
         let s = bas_pso(&sphere, &b, &seq, &mut stream(9, "x")).unwrap();
@@ -1296,7 +1299,10 @@ mod tests {
             "c1"
         );
         let o = BasPsoOptions {
-            population: 0,
+            swarm: PsoOptions {
+                population: 0,
+                ..Default::default()
+            },
             ..Default::default()
         };
         assert_eq!(
@@ -1304,7 +1310,10 @@ mod tests {
             "population"
         );
         let o = BasPsoOptions {
-            antenna: Real::INFINITY,
+            beetle: BeetleTerm {
+                antenna: Real::INFINITY,
+                ..Default::default()
+            },
             ..Default::default()
         };
         assert_eq!(

@@ -1,7 +1,8 @@
 //! Names of the settings' enums, from serde alone: an enum derives `Serialize` /
 //! `Deserialize` with its `rename_all` rule, and [`static_name`] and [`parse`] give the name
 //! of a value and the value of a name (command-line options, reports), so no enum carries a
-//! hand-written `as_str` / `FromStr` pair.
+//! hand-written `as_str` / `FromStr` pair. [`take_keys`] splits one options table between
+//! two structs.
 
 use serde::de::value::{Error as ValueError, StrDeserializer};
 use serde::de::{DeserializeOwned, IntoDeserializer};
@@ -26,6 +27,14 @@ pub fn static_name<T: Serialize>(v: &T) -> &'static str {
 pub fn parse<T: DeserializeOwned>(key: &str, s: &str) -> Result<T> {
     let d: StrDeserializer<'_, ValueError> = s.into_deserializer();
     T::deserialize(d).map_err(|e| Error::setting(key, e.to_string()))
+}
+
+/// Removes the entries of `keys` from `table` and returns them as a table of their own: for
+/// options read from one table into two structs (each refusing keys it does not know).
+pub fn take_keys(table: &mut toml::Table, keys: &[&str]) -> toml::Table {
+    keys.iter()
+        .filter_map(|k| table.remove(*k).map(|v| (k.to_string(), v)))
+        .collect()
 }
 
 /// A serializer that accepts unit variants only and returns their `&'static str` name.

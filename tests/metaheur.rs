@@ -90,7 +90,10 @@ fn bas_pso_cuts_tx60_acpe_by_90_percent() {
     let f = |x: &[Real]| p.fitness(x);
     let before = acpe(&c, &vec![0.0; c.params.len()]);
     let o = BasPsoOptions {
-        iterations: 300,
+        swarm: PsoOptions {
+            iterations: 300,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let r = bas_pso(&f, &b, &o, &mut stream(1, "bas_pso")).unwrap();
@@ -109,12 +112,18 @@ fn bas_pso_cuts_tx60_acpe_by_90_percent() {
     assert!(r.trace.windows(2).all(|w| w[1] <= w[0]));
     // Same seed, same bytes, with or without threads.
     let seq = BasPsoOptions {
-        parallel: false,
-        iterations: 30,
+        swarm: PsoOptions {
+            parallel: false,
+            iterations: 30,
+            ..o.swarm.clone()
+        },
         ..o.clone()
     };
     let par = BasPsoOptions {
-        iterations: 30,
+        swarm: PsoOptions {
+            iterations: 30,
+            ..o.swarm.clone()
+        },
         ..o
     };
     let a = bas_pso(&f, &b, &seq, &mut stream(7, "bas_pso")).unwrap();

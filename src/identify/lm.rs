@@ -15,12 +15,10 @@ use nalgebra::DVector;
 use serde::Deserialize;
 
 use super::linalg::solve_spd;
-use super::robot::identify_robot;
 use super::solver::{finish, max_abs, LeastSquares, Solver, Work, DIVERGENCE_FACTOR};
-use super::{CalibrationProblem, Identified, Method, Termination};
+use super::{Identified, Termination};
 use crate::error::{check_count, finite_non_negative, finite_positive, Error, Result};
 use crate::math::Real;
-use crate::rng::Rng;
 
 /// Options of `lm` (FORMATS.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
@@ -81,7 +79,7 @@ fn undamp(work: &mut Work, damping: Real, marquardt: bool, diag: &DVector<Real>)
     }
 }
 
-impl Method for LmOptions {
+impl Solver for LmOptions {
     fn name(&self) -> &'static str {
         "lm"
     }
@@ -100,12 +98,6 @@ impl Method for LmOptions {
         Ok(())
     }
 
-    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
-        identify_robot(self, problem)
-    }
-}
-
-impl Solver for LmOptions {
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         levenberg_marquardt(p, x0, self)
     }

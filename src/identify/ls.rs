@@ -7,12 +7,10 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::robot::identify_robot;
 use super::solver::{gauss_newton, LeastSquares, Solver};
-use super::{CalibrationProblem, Identified, Method};
+use super::Identified;
 use crate::error::{check_count, finite_positive, Result};
 use crate::math::Real;
-use crate::rng::Rng;
 
 /// Options of `ls` (FORMATS.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
@@ -33,7 +31,7 @@ impl Default for LsOptions {
     }
 }
 
-impl Method for LsOptions {
+impl Solver for LsOptions {
     fn name(&self) -> &'static str {
         "ls"
     }
@@ -43,12 +41,6 @@ impl Method for LsOptions {
         check_count("max_iter", self.max_iter)
     }
 
-    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
-        identify_robot(self, problem)
-    }
-}
-
-impl Solver for LsOptions {
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         gauss_newton(p, x0, self.eps, self.max_iter, None, None)
     }

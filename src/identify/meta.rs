@@ -72,9 +72,10 @@ impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> 
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
         let mut t = toml::Table::deserialize(d)?;
-        let mut bound = |key: &str, default: Real| match t.remove(key) {
+        let bounds = crate::names::take_keys(&mut t, &["bound_mm", "bound_rad"]);
+        let bound = |key: &str, default: Real| match bounds.get(key) {
             None => Ok(default),
-            Some(v) => Real::deserialize(v).map_err(D::Error::custom),
+            Some(v) => Real::deserialize(v.clone()).map_err(D::Error::custom),
         };
         let bound_mm = bound("bound_mm", default_bound_mm())?;
         let bound_rad = bound("bound_rad", default_bound_rad())?;

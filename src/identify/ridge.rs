@@ -10,13 +10,11 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::robot::identify_robot;
 use super::solver::{gauss_newton, LeastSquares, RidgeCfg, Solver};
 use super::xi::XiRule;
-use super::{CalibrationProblem, Identified, Method};
+use super::Identified;
 use crate::error::{check_count, finite_positive, Result};
 use crate::math::Real;
-use crate::rng::Rng;
 
 /// Options of `ridge` (FORMATS.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
@@ -43,7 +41,7 @@ impl Default for RidgeOptions {
     }
 }
 
-impl Method for RidgeOptions {
+impl Solver for RidgeOptions {
     fn name(&self) -> &'static str {
         "ridge"
     }
@@ -54,12 +52,6 @@ impl Method for RidgeOptions {
         check_count("max_iter", self.max_iter)
     }
 
-    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
-        identify_robot(self, problem)
-    }
-}
-
-impl Solver for RidgeOptions {
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         let cfg = RidgeCfg {
             xi: &self.xi,

@@ -13,11 +13,12 @@ use std::cell::RefCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::solver::{solve, LeastSquares, Solver};
-use super::{CalibrationProblem, Identified};
+use super::{CalibrationProblem, Identified, Method};
 use crate::error::Error;
 use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
 use crate::kinematics::{Chain, ChainVars, Param, Robot};
 use crate::math::{Mat3, Real, Vec3};
+use crate::rng::Rng;
 
 /// A [`LeastSquares`] problem over a robot's parameter errors.
 #[derive(Debug)]
@@ -233,4 +234,19 @@ pub fn identify_robot(
     )?
     .with_orientation_weight(problem.k)?;
     Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
+}
+
+/// Every [`Solver`] is a [`Method`]: on a calibration problem it runs [`identify_robot`].
+impl<S: Solver> Method for S {
+    fn name(&self) -> &'static str {
+        Solver::name(self)
+    }
+
+    fn check(&self) -> crate::Result<()> {
+        Solver::check(self)
+    }
+
+    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> crate::Result<Identified> {
+        identify_robot(self, problem)
+    }
 }

@@ -30,14 +30,12 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::robot::identify_robot;
 use super::solver::{gauss_newton, LeastSquares, RidgeCfg, Solver};
 use super::weights::{RobustCfg, Sigma0, WeightFn};
 use super::xi::XiRule;
-use super::{CalibrationProblem, Identified, Method};
+use super::Identified;
 use crate::error::{check_count, finite_positive, Error, Result};
 use crate::math::Real;
-use crate::rng::Rng;
 
 /// Options of `igg3` (FORMATS.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
@@ -76,7 +74,7 @@ impl Default for RobustOptions {
     }
 }
 
-impl Method for RobustOptions {
+impl Solver for RobustOptions {
     fn name(&self) -> &'static str {
         "igg3"
     }
@@ -95,12 +93,6 @@ impl Method for RobustOptions {
         check_count("max_iter", self.max_iter)
     }
 
-    fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
-        identify_robot(self, problem)
-    }
-}
-
-impl Solver for RobustOptions {
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         let cfg = RidgeCfg {
             xi: &self.xi,

@@ -12,7 +12,8 @@ use nalgebra::{DMatrix, DMatrixView, DVector};
 use super::linalg::{self, solve_spd};
 use super::weights::{point_weights, RobustCfg, Sigma0};
 use super::xi::{choose_xi, XiRule};
-use super::{Identified, Method, Termination};
+use super::{Identified, Termination};
+use crate::error::Result;
 use crate::math::Real;
 
 /// A nonlinear least-squares problem: residuals of `n_points` points with `rows_per_point`
@@ -29,8 +30,14 @@ pub trait LeastSquares {
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>);
 }
 
-/// A Jacobian-based method: it solves any [`LeastSquares`] problem.
-pub trait Solver: Method {
+/// A Jacobian-based method: it solves any [`LeastSquares`] problem. Every solver is a
+/// [`super::Method`]: on a calibration problem it solves the kinematic least squares
+/// ([`super::robot::identify_robot`]).
+pub trait Solver: std::fmt::Debug + Send + Sync {
+    /// The method's name in scenarios and reports.
+    fn name(&self) -> &'static str;
+    /// Checks the option values; an error names the offending key.
+    fn check(&self) -> Result<()>;
     /// Runs from `x0` on a problem [`solve`] has checked.
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified;
 }

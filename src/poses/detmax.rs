@@ -324,7 +324,7 @@ mod tests {
                         let want = objective_of_gram(&b, o, m + 1);
                         assert!(
                             (fast - want).abs() <= 1e-7 * want.abs(),
-                            "add {c}, {o}, m {m}: {fast} vs {want}"
+                            "add {c}, {o:?}, m {m}: {fast} vs {want}"
                         );
                     }
                     for &c in &set {
@@ -345,7 +345,7 @@ mod tests {
                         assert!(
                             (fast - want).abs() <= tol * want.abs()
                                 && (dense - want).abs() <= tol * want.abs(),
-                            "remove {c}, {o}, m {m}: fast {fast}, dense {dense}, want {want}"
+                            "remove {c}, {o:?}, m {m}: fast {fast}, dense {dense}, want {want}"
                         );
                     }
                 }
@@ -418,10 +418,10 @@ mod tests {
         for o in [Objective::Composite, Objective::O1, Objective::O6] {
             let res = detmax(&model, &cands, (0..20).collect(), o, 1000);
             let (set, trace) = reference_detmax(&model, &cands, (0..20).collect(), o);
-            assert!(res.exchanges > 3, "{o}");
-            assert_eq!(res.set, set, "{o}");
+            assert!(res.exchanges > 3, "{o:?}");
+            assert_eq!(res.set, set, "{o:?}");
             for (x, y) in res.trace.iter().zip(&trace) {
-                assert!((x - y).abs() <= 1e-12 * y.abs(), "{o}: {x} vs {y}");
+                assert!((x - y).abs() <= 1e-12 * y.abs(), "{o:?}: {x} vs {y}");
             }
         }
     }

@@ -19,7 +19,6 @@ pub mod separation;
 pub mod symeig;
 
 use std::cell::RefCell;
-use std::fmt;
 
 use nalgebra::{DMatrix, DMatrixViewMut};
 use rand::seq::index::sample;
@@ -157,12 +156,6 @@ impl Objective {
     }
 }
 
-impl fmt::Display for Objective {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
 /// How poses are chosen from the candidates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -181,12 +174,6 @@ impl Strategy {
     /// The name used in scenario files and on the command line.
     pub fn as_str(self) -> &'static str {
         crate::names::static_name(&self)
-    }
-}
-
-impl fmt::Display for Strategy {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
     }
 }
 
@@ -521,7 +508,7 @@ mod tests {
         }
         for o in [Objective::Composite, Objective::O1, Objective::O6] {
             assert_eq!(
-                crate::names::parse::<Objective>("o", &o.to_string()).ok(),
+                crate::names::parse::<Objective>("o", o.as_str()).ok(),
                 Some(o)
             );
         }
@@ -550,7 +537,7 @@ mod tests {
             let got = ev.value(&model, &flat, o);
             assert!(
                 (got - want).abs() <= 1e-7 * want.abs(),
-                "{o}: {got} vs {want}"
+                "{o:?}: {got} vs {want}"
             );
         }
     }
