@@ -43,6 +43,15 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// The key of a [`Error::Setting`] (`None` for other errors): for callers that report
+    /// or test which setting was refused.
+    pub fn key(&self) -> Option<&str> {
+        match self {
+            Error::Setting { key, .. } => Some(key),
+            _ => None,
+        }
+    }
+
     /// An error about a setting.
     pub fn setting(key: impl Into<String>, msg: impl Into<String>) -> Self {
         Error::Setting {

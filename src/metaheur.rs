@@ -322,6 +322,21 @@ pub struct MetaResult {
     pub reached_target: bool,
 }
 
+impl MetaResult {
+    /// The result of a search that ended at `x` with fitness `f`, the best fitness per
+    /// iteration `trace`, after `evaluations` evaluations, with the target fitness `target`.
+    fn new(x: Vec<Real>, f: Real, trace: Vec<Real>, evaluations: usize, target: Real) -> Self {
+        MetaResult {
+            x,
+            reached_target: f <= target,
+            fitness: f,
+            iterations: trace.len(),
+            trace,
+            evaluations,
+        }
+    }
+}
+
 /// The fitness to minimise.
 pub type Fitness<'f> = dyn Fn(&[Real]) -> Real + Sync + 'f;
 
@@ -465,7 +480,7 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
     let mut evaluations = 1;
     let (mut d, mut delta) = (o.antenna, o.step);
     let mut trace = Vec::with_capacity(o.iterations);
-    for _ in 0..o.iterations {
+    while trace.len() < o.iterations && !reached(&trace, o.target) {
         random_direction(rng, &mut dir);
         offset(&y, &dir, d, &mut yr);
         offset(&y, &dir, -d, &mut yl);
@@ -490,21 +505,28 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
             best_f = fy;
             best_x.copy_from_slice(&x);
         }
-        d = o.decay * d + o.antenna_floor;
-        delta = o.decay * delta + o.step_floor;
+        (d, delta) = eq13(d, delta, o.decay, o.antenna_floor, o.step_floor);
         trace.push(best_f);
-        if best_f <= o.target {
-            break;
-        }
     }
-    Ok(MetaResult {
-        x: best_x,
-        reached_target: best_f <= o.target,
-        fitness: best_f,
-        iterations: trace.len(),
+    Ok(MetaResult::new(
+        best_x,
+        best_f,
         trace,
         evaluations,
-    })
+        o.target,
+    ))
+}
+
+/// The schedules of Qiao's eq. 13: `d ← decay·d + d0`, `δ ← decay·δ + δ0`.
+#[inline]
+fn eq13(d: Real, delta: Real, decay: Real, d0: Real, delta0: Real) -> (Real, Real) {
+    (decay * d + d0, decay * delta + delta0)
+}
+
+/// True once the best fitness of the last iteration is at or below `target`.
+#[inline]
+fn reached(trace: &[Real], target: Real) -> bool {
+    trace.last().is_some_and(|&f| f <= target)
 }
 
 /// `sign(fr − fl)` with infinities handled and 0 for ties.
@@ -586,28 +608,32 @@ fn evaluate(f: &Fitness, xs: &[Vec<Real>], out: &mut [Real], parallel: bool) {
 /// [0, 1] per coordinate, `x_b` the particle's best and `x_g` the swarm's best; Halton
 /// initial population, zero initial velocities.
 pub fn pso(f: &Fitness, b: &Bounds, o: &PsoOptions, rng: &mut Rng) -> Result<MetaResult> {
+    let s = Swarm::of(o, None);
     b.check()?;
-    o.check()?;
-    swarm(f, b, &o.swarm(), rng)
+    check_swarm(&s)?;
+    swarm(f, b, &s, rng)
 }
 
 impl PsoOptions {
     /// Checks the option values (keys as in the scenario).
     pub fn check(&self) -> Result<()> {
-        check_swarm(&self.swarm())
+        check_swarm(&Swarm::of(self, None))
     }
+}
 
-    fn swarm(&self) -> Swarm {
+impl Swarm {
+    /// The swarm of `o`, with the beetle term of BAS-PSO if given.
+    fn of(o: &PsoOptions, beetle: Option<BeetleTerm>) -> Swarm {
         Swarm {
-            population: self.population,
-            iterations: self.iterations,
-            c1: self.c1,
-            c2: self.c2,
-            velocity: self.velocity,
-            max_velocity: self.max_velocity,
-            parallel: self.parallel,
-            target: self.target,
-            beetle: None,
+            population: o.population,
+            iterations: o.iterations,
+            c1: o.c1,
+            c2: o.c2,
+            velocity: o.velocity,
+            max_velocity: o.max_velocity,
+            parallel: o.parallel,
+            target: o.target,
+            beetle,
         }
     }
 }
@@ -621,20 +647,13 @@ impl PsoOptions {
 pub fn bas_pso(f: &Fitness, b: &Bounds, o: &BasPsoOptions, rng: &mut Rng) -> Result<MetaResult> {
     b.check()?;
     o.check()?;
-    swarm(f, b, &o.swarm(), rng)
+    swarm(f, b, &Swarm::of(&o.swarm, Some(o.beetle)), rng)
 }
 
 impl BasPsoOptions {
     /// Checks the option values (keys as in the scenario).
     pub fn check(&self) -> Result<()> {
-        check_swarm(&self.swarm())
-    }
-
-    fn swarm(&self) -> Swarm {
-        Swarm {
-            beetle: Some(self.beetle),
-            ..self.swarm.swarm()
-        }
+        check_swarm(&Swarm::of(&self.swarm, Some(self.beetle)))
     }
 }
 
@@ -683,7 +702,8 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
     };
     let (mut d, mut delta) = s.beetle.map_or((0.0, 0.0), |bt| (bt.antenna, bt.step));
     let mut trace = Vec::with_capacity(s.iterations);
-    for it in 0..s.iterations {
+    while trace.len() < s.iterations && !reached(&trace, s.target) {
+        let it = trace.len();
         let w = match s.velocity {
             Velocity::Constriction => 1.0,
             Velocity::Inertia { start, end } => {
@@ -762,22 +782,17 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
             }
         }
         if let Some(bt) = s.beetle {
-            d = bt.decay * d + bt.antenna_floor;
-            delta = bt.decay * delta + bt.step_floor;
+            (d, delta) = eq13(d, delta, bt.decay, bt.antenna_floor, bt.step_floor);
         }
         trace.push(gbest_f);
-        if gbest_f <= s.target {
-            break;
-        }
     }
-    Ok(MetaResult {
-        x: gbest_x,
-        reached_target: gbest_f <= s.target,
-        fitness: gbest_f,
-        iterations: trace.len(),
+    Ok(MetaResult::new(
+        gbest_x,
+        gbest_f,
         trace,
         evaluations,
-    })
+        s.target,
+    ))
 }
 
 /// One pose's term of Qiao's fitness (eq. 14): `k(|Δn| + |Δo| + |Δa|) + |Δp|`, where n, o, a
@@ -1256,81 +1271,59 @@ mod tests {
     }
 
     fn key(e: Error) -> String {
-        match e {
-            Error::Setting { key, .. } => key,
-            other => panic!("not a setting error: {other}"),
-        }
+        e.key()
+            .unwrap_or_else(|| panic!("not a setting error: {e}"))
+            .into()
+    }
+
+    /// The key named when the default options, edited by `edit`, are run by `run`.
+    fn refused<O: Default>(
+        edit: impl FnOnce(&mut O),
+        run: impl FnOnce(&O) -> Result<MetaResult>,
+    ) -> String {
+        let mut o = O::default();
+        edit(&mut o);
+        key(run(&o).unwrap_err())
     }
 
     #[test]
     fn bad_options_are_refused_by_name() {
         let b = Bounds::symmetric(&[1.0; 3]);
         let mut rng = stream(1, "x");
-        let e = |o: PsoOptions, rng: &mut Rng| key(pso(&sphere, &b, &o, rng).unwrap_err());
+        let mut r = stream(1, "y");
         assert_eq!(
-            e(
-                PsoOptions {
-                    population: 0,
-                    ..Default::default()
-                },
-                &mut rng
+            refused(
+                |o: &mut PsoOptions| o.population = 0,
+                |o| pso(&sphere, &b, o, &mut r)
             ),
             "population"
         );
         assert_eq!(
-            e(
-                PsoOptions {
-                    c1: Real::NAN,
-                    ..Default::default()
-                },
-                &mut rng
+            refused(
+                |o: &mut PsoOptions| o.c1 = Real::NAN,
+                |o| pso(&sphere, &b, o, &mut r)
             ),
             "c1"
         );
+        // The constriction factor needs c1 + c2 > 4.
+        let weak = |o: &mut PsoOptions| (o.c1, o.c2) = (1.0, 1.0);
+        assert_eq!(refused(weak, |o| pso(&sphere, &b, o, &mut r)), "c1");
+        let hybrid = |o: &BasPsoOptions| bas_pso(&sphere, &b, o, &mut stream(2, "y"));
         assert_eq!(
-            e(
-                PsoOptions {
-                    c1: 1.0,
-                    c2: 1.0,
-                    ..Default::default()
-                },
-                &mut rng
-            ),
-            "c1"
-        );
-        let o = BasPsoOptions {
-            swarm: PsoOptions {
-                population: 0,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
-        assert_eq!(
-            key(bas_pso(&sphere, &b, &o, &mut rng).unwrap_err()),
+            refused(|o: &mut BasPsoOptions| o.swarm.population = 0, hybrid),
             "population"
         );
-        let o = BasPsoOptions {
-            beetle: BeetleTerm {
-                antenna: Real::INFINITY,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
         assert_eq!(
-            key(bas_pso(&sphere, &b, &o, &mut rng).unwrap_err()),
+            refused(
+                |o: &mut BasPsoOptions| o.beetle.antenna = Real::INFINITY,
+                hybrid
+            ),
             "antenna"
         );
-        let o = BasOptions {
-            decay: 1.0,
-            ..Default::default()
-        };
-        assert_eq!(key(bas(&sphere, &b, &o, &mut rng).unwrap_err()), "decay");
-        let o = BasOptions {
-            iterations: 0,
-            ..Default::default()
-        };
+        let beetle = |o: &BasOptions| bas(&sphere, &b, o, &mut stream(3, "y"));
+        assert_eq!(refused(|o: &mut BasOptions| o.decay = 1.0, beetle), "decay");
         assert_eq!(
-            key(bas(&sphere, &b, &o, &mut rng).unwrap_err()),
+            refused(|o: &mut BasOptions| o.iterations = 0, beetle),
             "iterations"
         );
         let inverted = Bounds {

@@ -5,21 +5,28 @@
 //! two structs.
 
 use serde::de::value::{Error as ValueError, StrDeserializer};
-use serde::de::{DeserializeOwned, IntoDeserializer};
-use serde::ser::{self, Impossible, Serialize};
+use serde::de::{DeserializeOwned, Deserializer, Error as _, IntoDeserializer, Visitor};
+use serde::Serialize;
 
 use crate::error::{Error, Result};
 
-/// The serde name of a unit variant (`Termination::MaxIterations` → `"max-iterations"`).
+/// The serde name of a unit variant (`Termination::MaxIterations` → `"max-iterations"`): the
+/// entry of the enum's variant list (as its `Deserialize` declares it) that equals the value
+/// serialised.
 ///
 /// # Panics
-/// If `v` does not serialise as a unit variant (a programming error: only call it on
-/// field-less enums).
-pub fn static_name<T: Serialize>(v: &T) -> &'static str {
-    match v.serialize(VariantName) {
-        Ok(s) => s,
-        Err(e) => panic!("static_name on a value that is not a unit variant: {e}"),
-    }
+/// If `v` is not a unit variant of a field-less enum (a programming error).
+pub fn static_name<T: Serialize + DeserializeOwned>(v: &T) -> &'static str {
+    let name = serde_json::to_value(v).ok();
+    let probe = VariantList::default();
+    let _ = T::deserialize(&probe);
+    probe
+        .0
+        .get()
+        .iter()
+        .find(|n| name.as_ref().and_then(|v| v.as_str()) == Some(**n))
+        .copied()
+        .unwrap_or_else(|| panic!("static_name on a value that is not a unit variant: {name:?}"))
 }
 
 /// Parses `s` as the serde name of a `T` (a field-less enum); the error names `key` and the
@@ -37,146 +44,31 @@ pub fn take_keys(table: &mut toml::Table, keys: &[&str]) -> toml::Table {
         .collect()
 }
 
-/// A serializer that accepts unit variants only and returns their `&'static str` name.
-struct VariantName;
+/// A deserializer that only records the variant names an enum asks for.
+#[derive(Default)]
+struct VariantList(std::cell::Cell<&'static [&'static str]>);
 
-#[derive(Debug)]
-struct NotAUnitVariant;
+impl<'de> Deserializer<'de> for &VariantList {
+    type Error = ValueError;
 
-impl std::fmt::Display for NotAUnitVariant {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("not a unit variant")
-    }
-}
-
-impl std::error::Error for NotAUnitVariant {}
-
-impl ser::Error for NotAUnitVariant {
-    fn custom<M: std::fmt::Display>(_: M) -> Self {
-        NotAUnitVariant
-    }
-}
-
-macro_rules! refuse {
-    ($($f:ident($t:ty)),* $(,)?) => {
-        $(fn $f(self, _: $t) -> std::result::Result<Self::Ok, Self::Error> {
-            Err(NotAUnitVariant)
-        })*
-    };
-}
-
-impl ser::Serializer for VariantName {
-    type Ok = &'static str;
-    type Error = NotAUnitVariant;
-    type SerializeSeq = Impossible<&'static str, NotAUnitVariant>;
-    type SerializeTuple = Impossible<&'static str, NotAUnitVariant>;
-    type SerializeTupleStruct = Impossible<&'static str, NotAUnitVariant>;
-    type SerializeTupleVariant = Impossible<&'static str, NotAUnitVariant>;
-    type SerializeMap = Impossible<&'static str, NotAUnitVariant>;
-    type SerializeStruct = Impossible<&'static str, NotAUnitVariant>;
-    type SerializeStructVariant = Impossible<&'static str, NotAUnitVariant>;
-
-    fn serialize_unit_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        variant: &'static str,
-    ) -> std::result::Result<&'static str, NotAUnitVariant> {
-        Ok(variant)
+    fn deserialize_any<V: Visitor<'de>>(self, _: V) -> std::result::Result<V::Value, ValueError> {
+        Err(ValueError::custom("not an enum"))
     }
 
-    refuse!(
-        serialize_bool(bool),
-        serialize_i8(i8),
-        serialize_i16(i16),
-        serialize_i32(i32),
-        serialize_i64(i64),
-        serialize_u8(u8),
-        serialize_u16(u16),
-        serialize_u32(u32),
-        serialize_u64(u64),
-        serialize_f32(f32),
-        serialize_f64(f64),
-        serialize_char(char),
-        serialize_str(&str),
-        serialize_bytes(&[u8]),
-        serialize_unit_struct(&'static str),
-    );
+    fn deserialize_enum<V: Visitor<'de>>(
+        self,
+        _: &'static str,
+        variants: &'static [&'static str],
+        _: V,
+    ) -> std::result::Result<V::Value, ValueError> {
+        self.0.set(variants);
+        Err(ValueError::custom("variant names recorded"))
+    }
 
-    fn serialize_none(self) -> std::result::Result<Self::Ok, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_some<T: ?Sized + Serialize>(
-        self,
-        _: &T,
-    ) -> std::result::Result<Self::Ok, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_unit(self) -> std::result::Result<Self::Ok, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_newtype_struct<T: ?Sized + Serialize>(
-        self,
-        _: &'static str,
-        _: &T,
-    ) -> std::result::Result<Self::Ok, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_newtype_variant<T: ?Sized + Serialize>(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: &T,
-    ) -> std::result::Result<Self::Ok, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_seq(
-        self,
-        _: Option<usize>,
-    ) -> std::result::Result<Self::SerializeSeq, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_tuple(self, _: usize) -> std::result::Result<Self::SerializeTuple, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_tuple_struct(
-        self,
-        _: &'static str,
-        _: usize,
-    ) -> std::result::Result<Self::SerializeTupleStruct, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_tuple_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> std::result::Result<Self::SerializeTupleVariant, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_map(
-        self,
-        _: Option<usize>,
-    ) -> std::result::Result<Self::SerializeMap, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_struct(
-        self,
-        _: &'static str,
-        _: usize,
-    ) -> std::result::Result<Self::SerializeStruct, Self::Error> {
-        Err(NotAUnitVariant)
-    }
-    fn serialize_struct_variant(
-        self,
-        _: &'static str,
-        _: u32,
-        _: &'static str,
-        _: usize,
-    ) -> std::result::Result<Self::SerializeStructVariant, Self::Error> {
-        Err(NotAUnitVariant)
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+        option unit unit_struct newtype_struct seq tuple tuple_struct map struct identifier
+        ignored_any
     }
 }
 

@@ -15,9 +15,9 @@ use nalgebra::DVector;
 use serde::Deserialize;
 
 use super::linalg::solve_spd;
-use super::solver::{finish, max_abs, LeastSquares, Solver, Work, DIVERGENCE_FACTOR};
+use super::solver::{check_stop, finish, max_abs, LeastSquares, Solver, Work, DIVERGENCE_FACTOR};
 use super::{Identified, Termination};
-use crate::error::{check_count, finite_non_negative, finite_positive, Error, Result};
+use crate::error::{finite_non_negative, finite_positive, Error, Result};
 use crate::math::Real;
 
 /// Options of `lm` (FORMATS.md `[[methods]]`).
@@ -80,13 +80,8 @@ fn undamp(work: &mut Work, damping: Real, marquardt: bool, diag: &DVector<Real>)
 }
 
 impl Solver for LmOptions {
-    fn name(&self) -> &'static str {
-        "lm"
-    }
-
     fn check(&self) -> Result<()> {
-        finite_positive("eps", self.eps)?;
-        check_count("max_iter", self.max_iter)?;
+        check_stop(self.eps, self.max_iter)?;
         finite_non_negative("mu", self.mu)?;
         finite_positive("lambda0", self.lambda0)?;
         if !(self.lambda_factor.is_finite() && self.lambda_factor > 1.0) {
@@ -108,7 +103,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         return adaptive(p, x0, o);
     }
     let mut work = Work::new(p);
-    let w = vec![1.0; p.n_points()];
+    let w = vec![1.0; p.size().points];
     let mut x = x0.clone();
     let mut cost0 = Real::NAN;
     let mut termination = Termination::MaxIterations;
@@ -141,7 +136,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
 fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
     let mut work = Work::new(p);
     let mut trial = Work::new(p);
-    let w = vec![1.0; p.n_points()];
+    let w = vec![1.0; p.size().points];
     let t = x0.len();
     let mut x = x0.clone();
     let mut x_try = x0.clone();

@@ -7,9 +7,9 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::solver::{gauss_newton, LeastSquares, Solver};
+use super::solver::{check_stop, gauss_newton, LeastSquares, Solver};
 use super::Identified;
-use crate::error::{check_count, finite_positive, Result};
+use crate::error::Result;
 use crate::math::Real;
 
 /// Options of `ls` (FORMATS.md `[[methods]]`).
@@ -32,13 +32,8 @@ impl Default for LsOptions {
 }
 
 impl Solver for LsOptions {
-    fn name(&self) -> &'static str {
-        "ls"
-    }
-
     fn check(&self) -> Result<()> {
-        finite_positive("eps", self.eps)?;
-        check_count("max_iter", self.max_iter)
+        check_stop(self.eps, self.max_iter)
     }
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {

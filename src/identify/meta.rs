@@ -17,43 +17,29 @@ use crate::rng::Rng;
 
 /// A search over a box: the options of one of [`bas`], [`pso`], [`bas_pso`].
 pub trait Search: std::fmt::Debug + Send + Sync {
-    /// The method's name in scenarios.
-    const NAME: &'static str;
     /// Checks the option values.
     fn check(&self) -> Result<()>;
     /// Minimises `f` over `b`.
     fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult>;
 }
 
-impl Search for BasOptions {
-    const NAME: &'static str = "bas";
-    fn check(&self) -> Result<()> {
-        BasOptions::check(self)
-    }
-    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
-        bas(f, b, self, rng)
-    }
+/// Each search's options check themselves and run their search.
+macro_rules! search {
+    ($options:ty, $run:path) => {
+        impl Search for $options {
+            fn check(&self) -> Result<()> {
+                <$options>::check(self)
+            }
+            fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
+                $run(f, b, self, rng)
+            }
+        }
+    };
 }
 
-impl Search for PsoOptions {
-    const NAME: &'static str = "pso";
-    fn check(&self) -> Result<()> {
-        PsoOptions::check(self)
-    }
-    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
-        pso(f, b, self, rng)
-    }
-}
-
-impl Search for BasPsoOptions {
-    const NAME: &'static str = "bas-pso";
-    fn check(&self) -> Result<()> {
-        BasPsoOptions::check(self)
-    }
-    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
-        bas_pso(f, b, self, rng)
-    }
-}
+search!(BasOptions, bas);
+search!(PsoOptions, pso);
+search!(BasPsoOptions, bas_pso);
 
 /// Options of `bas`, `pso` and `bas-pso` (FORMATS.md `[[methods]]`): the search's own
 /// options and the search box. Deserialised from one table: `bound_mm` and `bound_rad`
@@ -107,10 +93,6 @@ impl<S: Default> Default for Metaheuristic<S> {
 }
 
 impl<S: Search> Method for Metaheuristic<S> {
-    fn name(&self) -> &'static str {
-        S::NAME
-    }
-
     fn check(&self) -> Result<()> {
         self.search.check()?;
         finite_positive("bound_mm", self.bound_mm)?;

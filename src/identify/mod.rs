@@ -58,16 +58,13 @@ pub use registry::{method_by_name, MethodEntry, MethodSpec, METHODS};
 pub use ridge::RidgeOptions;
 pub use robot::RobotProblem;
 pub use robust::RobustOptions;
-pub use solver::{solve, LeastSquares, Solver};
-pub use weights::{Sigma0, WeightFn};
+pub use solver::{solve, LeastSquares, Size, Solver};
+pub use weights::{Robustness, Sigma0, WeightFn};
 pub use xi::XiRule;
 
 /// An identification method with its options: the one interface through which `run` and
 /// `identify` reach every method.
 pub trait Method: std::fmt::Debug + Send + Sync {
-    /// The method's name in scenarios and reports (`ls`, `ridge`, …).
-    fn name(&self) -> &'static str;
-
     /// Checks the option values; an error names the offending key.
     fn check(&self) -> Result<()>;
 

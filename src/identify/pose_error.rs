@@ -29,10 +29,6 @@ fn default_iterations() -> usize {
 const STEP_TOLERANCE: f64 = 1e-9;
 
 impl Method for PoseErrorLs {
-    fn name(&self) -> &'static str {
-        "ls"
-    }
-
     fn check(&self) -> Result<()> {
         check_count("iterations", self.iterations)
     }

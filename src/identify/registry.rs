@@ -149,6 +149,8 @@ fn split(e: Error) -> EntryError {
 /// One identification method of a study, with its label and orientation weight.
 #[derive(Clone, Debug)]
 pub struct MethodSpec {
+    /// The method's name (`name = "…"`).
+    pub name: &'static str,
     /// The name in reports, `summary.json` and `trials.csv` (`label`, default the name).
     pub label: String,
     /// Weight of orientation against position residuals on full-pose data, mm per rad (key
@@ -196,12 +198,17 @@ impl MethodSpec {
             rest.remove(common);
         }
         let method = (entry.build)(&rest)?;
-        Ok(MethodSpec { label, k, method })
+        Ok(MethodSpec {
+            name: entry.name,
+            label,
+            k,
+            method,
+        })
     }
 
     /// The method's name.
     pub fn name(&self) -> &'static str {
-        self.method.name()
+        self.name
     }
 }
 

@@ -10,10 +10,10 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::solver::{gauss_newton, LeastSquares, RidgeCfg, Solver};
+use super::solver::{check_stop, gauss_newton, LeastSquares, RidgeCfg, Solver};
 use super::xi::XiRule;
 use super::Identified;
-use crate::error::{check_count, finite_positive, Result};
+use crate::error::Result;
 use crate::math::Real;
 
 /// Options of `ridge` (FORMATS.md `[[methods]]`).
@@ -41,22 +41,23 @@ impl Default for RidgeOptions {
     }
 }
 
-impl Solver for RidgeOptions {
-    fn name(&self) -> &'static str {
-        "ridge"
+impl RidgeOptions {
+    /// The ridge settings as the Gauss–Newton engine takes them.
+    pub(crate) fn cfg(&self) -> RidgeCfg<'_> {
+        RidgeCfg {
+            xi: &self.xi,
+            scale: self.scale,
+        }
     }
+}
 
+impl Solver for RidgeOptions {
     fn check(&self) -> Result<()> {
         self.xi.check("xi")?;
-        finite_positive("eps", self.eps)?;
-        check_count("max_iter", self.max_iter)
+        check_stop(self.eps, self.max_iter)
     }
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
-        let cfg = RidgeCfg {
-            xi: &self.xi,
-            scale: self.scale,
-        };
-        gauss_newton(p, x0, self.eps, self.max_iter, Some(cfg), None)
+        gauss_newton(p, x0, self.eps, self.max_iter, Some(self.cfg()), None)
     }
 }

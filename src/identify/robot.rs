@@ -12,7 +12,7 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::solver::{solve, LeastSquares, Solver};
+use super::solver::{solve, LeastSquares, Size, Solver};
 use super::{CalibrationProblem, Identified, Method};
 use crate::error::Error;
 use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
@@ -173,16 +173,12 @@ impl<'a> RobotProblem<'a> {
 }
 
 impl LeastSquares for RobotProblem<'_> {
-    fn n_params(&self) -> usize {
-        self.params.len()
-    }
-
-    fn n_points(&self) -> usize {
-        self.points.len()
-    }
-
-    fn rows_per_point(&self) -> usize {
-        self.measure.rows()
+    fn size(&self) -> Size {
+        Size {
+            params: self.params.len(),
+            points: self.points.len(),
+            rows_per_point: self.measure.rows(),
+        }
     }
 
     /// Forward kinematics and the analytic Jacobian at `nominal + x`, from the tool frame
@@ -238,10 +234,6 @@ pub fn identify_robot(
 
 /// Every [`Solver`] is a [`Method`]: on a calibration problem it runs [`identify_robot`].
 impl<S: Solver> Method for S {
-    fn name(&self) -> &'static str {
-        Solver::name(self)
-    }
-
     fn check(&self) -> crate::Result<()> {
         Solver::check(self)
     }

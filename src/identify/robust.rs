@@ -30,80 +30,62 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::solver::{gauss_newton, LeastSquares, RidgeCfg, Solver};
-use super::weights::{RobustCfg, Sigma0, WeightFn};
-use super::xi::XiRule;
+use super::ridge::RidgeOptions;
+use super::solver::{gauss_newton, LeastSquares, Solver};
+use super::weights::Robustness;
 use super::Identified;
-use crate::error::{check_count, finite_positive, Error, Result};
+use crate::error::Result;
 use crate::math::Real;
 
-/// Options of `igg3` (FORMATS.md `[[methods]]`).
-#[derive(Clone, Debug, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+/// Options of `igg3` (FORMATS.md `[[methods]]`): the ridge's options (`xi`, `scale`, `eps`,
+/// `max_iter`; here with an iteration limit of 200 over all phases) and the robust weights.
+/// Read from one table: the keys of [`Robustness`] go to `robust`, every other key to
+/// `ridge`.
+#[derive(Clone, Debug)]
 pub struct RobustOptions {
-    /// Weight function. Default [`WeightFn::Igg3`].
-    pub weight: WeightFn,
-    /// Lower threshold k0 (IGG3, Huber). Default 1.5.
-    pub k0: Real,
-    /// Upper threshold k1 (IGG3) or Tukey's cut-off. Default 2.5.
-    pub k1: Real,
-    /// σ0 estimate. Default [`Sigma0::Classical`].
-    pub sigma0: Sigma0,
-    /// Ridge parameter rule. Default [`XiRule::DoubleH`].
-    pub xi: XiRule,
-    /// Column scaling of the ridge (see [`super::RidgeOptions::scale`]). Default true.
-    pub scale: bool,
-    /// Stop when `max |δx| < eps` (mm or rad). Default 1e-9.
-    pub eps: Real,
-    /// Iteration limit (all phases). Default 200.
-    pub max_iter: usize,
+    /// The ridge iterations.
+    pub ridge: RidgeOptions,
+    /// The weights.
+    pub robust: Robustness,
 }
 
 impl Default for RobustOptions {
     fn default() -> Self {
         RobustOptions {
-            weight: WeightFn::Igg3,
-            k0: 1.5,
-            k1: 2.5,
-            sigma0: Sigma0::Classical,
-            xi: XiRule::DoubleH,
-            scale: true,
-            eps: 1e-9,
-            max_iter: 200,
+            ridge: RidgeOptions {
+                max_iter: 200,
+                ..Default::default()
+            },
+            robust: Robustness::default(),
         }
     }
 }
 
-impl Solver for RobustOptions {
-    fn name(&self) -> &'static str {
-        "igg3"
-    }
-
-    fn check(&self) -> Result<()> {
-        finite_positive("k0", self.k0)?;
-        finite_positive("k1", self.k1)?;
-        if self.k1 <= self.k0 {
-            return Err(Error::setting(
-                "k1",
-                format!("must exceed k0 ({}), got {}", self.k0, self.k1),
-            ));
+impl<'de> Deserialize<'de> for RobustOptions {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut ridge = toml::Table::deserialize(d)?;
+        let robust = crate::names::take_keys(&mut ridge, &["weight", "k0", "k1", "sigma0"]);
+        if !ridge.contains_key("max_iter") {
+            ridge.insert("max_iter".into(), toml::Value::Integer(200));
         }
-        self.xi.check("xi")?;
-        finite_positive("eps", self.eps)?;
-        check_count("max_iter", self.max_iter)
+        Ok(RobustOptions {
+            ridge: RidgeOptions::deserialize(toml::Value::Table(ridge))
+                .map_err(D::Error::custom)?,
+            robust: Robustness::deserialize(toml::Value::Table(robust))
+                .map_err(D::Error::custom)?,
+        })
+    }
+}
+
+impl Solver for RobustOptions {
+    fn check(&self) -> Result<()> {
+        self.robust.check()?;
+        self.ridge.check()
     }
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
-        let cfg = RidgeCfg {
-            xi: &self.xi,
-            scale: self.scale,
-        };
-        let robust = RobustCfg {
-            weight: self.weight,
-            k0: self.k0,
-            k1: self.k1,
-            sigma0: self.sigma0,
-        };
-        gauss_newton(p, x0, self.eps, self.max_iter, Some(cfg), Some(&robust))
+        let r = &self.ridge;
+        gauss_newton(p, x0, r.eps, r.max_iter, Some(r.cfg()), Some(&self.robust))
     }
 }

@@ -10,23 +10,37 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use super::linalg::{self, solve_spd};
-use super::weights::{point_weights, RobustCfg, Sigma0};
+use super::weights::{point_weights, Robustness, Sigma0};
 use super::xi::{choose_xi, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
 use crate::math::Real;
 
-/// A nonlinear least-squares problem: residuals of `n_points` points with `rows_per_point`
-/// rows each, over `n_params` unknowns.
-pub trait LeastSquares {
+/// The size of a [`LeastSquares`] problem.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Size {
     /// Number of unknowns `t`.
-    fn n_params(&self) -> usize;
+    pub params: usize,
     /// Number of measured points (each carries one weight in the robust methods).
-    fn n_points(&self) -> usize;
+    pub points: usize,
     /// Rows of the residual per point (3 for positions, 6 for full poses).
-    fn rows_per_point(&self) -> usize;
-    /// r = measured − model(x) (length n_points·rows), j = ∂model/∂x
-    /// (`n_points·rows × n_params`). Both buffers come with the right sizes.
+    pub rows_per_point: usize,
+}
+
+impl Size {
+    /// Rows of the residual, `points · rows_per_point`.
+    pub fn rows(&self) -> usize {
+        self.points * self.rows_per_point
+    }
+}
+
+/// A nonlinear least-squares problem: residuals of `points` points with `rows_per_point`
+/// rows each, over `params` unknowns ([`Size`]).
+pub trait LeastSquares {
+    /// The problem's size.
+    fn size(&self) -> Size;
+    /// r = measured − model(x) (length `size().rows()`), j = ∂model/∂x
+    /// (`size().rows() × size().params`). Both buffers come with the right sizes.
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>);
 }
 
@@ -34,12 +48,17 @@ pub trait LeastSquares {
 /// [`super::Method`]: on a calibration problem it solves the kinematic least squares
 /// ([`super::robot::identify_robot`]).
 pub trait Solver: std::fmt::Debug + Send + Sync {
-    /// The method's name in scenarios and reports.
-    fn name(&self) -> &'static str;
     /// Checks the option values; an error names the offending key.
     fn check(&self) -> Result<()>;
     /// Runs from `x0` on a problem [`solve`] has checked.
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified;
+}
+
+/// Checks the stopping rule of the Gauss–Newton methods: `eps` finite and positive,
+/// `max_iter` at least 1.
+pub(crate) fn check_stop(eps: Real, max_iter: usize) -> Result<()> {
+    crate::error::finite_positive("eps", eps)?;
+    crate::error::check_count("max_iter", max_iter)
 }
 
 /// Runs `solver` on `p` from `x0`.
@@ -54,8 +73,9 @@ pub fn solve(solver: &dyn Solver, p: &dyn LeastSquares, x0: &DVector<Real>) -> I
 }
 
 fn check_problem(p: &dyn LeastSquares, x0: &DVector<Real>) -> Option<&'static str> {
-    let t = p.n_params();
-    if t == 0 || p.rows_per_point() == 0 || p.n_points() == 0 {
+    let size = p.size();
+    let t = size.params;
+    if t == 0 || size.rows_per_point == 0 || size.points == 0 {
         return Some("empty problem");
     }
     if x0.len() != t {
@@ -64,7 +84,7 @@ fn check_problem(p: &dyn LeastSquares, x0: &DVector<Real>) -> Option<&'static st
     if x0.iter().any(|v| !v.is_finite()) {
         return Some("x0 is not finite");
     }
-    if p.n_points() * p.rows_per_point() < t {
+    if size.rows() < t {
         return Some("fewer residual rows than unknowns");
     }
     None
@@ -76,7 +96,7 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         x: x0.clone(),
         iterations: 0,
         termination: Termination::InvalidInput,
-        weights: vec![1.0; p.n_points()],
+        weights: vec![1.0; p.size().points],
         condition_number: Real::NAN,
         covariance: DMatrix::from_element(t, t, Real::NAN),
         sigma0: Real::NAN,
@@ -108,9 +128,10 @@ pub(crate) struct Work {
 
 impl Work {
     pub fn new(p: &dyn LeastSquares) -> Work {
-        let (m, t) = (p.n_points() * p.rows_per_point(), p.n_params());
+        let size = p.size();
+        let (m, t) = (size.rows(), size.params);
         Work {
-            rows: p.rows_per_point(),
+            rows: size.rows_per_point,
             r: DVector::zeros(m),
             j: DMatrix::zeros(m, t),
             pj: DMatrix::zeros(m, t),
@@ -293,11 +314,11 @@ pub(crate) fn gauss_newton(
     eps: Real,
     max_iter: usize,
     ridge: Option<RidgeCfg>,
-    robust: Option<&RobustCfg>,
+    robust: Option<&Robustness>,
 ) -> Identified {
     let t = x0.len();
     let mut work = Work::new(p);
-    let mut w = vec![1.0; p.n_points()];
+    let mut w = vec![1.0; p.size().points];
     let mut x = x0.clone();
     let mut d = DVector::from_element(t, 1.0);
     let mut dev = DVector::zeros(t);

@@ -46,14 +46,12 @@ struct Linear {
 }
 
 impl LeastSquares for Linear {
-    fn n_params(&self) -> usize {
-        self.a.ncols()
-    }
-    fn n_points(&self) -> usize {
-        self.a.nrows()
-    }
-    fn rows_per_point(&self) -> usize {
-        1
+    fn size(&self) -> solver::Size {
+        solver::Size {
+            params: self.a.ncols(),
+            points: self.a.nrows(),
+            rows_per_point: 1,
+        }
     }
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
         r.copy_from(&(&self.b - &self.a * x));
@@ -166,8 +164,11 @@ fn bad_input_is_reported_not_panicked() {
     let out = solve(&LsOptions::default(), &p, &nan);
     assert_eq!(out.termination, Termination::InvalidInput);
     let o = RobustOptions {
-        k0: 3.0,
-        k1: 2.0,
+        robust: Robustness {
+            k0: 3.0,
+            k1: 2.0,
+            ..Default::default()
+        },
         ..Default::default()
     };
     let out = solve(&o, &p, &DVector::zeros(3));
@@ -326,7 +327,10 @@ fn all_methods() -> Vec<Box<dyn Solver>> {
         ridge(XiRule::LCurve),
         Box::new(RobustOptions::default()),
         Box::new(RobustOptions {
-            sigma0: Sigma0::Mad,
+            robust: Robustness {
+                sigma0: Sigma0::Mad,
+                ..Default::default()
+            },
             ..Default::default()
         }),
         Box::new(LmOptions::default()),
@@ -565,7 +569,10 @@ fn igg3_resists_outliers() {
         }
         for wf in [WeightFn::Huber, WeightFn::Tukey] {
             let o = RobustOptions {
-                weight: wf,
+                robust: Robustness {
+                    weight: wf,
+                    ..Default::default()
+                },
                 ..Default::default()
             };
             let (out, rms) = run(&s, &dirty, &o);

@@ -28,17 +28,44 @@ pub enum Sigma0 {
     Mad,
 }
 
-/// The robust part of the settings, as the engine ([`super::solver`]) sees it.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct RobustCfg {
-    /// Weight function.
+/// The robust part of IGG3's options (keys `weight`, `k0`, `k1`, `sigma0`).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Robustness {
+    /// Weight function. Default [`WeightFn::Igg3`].
     pub weight: WeightFn,
-    /// Lower threshold.
+    /// Lower threshold k0 (IGG3, Huber). Default 1.5.
     pub k0: Real,
-    /// Upper threshold.
+    /// Upper threshold k1 (IGG3) or Tukey's cut-off. Default 2.5.
     pub k1: Real,
-    /// σ0 estimate.
+    /// σ0 estimate. Default [`Sigma0::Classical`].
     pub sigma0: Sigma0,
+}
+
+impl Default for Robustness {
+    fn default() -> Self {
+        Robustness {
+            weight: WeightFn::Igg3,
+            k0: 1.5,
+            k1: 2.5,
+            sigma0: Sigma0::Classical,
+        }
+    }
+}
+
+impl Robustness {
+    /// Checks the thresholds: positive, `k1 > k0`.
+    pub fn check(&self) -> crate::Result<()> {
+        crate::error::finite_positive("k0", self.k0)?;
+        crate::error::finite_positive("k1", self.k1)?;
+        if self.k1 <= self.k0 {
+            return Err(crate::Error::setting(
+                "k1",
+                format!("must exceed k0 ({}), got {}", self.k0, self.k1),
+            ));
+        }
+        Ok(())
+    }
 }
 
 impl WeightFn {
@@ -86,7 +113,7 @@ pub(crate) fn point_weights(
     r: &DVector<Real>,
     rows: usize,
     t: usize,
-    o: &RobustCfg,
+    o: &Robustness,
     rms0: Real,
     w: &mut [Real],
     buf: &mut Vec<Real>,

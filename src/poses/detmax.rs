@@ -234,21 +234,7 @@ mod tests {
 
     #[test]
     fn never_lowers_the_objective_and_ends_at_a_local_optimum() {
-        let mut robot = crate::robots::irb2600();
-        // A target point off the flange axis, so θ6 acts on the position.
-        robot.set(crate::kinematics::Param::Tool(0), 80.0);
-        robot.set(crate::kinematics::Param::Tool(2), 120.0);
-        let ident = crate::identifiability::analyse(
-            &robot,
-            &robot.params(),
-            &crate::sampling::uniform_joint_poses(&robot, 60, &mut crate::rng::from_seed(1)),
-            crate::jacobian::Measure::Position,
-        )
-        .identifiable;
-        let model =
-            super::super::RobotPoseModel::new(&robot, &ident, crate::jacobian::Measure::Position);
-        let cands =
-            crate::sampling::uniform_joint_poses(&robot, 120, &mut crate::rng::from_seed(2));
+        let (model, cands) = tool_model(120, 2);
         let m = 15;
         let res = detmax(&model, &cands, (0..m).collect(), Objective::Composite, 1000);
         assert!(res.exchanges > 0);
@@ -287,16 +273,7 @@ mod tests {
 
     #[test]
     fn fast_scan_values_match_the_dense_eigen_path() {
-        let mut robot = crate::robots::irb2600();
-        robot.set(crate::kinematics::Param::Tool(0), 80.0);
-        robot.set(crate::kinematics::Param::Tool(2), 120.0);
-        let ident = crate::identifiability::analyse(
-            &robot,
-            &robot.params(),
-            &crate::sampling::uniform_joint_poses(&robot, 60, &mut crate::rng::from_seed(1)),
-            crate::jacobian::Measure::Position,
-        )
-        .identifiable;
+        let (robot, ident) = tool_robot();
         for measure in [
             crate::jacobian::Measure::Position,
             crate::jacobian::Measure::Pose,
@@ -401,6 +378,21 @@ mod tests {
 
     #[test]
     fn same_exchanges_as_the_dense_eigen_path() {
+        let (model, cands) = tool_model(150, 3);
+        for o in [Objective::Composite, Objective::O1, Objective::O6] {
+            let res = detmax(&model, &cands, (0..20).collect(), o, 1000);
+            let (set, trace) = reference_detmax(&model, &cands, (0..20).collect(), o);
+            assert!(res.exchanges > 3, "{o:?}");
+            assert_eq!(res.set, set, "{o:?}");
+            for (x, y) in res.trace.iter().zip(&trace) {
+                assert!((x - y).abs() <= 1e-12 * y.abs(), "{o:?}: {x} vs {y}");
+            }
+        }
+    }
+
+    /// The IRB2600 with a target point off the flange axis (so θ6 acts on the position) and
+    /// its position-identifiable parameters.
+    fn tool_robot() -> (crate::kinematics::Robot, Vec<crate::kinematics::Param>) {
         let mut robot = crate::robots::irb2600();
         robot.set(crate::kinematics::Param::Tool(0), 80.0);
         robot.set(crate::kinematics::Param::Tool(2), 120.0);
@@ -411,19 +403,17 @@ mod tests {
             crate::jacobian::Measure::Position,
         )
         .identifiable;
+        (robot, ident)
+    }
+
+    /// The position model of [`tool_robot`] and `n` uniform candidate poses from `seed`.
+    fn tool_model(n: usize, seed: u64) -> (super::super::RobotPoseModel, Vec<Vec<Real>>) {
+        let (robot, ident) = tool_robot();
         let model =
             super::super::RobotPoseModel::new(&robot, &ident, crate::jacobian::Measure::Position);
         let cands =
-            crate::sampling::uniform_joint_poses(&robot, 150, &mut crate::rng::from_seed(3));
-        for o in [Objective::Composite, Objective::O1, Objective::O6] {
-            let res = detmax(&model, &cands, (0..20).collect(), o, 1000);
-            let (set, trace) = reference_detmax(&model, &cands, (0..20).collect(), o);
-            assert!(res.exchanges > 3, "{o:?}");
-            assert_eq!(res.set, set, "{o:?}");
-            for (x, y) in res.trace.iter().zip(&trace) {
-                assert!((x - y).abs() <= 1e-12 * y.abs(), "{o:?}: {x} vs {y}");
-            }
-        }
+            crate::sampling::uniform_joint_poses(&robot, n, &mut crate::rng::from_seed(seed));
+        (model, cands)
     }
 
     fn brute_robot(

@@ -549,42 +549,24 @@ mod tests {
         let model = RobotPoseModel::new(&robot, &params, Measure::Position);
         let mut rng = crate::rng::from_seed(1);
         let cands = crate::sampling::uniform_joint_poses(&robot, 10, &mut rng);
-        // Too few poses for 4 parameters (need 2), too many for the pool.
-        assert!(select(
-            &model,
-            &cands,
-            Strategy::Detmax,
-            &SelectOptions::new(1),
-            &mut rng
-        )
-        .is_err());
-        assert!(select(
-            &model,
-            &cands,
-            Strategy::Detmax,
-            &SelectOptions::new(11),
-            &mut rng
-        )
-        .is_err());
         let mut bad = cands.clone();
         bad[3][2] = 1e9;
-        assert!(select(
-            &model,
-            &bad,
-            Strategy::Random,
-            &SelectOptions::new(3),
-            &mut rng
-        )
-        .is_err());
-        bad[3] = vec![0.0; 2];
-        assert!(select(
-            &model,
-            &bad,
-            Strategy::Random,
-            &SelectOptions::new(3),
-            &mut rng
-        )
-        .is_err());
+        let mut short = cands.clone();
+        short[3] = vec![0.0; 2];
+        // Too few poses for 4 parameters (need 2), too many for the pool; a pose outside the
+        // limits; a pose of the wrong length.
+        for (pool, strategy, count) in [
+            (&cands, Strategy::Detmax, 1),
+            (&cands, Strategy::Detmax, 11),
+            (&bad, Strategy::Random, 3),
+            (&short, Strategy::Random, 3),
+        ] {
+            let o = SelectOptions::new(count);
+            assert!(
+                select(&model, pool, strategy, &o, &mut rng).is_err(),
+                "{strategy:?}, {count} poses"
+            );
+        }
         let mut o = SelectOptions::new(3);
         o.ide.population = 3;
         assert!(select(&model, &cands, Strategy::Ide, &o, &mut rng).is_err());

@@ -334,10 +334,9 @@ mod tests {
     use super::*;
 
     fn key_of(e: Error) -> String {
-        match e {
-            Error::Setting { key, .. } => key,
-            other => panic!("expected a setting error, got {other}"),
-        }
+        e.key()
+            .unwrap_or_else(|| panic!("not a setting error: {e}"))
+            .into()
     }
 
     #[test]
