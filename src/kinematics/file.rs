@@ -250,8 +250,8 @@ fn tidy(v: Real) -> Real {
     }
 }
 
-fn num(v: Real) -> String {
-    let v = tidy(v);
+fn num(v: Real, tidied: bool) -> String {
+    let v = if tidied { tidy(v) } else { v };
     let s = format!("{v:?}");
     if s == "-0.0" {
         "0.0".into()
@@ -282,7 +282,23 @@ fn toml_string(text: &str) -> String {
 }
 
 /// Writes a robot as a robot file in its own units; [`parse_robot_file`] reads it back.
+///
+/// Numbers are tidied (`89.99999999999999` is written `90.0`) unless tidying would make the
+/// file unreadable — a lever or a joint range so small that it rounds to zero — in which
+/// case every number is written exactly. So a robot that passes [`Robot::check`] always
+/// reads back.
 pub fn robot_to_toml(robot: &Robot) -> String {
+    let tidied = write_robot(robot, true);
+    if parse_robot_file(&tidied, Path::new("robot.toml")).is_ok() {
+        tidied
+    } else {
+        write_robot(robot, false)
+    }
+}
+
+/// [`robot_to_toml`] with or without tidied numbers.
+fn write_robot(robot: &Robot, tidied: bool) -> String {
+    let num = |v: Real| num(v, tidied);
     let n = robot.dof();
     let (lu, au) = (robot.units.length_to_mm(), robot.units.angle_to_rad());
     let mut s = String::new();
@@ -521,5 +537,21 @@ mod tests {
             let back = parse_robot_file(&robot_to_toml(&r), Path::new("n.toml")).unwrap();
             assert_eq!(back.name, name);
         }
+    }
+
+    #[test]
+    fn tiny_levers_and_ranges_read_back() {
+        // Found by fuzzing: tidying wrote l1 = 1e-320 as 0.0, and a range of 1e-13 degrees
+        // as [0.0, 0.0], files the parser refuses.
+        let mut r = robots::guo_3t2r();
+        r.coupling = Some(Coupling::Differential { l1_mm: 1e-320 });
+        r.joints[3].limits = (0.0, 1e-13_f64.to_radians());
+        r.joints[4].limits = (1.0, 1.0 + 1e-14);
+        assert_eq!(r.check(), Ok(()));
+        let back = parse_robot_file(&robot_to_toml(&r), Path::new("t.toml")).unwrap();
+        assert_eq!(back.coupling, r.coupling);
+        assert!(back.joints[3].limits.1 > 0.0 && back.joints[4].limits.1 > 1.0);
+        // Ordinary robots are still written tidied.
+        assert!(robot_to_toml(&robots::irb2600()).contains("alpha = -90.0\n"));
     }
 }
