@@ -150,28 +150,30 @@ pub fn compare(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Regres
 /// Refuses, naming `path`, a JSON value that is not a calbench summary: it must be an object
 /// with a `scenario` name and `results`, a list of objects each naming its `method`.
 pub fn check_summary(value: &Value, path: &Path) -> Result<()> {
-    let what = "a calbench summary (summary.json from `calbench run`) is an object with \
-                `scenario` and `results`, a list of entries with `method`, `poses` and metrics";
     let not = |place: &str, got: String| {
         Error::file(
             path,
             place,
-            format!("{got}: not a calbench summary; {what}"),
+            format!(
+                "{got}, so this is not a calbench summary (summary.json from `calbench run`: \
+                 an object with a `scenario` name and `results`, a list of entries with \
+                 `method`, `poses` and metrics)"
+            ),
         )
     };
     let Some(obj) = value.as_object() else {
         return Err(not("top level", format!("is {}", kind(value))));
+    };
+    let results = match obj.get("results") {
+        Some(Value::Array(r)) => r,
+        Some(v) => return Err(not("results", format!("is {}, not a list", kind(v)))),
+        None => return Err(not("results", "is missing".into())),
     };
     match obj.get("scenario") {
         Some(Value::String(_)) => {}
         Some(v) => return Err(not("scenario", format!("is {}, not a name", kind(v)))),
         None => return Err(not("scenario", "is missing".into())),
     }
-    let results = match obj.get("results") {
-        Some(Value::Array(r)) => r,
-        Some(v) => return Err(not("results", format!("is {}, not a list", kind(v)))),
-        None => return Err(not("results", "is missing".into())),
-    };
     for (i, e) in results.iter().enumerate() {
         if !matches!(e.get("method"), Some(Value::String(_))) {
             return Err(not(
@@ -341,7 +343,8 @@ mod tests {
         let good = summary(90.0, 0.1);
         comparable(&good, Path::new("a"), &good, Path::new("b")).unwrap();
         for (bad, key) in [
-            (json!({}), "scenario"),
+            (json!({}), "results"),
+            (json!({"results": []}), "scenario"),
             (json!({"scenario": "s"}), "results"),
             (json!({"scenario": "s", "results": 3}), "results"),
             (json!({"scenario": "s", "results": {"a": 1}}), "results"),
