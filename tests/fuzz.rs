@@ -6,9 +6,13 @@
 //!
 //! Each parser gets [`CASES`] cases per property in the normal run, from a fixed seed so the
 //! run is repeatable. The `#[ignore]`d `*_long` tests run [`LONG_CASES`] cases from a random
-//! seed: `cargo test --test fuzz -- --ignored` (`CALBENCH_FUZZ_CASES` and
+//! seed: `cargo test --test fuzz -- --ignored _long` (`CALBENCH_FUZZ_CASES` and
 //! `CALBENCH_FUZZ_SEED` override the count and the seed; `CALBENCH_FUZZ_COLLECT=1` prints
 //! every message without the file and goes on, to list them all in one run).
+//!
+//! Gaps found in code outside these parsers' own checks are let through by the properties
+//! ([`SCENARIO_GAPS`], [`SWEEP_GAP`] and the unreadable robot file in [`scenario_property`]),
+//! each pinned by an `#[ignore]`d test with the exact input that shows it.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -410,6 +414,13 @@ const TOML_VALUES: &[&str] = &[
     "\"linear\"",
     "\"paper\"",
     "\"../nowhere.toml\"",
+    "\"methods\"",
+    "\"trials\"",
+    "\"name.x\"",
+    "\".\"",
+    "\"outliers.count\"",
+    "\"calibration.count\"",
+    "[0, 2]",
     "\"/dev/null\"",
     "\"\\u0000\"",
     "\"\\n\"",
@@ -658,13 +669,49 @@ fn scenario_corpus() -> &'static [Vec<u8>] {
             .collect();
         files.sort();
         assert!(files.len() >= 3, "scenarios/*.toml not found");
-        files.iter().map(|p| std::fs::read(p).unwrap()).collect()
+        let mut corpus: Vec<Vec<u8>> = files.iter().map(|p| std::fs::read(p).unwrap()).collect();
+        // A robot file beside the scenario ([`SCENARIO_ROBOT`]), which no shipped scenario
+        // has. (A sweep would belong here too, but see [`SWEEP_GAP`].)
+        let guard = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
+        let file = guard.replace(
+            "builtin = \"irb2600\"",
+            &format!("file = \"{SCENARIO_ROBOT}\""),
+        );
+        assert_ne!(file, guard);
+        corpus.push(file.into_bytes());
+        corpus
     })
+}
+
+/// The robot file the scenario corpus refers to, written beside each case's scenario.
+const SCENARIO_ROBOT: &str = "fuzz-robot.toml";
+
+/// Writes [`SCENARIO_ROBOT`] into the calling thread's scratch folder.
+fn write_scenario_robot() -> PathBuf {
+    let p = scratch().join(SCENARIO_ROBOT);
+    std::fs::write(&p, robot_to_toml(&robots::irb2600())).unwrap();
+    p
 }
 
 fn scenario_keys() -> &'static [String] {
     static K: OnceLock<Vec<String>> = OnceLock::new();
-    K.get_or_init(|| keys_of(scenario_corpus()))
+    K.get_or_init(|| {
+        let mut k = keys_of(scenario_corpus());
+        // Keys no shipped scenario uses.
+        k.extend(
+            [
+                "[sweep]",
+                "key",
+                "values",
+                "file",
+                "poses_file",
+                "robot.file",
+                "sweep.key",
+            ]
+            .map(String::from),
+        );
+        k
+    })
 }
 
 /// Measurement CSVs written by `calbench simulate` (position-only and full-pose) and the
@@ -768,13 +815,29 @@ const SCENARIO_GAPS: &[&str] = &[
     "setting `robot.builtin`: no built-in robot",
 ];
 
-/// The scenario parser on `bytes`.
+/// Known gap: `Scenario::parse` of any scenario with a sweep recurses until the stack
+/// overflows, which aborts the whole test process, so the property skips texts that mention
+/// a sweep. Pinned by the `#[ignore]`d `scenario_with_a_sweep_parses`; remove this skip when
+/// it passes.
+const SWEEP_GAP: &str = "sweep";
+
+/// The scenario parser on `bytes`, beside [`SCENARIO_ROBOT`]. An error inside a robot file
+/// the scenario refers to may name that file instead of the scenario.
 fn scenario_property(bytes: &[u8]) -> Result<(), TestCaseError> {
     let path = case_file("scenario", "toml");
     let text = String::from_utf8_lossy(bytes);
+    if text.contains(SWEEP_GAP) {
+        return Ok(());
+    }
     if let Err(e) = Scenario::parse(&text, Some(&path)) {
         let msg = e.to_string();
-        if SCENARIO_GAPS.iter().any(|g| msg.starts_with(g)) {
+        // An error inside a file the scenario refers to (its robot file) names that file.
+        let named = msg.split_once(": ").map(|(p, _)| Path::new(p));
+        let referenced = named.is_some_and(|p| p != path && p.exists());
+        // Known gap, pinned by `scenario_missing_robot_file_names_the_scenario`: a robot
+        // file that cannot be read is named without the scenario or the key.
+        let unreadable = named.is_some_and(|p| p != path && p.is_absolute() && !p.exists());
+        if SCENARIO_GAPS.iter().any(|g| msg.starts_with(g)) || referenced || unreadable {
             return Ok(());
         }
         names_file(&msg, &path)?;
@@ -813,10 +876,12 @@ fn run_robot_mutations(cases: u32, seed: Option<u64>) {
 }
 
 fn run_scenario_bytes(cases: u32, seed: Option<u64>) {
+    write_scenario_robot();
     fuzz(cases, seed, random_bytes(), |b| scenario_property(&b.0));
 }
 
 fn run_scenario_mutations(cases: u32, seed: Option<u64>) {
+    write_scenario_robot();
     let s = mutated(scenario_corpus(), toml_mutation(scenario_keys()), false);
     fuzz(cases, seed, s, |(_, b, _)| scenario_property(&b.0));
 }
@@ -841,8 +906,9 @@ fn corpora_are_valid() {
         robot_property(f).unwrap();
         parse_robot_file(&String::from_utf8_lossy(f), Path::new("r.toml")).unwrap();
     }
+    let beside = write_scenario_robot().with_file_name("s.toml");
     for f in scenario_corpus() {
-        Scenario::parse(&String::from_utf8_lossy(f), Some(Path::new("s.toml"))).unwrap();
+        Scenario::parse(&String::from_utf8_lossy(f), Some(&beside)).unwrap();
     }
     let (files, robots) = csv_corpus();
     for (f, r) in files.iter().zip(robots) {
@@ -885,7 +951,7 @@ fn csv_mutations() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored"]
+#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
 fn robot_file_long() {
     let (cases, seed) = long_run();
     run_robot_bytes(cases, seed);
@@ -893,7 +959,7 @@ fn robot_file_long() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored"]
+#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
 fn scenario_long() {
     let (cases, seed) = long_run();
     run_scenario_bytes(cases, seed);
@@ -901,7 +967,7 @@ fn scenario_long() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored"]
+#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
 fn csv_long() {
     let (cases, seed) = long_run();
     run_csv_bytes(cases, seed);
@@ -939,4 +1005,56 @@ fn deep_nesting_is_refused_naming_the_file() {
             assert!(e.starts_with("dir/deep.toml: TOML"), "{}", &e[..100]);
         }
     }
+}
+
+/// Found by `scenario_mutations` with a sweep in its corpus: `scenarios/ci-guard.toml` with
+/// `[sweep]`, `key = "outliers.count"`, `values = [0, 2]` appended makes `Scenario::parse`
+/// overflow its stack (`thread 'main' has overflowed its stack`, SIGABRT): each swept value
+/// is checked through `with_override`, which parses the table again, sweep included. Run in a
+/// child process, since a stack overflow aborts the process.
+#[test]
+#[ignore = "known gap: a scenario with a sweep overflows the stack in Scenario::parse"]
+fn scenario_with_a_sweep_parses() {
+    let dir = std::env::temp_dir().join(format!("calbench-fuzz-sweep-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let guard = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
+    let path = dir.join("sweep.toml");
+    std::fs::write(
+        &path,
+        format!("{guard}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n"),
+    )
+    .unwrap();
+    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(["simulate", path.to_str().unwrap(), "--out"])
+        .arg(dir.join("out"))
+        .output()
+        .unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(
+        o.status.success(),
+        "{:?}: {}",
+        o.status,
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// Found by `scenario_mutations`: `scenarios/ci-guard.toml` with `builtin = "irb2600"`
+/// replaced by `file = "fu.toml"` (no such file beside it) is refused with
+/// `<dir>/fu.toml: No such file or directory (os error 2)` — naming neither the scenario file
+/// nor the key `robot.file` (the command line prints the cause twice:
+/// `error: fu.toml: No such file or directory (os error 2): No such file or directory (os
+/// error 2)`). `file = "\u0000"` likewise gives `<dir>/\0: file name contained an unexpected
+/// NUL byte`.
+#[test]
+#[ignore = "known gap: an unreadable robot.file is refused without the scenario or the key"]
+fn scenario_missing_robot_file_names_the_scenario() {
+    let text = std::fs::read_to_string(root().join("scenarios/ci-guard.toml"))
+        .unwrap()
+        .replace("builtin = \"irb2600\"", "file = \"fu.toml\"");
+    let path = std::env::temp_dir().join("calbench-fuzz-no-robot/ci-guard.toml");
+    let e = Scenario::parse(&text, Some(&path)).unwrap_err().to_string();
+    assert!(
+        e.contains(&path.display().to_string()) && e.contains("robot.file"),
+        "{e}"
+    );
 }
