@@ -482,5 +482,6 @@ pub fn check(summary: &Path, baseline: &Path, tolerance: Real) -> Result<Vec<Reg
     }
     let s = read_json(summary)?;
     let b = read_json(baseline)?;
+    crate::check::comparable(&s, summary, &b, baseline)?;
     Ok(compare(&s, &b, tolerance))
 }

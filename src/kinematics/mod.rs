@@ -24,7 +24,108 @@ pub use chain::{Chain, ChainVars, Op, OpKind};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
 pub use param::{Param, PARAMS_PER_JOINT};
 
+use crate::error::{Error, Result};
 use crate::math::{Frame, Real};
+
+/// Largest magnitude of a length in a robot model, mm (1 km): link lengths and offsets, base
+/// and tool offsets, prismatic joint limits and screw travels, the coupling's lever.
+pub const MAX_LENGTH_MM: Real = 1e6;
+
+/// Largest magnitude of a constant angle in a robot model, rad (one turn): α, θ, β and the
+/// base and tool angles.
+pub const MAX_ANGLE_RAD: Real = 2.0 * std::f64::consts::PI;
+
+/// Largest magnitude of a revolute joint limit or joint value, rad (ten turns).
+pub const MAX_JOINT_RAD: Real = 20.0 * std::f64::consts::PI;
+
+/// What kind of number a robot-model value is, which sets its unit and its range.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Quantity {
+    /// A length, mm inside; at most [`MAX_LENGTH_MM`] in magnitude.
+    Length,
+    /// A constant angle, rad inside; at most [`MAX_ANGLE_RAD`] in magnitude.
+    Angle,
+    /// A revolute joint's limit or value, rad inside; at most [`MAX_JOINT_RAD`] in magnitude.
+    JointAngle,
+}
+
+impl Quantity {
+    fn bound(self) -> Real {
+        match self {
+            Quantity::Length => MAX_LENGTH_MM,
+            Quantity::Angle => MAX_ANGLE_RAD,
+            Quantity::JointAngle => MAX_JOINT_RAD,
+        }
+    }
+
+    fn inner_unit(self) -> &'static str {
+        match self {
+            Quantity::Length => "mm",
+            _ => "rad",
+        }
+    }
+
+    fn what(self) -> &'static str {
+        match self {
+            Quantity::Length => "length",
+            Quantity::Angle => "angle",
+            Quantity::JointAngle => "joint angle",
+        }
+    }
+}
+
+/// Converts `raw` (in `unit`, `factor` to the internal unit) to the internal unit and checks
+/// the result: finite and within the quantity's range. The check comes after the conversion,
+/// so a finite value that overflows in mm is refused. The error says what is allowed, in
+/// `unit` and in the internal unit.
+pub(crate) fn to_internal(
+    quantity: Quantity,
+    raw: Real,
+    factor: Real,
+    unit: &str,
+) -> std::result::Result<Real, String> {
+    let v = raw * factor;
+    let bound = quantity.bound();
+    // The slack lets a bound written in other units (360° = 2π) through despite rounding.
+    if v.is_finite() && v.abs() <= bound * (1.0 + 1e-12) {
+        return Ok(v);
+    }
+    let inner = quantity.inner_unit();
+    let shown = |x: Real| (x * 1e6).round() / 1e6;
+    let (allowed, got) = if unit == inner {
+        (
+            format!("±{} {inner}", shown(bound)),
+            format!("{raw:?} {unit}"),
+        )
+    } else {
+        (
+            format!(
+                "±{} {unit} (±{} {inner})",
+                shown(bound / factor),
+                shown(bound)
+            ),
+            format!("{raw:?} {unit}, which is {v:?} {inner}"),
+        )
+    };
+    Err(format!(
+        "must be a finite {} within {allowed}, got {got}",
+        quantity.what()
+    ))
+}
+
+/// A value of a robot model that is not finite, out of range, or inconsistent.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ModelIssue {
+    /// Where, as in a robot file: `joint 2 (joints[1]), key `a``, `base.xyz`, `coupling.l1`.
+    pub place: String,
+    /// What is wrong and what is allowed.
+    pub msg: String,
+}
+
+/// The place of a joint's key in a robot file, as messages name it.
+pub(crate) fn joint_place(j: usize, key: &str) -> String {
+    format!("joint {} (joints[{j}]), key `{key}`", j + 1)
+}
 
 /// The link-transform convention of a robot (see the module docs).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -111,6 +212,22 @@ impl Units {
         match self.length {
             LengthUnit::Mm => 1.0,
             LengthUnit::M => 1000.0,
+        }
+    }
+
+    /// The length unit's name in robot files: `mm` or `m`.
+    pub fn length_name(self) -> &'static str {
+        match self.length {
+            LengthUnit::Mm => "mm",
+            LengthUnit::M => "m",
+        }
+    }
+
+    /// The angle unit's name in robot files: `deg` or `rad`.
+    pub fn angle_name(self) -> &'static str {
+        match self.angle {
+            AngleUnit::Deg => "deg",
+            AngleUnit::Rad => "rad",
         }
     }
 
@@ -248,12 +365,138 @@ impl Robot {
 
     /// Factor from the user unit of joint `i`'s value to the internal unit.
     fn q_factor(&self, i: usize, kind: JointType) -> Real {
-        let coupled = self.coupling.is_some() && i < 2;
-        if coupled || kind == JointType::Prismatic {
+        if self.q_is_length(i, kind) {
             self.units.length_to_mm()
         } else {
             self.units.angle_to_rad()
         }
+    }
+
+    /// Checks every value of the model (internal units): each parameter finite and within its
+    /// range ([`MAX_LENGTH_MM`], [`MAX_ANGLE_RAD`]; joint limits [`MAX_JOINT_RAD`] or
+    /// [`MAX_LENGTH_MM`]), each joint's lower limit below its upper, no β in a `dh` robot, a
+    /// coupling lever that is positive and in range. [`read_robot_file`] refuses files whose
+    /// robot fails this check; robots built in code can call it before they are used.
+    pub fn check(&self) -> std::result::Result<(), ModelIssue> {
+        let n = self.dof();
+        if self.values.len() != PARAMS_PER_JOINT * n + 12 {
+            return Err(ModelIssue {
+                place: "joints".into(),
+                msg: format!(
+                    "{} parameter values for {n} joints; expected {}",
+                    self.values.len(),
+                    PARAMS_PER_JOINT * n + 12
+                ),
+            });
+        }
+        let issue = |place: String, msg: String| ModelIssue { place, msg };
+        for p in Param::all(n, true) {
+            let v = self.get(p);
+            let (place, quantity) = match p {
+                Param::Theta(j) => (joint_place(j, "theta"), Quantity::Angle),
+                Param::D(j) => (joint_place(j, "d"), Quantity::Length),
+                Param::A(j) => (joint_place(j, "a"), Quantity::Length),
+                Param::Alpha(j) => (joint_place(j, "alpha"), Quantity::Angle),
+                Param::Beta(j) => (joint_place(j, "beta"), Quantity::Angle),
+                Param::Base(c) | Param::Tool(c) => {
+                    let part = if matches!(p, Param::Base(_)) {
+                        "base"
+                    } else {
+                        "tool"
+                    };
+                    if c < 3 {
+                        (format!("{part}.xyz"), Quantity::Length)
+                    } else {
+                        (format!("{part}.rpy"), Quantity::Angle)
+                    }
+                }
+            };
+            let unit = quantity.inner_unit();
+            to_internal(quantity, v, 1.0, unit).map_err(|m| issue(place.clone(), m))?;
+            if matches!(p, Param::Beta(_)) && !self.convention.has_beta() && v != 0.0 {
+                return Err(issue(
+                    place,
+                    "convention \"dh\" has no β; use \"dh_beta\" or \"mdh\"".into(),
+                ));
+            }
+        }
+        for (j, joint) in self.joints.iter().enumerate() {
+            let quantity = if self.q_is_length(j, joint.kind) {
+                Quantity::Length
+            } else {
+                Quantity::JointAngle
+            };
+            let (lo, hi) = joint.limits;
+            let unit = quantity.inner_unit();
+            for v in [lo, hi] {
+                to_internal(quantity, v, 1.0, unit)
+                    .map_err(|m| issue(joint_place(j, "limits"), m))?;
+            }
+            if lo >= hi {
+                return Err(issue(
+                    joint_place(j, "limits"),
+                    format!("lower limit {lo:?} {unit} must be below upper limit {hi:?} {unit}"),
+                ));
+            }
+        }
+        if let Some(Coupling::Differential { l1_mm }) = self.coupling {
+            to_internal(Quantity::Length, l1_mm, 1.0, "mm")
+                .ok()
+                .filter(|&l| l > 0.0)
+                .ok_or_else(|| {
+                    issue(
+                        "coupling.l1".into(),
+                        format!("must be a finite length > 0 within ±{MAX_LENGTH_MM} mm, got {l1_mm:?} mm"),
+                    )
+                })?;
+            if n < 2
+                || self.joints[0].kind != JointType::Revolute
+                || self.joints[1].kind != JointType::Prismatic
+            {
+                return Err(issue(
+                    "coupling".into(),
+                    "a differential coupling drives a revolute joint 1 and a prismatic joint 2"
+                        .into(),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Joint values given in the robot's units (`--q`, a file), converted to internal units
+    /// and checked after the conversion: each finite and within [`MAX_LENGTH_MM`] (prismatic
+    /// joints, screw travels) or [`MAX_JOINT_RAD`] (revolute joints), so forward kinematics of
+    /// the result is finite. `key` names the values in the error (e.g. `--q`).
+    pub fn q_from_user_checked(&self, q: &[Real], key: &str) -> Result<Vec<Real>> {
+        if q.len() != self.dof() {
+            return Err(Error::setting(
+                key,
+                format!(
+                    "the robot has {} joints but {} values were given",
+                    self.dof(),
+                    q.len()
+                ),
+            ));
+        }
+        q.iter()
+            .zip(&self.joints)
+            .enumerate()
+            .map(|(i, (&v, j))| {
+                let length = self.q_is_length(i, j.kind);
+                let (quantity, unit) = if length {
+                    (Quantity::Length, self.units.length_name())
+                } else {
+                    (Quantity::JointAngle, self.units.angle_name())
+                };
+                to_internal(quantity, v, self.q_factor(i, j.kind), unit)
+                    .map_err(|m| Error::setting(key, format!("joint {}: {m}", i + 1)))
+            })
+            .collect()
+    }
+
+    /// Whether joint `i`'s value is a length (prismatic, or a screw travel of a coupling).
+    fn q_is_length(&self, i: usize, kind: JointType) -> bool {
+        (self.coupling.is_some() && i < 2) || kind == JointType::Prismatic
     }
 
     /// Whether `q` (internal units) lies within the joint limits (with a tolerance of 1e-9).

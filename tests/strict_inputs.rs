@@ -1,0 +1,109 @@
+//! Strict inputs on the command line: robot files checked after unit conversion (`fk`), and
+//! `check` refusing files that are not comparable summaries, each naming the file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-strict-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn calbench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// Fails unless `o` is a refusal (non-zero exit, no panic) whose message has every `words`.
+fn refused(o: &Output, words: &[&str]) {
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(!o.status.success(), "accepted: {text}");
+    assert_ne!(o.status.code(), Some(101), "panicked: {text}");
+    for w in words {
+        assert!(text.contains(w), "`{w}` missing from: {text}");
+    }
+}
+
+#[test]
+fn fk_refuses_a_length_that_overflows_in_mm() {
+    let d = tmp("fk");
+    let text = String::from_utf8(calbench(&["robots", "irb2600"]).stdout).unwrap();
+    // The IRB2600 in metres, with a2 = 1e308 m: finite in the file, infinite in mm.
+    let mut joint = 0;
+    let metres: String = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("[[joints]]") {
+                joint += 1;
+            }
+            if l == "length_unit = \"mm\"" {
+                "length_unit = \"m\"".to_string()
+            } else if joint == 2 && l.starts_with("a = ") {
+                "a = 1e308".to_string()
+            } else if let Some(v) = l.strip_prefix("d = ") {
+                format!("d = {}", v.parse::<f64>().unwrap() / 1000.0)
+            } else if let Some(v) = l.strip_prefix("a = ") {
+                format!("a = {}", v.parse::<f64>().unwrap() / 1000.0)
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let huge = d.join("huge.toml");
+    std::fs::write(&huge, metres.replace("a = 1e308", "a = 1.2")).unwrap();
+    let h = huge.to_str().unwrap();
+    let ok = calbench(&["fk", "--robot", h, "--q", "0,0,0,0,0,0", "--json"]);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    std::fs::write(&huge, &metres).unwrap();
+    let o = calbench(&["fk", "--robot", h, "--q", "0,0,0,0,0,0", "--json"]);
+    refused(&o, &["huge.toml", "joints[1]", "`a`"]);
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+}
+
+#[test]
+fn check_refuses_files_that_are_not_comparable_summaries() {
+    let d = tmp("check");
+    let summary = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/baselines/ci-guard.json");
+    let s = summary.to_str().unwrap();
+    let real: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let mut other = real.clone();
+    other["scenario"] = serde_json::json!("another-study");
+    let mut unrelated = real.clone();
+    for e in unrelated["results"].as_array_mut().unwrap() {
+        e["method"] = serde_json::json!("pso");
+    }
+    let cases = [
+        ("empty.json", "{}".to_string(), "results"),
+        ("notlist.json", r#"{"results": 3}"#.to_string(), "results"),
+        ("array.json", "[1, 2]".to_string(), "not a calbench summary"),
+        ("other.json", other.to_string(), "scenario"),
+        ("unrelated.json", unrelated.to_string(), "shares no metric"),
+    ];
+    for (name, body, key) in cases {
+        let p = d.join(name);
+        std::fs::write(&p, body).unwrap();
+        let p = p.to_str().unwrap();
+        refused(&calbench(&["check", s, "--baseline", p]), &[name, key]);
+        refused(&calbench(&["check", p, "--baseline", s]), &[name, key]);
+    }
+    let same = calbench(&["check", s, "--baseline", s]);
+    assert!(same.status.success());
+}
