@@ -38,7 +38,7 @@ pub const GRAVITY: Real = 9.81;
 
 /// Time step of the settling simulation, s. The springs are implicit and gravity is explicit,
 /// so a step far longer than the arm's natural periods (a few ms) damps the inertial transient
-/// by a factor ~(ω·dt)⁻² ≈ 1e-8 per step; what is left is a fixed-point iteration on
+/// by a factor ~(ω·dt)⁻² (below 1e-6) per step; what is left is a fixed-point iteration on
 /// `K Δq = τ_g(q + Δq)`, contracting by ~‖∂τ_g/∂q‖/k (about 1e-3 on the IRB2600) per step.
 const DT: Real = 100.0;
 
@@ -49,9 +49,9 @@ pub const MIN_STEPS: usize = 2;
 pub const MAX_STEPS: usize = 16;
 
 /// The settle stops once a step moved no joint by more than this (rad). The error left is
-/// about the contraction factor times this: ~1e-13 rad on the IRB2600, where, started from the
-/// small-deflection estimate, [`MIN_STEPS`] steps suffice (checked against the exact
-/// equilibrium in `compliance::tests::rapier_matches_exact_equilibrium_on_irb2600`).
+/// about the contraction factor times this. On the IRB2600, started from the small-deflection
+/// estimate, [`MIN_STEPS`] steps suffice and the settled joints match the exact equilibrium to
+/// 1e-15 rad (`compliance::tests::rapier_matches_exact_equilibrium_on_irb2600`).
 pub const STEP_TOLERANCE: Real = 1e-10;
 
 /// Angular inertia floor per body, kg·m². It only shapes the transient (it keeps the joint-space
@@ -381,5 +381,26 @@ mod tests {
         assert!(s.last_step_change < STEP_TOLERANCE);
         assert_relative_eq!(s.tool.pos.z, 500.0 - l * th.sin(), epsilon = 1e-8);
         assert_relative_eq!(s.tool.pos.x, l * th.cos(), epsilon = 1e-8);
+    }
+
+    #[test]
+    fn inconsistent_inputs_are_errors() {
+        assert!(Arm::new(0).is_err());
+        assert!(Arm::new(MAX_BODIES + 1).is_err());
+        let mut arm = Arm::new(2).unwrap();
+        let b = SpringBody {
+            axis: Frame::identity(),
+            stiffness: 1e4,
+            masses: 0..0,
+        };
+        let tool = Frame::identity();
+        assert!(arm
+            .settle(std::slice::from_ref(&b), &[], &tool, &[])
+            .is_err());
+        let two = [b.clone(), b];
+        assert!(arm.settle(&two, &[], &tool, &[0.0]).is_err());
+        let s = arm.settle(&two, &[], &tool, &[]).unwrap();
+        assert_eq!(s.deflection(), &[0.0, 0.0]);
+        assert_eq!(s.steps, MIN_STEPS);
     }
 }
