@@ -89,7 +89,7 @@ pub fn parse_measure(text: &str) -> Result<Measure> {
 /// `calbench fk --robot R --q … [--json]`.
 pub fn fk(robot: &str, q: &str, json: bool) -> Result<()> {
     let robot = robots::load(robot)?;
-    let q = robot.q_from_user(&parse_q(q, robot.dof())?);
+    let q = robot.q_from_user_checked(&parse_q(q, robot.dof())?, "--q")?;
     let f = robot.fk(&q);
     let rot: Vec<[Real; 3]> = (0..3)
         .map(|i| [f.rot[(i, 0)], f.rot[(i, 1)], f.rot[(i, 2)]])
@@ -482,6 +482,6 @@ pub fn check(summary: &Path, baseline: &Path, tolerance: Real) -> Result<Vec<Reg
     }
     let s = read_json(summary)?;
     let b = read_json(baseline)?;
-    crate::check::comparable(&s, summary, &b, baseline)?;
+    calbench::check::comparable(&s, summary, &b, baseline)?;
     Ok(compare(&s, &b, tolerance))
 }

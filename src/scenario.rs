@@ -503,15 +503,25 @@ impl Scenario {
             table,
         };
         // Settings that need the robot: joint counts of lists, parameter names.
-        let robot = scenario.robot()?;
+        let robot = scenario.robot().map_err(|e| match e {
+            Error::Setting { key, msg } => ferr(&key, msg),
+            Error::File { .. } => e,
+            other => ferr("robot.file", other.to_string()),
+        })?;
         check(scenario.compliance.check(robot.dof()))?;
         if let ParamSelection::List(_) = &scenario.errors.params {
             let measure = scenario.tracker.measure.measure();
             check(selected_params(&robot, &scenario.errors.params, measure).map(|_| ()))?;
         }
         if let Some(sw) = &scenario.sweep {
+            let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
             for v in &sw.values {
-                scenario.with_override(&sw.key, v.clone())?;
+                scenario.plan(&sw.key, v.clone()).map_err(|e| match e {
+                    Error::Setting { key, msg } => {
+                        Error::file(shown, format!("sweep ({key})"), msg)
+                    }
+                    other => other,
+                })?;
             }
         }
         Ok(scenario)
@@ -545,6 +555,18 @@ impl Scenario {
     /// A copy with one dotted key (`outliers.count`, `trials`, `tracker.mpe_a_um`) set to
     /// `value`, checked again.
     pub fn with_override(&self, key: &str, value: toml::Value) -> Result<Scenario> {
+        Scenario::from_table(self.edited(key, value)?, self.path.as_deref())
+    }
+
+    /// The study of one swept value: the scenario with `key` set to `value` and no sweep.
+    fn plan(&self, key: &str, value: toml::Value) -> Result<Scenario> {
+        let mut table = self.edited(key, value)?;
+        table.remove("sweep");
+        Scenario::from_table(table, self.path.as_deref())
+    }
+
+    /// The scenario's table with the dotted `key` set to `value`.
+    fn edited(&self, key: &str, value: toml::Value) -> Result<toml::Table> {
         let mut table = self.table.clone();
         if key.starts_with("methods") {
             return Err(Error::setting(key, "methods cannot be swept or overridden"));
@@ -563,10 +585,7 @@ impl Scenario {
                 .ok_or_else(|| Error::setting(key, format!("`{p}` is not a section")))?;
         }
         t.insert(last.to_string(), value);
-        let mut s = Scenario::from_table(table, self.path.as_deref())?;
-        s.sweep = None;
-        s.table.remove("sweep");
-        Ok(s)
+        Ok(table)
     }
 
     /// One checked scenario per swept value (or the scenario itself when there is no sweep).
@@ -576,7 +595,7 @@ impl Scenario {
             Some(sw) => sw
                 .values
                 .iter()
-                .map(|v| Ok((Some(v.clone()), self.with_override(&sw.key, v.clone())?)))
+                .map(|v| Ok((Some(v.clone()), self.plan(&sw.key, v.clone())?)))
                 .collect(),
         }
     }

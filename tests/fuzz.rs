@@ -10,9 +10,9 @@
 //! `CALBENCH_FUZZ_SEED` override the count and the seed; `CALBENCH_FUZZ_COLLECT=1` prints
 //! every message without the file and goes on, to list them all in one run).
 //!
-//! Gaps found in code outside these parsers' own checks are let through by the properties
-//! ([`SCENARIO_GAPS`], [`SWEEP_GAP`] and the unreadable robot file in [`scenario_property`]),
-//! each pinned by an `#[ignore]`d test with the exact input that shows it.
+//! Gaps the fuzzing found are pinned by tests with the exact input that showed them (a sweep
+//! that overflowed the stack, an unknown `robot.builtin` or an unreadable `robot.file` refused
+//! without the scenario file).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -670,8 +670,8 @@ fn scenario_corpus() -> &'static [Vec<u8>] {
         files.sort();
         assert!(files.len() >= 3, "scenarios/*.toml not found");
         let mut corpus: Vec<Vec<u8>> = files.iter().map(|p| std::fs::read(p).unwrap()).collect();
-        // A robot file beside the scenario ([`SCENARIO_ROBOT`]), which no shipped scenario
-        // has. (A sweep would belong here too, but see [`SWEEP_GAP`].)
+        // A robot file beside the scenario ([`SCENARIO_ROBOT`]) and a sweep, which no shipped
+        // scenario has.
         let guard = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
         let file = guard.replace(
             "builtin = \"irb2600\"",
@@ -679,6 +679,9 @@ fn scenario_corpus() -> &'static [Vec<u8>] {
         );
         assert_ne!(file, guard);
         corpus.push(file.into_bytes());
+        corpus.push(
+            format!("{guard}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n").into_bytes(),
+        );
         corpus
     })
 }
@@ -807,37 +810,17 @@ fn robot_property(bytes: &[u8]) -> Result<(), TestCaseError> {
     Ok(())
 }
 
-/// Scenario-parser errors known not to name the file, each pinned by an exact input in an
-/// `#[ignore]`d test below. A message that starts with one of these passes the property;
-/// remove the entry when the gap is closed (the pinned test then passes too).
-const SCENARIO_GAPS: &[&str] = &[
-    // scenario_unknown_builtin_names_the_file
-    "setting `robot.builtin`: no built-in robot",
-];
-
-/// Known gap: `Scenario::parse` of any scenario with a sweep recurses until the stack
-/// overflows, which aborts the whole test process, so the property skips texts that mention
-/// a sweep. Pinned by the `#[ignore]`d `scenario_with_a_sweep_parses`; remove this skip when
-/// it passes.
-const SWEEP_GAP: &str = "sweep";
-
 /// The scenario parser on `bytes`, beside [`SCENARIO_ROBOT`]. An error inside a robot file
 /// the scenario refers to may name that file instead of the scenario.
 fn scenario_property(bytes: &[u8]) -> Result<(), TestCaseError> {
     let path = case_file("scenario", "toml");
     let text = String::from_utf8_lossy(bytes);
-    if text.contains(SWEEP_GAP) {
-        return Ok(());
-    }
     if let Err(e) = Scenario::parse(&text, Some(&path)) {
         let msg = e.to_string();
         // An error inside a file the scenario refers to (its robot file) names that file.
         let named = msg.split_once(": ").map(|(p, _)| Path::new(p));
         let referenced = named.is_some_and(|p| p != path && p.exists());
-        // Known gap, pinned by `scenario_missing_robot_file_names_the_scenario`: a robot
-        // file that cannot be read is named without the scenario or the key.
-        let unreadable = named.is_some_and(|p| p != path && p.is_absolute() && !p.exists());
-        if SCENARIO_GAPS.iter().any(|g| msg.starts_with(g)) || referenced || unreadable {
+        if referenced {
             return Ok(());
         }
         names_file(&msg, &path)?;
@@ -978,7 +961,6 @@ fn csv_long() {
 /// `builtin = "guo-0t2r"` is refused with `setting `robot.builtin`: no built-in robot
 /// "guo-0t2r"; built-ins: irb2600, irb2600-mdh, tx60, guo-3t2r` — without the scenario file.
 #[test]
-#[ignore = "known gap: Scenario::parse does not name the file for an unknown robot.builtin"]
 fn scenario_unknown_builtin_names_the_file() {
     let text = std::fs::read_to_string(root().join("scenarios/guo2024-3t2r.toml"))
         .unwrap()
@@ -1013,7 +995,6 @@ fn deep_nesting_is_refused_naming_the_file() {
 /// is checked through `with_override`, which parses the table again, sweep included. Run in a
 /// child process, since a stack overflow aborts the process.
 #[test]
-#[ignore = "known gap: a scenario with a sweep overflows the stack in Scenario::parse"]
 fn scenario_with_a_sweep_parses() {
     let dir = std::env::temp_dir().join(format!("calbench-fuzz-sweep-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -1046,7 +1027,6 @@ fn scenario_with_a_sweep_parses() {
 /// error 2)`). `file = "\u0000"` likewise gives `<dir>/\0: file name contained an unexpected
 /// NUL byte`.
 #[test]
-#[ignore = "known gap: an unreadable robot.file is refused without the scenario or the key"]
 fn scenario_missing_robot_file_names_the_scenario() {
     let text = std::fs::read_to_string(root().join("scenarios/ci-guard.toml"))
         .unwrap()

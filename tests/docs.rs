@@ -1,0 +1,82 @@
+//! Every scenario example in README.md and in FORMATS.md (`../shared/FORMATS.md`, the
+//! user-facing contract, when it is beside the project) runs as a user would run it:
+//! `calbench run EXAMPLE --trials 2`, sweep included.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The ```toml blocks of a Markdown file that are scenarios (they have `[[methods]]`).
+fn scenario_blocks(path: &Path) -> Vec<String> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut out = Vec::new();
+    let mut rest = text.as_str();
+    while let Some(i) = rest.find("```toml\n") {
+        let body = &rest[i + 8..];
+        let end = body.find("```").expect("unclosed code block");
+        if body[..end].contains("[[methods]]") {
+            out.push(body[..end].to_string());
+        }
+        rest = &body[end + 3..];
+    }
+    out
+}
+
+fn run_examples(doc: &Path) -> usize {
+    let blocks = scenario_blocks(doc);
+    let dir = std::env::temp_dir().join(format!(
+        "calbench-docs-{}-{}",
+        doc.file_stem().unwrap().to_string_lossy(),
+        std::process::id()
+    ));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (i, b) in blocks.iter().enumerate() {
+        let file = dir.join(format!("example{i}.toml"));
+        std::fs::write(&file, b).unwrap();
+        let out = dir.join(format!("out{i}"));
+        let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+            .arg("run")
+            .arg(&file)
+            .args(["--trials", "2", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{} example {i} failed: {}",
+            doc.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
+        if b.contains("[sweep]") {
+            assert!(
+                summary["sweep_key"].is_string(),
+                "example {i}: no sweep_key"
+            );
+            assert!(summary["results"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|e| !e["sweep_value"].is_null()));
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+    blocks.len()
+}
+
+#[test]
+fn readme_scenario_examples_run() {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    assert!(run_examples(&root.join("README.md")) >= 1);
+}
+
+#[test]
+fn formats_scenario_examples_run() {
+    let formats = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/FORMATS.md");
+    if !formats.exists() {
+        eprintln!("{} is not beside the project; skipped", formats.display());
+        return;
+    }
+    assert!(run_examples(&formats) >= 1);
+}
