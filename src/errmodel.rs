@@ -268,6 +268,30 @@ pub fn identify(
     iterations: usize,
     k: Real,
 ) -> Result<ModelFit> {
+    identify_weighted(model, nominal, params, qs, measured, iterations, k, None)
+}
+
+/// [`identify`] with prior weights `w_j` per pose: pose j's rows are scaled by `√w_j`
+/// (weighted least squares); `None` is [`identify`].
+#[allow(clippy::too_many_arguments)]
+pub fn identify_weighted(
+    model: ErrorModel,
+    nominal: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measured: &[Frame],
+    iterations: usize,
+    k: Real,
+    weights: Option<&[Real]>,
+) -> Result<ModelFit> {
+    if weights
+        .is_some_and(|w| w.len() != qs.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0)))
+    {
+        return Err(Error::setting(
+            "weights",
+            "need one finite positive weight per pose",
+        ));
+    }
     if iterations == 0 {
         return Err(Error::setting("iterations", "must be at least 1"));
     }
@@ -282,7 +306,15 @@ pub fn identify(
     let mut robot = nominal.clone();
     let mut last_step = 0.0;
     for _ in 0..iterations {
-        let (r, j) = stack(model, &robot, params, qs, measured, k)?;
+        let (mut r, mut j) = stack(model, &robot, params, qs, measured, k)?;
+        if let Some(w) = weights {
+            let rows = model.rows();
+            for (p, wp) in w.iter().enumerate() {
+                let s = wp.sqrt();
+                r.rows_mut(p * rows, rows).scale_mut(s);
+                j.rows_mut(p * rows, rows).scale_mut(s);
+            }
+        }
         if r.iter().chain(j.iter()).any(|v| !v.is_finite()) {
             return Err(Error::Compute(format!(
                 "{model} identification diverged (non-finite residual or Jacobian)"

@@ -851,6 +851,8 @@ pub struct MetaProblem<'a> {
     chain: Chain,
     flat: Vec<usize>,
     vars: Vec<PoseVars>,
+    /// `√w_j` of each pose's prior weight, if any.
+    point_scale: Option<Vec<Real>>,
 }
 
 impl<'a> MetaProblem<'a> {
@@ -942,7 +944,29 @@ impl<'a> MetaProblem<'a> {
             chain: nominal.chain(),
             flat,
             vars,
+            point_scale: None,
         })
+    }
+
+    /// Weighs pose `j`'s term of the fitness by `√w_j` (the weights `w_j ∝ 1/σ_j²` of
+    /// [`crate::measurement::Measurements::weights`]: a sum of norms divided by each point's
+    /// σ). `None` leaves every term at 1. Fails unless there is one finite, positive weight
+    /// per pose.
+    pub fn with_weights(mut self, w: Option<&[Real]>) -> Result<Self> {
+        if let Some(w) = w {
+            if w.len() != self.qs.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(Error::setting(
+                    "weights",
+                    format!(
+                        "need {} finite positive weights, got {}",
+                        self.qs.len(),
+                        w.len()
+                    ),
+                ));
+            }
+        }
+        self.point_scale = w.map(|w| w.iter().map(|v| v.sqrt()).collect());
+        Ok(self)
     }
 
     /// A problem from measured frames (full pose: position and rotation).
@@ -1064,10 +1088,21 @@ impl<'a> MetaProblem<'a> {
                     }
                 }
             }
-            total += (self.points[j] - p).norm();
-            if let Some(rots) = &self.rotations {
+            let orientation = |rots: &Vec<Mat3>| {
                 let dr = rots[j] - r;
-                total += self.k * (dr.column(0).norm() + dr.column(1).norm() + dr.column(2).norm());
+                self.k * (dr.column(0).norm() + dr.column(1).norm() + dr.column(2).norm())
+            };
+            let position = (self.points[j] - p).norm();
+            match &self.point_scale {
+                None => {
+                    total += position;
+                    if let Some(rots) = &self.rotations {
+                        total += orientation(rots);
+                    }
+                }
+                Some(s) => {
+                    total += s[j] * (position + self.rotations.as_ref().map_or(0.0, orientation))
+                }
             }
         }
         total

@@ -15,7 +15,9 @@ use nalgebra::DVector;
 use serde::Deserialize;
 
 use super::linalg::solve_spd;
-use super::solver::{check_stop, finish, max_abs, LeastSquares, Solver, Work, DIVERGENCE_FACTOR};
+use super::solver::{
+    check_stop, finish, max_abs, start_weights, LeastSquares, Solver, Work, DIVERGENCE_FACTOR,
+};
 use super::{Identified, Termination};
 use crate::error::{finite_non_negative, finite_positive, Error, Result};
 use crate::math::Real;
@@ -103,7 +105,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         return adaptive(p, x0, o);
     }
     let mut work = Work::new(p);
-    let w = vec![1.0; p.size().points];
+    let w = start_weights(p);
     let mut x = x0.clone();
     let mut cost0 = Real::NAN;
     let mut termination = Termination::MaxIterations;
@@ -136,7 +138,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
 fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
     let mut work = Work::new(p);
     let mut trial = Work::new(p);
-    let w = vec![1.0; p.size().points];
+    let w = start_weights(p);
     let t = x0.len();
     let mut x = x0.clone();
     let mut x_try = x0.clone();

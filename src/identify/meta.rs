@@ -110,7 +110,8 @@ impl<S: Search> Method for Metaheuristic<S> {
             problem.points.clone(),
             problem.rotations.clone(),
             problem.k,
-        )?;
+        )?
+        .with_weights(problem.weights.as_deref())?;
         let bounds = mp.bounds(self.bound_mm, self.bound_rad);
         let f = |x: &[Real]| mp.fitness(x);
         let r = self.search.search(&f, &bounds, rng)?;

@@ -47,7 +47,7 @@ impl Method for PoseErrorLs {
             .zip(rots)
             .map(|(p, r)| Frame { rot: *r, pos: *p })
             .collect();
-        let fit = crate::errmodel::identify(
+        let fit = crate::errmodel::identify_weighted(
             self.error_model,
             problem.nominal,
             problem.params,
@@ -55,6 +55,7 @@ impl Method for PoseErrorLs {
             &frames,
             self.iterations,
             problem.k,
+            problem.weights.as_deref(),
         )?;
         let termination = if fit.last_step < STEP_TOLERANCE {
             Termination::Converged

@@ -37,6 +37,8 @@ pub struct RobotProblem<'a> {
     vars: Vec<ChainVars>,
     /// Weight of the orientation rows of full-pose data, mm per rad.
     orientation_weight: Real,
+    /// Prior weight of each point, if any.
+    prior: Option<&'a [Real]>,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -136,6 +138,7 @@ impl<'a> RobotProblem<'a> {
             work: RefCell::new((nominal.values.clone(), chain)),
             vars,
             orientation_weight: 1.0,
+            prior: None,
         })
     }
 
@@ -149,6 +152,26 @@ impl<'a> RobotProblem<'a> {
     pub fn with_orientation_weight(mut self, k: Real) -> crate::Result<Self> {
         crate::error::finite_positive("k", k)?;
         self.orientation_weight = k;
+        Ok(self)
+    }
+
+    /// Gives point `i` the prior weight `w[i]` (e.g. `1/σ_i²`, [`crate::measurement::Measurements::weights`]);
+    /// `None` leaves every point at 1. Fails unless there is one finite, positive weight per
+    /// point.
+    pub fn with_prior_weights(mut self, w: Option<&'a [Real]>) -> crate::Result<Self> {
+        if let Some(w) = w {
+            if w.len() != self.points.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+                return Err(Error::setting(
+                    "weights",
+                    format!(
+                        "need {} finite positive weights, got {}",
+                        self.points.len(),
+                        w.len()
+                    ),
+                ));
+            }
+        }
+        self.prior = w;
         Ok(self)
     }
 
@@ -179,6 +202,10 @@ impl LeastSquares for RobotProblem<'_> {
             points: self.points.len(),
             rows_per_point: self.measure.rows(),
         }
+    }
+
+    fn prior(&self) -> Option<&[Real]> {
+        self.prior
     }
 
     /// Forward kinematics and the analytic Jacobian at `nominal + x`, from the tool frame
@@ -228,7 +255,8 @@ pub fn identify_robot(
         problem.rotations.as_deref(),
         problem.measure,
     )?
-    .with_orientation_weight(problem.k)?;
+    .with_orientation_weight(problem.k)?
+    .with_prior_weights(problem.weights.as_deref())?;
     Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
 }
 

@@ -39,6 +39,11 @@ impl Size {
 pub trait LeastSquares {
     /// The problem's size.
     fn size(&self) -> Size;
+    /// Prior weight of each point (`P` of the normal equations before any robust
+    /// reweighting); `None`: every point weighs 1.
+    fn prior(&self) -> Option<&[Real]> {
+        None
+    }
     /// r = measured − model(x) (length `size().rows()`), j = ∂model/∂x
     /// (`size().rows() × size().params`). Both buffers come with the right sizes.
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>);
@@ -52,6 +57,12 @@ pub trait Solver: std::fmt::Debug + Send + Sync {
     fn check(&self) -> Result<()>;
     /// Runs from `x0` on a problem [`solve`] has checked.
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified;
+}
+
+/// The weights the iterations start from: the problem's prior weights, or 1.
+pub(crate) fn start_weights(p: &dyn LeastSquares) -> Vec<Real> {
+    p.prior()
+        .map_or_else(|| vec![1.0; p.size().points], <[Real]>::to_vec)
 }
 
 /// Checks the stopping rule of the Gauss–Newton methods: `eps` finite and positive,
@@ -96,7 +107,7 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         x: x0.clone(),
         iterations: 0,
         termination: Termination::InvalidInput,
-        weights: vec![1.0; p.size().points],
+        weights: start_weights(p),
         condition_number: Real::NAN,
         covariance: DMatrix::from_element(t, t, Real::NAN),
         sigma0: Real::NAN,
@@ -318,7 +329,7 @@ pub(crate) fn gauss_newton(
 ) -> Identified {
     let t = x0.len();
     let mut work = Work::new(p);
-    let mut w = vec![1.0; p.size().points];
+    let mut w = start_weights(p);
     let mut x = x0.clone();
     let mut d = DVector::from_element(t, 1.0);
     let mut dev = DVector::zeros(t);
@@ -344,7 +355,16 @@ pub(crate) fn gauss_newton(
             break;
         }
         if let (true, Some(ro)) = (reweighting, robust) {
-            let s = point_weights(&work.r, work.rows, t, ro, rms0, &mut w, &mut sort_buf);
+            let s = point_weights(
+                &work.r,
+                work.rows,
+                t,
+                ro,
+                rms0,
+                p.prior(),
+                &mut w,
+                &mut sort_buf,
+            );
             sigma_mad = s.mad;
         }
         work.normal(&w);

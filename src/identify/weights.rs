@@ -109,12 +109,14 @@ pub(crate) struct WeightStats {
 
 /// Recomputes the point weights `w` from the residuals `r` (`rows` per point, `t` unknowns).
 /// `rms0` is the RMS point residual at the start. Allocation-free once `buf` has capacity.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn point_weights(
     r: &DVector<Real>,
     rows: usize,
     t: usize,
     o: &Robustness,
     rms0: Real,
+    prior: Option<&[Real]>,
     w: &mut [Real],
     buf: &mut Vec<Real>,
 ) -> WeightStats {
@@ -135,13 +137,23 @@ pub(crate) fn point_weights(
         }
         Sigma0::Mad => {
             buf.clear();
-            buf.extend(r.iter().map(|v| v.abs()));
+            match prior {
+                None => buf.extend(r.iter().map(|v| v.abs())),
+                Some(p) => buf.extend(
+                    r.iter()
+                        .enumerate()
+                        .map(|(k, v)| p[k / rows].sqrt() * v.abs()),
+                ),
+            }
             1.4826 * median(buf)
         }
     };
     let mad = (o.sigma0 == Sigma0::Mad).then_some(sigma0);
     if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
-        w.fill(1.0);
+        match prior {
+            None => w.fill(1.0),
+            Some(p) => w.copy_from_slice(p),
+        }
         return WeightStats { mad };
     }
     let scale = sigma0 * (rows as Real).sqrt();
@@ -150,7 +162,11 @@ pub(crate) fn point_weights(
             .map(|k| r[i * rows + k].powi(2))
             .sum::<Real>()
             .sqrt();
-        *wi = o.weight.weight(e / scale, o.k0, o.k1);
+        // Eq. 16 with prior weight p_i: p̄_i = p_i ψ(u_i)/u_i, u_i the standardised residual.
+        *wi = match prior {
+            None => o.weight.weight(e / scale, o.k0, o.k1),
+            Some(p) => p[i] * o.weight.weight(p[i].sqrt() * e / scale, o.k0, o.k1),
+        };
     }
     WeightStats { mad }
 }
