@@ -10,7 +10,7 @@ use calbench::calibrate::{calibrate, Registration};
 use calbench::check::{compare, read_json, Regression};
 use calbench::error::{Error, Result};
 use calbench::identifiability::analyse;
-use calbench::identify::method_by_name;
+use calbench::identify::{method_by_name, Termination};
 use calbench::jacobian::Measure;
 use calbench::kinematics::robot_to_toml;
 use calbench::math::{Frame, Real};
@@ -251,6 +251,7 @@ pub fn identify_file(
     registration: &str,
     validate: Option<&Path>,
     k: Option<Real>,
+    allow_rank_deficient: bool,
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
@@ -283,6 +284,33 @@ pub fn identify_file(
         &spec,
         &mut calbench::rng::stream(0, "identify"),
     )?;
+    let undetermined = matches!(
+        c.identified.termination,
+        Termination::RankDeficient | Termination::Singular
+    );
+    if undetermined && !allow_rank_deficient {
+        let a = analyse(&nominal, &params, &d.qs, measure);
+        let names = |v: &[calbench::kinematics::Param]| {
+            v.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(" ")
+        };
+        let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
+        return Err(Error::file(
+            data,
+            "data",
+            format!(
+                "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
+                 dependent groups: {}); {} ended {}, so nothing was written. Measure poses \
+                 that move every joint, or pass --allow-rank-deficient",
+                a.rank,
+                params.len(),
+                c.identified.rank.unwrap_or(a.rank),
+                names(&a.unidentifiable),
+                groups.join(" "),
+                spec.name(),
+                c.identified.termination.as_str(),
+            ),
+        ));
+    }
     let validation = val.as_ref().map(|v| validate_file(&nominal, &c, v));
     let record = IdentifyRecord {
         nominal: &nominal,

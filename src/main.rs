@@ -114,6 +114,10 @@ enum Command {
         /// (default 100; about σ_position / σ_orientation of the instrument).
         #[arg(long)]
         k: Option<f64>,
+        /// Write the result even when the data do not determine every parameter (termination
+        /// `rank-deficient`); without it such a result is refused.
+        #[arg(long)]
+        allow_rank_deficient: bool,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -183,6 +187,7 @@ fn run(cli: Cli) -> Result<()> {
             registration,
             validate,
             k,
+            allow_rank_deficient,
             out,
         }) => Ok(commands::identify_file(
             &robot,
@@ -191,6 +196,7 @@ fn run(cli: Cli) -> Result<()> {
             &registration,
             validate.as_deref(),
             k,
+            allow_rank_deficient,
             &out,
         )?),
         Some(Command::Poses {

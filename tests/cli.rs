@@ -134,3 +134,72 @@ fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
         assert!(!o.status.success() && err.contains("--k"), "k = {k}: {err}");
     }
 }
+
+/// A file on which only joint 1 moves determines a handful of the parameters: every method
+/// must say so (`rank-deficient`, or `singular` for plain least squares) instead of writing
+/// a compensated robot as if converged, unless the user asks for the result anyway.
+#[test]
+fn identify_refuses_data_that_do_not_determine_the_parameters() {
+    use calbench::measurement::Measurements;
+    let robot = calbench::robots::irb2600();
+    let truth = robot.with_errors(&[(calbench::kinematics::Param::A(1), 0.5)]);
+    let qs: Vec<Vec<f64>> = (0..30)
+        .map(|i| {
+            let mut q = vec![0.3, -0.4, 0.5, 0.2, 0.6, 0.1];
+            q[0] = -1.0 + 0.07 * i as f64;
+            q
+        })
+        .collect();
+    let data = Measurements {
+        points: qs.iter().map(|q| truth.fk(q).pos).collect(),
+        qs,
+        ..Default::default()
+    };
+    let dir = tmp("rank");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("joint1.csv");
+    calbench::sim::csv::write_measurements(&file, &robot, &data).unwrap();
+    for method in ["ls", "ridge", "igg3", "lm", "bas"] {
+        let out = dir.join(method);
+        let args = [
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            file.to_str().unwrap(),
+            "--method",
+            method,
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{method} accepted rank-deficient data");
+        assert!(
+            err.contains("joint1.csv") && err.contains("undetermined") && err.contains("theta2"),
+            "{method}: {err}"
+        );
+        assert!(!out.exists(), "{method} wrote output");
+    }
+    let out = dir.join("allowed");
+    calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        file.to_str().unwrap(),
+        "--method",
+        "lm",
+        "--allow-rank-deficient",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("identified.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["termination"], "rank-deficient");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -85,7 +85,8 @@ pub fn calibrate(
     let mut round = 0;
     loop {
         let problem = CalibrationProblem::new(nominal, params, data, frame, method.k);
-        let identified = method.method.identify(&problem, rng)?;
+        let mut identified = method.method.identify(&problem, rng)?;
+        crate::identify::robot::assess(&problem, &mut identified)?;
         let robot = problem.robot_with(identified.x.as_slice());
         round += 1;
         if round >= rounds {

@@ -91,6 +91,10 @@ pub enum Termination {
     Diverged,
     /// The normal matrix could not be factorised (rank-deficient parameters).
     Singular,
+    /// The data do not determine every parameter (the column-scaled Jacobian at the solution
+    /// has a numerical rank below the number of parameters): the undetermined directions were
+    /// filled in by the method's damping or regularisation, not by the data.
+    RankDeficient,
     /// Levenberg–Marquardt could not find a step that lowers the cost.
     NoProgress,
     /// The problem or the settings are inconsistent (sizes, non-finite start, bad options).
@@ -99,7 +103,8 @@ pub enum Termination {
 
 impl Termination {
     /// The name used in reports: `converged`, `max-iterations`, `max-evaluations`,
-    /// `target-reached`, `diverged`, `singular`, `no-progress`, `invalid-input`.
+    /// `target-reached`, `diverged`, `singular`, `rank-deficient`, `no-progress`,
+    /// `invalid-input`.
     pub fn as_str(self) -> &'static str {
         crate::names::static_name(&self)
     }
@@ -122,9 +127,12 @@ pub struct Identified {
     pub trace: Option<Vec<Real>>,
     /// Final weight of each point (1 for the non-robust methods).
     pub weights: Vec<Real>,
-    /// Condition number `λmax/λmin` of `JᵀPJ` at the solution (Li 2018 eq. 17), unscaled;
-    /// infinite when singular, NaN when not computed.
+    /// Condition number σ_max/σ_min of the column-scaled, weighted Jacobian at the solution
+    /// ([`solver::conditioning`], FORMATS.md `condition_number`); infinite below full rank,
+    /// NaN when not computed.
     pub condition_number: Real,
+    /// Numerical rank of that Jacobian ([`solver::RANK_TOLERANCE`]); `None` when not computed.
+    pub rank: Option<usize>,
     /// `σ0² (JᵀPJ)⁻¹` at the solution; NaN entries when `JᵀPJ` is singular or there is no
     /// redundancy; empty when not computed.
     pub covariance: DMatrix<Real>,
@@ -162,6 +170,7 @@ impl Identified {
             sigma0: Real::NAN,
             rms_residual: Real::NAN,
             ridge_xi: None,
+            rank: None,
         }
     }
 }

@@ -12,8 +12,8 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::solver::{solve, LeastSquares, Size, Solver};
-use super::{CalibrationProblem, Identified, Method};
+use super::solver::{conditioning, solve, LeastSquares, Size, Solver};
+use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::error::Error;
 use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
 use crate::kinematics::{Chain, ChainVars, Param, Robot};
@@ -258,6 +258,49 @@ pub fn identify_robot(
     .with_orientation_weight(problem.k)?
     .with_prior_weights(problem.weights.as_deref())?;
     Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
+}
+
+/// Fills in what a method that does not form `JᵀPJ` (the searches, the pose-error models)
+/// leaves out: the rank and condition number of the column-scaled, weighted Jacobian and the
+/// RMS point residual at its estimate, from the problem's kinematic least squares; and marks a
+/// solution whose parameters the data do not all determine [`Termination::RankDeficient`].
+pub fn assess(problem: &CalibrationProblem, out: &mut Identified) -> crate::Result<()> {
+    if out.rank.is_some() || out.x.len() != problem.params.len() {
+        return Ok(());
+    }
+    let rp = RobotProblem::new(
+        problem.nominal,
+        problem.params,
+        problem.poses(),
+        &problem.points,
+        problem.rotations.as_deref(),
+        problem.measure,
+    )?
+    .with_orientation_weight(problem.k)?
+    .with_prior_weights(problem.weights.as_deref())?;
+    let size = rp.size();
+    let mut r = DVector::zeros(size.rows());
+    let mut j = DMatrix::zeros(size.rows(), size.params);
+    rp.evaluate(&out.x, &mut r, &mut j);
+    if let Some(w) = problem.weights.as_deref() {
+        for (i, wi) in w.iter().enumerate() {
+            j.rows_mut(i * size.rows_per_point, size.rows_per_point)
+                .scale_mut(wi.sqrt());
+        }
+    }
+    let (rank, cond) = conditioning(&j.tr_mul(&j));
+    out.rank = Some(rank);
+    out.condition_number = cond;
+    out.rms_residual = (r.norm_squared() / size.points as Real).sqrt();
+    if rank < size.params
+        && matches!(
+            out.termination,
+            Termination::Converged | Termination::MaxIterations | Termination::TargetReached
+        )
+    {
+        out.termination = Termination::RankDeficient;
+    }
+    Ok(())
 }
 
 /// Every [`Solver`] is a [`Method`]: on a calibration problem it runs [`identify_robot`].

@@ -115,6 +115,7 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         ridge_xi: None,
         evaluations: 0,
         trace: None,
+        rank: None,
     }
 }
 
@@ -252,21 +253,10 @@ pub(crate) fn finish(
     let sigma0 = sigma0.unwrap_or(classical);
     let m = weights.len() as Real;
     let rms_residual = (work.r.norm_squared() / m).sqrt();
-    let (condition_number, covariance) = if work.n.iter().all(|v| v.is_finite()) {
-        // Eigenvalues only: the condition number needs no eigenvectors.
-        let eigenvalues = work.n.symmetric_eigenvalues();
-        let (mx, mn) = eigenvalues
-            .iter()
-            .fold((Real::NEG_INFINITY, Real::INFINITY), |(a, b), &e| {
-                (a.max(e), b.min(e))
-            });
-        let cond = if mn > 0.0 && mn > mx * 1e-300 {
-            mx / mn
-        } else {
-            Real::INFINITY
-        };
+    let (rank, condition_number, covariance) = if work.n.iter().all(|v| v.is_finite()) {
+        let (rank, cond) = conditioning(&work.n);
         let mut cov = DMatrix::from_element(t, t, Real::NAN);
-        if cond.is_finite() {
+        if rank == t {
             work.a.copy_from(&work.n);
             if linalg::cholesky_in_place(&mut work.a) {
                 for c in 0..t {
@@ -279,9 +269,17 @@ pub(crate) fn finish(
                 }
             }
         }
-        (cond, cov)
+        (Some(rank), cond, cov)
     } else {
-        (Real::NAN, DMatrix::from_element(t, t, Real::NAN))
+        (None, Real::NAN, DMatrix::from_element(t, t, Real::NAN))
+    };
+    let termination = match (termination, rank) {
+        (Termination::Converged | Termination::MaxIterations | Termination::NoProgress, Some(r))
+            if r < t =>
+        {
+            Termination::RankDeficient
+        }
+        (other, _) => other,
     };
     Identified {
         x,
@@ -295,7 +293,48 @@ pub(crate) fn finish(
         ridge_xi,
         evaluations,
         trace: None,
+        rank,
     }
+}
+
+/// Directions whose scaled singular value is below this fraction of the largest are
+/// undetermined by the data (relative eigenvalue of the scaled normal matrix below its
+/// square, 1e-14: a few hundred times the rounding of `JᵀPJ`).
+pub const RANK_TOLERANCE: Real = 1e-7;
+
+/// Numerical rank and condition number of the column-scaled Jacobian `J D^-½` from its normal
+/// matrix `n = JᵀPJ` (FORMATS.md `condition_number`: σ_max/σ_min after scaling every column to
+/// unit norm, points weighted): `sqrt(λ_max/λ_min)` of `D^-½ n D^-½`, `D = diag(n)`. A zero
+/// column counts as an undetermined direction. The rank counts the scaled singular values
+/// above [`RANK_TOLERANCE`] times the largest; the condition number is infinite below full
+/// rank.
+pub fn conditioning(n: &DMatrix<Real>) -> (usize, Real) {
+    let t = n.nrows();
+    let scale: Vec<Real> = (0..t)
+        .map(|k| {
+            let d = n[(k, k)];
+            if d > 0.0 && d.is_finite() {
+                1.0 / d.sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let scaled = DMatrix::from_fn(t, t, |i, k| n[(i, k)] * scale[i] * scale[k]);
+    let eigenvalues = scaled.symmetric_eigenvalues();
+    let max = eigenvalues.iter().fold(0.0 as Real, |a, &e| a.max(e));
+    if !(max > 0.0 && max.is_finite()) {
+        return (0, Real::INFINITY);
+    }
+    let floor = max * RANK_TOLERANCE * RANK_TOLERANCE;
+    let rank = eigenvalues.iter().filter(|&&e| e > floor).count();
+    let min = eigenvalues.iter().fold(Real::INFINITY, |a, &e| a.min(e));
+    let cond = if rank == t {
+        (max / min).sqrt()
+    } else {
+        Real::INFINITY
+    };
+    (rank, cond)
 }
 
 /// Cost growth beyond which an iteration counts as diverged.

@@ -139,7 +139,10 @@ pub fn aggregate(
     let usable = |o: &Outcome| {
         !matches!(
             o.termination,
-            Termination::Diverged | Termination::Singular | Termination::InvalidInput
+            Termination::Diverged
+                | Termination::Singular
+                | Termination::RankDeficient
+                | Termination::InvalidInput
         ) && o.identified.iter().all(|x| x.is_finite())
             && o.after_mm.rms.is_finite()
     };
