@@ -48,20 +48,34 @@ pub fn robots(name: Option<&str>) -> Result<()> {
     }
 }
 
-/// Parses a comma-separated list of numbers (joint values) for a robot with `dof` joints.
-pub fn parse_q(text: &str, dof: usize) -> Result<Vec<Real>> {
-    let q: Vec<Real> = text
-        .split(',')
+/// The comma-separated values of option `key`'s `text`, each trimmed and parsed as `T`; a
+/// value that does not parse or that `valid` refuses is an error with the message `not(value)`
+/// (the value as written).
+fn parse_list<T: std::str::FromStr>(
+    text: &str,
+    key: &str,
+    valid: impl Fn(&T) -> bool,
+    not: impl Fn(&str) -> String,
+) -> Result<Vec<T>> {
+    text.split(',')
         .map(|s| {
             s.trim()
-                .parse::<Real>()
+                .parse::<T>()
                 .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    Error::setting("--q", format!("\"{}\" is not a finite number", s.trim()))
-                })
+                .filter(|v| valid(v))
+                .ok_or_else(|| Error::setting(key, not(s)))
         })
-        .collect::<Result<_>>()?;
+        .collect()
+}
+
+/// Parses a comma-separated list of numbers (joint values) for a robot with `dof` joints.
+pub fn parse_q(text: &str, dof: usize) -> Result<Vec<Real>> {
+    let q = parse_list(
+        text,
+        "--q",
+        |v: &Real| v.is_finite(),
+        |s| format!("\"{}\" is not a finite number", s.trim()),
+    )?;
     if q.len() != dof {
         return Err(Error::setting(
             "--q",
@@ -411,21 +425,12 @@ pub fn poses(
         sel.scores.condition_number
     );
     if let Some(list) = curve {
-        let counts: Vec<usize> = list
-            .split(',')
-            .map(|s| {
-                s.trim()
-                    .parse::<usize>()
-                    .ok()
-                    .filter(|&n| n >= 1 && n <= pool.len())
-                    .ok_or_else(|| {
-                        Error::setting(
-                            "--curve",
-                            format!("\"{s}\" is not a pose count in 1..={}", pool.len()),
-                        )
-                    })
-            })
-            .collect::<Result<_>>()?;
+        let counts = parse_list(
+            list,
+            "--curve",
+            |&n: &usize| n >= 1 && n <= pool.len(),
+            |s| format!("\"{s}\" is not a pose count in 1..={}", pool.len()),
+        )?;
         let pts = calbench::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
         let mut text = String::from("count,objective\n");
         println!("objective against pose count (Guo 2024 fig. 7):");

@@ -109,12 +109,9 @@ pub fn pose_rows(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
-    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
-    let mut rot_cols = [0usize; MAX_OPS];
-    let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
-    let end = chain.walk(q, |op, r, p| rec.visit(op, r, p));
-    rec.finish(&end.pos);
-    end
+    record_rows(cols, measure, out, row0, |rec| {
+        chain.walk(q, |op, r, p| rec.visit(op, r, p))
+    })
 }
 
 /// [`pose_rows`] from the precomputed chain variables of a pose ([`Chain::variables`]), for
@@ -127,10 +124,25 @@ pub fn pose_rows_vars(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
+    record_rows(cols, measure, out, row0, |rec| {
+        chain.walk_vars(&vars.0, &vars.1, |op, r, p| rec.visit(op, r, p))
+    })
+}
+
+/// Writes one pose's rows while `walk` walks the chain with the writer it is given, and
+/// returns the tool frame the walk ends at (shared by [`pose_rows`] and [`pose_rows_vars`]).
+#[inline(always)]
+fn record_rows(
+    cols: &Columns,
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+    walk: impl FnOnce(&mut Rows<'_>) -> crate::math::Frame,
+) -> crate::math::Frame {
     let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
     let mut rot_cols = [0usize; MAX_OPS];
     let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
-    let end = chain.walk_vars(&vars.0, &vars.1, |op, r, p| rec.visit(op, r, p));
+    let end = walk(&mut rec);
     rec.finish(&end.pos);
     end
 }

@@ -25,28 +25,33 @@ pub struct Builtin {
     pub link_mass_kg: &'static [Real],
 }
 
+/// IRB2600ID joint stiffness (both of its models). Guessed: of the order reported for arms of
+/// this class (10⁶–10⁷ N·m/rad on the main axes), chosen so that the gravity sag with
+/// [`IRB2600_LINK_MASS_KG`] and no payload has a median of 0.19 mm over uniform joint poses
+/// (p95 0.37, max 0.41 mm; measured by `compliance::tests::sag_of_builtins`), about 20 % of
+/// Li 2018's pre-calibration RMS error of 0.83 mm (Li 2018 §1: ~20 % of the error is
+/// non-geometric).
+const IRB2600_STIFFNESS: [Real; 6] = [4.0e6, 3.5e6, 2.5e6, 4.0e5, 4.0e5, 2.0e5];
+
+/// IRB2600ID link masses (kg, both of its models). Guessed from its total mass (about
+/// 284 kg, ABB product specification), less the fixed base.
+const IRB2600_LINK_MASS_KG: [Real; 6] = [60.0, 40.0, 25.0, 10.0, 4.0, 1.0];
+
 /// The built-in robots.
 pub const BUILTINS: &[Builtin] = &[
     Builtin {
         name: "irb2600",
         summary: "ABB IRB2600ID-8/2.0, standard DH (Li 2018 table 1)",
         build: irb2600,
-        // Guessed: of the order reported for arms of this class (10⁶–10⁷ N·m/rad on the
-        // main axes), chosen so that the gravity sag with these masses and no payload has a
-        // median of 0.19 mm over uniform joint poses (p95 0.37, max 0.41 mm; measured by
-        // `compliance::tests::sag_of_builtins`), about 20 % of Li 2018's pre-calibration RMS
-        // error of 0.83 mm (Li 2018 §1: ~20 % of the error is non-geometric).
-        stiffness: &[4.0e6, 3.5e6, 2.5e6, 4.0e5, 4.0e5, 2.0e5],
-        // Guessed from the IRB2600ID's total mass (about 284 kg, ABB product specification),
-        // less the fixed base.
-        link_mass_kg: &[60.0, 40.0, 25.0, 10.0, 4.0, 1.0],
+        stiffness: &IRB2600_STIFFNESS,
+        link_mass_kg: &IRB2600_LINK_MASS_KG,
     },
     Builtin {
         name: "irb2600-mdh",
         summary: "the same ABB IRB2600ID in Craig's MD-H with β2 on the parallel joints 2/3 (Ban)",
         build: irb2600_mdh,
-        stiffness: &[4.0e6, 3.5e6, 2.5e6, 4.0e5, 4.0e5, 2.0e5],
-        link_mass_kg: &[60.0, 40.0, 25.0, 10.0, 4.0, 1.0],
+        stiffness: &IRB2600_STIFFNESS,
+        link_mass_kg: &IRB2600_LINK_MASS_KG,
     },
     Builtin {
         name: "tx60",

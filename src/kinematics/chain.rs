@@ -194,22 +194,16 @@ impl Chain {
     /// for every operation with the frame just before it (rotation, origin), and returns the
     /// final frame. Allocation-free.
     #[inline]
-    pub fn walk(&self, q: &[Real], mut visit: impl FnMut(&Op, &Mat3, &Vec3)) -> Frame {
+    pub fn walk(&self, q: &[Real], visit: impl FnMut(&Op, &Mat3, &Vec3)) -> Frame {
         debug_assert_eq!(q.len(), self.dof);
         let c = self.vars(q);
-        let mut r = Mat3::identity();
-        let mut p = Vec3::zeros();
-        for op in &self.ops {
-            visit(op, &r, &p);
-            match op.var {
-                None => apply(op.kind, op.value, op.sc, &mut r, &mut p),
-                Some(v) => {
-                    let t = op.value + c[v];
-                    apply(op.kind, t, t.sin_cos(), &mut r, &mut p)
-                }
-            }
-        }
-        Frame { rot: r, pos: p }
+        self.walk_with(
+            |op, v| {
+                let t = op.value + c[v];
+                (t, t.sin_cos())
+            },
+            visit,
+        )
     }
 
     /// The chain variables of joint values `q` (internal units, `q.len()` ≤ 16) and their
@@ -233,22 +227,35 @@ impl Chain {
         &self,
         vars: &[Real; 16],
         sc: &[(Real, Real); 16],
+        visit: impl FnMut(&Op, &Mat3, &Vec3),
+    ) -> Frame {
+        self.walk_with(
+            |op, v| {
+                let (sa, ca) = op.sc;
+                let (sv, cv) = sc[v];
+                (op.value + vars[v], (sa * cv + ca * sv, ca * cv - sa * sv))
+            },
+            visit,
+        )
+    }
+
+    /// The walk of [`Chain::walk`] and [`Chain::walk_vars`]: an operation driven by chain
+    /// variable `v` takes its value and (sin, cos) from `driven(op, v)`, a fixed one its own.
+    #[inline(always)]
+    fn walk_with(
+        &self,
+        driven: impl Fn(&Op, usize) -> (Real, (Real, Real)),
         mut visit: impl FnMut(&Op, &Mat3, &Vec3),
     ) -> Frame {
         let mut r = Mat3::identity();
         let mut p = Vec3::zeros();
         for op in &self.ops {
             visit(op, &r, &p);
-            match op.var {
-                None => apply(op.kind, op.value, op.sc, &mut r, &mut p),
-                Some(v) => {
-                    let (sa, ca) = op.sc;
-                    let (sv, cv) = sc[v];
-                    let t = op.value + vars[v];
-                    let sct = (sa * cv + ca * sv, ca * cv - sa * sv);
-                    apply(op.kind, t, sct, &mut r, &mut p)
-                }
-            }
+            let (t, sc) = match op.var {
+                None => (op.value, op.sc),
+                Some(v) => driven(op, v),
+            };
+            apply(op.kind, t, sc, &mut r, &mut p);
         }
         Frame { rot: r, pos: p }
     }

@@ -180,28 +180,33 @@ mod tests {
 
     #[test]
     fn fmt_num_hand_checked() {
-        assert_eq!(fmt_num(4.56789, 3), "4.57");
-        assert_eq!(fmt_num(-0.5, 2), "-0.5");
-        assert_eq!(fmt_num(2.5, 3), "2.5");
-        assert_eq!(fmt_num(1.0, 3), "1");
-        assert_eq!(fmt_num(100.0, 2), "100");
-        assert_eq!(fmt_num(12345.6, 3), "12346");
-        assert_eq!(fmt_num(0.000123456, 3), "0.000123");
-        assert_eq!(fmt_num(0.0001, 3), "0.0001");
-        assert_eq!(fmt_num(1.23456e-5, 3), "1.23e-5");
-        assert_eq!(fmt_num(-1.0e-5, 3), "-1e-5");
-        assert_eq!(fmt_num(2.5e7, 2), "2.5e7");
-        assert_eq!(fmt_num(1.5e6, 4), "1.5e6");
-        assert_eq!(fmt_num(999_999.0, 4), "1e6");
-        assert_eq!(fmt_num(9.996, 3), "10");
-        assert_eq!(fmt_num(0.099996, 3), "0.1");
-        assert_eq!(fmt_num(0.0, 3), "0");
-        assert_eq!(fmt_num(-0.0, 3), "0");
-        assert_eq!(fmt_num(-0.0001, 1), "-0.0001");
-        assert_eq!(fmt_num(0.123, 0), "0.1");
-        assert_eq!(fmt_num(Real::NAN, 3), "—");
-        assert_eq!(fmt_num(Real::INFINITY, 3), "—");
-        assert_eq!(fmt_num(Real::NEG_INFINITY, 3), "—");
+        // (value, significant digits, text)
+        for (v, digits, text) in [
+            (4.56789, 3, "4.57"),
+            (-0.5, 2, "-0.5"),
+            (2.5, 3, "2.5"),
+            (1.0, 3, "1"),
+            (100.0, 2, "100"),
+            (12345.6, 3, "12346"),
+            (0.000123456, 3, "0.000123"),
+            (0.0001, 3, "0.0001"),
+            (1.23456e-5, 3, "1.23e-5"),
+            (-1.0e-5, 3, "-1e-5"),
+            (2.5e7, 2, "2.5e7"),
+            (1.5e6, 4, "1.5e6"),
+            (999_999.0, 4, "1e6"),
+            (9.996, 3, "10"),
+            (0.099996, 3, "0.1"),
+            (0.0, 3, "0"),
+            (-0.0, 3, "0"),
+            (-0.0001, 1, "-0.0001"),
+            (0.123, 0, "0.1"),
+            (Real::NAN, 3, "—"),
+            (Real::INFINITY, 3, "—"),
+            (Real::NEG_INFINITY, 3, "—"),
+        ] {
+            assert_eq!(fmt_num(v, digits), text, "fmt_num({v}, {digits})");
+        }
     }
 
     #[test]

@@ -11,6 +11,7 @@ use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use plotters::chart::MeshStyle;
 use plotters::coord::ranged1d::{AsRangedCoord, DefaultFormatting, KeyPointHint, ValueFormatter};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -71,13 +72,21 @@ fn with_suffix(stem: &Path, ext: &str) -> PathBuf {
     PathBuf::from(s)
 }
 
-type DrawResult<DB> =
-    std::result::Result<(), DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
+/// The result of drawing on back end `DB`: `T` (nothing by default) or the back end's error.
+type DrawResult<DB, T = ()> =
+    std::result::Result<T, DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>>;
 
 /// A figure that can be drawn on any plotters back end (so one description gives both the
 /// PNG and the SVG).
 trait Figure {
+    /// Draws the figure on `root`, already filled white.
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB>;
+}
+
+/// Fills `root` white and draws `fig` on it.
+fn paint<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, fig: &impl Figure) -> DrawResult<DB> {
+    root.fill(&WHITE)?;
+    fig.draw(root)
 }
 
 /// Draws `fig` to `<stem>.svg` and `<stem>.png`.
@@ -92,13 +101,13 @@ fn render(stem: &Path, fig: &impl Figure) -> Result<()> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, PLOT_SIZE).into_drawing_area();
-        fig.draw(&root).map_err(|e| cannot(&svg_path, &e))?;
+        paint(&root, fig).map_err(|e| cannot(&svg_path, &e))?;
         root.present().map_err(|e| cannot(&svg_path, &e))?;
     }
     std::fs::write(&svg_path, svg.as_bytes()).map_err(|e| Error::io(&svg_path, e))?;
 
     let root = BitMapBackend::new(&png_path, PLOT_SIZE).into_drawing_area();
-    fig.draw(&root).map_err(|e| cannot(&png_path, &e))?;
+    paint(&root, fig).map_err(|e| cannot(&png_path, &e))?;
     root.present()
         .map_err(|e| Error::io(&png_path, std::io::Error::other(e.to_string())))?;
     Ok(())
@@ -302,6 +311,58 @@ fn rotated_category_labels<DB: DrawingBackend>(
     Ok(())
 }
 
+/// The mesh every chart shares, ready for what is particular to one chart before `draw`:
+/// tick labels by `x_fmt` and [`y_fmt`], `y_desc` along the y axis, the common fonts.
+fn styled_mesh<'a, 'b, DB, X, Y>(
+    chart: &'b mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    x_fmt: &'b dyn Fn(&Real) -> String,
+    y_desc: &str,
+) -> MeshStyle<'a, 'b, X, Y, DB>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = Real> + ValueFormatter<Real>,
+    Y: Ranged<ValueType = Real> + ValueFormatter<Real>,
+{
+    let mut mesh = chart.configure_mesh();
+    mesh.x_label_formatter(x_fmt)
+        .y_label_formatter(&y_fmt)
+        .y_desc(y_desc)
+        .axis_desc_style((FAMILY, 17))
+        .label_style((FAMILY, 14));
+    mesh
+}
+
+/// A chart of `n` categories along x (named by `names`, blank past the names) over the y
+/// range `y`, with its mesh drawn: the names stand under their ticks, or run downwards from
+/// them when there are many or long ones ([`category_label_layout`]).
+fn categorical_chart<'a, DB: DrawingBackend>(
+    root: &'a DrawingArea<DB, Shift>,
+    title: &str,
+    y_label: &str,
+    names: &[String],
+    n: usize,
+    y: Range<Real>,
+) -> DrawResult<DB, ChartContext<'a, DB, Cartesian2d<Categories, RangedCoordf64>>> {
+    let (x_area, rotate) = category_label_layout(names);
+    let y_bottom = y.start;
+    let mut chart = chart_builder(root, title, x_area).build_cartesian_2d(Categories { n }, y)?;
+    let x_fmt = |v: &Real| {
+        if rotate {
+            String::new()
+        } else {
+            category_label(names, *v)
+        }
+    };
+    styled_mesh(&mut chart, &x_fmt, y_label)
+        .disable_x_mesh()
+        .x_labels(n.max(1))
+        .draw()?;
+    if rotate {
+        rotated_category_labels(root, &chart, names, y_bottom)?;
+    }
+    Ok(chart)
+}
+
 // ---------------------------------------------------------------------------------------------
 // Grouped bars
 
@@ -314,7 +375,6 @@ struct GroupedBars<'d> {
 
 impl Figure for GroupedBars<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        root.fill(&WHITE)?;
         let n = self
             .series
             .iter()
@@ -322,35 +382,11 @@ impl Figure for GroupedBars<'_> {
             .max()
             .unwrap_or(0)
             .max(self.categories.len());
-        let (x_area, rotate) = category_label_layout(self.categories);
         let y = with_headroom(
             span(self.series.iter().flat_map(|(_, v)| finite(v)), true),
             self.series.len(),
         );
-        let y_bottom = y.start;
-        let mut chart =
-            chart_builder(root, self.title, x_area).build_cartesian_2d(Categories { n }, y)?;
-        let names = self.categories;
-        let x_fmt = |v: &Real| {
-            if rotate {
-                String::new()
-            } else {
-                category_label(names, *v)
-            }
-        };
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(n.max(1))
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .y_desc(self.y_label)
-            .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14))
-            .draw()?;
-        if rotate {
-            rotated_category_labels(root, &chart, names, y_bottom)?;
-        }
+        let mut chart = categorical_chart(root, self.title, self.y_label, self.categories, n, y)?;
 
         let m = self.series.len().max(1) as Real;
         let w = 0.8 / m;
@@ -418,19 +454,12 @@ fn rms(v: &[Real]) -> Real {
 
 impl Figure for BeforeAfter<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        root.fill(&WHITE)?;
         let n = self.before.len().max(self.after.len()).max(1);
         let y = with_headroom(span(finite(self.before).chain(finite(self.after)), true), 2);
         let mut chart =
             chart_builder(root, self.title, 50).build_cartesian_2d(0.5..n as Real + 0.5, y)?;
-        chart
-            .configure_mesh()
+        styled_mesh(&mut chart, &int_fmt, "error (mm)")
             .x_desc("validation point")
-            .y_desc("error (mm)")
-            .x_label_formatter(&int_fmt)
-            .y_label_formatter(&y_fmt)
-            .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14))
             .draw()?;
         for (s, (name, v)) in [("before", self.before), ("after", self.after)]
             .into_iter()
@@ -533,34 +562,9 @@ struct BoxPlot<'d> {
 
 impl Figure for BoxPlot<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        root.fill(&WHITE)?;
         let names: Vec<String> = self.groups.iter().map(|(n, _)| n.clone()).collect();
-        let n = names.len();
-        let (x_area, rotate) = category_label_layout(&names);
         let y = span(self.groups.iter().flat_map(|(_, v)| finite(v)), false);
-        let y_bottom = y.start;
-        let mut chart =
-            chart_builder(root, self.title, x_area).build_cartesian_2d(Categories { n }, y)?;
-        let x_fmt = |v: &Real| {
-            if rotate {
-                String::new()
-            } else {
-                category_label(&names, *v)
-            }
-        };
-        chart
-            .configure_mesh()
-            .disable_x_mesh()
-            .x_labels(n.max(1))
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .y_desc(self.y_label)
-            .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14))
-            .draw()?;
-        if rotate {
-            rotated_category_labels(root, &chart, &names, y_bottom)?;
-        }
+        let mut chart = categorical_chart(root, self.title, self.y_label, &names, names.len(), y)?;
 
         for (g, (_, v)) in self.groups.iter().enumerate() {
             let Some(b) = box_stats(v) else { continue };
@@ -642,14 +646,8 @@ impl Traces<'_> {
         let len = self.series.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
         let x = 0.0..(len.max(2) - 1) as Real;
         let mut chart = chart_builder(root, self.title, 50).build_cartesian_2d(x, y)?;
-        chart
-            .configure_mesh()
+        styled_mesh(&mut chart, &int_fmt, self.y_label)
             .x_desc(self.x_label)
-            .y_desc(self.y_label)
-            .x_label_formatter(&int_fmt)
-            .y_label_formatter(&y_fmt)
-            .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14))
             .draw()?;
         for (s, (name, v)) in self.series.iter().enumerate() {
             let c = color(s);
@@ -669,7 +667,6 @@ impl Traces<'_> {
 
 impl Figure for Traces<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        root.fill(&WHITE)?;
         let ys = self
             .series
             .iter()
@@ -735,7 +732,6 @@ fn sweep_points(v: &[(Real, Real, Real)]) -> Vec<(Real, Real, Real)> {
 
 impl Figure for Sweep<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        root.fill(&WHITE)?;
         let pts: Vec<Vec<(Real, Real, Real)>> =
             self.series.iter().map(|(_, v)| sweep_points(v)).collect();
         let x = span(pts.iter().flatten().map(|p| p.0), false);
@@ -748,14 +744,8 @@ impl Figure for Sweep<'_> {
         );
         let mut chart = chart_builder(root, self.title, 50).build_cartesian_2d(x, y)?;
         let x_fmt = |v: &Real| fmt_num(*v, 3);
-        chart
-            .configure_mesh()
+        styled_mesh(&mut chart, &x_fmt, self.y_label)
             .x_desc(self.x_label)
-            .y_desc(self.y_label)
-            .x_label_formatter(&x_fmt)
-            .y_label_formatter(&y_fmt)
-            .axis_desc_style((FAMILY, 17))
-            .label_style((FAMILY, 14))
             .draw()?;
         for (s, ((name, _), p)) in self.series.iter().zip(&pts).enumerate() {
             let c = color(s);

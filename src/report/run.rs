@@ -17,6 +17,12 @@ fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 
+/// Writes `v` as pretty-printed JSON with a final newline.
+fn write_json(path: &Path, v: &Value) -> Result<()> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
+    write(path, &(s + "\n"))
+}
+
 /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
 /// `method / poses`.
 fn fitness_traces(b: &Block) -> Vec<(String, Vec<Real>)> {
@@ -39,6 +45,33 @@ fn fitness_traces(b: &Block) -> Vec<(String, Vec<Real>)> {
                 .collect()
         })
         .unwrap_or_default()
+}
+
+/// The label of a results entry in tables and plots: `method / poses`.
+fn entry_label(e: &Entry) -> String {
+    format!("{} / {}", e.method, e.poses)
+}
+
+/// The parameters with an η (those of the first entry) and, per entry of `b`, its label and
+/// mean η of each of those parameters (NaN where it has none).
+fn eta_by_parameter(b: &Block) -> (Vec<String>, Vec<(String, Vec<Real>)>) {
+    let params: Vec<String> = b
+        .entries
+        .first()
+        .map(|e| e.eta.keys().cloned().collect())
+        .unwrap_or_default();
+    let series = b
+        .entries
+        .iter()
+        .map(|e| {
+            let eta = params
+                .iter()
+                .map(|p| e.eta.get(p).map_or(Real::NAN, |x| x.mean))
+                .collect();
+            (entry_label(e), eta)
+        })
+        .collect();
+    (params, series)
 }
 
 /// `summary.json` as a JSON value.
@@ -302,28 +335,15 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
     s += &table(&headers, &rows);
     s += "\n## Identification accuracy η per parameter (mean %, Guo 2024 eq. 29)\n\n";
-    let b0 = &r.blocks[0];
-    let params: Vec<String> = b0
-        .entries
-        .first()
-        .map(|e| e.eta.keys().cloned().collect())
-        .unwrap_or_default();
-    let cols: Vec<String> = b0
-        .entries
-        .iter()
-        .map(|e| format!("{} / {}", e.method, e.poses))
-        .collect();
+    let (params, series) = eta_by_parameter(&r.blocks[0]);
     let mut h: Vec<&str> = vec!["parameter"];
-    h.extend(cols.iter().map(String::as_str));
+    h.extend(series.iter().map(|(label, _)| label.as_str()));
     let eta_rows: Vec<Vec<String>> = params
         .iter()
-        .map(|p| {
+        .enumerate()
+        .map(|(i, p)| {
             let mut row = vec![format!("`{p}`")];
-            row.extend(
-                b0.entries
-                    .iter()
-                    .map(|e| fmt_num(e.eta.get(p).map_or(Real::NAN, |x| x.mean), 4)),
-            );
+            row.extend(series.iter().map(|(_, eta)| fmt_num(eta[i], 4)));
             row
         })
         .collect();
@@ -351,24 +371,7 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
     // η per parameter per method × strategy (Guo 2024 fig. 8).
-    let params: Vec<String> = b0
-        .entries
-        .first()
-        .map(|e| e.eta.keys().cloned().collect())
-        .unwrap_or_default();
-    let series: Vec<(String, Vec<Real>)> = b0
-        .entries
-        .iter()
-        .map(|e| {
-            (
-                format!("{} / {}", e.method, e.poses),
-                params
-                    .iter()
-                    .map(|p| e.eta.get(p).map_or(Real::NAN, |x| x.mean))
-                    .collect(),
-            )
-        })
-        .collect();
+    let (params, series) = eta_by_parameter(b0);
     plots::grouped_bars(
         &out.join("eta"),
         "Identification accuracy per parameter",
@@ -413,7 +416,7 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
                         .map(|o| o.after_mm.rms)
                 })
                 .collect();
-            (format!("{} / {}", e.method, e.poses), v)
+            (entry_label(e), v)
         })
         .collect();
     plots::box_plot(
@@ -497,7 +500,7 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
                         )
                     })
                     .collect();
-                series.push((format!("{} / {}", e.method, e.poses), pts));
+                series.push((entry_label(e), pts));
             }
             plots::sweep(
                 &out.join("sweep"),
@@ -518,8 +521,7 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
 /// Writes every output file of a run into its folder.
 pub fn write_all(r: &RunResult) -> Result<()> {
     std::fs::create_dir_all(&r.out).map_err(|e| Error::io(&r.out, e))?;
-    let s = serde_json::to_string_pretty(&summary(r)).map_err(|e| Error::Compute(e.to_string()))?;
-    write(&r.out.join("summary.json"), &(s + "\n"))?;
+    write_json(&r.out.join("summary.json"), &summary(r))?;
     write(&r.out.join("trials.csv"), &trials_csv(r))?;
     let timing: Vec<Value> = r
         .blocks
@@ -531,9 +533,10 @@ pub fn write_all(r: &RunResult) -> Result<()> {
             })
         })
         .collect();
-    let t = json!({"run_seconds": r.seconds, "results": timing});
-    let t = serde_json::to_string_pretty(&t).map_err(|e| Error::Compute(e.to_string()))?;
-    write(&r.out.join("timing.json"), &(t + "\n"))?;
+    write_json(
+        &r.out.join("timing.json"),
+        &json!({"run_seconds": r.seconds, "results": timing}),
+    )?;
     let plots = write_plots(r)?;
     write(&r.out.join("report.md"), &report_md(r, &plots))?;
     Ok(())

@@ -38,39 +38,31 @@ pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurements) -> Resul
     for (i, q) in m.qs.iter().enumerate() {
         joint_cells(&mut s, robot, q);
         s.push(',');
-        let p = m.points.get(i).ok_or_else(|| {
-            Error::Compute(format!(
-                "measurement has {} poses but {} points",
-                m.qs.len(),
-                m.points.len()
-            ))
-        })?;
+        let p = of_pose(&m.points, i, m.qs.len(), "points")?;
         let _ = write!(s, "{},{},{}", fixed(p.x, 9), fixed(p.y, 9), fixed(p.z, 9));
         if let Some(qs) = &m.quats {
-            let qq = qs.get(i).ok_or_else(|| {
-                Error::Compute(format!(
-                    "measurement has {} poses but {} quaternions",
-                    m.qs.len(),
-                    qs.len()
-                ))
-            })?;
-            for v in qq {
+            for v in of_pose(qs, i, m.qs.len(), "quaternions")? {
                 let _ = write!(s, ",{}", fixed(*v, 12));
             }
         }
         if let Some(sd) = &m.sigma_mm {
-            let v = sd.get(i).ok_or_else(|| {
-                Error::Compute(format!(
-                    "measurement has {} poses but {} standard deviations",
-                    m.qs.len(),
-                    sd.len()
-                ))
-            })?;
+            let v = of_pose(sd, i, m.qs.len(), "standard deviations")?;
             let _ = write!(s, ",{}", fixed(*v, 9));
         }
         s.push('\n');
     }
     std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
+/// Entry `i` of a per-pose column `v` (`what`, plural) of a measurement of `poses` poses;
+/// an error when the column is shorter.
+fn of_pose<'a, T>(v: &'a [T], i: usize, poses: usize, what: &str) -> Result<&'a T> {
+    v.get(i).ok_or_else(|| {
+        Error::Compute(format!(
+            "measurement has {poses} poses but {} {what}",
+            v.len()
+        ))
+    })
 }
 
 /// Writes a pose list (the measurement CSV without the measured columns): `q1..qn` in the

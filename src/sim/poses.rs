@@ -156,14 +156,19 @@ mod tests {
         }
     }
 
+    /// A cube of edge `edge_mm` centred at `center_mm`.
+    fn cube(center_mm: [Real; 3], edge_mm: Real) -> Region {
+        Region::Box {
+            center_mm,
+            size_mm: [edge_mm; 3],
+        }
+    }
+
     /// Qiao 2021 §4: 50 calibration points in a 1000 mm cube centred at (550, 0, 550) mm.
     #[test]
     fn box_sampling_finds_points_in_qiaos_cube() {
         let r = crate::robots::tx60();
-        let region = Region::Box {
-            center_mm: [550.0, 0.0, 550.0],
-            size_mm: [1000.0; 3],
-        };
+        let region = cube([550.0, 0.0, 550.0], 1000.0);
         let qs = sample_region(&r, &region, 50, &mut stream(1, "poses")).unwrap();
         assert_eq!(qs.len(), 50);
         for q in &qs {
@@ -179,10 +184,7 @@ mod tests {
     #[test]
     fn unreachable_box_is_refused_naming_the_key() {
         let r = crate::robots::tx60();
-        let region = Region::Box {
-            center_mm: [5000.0, 0.0, 0.0],
-            size_mm: [100.0; 3],
-        };
+        let region = cube([5000.0, 0.0, 0.0], 100.0);
         let e = sample_region_keyed(&r, &region, 10, "validation.region", &mut stream(1, "p"))
             .unwrap_err();
         assert_eq!(key_of(&e), "validation.region");

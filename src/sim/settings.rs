@@ -68,6 +68,26 @@ impl<'de> Deserialize<'de> for ParamSelection {
     }
 }
 
+/// The parameters of an `errors.params` list, in list order: `param` reads one name (or
+/// gives the error for a name it does not know); a name listed twice is refused.
+pub(crate) fn listed_params(
+    names: &[String],
+    param: impl Fn(&str) -> Result<Param>,
+) -> Result<Vec<Param>> {
+    let mut out: Vec<Param> = Vec::with_capacity(names.len());
+    for n in names {
+        let p = param(n)?;
+        if out.contains(&p) {
+            return Err(Error::setting(
+                "errors.params",
+                format!("\"{n}\" is listed twice"),
+            ));
+        }
+        out.push(p);
+    }
+    Ok(out)
+}
+
 /// `[errors]`: the true robot = nominal + these errors (SPEC §3; Guo 2024 §4.2).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -109,9 +129,8 @@ impl ErrorSettings {
                     "the list is empty; give parameter names or \"identifiable\"",
                 ));
             }
-            let mut seen = Vec::with_capacity(names.len());
-            for n in names {
-                let p = Param::parse(n).ok_or_else(|| {
+            listed_params(names, |n| {
+                Param::parse(n).ok_or_else(|| {
                     Error::setting(
                         "errors.params",
                         format!(
@@ -119,15 +138,8 @@ impl ErrorSettings {
                              base.x … base.rz, tool.x … tool.rz)"
                         ),
                     )
-                })?;
-                if seen.contains(&p) {
-                    return Err(Error::setting(
-                        "errors.params",
-                        format!("\"{n}\" is listed twice"),
-                    ));
-                }
-                seen.push(p);
-            }
+                })
+            })?;
         }
         Ok(())
     }

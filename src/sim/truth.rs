@@ -9,7 +9,7 @@
 use rand::Rng as _;
 use rand_distr::StandardNormal;
 
-use super::settings::{ErrorKind, ErrorSettings, ParamSelection};
+use super::settings::{listed_params, ErrorKind, ErrorSettings, ParamSelection};
 use crate::error::{Error, Result};
 use crate::identifiability::identifiable_generic;
 use crate::jacobian::Measure;
@@ -46,9 +46,8 @@ pub fn selected_params(
             .collect()),
         ParamSelection::List(names) => {
             let all = robot.params();
-            let mut out: Vec<Param> = Vec::with_capacity(names.len());
-            for n in names {
-                let p = Param::parse(n).filter(|p| all.contains(p)).ok_or_else(|| {
+            listed_params(names, |n| {
+                Param::parse(n).filter(|p| all.contains(p)).ok_or_else(|| {
                     Error::setting(
                         "errors.params",
                         format!(
@@ -58,16 +57,8 @@ pub fn selected_params(
                             robot.dof()
                         ),
                     )
-                })?;
-                if out.contains(&p) {
-                    return Err(Error::setting(
-                        "errors.params",
-                        format!("\"{n}\" is listed twice"),
-                    ));
-                }
-                out.push(p);
-            }
-            Ok(out)
+                })
+            })
         }
     }
 }
