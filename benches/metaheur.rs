@@ -34,8 +34,10 @@ fn bench(c: &mut Criterion) {
             let id = BenchmarkId::new(model.as_str(), steps);
             g.bench_with_input(id, &steps, |bch, &steps| {
                 bch.iter(|| {
-                    identify(model, &nominal, &params, &qs, &measured, steps, DEFAULT_K)
-                        .expect("identify")
+                    identify(
+                        model, &nominal, &params, &qs, &measured, steps, DEFAULT_K, None,
+                    )
+                    .expect("identify")
                 })
             });
         }

@@ -258,6 +258,7 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
 
 /// `calbench identify --robot R --data CSV --method M [--registration …] [--validate CSV] [--k K]
 /// --out DIR`: identification on a measurement file, real or simulated.
+#[allow(clippy::too_many_arguments)]
 pub fn identify_file(
     robot: &str,
     data: &Path,
@@ -305,7 +306,10 @@ pub fn identify_file(
     if undetermined && !allow_rank_deficient {
         let a = analyse(&nominal, &params, &d.qs, measure);
         let names = |v: &[calbench::kinematics::Param]| {
-            v.iter().map(|p| p.to_string()).collect::<Vec<_>>().join(" ")
+            v.iter()
+                .map(|p| p.to_string())
+                .collect::<Vec<_>>()
+                .join(" ")
         };
         let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
         return Err(Error::file(

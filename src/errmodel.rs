@@ -258,23 +258,10 @@ pub struct ModelFit {
 /// [`ErrorModel::DirectFk`] is the identification on the forward kinematics without
 /// neglected terms of §4.2 (model 3). The Jacobians are exact derivatives of the residuals
 /// everywhere, so each model's iteration converges to the least-squares minimum of its own
-/// residual.
-pub fn identify(
-    model: ErrorModel,
-    nominal: &Robot,
-    params: &[Param],
-    qs: &[Vec<Real>],
-    measured: &[Frame],
-    iterations: usize,
-    k: Real,
-) -> Result<ModelFit> {
-    identify_weighted(model, nominal, params, qs, measured, iterations, k, None)
-}
-
-/// [`identify`] with prior weights `w_j` per pose: pose j's rows are scaled by `√w_j`
-/// (weighted least squares); `None` is [`identify`].
+/// residual. With prior weights `w_j` per pose (`Some`), pose j's rows are scaled by `√w_j`
+/// (weighted least squares).
 #[allow(clippy::too_many_arguments)]
-pub fn identify_weighted(
+pub fn identify(
     model: ErrorModel,
     nominal: &Robot,
     params: &[Param],

@@ -185,6 +185,20 @@ pub fn quaternion_matrix(q: &[Real; 4]) -> Mat3 {
         .into_inner()
 }
 
+/// Median of `v` (reorders it); NaN when empty.
+pub fn median(v: &mut [Real]) -> Real {
+    if v.is_empty() {
+        return Real::NAN;
+    }
+    v.sort_unstable_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -92,6 +92,18 @@ impl Measurements {
     }
 }
 
+/// Checks per-point weights: one finite, positive weight for each of `n` points (setting
+/// `weights`).
+pub fn check_weights(w: &[Real], n: usize) -> Result<()> {
+    if w.len() != n || w.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(Error::setting(
+            "weights",
+            format!("need {n} finite positive weights, got {} ({w:?})", w.len()),
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

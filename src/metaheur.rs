@@ -163,11 +163,13 @@ impl BasOptions {
     /// Checks the option values (keys as in the scenario).
     pub fn check(&self) -> Result<()> {
         check_count("iterations", self.iterations)?;
-        finite_positive("antenna", self.antenna)?;
-        finite_positive("step", self.step)?;
-        check_decay("decay", self.decay)?;
-        finite_non_negative("antenna_floor", self.antenna_floor)?;
-        finite_non_negative("step_floor", self.step_floor)?;
+        check_schedules(
+            self.antenna,
+            self.step,
+            self.decay,
+            self.antenna_floor,
+            self.step_floor,
+        )?;
         check_target("target", self.target)
     }
 }
@@ -555,6 +557,16 @@ struct Swarm {
     beetle: Option<BeetleTerm>,
 }
 
+/// Checks the settings of eq. 13's schedules: initial width and step positive, decay in
+/// [0, 1), floors at least 0.
+fn check_schedules(antenna: Real, step: Real, decay: Real, d0: Real, delta0: Real) -> Result<()> {
+    finite_positive("antenna", antenna)?;
+    finite_positive("step", step)?;
+    check_decay("decay", decay)?;
+    finite_non_negative("antenna_floor", d0)?;
+    finite_non_negative("step_floor", delta0)
+}
+
 fn check_swarm(s: &Swarm) -> Result<()> {
     check_count("population", s.population)?;
     check_count("iterations", s.iterations)?;
@@ -581,11 +593,7 @@ fn check_swarm(s: &Swarm) -> Result<()> {
     }
     if let Some(b) = s.beetle {
         finite_non_negative("c3", b.c3)?;
-        finite_positive("antenna", b.antenna)?;
-        finite_positive("step", b.step)?;
-        check_decay("decay", b.decay)?;
-        finite_non_negative("antenna_floor", b.antenna_floor)?;
-        finite_non_negative("step_floor", b.step_floor)?;
+        check_schedules(b.antenna, b.step, b.decay, b.antenna_floor, b.step_floor)?;
     }
     Ok(())
 }
@@ -1214,13 +1222,7 @@ mod tests {
         };
         let r = pso(&sphere, &b, &o, &mut stream(3, "pso")).unwrap();
         assert!(dist(&r.x, &c) < 1e-4, "pso {:?}", r.x);
-        let o = BasPsoOptions {
-            swarm: PsoOptions {
-                iterations: 300,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
+        let o = hybrid(300);
         let r = bas_pso(&sphere, &b, &o, &mut stream(3, "bas_pso")).unwrap();
         assert!(dist(&r.x, &c) < 1e-4, "bas_pso {:?}", r.x);
         assert_eq!(r.evaluations, 40 + 300 * 3 * 40);
@@ -1235,6 +1237,17 @@ mod tests {
         assert_relative_eq!(r.fitness, sphere(&r.x));
     }
 
+    /// BAS-PSO with `iterations` and the other options at their defaults.
+    fn hybrid(iterations: usize) -> BasPsoOptions {
+        BasPsoOptions {
+            swarm: PsoOptions {
+                iterations,
+                ..Default::default()
+            },
+            ..Default::default()
+        }
+    }
+
     #[test]
     fn swarms_find_the_rosenbrock_minimum() {
         let b = Bounds::symmetric(&[2.0, 2.0]);
@@ -1244,13 +1257,7 @@ mod tests {
         };
         let r = pso(&rosenbrock, &b, &o, &mut stream(4, "pso")).unwrap();
         assert!(dist(&r.x, &[1.0, 1.0]) < 1e-3, "pso {:?}", r.x);
-        let o = BasPsoOptions {
-            swarm: PsoOptions {
-                iterations: 400,
-                ..Default::default()
-            },
-            ..Default::default()
-        };
+        let o = hybrid(400);
         let r = bas_pso(&rosenbrock, &b, &o, &mut stream(4, "bas_pso")).unwrap();
         assert!(dist(&r.x, &[1.0, 1.0]) < 1e-3, "bas_pso {:?}", r.x);
         let o = BasOptions {
@@ -1289,20 +1296,11 @@ mod tests {
         assert_eq!(a, t);
         let other = bas_pso(&sphere, &b, &o, &mut stream(10, "x")).unwrap();
         assert_ne!(a.x, other.x);
-        let po = PsoOptions {
-            iterations: 50,
-            ..Default::default()
-        };
-        let p1 = pso(&sphere, &b, &po, &mut stream(9, "x")).unwrap();
-        let p2 = pso(&sphere, &b, &po, &mut stream(9, "x")).unwrap();
-        assert_eq!(p1, p2);
-        let bo = BasOptions {
-            iterations: 50,
-            ..Default::default()
-        };
-        let b1 = bas(&sphere, &b, &bo, &mut stream(9, "x")).unwrap();
-        let b2 = bas(&sphere, &b, &bo, &mut stream(9, "x")).unwrap();
-        assert_eq!(b1, b2);
+        // Same seed, same result: PSO and BAS too.
+        let same = |run: &dyn Fn() -> MetaResult| assert_eq!(run(), run());
+        let (po, bo) = (hybrid(50).swarm, BasOptions::default());
+        same(&|| pso(&sphere, &b, &po, &mut stream(9, "x")).unwrap());
+        same(&|| bas(&sphere, &b, &bo, &mut stream(9, "x")).unwrap());
     }
 
     fn key(e: Error) -> String {

@@ -36,6 +36,15 @@ pub fn parse<T: DeserializeOwned>(key: &str, s: &str) -> Result<T> {
     T::deserialize(d).map_err(|e| Error::setting(key, e.to_string()))
 }
 
+/// [`parse`] of a value read from `file` at `place` (a key path): the error names the file,
+/// the place, the value and the allowed names.
+pub fn parse_in<T: DeserializeOwned>(file: &std::path::Path, place: &str, s: &str) -> Result<T> {
+    parse(place, s).map_err(|e| match e {
+        Error::Setting { msg, .. } => Error::file(file, place, msg),
+        other => other,
+    })
+}
+
 /// Removes the entries of `keys` from `table` and returns them as a table of their own: for
 /// options read from one table into two structs (each refusing keys it does not know).
 pub fn take_keys(table: &mut toml::Table, keys: &[&str]) -> toml::Table {

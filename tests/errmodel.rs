@@ -97,7 +97,7 @@ fn one_step(len: Real, ang: Real) -> (Vec<Vec<Real>>, Vec<(Real, Real)>, Vec<Rea
     let mut xs = Vec::new();
     let mut acc = Vec::new();
     for model in ErrorModel::ALL {
-        let fit = identify(model, &nominal, &params, &qs, &measured, 1, K).unwrap();
+        let fit = identify(model, &nominal, &params, &qs, &measured, 1, K, None).unwrap();
         let model_val: Vec<Frame> = val.iter().map(|q| fit.robot.fk(q)).collect();
         acc.push(acpe_acae(&truth_val, &model_val).unwrap());
         xs.push(fit.x);
@@ -191,7 +191,7 @@ fn qiao_comparison(len: Real, ang: Real, sp: Real, sa: Real, draws: u64) -> [(Re
             .collect();
         let truth: Vec<Frame> = val.iter().map(|q| real.fk(q)).collect();
         for (o, (model, steps)) in out.iter_mut().zip(runs) {
-            let fit = identify(model, &nominal, &params, &qs, &measured, steps, K).unwrap();
+            let fit = identify(model, &nominal, &params, &qs, &measured, steps, K, None).unwrap();
             let model_val: Vec<Frame> = val.iter().map(|q| fit.robot.fk(q)).collect();
             let (p, a) = acpe_acae(&truth, &model_val).unwrap();
             o.0 += p / draws as Real;
@@ -231,7 +231,7 @@ fn iterated_models_recover_noise_free_errors() {
     let real = nominal.with_errors(&errs);
     let measured: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     for model in ErrorModel::ALL {
-        let fit = identify(model, &nominal, &params, &qs, &measured, 5, K).unwrap();
+        let fit = identify(model, &nominal, &params, &qs, &measured, 5, K, None).unwrap();
         for (x, (p, e)) in fit.x.iter().zip(&errs) {
             assert!((x - e).abs() < 1e-8, "{model} {p}: {x} vs {e}");
         }

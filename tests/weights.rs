@@ -4,7 +4,7 @@
 //! the pose-error models and Qiao's fitness of the searches.
 
 use calbench::calibrate::{calibrate, Registration};
-use calbench::errmodel::{identify_weighted, ErrorModel};
+use calbench::errmodel::{identify, ErrorModel};
 use calbench::identify::{method_by_name, MethodSpec};
 use calbench::jacobian::Measure;
 use calbench::kinematics::{Param, Robot};
@@ -130,7 +130,7 @@ fn weighted_pose_error_model_equals_the_repeated_pose() {
     let mut w = vec![1.0; data.len()];
     w[0] = 2.0;
     let m = ErrorModel::DirectFk;
-    let a = identify_weighted(
+    let a = identify(
         m,
         &nominal,
         &params,
@@ -141,7 +141,7 @@ fn weighted_pose_error_model_equals_the_repeated_pose() {
         Some(&w),
     )
     .unwrap();
-    let b = identify_weighted(
+    let b = identify(
         m,
         &nominal,
         &params,

@@ -47,7 +47,7 @@ impl Method for PoseErrorLs {
             .zip(rots)
             .map(|(p, r)| Frame { rot: *r, pos: *p })
             .collect();
-        let fit = crate::errmodel::identify_weighted(
+        let fit = crate::errmodel::identify(
             self.error_model,
             problem.nominal,
             problem.params,

@@ -160,19 +160,25 @@ impl<'a> RobotProblem<'a> {
     /// point.
     pub fn with_prior_weights(mut self, w: Option<&'a [Real]>) -> crate::Result<Self> {
         if let Some(w) = w {
-            if w.len() != self.points.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
-                return Err(Error::setting(
-                    "weights",
-                    format!(
-                        "need {} finite positive weights, got {}",
-                        self.points.len(),
-                        w.len()
-                    ),
-                ));
-            }
+            crate::measurement::check_weights(w, self.points.len())?;
         }
         self.prior = w;
         Ok(self)
+    }
+
+    /// The kinematic least squares of a calibration problem: its base-frame data, orientation
+    /// weight `k` and prior weights.
+    pub fn of(problem: &'a CalibrationProblem) -> crate::Result<Self> {
+        RobotProblem::new(
+            problem.nominal,
+            problem.params,
+            problem.poses(),
+            &problem.points,
+            problem.rotations.as_deref(),
+            problem.measure,
+        )?
+        .with_orientation_weight(problem.k)?
+        .with_prior_weights(problem.weights.as_deref())
     }
 
     /// The parameters, one per entry of `x`.
@@ -247,16 +253,7 @@ pub fn identify_robot(
     solver: &dyn Solver,
     problem: &CalibrationProblem,
 ) -> crate::Result<Identified> {
-    let rp = RobotProblem::new(
-        problem.nominal,
-        problem.params,
-        problem.poses(),
-        &problem.points,
-        problem.rotations.as_deref(),
-        problem.measure,
-    )?
-    .with_orientation_weight(problem.k)?
-    .with_prior_weights(problem.weights.as_deref())?;
+    let rp = RobotProblem::of(problem)?;
     Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
 }
 
@@ -268,16 +265,7 @@ pub fn assess(problem: &CalibrationProblem, out: &mut Identified) -> crate::Resu
     if out.rank.is_some() || out.x.len() != problem.params.len() {
         return Ok(());
     }
-    let rp = RobotProblem::new(
-        problem.nominal,
-        problem.params,
-        problem.poses(),
-        &problem.points,
-        problem.rotations.as_deref(),
-        problem.measure,
-    )?
-    .with_orientation_weight(problem.k)?
-    .with_prior_weights(problem.weights.as_deref())?;
+    let rp = RobotProblem::of(problem)?;
     let size = rp.size();
     let mut r = DVector::zeros(size.rows());
     let mut j = DMatrix::zeros(size.rows(), size.params);

@@ -274,11 +274,10 @@ pub(crate) fn finish(
         (None, Real::NAN, DMatrix::from_element(t, t, Real::NAN))
     };
     let termination = match (termination, rank) {
-        (Termination::Converged | Termination::MaxIterations | Termination::NoProgress, Some(r))
-            if r < t =>
-        {
-            Termination::RankDeficient
-        }
+        (
+            Termination::Converged | Termination::MaxIterations | Termination::NoProgress,
+            Some(r),
+        ) if r < t => Termination::RankDeficient,
         (other, _) => other,
     };
     Identified {

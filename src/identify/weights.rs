@@ -4,7 +4,7 @@
 
 use nalgebra::DVector;
 
-use crate::math::Real;
+use crate::math::{median, Real};
 
 /// The weight function of the robust iterations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
@@ -169,20 +169,6 @@ pub(crate) fn point_weights(
         };
     }
     WeightStats { mad }
-}
-
-/// Median of `v` (reorders it); NaN when empty.
-fn median(v: &mut [Real]) -> Real {
-    if v.is_empty() {
-        return Real::NAN;
-    }
-    v.sort_unstable_by(|a, b| a.total_cmp(b));
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
 }
 
 #[cfg(test)]

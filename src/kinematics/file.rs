@@ -63,37 +63,10 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
     let f: RobotFile =
         toml::from_str(text).map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
     let err = |place: String, msg: String| Error::file(path, place, msg);
-    let convention = match f.convention.as_str() {
-        "dh" => Convention::Dh,
-        "dh_beta" => Convention::DhBeta,
-        "mdh" => Convention::Mdh,
-        other => {
-            return Err(err(
-                "convention".into(),
-                format!("unknown convention \"{other}\"; allowed: \"dh\", \"dh_beta\", \"mdh\""),
-            ))
-        }
-    };
-    let length = match f.length_unit.as_str() {
-        "mm" => LengthUnit::Mm,
-        "m" => LengthUnit::M,
-        other => {
-            return Err(err(
-                "length_unit".into(),
-                format!("unknown unit \"{other}\"; allowed: \"mm\", \"m\""),
-            ))
-        }
-    };
-    let angle = match f.angle_unit.as_str() {
-        "deg" => AngleUnit::Deg,
-        "rad" => AngleUnit::Rad,
-        other => {
-            return Err(err(
-                "angle_unit".into(),
-                format!("unknown unit \"{other}\"; allowed: \"deg\", \"rad\""),
-            ))
-        }
-    };
+    use crate::names::parse_in;
+    let convention: Convention = parse_in(path, "convention", &f.convention)?;
+    let length: LengthUnit = parse_in(path, "length_unit", &f.length_unit)?;
+    let angle: AngleUnit = parse_in(path, "angle_unit", &f.angle_unit)?;
     let units = Units { length, angle };
     let (lu, au) = (units.length_to_mm(), units.angle_to_rad());
     let (lname, aname) = (units.length_name(), units.angle_name());
@@ -140,16 +113,7 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
     let mut values = vec![0.0; 5 * n + 12];
     let mut joints = Vec::with_capacity(n);
     for (j, e) in f.joints.iter().enumerate() {
-        let kind = match e.kind.as_str() {
-            "revolute" => JointType::Revolute,
-            "prismatic" => JointType::Prismatic,
-            other => {
-                return Err(err(
-                    joint_place(j, "type"),
-                    format!("unknown joint type \"{other}\"; allowed: \"revolute\", \"prismatic\""),
-                ))
-            }
-        };
+        let kind: JointType = parse_in(path, &joint_place(j, "type"), &e.kind)?;
         let beta = e.beta.unwrap_or(0.0);
         for (key, p, quantity, raw) in [
             ("alpha", Param::Alpha(j), Quantity::Angle, e.alpha),
@@ -304,24 +268,8 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "name = {}", toml_string(&robot.name));
     let _ = writeln!(s, "convention = \"{}\"", robot.convention.as_str());
-    let _ = writeln!(
-        s,
-        "length_unit = \"{}\"",
-        if robot.units.length == LengthUnit::Mm {
-            "mm"
-        } else {
-            "m"
-        }
-    );
-    let _ = writeln!(
-        s,
-        "angle_unit = \"{}\"",
-        if robot.units.angle == AngleUnit::Deg {
-            "deg"
-        } else {
-            "rad"
-        }
-    );
+    let _ = writeln!(s, "length_unit = \"{}\"", robot.units.length_name());
+    let _ = writeln!(s, "angle_unit = \"{}\"", robot.units.angle_name());
     if let Some(Coupling::Differential { l1_mm }) = robot.coupling {
         let _ = writeln!(
             s,
@@ -340,15 +288,7 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
             au
         };
         let _ = writeln!(s, "\n[[joints]]");
-        let _ = writeln!(
-            s,
-            "type = \"{}\"",
-            if joint.kind == JointType::Revolute {
-                "revolute"
-            } else {
-                "prismatic"
-            }
-        );
+        let _ = writeln!(s, "type = \"{}\"", crate::names::static_name(&joint.kind));
         let _ = writeln!(s, "alpha = {}", num(g(Param::Alpha(j)) / au));
         let _ = writeln!(s, "a = {}", num(g(Param::A(j)) / lu));
         let _ = writeln!(s, "d = {}", num(g(Param::D(j)) / lu));
@@ -444,22 +384,14 @@ mod tests {
 
     #[test]
     fn values_out_of_range_are_refused() {
-        refused(
-            &one_joint("mm", &JOINT.replace("\na = 0.0", "\na = 2e6")),
-            "`a`",
-        );
-        refused(
-            &one_joint("m", &JOINT.replace("d = 0.0", "d = 1001.0")),
-            "`d`",
-        );
-        refused(
-            &one_joint("mm", &JOINT.replace("theta = 0.0", "theta = 400.0")),
-            "`theta`",
-        );
-        refused(
-            &one_joint("mm", &JOINT.replace("alpha = 0.0", "alpha = -1e300")),
-            "`alpha`",
-        );
+        for (unit, from, to, key) in [
+            ("mm", "\na = 0.0", "\na = 2e6", "`a`"),
+            ("m", "d = 0.0", "d = 1001.0", "`d`"),
+            ("mm", "theta = 0.0", "theta = 400.0", "`theta`"),
+            ("mm", "alpha = 0.0", "alpha = -1e300", "`alpha`"),
+        ] {
+            refused(&one_joint(unit, &JOINT.replace(from, to)), key);
+        }
         let wide = JOINT.replace("[-90.0, 90.0]", "[-1e300, 1e300]");
         refused(&one_joint("mm", &wide), "limits");
         let tool = format!(

@@ -127,8 +127,9 @@ pub(crate) fn joint_place(j: usize, key: &str) -> String {
     format!("joint {} (joints[{j}]), key `{key}`", j + 1)
 }
 
-/// The link-transform convention of a robot (see the module docs).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// The link-transform convention of a robot (see the module docs); `dh`, `dh_beta`, `mdh`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum Convention {
     /// Standard Denavit–Hartenberg, Li 2018 eq. 1.
     Dh,
@@ -141,11 +142,7 @@ pub enum Convention {
 impl Convention {
     /// The name used in robot files.
     pub fn as_str(self) -> &'static str {
-        match self {
-            Convention::Dh => "dh",
-            Convention::DhBeta => "dh_beta",
-            Convention::Mdh => "mdh",
-        }
+        crate::names::static_name(&self)
     }
 
     /// Whether the convention has a β parameter per joint.
@@ -155,7 +152,8 @@ impl Convention {
 }
 
 /// The kind of a joint: which parameter its variable adds to.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum JointType {
     /// The joint variable adds to θ (rad inside the library).
     Revolute,
@@ -174,7 +172,8 @@ pub struct Joint {
 }
 
 /// Length unit of a robot file and its joint values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum LengthUnit {
     /// Millimetres.
     Mm,
@@ -183,7 +182,8 @@ pub enum LengthUnit {
 }
 
 /// Angle unit of a robot file and its joint values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum AngleUnit {
     /// Degrees.
     Deg,
@@ -217,18 +217,12 @@ impl Units {
 
     /// The length unit's name in robot files: `mm` or `m`.
     pub fn length_name(self) -> &'static str {
-        match self.length {
-            LengthUnit::Mm => "mm",
-            LengthUnit::M => "m",
-        }
+        crate::names::static_name(&self.length)
     }
 
     /// The angle unit's name in robot files: `deg` or `rad`.
     pub fn angle_name(self) -> &'static str {
-        match self.angle {
-            AngleUnit::Deg => "deg",
-            AngleUnit::Rad => "rad",
-        }
+        crate::names::static_name(&self.angle)
     }
 
     /// Factor from this angle unit to rad.

@@ -90,17 +90,7 @@ fn std(v: &[Real]) -> Real {
 }
 
 fn median(v: &[Real]) -> Real {
-    if v.is_empty() {
-        return Real::NAN;
-    }
-    let mut s = v.to_vec();
-    s.sort_by(|a, b| a.total_cmp(b));
-    let n = s.len();
-    if n % 2 == 1 {
-        s[n / 2]
-    } else {
-        0.5 * (s[n / 2 - 1] + s[n / 2])
-    }
+    crate::math::median(&mut v.to_vec())
 }
 
 /// η_i = (1 − |x_i − x̂_i| / |x_i|) · 100 % (Guo 2024 eq. 29); `None` where x_i = 0.
