@@ -2,7 +2,23 @@
 //! to stdout and write files through [`calbench::report`]; `main.rs` parses arguments and
 //! reports errors.
 
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
+
+/// `println!` that ignores a closed stdout (`calbench … | head`): results are on disk before
+/// anything is printed, and a reader that stops early is not an error.
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `print!` likewise.
+macro_rules! out_raw {
+    ($($arg:tt)*) => {{
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
 
 use serde_json::json;
 
@@ -30,7 +46,7 @@ pub fn robots(name: Option<&str>) -> Result<()> {
     match name {
         None => {
             for b in BUILTINS {
-                println!("{:<12} {}", b.name, b.summary);
+                out!("{:<12} {}", b.name, b.summary);
             }
             Ok(())
         }
@@ -42,7 +58,7 @@ pub fn robots(name: Option<&str>) -> Result<()> {
                     format!("no built-in robot \"{n}\"; built-ins: {}", names.join(", ")),
                 )
             })?;
-            print!("# {}\n{}", b.summary, robot_to_toml(&(b.build)()));
+            out_raw!("# {}\n{}", b.summary, robot_to_toml(&(b.build)()));
             Ok(())
         }
     }
@@ -109,18 +125,18 @@ pub fn fk(robot: &str, q: &str, json: bool) -> Result<()> {
         .map(|i| [f.rot[(i, 0)], f.rot[(i, 1)], f.rot[(i, 2)]])
         .collect();
     if json {
-        println!(
+        out!(
             "{}",
             json!({"position_mm": [f.pos.x, f.pos.y, f.pos.z], "rotation": rot})
         );
     } else {
-        println!(
+        out!(
             "position (mm): {:.6} {:.6} {:.6}",
             f.pos.x, f.pos.y, f.pos.z
         );
-        println!("rotation:");
+        out!("rotation:");
         for r in rot {
-            println!("  {:>10.6} {:>10.6} {:>10.6}", r[0], r[1], r[2]);
+            out!("  {:>10.6} {:>10.6} {:>10.6}", r[0], r[1], r[2]);
         }
     }
     if !robot.within_limits(&q) {
@@ -149,7 +165,7 @@ pub fn identifiability(
         |v: &[calbench::kinematics::Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     if json {
         let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
-        println!(
+        out!(
             "{}",
             json!({
                 "rank": a.rank,
@@ -160,14 +176,14 @@ pub fn identifiability(
             })
         );
     } else {
-        println!("robot {} ({} poses, {:?})", robot.name, poses, measure);
-        println!("rank {} of {} parameters", a.rank, robot.params().len());
-        println!("identifiable:   {}", names(&a.identifiable).join(" "));
-        println!("unidentifiable: {}", names(&a.unidentifiable).join(" "));
+        out!("robot {} ({} poses, {:?})", robot.name, poses, measure);
+        out!("rank {} of {} parameters", a.rank, robot.params().len());
+        out!("identifiable:   {}", names(&a.identifiable).join(" "));
+        out!("unidentifiable: {}", names(&a.unidentifiable).join(" "));
         for g in &a.groups {
-            println!("dependent group: {}", names(g).join(" "));
+            out!("dependent group: {}", names(g).join(" "));
         }
-        println!(
+        out!(
             "condition number (column-scaled): {:.4e}",
             a.condition_number
         );
@@ -247,7 +263,7 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         "validation_sag_mm": v.truth.sag_mm,
     });
     write_file(&out.join("truth.json"), &to_json_text(&truth_json)?)?;
-    println!(
+    out!(
         "{} calibration and {} validation poses of trial {trial} written to {}",
         m.data.len(),
         v.data.len(),
@@ -342,16 +358,16 @@ pub fn identify_file(
     };
     write_identified(out, &record)?;
     if let Some(v) = &validation {
-        println!("validation error (mm)   mean      rms       max       std");
+        out!("validation error (mm)   mean      rms       max       std");
         for (label, s) in [("before", v.before_mm), ("after", v.after_mm)] {
-            println!(
+            out!(
                 "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
                 s.mean, s.rms, s.max, s.std
             );
         }
     }
     let r = &c.identified;
-    println!(
+    out!(
         "{} on {} points: {} after {} iterations; written to {}",
         spec.name(),
         d.len(),
@@ -386,6 +402,17 @@ pub fn poses(
             ),
         ));
     }
+    // Every argument is checked before any work: the pool is `candidates` poses.
+    let counts = curve
+        .map(|list| {
+            parse_list(
+                list,
+                "--curve",
+                |&n: &usize| n >= 1 && n <= c.candidates,
+                |s| format!("\"{s}\" is not a pose count in 1..={}", c.candidates),
+            )
+        })
+        .transpose()?;
     let mut params = study::identified_params(&nominal, measure, false);
     let mut g = calbench::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
@@ -418,7 +445,7 @@ pub fn poses(
         trace += &format!("{i},{f}\n");
     }
     write_file(&out.join("trace.csv"), &trace)?;
-    println!(
+    out!(
         "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",
         sel.poses.len(),
         pool.len(),
@@ -428,18 +455,12 @@ pub fn poses(
         sel.scores.gcn,
         sel.scores.condition_number
     );
-    if let Some(list) = curve {
-        let counts = parse_list(
-            list,
-            "--curve",
-            |&n: &usize| n >= 1 && n <= pool.len(),
-            |s| format!("\"{s}\" is not a pose count in 1..={}", pool.len()),
-        )?;
+    if let Some(counts) = counts {
         let pts = calbench::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
         let mut text = String::from("count,objective\n");
-        println!("objective against pose count (Guo 2024 fig. 7):");
+        out!("objective against pose count (Guo 2024 fig. 7):");
         for (n, f) in &pts {
-            println!("  {n:>5} {f:.6}");
+            out!("  {n:>5} {f:.6}");
             text += &format!("{n},{f}\n");
         }
         write_file(&out.join("curve.csv"), &text)?;
@@ -459,7 +480,21 @@ fn print_table(r: &RunResult) {
         FAILURES,
     ];
     let (headers, rows) = entry_table(r, &columns);
-    print!("{}", markdown_table(&headers, &rows));
+    out_raw!("{}", markdown_table(&headers, &rows));
+}
+
+/// Checks, before any work, that `dir` is (or can be made) a folder calbench can write in.
+fn writable_folder(dir: &Path) -> Result<()> {
+    if dir.exists() && !dir.is_dir() {
+        return Err(Error::setting(
+            "--out",
+            format!("{} exists and is not a folder", dir.display()),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    let probe = dir.join(".calbench-write-test");
+    std::fs::write(&probe, b"").map_err(|e| Error::io(&probe, e))?;
+    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))
 }
 
 /// `calbench run SCENARIO [--trials N] [--seed S] [--threads T] [--out DIR]`, and the default
@@ -495,15 +530,17 @@ pub fn run(
             s.key
         ))
     );
+    let out = out.unwrap_or_else(|| Path::new("results").join(&sc.name));
+    writable_folder(&out)?;
     let opts = RunOptions {
         threads,
-        out,
+        out: Some(out),
         progress: true,
     };
     let r = montecarlo::run(sc, &opts)?;
     write_all(&r)?;
     print_table(&r);
-    println!(
+    out!(
         "\n{} trials in {:.1} s; report: {}",
         r.scenario.trials * r.blocks.len(),
         r.seconds,

@@ -166,7 +166,11 @@ fn run(cli: Cli) -> Result<()> {
         }) => {
             let regressions = commands::check(&summary, &baseline, tolerance)?;
             if regressions.is_empty() {
-                println!("no regression beyond tolerance {tolerance}");
+                use std::io::Write as _;
+                let _ = writeln!(
+                    std::io::stdout(),
+                    "no regression beyond tolerance {tolerance}"
+                );
                 Ok(())
             } else {
                 for r in &regressions {

@@ -258,6 +258,10 @@ pub struct Scenario {
     table: toml::Table,
 }
 
+/// The most trials a study may ask for (FORMATS.md `trials`): more is refused, not run until
+/// killed.
+pub const MAX_TRIALS: usize = 1_000_000_000;
+
 /// The built-in default study (`scenarios/default.toml`): what `calbench` runs with no
 /// arguments.
 pub const DEFAULT_SCENARIO: &str = include_str!("../scenarios/default.toml");
@@ -303,8 +307,11 @@ impl Scenario {
                 "must be a non-empty name without slashes".into(),
             ));
         }
-        if raw.trials == 0 {
-            return Err(ferr("trials", "must be at least 1".into()));
+        if raw.trials == 0 || raw.trials > MAX_TRIALS {
+            return Err(ferr(
+                "trials",
+                format!("must be between 1 and {MAX_TRIALS}, got {}", raw.trials),
+            ));
         }
         let robot = match (raw.robot.builtin, raw.robot.file) {
             (Some(b), None) => RobotRef::Builtin(b),

@@ -283,6 +283,13 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
             sigma.push(v);
         }
     }
+    if qs.is_empty() {
+        return Err(bad(
+            header_line,
+            "",
+            "the file has a header but no data rows".into(),
+        ));
+    }
     Ok(Measurements {
         qs,
         points,
