@@ -132,7 +132,9 @@ pub fn fk(robot: &str, q: &str, json: bool) -> Result<()> {
     } else {
         out!(
             "position (mm): {:.6} {:.6} {:.6}",
-            f.pos.x, f.pos.y, f.pos.z
+            f.pos.x,
+            f.pos.y,
+            f.pos.z
         );
         out!("rotation:");
         for r in rot {
@@ -362,7 +364,10 @@ pub fn identify_file(
         for (label, s) in [("before", v.before_mm), ("after", v.after_mm)] {
             out!(
                 "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
-                s.mean, s.rms, s.max, s.std
+                s.mean,
+                s.rms,
+                s.max,
+                s.std
             );
         }
     }

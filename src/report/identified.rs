@@ -95,6 +95,7 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
         "errors": errors,
         "covariance": cov,
         "condition_number": id.condition_number,
+        "rank": id.rank,
         "sigma0": id.sigma0,
         "rms_residual_mm": id.rms_residual,
         "iterations": id.iterations,
