@@ -301,12 +301,19 @@ fn full_pose_study_reports_qiao_acae() {
     run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
     let s = read_json(&out.join("summary.json")).unwrap();
     for e in s["results"].as_array().unwrap() {
-        // Orientation errors before and after, whose means are Qiao's ACAE.
-        let (b, a) = (
-            e["validation_before_deg"]["mean"].as_f64().unwrap(),
-            e["validation_after_deg"]["mean"].as_f64().unwrap(),
-        );
-        assert!(a.is_finite() && a < b, "{b} -> {a}");
+        // Orientation errors (rotation angles) before and after, and Qiao's attitude
+        // errors, whose means are Qiao's ACAE.
+        for key in ["deg", "attitude_deg"] {
+            let (b, a) = (
+                e[format!("validation_before_{key}")]["mean"]
+                    .as_f64()
+                    .unwrap(),
+                e[format!("validation_after_{key}")]["mean"]
+                    .as_f64()
+                    .unwrap(),
+            );
+            assert!(a.is_finite() && a < b, "{key}: {b} -> {a}");
+        }
     }
     let report = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(report.contains("after mean °"));

@@ -18,7 +18,7 @@ use crate::measurement::Measurements;
 use crate::rng::Rng;
 use registration::{register_svd, register_wsvd};
 
-pub use validation::{validation_errors, ErrorStats};
+pub use validation::{validation_errors, ErrorStats, PoseErrors};
 
 /// How the measured points are brought into the robot's base frame (FORMATS.md
 /// `[registration]`, SPEC §3 "Registration").

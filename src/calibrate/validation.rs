@@ -3,7 +3,7 @@
 
 use crate::errmodel::attitude_error_deg;
 use crate::kinematics::Robot;
-use crate::math::{Frame, Real};
+use crate::math::{rotation_vector, Frame, Real};
 
 /// Mean, RMS, max and standard deviation of a set of errors.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -38,21 +38,61 @@ impl ErrorStats {
     }
 }
 
-/// Position (mm) and orientation (deg) errors of `model` against the true frames, per pose:
-/// `|Δp|` and Qiao 2021's attitude error `√(Δα² + Δβ² + Δγ²)` of the fixed X-Y-Z angles
-/// ([`crate::errmodel::attitude_error_deg`]), whose means over the poses are Qiao's ACPE and
-/// ACAE (§4.1; FORMATS.md "summary.json").
-pub fn validation_errors(
-    model: &Robot,
-    qs: &[Vec<Real>],
-    truth: &[Frame],
-) -> (Vec<Real>, Vec<Real>) {
+/// The validation errors of a model at each pose.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PoseErrors {
+    /// Position error `|Δp|` (mm).
+    pub mm: Vec<Real>,
+    /// Orientation error: the rotation angle of `R_modelᵀ R_true` (deg), the geodesic
+    /// distance on SO(3), stable at every attitude (FORMATS.md `validation_*_deg`).
+    pub deg: Vec<Real>,
+    /// Qiao 2021's attitude error `√(Δα² + Δβ² + Δγ²)` of the fixed X-Y-Z angles (deg,
+    /// [`crate::errmodel::attitude_error_deg`]); undefined near ±90° pitch, where the angles
+    /// are singular (FORMATS.md `validation_*_attitude_deg`; Qiao's ACAE is its mean).
+    pub attitude_deg: Vec<Real>,
+}
+
+/// The errors of `model` against the true frames at the joint values `qs` ([`PoseErrors`]);
+/// the means over the poses of `mm` and `attitude_deg` are Qiao's ACPE and ACAE (§4.1).
+pub fn validation_errors(model: &Robot, qs: &[Vec<Real>], truth: &[Frame]) -> PoseErrors {
     let c = model.chain();
-    qs.iter()
-        .zip(truth)
-        .map(|(q, t)| {
-            let f = c.fk(q);
-            ((f.pos - t.pos).norm(), attitude_error_deg(t, &f))
-        })
-        .unzip()
+    let mut e = PoseErrors::default();
+    for (q, t) in qs.iter().zip(truth) {
+        let f = c.fk(q);
+        e.mm.push((f.pos - t.pos).norm());
+        e.deg.push(rotation_angle_deg(&f, t));
+        e.attitude_deg.push(attitude_error_deg(t, &f));
+    }
+    e
+}
+
+/// The rotation angle between two frames' orientations, `|log(R_modelᵀ R_true)|`, in degrees.
+pub fn rotation_angle_deg(model: &Frame, truth: &Frame) -> Real {
+    rotation_vector(&model.rot.tr_mul(&truth.rot))
+        .norm()
+        .to_degrees()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::{rot_x, rot_z, rpy_matrix, Vec3};
+
+    #[test]
+    fn orientation_error_is_the_rotation_angle_at_every_pitch() {
+        for pitch in [89.99f64, 90.0, -89.999, 30.0, 0.0] {
+            let model = Frame {
+                rot: rpy_matrix([0.3, pitch.to_radians(), -0.7]),
+                pos: Vec3::zeros(),
+            };
+            for turn in [rot_x(0.05f64.to_radians()), rot_z(0.05f64.to_radians())] {
+                let truth = Frame {
+                    rot: model.rot * turn,
+                    pos: Vec3::zeros(),
+                };
+                let deg = rotation_angle_deg(&model, &truth);
+                approx::assert_relative_eq!(deg, 0.05, max_relative = 1e-9);
+            }
+        }
+    }
 }

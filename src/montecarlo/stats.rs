@@ -42,12 +42,18 @@ pub struct Entry {
     pub validation_before_mm: ErrorStats,
     /// … after compensation.
     pub validation_after_mm: ErrorStats,
-    /// Orientation errors (deg) before, for full-pose data (Qiao's ACAE is the mean).
+    /// Orientation errors (deg, rotation angle) before, for full-pose data.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub validation_before_deg: Option<ErrorStats>,
     /// … after.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub validation_after_deg: Option<ErrorStats>,
+    /// Qiao's attitude errors (deg) before, for full-pose data (Qiao's ACAE is the mean).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_before_attitude_deg: Option<ErrorStats>,
+    /// … after.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_after_attitude_deg: Option<ErrorStats>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
@@ -202,6 +208,8 @@ pub fn aggregate(
         validation_after_mm: after,
         validation_before_deg: deg(|o| o.before_deg),
         validation_after_deg: deg(|o| o.after_deg),
+        validation_before_attitude_deg: deg(|o| o.before_attitude_deg),
+        validation_after_attitude_deg: deg(|o| o.after_attitude_deg),
         improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
         param_rmse: rmse,
         crb_ratio,

@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use super::study::{crb_trace, Study};
-use crate::calibrate::{calibrate, validation_errors, ErrorStats};
+use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
 use crate::identify::Termination;
 use crate::jacobian::Measure;
@@ -36,6 +36,10 @@ pub struct Outcome {
     pub before_deg: Option<ErrorStats>,
     /// … after.
     pub after_deg: Option<ErrorStats>,
+    /// Qiao's attitude errors (deg) before and after, for full-pose data.
+    pub before_attitude_deg: Option<ErrorStats>,
+    /// … after.
+    pub after_attitude_deg: Option<ErrorStats>,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
     /// A metaheuristic's best fitness per iteration (trial 0 only).
@@ -135,7 +139,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             None => Ok(truth_robot.fk(q)),
         })
         .collect::<Result<_>>()?;
-    let (before_p, before_a) = validation_errors(&study.nominal, &vqs, &vtruth);
+    let before = validation_errors(&study.nominal, &vqs, &vtruth);
     let full_pose = study.measure == Measure::Pose;
 
     let mut outcomes = Vec::new();
@@ -169,29 +173,31 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let mut trace = None;
-            let (identified, after_p, after_a, iterations, termination) = match res {
+            let (identified, after, iterations, termination) = match res {
                 Ok(c) => {
                     // The compensated robot lives in the registered frame: bring the truth
                     // there through the true tracker placement (identity for `known`).
                     let map = c.frame.compose(&study.tracker.frame().inverse());
                     let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
-                    let (p, a) = validation_errors(&c.robot, &vqs, &seen);
+                    let e = validation_errors(&c.robot, &vqs, &seen);
                     if index == 0 {
                         trace = c.identified.trace.clone().filter(|t| !t.is_empty());
                     }
                     let r = c.identified;
                     (
                         r.x.iter().copied().collect(),
-                        p,
-                        a,
+                        e,
                         r.iterations,
                         r.termination,
                     )
                 }
                 Err(_) => (
                     vec![Real::NAN; study.params.len()],
-                    vec![Real::NAN; vqs.len()],
-                    vec![Real::NAN; vqs.len()],
+                    PoseErrors {
+                        mm: vec![Real::NAN; vqs.len()],
+                        deg: vec![Real::NAN; vqs.len()],
+                        attitude_deg: vec![Real::NAN; vqs.len()],
+                    },
                     0,
                     Termination::InvalidInput,
                 ),
@@ -200,12 +206,14 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 method: mi,
                 strategy: si,
                 identified,
-                before_mm: ErrorStats::of(&before_p),
-                after_mm: ErrorStats::of(&after_p),
-                before_deg: full_pose.then(|| ErrorStats::of(&before_a)),
-                after_deg: full_pose.then(|| ErrorStats::of(&after_a)),
+                before_mm: ErrorStats::of(&before.mm),
+                after_mm: ErrorStats::of(&after.mm),
+                before_deg: full_pose.then(|| ErrorStats::of(&before.deg)),
+                after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
+                before_attitude_deg: full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
+                after_attitude_deg: full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
                 trace,
-                per_point: (index == 0).then(|| (before_p.clone(), after_p.clone())),
+                per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 iterations,
                 termination,
                 seconds,

@@ -18,8 +18,10 @@ pub struct FileValidation {
     pub before_mm: ErrorStats,
     /// Position errors of the compensated robot (mm).
     pub after_mm: ErrorStats,
-    /// Orientation errors before and after (deg), for full-pose files.
+    /// Orientation errors (rotation angle) before and after (deg), for full-pose files.
     pub deg: Option<(ErrorStats, ErrorStats)>,
+    /// Qiao's attitude errors before and after (deg), for full-pose files.
+    pub attitude_deg: Option<(ErrorStats, ErrorStats)>,
 }
 
 /// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
@@ -36,15 +38,19 @@ pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileV
             pos: c.frame.apply(p),
         })
         .collect();
-    let (bp, ba) = validation_errors(nominal, &v.qs, &truth);
-    let (ap, aa) = validation_errors(&c.robot, &v.qs, &truth);
+    let b = validation_errors(nominal, &v.qs, &truth);
+    let a = validation_errors(&c.robot, &v.qs, &truth);
+    let pose = v.quats.is_some();
     FileValidation {
-        before_mm: ErrorStats::of(&bp),
-        after_mm: ErrorStats::of(&ap),
-        deg: v
-            .quats
-            .is_some()
-            .then(|| (ErrorStats::of(&ba), ErrorStats::of(&aa))),
+        before_mm: ErrorStats::of(&b.mm),
+        after_mm: ErrorStats::of(&a.mm),
+        deg: pose.then(|| (ErrorStats::of(&b.deg), ErrorStats::of(&a.deg))),
+        attitude_deg: pose.then(|| {
+            (
+                ErrorStats::of(&b.attitude_deg),
+                ErrorStats::of(&a.attitude_deg),
+            )
+        }),
     }
 }
 
@@ -107,6 +113,10 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
         if let Some((b, a)) = &v.deg {
             j["validation_before_deg"] = stats_json(b);
             j["validation_after_deg"] = stats_json(a);
+        }
+        if let Some((b, a)) = &v.attitude_deg {
+            j["validation_before_attitude_deg"] = stats_json(b);
+            j["validation_after_attitude_deg"] = stats_json(a);
         }
     }
     j
