@@ -144,7 +144,10 @@ pub fn residuals_csv(r: &IdentifyRecord) -> String {
 /// Writes `residuals.csv`, `identified.json` and `robot.toml` (the compensated robot, named
 /// `<nominal>-calibrated`) into `out`.
 pub fn write_identified(out: &Path, r: &IdentifyRecord) -> Result<()> {
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    super::atomically(out, |dir| write_into(dir, r))
+}
+
+fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
     write(&out.join("residuals.csv"), &residuals_csv(r))?;
     let text = serde_json::to_string_pretty(&identified_json(r))
         .map_err(|e| Error::Compute(e.to_string()))?;

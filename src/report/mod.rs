@@ -24,3 +24,75 @@ pub use plots::{
     PLOT_SIZE,
 };
 pub use run::{columns, entry_table, summary, trials_csv, write_all, Column};
+
+/// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
+/// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when
+/// `out` is absent or empty; otherwise each new file replaces its namesake in `out`, other
+/// files there are kept). On failure the temporary folder is removed and `out` is left as it
+/// was, so a failed run leaves nothing half-written.
+pub fn atomically(
+    out: &std::path::Path,
+    write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
+) -> crate::Result<()> {
+    use crate::Error;
+    let name = out
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    let done = write(&tmp).and_then(|()| {
+        let empty = out.read_dir().map_or(true, |mut d| d.next().is_none());
+        if out.is_dir() && empty {
+            std::fs::remove_dir(out).map_err(|e| Error::io(out, e))?;
+        }
+        if !out.exists() {
+            return std::fs::rename(&tmp, out).map_err(|e| Error::io(out, e));
+        }
+        for entry in std::fs::read_dir(&tmp).map_err(|e| Error::io(&tmp, e))? {
+            let entry = entry.map_err(|e| Error::io(&tmp, e))?;
+            let target = out.join(entry.file_name());
+            std::fs::rename(entry.path(), &target).map_err(|e| Error::io(&target, e))?;
+        }
+        std::fs::remove_dir(&tmp).map_err(|e| Error::io(&tmp, e))
+    });
+    if done.is_err() {
+        let _ = std::fs::remove_dir_all(&tmp);
+    }
+    done
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_failed_write_leaves_nothing_and_a_good_one_keeps_other_files() {
+        let root = std::env::temp_dir().join(format!("calbench-atomic-{}", std::process::id()));
+        let out = root.join("results");
+        let _ = std::fs::remove_dir_all(&root);
+        // Failure half-way: neither the folder nor a temporary one is left.
+        let r = atomically(&out, |d| {
+            std::fs::write(d.join("summary.json"), "{}").unwrap();
+            Err(crate::Error::Compute("disk full".into()))
+        });
+        assert!(r.is_err());
+        assert!(!out.exists());
+        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 0);
+        // Success into an absent folder, then into a folder holding a user's file.
+        let write = |d: &std::path::Path| {
+            std::fs::write(d.join("summary.json"), "{\"n\": 1}").map_err(|e| crate::Error::io(d, e))
+        };
+        atomically(&out, write).unwrap();
+        std::fs::write(out.join("notes.txt"), "mine").unwrap();
+        atomically(&out, write).unwrap();
+        assert!(out.join("notes.txt").exists() && out.join("summary.json").exists());
+        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 1);
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}

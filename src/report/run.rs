@@ -366,8 +366,7 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
 }
 
 /// Renders the plots; returns (file name, caption) of each PNG.
-pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
-    let out = &r.out;
+pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
     // η per parameter per method × strategy (Guo 2024 fig. 8).
@@ -520,9 +519,13 @@ pub fn write_plots(r: &RunResult) -> Result<Vec<(String, String)>> {
 
 /// Writes every output file of a run into its folder.
 pub fn write_all(r: &RunResult) -> Result<()> {
-    std::fs::create_dir_all(&r.out).map_err(|e| Error::io(&r.out, e))?;
-    write_json(&r.out.join("summary.json"), &summary(r))?;
-    write(&r.out.join("trials.csv"), &trials_csv(r))?;
+    super::atomically(&r.out, |dir| write_into(r, dir))
+}
+
+/// Writes every file of a run into the folder `dir`.
+fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
+    write_json(&dir.join("summary.json"), &summary(r))?;
+    write(&dir.join("trials.csv"), &trials_csv(r))?;
     let timing: Vec<Value> = r
         .blocks
         .iter()
@@ -534,10 +537,10 @@ pub fn write_all(r: &RunResult) -> Result<()> {
         })
         .collect();
     write_json(
-        &r.out.join("timing.json"),
+        &dir.join("timing.json"),
         &json!({"run_seconds": r.seconds, "results": timing}),
     )?;
-    let plots = write_plots(r)?;
-    write(&r.out.join("report.md"), &report_md(r, &plots))?;
+    let plots = write_plots(r, dir)?;
+    write(&dir.join("report.md"), &report_md(r, &plots))?;
     Ok(())
 }
