@@ -153,6 +153,7 @@ pub fn identifiability(
     measure: &str,
     poses: usize,
     seed: u64,
+    poses_file: Option<&Path>,
     json: bool,
 ) -> Result<()> {
     let robot = robots::load(robot)?;
@@ -160,8 +161,14 @@ pub fn identifiability(
     if poses == 0 {
         return Err(Error::setting("--poses", "must be at least 1"));
     }
-    let mut rng = calbench::rng::stream(seed, "identifiability");
-    let qs = calbench::sampling::uniform_joint_poses(&robot, poses, &mut rng);
+    let qs = match poses_file {
+        Some(p) => calbench::sim::poses::read_pose_list(p, &robot)?,
+        None => {
+            let mut rng = calbench::rng::stream(seed, "identifiability");
+            calbench::sampling::uniform_joint_poses(&robot, poses, &mut rng)
+        }
+    };
+    let poses = qs.len();
     let a = analyse(&robot, &robot.params(), &qs, measure);
     let names =
         |v: &[calbench::kinematics::Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
@@ -281,6 +288,7 @@ pub fn identify_file(
     robot: &str,
     data: &Path,
     method: &str,
+    options: &[String],
     registration: &str,
     validate: Option<&Path>,
     k: Option<Real>,
@@ -288,7 +296,7 @@ pub fn identify_file(
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
-    let mut spec = method_by_name(method)?;
+    let mut spec = method_with_options(method, options)?;
     let registration: Registration = calbench::names::parse("--registration", registration)?;
     let d = read_measurements(data, &nominal)?;
     let measure = d.measure();
@@ -486,6 +494,27 @@ fn print_table(r: &RunResult) {
     ];
     let (headers, rows) = entry_table(r, &columns);
     out_raw!("{}", markdown_table(&headers, &rows));
+}
+
+/// The method `name` with the `--set KEY=VALUE` options (values in TOML), read like a
+/// scenario's `[[methods]]` entry.
+fn method_with_options(name: &str, options: &[String]) -> Result<calbench::identify::MethodSpec> {
+    if options.is_empty() {
+        return method_by_name(name);
+    }
+    let mut t = toml::Table::new();
+    t.insert("name".into(), toml::Value::String(name.into()));
+    for o in options {
+        let (key, value) = o
+            .split_once('=')
+            .ok_or_else(|| Error::setting("--set", format!("\"{o}\" is not KEY=VALUE")))?;
+        let v: toml::Table = toml::from_str(&format!("v = {value}")).map_err(|_| {
+            Error::setting("--set", format!("{key}: \"{value}\" is not a TOML value"))
+        })?;
+        t.insert(key.trim().to_string(), v["v"].clone());
+    }
+    calbench::identify::MethodSpec::from_table(&t)
+        .map_err(|(k, msg)| Error::setting(format!("--set {k}"), msg))
 }
 
 /// Checks, before any work, that `dir` is (or can be made) a folder calbench can write in.

@@ -50,6 +50,9 @@ enum Command {
         /// Seed of the random poses.
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Analyse these poses instead (a pose list or measurement CSV, `q1..qn` columns).
+        #[arg(long)]
+        poses_file: Option<PathBuf>,
         /// Print JSON to stdout.
         #[arg(long)]
         json: bool,
@@ -114,6 +117,10 @@ enum Command {
         /// (default 100; about σ_position / σ_orientation of the instrument).
         #[arg(long)]
         k: Option<f64>,
+        /// A method option, `KEY=VALUE` in TOML (repeatable): any key of the method's
+        /// `[[methods]]` entry, e.g. `--set bound_mm=5 --set iterations=4000`.
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        options: Vec<String>,
         /// Write the result even when the data do not determine every parameter (termination
         /// `rank-deficient`); without it such a result is refused.
         #[arg(long)]
@@ -191,12 +198,14 @@ fn run(cli: Cli) -> Result<()> {
             registration,
             validate,
             k,
+            options,
             allow_rank_deficient,
             out,
         }) => Ok(commands::identify_file(
             &robot,
             &data,
             &method,
+            &options,
             &registration,
             validate.as_deref(),
             k,
@@ -223,9 +232,15 @@ fn run(cli: Cli) -> Result<()> {
             measure,
             poses,
             seed,
+            poses_file,
             json,
         }) => Ok(commands::identifiability(
-            &robot, &measure, poses, seed, json,
+            &robot,
+            &measure,
+            poses,
+            seed,
+            poses_file.as_deref(),
+            json,
         )?),
     }
 }

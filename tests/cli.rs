@@ -203,3 +203,56 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
     assert_eq!(j["termination"], "rank-deficient");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `identify --set KEY=VALUE` sets any option of the method (here the search box of BAS on
+/// real data), refusing unknown keys by name; `identifiability --poses-file` analyses the
+/// user's poses.
+#[test]
+fn identify_takes_method_options_and_identifiability_the_users_poses() {
+    let dir = tmp("set");
+    calbench(&[
+        "simulate",
+        &scenario(),
+        "--out",
+        dir.join("sim").to_str().unwrap(),
+    ]);
+    let data = dir.join("sim/measurements.csv");
+    let identify = |extra: &[&str], out: &str| {
+        let mut args = vec![
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            data.to_str().unwrap(),
+            "--method",
+            "bas",
+        ];
+        args.extend_from_slice(extra);
+        let out = dir.join(out);
+        args.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        Command::new(env!("CARGO_BIN_EXE_calbench"))
+            .args(&args)
+            .output()
+            .unwrap()
+    };
+    let o = identify(&["--set", "iterations=50", "--set", "bound_mm=4"], "ok");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let j: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("ok/identified.json")).unwrap())
+            .unwrap();
+    assert_eq!(j["iterations"], 50);
+    let o = identify(&["--set", "iterationz=50"], "bad");
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("iterationz"));
+    let o = calbench(&[
+        "identifiability",
+        "--robot",
+        "irb2600",
+        "--poses-file",
+        data.to_str().unwrap(),
+        "--json",
+    ]);
+    let a: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(a["rank"].as_u64().unwrap() > 10);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
