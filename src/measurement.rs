@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::jacobian::Measure;
-use crate::math::{Real, Vec3};
+use crate::math::{quaternion_matrix, Frame, Mat3, Real, Vec3};
 
 /// Measured poses: joint values, measured target points and, for full-pose data, measured
 /// orientations, in the instrument's frame; optionally a standard deviation per point.
@@ -54,6 +54,19 @@ impl Measurements {
         let inv: Vec<Real> = s.iter().map(|v| 1.0 / (v * v)).collect();
         let mean = inv.iter().sum::<Real>() / inv.len().max(1) as Real;
         Some(inv.iter().map(|w| w / mean).collect())
+    }
+
+    /// The measured points and orientations in another frame: `frame` applied to every point
+    /// and `frame.rot · R(q)` to every orientation (registration into the base frame).
+    pub fn in_frame(&self, frame: &Frame) -> (Vec<Vec3>, Option<Vec<Mat3>>) {
+        (
+            self.points.iter().map(|p| frame.apply(p)).collect(),
+            self.quats.as_ref().map(|qs| {
+                qs.iter()
+                    .map(|q| frame.rot * quaternion_matrix(q))
+                    .collect()
+            }),
+        )
     }
 
     /// Checks that the lengths agree and every value is finite (standard deviations positive).

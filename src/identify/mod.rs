@@ -46,7 +46,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::Result;
 use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
-use crate::math::{quaternion_matrix, Frame, Mat3, Real, Vec3};
+use crate::math::{Frame, Mat3, Real, Vec3};
 use crate::measurement::Measurements;
 use crate::rng::Rng;
 
@@ -211,6 +211,7 @@ impl<'a> CalibrationProblem<'a> {
         frame: Frame,
         k: Real,
     ) -> CalibrationProblem<'a> {
+        let (points, rotations) = data.in_frame(&frame);
         CalibrationProblem {
             nominal,
             params,
@@ -218,12 +219,8 @@ impl<'a> CalibrationProblem<'a> {
             data,
             frame,
             k,
-            points: data.points.iter().map(|p| frame.apply(p)).collect(),
-            rotations: data.quats.as_ref().map(|qs| {
-                qs.iter()
-                    .map(|q| frame.rot * quaternion_matrix(q))
-                    .collect()
-            }),
+            points,
+            rotations,
             weights: data.weights(),
         }
     }

@@ -12,7 +12,7 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::solver::{conditioning, solve, LeastSquares, Size, Solver};
+use super::solver::{conditioning, solve, start_weights, LeastSquares, Size, Solver, Work};
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::error::Error;
 use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
@@ -267,19 +267,15 @@ pub fn assess(problem: &CalibrationProblem, out: &mut Identified) -> crate::Resu
     }
     let rp = RobotProblem::of(problem)?;
     let size = rp.size();
-    let mut r = DVector::zeros(size.rows());
-    let mut j = DMatrix::zeros(size.rows(), size.params);
-    rp.evaluate(&out.x, &mut r, &mut j);
-    if let Some(w) = problem.weights.as_deref() {
-        for (i, wi) in w.iter().enumerate() {
-            j.rows_mut(i * size.rows_per_point, size.rows_per_point)
-                .scale_mut(wi.sqrt());
-        }
-    }
-    let (rank, cond) = conditioning(&j.tr_mul(&j));
+    // The solvers' own buffers and normal equations: JᵀPJ with the prior weights.
+    let mut work = Work::new(&rp);
+    let w = start_weights(&rp);
+    work.evaluate(&rp, &out.x, &w);
+    work.normal(&w);
+    let (rank, cond) = conditioning(&work.n);
     out.rank = Some(rank);
     out.condition_number = cond;
-    out.rms_residual = (r.norm_squared() / size.points as Real).sqrt();
+    out.rms_residual = (work.r.norm_squared() / size.points as Real).sqrt();
     if rank < size.params
         && matches!(
             out.termination,

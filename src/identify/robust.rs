@@ -66,12 +66,14 @@ impl<'de> Deserialize<'de> for RobustOptions {
         use serde::de::Error as _;
         let mut ridge = toml::Table::deserialize(d)?;
         let robust = crate::names::take_keys(&mut ridge, &["weight", "k0", "k1", "sigma0"]);
-        if !ridge.contains_key("max_iter") {
-            ridge.insert("max_iter".into(), toml::Value::Integer(200));
+        let limit_given = ridge.contains_key("max_iter");
+        let mut r =
+            RidgeOptions::deserialize(toml::Value::Table(ridge)).map_err(D::Error::custom)?;
+        if !limit_given {
+            r.max_iter = RobustOptions::default().ridge.max_iter;
         }
         Ok(RobustOptions {
-            ridge: RidgeOptions::deserialize(toml::Value::Table(ridge))
-                .map_err(D::Error::custom)?,
+            ridge: r,
             robust: Robustness::deserialize(toml::Value::Table(robust))
                 .map_err(D::Error::custom)?,
         })

@@ -8,7 +8,7 @@ use serde_json::{json, Value};
 use crate::calibrate::{validation_errors, Calibrated, ErrorStats, Registration};
 use crate::error::{Error, Result};
 use crate::kinematics::{robot_to_toml, Param, Robot};
-use crate::math::{quaternion_matrix, Frame, Mat3, Real};
+use crate::math::{Frame, Mat3, Real};
 use crate::measurement::Measurements;
 
 /// Validation of a compensated robot on a measurement file: position errors before
@@ -27,15 +27,13 @@ pub struct FileValidation {
 /// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
 /// registration.
 pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileValidation {
-    let truth: Vec<Frame> = v
-        .points
-        .iter()
+    let (points, rotations) = v.in_frame(&c.frame);
+    let truth: Vec<Frame> = points
+        .into_iter()
         .enumerate()
-        .map(|(i, p)| Frame {
-            rot: v.quats.as_ref().map_or(Mat3::identity(), |qs| {
-                c.frame.rot * quaternion_matrix(&qs[i])
-            }),
-            pos: c.frame.apply(p),
+        .map(|(i, pos)| Frame {
+            rot: rotations.as_ref().map_or(Mat3::identity(), |r| r[i]),
+            pos,
         })
         .collect();
     let b = validation_errors(nominal, &v.qs, &truth);
