@@ -22,7 +22,7 @@ macro_rules! out_raw {
 
 use serde_json::json;
 
-use calbench::calibrate::{calibrate, Registration};
+use calbench::calibrate::{calibrate, Registration, RoundsEnd};
 use calbench::check::{compare, read_json, Regression};
 use calbench::error::{Error, Result};
 use calbench::identifiability::analyse;
@@ -200,10 +200,6 @@ pub fn identifiability(
     Ok(())
 }
 
-fn create_dir(dir: &Path) -> Result<()> {
-    std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))
-}
-
 fn write_file(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
@@ -252,9 +248,6 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         sag_ref,
         &mut calbench::rng::stream(seed, "measure/validation"),
     )?;
-    create_dir(out)?;
-    write_measurements(&out.join("measurements.csv"), &study.nominal, &m.data)?;
-    write_measurements(&out.join("validation.csv"), &study.nominal, &v.data)?;
     let errs: serde_json::Map<String, serde_json::Value> = errors
         .iter()
         .map(|(p, e)| (p.to_string(), json!(e)))
@@ -271,7 +264,11 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         "sag_mm": m.truth.sag_mm,
         "validation_sag_mm": v.truth.sag_mm,
     });
-    write_file(&out.join("truth.json"), &to_json_text(&truth_json)?)?;
+    calbench::report::atomically(out, |dir| {
+        write_measurements(&dir.join("measurements.csv"), &study.nominal, &m.data)?;
+        write_measurements(&dir.join("validation.csv"), &study.nominal, &v.data)?;
+        write_file(&dir.join("truth.json"), &to_json_text(&truth_json)?)
+    })?;
     out!(
         "{} calibration and {} validation poses of trial {trial} written to {}",
         m.data.len(),
@@ -355,6 +352,20 @@ pub fn identify_file(
             ),
         ));
     }
+    if matches!(
+        c.rounds.termination,
+        RoundsEnd::MaxRounds | RoundsEnd::Stalled
+    ) {
+        eprintln!(
+            "warning: {} registration and identification did not settle within {} mm in {} \
+             rounds ({}; the smallest frame step was {:.3e} mm, and that round is the result)",
+            registration.as_str(),
+            calbench::calibrate::ROUND_TOLERANCE_MM,
+            c.rounds.rounds,
+            c.rounds.termination.as_str(),
+            c.rounds.last_step_mm
+        );
+    }
     let validation = val.as_ref().map(|v| validate_file(&nominal, &c, v));
     let record = IdentifyRecord {
         nominal: &nominal,
@@ -380,8 +391,17 @@ pub fn identify_file(
         }
     }
     let r = &c.identified;
+    let rounds = match c.rounds.termination {
+        RoundsEnd::Single => String::new(),
+        end => format!(
+            " ({} rounds of {} registration and identification, {})",
+            c.rounds.rounds,
+            registration.as_str(),
+            end.as_str()
+        ),
+    };
     out!(
-        "{} on {} points: {} after {} iterations; written to {}",
+        "{} on {} points: {} after {} iterations{rounds}; written to {}",
         spec.name(),
         d.len(),
         r.termination.as_str(),
@@ -439,8 +459,10 @@ pub fn poses(
     let mut opts = SelectOptions::new(count);
     opts.objective = c.objective;
     let sel = calbench::poses::select(&model, &pool, strategy, &opts, &mut g)?;
-    create_dir(out)?;
-    write_pose_list(&out.join("poses.csv"), &nominal, &sel.poses)?;
+    // Everything is computed before anything is written, and written as a whole.
+    let curve = counts
+        .map(|counts| calbench::poses::objective_curve(&model, &pool, &counts, &opts, &mut g))
+        .transpose()?;
     let mut scores = serde_json::to_value(sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
     scores["strategy"] = json!(strategy.as_str());
     scores["count"] = json!(sel.poses.len());
@@ -452,12 +474,26 @@ pub fn poses(
             "gcn": s.table.iter().map(|(k, v)| json!({"block": k, "gcn": v})).collect::<Vec<_>>(),
         });
     }
-    write_file(&out.join("scores.json"), &to_json_text(&scores)?)?;
     let mut trace = String::from("iteration,objective\n");
     for (i, f) in sel.trace.iter().enumerate() {
         trace += &format!("{i},{f}\n");
     }
-    write_file(&out.join("trace.csv"), &trace)?;
+    let curve_csv = curve.as_ref().map(|pts| {
+        let mut text = String::from("count,objective\n");
+        for (n, f) in pts {
+            text += &format!("{n},{f}\n");
+        }
+        text
+    });
+    calbench::report::atomically(out, |dir| {
+        write_pose_list(&dir.join("poses.csv"), &nominal, &sel.poses)?;
+        write_file(&dir.join("scores.json"), &to_json_text(&scores)?)?;
+        write_file(&dir.join("trace.csv"), &trace)?;
+        match &curve_csv {
+            Some(text) => write_file(&dir.join("curve.csv"), text),
+            None => Ok(()),
+        }
+    })?;
     out!(
         "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",
         sel.poses.len(),
@@ -468,15 +504,11 @@ pub fn poses(
         sel.scores.gcn,
         sel.scores.condition_number
     );
-    if let Some(counts) = counts {
-        let pts = calbench::poses::objective_curve(&model, &pool, &counts, &opts, &mut g)?;
-        let mut text = String::from("count,objective\n");
+    if let Some(pts) = &curve {
         out!("objective against pose count (Guo 2024 fig. 7):");
-        for (n, f) in &pts {
+        for (n, f) in pts {
             out!("  {n:>5} {f:.6}");
-            text += &format!("{n},{f}\n");
         }
-        write_file(&out.join("curve.csv"), &text)?;
     }
     Ok(())
 }

@@ -27,17 +27,20 @@ pub struct FileValidation {
 /// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
 /// registration.
 pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileValidation {
-    let (points, rotations) = v.in_frame(&c.frame);
-    let truth: Vec<Frame> = points
-        .into_iter()
-        .enumerate()
-        .map(|(i, pos)| Frame {
-            rot: rotations.as_ref().map_or(Mat3::identity(), |r| r[i]),
-            pos,
-        })
-        .collect();
-    let b = validation_errors(nominal, &v.qs, &truth);
-    let a = validation_errors(&c.robot, &v.qs, &truth);
+    let truth = |frame: &Frame| -> Vec<Frame> {
+        let (points, rotations) = v.in_frame(frame);
+        points
+            .into_iter()
+            .enumerate()
+            .map(|(i, pos)| Frame {
+                rot: rotations.as_ref().map_or(Mat3::identity(), |r| r[i]),
+                pos,
+            })
+            .collect()
+    };
+    // "Before" in the nominal robot's own registration, the same for every method.
+    let b = validation_errors(nominal, &v.qs, &truth(&c.nominal_frame));
+    let a = validation_errors(&c.robot, &v.qs, &truth(&c.frame));
     let pose = v.quats.is_some();
     FileValidation {
         before_mm: ErrorStats::of(&b.mm),
@@ -95,6 +98,9 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
         "method": r.method,
         "registration": r.registration.as_str(),
         "registration_frame": {"xyz_mm": xyz, "rpy_rad": rpy},
+        "registration_rounds": r.calibrated.rounds.rounds,
+        "registration_termination": r.calibrated.rounds.termination.as_str(),
+        "registration_last_step_mm": r.calibrated.rounds.last_step_mm,
         "parameters": names,
         "errors": errors,
         "covariance": cov,
@@ -120,19 +126,19 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
     j
 }
 
-/// `residuals.csv`: per point, the residual before (nominal) and after (compensated) in the
-/// registered frame, and the final weight.
+/// `residuals.csv`: per point, the residual before (the nominal robot in its own
+/// registration) and after (the compensated robot in the final registration), and the final
+/// weight.
 pub fn residuals_csv(r: &IdentifyRecord) -> String {
     let c = r.calibrated;
     let (cn, cc) = (r.nominal.chain(), c.robot.chain());
     let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
     for (i, (q, p)) in r.data.qs.iter().zip(&r.data.points).enumerate() {
-        let pb = c.frame.apply(p);
         let w = c.identified.weights.get(i).copied().unwrap_or(1.0);
         csv += &format!(
             "{i},{},{},{}\n",
-            (pb - cn.fk(q).pos).norm(),
-            (pb - cc.fk(q).pos).norm(),
+            (c.nominal_frame.apply(p) - cn.fk(q).pos).norm(),
+            (c.frame.apply(p) - cc.fk(q).pos).norm(),
             w
         );
     }
