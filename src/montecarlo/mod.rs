@@ -1,7 +1,7 @@
 //! The Monte-Carlo harness (FORMATS.md `run`): a scenario's trials in parallel with rayon,
 //! each from its own seed, aggregated per method and pose strategy. It returns values; the
 //! files (`summary.json`, `trials.csv`, `report.md`, plots) are written by
-//! [`crate::report::write_all`].
+//! [`crate::report::run_study`].
 //!
 //! - [`study`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
 //!   sets);
