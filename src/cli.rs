@@ -34,7 +34,7 @@ use calbench::montecarlo::{self, study, trial, RunOptions, RunResult, Study};
 use calbench::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
 use calbench::report::identified::{validate_file, write_identified, IdentifyRecord};
 use calbench::report::markdown::table as markdown_table;
-use calbench::report::{entry_table, write_all};
+use calbench::report::{entry_table, run_study};
 use calbench::robots::{self, BUILTINS};
 use calbench::scenario::Scenario;
 use calbench::sim::csv::{read_measurements, write_measurements, write_pose_list};
@@ -525,6 +525,7 @@ fn print_table(r: &RunResult) {
         FAILURES,
     ];
     let (headers, rows) = entry_table(r, &columns);
+    let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
     out_raw!("{}", markdown_table(&headers, &rows));
 }
 
@@ -571,7 +572,9 @@ pub fn run(
     seed: Option<u64>,
     threads: Option<usize>,
     out: Option<PathBuf>,
+    shard: Option<&str>,
 ) -> Result<()> {
+    let shard = shard.map(montecarlo::Shard::parse).transpose()?;
     let mut sc = match scenario {
         Some(p) => Scenario::load(p)?,
         None => Scenario::default_study()?,
@@ -587,13 +590,17 @@ pub fn run(
         return Err(Error::setting("--threads", "must be at least 1"));
     }
     eprintln!(
-        "running {}: {} trials{}",
+        "running {}: {} trials{}{}",
         sc.name,
         sc.trials,
         sc.sweep.as_ref().map_or(String::new(), |s| format!(
-            " × {} values of {}",
-            s.values.len(),
-            s.key
+            " × {} sweep points of {}",
+            s.points().len(),
+            s.keys().join(", ")
+        )),
+        shard.map_or(String::new(), |s| format!(
+            ", shard {}/{}",
+            s.index, s.count
         ))
     );
     let out = out.unwrap_or_else(|| Path::new("results").join(&sc.name));
@@ -602,15 +609,40 @@ pub fn run(
         threads,
         out: Some(out),
         progress: true,
+        shard,
     };
-    let r = montecarlo::run(sc, &opts)?;
-    write_all(&r)?;
+    let r = run_study(sc, &opts)?;
+    if let Some(s) = shard {
+        out!(
+            "shard {}/{} of {} in {:.1} s: {}; combine all {} shards with `calbench merge`",
+            s.index,
+            s.count,
+            r.scenario.name,
+            r.seconds,
+            r.out.display(),
+            s.count
+        );
+        return Ok(());
+    }
     print_table(&r);
     out!(
         "\n{} trials in {:.1} s; report: {}",
         r.scenario.trials * r.blocks.len(),
         r.seconds,
         r.out.join("report.md").display()
+    );
+    Ok(())
+}
+
+/// `calbench merge DIR… --out DIR`.
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
+    writable_folder(out)?;
+    let r = calbench::report::shard::merge(dirs, out)?;
+    print_table(&r);
+    out!(
+        "\nmerged {} shards; report: {}",
+        dirs.len(),
+        out.join("report.md").display()
     );
     Ok(())
 }

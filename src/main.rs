@@ -73,6 +73,20 @@ enum Command {
         /// Output folder.
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Run only share I of N (0 ≤ I < N) of the trials and sweep points, writing a
+        /// partial result for `calbench merge`.
+        #[arg(long, value_name = "I/N")]
+        shard: Option<String>,
+    },
+    /// Merge the partial results of `run --shard I/N` (all N of them) into the output of
+    /// the whole run.
+    Merge {
+        /// The shard folders.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
     },
     /// Regression guard: compare a summary.json with a baseline.
     Check {
@@ -158,14 +172,23 @@ fn main() {
 
 fn run(cli: Cli) -> Result<()> {
     match cli.command {
-        None => Ok(commands::run(None, None, None, None, None)?),
+        None => Ok(commands::run(None, None, None, None, None, None)?),
         Some(Command::Run {
             scenario,
             trials,
             seed,
             threads,
             out,
-        }) => Ok(commands::run(Some(&scenario), trials, seed, threads, out)?),
+            shard,
+        }) => Ok(commands::run(
+            Some(&scenario),
+            trials,
+            seed,
+            threads,
+            out,
+            shard.as_deref(),
+        )?),
+        Some(Command::Merge { dirs, out }) => Ok(commands::merge(&dirs, &out)?),
         Some(Command::Check {
             summary,
             baseline,

@@ -49,7 +49,17 @@ fn run_examples(doc: &Path) -> usize {
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
                 .unwrap();
-        if b.contains("[sweep]") {
+        if b.contains("[[sweep]]") {
+            let keys = summary["sweep_keys"]
+                .as_array()
+                .expect("no sweep_keys")
+                .len();
+            assert!(summary["results"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .all(|e| e["sweep"].as_object().is_some_and(|m| m.len() == keys)));
+        } else if b.contains("[sweep]") {
             assert!(
                 summary["sweep_key"].is_string(),
                 "example {i}: no sweep_key"

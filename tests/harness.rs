@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use calbench::check::{compare, read_json};
-use calbench::montecarlo::{run, RunOptions};
+use calbench::montecarlo::RunOptions;
 use calbench::scenario::Scenario;
 
 fn tmp(name: &str) -> PathBuf {
@@ -48,16 +48,16 @@ fn tiny() -> Scenario {
 }
 
 fn run_to(s: Scenario, out: &Path, threads: usize) {
-    let r = run(
+    calbench::report::run_study(
         s,
         &RunOptions {
             threads: Some(threads),
             out: Some(out.to_path_buf()),
             progress: false,
+            shard: None,
         },
     )
     .unwrap();
-    calbench::report::write_all(&r).unwrap();
 }
 
 #[test]

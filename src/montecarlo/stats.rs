@@ -30,6 +30,9 @@ pub struct Entry {
     /// The swept value, for sweeps.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sweep_value: Option<serde_json::Value>,
+    /// Every swept key and its value at this entry, for sweeps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<BTreeMap<String, serde_json::Value>>,
     /// Mean over parameters of the mean η (%).
     pub eta_mean_pct: Real,
     /// Mean over parameters of the median η (%): with random errors a draw near zero makes
@@ -73,6 +76,9 @@ pub struct Entry {
     /// whatever the thread count) and with its value in `timing.json` and `report.md`.
     #[serde(serialize_with = "as_null")]
     pub seconds_per_identification: Real,
+    /// Spreads over trials (plots only).
+    #[serde(skip)]
+    pub spread: Spread,
 }
 
 fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
@@ -104,123 +110,238 @@ pub fn eta(truth: Real, identified: Real) -> Option<Real> {
     (truth != 0.0).then(|| (1.0 - (truth - identified).abs() / truth.abs()) * 100.0)
 }
 
-fn average_stats(v: &[ErrorStats]) -> ErrorStats {
-    let f = |g: fn(&ErrorStats) -> Real| mean(&v.iter().map(g).collect::<Vec<_>>());
-    ErrorStats {
-        mean: f(|s| s.mean),
-        rms: f(|s| s.rms),
-        max: f(|s| s.max),
-        std: f(|s| s.std),
+/// The sum of `v` in order (as `Iterator::sum`, from −0), streamed one value at a time.
+#[derive(Clone, Copy, Debug)]
+struct Sum {
+    total: Real,
+    n: usize,
+}
+
+impl Default for Sum {
+    fn default() -> Self {
+        Sum { total: -0.0, n: 0 }
     }
 }
 
-/// Aggregates the outcomes of `(strategy, method)` over `trials`.
-pub fn aggregate(
-    trials: &[TrialResult],
-    strategy: usize,
-    method: usize,
-    names: &[String],
-    labels: (&str, &str),
-    sweep_value: Option<serde_json::Value>,
-) -> Entry {
-    let outs: Vec<(&TrialResult, &Outcome)> = trials
-        .iter()
-        .filter_map(|t| {
-            t.outcomes
-                .iter()
-                .find(|o| o.strategy == strategy && o.method == method)
-                .map(|o| (t, o))
-        })
-        .collect();
-    let usable = |o: &Outcome| {
-        !matches!(
-            o.termination,
-            Termination::Diverged
-                | Termination::Singular
-                | Termination::RankDeficient
-                | Termination::InvalidInput
-        ) && o.identified.iter().all(|x| x.is_finite())
-            && o.after_mm.rms.is_finite()
-    };
-    let ok: Vec<_> = outs.iter().filter(|(_, o)| usable(o)).collect();
-    let failures = outs.len() - ok.len();
+impl Sum {
+    fn add(&mut self, x: Real) {
+        self.total += x;
+        self.n += 1;
+    }
+    fn mean(&self) -> Real {
+        if self.n == 0 {
+            Real::NAN
+        } else {
+            self.total / self.n as Real
+        }
+    }
+}
 
-    let mut eta_map = BTreeMap::new();
-    let mut rmse = BTreeMap::new();
-    let mut emp_trace = 0.0;
-    for (k, name) in names.iter().enumerate() {
-        // Base parameters absorb the registration's error: nuisance, not compared.
-        if name.starts_with("base.") {
-            continue;
+/// Running sums of the four statistics of [`ErrorStats`] over trials.
+#[derive(Clone, Copy, Debug, Default)]
+struct StatsSum([Sum; 4]);
+
+impl StatsSum {
+    fn add(&mut self, s: &ErrorStats) {
+        for (a, x) in self.0.iter_mut().zip([s.mean, s.rms, s.max, s.std]) {
+            a.add(x);
         }
-        let errs: Vec<Real> = ok
-            .iter()
-            .map(|(t, o)| o.identified[k] - t.truth[k])
-            .collect();
-        rmse.insert(
-            name.clone(),
-            (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt(),
-        );
-        emp_trace += std(&errs).powi(2);
-        let etas: Vec<Real> = ok
-            .iter()
-            .filter_map(|(t, o)| eta(t.truth[k], o.identified[k]))
-            .collect();
-        if !etas.is_empty() {
-            eta_map.insert(
+    }
+    fn average(&self) -> ErrorStats {
+        ErrorStats {
+            mean: self.0[0].mean(),
+            rms: self.0[1].mean(),
+            max: self.0[2].mean(),
+            std: self.0[3].mean(),
+        }
+    }
+}
+
+/// What one (strategy, method) pair has gathered so far: running sums, and per parameter the
+/// compact per-trial numbers an exact median and two-pass deviation need (its error and its
+/// η, 16 bytes per trial and parameter).
+#[derive(Clone, Debug, Default)]
+struct Cell {
+    outs: usize,
+    seconds: Sum,
+    seconds_sq: Sum,
+    terminations: BTreeMap<String, usize>,
+    ok: usize,
+    errs: Vec<Vec<Real>>,
+    etas: Vec<Vec<Real>>,
+    crb: Sum,
+    before: StatsSum,
+    after: StatsSum,
+    after_rms_sq: Sum,
+    deg: [Option<StatsSum>; 4],
+    iterations: Sum,
+}
+
+/// Spreads over trials of the headline metrics (for the sweep plots; not in `summary.json`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spread {
+    /// Standard deviation over trials of the validation RMS after compensation (mm).
+    pub after_rms: Real,
+    /// Mean over parameters of the standard deviation of η (%).
+    pub eta: Real,
+    /// Standard deviation of the wall time of one identification (s).
+    pub seconds: Real,
+}
+
+/// Streaming aggregation of a block's trials into one [`Entry`] per strategy × method
+/// (SPEC §6): trials are pushed in trial order and dropped; what stays is running sums and
+/// the per-parameter numbers of [`Cell`]. The sums run in trial order, so the entries are the
+/// same bytes whichever way the trials were split among threads or shards.
+#[derive(Clone, Debug)]
+pub struct Accumulator {
+    names: Vec<String>,
+    methods: usize,
+    cells: Vec<Cell>,
+}
+
+fn usable(o: &Outcome) -> bool {
+    !matches!(
+        o.termination,
+        Termination::Diverged
+            | Termination::Singular
+            | Termination::RankDeficient
+            | Termination::InvalidInput
+    ) && o.identified.iter().all(|x| x.is_finite())
+        && o.after_mm.rms.is_finite()
+}
+
+impl Accumulator {
+    /// An empty accumulator for `strategies` × `methods` outcomes over the parameters `names`.
+    pub fn new(names: &[String], strategies: usize, methods: usize) -> Accumulator {
+        let cell = Cell {
+            errs: vec![Vec::new(); names.len()],
+            etas: vec![Vec::new(); names.len()],
+            ..Cell::default()
+        };
+        Accumulator {
+            names: names.to_vec(),
+            methods,
+            cells: vec![cell; strategies * methods],
+        }
+    }
+
+    /// Adds one trial (trials must come in trial order).
+    pub fn push(&mut self, t: &TrialResult) {
+        for o in &t.outcomes {
+            let c = &mut self.cells[o.strategy * self.methods + o.method];
+            c.outs += 1;
+            c.seconds.add(o.seconds);
+            c.seconds_sq.add(o.seconds * o.seconds);
+            *c.terminations
+                .entry(o.termination.as_str().to_string())
+                .or_insert(0) += 1;
+            if !usable(o) {
+                continue;
+            }
+            c.ok += 1;
+            for (k, name) in self.names.iter().enumerate() {
+                // Base parameters absorb the registration's error: nuisance, not compared.
+                if name.starts_with("base.") {
+                    continue;
+                }
+                c.errs[k].push(o.identified[k] - t.truth[k]);
+                if let Some(e) = eta(t.truth[k], o.identified[k]) {
+                    c.etas[k].push(e);
+                }
+            }
+            if let Some(x) = t.crb_trace[o.strategy] {
+                c.crb.add(x);
+            }
+            c.before.add(&o.before_mm);
+            c.after.add(&o.after_mm);
+            c.after_rms_sq.add(o.after_mm.rms * o.after_mm.rms);
+            let degs = [
+                o.before_deg,
+                o.after_deg,
+                o.before_attitude_deg,
+                o.after_attitude_deg,
+            ];
+            for (acc, d) in c.deg.iter_mut().zip(degs) {
+                if let Some(d) = d {
+                    acc.get_or_insert_with(StatsSum::default).add(&d);
+                }
+            }
+            c.iterations.add(o.iterations as Real);
+        }
+    }
+
+    /// The entry of `(strategy, method)`, labelled `(method, poses)`.
+    pub fn entry(
+        &self,
+        strategy: usize,
+        method: usize,
+        labels: (&str, &str),
+        sweep_value: Option<serde_json::Value>,
+        sweep: Option<BTreeMap<String, serde_json::Value>>,
+    ) -> Entry {
+        let c = &self.cells[strategy * self.methods + method];
+        let failures = c.outs - c.ok;
+        let mut eta_map = BTreeMap::new();
+        let mut rmse = BTreeMap::new();
+        let mut emp_trace = 0.0;
+        for (k, name) in self.names.iter().enumerate() {
+            if name.starts_with("base.") {
+                continue;
+            }
+            let errs = &c.errs[k];
+            rmse.insert(
                 name.clone(),
-                EtaStats {
-                    mean: mean(&etas),
-                    median: median(&etas),
-                    std: std(&etas),
-                },
+                (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt(),
             );
+            emp_trace += std(errs).powi(2);
+            let etas = &c.etas[k];
+            if !etas.is_empty() {
+                eta_map.insert(
+                    name.clone(),
+                    EtaStats {
+                        mean: mean(etas),
+                        median: median(etas),
+                        std: std(etas),
+                    },
+                );
+            }
         }
-    }
-    let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
-    let eta_median_pct = mean(&eta_map.values().map(|e| e.median).collect::<Vec<_>>());
-    let crbs: Vec<Real> = ok
-        .iter()
-        .filter_map(|(t, _)| t.crb_trace[strategy])
-        .collect();
-    let crb_ratio = (ok.len() >= 2 && crbs.len() == ok.len())
-        .then(|| emp_trace * ok.len() as Real / (ok.len() - 1) as Real / mean(&crbs));
-    let before = average_stats(&ok.iter().map(|(_, o)| o.before_mm).collect::<Vec<_>>());
-    let after = average_stats(&ok.iter().map(|(_, o)| o.after_mm).collect::<Vec<_>>());
-    let deg = |f: fn(&Outcome) -> Option<ErrorStats>| {
-        let v: Vec<ErrorStats> = ok.iter().filter_map(|(_, o)| f(o)).collect();
-        (!v.is_empty()).then(|| average_stats(&v))
-    };
-    let mut terminations = BTreeMap::new();
-    for (_, o) in &outs {
-        *terminations
-            .entry(o.termination.as_str().to_string())
-            .or_insert(0) += 1;
-    }
-    Entry {
-        method: labels.0.to_string(),
-        poses: labels.1.to_string(),
-        sweep_value,
-        eta_mean_pct,
-        eta_median_pct,
-        eta: eta_map,
-        validation_before_mm: before,
-        validation_after_mm: after,
-        validation_before_deg: deg(|o| o.before_deg),
-        validation_after_deg: deg(|o| o.after_deg),
-        validation_before_attitude_deg: deg(|o| o.before_attitude_deg),
-        validation_after_attitude_deg: deg(|o| o.after_attitude_deg),
-        improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
-        param_rmse: rmse,
-        crb_ratio,
-        failures,
-        terminations,
-        iterations_mean: mean(
-            &ok.iter()
-                .map(|(_, o)| o.iterations as Real)
-                .collect::<Vec<_>>(),
-        ),
-        seconds_per_identification: mean(&outs.iter().map(|(_, o)| o.seconds).collect::<Vec<_>>()),
+        let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
+        let eta_median_pct = mean(&eta_map.values().map(|e| e.median).collect::<Vec<_>>());
+        let ok = c.ok;
+        let crb_ratio = (ok >= 2 && c.crb.n == ok)
+            .then(|| emp_trace * ok as Real / (ok - 1) as Real / c.crb.mean());
+        let before = c.before.average();
+        let after = c.after.average();
+        let deg = |i: usize| c.deg[i].as_ref().map(StatsSum::average);
+        let spread_of = |s: &Sum, sq: &Sum| (sq.mean() - s.mean().powi(2)).max(0.0).sqrt();
+        Entry {
+            method: labels.0.to_string(),
+            poses: labels.1.to_string(),
+            sweep_value,
+            sweep,
+            eta_mean_pct,
+            eta_median_pct,
+            eta: eta_map.clone(),
+            validation_before_mm: before,
+            validation_after_mm: after,
+            validation_before_deg: deg(0),
+            validation_after_deg: deg(1),
+            validation_before_attitude_deg: deg(2),
+            validation_after_attitude_deg: deg(3),
+            improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
+            param_rmse: rmse,
+            crb_ratio,
+            failures,
+            terminations: c.terminations.clone(),
+            iterations_mean: c.iterations.mean(),
+            seconds_per_identification: c.seconds.mean(),
+            spread: Spread {
+                after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),
+                eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),
+                seconds: spread_of(&c.seconds, &c.seconds_sq),
+            },
+        }
     }
 }
 

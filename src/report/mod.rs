@@ -20,10 +20,11 @@ pub mod run;
 
 pub use markdown::{fmt_num, table};
 pub use plots::{
-    before_after, box_plot, box_stats, grouped_bars, sweep, traces, BoxStats, SweepSeries,
+    before_after, box_plot, box_stats, grouped_bars, heatmap, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,
 };
-pub use run::{columns, entry_table, summary, trials_csv, write_all, Column};
+pub use run::{columns, entry_table, run_study, summary, write_into, Column, TrialsCsv};
+pub mod shard;
 
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
 /// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when

@@ -792,3 +792,102 @@ pub fn sweep(
         },
     )
 }
+
+// ---------------------------------------------------------------------------------------------
+// Heat map
+
+struct HeatMap<'d> {
+    title: &'d str,
+    x_label: &'d str,
+    y_label: &'d str,
+    x_names: &'d [String],
+    y_names: &'d [String],
+    values: &'d [Vec<Real>],
+}
+
+/// The colour of `t` in 0..1 on a light-to-dark blue scale (NaN: grey).
+fn heat_colour(t: Real) -> RGBColor {
+    if !t.is_finite() {
+        return RGBColor(200, 200, 200);
+    }
+    let t = t.clamp(0.0, 1.0);
+    let mix = |a: u8, b: u8| (Real::from(a) + (Real::from(b) - Real::from(a)) * t).round() as u8;
+    RGBColor(mix(247, 8), mix(251, 48), mix(255, 107))
+}
+
+impl Figure for HeatMap<'_> {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
+        let (nx, ny) = (self.x_names.len(), self.y_names.len());
+        let mut chart = chart_builder(root, self.title, 50)
+            .build_cartesian_2d(Categories { n: nx }, Categories { n: ny })?;
+        let x_fmt = |v: &Real| category_label(self.x_names, *v);
+        let y_fmt = |v: &Real| category_label(self.y_names, *v);
+        chart
+            .configure_mesh()
+            .disable_mesh()
+            .x_label_formatter(&x_fmt)
+            .y_label_formatter(&y_fmt)
+            .x_labels(nx.max(1))
+            .y_labels(ny.max(1))
+            .x_desc(self.x_label)
+            .y_desc(self.y_label)
+            .axis_desc_style((FAMILY, 17))
+            .label_style((FAMILY, 14))
+            .draw()?;
+        let all: Vec<Real> = self.values.iter().flatten().copied().collect();
+        let r = span(finite(&all), false);
+        let scale = |v: Real| (v - r.start) / (r.end - r.start);
+        for (i, col) in self.values.iter().enumerate().take(nx) {
+            for (j, &v) in col.iter().enumerate().take(ny) {
+                let (x, y) = (i as Real, j as Real);
+                let t = scale(v);
+                chart.draw_series(std::iter::once(Rectangle::new(
+                    [(x - 0.5, y - 0.5), (x + 0.5, y + 0.5)],
+                    heat_colour(t).filled(),
+                )))?;
+                let ink = if t.is_finite() && t > 0.55 {
+                    WHITE
+                } else {
+                    BLACK
+                };
+                let style = TextStyle::from((FAMILY, 16).into_font())
+                    .color(&ink)
+                    .pos(Pos::new(HPos::Center, VPos::Center));
+                chart.draw_series(std::iter::once(Text::new(
+                    if v.is_finite() {
+                        fmt_num(v, 4)
+                    } else {
+                        "–".into()
+                    },
+                    (x, y),
+                    style,
+                )))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A metric over a two-axis grid, one cell per pair of values, coloured light to dark from
+/// the smallest to the largest finite value and labelled with its value (the grid sweeps'
+/// plot). `values[i][j]` belongs to `x_names[i]` and `y_names[j]`; a non-finite value is a
+/// grey cell marked "–". Writes `<stem>.png` and `<stem>.svg`.
+pub fn heatmap(
+    stem: &Path,
+    title: &str,
+    (x_label, x_names): (&str, &[String]),
+    (y_label, y_names): (&str, &[String]),
+    values: &[Vec<Real>],
+) -> Result<()> {
+    render(
+        stem,
+        &HeatMap {
+            title,
+            x_label,
+            y_label,
+            x_names,
+            y_names,
+            values,
+        },
+    )
+}

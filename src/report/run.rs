@@ -2,7 +2,8 @@
 //! `run`). Writers only read results that are already computed.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
 
@@ -11,7 +12,10 @@ use super::plots;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::montecarlo::stats::{eta, Entry};
-use crate::montecarlo::{toml_to_json, Block, RunResult};
+use crate::montecarlo::{
+    toml_to_json, Block, BlockInfo, RunOptions, RunResult, TrialResult, TrialSink,
+};
+use crate::scenario::{Scenario, Sweep};
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
@@ -26,21 +30,14 @@ fn write_json(path: &Path, v: &Value) -> Result<()> {
 /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
 /// `method / poses`.
 fn fitness_traces(b: &Block) -> Vec<(String, Vec<Real>)> {
-    let sc = &b.study.scenario;
-    b.trials
-        .first()
+    b.trial0
+        .as_ref()
         .map(|t| {
-            t.outcomes
+            t.traces
                 .iter()
-                .filter_map(|o| {
-                    o.trace.as_ref().map(|tr| {
-                        let label = format!(
-                            "{} / {}",
-                            sc.methods[o.method].label,
-                            sc.calibration.strategies[o.strategy].name()
-                        );
-                        (label, tr.clone())
-                    })
+                .map(|(si, mi, tr)| {
+                    let label = format!("{} / {}", b.info.methods[*mi], b.info.strategies[*si]);
+                    (label, tr.clone())
                 })
                 .collect()
         })
@@ -77,13 +74,13 @@ fn eta_by_parameter(b: &Block) -> (Vec<String>, Vec<(String, Vec<Real>)>) {
 /// `summary.json` as a JSON value.
 pub fn summary(r: &RunResult) -> Value {
     let sc = &r.scenario;
-    let first = &r.blocks[0].study;
+    let first = &r.blocks[0].info;
     let mut optimised = serde_json::Map::new();
-    for (si, s) in first.scenario.calibration.strategies.iter().enumerate() {
+    for (si, s) in first.strategies.iter().enumerate() {
         if let Some(set) = &first.fixed[si] {
             optimised.insert(
-                s.name().to_string(),
-                json!({"poses": set.poses.len(), "iterations": set.trace.len(),
+                s.clone(),
+                json!({"poses": set.poses, "iterations": set.trace.len(),
                        "final_objective": set.trace.last(), "scores": set.scores}),
             );
         }
@@ -105,21 +102,25 @@ pub fn summary(r: &RunResult) -> Value {
     let mut s = json!({
         "scenario": sc.name,
         "description": sc.description,
-        "robot": first.nominal.name,
+        "robot": first.robot,
         "trials": sc.trials,
         "seed": sc.seed,
-        "measure": match first.measure { crate::jacobian::Measure::Position => "position", crate::jacobian::Measure::Pose => "pose" },
+        "measure": if first.full_pose { "pose" } else { "position" },
         "registration": sc.registration.as_str(),
-        "parameters": first.params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
-        "error_parameters": first.error_params.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
+        "parameters": first.params,
+        "error_parameters": first.error_params,
         "fixed_pose_sets": optimised,
         "fitness_trace_trial0": convergence,
         "timing": "timing.json",
         "results": results,
     });
     if let Some(sw) = &sc.sweep {
-        s["sweep_key"] = json!(sw.key);
-        s["sweep_values"] = Value::Array(sw.values.iter().map(toml_to_json).collect());
+        if let [axis] = sw.axes.as_slice() {
+            s["sweep_key"] = json!(axis.key);
+            s["sweep_values"] = Value::Array(axis.values.iter().map(toml_to_json).collect());
+        }
+        s["sweep_keys"] = json!(sw.keys());
+        s["sweep_zip"] = json!(sw.zip);
     }
     s
 }
@@ -182,19 +183,19 @@ pub mod columns {
 
 /// The headers and rows of a table with one row per results entry: the swept value (for
 /// sweeps), the method, the poses, then `columns`.
-pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<&'static str>, Vec<Vec<String>>) {
-    let mut headers = Vec::new();
-    if r.scenario.sweep.is_some() {
-        headers.push("swept value");
+pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut headers: Vec<String> = Vec::new();
+    if let Some(sw) = &r.scenario.sweep {
+        headers.extend(sw.axes.iter().map(|a| a.key.clone()));
     }
-    headers.extend(["method", "poses"]);
-    headers.extend(columns.iter().map(|c| c.0));
+    headers.extend(["method", "poses"].map(String::from));
+    headers.extend(columns.iter().map(|c| c.0.to_string()));
     let mut rows = Vec::new();
     for b in &r.blocks {
         for e in &b.entries {
             let mut row = Vec::new();
-            if let Some(v) = &b.sweep_value {
-                row.push(v.to_string());
+            if let Some(p) = &b.info.point {
+                row.extend(p.iter().map(|v| v.to_string()));
             }
             row.extend([e.method.clone(), e.poses.clone()]);
             row.extend(columns.iter().map(|c| (c.1)(e)));
@@ -204,116 +205,150 @@ pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<&'static str>, Vec
     (headers, rows)
 }
 
-/// `trials.csv`: one row per trial × strategy × method (× swept value).
-pub fn trials_csv(r: &RunResult) -> String {
-    let first = &r.blocks[0].study;
-    let names: Vec<String> = first.params.iter().map(|p| p.to_string()).collect();
-    let pose = first.measure == crate::jacobian::Measure::Pose;
-    let mut head = vec!["trial".to_string()];
-    if r.scenario.sweep.is_some() {
-        head.push("sweep_value".into());
+/// `trials.csv`, written as trials finish: one row per trial × strategy × method (× sweep
+/// point), in trial order. The header comes from the first block; one axis adds the column
+/// `sweep_value`, a grid one column per swept key.
+pub struct TrialsCsv {
+    path: PathBuf,
+    out: std::io::BufWriter<std::fs::File>,
+    sweep_columns: Vec<String>,
+    header: bool,
+}
+
+impl TrialsCsv {
+    /// Creates `path` for the trials of a run of a scenario with `sweep`.
+    pub fn create(path: &Path, sweep: Option<&Sweep>) -> Result<TrialsCsv> {
+        let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+        let sweep_columns = match sweep {
+            None => Vec::new(),
+            Some(sw) if sw.axes.len() == 1 => vec!["sweep_value".into()],
+            Some(sw) => sw.axes.iter().map(|a| a.key.clone()).collect(),
+        };
+        Ok(TrialsCsv {
+            path: path.to_path_buf(),
+            out: std::io::BufWriter::new(file),
+            sweep_columns,
+            header: false,
+        })
     }
-    head.extend(
-        [
-            "method",
-            "poses",
-            "eta_mean_pct",
-            "before_mean_mm",
-            "before_rms_mm",
-            "before_max_mm",
-            "after_mean_mm",
-            "after_rms_mm",
-            "after_max_mm",
-        ]
-        .map(String::from),
-    );
-    if pose {
+
+    /// Flushes the file.
+    pub fn finish(mut self) -> Result<()> {
+        self.out.flush().map_err(|e| Error::io(&self.path, e))
+    }
+
+    fn header(&self, info: &BlockInfo) -> String {
+        let mut head = vec!["trial".to_string()];
+        head.extend(self.sweep_columns.iter().cloned());
         head.extend(
             [
-                "before_mean_deg",
-                "before_rms_deg",
-                "after_mean_deg",
-                "after_rms_deg",
+                "method",
+                "poses",
+                "eta_mean_pct",
+                "before_mean_mm",
+                "before_rms_mm",
+                "before_max_mm",
+                "after_mean_mm",
+                "after_rms_mm",
+                "after_max_mm",
             ]
             .map(String::from),
         );
+        if info.full_pose {
+            head.extend(
+                [
+                    "before_mean_deg",
+                    "before_rms_deg",
+                    "after_mean_deg",
+                    "after_rms_deg",
+                ]
+                .map(String::from),
+            );
+        }
+        head.extend(["iterations", "termination"].map(String::from));
+        head.extend(info.params.iter().map(|n| format!("true_{n}")));
+        head.extend(info.params.iter().map(|n| format!("identified_{n}")));
+        head.join(",") + "\n"
     }
-    head.extend(["iterations", "termination"].map(String::from));
-    head.extend(names.iter().map(|n| format!("true_{n}")));
-    head.extend(names.iter().map(|n| format!("identified_{n}")));
-    let mut out = head.join(",") + "\n";
-    for b in &r.blocks {
-        let sc = &b.study.scenario;
-        for t in &b.trials {
-            for o in &t.outcomes {
-                let mut row = vec![t.index.to_string()];
-                if let Some(v) = &b.sweep_value {
-                    row.push(v.to_string().replace(',', ";"));
-                }
-                let etas: Vec<Real> = t
-                    .truth
-                    .iter()
-                    .zip(&o.identified)
-                    .filter_map(|(&x, &y)| eta(x, y))
-                    .collect();
-                let eta_mean = if etas.is_empty() {
-                    Real::NAN
-                } else {
-                    etas.iter().sum::<Real>() / etas.len() as Real
-                };
-                row.push(sc.methods[o.method].label.clone());
-                row.push(sc.calibration.strategies[o.strategy].name().into());
-                for v in [
-                    eta_mean,
-                    o.before_mm.mean,
-                    o.before_mm.rms,
-                    o.before_mm.max,
-                    o.after_mm.mean,
-                    o.after_mm.rms,
-                    o.after_mm.max,
-                ] {
+}
+
+impl TrialSink for TrialsCsv {
+    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
+        let mut out = String::new();
+        if !self.header {
+            out += &self.header(info);
+            self.header = true;
+        }
+        for o in &t.outcomes {
+            let mut row = vec![t.index.to_string()];
+            if let Some(p) = &info.point {
+                row.extend(p.iter().map(|v| v.to_string().replace(',', ";")));
+            }
+            let etas: Vec<Real> = t
+                .truth
+                .iter()
+                .zip(&o.identified)
+                .filter_map(|(&x, &y)| eta(x, y))
+                .collect();
+            let eta_mean = if etas.is_empty() {
+                Real::NAN
+            } else {
+                etas.iter().sum::<Real>() / etas.len() as Real
+            };
+            row.push(info.methods[o.method].clone());
+            row.push(info.strategies[o.strategy].clone());
+            for v in [
+                eta_mean,
+                o.before_mm.mean,
+                o.before_mm.rms,
+                o.before_mm.max,
+                o.after_mm.mean,
+                o.after_mm.rms,
+                o.after_mm.max,
+            ] {
+                row.push(num(v));
+            }
+            if info.full_pose {
+                let (bd, ad) = (
+                    o.before_deg.unwrap_or_default(),
+                    o.after_deg.unwrap_or_default(),
+                );
+                for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
                     row.push(num(v));
                 }
-                if pose {
-                    let (bd, ad) = (
-                        o.before_deg.unwrap_or_default(),
-                        o.after_deg.unwrap_or_default(),
-                    );
-                    for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
-                        row.push(num(v));
-                    }
-                }
-                row.push(o.iterations.to_string());
-                row.push(o.termination.as_str().into());
-                row.extend(t.truth.iter().map(|&v| num(v)));
-                row.extend(o.identified.iter().map(|&v| num(v)));
-                out += &row.join(",");
-                out.push('\n');
             }
+            row.push(o.iterations.to_string());
+            row.push(o.termination.as_str().into());
+            row.extend(t.truth.iter().map(|&v| num(v)));
+            row.extend(o.identified.iter().map(|&v| num(v)));
+            out += &row.join(",");
+            out.push('\n');
         }
+        self.out
+            .write_all(out.as_bytes())
+            .map_err(|e| Error::io(&self.path, e))
     }
-    out
 }
 
 /// `report.md`: the tables a paper would print, and the plots.
 pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     let sc = &r.scenario;
-    let first = &r.blocks[0].study;
+    let first = &r.blocks[0].info;
     let mut s = String::new();
     let _ = writeln!(s, "# {}\n\n{}\n", sc.name, sc.description);
     let _ = writeln!(
         s,
         "Robot `{}`, {} trials from seed {}, {} measurement, registration `{}`, {} calibration and {} validation poses per trial. Identified parameters: {}.\n",
-        first.nominal.name,
+        first.robot,
         sc.trials,
         sc.seed,
-        if first.measure == crate::jacobian::Measure::Pose { "full-pose" } else { "position" },
+        if first.full_pose { "full-pose" } else { "position" },
         sc.registration.as_str(),
         sc.calibration.count,
         sc.validation.count,
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
-    let pose = first.measure == crate::jacobian::Measure::Pose;
+    let pose = first.full_pose;
     use columns::*;
     let mut cols = vec![
         ETA_MEAN,
@@ -331,9 +366,13 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     }
     cols.extend([CRB_RATIO, FAILURES, MS_PER_IDENTIFICATION]);
     let (headers, rows) = entry_table(r, &cols);
+    let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
     s += "## Validation errors and identification accuracy\n\n";
     s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
     s += &table(&headers, &rows);
+    if let Some(sw) = &sc.sweep {
+        s += &sweep_tables(r, sw);
+    }
     s += "\n## Identification accuracy η per parameter (mean %, Guo 2024 eq. 29)\n\n";
     let (params, series) = eta_by_parameter(&r.blocks[0]);
     let mut h: Vec<&str> = vec!["parameter"];
@@ -365,10 +404,212 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     s
 }
 
+/// The sweep section of `report.md`: the headline metrics per sweep point, and for a
+/// two-axis grid the validation RMS after compensation of each method and strategy as a
+/// table of the first axis (rows) against the second (columns).
+fn sweep_tables(r: &RunResult, sw: &Sweep) -> String {
+    use columns::*;
+    let mut s = String::from("\n## Sweep\n\n");
+    let _ = writeln!(
+        s,
+        "Swept: {}{}.\n",
+        sw.keys()
+            .iter()
+            .map(|k| format!("`{k}`"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        if sw.zip { " (paired)" } else { "" }
+    );
+    let (headers, rows) = entry_table(
+        r,
+        &[AFTER_RMS, ETA_MEDIAN, CRB_RATIO, MS_PER_IDENTIFICATION],
+    );
+    let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
+    s += &table(&headers, &rows);
+    if sw.dims() == 2 {
+        let (xa, ya) = (&sw.axes[0], &sw.axes[1]);
+        for (k, e) in r.blocks[0].entries.iter().enumerate() {
+            let _ = writeln!(
+                s,
+                "\nValidation RMS after (mm), {}: `{}` down, `{}` across.\n",
+                entry_label(e),
+                xa.key,
+                ya.key
+            );
+            let mut h = vec![String::new()];
+            h.extend(ya.values.iter().map(|v| v.to_string()));
+            let h: Vec<&str> = h.iter().map(String::as_str).collect();
+            let rows: Vec<Vec<String>> = xa
+                .values
+                .iter()
+                .enumerate()
+                .map(|(i, xv)| {
+                    let mut row = vec![xv.to_string()];
+                    row.extend((0..ya.values.len()).map(|j| {
+                        r.blocks
+                            .get(i * ya.values.len() + j)
+                            .map_or(String::new(), |b| {
+                                fmt_num(b.entries[k].validation_after_mm.rms, 4)
+                            })
+                    }));
+                    row
+                })
+                .collect();
+            s += &table(&h, &rows);
+        }
+    }
+    s
+}
+
+/// A sweep value as a plot position: the number itself, or `None` (then the plots place the
+/// values at their list positions).
+fn numeric(v: &toml::Value) -> Option<Real> {
+    v.as_float().or(v.as_integer().map(|i| i as Real))
+}
+
+/// The headline metrics of the sweep plots: file stem, title, y label, value and spread
+/// over trials of an entry.
+type SweepMetric = (
+    &'static str,
+    &'static str,
+    &'static str,
+    fn(&Entry) -> (Real, Real),
+);
+
+const SWEEP_METRICS: [SweepMetric; 4] = [
+    (
+        "sweep_validation_rms",
+        "Validation RMS after compensation (± 1 s.d. over trials)",
+        "RMS (mm)",
+        |e| (e.validation_after_mm.rms, e.spread.after_rms),
+    ),
+    (
+        "sweep_eta_median",
+        "Identification accuracy: median η (± mean s.d. of η)",
+        "median η (%)",
+        |e| (e.eta_median_pct, e.spread.eta),
+    ),
+    (
+        "sweep_crb_ratio",
+        "Parameter covariance over the Cramér–Rao bound",
+        "CRB ratio",
+        |e| (e.crb_ratio.unwrap_or(Real::NAN), Real::NAN),
+    ),
+    (
+        "sweep_seconds",
+        "Wall time per identification (± 1 s.d.)",
+        "time (s)",
+        |e| (e.seconds_per_identification, e.spread.seconds),
+    ),
+];
+
+/// The sweep plots: for one axis (or paired axes) each headline metric against the swept
+/// value, one line per method × strategy with its spread; for a two-axis grid a heat map of
+/// the validation RMS after compensation per method × strategy.
+fn write_sweep_plots(r: &RunResult, sw: &Sweep, out: &Path) -> Result<Vec<(String, String)>> {
+    let mut done = Vec::new();
+    let b0 = &r.blocks[0];
+    if sw.dims() == 1 {
+        let axis = &sw.axes[0];
+        let numbers: Option<Vec<Real>> = axis.values.iter().map(numeric).collect();
+        let (xs, x_label) = match numbers {
+            Some(v) => (v, axis.key.clone()),
+            None => (
+                (0..axis.values.len()).map(|i| i as Real).collect(),
+                format!(
+                    "{} (value no.: {})",
+                    axis.key,
+                    axis.values
+                        .iter()
+                        .enumerate()
+                        .map(|(i, v)| format!("{i} = {v}"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ),
+        };
+        for (stem, title, y_label, metric) in SWEEP_METRICS {
+            let series: Vec<plots::SweepSeries> = b0
+                .entries
+                .iter()
+                .enumerate()
+                .map(|(k, e)| {
+                    let pts = r
+                        .blocks
+                        .iter()
+                        .zip(&xs)
+                        .map(|(b, &x)| {
+                            let (m, sd) = metric(&b.entries[k]);
+                            (x, m, sd)
+                        })
+                        .collect();
+                    (entry_label(e), pts)
+                })
+                .collect();
+            plots::sweep(&out.join(stem), title, &x_label, y_label, &series)?;
+            done.push((
+                format!("{stem}.png"),
+                format!("{title} against {}", axis.key),
+            ));
+        }
+    } else if sw.dims() == 2 {
+        let (xa, ya) = (&sw.axes[0], &sw.axes[1]);
+        let names = |a: &crate::scenario::SweepAxis| -> Vec<String> {
+            a.values.iter().map(|v| v.to_string()).collect()
+        };
+        let (xn, yn) = (names(xa), names(ya));
+        for (k, e) in b0.entries.iter().enumerate() {
+            let values: Vec<Vec<Real>> = (0..xa.values.len())
+                .map(|i| {
+                    (0..ya.values.len())
+                        .map(|j| {
+                            r.blocks
+                                .get(i * ya.values.len() + j)
+                                .map_or(Real::NAN, |b| b.entries[k].validation_after_mm.rms)
+                        })
+                        .collect()
+                })
+                .collect();
+            let stem = format!("heatmap_{}_{}", file_safe(&e.method), file_safe(&e.poses));
+            plots::heatmap(
+                &out.join(&stem),
+                &format!("Validation RMS after compensation (mm), {}", entry_label(e)),
+                (&xa.key, &xn),
+                (&ya.key, &yn),
+                &values,
+            )?;
+            done.push((
+                format!("{stem}.png"),
+                format!(
+                    "validation RMS after, {}, over {} and {}",
+                    entry_label(e),
+                    xa.key,
+                    ya.key
+                ),
+            ));
+        }
+    }
+    Ok(done)
+}
+
+/// `s` with every character outside `[A-Za-z0-9._-]` replaced by `_` (a file name part).
+fn file_safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
 /// Renders the plots; returns (file name, caption) of each PNG.
 pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
+    let info = &b0.info;
     // η per parameter per method × strategy (Guo 2024 fig. 8).
     let (params, series) = eta_by_parameter(b0);
     plots::grouped_bars(
@@ -380,43 +621,23 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     )?;
     done.push(("eta.png".into(), "η per parameter and method".into()));
     // Validation error per point, trial 0, the first method and strategy (Li 2018 fig. 3).
-    if let Some(o) = b0.trials.first().and_then(|t| t.outcomes.first()) {
-        if let Some((before, after)) = &o.per_point {
-            let sc = &b0.study.scenario;
-            let title = format!(
-                "Validation errors, trial 0, {} on {} poses",
-                sc.methods[o.method].label,
-                sc.calibration.strategies[o.strategy].name()
-            );
-            plots::before_after(&out.join("validation_trial0"), &title, before, after)?;
-            done.push((
-                "validation_trial0.png".into(),
-                "validation error per point before and after compensation, trial 0".into(),
-            ));
-        }
+    if let Some((si, mi, before, after)) = b0.trial0.as_ref().and_then(|t| t.per_point.as_ref()) {
+        let title = format!(
+            "Validation errors, trial 0, {} on {} poses",
+            info.methods[*mi], info.strategies[*si]
+        );
+        plots::before_after(&out.join("validation_trial0"), &title, before, after)?;
+        done.push((
+            "validation_trial0.png".into(),
+            "validation error per point before and after compensation, trial 0".into(),
+        ));
     }
     // Validation RMS over trials per method × strategy.
     let groups: Vec<(String, Vec<Real>)> = b0
         .entries
         .iter()
-        .enumerate()
-        .map(|(k, e)| {
-            let (si, mi) = (
-                k / b0.study.scenario.methods.len(),
-                k % b0.study.scenario.methods.len(),
-            );
-            let v = b0
-                .trials
-                .iter()
-                .flat_map(|t| {
-                    t.outcomes
-                        .iter()
-                        .filter(|o| o.strategy == si && o.method == mi)
-                        .map(|o| o.after_mm.rms)
-                })
-                .collect();
-            (entry_label(e), v)
-        })
+        .zip(&b0.after_rms)
+        .map(|(e, v)| (entry_label(e), v.clone()))
         .collect();
     plots::box_plot(
         &out.join("validation_rms"),
@@ -429,17 +650,14 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         "validation RMS over trials".into(),
     ));
     // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
-    let traces: Vec<(String, Vec<Real>)> = b0
-        .study
-        .scenario
-        .calibration
+    let traces: Vec<(String, Vec<Real>)> = info
         .strategies
         .iter()
-        .zip(&b0.study.fixed)
+        .zip(&info.fixed)
         .filter_map(|(s, f)| {
             f.as_ref()
                 .filter(|f| !f.trace.is_empty())
-                .map(|f| (s.name().to_string(), f.trace.clone()))
+                .map(|f| (s.clone(), f.trace.clone()))
         })
         .collect();
     if !traces.is_empty() {
@@ -472,60 +690,51 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
             "metaheuristic convergence, trial 0".into(),
         ));
     }
-    // Sweeps: validation RMS after compensation against the swept value.
     if let Some(sw) = &r.scenario.sweep {
-        let xs: Vec<Option<Real>> = r
-            .blocks
-            .iter()
-            .map(|b| {
-                b.sweep_value
-                    .as_ref()
-                    .and_then(|v| v.as_float().or(v.as_integer().map(|i| i as Real)))
-            })
-            .collect();
-        if xs.iter().all(Option::is_some) {
-            let mut series: Vec<plots::SweepSeries> = Vec::new();
-            for (k, e) in b0.entries.iter().enumerate() {
-                let pts = r
-                    .blocks
-                    .iter()
-                    .zip(&xs)
-                    .map(|(b, x)| {
-                        let e = &b.entries[k];
-                        (
-                            x.unwrap_or(0.0),
-                            e.validation_after_mm.rms,
-                            e.validation_after_mm.std,
-                        )
-                    })
-                    .collect();
-                series.push((entry_label(e), pts));
-            }
-            plots::sweep(
-                &out.join("sweep"),
-                "Validation RMS after compensation",
-                &sw.key,
-                "RMS (mm)",
-                &series,
-            )?;
-            done.push((
-                "sweep.png".into(),
-                format!("validation RMS against {}", sw.key),
-            ));
-        }
+        done.extend(write_sweep_plots(r, sw, out)?);
     }
     Ok(done)
 }
 
-/// Writes every output file of a run into its folder.
-pub fn write_all(r: &RunResult) -> Result<()> {
-    super::atomically(&r.out, |dir| write_into(r, dir))
+/// Runs `scenario` and writes its output folder as a whole ([`super::atomically`]):
+/// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
+/// plots; with `opts.shard`, the shard's partial result instead ([`super::shard`]).
+pub fn run_study(scenario: Scenario, opts: &RunOptions) -> Result<RunResult> {
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    let mut result = None;
+    super::atomically(&out, |dir| {
+        let mut csv = TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
+        let r = match opts.shard {
+            None => {
+                let r = crate::montecarlo::run(scenario, opts, &mut csv)?;
+                csv.finish()?;
+                write_into(&r, dir)?;
+                r
+            }
+            Some(_) => {
+                let mut records = super::shard::Records::create(dir)?;
+                let r = {
+                    let mut both = super::shard::Both(&mut csv, &mut records);
+                    crate::montecarlo::run(scenario, opts, &mut both)?
+                };
+                csv.finish()?;
+                records.finish(&r)?;
+                r
+            }
+        };
+        result = Some(r);
+        Ok(())
+    })?;
+    result.ok_or_else(|| Error::Compute("the run produced no result".into()))
 }
 
-/// Writes every file of a run into the folder `dir`.
-fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
+/// Writes every file of a complete run but `trials.csv` (written as the trials finished)
+/// into the folder `dir`.
+pub fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
     write_json(&dir.join("summary.json"), &summary(r))?;
-    write(&dir.join("trials.csv"), &trials_csv(r))?;
     let timing: Vec<Value> = r
         .blocks
         .iter()

@@ -1,0 +1,433 @@
+//! Research sweeps and sharded runs: grid sweeps and their refusals, the sweep plots, shards
+//! merged into the bytes of the unsharded run (N = 1, 3, 7), the merge's refusals, the Slurm
+//! example, and the streaming statistics against trials.csv.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use calbench::scenario::Scenario;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-sweeps-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A small study: LS and IGG3 on random poses, no sag (fast).
+const SMALL: &str = r#"
+name = "small"
+seed = 9
+trials = 5
+[robot]
+builtin = "irb2600"
+[errors]
+kind = "paper"
+[tracker]
+pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]
+[outliers]
+count = 0
+magnitude_mm = [0.5, 1.0]
+[compliance]
+model = "none"
+[calibration]
+count = 25
+strategies = ["random"]
+[validation]
+count = 10
+[[methods]]
+name = "ls"
+[[methods]]
+name = "igg3"
+label = "rob"
+"#;
+
+fn calbench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(args: &[&str]) -> Output {
+    let o = calbench(args);
+    assert!(
+        o.status.success(),
+        "calbench {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+fn write_scenario(dir: &Path, name: &str, text: &str) -> String {
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &p,
+        text.replace("name = \"small\"", &format!("name = \"{name}\"")),
+    )
+    .unwrap();
+    p.to_string_lossy().into_owned()
+}
+
+fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+fn json(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&read(p)).unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+#[test]
+fn shards_merge_into_the_bytes_of_the_unsharded_run() {
+    let dir = tmp("shards");
+    let sc = write_scenario(
+        &dir,
+        "sharded",
+        &format!("{SMALL}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 3]\n"),
+    );
+    let full = dir.join("full");
+    ok(&["run", &sc, "--threads", "2", "--out", s(&full)]);
+    for n in [1usize, 3, 7] {
+        let shards: Vec<PathBuf> = (0..n).map(|i| dir.join(format!("s{n}_{i}"))).collect();
+        for (i, d) in shards.iter().enumerate() {
+            // Thread counts differ between shards: the bytes must not.
+            let threads = (1 + i % 2).to_string();
+            ok(&[
+                "run",
+                &sc,
+                "--shard",
+                &format!("{i}/{n}"),
+                "--threads",
+                &threads,
+                "--out",
+                s(d),
+            ]);
+        }
+        let merged = dir.join(format!("m{n}"));
+        let mut args = vec!["merge"];
+        args.extend(shards.iter().rev().map(|d| s(d)));
+        args.extend(["--out", s(&merged)]);
+        ok(&args);
+        for f in ["summary.json", "trials.csv", "report.md"] {
+            let (a, b) = (read(&full.join(f)), read(&merged.join(f)));
+            if f == "report.md" {
+                // Timings differ; everything before the timing column must not.
+                let cut = |t: &str| t.lines().filter(|l| !l.contains('|')).collect::<String>();
+                assert_eq!(cut(&a), cut(&b), "{f}, {n} shards");
+            } else {
+                assert_eq!(a, b, "{f} of {n} shards differs from the unsharded run");
+            }
+        }
+        assert!(merged.join("sweep_validation_rms.png").is_file());
+    }
+    // 10 units (2 points × 5 trials) among 7 shards: every trial once, in order.
+    let rows: Vec<String> = read(&full.join("trials.csv"))
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').take(2).collect::<Vec<_>>().join(","))
+        .collect();
+    assert_eq!(rows.len(), 2 * 5 * 2);
+    assert_eq!(rows[0], "0,0");
+    assert_eq!(rows[19], "4,3");
+}
+
+#[test]
+fn merge_refuses_missing_duplicate_and_foreign_shards() {
+    let dir = tmp("refuse");
+    let sc = write_scenario(&dir, "refused", SMALL);
+    let d = |n: &str| dir.join(n);
+    for i in 0..3 {
+        ok(&[
+            "run",
+            &sc,
+            "--shard",
+            &format!("{i}/3"),
+            "--out",
+            s(&d(&format!("a{i}"))),
+        ]);
+    }
+    ok(&[
+        "run",
+        &sc,
+        "--seed",
+        "10",
+        "--shard",
+        "2/3",
+        "--out",
+        s(&d("seed10")),
+    ]);
+    let err = |args: &[&str]| {
+        let o = calbench(args);
+        assert!(!o.status.success(), "accepted: {args:?}");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let m = err(&["merge", s(&d("a0")), s(&d("a1")), "--out", s(&d("x"))]);
+    assert!(m.contains("missing") && m.contains("2/3"), "{m}");
+    let m = err(&[
+        "merge",
+        s(&d("a0")),
+        s(&d("a1")),
+        s(&d("a1")),
+        "--out",
+        s(&d("x")),
+    ]);
+    assert!(m.contains("twice") && m.contains("1/3"), "{m}");
+    let m = err(&[
+        "merge",
+        s(&d("a0")),
+        s(&d("a1")),
+        s(&d("seed10")),
+        "--out",
+        s(&d("x")),
+    ]);
+    assert!(m.contains("seed") && m.contains("seed10"), "{m}");
+    let m = err(&["merge", s(&d("a0")), s(&dir), "--out", s(&d("x"))]);
+    assert!(m.contains("shard.json"), "{m}");
+    assert!(!d("x").join("summary.json").exists());
+    for bad in ["3/3", "1/0", "x"] {
+        let m = err(&["run", &sc, "--shard", bad, "--out", s(&d("y"))]);
+        assert!(m.contains("--shard"), "{m}");
+    }
+}
+
+#[test]
+fn a_grid_runs_its_product_and_draws_heat_maps() {
+    let dir = tmp("grid");
+    let sc = write_scenario(
+        &dir,
+        "grid",
+        &format!(
+            "{SMALL}\n[[sweep]]\nkey = \"outliers.count\"\nvalues = [0, 2, 4]\n\
+             [[sweep]]\nkey = \"methods.rob.k0\"\nvalues = [1.0, 2.0]\n"
+        )
+        .replace("trials = 5", "trials = 2"),
+    );
+    let out = dir.join("out");
+    ok(&["run", &sc, "--out", s(&out)]);
+    let sm = json(&out.join("summary.json"));
+    assert_eq!(
+        sm["sweep_keys"],
+        serde_json::json!(["outliers.count", "methods.rob.k0"])
+    );
+    let results = sm["results"].as_array().unwrap();
+    assert_eq!(results.len(), 3 * 2 * 2);
+    // Product order: the last axis varies fastest.
+    let points: Vec<(i64, f64)> = results
+        .iter()
+        .step_by(2)
+        .map(|e| {
+            (
+                e["sweep"]["outliers.count"].as_i64().unwrap(),
+                e["sweep"]["methods.rob.k0"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert_eq!(
+        points,
+        [(0, 1.0), (0, 2.0), (2, 1.0), (2, 2.0), (4, 1.0), (4, 2.0)]
+    );
+    for stem in ["heatmap_ls_random", "heatmap_rob_random"] {
+        for ext in ["png", "svg"] {
+            assert!(out.join(format!("{stem}.{ext}")).is_file(), "{stem}.{ext}");
+        }
+    }
+    let report = read(&out.join("report.md"));
+    assert!(report.contains("## Sweep") && report.contains("heatmap_rob_random.png"));
+    // LS does not read k0: its results are the same for both values.
+    let ls: Vec<&serde_json::Value> = results.iter().filter(|e| e["method"] == "ls").collect();
+    assert_eq!(ls[0]["validation_after_mm"], ls[1]["validation_after_mm"]);
+}
+
+#[test]
+fn zipped_axes_pair_their_values_and_method_keys_follow_the_label() {
+    let text = format!(
+        "{SMALL}\n[[sweep]]\nkey = \"outliers.count\"\nvalues = [0, 2, 4]\nzip = true\n\
+         [[sweep]]\nkey = \"methods.rob.k0\"\nvalues = [1.0, 1.5, 2.0]\n"
+    );
+    let sc = Scenario::parse(&text, Some(Path::new("zip.toml"))).unwrap();
+    let plans = sc.sweep_plans().unwrap();
+    assert_eq!(plans.len(), 3);
+    for ((point, plan), (n, k0)) in plans.iter().zip([(0, "1.0"), (2, "1.5"), (4, "2.0")]) {
+        let point = point.as_ref().unwrap();
+        assert_eq!(point[0].as_integer(), Some(n));
+        assert_eq!(plan.outliers.count, Some(n as usize));
+        let igg3 = format!("{:?}", plan.methods[1].method);
+        assert!(igg3.contains(&format!("k0: {k0}")), "{igg3}");
+        assert!(plan.sweep.is_none());
+    }
+}
+
+#[test]
+fn bad_sweeps_are_refused_naming_the_file_and_the_key() {
+    let cases = [
+        ("[sweep]\nkey = \"outliers.cuont\"\nvalues = [1]\n", "cuont"),
+        (
+            "[sweep]\nkey = \"outliers.count\"\nvalues = [\"many\"]\n",
+            "outliers.count",
+        ),
+        (
+            "[sweep]\nkey = \"outliers.count\"\nvalues = []\n",
+            "outliers.count",
+        ),
+        (
+            "[sweep]\nkey = \"methods.nope.k0\"\nvalues = [1.0]\n",
+            "nope",
+        ),
+        ("[sweep]\nkey = \"methods.rob.k9\"\nvalues = [1.0]\n", "k9"),
+        (
+            "[sweep]\nkey = \"tracker.mpe_a_um\"\nvalues = [-1.0]\n",
+            "mpe_a_um",
+        ),
+        ("[sweep]\nkey = \"name\"\nvalues = [\"x\"]\n", "name"),
+        (
+            "[[sweep]]\nkey = \"outliers.count\"\nvalues = [0, 1]\nzip = true\n\
+             [[sweep]]\nkey = \"methods.rob.k0\"\nvalues = [1.0]\n",
+            "methods.rob.k0",
+        ),
+        (
+            "[[sweep]]\nkey = \"outliers.count\"\nvalues = [0]\n\
+             [[sweep]]\nkey = \"outliers.count\"\nvalues = [1]\n",
+            "outliers.count",
+        ),
+    ];
+    for (sweep, key) in cases {
+        let text = format!("{SMALL}\n{sweep}");
+        let e = Scenario::parse(&text, Some(Path::new("dir/bad-sweep.toml")))
+            .err()
+            .unwrap_or_else(|| panic!("accepted: {sweep}"))
+            .to_string();
+        assert!(
+            e.contains(key) && e.contains("bad-sweep.toml"),
+            "`{e}` lacks `{key}` or the file"
+        );
+    }
+}
+
+/// The streaming statistics of summary.json against trials.csv, computed here directly.
+#[test]
+fn summary_means_are_the_means_of_trials_csv() {
+    let dir = tmp("means");
+    let sc = write_scenario(&dir, "means", &SMALL.replace("trials = 5", "trials = 300"));
+    let out = dir.join("out");
+    ok(&["run", &sc, "--out", s(&out)]);
+    let csv = read(&out.join("trials.csv"));
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |n: &str| head.iter().position(|h| *h == n).unwrap();
+    let (m, rms, term) = (col("method"), col("after_rms_mm"), col("termination"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 600);
+    let sm = json(&out.join("summary.json"));
+    for e in sm["results"].as_array().unwrap() {
+        let v: Vec<f64> = rows
+            .iter()
+            .filter(|r| {
+                r[m] == e["method"].as_str().unwrap()
+                    && !["diverged", "singular", "rank-deficient", "invalid-input"]
+                        .contains(&r[term])
+                    && !r[rms].is_empty()
+            })
+            .map(|r| r[rms].parse::<f64>().unwrap())
+            .collect();
+        let mean = v.iter().sum::<f64>() / v.len() as f64;
+        let got = e["validation_after_mm"]["rms"].as_f64().unwrap();
+        assert!((got - mean).abs() <= 1e-12 * mean, "{got} against {mean}");
+    }
+}
+
+/// The Slurm example run as a cluster would: each array task, then the merge step.
+#[test]
+fn the_slurm_example_runs_and_merges() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tmp("slurm");
+    let sc = write_scenario(
+        &dir,
+        "cluster",
+        &format!("{SMALL}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n"),
+    );
+    let script = |name: &str, task: Option<usize>| {
+        let mut c = Command::new("bash");
+        c.arg(root.join("examples/slurm").join(name))
+            .current_dir(&dir)
+            .env("SCENARIO", &sc)
+            .env("N", "4")
+            .env("CALBENCH", env!("CARGO_BIN_EXE_calbench"));
+        if let Some(t) = task {
+            c.env("SLURM_ARRAY_TASK_ID", t.to_string());
+        }
+        let o = c.output().unwrap();
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    for t in 0..4 {
+        script("run-shards.sbatch", Some(t));
+    }
+    script("merge.sbatch", None);
+    let full = dir.join("full");
+    ok(&["run", &sc, "--out", s(&full)]);
+    for f in ["summary.json", "trials.csv"] {
+        assert_eq!(
+            read(&full.join(f)),
+            read(&dir.join("results/cluster").join(f))
+        );
+    }
+    Scenario::load(&root.join("examples/slurm/sweep-1e6.toml")).unwrap();
+}
+
+/// The README's sharded-run commands, as written (with this build's binary).
+#[test]
+fn the_readme_shard_commands_run() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let readme = read(&root.join("README.md"));
+    let block = readme
+        .split("```sh\n")
+        .skip(1)
+        .map(|b| &b[..b.find("```").unwrap()])
+        .find(|b| b.contains("--shard"))
+        .expect("a README example with --shard");
+    let dir = tmp("readme");
+    let mut n = 0;
+    for line in block.lines().filter(|l| l.starts_with("calbench ")) {
+        let words: Vec<String> = line
+            .split_whitespace()
+            .skip(1)
+            .map(|w| {
+                if w.starts_with("scenarios/") {
+                    root.join(w).to_string_lossy().into_owned()
+                } else {
+                    w.to_string()
+                }
+            })
+            .collect();
+        let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+            .args(&words)
+            .current_dir(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{line}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        n += 1;
+    }
+    assert_eq!(n, 3);
+    let full = dir.join("full");
+    ok(&[
+        "run",
+        s(&root.join("scenarios/ci-guard.toml")),
+        "--out",
+        s(&full),
+    ]);
+    assert_eq!(
+        read(&full.join("summary.json")),
+        read(&dir.join("results/ci-guard/summary.json"))
+    );
+}
