@@ -69,13 +69,15 @@ pub fn calibrate(
     method: &MethodSpec,
     rng: &mut Rng,
 ) -> Result<Calibrated> {
-    let chain = nominal.chain();
-    let nominal_points: Vec<Vec3> = data.qs.iter().map(|q| chain.fk(q).pos).collect();
+    let nominal_points = || -> Vec<Vec3> {
+        let chain = nominal.chain();
+        data.qs.iter().map(|q| chain.fk(q).pos).collect()
+    };
     let mut frame = match registration {
         Registration::Known => *known,
-        Registration::Wsvd => register_wsvd(&nominal_points, &data.points)?.frame,
+        Registration::Wsvd => register_wsvd(&nominal_points(), &data.points)?.frame,
         Registration::Svd | Registration::Identify => {
-            register_svd(&nominal_points, &data.points, None)?.frame
+            register_svd(&nominal_points(), &data.points, None)?.frame
         }
     };
     let rounds = match registration {
