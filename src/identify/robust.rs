@@ -1,11 +1,18 @@
 //! IGG3 robust ridge estimation (Li 2018 §2.2, eqs. 15–18), with Huber and Tukey weights as
 //! comparisons.
 //!
-//! Iteratively reweighted ridge: the ridge iterations of [`super::ridge`] first run with all
-//! points at weight 1 until the step falls below ε (Li: "第 1 次求解时 P 为单位权"); from then
-//! on every iteration gives each point the equivalent weight `p̄_i = p_i ψ(v_i)/v_i` (eq. 16,
-//! prior `p_i = 1`) from its residual `v_i` at the current estimate (eq. 15), and the
-//! iterations stop when a reweighted step has `max |dx| < ε`.
+//! Iteratively reweighted ridge, in one Gauss–Newton loop ([`super::solver`]): the ridge
+//! iterations of [`super::ridge`] first run with all points at weight 1 (Li: "第 1 次求解时 P 为
+//! 单位权") until the step falls below 0.01; then every iteration gives each point the
+//! equivalent weight `p̄_i = p_i ψ(v_i)/v_i` (eq. 16, prior `p_i = 1`) from its residual `v_i`
+//! at the current estimate (eq. 15) and takes one step, until the weights have settled (no
+//! weight moved by more than 0.01 in a round and the same points rejected, after at least two
+//! rounds). A final refit then gives every point the reweighting kept its prior weight and
+//! the rejected ones (weight 0, `u > k1`) none, and iterates to `max |dx| < ε`: the robust
+//! weights find the gross errors and the estimate is the efficient (least-squares) one on the
+//! other points (Hampel et al. 1986 §1.4; Rousseeuw & Leroy 1987 ch. 1 — see
+//! [`super::solver`]). On clean data this matches LS, which IGG3's down-weighting of the
+//! suspicious band alone does not (about 8 % higher validation RMS).
 //!
 //! The weight of a point follows from its standardised residual `u_i = |v_i| / (σ0 √r)`:
 //! `|v_i|` is the norm of its r = 3 (or 6) residual rows, so `u_i` is the RMS of the point's

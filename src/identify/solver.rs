@@ -10,7 +10,7 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use super::linalg::{self, solve_spd};
-use super::weights::{point_weights, Robustness, Sigma0};
+use super::weights::{point_weights, redecide_inliers, Robustness, Sigma0};
 use super::xi::{choose_xi, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
@@ -221,6 +221,14 @@ pub(crate) fn weighted_cost(r: &DVector<Real>, rows: usize, w: &[Real]) -> Real 
     c
 }
 
+/// Whether a reweighting round has settled: no weight moved by more than [`WEIGHT_TOL`] and
+/// the rejected points (weight 0) are the same as before.
+fn settled(w: &[Real], before: &[Real]) -> bool {
+    w.iter()
+        .zip(before)
+        .all(|(&a, &b)| (a - b).abs() <= WEIGHT_TOL && (a == 0.0) == (b == 0.0))
+}
+
 /// `max |v_i|`.
 pub(crate) fn max_abs(v: &DVector<Real>) -> Real {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
@@ -345,6 +353,33 @@ pub(crate) struct RidgeCfg<'a> {
     pub scale: bool,
 }
 
+/// Rounds of reweighting needed before the robust iterations may stop reweighting.
+const MIN_ROUNDS: usize = 2;
+
+/// The reweighting has settled when no point's weight moved by more than this in a round
+/// (and the set of rejected points is the one of the round before).
+pub(crate) const WEIGHT_TOL: Real = 0.1;
+
+/// The robust ridge starts reweighting after a step below this (mm or rad): the next
+/// estimate is then within about its square of the unweighted solution, closer than the
+/// noise the weights look at.
+const SWITCH_STEP: Real = 1e-2;
+
+/// Steps of the refit at which the rejected set may still be re-decided; after them it is
+/// fixed, so the refit always ends.
+const REDECISIONS: usize = 4;
+
+/// The phase of the Gauss–Newton engine.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// The prior weights (every method; the robust ridge's first solution).
+    Prior,
+    /// The robust ridge's reweighting rounds.
+    Reweight,
+    /// The robust ridge's final refit on the points it kept.
+    Refit,
+}
+
 /// The Gauss–Newton engine: plain (Li eq. 13), ridge-penalised towards `x0` (eq. 14) and
 /// iteratively reweighted (§2.2).
 ///
@@ -354,9 +389,30 @@ pub(crate) struct RidgeCfg<'a> {
 /// shrinkage when the iterations converge, instead of relaxing to the least-squares answer.
 /// `D = diag(JᵀPJ)` at `x0` (column scaling, so ξ is relative to unit-norm columns) or `I`.
 ///
-/// With robust weights, the points first all weigh 1 until the step falls below ε; from
-/// then on each iteration reweighs every point from the residuals at the current `x` and
-/// stops when a reweighted step falls below ε.
+/// With robust weights the iterations run in three phases, all in one loop:
+/// 1. the points keep their prior weights until the step falls below [`SWITCH_STEP`] (the
+///    residuals are then as close to those of the unweighted solution as the weights need);
+/// 2. every iteration reweighs every point from the residuals at the current `x` (one
+///    reweighting round) and takes one step; the rounds stop when the weights have settled:
+///    at least [`MIN_ROUNDS`] rounds, no weight moved by more than [`WEIGHT_TOL`], and the
+///    set of rejected points (weight 0) unchanged;
+/// 3. a final refit gives the kept points their prior weights and the rejected ones 0, and
+///    iterates until the step falls below ε ([`Termination::Converged`]). The rejected set
+///    is decided from the residuals at the robust estimate, and anew at each of the refit's
+///    first [`REDECISIONS`] steps, by rejection of `u > k1` with σ0 the classical estimate
+///    over the kept points, coming down from all points
+///    ([`super::weights::redecide_inliers`]); the refit only ends on a step that left the set
+///    unchanged. (The rounds' σ0 comes from down-weighted residuals and is biased low: their
+///    own zero weights would also drop good points.)
+///
+/// The refit is the "reweighted then re-estimated" form of robust estimation: the
+/// redescending weights only decide which points are gross errors, and the estimate is the
+/// efficient least-squares one on the others — Hampel, Ronchetti, Rousseeuw & Stahel,
+/// *Robust Statistics* (1986) §1.4 (rejection followed by least squares); Rousseeuw & Leroy,
+/// *Robust Regression and Outlier Detection* (1987) ch. 1 §2, the reweighted least squares
+/// after a robust fit. IGG3's down-weighting of the suspicious band `k0 < u ≤ k1` alone costs
+/// about 8 % in efficiency on clean data (a tenth of the points of a normal sample fall in
+/// it); the refit gives that back while the gross errors (u > k1) stay out.
 pub(crate) fn gauss_newton(
     p: &dyn LeastSquares,
     x0: &DVector<Real>,
@@ -368,17 +424,27 @@ pub(crate) fn gauss_newton(
     let t = x0.len();
     let mut work = Work::new(p);
     let mut w = start_weights(p);
+    let mut w_prev = w.clone();
     let mut x = x0.clone();
     let mut d = DVector::from_element(t, 1.0);
     let mut dev = DVector::zeros(t);
     let mut sort_buf: Vec<Real> = Vec::with_capacity(work.r.len());
-    let mut reweighting = false;
+    let mut phase = Phase::Prior;
+    let mut rounds = 0;
+    let mut redecisions = 0;
+    let mut set_changed = false;
+    let mut kept: Vec<bool> = Vec::with_capacity(w.len());
     let mut cost0 = Real::NAN;
     let mut rms0 = Real::NAN;
     let mut xi_used = None;
     let mut termination = Termination::MaxIterations;
     let mut iterations = 0;
     let mut sigma_mad = None;
+    let switch = if robust.is_some() {
+        SWITCH_STEP.max(eps)
+    } else {
+        eps
+    };
     for it in 0..max_iter {
         let cost = work.evaluate(p, &x, &w);
         if !cost.is_finite() {
@@ -392,7 +458,25 @@ pub(crate) fn gauss_newton(
             termination = Termination::Diverged;
             break;
         }
-        if let (true, Some(ro)) = (reweighting, robust) {
+        if let (Phase::Refit, Some(ro)) = (phase, robust) {
+            if redecisions < REDECISIONS {
+                set_changed = redecide_inliers(
+                    &work.r,
+                    work.rows,
+                    t,
+                    ro,
+                    rms0,
+                    p.prior(),
+                    &mut w,
+                    &mut kept,
+                );
+                redecisions += 1;
+            } else {
+                set_changed = false;
+            }
+        }
+        if let (Phase::Reweight, Some(ro)) = (phase, robust) {
+            w_prev.copy_from_slice(&w);
             let s = point_weights(
                 &work.r,
                 work.rows,
@@ -404,6 +488,20 @@ pub(crate) fn gauss_newton(
                 &mut sort_buf,
             );
             sigma_mad = s.mad;
+            rounds += 1;
+            if rounds >= MIN_ROUNDS && settled(&w, &w_prev) {
+                redecide_inliers(
+                    &work.r,
+                    work.rows,
+                    t,
+                    ro,
+                    rms0,
+                    p.prior(),
+                    &mut w,
+                    &mut kept,
+                );
+                phase = Phase::Refit;
+            }
         }
         work.normal(&w);
         if let Some(rc) = &ridge {
@@ -417,7 +515,17 @@ pub(crate) fn gauss_newton(
             dev -= x0;
             let cost_now = weighted_cost(&work.r, work.rows, &w);
             let n_rows = work.rows * w.iter().filter(|&&v| v > 0.0).count();
-            let xi = choose_xi(rc.xi, &work.n, &work.g, cost_now, &dev, &d, n_rows);
+            let xi = choose_xi(
+                rc.xi,
+                &work.n,
+                &work.g,
+                cost_now,
+                &dev,
+                &d,
+                n_rows,
+                &mut work.a,
+                &mut work.dx,
+            );
             xi_used = Some(xi);
             for k in 0..t {
                 work.n[(k, k)] += xi * d[k];
@@ -430,13 +538,20 @@ pub(crate) fn gauss_newton(
         }
         x += &work.dx;
         iterations = it + 1;
-        if max_abs(&work.dx) < eps {
-            if robust.is_some() && !reweighting {
-                reweighting = true;
-                continue;
+        let step = max_abs(&work.dx);
+        match phase {
+            Phase::Prior if robust.is_some() => {
+                if step < switch {
+                    phase = Phase::Reweight;
+                }
             }
-            termination = Termination::Converged;
-            break;
+            Phase::Reweight => {}
+            Phase::Prior | Phase::Refit => {
+                if step < eps && !set_changed {
+                    termination = Termination::Converged;
+                    break;
+                }
+            }
         }
     }
     let sigma0 = match robust {

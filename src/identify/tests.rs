@@ -590,6 +590,44 @@ fn igg3_resists_outliers() {
     assert!(worse >= 2, "ls was clearly worse in {worse} of 3 seeds");
 }
 
+/// The robust ridge's final refit (ξ = 0) is least squares on the points it keeps: with five
+/// gross errors among 50 points it rejects exactly those five, and its estimate is the LS
+/// estimate of the other 45 points; on the clean data it keeps every point and is LS.
+#[test]
+fn igg3_refit_is_least_squares_on_the_kept_points() {
+    let s = paper_setup();
+    let mut r = rng::from_seed(200);
+    let qs = uniform_joint_poses(&s.nominal, 50, &mut r);
+    let clean = measure(&s.truth, qs, 0.01, &mut r);
+    let mut dirty = clean.clone();
+    add_outliers(&mut dirty, 5, &mut r);
+    let inliers = RobotData {
+        qs: dirty.qs[5..].to_vec(),
+        points: dirty.points[5..].to_vec(),
+        rotations: None,
+    };
+    let o = RobustOptions {
+        ridge: RidgeOptions {
+            xi: XiRule::Fixed(0.0),
+            ..RobustOptions::default().ridge
+        },
+        ..Default::default()
+    };
+    let ls = LsOptions::default();
+    for (data, reference, rejected) in [(&dirty, &inliers, 5), (&clean, &clean, 0)] {
+        let (out, _) = run(&s, data, &o);
+        let (want, _) = run(&s, reference, &ls);
+        assert_eq!(out.termination, Termination::Converged);
+        assert!(out.iterations <= 20, "{} iterations", out.iterations);
+        let zeros: Vec<usize> = (0..50).filter(|&i| out.weights[i] == 0.0).collect();
+        assert_eq!(zeros, (0..rejected).collect::<Vec<_>>());
+        assert!(out.weights.iter().all(|&w| w == 0.0 || w == 1.0));
+        for (a, b) in out.x.iter().zip(want.x.iter()) {
+            approx::assert_relative_eq!(a, b, epsilon = 1e-9, max_relative = 1e-9);
+        }
+    }
+}
+
 /// Parameter error: lengths in mm, angles in rad × 1000 mm (arm-length lever).
 fn param_error(s: &Setup, x: &DVector<Real>) -> Real {
     x.iter()

@@ -171,6 +171,66 @@ pub(crate) fn point_weights(
     WeightStats { mad }
 }
 
+/// The rejection rule of the robust ridge's final refit, on the residuals `r` at the current
+/// estimate: starting from every point at its prior weight, σ0 is the classical estimate over
+/// the kept points (`sqrt(Σ p_i |v_i|² / (r Σ p_i − t))`), every point with standardised
+/// residual `u_i = √p_i |v_i| / (σ0 √r)` above `k1` is rejected (weight 0), and the two repeat
+/// until no more points go. σ0 thus comes down from above (the gross errors inflate it at
+/// first) and never rests on a set truncated by a too-small σ0, as the σ0 of the down-weighted
+/// rounds would. Returns whether the kept set differs from the one `w` held (kept: `w > 0`).
+/// Keeps every point when σ0 is not defined (too few rows) or below `1e-9 rms0` (consistent
+/// data).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn redecide_inliers(
+    r: &DVector<Real>,
+    rows: usize,
+    t: usize,
+    o: &Robustness,
+    rms0: Real,
+    prior: Option<&[Real]>,
+    w: &mut [Real],
+    before: &mut Vec<bool>,
+) -> bool {
+    before.clear();
+    before.extend(w.iter().map(|&v| v > 0.0));
+    match prior {
+        None => w.fill(1.0),
+        Some(p) => w.copy_from_slice(p),
+    }
+    loop {
+        let mut s = 0.0;
+        let mut n = 0.0;
+        for (i, &wi) in w.iter().enumerate() {
+            n += rows as Real * wi;
+            s += wi * point_norm2(r, rows, i);
+        }
+        if n <= t as Real {
+            break;
+        }
+        let sigma0 = (s / (n - t as Real)).sqrt();
+        if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
+            break;
+        }
+        let scale = sigma0 * (rows as Real).sqrt();
+        let mut rejected = false;
+        for (i, wi) in w.iter_mut().enumerate() {
+            if *wi > 0.0 && wi.sqrt() * point_norm2(r, rows, i).sqrt() / scale > o.k1 {
+                *wi = 0.0;
+                rejected = true;
+            }
+        }
+        if !rejected {
+            break;
+        }
+    }
+    w.iter().zip(before.iter()).any(|(&v, &b)| (v > 0.0) != b)
+}
+
+/// `|v_i|²` of point `i`'s `rows` residual rows.
+fn point_norm2(r: &DVector<Real>, rows: usize, i: usize) -> Real {
+    r.rows(i * rows, rows).norm_squared()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -98,7 +98,16 @@ const GRID: usize = 141;
 const GRID_DECADES: Real = 14.0;
 
 /// The ridge parameter for one iteration. `n = JᵀPJ`, `g = JᵀP E`, `cost = EᵀPE`,
-/// `dev = x − x0`, `d` the scaling, `n_rows` the rows with non-zero weight.
+/// `dev = x − x0`, `d` the scaling, `n_rows` the rows with non-zero weight; `a` and `y` are
+/// scratch buffers of `n`'s and `g`'s sizes.
+///
+/// [`XiRule::DoubleH`] needs only the least-squares solution of the scaled problem and its
+/// residual, which a Cholesky solve of `n` gives without the eigen-decomposition (and without
+/// allocating): with `δ = n⁻¹ g`, `ẑ = D^½ (δ + dev)`, `|ẑ|² = Σ d_k (δ_k + dev_k)²` and the
+/// explained part `βᵀβ = (g + n dev)ᵀ (δ + dev)`. When `n` is too close to singular for the
+/// factorisation ([`super::linalg::PIVOT_TOL`]) the eigen-decomposition below decides which
+/// components carry information, as for the other rules.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn choose_xi(
     rule: &XiRule,
     n: &DMatrix<Real>,
@@ -107,9 +116,16 @@ pub(crate) fn choose_xi(
     dev: &DVector<Real>,
     d: &DVector<Real>,
     n_rows: usize,
+    a: &mut DMatrix<Real>,
+    y: &mut DVector<Real>,
 ) -> Real {
     if let XiRule::Fixed(v) = rule {
         return *v;
+    }
+    if let XiRule::DoubleH = rule {
+        if let Some(xi) = double_h_cholesky(n, g, cost, dev, d, n_rows, a, y) {
+            return xi;
+        }
     }
     let t = n.nrows();
     let nd = n * dev;
@@ -203,6 +219,46 @@ pub(crate) fn choose_xi(
     }
 }
 
+/// [`XiRule::DoubleH`] through a Cholesky solve of `n` (see [`choose_xi`]); `None` when `n`
+/// does not factorise or the result is not finite.
+#[allow(clippy::too_many_arguments)]
+fn double_h_cholesky(
+    n: &DMatrix<Real>,
+    g: &DVector<Real>,
+    cost: Real,
+    dev: &DVector<Real>,
+    d: &DVector<Real>,
+    n_rows: usize,
+    a: &mut DMatrix<Real>,
+    y: &mut DVector<Real>,
+) -> Option<Real> {
+    let t = n.nrows();
+    a.copy_from(n);
+    if !super::linalg::cholesky_in_place(a) {
+        return None;
+    }
+    y.copy_from(g);
+    super::linalg::cholesky_solve(a, y);
+    let (mut b2, mut beta2, mut z2) = (cost, 0.0, 0.0);
+    for i in 0..t {
+        let nd: Real = n.column(i).dot(dev);
+        b2 += 2.0 * dev[i] * g[i] + dev[i] * nd;
+        let zi = y[i] + dev[i];
+        beta2 += (g[i] + nd) * zi;
+        z2 += d[i] * zi * zi;
+    }
+    if !(b2.is_finite() && beta2.is_finite() && z2.is_finite()) {
+        return None;
+    }
+    let rho0 = (b2.max(0.0) - beta2).max(0.0);
+    let dof = n_rows as Real - t as Real;
+    Some(if dof <= 0.0 || z2 <= 0.0 {
+        0.0
+    } else {
+        t as Real * (rho0 / dof) / z2
+    })
+}
+
 fn grid(lmax: Real, k: usize) -> Real {
     lmax * (10.0 as Real).powf(-GRID_DECADES + GRID_DECADES * k as Real / (GRID - 1) as Real)
 }
@@ -217,4 +273,38 @@ fn curve(comps: &[(Real, Real)], rho0: Real, xi: Real) -> (Real, Real, Real) {
         tr += f;
     }
     (rho2, eta2, tr)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Cholesky form of the double-h rule against its definition on the
+    /// eigen-decomposition of the scaled normal matrix (`ξ = t σ̂² / |ẑ|²`).
+    #[test]
+    fn double_h_by_cholesky_matches_the_eigen_decomposition() {
+        let t = 6;
+        let jac = DMatrix::from_fn(40, t, |i, k| {
+            (((i * 37 + k * 101 + i * k * 7) % 97) as Real / 97.0 - 0.5) * (k + 1) as Real
+        });
+        let e = DVector::from_fn(40, |i, _| ((i * 3) as Real * 0.91).cos() * 0.1);
+        let n = jac.tr_mul(&jac);
+        let g = jac.tr_mul(&e);
+        let cost = e.norm_squared();
+        let dev = DVector::from_fn(t, |k, _| 0.01 * k as Real - 0.02);
+        let d = DVector::from_fn(t, |k, _| n[(k, k)]);
+        let (mut a, mut y) = (DMatrix::zeros(t, t), DVector::zeros(t));
+        let xi = choose_xi(&XiRule::DoubleH, &n, &g, cost, &dev, &d, 40, &mut a, &mut y);
+        // Reference: b = E + J dev, A = J D^-½; ẑ = argmin |A z − b|, σ̂² = |A ẑ − b|² / (m − t).
+        let b = &e + &jac * &dev;
+        let dinv = DMatrix::from_diagonal(&d.map(|v| 1.0 / v.sqrt()));
+        let am = &jac * &dinv;
+        let eig = am.tr_mul(&am).symmetric_eigen();
+        let h = eig.eigenvectors.tr_mul(&am.tr_mul(&b));
+        let z = &eig.eigenvectors * DVector::from_fn(t, |k, _| h[k] / eig.eigenvalues[k]);
+        let s2 = (&am * &z - &b).norm_squared() / (40 - t) as Real;
+        let want = t as Real * s2 / z.norm_squared();
+        approx::assert_relative_eq!(xi, want, max_relative = 1e-9);
+        assert!(xi > 0.0);
+    }
 }
