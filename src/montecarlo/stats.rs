@@ -133,13 +133,17 @@ pub fn aggregate(
         })
         .collect();
     let usable = |o: &Outcome| {
-        !matches!(
-            o.termination,
-            Termination::Diverged
-                | Termination::Singular
-                | Termination::RankDeficient
-                | Termination::InvalidInput
-        ) && o.identified.iter().all(|x| x.is_finite())
+        let undetermined_ok =
+            o.rank_deficient_expected && o.termination == Termination::RankDeficient;
+        (undetermined_ok
+            || !matches!(
+                o.termination,
+                Termination::Diverged
+                    | Termination::Singular
+                    | Termination::RankDeficient
+                    | Termination::InvalidInput
+            ))
+            && o.identified.iter().all(|x| x.is_finite())
             && o.after_mm.rms.is_finite()
     };
     let ok: Vec<_> = outs.iter().filter(|(_, o)| usable(o)).collect();

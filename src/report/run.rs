@@ -117,6 +117,9 @@ pub fn summary(r: &RunResult) -> Value {
         "timing": "timing.json",
         "results": results,
     });
+    if let Some(sep) = &first.separation {
+        s["separation"] = sep.to_json();
+    }
     if let Some(sw) = &sc.sweep {
         s["sweep_key"] = json!(sw.key);
         s["sweep_values"] = Value::Array(sw.values.iter().map(toml_to_json).collect());
