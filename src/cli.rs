@@ -154,9 +154,18 @@ pub fn identifiability(
     poses: usize,
     seed: u64,
     poses_file: Option<&Path>,
+    gcn_blocks: Option<Real>,
     json: bool,
 ) -> Result<()> {
     let robot = robots::load(robot)?;
+    if let Some(t) = gcn_blocks {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(Error::setting(
+                "--gcn-threshold",
+                format!("must be a finite number > 0, got {t}"),
+            ));
+        }
+    }
     let measure = parse_measure(measure)?;
     if poses == 0 {
         return Err(Error::setting("--poses", "must be at least 1"));
@@ -172,18 +181,24 @@ pub fn identifiability(
     let a = analyse(&robot, &robot.params(), &qs, measure);
     let names =
         |v: &[calbench::kinematics::Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
+    // Guo 2024 §3.1: the separation of the joint parameters (θ, α, a, d, β blocks).
+    let sep = gcn_blocks
+        .map(|t| calbench::poses::separate(&robot, &robot.joint_params(), &qs, measure, t));
     if json {
         let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
-        out!(
-            "{}",
-            json!({
-                "rank": a.rank,
-                "identifiable": names(&a.identifiable),
-                "unidentifiable": names(&a.unidentifiable),
-                "groups": groups,
-                "condition_number": a.condition_number,
-            })
-        );
+        let mut v = json!({
+            "rank": a.rank,
+            "identifiable": names(&a.identifiable),
+            "unidentifiable": names(&a.unidentifiable),
+            "groups": groups,
+            "condition_number": a.condition_number,
+        });
+        if let (Some(sep), Some(obj)) = (&sep, v.as_object_mut()) {
+            if let Some(extra) = sep.to_json().as_object() {
+                obj.extend(extra.clone());
+            }
+        }
+        out!("{v}");
     } else {
         out!("robot {} ({} poses, {:?})", robot.name, poses, measure);
         out!("rank {} of {} parameters", a.rank, robot.params().len());
@@ -196,6 +211,23 @@ pub fn identifiability(
             "condition number (column-scaled): {:.4e}",
             a.condition_number
         );
+        if let Some(sep) = &sep {
+            out!("GCN per block (Guo 2024 eq. 14), before and after the separation:");
+            for b in &sep.blocks {
+                out!(
+                    "  {:<6} {:>12.4e} {:>12.4e}",
+                    b.name,
+                    b.gcn_before,
+                    b.gcn_after
+                );
+            }
+            out!("removed: {}", names(&sep.removed).join(" "));
+            out!(
+                "GCN full model {:.4e}, separated {:.4e}",
+                sep.gcn_full(),
+                sep.gcn_separated()
+            );
+        }
     }
     Ok(())
 }
@@ -446,13 +478,15 @@ pub fn poses(
             )
         })
         .transpose()?;
-    let mut params = study::identified_params(&nominal, measure, false);
+    let with_base = sc.registration == Registration::Identify;
+    let mut params = study::identified_params(&nominal, measure, with_base);
     let mut g = calbench::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
     let mut separation = None;
     if c.separate {
-        let s = calbench::poses::separate(&nominal, &params, &pool, measure, c.separate_threshold);
-        params = s.kept.clone();
+        let (kept, s) =
+            study::separated_params(&nominal, measure, with_base, &pool, c.separate_threshold);
+        params = kept;
         separation = Some(s);
     }
     let model = RobotPoseModel::new(&nominal, &params, measure);
@@ -469,10 +503,14 @@ pub fn poses(
     scores["parameters"] = json!(params.iter().map(|p| p.to_string()).collect::<Vec<_>>());
     scores["termination"] = json!(sel.termination);
     if let Some(s) = &separation {
-        scores["separation"] = json!({
-            "removed": s.removed.iter().map(|p| p.to_string()).collect::<Vec<_>>(),
-            "gcn": s.table.iter().map(|(k, v)| json!({"block": k, "gcn": v})).collect::<Vec<_>>(),
-        });
+        let mut j = s.to_json();
+        // The earlier form of the table, kept for scripts that read it.
+        j["gcn"] = json!(s
+            .table
+            .iter()
+            .map(|(k, v)| json!({"block": k, "gcn": v}))
+            .collect::<Vec<_>>());
+        scores["separation"] = j;
     }
     let mut trace = String::from("iteration,objective\n");
     for (i, f) in sel.trace.iter().enumerate() {
@@ -489,10 +527,19 @@ pub fn poses(
         write_pose_list(&dir.join("poses.csv"), &nominal, &sel.poses)?;
         write_file(&dir.join("scores.json"), &to_json_text(&scores)?)?;
         write_file(&dir.join("trace.csv"), &trace)?;
-        match &curve_csv {
-            Some(text) => write_file(&dir.join("curve.csv"), text),
-            None => Ok(()),
+        if let (Some(text), Some(pts)) = (&curve_csv, &curve) {
+            write_file(&dir.join("curve.csv"), text)?;
+            let pts: Vec<(Real, Real, Real)> =
+                pts.iter().map(|&(n, f)| (n as Real, f, 0.0)).collect();
+            calbench::report::plots::sweep(
+                &dir.join("curve"),
+                "Objective against pose count (Guo 2024 fig. 7)",
+                "pose count",
+                "objective",
+                &[(format!("{} objective", c.objective.as_str()), pts)],
+            )?;
         }
+        Ok(())
     })?;
     out!(
         "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",

@@ -494,6 +494,7 @@ mod tests {
             values,
             units: Units::DEG_MM,
             coupling: None,
+            beta_joints: None,
         };
         // base.rx = −90°: base z becomes world +y; the link (local x) stays along world x at θ = 0.
         r.set(Param::Base(3), -std::f64::consts::FRAC_PI_2);

@@ -53,6 +53,13 @@ enum Command {
         /// Analyse these poses instead (a pose list or measurement CSV, `q1..qn` columns).
         #[arg(long)]
         poses_file: Option<PathBuf>,
+        /// Also report Guo 2024's ill-conditioned parameter separation of the joint
+        /// parameters: each block's GCN before and after, and the removed parameters.
+        #[arg(long)]
+        gcn_blocks: bool,
+        /// GCN threshold of the separation (Guo 2024 §3.1: 1e2).
+        #[arg(long, default_value_t = 1e2)]
+        gcn_threshold: f64,
         /// Print JSON to stdout.
         #[arg(long)]
         json: bool,
@@ -256,6 +263,8 @@ fn run(cli: Cli) -> Result<()> {
             poses,
             seed,
             poses_file,
+            gcn_blocks,
+            gcn_threshold,
             json,
         }) => Ok(commands::identifiability(
             &robot,
@@ -263,6 +272,7 @@ fn run(cli: Cli) -> Result<()> {
             poses,
             seed,
             poses_file.as_deref(),
+            gcn_blocks.then_some(gcn_threshold),
             json,
         )?),
     }

@@ -67,7 +67,7 @@ pub const BUILTINS: &[Builtin] = &[
         name: "guo-3t2r",
         summary:
             "approximation of Guo 2024's 3T2R arm: differential screws 1/2, vertical screw 3, \
-                  revolute 4-5 at 45° (every length guessed)",
+                  revolute 4-5 at 45°, β on joint 2 (every length guessed)",
         build: guo_3t2r,
         // Guessed. Joint 1 is the turntable (N·m/rad); joints 2 and 3 are ball screws (N/mm),
         // rigid in the sag model. In this approximate geometry joints 1 and 4 are vertical and
@@ -132,6 +132,7 @@ fn from_table(name: &str, convention: Convention, kinds: &[JointType], rows: &[R
         values,
         units: Units::DEG_MM,
         coupling: None,
+        beta_joints: None,
     }
 }
 
@@ -226,6 +227,11 @@ pub fn tx60_qiao_params() -> Vec<Param> {
 /// with α4 = 45°. Joint values: q1, q2 are the two screw travels (mm), q3 the vertical
 /// travel (mm), q4, q5 in degrees.
 ///
+/// The model is Guo's position error model (eqs. 5–7): θ, d, a, α of the five joints and
+/// Hayati's β on joint 2 alone (nominal 0), 21 parameters; Guo introduces β2 for the arm's one
+/// pair of adjacent parallel joints (the text under eq. 6) and sets ∂A_i/∂β_i = 0 for every
+/// other joint. The convention is `dh_beta` with [`Robot::beta_joints`] = joint 2.
+///
 /// **Guessed** (not in the paper): every length (d1 = 400, d2 = 300, d4 = 150, d5 = 100,
 /// tool z = 60 mm), L1 = 400 mm, the screw travels 0–400 mm (which keep |ψ| ≤ 45° as eq. 17
 /// asks), the vertical travel 0–500 mm and the ranges of J4 (±180°) and J5 (±120°).
@@ -233,7 +239,7 @@ pub fn guo_3t2r() -> Robot {
     use JointType::{Prismatic, Revolute};
     let mut r = from_table(
         "guo-3t2r",
-        Convention::Dh,
+        Convention::DhBeta,
         &[Revolute, Prismatic, Prismatic, Revolute, Revolute],
         &[
             // (θ, d, a, α, β, limits); limits of joints 1–2 are screw travels in mm.
@@ -247,6 +253,7 @@ pub fn guo_3t2r() -> Robot {
     // Joint 1's limits are screw travels (mm), not angles.
     r.joints[0].limits = (0.0, 400.0);
     r.coupling = Some(Coupling::Differential { l1_mm: 400.0 });
+    r.beta_joints = Some(vec![1]);
     r.set(Param::Tool(2), 60.0);
     r
 }

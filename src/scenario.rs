@@ -52,6 +52,8 @@ struct RawScenario {
     calibration: CalibrationSection,
     #[serde(default)]
     validation: ValidationSection,
+    #[serde(default)]
+    identification: IdentificationSpec,
     methods: Vec<toml::Table>,
     sweep: Option<SweepField>,
 }
@@ -138,6 +140,19 @@ enum SweepField {
     Grid(Vec<SweepSection>),
 }
 
+/// `[identification]`: what the methods identify (FORMATS.md, scenario file).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IdentificationSpec {
+    /// The identified parameters: `"identifiable"` (the default: the joint and tool
+    /// parameters pivoted QR finds identifiable, with the base when the registration is
+    /// identified), `"all"` (every joint parameter of the model, θ, d, a, α and the β that
+    /// exist, Guo 2024's full 21-parameter model of eq. 7, with the identifiable base and tool
+    /// parameters) or a list of names. Lists that the data cannot determine are refused for
+    /// the methods that need full rank (LS); LM and ridge solve them by their damping.
+    pub params: ParamSelection,
+}
+
 /// Where the robot comes from.
 #[derive(Clone, Debug, PartialEq)]
 pub enum RobotRef {
@@ -158,8 +173,12 @@ pub enum PoseStrategy {
     Grid,
     /// The pose list `calibration.poses_file`.
     File(PathBuf),
-    /// Optimised once per study on the nominal robot (Guo 2024 §3).
+    /// Optimised once per study on the nominal robot (Guo 2024 §3), on the separated model
+    /// when `calibration.separate` is set.
     Optimised(Optimiser),
+    /// Optimised once per study on the full model, every joint parameter with no separation
+    /// (Guo 2024 fig. 6 and table 8, "full-parameter model").
+    OptimisedFull(Optimiser),
 }
 
 /// The names accepted in `calibration.strategies` (serde, kebab-case).
@@ -180,6 +199,12 @@ pub enum StrategyName {
     Ide,
     /// DETMAX-IDE ([`PoseStrategy::Optimised`]).
     DetmaxIde,
+    /// DETMAX on the full model ([`PoseStrategy::OptimisedFull`]).
+    DetmaxFull,
+    /// IDE on the full model ([`PoseStrategy::OptimisedFull`]).
+    IdeFull,
+    /// DETMAX-IDE on the full model ([`PoseStrategy::OptimisedFull`]).
+    DetmaxIdeFull,
 }
 
 impl PoseStrategy {
@@ -191,6 +216,12 @@ impl PoseStrategy {
             PoseStrategy::Grid => "grid",
             PoseStrategy::File(_) => "file",
             PoseStrategy::Optimised(o) => o.as_str(),
+            PoseStrategy::OptimisedFull(o) => match o {
+                Optimiser::Random => "random",
+                Optimiser::Detmax => "detmax-full",
+                Optimiser::Ide => "ide-full",
+                Optimiser::DetmaxIde => "detmax-ide-full",
+            },
         }
     }
 }
@@ -313,6 +344,8 @@ pub struct Scenario {
     pub calibration: Calibration,
     /// Validation poses.
     pub validation: Validation,
+    /// What the methods identify.
+    pub identification: IdentificationSpec,
     /// Identification methods compared.
     pub methods: Vec<MethodSpec>,
     /// The optional sweep.
@@ -435,6 +468,9 @@ impl Scenario {
                 StrategyName::Detmax => PoseStrategy::Optimised(Optimiser::Detmax),
                 StrategyName::Ide => PoseStrategy::Optimised(Optimiser::Ide),
                 StrategyName::DetmaxIde => PoseStrategy::Optimised(Optimiser::DetmaxIde),
+                StrategyName::DetmaxFull => PoseStrategy::OptimisedFull(Optimiser::Detmax),
+                StrategyName::IdeFull => PoseStrategy::OptimisedFull(Optimiser::Ide),
+                StrategyName::DetmaxIdeFull => PoseStrategy::OptimisedFull(Optimiser::DetmaxIde),
             };
             if strategies
                 .iter()
@@ -556,6 +592,7 @@ impl Scenario {
                 count: v.count,
                 region: v.region,
             },
+            identification: raw.identification,
             methods,
             sweep,
             table,
@@ -570,6 +607,34 @@ impl Scenario {
         if let ParamSelection::List(_) = &scenario.errors.params {
             let measure = scenario.tracker.measure.measure();
             check(selected_params(&robot, &scenario.errors.params, measure).map(|_| ()))?;
+        }
+        if let ParamSelection::List(names) = &scenario.identification.params {
+            let all = robot.params();
+            crate::sim::settings::listed_params(names, |n| {
+                crate::kinematics::Param::parse(n)
+                    .filter(|p| all.contains(p))
+                    .ok_or_else(|| {
+                        Error::setting(
+                            "identification.params",
+                            format!(
+                                "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
+                                robot.name,
+                                robot.convention.as_str(),
+                                robot.dof()
+                            ),
+                        )
+                    })
+            })
+            .map_err(|e| match e {
+                Error::Setting { msg, .. } => ferr("identification.params", msg),
+                other => other,
+            })?;
+            if names.is_empty() {
+                return Err(ferr(
+                    "identification.params",
+                    "give at least one parameter name".into(),
+                ));
+            }
         }
         if let Some(sw) = &scenario.sweep {
             for point in sw.points() {

@@ -256,3 +256,39 @@ fn identify_takes_method_options_and_identifiability_the_users_poses() {
     assert!(a["rank"].as_u64().unwrap() > 10);
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `identifiability --gcn-blocks --json` reports Guo 2024's separation of the joint
+/// parameters (README, Commands): each block's GCN before and after, and what was removed.
+#[test]
+fn identifiability_reports_gcn_blocks_of_the_separation() {
+    let o = calbench(&[
+        "identifiability",
+        "--robot",
+        "guo-3t2r",
+        "--measure",
+        "position",
+        "--gcn-blocks",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let a: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let blocks = a["blocks"].as_object().unwrap();
+    for name in ["theta", "d", "a", "alpha", "beta"] {
+        let after = blocks[name]["gcn_after"].as_f64().unwrap();
+        assert!(after <= 1e2, "{name}: {after}");
+    }
+    assert!(!a["removed"].as_array().unwrap().is_empty());
+    assert!(a["rank"].as_u64().is_some());
+    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args([
+            "identifiability",
+            "--robot",
+            "guo-3t2r",
+            "--gcn-blocks",
+            "--gcn-threshold=-1",
+        ])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--gcn-threshold"));
+}

@@ -162,6 +162,7 @@ fn arb_robot() -> impl Strategy<Value = Robot> {
                 values,
                 units: Units::DEG_MM,
                 coupling: None,
+                beta_joints: None,
             }
         })
 }

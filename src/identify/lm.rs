@@ -82,6 +82,12 @@ fn undamp(work: &mut Work, damping: Real, marquardt: bool, diag: &DVector<Real>)
 }
 
 impl Solver for LmOptions {
+    fn tolerates_rank_deficiency(&self) -> bool {
+        // μ I (or the adaptive λ) keeps JᵀJ + μI invertible; μ = 0 without adaptation is
+        // Gauss–Newton.
+        self.adaptive || self.mu > 0.0
+    }
+
     fn check(&self) -> Result<()> {
         check_stop(self.eps, self.max_iter)?;
         finite_non_negative("mu", self.mu)?;

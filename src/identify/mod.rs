@@ -72,6 +72,14 @@ pub trait Method: std::fmt::Debug + Send + Sync {
     /// stream (used by the stochastic searches only). An `Err` means the problem is
     /// inconsistent; how a valid problem's iterations ended is [`Identified::termination`].
     fn identify(&self, problem: &CalibrationProblem, rng: &mut Rng) -> Result<Identified>;
+
+    /// Whether the method gives an answer on parameters the data cannot all determine (a
+    /// rank-deficient Jacobian): LM's damping (Guo 2024 eq. 8) and ridge's regularisation
+    /// (Li 2018 eq. 14) keep such a problem solvable; plain least squares does not, and a
+    /// study refuses to run it on a rank-deficient `identification.params`.
+    fn tolerates_rank_deficiency(&self) -> bool {
+        false
+    }
 }
 
 /// Why an identification stopped. The names (serde, kebab-case) are those of reports and

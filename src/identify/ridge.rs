@@ -52,6 +52,10 @@ impl RidgeOptions {
 }
 
 impl Solver for RidgeOptions {
+    fn tolerates_rank_deficiency(&self) -> bool {
+        true
+    }
+
     fn check(&self) -> Result<()> {
         self.xi.check("xi")?;
         check_stop(self.eps, self.max_iter)

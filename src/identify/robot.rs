@@ -296,4 +296,8 @@ impl<S: Solver> Method for S {
     fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> crate::Result<Identified> {
         identify_robot(self, problem)
     }
+
+    fn tolerates_rank_deficiency(&self) -> bool {
+        Solver::tolerates_rank_deficiency(self)
+    }
 }

@@ -88,6 +88,10 @@ impl<'de> Deserialize<'de> for RobustOptions {
 }
 
 impl Solver for RobustOptions {
+    fn tolerates_rank_deficiency(&self) -> bool {
+        true
+    }
+
     fn check(&self) -> Result<()> {
         self.robust.check()?;
         self.ridge.check()

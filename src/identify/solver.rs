@@ -57,6 +57,10 @@ pub trait Solver: std::fmt::Debug + Send + Sync {
     fn check(&self) -> Result<()>;
     /// Runs from `x0` on a problem [`solve`] has checked.
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified;
+    /// See [`super::Method::tolerates_rank_deficiency`].
+    fn tolerates_rank_deficiency(&self) -> bool {
+        false
+    }
 }
 
 /// The weights the iterations start from: the problem's prior weights, or 1.

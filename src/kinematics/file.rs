@@ -23,6 +23,7 @@ struct RobotFile {
     base: Option<PartEntry>,
     tool: Option<PartEntry>,
     coupling: Option<CouplingEntry>,
+    beta_joints: Option<Vec<i64>>,
 }
 
 #[derive(Deserialize)]
@@ -190,6 +191,37 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
             }
         }
     }
+    let beta_joints = match &f.beta_joints {
+        None => None,
+        Some(list) => {
+            if !convention.has_beta() {
+                return Err(err(
+                    "beta_joints".into(),
+                    "convention \"dh\" has no β; use \"dh_beta\" or \"mdh\"".into(),
+                ));
+            }
+            let mut out: Vec<usize> = Vec::with_capacity(list.len());
+            for &j in list {
+                let ok = j >= 1 && (j as usize) <= n && !out.contains(&(j as usize - 1));
+                if !ok {
+                    return Err(err(
+                        "beta_joints".into(),
+                        format!("must list distinct joint numbers from 1 to {n}, got {j}"),
+                    ));
+                }
+                out.push(j as usize - 1);
+            }
+            for (j, e) in f.joints.iter().enumerate() {
+                if !out.contains(&j) && e.beta.is_some_and(|b| b != 0.0) {
+                    return Err(err(
+                        joint_place(j, "beta"),
+                        format!("joint {} is not in `beta_joints` and carries no β", j + 1),
+                    ));
+                }
+            }
+            Some(out)
+        }
+    };
     let robot = Robot {
         name: f.name,
         convention,
@@ -197,6 +229,7 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
         values,
         units,
         coupling,
+        beta_joints,
     };
     // Everything above was checked value by value in the file's units; this is the same
     // check on the assembled model, so the two cannot drift apart.
@@ -270,6 +303,10 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
     let _ = writeln!(s, "convention = \"{}\"", robot.convention.as_str());
     let _ = writeln!(s, "length_unit = \"{}\"", robot.units.length_name());
     let _ = writeln!(s, "angle_unit = \"{}\"", robot.units.angle_name());
+    if let (true, Some(bj)) = (robot.convention.has_beta(), &robot.beta_joints) {
+        let list: Vec<String> = bj.iter().map(|j| (j + 1).to_string()).collect();
+        let _ = writeln!(s, "beta_joints = [{}]", list.join(", "));
+    }
     if let Some(Coupling::Differential { l1_mm }) = robot.coupling {
         let _ = writeln!(
             s,
@@ -293,7 +330,7 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
         let _ = writeln!(s, "a = {}", num(g(Param::A(j)) / lu));
         let _ = writeln!(s, "d = {}", num(g(Param::D(j)) / lu));
         let _ = writeln!(s, "theta = {}", num(g(Param::Theta(j)) / au));
-        if robot.convention.has_beta() {
+        if robot.carries_beta(j) {
             let _ = writeln!(s, "beta = {}", num(g(Param::Beta(j)) / au));
         }
         let _ = writeln!(

@@ -268,6 +268,10 @@ pub struct Robot {
     pub units: Units,
     /// Optional actuator coupling (Guo 2024's differential drive).
     pub coupling: Option<Coupling>,
+    /// The joints (0-based) that carry Hayati's β when the convention has β; `None`: every
+    /// joint. Guo 2024 (§1.2, the text under eq. 6) puts β on A2 alone, its one pair of
+    /// adjacent parallel joints; the β of the other joints is not a parameter of its model.
+    pub beta_joints: Option<Vec<usize>>,
 }
 
 impl Robot {
@@ -277,9 +281,31 @@ impl Robot {
     }
 
     /// The parameters that exist in this robot's model, in flat-vector order: θ, d, a, α
-    /// (and β for `dh_beta` and `mdh`) per joint, then the six base and six tool parameters.
+    /// (and β for `dh_beta` and `mdh`, on the joints of [`Robot::beta_joints`]) per joint,
+    /// then the six base and six tool parameters.
     pub fn params(&self) -> Vec<Param> {
         Param::all(self.dof(), self.convention.has_beta())
+            .into_iter()
+            .filter(|&p| match p {
+                Param::Beta(j) => self.carries_beta(j),
+                _ => true,
+            })
+            .collect()
+    }
+
+    /// Whether joint `j` (0-based) carries a β parameter: the convention has β and the joint
+    /// is one of [`Robot::beta_joints`] (every joint when that is `None`).
+    pub fn carries_beta(&self, j: usize) -> bool {
+        self.convention.has_beta() && self.beta_joints.as_ref().is_none_or(|v| v.contains(&j))
+    }
+
+    /// The joint parameters of the model (θ, d, a, α of every joint and the β that exist):
+    /// [`Robot::params`] without base and tool, Guo 2024's 21 for its 3T2R arm (eq. 7).
+    pub fn joint_params(&self) -> Vec<Param> {
+        self.params()
+            .into_iter()
+            .filter(|p| p.joint().is_some())
+            .collect()
     }
 
     /// The value of one parameter (mm or rad).
@@ -413,6 +439,14 @@ impl Robot {
                     "convention \"dh\" has no β; use \"dh_beta\" or \"mdh\"".into(),
                 ));
             }
+            if let Param::Beta(j) = p {
+                if self.convention.has_beta() && !self.carries_beta(j) && v != 0.0 {
+                    return Err(issue(
+                        place,
+                        format!("joint {} carries no β (see `beta_joints`)", j + 1),
+                    ));
+                }
+            }
         }
         for (j, joint) in self.joints.iter().enumerate() {
             let quantity = if self.q_is_length(j, joint.kind) {
@@ -431,6 +465,25 @@ impl Robot {
                     joint_place(j, "limits"),
                     format!("lower limit {lo:?} {unit} must be below upper limit {hi:?} {unit}"),
                 ));
+            }
+        }
+        if let Some(bj) = &self.beta_joints {
+            if !self.convention.has_beta() {
+                return Err(issue(
+                    "beta_joints".into(),
+                    "convention \"dh\" has no β; use \"dh_beta\" or \"mdh\"".into(),
+                ));
+            }
+            for (k, &j) in bj.iter().enumerate() {
+                if j >= n || bj[..k].contains(&j) {
+                    return Err(issue(
+                        "beta_joints".into(),
+                        format!(
+                            "must list distinct joint numbers from 1 to {n}, got {}",
+                            j + 1
+                        ),
+                    ));
+                }
             }
         }
         if let Some(Coupling::Differential { l1_mm }) = self.coupling {

@@ -123,6 +123,8 @@ pub struct BlockInfo {
     pub strategies: Vec<String>,
     /// Per strategy: the fixed pose set, if any.
     pub fixed: Vec<Option<FixedInfo>>,
+    /// Guo's separation report (`calibration.separate`), if any.
+    pub separation: Option<serde_json::Value>,
 }
 
 impl BlockInfo {
@@ -154,6 +156,7 @@ impl BlockInfo {
                     })
                 })
                 .collect(),
+            separation: study.separation.as_ref().map(|s| s.to_json()),
         }
     }
 }

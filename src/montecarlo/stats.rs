@@ -199,14 +199,20 @@ pub struct Accumulator {
     cells: Vec<Cell>,
 }
 
+/// Whether an outcome counts (not a failure). A `rank-deficient` ending counts when the
+/// identified list is known to hold undetermined parameters (`identification.params`): it is
+/// then the expected outcome of a damped method.
 fn usable(o: &Outcome) -> bool {
-    !matches!(
-        o.termination,
-        Termination::Diverged
-            | Termination::Singular
-            | Termination::RankDeficient
-            | Termination::InvalidInput
-    ) && o.identified.iter().all(|x| x.is_finite())
+    let undetermined_ok = o.rank_deficient_expected && o.termination == Termination::RankDeficient;
+    (undetermined_ok
+        || !matches!(
+            o.termination,
+            Termination::Diverged
+                | Termination::Singular
+                | Termination::RankDeficient
+                | Termination::InvalidInput
+        ))
+        && o.identified.iter().all(|x| x.is_finite())
         && o.after_mm.rms.is_finite()
 }
 

@@ -3,13 +3,13 @@
 //! optimised pose sets — computed once (FORMATS.md `run`; Guo 2024 §3 for the optimised sets).
 
 use crate::compliance::Compliance;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::identifiability::identifiable_generic;
 use crate::jacobian::Measure;
 use crate::jacobian::{jacobian, Columns};
 use crate::kinematics::{Param, Robot};
 use crate::math::Real;
-use crate::poses::{self, RobotPoseModel, SelectOptions};
+use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::rng;
 use crate::scenario::{PoseStrategy, Registration, Scenario};
 use crate::sim::poses::{read_pose_list, sample_region};
@@ -44,12 +44,19 @@ pub struct Study {
     pub params: Vec<Param>,
     /// The parameters that carry injected errors.
     pub error_params: Vec<Param>,
+    /// The identified parameters that the data cannot determine (pivoted QR over generic
+    /// poses): empty unless `identification.params` names such parameters, which only the
+    /// methods that tolerate rank deficiency identify.
+    pub undetermined: Vec<Param>,
     /// The simulated tracker.
     pub tracker: Tracker,
     /// Gravity sag, if modelled.
     pub compliance: Option<Compliance>,
     /// Per calibration strategy: the fixed pose set, or `None` when drawn per trial.
     pub fixed: Vec<Option<FixedSet>>,
+    /// The ill-conditioned parameter separation (Guo 2024 §3.1) of the first optimised
+    /// strategy's candidate pool, when `calibration.separate` is set.
+    pub separation: Option<Separation>,
 }
 
 /// The parameters to identify: the identifiable ones among the joint and tool parameters
@@ -71,6 +78,110 @@ pub fn identified_params(robot: &Robot, measure: Measure, with_base: bool) -> Ve
     params
 }
 
+/// The base and tool parameters among `params`.
+fn ends(params: &[Param]) -> impl Iterator<Item = Param> + '_ {
+    params.iter().copied().filter(|p| p.joint().is_none())
+}
+
+/// The full model (`identification.params = "all"`): every joint parameter of the robot's
+/// model ([`Robot::joint_params`], Guo 2024's 21 of eq. 7 for its 3T2R arm), identifiable or
+/// not, with the tool parameters that act on the measured quantity (x, y, z for position
+/// data, all six for full-pose data) and, when the registration is identified, the six base
+/// parameters, in flat-vector order.
+pub fn full_params(robot: &Robot, measure: Measure, with_base: bool) -> Vec<Param> {
+    let mut v = robot.joint_params();
+    // The tool components that move the measured quantity: the point for position data,
+    // the whole frame for full-pose data; the base when the registration is identified.
+    let tool = if measure == Measure::Pose { 6 } else { 3 };
+    v.extend((0..tool).map(Param::Tool));
+    if with_base {
+        v.extend((0..6).map(Param::Base));
+    }
+    v.sort_by_key(|p| p.index(robot.dof()));
+    v
+}
+
+/// The separated model (Guo 2024 §3.1, eq. 27) as the pose optimisers use it: the joint
+/// parameters that the ill-conditioned parameter separation keeps over the poses `pool`, with
+/// the base and tool parameters of [`identified_params`], reduced to those pivoted QR finds
+/// identifiable ([`optimisable`]), in flat-vector order; and the separation itself.
+pub fn separated_params(
+    robot: &Robot,
+    measure: Measure,
+    with_base: bool,
+    pool: &[Vec<Real>],
+    threshold: Real,
+) -> (Vec<Param>, Separation) {
+    let sep = poses::separate(robot, &robot.joint_params(), pool, measure, threshold);
+    let mut v = sep.kept.clone();
+    v.extend(ends(&identified_params(robot, measure, with_base)));
+    (optimisable(robot, &v, measure), sep)
+}
+
+/// The parameters of `params` that pivoted QR finds identifiable over generic poses, in
+/// flat-vector order: the model a pose optimiser scores. The separation works block by block
+/// and leaves dependencies between blocks (Guo's own separated model keeps a GCN of
+/// 2.2749e18); on a rank-deficient Jacobian every observability index is zero (eqs. 9–15),
+/// which would leave the optimisers nothing to compare.
+pub fn optimisable(robot: &Robot, params: &[Param], measure: Measure) -> Vec<Param> {
+    let mut v = identifiable_generic(robot, params, measure);
+    v.sort_by_key(|p| p.index(robot.dof()));
+    v
+}
+
+/// The parameters `scenario` identifies (`identification.params`): [`identified_params`],
+/// [`full_params`] or the listed names in flat-vector order. A list the data cannot all
+/// determine is refused when a method of the scenario needs full rank
+/// ([`crate::identify::Method::tolerates_rank_deficiency`]), naming the method and the
+/// undetermined parameters. Also returns the parameters that pivoted QR leaves over (empty
+/// for `"identifiable"`).
+pub fn study_params(
+    scenario: &Scenario,
+    robot: &Robot,
+    measure: Measure,
+) -> Result<(Vec<Param>, Vec<Param>)> {
+    let with_base = scenario.registration == Registration::Identify;
+    let mut params = match &scenario.identification.params {
+        ParamSelection::Identifiable => {
+            return Ok((identified_params(robot, measure, with_base), Vec::new()))
+        }
+        ParamSelection::All => full_params(robot, measure, with_base),
+        ParamSelection::List(names) => names.iter().filter_map(|n| Param::parse(n)).collect(),
+    };
+    params.sort_by_key(|p| p.index(robot.dof()));
+    let determined = identifiable_generic(robot, &params, measure);
+    let undetermined: Vec<Param> = params
+        .iter()
+        .copied()
+        .filter(|p| !determined.contains(p))
+        .collect();
+    if !undetermined.is_empty() {
+        if let Some(m) = scenario
+            .methods
+            .iter()
+            .find(|m| !m.method.tolerates_rank_deficiency())
+        {
+            let undetermined: Vec<String> = undetermined.iter().map(|p| p.to_string()).collect();
+            let msg =
+                format!(
+                "method \"{}\" needs parameters the data determine, but {} of these {} are not \
+                 identifiable from {} data (pivoted QR leaves over {}); use a method that \
+                 tolerates rank deficiency (lm, ridge, igg3), or params = \"identifiable\"",
+                m.label,
+                undetermined.len(),
+                params.len(),
+                if measure == Measure::Pose { "full-pose" } else { "position" },
+                undetermined.join(", ")
+            );
+            return Err(match &scenario.path {
+                Some(p) => Error::file(p, "identification.params", msg),
+                None => Error::setting("identification.params", msg),
+            });
+        }
+    }
+    Ok((params, undetermined))
+}
+
 impl Study {
     /// Prepares `scenario`: loads the robot, picks the parameters, builds the tracker and the
     /// compliance model, and optimises the fixed pose sets.
@@ -78,10 +189,10 @@ impl Study {
         let nominal = scenario.robot()?;
         let measure = scenario.tracker.measure.measure();
         let with_base = scenario.registration == Registration::Identify;
-        let params = identified_params(&nominal, measure, with_base);
+        let (params, undetermined) = study_params(&scenario, &nominal, measure)?;
         let error_params = match (&scenario.errors.kind, &scenario.errors.params) {
             (ErrorKind::None, _) => Vec::new(),
-            (_, ParamSelection::Identifiable) => params
+            (_, ParamSelection::Identifiable) => identified_params(&nominal, measure, with_base)
                 .iter()
                 .copied()
                 .filter(|p| !matches!(p, Param::Base(_)))
@@ -92,6 +203,7 @@ impl Study {
         let compliance = Compliance::new(&scenario.compliance, &nominal, scenario.builtin())?;
 
         let mut fixed = Vec::new();
+        let mut separation = None;
         for (i, s) in scenario.calibration.strategies.iter().enumerate() {
             let c = &scenario.calibration;
             let set = match s {
@@ -119,12 +231,25 @@ impl Study {
                         crb_trace: None,
                     })
                 }
-                PoseStrategy::Optimised(strategy) => {
+                PoseStrategy::Optimised(strategy) | PoseStrategy::OptimisedFull(strategy) => {
                     let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));
                     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
-                    let opt_params = if c.separate {
-                        poses::separate(&nominal, &params, &pool, measure, c.separate_threshold)
-                            .kept
+                    let opt_params = if matches!(s, PoseStrategy::OptimisedFull(_)) {
+                        optimisable(
+                            &nominal,
+                            &full_params(&nominal, measure, with_base),
+                            measure,
+                        )
+                    } else if c.separate {
+                        let (kept, sep) = separated_params(
+                            &nominal,
+                            measure,
+                            with_base,
+                            &pool,
+                            c.separate_threshold,
+                        );
+                        separation.get_or_insert(sep);
+                        kept
                     } else {
                         params.clone()
                     };
@@ -148,9 +273,11 @@ impl Study {
             measure,
             params,
             error_params,
+            undetermined,
             tracker,
             compliance,
             fixed,
+            separation,
         };
         let traces: Vec<Option<Real>> = study
             .fixed

@@ -48,6 +48,10 @@ pub struct Outcome {
     pub iterations: usize,
     /// How it ended.
     pub termination: Termination,
+    /// Whether the identified list is known to be rank-deficient (`identification.params`
+    /// names undetermined parameters): a `rank-deficient` termination is then the expected
+    /// outcome of a damped method, not a failure.
+    pub rank_deficient_expected: bool,
     /// Wall time of registration and identification (s). Not part of the reproducible output.
     pub seconds: Real,
 }
@@ -216,6 +220,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 iterations,
                 termination,
+                rank_deficient_expected: !study.undetermined.is_empty(),
                 seconds,
             });
         }

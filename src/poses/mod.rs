@@ -25,7 +25,7 @@ use rand::seq::index::sample;
 
 pub use ide::IdeOptions;
 pub use indices::{score, Scores};
-pub use separation::{separate, Separation};
+pub use separation::{separate, BlockGcn, Separation};
 
 use crate::jacobian::{pose_rows, Columns, Measure};
 use crate::kinematics::{Chain, Param, Robot};

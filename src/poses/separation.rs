@@ -36,6 +36,70 @@ pub struct Separation {
     /// branch `d-d2` (block `d` without `d2`, tables 2–3), each reduced block `d[-d3]` (after
     /// the removals so far), and `separated` (the kept parameters).
     pub table: Vec<(String, Real)>,
+    /// Per block, in order of first appearance: its GCN before and after the separation
+    /// (Guo 2024 table 1 and the reduced blocks of tables 2–3).
+    pub blocks: Vec<BlockGcn>,
+}
+
+/// One block's GCN (eq. 14) before and after the separation.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BlockGcn {
+    /// The block: `theta`, `d`, `a`, `alpha`, `beta`, `base` or `tool` ([`Param::block`]).
+    pub name: &'static str,
+    /// GCN of the whole block.
+    pub gcn_before: Real,
+    /// GCN of the block's kept parameters (0 when none is kept).
+    pub gcn_after: Real,
+}
+
+impl Separation {
+    /// GCN of the full model (every parameter passed in).
+    pub fn gcn_full(&self) -> Real {
+        self.lookup("full")
+    }
+
+    /// GCN of the reconstructed model J_p (the kept parameters, eq. 27).
+    pub fn gcn_separated(&self) -> Real {
+        self.lookup("separated")
+    }
+
+    fn lookup(&self, label: &str) -> Real {
+        self.table
+            .iter()
+            .find(|(l, _)| l == label)
+            .map_or(Real::NAN, |x| x.1)
+    }
+
+    /// The report as JSON (FORMATS.md `identifiability --gcn-blocks`, `summary.json`
+    /// `separation`): `blocks` (name → `gcn_before`, `gcn_after`), `removed` (names, in the
+    /// order removed), `kept`, `gcn_full`, `gcn_separated` and `table` (every GCN computed, in
+    /// order, as `{"label", "gcn"}`). Infinite GCNs are written as `null`.
+    pub fn to_json(&self) -> serde_json::Value {
+        use serde_json::json;
+        let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
+        let blocks: serde_json::Map<String, serde_json::Value> = self
+            .blocks
+            .iter()
+            .map(|b| {
+                (
+                    b.name.to_string(),
+                    json!({"gcn_before": b.gcn_before, "gcn_after": b.gcn_after}),
+                )
+            })
+            .collect();
+        json!({
+            "blocks": blocks,
+            "removed": names(&self.removed),
+            "kept": names(&self.kept),
+            "gcn_full": self.gcn_full(),
+            "gcn_separated": self.gcn_separated(),
+            "table": self
+                .table
+                .iter()
+                .map(|(k, v)| json!({"label": k, "gcn": v}))
+                .collect::<Vec<_>>(),
+        })
+    }
 }
 
 /// Separates ill-conditioned parameters of `params` over the poses `qs` (internal units):
@@ -69,9 +133,11 @@ pub fn separate(
     }
     let mut removed_cols: Vec<usize> = Vec::new();
     let mut offending = Vec::new();
+    let mut before = Vec::with_capacity(blocks.len());
     for (name, idx) in &blocks {
         let g = sub_gcn(idx);
         table.push((name.to_string(), g));
+        before.push(g);
         if g.is_nan() || g > threshold {
             offending.push((*name, idx.clone()));
         }
@@ -113,10 +179,27 @@ pub fn separate(
         .filter(|c| !removed_cols.contains(c))
         .collect();
     table.push(("separated".to_string(), sub_gcn(&kept_idx)));
+    let blocks = blocks
+        .iter()
+        .zip(before)
+        .map(|((name, idx), gcn_before)| {
+            let kept: Vec<usize> = idx
+                .iter()
+                .copied()
+                .filter(|c| !removed_cols.contains(c))
+                .collect();
+            BlockGcn {
+                name,
+                gcn_before,
+                gcn_after: sub_gcn(&kept),
+            }
+        })
+        .collect();
     Separation {
         kept: kept_idx.iter().map(|&c| params[c]).collect(),
         removed: removed_cols.iter().map(|&c| params[c]).collect(),
         table,
+        blocks,
     }
 }
 

@@ -114,6 +114,9 @@ pub fn summary(r: &RunResult) -> Value {
         "timing": "timing.json",
         "results": results,
     });
+    if let Some(sep) = &first.separation {
+        s["separation"] = sep.clone();
+    }
     if let Some(sw) = &sc.sweep {
         if let [axis] = sw.axes.as_slice() {
             s["sweep_key"] = json!(axis.key);

@@ -142,10 +142,11 @@ fn encode(block: usize, t: &TrialResult) -> String {
     s.push_str(&format!(" {}", t.outcomes.len()));
     for o in &t.outcomes {
         s.push_str(&format!(
-            " {} {} {} {} {:e}",
+            " {} {} {} {} {} {:e}",
             o.strategy,
             o.method,
             o.termination.as_str(),
+            u8::from(o.rank_deficient_expected),
             o.iterations,
             o.seconds
         ));
@@ -251,6 +252,11 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let name = t.word()?.to_string();
         let termination: Termination = crate::names::parse("termination", &name)
             .map_err(|_| t.err(&format!("unknown termination \"{name}\"")))?;
+        let rank_deficient_expected = match t.usize()? {
+            0 => false,
+            1 => true,
+            v => return Err(t.err(&format!("{v} is not a flag (0 or 1)"))),
+        };
         let iterations = t.usize()?;
         let seconds = t.real()?;
         let before_mm = t.stats()?;
@@ -274,6 +280,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             trace: None,
             iterations,
             termination,
+            rank_deficient_expected,
             seconds,
         });
     }
@@ -473,6 +480,7 @@ mod tests {
                 trace: None,
                 iterations: 12,
                 termination: Termination::MaxIterations,
+                rank_deficient_expected: true,
                 seconds: 0.00123,
             }],
         };

@@ -45,6 +45,12 @@ pub enum ParamSelection {
     List(Vec<String>),
 }
 
+impl Default for ParamSelection {
+    fn default() -> Self {
+        ParamSelection::Identifiable
+    }
+}
+
 impl<'de> Deserialize<'de> for ParamSelection {
     fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         #[derive(Deserialize)]
