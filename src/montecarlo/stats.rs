@@ -68,6 +68,9 @@ pub struct Entry {
     pub terminations: BTreeMap<String, usize>,
     /// Mean iterations.
     pub iterations_mean: Real,
+    /// Mean evaluations of the model per identification (residuals for the Jacobian
+    /// methods, fitness for BAS, PSO and BAS-PSO): the budget a method spent.
+    pub evaluations_mean: Real,
     /// Mean wall time of one registration + identification (s). Machine-dependent, so it
     /// is written as `null` in `summary.json` (which must be the same bytes for a seed
     /// whatever the thread count) and with its value in `timing.json` and `report.md`.
@@ -218,6 +221,11 @@ pub fn aggregate(
         iterations_mean: mean(
             &ok.iter()
                 .map(|(_, o)| o.iterations as Real)
+                .collect::<Vec<_>>(),
+        ),
+        evaluations_mean: mean(
+            &ok.iter()
+                .map(|(_, o)| o.evaluations as Real)
                 .collect::<Vec<_>>(),
         ),
         seconds_per_identification: mean(&outs.iter().map(|(_, o)| o.seconds).collect::<Vec<_>>()),
