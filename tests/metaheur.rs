@@ -188,8 +188,10 @@ fn max_evaluations_gives_equal_budgets() {
         max_evaluations: Some(budget),
         ..PsoOptions::default()
     };
-    let mut bp_o = BasPsoOptions::default();
-    bp_o.swarm = pso_o.clone();
+    let bp_o = BasPsoOptions {
+        swarm: pso_o.clone(),
+        ..BasPsoOptions::default()
+    };
     let runs = [
         (bas(&f, &b, &bas_o, &mut stream(1, "m")).unwrap(), 3),
         (pso(&f, &b, &pso_o, &mut stream(1, "m")).unwrap(), 20),

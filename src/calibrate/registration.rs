@@ -152,7 +152,6 @@ fn ban_weights(e: &[Real]) -> Vec<Real> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::rpy_matrix;
     use crate::rng::stream;
     use approx::assert_relative_eq;
     use rand::Rng as _;
