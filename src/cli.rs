@@ -22,6 +22,7 @@ macro_rules! out_raw {
 
 use serde_json::json;
 
+use calbench::calibrate::registration_study::RegistrationScenario;
 use calbench::calibrate::{calibrate, Registration, RoundsEnd};
 use calbench::check::{compare, read_json, Regression};
 use calbench::error::{Error, Result};
@@ -621,6 +622,26 @@ pub fn run(
     out: Option<PathBuf>,
     shard: Option<&str>,
 ) -> Result<()> {
+    if let Some(p) = scenario {
+        let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+        let table: toml::Table =
+            toml::from_str(&text).map_err(|e| Error::file(p, "TOML", e.to_string().trim_end()))?;
+        if RegistrationScenario::is_one(&table) {
+            if shard.is_some() {
+                return Err(Error::setting(
+                    "--shard",
+                    "a registration study (`[registration_study]`) runs whole, not in shards",
+                ));
+            }
+            return registration_study(
+                RegistrationScenario::from_table(table, p)?,
+                trials,
+                seed,
+                threads,
+                out,
+            );
+        }
+    }
     let shard = shard.map(montecarlo::Shard::parse).transpose()?;
     let mut sc = match scenario {
         Some(p) => Scenario::load(p)?,
@@ -689,6 +710,62 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<()> {
     out!(
         "\nmerged {} shards; report: {}",
         dirs.len(),
+        out.join("report.md").display()
+    );
+    Ok(())
+}
+
+/// `calbench run` of a scenario with a `[registration_study]` table (Ban fig. 3): the grid
+/// of SVD against weighted-SVD registration errors, its report and heat map.
+fn registration_study(
+    mut sc: RegistrationScenario,
+    trials: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+) -> Result<()> {
+    if let Some(n) = trials {
+        if n == 0 || n > calbench::scenario::MAX_TRIALS {
+            return Err(Error::setting(
+                "--trials",
+                format!("must be between 1 and {}", calbench::scenario::MAX_TRIALS),
+            ));
+        }
+        sc.trials = n;
+    }
+    if let Some(s) = seed {
+        sc.seed = s;
+    }
+    if threads == Some(0) {
+        return Err(Error::setting("--threads", "must be at least 1"));
+    }
+    let st = &sc.registration_study;
+    eprintln!(
+        "running {}: registration study, {} × {} cells × {} draws",
+        sc.name,
+        st.outlier_counts.len(),
+        st.magnitude_mm.len(),
+        sc.trials
+    );
+    let out = out.unwrap_or_else(|| Path::new("results").join(&sc.name));
+    writable_folder(&out)?;
+    let t0 = std::time::Instant::now();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::Compute(e.to_string()))?;
+    let cells = pool.install(|| st.run(sc.seed, sc.trials))?;
+    calbench::report::registration_study::write_all(&sc, &cells, &out)?;
+    out!(
+        "{}\n{} draws per cell in {:.1} s; report: {}",
+        calbench::report::registration_study::report_md(&sc, &cells, "heatmap_difference.png")
+            .lines()
+            .skip_while(|l| !l.starts_with("## "))
+            .take_while(|l| !l.starts_with("!["))
+            .collect::<Vec<_>>()
+            .join("\n"),
+        sc.trials,
+        t0.elapsed().as_secs_f64(),
         out.join("report.md").display()
     );
     Ok(())

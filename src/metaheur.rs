@@ -132,6 +132,10 @@ pub enum Velocity {
 pub struct BasOptions {
     /// Iterations (3 fitness evaluations each). Default 2000.
     pub iterations: usize,
+    /// Budget of fitness evaluations: the search stops before an iteration that would
+    /// exceed it (and after `iterations` at the latest), so that searches of different
+    /// cost per iteration can be compared at equal budgets. Default none.
+    pub max_evaluations: Option<usize>,
     /// Initial antenna width `d` (eq. 13). Default 0.05.
     pub antenna: Real,
     /// Initial step `δ` (eq. 13). Default 0.05.
@@ -163,6 +167,7 @@ impl BasOptions {
     /// Checks the option values (keys as in the scenario).
     pub fn check(&self) -> Result<()> {
         check_count("iterations", self.iterations)?;
+        check_budget(self.max_evaluations, 1, 3)?;
         check_schedules(
             self.antenna,
             self.step,
@@ -178,6 +183,7 @@ impl Default for BasOptions {
     fn default() -> Self {
         BasOptions {
             iterations: 2000,
+            max_evaluations: None,
             antenna: 0.05,
             step: 0.05,
             decay: 0.95,
@@ -197,6 +203,10 @@ pub struct PsoOptions {
     pub population: usize,
     /// Iterations (one evaluation per particle each). Default 500.
     pub iterations: usize,
+    /// Budget of fitness evaluations, the initial population's included: the search stops
+    /// before an iteration that would exceed it (and after `iterations` at the latest).
+    /// Default none.
+    pub max_evaluations: Option<usize>,
     /// Cognitive learning factor `c1` (Qiao eq. 12). Default 2.05 (Clerc).
     pub c1: Real,
     /// Social learning factor `c2` (Qiao eq. 12). Default 2.05 (Clerc), so `K ≈ 0.7298`.
@@ -219,6 +229,7 @@ impl Default for PsoOptions {
         PsoOptions {
             population: 40,
             iterations: 500,
+            max_evaluations: None,
             c1: 2.05,
             c2: 2.05,
             velocity: Velocity::Constriction,
@@ -236,8 +247,8 @@ impl Default for PsoOptions {
 /// from one table: the keys of [`BeetleTerm`] go to `beetle`, every other key to `swarm`.
 #[derive(Clone, Debug, Default)]
 pub struct BasPsoOptions {
-    /// The swarm (population, iterations — three evaluations per particle each —, c1, c2,
-    /// velocity, max_velocity, target).
+    /// The swarm (population, iterations — three evaluations per particle each —,
+    /// max_evaluations, c1, c2, velocity, max_velocity, target).
     pub swarm: PsoOptions,
     /// The beetle velocity `B` of eq. 12 and its schedules (eq. 13).
     pub beetle: BeetleTerm,
@@ -322,20 +333,85 @@ pub struct MetaResult {
     pub iterations: usize,
     /// The search stopped because the best fitness reached the target.
     pub reached_target: bool,
+    /// The search stopped because its evaluation budget (`max_evaluations`) could not pay
+    /// for another iteration.
+    pub budget_spent: bool,
 }
 
 impl MetaResult {
     /// The result of a search that ended at `x` with fitness `f`, the best fitness per
     /// iteration `trace`, after `evaluations` evaluations, with the target fitness `target`.
-    fn new(x: Vec<Real>, f: Real, trace: Vec<Real>, evaluations: usize, target: Real) -> Self {
+    fn new(
+        x: Vec<Real>,
+        f: Real,
+        trace: Vec<Real>,
+        evaluations: usize,
+        target: Real,
+        limit: Limit,
+    ) -> Self {
+        let reached_target = f <= target;
         MetaResult {
             x,
-            reached_target: f <= target,
+            reached_target,
+            budget_spent: !reached_target && limit.by_budget && trace.len() == limit.iterations,
             fitness: f,
             iterations: trace.len(),
             trace,
             evaluations,
         }
+    }
+}
+
+/// How many iterations a search runs: `iterations`, or fewer when the evaluation budget
+/// runs out first (`by_budget`).
+#[derive(Clone, Copy, Debug)]
+struct Limit {
+    iterations: usize,
+    by_budget: bool,
+}
+
+impl Limit {
+    /// At most `iterations` iterations of `per_iteration` evaluations each, after `initial`
+    /// evaluations, within `max_evaluations` evaluations in all.
+    fn of(
+        iterations: usize,
+        max_evaluations: Option<usize>,
+        initial: usize,
+        per_iteration: usize,
+    ) -> Limit {
+        match max_evaluations {
+            Some(budget) => {
+                let affordable = budget.saturating_sub(initial) / per_iteration.max(1);
+                Limit {
+                    iterations: iterations.min(affordable),
+                    by_budget: affordable < iterations,
+                }
+            }
+            None => Limit {
+                iterations,
+                by_budget: false,
+            },
+        }
+    }
+}
+
+/// Checks that the budget `max_evaluations` pays for the `initial` evaluations and at least
+/// one iteration of `per_iteration` evaluations.
+fn check_budget(
+    max_evaluations: Option<usize>,
+    initial: usize,
+    per_iteration: usize,
+) -> Result<()> {
+    match max_evaluations {
+        Some(b) if b < initial + per_iteration => Err(Error::setting(
+            "max_evaluations",
+            format!(
+                "must pay for the {initial} initial evaluations and one iteration of \
+                 {per_iteration}: at least {}, got {b}",
+                initial + per_iteration
+            ),
+        )),
+        _ => Ok(()),
     }
 }
 
@@ -481,8 +557,9 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
     let mut best_x = x.clone();
     let mut evaluations = 1;
     let (mut d, mut delta) = (o.antenna, o.step);
-    let mut trace = Vec::with_capacity(o.iterations);
-    while trace.len() < o.iterations && !reached(&trace, o.target) {
+    let limit = Limit::of(o.iterations, o.max_evaluations, 1, 3);
+    let mut trace = Vec::with_capacity(limit.iterations);
+    while trace.len() < limit.iterations && !reached(&trace, o.target) {
         random_direction(rng, &mut dir);
         offset(&y, &dir, d, &mut yr);
         offset(&y, &dir, -d, &mut yl);
@@ -516,6 +593,7 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
         trace,
         evaluations,
         o.target,
+        limit,
     ))
 }
 
@@ -547,6 +625,7 @@ fn sign(fr: Real, fl: Real) -> Real {
 struct Swarm {
     population: usize,
     iterations: usize,
+    max_evaluations: Option<usize>,
     c1: Real,
     c2: Real,
     velocity: Velocity,
@@ -570,6 +649,7 @@ fn check_schedules(antenna: Real, step: Real, decay: Real, d0: Real, delta0: Rea
 fn check_swarm(s: &Swarm) -> Result<()> {
     check_count("population", s.population)?;
     check_count("iterations", s.iterations)?;
+    check_budget(s.max_evaluations, s.population, s.per_iteration())?;
     finite_non_negative("c1", s.c1)?;
     finite_non_negative("c2", s.c2)?;
     finite_positive("max_velocity", s.max_velocity)?;
@@ -630,11 +710,32 @@ impl PsoOptions {
 }
 
 impl Swarm {
+    /// Fitness evaluations per iteration: one per particle, three with the beetle term
+    /// (its two antennae).
+    fn per_iteration(&self) -> usize {
+        if self.beetle.is_some() {
+            3 * self.population
+        } else {
+            self.population
+        }
+    }
+
+    /// The iterations the swarm runs within its budget.
+    fn limit(&self) -> Limit {
+        Limit::of(
+            self.iterations,
+            self.max_evaluations,
+            self.population,
+            self.per_iteration(),
+        )
+    }
+
     /// The swarm of `o`, with the beetle term of BAS-PSO if given.
     fn of(o: &PsoOptions, beetle: Option<BeetleTerm>) -> Swarm {
         Swarm {
             population: o.population,
             iterations: o.iterations,
+            max_evaluations: o.max_evaluations,
             c1: o.c1,
             c2: o.c2,
             velocity: o.velocity,
@@ -709,14 +810,15 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
         Velocity::Inertia { .. } => 1.0,
     };
     let (mut d, mut delta) = s.beetle.map_or((0.0, 0.0), |bt| (bt.antenna, bt.step));
-    let mut trace = Vec::with_capacity(s.iterations);
-    while trace.len() < s.iterations && !reached(&trace, s.target) {
+    let limit = s.limit();
+    let mut trace = Vec::with_capacity(limit.iterations);
+    while trace.len() < limit.iterations && !reached(&trace, s.target) {
         let it = trace.len();
         let w = match s.velocity {
             Velocity::Constriction => 1.0,
             Velocity::Inertia { start, end } => {
-                let t = if s.iterations > 1 {
-                    it as Real / (s.iterations - 1) as Real
+                let t = if limit.iterations > 1 {
+                    it as Real / (limit.iterations - 1) as Real
                 } else {
                     0.0
                 };
@@ -800,6 +902,7 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
         trace,
         evaluations,
         s.target,
+        limit,
     ))
 }
 

@@ -166,3 +166,71 @@ fn pso_and_bas_reduce_tx60_errors() {
     let r = bas(&f, &b, &halton, &mut stream(1, "bas")).unwrap();
     assert!(r.fitness < 0.5 * r.trace[0], "{} {}", r.fitness, r.trace[0]);
 }
+
+/// `max_evaluations` puts BAS, PSO and BAS-PSO on one budget (the Qiao study's equal-budget
+/// comparison): each spends as many whole iterations as the budget pays for, at most the
+/// budget and less than one of its own iterations short of it, and reports the budget as
+/// the reason it stopped; a budget too small for one iteration is refused by key.
+#[test]
+fn max_evaluations_gives_equal_budgets() {
+    use calbench::metaheur::Bounds;
+    let f = |x: &[Real]| x.iter().map(|v| (v - 0.3).powi(2)).sum::<Real>();
+    let b = Bounds::symmetric(&[1.0; 4]);
+    let budget = 3000;
+    let bas_o = BasOptions {
+        iterations: 100_000,
+        max_evaluations: Some(budget),
+        ..BasOptions::default()
+    };
+    let pso_o = PsoOptions {
+        population: 20,
+        iterations: 100_000,
+        max_evaluations: Some(budget),
+        ..PsoOptions::default()
+    };
+    let bp_o = BasPsoOptions {
+        swarm: pso_o.clone(),
+        ..BasPsoOptions::default()
+    };
+    let runs = [
+        (bas(&f, &b, &bas_o, &mut stream(1, "m")).unwrap(), 3),
+        (pso(&f, &b, &pso_o, &mut stream(1, "m")).unwrap(), 20),
+        (bas_pso(&f, &b, &bp_o, &mut stream(1, "m")).unwrap(), 60),
+    ];
+    for (r, per_iteration) in &runs {
+        assert!(r.evaluations <= budget, "{} > {budget}", r.evaluations);
+        assert!(
+            r.evaluations + per_iteration > budget,
+            "{} spent",
+            r.evaluations
+        );
+        assert!(r.budget_spent && !r.reached_target);
+        assert_eq!(r.trace.len(), r.iterations);
+    }
+    // Without a budget the iteration limit alone stops the search.
+    let free = bas(
+        &f,
+        &b,
+        &BasOptions {
+            iterations: 50,
+            ..BasOptions::default()
+        },
+        &mut stream(1, "m"),
+    )
+    .unwrap();
+    assert_eq!((free.evaluations, free.budget_spent), (1 + 3 * 50, false));
+    // A budget that cannot pay for the initial population and one iteration.
+    let small = PsoOptions {
+        population: 20,
+        max_evaluations: Some(39),
+        ..PsoOptions::default()
+    };
+    let e = pso(&f, &b, &small, &mut stream(1, "m")).unwrap_err();
+    assert_eq!(e.key(), Some("max_evaluations"));
+    assert!(PsoOptions {
+        max_evaluations: Some(40),
+        ..small
+    }
+    .check()
+    .is_ok());
+}

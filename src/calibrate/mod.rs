@@ -8,6 +8,7 @@
 //! - this file: [`calibrate`].
 
 pub mod registration;
+pub mod registration_study;
 pub mod validation;
 
 use crate::error::Result;

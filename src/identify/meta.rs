@@ -100,7 +100,8 @@ impl<S: Search> Method for Metaheuristic<S> {
     }
 
     /// The search's best point; [`Termination::TargetReached`] when it stopped at its target
-    /// fitness, else [`Termination::MaxIterations`]. The trace is the best fitness per
+    /// fitness, [`Termination::MaxEvaluations`] when its `max_evaluations` budget ran out
+    /// before its `iterations`, else [`Termination::MaxIterations`]. The trace is the best fitness per
     /// iteration (Qiao 2021 fig. 4).
     fn identify(&self, problem: &CalibrationProblem, rng: &mut Rng) -> Result<Identified> {
         let mp = MetaProblem::new(
@@ -117,6 +118,8 @@ impl<S: Search> Method for Metaheuristic<S> {
         let r = self.search.search(&f, &bounds, rng)?;
         let termination = if r.reached_target {
             Termination::TargetReached
+        } else if r.budget_spent {
+            Termination::MaxEvaluations
         } else {
             Termination::MaxIterations
         };

@@ -71,6 +71,9 @@ pub struct Entry {
     pub terminations: BTreeMap<String, usize>,
     /// Mean iterations.
     pub iterations_mean: Real,
+    /// Mean evaluations of the model per identification (residuals for the Jacobian
+    /// methods, fitness for BAS, PSO and BAS-PSO): the budget a method spent.
+    pub evaluations_mean: Real,
     /// Mean wall time of one registration + identification (s). Machine-dependent, so it
     /// is written as `null` in `summary.json` (which must be the same bytes for a seed
     /// whatever the thread count) and with its value in `timing.json` and `report.md`.
@@ -175,6 +178,7 @@ struct Cell {
     after_rms_sq: Sum,
     deg: [Option<StatsSum>; 4],
     iterations: Sum,
+    evaluations: Sum,
 }
 
 /// Spreads over trials of the headline metrics (for the sweep plots; not in `summary.json`).
@@ -273,6 +277,7 @@ impl Accumulator {
                 }
             }
             c.iterations.add(o.iterations as Real);
+            c.evaluations.add(o.evaluations as Real);
         }
     }
 
@@ -341,6 +346,7 @@ impl Accumulator {
             failures,
             terminations: c.terminations.clone(),
             iterations_mean: c.iterations.mean(),
+            evaluations_mean: c.evaluations.mean(),
             seconds_per_identification: c.seconds.mean(),
             spread: Spread {
                 after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),

@@ -46,6 +46,9 @@ pub struct Outcome {
     pub trace: Option<Vec<Real>>,
     /// Iterations of the identification.
     pub iterations: usize,
+    /// Evaluations of the model in the identification ([`crate::identify::Identified`]'s
+    /// `evaluations`: residuals for the Jacobian methods, fitness for the searches).
+    pub evaluations: usize,
     /// How it ended.
     pub termination: Termination,
     /// Whether the identified list is known to be rank-deficient (`identification.params`
@@ -177,7 +180,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let mut trace = None;
-            let (identified, after, iterations, termination) = match res {
+            let (identified, after, iterations, evaluations, termination) = match res {
                 Ok(c) => {
                     // The compensated robot lives in the registered frame: bring the truth
                     // there through the true tracker placement (identity for `known`).
@@ -192,6 +195,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                         r.x.iter().copied().collect(),
                         e,
                         r.iterations,
+                        r.evaluations,
                         r.termination,
                     )
                 }
@@ -202,6 +206,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                         deg: vec![Real::NAN; vqs.len()],
                         attitude_deg: vec![Real::NAN; vqs.len()],
                     },
+                    0,
                     0,
                     Termination::InvalidInput,
                 ),
@@ -219,6 +224,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 trace,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 iterations,
+                evaluations,
                 termination,
                 rank_deficient_expected: !study.undetermined.is_empty(),
                 seconds,

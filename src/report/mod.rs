@@ -16,6 +16,7 @@
 pub mod identified;
 pub mod markdown;
 pub mod plots;
+pub mod registration_study;
 pub mod run;
 
 pub use markdown::{fmt_num, table};

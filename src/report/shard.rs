@@ -125,7 +125,7 @@ fn push_stats(s: &mut String, e: &ErrorStats) {
 }
 
 /// One trial as a line of `records.txt`: `block trial n truth… crb… outcomes`, each
-/// outcome `strategy method termination iterations seconds before×4 after×4`, four optional
+/// outcome `strategy method termination rank-deficient-expected iterations evaluations seconds before×4 after×4`, four optional
 /// orientation statistics (`-` or `+` and four numbers) and the n identified values.
 fn encode(block: usize, t: &TrialResult) -> String {
     let mut s = format!("{block} {} {}", t.index, t.truth.len());
@@ -142,12 +142,13 @@ fn encode(block: usize, t: &TrialResult) -> String {
     s.push_str(&format!(" {}", t.outcomes.len()));
     for o in &t.outcomes {
         s.push_str(&format!(
-            " {} {} {} {} {} {:e}",
+            " {} {} {} {} {} {} {:e}",
             o.strategy,
             o.method,
             o.termination.as_str(),
             u8::from(o.rank_deficient_expected),
             o.iterations,
+            o.evaluations,
             o.seconds
         ));
         push_stats(&mut s, &o.before_mm);
@@ -258,6 +259,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             v => return Err(t.err(&format!("{v} is not a flag (0 or 1)"))),
         };
         let iterations = t.usize()?;
+        let evaluations = t.usize()?;
         let seconds = t.real()?;
         let before_mm = t.stats()?;
         let after_mm = t.stats()?;
@@ -279,6 +281,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             per_point: None,
             trace: None,
             iterations,
+            evaluations,
             termination,
             rank_deficient_expected,
             seconds,
@@ -479,6 +482,7 @@ mod tests {
                 per_point: None,
                 trace: None,
                 iterations: 12,
+                evaluations: 40,
                 termination: Termination::MaxIterations,
                 rank_deficient_expected: true,
                 seconds: 0.00123,

@@ -1,0 +1,116 @@
+//! The files of a registration study (Ban fig. 3, [`crate::calibrate::registration_study`]):
+//! `summary.json`, `report.md` with the grid as a table, and the heat map
+//! `heatmap_difference.png` / `.svg` of the mean registration-error difference SVD −
+//! weighted SVD. Writers only read results that are already computed.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde_json::json;
+
+use super::markdown::{fmt_num, table};
+use super::plots;
+use crate::calibrate::registration_study::{Cell, RegistrationScenario};
+use crate::error::{Error, Result};
+use crate::math::Real;
+
+/// `values[row][column]` of `f` over the grid: a row per outlier count, a column per
+/// magnitude.
+fn grid(s: &RegistrationScenario, cells: &[Cell], f: fn(&Cell) -> Real) -> Vec<Vec<Real>> {
+    let nm = s.registration_study.magnitude_mm.len();
+    cells
+        .chunks(nm)
+        .map(|r| r.iter().map(f).collect())
+        .collect()
+}
+
+/// The column names: the magnitude ranges `0–m mm`.
+fn magnitude_names(s: &RegistrationScenario) -> Vec<String> {
+    s.registration_study
+        .magnitude_mm
+        .iter()
+        .map(|m| format!("0–{} mm", fmt_num(*m, 3)))
+        .collect()
+}
+
+/// `report.md`: the settings, the difference grid in µm, and each method's mean error.
+pub fn report_md(s: &RegistrationScenario, cells: &[Cell], plot: &str) -> String {
+    let st = &s.registration_study;
+    let mut out = String::new();
+    let _ = writeln!(out, "# {}\n\n{}\n", s.name, s.description);
+    let _ = writeln!(
+        out,
+        "Registration study (Ban fig. 3): {} points in a {} mm box centred at ({}) mm, noise uniform in ±{} mm per coordinate, {} draws per cell from seed {}. Registration error = mean distance of the registered noise-free points from the truth.\n",
+        st.points,
+        st.size_mm.map(|v| fmt_num(v, 4)).join(" × "),
+        st.center_mm.map(|v| fmt_num(v, 4)).join(", "),
+        fmt_num(st.noise_mm, 3),
+        s.trials,
+        s.seed
+    );
+    let mut headers = vec!["gross errors"];
+    let names = magnitude_names(s);
+    headers.extend(names.iter().map(String::as_str));
+    let rows_of = |f: fn(&Cell) -> Real, scale: Real| -> Vec<Vec<String>> {
+        grid(s, cells, f)
+            .iter()
+            .zip(&st.outlier_counts)
+            .map(|(r, c)| {
+                let mut row = vec![c.to_string()];
+                row.extend(r.iter().map(|v| fmt_num(v * scale, 4)));
+                row
+            })
+            .collect()
+    };
+    out += "## Mean registration error, SVD − weighted SVD (µm)\n\n";
+    out += &table(&headers, &rows_of(|c| c.difference_mm, 1e3));
+    let _ = writeln!(out, "\n![SVD − weighted SVD]({plot})\n");
+    out += "## Mean registration error of the SVD (µm)\n\n";
+    out += &table(&headers, &rows_of(|c| c.svd_mm, 1e3));
+    out += "\n## Mean registration error of the weighted SVD (µm)\n\n";
+    out += &table(&headers, &rows_of(|c| c.wsvd_mm, 1e3));
+    out += "\n## Share of draws where the weighted SVD is better\n\n";
+    out += &table(&headers, &rows_of(|c| c.wsvd_better_fraction, 1.0));
+    out
+}
+
+/// Writes the study's files into `out` as a whole ([`super::atomically`]).
+pub fn write_all(s: &RegistrationScenario, cells: &[Cell], out: &Path) -> Result<()> {
+    super::atomically(out, |dir| {
+        let summary = json!({
+            "scenario": s.name,
+            "description": s.description,
+            "kind": "registration_study",
+            "trials": s.trials,
+            "seed": s.seed,
+            "settings": serde_json::to_value(&s.registration_study).map_err(|e| Error::Compute(e.to_string()))?,
+            "cells": cells,
+        });
+        let path = dir.join("summary.json");
+        let text =
+            serde_json::to_string_pretty(&summary).map_err(|e| Error::Compute(e.to_string()))?;
+        std::fs::write(&path, text + "\n").map_err(|e| Error::io(&path, e))?;
+        let rows: Vec<String> = s
+            .registration_study
+            .outlier_counts
+            .iter()
+            .map(|c| c.to_string())
+            .collect();
+        // `grid` is by row (outlier count), the plot's values by column (magnitude range).
+        let by_row = grid(s, cells, |c| c.difference_mm * 1e3);
+        let columns = magnitude_names(s);
+        let by_column: Vec<Vec<Real>> = (0..columns.len())
+            .map(|j| by_row.iter().map(|row| row[j]).collect())
+            .collect();
+        plots::heatmap(
+            &dir.join("heatmap_difference"),
+            "Mean registration error, SVD − weighted SVD (µm)",
+            ("gross-error magnitude range", &columns),
+            ("points with a gross error", &rows),
+            &by_column,
+        )?;
+        let path = dir.join("report.md");
+        std::fs::write(&path, report_md(s, cells, "heatmap_difference.png"))
+            .map_err(|e| Error::io(&path, e))
+    })
+}
