@@ -109,7 +109,7 @@ fn shards_merge_into_the_bytes_of_the_unsharded_run() {
         }
         let merged = dir.join(format!("m{n}"));
         let mut args = vec!["merge"];
-        args.extend(shards.iter().rev().map(|d| s(d)));
+        args.extend(shards.iter().rev().map(|d| d.to_str().unwrap()));
         args.extend(["--out", s(&merged)]);
         ok(&args);
         for f in ["summary.json", "trials.csv", "report.md"] {
