@@ -323,9 +323,18 @@ pub fn identify_file(
     validate: Option<&Path>,
     k: Option<Real>,
     allow_rank_deficient: bool,
+    export: Option<&str>,
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
+    if let Some(e) = export {
+        if !matches!(e, "urdf" | "toml") {
+            return Err(Error::setting(
+                "--export",
+                format!("\"{e}\"; allowed: urdf, toml"),
+            ));
+        }
+    }
     let mut spec = method_with_options(method, options)?;
     let registration: Registration = calbench::names::parse("--registration", registration)?;
     let d = read_measurements(data, &nominal)?;
@@ -344,7 +353,7 @@ pub fn identify_file(
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
     let with_base = registration == Registration::Identify;
-    let params = study::identified_params(&nominal, measure, with_base);
+    let params = study::identified_params_tool_first(&nominal, measure, with_base);
     // For real data "known" means the points are already in the base frame.
     let c = calibrate(
         &nominal,
@@ -409,6 +418,7 @@ pub fn identify_file(
         params: &params,
         calibrated: &c,
         validation: validation.as_ref(),
+        urdf: compensated_urdf(robot, export, &c.robot)?,
     };
     write_identified(out, &record)?;
     if let Some(v) = &validation {
@@ -780,4 +790,87 @@ pub fn check(summary: &Path, baseline: &Path, tolerance: Real) -> Result<Vec<Reg
     let b = read_json(baseline)?;
     calbench::check::comparable(&s, summary, &b, baseline)?;
     Ok(compare(&s, &b, tolerance))
+}
+
+/// `calbench import RAW --mapping MAPPING --out CSV`.
+pub fn import(raw: &Path, mapping: &Path, out: &Path) -> Result<()> {
+    let n = calbench::import::import(raw, mapping, out)?;
+    out!("{n} rows of {} written to {}", raw.display(), out.display());
+    Ok(())
+}
+
+/// `calbench compensate --robot NOMINAL --identified IDENTIFIED --joints PROGRAM --out CSV`
+/// (Li 2018 §3): per program row, the joints (in the nominal robot's units, the controller's)
+/// at which the identified robot reaches the nominal pose, with the residual and a flag.
+pub fn compensate(robot: &str, identified: &str, joints: &Path, out: &Path) -> Result<()> {
+    let nominal = robots::load(robot)?;
+    let ident = robots::load(identified)?;
+    if ident.dof() != nominal.dof() {
+        return Err(Error::setting(
+            "--identified",
+            format!(
+                "{identified} has {} joints, the nominal robot {}",
+                ident.dof(),
+                nominal.dof()
+            ),
+        ));
+    }
+    let program = calbench::sim::poses::read_pose_list(joints, &nominal)?;
+    let cell = |v: Real| calbench::sim::csv::fixed(v, 9);
+    // What is written: 9 decimals in the nominal robot's units.
+    let round = |q: &[Real]| -> Vec<Real> {
+        let user: Vec<Real> = nominal
+            .q_to_user(q)
+            .iter()
+            .map(|&v| cell(v).parse().unwrap_or(v))
+            .collect();
+        nominal.q_from_user(&user)
+    };
+    let n = nominal.dof();
+    let mut s: String = (1..=n).map(|j| format!("q{j},")).collect();
+    s.push_str("residual_mm,residual_deg,flag\n");
+    let mut flagged = 0;
+    let mut worst: (Real, Real) = (0.0, 0.0);
+    for q in &program {
+        let c = calbench::compensate::compensate_row(&nominal, &ident, q, round);
+        for v in nominal.q_to_user(&c.q) {
+            s.push_str(&cell(v));
+            s.push(',');
+        }
+        s.push_str(&format!(
+            "{:.3e},{:.3e},{}\n",
+            c.residual_mm, c.residual_deg, c.flag
+        ));
+        flagged += usize::from(c.flag != "ok");
+        worst = (worst.0.max(c.residual_mm), worst.1.max(c.residual_deg));
+    }
+    write_file(out, &s)?;
+    out!(
+        "{} rows corrected ({flagged} flagged), worst residual {:.1e} mm / {:.1e} deg; written to {}",
+        program.len(),
+        worst.0,
+        worst.1,
+        out.display()
+    );
+    Ok(())
+}
+
+/// The compensated robot as a URDF: for a URDF robot (its source with the joint origins
+/// moved) unless `--export toml`, for a robot file with `--export urdf`.
+fn compensated_urdf(
+    robot: &str,
+    export: Option<&str>,
+    compensated: &calbench::kinematics::Robot,
+) -> Result<Option<String>> {
+    if export == Some("toml") {
+        return Ok(None);
+    }
+    if !calbench::urdf::is_urdf(robot) {
+        return match export {
+            Some("urdf") => calbench::urdf::robot_to_urdf(compensated).map(Some),
+            _ => Ok(None),
+        };
+    }
+    let source = calbench::urdf::UrdfRobot::load(Path::new(robot))?;
+    source.write(compensated).map(Some)
 }

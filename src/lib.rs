@@ -14,10 +14,12 @@ pub mod rng;
 pub use error::{Error, Result};
 pub mod calibrate;
 pub mod check;
+pub mod compensate;
 pub mod compliance;
 pub mod errmodel;
 pub mod identifiability;
 pub mod identify;
+pub mod import;
 pub mod jacobian;
 pub mod kinematics;
 pub mod measurement;
@@ -31,6 +33,7 @@ pub mod robots;
 pub mod sampling;
 pub mod scenario;
 pub mod sim;
+pub mod urdf;
 
 /// The README's Rust examples ("Adding a method"), compiled and run as doctests.
 #[cfg(doctest)]

@@ -146,7 +146,39 @@ enum Command {
         /// `rank-deficient`); without it such a result is refused.
         #[arg(long)]
         allow_rank_deficient: bool,
+        /// The compensated robot's format besides robot.toml: `urdf` (the default for a URDF
+        /// robot: robot.urdf, the source with its joint origins updated) or `toml` (robot.toml
+        /// only).
+        #[arg(long)]
+        export: Option<String>,
         /// Output folder.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Turn a tracker's raw export into a measurement CSV, as a mapping file says.
+    Import {
+        /// The raw export.
+        raw: PathBuf,
+        /// The mapping file (separator, decimal mark, columns, units, conventions).
+        #[arg(long)]
+        mapping: PathBuf,
+        /// The measurement CSV to write.
+        #[arg(long)]
+        out: PathBuf,
+    },
+    /// Joint commands for a robot whose controller keeps the nominal model: per program row,
+    /// the joints at which the identified robot reaches the nominal pose.
+    Compensate {
+        /// The nominal robot (the controller's model).
+        #[arg(long)]
+        robot: String,
+        /// The identified (compensated) robot, e.g. identify's robot.toml.
+        #[arg(long)]
+        identified: String,
+        /// The program: a CSV with columns q1..qn (nominal joint commands).
+        #[arg(long)]
+        joints: PathBuf,
+        /// The corrected program to write.
         #[arg(long)]
         out: PathBuf,
     },
@@ -216,6 +248,13 @@ fn run(cli: Cli) -> Result<()> {
                 anyhow::bail!("{} metric(s) regressed", regressions.len())
             }
         }
+        Some(Command::Import { raw, mapping, out }) => Ok(commands::import(&raw, &mapping, &out)?),
+        Some(Command::Compensate {
+            robot,
+            identified,
+            joints,
+            out,
+        }) => Ok(commands::compensate(&robot, &identified, &joints, &out)?),
         Some(Command::Simulate {
             scenario,
             trial,
@@ -230,6 +269,7 @@ fn run(cli: Cli) -> Result<()> {
             k,
             options,
             allow_rank_deficient,
+            export,
             out,
         }) => Ok(commands::identify_file(
             &robot,
@@ -240,6 +280,7 @@ fn run(cli: Cli) -> Result<()> {
             validate.as_deref(),
             k,
             allow_rank_deficient,
+            export.as_deref(),
             &out,
         )?),
         Some(Command::Poses {

@@ -88,6 +88,9 @@ pub fn load(name_or_path: &str) -> Result<Robot> {
         return Ok((b.build)());
     }
     let path = Path::new(name_or_path);
+    if path.exists() && crate::urdf::is_urdf(name_or_path) {
+        return Ok(crate::urdf::UrdfRobot::load(path)?.robot);
+    }
     if path.exists() {
         return read_robot_file(path);
     }

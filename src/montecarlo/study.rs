@@ -65,14 +65,41 @@ pub struct Study {
 /// base.z, θ1 with base.rz) is the one left out: it cannot be told apart from the tracker's
 /// placement, so no error is injected on it or identified for it.
 pub fn identified_params(robot: &Robot, measure: Measure, with_base: bool) -> Vec<Param> {
-    let all = robot.params();
-    let base = all.iter().copied().filter(|p| matches!(p, Param::Base(_)));
-    let rest = all.iter().copied().filter(|p| !matches!(p, Param::Base(_)));
-    let candidates: Vec<Param> = if with_base {
-        base.chain(rest).collect()
-    } else {
-        rest.collect()
-    };
+    offered_first(robot, measure, with_base, |p| matches!(p, Param::Base(_)))
+}
+
+/// [`identified_params`] for measured data (`calbench identify`): the tool parameters are
+/// offered right after the base, so a joint parameter that only duplicates the tool (d6 with
+/// tool.z, a6 with tool.x and tool.y on a robot whose last axis carries the tool) is the one
+/// left out, and the compensated robot file says where the tool really is (a probe mounted a
+/// few mm away from its nominal place moves `[tool]`, not the last link).
+pub fn identified_params_tool_first(
+    robot: &Robot,
+    measure: Measure,
+    with_base: bool,
+) -> Vec<Param> {
+    offered_first(robot, measure, with_base, |p| {
+        matches!(p, Param::Base(_) | Param::Tool(_))
+    })
+}
+
+/// The identifiable parameters when those `first` selects (base ones only `with_base`) are
+/// offered before the others, in flat-vector order.
+fn offered_first(
+    robot: &Robot,
+    measure: Measure,
+    with_base: bool,
+    first: impl Fn(&Param) -> bool,
+) -> Vec<Param> {
+    let all: Vec<Param> = robot
+        .params()
+        .into_iter()
+        .filter(|p| with_base || !matches!(p, Param::Base(_)))
+        .collect();
+    let head = all.iter().copied().filter(|p| first(p));
+    let candidates: Vec<Param> = head
+        .chain(all.iter().copied().filter(|p| !first(p)))
+        .collect();
     let mut params = identifiable_generic(robot, &candidates, measure);
     params.sort_by_key(|p| p.index(robot.dof()));
     params

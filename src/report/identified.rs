@@ -3,6 +3,9 @@
 
 use std::path::Path;
 
+use super::markdown::{fmt_num, table};
+use super::plots;
+
 use serde_json::{json, Value};
 
 use crate::calibrate::{validation_errors, Calibrated, ErrorStats, Registration};
@@ -77,6 +80,8 @@ pub struct IdentifyRecord<'a> {
     pub calibrated: &'a Calibrated,
     /// The validation on a separate file, if any.
     pub validation: Option<&'a FileValidation>,
+    /// The compensated robot as a URDF (written as `robot.urdf`), if asked for.
+    pub urdf: Option<String>,
 }
 
 /// `identified.json`.
@@ -158,9 +163,197 @@ fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
     write(&out.join("identified.json"), &(text + "\n"))?;
     let mut compensated = r.calibrated.robot.clone();
     compensated.name = format!("{}-calibrated", r.nominal.name);
+    write(&out.join("report.md"), &report_md(out, r)?)?;
+    if let Some(u) = &r.urdf {
+        write(&out.join("robot.urdf"), u)?;
+    }
     write(&out.join("robot.toml"), &robot_to_toml(&compensated))
 }
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// Bins of the residual histogram in `report.md`.
+const BINS: usize = 12;
+
+/// Counts of `v` in [`BINS`] equal bins over `[0, max]`, with the bins' labels.
+fn histogram(v: &[Real], unit: &str) -> (Vec<String>, Vec<Real>) {
+    let top = v
+        .iter()
+        .copied()
+        .filter(|x| x.is_finite())
+        .fold(0.0, Real::max);
+    let w = if top > 0.0 { top / BINS as Real } else { 1.0 };
+    let mut counts = vec![0.0; BINS];
+    for &x in v.iter().filter(|x| x.is_finite()) {
+        counts[((x / w) as usize).min(BINS - 1)] += 1.0;
+    }
+    let labels = (0..BINS)
+        .map(|b| {
+            format!(
+                "{}–{} {unit}",
+                fmt_num(b as Real * w, 2),
+                fmt_num((b + 1) as Real * w, 2)
+            )
+        })
+        .collect();
+    (labels, counts)
+}
+
+/// `report.md` of `identify` on real data, with its plots in `out`: residual per calibration
+/// point before and after, their histogram, the identified errors with standard errors (the
+/// square roots of the covariance's diagonal), the condition number and the dependent groups of
+/// the parameters the robot offers, and, for a robust method (IGG3, Qiao 2021 eq. 15), the final
+/// point weights.
+pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
+    use std::fmt::Write as _;
+    let c = r.calibrated;
+    let id = &c.identified;
+    let (cn, cc) = (r.nominal.chain(), c.robot.chain());
+    let (mut before, mut after) = (Vec::new(), Vec::new());
+    for (q, p) in r.data.qs.iter().zip(&r.data.points) {
+        let pb = c.frame.apply(p);
+        before.push((pb - cn.fk(q).pos).norm());
+        after.push((pb - cc.fk(q).pos).norm());
+    }
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Identification of {} on {}\n",
+        r.nominal.name,
+        r.data_path.display()
+    );
+    let _ = writeln!(
+        s,
+        "{} on {} points ({}), registration {}: {} after {} iterations; condition number \
+         (column-scaled) {}, rank {} of {} parameters.\n",
+        r.method,
+        r.data.len(),
+        if r.data.quats.is_some() {
+            "full pose"
+        } else {
+            "position"
+        },
+        r.registration.as_str(),
+        id.termination.as_str(),
+        id.iterations,
+        fmt_num(id.condition_number, 4),
+        id.rank.map_or("—".to_string(), |k| k.to_string()),
+        r.params.len(),
+    );
+    if let Some(v) = r.validation {
+        let row = |l: &str, e: &ErrorStats| {
+            vec![
+                l.to_string(),
+                fmt_num(e.mean, 4),
+                fmt_num(e.rms, 4),
+                fmt_num(e.max, 4),
+                fmt_num(e.std, 4),
+            ]
+        };
+        let mut rows = vec![
+            row("before (mm)", &v.before_mm),
+            row("after (mm)", &v.after_mm),
+        ];
+        if let Some((b, a)) = &v.deg {
+            rows.push(row("before (deg)", b));
+            rows.push(row("after (deg)", a));
+        }
+        s += "## Validation\n\n";
+        s += &table(&["error", "mean", "rms", "max", "std"], &rows);
+        s.push('\n');
+    }
+    plots::before_after(
+        &out.join("residuals"),
+        "Residual per calibration point",
+        &before,
+        &after,
+    )?;
+    let top = before.iter().chain(&after).copied().fold(0.0, Real::max);
+    let w = if top > 0.0 { top / BINS as Real } else { 1.0 };
+    let count = |v: &[Real]| {
+        let mut h = vec![0.0; BINS];
+        for &x in v {
+            h[((x / w) as usize).min(BINS - 1)] += 1.0;
+        }
+        h
+    };
+    let labels: Vec<String> = (0..BINS)
+        .map(|b| {
+            format!(
+                "{}–{}",
+                fmt_num(b as Real * w, 2),
+                fmt_num((b + 1) as Real * w, 2)
+            )
+        })
+        .collect();
+    plots::grouped_bars(
+        &out.join("histogram"),
+        "Residuals (mm): points per bin",
+        "points",
+        &labels,
+        &[
+            ("before".to_string(), count(&before)),
+            ("after".to_string(), count(&after)),
+        ],
+    )?;
+    s += "## Residuals\n\n![residual per point](residuals.png)\n\n![histogram](histogram.png)\n\n";
+    s += "## Identified errors\n\nmm and rad; standard error = √ of the covariance's diagonal.\n\n";
+    let rows: Vec<Vec<String>> = r
+        .params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let se = id
+                .covariance
+                .get((i, i))
+                .map_or(Real::NAN, |v| v.max(0.0).sqrt());
+            vec![p.to_string(), fmt_num(id.x[i], 4), fmt_num(se, 3)]
+        })
+        .collect();
+    s += &table(&["parameter", "error", "standard error"], &rows);
+    let all = r.nominal.params();
+    let a = crate::identifiability::analyse(r.nominal, &all, &r.data.qs, r.data.measure());
+    s += "\n## Identifiability on these poses\n\n";
+    let names = |v: &[Param]| {
+        v.iter()
+            .map(|p| p.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let _ = writeln!(
+        s,
+        "Of all {} parameters: rank {}, condition number {}; not identifiable: {}.\n",
+        all.len(),
+        a.rank,
+        fmt_num(a.condition_number, 4),
+        names(&a.unidentifiable)
+    );
+    for g in &a.groups {
+        let _ = writeln!(s, "- dependent group: {}", names(g));
+    }
+    if r.method == "igg3" && !id.weights.is_empty() {
+        let (labels, counts) = histogram(&id.weights, "");
+        plots::grouped_bars(
+            &out.join("weights"),
+            "IGG3 final point weights",
+            "points",
+            &labels,
+            &[("points".to_string(), counts)],
+        )?;
+        let low: Vec<String> = id
+            .weights
+            .iter()
+            .enumerate()
+            .filter(|(_, w)| **w < 1.0)
+            .map(|(i, w)| format!("{i} ({})", fmt_num(*w, 3)))
+            .collect();
+        let _ = writeln!(
+            s,
+            "\n## IGG3 final weights\n\n![weights](weights.png)\n\nPoints weighed below 1 (row, weight): {}\n",
+            if low.is_empty() { "none".to_string() } else { low.join(", ") }
+        );
+    }
+    Ok(s)
 }

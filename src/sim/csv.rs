@@ -90,7 +90,7 @@ fn joint_cells(s: &mut String, robot: &Robot, q: &[Real]) {
 }
 
 /// `v` with `d` decimals, negative zero written as zero.
-fn fixed(v: Real, d: usize) -> String {
+pub fn fixed(v: Real, d: usize) -> String {
     let t = format!("{v:.d$}");
     if t.starts_with('-') && t[1..].bytes().all(|b| b == b'0' || b == b'.') {
         t[1..].to_string()

@@ -1,0 +1,288 @@
+//! Real tracker data in, compensated robot out: `import` of a raw Leica export (the first
+//! rows of the IPA UR10 data set, shipped in examples/ipa-ur10/), URDF robots against their
+//! DH twins, `identify` writing robot.urdf, and `compensate`.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use calbench::kinematics::Param;
+use calbench::math::Real;
+use calbench::robots;
+use calbench::urdf::UrdfRobot;
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-rd-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(args: &[&str]) -> String {
+    let o = run(args);
+    assert!(
+        o.status.success(),
+        "calbench {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn ex(f: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("examples/ipa-ur10")
+        .join(f)
+        .display()
+        .to_string()
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+/// Pose difference (mm, rad) of two robots' FK at internal joint values.
+fn fk_gap(
+    a: &calbench::kinematics::Robot,
+    b: &calbench::kinematics::Robot,
+    q: &[Real],
+) -> (Real, Real) {
+    let (fa, fb) = (a.fk(q), b.fk(q));
+    let r = calbench::math::rotation_vector(&(fa.rot.transpose() * fb.rot)).norm();
+    ((fa.pos - fb.pos).norm(), r)
+}
+
+#[test]
+fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
+    let d = tmp("import");
+    let out = d.join("m.csv");
+    ok(&[
+        "import",
+        &ex("sample-200.csv"),
+        "--mapping",
+        &ex("mapping.toml"),
+        "--out",
+        &s(&out),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "q1,q2,q3,q4,q5,q6,x,y,z,qw,qx,qy,qz,sigma_mm"
+    );
+    // Raw row 1: joints -3,14159;-1,5708;0;-1,5708;0;0 rad, point 383,97123;-3240,7562;201,72621,
+    // angles -90,179563;-20,112975;-90,157388 deg (intrinsic X-Y-Z), σ 0,041565;0,022023;0,0055848.
+    let row: Vec<f64> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(|c| c.parse().unwrap())
+        .collect();
+    assert!((row[0] - (-3.14159f64).to_degrees()).abs() < 1e-8);
+    assert!((row[1] - (-1.5708f64).to_degrees()).abs() < 1e-8);
+    assert!((row[6] - 383.97123).abs() < 1e-9 && (row[7] + 3240.7562).abs() < 1e-9);
+    let r = calbench::import::euler_matrix(
+        [0, 1, 2],
+        [
+            (-90.179563f64).to_radians(),
+            (-20.112975f64).to_radians(),
+            (-90.157388f64).to_radians(),
+        ],
+        true,
+    );
+    let q = calbench::math::quaternion(&r);
+    for k in 0..4 {
+        assert!((row[9 + k] - q[k]).abs() < 1e-11, "quaternion {k}");
+    }
+    let sigma = ((0.041565f64.powi(2) + 0.022023f64.powi(2) + 0.0055848f64.powi(2)) / 3.0).sqrt();
+    assert!((row[13] - sigma).abs() < 1e-9);
+    assert_eq!(text.lines().count(), 200);
+
+    // A bad cell: refused naming the line and the column, nothing written.
+    let raw = std::fs::read_to_string(ex("sample-200.csv")).unwrap();
+    let mut ls: Vec<String> = raw.lines().map(String::from).collect();
+    let mut cells: Vec<String> = ls[5].split(';').map(String::from).collect();
+    cells[16] = "1,2x".into(); // measurement_y
+    ls[5] = cells.join(";");
+    let bad = d.join("bad.csv");
+    std::fs::write(&bad, ls.join("\n")).unwrap();
+    let badout = d.join("bad-out.csv");
+    let o = run(&[
+        "import",
+        &s(&bad),
+        "--mapping",
+        &ex("mapping.toml"),
+        "--out",
+        &s(&badout),
+    ]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        msg.contains("line 6") && msg.contains("measurement_y"),
+        "{msg}"
+    );
+    assert!(!badout.exists());
+}
+
+#[test]
+fn the_ur10_urdf_has_the_fk_of_the_dh_file() {
+    let dh = robots::load(&ex("ur10.toml")).unwrap();
+    let urdf = robots::load(&ex("ur10.urdf")).unwrap();
+    let mut g = calbench::rng::stream(3, "urdf-test");
+    for q in calbench::sampling::uniform_joint_poses(&dh, 50, &mut g) {
+        let (mm, rad) = fk_gap(&dh, &urdf, &q);
+        assert!(mm < 1e-9 && rad < 1e-12, "{mm} mm, {rad} rad at {q:?}");
+    }
+}
+
+/// Writing back: a URDF whose joint origins carry a robot's identified errors has that
+/// robot's FK, at every joint vector (the constant offsets stay right as the joints move).
+#[test]
+fn a_written_urdf_has_the_fk_of_the_robot_it_was_written_from() {
+    let u = UrdfRobot::load(Path::new(&ex("ur10.urdf"))).unwrap();
+    let n = u.robot.dof();
+    let errors: Vec<(Param, Real)> = u
+        .robot
+        .params()
+        .into_iter()
+        .enumerate()
+        .map(|(i, p)| {
+            (
+                p,
+                if p.is_length() { 0.7 } else { 2e-3 } * if i % 3 == 0 { -1.0 } else { 1.0 },
+            )
+        })
+        .collect();
+    let changed = u.robot.with_errors(&errors);
+    let d = tmp("urdf-write");
+    let path = d.join("changed.urdf");
+    std::fs::write(&path, u.write(&changed).unwrap()).unwrap();
+    let back = robots::load(&s(&path)).unwrap();
+    assert_eq!(back.dof(), n);
+    let mut g = calbench::rng::stream(4, "urdf-test");
+    let mut moved: Real = 0.0;
+    for q in calbench::sampling::uniform_joint_poses(&changed, 50, &mut g) {
+        let (mm, rad) = fk_gap(&changed, &back, &q);
+        assert!(mm < 1e-8 && rad < 1e-11, "{mm} mm, {rad} rad");
+        moved = moved.max(fk_gap(&changed, &u.robot, &q).0);
+    }
+    assert!(moved > 1.0, "the errors move the tip ({moved} mm)");
+}
+
+/// The worked example's pipeline on the shipped rows: import, identify on the URDF (robot.urdf
+/// written, and equal to robot.toml), compensate.
+#[test]
+fn import_identify_compensate_on_the_shipped_rows() {
+    let d = tmp("pipeline");
+    let m = d.join("m.csv");
+    let mapping = d.join("mapping-rad.toml");
+    let text = std::fs::read_to_string(ex("mapping.toml"))
+        .unwrap()
+        .replace("write_unit = \"deg\"", "write_unit = \"rad\"");
+    std::fs::write(&mapping, text).unwrap();
+    ok(&[
+        "import",
+        &ex("sample-200.csv"),
+        "--mapping",
+        &s(&mapping),
+        "--out",
+        &s(&m),
+    ]);
+    // Position only: the q and xyz columns.
+    let pos: String = std::fs::read_to_string(&m)
+        .unwrap()
+        .lines()
+        .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let p = d.join("pos.csv");
+    std::fs::write(&p, pos).unwrap();
+    let out = d.join("id");
+    ok(&[
+        "identify",
+        "--robot",
+        &ex("ur10.urdf"),
+        "--data",
+        &s(&p),
+        "--method",
+        "lm",
+        "--out",
+        &s(&out),
+    ]);
+    let toml = robots::load(&s(&out.join("robot.toml"))).unwrap();
+    let urdf = robots::load(&s(&out.join("robot.urdf"))).unwrap();
+    let mut g = calbench::rng::stream(5, "urdf-test");
+    for q in calbench::sampling::uniform_joint_poses(&toml, 20, &mut g) {
+        let (mm, rad) = fk_gap(&toml, &urdf, &q);
+        assert!(mm < 1e-8 && rad < 1e-11, "{mm} mm, {rad} rad");
+    }
+    let prog = d.join("prog.csv");
+    std::fs::write(
+        &prog,
+        "q1,q2,q3,q4,q5,q6\n0.1,-1.2,1.3,-1.6,1.2,0.3\n-2.0,-2.1,1.8,-2.2,0.9,0.1\n",
+    )
+    .unwrap();
+    let corr = d.join("corr.csv");
+    ok(&[
+        "compensate",
+        "--robot",
+        &ex("ur10.urdf"),
+        "--identified",
+        &s(&out.join("robot.toml")),
+        "--joints",
+        &s(&prog),
+        "--out",
+        &s(&corr),
+    ]);
+    let c = std::fs::read_to_string(&corr).unwrap();
+    let mut rows = c.lines();
+    assert_eq!(
+        rows.next().unwrap(),
+        "q1,q2,q3,q4,q5,q6,residual_mm,residual_deg,flag"
+    );
+    let nominal = robots::load(&ex("ur10.urdf")).unwrap();
+    for (row, qin) in rows.zip([
+        [0.1, -1.2, 1.3, -1.6, 1.2, 0.3],
+        [-2.0, -2.1, 1.8, -2.2, 0.9, 0.1],
+    ]) {
+        let f: Vec<&str> = row.split(',').collect();
+        assert_eq!(f[8], "ok", "{row}");
+        let qout: Vec<Real> = f[..6].iter().map(|v| v.parse().unwrap()).collect();
+        let (a, b) = (toml.fk(&qout), nominal.fk(&qin));
+        assert!((a.pos - b.pos).norm() < 1e-6);
+        assert!(
+            qout.iter().zip(&qin).any(|(x, y)| (x - y).abs() > 1e-5),
+            "joints corrected"
+        );
+    }
+}
+
+/// `identify --export urdf` on a robot file: the URDF of a robot of each convention has its FK.
+#[test]
+fn robot_files_of_every_convention_export_to_a_urdf_with_their_fk() {
+    let d = tmp("export");
+    for (i, r) in [robots::irb2600(), robots::irb2600_mdh(), robots::tx60()]
+        .into_iter()
+        .enumerate()
+    {
+        // Nonzero β and base/tool frames, so every part of the link transforms is exercised.
+        let errors: Vec<(Param, Real)> = r
+            .params()
+            .into_iter()
+            .map(|p| (p, if p.is_length() { 3.0 } else { 0.02 }))
+            .collect();
+        let r = r.with_errors(&errors);
+        let path = d.join(format!("r{i}.urdf"));
+        std::fs::write(&path, calbench::urdf::robot_to_urdf(&r).unwrap()).unwrap();
+        let back = robots::load(&s(&path)).unwrap();
+        let mut g = calbench::rng::stream(6, "urdf-test");
+        for q in calbench::sampling::uniform_joint_poses(&r, 30, &mut g) {
+            let (mm, rad) = fk_gap(&r, &back, &q);
+            assert!(mm < 1e-8 && rad < 1e-11, "{}: {mm} mm, {rad} rad", r.name);
+        }
+    }
+}
