@@ -83,8 +83,10 @@ fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
         .split(',')
         .map(|c| c.parse().unwrap())
         .collect();
-    assert!((row[0] - (-3.14159f64).to_degrees()).abs() < 1e-8);
-    assert!((row[1] - (-1.5708f64).to_degrees()).abs() < 1e-8);
+    // The file's own rounded values, not π and π/2.
+    let (q1, q2): (f64, f64) = ("-3.14159".parse().unwrap(), "-1.5708".parse().unwrap());
+    assert!((row[0] - q1.to_degrees()).abs() < 1e-8);
+    assert!((row[1] - q2.to_degrees()).abs() < 1e-8);
     assert!((row[6] - 383.97123).abs() < 1e-9 && (row[7] + 3240.7562).abs() < 1e-9);
     let r = calbench::import::euler_matrix(
         [0, 1, 2],

@@ -235,8 +235,12 @@ impl TrialSink for () {
 /// Gathers trials, in order, into blocks: the streaming aggregation shared by `run` and
 /// `merge`, so a merged result is the same bytes as an unsharded one.
 pub struct Collector {
-    blocks: Vec<(BlockInfo, Accumulator, Option<Trial0>, Vec<Vec<Real>>)>,
+    blocks: Vec<Collecting>,
 }
+
+/// One block being collected: its view, its statistics, trial 0's details and the per-trial
+/// CRB traces.
+type Collecting = (BlockInfo, Accumulator, Option<Trial0>, Vec<Vec<Real>>);
 
 impl Collector {
     /// An empty collector.

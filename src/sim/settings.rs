@@ -34,21 +34,16 @@ pub enum ErrorKind {
 }
 
 /// Which parameters carry an injected error: `"identifiable"`, `"all"` or a list of names.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub enum ParamSelection {
     /// The joint and tool parameters identifiable from the measured quantity (see
     /// [`crate::sim::truth::identifiable_params`]).
+    #[default]
     Identifiable,
     /// Every joint and tool parameter of the robot's model (base excluded).
     All,
     /// The named parameters (`theta1`, `d2`, `tool.x`, …).
     List(Vec<String>),
-}
-
-impl Default for ParamSelection {
-    fn default() -> Self {
-        ParamSelection::Identifiable
-    }
 }
 
 impl<'de> Deserialize<'de> for ParamSelection {
