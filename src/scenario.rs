@@ -387,6 +387,14 @@ impl Scenario {
             .unwrap_or(Path::new("<built-in default scenario>"))
             .to_path_buf();
         let ferr = |place: &str, msg: String| Error::file(&shown, place, msg);
+        if table.contains_key("registration_study") {
+            return Err(ferr(
+                "registration_study",
+                "this is a registration study (Ban fig. 3), which `calbench run` runs on its \
+                 own; it is not a calibration scenario"
+                    .into(),
+            ));
+        }
         let raw: RawScenario = toml::Value::Table(table.clone())
             .try_into()
             .map_err(|e: toml::de::Error| ferr("scenario", e.to_string().trim_end().into()))?;

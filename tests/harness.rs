@@ -326,7 +326,21 @@ fn every_shipped_scenario_loads() {
     for f in std::fs::read_dir(&dir).unwrap() {
         let p = f.unwrap().path();
         if p.extension().is_some_and(|e| e == "toml") {
-            Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            let text = std::fs::read_to_string(&p).unwrap();
+            let table: toml::Table = toml::from_str(&text).unwrap();
+            if calbench::calibrate::registration_study::RegistrationScenario::is_one(&table) {
+                calbench::calibrate::registration_study::RegistrationScenario::from_table(
+                    table, &p,
+                )
+                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                // Not a calibration scenario, and said so by the commands that take one.
+                let e = Scenario::load(&p)
+                    .err()
+                    .expect("a registration study is not a scenario");
+                assert!(e.to_string().contains("registration study"), "{e}");
+            } else {
+                Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            }
             n += 1;
         }
     }
