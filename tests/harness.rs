@@ -334,9 +334,9 @@ fn every_shipped_scenario_loads() {
                 )
                 .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
                 // Not a calibration scenario, and said so by the commands that take one.
-                let e = Scenario::load(&p)
-                    .err()
-                    .expect("a registration study is not a scenario");
+                let Err(e) = Scenario::load(&p) else {
+                    panic!("a registration study is not a scenario")
+                };
                 assert!(e.to_string().contains("registration study"), "{e}");
             } else {
                 Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
