@@ -24,8 +24,46 @@ pub use plots::{
     before_after, box_plot, box_stats, grouped_bars, heatmap, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,
 };
-pub use run::{columns, entry_table, run_study, summary, write_into, Column, TrialsCsv};
+pub use run::{columns, entry_table, summary, write_into, Column, TrialsCsv};
 pub mod shard;
+
+/// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
+/// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
+/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]).
+pub fn run_study(
+    scenario: crate::scenario::Scenario,
+    opts: &crate::montecarlo::RunOptions,
+) -> crate::Result<crate::montecarlo::RunResult> {
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| std::path::Path::new("results").join(&scenario.name));
+    let mut result = None;
+    atomically(&out, |dir| {
+        let mut csv = run::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
+        let r = match opts.shard {
+            None => {
+                let r = crate::montecarlo::run(scenario, opts, &mut csv)?;
+                csv.finish()?;
+                run::write_into(&r, dir)?;
+                r
+            }
+            Some(_) => {
+                let mut records = shard::Records::create(dir)?;
+                let r = {
+                    let mut both = shard::Both(&mut csv, &mut records);
+                    crate::montecarlo::run(scenario, opts, &mut both)?
+                };
+                csv.finish()?;
+                records.finish(&r)?;
+                r
+            }
+        };
+        result = Some(r);
+        Ok(())
+    })?;
+    result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
+}
 
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
 /// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when

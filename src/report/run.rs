@@ -12,10 +12,8 @@ use super::plots;
 use crate::error::{Error, Result};
 use crate::math::Real;
 use crate::montecarlo::stats::{eta, Entry};
-use crate::montecarlo::{
-    toml_to_json, Block, BlockInfo, RunOptions, RunResult, TrialResult, TrialSink,
-};
-use crate::scenario::{Scenario, Sweep};
+use crate::montecarlo::{toml_to_json, Block, BlockInfo, RunResult, TrialResult, TrialSink};
+use crate::scenario::Sweep;
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
@@ -700,41 +698,6 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         done.extend(write_sweep_plots(r, sw, out)?);
     }
     Ok(done)
-}
-
-/// Runs `scenario` and writes its output folder as a whole ([`super::atomically`]):
-/// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
-/// plots; with `opts.shard`, the shard's partial result instead ([`super::shard`]).
-pub fn run_study(scenario: Scenario, opts: &RunOptions) -> Result<RunResult> {
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
-    let mut result = None;
-    super::atomically(&out, |dir| {
-        let mut csv = TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
-        let r = match opts.shard {
-            None => {
-                let r = crate::montecarlo::run(scenario, opts, &mut csv)?;
-                csv.finish()?;
-                write_into(&r, dir)?;
-                r
-            }
-            Some(_) => {
-                let mut records = super::shard::Records::create(dir)?;
-                let r = {
-                    let mut both = super::shard::Both(&mut csv, &mut records);
-                    crate::montecarlo::run(scenario, opts, &mut both)?
-                };
-                csv.finish()?;
-                records.finish(&r)?;
-                r
-            }
-        };
-        result = Some(r);
-        Ok(())
-    })?;
-    result.ok_or_else(|| Error::Compute("the run produced no result".into()))
 }
 
 /// Writes every file of a complete run but `trials.csv` (written as the trials finished)
