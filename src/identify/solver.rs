@@ -10,7 +10,7 @@
 use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use super::linalg::{self, solve_spd};
-use super::weights::{point_weights, redecide_inliers, Robustness, Sigma0};
+use super::weights::{point_weights, redecide_inliers, Residuals, Robustness, Sigma0};
 use super::xi::{choose_xi, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
@@ -462,49 +462,31 @@ pub(crate) fn gauss_newton(
             termination = Termination::Diverged;
             break;
         }
-        if let (Phase::Refit, Some(ro)) = (phase, robust) {
-            if redecisions < REDECISIONS {
-                set_changed = redecide_inliers(
-                    &work.r,
-                    work.rows,
-                    t,
-                    ro,
-                    rms0,
-                    p.prior(),
-                    &mut w,
-                    &mut kept,
-                );
-                redecisions += 1;
-            } else {
-                set_changed = false;
-            }
-        }
-        if let (Phase::Reweight, Some(ro)) = (phase, robust) {
-            w_prev.copy_from_slice(&w);
-            let s = point_weights(
-                &work.r,
-                work.rows,
+        if let Some(o) = robust {
+            let res = Residuals {
+                r: &work.r,
+                rows: work.rows,
                 t,
-                ro,
                 rms0,
-                p.prior(),
-                &mut w,
-                &mut sort_buf,
-            );
-            sigma_mad = s.mad;
-            rounds += 1;
-            if rounds >= MIN_ROUNDS && settled(&w, &w_prev) {
-                redecide_inliers(
-                    &work.r,
-                    work.rows,
-                    t,
-                    ro,
-                    rms0,
-                    p.prior(),
-                    &mut w,
-                    &mut kept,
-                );
-                phase = Phase::Refit;
+                prior: p.prior(),
+                o,
+            };
+            match phase {
+                Phase::Refit if redecisions < REDECISIONS => {
+                    set_changed = redecide_inliers(&res, &mut w, &mut kept);
+                    redecisions += 1;
+                }
+                Phase::Refit => set_changed = false,
+                Phase::Reweight => {
+                    w_prev.copy_from_slice(&w);
+                    sigma_mad = point_weights(&res, &mut w, &mut sort_buf).mad;
+                    rounds += 1;
+                    if rounds >= MIN_ROUNDS && settled(&w, &w_prev) {
+                        redecide_inliers(&res, &mut w, &mut kept);
+                        phase = Phase::Refit;
+                    }
+                }
+                Phase::Prior => {}
             }
         }
         work.normal(&w);

@@ -107,34 +107,64 @@ pub(crate) struct WeightStats {
     pub mad: Option<Real>,
 }
 
-/// Recomputes the point weights `w` from the residuals `r` (`rows` per point, `t` unknowns).
-/// `rms0` is the RMS point residual at the start. Allocation-free once `buf` has capacity.
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn point_weights(
-    r: &DVector<Real>,
-    rows: usize,
-    t: usize,
-    o: &Robustness,
-    rms0: Real,
-    prior: Option<&[Real]>,
-    w: &mut [Real],
-    buf: &mut Vec<Real>,
-) -> WeightStats {
-    let sigma0 = match o.sigma0 {
-        Sigma0::Classical => {
-            let mut s = 0.0;
-            let mut n = 0.0;
-            for (i, &wi) in w.iter().enumerate() {
-                n += rows as Real * wi;
-                let e2: Real = (0..rows).map(|k| r[i * rows + k].powi(2)).sum();
-                s += wi * e2;
-            }
-            if n > t as Real {
-                (s / (n - t as Real)).sqrt()
-            } else {
-                Real::NAN
-            }
+/// What the robust weights are computed from: the residuals at the current estimate and
+/// the settings of the robust ridge.
+pub(crate) struct Residuals<'a> {
+    /// The residual vector, `rows` entries per point.
+    pub r: &'a DVector<Real>,
+    /// Residual rows per point.
+    pub rows: usize,
+    /// Unknowns.
+    pub t: usize,
+    /// The RMS point residual at the start (σ0 below `1e-9 rms0` means consistent data).
+    pub rms0: Real,
+    /// The problem's prior point weights; `None`: every point weighs 1.
+    pub prior: Option<&'a [Real]>,
+    /// The robust settings.
+    pub o: &'a Robustness,
+}
+
+impl Residuals<'_> {
+    /// `|v_i|²` of point `i`'s residual rows.
+    fn point_norm2(&self, i: usize) -> Real {
+        self.r.rows(i * self.rows, self.rows).norm_squared()
+    }
+
+    /// The classical σ0 with the weights `w`: `sqrt(Σ w_i |v_i|² / (rows Σ w_i − t))`; NaN
+    /// when the weighted rows do not exceed the unknowns.
+    fn classical_sigma0(&self, w: &[Real]) -> Real {
+        let (mut s, mut n) = (0.0, 0.0);
+        for (i, &wi) in w.iter().enumerate() {
+            n += self.rows as Real * wi;
+            s += wi * self.point_norm2(i);
         }
+        if n > self.t as Real {
+            (s / (n - self.t as Real)).sqrt()
+        } else {
+            Real::NAN
+        }
+    }
+
+    /// Whether σ0 says nothing: not finite, or below `1e-9 rms0` (consistent data).
+    fn uninformative(&self, sigma0: Real) -> bool {
+        !sigma0.is_finite() || sigma0 <= 1e-9 * self.rms0
+    }
+
+    /// Gives every point its prior weight (1 without priors).
+    fn reset(&self, w: &mut [Real]) {
+        match self.prior {
+            None => w.fill(1.0),
+            Some(p) => w.copy_from_slice(p),
+        }
+    }
+}
+
+/// Recomputes the point weights `w` from the residuals. Allocation-free once `buf` has
+/// capacity.
+pub(crate) fn point_weights(res: &Residuals, w: &mut [Real], buf: &mut Vec<Real>) -> WeightStats {
+    let (r, rows, o, prior) = (res.r, res.rows, res.o, res.prior);
+    let sigma0 = match o.sigma0 {
+        Sigma0::Classical => res.classical_sigma0(w),
         Sigma0::Mad => {
             buf.clear();
             match prior {
@@ -149,19 +179,13 @@ pub(crate) fn point_weights(
         }
     };
     let mad = (o.sigma0 == Sigma0::Mad).then_some(sigma0);
-    if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
-        match prior {
-            None => w.fill(1.0),
-            Some(p) => w.copy_from_slice(p),
-        }
+    if res.uninformative(sigma0) {
+        res.reset(w);
         return WeightStats { mad };
     }
     let scale = sigma0 * (rows as Real).sqrt();
     for (i, wi) in w.iter_mut().enumerate() {
-        let e: Real = (0..rows)
-            .map(|k| r[i * rows + k].powi(2))
-            .sum::<Real>()
-            .sqrt();
+        let e = res.point_norm2(i).sqrt();
         // Eq. 16 with prior weight p_i: p̄_i = p_i ψ(u_i)/u_i, u_i the standardised residual.
         *wi = match prior {
             None => o.weight.weight(e / scale, o.k0, o.k1),
@@ -180,41 +204,19 @@ pub(crate) fn point_weights(
 /// rounds would. Returns whether the kept set differs from the one `w` held (kept: `w > 0`).
 /// Keeps every point when σ0 is not defined (too few rows) or below `1e-9 rms0` (consistent
 /// data).
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn redecide_inliers(
-    r: &DVector<Real>,
-    rows: usize,
-    t: usize,
-    o: &Robustness,
-    rms0: Real,
-    prior: Option<&[Real]>,
-    w: &mut [Real],
-    before: &mut Vec<bool>,
-) -> bool {
+pub(crate) fn redecide_inliers(res: &Residuals, w: &mut [Real], before: &mut Vec<bool>) -> bool {
     before.clear();
     before.extend(w.iter().map(|&v| v > 0.0));
-    match prior {
-        None => w.fill(1.0),
-        Some(p) => w.copy_from_slice(p),
-    }
+    res.reset(w);
     loop {
-        let mut s = 0.0;
-        let mut n = 0.0;
-        for (i, &wi) in w.iter().enumerate() {
-            n += rows as Real * wi;
-            s += wi * point_norm2(r, rows, i);
-        }
-        if n <= t as Real {
+        let sigma0 = res.classical_sigma0(w);
+        if res.uninformative(sigma0) {
             break;
         }
-        let sigma0 = (s / (n - t as Real)).sqrt();
-        if !sigma0.is_finite() || sigma0 <= 1e-9 * rms0 {
-            break;
-        }
-        let scale = sigma0 * (rows as Real).sqrt();
+        let scale = sigma0 * (res.rows as Real).sqrt();
         let mut rejected = false;
         for (i, wi) in w.iter_mut().enumerate() {
-            if *wi > 0.0 && wi.sqrt() * point_norm2(r, rows, i).sqrt() / scale > o.k1 {
+            if *wi > 0.0 && wi.sqrt() * res.point_norm2(i).sqrt() / scale > res.o.k1 {
                 *wi = 0.0;
                 rejected = true;
             }
@@ -224,11 +226,6 @@ pub(crate) fn redecide_inliers(
         }
     }
     w.iter().zip(before.iter()).any(|(&v, &b)| (v > 0.0) != b)
-}
-
-/// `|v_i|²` of point `i`'s `rows` residual rows.
-fn point_norm2(r: &DVector<Real>, rows: usize, i: usize) -> Real {
-    r.rows(i * rows, rows).norm_squared()
 }
 
 #[cfg(test)]

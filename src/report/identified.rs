@@ -177,22 +177,32 @@ fn write(path: &Path, text: &str) -> Result<()> {
 /// Bins of the residual histogram in `report.md`.
 const BINS: usize = 12;
 
-/// Counts of `v` in [`BINS`] equal bins over `[0, max]`, with the bins' labels.
-fn histogram(v: &[Real], unit: &str) -> (Vec<String>, Vec<Real>) {
-    let top = v
-        .iter()
-        .copied()
-        .filter(|x| x.is_finite())
-        .fold(0.0, Real::max);
+/// Counts of each series in [`BINS`] equal bins over `[0, max]` (the largest finite value of
+/// all the series, so they share the bins), with the bins' labels; non-finite values are not
+/// counted.
+fn histogram(series: &[&[Real]]) -> (Vec<String>, Vec<Vec<Real>>) {
+    let finite = |v: &[Real]| {
+        v.iter()
+            .copied()
+            .filter(|x| x.is_finite())
+            .collect::<Vec<_>>()
+    };
+    let top = series.iter().flat_map(|v| finite(v)).fold(0.0, Real::max);
     let w = if top > 0.0 { top / BINS as Real } else { 1.0 };
-    let mut counts = vec![0.0; BINS];
-    for &x in v.iter().filter(|x| x.is_finite()) {
-        counts[((x / w) as usize).min(BINS - 1)] += 1.0;
-    }
+    let counts = series
+        .iter()
+        .map(|v| {
+            let mut h = vec![0.0; BINS];
+            for x in finite(v) {
+                h[((x / w) as usize).min(BINS - 1)] += 1.0;
+            }
+            h
+        })
+        .collect();
     let labels = (0..BINS)
         .map(|b| {
             format!(
-                "{}–{} {unit}",
+                "{}–{}",
                 fmt_num(b as Real * w, 2),
                 fmt_num((b + 1) as Real * w, 2)
             )
@@ -270,33 +280,17 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         &before,
         &after,
     )?;
-    let top = before.iter().chain(&after).copied().fold(0.0, Real::max);
-    let w = if top > 0.0 { top / BINS as Real } else { 1.0 };
-    let count = |v: &[Real]| {
-        let mut h = vec![0.0; BINS];
-        for &x in v {
-            h[((x / w) as usize).min(BINS - 1)] += 1.0;
-        }
-        h
-    };
-    let labels: Vec<String> = (0..BINS)
-        .map(|b| {
-            format!(
-                "{}–{}",
-                fmt_num(b as Real * w, 2),
-                fmt_num((b + 1) as Real * w, 2)
-            )
-        })
-        .collect();
+    let (labels, counts) = histogram(&[&before, &after]);
     plots::grouped_bars(
         &out.join("histogram"),
         "Residuals (mm): points per bin",
         "points",
         &labels,
-        &[
-            ("before".to_string(), count(&before)),
-            ("after".to_string(), count(&after)),
-        ],
+        &["before", "after"]
+            .into_iter()
+            .map(String::from)
+            .zip(counts)
+            .collect::<Vec<_>>(),
     )?;
     s += "## Residuals\n\n![residual per point](residuals.png)\n\n![histogram](histogram.png)\n\n";
     s += "## Identified errors\n\nmm and rad; standard error = √ of the covariance's diagonal.\n\n";
@@ -334,13 +328,13 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         let _ = writeln!(s, "- dependent group: {}", names(g));
     }
     if r.method == "igg3" && !id.weights.is_empty() {
-        let (labels, counts) = histogram(&id.weights, "");
+        let (labels, mut counts) = histogram(&[&id.weights]);
         plots::grouped_bars(
             &out.join("weights"),
             "IGG3 final point weights",
             "points",
             &labels,
-            &[("points".to_string(), counts)],
+            &[("points".to_string(), counts.remove(0))],
         )?;
         let low: Vec<String> = id
             .weights
