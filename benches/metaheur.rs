@@ -45,7 +45,7 @@ fn bench(c: &mut Criterion) {
     g.finish();
 
     let p = MetaProblem::from_frames(&nominal, params, qs, &measured, DEFAULT_K).expect("problem");
-    let b = p.bounds(0.5, 0.005);
+    let b = p.bounds(0.5, 0.005, 1e-5);
     let f = |x: &[Real]| p.fitness(x);
     let x0 = vec![0.0; b.dim()];
 

@@ -33,8 +33,16 @@ fn simulate(c: &mut Criterion) {
         g.bench_with_input(BenchmarkId::from_parameter(name), &tracker, |b, t| {
             let mut rng = stream(2, "noise");
             b.iter(|| {
-                measure_poses(&robot, black_box(&qs), t, Some(&outliers), None, &mut rng)
-                    .expect("measurement")
+                measure_poses(
+                    &robot,
+                    black_box(&qs),
+                    t,
+                    Some(&outliers),
+                    None,
+                    None,
+                    &mut rng,
+                )
+                .expect("measurement")
             })
         });
     }
@@ -55,8 +63,9 @@ fn simulate(c: &mut Criterion) {
         };
         let comp = Compliance::new(&settings, &robot, calbench::robots::builtin("irb2600"))
             .expect("compliance");
-        let sag =
-            comp.map(|c| Box::new(move |r: &Robot, q: &[f64]| c.deflected(r, q)) as Box<SagFn>);
+        let sag = comp.map(|c| {
+            Box::new(move |r: &Robot, q: &[f64], _: Option<f64>| c.deflected(r, q)) as Box<SagFn>
+        });
         g.bench_function(format!("{model:?}").to_lowercase(), |b| {
             let mut rng = stream(2, "noise");
             b.iter(|| {
@@ -66,6 +75,7 @@ fn simulate(c: &mut Criterion) {
                     &tracker,
                     None,
                     sag.as_deref(),
+                    None,
                     &mut rng,
                 )
                 .expect("measurement")
@@ -79,6 +89,7 @@ fn simulate(c: &mut Criterion) {
         &qs,
         &tracker,
         Some(&outliers),
+        None,
         None,
         &mut stream(3, "noise"),
     )

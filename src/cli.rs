@@ -25,6 +25,7 @@ use serde_json::json;
 use calbench::calibrate::registration_study::RegistrationScenario;
 use calbench::calibrate::{calibrate, Registration, RoundsEnd};
 use calbench::check::{compare, read_json, Regression};
+use calbench::compliance::CompliancePick;
 use calbench::error::{Error, Result};
 use calbench::identifiability::analyse;
 use calbench::identify::{method_by_name, Termination};
@@ -264,28 +265,30 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
     let vqs = trial::validation_poses(&study, trial)?;
     let sag = trial::sag_fn(&study);
     let sag_ref = sag.as_deref();
-    let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
-    let m = measure_poses(
+    let m = trial::measure_calibration(
+        &study,
         &truth,
         &qs,
-        &study.tracker,
-        outliers,
         sag_ref,
         &mut calbench::rng::stream(seed, "measure"),
     )?;
+    // The validation file records its payload when the scenario measures under loads.
+    let loaded = sc.calibration.payloads_kg.is_some() || sc.validation.payload_kg.is_some();
+    let vloads = loaded.then(|| vec![study.validation_payload(); vqs.len()]);
     let v = measure_poses(
         &truth,
         &vqs,
         &study.tracker,
         None,
         sag_ref,
+        vloads.as_deref(),
         &mut calbench::rng::stream(seed, "measure/validation"),
     )?;
     let errs: serde_json::Map<String, serde_json::Value> = errors
         .iter()
         .map(|(p, e)| (p.to_string(), json!(e)))
         .collect();
-    let truth_json = json!({
+    let mut truth_json = json!({
         "scenario": sc.name,
         "trial": trial,
         "seed": seed,
@@ -297,6 +300,9 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
         "sag_mm": m.truth.sag_mm,
         "validation_sag_mm": v.truth.sag_mm,
     });
+    if let Some(c) = study.true_compliance_json() {
+        truth_json["true_compliance"] = c;
+    }
     calbench::report::atomically(out, |dir| {
         write_measurements(&dir.join("measurements.csv"), &study.nominal, &m.data)?;
         write_measurements(&dir.join("validation.csv"), &study.nominal, &v.data)?;
@@ -324,6 +330,7 @@ pub fn identify_file(
     k: Option<Real>,
     allow_rank_deficient: bool,
     export: Option<&str>,
+    compliance: Option<&str>,
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
@@ -353,7 +360,11 @@ pub fn identify_file(
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
     let with_base = registration == Registration::Identify;
-    let params = study::identified_params_tool_first(&nominal, measure, with_base);
+    let kinematic = study::identified_params_tool_first(&nominal, measure, with_base);
+    let mut params = kinematic.clone();
+    if let Some(c) = compliance {
+        params.extend(CompliancePick::from_arg(c).params(&nominal, "--compliance")?);
+    }
     // For real data "known" means the points are already in the base frame.
     let c = calibrate(
         &nominal,
@@ -369,7 +380,8 @@ pub fn identify_file(
         Termination::RankDeficient | Termination::Singular
     );
     if undetermined && !allow_rank_deficient {
-        let a = analyse(&nominal, &params, &d.qs, measure);
+        // The analysis of the kinematic model (a compliance column's scale is per pose).
+        let a = analyse(&nominal, &kinematic, &d.qs, measure);
         let names = |v: &[calbench::kinematics::Param]| {
             v.iter()
                 .map(|p| p.to_string())
@@ -408,7 +420,10 @@ pub fn identify_file(
             c.rounds.last_step_mm
         );
     }
-    let validation = val.as_ref().map(|v| validate_file(&nominal, &c, v));
+    let validation = val
+        .as_ref()
+        .map(|v| validate_file(&nominal, &c, v))
+        .transpose()?;
     let record = IdentifyRecord {
         nominal: &nominal,
         data_path: data,
@@ -802,7 +817,19 @@ pub fn import(raw: &Path, mapping: &Path, out: &Path) -> Result<()> {
 /// `calbench compensate --robot NOMINAL --identified IDENTIFIED --joints PROGRAM --out CSV`
 /// (Li 2018 §3): per program row, the joints (in the nominal robot's units, the controller's)
 /// at which the identified robot reaches the nominal pose, with the residual and a flag.
-pub fn compensate(robot: &str, identified: &str, joints: &Path, out: &Path) -> Result<()> {
+pub fn compensate(
+    robot: &str,
+    identified: &str,
+    joints: &Path,
+    payload_kg: Real,
+    out: &Path,
+) -> Result<()> {
+    if !(payload_kg.is_finite() && payload_kg >= 0.0) {
+        return Err(Error::setting(
+            "--payload-kg",
+            format!("must be a finite payload ≥ 0 kg, got {payload_kg}"),
+        ));
+    }
     let nominal = robots::load(robot)?;
     let ident = robots::load(identified)?;
     if ident.dof() != nominal.dof() {
@@ -832,7 +859,7 @@ pub fn compensate(robot: &str, identified: &str, joints: &Path, out: &Path) -> R
     let mut flagged = 0;
     let mut worst: (Real, Real) = (0.0, 0.0);
     for q in &program {
-        let c = calbench::compensate::compensate_row(&nominal, &ident, q, round);
+        let c = calbench::compensate::compensate_row(&nominal, &ident, q, payload_kg, round)?;
         for v in nominal.q_to_user(&c.q) {
             s.push_str(&cell(v));
             s.push(',');

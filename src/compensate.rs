@@ -6,6 +6,7 @@
 //! Jacobian (the error itself is exact, so the fixed point is exact).
 
 use crate::calibrate::validation::rotation_angle_deg;
+use crate::compliance::loaded_fk;
 use crate::kinematics::Robot;
 use crate::math::{rotation_vector, Frame, Real};
 use nalgebra::{DMatrix, DVector};
@@ -50,15 +51,23 @@ fn error(target: &Frame, f: &Frame) -> [Real; 6] {
     ]
 }
 
-/// The joints (internal units) at which `identified` reaches `target`, starting from `q0`.
-pub fn solve(identified: &Robot, target: &Frame, q0: &[Real]) -> Vec<Real> {
+/// The joints (internal units) at which `identified` reaches `target` under a payload of
+/// `payload_kg` (its gravity sag, when the robot has joint compliances), starting from `q0`.
+/// Fails when the robot has compliances but no link masses.
+pub fn solve(
+    identified: &Robot,
+    target: &Frame,
+    q0: &[Real],
+    payload_kg: Real,
+) -> crate::Result<Vec<Real>> {
     let chain = identified.chain();
+    let pose = |q: &[Real]| loaded_fk(identified, &chain, q, payload_kg);
     let n = q0.len();
     let mut q = q0.to_vec();
     let mut qh = q.clone();
     let mut jac = DMatrix::<Real>::zeros(6, n);
     for _ in 0..MAX_ITERATIONS {
-        let f = chain.fk(&q);
+        let f = pose(&q)?;
         let e = error(target, &f);
         let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt() / K_MM_PER_RAD;
@@ -70,9 +79,9 @@ pub fn solve(identified: &Robot, target: &Frame, q0: &[Real]) -> Vec<Real> {
         for j in 0..n {
             qh.copy_from_slice(&q);
             qh[j] += h;
-            let ep = error(target, &chain.fk(&qh));
+            let ep = error(target, &pose(&qh)?);
             qh[j] -= 2.0 * h;
-            let em = error(target, &chain.fk(&qh));
+            let em = error(target, &pose(&qh)?);
             for r in 0..6 {
                 jac[(r, j)] = -(ep[r] - em[r]) / (2.0 * h);
             }
@@ -85,21 +94,24 @@ pub fn solve(identified: &Robot, target: &Frame, q0: &[Real]) -> Vec<Real> {
             q[j] += step[j];
         }
     }
-    q
+    Ok(q)
 }
 
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
 /// reaches the pose `nominal` gives at `q_nominal`. `round` maps joint values to what is
-/// written (the output's decimals), so the residuals are those of the written command.
+/// written (the output's decimals), so the residuals are those of the written command. The
+/// identified robot carries `payload_kg` at the tool (its sag, when it has compliances; the
+/// nominal robot of a locked controller knows no sag).
 pub fn compensate_row(
     nominal: &Robot,
     identified: &Robot,
     q_nominal: &[Real],
+    payload_kg: Real,
     round: impl Fn(&[Real]) -> Vec<Real>,
-) -> Corrected {
+) -> crate::Result<Corrected> {
     let target = nominal.fk(q_nominal);
-    let q = round(&solve(identified, &target, q_nominal));
-    let f = identified.fk(&q);
+    let q = round(&solve(identified, &target, q_nominal, payload_kg)?);
+    let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
     let residual_deg = rotation_angle_deg(&f, &target);
     let flag = if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
@@ -109,12 +121,12 @@ pub fn compensate_row(
     } else {
         "ok"
     };
-    Corrected {
+    Ok(Corrected {
         q,
         residual_mm,
         residual_deg,
         flag,
-    }
+    })
 }
 
 #[cfg(test)]
@@ -146,7 +158,7 @@ mod tests {
         let qs = crate::sampling::uniform_joint_poses(&nominal, 30, &mut g);
         let mut ok = 0;
         for q in &qs {
-            let c = compensate_row(&nominal, &truth, q, |q| q.to_vec());
+            let c = compensate_row(&nominal, &truth, q, 0.0, |q| q.to_vec()).unwrap();
             let target = nominal.fk(q);
             let before = (truth.fk(q).pos - target.pos).norm();
             assert!(before > 0.1, "the errors move the tool ({before} mm)");
@@ -166,13 +178,38 @@ mod tests {
     fn rounding_shows_in_the_residual_and_failures_are_flagged() {
         let nominal = crate::robots::load("irb2600").unwrap();
         let q = vec![0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
-        let coarse = compensate_row(&nominal, &nominal, &q, |q| {
+        let coarse = compensate_row(&nominal, &nominal, &q, 0.0, |q| {
             q.iter().map(|v| v + 1e-3).collect()
-        });
+        })
+        .unwrap();
         assert!(coarse.residual_mm > 1e-3);
         assert_eq!(coarse.flag, "failed");
-        let exact = compensate_row(&nominal, &nominal, &q, |q| q.to_vec());
+        let exact = compensate_row(&nominal, &nominal, &q, 0.0, |q| q.to_vec()).unwrap();
         assert_eq!(exact.flag, "ok");
         assert!(exact.residual_mm < 1e-12);
+    }
+
+    /// A robot with joint compliances: the corrected commands reach the nominal pose with the
+    /// arm sagging under the payload (the elasto-geometric model's own forward kinematics), and
+    /// the sag is what the uncorrected commands miss by.
+    #[test]
+    fn compliant_robot_commands_include_the_sag_at_the_payload() {
+        let nominal = crate::robots::load("irb2600").unwrap();
+        let mut soft = nominal.clone();
+        soft.set(Param::Compliance(1), 1.0 / 3.5e6);
+        soft.set(Param::Compliance(2), 1.0 / 2.5e6);
+        let chain = soft.chain();
+        let q = vec![0.3, 0.4, -0.2, 0.5, 0.6, 0.1];
+        let target = nominal.fk(&q);
+        let sagged = loaded_fk(&soft, &chain, &q, 20.0).unwrap();
+        let sag = (sagged.pos - target.pos).norm();
+        assert!(sag > 0.05, "20 kg sag the arm by {sag} mm");
+        let c = compensate_row(&nominal, &soft, &q, 20.0, |q| q.to_vec()).unwrap();
+        assert_eq!(c.flag, "ok");
+        let f = loaded_fk(&soft, &chain, &c.q, 20.0).unwrap();
+        assert!((f.pos - target.pos).norm() < 1e-8);
+        // Without a payload the rigid and the compliant arm differ by the links' own sag only.
+        let light = compensate_row(&nominal, &soft, &q, 0.0, |q| q.to_vec()).unwrap();
+        assert!(light.q != c.q);
     }
 }

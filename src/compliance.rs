@@ -28,10 +28,136 @@
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::kinematics::{Chain, Coupling, JointType, Robot};
+use crate::kinematics::{Chain, Coupling, JointType, Param, Robot};
 use crate::math::{Frame, Real, Vec3};
 use crate::physics::{self, SpringBody, GRAVITY};
 use crate::robots::Builtin;
+
+/// Which joint compliances the identification estimates (FORMATS.md `[identification]
+/// compliance`, `identify --compliance`): none (the default: a kinematic model), the joints
+/// gravity loads, or a list of names `c1`…`cn`.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum CompliancePick {
+    /// A purely kinematic model.
+    #[default]
+    None,
+    /// Every revolute joint whose gravity torque varies over the workspace
+    /// ([`gravity_loaded_joints`]).
+    Gravity,
+    /// The named compliances.
+    List(Vec<String>),
+}
+
+impl<'de> Deserialize<'de> for CompliancePick {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            One(String),
+            Many(Vec<String>),
+        }
+        let expected =
+            "expected \"gravity\" or a list of compliance names such as [\"c2\", \"c3\"]";
+        match Raw::deserialize(d).map_err(|_| serde::de::Error::custom(expected))? {
+            Raw::One(s) if s == "gravity" => Ok(CompliancePick::Gravity),
+            Raw::One(s) => Err(serde::de::Error::custom(format!("{expected}, got \"{s}\""))),
+            Raw::Many(v) => Ok(CompliancePick::List(v)),
+        }
+    }
+}
+
+impl CompliancePick {
+    /// Reads the command-line form: `gravity`, or names separated by commas (`c2,c3`).
+    pub fn from_arg(arg: &str) -> CompliancePick {
+        if arg.trim() == "gravity" {
+            CompliancePick::Gravity
+        } else {
+            CompliancePick::List(
+                arg.split(',')
+                    .map(|s| s.trim().to_string())
+                    .filter(|s| !s.is_empty())
+                    .collect(),
+            )
+        }
+    }
+
+    /// The compliance parameters picked on `robot`, in joint order. Errors (key `key`) name
+    /// a name that is not `c1`…`cn`, a joint that is not revolute, a name listed twice, and a
+    /// robot without link masses.
+    pub fn params(&self, robot: &Robot, key: &str) -> Result<Vec<Param>> {
+        if *self != CompliancePick::None && robot.link_mass_kg.is_none() {
+            return Err(Error::setting(
+                key,
+                format!(
+                    "robot \"{}\" gives no link masses (`mass_kg` on every joint of the robot \
+                     file), which the compliance model needs for its gravity torques",
+                    robot.name
+                ),
+            ));
+        }
+        let joints = match self {
+            CompliancePick::None => return Ok(Vec::new()),
+            CompliancePick::Gravity => gravity_loaded_joints(robot)?,
+            CompliancePick::List(names) => {
+                let mut out: Vec<usize> = Vec::with_capacity(names.len());
+                for n in names {
+                    let j = match Param::parse(n) {
+                        Some(Param::Compliance(j)) if j < robot.dof() => j,
+                        _ => {
+                            return Err(Error::setting(
+                                key,
+                                format!(
+                                    "\"{n}\" is not a compliance of robot \"{}\" (c1…c{})",
+                                    robot.name,
+                                    robot.dof()
+                                ),
+                            ))
+                        }
+                    };
+                    if robot.joints[j].kind != JointType::Revolute {
+                        return Err(Error::setting(
+                            key,
+                            format!(
+                                "\"{n}\": joint {} is prismatic; only revolute joints are \
+                                 compliant in calbench's model",
+                                j + 1
+                            ),
+                        ));
+                    }
+                    if out.contains(&j) {
+                        return Err(Error::setting(key, format!("\"{n}\" is listed twice")));
+                    }
+                    out.push(j);
+                }
+                out.sort_unstable();
+                out
+            }
+        };
+        Ok(joints.into_iter().map(Param::Compliance).collect())
+    }
+}
+
+/// The revolute joints that gravity loads: those whose gravity torque (link masses of the
+/// robot, a 10 kg payload) exceeds 1e-6 of the largest joint torque somewhere among 64 generic
+/// poses. A joint whose axis stays vertical (joint 1 of a floor-mounted arm) carries no
+/// gravity torque, so its compliance cannot show in a static measurement.
+pub fn gravity_loaded_joints(robot: &Robot) -> Result<Vec<usize>> {
+    let n = robot.dof();
+    let chain = robot.chain();
+    let qs = crate::sampling::uniform_joint_poses(robot, 64, &mut crate::rng::stream(0, "gravity"));
+    let mut peak = [0.0 as Real; 16];
+    let mut tau = [0.0; 16];
+    for q in &qs {
+        gravity_torques(robot, &chain, q, 10.0, &mut tau[..n])?;
+        for (p, t) in peak.iter_mut().zip(&tau[..n]) {
+            *p = p.max(t.abs());
+        }
+    }
+    let top = peak.iter().copied().fold(0.0, Real::max);
+    Ok((0..n)
+        .filter(|&j| robot.joints[j].kind == JointType::Revolute && peak[j] > 1e-6 * top)
+        .collect())
+}
 
 /// Which sag model to use (FORMATS.md `[compliance] model`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
@@ -182,7 +308,10 @@ impl Compliance {
         let link_mass = pick(
             "compliance.link_mass_kg",
             &s.link_mass_kg,
-            defaults.map(|b| b.link_mass_kg),
+            robot
+                .link_mass_kg
+                .as_deref()
+                .or(defaults.map(|b| b.link_mass_kg)),
         )?;
         // Check the built-in defaults as well (they pass through the same rules).
         ComplianceSettings {
@@ -220,6 +349,19 @@ impl Compliance {
         self.payload
     }
 
+    /// The true joint compliances `1/k_j` (rad/(N·m)) of the revolute joints, as the
+    /// parameters of the elasto-geometric model name them ([`Param::Compliance`]); prismatic
+    /// joints, rigid here, are left out.
+    pub fn true_compliances(&self, robot: &Robot) -> Vec<(Param, Real)> {
+        robot
+            .joints
+            .iter()
+            .enumerate()
+            .filter(|(_, j)| j.kind == JointType::Revolute)
+            .map(|(i, _)| (Param::Compliance(i), 1.0 / self.stiffness[i]))
+            .collect()
+    }
+
     fn check_robot(&self, robot: &Robot, q: &[Real]) -> Result<()> {
         if robot.dof() != self.stiffness.len() {
             return Err(Error::setting(
@@ -247,39 +389,13 @@ impl Compliance {
     }
 
     fn masses(&self, chain: &Chain, q: &[Real]) -> Masses {
-        let n = chain.dof();
-        let mut axes = [Frame::identity(); 16];
-        let tool = chain.walk(q, |op, r, p| {
-            if let Some(v) = op.var {
-                axes[v] = Frame { rot: *r, pos: *p };
-            }
-        });
-        let mut points = [Vec3::zeros(); 16];
-        for i in 0..n {
-            let next = if i + 1 < n { axes[i + 1].pos } else { tool.pos };
-            points[i] = 0.5 * (axes[i].pos + next);
-        }
-        Masses { axes, points, tool }
+        masses(chain, q)
     }
 
     /// Gravity torque (N·m) about each joint axis at the commanded pose; zero for prismatic
-    /// joints. `τ_j = z_jᵀ Σ_{i ≥ j} (c_i − o_j) × m_i g`, payload included.
-    fn torques(&self, robot: &Robot, m: &Masses, out: &mut [Real]) {
-        let n = robot.dof();
-        let g = Vec3::new(0.0, 0.0, -GRAVITY);
-        for (j, out_j) in out.iter_mut().enumerate().take(n) {
-            *out_j = 0.0;
-            if robot.joints[j].kind != JointType::Revolute {
-                continue;
-            }
-            let z = m.axes[j].rot.column(2).into_owned();
-            let o = m.axes[j].pos;
-            let mut t = (m.tool.pos - o).cross(&(g * self.payload));
-            for i in j..n {
-                t += (m.points[i] - o).cross(&(g * self.link_mass[i]));
-            }
-            *out_j = z.dot(&t) * 1e-3; // N·mm → N·m
-        }
+    /// joints ([`gravity_torques_at`]).
+    fn torques(&self, robot: &Robot, m: &Masses, payload: Real, out: &mut [Real]) {
+        gravity_torques_at(robot, &self.link_mass, payload, m, out)
     }
 
     /// Converts deflections of the chain variables `dc` into joint-value changes `dq` at `q`.
@@ -302,16 +418,23 @@ impl Compliance {
         self.check_robot(robot, q)?;
         let chain = robot.chain();
         let mut dq = vec![0.0; q.len()];
-        self.linear_into(robot, &chain, q, &mut dq);
+        self.linear_into(robot, &chain, q, self.payload, &mut dq);
         Ok(dq)
     }
 
     /// Linear model into a caller buffer (allocation-free).
-    fn linear_into(&self, robot: &Robot, chain: &Chain, q: &[Real], dq: &mut [Real]) {
+    fn linear_into(
+        &self,
+        robot: &Robot,
+        chain: &Chain,
+        q: &[Real],
+        payload: Real,
+        dq: &mut [Real],
+    ) {
         let n = robot.dof();
         let m = self.masses(chain, q);
         let mut dc = [0.0; 16];
-        self.torques(robot, &m, &mut dc[..n]);
+        self.torques(robot, &m, payload, &mut dc[..n]);
         for (d, k) in dc.iter_mut().zip(&self.stiffness) {
             *d /= k;
         }
@@ -330,35 +453,59 @@ impl Compliance {
     /// As [`Compliance::deflected`], with the robot's chain built once by the caller
     /// (`robot.chain()`); the `linear` model then allocates nothing.
     pub fn deflected_with_chain(&self, robot: &Robot, chain: &Chain, q: &[Real]) -> Result<Frame> {
+        self.deflected_under(robot, chain, q, self.payload)
+    }
+
+    /// As [`Compliance::deflected_with_chain`] with a payload of `payload_kg` at the tool
+    /// point in place of the configured one (a measurement under another load).
+    pub fn deflected_under(
+        &self,
+        robot: &Robot,
+        chain: &Chain,
+        q: &[Real],
+        payload: Real,
+    ) -> Result<Frame> {
         self.check_robot(robot, q)?;
+        if !(payload.is_finite() && payload >= 0.0) {
+            return Err(Error::setting(
+                "payload_kg",
+                format!("must be a finite number ≥ 0, got {payload}"),
+            ));
+        }
         let n = robot.dof();
         match self.model {
             ComplianceModel::None => Ok(chain.fk(q)),
             ComplianceModel::Linear => {
                 let mut dq = [0.0; 16];
-                self.linear_into(robot, chain, q, &mut dq[..n]);
+                self.linear_into(robot, chain, q, payload, &mut dq[..n]);
                 let mut qd = [0.0; 16];
                 for j in 0..n {
                     qd[j] = q[j] + dq[j];
                 }
                 Ok(chain.fk(&qd[..n]))
             }
-            ComplianceModel::Rapier => Ok(self.settle(robot, chain, q)?.tool),
+            ComplianceModel::Rapier => Ok(self.settle(robot, chain, q, payload)?.tool),
         }
     }
 
     /// The rapier settle at joint values `q`, started from the linear model's deflection
     /// (a deterministic function of the pose, so the result does not depend on what the
     /// thread's reused rapier world settled before). Allocation-free on our side.
-    fn settle(&self, robot: &Robot, chain: &Chain, q: &[Real]) -> Result<physics::Settled> {
+    fn settle(
+        &self,
+        robot: &Robot,
+        chain: &Chain,
+        q: &[Real],
+        payload: Real,
+    ) -> Result<physics::Settled> {
         let m = self.masses(chain, q);
         let mut dc = [0.0; 16];
         let n = robot.dof();
-        self.torques(robot, &m, &mut dc[..n]);
+        self.torques(robot, &m, payload, &mut dc[..n]);
         for (d, k) in dc.iter_mut().zip(&self.stiffness) {
             *d /= k;
         }
-        let s = self.spring_bodies(robot, &m, &dc);
+        let s = self.spring_bodies(robot, &m, &dc, payload);
         physics::settle(
             &s.bodies[..s.count],
             &s.masses[..s.mass_count],
@@ -370,7 +517,13 @@ impl Compliance {
     /// The rapier bodies: one per revolute joint, carrying the links up to the next revolute
     /// joint (prismatic joints are rigid); links before the first revolute joint sit on the
     /// fixed base and cannot sag. Each starts from its joint's entry of `dc`.
-    fn spring_bodies(&self, robot: &Robot, m: &Masses, dc: &[Real; 16]) -> SpringBodies {
+    fn spring_bodies(
+        &self,
+        robot: &Robot,
+        m: &Masses,
+        dc: &[Real; 16],
+        payload: Real,
+    ) -> SpringBodies {
         let n = robot.dof();
         let mut s = SpringBodies {
             bodies: std::array::from_fn(|_| SpringBody::default()),
@@ -396,7 +549,7 @@ impl Compliance {
             }
         }
         if s.count > 0 {
-            s.masses[s.mass_count] = (m.tool.pos, self.payload);
+            s.masses[s.mass_count] = (m.tool.pos, payload);
             s.mass_count += 1;
             s.bodies[s.count - 1].masses.end = s.mass_count;
         }
@@ -412,6 +565,179 @@ struct SpringBodies {
     masses: [(Vec3, Real); 17],
     mass_count: usize,
     start: [Real; 16],
+}
+
+/// The arm's mass points at joint values `q`: the joint axis frames, the link midpoints and
+/// the tool frame (world, mm). Fixed size, no allocation.
+fn masses(chain: &Chain, q: &[Real]) -> Masses {
+    masses_with(chain, |visit| chain.walk(q, visit))
+}
+
+/// [`masses`] from a chain walk `walk` that calls its visitor at every operation.
+#[inline(always)]
+fn masses_with(
+    chain: &Chain,
+    walk: impl FnOnce(&mut dyn FnMut(&crate::kinematics::Op, &crate::math::Mat3, &Vec3)) -> Frame,
+) -> Masses {
+    let n = chain.dof();
+    let mut axes = [Frame::identity(); 16];
+    let tool = walk(&mut |op, r, p| {
+        if let Some(v) = op.var {
+            axes[v] = Frame { rot: *r, pos: *p };
+        }
+    });
+    let mut points = [Vec3::zeros(); 16];
+    for i in 0..n {
+        let next = if i + 1 < n { axes[i + 1].pos } else { tool.pos };
+        points[i] = 0.5 * (axes[i].pos + next);
+    }
+    Masses { axes, points, tool }
+}
+
+/// Gravity torque (N·m) about each chain variable's axis at the mass points `m`, of the link
+/// masses `link_mass` (kg) and a payload (kg) at the tool point; zero for prismatic joints.
+/// `τ_j = z_jᵀ (Σ_{i ≥ j} (c_i − o_j) × m_i g + (p_tool − o_j) × m_payload g)` (SPEC §3).
+fn gravity_torques_at(
+    robot: &Robot,
+    link_mass: &[Real],
+    payload: Real,
+    m: &Masses,
+    out: &mut [Real],
+) {
+    let n = robot.dof();
+    let g = Vec3::new(0.0, 0.0, -GRAVITY);
+    for (j, out_j) in out.iter_mut().enumerate().take(n) {
+        *out_j = 0.0;
+        if robot.joints[j].kind != JointType::Revolute {
+            continue;
+        }
+        let z = m.axes[j].rot.column(2).into_owned();
+        let o = m.axes[j].pos;
+        let mut t = (m.tool.pos - o).cross(&(g * payload));
+        for (c, &mass) in m.points[j..n].iter().zip(&link_mass[j..n]) {
+            t += (c - o).cross(&(g * mass));
+        }
+        *out_j = z.dot(&t) * 1e-3; // N·mm → N·m
+    }
+}
+
+/// The gravity torques `τ_j(q, payload)` (N·m) of `robot`'s own link masses
+/// ([`Robot::link_mass_kg`]) and a payload of `payload_kg` at the tool point, about each chain
+/// variable's axis at joint values `q` (internal units), into `out` (one per joint; zero for
+/// prismatic joints): the regressors of the elasto-geometric model, in which joint `j`
+/// deflects by `c_j τ_j` ([`Param::Compliance`], SPEC §3 "Compliance"). The mass model is
+/// that of the simulated sag (point masses at the link midpoints). Fails when the robot gives
+/// no link masses. Allocation-free.
+pub fn gravity_torques(
+    robot: &Robot,
+    chain: &Chain,
+    q: &[Real],
+    payload_kg: Real,
+    out: &mut [Real],
+) -> Result<()> {
+    let Some(mass) = robot.link_mass_kg.as_deref() else {
+        return Err(Error::setting(
+            "mass_kg",
+            format!(
+                "robot \"{}\" gives no link masses: the compliance model needs `mass_kg` on \
+                 every joint of the robot file",
+                robot.name
+            ),
+        ));
+    };
+    if robot.dof() > 16 || mass.len() != robot.dof() || q.len() != robot.dof() {
+        return Err(Error::Compute(format!(
+            "gravity torques of a {}-joint robot: {} masses, {} joint values (at most 16 joints)",
+            robot.dof(),
+            mass.len(),
+            q.len()
+        )));
+    }
+    if !(payload_kg.is_finite() && payload_kg >= 0.0) {
+        return Err(Error::setting(
+            "payload_kg",
+            format!("must be a finite number ≥ 0, got {payload_kg}"),
+        ));
+    }
+    gravity_torques_at(robot, mass, payload_kg, &masses(chain, q), out);
+    Ok(())
+}
+
+/// [`gravity_torques`] from a pose's chain variables ([`Chain::variables`]) with the link
+/// masses `mass` (one per joint) and a checked payload: the identification's inner loop, which
+/// recomputes the torques with the current parameter estimate. Allocation-free.
+pub(crate) fn gravity_torques_vars(
+    robot: &Robot,
+    chain: &Chain,
+    vars: &crate::kinematics::ChainVars,
+    mass: &[Real],
+    payload_kg: Real,
+    out: &mut [Real],
+) {
+    gravity_torques_at(
+        robot,
+        mass,
+        payload_kg,
+        &masses_with(chain, |visit| chain.walk_vars(&vars.0, &vars.1, visit)),
+        out,
+    );
+}
+
+/// Checks the payloads of `points` measured points (kg): one per point, each finite and ≥ 0.
+/// Errors name the key `payload_kg` and the point.
+pub fn check_payloads(loads: &[Real], points: usize) -> Result<()> {
+    if loads.len() != points {
+        return Err(Error::setting(
+            "payload_kg",
+            format!("{} payloads but {points} measured points", loads.len()),
+        ));
+    }
+    match loads
+        .iter()
+        .enumerate()
+        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
+    {
+        Some((i, w)) => Err(Error::setting(
+            "payload_kg",
+            format!("point {i}: must be a finite payload ≥ 0 kg, got {w}"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Whether any joint compliance of `robot` is non-zero (its model then deflects under load).
+pub fn is_compliant(robot: &Robot) -> bool {
+    (0..robot.dof()).any(|j| robot.get(Param::Compliance(j)) != 0.0)
+}
+
+/// Adds `dv[j]` to chain variable `j` of `vars` and refreshes its sine and cosine.
+pub(crate) fn deflect_vars(vars: &mut crate::kinematics::ChainVars, dv: &[Real]) {
+    for (j, &d) in dv.iter().enumerate() {
+        if d != 0.0 {
+            vars.0[j] += d;
+            vars.1[j] = vars.0[j].sin_cos();
+        }
+    }
+}
+
+/// The tool frame of `robot` under the elasto-geometric model at joint values `q` (internal
+/// units) with `payload_kg` at the tool point: the forward kinematics with every chain
+/// variable `j` deflected by `c_j τ_j(q, payload)` ([`gravity_torques`], the robot's
+/// compliances [`Param::Compliance`]). The rigid forward kinematics when every compliance is
+/// zero. Fails when compliances are set but the robot gives no link masses.
+pub fn loaded_fk(robot: &Robot, chain: &Chain, q: &[Real], payload_kg: Real) -> Result<Frame> {
+    if !is_compliant(robot) {
+        return Ok(chain.fk(q));
+    }
+    let n = robot.dof();
+    let mut tau = [0.0; 16];
+    gravity_torques(robot, chain, q, payload_kg, &mut tau[..n])?;
+    for (j, t) in tau.iter_mut().enumerate().take(n) {
+        *t *= robot.get(Param::Compliance(j));
+    }
+    let mut vars = chain.variables(q);
+    deflect_vars(&mut vars, &tau[..n]);
+    Ok(chain.walk_vars(&vars.0, &vars.1, |_, _, _| {}))
 }
 
 /// Sag statistics of one arm over random poses: the tool-point displacement (mm) between the
@@ -481,7 +807,7 @@ mod tests {
     /// One revolute joint about world z turned to horizontal by α = 90°: a single link of
     /// length `2l` (mass point at l) along the DH x axis, tool at 2l.
     fn pendulum(l: Real) -> Robot {
-        let mut values = vec![0.0; 5 + 12];
+        let mut values = vec![0.0; crate::kinematics::value_count(1)];
         // Base turned so that joint 1's axis (base z) is horizontal (world −y... see below).
         values[Param::A(0).index(1)] = 2.0 * l;
         let mut r = Robot {
@@ -495,6 +821,7 @@ mod tests {
             units: Units::DEG_MM,
             coupling: None,
             beta_joints: None,
+            link_mass_kg: None,
         };
         // base.rx = −90°: base z becomes world +y; the link (local x) stays along world x at θ = 0.
         r.set(Param::Base(3), -std::f64::consts::FRAC_PI_2);
@@ -599,7 +926,7 @@ mod tests {
         };
         for q in uniform_joint_poses(&robot, 10, &mut stream(5, "potential")) {
             let mut t = [0.0; 6];
-            c.torques(&robot, &c.masses(&chain, &q), &mut t);
+            c.torques(&robot, &c.masses(&chain, &q), c.payload, &mut t);
             for j in 0..6 {
                 let h = 1e-6;
                 let (mut a, mut b) = (q.clone(), q.clone());
@@ -636,7 +963,7 @@ mod tests {
             let mut sag: Real = 0.0;
             for q in &qs {
                 // Settled: the last step moved no joint by more than the tolerance.
-                let st = rap.settle(&robot, &chain, q).unwrap();
+                let st = rap.settle(&robot, &chain, q, 0.0).unwrap();
                 assert!(st.last_step_change < physics::STEP_TOLERANCE);
                 let a = lin.deflected_with_chain(&robot, &chain, q).unwrap();
                 let b = rap.deflected_with_chain(&robot, &chain, q).unwrap();
@@ -664,7 +991,7 @@ mod tests {
         for _ in 0..60 {
             let qd: Vec<Real> = q.iter().zip(&dq).map(|(a, b)| a + b).collect();
             let mut t = vec![0.0; n];
-            c.torques(robot, &c.masses(chain, &qd), &mut t);
+            c.torques(robot, &c.masses(chain, &qd), c.payload, &mut t);
             for j in 0..n {
                 dq[j] = t[j] / c.stiffness[j];
             }
@@ -691,7 +1018,7 @@ mod tests {
             let mut worst: Real = 0.0;
             let mut most_steps = 0;
             for q in &qs {
-                let st = c.settle(&robot, &chain, q).unwrap();
+                let st = c.settle(&robot, &chain, q, 0.0).unwrap();
                 let exact = exact_deflection(&c, &robot, &chain, q);
                 for (a, b) in st.deflection().iter().zip(&exact) {
                     worst = worst.max((a - b).abs());
@@ -734,7 +1061,7 @@ mod tests {
         };
         let forward: Vec<_> = qs
             .iter()
-            .map(|q| bits(&c.settle(&robot, &chain, q).unwrap()))
+            .map(|q| bits(&c.settle(&robot, &chain, q, 0.0).unwrap()))
             .collect();
         // Another arm size in between rebuilds the thread's world.
         let pendulum = pendulum(400.0);
@@ -747,16 +1074,16 @@ mod tests {
         let p = Compliance::new(&ps, &pendulum, None).unwrap().unwrap();
         p.deflected(&pendulum, &[0.3]).unwrap();
         for (q, want) in qs.iter().zip(&forward).rev() {
-            assert_eq!(&bits(&c.settle(&robot, &chain, q).unwrap()), want);
+            assert_eq!(&bits(&c.settle(&robot, &chain, q, 0.0).unwrap()), want);
         }
         for (i, (q, want)) in qs.iter().zip(&forward).enumerate().step_by(7) {
             let m = c.masses(&chain, q);
             let mut dc = [0.0; 16];
-            c.torques(&robot, &m, &mut dc[..6]);
+            c.torques(&robot, &m, 0.0, &mut dc[..6]);
             for (d, k) in dc.iter_mut().zip(&c.stiffness) {
                 *d /= k;
             }
-            let sb = c.spring_bodies(&robot, &m, &dc);
+            let sb = c.spring_bodies(&robot, &m, &dc, 0.0);
             let mut fresh = physics::Arm::new(sb.count).unwrap();
             let st = fresh
                 .settle(
@@ -770,7 +1097,7 @@ mod tests {
         }
         // Across threads too.
         let other = std::thread::scope(|sc| {
-            sc.spawn(|| bits(&c.settle(&robot, &chain, &qs[5]).unwrap()))
+            sc.spawn(|| bits(&c.settle(&robot, &chain, &qs[5], 0.0).unwrap()))
                 .join()
                 .unwrap()
         });

@@ -39,18 +39,31 @@ impl Measure {
 #[derive(Clone, Debug)]
 pub struct Columns {
     of_param: Vec<Option<usize>>,
+    /// Per chain variable: the column of its joint's compliance ([`Param::Compliance`]),
+    /// which receives the derivative by that variable (the caller scales it by the joint's
+    /// gravity torque, [`crate::identify::RobotProblem`]).
+    of_var: [Option<usize>; 16],
+    /// Whether any entry of `of_var` is set.
+    any_var: bool,
     params: Vec<Param>,
 }
 
 impl Columns {
-    /// Columns for `params` (in that order) of a robot with `dof` joints.
+    /// Columns for `params` (in that order) of a robot with `dof` joints. The column of a
+    /// compliance `c_j` holds the derivative by joint `j`'s chain variable, unscaled.
     pub fn new(params: &[Param], dof: usize) -> Columns {
-        let mut of_param = vec![None; 5 * dof + 12];
+        let mut of_param = vec![None; crate::kinematics::value_count(dof)];
+        let mut of_var = [None; 16];
         for (c, p) in params.iter().enumerate() {
-            of_param[p.index(dof)] = Some(c);
+            match *p {
+                Param::Compliance(j) => of_var[j] = Some(c),
+                p => of_param[p.index(dof)] = Some(c),
+            }
         }
         Columns {
             of_param,
+            any_var: of_var.iter().any(Option::is_some),
+            of_var,
             params: params.to_vec(),
         }
     }
@@ -147,8 +160,9 @@ fn record_rows(
     end
 }
 
-/// Most rotation operations of a chain: three per joint (16 joints), six for base and tool.
-const MAX_OPS: usize = 3 * 16 + 6;
+/// Most rotation columns of a pose: three rotation operations per joint (16 joints), six for
+/// base and tool, and one compliance column per joint.
+const MAX_OPS: usize = 4 * 16 + 6;
 
 /// Writes one pose's rows during a chain walk. Translation columns are written on the way
 /// out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w` and origin `o`
@@ -187,9 +201,19 @@ impl<'a> Rows<'a> {
 
     #[inline(always)]
     fn visit(&mut self, op: &Op, r: &Mat3, p: &Vec3) {
-        let Some(c) = self.cols.of_param[op.param] else {
-            return;
-        };
+        if self.cols.any_var {
+            if let Some(c) = op.var.and_then(|v| self.cols.of_var[v]) {
+                self.write(c, op, r, p);
+            }
+        }
+        if let Some(c) = self.cols.of_param[op.param] {
+            self.write(c, op, r, p);
+        }
+    }
+
+    /// Writes (or, for a rotation, records) column `c` of the operation `op`.
+    #[inline(always)]
+    fn write(&mut self, c: usize, op: &Op, r: &Mat3, p: &Vec3) {
         let row0 = self.row0;
         let w: Vec3 = r.column(op.kind.axis()).into();
         let mut col = self.out.column_mut(c);

@@ -151,6 +151,11 @@ enum Command {
         /// only).
         #[arg(long)]
         export: Option<String>,
+        /// Joint compliances identified with the kinematic errors (elasto-geometric model):
+        /// names such as `c2,c3`, or `gravity` for every joint gravity loads. The gravity
+        /// torques use the robot's link masses and each row's `payload_kg`.
+        #[arg(long)]
+        compliance: Option<String>,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -178,6 +183,10 @@ enum Command {
         /// The program: a CSV with columns q1..qn (nominal joint commands).
         #[arg(long)]
         joints: PathBuf,
+        /// Payload at the tool (kg) while the program runs: a compensated robot with joint
+        /// compliances corrects the commands for its gravity sag under this load.
+        #[arg(long, default_value_t = 0.0)]
+        payload_kg: f64,
         /// The corrected program to write.
         #[arg(long)]
         out: PathBuf,
@@ -253,8 +262,15 @@ fn run(cli: Cli) -> Result<()> {
             robot,
             identified,
             joints,
+            payload_kg,
             out,
-        }) => Ok(commands::compensate(&robot, &identified, &joints, &out)?),
+        }) => Ok(commands::compensate(
+            &robot,
+            &identified,
+            &joints,
+            payload_kg,
+            &out,
+        )?),
         Some(Command::Simulate {
             scenario,
             trial,
@@ -270,6 +286,7 @@ fn run(cli: Cli) -> Result<()> {
             options,
             allow_rank_deficient,
             export,
+            compliance,
             out,
         }) => Ok(commands::identify_file(
             &robot,
@@ -281,6 +298,7 @@ fn run(cli: Cli) -> Result<()> {
             k,
             allow_rank_deficient,
             export.as_deref(),
+            compliance.as_deref(),
             &out,
         )?),
         Some(Command::Poses {

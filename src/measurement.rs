@@ -24,6 +24,10 @@ pub struct Measurements {
     /// (FORMATS.md, column `sigma_mm`). The identification weighs point `i` by
     /// [`Measurements::weights`].
     pub sigma_mm: Option<Vec<Real>>,
+    /// Payload at the tool point per pose (kg), when the measurement says (FORMATS.md, column
+    /// `payload_kg`): the load under which the elasto-geometric model ([`crate::kinematics::Param::Compliance`])
+    /// computes each pose's gravity torques. `None`: no payload.
+    pub payload_kg: Option<Vec<Real>>,
 }
 
 impl Measurements {
@@ -128,6 +132,7 @@ mod tests {
             points: vec![Vec3::zeros(); 3],
             quats: None,
             sigma_mm: Some(vec![0.01, 0.02, 0.01]),
+            payload_kg: None,
         };
         let w = m.weights().unwrap();
         // 1/σ² = 10000, 2500, 10000; mean 7500.

@@ -933,7 +933,7 @@ pub fn qiao_fitness(measured: &[Frame], model: &[Frame], k: Real) -> Real {
 pub const DEFAULT_K: Real = 100.0;
 
 /// Largest flat parameter vector handled by [`MetaProblem`] (16 joints).
-const MAX_VALUES: usize = 5 * 16 + 12;
+const MAX_VALUES: usize = 6 * 16 + 12;
 
 /// Joint-variable values of one pose and their (sin, cos).
 #[derive(Clone, Debug)]
@@ -964,6 +964,11 @@ pub struct MetaProblem<'a> {
     vars: Vec<PoseVars>,
     /// `√w_j` of each pose's prior weight, if any.
     point_scale: Option<Vec<Real>>,
+    /// Whether the model has joint compliances (searched, or in the nominal robot): the
+    /// fitness then uses the elasto-geometric forward kinematics.
+    compliant: bool,
+    /// The payload of each pose (kg), for the elasto-geometric model.
+    loads: Option<Vec<Real>>,
 }
 
 impl<'a> MetaProblem<'a> {
@@ -988,7 +993,9 @@ impl<'a> MetaProblem<'a> {
         let all = nominal.params();
         let mut flat = Vec::with_capacity(params.len());
         for p in &params {
-            if !all.contains(p) {
+            let compliance_ok = matches!(*p, Param::Compliance(j)
+                if j < dof && nominal.joints[j].kind == crate::kinematics::JointType::Revolute);
+            if !(all.contains(p) || compliance_ok) {
                 return Err(Error::setting(
                     "params",
                     format!("{p} is not a parameter of robot {}", nominal.name),
@@ -1045,6 +1052,8 @@ impl<'a> MetaProblem<'a> {
             }
             vars.push(PoseVars { c, sc });
         }
+        let compliant =
+            params.iter().any(|p| p.is_compliance()) || crate::compliance::is_compliant(nominal);
         Ok(MetaProblem {
             nominal,
             params,
@@ -1056,7 +1065,20 @@ impl<'a> MetaProblem<'a> {
             flat,
             vars,
             point_scale: None,
+            compliant,
+            loads: None,
         })
+    }
+
+    /// Sets the payload of each pose (kg; `None`: no payload), under which an
+    /// elasto-geometric model deflects the arm. Fails unless there is one finite payload ≥ 0
+    /// per pose.
+    pub fn with_payloads(mut self, loads: Option<&[Real]>) -> Result<Self> {
+        if let Some(w) = loads {
+            crate::compliance::check_payloads(w, self.qs.len())?;
+        }
+        self.loads = loads.map(<[Real]>::to_vec);
+        Ok(self)
     }
 
     /// Weighs pose `j`'s term of the fitness by `√w_j` (the weights `w_j ∝ 1/σ_j²` of
@@ -1129,14 +1151,56 @@ impl<'a> MetaProblem<'a> {
         Ok(self.nominal.with_errors(&errs))
     }
 
-    /// Bounds of half width `length_mm` on length parameters and `angle_rad` on angles.
-    pub fn bounds(&self, length_mm: Real, angle_rad: Real) -> Bounds {
+    /// Bounds of half width `length_mm` on length parameters, `angle_rad` on angles and
+    /// `compliance` (rad/(N·m)) on joint compliances.
+    pub fn bounds(&self, length_mm: Real, angle_rad: Real, compliance: Real) -> Bounds {
         let w: Vec<Real> = self
             .params
             .iter()
-            .map(|p| if p.is_length() { length_mm } else { angle_rad })
+            .map(|p| {
+                if p.is_compliance() {
+                    compliance
+                } else if p.is_length() {
+                    length_mm
+                } else {
+                    angle_rad
+                }
+            })
             .collect();
         Bounds::symmetric(&w)
+    }
+
+    /// Pose `j`'s term of the fitness for the model frame `(r, p)`.
+    #[inline(always)]
+    fn term(&self, j: usize, r: &Mat3, p: &Vec3) -> Real {
+        let position = (self.points[j] - p).norm();
+        let orientation = self.rotations.as_ref().map_or(0.0, |rots| {
+            let dr = rots[j] - r;
+            self.k * (dr.column(0).norm() + dr.column(1).norm() + dr.column(2).norm())
+        });
+        match &self.point_scale {
+            None => position + orientation,
+            Some(s) => s[j] * (position + orientation),
+        }
+    }
+
+    /// The fitness of an elasto-geometric model: the corrected robot's forward kinematics
+    /// under each pose's payload ([`crate::compliance::loaded_fk`]). Builds the robot (this
+    /// path allocates); `+∞` when a pose cannot be evaluated.
+    fn fitness_loaded(&self, x: &[Real]) -> Real {
+        let Ok(robot) = self.robot(x) else {
+            return Real::INFINITY;
+        };
+        let chain = robot.chain();
+        let mut total = 0.0;
+        for (j, q) in self.qs.iter().enumerate() {
+            let load = self.loads.as_ref().map_or(0.0, |l| l[j]);
+            match crate::compliance::loaded_fk(&robot, &chain, q, load) {
+                Ok(f) => total += self.term(j, &f.rot, &f.pos),
+                Err(_) => return Real::INFINITY,
+            }
+        }
+        total
     }
 
     /// Qiao's fitness (eq. 14) of the errors `x`; `+∞` if `x` has the wrong length.
@@ -1144,6 +1208,9 @@ impl<'a> MetaProblem<'a> {
     pub fn fitness(&self, x: &[Real]) -> Real {
         if x.len() != self.flat.len() {
             return Real::INFINITY;
+        }
+        if self.compliant {
+            return self.fitness_loaded(x);
         }
         let ops = self.chain.ops();
         if ops.len() > MAX_VALUES {
@@ -1199,22 +1266,7 @@ impl<'a> MetaProblem<'a> {
                     }
                 }
             }
-            let orientation = |rots: &Vec<Mat3>| {
-                let dr = rots[j] - r;
-                self.k * (dr.column(0).norm() + dr.column(1).norm() + dr.column(2).norm())
-            };
-            let position = (self.points[j] - p).norm();
-            match &self.point_scale {
-                None => {
-                    total += position;
-                    if let Some(rots) = &self.rotations {
-                        total += orientation(rots);
-                    }
-                }
-                Some(s) => {
-                    total += s[j] * (position + self.rotations.as_ref().map_or(0.0, orientation))
-                }
-            }
+            total += self.term(j, &r, &p);
         }
         total
     }

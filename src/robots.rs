@@ -110,7 +110,7 @@ type Row = (Real, Real, Real, Real, Real, (Real, Real));
 fn from_table(name: &str, convention: Convention, kinds: &[JointType], rows: &[Row]) -> Robot {
     let n = rows.len();
     let deg = std::f64::consts::PI / 180.0;
-    let mut values = vec![0.0; 5 * n + 12];
+    let mut values = vec![0.0; crate::kinematics::value_count(n)];
     let mut joints = Vec::with_capacity(n);
     for (j, &(theta, d, a, alpha, beta, (lo, hi))) in rows.iter().enumerate() {
         values[Param::Theta(j).index(n)] = theta * deg;
@@ -136,6 +136,9 @@ fn from_table(name: &str, convention: Convention, kinds: &[JointType], rows: &[R
         units: Units::DEG_MM,
         coupling: None,
         beta_joints: None,
+        link_mass_kg: builtin(name)
+            .filter(|b| b.link_mass_kg.len() == n)
+            .map(|b| b.link_mass_kg.to_vec()),
     }
 }
 

@@ -90,6 +90,7 @@ struct CalibrationSection {
     objective: String,
     separate: bool,
     separate_threshold: Real,
+    payloads_kg: Option<Vec<Real>>,
 }
 
 impl Default for CalibrationSection {
@@ -103,6 +104,7 @@ impl Default for CalibrationSection {
             objective: "composite".into(),
             separate: false,
             separate_threshold: 1e2,
+            payloads_kg: None,
         }
     }
 }
@@ -112,6 +114,7 @@ impl Default for CalibrationSection {
 struct ValidationSection {
     count: usize,
     region: Region,
+    payload_kg: Option<Real>,
 }
 
 impl Default for ValidationSection {
@@ -119,6 +122,7 @@ impl Default for ValidationSection {
         ValidationSection {
             count: 50,
             region: Region::Joint,
+            payload_kg: None,
         }
     }
 }
@@ -151,6 +155,9 @@ pub struct IdentificationSpec {
     /// parameters) or a list of names. Lists that the data cannot determine are refused for
     /// the methods that need full rank (LS); LM and ridge solve them by their damping.
     pub params: ParamSelection,
+    /// The joint compliances identified with the kinematic errors (elasto-geometric model,
+    /// [`crate::kinematics::Param::Compliance`]): none by default, `"gravity"` or names.
+    pub compliance: crate::compliance::CompliancePick,
 }
 
 /// Where the robot comes from.
@@ -243,6 +250,9 @@ pub struct Calibration {
     pub separate: bool,
     /// GCN threshold of the separation.
     pub separate_threshold: Real,
+    /// Payloads (kg) under which every calibration pose is measured, once each (FORMATS.md
+    /// `calibration.payloads_kg`); `None`: once, under `compliance.payload_kg`.
+    pub payloads_kg: Option<Vec<Real>>,
 }
 
 /// Validation poses: drawn afresh each trial, never used for identification.
@@ -252,6 +262,9 @@ pub struct Validation {
     pub count: usize,
     /// Where they are drawn.
     pub region: Region,
+    /// Payload (kg) of the validation poses (FORMATS.md `validation.payload_kg`); `None`:
+    /// `compliance.payload_kg`.
+    pub payload_kg: Option<Real>,
 }
 
 /// One axis of a sweep: a dotted key and its values.
@@ -514,6 +527,30 @@ impl Scenario {
             return Err(ferr("validation.count", "must be at least 1".into()));
         }
         check(v.region.check("validation.region"))?;
+        let load = |key: &str, w: Real| {
+            if w.is_finite() && w >= 0.0 {
+                Ok(())
+            } else {
+                Err(ferr(
+                    key,
+                    format!("must be a finite payload ≥ 0 kg, got {w}"),
+                ))
+            }
+        };
+        if let Some(p) = &c.payloads_kg {
+            if p.is_empty() {
+                return Err(ferr(
+                    "calibration.payloads_kg",
+                    "give at least one payload, or leave the key out".into(),
+                ));
+            }
+            for (i, &w) in p.iter().enumerate() {
+                load(&format!("calibration.payloads_kg[{i}]"), w)?;
+            }
+        }
+        if let Some(w) = v.payload_kg {
+            load("validation.payload_kg", w)?;
+        }
         if let Some(n) = raw.outliers.count {
             if n > c.count {
                 return Err(ferr(
@@ -548,6 +585,16 @@ impl Scenario {
                     &format!("methods[{i}].k"),
                     "k weighs orientation against position errors; the tracker measures \
                      positions only (set tracker.measure = \"pose\" or drop k)"
+                        .into(),
+                ));
+            }
+            if t.contains_key("error_model")
+                && raw.identification.compliance != crate::compliance::CompliancePick::None
+            {
+                return Err(ferr(
+                    &format!("methods[{i}].error_model"),
+                    "the pose-error models are kinematic; identification.compliance needs \
+                     ls, ridge, igg3, lm or a search"
                         .into(),
                 ));
             }
@@ -595,10 +642,12 @@ impl Scenario {
                 objective,
                 separate: c.separate,
                 separate_threshold: c.separate_threshold,
+                payloads_kg: c.payloads_kg,
             },
             validation: Validation {
                 count: v.count,
                 region: v.region,
+                payload_kg: v.payload_kg,
             },
             identification: raw.identification,
             methods,
@@ -612,6 +661,13 @@ impl Scenario {
             other => ferr("robot.file", other.to_string()),
         })?;
         check(scenario.compliance.check(robot.dof()))?;
+        check(
+            scenario
+                .identification
+                .compliance
+                .params(&robot, "identification.compliance")
+                .map(|_| ()),
+        )?;
         if let ParamSelection::List(_) = &scenario.errors.params {
             let measure = scenario.tracker.measure.measure();
             check(selected_params(&robot, &scenario.errors.params, measure).map(|_| ()))?;

@@ -20,7 +20,9 @@
 use std::path::Path;
 
 use crate::error::{Error, Result};
-use crate::kinematics::{AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Robot, Units};
+use crate::kinematics::{
+    value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Robot, Units,
+};
 use crate::math::{matrix_rpy, rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
 
 /// A robot read from a URDF: the calbench robot and what is needed to write it back.
@@ -189,7 +191,7 @@ impl UrdfRobot {
             rot: crate::math::Mat3::from_columns(&[x0, u1.cross(&x0), u1]),
             pos: w1.pos,
         };
-        let mut values = vec![0.0; 5 * n + 12];
+        let mut values = vec![0.0; value_count(n)];
         let mut frame = base;
         let mut offsets = Vec::with_capacity(n);
         for k in 0..n {
@@ -227,6 +229,7 @@ impl UrdfRobot {
             },
             coupling: None,
             beta_joints: None,
+            link_mass_kg: None,
         };
         Ok(UrdfRobot {
             robot,

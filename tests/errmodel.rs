@@ -301,7 +301,7 @@ fn harness_validation_errors_are_qiao_acpe_and_acae() {
     let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
     let truth: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     let model: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
-    let e = calbench::calibrate::validation_errors(&nominal, &qs, &truth);
+    let e = calbench::calibrate::validation_errors(&nominal, &qs, None, &truth).unwrap();
     let (p, a) = (e.mm, e.attitude_deg);
     let (acpe, acae) = acpe_acae(&truth, &model).unwrap();
     let mean = |v: &[Real]| v.iter().sum::<Real>() / v.len() as Real;

@@ -163,6 +163,7 @@ fn arb_robot() -> impl Strategy<Value = Robot> {
                 units: Units::DEG_MM,
                 coupling: None,
                 beta_joints: None,
+                link_mass_kg: None,
             }
         })
 }

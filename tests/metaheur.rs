@@ -86,7 +86,7 @@ fn problem(c: &Case) -> MetaProblem<'_> {
 fn bas_pso_cuts_tx60_acpe_by_90_percent() {
     let c = case();
     let p = problem(&c);
-    let b = p.bounds(0.5, 0.005);
+    let b = p.bounds(0.5, 0.005, 1e-5);
     let f = |x: &[Real]| p.fitness(x);
     let before = acpe(&c, &vec![0.0; c.params.len()]);
     let o = BasPsoOptions {
@@ -135,7 +135,7 @@ fn bas_pso_cuts_tx60_acpe_by_90_percent() {
 fn pso_and_bas_reduce_tx60_errors() {
     let c = case();
     let p = problem(&c);
-    let b = p.bounds(0.5, 0.005);
+    let b = p.bounds(0.5, 0.005, 1e-5);
     let f = |x: &[Real]| p.fitness(x);
     let before = acpe(&c, &vec![0.0; c.params.len()]);
     let o = PsoOptions {

@@ -44,6 +44,7 @@ fn tracker_data() -> (Robot, Robot, Measurements, Frame) {
         points,
         quats: None,
         sigma_mm: None,
+        payload_kg: None,
     };
     (nominal, truth, data, tracker)
 }

@@ -44,6 +44,7 @@ fn noisy_data(pose: bool) -> (Robot, Vec<Param>, Measurements) {
         points,
         quats,
         sigma_mm: None,
+        payload_kg: None,
     };
     (nominal, params, data)
 }

@@ -53,17 +53,26 @@ pub struct PoseErrors {
 }
 
 /// The errors of `model` against the true frames at the joint values `qs` ([`PoseErrors`]);
-/// the means over the poses of `mm` and `attitude_deg` are Qiao's ACPE and ACAE (§4.1).
-pub fn validation_errors(model: &Robot, qs: &[Vec<Real>], truth: &[Frame]) -> PoseErrors {
+/// the means over the poses of `mm` and `attitude_deg` are Qiao's ACPE and ACAE (§4.1). A
+/// model with joint compliances predicts each pose under its payload (`payloads`, kg; `None`:
+/// no payload) by [`crate::compliance::loaded_fk`]; a rigid model ignores the payloads. Fails
+/// when the model has compliances but no link masses.
+pub fn validation_errors(
+    model: &Robot,
+    qs: &[Vec<Real>],
+    payloads: Option<&[Real]>,
+    truth: &[Frame],
+) -> crate::Result<PoseErrors> {
     let c = model.chain();
     let mut e = PoseErrors::default();
-    for (q, t) in qs.iter().zip(truth) {
-        let f = c.fk(q);
+    for (i, (q, t)) in qs.iter().zip(truth).enumerate() {
+        let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
+        let f = crate::compliance::loaded_fk(model, &c, q, load)?;
         e.mm.push((f.pos - t.pos).norm());
         e.deg.push(rotation_angle_deg(&f, t));
         e.attitude_deg.push(attitude_error_deg(t, &f));
     }
-    e
+    Ok(e)
 }
 
 /// The rotation angle between two frames' orientations, `|log(R_modelᵀ R_true)|`, in degrees.

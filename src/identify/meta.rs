@@ -52,24 +52,30 @@ pub struct Metaheuristic<S> {
     pub bound_mm: Real,
     /// Half-width of the search box on angle parameters, rad. Default 0.02.
     pub bound_rad: Real,
+    /// Half-width of the search box on joint compliances, rad/(N·m). Default 1e-5 (ten
+    /// times an industrial arm's main-axis compliance).
+    pub bound_compliance: Real,
 }
 
 impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
         let mut t = toml::Table::deserialize(d)?;
-        let bounds = crate::names::take_keys(&mut t, &["bound_mm", "bound_rad"]);
+        let bounds =
+            crate::names::take_keys(&mut t, &["bound_mm", "bound_rad", "bound_compliance"]);
         let bound = |key: &str, default: Real| match bounds.get(key) {
             None => Ok(default),
             Some(v) => Real::deserialize(v.clone()).map_err(D::Error::custom),
         };
         let bound_mm = bound("bound_mm", default_bound_mm())?;
         let bound_rad = bound("bound_rad", default_bound_rad())?;
+        let bound_compliance = bound("bound_compliance", default_bound_compliance())?;
         let search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
         Ok(Metaheuristic {
             search,
             bound_mm,
             bound_rad,
+            bound_compliance,
         })
     }
 }
@@ -82,12 +88,17 @@ fn default_bound_rad() -> Real {
     0.02
 }
 
+fn default_bound_compliance() -> Real {
+    1e-5
+}
+
 impl<S: Default> Default for Metaheuristic<S> {
     fn default() -> Self {
         Metaheuristic {
             search: S::default(),
             bound_mm: default_bound_mm(),
             bound_rad: default_bound_rad(),
+            bound_compliance: default_bound_compliance(),
         }
     }
 }
@@ -96,7 +107,8 @@ impl<S: Search> Method for Metaheuristic<S> {
     fn check(&self) -> Result<()> {
         self.search.check()?;
         finite_positive("bound_mm", self.bound_mm)?;
-        finite_positive("bound_rad", self.bound_rad)
+        finite_positive("bound_rad", self.bound_rad)?;
+        finite_positive("bound_compliance", self.bound_compliance)
     }
 
     /// The search's best point; [`Termination::TargetReached`] when it stopped at its target
@@ -112,8 +124,9 @@ impl<S: Search> Method for Metaheuristic<S> {
             problem.rotations.clone(),
             problem.k,
         )?
-        .with_weights(problem.weights.as_deref())?;
-        let bounds = mp.bounds(self.bound_mm, self.bound_rad);
+        .with_weights(problem.weights.as_deref())?
+        .with_payloads(problem.data.payload_kg.as_deref())?;
+        let bounds = mp.bounds(self.bound_mm, self.bound_rad, self.bound_compliance);
         let f = |x: &[Real]| mp.fitness(x);
         let r = self.search.search(&f, &bounds, rng)?;
         let termination = if r.reached_target {

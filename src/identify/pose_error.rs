@@ -37,6 +37,13 @@ impl Method for PoseErrorLs {
     /// is [`Termination::Converged`] when the last step's norm is below 1e-9, else
     /// [`Termination::MaxIterations`].
     fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
+        if problem.params.iter().any(|p| p.is_compliance()) {
+            return Err(Error::setting(
+                "error_model",
+                "the pose-error models (Qiao 2021 §2) are kinematic: identify joint \
+                 compliances with ls, ridge, igg3, lm or a search",
+            ));
+        }
         let rots = problem
             .rotations
             .as_ref()

@@ -14,9 +14,10 @@ use nalgebra::{DMatrix, DVector};
 
 use super::solver::{conditioning, solve, start_weights, LeastSquares, Size, Solver, Work};
 use super::{CalibrationProblem, Identified, Method, Termination};
+use crate::compliance::{deflect_vars, gravity_torques_vars};
 use crate::error::Error;
 use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
-use crate::kinematics::{Chain, ChainVars, Param, Robot};
+use crate::kinematics::{Chain, ChainVars, JointType, Param, Robot};
 use crate::math::{Mat3, Real, Vec3};
 use crate::rng::Rng;
 
@@ -39,6 +40,15 @@ pub struct RobotProblem<'a> {
     orientation_weight: Real,
     /// Prior weight of each point, if any.
     prior: Option<&'a [Real]>,
+    /// The joints whose compliance is identified, with their columns.
+    compliant: Vec<(usize, usize)>,
+    /// Per point, the payload (kg) under which the elasto-geometric model computes the
+    /// gravity torques ([`crate::compliance::gravity_torques`], with the nominal link masses
+    /// and the current estimate's geometry); empty when the model has no compliance (none
+    /// identified, none in the nominal robot).
+    loads: Vec<Real>,
+    /// The nominal robot's link masses (kg), when the model has compliances.
+    masses: Vec<Real>,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -62,7 +72,19 @@ impl<'a> RobotProblem<'a> {
         }
         let known = nominal.params();
         for (i, p) in params.iter().enumerate() {
-            if !known.contains(p) {
+            if let Param::Compliance(j) = *p {
+                if j >= nominal.dof() || nominal.joints[j].kind != JointType::Revolute {
+                    return Err(Error::setting(
+                        "compliance",
+                        format!(
+                            "`{p}`: robot `{}` has no revolute joint {} (only revolute joints \
+                             are compliant in calbench's model)",
+                            nominal.name,
+                            j + 1
+                        ),
+                    ));
+                }
+            } else if !known.contains(p) {
                 return Err(Error::setting(
                     "params",
                     format!("`{p}` is not a parameter of robot `{}`", nominal.name),
@@ -127,7 +149,15 @@ impl<'a> RobotProblem<'a> {
         }
         let chain = nominal.chain();
         let vars = qs.iter().map(|q| chain.variables(q)).collect();
-        Ok(RobotProblem {
+        let compliant = params
+            .iter()
+            .enumerate()
+            .filter_map(|(c, p)| match *p {
+                Param::Compliance(j) => Some((j, c)),
+                _ => None,
+            })
+            .collect();
+        let problem = RobotProblem {
             nominal,
             params: params.to_vec(),
             index: params.iter().map(|p| p.index(dof)).collect(),
@@ -139,7 +169,39 @@ impl<'a> RobotProblem<'a> {
             vars,
             orientation_weight: 1.0,
             prior: None,
-        })
+            compliant,
+            loads: Vec::new(),
+            masses: Vec::new(),
+        };
+        problem.with_payloads(None)
+    }
+
+    /// Sets the payload of each point (kg; `None`: no payload), under which the
+    /// elasto-geometric model computes each pose's gravity torques when the model has
+    /// compliances (identified, or in the nominal robot). Fails when it does and the robot
+    /// gives no link masses, or a payload is not a finite number ≥ 0, or the payloads do not
+    /// match the points.
+    pub fn with_payloads(mut self, payloads: Option<&[Real]>) -> crate::Result<Self> {
+        self.loads.clear();
+        if self.compliant.is_empty() && !crate::compliance::is_compliant(self.nominal) {
+            return Ok(self);
+        }
+        let Some(mass) = self.nominal.link_mass_kg.clone() else {
+            return Err(Error::setting(
+                "mass_kg",
+                format!(
+                    "robot \"{}\" gives no link masses (`mass_kg` on every joint of the robot \
+                     file), which the compliance model needs for its gravity torques",
+                    self.nominal.name
+                ),
+            ));
+        };
+        let m = self.points.len();
+        let loads = payloads.map_or_else(|| vec![0.0; m], <[Real]>::to_vec);
+        crate::compliance::check_payloads(&loads, m)?;
+        self.loads = loads;
+        self.masses = mass;
+        Ok(self)
     }
 
     /// Weights the orientation rows of full-pose data (residual and Jacobian) by `k` (mm per
@@ -178,7 +240,8 @@ impl<'a> RobotProblem<'a> {
             problem.measure,
         )?
         .with_orientation_weight(problem.k)?
-        .with_prior_weights(problem.weights.as_deref())
+        .with_prior_weights(problem.weights.as_deref())?
+        .with_payloads(problem.data.payload_kg.as_deref())
     }
 
     /// The parameters, one per entry of `x`.
@@ -232,8 +295,39 @@ impl LeastSquares for RobotProblem<'_> {
             Measure::Pose => self.rotations,
             Measure::Position => None,
         };
+        let dof = self.nominal.dof();
         for (i, (v, pm)) in self.vars.iter().zip(self.points).enumerate() {
-            let f = pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i);
+            let f = match self.loads.get(i) {
+                None => pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i),
+                Some(&load) => {
+                    // Elasto-geometric model: each chain variable deflected by c_j τ_j, the
+                    // gravity torques of the current geometry at the commanded pose; the
+                    // column of c_j is the derivative by that variable times τ_j (τ's own
+                    // dependence on the geometry is second order and left out).
+                    let mut tau = [0.0; 16];
+                    gravity_torques_vars(
+                        self.nominal,
+                        chain,
+                        v,
+                        &self.masses,
+                        load,
+                        &mut tau[..dof],
+                    );
+                    let mut dv = [0.0; 16];
+                    for (k, d) in dv.iter_mut().enumerate().take(dof) {
+                        *d = values[Param::Compliance(k).index(dof)] * tau[k];
+                    }
+                    let mut vd = *v;
+                    deflect_vars(&mut vd, &dv[..dof]);
+                    let f = pose_rows_vars(chain, &self.cols, &vd, self.measure, j, rows * i);
+                    for &(k, c) in &self.compliant {
+                        for r in rows * i..rows * (i + 1) {
+                            j[(r, c)] *= tau[k];
+                        }
+                    }
+                    f
+                }
+            };
             let dp = pm - f.pos;
             for k in 0..3 {
                 r[rows * i + k] = dp[k];

@@ -6,8 +6,8 @@ use std::path::Path;
 use serde::Deserialize;
 
 use super::{
-    joint_place, to_internal, AngleUnit, Convention, Coupling, Joint, JointType, LengthUnit, Param,
-    Quantity, Robot, Units,
+    joint_place, to_internal, value_count, AngleUnit, Convention, Coupling, Joint, JointType,
+    LengthUnit, Param, Quantity, Robot, Units,
 };
 use crate::error::{Error, Result};
 use crate::math::Real;
@@ -37,6 +37,10 @@ struct JointEntry {
     theta: Real,
     beta: Option<Real>,
     limits: Vec<Real>,
+    /// Mass of the link this joint moves, kg (all joints or none).
+    mass_kg: Option<Real>,
+    /// Joint compliance, rad/(N·m) whatever the file's units (default 0: rigid).
+    compliance: Option<Real>,
 }
 
 #[derive(Deserialize)]
@@ -111,7 +115,7 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
         }
     };
     let n = f.joints.len();
-    let mut values = vec![0.0; 5 * n + 12];
+    let mut values = vec![0.0; value_count(n)];
     let mut joints = Vec::with_capacity(n);
     for (j, e) in f.joints.iter().enumerate() {
         let kind: JointType = parse_in(path, &joint_place(j, "type"), &e.kind)?;
@@ -159,7 +163,23 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
             kind,
             limits: (lo, hi),
         });
+        values[Param::Compliance(j).index(n)] = e.compliance.unwrap_or(0.0);
     }
+    let link_mass_kg = match f.joints.iter().filter(|e| e.mass_kg.is_some()).count() {
+        0 => None,
+        k if k == n => Some(f.joints.iter().filter_map(|e| e.mass_kg).collect()),
+        _ => {
+            let j = f
+                .joints
+                .iter()
+                .position(|e| e.mass_kg.is_none())
+                .unwrap_or(0);
+            return Err(err(
+                joint_place(j, "mass_kg"),
+                "give `mass_kg` on every joint or on none".into(),
+            ));
+        }
+    };
     if let Some(Coupling::Differential { .. }) = coupling {
         if n < 2 || joints[0].kind != JointType::Revolute || joints[1].kind != JointType::Prismatic
         {
@@ -230,6 +250,7 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
         units,
         coupling,
         beta_joints,
+        link_mass_kg,
     };
     // Everything above was checked value by value in the file's units; this is the same
     // check on the assembled model, so the two cannot drift apart.
@@ -339,6 +360,14 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
             num(joint.limits.0 / qf),
             num(joint.limits.1 / qf)
         );
+        if let Some(m) = &robot.link_mass_kg {
+            let _ = writeln!(s, "mass_kg = {}", num(m[j]));
+        }
+        // Compliances are small numbers (about 1e-7 rad/(N·m)): written exactly.
+        let c = g(Param::Compliance(j));
+        if c != 0.0 {
+            let _ = writeln!(s, "compliance = {}", self::num(c, false));
+        }
     }
     for (name, make) in [
         ("base", Param::Base as fn(usize) -> Param),

@@ -22,7 +22,7 @@ mod param;
 
 pub use chain::{Chain, ChainVars, Op, OpKind};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
-pub use param::{Param, PARAMS_PER_JOINT};
+pub use param::{value_count, Param, PARAMS_PER_JOINT};
 
 use crate::error::{Error, Result};
 use crate::math::{Frame, Real};
@@ -34,6 +34,10 @@ pub const MAX_LENGTH_MM: Real = 1e6;
 /// Largest magnitude of a constant angle in a robot model, rad (one turn): α, θ, β and the
 /// base and tool angles.
 pub const MAX_ANGLE_RAD: Real = 2.0 * std::f64::consts::PI;
+
+/// Largest magnitude of a joint compliance, rad/(N·m) (a joint of 1 N·m/rad stiffness): far
+/// above any real arm (about 1e-7 for an industrial arm's main axes).
+pub const MAX_COMPLIANCE: Real = 1.0;
 
 /// Largest magnitude of a revolute joint limit or joint value, rad (ten turns).
 pub const MAX_JOINT_RAD: Real = 20.0 * std::f64::consts::PI;
@@ -272,6 +276,12 @@ pub struct Robot {
     /// joint. Guo 2024 (§1.2, the text under eq. 6) puts β on A2 alone, its one pair of
     /// adjacent parallel joints; the β of the other joints is not a parameter of its model.
     pub beta_joints: Option<Vec<usize>>,
+    /// Link masses (kg), one per joint: link `i` is the body joint `i` moves, up to joint
+    /// `i + 1`, a point mass at the midpoint between the two joints' origins
+    /// ([`crate::compliance`]). From the robot file's `mass_kg` or the built-in robot's
+    /// table; `None` when neither gives them. The gravity torques of the elasto-geometric
+    /// model ([`Param::Compliance`]) need them.
+    pub link_mass_kg: Option<Vec<Real>>,
 }
 
 impl Robot {
@@ -399,13 +409,13 @@ impl Robot {
     /// robot fails this check; robots built in code can call it before they are used.
     pub fn check(&self) -> std::result::Result<(), ModelIssue> {
         let n = self.dof();
-        if self.values.len() != PARAMS_PER_JOINT * n + 12 {
+        if self.values.len() != value_count(n) {
             return Err(ModelIssue {
                 place: "joints".into(),
                 msg: format!(
                     "{} parameter values for {n} joints; expected {}",
                     self.values.len(),
-                    PARAMS_PER_JOINT * n + 12
+                    value_count(n)
                 ),
             });
         }
@@ -430,6 +440,7 @@ impl Robot {
                         (format!("{part}.rpy"), Quantity::Angle)
                     }
                 }
+                Param::Compliance(_) => continue,
             };
             let unit = quantity.inner_unit();
             to_internal(quantity, v, 1.0, unit).map_err(|m| issue(place.clone(), m))?;
@@ -484,6 +495,47 @@ impl Robot {
                         ),
                     ));
                 }
+            }
+        }
+        if let Some(m) = &self.link_mass_kg {
+            if m.len() != n {
+                return Err(issue(
+                    "mass_kg".into(),
+                    format!("{} link masses for {n} joints", m.len()),
+                ));
+            }
+            if let Some(j) = m.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(issue(
+                    joint_place(j, "mass_kg"),
+                    format!("must be a finite mass ≥ 0 kg, got {:?}", m[j]),
+                ));
+            }
+        }
+        for j in 0..n {
+            let c = self.get(Param::Compliance(j));
+            if c == 0.0 {
+                continue;
+            }
+            let place = joint_place(j, "compliance");
+            if !(c.is_finite() && c.abs() <= MAX_COMPLIANCE) {
+                return Err(issue(
+                    place,
+                    format!(
+                        "must be a finite number within ±{MAX_COMPLIANCE:e} rad/(N·m), got {c:?}"
+                    ),
+                ));
+            }
+            if self.joints[j].kind != JointType::Revolute {
+                return Err(issue(
+                    place,
+                    "only revolute joints are compliant in calbench's model".into(),
+                ));
+            }
+            if self.link_mass_kg.is_none() {
+                return Err(issue(
+                    place,
+                    "a compliance needs the link masses (`mass_kg` on every joint)".into(),
+                ));
             }
         }
         if let Some(Coupling::Differential { l1_mm }) = self.coupling {

@@ -8,6 +8,12 @@ type Maker = (&'static str, fn(usize) -> Param);
 /// Parameters per joint in the flat vector: θ, d, a, α, β.
 pub const PARAMS_PER_JOINT: usize = 5;
 
+/// Length of the flat parameter vector of a robot with `dof` joints: the joint parameters,
+/// the six base and six tool parameters, then one joint compliance per joint.
+pub fn value_count(dof: usize) -> usize {
+    PARAMS_PER_JOINT * dof + 12 + dof
+}
+
 const PART: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
 /// One geometric parameter of a robot. Joint indices are 0-based inside (`Theta(0)` is
@@ -28,6 +34,10 @@ pub enum Param {
     Base(usize),
     /// Tool frame component, same form as the base.
     Tool(usize),
+    /// Joint compliance `c_j` (rad/(N·m)): the joint deflects by `c_j τ_j` under the gravity
+    /// torque `τ_j` of the links and the payload (elasto-geometric model, SPEC §3
+    /// "Compliance"). Not part of [`Param::all`]: a study identifies it only when it asks to.
+    Compliance(usize),
 }
 
 impl Param {
@@ -55,6 +65,7 @@ impl Param {
             Param::Beta(j) => PARAMS_PER_JOINT * j + 4,
             Param::Base(c) => PARAMS_PER_JOINT * dof + c,
             Param::Tool(c) => PARAMS_PER_JOINT * dof + 6 + c,
+            Param::Compliance(j) => PARAMS_PER_JOINT * dof + 12 + j,
         }
     }
 
@@ -78,6 +89,7 @@ impl Param {
             Param::Beta(_) => "beta",
             Param::Base(_) => "base",
             Param::Tool(_) => "tool",
+            Param::Compliance(_) => "compliance",
         }
     }
 
@@ -90,12 +102,13 @@ impl Param {
             return PART.iter().position(|p| *p == c).map(Param::Tool);
         }
         // Longest prefixes first: "alpha" before "a".
-        let kinds: [Maker; 5] = [
+        let kinds: [Maker; 6] = [
             ("theta", Param::Theta),
             ("alpha", Param::Alpha),
             ("beta", Param::Beta),
             ("a", Param::A),
             ("d", Param::D),
+            ("c", Param::Compliance),
         ];
         for (prefix, make) in kinds {
             if let Some(num) = name.strip_prefix(prefix) {
@@ -109,13 +122,19 @@ impl Param {
         None
     }
 
-    /// The joint (0-based) a joint parameter belongs to.
+    /// Whether this is a joint compliance ([`Param::Compliance`]).
+    pub fn is_compliance(self) -> bool {
+        matches!(self, Param::Compliance(_))
+    }
+
+    /// The joint (0-based) a geometric joint parameter belongs to (`None` for base, tool and
+    /// compliance parameters).
     pub fn joint(self) -> Option<usize> {
         match self {
             Param::Theta(j) | Param::D(j) | Param::A(j) | Param::Alpha(j) | Param::Beta(j) => {
                 Some(j)
             }
-            Param::Base(_) | Param::Tool(_) => None,
+            Param::Base(_) | Param::Tool(_) | Param::Compliance(_) => None,
         }
     }
 }
@@ -130,6 +149,7 @@ impl fmt::Display for Param {
             Param::Beta(j) => write!(f, "beta{}", j + 1),
             Param::Base(c) => write!(f, "base.{}", PART[c]),
             Param::Tool(c) => write!(f, "tool.{}", PART[c]),
+            Param::Compliance(j) => write!(f, "c{}", j + 1),
         }
     }
 }

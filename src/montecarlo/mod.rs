@@ -125,6 +125,9 @@ pub struct BlockInfo {
     pub fixed: Vec<Option<FixedInfo>>,
     /// Guo's separation report (`calibration.separate`), if any.
     pub separation: Option<serde_json::Value>,
+    /// The simulated arm's joint compliances (name → rad/(N·m)), when it sags.
+    #[serde(default)]
+    pub true_compliance: Option<serde_json::Value>,
 }
 
 impl BlockInfo {
@@ -157,6 +160,7 @@ impl BlockInfo {
                 })
                 .collect(),
             separation: study.separation.as_ref().map(|s| s.to_json()),
+            true_compliance: study.true_compliance_json(),
         }
     }
 }

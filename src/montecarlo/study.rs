@@ -210,13 +210,49 @@ pub fn study_params(
 }
 
 impl Study {
+    /// The payload (kg) of the validation poses: `validation.payload_kg`, else the
+    /// compliance section's payload.
+    pub fn validation_payload(&self) -> Real {
+        let sc = &self.scenario;
+        sc.validation.payload_kg.unwrap_or(sc.compliance.payload_kg)
+    }
+
+    /// The true joint compliances of the simulated arm (rad/(N·m), [`Param::Compliance`]):
+    /// `1/k_j` of the sag model's stiffness for every revolute joint; empty without sag.
+    pub fn true_compliances(&self) -> Vec<(Param, Real)> {
+        self.compliance
+            .as_ref()
+            .map(|c| c.true_compliances(&self.nominal))
+            .unwrap_or_default()
+    }
+
+    /// [`Study::true_compliances`] as JSON (`summary.json` and `truth.json` key
+    /// `true_compliance`: name → rad/(N·m)); `None` without sag.
+    pub fn true_compliance_json(&self) -> Option<serde_json::Value> {
+        self.compliance.as_ref()?;
+        Some(serde_json::Value::Object(
+            self.true_compliances()
+                .into_iter()
+                .map(|(p, c)| (p.to_string(), serde_json::json!(c)))
+                .collect(),
+        ))
+    }
+
     /// Prepares `scenario`: loads the robot, picks the parameters, builds the tracker and the
     /// compliance model, and optimises the fixed pose sets.
     pub fn new(scenario: Scenario) -> Result<Study> {
         let nominal = scenario.robot()?;
         let measure = scenario.tracker.measure.measure();
         let with_base = scenario.registration == Registration::Identify;
-        let (params, undetermined) = study_params(&scenario, &nominal, measure)?;
+        let (mut params, undetermined) = study_params(&scenario, &nominal, measure)?;
+        // The kinematic parameters: what the pose optimisers and the Cramér–Rao bound see.
+        let kinematic = params.clone();
+        params.extend(
+            scenario
+                .identification
+                .compliance
+                .params(&nominal, "identification.compliance")?,
+        );
         let error_params = match (&scenario.errors.kind, &scenario.errors.params) {
             (ErrorKind::None, _) => Vec::new(),
             (_, ParamSelection::Identifiable) => identified_params(&nominal, measure, with_base)
@@ -278,7 +314,7 @@ impl Study {
                         separation.get_or_insert(sep);
                         kept
                     } else {
-                        params.clone()
+                        kinematic.clone()
                     };
                     let model = RobotPoseModel::new(&nominal, &opt_params, measure);
                     let mut opts = SelectOptions::new(c.count);
@@ -321,8 +357,12 @@ impl Study {
 }
 
 /// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
-/// base frame, with the nominal Jacobian), or `None` without noise.
+/// base frame, with the nominal Jacobian), or `None` without noise, and for an
+/// elasto-geometric model (its bound would need each pose's payload and torques).
 pub fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
+    if study.params.iter().any(|p| p.is_compliance()) {
+        return None;
+    }
     let cols = Columns::new(&study.params, study.nominal.dof());
     let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
     let rows = study.measure.rows();

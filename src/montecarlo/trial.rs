@@ -17,7 +17,7 @@ use crate::math::{Frame, Real};
 use crate::rng;
 use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::truth::draw_errors;
-use crate::sim::{measure_poses, SagFn};
+use crate::sim::{measure_poses, SagFn, Simulated};
 
 /// What one method on one strategy's measurement gave in one trial.
 #[derive(Clone, Debug)]
@@ -118,10 +118,42 @@ pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
 
 /// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.
 pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
-    study
-        .compliance
-        .clone()
-        .map(|c| Box::new(move |r: &Robot, q: &[Real]| c.deflected(r, q)) as Box<SagFn>)
+    study.compliance.clone().map(|c| {
+        Box::new(move |r: &Robot, q: &[Real], payload: Option<Real>| {
+            c.deflected_under(r, &r.chain(), q, payload.unwrap_or(c.payload_kg()))
+        }) as Box<SagFn>
+    })
+}
+
+/// Measures the calibration poses `qs` on the true robot (the tracker, the study's outliers
+/// and sag): once each, or, with `calibration.payloads_kg`, once per payload, every pose under
+/// the first payload, then every pose under the next, and so on (the measurement then
+/// records each row's payload).
+pub fn measure_calibration(
+    study: &Study,
+    truth_robot: &Robot,
+    qs: &[Vec<Real>],
+    sag: Option<&SagFn>,
+    rng: &mut crate::rng::Rng,
+) -> Result<Simulated> {
+    let sc = &study.scenario;
+    let expanded;
+    let (qs, loads) = match &sc.calibration.payloads_kg {
+        None => (qs, None),
+        Some(p) => {
+            expanded = (
+                p.iter()
+                    .flat_map(|_| qs.iter().cloned())
+                    .collect::<Vec<_>>(),
+                p.iter()
+                    .flat_map(|&w| std::iter::repeat_n(w, qs.len()))
+                    .collect::<Vec<Real>>(),
+            );
+            (&expanded.0[..], Some(&expanded.1[..]))
+        }
+    };
+    let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
+    measure_poses(truth_robot, qs, &study.tracker, outliers, sag, loads, rng)
 }
 
 /// Runs trial `index` of `study`.
@@ -129,39 +161,45 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let sc = &study.scenario;
     let seed = rng::trial_seed(sc.seed, index as u64);
     let (errors, truth_robot) = true_robot(study, index);
+    let true_c = study.true_compliances();
     let truth: Vec<Real> = study
         .params
         .iter()
-        .map(|p| errors.iter().find(|(q, _)| q == p).map_or(0.0, |e| e.1))
+        .map(|p| {
+            errors
+                .iter()
+                .chain(&true_c)
+                .find(|(q, _)| q == p)
+                .map_or(0.0, |e| e.1)
+        })
         .collect();
     let sag = sag_fn(study);
     let sag_ref = sag.as_deref();
 
     // Validation: fresh poses, true frames of the sagging true arm, free of tracker noise.
     let vqs = validation_poses(study, index)?;
+    let vload = sc.validation.payload_kg;
     let vtruth: Vec<Frame> = vqs
         .iter()
         .map(|q| match &sag_ref {
-            Some(f) => f(&truth_robot, q),
+            Some(f) => f(&truth_robot, q, vload),
             None => Ok(truth_robot.fk(q)),
         })
         .collect::<Result<_>>()?;
-    let before = validation_errors(&study.nominal, &vqs, &vtruth);
+    let vpayload = vec![study.validation_payload(); vqs.len()];
+    let before = validation_errors(&study.nominal, &vqs, Some(&vpayload), &vtruth)?;
     let full_pose = study.measure == Measure::Pose;
 
     let mut outcomes = Vec::new();
     let mut crb = Vec::new();
     for si in 0..sc.calibration.strategies.len() {
         let qs = calibration_poses(study, si, index)?;
-        let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
-        let mut gm = rng::stream(seed, "measure");
-        let m = measure_poses(
+        let m = measure_calibration(
+            study,
             &truth_robot,
             &qs,
-            &study.tracker,
-            outliers,
             sag_ref,
-            &mut gm,
+            &mut rng::stream(seed, "measure"),
         )?;
         crb.push(match &study.fixed[si] {
             Some(set) => set.crb_trace,
@@ -186,7 +224,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     // there through the true tracker placement (identity for `known`).
                     let map = c.frame.compose(&study.tracker.frame().inverse());
                     let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
-                    let e = validation_errors(&c.robot, &vqs, &seen);
+                    let e = validation_errors(&c.robot, &vqs, Some(&vpayload), &seen)?;
                     if index == 0 {
                         trace = c.identified.trace.clone().filter(|t| !t.is_empty());
                     }

@@ -9,6 +9,7 @@ use super::plots;
 use serde_json::{json, Value};
 
 use crate::calibrate::{validation_errors, Calibrated, ErrorStats, Registration};
+use crate::compliance::loaded_fk;
 use crate::error::{Error, Result};
 use crate::kinematics::{robot_to_toml, Param, Robot};
 use crate::math::{Frame, Mat3, Real};
@@ -28,8 +29,9 @@ pub struct FileValidation {
 }
 
 /// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
-/// registration.
-pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileValidation {
+/// registration; a compensated robot with compliances predicts each point under its
+/// `payload_kg`. Fails when such a robot has no link masses.
+pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> Result<FileValidation> {
     let truth = |frame: &Frame| -> Vec<Frame> {
         let (points, rotations) = v.in_frame(frame);
         points
@@ -42,10 +44,11 @@ pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileV
             .collect()
     };
     // "Before" in the nominal robot's own registration, the same for every method.
-    let b = validation_errors(nominal, &v.qs, &truth(&c.nominal_frame));
-    let a = validation_errors(&c.robot, &v.qs, &truth(&c.frame));
+    let loads = v.payload_kg.as_deref();
+    let b = validation_errors(nominal, &v.qs, loads, &truth(&c.nominal_frame))?;
+    let a = validation_errors(&c.robot, &v.qs, loads, &truth(&c.frame))?;
     let pose = v.quats.is_some();
-    FileValidation {
+    Ok(FileValidation {
         before_mm: ErrorStats::of(&b.mm),
         after_mm: ErrorStats::of(&a.mm),
         deg: pose.then(|| (ErrorStats::of(&b.deg), ErrorStats::of(&a.deg))),
@@ -55,7 +58,24 @@ pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> FileV
                 ErrorStats::of(&a.attitude_deg),
             )
         }),
+    })
+}
+
+/// Per calibration point, the residual (mm) before — the nominal robot in its own
+/// registration — and after — the compensated robot, under the point's payload, in the
+/// final registration.
+fn point_residuals(r: &IdentifyRecord) -> Result<(Vec<Real>, Vec<Real>)> {
+    let c = r.calibrated;
+    let (cn, cc) = (r.nominal.chain(), c.robot.chain());
+    let loads = r.data.payload_kg.as_deref();
+    let mut before = Vec::with_capacity(r.data.len());
+    let mut after = Vec::with_capacity(r.data.len());
+    for (i, (q, p)) in r.data.qs.iter().zip(&r.data.points).enumerate() {
+        let load = loads.map_or(0.0, |l| l[i]);
+        before.push((c.nominal_frame.apply(p) - cn.fk(q).pos).norm());
+        after.push((c.frame.apply(p) - loaded_fk(&c.robot, &cc, q, load)?.pos).norm());
     }
+    Ok((before, after))
 }
 
 fn stats_json(s: &ErrorStats) -> Value {
@@ -134,20 +154,20 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
 /// `residuals.csv`: per point, the residual before (the nominal robot in its own
 /// registration) and after (the compensated robot in the final registration), and the final
 /// weight.
-pub fn residuals_csv(r: &IdentifyRecord) -> String {
-    let c = r.calibrated;
-    let (cn, cc) = (r.nominal.chain(), c.robot.chain());
+pub fn residuals_csv(r: &IdentifyRecord) -> Result<String> {
+    let (before, after) = point_residuals(r)?;
     let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
-    for (i, (q, p)) in r.data.qs.iter().zip(&r.data.points).enumerate() {
-        let w = c.identified.weights.get(i).copied().unwrap_or(1.0);
-        csv += &format!(
-            "{i},{},{},{}\n",
-            (c.nominal_frame.apply(p) - cn.fk(q).pos).norm(),
-            (c.frame.apply(p) - cc.fk(q).pos).norm(),
-            w
-        );
+    for (i, (b, a)) in before.iter().zip(&after).enumerate() {
+        let w = r
+            .calibrated
+            .identified
+            .weights
+            .get(i)
+            .copied()
+            .unwrap_or(1.0);
+        csv += &format!("{i},{b},{a},{w}\n");
     }
-    csv
+    Ok(csv)
 }
 
 /// Writes `residuals.csv`, `identified.json` and `robot.toml` (the compensated robot, named
@@ -157,7 +177,7 @@ pub fn write_identified(out: &Path, r: &IdentifyRecord) -> Result<()> {
 }
 
 fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
-    write(&out.join("residuals.csv"), &residuals_csv(r))?;
+    write(&out.join("residuals.csv"), &residuals_csv(r)?)?;
     let text = serde_json::to_string_pretty(&identified_json(r))
         .map_err(|e| Error::Compute(e.to_string()))?;
     write(&out.join("identified.json"), &(text + "\n"))?;
@@ -220,13 +240,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
     use std::fmt::Write as _;
     let c = r.calibrated;
     let id = &c.identified;
-    let (cn, cc) = (r.nominal.chain(), c.robot.chain());
-    let (mut before, mut after) = (Vec::new(), Vec::new());
-    for (q, p) in r.data.qs.iter().zip(&r.data.points) {
-        let pb = c.frame.apply(p);
-        before.push((pb - cn.fk(q).pos).norm());
-        after.push((pb - cc.fk(q).pos).norm());
-    }
+    let (before, after) = point_residuals(r)?;
     let mut s = String::new();
     let _ = writeln!(
         s,

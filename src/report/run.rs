@@ -115,6 +115,14 @@ pub fn summary(r: &RunResult) -> Value {
     if let Some(sep) = &first.separation {
         s["separation"] = sep.clone();
     }
+    // The simulated arm's compliances, from the first sweep point that sags.
+    if let Some(c) = r
+        .blocks
+        .iter()
+        .find_map(|b| b.info.true_compliance.as_ref())
+    {
+        s["true_compliance"] = c.clone();
+    }
     if let Some(sw) = &sc.sweep {
         if let [axis] = sw.axes.as_slice() {
             s["sweep_key"] = json!(axis.key);
@@ -515,18 +523,30 @@ fn write_sweep_plots(r: &RunResult, sw: &Sweep, out: &Path) -> Result<Vec<(Strin
     let b0 = &r.blocks[0];
     if sw.dims() == 1 {
         let axis = &sw.axes[0];
-        let numbers: Option<Vec<Real>> = axis.values.iter().map(numeric).collect();
+        // Zipped axes move together: the x axis numbers the points and names every key.
+        let zipped = sw.axes.len() > 1;
+        let numbers: Option<Vec<Real>> = if zipped {
+            None
+        } else {
+            axis.values.iter().map(numeric).collect()
+        };
+        let keys = sw.keys().join(" + ");
         let (xs, x_label) = match numbers {
             Some(v) => (v, axis.key.clone()),
             None => (
                 (0..axis.values.len()).map(|i| i as Real).collect(),
                 format!(
-                    "{} (value no.: {})",
-                    axis.key,
-                    axis.values
-                        .iter()
-                        .enumerate()
-                        .map(|(i, v)| format!("{i} = {v}"))
+                    "{keys} (value no.: {})",
+                    (0..axis.values.len())
+                        .map(|i| {
+                            let vals: Vec<String> =
+                                sw.axes.iter().map(|a| a.values[i].to_string()).collect();
+                            if zipped {
+                                format!("{i} = ({})", vals.join(", "))
+                            } else {
+                                format!("{i} = {}", vals[0])
+                            }
+                        })
                         .collect::<Vec<_>>()
                         .join(", ")
                 ),
@@ -551,10 +571,7 @@ fn write_sweep_plots(r: &RunResult, sw: &Sweep, out: &Path) -> Result<Vec<(Strin
                 })
                 .collect();
             plots::sweep(&out.join(stem), title, &x_label, y_label, &series)?;
-            done.push((
-                format!("{stem}.png"),
-                format!("{title} against {}", axis.key),
-            ));
+            done.push((format!("{stem}.png"), format!("{title} against {keys}")));
         }
     } else if sw.dims() == 2 {
         let (xa, ya) = (&sw.axes[0], &sw.axes[1]);

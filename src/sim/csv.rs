@@ -1,7 +1,9 @@
 //! The measurement CSV (FORMATS.md): a header `q1,…,qn,x,y,z` (full-pose data adds
 //! `qw,qx,qy,qz`), then one row per pose: joint values in the robot file's units, the
 //! measured point in mm in the instrument's frame and the unit quaternion of the measured
-//! frame. A real tracker export in this shape loads exactly like a simulated one.
+//! frame; optional columns `sigma_mm` (the point's standard deviation) and `payload_kg` (the
+//! payload at the tool point during the measurement). A real tracker export in this shape
+//! loads exactly like a simulated one.
 //!
 //! Reading accepts the columns in any order (matched by header name), blank lines and
 //! `#` comment lines; it refuses a missing or unknown column, a row with the wrong number
@@ -21,6 +23,8 @@ const QUAT: [&str; 4] = ["qw", "qx", "qy", "qz"];
 const XYZ: [&str; 3] = ["x", "y", "z"];
 /// The optional per-point standard deviation column (mm).
 const SIGMA: &str = "sigma_mm";
+/// The optional per-pose payload column (kg).
+const PAYLOAD: &str = "payload_kg";
 
 /// Writes `m` as a measurement CSV. Numbers have a fixed format (9 decimals for joint values
 /// and points, 12 for quaternions), so equal measurements give identical bytes.
@@ -33,6 +37,9 @@ pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurements) -> Resul
     }
     if m.sigma_mm.is_some() {
         s.push_str(",sigma_mm");
+    }
+    if m.payload_kg.is_some() {
+        s.push_str(",payload_kg");
     }
     s.push('\n');
     for (i, q) in m.qs.iter().enumerate() {
@@ -48,6 +55,10 @@ pub fn write_measurements(path: &Path, robot: &Robot, m: &Measurements) -> Resul
         if let Some(sd) = &m.sigma_mm {
             let v = of_pose(sd, i, m.qs.len(), "standard deviations")?;
             let _ = write!(s, ",{}", fixed(*v, 9));
+        }
+        if let Some(pl) = &m.payload_kg {
+            let v = of_pose(pl, i, m.qs.len(), "payloads")?;
+            let _ = write!(s, ",{}", fixed(*v, 6));
         }
         s.push('\n');
     }
@@ -137,13 +148,14 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
         let known = qnames.contains(n)
             || XYZ.contains(&n.as_str())
             || QUAT.contains(&n.as_str())
-            || n == SIGMA;
+            || n == SIGMA
+            || n == PAYLOAD;
         if !known {
             return Err(bad(
                 header_line,
                 &format!(", column {}", i + 1),
                 format!(
-                    "unknown column \"{n}\" (expected q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm)"
+                    "unknown column \"{n}\" (expected q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm, payload_kg)"
                 ),
             ));
         }
@@ -192,6 +204,8 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
         (Vec::new(), None)
     };
     let sigma_col = if measured { find(SIGMA) } else { None };
+    let payload_col = find(PAYLOAD);
+    let mut payload = Vec::new();
     let mut sigma = Vec::new();
     let mut qs = Vec::new();
     let mut points = Vec::new();
@@ -282,6 +296,17 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
             }
             sigma.push(v);
         }
+        if let Some(c) = payload_col {
+            let v = num(c)?;
+            if v < 0.0 {
+                return Err(bad(
+                    line,
+                    &format!(", column {PAYLOAD}"),
+                    format!("{v} is not a payload ≥ 0 kg"),
+                ));
+            }
+            payload.push(v);
+        }
     }
     if qs.is_empty() {
         return Err(bad(
@@ -295,6 +320,7 @@ pub(crate) fn read_table(path: &Path, robot: &Robot, measured: bool) -> Result<M
         points,
         quats: qtcol.map(|_| quats),
         sigma_mm: sigma_col.map(|_| sigma),
+        payload_kg: payload_col.map(|_| payload),
     })
 }
 
@@ -325,7 +351,7 @@ mod tests {
             ..Default::default()
         })
         .unwrap();
-        let m = measure_poses(&r, &qs, &t, None, None, &mut stream(1, "noise")).unwrap();
+        let m = measure_poses(&r, &qs, &t, None, None, None, &mut stream(1, "noise")).unwrap();
         (r, m.data)
     }
 

@@ -56,21 +56,30 @@ pub struct Simulated {
 }
 
 /// The signature of a sag model: the deflected tool frame (in the base frame) of the true
-/// robot at joint values `q`.
-pub type SagFn = dyn Fn(&Robot, &[Real]) -> Result<Frame> + Sync;
+/// robot at joint values `q` under a payload (kg; `None`: the model's configured payload).
+pub type SagFn = dyn Fn(&Robot, &[Real], Option<Real>) -> Result<Frame> + Sync;
 
 /// Measures `true_robot` at each of `qs` (internal units) with `tracker`, then displaces
 /// outliers (`outliers`, if given). `sag` gives the deflected tool frame of the true robot at
-/// q; `None` means a rigid arm. Draws the tracker noise of pose 0, 1, … in order, then the
-/// outliers, all from `rng`.
+/// q; `None` means a rigid arm. `payloads` gives the payload (kg) of each pose, recorded in
+/// the measurement's `payload_kg` and passed to `sag`. Draws the tracker noise of pose 0, 1,
+/// … in order, then the outliers, all from `rng`.
 pub fn measure_poses(
     true_robot: &Robot,
     qs: &[Vec<Real>],
     tracker: &Tracker,
     outliers: Option<&OutlierSettings>,
     sag: Option<&SagFn>,
+    payloads: Option<&[Real]>,
     rng: &mut Rng,
 ) -> Result<Simulated> {
+    if let Some(p) = payloads.filter(|p| p.len() != qs.len()) {
+        return Err(Error::Compute(format!(
+            "{} payloads for {} poses",
+            p.len(),
+            qs.len()
+        )));
+    }
     let n_out = match outliers {
         Some(o) => o.count_for(qs.len())?,
         None => 0,
@@ -89,10 +98,10 @@ pub fn measure_poses(
     let mut quats = Vec::with_capacity(if full_pose { m } else { 0 });
     let mut sag_mm = Vec::with_capacity(m);
     let mut true_points = Vec::with_capacity(m);
-    for q in qs {
+    for (i, q) in qs.iter().enumerate() {
         let rigid = chain.fk(q);
         let world = match sag {
-            Some(f) => f(true_robot, q)?,
+            Some(f) => f(true_robot, q, payloads.map(|p| p[i]))?,
             None => rigid,
         };
         let d = world.pos - rigid.pos;
@@ -114,6 +123,7 @@ pub fn measure_poses(
             points,
             quats: full_pose.then_some(quats),
             sigma_mm: None,
+            payload_kg: payloads.map(<[Real]>::to_vec),
         },
         truth: SimTruth {
             outliers,
@@ -178,7 +188,7 @@ mod tests {
         let robot = crate::robots::irb2600();
         let qs = uniform_joint_poses(&robot, 20, &mut stream(1, "poses"));
         let t = quiet_tracker();
-        let m = measure_poses(&robot, &qs, &t, None, None, &mut stream(1, "noise")).unwrap();
+        let m = measure_poses(&robot, &qs, &t, None, None, None, &mut stream(1, "noise")).unwrap();
         for (i, q) in qs.iter().enumerate() {
             let p = robot.fk(q).pos;
             assert_relative_eq!(t.frame().apply(&m.data.points[i]), p, epsilon = 1e-9);
@@ -199,7 +209,16 @@ mod tests {
             fraction: None,
             magnitude_mm: [0.5, 1.0],
         };
-        let m = measure_poses(&robot, &qs, &t, Some(&o), None, &mut stream(2, "noise")).unwrap();
+        let m = measure_poses(
+            &robot,
+            &qs,
+            &t,
+            Some(&o),
+            None,
+            None,
+            &mut stream(2, "noise"),
+        )
+        .unwrap();
         assert_eq!(m.truth.outliers.len(), 8);
         assert!(m.truth.outliers.windows(2).all(|w| w[0] < w[1]));
         for i in 0..qs.len() {
@@ -214,9 +233,16 @@ mod tests {
             count: Some(51),
             ..o
         };
-        assert!(
-            measure_poses(&robot, &qs, &t, Some(&too_many), None, &mut stream(2, "n")).is_err()
-        );
+        assert!(measure_poses(
+            &robot,
+            &qs,
+            &t,
+            Some(&too_many),
+            None,
+            None,
+            &mut stream(2, "n")
+        )
+        .is_err());
     }
 
     #[test]
@@ -235,12 +261,13 @@ mod tests {
         let robot = crate::robots::irb2600();
         let qs = uniform_joint_poses(&robot, 5, &mut stream(3, "poses"));
         let t = quiet_tracker();
-        let sag = |r: &Robot, q: &[Real]| -> Result<Frame> {
+        let sag = |r: &Robot, q: &[Real], _: Option<Real>| -> Result<Frame> {
             let mut f = r.fk(q);
             f.pos.z -= 0.25;
             Ok(f)
         };
-        let m = measure_poses(&robot, &qs, &t, None, Some(&sag), &mut stream(3, "n")).unwrap();
+        let m =
+            measure_poses(&robot, &qs, &t, None, Some(&sag), None, &mut stream(3, "n")).unwrap();
         for (i, q) in qs.iter().enumerate() {
             assert_relative_eq!(m.truth.sag_mm[i][2], -0.25, epsilon = 1e-9);
             assert_relative_eq!(
@@ -261,9 +288,9 @@ mod tests {
             ..Default::default()
         })
         .unwrap();
-        let a = measure_poses(&robot, &qs, &t, None, None, &mut stream(4, "noise")).unwrap();
-        let b = measure_poses(&robot, &qs, &t, None, None, &mut stream(4, "noise")).unwrap();
-        let c = measure_poses(&robot, &qs, &t, None, None, &mut stream(5, "noise")).unwrap();
+        let a = measure_poses(&robot, &qs, &t, None, None, None, &mut stream(4, "noise")).unwrap();
+        let b = measure_poses(&robot, &qs, &t, None, None, None, &mut stream(4, "noise")).unwrap();
+        let c = measure_poses(&robot, &qs, &t, None, None, None, &mut stream(5, "noise")).unwrap();
         assert_eq!(a, b);
         assert_ne!(a.data.points, c.data.points);
         assert_eq!(a.data.quats.as_ref().map(Vec::len), Some(10));
