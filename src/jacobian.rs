@@ -154,7 +154,15 @@ fn record_rows(
 ) -> crate::math::Frame {
     let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
     let mut rot_cols = [0usize; MAX_OPS];
-    let mut rec = Rows::new(cols, measure, out, row0, &mut axes, &mut rot_cols);
+    let mut rec = Rows {
+        cols,
+        pose: measure == Measure::Pose,
+        out,
+        row0,
+        axes: &mut axes,
+        rot_cols: &mut rot_cols,
+        n: 0,
+    };
     let end = walk(&mut rec);
     rec.finish(&end.pos);
     end
@@ -178,27 +186,7 @@ struct Rows<'a> {
     n: usize,
 }
 
-impl<'a> Rows<'a> {
-    #[inline(always)]
-    fn new(
-        cols: &'a Columns,
-        measure: Measure,
-        out: &'a mut DMatrix<Real>,
-        row0: usize,
-        axes: &'a mut [(Vec3, Vec3); MAX_OPS],
-        rot_cols: &'a mut [usize; MAX_OPS],
-    ) -> Self {
-        Rows {
-            cols,
-            pose: measure == Measure::Pose,
-            out,
-            row0,
-            axes,
-            rot_cols,
-            n: 0,
-        }
-    }
-
+impl Rows<'_> {
     #[inline(always)]
     fn visit(&mut self, op: &Op, r: &Mat3, p: &Vec3) {
         if self.cols.any_var {

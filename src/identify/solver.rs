@@ -11,7 +11,7 @@ use nalgebra::{DMatrix, DMatrixView, DVector};
 
 use super::linalg::{self, solve_spd};
 use super::weights::{point_weights, redecide_inliers, Residuals, Robustness, Sigma0};
-use super::xi::{choose_xi, XiRule};
+use super::xi::{choose_xi, RidgeStep, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
 use crate::math::Real;
@@ -501,17 +501,15 @@ pub(crate) fn gauss_newton(
             dev -= x0;
             let cost_now = weighted_cost(&work.r, work.rows, &w);
             let n_rows = work.rows * w.iter().filter(|&&v| v > 0.0).count();
-            let xi = choose_xi(
-                rc.xi,
-                &work.n,
-                &work.g,
-                cost_now,
-                &dev,
-                &d,
+            let step = RidgeStep {
+                n: &work.n,
+                g: &work.g,
+                cost: cost_now,
+                dev: &dev,
+                d: &d,
                 n_rows,
-                &mut work.a,
-                &mut work.dx,
-            );
+            };
+            let xi = choose_xi(rc.xi, &step, &mut work.a, &mut work.dx);
             xi_used = Some(xi);
             for k in 0..t {
                 work.n[(k, k)] += xi * d[k];

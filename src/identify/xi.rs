@@ -97,9 +97,19 @@ impl XiRule {
 const GRID: usize = 141;
 const GRID_DECADES: Real = 14.0;
 
-/// The ridge parameter for one iteration. `n = JᵀPJ`, `g = JᵀP E`, `cost = EᵀPE`,
-/// `dev = x − x0`, `d` the scaling, `n_rows` the rows with non-zero weight; `a` and `y` are
-/// scratch buffers of `n`'s and `g`'s sizes.
+/// What the ridge parameter of one iteration is chosen from: `n = JᵀPJ`, `g = JᵀP E`,
+/// `cost = EᵀPE`, `dev = x − x0`, `d` the scaling and `n_rows` the rows with non-zero weight.
+pub(crate) struct RidgeStep<'a> {
+    pub n: &'a DMatrix<Real>,
+    pub g: &'a DVector<Real>,
+    pub cost: Real,
+    pub dev: &'a DVector<Real>,
+    pub d: &'a DVector<Real>,
+    pub n_rows: usize,
+}
+
+/// The ridge parameter for one iteration of `s`; `a` and `y` are scratch buffers of `n`'s and
+/// `g`'s sizes.
 ///
 /// [`XiRule::DoubleH`] needs only the least-squares solution of the scaled problem and its
 /// residual, which a Cholesky solve of `n` gives without the eigen-decomposition (and without
@@ -107,15 +117,9 @@ const GRID_DECADES: Real = 14.0;
 /// explained part `βᵀβ = (g + n dev)ᵀ (δ + dev)`. When `n` is too close to singular for the
 /// factorisation ([`super::linalg::PIVOT_TOL`]) the eigen-decomposition below decides which
 /// components carry information, as for the other rules.
-#[allow(clippy::too_many_arguments)]
 pub(crate) fn choose_xi(
     rule: &XiRule,
-    n: &DMatrix<Real>,
-    g: &DVector<Real>,
-    cost: Real,
-    dev: &DVector<Real>,
-    d: &DVector<Real>,
-    n_rows: usize,
+    s: &RidgeStep,
     a: &mut DMatrix<Real>,
     y: &mut DVector<Real>,
 ) -> Real {
@@ -123,10 +127,11 @@ pub(crate) fn choose_xi(
         return *v;
     }
     if let XiRule::DoubleH = rule {
-        if let Some(xi) = double_h_cholesky(n, g, cost, dev, d, n_rows, a, y) {
+        if let Some(xi) = double_h_cholesky(s, a, y) {
             return xi;
         }
     }
+    let (n, g, cost, dev, d, n_rows) = (s.n, s.g, s.cost, s.dev, s.d, s.n_rows);
     let t = n.nrows();
     let nd = n * dev;
     let b2 = (cost + 2.0 * dev.dot(g) + dev.dot(&nd)).max(0.0);
@@ -221,17 +226,8 @@ pub(crate) fn choose_xi(
 
 /// [`XiRule::DoubleH`] through a Cholesky solve of `n` (see [`choose_xi`]); `None` when `n`
 /// does not factorise or the result is not finite.
-#[allow(clippy::too_many_arguments)]
-fn double_h_cholesky(
-    n: &DMatrix<Real>,
-    g: &DVector<Real>,
-    cost: Real,
-    dev: &DVector<Real>,
-    d: &DVector<Real>,
-    n_rows: usize,
-    a: &mut DMatrix<Real>,
-    y: &mut DVector<Real>,
-) -> Option<Real> {
+fn double_h_cholesky(s: &RidgeStep, a: &mut DMatrix<Real>, y: &mut DVector<Real>) -> Option<Real> {
+    let (n, g, cost, dev, d, n_rows) = (s.n, s.g, s.cost, s.dev, s.d, s.n_rows);
     let t = n.nrows();
     a.copy_from(n);
     if !super::linalg::cholesky_in_place(a) {
@@ -294,7 +290,15 @@ mod tests {
         let dev = DVector::from_fn(t, |k, _| 0.01 * k as Real - 0.02);
         let d = DVector::from_fn(t, |k, _| n[(k, k)]);
         let (mut a, mut y) = (DMatrix::zeros(t, t), DVector::zeros(t));
-        let xi = choose_xi(&XiRule::DoubleH, &n, &g, cost, &dev, &d, 40, &mut a, &mut y);
+        let step = RidgeStep {
+            n: &n,
+            g: &g,
+            cost,
+            dev: &dev,
+            d: &d,
+            n_rows: 40,
+        };
+        let xi = choose_xi(&XiRule::DoubleH, &step, &mut a, &mut y);
         // Reference: b = E + J dev, A = J D^-½; ẑ = argmin |A z − b|, σ̂² = |A ẑ − b|² / (m − t).
         let b = &e + &jac * &dev;
         let dinv = DMatrix::from_diagonal(&d.map(|v| 1.0 / v.sqrt()));
