@@ -963,7 +963,7 @@ mod tests {
             let mut sag: Real = 0.0;
             for q in &qs {
                 // Settled: the last step moved no joint by more than the tolerance.
-                let st = rap.settle(&robot, &chain, q, 0.0).unwrap();
+                let st = rap.settle(&robot, &chain, q, rap.payload).unwrap();
                 assert!(st.last_step_change < physics::STEP_TOLERANCE);
                 let a = lin.deflected_with_chain(&robot, &chain, q).unwrap();
                 let b = rap.deflected_with_chain(&robot, &chain, q).unwrap();
@@ -1018,7 +1018,7 @@ mod tests {
             let mut worst: Real = 0.0;
             let mut most_steps = 0;
             for q in &qs {
-                let st = c.settle(&robot, &chain, q, 0.0).unwrap();
+                let st = c.settle(&robot, &chain, q, c.payload).unwrap();
                 let exact = exact_deflection(&c, &robot, &chain, q);
                 for (a, b) in st.deflection().iter().zip(&exact) {
                     worst = worst.max((a - b).abs());
@@ -1061,7 +1061,7 @@ mod tests {
         };
         let forward: Vec<_> = qs
             .iter()
-            .map(|q| bits(&c.settle(&robot, &chain, q, 0.0).unwrap()))
+            .map(|q| bits(&c.settle(&robot, &chain, q, c.payload).unwrap()))
             .collect();
         // Another arm size in between rebuilds the thread's world.
         let pendulum = pendulum(400.0);
@@ -1074,16 +1074,19 @@ mod tests {
         let p = Compliance::new(&ps, &pendulum, None).unwrap().unwrap();
         p.deflected(&pendulum, &[0.3]).unwrap();
         for (q, want) in qs.iter().zip(&forward).rev() {
-            assert_eq!(&bits(&c.settle(&robot, &chain, q, 0.0).unwrap()), want);
+            assert_eq!(
+                &bits(&c.settle(&robot, &chain, q, c.payload).unwrap()),
+                want
+            );
         }
         for (i, (q, want)) in qs.iter().zip(&forward).enumerate().step_by(7) {
             let m = c.masses(&chain, q);
             let mut dc = [0.0; 16];
-            c.torques(&robot, &m, 0.0, &mut dc[..6]);
+            c.torques(&robot, &m, c.payload, &mut dc[..6]);
             for (d, k) in dc.iter_mut().zip(&c.stiffness) {
                 *d /= k;
             }
-            let sb = c.spring_bodies(&robot, &m, &dc, 0.0);
+            let sb = c.spring_bodies(&robot, &m, &dc, c.payload);
             let mut fresh = physics::Arm::new(sb.count).unwrap();
             let st = fresh
                 .settle(
@@ -1097,7 +1100,7 @@ mod tests {
         }
         // Across threads too.
         let other = std::thread::scope(|sc| {
-            sc.spawn(|| bits(&c.settle(&robot, &chain, &qs[5], 0.0).unwrap()))
+            sc.spawn(|| bits(&c.settle(&robot, &chain, &qs[5], c.payload).unwrap()))
                 .join()
                 .unwrap()
         });
@@ -1158,13 +1161,21 @@ mod tests {
             ..base.clone()
         };
         assert_eq!(key(s, b), "compliance.payload_kg");
-        // A robot file without built-in defaults needs both lists.
+        // A robot file without built-in defaults needs the stiffness, and the masses unless
+        // the file gives them (`mass_kg`).
         assert_eq!(key(base.clone(), None), "compliance.stiffness_nm_per_rad");
         let s = ComplianceSettings {
             stiffness_nm_per_rad: Some(vec![1e6; 6]),
             ..base.clone()
         };
-        assert_eq!(key(s, None), "compliance.link_mass_kg");
+        let mut bare = robot.clone();
+        bare.link_mass_kg = None;
+        match Compliance::new(&s, &bare, None) {
+            Err(Error::Setting { key, .. }) => assert_eq!(key, "compliance.link_mass_kg"),
+            other => panic!("expected a setting error, got {other:?}"),
+        }
+        let c = Compliance::new(&s, &robot, None).unwrap().unwrap();
+        assert_eq!(c.link_mass_kg(), robot.link_mass_kg.as_deref().unwrap());
         // "none" needs nothing.
         assert!(
             Compliance::new(&settings(ComplianceModel::None), &robot, None)

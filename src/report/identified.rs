@@ -307,7 +307,8 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
             .collect::<Vec<_>>(),
     )?;
     s += "## Residuals\n\n![residual per point](residuals.png)\n\n![histogram](histogram.png)\n\n";
-    s += "## Identified errors\n\nmm and rad; standard error = √ of the covariance's diagonal.\n\n";
+    s += "## Identified errors\n\nmm and rad (joint compliances c<j>: rad/(N·m)); standard error = √ of the \
+          covariance's diagonal.\n\n";
     let rows: Vec<Vec<String>> = r
         .params
         .iter()
