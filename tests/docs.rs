@@ -1,6 +1,7 @@
-//! Every scenario example in README.md and in FORMATS.md (`../shared/FORMATS.md`, the
-//! user-facing contract, when it is beside the project) runs as a user would run it:
-//! `calbench run EXAMPLE --trials 2`, sweep included.
+//! Every scenario example in README.md, in FORMATS.md (`../shared/FORMATS.md`, the
+//! user-facing contract, when it is beside the project) and in FORMATS-additions.md (what
+//! calbench adds to it) runs as a user would run it: `calbench run EXAMPLE --trials 2`, sweep
+//! included.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -89,4 +90,10 @@ fn formats_scenario_examples_run() {
         return;
     }
     assert!(run_examples(&formats) >= 1);
+}
+
+#[test]
+fn formats_additions_examples_run() {
+    let doc = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("FORMATS-additions.md");
+    assert!(run_examples(&doc) >= 1);
 }
