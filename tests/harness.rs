@@ -146,6 +146,24 @@ fn noise_free_study_recovers_the_injected_errors() {
         let eta = e["eta_mean_pct"].as_f64().unwrap();
         assert!(rms < 1e-4, "{}: after RMS {rms}", e["method"]);
         assert!(eta > 99.99, "{}: η {eta}", e["method"]);
+        // At the calibration poses too: the errors go, and the nominal robot's were there.
+        let cal = e["calibration_after_mm"]["rms"].as_f64().unwrap();
+        let cal0 = e["calibration_before_mm"]["rms"].as_f64().unwrap();
+        assert!(cal < 1e-4, "{}: calibration RMS after {cal}", e["method"]);
+        assert!(cal0 > 1.0, "{}: calibration RMS before {cal0}", e["method"]);
+    }
+    // With sag, noise and outliers the calibration points are fitted, not free of error: the
+    // compensated robot misses their true points by the sag it cannot model.
+    let out = tmp("calpoints");
+    run_to(tiny(), &out, 2);
+    let s = read_json(&out.join("summary.json")).unwrap();
+    for e in s["results"].as_array().unwrap() {
+        let cal = e["calibration_after_mm"]["mean"].as_f64().unwrap();
+        assert!(
+            cal > 1e-3 && cal < 1.0,
+            "{}: calibration mean after {cal}",
+            e["method"]
+        );
     }
 }
 

@@ -32,6 +32,11 @@ pub struct Outcome {
     pub before_mm: ErrorStats,
     /// … after compensation.
     pub after_mm: ErrorStats,
+    /// Position errors (mm) at the calibration poses against their noise-free true points
+    /// (sag included): the nominal robot, before.
+    pub calibration_before_mm: ErrorStats,
+    /// … the compensated robot, in its registration, after.
+    pub calibration_after_mm: ErrorStats,
     /// Validation orientation errors (deg) before and after, for full-pose data.
     pub before_deg: Option<ErrorStats>,
     /// … after.
@@ -201,6 +206,21 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             sag_ref,
             &mut rng::stream(seed, "measure"),
         )?;
+        // The calibration rows' noise-free true points (positions; the orientation is not
+        // compared here), and the nominal robot's errors at them.
+        let cal_truth: Vec<Frame> = m
+            .truth
+            .true_points
+            .iter()
+            .map(|&pos| Frame {
+                rot: crate::math::Mat3::identity(),
+                pos,
+            })
+            .collect();
+        let cal_loads = m.data.payload_kg.as_deref();
+        let cal_before = ErrorStats::of(
+            &validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?.mm,
+        );
         crb.push(match &study.fixed[si] {
             Some(set) => set.crb_trace,
             None => crb_trace(study, &qs),
@@ -218,13 +238,15 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let mut trace = None;
-            let (identified, after, iterations, evaluations, termination) = match res {
+            let (identified, after, cal_after, iterations, evaluations, termination) = match res {
                 Ok(c) => {
                     // The compensated robot lives in the registered frame: bring the truth
                     // there through the true tracker placement (identity for `known`).
                     let map = c.frame.compose(&study.tracker.frame().inverse());
                     let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
                     let e = validation_errors(&c.robot, &vqs, Some(&vpayload), &seen)?;
+                    let cal_seen: Vec<Frame> = cal_truth.iter().map(|t| map.compose(t)).collect();
+                    let cal = validation_errors(&c.robot, &m.data.qs, cal_loads, &cal_seen)?;
                     if index == 0 {
                         trace = c.identified.trace.clone().filter(|t| !t.is_empty());
                     }
@@ -232,6 +254,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     (
                         r.x.iter().copied().collect(),
                         e,
+                        ErrorStats::of(&cal.mm),
                         r.iterations,
                         r.evaluations,
                         r.termination,
@@ -244,6 +267,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                         deg: vec![Real::NAN; vqs.len()],
                         attitude_deg: vec![Real::NAN; vqs.len()],
                     },
+                    ErrorStats::of(&[Real::NAN]),
                     0,
                     0,
                     Termination::InvalidInput,
@@ -255,6 +279,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 identified,
                 before_mm: ErrorStats::of(&before.mm),
                 after_mm: ErrorStats::of(&after.mm),
+                calibration_before_mm: cal_before,
+                calibration_after_mm: cal_after,
                 before_deg: full_pose.then(|| ErrorStats::of(&before.deg)),
                 after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
                 before_attitude_deg: full_pose.then(|| ErrorStats::of(&before.attitude_deg)),

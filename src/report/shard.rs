@@ -22,7 +22,7 @@ use crate::montecarlo::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialRes
 use crate::scenario::Scenario;
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-1";
+const FORMAT: &str = "calbench-shard-2";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -153,6 +153,8 @@ fn encode(block: usize, t: &TrialResult) -> String {
         ));
         push_stats(&mut s, &o.before_mm);
         push_stats(&mut s, &o.after_mm);
+        push_stats(&mut s, &o.calibration_before_mm);
+        push_stats(&mut s, &o.calibration_after_mm);
         for d in [
             o.before_deg,
             o.after_deg,
@@ -263,6 +265,8 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let seconds = t.real()?;
         let before_mm = t.stats()?;
         let after_mm = t.stats()?;
+        let calibration_before_mm = t.stats()?;
+        let calibration_after_mm = t.stats()?;
         let before_deg = t.optional_stats()?;
         let after_deg = t.optional_stats()?;
         let before_attitude_deg = t.optional_stats()?;
@@ -274,6 +278,8 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             identified,
             before_mm,
             after_mm,
+            calibration_before_mm,
+            calibration_after_mm,
             before_deg,
             after_deg,
             before_attitude_deg,
@@ -475,6 +481,8 @@ mod tests {
                 identified: vec![Real::INFINITY, Real::NAN, -1e300],
                 before_mm: stats(0.7),
                 after_mm: stats(0.1),
+                calibration_before_mm: stats(0.6),
+                calibration_after_mm: stats(0.05),
                 before_deg: None,
                 after_deg: Some(stats(0.3)),
                 before_attitude_deg: None,
