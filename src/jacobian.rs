@@ -11,6 +11,8 @@
 //! Rows per pose: 3 (position, mm per unit parameter) or 6 (position, then the small rotation
 //! of the tool frame in the world, rad per unit parameter).
 
+use std::mem::MaybeUninit;
+
 use nalgebra::{DMatrix, DVector};
 
 use crate::kinematics::{Chain, ChainVars, Op, Param, Robot};
@@ -144,6 +146,8 @@ pub fn pose_rows_vars(
 
 /// Writes one pose's rows while `walk` walks the chain with the writer it is given, and
 /// returns the tool frame the walk ends at (shared by [`pose_rows`] and [`pose_rows_vars`]).
+/// The rotation columns are recorded in an uninitialised array (zeroing [`MAX_OPS`] entries
+/// per pose cost a fifth of the evaluation).
 #[inline(always)]
 fn record_rows(
     cols: &Columns,
@@ -152,15 +156,26 @@ fn record_rows(
     row0: usize,
     walk: impl FnOnce(&mut Rows<'_>) -> crate::math::Frame,
 ) -> crate::math::Frame {
-    let mut axes = [(Vec3::zeros(), Vec3::zeros()); MAX_OPS];
-    let mut rot_cols = [0usize; MAX_OPS];
+    let mut rotations = [const { MaybeUninit::<(Vec3, Vec3, usize)>::uninit() }; MAX_OPS];
+    record_rows_in(&mut rotations, cols, measure, out, row0, walk)
+}
+
+#[inline(always)]
+fn record_rows_in(
+    rotations: &mut [MaybeUninit<(Vec3, Vec3, usize)>],
+    cols: &Columns,
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+    walk: impl FnOnce(&mut Rows<'_>) -> crate::math::Frame,
+) -> crate::math::Frame {
     let mut rec = Rows {
+        stride: out.nrows(),
         cols,
         pose: measure == Measure::Pose,
         out,
         row0,
-        axes: &mut axes,
-        rot_cols: &mut rot_cols,
+        rotations,
         n: 0,
     };
     let end = walk(&mut rec);
@@ -173,16 +188,17 @@ fn record_rows(
 const MAX_OPS: usize = 4 * 16 + 6;
 
 /// Writes one pose's rows during a chain walk. Translation columns are written on the way
-/// out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w` and origin `o`
-/// are recorded (in arrays of the caller's stack frame, so the
-/// writer is small to move) and the column written by [`Rows::finish`].
+/// out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w`, origin `o`
+/// and column are recorded (in an array of the caller's stack frame) and the column written
+/// by [`Rows::finish`].
 struct Rows<'a> {
+    /// Rows of `out` (the distance between the starts of two columns).
+    stride: usize,
     cols: &'a Columns,
     pose: bool,
     out: &'a mut DMatrix<Real>,
     row0: usize,
-    axes: &'a mut [(Vec3, Vec3); MAX_OPS],
-    rot_cols: &'a mut [usize; MAX_OPS],
+    rotations: &'a mut [MaybeUninit<(Vec3, Vec3, usize)>],
     n: usize,
 }
 
@@ -202,39 +218,38 @@ impl Rows<'_> {
     /// Writes (or, for a rotation, records) column `c` of the operation `op`.
     #[inline(always)]
     fn write(&mut self, c: usize, op: &Op, r: &Mat3, p: &Vec3) {
-        let row0 = self.row0;
-        let w: Vec3 = r.column(op.kind.axis()).into();
-        let mut col = self.out.column_mut(c);
+        // Each element read on its own, with constant indices: a wide load of a column that
+        // the walk has just written element by element stalls on store forwarding.
+        let w = match op.kind.axis() {
+            0 => Vec3::new(r[(0, 0)], r[(1, 0)], r[(2, 0)]),
+            1 => Vec3::new(r[(0, 1)], r[(1, 1)], r[(2, 1)]),
+            _ => Vec3::new(r[(0, 2)], r[(1, 2)], r[(2, 2)]),
+        };
+        let at = c * self.stride + self.row0;
+        let out = self.out.as_mut_slice();
         if op.kind.is_rotation() {
             if self.pose {
-                for k in 0..3 {
-                    col[row0 + 3 + k] = w[k];
-                }
+                out[at + 3..at + 6].copy_from_slice(w.as_slice());
             }
-            self.axes[self.n] = (w, *p);
-            self.rot_cols[self.n] = c;
+            self.rotations[self.n].write((w, *p, c));
             self.n += 1;
         } else {
-            for k in 0..3 {
-                col[row0 + k] = w[k];
-            }
+            out[at..at + 3].copy_from_slice(w.as_slice());
             if self.pose {
-                for k in 0..3 {
-                    col[row0 + 3 + k] = 0.0;
-                }
+                out[at + 3..at + 6].fill(0.0);
             }
         }
     }
 
     #[inline(always)]
     fn finish(self, pe: &Vec3) {
-        let n = self.n;
-        for ((w, o), &c) in self.axes[..n].iter().zip(&self.rot_cols[..n]) {
+        let out = self.out.as_mut_slice();
+        for slot in &self.rotations[..self.n] {
+            // SAFETY: `write` has set the first `n` entries.
+            let (w, o, c) = unsafe { slot.assume_init_ref() };
             let dp = w.cross(&(pe - o));
-            let mut col = self.out.column_mut(c);
-            for k in 0..3 {
-                col[self.row0 + k] = dp[k];
-            }
+            let at = c * self.stride + self.row0;
+            out[at..at + 3].copy_from_slice(dp.as_slice());
         }
     }
 }

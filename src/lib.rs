@@ -33,6 +33,7 @@ pub mod robots;
 pub mod sampling;
 pub mod scenario;
 pub mod sim;
+pub mod symeig;
 pub mod urdf;
 
 /// The README's Rust examples ("Adding a method"), compiled and run as doctests.

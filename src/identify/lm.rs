@@ -14,7 +14,7 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::linalg::solve_spd;
+use super::linalg::{cholesky_in_place, cholesky_solve};
 use super::solver::{
     check_stop, finish, max_abs, start_weights, LeastSquares, Solver, Work, DIVERGENCE_FACTOR,
 };
@@ -56,29 +56,26 @@ impl Default for LmOptions {
     }
 }
 
-/// Adds `damping · M` to the diagonal of `work.n` (which must hold `JᵀJ`), writing into `a`.
-fn damp(work: &mut Work, damping: Real, marquardt: bool) {
-    let t = work.n.nrows();
-    for k in 0..t {
+/// Solves the damped normal equations `(N + damping · M) Δx = g` for `work.dx`, with `N`
+/// and `g` from `work` (left unchanged: the damped matrix is formed in the factorisation
+/// buffer) and `M = I` or, with Marquardt's scaling, `diag(N)`. Returns false when the damped
+/// matrix is numerically singular.
+fn solve_damped(work: &mut Work, damping: Real, marquardt: bool) -> bool {
+    work.a.copy_from(&work.n);
+    for k in 0..work.n.nrows() {
         let m = if marquardt {
             work.n[(k, k)].max(Real::MIN_POSITIVE)
         } else {
             1.0
         };
-        work.n[(k, k)] += damping * m;
+        work.a[(k, k)] += damping * m;
     }
-}
-
-fn undamp(work: &mut Work, damping: Real, marquardt: bool, diag: &DVector<Real>) {
-    let t = work.n.nrows();
-    for k in 0..t {
-        let m = if marquardt {
-            diag[k].max(Real::MIN_POSITIVE)
-        } else {
-            1.0
-        };
-        work.n[(k, k)] -= damping * m;
+    if !cholesky_in_place(&mut work.a) {
+        return false;
     }
+    work.dx.copy_from(&work.g);
+    cholesky_solve(&work.a, &mut work.dx);
+    work.dx.iter().all(|v| v.is_finite())
 }
 
 impl Solver for LmOptions {
@@ -126,8 +123,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
             cost0 = cost.max(Real::MIN_POSITIVE);
         }
         work.normal(&w);
-        damp(&mut work, o.mu, o.marquardt);
-        if !solve_spd(&work.n, &work.g, &mut work.a, &mut work.dx) {
+        if !solve_damped(&mut work, o.mu, o.marquardt) {
             termination = Termination::Singular;
             break;
         }
@@ -138,17 +134,25 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
             break;
         }
     }
-    finish(p, &mut work, x, w, iterations, termination, None, None)
+    finish(
+        p,
+        &mut work,
+        x,
+        w,
+        iterations,
+        termination,
+        None,
+        None,
+        false,
+    )
 }
 
 fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
     let mut work = Work::new(p);
     let mut trial = Work::new(p);
     let w = start_weights(p);
-    let t = x0.len();
     let mut x = x0.clone();
     let mut x_try = x0.clone();
-    let mut diag = DVector::zeros(t);
     let mut cost = work.evaluate(p, &x, &w);
     let mut termination = Termination::MaxIterations;
     let mut iterations = 0;
@@ -158,13 +162,8 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
     } else {
         work.normal(&w);
         'outer: for _ in 0..o.max_iter {
-            for k in 0..t {
-                diag[k] = work.n[(k, k)];
-            }
             loop {
-                damp(&mut work, lambda, o.marquardt);
-                let ok = solve_spd(&work.n, &work.g, &mut work.a, &mut work.dx);
-                undamp(&mut work, lambda, o.marquardt, &diag);
+                let ok = solve_damped(&mut work, lambda, o.marquardt);
                 let step = max_abs(&work.dx);
                 if ok {
                     x_try.copy_from(&x);
@@ -202,5 +201,18 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
         }
     }
     work.evaluations += trial.evaluations;
-    finish(p, &mut work, x, w, iterations, termination, None, None)
+    // `work` holds the evaluation and normal equations at `x` (a rejected trial leaves it
+    // untouched, an accepted one is swapped in), unless the start was not finite.
+    let fresh = cost.is_finite();
+    finish(
+        p,
+        &mut work,
+        x,
+        w,
+        iterations,
+        termination,
+        None,
+        None,
+        fresh,
+    )
 }

@@ -135,15 +135,12 @@ pub struct Identified {
     pub trace: Option<Vec<Real>>,
     /// Final weight of each point (1 for the non-robust methods).
     pub weights: Vec<Real>,
-    /// Condition number σ_max/σ_min of the column-scaled, weighted Jacobian at the solution
-    /// ([`solver::conditioning`], FORMATS.md `condition_number`); infinite below full rank,
-    /// NaN when not computed.
-    pub condition_number: Real,
-    /// Numerical rank of that Jacobian ([`solver::RANK_TOLERANCE`]); `None` when not computed.
+    /// Numerical rank of the column-scaled, weighted Jacobian at the solution
+    /// ([`solver::rank`], [`solver::RANK_TOLERANCE`]); `None` when not computed.
     pub rank: Option<usize>,
-    /// `σ0² (JᵀPJ)⁻¹` at the solution; NaN entries when `JᵀPJ` is singular or there is no
-    /// redundancy; empty when not computed.
-    pub covariance: DMatrix<Real>,
+    /// The normal matrix `JᵀPJ` at the solution, from which [`Identified::covariance`] and
+    /// [`Identified::condition_number`] come on demand; empty when not computed.
+    pub normal: DMatrix<Real>,
     /// Unit-weight standard deviation `sqrt(vᵀPv / (n − t))` at the solution, n counting each
     /// row with its point's weight (for IGG3 with [`Sigma0::Mad`], the MAD-based value); NaN
     /// when `n ≤ t` or not computed.
@@ -157,6 +154,46 @@ pub struct Identified {
 }
 
 impl Identified {
+    /// Condition number σ_max/σ_min of the column-scaled, weighted Jacobian at the solution
+    /// ([`solver::conditioning`], FORMATS.md `condition_number`; computed here, as the
+    /// Monte-Carlo runs do not need it); infinite below full rank, NaN when not computed.
+    pub fn condition_number(&self) -> Real {
+        if self.normal.is_empty() {
+            Real::NAN
+        } else if self.normal.iter().all(|v| v.is_finite()) {
+            solver::conditioning(&self.normal).1
+        } else {
+            Real::NAN
+        }
+    }
+
+    /// `σ0² (JᵀPJ)⁻¹` at the solution (computed here from [`Identified::normal`] and
+    /// [`Identified::sigma0`], as the Monte-Carlo runs do not need it); NaN entries when
+    /// `JᵀPJ` is below full rank or singular, or there is no redundancy, or the method does
+    /// not estimate σ0 (the searches); empty when `JᵀPJ` was not computed.
+    pub fn covariance(&self) -> DMatrix<Real> {
+        let t = self.normal.nrows();
+        let mut cov = DMatrix::from_element(t, t, Real::NAN);
+        if t == 0 || self.rank != Some(t) {
+            return cov;
+        }
+        let mut l = self.normal.clone();
+        if !linalg::cholesky_in_place(&mut l) {
+            return cov;
+        }
+        let s2 = self.sigma0 * self.sigma0;
+        let mut e = DVector::zeros(t);
+        for c in 0..t {
+            e.fill(0.0);
+            e[c] = 1.0;
+            linalg::cholesky_solve(&l, &mut e);
+            for k in 0..t {
+                cov[(k, c)] = s2 * e[k];
+            }
+        }
+        cov
+    }
+
     /// A result without the statistics of the Jacobian methods (no covariance, condition
     /// number or residual): for methods that do not form `JᵀPJ`.
     pub fn plain(
@@ -173,8 +210,7 @@ impl Identified {
             termination,
             trace: None,
             weights: vec![1.0; points],
-            condition_number: Real::NAN,
-            covariance: DMatrix::zeros(0, 0),
+            normal: DMatrix::zeros(0, 0),
             sigma0: Real::NAN,
             rms_residual: Real::NAN,
             ridge_xi: None,

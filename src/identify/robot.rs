@@ -12,7 +12,7 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::solver::{conditioning, solve, start_weights, LeastSquares, Size, Solver, Work};
+use super::solver::{rank, solve, start_weights, LeastSquares, Size, Solver, Work};
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::compliance::{deflect_vars, gravity_torques_vars};
 use crate::error::Error;
@@ -366,9 +366,9 @@ pub fn assess(problem: &CalibrationProblem, out: &mut Identified) -> crate::Resu
     let w = start_weights(&rp);
     work.evaluate(&rp, &out.x, &w);
     work.normal(&w);
-    let (rank, cond) = conditioning(&work.n);
+    let rank = rank(&work.n);
     out.rank = Some(rank);
-    out.condition_number = cond;
+    out.normal = work.n.clone();
     out.rms_residual = (work.r.norm_squared() / size.points as Real).sqrt();
     if rank < size.params
         && matches!(

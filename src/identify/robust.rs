@@ -3,10 +3,10 @@
 //!
 //! Iteratively reweighted ridge, in one Gauss–Newton loop ([`super::solver`]): the ridge
 //! iterations of [`super::ridge`] first run with all points at weight 1 (Li: "第 1 次求解时 P 为
-//! 单位权") until the step falls below 0.01; then every iteration gives each point the
+//! 单位权") until the step falls below 0.1; then every iteration gives each point the
 //! equivalent weight `p̄_i = p_i ψ(v_i)/v_i` (eq. 16, prior `p_i = 1`) from its residual `v_i`
 //! at the current estimate (eq. 15) and takes one step, until the weights have settled (no
-//! weight moved by more than 0.01 in a round and the same points rejected, after at least two
+//! weight moved by more than 0.1 in a round and the same points rejected, after at least two
 //! rounds). A final refit then gives every point the reweighting kept its prior weight and
 //! the rejected ones (weight 0, `u > k1`) none, and iterates to `max |dx| < ε`: the robust
 //! weights find the gross errors and the estimate is the efficient (least-squares) one on the

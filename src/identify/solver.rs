@@ -7,7 +7,7 @@
 //! returns an [`Identified`]. [`solve`] checks the problem and the options first, so a
 //! solver never sees inconsistent sizes or a non-finite start.
 
-use nalgebra::{DMatrix, DMatrixView, DVector};
+use nalgebra::{DMatrix, DVector};
 
 use super::linalg::{self, solve_spd};
 use super::weights::{point_weights, redecide_inliers, Residuals, Robustness, Sigma0};
@@ -15,6 +15,7 @@ use super::xi::{choose_xi, RidgeStep, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
 use crate::math::Real;
+use crate::symeig::symmetric_eigenvalues;
 
 /// The size of a [`LeastSquares`] problem.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -112,8 +113,7 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         iterations: 0,
         termination: Termination::InvalidInput,
         weights: start_weights(p),
-        condition_number: Real::NAN,
-        covariance: DMatrix::from_element(t, t, Real::NAN),
+        normal: DMatrix::from_element(t, t, Real::NAN),
         sigma0: Real::NAN,
         rms_residual: Real::NAN,
         ridge_xi: None,
@@ -128,7 +128,8 @@ pub(crate) struct Work {
     pub rows: usize,
     pub r: DVector<Real>,
     pub j: DMatrix<Real>,
-    /// `P J` (rows scaled by their point's weight).
+    /// `P J` (rows scaled by their point's weight); allocated on the first use, as most
+    /// problems weigh every point 1.
     pub pj: DMatrix<Real>,
     /// `JᵀPJ`.
     pub n: DMatrix<Real>,
@@ -150,7 +151,7 @@ impl Work {
             rows: size.rows_per_point,
             r: DVector::zeros(m),
             j: DMatrix::zeros(m, t),
-            pj: DMatrix::zeros(m, t),
+            pj: DMatrix::zeros(0, 0),
             n: DMatrix::zeros(t, t),
             g: DVector::zeros(t),
             a: DMatrix::zeros(t, t),
@@ -167,15 +168,18 @@ impl Work {
         weighted_cost(&self.r, self.rows, w)
     }
 
-    /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: `N` is
-    /// one blocked matrix product (nalgebra's `gemm`, which hands dynamic sizes to
-    /// `matrixmultiply`) of a transposed view of `J`, mirrored from its lower triangle so it is
-    /// exactly symmetric; with all weights 1 `P J` is not formed.
+    /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: the
+    /// lower triangle of `N` by dot products of `J`'s contiguous columns ([`dot`]), mirrored so
+    /// that `N` is exactly symmetric; with all weights 1 `P J` is not formed.
     pub fn normal(&mut self, w: &[Real]) {
         let rows = self.rows;
         let unit = w.iter().all(|&wi| wi == 1.0);
         if !unit {
-            self.pj.copy_from(&self.j);
+            if self.pj.shape() != self.j.shape() {
+                self.pj = self.j.clone();
+            } else {
+                self.pj.copy_from(&self.j);
+            }
             for (i, &wi) in w.iter().enumerate() {
                 if wi != 1.0 {
                     self.pj.rows_mut(i * rows, rows).scale_mut(wi);
@@ -184,33 +188,120 @@ impl Work {
         }
         let pj = if unit { &self.j } else { &self.pj };
         let (m, t) = self.j.shape();
-        if t > GEMM_MIN && m > GEMM_MIN {
-            // Jᵀ as a t × m view of J's column-major storage (row stride m, column stride 1).
-            let jt = DMatrixView::from_slice_with_strides(self.j.as_slice(), t, m, m, 1);
-            self.n.gemm(1.0, &jt, pj, 0.0);
-            for a in 0..t {
-                for b in 0..a {
-                    self.n[(b, a)] = self.n[(a, b)];
-                }
-            }
-        } else {
-            // Small problems: lower triangle by column dot products, mirrored.
-            for a in 0..t {
-                let ca = pj.column(a);
-                for b in 0..=a {
-                    let v = ca.dot(&self.j.column(b));
-                    self.n[(a, b)] = v;
-                    self.n[(b, a)] = v;
-                }
-            }
+        let (js, pjs) = (self.j.as_slice(), pj.as_slice());
+        let (n, g, r) = (
+            self.n.as_mut_slice(),
+            self.g.as_mut_slice(),
+            self.r.as_slice(),
+        );
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            unsafe { gram_avx2(js, pjs, r, m, t, n, g) };
+            return;
         }
-        pj.tr_mul_to(&self.r, &mut self.g);
+        gram(js, pjs, r, m, t, n, g);
     }
 }
 
-/// Sizes above which nalgebra's `gemm` uses `matrixmultiply` (its `SMALL_DIM`); below, its
-/// fallback does not accept the strided transposed view, so [`Work::normal`] uses dot products.
-const GEMM_MIN: usize = 5;
+/// [`gram`] compiled for AVX2 (four-wide vectors; the same operations in the same order,
+/// so the same result bit for bit).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn gram_avx2(
+    js: &[Real],
+    pjs: &[Real],
+    r: &[Real],
+    m: usize,
+    t: usize,
+    n: &mut [Real],
+    g: &mut [Real],
+) {
+    gram(js, pjs, r, m, t, n, g)
+}
+
+/// `N = (PJ)ᵀ J` (t × t, column-major, exactly symmetric: the lower triangle mirrored) and
+/// `g = (PJ)ᵀ r` from the column-major m × t `J` and `PJ`. Two columns of `PJ` at a time
+/// against two of `J`, so that every loaded value serves two products; each entry's sum runs
+/// as in [`dot`].
+#[inline(always)]
+fn gram(js: &[Real], pjs: &[Real], r: &[Real], m: usize, t: usize, n: &mut [Real], g: &mut [Real]) {
+    let mut a = 0;
+    while a < t {
+        if a + 1 < t {
+            let ca = [col(pjs, m, a), col(pjs, m, a + 1)];
+            let mut b = 0;
+            while b <= a {
+                let v = dots::<2, 2>(ca, [col(js, m, b), col(js, m, b + 1)]);
+                for (p, row) in v.iter().enumerate() {
+                    for (q, &x) in row.iter().enumerate() {
+                        n[(b + q) * t + a + p] = x;
+                        n[(a + p) * t + b + q] = x;
+                    }
+                }
+                b += 2;
+            }
+        } else {
+            for b in 0..=a {
+                let x = dot(col(pjs, m, a), col(js, m, b));
+                n[b * t + a] = x;
+                n[a * t + b] = x;
+            }
+        }
+        a += 2;
+    }
+    for (k, gk) in g.iter_mut().enumerate().take(t) {
+        *gk = dot(col(pjs, m, k), r);
+    }
+}
+
+/// Column `k` of a column-major matrix with `m` rows.
+#[inline(always)]
+fn col(s: &[Real], m: usize, k: usize) -> &[Real] {
+    &s[k * m..(k + 1) * m]
+}
+
+/// `x · y` over the common length: [`dots`] of one pair.
+#[inline(always)]
+pub(crate) fn dot(x: &[Real], y: &[Real]) -> Real {
+    let n = x.len().min(y.len());
+    dots::<1, 1>([&x[..n]], [&y[..n]])[0][0]
+}
+
+/// The `P × Q` dot products `x_p · y_q` of slices of one length, each in four interleaved
+/// partial sums combined as `(s0 + s2) + (s1 + s3)`: a fixed order, so every product is the
+/// same whichever block computes it and on every machine (no fused multiply-add); the
+/// compiler vectorises the four lanes.
+#[inline(always)]
+fn dots<const P: usize, const Q: usize>(x: [&[Real]; P], y: [&[Real]; Q]) -> [[Real; Q]; P] {
+    let n = x[0].len();
+    let mut acc = [[[0.0; 4]; Q]; P];
+    let whole = n - n % 4;
+    let mut i = 0;
+    while i < whole {
+        let xs: [[Real; 4]; P] = std::array::from_fn(|p| x[p][i..i + 4].try_into().unwrap());
+        let ys: [[Real; 4]; Q] = std::array::from_fn(|q| y[q][i..i + 4].try_into().unwrap());
+        for p in 0..P {
+            for q in 0..Q {
+                for k in 0..4 {
+                    acc[p][q][k] += xs[p][k] * ys[q][k];
+                }
+            }
+        }
+        i += 4;
+    }
+    for (k, i) in (whole..n).enumerate() {
+        for p in 0..P {
+            for q in 0..Q {
+                acc[p][q][k] += x[p][i] * y[q][i];
+            }
+        }
+    }
+    acc.map(|row| row.map(|s| (s[0] + s[2]) + (s[1] + s[3])))
+}
 
 /// `Σ_i w_i |r_i|²` over points.
 pub(crate) fn weighted_cost(r: &DVector<Real>, rows: usize, w: &[Real]) -> Real {
@@ -239,7 +330,9 @@ pub(crate) fn max_abs(v: &DVector<Real>) -> Real {
 }
 
 /// The statistics of the solution: evaluates at `x`, forms `JᵀPJ` and fills [`Identified`].
-/// `sigma0` overrides the classical unit-weight standard deviation (the MAD option).
+/// `sigma0` overrides the classical unit-weight standard deviation (the MAD option). With
+/// `fresh`, `work` already holds the residual, Jacobian and normal equations at `x` with
+/// `weights`, and is not evaluated again (the evaluation is then not counted twice either).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn finish(
     p: &dyn LeastSquares,
@@ -250,12 +343,18 @@ pub(crate) fn finish(
     termination: Termination,
     ridge_xi: Option<Real>,
     sigma0: Option<Real>,
+    fresh: bool,
 ) -> Identified {
     let t = x.len();
     let rows = work.rows;
     let evaluations = work.evaluations;
-    let cost = work.evaluate(p, &x, &weights);
-    work.normal(&weights);
+    let cost = if fresh {
+        weighted_cost(&work.r, rows, &weights)
+    } else {
+        let cost = work.evaluate(p, &x, &weights);
+        work.normal(&weights);
+        cost
+    };
     let n_eff = rows as Real * weights.iter().sum::<Real>();
     let classical = if n_eff > t as Real && cost.is_finite() {
         (cost / (n_eff - t as Real)).sqrt()
@@ -265,26 +364,7 @@ pub(crate) fn finish(
     let sigma0 = sigma0.unwrap_or(classical);
     let m = weights.len() as Real;
     let rms_residual = (work.r.norm_squared() / m).sqrt();
-    let (rank, condition_number, covariance) = if work.n.iter().all(|v| v.is_finite()) {
-        let (rank, cond) = conditioning(&work.n);
-        let mut cov = DMatrix::from_element(t, t, Real::NAN);
-        if rank == t {
-            work.a.copy_from(&work.n);
-            if linalg::cholesky_in_place(&mut work.a) {
-                for c in 0..t {
-                    work.dx.fill(0.0);
-                    work.dx[c] = 1.0;
-                    linalg::cholesky_solve(&work.a, &mut work.dx);
-                    for k in 0..t {
-                        cov[(k, c)] = sigma0 * sigma0 * work.dx[k];
-                    }
-                }
-            }
-        }
-        (Some(rank), cond, cov)
-    } else {
-        (None, Real::NAN, DMatrix::from_element(t, t, Real::NAN))
-    };
+    let rank = work.n.iter().all(|v| v.is_finite()).then(|| rank(&work.n));
     let termination = match (termination, rank) {
         (
             Termination::Converged | Termination::MaxIterations | Termination::NoProgress,
@@ -297,8 +377,7 @@ pub(crate) fn finish(
         iterations,
         termination,
         weights,
-        condition_number,
-        covariance,
+        normal: work.n.clone(),
         sigma0,
         rms_residual,
         ridge_xi,
@@ -312,6 +391,50 @@ pub(crate) fn finish(
 /// undetermined by the data (relative eigenvalue of the scaled normal matrix below its
 /// square, 1e-14: a few hundred times the rounding of `JᵀPJ`).
 pub const RANK_TOLERANCE: Real = 1e-7;
+
+/// The numerical rank of [`conditioning`] without its eigenvalues when the matrix is clearly
+/// of full rank, as almost every calibration's is. With `S = D^-½ n D^-½` (unit diagonal),
+/// `λ_max ≤ trace S = t` and `λ_min ≥ 1 / trace S⁻¹`, and `trace S⁻¹ = ‖L⁻¹‖²_F` from the
+/// Cholesky factor `S = L Lᵀ`; when `t · trace S⁻¹` stays a hundred times below
+/// `RANK_TOLERANCE⁻²`, every eigenvalue is above [`conditioning`]'s floor and the rank is `t`.
+/// Otherwise (factorisation fails, or the bound is not conclusive) the eigenvalues decide.
+pub fn rank(n: &DMatrix<Real>) -> usize {
+    let t = n.nrows();
+    let mut s = DMatrix::zeros(t, t);
+    let scaled = (0..t).all(|k| {
+        let d = n[(k, k)];
+        d > 0.0 && d.is_finite()
+    });
+    if scaled {
+        for k in 0..t {
+            for i in 0..t {
+                s[(i, k)] = n[(i, k)] / (n[(i, i)] * n[(k, k)]).sqrt();
+            }
+        }
+        if linalg::cholesky_in_place(&mut s) {
+            // trace S⁻¹ = ‖L⁻¹‖²_F, column by column of L⁻¹ (forward substitution on e_c).
+            let mut trace = 0.0;
+            let mut v = vec![0.0; t];
+            for c in 0..t {
+                v.fill(0.0);
+                v[c] = 1.0;
+                for k in c..t {
+                    let x = v[k] / s[(k, k)];
+                    v[k] = x;
+                    trace += x * x;
+                    for i in k + 1..t {
+                        v[i] -= s[(i, k)] * x;
+                    }
+                }
+            }
+            let bound = t as Real * trace;
+            if bound.is_finite() && bound < 1e-2 / (RANK_TOLERANCE * RANK_TOLERANCE) {
+                return t;
+            }
+        }
+    }
+    conditioning(n).0
+}
 
 /// Numerical rank and condition number of the column-scaled Jacobian `J D^-½` from its normal
 /// matrix `n = JᵀPJ` (FORMATS.md `condition_number`: σ_max/σ_min after scaling every column to
@@ -331,8 +454,19 @@ pub fn conditioning(n: &DMatrix<Real>) -> (usize, Real) {
             }
         })
         .collect();
-    let scaled = DMatrix::from_fn(t, t, |i, k| n[(i, k)] * scale[i] * scale[k]);
-    let eigenvalues = scaled.symmetric_eigenvalues();
+    // The scaled matrix is symmetric, so its column-major storage is also the row-major one
+    // that [`symmetric_eigenvalues`] reads.
+    let mut scaled: Vec<Real> = (0..t * t)
+        .map(|ik| {
+            let (i, k) = (ik % t, ik / t);
+            n[(i, k)] * scale[i] * scale[k]
+        })
+        .collect();
+    let mut eigenvalues = vec![0.0; t];
+    let mut scratch = vec![0.0; t];
+    if !symmetric_eigenvalues(&mut scaled, t, &mut eigenvalues, &mut scratch) {
+        return (0, Real::INFINITY);
+    }
     let max = eigenvalues.iter().fold(0.0 as Real, |a, &e| a.max(e));
     if !(max > 0.0 && max.is_finite()) {
         return (0, Real::INFINITY);
@@ -365,9 +499,10 @@ const MIN_ROUNDS: usize = 2;
 pub(crate) const WEIGHT_TOL: Real = 0.1;
 
 /// The robust ridge starts reweighting after a step below this (mm or rad): the next
-/// estimate is then within about its square of the unweighted solution, closer than the
-/// noise the weights look at.
-const SWITCH_STEP: Real = 1e-2;
+/// estimate is then within about its square of the unweighted solution (0.01 mm), closer than
+/// the weights need: the rounds that follow re-solve anyway. (At 1e-2 the switch came one
+/// Gauss–Newton step later with the same results.)
+const SWITCH_STEP: Real = 1e-1;
 
 /// Steps of the refit at which the rejected set may still be re-decided; after them it is
 /// fixed, so the refit always ends.
@@ -523,6 +658,7 @@ pub(crate) fn gauss_newton(
         x += &work.dx;
         iterations = it + 1;
         let step = max_abs(&work.dx);
+
         match phase {
             Phase::Prior if robust.is_some() => {
                 if step < switch {
@@ -542,5 +678,15 @@ pub(crate) fn gauss_newton(
         Some(ro) if ro.sigma0 == Sigma0::Mad => sigma_mad,
         _ => None,
     };
-    finish(p, &mut work, x, w, iterations, termination, xi_used, sigma0)
+    finish(
+        p,
+        &mut work,
+        x,
+        w,
+        iterations,
+        termination,
+        xi_used,
+        sigma0,
+        false,
+    )
 }

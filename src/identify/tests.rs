@@ -88,7 +88,7 @@ fn linear_problem_matches_the_normal_equations() {
     assert_eq!(out.termination, Termination::Converged);
     assert!(out.iterations <= 2, "{} iterations", out.iterations);
     approx::assert_relative_eq!(out.x, ls_truth, epsilon = 1e-12);
-    approx::assert_relative_eq!(out.covariance, cov_truth, epsilon = 1e-12);
+    approx::assert_relative_eq!(out.covariance(), cov_truth, epsilon = 1e-12);
     approx::assert_relative_eq!(out.sigma0, s2.sqrt(), epsilon = 1e-12);
     // σmax/σmin of A with every column scaled to unit norm (FORMATS `condition_number`).
     let mut scaled = p.a.clone();
@@ -98,7 +98,7 @@ fn linear_problem_matches_the_normal_equations() {
     }
     let sv = scaled.svd(false, false).singular_values;
     let cond = sv.max() / sv.min();
-    approx::assert_relative_eq!(out.condition_number, cond, max_relative = 1e-10);
+    approx::assert_relative_eq!(out.condition_number(), cond, max_relative = 1e-10);
     assert_eq!(out.rank, Some(3));
 
     // Ridge with a fixed ξ and no scaling: the Tikhonov solution (AᵀA + ξI)⁻¹Aᵀb.
@@ -689,7 +689,11 @@ fn ridge_beats_ls_on_crowded_poses() {
         let (ls, _) = run(&s, &data, &LsOptions::default());
         assert_eq!(ls.termination, Termination::Converged);
         // Ill-conditioned even after column scaling (σmax/σmin of the scaled Jacobian).
-        assert!(ls.condition_number > 1e3, "cond {}", ls.condition_number);
+        assert!(
+            ls.condition_number() > 1e3,
+            "cond {}",
+            ls.condition_number()
+        );
         e_ls += param_error(&s, &ls.x);
         for (k, xi) in rules.iter().enumerate() {
             let o = RidgeOptions {
@@ -736,4 +740,36 @@ fn ls_covariance_meets_cramer_rao() {
     let ratio = cov.trace() / crb.trace();
     println!("trace ratio empirical / CRB = {ratio}");
     assert!((ratio - 1.0).abs() < 0.15, "ratio {ratio}");
+}
+
+/// The full-rank certificate of [`solver::rank`] gives the eigenvalue rank of
+/// [`solver::conditioning`] on Gram matrices from well conditioned to singular, with columns
+/// of very different scales (mm and rad).
+#[test]
+fn rank_certificate_agrees_with_the_eigenvalues() {
+    let mut r = rng::from_seed(17);
+    let normal = Normal::new(0.0, 1.0).expect("normal");
+    let mut seen = [0usize; 2];
+    for case in 0..400 {
+        let (m, t) = (40, 2 + case % 19);
+        let mut a = DMatrix::from_fn(m, t, |_, _| normal.sample(&mut r));
+        // A near-dependent column at a chosen distance (1e-2 … 1e-10 relative), or an exact
+        // copy, or none.
+        let kind = case % 6;
+        if kind < 5 && t > 1 {
+            let delta = [1e-2, 1e-5, 1e-7, 1e-9, 0.0][kind];
+            let noise = DVector::from_fn(m, |_, _| normal.sample(&mut r));
+            let c0 = a.column(0).clone_owned();
+            a.set_column(t - 1, &(c0 + noise * delta));
+        }
+        for (k, mut c) in a.column_iter_mut().enumerate() {
+            c *= [1.0, 1e3, 1e-3][k % 3];
+        }
+        let n = a.transpose() * &a;
+        let want = solver::conditioning(&n).0;
+        assert_eq!(solver::rank(&n), want, "case {case}, t {t}");
+        seen[usize::from(want == t)] += 1;
+    }
+    // Both sides of the decision occur.
+    assert!(seen[0] >= 100 && seen[1] >= 100, "{seen:?}");
 }

@@ -12,16 +12,16 @@
 //! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. For each
 //! candidate the lower triangle of JᵀJ ± BᵀB is formed in a per-worker buffer and its
 //! eigenvalues found by the allocation-free Householder + implicit-QL solver of
-//! [`super::symeig`] (about 2× faster than nalgebra's generic `symmetric_eigenvalues` at
+//! [`crate::symeig`] (about 2× faster than nalgebra's generic `symmetric_eigenvalues` at
 //! k = 26). The candidate scan runs on rayon and reduces by (value, index) with ties to the
 //! lower index, so the result does not depend on the thread count.
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
-use super::symeig::symmetric_eigenvalues;
 use super::{objective_of_eigenvalues, objective_of_gram, Objective, PoseModel};
 use crate::math::Real;
+use crate::symeig::symmetric_eigenvalues;
 
 /// What [`detmax`] found.
 #[derive(Clone, Debug, PartialEq)]

@@ -16,7 +16,6 @@ pub mod detmax;
 pub mod ide;
 pub mod indices;
 pub mod separation;
-pub mod symeig;
 
 use std::cell::RefCell;
 

@@ -113,8 +113,9 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
         .zip(id.x.iter())
         .map(|(n, x)| (n.clone(), json!(x)))
         .collect();
-    let cov: Vec<Vec<Real>> = (0..id.covariance.nrows())
-        .map(|i| id.covariance.row(i).iter().copied().collect())
+    let covariance = id.covariance();
+    let cov: Vec<Vec<Real>> = (0..covariance.nrows())
+        .map(|i| covariance.row(i).iter().copied().collect())
         .collect();
     let (xyz, rpy) = r.calibrated.frame.to_xyz_rpy();
     let mut j = json!({
@@ -129,7 +130,7 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
         "parameters": names,
         "errors": errors,
         "covariance": cov,
-        "condition_number": id.condition_number,
+        "condition_number": id.condition_number(),
         "rank": id.rank,
         "sigma0": id.sigma0,
         "rms_residual_mm": id.rms_residual,
@@ -262,7 +263,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         r.registration.as_str(),
         id.termination.as_str(),
         id.iterations,
-        fmt_num(id.condition_number, 4),
+        fmt_num(id.condition_number(), 4),
         id.rank.map_or("—".to_string(), |k| k.to_string()),
         r.params.len(),
     );
@@ -309,13 +310,13 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
     s += "## Residuals\n\n![residual per point](residuals.png)\n\n![histogram](histogram.png)\n\n";
     s += "## Identified errors\n\nmm and rad (joint compliances c<j>: rad/(N·m)); standard error = √ of the \
           covariance's diagonal.\n\n";
+    let covariance = id.covariance();
     let rows: Vec<Vec<String>> = r
         .params
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let se = id
-                .covariance
+            let se = covariance
                 .get((i, i))
                 .map_or(Real::NAN, |v| v.max(0.0).sqrt());
             vec![p.to_string(), fmt_num(id.x[i], 4), fmt_num(se, 3)]

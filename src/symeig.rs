@@ -1,6 +1,7 @@
-//! Eigenvalues of a small dense symmetric matrix, allocation-free, for the DETMAX candidate
+//! Eigenvalues of a small dense symmetric matrix, allocation-free: for the DETMAX candidate
 //! scans (Guo 2024 §3.2: every scan evaluates the objective of JᵀJ ± BᵀB, through the
-//! singular values sqrt(eig(JᵀJ)), for each candidate block B).
+//! singular values sqrt(eig(JᵀJ)), for each candidate block B) and for the rank and
+//! condition number of every identification ([`crate::identify::solver::conditioning`]).
 //!
 //! Householder reduction to tridiagonal form (eigenvalues only: Wilkinson & Reinsch, routine
 //! `tred2` without the accumulation of transforms), then the implicit QL iteration with
