@@ -5,9 +5,9 @@
 //! iterations of [`super::ridge`] first run with all points at weight 1 (Li: "第 1 次求解时 P 为
 //! 单位权") until the step falls below 0.1; then every iteration gives each point the
 //! equivalent weight `p̄_i = p_i ψ(v_i)/v_i` (eq. 16, prior `p_i = 1`) from its residual `v_i`
-//! at the current estimate (eq. 15) and takes one step, until the weights have settled (no
-//! weight moved by more than 0.1 in a round and the same points rejected, after at least two
-//! rounds). A final refit then gives every point the reweighting kept its prior weight and
+//! at the current estimate (eq. 15) and takes one step, until the weights have settled (the
+//! same points rejected as in the round before, after at least two rounds). A final refit
+//! then gives every point the reweighting kept its prior weight and
 //! the rejected ones (weight 0, `u > k1`) none, and iterates to `max |dx| < ε`: the robust
 //! weights find the gross errors and the estimate is the efficient (least-squares) one on the
 //! other points (Hampel et al. 1986 §1.4; Rousseeuw & Leroy 1987 ch. 1 — see

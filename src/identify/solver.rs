@@ -316,12 +316,15 @@ pub(crate) fn weighted_cost(r: &DVector<Real>, rows: usize, w: &[Real]) -> Real 
     c
 }
 
-/// Whether a reweighting round has settled: no weight moved by more than [`WEIGHT_TOL`] and
-/// the rejected points (weight 0) are the same as before.
+/// Whether a reweighting round has settled: the rejected points (weight 0) are the ones of
+/// the round before. Only that set reaches the estimate (the final refit keeps the others
+/// with their prior weights), so the down-weighted band need not settle too: waiting for
+/// every weight to stop moving cost two to four more rounds on clean data, and the refit's
+/// accuracy came out the same or better without them.
 fn settled(w: &[Real], before: &[Real]) -> bool {
     w.iter()
         .zip(before)
-        .all(|(&a, &b)| (a - b).abs() <= WEIGHT_TOL && (a == 0.0) == (b == 0.0))
+        .all(|(&a, &b)| (a == 0.0) == (b == 0.0))
 }
 
 /// `max |v_i|`.
@@ -494,10 +497,6 @@ pub(crate) struct RidgeCfg<'a> {
 /// Rounds of reweighting needed before the robust iterations may stop reweighting.
 const MIN_ROUNDS: usize = 2;
 
-/// The reweighting has settled when no point's weight moved by more than this in a round
-/// (and the set of rejected points is the one of the round before).
-pub(crate) const WEIGHT_TOL: Real = 0.1;
-
 /// The robust ridge starts reweighting after a step below this (mm or rad): the next
 /// estimate is then within about its square of the unweighted solution (0.01 mm), closer than
 /// the weights need: the rounds that follow re-solve anyway. (At 1e-2 the switch came one
@@ -532,9 +531,9 @@ enum Phase {
 /// 1. the points keep their prior weights until the step falls below [`SWITCH_STEP`] (the
 ///    residuals are then as close to those of the unweighted solution as the weights need);
 /// 2. every iteration reweighs every point from the residuals at the current `x` (one
-///    reweighting round) and takes one step; the rounds stop when the weights have settled:
-///    at least [`MIN_ROUNDS`] rounds, no weight moved by more than [`WEIGHT_TOL`], and the
-///    set of rejected points (weight 0) unchanged;
+///    reweighting round) and takes one step; the rounds stop when the weights have settled
+///    ([`settled`]): at least [`MIN_ROUNDS`] rounds, and the set of rejected points (weight 0)
+///    unchanged;
 /// 3. a final refit gives the kept points their prior weights and the rejected ones 0, and
 ///    iterates until the step falls below ε ([`Termination::Converged`]). The rejected set
 ///    is decided from the residuals at the robust estimate, and anew at each of the refit's
