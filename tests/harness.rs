@@ -364,3 +364,32 @@ fn every_shipped_scenario_loads() {
     }
     assert!(n >= 6, "{n} scenarios");
 }
+
+/// A fixed pose set on a true robot that is the same in every trial has its rapier sag
+/// computed once for the study; each trial must measure exactly what it would have
+/// measured by running the sag model itself.
+#[test]
+fn the_memoised_sag_of_a_fixed_pose_set_is_the_one_each_trial_computes() {
+    let text = TINY
+        .replace("model = \"linear\"", "model = \"rapier\"")
+        .replace("count = 30", "count = 12")
+        .replace("candidates = 150", "candidates = 40");
+    let mut study =
+        calbench::montecarlo::Study::new(Scenario::parse(&text, None).unwrap()).unwrap();
+    let fixed = study.fixed[1].as_ref().expect("detmax gives a fixed set");
+    assert!(
+        fixed.sag.is_some(),
+        "paper errors + rapier sag + fixed set: memoised"
+    );
+    // Everything but the wall time.
+    let outcomes = |study: &calbench::montecarlo::Study| {
+        let mut t = calbench::montecarlo::run_trial(study, 2).unwrap();
+        t.outcomes.iter_mut().for_each(|o| o.seconds = 0.0);
+        format!("{:?}", t.outcomes)
+    };
+    let with = outcomes(&study);
+    for f in study.fixed.iter_mut().flatten() {
+        f.sag = None;
+    }
+    assert_eq!(with, outcomes(&study));
+}

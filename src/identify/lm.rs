@@ -149,11 +149,14 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
 
 fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
     let mut work = Work::new(p);
-    let mut trial = Work::new(p);
     let w = start_weights(p);
     let mut x = x0.clone();
     let mut x_try = x0.clone();
     let mut cost = work.evaluate(p, &x, &w);
+    // Whether the residual and Jacobian in `work` are those at `x`. A trial evaluation
+    // overwrites them but leaves the normal equations of `x`, from which the next, more
+    // damped step is solved; only an accepted trial forms new ones.
+    let mut fresh = cost.is_finite();
     let mut termination = Termination::MaxIterations;
     let mut iterations = 0;
     let mut lambda = o.lambda0;
@@ -168,21 +171,21 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
                 if ok {
                     x_try.copy_from(&x);
                     x_try += &work.dx;
-                    let c = trial.evaluate(p, &x_try, &w);
+                    let c = work.evaluate(p, &x_try, &w);
                     if c.is_finite() && c < cost {
                         std::mem::swap(&mut x, &mut x_try);
-                        std::mem::swap(&mut work, &mut trial);
-                        work.dx.copy_from(&trial.dx);
                         cost = c;
                         lambda /= o.lambda_factor;
                         iterations += 1;
                         work.normal(&w);
+                        fresh = true;
                         if step < o.eps {
                             termination = Termination::Converged;
                             break 'outer;
                         }
                         break;
                     }
+                    fresh = false;
                     if step < o.eps {
                         termination = Termination::Converged;
                         break 'outer;
@@ -200,10 +203,6 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
             }
         }
     }
-    work.evaluations += trial.evaluations;
-    // `work` holds the evaluation and normal equations at `x` (a rejected trial leaves it
-    // untouched, an accepted one is swapped in), unless the start was not finite.
-    let fresh = cost.is_finite();
     finish(
         p,
         &mut work,

@@ -8,7 +8,7 @@ use crate::identifiability::identifiable_generic;
 use crate::jacobian::Measure;
 use crate::jacobian::{jacobian, Columns};
 use crate::kinematics::{Param, Robot};
-use crate::math::Real;
+use crate::math::{Frame, Real};
 use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::rng;
 use crate::scenario::{PoseStrategy, Registration, Scenario};
@@ -16,7 +16,11 @@ use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
 use crate::sim::truth::selected_params;
+use crate::sim::SagFn;
 use nalgebra::DMatrix;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::Arc;
 
 /// A calibration pose set fixed for the whole study (optimised, grid or file).
 #[derive(Clone, Debug)]
@@ -29,6 +33,63 @@ pub struct FixedSet {
     pub scores: Option<serde_json::Value>,
     /// The Cramér–Rao trace of the set (the same in every trial; `None` without noise).
     pub crb_trace: Option<Real>,
+    /// The true arm's deflected tool frames at the set's measured rows, when they are the
+    /// same in every trial (see [`SagMemo`]).
+    pub sag: Option<Arc<SagMemo>>,
+}
+
+/// Deflected tool frames of the true arm, computed once: with a fixed pose set, a true robot
+/// that is the same in every trial (errors `paper` or `none`) and a sag model, every trial
+/// would otherwise run the same rapier settles again (a third of the default study's time).
+/// The sag model is a pure function of the robot, the joint values and the payload, so a
+/// frame served from here is the one the trial would compute.
+#[derive(Debug)]
+pub struct SagMemo {
+    /// The true robot's parameter values the frames belong to.
+    values: Vec<Real>,
+    /// Frames by the bits of the joint values and of the payload.
+    frames: HashMap<(Vec<u64>, Option<u64>), Frame>,
+}
+
+impl SagMemo {
+    /// Computes the deflected frames of `robot` at `rows` (joint values, payload) with
+    /// `sag`, on rayon (in order, so the result does not depend on the thread count).
+    pub fn new(robot: &Robot, rows: &[(Vec<Real>, Option<Real>)], sag: &SagFn) -> Result<SagMemo> {
+        let frames: Vec<Frame> = rows
+            .par_iter()
+            .map(|(q, load)| sag(robot, q, *load))
+            .collect::<Result<_>>()?;
+        Ok(SagMemo {
+            values: robot.values.clone(),
+            frames: rows
+                .iter()
+                .zip(frames)
+                .map(|((q, load), f)| (Self::key(q, *load), f))
+                .collect(),
+        })
+    }
+
+    fn key(q: &[Real], load: Option<Real>) -> (Vec<u64>, Option<u64>) {
+        (
+            q.iter().map(|v| v.to_bits()).collect(),
+            load.map(Real::to_bits),
+        )
+    }
+
+    /// The frame of `robot` at `q` under `load`, if computed here (same robot values, same
+    /// joint values and payload, bit for bit).
+    pub fn get(&self, robot: &Robot, q: &[Real], load: Option<Real>) -> Option<Frame> {
+        let same = robot.values.len() == self.values.len()
+            && robot
+                .values
+                .iter()
+                .zip(&self.values)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same {
+            return None;
+        }
+        self.frames.get(&Self::key(q, load)).copied()
+    }
 }
 
 /// A scenario made ready to run.
@@ -278,6 +339,7 @@ impl Study {
                         trace: Vec::new(),
                         scores: None,
                         crb_trace: None,
+                        sag: None,
                     })
                 }
                 PoseStrategy::Grid => {
@@ -292,6 +354,7 @@ impl Study {
                         trace: Vec::new(),
                         scores: None,
                         crb_trace: None,
+                        sag: None,
                     })
                 }
                 PoseStrategy::Optimised(strategy) | PoseStrategy::OptimisedFull(strategy) => {
@@ -325,6 +388,7 @@ impl Study {
                         trace: sel.trace,
                         scores: serde_json::to_value(sel.scores).ok(),
                         crb_trace: None,
+                        sag: None,
                     })
                 }
             };
@@ -350,6 +414,29 @@ impl Study {
         for (f, t) in study.fixed.iter_mut().zip(traces) {
             if let Some(f) = f {
                 f.crb_trace = t;
+            }
+        }
+        if let (true, Some(sag)) = (
+            study.scenario.errors.kind.is_fixed(),
+            super::trial::sag_fn(&study),
+        ) {
+            let (_, truth) = super::trial::true_robot(&study, 0);
+            let memos: Vec<Option<Arc<SagMemo>>> = study
+                .fixed
+                .iter()
+                .map(|f| {
+                    f.as_ref()
+                        .map(|f| {
+                            let rows = super::trial::calibration_rows(&study.scenario, &f.poses);
+                            SagMemo::new(&truth, &rows, &*sag).map(Arc::new)
+                        })
+                        .transpose()
+                })
+                .collect::<Result<_>>()?;
+            for (f, m) in study.fixed.iter_mut().zip(memos) {
+                if let Some(f) = f {
+                    f.sag = m;
+                }
             }
         }
         Ok(study)

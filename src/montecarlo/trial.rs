@@ -15,6 +15,7 @@ use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
 use crate::math::{Frame, Real};
 use crate::rng;
+use crate::scenario::Scenario;
 use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::truth::draw_errors;
 use crate::sim::{measure_poses, SagFn, Simulated};
@@ -145,20 +146,27 @@ pub fn measure_calibration(
     let expanded;
     let (qs, loads) = match &sc.calibration.payloads_kg {
         None => (qs, None),
-        Some(p) => {
-            expanded = (
-                p.iter()
-                    .flat_map(|_| qs.iter().cloned())
-                    .collect::<Vec<_>>(),
-                p.iter()
-                    .flat_map(|&w| std::iter::repeat_n(w, qs.len()))
-                    .collect::<Vec<Real>>(),
-            );
+        Some(_) => {
+            let (q, l): (Vec<_>, Vec<_>) = calibration_rows(sc, qs).into_iter().unzip();
+            expanded = (q, l.into_iter().flatten().collect::<Vec<Real>>());
             (&expanded.0[..], Some(&expanded.1[..]))
         }
     };
     let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
     measure_poses(truth_robot, qs, &study.tracker, outliers, sag, loads, rng)
+}
+
+/// The rows [`measure_calibration`] measures for the poses `qs`: each pose with the payload
+/// its row passes to the sag model (`None` without `calibration.payloads_kg`), in the same
+/// order.
+pub fn calibration_rows(sc: &Scenario, qs: &[Vec<Real>]) -> Vec<(Vec<Real>, Option<Real>)> {
+    match &sc.calibration.payloads_kg {
+        None => qs.iter().map(|q| (q.clone(), None)).collect(),
+        Some(p) => p
+            .iter()
+            .flat_map(|&w| qs.iter().map(move |q| (q.clone(), Some(w))))
+            .collect(),
+    }
 }
 
 /// Runs trial `index` of `study`.
@@ -199,11 +207,22 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let mut crb = Vec::new();
     for si in 0..sc.calibration.strategies.len() {
         let qs = calibration_poses(study, si, index)?;
+        // The fixed set's frames computed once for the study, where it has them.
+        let memo = study.fixed[si].as_ref().and_then(|f| f.sag.clone());
+        let served: Option<Box<SagFn>> = match (memo, sag_fn(study)) {
+            (Some(memo), Some(model)) => Some(Box::new(
+                move |r: &Robot, q: &[Real], load: Option<Real>| {
+                    memo.get(r, q, load).map_or_else(|| model(r, q, load), Ok)
+                },
+            )),
+            _ => None,
+        };
+        let cal_sag = served.as_deref().or(sag_ref);
         let m = measure_calibration(
             study,
             &truth_robot,
             &qs,
-            sag_ref,
+            cal_sag,
             &mut rng::stream(seed, "measure"),
         )?;
         // The calibration rows' noise-free true points (positions; the orientation is not

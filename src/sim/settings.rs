@@ -33,6 +33,14 @@ pub enum ErrorKind {
     None,
 }
 
+impl ErrorKind {
+    /// Whether every trial draws the same errors (`paper`, `none`): the true robot is then
+    /// the same in every trial.
+    pub fn is_fixed(self) -> bool {
+        matches!(self, ErrorKind::Paper | ErrorKind::None)
+    }
+}
+
 /// Which parameters carry an injected error: `"identifiable"`, `"all"` or a list of names.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub enum ParamSelection {
