@@ -318,7 +318,8 @@ pub fn simulate(scenario: &Path, trial: usize, out: &Path) -> Result<()> {
 }
 
 /// `calbench identify --robot R --data CSV --method M [--registration …] [--validate CSV] [--k K]
-/// --out DIR`: identification on a measurement file, real or simulated.
+/// [--seed S] --out DIR`: identification on a measurement file, real or simulated; `seed`
+/// seeds the random searches.
 #[allow(clippy::too_many_arguments)]
 pub fn identify_file(
     robot: &str,
@@ -331,6 +332,7 @@ pub fn identify_file(
     allow_rank_deficient: bool,
     export: Option<&str>,
     compliance: Option<&str>,
+    seed: u64,
     out: &Path,
 ) -> Result<()> {
     let nominal = robots::load(robot)?;
@@ -373,7 +375,7 @@ pub fn identify_file(
         registration,
         &Frame::identity(),
         &spec,
-        &mut calbench::rng::stream(0, "identify"),
+        &mut calbench::rng::stream(seed, "identify"),
     )?;
     let undetermined = matches!(
         c.identified.termination,

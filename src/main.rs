@@ -156,6 +156,10 @@ enum Command {
         /// torques use the robot's link masses and each row's `payload_kg`.
         #[arg(long)]
         compliance: Option<String>,
+        /// Seed of the random searches (bas, pso, bas-pso): another seed gives another
+        /// identification of the same data (Qiao 2021 fig. 7); the others ignore it.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
         /// Output folder.
         #[arg(long)]
         out: PathBuf,
@@ -287,6 +291,7 @@ fn run(cli: Cli) -> Result<()> {
             allow_rank_deficient,
             export,
             compliance,
+            seed,
             out,
         }) => Ok(commands::identify_file(
             &robot,
@@ -299,6 +304,7 @@ fn run(cli: Cli) -> Result<()> {
             allow_rank_deficient,
             export.as_deref(),
             compliance.as_deref(),
+            seed,
             &out,
         )?),
         Some(Command::Poses {

@@ -168,9 +168,10 @@ pub fn irb2600() -> Robot {
 
 /// The IRB2600ID of [`irb2600`] rewritten in Craig's MD-H (Ban, eq. 1): row i holds
 /// α_{i−1}, a_{i−1} of the DH table (`Tx(a)Rx(α)` commutes), so the same joint values give the
-/// same flange frame; β2 (about y after joint 2) models the non-parallelism of axes 2 and 3.
+/// same flange frame; β2 (about y after joint 2) models the non-parallelism of axes 2 and 3,
+/// and no other joint carries a β.
 pub fn irb2600_mdh() -> Robot {
-    from_table(
+    let mut r = from_table(
         "irb2600-mdh",
         Convention::Mdh,
         &R6,
@@ -183,7 +184,11 @@ pub fn irb2600_mdh() -> Robot {
             (0.0, 0.0, 0.0, 90.0, 0.0, (-120.0, 120.0)),
             (180.0, 200.0, 0.0, -90.0, 0.0, (-400.0, 400.0)),
         ],
-    )
+    );
+    // β only on joint 2, whose axis is parallel to joint 3's (Ban): elsewhere the
+    // neighbouring axes are not parallel and α models the tilt.
+    r.beta_joints = Some(vec![1]);
+    r
 }
 
 /// Stäubli TX60 in DH + β.

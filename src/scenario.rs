@@ -668,9 +668,11 @@ impl Scenario {
                 .params(&robot, "identification.compliance")
                 .map(|_| ()),
         )?;
-        if let ParamSelection::List(_) = &scenario.errors.params {
+        let selection = scenario.errors.selection();
+        if let ParamSelection::List(_) = &selection {
             let measure = scenario.tracker.measure.measure();
-            check(selected_params(&robot, &scenario.errors.params, measure).map(|_| ()))?;
+            let key = scenario.errors.key();
+            check(selected_params(&robot, &selection, measure, key).map(|_| ()))?;
         }
         if let ParamSelection::List(names) = &scenario.identification.params {
             let all = robot.params();

@@ -234,3 +234,64 @@ fn max_evaluations_gives_equal_budgets() {
     .check()
     .is_ok());
 }
+
+/// Qiao's models 1 and 2 searched by BAS-PSO (`error_model`): at zero errors the
+/// differential model's fitness is eq. 14 between the measured and the nominal frames, and
+/// the model's own least-squares step (one Gauss–Newton step from the nominal robot) has a
+/// far smaller fitness; the search with the model reaches it to within a few per cent.
+#[test]
+fn linear_error_model_fitness_is_eq14_on_the_model_residual() {
+    use calbench::errmodel::{identify, ErrorModel};
+    use calbench::identify::meta::LinearFitness;
+    use calbench::identify::{CalibrationProblem, Method};
+    use calbench::measurement::Measurements;
+    let c = case();
+    let data = Measurements {
+        qs: c.qs.clone(),
+        points: c.measured.iter().map(|f| f.pos).collect(),
+        quats: Some(
+            c.measured
+                .iter()
+                .map(|f| calbench::math::quaternion(&f.rot))
+                .collect(),
+        ),
+        ..Default::default()
+    };
+    let cal = CalibrationProblem::new(&c.nominal, &c.params, &data, Frame::identity(), DEFAULT_K);
+    let zero = vec![0.0; c.params.len()];
+    let lin = LinearFitness::new(ErrorModel::Differential, &cal).unwrap();
+    let nominal = problem(&c).fitness(&zero);
+    assert!(
+        (lin.fitness(&zero) - nominal).abs() <= 1e-9 * nominal,
+        "{} {nominal}",
+        lin.fitness(&zero)
+    );
+    for model in [ErrorModel::Differential, ErrorModel::CoordinateTransfer] {
+        let lin = LinearFitness::new(model, &cal).unwrap();
+        let step = identify(
+            model,
+            &c.nominal,
+            &c.params,
+            &c.qs,
+            &c.measured,
+            1,
+            DEFAULT_K,
+            None,
+        )
+        .unwrap()
+        .x;
+        let (f0, fs) = (lin.fitness(&zero), lin.fitness(&step));
+        assert!(fs < 0.05 * f0, "{model}: {fs} against {f0} at zero");
+        let m: calbench::identify::meta::Metaheuristic<BasPsoOptions> = toml::from_str(&format!(
+            "error_model = \"{}\"\nmax_evaluations = 60000\nbound_mm = 0.5\nbound_rad = 0.005",
+            model.as_str()
+        ))
+        .unwrap();
+        let found = m.identify(&cal, &mut stream(1, "search")).unwrap();
+        let ff = lin.fitness(found.x.as_slice());
+        assert!(
+            ff < 1.5 * fs + 0.02 * f0,
+            "{model}: search {ff}, LS step {fs}, zero {f0}"
+        );
+    }
+}

@@ -1,13 +1,17 @@
 //! The derivative-free searches of Qiao 2021 (BAS, PSO, BAS-PSO; §3, eqs. 12–14) as
 //! identification methods: each searches the errors of the problem's parameters in a box of
 //! ± `bound_mm` (lengths) and ± `bound_rad` (angles) around the nominal values, minimising
-//! Qiao's fitness (eq. 14, [`crate::metaheur::MetaProblem::fitness`]). The searches
-//! themselves are in [`crate::metaheur`].
+//! Qiao's fitness (eq. 14, [`crate::metaheur::MetaProblem::fitness`]), or with the key
+//! `error_model` the same fitness on one of Qiao's linear pose-error models (§2.2–2.3,
+//! [`LinearFitness`]), as Qiao identified each model with BAS-PSO (§4.2, fig. 7). The
+//! searches themselves are in [`crate::metaheur`].
 
 use serde::Deserialize;
 
 use super::{CalibrationProblem, Identified, Method, Termination};
-use crate::error::{finite_positive, Result};
+use crate::errmodel::ErrorModel;
+use crate::error::{finite_positive, Error, Result};
+use crate::math::Frame;
 use crate::math::Real;
 use crate::metaheur::{
     bas, bas_pso, pso, BasOptions, BasPsoOptions, Bounds, Fitness, MetaProblem, MetaResult,
@@ -55,14 +59,20 @@ pub struct Metaheuristic<S> {
     /// Half-width of the search box on joint compliances, rad/(N·m). Default 1e-5 (ten
     /// times an industrial arm's main-axis compliance).
     pub bound_compliance: Real,
+    /// The pose-error model whose fitness is searched: `differential` or
+    /// `coordinate_transfer` (linearised at the nominal robot, [`LinearFitness`]), or
+    /// `direct_fk`, the forward kinematics themselves, which is also the default (`None`).
+    pub error_model: Option<ErrorModel>,
 }
 
 impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
         let mut t = toml::Table::deserialize(d)?;
-        let bounds =
-            crate::names::take_keys(&mut t, &["bound_mm", "bound_rad", "bound_compliance"]);
+        let bounds = crate::names::take_keys(
+            &mut t,
+            &["bound_mm", "bound_rad", "bound_compliance", "error_model"],
+        );
         let bound = |key: &str, default: Real| match bounds.get(key) {
             None => Ok(default),
             Some(v) => Real::deserialize(v.clone()).map_err(D::Error::custom),
@@ -70,12 +80,17 @@ impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> 
         let bound_mm = bound("bound_mm", default_bound_mm())?;
         let bound_rad = bound("bound_rad", default_bound_rad())?;
         let bound_compliance = bound("bound_compliance", default_bound_compliance())?;
+        let error_model = bounds
+            .get("error_model")
+            .map(|v| ErrorModel::deserialize(v.clone()).map_err(D::Error::custom))
+            .transpose()?;
         let search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
         Ok(Metaheuristic {
             search,
             bound_mm,
             bound_rad,
             bound_compliance,
+            error_model,
         })
     }
 }
@@ -99,6 +114,7 @@ impl<S: Default> Default for Metaheuristic<S> {
             bound_mm: default_bound_mm(),
             bound_rad: default_bound_rad(),
             bound_compliance: default_bound_compliance(),
+            error_model: None,
         }
     }
 }
@@ -127,8 +143,17 @@ impl<S: Search> Method for Metaheuristic<S> {
         .with_weights(problem.weights.as_deref())?
         .with_payloads(problem.data.payload_kg.as_deref())?;
         let bounds = mp.bounds(self.bound_mm, self.bound_rad, self.bound_compliance);
-        let f = |x: &[Real]| mp.fitness(x);
-        let r = self.search.search(&f, &bounds, rng)?;
+        let r = match self.error_model {
+            None | Some(ErrorModel::DirectFk) => {
+                let f = |x: &[Real]| mp.fitness(x);
+                self.search.search(&f, &bounds, rng)?
+            }
+            Some(model) => {
+                let lin = LinearFitness::new(model, problem)?;
+                let f = |x: &[Real]| lin.fitness(x);
+                self.search.search(&f, &bounds, rng)?
+            }
+        };
         let termination = if r.reached_target {
             Termination::TargetReached
         } else if r.budget_spent {
@@ -145,5 +170,93 @@ impl<S: Search> Method for Metaheuristic<S> {
         );
         out.trace = Some(r.trace);
         Ok(out)
+    }
+}
+
+/// Qiao's fitness (eq. 14) on a linear pose-error model (§2.2 differential, §2.3 coordinate
+/// transfer): the model's residual `r₀ − J₀x` at the errors `x`, with `r₀` and `J₀` taken at
+/// the nominal robot ([`crate::errmodel::stack`], orientation rows weighted by `k`), summed
+/// as eq. 14 sums its terms: per pose, the norm of the position block plus the norm of each
+/// three-row orientation block (`k(|Δn| + |Δo| + |Δa|)` for the differential model, `k|δ|`
+/// for the coordinate transfer), times the pose's prior weight. Allocation-free.
+#[derive(Clone, Debug)]
+pub struct LinearFitness {
+    /// `r₀`, one value per row.
+    r0: Vec<Real>,
+    /// `J₀`, row-major (`cols` values per row).
+    j0: Vec<Real>,
+    cols: usize,
+    /// Rows per pose.
+    rows: usize,
+    /// Prior weight of each pose (1 without weights).
+    weights: Vec<Real>,
+}
+
+impl LinearFitness {
+    /// The model at the nominal robot of `problem`; needs full-pose data and a kinematic
+    /// parameter list (`error_model` otherwise).
+    pub fn new(model: ErrorModel, problem: &CalibrationProblem) -> Result<LinearFitness> {
+        if problem.params.iter().any(|p| p.is_compliance()) {
+            return Err(Error::setting(
+                "error_model",
+                "the pose-error models (Qiao 2021 §2) are kinematic: search joint \
+                 compliances without error_model",
+            ));
+        }
+        let rots = problem.rotations.as_ref().ok_or_else(|| {
+            Error::setting("error_model", "the pose-error models need full-pose data")
+        })?;
+        let frames: Vec<Frame> = problem
+            .points
+            .iter()
+            .zip(rots)
+            .map(|(p, r)| Frame { rot: *r, pos: *p })
+            .collect();
+        let (r, j) = crate::errmodel::stack(
+            model,
+            problem.nominal,
+            problem.params,
+            problem.poses(),
+            &frames,
+            problem.k,
+        )?;
+        let cols = j.ncols();
+        let mut j0 = Vec::with_capacity(j.len());
+        for row in j.row_iter() {
+            j0.extend(row.iter());
+        }
+        Ok(LinearFitness {
+            r0: r.as_slice().to_vec(),
+            j0,
+            cols,
+            rows: model.rows(),
+            weights: problem
+                .weights
+                .clone()
+                .unwrap_or_else(|| vec![1.0; frames.len()]),
+        })
+    }
+
+    /// The fitness of the errors `x`; `+∞` if `x` has the wrong length.
+    pub fn fitness(&self, x: &[Real]) -> Real {
+        if x.len() != self.cols {
+            return Real::INFINITY;
+        }
+        let mut total = 0.0;
+        for (pose, w) in self.weights.iter().enumerate() {
+            let mut term = 0.0;
+            for block in 0..self.rows / 3 {
+                let mut sq = 0.0;
+                for k in 0..3 {
+                    let row = pose * self.rows + 3 * block + k;
+                    let j = &self.j0[row * self.cols..(row + 1) * self.cols];
+                    let e = self.r0[row] - j.iter().zip(x).map(|(a, b)| a * b).sum::<Real>();
+                    sq += e * e;
+                }
+                term += sq.sqrt();
+            }
+            total += w * term;
+        }
+        total
     }
 }

@@ -68,6 +68,11 @@ pub struct Entry {
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
     /// which absorb the registration's error, are left out.
     pub param_rmse: BTreeMap<String, Real>,
+    /// Mean over trials of each identified parameter's error (identified − true; mm, rad),
+    /// base left out as for `param_rmse`: the estimator's bias. Where the truth is the same
+    /// in every trial (`errors.kind` `paper` or `values`), the mean identified error is the
+    /// injected one plus this.
+    pub param_bias: BTreeMap<String, Real>,
     /// Trace of the empirical covariance of the estimates over the mean Cramér–Rao trace
     /// σ²(JᵀWJ)⁻¹ (`null` without tracker noise or with fewer than 2 trials).
     pub crb_ratio: Option<Real>,
@@ -303,6 +308,7 @@ impl Accumulator {
         let failures = c.outs - c.ok;
         let mut eta_map = BTreeMap::new();
         let mut rmse = BTreeMap::new();
+        let mut bias = BTreeMap::new();
         let mut emp_trace = 0.0;
         for (k, name) in self.names.iter().enumerate() {
             if name.starts_with("base.") {
@@ -313,6 +319,7 @@ impl Accumulator {
                 name.clone(),
                 (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt(),
             );
+            bias.insert(name.clone(), mean(errs));
             emp_trace += std(errs).powi(2);
             let etas = &c.etas[k];
             if !etas.is_empty() {
@@ -353,6 +360,7 @@ impl Accumulator {
             validation_after_attitude_deg: deg(3),
             improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
             param_rmse: rmse,
+            param_bias: bias,
             crb_ratio,
             failures,
             terminations: c.terminations.clone(),

@@ -314,14 +314,14 @@ impl Study {
                 .compliance
                 .params(&nominal, "identification.compliance")?,
         );
-        let error_params = match (&scenario.errors.kind, &scenario.errors.params) {
+        let error_params = match (&scenario.errors.kind, scenario.errors.selection()) {
             (ErrorKind::None, _) => Vec::new(),
             (_, ParamSelection::Identifiable) => identified_params(&nominal, measure, with_base)
                 .iter()
                 .copied()
                 .filter(|p| !matches!(p, Param::Base(_)))
                 .collect(),
-            (_, sel) => selected_params(&nominal, sel, measure)?,
+            (_, sel) => selected_params(&nominal, &sel, measure, scenario.errors.key())?,
         };
         let tracker = Tracker::new(&scenario.tracker)?;
         let compliance = Compliance::new(&scenario.compliance, &nominal, scenario.builtin())?;

@@ -135,6 +135,7 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
         "sigma0": id.sigma0,
         "rms_residual_mm": id.rms_residual,
         "iterations": id.iterations,
+        "evaluations": id.evaluations,
         "termination": id.termination.as_str(),
     });
     if let Some(v) = r.validation {

@@ -4,6 +4,8 @@
 //!
 //! Every struct denies unknown keys, so a typo in a scenario is refused by name.
 
+use std::collections::BTreeMap;
+
 use serde::{Deserialize, Deserializer};
 
 use crate::error::{Error, Result};
@@ -31,13 +33,27 @@ pub enum ErrorKind {
     Uniform,
     /// No error: the true robot is the nominal one.
     None,
+    /// The errors given by name in `errors.values` (mm or rad), the same in every trial: a
+    /// paper's identified errors as the truth (Li 2018 table 2 minus table 1).
+    Values,
 }
 
 impl ErrorKind {
-    /// Whether every trial draws the same errors (`paper`, `none`): the true robot is then
-    /// the same in every trial.
+    /// Whether every trial draws the same errors (`paper`, `none`, `values`): the true robot
+    /// is then the same in every trial.
     pub fn is_fixed(self) -> bool {
-        matches!(self, ErrorKind::Paper | ErrorKind::None)
+        matches!(self, ErrorKind::Paper | ErrorKind::None | ErrorKind::Values)
+    }
+
+    /// The name used in scenario files.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ErrorKind::Paper => "paper",
+            ErrorKind::Normal => "normal",
+            ErrorKind::Uniform => "uniform",
+            ErrorKind::None => "none",
+            ErrorKind::Values => "values",
+        }
     }
 }
 
@@ -108,8 +124,12 @@ pub struct ErrorSettings {
     pub length_mm: Real,
     /// Angle error (rad), same meaning; default 0.05.
     pub angle_rad: Real,
-    /// Which parameters get an error; default `"identifiable"`.
+    /// Which parameters get an error; default `"identifiable"`. Not used with
+    /// `kind = "values"`, whose parameters are the keys of `values`.
     pub params: ParamSelection,
+    /// With `kind = "values"`: the error of each named parameter (mm for lengths, rad for
+    /// angles); refused with any other kind.
+    pub values: BTreeMap<String, Real>,
 }
 
 impl Default for ErrorSettings {
@@ -119,6 +139,7 @@ impl Default for ErrorSettings {
             length_mm: 0.5,
             angle_rad: 0.05,
             params: ParamSelection::Identifiable,
+            values: BTreeMap::new(),
         }
     }
 }
@@ -131,7 +152,38 @@ impl ErrorSettings {
     pub fn check(&self) -> Result<()> {
         non_negative("errors.length_mm", self.length_mm)?;
         non_negative("errors.angle_rad", self.angle_rad)?;
-        if let ParamSelection::List(names) = &self.params {
+        if self.kind == ErrorKind::Values {
+            if self.values.is_empty() {
+                return Err(Error::setting(
+                    "errors.values",
+                    "kind = \"values\" needs the errors by parameter name, e.g. \
+                     values = { a3 = -0.83, alpha5 = 0.0029 } (mm, rad)",
+                ));
+            }
+            if self.params != ParamSelection::Identifiable {
+                return Err(Error::setting(
+                    "errors.params",
+                    "is not used with kind = \"values\": the parameters are the keys of \
+                     errors.values",
+                ));
+            }
+            if let Some((n, v)) = self.values.iter().find(|(_, v)| !v.is_finite()) {
+                return Err(Error::setting(
+                    format!("errors.values.{n}"),
+                    format!("must be a finite number, got {v}"),
+                ));
+            }
+        } else if !self.values.is_empty() {
+            return Err(Error::setting(
+                "errors.values",
+                format!(
+                    "is read only with kind = \"values\" (kind is \"{}\")",
+                    self.kind.as_str()
+                ),
+            ));
+        }
+        let selection = self.selection();
+        if let ParamSelection::List(names) = &selection {
             if names.is_empty() {
                 return Err(Error::setting(
                     "errors.params",
@@ -141,7 +193,7 @@ impl ErrorSettings {
             listed_params(names, |n| {
                 Param::parse(n).ok_or_else(|| {
                     Error::setting(
-                        "errors.params",
+                        self.key(),
                         format!(
                             "unknown parameter \"{n}\" (names are theta1, d1, a1, alpha1, beta1, …, \
                              base.x … base.rz, tool.x … tool.rz)"
@@ -151,6 +203,25 @@ impl ErrorSettings {
             })?;
         }
         Ok(())
+    }
+
+    /// The key that names the parameters: `errors.values` or `errors.params`.
+    pub fn key(&self) -> &'static str {
+        if self.kind == ErrorKind::Values {
+            "errors.values"
+        } else {
+            "errors.params"
+        }
+    }
+
+    /// The parameters that get an error: `params`, or the keys of `values` (in name order)
+    /// with `kind = "values"`.
+    pub fn selection(&self) -> ParamSelection {
+        if self.kind == ErrorKind::Values {
+            ParamSelection::List(self.values.keys().cloned().collect())
+        } else {
+            self.params.clone()
+        }
     }
 }
 

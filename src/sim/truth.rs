@@ -31,11 +31,12 @@ pub fn identifiable_params(robot: &Robot, measure: Measure) -> Vec<Param> {
 }
 
 /// The parameters selected by `sel` for `robot`: refuses names that are not parameters of
-/// the robot's model (key `errors.params`).
+/// the robot's model (naming `key`, the scenario key that listed them).
 pub fn selected_params(
     robot: &Robot,
     sel: &ParamSelection,
     measure: Measure,
+    key: &str,
 ) -> Result<Vec<Param>> {
     match sel {
         ParamSelection::Identifiable => Ok(identifiable_params(robot, measure)),
@@ -49,7 +50,7 @@ pub fn selected_params(
             listed_params(names, |n| {
                 Param::parse(n).filter(|p| all.contains(p)).ok_or_else(|| {
                     Error::setting(
-                        "errors.params",
+                        key,
                         format!(
                             "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
                             robot.name,
@@ -75,14 +76,15 @@ pub fn true_errors(
     rng: &mut Rng,
 ) -> Result<Vec<(Param, Real)>> {
     s.check()?;
+    let selection = s.selection();
     if s.kind == ErrorKind::None {
         // Still refuse names that do not exist in this robot.
-        if let ParamSelection::List(_) = s.params {
-            selected_params(nominal, &s.params, measure)?;
+        if let ParamSelection::List(_) = selection {
+            selected_params(nominal, &selection, measure, s.key())?;
         }
         return Ok(Vec::new());
     }
-    let params = selected_params(nominal, &s.params, measure)?;
+    let params = selected_params(nominal, &selection, measure, s.key())?;
     Ok(draw_errors(&params, s, rng))
 }
 
@@ -101,6 +103,7 @@ pub fn draw_errors(params: &[Param], s: &ErrorSettings, rng: &mut Rng) -> Vec<(P
                 ErrorKind::Normal => size * rng.sample::<Real, _>(StandardNormal),
                 ErrorKind::Uniform => size * (2.0 * rng.random::<Real>() - 1.0),
                 ErrorKind::None => 0.0,
+                ErrorKind::Values => s.values.get(&p.to_string()).copied().unwrap_or(0.0),
             };
             (p, e)
         })
@@ -128,6 +131,60 @@ mod tests {
                 (Param::Tool(2), 0.5)
             ]
         );
+    }
+
+    #[test]
+    fn given_values_are_injected_exactly_and_checked() {
+        let r = crate::robots::irb2600();
+        let values: std::collections::BTreeMap<String, Real> =
+            [("a3", -0.82916), ("alpha5", 2.912955e-3), ("tool.z", 0.1)]
+                .into_iter()
+                .map(|(k, v)| (k.to_string(), v))
+                .collect();
+        let s = ErrorSettings {
+            kind: ErrorKind::Values,
+            values: values.clone(),
+            ..Default::default()
+        };
+        let mut e = true_errors(&r, &s, Measure::Position, &mut stream(1, "e")).unwrap();
+        e.sort_by_key(|(p, _)| p.to_string());
+        assert_eq!(
+            e,
+            vec![
+                (Param::A(2), -0.82916),
+                (Param::Alpha(4), 2.912955e-3),
+                (Param::Tool(2), 0.1)
+            ]
+        );
+        // Refused: values with another kind, no values, `params` beside them, a name the
+        // robot lacks, a non-finite value.
+        let key =
+            |s: &ErrorSettings| match true_errors(&r, s, Measure::Position, &mut stream(1, "e")) {
+                Err(Error::Setting { key, .. }) => key,
+                other => panic!("{other:?}"),
+            };
+        let normal = ErrorSettings {
+            kind: ErrorKind::Normal,
+            values: values.clone(),
+            ..Default::default()
+        };
+        assert_eq!(key(&normal), "errors.values");
+        let empty = ErrorSettings {
+            kind: ErrorKind::Values,
+            ..Default::default()
+        };
+        assert_eq!(key(&empty), "errors.values");
+        let both = ErrorSettings {
+            params: ParamSelection::All,
+            ..s.clone()
+        };
+        assert_eq!(key(&both), "errors.params");
+        let mut foreign = s.clone();
+        foreign.values.insert("beta2".into(), 0.01);
+        assert_eq!(key(&foreign), "errors.values");
+        let mut nan = s.clone();
+        nan.values.insert("d4".into(), Real::NAN);
+        assert_eq!(key(&nan), "errors.values.d4");
     }
 
     #[test]
@@ -179,6 +236,7 @@ mod tests {
                 length_mm: 0.1,
                 angle_rad: 0.001,
                 params: ParamSelection::All,
+                ..Default::default()
             };
             for (p, e) in true_errors(&r, &s, Measure::Pose, &mut rng).unwrap() {
                 if p.is_length() {
