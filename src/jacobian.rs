@@ -157,25 +157,13 @@ fn record_rows(
     walk: impl FnOnce(&mut Rows<'_>) -> crate::math::Frame,
 ) -> crate::math::Frame {
     let mut rotations = [const { MaybeUninit::<(Vec3, Vec3, usize)>::uninit() }; MAX_OPS];
-    record_rows_in(&mut rotations, cols, measure, out, row0, walk)
-}
-
-#[inline(always)]
-fn record_rows_in(
-    rotations: &mut [MaybeUninit<(Vec3, Vec3, usize)>],
-    cols: &Columns,
-    measure: Measure,
-    out: &mut DMatrix<Real>,
-    row0: usize,
-    walk: impl FnOnce(&mut Rows<'_>) -> crate::math::Frame,
-) -> crate::math::Frame {
     let mut rec = Rows {
         stride: out.nrows(),
         cols,
         pose: measure == Measure::Pose,
         out,
         row0,
-        rotations,
+        rotations: &mut rotations,
         n: 0,
     };
     let end = walk(&mut rec);

@@ -134,17 +134,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
             break;
         }
     }
-    finish(
-        p,
-        &mut work,
-        x,
-        w,
-        iterations,
-        termination,
-        None,
-        None,
-        false,
-    )
+    finish_lm(p, &mut work, x, w, iterations, termination, false)
 }
 
 fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {
@@ -203,15 +193,18 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
             }
         }
     }
-    finish(
-        p,
-        &mut work,
-        x,
-        w,
-        iterations,
-        termination,
-        None,
-        None,
-        fresh,
-    )
+    finish_lm(p, &mut work, x, w, iterations, termination, fresh)
+}
+
+/// [`finish`] without a ridge parameter or a robust σ0 (LM reports neither).
+fn finish_lm(
+    p: &dyn LeastSquares,
+    work: &mut Work,
+    x: DVector<Real>,
+    w: Vec<Real>,
+    iterations: usize,
+    termination: Termination,
+    fresh: bool,
+) -> Identified {
+    finish(p, work, x, w, iterations, termination, None, None, fresh)
 }

@@ -11,7 +11,6 @@ use serde::Deserialize;
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::errmodel::ErrorModel;
 use crate::error::{finite_positive, Error, Result};
-use crate::math::Frame;
 use crate::math::Real;
 use crate::metaheur::{
     bas, bas_pso, pso, BasOptions, BasPsoOptions, Bounds, Fitness, MetaProblem, MetaResult,
@@ -203,15 +202,7 @@ impl LinearFitness {
                  compliances without error_model",
             ));
         }
-        let rots = problem.rotations.as_ref().ok_or_else(|| {
-            Error::setting("error_model", "the pose-error models need full-pose data")
-        })?;
-        let frames: Vec<Frame> = problem
-            .points
-            .iter()
-            .zip(rots)
-            .map(|(p, r)| Frame { rot: *r, pos: *p })
-            .collect();
+        let frames = problem.measured_frames("error_model")?;
         let (r, j) = crate::errmodel::stack(
             model,
             problem.nominal,

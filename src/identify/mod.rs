@@ -43,7 +43,7 @@ pub mod xi;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::jacobian::Measure;
 use crate::kinematics::{Param, Robot};
 use crate::math::{Frame, Mat3, Real, Vec3};
@@ -267,6 +267,21 @@ impl<'a> CalibrationProblem<'a> {
             rotations,
             weights: data.weights(),
         }
+    }
+
+    /// The measured tool frames (in the problem's frame) of full-pose data, for the
+    /// pose-error models (Qiao 2021 §2); `key` names the setting that needs them.
+    pub fn measured_frames(&self, key: &str) -> Result<Vec<Frame>> {
+        let rots = self
+            .rotations
+            .as_ref()
+            .ok_or_else(|| Error::setting(key, "the pose-error models need full-pose data"))?;
+        Ok(self
+            .points
+            .iter()
+            .zip(rots)
+            .map(|(p, r)| Frame { rot: *r, pos: *p })
+            .collect())
     }
 
     /// The joint values of the measured poses.

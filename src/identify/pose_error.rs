@@ -7,7 +7,6 @@ use serde::Deserialize;
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::errmodel::ErrorModel;
 use crate::error::{check_count, Error, Result};
-use crate::math::Frame;
 use crate::rng::Rng;
 
 /// Options of `ls` with `error_model` (FORMATS.md `[[methods]]`).
@@ -44,16 +43,7 @@ impl Method for PoseErrorLs {
                  compliances with ls, ridge, igg3, lm or a search",
             ));
         }
-        let rots = problem
-            .rotations
-            .as_ref()
-            .ok_or_else(|| Error::Compute("the pose-error models need full-pose data".into()))?;
-        let frames: Vec<Frame> = problem
-            .points
-            .iter()
-            .zip(rots)
-            .map(|(p, r)| Frame { rot: *r, pos: *p })
-            .collect();
+        let frames = problem.measured_frames("error_model")?;
         let fit = crate::errmodel::identify(
             self.error_model,
             problem.nominal,

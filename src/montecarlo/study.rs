@@ -38,6 +38,20 @@ pub struct FixedSet {
     pub sag: Option<Arc<SagMemo>>,
 }
 
+impl FixedSet {
+    /// A set that is not optimised (grid, file): no trace, no scores; the Cramér–Rao trace
+    /// and the sag are filled in by [`Study::new`].
+    pub fn plain(poses: Vec<Vec<Real>>) -> FixedSet {
+        FixedSet {
+            poses,
+            trace: Vec::new(),
+            scores: None,
+            crb_trace: None,
+            sag: None,
+        }
+    }
+}
+
 /// Deflected tool frames of the true arm, computed once: with a fixed pose set, a true robot
 /// that is the same in every trial (errors `paper` or `none`) and a sag model, every trial
 /// would otherwise run the same rapier settles again (a third of the default study's time).
@@ -334,13 +348,7 @@ impl Study {
                 PoseStrategy::Random | PoseStrategy::Box => None,
                 PoseStrategy::File(path) => {
                     let poses = read_pose_list(path, &nominal)?;
-                    Some(FixedSet {
-                        poses,
-                        trace: Vec::new(),
-                        scores: None,
-                        crb_trace: None,
-                        sag: None,
-                    })
+                    Some(FixedSet::plain(poses))
                 }
                 PoseStrategy::Grid => {
                     let dof = nominal.dof() as f64;
@@ -349,13 +357,7 @@ impl Study {
                     let mut poses =
                         sample_region(&nominal, &Region::Grid { per_joint }, c.count, &mut g)?;
                     poses.truncate(c.count);
-                    Some(FixedSet {
-                        poses,
-                        trace: Vec::new(),
-                        scores: None,
-                        crb_trace: None,
-                        sag: None,
-                    })
+                    Some(FixedSet::plain(poses))
                 }
                 PoseStrategy::Optimised(strategy) | PoseStrategy::OptimisedFull(strategy) => {
                     let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));

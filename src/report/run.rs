@@ -69,6 +69,20 @@ fn eta_by_parameter(b: &Block) -> (Vec<String>, Vec<(String, Vec<Real>)>) {
     (params, series)
 }
 
+/// The relative distance from the final objective within which a pose optimisation counts
+/// as settled (`settled_iteration` in `summary.json`).
+pub const SETTLED: Real = 1e-3;
+
+/// The first iteration (1-based) from which the objective `trace` stays within `rel` of
+/// its final value (relative to it): the iteration count at which an objective curve such
+/// as Guo 2024 fig. 6 flattens. `None` for an empty trace.
+pub fn settled_iteration(trace: &[Real], rel: Real) -> Option<usize> {
+    let last = *trace.last()?;
+    let tol = rel * last.abs();
+    let outside = trace.iter().rposition(|v| (v - last).abs() > tol);
+    Some(outside.map_or(1, |i| i + 2))
+}
+
 /// `summary.json` as a JSON value.
 pub fn summary(r: &RunResult) -> Value {
     let sc = &r.scenario;
@@ -79,7 +93,9 @@ pub fn summary(r: &RunResult) -> Value {
             optimised.insert(
                 s.clone(),
                 json!({"poses": set.poses, "iterations": set.trace.len(),
-                       "final_objective": set.trace.last(), "scores": set.scores}),
+                       "final_objective": set.trace.last(), "scores": set.scores,
+                       "trace": set.trace,
+                       "settled_iteration": settled_iteration(&set.trace, SETTLED)}),
             );
         }
     }
@@ -738,4 +754,21 @@ pub fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
     let plots = write_plots(r, dir)?;
     write(&dir.join("report.md"), &report_md(r, &plots))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::settled_iteration;
+
+    #[test]
+    fn settled_iteration_is_where_the_curve_stays_near_its_end() {
+        assert_eq!(settled_iteration(&[], 1e-3), None);
+        assert_eq!(settled_iteration(&[2.0], 1e-3), Some(1));
+        // Within 0.1 % of 2.0 from the fourth value on (1.9985 is 0.075 % away).
+        let t = [1.0, 1.5, 1.99, 1.9985, 1.9995, 2.0];
+        assert_eq!(settled_iteration(&t, 1e-3), Some(4));
+        // A dip after settling counts as not settled yet.
+        let t = [1.0, 2.0, 1.0, 2.0];
+        assert_eq!(settled_iteration(&t, 1e-3), Some(4));
+    }
 }
