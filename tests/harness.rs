@@ -76,6 +76,8 @@ fn tiny_study_writes_every_file_with_finite_values() {
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // Position data: no attitude plot.
+    assert!(!out.join("validation_trial0_attitude.png").exists());
     let s = read_json(&out.join("summary.json")).unwrap();
     for k in ["scenario", "trials", "seed", "results"] {
         assert!(s.get(k).is_some(), "summary lacks {k}");
@@ -92,6 +94,7 @@ fn tiny_study_writes_every_file_with_finite_values() {
             "validation_before_mm",
             "validation_after_mm",
             "param_rmse",
+            "param_bias",
             "crb_ratio",
             "failures",
             "seconds_per_identification",
@@ -392,4 +395,25 @@ fn the_memoised_sag_of_a_fixed_pose_set_is_the_one_each_trial_computes() {
         f.sag = None;
     }
     assert_eq!(with, outcomes(&study));
+}
+
+/// Full-pose data add the per-point attitude plot (Qiao 2021 fig. 6) beside the position one.
+#[test]
+fn full_pose_study_plots_the_attitude_error_per_point() {
+    let text = TINY
+        .replace("[tracker]", "[tracker]\nmeasure = \"pose\"")
+        .replace(
+            "strategies = [\"random\", \"detmax\"]",
+            "strategies = [\"random\"]",
+        );
+    let out = tmp("attitude");
+    run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
+    for f in [
+        "validation_trial0_attitude.png",
+        "validation_trial0_attitude.svg",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(report.contains("validation_trial0_attitude.png"));
 }

@@ -171,6 +171,10 @@ pub struct Trial0 {
     /// The first outcome's validation errors per point, before and after, with its
     /// (strategy, method).
     pub per_point: Option<(usize, usize, Vec<Real>, Vec<Real>)>,
+    /// The same outcome's attitude errors per point (Qiao's, deg), before and after, for
+    /// full-pose data.
+    #[serde(default)]
+    pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
     /// The metaheuristics' best fitness per iteration: (strategy, method, trace).
     pub traces: Vec<(usize, usize, Vec<Real>)>,
 }
@@ -183,6 +187,10 @@ impl Trial0 {
                     .as_ref()
                     .map(|(b, a)| (o.strategy, o.method, b.clone(), a.clone()))
             }),
+            per_point_attitude_deg: t
+                .outcomes
+                .first()
+                .and_then(|o| o.per_point_attitude_deg.clone()),
             traces: t
                 .outcomes
                 .iter()

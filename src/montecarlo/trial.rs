@@ -48,6 +48,9 @@ pub struct Outcome {
     pub after_attitude_deg: Option<ErrorStats>,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
+    /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
+    /// only; Qiao 2021 fig. 6).
+    pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
     /// A metaheuristic's best fitness per iteration (trial 0 only).
     pub trace: Option<Vec<Real>>,
     /// Iterations of the identification.
@@ -306,6 +309,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 after_attitude_deg: full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
                 trace,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
+                per_point_attitude_deg: (index == 0 && full_pose)
+                    .then(|| (before.attitude_deg.clone(), after.attitude_deg.clone())),
                 iterations,
                 evaluations,
                 termination,

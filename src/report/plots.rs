@@ -439,6 +439,9 @@ pub fn grouped_bars(
 
 struct BeforeAfter<'d> {
     title: &'d str,
+    /// The quantity and its unit, e.g. `error (mm)`; the unit (in brackets) is repeated in
+    /// the legend's RMS.
+    y_label: &'d str,
     before: &'d [Real],
     after: &'d [Real],
 }
@@ -455,10 +458,14 @@ fn rms(v: &[Real]) -> Real {
 impl Figure for BeforeAfter<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         let n = self.before.len().max(self.after.len()).max(1);
+        let unit = self
+            .y_label
+            .rsplit_once('(')
+            .map_or("", |(_, u)| u.trim_end_matches(')'));
         let y = with_headroom(span(finite(self.before).chain(finite(self.after)), true), 2);
         let mut chart =
             chart_builder(root, self.title, 50).build_cartesian_2d(0.5..n as Real + 0.5, y)?;
-        styled_mesh(&mut chart, &int_fmt, "error (mm)")
+        styled_mesh(&mut chart, &int_fmt, self.y_label)
             .x_desc("validation point")
             .draw()?;
         for (s, (name, v)) in [("before", self.before), ("after", self.after)]
@@ -478,7 +485,7 @@ impl Figure for BeforeAfter<'_> {
             ))?;
             chart
                 .draw_series(pts.iter().map(|&p| Circle::new(p, 3, c.filled())))?
-                .label(format!("{name} (rms {} mm)", fmt_num(rms(v), 3)))
+                .label(format!("{name} (rms {} {unit})", fmt_num(rms(v), 3)))
                 .legend(move |(x, y)| Circle::new((x + 7, y), 4, c.filled()));
         }
         legend(&mut chart, true)
@@ -489,10 +496,23 @@ impl Figure for BeforeAfter<'_> {
 /// fig. 7): one line with markers per series, the legend giving each series' RMS. Point `i`
 /// (0-based) is drawn at x = i + 1. Writes `<stem>.png` and `<stem>.svg`.
 pub fn before_after(stem: &Path, title: &str, before: &[Real], after: &[Real]) -> Result<()> {
+    before_after_in(stem, title, "error (mm)", before, after)
+}
+
+/// [`before_after`] for another quantity, named with its unit by `y_label` (e.g. `attitude
+/// error (deg)`, Qiao 2021 fig. 6).
+pub fn before_after_in(
+    stem: &Path,
+    title: &str,
+    y_label: &str,
+    before: &[Real],
+    after: &[Real],
+) -> Result<()> {
     render(
         stem,
         &BeforeAfter {
             title,
+            y_label,
             before,
             after,
         },

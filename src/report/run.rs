@@ -668,6 +668,24 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
             "validation_trial0.png".into(),
             "validation error per point before and after compensation, trial 0".into(),
         ));
+        // Full-pose data: the attitude errors of the same points (Qiao 2021 fig. 6).
+        if let Some((b, a)) = b0
+            .trial0
+            .as_ref()
+            .and_then(|t| t.per_point_attitude_deg.as_ref())
+        {
+            plots::before_after_in(
+                &out.join("validation_trial0_attitude"),
+                &format!("{title}: attitude"),
+                "attitude error (deg)",
+                b,
+                a,
+            )?;
+            done.push((
+                "validation_trial0_attitude.png".into(),
+                "validation attitude error per point before and after compensation, trial 0".into(),
+            ));
+        }
     }
     // Validation RMS over trials per method × strategy.
     let groups: Vec<(String, Vec<Real>)> = b0
