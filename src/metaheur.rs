@@ -954,12 +954,14 @@ struct PoseVars {
 #[derive(Clone, Debug)]
 pub struct MetaProblem<'a> {
     nominal: &'a Robot,
+    /// The nominal robot's compiled chain, whose operations the fitness walks.
+    chain: Chain,
     params: Vec<Param>,
     qs: Vec<Vec<Real>>,
     points: Vec<Vec3>,
     rotations: Option<Vec<Mat3>>,
+    /// The weight of eq. 14 (mm per unit of orientation error).
     k: Real,
-    chain: Chain,
     flat: Vec<usize>,
     vars: Vec<PoseVars>,
     /// `√w_j` of each pose's prior weight, if any.
