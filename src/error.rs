@@ -29,13 +29,15 @@ pub enum Error {
     /// A computation could not be carried out (e.g. too few reachable poses in a box).
     #[error("{0}")]
     Compute(String),
-    /// Reading or writing a file failed.
-    #[error("{}: {source}", path.display())]
+    /// Reading or writing a file failed. The message carries the operating system's; it
+    /// is not also given as a `source`, so that a report of the error chain (`{:#}`) says it
+    /// once.
+    #[error("{}: {cause}", path.display())]
     Io {
         /// The file or folder.
         path: PathBuf,
         /// The underlying error.
-        source: std::io::Error,
+        cause: std::io::Error,
     },
 }
 
@@ -77,7 +79,7 @@ impl Error {
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
             path: path.into(),
-            source,
+            cause: source,
         }
     }
 }

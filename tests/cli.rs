@@ -346,3 +346,20 @@ fn identify_seed_repeats_a_random_search_on_one_data_set() {
         );
     }
 }
+
+/// A missing file is named once with the system's reason, not with the reason twice.
+#[test]
+fn a_missing_file_is_reported_once() {
+    let missing = tmp("missing").join("nope.csv");
+    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(["identify", "--robot", "irb2600", "--data"])
+        .arg(&missing)
+        .args(["--method", "ls", "--out"])
+        .arg(tmp("missing-out"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("nope.csv"), "{err}");
+    assert_eq!(err.matches("(os error").count(), 1, "{err}");
+}
