@@ -95,13 +95,7 @@ pub fn parse_q(text: &str, dof: usize) -> Result<Vec<Real>> {
         |s| format!("\"{}\" is not a finite number", s.trim()),
     )?;
     if q.len() != dof {
-        return Err(Error::setting(
-            "--q",
-            format!(
-                "the robot has {dof} joints but {} values were given",
-                q.len()
-            ),
-        ));
+        return Err(Error::joint_count("--q", "the values given", q.len(), dof));
     }
     Ok(q)
 }
@@ -834,15 +828,10 @@ pub fn compensate(
     }
     let nominal = robots::load(robot)?;
     let ident = robots::load(identified)?;
-    if ident.dof() != nominal.dof() {
-        return Err(Error::setting(
-            "--identified",
-            format!(
-                "{identified} has {} joints, the nominal robot {}",
-                ident.dof(),
-                nominal.dof()
-            ),
-        ));
+    let (n, m) = (ident.dof(), nominal.dof());
+    if n != m {
+        let msg = format!("{identified} has {n} joints, the nominal robot {m}");
+        return Err(Error::setting("--identified", msg));
     }
     let program = calbench::sim::poses::read_pose_list(joints, &nominal)?;
     let cell = |v: Real| calbench::sim::csv::fixed(v, 9);

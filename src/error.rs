@@ -75,6 +75,15 @@ impl Error {
         }
     }
 
+    /// `got` joint values where the robot has `dof` joints: the setting `key` refused, with
+    /// `what` naming the offending values (`pose 3`, `--q`).
+    pub fn joint_count(key: &str, what: impl std::fmt::Display, got: usize, dof: usize) -> Self {
+        Error::setting(
+            key,
+            format!("{what}: {got} joint values for a {dof}-joint robot"),
+        )
+    }
+
     /// An I/O error on a path.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {

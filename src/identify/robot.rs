@@ -110,12 +110,11 @@ impl<'a> RobotProblem<'a> {
         let dof = nominal.dof();
         for (i, q) in qs.iter().enumerate() {
             if q.len() != dof {
-                return Err(Error::setting(
+                return Err(Error::joint_count(
                     "data",
-                    format!(
-                        "point {i}: {} joint values for a {dof}-joint robot",
-                        q.len()
-                    ),
+                    format_args!("point {i}"),
+                    q.len(),
+                    dof,
                 ));
             }
             if q.iter().any(|v| !v.is_finite()) || points[i].iter().any(|v| !v.is_finite()) {

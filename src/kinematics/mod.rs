@@ -568,13 +568,11 @@ impl Robot {
     /// the result is finite. `key` names the values in the error (e.g. `--q`).
     pub fn q_from_user_checked(&self, q: &[Real], key: &str) -> Result<Vec<Real>> {
         if q.len() != self.dof() {
-            return Err(Error::setting(
+            return Err(Error::joint_count(
                 key,
-                format!(
-                    "the robot has {} joints but {} values were given",
-                    self.dof(),
-                    q.len()
-                ),
+                "the values given",
+                q.len(),
+                self.dof(),
             ));
         }
         q.iter()

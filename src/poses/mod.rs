@@ -291,14 +291,8 @@ fn check_candidates(model: &dyn PoseModel, candidates: &[Vec<Real>]) -> crate::R
     let lim = model.limits();
     for (i, q) in candidates.iter().enumerate() {
         if q.len() != model.dof() {
-            return Err(Error::setting(
-                "candidates",
-                format!(
-                    "pose {i} has {} joint values, the robot has {}",
-                    q.len(),
-                    model.dof()
-                ),
-            ));
+            let what = format_args!("pose {i}");
+            return Err(Error::joint_count("candidates", what, q.len(), model.dof()));
         }
         for (j, (&v, &(lo, hi))) in q.iter().zip(lim).enumerate() {
             if !v.is_finite() || v < lo - 1e-9 || v > hi + 1e-9 {

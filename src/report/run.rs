@@ -642,6 +642,30 @@ fn file_safe(s: &str) -> String {
         .collect()
 }
 
+/// Records the PNG `<stem>.png` with its caption.
+fn caption(done: &mut Vec<(String, String)>, stem: &str, text: &str) {
+    done.push((format!("{stem}.png"), text.to_string()));
+}
+
+/// Plots `traces` against the iteration as `<stem>.png` / `.svg` (`names` = stem, title,
+/// y label; log scale with `log_y`) and records it with `text`; nothing without traces.
+fn trace_plot(
+    out: &Path,
+    done: &mut Vec<(String, String)>,
+    names: (&str, &str, &str),
+    traces: &[(String, Vec<Real>)],
+    log_y: bool,
+    text: &str,
+) -> Result<()> {
+    if traces.is_empty() {
+        return Ok(());
+    }
+    let (stem, title, y_label) = names;
+    plots::traces(&out.join(stem), title, "iteration", y_label, traces, log_y)?;
+    caption(done, stem, text);
+    Ok(())
+}
+
 /// Renders the plots; returns (file name, caption) of each PNG.
 pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     let mut done = Vec::new();
@@ -656,7 +680,7 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         &params,
         &series,
     )?;
-    done.push(("eta.png".into(), "η per parameter and method".into()));
+    caption(&mut done, "eta", "η per parameter and method");
     // Validation error per point, trial 0, the first method and strategy (Li 2018 fig. 3).
     if let Some((si, mi, before, after)) = b0.trial0.as_ref().and_then(|t| t.per_point.as_ref()) {
         let title = format!(
@@ -664,10 +688,11 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
             info.methods[*mi], info.strategies[*si]
         );
         plots::before_after(&out.join("validation_trial0"), &title, before, after)?;
-        done.push((
-            "validation_trial0.png".into(),
-            "validation error per point before and after compensation, trial 0".into(),
-        ));
+        caption(
+            &mut done,
+            "validation_trial0",
+            "validation error per point before and after compensation, trial 0",
+        );
         // Full-pose data: the attitude errors of the same points (Qiao 2021 fig. 6).
         if let Some((b, a)) = b0
             .trial0
@@ -681,10 +706,11 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
                 b,
                 a,
             )?;
-            done.push((
-                "validation_trial0_attitude.png".into(),
-                "validation attitude error per point before and after compensation, trial 0".into(),
-            ));
+            caption(
+                &mut done,
+                "validation_trial0_attitude",
+                "validation attitude error per point before and after compensation, trial 0",
+            );
         }
     }
     // Validation RMS over trials per method × strategy.
@@ -700,10 +726,7 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         "RMS (mm)",
         &groups,
     )?;
-    done.push((
-        "validation_rms.png".into(),
-        "validation RMS over trials".into(),
-    ));
+    caption(&mut done, "validation_rms", "validation RMS over trials");
     // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
     let traces: Vec<(String, Vec<Real>)> = info
         .strategies
@@ -715,35 +738,31 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
                 .map(|f| (s.clone(), f.trace.clone()))
         })
         .collect();
-    if !traces.is_empty() {
-        plots::traces(
-            &out.join("objective_trace"),
-            "Pose-set objective per iteration",
-            "iteration",
-            "objective",
+    // … and the metaheuristics' convergence (Qiao 2021 fig. 4).
+    let fit = fitness_traces(b0);
+    for (names, series, log_y, text) in [
+        (
+            (
+                "objective_trace",
+                "Pose-set objective per iteration",
+                "objective",
+            ),
             &traces,
             false,
-        )?;
-        done.push((
-            "objective_trace.png".into(),
-            "pose optimisation objective per iteration".into(),
-        ));
-    }
-    // Metaheuristics' convergence (Qiao 2021 fig. 4).
-    let fit = fitness_traces(b0);
-    if !fit.is_empty() {
-        plots::traces(
-            &out.join("fitness_trace"),
-            "Best fitness per iteration, trial 0",
-            "iteration",
-            "fitness (eq. 14)",
+            "pose optimisation objective per iteration",
+        ),
+        (
+            (
+                "fitness_trace",
+                "Best fitness per iteration, trial 0",
+                "fitness (eq. 14)",
+            ),
             &fit,
             true,
-        )?;
-        done.push((
-            "fitness_trace.png".into(),
-            "metaheuristic convergence, trial 0".into(),
-        ));
+            "metaheuristic convergence, trial 0",
+        ),
+    ] {
+        trace_plot(out, &mut done, names, series, log_y, text)?;
     }
     if let Some(sw) = &r.scenario.sweep {
         done.extend(write_sweep_plots(r, sw, out)?);
