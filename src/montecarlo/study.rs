@@ -15,7 +15,7 @@ use crate::scenario::{PoseStrategy, Registration, Scenario};
 use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
-use crate::sim::truth::selected_params;
+use crate::sim::truth::{draw_errors, selected_params};
 use crate::sim::SagFn;
 use nalgebra::DMatrix;
 use rayon::prelude::*;
@@ -418,18 +418,15 @@ impl Study {
                 f.crb_trace = t;
             }
         }
-        if let (true, Some(sag)) = (
-            study.scenario.errors.kind.is_fixed(),
-            super::trial::sag_fn(&study),
-        ) {
-            let (_, truth) = super::trial::true_robot(&study, 0);
+        if let (true, Some(sag)) = (study.scenario.errors.kind.is_fixed(), sag_fn(&study)) {
+            let (_, truth) = true_robot(&study, 0);
             let memos: Vec<Option<Arc<SagMemo>>> = study
                 .fixed
                 .iter()
                 .map(|f| {
                     f.as_ref()
                         .map(|f| {
-                            let rows = super::trial::calibration_rows(&study.scenario, &f.poses);
+                            let rows = calibration_rows(&study.scenario, &f.poses);
                             SagMemo::new(&truth, &rows, &*sag).map(Arc::new)
                         })
                         .transpose()
@@ -478,4 +475,38 @@ pub fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
     n.try_inverse()
         .map(|inv| inv.trace())
         .filter(|t| t.is_finite())
+}
+
+/// The injected errors and the true robot of trial `index`.
+pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
+    let seed = rng::trial_seed(study.scenario.seed, index as u64);
+    let errors = draw_errors(
+        &study.error_params,
+        &study.scenario.errors,
+        &mut rng::stream(seed, "errors"),
+    );
+    let robot = study.nominal.with_errors(&errors);
+    (errors, robot)
+}
+
+/// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.
+pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
+    study.compliance.clone().map(|c| {
+        Box::new(move |r: &Robot, q: &[Real], payload: Option<Real>| {
+            c.deflected_under(r, &r.chain(), q, payload.unwrap_or(c.payload_kg()))
+        }) as Box<SagFn>
+    })
+}
+
+/// The rows [`super::trial::measure_calibration`] measures for the poses `qs`: each pose with the payload
+/// its row passes to the sag model (`None` without `calibration.payloads_kg`), in the same
+/// order.
+pub fn calibration_rows(sc: &Scenario, qs: &[Vec<Real>]) -> Vec<(Vec<Real>, Option<Real>)> {
+    match &sc.calibration.payloads_kg {
+        None => qs.iter().map(|q| (q.clone(), None)).collect(),
+        Some(p) => p
+            .iter()
+            .flat_map(|&w| qs.iter().map(move |q| (q.clone(), Some(w))))
+            .collect(),
+    }
 }

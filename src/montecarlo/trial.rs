@@ -7,17 +7,16 @@
 
 use std::time::Instant;
 
+pub use super::study::{calibration_rows, sag_fn, true_robot};
 use super::study::{crb_trace, Study};
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
 use crate::identify::Termination;
 use crate::jacobian::Measure;
-use crate::kinematics::{Param, Robot};
+use crate::kinematics::Robot;
 use crate::math::{Frame, Real};
 use crate::rng;
-use crate::scenario::Scenario;
 use crate::sim::poses::{sample_region, sample_region_keyed};
-use crate::sim::truth::draw_errors;
 use crate::sim::{measure_poses, SagFn, Simulated};
 
 /// What one method on one strategy's measurement gave in one trial.
@@ -81,18 +80,6 @@ pub struct TrialResult {
     pub outcomes: Vec<Outcome>,
 }
 
-/// The injected errors and the true robot of trial `index`.
-pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
-    let seed = rng::trial_seed(study.scenario.seed, index as u64);
-    let errors = draw_errors(
-        &study.error_params,
-        &study.scenario.errors,
-        &mut rng::stream(seed, "errors"),
-    );
-    let robot = study.nominal.with_errors(&errors);
-    (errors, robot)
-}
-
 /// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
 /// fresh draw from the trial's seed.
 pub fn calibration_poses(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<Real>>> {
@@ -125,15 +112,6 @@ pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
     )
 }
 
-/// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.
-pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
-    study.compliance.clone().map(|c| {
-        Box::new(move |r: &Robot, q: &[Real], payload: Option<Real>| {
-            c.deflected_under(r, &r.chain(), q, payload.unwrap_or(c.payload_kg()))
-        }) as Box<SagFn>
-    })
-}
-
 /// Measures the calibration poses `qs` on the true robot (the tracker, the study's outliers
 /// and sag): once each, or, with `calibration.payloads_kg`, once per payload, every pose under
 /// the first payload, then every pose under the next, and so on (the measurement then
@@ -157,19 +135,6 @@ pub fn measure_calibration(
     };
     let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
     measure_poses(truth_robot, qs, &study.tracker, outliers, sag, loads, rng)
-}
-
-/// The rows [`measure_calibration`] measures for the poses `qs`: each pose with the payload
-/// its row passes to the sag model (`None` without `calibration.payloads_kg`), in the same
-/// order.
-pub fn calibration_rows(sc: &Scenario, qs: &[Vec<Real>]) -> Vec<(Vec<Real>, Option<Real>)> {
-    match &sc.calibration.payloads_kg {
-        None => qs.iter().map(|q| (q.clone(), None)).collect(),
-        Some(p) => p
-            .iter()
-            .flat_map(|&w| qs.iter().map(move |q| (q.clone(), Some(w))))
-            .collect(),
-    }
 }
 
 /// Runs trial `index` of `study`.
