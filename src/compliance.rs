@@ -678,7 +678,7 @@ pub(crate) fn gravity_torques_vars(
         robot,
         mass,
         payload_kg,
-        &masses_with(chain, |visit| chain.walk_vars(&vars.0, &vars.1, visit)),
+        &masses_with(chain, |visit| chain.walk_vars(vars, visit)),
         out,
     );
 }
@@ -737,7 +737,7 @@ pub fn loaded_fk(robot: &Robot, chain: &Chain, q: &[Real], payload_kg: Real) -> 
     }
     let mut vars = chain.variables(q);
     deflect_vars(&mut vars, &tau[..n]);
-    Ok(chain.walk_vars(&vars.0, &vars.1, |_, _, _| {}))
+    Ok(chain.walk_vars(&vars, |_, _, _| {}))
 }
 
 /// Sag statistics of one arm over random poses: the tool-point displacement (mm) between the

@@ -15,7 +15,7 @@ use std::mem::MaybeUninit;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::kinematics::{Chain, ChainVars, Op, Param, Robot};
+use crate::kinematics::{Chain, ChainVars, Lanes, Op, Param, Robot};
 use crate::math::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
 
 /// What is measured per pose.
@@ -125,8 +125,9 @@ pub fn pose_rows(
     row0: usize,
 ) -> crate::math::Frame {
     record_rows(cols, measure, out, row0, |rec| {
-        chain.walk(q, |op, r, p| rec.visit(op, r, p))
+        chain.walk_at(q, |op, f| rec.visit(op, f))
     })
+    .frame(0)
 }
 
 /// [`pose_rows`] from the precomputed chain variables of a pose ([`Chain::variables`]), for
@@ -139,35 +140,100 @@ pub fn pose_rows_vars(
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> crate::math::Frame {
-    record_rows(cols, measure, out, row0, |rec| {
-        chain.walk_vars(&vars.0, &vars.1, |op, r, p| rec.visit(op, r, p))
-    })
+    pose_rows_lanes(chain, cols, [vars], measure, out, row0).frame(0)
 }
 
-/// Writes one pose's rows while `walk` walks the chain with the writer it is given, and
-/// returns the tool frame the walk ends at (shared by [`pose_rows`] and [`pose_rows_vars`]).
+/// [`pose_rows_vars`] of [`LANES`] consecutive poses at once, each pose's rows below the
+/// previous one's from row `row0`, returning their tool frames ([`Lanes`]): the same bits as
+/// one pose at a time, in about a third of the time (four-wide vectors where the processor
+/// has AVX2). Allocation-free.
+pub fn pose_rows4(
+    chain: &Chain,
+    cols: &Columns,
+    vars: [&ChainVars; LANES],
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+) -> Lanes<LANES> {
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2, checked just above.
+        return unsafe { pose_rows4_avx2(chain, cols, vars, measure, out, row0) };
+    }
+    pose_rows_lanes(chain, cols, vars, measure, out, row0)
+}
+
+/// Poses per call of [`pose_rows4`].
+pub const LANES: usize = 4;
+
+/// [`pose_rows_lanes`] of four poses compiled for AVX2 (no fused multiply-add: the same
+/// operations, so the same bits as without).
+///
+/// # Safety
+/// The CPU must support AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn pose_rows4_avx2(
+    chain: &Chain,
+    cols: &Columns,
+    vars: [&ChainVars; LANES],
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+) -> Lanes<LANES> {
+    pose_rows_lanes(chain, cols, vars, measure, out, row0)
+}
+
+/// The rows of `L` consecutive poses walked together ([`Chain::walk_lanes`]).
+#[inline(always)]
+fn pose_rows_lanes<const L: usize>(
+    chain: &Chain,
+    cols: &Columns,
+    vars: [&ChainVars; L],
+    measure: Measure,
+    out: &mut DMatrix<Real>,
+    row0: usize,
+) -> Lanes<L> {
+    record_rows(
+        cols,
+        measure,
+        out,
+        row0,
+        #[inline(always)]
+        |rec| {
+            chain.walk_lanes(
+                vars,
+                #[inline(always)]
+                |op, f| rec.visit(op, f),
+            )
+        },
+    )
+}
+
+/// Writes the rows of `L` poses while `walk` walks the chain with the writer it is given, and
+/// returns the tool frames the walk ends at (shared by [`pose_rows`] and [`pose_rows_vars`]).
 /// The rotation columns are recorded in an uninitialised array (zeroing [`MAX_OPS`] entries
 /// per pose cost a fifth of the evaluation).
 #[inline(always)]
-fn record_rows(
+fn record_rows<const L: usize>(
     cols: &Columns,
     measure: Measure,
     out: &mut DMatrix<Real>,
     row0: usize,
-    walk: impl FnOnce(&mut Rows<'_>) -> crate::math::Frame,
-) -> crate::math::Frame {
-    let mut rotations = [const { MaybeUninit::<(Vec3, Vec3, usize)>::uninit() }; MAX_OPS];
+    walk: impl FnOnce(&mut Rows<'_, L>) -> Lanes<L>,
+) -> Lanes<L> {
+    let mut rotations = [const { MaybeUninit::<Recorded<L>>::uninit() }; MAX_OPS];
     let mut rec = Rows {
         stride: out.nrows(),
         cols,
-        pose: measure == Measure::Pose,
+        rows: measure.rows(),
         out,
         row0,
         rotations: &mut rotations,
         n: 0,
     };
     let end = walk(&mut rec);
-    rec.finish(&end.pos);
+    rec.finish(&end.p);
     end
 }
 
@@ -175,69 +241,85 @@ fn record_rows(
 /// base and tool, and one compliance column per joint.
 const MAX_OPS: usize = 4 * 16 + 6;
 
-/// Writes one pose's rows during a chain walk. Translation columns are written on the way
-/// out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w`, origin `o`
+/// A rotation column waiting for the end point: axis `w` and origin `o` in the world (one
+/// lane per pose), and the column.
+type Recorded<const L: usize> = ([[Real; L]; 3], [[Real; L]; 3], usize);
+
+/// Writes the rows of `L` poses during a chain walk. Translation columns are written on the
+/// way out; a rotation column's `w × (pe − o)` needs the end point, so its axis `w`, origin `o`
 /// and column are recorded (in an array of the caller's stack frame) and the column written
 /// by [`Rows::finish`].
-struct Rows<'a> {
+struct Rows<'a, const L: usize> {
     /// Rows of `out` (the distance between the starts of two columns).
     stride: usize,
     cols: &'a Columns,
-    pose: bool,
+    /// Rows per pose: 3, or 6 with the orientation.
+    rows: usize,
     out: &'a mut DMatrix<Real>,
     row0: usize,
-    rotations: &'a mut [MaybeUninit<(Vec3, Vec3, usize)>],
+    rotations: &'a mut [MaybeUninit<Recorded<L>>],
     n: usize,
 }
 
-impl Rows<'_> {
+impl<const L: usize> Rows<'_, L> {
     #[inline(always)]
-    fn visit(&mut self, op: &Op, r: &Mat3, p: &Vec3) {
+    fn visit(&mut self, op: &Op, f: &Lanes<L>) {
         if self.cols.any_var {
             if let Some(c) = op.var.and_then(|v| self.cols.of_var[v]) {
-                self.write(c, op, r, p);
+                self.write(c, op, f);
             }
         }
         if let Some(c) = self.cols.of_param[op.param] {
-            self.write(c, op, r, p);
+            self.write(c, op, f);
         }
     }
 
     /// Writes (or, for a rotation, records) column `c` of the operation `op`.
     #[inline(always)]
-    fn write(&mut self, c: usize, op: &Op, r: &Mat3, p: &Vec3) {
-        // Each element read on its own, with constant indices: a wide load of a column that
-        // the walk has just written element by element stalls on store forwarding.
-        let w = match op.kind.axis() {
-            0 => Vec3::new(r[(0, 0)], r[(1, 0)], r[(2, 0)]),
-            1 => Vec3::new(r[(0, 1)], r[(1, 1)], r[(2, 1)]),
-            _ => Vec3::new(r[(0, 2)], r[(1, 2)], r[(2, 2)]),
-        };
+    fn write(&mut self, c: usize, op: &Op, f: &Lanes<L>) {
+        let w = f.axis(op.kind.axis());
         let at = c * self.stride + self.row0;
-        let out = self.out.as_mut_slice();
+        let rows = self.rows;
+        let out = &mut self.out.as_mut_slice()[at..at + rows * L];
         if op.kind.is_rotation() {
-            if self.pose {
-                out[at + 3..at + 6].copy_from_slice(w.as_slice());
+            if rows == 6 {
+                for l in 0..L {
+                    for k in 0..3 {
+                        out[6 * l + 3 + k] = w[k][l];
+                    }
+                }
             }
-            self.rotations[self.n].write((w, *p, c));
+            self.rotations[self.n].write((w, f.p, c));
             self.n += 1;
         } else {
-            out[at..at + 3].copy_from_slice(w.as_slice());
-            if self.pose {
-                out[at + 3..at + 6].fill(0.0);
+            for l in 0..L {
+                for k in 0..3 {
+                    out[rows * l + k] = w[k][l];
+                }
+                if rows == 6 {
+                    out[6 * l + 3..6 * l + 6].fill(0.0);
+                }
             }
         }
     }
 
+    /// Writes the recorded rotation columns `w × (pe − o)`, `pe` the end points.
     #[inline(always)]
-    fn finish(self, pe: &Vec3) {
+    fn finish(self, pe: &[[Real; L]; 3]) {
+        let rows = self.rows;
         let out = self.out.as_mut_slice();
         for slot in &self.rotations[..self.n] {
             // SAFETY: `write` has set the first `n` entries.
             let (w, o, c) = unsafe { slot.assume_init_ref() };
-            let dp = w.cross(&(pe - o));
             let at = c * self.stride + self.row0;
-            out[at..at + 3].copy_from_slice(dp.as_slice());
+            let out = &mut out[at..at + rows * L];
+            for l in 0..L {
+                let d = [pe[0][l] - o[0][l], pe[1][l] - o[1][l], pe[2][l] - o[2][l]];
+                let w = [w[0][l], w[1][l], w[2][l]];
+                out[rows * l] = w[1] * d[2] - w[2] * d[1];
+                out[rows * l + 1] = w[2] * d[0] - w[0] * d[2];
+                out[rows * l + 2] = w[0] * d[1] - w[1] * d[0];
+            }
         }
     }
 }

@@ -6,7 +6,9 @@ use nalgebra::DMatrix;
 use proptest::prelude::*;
 
 use calbench::identifiability::analyse;
-use calbench::jacobian::{jacobian, jacobian_fd, Columns, Measure};
+use calbench::jacobian::{
+    jacobian, jacobian_fd, pose_rows4, pose_rows_vars, Columns, Measure, LANES,
+};
 use calbench::kinematics::{Convention, Joint, JointType, Param, Robot, Units};
 use calbench::math::{Mat3, Real, Vec3};
 use calbench::rng;
@@ -106,6 +108,55 @@ fn builtin_jacobians_match_finite_differences() {
         for measure in [Measure::Position, Measure::Pose] {
             let e = jacobian_mismatch(&robot, &qs, measure);
             assert!(e < 1e-6, "{} {measure:?}: relative error {e:e}", b.name);
+        }
+    }
+}
+
+/// The rows of four poses walked together ([`pose_rows4`], vector instructions where the
+/// processor has them) are those of the poses one by one to the bit, with every kind of
+/// column: geometric parameters of all conventions, base, tool and joint compliances.
+#[test]
+fn four_poses_at_once_are_the_poses_one_by_one_to_the_bit() {
+    for b in robots::BUILTINS {
+        let mut robot = (b.build)();
+        let mut g = rng::stream(5, b.name);
+        // Off-nominal values, so that no column is special.
+        let perturbed = uniform_joint_poses(&robot, 1, &mut g)[0].clone();
+        for (k, v) in robot.values.iter_mut().enumerate() {
+            *v += 1e-3 * perturbed[k % perturbed.len()] * (k as Real + 1.0);
+        }
+        let qs = uniform_joint_poses(&robot, 3 * LANES, &mut g);
+        let mut params = robot.params();
+        params.extend((0..robot.dof()).map(Param::Compliance));
+        let cols = Columns::new(&params, robot.dof());
+        let chain = robot.chain();
+        let vars: Vec<_> = qs.iter().map(|q| chain.variables(q)).collect();
+        for measure in [Measure::Position, Measure::Pose] {
+            let rows = measure.rows();
+            let mut one = DMatrix::from_element(rows * qs.len(), cols.len(), Real::NAN);
+            let mut four = one.clone();
+            let frames: Vec<_> = (0..qs.len())
+                .map(|i| pose_rows_vars(&chain, &cols, &vars[i], measure, &mut one, rows * i))
+                .collect();
+            for i0 in (0..qs.len()).step_by(LANES) {
+                let v = std::array::from_fn(|l| &vars[i0 + l]);
+                let f = pose_rows4(&chain, &cols, v, measure, &mut four, rows * i0);
+                for l in 0..LANES {
+                    let want = &frames[i0 + l];
+                    assert_eq!(f.frame(l).pos, want.pos, "{} pose {}", b.name, i0 + l);
+                    assert_eq!(f.frame(l).rot, want.rot, "{} pose {}", b.name, i0 + l);
+                }
+            }
+            assert!(
+                one.iter().all(|v| v.is_finite()),
+                "{}: a row left unwritten",
+                b.name
+            );
+            let same = one
+                .iter()
+                .zip(four.iter())
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+            assert!(same, "{} {measure:?}: the rows differ", b.name);
         }
     }
 }

@@ -24,23 +24,28 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
     if dmax == 0.0 {
         return n == 0;
     }
+    let s = a.as_mut_slice();
     for j in 0..n {
-        let ajj = a[(j, j)];
-        let mut d = ajj;
+        let ajj = s[j * n + j];
+        // Column j from row j down, less Σ_k L[i,k] L[j,k] in the order k = 0, 1, …: one
+        // contiguous update of the column per k (left-looking; each entry's sum in the same
+        // order as a dot product along its row would take).
         for k in 0..j {
-            d -= a[(j, k)] * a[(j, k)];
+            let ljk = s[k * n + j];
+            let (left, right) = s.split_at_mut(j * n);
+            let ck = &left[k * n + j..(k + 1) * n];
+            for (x, &y) in right[j..n].iter_mut().zip(ck) {
+                *x -= y * ljk;
+            }
         }
+        let d = s[j * n + j];
         if d.is_nan() || d <= PIVOT_TOL * ajj {
             return false;
         }
         let l = d.sqrt();
-        a[(j, j)] = l;
-        for i in j + 1..n {
-            let mut s = a[(i, j)];
-            for k in 0..j {
-                s -= a[(i, k)] * a[(j, k)];
-            }
-            a[(i, j)] = s / l;
+        s[j * n + j] = l;
+        for x in &mut s[j * n + j + 1..(j + 1) * n] {
+            *x /= l;
         }
     }
     true

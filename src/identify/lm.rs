@@ -3,7 +3,8 @@
 //! Each iteration solves `(JᵀJ + μ M) Δx = Jᵀ ΔP` with `ΔP = measured − model(x)` and
 //! `M = I`, or `M = diag(JᵀJ)` with Marquardt's scaling ([`LmOptions::marquardt`]).
 //!
-//! - Fixed damping (Guo 2024 eq. 8, `μ = 1`): every step is taken; stop when `max |Δx| < ε`.
+//! - Fixed damping (Guo 2024 eq. 8, `μ = 1`): every step is taken; stop when `max |Δx| < ε`
+//!   (the statistics then come from the last evaluation, [`Work::take_step_in_residual`]).
 //! - Adaptive damping (Ban: `λ0 = 0.01`, `ε = 1e-5`, `kmax = 50`): a step is accepted when it
 //!   lowers `|ΔP|²`, and λ is then divided by the factor (10); otherwise λ is multiplied by it
 //!   and the step is solved again. Stop when an accepted step has `max |Δx| < ε`
@@ -131,10 +132,12 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         iterations = it + 1;
         if max_abs(&work.dx) < o.eps {
             termination = Termination::Converged;
+            work.take_step_in_residual();
             break;
         }
     }
-    finish_lm(p, &mut work, x, w, iterations, termination, false)
+    let fresh = termination == Termination::Converged;
+    finish_lm(p, &mut work, x, w, iterations, termination, fresh)
 }
 
 fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identified {

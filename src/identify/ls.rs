@@ -2,7 +2,9 @@
 //!
 //! Each iteration solves `(JᵀPJ) δx = JᵀP E` with `E = measured − model(x)` and updates
 //! `x ← x + δx` until `max |δx| < ε` (mm or rad) or the iteration limit. `P` holds the
-//! points' prior weights (1 without standard deviations).
+//! points' prior weights (1 without standard deviations). The statistics of the estimate (σ0, the
+//! normal equations) come from the last evaluation, one step (< ε) before it, with the
+//! residual moved by that step to first order: no further evaluation.
 
 use nalgebra::DVector;
 use serde::Deserialize;

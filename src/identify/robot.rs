@@ -16,9 +16,9 @@ use super::solver::{rank, solve, start_weights, LeastSquares, Size, Solver, Work
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::compliance::{deflect_vars, gravity_torques_vars};
 use crate::error::Error;
-use crate::jacobian::{log_orientation_rows, pose_rows_vars, Columns, Measure};
+use crate::jacobian::{log_orientation_rows, pose_rows4, pose_rows_vars, Columns, Measure, LANES};
 use crate::kinematics::{Chain, ChainVars, JointType, Param, Robot};
-use crate::math::{Mat3, Real, Vec3};
+use crate::math::{Frame, Mat3, Real, Vec3};
 use crate::rng::Rng;
 
 /// A [`LeastSquares`] problem over a robot's parameter errors.
@@ -295,39 +295,9 @@ impl LeastSquares for RobotProblem<'_> {
             Measure::Position => None,
         };
         let dof = self.nominal.dof();
-        for (i, (v, pm)) in self.vars.iter().zip(self.points).enumerate() {
-            let f = match self.loads.get(i) {
-                None => pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i),
-                Some(&load) => {
-                    // Elasto-geometric model: each chain variable deflected by c_j τ_j, the
-                    // gravity torques of the current geometry at the commanded pose; the
-                    // column of c_j is the derivative by that variable times τ_j (τ's own
-                    // dependence on the geometry is second order and left out).
-                    let mut tau = [0.0; 16];
-                    gravity_torques_vars(
-                        self.nominal,
-                        chain,
-                        v,
-                        &self.masses,
-                        load,
-                        &mut tau[..dof],
-                    );
-                    let mut dv = [0.0; 16];
-                    for (k, d) in dv.iter_mut().enumerate().take(dof) {
-                        *d = values[Param::Compliance(k).index(dof)] * tau[k];
-                    }
-                    let mut vd = *v;
-                    deflect_vars(&mut vd, &dv[..dof]);
-                    let f = pose_rows_vars(chain, &self.cols, &vd, self.measure, j, rows * i);
-                    for &(k, c) in &self.compliant {
-                        for r in rows * i..rows * (i + 1) {
-                            j[(r, c)] *= tau[k];
-                        }
-                    }
-                    f
-                }
-            };
-            let dp = pm - f.pos;
+        // Each point's residual from its tool frame `f` (the rows of `j` are in place).
+        let residual = |i: usize, f: &Frame, r: &mut DVector<Real>, j: &mut DMatrix<Real>| {
+            let dp = self.points[i] - f.pos;
             for k in 0..3 {
                 r[rows * i + k] = dp[k];
             }
@@ -335,6 +305,43 @@ impl LeastSquares for RobotProblem<'_> {
                 let w = self.orientation_weight;
                 log_orientation_rows(&rots[i], &f.rot, w, r, j, rows * i + 3);
             }
+        };
+        if self.loads.is_empty() {
+            // Rigid model: four points per chain walk, the rest one by one.
+            let whole = self.vars.len() / LANES * LANES;
+            for i0 in (0..whole).step_by(LANES) {
+                let v = std::array::from_fn(|l| &self.vars[i0 + l]);
+                let f = pose_rows4(chain, &self.cols, v, self.measure, j, rows * i0);
+                for l in 0..LANES {
+                    residual(i0 + l, &f.frame(l), r, j);
+                }
+            }
+            for i in whole..self.vars.len() {
+                let f = pose_rows_vars(chain, &self.cols, &self.vars[i], self.measure, j, rows * i);
+                residual(i, &f, r, j);
+            }
+            return;
+        }
+        for (i, (v, &load)) in self.vars.iter().zip(&self.loads).enumerate() {
+            // Elasto-geometric model: each chain variable deflected by c_j τ_j, the gravity
+            // torques of the current geometry at the commanded pose; the column of c_j is the
+            // derivative by that variable times τ_j (τ's own dependence on the geometry is
+            // second order and left out).
+            let mut tau = [0.0; 16];
+            gravity_torques_vars(self.nominal, chain, v, &self.masses, load, &mut tau[..dof]);
+            let mut dv = [0.0; 16];
+            for (k, d) in dv.iter_mut().enumerate().take(dof) {
+                *d = values[Param::Compliance(k).index(dof)] * tau[k];
+            }
+            let mut vd = *v;
+            deflect_vars(&mut vd, &dv[..dof]);
+            let f = pose_rows_vars(chain, &self.cols, &vd, self.measure, j, rows * i);
+            for &(k, c) in &self.compliant {
+                for r in rows * i..rows * (i + 1) {
+                    j[(r, c)] *= tau[k];
+                }
+            }
+            residual(i, &f, r, j);
         }
     }
 }

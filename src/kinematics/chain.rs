@@ -62,30 +62,105 @@ pub struct Chain {
     coupling: Option<super::Coupling>,
 }
 
-/// Applies `op` (with total value `v`, sin/cos `sc` for rotations) to the frame `(r, p)`.
+/// The frames of `L` poses walked together ([`Chain::walk_lanes`]), as a structure of
+/// arrays: lane `l` of every entry belongs to pose `l`, so that the same operation applied
+/// to all lanes compiles to vector instructions. Every lane sees exactly the arithmetic of a
+/// walk of its pose alone, in the same order: the result is the same to the bit whatever `L`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lanes<const L: usize> {
+    /// Rotation, `r[row][column]`.
+    pub r: [[[Real; L]; 3]; 3],
+    /// Origin.
+    pub p: [[Real; L]; 3],
+}
+
+impl<const L: usize> Lanes<L> {
+    /// `L` identity frames.
+    fn identity() -> Self {
+        let mut r = [[[0.0; L]; 3]; 3];
+        for (k, row) in r.iter_mut().enumerate() {
+            row[k] = [1.0; L];
+        }
+        Lanes {
+            r,
+            p: [[0.0; L]; 3],
+        }
+    }
+
+    /// Column `a` of the rotations (the local axis `a` in the world).
+    #[inline(always)]
+    pub fn axis(&self, a: usize) -> [[Real; L]; 3] {
+        [self.r[0][a], self.r[1][a], self.r[2][a]]
+    }
+
+    /// Lane `l`'s rotation.
+    #[inline(always)]
+    pub fn rot(&self, l: usize) -> Mat3 {
+        let r = &self.r;
+        Mat3::new(
+            r[0][0][l], r[0][1][l], r[0][2][l], r[1][0][l], r[1][1][l], r[1][2][l], r[2][0][l],
+            r[2][1][l], r[2][2][l],
+        )
+    }
+
+    /// Lane `l`'s origin.
+    #[inline(always)]
+    pub fn pos(&self, l: usize) -> Vec3 {
+        Vec3::new(self.p[0][l], self.p[1][l], self.p[2][l])
+    }
+
+    /// Lane `l`'s frame.
+    #[inline(always)]
+    pub fn frame(&self, l: usize) -> Frame {
+        Frame {
+            rot: self.rot(l),
+            pos: self.pos(l),
+        }
+    }
+}
+
+/// Applies an operation of kind `kind` with total values `v` and (sin, cos) `(s, c)` (used by
+/// rotations), one per lane, to the frames `f`.
 #[inline(always)]
-fn apply(kind: OpKind, v: Real, sc: (Real, Real), r: &mut Mat3, p: &mut Vec3) {
-    let (s, c) = sc;
+fn apply<const L: usize>(
+    kind: OpKind,
+    v: &[Real; L],
+    s: &[Real; L],
+    c: &[Real; L],
+    f: &mut Lanes<L>,
+) {
     match kind {
         OpKind::Tx | OpKind::Ty | OpKind::Tz => {
             let a = kind.axis();
-            *p += r.column(a) * v;
+            for (p, r) in f.p.iter_mut().zip(&f.r) {
+                for ((p, &r), &v) in p.iter_mut().zip(&r[a]).zip(v) {
+                    *p += r * v;
+                }
+            }
         }
-        OpKind::Rx => rotate_cols(r, 1, 2, s, c),
-        OpKind::Ry => rotate_cols(r, 2, 0, s, c),
-        OpKind::Rz => rotate_cols(r, 0, 1, s, c),
+        OpKind::Rx => rotate_cols(&mut f.r, 1, 2, s, c),
+        OpKind::Ry => rotate_cols(&mut f.r, 2, 0, s, c),
+        OpKind::Rz => rotate_cols(&mut f.r, 0, 1, s, c),
     }
 }
 
 /// `R ← R · Rot`, for a rotation about the axis completing (i, j) to a right-handed triple:
 /// column i ← c·i + s·j, column j ← −s·i + c·j.
 #[inline(always)]
-fn rotate_cols(r: &mut Mat3, i: usize, j: usize, s: Real, c: Real) {
-    for k in 0..3 {
-        let a = r[(k, i)];
-        let b = r[(k, j)];
-        r[(k, i)] = c * a + s * b;
-        r[(k, j)] = -s * a + c * b;
+fn rotate_cols<const L: usize>(
+    r: &mut [[[Real; L]; 3]; 3],
+    i: usize,
+    j: usize,
+    s: &[Real; L],
+    c: &[Real; L],
+) {
+    for row in r.iter_mut() {
+        for l in 0..L {
+            let a = row[i][l];
+            let b = row[j][l];
+            row[i][l] = c[l] * a + s[l] * b;
+            row[j][l] = -s[l] * a + c[l] * b;
+        }
     }
 }
 
@@ -194,13 +269,21 @@ impl Chain {
     /// for every operation with the frame just before it (rotation, origin), and returns the
     /// final frame. Allocation-free.
     #[inline]
-    pub fn walk(&self, q: &[Real], visit: impl FnMut(&Op, &Mat3, &Vec3)) -> Frame {
+    pub fn walk(&self, q: &[Real], mut visit: impl FnMut(&Op, &Mat3, &Vec3)) -> Frame {
+        self.walk_at(q, |op, f| visit(op, &f.rot(0), &f.pos(0)))
+            .frame(0)
+    }
+
+    /// [`Chain::walk`] visiting with the one-lane frame of [`Chain::walk_lanes`].
+    #[inline(always)]
+    pub fn walk_at(&self, q: &[Real], visit: impl FnMut(&Op, &Lanes<1>)) -> Lanes<1> {
         debug_assert_eq!(q.len(), self.dof);
         let c = self.vars(q);
         self.walk_with(
             |op, v| {
                 let t = op.value + c[v];
-                (t, t.sin_cos())
+                let (s, cs) = t.sin_cos();
+                ([t], [s], [cs])
             },
             visit,
         )
@@ -223,41 +306,58 @@ impl Chain {
     /// `cos(a + v) = cos a cos v − sin a sin v` with the operation's own (sin a, cos a)
     /// instead of a new `sin_cos` (equal to rounding, ~1e-16). Allocation-free.
     #[inline]
-    pub fn walk_vars(
+    pub fn walk_vars(&self, vars: &ChainVars, mut visit: impl FnMut(&Op, &Mat3, &Vec3)) -> Frame {
+        self.walk_lanes([vars], |op, f| visit(op, &f.rot(0), &f.pos(0)))
+            .frame(0)
+    }
+
+    /// [`Chain::walk_vars`] of `L` poses at once (see [`Lanes`]), each from its chain
+    /// variables: `visit(op, frames_before)` for every operation. The same bits as `L` walks
+    /// one by one. Allocation-free.
+    #[inline(always)]
+    pub fn walk_lanes<const L: usize>(
         &self,
-        vars: &[Real; 16],
-        sc: &[(Real, Real); 16],
-        visit: impl FnMut(&Op, &Mat3, &Vec3),
-    ) -> Frame {
+        vars: [&ChainVars; L],
+        visit: impl FnMut(&Op, &Lanes<L>),
+    ) -> Lanes<L> {
         self.walk_with(
+            #[inline(always)]
             |op, v| {
                 let (sa, ca) = op.sc;
-                let (sv, cv) = sc[v];
-                (op.value + vars[v], (sa * cv + ca * sv, ca * cv - sa * sv))
+                let mut t = [0.0; L];
+                let mut s = [0.0; L];
+                let mut c = [0.0; L];
+                for l in 0..L {
+                    let (sv, cv) = vars[l].1[v];
+                    t[l] = op.value + vars[l].0[v];
+                    s[l] = sa * cv + ca * sv;
+                    c[l] = ca * cv - sa * sv;
+                }
+                (t, s, c)
             },
             visit,
         )
     }
 
-    /// The walk of [`Chain::walk`] and [`Chain::walk_vars`]: an operation driven by chain
-    /// variable `v` takes its value and (sin, cos) from `driven(op, v)`, a fixed one its own.
+    /// The walk of [`Chain::walk_at`] and [`Chain::walk_lanes`]: an operation driven by chain
+    /// variable `v` takes its values and (sin, cos) per lane from `driven(op, v)`, a fixed one
+    /// its own in every lane.
     #[inline(always)]
-    fn walk_with(
+    fn walk_with<const L: usize>(
         &self,
-        driven: impl Fn(&Op, usize) -> (Real, (Real, Real)),
-        mut visit: impl FnMut(&Op, &Mat3, &Vec3),
-    ) -> Frame {
-        let mut r = Mat3::identity();
-        let mut p = Vec3::zeros();
+        driven: impl Fn(&Op, usize) -> ([Real; L], [Real; L], [Real; L]),
+        mut visit: impl FnMut(&Op, &Lanes<L>),
+    ) -> Lanes<L> {
+        let mut f = Lanes::identity();
         for op in &self.ops {
-            visit(op, &r, &p);
-            let (t, sc) = match op.var {
-                None => (op.value, op.sc),
+            visit(op, &f);
+            let (t, s, c) = match op.var {
+                None => ([op.value; L], [op.sc.0; L], [op.sc.1; L]),
                 Some(v) => driven(op, v),
             };
-            apply(op.kind, t, sc, &mut r, &mut p);
+            apply(op.kind, &t, &s, &c, &mut f);
         }
-        Frame { rot: r, pos: p }
+        f
     }
 
     /// Forward kinematics: the tool frame in the world at joint values `q` (rad / mm).
@@ -293,7 +393,7 @@ mod tests {
             let chain = robot.chain();
             let q: Vec<Real> = (0..robot.dof()).map(|k| 0.3 - 0.17 * k as Real).collect();
             let (v, sc) = chain.variables(&q);
-            let (a, b) = (chain.fk(&q), chain.walk_vars(&v, &sc, |_, _, _| {}));
+            let (a, b) = (chain.fk(&q), chain.walk_vars(&(v, sc), |_, _, _| {}));
             assert_relative_eq!(a.pos, b.pos, epsilon = 1e-10);
             assert_relative_eq!(a.rot, b.rot, epsilon = 1e-14);
         }
@@ -326,10 +426,15 @@ mod tests {
             (OpKind::Ry, rot_y(0.7)),
             (OpKind::Rz, rot_z(0.7)),
         ] {
-            let mut r = r0;
-            let mut p = Vec3::zeros();
-            apply(kind, 0.7, 0.7f64.sin_cos(), &mut r, &mut p);
-            assert_relative_eq!(r, r0 * m, epsilon = 1e-14);
+            let mut f = Lanes::<1>::identity();
+            for (i, row) in f.r.iter_mut().enumerate() {
+                for (k, e) in row.iter_mut().enumerate() {
+                    *e = [r0[(i, k)]];
+                }
+            }
+            let (s, c) = 0.7f64.sin_cos();
+            apply(kind, &[0.7], &[s], &[c], &mut f);
+            assert_relative_eq!(f.rot(0), r0 * m, epsilon = 1e-14);
         }
     }
 }

@@ -20,7 +20,7 @@ mod chain;
 mod file;
 mod param;
 
-pub use chain::{Chain, ChainVars, Op, OpKind};
+pub use chain::{Chain, ChainVars, Lanes, Op, OpKind};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
 pub use param::{value_count, Param, PARAMS_PER_JOINT};
 
