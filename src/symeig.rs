@@ -8,7 +8,9 @@
 //! Wilkinson shifts (`tqli` without vectors). Both are backward stable: each eigenvalue is
 //! exact for a matrix within a few ε·‖A‖ of the input, as for nalgebra's `symmetric_eigen`.
 //! Written on a flat row-major slice so the inner loops are plain slices (nalgebra's generic
-//! version spends most of its time outside the arithmetic at k ≈ 26).
+//! version spends most of its time outside the arithmetic at k ≈ 26), and for several
+//! matrices at once ([`symmetric_eigenvalues_lanes`]): one entry holds the same entry of each
+//! matrix, every operation runs across them, and each matrix gets the bits it would get alone.
 
 use crate::math::Real;
 
@@ -18,142 +20,256 @@ use crate::math::Real;
 /// the QL iteration does not converge in 30·n sweeps (d then holds NaN) or when the input is
 /// not finite.
 pub fn symmetric_eigenvalues(a: &mut [Real], n: usize, d: &mut [Real], e: &mut [Real]) -> bool {
+    lanes(one_lane(a), n, one_lane(d), one_lane(e)) == [true]
+}
+
+/// `x` as one-lane entries.
+fn one_lane(x: &mut [Real]) -> &mut [[Real; 1]] {
+    // SAFETY: `[Real; 1]` has the size and alignment of `Real`, so the same memory holds as
+    // many one-lane entries as values; the borrow is carried over.
+    unsafe { std::slice::from_raw_parts_mut(x.as_mut_ptr().cast(), x.len()) }
+}
+
+/// [`symmetric_eigenvalues`] of `L` matrices at once, lane `t` of every entry belonging to
+/// matrix `t` (`a[i·n + j][t]`): each lane goes through exactly the arithmetic of the one-matrix
+/// call, in the same order, so its eigenvalues are the same bits; the lanes share the
+/// instructions (SIMD, AVX2 when the processor has it) and hide each other's latency in the QL
+/// sweeps. Returns, per lane, whether it converged (a lane that did not holds NaN in `d`).
+pub fn symmetric_eigenvalues_lanes<const L: usize>(
+    a: &mut [[Real; L]],
+    n: usize,
+    d: &mut [[Real; L]],
+    e: &mut [[Real; L]],
+) -> [bool; L] {
+    #[cfg(target_arch = "x86_64")]
+    if L > 1 && std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the processor has AVX2 (checked just above).
+        return unsafe { lanes_avx2(a, n, d, e) };
+    }
+    lanes(a, n, d, e)
+}
+
+/// [`lanes`] compiled for AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn lanes_avx2<const L: usize>(
+    a: &mut [[Real; L]],
+    n: usize,
+    d: &mut [[Real; L]],
+    e: &mut [[Real; L]],
+) -> [bool; L] {
+    lanes(a, n, d, e)
+}
+
+/// The body of [`symmetric_eigenvalues_lanes`].
+#[inline(always)]
+fn lanes<const L: usize>(
+    a: &mut [[Real; L]],
+    n: usize,
+    d: &mut [[Real; L]],
+    e: &mut [[Real; L]],
+) -> [bool; L] {
+    let mut ok = [true; L];
     if n == 0 {
-        return true;
+        return ok;
     }
-    if a[..n * n].iter().any(|x| !x.is_finite()) {
-        d[..n].fill(Real::NAN);
-        return false;
+    for x in &a[..n * n] {
+        for t in 0..L {
+            ok[t] &= x[t].is_finite();
+        }
     }
-    tridiagonalise(a, n, d, e);
-    if !ql_implicit(d, e, n) {
-        d[..n].fill(Real::NAN);
-        return false;
+    if ok.iter().any(|&o| o) {
+        tridiagonalise(a, n, d, e);
+        ql_implicit(d, e, n, &mut ok);
     }
-    true
+    for (t, &o) in ok.iter().enumerate() {
+        if !o {
+            for x in &mut d[..n] {
+                x[t] = Real::NAN;
+            }
+        }
+    }
+    ok
+}
+
+/// Lane-wise `f(x, y)`.
+#[inline(always)]
+fn zip<const L: usize>(x: [Real; L], y: [Real; L], f: impl Fn(Real, Real) -> Real) -> [Real; L] {
+    std::array::from_fn(|t| f(x[t], y[t]))
+}
+
+/// Lane-wise `if mask { new } else { old }`.
+#[inline(always)]
+fn select<const L: usize>(mask: [bool; L], new: [Real; L], old: [Real; L]) -> [Real; L] {
+    std::array::from_fn(|t| if mask[t] { new[t] } else { old[t] })
 }
 
 /// Householder tridiagonalisation of the lower triangle (`tred2`, eigenvalues only): the
-/// diagonal into `d`, the sub-diagonal into `e[1..n]` (`e[0] = 0`).
-fn tridiagonalise(a: &mut [Real], n: usize, d: &mut [Real], e: &mut [Real]) {
+/// diagonal into `d`, the sub-diagonal into `e[1..n]` (`e[0] = 0`). A lane whose row to reduce
+/// is zero (`scale == 0`) keeps its matrix: its transform is computed with unit scale and a
+/// zero vector, and not applied.
+#[inline(always)]
+fn tridiagonalise<const L: usize>(
+    a: &mut [[Real; L]],
+    n: usize,
+    d: &mut [[Real; L]],
+    e: &mut [[Real; L]],
+) {
     for i in (1..n).rev() {
         let l = i - 1;
         if l > 0 {
             let (head, row_i) = a.split_at_mut(i * n);
             let ri = &mut row_i[..=l];
-            let scale: Real = ri.iter().map(|x| x.abs()).sum();
-            if scale == 0.0 {
-                e[i] = ri[l];
-            } else {
-                let mut h = 0.0;
-                let inv = 1.0 / scale;
-                for x in ri.iter_mut() {
-                    *x *= inv;
-                    h += *x * *x;
+            let mut scale = [0.0; L];
+            for x in ri.iter() {
+                scale = zip(scale, *x, |s, x| s + x.abs());
+            }
+            let skip: [bool; L] = std::array::from_fn(|t| scale[t] == 0.0);
+            let inv = zip(scale, [1.0; L], |s, one| {
+                one / if s == 0.0 { one } else { s }
+            });
+            let mut h = [0.0; L];
+            for x in ri.iter_mut() {
+                *x = zip(*x, inv, |x, inv| x * inv);
+                h = zip(h, *x, |h, x| h + x * x);
+            }
+            let f = ri[l];
+            let g = zip(f, h, |f, h| if f >= 0.0 { -h.sqrt() } else { h.sqrt() });
+            e[i] = select(skip, f, zip(scale, g, |s, g| s * g));
+            let h = zip(h, zip(f, g, |f, g| f * g), |h, fg| h - fg);
+            let h = select(skip, [1.0; L], h);
+            ri[l] = zip(f, g, |f, g| f - g);
+            let mut f = [0.0; L];
+            for j in 0..=l {
+                // g = (A u)_j over the lower triangle: row j up to j, then column j below.
+                let mut g = [0.0; L];
+                for (x, u) in head[j * n..j * n + j + 1].iter().zip(&ri[..=j]) {
+                    g = zip(g, zip(*x, *u, |x, u| x * u), |g, xu| g + xu);
                 }
-                let f = ri[l];
-                let g = if f >= 0.0 { -h.sqrt() } else { h.sqrt() };
-                e[i] = scale * g;
-                h -= f * g;
-                ri[l] = f - g;
-                let mut f = 0.0;
-                for j in 0..=l {
-                    // g = (A u)_j over the lower triangle: row j up to j, then column j below.
-                    let mut g = 0.0;
-                    let rj = &head[j * n..j * n + j + 1];
-                    for (x, u) in rj.iter().zip(&ri[..=j]) {
-                        g += x * u;
-                    }
-                    for kk in (j + 1)..=l {
-                        g += head[kk * n + j] * ri[kk];
-                    }
-                    e[j] = g / h;
-                    f += e[j] * ri[j];
+                for kk in (j + 1)..=l {
+                    g = zip(g, zip(head[kk * n + j], ri[kk], |x, u| x * u), |g, xu| {
+                        g + xu
+                    });
                 }
-                let hh = f / (h + h);
-                for j in 0..=l {
-                    let f = ri[j];
-                    let g = e[j] - hh * f;
-                    e[j] = g;
-                    let rj = &mut head[j * n..j * n + j + 1];
-                    for ((x, ek), uk) in rj.iter_mut().zip(&e[..=j]).zip(&ri[..=j]) {
-                        *x -= f * ek + g * uk;
-                    }
+                e[j] = zip(g, h, |g, h| g / h);
+                f = zip(f, zip(e[j], ri[j], |e, u| e * u), |f, eu| f + eu);
+            }
+            let hh = zip(f, h, |f, h| f / (h + h));
+            for j in 0..=l {
+                let f = ri[j];
+                let g = zip(e[j], zip(hh, f, |hh, f| hh * f), |e, hf| e - hf);
+                e[j] = g;
+                let rj = &mut head[j * n..j * n + j + 1];
+                for ((x, ek), uk) in rj.iter_mut().zip(&e[..=j]).zip(&ri[..=j]) {
+                    let step: [Real; L] = std::array::from_fn(|t| f[t] * ek[t] + g[t] * uk[t]);
+                    *x = select(skip, *x, zip(*x, step, |x, s| x - s));
                 }
             }
         } else {
             e[i] = a[i * n + l];
         }
     }
-    e[0] = 0.0;
+    e[0] = [0.0; L];
     for i in 0..n {
         d[i] = a[i * n + i];
     }
 }
 
 /// Implicit QL with Wilkinson shifts on the tridiagonal (`d`, sub-diagonal `e[1..n]`)
-/// (`tqli`, eigenvalues only).
-fn ql_implicit(d: &mut [Real], e: &mut [Real], n: usize) -> bool {
+/// (`tqli`, eigenvalues only). The lanes sweep in step: a lane whose block is already split
+/// (or that failed, `ok` false) sits out a sweep, and a lane whose block is shorter than
+/// another's joins the sweep at its own bottom row. A lane that does not converge in 30·n
+/// sweeps of one eigenvalue gets `ok` false.
+#[inline(always)]
+fn ql_implicit<const L: usize>(
+    d: &mut [[Real; L]],
+    e: &mut [[Real; L]],
+    n: usize,
+    ok: &mut [bool; L],
+) {
     for i in 1..n {
         e[i - 1] = e[i];
     }
-    e[n - 1] = 0.0;
+    e[n - 1] = [0.0; L];
     let eps = Real::EPSILON;
     for l in 0..n {
-        let mut iter = 0;
+        let mut iter = [0usize; L];
         loop {
-            let mut m = l;
-            while m + 1 < n {
-                let dd = d[m].abs() + d[m + 1].abs();
-                if e[m].abs() <= eps * dd {
-                    break;
+            // The bottom row m of each lane's unreduced block starting at l.
+            let mut m = [l; L];
+            let mut active = [false; L];
+            for t in 0..L {
+                if !ok[t] {
+                    continue;
                 }
-                m += 1;
+                let mut mm = l;
+                while mm + 1 < n {
+                    let dd = d[mm][t].abs() + d[mm + 1][t].abs();
+                    if e[mm][t].abs() <= eps * dd {
+                        break;
+                    }
+                    mm += 1;
+                }
+                if mm != l {
+                    iter[t] += 1;
+                    if iter[t] > 30 * n.max(1) {
+                        ok[t] = false;
+                        continue;
+                    }
+                    m[t] = mm;
+                    active[t] = true;
+                }
             }
-            if m == l {
+            let Some(top) = (0..L).filter(|&t| active[t]).map(|t| m[t]).max() else {
                 break;
-            }
-            iter += 1;
-            if iter > 30 * n.max(1) {
-                return false;
-            }
-            let mut g = (d[l + 1] - d[l]) / (2.0 * e[l]);
-            let mut r = (g * g + 1.0).sqrt();
-            g = d[m] - d[l] + e[l] / (g + r.copysign(g));
-            let (mut s, mut c, mut p) = (1.0, 1.0, 0.0);
-            let mut early = false;
-            let mut i = m;
+            };
+            let dm: [Real; L] = std::array::from_fn(|t| d[m[t]][t]);
+            let g = zip(d[l + 1], d[l], |d1, d0| d1 - d0);
+            let g = zip(g, e[l], |g, e| g / (2.0 * e));
+            let r = zip(g, g, |g, _| (g * g + 1.0).sqrt());
+            let shift = zip(e[l], zip(g, r, |g, r| g + r.copysign(g)), |e, x| e / x);
+            let mut g = zip(zip(dm, d[l], |dm, dl| dm - dl), shift, |x, s| x + s);
+            let (mut s, mut c, mut p) = ([1.0; L], [1.0; L], [0.0; L]);
+            // Lanes still rotating in this sweep (a zero rotation radius ends one early).
+            let mut live = active;
+            let mut i = top;
             while i > l {
                 i -= 1;
-                let f = s * e[i];
-                let b = c * e[i];
+                let part: [bool; L] = std::array::from_fn(|t| live[t] && i < m[t]);
+                let f = zip(s, e[i], |s, e| s * e);
+                let b = zip(c, e[i], |c, e| c * e);
                 // sqrt(f² + g²) rather than hypot (half the time of the scan): Gram matrices
                 // of Jacobians in mm and rad stay far from the over/underflow range.
-                r = (f * f + g * g).sqrt();
-                e[i + 1] = r;
-                if r == 0.0 {
-                    d[i + 1] -= p;
-                    e[m] = 0.0;
-                    early = true;
-                    break;
+                let r = zip(f, g, |f, g| (f * f + g * g).sqrt());
+                e[i + 1] = select(part, r, e[i + 1]);
+                let early: [bool; L] = std::array::from_fn(|t| part[t] && r[t] == 0.0);
+                if early.iter().any(|&x| x) {
+                    d[i + 1] = select(early, zip(d[i + 1], p, |d, p| d - p), d[i + 1]);
+                    for t in (0..L).filter(|&t| early[t]) {
+                        e[m[t]][t] = 0.0;
+                        live[t] = false;
+                    }
                 }
-                s = f / r;
-                c = g / r;
-                g = d[i + 1] - p;
-                r = (d[i] - g) * s + 2.0 * c * b;
-                p = s * r;
-                d[i + 1] = g + p;
-                g = c * r - b;
+                let go: [bool; L] = std::array::from_fn(|t| part[t] && !early[t]);
+                let s1 = zip(f, r, |f, r| f / r);
+                let c1 = zip(g, r, |g, r| g / r);
+                let g1 = zip(d[i + 1], p, |d, p| d - p);
+                let r1: [Real; L] =
+                    std::array::from_fn(|t| (d[i][t] - g1[t]) * s1[t] + 2.0 * c1[t] * b[t]);
+                let p1 = zip(s1, r1, |s, r| s * r);
+                d[i + 1] = select(go, zip(g1, p1, |g, p| g + p), d[i + 1]);
+                g = select(go, zip(zip(c1, r1, |c, r| c * r), b, |cr, b| cr - b), g);
+                s = select(go, s1, s);
+                c = select(go, c1, c);
+                p = select(go, p1, p);
             }
-            if early {
-                continue;
+            for t in (0..L).filter(|&t| live[t]) {
+                d[l][t] -= p[t];
+                e[l][t] = g[t];
+                e[m[t]][t] = 0.0;
             }
-            d[l] -= p;
-            e[l] = g;
-            e[m] = 0.0;
         }
     }
-    true
 }
 
 #[cfg(test)]
@@ -188,6 +304,53 @@ mod tests {
             .zip(&want)
             .map(|(g, w)| (g - w).abs() / scale)
             .fold(0.0, Real::max)
+    }
+
+    #[test]
+    fn eight_matrices_at_once_are_the_matrices_one_by_one_to_the_bit() {
+        let mut rng = from_seed(21);
+        for trial in 0..60 {
+            let n = [26, 7, 36, 2, 1, 3][trial % 6];
+            let mats: Vec<DMatrix<Real>> = (0..8)
+                .map(|t| {
+                    let j =
+                        DMatrix::from_fn(n + t, n, |_, _| rng.sample::<Real, _>(StandardNormal));
+                    let mut m = j.transpose() * &j;
+                    // Decoupled rows and columns: Householder steps with nothing to reduce.
+                    for i in (0..n).filter(|i| (i + t + trial) % 3 == 0) {
+                        for c in (0..n).filter(|&c| c != i) {
+                            m[(i, c)] = 0.0;
+                            m[(c, i)] = 0.0;
+                        }
+                    }
+                    if t == 5 && trial % 2 == 0 {
+                        m[(n - 1, 0)] = Real::NAN;
+                    }
+                    if t == 6 {
+                        m *= 1e-9;
+                    }
+                    m
+                })
+                .collect();
+            let mut a = vec![[0.0; 8]; n * n];
+            for (t, m) in mats.iter().enumerate() {
+                for (x, v) in a.iter_mut().zip(m.transpose().iter()) {
+                    x[t] = *v;
+                }
+            }
+            let (mut d, mut e) = (vec![[0.0; 8]; n], vec![[0.0; 8]; n]);
+            let ok = symmetric_eigenvalues_lanes(&mut a, n, &mut d, &mut e);
+            for (t, m) in mats.iter().enumerate() {
+                let mut one: Vec<Real> = m.transpose().iter().copied().collect();
+                let (mut d1, mut e1) = (vec![0.0; n], vec![0.0; n]);
+                let ok1 = symmetric_eigenvalues(&mut one, n, &mut d1, &mut e1);
+                assert_eq!(ok[t], ok1, "trial {trial}, lane {t}");
+                assert_eq!(ok1, !(t == 5 && trial % 2 == 0), "trial {trial}, lane {t}");
+                for (x, y) in d.iter().zip(&d1) {
+                    assert_eq!(x[t].to_bits(), y.to_bits(), "trial {trial}, lane {t}");
+                }
+            }
+        }
     }
 
     #[test]

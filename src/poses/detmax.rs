@@ -12,16 +12,18 @@
 //! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. For each
 //! candidate the lower triangle of JᵀJ ± BᵀB is formed in a per-worker buffer and its
 //! eigenvalues found by the allocation-free Householder + implicit-QL solver of
-//! [`crate::symeig`] (about 2× faster than nalgebra's generic `symmetric_eigenvalues` at
-//! k = 26). The candidate scan runs on rayon and reduces by (value, index) with ties to the
-//! lower index, so the result does not depend on the thread count.
+//! [`crate::symeig`], eight candidates at a time in the lanes of
+//! [`crate::symeig::symmetric_eigenvalues_lanes`] (the same bits as one at a time; about 5×
+//! faster than nalgebra's generic `symmetric_eigenvalues` at k = 26). The candidate scan runs
+//! on rayon and reduces by (value, index) with ties to the lower index, so the result does not
+//! depend on the thread count.
 
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use super::{objective_of_eigenvalues, objective_of_gram, Objective, PoseModel};
 use crate::math::Real;
-use crate::symeig::symmetric_eigenvalues;
+use crate::symeig::symmetric_eigenvalues_lanes;
 
 /// What [`detmax`] found.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,54 +53,95 @@ fn better(x: (Real, usize), y: (Real, usize)) -> (Real, usize) {
     }
 }
 
-/// Buffers of one rayon worker in a scan.
+/// Candidates evaluated together by one [`ScanBuf::best`] call: the eigenvalue problems of
+/// eight candidates share their instructions ([`symmetric_eigenvalues_lanes`]; eight lanes
+/// are two AVX2 registers, whose independent chains hide the latency of the QL sweeps better
+/// than one: 0.165 s against 0.19 s for four lanes).
+const LANES: usize = 8;
+
+/// Buffers of one rayon worker in a scan: [`LANES`] candidates' matrices side by side.
 struct ScanBuf {
-    a: Vec<Real>,
-    d: Vec<Real>,
-    e: Vec<Real>,
+    a: Vec<[Real; LANES]>,
+    d: Vec<[Real; LANES]>,
+    e: Vec<[Real; LANES]>,
+    ev: Vec<Real>,
 }
 
 impl ScanBuf {
     fn new(k: usize) -> Self {
         ScanBuf {
-            a: vec![0.0; k * k],
-            d: vec![0.0; k],
-            e: vec![0.0; k],
+            a: vec![[0.0; LANES]; k * k],
+            d: vec![[0.0; LANES]; k],
+            e: vec![[0.0; LANES]; k],
+            ev: vec![0.0; k],
         }
     }
 
-    /// The objective of `gram` + `sign`·BᵀB over `m` poses for candidate `c` (Bᵀ = columns
-    /// `r·c .. r·c + r` of `blocks_t`), from the eigenvalues of [`symmetric_eigenvalues`]
-    /// (only the lower triangle is formed).
+    /// The best (value, key) of `keys` (at most [`LANES`]; ties to the lower key): the
+    /// objective of `gram` + `sign`·BᵀB over `m` poses for candidate c = `cand(key)` (Bᵀ =
+    /// columns `r·c .. r·c + r` of `blocks_t`), from the eigenvalues of
+    /// [`symmetric_eigenvalues_lanes`] (only the lower triangle is formed). Each candidate's
+    /// value is the same bits as if it were alone.
     #[allow(clippy::too_many_arguments)]
-    fn value(
+    fn best(
         &mut self,
         gram: &DMatrix<Real>,
         blocks_t: &DMatrix<Real>,
         r: usize,
-        c: usize,
+        keys: &[usize],
+        cand: impl Fn(usize) -> usize,
         sign: Real,
         objective: Objective,
         m: usize,
-    ) -> Real {
-        let k = gram.nrows();
-        // Column-major symmetric `gram` read as row-major: the same matrix.
-        self.a.copy_from_slice(gram.as_slice());
-        for row in 0..r {
-            let b = blocks_t.column(r * c + row);
-            let b = b.as_slice();
-            for i in 0..k {
-                let f = sign * b[i];
-                for (x, bj) in self.a[i * k..i * k + i + 1].iter_mut().zip(&b[..=i]) {
-                    *x += f * bj;
+    ) -> (Real, usize) {
+        debug_assert!(!keys.is_empty() && keys.len() <= LANES);
+        // Spare lanes repeat the first candidate; their values are not read.
+        let lane = |t: usize| cand(keys[if t < keys.len() { t } else { 0 }]);
+        let ok = eigenvalues(self, gram, blocks_t, r, &lane, sign);
+        let mut best = (Real::NEG_INFINITY, usize::MAX);
+        for (t, &key) in keys.iter().enumerate() {
+            let v = if ok[t] {
+                for (x, d) in self.ev.iter_mut().zip(&self.d) {
+                    *x = d[t];
+                }
+                objective_of_eigenvalues(&mut self.ev, objective, m)
+            } else {
+                Real::NEG_INFINITY
+            };
+            best = better(best, (v, key));
+        }
+        best
+    }
+}
+
+/// The eigenvalues of `gram` + `sign`·BᵀB for the candidates `lane(0..LANES)` into `buf.d`,
+/// with each lane's convergence flag.
+fn eigenvalues(
+    buf: &mut ScanBuf,
+    gram: &DMatrix<Real>,
+    blocks_t: &DMatrix<Real>,
+    r: usize,
+    lane: &dyn Fn(usize) -> usize,
+    sign: Real,
+) -> [bool; LANES] {
+    let k = gram.nrows();
+    // Column-major symmetric `gram` read as row-major: the same matrix.
+    for (x, &g) in buf.a.iter_mut().zip(gram.as_slice()) {
+        *x = [g; LANES];
+    }
+    for row in 0..r {
+        let b: [&[Real]; LANES] =
+            std::array::from_fn(|t| blocks_t.column(r * lane(t) + row).data.into_slice());
+        for i in 0..k {
+            let f: [Real; LANES] = std::array::from_fn(|t| sign * b[t][i]);
+            for (j, x) in buf.a[i * k..i * k + i + 1].iter_mut().enumerate() {
+                for t in 0..LANES {
+                    x[t] += f[t] * b[t][j];
                 }
             }
         }
-        if !symmetric_eigenvalues(&mut self.a, k, &mut self.d, &mut self.e) {
-            return Real::NEG_INFINITY;
-        }
-        objective_of_eigenvalues(&mut self.d, objective, m)
     }
+    symmetric_eigenvalues_lanes(&mut buf.a, k, &mut buf.d, &mut buf.e)
 }
 
 /// The Gram matrix JᵀJ of the candidates in `set`.
@@ -137,21 +180,21 @@ pub fn detmax(
     gram(&blocks, r, &set, &mut a);
     let mut value = objective_of_gram(&a, objective, m);
     let mut trace = vec![value];
+    let positions: Vec<usize> = (0..m).collect();
+    let mut outside = Vec::with_capacity(n);
     let mut exchanges = 0;
     let termination = loop {
         if exchanges >= max_exchanges {
             break format!("detmax: {max_exchanges} exchanges (limit)");
         }
         // (1) Add the best candidate.
-        let (_, added) = (0..n)
-            .into_par_iter()
-            .filter(|&c| !in_set[c])
+        outside.clear();
+        outside.extend((0..n).filter(|&c| !in_set[c]));
+        let (_, added) = outside
+            .par_chunks(LANES)
             .map_init(
                 || ScanBuf::new(k),
-                |buf, c| {
-                    let v = buf.value(&a, &blocks_t, r, c, 1.0, objective, m + 1);
-                    (v, c)
-                },
+                |buf, cands| buf.best(&a, &blocks_t, r, cands, |c| c, 1.0, objective, m + 1),
             )
             .reduce(|| (Real::NEG_INFINITY, usize::MAX), better);
         if added == usize::MAX {
@@ -161,14 +204,11 @@ pub fn detmax(
         add_block(&mut a_plus, &blocks, r, added, 1.0);
         // (2) Remove the pose whose removal leaves the best set; removing the one just
         // added restores the current set and its value exactly, and wins ties.
-        let (best_other, removed_pos) = (0..m)
-            .into_par_iter()
+        let (best_other, removed_pos) = positions
+            .par_chunks(LANES)
             .map_init(
                 || ScanBuf::new(k),
-                |buf, pos| {
-                    let v = buf.value(&a_plus, &blocks_t, r, set[pos], -1.0, objective, m);
-                    (v, pos)
-                },
+                |buf, pos| buf.best(&a_plus, &blocks_t, r, pos, |p| set[p], -1.0, objective, m),
             )
             .reduce(|| (Real::NEG_INFINITY, usize::MAX), better);
         // (3) The exchange rule.
@@ -295,7 +335,7 @@ mod tests {
                 let mut buf = ScanBuf::new(k);
                 for o in [Objective::Composite, Objective::O1, Objective::O6] {
                     for c in m..cands.len() {
-                        let fast = buf.value(&a, &blocks_t, r, c, 1.0, o, m + 1);
+                        let fast = buf.best(&a, &blocks_t, r, &[c], |c| c, 1.0, o, m + 1).0;
                         let mut b = a.clone();
                         add_block(&mut b, &blocks, r, c, 1.0);
                         let want = objective_of_gram(&b, o, m + 1);
@@ -305,7 +345,7 @@ mod tests {
                         );
                     }
                     for &c in &set {
-                        let fast = buf.value(&a, &blocks_t, r, c, -1.0, o, m - 1);
+                        let fast = buf.best(&a, &blocks_t, r, &[c], |c| c, -1.0, o, m - 1).0;
                         let mut b = a.clone();
                         add_block(&mut b, &blocks, r, c, -1.0);
                         let dense = objective_of_gram(&b, o, m - 1);
