@@ -143,24 +143,25 @@ pub fn pose_rows_vars(
     pose_rows_lanes(chain, cols, [vars], measure, out, row0).frame(0)
 }
 
-/// [`pose_rows_vars`] of [`LANES`] consecutive poses at once, each pose's rows below the
-/// previous one's from row `row0`, returning their tool frames ([`Lanes`]): the same bits as
-/// one pose at a time, in about a third of the time (four-wide vectors where the processor
-/// has AVX2). Allocation-free.
+/// [`pose_rows_vars`] of the first [`LANES`] poses of `vars` at once, each pose's rows below
+/// the previous one's from row `row0`, returning their tool frames ([`Lanes`]): the same bits
+/// as one pose at a time, in about a third of the time (four-wide vectors where the processor
+/// has AVX2). Allocation-free. Panics when `vars` holds fewer than [`LANES`] poses.
 pub fn pose_rows4(
     chain: &Chain,
     cols: &Columns,
-    vars: [&ChainVars; LANES],
+    vars: &[ChainVars],
     measure: Measure,
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> Lanes<LANES> {
+    let vars: &[ChainVars; LANES] = vars[..LANES].try_into().expect("LANES poses");
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2, checked just above.
         return unsafe { pose_rows4_avx2(chain, cols, vars, measure, out, row0) };
     }
-    pose_rows_lanes(chain, cols, vars, measure, out, row0)
+    pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0)
 }
 
 /// Poses per call of [`pose_rows4`].
@@ -176,12 +177,12 @@ pub const LANES: usize = 4;
 unsafe fn pose_rows4_avx2(
     chain: &Chain,
     cols: &Columns,
-    vars: [&ChainVars; LANES],
+    vars: &[ChainVars; LANES],
     measure: Measure,
     out: &mut DMatrix<Real>,
     row0: usize,
 ) -> Lanes<LANES> {
-    pose_rows_lanes(chain, cols, vars, measure, out, row0)
+    pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0)
 }
 
 /// The rows of `L` consecutive poses walked together ([`Chain::walk_lanes`]).

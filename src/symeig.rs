@@ -20,7 +20,7 @@ use crate::math::Real;
 /// the QL iteration does not converge in 30·n sweeps (d then holds NaN) or when the input is
 /// not finite.
 pub fn symmetric_eigenvalues(a: &mut [Real], n: usize, d: &mut [Real], e: &mut [Real]) -> bool {
-    lanes(one_lane(a), n, one_lane(d), one_lane(e)) == [true]
+    symmetric_eigenvalues_lanes(one_lane(a), n, one_lane(d), one_lane(e)) == [true]
 }
 
 /// `x` as one-lane entries.
@@ -41,55 +41,32 @@ pub fn symmetric_eigenvalues_lanes<const L: usize>(
     d: &mut [[Real; L]],
     e: &mut [[Real; L]],
 ) -> [bool; L] {
-    #[cfg(target_arch = "x86_64")]
-    if L > 1 && std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the processor has AVX2 (checked just above).
-        return unsafe { lanes_avx2(a, n, d, e) };
-    }
-    lanes(a, n, d, e)
-}
-
-/// [`lanes`] compiled for AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn lanes_avx2<const L: usize>(
-    a: &mut [[Real; L]],
-    n: usize,
-    d: &mut [[Real; L]],
-    e: &mut [[Real; L]],
-) -> [bool; L] {
-    lanes(a, n, d, e)
-}
-
-/// The body of [`symmetric_eigenvalues_lanes`].
-#[inline(always)]
-fn lanes<const L: usize>(
-    a: &mut [[Real; L]],
-    n: usize,
-    d: &mut [[Real; L]],
-    e: &mut [[Real; L]],
-) -> [bool; L] {
-    let mut ok = [true; L];
-    if n == 0 {
-        return ok;
-    }
-    for x in &a[..n * n] {
-        for t in 0..L {
-            ok[t] &= x[t].is_finite();
-        }
-    }
-    if ok.iter().any(|&o| o) {
-        tridiagonalise(a, n, d, e);
-        ql_implicit(d, e, n, &mut ok);
-    }
-    for (t, &o) in ok.iter().enumerate() {
-        if !o {
-            for x in &mut d[..n] {
-                x[t] = Real::NAN;
+    crate::math::with_avx2(
+        #[inline(always)]
+        || {
+            let mut ok = [true; L];
+            if n == 0 {
+                return ok;
             }
-        }
-    }
-    ok
+            for x in &a[..n * n] {
+                for t in 0..L {
+                    ok[t] &= x[t].is_finite();
+                }
+            }
+            if ok.iter().any(|&o| o) {
+                tridiagonalise(a, n, d, e);
+                ql_implicit(d, e, n, &mut ok);
+            }
+            for (t, &o) in ok.iter().enumerate() {
+                if !o {
+                    for x in &mut d[..n] {
+                        x[t] = Real::NAN;
+                    }
+                }
+            }
+            ok
+        },
+    )
 }
 
 /// Lane-wise `f(x, y)`.

@@ -139,8 +139,7 @@ fn four_poses_at_once_are_the_poses_one_by_one_to_the_bit() {
                 .map(|i| pose_rows_vars(&chain, &cols, &vars[i], measure, &mut one, rows * i))
                 .collect();
             for i0 in (0..qs.len()).step_by(LANES) {
-                let v = std::array::from_fn(|l| &vars[i0 + l]);
-                let f = pose_rows4(&chain, &cols, v, measure, &mut four, rows * i0);
+                let f = pose_rows4(&chain, &cols, &vars[i0..], measure, &mut four, rows * i0);
                 for l in 0..LANES {
                     let want = &frames[i0 + l];
                     assert_eq!(f.frame(l).pos, want.pos, "{} pose {}", b.name, i0 + l);

@@ -310,7 +310,7 @@ impl LeastSquares for RobotProblem<'_> {
             // Rigid model: four points per chain walk, the rest one by one.
             let whole = self.vars.len() / LANES * LANES;
             for i0 in (0..whole).step_by(LANES) {
-                let v = std::array::from_fn(|l| &self.vars[i0 + l]);
+                let v = &self.vars[i0..];
                 let f = pose_rows4(chain, &self.cols, v, self.measure, j, rows * i0);
                 for l in 0..LANES {
                     residual(i0 + l, &f.frame(l), r, j);

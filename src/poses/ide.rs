@@ -29,7 +29,7 @@ use rand::Rng as _;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
-use super::{Evaluator, Objective, PoseModel};
+use super::{Evaluator, Objective, PoseModel, Spectra};
 use crate::math::Real;
 use crate::rng::Rng;
 use crate::Error;
@@ -221,12 +221,17 @@ pub fn ide(
             handle_limits(track, &best, &limits);
             v_slot.copy_from_slice(track);
         }
+        // The trials' eigenvalue problems are solved several at once ([`Evaluator::values`]).
+        let lanes = Spectra::LANES;
         trials
-            .par_chunks(len)
-            .zip(values.par_iter_mut())
+            .par_chunks(lanes * len)
+            .zip(values.par_chunks_mut(lanes))
             .for_each_init(
                 || Evaluator::new(model),
-                |e, (set, val)| *val = e.value(model, set, objective),
+                |e, (sets, vals)| {
+                    let v = e.values(model, sets, len, objective);
+                    vals.copy_from_slice(&v[..vals.len()]);
+                },
             );
         // Eq. 26: greedy selection, strict improvement, earliest wins ties.
         let mut winner = None;

@@ -30,6 +30,7 @@ use crate::jacobian::{pose_rows, Columns, Measure};
 use crate::kinematics::{Chain, Param, Robot};
 use crate::math::Real;
 use crate::rng::Rng;
+use crate::symeig::{symmetric_eigenvalues, symmetric_eigenvalues_lanes};
 use crate::Error;
 
 /// The Jacobian rows of one measurement pose: what pose selection optimises over.
@@ -227,16 +228,21 @@ pub struct Selection {
     pub termination: String,
 }
 
-/// The objective of a Gram matrix `a = JᵀJ` over `m` poses: singular values of J are
-/// sqrt(eig(JᵀJ)) (symmetric eigenvalues of the small k × k matrix). A set with
-/// cond(J) above about 3e6 counts as rank-deficient (objective 0).
-pub(crate) fn objective_of_gram(a: &DMatrix<Real>, objective: Objective, m: usize) -> Real {
-    let mut ev = a.symmetric_eigenvalues();
-    objective_of_eigenvalues(ev.as_mut_slice(), objective, m)
+/// The objective of the Gram matrix JᵀJ over `m` poses whose lower triangle is stored
+/// row-major in `g` (k × k): singular values of J are sqrt(eig(JᵀJ)) (symmetric eigenvalues of
+/// the small k × k matrix, by [`crate::symeig`]). A set with cond(J) above about 3e6 counts as
+/// rank-deficient (objective 0).
+pub(crate) fn objective_of_lower(g: &[Real], k: usize, objective: Objective, m: usize) -> Real {
+    let mut lower = g.to_vec();
+    let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
+    if !symmetric_eigenvalues(&mut lower, k, &mut ev, &mut scratch) {
+        return Real::NEG_INFINITY;
+    }
+    objective_of_eigenvalues(&mut ev, objective, m)
 }
 
 /// The objective from the eigenvalues `ev` of JᵀJ over `m` poses (overwritten by the
-/// singular values): the second half of [`objective_of_gram`].
+/// singular values): the second half of [`objective_of_lower`].
 pub(crate) fn objective_of_eigenvalues(ev: &mut [Real], objective: Objective, m: usize) -> Real {
     // Eigenvalues of JᵀJ carry an absolute error of a few ε·λmax: below 1e-13·λmax (σ below
     // about 3e-7·σmax) they are noise, and the set counts as rank-deficient.
@@ -252,10 +258,84 @@ pub(crate) fn objective_of_eigenvalues(ev: &mut [Real], objective: Objective, m:
     }
 }
 
+/// Adds `sign · bbᵀ` to the lower triangle of the row-major k × k matrix `g` (k = `b.len()`).
+#[inline]
+pub(crate) fn add_outer_lower(g: &mut [Real], b: &[Real], sign: Real) {
+    let k = b.len();
+    for i in 0..k {
+        let f = sign * b[i];
+        for (x, bj) in g[i * k..i * k + i + 1].iter_mut().zip(&b[..=i]) {
+            *x += f * bj;
+        }
+    }
+}
+
+/// Gram matrices whose objectives are found together: the eigenvalue problems of up to
+/// [`Spectra::LANES`] matrices share their instructions
+/// ([`crate::symeig::symmetric_eigenvalues_lanes`]; eight lanes are two AVX2 registers, whose
+/// independent chains hide the latency of the QL sweeps better than one). Each matrix's
+/// objective is the same bits as [`objective_of_lower`] of the same entries.
+pub(crate) struct Spectra {
+    k: usize,
+    a: Vec<[Real; Spectra::LANES]>,
+    d: Vec<[Real; Spectra::LANES]>,
+    e: Vec<[Real; Spectra::LANES]>,
+    ev: Vec<Real>,
+}
+
+impl Spectra {
+    /// Matrices per call of [`Spectra::objectives`].
+    pub(crate) const LANES: usize = 8;
+
+    pub(crate) fn new(k: usize) -> Self {
+        Spectra {
+            k,
+            a: vec![[0.0; Self::LANES]; k * k],
+            d: vec![[0.0; Self::LANES]; k],
+            e: vec![[0.0; Self::LANES]; k],
+            ev: vec![0.0; k],
+        }
+    }
+
+    /// Puts the lower triangle of the row-major k × k matrix `g` into lane `t`.
+    pub(crate) fn set(&mut self, t: usize, g: &[Real]) {
+        for (x, &v) in self.a.iter_mut().zip(g) {
+            x[t] = v;
+        }
+    }
+
+    /// The objectives over `m` poses of the matrices in lanes `0..used` (entries from `used`
+    /// on are −∞); lanes `used..` are overwritten.
+    pub(crate) fn objectives(
+        &mut self,
+        used: usize,
+        objective: Objective,
+        m: usize,
+    ) -> [Real; Self::LANES] {
+        for x in &mut self.a {
+            for t in used..Self::LANES {
+                x[t] = x[0];
+            }
+        }
+        let ok = symmetric_eigenvalues_lanes(&mut self.a, self.k, &mut self.d, &mut self.e);
+        std::array::from_fn(|t| {
+            if t >= used || !ok[t] {
+                return Real::NEG_INFINITY;
+            }
+            for (x, d) in self.ev.iter_mut().zip(&self.d) {
+                *x = d[t];
+            }
+            objective_of_eigenvalues(&mut self.ev, objective, m)
+        })
+    }
+}
+
 /// Reusable buffers for evaluating pose sets.
 pub(crate) struct Evaluator {
     block: DMatrix<Real>,
-    gram: DMatrix<Real>,
+    row: Vec<Real>,
+    gram: Vec<Real>,
+    spectra: Spectra,
 }
 
 impl Evaluator {
@@ -263,8 +343,28 @@ impl Evaluator {
         let (r, k) = (model.rows_per_pose(), model.n_params());
         Evaluator {
             block: DMatrix::zeros(r, k),
-            gram: DMatrix::zeros(k, k),
+            row: vec![0.0; k],
+            gram: vec![0.0; k * k],
+            spectra: Spectra::new(k),
         }
+    }
+
+    /// The lower triangle of JᵀJ of the poses stored flat in `poses` (`dof` values each) into
+    /// `self.gram`; returns the pose count.
+    fn gram(&mut self, model: &dyn PoseModel, poses: &[Real]) -> usize {
+        let dof = model.dof();
+        self.gram.fill(0.0);
+        for q in poses.chunks_exact(dof) {
+            let mut v = self.block.as_view_mut();
+            model.jacobian_block(q, &mut v);
+            for i in 0..self.block.nrows() {
+                for (x, b) in self.row.iter_mut().zip(self.block.row(i).iter()) {
+                    *x = *b;
+                }
+                add_outer_lower(&mut self.gram, &self.row, 1.0);
+            }
+        }
+        poses.len() / dof.max(1)
     }
 
     /// The objective of the poses stored flat in `poses` (`dof` values each).
@@ -274,15 +374,28 @@ impl Evaluator {
         poses: &[Real],
         objective: Objective,
     ) -> Real {
-        let dof = model.dof();
-        self.gram.fill(0.0);
-        let m = poses.len() / dof.max(1);
-        for q in poses.chunks_exact(dof) {
-            let mut v = self.block.as_view_mut();
-            model.jacobian_block(q, &mut v);
-            self.gram.gemm_tr(1.0, &self.block, &self.block, 1.0);
+        let m = self.gram(model, poses);
+        objective_of_lower(&self.gram, self.row.len(), objective, m)
+    }
+
+    /// The objectives of up to [`Spectra::LANES`] pose sets stored one after another in
+    /// `sets`, `len` values each (entries past the sets are −∞): the same bits as
+    /// [`Evaluator::value`] of each.
+    pub(crate) fn values(
+        &mut self,
+        model: &dyn PoseModel,
+        sets: &[Real],
+        len: usize,
+        objective: Objective,
+    ) -> [Real; Spectra::LANES] {
+        let mut m = 0;
+        let mut used = 0;
+        for (t, set) in sets.chunks_exact(len.max(1)).enumerate() {
+            m = self.gram(model, set);
+            self.spectra.set(t, &self.gram);
+            used = t + 1;
         }
-        objective_of_gram(&self.gram, objective, m)
+        self.spectra.objectives(used, objective, m)
     }
 }
 
