@@ -1,7 +1,8 @@
-//! Eigenvalues of a small dense symmetric matrix, allocation-free: for the DETMAX candidate
-//! scans (Guo 2024 §3.2: every scan evaluates the objective of JᵀJ ± BᵀB, through the
-//! singular values sqrt(eig(JᵀJ)), for each candidate block B) and for the rank and
-//! condition number of every identification ([`crate::identify::solver::conditioning`]).
+//! Eigenvalues of a small dense symmetric matrix, allocation-free: for every pose-selection
+//! objective (Guo 2024 §3.2: DETMAX's scans evaluate the objective of JᵀJ ± BᵀB for each
+//! candidate block B, IDE's generations that of each trial set, through the singular values
+//! sqrt(eig(JᵀJ))) and for the rank and condition number of every identification
+//! ([`crate::identify::solver::conditioning`]).
 //!
 //! Householder reduction to tridiagonal form (eigenvalues only: Wilkinson & Reinsch, routine
 //! `tred2` without the accumulation of transforms), then the implicit QL iteration with
