@@ -212,7 +212,7 @@ fn pose_rows_lanes<const L: usize>(
 }
 
 /// Writes the rows of `L` poses while `walk` walks the chain with the writer it is given, and
-/// returns the tool frames the walk ends at (shared by [`pose_rows`] and [`pose_rows_vars`]).
+/// returns the tool frames the walk ends at (shared by [`pose_rows`] and [`pose_rows_lanes`]).
 /// The rotation columns are recorded in an uninitialised array (zeroing [`MAX_OPS`] entries
 /// per pose cost a fifth of the evaluation).
 #[inline(always)]
