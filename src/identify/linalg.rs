@@ -25,6 +25,15 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
         return n == 0;
     }
     let s = a.as_mut_slice();
+    crate::math::with_avx2(
+        #[inline(always)]
+        || factor_columns(s, n),
+    )
+}
+
+/// The column loop of [`cholesky_in_place`] on the column-major `s` (n × n).
+#[inline(always)]
+fn factor_columns(s: &mut [Real], n: usize) -> bool {
     for j in 0..n {
         let ajj = s[j * n + j];
         // Column j from row j down, less Σ_k L[i,k] L[j,k] in the order k = 0, 1, …: one
@@ -58,6 +67,15 @@ pub(crate) fn cholesky_solve(l: &DMatrix<Real>, b: &mut DVector<Real>) {
     let n = l.nrows();
     let ls = l.as_slice();
     let bs = b.as_mut_slice();
+    crate::math::with_avx2(
+        #[inline(always)]
+        || substitute(ls, bs, n),
+    );
+}
+
+/// The two sweeps of [`cholesky_solve`].
+#[inline(always)]
+fn substitute(ls: &[Real], bs: &mut [Real], n: usize) {
     for k in 0..n {
         let col = &ls[k * n..(k + 1) * n];
         let v = bs[k] / col[k];
