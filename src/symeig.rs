@@ -17,9 +17,9 @@ use crate::math::Real;
 
 /// Overwrites `d` (length n) with the eigenvalues (unordered) of the symmetric n × n matrix
 /// whose **lower triangle** is stored row-major in `a` (`a[i·n + j]`, j ≤ i; the upper
-/// triangle is ignored); `a` is destroyed and `e` (length n) is scratch. Returns false when
-/// the QL iteration does not converge in 30·n sweeps (d then holds NaN) or when the input is
-/// not finite.
+/// triangle is neither read nor written); the lower triangle is destroyed and `e` (length n)
+/// is scratch. Returns false when the QL iteration does not converge in 30·n sweeps (d then
+/// holds NaN) or when the lower triangle is not finite.
 pub fn symmetric_eigenvalues(a: &mut [Real], n: usize, d: &mut [Real], e: &mut [Real]) -> bool {
     symmetric_eigenvalues_lanes(one_lane(a), n, one_lane(d), one_lane(e)) == [true]
 }
@@ -49,9 +49,11 @@ pub fn symmetric_eigenvalues_lanes<const L: usize>(
             if n == 0 {
                 return ok;
             }
-            for x in &a[..n * n] {
-                for t in 0..L {
-                    ok[t] &= x[t].is_finite();
+            for i in 0..n {
+                for x in &a[i * n..i * n + i + 1] {
+                    for t in 0..L {
+                        ok[t] &= x[t].is_finite();
+                    }
                 }
             }
             if ok.iter().any(|&o| o) {
@@ -133,14 +135,25 @@ fn tridiagonalise<const L: usize>(
                 f = zip(f, zip(e[j], ri[j], |e, u| e * u), |f, eu| f + eu);
             }
             let hh = zip(f, h, |f, h| f / (h + h));
+            // A lane that skips keeps its entries; without one (almost always) no selection.
+            let any_skip = skip.iter().any(|&s| s);
             for j in 0..=l {
                 let f = ri[j];
                 let g = zip(e[j], zip(hh, f, |hh, f| hh * f), |e, hf| e - hf);
                 e[j] = g;
                 let rj = &mut head[j * n..j * n + j + 1];
-                for ((x, ek), uk) in rj.iter_mut().zip(&e[..=j]).zip(&ri[..=j]) {
-                    let step: [Real; L] = std::array::from_fn(|t| f[t] * ek[t] + g[t] * uk[t]);
-                    *x = select(skip, *x, zip(*x, step, |x, s| x - s));
+                let updates = rj.iter_mut().zip(&e[..=j]).zip(&ri[..=j]);
+                let step = |ek: &[Real; L], uk: &[Real; L]| -> [Real; L] {
+                    std::array::from_fn(|t| f[t] * ek[t] + g[t] * uk[t])
+                };
+                if any_skip {
+                    for ((x, ek), uk) in updates {
+                        *x = select(skip, *x, zip(*x, step(ek, uk), |x, s| x - s));
+                    }
+                } else {
+                    for ((x, ek), uk) in updates {
+                        *x = zip(*x, step(ek, uk), |x, s| x - s);
+                    }
                 }
             }
         } else {
@@ -173,21 +186,26 @@ fn ql_implicit<const L: usize>(
     for l in 0..n {
         let mut iter = [0usize; L];
         loop {
-            // The bottom row m of each lane's unreduced block starting at l.
+            // The bottom row m of each lane's unreduced block starting at l, all lanes scanning
+            // together: the first row mm whose sub-diagonal entry is negligible, else n − 1.
+            let mut bottom = [n as u64 - 1; L];
+            let mut open: Mask<L> = mask(|t| ok[t]);
+            let mut mm = l;
+            while mm + 1 < n && open.iter().any(|&o| o != 0) {
+                let dd = zip(d[mm], d[mm + 1], |a, b| a.abs() + b.abs());
+                let ends: Mask<L> =
+                    std::array::from_fn(|t| open[t] & word(e[mm][t].abs() <= eps * dd[t]));
+                bottom = std::array::from_fn(|t| (mm as u64 & ends[t]) | (bottom[t] & !ends[t]));
+                open = std::array::from_fn(|t| open[t] & !ends[t]);
+                mm += 1;
+            }
             let mut m = [l; L];
             let mut active = [false; L];
             for t in 0..L {
                 if !ok[t] {
                     continue;
                 }
-                let mut mm = l;
-                while mm + 1 < n {
-                    let dd = d[mm][t].abs() + d[mm + 1][t].abs();
-                    if e[mm][t].abs() <= eps * dd {
-                        break;
-                    }
-                    mm += 1;
-                }
+                let mm = bottom[t] as usize;
                 if mm != l {
                     iter[t] += 1;
                     if iter[t] > 30 * n.max(1) {
@@ -208,46 +226,77 @@ fn ql_implicit<const L: usize>(
             let shift = zip(e[l], zip(g, r, |g, r| g + r.copysign(g)), |e, x| e / x);
             let mut g = zip(zip(dm, d[l], |dm, dl| dm - dl), shift, |x, s| x + s);
             let (mut s, mut c, mut p) = ([1.0; L], [1.0; L], [0.0; L]);
-            // Lanes still rotating in this sweep (a zero rotation radius ends one early).
-            let mut live = active;
+            // Lanes still rotating in this sweep (a zero rotation radius ends one early), as
+            // word masks: they vectorise as the comparisons they come from, where arrays of
+            // bool cost a conversion per use.
+            let mut live: Mask<L> = mask(|t| active[t]);
+            let bottom: [i64; L] = std::array::from_fn(|t| m[t] as i64);
             let mut i = top;
             while i > l {
                 i -= 1;
-                let part: [bool; L] = std::array::from_fn(|t| live[t] && i < m[t]);
+                let part: Mask<L> = std::array::from_fn(|t| live[t] & word(bottom[t] > i as i64));
                 let f = zip(s, e[i], |s, e| s * e);
                 let b = zip(c, e[i], |c, e| c * e);
                 // sqrt(f² + g²) rather than hypot (half the time of the scan): Gram matrices
                 // of Jacobians in mm and rad stay far from the over/underflow range.
                 let r = zip(f, g, |f, g| (f * f + g * g).sqrt());
-                e[i + 1] = select(part, r, e[i + 1]);
-                let early: [bool; L] = std::array::from_fn(|t| part[t] && r[t] == 0.0);
-                if early.iter().any(|&x| x) {
-                    d[i + 1] = select(early, zip(d[i + 1], p, |d, p| d - p), d[i + 1]);
-                    for t in (0..L).filter(|&t| early[t]) {
+                e[i + 1] = blend(part, r, e[i + 1]);
+                let early: Mask<L> = std::array::from_fn(|t| part[t] & word(r[t] == 0.0));
+                if early.iter().any(|&x| x != 0) {
+                    d[i + 1] = blend(early, zip(d[i + 1], p, |d, p| d - p), d[i + 1]);
+                    for t in (0..L).filter(|&t| early[t] != 0) {
                         e[m[t]][t] = 0.0;
-                        live[t] = false;
+                        live[t] = 0;
                     }
                 }
-                let go: [bool; L] = std::array::from_fn(|t| part[t] && !early[t]);
+                let go: Mask<L> = std::array::from_fn(|t| part[t] & !early[t]);
                 let s1 = zip(f, r, |f, r| f / r);
                 let c1 = zip(g, r, |g, r| g / r);
                 let g1 = zip(d[i + 1], p, |d, p| d - p);
                 let r1: [Real; L] =
                     std::array::from_fn(|t| (d[i][t] - g1[t]) * s1[t] + 2.0 * c1[t] * b[t]);
                 let p1 = zip(s1, r1, |s, r| s * r);
-                d[i + 1] = select(go, zip(g1, p1, |g, p| g + p), d[i + 1]);
-                g = select(go, zip(zip(c1, r1, |c, r| c * r), b, |cr, b| cr - b), g);
-                s = select(go, s1, s);
-                c = select(go, c1, c);
-                p = select(go, p1, p);
+                d[i + 1] = blend(go, zip(g1, p1, |g, p| g + p), d[i + 1]);
+                g = blend(go, zip(zip(c1, r1, |c, r| c * r), b, |cr, b| cr - b), g);
+                s = blend(go, s1, s);
+                c = blend(go, c1, c);
+                p = blend(go, p1, p);
             }
-            for t in (0..L).filter(|&t| live[t]) {
-                d[l][t] -= p[t];
-                e[l][t] = g[t];
-                e[m[t]][t] = 0.0;
+            // Without branches on the lanes (which lanes finish a sweep is unpredictable):
+            // a lane not live keeps its values, and m = l for a lane not active.
+            d[l] = blend(live, zip(d[l], p, |d, p| d - p), d[l]);
+            e[l] = blend(live, g, e[l]);
+            for t in 0..L {
+                let x = &mut e[m[t]][t];
+                *x = if live[t] != 0 { 0.0 } else { *x };
             }
         }
     }
+}
+
+/// Lane masks as words, all ones (true) or zero (false).
+type Mask<const L: usize> = [u64; L];
+
+/// The word of a mask lane.
+#[inline(always)]
+fn word(b: bool) -> u64 {
+    if b {
+        u64::MAX
+    } else {
+        0
+    }
+}
+
+/// The mask of `f(t)` per lane.
+#[inline(always)]
+fn mask<const L: usize>(f: impl Fn(usize) -> bool) -> Mask<L> {
+    std::array::from_fn(|t| word(f(t)))
+}
+
+/// Lane-wise `if mask { new } else { old }`, by the bits.
+#[inline(always)]
+fn blend<const L: usize>(m: Mask<L>, new: [Real; L], old: [Real; L]) -> [Real; L] {
+    std::array::from_fn(|t| Real::from_bits((new[t].to_bits() & m[t]) | (old[t].to_bits() & !m[t])))
 }
 
 #[cfg(test)]
@@ -333,10 +382,12 @@ mod tests {
 
     #[test]
     fn hand_cases() {
-        // [[2, 1], [1, 4]] → 3 ± √2; 1 × 1; diagonal.
-        let mut a = [2.0, 0.0, 1.0, 4.0];
+        // [[2, 1], [1, 4]] → 3 ± √2 (the upper triangle, here NaN, is neither read nor
+        // written); 1 × 1; diagonal.
+        let mut a = [2.0, Real::NAN, 1.0, 4.0];
         let (mut d, mut e) = ([0.0; 2], [0.0; 2]);
         assert!(symmetric_eigenvalues(&mut a, 2, &mut d, &mut e));
+        assert!(a[1].is_nan());
         d.sort_unstable_by(|a, b| a.total_cmp(b));
         assert!((d[0] - (3.0 - 2.0f64.sqrt())).abs() < 1e-14);
         assert!((d[1] - (3.0 + 2.0f64.sqrt())).abs() < 1e-14);

@@ -9,12 +9,12 @@
 //! relative 1e-12 (so equal-valued sets cannot cycle).
 //!
 //! Cost: the Jacobian blocks of all candidates are computed once; the singular values of J are
-//! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. For each
-//! candidate the lower triangle of JᵀJ ± BᵀB is formed in a per-worker buffer and its
-//! eigenvalues found by the allocation-free Householder + implicit-QL solver of
-//! [`crate::symeig`], eight candidates at a time in the lanes of
-//! [`crate::symeig::symmetric_eigenvalues_lanes`] (the same bits as one at a time; about 5×
-//! faster than nalgebra's generic `symmetric_eigenvalues` at k = 26). The candidate scan runs
+//! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. Eight
+//! candidates at a time, the lower triangles of JᵀJ ± BᵀB are formed in the lanes of a
+//! per-worker [`Spectra`] and their eigenvalues found together by the allocation-free
+//! Householder + implicit-QL solver of [`crate::symeig::symmetric_eigenvalues_lanes`] (the
+//! same bits as one at a time, and several times faster than nalgebra's generic
+//! `symmetric_eigenvalues` at k = 26). The candidate scan runs
 //! on rayon and reduces by (value, index) with ties to the lower index, so the result does not
 //! depend on the thread count.
 
@@ -58,14 +58,12 @@ fn better(x: (Real, usize), y: (Real, usize)) -> (Real, usize) {
 
 /// Buffers of one rayon worker in a scan.
 struct ScanBuf {
-    g: Vec<Real>,
     spectra: Spectra,
 }
 
 impl ScanBuf {
     fn new(k: usize) -> Self {
         ScanBuf {
-            g: vec![0.0; k * k],
             spectra: Spectra::new(k),
         }
     }
@@ -87,11 +85,13 @@ impl ScanBuf {
         m: usize,
     ) -> (Real, usize) {
         debug_assert!(!keys.is_empty() && keys.len() <= Spectra::LANES);
-        for (t, &key) in keys.iter().enumerate() {
-            self.g.copy_from_slice(gram);
-            add_block(&mut self.g, blocks_t, r, cand(key), sign);
-            self.spectra.set(t, &self.g);
-        }
+        // Candidate c's rows: columns r·c .. r·c + r of the column-major blocks_t.
+        let k = blocks_t.nrows();
+        let rows = |t: usize| {
+            let c = cand(keys[t]);
+            &blocks_t.as_slice()[r * c * k..(r * c + r) * k]
+        };
+        self.spectra.set_plus_rows(keys.len(), gram, rows, sign);
         let values = self.spectra.objectives(keys.len(), objective, m);
         keys.iter()
             .zip(values)
@@ -290,6 +290,24 @@ mod tests {
                 dense_gram(&blocks, r, &set, &mut a);
                 let mut buf = ScanBuf::new(k);
                 for o in [Objective::Composite, Objective::O1, Objective::O6] {
+                    // The lanes' values are those of the one-matrix path to the bit, eight
+                    // candidates at a time (the best of them) as well as one.
+                    let mut g = vec![0.0; k * k];
+                    gram(&blocks_t, r, &set, &mut g);
+                    let outside: Vec<usize> = (m..m + 40).collect();
+                    for keys in outside.chunks(Spectra::LANES) {
+                        let one_by_one = keys.iter().map(|&c| {
+                            let mut plus = g.clone();
+                            add_block(&mut plus, &blocks_t, r, c, 1.0);
+                            let v = objective_of_lower(&plus, k, o, m + 1);
+                            let alone = buf.best(&g, &blocks_t, r, &[c], |c| c, 1.0, o, m + 1);
+                            assert_eq!(alone.0.to_bits(), v.to_bits(), "{c}, {o:?}, m {m}");
+                            (v, c)
+                        });
+                        let want = one_by_one.fold((Real::NEG_INFINITY, usize::MAX), better);
+                        let got = buf.best(&g, &blocks_t, r, keys, |c| c, 1.0, o, m + 1);
+                        assert_eq!((got.0.to_bits(), got.1), (want.0.to_bits(), want.1));
+                    }
                     for c in m..cands.len() {
                         let fast = buf
                             .best(a.as_slice(), &blocks_t, r, &[c], |c| c, 1.0, o, m + 1)

@@ -29,7 +29,7 @@ use rand::Rng as _;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
-use super::{Evaluator, Objective, PoseModel, Spectra};
+use super::{Evaluator, KnownBlocks, Objective, PoseModel, Spectra};
 use crate::math::Real;
 use crate::rng::Rng;
 use crate::Error;
@@ -174,6 +174,8 @@ pub fn ide(
     let mut best_idx: Vec<Option<usize>> = start_indices.to_vec();
     let mut ev = Evaluator::new(model);
     let mut best_val = ev.value(model, &best, objective);
+    // The best set's Jacobian blocks: the crossover copies most of its poses into each trial.
+    let mut known = KnownBlocks::new(model, &best);
     let start_value = best_val;
 
     // Eq. 19: the Gaussian population around the start set.
@@ -229,7 +231,7 @@ pub fn ide(
             .for_each_init(
                 || Evaluator::new(model),
                 |e, (sets, vals)| {
-                    let v = e.values(model, sets, len, objective);
+                    let v = e.values(model, sets, len, objective, &known);
                     vals.copy_from_slice(&v[..vals.len()]);
                 },
             );
@@ -243,6 +245,7 @@ pub fn ide(
         }
         if let Some(s) = winner {
             best.copy_from_slice(&trials[s * len..(s + 1) * len]);
+            known = KnownBlocks::new(model, &best);
             let t = s / 2;
             for p in 0..m {
                 if s % 2 == 1 || from_e[t * m + p] {

@@ -45,6 +45,11 @@ pub trait PoseModel: Sync {
     fn limits(&self) -> &[(Real, Real)];
     /// Writes the `rows_per_pose × n_params` Jacobian block of pose `q` into `out`.
     fn jacobian_block(&self, q: &[Real], out: &mut DMatrixViewMut<Real>);
+    /// [`PoseModel::jacobian_block`] into a whole matrix of that shape (the same values; a
+    /// model may skip the intermediate view).
+    fn jacobian_block_into(&self, q: &[Real], out: &mut DMatrix<Real>) {
+        self.jacobian_block(q, &mut out.as_view_mut());
+    }
 }
 
 /// A [`PoseModel`] over a robot's identification Jacobian ([`crate::jacobian::pose_rows`],
@@ -123,17 +128,19 @@ impl PoseModel for RobotPoseModel {
             let mut s = s.borrow_mut();
             if s.shape() != (r, k) {
                 *s = DMatrix::zeros(r, k);
-            } else {
-                s.fill(0.0);
             }
-            pose_rows(&self.chain, &self.cols, q, self.measure, &mut s, 0);
-            if let Some(sc) = &self.scale {
-                for (mut c, f) in s.column_iter_mut().zip(sc) {
-                    c *= *f;
-                }
-            }
+            self.jacobian_block_into(q, &mut s);
             out.copy_from(&*s);
         });
+    }
+    fn jacobian_block_into(&self, q: &[Real], out: &mut DMatrix<Real>) {
+        out.fill(0.0);
+        pose_rows(&self.chain, &self.cols, q, self.measure, out, 0);
+        if let Some(sc) = &self.scale {
+            for (mut c, f) in out.column_iter_mut().zip(sc) {
+                c *= *f;
+            }
+        }
     }
 }
 
@@ -274,13 +281,18 @@ pub(crate) fn add_outer_lower(g: &mut [Real], b: &[Real], sign: Real) {
 /// [`Spectra::LANES`] matrices share their instructions
 /// ([`crate::symeig::symmetric_eigenvalues_lanes`]; eight lanes are two AVX2 registers, whose
 /// independent chains hide the latency of the QL sweeps better than one). Each matrix's
-/// objective is the same bits as [`objective_of_lower`] of the same entries.
+/// objective is the same bits as [`objective_of_lower`] of the same entries. Only the lower
+/// triangles are stored (the rest stays zero: [`symmetric_eigenvalues_lanes`] neither reads nor
+/// writes it), and they are built in the lanes too ([`Spectra::set_plus_rows`],
+/// [`Spectra::accumulate`]).
 pub(crate) struct Spectra {
     k: usize,
     a: Vec<[Real; Spectra::LANES]>,
     d: Vec<[Real; Spectra::LANES]>,
     e: Vec<[Real; Spectra::LANES]>,
     ev: Vec<Real>,
+    /// Rows of pose blocks, row after row (k values each), lane t holding matrix t's.
+    rows: Vec<[Real; Spectra::LANES]>,
 }
 
 impl Spectra {
@@ -294,14 +306,78 @@ impl Spectra {
             d: vec![[0.0; Self::LANES]; k],
             e: vec![[0.0; Self::LANES]; k],
             ev: vec![0.0; k],
+            rows: Vec::new(),
         }
     }
 
-    /// Puts the lower triangle of the row-major k × k matrix `g` into lane `t`.
-    pub(crate) fn set(&mut self, t: usize, g: &[Real]) {
-        for (x, &v) in self.a.iter_mut().zip(g) {
-            x[t] = v;
+    /// Puts into lanes `0..used` the lower triangles of `g` + `sign`·Σ_r b_r b_rᵀ, `g` row-major
+    /// k × k and the rows b_r of lane t's pose block stored one after another in `rows(t)`
+    /// (k values each): the lanes computed together, each entry the same bits as
+    /// [`add_outer_lower`] of the rows one after another on a copy of `g`. Lanes from `used`
+    /// on get unspecified matrices.
+    pub(crate) fn set_plus_rows<'a>(
+        &mut self,
+        used: usize,
+        g: &[Real],
+        rows: impl Fn(usize) -> &'a [Real],
+        sign: Real,
+    ) {
+        let n = rows(0).len();
+        self.rows.resize(n, [0.0; Self::LANES]);
+        for t in 0..used {
+            for (x, &v) in self.rows.iter_mut().zip(rows(t)) {
+                x[t] = v;
+            }
         }
+        self.accumulate(Some(g), sign);
+    }
+
+    /// Zeroes the lower triangles of every lane.
+    fn clear(&mut self) {
+        let k = self.k;
+        for i in 0..k {
+            self.a[i * k..i * k + i + 1].fill([0.0; Self::LANES]);
+        }
+    }
+
+    /// Puts the rows of the `r` × k pose block `block` into lane `t`, for
+    /// [`Spectra::accumulate`].
+    fn put_rows(&mut self, t: usize, block: &DMatrix<Real>) {
+        let (r, k) = block.shape();
+        self.rows.resize(r * k, [0.0; Self::LANES]);
+        for row in 0..r {
+            for i in 0..k {
+                self.rows[row * k + i][t] = block[(row, i)];
+            }
+        }
+    }
+
+    /// Each lane's lower triangle becomes `g` (or, without `g`, stays as it is) plus
+    /// `sign`·Σ_r b_r b_rᵀ of that lane's rows b_r, added one row after another as
+    /// [`add_outer_lower`] adds them.
+    fn accumulate(&mut self, g: Option<&[Real]>, sign: Real) {
+        let k = self.k;
+        let (a, b) = (&mut self.a, &self.rows);
+        crate::math::with_avx2(
+            #[inline(always)]
+            || {
+                for i in 0..k {
+                    let row = i * k..i * k + i + 1;
+                    for (j, x) in a[row.clone()].iter_mut().enumerate() {
+                        let mut v = match g {
+                            Some(g) => [g[i * k + j]; Self::LANES],
+                            None => *x,
+                        };
+                        for r in b.chunks_exact(k) {
+                            for t in 0..Self::LANES {
+                                v[t] += sign * r[i][t] * r[j][t];
+                            }
+                        }
+                        *x = v;
+                    }
+                }
+            },
+        );
     }
 
     /// The objectives over `m` poses of the matrices in lanes `0..used` (entries from `used`
@@ -312,9 +388,12 @@ impl Spectra {
         objective: Objective,
         m: usize,
     ) -> [Real; Self::LANES] {
-        for x in &mut self.a {
-            for t in used..Self::LANES {
-                x[t] = x[0];
+        let k = self.k;
+        for i in 0..k {
+            for x in &mut self.a[i * k..i * k + i + 1] {
+                for t in used..Self::LANES {
+                    x[t] = x[0];
+                }
             }
         }
         let ok = symmetric_eigenvalues_lanes(&mut self.a, self.k, &mut self.d, &mut self.e);
@@ -355,8 +434,7 @@ impl Evaluator {
         let dof = model.dof();
         self.gram.fill(0.0);
         for q in poses.chunks_exact(dof) {
-            let mut v = self.block.as_view_mut();
-            model.jacobian_block(q, &mut v);
+            model.jacobian_block_into(q, &mut self.block);
             for i in 0..self.block.nrows() {
                 for (x, b) in self.row.iter_mut().zip(self.block.row(i).iter()) {
                     *x = *b;
@@ -380,22 +458,72 @@ impl Evaluator {
 
     /// The objectives of up to [`Spectra::LANES`] pose sets stored one after another in
     /// `sets`, `len` values each (entries past the sets are −∞): the same bits as
-    /// [`Evaluator::value`] of each.
+    /// [`Evaluator::value`] of each. A pose equal (to the bit) to the same pose of `known`
+    /// takes its block from there.
     pub(crate) fn values(
         &mut self,
         model: &dyn PoseModel,
         sets: &[Real],
         len: usize,
         objective: Objective,
+        known: &KnownBlocks,
     ) -> [Real; Spectra::LANES] {
-        let mut m = 0;
-        let mut used = 0;
-        for (t, set) in sets.chunks_exact(len.max(1)).enumerate() {
-            m = self.gram(model, set);
-            self.spectra.set(t, &self.gram);
-            used = t + 1;
+        // The sets' Gram matrices built together, pose after pose.
+        let dof = model.dof().max(1);
+        let used = sets.len() / len.max(1);
+        let m = len / dof;
+        self.spectra.clear();
+        for p in 0..m {
+            let at = p * dof..(p + 1) * dof;
+            for (t, set) in sets.chunks_exact(len.max(1)).enumerate() {
+                let q = &set[at.clone()];
+                match known.block(p, q) {
+                    Some(block) => self.spectra.put_rows(t, block),
+                    None => {
+                        model.jacobian_block_into(q, &mut self.block);
+                        self.spectra.put_rows(t, &self.block);
+                    }
+                }
+            }
+            self.spectra.accumulate(None, 1.0);
         }
         self.spectra.objectives(used, objective, m)
+    }
+}
+
+/// The Jacobian blocks of one pose set (IDE's current best), for the trial sets that keep
+/// some of its poses: a block depends only on its pose, so a pose met again need not be
+/// differentiated again.
+pub(crate) struct KnownBlocks {
+    dof: usize,
+    poses: Vec<Real>,
+    blocks: Vec<DMatrix<Real>>,
+}
+
+impl KnownBlocks {
+    /// The blocks of the poses stored flat in `poses` (`model.dof()` values each).
+    pub(crate) fn new(model: &dyn PoseModel, poses: &[Real]) -> Self {
+        let (r, k, dof) = (model.rows_per_pose(), model.n_params(), model.dof().max(1));
+        let blocks = poses
+            .chunks_exact(dof)
+            .map(|q| {
+                let mut b = DMatrix::zeros(r, k);
+                model.jacobian_block_into(q, &mut b);
+                b
+            })
+            .collect();
+        KnownBlocks {
+            dof,
+            poses: poses.to_vec(),
+            blocks,
+        }
+    }
+
+    /// The block of pose `p` when it is `q` (bit for bit).
+    fn block(&self, p: usize, q: &[Real]) -> Option<&DMatrix<Real>> {
+        let own = self.poses.get(p * self.dof..(p + 1) * self.dof)?;
+        let same = own.iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits());
+        same.then(|| &self.blocks[p])
     }
 }
 
@@ -625,12 +753,15 @@ mod tests {
 
     #[test]
     fn gram_eigen_path_agrees_with_svd_scores() {
-        let robot = crate::robots::irb2600();
-        let params: Vec<Param> = (0..6)
-            .flat_map(|j| [Param::Theta(j), Param::A(j)])
-            .collect();
-        let model = RobotPoseModel::new(&robot, &params, Measure::Position);
+        // The identifiable parameters: with an unidentifiable one every index is zero.
+        let mut robot = crate::robots::irb2600();
+        robot.set(Param::Tool(0), 80.0);
         let mut rng = crate::rng::from_seed(3);
+        let rich = crate::sampling::uniform_joint_poses(&robot, 60, &mut rng);
+        let params =
+            crate::identifiability::analyse(&robot, &robot.params(), &rich, Measure::Position)
+                .identifiable;
+        let model = RobotPoseModel::new(&robot, &params, Measure::Position);
         let qs = crate::sampling::uniform_joint_poses(&robot, 12, &mut rng);
         let s = score(&model, &qs);
         let flat: Vec<Real> = qs.iter().flatten().copied().collect();
@@ -642,9 +773,66 @@ mod tests {
         ] {
             let got = ev.value(&model, &flat, o);
             assert!(
+                want > 0.0,
+                "{o:?}: a rank-deficient set would compare zeros"
+            );
+            assert!(
                 (got - want).abs() <= 1e-7 * want.abs(),
                 "{o:?}: {got} vs {want}"
             );
+        }
+    }
+
+    #[test]
+    fn sets_evaluated_together_are_the_sets_one_by_one_to_the_bit() {
+        // Eight trial sets of 20 poses sharing some poses with a base set (as IDE's crossover
+        // makes them), and a ninth call with three sets: the objectives of the lanes, with and
+        // without the base set's blocks, are those of `value` one set at a time.
+        let mut robot = crate::robots::irb2600();
+        robot.set(Param::Tool(0), 80.0);
+        let mut rng = crate::rng::from_seed(5);
+        let rich = crate::sampling::uniform_joint_poses(&robot, 60, &mut rng);
+        let params =
+            crate::identifiability::analyse(&robot, &robot.params(), &rich, Measure::Position)
+                .identifiable;
+        let model = RobotPoseModel::new(&robot, &params, Measure::Position);
+        let (m, dof) = (20, model.dof());
+        let flat = |qs: Vec<Vec<Real>>| qs.into_iter().flatten().collect::<Vec<Real>>();
+        let base = flat(crate::sampling::uniform_joint_poses(&robot, m, &mut rng));
+        let mut sets = Vec::new();
+        for t in 0..Spectra::LANES {
+            let mut set = flat(crate::sampling::uniform_joint_poses(&robot, m, &mut rng));
+            for p in (0..m).filter(|p| (p + t) % 3 != 0) {
+                set[p * dof..(p + 1) * dof].copy_from_slice(&base[p * dof..(p + 1) * dof]);
+            }
+            sets.extend(set);
+        }
+        let len = m * dof;
+        let known = KnownBlocks::new(&model, &base);
+        let nothing_known = KnownBlocks::new(&model, &[]);
+        let mut ev = Evaluator::new(&model);
+        for objective in [Objective::Composite, Objective::O1, Objective::O6] {
+            let one_by_one: Vec<Real> = sets
+                .chunks_exact(len)
+                .map(|set| ev.value(&model, set, objective))
+                .collect();
+            assert!(one_by_one.iter().all(|&v| v.is_finite() && v > 0.0));
+            for k in [&known, &nothing_known] {
+                let all = ev.values(&model, &sets, len, objective, k);
+                assert_eq!(
+                    all.map(Real::to_bits).to_vec(),
+                    one_by_one.iter().map(|v| v.to_bits()).collect::<Vec<_>>()
+                );
+                let three = ev.values(&model, &sets[..3 * len], len, objective, k);
+                assert_eq!(
+                    three[..3].iter().map(|v| v.to_bits()).collect::<Vec<_>>(),
+                    one_by_one[..3]
+                        .iter()
+                        .map(|v| v.to_bits())
+                        .collect::<Vec<_>>()
+                );
+                assert!(three[3..].iter().all(|&v| v == Real::NEG_INFINITY));
+            }
         }
     }
 
