@@ -394,12 +394,19 @@ mod tests {
         let _ = r;
     }
 
+    /// The error reading `text` from a file of its own (tests run in parallel threads of one
+    /// process: a shared name let one test read another's file).
     fn read_err(text: &str) -> String {
-        let p = tmp("bad.csv");
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let name = format!(
+            "bad-{}.csv",
+            N.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        );
+        let p = tmp(&name);
         std::fs::write(&p, text).unwrap();
         let e = read_measurements(&p, &crate::robots::irb2600()).unwrap_err();
         let s = e.to_string();
-        assert!(s.contains("bad.csv"), "{s}");
+        assert!(s.contains(&name), "{s}");
         s
     }
 
