@@ -78,6 +78,12 @@ fn zip<const L: usize>(x: [Real; L], y: [Real; L], f: impl Fn(Real, Real) -> Rea
     std::array::from_fn(|t| f(x[t], y[t]))
 }
 
+/// Lane-wise `acc + x·u` (a multiplication and an addition: no fused multiply-add).
+#[inline(always)]
+fn mul_add<const L: usize>(acc: [Real; L], x: [Real; L], u: [Real; L]) -> [Real; L] {
+    std::array::from_fn(|t| acc[t] + x[t] * u[t])
+}
+
 /// Lane-wise `if mask { new } else { old }`.
 #[inline(always)]
 fn select<const L: usize>(mask: [bool; L], new: [Real; L], old: [Real; L]) -> [Real; L] {
@@ -119,42 +125,76 @@ fn tridiagonalise<const L: usize>(
             let h = zip(h, zip(f, g, |f, g| f * g), |h, fg| h - fg);
             let h = select(skip, [1.0; L], h);
             ri[l] = zip(f, g, |f, g| f - g);
+            // g = (A u)_j over the lower triangle (row j up to j, then column j below), two
+            // rows at a time: two independent sums sharing the loads of u, each in the order
+            // of its row alone.
             let mut f = [0.0; L];
-            for j in 0..=l {
-                // g = (A u)_j over the lower triangle: row j up to j, then column j below.
-                let mut g = [0.0; L];
-                for (x, u) in head[j * n..j * n + j + 1].iter().zip(&ri[..=j]) {
-                    g = zip(g, zip(*x, *u, |x, u| x * u), |g, xu| g + xu);
-                }
-                for kk in (j + 1)..=l {
-                    g = zip(g, zip(head[kk * n + j], ri[kk], |x, u| x * u), |g, xu| {
-                        g + xu
-                    });
-                }
-                e[j] = zip(g, h, |g, h| g / h);
-                f = zip(f, zip(e[j], ri[j], |e, u| e * u), |f, eu| f + eu);
-            }
-            let hh = zip(f, h, |f, h| f / (h + h));
-            // A lane that skips keeps its entries; without one (almost always) no selection.
-            let any_skip = skip.iter().any(|&s| s);
-            for j in 0..=l {
-                let f = ri[j];
-                let g = zip(e[j], zip(hh, f, |hh, f| hh * f), |e, hf| e - hf);
-                e[j] = g;
-                let rj = &mut head[j * n..j * n + j + 1];
-                let updates = rj.iter_mut().zip(&e[..=j]).zip(&ri[..=j]);
-                let step = |ek: &[Real; L], uk: &[Real; L]| -> [Real; L] {
-                    std::array::from_fn(|t| f[t] * ek[t] + g[t] * uk[t])
-                };
-                if any_skip {
-                    for ((x, ek), uk) in updates {
-                        *x = select(skip, *x, zip(*x, step(ek, uk), |x, s| x - s));
+            let mut j = 0;
+            while j <= l {
+                let pair = j < l;
+                let (mut g0, mut g1) = ([0.0; L], [0.0; L]);
+                if pair {
+                    let r0 = &head[j * n..j * n + j + 1];
+                    let r1 = &head[(j + 1) * n..(j + 1) * n + j + 2];
+                    for ((x0, x1), u) in r0.iter().zip(r1).zip(&ri[..=j]) {
+                        g0 = mul_add(g0, *x0, *u);
+                        g1 = mul_add(g1, *x1, *u);
+                    }
+                    g1 = mul_add(g1, r1[j + 1], ri[j + 1]);
+                    g0 = mul_add(g0, r1[j], ri[j + 1]);
+                    for kk in (j + 2)..=l {
+                        g0 = mul_add(g0, head[kk * n + j], ri[kk]);
+                        g1 = mul_add(g1, head[kk * n + j + 1], ri[kk]);
                     }
                 } else {
-                    for ((x, ek), uk) in updates {
-                        *x = zip(*x, step(ek, uk), |x, s| x - s);
+                    for (x, u) in head[j * n..j * n + j + 1].iter().zip(&ri[..=j]) {
+                        g0 = mul_add(g0, *x, *u);
                     }
                 }
+                for (jj, g) in [(j, g0), (j + 1, g1)].into_iter().take(1 + pair as usize) {
+                    e[jj] = zip(g, h, |g, h| g / h);
+                    f = mul_add(f, e[jj], ri[jj]);
+                }
+                j += 1 + pair as usize;
+            }
+            let hh = zip(f, h, |f, h| f / (h + h));
+            // Row j less f_j e + g_j u over its first j + 1 entries, with g_j = e_j − hh f_j
+            // (into e_j) and f_j = u_j; two rows at a time, sharing the loads of e and u. A
+            // lane that skips keeps its entries: without one (almost always) no selection.
+            let any_skip = skip.iter().any(|&s| s);
+            let step =
+                |f: &[Real; L], g: &[Real; L], ek: &[Real; L], uk: &[Real; L]| -> [Real; L] {
+                    std::array::from_fn(|t| f[t] * ek[t] + g[t] * uk[t])
+                };
+            let sub = |x: Real, s: Real| x - s;
+            let mut j = 0;
+            while j <= l {
+                let f0 = ri[j];
+                let g0 = zip(e[j], zip(hh, f0, |hh, f| hh * f), |e, hf| e - hf);
+                e[j] = g0;
+                if any_skip || j == l {
+                    let updates = head[j * n..j * n + j + 1]
+                        .iter_mut()
+                        .zip(&e[..=j])
+                        .zip(&ri[..=j]);
+                    for ((x, ek), uk) in updates {
+                        let new = zip(*x, step(&f0, &g0, ek, uk), sub);
+                        *x = if any_skip { select(skip, *x, new) } else { new };
+                    }
+                    j += 1;
+                    continue;
+                }
+                let f1 = ri[j + 1];
+                let g1 = zip(e[j + 1], zip(hh, f1, |hh, f| hh * f), |e, hf| e - hf);
+                e[j + 1] = g1;
+                let (r0, r1) = head[j * n..(j + 2) * n].split_at_mut(n);
+                let rows = r0[..=j].iter_mut().zip(&mut r1[..=j]);
+                for (((x0, x1), ek), uk) in rows.zip(&e[..=j]).zip(&ri[..=j]) {
+                    *x0 = zip(*x0, step(&f0, &g0, ek, uk), sub);
+                    *x1 = zip(*x1, step(&f1, &g1, ek, uk), sub);
+                }
+                r1[j + 1] = zip(r1[j + 1], step(&f1, &g1, &e[j + 1], &ri[j + 1]), sub);
+                j += 2;
             }
         } else {
             e[i] = a[i * n + l];
