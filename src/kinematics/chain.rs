@@ -132,10 +132,9 @@ fn apply<const L: usize>(
     match kind {
         OpKind::Tx | OpKind::Ty | OpKind::Tz => {
             let a = kind.axis();
-            for (p, r) in f.p.iter_mut().zip(&f.r) {
-                for ((p, &r), &v) in p.iter_mut().zip(&r[a]).zip(v) {
-                    *p += r * v;
-                }
+            for k in 0..3 {
+                let (p, r) = (f.p[k], f.r[k][a]);
+                f.p[k] = std::array::from_fn(|l| p[l] + r[l] * v[l]);
             }
         }
         OpKind::Rx => rotate_cols(&mut f.r, 1, 2, s, c),
