@@ -56,49 +56,36 @@ fn better(x: (Real, usize), y: (Real, usize)) -> (Real, usize) {
     }
 }
 
-/// Buffers of one rayon worker in a scan.
-struct ScanBuf {
-    spectra: Spectra,
-}
-
-impl ScanBuf {
-    fn new(k: usize) -> Self {
-        ScanBuf {
-            spectra: Spectra::new(k),
-        }
-    }
-
-    /// The best (value, key) of `keys` (at most [`Spectra::LANES`]; ties to the lower key):
-    /// the objective of `gram` + `sign`·BᵀB over `m` poses for candidate c = `cand(key)` (Bᵀ =
-    /// columns `r·c .. r·c + r` of `blocks_t`), the candidates' eigenvalue problems solved
-    /// together ([`Spectra`]; only the lower triangles are formed).
-    #[allow(clippy::too_many_arguments)]
-    fn best(
-        &mut self,
-        gram: &[Real],
-        blocks_t: &DMatrix<Real>,
-        r: usize,
-        keys: &[usize],
-        cand: impl Fn(usize) -> usize,
-        sign: Real,
-        objective: Objective,
-        m: usize,
-    ) -> (Real, usize) {
-        debug_assert!(!keys.is_empty() && keys.len() <= Spectra::LANES);
-        // Candidate c's rows: columns r·c .. r·c + r of the column-major blocks_t.
-        let k = blocks_t.nrows();
-        let rows = |t: usize| {
-            let c = cand(keys[t]);
-            &blocks_t.as_slice()[r * c * k..(r * c + r) * k]
-        };
-        self.spectra.set_plus_rows(keys.len(), gram, rows, sign);
-        let values = self.spectra.objectives(keys.len(), objective, m);
-        keys.iter()
-            .zip(values)
-            .fold((Real::NEG_INFINITY, usize::MAX), |b, (&key, v)| {
-                better(b, (v, key))
-            })
-    }
+/// The best (value, key) of `keys` (at most [`Spectra::LANES`]; ties to the lower key): the
+/// objective of `gram` + `sign`·BᵀB over `m` poses for candidate c = `cand(key)` (Bᵀ = columns
+/// `r·c .. r·c + r` of `blocks_t`), the candidates' eigenvalue problems solved together in
+/// `spectra` (only the lower triangles are formed).
+#[allow(clippy::too_many_arguments)]
+fn scan_best(
+    spectra: &mut Spectra,
+    gram: &[Real],
+    blocks_t: &DMatrix<Real>,
+    r: usize,
+    keys: &[usize],
+    cand: impl Fn(usize) -> usize,
+    sign: Real,
+    objective: Objective,
+    m: usize,
+) -> (Real, usize) {
+    debug_assert!(!keys.is_empty() && keys.len() <= Spectra::LANES);
+    // Candidate c's rows: columns r·c .. r·c + r of the column-major blocks_t.
+    let k = blocks_t.nrows();
+    let rows = |t: usize| {
+        let c = cand(keys[t]);
+        &blocks_t.as_slice()[r * c * k..(r * c + r) * k]
+    };
+    spectra.set_plus_rows(keys.len(), gram, rows, sign);
+    let values = spectra.objectives(keys.len(), objective, m);
+    keys.iter()
+        .zip(values)
+        .fold((Real::NEG_INFINITY, usize::MAX), |b, (&key, v)| {
+            better(b, (v, key))
+        })
 }
 
 /// The lower triangle of the Gram matrix JᵀJ of the candidates in `set`, row-major.
@@ -148,10 +135,11 @@ pub fn detmax(
         outside.extend((0..n).filter(|&c| !in_set[c]));
         let (_, added) = outside
             .par_chunks(Spectra::LANES)
-            .map_init(
-                || ScanBuf::new(k),
-                |buf, cands| buf.best(&a, &blocks_t, r, cands, |c| c, 1.0, objective, m + 1),
-            )
+            .map(|cands| {
+                Spectra::with(k, |sp| {
+                    scan_best(sp, &a, &blocks_t, r, cands, |c| c, 1.0, objective, m + 1)
+                })
+            })
             .reduce(|| (Real::NEG_INFINITY, usize::MAX), better);
         if added == usize::MAX {
             break "detmax: no candidate left to add".to_string();
@@ -162,10 +150,21 @@ pub fn detmax(
         // added restores the current set and its value exactly, and wins ties.
         let (best_other, removed_pos) = positions
             .par_chunks(Spectra::LANES)
-            .map_init(
-                || ScanBuf::new(k),
-                |buf, pos| buf.best(&a_plus, &blocks_t, r, pos, |p| set[p], -1.0, objective, m),
-            )
+            .map(|pos| {
+                Spectra::with(k, |sp| {
+                    scan_best(
+                        sp,
+                        &a_plus,
+                        &blocks_t,
+                        r,
+                        pos,
+                        |p| set[p],
+                        -1.0,
+                        objective,
+                        m,
+                    )
+                })
+            })
             .reduce(|| (Real::NEG_INFINITY, usize::MAX), better);
         // (3) The exchange rule.
         let improves = removed_pos != usize::MAX
@@ -288,7 +287,7 @@ mod tests {
                 let set: Vec<usize> = (0..m).collect();
                 let mut a = DMatrix::zeros(k, k);
                 dense_gram(&blocks, r, &set, &mut a);
-                let mut buf = ScanBuf::new(k);
+                let mut buf = Spectra::new(k);
                 for o in [Objective::Composite, Objective::O1, Objective::O6] {
                     // The lanes' values are those of the one-matrix path to the bit, eight
                     // candidates at a time (the best of them) as well as one.
@@ -300,18 +299,28 @@ mod tests {
                             let mut plus = g.clone();
                             add_block(&mut plus, &blocks_t, r, c, 1.0);
                             let v = objective_of_lower(&plus, k, o, m + 1);
-                            let alone = buf.best(&g, &blocks_t, r, &[c], |c| c, 1.0, o, m + 1);
+                            let alone =
+                                scan_best(&mut buf, &g, &blocks_t, r, &[c], |c| c, 1.0, o, m + 1);
                             assert_eq!(alone.0.to_bits(), v.to_bits(), "{c}, {o:?}, m {m}");
                             (v, c)
                         });
                         let want = one_by_one.fold((Real::NEG_INFINITY, usize::MAX), better);
-                        let got = buf.best(&g, &blocks_t, r, keys, |c| c, 1.0, o, m + 1);
+                        let got = scan_best(&mut buf, &g, &blocks_t, r, keys, |c| c, 1.0, o, m + 1);
                         assert_eq!((got.0.to_bits(), got.1), (want.0.to_bits(), want.1));
                     }
                     for c in m..cands.len() {
-                        let fast = buf
-                            .best(a.as_slice(), &blocks_t, r, &[c], |c| c, 1.0, o, m + 1)
-                            .0;
+                        let fast = scan_best(
+                            &mut buf,
+                            a.as_slice(),
+                            &blocks_t,
+                            r,
+                            &[c],
+                            |c| c,
+                            1.0,
+                            o,
+                            m + 1,
+                        )
+                        .0;
                         let mut b = a.clone();
                         dense_add_block(&mut b, &blocks, r, c, 1.0);
                         let want = nalgebra_objective(&b, o, m + 1);
@@ -321,9 +330,18 @@ mod tests {
                         );
                     }
                     for &c in &set {
-                        let fast = buf
-                            .best(a.as_slice(), &blocks_t, r, &[c], |c| c, -1.0, o, m - 1)
-                            .0;
+                        let fast = scan_best(
+                            &mut buf,
+                            a.as_slice(),
+                            &blocks_t,
+                            r,
+                            &[c],
+                            |c| c,
+                            -1.0,
+                            o,
+                            m - 1,
+                        )
+                        .0;
                         let mut b = a.clone();
                         dense_add_block(&mut b, &blocks, r, c, -1.0);
                         let dense = nalgebra_objective(&b, o, m - 1);

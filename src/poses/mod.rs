@@ -299,6 +299,26 @@ impl Spectra {
     /// Matrices per call of [`Spectra::objectives`].
     pub(crate) const LANES: usize = 8;
 
+    /// `f` with this thread's buffers for k × k matrices, made once per thread and k: a scan
+    /// asks for buffers per rayon task (about 1200 per DETMAX selection), and fresh ones cost
+    /// an allocation and the zeroing of k² lanes each time. A buffer's earlier contents never
+    /// reach a result (each use overwrites the lanes it reads).
+    pub(crate) fn with<R>(k: usize, f: impl FnOnce(&mut Spectra) -> R) -> R {
+        thread_local! {
+            static BUF: RefCell<Option<Spectra>> = const { RefCell::new(None) };
+        }
+        BUF.with(|cell| match cell.try_borrow_mut() {
+            Ok(mut slot) => {
+                if slot.as_ref().is_none_or(|s| s.k != k) {
+                    *slot = Some(Spectra::new(k));
+                }
+                f(slot.as_mut().expect("just set"))
+            }
+            // Already in use further up this thread's stack: a buffer of its own.
+            Err(_) => f(&mut Spectra::new(k)),
+        })
+    }
+
     pub(crate) fn new(k: usize) -> Self {
         Spectra {
             k,
@@ -414,7 +434,6 @@ pub(crate) struct Evaluator {
     block: DMatrix<Real>,
     row: Vec<Real>,
     gram: Vec<Real>,
-    spectra: Spectra,
 }
 
 impl Evaluator {
@@ -424,7 +443,6 @@ impl Evaluator {
             block: DMatrix::zeros(r, k),
             row: vec![0.0; k],
             gram: vec![0.0; k * k],
-            spectra: Spectra::new(k),
         }
     }
 
@@ -472,22 +490,24 @@ impl Evaluator {
         let dof = model.dof().max(1);
         let used = sets.len() / len.max(1);
         let m = len / dof;
-        self.spectra.clear();
-        for p in 0..m {
-            let at = p * dof..(p + 1) * dof;
-            for (t, set) in sets.chunks_exact(len.max(1)).enumerate() {
-                let q = &set[at.clone()];
-                match known.block(p, q) {
-                    Some(block) => self.spectra.put_rows(t, block),
-                    None => {
-                        model.jacobian_block_into(q, &mut self.block);
-                        self.spectra.put_rows(t, &self.block);
+        Spectra::with(self.row.len(), |spectra| {
+            spectra.clear();
+            for p in 0..m {
+                let at = p * dof..(p + 1) * dof;
+                for (t, set) in sets.chunks_exact(len.max(1)).enumerate() {
+                    let q = &set[at.clone()];
+                    match known.block(p, q) {
+                        Some(block) => spectra.put_rows(t, block),
+                        None => {
+                            model.jacobian_block_into(q, &mut self.block);
+                            spectra.put_rows(t, &self.block);
+                        }
                     }
                 }
+                spectra.accumulate(None, 1.0);
             }
-            self.spectra.accumulate(None, 1.0);
-        }
-        self.spectra.objectives(used, objective, m)
+            spectra.objectives(used, objective, m)
+        })
     }
 }
 
