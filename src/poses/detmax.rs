@@ -308,19 +308,12 @@ mod tests {
                         let got = scan_best(&mut buf, &g, &blocks_t, r, keys, |c| c, 1.0, o, m + 1);
                         assert_eq!((got.0.to_bits(), got.1), (want.0.to_bits(), want.1));
                     }
+                    // One candidate's value with `sign` over `poses` poses.
+                    let one = |buf: &mut Spectra, c: usize, sign: Real, poses: usize| {
+                        scan_best(buf, a.as_slice(), &blocks_t, r, &[c], |c| c, sign, o, poses).0
+                    };
                     for c in m..cands.len() {
-                        let fast = scan_best(
-                            &mut buf,
-                            a.as_slice(),
-                            &blocks_t,
-                            r,
-                            &[c],
-                            |c| c,
-                            1.0,
-                            o,
-                            m + 1,
-                        )
-                        .0;
+                        let fast = one(&mut buf, c, 1.0, m + 1);
                         let mut b = a.clone();
                         dense_add_block(&mut b, &blocks, r, c, 1.0);
                         let want = nalgebra_objective(&b, o, m + 1);
@@ -330,18 +323,7 @@ mod tests {
                         );
                     }
                     for &c in &set {
-                        let fast = scan_best(
-                            &mut buf,
-                            a.as_slice(),
-                            &blocks_t,
-                            r,
-                            &[c],
-                            |c| c,
-                            -1.0,
-                            o,
-                            m - 1,
-                        )
-                        .0;
+                        let fast = one(&mut buf, c, -1.0, m - 1);
                         let mut b = a.clone();
                         dense_add_block(&mut b, &blocks, r, c, -1.0);
                         let dense = nalgebra_objective(&b, o, m - 1);
