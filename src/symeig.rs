@@ -84,12 +84,6 @@ fn mul_add<const L: usize>(acc: [Real; L], x: [Real; L], u: [Real; L]) -> [Real;
     std::array::from_fn(|t| acc[t] + x[t] * u[t])
 }
 
-/// Lane-wise `if mask { new } else { old }`.
-#[inline(always)]
-fn select<const L: usize>(mask: [bool; L], new: [Real; L], old: [Real; L]) -> [Real; L] {
-    std::array::from_fn(|t| if mask[t] { new[t] } else { old[t] })
-}
-
 /// Householder tridiagonalisation of the lower triangle (`tred2`, eigenvalues only): the
 /// diagonal into `d`, the sub-diagonal into `e[1..n]` (`e[0] = 0`). A lane whose row to reduce
 /// is zero (`scale == 0`) keeps its matrix: its transform is computed with unit scale and a
@@ -110,7 +104,7 @@ fn tridiagonalise<const L: usize>(
             for x in ri.iter() {
                 scale = zip(scale, *x, |s, x| s + x.abs());
             }
-            let skip: [bool; L] = std::array::from_fn(|t| scale[t] == 0.0);
+            let skip: Mask<L> = mask(|t| scale[t] == 0.0);
             let inv = zip(scale, [1.0; L], |s, one| {
                 one / if s == 0.0 { one } else { s }
             });
@@ -121,9 +115,9 @@ fn tridiagonalise<const L: usize>(
             }
             let f = ri[l];
             let g = zip(f, h, |f, h| if f >= 0.0 { -h.sqrt() } else { h.sqrt() });
-            e[i] = select(skip, f, zip(scale, g, |s, g| s * g));
+            e[i] = blend(skip, f, zip(scale, g, |s, g| s * g));
             let h = zip(h, zip(f, g, |f, g| f * g), |h, fg| h - fg);
-            let h = select(skip, [1.0; L], h);
+            let h = blend(skip, [1.0; L], h);
             ri[l] = zip(f, g, |f, g| f - g);
             // g = (A u)_j over the lower triangle (row j up to j, then column j below), two
             // rows at a time: two independent sums sharing the loads of u, each in the order
@@ -161,7 +155,7 @@ fn tridiagonalise<const L: usize>(
             // Row j less f_j e + g_j u over its first j + 1 entries, with g_j = e_j − hh f_j
             // (into e_j) and f_j = u_j; two rows at a time, sharing the loads of e and u. A
             // lane that skips keeps its entries: without one (almost always) no selection.
-            let any_skip = skip.iter().any(|&s| s);
+            let any_skip = skip.iter().any(|&s| s != 0);
             let step =
                 |f: &[Real; L], g: &[Real; L], ek: &[Real; L], uk: &[Real; L]| -> [Real; L] {
                     std::array::from_fn(|t| f[t] * ek[t] + g[t] * uk[t])
@@ -179,7 +173,7 @@ fn tridiagonalise<const L: usize>(
                         .zip(&ri[..=j]);
                     for ((x, ek), uk) in updates {
                         let new = zip(*x, step(&f0, &g0, ek, uk), sub);
-                        *x = if any_skip { select(skip, *x, new) } else { new };
+                        *x = if any_skip { blend(skip, *x, new) } else { new };
                     }
                     j += 1;
                     continue;

@@ -490,7 +490,7 @@ impl Evaluator {
         let dof = model.dof().max(1);
         let used = sets.len() / len.max(1);
         let m = len / dof;
-        Spectra::with(self.row.len(), |spectra| {
+        Spectra::with(self.block.ncols(), |spectra| {
             spectra.clear();
             for p in 0..m {
                 let at = p * dof..(p + 1) * dof;
