@@ -314,17 +314,12 @@ impl<const L: usize> Rows<'_, L> {
             let (w, o, c) = unsafe { slot.assume_init_ref() };
             let at = c * self.stride + self.row0;
             let out = &mut out[at..at + rows * L];
-            // Across the lanes first (vector arithmetic), then into each pose's rows.
-            let d: [[Real; L]; 3] =
-                std::array::from_fn(|k| std::array::from_fn(|l| pe[k][l] - o[k][l]));
-            let cross = |a: usize, b: usize| -> [Real; L] {
-                std::array::from_fn(|l| w[a][l] * d[b][l] - w[b][l] * d[a][l])
-            };
-            let v = [cross(1, 2), cross(2, 0), cross(0, 1)];
             for l in 0..L {
-                for k in 0..3 {
-                    out[rows * l + k] = v[k][l];
-                }
+                let d = [pe[0][l] - o[0][l], pe[1][l] - o[1][l], pe[2][l] - o[2][l]];
+                let w = [w[0][l], w[1][l], w[2][l]];
+                out[rows * l] = w[1] * d[2] - w[2] * d[1];
+                out[rows * l + 1] = w[2] * d[0] - w[0] * d[2];
+                out[rows * l + 2] = w[0] * d[1] - w[1] * d[0];
             }
         }
     }
