@@ -516,41 +516,57 @@ pub const RANK_TOLERANCE: Real = 1e-7;
 /// Otherwise (factorisation fails, or the bound is not conclusive) the eigenvalues decide.
 pub fn rank(n: &DMatrix<Real>) -> usize {
     let t = n.nrows();
-    let mut s = DMatrix::zeros(t, t);
     let scaled = (0..t).all(|k| {
         let d = n[(k, k)];
         d > 0.0 && d.is_finite()
     });
-    if scaled {
-        // The lower triangle only: all the factorisation reads.
-        for k in 0..t {
-            for i in k..t {
-                s[(i, k)] = n[(i, k)] / (n[(i, i)] * n[(k, k)]).sqrt();
-            }
+    if scaled && full_rank_certified(n) {
+        return t;
+    }
+    conditioning(n).0
+}
+
+/// The certificate of [`rank`] for a matrix with a positive, finite diagonal: whether
+/// `t · trace S⁻¹` is conclusively small. A bound, not a rank: its rounding only moves the
+/// point at which the eigenvalues are asked instead.
+fn full_rank_certified(n: &DMatrix<Real>) -> bool {
+    let t = n.nrows();
+    let scale: Vec<Real> = (0..t).map(|k| 1.0 / n[(k, k)].sqrt()).collect();
+    let mut s = DMatrix::zeros(t, t);
+    // The lower triangle only: all the factorisation reads.
+    for k in 0..t {
+        for i in k..t {
+            s[(i, k)] = n[(i, k)] * scale[i] * scale[k];
         }
-        if linalg::cholesky_in_place(&mut s) {
-            // trace S⁻¹ = ‖L⁻¹‖²_F, column by column of L⁻¹ (forward substitution on e_c).
+    }
+    if !linalg::cholesky_in_place(&mut s) {
+        return false;
+    }
+    // trace S⁻¹ = ‖L⁻¹‖²_F, column by column of L⁻¹ (forward substitution on e_c, down the
+    // contiguous columns of L).
+    let inverse: Vec<Real> = (0..t).map(|k| 1.0 / s[(k, k)]).collect();
+    let l = s.as_slice();
+    let mut v = vec![0.0; t];
+    let trace = crate::math::with_avx2(
+        #[inline(always)]
+        || {
             let mut trace = 0.0;
-            let mut v = vec![0.0; t];
             for c in 0..t {
-                v.fill(0.0);
+                v[c..].fill(0.0);
                 v[c] = 1.0;
                 for k in c..t {
-                    let x = v[k] / s[(k, k)];
-                    v[k] = x;
+                    let x = v[k] * inverse[k];
                     trace += x * x;
-                    for i in k + 1..t {
-                        v[i] -= s[(i, k)] * x;
+                    for (vi, &lik) in v[k + 1..].iter_mut().zip(&l[k * t + k + 1..(k + 1) * t]) {
+                        *vi -= lik * x;
                     }
                 }
             }
-            let bound = t as Real * trace;
-            if bound.is_finite() && bound < 1e-2 / (RANK_TOLERANCE * RANK_TOLERANCE) {
-                return t;
-            }
-        }
-    }
-    conditioning(n).0
+            trace
+        },
+    );
+    let bound = t as Real * trace;
+    bound.is_finite() && bound < 1e-2 / (RANK_TOLERANCE * RANK_TOLERANCE)
 }
 
 /// Numerical rank and condition number of the column-scaled Jacobian `J D^-½` from its normal
