@@ -42,7 +42,7 @@ pub fn symmetric_eigenvalues_lanes<const L: usize>(
     d: &mut [[Real; L]],
     e: &mut [[Real; L]],
 ) -> [bool; L] {
-    crate::math::with_avx2(
+    crate::math::with_avx2_fma(
         #[inline(always)]
         || {
             let mut ok = [true; L];

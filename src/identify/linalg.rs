@@ -7,10 +7,12 @@ use crate::math::Real;
 /// Relative pivot below which a normal matrix counts as singular.
 pub(crate) const PIVOT_TOL: Real = 1e-12;
 
-/// Factorises the symmetric matrix `a = L Lᵀ` in place (L in the lower triangle). Returns
-/// false when a pivot is not positive or falls below [`PIVOT_TOL`] times its own diagonal
-/// entry (numerically singular; the test is invariant to column scaling, so mm and rad
-/// columns compare), or when `a` is not finite.
+/// Factorises the symmetric matrix `a = L Lᵀ` in place: L in the lower triangle, and its
+/// transpose below the diagonal mirrored into the upper one (row i of L contiguous, for the
+/// backward sweep of [`cholesky_solve`]). Reads the lower triangle only. Returns false when a
+/// pivot is not positive or falls below [`PIVOT_TOL`] times its own diagonal entry
+/// (numerically singular; the test is invariant to column scaling, so mm and rad columns
+/// compare), or when `a` is not finite.
 pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
     let n = a.nrows();
     let mut dmax: Real = 0.0;
@@ -25,7 +27,7 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
         return n == 0;
     }
     let s = a.as_mut_slice();
-    crate::math::with_avx2(
+    crate::math::with_avx2_fma(
         #[inline(always)]
         || factor_columns(s, n),
     )
@@ -36,11 +38,11 @@ const BLOCK: usize = 16;
 
 /// The column loop of [`cholesky_in_place`] on the column-major `s` (n × n).
 ///
-/// Left-looking: column j from row j down, less Σ_k L[i,k] L[j,k] in the order k = 0, 1, …
-/// (each entry's sum in the same order as a dot product along its row would take). The rows
-/// go [`BLOCK`] at a time, kept in registers across the k's; a block whose reads would run
-/// past the matrix (the last columns of a matrix under [`BLOCK`] rows) updates in memory, in
-/// the same order.
+/// Left-looking: column j from row j down, `a_ij ← fma(−L[i,k], L[j,k], a_ij)` for k = 0, 1,
+/// … in turn (one rounding per term), then scaled by the reciprocal of its pivot's square
+/// root. The rows go [`BLOCK`] at a time, kept in registers across the k's; a block whose
+/// reads would run past the matrix (the last columns of a matrix under [`BLOCK`] rows) updates
+/// in memory, in the same order.
 #[inline(always)]
 fn factor_columns(s: &mut [Real], n: usize) -> bool {
     for j in 0..n {
@@ -54,21 +56,21 @@ fn factor_columns(s: &mut [Real], n: usize) -> bool {
                 let mut acc = [0.0; BLOCK];
                 acc[..len].copy_from_slice(x);
                 for k in 0..j {
-                    let ljk = left[k * n + j];
+                    let ljk = -left[k * n + j];
                     let c: &[Real; BLOCK] = left[k * n + r0..k * n + r0 + BLOCK]
                         .try_into()
                         .expect("BLOCK values");
                     // Rows past `len` belong to the next column: computed, never stored.
                     for (a, &y) in acc.iter_mut().zip(c) {
-                        *a -= y * ljk;
+                        *a = y.mul_add(ljk, *a);
                     }
                 }
                 x.copy_from_slice(&acc[..len]);
             } else {
                 for k in 0..j {
-                    let ljk = left[k * n + j];
+                    let ljk = -left[k * n + j];
                     for (a, &y) in x.iter_mut().zip(&left[k * n + r0..k * n + r0 + len]) {
-                        *a -= y * ljk;
+                        *a = y.mul_add(ljk, *a);
                     }
                 }
             }
@@ -79,22 +81,25 @@ fn factor_columns(s: &mut [Real], n: usize) -> bool {
             return false;
         }
         let l = d.sqrt();
+        let inverse = 1.0 / l;
         s[j * n + j] = l;
-        for x in &mut s[j * n + j + 1..(j + 1) * n] {
-            *x /= l;
+        for i in j + 1..n {
+            let v = s[j * n + i] * inverse;
+            s[j * n + i] = v;
+            s[i * n + j] = v;
         }
     }
     true
 }
 
-/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`]. Both sweeps
-/// run down contiguous columns of `L` (column-major): the forward one as column updates,
-/// the backward one as column dot products.
+/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`]: the forward sweep
+/// down the contiguous columns of L, the backward one down those of Lᵀ (the mirrored upper
+/// triangle), each as column updates `b_i ← fma(−l_i, x_k, b_i)` with `x_k = b_k · (1/l_kk)`.
 pub(crate) fn cholesky_solve(l: &DMatrix<Real>, b: &mut DVector<Real>) {
     let n = l.nrows();
     let ls = l.as_slice();
     let bs = b.as_mut_slice();
-    crate::math::with_avx2(
+    crate::math::with_avx2_fma(
         #[inline(always)]
         || substitute(ls, bs, n),
     );
@@ -105,19 +110,20 @@ pub(crate) fn cholesky_solve(l: &DMatrix<Real>, b: &mut DVector<Real>) {
 fn substitute(ls: &[Real], bs: &mut [Real], n: usize) {
     for k in 0..n {
         let col = &ls[k * n..(k + 1) * n];
-        let v = bs[k] / col[k];
+        let v = bs[k] * (1.0 / col[k]);
         bs[k] = v;
         for (bi, li) in bs[k + 1..].iter_mut().zip(&col[k + 1..]) {
-            *bi -= li * v;
+            *bi = li.mul_add(-v, *bi);
         }
     }
     for i in (0..n).rev() {
-        let col = &ls[i * n..(i + 1) * n];
-        let mut s = bs[i];
-        for (lk, bk) in col[i + 1..].iter().zip(&bs[i + 1..]) {
-            s -= lk * bk;
+        // Column i of the upper triangle: L[i, 0..i].
+        let row = &ls[i * n..i * n + i];
+        let v = bs[i] * (1.0 / ls[i * n + i]);
+        bs[i] = v;
+        for (bk, lk) in bs[..i].iter_mut().zip(row) {
+            *bk = lk.mul_add(-v, *bk);
         }
-        bs[i] = s / col[i];
     }
 }
 
@@ -155,8 +161,9 @@ mod tests {
     }
 
     /// The register blocks of [`factor_columns`] give the bits of the plain left-looking
-    /// loop (each entry's sum over k in ascending order), for sizes under, at and over the
-    /// block and with columns of very different scales.
+    /// loop (each entry's fused updates over k in ascending order, the column scaled by the
+    /// pivot's reciprocal), for sizes under, at and over the block and with columns of very
+    /// different scales; the upper triangle mirrors L.
     #[test]
     fn blocked_factor_is_the_plain_loop_to_the_bit() {
         let mut seed = 7u64;
@@ -175,13 +182,13 @@ mod tests {
                 for k in 0..c {
                     let lck = plain[(c, k)];
                     for i in c..n {
-                        plain[(i, c)] -= plain[(i, k)] * lck;
+                        plain[(i, c)] = plain[(i, k)].mul_add(-lck, plain[(i, c)]);
                     }
                 }
                 let l = plain[(c, c)].sqrt();
                 plain[(c, c)] = l;
                 for i in c + 1..n {
-                    plain[(i, c)] /= l;
+                    plain[(i, c)] *= 1.0 / l;
                 }
             }
             let mut blocked = a.clone();
@@ -193,6 +200,7 @@ mod tests {
                         plain[(i, c)].to_bits(),
                         "n {n}, ({i}, {c})"
                     );
+                    assert_eq!(blocked[(c, i)].to_bits(), blocked[(i, c)].to_bits());
                 }
             }
         }

@@ -204,7 +204,7 @@ impl Work {
             self.r.as_slice(),
         );
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if has_avx2_fma() {
             gram::<Avx2>(js, pjs, r, m, t, n, g);
             return;
         }
@@ -309,9 +309,11 @@ fn col(s: &[Real], m: usize, k: usize) -> &[Real] {
 }
 
 /// The `P × Q` dot products `x_p · y_q` of slices of one length, each in four interleaved
-/// partial sums (`s_k` over the indices `i ≡ k mod 4`) combined as `(s0 + s2) + (s1 + s3)`:
-/// a fixed order, so every product is the same whichever block computes it, whichever
-/// kernel, and on every machine (no fused multiply-add).
+/// partial sums (`s_k ← fma(x_i, y_i, s_k)` over the indices `i ≡ k mod 4`, one rounding per
+/// term) combined as `(s0 + s2) + (s1 + s3)`: a fixed order, so every product is the same
+/// whichever block computes it, whichever kernel, and on every machine (the fused
+/// multiply-add is the correctly rounded IEEE operation everywhere: an instruction where the
+/// processor has one, a library call where not).
 trait Dots {
     fn dots<const P: usize, const Q: usize>(x: [&[Real]; P], y: [&[Real]; Q]) -> [[Real; Q]; P];
 }
@@ -332,7 +334,7 @@ impl Dots for Portable {
             for p in 0..P {
                 for q in 0..Q {
                     for k in 0..4 {
-                        acc[p][q][k] += xs[p][k] * ys[q][k];
+                        acc[p][q][k] = xs[p][k].mul_add(ys[q][k], acc[p][q][k]);
                     }
                 }
             }
@@ -353,15 +355,16 @@ fn combine<const P: usize, const Q: usize>(
     for (k, i) in (whole..x[0].len()).enumerate() {
         for p in 0..P {
             for q in 0..Q {
-                acc[p][q][k] += x[p][i] * y[q][i];
+                acc[p][q][k] = x[p][i].mul_add(y[q][i], acc[p][q][k]);
             }
         }
     }
     acc.map(|row| row.map(|s| (s[0] + s[2]) + (s[1] + s[3])))
 }
 
-/// [`Dots`] in AVX2 vectors, one per partial-sum quadruple: the same bits as [`Portable`].
-/// Constructed only where the processor has AVX2 ([`Work::normal`]).
+/// [`Dots`] in AVX2 vectors with fused multiply-adds, one vector per partial-sum quadruple:
+/// the same bits as [`Portable`]. Constructed only where the processor has AVX2 and FMA
+/// ([`Work::normal`]).
 #[cfg(target_arch = "x86_64")]
 struct Avx2;
 
@@ -369,22 +372,28 @@ struct Avx2;
 impl Dots for Avx2 {
     #[inline(always)]
     fn dots<const P: usize, const Q: usize>(x: [&[Real]; P], y: [&[Real]; Q]) -> [[Real; Q]; P] {
-        // SAFETY: `Avx2` is used only after AVX2 was detected (`Work::normal`).
+        // SAFETY: `Avx2` is used only after AVX2 and FMA were detected (`Work::normal`).
         unsafe { dots_avx2(x, y) }
     }
+}
+
+/// Whether the processor has AVX2 and FMA (the [`Avx2`] kernel's instructions).
+#[cfg(target_arch = "x86_64")]
+fn has_avx2_fma() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 /// The kernel of [`Avx2`].
 ///
 /// # Safety
-/// The CPU must support AVX2.
+/// The CPU must support AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
+#[target_feature(enable = "avx2,fma")]
 unsafe fn dots_avx2<const P: usize, const Q: usize>(
     x: [&[Real]; P],
     y: [&[Real]; Q],
 ) -> [[Real; Q]; P] {
-    use std::arch::x86_64::{__m256d, _mm256_add_pd, _mm256_loadu_pd, _mm256_mul_pd};
+    use std::arch::x86_64::{__m256d, _mm256_fmadd_pd, _mm256_loadu_pd};
     use std::arch::x86_64::{_mm256_setzero_pd, _mm256_storeu_pd};
     let n = x[0].len();
     assert!(x.iter().all(|v| v.len() == n) && y.iter().all(|v| v.len() == n));
@@ -401,7 +410,7 @@ unsafe fn dots_avx2<const P: usize, const Q: usize>(
             // SAFETY: as above.
             let yq = unsafe { _mm256_loadu_pd(y[q].as_ptr().add(i)) };
             for p in 0..P {
-                acc[p][q] = _mm256_add_pd(acc[p][q], _mm256_mul_pd(xs[p], yq));
+                acc[p][q] = _mm256_fmadd_pd(xs[p], yq, acc[p][q]);
             }
         }
         i += 4;
@@ -547,7 +556,7 @@ fn full_rank_certified(n: &DMatrix<Real>) -> bool {
     let inverse: Vec<Real> = (0..t).map(|k| 1.0 / s[(k, k)]).collect();
     let l = s.as_slice();
     let mut v = vec![0.0; t];
-    let trace = crate::math::with_avx2(
+    let trace = crate::math::with_avx2_fma(
         #[inline(always)]
         || {
             let mut trace = 0.0;
@@ -854,7 +863,7 @@ mod tests {
                 }
             }
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
+            if has_avx2_fma() {
                 let avx2 = run(&|n, gv| gram::<Avx2>(js, pjs, &r, m, t, n, gv));
                 let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&portable.0), bits(&avx2.0), "N, {m} × {t}");

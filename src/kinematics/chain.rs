@@ -47,8 +47,18 @@ pub struct Op {
     pub var: Option<usize>,
     /// Index of the parameter in the flat vector.
     pub param: usize,
-    /// Precomputed (sin, cos) of `value` for rotations without a variable.
+    /// Precomputed (sin, cos) of `value` for rotations ((0, 1) for translations, which do not
+    /// read it).
     sc: (Real, Real),
+}
+
+/// The (sin, cos) an operation keeps of its value: a rotation's, or (0, 1) for a translation.
+fn rotation_sc(kind: OpKind, value: Real) -> (Real, Real) {
+    if kind.is_rotation() {
+        value.sin_cos()
+    } else {
+        (0.0, 1.0)
+    }
 }
 
 /// The chain variables of one pose and their (sin, cos), from [`Chain::variables`].
@@ -176,7 +186,7 @@ impl Chain {
                 value,
                 var,
                 param: i,
-                sc: value.sin_cos(),
+                sc: rotation_sc(kind, value),
             });
         };
         // Base: Trans(x, y, z) · Rz · Ry · Rx.
@@ -237,7 +247,7 @@ impl Chain {
             let v = values[op.param];
             if v.to_bits() != op.value.to_bits() {
                 op.value = v;
-                op.sc = v.sin_cos();
+                op.sc = rotation_sc(op.kind, v);
             }
         }
     }
@@ -289,13 +299,18 @@ impl Chain {
     }
 
     /// The chain variables of joint values `q` (internal units, `q.len()` ≤ 16) and their
-    /// sines and cosines, for [`Chain::walk_vars`]: with fixed joint values these are computed
-    /// once and reused whatever the parameter values.
+    /// sines and cosines ([`crate::math::sin_cos4`]), for
+    /// [`Chain::walk_vars`]: with fixed joint values these are computed once and reused
+    /// whatever the parameter values.
     pub fn variables(&self, q: &[Real]) -> ChainVars {
         let c = self.vars(q);
         let mut sc = [(0.0, 1.0); 16];
-        for (k, v) in c.iter().take(q.len()).enumerate() {
-            sc[k] = v.sin_cos();
+        for k0 in (0..q.len()).step_by(4) {
+            let x: [Real; 4] = c[k0..k0 + 4].try_into().expect("16 variables");
+            let (s, cs) = crate::math::sin_cos4(x);
+            for (k, v) in sc.iter_mut().enumerate().skip(k0).take(4.min(q.len() - k0)) {
+                *v = (s[k - k0], cs[k - k0]);
+            }
         }
         (c, sc)
     }

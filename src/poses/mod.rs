@@ -378,7 +378,7 @@ impl Spectra {
     fn accumulate(&mut self, g: Option<&[Real]>, sign: Real) {
         let k = self.k;
         let (a, b) = (&mut self.a, &self.rows);
-        crate::math::with_avx2(
+        crate::math::with_avx2_fma(
             #[inline(always)]
             || {
                 for i in 0..k {
