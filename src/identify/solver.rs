@@ -838,8 +838,9 @@ pub(crate) fn gauss_newton(
 mod tests {
     use super::*;
 
-    /// The normal equations of every kernel and block shape are one set of bits: sizes with
-    /// odd column counts and row counts that are not a multiple of four.
+    /// The normal equations of every kernel and block shape are one set of bits, N and g each
+    /// entry that of its plain dot product: sizes with odd column counts and row counts that
+    /// are not a multiple of four.
     #[test]
     fn the_gram_kernels_agree_to_the_bit() {
         let mut g = crate::rng::from_seed(3);
@@ -861,6 +862,8 @@ mod tests {
                     assert_eq!(portable.0[b * t + a].to_bits(), x.to_bits(), "({a}, {b})");
                     assert_eq!(portable.0[a * t + b].to_bits(), x.to_bits(), "({b}, {a})");
                 }
+                let x = Portable::dots::<1, 1>([col(pjs, m, a)], [&r])[0][0];
+                assert_eq!(portable.1[a].to_bits(), x.to_bits(), "g[{a}]");
             }
             #[cfg(target_arch = "x86_64")]
             if has_avx2_fma() {
