@@ -366,6 +366,10 @@ impl Chain {
         for op in &self.ops {
             visit(op, &f);
             let (t, s, c) = match op.var {
+                // A fixed rotation or translation by zero (the base and tool of most robots,
+                // rows with d = 0, a = 0 or α = 0) leaves the frame as it is: R·Rot(±0) = R and
+                // p + R·0 = p exactly (c = 1, s = ±0), up to the sign of a zero entry.
+                None if op.value == 0.0 => continue,
                 None => ([op.value; L], [op.sc.0; L], [op.sc.1; L]),
                 Some(v) => driven(op, v),
             };
