@@ -246,9 +246,7 @@ const COS: [Real; 9] = [
 /// operation everywhere). A value with |x| > 1e5 or not finite gets the library's `sin_cos`.
 pub fn sin_cos4(x: [Real; 4]) -> ([Real; 4], [Real; 4]) {
     #[cfg(target_arch = "x86_64")]
-    let (mut sin, mut cos) = if std::arch::is_x86_feature_detected!("avx2")
-        && std::arch::is_x86_feature_detected!("fma")
-    {
+    let (mut sin, mut cos) = if has_avx2_fma() {
         // SAFETY: the processor has AVX2 and FMA (checked just above).
         unsafe { sin_cos4_avx2(x) }
     } else {
@@ -350,6 +348,14 @@ unsafe fn sin_cos4_avx2(x: [Real; 4]) -> ([Real; 4], [Real; 4]) {
     (sin, cos)
 }
 
+/// Whether the processor has AVX2 and FMA, the instructions of every run-time-selected
+/// kernel that uses fused multiply-adds ([`with_avx2_fma`], [`sin_cos4`], the identification's
+/// Gram kernel).
+#[cfg(target_arch = "x86_64")]
+pub(crate) fn has_avx2_fma() -> bool {
+    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+}
+
 /// `f()`, compiled for AVX2 and FMA when the processor has both (checked at run time): `f`
 /// and what it calls with `#[inline(always)]` are inlined into a function built with those
 /// target features, so that loops over small arrays of lanes become four-wide vector
@@ -359,7 +365,7 @@ unsafe fn sin_cos4_avx2(x: [Real; 4]) -> ([Real; 4], [Real; 4]) {
 #[inline(always)]
 pub fn with_avx2_fma<R>(f: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+    if has_avx2_fma() {
         #[target_feature(enable = "avx2,fma")]
         unsafe fn run<R>(f: impl FnOnce() -> R) -> R {
             f()
@@ -379,7 +385,7 @@ mod tests {
     /// the quadrant and the series change, at tiny and zero arguments, and the library's values
     /// beyond the reduction's range or for non-finite input.
     #[test]
-    fn sin_cos_lanes_agree_with_the_library() {
+    fn sin_cos4_agrees_with_the_library() {
         let ulps = |a: Real, b: Real| -> Real {
             if a == b {
                 return 0.0;

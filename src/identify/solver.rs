@@ -204,7 +204,7 @@ impl Work {
             self.r.as_slice(),
         );
         #[cfg(target_arch = "x86_64")]
-        if has_avx2_fma() {
+        if crate::math::has_avx2_fma() {
             gram::<Avx2>(js, pjs, r, m, t, n, g);
             return;
         }
@@ -375,12 +375,6 @@ impl Dots for Avx2 {
         // SAFETY: `Avx2` is used only after AVX2 and FMA were detected (`Work::normal`).
         unsafe { dots_avx2(x, y) }
     }
-}
-
-/// Whether the processor has AVX2 and FMA (the [`Avx2`] kernel's instructions).
-#[cfg(target_arch = "x86_64")]
-fn has_avx2_fma() -> bool {
-    std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
 }
 
 /// The kernel of [`Avx2`].
@@ -866,7 +860,7 @@ mod tests {
                 assert_eq!(portable.1[a].to_bits(), x.to_bits(), "g[{a}]");
             }
             #[cfg(target_arch = "x86_64")]
-            if has_avx2_fma() {
+            if crate::math::has_avx2_fma() {
                 let avx2 = run(&|n, gv| gram::<Avx2>(js, pjs, &r, m, t, n, gv));
                 let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&portable.0), bits(&avx2.0), "N, {m} × {t}");
