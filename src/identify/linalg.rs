@@ -33,63 +33,127 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
     )
 }
 
-/// Rows of a column updated together in [`factor_columns`], in registers.
-const BLOCK: usize = 16;
-
 /// The column loop of [`cholesky_in_place`] on the column-major `s` (n × n).
 ///
 /// Left-looking: column j from row j down, `a_ij ← fma(−L[i,k], L[j,k], a_ij)` for k = 0, 1,
 /// … in turn (one rounding per term), then scaled by the reciprocal of its pivot's square
-/// root. The rows go [`BLOCK`] at a time, kept in registers across the k's; a block whose
-/// reads would run past the matrix (the last columns of a matrix under [`BLOCK`] rows) updates
-/// in memory, in the same order.
+/// root. Columns go in pairs: the terms k < j of columns j and j + 1 together
+/// ([`update_columns`]: each loaded value of L serves both, and the two columns' sums run
+/// side by side), then column j is finished, then column j + 1 takes its term k = j and is
+/// finished: every entry's terms in the same order as one column at a time.
 #[inline(always)]
 fn factor_columns(s: &mut [Real], n: usize) -> bool {
-    for j in 0..n {
-        let ajj = s[j * n + j];
-        let mut r0 = j;
-        while j > 0 && r0 < n {
-            let len = BLOCK.min(n - r0);
+    let mut j = 0;
+    while j < n {
+        let pair = j + 1 < n;
+        let first = s[j * n + j];
+        let second = if pair { s[(j + 1) * n + j + 1] } else { 0.0 };
+        if j > 0 {
             let (left, right) = s.split_at_mut(j * n);
-            let x = &mut right[r0..r0 + len];
-            if (j - 1) * n + r0 + BLOCK <= left.len() {
-                let mut acc = [0.0; BLOCK];
-                acc[..len].copy_from_slice(x);
-                for k in 0..j {
-                    let ljk = -left[k * n + j];
-                    let c: &[Real; BLOCK] = left[k * n + r0..k * n + r0 + BLOCK]
-                        .try_into()
-                        .expect("BLOCK values");
-                    // Rows past `len` belong to the next column: computed, never stored.
-                    for (a, &y) in acc.iter_mut().zip(c) {
-                        *a = y.mul_add(ljk, *a);
-                    }
-                }
-                x.copy_from_slice(&acc[..len]);
+            if pair {
+                update::<2>(left, &mut right[..2 * n], n, j);
             } else {
-                for k in 0..j {
-                    let ljk = -left[k * n + j];
-                    for (a, &y) in x.iter_mut().zip(&left[k * n + r0..k * n + r0 + len]) {
-                        *a = y.mul_add(ljk, *a);
-                    }
-                }
+                update::<1>(left, &mut right[..n], n, j);
             }
-            r0 += len;
         }
-        let d = s[j * n + j];
-        if d.is_nan() || d <= PIVOT_TOL * ajj {
+        if !finish_column(s, n, j, first) {
             return false;
         }
-        let l = d.sqrt();
-        let inverse = 1.0 / l;
-        s[j * n + j] = l;
-        for i in j + 1..n {
-            let v = s[j * n + i] * inverse;
-            s[j * n + i] = v;
-            s[i * n + j] = v;
+        if pair {
+            let (left, right) = s.split_at_mut((j + 1) * n);
+            let (lj, col) = (&left[j * n..], &mut right[..n]);
+            let l = -lj[j + 1];
+            for (a, &y) in col[j + 1..].iter_mut().zip(&lj[j + 1..]) {
+                *a = y.mul_add(l, *a);
+            }
+            if !finish_column(s, n, j + 1, second) {
+                return false;
+            }
         }
+        j += 2;
     }
     true
+}
+
+/// Checks column j's pivot against its diagonal entry before the updates (`ajj`), then
+/// replaces the pivot by its square root and scales the rows below by the root's reciprocal,
+/// mirroring them into row j of the upper triangle. False when the pivot fails the check.
+#[inline(always)]
+fn finish_column(s: &mut [Real], n: usize, j: usize, ajj: Real) -> bool {
+    let d = s[j * n + j];
+    if d.is_nan() || d <= PIVOT_TOL * ajj {
+        return false;
+    }
+    let l = d.sqrt();
+    let inverse = 1.0 / l;
+    s[j * n + j] = l;
+    for i in j + 1..n {
+        let v = s[j * n + i] * inverse;
+        s[j * n + i] = v;
+        s[i * n + j] = v;
+    }
+    true
+}
+
+/// [`update_columns`] with the widest register block that the rows left (n − j) and the
+/// matrix (n) allow.
+#[inline(always)]
+fn update<const C: usize>(left: &[Real], cols: &mut [Real], n: usize, j: usize) {
+    let rows = n - j;
+    if n >= 16 && rows > 8 {
+        update_columns::<C, 16>(left, cols, n, j);
+    } else if n >= 8 && rows > 4 {
+        update_columns::<C, 8>(left, cols, n, j);
+    } else if n >= 4 {
+        update_columns::<C, 4>(left, cols, n, j);
+    } else {
+        update_columns::<C, 1>(left, cols, n, j);
+    }
+}
+
+/// The `C` (1 or 2) columns j, j + 1 (`cols`, column-major with n rows, n ≥ `B`) updated by the
+/// j columns of L to their left (`left`): rows j.. (column j + c from row j + c) `B` at a
+/// time, kept in registers across the k's. A block that would run past the last row is moved
+/// up to end there: its first rows (above the column's diagonal, or already updated) are
+/// computed and not stored, so that every block is a whole register block and every stored
+/// entry gets the same fused updates in the same order.
+#[inline(always)]
+fn update_columns<const C: usize, const B: usize>(
+    left: &[Real],
+    cols: &mut [Real],
+    n: usize,
+    j: usize,
+) {
+    let mut r0 = j;
+    while r0 < n {
+        let b0 = r0.min(n - B);
+        let mut acc0: [Real; B] = cols[b0..b0 + B].try_into().expect("B values");
+        let mut acc1: [Real; B] = if C == 2 {
+            cols[n + b0..n + b0 + B].try_into().expect("B values")
+        } else {
+            [0.0; B]
+        };
+        for k in 0..j {
+            let lk = &left[k * n..(k + 1) * n];
+            let y: &[Real; B] = lk[b0..b0 + B].try_into().expect("B values");
+            let l0 = -lk[j];
+            for (a, &y) in acc0.iter_mut().zip(y) {
+                *a = y.mul_add(l0, *a);
+            }
+            if C == 2 {
+                let l1 = -lk[j + 1];
+                for (a, &y) in acc1.iter_mut().zip(y) {
+                    *a = y.mul_add(l1, *a);
+                }
+            }
+        }
+        cols[r0..b0 + B].copy_from_slice(&acc0[r0 - b0..]);
+        if C == 2 {
+            let from = r0.max(j + 1);
+            cols[n + from..n + b0 + B].copy_from_slice(&acc1[from - b0..]);
+        }
+        r0 = b0 + B;
+    }
 }
 
 /// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`]: the forward sweep
@@ -173,7 +237,7 @@ mod tests {
                 .wrapping_add(1442695040888963407);
             (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
         };
-        for n in [1, 2, 5, 14, 15, 16, 17, 20, 31, 33, 47] {
+        for n in [1, 2, 5, 7, 8, 9, 14, 15, 16, 17, 20, 31, 33, 47] {
             let m = n + 30;
             let j = DMatrix::from_fn(m, n, |_, c| next() * [1.0, 1e3, 1e-2][c % 3]);
             let a = j.transpose() * &j;
