@@ -147,7 +147,7 @@ impl<'a> RobotProblem<'a> {
             _ => {}
         }
         let chain = nominal.chain();
-        let vars = qs.iter().map(|q| chain.variables(q)).collect();
+        let vars = chain.variables_of(qs);
         let compliant = params
             .iter()
             .enumerate()

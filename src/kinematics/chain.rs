@@ -299,20 +299,38 @@ impl Chain {
     }
 
     /// The chain variables of joint values `q` (internal units, `q.len()` ≤ 16) and their
-    /// sines and cosines ([`crate::math::sin_cos4`]), for
+    /// sines and cosines ([`crate::math::sin_cos_slice`]), for
     /// [`Chain::walk_vars`]: with fixed joint values these are computed once and reused
     /// whatever the parameter values.
     pub fn variables(&self, q: &[Real]) -> ChainVars {
         let c = self.vars(q);
         let mut sc = [(0.0, 1.0); 16];
-        for k0 in (0..q.len()).step_by(4) {
-            let x: [Real; 4] = c[k0..k0 + 4].try_into().expect("16 variables");
-            let (s, cs) = crate::math::sin_cos4(x);
-            for (k, v) in sc.iter_mut().enumerate().skip(k0).take(4.min(q.len() - k0)) {
-                *v = (s[k - k0], cs[k - k0]);
-            }
-        }
+        crate::math::sin_cos_slice(&c[..q.len()], &mut sc[..q.len()]);
         (c, sc)
+    }
+
+    /// [`Chain::variables`] of every pose of `qs`, the same bits: all the poses' sines and
+    /// cosines in one [`crate::math::sin_cos_slice`] (sixteen at a time, with no lane left
+    /// empty between poses).
+    pub fn variables_of<Q: AsRef<[Real]>>(&self, qs: &[Q]) -> Vec<ChainVars> {
+        let mut out: Vec<ChainVars> = qs
+            .iter()
+            .map(|q| (self.vars(q.as_ref()), [(0.0, 1.0); 16]))
+            .collect();
+        let values: Vec<Real> = out
+            .iter()
+            .zip(qs)
+            .flat_map(|(v, q)| v.0[..q.as_ref().len()].iter().copied())
+            .collect();
+        let mut sc = vec![(0.0, 0.0); values.len()];
+        crate::math::sin_cos_slice(&values, &mut sc);
+        let mut at = 0;
+        for (v, q) in out.iter_mut().zip(qs) {
+            let n = q.as_ref().len();
+            v.1[..n].copy_from_slice(&sc[at..at + n]);
+            at += n;
+        }
+        out
     }
 
     /// [`Chain::walk`] from precomputed chain variables ([`Chain::variables`]): a rotation
