@@ -232,8 +232,12 @@ fn gram<D: Dots>(
         if a + 1 < t {
             let ca = [col(pjs, m, a), col(pjs, m, a + 1)];
             let mut b = 0;
-            // Four columns of J while all lie left of column a + 1, then two.
-            while b + 4 <= a + 1 {
+            // Four columns of J while all lie left of column a + 2, then two: when a is two
+            // more than a multiple of four, the last block of four ends with the diagonal
+            // pair (its entry (a, a + 1) is computed both ways, and the one put last,
+            // (PJ)_{a+1}·J_a, is the one the 2 × 2 block gives), so that eight sums run
+            // side by side instead of four.
+            while b + 4 <= a + 2 {
                 let cb = [
                     col(js, m, b),
                     col(js, m, b + 1),
@@ -534,6 +538,14 @@ pub fn rank(n: &DMatrix<Real>) -> usize {
 /// point at which the eigenvalues are asked instead.
 fn full_rank_certified(n: &DMatrix<Real>) -> bool {
     let t = n.nrows();
+    let bound = scaled_inverse_trace(n).map_or(Real::NAN, |trace| t as Real * trace);
+    bound.is_finite() && bound < 1e-2 / (RANK_TOLERANCE * RANK_TOLERANCE)
+}
+
+/// `trace S⁻¹` of the scaled `S = D^-½ n D^-½` (`D = diag(n)`, positive and finite), from
+/// its Cholesky factor; `None` when the factorisation fails.
+fn scaled_inverse_trace(n: &DMatrix<Real>) -> Option<Real> {
+    let t = n.nrows();
     let scale: Vec<Real> = (0..t).map(|k| 1.0 / n[(k, k)].sqrt()).collect();
     let mut s = DMatrix::zeros(t, t);
     // The lower triangle only: all the factorisation reads.
@@ -543,33 +555,38 @@ fn full_rank_certified(n: &DMatrix<Real>) -> bool {
         }
     }
     if !linalg::cholesky_in_place(&mut s) {
-        return false;
+        return None;
     }
-    // trace S⁻¹ = ‖L⁻¹‖²_F, column by column of L⁻¹ (forward substitution on e_c, down the
-    // contiguous columns of L).
+    // trace S⁻¹ = ‖L⁻¹‖²_F, four columns of L⁻¹ at a time (forward substitution on e_c for
+    // c = c0…c0+3 side by side, down the contiguous columns of L; a column c > k has
+    // v_k = 0 and takes no update).
     let inverse: Vec<Real> = (0..t).map(|k| 1.0 / s[(k, k)]).collect();
     let l = s.as_slice();
-    let mut v = vec![0.0; t];
+    let mut v = vec![[0.0 as Real; 4]; t];
     let trace = crate::math::with_avx2_fma(
         #[inline(always)]
         || {
-            let mut trace = 0.0;
-            for c in 0..t {
-                v[c..].fill(0.0);
-                v[c] = 1.0;
-                for k in c..t {
-                    let x = v[k] * inverse[k];
-                    trace += x * x;
+            let mut sums = [0.0 as Real; 4];
+            for c0 in (0..t).step_by(4) {
+                for (i, vi) in v.iter_mut().enumerate().skip(c0) {
+                    *vi = std::array::from_fn(|c| if i == c0 + c { 1.0 } else { 0.0 });
+                }
+                for k in c0..t {
+                    let x: [Real; 4] = std::array::from_fn(|c| v[k][c] * inverse[k]);
+                    for c in 0..4 {
+                        sums[c] += x[c] * x[c];
+                    }
                     for (vi, &lik) in v[k + 1..].iter_mut().zip(&l[k * t + k + 1..(k + 1) * t]) {
-                        *vi -= lik * x;
+                        for c in 0..4 {
+                            vi[c] -= lik * x[c];
+                        }
                     }
                 }
             }
-            trace
+            (sums[0] + sums[2]) + (sums[1] + sums[3])
         },
     );
-    let bound = t as Real * trace;
-    bound.is_finite() && bound < 1e-2 / (RANK_TOLERANCE * RANK_TOLERANCE)
+    Some(trace)
 }
 
 /// Numerical rank and condition number of the column-scaled Jacobian `J D^-½` from its normal
@@ -831,6 +848,26 @@ pub(crate) fn gauss_newton(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The rank certificate's `trace S⁻¹` (four columns of L⁻¹ at a time) against the trace
+    /// of the inverse of the scaled matrix formed by nalgebra, for sizes around the groups of
+    /// four and columns of very different scales.
+    #[test]
+    fn scaled_inverse_trace_is_the_trace_of_the_inverse() {
+        let mut g = crate::rng::from_seed(5);
+        for t in [1, 2, 3, 4, 5, 8, 9, 20, 23] {
+            let j = DMatrix::from_fn(t + 10, t, |_, k| {
+                rand::Rng::random_range(&mut g, -1.0..1.0) * [1.0, 1e3, 1e-3][k % 3]
+            });
+            let n = j.transpose() * &j;
+            let d = DMatrix::from_diagonal(&n.map_diagonal(|v: Real| 1.0 / v.sqrt()));
+            let want = (&d * &n * &d).try_inverse().expect("invertible").trace();
+            let got = scaled_inverse_trace(&n).expect("positive definite");
+            assert!((got - want).abs() <= 1e-9 * want, "t {t}: {got} vs {want}");
+        }
+        let singular = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
+        assert!(scaled_inverse_trace(&singular).is_none());
+    }
 
     /// The normal equations of every kernel and block shape are one set of bits, N and g each
     /// entry that of its plain dot product: sizes with odd column counts and row counts that
