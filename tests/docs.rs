@@ -1,7 +1,8 @@
 //! Every scenario example in README.md, in FORMATS.md (`../shared/FORMATS.md`, the
 //! user-facing contract, when it is beside the project) and in FORMATS-additions.md (what
 //! calbench adds to it) runs as a user would run it: `calbench run EXAMPLE --trials 2`, sweep
-//! included.
+//! included; and README's head-to-head scripts stop with a clear message where their peers
+//! (Python with scipy, Ceres) are missing.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -96,4 +97,46 @@ fn formats_scenario_examples_run() {
 fn formats_additions_examples_run() {
     let doc = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("FORMATS-additions.md");
     assert!(run_examples(&doc) >= 1);
+}
+
+/// The head-to-head scripts of README.md (`benches/scipy_ratio.sh`, `benches/ceres_sitting.sh`)
+/// need a Python with scipy and, for the second, Ceres, which no test may need: here they are
+/// run as a user would on a machine without them, and must stop before any work with status 2
+/// and a message naming what is missing.
+#[test]
+fn head_to_head_scripts_name_what_is_missing() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let peer = std::env::temp_dir().join(format!("calbench-peer-stub-{}", std::process::id()));
+    std::fs::create_dir_all(peer.join("ceres")).unwrap();
+    for f in ["h2h.toml", "scipy_ref.py"] {
+        std::fs::write(peer.join(f), "").unwrap();
+    }
+    let sitting = peer.join("ceres/sitting.sh");
+    std::fs::write(&sitting, "#!/bin/sh\nexit 1\n").unwrap();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(&sitting, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    let run = |script: &str, peer: &Path, python: &str| {
+        let o = Command::new("bash")
+            .arg(root.join("benches").join(script))
+            .arg(peer)
+            .arg(python)
+            .output()
+            .unwrap();
+        (
+            o.status.code(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    for script in ["scipy_ratio.sh", "ceres_sitting.sh"] {
+        let (code, err) = run(script, &peer.join("absent"), "python3");
+        assert_eq!(code, Some(2), "{script}: {err}");
+        assert!(err.contains("h2h.toml"), "{script}: {err}");
+        let (code, err) = run(script, &peer, "/bin/false");
+        assert_eq!(code, Some(2), "{script}: {err}");
+        assert!(err.contains("lacks numpy/scipy"), "{script}: {err}");
+    }
+    std::fs::remove_dir_all(&peer).unwrap();
 }
