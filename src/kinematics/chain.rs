@@ -422,6 +422,28 @@ mod tests {
     use crate::math::{rot_x, rot_y, rot_z};
     use approx::assert_relative_eq;
 
+    /// All poses' chain variables at once are each pose's alone, to the bit.
+    #[test]
+    fn variables_of_are_the_variables_of_each_pose() {
+        for name in ["irb2600", "tx60", "guo-3t2r"] {
+            let robot = crate::robots::load(name).expect("robot");
+            let chain = robot.chain();
+            let qs: Vec<Vec<Real>> = (0..7)
+                .map(|i| {
+                    (0..robot.dof())
+                        .map(|k| 0.9 * (i as Real) - 0.31 * k as Real)
+                        .collect()
+                })
+                .collect();
+            for (q, (c, sc)) in qs.iter().zip(chain.variables_of(&qs)) {
+                let (c1, sc1) = chain.variables(q);
+                assert_eq!(c.map(Real::to_bits), c1.map(Real::to_bits), "{name}");
+                let bits = |v: [(Real, Real); 16]| v.map(|(s, c)| (s.to_bits(), c.to_bits()));
+                assert_eq!(bits(sc), bits(sc1), "{name}");
+            }
+        }
+    }
+
     #[test]
     fn walk_vars_matches_walk() {
         for name in ["irb2600", "irb2600-mdh", "tx60", "guo-3t2r"] {
