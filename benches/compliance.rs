@@ -1,9 +1,9 @@
 //! Deflected tool frame per pose: linear small-deflection model vs the rapier multibody.
 
-use calbench::compliance::{Compliance, ComplianceModel, ComplianceSettings};
-use calbench::rng::stream;
-use calbench::robots::{builtin, load};
-use calbench::sampling::uniform_joint_poses;
+use calbench::numeric::rng::stream;
+use calbench::robot::builtin::{builtin, load};
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::sim::sag::{Compliance, ComplianceModel, ComplianceSettings};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::hint::black_box;
 

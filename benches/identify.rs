@@ -1,21 +1,22 @@
 //! Identification on the irb2600: 50 random poses, noise-free measurements of the paper set
 //! (every length +0.5 mm, every angle +0.05 rad on the position-identifiable parameters).
 
-use calbench::identifiability::analyse;
 use calbench::identify::{
     solve, LmOptions, LsOptions, RidgeOptions, RobotProblem, RobustOptions, Solver, XiRule,
 };
-use calbench::jacobian::{jacobian, Columns, Measure};
-use calbench::kinematics::Param;
-use calbench::math::Real;
-use calbench::rng;
-use calbench::robots;
-use calbench::sampling::uniform_joint_poses;
+use calbench::measurement::Measure;
+use calbench::numeric::rng;
+use calbench::numeric::Real;
+use calbench::robot::builtin;
+use calbench::robot::identifiability::analyse;
+use calbench::robot::jacobian::{jacobian, Columns};
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::Param;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::DVector;
 
 fn bench(c: &mut Criterion) {
-    let nominal = robots::irb2600();
+    let nominal = builtin::irb2600();
     let mut r = rng::from_seed(11);
     let rich = uniform_joint_poses(&nominal, 200, &mut r);
     let cand = analyse(&nominal, &nominal.params(), &rich, Measure::Position).identifiable;

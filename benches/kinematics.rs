@@ -4,13 +4,15 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use nalgebra::DMatrix;
 use std::hint::black_box;
 
-use calbench::jacobian::{pose_rows, Columns, Measure};
-use calbench::rng;
-use calbench::robots;
-use calbench::sampling::uniform_joint_poses;
+use calbench::robot::jacobian::{pose_rows, Columns};
+
+use calbench::measurement::Measure;
+use calbench::numeric::rng;
+use calbench::robot::builtin;
+use calbench::robot::sampling::uniform_joint_poses;
 
 fn kinematics(c: &mut Criterion) {
-    let robot = robots::irb2600();
+    let robot = builtin::irb2600();
     let chain = robot.chain();
     let mut g = rng::stream(1, "bench");
     let qs = uniform_joint_poses(&robot, 50, &mut g);

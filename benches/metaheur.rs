@@ -2,18 +2,18 @@
 //! one fitness evaluation, and each search with a fixed budget; and the three pose-error
 //! models (Qiao §2.2–2.3, §4.2), one linear step and Gauss–Newton to convergence.
 
-use calbench::errmodel::{identify, ErrorModel};
-use calbench::kinematics::Param;
-use calbench::math::{Frame, Real};
-use calbench::metaheur::{
+use calbench::identify::qiao::error_models::{identify, ErrorModel};
+use calbench::identify::qiao::{
     bas, bas_pso, poses_in_cube, pso, BasOptions, BasPsoOptions, MetaProblem, PsoOptions, DEFAULT_K,
 };
-use calbench::rng::stream;
-use calbench::robots::tx60_qiao_params;
+use calbench::numeric::rng::stream;
+use calbench::numeric::{Frame, Real};
+use calbench::robot::builtin::tx60_qiao_params;
+use calbench::robot::Param;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
 fn bench(c: &mut Criterion) {
-    let nominal = calbench::robots::load("tx60").expect("tx60");
+    let nominal = calbench::robot::builtin::load("tx60").expect("tx60");
     let params = tx60_qiao_params();
     let errs: Vec<(Param, Real)> = params
         .iter()

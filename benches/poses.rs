@@ -1,16 +1,16 @@
 //! DETMAX-IDE choosing 60 of 1000 candidates on the IRB2600 (identifiable parameters,
 //! position data), and DETMAX alone.
 
-use calbench::identifiability::analyse;
-use calbench::jacobian::Measure;
-use calbench::kinematics::Param;
+use calbench::measurement::Measure;
+use calbench::numeric::rng::from_seed;
 use calbench::poses::{select, RobotPoseModel, SelectOptions, Strategy};
-use calbench::rng::from_seed;
-use calbench::sampling::uniform_joint_poses;
+use calbench::robot::identifiability::analyse;
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::Param;
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
 fn bench(c: &mut Criterion) {
-    let mut robot = calbench::robots::irb2600();
+    let mut robot = calbench::robot::builtin::irb2600();
     robot.set(Param::Tool(0), 80.0);
     robot.set(Param::Tool(2), 120.0);
     let qs = uniform_joint_poses(&robot, 80, &mut from_seed(11));

@@ -2,10 +2,10 @@
 //! outliers; and the two registrations of 50 points.
 
 use calbench::calibrate::registration::{register_svd, register_wsvd};
-use calbench::compliance::{Compliance, ComplianceModel, ComplianceSettings};
-use calbench::kinematics::Robot;
-use calbench::rng::stream;
-use calbench::sampling::uniform_joint_poses;
+use calbench::numeric::rng::stream;
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::Robot;
+use calbench::sim::sag::{Compliance, ComplianceModel, ComplianceSettings};
 use calbench::sim::{
     measure_poses, MeasureSetting, OutlierSettings, SagFn, Tracker, TrackerSettings,
 };
@@ -13,7 +13,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 use std::hint::black_box;
 
 fn simulate(c: &mut Criterion) {
-    let robot = calbench::robots::irb2600();
+    let robot = calbench::robot::builtin::irb2600();
     let qs = uniform_joint_poses(&robot, 50, &mut stream(1, "poses"));
     let outliers = OutlierSettings {
         count: Some(4),
@@ -61,8 +61,12 @@ fn simulate(c: &mut Criterion) {
             model,
             ..Default::default()
         };
-        let comp = Compliance::new(&settings, &robot, calbench::robots::builtin("irb2600"))
-            .expect("compliance");
+        let comp = Compliance::new(
+            &settings,
+            &robot,
+            calbench::robot::builtin::builtin("irb2600"),
+        )
+        .expect("compliance");
         let sag = comp.map(|c| {
             Box::new(move |r: &Robot, q: &[f64], _: Option<f64>| c.deflected(r, q)) as Box<SagFn>
         });

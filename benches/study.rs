@@ -2,9 +2,9 @@
 //! eight method × strategy pairs, rapier sag, two threads), outputs written to a scratch
 //! folder: the speed table's wall-time line (target ≤ 4 s).
 
-use calbench::montecarlo::RunOptions;
 use calbench::report::run_study;
-use calbench::scenario::Scenario;
+use calbench::study::scenario::Scenario;
+use calbench::study::RunOptions;
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn bench(c: &mut Criterion) {

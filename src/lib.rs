@@ -8,33 +8,26 @@
 #![warn(missing_docs)]
 
 pub mod error;
-pub mod math;
-pub mod rng;
 
 pub use error::{Error, Result};
-pub mod calibrate;
-pub mod check;
-pub mod compensate;
-pub mod compliance;
-pub mod errmodel;
-pub mod identifiability;
-pub mod identify;
-pub mod import;
-pub mod jacobian;
-pub mod kinematics;
+
+pub mod numeric;
+
 pub mod measurement;
-pub mod metaheur;
-pub mod montecarlo;
-pub mod names;
-pub mod physics;
-pub mod poses;
-pub mod report;
-pub mod robots;
-pub mod sampling;
-pub mod scenario;
+
+pub mod robot;
+
 pub mod sim;
-pub mod symeig;
-pub mod urdf;
+
+pub mod identify;
+
+pub mod poses;
+
+pub mod calibrate;
+
+pub mod study;
+
+pub mod report;
 
 /// The README's Rust examples ("Adding a method"), compiled and run as doctests.
 #[cfg(doctest)]

@@ -141,8 +141,8 @@ fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
 #[test]
 fn identify_refuses_data_that_do_not_determine_the_parameters() {
     use calbench::measurement::Measurements;
-    let robot = calbench::robots::irb2600();
-    let truth = robot.with_errors(&[(calbench::kinematics::Param::A(1), 0.5)]);
+    let robot = calbench::robot::builtin::irb2600();
+    let truth = robot.with_errors(&[(calbench::robot::Param::A(1), 0.5)]);
     let qs: Vec<Vec<f64>> = (0..30)
         .map(|i| {
             let mut q = vec![0.3, -0.4, 0.5, 0.2, 0.6, 0.1];
@@ -158,7 +158,7 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
     let dir = tmp("rank");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("joint1.csv");
-    calbench::sim::csv::write_measurements(&file, &robot, &data).unwrap();
+    calbench::measurement::csv::write_measurements(&file, &robot, &data).unwrap();
     for method in ["ls", "ridge", "igg3", "lm", "bas"] {
         let out = dir.join(method);
         let args = [

@@ -1,31 +1,33 @@
-//! The elasto-geometric model: joint compliances identified with the kinematic errors (SPEC §3
-//! "Compliance"), checked against finite differences, noise-free recovery, the robot file and
+//! The elasto-geometric model: joint compliances identified with the kinematic errors, checked against finite differences, noise-free recovery, the robot file and
 //! measurement CSV round trips, and the command line.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use calbench::compliance::{
-    gravity_loaded_joints, gravity_torques, loaded_fk, Compliance, ComplianceModel, CompliancePick,
-    ComplianceSettings,
+use calbench::robot::compliance::{
+    gravity_loaded_joints, gravity_torques, loaded_fk, CompliancePick,
 };
+
 use calbench::identify::{solve, LeastSquares, LmOptions, RobotProblem};
-use calbench::jacobian::Measure;
-use calbench::kinematics::{parse_robot_file, robot_to_toml, Param, Robot};
-use calbench::math::{Real, Vec3};
+use calbench::measurement::csv::{read_measurements, write_measurements};
+use calbench::measurement::Measure;
 use calbench::measurement::Measurements;
-use calbench::rng::stream;
-use calbench::sampling::uniform_joint_poses;
-use calbench::sim::csv::{read_measurements, write_measurements};
+use calbench::numeric::rng::stream;
+use calbench::numeric::{Real, Vec3};
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::{parse_robot_file, robot_to_toml, Param, Robot};
+use calbench::sim::sag::{Compliance, ComplianceModel, ComplianceSettings};
 use nalgebra::{DMatrix, DVector};
 
 fn irb() -> Robot {
-    calbench::robots::load("irb2600").unwrap()
+    calbench::robot::builtin::load("irb2600").unwrap()
 }
 
 /// The IRB2600's true compliances of the built-in stiffness, for joints 2…6.
 fn true_c(j: usize) -> Real {
-    1.0 / calbench::robots::builtin("irb2600").unwrap().stiffness[j]
+    1.0 / calbench::robot::builtin::builtin("irb2600")
+        .unwrap()
+        .stiffness[j]
 }
 
 /// Kinematic errors of a few millimetres-and-milliradians on a handful of parameters.
@@ -45,9 +47,13 @@ fn linear_sag_points(truth: &Robot, qs: &[Vec<Real>], loads: &[Real]) -> Vec<Vec
         model: ComplianceModel::Linear,
         ..Default::default()
     };
-    let c = Compliance::new(&settings, truth, calbench::robots::builtin("irb2600"))
-        .unwrap()
-        .unwrap();
+    let c = Compliance::new(
+        &settings,
+        truth,
+        calbench::robot::builtin::builtin("irb2600"),
+    )
+    .unwrap()
+    .unwrap();
     let chain = truth.chain();
     qs.iter()
         .zip(loads)
@@ -428,9 +434,13 @@ fn elasto_geometric_model_matches_rapier_sag() {
         model: ComplianceModel::Rapier,
         ..Default::default()
     };
-    let rapier = Compliance::new(&settings, &truth, calbench::robots::builtin("irb2600"))
-        .unwrap()
-        .unwrap();
+    let rapier = Compliance::new(
+        &settings,
+        &truth,
+        calbench::robot::builtin::builtin("irb2600"),
+    )
+    .unwrap()
+    .unwrap();
     let mut model = truth.clone();
     for (p, c) in rapier.true_compliances(&truth) {
         model.set(p, c);
@@ -456,7 +466,7 @@ fn elasto_geometric_model_matches_rapier_sag() {
 /// compliance is the third bound.
 #[test]
 fn search_fitness_sees_the_compliances() {
-    use calbench::metaheur::MetaProblem;
+    use calbench::identify::qiao::MetaProblem;
     let nominal = irb();
     let truth = nominal.with_errors(&kinematic_errors());
     let poses = uniform_joint_poses(&nominal, 20, &mut stream(4, "meta"));

@@ -1,4 +1,4 @@
-//! Every scenario example in README.md, in FORMATS.md (`../shared/FORMATS.md`, the
+//! Every scenario example in README.md, in docs/formats.md (`../shared/FORMATS.md`, the
 //! user-facing contract, when it is beside the project) and in FORMATS-additions.md (what
 //! calbench adds to it) runs as a user would run it: `calbench run EXAMPLE --trials 2`, sweep
 //! included; and README's head-to-head scripts stop with a clear message where their peers

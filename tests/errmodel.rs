@@ -1,14 +1,14 @@
 //! Qiao 2021's three pose-error models (§2.2–2.3, §4.2) and accuracy figures (§4.1–4.2).
 
 use approx::assert_relative_eq;
-use calbench::errmodel::{
+use calbench::identify::qiao::error_models::{
     acpe_acae, identify, pose_errors, residual_and_jacobian, stack, ErrorModel,
 };
-use calbench::kinematics::{Param, Robot};
-use calbench::math::{rot_x, Frame, Real, Vec3};
-use calbench::metaheur::{poses_in_cube, DEFAULT_K as K};
-use calbench::rng::stream;
-use calbench::robots::tx60_qiao_params;
+use calbench::identify::qiao::{poses_in_cube, DEFAULT_K as K};
+use calbench::numeric::rng::stream;
+use calbench::numeric::{rot_x, Frame, Real, Vec3};
+use calbench::robot::builtin::tx60_qiao_params;
+use calbench::robot::{Param, Robot};
 use nalgebra::DMatrix;
 use rand_distr::{Distribution, Normal};
 
@@ -24,7 +24,7 @@ fn errors(params: &[Param], len: Real, ang: Real) -> Vec<(Param, Real)> {
 }
 
 fn setup(n: usize, seed: u64) -> (Robot, Vec<Vec<Real>>) {
-    let nominal = calbench::robots::load("tx60").unwrap();
+    let nominal = calbench::robot::builtin::load("tx60").unwrap();
     let mut rng = stream(seed, "poses");
     let qs = poses_in_cube(&nominal, n, [550.0, 0.0, 550.0], 1000.0, 200_000, &mut rng).unwrap();
     (nominal, qs)
@@ -286,16 +286,16 @@ fn accuracy_figures_by_hand() {
 fn model_names_round_trip() {
     for m in ErrorModel::ALL {
         assert_eq!(
-            calbench::names::parse::<ErrorModel>("error_model", m.as_str()).unwrap(),
+            calbench::robot::names::parse::<ErrorModel>("error_model", m.as_str()).unwrap(),
             m
         );
     }
-    assert!(calbench::names::parse::<ErrorModel>("error_model", "dh").is_err());
+    assert!(calbench::robot::names::parse::<ErrorModel>("error_model", "dh").is_err());
 }
 
 #[test]
 fn harness_validation_errors_are_qiao_acpe_and_acae() {
-    // The harness's per-pose errors average to Qiao's ACPE and ACAE (FORMATS.md).
+    // The harness's per-pose errors average to Qiao's ACPE and ACAE (docs/formats.md).
     let (nominal, qs) = setup(10, 6);
     let params = tx60_qiao_params();
     let real = nominal.with_errors(&errors(&params, 0.3, 0.003));

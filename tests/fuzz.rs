@@ -22,10 +22,10 @@ use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
 
-use calbench::kinematics::{parse_robot_file, read_robot_file, robot_to_toml, Robot};
-use calbench::robots;
-use calbench::scenario::Scenario;
-use calbench::sim::csv::read_measurements;
+use calbench::measurement::csv::read_measurements;
+use calbench::robot::builtin;
+use calbench::robot::{parse_robot_file, read_robot_file, robot_to_toml, Robot};
+use calbench::study::scenario::Scenario;
 
 /// Cases per property in the normal run.
 const CASES: u32 = 10_000;
@@ -626,7 +626,7 @@ fn keys_of(corpus: &[Vec<u8>]) -> Vec<String> {
 fn robot_corpus() -> &'static [Vec<u8>] {
     static C: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
     C.get_or_init(|| {
-        robots::BUILTINS
+        builtin::BUILTINS
             .iter()
             .map(|b| format!("# {}\n{}", b.summary, robot_to_toml(&(b.build)())).into_bytes())
             .collect()
@@ -702,7 +702,7 @@ const SCENARIO_ROBOT: &str = "fuzz-robot.toml";
 /// Writes [`SCENARIO_ROBOT`] into the calling thread's scratch folder.
 fn write_scenario_robot() -> PathBuf {
     let p = scratch().join(SCENARIO_ROBOT);
-    std::fs::write(&p, robot_to_toml(&robots::irb2600())).unwrap();
+    std::fs::write(&p, robot_to_toml(&builtin::irb2600())).unwrap();
     p
 }
 
@@ -765,7 +765,7 @@ fn csv_corpus() -> &'static (Vec<Vec<u8>>, Vec<Robot>) {
             );
             for f in ["measurements.csv", "validation.csv"] {
                 files.push(std::fs::read(dir.join(f)).unwrap());
-                robots.push(robots::load(robot).unwrap());
+                robots.push(builtin::load(robot).unwrap());
             }
             std::fs::remove_dir_all(&dir).unwrap();
         }

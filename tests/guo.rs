@@ -4,11 +4,11 @@
 
 use std::path::Path;
 
-use calbench::kinematics::{parse_robot_file, robot_to_toml, Param};
-use calbench::montecarlo::{run, RunOptions, Study};
 use calbench::poses::separate;
-use calbench::robots;
-use calbench::scenario::Scenario;
+use calbench::robot::builtin;
+use calbench::robot::{parse_robot_file, robot_to_toml, Param};
+use calbench::study::scenario::Scenario;
+use calbench::study::{run, RunOptions, Study};
 
 const FULL: &str = r#"
 name = "guo-full-test"
@@ -39,7 +39,7 @@ adaptive = false
 
 #[test]
 fn guo_3t2r_has_guos_21_joint_parameters_with_beta2_alone() {
-    let r = robots::guo_3t2r();
+    let r = builtin::guo_3t2r();
     let joint: Vec<String> = r.joint_params().iter().map(|p| p.to_string()).collect();
     assert_eq!(joint.len(), 21, "{joint:?}");
     assert!(joint.contains(&"beta2".to_string()));
@@ -55,7 +55,7 @@ fn guo_3t2r_has_guos_21_joint_parameters_with_beta2_alone() {
 
 #[test]
 fn beta_joints_is_checked_naming_the_key() {
-    let base = robot_to_toml(&robots::guo_3t2r());
+    let base = robot_to_toml(&builtin::guo_3t2r());
     for (from, to, key) in [
         ("beta_joints = [2]", "beta_joints = [6]", "beta_joints"),
         ("beta_joints = [2]", "beta_joints = [2, 2]", "beta_joints"),
@@ -108,7 +108,7 @@ fn lm_on_the_full_model_reports_eta_for_every_parameter_noise_free() {
     let r = serde_json::to_value(&res.blocks[0].entries[0]).unwrap();
     assert_eq!(r["failures"], 0, "{r}");
     let eta = r["eta"].as_object().unwrap();
-    for name in robots::guo_3t2r().joint_params() {
+    for name in builtin::guo_3t2r().joint_params() {
         assert!(eta.contains_key(&name.to_string()), "no η for {name}");
     }
     // The damped solution fits the data: noise-free validation after compensation is far
@@ -125,11 +125,17 @@ fn lm_on_the_full_model_reports_eta_for_every_parameter_noise_free() {
 
 #[test]
 fn separation_reports_block_gcns_and_brings_every_block_under_the_threshold() {
-    let r = robots::guo_3t2r();
-    let mut g = calbench::rng::from_seed(8);
-    let qs = calbench::sampling::uniform_joint_poses(&r, 100, &mut g);
+    let r = builtin::guo_3t2r();
+    let mut g = calbench::numeric::rng::from_seed(8);
+    let qs = calbench::robot::sampling::uniform_joint_poses(&r, 100, &mut g);
     let params = r.joint_params();
-    let sep = separate(&r, &params, &qs, calbench::jacobian::Measure::Position, 1e2);
+    let sep = separate(
+        &r,
+        &params,
+        &qs,
+        calbench::measurement::Measure::Position,
+        1e2,
+    );
     assert!(!sep.removed.is_empty());
     let names: Vec<&str> = sep.blocks.iter().map(|b| b.name).collect();
     assert_eq!(names, ["theta", "d", "a", "alpha", "beta"]);

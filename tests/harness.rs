@@ -4,9 +4,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use calbench::check::{compare, read_json};
-use calbench::montecarlo::RunOptions;
-use calbench::scenario::Scenario;
+use calbench::report::check::{compare, read_json};
+use calbench::study::scenario::Scenario;
+use calbench::study::RunOptions;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("calbench-{name}-{}", std::process::id()));
@@ -349,11 +349,9 @@ fn every_shipped_scenario_loads() {
         if p.extension().is_some_and(|e| e == "toml") {
             let text = std::fs::read_to_string(&p).unwrap();
             let table: toml::Table = toml::from_str(&text).unwrap();
-            if calbench::calibrate::registration_study::RegistrationScenario::is_one(&table) {
-                calbench::calibrate::registration_study::RegistrationScenario::from_table(
-                    table, &p,
-                )
-                .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            if calbench::study::registration_study::RegistrationScenario::is_one(&table) {
+                calbench::study::registration_study::RegistrationScenario::from_table(table, &p)
+                    .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
                 // Not a calibration scenario, and said so by the commands that take one.
                 let Err(e) = Scenario::load(&p) else {
                     panic!("a registration study is not a scenario")
@@ -377,16 +375,15 @@ fn the_memoised_sag_of_a_fixed_pose_set_is_the_one_each_trial_computes() {
         .replace("model = \"linear\"", "model = \"rapier\"")
         .replace("count = 30", "count = 12")
         .replace("candidates = 150", "candidates = 40");
-    let mut study =
-        calbench::montecarlo::Study::new(Scenario::parse(&text, None).unwrap()).unwrap();
+    let mut study = calbench::study::Study::new(Scenario::parse(&text, None).unwrap()).unwrap();
     let fixed = study.fixed[1].as_ref().expect("detmax gives a fixed set");
     assert!(
         fixed.sag.is_some(),
         "paper errors + rapier sag + fixed set: memoised"
     );
     // Everything but the wall time.
-    let outcomes = |study: &calbench::montecarlo::Study| {
-        let mut t = calbench::montecarlo::run_trial(study, 2).unwrap();
+    let outcomes = |study: &calbench::study::Study| {
+        let mut t = calbench::study::run_trial(study, 2).unwrap();
         t.outcomes.iter_mut().for_each(|o| o.seconds = 0.0);
         format!("{:?}", t.outcomes)
     };

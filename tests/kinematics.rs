@@ -5,23 +5,24 @@ use approx::assert_relative_eq;
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 
-use calbench::identifiability::analyse;
-use calbench::jacobian::{
-    jacobian, jacobian_fd, pose_rows4, pose_rows_vars, Columns, Measure, LANES,
+use calbench::measurement::Measure;
+use calbench::numeric::rng;
+use calbench::numeric::{Mat3, Real, Vec3};
+use calbench::robot::builtin;
+use calbench::robot::identifiability::analyse;
+use calbench::robot::jacobian::{
+    jacobian, jacobian_fd, pose_rows4, pose_rows_vars, Columns, LANES,
 };
-use calbench::kinematics::{Convention, Joint, JointType, Param, Robot, Units};
-use calbench::math::{Mat3, Real, Vec3};
-use calbench::rng;
-use calbench::robots;
-use calbench::sampling::uniform_joint_poses;
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::{Convention, Joint, JointType, Param, Robot, Units};
 
 const DEG: Real = std::f64::consts::PI / 180.0;
 
-fn fk_user(robot: &Robot, q_user: &[Real]) -> calbench::math::Frame {
+fn fk_user(robot: &Robot, q_user: &[Real]) -> calbench::numeric::Frame {
     robot.fk(&robot.q_from_user(q_user))
 }
 
-fn assert_frame(f: &calbench::math::Frame, pos: [Real; 3], cols: [[Real; 3]; 3]) {
+fn assert_frame(f: &calbench::numeric::Frame, pos: [Real; 3], cols: [[Real; 3]; 3]) {
     assert_relative_eq!(f.pos, Vec3::from(pos), epsilon = 1e-9);
     let r = Mat3::from_columns(&cols.map(Vec3::from));
     assert_relative_eq!(f.rot, r, epsilon = 1e-12);
@@ -31,7 +32,7 @@ fn assert_frame(f: &calbench::math::Frame, pos: [Real; 3], cols: [[Real; 3]; 3])
 /// x = −z₀, y = y₀, z = x₀.
 #[test]
 fn irb2600_home_pose_by_hand() {
-    let r = robots::irb2600();
+    let r = builtin::irb2600();
     let f = fk_user(&r, &[0.0; 6]);
     assert_frame(
         &f,
@@ -45,7 +46,7 @@ fn irb2600_home_pose_by_hand() {
 
 #[test]
 fn irb2600_mdh_home_pose_by_hand() {
-    let f = fk_user(&robots::irb2600_mdh(), &[0.0; 6]);
+    let f = fk_user(&builtin::irb2600_mdh(), &[0.0; 6]);
     assert_frame(
         &f,
         [1288.0, 0.0, 1495.0],
@@ -57,7 +58,7 @@ fn irb2600_mdh_home_pose_by_hand() {
 /// base orientation.
 #[test]
 fn tx60_home_pose_by_hand() {
-    let f = fk_user(&robots::tx60(), &[0.0; 6]);
+    let f = fk_user(&builtin::tx60(), &[0.0; 6]);
     assert_frame(
         &f,
         [0.0, 20.0, 670.0],
@@ -69,7 +70,7 @@ fn tx60_home_pose_by_hand() {
 /// (0, 500 − 160/√2, 550 + 160/√2) mm — d4 + tool z = 100 + 60 along the 45° axis of joint 4.
 #[test]
 fn guo_3t2r_pose_by_hand() {
-    let r = robots::guo_3t2r();
+    let r = builtin::guo_3t2r();
     let f = fk_user(&r, &[200.0, 200.0, 0.0, 0.0, 0.0]);
     let s = 160.0 / 2f64.sqrt();
     assert_relative_eq!(f.pos, Vec3::new(0.0, 500.0 - s, 550.0 + s), epsilon = 1e-9);
@@ -82,7 +83,7 @@ fn guo_3t2r_pose_by_hand() {
 
 #[test]
 fn dh_and_mdh_descriptions_agree_in_fk() {
-    let (dh, mdh) = (robots::irb2600(), robots::irb2600_mdh());
+    let (dh, mdh) = (builtin::irb2600(), builtin::irb2600_mdh());
     let mut g = rng::stream(7, "test");
     for q in uniform_joint_poses(&dh, 200, &mut g) {
         let (a, b) = (dh.fk(&q), mdh.fk(&q));
@@ -101,7 +102,7 @@ fn jacobian_mismatch(robot: &Robot, qs: &[Vec<Real>], measure: Measure) -> Real 
 
 #[test]
 fn builtin_jacobians_match_finite_differences() {
-    for b in robots::BUILTINS {
+    for b in builtin::BUILTINS {
         let robot = (b.build)();
         let mut g = rng::stream(11, b.name);
         let qs = uniform_joint_poses(&robot, 20, &mut g);
@@ -117,7 +118,7 @@ fn builtin_jacobians_match_finite_differences() {
 /// column: geometric parameters of all conventions, base, tool and joint compliances.
 #[test]
 fn four_poses_at_once_are_the_poses_one_by_one_to_the_bit() {
-    for b in robots::BUILTINS {
+    for b in builtin::BUILTINS {
         let mut robot = (b.build)();
         let mut g = rng::stream(5, b.name);
         // Off-nominal values, so that no column is special.
@@ -232,7 +233,7 @@ proptest! {
 
     #[test]
     fn builtin_jacobians_at_random_poses(which in 0usize..4, seed in any::<u64>()) {
-        let robot = (robots::BUILTINS[which].build)();
+        let robot = (builtin::BUILTINS[which].build)();
         let mut g = rng::from_seed(seed);
         let qs = uniform_joint_poses(&robot, 3, &mut g);
         for measure in [Measure::Position, Measure::Pose] {
@@ -245,7 +246,7 @@ proptest! {
 /// Li 2018 eqs. 8–11: with the base at the origin, the base-frame columns are `[I, −[p]×]`.
 #[test]
 fn base_columns_are_li_2018_eq_8_to_11() {
-    let robot = robots::irb2600();
+    let robot = builtin::irb2600();
     let n = robot.dof();
     let params: Vec<Param> = (0..6).map(Param::Base).collect();
     let cols = Columns::new(&params, n);
@@ -257,13 +258,13 @@ fn base_columns_are_li_2018_eq_8_to_11() {
     // Base rotation applied Rz·Ry·Rx at zero angles: small rotations about x, y, z.
     expect
         .view_mut((0, 3), (3, 3))
-        .copy_from(&(-calbench::math::skew(&p)));
+        .copy_from(&(-calbench::numeric::skew(&p)));
     assert_relative_eq!(j, expect, epsilon = 1e-9);
 }
 
 #[test]
 fn irb2600_position_groups_d2_with_d3() {
-    let robot = robots::irb2600();
+    let robot = builtin::irb2600();
     let mut g = rng::stream(3, "test");
     let qs = uniform_joint_poses(&robot, 60, &mut g);
     let a = analyse(&robot, &robot.params(), &qs, Measure::Position);
@@ -275,13 +276,13 @@ fn irb2600_position_groups_d2_with_d3() {
     );
     assert_eq!(a.rank, a.identifiable.len());
     assert_eq!(a.rank + a.unidentifiable.len(), robot.params().len());
-    // θ6 and the tool are coupled for position-only data (SPEC §2): something is unidentifiable.
+    // θ6 and the tool are coupled for position-only data: something is unidentifiable.
     assert!(a.condition_number.is_finite() && a.condition_number > 1.0);
 }
 
 #[test]
 fn irb2600_mdh_beta2_is_identifiable() {
-    let robot = robots::irb2600_mdh();
+    let robot = builtin::irb2600_mdh();
     let mut g = rng::stream(3, "test");
     let qs = uniform_joint_poses(&robot, 60, &mut g);
     let a = analyse(&robot, &robot.params(), &qs, Measure::Position);
@@ -290,7 +291,7 @@ fn irb2600_mdh_beta2_is_identifiable() {
 
 #[test]
 fn full_pose_identifies_more_than_position() {
-    let robot = robots::irb2600();
+    let robot = builtin::irb2600();
     let mut g = rng::stream(5, "test");
     let qs = uniform_joint_poses(&robot, 40, &mut g);
     let p = analyse(&robot, &robot.params(), &qs, Measure::Position);
@@ -305,7 +306,7 @@ fn full_pose_identifies_more_than_position() {
 
 #[test]
 fn bad_robot_files_name_the_key() {
-    use calbench::kinematics::parse_robot_file;
+    use calbench::robot::parse_robot_file;
     let head = "name = \"x\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n";
     let joint = |body: &str| format!("{head}[[joints]]\ntype = \"revolute\"\n{body}");
     let cases = [
@@ -336,8 +337,8 @@ fn bad_robot_files_name_the_key() {
 
 #[test]
 fn printed_builtins_load_back_identically() {
-    use calbench::kinematics::{parse_robot_file, robot_to_toml};
-    for b in robots::BUILTINS {
+    use calbench::robot::{parse_robot_file, robot_to_toml};
+    for b in builtin::BUILTINS {
         let r = (b.build)();
         let back = parse_robot_file(&robot_to_toml(&r), std::path::Path::new("x.toml")).unwrap();
         assert_eq!(back.dof(), r.dof());
@@ -352,7 +353,7 @@ fn printed_builtins_load_back_identically() {
 
 #[test]
 fn units_m_rad_equal_mm_deg() {
-    use calbench::kinematics::parse_robot_file;
+    use calbench::robot::parse_robot_file;
     let mm = "name = \"a\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n[[joints]]\ntype = \"revolute\"\nalpha = 90.0\na = 100.0\nd = 200.0\ntheta = 10.0\nlimits = [-90.0, 90.0]\n[[joints]]\ntype = \"prismatic\"\nalpha = 0.0\na = 50.0\nd = 0.0\ntheta = 0.0\nlimits = [0.0, 300.0]\n";
     let m = "name = \"a\"\nconvention = \"dh\"\nlength_unit = \"m\"\nangle_unit = \"rad\"\n[[joints]]\ntype = \"revolute\"\nalpha = 1.5707963267948966\na = 0.1\nd = 0.2\ntheta = 0.17453292519943295\nlimits = [-1.5707963267948966, 1.5707963267948966]\n[[joints]]\ntype = \"prismatic\"\nalpha = 0.0\na = 0.05\nd = 0.0\ntheta = 0.0\nlimits = [0.0, 0.3]\n";
     let p = std::path::Path::new("u.toml");

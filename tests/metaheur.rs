@@ -1,15 +1,15 @@
 //! Derivative-free identification of the TX60 on noise-free full-pose data (Qiao 2021 §4).
 
-use calbench::errmodel::acpe_acae;
-use calbench::jacobian::Measure;
-use calbench::kinematics::{Param, Robot};
-use calbench::math::{Frame, Real};
-use calbench::metaheur::{
+use calbench::identify::qiao::error_models::acpe_acae;
+use calbench::identify::qiao::{
     bas, bas_pso, poses_in_cube, pso, BasOptions, BasPsoOptions, BasStart, MetaProblem, PsoOptions,
     DEFAULT_K,
 };
-use calbench::rng::stream;
-use calbench::robots::tx60_qiao_params;
+use calbench::measurement::Measure;
+use calbench::numeric::rng::stream;
+use calbench::numeric::{Frame, Real};
+use calbench::robot::builtin::tx60_qiao_params;
+use calbench::robot::{Param, Robot};
 
 /// Errors of 0.1 mm / 0.001 rad (Qiao's pre-calibration ACPE/ACAE of 0.312 mm / 0.221° is of
 /// this order), scaled 1, −0.6, 0.8, −1, 0.4 in turn.
@@ -33,7 +33,7 @@ struct Case {
 }
 
 fn case() -> Case {
-    let nominal = calbench::robots::load("tx60").unwrap();
+    let nominal = calbench::robot::builtin::load("tx60").unwrap();
     let params = tx60_qiao_params();
     let truth = injected(&params);
     let errs: Vec<(Param, Real)> = params.iter().copied().zip(truth.iter().copied()).collect();
@@ -67,7 +67,7 @@ fn acpe(c: &Case, x: &[Real]) -> (Real, Real) {
 #[test]
 fn qiao_parameters_are_identifiable_from_full_pose() {
     let c = case();
-    let id = calbench::identifiability::analyse(&c.nominal, &c.params, &c.qs, Measure::Pose);
+    let id = calbench::robot::identifiability::analyse(&c.nominal, &c.params, &c.qs, Measure::Pose);
     assert_eq!(id.rank, 24, "{:?}", id.unidentifiable);
 }
 
@@ -173,7 +173,7 @@ fn pso_and_bas_reduce_tx60_errors() {
 /// the reason it stopped; a budget too small for one iteration is refused by key.
 #[test]
 fn max_evaluations_gives_equal_budgets() {
-    use calbench::metaheur::Bounds;
+    use calbench::identify::qiao::Bounds;
     let f = |x: &[Real]| x.iter().map(|v| (v - 0.3).powi(2)).sum::<Real>();
     let b = Bounds::symmetric(&[1.0; 4]);
     let budget = 3000;
@@ -241,8 +241,8 @@ fn max_evaluations_gives_equal_budgets() {
 /// far smaller fitness; the search with the model reaches it to within a few per cent.
 #[test]
 fn linear_error_model_fitness_is_eq14_on_the_model_residual() {
-    use calbench::errmodel::{identify, ErrorModel};
-    use calbench::identify::meta::LinearFitness;
+    use calbench::identify::qiao::error_models::{identify, ErrorModel};
+    use calbench::identify::qiao::method::LinearFitness;
     use calbench::identify::{CalibrationProblem, Method};
     use calbench::measurement::Measurements;
     let c = case();
@@ -252,7 +252,7 @@ fn linear_error_model_fitness_is_eq14_on_the_model_residual() {
         quats: Some(
             c.measured
                 .iter()
-                .map(|f| calbench::math::quaternion(&f.rot))
+                .map(|f| calbench::numeric::quaternion(&f.rot))
                 .collect(),
         ),
         ..Default::default()
@@ -282,11 +282,12 @@ fn linear_error_model_fitness_is_eq14_on_the_model_residual() {
         .x;
         let (f0, fs) = (lin.fitness(&zero), lin.fitness(&step));
         assert!(fs < 0.05 * f0, "{model}: {fs} against {f0} at zero");
-        let m: calbench::identify::meta::Metaheuristic<BasPsoOptions> = toml::from_str(&format!(
-            "error_model = \"{}\"\nmax_evaluations = 60000\nbound_mm = 0.5\nbound_rad = 0.005",
-            model.as_str()
-        ))
-        .unwrap();
+        let m: calbench::identify::qiao::method::Metaheuristic<BasPsoOptions> =
+            toml::from_str(&format!(
+                "error_model = \"{}\"\nmax_evaluations = 60000\nbound_mm = 0.5\nbound_rad = 0.005",
+                model.as_str()
+            ))
+            .unwrap();
         let found = m.identify(&cal, &mut stream(1, "search")).unwrap();
         let ff = lin.fitness(found.x.as_slice());
         assert!(

@@ -1,17 +1,17 @@
 //! Measurement-pose selection on the IRB2600 (Guo 2024 §3.2): DETMAX-IDE ≥ DETMAX ≥ random,
 //! limits, determinism for a seed and across rayon thread counts.
 
-use calbench::identifiability::analyse;
-use calbench::jacobian::Measure;
-use calbench::kinematics::{Param, Robot};
+use calbench::measurement::Measure;
+use calbench::numeric::rng::{from_seed, Rng};
 use calbench::poses::{score, select, RobotPoseModel, SelectOptions, Strategy};
-use calbench::rng::{from_seed, Rng};
-use calbench::sampling::uniform_joint_poses;
+use calbench::robot::identifiability::analyse;
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::{Param, Robot};
 
 /// The IRB2600 with a target point off the flange axis (so θ6 acts on the position) and its
 /// identifiable parameters for position data.
 fn setup() -> (Robot, Vec<Param>) {
-    let mut robot = calbench::robots::irb2600();
+    let mut robot = calbench::robot::builtin::irb2600();
     robot.set(Param::Tool(0), 80.0);
     robot.set(Param::Tool(2), 120.0);
     let qs = uniform_joint_poses(&robot, 80, &mut from_seed(11));

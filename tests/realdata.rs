@@ -5,10 +5,10 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use calbench::kinematics::Param;
-use calbench::math::Real;
-use calbench::robots;
-use calbench::urdf::UrdfRobot;
+use calbench::numeric::Real;
+use calbench::robot::builtin;
+use calbench::robot::urdf::UrdfRobot;
+use calbench::robot::Param;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("calbench-rd-{name}-{}", std::process::id()));
@@ -47,13 +47,9 @@ fn s(p: &Path) -> String {
 }
 
 /// Pose difference (mm, rad) of two robots' FK at internal joint values.
-fn fk_gap(
-    a: &calbench::kinematics::Robot,
-    b: &calbench::kinematics::Robot,
-    q: &[Real],
-) -> (Real, Real) {
+fn fk_gap(a: &calbench::robot::Robot, b: &calbench::robot::Robot, q: &[Real]) -> (Real, Real) {
     let (fa, fb) = (a.fk(q), b.fk(q));
-    let r = calbench::math::rotation_vector(&(fa.rot.transpose() * fb.rot)).norm();
+    let r = calbench::numeric::rotation_vector(&(fa.rot.transpose() * fb.rot)).norm();
     ((fa.pos - fb.pos).norm(), r)
 }
 
@@ -88,7 +84,7 @@ fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
     assert!((row[0] - q1.to_degrees()).abs() < 1e-8);
     assert!((row[1] - q2.to_degrees()).abs() < 1e-8);
     assert!((row[6] - 383.97123).abs() < 1e-9 && (row[7] + 3240.7562).abs() < 1e-9);
-    let r = calbench::import::euler_matrix(
+    let r = calbench::measurement::import::euler_matrix(
         [0, 1, 2],
         [
             (-90.179563f64).to_radians(),
@@ -97,7 +93,7 @@ fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
         ],
         true,
     );
-    let q = calbench::math::quaternion(&r);
+    let q = calbench::numeric::quaternion(&r);
     for k in 0..4 {
         assert!((row[9 + k] - q[k]).abs() < 1e-11, "quaternion {k}");
     }
@@ -133,10 +129,10 @@ fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
 
 #[test]
 fn the_ur10_urdf_has_the_fk_of_the_dh_file() {
-    let dh = robots::load(&ex("ur10.toml")).unwrap();
-    let urdf = robots::load(&ex("ur10.urdf")).unwrap();
-    let mut g = calbench::rng::stream(3, "urdf-test");
-    for q in calbench::sampling::uniform_joint_poses(&dh, 50, &mut g) {
+    let dh = builtin::load(&ex("ur10.toml")).unwrap();
+    let urdf = builtin::load(&ex("ur10.urdf")).unwrap();
+    let mut g = calbench::numeric::rng::stream(3, "urdf-test");
+    for q in calbench::robot::sampling::uniform_joint_poses(&dh, 50, &mut g) {
         let (mm, rad) = fk_gap(&dh, &urdf, &q);
         assert!(mm < 1e-9 && rad < 1e-12, "{mm} mm, {rad} rad at {q:?}");
     }
@@ -164,11 +160,11 @@ fn a_written_urdf_has_the_fk_of_the_robot_it_was_written_from() {
     let d = tmp("urdf-write");
     let path = d.join("changed.urdf");
     std::fs::write(&path, u.write(&changed).unwrap()).unwrap();
-    let back = robots::load(&s(&path)).unwrap();
+    let back = builtin::load(&s(&path)).unwrap();
     assert_eq!(back.dof(), n);
-    let mut g = calbench::rng::stream(4, "urdf-test");
+    let mut g = calbench::numeric::rng::stream(4, "urdf-test");
     let mut moved: Real = 0.0;
-    for q in calbench::sampling::uniform_joint_poses(&changed, 50, &mut g) {
+    for q in calbench::robot::sampling::uniform_joint_poses(&changed, 50, &mut g) {
         let (mm, rad) = fk_gap(&changed, &back, &q);
         assert!(mm < 1e-8 && rad < 1e-11, "{mm} mm, {rad} rad");
         moved = moved.max(fk_gap(&changed, &u.robot, &q).0);
@@ -215,10 +211,10 @@ fn import_identify_compensate_on_the_shipped_rows() {
         "--out",
         &s(&out),
     ]);
-    let toml = robots::load(&s(&out.join("robot.toml"))).unwrap();
-    let urdf = robots::load(&s(&out.join("robot.urdf"))).unwrap();
-    let mut g = calbench::rng::stream(5, "urdf-test");
-    for q in calbench::sampling::uniform_joint_poses(&toml, 20, &mut g) {
+    let toml = builtin::load(&s(&out.join("robot.toml"))).unwrap();
+    let urdf = builtin::load(&s(&out.join("robot.urdf"))).unwrap();
+    let mut g = calbench::numeric::rng::stream(5, "urdf-test");
+    for q in calbench::robot::sampling::uniform_joint_poses(&toml, 20, &mut g) {
         let (mm, rad) = fk_gap(&toml, &urdf, &q);
         assert!(mm < 1e-8 && rad < 1e-11, "{mm} mm, {rad} rad");
     }
@@ -246,7 +242,7 @@ fn import_identify_compensate_on_the_shipped_rows() {
         rows.next().unwrap(),
         "q1,q2,q3,q4,q5,q6,residual_mm,residual_deg,flag"
     );
-    let nominal = robots::load(&ex("ur10.urdf")).unwrap();
+    let nominal = builtin::load(&ex("ur10.urdf")).unwrap();
     for (row, qin) in rows.zip([
         [0.1, -1.2, 1.3, -1.6, 1.2, 0.3],
         [-2.0, -2.1, 1.8, -2.2, 0.9, 0.1],
@@ -267,7 +263,7 @@ fn import_identify_compensate_on_the_shipped_rows() {
 #[test]
 fn robot_files_of_every_convention_export_to_a_urdf_with_their_fk() {
     let d = tmp("export");
-    for (i, r) in [robots::irb2600(), robots::irb2600_mdh(), robots::tx60()]
+    for (i, r) in [builtin::irb2600(), builtin::irb2600_mdh(), builtin::tx60()]
         .into_iter()
         .enumerate()
     {
@@ -279,10 +275,10 @@ fn robot_files_of_every_convention_export_to_a_urdf_with_their_fk() {
             .collect();
         let r = r.with_errors(&errors);
         let path = d.join(format!("r{i}.urdf"));
-        std::fs::write(&path, calbench::urdf::robot_to_urdf(&r).unwrap()).unwrap();
-        let back = robots::load(&s(&path)).unwrap();
-        let mut g = calbench::rng::stream(6, "urdf-test");
-        for q in calbench::sampling::uniform_joint_poses(&r, 30, &mut g) {
+        std::fs::write(&path, calbench::robot::urdf::robot_to_urdf(&r).unwrap()).unwrap();
+        let back = builtin::load(&s(&path)).unwrap();
+        let mut g = calbench::numeric::rng::stream(6, "urdf-test");
+        for q in calbench::robot::sampling::uniform_joint_poses(&r, 30, &mut g) {
             let (mm, rad) = fk_gap(&r, &back, &q);
             assert!(mm < 1e-8 && rad < 1e-11, "{}: {mm} mm, {rad} rad", r.name);
         }

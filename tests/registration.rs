@@ -1,4 +1,4 @@
-//! SVD registration alternating with identification (SPEC §3 "Registration"): on data in a
+//! SVD registration alternating with identification: on data in a
 //! tracker frame far from the base, the alternation must settle (termination `converged`) at
 //! the joint optimum of frame and kinematic errors, which `identify` registration computes
 //! directly by identifying the base parameters with the rest; and the "before" frame is the
@@ -6,19 +6,19 @@
 
 use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
 use calbench::identify::method_by_name;
-use calbench::jacobian::Measure;
-use calbench::kinematics::{Param, Robot};
-use calbench::math::{Frame, Real, Vec3};
+use calbench::measurement::Measure;
 use calbench::measurement::Measurements;
-use calbench::montecarlo::study::identified_params;
-use calbench::rng;
-use calbench::sampling::uniform_joint_poses;
+use calbench::numeric::rng;
+use calbench::numeric::{Frame, Real, Vec3};
+use calbench::robot::param_sets::identified_params;
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::{Param, Robot};
 use rand::Rng as _;
 
 /// The IRB2600 with errors of 0.5 mm / 0.005 rad, 60 poses measured from a tracker 3 m away
 /// and turned by 1 rad, with a pseudo-noise of ~0.02 mm. Returns the tracker pose too.
 fn tracker_data() -> (Robot, Robot, Measurements, Frame) {
-    let nominal = calbench::robots::irb2600();
+    let nominal = calbench::robot::builtin::irb2600();
     let params = identified_params(&nominal, Measure::Position, false);
     let errors: Vec<(Param, Real)> = params
         .iter()

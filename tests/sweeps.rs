@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use calbench::scenario::Scenario;
+use calbench::study::scenario::Scenario;
 
 fn tmp(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("calbench-sweeps-{name}-{}", std::process::id()));

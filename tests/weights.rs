@@ -4,22 +4,22 @@
 //! the pose-error models and Qiao's fitness of the searches.
 
 use calbench::calibrate::{calibrate, Registration};
-use calbench::errmodel::{identify, ErrorModel};
+use calbench::identify::qiao::error_models::{identify, ErrorModel};
+use calbench::identify::qiao::MetaProblem;
 use calbench::identify::{method_by_name, MethodSpec};
-use calbench::jacobian::Measure;
-use calbench::kinematics::{Param, Robot};
-use calbench::math::{quaternion, Frame, Real, Vec3};
+use calbench::measurement::Measure;
 use calbench::measurement::Measurements;
-use calbench::metaheur::MetaProblem;
-use calbench::montecarlo::study::identified_params;
-use calbench::rng;
-use calbench::sampling::uniform_joint_poses;
+use calbench::numeric::rng;
+use calbench::numeric::{quaternion, Frame, Real, Vec3};
+use calbench::robot::param_sets::identified_params;
+use calbench::robot::sampling::uniform_joint_poses;
+use calbench::robot::{Param, Robot};
 use rand::Rng as _;
 
 /// The IRB2600 with small errors on its identifiable parameters, 30 poses measured with a
 /// deterministic pseudo-noise of ~0.05 mm, in the base frame.
 fn noisy_data(pose: bool) -> (Robot, Vec<Param>, Measurements) {
-    let nominal = calbench::robots::irb2600();
+    let nominal = calbench::robot::builtin::irb2600();
     let measure = if pose {
         Measure::Pose
     } else {
@@ -122,7 +122,7 @@ fn weighted_pose_error_model_equals_the_repeated_pose() {
             .iter()
             .zip(d.quats.as_ref().unwrap())
             .map(|(p, q)| Frame {
-                rot: calbench::math::quaternion_matrix(q),
+                rot: calbench::numeric::quaternion_matrix(q),
                 pos: *p,
             })
             .collect()
@@ -165,7 +165,7 @@ fn weighted_fitness_equals_the_repeated_pose() {
     let rots = |d: &Measurements| {
         d.quats
             .as_ref()
-            .map(|q| q.iter().map(calbench::math::quaternion_matrix).collect())
+            .map(|q| q.iter().map(calbench::numeric::quaternion_matrix).collect())
     };
     // Qiao's fitness is a sum of norms: a pose counted twice is a pose scaled by 2 = √4.
     let mut w = vec![1.0; data.len()];

@@ -1,4 +1,4 @@
-//! The calibration pipeline (SPEC §3 "Registration", §4): the frame registration of the
+//! The calibration pipeline: the frame registration of the
 //! measured points alternating with the identification, and the validation of the
 //! compensated robot. `calbench run` calls it once per trial, method and pose strategy;
 //! `calbench identify` once on a measurement file.
@@ -7,22 +7,22 @@
 //! - [`validation`]: validation errors of a model against true (or measured) frames;
 //! - this file: [`calibrate`].
 
+pub mod compensate;
 pub mod registration;
-pub mod registration_study;
 pub mod validation;
 
 use crate::error::Result;
 use crate::identify::{CalibrationProblem, Identified, MethodSpec};
-use crate::kinematics::{Param, Robot};
-use crate::math::{Frame, Real, Vec3};
 use crate::measurement::Measurements;
-use crate::rng::Rng;
+use crate::numeric::rng::Rng;
+use crate::numeric::{Frame, Real, Vec3};
+use crate::robot::{Param, Robot};
 use registration::{register_svd, register_wsvd};
 
 pub use validation::{validation_errors, ErrorStats, PoseErrors};
 
-/// How the measured points are brought into the robot's base frame (FORMATS.md
-/// `[registration]`, SPEC §3 "Registration").
+/// How the measured points are brought into the robot's base frame (docs/formats.md
+/// `[registration]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Registration {
@@ -41,7 +41,7 @@ pub enum Registration {
 impl Registration {
     /// The name used in files and on the command line.
     pub fn as_str(self) -> &'static str {
-        crate::names::static_name(&self)
+        crate::robot::names::static_name(&self)
     }
 }
 
@@ -92,7 +92,7 @@ pub enum RoundsEnd {
 impl RoundsEnd {
     /// The name used in files.
     pub fn as_str(self) -> &'static str {
-        crate::names::static_name(&self)
+        crate::robot::names::static_name(&self)
     }
 }
 
@@ -106,8 +106,8 @@ pub const STALL_ROUNDS: usize = 25;
 /// Depth of the Anderson acceleration of the alternation.
 const ANDERSON_DEPTH: usize = 6;
 
-/// Registration and identification of one method on one measurement (SPEC §3
-/// "Registration", §4).
+/// Registration and identification of one method on one measurement (Ban eqs. 12–25 for
+/// the registration).
 ///
 /// - `svd` and `wsvd`: the nominal robot's registration (SVD, or Ban's weighted SVD) is the
 ///   first frame; registration (an SVD weighing the points as the identification did) and
@@ -283,7 +283,7 @@ impl FrameCoordinates {
     }
 
     fn of(&self, frame: &Frame) -> Coordinates {
-        let w = crate::math::rotation_vector(&(frame.rot * self.reference.transpose()));
+        let w = crate::numeric::rotation_vector(&(frame.rot * self.reference.transpose()));
         let (s, c) = (self.radius, frame.apply(&self.centroid));
         Coordinates::new(s * w.x, s * w.y, s * w.z, c.x, c.y, c.z)
     }

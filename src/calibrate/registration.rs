@@ -1,4 +1,4 @@
-//! Registration of the tracker frame to the robot base (SPEC §3; Ban eqs. 12–25).
+//! Registration of the tracker frame to the robot base (Ban eqs. 12–25).
 //!
 //! Given the nominal target points `b_i` in the robot base frame and the measured points
 //! `a_i` in the tracker frame, find the rigid transform `(R, t)` minimising
@@ -22,7 +22,7 @@
 use nalgebra::Matrix3;
 
 use crate::error::{Error, Result};
-use crate::math::{Frame, Real, Vec3};
+use crate::numeric::{Frame, Real, Vec3};
 
 /// The result of a registration.
 #[derive(Clone, Debug, PartialEq)]
@@ -152,7 +152,7 @@ fn ban_weights(e: &[Real]) -> Vec<Real> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::stream;
+    use crate::numeric::rng::stream;
     use approx::assert_relative_eq;
     use rand::Rng as _;
 

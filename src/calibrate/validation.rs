@@ -1,9 +1,9 @@
-//! Validation of a compensated robot (SPEC §6): per-pose position and orientation errors
+//! Validation of a compensated robot: per-pose position and orientation errors
 //! against true (or measured) frames, and their statistics.
 
-use crate::errmodel::attitude_error_deg;
-use crate::kinematics::Robot;
-use crate::math::{rotation_vector, Frame, Real};
+use crate::identify::qiao::error_models::attitude_error_deg;
+use crate::numeric::{rotation_vector, Frame, Real};
+use crate::robot::Robot;
 
 /// Mean, RMS, max and standard deviation of a set of errors.
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
@@ -44,18 +44,18 @@ pub struct PoseErrors {
     /// Position error `|Δp|` (mm).
     pub mm: Vec<Real>,
     /// Orientation error: the rotation angle of `R_modelᵀ R_true` (deg), the geodesic
-    /// distance on SO(3), stable at every attitude (FORMATS.md `validation_*_deg`).
+    /// distance on SO(3), stable at every attitude (docs/formats.md `validation_*_deg`).
     pub deg: Vec<Real>,
     /// Qiao 2021's attitude error `√(Δα² + Δβ² + Δγ²)` of the fixed X-Y-Z angles (deg,
-    /// [`crate::errmodel::attitude_error_deg`]); undefined near ±90° pitch, where the angles
-    /// are singular (FORMATS.md `validation_*_attitude_deg`; Qiao's ACAE is its mean).
+    /// [`crate::identify::qiao::error_models::attitude_error_deg`]); undefined near ±90° pitch, where the angles
+    /// are singular (docs/formats.md `validation_*_attitude_deg`; Qiao's ACAE is its mean).
     pub attitude_deg: Vec<Real>,
 }
 
 /// The errors of `model` against the true frames at the joint values `qs` ([`PoseErrors`]);
 /// the means over the poses of `mm` and `attitude_deg` are Qiao's ACPE and ACAE (§4.1). A
 /// model with joint compliances predicts each pose under its payload (`payloads`, kg; `None`:
-/// no payload) by [`crate::compliance::loaded_fk`]; a rigid model ignores the payloads. Fails
+/// no payload) by [`crate::robot::compliance::loaded_fk`]; a rigid model ignores the payloads. Fails
 /// when the model has compliances but no link masses.
 pub fn validation_errors(
     model: &Robot,
@@ -67,7 +67,7 @@ pub fn validation_errors(
     let mut e = PoseErrors::default();
     for (i, (q, t)) in qs.iter().zip(truth).enumerate() {
         let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
-        let f = crate::compliance::loaded_fk(model, &c, q, load)?;
+        let f = crate::robot::compliance::loaded_fk(model, &c, q, load)?;
         e.mm.push((f.pos - t.pos).norm());
         e.deg.push(rotation_angle_deg(&f, t));
         e.attitude_deg.push(attitude_error_deg(t, &f));
@@ -85,7 +85,7 @@ pub fn rotation_angle_deg(model: &Frame, truth: &Frame) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{rot_x, rot_z, rpy_matrix, Vec3};
+    use crate::numeric::{rot_x, rot_z, rpy_matrix, Vec3};
 
     #[test]
     fn orientation_error_is_the_rotation_angle_at_every_pitch() {

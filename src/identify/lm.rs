@@ -15,15 +15,15 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
-use super::linalg::{cholesky_in_place, cholesky_solve};
 use super::solver::{
     check_stop, finish, max_abs, start_weights, LeastSquares, Solver, Work, DIVERGENCE_FACTOR,
 };
 use super::{Identified, Termination};
 use crate::error::{finite_non_negative, finite_positive, Error, Result};
-use crate::math::Real;
+use crate::numeric::linalg::{cholesky_in_place, cholesky_solve};
+use crate::numeric::Real;
 
-/// Options of `lm` (FORMATS.md `[[methods]]`).
+/// Options of `lm` (docs/formats.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LmOptions {

@@ -12,9 +12,9 @@ use serde::Deserialize;
 use super::solver::{check_stop, gauss_newton, LeastSquares, Solver};
 use super::Identified;
 use crate::error::Result;
-use crate::math::Real;
+use crate::numeric::Real;
 
-/// Options of `ls` (FORMATS.md `[[methods]]`).
+/// Options of `ls` (docs/formats.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LsOptions {

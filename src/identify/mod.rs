@@ -1,4 +1,4 @@
-//! Identification methods (SPEC §4): every method behind one interface, [`Method`], over one
+//! Identification methods: every method behind one interface, [`Method`], over one
 //! problem description, [`CalibrationProblem`], returning one result type, [`Identified`].
 //!
 //! | method (`name`) | type | what it solves | source |
@@ -28,11 +28,9 @@
 //! Adding a method is one file with an options struct that implements [`Method`] and one
 //! line in [`registry::METHODS`] (README, "Adding a method").
 
-mod linalg;
 pub mod lm;
 pub mod ls;
-pub mod meta;
-pub mod pose_error;
+pub mod qiao;
 pub mod registry;
 pub mod ridge;
 pub mod robot;
@@ -44,16 +42,16 @@ pub mod xi;
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{Error, Result};
-use crate::jacobian::Measure;
-use crate::kinematics::{Param, Robot};
-use crate::math::{Frame, Mat3, Real, Vec3};
+use crate::measurement::Measure;
 use crate::measurement::Measurements;
-use crate::rng::Rng;
+use crate::numeric::rng::Rng;
+use crate::numeric::{Frame, Mat3, Real, Vec3};
+use crate::robot::{Param, Robot};
 
 pub use lm::LmOptions;
 pub use ls::LsOptions;
-pub use meta::{Metaheuristic, Search};
-pub use pose_error::PoseErrorLs;
+pub use qiao::method::{Metaheuristic, Search};
+pub use qiao::pose_error::PoseErrorLs;
 pub use registry::{method_by_name, MethodEntry, MethodSpec, METHODS};
 pub use ridge::RidgeOptions;
 pub use robot::RobotProblem;
@@ -114,7 +112,7 @@ impl Termination {
     /// `target-reached`, `diverged`, `singular`, `rank-deficient`, `no-progress`,
     /// `invalid-input`.
     pub fn as_str(self) -> &'static str {
-        crate::names::static_name(&self)
+        crate::robot::names::static_name(&self)
     }
 }
 
@@ -155,7 +153,7 @@ pub struct Identified {
 
 impl Identified {
     /// Condition number σ_max/σ_min of the column-scaled, weighted Jacobian at the solution
-    /// ([`solver::conditioning`], FORMATS.md `condition_number`; computed here, as the
+    /// ([`solver::conditioning`], docs/formats.md `condition_number`; computed here, as the
     /// Monte-Carlo runs do not need it); infinite below full rank, NaN when not computed.
     pub fn condition_number(&self) -> Real {
         if self.normal.is_empty() {
@@ -178,7 +176,7 @@ impl Identified {
             return cov;
         }
         let mut l = self.normal.clone();
-        if !linalg::cholesky_in_place(&mut l) {
+        if !crate::numeric::linalg::cholesky_in_place(&mut l) {
             return cov;
         }
         let s2 = self.sigma0 * self.sigma0;
@@ -186,7 +184,7 @@ impl Identified {
         for c in 0..t {
             e.fill(0.0);
             e[c] = 1.0;
-            linalg::cholesky_solve(&l, &mut e);
+            crate::numeric::linalg::cholesky_solve(&l, &mut e);
             for k in 0..t {
                 cov[(k, c)] = s2 * e[k];
             }

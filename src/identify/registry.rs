@@ -1,5 +1,5 @@
 //! The identification methods by name, and a scenario's `[[methods]]` entry read into a
-//! [`MethodSpec`] (FORMATS.md `[[methods]]`).
+//! [`MethodSpec`] (docs/formats.md `[[methods]]`).
 //!
 //! Every method's options are one struct: `#[derive(Deserialize)]` with
 //! `deny_unknown_fields` and `Default`, checked by its [`Method::check`]. An entry's common
@@ -10,11 +10,11 @@ use std::sync::Arc;
 
 use serde::de::DeserializeOwned;
 
-use super::meta::Metaheuristic;
+use super::qiao::method::Metaheuristic;
 use super::{LmOptions, LsOptions, Method, PoseErrorLs, RidgeOptions, RobustOptions};
 use crate::error::{finite_positive, Error, Result};
-use crate::math::Real;
-use crate::metaheur::{BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
+use crate::identify::qiao::{BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
+use crate::numeric::Real;
 
 /// A refused `[[methods]]` entry: the key (empty when the entry as a whole is wrong) and
 /// what is wrong.

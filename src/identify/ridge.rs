@@ -14,9 +14,9 @@ use super::solver::{check_stop, gauss_newton, LeastSquares, RidgeCfg, Solver};
 use super::xi::XiRule;
 use super::Identified;
 use crate::error::Result;
-use crate::math::Real;
+use crate::numeric::Real;
 
-/// Options of `ridge` (FORMATS.md `[[methods]]`).
+/// Options of `ridge` (docs/formats.md `[[methods]]`).
 #[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RidgeOptions {

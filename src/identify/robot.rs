@@ -1,12 +1,12 @@
 //! The kinematic identification problem of a robot: measured tool points (and orientations)
-//! at known joint values, unknown errors of chosen parameters (SPEC §2, §4).
+//! at known joint values, unknown errors of chosen parameters.
 //!
 //! The unknown `x` holds the errors added to the nominal values of the chosen parameters
 //! (mm, rad); the model is the forward kinematics of the robot with those errors, and the
-//! Jacobian is the analytic one of [`crate::jacobian`] (Li 2018 eqs. 6–12). The residual of
+//! Jacobian is the analytic one of [`crate::robot::jacobian`] (Li 2018 eqs. 6–12). The residual of
 //! a point is `p_meas − p_model(x)`; for full poses the orientation rows are
 //! `φ = log(R_meas · R_model(x)ᵀ)` with its exact derivative `J_r⁻¹(φ) J_ω`
-//! ([`crate::jacobian::log_orientation_rows`]), weighted against the position rows.
+//! ([`crate::robot::jacobian::log_orientation_rows`]), weighted against the position rows.
 
 use std::cell::RefCell;
 
@@ -14,12 +14,13 @@ use nalgebra::{DMatrix, DVector};
 
 use super::solver::{rank, solve, start_weights, LeastSquares, Size, Solver, Work};
 use super::{CalibrationProblem, Identified, Method, Termination};
-use crate::compliance::{deflect_vars, gravity_torques_vars};
 use crate::error::Error;
-use crate::jacobian::{log_orientation_rows, pose_rows4, pose_rows_vars, Columns, Measure, LANES};
-use crate::kinematics::{Chain, ChainVars, JointType, Param, Robot};
-use crate::math::{Frame, Mat3, Real, Vec3};
-use crate::rng::Rng;
+use crate::measurement::Measure;
+use crate::numeric::rng::Rng;
+use crate::numeric::{Frame, Mat3, Real, Vec3};
+use crate::robot::compliance::{deflect_vars, gravity_torques_vars};
+use crate::robot::jacobian::{log_orientation_rows, pose_rows4, pose_rows_vars, Columns, LANES};
+use crate::robot::{Chain, ChainVars, JointType, Param, Robot};
 
 /// A [`LeastSquares`] problem over a robot's parameter errors.
 #[derive(Debug)]
@@ -43,7 +44,7 @@ pub struct RobotProblem<'a> {
     /// The joints whose compliance is identified, with their columns.
     compliant: Vec<(usize, usize)>,
     /// Per point, the payload (kg) under which the elasto-geometric model computes the
-    /// gravity torques ([`crate::compliance::gravity_torques`], with the nominal link masses
+    /// gravity torques ([`crate::robot::compliance::gravity_torques`], with the nominal link masses
     /// and the current estimate's geometry); empty when the model has no compliance (none
     /// identified, none in the nominal robot).
     loads: Vec<Real>,
@@ -182,7 +183,7 @@ impl<'a> RobotProblem<'a> {
     /// match the points.
     pub fn with_payloads(mut self, payloads: Option<&[Real]>) -> crate::Result<Self> {
         self.loads.clear();
-        if self.compliant.is_empty() && !crate::compliance::is_compliant(self.nominal) {
+        if self.compliant.is_empty() && !crate::robot::compliance::is_compliant(self.nominal) {
             return Ok(self);
         }
         let Some(mass) = self.nominal.link_mass_kg.clone() else {
@@ -197,7 +198,7 @@ impl<'a> RobotProblem<'a> {
         };
         let m = self.points.len();
         let loads = payloads.map_or_else(|| vec![0.0; m], <[Real]>::to_vec);
-        crate::compliance::check_payloads(&loads, m)?;
+        crate::robot::compliance::check_payloads(&loads, m)?;
         self.loads = loads;
         self.masses = mass;
         Ok(self)

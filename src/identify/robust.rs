@@ -30,7 +30,7 @@
 //! Weight functions ([`WeightFn`]):
 //! - IGG3 (Li eq. 18): `1` for `u ≤ k0`; `(k0/u)·((k1 − u)/(k1 − k0))²` for `k0 < u ≤ k1`;
 //!   `0` for `u > k1`. The paper's text gives `k0 = 1.5`, `k1 = 2.4` (garbled); the defaults
-//!   are `k0 = 1.5`, `k1 = 2.5` (SPEC §4), both settable.
+//!   are `k0 = 1.5`, `k1 = 2.5`, both settable.
 //! - Huber: `1` for `u ≤ k0`, `k0/u` beyond.
 //! - Tukey's biweight with cut-off `c = k1`: `(1 − (u/c)²)²` for `u < c`, `0` beyond.
 
@@ -42,9 +42,9 @@ use super::solver::{gauss_newton, LeastSquares, Solver};
 use super::weights::Robustness;
 use super::Identified;
 use crate::error::Result;
-use crate::math::Real;
+use crate::numeric::Real;
 
-/// Options of `igg3` (FORMATS.md `[[methods]]`): the ridge's options (`xi`, `scale`, `eps`,
+/// Options of `igg3` (docs/formats.md `[[methods]]`): the ridge's options (`xi`, `scale`, `eps`,
 /// `max_iter`; here with an iteration limit of 200 over all phases) and the robust weights.
 /// Read from one table: the keys of [`Robustness`] go to `robust`, every other key to
 /// `ridge`.
@@ -72,7 +72,7 @@ impl<'de> Deserialize<'de> for RobustOptions {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
         let mut ridge = toml::Table::deserialize(d)?;
-        let robust = crate::names::take_keys(&mut ridge, &["weight", "k0", "k1", "sigma0"]);
+        let robust = crate::robot::names::take_keys(&mut ridge, &["weight", "k0", "k1", "sigma0"]);
         let limit_given = ridge.contains_key("max_iter");
         let mut r =
             RidgeOptions::deserialize(toml::Value::Table(ridge)).map_err(D::Error::custom)?;

@@ -1,4 +1,4 @@
-//! The nonlinear least-squares engine under the Jacobian-based methods (SPEC §4): the
+//! The nonlinear least-squares engine under the Jacobian-based methods: the
 //! [`LeastSquares`] problem trait, the shared buffers and normal equations, the Gauss–Newton
 //! iteration of LS, ridge and the robust ridge (Li 2018 eqs. 13–14, §2.2), and the statistics
 //! of a solution ([`finish`]).
@@ -9,13 +9,13 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::linalg::{self, solve_spd};
 use super::weights::{point_weights, redecide_inliers, Residuals, Robustness, Sigma0};
 use super::xi::{choose_xi, RidgeStep, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
-use crate::math::Real;
-use crate::symeig::symmetric_eigenvalues;
+use crate::numeric::linalg::{self, solve_spd};
+use crate::numeric::symeig::symmetric_eigenvalues;
+use crate::numeric::Real;
 
 /// The size of a [`LeastSquares`] problem.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -204,7 +204,7 @@ impl Work {
             self.r.as_slice(),
         );
         #[cfg(target_arch = "x86_64")]
-        if crate::math::has_avx2_fma() {
+        if crate::numeric::has_avx2_fma() {
             gram::<Avx2>(js, pjs, r, m, t, n, g);
             return;
         }
@@ -563,7 +563,7 @@ fn scaled_inverse_trace(n: &DMatrix<Real>) -> Option<Real> {
     let inverse: Vec<Real> = (0..t).map(|k| 1.0 / s[(k, k)]).collect();
     let l = s.as_slice();
     let mut v = vec![[0.0 as Real; 4]; t];
-    let trace = crate::math::with_avx2_fma(
+    let trace = crate::numeric::with_avx2_fma(
         #[inline(always)]
         || {
             let mut sums = [0.0 as Real; 4];
@@ -590,7 +590,7 @@ fn scaled_inverse_trace(n: &DMatrix<Real>) -> Option<Real> {
 }
 
 /// Numerical rank and condition number of the column-scaled Jacobian `J D^-½` from its normal
-/// matrix `n = JᵀPJ` (FORMATS.md `condition_number`: σ_max/σ_min after scaling every column to
+/// matrix `n = JᵀPJ` (docs/formats.md `condition_number`: σ_max/σ_min after scaling every column to
 /// unit norm, points weighted): `sqrt(λ_max/λ_min)` of `D^-½ n D^-½`, `D = diag(n)`. A zero
 /// column counts as an undetermined direction. The rank counts the scaled singular values
 /// above [`RANK_TOLERANCE`] times the largest; the condition number is infinite below full
@@ -854,7 +854,7 @@ mod tests {
     /// four and columns of very different scales.
     #[test]
     fn scaled_inverse_trace_is_the_trace_of_the_inverse() {
-        let mut g = crate::rng::from_seed(5);
+        let mut g = crate::numeric::rng::from_seed(5);
         for t in [1, 2, 3, 4, 5, 8, 9, 20, 23] {
             let j = DMatrix::from_fn(t + 10, t, |_, k| {
                 rand::Rng::random_range(&mut g, -1.0..1.0) * [1.0, 1e3, 1e-3][k % 3]
@@ -874,7 +874,7 @@ mod tests {
     /// are not a multiple of four.
     #[test]
     fn the_gram_kernels_agree_to_the_bit() {
-        let mut g = crate::rng::from_seed(3);
+        let mut g = crate::numeric::rng::from_seed(3);
         for (m, t) in [(150, 24), (57, 7), (6, 1), (13, 20), (300, 33)] {
             let j = DMatrix::from_fn(m, t, |_, _| rand::Rng::random_range(&mut g, -1.0..1.0));
             let pj = DMatrix::from_fn(m, t, |i, k| j[(i, k)] * (1.0 + (i % 3) as Real));
@@ -897,7 +897,7 @@ mod tests {
                 assert_eq!(portable.1[a].to_bits(), x.to_bits(), "g[{a}]");
             }
             #[cfg(target_arch = "x86_64")]
-            if crate::math::has_avx2_fma() {
+            if crate::numeric::has_avx2_fma() {
                 let avx2 = run(&|n, gv| gram::<Avx2>(js, pjs, &r, m, t, n, gv));
                 let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&portable.0), bits(&avx2.0), "N, {m} × {t}");

@@ -5,20 +5,20 @@ use rand::Rng as _;
 use rand_distr::{Distribution, Normal};
 
 use super::*;
-use crate::identifiability::analyse;
-use crate::jacobian::Measure;
-use crate::kinematics::{Param, Robot};
-use crate::math::{Real, Vec3};
-use crate::rng::{self, Rng};
-use crate::robots;
-use crate::sampling::uniform_joint_poses;
+use crate::measurement::Measure;
+use crate::numeric::rng::{self, Rng};
+use crate::numeric::{Real, Vec3};
+use crate::robot::builtin;
+use crate::robot::identifiability::analyse;
+use crate::robot::sampling::uniform_joint_poses;
+use crate::robot::{Param, Robot};
 
 /// Measured data in the base frame, for [`RobotProblem`].
 #[derive(Clone, Debug, Default)]
 struct RobotData {
     qs: Vec<Vec<Real>>,
     points: Vec<Vec3>,
-    rotations: Option<Vec<crate::math::Mat3>>,
+    rotations: Option<Vec<crate::numeric::Mat3>>,
 }
 
 impl RobotData {
@@ -190,7 +190,7 @@ fn bad_input_is_reported_not_panicked() {
 
 #[test]
 fn robot_problem_rejects_inconsistent_input() {
-    let nominal = robots::irb2600();
+    let nominal = builtin::irb2600();
     let qs = vec![vec![0.0; 6]; 3];
     let data = RobotData {
         qs: qs.clone(),
@@ -236,8 +236,8 @@ struct Setup {
 /// keep it: θ6 of the irb2600 with a zero tool, for position data).
 fn identifiable(nominal: &Robot, rich: &[Vec<Real>], measure: Measure) -> Vec<Param> {
     let params = analyse(nominal, &nominal.params(), rich, measure).identifiable;
-    let cols = crate::jacobian::Columns::new(&params, nominal.dof());
-    let j = crate::jacobian::jacobian(nominal, &cols, rich, measure);
+    let cols = crate::robot::jacobian::Columns::new(&params, nominal.dof());
+    let j = crate::robot::jacobian::jacobian(nominal, &cols, rich, measure);
     params
         .into_iter()
         .enumerate()
@@ -249,7 +249,7 @@ fn identifiable(nominal: &Robot, rich: &[Vec<Real>], measure: Measure) -> Vec<Pa
 /// irb2600 with the paper set (every length +0.5 mm, every angle +0.05 rad) on the
 /// parameters identifiable from positions.
 fn paper_setup() -> Setup {
-    let nominal = robots::irb2600();
+    let nominal = builtin::irb2600();
     let mut r = rng::from_seed(11);
     let rich = uniform_joint_poses(&nominal, 200, &mut r);
     let params = identifiable(&nominal, &rich, Measure::Position);
@@ -383,7 +383,7 @@ fn exact_full_pose_data(
     seed: u64,
     poses: usize,
 ) -> (Robot, Vec<Param>, Vec<(Param, Real)>, RobotData) {
-    let nominal = robots::irb2600();
+    let nominal = builtin::irb2600();
     let mut r = rng::from_seed(seed);
     let rich = uniform_joint_poses(&nominal, 200, &mut r);
     let params = identifiable(&nominal, &rich, Measure::Pose);
@@ -418,7 +418,7 @@ fn full_pose_data_recovers_the_errors() {
 
 #[test]
 fn orientation_weight_scales_the_orientation_rows_and_balances_noisy_full_poses() {
-    let nominal = robots::irb2600();
+    let nominal = builtin::irb2600();
     let mut r = rng::from_seed(4);
     let rich = uniform_joint_poses(&nominal, 200, &mut r);
     let params = identifiable(&nominal, &rich, Measure::Pose);
@@ -734,8 +734,8 @@ fn ls_covariance_meets_cramer_rao() {
     let n = trials as Real;
     let mean = &sum / n;
     let cov = (sum2 - &mean * mean.transpose() * n) / (n - 1.0);
-    let cols = crate::jacobian::Columns::new(&s.params, s.truth.dof());
-    let j = crate::jacobian::jacobian(&s.truth, &cols, &qs, Measure::Position);
+    let cols = crate::robot::jacobian::Columns::new(&s.params, s.truth.dof());
+    let j = crate::robot::jacobian::jacobian(&s.truth, &cols, &qs, Measure::Position);
     let crb = (j.transpose() * j).try_inverse().expect("regular") * (sigma * sigma);
     let ratio = cov.trace() / crb.trace();
     println!("trace ratio empirical / CRB = {ratio}");

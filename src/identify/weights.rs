@@ -4,7 +4,7 @@
 
 use nalgebra::DVector;
 
-use crate::math::{median, Real};
+use crate::numeric::{median, Real};
 
 /// The weight function of the robust iterations.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]

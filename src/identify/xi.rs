@@ -27,7 +27,7 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::math::Real;
+use crate::numeric::Real;
 
 /// How the ridge parameter ξ is chosen.
 #[derive(Clone, Debug, PartialEq)]
@@ -55,7 +55,7 @@ impl XiRule {
 }
 
 impl<'de> serde::Deserialize<'de> for XiRule {
-    /// `xi = "double-h" | "gcv" | "l-curve"` or a number ξ ≥ 0 (FORMATS.md `[[methods]]`).
+    /// `xi = "double-h" | "gcv" | "l-curve"` or a number ξ ≥ 0 (docs/formats.md `[[methods]]`).
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         #[derive(serde::Deserialize)]
         #[serde(rename_all = "kebab-case")]
@@ -115,7 +115,7 @@ pub(crate) struct RidgeStep<'a> {
 /// residual, which a Cholesky solve of `n` gives without the eigen-decomposition (and without
 /// allocating): with `δ = n⁻¹ g`, `ẑ = D^½ (δ + dev)`, `|ẑ|² = Σ d_k (δ_k + dev_k)²` and the
 /// explained part `βᵀβ = (g + n dev)ᵀ (δ + dev)`. When `n` is too close to singular for the
-/// factorisation ([`super::linalg::PIVOT_TOL`]) the eigen-decomposition below decides which
+/// factorisation ([`crate::numeric::linalg::PIVOT_TOL`]) the eigen-decomposition below decides which
 /// components carry information, as for the other rules.
 pub(crate) fn choose_xi(
     rule: &XiRule,
@@ -230,11 +230,11 @@ fn double_h_cholesky(s: &RidgeStep, a: &mut DMatrix<Real>, y: &mut DVector<Real>
     let (n, g, cost, dev, d, n_rows) = (s.n, s.g, s.cost, s.dev, s.d, s.n_rows);
     let t = n.nrows();
     a.copy_from(n);
-    if !super::linalg::cholesky_in_place(a) {
+    if !crate::numeric::linalg::cholesky_in_place(a) {
         return None;
     }
     y.copy_from(g);
-    super::linalg::cholesky_solve(a, y);
+    crate::numeric::linalg::cholesky_solve(a, y);
     let (mut b2, mut beta2, mut z2) = (cost, 0.0, 0.0);
     for i in 0..t {
         let nd: Real = n.column(i).dot(dev);

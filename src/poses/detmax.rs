@@ -12,7 +12,7 @@
 //! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. Eight
 //! candidates at a time, the lower triangles of JᵀJ ± BᵀB are formed in the lanes of a
 //! per-worker [`Spectra`] and their eigenvalues found together by the allocation-free
-//! Householder + implicit-QL solver of [`crate::symeig::symmetric_eigenvalues_lanes`] (the
+//! Householder + implicit-QL solver of [`crate::numeric::symeig::symmetric_eigenvalues_lanes`] (the
 //! same bits as one at a time, and several times faster than nalgebra's generic
 //! `symmetric_eigenvalues` at k = 26). The candidate scan runs
 //! on rayon and reduces by (value, index) with ties to the lower index, so the result does not
@@ -22,7 +22,7 @@ use nalgebra::DMatrix;
 use rayon::prelude::*;
 
 use super::{add_outer_lower, objective_of_lower, Objective, PoseModel, Spectra};
-use crate::math::Real;
+use crate::numeric::Real;
 
 /// What [`detmax`] found.
 #[derive(Clone, Debug, PartialEq)]
@@ -195,7 +195,7 @@ mod tests {
     use super::super::test_models::TableModel;
     use super::super::{indices, Objective};
     use super::*;
-    use crate::math::Real;
+    use crate::numeric::Real;
 
     /// Brute-force objective of a candidate subset via SVD of the stacked J.
     fn brute(model: &TableModel, set: &[usize], o: Objective) -> Real {
@@ -270,13 +270,16 @@ mod tests {
     fn fast_scan_values_match_the_dense_eigen_path() {
         let (robot, ident) = tool_robot();
         for measure in [
-            crate::jacobian::Measure::Position,
-            crate::jacobian::Measure::Pose,
+            crate::measurement::Measure::Position,
+            crate::measurement::Measure::Pose,
         ] {
             let model = super::super::RobotPoseModel::new(&robot, &ident, measure);
             let (r, k) = (model.rows_per_pose(), model.n_params());
-            let cands =
-                crate::sampling::uniform_joint_poses(&robot, 150, &mut crate::rng::from_seed(4));
+            let cands = crate::robot::sampling::uniform_joint_poses(
+                &robot,
+                150,
+                &mut crate::numeric::rng::from_seed(4),
+            );
             let mut blocks = DMatrix::zeros(r * cands.len(), k);
             for (i, q) in cands.iter().enumerate() {
                 model.jacobian_block(q, &mut blocks.rows_mut(r * i, r));
@@ -364,7 +367,7 @@ mod tests {
     }
 
     /// The objective of a Gram matrix through nalgebra's eigenvalues: the path independent of
-    /// [`crate::symeig`].
+    /// [`crate::numeric::symeig`].
     fn nalgebra_objective(a: &DMatrix<Real>, o: Objective, m: usize) -> Real {
         let mut ev = a.symmetric_eigenvalues();
         super::super::objective_of_eigenvalues(ev.as_mut_slice(), o, m)
@@ -446,15 +449,19 @@ mod tests {
 
     /// The IRB2600 with a target point off the flange axis (so θ6 acts on the position) and
     /// its position-identifiable parameters.
-    fn tool_robot() -> (crate::kinematics::Robot, Vec<crate::kinematics::Param>) {
-        let mut robot = crate::robots::irb2600();
-        robot.set(crate::kinematics::Param::Tool(0), 80.0);
-        robot.set(crate::kinematics::Param::Tool(2), 120.0);
-        let ident = crate::identifiability::analyse(
+    fn tool_robot() -> (crate::robot::Robot, Vec<crate::robot::Param>) {
+        let mut robot = crate::robot::builtin::irb2600();
+        robot.set(crate::robot::Param::Tool(0), 80.0);
+        robot.set(crate::robot::Param::Tool(2), 120.0);
+        let ident = crate::robot::identifiability::analyse(
             &robot,
             &robot.params(),
-            &crate::sampling::uniform_joint_poses(&robot, 60, &mut crate::rng::from_seed(1)),
-            crate::jacobian::Measure::Position,
+            &crate::robot::sampling::uniform_joint_poses(
+                &robot,
+                60,
+                &mut crate::numeric::rng::from_seed(1),
+            ),
+            crate::measurement::Measure::Position,
         )
         .identifiable;
         (robot, ident)
@@ -463,10 +470,16 @@ mod tests {
     /// The position model of [`tool_robot`] and `n` uniform candidate poses from `seed`.
     fn tool_model(n: usize, seed: u64) -> (super::super::RobotPoseModel, Vec<Vec<Real>>) {
         let (robot, ident) = tool_robot();
-        let model =
-            super::super::RobotPoseModel::new(&robot, &ident, crate::jacobian::Measure::Position);
-        let cands =
-            crate::sampling::uniform_joint_poses(&robot, n, &mut crate::rng::from_seed(seed));
+        let model = super::super::RobotPoseModel::new(
+            &robot,
+            &ident,
+            crate::measurement::Measure::Position,
+        );
+        let cands = crate::robot::sampling::uniform_joint_poses(
+            &robot,
+            n,
+            &mut crate::numeric::rng::from_seed(seed),
+        );
         (model, cands)
     }
 

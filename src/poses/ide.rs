@@ -30,8 +30,8 @@ use rand_distr::StandardNormal;
 use rayon::prelude::*;
 
 use super::{Evaluator, KnownBlocks, Objective, PoseModel, Spectra};
-use crate::math::Real;
-use crate::rng::Rng;
+use crate::numeric::rng::Rng;
+use crate::numeric::Real;
 use crate::Error;
 
 /// Settings of the IDE stage (Guo 2024 eqs. 19–26; the paper gives no values, these

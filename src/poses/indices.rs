@@ -1,5 +1,5 @@
 //! Observability indices O1–O6, the entropy-weighted composite index and the GCN
-//! (Guo 2024 eqs. 9–15, SPEC §5).
+//! (Guo 2024 eqs. 9–15).
 //!
 //! All indices are functions of the singular values σ1 ≥ … ≥ σk of the stacked identification
 //! Jacobian J over m poses (k = number of parameters):
@@ -24,7 +24,7 @@ use nalgebra::DMatrix;
 use serde::Serialize;
 
 use super::{Objective, PoseModel};
-use crate::math::Real;
+use crate::numeric::Real;
 
 /// The observability indices of one pose set (Guo 2024 eqs. 9–15).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -286,7 +286,7 @@ mod tests {
         // shared columns; spreads of a few to ten decades, k from 1 to 80 (past the stack
         // buffer), ties and the k < 2 case.
         use rand::Rng as _;
-        let mut rng = crate::rng::from_seed(8);
+        let mut rng = crate::numeric::rng::from_seed(8);
         for case in 0..400 {
             let k = [1, 2, 3, 20, 26, 64, 65, 80][case % 8];
             let decades = [2.0, 6.0, 10.0][case % 3];
@@ -360,7 +360,7 @@ mod tests {
     fn svd_of_a_rotated_diagonal_matrix_gives_the_hand_indices() {
         // J = R3 · [[3,0],[0,2],[0,0]] · R2ᵀ has singular values 3 and 2.
         let (c, s) = (0.3f64.cos(), 0.3f64.sin());
-        let r3 = crate::math::rot_x(0.7) * crate::math::rot_z(-1.1);
+        let r3 = crate::numeric::rot_x(0.7) * crate::numeric::rot_z(-1.1);
         let d = DMatrix::from_row_slice(3, 2, &[3.0, 0.0, 0.0, 2.0, 0.0, 0.0]);
         let r2 = DMatrix::from_row_slice(2, 2, &[c, -s, s, c]);
         let r3d = DMatrix::from_iterator(3, 3, r3.iter().copied());

@@ -1,4 +1,4 @@
-//! Measurement-pose selection (SPEC §5; Guo 2024, `papers/guo2024-detmax-ide-pose-optimization.txt`).
+//! Measurement-pose selection (Guo 2024, `papers/guo2024-detmax-ide-pose-optimization.txt`).
 //!
 //! - [`indices`]: observability indices O1–O6, the entropy-weighted composite (eqs. 9–15), GCN
 //!   (eq. 14);
@@ -26,11 +26,13 @@ pub use ide::IdeOptions;
 pub use indices::{score, Scores};
 pub use separation::{separate, BlockGcn, Separation};
 
-use crate::jacobian::{pose_rows, Columns, Measure};
-use crate::kinematics::{Chain, Param, Robot};
-use crate::math::Real;
-use crate::rng::Rng;
-use crate::symeig::{symmetric_eigenvalues, symmetric_eigenvalues_lanes};
+use crate::robot::jacobian::{pose_rows, Columns};
+
+use crate::measurement::Measure;
+use crate::numeric::rng::Rng;
+use crate::numeric::symeig::{symmetric_eigenvalues, symmetric_eigenvalues_lanes};
+use crate::numeric::Real;
+use crate::robot::{Chain, Param, Robot};
 use crate::Error;
 
 /// The Jacobian rows of one measurement pose: what pose selection optimises over.
@@ -52,7 +54,7 @@ pub trait PoseModel: Sync {
     }
 }
 
-/// A [`PoseModel`] over a robot's identification Jacobian ([`crate::jacobian::pose_rows`],
+/// A [`PoseModel`] over a robot's identification Jacobian ([`crate::robot::jacobian::pose_rows`],
 /// Guo 2024 eq. 7), with optional column scaling.
 #[derive(Clone, Debug)]
 pub struct RobotPoseModel {
@@ -83,7 +85,7 @@ impl RobotPoseModel {
     }
 
     /// The same model with column `c` multiplied by `scale[c]` (e.g. the inverse column norms
-    /// of [`crate::identifiability::scale_columns`] over a reference pose set, so that mm and
+    /// of [`crate::robot::identifiability::scale_columns`] over a reference pose set, so that mm and
     /// rad columns compare). Fails when the length differs from the parameter count or a
     /// factor is not finite and positive.
     pub fn with_column_scale(mut self, scale: Vec<Real>) -> crate::Result<Self> {
@@ -159,7 +161,7 @@ pub enum Objective {
 impl Objective {
     /// The name used in scenario files.
     pub fn as_str(self) -> &'static str {
-        crate::names::static_name(&self)
+        crate::robot::names::static_name(&self)
     }
 }
 
@@ -180,7 +182,7 @@ pub enum Strategy {
 impl Strategy {
     /// The name used in scenario files and on the command line.
     pub fn as_str(self) -> &'static str {
-        crate::names::static_name(&self)
+        crate::robot::names::static_name(&self)
     }
 }
 
@@ -237,7 +239,7 @@ pub struct Selection {
 
 /// The objective of the Gram matrix JᵀJ over `m` poses whose lower triangle is stored
 /// row-major in `g` (k × k): singular values of J are sqrt(eig(JᵀJ)) (symmetric eigenvalues of
-/// the small k × k matrix, by [`crate::symeig`]). A set with cond(J) above about 3e6 counts as
+/// the small k × k matrix, by [`crate::numeric::symeig`]). A set with cond(J) above about 3e6 counts as
 /// rank-deficient (objective 0).
 pub(crate) fn objective_of_lower(g: &[Real], k: usize, objective: Objective, m: usize) -> Real {
     let mut lower = g.to_vec();
@@ -279,7 +281,7 @@ pub(crate) fn add_outer_lower(g: &mut [Real], b: &[Real], sign: Real) {
 
 /// Gram matrices whose objectives are found together: the eigenvalue problems of up to
 /// [`Spectra::LANES`] matrices share their instructions
-/// ([`crate::symeig::symmetric_eigenvalues_lanes`]; eight lanes are two AVX2 registers, whose
+/// ([`crate::numeric::symeig::symmetric_eigenvalues_lanes`]; eight lanes are two AVX2 registers, whose
 /// independent chains hide the latency of the QL sweeps better than one). Each matrix's
 /// objective is the same bits as [`objective_of_lower`] of the same entries. Only the lower
 /// triangles are stored (the rest stays zero: [`symmetric_eigenvalues_lanes`] neither reads nor
@@ -378,7 +380,7 @@ impl Spectra {
     fn accumulate(&mut self, g: Option<&[Real]>, sign: Real) {
         let k = self.k;
         let (a, b) = (&mut self.a, &self.rows);
-        crate::math::with_avx2_fma(
+        crate::numeric::with_avx2_fma(
             #[inline(always)]
             || {
                 for i in 0..k {
@@ -756,32 +758,36 @@ mod tests {
             Strategy::DetmaxIde,
         ] {
             assert_eq!(
-                crate::names::parse::<Strategy>("s", s.as_str()).ok(),
+                crate::robot::names::parse::<Strategy>("s", s.as_str()).ok(),
                 Some(s)
             );
         }
         for o in [Objective::Composite, Objective::O1, Objective::O6] {
             assert_eq!(
-                crate::names::parse::<Objective>("o", o.as_str()).ok(),
+                crate::robot::names::parse::<Objective>("o", o.as_str()).ok(),
                 Some(o)
             );
         }
         assert_eq!(Strategy::DetmaxIde.as_str(), "detmax-ide");
-        assert!(crate::names::parse::<Strategy>("s", "DETMAX").is_err());
-        assert!(crate::names::parse::<Objective>("o", "o2").is_err());
+        assert!(crate::robot::names::parse::<Strategy>("s", "DETMAX").is_err());
+        assert!(crate::robot::names::parse::<Objective>("o", "o2").is_err());
     }
 
     /// The IRB2600 with a tool, its position-identifiable parameters (with an unidentifiable
     /// one every index is zero, and tests comparing indices would compare zeros), and the
     /// random stream after choosing them.
     fn identifiable_model(seed: u64) -> (Robot, RobotPoseModel, Rng) {
-        let mut robot = crate::robots::irb2600();
+        let mut robot = crate::robot::builtin::irb2600();
         robot.set(Param::Tool(0), 80.0);
-        let mut rng = crate::rng::from_seed(seed);
-        let rich = crate::sampling::uniform_joint_poses(&robot, 60, &mut rng);
-        let params =
-            crate::identifiability::analyse(&robot, &robot.params(), &rich, Measure::Position)
-                .identifiable;
+        let mut rng = crate::numeric::rng::from_seed(seed);
+        let rich = crate::robot::sampling::uniform_joint_poses(&robot, 60, &mut rng);
+        let params = crate::robot::identifiability::analyse(
+            &robot,
+            &robot.params(),
+            &rich,
+            Measure::Position,
+        )
+        .identifiable;
         let model = RobotPoseModel::new(&robot, &params, Measure::Position);
         (robot, model, rng)
     }
@@ -789,7 +795,7 @@ mod tests {
     #[test]
     fn gram_eigen_path_agrees_with_svd_scores() {
         let (robot, model, mut rng) = identifiable_model(3);
-        let qs = crate::sampling::uniform_joint_poses(&robot, 12, &mut rng);
+        let qs = crate::robot::sampling::uniform_joint_poses(&robot, 12, &mut rng);
         let s = score(&model, &qs);
         let flat: Vec<Real> = qs.iter().flatten().copied().collect();
         let mut ev = Evaluator::new(&model);
@@ -818,10 +824,14 @@ mod tests {
         let (robot, model, mut rng) = identifiable_model(5);
         let (m, dof) = (20, model.dof());
         let flat = |qs: Vec<Vec<Real>>| qs.into_iter().flatten().collect::<Vec<Real>>();
-        let base = flat(crate::sampling::uniform_joint_poses(&robot, m, &mut rng));
+        let base = flat(crate::robot::sampling::uniform_joint_poses(
+            &robot, m, &mut rng,
+        ));
         let mut sets = Vec::new();
         for t in 0..Spectra::LANES {
-            let mut set = flat(crate::sampling::uniform_joint_poses(&robot, m, &mut rng));
+            let mut set = flat(crate::robot::sampling::uniform_joint_poses(
+                &robot, m, &mut rng,
+            ));
             for p in (0..m).filter(|p| (p + t) % 3 != 0) {
                 set[p * dof..(p + 1) * dof].copy_from_slice(&base[p * dof..(p + 1) * dof]);
             }
@@ -858,11 +868,11 @@ mod tests {
 
     #[test]
     fn bad_inputs_are_errors() {
-        let robot = crate::robots::irb2600();
+        let robot = crate::robot::builtin::irb2600();
         let params = vec![Param::A(0), Param::A(1), Param::D(0), Param::Theta(1)];
         let model = RobotPoseModel::new(&robot, &params, Measure::Position);
-        let mut rng = crate::rng::from_seed(1);
-        let cands = crate::sampling::uniform_joint_poses(&robot, 10, &mut rng);
+        let mut rng = crate::numeric::rng::from_seed(1);
+        let cands = crate::robot::sampling::uniform_joint_poses(&robot, 10, &mut rng);
         let mut bad = cands.clone();
         bad[3][2] = 1e9;
         let mut short = cands.clone();

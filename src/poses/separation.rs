@@ -6,7 +6,7 @@
 //! it, the branch step removes each parameter in turn and computes the GCN of what is left
 //! (tables 2–3); backward elimination then removes the parameter whose removal leaves the
 //! smallest GCN (ties to the later parameter), and repeats on the reduced block until it is
-//! under the threshold (SPEC §5). The kept parameters of all blocks form the reconstructed
+//! under the threshold. The kept parameters of all blocks form the reconstructed
 //! model J_p (eq. 27), whose GCN ends the table.
 //!
 //! Differences from the paper, on purpose: the paper averages each GCN over pose counts
@@ -21,9 +21,10 @@
 use nalgebra::DMatrix;
 
 use super::indices::gcn;
-use crate::jacobian::{jacobian, Columns, Measure};
-use crate::kinematics::{Param, Robot};
-use crate::math::Real;
+use crate::measurement::Measure;
+use crate::numeric::Real;
+use crate::robot::jacobian::{jacobian, Columns};
+use crate::robot::{Param, Robot};
 
 /// The outcome of [`separate`].
 #[derive(Clone, Debug, PartialEq)]
@@ -70,7 +71,7 @@ impl Separation {
             .map_or(Real::NAN, |x| x.1)
     }
 
-    /// The report as JSON (FORMATS.md `identifiability --gcn-blocks`, `summary.json`
+    /// The report as JSON (docs/formats.md `identifiability --gcn-blocks`, `summary.json`
     /// `separation`): `blocks` (name → `gcn_before`, `gcn_after`), `removed` (names, in the
     /// order removed), `kept`, `gcn_full`, `gcn_separated` and `table` (every GCN computed, in
     /// order, as `{"label", "gcn"}`). Infinite GCNs are written as `null`.
@@ -206,13 +207,13 @@ pub fn separate(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::identifiability::analyse;
-    use crate::rng::from_seed;
-    use crate::sampling::uniform_joint_poses;
+    use crate::numeric::rng::from_seed;
+    use crate::robot::identifiability::analyse;
+    use crate::robot::sampling::uniform_joint_poses;
 
     #[test]
     fn separates_d2_d3_on_irb2600_like_identifiability() {
-        let robot = crate::robots::irb2600();
+        let robot = crate::robot::builtin::irb2600();
         let params: Vec<Param> = robot
             .params()
             .into_iter()
@@ -253,7 +254,7 @@ mod tests {
 
     #[test]
     fn a_well_conditioned_block_is_pruned() {
-        let robot = crate::robots::irb2600();
+        let robot = crate::robot::builtin::irb2600();
         let params = vec![Param::A(0), Param::A(1), Param::A(2)];
         let qs = uniform_joint_poses(&robot, 30, &mut from_seed(6));
         let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);

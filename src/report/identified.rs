@@ -1,4 +1,4 @@
-//! The files of `calbench identify` (FORMATS.md `identify`): `identified.json`,
+//! The files of `calbench identify` (docs/formats.md `identify`): `identified.json`,
 //! `residuals.csv` and the compensated `robot.toml`.
 
 use std::path::Path;
@@ -9,11 +9,11 @@ use super::plots;
 use serde_json::{json, Value};
 
 use crate::calibrate::{validation_errors, Calibrated, ErrorStats, Registration};
-use crate::compliance::loaded_fk;
 use crate::error::{Error, Result};
-use crate::kinematics::{robot_to_toml, Param, Robot};
-use crate::math::{Frame, Mat3, Real};
 use crate::measurement::Measurements;
+use crate::numeric::{Frame, Mat3, Real};
+use crate::robot::compliance::loaded_fk;
+use crate::robot::{robot_to_toml, Param, Robot};
 
 /// Validation of a compensated robot on a measurement file: position errors before
 /// (nominal) and after (compensated) and, for full-pose files, orientation errors.
@@ -325,7 +325,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         .collect();
     s += &table(&["parameter", "error", "standard error"], &rows);
     let all = r.nominal.params();
-    let a = crate::identifiability::analyse(r.nominal, &all, &r.data.qs, r.data.measure());
+    let a = crate::robot::identifiability::analyse(r.nominal, &all, &r.data.qs, r.data.measure());
     s += "\n## Identifiability on these poses\n\n";
     let names = |v: &[Param]| {
         v.iter()

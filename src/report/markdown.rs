@@ -1,7 +1,7 @@
-//! Markdown helpers for `report.md` (FORMATS.md, `run` outputs): GitHub tables and compact
+//! Markdown helpers for `report.md` (docs/formats.md, `run` outputs): GitHub tables and compact
 //! number formatting.
 
-use crate::math::Real;
+use crate::numeric::Real;
 
 /// The placeholder written for a missing or non-finite number.
 pub const MISSING: &str = "—";

@@ -1,8 +1,8 @@
-//! Every writer of calbench's output files (FORMATS.md): [`run`] writes a run's
+//! Every writer of calbench's output files (docs/formats.md): [`run`] writes a run's
 //! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
 //! `calbench identify`.
 //!
-//! The report only reads results that are already computed (DESIGN.md). [`plots`] draws the
+//! The report only reads results that are already computed. [`plots`] draws the
 //! figures of the source papers — η per parameter per method (Guo 2024, fig. 8), validation
 //! error per point before and after calibration (Li 2018, fig. 3; Ban, fig. 7), validation
 //! RMS over trials per method, objective or fitness per iteration (Qiao 2021; Guo 2024,
@@ -13,6 +13,7 @@
 //! family `sans-serif`), so plots render the same on every machine without system font
 //! libraries, and the same data gives the same bytes.
 
+pub mod check;
 pub mod identified;
 pub mod markdown;
 pub mod plots;
@@ -31,9 +32,9 @@ pub mod shard;
 /// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
 /// plots; with `opts.shard`, the shard's partial result instead ([`shard`]).
 pub fn run_study(
-    scenario: crate::scenario::Scenario,
-    opts: &crate::montecarlo::RunOptions,
-) -> crate::Result<crate::montecarlo::RunResult> {
+    scenario: crate::study::scenario::Scenario,
+    opts: &crate::study::RunOptions,
+) -> crate::Result<crate::study::RunResult> {
     let out = opts
         .out
         .clone()
@@ -43,7 +44,7 @@ pub fn run_study(
         let mut csv = run::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
         let r = match opts.shard {
             None => {
-                let r = crate::montecarlo::run(scenario, opts, &mut csv)?;
+                let r = crate::study::run(scenario, opts, &mut csv)?;
                 csv.finish()?;
                 run::write_into(&r, dir)?;
                 r
@@ -52,7 +53,7 @@ pub fn run_study(
                 let mut records = shard::Records::create(dir)?;
                 let r = {
                     let mut both = shard::Both(&mut csv, &mut records);
-                    crate::montecarlo::run(scenario, opts, &mut both)?
+                    crate::study::run(scenario, opts, &mut both)?
                 };
                 csv.finish()?;
                 records.finish(&r)?;

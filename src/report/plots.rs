@@ -1,7 +1,7 @@
-//! The report's plots, each written as `<stem>.png` and `<stem>.svg` (FORMATS.md, `run`
+//! The report's plots, each written as `<stem>.png` and `<stem>.svg` (docs/formats.md, `run`
 //! outputs).
 //!
-//! Every function takes already-computed numbers (DESIGN.md: plots only read results), skips
+//! Every function takes already-computed numbers (plots only read results), skips
 //! non-finite values, and draws an empty chart carrying its title when nothing is left to
 //! draw; it never panics on its data. Output is deterministic: the same data gives the same
 //! bytes (text is laid out with the bundled DejaVu Sans, no system fonts; see
@@ -20,7 +20,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle, FontTransform};
 
 use super::markdown::fmt_num;
-use crate::math::Real;
+use crate::numeric::Real;
 use crate::{Error, Result};
 
 /// Size of every plot in pixels (PNG) or user units (SVG), width × height.
@@ -703,7 +703,7 @@ impl Figure for Traces<'_> {
 
 /// Objective or fitness per iteration, one line per series: the convergence curves of
 /// BAS / PSO / BAS-PSO (Qiao 2021, fig. 4), of DETMAX-IDE (Guo 2024, eqs. 19–26, iterations to
-/// convergence in SPEC §7) or the LM objective (Ban, fig. 2 flow). Value `i` (0-based) is
+/// convergence) or the LM objective (Ban, fig. 2 flow). Value `i` (0-based) is
 /// iteration `i`. With `log_y` the y axis is logarithmic and values ≤ 0 are skipped like
 /// non-finite ones. Writes `<stem>.png` and `<stem>.svg`.
 pub fn traces(

@@ -1,4 +1,4 @@
-//! The files of a registration study (Ban fig. 3, [`crate::calibrate::registration_study`]):
+//! The files of a registration study (Ban fig. 3, [`crate::study::registration_study`]):
 //! `summary.json`, `report.md` with the grid as a table, and the heat map
 //! `heatmap_difference.png` / `.svg` of the mean registration-error difference SVD −
 //! weighted SVD. Writers only read results that are already computed.
@@ -10,9 +10,9 @@ use serde_json::json;
 
 use super::markdown::{fmt_num, table};
 use super::plots;
-use crate::calibrate::registration_study::{Cell, RegistrationScenario};
 use crate::error::{Error, Result};
-use crate::math::Real;
+use crate::numeric::Real;
+use crate::study::registration_study::{Cell, RegistrationScenario};
 
 /// `values[row][column]` of `f` over the grid: a row per outlier count, a column per
 /// magnitude.

@@ -1,4 +1,4 @@
-//! The files of a run: `summary.json`, `trials.csv`, `report.md` and the plots (FORMATS.md
+//! The files of a run: `summary.json`, `trials.csv`, `report.md` and the plots (docs/formats.md
 //! `run`). Writers only read results that are already computed.
 
 use std::fmt::Write as _;
@@ -10,10 +10,10 @@ use serde_json::{json, Value};
 use super::markdown::{fmt_num, table};
 use super::plots;
 use crate::error::{Error, Result};
-use crate::math::Real;
-use crate::montecarlo::stats::{eta, Entry};
-use crate::montecarlo::{toml_to_json, Block, BlockInfo, RunResult, TrialResult, TrialSink};
-use crate::scenario::Sweep;
+use crate::numeric::Real;
+use crate::study::scenario::Sweep;
+use crate::study::stats::{eta, Entry};
+use crate::study::{toml_to_json, Block, BlockInfo, RunResult, TrialResult, TrialSink};
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
@@ -591,7 +591,7 @@ fn write_sweep_plots(r: &RunResult, sw: &Sweep, out: &Path) -> Result<Vec<(Strin
         }
     } else if sw.dims() == 2 {
         let (xa, ya) = (&sw.axes[0], &sw.axes[1]);
-        let names = |a: &crate::scenario::SweepAxis| -> Vec<String> {
+        let names = |a: &crate::study::scenario::SweepAxis| -> Vec<String> {
             a.values.iter().map(|v| v.to_string()).collect()
         };
         let (xn, yn) = (names(xa), names(ya));

@@ -1,11 +1,11 @@
-//! Sharded runs (FORMATS.md `run --shard`, `merge`): a shard's partial result and the merge
+//! Sharded runs (docs/formats.md `run --shard`, `merge`): a shard's partial result and the merge
 //! of all shards into the output of the unsharded run.
 //!
 //! A shard folder holds `trials.csv` (its own rows), `shard.json` (the scenario as run, the
 //! share, and what the reports need of each block's study and of trial 0) and `records.txt`:
 //! one line per trial with every number the aggregation reads, floats in shortest
 //! round-trip form, so the merge replays the trials in order through the same streaming
-//! aggregation ([`crate::montecarlo::Collector`]) and writes the same bytes as one machine.
+//! aggregation ([`crate::study::Collector`]) and writes the same bytes as one machine.
 
 use std::io::{BufRead, Write as _};
 use std::path::{Path, PathBuf};
@@ -16,10 +16,10 @@ use super::run::{write_into, TrialsCsv};
 use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
-use crate::math::Real;
-use crate::montecarlo::trial::Outcome;
-use crate::montecarlo::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
-use crate::scenario::Scenario;
+use crate::numeric::Real;
+use crate::study::scenario::Scenario;
+use crate::study::trial::Outcome;
+use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
 const FORMAT: &str = "calbench-shard-2";
@@ -253,7 +253,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let strategy = t.usize()?;
         let method = t.usize()?;
         let name = t.word()?.to_string();
-        let termination: Termination = crate::names::parse("termination", &name)
+        let termination: Termination = crate::robot::names::parse("termination", &name)
             .map_err(|_| t.err(&format!("unknown termination \"{name}\"")))?;
         let rank_deficient_expected = match t.usize()? {
             0 => false,

@@ -1,4 +1,4 @@
-//! The virtual measurement (SPEC §3): the true robot, the laser tracker with its
+//! The virtual measurement: the true robot, the laser tracker with its
 //! range-dependent noise, gross outliers, measurement regions and the measurement CSV.
 //!
 //! - [`settings`]: the scenario sections `[errors]`, `[tracker]`, `[outliers]` and `region`.
@@ -6,14 +6,15 @@
 //! - [`poses`]: joint configurations in a region (joint space, a Cartesian box as in Qiao
 //!   2021 §4, a grid) or from a pose-list file.
 //! - [`tracker`]: the tracker frame and noise model (Li 2018 §3, Qiao 2021 §4).
-//! - [`csv`]: the measurement CSV of FORMATS.md, written byte-identically for a seed.
+//! - [`csv`]: the measurement CSV of docs/formats.md, written byte-identically for a seed.
 //!
 //! [`measure_poses`] puts them together: for each joint configuration, the true tool frame
 //! (optionally deflected by gravity sag, computed elsewhere) is measured by the tracker; then
 //! a number of points is displaced as gross outliers (Ban §3).
 
-pub mod csv;
 pub mod poses;
+pub mod rapier;
+pub mod sag;
 pub mod settings;
 pub mod tracker;
 pub mod truth;
@@ -28,10 +29,10 @@ use rand::Rng as _;
 use rand_distr::StandardNormal;
 
 use crate::error::{Error, Result};
-use crate::kinematics::Robot;
-use crate::math::{Frame, Real, Vec3};
 pub use crate::measurement::Measurements;
-use crate::rng::Rng;
+use crate::numeric::rng::Rng;
+use crate::numeric::{Frame, Real, Vec3};
+use crate::robot::Robot;
 
 /// What only a simulation knows about a measurement, kept beside the [`Measurements`].
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -92,7 +93,7 @@ pub fn measure_poses(
         )));
     }
     let chain = true_robot.chain();
-    let full_pose = tracker.measures() == crate::jacobian::Measure::Pose;
+    let full_pose = tracker.measures() == crate::measurement::Measure::Pose;
     let m = qs.len();
     let mut points = Vec::with_capacity(m);
     let mut quats = Vec::with_capacity(if full_pose { m } else { 0 });
@@ -169,8 +170,8 @@ pub fn add_outliers(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::stream;
-    use crate::sampling::uniform_joint_poses;
+    use crate::numeric::rng::stream;
+    use crate::robot::sampling::uniform_joint_poses;
     use approx::assert_relative_eq;
 
     fn quiet_tracker() -> Tracker {
@@ -185,7 +186,7 @@ mod tests {
 
     #[test]
     fn noise_free_points_are_fk_in_the_tracker_frame() {
-        let robot = crate::robots::irb2600();
+        let robot = crate::robot::builtin::irb2600();
         let qs = uniform_joint_poses(&robot, 20, &mut stream(1, "poses"));
         let t = quiet_tracker();
         let m = measure_poses(&robot, &qs, &t, None, None, None, &mut stream(1, "noise")).unwrap();
@@ -201,7 +202,7 @@ mod tests {
 
     #[test]
     fn outliers_are_displaced_by_magnitudes_in_range_and_recorded() {
-        let robot = crate::robots::irb2600();
+        let robot = crate::robot::builtin::irb2600();
         let qs = uniform_joint_poses(&robot, 50, &mut stream(2, "poses"));
         let t = quiet_tracker();
         let o = OutlierSettings {
@@ -258,7 +259,7 @@ mod tests {
 
     #[test]
     fn sag_is_added_to_the_true_points() {
-        let robot = crate::robots::irb2600();
+        let robot = crate::robot::builtin::irb2600();
         let qs = uniform_joint_poses(&robot, 5, &mut stream(3, "poses"));
         let t = quiet_tracker();
         let sag = |r: &Robot, q: &[Real], _: Option<Real>| -> Result<Frame> {
@@ -280,7 +281,7 @@ mod tests {
 
     #[test]
     fn same_seed_same_measurement() {
-        let robot = crate::robots::tx60();
+        let robot = crate::robot::builtin::tx60();
         let qs = uniform_joint_poses(&robot, 10, &mut stream(4, "poses"));
         let t = Tracker::new(&TrackerSettings {
             measure: MeasureSetting::Pose,

@@ -8,10 +8,10 @@ use rand::Rng as _;
 
 use super::settings::Region;
 use crate::error::{Error, Result};
-use crate::kinematics::Robot;
-use crate::math::{Real, Vec3};
-use crate::rng::Rng;
-use crate::sampling::uniform_joint_poses;
+use crate::numeric::rng::Rng;
+use crate::numeric::{Real, Vec3};
+use crate::robot::sampling::uniform_joint_poses;
+use crate::robot::Robot;
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
 pub const BOX_TRIES_PER_POSE: usize = 5_000;
@@ -134,20 +134,20 @@ fn grid(robot: &Robot, k: usize, n: usize, key: &str, rng: &mut Rng) -> Result<V
         .collect())
 }
 
-/// Reads a pose list (FORMATS.md: the measurement CSV without the measured columns): a
+/// Reads a pose list (docs/formats.md: the measurement CSV without the measured columns): a
 /// header with `q1 … qn` (measured columns `x,y,z,qw,qx,qy,qz` may follow and are ignored),
 /// then one row per pose in the robot file's units. Returns internal units. A bad line, a
 /// non-finite value or a value outside the joint limits is refused naming the file, the line
 /// and the column.
 pub fn read_pose_list(path: &Path, robot: &Robot) -> Result<Vec<Vec<Real>>> {
-    let table = super::csv::read_table(path, robot, false)?;
+    let table = crate::measurement::csv::read_table(path, robot, false)?;
     Ok(table.qs)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::stream;
+    use crate::numeric::rng::stream;
 
     fn key_of(e: &Error) -> &str {
         match e {
@@ -167,7 +167,7 @@ mod tests {
     /// Qiao 2021 §4: 50 calibration points in a 1000 mm cube centred at (550, 0, 550) mm.
     #[test]
     fn box_sampling_finds_points_in_qiaos_cube() {
-        let r = crate::robots::tx60();
+        let r = crate::robot::builtin::tx60();
         let region = cube([550.0, 0.0, 550.0], 1000.0);
         let qs = sample_region(&r, &region, 50, &mut stream(1, "poses")).unwrap();
         assert_eq!(qs.len(), 50);
@@ -183,7 +183,7 @@ mod tests {
 
     #[test]
     fn unreachable_box_is_refused_naming_the_key() {
-        let r = crate::robots::tx60();
+        let r = crate::robot::builtin::tx60();
         let region = cube([5000.0, 0.0, 0.0], 100.0);
         let e = sample_region_keyed(&r, &region, 10, "validation.region", &mut stream(1, "p"))
             .unwrap_err();
@@ -195,7 +195,7 @@ mod tests {
 
     #[test]
     fn joint_region_is_within_limits() {
-        let r = crate::robots::irb2600();
+        let r = crate::robot::builtin::irb2600();
         let qs = sample_region(&r, &Region::Joint, 100, &mut stream(2, "p")).unwrap();
         assert_eq!(qs.len(), 100);
         assert!(qs.iter().all(|q| r.within_limits(q)));
@@ -203,7 +203,7 @@ mod tests {
 
     #[test]
     fn grid_points_are_distinct_cell_centres() {
-        let r = crate::robots::irb2600();
+        let r = crate::robot::builtin::irb2600();
         let qs =
             sample_region(&r, &Region::Grid { per_joint: 2 }, 64, &mut stream(3, "p")).unwrap();
         assert_eq!(qs.len(), 64); // the whole 2^6 grid

@@ -1,4 +1,4 @@
-//! The scenario sections of the virtual measurement (FORMATS.md: `[errors]`, `[tracker]`,
+//! The scenario sections of the virtual measurement (docs/formats.md: `[errors]`, `[tracker]`,
 //! `[outliers]` and the `region` of `[calibration]` / `[validation]`), as serde structs with
 //! the documented defaults and a `check` that refuses bad values naming the key.
 //!
@@ -9,9 +9,9 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Deserializer};
 
 use crate::error::{Error, Result};
-use crate::jacobian::Measure;
-use crate::kinematics::Param;
-use crate::math::Real;
+use crate::measurement::Measure;
+use crate::numeric::Real;
+use crate::robot::Param;
 
 /// Refuses a non-finite or negative number.
 fn non_negative(key: &str, v: Real) -> Result<()> {
@@ -21,7 +21,7 @@ fn non_negative(key: &str, v: Real) -> Result<()> {
     Ok(())
 }
 
-/// How the true robot's parameter errors are drawn (SPEC §3).
+/// How the true robot's parameter errors are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ErrorKind {
@@ -113,7 +113,7 @@ pub(crate) fn listed_params(
     Ok(out)
 }
 
-/// `[errors]`: the true robot = nominal + these errors (SPEC §3; Guo 2024 §4.2).
+/// `[errors]`: the true robot = nominal + these errors (Guo 2024 §4.2).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct ErrorSettings {
@@ -245,7 +245,7 @@ impl MeasureSetting {
     }
 }
 
-/// `[tracker]`: the simulated laser tracker (SPEC §3; Li 2018 §3 and Qiao 2021 §4: Leica
+/// `[tracker]`: the simulated laser tracker (Li 2018 §3 and Qiao 2021 §4: Leica
 /// AT901/AT960, MPE = 15 µm + 6 µm/m).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -300,7 +300,7 @@ impl TrackerSettings {
     }
 }
 
-/// `[outliers]`: gross errors added to some measured points (SPEC §3; Ban §3: 2..16 of 50
+/// `[outliers]`: gross errors added to some measured points (Ban §3: 2..16 of 50
 /// points, magnitudes 0–0.2 … 0–1.0 mm).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(default, deny_unknown_fields)]

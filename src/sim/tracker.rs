@@ -1,4 +1,4 @@
-//! The simulated laser tracker (SPEC §3).
+//! The simulated laser tracker.
 //!
 //! The tracker frame differs from the robot base by a rigid transform (the scenario's
 //! `tracker.pose`). A measured point is the true target point expressed in the tracker frame
@@ -14,9 +14,9 @@ use rand_distr::StandardNormal;
 
 use super::settings::TrackerSettings;
 use crate::error::Result;
-use crate::jacobian::Measure;
-use crate::math::{Frame, Real, Vec3};
-use crate::rng::Rng;
+use crate::measurement::Measure;
+use crate::numeric::rng::Rng;
+use crate::numeric::{Frame, Real, Vec3};
 
 /// A laser tracker with its pose in the robot base frame and its noise model.
 #[derive(Clone, Debug, PartialEq)]
@@ -94,14 +94,14 @@ impl Tracker {
     }
 }
 
-pub use crate::math::{quaternion, quaternion_matrix};
+pub use crate::numeric::{quaternion, quaternion_matrix};
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::Mat3;
-    use crate::math::{rotation_vector, rpy_matrix};
-    use crate::rng::stream;
+    use crate::numeric::rng::stream;
+    use crate::numeric::Mat3;
+    use crate::numeric::{rotation_vector, rpy_matrix};
     use approx::assert_relative_eq;
 
     fn settings() -> TrackerSettings {

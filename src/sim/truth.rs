@@ -1,4 +1,4 @@
-//! The true robot's parameter errors (SPEC §3).
+//! The true robot's parameter errors.
 //!
 //! The paper set of Guo 2024 §4.2 puts +0.5 mm on every length and +0.05 rad on every angle
 //! parameter; random sets draw each error from a normal or uniform law whose size depends on
@@ -11,15 +11,15 @@ use rand_distr::StandardNormal;
 
 use super::settings::{listed_params, ErrorKind, ErrorSettings, ParamSelection};
 use crate::error::{Error, Result};
-use crate::identifiability::identifiable_generic;
-use crate::jacobian::Measure;
-use crate::kinematics::{Param, Robot};
-use crate::math::Real;
-use crate::rng::Rng;
+use crate::measurement::Measure;
+use crate::numeric::rng::Rng;
+use crate::numeric::Real;
+use crate::robot::identifiability::identifiable_generic;
+use crate::robot::{Param, Robot};
 
 /// The joint and tool parameters of `robot` (base excluded, held at its nominal value)
 /// that are identifiable from `measure` data
-/// ([`crate::identifiability::identifiable_generic`]). Deterministic, so callers may cache
+/// ([`crate::robot::identifiability::identifiable_generic`]). Deterministic, so callers may cache
 /// it per (robot, measure).
 pub fn identifiable_params(robot: &Robot, measure: Measure) -> Vec<Param> {
     let params: Vec<Param> = robot
@@ -65,7 +65,7 @@ pub fn selected_params(
 }
 
 /// The injected errors (parameter, mm or rad) of the true robot `nominal + errors`
-/// (SPEC §3): for `paper`, `+length_mm` on lengths and `+angle_rad` on angles (Guo 2024
+///: for `paper`, `+length_mm` on lengths and `+angle_rad` on angles (Guo 2024
 /// §4.2); for `normal`, N(0, σ²) with σ = `length_mm` / `angle_rad`; for `uniform`,
 /// U(−h, h) with the same half-widths; for `none`, no errors (an empty list). The parameters
 /// come in flat-vector order for `identifiable`/`all` and in list order otherwise.
@@ -113,11 +113,11 @@ pub fn draw_errors(params: &[Param], s: &ErrorSettings, rng: &mut Rng) -> Vec<(P
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::rng::stream;
+    use crate::numeric::rng::stream;
 
     #[test]
     fn paper_set_on_named_parameters() {
-        let r = crate::robots::irb2600();
+        let r = crate::robot::builtin::irb2600();
         let s = ErrorSettings {
             params: ParamSelection::List(vec!["a1".into(), "alpha2".into(), "tool.z".into()]),
             ..Default::default()
@@ -135,7 +135,7 @@ mod tests {
 
     #[test]
     fn given_values_are_injected_exactly_and_checked() {
-        let r = crate::robots::irb2600();
+        let r = crate::robot::builtin::irb2600();
         let values: std::collections::BTreeMap<String, Real> =
             [("a3", -0.82916), ("alpha5", 2.912955e-3), ("tool.z", 0.1)]
                 .into_iter()
@@ -189,7 +189,7 @@ mod tests {
 
     #[test]
     fn unknown_or_foreign_names_are_refused_naming_the_key() {
-        let r = crate::robots::irb2600(); // standard DH: no β
+        let r = crate::robot::builtin::irb2600(); // standard DH: no β
         for bad in ["beta2", "theta7", "nonsense"] {
             let s = ErrorSettings {
                 params: ParamSelection::List(vec![bad.into()]),
@@ -206,14 +206,14 @@ mod tests {
 
     #[test]
     fn identifiable_set_excludes_known_dependencies() {
-        let r = crate::robots::irb2600();
+        let r = crate::robot::builtin::irb2600();
         let ids = identifiable_params(&r, Measure::Position);
         // Tool orientation never moves the target point.
         for c in 3..6 {
             assert!(!ids.contains(&Param::Tool(c)));
         }
         assert!(ids.iter().all(|p| !matches!(p, Param::Base(_))));
-        // θ6 and the tool point are coupled for position data (SPEC §2): not both.
+        // θ6 and the tool point are coupled for position data: not both.
         assert!(
             !(ids.contains(&Param::Theta(5))
                 && ids.contains(&Param::Tool(0))
@@ -227,7 +227,7 @@ mod tests {
 
     #[test]
     fn random_sets_have_the_set_spread() {
-        let r = crate::robots::tx60();
+        let r = crate::robot::builtin::tx60();
         let mut rng = stream(9, "errors");
         let (mut ls, mut nl, mut amax) = (0.0, 0, 0.0f64);
         for _ in 0..200 {

@@ -1,0 +1,402 @@
+//! Pose-error models for Jacobian-based identification and Qiao's accuracy figures (Qiao 2021, `papers/qiao2021-bas-pso-tx60.txt`, §2.2–2.3, §4.1–4.2).
+//!
+//! Qiao compares three ways to relate a measured pose `T_m = [R_m P_m; 0 1]` to the model
+//! pose `T = [R P; 0 1]` of the current parameters (columns of `R`: n, o, a):
+//!
+//! | model | residual `r` (measured − model) | `−∂r/∂η` | Qiao |
+//! |---|---|---|---|
+//! | [`ErrorModel::Differential`] | `[P_m − P; n_m − n; o_m − o; a_m − a]` (12 rows) | `[J_p; [ω]×n; [ω]×o; [ω]×a]`, `ω = J_ω` | §2.2, eq. 5 |
+//! | [`ErrorModel::CoordinateTransfer`] | `[d; δ]` of `Δ = T_m T⁻¹ − I ≈ [[δ]× d; 0 0]`: `d = P_m − R_e P`, `δ = vee((R_e − R_eᵀ)/2)`, `R_e = R_m Rᵀ` (6 rows) | `[R_e(J_p + [P]×J_ω); ½(tr R_e·I − R_eᵀ)J_ω]`, at `R_e = I` eq. 11's `[J_p + [P]×J_ω; J_ω]` | §2.3, eqs. 6–11 |
+//! | [`ErrorModel::DirectFk`] | `[P_m − P; φ]`, `φ = log(R_m Rᵀ)` (6 rows, exact rotation vector) | `[J_p; J_r⁻¹(φ)J_ω]` | §4.2 "model 3" |
+//!
+//! `J_p`, `J_ω` are the tool-point and tool-rotation columns of [`crate::robot::jacobian`] (exact first
+//! derivatives of forward kinematics, `∂R = [J_ω ∂η]× R`), `J_r` the right Jacobian of SO(3).
+//! The Jacobians are exact derivatives of the residuals at any linearisation point (tested
+//! against finite differences), so Gauss–Newton ([`identify`]) converges to the least-squares
+//! minimum of each model's residual, and on noise-free data all three reach the true
+//! parameters.
+//!
+//! At `T_m = T` the three Jacobians predict the same first-order change of the pose: the
+//! models agree to first order and differ only in the coordinates in which they measure the
+//! error. Those coordinates matter in two ways. Linearised once at the nominal parameters
+//! (Qiao's models 1 and 2), each model keeps its own second-order error: the differential
+//! model compares matrix entries (its rotation rows are not a rotation), the
+//! coordinate-transfer model drops second-order parts of `R_m Rᵀ` in `δ` and through
+//! `R_m Rᵀ P` in `d` (Qiao §4.2's "two neglects"); the direct model neglects nothing once
+//! iterated. And with measurement noise, the coordinate-transfer position rows carry the
+//! orientation noise times the lever arm `|P|` (about 1 m), which makes that model the
+//! noisiest of the three: with tracker-like noise the order is coordinate transfer worst,
+//! then differential, then direct identification on the forward kinematics, as Qiao reports
+//! (see the tests).
+//!
+//! Residual rows are in mm for positions and rad (or dimensionless) for orientation; the
+//! orientation rows are weighted by a factor `k` as in Qiao's fitness (eq. 14), see [`stack`].
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{finite_positive, Error, Result};
+use crate::measurement::Measure;
+use crate::numeric::{matrix_rpy, Frame, Mat3, Real, Vec3};
+use crate::robot::jacobian::{log_orientation_rows, pose_rows, Columns};
+use crate::robot::{Chain, Param, Robot};
+
+/// The pose-error model of an identification (see the module docs for the formulas).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ErrorModel {
+    /// Differential transformation of the pose matrix (Qiao §2.2, eq. 5): 12 rows per pose.
+    Differential,
+    /// Coordinate-error transfer through the link frames (Qiao §2.3, eqs. 6–11): 6 rows.
+    CoordinateTransfer,
+    /// Direct identification on forward kinematics (Qiao §4.2, error model 3): 6 rows.
+    DirectFk,
+}
+
+impl ErrorModel {
+    /// The three models.
+    pub const ALL: [ErrorModel; 3] = [
+        ErrorModel::Differential,
+        ErrorModel::CoordinateTransfer,
+        ErrorModel::DirectFk,
+    ];
+
+    /// Residual rows per pose.
+    pub fn rows(self) -> usize {
+        match self {
+            ErrorModel::Differential => 12,
+            ErrorModel::CoordinateTransfer | ErrorModel::DirectFk => 6,
+        }
+    }
+
+    /// The setting's name: `differential`, `coordinate_transfer` or `direct_fk`.
+    pub fn as_str(self) -> &'static str {
+        crate::robot::names::static_name(&self)
+    }
+}
+
+impl std::fmt::Display for ErrorModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// Writes one pose's residual (rows `row0..row0 + model.rows()` of `r`) and Jacobian (same
+/// rows of `j`, one column per entry of `cols`) of `model` at joint values `q`, for the
+/// robot compiled in `chain`, against the measured tool frame `measured` (world). Returns the
+/// model frame. Allocation-free; `r` and `j` must have room for the rows.
+#[allow(clippy::too_many_arguments)]
+pub fn rows_into(
+    model: ErrorModel,
+    chain: &Chain,
+    cols: &Columns,
+    q: &[Real],
+    measured: &Frame,
+    r: &mut DVector<Real>,
+    j: &mut DMatrix<Real>,
+    row0: usize,
+) -> Frame {
+    let t = pose_rows(chain, cols, q, Measure::Pose, j, row0);
+    let (rm, pm) = (&measured.rot, &measured.pos);
+    match model {
+        ErrorModel::Differential => {
+            let dp = pm - t.pos;
+            for k in 0..3 {
+                r[row0 + k] = dp[k];
+            }
+            for c in 0..3 {
+                let d = rm.column(c) - t.rot.column(c);
+                for k in 0..3 {
+                    r[row0 + 3 + 3 * c + k] = d[k];
+                }
+            }
+            for col in 0..cols.len() {
+                let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
+                for c in 0..3 {
+                    // ∂(column c) = ω × column c.
+                    let d = w.cross(&t.rot.column(c).into_owned());
+                    for k in 0..3 {
+                        j[(row0 + 3 + 3 * c + k, col)] = d[k];
+                    }
+                }
+            }
+        }
+        ErrorModel::CoordinateTransfer => {
+            let re = rm * t.rot.transpose();
+            let d = pm - re * t.pos;
+            let s = (re - re.transpose()) * 0.5;
+            let delta = Vec3::new(s[(2, 1)], s[(0, 2)], s[(1, 0)]);
+            for k in 0..3 {
+                r[row0 + k] = d[k];
+                r[row0 + 3 + k] = delta[k];
+            }
+            // Exact derivatives at any R_e = R_m Rᵀ (with ∂R = [ω]×R): ∂d = −R_e(J_p + P × ω)
+            // and ∂δ = −½(tr R_e·I − R_eᵀ)ω; both reduce to Qiao's eq. 11 at R_e = I.
+            let g = (Mat3::identity() * re.trace() - re.transpose()) * 0.5;
+            for col in 0..cols.len() {
+                let w = Vec3::new(j[(row0 + 3, col)], j[(row0 + 4, col)], j[(row0 + 5, col)]);
+                let v = Vec3::new(j[(row0, col)], j[(row0 + 1, col)], j[(row0 + 2, col)])
+                    + t.pos.cross(&w);
+                let (jp, jw) = (re * v, g * w);
+                for k in 0..3 {
+                    j[(row0 + k, col)] = jp[k];
+                    j[(row0 + 3 + k, col)] = jw[k];
+                }
+            }
+        }
+        ErrorModel::DirectFk => {
+            let dp = pm - t.pos;
+            for k in 0..3 {
+                r[row0 + k] = dp[k];
+            }
+            log_orientation_rows(rm, &t.rot, 1.0, r, j, row0 + 3);
+        }
+    }
+    t
+}
+
+/// One pose's residual and Jacobian of `model` for `robot` (the linearisation point) and the
+/// parameters `params`, against the measured tool frame (world). `out_r` must hold
+/// `model.rows()` values and `out_j` be `model.rows()` × `params.len()`. Compiles the chain
+/// per call: stacked identification should use [`rows_into`] or [`stack`].
+pub fn residual_and_jacobian(
+    model: ErrorModel,
+    robot: &Robot,
+    params: &[Param],
+    q: &[Real],
+    measured: &Frame,
+    out_r: &mut [Real],
+    out_j: &mut DMatrix<Real>,
+) -> Result<()> {
+    let rows = model.rows();
+    if out_r.len() != rows || out_j.nrows() != rows || out_j.ncols() != params.len() {
+        return Err(Error::setting(
+            "error_model",
+            format!(
+                "{model} needs a residual of {rows} and a Jacobian of {rows}×{}",
+                params.len()
+            ),
+        ));
+    }
+    check_pose(robot, q, 0)?;
+    let mut r = DVector::zeros(rows);
+    let cols = Columns::new(params, robot.dof());
+    rows_into(model, &robot.chain(), &cols, q, measured, &mut r, out_j, 0);
+    out_r.copy_from_slice(r.as_slice());
+    Ok(())
+}
+
+fn check_pose(robot: &Robot, q: &[Real], i: usize) -> Result<()> {
+    if q.len() != robot.dof() || q.iter().any(|v| !v.is_finite()) {
+        return Err(Error::setting(
+            "poses",
+            format!("pose {i}: expected {} finite joint values", robot.dof()),
+        ));
+    }
+    Ok(())
+}
+
+/// The stacked residual and Jacobian of `model` over all poses, with the orientation rows
+/// (all rows after the first three of each pose) multiplied by `k`.
+///
+/// `k` plays the part of the weighting factor of Qiao's fitness (eq. 14), which balances
+/// orientation errors (rad, or dimensionless matrix entries) against position errors (mm):
+/// with `k = 1` one radian counts as one millimetre, which leaves the orientation data almost
+/// unused; [`crate::identify::qiao::DEFAULT_K`] (100 mm) puts the two on a comparable footing for
+/// a tracker measuring about 15 µm and 0.005°.
+pub fn stack(
+    model: ErrorModel,
+    robot: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measured: &[Frame],
+    k: Real,
+) -> Result<(DVector<Real>, DMatrix<Real>)> {
+    finite_positive("k", k)?;
+    if qs.len() != measured.len() {
+        return Err(Error::setting(
+            "measurements",
+            format!("{} poses but {} measured frames", qs.len(), measured.len()),
+        ));
+    }
+    for (i, q) in qs.iter().enumerate() {
+        check_pose(robot, q, i)?;
+    }
+    let rows = model.rows();
+    let mut r = DVector::zeros(rows * qs.len());
+    let mut j = DMatrix::zeros(rows * qs.len(), params.len());
+    let cols = Columns::new(params, robot.dof());
+    let chain = robot.chain();
+    for (i, (q, m)) in qs.iter().zip(measured).enumerate() {
+        rows_into(model, &chain, &cols, q, m, &mut r, &mut j, rows * i);
+    }
+    if k != 1.0 {
+        for row in (0..r.len()).filter(|row| row % rows >= 3) {
+            r[row] *= k;
+            j.row_mut(row).scale_mut(k);
+        }
+    }
+    Ok((r, j))
+}
+
+/// The result of [`identify`].
+#[derive(Clone, Debug)]
+pub struct ModelFit {
+    /// Identified errors of the parameters, in their order (mm, rad).
+    pub x: Vec<Real>,
+    /// The robot with the errors applied.
+    pub robot: Robot,
+    /// Norm of the last correction step.
+    pub last_step: Real,
+}
+
+/// Gauss–Newton identification with `model`: `iterations` steps of
+/// `Δx = J⁺ r` (least squares by SVD, orientation rows weighted by `k`, see [`stack`]),
+/// re-linearised at the corrected robot each step.
+///
+/// One step from the nominal robot is the linear identification of Qiao's error models 1
+/// and 2 (their Jacobians carry the nominal parameters, §2.2–2.3); iterated to convergence,
+/// [`ErrorModel::DirectFk`] is the identification on the forward kinematics without
+/// neglected terms of §4.2 (model 3). The Jacobians are exact derivatives of the residuals
+/// everywhere, so each model's iteration converges to the least-squares minimum of its own
+/// residual. With prior weights `w_j` per pose (`Some`), pose j's rows are scaled by `√w_j`
+/// (weighted least squares).
+#[allow(clippy::too_many_arguments)]
+pub fn identify(
+    model: ErrorModel,
+    nominal: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measured: &[Frame],
+    iterations: usize,
+    k: Real,
+    weights: Option<&[Real]>,
+) -> Result<ModelFit> {
+    if weights
+        .is_some_and(|w| w.len() != qs.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0)))
+    {
+        return Err(Error::setting(
+            "weights",
+            "need one finite positive weight per pose",
+        ));
+    }
+    if iterations == 0 {
+        return Err(Error::setting("iterations", "must be at least 1"));
+    }
+    let all = nominal.params();
+    if let Some(p) = params.iter().find(|p| !all.contains(p)) {
+        return Err(Error::setting(
+            "params",
+            format!("{p} is not a parameter of robot {}", nominal.name),
+        ));
+    }
+    let mut x = vec![0.0; params.len()];
+    let mut robot = nominal.clone();
+    let mut last_step = 0.0;
+    for _ in 0..iterations {
+        let (mut r, mut j) = stack(model, &robot, params, qs, measured, k)?;
+        if let Some(w) = weights {
+            let rows = model.rows();
+            for (p, wp) in w.iter().enumerate() {
+                let s = wp.sqrt();
+                r.rows_mut(p * rows, rows).scale_mut(s);
+                j.rows_mut(p * rows, rows).scale_mut(s);
+            }
+        }
+        if r.iter().chain(j.iter()).any(|v| !v.is_finite()) {
+            return Err(Error::Compute(format!(
+                "{model} identification diverged (non-finite residual or Jacobian)"
+            )));
+        }
+        let dx = j
+            .svd(true, true)
+            .solve(&r, 1e-12)
+            .map_err(|e| Error::Compute(format!("least squares failed: {e}")))?;
+        last_step = dx.norm();
+        for (xi, d) in x.iter_mut().zip(dx.iter()) {
+            *xi += d;
+        }
+        let errs: Vec<(Param, Real)> = params.iter().copied().zip(x.iter().copied()).collect();
+        robot = nominal.with_errors(&errs);
+    }
+    Ok(ModelFit {
+        x,
+        robot,
+        last_step,
+    })
+}
+
+/// Qiao 2021's accuracy figures (§4.1–4.2).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PoseErrorStats {
+    /// ACPE of each run, mm: `(1/M) Σ_j √(Δx² + Δy² + Δz²)` over the M points (§4.1).
+    pub acpe_mm: Vec<Real>,
+    /// ACAE of each run, degrees: `(1/M) Σ_j √(Δα² + Δβ² + Δγ²)` (§4.1), with Δα, Δβ, Δγ the
+    /// differences of the fixed X-Y-Z angles (wrapped to ±180°).
+    pub acae_deg: Vec<Real>,
+    /// APE, mm: `(1/(NM)) Σ_i Σ_j √(Δx² + Δy² + Δz²)` over N runs and M points (§4.2).
+    pub ape: Real,
+    /// AAE, degrees: `(1/(NM)) Σ_i Σ_j √(Δα² + Δβ² + Δγ²)` (§4.2).
+    pub aae: Real,
+}
+
+fn wrap(a: Real) -> Real {
+    use std::f64::consts::PI;
+    let mut w = (a + PI).rem_euclid(2.0 * PI) - PI;
+    if w <= -PI {
+        w += 2.0 * PI;
+    }
+    w
+}
+
+/// ACPE (mm) and ACAE (deg) of model frames against true frames (Qiao §4.1).
+pub fn acpe_acae(truth: &[Frame], model: &[Frame]) -> Result<(Real, Real)> {
+    if truth.is_empty() || truth.len() != model.len() {
+        return Err(Error::setting(
+            "frames",
+            format!(
+                "need as many model frames as true ones (at least one), got {} and {}",
+                model.len(),
+                truth.len()
+            ),
+        ));
+    }
+    let (mut p, mut a) = (0.0, 0.0);
+    for (t, m) in truth.iter().zip(model) {
+        p += (t.pos - m.pos).norm();
+        a += attitude_error_deg(t, m);
+    }
+    let m = truth.len() as Real;
+    Ok((p / m, a / m))
+}
+
+/// One pose's attitude error as Qiao's ACAE counts it (§4.1), degrees:
+/// `√(Δα² + Δβ² + Δγ²)` of the differences of the fixed X-Y-Z angles (wrapped to ±180°).
+/// Unlike the angle of `R_m R_tᵀ` it depends on the frames' orientation, and grows near the
+/// angles' singularity (β = ±90°).
+pub fn attitude_error_deg(truth: &Frame, model: &Frame) -> Real {
+    let (rt, rm) = (matrix_rpy(&truth.rot), matrix_rpy(&model.rot));
+    let d: Real = (0..3).map(|i| wrap(rt[i] - rm[i]).powi(2)).sum();
+    d.sqrt().to_degrees()
+}
+
+/// ACPE/ACAE of each run and APE/AAE over all runs (Qiao §4.1–4.2) of model frames
+/// (`runs[i][j]`: run i, point j) against the true frames.
+pub fn pose_errors(truth: &[Frame], runs: &[Vec<Frame>]) -> Result<PoseErrorStats> {
+    if runs.is_empty() {
+        return Err(Error::setting("runs", "need at least one run"));
+    }
+    let mut acpe_mm = Vec::with_capacity(runs.len());
+    let mut acae_deg = Vec::with_capacity(runs.len());
+    for run in runs {
+        let (p, a) = acpe_acae(truth, run)?;
+        acpe_mm.push(p);
+        acae_deg.push(a);
+    }
+    let n = runs.len() as Real;
+    Ok(PoseErrorStats {
+        ape: acpe_mm.iter().sum::<Real>() / n,
+        aae: acae_deg.iter().sum::<Real>() / n,
+        acpe_mm,
+        acae_deg,
+    })
+}

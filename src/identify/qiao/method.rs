@@ -1,0 +1,253 @@
+//! The derivative-free searches of Qiao 2021 (BAS, PSO, BAS-PSO; §3, eqs. 12–14) as
+//! identification methods: each searches the errors of the problem's parameters in a box of
+//! ± `bound_mm` (lengths) and ± `bound_rad` (angles) around the nominal values, minimising
+//! Qiao's fitness (eq. 14, [`crate::identify::qiao::MetaProblem::fitness`]), or with the key
+//! `error_model` the same fitness on one of Qiao's linear pose-error models (§2.2–2.3,
+//! [`LinearFitness`]), as Qiao identified each model with BAS-PSO (§4.2, fig. 7). The
+//! searches themselves are in [`crate::identify::qiao`].
+
+use serde::Deserialize;
+
+use crate::error::{finite_positive, Error, Result};
+use crate::identify::qiao::error_models::ErrorModel;
+use crate::identify::qiao::{
+    bas, bas_pso, pso, BasOptions, BasPsoOptions, Bounds, Fitness, MetaProblem, MetaResult,
+    PsoOptions,
+};
+use crate::identify::{CalibrationProblem, Identified, Method, Termination};
+use crate::numeric::rng::Rng;
+use crate::numeric::Real;
+
+/// A search over a box: the options of one of [`bas`], [`pso`], [`bas_pso`].
+pub trait Search: std::fmt::Debug + Send + Sync {
+    /// Checks the option values.
+    fn check(&self) -> Result<()>;
+    /// Minimises `f` over `b`.
+    fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult>;
+}
+
+/// Each search's options check themselves and run their search.
+macro_rules! search {
+    ($options:ty, $run:path) => {
+        impl Search for $options {
+            fn check(&self) -> Result<()> {
+                <$options>::check(self)
+            }
+            fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
+                $run(f, b, self, rng)
+            }
+        }
+    };
+}
+
+search!(BasOptions, bas);
+search!(PsoOptions, pso);
+search!(BasPsoOptions, bas_pso);
+
+/// Options of `bas`, `pso` and `bas-pso` (docs/formats.md `[[methods]]`): the search's own
+/// options and the search box. Deserialised from one table: `bound_mm` and `bound_rad`
+/// here, every other key into the search's options (which refuse unknown keys).
+#[derive(Clone, Debug)]
+pub struct Metaheuristic<S> {
+    /// The search and its options.
+    pub search: S,
+    /// Half-width of the search box on length parameters, mm. Default 2.
+    pub bound_mm: Real,
+    /// Half-width of the search box on angle parameters, rad. Default 0.02.
+    pub bound_rad: Real,
+    /// Half-width of the search box on joint compliances, rad/(N·m). Default 1e-5 (ten
+    /// times an industrial arm's main-axis compliance).
+    pub bound_compliance: Real,
+    /// The pose-error model whose fitness is searched: `differential` or
+    /// `coordinate_transfer` (linearised at the nominal robot, [`LinearFitness`]), or
+    /// `direct_fk`, the forward kinematics themselves, which is also the default (`None`).
+    pub error_model: Option<ErrorModel>,
+}
+
+impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut t = toml::Table::deserialize(d)?;
+        let bounds = crate::robot::names::take_keys(
+            &mut t,
+            &["bound_mm", "bound_rad", "bound_compliance", "error_model"],
+        );
+        let bound = |key: &str, default: Real| match bounds.get(key) {
+            None => Ok(default),
+            Some(v) => Real::deserialize(v.clone()).map_err(D::Error::custom),
+        };
+        let bound_mm = bound("bound_mm", default_bound_mm())?;
+        let bound_rad = bound("bound_rad", default_bound_rad())?;
+        let bound_compliance = bound("bound_compliance", default_bound_compliance())?;
+        let error_model = bounds
+            .get("error_model")
+            .map(|v| ErrorModel::deserialize(v.clone()).map_err(D::Error::custom))
+            .transpose()?;
+        let search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
+        Ok(Metaheuristic {
+            search,
+            bound_mm,
+            bound_rad,
+            bound_compliance,
+            error_model,
+        })
+    }
+}
+
+fn default_bound_mm() -> Real {
+    2.0
+}
+
+fn default_bound_rad() -> Real {
+    0.02
+}
+
+fn default_bound_compliance() -> Real {
+    1e-5
+}
+
+impl<S: Default> Default for Metaheuristic<S> {
+    fn default() -> Self {
+        Metaheuristic {
+            search: S::default(),
+            bound_mm: default_bound_mm(),
+            bound_rad: default_bound_rad(),
+            bound_compliance: default_bound_compliance(),
+            error_model: None,
+        }
+    }
+}
+
+impl<S: Search> Method for Metaheuristic<S> {
+    fn check(&self) -> Result<()> {
+        self.search.check()?;
+        finite_positive("bound_mm", self.bound_mm)?;
+        finite_positive("bound_rad", self.bound_rad)?;
+        finite_positive("bound_compliance", self.bound_compliance)
+    }
+
+    /// The search's best point; [`Termination::TargetReached`] when it stopped at its target
+    /// fitness, [`Termination::MaxEvaluations`] when its `max_evaluations` budget ran out
+    /// before its `iterations`, else [`Termination::MaxIterations`]. The trace is the best fitness per
+    /// iteration (Qiao 2021 fig. 4).
+    fn identify(&self, problem: &CalibrationProblem, rng: &mut Rng) -> Result<Identified> {
+        let mp = MetaProblem::new(
+            problem.nominal,
+            problem.params.to_vec(),
+            problem.poses().to_vec(),
+            problem.points.clone(),
+            problem.rotations.clone(),
+            problem.k,
+        )?
+        .with_weights(problem.weights.as_deref())?
+        .with_payloads(problem.data.payload_kg.as_deref())?;
+        let bounds = mp.bounds(self.bound_mm, self.bound_rad, self.bound_compliance);
+        let r = match self.error_model {
+            None | Some(ErrorModel::DirectFk) => {
+                let f = |x: &[Real]| mp.fitness(x);
+                self.search.search(&f, &bounds, rng)?
+            }
+            Some(model) => {
+                let lin = LinearFitness::new(model, problem)?;
+                let f = |x: &[Real]| lin.fitness(x);
+                self.search.search(&f, &bounds, rng)?
+            }
+        };
+        let termination = if r.reached_target {
+            Termination::TargetReached
+        } else if r.budget_spent {
+            Termination::MaxEvaluations
+        } else {
+            Termination::MaxIterations
+        };
+        let mut out = Identified::plain(
+            r.x,
+            r.iterations,
+            r.evaluations,
+            termination,
+            problem.data.len(),
+        );
+        out.trace = Some(r.trace);
+        Ok(out)
+    }
+}
+
+/// Qiao's fitness (eq. 14) on a linear pose-error model (§2.2 differential, §2.3 coordinate
+/// transfer): the model's residual `r₀ − J₀x` at the errors `x`, with `r₀` and `J₀` taken at
+/// the nominal robot ([`crate::identify::qiao::error_models::stack`], orientation rows weighted by `k`), summed
+/// as eq. 14 sums its terms: per pose, the norm of the position block plus the norm of each
+/// three-row orientation block (`k(|Δn| + |Δo| + |Δa|)` for the differential model, `k|δ|`
+/// for the coordinate transfer), times the pose's prior weight. Allocation-free.
+#[derive(Clone, Debug)]
+pub struct LinearFitness {
+    /// `r₀`, one value per row.
+    r0: Vec<Real>,
+    /// `J₀`, row-major (`cols` values per row).
+    j0: Vec<Real>,
+    cols: usize,
+    /// Rows per pose.
+    rows: usize,
+    /// Prior weight of each pose (1 without weights).
+    weights: Vec<Real>,
+}
+
+impl LinearFitness {
+    /// The model at the nominal robot of `problem`; needs full-pose data and a kinematic
+    /// parameter list (`error_model` otherwise).
+    pub fn new(model: ErrorModel, problem: &CalibrationProblem) -> Result<LinearFitness> {
+        if problem.params.iter().any(|p| p.is_compliance()) {
+            return Err(Error::setting(
+                "error_model",
+                "the pose-error models (Qiao 2021 §2) are kinematic: search joint \
+                 compliances without error_model",
+            ));
+        }
+        let frames = problem.measured_frames("error_model")?;
+        let (r, j) = crate::identify::qiao::error_models::stack(
+            model,
+            problem.nominal,
+            problem.params,
+            problem.poses(),
+            &frames,
+            problem.k,
+        )?;
+        let cols = j.ncols();
+        let mut j0 = Vec::with_capacity(j.len());
+        for row in j.row_iter() {
+            j0.extend(row.iter());
+        }
+        Ok(LinearFitness {
+            r0: r.as_slice().to_vec(),
+            j0,
+            cols,
+            rows: model.rows(),
+            weights: problem
+                .weights
+                .clone()
+                .unwrap_or_else(|| vec![1.0; frames.len()]),
+        })
+    }
+
+    /// The fitness of the errors `x`; `+∞` if `x` has the wrong length.
+    pub fn fitness(&self, x: &[Real]) -> Real {
+        if x.len() != self.cols {
+            return Real::INFINITY;
+        }
+        let mut total = 0.0;
+        for (pose, w) in self.weights.iter().enumerate() {
+            let mut term = 0.0;
+            for block in 0..self.rows / 3 {
+                let mut sq = 0.0;
+                for k in 0..3 {
+                    let row = pose * self.rows + 3 * block + k;
+                    let j = &self.j0[row * self.cols..(row + 1) * self.cols];
+                    let e = self.r0[row] - j.iter().zip(x).map(|(a, b)| a * b).sum::<Real>();
+                    sq += e * e;
+                }
+                term += sq.sqrt();
+            }
+            total += w * term;
+        }
+        total
+    }
+}

@@ -1,0 +1,485 @@
+//! The measurement CSV (docs/formats.md): a header `q1,…,qn,x,y,z` (full-pose data adds
+//! `qw,qx,qy,qz`), then one row per pose: joint values in the robot file's units, the
+//! measured point in mm in the instrument's frame and the unit quaternion of the measured
+//! frame; optional columns `sigma_mm` (the point's standard deviation) and `payload_kg` (the
+//! payload at the tool point during the measurement). A real tracker export in this shape
+//! loads exactly like a simulated one.
+//!
+//! Reading accepts the columns in any order (matched by header name), blank lines and
+//! `#` comment lines; it refuses a missing or unknown column, a row with the wrong number
+//! of fields, a value that is not a finite number, a joint value outside the limits and a
+//! quaternion that is not of unit length (within 1e-3; it is then normalised), naming the
+//! file, the line and the column.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::measurement::{JointSpace, Measurements};
+use crate::numeric::{Real, Vec3};
+
+const QUAT: [&str; 4] = ["qw", "qx", "qy", "qz"];
+const XYZ: [&str; 3] = ["x", "y", "z"];
+/// The optional per-point standard deviation column (mm).
+const SIGMA: &str = "sigma_mm";
+/// The optional per-pose payload column (kg).
+const PAYLOAD: &str = "payload_kg";
+
+/// Writes `m` as a measurement CSV. Numbers have a fixed format (9 decimals for joint values
+/// and points, 12 for quaternions), so equal measurements give identical bytes.
+pub fn write_measurements(
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+    m: &Measurements,
+) -> Result<()> {
+    let mut s = String::with_capacity(64 * (m.qs.len() + 1));
+    joint_header(&mut s, robot.dof());
+    s.push_str(",x,y,z");
+    if m.quats.is_some() {
+        s.push_str(",qw,qx,qy,qz");
+    }
+    if m.sigma_mm.is_some() {
+        s.push_str(",sigma_mm");
+    }
+    if m.payload_kg.is_some() {
+        s.push_str(",payload_kg");
+    }
+    s.push('\n');
+    for (i, q) in m.qs.iter().enumerate() {
+        joint_cells(&mut s, robot, q);
+        s.push(',');
+        let p = of_pose(&m.points, i, m.qs.len(), "points")?;
+        let _ = write!(s, "{},{},{}", fixed(p.x, 9), fixed(p.y, 9), fixed(p.z, 9));
+        if let Some(qs) = &m.quats {
+            for v in of_pose(qs, i, m.qs.len(), "quaternions")? {
+                let _ = write!(s, ",{}", fixed(*v, 12));
+            }
+        }
+        if let Some(sd) = &m.sigma_mm {
+            let v = of_pose(sd, i, m.qs.len(), "standard deviations")?;
+            let _ = write!(s, ",{}", fixed(*v, 9));
+        }
+        if let Some(pl) = &m.payload_kg {
+            let v = of_pose(pl, i, m.qs.len(), "payloads")?;
+            let _ = write!(s, ",{}", fixed(*v, 6));
+        }
+        s.push('\n');
+    }
+    std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
+/// Entry `i` of a per-pose column `v` (`what`, plural) of a measurement of `poses` poses;
+/// an error when the column is shorter.
+fn of_pose<'a, T>(v: &'a [T], i: usize, poses: usize, what: &str) -> Result<&'a T> {
+    v.get(i).ok_or_else(|| {
+        Error::Compute(format!(
+            "measurement has {poses} poses but {} {what}",
+            v.len()
+        ))
+    })
+}
+
+/// Writes a pose list (the measurement CSV without the measured columns): `q1..qn` in the
+/// robot's units, in the same fixed format as [`write_measurements`], so the poses a
+/// measurement of this list records are the very values of the list.
+pub fn write_pose_list(
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+    qs: &[Vec<Real>],
+) -> Result<()> {
+    let mut s = String::with_capacity(16 * robot.dof() * (qs.len() + 1));
+    joint_header(&mut s, robot.dof());
+    s.push('\n');
+    for q in qs {
+        joint_cells(&mut s, robot, q);
+        s.push('\n');
+    }
+    std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
+fn joint_header(s: &mut String, dof: usize) {
+    let names: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
+    s.push_str(&names.join(","));
+}
+
+fn joint_cells(s: &mut String, robot: &(impl JointSpace + ?Sized), q: &[Real]) {
+    let cells: Vec<String> = robot.q_to_user(q).iter().map(|&v| fixed(v, 9)).collect();
+    s.push_str(&cells.join(","));
+}
+
+/// `v` with `d` decimals, negative zero written as zero.
+pub fn fixed(v: Real, d: usize) -> String {
+    let t = format!("{v:.d$}");
+    if t.starts_with('-') && t[1..].bytes().all(|b| b == b'0' || b == b'.') {
+        t[1..].to_string()
+    } else {
+        t
+    }
+}
+
+/// Reads a measurement CSV for `robot` (see the module docs for what is refused).
+pub fn read_measurements(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result<Measurements> {
+    read_table(path, robot, true)
+}
+
+/// Reads a measurement CSV (`measured`) or a pose list (measured columns optional and
+/// ignored).
+pub(crate) fn read_table(
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+    measured: bool,
+) -> Result<Measurements> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let mut rd = ::csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(true)
+        .trim(::csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(std::io::BufReader::new(file));
+    let bad =
+        |line: u64, place: &str, msg: String| Error::file(path, format!("line {line}{place}"), msg);
+    let header = rd
+        .headers()
+        .map_err(|e| bad(1, "", format!("cannot read the header: {e}")))?
+        .clone();
+    let header_line = 1;
+    let names: Vec<String> = header.iter().map(str::to_string).collect();
+    if names.iter().all(|n| n.is_empty()) {
+        return Err(bad(
+            header_line,
+            "",
+            "empty file: expected a header row q1,…,qn,x,y,z".into(),
+        ));
+    }
+    let dof = robot.dof();
+    let qnames: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
+    let find = |n: &str| names.iter().position(|h| h == n);
+    // Unknown and repeated columns.
+    for (i, n) in names.iter().enumerate() {
+        let known = qnames.contains(n)
+            || XYZ.contains(&n.as_str())
+            || QUAT.contains(&n.as_str())
+            || n == SIGMA
+            || n == PAYLOAD;
+        if !known {
+            return Err(bad(
+                header_line,
+                &format!(", column {}", i + 1),
+                format!(
+                    "unknown column \"{n}\" (expected q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm, payload_kg)"
+                ),
+            ));
+        }
+        if names[..i].contains(n) {
+            return Err(bad(
+                header_line,
+                &format!(", column {n}"),
+                format!("column \"{n}\" appears twice"),
+            ));
+        }
+    }
+    let missing = |n: &str| {
+        bad(
+            header_line,
+            "",
+            format!(
+                "missing column \"{n}\" (robot \"{}\" has {dof} joints)",
+                robot.name()
+            ),
+        )
+    };
+    let qcol: Vec<usize> = qnames
+        .iter()
+        .map(|n| find(n).ok_or_else(|| missing(n)))
+        .collect::<Result<_>>()?;
+    let (xcol, qtcol) = if measured {
+        let x: Vec<usize> = XYZ
+            .iter()
+            .map(|n| find(n).ok_or_else(|| missing(n)))
+            .collect::<Result<_>>()?;
+        let present = QUAT.iter().filter(|n| find(n).is_some()).count();
+        let q = match present {
+            0 => None,
+            4 => Some(QUAT.iter().filter_map(|n| find(n)).collect::<Vec<usize>>()),
+            _ => {
+                let n = QUAT
+                    .iter()
+                    .find(|n| find(n).is_none())
+                    .copied()
+                    .unwrap_or("qw");
+                return Err(missing(n));
+            }
+        };
+        (x, q)
+    } else {
+        (Vec::new(), None)
+    };
+    let sigma_col = if measured { find(SIGMA) } else { None };
+    let payload_col = find(PAYLOAD);
+    let mut payload = Vec::new();
+    let mut sigma = Vec::new();
+    let mut qs = Vec::new();
+    let mut points = Vec::new();
+    let mut quats = Vec::new();
+    let mut rec = ::csv::StringRecord::new();
+    let mut quser = vec![0.0; dof];
+    let lim_lo = robot.q_to_user(&(0..dof).map(|j| robot.limits(j).0).collect::<Vec<_>>());
+    let lim_hi = robot.q_to_user(&(0..dof).map(|j| robot.limits(j).1).collect::<Vec<_>>());
+    loop {
+        let more = rd.read_record(&mut rec).map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            bad(line, "", format!("unreadable row: {e}"))
+        })?;
+        if !more {
+            break;
+        }
+        let line = rec.position().map_or(0, |p| p.line());
+        if rec.len() == 1 && rec.get(0).is_some_and(str::is_empty) {
+            continue; // blank line
+        }
+        if rec.len() != names.len() {
+            return Err(bad(
+                line,
+                "",
+                format!(
+                    "{} fields, expected {} as in the header",
+                    rec.len(),
+                    names.len()
+                ),
+            ));
+        }
+        let num = |c: usize| -> Result<Real> {
+            let t = rec.get(c).unwrap_or("");
+            t.parse::<Real>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    bad(
+                        line,
+                        &format!(", column {}", names[c]),
+                        format!("\"{t}\" is not a finite number"),
+                    )
+                })
+        };
+        for (j, &c) in qcol.iter().enumerate() {
+            quser[j] = num(c)?;
+        }
+        let q = robot.q_from_user(&quser);
+        for (j, v) in q.iter().enumerate() {
+            let (lo, hi) = robot.limits(j);
+            if *v < lo - 1e-9 || *v > hi + 1e-9 {
+                return Err(bad(
+                    line,
+                    &format!(", column {}", qnames[j]),
+                    format!(
+                        "{} is outside the joint limits [{}, {}]",
+                        quser[j], lim_lo[j], lim_hi[j]
+                    ),
+                ));
+            }
+        }
+        qs.push(q);
+        if measured {
+            points.push(Vec3::new(num(xcol[0])?, num(xcol[1])?, num(xcol[2])?));
+        }
+        if let Some(qc) = &qtcol {
+            let mut qq = [0.0; 4];
+            for (k, &c) in qc.iter().enumerate() {
+                qq[k] = num(c)?;
+            }
+            let n = qq.iter().map(|v| v * v).sum::<Real>().sqrt();
+            if (n - 1.0).abs() > 1e-3 {
+                return Err(bad(
+                    line,
+                    ", column qw",
+                    format!("the quaternion has length {n}, expected a unit quaternion"),
+                ));
+            }
+            quats.push(qq.map(|v| v / n));
+        }
+        if let Some(c) = sigma_col {
+            let v = num(c)?;
+            if v <= 0.0 {
+                return Err(bad(
+                    line,
+                    &format!(", column {SIGMA}"),
+                    format!("{v} is not a positive standard deviation"),
+                ));
+            }
+            sigma.push(v);
+        }
+        if let Some(c) = payload_col {
+            let v = num(c)?;
+            if v < 0.0 {
+                return Err(bad(
+                    line,
+                    &format!(", column {PAYLOAD}"),
+                    format!("{v} is not a payload ≥ 0 kg"),
+                ));
+            }
+            payload.push(v);
+        }
+    }
+    if qs.is_empty() {
+        return Err(bad(
+            header_line,
+            "",
+            "the file has a header but no data rows".into(),
+        ));
+    }
+    Ok(Measurements {
+        qs,
+        points,
+        quats: qtcol.map(|_| quats),
+        sigma_mm: sigma_col.map(|_| sigma),
+        payload_kg: payload_col.map(|_| payload),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::numeric::rng::stream;
+    use crate::robot::sampling::uniform_joint_poses;
+    use crate::robot::Robot;
+    use crate::sim::{measure_poses, MeasureSetting, Tracker, TrackerSettings};
+    use approx::assert_relative_eq;
+
+    fn tmp(name: &str) -> std::path::PathBuf {
+        let d = std::env::temp_dir().join(format!("calbench-sim-csv-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        d.join(name)
+    }
+
+    fn measurement(pose: bool) -> (Robot, Measurements) {
+        let r = crate::robot::builtin::tx60();
+        let qs = uniform_joint_poses(&r, 12, &mut stream(1, "poses"));
+        let t = Tracker::new(&TrackerSettings {
+            measure: if pose {
+                MeasureSetting::Pose
+            } else {
+                MeasureSetting::Position
+            },
+            angle_noise_deg: 0.01,
+            ..Default::default()
+        })
+        .unwrap();
+        let m = measure_poses(&r, &qs, &t, None, None, None, &mut stream(1, "noise")).unwrap();
+        (r, m.data)
+    }
+
+    #[test]
+    fn write_read_roundtrip() {
+        for pose in [false, true] {
+            let (r, m) = measurement(pose);
+            let p = tmp(&format!("rt-{pose}.csv"));
+            write_measurements(&p, &r, &m).unwrap();
+            let d = read_measurements(&p, &r).unwrap();
+            assert_eq!(d.qs.len(), m.qs.len());
+            for i in 0..m.qs.len() {
+                for j in 0..6 {
+                    // 1e-9 degree written.
+                    assert_relative_eq!(d.qs[i][j], m.qs[i][j], epsilon = 1e-10);
+                }
+                assert_relative_eq!(d.points[i], m.points[i], epsilon = 1e-9);
+            }
+            assert_eq!(d.quats.is_some(), pose);
+            if let (Some(a), Some(b)) = (&d.quats, &m.quats) {
+                for (x, y) in a.iter().zip(b) {
+                    for k in 0..4 {
+                        assert_relative_eq!(x[k], y[k], epsilon = 1e-11);
+                    }
+                }
+            }
+            // Rewriting what was read gives the same bytes.
+            let again = d.clone();
+            let p2 = tmp(&format!("rt2-{pose}.csv"));
+            write_measurements(&p2, &r, &again).unwrap();
+            assert_eq!(std::fs::read(&p).unwrap(), std::fs::read(&p2).unwrap());
+            // The pose list reader takes the same file.
+            let ql = crate::sim::poses::read_pose_list(&p, &r).unwrap();
+            assert_eq!(ql.len(), m.qs.len());
+        }
+        let (r, m) = measurement(false);
+        let text = std::fs::read_to_string(tmp("rt-false.csv")).unwrap();
+        assert!(text.starts_with("q1,q2,q3,q4,q5,q6,x,y,z\n"));
+        assert_eq!(text.lines().count(), m.qs.len() + 1);
+        let _ = r;
+    }
+
+    /// The error reading `text` from a file of its own (tests run in parallel threads of one
+    /// process: a shared name let one test read another's file).
+    fn read_err(text: &str) -> String {
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let name = format!(
+            "bad-{}.csv",
+            N.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+        );
+        let p = tmp(&name);
+        std::fs::write(&p, text).unwrap();
+        let e = read_measurements(&p, &crate::robot::builtin::irb2600()).unwrap_err();
+        let s = e.to_string();
+        assert!(s.contains(&name), "{s}");
+        s
+    }
+
+    #[test]
+    fn standard_deviations_round_trip_and_must_be_positive() {
+        let (r, mut m) = measurement(false);
+        m.sigma_mm = Some((0..m.len()).map(|i| 0.01 + 0.001 * i as Real).collect());
+        let p = tmp("sigma.csv");
+        write_measurements(&p, &r, &m).unwrap();
+        let d = read_measurements(&p, &r).unwrap();
+        let (a, b) = (d.sigma_mm.unwrap(), m.sigma_mm.unwrap());
+        for (x, y) in a.iter().zip(&b) {
+            assert_relative_eq!(*x, *y, epsilon = 1e-12);
+        }
+        let h = "q1,q2,q3,q4,q5,q6,x,y,z,sigma_mm\n";
+        let s = read_err(&format!(
+            "{h}0,0,0,0,0,0,1,2,3,0.01\n0,0,0,0,0,0,1,2,3,-1\n"
+        ));
+        assert!(s.contains("line 3") && s.contains("column sigma_mm"), "{s}");
+    }
+
+    #[test]
+    fn bad_lines_are_named() {
+        let h = "q1,q2,q3,q4,q5,q6,x,y,z\n";
+        let ok = "0,0,0,0,0,0,1,2,3\n";
+        let s = read_err(&format!("{h}{ok}{ok}0,0,0,zero,0,0,1,2,3\n"));
+        assert!(
+            s.contains("line 4") && s.contains("column q4") && s.contains("zero"),
+            "{s}"
+        );
+        let s = read_err(&format!("{h}{ok}0,0,0,0,0,0,1,NaN,3\n"));
+        assert!(s.contains("line 3") && s.contains("column y"), "{s}");
+        let s = read_err(&format!("{h}{ok}0,0,0,0,0,1,2,3\n"));
+        assert!(s.contains("line 3") && s.contains("8 fields"), "{s}");
+        let s = read_err("q1,q2,q3,q4,q5,x,y,z\n");
+        assert!(s.contains("missing column \"q6\""), "{s}");
+        let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,w\n");
+        assert!(s.contains("unknown column \"w\""), "{s}");
+        let s = read_err(&format!("{h}0,400,0,0,0,0,1,2,3\n"));
+        assert!(
+            s.contains("line 2") && s.contains("column q2") && s.contains("limits"),
+            "{s}"
+        );
+        let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx,qy,qz\n0,0,0,0,0,0,1,2,3,1,1,0,0\n");
+        assert!(s.contains("line 2") && s.contains("unit quaternion"), "{s}");
+        let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx\n");
+        assert!(s.contains("missing column \"qy\""), "{s}");
+    }
+
+    #[test]
+    fn columns_in_any_order_with_comments_and_blank_lines() {
+        let p = tmp("order.csv");
+        std::fs::write(
+            &p,
+            "# exported\nx,y,z,q1,q2,q3,q4,q5,q6\n\n1,2,3,10,20,30,40,50,60\n",
+        )
+        .unwrap();
+        let r = crate::robot::builtin::irb2600();
+        let d = read_measurements(&p, &r).unwrap();
+        assert_eq!(d.points, vec![Vec3::new(1.0, 2.0, 3.0)]);
+        assert_relative_eq!(d.qs[0][5], 60f64.to_radians(), epsilon = 1e-15);
+    }
+}

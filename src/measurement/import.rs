@@ -1,0 +1,526 @@
+//! `calbench import`: a laser tracker's raw export turned into the measurement CSV
+//! (docs/formats.md, "Mapping file").
+//!
+//! What a real export varies in is named by a mapping file ([`Mapping`]): the field separator
+//! and decimal mark, the columns holding the joints, the measured position and orientation,
+//! their units, the orientation convention (Euler axis sequence, intrinsic or extrinsic, or a
+//! quaternion's component order) and the per-point standard deviations, which become the
+//! `sigma_mm` weight column (weighted least squares in every method, [`Measurements::weights`]).
+//! A cell that is empty or not a finite number is refused naming the file, the line and the
+//! column; nothing is dropped.
+//!
+//! [`Measurements::weights`]: crate::measurement::Measurements::weights
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
+
+/// A mapping file: how to read one tracker export.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mapping {
+    /// The field separator (one character; `";"`, `","`, `"\t"`).
+    #[serde(default = "comma")]
+    pub separator: String,
+    /// The decimal mark (`"."` or `","`).
+    #[serde(default = "dot")]
+    pub decimal: String,
+    /// The joint columns.
+    pub joints: JointColumns,
+    /// The measured position columns.
+    pub position: PositionColumns,
+    /// The measured orientation columns (full-pose data), if any.
+    pub orientation: Option<OrientationColumns>,
+    /// The standard deviation columns, if any.
+    pub sigma: Option<SigmaColumns>,
+}
+
+fn comma() -> String {
+    ",".into()
+}
+
+fn dot() -> String {
+    ".".into()
+}
+
+/// A unit of a column: angles or lengths.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Unit {
+    /// Radians.
+    Rad,
+    /// Degrees.
+    Deg,
+    /// Millimetres.
+    Mm,
+    /// Metres.
+    M,
+}
+
+impl Unit {
+    /// `(kind, factor to rad or mm)`.
+    fn scale(self) -> (&'static str, Real) {
+        match self {
+            Unit::Rad => ("angle", 1.0),
+            Unit::Deg => ("angle", std::f64::consts::PI / 180.0),
+            Unit::Mm => ("length", 1.0),
+            Unit::M => ("length", 1000.0),
+        }
+    }
+}
+
+/// `[joints]`: the joint columns, in joint order.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct JointColumns {
+    /// Column names of q1 … qn.
+    pub columns: Vec<String>,
+    /// Their unit in the export.
+    pub unit: Unit,
+    /// Their unit in the measurement CSV: the robot file's unit (`angle_unit`; a URDF's
+    /// radians). Default: `unit`. Of the same kind as `unit` (angle or length).
+    pub write_unit: Option<Unit>,
+}
+
+/// `[position]`: the measured point.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PositionColumns {
+    /// Column names of x, y, z.
+    pub columns: [String; 3],
+    /// `"mm"` or `"m"`.
+    pub unit: Unit,
+}
+
+/// How an orientation is written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum OrientationKind {
+    /// Three Euler angles.
+    Euler,
+    /// Four quaternion components.
+    Quaternion,
+}
+
+/// Whether Euler rotations turn about the moving (intrinsic) or the fixed (extrinsic) axes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum EulerFrame {
+    /// About the moving axes: sequence "xyz" is R = Rx(a)·Ry(b)·Rz(c).
+    Intrinsic,
+    /// About the fixed axes: sequence "xyz" is R = Rz(c)·Ry(b)·Rx(a) (a robot file's `rpy`).
+    Extrinsic,
+}
+
+/// `[orientation]`: the measured frame's orientation in the instrument's frame.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OrientationColumns {
+    /// `"euler"` or `"quaternion"`.
+    pub kind: OrientationKind,
+    /// The columns: three angles in the order of `sequence`, or four quaternion components
+    /// in the order of `order`.
+    pub columns: Vec<String>,
+    /// Euler: the axis sequence, three of x, y, z with no axis twice in a row (`"xyz"`,
+    /// `"zyx"`, `"zyz"`, …).
+    pub sequence: Option<String>,
+    /// Euler: `"intrinsic"` or `"extrinsic"`.
+    pub frame: Option<EulerFrame>,
+    /// Euler: `"deg"` or `"rad"`.
+    pub unit: Option<Unit>,
+    /// Quaternion: the components' order, `"wxyz"` or `"xyzw"`.
+    pub order: Option<String>,
+}
+
+/// How several standard deviation columns make one per-point σ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Combine {
+    /// √(Σσ²/n): the σ of one coordinate with the same total variance (default).
+    #[default]
+    Rms,
+    /// The largest.
+    Max,
+}
+
+/// `[sigma]`: standard deviations of the measured position, one σ per point (`sigma_mm`).
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SigmaColumns {
+    /// One column (σ of the point) or several (σ per axis), combined by `combine`.
+    pub position: Vec<String>,
+    /// `"mm"` or `"m"`.
+    pub unit: Unit,
+    /// `"rms"` (default) or `"max"`.
+    #[serde(default)]
+    pub combine: Combine,
+}
+
+/// A checked mapping: single-character separators, resolved conventions.
+struct Plan {
+    sep: char,
+    decimal: char,
+    joints: (Vec<String>, Real),
+    position: ([String; 3], Real),
+    orientation: Option<Orient>,
+    sigma: Option<(Vec<String>, Real, Combine)>,
+}
+
+enum Orient {
+    Euler {
+        cols: Vec<String>,
+        axes: [usize; 3],
+        intrinsic: bool,
+        scale: Real,
+    },
+    Quat {
+        cols: Vec<String>,
+        /// Position of w, x, y, z among the columns.
+        at: [usize; 4],
+    },
+}
+
+impl Mapping {
+    /// Reads and checks a mapping file.
+    pub fn load(path: &Path) -> Result<Mapping> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let m: Mapping = toml::from_str(&text)
+            .map_err(|e| Error::file(path, "mapping", e.message().to_string()))?;
+        m.plan(path)?;
+        Ok(m)
+    }
+
+    fn plan(&self, path: &Path) -> Result<Plan> {
+        let bad = |key: &str, msg: String| Error::file(path, key, msg);
+        let one_char = |key: &str, s: &str| {
+            let mut c = s.chars();
+            match (c.next(), c.next()) {
+                (Some(ch), None) => Ok(ch),
+                _ => Err(bad(key, format!("\"{s}\" must be one character"))),
+            }
+        };
+        let sep = one_char("separator", &self.separator)?;
+        let decimal = one_char("decimal", &self.decimal)?;
+        if !matches!(decimal, '.' | ',') || decimal == sep {
+            return Err(bad(
+                "decimal",
+                format!("\"{decimal}\": \".\" or \",\", and not the separator"),
+            ));
+        }
+        if self.joints.columns.is_empty() {
+            return Err(bad("joints.columns", "names no column".into()));
+        }
+        let (kind, from) = self.joints.unit.scale();
+        let (wkind, to) = self.joints.write_unit.unwrap_or(self.joints.unit).scale();
+        if kind != wkind {
+            return Err(bad(
+                "joints.write_unit",
+                format!("an {wkind} unit for joints read in an {kind} unit"),
+            ));
+        }
+        let length = |key: &str, u: Unit| match u.scale() {
+            ("length", f) => Ok(f),
+            _ => Err(bad(key, "must be \"mm\" or \"m\"".into())),
+        };
+        let position = (
+            self.position.columns.clone(),
+            length("position.unit", self.position.unit)?,
+        );
+        let orientation = self
+            .orientation
+            .as_ref()
+            .map(|o| o.plan(path))
+            .transpose()?;
+        let sigma = match &self.sigma {
+            Some(s) if s.position.is_empty() => {
+                return Err(bad("sigma.position", "names no column".into()))
+            }
+            Some(s) => Some((s.position.clone(), length("sigma.unit", s.unit)?, s.combine)),
+            None => None,
+        };
+        Ok(Plan {
+            sep,
+            decimal,
+            joints: (self.joints.columns.clone(), from / to),
+            position,
+            orientation,
+            sigma,
+        })
+    }
+}
+
+impl OrientationColumns {
+    fn plan(&self, path: &Path) -> Result<Orient> {
+        let bad = |key: &str, msg: &str| Error::file(path, format!("orientation.{key}"), msg);
+        let n = self.columns.len();
+        match self.kind {
+            OrientationKind::Euler => {
+                if n != 3 || self.order.is_some() {
+                    return Err(bad(
+                        "columns",
+                        "Euler angles take three columns (and no `order`)",
+                    ));
+                }
+                let seq = self
+                    .sequence
+                    .as_deref()
+                    .ok_or_else(|| bad("sequence", "missing: the axis sequence, e.g. \"xyz\""))?;
+                let axes: Vec<usize> = seq
+                    .chars()
+                    .map(|c| "xyz".find(c.to_ascii_lowercase()))
+                    .collect::<Option<_>>()
+                    .filter(|a: &Vec<usize>| a.len() == 3 && a[0] != a[1] && a[1] != a[2])
+                    .ok_or_else(|| {
+                        bad(
+                            "sequence",
+                            "three of x, y, z, no axis twice in a row (\"xyz\", \"zyz\")",
+                        )
+                    })?;
+                let frame = self
+                    .frame
+                    .ok_or_else(|| bad("frame", "missing: \"intrinsic\" or \"extrinsic\""))?;
+                let unit = self
+                    .unit
+                    .ok_or_else(|| bad("unit", "missing: \"deg\" or \"rad\""))?;
+                let scale = match unit.scale() {
+                    ("angle", f) => f,
+                    _ => return Err(bad("unit", "must be \"deg\" or \"rad\"")),
+                };
+                Ok(Orient::Euler {
+                    cols: self.columns.clone(),
+                    axes: [axes[0], axes[1], axes[2]],
+                    intrinsic: frame == EulerFrame::Intrinsic,
+                    scale,
+                })
+            }
+            OrientationKind::Quaternion => {
+                if n != 4 || self.sequence.is_some() || self.frame.is_some() || self.unit.is_some()
+                {
+                    return Err(bad(
+                        "columns",
+                        "a quaternion takes four columns and `order` only",
+                    ));
+                }
+                let at = match self.order.as_deref() {
+                    Some("wxyz") => [0, 1, 2, 3],
+                    Some("xyzw") => [3, 0, 1, 2],
+                    _ => return Err(bad("order", "\"wxyz\" or \"xyzw\"")),
+                };
+                Ok(Orient::Quat {
+                    cols: self.columns.clone(),
+                    at,
+                })
+            }
+        }
+    }
+}
+
+/// The rotation of Euler angles `v` (rad) about `axes` (0 = x, 1 = y, 2 = z), intrinsic
+/// (R = R₁(v₁)·R₂(v₂)·R₃(v₃)) or extrinsic (R = R₃(v₃)·R₂(v₂)·R₁(v₁)).
+pub fn euler_matrix(axes: [usize; 3], v: [Real; 3], intrinsic: bool) -> Mat3 {
+    let r = |a: usize, t: Real| match a {
+        0 => rot_x(t),
+        1 => rot_y(t),
+        _ => rot_z(t),
+    };
+    let (a, b, c) = (r(axes[0], v[0]), r(axes[1], v[1]), r(axes[2], v[2]));
+    if intrinsic {
+        a * b * c
+    } else {
+        c * b * a
+    }
+}
+
+/// Reads the export `raw` as `mapping` says and writes the measurement CSV `out`; returns the
+/// number of rows written.
+pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
+    let mapping = Mapping::load(mapping_path)?;
+    let plan = mapping.plan(mapping_path)?;
+    let bytes = std::fs::read(raw).map_err(|e| Error::io(raw, e))?;
+    let text = String::from_utf8_lossy(&bytes);
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
+    let (_, head) = lines
+        .find(|(_, l)| !l.trim().is_empty())
+        .ok_or_else(|| Error::file(raw, "line 1", "the export is empty (no header line)"))?;
+    let header: Vec<&str> = head.split(plan.sep).map(str::trim).collect();
+    let index: HashMap<&str, usize> = header.iter().enumerate().map(|(i, h)| (*h, i)).collect();
+    let find = |key: &str, name: &str| {
+        index.get(name).copied().ok_or_else(|| {
+            Error::file(
+                mapping_path,
+                key,
+                format!(
+                    "column \"{name}\" is not in the header of {} ({})",
+                    raw.display(),
+                    header.join(", ")
+                ),
+            )
+        })
+    };
+    let cols = |key: &str, names: &[String]| -> Result<Vec<usize>> {
+        names.iter().map(|n| find(key, n)).collect()
+    };
+    let jc = cols("joints.columns", &plan.joints.0)?;
+    let pc = cols("position.columns", &plan.position.0)?;
+    let oc = match &plan.orientation {
+        Some(Orient::Euler { cols: c, .. } | Orient::Quat { cols: c, .. }) => {
+            cols("orientation.columns", c)?
+        }
+        None => Vec::new(),
+    };
+    let sc = match &plan.sigma {
+        Some((c, ..)) => cols("sigma.position", c)?,
+        None => Vec::new(),
+    };
+
+    let dof = jc.len();
+    let mut s = String::with_capacity(128 * 1024);
+    let names: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
+    s.push_str(&names.join(","));
+    s.push_str(",x,y,z");
+    if plan.orientation.is_some() {
+        s.push_str(",qw,qx,qy,qz");
+    }
+    if plan.sigma.is_some() {
+        s.push_str(",sigma_mm");
+    }
+    s.push('\n');
+    let mut rows = 0;
+    let mut cell = String::new();
+    for (line, l) in lines {
+        if l.trim().is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = l.split(plan.sep).collect();
+        if fields.len() != header.len() {
+            return Err(Error::file(
+                raw,
+                format!("line {line}"),
+                format!("{} fields, the header has {}", fields.len(), header.len()),
+            ));
+        }
+        let mut num = |c: usize| -> Result<Real> {
+            let f = fields[c].trim();
+            let place = format!("line {line}, column {}", header[c]);
+            if f.is_empty() {
+                return Err(Error::file(raw, place, "empty cell"));
+            }
+            cell.clear();
+            cell.extend(
+                f.chars()
+                    .map(|ch| if ch == plan.decimal { '.' } else { ch }),
+            );
+            cell.parse::<Real>()
+                .ok()
+                .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')))
+                .ok_or_else(|| Error::file(raw, place, format!("\"{f}\" is not a finite number")))
+        };
+        let mut row = Vec::with_capacity(dof + 8);
+        for &c in &jc {
+            row.push(num(c)? * plan.joints.1);
+        }
+        for &c in &pc {
+            row.push(num(c)? * plan.position.1);
+        }
+        let cells: Vec<String> = row
+            .iter()
+            .map(|&v| crate::measurement::csv::fixed(v, 9))
+            .collect();
+        s.push_str(&cells.join(","));
+        if let Some(o) = &plan.orientation {
+            let q = match o {
+                Orient::Euler {
+                    axes,
+                    intrinsic,
+                    scale,
+                    ..
+                } => {
+                    let v = [
+                        num(oc[0])? * scale,
+                        num(oc[1])? * scale,
+                        num(oc[2])? * scale,
+                    ];
+                    quaternion(&euler_matrix(*axes, v, *intrinsic))
+                }
+                Orient::Quat { at, .. } => {
+                    let mut q = [0.0; 4];
+                    for (k, &i) in at.iter().enumerate() {
+                        q[k] = num(oc[i])?;
+                    }
+                    let n = q.iter().map(|v| v * v).sum::<Real>().sqrt();
+                    if (n - 1.0).abs() > 1e-3 {
+                        return Err(Error::file(
+                            raw,
+                            format!("line {line}, column {}", header[oc[0]]),
+                            format!("the quaternion has norm {n}, not 1"),
+                        ));
+                    }
+                    q.map(|v| v / n)
+                }
+            };
+            for v in q {
+                let _ = write!(s, ",{}", crate::measurement::csv::fixed(v, 12));
+            }
+        }
+        if let Some((_, scale, combine)) = &plan.sigma {
+            let mut acc: Real = 0.0;
+            for &c in &sc {
+                let v = num(c)? * scale;
+                if v <= 0.0 {
+                    return Err(Error::file(
+                        raw,
+                        format!("line {line}, column {}", header[c]),
+                        format!("standard deviation {v} mm: must be positive"),
+                    ));
+                }
+                acc = match combine {
+                    Combine::Rms => acc + v * v,
+                    Combine::Max => acc.max(v),
+                };
+            }
+            let sigma = match combine {
+                Combine::Rms => (acc / sc.len() as Real).sqrt(),
+                Combine::Max => acc,
+            };
+            let _ = write!(s, ",{}", crate::measurement::csv::fixed(sigma, 9));
+        }
+        s.push('\n');
+        rows += 1;
+    }
+    if rows == 0 {
+        return Err(Error::file(
+            raw,
+            "rows",
+            "the export has a header and no data rows",
+        ));
+    }
+    std::fs::write(out, s).map_err(|e| Error::io(out, e))?;
+    Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+
+    #[test]
+    fn euler_conventions_match_their_definitions() {
+        let v = [0.3, -1.1, 2.0];
+        let i = euler_matrix([0, 1, 2], v, true);
+        assert_relative_eq!(i, rot_x(v[0]) * rot_y(v[1]) * rot_z(v[2]), epsilon = 1e-15);
+        // Extrinsic x-y-z is the robot file's rpy (fixed X-Y-Z).
+        let e = euler_matrix([0, 1, 2], v, false);
+        assert_relative_eq!(e, crate::numeric::rpy_matrix(v), epsilon = 1e-12);
+        // Intrinsic z-y-x equals extrinsic x-y-z with the angles reversed.
+        let z = euler_matrix([2, 1, 0], [v[2], v[1], v[0]], true);
+        assert_relative_eq!(z, e, epsilon = 1e-12);
+    }
+}

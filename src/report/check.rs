@@ -1,0 +1,387 @@
+//! `calbench check`: the regression guard on identification accuracy (docs/formats.md).
+//!
+//! A summary is compared with a baseline entry by entry — entries are matched by method,
+//! pose strategy and swept value — on the metrics that say how well the calibration worked.
+//! Timing is not compared: it depends on the machine.
+//!
+//! Both files must be calbench summaries ([`check_summary`]) of the same scenario that share
+//! at least one metric ([`comparable`]); otherwise there is nothing to guard and `check`
+//! refuses them, naming the file. A metric regresses when it is worse by the tolerance or
+//! more: a change of exactly the tolerance is a regression ([`compare`]).
+
+use std::fmt;
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+
+/// Which way a metric improves.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Better {
+    Higher,
+    Lower,
+}
+
+/// One metric that got worse beyond the tolerance.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Regression {
+    /// The entry: `method / poses [/ sweep value]`.
+    pub entry: String,
+    /// The metric's key path, e.g. `validation_after_mm.rms`.
+    pub metric: String,
+    /// The baseline value.
+    pub baseline: Real,
+    /// The value in the summary (`NaN` when the entry or metric is missing).
+    pub value: Real,
+}
+
+impl fmt::Display for Regression {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.value.is_nan() {
+            write!(
+                f,
+                "{}: {} is missing (baseline {})",
+                self.entry, self.metric, self.baseline
+            )
+        } else {
+            write!(
+                f,
+                "{}: {} got worse: {} (baseline {})",
+                self.entry, self.metric, self.value, self.baseline
+            )
+        }
+    }
+}
+
+/// The compared metrics, with the direction each improves in. `param_rmse` is compared per
+/// parameter name.
+const METRICS: &[(&str, Better)] = &[
+    ("eta_mean_pct", Better::Higher),
+    ("eta_median_pct", Better::Higher),
+    ("validation_after_mm.mean", Better::Lower),
+    ("validation_after_mm.rms", Better::Lower),
+    ("validation_after_mm.max", Better::Lower),
+    ("validation_after_deg.mean", Better::Lower),
+    ("validation_after_deg.rms", Better::Lower),
+    ("failures", Better::Lower),
+];
+
+fn entry_key(e: &Value) -> String {
+    let s = |k: &str| match e.get(k) {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => String::new(),
+    };
+    match e.get("sweep_value") {
+        Some(v) => format!("{} / {} / {}", s("method"), s("poses"), v),
+        None => format!("{} / {}", s("method"), s("poses")),
+    }
+}
+
+fn lookup(e: &Value, path: &str) -> Option<Real> {
+    path.split('.')
+        .try_fold(e, |v, k| v.get(k))
+        .and_then(Value::as_f64)
+}
+
+/// Whether `value` is worse than `base` by at least `tolerance` times the baseline's
+/// magnitude, in direction `dir`. A change of exactly the tolerance counts: the comparison
+/// allows 1e-12 of the magnitude for the rounding of decimal numbers. A change of 1e-9 or
+/// less never counts, so equal values, and a zero baseline with rounding noise, pass.
+fn regressed(value: Real, base: Real, tolerance: Real, dir: Better) -> bool {
+    let worse_by = match dir {
+        Better::Higher => base - value,
+        Better::Lower => value - base,
+    };
+    let rounding = 1e-12 * base.abs().max(value.abs());
+    worse_by > 1e-9 && worse_by >= tolerance * base.abs() - rounding
+}
+
+/// The metrics compared for one baseline entry: [`METRICS`] and its `param_rmse` names.
+fn entry_metrics(b: &Value) -> Vec<(String, Better)> {
+    let mut metrics: Vec<(String, Better)> =
+        METRICS.iter().map(|(m, d)| (m.to_string(), *d)).collect();
+    if let Some(Value::Object(m)) = b.get("param_rmse") {
+        metrics.extend(m.keys().map(|k| (format!("param_rmse.{k}"), Better::Lower)));
+    }
+    metrics
+}
+
+fn entries(v: &Value) -> &[Value] {
+    v.get("results")
+        .and_then(Value::as_array)
+        .map_or(&[], Vec::as_slice)
+}
+
+/// Compares `summary` with `baseline` and returns every regression. A metric regresses when it
+/// is worse than the baseline by the tolerance or more: by at least `tolerance` times the
+/// baseline's magnitude (a change of exactly the tolerance is a regression) and by more than
+/// 1e-9, so a zero baseline tolerates rounding only. A baseline entry or metric missing from
+/// the summary is a regression; a non-finite value is one too.
+///
+/// This compares two values as they are; `calbench check` first refuses them unless they are
+/// [`comparable`].
+pub fn compare(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Regression> {
+    let new = entries(summary);
+    let mut out = Vec::new();
+    for b in entries(baseline) {
+        let key = entry_key(b);
+        let found = new.iter().find(|e| entry_key(e) == key);
+        for (metric, dir) in entry_metrics(b) {
+            let Some(base) = lookup(b, &metric) else {
+                continue;
+            };
+            let value = found.and_then(|e| lookup(e, &metric)).unwrap_or(Real::NAN);
+            if regressed(value, base, tolerance, dir) || !value.is_finite() {
+                out.push(Regression {
+                    entry: key.clone(),
+                    metric,
+                    baseline: base,
+                    value,
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Refuses, naming `path`, a JSON value that is not a calbench summary: it must be an object
+/// with a `scenario` name and `results`, a list of objects each naming its `method`.
+pub fn check_summary(value: &Value, path: &Path) -> Result<()> {
+    let not = |place: &str, got: String| {
+        Error::file(
+            path,
+            place,
+            format!(
+                "{got}, so this is not a calbench summary (summary.json from `calbench run`: \
+                 an object with a `scenario` name and `results`, a list of entries with \
+                 `method`, `poses` and metrics)"
+            ),
+        )
+    };
+    let Some(obj) = value.as_object() else {
+        return Err(not("top level", format!("is {}", kind(value))));
+    };
+    let results = match obj.get("results") {
+        Some(Value::Array(r)) => r,
+        Some(v) => return Err(not("results", format!("is {}, not a list", kind(v)))),
+        None => return Err(not("results", "is missing".into())),
+    };
+    match obj.get("scenario") {
+        Some(Value::String(_)) => {}
+        Some(v) => return Err(not("scenario", format!("is {}, not a name", kind(v)))),
+        None => return Err(not("scenario", "is missing".into())),
+    }
+    for (i, e) in results.iter().enumerate() {
+        if !matches!(e.get("method"), Some(Value::String(_))) {
+            return Err(not(
+                &format!("results[{i}]"),
+                format!("is {} without a `method` name", kind(e)),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A JSON value's kind, for messages.
+fn kind(v: &Value) -> &'static str {
+    match v {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "a list",
+        Value::Object(_) => "an object",
+    }
+}
+
+/// Refuses a summary and a baseline that cannot be compared, naming the file: either is not
+/// a calbench summary ([`check_summary`]), they are summaries of different scenarios (their
+/// `scenario` names differ), or they share no metric — no baseline entry has a compared
+/// metric that the summary's entry of the same method, poses and swept value also has —
+/// so a comparison would guard nothing.
+pub fn comparable(
+    summary: &Value,
+    summary_path: &Path,
+    baseline: &Value,
+    baseline_path: &Path,
+) -> Result<()> {
+    check_summary(summary, summary_path)?;
+    check_summary(baseline, baseline_path)?;
+    let (s, b) = (&summary["scenario"], &baseline["scenario"]);
+    if s != b {
+        return Err(Error::file(
+            baseline_path,
+            "scenario",
+            format!(
+                "is {b}, but {} is a summary of scenario {s}: a baseline must come from the \
+                 same scenario",
+                summary_path.display()
+            ),
+        ));
+    }
+    let new = entries(summary);
+    let shared = entries(baseline).iter().any(|b| {
+        let key = entry_key(b);
+        new.iter().filter(|e| entry_key(e) == key).any(|e| {
+            entry_metrics(b)
+                .iter()
+                .any(|(m, _)| lookup(b, m).is_some() && path_exists(e, m))
+        })
+    });
+    if !shared {
+        let keys: Vec<String> = entries(baseline).iter().map(entry_key).collect();
+        return Err(Error::file(
+            baseline_path,
+            "results",
+            format!(
+                "shares no metric with {}: nothing to compare (baseline entries: {}; \
+                 entries are matched by method, poses and sweep value)",
+                summary_path.display(),
+                if keys.is_empty() {
+                    "none".to_string()
+                } else {
+                    keys.join(", ")
+                }
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Whether the key path exists in `e` (with any value: a `null` metric is there, and missing
+/// from it is a regression, not a reason to refuse the comparison).
+fn path_exists(e: &Value, path: &str) -> bool {
+    path.split('.').try_fold(e, |v, k| v.get(k)).is_some()
+}
+
+/// Reads a JSON file.
+pub fn read_json(path: &Path) -> Result<Value> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn summary(eta: Real, rms: Real) -> Value {
+        json!({"scenario": "s", "results": [{"method": "ls", "poses": "random", "eta_mean_pct": eta,
+            "validation_after_mm": {"mean": rms, "rms": rms, "max": 2.0 * rms, "std": 0.1},
+            "param_rmse": {"a2": 0.01}, "failures": 0}]})
+    }
+
+    #[test]
+    fn equal_summaries_pass() {
+        assert!(compare(&summary(90.0, 0.1), &summary(90.0, 0.1), 0.05).is_empty());
+    }
+
+    #[test]
+    fn worse_beyond_tolerance_is_named() {
+        let r = compare(&summary(80.0, 0.2), &summary(90.0, 0.1), 0.05);
+        let names: Vec<&str> = r.iter().map(|r| r.metric.as_str()).collect();
+        assert!(names.contains(&"eta_mean_pct"));
+        assert!(names.contains(&"validation_after_mm.rms"));
+        assert!(!names.contains(&"failures"));
+    }
+
+    #[test]
+    fn within_tolerance_and_better_pass() {
+        assert!(compare(&summary(89.0, 0.104), &summary(90.0, 0.1), 0.05).is_empty());
+        assert!(compare(&summary(99.0, 0.01), &summary(90.0, 0.1), 0.0).is_empty());
+    }
+
+    #[test]
+    fn missing_entry_is_a_regression() {
+        let mut s = summary(90.0, 0.1);
+        s["results"][0]["method"] = json!("lm");
+        assert!(!compare(&s, &summary(90.0, 0.1), 0.05).is_empty());
+    }
+
+    #[test]
+    fn a_change_of_exactly_the_tolerance_is_a_regression() {
+        // 5 % worse, exactly: 0.1 → 0.105 mm, 90 → 85.5 %.
+        let r = compare(&summary(85.5, 0.105), &summary(90.0, 0.1), 0.05);
+        let names: Vec<&str> = r.iter().map(|r| r.metric.as_str()).collect();
+        assert!(names.contains(&"eta_mean_pct"), "{names:?}");
+        assert!(names.contains(&"validation_after_mm.rms"), "{names:?}");
+        assert!(names.contains(&"validation_after_mm.max"), "{names:?}");
+        // Exactly the tolerance on values whose decimal forms round differently.
+        for (base, tol) in [(0.3, 0.05), (0.7, 0.1), (1.1, 0.02), (123.456, 0.03)] {
+            let worse = base * (1.0 + tol);
+            let r = compare(&summary(90.0, worse), &summary(90.0, base), tol);
+            assert!(
+                r.iter().any(|r| r.metric == "validation_after_mm.rms"),
+                "{base} → {worse} at {tol}"
+            );
+        }
+        // Just inside the tolerance, and equal values with a zero tolerance, pass.
+        assert!(compare(&summary(85.6, 0.1049), &summary(90.0, 0.1), 0.05).is_empty());
+        assert!(compare(&summary(90.0, 0.1), &summary(90.0, 0.1), 0.0).is_empty());
+    }
+
+    fn refused(s: &Value, b: &Value, file: &str, key: &str) {
+        let e = comparable(
+            s,
+            Path::new("new/summary.json"),
+            b,
+            Path::new("old/base.json"),
+        )
+        .expect_err("accepted")
+        .to_string();
+        assert!(
+            e.contains(file) && e.contains(key),
+            "`{e}` lacks {file} or {key}"
+        );
+    }
+
+    #[test]
+    fn files_that_are_not_summaries_are_refused_naming_the_file() {
+        let good = summary(90.0, 0.1);
+        comparable(&good, Path::new("a"), &good, Path::new("b")).unwrap();
+        for (bad, key) in [
+            (json!({}), "results"),
+            (json!({"results": []}), "scenario"),
+            (json!({"scenario": "s"}), "results"),
+            (json!({"scenario": "s", "results": 3}), "results"),
+            (json!({"scenario": "s", "results": {"a": 1}}), "results"),
+            (json!({"scenario": 7, "results": []}), "scenario"),
+            (json!([1, 2]), "not a calbench summary"),
+            (json!({"scenario": "s", "results": [1]}), "results[0]"),
+            (
+                json!({"scenario": "s", "results": [{"poses": "x"}]}),
+                "method",
+            ),
+        ] {
+            refused(&good, &bad, "old/base.json", key);
+            refused(&bad, &good, "new/summary.json", key);
+        }
+    }
+
+    #[test]
+    fn unrelated_baselines_are_refused() {
+        let good = summary(90.0, 0.1);
+        let mut other = good.clone();
+        other["scenario"] = json!("another");
+        refused(&good, &other, "old/base.json", "scenario");
+        let empty = json!({"scenario": "s", "results": []});
+        refused(&good, &empty, "old/base.json", "shares no metric");
+        // Entries of other methods only, or entries without compared metrics.
+        let mut lm = good.clone();
+        lm["results"][0]["method"] = json!("lm");
+        refused(&good, &lm, "new/summary.json", "shares no metric");
+        let bare = json!({"scenario": "s", "results": [{"method": "ls", "poses": "random"}]});
+        refused(&good, &bare, "old/base.json", "shares no metric");
+        // One shared metric is enough; the rest missing are regressions.
+        let mut two = good.clone();
+        two["results"]
+            .as_array_mut()
+            .unwrap()
+            .push(lm["results"][0].clone());
+        comparable(&good, Path::new("a"), &two, Path::new("b")).unwrap();
+        assert!(!compare(&good, &two, 0.05).is_empty());
+    }
+}

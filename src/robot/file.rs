@@ -1,0 +1,559 @@
+//! Robot files (docs/formats.md, "Robot file"): reading with every value checked, and writing.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use super::{
+    joint_place, to_internal, value_count, AngleUnit, Convention, Coupling, Joint, JointType,
+    LengthUnit, Param, Quantity, Robot, Units,
+};
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RobotFile {
+    name: String,
+    convention: String,
+    length_unit: String,
+    angle_unit: String,
+    joints: Vec<JointEntry>,
+    base: Option<PartEntry>,
+    tool: Option<PartEntry>,
+    coupling: Option<CouplingEntry>,
+    beta_joints: Option<Vec<i64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct JointEntry {
+    #[serde(rename = "type")]
+    kind: String,
+    alpha: Real,
+    a: Real,
+    d: Real,
+    theta: Real,
+    beta: Option<Real>,
+    limits: Vec<Real>,
+    /// Mass of the link this joint moves, kg (all joints or none).
+    mass_kg: Option<Real>,
+    /// Joint compliance, rad/(N·m) whatever the file's units (default 0: rigid).
+    compliance: Option<Real>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PartEntry {
+    xyz: Option<Vec<Real>>,
+    rpy: Option<Vec<Real>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CouplingEntry {
+    kind: String,
+    l1: Real,
+}
+
+/// Parses and checks a robot file's text. `path` is used in messages only.
+///
+/// Refuses, naming the file, the joint and the key: TOML errors, missing and unknown keys, an
+/// unknown convention, unit or joint type, `limits` that are not two numbers, a non-zero
+/// `beta` in a `dh` robot, and every value that is not finite or out of range *after* its
+/// conversion to mm and rad (see [`Robot::check`]: a length of `1e308` m is infinite in mm
+/// and refused), including limits whose lower value is not below the upper one.
+pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
+    let f: RobotFile =
+        toml::from_str(text).map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
+    let err = |place: String, msg: String| Error::file(path, place, msg);
+    use crate::robot::names::parse_in;
+    let convention: Convention = parse_in(path, "convention", &f.convention)?;
+    let length: LengthUnit = parse_in(path, "length_unit", &f.length_unit)?;
+    let angle: AngleUnit = parse_in(path, "angle_unit", &f.angle_unit)?;
+    let units = Units { length, angle };
+    let (lu, au) = (units.length_to_mm(), units.angle_to_rad());
+    let (lname, aname) = (units.length_name(), units.angle_name());
+    // Every number goes through here: converted to mm / rad, then checked.
+    let conv = |place: &dyn Fn() -> String, quantity: Quantity, raw: Real| -> Result<Real> {
+        let (factor, unit) = match quantity {
+            Quantity::Length => (lu, lname),
+            Quantity::Angle | Quantity::JointAngle => (au, aname),
+        };
+        to_internal(quantity, raw, factor, unit).map_err(|m| err(place(), m))
+    };
+    if f.joints.is_empty() {
+        return Err(err(
+            "joints".into(),
+            "a robot needs at least one [[joints]] entry".into(),
+        ));
+    }
+    if f.joints.len() > 16 {
+        return Err(err(
+            "joints".into(),
+            "at most 16 joints are supported".into(),
+        ));
+    }
+    let coupling = match &f.coupling {
+        None => None,
+        Some(c) => {
+            if c.kind != "differential" {
+                return Err(err(
+                    "coupling.kind".into(),
+                    format!("unknown coupling \"{}\"; allowed: \"differential\"", c.kind),
+                ));
+            }
+            let l1 = conv(&|| "coupling.l1".into(), Quantity::Length, c.l1)?;
+            if l1 <= 0.0 {
+                return Err(err(
+                    "coupling.l1".into(),
+                    format!("must be a length > 0, got {:?} {lname}", c.l1),
+                ));
+            }
+            Some(Coupling::Differential { l1_mm: l1 })
+        }
+    };
+    let n = f.joints.len();
+    let mut values = vec![0.0; value_count(n)];
+    let mut joints = Vec::with_capacity(n);
+    for (j, e) in f.joints.iter().enumerate() {
+        let kind: JointType = parse_in(path, &joint_place(j, "type"), &e.kind)?;
+        let beta = e.beta.unwrap_or(0.0);
+        for (key, p, quantity, raw) in [
+            ("alpha", Param::Alpha(j), Quantity::Angle, e.alpha),
+            ("a", Param::A(j), Quantity::Length, e.a),
+            ("d", Param::D(j), Quantity::Length, e.d),
+            ("theta", Param::Theta(j), Quantity::Angle, e.theta),
+            ("beta", Param::Beta(j), Quantity::Angle, beta),
+        ] {
+            values[p.index(n)] = conv(&|| joint_place(j, key), quantity, raw)?;
+        }
+        if convention == Convention::Dh && beta != 0.0 {
+            return Err(err(
+                joint_place(j, "beta"),
+                "convention \"dh\" has no β; use \"dh_beta\" or \"mdh\"".into(),
+            ));
+        }
+        if e.limits.len() != 2 {
+            return Err(err(
+                joint_place(j, "limits"),
+                format!("must be [lower, upper], got {} values", e.limits.len()),
+            ));
+        }
+        let coupled = coupling.is_some() && j < 2;
+        let (quantity, unit) = if coupled || kind == JointType::Prismatic {
+            (Quantity::Length, lname)
+        } else {
+            (Quantity::JointAngle, aname)
+        };
+        let place = || joint_place(j, "limits");
+        let lo = conv(&place, quantity, e.limits[0])?;
+        let hi = conv(&place, quantity, e.limits[1])?;
+        if lo >= hi {
+            return Err(err(
+                place(),
+                format!(
+                    "lower limit {:?} {unit} must be below upper limit {:?} {unit}",
+                    e.limits[0], e.limits[1]
+                ),
+            ));
+        }
+        joints.push(Joint {
+            kind,
+            limits: (lo, hi),
+        });
+        values[Param::Compliance(j).index(n)] = e.compliance.unwrap_or(0.0);
+    }
+    let link_mass_kg = match f.joints.iter().filter(|e| e.mass_kg.is_some()).count() {
+        0 => None,
+        k if k == n => Some(f.joints.iter().filter_map(|e| e.mass_kg).collect()),
+        _ => {
+            let j = f
+                .joints
+                .iter()
+                .position(|e| e.mass_kg.is_none())
+                .unwrap_or(0);
+            return Err(err(
+                joint_place(j, "mass_kg"),
+                "give `mass_kg` on every joint or on none".into(),
+            ));
+        }
+    };
+    if let Some(Coupling::Differential { .. }) = coupling {
+        if n < 2 || joints[0].kind != JointType::Revolute || joints[1].kind != JointType::Prismatic
+        {
+            return Err(err(
+                "coupling".into(),
+                "a differential coupling drives a revolute joint 1 and a prismatic joint 2".into(),
+            ));
+        }
+    }
+    for (name, part, make) in [
+        ("base", &f.base, Param::Base as fn(usize) -> Param),
+        ("tool", &f.tool, Param::Tool),
+    ] {
+        let Some(part) = part else { continue };
+        for (key, vals, quantity, offset) in [
+            ("xyz", &part.xyz, Quantity::Length, 0),
+            ("rpy", &part.rpy, Quantity::Angle, 3),
+        ] {
+            let Some(vals) = vals else { continue };
+            let place = || format!("{name}.{key}");
+            if vals.len() != 3 {
+                return Err(err(
+                    place(),
+                    format!("must be three numbers, got {} values", vals.len()),
+                ));
+            }
+            for (c, &v) in vals.iter().enumerate() {
+                values[make(offset + c).index(n)] = conv(&place, quantity, v)?;
+            }
+        }
+    }
+    let beta_joints = match &f.beta_joints {
+        None => None,
+        Some(list) => {
+            if !convention.has_beta() {
+                return Err(err(
+                    "beta_joints".into(),
+                    "convention \"dh\" has no β; use \"dh_beta\" or \"mdh\"".into(),
+                ));
+            }
+            let mut out: Vec<usize> = Vec::with_capacity(list.len());
+            for &j in list {
+                let ok = j >= 1 && (j as usize) <= n && !out.contains(&(j as usize - 1));
+                if !ok {
+                    return Err(err(
+                        "beta_joints".into(),
+                        format!("must list distinct joint numbers from 1 to {n}, got {j}"),
+                    ));
+                }
+                out.push(j as usize - 1);
+            }
+            for (j, e) in f.joints.iter().enumerate() {
+                if !out.contains(&j) && e.beta.is_some_and(|b| b != 0.0) {
+                    return Err(err(
+                        joint_place(j, "beta"),
+                        format!("joint {} is not in `beta_joints` and carries no β", j + 1),
+                    ));
+                }
+            }
+            Some(out)
+        }
+    };
+    let robot = Robot {
+        name: f.name,
+        convention,
+        joints,
+        values,
+        units,
+        coupling,
+        beta_joints,
+        link_mass_kg,
+    };
+    // Everything above was checked value by value in the file's units; this is the same
+    // check on the assembled model, so the two cannot drift apart.
+    robot.check().map_err(|i| err(i.place, i.msg))?;
+    Ok(robot)
+}
+
+/// Rounds away the last bits of unit conversions (deg → rad → deg) for printing.
+fn tidy(v: Real) -> Real {
+    let r = (v * 1e12).round() / 1e12;
+    if (r - v).abs() <= 1e-9 * v.abs().max(1.0) {
+        r
+    } else {
+        v
+    }
+}
+
+fn num(v: Real, tidied: bool) -> String {
+    let v = if tidied { tidy(v) } else { v };
+    let s = format!("{v:?}");
+    if s == "-0.0" {
+        "0.0".into()
+    } else {
+        s
+    }
+}
+
+/// `text` as a TOML basic string, quoted and escaped, so any name reads back as itself.
+fn toml_string(text: &str) -> String {
+    let mut s = String::with_capacity(text.len() + 2);
+    s.push('"');
+    for c in text.chars() {
+        match c {
+            '"' => s.push_str("\\\""),
+            '\\' => s.push_str("\\\\"),
+            '\n' => s.push_str("\\n"),
+            '\t' => s.push_str("\\t"),
+            '\r' => s.push_str("\\r"),
+            c if c.is_control() => {
+                let _ = write!(s, "\\u{:04X}", c as u32);
+            }
+            c => s.push(c),
+        }
+    }
+    s.push('"');
+    s
+}
+
+/// Writes a robot as a robot file in its own units; [`parse_robot_file`] reads it back.
+///
+/// Numbers are tidied (`89.99999999999999` is written `90.0`) unless tidying would make the
+/// file unreadable — a lever or a joint range so small that it rounds to zero — in which
+/// case every number is written exactly. So a robot that passes [`Robot::check`] always
+/// reads back.
+pub fn robot_to_toml(robot: &Robot) -> String {
+    let tidied = write_robot(robot, true);
+    if parse_robot_file(&tidied, Path::new("robot.toml")).is_ok() {
+        tidied
+    } else {
+        write_robot(robot, false)
+    }
+}
+
+/// [`robot_to_toml`] with or without tidied numbers.
+fn write_robot(robot: &Robot, tidied: bool) -> String {
+    let num = |v: Real| num(v, tidied);
+    let n = robot.dof();
+    let (lu, au) = (robot.units.length_to_mm(), robot.units.angle_to_rad());
+    let mut s = String::new();
+    let _ = writeln!(s, "name = {}", toml_string(&robot.name));
+    let _ = writeln!(s, "convention = \"{}\"", robot.convention.as_str());
+    let _ = writeln!(s, "length_unit = \"{}\"", robot.units.length_name());
+    let _ = writeln!(s, "angle_unit = \"{}\"", robot.units.angle_name());
+    if let (true, Some(bj)) = (robot.convention.has_beta(), &robot.beta_joints) {
+        let list: Vec<String> = bj.iter().map(|j| (j + 1).to_string()).collect();
+        let _ = writeln!(s, "beta_joints = [{}]", list.join(", "));
+    }
+    if let Some(Coupling::Differential { l1_mm }) = robot.coupling {
+        let _ = writeln!(
+            s,
+            "\n# Joints 1 and 2 take the travels of two differential screws (length unit):\n\
+             # joint 1 turns by atan((q1 - q2) / l1), joint 2 moves by (q1 + q2) / 2.\n\
+             [coupling]\nkind = \"differential\"\nl1 = {}",
+            num(l1_mm / lu)
+        );
+    }
+    for (j, joint) in robot.joints.iter().enumerate() {
+        let g = |p: Param| robot.values[p.index(n)];
+        let coupled = robot.coupling.is_some() && j < 2;
+        let qf = if coupled || joint.kind == JointType::Prismatic {
+            lu
+        } else {
+            au
+        };
+        let _ = writeln!(s, "\n[[joints]]");
+        let _ = writeln!(
+            s,
+            "type = \"{}\"",
+            crate::robot::names::static_name(&joint.kind)
+        );
+        let _ = writeln!(s, "alpha = {}", num(g(Param::Alpha(j)) / au));
+        let _ = writeln!(s, "a = {}", num(g(Param::A(j)) / lu));
+        let _ = writeln!(s, "d = {}", num(g(Param::D(j)) / lu));
+        let _ = writeln!(s, "theta = {}", num(g(Param::Theta(j)) / au));
+        if robot.carries_beta(j) {
+            let _ = writeln!(s, "beta = {}", num(g(Param::Beta(j)) / au));
+        }
+        let _ = writeln!(
+            s,
+            "limits = [{}, {}]",
+            num(joint.limits.0 / qf),
+            num(joint.limits.1 / qf)
+        );
+        if let Some(m) = &robot.link_mass_kg {
+            let _ = writeln!(s, "mass_kg = {}", num(m[j]));
+        }
+        // Compliances are small numbers (about 1e-7 rad/(N·m)): written exactly.
+        let c = g(Param::Compliance(j));
+        if c != 0.0 {
+            let _ = writeln!(s, "compliance = {}", self::num(c, false));
+        }
+    }
+    for (name, make) in [
+        ("base", Param::Base as fn(usize) -> Param),
+        ("tool", Param::Tool),
+    ] {
+        let v: Vec<Real> = (0..6).map(|c| robot.values[make(c).index(n)]).collect();
+        let _ = writeln!(
+            s,
+            "\n[{name}]\nxyz = [{}, {}, {}]\nrpy = [{}, {}, {}]",
+            num(v[0] / lu),
+            num(v[1] / lu),
+            num(v[2] / lu),
+            num(v[3] / au),
+            num(v[4] / au),
+            num(v[5] / au)
+        );
+    }
+    s
+}
+
+/// Reads and checks a robot file.
+pub fn read_robot_file(path: &Path) -> Result<Robot> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_robot_file(&text, path)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::builtin;
+
+    const HEAD: &str = "name = \"x\"\nconvention = \"dh\"\nangle_unit = \"deg\"\n";
+
+    /// A one-joint robot file in `length_unit` with `body` as the joint's keys.
+    fn one_joint(length_unit: &str, body: &str) -> String {
+        format!("{HEAD}length_unit = \"{length_unit}\"\n[[joints]]\ntype = \"revolute\"\n{body}\n")
+    }
+
+    fn refused(text: &str, key: &str) -> String {
+        let e = parse_robot_file(text, Path::new("dir/bad-robot.toml"))
+            .expect_err(&format!("accepted:\n{text}"))
+            .to_string();
+        assert!(
+            e.contains("dir/bad-robot.toml") && e.contains(key),
+            "message `{e}` lacks the file or `{key}`"
+        );
+        e
+    }
+
+    const JOINT: &str = "alpha = 0.0\na = 0.0\nd = 0.0\ntheta = 0.0\nlimits = [-90.0, 90.0]";
+
+    #[test]
+    fn values_are_checked_after_unit_conversion() {
+        // Finite in metres, infinite in mm.
+        let e = refused(
+            &one_joint("m", &JOINT.replace("\na = 0.0", "\na = 1e308")),
+            "`a`",
+        );
+        assert!(e.contains("inf"), "{e}");
+        refused(
+            &one_joint("m", &JOINT.replace("d = 0.0", "d = -1e306")),
+            "`d`",
+        );
+        let base = format!("{}[base]\nxyz = [0.0, 1e307, 0.0]\n", one_joint("m", JOINT));
+        refused(&base, "base.xyz");
+        // Distinct in degrees, equal (zero) in radians.
+        let tiny = JOINT.replace("[-90.0, 90.0]", "[5e-324, 1e-323]");
+        refused(&one_joint("mm", &tiny), "limits");
+        let coupled = "name = \"c\"\nconvention = \"dh\"\nlength_unit = \"m\"\nangle_unit = \"deg\"\n\
+            [coupling]\nkind = \"differential\"\nl1 = 1e308\n\
+            [[joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 0.0\nd = 0.0\ntheta = 0.0\nlimits = [0.0, 0.4]\n\
+            [[joints]]\ntype = \"prismatic\"\nalpha = 0.0\na = 0.0\nd = 0.0\ntheta = 0.0\nlimits = [0.0, 0.4]\n";
+        refused(coupled, "coupling.l1");
+        // A prismatic limit in metres that overflows.
+        let pris = one_joint("m", JOINT)
+            .replace("revolute", "prismatic")
+            .replace("[-90.0, 90.0]", "[0.0, 1e306]");
+        refused(&pris, "limits");
+    }
+
+    #[test]
+    fn values_out_of_range_are_refused() {
+        for (unit, from, to, key) in [
+            ("mm", "\na = 0.0", "\na = 2e6", "`a`"),
+            ("m", "d = 0.0", "d = 1001.0", "`d`"),
+            ("mm", "theta = 0.0", "theta = 400.0", "`theta`"),
+            ("mm", "alpha = 0.0", "alpha = -1e300", "`alpha`"),
+        ] {
+            refused(&one_joint(unit, &JOINT.replace(from, to)), key);
+        }
+        let wide = JOINT.replace("[-90.0, 90.0]", "[-1e300, 1e300]");
+        refused(&one_joint("mm", &wide), "limits");
+        let tool = format!(
+            "{}[tool]\nrpy = [0.0, 720.0, 0.0]\n",
+            one_joint("mm", JOINT)
+        );
+        refused(&tool, "tool.rpy");
+        // The bounds themselves are accepted, in either unit.
+        let edge = JOINT
+            .replace("theta = 0.0", "theta = -360.0")
+            .replace("\na = 0.0", "\na = 1000.0")
+            .replace("[-90.0, 90.0]", "[-3600.0, 3600.0]");
+        parse_robot_file(&one_joint("m", &edge), Path::new("ok.toml")).unwrap();
+        let rad = one_joint("mm", JOINT)
+            .replace("\"deg\"", "\"rad\"")
+            .replace("theta = 0.0", "theta = 6.283185307179586")
+            .replace("[-90.0, 90.0]", "[-62.83185307179586, 62.83185307179586]");
+        parse_robot_file(&rad, Path::new("ok.toml")).unwrap();
+    }
+
+    #[test]
+    fn builtins_pass_the_model_check() {
+        for b in builtin::BUILTINS {
+            assert_eq!((b.build)().check(), Ok(()), "{}", b.name);
+        }
+    }
+
+    #[test]
+    fn model_check_names_the_key() {
+        let mut r = builtin::irb2600();
+        r.set(Param::A(1), Real::INFINITY);
+        assert_eq!(r.check().unwrap_err().place, "joint 2 (joints[1]), key `a`");
+        let mut r = builtin::irb2600();
+        r.set(Param::Tool(4), Real::NAN);
+        assert_eq!(r.check().unwrap_err().place, "tool.rpy");
+        let mut r = builtin::irb2600();
+        r.joints[3].limits = (1.0, 1.0);
+        assert_eq!(
+            r.check().unwrap_err().place,
+            "joint 4 (joints[3]), key `limits`"
+        );
+        let mut r = builtin::irb2600();
+        r.set(Param::Beta(2), 0.01);
+        assert_eq!(
+            r.check().unwrap_err().place,
+            "joint 3 (joints[2]), key `beta`"
+        );
+    }
+
+    #[test]
+    fn joint_values_are_checked_after_unit_conversion() {
+        let text = one_joint("m", JOINT).replace("revolute", "prismatic")
+            + "[[joints]]\ntype = \"revolute\"\n"
+            + JOINT;
+        let r = parse_robot_file(&text, Path::new("p.toml")).unwrap();
+        let q = r.q_from_user_checked(&[0.5, 30.0], "--q").unwrap();
+        assert!((q[0] - 500.0).abs() < 1e-12 && (q[1] - 30.0_f64.to_radians()).abs() < 1e-12);
+        for bad in [[1e306, 0.0], [0.0, 1e300], [Real::NAN, 0.0]] {
+            let e = r.q_from_user_checked(&bad, "--q").unwrap_err().to_string();
+            assert!(e.contains("--q") && e.contains("joint"), "{e}");
+        }
+        assert!(r.q_from_user_checked(&[0.0], "--q").is_err());
+    }
+
+    #[test]
+    fn any_name_reads_back() {
+        let mut r = builtin::tx60();
+        for name in [
+            "quote \" and \\ back",
+            "two\nlines\ttab",
+            "bell \u{7} del \u{7f}",
+            "ü ✓",
+        ] {
+            r.name = name.into();
+            let back = parse_robot_file(&robot_to_toml(&r), Path::new("n.toml")).unwrap();
+            assert_eq!(back.name, name);
+        }
+    }
+
+    #[test]
+    fn tiny_levers_and_ranges_read_back() {
+        // Found by fuzzing: tidying wrote l1 = 1e-320 as 0.0, and a range of 1e-13 degrees
+        // as [0.0, 0.0], files the parser refuses.
+        let mut r = builtin::guo_3t2r();
+        r.coupling = Some(Coupling::Differential { l1_mm: 1e-320 });
+        r.joints[3].limits = (0.0, 1e-13_f64.to_radians());
+        r.joints[4].limits = (1.0, 1.0 + 1e-14);
+        assert_eq!(r.check(), Ok(()));
+        let back = parse_robot_file(&robot_to_toml(&r), Path::new("t.toml")).unwrap();
+        assert_eq!(back.coupling, r.coupling);
+        assert!(back.joints[3].limits.1 > 0.0 && back.joints[4].limits.1 > 1.0);
+        // Ordinary robots are still written tidied.
+        assert!(robot_to_toml(&builtin::irb2600()).contains("alpha = -90.0\n"));
+    }
+}

@@ -1,0 +1,179 @@
+//! Parameter names and the layout of the flat parameter vector.
+
+use std::fmt;
+
+/// A name prefix and the constructor of its parameter kind.
+type Maker = (&'static str, fn(usize) -> Param);
+
+/// Parameters per joint in the flat vector: θ, d, a, α, β.
+pub const PARAMS_PER_JOINT: usize = 5;
+
+/// Length of the flat parameter vector of a robot with `dof` joints: the joint parameters,
+/// the six base and six tool parameters, then one joint compliance per joint.
+pub fn value_count(dof: usize) -> usize {
+    PARAMS_PER_JOINT * dof + 12 + dof
+}
+
+const PART: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+
+/// One geometric parameter of a robot. Joint indices are 0-based inside (`Theta(0)` is
+/// `theta1`); base and tool components are 0..6 for x, y, z, rx, ry, rz.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Param {
+    /// Joint angle offset θ (rad).
+    Theta(usize),
+    /// Link offset d (mm).
+    D(usize),
+    /// Link length a (mm).
+    A(usize),
+    /// Link twist α (rad).
+    Alpha(usize),
+    /// Hayati's β (rad), for `dh_beta` and `mdh`.
+    Beta(usize),
+    /// Base frame component (x, y, z mm; rx, ry, rz rad, fixed X-Y-Z angles).
+    Base(usize),
+    /// Tool frame component, same form as the base.
+    Tool(usize),
+    /// Joint compliance `c_j` (rad/(N·m)): the joint deflects by `c_j τ_j` under the gravity
+    /// torque `τ_j` of the links and the payload (elasto-geometric model, docs/formats.md
+    /// "Elasto-geometric calibration"). Not part of [`Param::all`]: a study identifies it only when it asks to.
+    Compliance(usize),
+}
+
+impl Param {
+    /// Every parameter of a robot with `dof` joints, in flat-vector order.
+    pub fn all(dof: usize, with_beta: bool) -> Vec<Param> {
+        let mut v = Vec::with_capacity(PARAMS_PER_JOINT * dof + 12);
+        for j in 0..dof {
+            v.extend([Param::Theta(j), Param::D(j), Param::A(j), Param::Alpha(j)]);
+            if with_beta {
+                v.push(Param::Beta(j));
+            }
+        }
+        v.extend((0..6).map(Param::Base));
+        v.extend((0..6).map(Param::Tool));
+        v
+    }
+
+    /// Position of this parameter in the flat vector of a robot with `dof` joints.
+    pub fn index(self, dof: usize) -> usize {
+        match self {
+            Param::Theta(j) => PARAMS_PER_JOINT * j,
+            Param::D(j) => PARAMS_PER_JOINT * j + 1,
+            Param::A(j) => PARAMS_PER_JOINT * j + 2,
+            Param::Alpha(j) => PARAMS_PER_JOINT * j + 3,
+            Param::Beta(j) => PARAMS_PER_JOINT * j + 4,
+            Param::Base(c) => PARAMS_PER_JOINT * dof + c,
+            Param::Tool(c) => PARAMS_PER_JOINT * dof + 6 + c,
+            Param::Compliance(j) => PARAMS_PER_JOINT * dof + 12 + j,
+        }
+    }
+
+    /// Whether the parameter is a length (mm); otherwise it is an angle (rad).
+    pub fn is_length(self) -> bool {
+        match self {
+            Param::D(_) | Param::A(_) => true,
+            Param::Base(c) | Param::Tool(c) => c < 3,
+            _ => false,
+        }
+    }
+
+    /// The parameter's block for ill-conditioning analysis (Guo 2024 §3.1): `theta`, `d`,
+    /// `a`, `alpha`, `beta`, `base` or `tool`.
+    pub fn block(self) -> &'static str {
+        match self {
+            Param::Theta(_) => "theta",
+            Param::D(_) => "d",
+            Param::A(_) => "a",
+            Param::Alpha(_) => "alpha",
+            Param::Beta(_) => "beta",
+            Param::Base(_) => "base",
+            Param::Tool(_) => "tool",
+            Param::Compliance(_) => "compliance",
+        }
+    }
+
+    /// Parses a name such as `theta1`, `alpha3`, `base.rz` or `tool.x`.
+    pub fn parse(name: &str) -> Option<Param> {
+        if let Some(c) = name.strip_prefix("base.") {
+            return PART.iter().position(|p| *p == c).map(Param::Base);
+        }
+        if let Some(c) = name.strip_prefix("tool.") {
+            return PART.iter().position(|p| *p == c).map(Param::Tool);
+        }
+        // Longest prefixes first: "alpha" before "a".
+        let kinds: [Maker; 6] = [
+            ("theta", Param::Theta),
+            ("alpha", Param::Alpha),
+            ("beta", Param::Beta),
+            ("a", Param::A),
+            ("d", Param::D),
+            ("c", Param::Compliance),
+        ];
+        for (prefix, make) in kinds {
+            if let Some(num) = name.strip_prefix(prefix) {
+                if num.is_empty() || !num.bytes().all(|b| b.is_ascii_digit()) {
+                    return None;
+                }
+                let j: usize = num.parse().ok()?;
+                return if j >= 1 { Some(make(j - 1)) } else { None };
+            }
+        }
+        None
+    }
+
+    /// Whether this is a joint compliance ([`Param::Compliance`]).
+    pub fn is_compliance(self) -> bool {
+        matches!(self, Param::Compliance(_))
+    }
+
+    /// The joint (0-based) a geometric joint parameter belongs to (`None` for base, tool and
+    /// compliance parameters).
+    pub fn joint(self) -> Option<usize> {
+        match self {
+            Param::Theta(j) | Param::D(j) | Param::A(j) | Param::Alpha(j) | Param::Beta(j) => {
+                Some(j)
+            }
+            Param::Base(_) | Param::Tool(_) | Param::Compliance(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for Param {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Param::Theta(j) => write!(f, "theta{}", j + 1),
+            Param::D(j) => write!(f, "d{}", j + 1),
+            Param::A(j) => write!(f, "a{}", j + 1),
+            Param::Alpha(j) => write!(f, "alpha{}", j + 1),
+            Param::Beta(j) => write!(f, "beta{}", j + 1),
+            Param::Base(c) => write!(f, "base.{}", PART[c]),
+            Param::Tool(c) => write!(f, "tool.{}", PART[c]),
+            Param::Compliance(j) => write!(f, "c{}", j + 1),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip() {
+        for p in Param::all(6, true) {
+            assert_eq!(Param::parse(&p.to_string()), Some(p), "{p}");
+        }
+        assert_eq!(Param::parse("alpha10"), Some(Param::Alpha(9)));
+        for bad in ["theta0", "theta", "x1", "base.q", "a1b", "d-1", ""] {
+            assert_eq!(Param::parse(bad), None, "{bad}");
+        }
+    }
+
+    #[test]
+    fn indices_are_a_bijection() {
+        let all = Param::all(4, true);
+        let mut idx: Vec<usize> = all.iter().map(|p| p.index(4)).collect();
+        idx.sort_unstable();
+        assert_eq!(idx, (0..all.len()).collect::<Vec<_>>());
+    }
+}

@@ -1,0 +1,452 @@
+//! URDF robots in and out (docs/formats.md, "URDF robots").
+//!
+//! A URDF's serial chain, from its root link to its only leaf link, becomes a calbench robot
+//! in the standard DH convention (Li 2018 eq. 1) by the common-normal construction of
+//! Denavit and Hartenberg: at q = 0 every moving joint is a line (its origin and axis in the
+//! root frame); frame i−1 has its z axis on joint i's line and its x axis on the common normal
+//! of lines i−1 and i (for parallel lines: the perpendicular from the previous origin), which
+//! gives θ, d, a, α of every link. The last link keeps θ = d = a = α = 0, so the whole
+//! placement of the tip link after the last joint is the `[tool]` frame; the placement of the
+//! first joint's line in the root frame is the `[base]` frame. Joint values are the URDF's:
+//! radians for revolute and continuous joints, metres for prismatic ones (the robot's units
+//! are rad and m); measured positions stay in mm.
+//!
+//! Writing back ([`UrdfRobot::write`]) keeps every element of the source and changes only the
+//! `<origin>` of each moving joint and of the last fixed joint before the tip (one is added
+//! when the tip is a moving joint's child), so that the URDF's FK equals the identified
+//! robot's: joint i's frame is the identified DH frame i−1 times the same constant offset as
+//! in the source (a turn about and a shift along the joint axis).
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::numeric::{matrix_rpy, rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
+use crate::robot::{
+    value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Robot, Units,
+};
+
+/// A robot read from a URDF: the calbench robot and what is needed to write it back.
+#[derive(Clone, Debug)]
+pub struct UrdfRobot {
+    /// The calbench robot (standard DH, units rad and m).
+    pub robot: Robot,
+    source: urdf_rs::Robot,
+    /// Indices into `source.joints` of the chain, root to tip.
+    chain: Vec<usize>,
+    /// Per moving joint: DH frame i−1 → the URDF joint frame (constant).
+    offsets: Vec<Frame>,
+}
+
+/// `<origin>` of a URDF joint as a frame (mm).
+fn origin(j: &urdf_rs::Joint) -> Frame {
+    let p = &j.origin;
+    Frame {
+        rot: rpy_matrix(*p.rpy),
+        pos: Vec3::new(p.xyz[0], p.xyz[1], p.xyz[2]) * 1000.0,
+    }
+}
+
+fn set_origin(j: &mut urdf_rs::Joint, f: &Frame) {
+    let m = |v: Real| if v == 0.0 { 0.0 } else { v };
+    j.origin.xyz = urdf_rs::Vec3([
+        m(f.pos.x / 1000.0),
+        m(f.pos.y / 1000.0),
+        m(f.pos.z / 1000.0),
+    ]);
+    j.origin.rpy = urdf_rs::Vec3(matrix_rpy(&f.rot).map(m));
+}
+
+fn moving(j: &urdf_rs::Joint) -> Result<Option<JointType>> {
+    use urdf_rs::JointType as U;
+    Ok(match j.joint_type {
+        U::Fixed => None,
+        U::Revolute | U::Continuous => Some(JointType::Revolute),
+        U::Prismatic => Some(JointType::Prismatic),
+        _ => {
+            return Err(Error::Compute(format!(
+                "joint \"{}\": type {:?} is not a one-axis joint (revolute, continuous, \
+                 prismatic, fixed)",
+                j.name, j.joint_type
+            )))
+        }
+    })
+}
+
+/// The DH link transform Rz(θ)Tz(d)Tx(a)Rx(α).
+fn dh(theta: Real, d: Real, a: Real, alpha: Real) -> Frame {
+    let rz = rot_z(theta);
+    Frame {
+        rot: rz * rot_x(alpha),
+        pos: rz * Vec3::new(a, 0.0, 0.0) + Vec3::new(0.0, 0.0, d),
+    }
+}
+
+/// The DH parameters (θ, d, a, α) of the link from frame `prev` (z on the previous joint's
+/// line) to the frame whose z is on the line (`p`, `u`), and that frame.
+fn next_frame(prev: &Frame, p: &Vec3, u: &Vec3) -> ([Real; 4], Frame) {
+    let (o0, z0, x0) = (
+        prev.pos,
+        prev.rot.column(2).into_owned(),
+        prev.rot.column(0).into_owned(),
+    );
+    let n = z0.cross(u);
+    let (foot0, o1, x1) = if n.norm() > 1e-9 {
+        // Closest points of the lines o0 + s z0 and p + t u.
+        let w = o0 - p;
+        let (b, d, e) = (z0.dot(u), z0.dot(&w), u.dot(&w));
+        let den = 1.0 - b * b;
+        let s = (b * e - d) / den;
+        let t = (e - b * d) / den;
+        (o0 + s * z0, p + t * u, n.normalize())
+    } else {
+        // Parallel: the perpendicular from the previous origin.
+        let o1 = p + (o0 - p).dot(u) * u;
+        let r = o1 - o0;
+        let x = if r.norm() > 1e-9 { r.normalize() } else { x0 };
+        (o0, o1, x)
+    };
+    let d = (foot0 - o0).dot(&z0);
+    let a = (o1 - foot0).dot(&x1);
+    let theta = x0.cross(&x1).dot(&z0).atan2(x0.dot(&x1));
+    let alpha = z0.cross(u).dot(&x1).atan2(z0.dot(u));
+    let f = prev.compose(&dh(theta, d, a, alpha));
+    ([theta, d, a, alpha], f)
+}
+
+impl UrdfRobot {
+    /// Reads the URDF at `path`: the chain from the root link to the only leaf link.
+    pub fn load(path: &Path) -> Result<UrdfRobot> {
+        let bad = |msg: String| Error::file(path, "URDF", msg);
+        let source = urdf_rs::read_file(path).map_err(|e| bad(e.to_string()))?;
+        let js = &source.joints;
+        let parents: std::collections::HashSet<&str> =
+            js.iter().map(|j| j.parent.link.as_str()).collect();
+        let leaves: Vec<&str> = js
+            .iter()
+            .map(|j| j.child.link.as_str())
+            .filter(|c| !parents.contains(c))
+            .collect();
+        if leaves.len() != 1 {
+            return Err(bad(format!(
+                "{} leaf links ({}): calbench takes a serial chain to one tip link",
+                leaves.len(),
+                leaves.join(", ")
+            )));
+        }
+        let mut chain = Vec::new();
+        let mut link = leaves[0];
+        while let Some(i) = js.iter().position(|j| j.child.link == link) {
+            if chain.contains(&i) || chain.len() > js.len() {
+                return Err(bad(format!("the joints form a loop at link \"{link}\"")));
+            }
+            chain.push(i);
+            link = js[i].parent.link.as_str();
+        }
+        chain.reverse();
+        // The moving joints' frames and axes at q = 0, in the root frame.
+        let mut w = Frame::identity();
+        let mut lines = Vec::new();
+        let mut joints = Vec::new();
+        for &i in &chain {
+            let j = &js[i];
+            w = w.compose(&origin(j));
+            if let Some(kind) = moving(j).map_err(|e| bad(e.to_string()))? {
+                let a = Vec3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
+                if a.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
+                    return Err(bad(format!("joint \"{}\": zero axis", j.name)));
+                }
+                let scale = if kind == JointType::Prismatic {
+                    1000.0
+                } else {
+                    1.0
+                };
+                let limits = if j.joint_type == urdf_rs::JointType::Continuous {
+                    (-2.0 * std::f64::consts::PI, 2.0 * std::f64::consts::PI)
+                } else {
+                    (j.limit.lower * scale, j.limit.upper * scale)
+                };
+                if limits.0.partial_cmp(&limits.1) != Some(std::cmp::Ordering::Less) {
+                    return Err(bad(format!(
+                        "joint \"{}\": limits [{}, {}] are not an interval",
+                        j.name, j.limit.lower, j.limit.upper
+                    )));
+                }
+                joints.push(Joint { kind, limits });
+                lines.push((w, w.rot * a.normalize()));
+            }
+        }
+        let n = joints.len();
+        if n == 0 {
+            return Err(bad("the chain has no moving joint".into()));
+        }
+        // Frame 0: on the first line, x perpendicular to it.
+        let (w1, u1) = lines[0];
+        let helper = if u1.x.abs() < 0.9 {
+            Vec3::x()
+        } else {
+            Vec3::y()
+        };
+        let x0 = (helper - helper.dot(&u1) * u1).normalize();
+        let base = Frame {
+            rot: crate::numeric::Mat3::from_columns(&[x0, u1.cross(&x0), u1]),
+            pos: w1.pos,
+        };
+        let mut values = vec![0.0; value_count(n)];
+        let mut frame = base;
+        let mut offsets = Vec::with_capacity(n);
+        for k in 0..n {
+            offsets.push(frame.inverse().compose(&lines[k].0));
+            if k + 1 < n {
+                let (wp, u) = lines[k + 1];
+                let (p, f) = next_frame(&frame, &wp.pos, &u);
+                for (c, v) in [Param::Theta(k), Param::D(k), Param::A(k), Param::Alpha(k)]
+                    .into_iter()
+                    .zip(p)
+                {
+                    values[c.index(n)] = v;
+                }
+                frame = f;
+            }
+        }
+        // The tip at q = 0 seen from the last DH frame (= frame n−1 at q = 0).
+        let tool = frame.inverse().compose(&w);
+        let (bx, br) = base.to_xyz_rpy();
+        let (tx, tr) = tool.to_xyz_rpy();
+        for c in 0..3 {
+            values[Param::Base(c).index(n)] = bx[c];
+            values[Param::Base(3 + c).index(n)] = br[c];
+            values[Param::Tool(c).index(n)] = tx[c];
+            values[Param::Tool(3 + c).index(n)] = tr[c];
+        }
+        let robot = Robot {
+            name: source.name.clone(),
+            convention: Convention::Dh,
+            joints,
+            values,
+            units: Units {
+                length: LengthUnit::M,
+                angle: AngleUnit::Rad,
+            },
+            coupling: None,
+            beta_joints: None,
+            link_mass_kg: None,
+        };
+        Ok(UrdfRobot {
+            robot,
+            source,
+            chain,
+            offsets,
+        })
+    }
+
+    /// The source URDF with its joint origins moved so that its FK is `identified`'s (a
+    /// robot with this robot's joints, e.g. the compensated robot of `identify`).
+    pub fn write(&self, identified: &Robot) -> Result<String> {
+        let n = self.robot.dof();
+        let mut out = self.source.clone();
+        // DH frames i−1 at q = 0 (without the tool): the frames of the moving joints.
+        let mut frames = Vec::with_capacity(n);
+        let mut f = identified.base();
+        let v = |p: Param| identified.get(p);
+        for k in 0..n {
+            frames.push(f);
+            f = f.compose(&dh(
+                v(Param::Theta(k)),
+                v(Param::D(k)),
+                v(Param::A(k)),
+                v(Param::Alpha(k)),
+            ));
+        }
+        let tip = f.compose(&identified.tool());
+        let mut w = Frame::identity(); // the source's frames, updated as joints move
+        let mut k = 0;
+        let mut last_fixed = None;
+        for (pos, &i) in self.chain.iter().enumerate() {
+            let j = &mut out.joints[i];
+            if moving(j)?.is_some() {
+                let target = frames[k].compose(&self.offsets[k]);
+                set_origin(j, &w.inverse().compose(&target));
+                w = target;
+                k += 1;
+                last_fixed = None;
+            } else {
+                w = w.compose(&origin(j));
+                if k == n {
+                    last_fixed = Some(pos);
+                }
+            }
+        }
+        // The placement of the tip after the last moving joint.
+        let before_last = match last_fixed {
+            Some(pos) => w.compose(&origin(&out.joints[self.chain[pos]]).inverse()),
+            None => w,
+        };
+        let place = before_last.inverse().compose(&tip);
+        match last_fixed {
+            Some(pos) => set_origin(&mut out.joints[self.chain[pos]], &place),
+            None => {
+                let parent = out.joints[*self.chain.last().unwrap_or(&0)]
+                    .child
+                    .link
+                    .clone();
+                let mini = urdf_rs::read_from_string(&format!(
+                    "<robot name=\"t\"><link name=\"{parent}\"/><link name=\"calbench_tool\"/>\
+                     <joint name=\"calbench_tool\" type=\"fixed\"><parent link=\"{parent}\"/>\
+                     <child link=\"calbench_tool\"/></joint></robot>"
+                ))
+                .map_err(|e| Error::Compute(e.to_string()))?;
+                let mut j = mini.joints[0].clone();
+                set_origin(&mut j, &place);
+                out.links.push(mini.links[1].clone());
+                out.joints.push(j);
+            }
+        }
+        urdf_rs::write_to_string(&out).map_err(|e| Error::Compute(e.to_string()))
+    }
+}
+
+/// Whether `robot` names a URDF file (by its extension).
+pub fn is_urdf(robot: &str) -> bool {
+    Path::new(robot)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+}
+
+/// A URDF of a calbench robot (`identify --export urdf` on a robot file): root link `world`, a
+/// fixed joint `base_placement` to `base_link` (the `[base]` frame), joint i (`joint_i`, child
+/// `link_i`) turning or sliding along the z axis of its frame, whose origin holds what of the
+/// link transforms lies between joints i−1 and i, a fixed joint to `flange` with the rest of the
+/// last link and one to `tcp` with the `[tool]` frame. Lengths in m, angles in rad.
+pub fn robot_to_urdf(robot: &Robot) -> Result<String> {
+    if robot.coupling.is_some() {
+        return Err(Error::setting(
+            "--export",
+            "urdf: a robot with an actuator coupling has no URDF form",
+        ));
+    }
+    let v = |p: Param| robot.get(p);
+    let ry = |b: Real| Frame {
+        rot: crate::numeric::rot_y(b),
+        pos: Vec3::zeros(),
+    };
+    let rz = |t: Real| Frame {
+        rot: rot_z(t),
+        pos: Vec3::zeros(),
+    };
+    let tz = |d: Real| Frame {
+        rot: crate::numeric::Mat3::identity(),
+        pos: Vec3::new(0.0, 0.0, d),
+    };
+    let xa = |alpha: Real, a: Real| Frame {
+        rot: rot_x(alpha),
+        pos: Vec3::new(a, 0.0, 0.0),
+    };
+    let f = |x: Real| {
+        let x = if x == 0.0 { 0.0 } else { x };
+        format!("{x:?}")
+    };
+    let mut s = format!(
+        "<?xml version=\"1.0\"?>\n<robot name=\"{}\">\n  <link name=\"world\"/>\n",
+        robot.name
+    );
+    let joint = |s: &mut String,
+                 name: &str,
+                 kind: &str,
+                 parent: &str,
+                 child: &str,
+                 o: &Frame,
+                 lim: Option<(Real, Real)>| {
+        let r = matrix_rpy(&o.rot);
+        s.push_str(&format!(
+            "  <link name=\"{child}\"/>\n  <joint name=\"{name}\" type=\"{kind}\">\n    <parent link=\"{parent}\"/>\n    <child link=\"{child}\"/>\n    <origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\n",
+            f(o.pos.x / 1000.0), f(o.pos.y / 1000.0), f(o.pos.z / 1000.0), f(r[0]), f(r[1]), f(r[2])
+        ));
+        if let Some((lo, hi)) = lim {
+            s.push_str(&format!(
+                "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n",
+                f(lo),
+                f(hi)
+            ));
+        }
+        s.push_str("  </joint>\n");
+    };
+    joint(
+        &mut s,
+        "base_placement",
+        "fixed",
+        "world",
+        "base_link",
+        &robot.base(),
+        None,
+    );
+    let mut post = Frame::identity();
+    let mut parent = "base_link".to_string();
+    for (k, j) in robot.joints.iter().enumerate() {
+        let (th, d, a, al, be) = (
+            v(Param::Theta(k)),
+            v(Param::D(k)),
+            v(Param::A(k)),
+            v(Param::Alpha(k)),
+            v(Param::Beta(k)),
+        );
+        let rev = j.kind == JointType::Revolute;
+        let (pre, next) = match robot.convention {
+            Convention::Dh | Convention::DhBeta => {
+                let tail = tz(d).compose(&xa(al, a)).compose(&ry(be));
+                if rev {
+                    (Frame::identity(), rz(th).compose(&tail))
+                } else {
+                    (rz(th), tail)
+                }
+            }
+            Convention::Mdh => {
+                let head = xa(al, 0.0).compose(&Frame {
+                    rot: crate::numeric::Mat3::identity(),
+                    pos: Vec3::new(a, 0.0, 0.0),
+                });
+                if rev {
+                    (head.compose(&rz(th)), tz(d).compose(&ry(be)))
+                } else {
+                    (head.compose(&rz(th)).compose(&tz(d)), ry(be))
+                }
+            }
+        };
+        let (kind, scale) = if rev {
+            ("revolute", 1.0)
+        } else {
+            ("prismatic", 1e-3)
+        };
+        let child = format!("link_{}", k + 1);
+        joint(
+            &mut s,
+            &format!("joint_{}", k + 1),
+            kind,
+            &parent,
+            &child,
+            &post.compose(&pre),
+            Some((j.limits.0 * scale, j.limits.1 * scale)),
+        );
+        parent = child;
+        post = next;
+    }
+    joint(
+        &mut s,
+        "flange_fixed",
+        "fixed",
+        &parent,
+        "flange",
+        &post,
+        None,
+    );
+    joint(
+        &mut s,
+        "tool_fixed",
+        "fixed",
+        "flange",
+        "tcp",
+        &robot.tool(),
+        None,
+    );
+    s.push_str("</robot>\n");
+    Ok(s)
+}

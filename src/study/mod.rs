@@ -1,0 +1,466 @@
+//! The Monte-Carlo harness (docs/formats.md `run`): a scenario's trials in parallel with rayon,
+//! each from its own seed, aggregated per method and pose strategy. It returns values; the
+//! files (`summary.json`, `trials.csv`, `report.md`, plots) are written by
+//! [`crate::report::run_study`].
+//!
+//! - [`study`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
+//!   sets);
+//! - [`trial`]: one trial (true robot, measurements, every method's calibration, validation);
+//! - [`stats`]: the aggregation into [`Entry`] values.
+//!
+//! Determinism: trial i draws everything from `rng::trial_seed(seed, i)` and results are
+//! consumed in trial order, so the output is the same whatever the thread count (timing
+//! fields excepted) and whatever the split into shards ([`Shard`]).
+//!
+//! Memory: trials run in chunks of [`CHUNK`]; each chunk's results go to a [`TrialSink`]
+//! (the `trials.csv` writer, a shard's record file) and into a streaming
+//! [`stats::Accumulator`], then are dropped, so a run holds a chunk of trials plus the
+//! accumulators' compact per-trial numbers, not the trials themselves.
+
+pub mod plan;
+pub mod registration_study;
+pub mod scenario;
+pub mod stats;
+pub mod trial;
+
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+use crate::study::scenario::Scenario;
+pub use plan::Study;
+pub use stats::{Accumulator, Entry};
+pub use trial::{run_trial, TrialResult};
+
+/// Trials run in parallel at a time: their results are handed on, in order, and dropped.
+pub const CHUNK: usize = 256;
+
+/// A share of a run's work (`calbench run --shard I/N`): the work units (sweep point ×
+/// trial, in run order) from ⌊I·W/N⌋ to ⌊(I+1)·W/N⌋ of the W in all, so the N shards cover
+/// every unit once, in contiguous runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// I, from 0.
+    pub index: usize,
+    /// N.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Parses `I/N` (0 ≤ I < N).
+    pub fn parse(text: &str) -> Result<Shard> {
+        let bad = || {
+            Error::setting(
+                "--shard",
+                format!("\"{text}\" is not I/N with 0 ≤ I < N (e.g. 0/8)"),
+            )
+        };
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let (index, count): (usize, usize) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+
+    /// The work units `[start, end)` of this shard out of `total`.
+    pub fn range(&self, total: u64) -> (u64, u64) {
+        let at = |i: usize| (total as u128 * i as u128 / self.count as u128) as u64;
+        (at(self.index), at(self.index + 1))
+    }
+}
+
+/// Options of a run from the command line.
+#[derive(Clone, Debug, Default)]
+pub struct RunOptions {
+    /// Worker threads (`None`: rayon's default, one per core).
+    pub threads: Option<usize>,
+    /// Output folder (`None`: `results/<name>/`).
+    pub out: Option<PathBuf>,
+    /// Show a progress bar (only drawn when stderr is a terminal).
+    pub progress: bool,
+    /// Run only this share of the work.
+    pub shard: Option<Shard>,
+}
+
+/// A fixed calibration pose set as the reports show it.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct FixedInfo {
+    /// Poses in the set.
+    pub poses: usize,
+    /// The optimiser's objective per iteration.
+    pub trace: Vec<Real>,
+    /// The optimiser's scores of the set.
+    pub scores: Option<serde_json::Value>,
+}
+
+/// What the reports need of a block's prepared study (kept once the study is dropped, and
+/// carried by shards to the merge).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BlockInfo {
+    /// The block's place in the run (sweep point index; 0 without a sweep).
+    pub index: usize,
+    /// The sweep point: one value per axis.
+    pub point: Option<Vec<toml::Value>>,
+    /// The robot's name.
+    pub robot: String,
+    /// Full-pose (rather than position) measurement.
+    pub full_pose: bool,
+    /// The identified parameters.
+    pub params: Vec<String>,
+    /// The parameters carrying injected errors.
+    pub error_params: Vec<String>,
+    /// Method labels.
+    pub methods: Vec<String>,
+    /// Strategy names.
+    pub strategies: Vec<String>,
+    /// Per strategy: the fixed pose set, if any.
+    pub fixed: Vec<Option<FixedInfo>>,
+    /// Guo's separation report (`calibration.separate`), if any.
+    pub separation: Option<serde_json::Value>,
+    /// The simulated arm's joint compliances (name → rad/(N·m)), when it sags.
+    #[serde(default)]
+    pub true_compliance: Option<serde_json::Value>,
+}
+
+impl BlockInfo {
+    /// The reports' view of `study`, block `index` at sweep `point`.
+    pub fn of(study: &Study, index: usize, point: Option<Vec<toml::Value>>) -> BlockInfo {
+        let sc = &study.scenario;
+        BlockInfo {
+            index,
+            point,
+            robot: study.nominal.name.clone(),
+            full_pose: study.measure == crate::measurement::Measure::Pose,
+            params: study.params.iter().map(|p| p.to_string()).collect(),
+            error_params: study.error_params.iter().map(|p| p.to_string()).collect(),
+            methods: sc.methods.iter().map(|m| m.label.clone()).collect(),
+            strategies: sc
+                .calibration
+                .strategies
+                .iter()
+                .map(|s| s.name().to_string())
+                .collect(),
+            fixed: study
+                .fixed
+                .iter()
+                .map(|f| {
+                    f.as_ref().map(|f| FixedInfo {
+                        poses: f.poses.len(),
+                        trace: f.trace.clone(),
+                        scores: f.scores.clone(),
+                    })
+                })
+                .collect(),
+            separation: study.separation.as_ref().map(|s| s.to_json()),
+            true_compliance: study.true_compliance_json(),
+        }
+    }
+}
+
+/// What trial 0 of a block keeps for the plots and `summary.json`.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+pub struct Trial0 {
+    /// The first outcome's validation errors per point, before and after, with its
+    /// (strategy, method).
+    pub per_point: Option<(usize, usize, Vec<Real>, Vec<Real>)>,
+    /// The same outcome's attitude errors per point (Qiao's, deg), before and after, for
+    /// full-pose data.
+    #[serde(default)]
+    pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
+    /// The metaheuristics' best fitness per iteration: (strategy, method, trace).
+    pub traces: Vec<(usize, usize, Vec<Real>)>,
+}
+
+impl Trial0 {
+    fn of(t: &TrialResult) -> Trial0 {
+        Trial0 {
+            per_point: t.outcomes.first().and_then(|o| {
+                o.per_point
+                    .as_ref()
+                    .map(|(b, a)| (o.strategy, o.method, b.clone(), a.clone()))
+            }),
+            per_point_attitude_deg: t
+                .outcomes
+                .first()
+                .and_then(|o| o.per_point_attitude_deg.clone()),
+            traces: t
+                .outcomes
+                .iter()
+                .filter_map(|o| {
+                    o.trace
+                        .as_ref()
+                        .map(|tr| (o.strategy, o.method, tr.clone()))
+                })
+                .collect(),
+        }
+    }
+}
+
+/// The results of one sweep point (or of the whole study without a sweep).
+pub struct Block {
+    /// The reports' view of the block's study.
+    pub info: BlockInfo,
+    /// One entry per strategy × method.
+    pub entries: Vec<Entry>,
+    /// Trial 0's per-point errors and traces, when this run had trial 0.
+    pub trial0: Option<Trial0>,
+    /// Block 0 only: each trial's validation RMS after compensation, per strategy × method
+    /// (the box plot).
+    pub after_rms: Vec<Vec<Real>>,
+}
+
+/// Everything a run produced.
+pub struct RunResult {
+    /// The scenario as run.
+    pub scenario: Scenario,
+    /// One block per sweep point this run covered, in order.
+    pub blocks: Vec<Block>,
+    /// The output folder.
+    pub out: PathBuf,
+    /// Wall time of the whole run (s).
+    pub seconds: f64,
+    /// The share of the work run, if not all.
+    pub shard: Option<Shard>,
+}
+
+/// Where each trial goes once it has run, in trial order (per block, blocks in order).
+pub trait TrialSink {
+    /// Takes trial `t` of the block described by `info`.
+    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()>;
+}
+
+/// A sink that keeps nothing.
+impl TrialSink for () {
+    fn trial(&mut self, _: &BlockInfo, _: &TrialResult) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// Gathers trials, in order, into blocks: the streaming aggregation shared by `run` and
+/// `merge`, so a merged result is the same bytes as an unsharded one.
+pub struct Collector {
+    blocks: Vec<Collecting>,
+}
+
+/// One block being collected: its view, its statistics, trial 0's details and the per-trial
+/// CRB traces.
+type Collecting = (BlockInfo, Accumulator, Option<Trial0>, Vec<Vec<Real>>);
+
+impl Collector {
+    /// An empty collector.
+    pub fn new() -> Collector {
+        Collector { blocks: Vec::new() }
+    }
+
+    /// Starts the block `info` (blocks come in order).
+    pub fn begin(&mut self, info: BlockInfo, trial0: Option<Trial0>) {
+        let acc = Accumulator::new(&info.params, info.strategies.len(), info.methods.len());
+        let cells = if info.index == 0 {
+            vec![Vec::new(); info.strategies.len() * info.methods.len()]
+        } else {
+            Vec::new()
+        };
+        self.blocks.push((info, acc, trial0, cells));
+    }
+
+    /// Adds trial `t` to the current block and hands it to `sink`.
+    pub fn trial(&mut self, t: &TrialResult, sink: &mut dyn TrialSink) -> Result<()> {
+        let (info, acc, trial0, rms) = self
+            .blocks
+            .last_mut()
+            .ok_or_else(|| Error::Compute("a trial before its block".into()))?;
+        acc.push(t);
+        if t.index == 0 && trial0.is_none() {
+            *trial0 = Some(Trial0::of(t));
+        }
+        if !rms.is_empty() {
+            for o in &t.outcomes {
+                rms[o.strategy * info.methods.len() + o.method].push(o.after_mm.rms);
+            }
+        }
+        sink.trial(info, t)
+    }
+
+    /// The blocks, with their entries.
+    pub fn finish(self, sweep: Option<&crate::study::scenario::Sweep>) -> Vec<Block> {
+        self.blocks
+            .into_iter()
+            .map(|(info, acc, trial0, after_rms)| {
+                let (value, map) = match (sweep, &info.point) {
+                    (Some(sw), Some(p)) => {
+                        let json: Vec<serde_json::Value> = p.iter().map(toml_to_json).collect();
+                        let map: BTreeMap<String, serde_json::Value> = sw
+                            .axes
+                            .iter()
+                            .map(|a| a.key.clone())
+                            .zip(json.iter().cloned())
+                            .collect();
+                        let value = if json.len() == 1 {
+                            json[0].clone()
+                        } else {
+                            serde_json::Value::Array(json)
+                        };
+                        (Some(value), Some(map))
+                    }
+                    _ => (None, None),
+                };
+                let mut entries = Vec::new();
+                for (si, s) in info.strategies.iter().enumerate() {
+                    for (mi, m) in info.methods.iter().enumerate() {
+                        entries.push(acc.entry(si, mi, (m, s), value.clone(), map.clone()));
+                    }
+                }
+                Block {
+                    info,
+                    entries,
+                    trial0,
+                    after_rms,
+                }
+            })
+            .collect()
+    }
+}
+
+impl Default for Collector {
+    fn default() -> Self {
+        Collector::new()
+    }
+}
+
+/// Converts a TOML value to JSON (sweep values in `summary.json`).
+pub fn toml_to_json(v: &toml::Value) -> serde_json::Value {
+    serde_json::to_value(v).unwrap_or(serde_json::Value::Null)
+}
+
+/// Runs trials `range` of a prepared study on `pool`, a chunk at a time, handing each
+/// chunk's results in order to `each`.
+pub fn run_trials(
+    study: &Study,
+    range: std::ops::Range<usize>,
+    pool: &rayon::ThreadPool,
+    bar: &ProgressBar,
+    each: &mut dyn FnMut(TrialResult) -> Result<()>,
+) -> Result<()> {
+    let mut start = range.start;
+    while start < range.end {
+        let end = (start + CHUNK).min(range.end);
+        let chunk: Vec<TrialResult> = pool.install(|| {
+            (start..end)
+                .into_par_iter()
+                .map(|i| {
+                    let r = run_trial(study, i);
+                    bar.inc(1);
+                    r
+                })
+                .collect::<Result<_>>()
+        })?;
+        for t in chunk {
+            each(t)?;
+        }
+        start = end;
+    }
+    Ok(())
+}
+
+/// Runs `scenario` (every sweep point, every trial; with `opts.shard` only its share) and
+/// returns the aggregated results; every trial goes to `sink` in order as it finishes.
+pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> Result<RunResult> {
+    let t0 = std::time::Instant::now();
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    let plans = scenario.sweep_plans()?;
+    let trials = scenario.trials as u64;
+    let total = plans.len() as u64 * trials;
+    let (first, last) = opts.shard.map_or((0, total), |s| s.range(total));
+    let bar = if opts.progress && std::io::stderr().is_terminal() {
+        let b = ProgressBar::new(last - first);
+        if let Ok(style) = ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials ({per_sec}, {eta} left) {msg}",
+        ) {
+            b.set_style(style);
+        }
+        b
+    } else {
+        ProgressBar::hidden()
+    };
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = opts.threads {
+        builder = builder.num_threads(t);
+    }
+    let pool = builder
+        .build()
+        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))?;
+    let mut collector = Collector::new();
+    for (b, (point, plan)) in plans.into_iter().enumerate() {
+        let (lo, hi) = (b as u64 * trials, (b as u64 + 1) * trials);
+        let (from, to) = (first.max(lo), last.min(hi));
+        if from >= to {
+            continue;
+        }
+        if let (Some(p), Some(sw)) = (&point, &scenario.sweep) {
+            let shown: Vec<String> = sw
+                .axes
+                .iter()
+                .zip(p)
+                .map(|(a, v)| format!("{} = {v}", a.key))
+                .collect();
+            bar.set_message(shown.join(", "));
+        }
+        let study = pool.install(|| Study::new(plan))?;
+        collector.begin(BlockInfo::of(&study, b, point), None);
+        let range = (from - lo) as usize..(to - lo) as usize;
+        run_trials(&study, range, &pool, &bar, &mut |t| {
+            collector.trial(&t, sink)
+        })?;
+    }
+    bar.finish_and_clear();
+    let blocks = collector.finish(scenario.sweep.as_ref());
+    Ok(RunResult {
+        scenario,
+        blocks,
+        out,
+        seconds: t0.elapsed().as_secs_f64(),
+        shard: opts.shard,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_cover_every_unit_once_in_order() {
+        for total in [0u64, 1, 7, 20, 1001] {
+            for n in [1usize, 3, 7, 40] {
+                let mut next = 0;
+                for i in 0..n {
+                    let (a, b) = Shard { index: i, count: n }.range(total);
+                    assert_eq!(a, next);
+                    assert!(b >= a);
+                    next = b;
+                }
+                assert_eq!(next, total);
+            }
+        }
+    }
+
+    #[test]
+    fn shard_text_is_checked() {
+        assert_eq!(Shard::parse("2/7").unwrap(), Shard { index: 2, count: 7 });
+        for bad in ["7/7", "1/0", "a/3", "3", "-1/3"] {
+            assert!(Shard::parse(bad).is_err(), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,433 @@
+//! A study prepared for its trials: everything that depends only on the scenario and the
+//! nominal robot — the identified parameter set, the tracker, the compliance model and the
+//! optimised pose sets — computed once (docs/formats.md `run`; Guo 2024 §3 for the optimised sets).
+
+use crate::error::{Error, Result};
+use crate::measurement::Measure;
+use crate::numeric::rng;
+use crate::numeric::{Frame, Real};
+use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
+use crate::robot::identifiability::identifiable_generic;
+use crate::robot::jacobian::{jacobian, Columns};
+use crate::robot::param_sets::{ends, full_params, identified_params, optimisable};
+use crate::robot::{Param, Robot};
+use crate::sim::poses::{read_pose_list, sample_region};
+use crate::sim::sag::Compliance;
+use crate::sim::settings::{ErrorKind, ParamSelection, Region};
+use crate::sim::tracker::Tracker;
+use crate::sim::truth::{draw_errors, selected_params};
+use crate::sim::SagFn;
+use crate::study::scenario::{PoseStrategy, Registration, Scenario};
+use nalgebra::DMatrix;
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+/// A calibration pose set fixed for the whole study (optimised, grid or file).
+#[derive(Clone, Debug)]
+pub struct FixedSet {
+    /// Joint values (internal units).
+    pub poses: Vec<Vec<Real>>,
+    /// The optimiser's objective per iteration (empty when not optimised).
+    pub trace: Vec<Real>,
+    /// The optimiser's scores of the chosen set, as JSON (empty for grid and file sets).
+    pub scores: Option<serde_json::Value>,
+    /// The Cramér–Rao trace of the set (the same in every trial; `None` without noise).
+    pub crb_trace: Option<Real>,
+    /// The true arm's deflected tool frames at the set's measured rows, when they are the
+    /// same in every trial (see [`SagMemo`]).
+    pub sag: Option<Arc<SagMemo>>,
+}
+
+impl FixedSet {
+    /// A set that is not optimised (grid, file): no trace, no scores; the Cramér–Rao trace
+    /// and the sag are filled in by [`Study::new`].
+    pub fn plain(poses: Vec<Vec<Real>>) -> FixedSet {
+        FixedSet {
+            poses,
+            trace: Vec::new(),
+            scores: None,
+            crb_trace: None,
+            sag: None,
+        }
+    }
+}
+
+/// Deflected tool frames of the true arm, computed once: with a fixed pose set, a true robot
+/// that is the same in every trial (errors `paper` or `none`) and a sag model, every trial
+/// would otherwise run the same rapier settles again (a third of the default study's time).
+/// The sag model is a pure function of the robot, the joint values and the payload, so a
+/// frame served from here is the one the trial would compute.
+#[derive(Debug)]
+pub struct SagMemo {
+    /// The true robot's parameter values the frames belong to.
+    values: Vec<Real>,
+    /// Frames by the bits of the joint values and of the payload.
+    frames: HashMap<(Vec<u64>, Option<u64>), Frame>,
+}
+
+impl SagMemo {
+    /// Computes the deflected frames of `robot` at `rows` (joint values, payload) with
+    /// `sag`, on rayon (in order, so the result does not depend on the thread count).
+    pub fn new(robot: &Robot, rows: &[(Vec<Real>, Option<Real>)], sag: &SagFn) -> Result<SagMemo> {
+        let frames: Vec<Frame> = rows
+            .par_iter()
+            .map(|(q, load)| sag(robot, q, *load))
+            .collect::<Result<_>>()?;
+        Ok(SagMemo {
+            values: robot.values.clone(),
+            frames: rows
+                .iter()
+                .zip(frames)
+                .map(|((q, load), f)| (Self::key(q, *load), f))
+                .collect(),
+        })
+    }
+
+    fn key(q: &[Real], load: Option<Real>) -> (Vec<u64>, Option<u64>) {
+        (
+            q.iter().map(|v| v.to_bits()).collect(),
+            load.map(Real::to_bits),
+        )
+    }
+
+    /// The frame of `robot` at `q` under `load`, if computed here (same robot values, same
+    /// joint values and payload, bit for bit).
+    pub fn get(&self, robot: &Robot, q: &[Real], load: Option<Real>) -> Option<Frame> {
+        let same = robot.values.len() == self.values.len()
+            && robot
+                .values
+                .iter()
+                .zip(&self.values)
+                .all(|(a, b)| a.to_bits() == b.to_bits());
+        if !same {
+            return None;
+        }
+        self.frames.get(&Self::key(q, load)).copied()
+    }
+}
+
+/// A scenario made ready to run.
+pub struct Study {
+    /// The checked scenario.
+    pub scenario: Scenario,
+    /// The nominal robot.
+    pub nominal: Robot,
+    /// Position or full pose.
+    pub measure: Measure,
+    /// The parameters identified (identifiable ones of the joint, tool and — when the
+    /// registration is identified — base parameters).
+    pub params: Vec<Param>,
+    /// The parameters that carry injected errors.
+    pub error_params: Vec<Param>,
+    /// The identified parameters that the data cannot determine (pivoted QR over generic
+    /// poses): empty unless `identification.params` names such parameters, which only the
+    /// methods that tolerate rank deficiency identify.
+    pub undetermined: Vec<Param>,
+    /// The simulated tracker.
+    pub tracker: Tracker,
+    /// Gravity sag, if modelled.
+    pub compliance: Option<Compliance>,
+    /// Per calibration strategy: the fixed pose set, or `None` when drawn per trial.
+    pub fixed: Vec<Option<FixedSet>>,
+    /// The ill-conditioned parameter separation (Guo 2024 §3.1) of the first optimised
+    /// strategy's candidate pool, when `calibration.separate` is set.
+    pub separation: Option<Separation>,
+}
+
+/// The separated model (Guo 2024 §3.1, eq. 27) as the pose optimisers use it: the joint
+/// parameters that the ill-conditioned parameter separation keeps over the poses `pool`, with
+/// the base and tool parameters of [`identified_params`], reduced to those pivoted QR finds
+/// identifiable ([`optimisable`]), in flat-vector order; and the separation itself.
+pub fn separated_params(
+    robot: &Robot,
+    measure: Measure,
+    with_base: bool,
+    pool: &[Vec<Real>],
+    threshold: Real,
+) -> (Vec<Param>, Separation) {
+    let sep = poses::separate(robot, &robot.joint_params(), pool, measure, threshold);
+    let mut v = sep.kept.clone();
+    v.extend(ends(&identified_params(robot, measure, with_base)));
+    (optimisable(robot, &v, measure), sep)
+}
+
+/// The parameters `scenario` identifies (`identification.params`): [`identified_params`],
+/// [`full_params`] or the listed names in flat-vector order. A list the data cannot all
+/// determine is refused when a method of the scenario needs full rank
+/// ([`crate::identify::Method::tolerates_rank_deficiency`]), naming the method and the
+/// undetermined parameters. Also returns the parameters that pivoted QR leaves over (empty
+/// for `"identifiable"`).
+pub fn study_params(
+    scenario: &Scenario,
+    robot: &Robot,
+    measure: Measure,
+) -> Result<(Vec<Param>, Vec<Param>)> {
+    let with_base = scenario.registration == Registration::Identify;
+    let mut params = match &scenario.identification.params {
+        ParamSelection::Identifiable => {
+            return Ok((identified_params(robot, measure, with_base), Vec::new()))
+        }
+        ParamSelection::All => full_params(robot, measure, with_base),
+        ParamSelection::List(names) => names.iter().filter_map(|n| Param::parse(n)).collect(),
+    };
+    params.sort_by_key(|p| p.index(robot.dof()));
+    let determined = identifiable_generic(robot, &params, measure);
+    let undetermined: Vec<Param> = params
+        .iter()
+        .copied()
+        .filter(|p| !determined.contains(p))
+        .collect();
+    if !undetermined.is_empty() {
+        if let Some(m) = scenario
+            .methods
+            .iter()
+            .find(|m| !m.method.tolerates_rank_deficiency())
+        {
+            let undetermined: Vec<String> = undetermined.iter().map(|p| p.to_string()).collect();
+            let msg =
+                format!(
+                "method \"{}\" needs parameters the data determine, but {} of these {} are not \
+                 identifiable from {} data (pivoted QR leaves over {}); use a method that \
+                 tolerates rank deficiency (lm, ridge, igg3), or params = \"identifiable\"",
+                m.label,
+                undetermined.len(),
+                params.len(),
+                if measure == Measure::Pose { "full-pose" } else { "position" },
+                undetermined.join(", ")
+            );
+            return Err(match &scenario.path {
+                Some(p) => Error::file(p, "identification.params", msg),
+                None => Error::setting("identification.params", msg),
+            });
+        }
+    }
+    Ok((params, undetermined))
+}
+
+impl Study {
+    /// The payload (kg) of the validation poses: `validation.payload_kg`, else the
+    /// compliance section's payload.
+    pub fn validation_payload(&self) -> Real {
+        let sc = &self.scenario;
+        sc.validation.payload_kg.unwrap_or(sc.compliance.payload_kg)
+    }
+
+    /// The true joint compliances of the simulated arm (rad/(N·m), [`Param::Compliance`]):
+    /// `1/k_j` of the sag model's stiffness for every revolute joint; empty without sag.
+    pub fn true_compliances(&self) -> Vec<(Param, Real)> {
+        self.compliance
+            .as_ref()
+            .map(|c| c.true_compliances(&self.nominal))
+            .unwrap_or_default()
+    }
+
+    /// [`Study::true_compliances`] as JSON (`summary.json` and `truth.json` key
+    /// `true_compliance`: name → rad/(N·m)); `None` without sag.
+    pub fn true_compliance_json(&self) -> Option<serde_json::Value> {
+        self.compliance.as_ref()?;
+        Some(serde_json::Value::Object(
+            self.true_compliances()
+                .into_iter()
+                .map(|(p, c)| (p.to_string(), serde_json::json!(c)))
+                .collect(),
+        ))
+    }
+
+    /// Prepares `scenario`: loads the robot, picks the parameters, builds the tracker and the
+    /// compliance model, and optimises the fixed pose sets.
+    pub fn new(scenario: Scenario) -> Result<Study> {
+        let nominal = scenario.robot()?;
+        let measure = scenario.tracker.measure.measure();
+        let with_base = scenario.registration == Registration::Identify;
+        let (mut params, undetermined) = study_params(&scenario, &nominal, measure)?;
+        // The kinematic parameters: what the pose optimisers and the Cramér–Rao bound see.
+        let kinematic = params.clone();
+        params.extend(
+            scenario
+                .identification
+                .compliance
+                .params(&nominal, "identification.compliance")?,
+        );
+        let error_params = match (&scenario.errors.kind, scenario.errors.selection()) {
+            (ErrorKind::None, _) => Vec::new(),
+            (_, ParamSelection::Identifiable) => identified_params(&nominal, measure, with_base)
+                .iter()
+                .copied()
+                .filter(|p| !matches!(p, Param::Base(_)))
+                .collect(),
+            (_, sel) => selected_params(&nominal, &sel, measure, scenario.errors.key())?,
+        };
+        let tracker = Tracker::new(&scenario.tracker)?;
+        let compliance = Compliance::new(&scenario.compliance, &nominal, scenario.builtin())?;
+
+        let mut fixed = Vec::new();
+        let mut separation = None;
+        for (i, s) in scenario.calibration.strategies.iter().enumerate() {
+            let c = &scenario.calibration;
+            let set = match s {
+                PoseStrategy::Random | PoseStrategy::Box => None,
+                PoseStrategy::File(path) => {
+                    let poses = read_pose_list(path, &nominal)?;
+                    Some(FixedSet::plain(poses))
+                }
+                PoseStrategy::Grid => {
+                    let dof = nominal.dof() as f64;
+                    let per_joint = ((c.count as f64).powf(1.0 / dof).ceil() as usize).max(2);
+                    let mut g = rng::stream(scenario.seed, "grid");
+                    let mut poses =
+                        sample_region(&nominal, &Region::Grid { per_joint }, c.count, &mut g)?;
+                    poses.truncate(c.count);
+                    Some(FixedSet::plain(poses))
+                }
+                PoseStrategy::Optimised(strategy) | PoseStrategy::OptimisedFull(strategy) => {
+                    let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));
+                    let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
+                    let opt_params = if matches!(s, PoseStrategy::OptimisedFull(_)) {
+                        optimisable(
+                            &nominal,
+                            &full_params(&nominal, measure, with_base),
+                            measure,
+                        )
+                    } else if c.separate {
+                        let (kept, sep) = separated_params(
+                            &nominal,
+                            measure,
+                            with_base,
+                            &pool,
+                            c.separate_threshold,
+                        );
+                        separation.get_or_insert(sep);
+                        kept
+                    } else {
+                        kinematic.clone()
+                    };
+                    let model = RobotPoseModel::new(&nominal, &opt_params, measure);
+                    let mut opts = SelectOptions::new(c.count);
+                    opts.objective = c.objective;
+                    let sel = poses::select(&model, &pool, *strategy, &opts, &mut g)?;
+                    Some(FixedSet {
+                        poses: sel.poses,
+                        trace: sel.trace,
+                        scores: serde_json::to_value(sel.scores).ok(),
+                        crb_trace: None,
+                        sag: None,
+                    })
+                }
+            };
+            fixed.push(set);
+        }
+        let mut study = Study {
+            scenario,
+            nominal,
+            measure,
+            params,
+            error_params,
+            undetermined,
+            tracker,
+            compliance,
+            fixed,
+            separation,
+        };
+        let traces: Vec<Option<Real>> = study
+            .fixed
+            .iter()
+            .map(|f| f.as_ref().and_then(|f| crb_trace(&study, &f.poses)))
+            .collect();
+        for (f, t) in study.fixed.iter_mut().zip(traces) {
+            if let Some(f) = f {
+                f.crb_trace = t;
+            }
+        }
+        if let (true, Some(sag)) = (study.scenario.errors.kind.is_fixed(), sag_fn(&study)) {
+            let (_, truth) = true_robot(&study, 0);
+            let memos: Vec<Option<Arc<SagMemo>>> = study
+                .fixed
+                .iter()
+                .map(|f| {
+                    f.as_ref()
+                        .map(|f| {
+                            let rows = calibration_rows(&study.scenario, &f.poses);
+                            SagMemo::new(&truth, &rows, &*sag).map(Arc::new)
+                        })
+                        .transpose()
+                })
+                .collect::<Result<_>>()?;
+            for (f, m) in study.fixed.iter_mut().zip(memos) {
+                if let Some(f) = f {
+                    f.sag = m;
+                }
+            }
+        }
+        Ok(study)
+    }
+}
+
+/// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
+/// base frame, with the nominal Jacobian), or `None` without noise, and for an
+/// elasto-geometric model (its bound would need each pose's payload and torques).
+pub fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
+    if study.params.iter().any(|p| p.is_compliance()) {
+        return None;
+    }
+    let cols = Columns::new(&study.params, study.nominal.dof());
+    let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
+    let rows = study.measure.rows();
+    let chain = study.nominal.chain();
+    let tracker_at = study.tracker.frame().pos;
+    for (i, q) in qs.iter().enumerate() {
+        let range = (chain.fk(q).pos - tracker_at).norm();
+        let s = study.tracker.sigma_mm(range);
+        if s <= 0.0 {
+            return None;
+        }
+        let mut block = j.rows_mut(rows * i, 3);
+        block /= s;
+        if rows == 6 {
+            let sa = study.scenario.tracker.angle_noise_deg.to_radians();
+            if sa <= 0.0 {
+                return None;
+            }
+            let mut b = j.rows_mut(rows * i + 3, 3);
+            b /= sa;
+        }
+    }
+    let n: DMatrix<Real> = j.transpose() * &j;
+    n.try_inverse()
+        .map(|inv| inv.trace())
+        .filter(|t| t.is_finite())
+}
+
+/// The injected errors and the true robot of trial `index`.
+pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
+    let seed = rng::trial_seed(study.scenario.seed, index as u64);
+    let errors = draw_errors(
+        &study.error_params,
+        &study.scenario.errors,
+        &mut rng::stream(seed, "errors"),
+    );
+    let robot = study.nominal.with_errors(&errors);
+    (errors, robot)
+}
+
+/// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.
+pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
+    study.compliance.clone().map(|c| {
+        Box::new(move |r: &Robot, q: &[Real], payload: Option<Real>| {
+            c.deflected_under(r, &r.chain(), q, payload.unwrap_or(c.payload_kg()))
+        }) as Box<SagFn>
+    })
+}
+
+/// The rows [`super::trial::measure_calibration`] measures for the poses `qs`: each pose with the payload
+/// its row passes to the sag model (`None` without `calibration.payloads_kg`), in the same
+/// order.
+pub fn calibration_rows(sc: &Scenario, qs: &[Vec<Real>]) -> Vec<(Vec<Real>, Option<Real>)> {
+    match &sc.calibration.payloads_kg {
+        None => qs.iter().map(|q| (q.clone(), None)).collect(),
+        Some(p) => p
+            .iter()
+            .flat_map(|&w| qs.iter().map(move |q| (q.clone(), Some(w))))
+            .collect(),
+    }
+}

@@ -1,0 +1,350 @@
+//! The registration study of Ban §3 (fig. 3): SVD against Ban's weighted SVD
+//! ([`super::registration`], eqs. 12–25) on point sets with gross errors, over a grid of
+//! outlier counts × outlier magnitude ranges. A scenario holding a `[registration_study]`
+//! table (docs/formats.md) runs it with `calbench run`.
+//!
+//! Each draw (one per trial, seed `trial_seed(seed, t)`): `points` base points uniform in the
+//! box `center_mm ± size_mm / 2`, seen from the tracker at `tracker_pose` (as in a scenario's
+//! `[tracker]`); every coordinate of the measured points gets uniform noise in
+//! `±noise_mm` (Ban: "0–0.02 mm random error in x, y, z"). The base points and the noise are
+//! shared by every cell of the grid (common random numbers: the cells differ only in their
+//! gross errors); each cell then displaces `count` points chosen at random by a magnitude
+//! uniform in `[0, m]` mm along a random direction ([`crate::sim::add_outliers`]). Both
+//! registrations are fitted to the same data, and each one's registration error is the mean
+//! distance of the registered noise-free points from the base points (Ban's mean absolute
+//! error of the transformed point set). Fig. 3 plots the difference SVD − weighted SVD.
+//!
+//! Draws run in parallel; sums are taken in trial order, so the output depends on the seed
+//! alone, not on the thread count.
+
+use rand::Rng as _;
+use rayon::prelude::*;
+use serde::Deserialize;
+
+use crate::calibrate::registration::{register_svd, register_wsvd, Registration};
+use crate::error::{finite_non_negative, finite_positive, Error, Result};
+use crate::numeric::rng;
+use crate::numeric::{Frame, Real, Vec3};
+
+/// The `[registration_study]` table. Defaults are Ban §3's simulation: 50 points, ±0.02 mm
+/// noise, 2, 4, …, 16 gross errors of 0–0.2 … 0–1 mm, in Ban's 800 mm cube.
+#[derive(Clone, Debug, PartialEq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RegistrationStudy {
+    /// Points per set. Default 50.
+    pub points: usize,
+    /// Half-width of the uniform noise on each coordinate, mm. Default 0.02.
+    pub noise_mm: Real,
+    /// Numbers of points given a gross error (rows of the grid). Default 2, 4, …, 16.
+    pub outlier_counts: Vec<usize>,
+    /// Upper ends of the gross errors' magnitude ranges `[0, m]`, mm (columns of the grid).
+    /// Default 0.2, 0.4, 0.6, 0.8, 1.0.
+    pub magnitude_mm: Vec<Real>,
+    /// Centre of the box the points are drawn in, base frame, mm. Default (1000, 0, 900).
+    pub center_mm: [Real; 3],
+    /// Edge lengths of that box, mm. Default 800 mm each (Ban's cube).
+    pub size_mm: [Real; 3],
+    /// The tracker frame in the base frame: x, y, z mm; rx, ry, rz deg (fixed X-Y-Z), as
+    /// `tracker.pose` of a scenario. Default (2500, 0, 500, 0, 0, 180).
+    pub tracker_pose: [Real; 6],
+}
+
+impl Default for RegistrationStudy {
+    fn default() -> Self {
+        RegistrationStudy {
+            points: 50,
+            noise_mm: 0.02,
+            outlier_counts: (1..=8).map(|i| 2 * i).collect(),
+            magnitude_mm: vec![0.2, 0.4, 0.6, 0.8, 1.0],
+            center_mm: [1000.0, 0.0, 900.0],
+            size_mm: [800.0; 3],
+            tracker_pose: [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0],
+        }
+    }
+}
+
+/// A scenario file running the registration study: `name`, `description`, `seed`,
+/// `trials` (draws per cell) as in every scenario, and the `[registration_study]` table.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RegistrationScenario {
+    /// Name (the default output folder `results/<name>/`).
+    pub name: String,
+    /// What the study asks.
+    #[serde(default)]
+    pub description: String,
+    /// Master seed; draw t uses `trial_seed(seed, t)`.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Draws per cell of the grid.
+    #[serde(default = "default_trials")]
+    pub trials: usize,
+    /// The study's settings.
+    pub registration_study: RegistrationStudy,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+fn default_trials() -> usize {
+    100
+}
+
+impl RegistrationScenario {
+    /// True when a scenario file's table asks for the registration study.
+    pub fn is_one(table: &toml::Table) -> bool {
+        table.contains_key("registration_study")
+    }
+
+    /// Parses and checks the scenario in `table`, read from `path` (named in errors).
+    pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
+        let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+        let s: RegistrationScenario =
+            toml::Value::Table(table)
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    ferr(
+                        "scenario",
+                        format!(
+                            "{} (a scenario with [registration_study] takes only name, \
+                         description, seed, trials and that table)",
+                            e.to_string().trim_end()
+                        ),
+                    )
+                })?;
+        if s.name.trim().is_empty() || s.name.contains(['/', '\\']) {
+            return Err(ferr(
+                "name",
+                "must be a non-empty name without slashes".into(),
+            ));
+        }
+        if s.trials == 0 || s.trials > crate::study::scenario::MAX_TRIALS {
+            return Err(ferr(
+                "trials",
+                format!(
+                    "must be between 1 and {}, got {}",
+                    crate::study::scenario::MAX_TRIALS,
+                    s.trials
+                ),
+            ));
+        }
+        s.registration_study
+            .check()
+            .map_err(|e| ferr("setting", e.to_string()))?;
+        Ok(s)
+    }
+}
+
+/// One cell of the grid: means over the draws.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Cell {
+    /// Points with a gross error.
+    pub outlier_count: usize,
+    /// Upper end of the magnitude range, mm.
+    pub magnitude_mm: Real,
+    /// Mean registration error of the SVD, mm.
+    pub svd_mm: Real,
+    /// Mean registration error of the weighted SVD, mm.
+    pub wsvd_mm: Real,
+    /// `svd_mm − wsvd_mm` (Ban fig. 3), mm.
+    pub difference_mm: Real,
+    /// Share of the draws in which the weighted SVD was the better of the two.
+    pub wsvd_better_fraction: Real,
+}
+
+impl RegistrationStudy {
+    /// Checks the settings (keys as in the table).
+    pub fn check(&self) -> Result<()> {
+        let biggest = self.outlier_counts.iter().copied().max().unwrap_or(0);
+        if self.points < 3 {
+            return Err(Error::setting(
+                "registration_study.points",
+                format!("must be at least 3, got {}", self.points),
+            ));
+        }
+        if self.outlier_counts.is_empty() || biggest > self.points {
+            return Err(Error::setting(
+                "registration_study.outlier_counts",
+                format!(
+                    "must be a non-empty list of counts up to points = {}, got {:?}",
+                    self.points, self.outlier_counts
+                ),
+            ));
+        }
+        if self.magnitude_mm.is_empty() {
+            return Err(Error::setting(
+                "registration_study.magnitude_mm",
+                "must be a non-empty list of magnitudes (mm)",
+            ));
+        }
+        for m in &self.magnitude_mm {
+            finite_non_negative("registration_study.magnitude_mm", *m)?;
+        }
+        finite_non_negative("registration_study.noise_mm", self.noise_mm)?;
+        for v in self.center_mm.iter().chain(&self.tracker_pose) {
+            if !v.is_finite() {
+                return Err(Error::setting(
+                    "registration_study",
+                    format!("center_mm and tracker_pose must be finite, got {v}"),
+                ));
+            }
+        }
+        for s in self.size_mm {
+            finite_positive("registration_study.size_mm", s)?;
+        }
+        Ok(())
+    }
+
+    /// The grid's cells (outlier counts outer, magnitudes inner), each averaged over
+    /// `trials` draws from `seed`.
+    pub fn run(&self, seed: u64, trials: usize) -> Result<Vec<Cell>> {
+        self.check()?;
+        let per_trial: Vec<Vec<(Real, Real)>> = (0..trials)
+            .into_par_iter()
+            .map(|t| self.draw(rng::trial_seed(seed, t as u64)))
+            .collect::<Result<_>>()?;
+        let n = trials as Real;
+        let mut cells = Vec::new();
+        for (ci, &count) in self.outlier_counts.iter().enumerate() {
+            for (mi, &m) in self.magnitude_mm.iter().enumerate() {
+                let k = ci * self.magnitude_mm.len() + mi;
+                let (mut svd, mut wsvd, mut better) = (0.0, 0.0, 0.0);
+                for d in &per_trial {
+                    svd += d[k].0;
+                    wsvd += d[k].1;
+                    if d[k].1 < d[k].0 {
+                        better += 1.0;
+                    }
+                }
+                cells.push(Cell {
+                    outlier_count: count,
+                    magnitude_mm: m,
+                    svd_mm: svd / n,
+                    wsvd_mm: wsvd / n,
+                    difference_mm: (svd - wsvd) / n,
+                    wsvd_better_fraction: better / n,
+                });
+            }
+        }
+        Ok(cells)
+    }
+
+    /// One draw: the (SVD, weighted SVD) registration errors of every cell, in grid order.
+    fn draw(&self, seed: u64) -> Result<Vec<(Real, Real)>> {
+        let p = &self.tracker_pose;
+        let tracker =
+            Frame::from_xyz_rpy([p[0], p[1], p[2]], [p[3], p[4], p[5]].map(Real::to_radians));
+        let mut g = rng::stream(seed, "registration/points");
+        let base: Vec<Vec3> = (0..self.points)
+            .map(|_| {
+                Vec3::from_fn(|i, _| {
+                    self.center_mm[i] + self.size_mm[i] * (g.random::<Real>() - 0.5)
+                })
+            })
+            .collect();
+        // Tracker coordinates of the base points, and the same with noise.
+        let clean: Vec<Vec3> = base.iter().map(|b| tracker.apply_inverse(b)).collect();
+        let noisy: Vec<Vec3> = clean
+            .iter()
+            .map(|a| a + Vec3::from_fn(|_, _| self.noise_mm * (2.0 * g.random::<Real>() - 1.0)))
+            .collect();
+        let error = |r: &Registration| {
+            clean
+                .iter()
+                .zip(&base)
+                .map(|(a, b)| (r.frame.apply(a) - b).norm())
+                .sum::<Real>()
+                / base.len() as Real
+        };
+        let mut out = Vec::with_capacity(self.outlier_counts.len() * self.magnitude_mm.len());
+        let mut measured = noisy.clone();
+        for &count in &self.outlier_counts {
+            for &m in &self.magnitude_mm {
+                measured.copy_from_slice(&noisy);
+                let mut go = rng::stream(seed, &format!("registration/outliers/{count}/{m}"));
+                crate::sim::add_outliers(&mut measured, count, [0.0, m], &mut go);
+                out.push((
+                    error(&register_svd(&base, &measured, None)?),
+                    error(&register_wsvd(&base, &measured)?),
+                ));
+            }
+        }
+        Ok(out)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Without gross errors or noise both registrations recover the tracker exactly, in
+    /// every cell (magnitude 0 leaves the points where they are).
+    #[test]
+    fn exact_data_register_exactly() {
+        let s = RegistrationStudy {
+            noise_mm: 0.0,
+            outlier_counts: vec![0, 3],
+            magnitude_mm: vec![0.0],
+            ..RegistrationStudy::default()
+        };
+        for c in s.run(7, 3).unwrap() {
+            assert!(c.svd_mm < 1e-9 && c.wsvd_mm < 1e-9, "{c:?}");
+        }
+    }
+
+    /// Ban's fig. 3: the gap between the SVD's and the weighted SVD's mean error is
+    /// positive and grows with the number of gross errors (2–16 of 50) and with their size
+    /// (0–0.2 … 0–1 mm).
+    #[test]
+    fn wsvd_advantage_grows_with_outlier_count_and_size() {
+        let s = RegistrationStudy {
+            outlier_counts: vec![2, 4, 8, 16],
+            magnitude_mm: vec![0.2, 0.6, 1.0],
+            ..RegistrationStudy::default()
+        };
+        let cells = s.run(1, 40).unwrap();
+        let gap = |i: usize, k: usize| cells[i * 3 + k].difference_mm;
+        for i in 0..4 {
+            for k in 0..3 {
+                assert!(gap(i, k) > 0.0, "{cells:?}");
+                if i > 0 {
+                    assert!(gap(i, k) > gap(i - 1, k), "count: {cells:?}");
+                }
+                if k > 0 {
+                    assert!(gap(i, k) > gap(i, k - 1), "size: {cells:?}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn bad_settings_are_refused_by_key() {
+        let bad = [
+            RegistrationStudy {
+                points: 2,
+                ..RegistrationStudy::default()
+            },
+            RegistrationStudy {
+                outlier_counts: vec![60],
+                ..RegistrationStudy::default()
+            },
+            RegistrationStudy {
+                magnitude_mm: vec![],
+                ..RegistrationStudy::default()
+            },
+            RegistrationStudy {
+                noise_mm: -1.0,
+                ..RegistrationStudy::default()
+            },
+        ];
+        for s in bad {
+            assert!(s
+                .check()
+                .unwrap_err()
+                .key()
+                .unwrap()
+                .starts_with("registration_study"));
+        }
+    }
+}

@@ -1,0 +1,397 @@
+//! Monte-Carlo statistics: identification accuracy η (Guo 2024 eq. 29), validation errors
+//! averaged over trials, parameter RMSE and its ratio to the Cramér–Rao bound.
+
+use serde::Serialize;
+use std::collections::BTreeMap;
+
+use super::trial::{Outcome, TrialResult};
+use crate::calibrate::ErrorStats;
+use crate::identify::Termination;
+use crate::numeric::Real;
+
+/// Mean, median and standard deviation of η for one parameter, over trials (%).
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct EtaStats {
+    /// Mean η (%).
+    pub mean: Real,
+    /// Median η (%).
+    pub median: Real,
+    /// Standard deviation of η (%).
+    pub std: Real,
+}
+
+/// One `results` entry of `summary.json` (docs/formats.md "summary.json").
+#[derive(Clone, Debug, Serialize)]
+pub struct Entry {
+    /// The method's label.
+    pub method: String,
+    /// The calibration pose strategy.
+    pub poses: String,
+    /// The swept value, for sweeps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep_value: Option<serde_json::Value>,
+    /// Every swept key and its value at this entry, for sweeps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<BTreeMap<String, serde_json::Value>>,
+    /// Mean over parameters of the mean η (%).
+    pub eta_mean_pct: Real,
+    /// Mean over parameters of the median η (%): with random errors a draw near zero makes
+    /// one trial's η hugely negative, which the mean follows and the median does not.
+    pub eta_median_pct: Real,
+    /// η per parameter with a non-zero injected error.
+    pub eta: BTreeMap<String, EtaStats>,
+    /// Validation position errors before compensation (mm), each statistic averaged over
+    /// trials.
+    pub validation_before_mm: ErrorStats,
+    /// … after compensation.
+    pub validation_after_mm: ErrorStats,
+    /// Position errors at the calibration poses against their noise-free true points (mm),
+    /// nominal robot, each statistic averaged over trials: what a paper that validates on its
+    /// calibration points reports (Ban; Qiao 2021's calibration-point figures).
+    pub calibration_before_mm: ErrorStats,
+    /// … compensated robot.
+    pub calibration_after_mm: ErrorStats,
+    /// Orientation errors (deg, rotation angle) before, for full-pose data.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_before_deg: Option<ErrorStats>,
+    /// … after.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_after_deg: Option<ErrorStats>,
+    /// Qiao's attitude errors (deg) before, for full-pose data (Qiao's ACAE is the mean).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_before_attitude_deg: Option<ErrorStats>,
+    /// … after.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_after_attitude_deg: Option<ErrorStats>,
+    /// Improvement of the mean validation error, % ((before − after) / before).
+    pub improvement_pct: Real,
+    /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
+    /// which absorb the registration's error, are left out.
+    pub param_rmse: BTreeMap<String, Real>,
+    /// Mean over trials of each identified parameter's error (identified − true; mm, rad),
+    /// base left out as for `param_rmse`: the estimator's bias. Where the truth is the same
+    /// in every trial (`errors.kind` `paper` or `values`), the mean identified error is the
+    /// injected one plus this.
+    pub param_bias: BTreeMap<String, Real>,
+    /// Trace of the empirical covariance of the estimates over the mean Cramér–Rao trace
+    /// σ²(JᵀWJ)⁻¹ (`null` without tracker noise or with fewer than 2 trials).
+    pub crb_ratio: Option<Real>,
+    /// Identifications that gave no usable result (diverged, singular, invalid, non-finite).
+    pub failures: usize,
+    /// How the identifications ended, by termination reason.
+    pub terminations: BTreeMap<String, usize>,
+    /// Mean iterations.
+    pub iterations_mean: Real,
+    /// Mean evaluations of the model per identification (residuals for the Jacobian
+    /// methods, fitness for BAS, PSO and BAS-PSO): the budget a method spent.
+    pub evaluations_mean: Real,
+    /// Mean wall time of one registration + identification (s). Machine-dependent, so it
+    /// is written as `null` in `summary.json` (which must be the same bytes for a seed
+    /// whatever the thread count) and with its value in `timing.json` and `report.md`.
+    #[serde(serialize_with = "as_null")]
+    pub seconds_per_identification: Real,
+    /// Spreads over trials (plots only).
+    #[serde(skip)]
+    pub spread: Spread,
+}
+
+fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_none()
+}
+
+fn mean(v: &[Real]) -> Real {
+    if v.is_empty() {
+        Real::NAN
+    } else {
+        v.iter().sum::<Real>() / v.len() as Real
+    }
+}
+
+fn std(v: &[Real]) -> Real {
+    let m = mean(v);
+    if v.is_empty() {
+        return Real::NAN;
+    }
+    (v.iter().map(|x| (x - m) * (x - m)).sum::<Real>() / v.len() as Real).sqrt()
+}
+
+fn median(v: &[Real]) -> Real {
+    crate::numeric::median(&mut v.to_vec())
+}
+
+/// η_i = (1 − |x_i − x̂_i| / |x_i|) · 100 % (Guo 2024 eq. 29); `None` where x_i = 0.
+pub fn eta(truth: Real, identified: Real) -> Option<Real> {
+    (truth != 0.0).then(|| (1.0 - (truth - identified).abs() / truth.abs()) * 100.0)
+}
+
+/// The sum of `v` in order (as `Iterator::sum`, from −0), streamed one value at a time.
+#[derive(Clone, Copy, Debug)]
+struct Sum {
+    total: Real,
+    n: usize,
+}
+
+impl Default for Sum {
+    fn default() -> Self {
+        Sum { total: -0.0, n: 0 }
+    }
+}
+
+impl Sum {
+    fn add(&mut self, x: Real) {
+        self.total += x;
+        self.n += 1;
+    }
+    fn mean(&self) -> Real {
+        if self.n == 0 {
+            Real::NAN
+        } else {
+            self.total / self.n as Real
+        }
+    }
+}
+
+/// Running sums of the four statistics of [`ErrorStats`] over trials.
+#[derive(Clone, Copy, Debug, Default)]
+struct StatsSum([Sum; 4]);
+
+impl StatsSum {
+    fn add(&mut self, s: &ErrorStats) {
+        for (a, x) in self.0.iter_mut().zip([s.mean, s.rms, s.max, s.std]) {
+            a.add(x);
+        }
+    }
+    fn average(&self) -> ErrorStats {
+        ErrorStats {
+            mean: self.0[0].mean(),
+            rms: self.0[1].mean(),
+            max: self.0[2].mean(),
+            std: self.0[3].mean(),
+        }
+    }
+}
+
+/// What one (strategy, method) pair has gathered so far: running sums, and per parameter the
+/// compact per-trial numbers an exact median and two-pass deviation need (its error and its
+/// η, 16 bytes per trial and parameter).
+#[derive(Clone, Debug, Default)]
+struct Cell {
+    outs: usize,
+    seconds: Sum,
+    seconds_sq: Sum,
+    terminations: BTreeMap<String, usize>,
+    ok: usize,
+    errs: Vec<Vec<Real>>,
+    etas: Vec<Vec<Real>>,
+    crb: Sum,
+    before: StatsSum,
+    after: StatsSum,
+    calibration: [StatsSum; 2],
+    after_rms_sq: Sum,
+    deg: [Option<StatsSum>; 4],
+    iterations: Sum,
+    evaluations: Sum,
+}
+
+/// Spreads over trials of the headline metrics (for the sweep plots; not in `summary.json`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Spread {
+    /// Standard deviation over trials of the validation RMS after compensation (mm).
+    pub after_rms: Real,
+    /// Mean over parameters of the standard deviation of η (%).
+    pub eta: Real,
+    /// Standard deviation of the wall time of one identification (s).
+    pub seconds: Real,
+}
+
+/// Streaming aggregation of a block's trials into one [`Entry`] per strategy × method
+///: trials are pushed in trial order and dropped; what stays is running sums and
+/// the per-parameter numbers of [`Cell`]. The sums run in trial order, so the entries are the
+/// same bytes whichever way the trials were split among threads or shards.
+#[derive(Clone, Debug)]
+pub struct Accumulator {
+    names: Vec<String>,
+    methods: usize,
+    cells: Vec<Cell>,
+}
+
+/// Whether an outcome counts (not a failure). A `rank-deficient` ending counts when the
+/// identified list is known to hold undetermined parameters (`identification.params`): it is
+/// then the expected outcome of a damped method.
+fn usable(o: &Outcome) -> bool {
+    let undetermined_ok = o.rank_deficient_expected && o.termination == Termination::RankDeficient;
+    (undetermined_ok
+        || !matches!(
+            o.termination,
+            Termination::Diverged
+                | Termination::Singular
+                | Termination::RankDeficient
+                | Termination::InvalidInput
+        ))
+        && o.identified.iter().all(|x| x.is_finite())
+        && o.after_mm.rms.is_finite()
+}
+
+impl Accumulator {
+    /// An empty accumulator for `strategies` × `methods` outcomes over the parameters `names`.
+    pub fn new(names: &[String], strategies: usize, methods: usize) -> Accumulator {
+        let cell = Cell {
+            errs: vec![Vec::new(); names.len()],
+            etas: vec![Vec::new(); names.len()],
+            ..Cell::default()
+        };
+        Accumulator {
+            names: names.to_vec(),
+            methods,
+            cells: vec![cell; strategies * methods],
+        }
+    }
+
+    /// Adds one trial (trials must come in trial order).
+    pub fn push(&mut self, t: &TrialResult) {
+        for o in &t.outcomes {
+            let c = &mut self.cells[o.strategy * self.methods + o.method];
+            c.outs += 1;
+            c.seconds.add(o.seconds);
+            c.seconds_sq.add(o.seconds * o.seconds);
+            *c.terminations
+                .entry(o.termination.as_str().to_string())
+                .or_insert(0) += 1;
+            if !usable(o) {
+                continue;
+            }
+            c.ok += 1;
+            for (k, name) in self.names.iter().enumerate() {
+                // Base parameters absorb the registration's error: nuisance, not compared.
+                if name.starts_with("base.") {
+                    continue;
+                }
+                c.errs[k].push(o.identified[k] - t.truth[k]);
+                if let Some(e) = eta(t.truth[k], o.identified[k]) {
+                    c.etas[k].push(e);
+                }
+            }
+            if let Some(x) = t.crb_trace[o.strategy] {
+                c.crb.add(x);
+            }
+            c.before.add(&o.before_mm);
+            c.after.add(&o.after_mm);
+            c.calibration[0].add(&o.calibration_before_mm);
+            c.calibration[1].add(&o.calibration_after_mm);
+            c.after_rms_sq.add(o.after_mm.rms * o.after_mm.rms);
+            let degs = [
+                o.before_deg,
+                o.after_deg,
+                o.before_attitude_deg,
+                o.after_attitude_deg,
+            ];
+            for (acc, d) in c.deg.iter_mut().zip(degs) {
+                if let Some(d) = d {
+                    acc.get_or_insert_with(StatsSum::default).add(&d);
+                }
+            }
+            c.iterations.add(o.iterations as Real);
+            c.evaluations.add(o.evaluations as Real);
+        }
+    }
+
+    /// The entry of `(strategy, method)`, labelled `(method, poses)`.
+    pub fn entry(
+        &self,
+        strategy: usize,
+        method: usize,
+        labels: (&str, &str),
+        sweep_value: Option<serde_json::Value>,
+        sweep: Option<BTreeMap<String, serde_json::Value>>,
+    ) -> Entry {
+        let c = &self.cells[strategy * self.methods + method];
+        let failures = c.outs - c.ok;
+        let mut eta_map = BTreeMap::new();
+        let mut rmse = BTreeMap::new();
+        let mut bias = BTreeMap::new();
+        let mut emp_trace = 0.0;
+        for (k, name) in self.names.iter().enumerate() {
+            if name.starts_with("base.") {
+                continue;
+            }
+            let errs = &c.errs[k];
+            rmse.insert(
+                name.clone(),
+                (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt(),
+            );
+            bias.insert(name.clone(), mean(errs));
+            emp_trace += std(errs).powi(2);
+            let etas = &c.etas[k];
+            if !etas.is_empty() {
+                eta_map.insert(
+                    name.clone(),
+                    EtaStats {
+                        mean: mean(etas),
+                        median: median(etas),
+                        std: std(etas),
+                    },
+                );
+            }
+        }
+        let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
+        let eta_median_pct = mean(&eta_map.values().map(|e| e.median).collect::<Vec<_>>());
+        let ok = c.ok;
+        let crb_ratio = (ok >= 2 && c.crb.n == ok)
+            .then(|| emp_trace * ok as Real / (ok - 1) as Real / c.crb.mean());
+        let before = c.before.average();
+        let after = c.after.average();
+        let deg = |i: usize| c.deg[i].as_ref().map(StatsSum::average);
+        let spread_of = |s: &Sum, sq: &Sum| (sq.mean() - s.mean().powi(2)).max(0.0).sqrt();
+        Entry {
+            method: labels.0.to_string(),
+            poses: labels.1.to_string(),
+            sweep_value,
+            sweep,
+            eta_mean_pct,
+            eta_median_pct,
+            eta: eta_map.clone(),
+            validation_before_mm: before,
+            validation_after_mm: after,
+            calibration_before_mm: c.calibration[0].average(),
+            calibration_after_mm: c.calibration[1].average(),
+            validation_before_deg: deg(0),
+            validation_after_deg: deg(1),
+            validation_before_attitude_deg: deg(2),
+            validation_after_attitude_deg: deg(3),
+            improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
+            param_rmse: rmse,
+            param_bias: bias,
+            crb_ratio,
+            failures,
+            terminations: c.terminations.clone(),
+            iterations_mean: c.iterations.mean(),
+            evaluations_mean: c.evaluations.mean(),
+            seconds_per_identification: c.seconds.mean(),
+            spread: Spread {
+                after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),
+                eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),
+                seconds: spread_of(&c.seconds, &c.seconds_sq),
+            },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn eta_is_guo_eq_29() {
+        assert_eq!(eta(0.5, 0.5), Some(100.0));
+        assert!((eta(0.5, 0.4).unwrap() - 80.0).abs() < 1e-12);
+        assert!((eta(-0.05, -0.06).unwrap() - 80.0).abs() < 1e-12);
+        assert_eq!(eta(0.0, 0.1), None);
+    }
+
+    #[test]
+    fn median_and_std_by_hand() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert!((std(&[1.0, 3.0]) - 1.0).abs() < 1e-12);
+    }
+}

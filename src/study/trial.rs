@@ -1,0 +1,293 @@
+//! One Monte-Carlo trial: a true robot, its measurement for each calibration strategy, every
+//! method's identification, and the validation of each compensated robot.
+//!
+//! Within a trial every method and strategy sees the same true robot; each strategy's
+//! measurement draws its noise and outliers from the same stream, so the draws line up pose
+//! by pose (docs/formats.md `run`).
+
+use std::time::Instant;
+
+pub use super::plan::{calibration_rows, sag_fn, true_robot};
+use super::plan::{crb_trace, Study};
+use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
+use crate::error::Result;
+use crate::identify::Termination;
+use crate::measurement::Measure;
+use crate::numeric::rng;
+use crate::numeric::{Frame, Real};
+use crate::robot::Robot;
+use crate::sim::poses::{sample_region, sample_region_keyed};
+use crate::sim::{measure_poses, SagFn, Simulated};
+
+/// What one method on one strategy's measurement gave in one trial.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// Index into the scenario's methods.
+    pub method: usize,
+    /// Index into the scenario's strategies.
+    pub strategy: usize,
+    /// Identified errors, one per study parameter (mm, rad).
+    pub identified: Vec<Real>,
+    /// Validation position errors (mm) before compensation: statistics.
+    pub before_mm: ErrorStats,
+    /// … after compensation.
+    pub after_mm: ErrorStats,
+    /// Position errors (mm) at the calibration poses against their noise-free true points
+    /// (sag included): the nominal robot, before.
+    pub calibration_before_mm: ErrorStats,
+    /// … the compensated robot, in its registration, after.
+    pub calibration_after_mm: ErrorStats,
+    /// Validation orientation errors (deg) before and after, for full-pose data.
+    pub before_deg: Option<ErrorStats>,
+    /// … after.
+    pub after_deg: Option<ErrorStats>,
+    /// Qiao's attitude errors (deg) before and after, for full-pose data.
+    pub before_attitude_deg: Option<ErrorStats>,
+    /// … after.
+    pub after_attitude_deg: Option<ErrorStats>,
+    /// Per-point validation errors before and after (kept for trial 0's plot only).
+    pub per_point: Option<(Vec<Real>, Vec<Real>)>,
+    /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
+    /// only; Qiao 2021 fig. 6).
+    pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
+    /// A metaheuristic's best fitness per iteration (trial 0 only).
+    pub trace: Option<Vec<Real>>,
+    /// Iterations of the identification.
+    pub iterations: usize,
+    /// Evaluations of the model in the identification ([`crate::identify::Identified`]'s
+    /// `evaluations`: residuals for the Jacobian methods, fitness for the searches).
+    pub evaluations: usize,
+    /// How it ended.
+    pub termination: Termination,
+    /// Whether the identified list is known to be rank-deficient (`identification.params`
+    /// names undetermined parameters): a `rank-deficient` termination is then the expected
+    /// outcome of a damped method, not a failure.
+    pub rank_deficient_expected: bool,
+    /// Wall time of registration and identification (s). Not part of the reproducible output.
+    pub seconds: Real,
+}
+
+/// One trial's results.
+#[derive(Clone, Debug)]
+pub struct TrialResult {
+    /// Trial index.
+    pub index: usize,
+    /// The injected errors, one per study parameter (0 where none was injected).
+    pub truth: Vec<Real>,
+    /// The Cramér–Rao trace per strategy (`None` without tracker noise).
+    pub crb_trace: Vec<Option<Real>>,
+    /// One outcome per strategy × method.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
+/// fresh draw from the trial's seed.
+pub fn calibration_poses(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<Real>>> {
+    let sc = &study.scenario;
+    if let Some(set) = &study.fixed[si] {
+        return Ok(set.poses.clone());
+    }
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let name = sc.calibration.strategies[si].name();
+    let mut gp = rng::stream(seed, &format!("poses/{name}"));
+    sample_region(
+        &study.nominal,
+        &sc.calibration.region,
+        sc.calibration.count,
+        &mut gp,
+    )
+}
+
+/// The validation poses of trial `index`.
+pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
+    let sc = &study.scenario;
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let mut gv = rng::stream(seed, "validation");
+    sample_region_keyed(
+        &study.nominal,
+        &sc.validation.region,
+        sc.validation.count,
+        "validation.region",
+        &mut gv,
+    )
+}
+
+/// Measures the calibration poses `qs` on the true robot (the tracker, the study's outliers
+/// and sag): once each, or, with `calibration.payloads_kg`, once per payload, every pose under
+/// the first payload, then every pose under the next, and so on (the measurement then
+/// records each row's payload).
+pub fn measure_calibration(
+    study: &Study,
+    truth_robot: &Robot,
+    qs: &[Vec<Real>],
+    sag: Option<&SagFn>,
+    rng: &mut crate::numeric::rng::Rng,
+) -> Result<Simulated> {
+    let sc = &study.scenario;
+    let expanded;
+    let (qs, loads) = match &sc.calibration.payloads_kg {
+        None => (qs, None),
+        Some(_) => {
+            let (q, l): (Vec<_>, Vec<_>) = calibration_rows(sc, qs).into_iter().unzip();
+            expanded = (q, l.into_iter().flatten().collect::<Vec<Real>>());
+            (&expanded.0[..], Some(&expanded.1[..]))
+        }
+    };
+    let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
+    measure_poses(truth_robot, qs, &study.tracker, outliers, sag, loads, rng)
+}
+
+/// Runs trial `index` of `study`.
+pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
+    let sc = &study.scenario;
+    let seed = rng::trial_seed(sc.seed, index as u64);
+    let (errors, truth_robot) = true_robot(study, index);
+    let true_c = study.true_compliances();
+    let truth: Vec<Real> = study
+        .params
+        .iter()
+        .map(|p| {
+            errors
+                .iter()
+                .chain(&true_c)
+                .find(|(q, _)| q == p)
+                .map_or(0.0, |e| e.1)
+        })
+        .collect();
+    let sag = sag_fn(study);
+    let sag_ref = sag.as_deref();
+
+    // Validation: fresh poses, true frames of the sagging true arm, free of tracker noise.
+    let vqs = validation_poses(study, index)?;
+    let vload = sc.validation.payload_kg;
+    let vtruth: Vec<Frame> = vqs
+        .iter()
+        .map(|q| match &sag_ref {
+            Some(f) => f(&truth_robot, q, vload),
+            None => Ok(truth_robot.fk(q)),
+        })
+        .collect::<Result<_>>()?;
+    let vpayload = vec![study.validation_payload(); vqs.len()];
+    let before = validation_errors(&study.nominal, &vqs, Some(&vpayload), &vtruth)?;
+    let full_pose = study.measure == Measure::Pose;
+
+    let mut outcomes = Vec::new();
+    let mut crb = Vec::new();
+    for si in 0..sc.calibration.strategies.len() {
+        let qs = calibration_poses(study, si, index)?;
+        // The fixed set's frames computed once for the study, where it has them.
+        let memo = study.fixed[si].as_ref().and_then(|f| f.sag.clone());
+        let served: Option<Box<SagFn>> = match (memo, sag_fn(study)) {
+            (Some(memo), Some(model)) => Some(Box::new(
+                move |r: &Robot, q: &[Real], load: Option<Real>| {
+                    memo.get(r, q, load).map_or_else(|| model(r, q, load), Ok)
+                },
+            )),
+            _ => None,
+        };
+        let cal_sag = served.as_deref().or(sag_ref);
+        let m = measure_calibration(
+            study,
+            &truth_robot,
+            &qs,
+            cal_sag,
+            &mut rng::stream(seed, "measure"),
+        )?;
+        // The calibration rows' noise-free true points (positions; the orientation is not
+        // compared here), and the nominal robot's errors at them.
+        let cal_truth: Vec<Frame> = m
+            .truth
+            .true_points
+            .iter()
+            .map(|&pos| Frame {
+                rot: crate::numeric::Mat3::identity(),
+                pos,
+            })
+            .collect();
+        let cal_loads = m.data.payload_kg.as_deref();
+        let cal_before = ErrorStats::of(
+            &validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?.mm,
+        );
+        crb.push(match &study.fixed[si] {
+            Some(set) => set.crb_trace,
+            None => crb_trace(study, &qs),
+        });
+        for (mi, spec) in sc.methods.iter().enumerate() {
+            let t0 = Instant::now();
+            let res = calibrate(
+                &study.nominal,
+                &study.params,
+                &m.data,
+                sc.registration,
+                &study.tracker.frame(),
+                spec,
+                &mut rng::stream(seed, &format!("method/{}", spec.label)),
+            );
+            let seconds = t0.elapsed().as_secs_f64();
+            let mut trace = None;
+            let (identified, after, cal_after, iterations, evaluations, termination) = match res {
+                Ok(c) => {
+                    // The compensated robot lives in the registered frame: bring the truth
+                    // there through the true tracker placement (identity for `known`).
+                    let map = c.frame.compose(&study.tracker.frame().inverse());
+                    let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
+                    let e = validation_errors(&c.robot, &vqs, Some(&vpayload), &seen)?;
+                    let cal_seen: Vec<Frame> = cal_truth.iter().map(|t| map.compose(t)).collect();
+                    let cal = validation_errors(&c.robot, &m.data.qs, cal_loads, &cal_seen)?;
+                    if index == 0 {
+                        trace = c.identified.trace.clone().filter(|t| !t.is_empty());
+                    }
+                    let r = c.identified;
+                    (
+                        r.x.iter().copied().collect(),
+                        e,
+                        ErrorStats::of(&cal.mm),
+                        r.iterations,
+                        r.evaluations,
+                        r.termination,
+                    )
+                }
+                Err(_) => (
+                    vec![Real::NAN; study.params.len()],
+                    PoseErrors {
+                        mm: vec![Real::NAN; vqs.len()],
+                        deg: vec![Real::NAN; vqs.len()],
+                        attitude_deg: vec![Real::NAN; vqs.len()],
+                    },
+                    ErrorStats::of(&[Real::NAN]),
+                    0,
+                    0,
+                    Termination::InvalidInput,
+                ),
+            };
+            outcomes.push(Outcome {
+                method: mi,
+                strategy: si,
+                identified,
+                before_mm: ErrorStats::of(&before.mm),
+                after_mm: ErrorStats::of(&after.mm),
+                calibration_before_mm: cal_before,
+                calibration_after_mm: cal_after,
+                before_deg: full_pose.then(|| ErrorStats::of(&before.deg)),
+                after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
+                before_attitude_deg: full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
+                after_attitude_deg: full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
+                trace,
+                per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
+                per_point_attitude_deg: (index == 0 && full_pose)
+                    .then(|| (before.attitude_deg.clone(), after.attitude_deg.clone())),
+                iterations,
+                evaluations,
+                termination,
+                rank_deficient_expected: !study.undetermined.is_empty(),
+                seconds,
+            });
+        }
+    }
+    Ok(TrialResult {
+        index,
+        truth,
+        crb_trace: crb,
+        outcomes,
+    })
+}
