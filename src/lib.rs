@@ -1,10 +1,21 @@
 //! calbench: a simulation-driven benchmark harness for the kinematic calibration of
 //! industrial robots.
 //!
-//! The crate follows the data flow of the project's design: robot models and forward
-//! kinematics ([`kinematics`]), the identification Jacobian ([`jacobian`]) and
-//! identifiability analysis, the virtual measurement, identification methods, measurement-pose
-//! selection, the Monte-Carlo harness and its reports.
+//! The modules are layers, each importing only from those listed before it
+//! (docs/architecture.md):
+//!
+//! - [`numeric`]: scalar types, frames and rotations, random streams, and the kernels
+//!   (sine and cosine, Gram matrix, Cholesky, symmetric eigenvalues) behind one SIMD dispatch;
+//! - [`measurement`]: what is measured ([`measurement::Measure`]), measured poses
+//!   ([`measurement::Measurements`]), the measurement CSV and the import of tracker exports;
+//! - [`robot`]: robot models and forward kinematics, robot files and URDF, the built-in robots,
+//!   the identification Jacobian, identifiability, parameter sets and the compliance model;
+//! - [`sim`]: the virtual measurement (true robot, tracker, outliers, poses, gravity sag);
+//! - [`identify`]: the identification methods behind one trait;
+//! - [`poses`]: measurement-pose selection (observability indices, DETMAX, IDE);
+//! - [`calibrate`]: registration with identification, validation, compensation;
+//! - [`study`]: scenarios and the Monte-Carlo harness;
+//! - [`report`]: the output files, plots, shards and the regression check.
 #![warn(missing_docs)]
 
 pub mod error;

@@ -20,10 +20,11 @@
 //!   [`Termination`]);
 //! - [`registry`]: the method names, each with the function that reads its options from a
 //!   scenario's `[[methods]]` entry ([`MethodSpec`]);
-//! - one file per method: [`ls`], [`ridge`], [`robust`], [`lm`], [`pose_error`], [`meta`];
+//! - one file per method: [`ls`], [`ridge`], [`robust`], [`lm`], and in [`qiao`] Qiao 2021's
+//!   searches and pose-error models;
 //! - the shared machinery of the Jacobian-based methods: [`solver`] (the least-squares
 //!   engine), [`xi`] (ridge parameter rules), [`weights`] (robust weights), [`robot`] (the
-//!   kinematic least-squares problem), `linalg`.
+//!   kinematic least-squares problem).
 //!
 //! Adding a method is one file with an options struct that implements [`Method`] and one
 //! line in [`registry::METHODS`] (README, "Adding a method").

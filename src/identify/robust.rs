@@ -17,17 +17,17 @@
 //! The weight of a point follows from its standardised residual `u_i = |v_i| / (σ0 √r)`:
 //! `|v_i|` is the norm of its r = 3 (or 6) residual rows, so `u_i` is the RMS of the point's
 //! rows in units of σ0 (about 1 for a normal point). σ0 is either
-//! - [`Sigma0::Classical`]: Li's `σ0 = sqrt(vᵀPv / (n − t))` with the weights of the
+//! - [`crate::identify::Sigma0::Classical`]: Li's `σ0 = sqrt(vᵀPv / (n − t))` with the weights of the
 //!   previous iteration, where n counts each row with its weight, `n = r Σ_i p̄_i` (with n
 //!   the plain row count, down-weighted points keep their share of the redundancy while
 //!   their residuals leave `vᵀPv`, and σ0 shrinks from one reweighting to the next until
 //!   good points are rejected too); or
-//! - [`Sigma0::Mad`]: `1.4826 · median |v_k|` over all residual rows (zero-centred MAD).
+//! - [`crate::identify::Sigma0::Mad`]: `1.4826 · median |v_k|` over all residual rows (zero-centred MAD).
 //!
 //! When σ0 falls below `1e-9` times the RMS point residual at the start (consistent,
 //! noise-free data), every point keeps weight 1.
 //!
-//! Weight functions ([`WeightFn`]):
+//! Weight functions ([`crate::identify::WeightFn`]):
 //! - IGG3 (Li eq. 18): `1` for `u ≤ k0`; `(k0/u)·((k1 − u)/(k1 − k0))²` for `k0 < u ≤ k1`;
 //!   `0` for `u > k1`. The paper's text gives `k0 = 1.5`, `k1 = 2.4` (garbled); the defaults
 //!   are `k0 = 1.5`, `k1 = 2.5`, both settable.

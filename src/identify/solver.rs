@@ -1,7 +1,7 @@
 //! The nonlinear least-squares engine under the Jacobian-based methods: the
 //! [`LeastSquares`] problem trait, the shared buffers and normal equations, the Gauss–Newton
 //! iteration of LS, ridge and the robust ridge (Li 2018 eqs. 13–14, §2.2), and the statistics
-//! of a solution ([`finish`]).
+//! of a solution (`finish`).
 //!
 //! A solver is any [`Solver`]: it runs on a [`LeastSquares`] problem from a start `x0` and
 //! returns an [`Identified`]. [`solve`] checks the problem and the options first, so a

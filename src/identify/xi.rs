@@ -2,7 +2,7 @@
 //!
 //! Iteration k solves `(JᵀPJ + ξ_k D) δx = JᵀP E − ξ_k D (x − x0)` (the Gauss–Newton step of
 //! the ridge objective `EᵀPE + ξ (x − x0)ᵀ D (x − x0)`; from `x0` it is Li's eq. 14). With
-//! [`RidgeOptions::scale`] `D = diag(JᵀPJ)` at `x0`, i.e. ξ acts on the column-scaled problem
+//! [`crate::identify::RidgeOptions::scale`] `D = diag(JᵀPJ)` at `x0`, i.e. ξ acts on the column-scaled problem
 //! `A = P^½ J D^-½` whose columns have unit norm, so one ξ means the same for mm and rad
 //! columns; without it `D = I` (Li's literal form, ξ in the units of `JᵀPJ`).
 //!

@@ -11,7 +11,7 @@
 //! Cost: the Jacobian blocks of all candidates are computed once; the singular values of J are
 //! sqrt(eig(JᵀJ)) of the small k × k Gram matrix instead of an SVD of the tall J. Eight
 //! candidates at a time, the lower triangles of JᵀJ ± BᵀB are formed in the lanes of a
-//! per-worker [`Spectra`] and their eigenvalues found together by the allocation-free
+//! per-worker `Spectra` and their eigenvalues found together by the allocation-free
 //! Householder + implicit-QL solver of [`crate::numeric::symeig::symmetric_eigenvalues_lanes`] (the
 //! same bits as one at a time, and several times faster than nalgebra's generic
 //! `symmetric_eigenvalues` at k = 26). The candidate scan runs

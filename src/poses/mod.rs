@@ -1,4 +1,4 @@
-//! Measurement-pose selection (Guo 2024, `papers/guo2024-detmax-ide-pose-optimization.txt`).
+//! Measurement-pose selection (Guo 2024).
 //!
 //! - [`indices`]: observability indices O1–O6, the entropy-weighted composite (eqs. 9–15), GCN
 //!   (eq. 14);

@@ -144,7 +144,7 @@ const R6: [JointType; 6] = [JointType::Revolute; 6];
 
 /// ABB IRB2600ID-8/2.0 in standard DH.
 ///
-/// Geometry: Li 2018 (papers/li2018-robust-ridge-irb2600.txt) table 1.
+/// Geometry: Li 2018 table 1.
 /// Joint limits: ABB IRB 2600ID product specification, working range per axis:
 /// axis 1 ±180°, axis 2 +155°/−95°, axis 3 +75°/−180°, axis 4 ±175°, axis 5 ±120°,
 /// axis 6 ±400°.
@@ -191,7 +191,7 @@ pub fn irb2600_mdh() -> Robot {
 
 /// Stäubli TX60 in DH + β.
 ///
-/// Geometry: Qiao 2021 (papers/qiao2021-bas-pso-tx60.txt) table 1 (θ, α in rad there:
+/// Geometry: Qiao 2021 table 1 (θ, α in rad there:
 /// π, π/2, … written here in degrees). Joint limits: Stäubli TX60 data sheet, working range
 /// J1 ±180°, J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
 pub fn tx60() -> Robot {
@@ -223,8 +223,8 @@ pub fn tx60_qiao_params() -> Vec<Param> {
     v
 }
 
-/// An approximation of Guo 2024's 3T2R arm (papers/guo2024-detmax-ide-pose-optimization.txt,
-/// §1.1 and fig. 1). The paper gives the structure but not the geometry.
+/// An approximation of Guo 2024's 3T2R arm (§1.1 and fig. 1). The paper gives the structure
+/// but not the geometry.
 ///
 /// From the paper: joints J1–J3 are ball screws; J1 and J2 drive link 1 together, in
 /// parallel and differentially, so that link 1 turns by ψ = atan(s_x(φ1 − φ2)/(2π L1)) and

@@ -3,8 +3,9 @@
 //! files (`summary.json`, `trials.csv`, `report.md`, plots) are written by
 //! [`crate::report::run_study`].
 //!
-//! - [`study`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
+//! - [`plan`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
 //!   sets);
+//! - [`scenario`]: the scenario file, parsed and checked (sweeps included);
 //! - [`trial`]: one trial (true robot, measurements, every method's calibration, validation);
 //! - [`stats`]: the aggregation into [`Entry`] values.
 //!

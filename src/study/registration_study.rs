@@ -1,5 +1,5 @@
 //! The registration study of Ban §3 (fig. 3): SVD against Ban's weighted SVD
-//! ([`super::registration`], eqs. 12–25) on point sets with gross errors, over a grid of
+//! ([`crate::calibrate::registration`], eqs. 12–25) on point sets with gross errors, over a grid of
 //! outlier counts × outlier magnitude ranges. A scenario holding a `[registration_study]`
 //! table (docs/formats.md) runs it with `calbench run`.
 //!

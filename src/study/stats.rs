@@ -206,7 +206,7 @@ pub struct Spread {
 
 /// Streaming aggregation of a block's trials into one [`Entry`] per strategy × method
 ///: trials are pushed in trial order and dropped; what stays is running sums and
-/// the per-parameter numbers of [`Cell`]. The sums run in trial order, so the entries are the
+/// the per-parameter numbers of each cell. The sums run in trial order, so the entries are the
 /// same bytes whichever way the trials were split among threads or shards.
 #[derive(Clone, Debug)]
 pub struct Accumulator {
