@@ -6,7 +6,7 @@
 //!
 //! Each parser gets [`CASES`] cases per property in the normal run, from a fixed seed so the
 //! run is repeatable. The `#[ignore]`d `*_long` tests run [`LONG_CASES`] cases from a random
-//! seed: `cargo test --test fuzz -- --ignored _long` (`CALBENCH_FUZZ_CASES` and
+//! seed: `cargo test --test cli -- --ignored _long` (`CALBENCH_FUZZ_CASES` and
 //! `CALBENCH_FUZZ_SEED` override the count and the seed; `CALBENCH_FUZZ_COLLECT=1` prints
 //! every message without the file and goes on, to list them all in one run).
 //!
@@ -944,7 +944,7 @@ fn csv_mutations() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
 fn robot_file_long() {
     let (cases, seed) = long_run();
     run_robot_bytes(cases, seed);
@@ -952,7 +952,7 @@ fn robot_file_long() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
 fn scenario_long() {
     let (cases, seed) = long_run();
     run_scenario_bytes(cases, seed);
@@ -960,7 +960,7 @@ fn scenario_long() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
 fn csv_long() {
     let (cases, seed) = long_run();
     run_csv_bytes(cases, seed);

@@ -1,0 +1,8 @@
+//! The measurement model: forward kinematics and the identification Jacobian, the
+//! elasto-geometric (compliance) model, tracker registration alternating with identification,
+//! and per-point weights.
+
+mod compliance;
+mod kinematics;
+mod registration;
+mod weights;

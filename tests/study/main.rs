@@ -1,0 +1,6 @@
+//! Monte-Carlo studies: the harness end to end (files, determinism, the CI regression guard),
+//! sweeps and sharded runs, and the report's plots.
+
+mod harness;
+mod report;
+mod sweeps;
