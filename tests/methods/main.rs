@@ -2,6 +2,9 @@
 //! (BAS, PSO, BAS-PSO), Guo 2024's full model and parameter separation, and DETMAX/IDE pose
 //! selection.
 
+#[path = "../common/mod.rs"]
+mod common;
+
 mod errmodel;
 mod guo;
 mod metaheur;

@@ -2,6 +2,9 @@
 //! elasto-geometric (compliance) model, tracker registration alternating with identification,
 //! and per-point weights.
 
+#[path = "../common/mod.rs"]
+mod common;
+
 mod compliance;
 mod kinematics;
 mod registration;
