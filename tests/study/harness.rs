@@ -1,19 +1,13 @@
 //! The Monte-Carlo harness end to end: files and keys, thread-count determinism, the
 //! regression guard, and the CI baseline.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use calbench::report::check::{compare, read_json};
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use crate::common::{calbench, path_arg, read, root, tmp_dir};
 
 const TINY: &str = r#"
 name = "tiny"
@@ -62,7 +56,7 @@ fn run_to(s: Scenario, out: &Path, threads: usize) {
 
 #[test]
 fn tiny_study_writes_every_file_with_finite_values() {
-    let out = tmp("tiny");
+    let out = tmp_dir("harness-tiny");
     run_to(tiny(), &out, 2);
     for f in [
         "summary.json",
@@ -117,13 +111,12 @@ fn tiny_study_writes_every_file_with_finite_values() {
 
 #[test]
 fn one_and_two_threads_give_the_same_bytes() {
-    let (a, b) = (tmp("threads1"), tmp("threads2"));
+    let (a, b) = (tmp_dir("harness-threads1"), tmp_dir("harness-threads2"));
     run_to(tiny(), &a, 1);
     run_to(tiny(), &b, 2);
-    let read = |d: &Path, f: &str| std::fs::read_to_string(d.join(f)).unwrap();
-    assert_eq!(read(&a, "trials.csv"), read(&b, "trials.csv"));
+    assert_eq!(read(&a.join("trials.csv")), read(&b.join("trials.csv")));
     let strip = |d: &Path| {
-        read(d, "summary.json")
+        read(&d.join("summary.json"))
             .lines()
             .filter(|l| !l.contains("seconds_per_identification"))
             .collect::<Vec<_>>()
@@ -141,7 +134,7 @@ fn noise_free_study_recovers_the_injected_errors() {
         )
         .replace("count = 2\n", "count = 0\n")
         .replace("model = \"linear\"", "model = \"none\"");
-    let out = tmp("noisefree");
+    let out = tmp_dir("harness-noisefree");
     run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
     let s = read_json(&out.join("summary.json")).unwrap();
     for e in s["results"].as_array().unwrap() {
@@ -157,7 +150,7 @@ fn noise_free_study_recovers_the_injected_errors() {
     }
     // With sag, noise and outliers the calibration points are fitted, not free of error: the
     // compensated robot misses their true points by the sag it cannot model.
-    let out = tmp("calpoints");
+    let out = tmp_dir("harness-calpoints");
     run_to(tiny(), &out, 2);
     let s = read_json(&out.join("summary.json")).unwrap();
     for e in s["results"].as_array().unwrap() {
@@ -172,7 +165,7 @@ fn noise_free_study_recovers_the_injected_errors() {
 
 #[test]
 fn check_fails_on_a_worsened_summary() {
-    let out = tmp("check");
+    let out = tmp_dir("harness-check");
     run_to(tiny(), &out, 2);
     let s = read_json(&out.join("summary.json")).unwrap();
     assert!(compare(&s, &s, 0.0).is_empty());
@@ -183,27 +176,22 @@ fn check_fails_on_a_worsened_summary() {
     worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 1.5);
     let path = out.join("worse.json");
     std::fs::write(&path, serde_json::to_string(&worse).unwrap()).unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args([
-            "check",
-            path.to_str().unwrap(),
-            "--baseline",
-            out.join("summary.json").to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let o = calbench(&[
+        "check",
+        path_arg(&path),
+        "--baseline",
+        path_arg(&out.join("summary.json")),
+    ]);
     assert!(!o.status.success());
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("validation_after_mm.rms"), "{err}");
-    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args([
-            "check",
-            out.join("summary.json").to_str().unwrap(),
-            "--baseline",
-            out.join("summary.json").to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let summary = out.join("summary.json");
+    let o = calbench(&[
+        "check",
+        path_arg(&summary),
+        "--baseline",
+        path_arg(&summary),
+    ]);
     assert!(o.status.success());
 }
 
@@ -213,12 +201,11 @@ fn check_fails_on_a_worsened_summary() {
 /// and copy its `summary.json` there.
 #[test]
 fn ci_guard_matches_the_baseline() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let s = Scenario::load(&root.join("scenarios/ci-guard.toml")).unwrap();
-    let out = tmp("ci-guard");
+    let s = Scenario::load(&root().join("scenarios/ci-guard.toml")).unwrap();
+    let out = tmp_dir("harness-ci-guard");
     run_to(s, &out, 2);
     let now = read_json(&out.join("summary.json")).unwrap();
-    let base = read_json(&root.join("results/baselines/ci-guard.json")).unwrap();
+    let base = read_json(&root().join("results/baselines/ci-guard.json")).unwrap();
     let r = compare(&now, &base, 0.02);
     assert!(
         r.is_empty(),
@@ -318,7 +305,7 @@ fn full_pose_study_reports_qiao_acae() {
             "strategies = [\"random\", \"detmax\"]",
             "strategies = [\"random\"]",
         );
-    let out = tmp("tiny-pose");
+    let out = tmp_dir("harness-tiny-pose");
     run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
     let s = read_json(&out.join("summary.json")).unwrap();
     for e in s["results"].as_array().unwrap() {
@@ -336,13 +323,13 @@ fn full_pose_study_reports_qiao_acae() {
             assert!(a.is_finite() && a < b, "{key}: {b} -> {a}");
         }
     }
-    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let report = read(&out.join("report.md"));
     assert!(report.contains("after mean °"));
 }
 
 #[test]
 fn every_shipped_scenario_loads() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+    let dir = root().join("scenarios");
     let mut n = 0;
     for f in std::fs::read_dir(&dir).unwrap() {
         let p = f.unwrap().path();
@@ -403,7 +390,7 @@ fn full_pose_study_plots_the_attitude_error_per_point() {
             "strategies = [\"random\", \"detmax\"]",
             "strategies = [\"random\"]",
         );
-    let out = tmp("attitude");
+    let out = tmp_dir("harness-attitude");
     run_to(Scenario::parse(&text, None).unwrap(), &out, 2);
     for f in [
         "validation_trial0_attitude.png",
@@ -411,6 +398,6 @@ fn full_pose_study_plots_the_attitude_error_per_point() {
     ] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
-    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let report = read(&out.join("report.md"));
     assert!(report.contains("validation_trial0_attitude.png"));
 }

@@ -1,22 +1,9 @@
 //! Strict inputs on the command line: robot files checked after unit conversion (`fk`), and
 //! `check` refusing files that are not comparable summaries, each naming the file.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-strict-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn calbench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(args)
-        .output()
-        .unwrap()
-}
+use crate::common::{calbench, load_json, root, tmp_dir};
 
 /// Fails unless `o` is a refusal (non-zero exit, no panic) whose message has every `words`.
 fn refused(o: &Output, words: &[&str]) {
@@ -34,7 +21,7 @@ fn refused(o: &Output, words: &[&str]) {
 
 #[test]
 fn fk_refuses_a_length_that_overflows_in_mm() {
-    let d = tmp("fk");
+    let d = tmp_dir("strict-fk");
     let text = String::from_utf8(calbench(&["robots", "irb2600"]).stdout).unwrap();
     // The IRB2600 in metres, with a2 = 1e308 m: finite in the file, infinite in mm.
     let mut joint = 0;
@@ -79,11 +66,10 @@ fn fk_refuses_a_length_that_overflows_in_mm() {
 
 #[test]
 fn check_refuses_files_that_are_not_comparable_summaries() {
-    let d = tmp("check");
-    let summary = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/baselines/ci-guard.json");
+    let d = tmp_dir("strict-check");
+    let summary = root().join("results/baselines/ci-guard.json");
     let s = summary.to_str().unwrap();
-    let real: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    let real = load_json(&summary);
     let mut other = real.clone();
     other["scenario"] = serde_json::json!("another-study");
     let mut unrelated = real.clone();

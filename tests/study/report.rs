@@ -1,22 +1,14 @@
 //! Report plots: every plot writes a real PNG and SVG, deterministically, and survives empty
 //! and non-finite data.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use calbench::report::plots::{
     before_after, box_plot, box_stats, grouped_bars, sweep, traces, BoxStats, PLOT_SIZE,
 };
 use calbench::Error;
 
-/// A fresh folder for one test under cargo's per-target scratch directory.
-fn scratch(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join("report-tests")
-        .join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch dir");
-    dir
-}
+use crate::common::tmp_dir;
 
 const PNG_MAGIC: [u8; 8] = [0x89, b'P', b'N', b'G', 0x0D, 0x0A, 0x1A, 0x0A];
 
@@ -54,7 +46,7 @@ fn names(v: &[&str]) -> Vec<String> {
 
 #[test]
 fn grouped_bars_writes_png_and_svg() {
-    let dir = scratch("bars");
+    let dir = tmp_dir("report-bars");
     let cats = names(&["a2", "d3", "alpha2", "beta2", "tool.x"]);
     let series = vec![
         ("ls".to_string(), vec![92.0, 80.5, 99.0, 75.0, 60.0]),
@@ -75,7 +67,7 @@ fn grouped_bars_writes_png_and_svg() {
 
 #[test]
 fn grouped_bars_many_categories_rotated_labels() {
-    let dir = scratch("bars-many");
+    let dir = tmp_dir("report-bars-many");
     let cats: Vec<String> = (1..=30).map(|i| format!("theta{i}")).collect();
     let series = vec![("ls".to_string(), (0..30).map(|i| i as f64).collect())];
     let stem = dir.join("eta");
@@ -87,7 +79,7 @@ fn grouped_bars_many_categories_rotated_labels() {
 
 #[test]
 fn before_after_writes_png_and_svg() {
-    let dir = scratch("before-after");
+    let dir = tmp_dir("report-before-after");
     let before: Vec<f64> = (0..40)
         .map(|i| 1.0 + 0.3 * ((i as f64) * 0.7).sin())
         .collect();
@@ -105,7 +97,7 @@ fn before_after_writes_png_and_svg() {
 
 #[test]
 fn box_plot_writes_png_and_svg() {
-    let dir = scratch("box");
+    let dir = tmp_dir("report-box");
     let groups = vec![
         ("ls".to_string(), vec![0.10, 0.12, 0.11, 0.13, 0.09, 0.50]),
         ("lm".to_string(), vec![0.05, 0.06, 0.055, 0.07, 0.065]),
@@ -120,7 +112,7 @@ fn box_plot_writes_png_and_svg() {
 
 #[test]
 fn traces_linear_and_log() {
-    let dir = scratch("traces");
+    let dir = tmp_dir("report-traces");
     let series = vec![
         (
             "pso".to_string(),
@@ -155,7 +147,7 @@ fn traces_linear_and_log() {
 
 #[test]
 fn sweep_writes_png_and_svg() {
-    let dir = scratch("sweep");
+    let dir = tmp_dir("report-sweep");
     let series = vec![
         (
             "detmax".to_string(),
@@ -174,7 +166,7 @@ fn sweep_writes_png_and_svg() {
 
 #[test]
 fn empty_data_draws_titled_empty_charts() {
-    let dir = scratch("empty");
+    let dir = tmp_dir("report-empty");
     let d = |s: &str| dir.join(s);
     grouped_bars(&d("bars"), "Empty bars", "η", &[], &[]).unwrap();
     check_outputs(&d("bars"), "Empty bars");
@@ -194,7 +186,7 @@ fn empty_data_draws_titled_empty_charts() {
 
 #[test]
 fn non_finite_data_is_skipped() {
-    let dir = scratch("nan");
+    let dir = tmp_dir("report-nan");
     let d = |s: &str| dir.join(s);
     let nan = f64::NAN;
     let inf = f64::INFINITY;
@@ -267,7 +259,7 @@ fn non_finite_data_is_skipped() {
 
 #[test]
 fn renders_are_byte_identical() {
-    let dir = scratch("determinism");
+    let dir = tmp_dir("report-determinism");
     let cats = names(&["a1", "theta2", "beta3"]);
     let series = vec![
         ("ls".to_string(), vec![1.0, 2.0, 3.0]),
@@ -284,7 +276,7 @@ fn renders_are_byte_identical() {
 
 #[test]
 fn title_is_escaped_in_svg() {
-    let dir = scratch("escape");
+    let dir = tmp_dir("report-escape");
     let stem = dir.join("t");
     before_after(&stem, "LS & ridge <fig. 3>", &[1.0], &[0.5]).unwrap();
     let svg = check_outputs(&stem, "LS &amp; ridge &lt;fig. 3&gt;");
@@ -293,7 +285,7 @@ fn title_is_escaped_in_svg() {
 
 #[test]
 fn stem_keeps_its_dots() {
-    let dir = scratch("dots");
+    let dir = tmp_dir("report-dots");
     let stem = dir.join("eta.v2");
     traces(
         &stem,
@@ -310,7 +302,7 @@ fn stem_keeps_its_dots() {
 
 #[test]
 fn missing_folder_is_an_io_error() {
-    let dir = scratch("missing");
+    let dir = tmp_dir("report-missing");
     let stem = dir.join("no-such-folder").join("plot");
     let err = traces(&stem, "T", "i", "f", &[], false).unwrap_err();
     match err {

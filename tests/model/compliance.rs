@@ -1,8 +1,7 @@
 //! The elasto-geometric model: joint compliances identified with the kinematic errors, checked against finite differences, noise-free recovery, the robot file and
 //! measurement CSV round trips, and the command line.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
 use calbench::robot::compliance::{
     gravity_loaded_joints, gravity_torques, loaded_fk, CompliancePick,
@@ -18,6 +17,8 @@ use calbench::robot::sampling::uniform_joint_poses;
 use calbench::robot::{parse_robot_file, robot_to_toml, Param, Robot};
 use calbench::sim::sag::{Compliance, ComplianceModel, ComplianceSettings};
 use nalgebra::{DMatrix, DVector};
+
+use crate::common::{calbench, calbench_ok, load_json, root, tmp_dir, write_scenario};
 
 fn irb() -> Robot {
     calbench::robot::builtin::load("irb2600").unwrap()
@@ -225,7 +226,7 @@ fn measurement_csv_keeps_the_payload_column() {
         sigma_mm: None,
         payload_kg: Some(vec![0.0, 20.0, 0.0, 12.5]),
     };
-    let dir = tempdir("csv");
+    let dir = tmp_dir("compliance-csv");
     let path = dir.join("m.csv");
     write_measurements(&path, &r, &m).unwrap();
     let back = read_measurements(&path, &r).unwrap();
@@ -264,27 +265,14 @@ fn compliance_picks_are_checked() {
     assert!(e.contains("no link masses"), "{e}");
 }
 
-fn tempdir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-compliance-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn calbench(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
 /// The command line as a user runs it: a multi-payload scenario simulated, the measurement
 /// identified with `--compliance`, and the program compensated at a payload.
 #[test]
 fn simulate_identify_compensate_with_compliances() {
-    let dir = tempdir("cli");
-    let scenario = dir.join("elasto.toml");
-    std::fs::write(
-        &scenario,
+    let dir = tmp_dir("compliance-cli");
+    let scenario = write_scenario(
+        &dir,
+        "elasto",
         r#"name = "elasto"
 trials = 1
 seed = 3
@@ -305,16 +293,14 @@ compliance = ["c2", "c3"]
 [[methods]]
 name = "lm"
 "#,
-    )
-    .unwrap();
+    );
     let sim = dir.join("sim");
-    let o = calbench(&[
+    calbench_ok(&[
         "simulate",
         scenario.to_str().unwrap(),
         "--out",
         sim.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let csv = std::fs::read_to_string(sim.join("measurements.csv")).unwrap();
     assert!(csv.lines().next().unwrap().ends_with("payload_kg"));
     assert_eq!(
@@ -324,13 +310,12 @@ name = "lm"
     );
     let vcsv = std::fs::read_to_string(sim.join("validation.csv")).unwrap();
     assert!(vcsv.lines().nth(1).unwrap().ends_with(",10.000000"));
-    let truth: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(sim.join("truth.json")).unwrap()).unwrap();
+    let truth = load_json(&sim.join("truth.json"));
     let c2 = truth["true_compliance"]["c2"].as_f64().unwrap();
     assert!((c2 - true_c(1)).abs() < 1e-20);
 
     let id = dir.join("id");
-    let o = calbench(&[
+    calbench_ok(&[
         "identify",
         "--robot",
         "irb2600",
@@ -345,10 +330,7 @@ name = "lm"
         "--out",
         id.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let ident: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(id.join("identified.json")).unwrap())
-            .unwrap();
+    let ident = load_json(&id.join("identified.json"));
     for (name, j) in [("c2", 1), ("c3", 2)] {
         let got = ident["errors"][name].as_f64().unwrap();
         assert!((got - true_c(j)).abs() < 0.1 * true_c(j), "{name}: {got:e}");
@@ -364,7 +346,7 @@ name = "lm"
 
     // Without --compliance the same data leave the sag in the validation.
     let kin = dir.join("kin");
-    let o = calbench(&[
+    calbench_ok(&[
         "identify",
         "--robot",
         "irb2600",
@@ -377,10 +359,7 @@ name = "lm"
         "--out",
         kin.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let k: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(kin.join("identified.json")).unwrap())
-            .unwrap();
+    let k = load_json(&kin.join("identified.json"));
     assert!(k["validation_after_mm"]["rms"].as_f64().unwrap() > 2.0 * after);
 
     // Compensation at 20 kg differs from compensation at 0 kg by the sag.
@@ -389,7 +368,7 @@ name = "lm"
     let mut outs = Vec::new();
     for w in ["0", "20"] {
         let out = dir.join(format!("corrected-{w}.csv"));
-        let o = calbench(&[
+        calbench_ok(&[
             "compensate",
             "--robot",
             "irb2600",
@@ -402,7 +381,6 @@ name = "lm"
             "--out",
             out.to_str().unwrap(),
         ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let text = std::fs::read_to_string(&out).unwrap();
         assert!(text.contains(",ok"), "{text}");
         outs.push(text);
@@ -500,11 +478,11 @@ fn search_fitness_sees_the_compliances() {
 /// the floor, and the true compliances reported.
 #[test]
 fn the_elastogeometric_study_runs() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let out = tempdir("study");
-    let o = calbench(&[
+    let out = tmp_dir("compliance-study");
+    calbench_ok(&[
         "run",
-        root.join("scenarios/elastogeometric.toml")
+        root()
+            .join("scenarios/elastogeometric.toml")
             .to_str()
             .unwrap(),
         "--trials",
@@ -512,9 +490,7 @@ fn the_elastogeometric_study_runs() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let s: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let s = load_json(&out.join("summary.json"));
     assert!(s["true_compliance"]["c3"].as_f64().unwrap() > 0.0);
     let rms = |point: usize, method: &str| {
         s["results"]

@@ -2,8 +2,7 @@
 
 use calbench::identify::qiao::error_models::acpe_acae;
 use calbench::identify::qiao::{
-    bas, bas_pso, poses_in_cube, pso, BasOptions, BasPsoOptions, BasStart, MetaProblem, PsoOptions,
-    DEFAULT_K,
+    bas, bas_pso, pso, BasOptions, BasPsoOptions, BasStart, MetaProblem, PsoOptions, DEFAULT_K,
 };
 use calbench::measurement::Measure;
 use calbench::numeric::rng::stream;
@@ -11,18 +10,7 @@ use calbench::numeric::{Frame, Real};
 use calbench::robot::builtin::tx60_qiao_params;
 use calbench::robot::{Param, Robot};
 
-/// Errors of 0.1 mm / 0.001 rad (Qiao's pre-calibration ACPE/ACAE of 0.312 mm / 0.221° is of
-/// this order), scaled 1, −0.6, 0.8, −1, 0.4 in turn.
-fn injected(params: &[Param]) -> Vec<Real> {
-    params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let s = [1.0, -0.6, 0.8, -1.0, 0.4][i % 5];
-            s * if p.is_length() { 0.1 } else { 0.001 }
-        })
-        .collect()
-}
+use crate::common::{alternating_errors, qiao_cube_poses};
 
 struct Case {
     nominal: Robot,
@@ -35,11 +23,12 @@ struct Case {
 fn case() -> Case {
     let nominal = calbench::robot::builtin::load("tx60").unwrap();
     let params = tx60_qiao_params();
-    let truth = injected(&params);
-    let errs: Vec<(Param, Real)> = params.iter().copied().zip(truth.iter().copied()).collect();
+    // Errors of 0.1 mm / 0.001 rad (Qiao's pre-calibration ACPE/ACAE of 0.312 mm / 0.221° is
+    // of this order).
+    let errs = alternating_errors(&params, 0.1, 0.001);
+    let truth: Vec<Real> = errs.iter().map(|e| e.1).collect();
     let real = nominal.with_errors(&errs);
-    let mut rng = stream(2021, "poses");
-    let qs = poses_in_cube(&nominal, 50, [550.0, 0.0, 550.0], 1000.0, 200_000, &mut rng).unwrap();
+    let qs = qiao_cube_poses(&nominal, 50, &mut stream(2021, "poses"));
     let chain = real.chain();
     let measured = qs.iter().map(|q| chain.fk(q)).collect();
     Case {

@@ -2,48 +2,21 @@
 //! rows of the IPA UR10 data set, shipped in examples/ipa-ur10/), URDF robots against their
 //! DH twins, `identify` writing robot.urdf, and `compensate`.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
 
 use calbench::numeric::Real;
 use calbench::robot::builtin;
 use calbench::robot::urdf::UrdfRobot;
 use calbench::robot::Param;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-rd-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn ok(args: &[&str]) -> String {
-    let o = run(args);
-    assert!(
-        o.status.success(),
-        "calbench {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
+use crate::common::{calbench, calbench_ok, path_arg, root, tmp_dir};
 
 fn ex(f: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
+    root()
         .join("examples/ipa-ur10")
         .join(f)
         .display()
         .to_string()
-}
-
-fn s(p: &Path) -> String {
-    p.display().to_string()
 }
 
 /// Pose difference (mm, rad) of two robots' FK at internal joint values.
@@ -55,15 +28,15 @@ fn fk_gap(a: &calbench::robot::Robot, b: &calbench::robot::Robot, q: &[Real]) ->
 
 #[test]
 fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
-    let d = tmp("import");
+    let d = tmp_dir("realdata-import");
     let out = d.join("m.csv");
-    ok(&[
+    calbench_ok(&[
         "import",
         &ex("sample-200.csv"),
         "--mapping",
         &ex("mapping.toml"),
         "--out",
-        &s(&out),
+        path_arg(&out),
     ]);
     let text = std::fs::read_to_string(&out).unwrap();
     let mut lines = text.lines();
@@ -110,13 +83,13 @@ fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
     let bad = d.join("bad.csv");
     std::fs::write(&bad, ls.join("\n")).unwrap();
     let badout = d.join("bad-out.csv");
-    let o = run(&[
+    let o = calbench(&[
         "import",
-        &s(&bad),
+        path_arg(&bad),
         "--mapping",
         &ex("mapping.toml"),
         "--out",
-        &s(&badout),
+        path_arg(&badout),
     ]);
     let msg = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
@@ -157,10 +130,10 @@ fn a_written_urdf_has_the_fk_of_the_robot_it_was_written_from() {
         })
         .collect();
     let changed = u.robot.with_errors(&errors);
-    let d = tmp("urdf-write");
+    let d = tmp_dir("realdata-urdf-write");
     let path = d.join("changed.urdf");
     std::fs::write(&path, u.write(&changed).unwrap()).unwrap();
-    let back = builtin::load(&s(&path)).unwrap();
+    let back = builtin::load(path_arg(&path)).unwrap();
     assert_eq!(back.dof(), n);
     let mut g = calbench::numeric::rng::stream(4, "urdf-test");
     let mut moved: Real = 0.0;
@@ -176,20 +149,20 @@ fn a_written_urdf_has_the_fk_of_the_robot_it_was_written_from() {
 /// written, and equal to robot.toml), compensate.
 #[test]
 fn import_identify_compensate_on_the_shipped_rows() {
-    let d = tmp("pipeline");
+    let d = tmp_dir("realdata-pipeline");
     let m = d.join("m.csv");
     let mapping = d.join("mapping-rad.toml");
     let text = std::fs::read_to_string(ex("mapping.toml"))
         .unwrap()
         .replace("write_unit = \"deg\"", "write_unit = \"rad\"");
     std::fs::write(&mapping, text).unwrap();
-    ok(&[
+    calbench_ok(&[
         "import",
         &ex("sample-200.csv"),
         "--mapping",
-        &s(&mapping),
+        path_arg(&mapping),
         "--out",
-        &s(&m),
+        path_arg(&m),
     ]);
     // Position only: the q and xyz columns.
     let pos: String = std::fs::read_to_string(&m)
@@ -200,19 +173,19 @@ fn import_identify_compensate_on_the_shipped_rows() {
     let p = d.join("pos.csv");
     std::fs::write(&p, pos).unwrap();
     let out = d.join("id");
-    ok(&[
+    calbench_ok(&[
         "identify",
         "--robot",
         &ex("ur10.urdf"),
         "--data",
-        &s(&p),
+        path_arg(&p),
         "--method",
         "lm",
         "--out",
-        &s(&out),
+        path_arg(&out),
     ]);
-    let toml = builtin::load(&s(&out.join("robot.toml"))).unwrap();
-    let urdf = builtin::load(&s(&out.join("robot.urdf"))).unwrap();
+    let toml = builtin::load(path_arg(&out.join("robot.toml"))).unwrap();
+    let urdf = builtin::load(path_arg(&out.join("robot.urdf"))).unwrap();
     let mut g = calbench::numeric::rng::stream(5, "urdf-test");
     for q in calbench::robot::sampling::uniform_joint_poses(&toml, 20, &mut g) {
         let (mm, rad) = fk_gap(&toml, &urdf, &q);
@@ -225,16 +198,16 @@ fn import_identify_compensate_on_the_shipped_rows() {
     )
     .unwrap();
     let corr = d.join("corr.csv");
-    ok(&[
+    calbench_ok(&[
         "compensate",
         "--robot",
         &ex("ur10.urdf"),
         "--identified",
-        &s(&out.join("robot.toml")),
+        path_arg(&out.join("robot.toml")),
         "--joints",
-        &s(&prog),
+        path_arg(&prog),
         "--out",
-        &s(&corr),
+        path_arg(&corr),
     ]);
     let c = std::fs::read_to_string(&corr).unwrap();
     let mut rows = c.lines();
@@ -262,7 +235,7 @@ fn import_identify_compensate_on_the_shipped_rows() {
 /// `identify --export urdf` on a robot file: the URDF of a robot of each convention has its FK.
 #[test]
 fn robot_files_of_every_convention_export_to_a_urdf_with_their_fk() {
-    let d = tmp("export");
+    let d = tmp_dir("realdata-export");
     for (i, r) in [builtin::irb2600(), builtin::irb2600_mdh(), builtin::tx60()]
         .into_iter()
         .enumerate()
@@ -276,7 +249,7 @@ fn robot_files_of_every_convention_export_to_a_urdf_with_their_fk() {
         let r = r.with_errors(&errors);
         let path = d.join(format!("r{i}.urdf"));
         std::fs::write(&path, calbench::robot::urdf::robot_to_urdf(&r).unwrap()).unwrap();
-        let back = builtin::load(&s(&path)).unwrap();
+        let back = builtin::load(path_arg(&path)).unwrap();
         let mut g = calbench::numeric::rng::stream(6, "urdf-test");
         for q in calbench::robot::sampling::uniform_joint_poses(&r, 30, &mut g) {
             let (mm, rad) = fk_gap(&r, &back, &q);

@@ -1,40 +1,19 @@
 //! The file-level commands end to end: `simulate` reruns give the same bytes, and
 //! `identify` on its output writes a compensated robot that every command loads.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::Path;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
-fn calbench(args: &[&str]) -> std::process::Output {
-    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(args)
-        .output()
-        .unwrap();
-    assert!(
-        o.status.success(),
-        "calbench {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
+use crate::common::{bin, calbench, calbench_ok, load_json, root, tmp_dir};
 
 fn scenario() -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenarios/ci-guard.toml")
-        .display()
-        .to_string()
+    root().join("scenarios/ci-guard.toml").display().to_string()
 }
 
 #[test]
 fn simulate_reruns_are_byte_identical() {
-    let (a, b) = (tmp("sim-a"), tmp("sim-b"));
+    let (a, b) = (tmp_dir("cli-sim-a"), tmp_dir("cli-sim-b"));
     for d in [&a, &b] {
-        calbench(&[
+        calbench_ok(&[
             "simulate",
             &scenario(),
             "--trial",
@@ -50,18 +29,17 @@ fn simulate_reruns_are_byte_identical() {
         );
         assert!(!x.is_empty() && x == y, "{f} differs between reruns");
     }
-    let truth: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(a.join("truth.json")).unwrap()).unwrap();
+    let truth = load_json(&a.join("truth.json"));
     assert_eq!(truth["outliers"].as_array().unwrap().len(), 2);
     assert_eq!(truth["sag_mm"].as_array().unwrap().len(), 40);
 }
 
 #[test]
 fn identify_on_simulated_data_compensates_and_writes_a_loadable_robot() {
-    let sim = tmp("id-sim");
-    let out = tmp("id-out");
-    calbench(&["simulate", &scenario(), "--out", sim.to_str().unwrap()]);
-    let o = calbench(&[
+    let sim = tmp_dir("cli-id-sim");
+    let out = tmp_dir("cli-id-out");
+    calbench_ok(&["simulate", &scenario(), "--out", sim.to_str().unwrap()]);
+    let o = calbench_ok(&[
         "identify",
         "--robot",
         "irb2600",
@@ -75,13 +53,12 @@ fn identify_on_simulated_data_compensates_and_writes_a_loadable_robot() {
         out.to_str().unwrap(),
     ]);
     assert!(String::from_utf8_lossy(&o.stdout).contains("validation error"));
-    let j: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(out.join("identified.json")).unwrap()).unwrap();
+    let j = load_json(&out.join("identified.json"));
     let before = j["validation_before_mm"]["rms"].as_f64().unwrap();
     let after = j["validation_after_mm"]["rms"].as_f64().unwrap();
     assert!(after < 0.01 * before, "validation RMS {before} → {after}");
     let robot = out.join("robot.toml");
-    let o = calbench(&[
+    let o = calbench_ok(&[
         "fk",
         "--robot",
         robot.to_str().unwrap(),
@@ -97,39 +74,36 @@ fn identify_on_simulated_data_compensates_and_writes_a_loadable_robot() {
 
 #[test]
 fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
-    let qiao = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/qiao2021-tx60.toml");
-    let (pose, pos) = (tmp("k-pose"), tmp("k-pos"));
-    calbench(&[
+    let qiao = root().join("scenarios/qiao2021-tx60.toml");
+    let (pose, pos) = (tmp_dir("cli-k-pose"), tmp_dir("cli-k-pos"));
+    calbench_ok(&[
         "simulate",
         qiao.to_str().unwrap(),
         "--out",
         pose.to_str().unwrap(),
     ]);
-    calbench(&["simulate", &scenario(), "--out", pos.to_str().unwrap()]);
+    calbench_ok(&["simulate", &scenario(), "--out", pos.to_str().unwrap()]);
     let id = |sim: &Path, robot: &str, k: &str, out: &Path| {
-        Command::new(env!("CARGO_BIN_EXE_calbench"))
-            .args([
-                "identify",
-                "--robot",
-                robot,
-                "--data",
-                sim.join("measurements.csv").to_str().unwrap(),
-                "--method",
-                "lm",
-                "--validate",
-                sim.join("validation.csv").to_str().unwrap(),
-                "--k",
-                k,
-                "--out",
-                out.to_str().unwrap(),
-            ])
-            .output()
-            .unwrap()
+        calbench(&[
+            "identify",
+            "--robot",
+            robot,
+            "--data",
+            sim.join("measurements.csv").to_str().unwrap(),
+            "--method",
+            "lm",
+            "--validate",
+            sim.join("validation.csv").to_str().unwrap(),
+            "--k",
+            k,
+            "--out",
+            out.to_str().unwrap(),
+        ])
     };
-    let o = id(&pose, "tx60", "150", &tmp("k-out"));
+    let o = id(&pose, "tx60", "150", &tmp_dir("cli-k-out"));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for (sim, robot, k) in [(&pose, "tx60", "0"), (&pos, "irb2600", "100")] {
-        let o = id(sim, robot, k, &tmp("k-bad"));
+        let o = id(sim, robot, k, &tmp_dir("cli-k-bad"));
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains("--k"), "k = {k}: {err}");
     }
@@ -155,8 +129,7 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
         qs,
         ..Default::default()
     };
-    let dir = tmp("rank");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp_dir("cli-rank");
     let file = dir.join("joint1.csv");
     calbench::measurement::csv::write_measurements(&file, &robot, &data).unwrap();
     for method in ["ls", "ridge", "igg3", "lm", "bas"] {
@@ -172,10 +145,7 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
             "--out",
             out.to_str().unwrap(),
         ];
-        let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-            .args(args)
-            .output()
-            .unwrap();
+        let o = calbench(&args);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{method} accepted rank-deficient data");
         assert!(
@@ -185,7 +155,7 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
         assert!(!out.exists(), "{method} wrote output");
     }
     let out = dir.join("allowed");
-    calbench(&[
+    calbench_ok(&[
         "identify",
         "--robot",
         "irb2600",
@@ -197,9 +167,7 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
         "--out",
         out.to_str().unwrap(),
     ]);
-    let j: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("identified.json")).unwrap())
-            .unwrap();
+    let j = load_json(&out.join("identified.json"));
     assert_eq!(j["termination"], "rank-deficient");
     std::fs::remove_dir_all(&dir).unwrap();
 }
@@ -209,8 +177,8 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
 /// user's poses.
 #[test]
 fn identify_takes_method_options_and_identifiability_the_users_poses() {
-    let dir = tmp("set");
-    calbench(&[
+    let dir = tmp_dir("cli-set");
+    calbench_ok(&[
         "simulate",
         &scenario(),
         "--out",
@@ -230,21 +198,16 @@ fn identify_takes_method_options_and_identifiability_the_users_poses() {
         args.extend_from_slice(extra);
         let out = dir.join(out);
         args.extend_from_slice(&["--out", out.to_str().unwrap()]);
-        Command::new(env!("CARGO_BIN_EXE_calbench"))
-            .args(&args)
-            .output()
-            .unwrap()
+        calbench(&args)
     };
     let o = identify(&["--set", "iterations=50", "--set", "bound_mm=4"], "ok");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let j: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("ok/identified.json")).unwrap())
-            .unwrap();
+    let j = load_json(&dir.join("ok/identified.json"));
     assert_eq!(j["iterations"], 50);
     let o = identify(&["--set", "iterationz=50"], "bad");
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("iterationz"));
-    let o = calbench(&[
+    let o = calbench_ok(&[
         "identifiability",
         "--robot",
         "irb2600",
@@ -261,7 +224,7 @@ fn identify_takes_method_options_and_identifiability_the_users_poses() {
 /// parameters (README, Commands): each block's GCN before and after, and what was removed.
 #[test]
 fn identifiability_reports_gcn_blocks_of_the_separation() {
-    let o = calbench(&[
+    let o = calbench_ok(&[
         "identifiability",
         "--robot",
         "guo-3t2r",
@@ -279,16 +242,13 @@ fn identifiability_reports_gcn_blocks_of_the_separation() {
     }
     assert!(!a["removed"].as_array().unwrap().is_empty());
     assert!(a["rank"].as_u64().is_some());
-    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args([
-            "identifiability",
-            "--robot",
-            "guo-3t2r",
-            "--gcn-blocks",
-            "--gcn-threshold=-1",
-        ])
-        .output()
-        .unwrap();
+    let o = calbench(&[
+        "identifiability",
+        "--robot",
+        "guo-3t2r",
+        "--gcn-blocks",
+        "--gcn-threshold=-1",
+    ]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--gcn-threshold"));
 }
@@ -298,17 +258,17 @@ fn identifiability_reports_gcn_blocks_of_the_separation() {
 /// bytes, another seed another identification of the same budget.
 #[test]
 fn identify_seed_repeats_a_random_search_on_one_data_set() {
-    let qiao = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/qiao2021-tx60.toml");
-    let sim = tmp("seed-sim");
-    calbench(&[
+    let qiao = root().join("scenarios/qiao2021-tx60.toml");
+    let sim = tmp_dir("cli-seed-sim");
+    calbench_ok(&[
         "simulate",
         qiao.to_str().unwrap(),
         "--out",
         sim.to_str().unwrap(),
     ]);
     let run = |seed: &str, name: &str| {
-        let out = tmp(name);
-        calbench(&[
+        let out = tmp_dir(&format!("cli-{name}"));
+        calbench_ok(&[
             "identify",
             "--robot",
             "tx60",
@@ -327,9 +287,7 @@ fn identify_seed_repeats_a_random_search_on_one_data_set() {
             "--out",
             out.to_str().unwrap(),
         ]);
-        let j: serde_json::Value =
-            serde_json::from_slice(&std::fs::read(out.join("identified.json")).unwrap()).unwrap();
-        j
+        load_json(&out.join("identified.json"))
     };
     let (a, b, c) = (run("1", "seed-a"), run("1", "seed-b"), run("2", "seed-c"));
     assert_eq!(a["errors"], b["errors"]);
@@ -350,12 +308,12 @@ fn identify_seed_repeats_a_random_search_on_one_data_set() {
 /// A missing file is named once with the system's reason, not with the reason twice.
 #[test]
 fn a_missing_file_is_reported_once() {
-    let missing = tmp("missing").join("nope.csv");
-    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
+    let missing = tmp_dir("cli-missing").join("nope.csv");
+    let o = bin()
         .args(["identify", "--robot", "irb2600", "--data"])
         .arg(&missing)
         .args(["--method", "ls", "--out"])
-        .arg(tmp("missing-out"))
+        .arg(tmp_dir("cli-missing-out"))
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);

@@ -6,7 +6,7 @@
 //!
 //! Each parser gets [`CASES`] cases per property in the normal run, from a fixed seed so the
 //! run is repeatable. The `#[ignore]`d `*_long` tests run [`LONG_CASES`] cases from a random
-//! seed: `cargo test --test fuzz -- --ignored _long` (`CALBENCH_FUZZ_CASES` and
+//! seed: `cargo test --test cli -- --ignored _long` (`CALBENCH_FUZZ_CASES` and
 //! `CALBENCH_FUZZ_SEED` override the count and the seed; `CALBENCH_FUZZ_COLLECT=1` prints
 //! every message without the file and goes on, to list them all in one run).
 //!
@@ -15,7 +15,6 @@
 //! without the scenario file).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 
 use proptest::prelude::*;
@@ -26,6 +25,8 @@ use calbench::measurement::csv::read_measurements;
 use calbench::robot::builtin;
 use calbench::robot::{parse_robot_file, read_robot_file, robot_to_toml, Robot};
 use calbench::study::scenario::Scenario;
+
+use crate::common::{calbench, calbench_ok, path_arg, root, tmp_dir, write_scenario};
 
 /// Cases per property in the normal run.
 const CASES: u32 = 10_000;
@@ -654,10 +655,6 @@ fn robot_keys() -> &'static [String] {
     })
 }
 
-fn root() -> &'static Path {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
 /// The shipped scenarios.
 fn scenario_corpus() -> &'static [Vec<u8>] {
     static C: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
@@ -746,23 +743,9 @@ fn csv_corpus() -> &'static (Vec<Vec<u8>>, Vec<Robot>) {
                  [calibration]\ncount = 12\nstrategies = [\"random\"]\n\
                  [validation]\ncount = 4\n[[methods]]\nname = \"ls\"\n"
             );
-            let dir = std::env::temp_dir().join(format!(
-                "calbench-fuzz-simulate-{}-{tag}",
-                std::process::id()
-            ));
-            std::fs::create_dir_all(&dir).unwrap();
-            let path = dir.join("scenario.toml");
-            std::fs::write(&path, scenario).unwrap();
-            let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-                .args(["simulate", path.to_str().unwrap(), "--out"])
-                .arg(&dir)
-                .output()
-                .unwrap();
-            assert!(
-                o.status.success(),
-                "calbench simulate: {}",
-                String::from_utf8_lossy(&o.stderr)
-            );
+            let dir = tmp_dir(&format!("fuzz-simulate-{tag}"));
+            let path = write_scenario(&dir, "scenario", &scenario);
+            calbench_ok(&["simulate", path_arg(&path), "--out", path_arg(&dir)]);
             for f in ["measurements.csv", "validation.csv"] {
                 files.push(std::fs::read(dir.join(f)).unwrap());
                 robots.push(builtin::load(robot).unwrap());
@@ -944,7 +927,7 @@ fn csv_mutations() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
 fn robot_file_long() {
     let (cases, seed) = long_run();
     run_robot_bytes(cases, seed);
@@ -952,7 +935,7 @@ fn robot_file_long() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
 fn scenario_long() {
     let (cases, seed) = long_run();
     run_scenario_bytes(cases, seed);
@@ -960,7 +943,7 @@ fn scenario_long() {
 }
 
 #[test]
-#[ignore = "long fuzz run: cargo test --test fuzz -- --ignored _long"]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
 fn csv_long() {
     let (cases, seed) = long_run();
     run_csv_bytes(cases, seed);
@@ -1006,20 +989,19 @@ fn deep_nesting_is_refused_naming_the_file() {
 /// child process, since a stack overflow aborts the process.
 #[test]
 fn scenario_with_a_sweep_parses() {
-    let dir = std::env::temp_dir().join(format!("calbench-fuzz-sweep-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp_dir("fuzz-sweep");
     let guard = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
-    let path = dir.join("sweep.toml");
-    std::fs::write(
-        &path,
-        format!("{guard}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n"),
-    )
-    .unwrap();
-    let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(["simulate", path.to_str().unwrap(), "--out"])
-        .arg(dir.join("out"))
-        .output()
-        .unwrap();
+    let path = write_scenario(
+        &dir,
+        "sweep",
+        &format!("{guard}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n"),
+    );
+    let o = calbench(&[
+        "simulate",
+        path_arg(&path),
+        "--out",
+        path_arg(&dir.join("out")),
+    ]);
     std::fs::remove_dir_all(&dir).unwrap();
     assert!(
         o.status.success(),

@@ -4,7 +4,7 @@ use approx::assert_relative_eq;
 use calbench::identify::qiao::error_models::{
     acpe_acae, identify, pose_errors, residual_and_jacobian, stack, ErrorModel,
 };
-use calbench::identify::qiao::{poses_in_cube, DEFAULT_K as K};
+use calbench::identify::qiao::DEFAULT_K as K;
 use calbench::numeric::rng::stream;
 use calbench::numeric::{rot_x, Frame, Real, Vec3};
 use calbench::robot::builtin::tx60_qiao_params;
@@ -12,21 +12,11 @@ use calbench::robot::{Param, Robot};
 use nalgebra::DMatrix;
 use rand_distr::{Distribution, Normal};
 
-fn errors(params: &[Param], len: Real, ang: Real) -> Vec<(Param, Real)> {
-    params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let s = [1.0, -0.6, 0.8, -1.0, 0.4][i % 5];
-            (*p, s * if p.is_length() { len } else { ang })
-        })
-        .collect()
-}
+use crate::common::{alternating_errors, qiao_cube_poses};
 
 fn setup(n: usize, seed: u64) -> (Robot, Vec<Vec<Real>>) {
     let nominal = calbench::robot::builtin::load("tx60").unwrap();
-    let mut rng = stream(seed, "poses");
-    let qs = poses_in_cube(&nominal, n, [550.0, 0.0, 550.0], 1000.0, 200_000, &mut rng).unwrap();
+    let qs = qiao_cube_poses(&nominal, n, &mut stream(seed, "poses"));
     (nominal, qs)
 }
 
@@ -37,8 +27,8 @@ fn jacobians_are_minus_the_derivative_of_the_residuals() {
     // point 0.5 mm / 0.005 rad off), so that iterated Gauss–Newton is exact for every model.
     let (nominal, qs) = setup(3, 1);
     let params = tx60_qiao_params();
-    let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
-    let at = nominal.with_errors(&errors(&params, -0.2, -0.002));
+    let real = nominal.with_errors(&alternating_errors(&params, 0.3, 0.003));
+    let at = nominal.with_errors(&alternating_errors(&params, -0.2, -0.002));
     let h = 1e-6;
     for model in ErrorModel::ALL {
         for q in &qs {
@@ -90,7 +80,7 @@ fn one_step(len: Real, ang: Real) -> (Vec<Vec<Real>>, Vec<(Real, Real)>, Vec<Rea
     let (nominal, qs) = setup(50, 3);
     let (_, val) = setup(30, 4);
     let params = tx60_qiao_params();
-    let errs = errors(&params, len, ang);
+    let errs = alternating_errors(&params, len, ang);
     let real = nominal.with_errors(&errs);
     let measured: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     let truth_val: Vec<Frame> = val.iter().map(|q| real.fk(q)).collect();
@@ -163,10 +153,10 @@ fn qiao_comparison(len: Real, ang: Real, sp: Real, sa: Real, draws: u64) -> [(Re
     let mut out = [(0.0, 0.0); 3];
     for draw in 0..draws {
         let mut rng = stream(draw, "qiao-comparison");
-        let cube = |n, rng: &mut _| {
-            poses_in_cube(&nominal, n, [550.0, 0.0, 550.0], 1000.0, 200_000, rng).unwrap()
-        };
-        let (qs, val) = (cube(50, &mut rng), cube(30, &mut rng));
+        let (qs, val) = (
+            qiao_cube_poses(&nominal, 50, &mut rng),
+            qiao_cube_poses(&nominal, 30, &mut rng),
+        );
         let errs: Vec<(Param, Real)> = params
             .iter()
             .map(|p| {
@@ -227,7 +217,7 @@ fn models_rank_as_qiao_reports() {
 fn iterated_models_recover_noise_free_errors() {
     let (nominal, qs) = setup(50, 5);
     let params = tx60_qiao_params();
-    let errs = errors(&params, 0.5, 0.005);
+    let errs = alternating_errors(&params, 0.5, 0.005);
     let real = nominal.with_errors(&errs);
     let measured: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     for model in ErrorModel::ALL {
@@ -295,10 +285,10 @@ fn model_names_round_trip() {
 
 #[test]
 fn harness_validation_errors_are_qiao_acpe_and_acae() {
-    // The harness's per-pose errors average to Qiao's ACPE and ACAE (docs/formats.md).
+    // The harness's per-pose errors average to Qiao's ACPE and ACAE (FORMATS.md).
     let (nominal, qs) = setup(10, 6);
     let params = tx60_qiao_params();
-    let real = nominal.with_errors(&errors(&params, 0.3, 0.003));
+    let real = nominal.with_errors(&alternating_errors(&params, 0.3, 0.003));
     let truth: Vec<Frame> = qs.iter().map(|q| real.fk(q)).collect();
     let model: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
     let e = calbench::calibrate::validation_errors(&nominal, &qs, None, &truth).unwrap();

@@ -3,16 +3,13 @@
 //! example, and the streaming statistics against trials.csv.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use calbench::study::scenario::Scenario;
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-sweeps-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use crate::common::{
+    bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario,
+};
 
 /// A small study: LS and IGG3 on random poses, no sag (fast).
 const SMALL: &str = r#"
@@ -42,61 +39,29 @@ name = "igg3"
 label = "rob"
 "#;
 
-fn calbench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn ok(args: &[&str]) -> Output {
-    let o = calbench(args);
-    assert!(
-        o.status.success(),
-        "calbench {args:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    o
-}
-
-fn write_scenario(dir: &Path, name: &str, text: &str) -> String {
-    let p = dir.join(format!("{name}.toml"));
-    std::fs::write(
-        &p,
-        text.replace("name = \"small\"", &format!("name = \"{name}\"")),
-    )
-    .unwrap();
-    p.to_string_lossy().into_owned()
-}
-
-fn read(p: &Path) -> String {
-    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-fn json(p: &Path) -> serde_json::Value {
-    serde_json::from_str(&read(p)).unwrap()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
+/// Writes `text`, a variant of [`SMALL`], as `dir/name.toml` and named `name`; returns the
+/// file's path as an argument.
+fn write_small(dir: &Path, name: &str, text: &str) -> String {
+    let text = text.replace("name = \"small\"", &format!("name = \"{name}\""));
+    path_arg(&write_scenario(dir, name, &text)).to_string()
 }
 
 #[test]
 fn shards_merge_into_the_bytes_of_the_unsharded_run() {
-    let dir = tmp("shards");
-    let sc = write_scenario(
+    let dir = tmp_dir("sweeps-shards");
+    let sc = write_small(
         &dir,
         "sharded",
         &format!("{SMALL}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 3]\n"),
     );
     let full = dir.join("full");
-    ok(&["run", &sc, "--threads", "2", "--out", s(&full)]);
+    calbench_ok(&["run", &sc, "--threads", "2", "--out", path_arg(&full)]);
     for n in [1usize, 3, 7] {
         let shards: Vec<PathBuf> = (0..n).map(|i| dir.join(format!("s{n}_{i}"))).collect();
         for (i, d) in shards.iter().enumerate() {
             // Thread counts differ between shards: the bytes must not.
             let threads = (1 + i % 2).to_string();
-            ok(&[
+            calbench_ok(&[
                 "run",
                 &sc,
                 "--shard",
@@ -104,14 +69,14 @@ fn shards_merge_into_the_bytes_of_the_unsharded_run() {
                 "--threads",
                 &threads,
                 "--out",
-                s(d),
+                path_arg(d),
             ]);
         }
         let merged = dir.join(format!("m{n}"));
         let mut args = vec!["merge"];
         args.extend(shards.iter().rev().map(|d| d.to_str().unwrap()));
-        args.extend(["--out", s(&merged)]);
-        ok(&args);
+        args.extend(["--out", path_arg(&merged)]);
+        calbench_ok(&args);
         for f in ["summary.json", "trials.csv", "report.md"] {
             let (a, b) = (read(&full.join(f)), read(&merged.join(f)));
             if f == "report.md" {
@@ -137,20 +102,20 @@ fn shards_merge_into_the_bytes_of_the_unsharded_run() {
 
 #[test]
 fn merge_refuses_missing_duplicate_and_foreign_shards() {
-    let dir = tmp("refuse");
-    let sc = write_scenario(&dir, "refused", SMALL);
+    let dir = tmp_dir("sweeps-refuse");
+    let sc = write_small(&dir, "refused", SMALL);
     let d = |n: &str| dir.join(n);
     for i in 0..3 {
-        ok(&[
+        calbench_ok(&[
             "run",
             &sc,
             "--shard",
             &format!("{i}/3"),
             "--out",
-            s(&d(&format!("a{i}"))),
+            path_arg(&d(&format!("a{i}"))),
         ]);
     }
-    ok(&[
+    calbench_ok(&[
         "run",
         &sc,
         "--seed",
@@ -158,46 +123,58 @@ fn merge_refuses_missing_duplicate_and_foreign_shards() {
         "--shard",
         "2/3",
         "--out",
-        s(&d("seed10")),
+        path_arg(&d("seed10")),
     ]);
     let err = |args: &[&str]| {
         let o = calbench(args);
         assert!(!o.status.success(), "accepted: {args:?}");
         String::from_utf8_lossy(&o.stderr).into_owned()
     };
-    let m = err(&["merge", s(&d("a0")), s(&d("a1")), "--out", s(&d("x"))]);
+    let m = err(&[
+        "merge",
+        path_arg(&d("a0")),
+        path_arg(&d("a1")),
+        "--out",
+        path_arg(&d("x")),
+    ]);
     assert!(m.contains("missing") && m.contains("2/3"), "{m}");
     let m = err(&[
         "merge",
-        s(&d("a0")),
-        s(&d("a1")),
-        s(&d("a1")),
+        path_arg(&d("a0")),
+        path_arg(&d("a1")),
+        path_arg(&d("a1")),
         "--out",
-        s(&d("x")),
+        path_arg(&d("x")),
     ]);
     assert!(m.contains("twice") && m.contains("1/3"), "{m}");
     let m = err(&[
         "merge",
-        s(&d("a0")),
-        s(&d("a1")),
-        s(&d("seed10")),
+        path_arg(&d("a0")),
+        path_arg(&d("a1")),
+        path_arg(&d("seed10")),
         "--out",
-        s(&d("x")),
+        path_arg(&d("x")),
     ]);
     assert!(m.contains("seed") && m.contains("seed10"), "{m}");
-    let m = err(&["merge", s(&d("a0")), s(&dir), "--out", s(&d("x"))]);
+    let m = err(&[
+        "merge",
+        path_arg(&d("a0")),
+        path_arg(&dir),
+        "--out",
+        path_arg(&d("x")),
+    ]);
     assert!(m.contains("shard.json"), "{m}");
     assert!(!d("x").join("summary.json").exists());
     for bad in ["3/3", "1/0", "x"] {
-        let m = err(&["run", &sc, "--shard", bad, "--out", s(&d("y"))]);
+        let m = err(&["run", &sc, "--shard", bad, "--out", path_arg(&d("y"))]);
         assert!(m.contains("--shard"), "{m}");
     }
 }
 
 #[test]
 fn a_grid_runs_its_product_and_draws_heat_maps() {
-    let dir = tmp("grid");
-    let sc = write_scenario(
+    let dir = tmp_dir("sweeps-grid");
+    let sc = write_small(
         &dir,
         "grid",
         &format!(
@@ -207,8 +184,8 @@ fn a_grid_runs_its_product_and_draws_heat_maps() {
         .replace("trials = 5", "trials = 2"),
     );
     let out = dir.join("out");
-    ok(&["run", &sc, "--out", s(&out)]);
-    let sm = json(&out.join("summary.json"));
+    calbench_ok(&["run", &sc, "--out", path_arg(&out)]);
+    let sm = load_json(&out.join("summary.json"));
     assert_eq!(
         sm["sweep_keys"],
         serde_json::json!(["outliers.count", "methods.rob.k0"])
@@ -310,10 +287,10 @@ fn bad_sweeps_are_refused_naming_the_file_and_the_key() {
 /// The streaming statistics of summary.json against trials.csv, computed here directly.
 #[test]
 fn summary_means_are_the_means_of_trials_csv() {
-    let dir = tmp("means");
-    let sc = write_scenario(&dir, "means", &SMALL.replace("trials = 5", "trials = 300"));
+    let dir = tmp_dir("sweeps-means");
+    let sc = write_small(&dir, "means", &SMALL.replace("trials = 5", "trials = 300"));
     let out = dir.join("out");
-    ok(&["run", &sc, "--out", s(&out)]);
+    calbench_ok(&["run", &sc, "--out", path_arg(&out)]);
     let csv = read(&out.join("trials.csv"));
     let mut lines = csv.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -321,7 +298,7 @@ fn summary_means_are_the_means_of_trials_csv() {
     let (m, rms, term) = (col("method"), col("after_rms_mm"), col("termination"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     assert_eq!(rows.len(), 600);
-    let sm = json(&out.join("summary.json"));
+    let sm = load_json(&out.join("summary.json"));
     for e in sm["results"].as_array().unwrap() {
         let v: Vec<f64> = rows
             .iter()
@@ -342,9 +319,9 @@ fn summary_means_are_the_means_of_trials_csv() {
 /// The Slurm example run as a cluster would: each array task, then the merge step.
 #[test]
 fn the_slurm_example_runs_and_merges() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dir = tmp("slurm");
-    let sc = write_scenario(
+    let root = root();
+    let dir = tmp_dir("sweeps-slurm");
+    let sc = write_small(
         &dir,
         "cluster",
         &format!("{SMALL}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n"),
@@ -371,7 +348,7 @@ fn the_slurm_example_runs_and_merges() {
     }
     script("merge.sbatch", None);
     let full = dir.join("full");
-    ok(&["run", &sc, "--out", s(&full)]);
+    calbench_ok(&["run", &sc, "--out", path_arg(&full)]);
     for f in ["summary.json", "trials.csv"] {
         assert_eq!(
             read(&full.join(f)),
@@ -384,7 +361,7 @@ fn the_slurm_example_runs_and_merges() {
 /// The README's sharded-run commands, as written (with this build's binary).
 #[test]
 fn the_readme_shard_commands_run() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = root();
     let readme = read(&root.join("README.md"));
     let block = readme
         .split("```sh\n")
@@ -392,7 +369,7 @@ fn the_readme_shard_commands_run() {
         .map(|b| &b[..b.find("```").unwrap()])
         .find(|b| b.contains("--shard"))
         .expect("a README example with --shard");
-    let dir = tmp("readme");
+    let dir = tmp_dir("sweeps-readme");
     let mut n = 0;
     for line in block.lines().filter(|l| l.starts_with("calbench ")) {
         let words: Vec<String> = line
@@ -406,11 +383,7 @@ fn the_readme_shard_commands_run() {
                 }
             })
             .collect();
-        let o = Command::new(env!("CARGO_BIN_EXE_calbench"))
-            .args(&words)
-            .current_dir(&dir)
-            .output()
-            .unwrap();
+        let o = bin().args(&words).current_dir(&dir).output().unwrap();
         assert!(
             o.status.success(),
             "{line}: {}",
@@ -420,11 +393,11 @@ fn the_readme_shard_commands_run() {
     }
     assert_eq!(n, 3);
     let full = dir.join("full");
-    ok(&[
+    calbench_ok(&[
         "run",
-        s(&root.join("scenarios/ci-guard.toml")),
+        path_arg(&root.join("scenarios/ci-guard.toml")),
         "--out",
-        s(&full),
+        path_arg(&full),
     ]);
     assert_eq!(
         read(&full.join("summary.json")),

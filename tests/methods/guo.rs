@@ -10,6 +10,8 @@ use calbench::robot::{parse_robot_file, robot_to_toml, Param};
 use calbench::study::scenario::Scenario;
 use calbench::study::{run, RunOptions, Study};
 
+use crate::common::tmp_dir;
+
 const FULL: &str = r#"
 name = "guo-full-test"
 seed = 3
@@ -96,7 +98,7 @@ fn ls_is_refused_on_the_rank_deficient_full_model_and_lm_runs_it() {
 
 #[test]
 fn lm_on_the_full_model_reports_eta_for_every_parameter_noise_free() {
-    let out = std::env::temp_dir().join(format!("calbench-guo-full-{}", std::process::id()));
+    let out = tmp_dir("guo-full");
     let s = Scenario::parse(FULL, None).unwrap();
     let opts = RunOptions {
         out: Some(out.clone()),

@@ -1,0 +1,11 @@
+//! The command line and the files it reads: `simulate`, `identify`, `fk`, `check`, `import`
+//! and `compensate` end to end, strict refusals of bad inputs, fuzzing of the robot, scenario
+//! and measurement parsers, and real tracker data (the IPA UR10 rows in `examples/ipa-ur10/`).
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod cli;
+mod fuzz;
+mod realdata;
+mod strict_inputs;

@@ -1,0 +1,87 @@
+//! Helpers shared by the test crates. Each group's `tests/<group>/main.rs` includes this file
+//! as `#[path = "../common/mod.rs"] mod common;` and uses a part of it.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use calbench::identify::qiao::poses_in_cube;
+use calbench::numeric::rng::Rng;
+use calbench::numeric::Real;
+use calbench::robot::{Param, Robot};
+
+/// The crate's folder, which holds the shipped files (`scenarios/`, `examples/`, `results/`).
+pub fn root() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A fresh, empty folder `calbench-NAME-PID` in the temporary folder. `NAME` starts with the
+/// test file's name (`cli-…`, `sweeps-…`), as the tests of one crate share a process.
+pub fn tmp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
+    d
+}
+
+/// The `calbench` binary of this build, to be given arguments, a folder or an environment.
+pub fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_calbench"))
+}
+
+/// Runs `calbench ARGS` and returns its output, whether it succeeded or not.
+pub fn calbench(args: &[&str]) -> Output {
+    bin().args(args).output().unwrap()
+}
+
+/// Runs `calbench ARGS` and fails, with its standard error, unless it succeeds.
+pub fn calbench_ok(args: &[&str]) -> Output {
+    let o = calbench(args);
+    assert!(
+        o.status.success(),
+        "calbench {args:?}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+/// A path as a command-line argument.
+pub fn path_arg(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The text of a file; a failure names the file.
+pub fn read(p: &Path) -> String {
+    std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// The JSON document of a file (`summary.json`, `identified.json`, `truth.json`, …).
+pub fn load_json(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&read(p)).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// Writes a scenario as `DIR/NAME.toml` and returns its path.
+pub fn write_scenario(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, text).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    p
+}
+
+/// Errors of `len` mm on the lengths and `ang` rad on the angles of `params`, scaled 1, −0.6,
+/// 0.8, −1, 0.4 in turn.
+pub fn alternating_errors(params: &[Param], len: Real, ang: Real) -> Vec<(Param, Real)> {
+    params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let s = [1.0, -0.6, 0.8, -1.0, 0.4][i % 5];
+            (*p, s * if p.is_length() { len } else { ang })
+        })
+        .collect()
+}
+
+/// `n` poses of `robot` whose tool point lies in Qiao 2021's measurement cube for the TX60
+/// (1 m edge, centred at (550, 0, 550) mm).
+pub fn qiao_cube_poses(robot: &Robot, n: usize, rng: &mut Rng) -> Vec<Vec<Real>> {
+    poses_in_cube(robot, n, [550.0, 0.0, 550.0], 1000.0, 200_000, rng).unwrap()
+}

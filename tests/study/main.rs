@@ -1,0 +1,9 @@
+//! Monte-Carlo studies: the harness end to end (files, determinism, the CI regression guard),
+//! sweeps and sharded runs, and the report's plots.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod harness;
+mod report;
+mod sweeps;
