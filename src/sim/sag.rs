@@ -1,4 +1,4 @@
-//! Gravity sag of a compliant arm (SPEC §3 "Compliance", FORMATS.md `[compliance]`).
+//! Gravity sag of a compliant arm (docs/formats.md `[compliance]`).
 //!
 //! Each revolute joint is a torsional spring of stiffness `k_j` (N·m/rad); under gravity (and an
 //! optional payload) the arm sags. This is the unmodelled, pose-dependent share of the
@@ -16,7 +16,7 @@
 //! changes of the two screw travels that keep their sum.
 //!
 //! **Models.**
-//! - `linear`: the small-deflection model `Δq = K⁻¹ τ_g(q)` (SPEC §3), with
+//! - `linear`: the small-deflection model `Δq = K⁻¹ τ_g(q)`, with
 //!   `τ_g,j = z_jᵀ Σ_{i ≥ j} (c_i − o_j) × m_i g` the gravity torque about joint `j`'s axis
 //!   (`z_j`, through `o_j`) of every mass downstream; the deflected tool frame is
 //!   `FK(q + Δq)`.
@@ -46,7 +46,7 @@ pub enum ComplianceModel {
     None,
 }
 
-/// The `[compliance]` section of a scenario (FORMATS.md). When the section is absent, the
+/// The `[compliance]` section of a scenario (docs/formats.md). When the section is absent, the
 /// default is `model = "none"`, no overrides and no payload.
 #[derive(Clone, Debug, PartialEq, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -274,7 +274,7 @@ impl Compliance {
         }
     }
 
-    /// The joint deflection `Δq = K⁻¹ τ_g(q)` of the linear model (SPEC §3), in internal
+    /// The joint deflection `Δq = K⁻¹ τ_g(q)` of the linear model, in internal
     /// units, at joint values `q` (internal units) of `robot` (the true robot). Zero for
     /// prismatic joints. Whatever the configured model, this is the small-deflection estimate.
     pub fn joint_deflection(&self, robot: &Robot, q: &[Real]) -> Result<Vec<Real>> {

@@ -285,7 +285,7 @@ fn model_names_round_trip() {
 
 #[test]
 fn harness_validation_errors_are_qiao_acpe_and_acae() {
-    // The harness's per-pose errors average to Qiao's ACPE and ACAE (FORMATS.md).
+    // The harness's per-pose errors average to Qiao's ACPE and ACAE (docs/formats.md).
     let (nominal, qs) = setup(10, 6);
     let params = tx60_qiao_params();
     let real = nominal.with_errors(&alternating_errors(&params, 0.3, 0.003));
