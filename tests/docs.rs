@@ -471,3 +471,42 @@ fn head_to_head_scripts_name_what_is_missing() {
     );
     std::fs::remove_dir_all(&peer).unwrap();
 }
+
+/// The `rust-version` that Cargo.toml declares is one the crate and every locked dependency
+/// build with: no package of `cargo metadata` asks for a newer compiler. (Clippy's
+/// `incompatible_msrv` lint, run with `-D warnings` by scripts/test.sh, checks the crate's own
+/// use of the standard library against the same number.)
+#[test]
+fn declared_rust_version_covers_every_dependency() {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let o = Command::new(cargo)
+        .args(["metadata", "--format-version", "1", "--locked"])
+        .current_dir(root())
+        .output()
+        .expect("cargo metadata runs");
+    assert!(o.status.success(), "cargo metadata: {}", text(&o));
+    let meta: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let version = |s: &str| -> Vec<u64> {
+        let mut v: Vec<u64> = s.split('.').map(|p| p.parse().unwrap()).collect();
+        v.resize(3, 0);
+        v
+    };
+    let packages = meta["packages"].as_array().unwrap();
+    let ours = packages
+        .iter()
+        .find(|p| p["name"] == "calbench")
+        .and_then(|p| p["rust_version"].as_str())
+        .expect("Cargo.toml declares rust-version");
+    let newer: Vec<String> = packages
+        .iter()
+        .filter_map(|p| {
+            let need = p["rust_version"].as_str()?;
+            (version(need) > version(ours))
+                .then(|| format!("{} {} needs {need}", p["name"], p["version"]))
+        })
+        .collect();
+    assert!(
+        newer.is_empty(),
+        "rust-version {ours} is below what these need: {newer:?}"
+    );
+}
