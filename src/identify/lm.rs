@@ -4,7 +4,7 @@
 //! `M = I`, or `M = diag(JᵀJ)` with Marquardt's scaling ([`LmOptions::marquardt`]).
 //!
 //! - Fixed damping (Guo 2024 eq. 8, `μ = 1`): every step is taken; stop when `max |Δx| < ε`
-//!   (the statistics then come from the last evaluation, [`Work::take_step_in_residual`]).
+//!   (the statistics then come from the last evaluation, `Work::take_step_in_residual`).
 //! - Adaptive damping (Ban: `λ0 = 0.01`, `ε = 1e-5`, `kmax = 50`): a step is accepted when it
 //!   lowers `|ΔP|²`, and λ is then divided by the factor (10); otherwise λ is multiplied by it
 //!   and the step is solved again. Stop when an accepted step has `max |Δx| < ε`

@@ -138,34 +138,14 @@ pub fn pose_rows4(
     row0: usize,
 ) -> Lanes<LANES> {
     let vars: &[ChainVars; LANES] = vars[..LANES].try_into().expect("LANES poses");
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
-        return unsafe { pose_rows4_avx2(chain, cols, vars, measure, out, row0) };
-    }
-    pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0)
+    crate::numeric::simd::dispatch(
+        #[inline(always)]
+        |_| pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0),
+    )
 }
 
 /// Poses per call of [`pose_rows4`].
 pub const LANES: usize = 4;
-
-/// [`pose_rows_lanes`] of four poses compiled for AVX2 (no fused multiply-add: the same
-/// operations, so the same bits as without).
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn pose_rows4_avx2(
-    chain: &Chain,
-    cols: &Columns,
-    vars: &[ChainVars; LANES],
-    measure: Measure,
-    out: &mut DMatrix<Real>,
-    row0: usize,
-) -> Lanes<LANES> {
-    pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0)
-}
 
 /// The rows of `L` consecutive poses walked together ([`Chain::walk_lanes`]).
 #[inline(always)]
