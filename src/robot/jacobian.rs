@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::measurement::Measure;
 use crate::numeric::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
-use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot};
+use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot, MAX_JOINTS};
 
 /// Maps flat parameter indices to Jacobian columns, for a chosen parameter list.
 #[derive(Clone, Debug)]
@@ -26,7 +26,7 @@ pub struct Columns {
     /// Per chain variable: the column of its joint's compliance ([`Param::Compliance`]),
     /// which receives the derivative by that variable (the caller scales it by the joint's
     /// gravity torque, [`crate::identify::RobotProblem`]).
-    of_var: [Option<usize>; 16],
+    of_var: [Option<usize>; MAX_JOINTS],
     /// Whether any entry of `of_var` is set.
     any_var: bool,
     params: Vec<Param>,
@@ -37,7 +37,7 @@ impl Columns {
     /// compliance `c_j` holds the derivative by joint `j`'s chain variable, unscaled.
     pub fn new(params: &[Param], dof: usize) -> Columns {
         let mut of_param = vec![None; crate::robot::value_count(dof)];
-        let mut of_var = [None; 16];
+        let mut of_var = [None; MAX_JOINTS];
         for (c, p) in params.iter().enumerate() {
             match *p {
                 Param::Compliance(j) => of_var[j] = Some(c),
@@ -200,9 +200,9 @@ fn record_rows<const L: usize>(
     end
 }
 
-/// Most rotation columns of a pose: three rotation operations per joint (16 joints), six for
-/// base and tool, and one compliance column per joint.
-const MAX_OPS: usize = 4 * 16 + 6;
+/// Most rotation columns of a pose: three rotation operations per joint ([`MAX_JOINTS`]
+/// joints), six for base and tool, and one compliance column per joint.
+const MAX_OPS: usize = 4 * MAX_JOINTS + 6;
 
 /// A rotation column waiting for the end point: axis `w` and origin `o` in the world (one
 /// lane per pose), and the column.
