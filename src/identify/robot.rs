@@ -20,7 +20,7 @@ use crate::numeric::rng::Rng;
 use crate::numeric::{Frame, Mat3, Real, Vec3};
 use crate::robot::compliance::{deflect_vars, gravity_torques_vars};
 use crate::robot::jacobian::{log_orientation_rows, pose_rows4, pose_rows_vars, Columns, LANES};
-use crate::robot::{Chain, ChainVars, JointType, Param, Robot};
+use crate::robot::{Chain, ChainVars, JointType, Param, Robot, MAX_JOINTS};
 
 /// A [`LeastSquares`] problem over a robot's parameter errors.
 #[derive(Debug)]
@@ -328,9 +328,9 @@ impl LeastSquares for RobotProblem<'_> {
             // torques of the current geometry at the commanded pose; the column of c_j is the
             // derivative by that variable times τ_j (τ's own dependence on the geometry is
             // second order and left out).
-            let mut tau = [0.0; 16];
+            let mut tau = [0.0; MAX_JOINTS];
             gravity_torques_vars(self.nominal, chain, v, &self.masses, load, &mut tau[..dof]);
-            let mut dv = [0.0; 16];
+            let mut dv = [0.0; MAX_JOINTS];
             for (k, d) in dv.iter_mut().enumerate().take(dof) {
                 *d = values[Param::Compliance(k).index(dof)] * tau[k];
             }

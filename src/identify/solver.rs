@@ -13,6 +13,7 @@ use super::weights::{point_weights, redecide_inliers, Residuals, Robustness, Sig
 use super::xi::{choose_xi, RidgeStep, XiRule};
 use super::{Identified, Termination};
 use crate::error::Result;
+use crate::numeric::gram;
 use crate::numeric::linalg::{self, solve_spd};
 use crate::numeric::symeig::symmetric_eigenvalues;
 use crate::numeric::Real;
@@ -178,8 +179,9 @@ impl Work {
     }
 
     /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: the
-    /// lower triangle of `N` by dot products of `J`'s contiguous columns ([`dot`]), mirrored so
-    /// that `N` is exactly symmetric; with all weights 1 `P J` is not formed.
+    /// lower triangle of `N` by dot products of `J`'s contiguous columns
+    /// ([`gram::normal_equations`]), mirrored so that `N` is exactly symmetric; with all
+    /// weights 1 `P J` is not formed.
     pub fn normal(&mut self, w: &[Real]) {
         let rows = self.rows;
         let unit = w.iter().all(|&wi| wi == 1.0);
@@ -196,231 +198,14 @@ impl Work {
             }
         }
         let pj = if unit { &self.j } else { &self.pj };
-        let (m, t) = self.j.shape();
         let (js, pjs) = (self.j.as_slice(), pj.as_slice());
         let (n, g, r) = (
             self.n.as_mut_slice(),
             self.g.as_mut_slice(),
             self.r.as_slice(),
         );
-        #[cfg(target_arch = "x86_64")]
-        if crate::numeric::has_avx2_fma() {
-            gram::<Avx2>(js, pjs, r, m, t, n, g);
-            return;
-        }
-        gram::<Portable>(js, pjs, r, m, t, n, g);
+        gram::normal_equations(js, pjs, r, n, g);
     }
-}
-
-/// `N = (PJ)ᵀ J` (t × t, column-major, exactly symmetric: the lower triangle mirrored) and
-/// `g = (PJ)ᵀ r` from the column-major m × t `J` and `PJ`. Two columns of `PJ` at a time
-/// against four (or two) of `J`, so that every loaded value serves several products and
-/// eight independent sums hide the latency of the additions; each entry's sum runs as in
-/// [`Dots`], whatever the block and the kernel.
-#[inline(always)]
-fn gram<D: Dots>(
-    js: &[Real],
-    pjs: &[Real],
-    r: &[Real],
-    m: usize,
-    t: usize,
-    n: &mut [Real],
-    g: &mut [Real],
-) {
-    let mut a = 0;
-    while a < t {
-        if a + 1 < t {
-            let ca = [col(pjs, m, a), col(pjs, m, a + 1)];
-            let mut b = 0;
-            // Four columns of J while all lie left of column a + 2, then two: when a is two
-            // more than a multiple of four, the last block of four ends with the diagonal
-            // pair (its entry (a, a + 1) is computed both ways, and the one put last,
-            // (PJ)_{a+1}·J_a, is the one the 2 × 2 block gives), so that eight sums run
-            // side by side instead of four.
-            while b + 4 <= a + 2 {
-                let cb = [
-                    col(js, m, b),
-                    col(js, m, b + 1),
-                    col(js, m, b + 2),
-                    col(js, m, b + 3),
-                ];
-                put(n, t, a, b, D::dots::<2, 4>(ca, cb));
-                b += 4;
-            }
-            while b <= a {
-                put(
-                    n,
-                    t,
-                    a,
-                    b,
-                    D::dots::<2, 2>(ca, [col(js, m, b), col(js, m, b + 1)]),
-                );
-                b += 2;
-            }
-        } else {
-            for b in 0..=a {
-                put(
-                    n,
-                    t,
-                    a,
-                    b,
-                    D::dots::<1, 1>([col(pjs, m, a)], [col(js, m, b)]),
-                );
-            }
-        }
-        a += 2;
-    }
-    // g four entries at a time: four independent sums instead of one latency-bound chain.
-    let mut k = 0;
-    while k + 4 <= t {
-        let cols = [
-            col(pjs, m, k),
-            col(pjs, m, k + 1),
-            col(pjs, m, k + 2),
-            col(pjs, m, k + 3),
-        ];
-        for (p, v) in D::dots::<4, 1>(cols, [r]).iter().enumerate() {
-            g[k + p] = v[0];
-        }
-        k += 4;
-    }
-    for (k, gk) in g.iter_mut().enumerate().take(t).skip(k) {
-        *gk = D::dots::<1, 1>([col(pjs, m, k)], [r])[0][0];
-    }
-}
-
-/// Writes the block `v` of entries `(a + p, b + q)` of the t × t `n` and their mirror images.
-#[inline(always)]
-fn put<const P: usize, const Q: usize>(
-    n: &mut [Real],
-    t: usize,
-    a: usize,
-    b: usize,
-    v: [[Real; Q]; P],
-) {
-    for (p, row) in v.iter().enumerate() {
-        for (q, &x) in row.iter().enumerate() {
-            n[(b + q) * t + a + p] = x;
-            n[(a + p) * t + b + q] = x;
-        }
-    }
-}
-
-/// Column `k` of a column-major matrix with `m` rows.
-#[inline(always)]
-fn col(s: &[Real], m: usize, k: usize) -> &[Real] {
-    &s[k * m..(k + 1) * m]
-}
-
-/// The `P × Q` dot products `x_p · y_q` of slices of one length, each in four interleaved
-/// partial sums (`s_k ← fma(x_i, y_i, s_k)` over the indices `i ≡ k mod 4`, one rounding per
-/// term) combined as `(s0 + s2) + (s1 + s3)`: a fixed order, so every product is the same
-/// whichever block computes it, whichever kernel, and on every machine (the fused
-/// multiply-add is the correctly rounded IEEE operation everywhere: an instruction where the
-/// processor has one, a library call where not).
-trait Dots {
-    fn dots<const P: usize, const Q: usize>(x: [&[Real]; P], y: [&[Real]; Q]) -> [[Real; Q]; P];
-}
-
-/// [`Dots`] in plain Rust (the compiler vectorises the four lanes as the target allows).
-struct Portable;
-
-impl Dots for Portable {
-    #[inline(always)]
-    fn dots<const P: usize, const Q: usize>(x: [&[Real]; P], y: [&[Real]; Q]) -> [[Real; Q]; P] {
-        let n = x[0].len();
-        let mut acc = [[[0.0; 4]; Q]; P];
-        let whole = n - n % 4;
-        let mut i = 0;
-        while i < whole {
-            let xs: [[Real; 4]; P] = std::array::from_fn(|p| x[p][i..i + 4].try_into().unwrap());
-            let ys: [[Real; 4]; Q] = std::array::from_fn(|q| y[q][i..i + 4].try_into().unwrap());
-            for p in 0..P {
-                for q in 0..Q {
-                    for k in 0..4 {
-                        acc[p][q][k] = xs[p][k].mul_add(ys[q][k], acc[p][q][k]);
-                    }
-                }
-            }
-            i += 4;
-        }
-        combine(x, y, whole, acc)
-    }
-}
-
-/// Adds the last `n mod 4` products to the first partial sums and combines each entry's four.
-#[inline(always)]
-fn combine<const P: usize, const Q: usize>(
-    x: [&[Real]; P],
-    y: [&[Real]; Q],
-    whole: usize,
-    mut acc: [[[Real; 4]; Q]; P],
-) -> [[Real; Q]; P] {
-    for (k, i) in (whole..x[0].len()).enumerate() {
-        for p in 0..P {
-            for q in 0..Q {
-                acc[p][q][k] = x[p][i].mul_add(y[q][i], acc[p][q][k]);
-            }
-        }
-    }
-    acc.map(|row| row.map(|s| (s[0] + s[2]) + (s[1] + s[3])))
-}
-
-/// [`Dots`] in AVX2 vectors with fused multiply-adds, one vector per partial-sum quadruple:
-/// the same bits as [`Portable`]. Constructed only where the processor has AVX2 and FMA
-/// ([`Work::normal`]).
-#[cfg(target_arch = "x86_64")]
-struct Avx2;
-
-#[cfg(target_arch = "x86_64")]
-impl Dots for Avx2 {
-    #[inline(always)]
-    fn dots<const P: usize, const Q: usize>(x: [&[Real]; P], y: [&[Real]; Q]) -> [[Real; Q]; P] {
-        // SAFETY: `Avx2` is used only after AVX2 and FMA were detected (`Work::normal`).
-        unsafe { dots_avx2(x, y) }
-    }
-}
-
-/// The kernel of [`Avx2`].
-///
-/// # Safety
-/// The CPU must support AVX2 and FMA.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-unsafe fn dots_avx2<const P: usize, const Q: usize>(
-    x: [&[Real]; P],
-    y: [&[Real]; Q],
-) -> [[Real; Q]; P] {
-    use std::arch::x86_64::{__m256d, _mm256_fmadd_pd, _mm256_loadu_pd};
-    use std::arch::x86_64::{_mm256_setzero_pd, _mm256_storeu_pd};
-    let n = x[0].len();
-    assert!(x.iter().all(|v| v.len() == n) && y.iter().all(|v| v.len() == n));
-    let whole = n - n % 4;
-    let mut acc: [[__m256d; Q]; P] = [[_mm256_setzero_pd(); Q]; P];
-    let mut i = 0;
-    while i < whole {
-        let mut xs = [_mm256_setzero_pd(); P];
-        for p in 0..P {
-            // SAFETY: i + 4 ≤ n, the length of every slice (asserted above).
-            xs[p] = unsafe { _mm256_loadu_pd(x[p].as_ptr().add(i)) };
-        }
-        for q in 0..Q {
-            // SAFETY: as above.
-            let yq = unsafe { _mm256_loadu_pd(y[q].as_ptr().add(i)) };
-            for p in 0..P {
-                acc[p][q] = _mm256_fmadd_pd(xs[p], yq, acc[p][q]);
-            }
-        }
-        i += 4;
-    }
-    let mut sums = [[[0.0; 4]; Q]; P];
-    for p in 0..P {
-        for q in 0..Q {
-            // SAFETY: `sums[p][q]` holds four values.
-            unsafe { _mm256_storeu_pd(sums[p][q].as_mut_ptr(), acc[p][q]) };
-        }
-    }
-    combine(x, y, whole, sums)
 }
 
 /// `Σ_i w_i |r_i|²` over points.
@@ -557,36 +342,7 @@ fn scaled_inverse_trace(n: &DMatrix<Real>) -> Option<Real> {
     if !linalg::cholesky_in_place(&mut s) {
         return None;
     }
-    // trace S⁻¹ = ‖L⁻¹‖²_F, four columns of L⁻¹ at a time (forward substitution on e_c for
-    // c = c0…c0+3 side by side, down the contiguous columns of L; a column c > k has
-    // v_k = 0 and takes no update).
-    let inverse: Vec<Real> = (0..t).map(|k| 1.0 / s[(k, k)]).collect();
-    let l = s.as_slice();
-    let mut v = vec![[0.0 as Real; 4]; t];
-    let trace = crate::numeric::with_avx2_fma(
-        #[inline(always)]
-        || {
-            let mut sums = [0.0 as Real; 4];
-            for c0 in (0..t).step_by(4) {
-                for (i, vi) in v.iter_mut().enumerate().skip(c0) {
-                    *vi = std::array::from_fn(|c| if i == c0 + c { 1.0 } else { 0.0 });
-                }
-                for k in c0..t {
-                    let x: [Real; 4] = std::array::from_fn(|c| v[k][c] * inverse[k]);
-                    for c in 0..4 {
-                        sums[c] += x[c] * x[c];
-                    }
-                    for (vi, &lik) in v[k + 1..].iter_mut().zip(&l[k * t + k + 1..(k + 1) * t]) {
-                        for c in 0..4 {
-                            vi[c] -= lik * x[c];
-                        }
-                    }
-                }
-            }
-            (sums[0] + sums[2]) + (sums[1] + sums[3])
-        },
-    );
-    Some(trace)
+    Some(linalg::cholesky_inverse_trace(&s))
 }
 
 /// Numerical rank and condition number of the column-scaled Jacobian `J D^-½` from its normal
@@ -867,42 +623,5 @@ mod tests {
         }
         let singular = DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 1.0, 1.0]);
         assert!(scaled_inverse_trace(&singular).is_none());
-    }
-
-    /// The normal equations of every kernel and block shape are one set of bits, N and g each
-    /// entry that of its plain dot product: sizes with odd column counts and row counts that
-    /// are not a multiple of four.
-    #[test]
-    fn the_gram_kernels_agree_to_the_bit() {
-        let mut g = crate::numeric::rng::from_seed(3);
-        for (m, t) in [(150, 24), (57, 7), (6, 1), (13, 20), (300, 33)] {
-            let j = DMatrix::from_fn(m, t, |_, _| rand::Rng::random_range(&mut g, -1.0..1.0));
-            let pj = DMatrix::from_fn(m, t, |i, k| j[(i, k)] * (1.0 + (i % 3) as Real));
-            let r: Vec<Real> = (0..m).map(|i| (i as Real).sin()).collect();
-            let run = |kernel: &dyn Fn(&mut [Real], &mut [Real])| {
-                let (mut n, mut gv) = (vec![Real::NAN; t * t], vec![Real::NAN; t]);
-                kernel(&mut n, &mut gv);
-                (n, gv)
-            };
-            let (js, pjs) = (j.as_slice(), pj.as_slice());
-            let portable = run(&|n, gv| gram::<Portable>(js, pjs, &r, m, t, n, gv));
-            // Against the plain definition: each entry one dot product in the fixed order.
-            for a in 0..t {
-                for b in 0..=a {
-                    let x = Portable::dots::<1, 1>([col(pjs, m, a)], [col(js, m, b)])[0][0];
-                    assert_eq!(portable.0[b * t + a].to_bits(), x.to_bits(), "({a}, {b})");
-                    assert_eq!(portable.0[a * t + b].to_bits(), x.to_bits(), "({b}, {a})");
-                }
-                let x = Portable::dots::<1, 1>([col(pjs, m, a)], [&r])[0][0];
-                assert_eq!(portable.1[a].to_bits(), x.to_bits(), "g[{a}]");
-            }
-            #[cfg(target_arch = "x86_64")]
-            if crate::numeric::has_avx2_fma() {
-                let avx2 = run(&|n, gv| gram::<Avx2>(js, pjs, &r, m, t, n, gv));
-                let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-                assert_eq!(bits(&portable.0), bits(&avx2.0), "N, {m} × {t}");
-                assert_eq!(bits(&portable.1), bits(&avx2.1), "g, {m} × {t}");
-            }
-        }
     }
 }

@@ -13,7 +13,8 @@
 //! matrices at once ([`symmetric_eigenvalues_lanes`]): one entry holds the same entry of each
 //! matrix, every operation runs across them, and each matrix gets the bits it would get alone.
 
-use crate::numeric::Real;
+use super::simd;
+use super::Real;
 
 /// Overwrites `d` (length n) with the eigenvalues (unordered) of the symmetric n × n matrix
 /// whose **lower triangle** is stored row-major in `a` (`a[i·n + j]`, j ≤ i; the upper
@@ -42,9 +43,9 @@ pub fn symmetric_eigenvalues_lanes<const L: usize>(
     d: &mut [[Real; L]],
     e: &mut [[Real; L]],
 ) -> [bool; L] {
-    crate::numeric::with_avx2_fma(
+    simd::dispatch(
         #[inline(always)]
-        || {
+        |_| {
             let mut ok = [true; L];
             if n == 0 {
                 return ok;
@@ -367,6 +368,8 @@ mod tests {
             .fold(0.0, Real::max)
     }
 
+    /// Each lane of [`symmetric_eigenvalues_lanes`], on every instruction set the processor
+    /// offers, gets the bits of its matrix alone on the portable path.
     #[test]
     fn eight_matrices_at_once_are_the_matrices_one_by_one_to_the_bit() {
         let mut rng = from_seed(21);
@@ -393,22 +396,31 @@ mod tests {
                     m
                 })
                 .collect();
-            let mut a = vec![[0.0; 8]; n * n];
-            for (t, m) in mats.iter().enumerate() {
-                for (x, v) in a.iter_mut().zip(m.transpose().iter()) {
-                    x[t] = *v;
+            // The eight lanes on every path of the dispatch, each matrix alone on the portable
+            // one.
+            for isa in simd::available() {
+                let mut a = vec![[0.0; 8]; n * n];
+                for (t, m) in mats.iter().enumerate() {
+                    for (x, v) in a.iter_mut().zip(m.transpose().iter()) {
+                        x[t] = *v;
+                    }
                 }
-            }
-            let (mut d, mut e) = (vec![[0.0; 8]; n], vec![[0.0; 8]; n]);
-            let ok = symmetric_eigenvalues_lanes(&mut a, n, &mut d, &mut e);
-            for (t, m) in mats.iter().enumerate() {
-                let mut one: Vec<Real> = m.transpose().iter().copied().collect();
-                let (mut d1, mut e1) = (vec![0.0; n], vec![0.0; n]);
-                let ok1 = symmetric_eigenvalues(&mut one, n, &mut d1, &mut e1);
-                assert_eq!(ok[t], ok1, "trial {trial}, lane {t}");
-                assert_eq!(ok1, !(t == 5 && trial % 2 == 0), "trial {trial}, lane {t}");
-                for (x, y) in d.iter().zip(&d1) {
-                    assert_eq!(x[t].to_bits(), y.to_bits(), "trial {trial}, lane {t}");
+                let (mut d, mut e) = (vec![[0.0; 8]; n], vec![[0.0; 8]; n]);
+                let ok = simd::forced(isa, || {
+                    symmetric_eigenvalues_lanes(&mut a, n, &mut d, &mut e)
+                });
+                for (t, m) in mats.iter().enumerate() {
+                    let mut one: Vec<Real> = m.transpose().iter().copied().collect();
+                    let (mut d1, mut e1) = (vec![0.0; n], vec![0.0; n]);
+                    let ok1 = simd::forced(simd::Isa::Portable, || {
+                        symmetric_eigenvalues(&mut one, n, &mut d1, &mut e1)
+                    });
+                    let at = format!("trial {trial}, lane {t}, {isa:?}");
+                    assert_eq!(ok[t], ok1, "{at}");
+                    assert_eq!(ok1, !(t == 5 && trial % 2 == 0), "{at}");
+                    for (x, y) in d.iter().zip(&d1) {
+                        assert_eq!(x[t].to_bits(), y.to_bits(), "{at}");
+                    }
                 }
             }
         }

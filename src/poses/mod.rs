@@ -380,9 +380,9 @@ impl Spectra {
     fn accumulate(&mut self, g: Option<&[Real]>, sign: Real) {
         let k = self.k;
         let (a, b) = (&mut self.a, &self.rows);
-        crate::numeric::with_avx2_fma(
+        crate::numeric::simd::dispatch(
             #[inline(always)]
-            || {
+            |_| {
                 for i in 0..k {
                     let row = i * k..i * k + i + 1;
                     for (j, x) in a[row.clone()].iter_mut().enumerate() {

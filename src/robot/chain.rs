@@ -1,6 +1,6 @@
 //! The chain of elementary operations behind forward kinematics and the Jacobian.
 
-use super::{Convention, JointType, Param, Robot};
+use super::{Convention, JointType, Param, Robot, MAX_JOINTS};
 use crate::numeric::{Frame, Mat3, Real, Vec3};
 
 /// An elementary operation: a rotation about, or a translation along, one local axis.
@@ -62,7 +62,7 @@ fn rotation_sc(kind: OpKind, value: Real) -> (Real, Real) {
 }
 
 /// The chain variables of one pose and their (sin, cos), from [`Chain::variables`].
-pub type ChainVars = ([Real; 16], [(Real, Real); 16]);
+pub type ChainVars = ([Real; MAX_JOINTS], [(Real, Real); MAX_JOINTS]);
 
 /// A robot compiled into elementary operations for one set of parameter values.
 #[derive(Clone, Debug)]
@@ -262,10 +262,11 @@ impl Chain {
         self.dof
     }
 
-    /// Chain variables from joint values (see [`Robot::chain_values`]); `q.len()` ≤ 16.
+    /// Chain variables from joint values (see [`Robot::chain_values`]);
+    /// `q.len()` ≤ [`MAX_JOINTS`].
     #[inline]
-    fn vars(&self, q: &[Real]) -> [Real; 16] {
-        let mut c = [0.0; 16];
+    fn vars(&self, q: &[Real]) -> [Real; MAX_JOINTS] {
+        let mut c = [0.0; MAX_JOINTS];
         c[..q.len()].copy_from_slice(q);
         if let Some(super::Coupling::Differential { l1_mm }) = self.coupling {
             c[0] = ((q[0] - q[1]) / l1_mm).atan();
@@ -298,13 +299,13 @@ impl Chain {
         )
     }
 
-    /// The chain variables of joint values `q` (internal units, `q.len()` ≤ 16) and their
-    /// sines and cosines ([`crate::numeric::sin_cos_slice`]), for
+    /// The chain variables of joint values `q` (internal units, `q.len()` ≤ [`MAX_JOINTS`])
+    /// and their sines and cosines ([`crate::numeric::sin_cos_slice`]), for
     /// [`Chain::walk_vars`]: with fixed joint values these are computed once and reused
     /// whatever the parameter values.
     pub fn variables(&self, q: &[Real]) -> ChainVars {
         let c = self.vars(q);
-        let mut sc = [(0.0, 1.0); 16];
+        let mut sc = [(0.0, 1.0); MAX_JOINTS];
         crate::numeric::sin_cos_slice(&c[..q.len()], &mut sc[..q.len()]);
         (c, sc)
     }
@@ -315,7 +316,7 @@ impl Chain {
     pub fn variables_of<Q: AsRef<[Real]>>(&self, qs: &[Q]) -> Vec<ChainVars> {
         let mut out: Vec<ChainVars> = qs
             .iter()
-            .map(|q| (self.vars(q.as_ref()), [(0.0, 1.0); 16]))
+            .map(|q| (self.vars(q.as_ref()), [(0.0, 1.0); MAX_JOINTS]))
             .collect();
         let values: Vec<Real> = out
             .iter()
@@ -438,7 +439,8 @@ mod tests {
             for (q, (c, sc)) in qs.iter().zip(chain.variables_of(&qs)) {
                 let (c1, sc1) = chain.variables(q);
                 assert_eq!(c.map(Real::to_bits), c1.map(Real::to_bits), "{name}");
-                let bits = |v: [(Real, Real); 16]| v.map(|(s, c)| (s.to_bits(), c.to_bits()));
+                let bits =
+                    |v: [(Real, Real); MAX_JOINTS]| v.map(|(s, c)| (s.to_bits(), c.to_bits()));
                 assert_eq!(bits(sc), bits(sc1), "{name}");
             }
         }

@@ -14,7 +14,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::numeric::{Frame, Real, Vec3};
-use crate::robot::{Chain, JointType, Param, Robot};
+use crate::robot::{Chain, JointType, Param, Robot, MAX_JOINTS};
 
 /// Standard gravity, m/s².
 pub const GRAVITY: Real = 9.81;
@@ -135,8 +135,8 @@ pub fn gravity_loaded_joints(robot: &Robot) -> Result<Vec<usize>> {
         64,
         &mut crate::numeric::rng::stream(0, "gravity"),
     );
-    let mut peak = [0.0 as Real; 16];
-    let mut tau = [0.0; 16];
+    let mut peak = [0.0 as Real; MAX_JOINTS];
+    let mut tau = [0.0; MAX_JOINTS];
     for q in &qs {
         gravity_torques(robot, &chain, q, 10.0, &mut tau[..n])?;
         for (p, t) in peak.iter_mut().zip(&tau[..n]) {
@@ -153,9 +153,9 @@ pub fn gravity_loaded_joints(robot: &Robot) -> Result<Vec<usize>> {
 /// (kg), with the payload added to the last link as a separate point. Fixed size, no allocation.
 pub(crate) struct Masses {
     /// Axis frames of the joints (world, mm).
-    pub(crate) axes: [Frame; 16],
+    pub(crate) axes: [Frame; MAX_JOINTS],
     /// Link mass points (world, mm).
-    pub(crate) points: [Vec3; 16],
+    pub(crate) points: [Vec3; MAX_JOINTS],
     /// The tool frame (world, mm).
     pub(crate) tool: Frame,
 }
@@ -173,13 +173,13 @@ fn masses_with(
     walk: impl FnOnce(&mut dyn FnMut(&crate::robot::Op, &crate::numeric::Mat3, &Vec3)) -> Frame,
 ) -> Masses {
     let n = chain.dof();
-    let mut axes = [Frame::identity(); 16];
+    let mut axes = [Frame::identity(); MAX_JOINTS];
     let tool = walk(&mut |op, r, p| {
         if let Some(v) = op.var {
             axes[v] = Frame { rot: *r, pos: *p };
         }
     });
-    let mut points = [Vec3::zeros(); 16];
+    let mut points = [Vec3::zeros(); MAX_JOINTS];
     for i in 0..n {
         let next = if i + 1 < n { axes[i + 1].pos } else { tool.pos };
         points[i] = 0.5 * (axes[i].pos + next);
@@ -238,9 +238,10 @@ pub fn gravity_torques(
             ),
         ));
     };
-    if robot.dof() > 16 || mass.len() != robot.dof() || q.len() != robot.dof() {
+    if robot.dof() > MAX_JOINTS || mass.len() != robot.dof() || q.len() != robot.dof() {
         return Err(Error::Compute(format!(
-            "gravity torques of a {}-joint robot: {} masses, {} joint values (at most 16 joints)",
+            "gravity torques of a {}-joint robot: {} masses, {} joint values \
+             (at most {MAX_JOINTS} joints)",
             robot.dof(),
             mass.len(),
             q.len()
@@ -323,7 +324,7 @@ pub fn loaded_fk(robot: &Robot, chain: &Chain, q: &[Real], payload_kg: Real) -> 
         return Ok(chain.fk(q));
     }
     let n = robot.dof();
-    let mut tau = [0.0; 16];
+    let mut tau = [0.0; MAX_JOINTS];
     gravity_torques(robot, chain, q, payload_kg, &mut tau[..n])?;
     for (j, t) in tau.iter_mut().enumerate().take(n) {
         *t *= robot.get(Param::Compliance(j));

@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 use super::{
     joint_place, to_internal, value_count, AngleUnit, Convention, Coupling, Joint, JointType,
-    LengthUnit, Param, Quantity, Robot, Units,
+    LengthUnit, Param, Quantity, Robot, Units, MAX_JOINTS,
 };
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -89,10 +89,10 @@ pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
             "a robot needs at least one [[joints]] entry".into(),
         ));
     }
-    if f.joints.len() > 16 {
+    if f.joints.len() > MAX_JOINTS {
         return Err(err(
             "joints".into(),
-            "at most 16 joints are supported".into(),
+            format!("at most {MAX_JOINTS} joints are supported"),
         ));
     }
     let coupling = match &f.coupling {

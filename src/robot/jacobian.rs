@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::measurement::Measure;
 use crate::numeric::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
-use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot};
+use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot, MAX_JOINTS};
 
 /// Maps flat parameter indices to Jacobian columns, for a chosen parameter list.
 #[derive(Clone, Debug)]
@@ -26,7 +26,7 @@ pub struct Columns {
     /// Per chain variable: the column of its joint's compliance ([`Param::Compliance`]),
     /// which receives the derivative by that variable (the caller scales it by the joint's
     /// gravity torque, [`crate::identify::RobotProblem`]).
-    of_var: [Option<usize>; 16],
+    of_var: [Option<usize>; MAX_JOINTS],
     /// Whether any entry of `of_var` is set.
     any_var: bool,
     params: Vec<Param>,
@@ -37,7 +37,7 @@ impl Columns {
     /// compliance `c_j` holds the derivative by joint `j`'s chain variable, unscaled.
     pub fn new(params: &[Param], dof: usize) -> Columns {
         let mut of_param = vec![None; crate::robot::value_count(dof)];
-        let mut of_var = [None; 16];
+        let mut of_var = [None; MAX_JOINTS];
         for (c, p) in params.iter().enumerate() {
             match *p {
                 Param::Compliance(j) => of_var[j] = Some(c),
@@ -138,34 +138,14 @@ pub fn pose_rows4(
     row0: usize,
 ) -> Lanes<LANES> {
     let vars: &[ChainVars; LANES] = vars[..LANES].try_into().expect("LANES poses");
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
-        return unsafe { pose_rows4_avx2(chain, cols, vars, measure, out, row0) };
-    }
-    pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0)
+    crate::numeric::simd::dispatch(
+        #[inline(always)]
+        |_| pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0),
+    )
 }
 
 /// Poses per call of [`pose_rows4`].
 pub const LANES: usize = 4;
-
-/// [`pose_rows_lanes`] of four poses compiled for AVX2 (no fused multiply-add: the same
-/// operations, so the same bits as without).
-///
-/// # Safety
-/// The CPU must support AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn pose_rows4_avx2(
-    chain: &Chain,
-    cols: &Columns,
-    vars: &[ChainVars; LANES],
-    measure: Measure,
-    out: &mut DMatrix<Real>,
-    row0: usize,
-) -> Lanes<LANES> {
-    pose_rows_lanes(chain, cols, vars.each_ref(), measure, out, row0)
-}
 
 /// The rows of `L` consecutive poses walked together ([`Chain::walk_lanes`]).
 #[inline(always)]
@@ -220,9 +200,9 @@ fn record_rows<const L: usize>(
     end
 }
 
-/// Most rotation columns of a pose: three rotation operations per joint (16 joints), six for
-/// base and tool, and one compliance column per joint.
-const MAX_OPS: usize = 4 * 16 + 6;
+/// Most rotation columns of a pose: three rotation operations per joint ([`MAX_JOINTS`]
+/// joints), six for base and tool, and one compliance column per joint.
+const MAX_OPS: usize = 4 * MAX_JOINTS + 6;
 
 /// A rotation column waiting for the end point: axis `w` and origin `o` in the world (one
 /// lane per pose), and the column.

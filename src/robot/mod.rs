@@ -50,6 +50,11 @@ pub const MAX_COMPLIANCE: Real = 1.0;
 /// Largest magnitude of a revolute joint limit or joint value, rad (ten turns).
 pub const MAX_JOINT_RAD: Real = 20.0 * std::f64::consts::PI;
 
+/// Most joints of a robot model: the chain keeps its per-joint variables, and the Jacobian,
+/// compliance and sag code their per-joint scratch, in arrays of this fixed size, so that
+/// walking a chain allocates nothing.
+pub const MAX_JOINTS: usize = 16;
+
 /// What kind of number a robot-model value is, which sets its unit and its range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Quantity {

@@ -32,6 +32,7 @@ use rapier3d_f64::prelude::{
 
 use crate::error::{Error, Result};
 use crate::numeric::{rot_y, Frame, Mat3, Real, Vec3};
+use crate::robot::MAX_JOINTS;
 
 pub use crate::robot::compliance::GRAVITY;
 
@@ -61,8 +62,8 @@ const INERTIA_FLOOR: Real = 1e-3;
 /// Radius (m) of the small sphere each point mass is spread over for its own inertia.
 const POINT_RADIUS: Real = 0.05;
 
-/// Most spring bodies an [`Arm`] carries (the compliance model allows 16 joints).
-pub const MAX_BODIES: usize = 16;
+/// Most spring bodies an [`Arm`] carries (one per joint: at most [`MAX_JOINTS`]).
+pub const MAX_BODIES: usize = MAX_JOINTS;
 
 /// One spring joint and the rigid body it carries.
 #[derive(Clone, Debug, Default)]

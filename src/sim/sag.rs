@@ -30,7 +30,7 @@ use serde::Deserialize;
 use crate::error::{Error, Result};
 use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::compliance::{gravity_torques_at, masses, Masses};
-use crate::robot::{builtin::Builtin, Chain, Coupling, JointType, Param, Robot};
+use crate::robot::{builtin::Builtin, Chain, Coupling, JointType, Param, Robot, MAX_JOINTS};
 use crate::sim::rapier::{self, SpringBody};
 
 /// Which sag model to use (docs/formats.md `[compliance] model`).
@@ -143,10 +143,10 @@ impl Compliance {
         if s.model == ComplianceModel::None {
             return Ok(None);
         }
-        if dof > 16 {
+        if dof > MAX_JOINTS {
             return Err(Error::setting(
                 "compliance.model",
-                "at most 16 joints are supported",
+                format!("at most {MAX_JOINTS} joints are supported"),
             ));
         }
         s.check(dof)?;
@@ -296,7 +296,7 @@ impl Compliance {
     ) {
         let n = robot.dof();
         let m = self.masses(chain, q);
-        let mut dc = [0.0; 16];
+        let mut dc = [0.0; MAX_JOINTS];
         self.torques(robot, &m, payload, &mut dc[..n]);
         for (d, k) in dc.iter_mut().zip(&self.stiffness) {
             *d /= k;
@@ -339,9 +339,9 @@ impl Compliance {
         match self.model {
             ComplianceModel::None => Ok(chain.fk(q)),
             ComplianceModel::Linear => {
-                let mut dq = [0.0; 16];
+                let mut dq = [0.0; MAX_JOINTS];
                 self.linear_into(robot, chain, q, payload, &mut dq[..n]);
-                let mut qd = [0.0; 16];
+                let mut qd = [0.0; MAX_JOINTS];
                 for j in 0..n {
                     qd[j] = q[j] + dq[j];
                 }
@@ -362,7 +362,7 @@ impl Compliance {
         payload: Real,
     ) -> Result<rapier::Settled> {
         let m = self.masses(chain, q);
-        let mut dc = [0.0; 16];
+        let mut dc = [0.0; MAX_JOINTS];
         let n = robot.dof();
         self.torques(robot, &m, payload, &mut dc[..n]);
         for (d, k) in dc.iter_mut().zip(&self.stiffness) {
@@ -384,16 +384,16 @@ impl Compliance {
         &self,
         robot: &Robot,
         m: &Masses,
-        dc: &[Real; 16],
+        dc: &[Real; MAX_JOINTS],
         payload: Real,
     ) -> SpringBodies {
         let n = robot.dof();
         let mut s = SpringBodies {
             bodies: std::array::from_fn(|_| SpringBody::default()),
             count: 0,
-            masses: [(Vec3::zeros(), 0.0); 17],
+            masses: [(Vec3::zeros(), 0.0); MAX_JOINTS + 1],
             mass_count: 0,
-            start: [0.0; 16],
+            start: [0.0; MAX_JOINTS],
         };
         for (i, &start) in dc.iter().enumerate().take(n) {
             if robot.joints[i].kind == JointType::Revolute {
@@ -423,11 +423,11 @@ impl Compliance {
 /// The rapier inputs of one pose (fixed size): spring bodies, the point masses they carry
 /// (links and payload) and the start coordinates.
 struct SpringBodies {
-    bodies: [SpringBody; 16],
+    bodies: [SpringBody; MAX_JOINTS],
     count: usize,
-    masses: [(Vec3, Real); 17],
+    masses: [(Vec3, Real); MAX_JOINTS + 1],
     mass_count: usize,
-    start: [Real; 16],
+    start: [Real; MAX_JOINTS],
 }
 
 /// Sag statistics of one arm over random poses: the tool-point displacement (mm) between the
@@ -772,7 +772,7 @@ mod tests {
         }
         for (i, (q, want)) in qs.iter().zip(&forward).enumerate().step_by(7) {
             let m = c.masses(&chain, q);
-            let mut dc = [0.0; 16];
+            let mut dc = [0.0; MAX_JOINTS];
             c.torques(&robot, &m, c.payload, &mut dc[..6]);
             for (d, k) in dc.iter_mut().zip(&c.stiffness) {
                 *d /= k;

@@ -39,7 +39,7 @@ use crate::error::{check_count, finite_non_negative, finite_positive, Error, Res
 use crate::measurement::Measure;
 use crate::numeric::rng::Rng;
 use crate::numeric::{Frame, Mat3, Real, Vec3};
-use crate::robot::{Chain, OpKind, Param, Robot};
+use crate::robot::{Chain, OpKind, Param, Robot, MAX_JOINTS};
 
 /// The search box: `lower[i] ≤ x[i] ≤ upper[i]`.
 #[derive(Clone, Debug, PartialEq)]
@@ -936,14 +936,14 @@ pub fn qiao_fitness(measured: &[Frame], model: &[Frame], k: Real) -> Real {
 /// 0.002–0.003) weighs like 0.2–0.3 mm, the order of the position errors of Qiao's TX60.
 pub const DEFAULT_K: Real = 100.0;
 
-/// Largest flat parameter vector handled by [`MetaProblem`] (16 joints).
-const MAX_VALUES: usize = 6 * 16 + 12;
+/// Largest flat parameter vector handled by [`MetaProblem`] ([`MAX_JOINTS`] joints).
+const MAX_VALUES: usize = 6 * MAX_JOINTS + 12;
 
 /// Joint-variable values of one pose and their (sin, cos).
 #[derive(Clone, Debug)]
 struct PoseVars {
-    c: [Real; 16],
-    sc: [(Real, Real); 16],
+    c: [Real; MAX_JOINTS],
+    sc: [(Real, Real); MAX_JOINTS],
 }
 
 /// Direct identification on the forward kinematics with Qiao's fitness (eq. 14, §4.2 "error
@@ -990,8 +990,11 @@ impl<'a> MetaProblem<'a> {
         k: Real,
     ) -> Result<MetaProblem<'a>> {
         let dof = nominal.dof();
-        if dof > 16 {
-            return Err(Error::setting("robot", "at most 16 joints are supported"));
+        if dof > MAX_JOINTS {
+            return Err(Error::setting(
+                "robot",
+                format!("at most {MAX_JOINTS} joints are supported"),
+            ));
         }
         if params.is_empty() {
             return Err(Error::setting("params", "no parameters to identify"));
@@ -1050,9 +1053,9 @@ impl<'a> MetaProblem<'a> {
                     format!("pose {i}: non-finite point"),
                 ));
             }
-            let mut c = [0.0; 16];
+            let mut c = [0.0; MAX_JOINTS];
             nominal.chain_values(q, &mut c[..dof]);
-            let mut sc = [(0.0, 1.0); 16];
+            let mut sc = [(0.0, 1.0); MAX_JOINTS];
             for j in 0..dof {
                 sc[j] = c[j].sin_cos();
             }
