@@ -14,13 +14,14 @@ mod sweep;
 use std::path::{Path, PathBuf};
 
 pub use crate::calibrate::Registration;
-use crate::error::{Error, Result};
+use crate::error::{at_line, Error, Result};
 use crate::identify::registry::method_names;
 pub use crate::identify::MethodSpec;
 use crate::numeric::Real;
 use crate::poses::{Objective, Strategy as Optimiser};
 use crate::robot::builtin;
 use crate::robot::Robot;
+use crate::sim::poses::check_region;
 use crate::sim::sag::ComplianceSettings;
 use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
@@ -68,6 +69,45 @@ pub struct Scenario {
     /// The optional sweep.
     pub sweep: Option<Sweep>,
     table: toml::Table,
+    source: Option<Source>,
+}
+
+/// The text a scenario was read from, for the lines of refused keys, and the keys set since
+/// (by an override or a sweep point), whose values are not the text's: they get no line.
+#[derive(Clone, Debug)]
+struct Source {
+    text: std::sync::Arc<str>,
+    edited: Vec<String>,
+}
+
+impl Source {
+    /// The line of `key` in the text, unless `key` was edited (or lies in, or holds, an
+    /// edited key).
+    fn line(&self, key: &str) -> Option<usize> {
+        let within = |a: &str, b: &str| {
+            a == b || a.strip_prefix(b).is_some_and(|r| r.starts_with(['.', '[']))
+        };
+        if self.edited.iter().any(|e| within(key, e) || within(e, key)) {
+            return None;
+        }
+        crate::error::toml_key_line(&self.text, key)
+    }
+
+    /// `source` with `keys` edited too. A method's key (`methods.<label>.<key>`) counts as
+    /// an edit of every method: refusals name methods by index.
+    fn edit(source: &Option<Source>, keys: impl IntoIterator<Item = String>) -> Option<Source> {
+        source.as_ref().map(|s| {
+            let mut s = s.clone();
+            s.edited.extend(keys.into_iter().map(|k| {
+                if k.starts_with("methods.") {
+                    "methods".to_string()
+                } else {
+                    k
+                }
+            }));
+            s
+        })
+    }
 }
 
 /// The most trials a study may ask for (docs/formats.md `trials`): more is refused, not run until
@@ -96,14 +136,29 @@ impl Scenario {
         let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
         let table: toml::Table = toml::from_str(text)
             .map_err(|e| Error::file(shown, "TOML", e.to_string().trim_end()))?;
-        Scenario::from_table(table, path)
+        let source = Source {
+            text: text.into(),
+            edited: Vec::new(),
+        };
+        Scenario::from_table(table, path, Some(source))
     }
 
-    fn from_table(table: toml::Table, path: Option<&Path>) -> Result<Scenario> {
+    /// Checks the parsed `table` of the file `path`; `source` gives the lines of refused keys
+    /// (`line 14, calibration.count`).
+    fn from_table(
+        table: toml::Table,
+        path: Option<&Path>,
+        source: Option<Source>,
+    ) -> Result<Scenario> {
         let shown = path
             .unwrap_or(Path::new("<built-in default scenario>"))
             .to_path_buf();
-        let ferr = |place: &str, msg: String| Error::file(&shown, place, msg);
+        let line = |key: &str| source.as_ref().and_then(|s| s.line(key));
+        // An error whose line is that of `key` (the place itself, or the key of a setting).
+        let at = |key: &str, place: &str, msg: String| {
+            Error::file(&shown, at_line(line(key), place), msg)
+        };
+        let ferr = |place: &str, msg: String| at(place, place, msg);
         if table.contains_key("registration_study") {
             return Err(ferr(
                 "registration_study",
@@ -112,14 +167,30 @@ impl Scenario {
                     .into(),
             ));
         }
-        let raw: RawScenario = toml::Value::Table(table.clone())
-            .try_into()
-            .map_err(|e: toml::de::Error| ferr("scenario", e.to_string().trim_end().into()))?;
+        let raw: RawScenario =
+            toml::Value::Table(table.clone())
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    // The same refusal read from the text has a span: its line.
+                    let line = source
+                        .as_ref()
+                        .filter(|s| s.edited.is_empty())
+                        .and_then(|s| {
+                            let spanned = toml::from_str::<RawScenario>(&s.text).err()?;
+                            Some(crate::error::line_of(&s.text, spanned.span()?.start))
+                        });
+                    Error::file(&shown, at_line(line, "scenario"), e.to_string().trim_end())
+                })?;
         let dir = path
             .and_then(Path::parent)
             .map(Path::to_path_buf)
             .unwrap_or_default();
-        let check = |r: Result<()>| r.map_err(|e| ferr("setting", e.to_string()));
+        let check = |r: Result<()>| {
+            r.map_err(|e| match &e {
+                Error::Setting { key, .. } => at(key, "setting", e.to_string()),
+                _ => ferr("setting", e.to_string()),
+            })
+        };
 
         if raw.name.trim().is_empty() || raw.name.contains(['/', '\\']) {
             return Err(ferr(
@@ -358,6 +429,7 @@ impl Scenario {
             methods,
             sweep,
             table,
+            source: source.clone(),
         };
         // Settings that need the robot: joint counts of lists, parameter names.
         let robot = scenario.robot().map_err(|e| match e {
@@ -366,6 +438,33 @@ impl Scenario {
             other => ferr("robot.file", other.to_string()),
         })?;
         check(scenario.compliance.check(robot.dof()))?;
+        // Regions no pose reaches, refused now rather than after a search in the run.
+        let keyed = |r: Result<()>| {
+            r.map_err(|e| match e {
+                Error::Setting { key, msg } => ferr(&key, msg),
+                other => other,
+            })
+        };
+        let cal = &scenario.calibration;
+        let drawn = cal
+            .strategies
+            .iter()
+            .filter_map(|s| match s {
+                PoseStrategy::Random | PoseStrategy::Box => Some(cal.count),
+                PoseStrategy::Optimised(_) | PoseStrategy::OptimisedFull(_) => Some(cal.candidates),
+                PoseStrategy::Grid | PoseStrategy::File(_) => None,
+            })
+            .max();
+        if let Some(n) = drawn {
+            keyed(check_region(&robot, &cal.region, n, "calibration.region"))?;
+        }
+        let val = &scenario.validation;
+        keyed(check_region(
+            &robot,
+            &val.region,
+            val.count,
+            "validation.region",
+        ))?;
         check(
             scenario
                 .identification

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use serde::Deserialize;
 
-use super::Scenario;
+use super::{Scenario, Source};
 use crate::error::{Error, Result};
 
 #[derive(Deserialize)]
@@ -96,6 +96,7 @@ impl Scenario {
         Scenario::from_table(
             self.edited(self.table.clone(), key, value)?,
             self.path.as_deref(),
+            Source::edit(&self.source, [key.to_string()]),
         )
     }
 
@@ -118,7 +119,14 @@ impl Scenario {
             })?;
             keys.push(format!("{} = {v}", axis.key));
         }
-        Scenario::from_table(table, self.path.as_deref()).map_err(|e| {
+        let source = Source::edit(
+            &self.source,
+            sw.axes
+                .iter()
+                .map(|a| a.key.clone())
+                .chain(["sweep".into()]),
+        );
+        Scenario::from_table(table, self.path.as_deref(), source).map_err(|e| {
             let msg = match e {
                 Error::File { place, msg, .. } => format!("{place}: {msg}"),
                 other => other.to_string(),
