@@ -84,6 +84,19 @@ impl Error {
         )
     }
 
+    /// An error about the value of the dotted `key` (`calibration.region`, `joints[1].a`) in
+    /// the TOML file `file` whose text is `text`: the place is `line N, PLACE` where the key
+    /// is written in the text ([`toml_key_line`]), else `place` alone.
+    pub fn toml_file(
+        file: impl Into<PathBuf>,
+        text: &str,
+        key: &str,
+        place: impl Into<String>,
+        msg: impl Into<String>,
+    ) -> Self {
+        Error::file(file, at_line(toml_key_line(text, key), place), msg)
+    }
+
     /// An I/O error on a path.
     pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
         Error::Io {
@@ -91,6 +104,63 @@ impl Error {
             cause: source,
         }
     }
+}
+
+/// `place` prefixed with its 1-based line where there is one: `line 14, joints[1].a`.
+pub fn at_line(line: Option<usize>, place: impl Into<String>) -> String {
+    let place = place.into();
+    match line {
+        Some(n) => format!("line {n}, {place}"),
+        None => place,
+    }
+}
+
+/// The 1-based line of the byte offset `at` in `text`.
+pub fn line_of(text: &str, at: usize) -> usize {
+    let end = at.min(text.len());
+    text.as_bytes()[..end]
+        .iter()
+        .filter(|&&b| b == b'\n')
+        .count()
+        + 1
+}
+
+/// The 1-based line where the dotted `key` is written in the TOML `text`: a path of table
+/// keys and array indices such as `calibration.region`, `joints[1].a` or `methods[0].k1`.
+/// The line of the key itself when the path ends in a key, of the element when it ends in an
+/// index (`joints[1]`: the line of that `[[joints]]`). `None` when the text does not parse or
+/// does not write the key (a default, a value set on the command line).
+pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
+    use toml::de::{DeTable, DeValue};
+    let doc = DeTable::parse(text).ok()?;
+    let mut table = doc.get_ref();
+    let mut value: Option<&toml::Spanned<DeValue>> = None;
+    let mut span = None;
+    for part in key.split('.') {
+        let (name, indices) = match part.find('[') {
+            Some(i) => (&part[..i], &part[i..]),
+            None => (part, ""),
+        };
+        if let Some(v) = value {
+            table = match v.get_ref() {
+                DeValue::Table(t) => t,
+                _ => return None,
+            };
+        }
+        let (k, v) = table.get_key_value(name)?;
+        span = Some(k.span());
+        let mut v = v;
+        for index in indices.split('[').skip(1) {
+            let i: usize = index.strip_suffix(']')?.parse().ok()?;
+            v = match v.get_ref() {
+                DeValue::Array(a) => a.get(i)?,
+                _ => return None,
+            };
+            span = Some(v.span());
+        }
+        value = Some(v);
+    }
+    span.map(|s| line_of(text, s.start))
 }
 
 /// Refuses a setting `v` unless it is finite and positive (the error names `key`).
@@ -123,5 +193,44 @@ pub fn check_count(key: &str, n: usize) -> Result<()> {
         Err(Error::setting(key, "must be at least 1"))
     } else {
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TEXT: &str = "name = \"x\"\n\n[calibration]\ncount = 5\nregion = { kind = \"box\" }\n\n\
+        [[joints]]\na = 1.0\n\n[[joints]]\n# the second\na = 2.0\nlimits = [0.0, 1.0]\n\n\
+        [[methods]]\nname = \"ls\"\n";
+
+    #[test]
+    fn key_lines_are_found() {
+        assert_eq!(toml_key_line(TEXT, "name"), Some(1));
+        assert_eq!(toml_key_line(TEXT, "calibration.region"), Some(5));
+        assert_eq!(toml_key_line(TEXT, "calibration.region.kind"), Some(5));
+        assert_eq!(toml_key_line(TEXT, "joints[0].a"), Some(8));
+        assert_eq!(toml_key_line(TEXT, "joints[1].a"), Some(12));
+        assert_eq!(toml_key_line(TEXT, "joints[1].limits"), Some(13));
+        assert_eq!(toml_key_line(TEXT, "methods[0].name"), Some(16));
+        for absent in [
+            "calibration.strategies",
+            "joints[2].a",
+            "joints[1].d",
+            "name.x",
+            "methods[x]",
+            "",
+        ] {
+            assert_eq!(toml_key_line(TEXT, absent), None, "{absent}");
+        }
+        assert_eq!(toml_key_line("a = [", "a"), None);
+    }
+
+    #[test]
+    fn places_carry_their_line() {
+        let e = Error::toml_file("r.toml", TEXT, "joints[1].a", "joint 2, key `a`", "bad");
+        assert_eq!(e.to_string(), "r.toml: line 12, joint 2, key `a`: bad");
+        let e = Error::toml_file("r.toml", TEXT, "joints[1].d", "joint 2, key `d`", "bad");
+        assert_eq!(e.to_string(), "r.toml: joint 2, key `d`: bad");
     }
 }

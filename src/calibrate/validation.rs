@@ -1,8 +1,13 @@
 //! Validation of a compensated robot: per-pose position and orientation errors
-//! against true (or measured) frames, and their statistics.
+//! against true (or measured) frames, their statistics, the validation on a measurement file
+//! and the residual of each calibration point. The reports only format what is computed here.
 
+use super::Calibrated;
+use crate::error::Result;
 use crate::identify::qiao::error_models::attitude_error_deg;
-use crate::numeric::{rotation_vector, Frame, Real};
+use crate::measurement::Measurements;
+use crate::numeric::{rotation_vector, Frame, Mat3, Real};
+use crate::robot::compliance::loaded_fk;
 use crate::robot::Robot;
 
 /// Mean, RMS, max and standard deviation of a set of errors.
@@ -80,6 +85,72 @@ pub fn rotation_angle_deg(model: &Frame, truth: &Frame) -> Real {
     rotation_vector(&model.rot.tr_mul(&truth.rot))
         .norm()
         .to_degrees()
+}
+
+/// Validation of a compensated robot on a measurement file: position errors before
+/// (nominal) and after (compensated) and, for full-pose files, orientation errors.
+pub struct FileValidation {
+    /// Position errors of the nominal robot (mm).
+    pub before_mm: ErrorStats,
+    /// Position errors of the compensated robot (mm).
+    pub after_mm: ErrorStats,
+    /// Orientation errors (rotation angle) before and after (deg), for full-pose files.
+    pub deg: Option<(ErrorStats, ErrorStats)>,
+    /// Qiao's attitude errors before and after (deg), for full-pose files.
+    pub attitude_deg: Option<(ErrorStats, ErrorStats)>,
+}
+
+/// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
+/// registration; a compensated robot with compliances predicts each point under its
+/// `payload_kg`. Fails when such a robot has no link masses.
+pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> Result<FileValidation> {
+    let truth = |frame: &Frame| -> Vec<Frame> {
+        let (points, rotations) = v.in_frame(frame);
+        points
+            .into_iter()
+            .enumerate()
+            .map(|(i, pos)| Frame {
+                rot: rotations.as_ref().map_or(Mat3::identity(), |r| r[i]),
+                pos,
+            })
+            .collect()
+    };
+    // "Before" in the nominal robot's own registration, the same for every method.
+    let loads = v.payload_kg.as_deref();
+    let b = validation_errors(nominal, &v.qs, loads, &truth(&c.nominal_frame))?;
+    let a = validation_errors(&c.robot, &v.qs, loads, &truth(&c.frame))?;
+    let pose = v.quats.is_some();
+    Ok(FileValidation {
+        before_mm: ErrorStats::of(&b.mm),
+        after_mm: ErrorStats::of(&a.mm),
+        deg: pose.then(|| (ErrorStats::of(&b.deg), ErrorStats::of(&a.deg))),
+        attitude_deg: pose.then(|| {
+            (
+                ErrorStats::of(&b.attitude_deg),
+                ErrorStats::of(&a.attitude_deg),
+            )
+        }),
+    })
+}
+
+/// Per calibration point of `data`, the residual (mm) before — the `nominal` robot in its own
+/// registration — and after — the compensated robot of `c`, under the point's payload, in
+/// the final registration.
+pub fn point_residuals(
+    nominal: &Robot,
+    c: &Calibrated,
+    data: &Measurements,
+) -> Result<(Vec<Real>, Vec<Real>)> {
+    let (cn, cc) = (nominal.chain(), c.robot.chain());
+    let loads = data.payload_kg.as_deref();
+    let mut before = Vec::with_capacity(data.len());
+    let mut after = Vec::with_capacity(data.len());
+    for (i, (q, p)) in data.qs.iter().zip(&data.points).enumerate() {
+        let load = loads.map_or(0.0, |l| l[i]);
+        before.push((c.nominal_frame.apply(p) - cn.fk(q).pos).norm());
+        after.push((c.frame.apply(p) - loaded_fk(&c.robot, &cc, q, load)?.pos).norm());
+    }
+    Ok((before, after))
 }
 
 #[cfg(test)]

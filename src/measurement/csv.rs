@@ -7,9 +7,12 @@
 //!
 //! Reading accepts the columns in any order (matched by header name), blank lines and
 //! `#` comment lines; it refuses a missing or unknown column, a row with the wrong number
-//! of fields, a value that is not a finite number, a joint value outside the limits and a
-//! quaternion that is not of unit length (within 1e-3; it is then normalised), naming the
-//! file, the line and the column.
+//! of fields, a value that is not a finite number, a joint value that overflows in internal
+//! units (mm, rad) or lies outside the limits, a measured coordinate beyond ±[`MAX_POINT_MM`],
+//! a standard deviation outside [[`MIN_SIGMA_MM`], [`MAX_POINT_MM`]] and a quaternion that is
+//! not of unit length (within 1e-3; it is then normalised), naming the file, the line and the
+//! column. A measurement CSV with fewer than [`MIN_DISTINCT_POSES`] distinct poses is refused
+//! too, naming its data lines: it can neither be registered nor identify anything.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -24,6 +27,20 @@ const XYZ: [&str; 3] = ["x", "y", "z"];
 const SIGMA: &str = "sigma_mm";
 /// The optional per-pose payload column (kg).
 const PAYLOAD: &str = "payload_kg";
+
+/// The largest measured coordinate (and standard deviation) read, in mm: 1 km, the bound of a
+/// robot file's lengths. Beyond it a coordinate is an export error, and its square (in a
+/// registration or a residual) could overflow.
+pub const MAX_POINT_MM: Real = 1e6;
+
+/// The smallest standard deviation read, in mm: the last decimal [`write_measurements`]
+/// writes; below it the weight `1/σ²` of the point could overflow.
+pub const MIN_SIGMA_MM: Real = 1e-9;
+
+/// The fewest distinct poses (rows of distinct joint values) a measurement CSV may hold: the
+/// instrument frame is registered on at least three points not on a line, and the poses of a
+/// calibration must move the joints.
+pub const MIN_DISTINCT_POSES: usize = 3;
 
 /// Writes `m` as a measurement CSV. Numbers have a fixed format (9 decimals for joint values
 /// and points, 12 for quaternions), so equal measurements give identical bytes.
@@ -129,20 +146,42 @@ pub(crate) fn read_table(
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
 ) -> Result<Measurements> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    // The reader skips empty lines and leaves them out of its line numbers: `#` comment
+    // lines are emptied here (rather than skipped by the reader), and each line number the
+    // reader gives is mapped back to the file's through the lines that are not empty.
+    let mut bytes = Vec::with_capacity(raw.len());
+    let mut kept: Vec<u64> = Vec::new();
+    for (i, line) in raw.split_inclusive(|&b| b == b'\n').enumerate() {
+        if line.first() == Some(&b'#') {
+            bytes.extend(line.iter().filter(|&&b| b == b'\r' || b == b'\n'));
+            continue;
+        }
+        if line.iter().any(|&b| b != b'\r' && b != b'\n') {
+            kept.push(i as u64 + 1);
+        }
+        bytes.extend_from_slice(line);
+    }
+    let line_at = |p: &::csv::Position| {
+        let n = p.line();
+        usize::try_from(n)
+            .ok()
+            .and_then(|n| kept.get(n.checked_sub(1)?))
+            .copied()
+            .unwrap_or(n)
+    };
     let mut rd = ::csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
         .trim(::csv::Trim::All)
-        .comment(Some(b'#'))
-        .from_reader(std::io::BufReader::new(file));
+        .from_reader(bytes.as_slice());
     let bad =
         |line: u64, place: &str, msg: String| Error::file(path, format!("line {line}{place}"), msg);
     let header = rd
         .headers()
         .map_err(|e| bad(1, "", format!("cannot read the header: {e}")))?
         .clone();
-    let header_line = 1;
+    let header_line = header.position().map_or(1, line_at);
     let names: Vec<String> = header.iter().map(str::to_string).collect();
     if names.iter().all(|n| n.is_empty()) {
         return Err(bad(
@@ -219,6 +258,7 @@ pub(crate) fn read_table(
     let mut payload = Vec::new();
     let mut sigma = Vec::new();
     let mut qs = Vec::new();
+    let mut lines = Vec::new();
     let mut points = Vec::new();
     let mut quats = Vec::new();
     let mut rec = ::csv::StringRecord::new();
@@ -227,13 +267,13 @@ pub(crate) fn read_table(
     let lim_hi = robot.q_to_user(&(0..dof).map(|j| robot.limits(j).1).collect::<Vec<_>>());
     loop {
         let more = rd.read_record(&mut rec).map_err(|e| {
-            let line = e.position().map_or(0, |p| p.line());
+            let line = e.position().map_or(0, line_at);
             bad(line, "", format!("unreadable row: {e}"))
         })?;
         if !more {
             break;
         }
-        let line = rec.position().map_or(0, |p| p.line());
+        let line = rec.position().map_or(0, line_at);
         if rec.len() == 1 && rec.get(0).is_some_and(str::is_empty) {
             continue; // blank line
         }
@@ -266,6 +306,17 @@ pub(crate) fn read_table(
         }
         let q = robot.q_from_user(&quser);
         for (j, v) in q.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(bad(
+                    line,
+                    &format!(", column {}", qnames[j]),
+                    format!(
+                        "{} overflows: it is {v} in internal units (mm or rad); the joint \
+                         limits are [{}, {}]",
+                        quser[j], lim_lo[j], lim_hi[j]
+                    ),
+                ));
+            }
             let (lo, hi) = robot.limits(j);
             if *v < lo - 1e-9 || *v > hi + 1e-9 {
                 return Err(bad(
@@ -279,8 +330,24 @@ pub(crate) fn read_table(
             }
         }
         qs.push(q);
+        lines.push(line);
         if measured {
-            points.push(Vec3::new(num(xcol[0])?, num(xcol[1])?, num(xcol[2])?));
+            let mut p = [0.0; 3];
+            for (k, &c) in xcol.iter().enumerate() {
+                p[k] = num(c)?;
+                if p[k].abs() > MAX_POINT_MM {
+                    return Err(bad(
+                        line,
+                        &format!(", column {}", XYZ[k]),
+                        format!(
+                            "{:?} mm is out of range: a measured coordinate must be within \
+                             ±{MAX_POINT_MM} mm (1 km)",
+                            p[k]
+                        ),
+                    ));
+                }
+            }
+            points.push(Vec3::from(p));
         }
         if let Some(qc) = &qtcol {
             let mut qq = [0.0; 4];
@@ -306,6 +373,16 @@ pub(crate) fn read_table(
                     format!("{v} is not a positive standard deviation"),
                 ));
             }
+            if !(MIN_SIGMA_MM..=MAX_POINT_MM).contains(&v) {
+                return Err(bad(
+                    line,
+                    &format!(", column {SIGMA}"),
+                    format!(
+                        "{v:?} mm is out of range: a standard deviation must be within \
+                         [{MIN_SIGMA_MM}, {MAX_POINT_MM}] mm (its weight 1/σ² must not overflow)"
+                    ),
+                ));
+            }
             sigma.push(v);
         }
         if let Some(c) = payload_col {
@@ -327,6 +404,9 @@ pub(crate) fn read_table(
             "the file has a header but no data rows".into(),
         ));
     }
+    if measured {
+        distinct_poses(&qs, &lines, dof).map_err(|(place, msg)| bad(place, "", msg))?;
+    }
     Ok(Measurements {
         qs,
         points,
@@ -334,6 +414,55 @@ pub(crate) fn read_table(
         sigma_mm: sigma_col.map(|_| sigma),
         payload_kg: payload_col.map(|_| payload),
     })
+}
+
+/// Refuses rows of fewer than [`MIN_DISTINCT_POSES`] distinct poses (`qs`, read from the
+/// file's `lines`): (the first data line, message).
+fn distinct_poses(
+    qs: &[Vec<Real>],
+    lines: &[u64],
+    dof: usize,
+) -> std::result::Result<(), (u64, String)> {
+    let mut first: Vec<usize> = Vec::new();
+    for (i, q) in qs.iter().enumerate() {
+        let seen = first
+            .iter()
+            .any(|&k| qs[k].iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits()));
+        if !seen {
+            first.push(i);
+            if first.len() >= MIN_DISTINCT_POSES {
+                return Ok(());
+            }
+        }
+    }
+    let at = |i: usize| lines.get(i).copied().unwrap_or(0);
+    let rows = qs.len();
+    let span = format!("lines {} to {}", at(0), at(rows - 1));
+    let what = if first.len() == 1 {
+        if rows == 1 {
+            format!("the file has one row (line {}), one pose", at(0))
+        } else {
+            format!(
+                "all {rows} rows ({span}) are the same pose, the joint values of line {}",
+                at(0)
+            )
+        }
+    } else {
+        let seen: Vec<String> = first.iter().map(|&i| at(i).to_string()).collect();
+        format!(
+            "the {rows} rows ({span}) hold only {} distinct poses, first seen on lines {}",
+            first.len(),
+            seen.join(" and ")
+        )
+    };
+    Err((
+        at(0),
+        format!(
+            "{what}: a measurement needs at least {MIN_DISTINCT_POSES} distinct poses (rows \
+             of distinct q1…q{dof}): the instrument frame is registered on at least three \
+             points not on a line, and the poses of a calibration must move the joints"
+        ),
+    ))
 }
 
 #[cfg(test)]
@@ -474,12 +603,73 @@ mod tests {
         let p = tmp("order.csv");
         std::fs::write(
             &p,
-            "# exported\nx,y,z,q1,q2,q3,q4,q5,q6\n\n1,2,3,10,20,30,40,50,60\n",
+            "# exported\nx,y,z,q1,q2,q3,q4,q5,q6\n\n1,2,3,10,20,30,40,50,60\n\
+             # more\n1,2,3,11,20,30,40,50,60\n1,2,3,12,20,30,40,50,60\n",
         )
         .unwrap();
         let r = crate::robot::builtin::irb2600();
         let d = read_measurements(&p, &r).unwrap();
-        assert_eq!(d.points, vec![Vec3::new(1.0, 2.0, 3.0)]);
+        assert_eq!(d.points, vec![Vec3::new(1.0, 2.0, 3.0); 3]);
         assert_relative_eq!(d.qs[0][5], 60f64.to_radians(), epsilon = 1e-15);
+    }
+
+    #[test]
+    fn the_header_line_is_named_after_comments() {
+        let s = read_err("# exported by the tracker\n\nq1,q2,q3,q4,q5,q6,x,y,z,w\n");
+        assert!(s.contains("line 3, column 10"), "{s}");
+    }
+
+    #[test]
+    fn too_few_distinct_poses_are_refused_naming_the_lines() {
+        let h = "q1,q2,q3,q4,q5,q6,x,y,z\n";
+        let row = |q1: u32| format!("{q1},10,20,30,40,50,1000,200,300\n");
+        let s = read_err(&format!("{h}{}{}# again\n{}", row(1), row(1), row(1)));
+        assert!(
+            s.contains("line 2: all 3 rows (lines 2 to 5) are the same pose"),
+            "{s}"
+        );
+        assert!(s.contains("at least 3 distinct poses"), "{s}");
+        let s = read_err(&format!("{h}{}{}{}{}", row(1), row(2), row(1), row(2)));
+        assert!(
+            s.contains("line 2: the 4 rows (lines 2 to 5) hold only 2 distinct poses, first seen on lines 2 and 3"),
+            "{s}"
+        );
+        let s = read_err(&format!("{h}{}", row(1)));
+        assert!(s.contains("line 2: the file has one row (line 2)"), "{s}");
+        // Three distinct poses are enough, whatever repeats.
+        let p = tmp("three.csv");
+        std::fs::write(&p, format!("{h}{}{}{}{}", row(1), row(1), row(2), row(3))).unwrap();
+        let d = read_measurements(&p, &crate::robot::builtin::irb2600()).unwrap();
+        assert_eq!(d.len(), 4);
+        // A pose list is a list of commands: repeats are allowed.
+        let ql = crate::sim::poses::read_pose_list(&p, &crate::robot::builtin::irb2600());
+        assert_eq!(ql.unwrap().len(), 4);
+    }
+
+    #[test]
+    fn values_that_overflow_are_refused_naming_line_and_column() {
+        let h = "q1,q2,q3,q4,q5,q6,x,y,z,sigma_mm\n";
+        let ok = "0,0,0,0,0,0,1,2,3,0.01\n1,0,0,0,0,0,1,2,3,0.01\n2,0,0,0,0,0,1,2,3,0.01\n";
+        for (row, column) in [
+            ("3,0,0,0,0,0,1,1e400,3,0.01", "column y"),
+            ("3,0,0,0,0,0,1,1e308,3,0.01", "column y"),
+            ("3,0,0,0,0,0,-2e6,0,3,0.01", "column x"),
+            ("3,0,0,0,0,0,1,2,3,1e-200", "column sigma_mm"),
+            ("3,0,0,0,0,0,1,2,3,1e300", "column sigma_mm"),
+            ("1e400,0,0,0,0,0,1,2,3,0.01", "column q1"),
+        ] {
+            let s = read_err(&format!("{h}{ok}{row}\n"));
+            assert!(s.contains(&format!("line 5, {column}")), "{row}: {s}");
+        }
+        // Joint values finite in metres overflow in mm.
+        let mut r = crate::robot::builtin::guo_3t2r();
+        r.units.length = crate::robot::LengthUnit::M;
+        let p = tmp("metres.csv");
+        std::fs::write(&p, "q1,q2,q3,q4,q5,x,y,z\n1e306,0,0,0,0,1,2,3\n").unwrap();
+        let s = read_measurements(&p, &r).unwrap_err().to_string();
+        assert!(
+            s.contains("line 2, column q1") && s.contains("overflows"),
+            "{s}"
+        );
     }
 }

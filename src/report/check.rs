@@ -14,7 +14,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
-use crate::error::{Error, Result};
+use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 
 /// Which way a metric improves.
@@ -197,11 +197,14 @@ fn kind(v: &Value) -> &'static str {
     }
 }
 
-/// Refuses a summary and a baseline that cannot be compared, naming the file: either is not
-/// a calbench summary ([`check_summary`]), they are summaries of different scenarios (their
-/// `scenario` names differ), or they share no metric — no baseline entry has a compared
-/// metric that the summary's entry of the same method, poses and swept value also has —
-/// so a comparison would guard nothing.
+/// Refuses a summary and a baseline that cannot be compared, naming the file and the key
+/// (with its line for `results`): either is not a calbench summary ([`check_summary`]), they
+/// are summaries of different scenarios (their `scenario` names differ), or they share no
+/// metric — no baseline entry has a compared metric that the summary's entry of the same
+/// method, poses and swept value also has — so a comparison would guard nothing. Which file
+/// is short is said: a baseline without entries; a summary without entries, or without any
+/// of the baseline's (the missing entries are listed), or whose entries lack every metric the
+/// baseline's have; a baseline whose entries have no compared metric.
 pub fn comparable(
     summary: &Value,
     summary_path: &Path,
@@ -222,33 +225,143 @@ pub fn comparable(
             ),
         ));
     }
-    let new = entries(summary);
-    let shared = entries(baseline).iter().any(|b| {
-        let key = entry_key(b);
-        new.iter().filter(|e| entry_key(e) == key).any(|e| {
-            entry_metrics(b)
-                .iter()
-                .any(|(m, _)| lookup(b, m).is_some() && path_exists(e, m))
-        })
-    });
-    if !shared {
-        let keys: Vec<String> = entries(baseline).iter().map(entry_key).collect();
+    let (new, old) = (entries(summary), entries(baseline));
+    let listed = |v: Vec<String>| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.join(", ")
+        }
+    };
+    let keys = |v: &[Value]| listed(v.iter().map(entry_key).collect());
+    let results = |path: &Path| at_line(json_key_line(path, "results"), "results");
+    if old.is_empty() {
         return Err(Error::file(
             baseline_path,
-            "results",
+            results(baseline_path),
+            format!(
+                "is empty: the baseline has no entries, so it shares no metric with {}: \
+                 nothing to guard",
+                summary_path.display()
+            ),
+        ));
+    }
+    if new.is_empty() {
+        return Err(Error::file(
+            summary_path,
+            results(summary_path),
+            format!(
+                "is empty: the summary has no entries, so it shares no metric with {}: every \
+                 baseline entry is missing ({})",
+                baseline_path.display(),
+                keys(old)
+            ),
+        ));
+    }
+    let matched: Vec<&Value> = old
+        .iter()
+        .filter(|b| new.iter().any(|e| entry_key(e) == entry_key(b)))
+        .collect();
+    if matched.is_empty() {
+        return Err(Error::file(
+            summary_path,
+            results(summary_path),
+            format!(
+                "shares no metric with {}: it has none of the baseline's entries (missing: {}; \
+                 here: {}; entries are matched by method, poses and sweep value)",
+                baseline_path.display(),
+                keys(old),
+                keys(new)
+            ),
+        ));
+    }
+    let has = |e: &Value, b: &Value| {
+        entry_metrics(b)
+            .iter()
+            .any(|(m, _)| lookup(b, m).is_some() && path_exists(e, m))
+    };
+    let shared = matched.iter().any(|b| {
+        let key = entry_key(b);
+        new.iter()
+            .filter(|e| entry_key(e) == key)
+            .any(|e| has(e, b))
+    });
+    if !shared {
+        // The baseline's matched entries have metrics the summary's lack: the summary is short.
+        let wanted: Vec<String> = matched
+            .iter()
+            .flat_map(|b| {
+                entry_metrics(b)
+                    .into_iter()
+                    .filter(|(m, _)| lookup(b, m).is_some())
+                    .map(|(m, _)| format!("{} {m}", entry_key(b)))
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        if !wanted.is_empty() {
+            return Err(Error::file(
+                summary_path,
+                results(summary_path),
+                format!(
+                    "shares no metric with {}: its entries lack every compared metric the \
+                     baseline has (missing: {})",
+                    baseline_path.display(),
+                    listed(wanted)
+                ),
+            ));
+        }
+        return Err(Error::file(
+            baseline_path,
+            results(baseline_path),
             format!(
                 "shares no metric with {}: nothing to compare (baseline entries: {}; \
                  entries are matched by method, poses and sweep value)",
                 summary_path.display(),
-                if keys.is_empty() {
-                    "none".to_string()
-                } else {
-                    keys.join(", ")
-                }
+                keys(old)
             ),
         ));
     }
     Ok(())
+}
+
+/// The 1-based line where the top-level `key` of the JSON file at `path` is written (the
+/// file is read again, for a message); `None` when it cannot be read or has no such key.
+fn json_key_line(path: &Path, key: &str) -> Option<usize> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let (mut depth, mut line) = (0usize, 1usize);
+    let mut chars = text.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '\n' => line += 1,
+            '{' | '[' => depth += 1,
+            '}' | ']' => depth = depth.saturating_sub(1),
+            '"' => {
+                let (start, mut word, mut escaped) = (line, String::new(), false);
+                for c in chars.by_ref() {
+                    match c {
+                        _ if escaped => escaped = false,
+                        '\\' => escaped = true,
+                        '"' => break,
+                        '\n' => line += 1,
+                        _ => {}
+                    }
+                    if !escaped && c != '\\' {
+                        word.push(c);
+                    }
+                }
+                while chars.peek().is_some_and(|c| c.is_whitespace()) {
+                    if chars.next() == Some('\n') {
+                        line += 1;
+                    }
+                }
+                if depth == 1 && chars.peek() == Some(&':') && word == key {
+                    return Some(start);
+                }
+            }
+            _ => {}
+        }
+    }
+    None
 }
 
 /// Whether the key path exists in `e` (with any value: a `null` metric is there, and missing
@@ -359,6 +472,54 @@ mod tests {
             refused(&good, &bad, "old/base.json", key);
             refused(&bad, &good, "new/summary.json", key);
         }
+    }
+
+    #[test]
+    fn a_summary_without_the_baselines_entries_says_what_is_missing() {
+        let good = summary(90.0, 0.1);
+        let (s, b) = (Path::new("new/summary.json"), Path::new("old/base.json"));
+        let empty = json!({"scenario": "s", "results": []});
+        let e = comparable(&empty, s, &good, b).unwrap_err().to_string();
+        assert!(
+            e.starts_with("new/summary.json: results: is empty")
+                && e.contains("every baseline entry is missing (ls / random)"),
+            "{e}"
+        );
+        let e = comparable(&good, s, &empty, b).unwrap_err().to_string();
+        assert!(e.starts_with("old/base.json: results: is empty"), "{e}");
+        let mut lm = good.clone();
+        lm["results"][0]["method"] = json!("lm");
+        let e = comparable(&lm, s, &good, b).unwrap_err().to_string();
+        assert!(
+            e.starts_with("new/summary.json: results: ")
+                && e.contains("missing: ls / random; here: lm / random"),
+            "{e}"
+        );
+        let bare = json!({"scenario": "s", "results": [{"method": "ls", "poses": "random"}]});
+        let e = comparable(&bare, s, &good, b).unwrap_err().to_string();
+        assert!(
+            e.starts_with("new/summary.json: results: ") && e.contains("ls / random eta_mean_pct"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn the_line_of_results_is_named() {
+        let dir = std::env::temp_dir().join(format!("calbench-check-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("s.json");
+        let text = "{\n  \"a\": {\"results\": 1},\n  \"b\": \"results\",\n  \"results\": []\n}\n";
+        std::fs::write(&path, text).unwrap();
+        assert_eq!(json_key_line(&path, "results"), Some(4));
+        assert_eq!(json_key_line(&path, "scenario"), None);
+        let v: Value = serde_json::from_str(text).unwrap();
+        let mut v = v;
+        v["scenario"] = json!("s");
+        let e = comparable(&v, &path, &summary(90.0, 0.1), Path::new("b"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("s.json: line 4, results: is empty"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -8,75 +8,13 @@ use super::plots;
 
 use serde_json::{json, Value};
 
-use crate::calibrate::{validation_errors, Calibrated, ErrorStats, Registration};
+use crate::calibrate::validation::point_residuals;
+pub use crate::calibrate::validation::{validate_file, FileValidation};
+use crate::calibrate::{Calibrated, ErrorStats, Registration};
 use crate::error::{Error, Result};
 use crate::measurement::Measurements;
-use crate::numeric::{Frame, Mat3, Real};
-use crate::robot::compliance::loaded_fk;
+use crate::numeric::Real;
 use crate::robot::{robot_to_toml, Param, Robot};
-
-/// Validation of a compensated robot on a measurement file: position errors before
-/// (nominal) and after (compensated) and, for full-pose files, orientation errors.
-pub struct FileValidation {
-    /// Position errors of the nominal robot (mm).
-    pub before_mm: ErrorStats,
-    /// Position errors of the compensated robot (mm).
-    pub after_mm: ErrorStats,
-    /// Orientation errors (rotation angle) before and after (deg), for full-pose files.
-    pub deg: Option<(ErrorStats, ErrorStats)>,
-    /// Qiao's attitude errors before and after (deg), for full-pose files.
-    pub attitude_deg: Option<(ErrorStats, ErrorStats)>,
-}
-
-/// Validates `c` on the measurements `v`, brought into the base frame by the calibration's
-/// registration; a compensated robot with compliances predicts each point under its
-/// `payload_kg`. Fails when such a robot has no link masses.
-pub fn validate_file(nominal: &Robot, c: &Calibrated, v: &Measurements) -> Result<FileValidation> {
-    let truth = |frame: &Frame| -> Vec<Frame> {
-        let (points, rotations) = v.in_frame(frame);
-        points
-            .into_iter()
-            .enumerate()
-            .map(|(i, pos)| Frame {
-                rot: rotations.as_ref().map_or(Mat3::identity(), |r| r[i]),
-                pos,
-            })
-            .collect()
-    };
-    // "Before" in the nominal robot's own registration, the same for every method.
-    let loads = v.payload_kg.as_deref();
-    let b = validation_errors(nominal, &v.qs, loads, &truth(&c.nominal_frame))?;
-    let a = validation_errors(&c.robot, &v.qs, loads, &truth(&c.frame))?;
-    let pose = v.quats.is_some();
-    Ok(FileValidation {
-        before_mm: ErrorStats::of(&b.mm),
-        after_mm: ErrorStats::of(&a.mm),
-        deg: pose.then(|| (ErrorStats::of(&b.deg), ErrorStats::of(&a.deg))),
-        attitude_deg: pose.then(|| {
-            (
-                ErrorStats::of(&b.attitude_deg),
-                ErrorStats::of(&a.attitude_deg),
-            )
-        }),
-    })
-}
-
-/// Per calibration point, the residual (mm) before — the nominal robot in its own
-/// registration — and after — the compensated robot, under the point's payload, in the
-/// final registration.
-fn point_residuals(r: &IdentifyRecord) -> Result<(Vec<Real>, Vec<Real>)> {
-    let c = r.calibrated;
-    let (cn, cc) = (r.nominal.chain(), c.robot.chain());
-    let loads = r.data.payload_kg.as_deref();
-    let mut before = Vec::with_capacity(r.data.len());
-    let mut after = Vec::with_capacity(r.data.len());
-    for (i, (q, p)) in r.data.qs.iter().zip(&r.data.points).enumerate() {
-        let load = loads.map_or(0.0, |l| l[i]);
-        before.push((c.nominal_frame.apply(p) - cn.fk(q).pos).norm());
-        after.push((c.frame.apply(p) - loaded_fk(&c.robot, &cc, q, load)?.pos).norm());
-    }
-    Ok((before, after))
-}
 
 fn stats_json(s: &ErrorStats) -> Value {
     json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
@@ -157,7 +95,7 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
 /// registration) and after (the compensated robot in the final registration), and the final
 /// weight.
 pub fn residuals_csv(r: &IdentifyRecord) -> Result<String> {
-    let (before, after) = point_residuals(r)?;
+    let (before, after) = point_residuals(r.nominal, r.calibrated, r.data)?;
     let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
     for (i, (b, a)) in before.iter().zip(&after).enumerate() {
         let w = r
@@ -242,7 +180,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
     use std::fmt::Write as _;
     let c = r.calibrated;
     let id = &c.identified;
-    let (before, after) = point_residuals(r)?;
+    let (before, after) = point_residuals(r.nominal, r.calibrated, r.data)?;
     let mut s = String::new();
     let _ = writeln!(
         s,

@@ -64,7 +64,30 @@ struct CouplingEntry {
 /// `beta` in a `dh` robot, and every value that is not finite or out of range *after* its
 /// conversion to mm and rad (see [`Robot::check`]: a length of `1e308` m is infinite in mm
 /// and refused), including limits whose lower value is not below the upper one.
+///
+/// A refusal of a value names its line too (`line 14, joint 2 (joints[1]), key \`a\``) where
+/// the file writes the key; TOML errors carry their own line and column.
 pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
+    parse_robot_text(text, path).map_err(|e| match e {
+        Error::File { file, place, msg } if place != "TOML" => {
+            let line = crate::error::toml_key_line(text, &key_of_place(&place));
+            Error::file(file, crate::error::at_line(line, place), msg)
+        }
+        other => other,
+    })
+}
+
+/// The dotted key of a place as robot-file messages name it: `joint 2 (joints[1]), key \`a\``
+/// is `joints[1].a`; `base.xyz`, `coupling.l1` and other keys are themselves.
+fn key_of_place(place: &str) -> String {
+    let joint = place
+        .split_once(" (")
+        .and_then(|(_, rest)| rest.split_once("), key `"))
+        .and_then(|(at, key)| Some(format!("{at}.{}", key.strip_suffix('`')?)));
+    joint.unwrap_or_else(|| place.to_string())
+}
+
+fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
     let f: RobotFile =
         toml::from_str(text).map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
     let err = |place: String, msg: String| Error::file(path, place, msg);
@@ -450,6 +473,43 @@ mod tests {
             .replace("revolute", "prismatic")
             .replace("[-90.0, 90.0]", "[0.0, 1e306]");
         refused(&pris, "limits");
+    }
+
+    #[test]
+    fn refusals_name_the_line_of_the_key() {
+        // Lines: 1-3 HEAD, 4 length_unit, 5 [[joints]], 6 type, 7 alpha, 8 a, 9 d, 10 theta,
+        // 11 limits.
+        let a = one_joint("m", &JOINT.replace("\na = 0.0", "\na = 1e308"));
+        refused(&a, "bad-robot.toml: line 8, joint 1 (joints[0]), key `a`: ");
+        let alpha = one_joint("mm", &JOINT.replace("alpha = 0.0", "alpha = 400"));
+        refused(&alpha, "line 7, joint 1 (joints[0]), key `alpha`: ");
+        let limits = one_joint("mm", &JOINT.replace("[-90.0, 90.0]", "[90.0, -90.0]"));
+        refused(&limits, "line 11, joint 1 (joints[0]), key `limits`: ");
+        // Lines 12 blank, 13 [[joints]], 14 type, 15 alpha, 16 a, 17 d.
+        let two = format!(
+            "{}\n[[joints]]\ntype = \"revolute\"\n{JOINT}\n",
+            one_joint("mm", JOINT)
+        );
+        let i = two.rfind("d = 0.0").unwrap();
+        let bad_second = format!("{}d = 2e6{}", &two[..i], &two[i + 7..]);
+        refused(&bad_second, "line 17, joint 2 (joints[1]), key `d`: ");
+        let base = format!("{}[base]\nxyz = [0.0, 1e307, 0.0]\n", one_joint("m", JOINT));
+        refused(&base, "line 13, base.xyz: ");
+        let kind = one_joint("mm", JOINT).replace("\"revolute\"", "\"hinge\"");
+        refused(&kind, "line 6, joint 1 (joints[0]), key `type`: ");
+        // A key the file does not write has no line; TOML errors carry their own.
+        let e = refused(
+            &format!("{HEAD}length_unit = \"mm\"\njoints = []\n"),
+            "joints",
+        );
+        assert!(e.contains("line 5, joints: "), "{e}");
+        let e = refused(&one_joint("mm", "alpha = 0.0\na = \"x\""), "TOML");
+        assert!(e.contains("line 8"), "{e}");
+        assert_eq!(
+            key_of_place("joint 12 (joints[11]), key `beta`"),
+            "joints[11].beta"
+        );
+        assert_eq!(key_of_place("coupling.l1"), "coupling.l1");
     }
 
     #[test]

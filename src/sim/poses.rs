@@ -11,12 +11,116 @@ use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
 use crate::robot::sampling::uniform_joint_poses;
-use crate::robot::Robot;
+use crate::robot::{Coupling, JointType, Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
 pub const BOX_TRIES_PER_POSE: usize = 5_000;
 /// Minimum number of tries when sampling a box.
 pub const BOX_TRIES_MIN: usize = 200_000;
+
+/// An upper bound of the distance (mm) from the origin of the base frame to the tool point
+/// over every joint configuration: the sum of the lengths of the chain's translations — each
+/// joint's `a` and `d`, the reach of its travel when it slides (prismatic or screw-coupled),
+/// and the tool's offset. Rotations do not change lengths, so no tool point lies farther.
+pub fn reach_bound_mm(robot: &Robot) -> Real {
+    let travel = |j: usize| {
+        let (lo, hi) = robot.joints[j].limits;
+        lo.abs().max(hi.abs())
+    };
+    let coupled = matches!(robot.coupling, Some(Coupling::Differential { .. }));
+    let mut r = 0.0;
+    for (j, joint) in robot.joints.iter().enumerate() {
+        r += robot.get(Param::A(j)).abs() + robot.get(Param::D(j)).abs();
+        if joint.kind == JointType::Prismatic || (coupled && j < 2) {
+            r += travel(j);
+        }
+    }
+    if coupled && robot.dof() >= 2 {
+        // The screw travels combine into the prismatic joint's: count both.
+        r += travel(0).max(travel(1));
+    }
+    let tool = Vec3::new(
+        robot.get(Param::Tool(0)),
+        robot.get(Param::Tool(1)),
+        robot.get(Param::Tool(2)),
+    );
+    r + tool.norm()
+}
+
+/// Refuses, naming `key`, a region that cannot give `n` poses, quickly and before any pose
+/// is drawn (a scenario checks its regions when it is loaded):
+///
+/// - a `box` wholly beyond [`reach_bound_mm`] of the base origin: refused at once;
+/// - a `box` in which not one of [`BOX_TRIES_MIN`] random joint configurations (a fixed
+///   seed) puts the tool point: refused after that bounded search (the sampling itself gives
+///   up after as many tries without a pose);
+/// - a `grid` of fewer points than `n`.
+pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Result<()> {
+    region.check(key)?;
+    match region {
+        Region::Joint => Ok(()),
+        Region::Grid { per_joint } => {
+            let dof = robot.dof();
+            let total = u32::try_from(dof)
+                .ok()
+                .and_then(|d| per_joint.checked_pow(d));
+            match total {
+                Some(g) if n > g => Err(Error::setting(
+                    key,
+                    format!(
+                        "{n} poses asked for but the grid has only {per_joint}^{dof} = {g} points"
+                    ),
+                )),
+                _ => Ok(()),
+            }
+        }
+        Region::Box { center_mm, size_mm } => {
+            let c = Vec3::from(*center_mm);
+            let h = Vec3::from(*size_mm) / 2.0;
+            let base = Vec3::new(
+                robot.get(Param::Base(0)),
+                robot.get(Param::Base(1)),
+                robot.get(Param::Base(2)),
+            );
+            let nearest = Vec3::from_fn(|k, _| base[k].clamp(c[k] - h[k], c[k] + h[k]));
+            let gap = (nearest - base).norm();
+            let reach = reach_bound_mm(robot);
+            let out_of_reach = |how: String| {
+                Error::setting(
+                    key,
+                    format!(
+                        "the box centred at {center_mm:?} mm of size {size_mm:?} mm is out of \
+                         reach of robot \"{}\": {how}",
+                        robot.name
+                    ),
+                )
+            };
+            if gap > reach * (1.0 + 1e-9) + 1e-6 {
+                return Err(out_of_reach(format!(
+                    "its nearest point is {gap:.1} mm from the base origin, and no tool point \
+                     is farther than {reach:.1} mm (the sum of the link lengths, travels and \
+                     tool offset)"
+                )));
+            }
+            let chain = robot.chain();
+            let mut rng = crate::numeric::rng::stream(0, "reach");
+            let mut q = vec![0.0; robot.dof()];
+            for _ in 0..BOX_TRIES_MIN {
+                for (v, j) in q.iter_mut().zip(&robot.joints) {
+                    *v = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
+                }
+                let d = chain.fk(&q).pos - c;
+                if (0..3).all(|k| d[k].abs() <= h[k]) {
+                    return Ok(());
+                }
+            }
+            Err(out_of_reach(format!(
+                "not one of {BOX_TRIES_MIN} random joint configurations within the limits puts \
+                 the tool point in it (the search stops there)"
+            )))
+        }
+    }
+}
 
 /// `n` joint configurations (internal units) in `region`, errors keyed `calibration.region`.
 /// See [`sample_region_keyed`].
@@ -35,7 +139,8 @@ pub fn sample_region(
 /// - `box`: rejection sampling of uniform joint configurations whose tool point (forward
 ///   kinematics of `robot`, the nominal model the planner knows) lies in the axis-aligned box
 ///   (Qiao 2021 §4's 1000 mm cube); at most `BOX_TRIES_MIN + BOX_TRIES_PER_POSE · n` tries,
-///   after which the box is refused as (nearly) unreachable, naming `key`;
+///   and at most `BOX_TRIES_MIN` while no pose is found, after which the box is refused as
+///   (nearly) unreachable, naming `key`;
 /// - `grid`: `per_joint` values per joint at the cell centres of each joint range, `n`
 ///   distinct grid points drawn at random and returned in grid order; more poses than grid
 ///   points are refused naming `key`.
@@ -58,6 +163,9 @@ pub fn sample_region_keyed(
             let mut q = vec![0.0; robot.dof()];
             let mut t = 0;
             while out.len() < n && t < tries {
+                if t == BOX_TRIES_MIN && out.is_empty() {
+                    break; // hopeless: not one pose so far
+                }
                 t += 1;
                 for (v, j) in q.iter_mut().zip(&robot.joints) {
                     *v = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
@@ -72,8 +180,8 @@ pub fn sample_region_keyed(
                     key,
                     format!(
                         "only {} of {n} poses found with the tool point in the box centred at \
-                         {center_mm:?} mm of size {size_mm:?} mm after {tries} random tries: the \
-                         box is (nearly) out of reach of robot \"{}\"",
+                         {center_mm:?} mm of size {size_mm:?} mm after {t} random tries (the \
+                         search stops there): the box is (nearly) out of reach of robot \"{}\"",
                         out.len(),
                         robot.name
                     ),
@@ -191,6 +299,61 @@ mod tests {
         assert!(e.to_string().contains("out of reach"), "{e}");
         let e = sample_region(&r, &region, 10, &mut stream(1, "p")).unwrap_err();
         assert_eq!(key_of(&e), "calibration.region");
+    }
+
+    #[test]
+    fn no_tool_point_lies_beyond_the_reach_bound() {
+        for b in crate::robot::builtin::BUILTINS {
+            let r = (b.build)();
+            let base = Vec3::new(
+                r.get(Param::Base(0)),
+                r.get(Param::Base(1)),
+                r.get(Param::Base(2)),
+            );
+            let reach = reach_bound_mm(&r);
+            for q in uniform_joint_poses(&r, 2000, &mut stream(4, b.name)) {
+                let d = (r.fk(&q).pos - base).norm();
+                assert!(d <= reach, "{}: {d} mm beyond the bound {reach} mm", b.name);
+            }
+        }
+    }
+
+    #[test]
+    fn regions_no_pose_reaches_are_refused_quickly() {
+        let r = crate::robot::builtin::tx60();
+        // Far beyond the reach: refused without a search.
+        let far = cube([5000.0, 0.0, 550.0], 100.0);
+        let t = std::time::Instant::now();
+        let e = check_region(&r, &far, 50, "calibration.region").unwrap_err();
+        assert!(t.elapsed().as_millis() < 50, "{:?}", t.elapsed());
+        assert_eq!(key_of(&e), "calibration.region");
+        assert!(
+            e.to_string().contains("out of reach")
+                && e.to_string().contains("no tool point is farther"),
+            "{e}"
+        );
+        // Within reach, but too small to be hit by chance: the bounded search.
+        let under = cube([300.0, 0.0, 300.0], 0.01);
+        let e = check_region(&r, &under, 50, "validation.region").unwrap_err();
+        assert_eq!(key_of(&e), "validation.region");
+        assert!(
+            e.to_string()
+                .contains(&format!("not one of {BOX_TRIES_MIN}")),
+            "{e}"
+        );
+        // The sampling gives up as soon, whatever the number of poses asked for.
+        let e = sample_region(&r, &under, 100_000, &mut stream(1, "p")).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains(&format!("after {BOX_TRIES_MIN} random tries")),
+            "{e}"
+        );
+        // Reachable regions pass; a grid of too few points does not.
+        check_region(&r, &cube([550.0, 0.0, 550.0], 1000.0), 50, "k").unwrap();
+        check_region(&r, &Region::Joint, 10, "k").unwrap();
+        check_region(&r, &Region::Grid { per_joint: 2 }, 64, "k").unwrap();
+        let e = check_region(&r, &Region::Grid { per_joint: 2 }, 65, "k").unwrap_err();
+        assert!(e.to_string().contains("2^6 = 64 points"), "{e}");
     }
 
     #[test]

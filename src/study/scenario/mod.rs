@@ -1,0 +1,547 @@
+//! Scenario files (docs/formats.md, "Scenario file"): parsed, then checked into a validated
+//! [`Scenario`] before any trial runs. A bad file is refused with the file, the key and what
+//! is allowed.
+//!
+//! Each section's settings type lives with the code that uses it (the simulator's
+//! [`ErrorSettings`], [`TrackerSettings`], [`OutlierSettings`], the compliance model's
+//! [`ComplianceSettings`]); this module composes them, adds the study-level keys and checks
+//! the whole. Sweeps and command-line overrides edit the parsed TOML and check it again, so a
+//! swept value is held to the same rules as a written one.
+
+mod sections;
+mod sweep;
+
+use std::path::{Path, PathBuf};
+
+pub use crate::calibrate::Registration;
+use crate::error::{at_line, Error, Result};
+use crate::identify::registry::method_names;
+pub use crate::identify::MethodSpec;
+use crate::numeric::Real;
+use crate::poses::{Objective, Strategy as Optimiser};
+use crate::robot::builtin;
+use crate::robot::Robot;
+use crate::sim::poses::check_region;
+use crate::sim::sag::ComplianceSettings;
+use crate::sim::settings::{
+    ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
+};
+use crate::sim::truth::selected_params;
+use sections::RawScenario;
+pub use sections::{
+    Calibration, IdentificationSpec, PoseStrategy, RobotRef, StrategyName, Validation,
+};
+pub use sweep::{Sweep, SweepAxis};
+
+/// A checked scenario: every value in range, ready to run.
+#[derive(Clone, Debug)]
+pub struct Scenario {
+    /// The file it came from (`None` for the built-in default).
+    pub path: Option<PathBuf>,
+    /// Study name (the results folder).
+    pub name: String,
+    /// What the study asks.
+    pub description: String,
+    /// Master seed: trial i uses `rng::trial_seed(seed, i)`.
+    pub seed: u64,
+    /// Number of Monte-Carlo trials.
+    pub trials: usize,
+    /// The robot.
+    pub robot: RobotRef,
+    /// The injected errors.
+    pub errors: ErrorSettings,
+    /// The simulated laser tracker.
+    pub tracker: TrackerSettings,
+    /// Gross outliers in the calibration measurements.
+    pub outliers: OutlierSettings,
+    /// Gravity sag.
+    pub compliance: ComplianceSettings,
+    /// Registration of the tracker frame.
+    pub registration: Registration,
+    /// Calibration poses.
+    pub calibration: Calibration,
+    /// Validation poses.
+    pub validation: Validation,
+    /// What the methods identify.
+    pub identification: IdentificationSpec,
+    /// Identification methods compared.
+    pub methods: Vec<MethodSpec>,
+    /// The optional sweep.
+    pub sweep: Option<Sweep>,
+    table: toml::Table,
+    source: Option<Source>,
+}
+
+/// The text a scenario was read from, for the lines of refused keys, and the keys set since
+/// (by an override or a sweep point), whose values are not the text's: they get no line.
+#[derive(Clone, Debug)]
+struct Source {
+    text: std::sync::Arc<str>,
+    edited: Vec<String>,
+}
+
+impl Source {
+    /// The line of `key` in the text, unless `key` was edited (or lies in, or holds, an
+    /// edited key).
+    fn line(&self, key: &str) -> Option<usize> {
+        let within = |a: &str, b: &str| {
+            a == b || a.strip_prefix(b).is_some_and(|r| r.starts_with(['.', '[']))
+        };
+        if self.edited.iter().any(|e| within(key, e) || within(e, key)) {
+            return None;
+        }
+        crate::error::toml_key_line(&self.text, key)
+    }
+
+    /// `source` with `keys` edited too. A method's key (`methods.<label>.<key>`) counts as
+    /// an edit of every method: refusals name methods by index.
+    fn edit(source: &Option<Source>, keys: impl IntoIterator<Item = String>) -> Option<Source> {
+        source.as_ref().map(|s| {
+            let mut s = s.clone();
+            s.edited.extend(keys.into_iter().map(|k| {
+                if k.starts_with("methods.") {
+                    "methods".to_string()
+                } else {
+                    k
+                }
+            }));
+            s
+        })
+    }
+}
+
+/// The most trials a study may ask for (docs/formats.md `trials`): more is refused, not run until
+/// killed.
+pub const MAX_TRIALS: usize = 1_000_000_000;
+
+/// The built-in default study (`scenarios/default.toml`): what `calbench` runs with no
+/// arguments.
+pub const DEFAULT_SCENARIO: &str = include_str!("../../../scenarios/default.toml");
+
+impl Scenario {
+    /// Reads and checks a scenario file.
+    pub fn load(path: &Path) -> Result<Scenario> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Scenario::parse(&text, Some(path))
+    }
+
+    /// The built-in default study.
+    pub fn default_study() -> Result<Scenario> {
+        Scenario::parse(DEFAULT_SCENARIO, None)
+    }
+
+    /// Parses and checks a scenario's text; `path` (for messages and relative files) is the
+    /// file it came from.
+    pub fn parse(text: &str, path: Option<&Path>) -> Result<Scenario> {
+        let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
+        let table: toml::Table = toml::from_str(text)
+            .map_err(|e| Error::file(shown, "TOML", e.to_string().trim_end()))?;
+        let source = Source {
+            text: text.into(),
+            edited: Vec::new(),
+        };
+        Scenario::from_table(table, path, Some(source))
+    }
+
+    /// Checks the parsed `table` of the file `path`; `source` gives the lines of refused keys
+    /// (`line 14, calibration.count`).
+    fn from_table(
+        table: toml::Table,
+        path: Option<&Path>,
+        source: Option<Source>,
+    ) -> Result<Scenario> {
+        let shown = path
+            .unwrap_or(Path::new("<built-in default scenario>"))
+            .to_path_buf();
+        let line = |key: &str| source.as_ref().and_then(|s| s.line(key));
+        // An error whose line is that of `key` (the place itself, or the key of a setting).
+        let at = |key: &str, place: &str, msg: String| {
+            Error::file(&shown, at_line(line(key), place), msg)
+        };
+        let ferr = |place: &str, msg: String| at(place, place, msg);
+        if table.contains_key("registration_study") {
+            return Err(ferr(
+                "registration_study",
+                "this is a registration study (Ban fig. 3), which `calbench run` runs on its \
+                 own; it is not a calibration scenario"
+                    .into(),
+            ));
+        }
+        let raw: RawScenario =
+            toml::Value::Table(table.clone())
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    // The same refusal read from the text has a span: its line.
+                    let line = source
+                        .as_ref()
+                        .filter(|s| s.edited.is_empty())
+                        .and_then(|s| {
+                            let spanned = toml::from_str::<RawScenario>(&s.text).err()?;
+                            Some(crate::error::line_of(&s.text, spanned.span()?.start))
+                        });
+                    Error::file(&shown, at_line(line, "scenario"), e.to_string().trim_end())
+                })?;
+        let dir = path
+            .and_then(Path::parent)
+            .map(Path::to_path_buf)
+            .unwrap_or_default();
+        let check = |r: Result<()>| {
+            r.map_err(|e| match &e {
+                Error::Setting { key, .. } => at(key, "setting", e.to_string()),
+                _ => ferr("setting", e.to_string()),
+            })
+        };
+
+        if raw.name.trim().is_empty() || raw.name.contains(['/', '\\']) {
+            return Err(ferr(
+                "name",
+                "must be a non-empty name without slashes".into(),
+            ));
+        }
+        if raw.trials == 0 || raw.trials > MAX_TRIALS {
+            return Err(ferr(
+                "trials",
+                format!("must be between 1 and {MAX_TRIALS}, got {}", raw.trials),
+            ));
+        }
+        let robot = match (raw.robot.builtin, raw.robot.file) {
+            (Some(b), None) => RobotRef::Builtin(b),
+            (None, Some(f)) => RobotRef::File(dir.join(f)),
+            _ => {
+                return Err(ferr(
+                    "robot",
+                    "give exactly one of `builtin = \"NAME\"` or `file = \"PATH\"`".into(),
+                ))
+            }
+        };
+        check(raw.errors.check())?;
+        check(raw.tracker.check())?;
+        check(raw.outliers.check())?;
+
+        let c = raw.calibration;
+        if c.count == 0 {
+            return Err(ferr("calibration.count", "must be at least 1".into()));
+        }
+        if c.strategies.is_empty() {
+            return Err(ferr(
+                "calibration.strategies",
+                "give at least one of: random, box, grid, file, detmax, ide, detmax-ide".into(),
+            ));
+        }
+        let mut strategies = Vec::new();
+        for (i, s) in c.strategies.iter().enumerate() {
+            let key = format!("calibration.strategies[{i}]");
+            let name: StrategyName = crate::robot::names::parse(&key, s)
+                .map_err(|_| {
+                    ferr(
+                        &key,
+                        format!(
+                            "unknown strategy \"{s}\"; allowed: random, box, grid, file, detmax, ide, detmax-ide"
+                        ),
+                    )
+                })?;
+            let st = match name {
+                StrategyName::Random => PoseStrategy::Random,
+                StrategyName::Box => {
+                    if !matches!(c.region, Region::Box { .. }) {
+                        return Err(ferr(
+                            "calibration.region",
+                            "strategy \"box\" needs region = { kind = \"box\", … }".into(),
+                        ));
+                    }
+                    PoseStrategy::Box
+                }
+                StrategyName::Grid => PoseStrategy::Grid,
+                StrategyName::File => match &c.poses_file {
+                    Some(f) => PoseStrategy::File(dir.join(f)),
+                    None => {
+                        return Err(ferr(
+                            "calibration.poses_file",
+                            "strategy \"file\" needs a pose list".into(),
+                        ))
+                    }
+                },
+                StrategyName::Detmax => PoseStrategy::Optimised(Optimiser::Detmax),
+                StrategyName::Ide => PoseStrategy::Optimised(Optimiser::Ide),
+                StrategyName::DetmaxIde => PoseStrategy::Optimised(Optimiser::DetmaxIde),
+                StrategyName::DetmaxFull => PoseStrategy::OptimisedFull(Optimiser::Detmax),
+                StrategyName::IdeFull => PoseStrategy::OptimisedFull(Optimiser::Ide),
+                StrategyName::DetmaxIdeFull => PoseStrategy::OptimisedFull(Optimiser::DetmaxIde),
+            };
+            if strategies
+                .iter()
+                .any(|x: &PoseStrategy| x.name() == st.name())
+            {
+                return Err(ferr(
+                    &format!("calibration.strategies[{i}]"),
+                    format!("\"{s}\" is listed twice"),
+                ));
+            }
+            strategies.push(st);
+        }
+        let optimised = strategies
+            .iter()
+            .any(|s| matches!(s, PoseStrategy::Optimised(_)));
+        if optimised && c.candidates < c.count {
+            return Err(ferr(
+                "calibration.candidates",
+                format!("must be at least calibration.count ({})", c.count),
+            ));
+        }
+        let objective: Objective =
+            crate::robot::names::parse("calibration.objective", &c.objective)
+                .map_err(|e| ferr("calibration.objective", e.to_string()))?;
+        if !(c.separate_threshold.is_finite() && c.separate_threshold > 0.0) {
+            return Err(ferr(
+                "calibration.separate_threshold",
+                "must be a positive number".into(),
+            ));
+        }
+        check(c.region.check("calibration.region"))?;
+        let v = raw.validation;
+        if v.count == 0 {
+            return Err(ferr("validation.count", "must be at least 1".into()));
+        }
+        check(v.region.check("validation.region"))?;
+        let load = |key: &str, w: Real| {
+            if w.is_finite() && w >= 0.0 {
+                Ok(())
+            } else {
+                Err(ferr(
+                    key,
+                    format!("must be a finite payload ≥ 0 kg, got {w}"),
+                ))
+            }
+        };
+        if let Some(p) = &c.payloads_kg {
+            if p.is_empty() {
+                return Err(ferr(
+                    "calibration.payloads_kg",
+                    "give at least one payload, or leave the key out".into(),
+                ));
+            }
+            for (i, &w) in p.iter().enumerate() {
+                load(&format!("calibration.payloads_kg[{i}]"), w)?;
+            }
+        }
+        if let Some(w) = v.payload_kg {
+            load("validation.payload_kg", w)?;
+        }
+        if let Some(n) = raw.outliers.count {
+            if n > c.count {
+                return Err(ferr(
+                    "outliers.count",
+                    format!("{n} outliers but only {} calibration poses", c.count),
+                ));
+            }
+        }
+
+        if raw.methods.is_empty() {
+            return Err(ferr(
+                "methods",
+                format!(
+                    "give at least one [[methods]]; allowed names: {}",
+                    method_names()
+                ),
+            ));
+        }
+        let mut methods = Vec::new();
+        for (i, t) in raw.methods.iter().enumerate() {
+            let m = MethodSpec::from_table(t).map_err(|(k, msg)| {
+                let place = if k.is_empty() {
+                    format!("methods[{i}]")
+                } else {
+                    format!("methods[{i}].{k}")
+                };
+                ferr(&place, msg)
+            })?;
+            let position_only = raw.tracker.measure.measure() != crate::measurement::Measure::Pose;
+            if position_only && t.contains_key("k") {
+                return Err(ferr(
+                    &format!("methods[{i}].k"),
+                    "k weighs orientation against position errors; the tracker measures \
+                     positions only (set tracker.measure = \"pose\" or drop k)"
+                        .into(),
+                ));
+            }
+            if t.contains_key("error_model")
+                && raw.identification.compliance != crate::robot::compliance::CompliancePick::None
+            {
+                return Err(ferr(
+                    &format!("methods[{i}].error_model"),
+                    "the pose-error models are kinematic; identification.compliance needs \
+                     ls, ridge, igg3, lm or a search"
+                        .into(),
+                ));
+            }
+            if t.contains_key("error_model") && position_only {
+                return Err(ferr(
+                    &format!("methods[{i}].error_model"),
+                    "the pose-error models need full-pose data: set tracker.measure = \"pose\""
+                        .into(),
+                ));
+            }
+            if methods.iter().any(|x: &MethodSpec| x.label == m.label) {
+                return Err(ferr(
+                    &format!("methods[{i}].label"),
+                    format!(
+                        "\"{}\" is used twice: give each method a distinct `label`",
+                        m.label
+                    ),
+                ));
+            }
+            methods.push(m);
+        }
+
+        let sweep = match raw.sweep {
+            None => None,
+            Some(field) => Some(sweep::check_sweep(field).map_err(|(k, m)| ferr(&k, m))?),
+        };
+
+        let scenario = Scenario {
+            path: path.map(Path::to_path_buf),
+            name: raw.name,
+            description: raw.description,
+            seed: raw.seed,
+            trials: raw.trials,
+            robot,
+            errors: raw.errors,
+            tracker: raw.tracker,
+            outliers: raw.outliers,
+            compliance: raw.compliance,
+            registration: raw.registration.method,
+            calibration: Calibration {
+                count: c.count,
+                strategies,
+                region: c.region,
+                candidates: c.candidates,
+                objective,
+                separate: c.separate,
+                separate_threshold: c.separate_threshold,
+                payloads_kg: c.payloads_kg,
+            },
+            validation: Validation {
+                count: v.count,
+                region: v.region,
+                payload_kg: v.payload_kg,
+            },
+            identification: raw.identification,
+            methods,
+            sweep,
+            table,
+            source: source.clone(),
+        };
+        // Settings that need the robot: joint counts of lists, parameter names.
+        let robot = scenario.robot().map_err(|e| match e {
+            Error::Setting { key, msg } => ferr(&key, msg),
+            Error::File { .. } => e,
+            other => ferr("robot.file", other.to_string()),
+        })?;
+        check(scenario.compliance.check(robot.dof()))?;
+        // Regions no pose reaches, refused now rather than after a search in the run.
+        let keyed = |r: Result<()>| {
+            r.map_err(|e| match e {
+                Error::Setting { key, msg } => ferr(&key, msg),
+                other => other,
+            })
+        };
+        let cal = &scenario.calibration;
+        let drawn = cal
+            .strategies
+            .iter()
+            .filter_map(|s| match s {
+                PoseStrategy::Random | PoseStrategy::Box => Some(cal.count),
+                PoseStrategy::Optimised(_) | PoseStrategy::OptimisedFull(_) => Some(cal.candidates),
+                PoseStrategy::Grid | PoseStrategy::File(_) => None,
+            })
+            .max();
+        if let Some(n) = drawn {
+            keyed(check_region(&robot, &cal.region, n, "calibration.region"))?;
+        }
+        let val = &scenario.validation;
+        keyed(check_region(
+            &robot,
+            &val.region,
+            val.count,
+            "validation.region",
+        ))?;
+        check(
+            scenario
+                .identification
+                .compliance
+                .params(&robot, "identification.compliance")
+                .map(|_| ()),
+        )?;
+        let selection = scenario.errors.selection();
+        if let ParamSelection::List(_) = &selection {
+            let measure = scenario.tracker.measure.measure();
+            let key = scenario.errors.key();
+            check(selected_params(&robot, &selection, measure, key).map(|_| ()))?;
+        }
+        if let ParamSelection::List(names) = &scenario.identification.params {
+            let all = robot.params();
+            crate::sim::settings::listed_params(names, |n| {
+                crate::robot::Param::parse(n)
+                    .filter(|p| all.contains(p))
+                    .ok_or_else(|| {
+                        Error::setting(
+                            "identification.params",
+                            format!(
+                                "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
+                                robot.name,
+                                robot.convention.as_str(),
+                                robot.dof()
+                            ),
+                        )
+                    })
+            })
+            .map_err(|e| match e {
+                Error::Setting { msg, .. } => ferr("identification.params", msg),
+                other => other,
+            })?;
+            if names.is_empty() {
+                return Err(ferr(
+                    "identification.params",
+                    "give at least one parameter name".into(),
+                ));
+            }
+        }
+        if let Some(sw) = &scenario.sweep {
+            for point in sw.points() {
+                scenario.plan(&point)?;
+            }
+        }
+        Ok(scenario)
+    }
+
+    /// The nominal robot.
+    pub fn robot(&self) -> Result<Robot> {
+        match &self.robot {
+            RobotRef::Builtin(n) => {
+                if builtin::builtin(n).is_none() {
+                    let names: Vec<&str> = builtin::BUILTINS.iter().map(|b| b.name).collect();
+                    return Err(Error::setting(
+                        "robot.builtin",
+                        format!("no built-in robot \"{n}\"; built-ins: {}", names.join(", ")),
+                    ));
+                }
+                builtin::load(n)
+            }
+            RobotRef::File(p) => crate::robot::read_robot_file(p),
+        }
+    }
+
+    /// The built-in robot's table entry (for default stiffness and masses), if built-in.
+    pub fn builtin(&self) -> Option<&'static builtin::Builtin> {
+        match &self.robot {
+            RobotRef::Builtin(n) => builtin::builtin(n),
+            RobotRef::File(_) => None,
+        }
+    }
+
+    /// The scenario as a TOML table (as written, before checking): what a shard records so
+    /// that shards of different scenarios are told apart.
+    pub fn table(&self) -> &toml::Table {
+        &self.table
+    }
+}

@@ -1,0 +1,239 @@
+//! The sections of a scenario file: the raw sections as written (deserialised, unchecked)
+//! and the checked settings of the study-level sections.
+
+use std::path::PathBuf;
+
+use serde::Deserialize;
+
+use super::sweep::SweepField;
+use super::Registration;
+use crate::numeric::Real;
+use crate::poses::{Objective, Strategy as Optimiser};
+use crate::sim::sag::ComplianceSettings;
+use crate::sim::settings::{
+    ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
+};
+
+/// The scenario file, as written. Unknown keys are refused by serde.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawScenario {
+    pub(super) name: String,
+    #[serde(default)]
+    pub(super) description: String,
+    #[serde(default = "default_seed")]
+    pub(super) seed: u64,
+    #[serde(default = "default_trials")]
+    pub(super) trials: usize,
+    pub(super) robot: RobotSection,
+    #[serde(default)]
+    pub(super) errors: ErrorSettings,
+    #[serde(default)]
+    pub(super) tracker: TrackerSettings,
+    #[serde(default)]
+    pub(super) outliers: OutlierSettings,
+    #[serde(default)]
+    pub(super) compliance: ComplianceSettings,
+    #[serde(default)]
+    pub(super) registration: RegistrationSection,
+    #[serde(default)]
+    pub(super) calibration: CalibrationSection,
+    #[serde(default)]
+    pub(super) validation: ValidationSection,
+    #[serde(default)]
+    pub(super) identification: IdentificationSpec,
+    pub(super) methods: Vec<toml::Table>,
+    pub(super) sweep: Option<SweepField>,
+}
+
+pub(super) fn default_seed() -> u64 {
+    1
+}
+pub(super) fn default_trials() -> usize {
+    100
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RobotSection {
+    pub(super) builtin: Option<String>,
+    pub(super) file: Option<PathBuf>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RegistrationSection {
+    #[serde(default)]
+    pub(super) method: Registration,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(super) struct CalibrationSection {
+    pub(super) count: usize,
+    pub(super) strategies: Vec<String>,
+    pub(super) poses_file: Option<PathBuf>,
+    pub(super) region: Region,
+    pub(super) candidates: usize,
+    pub(super) objective: String,
+    pub(super) separate: bool,
+    pub(super) separate_threshold: Real,
+    pub(super) payloads_kg: Option<Vec<Real>>,
+}
+
+impl Default for CalibrationSection {
+    fn default() -> Self {
+        CalibrationSection {
+            count: 50,
+            strategies: vec!["random".into()],
+            poses_file: None,
+            region: Region::Joint,
+            candidates: 1000,
+            objective: "composite".into(),
+            separate: false,
+            separate_threshold: 1e2,
+            payloads_kg: None,
+        }
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub(super) struct ValidationSection {
+    pub(super) count: usize,
+    pub(super) region: Region,
+    pub(super) payload_kg: Option<Real>,
+}
+
+impl Default for ValidationSection {
+    fn default() -> Self {
+        ValidationSection {
+            count: 50,
+            region: Region::Joint,
+            payload_kg: None,
+        }
+    }
+}
+
+/// `[identification]`: what the methods identify (docs/formats.md, scenario file).
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IdentificationSpec {
+    /// The identified parameters: `"identifiable"` (the default: the joint and tool
+    /// parameters pivoted QR finds identifiable, with the base when the registration is
+    /// identified), `"all"` (every joint parameter of the model, θ, d, a, α and the β that
+    /// exist, Guo 2024's full 21-parameter model of eq. 7, with the identifiable base and tool
+    /// parameters) or a list of names. Lists that the data cannot determine are refused for
+    /// the methods that need full rank (LS); LM and ridge solve them by their damping.
+    pub params: ParamSelection,
+    /// The joint compliances identified with the kinematic errors (elasto-geometric model,
+    /// [`crate::robot::Param::Compliance`]): none by default, `"gravity"` or names.
+    pub compliance: crate::robot::compliance::CompliancePick,
+}
+
+/// Where the robot comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum RobotRef {
+    /// A built-in robot by name.
+    Builtin(String),
+    /// A robot file (resolved against the scenario file's folder).
+    File(PathBuf),
+}
+
+/// How a set of calibration poses is chosen (docs/formats.md `calibration.strategies`).
+#[derive(Clone, Debug, PartialEq)]
+pub enum PoseStrategy {
+    /// Drawn afresh each trial, uniformly within `calibration.region`.
+    Random,
+    /// Drawn afresh each trial with the tool point in the box `calibration.region`.
+    Box,
+    /// A regular grid over the joint ranges (the same every trial).
+    Grid,
+    /// The pose list `calibration.poses_file`.
+    File(PathBuf),
+    /// Optimised once per study on the nominal robot (Guo 2024 §3), on the separated model
+    /// when `calibration.separate` is set.
+    Optimised(Optimiser),
+    /// Optimised once per study on the full model, every joint parameter with no separation
+    /// (Guo 2024 fig. 6 and table 8, "full-parameter model").
+    OptimisedFull(Optimiser),
+}
+
+/// The names accepted in `calibration.strategies` (serde, kebab-case).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum StrategyName {
+    /// [`PoseStrategy::Random`].
+    Random,
+    /// [`PoseStrategy::Box`].
+    Box,
+    /// [`PoseStrategy::Grid`].
+    Grid,
+    /// [`PoseStrategy::File`].
+    File,
+    /// DETMAX ([`PoseStrategy::Optimised`]).
+    Detmax,
+    /// IDE ([`PoseStrategy::Optimised`]).
+    Ide,
+    /// DETMAX-IDE ([`PoseStrategy::Optimised`]).
+    DetmaxIde,
+    /// DETMAX on the full model ([`PoseStrategy::OptimisedFull`]).
+    DetmaxFull,
+    /// IDE on the full model ([`PoseStrategy::OptimisedFull`]).
+    IdeFull,
+    /// DETMAX-IDE on the full model ([`PoseStrategy::OptimisedFull`]).
+    DetmaxIdeFull,
+}
+
+impl PoseStrategy {
+    /// The name used in files and reports.
+    pub fn name(&self) -> &'static str {
+        match self {
+            PoseStrategy::Random => "random",
+            PoseStrategy::Box => "box",
+            PoseStrategy::Grid => "grid",
+            PoseStrategy::File(_) => "file",
+            PoseStrategy::Optimised(o) => o.as_str(),
+            PoseStrategy::OptimisedFull(o) => match o {
+                Optimiser::Random => "random",
+                Optimiser::Detmax => "detmax-full",
+                Optimiser::Ide => "ide-full",
+                Optimiser::DetmaxIde => "detmax-ide-full",
+            },
+        }
+    }
+}
+
+/// Calibration poses: how many, how chosen, from where.
+#[derive(Clone, Debug)]
+pub struct Calibration {
+    /// Poses per calibration set.
+    pub count: usize,
+    /// The strategies compared.
+    pub strategies: Vec<PoseStrategy>,
+    /// Region of random poses and of the optimisers' candidate pool.
+    pub region: Region,
+    /// Size of the optimisers' candidate pool.
+    pub candidates: usize,
+    /// The optimisers' objective.
+    pub objective: Objective,
+    /// Ill-conditioned parameter separation before optimising (Guo 2024 §3.1).
+    pub separate: bool,
+    /// GCN threshold of the separation.
+    pub separate_threshold: Real,
+    /// Payloads (kg) under which every calibration pose is measured, once each (docs/formats.md
+    /// `calibration.payloads_kg`); `None`: once, under `compliance.payload_kg`.
+    pub payloads_kg: Option<Vec<Real>>,
+}
+
+/// Validation poses: drawn afresh each trial, never used for identification.
+#[derive(Clone, Debug)]
+pub struct Validation {
+    /// Poses per trial.
+    pub count: usize,
+    /// Where they are drawn.
+    pub region: Region,
+    /// Payload (kg) of the validation poses (docs/formats.md `validation.payload_kg`); `None`:
+    /// `compliance.payload_kg`.
+    pub payload_kg: Option<Real>,
+}

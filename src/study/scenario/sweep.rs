@@ -1,0 +1,277 @@
+//! Sweeps (`[sweep]`, `[[sweep]]`) and overrides: the axes as written, their check, and the
+//! scenario of each sweep point, made by editing the parsed TOML and checking it again.
+
+use std::path::PathBuf;
+
+use serde::Deserialize;
+
+use super::{Scenario, Source};
+use crate::error::{Error, Result};
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SweepSection {
+    pub(super) key: String,
+    pub(super) values: Vec<toml::Value>,
+    #[serde(default)]
+    pub(super) zip: bool,
+}
+
+/// `[sweep]` (one axis) or `[[sweep]]` (a grid of axes).
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum SweepField {
+    One(SweepSection),
+    Grid(Vec<SweepSection>),
+}
+
+/// One axis of a sweep: a dotted key and its values.
+#[derive(Clone, Debug)]
+pub struct SweepAxis {
+    /// The key, e.g. `outliers.count` or `methods.<label>.k0`.
+    pub key: String,
+    /// The values, as written.
+    pub values: Vec<toml::Value>,
+}
+
+/// The swept settings (docs/formats.md `[sweep]`, `[[sweep]]`): one axis, or several axes run as
+/// their cartesian product (the last axis varying fastest) or, with `zip`, paired value by
+/// value.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    /// The axes, in file order.
+    pub axes: Vec<SweepAxis>,
+    /// The axes' lists are paired (`zip = true` on the first axis) instead of crossed.
+    pub zip: bool,
+}
+
+impl Sweep {
+    /// The swept keys, in axis order.
+    pub fn keys(&self) -> Vec<&str> {
+        self.axes.iter().map(|a| a.key.as_str()).collect()
+    }
+
+    /// Every point of the sweep: one value per axis, in run order.
+    pub fn points(&self) -> Vec<Vec<toml::Value>> {
+        if self.zip {
+            let n = self.axes[0].values.len();
+            return (0..n)
+                .map(|i| self.axes.iter().map(|a| a.values[i].clone()).collect())
+                .collect();
+        }
+        let mut points: Vec<Vec<toml::Value>> = vec![Vec::new()];
+        for a in &self.axes {
+            points = points
+                .iter()
+                .flat_map(|p| {
+                    a.values.iter().map(move |v| {
+                        let mut q = p.clone();
+                        q.push(v.clone());
+                        q
+                    })
+                })
+                .collect();
+        }
+        points
+    }
+
+    /// The number of independent dimensions the results span: 1 for one axis or zipped
+    /// axes, else the number of axes.
+    pub fn dims(&self) -> usize {
+        if self.zip {
+            1
+        } else {
+            self.axes.len()
+        }
+    }
+}
+
+impl Scenario {
+    /// A copy with one dotted key (`outliers.count`, `trials`, `tracker.mpe_a_um`) set to
+    /// `value`, checked again.
+    pub fn with_override(&self, key: &str, value: toml::Value) -> Result<Scenario> {
+        if key.starts_with("methods") {
+            return Err(Error::setting(key, "methods cannot be overridden"));
+        }
+        Scenario::from_table(
+            self.edited(self.table.clone(), key, value)?,
+            self.path.as_deref(),
+            Source::edit(&self.source, [key.to_string()]),
+        )
+    }
+
+    /// The study of one sweep point (one value per axis): the scenario with each swept key
+    /// set and no sweep, checked again. A refusal names the file and the swept key.
+    pub fn plan(&self, point: &[toml::Value]) -> Result<Scenario> {
+        let shown = self
+            .path
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("<built-in default scenario>"));
+        let Some(sw) = &self.sweep else {
+            return Ok(self.clone());
+        };
+        let mut table = self.table.clone();
+        table.remove("sweep");
+        let mut keys = Vec::new();
+        for (axis, v) in sw.axes.iter().zip(point) {
+            table = self.edited(table, &axis.key, v.clone()).map_err(|e| {
+                Error::file(&shown, format!("sweep key \"{}\"", axis.key), e.to_string())
+            })?;
+            keys.push(format!("{} = {v}", axis.key));
+        }
+        let source = Source::edit(
+            &self.source,
+            sw.axes
+                .iter()
+                .map(|a| a.key.clone())
+                .chain(["sweep".into()]),
+        );
+        Scenario::from_table(table, self.path.as_deref(), source).map_err(|e| {
+            let msg = match e {
+                Error::File { place, msg, .. } => format!("{place}: {msg}"),
+                other => other.to_string(),
+            };
+            Error::file(&shown, format!("sweep ({})", keys.join(", ")), msg)
+        })
+    }
+
+    /// `table` with the dotted `key` set to `value`. `methods.<label>.<key>` sets a key of
+    /// the method whose `label` (or, without one, name) is `<label>`. The key must be one
+    /// the scenario can hold: an unknown one is refused when the table is checked again.
+    fn edited(&self, mut table: toml::Table, key: &str, value: toml::Value) -> Result<toml::Table> {
+        let mut parts: Vec<&str> = key.split('.').collect();
+        if parts.iter().any(|p| p.is_empty()) {
+            return Err(Error::setting(key, "is not a dotted key"));
+        }
+        let last = parts.pop().unwrap_or_default();
+        if parts.first() == Some(&"methods") {
+            if parts.len() != 2 {
+                return Err(Error::setting(
+                    key,
+                    "a method key is swept as methods.<label>.<key>",
+                ));
+            }
+            let label = parts[1];
+            let methods = table
+                .get_mut("methods")
+                .and_then(toml::Value::as_array_mut)
+                .ok_or_else(|| Error::setting(key, "the scenario has no [[methods]]"))?;
+            let label_of = |t: &toml::Table| {
+                t.get("label")
+                    .or_else(|| t.get("name"))
+                    .and_then(toml::Value::as_str)
+                    .map(str::to_string)
+            };
+            let labels: Vec<String> = methods
+                .iter()
+                .filter_map(|m| m.as_table().and_then(label_of))
+                .collect();
+            let m = methods
+                .iter_mut()
+                .filter_map(toml::Value::as_table_mut)
+                .find(|t| label_of(t).as_deref() == Some(label))
+                .ok_or_else(|| {
+                    Error::setting(
+                        key,
+                        format!(
+                            "no method labelled \"{label}\"; labels: {}",
+                            labels.join(", ")
+                        ),
+                    )
+                })?;
+            if last == "name" || last == "label" {
+                return Err(Error::setting(
+                    key,
+                    "a method's name and label cannot be swept",
+                ));
+            }
+            m.insert(last.to_string(), value);
+            return Ok(table);
+        }
+        if matches!(parts.first(), Some(&"sweep")) || (parts.is_empty() && last == "name") {
+            return Err(Error::setting(key, "cannot be swept or overridden"));
+        }
+        let mut t = &mut table;
+        for p in parts {
+            t = t
+                .entry(p.to_string())
+                .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+                .as_table_mut()
+                .ok_or_else(|| Error::setting(key, format!("`{p}` is not a section")))?;
+        }
+        t.insert(last.to_string(), value);
+        Ok(table)
+    }
+
+    /// One checked scenario per sweep point, with the point's values (or the scenario itself
+    /// when there is no sweep).
+    pub fn sweep_plans(&self) -> Result<Vec<(Option<Vec<toml::Value>>, Scenario)>> {
+        match &self.sweep {
+            None => Ok(vec![(None, self.clone())]),
+            Some(sw) => sw
+                .points()
+                .into_iter()
+                .map(|p| {
+                    let plan = self.plan(&p)?;
+                    Ok((Some(p), plan))
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Checks the sweep section: every axis a key and a non-empty list, keys distinct, zipped
+/// lists of one length. Returns (key, message) on refusal.
+pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (String, String)> {
+    let (sections, grid) = match field {
+        SweepField::One(s) => (vec![s], false),
+        SweepField::Grid(v) => (v, true),
+    };
+    if sections.is_empty() {
+        return Err(("sweep".into(), "give at least one [[sweep]] axis".into()));
+    }
+    let zip = sections[0].zip;
+    let mut axes: Vec<SweepAxis> = Vec::new();
+    for (i, s) in sections.into_iter().enumerate() {
+        let place = if grid {
+            format!("sweep[{i}]")
+        } else {
+            "sweep".into()
+        };
+        if s.zip && i > 0 {
+            return Err((
+                format!("{place}.zip"),
+                "zip = true belongs on the first axis".into(),
+            ));
+        }
+        if s.values.is_empty() {
+            return Err((
+                format!("{place}.values"),
+                format!("\"{}\": give at least one value", s.key),
+            ));
+        }
+        if axes.iter().any(|a| a.key == s.key) {
+            return Err((
+                format!("{place}.key"),
+                format!("\"{}\" is swept twice", s.key),
+            ));
+        }
+        if zip && s.values.len() != axes.first().map_or(s.values.len(), |a| a.values.len()) {
+            return Err((
+                format!("{place}.values"),
+                format!(
+                    "zipped axes need lists of one length: \"{}\" has {}, \"{}\" {}",
+                    axes[0].key,
+                    axes[0].values.len(),
+                    s.key,
+                    s.values.len()
+                ),
+            ));
+        }
+        axes.push(SweepAxis {
+            key: s.key,
+            values: s.values,
+        });
+    }
+    Ok(Sweep { axes, zip })
+}

@@ -1,0 +1,378 @@
+//! Refusals of bad input files as a user meets them: the binary run on temporary files, and
+//! the message naming the file, the line where there is one, and the key or column.
+//!
+//! - a robot file with a value out of range, refused by every command that loads it;
+//! - a measurement CSV of too few distinct poses, refused by `identify` before any solve;
+//! - a CSV value that overflows, in the file or after the conversion to internal units;
+//! - a scenario region no pose reaches, refused when the scenario is loaded, at once;
+//! - `check` on a summary without results, saying what is missing.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::{Duration, Instant};
+
+/// A fresh folder for one test.
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("calbench-refusals-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn calbench(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn path(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// The message of a refusal (non-zero exit, no panic, nothing on stdout), which must hold
+/// every one of `words`.
+fn refused(o: &Output, words: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(!o.status.success(), "accepted: {out}{err}");
+    assert_ne!(o.status.code(), Some(101), "panicked: {err}");
+    assert!(err.starts_with("error: "), "{err}");
+    for w in words {
+        assert!(err.contains(w), "`{w}` missing from: {err}");
+    }
+    err
+}
+
+/// The built-in TX60 as a robot file, with `edit` applied to the text.
+fn tx60_file(dir: &Path, name: &str, edit: impl Fn(&str) -> String) -> PathBuf {
+    let o = calbench(&["robots", "tx60"]);
+    assert!(o.status.success());
+    let text = String::from_utf8(o.stdout).unwrap();
+    let p = dir.join(name);
+    std::fs::write(&p, edit(&text)).unwrap();
+    p
+}
+
+/// `text` with the `n`-th (1-based) line that starts with `key = ` replaced by `line`, and
+/// the number of that line.
+fn replace_nth(text: &str, key: &str, n: usize, line: &str) -> (String, usize) {
+    let mut seen = 0;
+    let mut at = 0;
+    let lines: Vec<String> = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| {
+            if l.starts_with(&format!("{key} = ")) {
+                seen += 1;
+                if seen == n {
+                    at = i + 1;
+                    return line.to_string();
+                }
+            }
+            l.to_string()
+        })
+        .collect();
+    assert!(at > 0, "no {n}th `{key}` in the text");
+    (lines.join("\n") + "\n", at)
+}
+
+/// A small position-measuring scenario of the TX60 (its robot given by `robot`), written
+/// into `dir`.
+fn scenario(dir: &Path, name: &str, robot: &str, extra: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(
+        &p,
+        format!(
+            "name = \"refusal\"\nseed = 3\ntrials = 2\n\n[robot]\n{robot}\n\n\
+             [calibration]\ncount = 12\n\n[validation]\ncount = 6\n{extra}\n\
+             [[methods]]\nname = \"ls\"\n"
+        ),
+    )
+    .unwrap();
+    p
+}
+
+/// The calibration measurement of trial 0 of a TX60 scenario: (header, data rows).
+fn measurement(dir: &Path) -> (String, Vec<String>) {
+    let sc = scenario(dir, "sim.toml", "builtin = \"tx60\"", "");
+    let out = dir.join("sim");
+    let o = calbench(&["simulate", path(&sc), "--out", path(&out)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(out.join("measurements.csv")).unwrap();
+    let mut lines = text.lines().map(str::to_string);
+    let header = lines.next().unwrap();
+    (header, lines.collect())
+}
+
+#[test]
+fn a_robot_value_out_of_range_is_refused_by_every_command_naming_file_line_and_key() {
+    let d = tmp("robot");
+    // The TX60 in metres with a2 = 1e308 m, infinite in mm; and α2 = 400°.
+    let (metres, a_line) = {
+        let t = tx60_file(&d, "m.toml", |t| {
+            t.replace("length_unit = \"mm\"", "length_unit = \"m\"")
+        });
+        let text = std::fs::read_to_string(t).unwrap();
+        replace_nth(&text, "a", 2, "a = 1e308")
+    };
+    let huge = d.join("huge.toml");
+    std::fs::write(&huge, metres).unwrap();
+    let (twisted, alpha_line) = {
+        let text = String::from_utf8(calbench(&["robots", "tx60"]).stdout).unwrap();
+        replace_nth(&text, "alpha", 2, "alpha = 400")
+    };
+    let bent = d.join("bent.toml");
+    std::fs::write(&bent, twisted).unwrap();
+    let (csv_header, rows) = measurement(&d);
+    let data = d.join("data.csv");
+    std::fs::write(&data, format!("{csv_header}\n{}\n", rows.join("\n"))).unwrap();
+
+    for (file, line, key) in [
+        (&huge, a_line, "joint 2 (joints[1]), key `a`"),
+        (&bent, alpha_line, "joint 2 (joints[1]), key `alpha`"),
+    ] {
+        let name = file.file_name().unwrap().to_str().unwrap();
+        let place = format!("{name}: line {line}, {key}: ");
+        let words = [place.as_str(), "must be a finite"];
+        refused(
+            &calbench(&["identifiability", "--robot", path(file)]),
+            &words,
+        );
+        refused(
+            &calbench(&["fk", "--robot", path(file), "--q", "0,0,0,0,0,0"]),
+            &words,
+        );
+        let out = d.join(format!("out-{name}"));
+        refused(
+            &calbench(&[
+                "identify",
+                "--robot",
+                path(file),
+                "--data",
+                path(&data),
+                "--method",
+                "ls",
+                "--out",
+                path(&out),
+            ]),
+            &words,
+        );
+        assert!(!out.exists());
+        let sc = scenario(&d, &format!("sc-{name}"), &format!("file = \"{name}\""), "");
+        let out = d.join(format!("run-{name}"));
+        refused(&calbench(&["run", path(&sc), "--out", path(&out)]), &words);
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn a_measurement_of_too_few_distinct_poses_is_refused_before_any_solve() {
+    let d = tmp("poses");
+    let (header, rows) = measurement(&d);
+    let identify = |name: &str, body: &[&String]| {
+        let data = d.join(name);
+        let text: Vec<&str> = body.iter().map(|s| s.as_str()).collect();
+        std::fs::write(&data, format!("{header}\n{}\n", text.join("\n"))).unwrap();
+        let out = d.join(format!("out-{name}"));
+        let t = Instant::now();
+        let o = calbench(&[
+            "identify",
+            "--robot",
+            "tx60",
+            "--data",
+            path(&data),
+            "--method",
+            "lm",
+            "--out",
+            path(&out),
+        ]);
+        assert!(t.elapsed() < Duration::from_secs(5), "{:?}", t.elapsed());
+        assert!(!out.exists());
+        o
+    };
+    // Every row the same pose (lines 2 to 31).
+    let same: Vec<&String> = std::iter::repeat_n(&rows[0], 30).collect();
+    let e = refused(
+        &identify("same.csv", &same),
+        &[
+            "same.csv: line 2: ",
+            "all 30 rows (lines 2 to 31) are the same pose",
+            "at least 3 distinct poses",
+        ],
+    );
+    assert!(e.contains("q1…q6"), "{e}");
+    // Two poses, alternating.
+    let two: Vec<&String> = (0..20).map(|i| &rows[i % 2]).collect();
+    refused(
+        &identify("two.csv", &two),
+        &[
+            "two.csv: line 2: ",
+            "hold only 2 distinct poses, first seen on lines 2 and 3",
+        ],
+    );
+}
+
+#[test]
+fn a_csv_value_that_overflows_is_refused_naming_file_line_and_column() {
+    let d = tmp("overflow");
+    let (header, rows) = measurement(&d);
+    let columns: Vec<&str> = header.split(',').collect();
+    let x = columns.iter().position(|c| *c == "x").unwrap();
+    let with = |column: usize, value: &str| {
+        let mut r: Vec<String> = rows[4].split(',').map(str::to_string).collect();
+        r[column] = value.to_string();
+        let mut body = rows.clone();
+        body[4] = r.join(",");
+        format!("{header}\n{}\n", body.join("\n"))
+    };
+    let identify = |name: &str, text: String| {
+        let data = d.join(name);
+        std::fs::write(&data, text).unwrap();
+        calbench(&[
+            "identify",
+            "--robot",
+            "tx60",
+            "--data",
+            path(&data),
+            "--method",
+            "ls",
+            "--out",
+            path(&d.join("out")),
+        ])
+    };
+    // Row 5 of the data is line 6.
+    refused(
+        &identify("inf.csv", with(x, "1e400")),
+        &["inf.csv: line 6, column x: ", "not a finite number"],
+    );
+    refused(
+        &identify("far.csv", with(x, "1e308")),
+        &["far.csv: line 6, column x: ", "out of range", "1 km"],
+    );
+    refused(
+        &identify("q.csv", with(0, "1e400")),
+        &["q.csv: line 6, column q1: "],
+    );
+    // Finite in metres, infinite in mm: a prismatic joint's travel.
+    let prismatic = tx60_file(&d, "slide.toml", |t| {
+        let t = t.replace("length_unit = \"mm\"", "length_unit = \"m\"");
+        let (t, _) = replace_nth(&t, "type", 3, "type = \"prismatic\"");
+        let (t, _) = replace_nth(&t, "limits", 3, "limits = [0.0, 0.5]");
+        t
+    });
+    let slide = d.join("slide.csv");
+    let mut text = String::from("q1,q2,q3,q4,q5,q6,x,y,z\n");
+    for i in 0..4 {
+        text += &format!("{i},0,0.1,0,0,0,1,2,3\n");
+    }
+    text += "0,0,1e306,0,0,0,1,2,3\n";
+    std::fs::write(&slide, text).unwrap();
+    refused(
+        &calbench(&[
+            "identify",
+            "--robot",
+            path(&prismatic),
+            "--data",
+            path(&slide),
+            "--method",
+            "ls",
+            "--out",
+            path(&d.join("out")),
+        ]),
+        &["slide.csv: line 6, column q3: ", "overflows"],
+    );
+}
+
+#[test]
+fn a_scenario_region_no_pose_reaches_is_refused_at_once_naming_file_line_and_key() {
+    let d = tmp("region");
+    let far = "region = { kind = \"box\", center_mm = [5000.0, 0.0, 500.0], size_mm = [100.0, 100.0, 100.0] }";
+    let tiny = "region = { kind = \"box\", center_mm = [300.0, 0.0, 300.0], size_mm = [0.01, 0.01, 0.01] }";
+    for (name, extra, key, why) in [
+        (
+            "far.toml",
+            format!("{far}\n"),
+            "calibration.region",
+            "no tool point is farther",
+        ),
+        (
+            "tiny.toml",
+            format!("\n[validation]\ncount = 6\n{tiny}\n"),
+            "validation.region",
+            "not one of 200000 random joint configurations",
+        ),
+    ] {
+        let text = format!(
+            "name = \"refusal\"\nseed = 3\ntrials = 2\n\n[robot]\nbuiltin = \"tx60\"\n\n\
+             [calibration]\ncount = 12\n{extra}\n[[methods]]\nname = \"ls\"\n"
+        );
+        let line = text.lines().position(|l| l.starts_with("region")).unwrap() + 1;
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        let out = d.join(format!("out-{name}"));
+        let place = format!("{name}: line {line}, {key}: ");
+        let t = Instant::now();
+        let o = calbench(&["run", path(&p), "--out", path(&out)]);
+        assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
+        let e = refused(&o, &[place.as_str(), "out of reach", why]);
+        assert!(o.stdout.is_empty(), "a run started: {e}");
+        assert!(!out.exists());
+        refused(
+            &calbench(&["simulate", path(&p), "--out", path(&out)]),
+            &[place.as_str()],
+        );
+    }
+}
+
+#[test]
+fn check_on_a_summary_without_results_says_what_is_missing() {
+    let d = tmp("check");
+    let baseline = Path::new(env!("CARGO_MANIFEST_DIR")).join("results/baselines/ci-guard.json");
+    let text = std::fs::read_to_string(&baseline).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let entries: Vec<String> = v["results"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| {
+            format!(
+                "{} / {}",
+                e["method"].as_str().unwrap(),
+                e["poses"].as_str().unwrap()
+            )
+        })
+        .collect();
+    v["results"] = serde_json::json!([]);
+    let pretty = serde_json::to_string_pretty(&v).unwrap();
+    let line = pretty
+        .lines()
+        .position(|l| l.starts_with("  \"results\""))
+        .unwrap()
+        + 1;
+    let empty = d.join("empty.json");
+    std::fs::write(&empty, &pretty).unwrap();
+    let place = format!("empty.json: line {line}, results: is empty");
+    let e = refused(
+        &calbench(&["check", path(&empty), "--baseline", path(&baseline)]),
+        &[place.as_str(), "ci-guard.json"],
+    );
+    for entry in &entries {
+        assert!(e.contains(entry.as_str()), "{entry} missing from: {e}");
+    }
+    // A summary whose entries are none of the baseline's lists what is missing and what is
+    // there.
+    if let Some(r) = v["results"].as_array_mut() {
+        r.push(serde_json::json!({"method": "pso", "poses": "random", "eta_mean_pct": 90.0}));
+    }
+    let other = d.join("other.json");
+    std::fs::write(&other, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let place = format!("other.json: line {line}, results: ");
+    let e = refused(
+        &calbench(&["check", path(&other), "--baseline", path(&baseline)]),
+        &[place.as_str(), "here: pso / random"],
+    );
+    for entry in &entries {
+        assert!(e.contains(entry.as_str()), "{entry} missing from: {e}");
+    }
+}
