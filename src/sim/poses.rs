@@ -9,8 +9,8 @@ use rand::Rng as _;
 use super::settings::Region;
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
-use crate::numeric::{Real, Vec3};
-use crate::robot::sampling::uniform_joint_poses;
+use crate::numeric::Real;
+use crate::robot::sampling::{poses_in_box, uniform_joint_poses};
 use crate::robot::Robot;
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
@@ -32,10 +32,11 @@ pub fn sample_region(
 /// `n` joint configurations (internal units) in `region`:
 ///
 /// - `joint`: uniform within the joint limits;
-/// - `box`: rejection sampling of uniform joint configurations whose tool point (forward
-///   kinematics of `robot`, the nominal model the planner knows) lies in the axis-aligned box
-///   (Qiao 2021 §4's 1000 mm cube); at most `BOX_TRIES_MIN + BOX_TRIES_PER_POSE · n` tries,
-///   after which the box is refused as (nearly) unreachable, naming `key`;
+/// - `box`: rejection sampling ([`poses_in_box`]) of uniform joint configurations whose tool
+///   point (forward kinematics of `robot`, the nominal model the planner knows) lies in the
+///   axis-aligned box (Qiao 2021 §4's 1000 mm cube); at most
+///   `BOX_TRIES_MIN + BOX_TRIES_PER_POSE · n` tries, after which the box is refused as
+///   (nearly) unreachable, naming `key`;
 /// - `grid`: `per_joint` values per joint at the cell centres of each joint range, `n`
 ///   distinct grid points drawn at random and returned in grid order; more poses than grid
 ///   points are refused naming `key`.
@@ -50,23 +51,8 @@ pub fn sample_region_keyed(
     match region {
         Region::Joint => Ok(uniform_joint_poses(robot, n, rng)),
         Region::Box { center_mm, size_mm } => {
-            let c = Vec3::from(*center_mm);
-            let h = Vec3::from(*size_mm) / 2.0;
-            let chain = robot.chain();
             let tries = BOX_TRIES_MIN + BOX_TRIES_PER_POSE * n;
-            let mut out = Vec::with_capacity(n);
-            let mut q = vec![0.0; robot.dof()];
-            let mut t = 0;
-            while out.len() < n && t < tries {
-                t += 1;
-                for (v, j) in q.iter_mut().zip(&robot.joints) {
-                    *v = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
-                }
-                let d = chain.fk(&q).pos - c;
-                if (0..3).all(|k| d[k].abs() <= h[k]) {
-                    out.push(q.clone());
-                }
-            }
+            let out = poses_in_box(robot, n, *center_mm, *size_mm, tries, rng);
             if out.len() < n {
                 return Err(Error::setting(
                     key,

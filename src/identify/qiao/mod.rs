@@ -51,16 +51,15 @@ pub use fitness::{qiao_fitness, qiao_term, MetaProblem, DEFAULT_K};
 pub use pso::{bas_pso, pso, BasPsoOptions, BeetleTerm, PsoOptions, Velocity};
 pub use search::{halton, halton_population, halton_population_at, Bounds, Fitness, MetaResult};
 
-use rand::Rng as _;
-
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::Real;
+use crate::robot::sampling::poses_in_box;
 use crate::robot::Robot;
 
-/// Joint configurations of `robot` whose tool point lies in the axis-aligned box centred at
-/// `centre` with edge `edge` (mm), by rejection sampling of uniform joint values — Qiao
-/// 2021 §4's calibration points "in a 1000 mm cube centred at (550, 0, 550)". Fails with
+/// Joint configurations of `robot` whose tool point lies in the cube centred at `centre` with
+/// edge `edge` (mm): Qiao 2021 §4's calibration points "in a 1000 mm cube centred at (550,
+/// 0, 550)", drawn by [`crate::robot::sampling::poses_in_box`]. Fails with
 /// [`Error::Compute`] if fewer than `n` are found in `max_draws` draws.
 pub fn poses_in_cube(
     robot: &Robot,
@@ -70,25 +69,11 @@ pub fn poses_in_cube(
     max_draws: usize,
     rng: &mut Rng,
 ) -> Result<Vec<Vec<Real>>> {
-    let chain = robot.chain();
-    let h = 0.5 * edge;
-    let mut out = Vec::with_capacity(n);
-    let mut q = vec![0.0; robot.dof()];
-    for _ in 0..max_draws {
-        if out.len() == n {
-            break;
-        }
-        for (v, j) in q.iter_mut().zip(&robot.joints) {
-            *v = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
-        }
-        let p = chain.fk(&q).pos;
-        if (0..3).all(|i| (p[i] - centre[i]).abs() <= h) {
-            out.push(q.clone());
-        }
-    }
+    let out = poses_in_box(robot, n, centre, [edge; 3], max_draws, rng);
     if out.len() < n {
         return Err(Error::Compute(format!(
-            "only {} of {n} poses found in the {edge} mm cube at {centre:?} after {max_draws} draws",
+            "only {} of {n} poses found in the {edge} mm cube at {centre:?} after \
+             {max_draws} draws",
             out.len()
         )));
     }

@@ -231,3 +231,26 @@ fn nan_fitness_counts_as_worst() {
     let r = pso(&f, &b, &o, &mut stream(2, "x")).unwrap();
     assert!(r.fitness.is_finite() && r.x[0] >= 0.0);
 }
+
+/// Qiao's cube is the scenarios' box region: the same draws give the same poses.
+#[test]
+fn poses_in_cube_is_the_box_region() {
+    let robot = crate::robot::builtin::tx60();
+    let (centre, edge) = ([550.0, 0.0, 550.0], 1000.0);
+    let cube = poses_in_cube(&robot, 20, centre, edge, 200_000, &mut stream(7, "p")).unwrap();
+    let region = crate::sim::settings::Region::Box {
+        center_mm: centre,
+        size_mm: [edge; 3],
+    };
+    let boxed = crate::sim::poses::sample_region(&robot, &region, 20, &mut stream(7, "p")).unwrap();
+    assert_eq!(cube, boxed);
+    let e = poses_in_cube(
+        &robot,
+        5,
+        [5000.0, 0.0, 0.0],
+        10.0,
+        1000,
+        &mut stream(7, "p"),
+    );
+    assert!(matches!(e, Err(Error::Compute(_))));
+}
