@@ -10,7 +10,7 @@ use super::settings::Region;
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
-use crate::robot::sampling::uniform_joint_poses;
+use crate::robot::sampling::{poses_in_box, uniform_joint_pose, uniform_joint_poses};
 use crate::robot::{Coupling, JointType, Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
@@ -106,9 +106,7 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
             let mut rng = crate::numeric::rng::stream(0, "reach");
             let mut q = vec![0.0; robot.dof()];
             for _ in 0..BOX_TRIES_MIN {
-                for (v, j) in q.iter_mut().zip(&robot.joints) {
-                    *v = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
-                }
+                uniform_joint_pose(robot, &mut rng, &mut q);
                 let d = chain.fk(&q).pos - c;
                 if (0..3).all(|k| d[k].abs() <= h[k]) {
                     return Ok(());
@@ -136,10 +134,11 @@ pub fn sample_region(
 /// `n` joint configurations (internal units) in `region`:
 ///
 /// - `joint`: uniform within the joint limits;
-/// - `box`: rejection sampling of uniform joint configurations whose tool point (forward
-///   kinematics of `robot`, the nominal model the planner knows) lies in the axis-aligned box
-///   (Qiao 2021 §4's 1000 mm cube); at most `BOX_TRIES_MIN + BOX_TRIES_PER_POSE · n` tries,
-///   and at most `BOX_TRIES_MIN` while no pose is found, after which the box is refused as
+/// - `box`: rejection sampling ([`poses_in_box`]) of uniform joint configurations whose tool
+///   point (forward kinematics of `robot`, the nominal model the planner knows) lies in the
+///   axis-aligned box (Qiao 2021 §4's 1000 mm cube); at most
+///   `BOX_TRIES_MIN + BOX_TRIES_PER_POSE · n` tries, and at most `BOX_TRIES_MIN` while no
+///   pose is found, after which the box is refused as
 ///   (nearly) unreachable, naming `key`;
 /// - `grid`: `per_joint` values per joint at the cell centres of each joint range, `n`
 ///   distinct grid points drawn at random and returned in grid order; more poses than grid
@@ -155,27 +154,10 @@ pub fn sample_region_keyed(
     match region {
         Region::Joint => Ok(uniform_joint_poses(robot, n, rng)),
         Region::Box { center_mm, size_mm } => {
-            let c = Vec3::from(*center_mm);
-            let h = Vec3::from(*size_mm) / 2.0;
-            let chain = robot.chain();
             let tries = BOX_TRIES_MIN + BOX_TRIES_PER_POSE * n;
-            let mut out = Vec::with_capacity(n);
-            let mut q = vec![0.0; robot.dof()];
-            let mut t = 0;
-            while out.len() < n && t < tries {
-                if t == BOX_TRIES_MIN && out.is_empty() {
-                    break; // hopeless: not one pose so far
-                }
-                t += 1;
-                for (v, j) in q.iter_mut().zip(&robot.joints) {
-                    *v = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
-                }
-                let d = chain.fk(&q).pos - c;
-                if (0..3).all(|k| d[k].abs() <= h[k]) {
-                    out.push(q.clone());
-                }
-            }
+            let out = poses_in_box(robot, n, *center_mm, *size_mm, (tries, BOX_TRIES_MIN), rng);
             if out.len() < n {
+                let t = if out.is_empty() { BOX_TRIES_MIN } else { tries };
                 return Err(Error::setting(
                     key,
                     format!(
