@@ -311,7 +311,7 @@ pub(crate) fn read_table(
                     line,
                     &format!(", column {}", qnames[j]),
                     format!(
-                        "{} overflows: it is {v} in internal units (mm or rad); the joint \
+                        "{:?} overflows: it is {v} in internal units (mm or rad); the joint \
                          limits are [{}, {}]",
                         quser[j], lim_lo[j], lim_hi[j]
                     ),
