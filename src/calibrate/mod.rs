@@ -25,6 +25,8 @@ pub use validation::{validation_errors, ErrorStats, PoseErrors};
 /// `[registration]`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "lowercase")]
 pub enum Registration {
     /// SVD (Kabsch/Arun) of nominal against measured points, then identification.
     Svd,
@@ -41,7 +43,7 @@ pub enum Registration {
 impl Registration {
     /// The name used in files and on the command line.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 }
 
@@ -77,6 +79,8 @@ pub struct Rounds {
 /// Why the alternation of registration and identification stopped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "kebab-case")]
 pub enum RoundsEnd {
     /// The frame moved by less than [`ROUND_TOLERANCE_MM`] in the last round.
     Converged,
@@ -92,7 +96,7 @@ pub enum RoundsEnd {
 impl RoundsEnd {
     /// The name used in files.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 }
 

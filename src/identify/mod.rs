@@ -85,6 +85,8 @@ pub trait Method: std::fmt::Debug + Send + Sync {
 /// `trials.csv`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Termination {
     /// The step fell below the tolerance (`max |dx| < ε`).
     Converged,
@@ -113,7 +115,7 @@ impl Termination {
     /// `target-reached`, `diverged`, `singular`, `rank-deficient`, `no-progress`,
     /// `invalid-input`.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 }
 

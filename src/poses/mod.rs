@@ -149,6 +149,8 @@ impl PoseModel for RobotPoseModel {
 /// The objective maximised by DETMAX and IDE (Guo 2024 eq. 15, or a single index).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "lowercase")]
 pub enum Objective {
     /// The entropy-weighted composite index (eqs. 12–15); `"composite"`.
     Composite,
@@ -161,13 +163,15 @@ pub enum Objective {
 impl Objective {
     /// The name used in scenario files.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 }
 
 /// How poses are chosen from the candidates.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "kebab-case")]
 pub enum Strategy {
     /// A uniformly random subset of the candidates; `"random"`.
     Random,
@@ -182,7 +186,7 @@ pub enum Strategy {
 impl Strategy {
     /// The name used in scenario files and on the command line.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 }
 

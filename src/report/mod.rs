@@ -66,11 +66,29 @@ pub fn run_study(
     result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
 }
 
+/// The first path that keeps `out` from being written as a folder holding the files `names`:
+/// `out` itself when it exists and is not a folder, or `out/NAME` when that is a folder
+/// (which no file can replace). `None` when nothing is in the way.
+pub fn blocked_output<S: AsRef<std::ffi::OsStr>>(
+    out: &std::path::Path,
+    names: impl IntoIterator<Item = S>,
+) -> Option<std::path::PathBuf> {
+    if out.exists() && !out.is_dir() {
+        return Some(out.to_path_buf());
+    }
+    names
+        .into_iter()
+        .map(|n| out.join(n.as_ref()))
+        .find(|p| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()))
+}
+
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
 /// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when
 /// `out` is absent or empty; otherwise each new file replaces its namesake in `out`, other
 /// files there are kept). On failure the temporary folder is removed and `out` is left as it
-/// was, so a failed run leaves nothing half-written.
+/// was, so a failed run leaves nothing half-written; that includes an `out` that is a file,
+/// or that holds a folder named like one of the new files ([`blocked_output`]), which is
+/// refused, naming it, before any file is moved.
 pub fn atomically(
     out: &std::path::Path,
     write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
@@ -83,11 +101,32 @@ pub fn atomically(
         .parent()
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(std::path::Path::new("."));
+    let in_the_way = |p: std::path::PathBuf| {
+        let why = if p == out {
+            "exists and is not a folder; nothing was written"
+        } else {
+            "is a folder where an output file of that name is to be written; nothing was written"
+        };
+        Error::io(
+            p,
+            std::io::Error::new(std::io::ErrorKind::AlreadyExists, why),
+        )
+    };
+    if let Some(p) = blocked_output(out, None::<&str>) {
+        return Err(in_the_way(p));
+    }
     std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
     let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
     let done = write(&tmp).and_then(|()| {
+        let written = std::fs::read_dir(&tmp)
+            .map_err(|e| Error::io(&tmp, e))?
+            .map(|e| e.map(|e| e.file_name()).map_err(|e| Error::io(&tmp, e)))
+            .collect::<crate::Result<Vec<_>>>()?;
+        if let Some(p) = blocked_output(out, &written) {
+            return Err(in_the_way(p));
+        }
         let empty = out.read_dir().map_or(true, |mut d| d.next().is_none());
         if out.is_dir() && empty {
             std::fs::remove_dir(out).map_err(|e| Error::io(out, e))?;
@@ -134,6 +173,24 @@ mod tests {
         atomically(&out, write).unwrap();
         assert!(out.join("notes.txt").exists() && out.join("summary.json").exists());
         assert_eq!(std::fs::read_dir(&root).unwrap().count(), 1);
+        // A folder where a new file goes: refused, naming it, before any file is moved.
+        std::fs::create_dir(out.join("trials.csv")).unwrap();
+        let e = atomically(&out, |d| {
+            std::fs::write(d.join("summary.json"), "{\"n\": 2}").unwrap();
+            std::fs::write(d.join("trials.csv"), "n\n2\n").map_err(|e| crate::Error::io(d, e))
+        })
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("trials.csv") && e.contains("is a folder"), "{e}");
+        let kept = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert_eq!(kept, "{\"n\": 1}");
+        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 1);
+        // A file where the folder goes: refused, naming it, before `write` runs.
+        let file = out.join("notes.txt");
+        let e = atomically(&file, |_| unreachable!())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("notes.txt") && e.contains("not a folder"), "{e}");
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

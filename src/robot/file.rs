@@ -369,11 +369,7 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
             au
         };
         let _ = writeln!(s, "\n[[joints]]");
-        let _ = writeln!(
-            s,
-            "type = \"{}\"",
-            crate::robot::names::static_name(&joint.kind)
-        );
+        let _ = writeln!(s, "type = \"{}\"", <&str>::from(joint.kind));
         let _ = writeln!(s, "alpha = {}", num(g(Param::Alpha(j)) / au));
         let _ = writeln!(s, "a = {}", num(g(Param::A(j)) / lu));
         let _ = writeln!(s, "d = {}", num(g(Param::D(j)) / lu));

@@ -147,6 +147,8 @@ pub(crate) fn joint_place(j: usize, key: &str) -> String {
 /// The link-transform convention of a robot (see the module docs); `dh`, `dh_beta`, `mdh`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "snake_case")]
 pub enum Convention {
     /// Standard Denavit–Hartenberg, Li 2018 eq. 1.
     Dh,
@@ -159,7 +161,7 @@ pub enum Convention {
 impl Convention {
     /// The name used in robot files.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 
     /// Whether the convention has a β parameter per joint.
@@ -171,6 +173,8 @@ impl Convention {
 /// The kind of a joint: which parameter its variable adds to.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "lowercase")]
 pub enum JointType {
     /// The joint variable adds to θ (rad inside the library).
     Revolute,
@@ -191,6 +195,8 @@ pub struct Joint {
 /// Length unit of a robot file and its joint values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "lowercase")]
 pub enum LengthUnit {
     /// Millimetres.
     Mm,
@@ -201,6 +207,8 @@ pub enum LengthUnit {
 /// Angle unit of a robot file and its joint values.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "lowercase")]
 pub enum AngleUnit {
     /// Degrees.
     Deg,
@@ -234,12 +242,12 @@ impl Units {
 
     /// The length unit's name in robot files: `mm` or `m`.
     pub fn length_name(self) -> &'static str {
-        crate::robot::names::static_name(&self.length)
+        self.length.into()
     }
 
     /// The angle unit's name in robot files: `deg` or `rad`.
     pub fn angle_name(self) -> &'static str {
-        crate::robot::names::static_name(&self.angle)
+        self.angle.into()
     }
 
     /// Factor from this angle unit to rad.

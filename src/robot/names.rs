@@ -1,33 +1,15 @@
-//! Names of the settings' enums, from serde alone: an enum derives `Serialize` /
-//! `Deserialize` with its `rename_all` rule, and [`static_name`] and [`parse`] give the name
-//! of a value and the value of a name (command-line options, reports), so no enum carries a
-//! hand-written `as_str` / `FromStr` pair. [`take_keys`] splits one options table between
-//! two structs.
+//! Names of the settings' enums. An enum derives `Serialize` / `Deserialize` with its
+//! `rename_all` rule (the names of files and reports) and `strum`'s `IntoStaticStr`,
+//! `EnumString`, `VariantNames` and `EnumIter` with the same rule (`serialize_all`): its
+//! `as_str` is `self.into()`, the command line accepts and lists `VARIANTS`, and messages
+//! list them, so no enum carries a hand-written name list or `as_str` / `FromStr` pair.
+//! [`parse`] reads a name through serde, with serde's message naming the allowed names;
+//! [`take_keys`] splits one options table between two structs.
 
 use serde::de::value::{Error as ValueError, StrDeserializer};
-use serde::de::{DeserializeOwned, Deserializer, Error as _, IntoDeserializer, Visitor};
-use serde::Serialize;
+use serde::de::{DeserializeOwned, IntoDeserializer};
 
 use crate::error::{Error, Result};
-
-/// The serde name of a unit variant (`Termination::MaxIterations` → `"max-iterations"`): the
-/// entry of the enum's variant list (as its `Deserialize` declares it) that equals the value
-/// serialised.
-///
-/// # Panics
-/// If `v` is not a unit variant of a field-less enum (a programming error).
-pub fn static_name<T: Serialize + DeserializeOwned>(v: &T) -> &'static str {
-    let name = serde_json::to_value(v).ok();
-    let probe = VariantList::default();
-    let _ = T::deserialize(&probe);
-    probe
-        .0
-        .get()
-        .iter()
-        .find(|n| name.as_ref().and_then(|v| v.as_str()) == Some(**n))
-        .copied()
-        .unwrap_or_else(|| panic!("static_name on a value that is not a unit variant: {name:?}"))
-}
 
 /// Parses `s` as the serde name of a `T` (a field-less enum); the error names `key` and the
 /// allowed names.
@@ -53,39 +35,11 @@ pub fn take_keys(table: &mut toml::Table, keys: &[&str]) -> toml::Table {
         .collect()
 }
 
-/// A deserializer that only records the variant names an enum asks for.
-#[derive(Default)]
-struct VariantList(std::cell::Cell<&'static [&'static str]>);
-
-impl<'de> Deserializer<'de> for &VariantList {
-    type Error = ValueError;
-
-    fn deserialize_any<V: Visitor<'de>>(self, _: V) -> std::result::Result<V::Value, ValueError> {
-        Err(ValueError::custom("not an enum"))
-    }
-
-    fn deserialize_enum<V: Visitor<'de>>(
-        self,
-        _: &'static str,
-        variants: &'static [&'static str],
-        _: V,
-    ) -> std::result::Result<V::Value, ValueError> {
-        self.0.set(variants);
-        Err(ValueError::custom("variant names recorded"))
-    }
-
-    serde::forward_to_deserialize_any! {
-        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
-        option unit unit_struct newtype_struct seq tuple tuple_struct map struct identifier
-        ignored_any
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    #[derive(Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+    #[derive(Debug, PartialEq, serde::Deserialize)]
     #[serde(rename_all = "kebab-case")]
     enum Colour {
         DeepRed,
@@ -93,8 +47,7 @@ mod tests {
     }
 
     #[test]
-    fn names_round_trip_and_unknown_names_list_the_allowed_ones() {
-        assert_eq!(static_name(&Colour::DeepRed), "deep-red");
+    fn unknown_names_list_the_allowed_ones() {
         assert_eq!(parse::<Colour>("colour", "blue").unwrap(), Colour::Blue);
         let e = parse::<Colour>("colour", "green").unwrap_err().to_string();
         assert!(

@@ -228,6 +228,8 @@ impl ErrorSettings {
 /// What the tracker measures.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "lowercase")]
 pub enum MeasureSetting {
     /// The target point only.
     Position,

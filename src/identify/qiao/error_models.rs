@@ -43,6 +43,8 @@ use crate::robot::{Chain, Param, Robot};
 /// The pose-error model of an identification (see the module docs for the formulas).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "snake_case")]
 pub enum ErrorModel {
     /// Differential transformation of the pose matrix (Qiao §2.2, eq. 5): 12 rows per pose.
     Differential,
@@ -70,7 +72,7 @@ impl ErrorModel {
 
     /// The setting's name: `differential`, `coordinate_transfer` or `direct_fk`.
     pub fn as_str(self) -> &'static str {
-        crate::robot::names::static_name(&self)
+        self.into()
     }
 }
 

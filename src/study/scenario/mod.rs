@@ -27,7 +27,7 @@ use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
 use crate::sim::truth::selected_params;
-use sections::RawScenario;
+use sections::{strategy_names, RawScenario};
 pub use sections::{
     Calibration, IdentificationSpec, PoseStrategy, RobotRef, StrategyName, Validation,
 };
@@ -225,21 +225,18 @@ impl Scenario {
         if c.strategies.is_empty() {
             return Err(ferr(
                 "calibration.strategies",
-                "give at least one of: random, box, grid, file, detmax, ide, detmax-ide".into(),
+                format!("give at least one of: {}", strategy_names()),
             ));
         }
         let mut strategies = Vec::new();
         for (i, s) in c.strategies.iter().enumerate() {
             let key = format!("calibration.strategies[{i}]");
-            let name: StrategyName = crate::robot::names::parse(&key, s)
-                .map_err(|_| {
-                    ferr(
-                        &key,
-                        format!(
-                            "unknown strategy \"{s}\"; allowed: random, box, grid, file, detmax, ide, detmax-ide"
-                        ),
-                    )
-                })?;
+            let name: StrategyName = crate::robot::names::parse(&key, s).map_err(|_| {
+                ferr(
+                    &key,
+                    format!("unknown strategy \"{s}\"; allowed: {}", strategy_names()),
+                )
+            })?;
             let st = match name {
                 StrategyName::Random => PoseStrategy::Random,
                 StrategyName::Box => {

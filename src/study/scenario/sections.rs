@@ -162,6 +162,8 @@ pub enum PoseStrategy {
 /// The names accepted in `calibration.strategies` (serde, kebab-case).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "kebab-case")]
 pub enum StrategyName {
     /// [`PoseStrategy::Random`].
     Random,
@@ -185,22 +187,29 @@ pub enum StrategyName {
     DetmaxIdeFull,
 }
 
+/// The names of `calibration.strategies`, comma-separated (for messages).
+pub(crate) fn strategy_names() -> String {
+    <StrategyName as strum::VariantNames>::VARIANTS.join(", ")
+}
+
 impl PoseStrategy {
     /// The name used in files and reports.
     pub fn name(&self) -> &'static str {
-        match self {
-            PoseStrategy::Random => "random",
-            PoseStrategy::Box => "box",
-            PoseStrategy::Grid => "grid",
-            PoseStrategy::File(_) => "file",
-            PoseStrategy::Optimised(o) => o.as_str(),
-            PoseStrategy::OptimisedFull(o) => match o {
-                Optimiser::Random => "random",
-                Optimiser::Detmax => "detmax-full",
-                Optimiser::Ide => "ide-full",
-                Optimiser::DetmaxIde => "detmax-ide-full",
-            },
-        }
+        let name = match self {
+            PoseStrategy::Random
+            | PoseStrategy::Optimised(Optimiser::Random)
+            | PoseStrategy::OptimisedFull(Optimiser::Random) => StrategyName::Random,
+            PoseStrategy::Box => StrategyName::Box,
+            PoseStrategy::Grid => StrategyName::Grid,
+            PoseStrategy::File(_) => StrategyName::File,
+            PoseStrategy::Optimised(Optimiser::Detmax) => StrategyName::Detmax,
+            PoseStrategy::Optimised(Optimiser::Ide) => StrategyName::Ide,
+            PoseStrategy::Optimised(Optimiser::DetmaxIde) => StrategyName::DetmaxIde,
+            PoseStrategy::OptimisedFull(Optimiser::Detmax) => StrategyName::DetmaxFull,
+            PoseStrategy::OptimisedFull(Optimiser::Ide) => StrategyName::IdeFull,
+            PoseStrategy::OptimisedFull(Optimiser::DetmaxIde) => StrategyName::DetmaxIdeFull,
+        };
+        name.into()
     }
 }
 

@@ -1,0 +1,94 @@
+//! `calbench compensate --robot NOMINAL --identified IDENTIFIED --joints PROGRAM
+//! [--payload-kg W] --out CSV` (Li 2018 §3): per program row, the joints (in the nominal
+//! robot's units, the controller's) at which the identified robot reaches the nominal pose,
+//! with the residual and a flag.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use calbench::calibrate::compensate::compensate_row;
+use calbench::error::Error;
+use calbench::measurement::csv::fixed;
+use calbench::numeric::Real;
+use calbench::robot::builtin;
+
+use super::{check_out_file, write_file};
+
+/// Arguments of `calbench compensate`.
+#[derive(clap::Args)]
+pub struct CompensateArgs {
+    /// The nominal robot (the controller's model).
+    #[arg(long)]
+    pub robot: String,
+    /// The identified (compensated) robot, e.g. identify's robot.toml.
+    #[arg(long)]
+    pub identified: String,
+    /// The program: a CSV with columns q1..qn (nominal joint commands).
+    #[arg(long)]
+    pub joints: PathBuf,
+    /// Payload at the tool (kg) while the program runs: a compensated robot with joint
+    /// compliances corrects the commands for its gravity sag under this load.
+    #[arg(long, default_value_t = 0.0)]
+    pub payload_kg: Real,
+    /// The corrected program to write (an existing file is replaced).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Corrects every row of the program and writes the corrected program.
+pub fn run(args: &CompensateArgs) -> Result<()> {
+    let payload_kg = args.payload_kg;
+    if !(payload_kg.is_finite() && payload_kg >= 0.0) {
+        return Err(Error::setting(
+            "--payload-kg",
+            format!("must be a finite payload ≥ 0 kg, got {payload_kg}"),
+        )
+        .into());
+    }
+    check_out_file(&args.out)?;
+    let nominal = builtin::load(&args.robot)?;
+    let ident = builtin::load(&args.identified)?;
+    let (n, m) = (ident.dof(), nominal.dof());
+    if n != m {
+        let msg = format!("{} has {n} joints, the nominal robot {m}", args.identified);
+        return Err(Error::setting("--identified", msg).into());
+    }
+    let program = calbench::sim::poses::read_pose_list(&args.joints, &nominal)?;
+    let cell = |v: Real| fixed(v, 9);
+    // What is written: 9 decimals in the nominal robot's units.
+    let round = |q: &[Real]| -> Vec<Real> {
+        let user: Vec<Real> = nominal
+            .q_to_user(q)
+            .iter()
+            .map(|&v| cell(v).parse().unwrap_or(v))
+            .collect();
+        nominal.q_from_user(&user)
+    };
+    let mut s: String = (1..=nominal.dof()).map(|j| format!("q{j},")).collect();
+    s.push_str("residual_mm,residual_deg,flag\n");
+    let mut flagged = 0;
+    let mut worst: (Real, Real) = (0.0, 0.0);
+    for q in &program {
+        let c = compensate_row(&nominal, &ident, q, payload_kg, round)?;
+        for v in nominal.q_to_user(&c.q) {
+            s.push_str(&cell(v));
+            s.push(',');
+        }
+        s.push_str(&format!(
+            "{:.3e},{:.3e},{}\n",
+            c.residual_mm, c.residual_deg, c.flag
+        ));
+        flagged += usize::from(c.flag != "ok");
+        worst = (worst.0.max(c.residual_mm), worst.1.max(c.residual_deg));
+    }
+    write_file(&args.out, &s)?;
+    out!(
+        "{} rows corrected ({flagged} flagged), worst residual {:.1e} mm / {:.1e} deg; written to {}",
+        program.len(),
+        worst.0,
+        worst.1,
+        args.out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,34 @@
+//! `calbench merge DIR… --out DIR`: the partial results of `run --shard I/N` combined into
+//! the output of the whole run.
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+
+use super::{print_table, writable_folder};
+
+/// Arguments of `calbench merge`.
+#[derive(clap::Args)]
+pub struct MergeArgs {
+    /// The shard folders.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Checks that the folders are the N shards of one run, writes the whole run's files and
+/// prints its table.
+pub fn run(args: &MergeArgs) -> Result<()> {
+    let out = &args.out;
+    writable_folder(out, &super::run::OUTPUTS)?;
+    let r = calbench::report::shard::merge(&args.dirs, out)?;
+    print_table(&r);
+    out!(
+        "\nmerged {} shards; report: {}",
+        args.dirs.len(),
+        out.join("report.md").display()
+    );
+    Ok(())
+}

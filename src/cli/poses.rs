@@ -1,0 +1,202 @@
+//! `calbench poses SCENARIO --strategy S [--count M] [--curve A,B,…] --out DIR`: choose a
+//! calibration pose set on the scenario's nominal robot (Guo 2024 §3).
+
+use std::path::PathBuf;
+
+use anyhow::Result;
+use clap::builder::{PossibleValuesParser, TypedValueParser};
+use serde_json::json;
+
+use calbench::calibrate::Registration;
+use calbench::error::Error;
+use calbench::measurement::csv::write_pose_list;
+use calbench::numeric::Real;
+use calbench::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
+use calbench::robot::param_sets;
+use calbench::sim::poses::sample_region;
+use calbench::study::plan;
+use calbench::study::scenario::{Scenario, StrategyName};
+
+use super::{check_out_folder, to_json_text, write_file};
+
+/// The files always written (`curve.*` only with `--curve`).
+const OUTPUTS: [&str; 3] = ["poses.csv", "scores.json", "trace.csv"];
+
+/// Arguments of `calbench poses`.
+#[derive(clap::Args)]
+pub struct PosesArgs {
+    /// The scenario file.
+    pub scenario: PathBuf,
+    /// How the poses are chosen from the candidates; a `-full` strategy optimises over the
+    /// full model (every joint parameter, no separation), as in a scenario.
+    #[arg(long, value_parser = strategies())]
+    pub strategy: StrategyName,
+    /// Number of poses (default: calibration.count).
+    #[arg(long)]
+    pub count: Option<usize>,
+    /// Print the objective against these pose counts (e.g. 20,40,60,80).
+    #[arg(long, value_delimiter = ',', value_parser = pose_count, action = clap::ArgAction::Set)]
+    pub curve: Option<Vec<usize>>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// The optimiser a strategy name runs on the candidates and whether over the full model
+/// (`-full`); `None` for `box`, `grid` and `file`, which choose no poses among candidates.
+fn selection(name: StrategyName) -> Option<(Optimiser, bool)> {
+    match name {
+        StrategyName::Random => Some((Optimiser::Random, false)),
+        StrategyName::Box | StrategyName::Grid | StrategyName::File => None,
+        StrategyName::Detmax => Some((Optimiser::Detmax, false)),
+        StrategyName::Ide => Some((Optimiser::Ide, false)),
+        StrategyName::DetmaxIde => Some((Optimiser::DetmaxIde, false)),
+        StrategyName::DetmaxFull => Some((Optimiser::Detmax, true)),
+        StrategyName::IdeFull => Some((Optimiser::Ide, true)),
+        StrategyName::DetmaxIdeFull => Some((Optimiser::DetmaxIde, true)),
+    }
+}
+
+/// `--strategy`: the names of the scenario strategies that choose among candidates.
+fn strategies() -> impl TypedValueParser<Value = StrategyName> {
+    use strum::IntoEnumIterator as _;
+    let names = StrategyName::iter()
+        .filter(|&s| selection(s).is_some())
+        .map(<&'static str>::from);
+    PossibleValuesParser::new(names).map(|name| {
+        name.parse::<StrategyName>()
+            .unwrap_or_else(|_| unreachable!("\"{name}\" is a strategy's own name"))
+    })
+}
+
+/// One element of `--curve`, blanks around it ignored.
+fn pose_count(text: &str) -> std::result::Result<usize, String> {
+    text.trim()
+        .parse::<usize>()
+        .map_err(|_| "not a pose count (a whole number)".to_string())
+}
+
+/// Chooses the poses, writes the output folder and prints the scores (and the curve).
+pub fn run(args: &PosesArgs) -> Result<()> {
+    let out = &args.out;
+    check_out_folder(out, &OUTPUTS)?;
+    let sc = Scenario::load(&args.scenario)?;
+    let (optimiser, full) = selection(args.strategy)
+        .unwrap_or_else(|| unreachable!("--strategy takes the optimising strategies only"));
+    let strategy_name: &'static str = args.strategy.into();
+    let nominal = sc.robot()?;
+    let measure = sc.tracker.measure.measure();
+    let c = &sc.calibration;
+    let count = args.count.unwrap_or(c.count);
+    if count == 0 || count > c.candidates {
+        return Err(Error::setting(
+            "--count",
+            format!(
+                "must be between 1 and calibration.candidates ({})",
+                c.candidates
+            ),
+        )
+        .into());
+    }
+    // Every argument is checked before any work: the pool is `candidates` poses.
+    if let Some(bad) = args
+        .curve
+        .iter()
+        .flatten()
+        .find(|&&n| n == 0 || n > c.candidates)
+    {
+        return Err(Error::setting(
+            "--curve",
+            format!("\"{bad}\" is not a pose count in 1..={}", c.candidates),
+        )
+        .into());
+    }
+    let with_base = sc.registration == Registration::Identify;
+    let mut g = calbench::numeric::rng::stream(sc.seed, "poses-command");
+    let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
+    let mut separation = None;
+    let params = if full {
+        // As a scenario's `-full` strategies: every joint parameter, no separation.
+        let all = param_sets::full_params(&nominal, measure, with_base);
+        param_sets::optimisable(&nominal, &all, measure)
+    } else if c.separate {
+        let (kept, s) =
+            plan::separated_params(&nominal, measure, with_base, &pool, c.separate_threshold);
+        separation = Some(s);
+        kept
+    } else {
+        param_sets::identified_params(&nominal, measure, with_base)
+    };
+    let model = RobotPoseModel::new(&nominal, &params, measure);
+    let mut opts = SelectOptions::new(count);
+    opts.objective = c.objective;
+    let sel = calbench::poses::select(&model, &pool, optimiser, &opts, &mut g)?;
+    // Everything is computed before anything is written, and written as a whole.
+    let curve = args
+        .curve
+        .as_deref()
+        .map(|counts| calbench::poses::objective_curve(&model, &pool, counts, &opts, &mut g))
+        .transpose()?;
+    let mut scores = serde_json::to_value(sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
+    scores["strategy"] = json!(strategy_name);
+    scores["count"] = json!(sel.poses.len());
+    scores["parameters"] = json!(params.iter().map(|p| p.to_string()).collect::<Vec<_>>());
+    scores["termination"] = json!(sel.termination);
+    if let Some(s) = &separation {
+        let mut j = s.to_json();
+        // The earlier form of the table, kept for scripts that read it.
+        j["gcn"] = json!(s
+            .table
+            .iter()
+            .map(|(k, v)| json!({"block": k, "gcn": v}))
+            .collect::<Vec<_>>());
+        scores["separation"] = j;
+    }
+    let mut trace = String::from("iteration,objective\n");
+    for (i, f) in sel.trace.iter().enumerate() {
+        trace += &format!("{i},{f}\n");
+    }
+    let curve_csv = curve.as_ref().map(|pts| {
+        let mut text = String::from("count,objective\n");
+        for (n, f) in pts {
+            text += &format!("{n},{f}\n");
+        }
+        text
+    });
+    let [poses_csv, scores_json, trace_csv] = OUTPUTS;
+    calbench::report::atomically(out, |dir| {
+        write_pose_list(&dir.join(poses_csv), &nominal, &sel.poses)?;
+        write_file(&dir.join(scores_json), &to_json_text(&scores)?)?;
+        write_file(&dir.join(trace_csv), &trace)?;
+        if let (Some(text), Some(pts)) = (&curve_csv, &curve) {
+            write_file(&dir.join("curve.csv"), text)?;
+            let pts: Vec<(Real, Real, Real)> =
+                pts.iter().map(|&(n, f)| (n as Real, f, 0.0)).collect();
+            calbench::report::plots::sweep(
+                &dir.join("curve"),
+                "Objective against pose count (Guo 2024 fig. 7)",
+                "pose count",
+                "objective",
+                &[(format!("{} objective", c.objective.as_str()), pts)],
+            )?;
+        }
+        Ok(())
+    })?;
+    out!(
+        "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",
+        sel.poses.len(),
+        pool.len(),
+        strategy_name,
+        sel.scores.composite,
+        sel.scores.o1,
+        sel.scores.gcn,
+        sel.scores.condition_number
+    );
+    if let Some(pts) = &curve {
+        out!("objective against pose count (Guo 2024 fig. 7):");
+        for (n, f) in pts {
+            out!("  {n:>5} {f:.6}");
+        }
+    }
+    Ok(())
+}
