@@ -1,6 +1,7 @@
 //! The command line and the files it reads: `simulate`, `identify`, `fk`, `check`, `import`
 //! and `compensate` end to end, strict refusals of bad inputs, fuzzing of the robot, scenario
-//! and measurement parsers, and real tracker data (the IPA UR10 rows in `examples/ipa-ur10/`).
+//! and measurement parsers, real tracker data (the IPA UR10 rows in `examples/ipa-ur10/`), and
+//! typed arguments: allowed values listed, `--out` checked before any work.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -9,3 +10,4 @@ mod cli;
 mod fuzz;
 mod realdata;
 mod strict_inputs;
+mod typed;

@@ -10,10 +10,7 @@ use std::process::{Command, Output};
 use strum::IntoEnumIterator as _;
 
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-typed-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    crate::common::tmp_dir(&format!("typed-{name}"))
 }
 
 fn calbench<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Output {
@@ -28,10 +25,7 @@ fn stderr(o: &Output) -> String {
 }
 
 fn root(path: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join(path)
-        .display()
-        .to_string()
+    crate::common::root().join(path).display().to_string()
 }
 
 /// Fails unless `o` is a refusal (exit status `code`, no panic) whose stderr has every `words`.
