@@ -74,10 +74,19 @@ pub struct Scenario {
 
 /// The text a scenario was read from, for the lines of refused keys, and the keys set since
 /// (by an override or a sweep point), whose values are not the text's: they get no line.
-#[derive(Clone, Debug)]
+#[derive(Clone)]
 struct Source {
     text: std::sync::Arc<str>,
     edited: Vec<String>,
+}
+
+impl std::fmt::Debug for Source {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Source")
+            .field("lines", &self.text.lines().count())
+            .field("edited", &self.edited)
+            .finish()
+    }
 }
 
 impl Source {
