@@ -1,7 +1,8 @@
 //! The command line and the files it reads: `simulate`, `identify`, `fk`, `check`, `import`
 //! and `compensate` end to end, strict refusals of bad inputs, fuzzing of the robot, scenario
 //! and measurement parsers, real tracker data (the IPA UR10 rows in `examples/ipa-ur10/`), and
-//! typed arguments: allowed values listed, `--out` checked before any work.
+//! typed arguments: allowed values listed, `--out` checked before any work; refusals that name
+//! the file, the line and the key.
 
 #[path = "../common/mod.rs"]
 mod common;
@@ -9,5 +10,6 @@ mod common;
 mod cli;
 mod fuzz;
 mod realdata;
+mod refusals;
 mod strict_inputs;
 mod typed;

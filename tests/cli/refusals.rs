@@ -8,26 +8,14 @@
 //! - `check` on a summary without results, saying what is missing.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::time::{Duration, Instant};
+
+use crate::common::{calbench, path_arg as path};
 
 /// A fresh folder for one test.
 fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("calbench-refusals-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn calbench(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_calbench"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
+    crate::common::tmp_dir(&format!("refusals-{name}"))
 }
 
 /// The message of a refusal (non-zero exit, no panic, nothing on stdout), which must hold
