@@ -155,7 +155,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             data_path: &args.data,
             data: &d,
             kinematic: &kinematic,
-            params: &params,
+            param_count: params.len(),
         };
         return Err(p.undetermined(&c, &spec).into());
     }
@@ -230,8 +230,8 @@ struct Problem<'a> {
     /// The kinematic parameters (a compliance column's scale is per pose, so the analysis
     /// is of these).
     kinematic: &'a [Param],
-    /// Every identified parameter.
-    params: &'a [Param],
+    /// The number of identified parameters.
+    param_count: usize,
 }
 
 impl Problem<'_> {
@@ -259,7 +259,7 @@ impl Problem<'_> {
                  dependent groups: {}); {} ended {}, so nothing was written. Measure poses \
                  that move every joint, or pass --allow-rank-deficient",
                 a.rank,
-                self.params.len(),
+                self.param_count,
                 c.identified.rank.unwrap_or(a.rank),
                 names(&a.unidentifiable),
                 groups.join(" "),

@@ -254,6 +254,16 @@ mod tests {
     use super::*;
     use approx::assert_relative_eq;
 
+    /// Numbers in [−0.5, 0.5) from a linear congruential generator seeded with `seed`.
+    fn uniform(mut seed: u64) -> impl FnMut() -> Real {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
+        }
+    }
+
     #[test]
     fn solves_a_known_spd_system() {
         // A = [[4,2,0],[2,5,1],[0,1,3]], x = [1,-2,3] → b = A x = [0,-5,7].
@@ -271,13 +281,7 @@ mod tests {
     /// different scales; the upper triangle mirrors L.
     #[test]
     fn blocked_factor_is_the_plain_loop_to_the_bit() {
-        let mut seed = 7u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
-        };
+        let mut next = uniform(7u64);
         for n in [1, 2, 5, 7, 8, 9, 14, 15, 16, 17, 20, 31, 33, 47] {
             let m = n + 30;
             let j = DMatrix::from_fn(m, n, |_, c| next() * [1.0, 1e3, 1e-2][c % 3]);
@@ -315,13 +319,7 @@ mod tests {
     /// instruction set the processor offers.
     #[test]
     fn every_path_gives_the_same_bits() {
-        let mut seed = 11u64;
-        let mut next = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as Real / (1u64 << 53) as Real - 0.5
-        };
+        let mut next = uniform(11u64);
         for n in [1, 3, 8, 17, 26, 40] {
             let j = DMatrix::from_fn(n + 20, n, |_, c| next() * [1.0, 1e3, 1e-2][c % 3]);
             let a = j.transpose() * &j;

@@ -427,12 +427,6 @@ impl Region {
 mod tests {
     use super::*;
 
-    fn key_of(e: Error) -> String {
-        e.key()
-            .unwrap_or_else(|| panic!("not a setting error: {e}"))
-            .into()
-    }
-
     #[test]
     fn defaults_match_formats() {
         let t: TrackerSettings = toml::from_str("").unwrap();
@@ -488,17 +482,17 @@ mod tests {
         };
         let e = t.check().unwrap_err();
         assert!(e.to_string().contains("must be ≥ 0, got -1"), "{e}");
-        assert_eq!(key_of(e), "tracker.mpe_a_um");
+        assert_eq!(e.key(), Some("tracker.mpe_a_um"));
         let t = TrackerSettings {
             coverage: 0.0,
             ..Default::default()
         };
-        assert_eq!(key_of(t.check().unwrap_err()), "tracker.coverage");
+        assert_eq!(t.check().unwrap_err().key(), Some("tracker.coverage"));
         let e = ErrorSettings {
             length_mm: Real::NAN,
             ..Default::default()
         };
-        assert_eq!(key_of(e.check().unwrap_err()), "errors.length_mm");
+        assert_eq!(e.check().unwrap_err().key(), Some("errors.length_mm"));
     }
 
     #[test]
@@ -508,19 +502,19 @@ mod tests {
             ..Default::default()
         };
         o.check().unwrap();
-        assert_eq!(key_of(o.count_for(40).unwrap_err()), "outliers.count");
+        assert_eq!(o.count_for(40).unwrap_err().key(), Some("outliers.count"));
         assert_eq!(o.count_for(100).unwrap(), 100);
         let o = OutlierSettings {
             magnitude_mm: [1.0, 0.5],
             ..Default::default()
         };
-        assert_eq!(key_of(o.check().unwrap_err()), "outliers.magnitude_mm");
+        assert_eq!(o.check().unwrap_err().key(), Some("outliers.magnitude_mm"));
         let o = OutlierSettings {
             count: Some(1),
             fraction: Some(0.1),
             ..Default::default()
         };
-        assert_eq!(key_of(o.check().unwrap_err()), "outliers.fraction");
+        assert_eq!(o.check().unwrap_err().key(), Some("outliers.fraction"));
     }
 
     #[test]
@@ -545,14 +539,14 @@ mod tests {
         };
         let e = s.check().unwrap_err();
         assert!(e.to_string().contains("thetta2"), "{e}");
-        assert_eq!(key_of(e), "errors.params");
+        assert_eq!(e.key(), Some("errors.params"));
         let r = Region::Box {
             center_mm: [0.0; 3],
             size_mm: [1.0, 0.0, 1.0],
         };
         assert_eq!(
-            key_of(r.check("validation.region").unwrap_err()),
-            "validation.region"
+            r.check("validation.region").unwrap_err().key(),
+            Some("validation.region")
         );
     }
 }

@@ -27,11 +27,54 @@ use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
 use crate::sim::truth::selected_params;
-use sections::{strategy_names, RawScenario};
+use sections::{
+    strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
+};
 pub use sections::{
     Calibration, IdentificationSpec, PoseStrategy, RobotRef, StrategyName, Validation,
 };
+use serde::Deserialize;
+use sweep::SweepField;
 pub use sweep::{Sweep, SweepAxis};
+
+/// The scenario file, as written. Unknown keys are refused by serde.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawScenario {
+    name: String,
+    #[serde(default)]
+    description: String,
+    #[serde(default = "default_seed")]
+    seed: u64,
+    #[serde(default = "default_trials")]
+    trials: usize,
+    robot: RobotSection,
+    #[serde(default)]
+    errors: ErrorSettings,
+    #[serde(default)]
+    tracker: TrackerSettings,
+    #[serde(default)]
+    outliers: OutlierSettings,
+    #[serde(default)]
+    compliance: ComplianceSettings,
+    #[serde(default)]
+    registration: RegistrationSection,
+    #[serde(default)]
+    calibration: CalibrationSection,
+    #[serde(default)]
+    validation: ValidationSection,
+    #[serde(default)]
+    identification: IdentificationSpec,
+    methods: Vec<toml::Table>,
+    sweep: Option<SweepField>,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+fn default_trials() -> usize {
+    100
+}
 
 /// A checked scenario: every value in range, ready to run.
 #[derive(Clone, Debug)]

@@ -1,57 +1,14 @@
-//! The sections of a scenario file: the raw sections as written (deserialised, unchecked)
-//! and the checked settings of the study-level sections.
+//! The sections of a scenario file: the sections as written (deserialised, unchecked) and
+//! the checked settings of the study-level sections.
 
 use std::path::PathBuf;
 
 use serde::Deserialize;
 
-use super::sweep::SweepField;
 use super::Registration;
 use crate::numeric::Real;
 use crate::poses::{Objective, Strategy as Optimiser};
-use crate::sim::sag::ComplianceSettings;
-use crate::sim::settings::{
-    ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
-};
-
-/// The scenario file, as written. Unknown keys are refused by serde.
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(super) struct RawScenario {
-    pub(super) name: String,
-    #[serde(default)]
-    pub(super) description: String,
-    #[serde(default = "default_seed")]
-    pub(super) seed: u64,
-    #[serde(default = "default_trials")]
-    pub(super) trials: usize,
-    pub(super) robot: RobotSection,
-    #[serde(default)]
-    pub(super) errors: ErrorSettings,
-    #[serde(default)]
-    pub(super) tracker: TrackerSettings,
-    #[serde(default)]
-    pub(super) outliers: OutlierSettings,
-    #[serde(default)]
-    pub(super) compliance: ComplianceSettings,
-    #[serde(default)]
-    pub(super) registration: RegistrationSection,
-    #[serde(default)]
-    pub(super) calibration: CalibrationSection,
-    #[serde(default)]
-    pub(super) validation: ValidationSection,
-    #[serde(default)]
-    pub(super) identification: IdentificationSpec,
-    pub(super) methods: Vec<toml::Table>,
-    pub(super) sweep: Option<SweepField>,
-}
-
-pub(super) fn default_seed() -> u64 {
-    1
-}
-pub(super) fn default_trials() -> usize {
-    100
-}
+use crate::sim::settings::{ParamSelection, Region};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
