@@ -64,6 +64,21 @@ fn rotation_sc(kind: OpKind, value: Real) -> (Real, Real) {
 /// The chain variables of one pose and their (sin, cos), from [`Chain::variables`].
 pub type ChainVars = ([Real; MAX_JOINTS], [(Real, Real); MAX_JOINTS]);
 
+/// Most operations a chain has: base and tool (six each) and five per joint, for the 16
+/// joints of [`ChainVars`].
+pub const MAX_OPS: usize = 12 + 5 * 16;
+
+/// Every operation's constant part for other parameter values, with its (sin, cos)
+/// ([`Chain::op_values`]): what [`Chain::set_values`] would set, kept beside the chain so that
+/// one chain serves walks with different parameter values at once (the searches evaluate
+/// their fitness in parallel, [`Chain::walk_lanes_values`]). On the stack: making and walking
+/// it allocate nothing.
+#[derive(Clone, Copy, Debug)]
+pub struct OpValues {
+    value: [Real; MAX_OPS],
+    sc: [(Real, Real); MAX_OPS],
+}
+
 /// A robot compiled into elementary operations for one set of parameter values.
 #[derive(Clone, Debug)]
 pub struct Chain {
@@ -173,6 +188,31 @@ fn rotate_cols<const L: usize>(
     }
 }
 
+/// An operation's values, sines and cosines in `L` lanes.
+type LaneValues<const L: usize> = ([Real; L], [Real; L], [Real; L]);
+
+/// The values and (sin, cos) per lane of an operation with constant part `a`, (sin a, cos a),
+/// driven by chain variable `v`, from each lane's chain variables: `a + v`, and
+/// `sin(a + v) = sin a cos v + cos a sin v`, `cos(a + v) = cos a cos v − sin a sin v`.
+#[inline(always)]
+fn driven_by<const L: usize>(
+    vars: [&ChainVars; L],
+) -> impl Fn(Real, (Real, Real), usize) -> LaneValues<L> + '_ {
+    #[inline(always)]
+    move |a, (sa, ca), v| {
+        let mut t = [0.0; L];
+        let mut s = [0.0; L];
+        let mut c = [0.0; L];
+        for l in 0..L {
+            let (sv, cv) = vars[l].1[v];
+            t[l] = a + vars[l].0[v];
+            s[l] = sa * cv + ca * sv;
+            c[l] = ca * cv - sa * sv;
+        }
+        (t, s, c)
+    }
+}
+
 impl Chain {
     /// Compiles `robot` with its current parameter values.
     pub fn new(robot: &Robot) -> Chain {
@@ -252,6 +292,38 @@ impl Chain {
         }
     }
 
+    /// The operations' constant parts with `errors[op.param]` added to each (`errors` in the
+    /// layout of [`Robot::values`]): the values of [`Chain::set_values`] of the chain's values
+    /// plus `errors`, to the bit, without changing the chain. As there, only the rotations
+    /// whose value changed get a new `sin_cos`. `errors` shorter than the chain's largest
+    /// parameter index adds nothing.
+    ///
+    /// # Panics
+    ///
+    /// If the chain has more than [`MAX_OPS`] operations (more than 16 joints).
+    pub fn op_values(&self, errors: &[Real]) -> OpValues {
+        assert!(self.ops.len() <= MAX_OPS, "more than {MAX_OPS} operations");
+        let mut out = OpValues {
+            value: [0.0; MAX_OPS],
+            sc: [(0.0, 1.0); MAX_OPS],
+        };
+        let add = self.ops.iter().all(|op| op.param < errors.len());
+        for ((op, value), sc) in self.ops.iter().zip(&mut out.value).zip(&mut out.sc) {
+            let v = if add {
+                op.value + errors[op.param]
+            } else {
+                op.value
+            };
+            *value = v;
+            *sc = if v.to_bits() == op.value.to_bits() {
+                op.sc
+            } else {
+                rotation_sc(op.kind, v)
+            };
+        }
+        out
+    }
+
     /// The operations, base first.
     pub fn ops(&self) -> &[Op] {
         &self.ops
@@ -290,8 +362,9 @@ impl Chain {
         debug_assert_eq!(q.len(), self.dof);
         let c = self.vars(q);
         self.walk_with(
-            |op, v| {
-                let t = op.value + c[v];
+            |_, op| (op.value, op.sc),
+            |value, _, v| {
+                let t = value + c[v];
                 let (s, cs) = t.sin_cos();
                 ([t], [s], [cs])
             },
@@ -353,44 +426,49 @@ impl Chain {
         vars: [&ChainVars; L],
         visit: impl FnMut(&Op, &Lanes<L>),
     ) -> Lanes<L> {
+        self.walk_with(|_, op| (op.value, op.sc), driven_by(vars), visit)
+    }
+
+    /// [`Chain::walk_lanes`] of the chain with the operations' constant parts `values`
+    /// ([`Chain::op_values`]) in place of its own: the same bits as a walk of the chain after
+    /// [`Chain::set_values`] with those values. Allocation-free.
+    #[inline(always)]
+    pub fn walk_lanes_values<const L: usize>(
+        &self,
+        values: &OpValues,
+        vars: [&ChainVars; L],
+        visit: impl FnMut(&Op, &Lanes<L>),
+    ) -> Lanes<L> {
         self.walk_with(
             #[inline(always)]
-            |op, v| {
-                let (sa, ca) = op.sc;
-                let mut t = [0.0; L];
-                let mut s = [0.0; L];
-                let mut c = [0.0; L];
-                for l in 0..L {
-                    let (sv, cv) = vars[l].1[v];
-                    t[l] = op.value + vars[l].0[v];
-                    s[l] = sa * cv + ca * sv;
-                    c[l] = ca * cv - sa * sv;
-                }
-                (t, s, c)
-            },
+            |o, _| (values.value[o], values.sc[o]),
+            driven_by(vars),
             visit,
         )
     }
 
-    /// The walk of [`Chain::walk_at`] and [`Chain::walk_lanes`]: an operation driven by chain
-    /// variable `v` takes its values and (sin, cos) per lane from `driven(op, v)`, a fixed one
-    /// its own in every lane.
+    /// The walk of [`Chain::walk_at`], [`Chain::walk_lanes`] and [`Chain::walk_lanes_values`]:
+    /// operation `o` has the constant part and (sin, cos) `constant(o, op)`; one driven by
+    /// chain variable `v` takes its values and (sin, cos) per lane from
+    /// `driven(constant, (sin, cos), v)`, a fixed one its constant in every lane.
     #[inline(always)]
     fn walk_with<const L: usize>(
         &self,
-        driven: impl Fn(&Op, usize) -> ([Real; L], [Real; L], [Real; L]),
+        constant: impl Fn(usize, &Op) -> (Real, (Real, Real)),
+        driven: impl Fn(Real, (Real, Real), usize) -> LaneValues<L>,
         mut visit: impl FnMut(&Op, &Lanes<L>),
     ) -> Lanes<L> {
         let mut f = Lanes::identity();
-        for op in &self.ops {
+        for (o, op) in self.ops.iter().enumerate() {
             visit(op, &f);
+            let (value, sc) = constant(o, op);
             let (t, s, c) = match op.var {
                 // A fixed rotation or translation by zero (the base and tool of most robots,
                 // rows with d = 0, a = 0 or α = 0) leaves the frame as it is: R·Rot(±0) = R and
                 // p + R·0 = p exactly (c = 1, s = ±0), up to the sign of a zero entry.
-                None if op.value == 0.0 => continue,
-                None => ([op.value; L], [op.sc.0; L], [op.sc.1; L]),
-                Some(v) => driven(op, v),
+                None if value == 0.0 => continue,
+                None => ([value; L], [sc.0; L], [sc.1; L]),
+                Some(v) => driven(value, sc, v),
             };
             apply(op.kind, &t, &s, &c, &mut f);
         }
@@ -456,6 +534,61 @@ mod tests {
             let (a, b) = (chain.fk(&q), chain.walk_vars(&(v, sc), |_, _, _| {}));
             assert_relative_eq!(a.pos, b.pos, epsilon = 1e-10);
             assert_relative_eq!(a.rot, b.rot, epsilon = 1e-14);
+        }
+    }
+
+    /// The walk with other operation values is the walk of the chain set to those values, to
+    /// the bit, in one lane and in four.
+    #[test]
+    fn walk_lanes_values_is_the_walk_after_set_values() {
+        let bits = |f: &Lanes<1>| {
+            (
+                f.r.map(|r| r.map(|c| c[0].to_bits())),
+                f.p.map(|p| p[0].to_bits()),
+            )
+        };
+        for name in ["irb2600", "irb2600-mdh", "tx60", "guo-3t2r"] {
+            let robot = crate::robot::builtin::load(name).expect("robot");
+            let chain = robot.chain();
+            // Some errors zero, so that both keep some operations' own values.
+            let errors: Vec<Real> = (0..robot.values.len())
+                .map(|k| 1e-3 * ((k * 7 % 5) as Real - 2.0))
+                .collect();
+            let mut set = chain.clone();
+            let sum: Vec<Real> = robot
+                .values
+                .iter()
+                .zip(&errors)
+                .map(|(a, e)| a + e)
+                .collect();
+            set.set_values(&sum);
+            let values = chain.op_values(&errors);
+            let qs: Vec<Vec<Real>> = (0..4)
+                .map(|i| {
+                    (0..robot.dof())
+                        .map(|k| 0.7 * i as Real - 0.23 * k as Real)
+                        .collect()
+                })
+                .collect();
+            let vars = chain.variables_of(&qs);
+            let four = chain.walk_lanes_values(
+                &values,
+                std::array::from_fn::<_, 4, _>(|l| &vars[l]),
+                |_, _| {},
+            );
+            for (l, v) in vars.iter().enumerate() {
+                let a = chain.walk_lanes_values(&values, [v], |_, _| {});
+                let b = set.walk_lanes([v], |_, _| {});
+                assert_eq!(bits(&a), bits(&b), "{name}");
+                assert_eq!(four.frame(l), a.frame(0), "{name}");
+            }
+            // Too short an error vector adds nothing.
+            let none = chain.op_values(&[1.0; 3]);
+            let (a, b) = (
+                chain.walk_lanes_values(&none, [&vars[0]], |_, _| {}),
+                chain.walk_lanes([&vars[0]], |_, _| {}),
+            );
+            assert_eq!(bits(&a), bits(&b), "{name}");
         }
     }
 

@@ -28,7 +28,7 @@ pub mod param_sets;
 pub mod sampling;
 pub mod urdf;
 
-pub use chain::{Chain, ChainVars, Lanes, Op, OpKind};
+pub use chain::{Chain, ChainVars, Lanes, Op, OpKind, OpValues, MAX_OPS};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
 pub use param::{value_count, Param, PARAMS_PER_JOINT};
 

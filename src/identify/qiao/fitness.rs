@@ -5,7 +5,8 @@ use super::search::Bounds;
 use crate::error::{Error, Result};
 use crate::measurement::Measure;
 use crate::numeric::{Frame, Mat3, Real, Vec3};
-use crate::robot::{Chain, OpKind, Param, Robot};
+use crate::robot::jacobian::LANES;
+use crate::robot::{Chain, ChainVars, Param, Robot};
 
 /// One pose's term of Qiao's fitness (eq. 14): `k(|Δn| + |Δo| + |Δa|) + |Δp|`, where n, o, a
 /// are the columns of the rotation and p the position of the measured and the model frame.
@@ -36,22 +37,16 @@ pub const DEFAULT_K: Real = 100.0;
 /// Largest flat parameter vector handled by [`MetaProblem`] (16 joints).
 const MAX_VALUES: usize = 6 * 16 + 12;
 
-/// Joint-variable values of one pose and their (sin, cos).
-#[derive(Clone, Debug)]
-struct PoseVars {
-    c: [Real; 16],
-    sc: [(Real, Real); 16],
-}
-
 /// Direct identification on the forward kinematics with Qiao's fitness (eq. 14, §4.2 "error
 /// model 3"): the unknowns are errors `x` of `params` added to the nominal robot, and
 /// `fitness(x) = Σ_j [k(|Δn| + |Δo| + |Δa|) + |Δp|]` between the measured frames and the
 /// forward kinematics of the corrected robot (position-only data: `Σ_j |Δp|`).
 ///
 /// The measured frames are in the robot's world (base-frame) coordinates. The fitness is
-/// allocation-free: it walks the nominal chain's operations with the errors added, using
-/// per-pose precomputed sines and cosines of the joint variables (angle-addition formulas), so
-/// no robot or chain is built per call.
+/// allocation-free: it walks the nominal robot's [`Chain`] with the errors added to its
+/// operations ([`Chain::op_values`], [`Chain::walk_lanes_values`]), from each pose's chain
+/// variables and their sines and cosines computed once ([`Chain::variables_of`]), so no robot
+/// or chain is built per call.
 #[derive(Clone, Debug)]
 pub struct MetaProblem<'a> {
     nominal: &'a Robot,
@@ -64,7 +59,8 @@ pub struct MetaProblem<'a> {
     /// The weight of eq. 14 (mm per unit of orientation error).
     k: Real,
     flat: Vec<usize>,
-    vars: Vec<PoseVars>,
+    /// The chain variables of every pose and their sines and cosines.
+    vars: Vec<ChainVars>,
     /// `√w_j` of each pose's prior weight, if any.
     point_scale: Option<Vec<Real>>,
     /// Whether the model has joint compliances (searched, or in the nominal robot): the
@@ -133,7 +129,6 @@ impl<'a> MetaProblem<'a> {
                 format!("must be finite and non-negative, got {k}"),
             ));
         }
-        let mut vars = Vec::with_capacity(qs.len());
         for (i, q) in qs.iter().enumerate() {
             if q.len() != dof || q.iter().any(|v| !v.is_finite()) {
                 return Err(Error::setting(
@@ -147,14 +142,9 @@ impl<'a> MetaProblem<'a> {
                     format!("pose {i}: non-finite point"),
                 ));
             }
-            let mut c = [0.0; 16];
-            nominal.chain_values(q, &mut c[..dof]);
-            let mut sc = [(0.0, 1.0); 16];
-            for j in 0..dof {
-                sc[j] = c[j].sin_cos();
-            }
-            vars.push(PoseVars { c, sc });
         }
+        let chain = nominal.chain();
+        let vars = chain.variables_of(&qs);
         let compliant = params.iter().any(|p| p.is_compliance())
             || crate::robot::compliance::is_compliant(nominal);
         Ok(MetaProblem {
@@ -164,7 +154,7 @@ impl<'a> MetaProblem<'a> {
             points,
             rotations,
             k,
-            chain: nominal.chain(),
+            chain,
             flat,
             vars,
             point_scale: None,
@@ -315,63 +305,34 @@ impl<'a> MetaProblem<'a> {
         if self.compliant {
             return self.fitness_loaded(x);
         }
-        let ops = self.chain.ops();
-        if ops.len() > MAX_VALUES {
-            return Real::INFINITY;
-        }
-        let mut delta = [0.0; MAX_VALUES];
+        let mut errors = [0.0; MAX_VALUES];
         for (&i, &v) in self.flat.iter().zip(x) {
-            delta[i] = v;
+            errors[i] = v;
         }
-        // Per operation: total constant value and, for rotations, its (sin, cos).
-        let mut val = [0.0; MAX_VALUES];
-        let mut sc = [(0.0, 1.0); MAX_VALUES];
-        for (o, op) in ops.iter().enumerate() {
-            let v = op.value + delta[op.param];
-            val[o] = v;
-            if op.kind.is_rotation() {
-                sc[o] = v.sin_cos();
-            }
-        }
-        let mut total = 0.0;
-        for (j, pv) in self.vars.iter().enumerate() {
-            let mut r = Mat3::identity();
-            let mut p = Vec3::zeros();
-            for (o, op) in ops.iter().enumerate() {
-                match op.kind {
-                    OpKind::Tx | OpKind::Ty | OpKind::Tz => {
-                        let t = match op.var {
-                            Some(vi) => val[o] + pv.c[vi],
-                            None => val[o],
-                        };
-                        p += r.column(op.kind.axis()) * t;
-                    }
-                    _ => {
-                        let (s, c) = match op.var {
-                            Some(vi) => {
-                                let (s1, c1) = sc[o];
-                                let (s2, c2) = pv.sc[vi];
-                                (s1 * c2 + c1 * s2, c1 * c2 - s1 * s2)
-                            }
-                            None => sc[o],
-                        };
-                        let (a, b) = match op.kind {
-                            OpKind::Rx => (1, 2),
-                            OpKind::Ry => (2, 0),
-                            _ => (0, 1),
-                        };
-                        for row in 0..3 {
-                            let u = r[(row, a)];
-                            let w = r[(row, b)];
-                            r[(row, a)] = c * u + s * w;
-                            r[(row, b)] = -s * u + c * w;
-                        }
+        let values = self.chain.op_values(&errors);
+        // Four poses per chain walk (four-wide vectors where the processor has AVX2), the rest
+        // one by one; the terms summed in pose order.
+        crate::numeric::with_avx2_fma(
+            #[inline(always)]
+            || {
+                let mut total = 0.0;
+                let whole = self.vars.len() / LANES * LANES;
+                for j0 in (0..whole).step_by(LANES) {
+                    let vars: [&ChainVars; LANES] = std::array::from_fn(|l| &self.vars[j0 + l]);
+                    let f = self.chain.walk_lanes_values(&values, vars, |_, _| {});
+                    for l in 0..LANES {
+                        total += self.term(j0 + l, &f.rot(l), &f.pos(l));
                     }
                 }
-            }
-            total += self.term(j, &r, &p);
-        }
-        total
+                for j in whole..self.vars.len() {
+                    let f = self
+                        .chain
+                        .walk_lanes_values(&values, [&self.vars[j]], |_, _| {});
+                    total += self.term(j, &f.rot(0), &f.pos(0));
+                }
+                total
+            },
+        )
     }
 
     /// The model frames of the corrected robot at every pose (for reports; allocates).
