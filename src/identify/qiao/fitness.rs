@@ -6,7 +6,7 @@ use crate::error::{Error, Result};
 use crate::measurement::Measure;
 use crate::numeric::{Frame, Mat3, Real, Vec3};
 use crate::robot::jacobian::LANES;
-use crate::robot::{Chain, ChainVars, Param, Robot};
+use crate::robot::{Chain, ChainVars, Param, Robot, MAX_JOINTS};
 
 /// One pose's term of Qiao's fitness (eq. 14): `k(|Δn| + |Δo| + |Δa|) + |Δp|`, where n, o, a
 /// are the columns of the rotation and p the position of the measured and the model frame.
@@ -34,8 +34,8 @@ pub fn qiao_fitness(measured: &[Frame], model: &[Frame], k: Real) -> Real {
 /// 0.002–0.003) weighs like 0.2–0.3 mm, the order of the position errors of Qiao's TX60.
 pub const DEFAULT_K: Real = 100.0;
 
-/// Largest flat parameter vector handled by [`MetaProblem`] (16 joints).
-const MAX_VALUES: usize = 6 * 16 + 12;
+/// Largest flat parameter vector handled by [`MetaProblem`] ([`MAX_JOINTS`] joints).
+const MAX_VALUES: usize = 6 * MAX_JOINTS + 12;
 
 /// Direct identification on the forward kinematics with Qiao's fitness (eq. 14, §4.2 "error
 /// model 3"): the unknowns are errors `x` of `params` added to the nominal robot, and
@@ -83,8 +83,11 @@ impl<'a> MetaProblem<'a> {
         k: Real,
     ) -> Result<MetaProblem<'a>> {
         let dof = nominal.dof();
-        if dof > 16 {
-            return Err(Error::setting("robot", "at most 16 joints are supported"));
+        if dof > MAX_JOINTS {
+            return Err(Error::setting(
+                "robot",
+                format!("at most {MAX_JOINTS} joints are supported"),
+            ));
         }
         if params.is_empty() {
             return Err(Error::setting("params", "no parameters to identify"));
@@ -312,9 +315,9 @@ impl<'a> MetaProblem<'a> {
         let values = self.chain.op_values(&errors);
         // Four poses per chain walk (four-wide vectors where the processor has AVX2), the rest
         // one by one; the terms summed in pose order.
-        crate::numeric::with_avx2_fma(
+        crate::numeric::simd::dispatch(
             #[inline(always)]
-            || {
+            |_| {
                 let mut total = 0.0;
                 let whole = self.vars.len() / LANES * LANES;
                 for j0 in (0..whole).step_by(LANES) {
