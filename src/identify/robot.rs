@@ -358,7 +358,7 @@ pub fn identify_robot(
     Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
 }
 
-/// Fills in what a method that does not form `JᵀPJ` (the searches, the pose-error models)
+/// Fills in what a method that does not form `JᵀPJ` (the searches)
 /// leaves out: the rank and condition number of the column-scaled, weighted Jacobian and the
 /// RMS point residual at its estimate, from the problem's kinematic least squares; and marks a
 /// solution whose parameters the data do not all determine [`Termination::RankDeficient`].

@@ -1,4 +1,5 @@
-//! Pose-error models for Jacobian-based identification and Qiao's accuracy figures (Qiao 2021, `papers/qiao2021-bas-pso-tx60.txt`, §2.2–2.3, §4.1–4.2).
+//! Pose-error models for Jacobian-based identification and Qiao's accuracy figures (Qiao
+//! 2021, `papers/qiao2021-bas-pso-tx60.txt`, §2.2–2.3, §4.1–4.2).
 //!
 //! Qiao compares three ways to relate a measured pose `T_m = [R_m P_m; 0 1]` to the model
 //! pose `T = [R P; 0 1]` of the current parameters (columns of `R`: n, o, a):
@@ -9,12 +10,14 @@
 //! | [`ErrorModel::CoordinateTransfer`] | `[d; δ]` of `Δ = T_m T⁻¹ − I ≈ [[δ]× d; 0 0]`: `d = P_m − R_e P`, `δ = vee((R_e − R_eᵀ)/2)`, `R_e = R_m Rᵀ` (6 rows) | `[R_e(J_p + [P]×J_ω); ½(tr R_e·I − R_eᵀ)J_ω]`, at `R_e = I` eq. 11's `[J_p + [P]×J_ω; J_ω]` | §2.3, eqs. 6–11 |
 //! | [`ErrorModel::DirectFk`] | `[P_m − P; φ]`, `φ = log(R_m Rᵀ)` (6 rows, exact rotation vector) | `[J_p; J_r⁻¹(φ)J_ω]` | §4.2 "model 3" |
 //!
-//! `J_p`, `J_ω` are the tool-point and tool-rotation columns of [`crate::robot::jacobian`] (exact first
-//! derivatives of forward kinematics, `∂R = [J_ω ∂η]× R`), `J_r` the right Jacobian of SO(3).
-//! The Jacobians are exact derivatives of the residuals at any linearisation point (tested
-//! against finite differences), so Gauss–Newton ([`identify`]) converges to the least-squares
-//! minimum of each model's residual, and on noise-free data all three reach the true
-//! parameters.
+//! `J_p`, `J_ω` are the tool-point and tool-rotation columns of [`crate::robot::jacobian`]
+//! (exact first derivatives of forward kinematics, `∂R = [J_ω ∂η]× R`), `J_r` the right
+//! Jacobian of SO(3). The Jacobians are exact derivatives of the residuals at any
+//! linearisation point (tested against finite differences), so Gauss–Newton converges to the
+//! least-squares minimum of each model's residual, and on noise-free data all three reach the
+//! true parameters. Each model is a least-squares problem ([`PoseErrorProblem`]) of the one
+//! engine of the Jacobian-based methods ([`crate::identify::solver`]); [`identify`] runs its
+//! Gauss–Newton iteration.
 //!
 //! At `T_m = T` the three Jacobians predict the same first-order change of the pose: the
 //! models agree to first order and differ only in the coordinates in which they measure the
@@ -32,9 +35,13 @@
 //! Residual rows are in mm for positions and rad (or dimensionless) for orientation; the
 //! orientation rows are weighted by a factor `k` as in Qiao's fitness (eq. 14), see [`stack`].
 
+use std::cell::RefCell;
+
 use nalgebra::{DMatrix, DVector};
 
 use crate::error::{finite_positive, Error, Result};
+use crate::identify::solver::{solve, LeastSquares, Size};
+use crate::identify::{Identified, LsOptions};
 use crate::measurement::Measure;
 use crate::numeric::{matrix_rpy, Frame, Mat3, Real, Vec3};
 use crate::robot::jacobian::{log_orientation_rows, pose_rows, Columns};
@@ -198,13 +205,14 @@ fn check_pose(robot: &Robot, q: &[Real], i: usize) -> Result<()> {
 }
 
 /// The stacked residual and Jacobian of `model` over all poses, with the orientation rows
-/// (all rows after the first three of each pose) multiplied by `k`.
+/// (all rows after the first three of each pose) multiplied by `k`: [`PoseErrorProblem`]
+/// evaluated at `robot` (no errors added).
 ///
 /// `k` plays the part of the weighting factor of Qiao's fitness (eq. 14), which balances
 /// orientation errors (rad, or dimensionless matrix entries) against position errors (mm):
 /// with `k = 1` one radian counts as one millimetre, which leaves the orientation data almost
-/// unused; [`crate::identify::qiao::DEFAULT_K`] (100 mm) puts the two on a comparable footing for
-/// a tracker measuring about 15 µm and 0.005°.
+/// unused; [`crate::identify::qiao::DEFAULT_K`] (100 mm) puts the two on a comparable footing
+/// for a tracker measuring about 15 µm and 0.005°.
 pub fn stack(
     model: ErrorModel,
     robot: &Robot,
@@ -213,32 +221,151 @@ pub fn stack(
     measured: &[Frame],
     k: Real,
 ) -> Result<(DVector<Real>, DMatrix<Real>)> {
-    finite_positive("k", k)?;
-    if qs.len() != measured.len() {
-        return Err(Error::setting(
-            "measurements",
-            format!("{} poses but {} measured frames", qs.len(), measured.len()),
-        ));
-    }
-    for (i, q) in qs.iter().enumerate() {
-        check_pose(robot, q, i)?;
-    }
-    let rows = model.rows();
-    let mut r = DVector::zeros(rows * qs.len());
-    let mut j = DMatrix::zeros(rows * qs.len(), params.len());
-    let cols = Columns::new(params, robot.dof());
-    let chain = robot.chain();
-    for (i, (q, m)) in qs.iter().zip(measured).enumerate() {
-        rows_into(model, &chain, &cols, q, m, &mut r, &mut j, rows * i);
-    }
-    if k != 1.0 {
-        for row in (0..r.len()).filter(|row| row % rows >= 3) {
-            r[row] *= k;
-            j.row_mut(row).scale_mut(k);
-        }
-    }
+    let problem = PoseErrorProblem::new(model, robot, params, qs, measured, k)?;
+    let size = problem.size();
+    let mut r = DVector::zeros(size.rows());
+    let mut j = DMatrix::zeros(size.rows(), size.params);
+    problem.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
     Ok((r, j))
 }
+
+/// One of Qiao's pose-error models as a least-squares problem of the engine
+/// ([`LeastSquares`], [`crate::identify::solver`]): the unknowns are errors `x` of `params`
+/// added to the nominal robot; each pose's residual and Jacobian are those of [`rows_into`]
+/// at the corrected robot, the orientation rows weighted by `k` (see [`stack`]), and each
+/// pose may carry a prior weight (its rows weighed by `w_j` in `JᵀPJ`).
+#[derive(Debug)]
+pub struct PoseErrorProblem<'a> {
+    model: ErrorModel,
+    nominal: &'a Robot,
+    /// Flat index of each parameter.
+    index: Vec<usize>,
+    cols: Columns,
+    qs: &'a [Vec<Real>],
+    measured: &'a [Frame],
+    /// Weight of the orientation rows (mm per rad, or per unit of matrix entry).
+    k: Real,
+    prior: Option<&'a [Real]>,
+    /// Working parameter values and the chain compiled from them, updated in place at each
+    /// evaluation ([`Chain::set_values`]).
+    work: RefCell<(Vec<Real>, Chain)>,
+}
+
+impl<'a> PoseErrorProblem<'a> {
+    /// The problem of `model` over the errors of `params` of `nominal`, from the tool frames
+    /// `measured` (world) at the joint values `qs`, orientation rows weighted by `k`. Fails
+    /// when a parameter is not one of the robot's kinematic parameters, `k` is not finite and
+    /// positive, the frames do not match the poses, or a pose has the wrong number of joint
+    /// values or a non-finite one, or a non-finite measured frame.
+    pub fn new(
+        model: ErrorModel,
+        nominal: &'a Robot,
+        params: &[Param],
+        qs: &'a [Vec<Real>],
+        measured: &'a [Frame],
+        k: Real,
+    ) -> Result<Self> {
+        finite_positive("k", k)?;
+        let all = nominal.params();
+        if let Some(p) = params.iter().find(|p| !all.contains(p)) {
+            return Err(Error::setting(
+                "params",
+                format!("{p} is not a parameter of robot {}", nominal.name),
+            ));
+        }
+        if qs.len() != measured.len() {
+            return Err(Error::setting(
+                "measurements",
+                format!("{} poses but {} measured frames", qs.len(), measured.len()),
+            ));
+        }
+        for (i, (q, m)) in qs.iter().zip(measured).enumerate() {
+            check_pose(nominal, q, i)?;
+            if m.pos.iter().chain(m.rot.iter()).any(|v| !v.is_finite()) {
+                return Err(Error::setting(
+                    "measurements",
+                    format!("pose {i}: measured frame not finite"),
+                ));
+            }
+        }
+        let dof = nominal.dof();
+        Ok(PoseErrorProblem {
+            model,
+            nominal,
+            index: params.iter().map(|p| p.index(dof)).collect(),
+            cols: Columns::new(params, dof),
+            qs,
+            measured,
+            k,
+            prior: None,
+            work: RefCell::new((nominal.values.clone(), nominal.chain())),
+        })
+    }
+
+    /// Gives pose `j` the prior weight `w[j]` (`None`: every pose weighs 1). Fails unless
+    /// there is one finite, positive weight per pose.
+    pub fn with_weights(mut self, w: Option<&'a [Real]>) -> Result<Self> {
+        if w.is_some_and(|w| {
+            w.len() != self.qs.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0))
+        }) {
+            return Err(Error::setting(
+                "weights",
+                "need one finite positive weight per pose",
+            ));
+        }
+        self.prior = w;
+        Ok(self)
+    }
+
+    /// The nominal robot with the errors `x` added.
+    pub fn robot_with(&self, x: &DVector<Real>) -> Robot {
+        let mut r = self.nominal.clone();
+        for (&i, &v) in self.index.iter().zip(x.iter()) {
+            r.values[i] += v;
+        }
+        r
+    }
+}
+
+impl LeastSquares for PoseErrorProblem<'_> {
+    fn size(&self) -> Size {
+        Size {
+            params: self.index.len(),
+            points: self.qs.len(),
+            rows_per_point: self.model.rows(),
+        }
+    }
+
+    fn prior(&self) -> Option<&[Real]> {
+        self.prior
+    }
+
+    /// The model's rows of every pose ([`rows_into`]) at `nominal + x`, orientation rows
+    /// times `k`. The chain is updated in place.
+    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        let mut guard = self.work.borrow_mut();
+        let (values, chain) = &mut *guard;
+        values.copy_from_slice(&self.nominal.values);
+        for (&i, &v) in self.index.iter().zip(x.iter()) {
+            values[i] += v;
+        }
+        chain.set_values(values);
+        let rows = self.model.rows();
+        for (i, (q, m)) in self.qs.iter().zip(self.measured).enumerate() {
+            rows_into(self.model, chain, &self.cols, q, m, r, j, rows * i);
+        }
+        if self.k != 1.0 {
+            for row in (0..r.len()).filter(|row| row % rows >= 3) {
+                r[row] *= self.k;
+                j.row_mut(row).scale_mut(self.k);
+            }
+        }
+    }
+}
+
+/// The step below which the Gauss–Newton iteration of [`identify`] counts as converged:
+/// `max |δx| < 1e-9` (mm or rad), the `eps` of `ls`.
+pub const STEP_TOLERANCE: Real = 1e-9;
 
 /// The result of [`identify`].
 #[derive(Clone, Debug)]
@@ -247,21 +374,29 @@ pub struct ModelFit {
     pub x: Vec<Real>,
     /// The robot with the errors applied.
     pub robot: Robot,
-    /// Norm of the last correction step.
-    pub last_step: Real,
+    /// The engine's result: how the iteration ended ([`Identified::termination`]), the
+    /// iterations and evaluations, and the statistics of the model's least squares.
+    pub identified: Identified,
 }
 
-/// Gauss–Newton identification with `model`: `iterations` steps of
-/// `Δx = J⁺ r` (least squares by SVD, orientation rows weighted by `k`, see [`stack`]),
-/// re-linearised at the corrected robot each step.
+/// Gauss–Newton identification with `model`: at most `iterations` steps of
+/// `(JᵀPJ) δx = JᵀP r` (orientation rows weighted by `k`, see [`stack`]; `P` the prior
+/// weights `w_j` per pose, or 1), re-linearised at the corrected robot each step, until
+/// `max |δx| <` [`STEP_TOLERANCE`]: the [`PoseErrorProblem`] solved by the engine of `ls`
+/// ([`LsOptions`], [`crate::identify::solver`]).
 ///
 /// One step from the nominal robot is the linear identification of Qiao's error models 1
 /// and 2 (their Jacobians carry the nominal parameters, §2.2–2.3); iterated to convergence,
 /// [`ErrorModel::DirectFk`] is the identification on the forward kinematics without
 /// neglected terms of §4.2 (model 3). The Jacobians are exact derivatives of the residuals
 /// everywhere, so each model's iteration converges to the least-squares minimum of its own
-/// residual. With prior weights `w_j` per pose (`Some`), pose j's rows are scaled by `√w_j`
-/// (weighted least squares).
+/// residual.
+///
+/// How the iteration ended is the engine's [`Identified::termination`]: a residual that
+/// becomes non-finite or grows without bound ends it as
+/// [`crate::identify::Termination::Diverged`], a singular `JᵀPJ` as `Singular`. An `Err`
+/// means the inputs are inconsistent (see [`PoseErrorProblem::new`], `iterations` 0, bad
+/// weights).
 #[allow(clippy::too_many_arguments)]
 pub fn identify(
     model: ErrorModel,
@@ -273,57 +408,20 @@ pub fn identify(
     k: Real,
     weights: Option<&[Real]>,
 ) -> Result<ModelFit> {
-    if weights
-        .is_some_and(|w| w.len() != qs.len() || w.iter().any(|v| !(v.is_finite() && *v > 0.0)))
-    {
-        return Err(Error::setting(
-            "weights",
-            "need one finite positive weight per pose",
-        ));
-    }
     if iterations == 0 {
         return Err(Error::setting("iterations", "must be at least 1"));
     }
-    let all = nominal.params();
-    if let Some(p) = params.iter().find(|p| !all.contains(p)) {
-        return Err(Error::setting(
-            "params",
-            format!("{p} is not a parameter of robot {}", nominal.name),
-        ));
-    }
-    let mut x = vec![0.0; params.len()];
-    let mut robot = nominal.clone();
-    let mut last_step = 0.0;
-    for _ in 0..iterations {
-        let (mut r, mut j) = stack(model, &robot, params, qs, measured, k)?;
-        if let Some(w) = weights {
-            let rows = model.rows();
-            for (p, wp) in w.iter().enumerate() {
-                let s = wp.sqrt();
-                r.rows_mut(p * rows, rows).scale_mut(s);
-                j.rows_mut(p * rows, rows).scale_mut(s);
-            }
-        }
-        if r.iter().chain(j.iter()).any(|v| !v.is_finite()) {
-            return Err(Error::Compute(format!(
-                "{model} identification diverged (non-finite residual or Jacobian)"
-            )));
-        }
-        let dx = j
-            .svd(true, true)
-            .solve(&r, 1e-12)
-            .map_err(|e| Error::Compute(format!("least squares failed: {e}")))?;
-        last_step = dx.norm();
-        for (xi, d) in x.iter_mut().zip(dx.iter()) {
-            *xi += d;
-        }
-        let errs: Vec<(Param, Real)> = params.iter().copied().zip(x.iter().copied()).collect();
-        robot = nominal.with_errors(&errs);
-    }
+    let problem =
+        PoseErrorProblem::new(model, nominal, params, qs, measured, k)?.with_weights(weights)?;
+    let options = LsOptions {
+        eps: STEP_TOLERANCE,
+        max_iter: iterations,
+    };
+    let identified = solve(&options, &problem, &DVector::zeros(params.len()));
     Ok(ModelFit {
-        x,
-        robot,
-        last_step,
+        x: identified.x.iter().copied().collect(),
+        robot: problem.robot_with(&identified.x),
+        identified,
     })
 }
 

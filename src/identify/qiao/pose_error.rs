@@ -6,7 +6,7 @@ use serde::Deserialize;
 
 use crate::error::{check_count, Error, Result};
 use crate::identify::qiao::error_models::ErrorModel;
-use crate::identify::{CalibrationProblem, Identified, Method, Termination};
+use crate::identify::{CalibrationProblem, Identified, Method};
 use crate::numeric::rng::Rng;
 
 /// Options of `ls` with `error_model` (docs/formats.md `[[methods]]`).
@@ -15,7 +15,8 @@ use crate::numeric::rng::Rng;
 pub struct PoseErrorLs {
     /// The pose-error model.
     pub error_model: ErrorModel,
-    /// Gauss–Newton steps. Default 10 (1 is Qiao's linear identification of models 1–2).
+    /// Most Gauss–Newton steps; the iteration stops earlier when `max |δx| < 1e-9`. Default
+    /// 10 (1 is Qiao's linear identification of models 1–2).
     #[serde(default = "default_iterations")]
     pub iterations: usize,
 }
@@ -24,17 +25,17 @@ fn default_iterations() -> usize {
     10
 }
 
-/// The last step below which the Gauss–Newton iteration counts as converged.
-const STEP_TOLERANCE: f64 = 1e-9;
-
 impl Method for PoseErrorLs {
     fn check(&self) -> Result<()> {
         check_count("iterations", self.iterations)
     }
 
-    /// Runs all `iterations` Gauss–Newton steps ([`crate::identify::qiao::error_models::identify`]); the result
-    /// is [`Termination::Converged`] when the last step's norm is below 1e-9, else
-    /// [`Termination::MaxIterations`].
+    /// Runs the Gauss–Newton iteration of
+    /// [`crate::identify::qiao::error_models::identify`] (at most `iterations` steps, until
+    /// `max |δx| < 1e-9`) and returns the engine's result ([`crate::identify::Termination`]):
+    /// `converged`, `max-iterations`, or `diverged` when the residual became non-finite or
+    /// grew without bound, which a study counts among the method's failures. An `Err` only
+    /// for inconsistent inputs (position-only data, joint compliances).
     fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
         if problem.params.iter().any(|p| p.is_compliance()) {
             return Err(Error::setting(
@@ -54,17 +55,46 @@ impl Method for PoseErrorLs {
             problem.k,
             problem.weights.as_deref(),
         )?;
-        let termination = if fit.last_step < STEP_TOLERANCE {
-            Termination::Converged
-        } else {
-            Termination::MaxIterations
+        Ok(fit.identified)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::Termination;
+    use crate::measurement::Measurements;
+    use crate::numeric::rng::stream;
+    use crate::numeric::{quaternion, Frame};
+    use crate::robot::builtin::tx60_qiao_params;
+
+    /// An identification whose residual overflows ends `diverged`, which a study counts among
+    /// the method's failures, and not in an `Err`, which a study reports as `invalid-input`.
+    /// Every measured point is 1e305 times its true distance from the base (finite, up to
+    /// 6e307 mm): the squared residual overflows at the start, and a Gauss–Newton step takes
+    /// the model's lengths to that size, where the forward kinematics overflow.
+    #[test]
+    fn a_diverging_identification_ends_diverged_not_in_an_error() {
+        let nominal = crate::robot::builtin::load("tx60").expect("tx60");
+        let params = tx60_qiao_params();
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 20, &mut stream(1, "q"));
+        let frames: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
+        let data = Measurements {
+            qs,
+            points: frames.iter().map(|f| f.pos * 1e305).collect(),
+            quats: Some(frames.iter().map(|f| quaternion(&f.rot)).collect()),
+            ..Default::default()
         };
-        Ok(Identified::plain(
-            fit.x,
-            self.iterations,
-            self.iterations,
-            termination,
-            problem.data.len(),
-        ))
+        let problem = CalibrationProblem::new(&nominal, &params, &data, Frame::identity(), 100.0);
+        for error_model in ErrorModel::ALL {
+            let method = PoseErrorLs {
+                error_model,
+                iterations: 10,
+            };
+            let out = method
+                .identify(&problem, &mut stream(1, "m"))
+                .unwrap_or_else(|e| panic!("{error_model}: a divergence is not an error: {e}"));
+            assert_eq!(out.termination, Termination::Diverged, "{error_model}");
+        }
     }
 }
