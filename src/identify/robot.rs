@@ -256,21 +256,13 @@ impl<'a> RobotProblem<'a> {
 
     /// The compensated robot: the nominal robot with the errors `x` added.
     pub fn robot_with(&self, x: &DVector<Real>) -> Robot {
-        let mut r = self.nominal.clone();
-        for (&i, &v) in self.index.iter().zip(x.iter()) {
-            r.values[i] += v;
-        }
-        r
+        self.nominal.with_added(&self.index, x.as_slice())
     }
 }
 
 impl LeastSquares for RobotProblem<'_> {
     fn size(&self) -> Size {
-        Size {
-            params: self.params.len(),
-            points: self.points.len(),
-            rows_per_point: self.measure.rows(),
-        }
+        Size::new(self.params.len(), self.points.len(), self.measure.rows())
     }
 
     fn prior(&self) -> Option<&[Real]> {
@@ -284,11 +276,8 @@ impl LeastSquares for RobotProblem<'_> {
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
         let mut guard = self.work.borrow_mut();
         let (values, chain) = &mut *guard;
-        values.copy_from_slice(&self.nominal.values);
-        for (&i, &v) in self.index.iter().zip(x.iter()) {
-            values[i] += v;
-        }
-        chain.set_values(values);
+        self.nominal
+            .set_chain_with_added(&self.index, x.as_slice(), values, chain);
         let chain = &*chain;
         let rows = self.measure.rows();
         let rots = match self.measure {

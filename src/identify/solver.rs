@@ -30,6 +30,15 @@ pub struct Size {
 }
 
 impl Size {
+    /// `params` unknowns, `points` measured points of `rows_per_point` rows each.
+    pub fn new(params: usize, points: usize, rows_per_point: usize) -> Size {
+        Size {
+            params,
+            points,
+            rows_per_point,
+        }
+    }
+
     /// Rows of the residual, `points · rows_per_point`.
     pub fn rows(&self) -> usize {
         self.points * self.rows_per_point

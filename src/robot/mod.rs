@@ -378,6 +378,36 @@ impl Robot {
         r
     }
 
+    /// The flat parameter values with `x[k]` added to value `index[k]`, written into `values`
+    /// (one per flat value): the model an identification evaluates at its estimate `x`.
+    pub fn values_with_added(&self, index: &[usize], x: &[Real], values: &mut [Real]) {
+        values.copy_from_slice(&self.values);
+        for (&i, &v) in index.iter().zip(x) {
+            values[i] += v;
+        }
+    }
+
+    /// Sets `chain` (compiled from this robot) to the values with `x[k]` added to value
+    /// `index[k]`, written into `values` on the way ([`Robot::values_with_added`],
+    /// [`Chain::set_values`]): an identification's model at its estimate, allocation-free.
+    pub fn set_chain_with_added(
+        &self,
+        index: &[usize],
+        x: &[Real],
+        values: &mut [Real],
+        chain: &mut Chain,
+    ) {
+        self.values_with_added(index, x, values);
+        chain.set_values(values);
+    }
+
+    /// A copy with `x[k]` added to flat value `index[k]` ([`Robot::values_with_added`]).
+    pub fn with_added(&self, index: &[usize], x: &[Real]) -> Robot {
+        let mut r = self.clone();
+        self.values_with_added(index, x, &mut r.values);
+        r
+    }
+
     /// The base frame in the world.
     pub fn base(&self) -> Frame {
         self.part_frame(Param::Base(0).index(self.dof()))

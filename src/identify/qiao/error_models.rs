@@ -1,5 +1,5 @@
 //! Pose-error models for Jacobian-based identification and Qiao's accuracy figures (Qiao
-//! 2021, `papers/qiao2021-bas-pso-tx60.txt`, §2.2–2.3, §4.1–4.2).
+//! 2021, §2.2–2.3, §4.1–4.2).
 //!
 //! Qiao compares three ways to relate a measured pose `T_m = [R_m P_m; 0 1]` to the model
 //! pose `T = [R P; 0 1]` of the current parameters (columns of `R`: n, o, a):
@@ -316,40 +316,16 @@ impl<'a> PoseErrorProblem<'a> {
         self.prior = w;
         Ok(self)
     }
-
-    /// The nominal robot with the errors `x` added.
-    pub fn robot_with(&self, x: &DVector<Real>) -> Robot {
-        let mut r = self.nominal.clone();
-        for (&i, &v) in self.index.iter().zip(x.iter()) {
-            r.values[i] += v;
-        }
-        r
-    }
 }
 
 impl LeastSquares for PoseErrorProblem<'_> {
-    fn size(&self) -> Size {
-        Size {
-            params: self.index.len(),
-            points: self.qs.len(),
-            rows_per_point: self.model.rows(),
-        }
-    }
-
-    fn prior(&self) -> Option<&[Real]> {
-        self.prior
-    }
-
     /// The model's rows of every pose ([`rows_into`]) at `nominal + x`, orientation rows
     /// times `k`. The chain is updated in place.
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
         let mut guard = self.work.borrow_mut();
         let (values, chain) = &mut *guard;
-        values.copy_from_slice(&self.nominal.values);
-        for (&i, &v) in self.index.iter().zip(x.iter()) {
-            values[i] += v;
-        }
-        chain.set_values(values);
+        self.nominal
+            .set_chain_with_added(&self.index, x.as_slice(), values, chain);
         let rows = self.model.rows();
         for (i, (q, m)) in self.qs.iter().zip(self.measured).enumerate() {
             rows_into(self.model, chain, &self.cols, q, m, r, j, rows * i);
@@ -360,6 +336,14 @@ impl LeastSquares for PoseErrorProblem<'_> {
                 j.row_mut(row).scale_mut(self.k);
             }
         }
+    }
+
+    fn size(&self) -> Size {
+        Size::new(self.index.len(), self.qs.len(), self.model.rows())
+    }
+
+    fn prior(&self) -> Option<&[Real]> {
+        self.prior
     }
 }
 
@@ -420,7 +404,9 @@ pub fn identify(
     let identified = solve(&options, &problem, &DVector::zeros(params.len()));
     Ok(ModelFit {
         x: identified.x.iter().copied().collect(),
-        robot: problem.robot_with(&identified.x),
+        robot: problem
+            .nominal
+            .with_added(&problem.index, identified.x.as_slice()),
         identified,
     })
 }

@@ -1,5 +1,5 @@
-//! Derivative-free identification: BAS, PSO and BAS-PSO (Qiao 2021,
-//! `papers/qiao2021-bas-pso-tx60.txt`, §3, eqs. 12–14).
+//! Derivative-free identification: BAS, PSO and BAS-PSO (Qiao 2021, §3,
+//! eqs. 12–14).
 //!
 //! The three searches minimise a fitness `f(x)` over a box ([`Bounds`]); for kinematic
 //! calibration `x` holds the errors of a list of parameters and `f` is Qiao's eq. 14
