@@ -10,7 +10,7 @@ use super::settings::Region;
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
-use crate::robot::sampling::{poses_in_box, uniform_joint_pose, uniform_joint_poses};
+use crate::robot::sampling::{poses_in_box, uniform_joint_poses};
 use crate::robot::{Coupling, JointType, Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
@@ -102,15 +102,10 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
                      tool offset)"
                 )));
             }
-            let chain = robot.chain();
             let mut rng = crate::numeric::rng::stream(0, "reach");
-            let mut q = vec![0.0; robot.dof()];
-            for _ in 0..BOX_TRIES_MIN {
-                uniform_joint_pose(robot, &mut rng, &mut q);
-                let d = chain.fk(&q).pos - c;
-                if (0..3).all(|k| d[k].abs() <= h[k]) {
-                    return Ok(());
-                }
+            let tries = (BOX_TRIES_MIN, BOX_TRIES_MIN);
+            if !poses_in_box(robot, 1, *center_mm, *size_mm, tries, &mut rng).is_empty() {
+                return Ok(());
             }
             Err(out_of_reach(format!(
                 "not one of {BOX_TRIES_MIN} random joint configurations within the limits puts \
