@@ -244,6 +244,10 @@ pub struct CalibrationProblem<'a> {
     pub rotations: Option<Vec<Mat3>>,
     /// Per-point weights ([`Measurements::weights`]); `None`: every point weighs 1.
     pub weights: Option<Vec<Real>>,
+    /// Tikhonov precision of each parameter's error towards 0 (the nominal value), in the
+    /// units of the weighted cost ([`MethodSpec::precisions`]); empty: no priors. The
+    /// Jacobian methods minimise `rᵀPr + Σ λ_k x_k²` (a MAP estimate); the searches ignore it.
+    pub priors: Vec<Real>,
 }
 
 impl<'a> CalibrationProblem<'a> {
@@ -267,6 +271,7 @@ impl<'a> CalibrationProblem<'a> {
             points,
             rotations,
             weights: data.weights(),
+            priors: Vec::new(),
         }
     }
 
