@@ -142,6 +142,23 @@ pub fn compensate_row(
     })
 }
 
+/// Turns each revolute joint outside its limits by whole turns into them, where a turn
+/// reaches (the same pose).
+fn wrap_into_limits(robot: &Robot, q: &mut [Real]) {
+    let turn = 2.0 * std::f64::consts::PI;
+    for (v, j) in q.iter_mut().zip(&robot.joints) {
+        if j.kind != crate::robot::JointType::Revolute {
+            continue;
+        }
+        let (lo, hi) = j.limits;
+        let k = ((lo - *v) / turn).ceil();
+        let w = *v + k * turn;
+        if (*v < lo || *v > hi) && w <= hi {
+            *v = w;
+        }
+    }
+}
+
 /// Random starts tried for a Cartesian target after the previous solution and the middle of
 /// the joint limits.
 const TARGET_STARTS: usize = 40;
@@ -170,10 +187,15 @@ pub fn compensate_targets(
     let mut out: Vec<Corrected> = Vec::with_capacity(targets.len());
     for target in targets {
         let previous = out.last().map(|c| c.q.clone());
-        let starts = previous.iter().chain(std::iter::once(&middle)).chain(&randoms);
+        let starts = previous
+            .iter()
+            .chain(std::iter::once(&middle))
+            .chain(&randoms);
         let mut best: Option<Corrected> = None;
         for q0 in starts {
-            let q = round(&solve_rows(identified, target, q0, payload_kg, rows)?);
+            let mut q = solve_rows(identified, target, q0, payload_kg, rows)?;
+            wrap_into_limits(identified, &mut q);
+            let q = round(&q);
             let f = loaded_fk(identified, &chain, &q, payload_kg)?;
             let residual_mm = (f.pos - target.pos).norm();
             let residual_deg = if position_only {
@@ -194,10 +216,10 @@ pub fn compensate_targets(
                 residual_deg,
                 flag,
             };
-            let better = best.as_ref().is_none_or(|b| {
-                (b.flag == "failed" && c.flag != "failed")
-                    || (b.flag == c.flag && c.residual_mm < b.residual_mm)
-            });
+            let rank = |f: &str| ["ok", "limits", "failed"].iter().position(|g| *g == f);
+            let better = best
+                .as_ref()
+                .is_none_or(|b| (rank(c.flag), c.residual_mm) < (rank(b.flag), b.residual_mm));
             let done = c.flag == "ok";
             if better {
                 best = Some(c);

@@ -150,7 +150,10 @@ pub fn cross_validate(
         fold_rms.push(v.after_mm.rms);
     }
     let mean = fold_rms.iter().sum::<Real>() / k as Real;
-    let sd = (fold_rms.iter().map(|r| (r - mean) * (r - mean)).sum::<Real>()
+    let sd = (fold_rms
+        .iter()
+        .map(|r| (r - mean) * (r - mean))
+        .sum::<Real>()
         / (k - 1) as Real)
         .sqrt();
     Ok(CrossValidation {

@@ -131,13 +131,7 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
         .cholesky()
         .map(|c| c.inverse())
         .unwrap_or_else(|| DMatrix::from_element(t, t, Real::NAN));
-    let mut problem = CalibrationProblem::new(
-        s.nominal,
-        s.params,
-        s.data,
-        s.calibrated.frame,
-        s.k,
-    );
+    let mut problem = CalibrationProblem::new(s.nominal, s.params, s.data, s.calibrated.frame, s.k);
     problem.priors = s.priors.to_vec();
     let rp = RobotProblem::of(&problem)?;
     let (r, j) = evaluate(&rp, &id.x);

@@ -8,11 +8,11 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::calibrate::compensate::{compensate_row, compensate_targets};
-use calbench::measurement::csv::read_targets;
-use calbench::numeric::{quaternion_matrix, Frame, Mat3};
 use calbench::error::Error;
 use calbench::measurement::csv::fixed;
+use calbench::measurement::csv::read_targets;
 use calbench::numeric::Real;
+use calbench::numeric::{quaternion_matrix, Frame, Mat3};
 use calbench::robot::builtin;
 
 use super::{check_out_file, write_file};

@@ -8,13 +8,13 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
+use calbench::calibrate::cv;
 use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
 use calbench::error::Error;
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, Termination, METHODS};
 use calbench::measurement::csv::read_measurements;
 use calbench::measurement::{Measure, Measurements};
 use calbench::numeric::{Frame, Real};
-use calbench::calibrate::cv;
 use calbench::report::exports;
 use calbench::report::identified::{validate_file, write_identified_with, IdentifyRecord};
 use calbench::report::practice::{Practice, PriorMove};
@@ -216,7 +216,8 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     let mut choice = None;
     if !args.models.is_empty() {
         let (cvs, best) = cv::choose_model(&nominal, &args.models, &d, folds, &setup)?;
-        (robot, params) = args.models[best].robot_and_params(&nominal, &d, registration, &args.fix)?;
+        (robot, params) =
+            args.models[best].robot_and_params(&nominal, &d, registration, &args.fix)?;
         choice = Some((cvs, best));
     }
     let nominal = robot;

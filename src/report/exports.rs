@@ -84,12 +84,7 @@ fn fnv(s: &str) -> u64 {
 /// angles in its `angle_unit`; a compliance in rad/(N·m)): `joint,parameter,unit,nominal,
 /// identified,delta,sigma`. `sigma` is the identification's standard error (√ of the
 /// covariance's diagonal); empty for a parameter not identified (fixed or not identifiable).
-pub fn dh_csv(
-    nominal: &Robot,
-    identified: &Robot,
-    params: &[Param],
-    sigma: &[Real],
-) -> String {
+pub fn dh_csv(nominal: &Robot, identified: &Robot, params: &[Param], sigma: &[Real]) -> String {
     let mut s = String::from("joint,parameter,unit,nominal,identified,delta,sigma\n");
     let (len, ang) = (nominal.units.length_to_mm(), nominal.units.angle_to_rad());
     let mut all = nominal.params();
@@ -152,7 +147,10 @@ mod tests {
         let pi = std::f64::consts::PI;
         assert!(close(&seg("shoulder"), &[0.0, 0.0, 0.1273, 0.0, 0.0, 0.0]));
         assert!(close(&seg("forearm"), &[-0.612, 0.0, 0.0, 0.0, 0.0, 0.0]));
-        assert!(close(&seg("wrist_1"), &[-0.5723, 0.0, 0.163941, 0.0, 0.0, 0.0]));
+        assert!(close(
+            &seg("wrist_1"),
+            &[-0.5723, 0.0, 0.163941, 0.0, 0.0, 0.0]
+        ));
         let w2 = seg("wrist_2");
         assert!(close(&w2[..2], &[0.0, -0.1157]) && (w2[3] - pi / 2.0).abs() < 1e-9);
         assert!(y.contains("hash: calib_"));

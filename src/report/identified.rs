@@ -153,7 +153,10 @@ fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
     write(&out.join("identified.json"), &(text + "\n"))?;
     let mut compensated = r.calibrated.robot.clone();
     compensated.name = format!("{}-calibrated", r.nominal.name);
-    write(&out.join("report.md"), &(report_md(out, r)? + &more.markdown))?;
+    write(
+        &out.join("report.md"),
+        &(report_md(out, r)? + &more.markdown),
+    )?;
     if let Some(u) = &r.urdf {
         write(&out.join("robot.urdf"), u)?;
     }
