@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use calbench::calibrate::cv;
+use calbench::calibrate::diagnostics::{diagnose, Subject};
 use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
 use calbench::error::Error;
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, Termination, METHODS};
@@ -303,7 +304,18 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         models: choice.clone(),
         fixed: args.fix.clone(),
         priors,
-        diagnostics: None,
+        diagnostics: Some(diagnose(&Subject {
+            nominal: &nominal,
+            params: &params,
+            data: &d,
+            calibrated: &c,
+            k: spec.k,
+            priors: &spec.precisions(&params)?,
+            validation: val
+                .as_ref()
+                .zip(validation.as_ref())
+                .map(|(v, s)| (v, s.after_mm.rms)),
+        })?),
     };
     let record = IdentifyRecord {
         nominal: &nominal,
