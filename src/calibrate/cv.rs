@@ -313,7 +313,7 @@ mod tests {
             qs,
             ..Default::default()
         };
-        let method = crate::identify::method_by_name("lm").unwrap();
+        let method = crate::identify::method_by_name("ls").unwrap();
         let s = CvSetup {
             method: &method,
             registration: Registration::Identify,
@@ -323,7 +323,7 @@ mod tests {
         };
         let (cvs, best) = choose_model(&nominal, &[Model::KINEMATIC], &data, 4, &s).unwrap();
         let cv = &cvs[best];
-        assert!(cv.rms < 1e-6, "{cv:?}");
+        assert!(cv.rms < 1e-8, "{cv:?}");
         assert_eq!(cv.fold_rms.len(), 4);
         let (robot, _) = Model {
             beta: true,

@@ -135,16 +135,11 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
 fn fix_holds_and_a_prior_pulls_towards_nominal() {
     let d = tmp_dir("practice-prior");
     let data = ur10_positions(&d);
+    let robot = ex("ur10.toml");
     let run = |extra: &[&str], name: &str| {
         let out = d.join(name);
         let mut a = vec![
-            "identify",
-            "--robot",
-            &ex("ur10.toml"),
-            "--data",
-            &data,
-            "--method",
-            "lm",
+            "identify", "--robot", &robot, "--data", &data, "--method", "lm",
         ];
         a.extend_from_slice(extra);
         a.extend_from_slice(&["--out", path_arg(&out)]);
