@@ -112,9 +112,8 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
         })
         .collect();
     let mut flagged_pairs: Vec<Pair> = Vec::new();
-    for i in 0..t {
-        for k in i + 1..t {
-            let rho = correlation[i][k];
+    for (i, row) in correlation.iter().enumerate() {
+        for (k, &rho) in row.iter().enumerate().skip(i + 1) {
             if rho.abs() > CORRELATION_FLAG {
                 flagged_pairs.push(Pair {
                     a: s.params[i].to_string(),
@@ -143,7 +142,7 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     for i in 0..m {
         let w = id.weights.get(i).copied().unwrap_or(1.0);
         let ji = j.rows(rows * i, rows);
-        let h = (&ji * &n_inv * ji.transpose()) * w;
+        let h = (ji * &n_inv * ji.transpose()) * w;
         leverage.push(h.trace());
         let ri = r.rows(rows * i, rows).into_owned();
         let cook = (DMatrix::identity(rows, rows) - &h)
@@ -218,7 +217,7 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
     let mut sigmas = Vec::with_capacity(data.len());
     for i in 0..data.len() {
         let ji = j.rows(3 * i, 3);
-        sigmas.push((&ji * cov * ji.transpose()).trace().max(0.0).sqrt());
+        sigmas.push((ji * cov * ji.transpose()).trace().max(0.0).sqrt());
     }
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {

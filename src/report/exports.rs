@@ -156,7 +156,7 @@ mod tests {
         assert!(y.contains("hash: calib_"));
         let irb = crate::robot::builtin::load("irb2600").unwrap();
         let mut seven = irb.clone();
-        seven.joints.push(seven.joints[5].clone());
+        seven.joints.push(seven.joints[5]);
         assert!(ur_yaml(&seven).is_err());
     }
 
