@@ -110,6 +110,17 @@ fn solve_rows(
     Ok(q)
 }
 
+/// The flag of a written command `q` with its residuals ([`Corrected::flag`]).
+fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -> &'static str {
+    if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
+        "failed"
+    } else if !identified.within_limits(q) {
+        "limits"
+    } else {
+        "ok"
+    }
+}
+
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
 /// reaches the pose `nominal` gives at `q_nominal`. `round` maps joint values to what is
 /// written (the output's decimals), so the residuals are those of the written command. The
@@ -127,13 +138,7 @@ pub fn compensate_row(
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
     let residual_deg = rotation_angle_deg(&f, &target);
-    let flag = if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
-        "failed"
-    } else if !identified.within_limits(&q) {
-        "limits"
-    } else {
-        "ok"
-    };
+    let flag = flag(identified, &q, residual_mm, residual_deg);
     Ok(Corrected {
         q,
         residual_mm,
@@ -203,13 +208,7 @@ pub fn compensate_targets(
             } else {
                 rotation_angle_deg(&f, target)
             };
-            let flag = if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
-                "failed"
-            } else if !identified.within_limits(&q) {
-                "limits"
-            } else {
-                "ok"
-            };
+            let flag = flag(identified, &q, residual_mm, residual_deg);
             let c = Corrected {
                 q,
                 residual_mm,
@@ -282,9 +281,12 @@ mod tests {
     #[test]
     fn cartesian_targets_are_reached_on_the_identified_robot() {
         let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let qs = crate::robot::sampling::uniform_joint_poses(
+            &nominal,
+            12,
+            &mut stream(9, "targets-test"),
+        );
         let truth = nominal.with_errors(&[(Param::A(1), 0.7), (Param::Theta(2), 2e-3)]);
-        let mut g = stream(9, "targets-test");
-        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 12, &mut g);
         let mut targets: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
         for only in [true, false] {
             let c = compensate_targets(&truth, &targets, only, 0.0, |q| q.to_vec()).unwrap();

@@ -178,32 +178,6 @@ pub struct Model {
     pub compliance: bool,
 }
 
-impl FromStr for Model {
-    type Err = String;
-
-    /// `kinematic`, `beta`, `compliance`, or terms joined by `+` (`beta+compliance`).
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        let mut m = Model {
-            beta: false,
-            compliance: false,
-        };
-        for term in s.split('+').map(str::trim) {
-            match term {
-                "kinematic" => {}
-                "beta" => m.beta = true,
-                "compliance" => m.compliance = true,
-                other => {
-                    return Err(format!(
-                        "unknown model term `{other}`; known: kinematic, beta, compliance \
-                         (joined by +)"
-                    ))
-                }
-            }
-        }
-        Ok(m)
-    }
-}
-
 impl Model {
     /// The plain kinematic model.
     pub const KINEMATIC: Model = Model {
@@ -244,6 +218,29 @@ impl Model {
         }
         params.retain(|p| !fixed.contains(p));
         Ok((robot, params))
+    }
+}
+
+impl FromStr for Model {
+    type Err = String;
+
+    /// `kinematic`, `beta`, `compliance`, or terms joined by `+` (`beta+compliance`).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let mut m = Model::KINEMATIC;
+        for term in s.split('+').map(str::trim) {
+            match term {
+                "kinematic" => {}
+                "beta" => m.beta = true,
+                "compliance" => m.compliance = true,
+                other => {
+                    return Err(format!(
+                        "unknown model term `{other}`; known: kinematic, beta, compliance \
+                         (joined by +)"
+                    ))
+                }
+            }
+        }
+        Ok(m)
     }
 }
 

@@ -96,18 +96,11 @@ impl Practice {
         }
         if !self.priors.is_empty() {
             j.insert("priors".into(), to_value(&self.priors));
-            let rows: Vec<Vec<String>> = self
-                .priors
-                .iter()
-                .map(|p| {
-                    vec![
-                        p.parameter.clone(),
-                        fmt_num(p.sigma, 4),
-                        fmt_num(p.without_prior, 4),
-                        fmt_num(p.with_prior, 4),
-                    ]
-                })
-                .collect();
+            let mut rows = Vec::with_capacity(self.priors.len());
+            for p in &self.priors {
+                let nums = [p.sigma, p.without_prior, p.with_prior].map(|v| fmt_num(v, 4));
+                rows.push(std::iter::once(p.parameter.clone()).chain(nums).collect());
+            }
             *md += "\n## Priors\n\n";
             *md += &table(&["parameter", "σ", "without prior", "with prior"], &rows);
         }
