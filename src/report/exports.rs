@@ -62,10 +62,11 @@ pub fn ur_yaml(robot: &Robot) -> Result<String> {
         let (xyz, rpy) = seg.to_xyz_rpy();
         s += &format!("  {name}:\n");
         for (key, value) in ["x", "y", "z"].iter().zip(xyz) {
-            s += &format!("    {key}: {}\n", value / 1000.0);
+            // `+ 0.0` writes a negative zero as 0.
+            s += &format!("    {key}: {}\n", value / 1000.0 + 0.0);
         }
         for (key, value) in ["roll", "pitch", "yaw"].iter().zip(rpy) {
-            s += &format!("    {key}: {value}\n");
+            s += &format!("    {key}: {}\n", value + 0.0);
         }
     }
     s += &format!("  hash: calib_calbench_{}\n", fnv(&s));
