@@ -171,6 +171,7 @@ pub fn calibrate(
         *rng = start.clone();
         let mut problem = CalibrationProblem::new(nominal, params, data, frame, method.k);
         problem.priors.clone_from(&precisions);
+        problem.trace.clone_from(&method.trace);
         let mut identified = method.method.identify(&problem, rng)?;
         crate::identify::robot::assess(&problem, &mut identified)?;
         let robot = problem.robot_with(identified.x.as_slice());

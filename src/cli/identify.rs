@@ -240,13 +240,16 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         (None, None) => None,
     };
     // For real data "known" means the points are already in the base frame.
+    let recorder = calbench::identify::TraceRecorder::default();
+    let mut traced = spec.clone();
+    traced.trace = Some(recorder.clone());
     let c = calibrate(
         &nominal,
         &params,
         &d,
         registration,
         &Frame::identity(),
-        &spec,
+        &traced,
         &mut calbench::numeric::rng::stream(args.seed, "identify"),
     )?;
     let undetermined = matches!(
@@ -304,6 +307,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         models: choice.clone(),
         fixed: args.fix.clone(),
         priors,
+        trace: convergence_trace(&c, &recorder),
         diagnostics: Some(diagnose(&Subject {
             nominal: &nominal,
             params: &params,
@@ -523,4 +527,18 @@ fn prior_moves(
             })
         })
         .collect())
+}
+
+/// The convergence trace: the searches' best fitness per iteration, or the RMS point
+/// residual (mm) at each evaluation of the Jacobian methods' model (every round of an `svd`
+/// or `wsvd` alternation; adaptive LM's rejected trial steps included).
+fn convergence_trace(
+    c: &Calibrated,
+    recorder: &calbench::identify::TraceRecorder,
+) -> Option<(&'static str, Vec<Real>)> {
+    if let Some(t) = &c.identified.trace {
+        return Some(("best fitness per iteration", t.clone()));
+    }
+    let t = recorder.lock().ok()?.clone();
+    (!t.is_empty()).then_some(("RMS point residual (mm) per evaluation", t))
 }

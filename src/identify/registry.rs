@@ -162,6 +162,9 @@ pub struct MethodSpec {
     /// Priors on parameter errors (key `priors = { a2 = 0.05, … }`): each parameter's error
     /// has σ (mm, rad; rad/(N·m) for a compliance) about 0, the nominal value. Empty: none.
     pub priors: Vec<(Param, Real)>,
+    /// Where the Jacobian methods record the RMS point residual of each evaluation
+    /// (`identify`'s convergence trace); `None`: not recorded.
+    pub trace: Option<super::TraceRecorder>,
 }
 
 impl MethodSpec {
@@ -222,6 +225,7 @@ impl MethodSpec {
             k,
             method,
             priors,
+            trace: None,
         })
     }
 

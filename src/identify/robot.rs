@@ -43,6 +43,8 @@ pub struct RobotProblem<'a> {
     prior: Option<&'a [Real]>,
     /// Tikhonov precision of each parameter (priors towards the nominal value), if any.
     tikhonov: Option<&'a [Real]>,
+    /// Where the RMS point residual of each evaluation is recorded, if anywhere.
+    trace: Option<super::TraceRecorder>,
     /// The joints whose compliance is identified, with their columns.
     compliant: Vec<(usize, usize)>,
     /// Per point, the payload (kg) under which the elasto-geometric model computes the
@@ -172,6 +174,7 @@ impl<'a> RobotProblem<'a> {
             orientation_weight: 1.0,
             prior: None,
             tikhonov: None,
+            trace: None,
             compliant,
             loads: Vec::new(),
             masses: Vec::new(),
@@ -267,6 +270,10 @@ impl<'a> RobotProblem<'a> {
         .with_prior_weights(problem.weights.as_deref())?
         .with_tikhonov(Some(&problem.priors))?
         .with_payloads(problem.data.payload_kg.as_deref())
+        .map(|mut p| {
+            p.trace.clone_from(&problem.trace);
+            p
+        })
     }
 
     /// The parameters, one per entry of `x`.
@@ -303,6 +310,19 @@ impl LeastSquares for RobotProblem<'_> {
     /// computed once in [`RobotProblem::new`]). Allocation-free: the chain is
     /// updated in place ([`Chain::set_values`]).
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        self.model(x, r, j);
+        if let Some(t) = &self.trace {
+            let rms = (r.norm_squared() / self.points.len() as Real).sqrt();
+            if let Ok(mut t) = t.lock() {
+                t.push(rms);
+            }
+        }
+    }
+}
+
+impl RobotProblem<'_> {
+    /// [`LeastSquares::evaluate`] without the trace.
+    fn model(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
         let mut guard = self.work.borrow_mut();
         let (values, chain) = &mut *guard;
         self.nominal

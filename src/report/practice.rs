@@ -39,6 +39,8 @@ pub struct Practice {
     pub fixed: Vec<Param>,
     /// `--prior`: how each moved its estimate.
     pub priors: Vec<PriorMove>,
+    /// The convergence trace: what it holds, and its values.
+    pub trace: Option<(&'static str, Vec<Real>)>,
     /// The diagnostics.
     pub diagnostics: Option<Diagnostics>,
 }
@@ -103,6 +105,19 @@ impl Practice {
             }
             *md += "\n## Priors\n\n";
             *md += &table(&["parameter", "σ", "without prior", "with prior"], &rows);
+        }
+        if let Some((what, values)) = &self.trace {
+            j.insert(
+                "convergence_trace".into(),
+                json!({"values": what, "trace": values}),
+            );
+            let _ = writeln!(
+                md,
+                "\n## Convergence\n\n{what}: {} values, from {} to {}.",
+                values.len(),
+                values.first().map_or("—".into(), |v| fmt_num(*v, 6)),
+                values.last().map_or("—".into(), |v| fmt_num(*v, 6))
+            );
         }
         if let Some(d) = &self.diagnostics {
             j.insert("diagnostics".into(), to_value(d));

@@ -82,6 +82,17 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     assert_eq!(diag["correlation"].as_array().unwrap().len(), t);
     assert_eq!(diag["predicted"]["at"], "validation");
     assert!(diag["predicted"]["rms_mm"].as_f64().unwrap() > 0.0);
+    let trace: Vec<f64> = j["convergence_trace"]["trace"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(
+        trace.len() > 2 && trace[0] > 10.0 * trace[trace.len() - 1],
+        "{trace:?}"
+    );
+    assert!((trace[trace.len() - 1] - j["rms_residual_mm"].as_f64().unwrap()).abs() < 1e-3);
     let yaml = read(&out.join("ur-kinematics.yaml"));
     for seg in [
         "kinematics:",
