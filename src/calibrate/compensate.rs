@@ -166,7 +166,7 @@ fn wrap_into_limits(robot: &Robot, q: &mut [Real]) {
 
 /// Random starts tried for a Cartesian target after the previous solution and the middle of
 /// the joint limits.
-const TARGET_STARTS: usize = 40;
+pub const TARGET_STARTS: usize = 40;
 
 /// Solves Cartesian tool targets (`compensate --targets`): per target, the joints at which
 /// `identified` reaches it (position only when `position_only`, else the whole pose).
