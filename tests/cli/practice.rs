@@ -449,3 +449,39 @@ fn a_seven_axis_arm_end_to_end() {
         read(&c)
     );
 }
+
+/// A scenario's `priors` in `[[methods]]` run under the entry's label, and a bad σ is
+/// refused naming `priors.NAME`.
+#[test]
+fn scenario_priors_run_and_bad_ones_are_named() {
+    let d = tmp_dir("practice-scenario-priors");
+    let base = read(&root().join("scenarios/ci-guard.toml"));
+    let text = base.replace(
+        "name = \"lm\"",
+        "name = \"lm\"\n\n[[methods]]\nname = \"lm\"\nlabel = \"lm-prior\"\npriors = { a2 = 0.001 }",
+    );
+    let s = d.join("s.toml");
+    std::fs::write(&s, &text).unwrap();
+    let out = d.join("out");
+    calbench_ok(&[
+        "run",
+        path_arg(&s),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&out),
+    ]);
+    let summary = load_json(&out.join("summary.json"));
+    let text_summary = summary.to_string();
+    assert!(text_summary.contains("lm-prior"));
+    std::fs::write(&s, text.replace("a2 = 0.001", "a2 = 0")).unwrap();
+    let bad = calbench(&[
+        "run",
+        path_arg(&s),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&d.join("bad")),
+    ]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("priors.a2"));
+}
