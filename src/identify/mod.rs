@@ -29,6 +29,7 @@
 //! Adding a method is one file with an options struct that implements [`Method`] and one
 //! line in [`registry::METHODS`] (README, "Adding a method").
 
+pub mod kind;
 pub mod lm;
 pub mod ls;
 pub mod qiao;

@@ -8,6 +8,7 @@
 
 pub mod csv;
 pub mod import;
+pub mod kind;
 
 use crate::error::{Error, Result};
 use crate::numeric::{quaternion_matrix, Frame, Mat3, Real, Vec3};

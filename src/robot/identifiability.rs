@@ -105,7 +105,12 @@ pub fn analyse(
     measure: Measure,
 ) -> Identifiability {
     let cols = Columns::new(params, robot.dof());
-    let mut j = jacobian(robot, &cols, qs, measure);
+    analyse_jacobian(params, jacobian(robot, &cols, qs, measure))
+}
+
+/// [`analyse`] of a given identification Jacobian `j`, one column per parameter of `params`
+/// (any measurement kind's rows, with the instrument's own unknowns projected out).
+pub fn analyse_jacobian(params: &[Param], mut j: DMatrix<Real>) -> Identifiability {
     scale_columns(&mut j);
     let pivots = pivoted_gram_schmidt(&j, RANK_TOL);
     let mut is_pivot = vec![false; params.len()];

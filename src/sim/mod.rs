@@ -12,6 +12,7 @@
 //! (optionally deflected by gravity sag, computed elsewhere) is measured by the tracker; then
 //! a number of points is displaced as gross outliers (Ban §3).
 
+pub mod instrument;
 pub mod poses;
 pub mod rapier;
 pub mod sag;

@@ -1,0 +1,327 @@
+//! The identification problem of any measurement kind ([`crate::measurement::kind`]): the
+//! robot's parameter errors and the instrument's own unknowns (pivot, planes, spheres) from
+//! what the instrument read. Every Jacobian method ([`super::Solver`]) solves it through
+//! [`super::solve`], as it solves the tracker's [`super::RobotProblem`].
+//!
+//! The unknown vector is `[x, δc]`: the errors `x` of the robot's parameters (mm, rad), then
+//! the corrections `δc` of the nuisance values from their first guess
+//! ([`crate::measurement::kind::nuisance_guess`] over the nominal tool points). The rows come
+//! from [`crate::measurement::kind::rows`] over the tool frames and their Jacobian rows
+//! ([`crate::robot::jacobian::pose_rows_vars`], full-pose rows so that targets off the tool
+//! point see the rotation).
+
+use std::cell::RefCell;
+
+use nalgebra::{DMatrix, DVector};
+
+use super::solver::{LeastSquares, Size};
+use crate::error::{Error, Result};
+use crate::measurement::kind::{nuisance_guess, rows, KindData};
+use crate::measurement::Measure;
+use crate::numeric::{Mat3, Real, Vec3};
+use crate::robot::jacobian::{pose_rows_vars, Columns};
+use crate::robot::{Chain, ChainVars, Param, Robot};
+
+/// Buffers of one evaluation: parameter values and chain, tool points, rotations, the
+/// stacked full-pose rows, the nuisance values.
+#[derive(Debug)]
+struct Work {
+    values: Vec<Real>,
+    chain: Chain,
+    p: Vec<Vec3>,
+    rot: Vec<Mat3>,
+    tool: DMatrix<Real>,
+    c: Vec<Real>,
+}
+
+/// A [`LeastSquares`] problem over a robot's parameter errors and an instrument's unknowns.
+#[derive(Debug)]
+pub struct KindProblem<'a> {
+    nominal: &'a Robot,
+    params: Vec<Param>,
+    index: Vec<usize>,
+    cols: Columns,
+    vars: Vec<ChainVars>,
+    data: &'a KindData,
+    c0: Vec<Real>,
+    work: RefCell<Work>,
+}
+
+impl<'a> KindProblem<'a> {
+    /// The problem of identifying `params` of `nominal` from `data` read at joint values
+    /// `qs`. Fails when `params` is empty, repeats a parameter or names one the model lacks
+    /// (compliances are not modelled for these kinds), when the data do not match the poses,
+    /// or a plane or sphere has too few points for its first guess.
+    pub fn new(
+        nominal: &'a Robot,
+        params: &[Param],
+        qs: &[Vec<Real>],
+        data: &'a KindData,
+    ) -> Result<Self> {
+        if params.is_empty() {
+            return Err(Error::setting("params", "no parameters to identify"));
+        }
+        let known = nominal.params();
+        for (i, p) in params.iter().enumerate() {
+            if !known.contains(p) || params[..i].contains(p) {
+                return Err(Error::setting(
+                    "params",
+                    format!("`{p}` is not a parameter of robot `{}` or is listed twice", nominal.name),
+                ));
+            }
+        }
+        let dof = nominal.dof();
+        if let Some(i) = qs.iter().position(|q| q.len() != dof || q.iter().any(|v| !v.is_finite())) {
+            return Err(Error::joint_count("data", format_args!("pose {i}"), qs[i].len(), dof));
+        }
+        data.check(qs.len())?;
+        if data.instrument.observations(qs.len()) == 0 {
+            return Err(Error::setting("data", "no observations"));
+        }
+        let chain = nominal.chain();
+        let p: Vec<Vec3> = qs.iter().map(|q| chain.fk(q).pos).collect();
+        let c0 = nuisance_guess(&data.instrument, &data.group, &p)?;
+        let m = qs.len();
+        let cols = Columns::new(params, dof);
+        Ok(KindProblem {
+            nominal,
+            params: params.to_vec(),
+            index: params.iter().map(|p| p.index(dof)).collect(),
+            vars: chain.variables_of(qs),
+            work: RefCell::new(Work {
+                values: nominal.values.clone(),
+                chain,
+                p,
+                rot: vec![Mat3::identity(); m],
+                tool: DMatrix::zeros(6 * m, params.len()),
+                c: c0.clone(),
+            }),
+            cols,
+            data,
+            c0,
+        })
+    }
+
+    /// The robot's parameters (the first `params().len()` unknowns).
+    pub fn params(&self) -> &[Param] {
+        &self.params
+    }
+
+    /// The nuisance values at the unknowns `x` (first guess plus correction).
+    pub fn nuisance_at(&self, x: &DVector<Real>) -> Vec<Real> {
+        let t = self.params.len();
+        self.c0.iter().enumerate().map(|(k, c)| c + x[t + k]).collect()
+    }
+
+    /// The compensated robot: the nominal robot with the errors `x[..t]` added.
+    pub fn robot_with(&self, x: &DVector<Real>) -> Robot {
+        self.nominal
+            .with_added(&self.index, &x.as_slice()[..self.params.len()])
+    }
+}
+
+impl LeastSquares for KindProblem<'_> {
+    fn size(&self) -> Size {
+        let inst = &self.data.instrument;
+        Size::new(
+            self.params.len() + inst.nuisance(),
+            inst.observations(self.vars.len()),
+            inst.rows_per_observation(),
+        )
+    }
+
+    /// Forward kinematics and the full-pose Jacobian rows at `nominal + x` (one chain walk
+    /// per pose), then the kind's rows. Allocation-free.
+    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        let t = self.params.len();
+        let mut guard = self.work.borrow_mut();
+        let w = &mut *guard;
+        self.nominal
+            .set_chain_with_added(&self.index, &x.as_slice()[..t], &mut w.values, &mut w.chain);
+        for (i, v) in self.vars.iter().enumerate() {
+            let f = pose_rows_vars(&w.chain, &self.cols, v, Measure::Pose, &mut w.tool, 6 * i);
+            w.p[i] = f.pos;
+            w.rot[i] = f.rot;
+        }
+        for (k, c) in w.c.iter_mut().enumerate() {
+            *c = self.c0[k] + x[t + k];
+        }
+        rows(self.data, &w.p, &w.rot, &w.tool, &w.c, r, j);
+    }
+}
+
+/// Identifiability of `params` of `robot` for the instrument of `data` read at poses `qs`
+/// ([`crate::robot::identifiability::analyse_jacobian`]): the kind's Jacobian at the nominal
+/// robot with the instrument's own unknowns projected out (a parameter counts as identifiable
+/// when the data separate it from the pivot, planes or spheres as well as from the other
+/// parameters).
+pub fn identifiability(
+    robot: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    data: &KindData,
+) -> Result<crate::robot::identifiability::Identifiability> {
+    let kp = KindProblem::new(robot, params, qs, data)?;
+    let size = kp.size();
+    let mut r = DVector::zeros(size.rows());
+    let mut j = DMatrix::zeros(size.rows(), size.params);
+    kp.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
+    let t = params.len();
+    let mut jr = j.columns(0, t).into_owned();
+    if size.params > t {
+        // Remove the part of each robot column that the nuisance columns explain.
+        let n = j.columns(t, size.params - t).into_owned();
+        let svd = n.svd(true, false);
+        let u = svd.u.as_ref().ok_or_else(|| Error::Compute("SVD".into()))?;
+        let big = svd.singular_values.max();
+        let keep: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&k| svd.singular_values[k] > 1e-10 * big)
+            .collect();
+        let q = u.select_columns(&keep);
+        jr -= &q * (q.transpose() * &jr);
+    }
+    Ok(crate::robot::identifiability::analyse_jacobian(params, jr))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::identify::{solve, LmOptions, LsOptions, RidgeOptions, RobustOptions, Solver};
+    use crate::measurement::kind::Kind;
+    use crate::robot::builtin::irb2600;
+    use crate::sim::instrument::{groups_of, layout, noise_free, touching, InstrumentSettings};
+
+    /// Every kind but `pose` (the tracker's own path): a short pool of poses on the
+    /// instrument (touching the planes or spheres), its layout and its joint and tool
+    /// parameters.
+    fn setups() -> Vec<(Kind, Vec<Vec<Real>>, Vec<usize>, crate::sim::instrument::Layout)> {
+        let robot = irb2600();
+        let mut rng = crate::numeric::rng::stream(5, "kinds");
+        let pool = crate::robot::sampling::uniform_joint_poses(&robot, 90, &mut rng);
+        let kinds = [Kind::Position, Kind::Distance, Kind::Plane, Kind::Sphere, Kind::MultiTarget];
+        let mut out = Vec::new();
+        for kind in kinds {
+            let mut pivots = vec![true];
+            if kind == Kind::Distance {
+                pivots.push(false);
+            }
+            for pivot in pivots {
+                let s = InstrumentSettings {
+                    kind,
+                    pivot,
+                    ..InstrumentSettings::default()
+                };
+                let lay = layout(&s, &robot, &pool).unwrap();
+                let (qs, g) = touching(&robot, &lay, &pool, &groups_of(&lay.instrument, 90));
+                assert!(qs.len() > 30, "{kind:?}: {} of 90 poses touch", qs.len());
+                out.push((kind, qs, g, lay));
+            }
+        }
+        out
+    }
+
+    fn candidates(robot: &Robot) -> Vec<Param> {
+        robot.params()
+    }
+
+    #[test]
+    fn jacobian_rows_agree_with_finite_differences() {
+        let robot = irb2600();
+        let params = candidates(&robot);
+        for (kind, qs, g, lay) in setups() {
+            let data = noise_free(&lay.instrument, &robot, &qs, &g, &lay.nuisance);
+            let kp = KindProblem::new(&robot, &params, &qs, &data).unwrap();
+            let size = kp.size();
+            // The robot's columns are exact at the nominal values (Li 2018 eqs. 6–12); the
+            // nuisance values away from their first guess.
+            let t = params.len();
+            let x = DVector::from_fn(size.params, |k, _| {
+                if k < t { 0.0 } else { 1e-2 * ((k % 7) as Real - 3.0) }
+            });
+            let mut r = DVector::zeros(size.rows());
+            let mut j = DMatrix::zeros(size.rows(), size.params);
+            kp.evaluate(&x, &mut r, &mut j);
+            let (mut rp, mut rm) = (r.clone(), r.clone());
+            let mut scratch = j.clone();
+            let h = 1e-5;
+            let largest = j.column_iter().map(|c| c.norm()).fold(0.0, Real::max);
+            for c in 0..size.params {
+                let (mut xp, mut xm) = (x.clone(), x.clone());
+                xp[c] += h;
+                xm[c] -= h;
+                kp.evaluate(&xp, &mut rp, &mut scratch);
+                kp.evaluate(&xm, &mut rm, &mut scratch);
+                // r = measured − model, so ∂model/∂x = −∂r/∂x.
+                let fd = -(&rp - &rm) / (2.0 * h);
+                let scale = fd.norm().max(j.column(c).norm()).max(1e-6 * largest);
+                let diff = (&fd - j.column(c)).norm();
+                let err = diff / scale;
+                // A column that is zero (θ1 for lengths: rotations about the base axis change
+                // none) is compared with the rounding of the differences instead.
+                let err = if diff < 1e-10 * largest { 0.0 } else { err };
+                let name = params.get(c).map_or("nuisance".into(), |p| p.to_string());
+                assert!(err < 1e-6, "{kind:?} column {c} ({name}): relative error {err:e}");
+            }
+        }
+    }
+
+    #[test]
+    fn noise_free_data_recover_the_identifiable_parameters_by_every_jacobian_method() {
+        let nominal = irb2600();
+        let params = candidates(&nominal);
+        let solvers: [(&str, Box<dyn Solver>); 4] = [
+            ("ls", Box::new(LsOptions::default())),
+            ("ridge", Box::new(RidgeOptions::default())),
+            ("igg3", Box::new(RobustOptions::default())),
+            ("lm", Box::new(LmOptions { adaptive: true, eps: 1e-12, max_iter: 200, ..LmOptions::default() })),
+        ];
+        for (kind, qs, g, lay) in setups() {
+            let data0 = noise_free(&lay.instrument, &nominal, &qs, &g, &lay.nuisance);
+            let a = identifiability(&nominal, &params, &qs, &data0).unwrap();
+            let ident = a.identifiable.clone();
+            let errors: Vec<(Param, Real)> = ident
+                .iter()
+                .enumerate()
+                .map(|(k, &p)| (p, if p.is_length() { 0.1 } else { 1e-3 } * (1.0 + 0.1 * (k % 5) as Real)))
+                .collect();
+            let truth = nominal.with_errors(&errors);
+            // The true robot touches its surfaces at slightly moved joints.
+            let (tq, tg) = touching(&truth, &lay, &qs, &g);
+            assert_eq!(tq.len(), qs.len(), "{kind:?}");
+            let data = noise_free(&lay.instrument, &truth, &tq, &tg, &lay.nuisance);
+            let kp = KindProblem::new(&nominal, &ident, &tq, &data).unwrap();
+            for (name, solver) in &solvers {
+                let out = solve(solver.as_ref(), &kp, &DVector::zeros(kp.size().params));
+                for (k, (p, e)) in errors.iter().enumerate() {
+                    assert!(
+                        (out.x[k] - e).abs() < 1e-6,
+                        "{kind:?} {name}: {p} {} against {e} ({:?})",
+                        out.x[k],
+                        out.termination
+                    );
+                }
+                let c = kp.nuisance_at(&out.x);
+                for (k, v) in lay.nuisance.iter().enumerate() {
+                    assert!((c[k] - v).abs() < 1e-6, "{kind:?} {name}: nuisance {k}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn distance_cannot_see_the_base_frame() {
+        let robot = irb2600();
+        let (_, qs, g, lay) = setups()
+            .into_iter()
+            .find(|(k, _, _, _)| *k == Kind::Distance)
+            .unwrap();
+        let data = noise_free(&lay.instrument, &robot, &qs, &g, &lay.nuisance);
+        let a = identifiability(&robot, &robot.params(), &qs, &data).unwrap();
+        let base: Vec<_> = a
+            .unidentifiable
+            .iter()
+            .filter(|p| matches!(p, Param::Base(_)))
+            .collect();
+        assert_eq!(base.len(), 6, "{:?}", a.unidentifiable);
+    }
+}

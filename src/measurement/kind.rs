@@ -1,0 +1,390 @@
+//! Measurement kinds beyond the laser tracker: what each instrument observes of the tool
+//! point, as residual rows with their analytic Jacobian rows.
+//!
+//! Every kind observes functions of the model's tool frames (position `p_i`, rotation `R_i`)
+//! and, for some, of the instrument's own unknowns (the nuisance parameters: a pivot, plane or
+//! sphere parameters). Given the tool frames and their Jacobian rows `J_p` (position) and
+//! `J_ω` (rotation, world frame) over the robot's parameters, [`rows`] writes each
+//! observation's residual `measured − model` and the derivative of the model by the robot's
+//! parameters and by the nuisance parameters. The identification problem
+//! ([`crate::identify::kind::KindProblem`]) wraps this one function, so every Jacobian method
+//! picks every kind up through it.
+//!
+//! | kind | observation | rows | nuisance |
+//! |---|---|---|---|
+//! | `position`, `multi-target` | the points `p_i + R_i o_t` of the targets `o_t` (tool frame) | 3 per target | none |
+//! | `distance` (pivot) | `|p_i − c|`, the length from a fixed pivot `c` (ballbar, draw-wire) | 1 | `c` (3) |
+//! | `distance` (chain) | `|p_{i+1} − p_i|`, the length between consecutive poses (interferometer along a line) | 1 | none |
+//! | `plane` | `p_k − (c₀ + c₁ p_u + c₂ p_v) = 0` on plane `l` (axis `k`) | 1 | 3 per plane |
+//! | `sphere` | `|p_i − c_l| − ρ_l = 0` on sphere `l` of known radius `ρ_l` | 1 | `c_l` (3 per sphere) |
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::error::{Error, Result};
+use crate::numeric::{skew, Real, Vec3};
+
+/// A measurement kind: what the instrument observes per pose.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
+#[strum(serialize_all = "kebab-case")]
+pub enum Kind {
+    /// The tool point (laser tracker, 3 rows).
+    Position,
+    /// The tool point and orientation (6-DOF tracker probe, 6 rows).
+    Pose,
+    /// Lengths: from a fixed pivot, or between consecutive poses' tool points.
+    Distance,
+    /// Tool points on one of several planes of unknown parameters.
+    Plane,
+    /// Tool points on spheres of known radius and unknown centre.
+    Sphere,
+    /// Several tool points per pose (reflectors on one flange).
+    MultiTarget,
+}
+
+impl Kind {
+    /// The name used in files and on the command line.
+    pub fn as_str(self) -> &'static str {
+        self.into()
+    }
+}
+
+/// The geometry of one instrument: everything the residual needs besides the tool frames.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Instrument {
+    /// Several targets at known offsets `o_t` in the tool frame (`[0, 0, 0]` alone: the
+    /// tracker's position).
+    Targets(Vec<Vec3>),
+    /// Lengths from one pivot of unknown position (`true`), or between consecutive poses.
+    Distance {
+        /// A fixed pivot (its position is identified) rather than consecutive pairs.
+        pivot: bool,
+    },
+    /// Planes of unknown parameters; each plane is `p[axis] = c₀ + c₁ p[u] + c₂ p[v]` with
+    /// `(u, v)` the other two axes in cyclic order.
+    Planes(Vec<usize>),
+    /// Spheres of known radius (mm) and unknown centre.
+    Spheres(Vec<Real>),
+}
+
+impl Instrument {
+    /// The kind of data this instrument delivers.
+    pub fn kind(&self) -> Kind {
+        match self {
+            Instrument::Targets(t) if t.len() == 1 && t[0] == Vec3::zeros() => Kind::Position,
+            Instrument::Targets(_) => Kind::MultiTarget,
+            Instrument::Distance { .. } => Kind::Distance,
+            Instrument::Planes(_) => Kind::Plane,
+            Instrument::Spheres(_) => Kind::Sphere,
+        }
+    }
+
+    /// Number of nuisance parameters (the instrument's own unknowns).
+    pub fn nuisance(&self) -> usize {
+        match self {
+            Instrument::Targets(_) | Instrument::Distance { pivot: false } => 0,
+            Instrument::Distance { pivot: true } => 3,
+            Instrument::Planes(p) => 3 * p.len(),
+            Instrument::Spheres(s) => 3 * s.len(),
+        }
+    }
+
+    /// Names of the nuisance parameters (`pivot_x`, `plane1_c0`, `sphere2_y`, …).
+    pub fn nuisance_names(&self) -> Vec<String> {
+        let xyz = |pre: String| ["x", "y", "z"].map(|a| format!("{pre}_{a}"));
+        match self {
+            Instrument::Targets(_) | Instrument::Distance { pivot: false } => Vec::new(),
+            Instrument::Distance { pivot: true } => xyz("pivot".into()).to_vec(),
+            Instrument::Planes(p) => (1..=p.len())
+                .flat_map(|l| ["c0", "c1", "c2"].map(|c| format!("plane{l}_{c}")))
+                .collect(),
+            Instrument::Spheres(s) => (1..=s.len())
+                .flat_map(|l| xyz(format!("sphere{l}")))
+                .collect(),
+        }
+    }
+
+    /// Rows per observation.
+    pub fn rows_per_observation(&self) -> usize {
+        match self {
+            Instrument::Targets(t) => 3 * t.len(),
+            _ => 1,
+        }
+    }
+
+    /// Observations of `m` poses (one less for consecutive distances).
+    pub fn observations(&self, m: usize) -> usize {
+        match self {
+            Instrument::Distance { pivot: false } => m.saturating_sub(1),
+            _ => m,
+        }
+    }
+
+    /// Checks the geometry: at least one target, plane or sphere; finite offsets; plane
+    /// axes 0–2; radii finite and positive.
+    pub fn check(&self) -> Result<()> {
+        let bad = |k: &str, m: String| Err(Error::setting(k, m));
+        match self {
+            Instrument::Targets(t) if t.is_empty() => {
+                bad("measurement.targets_mm", "needs at least one target".into())
+            }
+            Instrument::Targets(t) if t.iter().any(|o| o.iter().any(|v| !v.is_finite())) => {
+                bad("measurement.targets_mm", "offsets must be finite".into())
+            }
+            Instrument::Planes(p) if p.is_empty() || p.iter().any(|&a| a > 2) => bad(
+                "measurement.planes",
+                "needs at least one plane, each with an axis x, y or z".into(),
+            ),
+            Instrument::Spheres(s) if s.is_empty() || s.iter().any(|r| !(r.is_finite() && *r > 0.0)) => {
+                bad(
+                    "measurement.radius_mm",
+                    "needs at least one sphere of finite radius > 0".into(),
+                )
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+/// What an instrument measured: per observation its value(s) and the plane or sphere it
+/// belongs to; the joint values are kept beside it by the caller.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KindData {
+    /// The instrument's geometry.
+    pub instrument: Instrument,
+    /// Per pose, the plane or sphere it touches (0 for the other kinds).
+    pub group: Vec<usize>,
+    /// Measured values, [`Instrument::rows_per_observation`] per observation: the targets'
+    /// coordinates (mm, base frame) or the lengths (mm); zeros for planes and spheres (the
+    /// constraint's value).
+    pub values: Vec<Real>,
+}
+
+impl KindData {
+    /// Checks the lengths against `m` poses and the group indices against the planes or
+    /// spheres; every value finite.
+    pub fn check(&self, m: usize) -> Result<()> {
+        self.instrument.check()?;
+        let rows = self.instrument.observations(m) * self.instrument.rows_per_observation();
+        if self.values.len() != rows {
+            return Err(Error::setting(
+                "measurements",
+                format!("{m} poses need {rows} measured values, got {}", self.values.len()),
+            ));
+        }
+        if self.group.len() != m {
+            return Err(Error::setting(
+                "measurements",
+                format!("{m} poses but {} plane or sphere indices", self.group.len()),
+            ));
+        }
+        let groups = match &self.instrument {
+            Instrument::Planes(p) => p.len(),
+            Instrument::Spheres(s) => s.len(),
+            _ => 1,
+        };
+        if let Some(i) = self.group.iter().position(|&g| g >= groups) {
+            return Err(Error::setting(
+                "measurements",
+                format!("pose {i}: plane or sphere {} of {groups}", self.group[i] + 1),
+            ));
+        }
+        if let Some(i) = self.values.iter().position(|v| !v.is_finite()) {
+            return Err(Error::setting("measurements", format!("value {i} not finite")));
+        }
+        Ok(())
+    }
+}
+
+/// The model's value of observation `i` for tool points `p` (and rotations `rot`, for
+/// targets) and nuisance values `c`: what a noise-free instrument reads.
+pub fn model_values(
+    inst: &Instrument,
+    group: &[usize],
+    p: &[Vec3],
+    rot: &[crate::numeric::Mat3],
+    c: &[Real],
+    out: &mut Vec<Real>,
+) {
+    out.clear();
+    let m = p.len();
+    for i in 0..inst.observations(m) {
+        match inst {
+            Instrument::Targets(t) => {
+                for o in t {
+                    out.extend((p[i] + rot[i] * o).iter());
+                }
+            }
+            Instrument::Distance { pivot: true } => out.push((p[i] - centre(c, 0)).norm()),
+            Instrument::Distance { pivot: false } => out.push((p[i + 1] - p[i]).norm()),
+            Instrument::Planes(axes) => {
+                let g = group[i];
+                let (k, u, v) = plane_axes(axes[g]);
+                let cc = &c[3 * g..3 * g + 3];
+                out.push(p[i][k] - (cc[0] + cc[1] * p[i][u] + cc[2] * p[i][v]));
+            }
+            Instrument::Spheres(r) => {
+                let g = group[i];
+                out.push((p[i] - centre(c, g)).norm() - r[g]);
+            }
+        }
+    }
+}
+
+fn centre(c: &[Real], g: usize) -> Vec3 {
+    Vec3::new(c[3 * g], c[3 * g + 1], c[3 * g + 2])
+}
+
+/// The plane's normal axis and the two others in cyclic order.
+pub fn plane_axes(axis: usize) -> (usize, usize, usize) {
+    (axis, (axis + 1) % 3, (axis + 2) % 3)
+}
+
+/// The residual and Jacobian rows of every observation.
+///
+/// `tool` holds, per pose `i`, rows `6i..6i+3` = `J_p` and `6i+3..6i+6` = `J_ω` over the
+/// robot's `t` parameters (the first `t` columns of `j`); `c` are the nuisance values (the
+/// last `c.len()` columns of `j`). Writes `r = values − model` and `j = ∂model/∂(x, c)`.
+/// Allocation-free.
+#[allow(clippy::too_many_arguments)]
+pub fn rows(
+    data: &KindData,
+    p: &[Vec3],
+    rot: &[crate::numeric::Mat3],
+    tool: &DMatrix<Real>,
+    c: &[Real],
+    r: &mut DVector<Real>,
+    j: &mut DMatrix<Real>,
+) {
+    let t = tool.ncols();
+    let m = p.len();
+    let inst = &data.instrument;
+    let jp = |i: usize, k: usize, col: usize| tool[(6 * i + k, col)];
+    let jw = |i: usize, k: usize, col: usize| tool[(6 * i + 3 + k, col)];
+    j.fill(0.0);
+    for i in 0..inst.observations(m) {
+        match inst {
+            Instrument::Targets(targets) => {
+                let nt = targets.len();
+                for (ti, o) in targets.iter().enumerate() {
+                    let ro = rot[i] * o;
+                    let pt = p[i] + ro;
+                    // δ(p + R o) = J_p δx + ω × (R o) = J_p δx − [R o]× J_ω δx.
+                    let s = skew(&ro);
+                    let row = 3 * (nt * i + ti);
+                    for k in 0..3 {
+                        r[row + k] = data.values[row + k] - pt[k];
+                        for col in 0..t {
+                            let w = Vec3::new(jw(i, 0, col), jw(i, 1, col), jw(i, 2, col));
+                            j[(row + k, col)] = jp(i, k, col) - (s * w)[k];
+                        }
+                    }
+                }
+            }
+            Instrument::Distance { pivot } => {
+                let (a, b) = if *pivot { (i, None) } else { (i + 1, Some(i)) };
+                let other = match b {
+                    Some(b) => p[b],
+                    None => centre(c, 0),
+                };
+                let d = p[a] - other;
+                let len = d.norm();
+                let u = d / len;
+                r[i] = data.values[i] - len;
+                for col in 0..t {
+                    let mut v = 0.0;
+                    for k in 0..3 {
+                        let db = b.map_or(0.0, |b| jp(b, k, col));
+                        v += u[k] * (jp(a, k, col) - db);
+                    }
+                    j[(i, col)] = v;
+                }
+                if *pivot {
+                    for k in 0..3 {
+                        j[(i, t + k)] = -u[k];
+                    }
+                }
+            }
+            Instrument::Planes(axes) => {
+                let g = data.group[i];
+                let (k, u, v) = plane_axes(axes[g]);
+                let cc = &c[3 * g..3 * g + 3];
+                r[i] = data.values[i] - (p[i][k] - (cc[0] + cc[1] * p[i][u] + cc[2] * p[i][v]));
+                for col in 0..t {
+                    j[(i, col)] = jp(i, k, col) - cc[1] * jp(i, u, col) - cc[2] * jp(i, v, col);
+                }
+                j[(i, t + 3 * g)] = -1.0;
+                j[(i, t + 3 * g + 1)] = -p[i][u];
+                j[(i, t + 3 * g + 2)] = -p[i][v];
+            }
+            Instrument::Spheres(radius) => {
+                let g = data.group[i];
+                let d = p[i] - centre(c, g);
+                let len = d.norm();
+                let u = d / len;
+                r[i] = data.values[i] - (len - radius[g]);
+                for col in 0..t {
+                    j[(i, col)] = (0..3).map(|k| u[k] * jp(i, k, col)).sum();
+                }
+                for k in 0..3 {
+                    j[(i, t + 3 * g + k)] = -u[k];
+                }
+            }
+        }
+    }
+}
+
+/// A first guess of the nuisance values from (nominal) tool points `p`: the plane through
+/// each group's points (least squares in the graph form), the sphere centre (algebraic fit
+/// with the known radius's centre found from `|p|² − 2 p·c + |c|² − ρ² = 0`, linear in `c`
+/// and `|c|² − ρ²`), and the pivot the same way with the radius free. Fails when a group has
+/// too few points to fix its parameters.
+pub fn nuisance_guess(inst: &Instrument, group: &[usize], p: &[Vec3]) -> Result<Vec<Real>> {
+    let groups = match inst {
+        Instrument::Targets(_) | Instrument::Distance { pivot: false } => return Ok(Vec::new()),
+        Instrument::Distance { pivot: true } => 1,
+        Instrument::Planes(a) => a.len(),
+        Instrument::Spheres(s) => s.len(),
+    };
+    let mut out = Vec::with_capacity(3 * groups);
+    for g in 0..groups {
+        let pts: Vec<&Vec3> = p
+            .iter()
+            .zip(group)
+            .filter(|(_, &gi)| gi == g || matches!(inst, Instrument::Distance { .. }))
+            .map(|(pt, _)| pt)
+            .collect();
+        let (a, b): (Vec<[Real; 4]>, Vec<Real>) = match inst {
+            Instrument::Planes(axes) => {
+                let (k, u, v) = plane_axes(axes[g]);
+                pts.iter().map(|pt| ([1.0, pt[u], pt[v], 0.0], pt[k])).unzip()
+            }
+            _ => pts
+                .iter()
+                .map(|pt| ([2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], 1.0], pt.norm_squared()))
+                .unzip(),
+        };
+        let cols = if matches!(inst, Instrument::Planes(_)) { 3 } else { 4 };
+        if a.len() < cols + 1 {
+            return Err(Error::setting(
+                "measurements",
+                format!(
+                    "{} {} has {} points; it needs at least {}",
+                    inst.kind().as_str(),
+                    g + 1,
+                    a.len(),
+                    cols + 1
+                ),
+            ));
+        }
+        let am = DMatrix::from_fn(a.len(), cols, |i, c| a[i][c]);
+        let bv = DVector::from_vec(b);
+        let x = am
+            .svd(true, true)
+            .solve(&bv, 1e-12)
+            .map_err(|e| Error::Compute(e.to_string()))?;
+        out.extend(x.iter().take(3));
+    }
+    Ok(out)
+}

@@ -1,0 +1,309 @@
+//! Simulated instruments beyond the tracker ([`crate::measurement::kind`]): their layout in
+//! the cell (pivot, planes, spheres, targets), the touch of a plane or sphere (the robot moves
+//! from its commanded pose until the true tool point meets the surface, and the controller
+//! records the joint values there), and each instrument's noise.
+//!
+//! Noise per kind (σ per reading, Gaussian): `noise_um + scale_um_per_m · L` with `L` the
+//! measured length (distance) or the range from the tracker position (targets), in metres;
+//! for planes and spheres `noise_um` along the surface normal (the probe's trigger and the
+//! robot's repeatability at contact).
+
+use rand::Rng as _;
+use rand_distr::StandardNormal;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::measurement::kind::{model_values, Instrument, Kind, KindData};
+use crate::numeric::rng::Rng;
+use crate::numeric::{Real, Vec3};
+use crate::robot::Robot;
+
+/// One `[[measurement]]` entry of a scenario: an instrument and its settings
+/// (docs/formats.md, "Measurement kinds").
+#[derive(Clone, Debug, PartialEq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct InstrumentSettings {
+    /// The kind: `position`, `distance`, `plane`, `sphere` or `multi-target`.
+    pub kind: Kind,
+    /// Constant part of σ per reading, µm.
+    pub noise_um: Real,
+    /// Length- or range-proportional part of σ, µm per m.
+    pub scale_um_per_m: Real,
+    /// Distance: from a fixed pivot (`true`) or between consecutive poses.
+    pub pivot: bool,
+    /// Distance: the pivot in the base frame, mm.
+    pub pivot_mm: [Real; 3],
+    /// Plane: the number of planes (normals along z, x, y in turn).
+    pub planes: usize,
+    /// Sphere: the number of spheres.
+    pub spheres: usize,
+    /// Sphere: the radius, mm.
+    pub radius_mm: Real,
+    /// Multi-target: the targets' offsets in the tool frame, mm.
+    pub targets_mm: Vec<[Real; 3]>,
+    /// Targets: the tracker's position in the base frame (mm), for the range in σ.
+    pub tracker_mm: [Real; 3],
+}
+
+impl Default for InstrumentSettings {
+    fn default() -> Self {
+        InstrumentSettings {
+            kind: Kind::Position,
+            noise_um: 7.5,
+            scale_um_per_m: 3.0,
+            pivot: true,
+            pivot_mm: [1200.0, 0.0, 0.0],
+            planes: 3,
+            spheres: 1,
+            radius_mm: 25.4,
+            targets_mm: vec![[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 100.0, 0.0]],
+            tracker_mm: [2500.0, 0.0, 500.0],
+        }
+    }
+}
+
+impl InstrumentSettings {
+    /// The instrument's geometry (kind `pose` is refused: it is the tracker's own path).
+    pub fn instrument(&self) -> Result<Instrument> {
+        let inst = match self.kind {
+            Kind::Position => Instrument::Targets(vec![Vec3::zeros()]),
+            Kind::MultiTarget => {
+                Instrument::Targets(self.targets_mm.iter().map(|t| Vec3::from(*t)).collect())
+            }
+            Kind::Distance => Instrument::Distance { pivot: self.pivot },
+            Kind::Plane => Instrument::Planes((0..self.planes).map(|l| [2, 0, 1][l % 3]).collect()),
+            Kind::Sphere => Instrument::Spheres(vec![self.radius_mm; self.spheres]),
+            Kind::Pose => {
+                return Err(Error::setting(
+                    "measurement.kind",
+                    "`pose` is the tracker's full pose: use [tracker] measure = \"pose\" in a \
+                     calibration scenario",
+                ))
+            }
+        };
+        inst.check()?;
+        for (k, v) in [("noise_um", self.noise_um), ("scale_um_per_m", self.scale_um_per_m)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::setting(
+                    &format!("measurement.{k}"),
+                    format!("must be finite and ≥ 0, got {v}"),
+                ));
+            }
+        }
+        if self.pivot_mm.iter().chain(&self.tracker_mm).any(|v| !v.is_finite()) {
+            return Err(Error::setting("measurement.pivot_mm", "must be finite"));
+        }
+        Ok(inst)
+    }
+}
+
+/// The true geometry of an instrument in the cell: the nuisance values (pivot, plane
+/// coefficients, sphere centres) and the plane or sphere each candidate touches.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Layout {
+    /// The instrument.
+    pub instrument: Instrument,
+    /// The nuisance values (see [`crate::measurement::kind::nuisance_guess`]).
+    pub nuisance: Vec<Real>,
+}
+
+/// Lays the instrument out for the candidate poses `qs` of `nominal`: the pivot where the
+/// settings put it; plane `l` through the median of its candidates' points along its axis,
+/// tilted by 0.02 and 0.01; sphere `l` centred at the tool point of its first candidate.
+/// Candidate `i` belongs to plane or sphere `i mod count`.
+pub fn layout(s: &InstrumentSettings, nominal: &Robot, qs: &[Vec<Real>]) -> Result<Layout> {
+    let instrument = s.instrument()?;
+    let chain = nominal.chain();
+    let p: Vec<Vec3> = qs.iter().map(|q| chain.fk(q).pos).collect();
+    let groups = groups_of(&instrument, qs.len());
+    let nuisance = match &instrument {
+        Instrument::Distance { pivot: true } => s.pivot_mm.to_vec(),
+        Instrument::Planes(axes) => axes
+            .iter()
+            .enumerate()
+            .flat_map(|(l, &a)| {
+                let mut v: Vec<Real> = p
+                    .iter()
+                    .zip(&groups)
+                    .filter(|(_, &g)| g == l)
+                    .map(|(pt, _)| pt[a])
+                    .collect();
+                v.sort_by(Real::total_cmp);
+                [v.get(v.len() / 2).copied().unwrap_or(0.0), 0.02, 0.01]
+            })
+            .collect(),
+        Instrument::Spheres(r) => (0..r.len())
+            .flat_map(|l| p.get(l).map_or([0.0; 3], |v| [v[0], v[1], v[2]]))
+            .collect(),
+        _ => Vec::new(),
+    };
+    Ok(Layout {
+        instrument,
+        nuisance,
+    })
+}
+
+/// Plane or sphere of each of `m` poses: `i mod count` (0 for the other kinds).
+pub fn groups_of(inst: &Instrument, m: usize) -> Vec<usize> {
+    let n = match inst {
+        Instrument::Planes(p) => p.len(),
+        Instrument::Spheres(s) => s.len(),
+        _ => 1,
+    };
+    (0..m).map(|i| i % n).collect()
+}
+
+/// The surface constraint `g(p)` of pose `i`'s plane or sphere (0 on the surface, mm) and its
+/// gradient; `None` for the kinds without a surface.
+fn surface(lay: &Layout, group: usize, p: &Vec3) -> Option<(Real, Vec3)> {
+    let c = &lay.nuisance;
+    match &lay.instrument {
+        Instrument::Planes(axes) => {
+            let (k, u, v) = crate::measurement::kind::plane_axes(axes[group]);
+            let cc = &c[3 * group..3 * group + 3];
+            let mut grad = Vec3::zeros();
+            grad[k] = 1.0;
+            grad[u] = -cc[1];
+            grad[v] = -cc[2];
+            Some((p[k] - (cc[0] + cc[1] * p[u] + cc[2] * p[v]), grad))
+        }
+        Instrument::Spheres(r) => {
+            let d = p - Vec3::new(c[3 * group], c[3 * group + 1], c[3 * group + 2]);
+            Some((d.norm() - r[group], d.normalize()))
+        }
+        _ => None,
+    }
+}
+
+/// Moves `robot` from joint values `q` until its tool point meets the plane or sphere `group`
+/// of `lay` (minimum-norm joint steps on the scalar constraint, at most 0.2 rad or 50 mm per
+/// joint and step): `None` when it does not meet it to 1e-9 mm within the joint limits in 100
+/// steps. Poses of kinds without a surface come back unchanged.
+pub fn touch(robot: &Robot, lay: &Layout, group: usize, q: &[Real]) -> Option<Vec<Real>> {
+    if !matches!(lay.instrument, Instrument::Planes(_) | Instrument::Spheres(_)) {
+        return Some(q.to_vec());
+    }
+    let chain = robot.chain();
+    let mut q = q.to_vec();
+    let h = 1e-6;
+    for _ in 0..100 {
+        let p = chain.fk(&q).pos;
+        let (g, grad) = surface(lay, group, &p)?;
+        if g.abs() < 1e-9 {
+            let inside = robot
+                .joints
+                .iter()
+                .zip(&q)
+                .all(|(j, v)| *v >= j.limits.0 && *v <= j.limits.1);
+            return inside.then_some(q);
+        }
+        let mut dg = vec![0.0; q.len()];
+        for (k, d) in dg.iter_mut().enumerate() {
+            let mut qp = q.clone();
+            qp[k] += h;
+            let mut qm = q.clone();
+            qm[k] -= h;
+            *d = grad.dot(&(chain.fk(&qp).pos - chain.fk(&qm).pos)) / (2.0 * h);
+        }
+        let n2: Real = dg.iter().map(|d| d * d).sum();
+        if n2 < 1e-12 {
+            return None;
+        }
+        let mut step: Vec<Real> = dg.iter().map(|d| -g * d / n2).collect();
+        let big = step.iter().fold(0.0, |a: Real, s| a.max(s.abs()));
+        let limit = 0.2;
+        if big > limit {
+            step.iter_mut().for_each(|s| *s *= limit / big);
+        }
+        q.iter_mut().zip(&step).for_each(|(v, s)| *v += s);
+    }
+    None
+}
+
+/// The poses of `qs` that touch their plane or sphere `groups[i]` on `robot` (see
+/// [`touch`]), each moved onto it, with their plane or sphere; the others are dropped. Every
+/// pose is kept, unmoved, for the kinds without a surface.
+pub fn touching(
+    robot: &Robot,
+    lay: &Layout,
+    qs: &[Vec<Real>],
+    groups: &[usize],
+) -> (Vec<Vec<Real>>, Vec<usize>) {
+    qs.iter()
+        .zip(groups)
+        .filter_map(|(q, &g)| touch(robot, lay, g, q).map(|q| (q, g)))
+        .unzip()
+}
+
+/// What the instrument reads on the `truth` robot at the commanded joint values `qs` of
+/// poses on planes or spheres `group`: the joints where the true robot touches (the
+/// commanded ones for the other kinds) and the noisy readings (`s`'s noise, drawn from
+/// `rng`). Fails when the true robot cannot touch a surface from a commanded pose.
+pub fn measure(
+    s: &InstrumentSettings,
+    lay: &Layout,
+    truth: &Robot,
+    qs: &[Vec<Real>],
+    group: &[usize],
+    rng: &mut Rng,
+) -> Result<(Vec<Vec<Real>>, KindData)> {
+    let mut touched = Vec::with_capacity(qs.len());
+    for (i, (q, &g)) in qs.iter().zip(group).enumerate() {
+        touched.push(touch(truth, lay, g, q).ok_or_else(|| {
+            Error::Compute(format!("pose {i}: the true robot does not touch its surface"))
+        })?);
+    }
+    let chain = truth.chain();
+    let frames: Vec<_> = touched.iter().map(|q| chain.fk(q)).collect();
+    let p: Vec<Vec3> = frames.iter().map(|f| f.pos).collect();
+    let rot: Vec<_> = frames.iter().map(|f| f.rot).collect();
+    let mut values = Vec::new();
+    model_values(&lay.instrument, group, &p, &rot, &lay.nuisance, &mut values);
+    let tracker = Vec3::from(s.tracker_mm);
+    let per = lay.instrument.rows_per_observation();
+    let surface_kind = matches!(lay.instrument, Instrument::Planes(_) | Instrument::Spheres(_));
+    for (k, v) in values.iter_mut().enumerate() {
+        let range_m = match &lay.instrument {
+            Instrument::Distance { .. } => *v * 1e-3,
+            Instrument::Targets(_) => (p[k / per] - tracker).norm() * 1e-3,
+            _ => 0.0,
+        };
+        let sigma_mm = (s.noise_um + s.scale_um_per_m * range_m) * 1e-3;
+        let z: Real = rng.sample(StandardNormal);
+        // A surface's reading is its constraint, 0 by definition: the contact error (the
+        // touched point off the surface by σ along its normal) shows as a reading of −g.
+        *v = if surface_kind { sigma_mm * z } else { *v + sigma_mm * z };
+    }
+    let data = KindData {
+        instrument: lay.instrument.clone(),
+        group: group.to_vec(),
+        values,
+    };
+    data.check(touched.len())?;
+    Ok((touched, data))
+}
+
+/// Noise-free readings of `robot` at poses `qs` on planes or spheres `group`, with nuisance
+/// values `nuisance`: the data of an identifiability analysis or a recovery test.
+pub fn noise_free(
+    inst: &Instrument,
+    robot: &Robot,
+    qs: &[Vec<Real>],
+    group: &[usize],
+    nuisance: &[Real],
+) -> KindData {
+    let chain = robot.chain();
+    let frames: Vec<_> = qs.iter().map(|q| chain.fk(q)).collect();
+    let p: Vec<Vec3> = frames.iter().map(|f| f.pos).collect();
+    let rot: Vec<_> = frames.iter().map(|f| f.rot).collect();
+    let mut values = Vec::new();
+    model_values(inst, group, &p, &rot, nuisance, &mut values);
+    if matches!(inst, Instrument::Planes(_) | Instrument::Spheres(_)) {
+        values.iter_mut().for_each(|v| *v = 0.0);
+    }
+    KindData {
+        instrument: inst.clone(),
+        group: group.to_vec(),
+        values,
+    }
+}
