@@ -1,6 +1,7 @@
 //! `calbench identifiability --robot R [--measure M] [--poses N] [--seed S] [--poses-file CSV]
 //! [--gcn-blocks [--gcn-threshold T]] [--json]`: rank, identifiable parameters and dependent
-//! groups.
+//! groups, for the tracker (`position`, `pose`) or another instrument (`distance`, `plane`,
+//! `sphere`, `multi-target`).
 
 use std::path::PathBuf;
 
@@ -11,6 +12,8 @@ use calbench::error::Error;
 use calbench::numeric::Real;
 use calbench::robot::identifiability::analyse;
 use calbench::robot::Param;
+use calbench::measurement::kind::Kind;
+use calbench::sim::instrument::InstrumentSettings;
 use calbench::sim::settings::MeasureSetting;
 
 /// Arguments of `calbench identifiability`.
@@ -22,9 +25,19 @@ pub struct IdentifiabilityArgs {
     /// The chain of a URDF tree.
     #[command(flatten)]
     pub chain: super::ChainArgs,
-    /// What is measured per pose: the point (3 rows) or the full pose (6 rows).
-    #[arg(long, default_value = "position", value_parser = super::named::<MeasureSetting>())]
-    pub measure: MeasureSetting,
+    /// What is measured per pose: the point (3 rows), the full pose (6 rows), or another
+    /// instrument's reading (docs/formats.md, "Measurement kinds").
+    #[arg(long, default_value = "position", value_parser = super::named::<Kind>())]
+    pub measure: Kind,
+    /// `distance`: lengths between consecutive poses instead of from a pivot.
+    #[arg(long)]
+    pub between_poses: bool,
+    /// `plane`: the number of planes.
+    #[arg(long, default_value_t = 3)]
+    pub planes: usize,
+    /// `sphere`: the number of spheres.
+    #[arg(long, default_value_t = 1)]
+    pub spheres: usize,
     /// Number of random poses within the joint limits.
     #[arg(long, default_value_t = 100)]
     pub poses: usize,
@@ -59,7 +72,6 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
             .into());
         }
     }
-    let measure = args.measure.measure();
     if args.poses == 0 {
         return Err(Error::setting("--poses", "must be at least 1").into());
     }
@@ -71,6 +83,11 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
         }
     };
     let poses = qs.len();
+    let measure = match args.measure {
+        Kind::Position => MeasureSetting::Position.measure(),
+        Kind::Pose => MeasureSetting::Pose.measure(),
+        kind => return instrument(args, &robot, &qs, kind),
+    };
     let a = analyse(&robot, &robot.params(), &qs, measure);
     let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     // Guo 2024 §3.1: the separation of the joint parameters (θ, α, a, d, β blocks).
@@ -121,5 +138,77 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
             sep.gcn_separated()
         );
     }
+    Ok(())
+}
+
+/// `--measure distance|plane|sphere|multi-target`: the kind's Jacobian at the nominal robot
+/// over the poses, the instrument's own unknowns (pivot, planes, spheres) projected out.
+fn instrument(
+    args: &IdentifiabilityArgs,
+    robot: &calbench::robot::Robot,
+    qs: &[Vec<Real>],
+    kind: Kind,
+) -> Result<()> {
+    if args.gcn_blocks {
+        return Err(Error::setting(
+            "--gcn-blocks",
+            "Guo 2024's separation is for the tracker's `position` and `pose` only",
+        )
+        .into());
+    }
+    let s = InstrumentSettings {
+        kind,
+        pivot: !args.between_poses,
+        planes: args.planes,
+        spheres: args.spheres,
+        ..InstrumentSettings::default()
+    };
+    // Random poses move onto their planes or spheres; a pose file's poses are taken as
+    // they are (they touch, or the fitted surfaces are the instrument's).
+    let (inst, qs, groups) = if args.poses_file.is_some() {
+        let inst = s.instrument()?;
+        let g = calbench::sim::instrument::groups_of(&inst, qs.len());
+        (inst, qs.to_vec(), g)
+    } else {
+        let mut rng = calbench::numeric::rng::stream(args.seed, "identifiability");
+        let (lay, qs, g) = calbench::sim::instrument::instrument_poses(&s, robot, args.poses, &mut rng)?;
+        (lay.instrument, qs, g)
+    };
+    let qs = &qs[..];
+    // The Jacobian does not depend on the readings: zeros of the right length.
+    let values = vec![0.0; inst.observations(qs.len()) * inst.rows_per_observation()];
+    let data = calbench::measurement::kind::KindData {
+        instrument: inst,
+        group: groups,
+        values,
+    };
+    let a = calbench::identify::kind::identifiability(robot, &robot.params(), qs, &data)?;
+    let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
+    let nuisance = data.instrument.nuisance_names();
+    if args.json {
+        let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
+        out!(
+            "{}",
+            json!({
+                "measure": kind.as_str(),
+                "rank": a.rank,
+                "identifiable": names(&a.identifiable),
+                "unidentifiable": names(&a.unidentifiable),
+                "groups": groups,
+                "condition_number": a.condition_number,
+                "instrument_unknowns": nuisance,
+            })
+        );
+        return Ok(());
+    }
+    out!("robot {} ({} poses, {})", robot.name, qs.len(), kind.as_str());
+    out!("instrument unknowns: {}", nuisance.join(" "));
+    out!("rank {} of {} parameters", a.rank, robot.params().len());
+    out!("identifiable:   {}", names(&a.identifiable).join(" "));
+    out!("unidentifiable: {}", names(&a.unidentifiable).join(" "));
+    for g in &a.groups {
+        out!("dependent group: {}", names(g).join(" "));
+    }
+    out!("condition number (column-scaled): {:.4e}", a.condition_number);
     Ok(())
 }

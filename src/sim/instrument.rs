@@ -307,3 +307,39 @@ pub fn noise_free(
         values,
     }
 }
+
+/// `n` poses of `nominal` on the instrument of `s`: joint values drawn uniformly within the
+/// limits from `rng` ([`crate::robot::sampling::uniform_joint_poses`]), laid out by [`layout`]
+/// on the first draw, moved onto their planes or spheres by [`touching`] (those that do not
+/// reach theirs are dropped and more are drawn); with each pose's plane or sphere. Fails
+/// when 20 draws of `4n` candidates do not give `n` poses.
+pub fn instrument_poses(
+    s: &InstrumentSettings,
+    nominal: &Robot,
+    n: usize,
+    rng: &mut Rng,
+) -> Result<(Layout, Vec<Vec<Real>>, Vec<usize>)> {
+    let batch = 4 * n.max(1);
+    let first = crate::robot::sampling::uniform_joint_poses(nominal, batch, rng);
+    let lay = layout(s, nominal, &first)?;
+    let (mut qs, mut groups) = touching(nominal, &lay, &first, &groups_of(&lay.instrument, batch));
+    for _ in 1..20 {
+        if qs.len() >= n {
+            break;
+        }
+        let more = crate::robot::sampling::uniform_joint_poses(nominal, batch, rng);
+        let (q, g) = touching(nominal, &lay, &more, &groups_of(&lay.instrument, batch));
+        qs.extend(q);
+        groups.extend(g);
+    }
+    if qs.len() < n {
+        return Err(Error::Compute(format!(
+            "only {} of {n} poses reach their {}",
+            qs.len(),
+            s.kind.as_str()
+        )));
+    }
+    qs.truncate(n);
+    groups.truncate(n);
+    Ok((lay, qs, groups))
+}
