@@ -8,6 +8,7 @@ use anyhow::Result;
 use calbench::error::Error;
 use calbench::report::registration_study::{report_md, write_all};
 use calbench::report::run_study;
+use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::registration_study::RegistrationScenario;
 use calbench::study::scenario::{Scenario, MAX_TRIALS};
 use calbench::study::{RunOptions, Shard};
@@ -74,6 +75,16 @@ pub fn run(args: &RunArgs) -> Result<()> {
                 .into());
             }
             return registration_study(RegistrationScenario::from_table(table, p)?, args);
+        }
+        if InstrumentsScenario::is_one(&table) {
+            if args.shard.is_some() {
+                return Err(Error::setting(
+                    "--shard",
+                    "an instruments study (`[measurement]`) runs whole, not in shards",
+                )
+                .into());
+            }
+            return instruments_study(InstrumentsScenario::from_table(table, p)?, args);
         }
     }
     let mut sc = match &args.scenario {
@@ -185,6 +196,50 @@ fn registration_study(mut sc: RegistrationScenario, args: &RunArgs) -> Result<()
             .take_while(|l| !l.starts_with("!["))
             .collect::<Vec<_>>()
             .join("\n"),
+        sc.trials,
+        t0.elapsed().as_secs_f64(),
+        out.join("report.md").display()
+    );
+    Ok(())
+}
+
+/// Runs an instruments study (`[measurement]` tables) and writes its folder.
+fn instruments_study(mut sc: InstrumentsScenario, args: &RunArgs) -> Result<()> {
+    if let Some(n) = args.trials {
+        if n < 2 || n > MAX_TRIALS {
+            return Err(
+                Error::setting("--trials", format!("must be between 2 and {MAX_TRIALS}")).into(),
+            );
+        }
+        sc.trials = n;
+    }
+    if let Some(s) = args.seed {
+        sc.seed = s;
+    }
+    if args.threads == Some(0) {
+        return Err(Error::setting("--threads", "must be at least 1").into());
+    }
+    let robot = super::ChainArgs::default().load(&sc.robot)?;
+    eprintln!(
+        "running {}: instruments study, {} instruments × {} pose counts × {} strategies × {} trials",
+        sc.name,
+        sc.instruments().len(),
+        sc.poses.len(),
+        sc.strategies.len(),
+        sc.trials
+    );
+    let out = out_folder(args, &sc.name);
+    writable_folder(&out, &STUDY_OUTPUTS)?;
+    let t0 = std::time::Instant::now();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.unwrap_or(0))
+        .build()
+        .map_err(|e| Error::Compute(e.to_string()))?;
+    let cells = pool.install(|| sc.run(&robot))?;
+    calbench::report::instruments::write_all(&sc, &cells, &out)?;
+    out!(
+        "{}\n{} trials per cell in {:.1} s; report: {}",
+        calbench::report::instruments::report_md(&sc, &cells),
         sc.trials,
         t0.elapsed().as_secs_f64(),
         out.join("report.md").display()

@@ -44,6 +44,7 @@ pub struct KindProblem<'a> {
     vars: Vec<ChainVars>,
     data: &'a KindData,
     c0: Vec<Real>,
+    prior: Option<&'a [Real]>,
     work: RefCell<Work>,
 }
 
@@ -80,7 +81,28 @@ impl<'a> KindProblem<'a> {
         }
         let chain = nominal.chain();
         let p: Vec<Vec3> = qs.iter().map(|q| chain.fk(q).pos).collect();
-        let c0 = nuisance_guess(&data.instrument, &data.group, &p)?;
+        let c0 = nuisance_guess(&data.instrument, &data.group, &p, &data.values)?;
+        Self::with_guess(nominal, params, qs, data, c0)
+    }
+
+    /// [`KindProblem::new`] with the first guess `c0` of the nuisance values given (the
+    /// instrument's layout, e.g. for the rows of a single pose).
+    pub fn with_guess(
+        nominal: &'a Robot,
+        params: &[Param],
+        qs: &[Vec<Real>],
+        data: &'a KindData,
+        c0: Vec<Real>,
+    ) -> Result<Self> {
+        if c0.len() != data.instrument.nuisance() || c0.iter().any(|v| !v.is_finite()) {
+            return Err(Error::setting(
+                "nuisance",
+                format!("{} finite values needed", data.instrument.nuisance()),
+            ));
+        }
+        let chain = nominal.chain();
+        let p: Vec<Vec3> = qs.iter().map(|q| chain.fk(q).pos).collect();
+        let dof = nominal.dof();
         let m = qs.len();
         let cols = Columns::new(params, dof);
         Ok(KindProblem {
@@ -99,7 +121,19 @@ impl<'a> KindProblem<'a> {
             cols,
             data,
             c0,
+            prior: None,
         })
+    }
+
+    /// Gives observation `i` the prior weight `w[i]` (`1/σ_i²`, normalised or not); `None`:
+    /// every observation weighs 1. Fails unless there is one finite, positive weight per
+    /// observation.
+    pub fn with_prior_weights(mut self, w: Option<&'a [Real]>) -> Result<Self> {
+        if let Some(w) = w {
+            crate::measurement::check_weights(w, self.size().points)?;
+        }
+        self.prior = w;
+        Ok(self)
     }
 
     /// The robot's parameters (the first `params().len()` unknowns).
@@ -128,6 +162,10 @@ impl LeastSquares for KindProblem<'_> {
             inst.observations(self.vars.len()),
             inst.rows_per_observation(),
         )
+    }
+
+    fn prior(&self) -> Option<&[Real]> {
+        self.prior
     }
 
     /// Forward kinematics and the full-pose Jacobian rows at `nominal + x` (one chain walk

@@ -335,12 +335,17 @@ pub fn rows(
     }
 }
 
-/// A first guess of the nuisance values from (nominal) tool points `p`: the plane through
-/// each group's points (least squares in the graph form), the sphere centre (algebraic fit
-/// with the known radius's centre found from `|p|² − 2 p·c + |c|² − ρ² = 0`, linear in `c`
-/// and `|c|² − ρ²`), and the pivot the same way with the radius free. Fails when a group has
-/// too few points to fix its parameters.
-pub fn nuisance_guess(inst: &Instrument, group: &[usize], p: &[Vec3]) -> Result<Vec<Real>> {
+/// A first guess of the nuisance values from (nominal) tool points `p` and the readings
+/// `values`: the plane through each group's points (least squares in the graph form), the
+/// sphere centre (algebraic fit: `|p|² − 2 p·c + |c|² − ρ² = 0` is linear in `c` and
+/// `|c|² − ρ²`), and the pivot by trilateration (`|p_i|² − 2 p_i·c + |c|² = L_i²`, linear in
+/// `c` and `|c|²`). Fails when a group has too few points to fix its parameters.
+pub fn nuisance_guess(
+    inst: &Instrument,
+    group: &[usize],
+    p: &[Vec3],
+    values: &[Real],
+) -> Result<Vec<Real>> {
     let groups = match inst {
         Instrument::Targets(_) | Instrument::Distance { pivot: false } => return Ok(Vec::new()),
         Instrument::Distance { pivot: true } => 1,
@@ -360,6 +365,11 @@ pub fn nuisance_guess(inst: &Instrument, group: &[usize], p: &[Vec3]) -> Result<
                 let (k, u, v) = plane_axes(axes[g]);
                 pts.iter().map(|pt| ([1.0, pt[u], pt[v], 0.0], pt[k])).unzip()
             }
+            Instrument::Distance { .. } => pts
+                .iter()
+                .zip(values)
+                .map(|(pt, l)| ([2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], -1.0], pt.norm_squared() - l * l))
+                .unzip(),
             _ => pts
                 .iter()
                 .map(|pt| ([2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], 1.0], pt.norm_squared()))

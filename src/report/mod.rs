@@ -19,6 +19,7 @@ pub mod identified;
 pub mod markdown;
 pub mod plots;
 pub mod practice;
+pub mod instruments;
 pub mod registration_study;
 pub mod run;
 

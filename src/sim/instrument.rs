@@ -18,6 +18,9 @@ use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
 use crate::robot::Robot;
 
+/// How far inside the joint limits (rad or mm) [`touching`] keeps its poses.
+pub const TOUCH_MARGIN: Real = 0.05;
+
 /// One `[[measurement]]` entry of a scenario: an instrument and its settings
 /// (docs/formats.md, "Measurement kinds").
 #[derive(Clone, Debug, PartialEq, Deserialize, serde::Serialize)]
@@ -176,10 +179,11 @@ fn surface(lay: &Layout, group: usize, p: &Vec3) -> Option<(Real, Vec3)> {
 }
 
 /// Moves `robot` from joint values `q` until its tool point meets the plane or sphere `group`
-/// of `lay` (minimum-norm joint steps on the scalar constraint, at most 0.2 rad or 50 mm per
-/// joint and step): `None` when it does not meet it to 1e-9 mm within the joint limits in 100
-/// steps. Poses of kinds without a surface come back unchanged.
-pub fn touch(robot: &Robot, lay: &Layout, group: usize, q: &[Real]) -> Option<Vec<Real>> {
+/// of `lay` (minimum-norm joint steps on the scalar constraint, at most 0.2 rad or mm per
+/// joint and step): `None` when it does not meet it to 1e-9 mm within the joint limits
+/// narrowed by `margin` (rad or mm) in 100 steps. Poses of kinds without a surface come back
+/// unchanged.
+pub fn touch(robot: &Robot, lay: &Layout, group: usize, q: &[Real], margin: Real) -> Option<Vec<Real>> {
     if !matches!(lay.instrument, Instrument::Planes(_) | Instrument::Spheres(_)) {
         return Some(q.to_vec());
     }
@@ -194,7 +198,7 @@ pub fn touch(robot: &Robot, lay: &Layout, group: usize, q: &[Real]) -> Option<Ve
                 .joints
                 .iter()
                 .zip(&q)
-                .all(|(j, v)| *v >= j.limits.0 && *v <= j.limits.1);
+                .all(|(j, v)| *v >= j.limits.0 + margin && *v <= j.limits.1 - margin);
             return inside.then_some(q);
         }
         let mut dg = vec![0.0; q.len()];
@@ -221,8 +225,9 @@ pub fn touch(robot: &Robot, lay: &Layout, group: usize, q: &[Real]) -> Option<Ve
 }
 
 /// The poses of `qs` that touch their plane or sphere `groups[i]` on `robot` (see
-/// [`touch`]), each moved onto it, with their plane or sphere; the others are dropped. Every
-/// pose is kept, unmoved, for the kinds without a surface.
+/// [`touch`], [`TOUCH_MARGIN`] inside the joint limits, so that a slightly different robot
+/// still touches from there), each moved onto it, with their plane or sphere; the others are
+/// dropped. Every pose is kept, unmoved, for the kinds without a surface.
 pub fn touching(
     robot: &Robot,
     lay: &Layout,
@@ -231,14 +236,15 @@ pub fn touching(
 ) -> (Vec<Vec<Real>>, Vec<usize>) {
     qs.iter()
         .zip(groups)
-        .filter_map(|(q, &g)| touch(robot, lay, g, q).map(|q| (q, g)))
+        .filter_map(|(q, &g)| touch(robot, lay, g, q, TOUCH_MARGIN).map(|q| (q, g)))
         .unzip()
 }
 
 /// What the instrument reads on the `truth` robot at the commanded joint values `qs` of
 /// poses on planes or spheres `group`: the joints where the true robot touches (the
 /// commanded ones for the other kinds) and the noisy readings (`s`'s noise, drawn from
-/// `rng`). Fails when the true robot cannot touch a surface from a commanded pose.
+/// `rng`), with the σ of each observation (mm). Fails when the true robot cannot touch a
+/// surface from a commanded pose.
 pub fn measure(
     s: &InstrumentSettings,
     lay: &Layout,
@@ -246,10 +252,10 @@ pub fn measure(
     qs: &[Vec<Real>],
     group: &[usize],
     rng: &mut Rng,
-) -> Result<(Vec<Vec<Real>>, KindData)> {
+) -> Result<(Vec<Vec<Real>>, KindData, Vec<Real>)> {
     let mut touched = Vec::with_capacity(qs.len());
     for (i, (q, &g)) in qs.iter().zip(group).enumerate() {
-        touched.push(touch(truth, lay, g, q).ok_or_else(|| {
+        touched.push(touch(truth, lay, g, q, 0.0).ok_or_else(|| {
             Error::Compute(format!("pose {i}: the true robot does not touch its surface"))
         })?);
     }
@@ -262,6 +268,7 @@ pub fn measure(
     let tracker = Vec3::from(s.tracker_mm);
     let per = lay.instrument.rows_per_observation();
     let surface_kind = matches!(lay.instrument, Instrument::Planes(_) | Instrument::Spheres(_));
+    let mut sigma = vec![0.0; values.len() / per];
     for (k, v) in values.iter_mut().enumerate() {
         let range_m = match &lay.instrument {
             Instrument::Distance { .. } => *v * 1e-3,
@@ -269,6 +276,7 @@ pub fn measure(
             _ => 0.0,
         };
         let sigma_mm = (s.noise_um + s.scale_um_per_m * range_m) * 1e-3;
+        sigma[k / per] = sigma_mm;
         let z: Real = rng.sample(StandardNormal);
         // A surface's reading is its constraint, 0 by definition: the contact error (the
         // touched point off the surface by σ along its normal) shows as a reading of −g.
@@ -280,7 +288,7 @@ pub fn measure(
         values,
     };
     data.check(touched.len())?;
-    Ok((touched, data))
+    Ok((touched, data, sigma))
 }
 
 /// Noise-free readings of `robot` at poses `qs` on planes or spheres `group`, with nuisance

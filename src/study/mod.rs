@@ -19,6 +19,7 @@
 //! accumulators' compact per-trial numbers, not the trials themselves.
 
 pub mod plan;
+pub mod instruments;
 pub mod registration_study;
 pub mod scenario;
 pub mod stats;

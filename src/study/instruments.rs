@@ -1,0 +1,517 @@
+//! The instruments study: which parameters each measurement kind identifies, and to what
+//! accuracy, on one robot with one error set (docs/instruments.md).
+//!
+//! A scenario holding `[[measurement]]` (or one `[measurement]`) entries runs it: for every
+//! instrument, pose count and pose strategy (`random` or `detmax-ide` on the instrument's own
+//! information matrix), each trial draws the true robot, measures the poses with the
+//! instrument (touching its planes or spheres with the true robot, the instrument's noise),
+//! identifies the parameters the instrument can see by `ls` weighted by `1/σ²`, and validates
+//! the identified robot by the position error at fresh poses, as a tracker would see it.
+
+use std::collections::BTreeMap;
+
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
+use rand::seq::index::sample;
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+use crate::identify::kind::{identifiability, KindProblem};
+use crate::identify::{solve, LeastSquares, LsOptions, Termination};
+use crate::measurement::kind::{Instrument, KindData};
+use crate::numeric::rng::{stream, trial_seed};
+use crate::numeric::{Real, Vec3};
+use crate::poses::{select, PoseModel, SelectOptions, Strategy};
+use crate::robot::{Param, Robot};
+use crate::sim::instrument::{instrument_poses, measure, touch, InstrumentSettings, Layout};
+use crate::sim::settings::ErrorSettings;
+
+/// One `[measurement]` table or an array of them.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum OneOrMany {
+    /// `[measurement]`.
+    One(Box<InstrumentSettings>),
+    /// `[[measurement]]`.
+    Many(Vec<InstrumentSettings>),
+}
+
+/// A scenario file running the instruments study.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InstrumentsScenario {
+    /// Name (the default output folder `results/<name>/`).
+    pub name: String,
+    /// What the study asks.
+    #[serde(default)]
+    pub description: String,
+    /// Master seed; trial t uses `trial_seed(seed, t)`.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Trials per cell.
+    #[serde(default = "default_trials")]
+    pub trials: usize,
+    /// Built-in robot name or robot file.
+    pub robot: String,
+    /// Pose counts.
+    #[serde(default = "default_counts")]
+    pub poses: Vec<usize>,
+    /// Pose strategies: `random`, `detmax-ide` (or `detmax`).
+    #[serde(default = "default_strategies")]
+    pub strategies: Vec<String>,
+    /// Candidate poses on each instrument (the pool that random draws from and DETMAX
+    /// searches).
+    #[serde(default = "default_candidates")]
+    pub candidates: usize,
+    /// Fresh validation poses per trial.
+    #[serde(default = "default_validation")]
+    pub validation: usize,
+    /// The true robot's errors.
+    #[serde(default)]
+    pub errors: ErrorSettings,
+    /// The instruments.
+    pub measurement: OneOrMany,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+fn default_trials() -> usize {
+    20
+}
+fn default_counts() -> Vec<usize> {
+    vec![50, 200]
+}
+fn default_strategies() -> Vec<String> {
+    vec!["random".into(), "detmax-ide".into()]
+}
+fn default_candidates() -> usize {
+    400
+}
+fn default_validation() -> usize {
+    50
+}
+
+impl InstrumentsScenario {
+    /// True when a scenario file's table asks for the instruments study.
+    pub fn is_one(table: &toml::Table) -> bool {
+        table.contains_key("measurement")
+    }
+
+    /// The instruments, in file order.
+    pub fn instruments(&self) -> Vec<InstrumentSettings> {
+        match &self.measurement {
+            OneOrMany::One(s) => vec![(**s).clone()],
+            OneOrMany::Many(v) => v.clone(),
+        }
+    }
+
+    /// Parses and checks the scenario in `table`, read from `path` (named in errors).
+    pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
+        let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+        let s: InstrumentsScenario = toml::Value::Table(table).try_into().map_err(
+            |e: toml::de::Error| {
+                ferr(
+                    "scenario",
+                    format!(
+                        "{} (a scenario with [measurement] takes name, description, seed, \
+                         trials, robot, poses, strategies, candidates, validation, [errors] \
+                         and its [[measurement]] tables)",
+                        e.to_string().trim_end()
+                    ),
+                )
+            },
+        )?;
+        if s.name.trim().is_empty() || s.name.contains(['/', '\\']) {
+            return Err(ferr("name", "must be a non-empty name without slashes".into()));
+        }
+        if s.trials < 2 || s.trials > crate::study::scenario::MAX_TRIALS {
+            return Err(ferr(
+                "trials",
+                format!("must be between 2 and {}", crate::study::scenario::MAX_TRIALS),
+            ));
+        }
+        for (i, m) in s.instruments().iter().enumerate() {
+            m.instrument()
+                .map_err(|e| ferr(&format!("measurement[{i}]"), e.to_string()))?;
+        }
+        if s.instruments().is_empty() || s.poses.is_empty() || s.strategies.is_empty() {
+            return Err(ferr(
+                "measurement",
+                "needs at least one instrument, pose count and strategy".into(),
+            ));
+        }
+        for st in &s.strategies {
+            strategy(st).map_err(|e| ferr("strategies", e.to_string()))?;
+        }
+        if s.poses.iter().any(|&n| n < 10 || n > s.candidates) {
+            return Err(ferr(
+                "poses",
+                format!("each count must be between 10 and candidates = {}", s.candidates),
+            ));
+        }
+        if s.validation == 0 {
+            return Err(ferr("validation", "must be at least 1".into()));
+        }
+        s.errors.check().map_err(|e| ferr("errors", e.to_string()))?;
+        Ok(s)
+    }
+}
+
+fn strategy(name: &str) -> Result<Strategy> {
+    match name {
+        "random" => Ok(Strategy::Random),
+        "detmax" => Ok(Strategy::Detmax),
+        "detmax-ide" => Ok(Strategy::DetmaxIde),
+        other => Err(Error::setting(
+            "strategies",
+            format!("unknown strategy \"{other}\" (random, detmax, detmax-ide)"),
+        )),
+    }
+}
+
+/// The instrument's information rows of one pose for pose selection: the pose moved onto
+/// the nearest plane or sphere first (IDE's mutated poses leave them; the simulation touches
+/// from the commanded pose the same way).
+struct KindPoseModel<'a> {
+    robot: &'a Robot,
+    params: Vec<Param>,
+    lay: &'a Layout,
+    limits: Vec<(Real, Real)>,
+    scale: Vec<Real>,
+}
+
+impl KindPoseModel<'_> {
+    fn rows_of(&self, q: &[Real], out: &mut DMatrixViewMut<Real>) {
+        let g = nearest(self.lay, &self.robot.fk(q).pos);
+        let q = touch(self.robot, self.lay, g, q, 0.0).unwrap_or_else(|| q.to_vec());
+        let qs = [q];
+        let data = KindData {
+            instrument: self.lay.instrument.clone(),
+            group: vec![g],
+            values: vec![0.0; self.lay.instrument.rows_per_observation()],
+        };
+        out.fill(0.0);
+        // The instrument's geometry is the layout's (one point cannot fix a first guess).
+        let Ok(kp) =
+            KindProblem::with_guess(self.robot, &self.params, &qs, &data, self.lay.nuisance.clone())
+        else {
+            return;
+        };
+        let size = kp.size();
+        let mut r = DVector::zeros(size.rows());
+        let mut j = DMatrix::zeros(size.rows(), size.params);
+        kp.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
+        for c in 0..size.params {
+            for k in 0..size.rows() {
+                out[(k, c)] = j[(k, c)] * self.scale[c];
+            }
+        }
+    }
+}
+
+impl PoseModel for KindPoseModel<'_> {
+    fn dof(&self) -> usize {
+        self.limits.len()
+    }
+    fn n_params(&self) -> usize {
+        self.params.len() + self.lay.instrument.nuisance()
+    }
+    fn rows_per_pose(&self) -> usize {
+        self.lay.instrument.rows_per_observation()
+    }
+    fn limits(&self) -> &[(Real, Real)] {
+        &self.limits
+    }
+    fn jacobian_block(&self, q: &[Real], out: &mut DMatrixViewMut<Real>) {
+        self.rows_of(q, out);
+    }
+}
+
+/// The plane or sphere whose surface is nearest to `p`.
+fn nearest(lay: &Layout, p: &Vec3) -> usize {
+    let c = &lay.nuisance;
+    let dist = |g: usize| match &lay.instrument {
+        Instrument::Planes(axes) => {
+            let (k, u, v) = crate::measurement::kind::plane_axes(axes[g]);
+            (p[k] - (c[3 * g] + c[3 * g + 1] * p[u] + c[3 * g + 2] * p[v])).abs()
+        }
+        Instrument::Spheres(r) => {
+            ((p - Vec3::new(c[3 * g], c[3 * g + 1], c[3 * g + 2])).norm() - r[g]).abs()
+        }
+        _ => 0.0,
+    };
+    let n = match &lay.instrument {
+        Instrument::Planes(a) => a.len(),
+        Instrument::Spheres(s) => s.len(),
+        _ => 1,
+    };
+    (0..n)
+        .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
+        .unwrap_or(0)
+}
+
+/// One cell's results: an instrument, a pose count and a strategy.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Cell {
+    /// The instrument's label: its kind (with `-chain` for lengths between poses).
+    pub kind: String,
+    /// Measured poses.
+    pub poses: usize,
+    /// Pose strategy.
+    pub strategy: String,
+    /// σ settings: constant part (µm) and per metre (µm/m).
+    pub noise_um: Real,
+    /// See `noise_um`.
+    pub scale_um_per_m: Real,
+    /// The robot's parameters the instrument identifies on the candidate poses (base
+    /// excluded: the error set has none, and the tracker's frame is registered).
+    pub identified: Vec<String>,
+    /// The joint and tool parameters it cannot see.
+    pub unidentifiable: Vec<String>,
+    /// The instrument's own unknowns, identified with the robot.
+    pub instrument_unknowns: Vec<String>,
+    /// Mean η (Guo 2024 eq. 29, %) per parameter with an injected error; a parameter the
+    /// instrument cannot see keeps its nominal value (η = 0).
+    pub eta: BTreeMap<String, Real>,
+    /// Mean over those parameters of the mean η (%).
+    pub eta_mean_pct: Real,
+    /// Validation RMS position error at fresh poses (mm), mean over trials, before
+    /// (nominal robot) and after calibration.
+    pub validation_before_mm: Real,
+    /// See `validation_before_mm`.
+    pub validation_after_mm: Real,
+    /// Trace of the empirical covariance of the identified errors over trials divided by the
+    /// mean Cramér–Rao trace `(JᵀWJ)⁻¹` (robot parameters).
+    pub crb_ratio: Real,
+    /// Trials whose identification did not converge or whose poses the true robot could not
+    /// touch.
+    pub failures: usize,
+}
+
+impl InstrumentsScenario {
+    /// Runs every cell, trials in parallel on rayon (each trial from its own seed, results
+    /// in trial order, so the bytes do not depend on the thread count).
+    pub fn run(&self, nominal: &Robot) -> Result<Vec<Cell>> {
+        use rayon::prelude::*;
+        let joint_tool: Vec<Param> = nominal
+            .params()
+            .into_iter()
+            .filter(|p| !matches!(p, Param::Base(_)))
+            .collect();
+        let mut cells = Vec::new();
+        for (ii, s) in self.instruments().iter().enumerate() {
+            let mut rng = stream(self.seed, &format!("instruments-pool-{ii}"));
+            let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
+            let values = vec![
+                0.0;
+                lay.instrument.observations(pool.len())
+                    * lay.instrument.rows_per_observation()
+            ];
+            let pool_data = KindData {
+                instrument: lay.instrument.clone(),
+                group: groups.clone(),
+                values,
+            };
+            let a = identifiability(nominal, &joint_tool, &pool, &pool_data)?;
+            let params = a.identifiable.clone();
+            let label = match lay.instrument {
+                Instrument::Distance { pivot: false } => "distance-chain".to_string(),
+                _ => s.kind.as_str().to_string(),
+            };
+            // Column scale for pose selection: the pool's column norms.
+            let scale: Vec<Real> = {
+                let kp = KindProblem::new(nominal, &params, &pool, &pool_data)?;
+                let size = kp.size();
+                let mut r = DVector::zeros(size.rows());
+                let mut j = DMatrix::zeros(size.rows(), size.params);
+                kp.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
+                (0..size.params)
+                    .map(|c| 1.0 / j.column(c).norm().max(1e-12))
+                    .collect()
+            };
+            let model = KindPoseModel {
+                robot: nominal,
+                params: params.clone(),
+                lay: &lay,
+                limits: nominal.joints.iter().map(|j| j.limits).collect(),
+                scale,
+            };
+            for &count in &self.poses {
+                for st in &self.strategies {
+                    let strat = strategy(st)?;
+                    let fixed = if strat == Strategy::Random {
+                        None
+                    } else {
+                        let mut r = stream(self.seed, &format!("instruments-select-{ii}-{count}"));
+                        let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)?;
+                        let g: Vec<usize> = sel
+                            .poses
+                            .iter()
+                            .map(|q| nearest(&lay, &nominal.fk(q).pos))
+                            .collect();
+                        Some((sel.poses, g))
+                    };
+                    let trials: Vec<Option<Trial>> = (0..self.trials)
+                        .into_par_iter()
+                        .map(|t| {
+                            let seed = trial_seed(self.seed, t as u64);
+                            self.trial(nominal, s, &lay, &params, &pool, &groups, fixed.as_ref(), count, seed)
+                        })
+                        .collect::<Result<_>>()?;
+                    cells.push(self.cell(&label, s, &lay, &params, &a.unidentifiable, count, st, &trials));
+                }
+            }
+        }
+        Ok(cells)
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn trial(
+        &self,
+        nominal: &Robot,
+        s: &InstrumentSettings,
+        lay: &Layout,
+        params: &[Param],
+        pool: &[Vec<Real>],
+        groups: &[usize],
+        fixed: Option<&(Vec<Vec<Real>>, Vec<usize>)>,
+        count: usize,
+        seed: u64,
+    ) -> Result<Option<Trial>> {
+        let mut rng = stream(seed, "errors");
+        let errors = crate::sim::truth::true_errors(
+            nominal,
+            &self.errors,
+            crate::measurement::Measure::Position,
+            &mut rng,
+        )?;
+        let truth = nominal.with_errors(&errors);
+        let (qs, g) = match fixed {
+            Some((q, g)) => (q.clone(), g.clone()),
+            None => {
+                let mut r = stream(seed, "poses");
+                let idx = sample(&mut r, pool.len(), count).into_vec();
+                (
+                    idx.iter().map(|&i| pool[i].clone()).collect(),
+                    idx.iter().map(|&i| groups[i]).collect(),
+                )
+            }
+        };
+        let mut noise = stream(seed, "noise");
+        let Ok((tq, data, sigma)) = measure(s, lay, &truth, &qs, &g, &mut noise) else {
+            return Ok(None);
+        };
+        let w: Option<Vec<Real>> = sigma
+            .iter()
+            .all(|v| *v > 0.0)
+            .then(|| sigma.iter().map(|v| 1.0 / (v * v)).collect());
+        let kp = KindProblem::new(nominal, params, &tq, &data)?.with_prior_weights(w.as_deref())?;
+        let out = solve(&LsOptions::default(), &kp, &DVector::zeros(kp.size().params));
+        if out.termination != Termination::Converged {
+            return Ok(None);
+        }
+        let t = params.len();
+        let x: Vec<Real> = out.x.iter().take(t).copied().collect();
+        // Cramér–Rao: (JᵀWJ)⁻¹ over the robot's parameters, W = 1/σ² (the normal matrix of
+        // the solution is JᵀPJ with the same weights).
+        let crb = out
+            .normal
+            .clone()
+            .try_inverse()
+            .map_or(Real::NAN, |inv| (0..t).map(|c| inv[(c, c)]).sum());
+        let ident = kp.robot_with(&out.x);
+        let mut vr = stream(seed, "validation");
+        let vq = crate::robot::sampling::uniform_joint_poses(nominal, self.validation, &mut vr);
+        let (ct, cn, ci) = (truth.chain(), nominal.chain(), ident.chain());
+        let seen: Vec<Vec3> = vq.iter().map(|q| ct.fk(q).pos).collect();
+        // The tracker's sense: the model's points registered onto the measured ones (the
+        // frame a tracker fits), then the RMS distance.
+        let rms = |c: &crate::robot::Chain| -> Result<Real> {
+            let model: Vec<Vec3> = vq.iter().map(|q| c.fk(q).pos).collect();
+            let reg = crate::calibrate::registration::register_svd(&seen, &model, None)?;
+            Ok((reg.residuals.iter().map(|r| r * r).sum::<Real>() / vq.len() as Real).sqrt())
+        };
+        Ok(Some(Trial {
+            errors,
+            x,
+            crb,
+            before: rms(&cn)?,
+            after: rms(&ci)?,
+        }))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn cell(
+        &self,
+        label: &str,
+        s: &InstrumentSettings,
+        lay: &Layout,
+        params: &[Param],
+        unident: &[Param],
+        count: usize,
+        st: &str,
+        trials: &[Option<Trial>],
+    ) -> Cell {
+        let ok: Vec<&Trial> = trials.iter().flatten().collect();
+        let n = ok.len().max(1) as Real;
+        let mut eta = BTreeMap::new();
+        if let Some(first) = ok.first() {
+            for (k, (p, _)) in first.errors.iter().enumerate() {
+                let sum: Real = ok
+                    .iter()
+                    .map(|tr| {
+                        let e = tr.errors[k].1;
+                        let est = params.iter().position(|q| q == p).map_or(0.0, |c| tr.x[c]);
+                        if e == 0.0 { Real::NAN } else { (1.0 - (e - est).abs() / e.abs()) * 100.0 }
+                    })
+                    .sum();
+                if sum.is_finite() {
+                    eta.insert(p.to_string(), sum / n);
+                }
+            }
+        }
+        let eta_mean_pct = eta.values().sum::<Real>() / eta.len().max(1) as Real;
+        // Empirical covariance trace of the estimation errors of the identified parameters.
+        let t = params.len();
+        let err = |tr: &Trial, c: usize| {
+            let truth = tr
+                .errors
+                .iter()
+                .find(|(p, _)| *p == params[c])
+                .map_or(0.0, |e| e.1);
+            tr.x[c] - truth
+        };
+        let trace: Real = (0..t)
+            .map(|c| {
+                let mean = ok.iter().map(|tr| err(tr, c)).sum::<Real>() / n;
+                ok.iter().map(|tr| (err(tr, c) - mean).powi(2)).sum::<Real>() / (n - 1.0).max(1.0)
+            })
+            .sum();
+        let crb = ok.iter().map(|tr| tr.crb).sum::<Real>() / n;
+        Cell {
+            kind: label.to_string(),
+            poses: count,
+            strategy: st.to_string(),
+            noise_um: s.noise_um,
+            scale_um_per_m: s.scale_um_per_m,
+            identified: params.iter().map(|p| p.to_string()).collect(),
+            unidentifiable: unident.iter().map(|p| p.to_string()).collect(),
+            instrument_unknowns: lay.instrument.nuisance_names(),
+            eta,
+            eta_mean_pct,
+            validation_before_mm: ok.iter().map(|tr| tr.before).sum::<Real>() / n,
+            validation_after_mm: ok.iter().map(|tr| tr.after).sum::<Real>() / n,
+            crb_ratio: trace / crb,
+            failures: trials.len() - ok.len(),
+        }
+    }
+}
+
+/// One trial's outcome.
+struct Trial {
+    errors: Vec<(Param, Real)>,
+    x: Vec<Real>,
+    crb: Real,
+    before: Real,
+    after: Real,
+}
