@@ -9,10 +9,10 @@ use anyhow::Result;
 use serde_json::json;
 
 use calbench::error::Error;
+use calbench::measurement::kind::Kind;
 use calbench::numeric::Real;
 use calbench::robot::identifiability::analyse;
 use calbench::robot::Param;
-use calbench::measurement::kind::Kind;
 use calbench::sim::instrument::InstrumentSettings;
 use calbench::sim::settings::MeasureSetting;
 
@@ -171,7 +171,8 @@ fn instrument(
         (inst, qs.to_vec(), g)
     } else {
         let mut rng = calbench::numeric::rng::stream(args.seed, "identifiability");
-        let (lay, qs, g) = calbench::sim::instrument::instrument_poses(&s, robot, args.poses, &mut rng)?;
+        let (lay, qs, g) =
+            calbench::sim::instrument::instrument_poses(&s, robot, args.poses, &mut rng)?;
         (lay.instrument, qs, g)
     };
     let qs = &qs[..];
@@ -201,7 +202,12 @@ fn instrument(
         );
         return Ok(());
     }
-    out!("robot {} ({} poses, {})", robot.name, qs.len(), kind.as_str());
+    out!(
+        "robot {} ({} poses, {})",
+        robot.name,
+        qs.len(),
+        kind.as_str()
+    );
     out!("instrument unknowns: {}", nuisance.join(" "));
     out!("rank {} of {} parameters", a.rank, robot.params().len());
     out!("identifiable:   {}", names(&a.identifiable).join(" "));
@@ -209,6 +215,9 @@ fn instrument(
     for g in &a.groups {
         out!("dependent group: {}", names(g).join(" "));
     }
-    out!("condition number (column-scaled): {:.4e}", a.condition_number);
+    out!(
+        "condition number (column-scaled): {:.4e}",
+        a.condition_number
+    );
     Ok(())
 }

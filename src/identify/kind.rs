@@ -67,13 +67,24 @@ impl<'a> KindProblem<'a> {
             if !known.contains(p) || params[..i].contains(p) {
                 return Err(Error::setting(
                     "params",
-                    format!("`{p}` is not a parameter of robot `{}` or is listed twice", nominal.name),
+                    format!(
+                        "`{p}` is not a parameter of robot `{}` or is listed twice",
+                        nominal.name
+                    ),
                 ));
             }
         }
         let dof = nominal.dof();
-        if let Some(i) = qs.iter().position(|q| q.len() != dof || q.iter().any(|v| !v.is_finite())) {
-            return Err(Error::joint_count("data", format_args!("pose {i}"), qs[i].len(), dof));
+        if let Some(i) = qs
+            .iter()
+            .position(|q| q.len() != dof || q.iter().any(|v| !v.is_finite()))
+        {
+            return Err(Error::joint_count(
+                "data",
+                format_args!("pose {i}"),
+                qs[i].len(),
+                dof,
+            ));
         }
         data.check(qs.len())?;
         if data.instrument.observations(qs.len()) == 0 {
@@ -144,7 +155,11 @@ impl<'a> KindProblem<'a> {
     /// The nuisance values at the unknowns `x` (first guess plus correction).
     pub fn nuisance_at(&self, x: &DVector<Real>) -> Vec<Real> {
         let t = self.params.len();
-        self.c0.iter().enumerate().map(|(k, c)| c + x[t + k]).collect()
+        self.c0
+            .iter()
+            .enumerate()
+            .map(|(k, c)| c + x[t + k])
+            .collect()
     }
 
     /// The compensated robot: the nominal robot with the errors `x[..t]` added.
@@ -174,8 +189,12 @@ impl LeastSquares for KindProblem<'_> {
         let t = self.params.len();
         let mut guard = self.work.borrow_mut();
         let w = &mut *guard;
-        self.nominal
-            .set_chain_with_added(&self.index, &x.as_slice()[..t], &mut w.values, &mut w.chain);
+        self.nominal.set_chain_with_added(
+            &self.index,
+            &x.as_slice()[..t],
+            &mut w.values,
+            &mut w.chain,
+        );
         for (i, v) in self.vars.iter().enumerate() {
             let f = pose_rows_vars(&w.chain, &self.cols, v, Measure::Pose, &mut w.tool, 6 * i);
             w.p[i] = f.pos;
@@ -232,11 +251,22 @@ mod tests {
     /// Every kind but `pose` (the tracker's own path): a short pool of poses on the
     /// instrument (touching the planes or spheres), its layout and its joint and tool
     /// parameters.
-    fn setups() -> Vec<(Kind, Vec<Vec<Real>>, Vec<usize>, crate::sim::instrument::Layout)> {
+    fn setups() -> Vec<(
+        Kind,
+        Vec<Vec<Real>>,
+        Vec<usize>,
+        crate::sim::instrument::Layout,
+    )> {
         let robot = irb2600();
         let mut rng = crate::numeric::rng::stream(5, "kinds");
         let pool = crate::robot::sampling::uniform_joint_poses(&robot, 90, &mut rng);
-        let kinds = [Kind::Position, Kind::Distance, Kind::Plane, Kind::Sphere, Kind::MultiTarget];
+        let kinds = [
+            Kind::Position,
+            Kind::Distance,
+            Kind::Plane,
+            Kind::Sphere,
+            Kind::MultiTarget,
+        ];
         let mut out = Vec::new();
         for kind in kinds {
             let mut pivots = vec![true];
@@ -274,7 +304,11 @@ mod tests {
             // nuisance values away from their first guess.
             let t = params.len();
             let x = DVector::from_fn(size.params, |k, _| {
-                if k < t { 0.0 } else { 1e-2 * ((k % 7) as Real - 3.0) }
+                if k < t {
+                    0.0
+                } else {
+                    1e-2 * ((k % 7) as Real - 3.0)
+                }
             });
             let mut r = DVector::zeros(size.rows());
             let mut j = DMatrix::zeros(size.rows(), size.params);
@@ -298,7 +332,10 @@ mod tests {
                 // none) is compared with the rounding of the differences instead.
                 let err = if diff < 1e-10 * largest { 0.0 } else { err };
                 let name = params.get(c).map_or("nuisance".into(), |p| p.to_string());
-                assert!(err < 1e-6, "{kind:?} column {c} ({name}): relative error {err:e}");
+                assert!(
+                    err < 1e-6,
+                    "{kind:?} column {c} ({name}): relative error {err:e}"
+                );
             }
         }
     }
@@ -311,7 +348,15 @@ mod tests {
             ("ls", Box::new(LsOptions::default())),
             ("ridge", Box::new(RidgeOptions::default())),
             ("igg3", Box::new(RobustOptions::default())),
-            ("lm", Box::new(LmOptions { adaptive: true, eps: 1e-12, max_iter: 200, ..LmOptions::default() })),
+            (
+                "lm",
+                Box::new(LmOptions {
+                    adaptive: true,
+                    eps: 1e-12,
+                    max_iter: 200,
+                    ..LmOptions::default()
+                }),
+            ),
         ];
         for (kind, qs, g, lay) in setups() {
             let data0 = noise_free(&lay.instrument, &nominal, &qs, &g, &lay.nuisance);
@@ -320,7 +365,12 @@ mod tests {
             let errors: Vec<(Param, Real)> = ident
                 .iter()
                 .enumerate()
-                .map(|(k, &p)| (p, if p.is_length() { 0.1 } else { 1e-3 } * (1.0 + 0.1 * (k % 5) as Real)))
+                .map(|(k, &p)| {
+                    (
+                        p,
+                        if p.is_length() { 0.1 } else { 1e-3 } * (1.0 + 0.1 * (k % 5) as Real),
+                    )
+                })
                 .collect();
             let truth = nominal.with_errors(&errors);
             // The true robot touches its surfaces at slightly moved joints.
@@ -343,6 +393,59 @@ mod tests {
                     assert!((c[k] - v).abs() < 1e-6, "{kind:?} {name}: nuisance {k}");
                 }
             }
+        }
+    }
+
+    /// Cramér–Rao (Gaussian noise alone, the same σ on every reading): the trace of the
+    /// empirical covariance of `ls`'s robot-parameter estimates over 400 noise draws against
+    /// σ² trace((JᵀJ)⁻¹) of the robot's block, per kind, at most 1.05. σ = 2 µm keeps every
+    /// kind in its linear range: one 25.4 mm sphere seen from 30 poses is so weakly
+    /// conditioned that at σ = 10 µm the estimate's spread is 1.34 times the bound.
+    #[test]
+    fn ls_meets_the_cramer_rao_bound_for_every_kind() {
+        use rand::Rng as _;
+        let nominal = irb2600();
+        let params = candidates(&nominal);
+        let sigma = 0.002;
+        let draws = 400;
+        for (kind, qs, g, lay) in setups() {
+            let (qs, g) = (&qs[..30], &g[..30]);
+            let data0 = noise_free(&lay.instrument, &nominal, qs, g, &lay.nuisance);
+            let ident = identifiability(&nominal, &params, qs, &data0)
+                .unwrap()
+                .identifiable;
+            let errors: Vec<(Param, Real)> = ident
+                .iter()
+                .map(|&p| (p, if p.is_length() { 0.1 } else { 1e-3 }))
+                .collect();
+            let truth = nominal.with_errors(&errors);
+            let (tq, tg) = touching(&truth, &lay, qs, g);
+            let clean = noise_free(&lay.instrument, &truth, &tq, &tg, &lay.nuisance);
+            let t = ident.len();
+            let ls = LsOptions::default();
+            let kp = KindProblem::new(&nominal, &ident, &tq, &clean).unwrap();
+            let exact = solve(&ls, &kp, &DVector::zeros(kp.size().params));
+            let inv = exact.normal.clone().try_inverse().unwrap();
+            let crb: Real = (0..t).map(|c| sigma * sigma * inv[(c, c)]).sum();
+            let mut rng = crate::numeric::rng::stream(36, kind.as_str());
+            let mut est = Vec::with_capacity(draws);
+            for _ in 0..draws {
+                let mut data = clean.clone();
+                for v in &mut data.values {
+                    let z: Real = rng.sample(rand_distr::StandardNormal);
+                    *v += sigma * z;
+                }
+                let kp = KindProblem::new(&nominal, &ident, &tq, &data).unwrap();
+                let out = solve(&ls, &kp, &DVector::zeros(kp.size().params));
+                est.push(out.x.rows(0, t).into_owned());
+            }
+            let n = draws as Real;
+            let mean = est.iter().fold(DVector::zeros(t), |a, e| a + e) / n;
+            let trace: Real =
+                est.iter().map(|e| (e - &mean).norm_squared()).sum::<Real>() / (n - 1.0);
+            let ratio = trace / crb;
+            eprintln!("{kind:?}: CRB ratio {ratio:.4}");
+            assert!(ratio <= 1.05 && ratio > 0.9, "{kind:?}: CRB ratio {ratio}");
         }
     }
 

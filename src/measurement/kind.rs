@@ -136,7 +136,9 @@ impl Instrument {
                 "measurement.planes",
                 "needs at least one plane, each with an axis x, y or z".into(),
             ),
-            Instrument::Spheres(s) if s.is_empty() || s.iter().any(|r| !(r.is_finite() && *r > 0.0)) => {
+            Instrument::Spheres(s)
+                if s.is_empty() || s.iter().any(|r| !(r.is_finite() && *r > 0.0)) =>
+            {
                 bad(
                     "measurement.radius_mm",
                     "needs at least one sphere of finite radius > 0".into(),
@@ -170,7 +172,10 @@ impl KindData {
         if self.values.len() != rows {
             return Err(Error::setting(
                 "measurements",
-                format!("{m} poses need {rows} measured values, got {}", self.values.len()),
+                format!(
+                    "{m} poses need {rows} measured values, got {}",
+                    self.values.len()
+                ),
             ));
         }
         if self.group.len() != m {
@@ -187,11 +192,17 @@ impl KindData {
         if let Some(i) = self.group.iter().position(|&g| g >= groups) {
             return Err(Error::setting(
                 "measurements",
-                format!("pose {i}: plane or sphere {} of {groups}", self.group[i] + 1),
+                format!(
+                    "pose {i}: plane or sphere {} of {groups}",
+                    self.group[i] + 1
+                ),
             ));
         }
         if let Some(i) = self.values.iter().position(|v| !v.is_finite()) {
-            return Err(Error::setting("measurements", format!("value {i} not finite")));
+            return Err(Error::setting(
+                "measurements",
+                format!("value {i} not finite"),
+            ));
         }
         Ok(())
     }
@@ -363,19 +374,35 @@ pub fn nuisance_guess(
         let (a, b): (Vec<[Real; 4]>, Vec<Real>) = match inst {
             Instrument::Planes(axes) => {
                 let (k, u, v) = plane_axes(axes[g]);
-                pts.iter().map(|pt| ([1.0, pt[u], pt[v], 0.0], pt[k])).unzip()
+                pts.iter()
+                    .map(|pt| ([1.0, pt[u], pt[v], 0.0], pt[k]))
+                    .unzip()
             }
             Instrument::Distance { .. } => pts
                 .iter()
                 .zip(values)
-                .map(|(pt, l)| ([2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], -1.0], pt.norm_squared() - l * l))
+                .map(|(pt, l)| {
+                    (
+                        [2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], -1.0],
+                        pt.norm_squared() - l * l,
+                    )
+                })
                 .unzip(),
             _ => pts
                 .iter()
-                .map(|pt| ([2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], 1.0], pt.norm_squared()))
+                .map(|pt| {
+                    (
+                        [2.0 * pt[0], 2.0 * pt[1], 2.0 * pt[2], 1.0],
+                        pt.norm_squared(),
+                    )
+                })
                 .unzip(),
         };
-        let cols = if matches!(inst, Instrument::Planes(_)) { 3 } else { 4 };
+        let cols = if matches!(inst, Instrument::Planes(_)) {
+            3
+        } else {
+            4
+        };
         if a.len() < cols + 1 {
             return Err(Error::setting(
                 "measurements",

@@ -26,7 +26,11 @@ pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
                 c.kind.clone(),
                 c.poses.to_string(),
                 c.strategy.clone(),
-                format!("{} + {}/m", fmt_num(c.noise_um, 3), fmt_num(c.scale_um_per_m, 3)),
+                format!(
+                    "{} + {}/m",
+                    fmt_num(c.noise_um, 3),
+                    fmt_num(c.scale_um_per_m, 3)
+                ),
                 c.identified.len().to_string(),
                 fmt_num(c.eta_mean_pct, 4),
                 fmt_num(c.validation_before_mm, 4),
@@ -61,8 +65,16 @@ pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
         out += &format!(
             "- **{}**: {} (instrument unknowns: {})\n",
             c.kind,
-            if c.unidentifiable.is_empty() { "none".into() } else { c.unidentifiable.join(", ") },
-            if c.instrument_unknowns.is_empty() { "none".into() } else { c.instrument_unknowns.join(", ") },
+            if c.unidentifiable.is_empty() {
+                "none".into()
+            } else {
+                c.unidentifiable.join(", ")
+            },
+            if c.instrument_unknowns.is_empty() {
+                "none".into()
+            } else {
+                c.instrument_unknowns.join(", ")
+            },
         );
     }
     out

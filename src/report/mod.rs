@@ -16,10 +16,10 @@
 pub mod check;
 pub mod exports;
 pub mod identified;
+pub mod instruments;
 pub mod markdown;
 pub mod plots;
 pub mod practice;
-pub mod instruments;
 pub mod registration_study;
 pub mod run;
 

@@ -85,7 +85,10 @@ impl InstrumentSettings {
             }
         };
         inst.check()?;
-        for (k, v) in [("noise_um", self.noise_um), ("scale_um_per_m", self.scale_um_per_m)] {
+        for (k, v) in [
+            ("noise_um", self.noise_um),
+            ("scale_um_per_m", self.scale_um_per_m),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::setting(
                     &format!("measurement.{k}"),
@@ -93,7 +96,12 @@ impl InstrumentSettings {
                 ));
             }
         }
-        if self.pivot_mm.iter().chain(&self.tracker_mm).any(|v| !v.is_finite()) {
+        if self
+            .pivot_mm
+            .iter()
+            .chain(&self.tracker_mm)
+            .any(|v| !v.is_finite())
+        {
             return Err(Error::setting("measurement.pivot_mm", "must be finite"));
         }
         Ok(inst)
@@ -183,8 +191,17 @@ fn surface(lay: &Layout, group: usize, p: &Vec3) -> Option<(Real, Vec3)> {
 /// joint and step): `None` when it does not meet it to 1e-9 mm within the joint limits
 /// narrowed by `margin` (rad or mm) in 100 steps. Poses of kinds without a surface come back
 /// unchanged.
-pub fn touch(robot: &Robot, lay: &Layout, group: usize, q: &[Real], margin: Real) -> Option<Vec<Real>> {
-    if !matches!(lay.instrument, Instrument::Planes(_) | Instrument::Spheres(_)) {
+pub fn touch(
+    robot: &Robot,
+    lay: &Layout,
+    group: usize,
+    q: &[Real],
+    margin: Real,
+) -> Option<Vec<Real>> {
+    if !matches!(
+        lay.instrument,
+        Instrument::Planes(_) | Instrument::Spheres(_)
+    ) {
         return Some(q.to_vec());
     }
     let chain = robot.chain();
@@ -256,7 +273,9 @@ pub fn measure(
     let mut touched = Vec::with_capacity(qs.len());
     for (i, (q, &g)) in qs.iter().zip(group).enumerate() {
         touched.push(touch(truth, lay, g, q, 0.0).ok_or_else(|| {
-            Error::Compute(format!("pose {i}: the true robot does not touch its surface"))
+            Error::Compute(format!(
+                "pose {i}: the true robot does not touch its surface"
+            ))
         })?);
     }
     let chain = truth.chain();
@@ -267,7 +286,10 @@ pub fn measure(
     model_values(&lay.instrument, group, &p, &rot, &lay.nuisance, &mut values);
     let tracker = Vec3::from(s.tracker_mm);
     let per = lay.instrument.rows_per_observation();
-    let surface_kind = matches!(lay.instrument, Instrument::Planes(_) | Instrument::Spheres(_));
+    let surface_kind = matches!(
+        lay.instrument,
+        Instrument::Planes(_) | Instrument::Spheres(_)
+    );
     let mut sigma = vec![0.0; values.len() / per];
     for (k, v) in values.iter_mut().enumerate() {
         let range_m = match &lay.instrument {
@@ -280,7 +302,11 @@ pub fn measure(
         let z: Real = rng.sample(StandardNormal);
         // A surface's reading is its constraint, 0 by definition: the contact error (the
         // touched point off the surface by σ along its normal) shows as a reading of −g.
-        *v = if surface_kind { sigma_mm * z } else { *v + sigma_mm * z };
+        *v = if surface_kind {
+            sigma_mm * z
+        } else {
+            *v + sigma_mm * z
+        };
     }
     let data = KindData {
         instrument: lay.instrument.clone(),

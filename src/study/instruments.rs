@@ -108,26 +108,33 @@ impl InstrumentsScenario {
     /// Parses and checks the scenario in `table`, read from `path` (named in errors).
     pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
-        let s: InstrumentsScenario = toml::Value::Table(table).try_into().map_err(
-            |e: toml::de::Error| {
-                ferr(
-                    "scenario",
-                    format!(
-                        "{} (a scenario with [measurement] takes name, description, seed, \
+        let s: InstrumentsScenario =
+            toml::Value::Table(table)
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    ferr(
+                        "scenario",
+                        format!(
+                            "{} (a scenario with [measurement] takes name, description, seed, \
                          trials, robot, poses, strategies, candidates, validation, [errors] \
                          and its [[measurement]] tables)",
-                        e.to_string().trim_end()
-                    ),
-                )
-            },
-        )?;
+                            e.to_string().trim_end()
+                        ),
+                    )
+                })?;
         if s.name.trim().is_empty() || s.name.contains(['/', '\\']) {
-            return Err(ferr("name", "must be a non-empty name without slashes".into()));
+            return Err(ferr(
+                "name",
+                "must be a non-empty name without slashes".into(),
+            ));
         }
         if s.trials < 2 || s.trials > crate::study::scenario::MAX_TRIALS {
             return Err(ferr(
                 "trials",
-                format!("must be between 2 and {}", crate::study::scenario::MAX_TRIALS),
+                format!(
+                    "must be between 2 and {}",
+                    crate::study::scenario::MAX_TRIALS
+                ),
             ));
         }
         for (i, m) in s.instruments().iter().enumerate() {
@@ -146,13 +153,18 @@ impl InstrumentsScenario {
         if s.poses.iter().any(|&n| n < 10 || n > s.candidates) {
             return Err(ferr(
                 "poses",
-                format!("each count must be between 10 and candidates = {}", s.candidates),
+                format!(
+                    "each count must be between 10 and candidates = {}",
+                    s.candidates
+                ),
             ));
         }
         if s.validation == 0 {
             return Err(ferr("validation", "must be at least 1".into()));
         }
-        s.errors.check().map_err(|e| ferr("errors", e.to_string()))?;
+        s.errors
+            .check()
+            .map_err(|e| ferr("errors", e.to_string()))?;
         Ok(s)
     }
 }
@@ -192,9 +204,13 @@ impl KindPoseModel<'_> {
         };
         out.fill(0.0);
         // The instrument's geometry is the layout's (one point cannot fix a first guess).
-        let Ok(kp) =
-            KindProblem::with_guess(self.robot, &self.params, &qs, &data, self.lay.nuisance.clone())
-        else {
+        let Ok(kp) = KindProblem::with_guess(
+            self.robot,
+            &self.params,
+            &qs,
+            &data,
+            self.lay.nuisance.clone(),
+        ) else {
             return;
         };
         let size = kp.size();
@@ -355,10 +371,29 @@ impl InstrumentsScenario {
                         .into_par_iter()
                         .map(|t| {
                             let seed = trial_seed(self.seed, t as u64);
-                            self.trial(nominal, s, &lay, &params, &pool, &groups, fixed.as_ref(), count, seed)
+                            self.trial(
+                                nominal,
+                                s,
+                                &lay,
+                                &params,
+                                &pool,
+                                &groups,
+                                fixed.as_ref(),
+                                count,
+                                seed,
+                            )
                         })
                         .collect::<Result<_>>()?;
-                    cells.push(self.cell(&label, s, &lay, &params, &a.unidentifiable, count, st, &trials));
+                    cells.push(self.cell(
+                        &label,
+                        s,
+                        &lay,
+                        &params,
+                        &a.unidentifiable,
+                        count,
+                        st,
+                        &trials,
+                    ));
                 }
             }
         }
@@ -406,7 +441,11 @@ impl InstrumentsScenario {
             .all(|v| *v > 0.0)
             .then(|| sigma.iter().map(|v| 1.0 / (v * v)).collect());
         let kp = KindProblem::new(nominal, params, &tq, &data)?.with_prior_weights(w.as_deref())?;
-        let out = solve(&LsOptions::default(), &kp, &DVector::zeros(kp.size().params));
+        let out = solve(
+            &LsOptions::default(),
+            &kp,
+            &DVector::zeros(kp.size().params),
+        );
         if out.termination != Termination::Converged {
             return Ok(None);
         }
@@ -462,7 +501,11 @@ impl InstrumentsScenario {
                     .map(|tr| {
                         let e = tr.errors[k].1;
                         let est = params.iter().position(|q| q == p).map_or(0.0, |c| tr.x[c]);
-                        if e == 0.0 { Real::NAN } else { (1.0 - (e - est).abs() / e.abs()) * 100.0 }
+                        if e == 0.0 {
+                            Real::NAN
+                        } else {
+                            (1.0 - (e - est).abs() / e.abs()) * 100.0
+                        }
                     })
                     .sum();
                 if sum.is_finite() {
@@ -484,7 +527,10 @@ impl InstrumentsScenario {
         let trace: Real = (0..t)
             .map(|c| {
                 let mean = ok.iter().map(|tr| err(tr, c)).sum::<Real>() / n;
-                ok.iter().map(|tr| (err(tr, c) - mean).powi(2)).sum::<Real>() / (n - 1.0).max(1.0)
+                ok.iter()
+                    .map(|tr| (err(tr, c) - mean).powi(2))
+                    .sum::<Real>()
+                    / (n - 1.0).max(1.0)
             })
             .sum();
         let crb = ok.iter().map(|tr| tr.crb).sum::<Real>() / n;

@@ -18,8 +18,8 @@
 //! [`stats::Accumulator`], then are dropped, so a run holds a chunk of trials plus the
 //! accumulators' compact per-trial numbers, not the trials themselves.
 
-pub mod plan;
 pub mod instruments;
+pub mod plan;
 pub mod registration_study;
 pub mod scenario;
 pub mod stats;
