@@ -14,6 +14,7 @@
 //! libraries, and the same data gives the same bytes.
 
 pub mod check;
+pub mod html;
 pub mod identified;
 pub mod markdown;
 pub mod plots;
