@@ -366,7 +366,10 @@ fn compare_refuses_what_is_not_a_summary_naming_the_file() {
 fn the_readme_shows_a_committed_screenshot_of_the_default_study_page() {
     let readme = read(&root().join("README.md"));
     let image = "assets/report-default.png";
-    assert!(readme.contains(&format!("]({image})")), "README.md shows {image}");
+    assert!(
+        readme.contains(&format!("]({image})")),
+        "README.md shows {image}"
+    );
     let bytes = std::fs::read(root().join(image)).unwrap();
     assert!(bytes.starts_with(b"\x89PNG"), "{image} is a PNG");
 }
