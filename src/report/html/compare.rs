@@ -1,6 +1,6 @@
 //! `calbench compare A B --out DIR`: two runs side by side, entry by entry, as `compare.html`
 //! and `compare.md`. Every metric `calbench check` guards is listed with both values, the
-//! difference and the relative change; the regressions are the ones [`check::compare`]
+//! difference and the relative change; the regressions are the ones [`crate::report::check::compare`]
 //! reports with the same tolerance (B is compared against A as a summary against its
 //! baseline). An entry in only one of the runs is listed as such.
 
@@ -270,7 +270,7 @@ impl Comparison {
     }
 }
 
-/// The files [`write`] writes.
+/// The files [`write()`] writes.
 pub const OUTPUTS: [&str; 2] = ["compare.html", "compare.md"];
 
 /// Writes `compare.html` and `compare.md` of `c` into the folder `out` as a whole.
