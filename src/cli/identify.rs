@@ -13,9 +13,8 @@ use calbench::identify::{method_by_name, MethodEntry, MethodSpec, Termination, M
 use calbench::measurement::csv::read_measurements;
 use calbench::measurement::{Measure, Measurements};
 use calbench::numeric::{Frame, Real};
-use calbench::report::identified::{
-    registration_warning, validate_file, write_identified, IdentifyRecord,
-};
+use calbench::report::identified::{registration_warning, validate_file, IdentifyRecord};
+use calbench::report::write_identified;
 use calbench::robot::compliance::CompliancePick;
 use calbench::robot::identifiability::analyse;
 use calbench::robot::{builtin, param_sets, Param, Robot};

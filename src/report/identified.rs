@@ -111,13 +111,10 @@ pub fn residuals_csv(r: &IdentifyRecord) -> Result<String> {
     Ok(csv)
 }
 
-/// Writes `residuals.csv`, `identified.json` and `robot.toml` (the compensated robot, named
-/// `<nominal>-calibrated`) into `out`.
-pub fn write_identified(out: &Path, r: &IdentifyRecord) -> Result<()> {
-    super::atomically(out, |dir| write_into(dir, r))
-}
-
-fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
+/// Writes `residuals.csv`, `identified.json`, `report.md` with its plots, `robot.toml` (the
+/// compensated robot, named `<nominal>-calibrated`) and `robot.urdf` if asked for into the
+/// folder `out` ([`super::write_identified`] adds `report.html` and writes them as a whole).
+pub fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
     write(&out.join("residuals.csv"), &residuals_csv(r)?)?;
     let text = serde_json::to_string_pretty(&identified_json(r))
         .map_err(|e| Error::Compute(e.to_string()))?;
@@ -125,7 +122,6 @@ fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
     let mut compensated = r.calibrated.robot.clone();
     compensated.name = format!("{}-calibrated", r.nominal.name);
     write(&out.join("report.md"), &report_md(out, r)?)?;
-    super::html::identify::page(out, r)?.write(&out.join("report.html"))?;
     if let Some(u) = &r.urdf {
         write(&out.join("robot.urdf"), u)?;
     }

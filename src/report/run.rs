@@ -805,9 +805,10 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     Ok(done)
 }
 
-/// Writes every file of a complete run but `trials.csv` (written as the trials finished)
-/// into the folder `dir`.
-pub fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
+/// Writes every file of a complete run but `trials.csv` (written as the trials finished) and
+/// `report.html` ([`super::write_run`]) into the folder `dir`; returns the plots written
+/// (file name, caption), as `report.md` lists them.
+pub fn write_into(r: &RunResult, dir: &Path) -> Result<Vec<(String, String)>> {
     write_json(&dir.join("summary.json"), &summary(r))?;
     let timing: Vec<Value> = r
         .blocks
@@ -825,7 +826,7 @@ pub fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
     )?;
     let plots = write_plots(r, dir)?;
     write(&dir.join("report.md"), &report_md(r, &plots))?;
-    super::html::run::page(r, &plots, dir)?.write(&dir.join("report.html"))
+    Ok(plots)
 }
 
 #[cfg(test)]
