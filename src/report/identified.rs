@@ -202,6 +202,15 @@ fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 
+/// The standard error of parameter `i`: the square root of the covariance's diagonal; NaN
+/// where the covariance is not given (its entries NaN) or lacks the parameter.
+pub fn standard_error(covariance: &nalgebra::DMatrix<Real>, i: usize) -> Real {
+    covariance
+        .get((i, i))
+        .filter(|v| v.is_finite())
+        .map_or(Real::NAN, |v| v.max(0.0).sqrt())
+}
+
 /// The headers of [`validation_rows`].
 pub const VALIDATION_HEADERS: [&str; 5] = ["error", "mean", "rms", "max", "std"];
 
@@ -337,9 +346,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let se = covariance
-                .get((i, i))
-                .map_or(Real::NAN, |v| v.max(0.0).sqrt());
+            let se = standard_error(&covariance, i);
             vec![p.to_string(), fmt_num(id.x[i], 4), fmt_num(se, 3)]
         })
         .collect();

@@ -15,7 +15,9 @@ use super::Page;
 use crate::calibrate::validation::point_residuals;
 use crate::error::Result;
 use crate::numeric::Real;
-use crate::report::identified::{validation_rows, warnings, IdentifyRecord, VALIDATION_HEADERS};
+use crate::report::identified::{
+    standard_error, validation_rows, warnings, IdentifyRecord, VALIDATION_HEADERS,
+};
 use crate::report::markdown::fmt_num;
 
 /// Pairs of parameters whose estimates correlate by more than this (|ρ|) are flagged: the
@@ -33,7 +35,7 @@ pub struct View<'a> {
     pub before: Vec<Real>,
     /// … of the compensated robot (mm).
     pub after: Vec<Real>,
-    /// The covariance of the identified errors (empty when the data do not give one).
+    /// The covariance of the identified errors (its entries NaN when the data do not give one).
     pub covariance: DMatrix<Real>,
 }
 
@@ -183,7 +185,7 @@ fn parameters_section(page: &mut Page, v: &View) -> Result<()> {
         "Errors in mm and rad (joint compliances c<j>: rad/(N·m)); σ is the square root of the \
          covariance's diagonal (σ0² (JᵀPJ)⁻¹).",
     );
-    if cov.is_empty() {
+    if (0..names.len()).any(|i| standard_error(cov, i).is_nan()) {
         page.para(
             "No covariance: the data do not determine every parameter, leave no redundancy, \
              or the method does not estimate σ0. σ and ρ are not given.",
@@ -193,11 +195,7 @@ fn parameters_section(page: &mut Page, v: &View) -> Result<()> {
         .iter()
         .enumerate()
         .map(|(i, name)| {
-            let sigma = if cov.nrows() > i {
-                cov[(i, i)].max(0.0).sqrt()
-            } else {
-                Real::NAN
-            };
+            let sigma = standard_error(cov, i);
             let partners: Vec<String> = pairs
                 .iter()
                 .filter(|(a, b, _)| *a == i || *b == i)
