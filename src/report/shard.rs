@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::run::{write_into, TrialsCsv};
+use super::run::TrialsCsv;
+use super::write_run;
 use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
@@ -453,7 +454,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
             seconds,
             shard: None,
         };
-        write_into(&r, dir)?;
+        write_run(&r, dir)?;
         result = Some(r);
         Ok(())
     })?;
