@@ -22,7 +22,7 @@ use crate::study::trial::Outcome;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-2";
+const FORMAT: &str = "calbench-shard-3";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -160,6 +160,7 @@ fn encode(block: usize, t: &TrialResult) -> String {
             o.after_deg,
             o.before_attitude_deg,
             o.after_attitude_deg,
+            o.before_fitted_mm,
         ] {
             match d {
                 Some(d) => {
@@ -271,6 +272,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let after_deg = t.optional_stats()?;
         let before_attitude_deg = t.optional_stats()?;
         let after_attitude_deg = t.optional_stats()?;
+        let before_fitted_mm = t.optional_stats()?;
         let identified = t.reals(n)?;
         outcomes.push(Outcome {
             method,
@@ -284,6 +286,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             after_deg,
             before_attitude_deg,
             after_attitude_deg,
+            before_fitted_mm,
             per_point: None,
             per_point_attitude_deg: None,
             trace: None,
@@ -487,6 +490,7 @@ mod tests {
                 before_deg: None,
                 after_deg: Some(stats(0.3)),
                 before_attitude_deg: None,
+                before_fitted_mm: None,
                 after_attitude_deg: None,
                 per_point: None,
                 per_point_attitude_deg: None,

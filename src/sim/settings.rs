@@ -384,6 +384,24 @@ pub enum Region {
         /// Edge lengths of the box, mm.
         size_mm: [Real; 3],
     },
+    /// Tool points drawn uniformly in an axis-aligned box of the base frame, each with its
+    /// tool z axis drawn uniformly within `cone_deg` of `axis`; the joints solved by inverse
+    /// kinematics on the nominal robot, a target it cannot reach within its joint limits
+    /// drawn again (a tracker-visible region: Li 2018 §3).
+    Workspace {
+        /// Centre of the box, mm.
+        center_mm: [Real; 3],
+        /// Edge lengths of the box, mm.
+        size_mm: [Real; 3],
+        /// Axis of the orientation cone, base frame (normalised; not zero).
+        axis: [Real; 3],
+        /// Half-angle of the cone, degrees, in [0, 180].
+        cone_deg: Real,
+        /// Start of the inverse kinematics, one value per joint in the robot's units (deg,
+        /// mm); `None`: zero clamped into each joint's range.
+        #[serde(default)]
+        start: Option<Vec<Real>>,
+    },
     /// A regular grid of `per_joint` values per joint (cell centres of the joint ranges);
     /// the poses are drawn without repetition from the grid.
     Grid {
@@ -398,17 +416,34 @@ impl Region {
     pub fn check(&self, key: &str) -> Result<()> {
         match self {
             Region::Joint => Ok(()),
-            Region::Box { center_mm, size_mm } => {
-                if center_mm.iter().any(|v| !v.is_finite()) {
+            Region::Box { center_mm, size_mm } => check_box(key, center_mm, size_mm),
+            Region::Workspace {
+                center_mm,
+                size_mm,
+                axis,
+                cone_deg,
+                start,
+            } => {
+                check_box(key, center_mm, size_mm)?;
+                if let Some(s) = start {
+                    if s.iter().any(|v| !v.is_finite()) {
+                        return Err(Error::setting(
+                            key,
+                            format!("start must be finite, got {s:?}"),
+                        ));
+                    }
+                }
+                let norm = axis.iter().map(|v| v * v).sum::<Real>().sqrt();
+                if !(norm.is_finite() && norm > 0.0) {
                     return Err(Error::setting(
                         key,
-                        format!("center_mm must be finite, got {center_mm:?}"),
+                        format!("axis must be finite and not zero, got {axis:?}"),
                     ));
                 }
-                if size_mm.iter().any(|v| !v.is_finite() || *v <= 0.0) {
+                if !(0.0..=180.0).contains(cone_deg) {
                     return Err(Error::setting(
                         key,
-                        format!("size_mm must be > 0, got {size_mm:?}"),
+                        format!("cone_deg must be in [0, 180], got {cone_deg}"),
                     ));
                 }
                 Ok(())
@@ -421,6 +456,23 @@ impl Region {
             }
         }
     }
+}
+
+/// Refuses a non-finite box centre and edges ≤ 0, naming `key`.
+fn check_box(key: &str, center_mm: &[Real; 3], size_mm: &[Real; 3]) -> Result<()> {
+    if center_mm.iter().any(|v| !v.is_finite()) {
+        return Err(Error::setting(
+            key,
+            format!("center_mm must be finite, got {center_mm:?}"),
+        ));
+    }
+    if size_mm.iter().any(|v| !v.is_finite() || *v <= 0.0) {
+        return Err(Error::setting(
+            key,
+            format!("size_mm must be > 0, got {size_mm:?}"),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
