@@ -268,11 +268,12 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let after_mm = t.stats()?;
         let calibration_before_mm = t.stats()?;
         let calibration_after_mm = t.stats()?;
-        let before_deg = t.optional_stats()?;
-        let after_deg = t.optional_stats()?;
-        let before_attitude_deg = t.optional_stats()?;
-        let after_attitude_deg = t.optional_stats()?;
-        let before_fitted_mm = t.optional_stats()?;
+        let mut optional = [None; 5];
+        for o in &mut optional {
+            *o = t.optional_stats()?;
+        }
+        let [before_deg, after_deg, before_attitude_deg, after_attitude_deg, before_fitted_mm] =
+            optional;
         let identified = t.reals(n)?;
         outcomes.push(Outcome {
             method,

@@ -16,34 +16,25 @@ const MAX_ITERATIONS: usize = 50;
 const TOL_MM: Real = 1e-10;
 const TOL_RAD: Real = 1e-12;
 
+/// The position error `dp` (mm) and the rotation `dr` (rad, mm-weighted) as one 6-vector.
+fn stack(dp: Vec3, dr: Vec3) -> [Real; 6] {
+    let r = K_MM_PER_RAD * dr;
+    [dp.x, dp.y, dp.z, r.x, r.y, r.z]
+}
+
 /// The 6-vector pose error of `f` against `target` (mm, then mm-weighted rad).
 fn pose_error(target: &Frame, f: &Frame) -> [Real; 6] {
-    let dp = target.pos - f.pos;
-    let dr = rotation_vector(&(target.rot * f.rot.transpose()));
-    [
-        dp.x,
-        dp.y,
-        dp.z,
-        K_MM_PER_RAD * dr.x,
-        K_MM_PER_RAD * dr.y,
-        K_MM_PER_RAD * dr.z,
-    ]
+    stack(
+        target.pos - f.pos,
+        rotation_vector(&(target.rot * f.rot.transpose())),
+    )
 }
 
 /// The point-and-axis error of `f`: the position error, then `z_f × axis` (the small
 /// rotation that turns the flange z axis onto `axis`), mm-weighted. The rotation about the
 /// axis is free, so the rows have rank 5 at most.
 fn axis_error(point: &Vec3, axis: &Vec3, f: &Frame) -> [Real; 6] {
-    let dp = point - f.pos;
-    let dr = f.rot.column(2).cross(axis);
-    [
-        dp.x,
-        dp.y,
-        dp.z,
-        K_MM_PER_RAD * dr.x,
-        K_MM_PER_RAD * dr.y,
-        K_MM_PER_RAD * dr.z,
-    ]
+    stack(point - f.pos, f.rot.column(2).cross(axis))
 }
 
 /// Gauss–Newton on `error(pose(q))` from `q0`: central-difference Jacobian, minimum-norm

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use rand::Rng as _;
 
-use super::settings::Region;
+use super::settings::{Region, WorkspaceRegion};
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
@@ -76,35 +76,20 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
                 _ => Ok(()),
             }
         }
-        Region::Workspace {
-            center_mm,
-            size_mm,
-            axis,
-            cone_deg,
-            start,
-        } => {
-            beyond_reach(robot, center_mm, size_mm, key)?;
-            let start = workspace_start(robot, start.as_deref(), key)?;
+        Region::Workspace(w) => {
+            beyond_reach(robot, &w.center_mm, &w.size_mm, key)?;
             let mut rng = crate::numeric::rng::stream(0, "reach");
-            let found = poses_in_workspace(
-                robot,
-                1,
-                (*center_mm, *size_mm),
-                (*axis, *cone_deg),
-                start.as_deref(),
-                &mut rng,
-            );
-            if !found.is_empty() {
+            if !workspace(robot, w, 1, key, &mut rng)?.is_empty() {
                 return Ok(());
             }
             Err(Error::setting(
                 key,
                 format!(
-                    "the workspace box centred at {center_mm:?} mm of size {size_mm:?} mm with \
-                     the tool axis within {cone_deg}° of {axis:?} is out of reach of robot \
-                     \"{}\": not one of {WORKSPACE_TRIES_PER_POSE} random targets is reached \
-                     within the joint limits (the search stops there)",
-                    robot.name
+                    "the workspace box centred at {:?} mm of size {:?} mm with the tool axis \
+                     within {}° of {:?} is out of reach of robot \"{}\": not one of \
+                     {WORKSPACE_TRIES_PER_POSE} random targets is reached within the joint \
+                     limits (the search stops there)",
+                    w.center_mm, w.size_mm, w.cone_deg, w.axis, robot.name
                 ),
             ))
         }
@@ -129,32 +114,50 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
     }
 }
 
-/// The `start` of a workspace region in internal units, refused naming `key` when it does
-/// not give one value per joint or leaves the joint limits.
-fn workspace_start(robot: &Robot, start: Option<&[Real]>, key: &str) -> Result<Option<Vec<Real>>> {
-    let Some(s) = start else { return Ok(None) };
-    if s.len() != robot.dof() {
-        return Err(Error::setting(
-            key,
-            format!(
-                "start has {} values but robot \"{}\" has {} joints",
-                s.len(),
-                robot.name,
-                robot.dof()
-            ),
-        ));
-    }
-    let q = robot.q_from_user(s);
-    if !robot.within_limits(&q) {
-        return Err(Error::setting(
-            key,
-            format!(
-                "start {s:?} leaves the joint limits of robot \"{}\"",
-                robot.name
-            ),
-        ));
-    }
-    Ok(Some(q))
+/// Up to `n` poses of the workspace region `w` ([`poses_in_workspace`]); its `start` is
+/// refused, naming `key`, when it does not give one value per joint or leaves the limits.
+fn workspace(
+    robot: &Robot,
+    w: &WorkspaceRegion,
+    n: usize,
+    key: &str,
+    rng: &mut Rng,
+) -> Result<Vec<Vec<Real>>> {
+    let start = match &w.start {
+        None => None,
+        Some(s) if s.len() != robot.dof() => {
+            return Err(Error::setting(
+                key,
+                format!(
+                    "start has {} values but robot \"{}\" has {} joints",
+                    s.len(),
+                    robot.name,
+                    robot.dof()
+                ),
+            ))
+        }
+        Some(s) => {
+            let q = robot.q_from_user(s);
+            if !robot.within_limits(&q) {
+                return Err(Error::setting(
+                    key,
+                    format!(
+                        "start {s:?} leaves the joint limits of robot \"{}\"",
+                        robot.name
+                    ),
+                ));
+            }
+            Some(q)
+        }
+    };
+    Ok(poses_in_workspace(
+        robot,
+        n,
+        (w.center_mm, w.size_mm),
+        (w.axis, w.cone_deg),
+        start.as_deref(),
+        rng,
+    ))
 }
 
 /// Refuses, naming `key`, a box wholly beyond [`reach_bound_mm`] of the base origin.
@@ -245,31 +248,21 @@ pub fn sample_region_keyed(
             }
             Ok(out)
         }
-        Region::Workspace {
-            center_mm,
-            size_mm,
-            axis,
-            cone_deg,
-            start,
-        } => {
-            let start = workspace_start(robot, start.as_deref(), key)?;
-            let out = poses_in_workspace(
-                robot,
-                n,
-                (*center_mm, *size_mm),
-                (*axis, *cone_deg),
-                start.as_deref(),
-                rng,
-            );
+        Region::Workspace(w) => {
+            let out = workspace(robot, w, n, key, rng)?;
             if out.len() < n {
                 return Err(Error::setting(
                     key,
                     format!(
-                        "only {} of {n} poses found in the workspace box centred at \
-                         {center_mm:?} mm of size {size_mm:?} mm with the tool axis within \
-                         {cone_deg}° of {axis:?} after {} random targets (the search stops \
-                         there): the region is (nearly) out of reach of robot \"{}\"",
+                        "only {} of {n} poses found in the workspace box centred at {:?} mm of \
+                         size {:?} mm with the tool axis within {}° of {:?} after {} random \
+                         targets (the search stops there): the region is (nearly) out of reach \
+                         of robot \"{}\"",
                         out.len(),
+                        w.center_mm,
+                        w.size_mm,
+                        w.cone_deg,
+                        w.axis,
                         WORKSPACE_TRIES_PER_POSE * n,
                         robot.name
                     ),
@@ -366,13 +359,13 @@ mod tests {
     #[test]
     fn workspace_poses_lie_in_the_box_and_the_cone() {
         let r = crate::robot::builtin::irb2600();
-        let region = Region::Workspace {
+        let region = Region::Workspace(WorkspaceRegion {
             center_mm: [1200.0, 0.0, 900.0],
             size_mm: [1000.0, 1000.0, 800.0],
             axis: [2.0, 0.0, 0.0],
             cone_deg: 30.0,
             start: None,
-        };
+        });
         check_region(&r, &region, 40, "validation.region").unwrap();
         let qs = sample_region(&r, &region, 40, &mut stream(3, "poses")).unwrap();
         assert_eq!(qs.len(), 40);
@@ -391,30 +384,30 @@ mod tests {
         let again = sample_region(&r, &region, 40, &mut stream(3, "poses")).unwrap();
         assert_eq!(qs, again);
         // Out of reach, a zero axis, a start of the wrong length: refused naming the key.
-        let far = Region::Workspace {
+        let far = Region::Workspace(WorkspaceRegion {
             center_mm: [9000.0, 0.0, 900.0],
             size_mm: [100.0; 3],
             axis: [1.0, 0.0, 0.0],
             cone_deg: 30.0,
             start: None,
-        };
+        });
         let e = check_region(&r, &far, 5, "calibration.region").unwrap_err();
         assert_eq!(key_of(&e), "calibration.region");
-        let zero = Region::Workspace {
+        let zero = Region::Workspace(WorkspaceRegion {
             center_mm: [1200.0, 0.0, 900.0],
             size_mm: [100.0; 3],
             axis: [0.0; 3],
             cone_deg: 30.0,
             start: None,
-        };
+        });
         assert!(check_region(&r, &zero, 5, "k").is_err());
-        let short = Region::Workspace {
+        let short = Region::Workspace(WorkspaceRegion {
             center_mm: [1200.0, 0.0, 900.0],
             size_mm: [100.0; 3],
             axis: [1.0, 0.0, 0.0],
             cone_deg: 30.0,
             start: Some(vec![0.0; 3]),
-        };
+        });
         assert!(check_region(&r, &short, 5, "k").is_err());
     }
 

@@ -384,24 +384,9 @@ pub enum Region {
         /// Edge lengths of the box, mm.
         size_mm: [Real; 3],
     },
-    /// Tool points drawn uniformly in an axis-aligned box of the base frame, each with its
-    /// tool z axis drawn uniformly within `cone_deg` of `axis`; the joints solved by inverse
-    /// kinematics on the nominal robot, a target it cannot reach within its joint limits
-    /// drawn again (a tracker-visible region: Li 2018 §3).
-    Workspace {
-        /// Centre of the box, mm.
-        center_mm: [Real; 3],
-        /// Edge lengths of the box, mm.
-        size_mm: [Real; 3],
-        /// Axis of the orientation cone, base frame (normalised; not zero).
-        axis: [Real; 3],
-        /// Half-angle of the cone, degrees, in [0, 180].
-        cone_deg: Real,
-        /// Start of the inverse kinematics, one value per joint in the robot's units (deg,
-        /// mm); `None`: zero clamped into each joint's range.
-        #[serde(default)]
-        start: Option<Vec<Real>>,
-    },
+    /// Tool points in a box with the tool axis in a cone, joints by inverse kinematics
+    /// ([`WorkspaceRegion`]).
+    Workspace(WorkspaceRegion),
     /// A regular grid of `per_joint` values per joint (cell centres of the joint ranges);
     /// the poses are drawn without repetition from the grid.
     Grid {
@@ -417,37 +402,7 @@ impl Region {
         match self {
             Region::Joint => Ok(()),
             Region::Box { center_mm, size_mm } => check_box(key, center_mm, size_mm),
-            Region::Workspace {
-                center_mm,
-                size_mm,
-                axis,
-                cone_deg,
-                start,
-            } => {
-                check_box(key, center_mm, size_mm)?;
-                if let Some(s) = start {
-                    if s.iter().any(|v| !v.is_finite()) {
-                        return Err(Error::setting(
-                            key,
-                            format!("start must be finite, got {s:?}"),
-                        ));
-                    }
-                }
-                let norm = axis.iter().map(|v| v * v).sum::<Real>().sqrt();
-                if !(norm.is_finite() && norm > 0.0) {
-                    return Err(Error::setting(
-                        key,
-                        format!("axis must be finite and not zero, got {axis:?}"),
-                    ));
-                }
-                if !(0.0..=180.0).contains(cone_deg) {
-                    return Err(Error::setting(
-                        key,
-                        format!("cone_deg must be in [0, 180], got {cone_deg}"),
-                    ));
-                }
-                Ok(())
-            }
+            Region::Workspace(w) => w.check(key),
             Region::Grid { per_joint } => {
                 if *per_joint == 0 {
                     return Err(Error::setting(key, "per_joint must be ≥ 1, got 0"));
@@ -455,6 +410,57 @@ impl Region {
                 Ok(())
             }
         }
+    }
+}
+
+/// `kind = "workspace"`: tool points drawn uniformly in an axis-aligned box of the base frame,
+/// each with its tool z axis drawn uniformly within `cone_deg` of `axis`; the joints solved by
+/// inverse kinematics on the nominal robot, a target it cannot reach within its joint limits
+/// drawn again (a tracker-visible region: Li 2018 §3).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorkspaceRegion {
+    /// Centre of the box, mm.
+    pub center_mm: [Real; 3],
+    /// Edge lengths of the box, mm.
+    pub size_mm: [Real; 3],
+    /// Axis of the orientation cone, base frame (normalised; not zero).
+    pub axis: [Real; 3],
+    /// Half-angle of the cone, degrees, in [0, 180].
+    pub cone_deg: Real,
+    /// Start of the inverse kinematics, one value per joint in the robot's units (deg, mm);
+    /// `None`: zero clamped into each joint's range.
+    #[serde(default)]
+    pub start: Option<Vec<Real>>,
+}
+
+impl WorkspaceRegion {
+    /// Refuses a bad box, a zero or non-finite axis, a cone outside [0, 180]° and a
+    /// non-finite start, naming `key`.
+    pub fn check(&self, key: &str) -> Result<()> {
+        check_box(key, &self.center_mm, &self.size_mm)?;
+        let norm = self.axis.iter().map(|v| v * v).sum::<Real>().sqrt();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(Error::setting(
+                key,
+                format!("axis must be finite and not zero, got {:?}", self.axis),
+            ));
+        }
+        if !(0.0..=180.0).contains(&self.cone_deg) {
+            return Err(Error::setting(
+                key,
+                format!("cone_deg must be in [0, 180], got {}", self.cone_deg),
+            ));
+        }
+        if let Some(s) = &self.start {
+            if s.iter().any(|v| !v.is_finite()) {
+                return Err(Error::setting(
+                    key,
+                    format!("start must be finite, got {s:?}"),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 

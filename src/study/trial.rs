@@ -45,9 +45,6 @@ pub struct Outcome {
     pub before_attitude_deg: Option<ErrorStats>,
     /// … after.
     pub after_attitude_deg: Option<ErrorStats>,
-    /// Validation position errors (mm) of the nominal robot after the best rigid fit of its
-    /// points to the true ones (`validation.before_fitted`).
-    pub before_fitted_mm: Option<ErrorStats>,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
     /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
@@ -68,6 +65,9 @@ pub struct Outcome {
     pub rank_deficient_expected: bool,
     /// Wall time of registration and identification (s). Not part of the reproducible output.
     pub seconds: Real,
+    /// With `validation.before_fitted`: the nominal robot's validation position errors (mm)
+    /// after the best rigid fit of its points to the true ones.
+    pub before_fitted_mm: Option<ErrorStats>,
 }
 
 /// One trial's results.
