@@ -37,21 +37,24 @@ fn axis_error(point: &Vec3, axis: &Vec3, f: &Frame) -> [Real; 6] {
     stack(point - f.pos, f.rot.column(2).cross(axis))
 }
 
-/// Gauss–Newton on `error(pose(q))` from `q0`: central-difference Jacobian, minimum-norm
+/// Gauss–Newton on the first `rows` rows of `error(pose(q))` (the others count as zero)
+/// from `q0`: central-difference Jacobian, minimum-norm
 /// steps (SVD), until the position error is below [`TOL_MM`] and the rotation below
 /// [`TOL_RAD`] or after [`MAX_ITERATIONS`]. Returns the last iterate, reached or not.
 fn gauss_newton(
     q0: &[Real],
     pose: impl Fn(&[Real]) -> crate::Result<Frame>,
     error: impl Fn(&Frame) -> [Real; 6],
+    rows: usize,
 ) -> crate::Result<Vec<Real>> {
     let n = q0.len();
     let mut q = q0.to_vec();
     let mut qh = q.clone();
-    let mut jac = DMatrix::<Real>::zeros(6, n);
+    let mut jac = DMatrix::<Real>::zeros(rows, n);
     for _ in 0..MAX_ITERATIONS {
         let f = pose(&q)?;
-        let e = error(&f);
+        let mut e = error(&f);
+        e[rows..].fill(0.0);
         let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt() / K_MM_PER_RAD;
         if pos < TOL_MM && rot < TOL_RAD {
@@ -65,11 +68,11 @@ fn gauss_newton(
             let ep = error(&pose(&qh)?);
             qh[j] -= 2.0 * h;
             let em = error(&pose(&qh)?);
-            for r in 0..6 {
+            for r in 0..rows {
                 jac[(r, j)] = -(ep[r] - em[r]) / (2.0 * h);
             }
         }
-        let rhs = DVector::from_row_slice(&e);
+        let rhs = DVector::from_row_slice(&e[..rows]);
         let Ok(step) = jac.clone().svd(true, true).solve(&rhs, 1e-12) else {
             break;
         };
@@ -90,11 +93,24 @@ pub fn solve_pose(
     q0: &[Real],
     payload_kg: Real,
 ) -> crate::Result<Vec<Real>> {
+    solve_pose_rows(robot, target, q0, payload_kg, 6)
+}
+
+/// [`solve_pose`] on the first `rows` rows of the error: 6 for the pose, 3 for the position
+/// only (the orientation is free; the step is the least-norm one).
+pub fn solve_pose_rows(
+    robot: &Robot,
+    target: &Frame,
+    q0: &[Real],
+    payload_kg: Real,
+    rows: usize,
+) -> crate::Result<Vec<Real>> {
     let chain = robot.chain();
     gauss_newton(
         q0,
         |q| loaded_fk(robot, &chain, q, payload_kg),
         |f| pose_error(target, f),
+        rows,
     )
 }
 
@@ -110,7 +126,7 @@ pub fn solve_point_axis(
     (tol_mm, tol_deg): (Real, Real),
 ) -> Option<Vec<Real>> {
     let chain = robot.chain();
-    let q = gauss_newton(q0, |q| Ok(chain.fk(q)), |f| axis_error(point, axis, f)).ok()?;
+    let q = gauss_newton(q0, |q| Ok(chain.fk(q)), |f| axis_error(point, axis, f), 6).ok()?;
     let f = chain.fk(&q);
     let angle = f
         .rot
