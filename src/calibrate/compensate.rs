@@ -38,19 +38,7 @@ pub fn solve(
     q0: &[Real],
     payload_kg: Real,
 ) -> crate::Result<Vec<Real>> {
-    solve_rows(identified, target, q0, payload_kg, 6)
-}
-
-/// [`solve`] on the first `rows` rows of the error: 6 for the pose, 3 for the position only
-/// (the orientation is free; the step is the least-norm one) ([`crate::robot::ik::solve_pose_rows`]).
-fn solve_rows(
-    identified: &Robot,
-    target: &Frame,
-    q0: &[Real],
-    payload_kg: Real,
-    rows: usize,
-) -> crate::Result<Vec<Real>> {
-    crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)
+    crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, 6)
 }
 
 /// The flag of a written command `q` with its residuals ([`Corrected::flag`]).
@@ -141,7 +129,8 @@ pub fn compensate_targets(
             .chain(&randoms);
         let mut best: Option<Corrected> = None;
         for q0 in starts {
-            let mut q = solve_rows(identified, target, q0, payload_kg, rows)?;
+            let mut q =
+                crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)?;
             wrap_into_limits(identified, &mut q);
             let q = round(&q);
             let f = loaded_fk(identified, &chain, &q, payload_kg)?;
