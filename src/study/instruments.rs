@@ -25,16 +25,6 @@ use crate::robot::{Param, Robot};
 use crate::sim::instrument::{instrument_poses, measure, touch, InstrumentSettings, Layout};
 use crate::sim::settings::ErrorSettings;
 
-/// One `[measurement]` table or an array of them.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(untagged)]
-pub enum OneOrMany {
-    /// `[measurement]`.
-    One(Box<InstrumentSettings>),
-    /// `[[measurement]]`.
-    Many(Vec<InstrumentSettings>),
-}
-
 /// A scenario file running the instruments study.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -68,8 +58,10 @@ pub struct InstrumentsScenario {
     /// The true robot's errors.
     #[serde(default)]
     pub errors: ErrorSettings,
-    /// The instruments.
-    pub measurement: OneOrMany,
+    /// The instruments: one `[measurement]` table or `[[measurement]]` tables (read by
+    /// [`InstrumentsScenario::from_table`], each entry's errors naming its place).
+    #[serde(skip)]
+    pub measurement: Vec<InstrumentSettings>,
 }
 
 fn default_seed() -> u64 {
@@ -99,16 +91,33 @@ impl InstrumentsScenario {
 
     /// The instruments, in file order.
     pub fn instruments(&self) -> Vec<InstrumentSettings> {
-        match &self.measurement {
-            OneOrMany::One(s) => vec![(**s).clone()],
-            OneOrMany::Many(v) => v.clone(),
-        }
+        self.measurement.clone()
     }
 
     /// Parses and checks the scenario in `table`, read from `path` (named in errors).
-    pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
+    pub fn from_table(mut table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
-        let s: InstrumentsScenario =
+        let entries = match table.remove("measurement") {
+            Some(toml::Value::Array(a)) => a,
+            Some(t @ toml::Value::Table(_)) => vec![t],
+            _ => {
+                return Err(ferr(
+                    "measurement",
+                    "must be a [measurement] table or [[measurement]] tables".into(),
+                ))
+            }
+        };
+        let mut measurement = Vec::with_capacity(entries.len());
+        for (i, e) in entries.into_iter().enumerate() {
+            let m: InstrumentSettings = e.try_into().map_err(|e: toml::de::Error| {
+                ferr(
+                    &format!("measurement[{i}]"),
+                    e.to_string().trim_end().to_string(),
+                )
+            })?;
+            measurement.push(m);
+        }
+        let mut s: InstrumentsScenario =
             toml::Value::Table(table)
                 .try_into()
                 .map_err(|e: toml::de::Error| {
@@ -122,6 +131,7 @@ impl InstrumentsScenario {
                         ),
                     )
                 })?;
+        s.measurement = measurement;
         if s.name.trim().is_empty() || s.name.contains(['/', '\\']) {
             return Err(ferr(
                 "name",
@@ -359,7 +369,8 @@ impl InstrumentsScenario {
                         None
                     } else {
                         let mut r = stream(self.seed, &format!("instruments-select-{ii}-{count}"));
-                        let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)?;
+                        let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)
+                            .map_err(|e| Error::setting("poses", format!("{label}: {e}")))?;
                         let g: Vec<usize> = sel
                             .poses
                             .iter()

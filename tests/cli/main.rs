@@ -10,6 +10,7 @@ mod common;
 mod cli;
 mod fuzz;
 mod html;
+mod instruments;
 mod practice;
 mod realdata;
 mod refusals;

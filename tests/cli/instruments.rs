@@ -1,0 +1,177 @@
+//! Measurement kinds beyond the tracker: `identifiability --measure K` per instrument, and a
+//! small run of an instruments study (`[[measurement]]` tables), with refusals by key.
+
+use crate::common::{calbench, calbench_ok, load_json, read, tmp_dir, write_scenario};
+
+/// `identifiability --measure distance|plane|sphere|multi-target --json`: a length sees
+/// none of the base frame; several targets per pose see more than one (the tool's rotation).
+#[test]
+fn identifiability_per_instrument() {
+    let json = |k: &str, robot: &str| -> serde_json::Value {
+        let o = calbench_ok(&[
+            "identifiability",
+            "--robot",
+            robot,
+            "--measure",
+            k,
+            "--poses",
+            "40",
+            "--json",
+        ]);
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    for robot in ["irb2600", "tx60"] {
+        let d = json("distance", robot);
+        let base: Vec<&str> = d["unidentifiable"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|v| v.as_str())
+            .filter(|v| v.starts_with("base"))
+            .collect();
+        assert_eq!(base.len(), 6, "{robot}: {d}");
+        assert_eq!(
+            d["instrument_unknowns"].as_array().unwrap().len(),
+            3,
+            "pivot"
+        );
+        let p = json("position", robot)["rank"].as_u64().unwrap();
+        let m = json("multi-target", robot)["rank"].as_u64().unwrap();
+        assert!(m > p, "{robot}: multi-target rank {m}, position {p}");
+        for k in ["plane", "sphere"] {
+            let v = json(k, robot);
+            assert!(v["rank"].as_u64().unwrap() > 10, "{robot} {k}: {v}");
+            assert!(!v["instrument_unknowns"].as_array().unwrap().is_empty());
+        }
+    }
+    let o = calbench(&[
+        "identifiability",
+        "--robot",
+        "irb2600",
+        "--measure",
+        "laser-pointer",
+    ]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("multi-target"));
+}
+
+const STUDY: &str = r#"
+name = "instruments-small"
+seed = 5
+trials = 3
+robot = "irb2600"
+poses = [40]
+strategies = ["random", "detmax"]
+candidates = 100
+validation = 10
+
+[errors]
+kind = "paper"
+length_mm = 0.1
+angle_rad = 0.0005
+
+[[measurement]]
+kind = "position"
+
+[[measurement]]
+kind = "distance"
+noise_um = 1.0
+scale_um_per_m = 1.0
+
+[[measurement]]
+kind = "plane"
+noise_um = 13.0
+scale_um_per_m = 0.0
+
+[[measurement]]
+kind = "sphere"
+noise_um = 13.0
+scale_um_per_m = 0.0
+
+[[measurement]]
+kind = "multi-target"
+"#;
+
+/// A small instruments study runs every kind and strategy into `summary.json` and
+/// `report.md`, the same bytes for one and two threads; calibration beats the nominal robot
+/// for the tracker kinds.
+#[test]
+fn instruments_study_runs_every_kind() {
+    let dir = tmp_dir("instruments-small");
+    let sc = write_scenario(&dir, "s.toml", STUDY);
+    let run = |threads: &str, out: &str| {
+        let out = dir.join(out);
+        calbench_ok(&[
+            "run",
+            sc.to_str().unwrap(),
+            "--threads",
+            threads,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        out
+    };
+    let a = run("1", "a");
+    let b = run("2", "b");
+    assert_eq!(read(&a.join("summary.json")), read(&b.join("summary.json")));
+    let s = load_json(&a.join("summary.json"));
+    let cells = s["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 5 * 2);
+    for k in ["position", "distance", "plane", "sphere", "multi-target"] {
+        let c: Vec<_> = cells.iter().filter(|c| c["kind"] == k).collect();
+        assert_eq!(c.len(), 2, "{k}");
+        for c in c {
+            assert_eq!(c["failures"], 0, "{k}: {c}");
+            let (before, after) = (
+                c["validation_before_mm"].as_f64().unwrap(),
+                c["validation_after_mm"].as_f64().unwrap(),
+            );
+            assert!(after < before, "{k}: {after} ≥ {before}");
+        }
+    }
+    let d = cells.iter().find(|c| c["kind"] == "distance").unwrap();
+    assert!(d["unidentifiable"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|p| p == "d1"));
+    assert!(read(&a.join("report.md")).contains("cannot see"));
+}
+
+/// A bad instrument is refused before any trial, naming the file and the key.
+#[test]
+fn instruments_study_refuses_bad_settings() {
+    let dir = tmp_dir("instruments-bad");
+    for (bad, key) in [
+        (
+            STUDY.replace(
+                "kind = \"sphere\"\n",
+                "kind = \"sphere\"\nradius_mm = -1.0\n",
+            ),
+            "radius_mm",
+        ),
+        (
+            STUDY.replace("kind = \"distance\"\n", "kind = \"distanse\"\n"),
+            "distanse",
+        ),
+        (STUDY.replace("poses = [40]", "poses = [400]"), "poses"),
+        (
+            STUDY.replace("kind = \"plane\"\n", "kind = \"plane\"\nplanes = 0\n"),
+            "planes",
+        ),
+    ] {
+        let sc = write_scenario(&dir, "bad.toml", &bad);
+        let o = calbench(&[
+            "run",
+            sc.to_str().unwrap(),
+            "--out",
+            dir.join("o").to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("bad.toml") && err.contains(key),
+            "{key}: {err}"
+        );
+        assert!(!dir.join("o").exists());
+    }
+}
