@@ -206,7 +206,7 @@ fn registration_study(mut sc: RegistrationScenario, args: &RunArgs) -> Result<()
 /// Runs an instruments study (`[measurement]` tables) and writes its folder.
 fn instruments_study(mut sc: InstrumentsScenario, args: &RunArgs) -> Result<()> {
     if let Some(n) = args.trials {
-        if n < 2 || n > MAX_TRIALS {
+        if !(2..=MAX_TRIALS).contains(&n) {
             return Err(
                 Error::setting("--trials", format!("must be between 2 and {MAX_TRIALS}")).into(),
             );

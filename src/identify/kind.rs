@@ -248,15 +248,18 @@ mod tests {
     use crate::robot::builtin::irb2600;
     use crate::sim::instrument::{groups_of, layout, noise_free, touching, InstrumentSettings};
 
-    /// Every kind but `pose` (the tracker's own path): a short pool of poses on the
-    /// instrument (touching the planes or spheres), its layout and its joint and tool
-    /// parameters.
-    fn setups() -> Vec<(
+    /// A kind, its poses, their planes or spheres, and its layout.
+    type Setup = (
         Kind,
         Vec<Vec<Real>>,
         Vec<usize>,
         crate::sim::instrument::Layout,
-    )> {
+    );
+
+    /// Every kind but `pose` (the tracker's own path): a short pool of poses on the
+    /// instrument (touching the planes or spheres), its layout and its joint and tool
+    /// parameters.
+    fn setups() -> Vec<Setup> {
         let robot = irb2600();
         let mut rng = crate::numeric::rng::stream(5, "kinds");
         let pool = crate::robot::sampling::uniform_joint_poses(&robot, 90, &mut rng);

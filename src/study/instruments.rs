@@ -138,7 +138,7 @@ impl InstrumentsScenario {
                 "must be a non-empty name without slashes".into(),
             ));
         }
-        if s.trials < 2 || s.trials > crate::study::scenario::MAX_TRIALS {
+        if !(2..=crate::study::scenario::MAX_TRIALS).contains(&s.trials) {
             return Err(ferr(
                 "trials",
                 format!(
@@ -160,7 +160,7 @@ impl InstrumentsScenario {
         for st in &s.strategies {
             strategy(st).map_err(|e| ferr("strategies", e.to_string()))?;
         }
-        if s.poses.iter().any(|&n| n < 10 || n > s.candidates) {
+        if s.poses.iter().any(|n| !(10..=s.candidates).contains(n)) {
             return Err(ferr(
                 "poses",
                 format!(
