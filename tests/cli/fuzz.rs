@@ -666,15 +666,15 @@ fn scenario_corpus() -> &'static [Vec<u8>] {
             .collect();
         files.sort();
         assert!(files.len() >= 3, "scenarios/*.toml not found");
-        // Registration studies (`[registration_study]`, Ban fig. 3) are another format, read
-        // by `calibrate::registration_study`, not by `Scenario::parse`.
+        // Registration studies (`[registration_study]`, Ban fig. 3) and instruments studies
+        // (`[[measurement]]`) are other formats, not read by `Scenario::parse`.
         // A shipped scenario's robot file (`file = "../robots/…"`, resolved against the
         // scenario's folder) is named by its absolute path, as the corpus is parsed elsewhere.
         let robots = format!("file = \"{}/", root().display());
         let mut corpus: Vec<Vec<u8>> = files
             .iter()
             .map(|p| std::fs::read_to_string(p).unwrap())
-            .filter(|f| !f.contains("[registration_study]"))
+            .filter(|f| !f.contains("[registration_study]") && !f.contains("[[measurement]]"))
             .map(|f| f.replace("file = \"../", &robots).into_bytes())
             .collect();
         // A robot file beside the scenario ([`SCENARIO_ROBOT`]) and a sweep, which no shipped

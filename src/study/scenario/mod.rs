@@ -219,6 +219,14 @@ impl Scenario {
                     .into(),
             ));
         }
+        if table.contains_key("measurement") {
+            return Err(ferr(
+                "measurement",
+                "this is an instruments study (docs/formats.md § 4.15), which `calbench run` \
+                 runs on its own; it is not a calibration scenario"
+                    .into(),
+            ));
+        }
         let raw: RawScenario =
             toml::Value::Table(table.clone())
                 .try_into()
