@@ -344,6 +344,13 @@ fn every_shipped_scenario_loads() {
                     panic!("a registration study is not a scenario")
                 };
                 assert!(e.to_string().contains("registration study"), "{e}");
+            } else if calbench::study::instruments::InstrumentsScenario::is_one(&table) {
+                calbench::study::instruments::InstrumentsScenario::from_table(table, &p)
+                    .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                let Err(e) = Scenario::load(&p) else {
+                    panic!("an instruments study is not a scenario")
+                };
+                assert!(e.to_string().contains("instruments study"), "{e}");
             } else {
                 Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
             }
