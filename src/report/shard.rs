@@ -447,7 +447,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         }
         csv.finish()?;
         let r = RunResult {
-            blocks: collector.finish(scenario.sweep.as_ref()),
+            blocks: collector.finish(scenario.sweep.as_ref())?,
             scenario: scenario.clone(),
             out: out.to_path_buf(),
             seconds,

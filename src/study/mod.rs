@@ -16,11 +16,13 @@
 //! Memory: trials run in chunks of [`CHUNK`]; each chunk's results go to a [`TrialSink`]
 //! (the `trials.csv` writer, a shard's record file) and into a streaming
 //! [`stats::Accumulator`], then are dropped, so a run holds a chunk of trials plus the
-//! accumulators' compact per-trial numbers, not the trials themselves.
+//! accumulators' running sums; the per-trial numbers of the exact medians go to a scratch
+//! file ([`spill`]), so memory does not grow with the trials.
 
 pub mod plan;
 pub mod registration_study;
 pub mod scenario;
+pub mod spill;
 pub mod stats;
 pub mod trial;
 
@@ -280,7 +282,7 @@ impl Collector {
             .blocks
             .last_mut()
             .ok_or_else(|| Error::Compute("a trial before its block".into()))?;
-        acc.push(t);
+        acc.push(t)?;
         if t.index == 0 && trial0.is_none() {
             *trial0 = Some(Trial0::of(t));
         }
@@ -292,8 +294,9 @@ impl Collector {
         sink.trial(info, t)
     }
 
-    /// The blocks, with their entries.
-    pub fn finish(self, sweep: Option<&crate::study::scenario::Sweep>) -> Vec<Block> {
+    /// The blocks, with their entries. Fails only when the scratch file of the statistics
+    /// cannot be read.
+    pub fn finish(self, sweep: Option<&crate::study::scenario::Sweep>) -> Result<Vec<Block>> {
         self.blocks
             .into_iter()
             .map(|(info, acc, trial0, after_rms)| {
@@ -318,15 +321,15 @@ impl Collector {
                 let mut entries = Vec::new();
                 for (si, s) in info.strategies.iter().enumerate() {
                     for (mi, m) in info.methods.iter().enumerate() {
-                        entries.push(acc.entry(si, mi, (m, s), value.clone(), map.clone()));
+                        entries.push(acc.entry(si, mi, (m, s), value.clone(), map.clone())?);
                     }
                 }
-                Block {
+                Ok(Block {
                     info,
                     entries,
                     trial0,
                     after_rms,
-                }
+                })
             })
             .collect()
     }
@@ -427,7 +430,7 @@ pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> R
         })?;
     }
     bar.finish_and_clear();
-    let blocks = collector.finish(scenario.sweep.as_ref());
+    let blocks = collector.finish(scenario.sweep.as_ref())?;
     Ok(RunResult {
         scenario,
         blocks,
