@@ -14,6 +14,7 @@
 //! libraries, and the same data gives the same bytes.
 
 pub mod check;
+pub mod checkpoint;
 pub mod identified;
 pub mod markdown;
 pub mod plots;
@@ -30,7 +31,9 @@ pub mod shard;
 
 /// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
 /// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
-/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]).
+/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]). A checkpoint
+/// beside the output folder lets `calbench run --resume` continue the run if it is killed
+/// ([`checkpoint`]).
 pub fn run_study(
     scenario: crate::study::scenario::Scenario,
     opts: &crate::study::RunOptions,
@@ -39,12 +42,46 @@ pub fn run_study(
         .out
         .clone()
         .unwrap_or_else(|| std::path::Path::new("results").join(&scenario.name));
+    let cp = checkpoint::Checkpoint::start(&scenario, opts.shard, &out)?;
+    study_into(scenario, opts, &out, cp, None)
+}
+
+/// Continues the run into `out` that was killed (`calbench run --resume DIR`): from its
+/// checkpoint ([`checkpoint`]), which must be of this binary's version and, when `given`,
+/// of that scenario. Writes the same files as an uninterrupted run.
+pub fn resume_study(
+    out: &std::path::Path,
+    given: Option<&crate::study::scenario::Scenario>,
+    threads: Option<usize>,
+) -> crate::Result<crate::study::RunResult> {
+    let (cp, scenario, shard, mut records) = checkpoint::Checkpoint::resume(out, given)?;
+    let opts = crate::study::RunOptions {
+        threads,
+        out: Some(out.to_path_buf()),
+        progress: true,
+        shard,
+    };
+    study_into(scenario, &opts, out, cp, Some(&mut records))
+}
+
+/// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
+/// all; the checkpoint is removed once the output is in place.
+fn study_into(
+    scenario: crate::study::scenario::Scenario,
+    opts: &crate::study::RunOptions,
+    out: &std::path::Path,
+    mut cp: checkpoint::Checkpoint,
+    replay: Option<&mut dyn crate::study::Replay>,
+) -> crate::Result<crate::study::RunResult> {
     let mut result = None;
-    atomically(&out, |dir| {
+    atomically(out, |dir| {
         let mut csv = run::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
         let r = match opts.shard {
             None => {
-                let r = crate::study::run(scenario, opts, &mut csv)?;
+                let r = {
+                    let mut both = shard::Both(&mut csv, &mut cp);
+                    crate::study::run_resumed(scenario, opts, &mut both, replay)?
+                };
                 csv.finish()?;
                 run::write_into(&r, dir)?;
                 r
@@ -52,8 +89,9 @@ pub fn run_study(
             Some(_) => {
                 let mut records = shard::Records::create(dir)?;
                 let r = {
-                    let mut both = shard::Both(&mut csv, &mut records);
-                    crate::study::run(scenario, opts, &mut both)?
+                    let mut sinks = shard::Both(&mut csv, &mut records);
+                    let mut all = shard::Both(&mut sinks, &mut cp);
+                    crate::study::run_resumed(scenario, opts, &mut all, replay)?
                 };
                 csv.finish()?;
                 records.finish(&r)?;
@@ -63,6 +101,7 @@ pub fn run_study(
         result = Some(r);
         Ok(())
     })?;
+    cp.finish()?;
     result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
 }
 

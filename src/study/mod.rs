@@ -236,6 +236,16 @@ pub struct RunResult {
     pub shard: Option<Shard>,
 }
 
+/// The trials a killed run had finished, read back in order when it is resumed
+/// (`calbench run --resume`): they go through the same aggregation and sinks as the trials
+/// run now, so the result is the same bytes as an uninterrupted run.
+pub trait Replay {
+    /// Work units (trials) already done, from the start of this run's share.
+    fn done(&self) -> u64;
+    /// The next finished trial and its block.
+    fn next(&mut self) -> Result<(usize, TrialResult)>;
+}
+
 /// Where each trial goes once it has run, in trial order (per block, blocks in order).
 pub trait TrialSink {
     /// Takes trial `t` of the block described by `info`.
@@ -379,6 +389,17 @@ pub fn run_trials(
 /// Runs `scenario` (every sweep point, every trial; with `opts.shard` only its share) and
 /// returns the aggregated results; every trial goes to `sink` in order as it finishes.
 pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> Result<RunResult> {
+    run_resumed(scenario, opts, sink, None)
+}
+
+/// [`run`] continuing a killed run: the first `replay.done()` trials of the share come from
+/// `replay` instead of being run again (and go to `sink` like the others).
+pub fn run_resumed(
+    scenario: Scenario,
+    opts: &RunOptions,
+    sink: &mut dyn TrialSink,
+    mut replay: Option<&mut dyn Replay>,
+) -> Result<RunResult> {
     let t0 = std::time::Instant::now();
     let out = opts
         .out
@@ -424,7 +445,21 @@ pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> R
         }
         let study = pool.install(|| Study::new(plan))?;
         collector.begin(BlockInfo::of(&study, b, point), None);
-        let range = (from - lo) as usize..(to - lo) as usize;
+        let mut range = (from - lo) as usize..(to - lo) as usize;
+        if let Some(r) = replay.as_mut() {
+            let done = (first + r.done()).clamp(from, to);
+            for _ in from..done {
+                let (rb, t) = r.next()?;
+                if rb != b {
+                    return Err(Error::Compute(format!(
+                        "the checkpoint holds a trial of sweep point {rb} where one of point {b}                          was expected"
+                    )));
+                }
+                collector.trial(&t, sink)?;
+                bar.inc(1);
+            }
+            range.start = (done - lo) as usize;
+        }
         run_trials(&study, range, &pool, &bar, &mut |t| {
             collector.trial(&t, sink)
         })?;
