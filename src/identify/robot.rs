@@ -12,7 +12,9 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::solver::{self, rank, solve, start_weights, LeastSquares, Size, Solver, Work};
+use super::solver::{
+    self, rank, solve, start_weights, Column, LeastSquares, Matrix, Size, Solver, Work,
+};
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::error::Error;
 use crate::measurement::Measure;
@@ -303,16 +305,10 @@ impl LeastSquares for RobotProblem<'_> {
 
     /// [`LeastSquares::evaluate`] of one block of points: their chain variables computed
     /// for the block (allocation-free, into a buffer of [`solver::BLOCK_POINTS`] poses).
-    fn evaluate_points(
-        &self,
-        x: &DVector<Real>,
-        first: usize,
-        r: &mut DVector<Real>,
-        j: &mut DMatrix<Real>,
-    ) {
+    fn evaluate_points(&self, x: &Column, i: usize, r: &mut Column, j: &mut Matrix) {
         let count = r.len() / self.measure.rows();
         if !self.vars.is_empty() {
-            return self.evaluate_block(x, &self.vars[first..first + count], first, r, j);
+            return self.evaluate_block(x, &self.vars[i..i + count], i, r, j);
         }
         let mut vars = self.block_vars.borrow_mut();
         if vars.len() < count {
@@ -320,11 +316,11 @@ impl LeastSquares for RobotProblem<'_> {
         }
         {
             let guard = self.work.borrow();
-            for (v, q) in vars.iter_mut().zip(&self.qs[first..first + count]) {
+            for (v, q) in vars.iter_mut().zip(&self.qs[i..i + count]) {
                 *v = guard.1.variables(q);
             }
         }
-        self.evaluate_block(x, &vars[..count], first, r, j);
+        self.evaluate_block(x, &vars[..count], i, r, j);
     }
 }
 

@@ -19,6 +19,12 @@ use crate::numeric::normal::NormalEquations;
 use crate::numeric::symeig::symmetric_eigenvalues;
 use crate::numeric::Real;
 
+/// A column vector of the problems (unknowns, residual).
+pub type Column = DVector<Real>;
+
+/// A matrix of the problems (Jacobian, normal equations).
+pub type Matrix = DMatrix<Real>;
+
 /// The size of a [`LeastSquares`] problem.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Size {
@@ -66,23 +72,17 @@ pub trait LeastSquares {
     fn block_points(&self) -> Option<usize> {
         None
     }
-    /// [`LeastSquares::evaluate`] of the points `first..first + count` only, `count` the
+    /// [`LeastSquares::evaluate`] of the points `i..i + count` only, `count` the
     /// points `r` has room for: `r` holds their rows and `j` their Jacobian rows, in the
     /// order of the whole problem. The default evaluates the whole problem and copies the
     /// block (correct, not economical: a problem that returns [`LeastSquares::block_points`]
     /// overrides it).
-    fn evaluate_points(
-        &self,
-        x: &DVector<Real>,
-        first: usize,
-        r: &mut DVector<Real>,
-        j: &mut DMatrix<Real>,
-    ) {
+    fn evaluate_points(&self, x: &Column, i: usize, r: &mut Column, j: &mut Matrix) {
         let size = self.size();
         let mut rw = DVector::zeros(size.rows());
         let mut jw = DMatrix::zeros(size.rows(), size.params);
         self.evaluate(x, &mut rw, &mut jw);
-        let row0 = first * size.rows_per_point;
+        let row0 = i * size.rows_per_point;
         r.copy_from(&rw.rows(row0, r.len()));
         j.copy_from(&jw.rows(row0, r.len()));
     }

@@ -47,13 +47,7 @@ struct Meta {
 
 /// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it.
 pub fn folder(out: &Path) -> PathBuf {
-    let name = out
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
+    let (parent, name) = super::parent_and_name(out);
     parent.join(format!(".{name}.checkpoint"))
 }
 
@@ -198,12 +192,8 @@ impl Checkpoint {
             }
         }
         // The temporary output folder of the killed process.
-        let name = out
-            .file_name()
-            .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-        if let Some(parent) = dir.parent() {
-            let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{}", meta.pid)));
-        }
+        let (parent, name) = super::parent_and_name(out);
+        let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{}", meta.pid)));
         let records = dir.join("records.txt");
         let file = std::fs::OpenOptions::new()
             .read(true)

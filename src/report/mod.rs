@@ -105,6 +105,19 @@ fn study_into(
     result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
 }
 
+/// The folder holding `out` (`.` for a bare name) and `out`'s last part (`out` when it has
+/// none): where the temporary and checkpoint folders of an output folder go.
+pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
+    let name = out
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    (parent.to_path_buf(), name)
+}
+
 /// The first path that keeps `out` from being written as a folder holding the files `names`:
 /// `out` itself when it exists and is not a folder, or `out/NAME` when that is a folder
 /// (which no file can replace). `None` when nothing is in the way.
@@ -133,13 +146,8 @@ pub fn atomically(
     write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
 ) -> crate::Result<()> {
     use crate::Error;
-    let name = out
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(std::path::Path::new("."));
+    let (parent, name) = parent_and_name(out);
+    let parent = parent.as_path();
     let in_the_way = |p: std::path::PathBuf| {
         let why = if p == out {
             "exists and is not a folder; nothing was written"

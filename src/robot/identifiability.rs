@@ -34,6 +34,25 @@ pub struct Identifiability {
     pub condition_number: Real,
 }
 
+impl Identifiability {
+    /// The analysis of `params` whose columns `ident` are identifiable and `dep` are not.
+    fn of(
+        params: &[Param],
+        ident: &[usize],
+        dep: &[usize],
+        groups: Vec<Vec<Param>>,
+        condition_number: Real,
+    ) -> Identifiability {
+        Identifiability {
+            rank: ident.len(),
+            identifiable: ident.iter().map(|&c| params[c]).collect(),
+            unidentifiable: dep.iter().map(|&c| params[c]).collect(),
+            groups,
+            condition_number,
+        }
+    }
+}
+
 /// Scales each column of `j` to unit norm in place and returns the norms. A column whose
 /// norm is at rounding level (below 1e-9 of the largest column norm, plus 1e-12) is a
 /// parameter with no effect: it is set to zero rather than blown up to unit norm, so it
@@ -54,6 +73,19 @@ pub fn scale_columns(j: &mut DMatrix<Real>) -> Vec<Real> {
     norms
 }
 
+/// The next pivot: the column not yet `used` of the largest remaining norm `norm(c)` (ties to
+/// the earlier column), with that norm; `None` when every column is used.
+fn largest_remaining(used: &[bool], norm: impl Fn(usize) -> Real) -> Option<(usize, Real)> {
+    let mut best: Option<(usize, Real)> = None;
+    for c in (0..used.len()).filter(|&c| !used[c]) {
+        let n = norm(c);
+        if best.is_none_or(|(_, bn)| n > bn * (1.0 + 1e-12)) {
+            best = Some((c, n));
+        }
+    }
+    best
+}
+
 /// Pivoted QR by modified Gram–Schmidt: returns the pivot columns in the order chosen.
 /// A column is chosen while its remaining norm exceeds `tol` (columns are unit norm or zero).
 fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
@@ -62,14 +94,9 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
     let mut chosen = Vec::new();
     let mut used = vec![false; k];
     loop {
-        let mut best: Option<(usize, Real)> = None;
-        for (c, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
-            let n = r.column(c).norm();
-            if best.is_none_or(|(_, bn)| n > bn * (1.0 + 1e-12)) {
-                best = Some((c, n));
-            }
-        }
-        let Some((c, n)) = best else { break };
+        let Some((c, n)) = largest_remaining(&used, |c| r.column(c).norm()) else {
+            break;
+        };
         if n <= tol {
             break;
         }
@@ -97,6 +124,33 @@ fn find_root(p: &mut [usize], i: usize) -> usize {
         c = n;
     }
     r
+}
+
+/// The groups of mutually dependent parameters: each dependent column `dep` with the
+/// identifiable ones (`ident`) that take part in its combination `combination(d)` (weights
+/// above 1e-6; `None`: a column with no effect, a group of its own), overlapping groups merged.
+fn dependency_groups(
+    params: &[Param],
+    ident: &[usize],
+    dep: &[usize],
+    combination: impl Fn(usize) -> Option<DVector<Real>>,
+) -> Vec<Vec<Param>> {
+    let mut parent: Vec<usize> = (0..params.len()).collect();
+    let mut in_group = vec![false; params.len()];
+    for &d in dep {
+        in_group[d] = true;
+        let Some(x) = combination(d) else {
+            continue; // no effect at all: a group of its own
+        };
+        for (xi, &c) in x.iter().zip(ident) {
+            if xi.abs() > 1e-6 {
+                in_group[c] = true;
+                let (ra, rb) = (find_root(&mut parent, d), find_root(&mut parent, c));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    collect_groups(params, &in_group, &mut parent)
 }
 
 /// The groups of mutually dependent parameters: those `in_group`, one group per root of the
@@ -169,26 +223,13 @@ pub fn analyse(
     // Groups: each dependent column as a combination of the identifiable ones.
     let a = j.select_columns(&ident_idx);
     let svd = a.clone().svd(true, true);
-    let mut parent: Vec<usize> = (0..params.len()).collect();
-    let mut in_group = vec![false; params.len()];
-    for &d in &dep_idx {
-        in_group[d] = true;
+    let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
         let b = j.column(d).into_owned();
-        if b.norm() < RANK_TOL {
-            continue; // no effect at all: a group of its own
-        }
-        let x = svd
-            .solve(&b, 1e-12)
-            .unwrap_or_else(|_| DVector::zeros(ident_idx.len()));
-        for (xi, &c) in x.iter().zip(&ident_idx) {
-            if xi.abs() > 1e-6 {
-                in_group[c] = true;
-                let (ra, rb) = (find_root(&mut parent, d), find_root(&mut parent, c));
-                parent[ra.max(rb)] = ra.min(rb);
-            }
-        }
-    }
-    let groups = collect_groups(params, &in_group, &mut parent);
+        (b.norm() >= RANK_TOL).then(|| {
+            svd.solve(&b, 1e-12)
+                .unwrap_or_else(|_| DVector::zeros(ident_idx.len()))
+        })
+    });
 
     let sv = svd.singular_values;
     let (mx, mn) = sv
@@ -199,13 +240,7 @@ pub fn analyse(
     } else {
         mx / mn
     };
-    Identifiability {
-        rank: ident_idx.len(),
-        identifiable: ident_idx.iter().map(|&c| params[c]).collect(),
-        unidentifiable: dep_idx.iter().map(|&c| params[c]).collect(),
-        groups,
-        condition_number,
-    }
+    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
 }
 
 /// [`analyse`] from the Gram matrix `JᵀJ` of the Jacobian, summed over blocks of
@@ -255,14 +290,9 @@ pub fn analyse_gram(
     let mut used = vec![false; t];
     let mut chosen = Vec::new();
     loop {
-        let mut best: Option<(usize, Real)> = None;
-        for c in (0..t).filter(|&c| !used[c]) {
-            let v = a[(c, c)].max(0.0).sqrt();
-            if best.is_none_or(|(_, bn)| v > bn * (1.0 + 1e-12)) {
-                best = Some((c, v));
-            }
-        }
-        let Some((c, v)) = best else { break };
+        let Some((c, v)) = largest_remaining(&used, |c| a[(c, c)].max(0.0).sqrt()) else {
+            break;
+        };
         if v <= RANK_TOL {
             break;
         }
@@ -280,26 +310,13 @@ pub fn analyse_gram(
     let dep_idx: Vec<usize> = (0..t).filter(|&c| !used[c]).collect();
     let ss = s.select_rows(&ident_idx).select_columns(&ident_idx);
     let chol = ss.clone().cholesky();
-    let mut parent: Vec<usize> = (0..t).collect();
-    let mut in_group = vec![false; t];
-    for &d in &dep_idx {
-        in_group[d] = true;
-        if s[(d, d)].max(0.0).sqrt() < RANK_TOL {
-            continue; // no effect at all: a group of its own
-        }
-        let b = DVector::from_fn(ident_idx.len(), |i, _| s[(ident_idx[i], d)]);
-        let x = chol
-            .as_ref()
-            .map_or_else(|| DVector::zeros(ident_idx.len()), |c| c.solve(&b));
-        for (xi, &c) in x.iter().zip(&ident_idx) {
-            if xi.abs() > 1e-6 {
-                in_group[c] = true;
-                let (ra, rb) = (find_root(&mut parent, d), find_root(&mut parent, c));
-                parent[ra.max(rb)] = ra.min(rb);
-            }
-        }
-    }
-    let groups = collect_groups(params, &in_group, &mut parent);
+    let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
+        (s[(d, d)].max(0.0).sqrt() >= RANK_TOL).then(|| {
+            let b = DVector::from_fn(ident_idx.len(), |i, _| s[(ident_idx[i], d)]);
+            chol.as_ref()
+                .map_or_else(|| DVector::zeros(ident_idx.len()), |c| c.solve(&b))
+        })
+    });
     let k = ident_idx.len();
     let mut lower: Vec<Real> = (0..k * k).map(|ik| ss[(ik / k, ik % k)]).collect();
     let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
@@ -312,13 +329,7 @@ pub fn analyse_gram(
     } else {
         (mx / mn).sqrt()
     };
-    Identifiability {
-        rank: k,
-        identifiable: ident_idx.iter().map(|&c| params[c]).collect(),
-        unidentifiable: dep_idx.iter().map(|&c| params[c]).collect(),
-        groups,
-        condition_number,
-    }
+    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
 }
 
 #[cfg(test)]
