@@ -9,8 +9,8 @@
 //! before it are flushed, so whatever moment the run is killed, it names a prefix of
 //! `records.txt` made of whole lines. `calbench run --resume DIR` cuts `records.txt` back
 //! to that prefix, replays it through the same aggregation as a live run
-//! ([`crate::study::run_resumed`]) and runs the rest; the folder is removed once `DIR` is
-//! written.
+//! ([`crate::study::run_resumed`]) and runs the rest; the folder is removed when the run
+//! ends, with its output or with an error (only a run killed from outside leaves one).
 
 use std::io::{BufRead, Write as _};
 use std::path::{Path, PathBuf};

@@ -65,7 +65,7 @@ pub fn resume_study(
 }
 
 /// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
-/// all; the checkpoint is removed once the output is in place.
+/// all; the checkpoint is removed once the run ends, with its output or with an error.
 fn study_into(
     scenario: crate::study::scenario::Scenario,
     opts: &crate::study::RunOptions,
@@ -74,7 +74,7 @@ fn study_into(
     replay: Option<&mut dyn crate::study::Replay>,
 ) -> crate::Result<crate::study::RunResult> {
     let mut result = None;
-    atomically(out, |dir| {
+    let done = atomically(out, |dir| {
         let mut csv = run::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
         let r = match opts.shard {
             None => {
@@ -100,8 +100,11 @@ fn study_into(
         };
         result = Some(r);
         Ok(())
-    })?;
+    });
+    // A run that ends, with its output or with an error, leaves no checkpoint: only a run
+    // killed from outside does.
     cp.finish()?;
+    done?;
     result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
 }
 
