@@ -248,7 +248,7 @@ impl TrialSink for Checkpoint {
             .write_all(line.as_bytes())
             .map_err(|e| Error::io(&path, e))?;
         self.meta.bytes += line.len() as u64;
-        if self.seen % CHUNK as u64 == 0 {
+        if self.seen.is_multiple_of(CHUNK as u64) {
             self.records.flush().map_err(|e| Error::io(&path, e))?;
             self.meta.done = self.seen;
             write_meta(&self.dir, &self.meta)?;

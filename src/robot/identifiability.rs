@@ -93,10 +93,7 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
     let k = a.ncols();
     let mut chosen = Vec::new();
     let mut used = vec![false; k];
-    loop {
-        let Some((c, n)) = largest_remaining(&used, |c| r.column(c).norm()) else {
-            break;
-        };
+    while let Some((c, n)) = largest_remaining(&used, |c| r.column(c).norm()) {
         if n <= tol {
             break;
         }
@@ -289,10 +286,7 @@ pub fn analyse_gram(
     let mut a = s.clone();
     let mut used = vec![false; t];
     let mut chosen = Vec::new();
-    loop {
-        let Some((c, v)) = largest_remaining(&used, |c| a[(c, c)].max(0.0).sqrt()) else {
-            break;
-        };
+    while let Some((c, v)) = largest_remaining(&used, |c| a[(c, c)].max(0.0).sqrt()) {
         if v <= RANK_TOL {
             break;
         }
