@@ -5,7 +5,7 @@
 //! [`NormalEquations`] is the accumulator: [`NormalEquations::clear`], then
 //! [`NormalEquations::add`] for each block of rows (its Jacobian rows, residual and point
 //! weights), then read [`NormalEquations::n`] and [`NormalEquations::g`]. Each block's
-//! product is the Gram kernel of the whole-Jacobian path ([`gram::normal_equations`]); only
+//! product is the Gram kernel of the whole-Jacobian path (`gram::normal_equations`); only
 //! the order of the sum over blocks differs from that path, so the two agree to rounding
 //! (docs/performance.md, "Streaming identification"). Terms that do not come from the rows,
 //! a ridge or a prior, are added to `n` and `g` after the last block by the caller.

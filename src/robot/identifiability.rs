@@ -241,7 +241,7 @@ pub fn analyse(
 }
 
 /// [`analyse`] from the Gram matrix `JᵀJ` of the Jacobian, summed over blocks of
-/// [`GRAM_BLOCK_POSES`] poses ([`crate::numeric::normal::NormalEquations`]): the same column
+/// 512 poses ([`crate::numeric::normal::NormalEquations`]): the same column
 /// scaling (unit diagonal), the pivoted Gram–Schmidt as a pivoted Cholesky factorisation
 /// (the remaining norm of a column is the square root of its Schur complement's diagonal),
 /// each dependent column's combination of the identifiable ones by their normal equations,

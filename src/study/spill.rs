@@ -166,7 +166,7 @@ impl Spill {
 
     /// The `k`-th smallest value of stream `s` (from 0, in [`Real::total_cmp`] order): the
     /// values whose order key starts with the bits chosen so far are counted by their next
-    /// [`SELECT_BITS`] bits, the bucket holding rank `k` is kept, and once few enough
+    /// 8 bits, the bucket holding rank `k` is kept, and once few enough
     /// candidates remain they are sorted in memory. At most eight passes, usually two or
     /// three; memory independent of the stream's length (32 kB).
     pub fn select(&self, s: usize, k: usize) -> Result<Real> {
