@@ -50,7 +50,7 @@ ReturnToService=2
 MpiDefault=none
 SlurmctldLogFile=/var/log/slurm/slurmctld.log
 SlurmdLogFile=/var/log/slurm/slurmd.log
-NodeName=$HOST CPUs=$(nproc) RealMemory=2000 State=UNKNOWN
+NodeName=$HOST CPUs=$(nproc) RealMemory=4000 State=UNKNOWN
 PartitionName=calbench Nodes=$HOST Default=YES MaxTime=INFINITE State=UP
 CONF
     rm -f /etc/slurm/cgroup.conf
