@@ -5,9 +5,11 @@
 //!
 //! - [`registration`]: SVD (Kabsch/Arun) and Ban's weighted SVD of point sets;
 //! - [`validation`]: validation errors of a model against true (or measured) frames;
+//! - [`on_data`]: identification on a measurement (`identify`), with its refusals;
 //! - this file: [`calibrate`].
 
 pub mod compensate;
+pub mod on_data;
 pub mod registration;
 pub mod validation;
 

@@ -7,16 +7,16 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
+use calbench::calibrate::on_data::identify_on_data;
+use calbench::calibrate::{Registration, RoundsEnd};
 use calbench::error::Error;
-use calbench::identify::{method_by_name, MethodEntry, MethodSpec, Termination, METHODS};
+use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
-use calbench::measurement::{Measure, Measurements};
-use calbench::numeric::{Frame, Real};
+use calbench::measurement::Measure;
+use calbench::numeric::Real;
 use calbench::report::identified::{validate_file, write_identified, IdentifyRecord};
 use calbench::robot::compliance::CompliancePick;
-use calbench::robot::identifiability::analyse;
-use calbench::robot::{builtin, param_sets, Param, Robot};
+use calbench::robot::{builtin, Robot};
 
 use super::check_out_folder;
 
@@ -129,36 +129,21 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         .as_deref()
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
-    let with_base = registration == Registration::Identify;
-    let kinematic = param_sets::identified_params_tool_first(&nominal, measure, with_base);
-    let mut params = kinematic.clone();
-    if let Some(c) = &args.compliance {
-        params.extend(c.params(&nominal, "--compliance")?);
-    }
-    // For real data "known" means the points are already in the base frame.
-    let c = calibrate(
+    let on = identify_on_data(
         &nominal,
-        &params,
         &d,
-        registration,
-        &Frame::identity(),
         &spec,
-        &mut calbench::numeric::rng::stream(args.seed, "identify"),
+        registration,
+        args.compliance.as_ref(),
+        "--compliance",
+        args.seed,
     )?;
-    let undetermined = matches!(
-        c.identified.termination,
-        Termination::RankDeficient | Termination::Singular
-    );
-    if undetermined && !args.allow_rank_deficient {
-        let p = Problem {
-            nominal: &nominal,
-            data_path: &args.data,
-            data: &d,
-            kinematic: &kinematic,
-            param_count: params.len(),
-        };
-        return Err(p.undetermined(&c, &spec).into());
+    if on.undetermined() && !args.allow_rank_deficient {
+        return Err(on
+            .undetermined_error(&nominal, &args.data, &d, &spec, "--allow-rank-deficient")
+            .into());
     }
+    let (params, c) = (&on.params, &on.calibrated);
     if matches!(
         c.rounds.termination,
         RoundsEnd::MaxRounds | RoundsEnd::Stalled
@@ -175,7 +160,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     }
     let validation = val
         .as_ref()
-        .map(|v| validate_file(&nominal, &c, v))
+        .map(|v| validate_file(&nominal, c, v))
         .transpose()?;
     let record = IdentifyRecord {
         nominal: &nominal,
@@ -183,8 +168,8 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         data: &d,
         method: spec.name(),
         registration,
-        params: &params,
-        calibrated: &c,
+        params,
+        calibrated: c,
         validation: validation.as_ref(),
         urdf: compensated_urdf(&args.robot, args.export, &c.robot)?,
     };
@@ -220,54 +205,6 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         out.display()
     );
     Ok(())
-}
-
-/// What was identified from what: for the refusal of data that do not determine it.
-struct Problem<'a> {
-    nominal: &'a Robot,
-    data_path: &'a Path,
-    data: &'a Measurements,
-    /// The kinematic parameters (a compliance column's scale is per pose, so the analysis
-    /// is of these).
-    kinematic: &'a [Param],
-    /// The number of identified parameters.
-    param_count: usize,
-}
-
-impl Problem<'_> {
-    /// The refusal of a result whose data do not determine every parameter: the undetermined
-    /// parameters and the dependent groups of the kinematic model.
-    fn undetermined(&self, c: &Calibrated, spec: &MethodSpec) -> Error {
-        let a = analyse(
-            self.nominal,
-            self.kinematic,
-            &self.data.qs,
-            self.data.measure(),
-        );
-        let names = |v: &[Param]| {
-            v.iter()
-                .map(|p| p.to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
-        Error::file(
-            self.data_path,
-            "data",
-            format!(
-                "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
-                 dependent groups: {}); {} ended {}, so nothing was written. Measure poses \
-                 that move every joint, or pass --allow-rank-deficient",
-                a.rank,
-                self.param_count,
-                c.identified.rank.unwrap_or(a.rank),
-                names(&a.unidentifiable),
-                groups.join(" "),
-                spec.name(),
-                c.identified.termination.as_str(),
-            ),
-        )
-    }
 }
 
 /// The method `name` with the `--set KEY=VALUE` options, read like a scenario's

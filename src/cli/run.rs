@@ -76,17 +76,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
             return registration_study(RegistrationScenario::from_table(table, p)?, args);
         }
     }
-    let mut sc = match &args.scenario {
+    let sc = match &args.scenario {
         Some(p) => Scenario::load(p)?,
         None => Scenario::default_study()?,
     };
-    if let Some(n) = args.trials {
-        sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
-    }
-    if let Some(s) = args.seed {
-        let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
-        sc = sc.with_override("seed", toml::Value::Integer(s))?;
-    }
+    let sc = sc.with_run_overrides(args.trials, args.seed)?;
     if args.threads == Some(0) {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }

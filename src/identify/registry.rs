@@ -210,6 +210,22 @@ impl MethodSpec {
     pub fn name(&self) -> &'static str {
         self.name
     }
+
+    /// A method supplied from outside ([`super::external`]) under `label`, with the default
+    /// orientation weight.
+    pub fn external(label: &str, method: super::external::External) -> MethodSpec {
+        MethodSpec {
+            name: super::external::EXTERNAL,
+            label: label.to_string(),
+            k: DEFAULT_K,
+            method: Arc::new(method),
+        }
+    }
+
+    /// Whether the method was supplied from outside rather than read from a scenario.
+    pub fn is_external(&self) -> bool {
+        self.name == super::external::EXTERNAL
+    }
 }
 
 /// A method by name with its default options (`calbench identify --method`).
