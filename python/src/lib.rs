@@ -408,6 +408,13 @@ fn matrix<'py>(py: Python<'py>, m: &DMatrix<Real>) -> Bound<'py, PyAny> {
         .unwrap_or_else(|_| PyArray1::<f64>::zeros(py, 0, false).into_any())
 }
 
+/// A validation measurement: (q, points, rotations or None).
+type Validation<'py> = (
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    Option<Bound<'py, PyAny>>,
+);
+
 /// Identification on measured arrays (the Python half documents the arguments); returns a
 /// dict of the result's fields.
 #[pyfunction]
@@ -427,11 +434,7 @@ fn identify<'py>(
     options: Option<Bound<'py, PyDict>>,
     registration: &str,
     compliance: Option<&str>,
-    validate: Option<(
-        PyReadonlyArray2<'py, f64>,
-        PyReadonlyArray2<'py, f64>,
-        Option<Bound<'py, PyAny>>,
-    )>,
+    validate: Option<Validation<'py>>,
     seed: u64,
     allow_rank_deficient: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
