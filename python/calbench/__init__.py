@@ -94,6 +94,7 @@ class IdentifyResult:
         registration_frame: ndarray (4, 4), instrument → base frame.
         validation: dict of before and after statistics (``before_mm``, ``after_mm``, and
             for full poses ``*_deg``), when ``validate`` was given; else None.
+        seconds: wall time of the identification (and validation) in Rust, s.
     """
 
     __slots__ = (
@@ -113,6 +114,7 @@ class IdentifyResult:
         "registration_frame",
         "registration_rounds",
         "validation",
+        "seconds",
     )
 
     def __init__(self, fields):

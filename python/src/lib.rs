@@ -477,8 +477,9 @@ fn identify<'py>(
         .as_ref()
         .map(|(vq, vp, vr)| measurements(nominal, "validate", vq, vp, vr.as_ref(), None, None))
         .transpose()?;
-    let (on, validation) = py
+    let (on, validation, seconds) = py
         .detach(|| {
+            let t0 = std::time::Instant::now();
             let on = identify_on_data(
                 nominal,
                 &data,
@@ -492,7 +493,7 @@ fn identify<'py>(
                 .as_ref()
                 .map(|v| validate_file(nominal, &on.calibrated, v))
                 .transpose()?;
-            Ok((on, validation))
+            Ok((on, validation, t0.elapsed().as_secs_f64()))
         })
         .map_err(err)?;
     if on.undetermined() && !allow_rank_deficient {
@@ -544,6 +545,7 @@ fn identify<'py>(
     }
     out.set_item("registration_frame", frame.into_pyarray(py))?;
     out.set_item("registration_rounds", c.rounds.rounds)?;
+    out.set_item("seconds", seconds)?;
     match &validation {
         None => out.set_item("validation", py.None())?,
         Some(v) => {
