@@ -105,13 +105,16 @@ type Cached = (Vec<Real>, DVector<Real>, DMatrix<Real>);
 pub struct ExternalProblem {
     nominal: Robot,
     params: Vec<Param>,
+    /// Position or full pose, and the orientation weight (mm per rad).
+    measure: (Measure, Real),
+    /// Per point: prior weights and payloads, when given.
+    prior: Option<Vec<Real>>,
+    payloads: Option<Vec<Real>>,
+    /// The joint values, and the measured points and rotations in the base frame.
     qs: Vec<Vec<Real>>,
     points: Vec<Vec3>,
     rotations: Option<Vec<Mat3>>,
-    measure: Measure,
-    k: Real,
-    prior: Option<Vec<Real>>,
-    payloads: Option<Vec<Real>>,
+    /// Evaluations so far, and the last one.
     last: Mutex<(usize, Option<Cached>)>,
 }
 
@@ -131,13 +134,12 @@ impl ExternalProblem {
         Ok(ExternalProblem {
             nominal: problem.nominal.clone(),
             params: problem.params.to_vec(),
+            measure: (problem.measure, problem.k),
+            prior: problem.weights.clone(),
+            payloads: problem.data.payload_kg.clone(),
             qs: problem.poses().to_vec(),
             points: problem.points.clone(),
             rotations: problem.rotations.clone(),
-            measure: problem.measure,
-            k: problem.k,
-            prior: problem.weights.clone(),
-            payloads: problem.data.payload_kg.clone(),
             last: Mutex::new((0, None)),
         })
     }
@@ -161,7 +163,7 @@ impl ExternalProblem {
 
     /// The problem's size: parameters, points and rows per point.
     pub fn size(&self) -> Size {
-        Size::new(self.params.len(), self.points.len(), self.measure.rows())
+        Size::new(self.params.len(), self.points.len(), self.measure.0.rows())
     }
 
     /// Evaluations of the model so far (a residual and a Jacobian at one `x` count once).
@@ -204,9 +206,9 @@ impl ExternalProblem {
             &self.qs,
             &self.points,
             self.rotations.as_deref(),
-            self.measure,
+            self.measure.0,
         )?
-        .with_orientation_weight(self.k)?
+        .with_orientation_weight(self.measure.1)?
         .with_prior_weights(self.prior.as_deref())?
         .with_payloads(self.payloads.as_deref())?;
         let (mut r, mut j) = match last.1.take() {

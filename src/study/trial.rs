@@ -173,15 +173,9 @@ pub fn simulate_trial(study: &Study, trial: usize, key: &str) -> Result<Simulate
     let seed = rng::trial_seed(sc.seed, trial as u64);
     let qs = calibration_poses(study, 0, trial)?;
     let vqs = validation_poses(study, trial)?;
-    let sag = sag_fn(study);
+    let (sag, mut gm) = (sag_fn(study), rng::stream(seed, "measure"));
     let sag_ref = sag.as_deref();
-    let calibration = measure_calibration(
-        study,
-        &truth,
-        &qs,
-        sag_ref,
-        &mut rng::stream(seed, "measure"),
-    )?;
+    let calibration = measure_calibration(study, &truth, &qs, sag_ref, &mut gm)?;
     // The validation measurement records its payload when the scenario measures under loads.
     let loaded = sc.calibration.payloads_kg.is_some() || sc.validation.payload_kg.is_some();
     let vloads = loaded.then(|| vec![study.validation_payload(); vqs.len()]);
