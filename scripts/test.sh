@@ -27,5 +27,5 @@ if ! { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas" 2>/dev/n
     exit 0
 fi
 # The test profile: the dependencies are those cargo test just built.
-VIRTUAL_ENV="$PWD/.venv" "$py" -m maturin develop --quiet --profile test -m python/Cargo.toml
+VIRTUAL_ENV="$PWD/.venv" "$py" -m maturin develop --quiet --profile test
 CALBENCH_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/calbench" "$py" -m pytest -q python/tests

@@ -28,13 +28,21 @@ def root():
 
 
 @pytest.fixture(scope="session")
-def cli():
-    """Runs the calbench binary from the repository root; fails on a non-zero exit."""
+def binary():
+    """The calbench binary to compare with: $CALBENCH_BIN, else one built under the target
+    folder, else one on PATH; its absence skips (fails with CI=true)."""
     b = _binary()
     if b is None or not Path(b).exists():
         if os.environ.get("CI") == "true":
             pytest.fail("no calbench binary (set CALBENCH_BIN or build it)")
         pytest.skip("no calbench binary to compare with (set CALBENCH_BIN)")
+    return b
+
+
+@pytest.fixture(scope="session")
+def cli(binary):
+    """Runs the calbench binary from the repository root; fails on a non-zero exit."""
+    b = binary
 
     def run(*args, ok=True):
         r = subprocess.run([b, *map(str, args)], cwd=ROOT, capture_output=True, text=True)

@@ -214,7 +214,7 @@ def test_run_of_a_dict_is_the_cli_bytes(cli, root, tmp_path):
 
 
 def test_run_write_is_whole_or_nothing(root, tmp_path):
-    study = calbench.run(root / CI_GUARD, trials=1)
+    study = calbench.run(root / CI_GUARD, trials=1, progress=True)
     blocker = tmp_path / "out"
     blocker.write_text("keep me")
     with pytest.raises(calbench.IoError, match="out"):

@@ -31,3 +31,10 @@ def test_the_example_sweep_runs_and_plots(root, tmp_path):
     else:
         assert (tmp_path / "eta.png").stat().st_size > 1000
     assert (tmp_path / "study" / "summary.json").exists()
+
+
+def test_the_overhead_benchmark_runs(root, binary):
+    r = subprocess.run([sys.executable, str(root / "benches" / "python_overhead.py"), binary, "--quick"],
+                       cwd=root, capture_output=True, text=True)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "binding overhead" in r.stdout and "gauss-newton" in r.stdout
