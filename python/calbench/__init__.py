@@ -97,29 +97,9 @@ class IdentifyResult:
         seconds: wall time of the identification (and validation) in Rust, s.
     """
 
-    __slots__ = (
-        "parameters",
-        "parameter_names",
-        "covariance",
-        "termination",
-        "iterations",
-        "evaluations",
-        "rank",
-        "condition_number",
-        "sigma0",
-        "rms_residual_mm",
-        "weights",
-        "residuals",
-        "robot",
-        "registration_frame",
-        "registration_rounds",
-        "validation",
-        "seconds",
-    )
-
     def __init__(self, fields):
-        for k in self.__slots__:
-            setattr(self, k, fields[k])
+        self.__dict__.update(fields)
+        self.parameter_names = list(self.parameters)
 
     def __repr__(self):
         return (

@@ -26,7 +26,7 @@ use calbench::measurement::{Measure, Measurements};
 use calbench::numeric::{Frame, Real};
 use calbench::report::InMemoryRun;
 use calbench::robot::compliance::CompliancePick;
-use calbench::robot::{builtin, names, Param, Robot};
+use calbench::robot::{builtin, Param, Robot};
 use calbench::study::scenario::Scenario;
 use calbench::study::{trial, RunOptions, Study};
 
@@ -471,13 +471,21 @@ fn identify<'py>(
         };
         setting(&key, msg)
     })?;
-    let registration: Registration = names::parse("registration", registration).map_err(err)?;
+    let registration: Registration = registration.parse().map_err(|_| {
+        setting(
+            "registration",
+            format!("\"{registration}\" is not one of identify, svd, wsvd, known"),
+        )
+    })?;
     let pick = compliance.map(CompliancePick::from_arg);
     let val = validate
         .as_ref()
         .map(|(vq, vp, vr)| measurements(nominal, "validate", vq, vp, vr.as_ref(), None, None))
         .transpose()?;
-    let (on, validation, seconds) = py
+    // The Rust side, timed as a whole: the identification and everything the result holds
+    // that `calbench identify` computes too (covariance, condition number, residuals,
+    // validation).
+    let (on, validation, covariance, condition, residuals, seconds) = py
         .detach(|| {
             let t0 = std::time::Instant::now();
             let on = identify_on_data(
@@ -493,7 +501,11 @@ fn identify<'py>(
                 .as_ref()
                 .map(|v| validate_file(nominal, &on.calibrated, v))
                 .transpose()?;
-            Ok((on, validation, t0.elapsed().as_secs_f64()))
+            let id = &on.calibrated.identified;
+            let (covariance, condition) = (id.covariance(), id.condition_number());
+            let residuals = residual_vectors(&on.calibrated, &data)?;
+            let seconds = t0.elapsed().as_secs_f64();
+            Ok((on, validation, covariance, condition, residuals, seconds))
         })
         .map_err(err)?;
     if on.undetermined() && !allow_rank_deficient {
@@ -508,29 +520,23 @@ fn identify<'py>(
     let c = &on.calibrated;
     let id = &c.identified;
     let out = PyDict::new(py);
-    let names: Vec<String> = on.params.iter().map(|p| p.to_string()).collect();
     let params = PyDict::new(py);
-    for (n, x) in names.iter().zip(id.x.iter()) {
-        params.set_item(n, *x)?;
+    for (p, x) in on.params.iter().zip(id.x.iter()) {
+        params.set_item(p.to_string(), *x)?;
     }
     out.set_item("parameters", params)?;
-    out.set_item("parameter_names", names)?;
-    out.set_item("covariance", matrix(py, &id.covariance()))?;
+    out.set_item("covariance", matrix(py, &covariance))?;
     out.set_item("termination", id.termination.as_str())?;
     out.set_item("iterations", id.iterations)?;
     out.set_item("evaluations", id.evaluations)?;
     out.set_item("rank", id.rank)?;
-    out.set_item("condition_number", id.condition_number())?;
+    out.set_item("condition_number", condition)?;
     out.set_item("sigma0", id.sigma0)?;
     out.set_item("rms_residual_mm", id.rms_residual)?;
     out.set_item("weights", PyArray1::from_slice(py, &id.weights))?;
-    let res = residual_vectors(c, &data).map_err(err)?;
-    let mut r = Array2::<f64>::zeros((res.len(), 3));
-    for (i, v) in res.iter().enumerate() {
-        for a in 0..3 {
-            r[[i, a]] = v[a];
-        }
-    }
+    let flat: Vec<f64> = residuals.iter().flat_map(|v| [v[0], v[1], v[2]]).collect();
+    let r = Array2::from_shape_vec((residuals.len(), 3), flat)
+        .map_err(|e| ComputeError::new_err(e.to_string()))?;
     out.set_item("residuals", r.into_pyarray(py))?;
     let mut compensated = c.robot.clone();
     compensated.name = format!("{}-calibrated", nominal.name);

@@ -487,8 +487,8 @@ pub fn measurements_from_arrays(
                 dof,
             ));
         }
-        for (j, &v) in quser.iter().enumerate() {
-            finite(i, &format!("q{}", j + 1), v)?;
+        if let Some(j) = quser.iter().position(|v| !v.is_finite()) {
+            finite(i, &format!("q{}", j + 1), quser[j])?;
         }
         let q =
             check_joints(robot, quser, (&lim_lo, &lim_hi)).map_err(|(c, msg)| at(i, &c, msg))?;
