@@ -26,6 +26,7 @@ if ! { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas" 2>/dev/n
     echo "skipped: $msg" >&2
     exit 0
 fi
-# The test profile: the dependencies are those cargo test just built.
-VIRTUAL_ENV="$PWD/.venv" "$py" -m maturin develop --quiet --profile test
+# The dev profile: its dependencies are those cargo test just built (optimised, as
+# Cargo.toml sets for every dependency).
+VIRTUAL_ENV="$PWD/.venv" "$py" -m maturin develop --quiet
 CALBENCH_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/calbench" "$py" -m pytest -q python/tests
