@@ -60,15 +60,28 @@ pub fn solve(
     q0: &[Real],
     payload_kg: Real,
 ) -> crate::Result<Vec<Real>> {
+    solve_rows(identified, target, q0, payload_kg, 6)
+}
+
+/// [`solve`] on the first `rows` rows of the error: 6 for the pose, 3 for the position only
+/// (the orientation is free; the step is the least-norm one).
+fn solve_rows(
+    identified: &Robot,
+    target: &Frame,
+    q0: &[Real],
+    payload_kg: Real,
+    rows: usize,
+) -> crate::Result<Vec<Real>> {
     let chain = identified.chain();
     let pose = |q: &[Real]| loaded_fk(identified, &chain, q, payload_kg);
     let n = q0.len();
     let mut q = q0.to_vec();
     let mut qh = q.clone();
-    let mut jac = DMatrix::<Real>::zeros(6, n);
+    let mut jac = DMatrix::<Real>::zeros(rows, n);
     for _ in 0..MAX_ITERATIONS {
         let f = pose(&q)?;
-        let e = error(target, &f);
+        let mut e = error(target, &f);
+        e[rows..].fill(0.0);
         let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt() / K_MM_PER_RAD;
         if pos < TOL_MM && rot < TOL_RAD {
@@ -82,11 +95,11 @@ pub fn solve(
             let ep = error(target, &pose(&qh)?);
             qh[j] -= 2.0 * h;
             let em = error(target, &pose(&qh)?);
-            for r in 0..6 {
+            for r in 0..rows {
                 jac[(r, j)] = -(ep[r] - em[r]) / (2.0 * h);
             }
         }
-        let rhs = DVector::from_row_slice(&e);
+        let rhs = DVector::from_row_slice(&e[..rows]);
         let Ok(step) = jac.clone().svd(true, true).solve(&rhs, 1e-12) else {
             break;
         };
@@ -95,6 +108,17 @@ pub fn solve(
         }
     }
     Ok(q)
+}
+
+/// The flag of a written command `q` with its residuals ([`Corrected::flag`]).
+fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -> &'static str {
+    if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
+        "failed"
+    } else if !identified.within_limits(q) {
+        "limits"
+    } else {
+        "ok"
+    }
 }
 
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
@@ -114,19 +138,98 @@ pub fn compensate_row(
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
     let residual_deg = rotation_angle_deg(&f, &target);
-    let flag = if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
-        "failed"
-    } else if !identified.within_limits(&q) {
-        "limits"
-    } else {
-        "ok"
-    };
+    let flag = flag(identified, &q, residual_mm, residual_deg);
     Ok(Corrected {
         q,
         residual_mm,
         residual_deg,
         flag,
     })
+}
+
+/// Turns each revolute joint outside its limits by whole turns into them, where a turn
+/// reaches (the same pose).
+fn wrap_into_limits(robot: &Robot, q: &mut [Real]) {
+    let turn = 2.0 * std::f64::consts::PI;
+    for (v, j) in q.iter_mut().zip(&robot.joints) {
+        if j.kind != crate::robot::JointType::Revolute {
+            continue;
+        }
+        let (lo, hi) = j.limits;
+        let k = ((lo - *v) / turn).ceil();
+        let w = *v + k * turn;
+        if (*v < lo || *v > hi) && w <= hi {
+            *v = w;
+        }
+    }
+}
+
+/// Random starts tried for a Cartesian target after the previous solution and the middle of
+/// the joint limits.
+pub const TARGET_STARTS: usize = 40;
+
+/// Solves Cartesian tool targets (`compensate --targets`): per target, the joints at which
+/// `identified` reaches it (position only when `position_only`, else the whole pose).
+/// Targets carry no joints, so each is solved from the previous target's solution, then the
+/// middle of the joint limits, then [`TARGET_STARTS`] seeded random poses, until a start
+/// gives a solution within the joint limits to [`ACCEPT_MM`] / [`ACCEPT_DEG`]; otherwise the
+/// closest one is returned, flagged. `round` as in [`compensate_row`].
+pub fn compensate_targets(
+    identified: &Robot,
+    targets: &[Frame],
+    position_only: bool,
+    payload_kg: Real,
+    round: impl Fn(&[Real]) -> Vec<Real>,
+) -> crate::Result<Vec<Corrected>> {
+    let n = identified.dof();
+    let middle: Vec<Real> = (0..n)
+        .map(|j| 0.5 * (identified.joints[j].limits.0 + identified.joints[j].limits.1))
+        .collect();
+    let mut g = crate::numeric::rng::stream(0, "compensate-targets");
+    let randoms = crate::robot::sampling::uniform_joint_poses(identified, TARGET_STARTS, &mut g);
+    let chain = identified.chain();
+    let rows = if position_only { 3 } else { 6 };
+    let mut out: Vec<Corrected> = Vec::with_capacity(targets.len());
+    for target in targets {
+        let previous = out.last().map(|c| c.q.clone());
+        let starts = previous
+            .iter()
+            .chain(std::iter::once(&middle))
+            .chain(&randoms);
+        let mut best: Option<Corrected> = None;
+        for q0 in starts {
+            let mut q = solve_rows(identified, target, q0, payload_kg, rows)?;
+            wrap_into_limits(identified, &mut q);
+            let q = round(&q);
+            let f = loaded_fk(identified, &chain, &q, payload_kg)?;
+            let residual_mm = (f.pos - target.pos).norm();
+            let residual_deg = if position_only {
+                0.0
+            } else {
+                rotation_angle_deg(&f, target)
+            };
+            let flag = flag(identified, &q, residual_mm, residual_deg);
+            let c = Corrected {
+                q,
+                residual_mm,
+                residual_deg,
+                flag,
+            };
+            let rank = |f: &str| ["ok", "limits", "failed"].iter().position(|g| *g == f);
+            let better = best
+                .as_ref()
+                .is_none_or(|b| (rank(c.flag), c.residual_mm) < (rank(b.flag), b.residual_mm));
+            let done = c.flag == "ok";
+            if better {
+                best = Some(c);
+            }
+            if done {
+                break;
+            }
+        }
+        out.extend(best);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]
@@ -171,6 +274,34 @@ mod tests {
             ok += 1;
         }
         assert!(ok >= 25, "only {ok} of 30 rows solved");
+    }
+
+    /// Cartesian targets of the nominal robot (positions, then full poses) are reached by the
+    /// identified robot; an unreachable one is flagged.
+    #[test]
+    fn cartesian_targets_are_reached_on_the_identified_robot() {
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let qs = crate::robot::sampling::uniform_joint_poses(
+            &nominal,
+            12,
+            &mut stream(9, "targets-test"),
+        );
+        let truth = nominal.with_errors(&[(Param::A(1), 0.7), (Param::Theta(2), 2e-3)]);
+        let mut targets: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
+        for only in [true, false] {
+            let c = compensate_targets(&truth, &targets, only, 0.0, |q| q.to_vec()).unwrap();
+            for (t, c) in targets.iter().zip(&c) {
+                assert_eq!(c.flag, "ok", "{c:?}");
+                let f = truth.fk(&c.q);
+                assert!((f.pos - t.pos).norm() < 1e-8);
+                if !only {
+                    assert!(rotation_angle_deg(&f, t) < 1e-7);
+                }
+            }
+        }
+        targets[0].pos *= 10.0;
+        let c = compensate_targets(&truth, &targets[..1], true, 0.0, |q| q.to_vec()).unwrap();
+        assert_eq!(c[0].flag, "failed");
     }
 
     /// The residual is that of the written (rounded) command, and a bad solve is flagged.

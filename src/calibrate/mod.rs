@@ -6,9 +6,14 @@
 //! - [`registration`]: SVD (Kabsch/Arun) and Ban's weighted SVD of point sets;
 //! - [`validation`]: validation errors of a model against true (or measured) frames;
 //! - [`on_data`]: identification on a measurement (`identify`), with its refusals;
+//! - [`cv`]: K-fold cross-validation, held-out splits and model choice (`identify --cv`);
+//! - [`diagnostics`]: parameter σ and correlations, leverage and Cook's distance, predicted
+//!   position σ (`identified.json` `diagnostics`);
 //! - this file: [`calibrate`].
 
 pub mod compensate;
+pub mod cv;
+pub mod diagnostics;
 pub mod on_data;
 pub mod registration;
 pub mod validation;
@@ -163,9 +168,12 @@ pub fn calibrate(
         }
     };
     let start = rng.clone();
+    let precisions = method.precisions(params)?;
     let mut solve = |frame: Frame| -> Result<(Identified, Robot)> {
         *rng = start.clone();
-        let problem = CalibrationProblem::new(nominal, params, data, frame, method.k);
+        let mut problem = CalibrationProblem::new(nominal, params, data, frame, method.k);
+        problem.priors.clone_from(&precisions);
+        problem.trace.clone_from(&method.trace);
         let mut identified = method.method.identify(&problem, rng)?;
         crate::identify::robot::assess(&problem, &mut identified)?;
         let robot = problem.robot_with(identified.x.as_slice());

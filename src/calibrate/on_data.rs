@@ -26,18 +26,13 @@ pub struct OnData {
 }
 
 impl OnData {
-    /// Whether the data left parameters undetermined (termination `rank-deficient` or
-    /// `singular`).
+    /// Whether the data left parameters undetermined ([`undetermined`]).
     pub fn undetermined(&self) -> bool {
-        matches!(
-            self.calibrated.identified.termination,
-            Termination::RankDeficient | Termination::Singular
-        )
+        undetermined(&self.calibrated)
     }
 
-    /// The refusal of a result whose data (`data`, read from `source`) do not determine
-    /// every parameter: the undetermined parameters and the dependent groups of the
-    /// kinematic model. `allow` names the option that accepts such a result.
+    /// The refusal of this result when its data leave parameters undetermined
+    /// ([`undetermined_error`]).
     pub fn undetermined_error(
         &self,
         nominal: &Robot,
@@ -46,32 +41,63 @@ impl OnData {
         spec: &MethodSpec,
         allow: &str,
     ) -> Error {
-        let a = analyse(nominal, &self.kinematic, &data.qs, data.measure());
-        let names = |v: &[Param]| {
-            v.iter()
-                .map(|p| p.to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
-        let c = &self.calibrated;
-        Error::file(
-            source,
-            "data",
-            format!(
-                "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
-                 dependent groups: {}); {} ended {}, so nothing was written. Measure poses \
-                 that move every joint, or pass {allow}",
-                a.rank,
-                self.params.len(),
-                c.identified.rank.unwrap_or(a.rank),
-                names(&a.unidentifiable),
-                groups.join(" "),
-                spec.name(),
-                c.identified.termination.as_str(),
-            ),
+        let params = (&self.kinematic[..], self.params.len());
+        undetermined_error(
+            nominal,
+            params,
+            &self.calibrated,
+            (source, data),
+            spec,
+            allow,
         )
     }
+}
+
+/// Whether a calibration left parameters undetermined (termination `rank-deficient` or
+/// `singular`).
+pub fn undetermined(c: &Calibrated) -> bool {
+    matches!(
+        c.identified.termination,
+        Termination::RankDeficient | Termination::Singular
+    )
+}
+
+/// The refusal of a result `c` whose data (`data`, read from `source`) do not determine every
+/// parameter: the undetermined parameters and the dependent groups of the kinematic model
+/// (`params`: the kinematic parameters, which [`analyse`] can judge, and the number of all
+/// identified). `allow` names the option that accepts such a result.
+pub fn undetermined_error(
+    nominal: &Robot,
+    params: (&[Param], usize),
+    c: &Calibrated,
+    (source, data): (&Path, &Measurements),
+    spec: &MethodSpec,
+    allow: &str,
+) -> Error {
+    let a = analyse(nominal, params.0, &data.qs, data.measure());
+    let names = |v: &[Param]| {
+        v.iter()
+            .map(|p| p.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
+    Error::file(
+        source,
+        "data",
+        format!(
+            "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
+             dependent groups: {}); {} ended {}, so nothing was written. Measure poses \
+             that move every joint, or pass {allow}",
+            a.rank,
+            params.1,
+            c.identified.rank.unwrap_or(a.rank),
+            names(&a.unidentifiable),
+            groups.join(" "),
+            spec.name(),
+            c.identified.termination.as_str(),
+        ),
+    )
 }
 
 /// Identifies the errors of `nominal` from the measurement `data` with `spec`: the

@@ -1,16 +1,18 @@
-//! `calbench compensate --robot NOMINAL --identified IDENTIFIED --joints PROGRAM
-//! [--payload-kg W] --out CSV` (Li 2018 §3): per program row, the joints (in the nominal
-//! robot's units, the controller's) at which the identified robot reaches the nominal pose,
-//! with the residual and a flag.
+//! `calbench compensate --robot NOMINAL --identified IDENTIFIED (--joints PROGRAM |
+//! --targets TARGETS) [--payload-kg W] --out CSV` (Li 2018 §3): per program row, the joints
+//! (in the nominal robot's units, the controller's) at which the identified robot reaches the
+//! nominal pose (or the Cartesian target), with the residual and a flag.
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 
-use calbench::calibrate::compensate::compensate_row;
+use calbench::calibrate::compensate::{compensate_row, compensate_targets};
 use calbench::error::Error;
 use calbench::measurement::csv::fixed;
+use calbench::measurement::csv::read_targets;
 use calbench::numeric::Real;
+use calbench::numeric::{quaternion_matrix, Frame, Mat3};
 use calbench::robot::builtin;
 
 use super::{check_out_file, write_file};
@@ -21,12 +23,19 @@ pub struct CompensateArgs {
     /// The nominal robot (the controller's model).
     #[arg(long)]
     pub robot: String,
+    /// The chain of a URDF tree.
+    #[command(flatten)]
+    pub chain: super::ChainArgs,
     /// The identified (compensated) robot, e.g. identify's robot.toml.
     #[arg(long)]
     pub identified: String,
     /// The program: a CSV with columns q1..qn (nominal joint commands).
+    #[arg(long, required_unless_present = "targets", conflicts_with = "targets")]
+    pub joints: Option<PathBuf>,
+    /// Cartesian tool targets for the nominal robot: a CSV with columns x,y,z (mm, base
+    /// frame) and optionally qw,qx,qy,qz (full poses); the output has columns q1..qn.
     #[arg(long)]
-    pub joints: PathBuf,
+    pub targets: Option<PathBuf>,
     /// Payload at the tool (kg) while the program runs: a compensated robot with joint
     /// compliances corrects the commands for its gravity sag under this load.
     #[arg(long, default_value_t = 0.0)]
@@ -47,14 +56,17 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
         .into());
     }
     check_out_file(&args.out)?;
-    let nominal = builtin::load(&args.robot)?;
-    let ident = builtin::load(&args.identified)?;
+    let nominal = args.chain.load(&args.robot)?;
+    let ident = if calbench::robot::urdf::is_urdf(&args.identified) {
+        args.chain.load(&args.identified)?
+    } else {
+        builtin::load(&args.identified)?
+    };
     let (n, m) = (ident.dof(), nominal.dof());
     if n != m {
         let msg = format!("{} has {n} joints, the nominal robot {m}", args.identified);
         return Err(Error::setting("--identified", msg).into());
     }
-    let program = calbench::sim::poses::read_pose_list(&args.joints, &nominal)?;
     let cell = |v: Real| fixed(v, 9);
     // What is written: 9 decimals in the nominal robot's units.
     let round = |q: &[Real]| -> Vec<Real> {
@@ -69,8 +81,30 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
     s.push_str("residual_mm,residual_deg,flag\n");
     let mut flagged = 0;
     let mut worst: (Real, Real) = (0.0, 0.0);
-    for q in &program {
-        let c = compensate_row(&nominal, &ident, q, payload_kg, round)?;
+    let rows = if let Some(path) = &args.targets {
+        let t = read_targets(path)?;
+        let frames: Vec<Frame> = t
+            .points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| Frame {
+                rot: t
+                    .quats
+                    .as_ref()
+                    .map_or(Mat3::identity(), |q| quaternion_matrix(&q[i])),
+                pos: *p,
+            })
+            .collect();
+        compensate_targets(&ident, &frames, t.quats.is_none(), payload_kg, round)?
+    } else {
+        let path = args.joints.as_deref().unwrap_or(std::path::Path::new(""));
+        let program = calbench::sim::poses::read_pose_list(path, &nominal)?;
+        program
+            .iter()
+            .map(|q| compensate_row(&nominal, &ident, q, payload_kg, round))
+            .collect::<calbench::Result<Vec<_>>>()?
+    };
+    for c in &rows {
         for v in nominal.q_to_user(&c.q) {
             s.push_str(&cell(v));
             s.push(',');
@@ -85,7 +119,7 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
     write_file(&args.out, &s)?;
     out!(
         "{} rows corrected ({flagged} flagged), worst residual {:.1e} mm / {:.1e} deg; written to {}",
-        program.len(),
+        rows.len(),
         worst.0,
         worst.1,
         args.out.display()

@@ -5,7 +5,6 @@ use serde_json::json;
 
 use calbench::error::Error;
 use calbench::numeric::Real;
-use calbench::robot::builtin;
 
 /// Arguments of `calbench fk`.
 #[derive(clap::Args)]
@@ -13,6 +12,9 @@ pub struct FkArgs {
     /// Built-in robot name or robot file.
     #[arg(long)]
     pub robot: String,
+    /// The chain of a URDF tree.
+    #[command(flatten)]
+    pub chain: super::ChainArgs,
     /// Joint values in the robot's units, comma-separated (`--q -10,20,30,0,45,0`).
     #[arg(
         long,
@@ -31,7 +33,7 @@ pub struct FkArgs {
 /// Prints the tool point and the rotation of the tool frame; warns on stderr when the joint
 /// values lie outside the joint limits.
 pub fn run(args: &FkArgs) -> Result<()> {
-    let robot = builtin::load(&args.robot)?;
+    let robot = args.chain.load(&args.robot)?;
     if args.q.len() != robot.dof() {
         let e = Error::joint_count("--q", "the values given", args.q.len(), robot.dof());
         return Err(e.into());

@@ -9,7 +9,6 @@ use serde_json::json;
 
 use calbench::error::Error;
 use calbench::numeric::Real;
-use calbench::robot::builtin;
 use calbench::robot::identifiability::analyse;
 use calbench::robot::Param;
 use calbench::sim::settings::MeasureSetting;
@@ -20,6 +19,9 @@ pub struct IdentifiabilityArgs {
     /// Built-in robot name or robot file.
     #[arg(long)]
     pub robot: String,
+    /// The chain of a URDF tree.
+    #[command(flatten)]
+    pub chain: super::ChainArgs,
     /// What is measured per pose: the point (3 rows) or the full pose (6 rows).
     #[arg(long, default_value = "position", value_parser = super::named::<MeasureSetting>())]
     pub measure: MeasureSetting,
@@ -46,7 +48,7 @@ pub struct IdentifiabilityArgs {
 
 /// Analyses every parameter of the robot's model over the poses and prints the result.
 pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
-    let robot = builtin::load(&args.robot)?;
+    let robot = args.chain.load(&args.robot)?;
     let gcn_blocks = args.gcn_blocks.then_some(args.gcn_threshold);
     if let Some(t) = gcn_blocks {
         if !(t.is_finite() && t > 0.0) {

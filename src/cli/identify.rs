@@ -1,22 +1,26 @@
-//! `calbench identify --robot R --data CSV --method M [--registration REG] [--validate CSV]
-//! [--k K] [--set KEY=VALUE …] [--allow-rank-deficient] [--export urdf|toml]
-//! [--compliance LIST|gravity] [--seed S] --out DIR`: identification on a measurement file,
-//! real or simulated.
+//! `calbench identify --robot R --data CSV --method M [--registration REG] [--validate CSV |
+//! --holdout LAST/EVERY] [--k K] [--set KEY=VALUE …] [--allow-rank-deficient]
+//! [--export urdf,toml,ur-yaml,dh-csv] [--compliance LIST|gravity] [--fix NAMES]
+//! [--prior NAME=σ|FILE …] [--cv K [--cv-seed S]] [--models A,B,…] [--seed S] --out DIR`:
+//! identification on a measurement file, real or simulated.
 
 use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use calbench::calibrate::on_data::identify_on_data;
-use calbench::calibrate::{Registration, RoundsEnd};
+use calbench::calibrate::diagnostics::{diagnose, Subject};
+use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
+use calbench::calibrate::{cv, on_data};
 use calbench::error::Error;
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
-use calbench::measurement::Measure;
-use calbench::numeric::Real;
-use calbench::report::identified::{validate_file, write_identified, IdentifyRecord};
+use calbench::measurement::{Measure, Measurements};
+use calbench::numeric::{Frame, Real};
+use calbench::report::exports;
+use calbench::report::identified::{validate_file, write_identified_with, IdentifyRecord};
+use calbench::report::practice::{Practice, PriorMove};
 use calbench::robot::compliance::CompliancePick;
-use calbench::robot::{builtin, Robot};
+use calbench::robot::{param_sets, Param, Robot};
 
 use super::check_out_folder;
 
@@ -34,6 +38,9 @@ pub struct IdentifyArgs {
     /// Built-in robot name or robot file.
     #[arg(long)]
     pub robot: String,
+    /// The chain of a URDF tree.
+    #[command(flatten)]
+    pub chain: super::ChainArgs,
     /// The measurement CSV (`q1..qn,x,y,z[,qw,qx,qy,qz]`).
     #[arg(long)]
     pub data: PathBuf,
@@ -45,8 +52,33 @@ pub struct IdentifyArgs {
     #[arg(long, default_value = "identify", value_parser = super::named::<Registration>())]
     pub registration: Registration,
     /// A validation measurement CSV.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "holdout")]
     pub validate: Option<PathBuf>,
+    /// Hold rows of --data out for validation instead of a --validate file: `LAST/EVERY`,
+    /// the last LAST of every EVERY consecutive rows (`3/10`: rows whose 0-based index % 10
+    /// ≥ 7).
+    #[arg(long, value_name = "LAST/EVERY")]
+    pub holdout: Option<calbench::calibrate::cv::Holdout>,
+    /// K-fold cross-validation on the calibration rows (seeded folds, the same for every
+    /// model): per fold, the position RMS of the held-out points; in identified.json `cv`.
+    #[arg(long, value_name = "K")]
+    pub cv: Option<usize>,
+    /// Seed of the cross-validation folds.
+    #[arg(long, default_value_t = 0)]
+    pub cv_seed: u64,
+    /// Candidate models compared by their K-fold CV RMS (K from --cv, default 5): terms
+    /// `kinematic`, `beta` (Hayati's β where identifiable), `compliance` (the gravity joints;
+    /// needs link masses), joined by `+`; the best is identified.
+    #[arg(long, value_delimiter = ',', conflicts_with = "compliance")]
+    pub models: Vec<calbench::calibrate::cv::Model>,
+    /// Parameters held at their nominal values (comma-separated names, e.g. `a2,theta3`).
+    #[arg(long, value_delimiter = ',', value_parser = param_name)]
+    pub fix: Vec<Param>,
+    /// A prior on a parameter's error: `NAME=σ` (mm, rad; rad/(N·m) for a compliance), or a
+    /// TOML file of `NAME = σ` lines (repeatable): a MAP estimate, Tikhonov towards the
+    /// nominal value, in the Jacobian methods.
+    #[arg(long, value_name = "NAME=σ|FILE", value_parser = prior_arg)]
+    pub prior: Vec<Vec<(Param, Real)>>,
     /// Full-pose data only: weight of orientation against position errors, mm per rad
     /// (default 100; about σ_position / σ_orientation of the instrument).
     #[arg(long)]
@@ -59,10 +91,11 @@ pub struct IdentifyArgs {
     /// `rank-deficient`); without it such a result is refused.
     #[arg(long)]
     pub allow_rank_deficient: bool,
-    /// The compensated robot's format besides robot.toml (default: `urdf` for a URDF robot,
-    /// else `toml`).
-    #[arg(long, value_enum)]
-    pub export: Option<Export>,
+    /// What is written besides robot.toml, comma-separated (default: `urdf` for a URDF
+    /// robot, else `toml`): `ur-yaml` writes UR's kinematics_params_file (ur-kinematics.yaml),
+    /// `dh-csv` the parameter table with nominal, identified, Δ and σ (dh-table.csv).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub export: Vec<Export>,
     /// Joint compliances identified with the kinematic errors (elasto-geometric model):
     /// names such as `c2,c3`, or `gravity` for every joint gravity loads. The gravity
     /// torques use the robot's link masses and each row's `payload_kg`.
@@ -85,6 +118,32 @@ pub enum Export {
     Urdf,
     /// robot.toml only.
     Toml,
+    /// Also ur-kinematics.yaml: UR's `kinematics_params_file`.
+    UrYaml,
+    /// Also dh-table.csv: nominal, identified, Δ and σ per parameter.
+    DhCsv,
+}
+
+/// `--fix`: one parameter name.
+fn param_name(text: &str) -> std::result::Result<Param, String> {
+    Param::parse(text.trim())
+        .ok_or_else(|| format!("`{text}` is not a parameter name (a2, theta3, base.x, …)"))
+}
+
+/// `--prior`: `NAME=σ`, or a TOML file of `NAME = σ` lines.
+fn prior_arg(text: &str) -> std::result::Result<Vec<(Param, Real)>, String> {
+    use calbench::identify::registry::parse_prior;
+    if let Some((name, sigma)) = text.split_once('=') {
+        return parse_prior(name, sigma.trim().parse().ok()).map(|p| vec![p]);
+    }
+    let body = std::fs::read_to_string(text).map_err(|e| format!("{text}: {e}"))?;
+    let t: toml::Table = toml::from_str(&body).map_err(|e| format!("{text}: {e}"))?;
+    t.iter()
+        .map(|(name, v)| {
+            let sigma = v.as_float().or_else(|| v.as_integer().map(|i| i as Real));
+            parse_prior(name, sigma).map_err(|m| format!("{text}: key `{name}`: {m}"))
+        })
+        .collect()
 }
 
 /// One `--set KEY=VALUE`: the key, and the value read as TOML.
@@ -108,10 +167,11 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 pub fn run(args: &IdentifyArgs) -> Result<()> {
     let out = &args.out;
     check_out_folder(out, &OUTPUTS)?;
-    let nominal = builtin::load(&args.robot)?;
+    let nominal = args.chain.load(&args.robot)?;
     let mut spec = method_with_options(args.method.name, &args.options)?;
+    spec.priors.extend(args.prior.iter().flatten().copied());
     let registration = args.registration;
-    let d = read_measurements(&args.data, &nominal)?;
+    let mut d = read_measurements(&args.data, &nominal)?;
     let measure = d.measure();
     if let Some(k) = args.k {
         if measure == Measure::Position {
@@ -124,26 +184,78 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         calbench::error::finite_positive("--k", k)?;
         spec.k = k;
     }
-    let val = args
+    let mut val = args
         .validate
         .as_deref()
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
-    let on = identify_on_data(
-        &nominal,
-        &d,
-        &spec,
-        registration,
-        args.compliance.as_ref(),
-        "--compliance",
-        args.seed,
-    )?;
-    if on.undetermined() && !args.allow_rank_deficient {
-        return Err(on
-            .undetermined_error(&nominal, &args.data, &d, &spec, "--allow-rank-deficient")
-            .into());
+    if let Some(h) = args.holdout {
+        let (cal, held) = h.split(d.len());
+        val = Some(cv::subset(&d, &held));
+        d = cv::subset(&d, &cal);
     }
-    let (params, c) = (&on.params, &on.calibrated);
+    let with_base = registration == Registration::Identify;
+    let mut kinematic = param_sets::identified_params_tool_first(&nominal, measure, with_base);
+    kinematic.retain(|p| !args.fix.contains(p));
+    let mut params = kinematic.clone();
+    if let Some(c) = &args.compliance {
+        params.extend(c.params(&nominal, "--compliance")?);
+    }
+    params.retain(|p| !args.fix.contains(p));
+    check_fixed(&nominal, &args.fix)?;
+    let setup = cv::CvSetup {
+        method: &spec,
+        registration,
+        seed: args.seed,
+        fold_seed: args.cv_seed,
+        fixed: &args.fix,
+    };
+    let folds = args.cv.unwrap_or(5);
+    // With --models the best model by CV is the one identified.
+    let mut robot = nominal.clone();
+    let mut choice = None;
+    if !args.models.is_empty() {
+        let (cvs, best) = cv::choose_model(&nominal, &args.models, &d, folds, &setup)?;
+        (robot, params) =
+            args.models[best].robot_and_params(&nominal, &d, registration, &args.fix)?;
+        choice = Some((cvs, best));
+    }
+    let nominal = robot;
+    let cross = match (&choice, args.cv) {
+        (Some((cvs, best)), _) => Some(cvs[*best].clone()),
+        (None, Some(k)) => {
+            let name = if args.compliance.is_some() {
+                "kinematic+compliance"
+            } else {
+                "kinematic"
+            };
+            Some(cv::cross_validate(
+                (&nominal, &params, name.to_string()),
+                &d,
+                k,
+                &setup,
+            )?)
+        }
+        (None, None) => None,
+    };
+    // For real data "known" means the points are already in the base frame.
+    let recorder = calbench::identify::TraceRecorder::default();
+    let mut traced = spec.clone();
+    traced.trace = Some(recorder.clone());
+    let c = calibrate(
+        &nominal,
+        &params,
+        &d,
+        registration,
+        &Frame::identity(),
+        &traced,
+        &mut calbench::numeric::rng::stream(args.seed, "identify"),
+    )?;
+    if on_data::undetermined(&c) && !args.allow_rank_deficient {
+        let allow = "--allow-rank-deficient";
+        let (all, source) = ((&kinematic[..], params.len()), (args.data.as_path(), &d));
+        return Err(on_data::undetermined_error(&nominal, all, &c, source, &spec, allow).into());
+    }
     if matches!(
         c.rounds.termination,
         RoundsEnd::MaxRounds | RoundsEnd::Stalled
@@ -160,20 +272,79 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     }
     let validation = val
         .as_ref()
-        .map(|v| validate_file(&nominal, c, v))
+        .map(|v| validate_file(&nominal, &c, v))
         .transpose()?;
+    let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, args.seed))?;
+    let mut extra = Vec::new();
+    if !args.export.contains(&Export::Toml) {
+        if args.export.contains(&Export::UrYaml) {
+            extra.push(("ur-kinematics.yaml", exports::ur_yaml(&c.robot)?));
+        }
+        if args.export.contains(&Export::DhCsv) {
+            let cov = c.identified.covariance();
+            let sigma: Vec<Real> = (0..params.len())
+                .map(|i| cov[(i, i)].max(0.0).sqrt())
+                .collect();
+            extra.push((
+                "dh-table.csv",
+                exports::dh_csv(&nominal, &c.robot, &params, &sigma),
+            ));
+        }
+    }
+    let practice = Practice {
+        holdout: args.holdout,
+        cv: cross.clone(),
+        models: choice.clone(),
+        fixed: args.fix.clone(),
+        priors,
+        trace: convergence_trace(&c, &recorder),
+        diagnostics: Some(diagnose(&Subject {
+            nominal: &nominal,
+            params: &params,
+            data: &d,
+            calibrated: &c,
+            k: spec.k,
+            priors: &spec.precisions(&params)?,
+            validation: val
+                .as_ref()
+                .zip(validation.as_ref())
+                .map(|(v, s)| (v, s.after_mm.rms)),
+        })?),
+    };
     let record = IdentifyRecord {
         nominal: &nominal,
         data_path: &args.data,
         data: &d,
         method: spec.name(),
         registration,
-        params,
-        calibrated: c,
+        params: &params,
+        calibrated: &c,
         validation: validation.as_ref(),
-        urdf: compensated_urdf(&args.robot, args.export, &c.robot)?,
+        urdf: compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?,
     };
-    write_identified(out, &record)?;
+    write_identified_with(out, &record, &practice.additions(), &extra)?;
+    if let Some((cvs, best)) = &choice {
+        out!("model             CV RMS (mm)  folds mean ± sd   parameters");
+        for (i, m) in cvs.iter().enumerate() {
+            out!(
+                "  {:<16} {:>10.4} {:>8.4} ± {:<8.4} {:>4}{}",
+                m.model,
+                m.rms,
+                m.mean,
+                m.sd,
+                m.parameters,
+                if i == *best { "  (best)" } else { "" }
+            );
+        }
+    } else if let Some(x) = &cross {
+        out!(
+            "{}-fold cross-validation: RMS {:.4} mm (folds {:.4} ± {:.4} mm)",
+            x.k,
+            x.rms,
+            x.mean,
+            x.sd
+        );
+    }
     if let Some(v) = &validation {
         out!("validation error (mm)   mean      rms       max       std");
         for (label, s) in [("before", v.before_mm), ("after", v.after_mm)] {
@@ -228,18 +399,88 @@ fn method_with_options(
 /// moved) unless `--export toml`, for a robot file with `--export urdf`.
 fn compensated_urdf(
     robot: &str,
-    export: Option<Export>,
+    chain: &calbench::robot::urdf::UrdfChain,
+    export: &[Export],
     compensated: &Robot,
 ) -> calbench::Result<Option<String>> {
-    if export == Some(Export::Toml) {
+    if export.contains(&Export::Toml) {
         return Ok(None);
     }
     if !calbench::robot::urdf::is_urdf(robot) {
-        return match export {
-            Some(Export::Urdf) => calbench::robot::urdf::robot_to_urdf(compensated).map(Some),
-            _ => Ok(None),
+        return if export.contains(&Export::Urdf) {
+            calbench::robot::urdf::robot_to_urdf(compensated).map(Some)
+        } else {
+            Ok(None)
         };
     }
-    let source = calbench::robot::urdf::UrdfRobot::load(Path::new(robot))?;
+    let source = calbench::robot::urdf::UrdfRobot::load_chain(Path::new(robot), chain)?;
     source.write(compensated).map(Some)
+}
+
+/// Refuses a `--fix` name the robot's model does not have.
+fn check_fixed(nominal: &Robot, fixed: &[Param]) -> calbench::Result<()> {
+    let known = nominal.params();
+    match fixed
+        .iter()
+        .find(|p| !known.contains(p) && !p.is_compliance())
+    {
+        Some(p) => Err(Error::setting(
+            "--fix",
+            format!("`{p}` is not a parameter of robot `{}`", nominal.name),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// How each prior moved its parameter's estimate: the same identification without the
+/// priors, against the MAP estimate of `c`.
+fn prior_moves(
+    nominal: &Robot,
+    params: &[Param],
+    d: &Measurements,
+    spec: &MethodSpec,
+    c: &Calibrated,
+    (registration, seed): (Registration, u64),
+) -> calbench::Result<Vec<PriorMove>> {
+    if spec.priors.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut free = spec.clone();
+    free.priors.clear();
+    let f = calibrate(
+        nominal,
+        params,
+        d,
+        registration,
+        &Frame::identity(),
+        &free,
+        &mut calbench::numeric::rng::stream(seed, "identify"),
+    )?;
+    Ok(spec
+        .priors
+        .iter()
+        .filter_map(|&(p, sigma)| {
+            let k = params.iter().position(|q| *q == p)?;
+            Some(PriorMove {
+                parameter: p.to_string(),
+                sigma,
+                without_prior: f.identified.x[k],
+                with_prior: c.identified.x[k],
+            })
+        })
+        .collect())
+}
+
+/// The convergence trace: the searches' best fitness per iteration, or the RMS point
+/// residual (mm) at each evaluation of the Jacobian methods' model (every round of an `svd`
+/// or `wsvd` alternation; adaptive LM's rejected trial steps included).
+fn convergence_trace(
+    c: &Calibrated,
+    recorder: &calbench::identify::TraceRecorder,
+) -> Option<(&'static str, Vec<Real>)> {
+    if let Some(t) = &c.identified.trace {
+        return Some(("best fitness per iteration", t.clone()));
+    }
+    let t = recorder.lock().ok()?.clone();
+    (!t.is_empty()).then_some(("RMS point residual (mm) per evaluation", t))
 }

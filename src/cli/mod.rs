@@ -160,3 +160,30 @@ pub fn print_table(r: &RunResult) {
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
     out_raw!("{}", markdown_table(&headers, &rows));
 }
+
+/// `--base LINK` / `--tip LINK`: the chain of a URDF tree that is the robot.
+#[derive(clap::Args, Clone, Debug, Default)]
+pub struct ChainArgs {
+    /// URDF robots: the link the chain starts at (default: the root link).
+    #[arg(long, value_name = "LINK")]
+    pub base: Option<String>,
+    /// URDF robots: the link the chain ends at, for a tree with several leaves (a gripper's
+    /// fingers, a sensor link).
+    #[arg(long, value_name = "LINK")]
+    pub tip: Option<String>,
+}
+
+impl ChainArgs {
+    /// The chain chosen.
+    pub fn chain(&self) -> calbench::robot::urdf::UrdfChain {
+        calbench::robot::urdf::UrdfChain {
+            base: self.base.clone(),
+            tip: self.tip.clone(),
+        }
+    }
+
+    /// The robot `name_or_path`, a URDF's chain chosen by these options.
+    pub fn load(&self, name_or_path: &str) -> Result<calbench::robot::Robot> {
+        calbench::robot::builtin::load_chain(name_or_path, &self.chain())
+    }
+}

@@ -247,7 +247,17 @@ pub struct CalibrationProblem<'a> {
     pub rotations: Option<Vec<Mat3>>,
     /// Per-point weights ([`Measurements::weights`]); `None`: every point weighs 1.
     pub weights: Option<Vec<Real>>,
+    /// Tikhonov precision of each parameter's error towards 0 (the nominal value), in the
+    /// units of the weighted cost ([`MethodSpec::precisions`]); empty: no priors. The
+    /// Jacobian methods minimise `rᵀPr + Σ λ_k x_k²` (a MAP estimate); the searches ignore it.
+    pub priors: Vec<Real>,
+    /// Records the RMS point residual (mm) of each evaluation of the kinematic least squares
+    /// ([`MethodSpec::trace`]); `None`: not recorded.
+    pub trace: Option<TraceRecorder>,
 }
+
+/// A shared record of the RMS point residual per evaluation (`identify`'s convergence trace).
+pub type TraceRecorder = std::sync::Arc<std::sync::Mutex<Vec<Real>>>;
 
 impl<'a> CalibrationProblem<'a> {
     /// The problem of identifying the errors of `params` of `nominal` from `data`, brought
@@ -270,6 +280,8 @@ impl<'a> CalibrationProblem<'a> {
             points,
             rotations,
             weights: data.weights(),
+            priors: Vec::new(),
+            trace: None,
         }
     }
 

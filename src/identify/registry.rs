@@ -15,6 +15,7 @@ use super::{LmOptions, LsOptions, Method, PoseErrorLs, RidgeOptions, RobustOptio
 use crate::error::{finite_positive, Error, Result};
 use crate::identify::qiao::{BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
 use crate::numeric::Real;
+use crate::robot::Param;
 
 /// A refused `[[methods]]` entry: the key (empty when the entry as a whole is wrong) and
 /// what is wrong.
@@ -158,6 +159,12 @@ pub struct MethodSpec {
     pub k: Real,
     /// The method with its options.
     pub method: Arc<dyn Method>,
+    /// Priors on parameter errors (key `priors = { a2 = 0.05, … }`): each parameter's error
+    /// has σ (mm, rad; rad/(N·m) for a compliance) about 0, the nominal value. Empty: none.
+    pub priors: Vec<(Param, Real)>,
+    /// Where the Jacobian methods record the RMS point residual of each evaluation
+    /// (`identify`'s convergence trace); `None`: not recorded.
+    pub trace: Option<super::TraceRecorder>,
 }
 
 impl MethodSpec {
@@ -193,8 +200,22 @@ impl MethodSpec {
                 k
             }
         };
+        let priors = match t.get("priors") {
+            None => Vec::new(),
+            Some(toml::Value::Table(p)) => p
+                .iter()
+                .map(|(name, v)| {
+                    let sigma = v.as_float().or_else(|| v.as_integer().map(|i| i as Real));
+                    parse_prior(name, sigma).map_err(|m| (format!("priors.{name}"), m))
+                })
+                .collect::<std::result::Result<_, _>>()?,
+            Some(v) => {
+                let msg = format!("must be a table of parameter = σ, got {v}");
+                return Err(("priors".to_string(), msg));
+            }
+        };
         let mut rest = t.clone();
-        for common in ["name", "label", "k"] {
+        for common in ["name", "label", "k", "priors"] {
             rest.remove(common);
         }
         let method = (entry.build)(&rest)?;
@@ -203,7 +224,29 @@ impl MethodSpec {
             label,
             k,
             method,
+            priors,
+            trace: None,
         })
+    }
+
+    /// The Tikhonov precisions `1/σ²` of `params` from [`MethodSpec::priors`] (0 for a
+    /// parameter without a prior; empty without priors), for [`super::CalibrationProblem`].
+    /// Fails when a prior names a parameter that is not identified.
+    pub fn precisions(&self, params: &[Param]) -> Result<Vec<Real>> {
+        if self.priors.is_empty() {
+            return Ok(Vec::new());
+        }
+        let mut l = vec![0.0; params.len()];
+        for &(p, sigma) in &self.priors {
+            let k = params.iter().position(|q| *q == p).ok_or_else(|| {
+                Error::setting(
+                    format!("priors.{p}"),
+                    "is not among the identified parameters (fixed, or not in the model)",
+                )
+            })?;
+            l[k] = 1.0 / (sigma * sigma);
+        }
+        Ok(l)
     }
 
     /// The method's name.
@@ -219,12 +262,26 @@ impl MethodSpec {
             label: label.to_string(),
             k: DEFAULT_K,
             method: Arc::new(method),
+            priors: Vec::new(),
+            trace: None,
         }
     }
 
     /// Whether the method was supplied from outside rather than read from a scenario.
     pub fn is_external(&self) -> bool {
         self.name == super::external::EXTERNAL
+    }
+}
+
+/// One prior `NAME = σ`: a parameter name ([`Param::parse`]) and a finite σ > 0; the message
+/// says what is wrong.
+pub fn parse_prior(name: &str, sigma: Option<Real>) -> std::result::Result<(Param, Real), String> {
+    let p = Param::parse(name.trim())
+        .ok_or_else(|| format!("`{name}` is not a parameter name (a2, theta3, base.x, …)"))?;
+    match sigma {
+        Some(s) if s.is_finite() && s > 0.0 => Ok((p, s)),
+        Some(s) => Err(format!("σ must be finite and above 0, got {s}")),
+        None => Err("σ must be a number".to_string()),
     }
 }
 

@@ -41,6 +41,10 @@ pub struct RobotProblem<'a> {
     orientation_weight: Real,
     /// Prior weight of each point, if any.
     prior: Option<&'a [Real]>,
+    /// Tikhonov precision of each parameter (priors towards the nominal value), if any.
+    tikhonov: Option<&'a [Real]>,
+    /// Where the RMS point residual of each evaluation is recorded, if anywhere.
+    trace: Option<super::TraceRecorder>,
     /// The joints whose compliance is identified, with their columns.
     compliant: Vec<(usize, usize)>,
     /// Per point, the payload (kg) under which the elasto-geometric model computes the
@@ -169,6 +173,8 @@ impl<'a> RobotProblem<'a> {
             vars,
             orientation_weight: 1.0,
             prior: None,
+            tikhonov: None,
+            trace: None,
             compliant,
             loads: Vec::new(),
             masses: Vec::new(),
@@ -228,8 +234,29 @@ impl<'a> RobotProblem<'a> {
         Ok(self)
     }
 
+    /// Gives each parameter the Tikhonov precision `λ[k]` towards its nominal value (a MAP
+    /// estimate, [`LeastSquares::tikhonov`]); `None` or empty: no priors. Fails unless there
+    /// is one finite precision ≥ 0 per parameter.
+    pub fn with_tikhonov(mut self, l: Option<&'a [Real]>) -> crate::Result<Self> {
+        let l = l.filter(|l| !l.is_empty());
+        if let Some(l) = l {
+            if l.len() != self.params.len() || l.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(Error::setting(
+                    "priors",
+                    format!(
+                        "{} prior precisions for {} parameters, or one not finite ≥ 0",
+                        l.len(),
+                        self.params.len()
+                    ),
+                ));
+            }
+        }
+        self.tikhonov = l;
+        Ok(self)
+    }
+
     /// The kinematic least squares of a calibration problem: its base-frame data, orientation
-    /// weight `k` and prior weights.
+    /// weight `k`, prior weights and parameter priors.
     pub fn of(problem: &'a CalibrationProblem) -> crate::Result<Self> {
         RobotProblem::new(
             problem.nominal,
@@ -241,7 +268,12 @@ impl<'a> RobotProblem<'a> {
         )?
         .with_orientation_weight(problem.k)?
         .with_prior_weights(problem.weights.as_deref())?
+        .with_tikhonov(Some(&problem.priors))?
         .with_payloads(problem.data.payload_kg.as_deref())
+        .map(|mut p| {
+            p.trace.clone_from(&problem.trace);
+            p
+        })
     }
 
     /// The parameters, one per entry of `x`.
@@ -269,11 +301,28 @@ impl LeastSquares for RobotProblem<'_> {
         self.prior
     }
 
+    fn tikhonov(&self) -> Option<&[Real]> {
+        self.tikhonov
+    }
+
     /// Forward kinematics and the analytic Jacobian at `nominal + x`, from the tool frame
     /// [`pose_rows_vars`] returns (one chain walk per point, the joints' sines and cosines
     /// computed once in [`RobotProblem::new`]). Allocation-free: the chain is
     /// updated in place ([`Chain::set_values`]).
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        self.model(x, r, j);
+        if let Some(t) = &self.trace {
+            let rms = (r.norm_squared() / self.points.len() as Real).sqrt();
+            if let Ok(mut t) = t.lock() {
+                t.push(rms);
+            }
+        }
+    }
+}
+
+impl RobotProblem<'_> {
+    /// [`LeastSquares::evaluate`] without the trace.
+    fn model(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
         let mut guard = self.work.borrow_mut();
         let (values, chain) = &mut *guard;
         self.nominal

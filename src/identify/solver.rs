@@ -58,6 +58,12 @@ pub trait LeastSquares {
     /// r = measured − model(x) (length `size().rows()`), j = ∂model/∂x
     /// (`size().rows() × size().params`). Both buffers come with the right sizes.
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>);
+    /// Tikhonov precision `λ_k` of each unknown (a prior `x_k ~ N(0, 1/λ_k)` in the units of
+    /// the weighted cost; 0: none): the MAP estimate minimises `rᵀPr + Σ λ_k x_k²`. `None`:
+    /// no priors.
+    fn tikhonov(&self) -> Option<&[Real]> {
+        None
+    }
 }
 
 /// A Jacobian-based method: it solves any [`LeastSquares`] problem. Every solver is a
@@ -151,6 +157,10 @@ pub(crate) struct Work {
     pub dx: DVector<Real>,
     /// Evaluations of the problem so far.
     pub evaluations: usize,
+    /// The problem's Tikhonov precisions ([`LeastSquares::tikhonov`]); empty: none.
+    pub tikhonov: Vec<Real>,
+    /// The `x` last evaluated (kept only with priors, whose gradient needs it).
+    pub x: DVector<Real>,
 }
 
 impl Work {
@@ -167,15 +177,27 @@ impl Work {
             a: DMatrix::zeros(t, t),
             dx: DVector::zeros(t),
             evaluations: 0,
+            tikhonov: p.tikhonov().map_or_else(Vec::new, <[Real]>::to_vec),
+            x: DVector::zeros(t),
         }
     }
 
-    /// Evaluates the problem at `x` and returns the weighted cost `rᵀPr` (non-finite when the
-    /// model is).
+    /// Evaluates the problem at `x` and returns the weighted cost `rᵀPr`, plus the priors'
+    /// `Σ λ_k x_k²` (non-finite when the model is).
     pub fn evaluate(&mut self, p: &dyn LeastSquares, x: &DVector<Real>, w: &[Real]) -> Real {
         p.evaluate(x, &mut self.r, &mut self.j);
         self.evaluations += 1;
-        weighted_cost(&self.r, self.rows, w)
+        let cost = weighted_cost(&self.r, self.rows, w);
+        if self.tikhonov.is_empty() {
+            return cost;
+        }
+        self.x.copy_from(x);
+        cost + self
+            .tikhonov
+            .iter()
+            .zip(x.iter())
+            .map(|(l, v)| l * v * v)
+            .sum::<Real>()
     }
 
     /// Moves the residual to the point after the step `dx` just solved, to first order:
@@ -185,6 +207,9 @@ impl Work {
     /// 2 m arm), and the normal equations kept are those one step (< ε) before.
     pub fn take_step_in_residual(&mut self) {
         self.r.gemv(-1.0, &self.j, &self.dx, 1.0);
+        if !self.tikhonov.is_empty() {
+            self.x += &self.dx;
+        }
     }
 
     /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: the
@@ -214,6 +239,12 @@ impl Work {
             self.r.as_slice(),
         );
         gram::normal_equations(js, pjs, r, n, g);
+        // The priors' Tikhonov terms (Gauss–Newton of `rᵀPr + Σ λ_k x_k²`): `λ` on the
+        // diagonal, `−λ x` in the gradient.
+        for (k, &l) in self.tikhonov.iter().enumerate() {
+            self.n[(k, k)] += l;
+            self.g[k] -= l * self.x[k];
+        }
     }
 }
 
@@ -265,13 +296,12 @@ pub(crate) fn finish(
     let t = x.len();
     let rows = work.rows;
     let evaluations = work.evaluations;
-    let cost = if fresh {
-        weighted_cost(&work.r, rows, &weights)
-    } else {
-        let cost = work.evaluate(p, &x, &weights);
+    // The data's cost only (σ0 is the data's; a prior's term is not a residual).
+    if !fresh {
+        work.evaluate(p, &x, &weights);
         work.normal(&weights);
-        cost
-    };
+    }
+    let cost = weighted_cost(&work.r, rows, &weights);
     let n_eff = rows as Real * weights.iter().sum::<Real>();
     let classical = if n_eff > t as Real && cost.is_finite() {
         (cost / (n_eff - t as Real)).sqrt()

@@ -773,3 +773,52 @@ fn rank_certificate_agrees_with_the_eigenvalues() {
     // Both sides of the decision occur.
     assert!(seen[0] >= 100 && seen[1] >= 100, "{seen:?}");
 }
+
+/// [`Linear`] with Tikhonov precisions: the MAP problem.
+struct LinearMap {
+    p: Linear,
+    l: Vec<Real>,
+}
+
+impl LeastSquares for LinearMap {
+    fn size(&self) -> solver::Size {
+        self.p.size()
+    }
+    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        self.p.evaluate(x, r, j);
+    }
+    fn tikhonov(&self) -> Option<&[Real]> {
+        Some(&self.l)
+    }
+}
+
+/// The priors' Tikhonov terms give the closed-form MAP estimate `(AᵀA + Λ)⁻¹ Aᵀb` in every
+/// Jacobian method (LM with a vanishing damping), and the reported normal matrix is the
+/// posterior's `AᵀA + Λ`.
+#[test]
+fn priors_give_the_closed_form_map_estimate() {
+    let l = vec![4.0, 0.0, 25.0];
+    let p = LinearMap {
+        p: linear(),
+        l: l.clone(),
+    };
+    let n = p.p.a.transpose() * &p.p.a + DMatrix::from_diagonal(&DVector::from_vec(l));
+    let want = n.clone().try_inverse().unwrap() * p.p.a.transpose() * &p.p.b;
+    let x0 = DVector::zeros(3);
+    let lm = LmOptions {
+        adaptive: true,
+        lambda0: 1e-12,
+        eps: 1e-12,
+        ..Default::default()
+    };
+    let methods: Vec<(&str, Box<dyn Solver>)> =
+        vec![("ls", Box::new(LsOptions::default())), ("lm", Box::new(lm))];
+    for (name, m) in methods {
+        let r = solve(m.as_ref(), &p, &x0);
+        assert!((&r.x - &want).amax() < 1e-9, "{name}: {} vs {want}", r.x);
+        assert!((&r.normal - &n).amax() < 1e-9, "{name}");
+    }
+    // Without priors the estimate is the least-squares one, farther from 0 on x3.
+    let free = solve(&LsOptions::default(), &linear(), &x0);
+    assert!(free.x[2].abs() > want[2].abs());
+}

@@ -139,6 +139,34 @@ pub fn read_measurements(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Res
     read_table(path, robot, true)
 }
 
+/// Cartesian targets have no joints.
+struct NoJoints;
+
+impl JointSpace for NoJoints {
+    fn name(&self) -> &str {
+        "targets"
+    }
+    fn dof(&self) -> usize {
+        0
+    }
+    fn q_to_user(&self, q: &[Real]) -> Vec<Real> {
+        q.to_vec()
+    }
+    fn q_from_user(&self, q: &[Real]) -> Vec<Real> {
+        q.to_vec()
+    }
+    fn limits(&self, _: usize) -> (Real, Real) {
+        (0.0, 0.0)
+    }
+}
+
+/// Reads a CSV of Cartesian tool targets (`compensate --targets`): the measurement CSV's
+/// columns without the joints, `x,y,z` (mm) and optionally `qw,qx,qy,qz`, in the robot's base
+/// frame. Refused like a measurement file (unknown or missing columns, bad values, by line).
+pub fn read_targets(path: &Path) -> Result<Measurements> {
+    read_table(path, &NoJoints, true)
+}
+
 /// Reads a measurement CSV (`measured`) or a pose list (measured columns optional and
 /// ignored).
 pub(crate) fn read_table(
@@ -341,7 +369,7 @@ pub(crate) fn read_table(
             "the file has a header but no data rows".into(),
         ));
     }
-    if measured {
+    if measured && dof > 0 {
         distinct_poses(&qs, &lines, dof).map_err(|(place, msg)| bad(place, "", msg))?;
     }
     Ok(Measurements {

@@ -113,17 +113,50 @@ pub fn residuals_csv(r: &IdentifyRecord) -> Result<String> {
 /// Writes `residuals.csv`, `identified.json` and `robot.toml` (the compensated robot, named
 /// `<nominal>-calibrated`) into `out`.
 pub fn write_identified(out: &Path, r: &IdentifyRecord) -> Result<()> {
-    super::atomically(out, |dir| write_into(dir, r))
+    write_identified_with(out, r, &Default::default(), &[])
 }
 
-fn write_into(out: &Path, r: &IdentifyRecord) -> Result<()> {
+/// What `identify`'s options add to its files: keys of `identified.json` and a section of
+/// `report.md` ([`super::practice`]).
+#[derive(Default)]
+pub struct Additions {
+    /// Keys added to `identified.json`.
+    pub json: serde_json::Map<String, Value>,
+    /// Markdown appended to `report.md`.
+    pub markdown: String,
+}
+
+/// [`write_identified`] with `more` keys added to `identified.json` (cross-validation,
+/// priors, diagnostics: [`super::practice`]) and the `files` (name, text) written beside it
+/// (the controller exports).
+pub fn write_identified_with(
+    out: &Path,
+    r: &IdentifyRecord,
+    more: &Additions,
+    files: &[(&str, String)],
+) -> Result<()> {
+    super::atomically(out, |dir| {
+        for (name, text) in files {
+            write(&dir.join(name), text)?;
+        }
+        write_into(dir, r, more)
+    })
+}
+
+fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
     write(&out.join("residuals.csv"), &residuals_csv(r)?)?;
-    let text = serde_json::to_string_pretty(&identified_json(r))
-        .map_err(|e| Error::Compute(e.to_string()))?;
+    let mut j = identified_json(r);
+    for (k, v) in &more.json {
+        j[k] = v.clone();
+    }
+    let text = serde_json::to_string_pretty(&j).map_err(|e| Error::Compute(e.to_string()))?;
     write(&out.join("identified.json"), &(text + "\n"))?;
     let mut compensated = r.calibrated.robot.clone();
     compensated.name = format!("{}-calibrated", r.nominal.name);
-    write(&out.join("report.md"), &report_md(out, r)?)?;
+    write(
+        &out.join("report.md"),
+        &(report_md(out, r)? + &more.markdown),
+    )?;
     if let Some(u) = &r.urdf {
         write(&out.join("robot.urdf"), u)?;
     }

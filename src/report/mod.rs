@@ -14,9 +14,11 @@
 //! libraries, and the same data gives the same bytes.
 
 pub mod check;
+pub mod exports;
 pub mod identified;
 pub mod markdown;
 pub mod plots;
+pub mod practice;
 pub mod registration_study;
 pub mod run;
 

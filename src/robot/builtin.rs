@@ -82,12 +82,25 @@ pub fn builtin(name: &str) -> Option<&'static Builtin> {
 
 /// A robot by built-in name or robot-file path.
 pub fn load(name_or_path: &str) -> Result<Robot> {
+    load_chain(name_or_path, &crate::robot::urdf::UrdfChain::default())
+}
+
+/// [`load`], a URDF's chain chosen by `which` (`--base`, `--tip`; refused for a robot that
+/// is not a URDF).
+pub fn load_chain(name_or_path: &str, which: &crate::robot::urdf::UrdfChain) -> Result<Robot> {
+    let path = Path::new(name_or_path);
+    let urdf = path.exists() && crate::robot::urdf::is_urdf(name_or_path);
+    if !urdf && *which != crate::robot::urdf::UrdfChain::default() {
+        return Err(Error::setting(
+            "--tip",
+            format!("--base and --tip choose a chain of a URDF; \"{name_or_path}\" is not one"),
+        ));
+    }
     if let Some(b) = builtin(name_or_path) {
         return Ok((b.build)());
     }
-    let path = Path::new(name_or_path);
-    if path.exists() && crate::robot::urdf::is_urdf(name_or_path) {
-        return Ok(crate::robot::urdf::UrdfRobot::load(path)?.robot);
+    if urdf {
+        return Ok(crate::robot::urdf::UrdfRobot::load_chain(path, which)?.robot);
     }
     if path.exists() {
         return read_robot_file(path);

@@ -1,6 +1,7 @@
 //! URDF robots in and out (docs/formats.md, "URDF robots").
 //!
-//! A URDF's serial chain, from its root link to its only leaf link, becomes a calbench robot
+//! A URDF's serial chain, from its root link to its only leaf link (or, in a tree, from the
+//! link [`UrdfChain::base`] names to the link [`UrdfChain::tip`] names), becomes a calbench robot
 //! in the standard DH convention (Li 2018 eq. 1) by the common-normal construction of
 //! Denavit and Hartenberg: at q = 0 every moving joint is a line (its origin and axis in the
 //! root frame); frame i−1 has its z axis on joint i's line and its x axis on the common normal
@@ -113,9 +114,26 @@ fn next_frame(prev: &Frame, p: &Vec3, u: &Vec3) -> ([Real; 4], Frame) {
     ([theta, d, a, alpha], f)
 }
 
+/// Which chain of a URDF tree is the robot (`--base LINK`, `--tip LINK`); by default from the
+/// root link to the only leaf link.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct UrdfChain {
+    /// The link the chain starts at (its frame is the robot's base); `None`: the root.
+    pub base: Option<String>,
+    /// The link the chain ends at (the tool's link); `None`: the only leaf.
+    pub tip: Option<String>,
+}
+
 impl UrdfRobot {
     /// Reads the URDF at `path`: the chain from the root link to the only leaf link.
     pub fn load(path: &Path) -> Result<UrdfRobot> {
+        Self::load_chain(path, &UrdfChain::default())
+    }
+
+    /// Reads the URDF at `path`: the chain `which` chooses. Fails when the tree has several
+    /// leaves and no tip is named, a named link does not exist, or the base is not on the
+    /// way from the root to the tip.
+    pub fn load_chain(path: &Path, which: &UrdfChain) -> Result<UrdfRobot> {
         let bad = |msg: String| Error::file(path, "URDF", msg);
         let source = urdf_rs::read_file(path).map_err(|e| bad(e.to_string()))?;
         let js = &source.joints;
@@ -126,16 +144,35 @@ impl UrdfRobot {
             .map(|j| j.child.link.as_str())
             .filter(|c| !parents.contains(c))
             .collect();
-        if leaves.len() != 1 {
-            return Err(bad(format!(
-                "{} leaf links ({}): calbench takes a serial chain to one tip link",
-                leaves.len(),
-                leaves.join(", ")
-            )));
+        let known = |l: &str| source.links.iter().any(|k| k.name == l);
+        for (key, l) in [("--base", &which.base), ("--tip", &which.tip)] {
+            if let Some(l) = l.as_deref().filter(|l| !known(l)) {
+                return Err(bad(format!("{key}: no link \"{l}\" in the URDF")));
+            }
         }
+        let tip = match (&which.tip, leaves.as_slice()) {
+            (Some(t), _) => t.as_str(),
+            (None, [one]) => one,
+            (None, _) => {
+                return Err(bad(format!(
+                    "{} leaf links ({}): calbench takes a serial chain to one tip link; name \
+                     it with --tip LINK",
+                    leaves.len(),
+                    leaves.join(", ")
+                )))
+            }
+        };
         let mut chain = Vec::new();
-        let mut link = leaves[0];
-        while let Some(i) = js.iter().position(|j| j.child.link == link) {
+        let mut link = tip;
+        while which.base.as_deref() != Some(link) {
+            let Some(i) = js.iter().position(|j| j.child.link == link) else {
+                if let Some(b) = &which.base {
+                    return Err(bad(format!(
+                        "--base: link \"{b}\" is not on the chain from the root to \"{tip}\""
+                    )));
+                }
+                break;
+            };
             if chain.contains(&i) || chain.len() > js.len() {
                 return Err(bad(format!("the joints form a loop at link \"{link}\"")));
             }

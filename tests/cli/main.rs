@@ -9,6 +9,7 @@ mod common;
 
 mod cli;
 mod fuzz;
+mod practice;
 mod realdata;
 mod refusals;
 mod strict_inputs;

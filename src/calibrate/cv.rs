@@ -1,0 +1,335 @@
+//! Cross-validation and model choice for `calbench identify` (docs/formats.md `identify`,
+//! "Cross-validation and model choice"): seeded K-fold splits of a measurement file, the
+//! validation error of each held-out fold after calibrating on the others, a held-out split
+//! rule ([`Holdout`]), and candidate models ([`Model`]) compared on the same folds.
+
+use std::str::FromStr;
+
+use super::validation::validate_file;
+use super::{calibrate, Registration};
+use crate::error::{Error, Result};
+use crate::identify::MethodSpec;
+use crate::measurement::Measurements;
+use crate::numeric::rng::stream;
+use crate::numeric::{Frame, Real};
+use crate::robot::compliance::CompliancePick;
+use crate::robot::{param_sets, Convention, Param, Robot};
+
+/// `--holdout LAST/EVERY`: of every `every` consecutive rows, the last `last` are held out
+/// for validation (`3/10`: rows whose 0-based index % 10 ≥ 7).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Holdout {
+    /// Rows held out of each block.
+    pub last: usize,
+    /// Rows per block.
+    pub every: usize,
+}
+
+impl FromStr for Holdout {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let bad = || format!("`{s}` is not LAST/EVERY with 0 < LAST < EVERY, e.g. 3/10");
+        let (a, b) = s.split_once('/').ok_or_else(bad)?;
+        let (last, every) = (
+            a.trim().parse::<usize>().map_err(|_| bad())?,
+            b.trim().parse::<usize>().map_err(|_| bad())?,
+        );
+        if last == 0 || last >= every {
+            return Err(bad());
+        }
+        Ok(Holdout { last, every })
+    }
+}
+
+impl Holdout {
+    /// The rows kept for calibration and those held out, of `n` rows.
+    pub fn split(&self, n: usize) -> (Vec<usize>, Vec<usize>) {
+        (0..n).partition(|i| i % self.every < self.every - self.last)
+    }
+}
+
+/// The rows `rows` of `m`, in that order.
+pub fn subset(m: &Measurements, rows: &[usize]) -> Measurements {
+    let pick = |v: &Option<Vec<Real>>| v.as_ref().map(|v| rows.iter().map(|&i| v[i]).collect());
+    Measurements {
+        qs: rows.iter().map(|&i| m.qs[i].clone()).collect(),
+        points: rows.iter().map(|&i| m.points[i]).collect(),
+        quats: m
+            .quats
+            .as_ref()
+            .map(|q| rows.iter().map(|&i| q[i]).collect()),
+        sigma_mm: pick(&m.sigma_mm),
+        payload_kg: pick(&m.payload_kg),
+    }
+}
+
+/// The fold (0..k) of each of `n` rows: a permutation drawn from `seed` (stream `cv`), dealt
+/// round-robin, so the folds differ in size by one at most. The same for every model.
+pub fn folds(n: usize, k: usize, seed: u64) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..n).collect();
+    let mut g = stream(seed, "cv");
+    for i in (1..n).rev() {
+        let j = rand::Rng::random_range(&mut g, 0..=i);
+        order.swap(i, j);
+    }
+    let mut fold = vec![0; n];
+    for (pos, &row) in order.iter().enumerate() {
+        fold[row] = pos % k;
+    }
+    fold
+}
+
+/// A K-fold cross-validation's result: position errors (mm) of the held-out points.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct CrossValidation {
+    /// The model's name ([`Model::name`]).
+    pub model: String,
+    /// Number of folds.
+    pub k: usize,
+    /// RMS over every held-out point (each point is held out once).
+    pub rms: Real,
+    /// The RMS of each fold.
+    pub fold_rms: Vec<Real>,
+    /// Mean of the folds' RMS.
+    pub mean: Real,
+    /// Standard deviation (sample, K − 1) of the folds' RMS.
+    pub sd: Real,
+    /// The number of parameters identified.
+    pub parameters: usize,
+}
+
+/// What one cross-validation runs: the robot and its parameters, the method, the
+/// registration, and the seeds.
+pub struct CvSetup<'a> {
+    /// The method.
+    pub method: &'a MethodSpec,
+    /// The registration.
+    pub registration: Registration,
+    /// Seed of the method's stream (`identify --seed`).
+    pub seed: u64,
+    /// Seed of the folds (`--cv-seed`).
+    pub fold_seed: u64,
+    /// Parameters held at their nominal values (`--fix`), left out of every model.
+    pub fixed: &'a [Param],
+}
+
+/// K-fold cross-validation of the errors of `params` of `robot` (the model `name`) on `data`:
+/// per fold, calibrate on the other folds and take the position errors of the fold's points
+/// ([`validate_file`]).
+pub fn cross_validate(
+    (robot, params, name): (&Robot, &[Param], String),
+    data: &Measurements,
+    k: usize,
+    s: &CvSetup,
+) -> Result<CrossValidation> {
+    let n = data.len();
+    if k < 2 || k > n {
+        return Err(Error::setting(
+            "--cv",
+            format!("needs 2 ≤ K ≤ the number of points ({n}), got {k}"),
+        ));
+    }
+    let fold = folds(n, k, s.fold_seed);
+    let mut fold_rms = Vec::with_capacity(k);
+    let mut sum_sq = 0.0;
+    for f in 0..k {
+        let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] == f);
+        let (tr, te) = (subset(data, &train), subset(data, &test));
+        let c = calibrate(
+            robot,
+            params,
+            &tr,
+            s.registration,
+            &Frame::identity(),
+            s.method,
+            &mut stream(s.seed, "identify"),
+        )?;
+        let v = validate_file(robot, &c, &te)?;
+        sum_sq += v.after_mm.rms * v.after_mm.rms * te.len() as Real;
+        fold_rms.push(v.after_mm.rms);
+    }
+    let mean = fold_rms.iter().sum::<Real>() / k as Real;
+    let sd = (fold_rms
+        .iter()
+        .map(|r| (r - mean) * (r - mean))
+        .sum::<Real>()
+        / (k - 1) as Real)
+        .sqrt();
+    Ok(CrossValidation {
+        model: name,
+        k,
+        rms: (sum_sq / n as Real).sqrt(),
+        fold_rms,
+        mean,
+        sd,
+        parameters: params.len(),
+    })
+}
+
+/// A candidate model of `identify --models`: the kinematic parameters, plus Hayati's β on
+/// the joints where it is identifiable (parallel neighbouring axes) and/or the compliances of
+/// the joints gravity loads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Model {
+    /// β on the joints where it is identifiable (a `dh` robot is read as `dh_beta`, β = 0).
+    pub beta: bool,
+    /// The compliances of the gravity-loaded joints (needs the robot's link masses).
+    pub compliance: bool,
+}
+
+impl Model {
+    /// The plain kinematic model.
+    pub const KINEMATIC: Model = Model {
+        beta: false,
+        compliance: false,
+    };
+
+    /// `kinematic`, `beta`, `compliance` or `beta+compliance`.
+    pub fn name(&self) -> String {
+        match (self.beta, self.compliance) {
+            (false, false) => "kinematic".into(),
+            (true, false) => "beta".into(),
+            (false, true) => "compliance".into(),
+            (true, true) => "beta+compliance".into(),
+        }
+    }
+
+    /// The robot to identify (for β, a `dh` robot as `dh_beta` with β = 0: the same
+    /// kinematics) and the parameters: those `identify` takes for measured data
+    /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances,
+    /// less the `fixed` ones.
+    pub fn robot_and_params(
+        &self,
+        nominal: &Robot,
+        data: &Measurements,
+        registration: Registration,
+        fixed: &[Param],
+    ) -> Result<(Robot, Vec<Param>)> {
+        let mut robot = nominal.clone();
+        if self.beta && robot.convention == Convention::Dh {
+            robot.convention = Convention::DhBeta;
+        }
+        let with_base = registration == Registration::Identify;
+        let mut params =
+            param_sets::identified_params_tool_first(&robot, data.measure(), with_base);
+        if self.compliance {
+            params.extend(CompliancePick::Gravity.params(&robot, "--models")?);
+        }
+        params.retain(|p| !fixed.contains(p));
+        Ok((robot, params))
+    }
+}
+
+impl FromStr for Model {
+    type Err = String;
+
+    /// `kinematic`, `beta`, `compliance`, or terms joined by `+` (`beta+compliance`).
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        let mut m = Model::KINEMATIC;
+        for term in s.split('+').map(str::trim) {
+            match term {
+                "kinematic" => {}
+                "beta" => m.beta = true,
+                "compliance" => m.compliance = true,
+                other => {
+                    return Err(format!(
+                        "unknown model term `{other}`; known: kinematic, beta, compliance \
+                         (joined by +)"
+                    ))
+                }
+            }
+        }
+        Ok(m)
+    }
+}
+
+/// Each model's cross-validation on the same folds, and the index of the best (lowest CV
+/// RMS; the first of equals, so list the simpler model first).
+pub fn choose_model(
+    nominal: &Robot,
+    models: &[Model],
+    data: &Measurements,
+    k: usize,
+    s: &CvSetup,
+) -> Result<(Vec<CrossValidation>, usize)> {
+    let cvs = models
+        .iter()
+        .map(|m| {
+            let (robot, params) = m.robot_and_params(nominal, data, s.registration, s.fixed)?;
+            cross_validate((&robot, &params, m.name()), data, k, s)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let best = (0..cvs.len())
+        .min_by(|&a, &b| cvs[a].rms.total_cmp(&cvs[b].rms))
+        .unwrap_or(0);
+    Ok((cvs, best))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn holdout_and_folds_split_every_row_once() {
+        let h: Holdout = "3/10".parse().unwrap();
+        let (cal, val) = h.split(25);
+        assert_eq!(val, vec![7, 8, 9, 17, 18, 19]);
+        assert_eq!(cal.len() + val.len(), 25);
+        assert!("0/10".parse::<Holdout>().is_err());
+        assert!("10/10".parse::<Holdout>().is_err());
+        assert!("3-10".parse::<Holdout>().is_err());
+        let f = folds(23, 5, 1);
+        assert_eq!(f, folds(23, 5, 1), "seeded");
+        assert_ne!(f, folds(23, 5, 2));
+        for k in 0..5 {
+            let size = f.iter().filter(|&&x| x == k).count();
+            assert!(size == 4 || size == 5, "fold {k}: {size}");
+        }
+    }
+
+    #[test]
+    fn models_parse_and_refuse_unknown_terms() {
+        assert_eq!("kinematic".parse::<Model>().unwrap(), Model::KINEMATIC);
+        let m: Model = "beta+compliance".parse().unwrap();
+        assert!(m.beta && m.compliance);
+        assert_eq!(m.name(), "beta+compliance");
+        assert!("harmonic".parse::<Model>().is_err());
+    }
+
+    /// Noise-free data of a robot with errors: every fold's held-out points are predicted
+    /// exactly, so the CV RMS is ~0; a β model on a dh robot keeps its kinematics.
+    #[test]
+    fn cross_validation_on_exact_data_is_exact() {
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let truth = nominal.with_errors(&[(Param::A(1), 0.4), (Param::Theta(2), 1e-3)]);
+        let mut g = stream(3, "cv-test");
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 60, &mut g);
+        let data = Measurements {
+            points: qs.iter().map(|q| truth.fk(q).pos).collect(),
+            qs,
+            ..Default::default()
+        };
+        let method = crate::identify::method_by_name("ls").unwrap();
+        let s = CvSetup {
+            method: &method,
+            registration: Registration::Identify,
+            seed: 0,
+            fold_seed: 1,
+            fixed: &[],
+        };
+        let (cvs, best) = choose_model(&nominal, &[Model::KINEMATIC], &data, 4, &s).unwrap();
+        let cv = &cvs[best];
+        assert!(cv.rms < 1e-8, "{cv:?}");
+        assert_eq!(cv.fold_rms.len(), 4);
+        let (robot, _) = Model {
+            beta: true,
+            compliance: false,
+        }
+        .robot_and_params(&nominal, &data, Registration::Identify, &[])
+        .unwrap();
+        let q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+        assert!((robot.fk(&q).pos - nominal.fk(&q).pos).norm() < 1e-9);
+        assert!(choose_model(&nominal, &[Model::KINEMATIC], &data, 1, &s).is_err());
+    }
+}

@@ -1,0 +1,293 @@
+//! Diagnostics of an identification on a measurement file (docs/formats.md `identify`,
+//! `diagnostics`): each parameter's σ and the correlation matrix with the pairs that trade off
+//! (|ρ| > [`CORRELATION_FLAG`], FIGAROH's threshold), each point's leverage and Cook's
+//! distance with the most influential points, and the position σ the covariance predicts at
+//! the validation (or calibration) poses.
+//!
+//! With `J` the weighted Jacobian at the solution, `N = JᵀPJ` (plus the priors' precisions)
+//! and `C = σ0² N⁻¹`: the hat matrix's block of point `i` is `H_ii = w_i J_i N⁻¹ J_iᵀ`, its
+//! leverage `h_i = trace H_ii` (the leverages sum to the number of parameters without priors),
+//! and its Cook's distance the block form `D_i = w_i r_iᵀ (I − H_ii)⁻¹ H_ii (I − H_ii)⁻¹ r_i /
+//! (t σ0²)` (Cook & Weisberg 1982, §3.5: the change of the fit when the point is left out, in
+//! units of the parameters' confidence ellipsoid).
+
+use nalgebra::{DMatrix, DVector};
+
+use super::Calibrated;
+use crate::error::Result;
+use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
+use crate::measurement::{Measure, Measurements};
+use crate::numeric::{Real, Vec3};
+use crate::robot::{Param, Robot};
+
+/// Pairs of parameters whose correlation exceeds this in magnitude are flagged.
+pub const CORRELATION_FLAG: Real = 0.8;
+/// The number of most influential points named.
+pub const TOP_POINTS: usize = 10;
+
+/// A flagged pair of parameters.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Pair {
+    /// The first parameter.
+    pub a: String,
+    /// The second parameter.
+    pub b: String,
+    /// Their correlation.
+    pub rho: Real,
+}
+
+/// An influential point.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Influential {
+    /// 0-based data row (as in `residuals.csv`).
+    pub row: usize,
+    /// Its leverage.
+    pub leverage: Real,
+    /// Its Cook's distance.
+    pub cook: Real,
+}
+
+/// The position σ the covariance predicts, against the measured error.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Predicted {
+    /// Where: `validation` poses or `calibration` poses.
+    pub at: &'static str,
+    /// RMS over the poses of the predicted σ of the model's position, `√trace(J_p C J_pᵀ)`
+    /// (mm): the parameters' uncertainty only.
+    pub rms_mm: Real,
+    /// Its largest value (mm).
+    pub max_mm: Real,
+    /// The measured position RMS at the same poses (validation error, or residual), mm.
+    pub measured_rms_mm: Real,
+}
+
+/// The diagnostics of an identification.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Diagnostics {
+    /// σ of each parameter (√ of the covariance's diagonal), in the parameters' order.
+    pub sigma: Vec<Real>,
+    /// The correlation matrix.
+    pub correlation: Vec<Vec<Real>>,
+    /// The pairs with |ρ| > [`CORRELATION_FLAG`], largest first.
+    pub flagged_pairs: Vec<Pair>,
+    /// Leverage of each point.
+    pub leverage: Vec<Real>,
+    /// Cook's distance of each point.
+    pub cook_distance: Vec<Real>,
+    /// The [`TOP_POINTS`] points of largest Cook's distance.
+    pub top_points: Vec<Influential>,
+    /// The predicted position σ.
+    pub predicted: Predicted,
+}
+
+/// What the diagnostics are taken of.
+pub struct Subject<'a> {
+    /// The nominal robot the errors were added to.
+    pub nominal: &'a Robot,
+    /// The parameters identified.
+    pub params: &'a [Param],
+    /// The calibration data.
+    pub data: &'a Measurements,
+    /// The calibration.
+    pub calibrated: &'a Calibrated,
+    /// Orientation weight (mm per rad).
+    pub k: Real,
+    /// The priors' precisions (empty: none).
+    pub priors: &'a [Real],
+    /// The validation data and its position RMS after calibration (mm), if any.
+    pub validation: Option<(&'a Measurements, Real)>,
+}
+
+/// The diagnostics of `s`. The entries depending on `N⁻¹` are NaN when `N` is singular.
+pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
+    let id = &s.calibrated.identified;
+    let t = s.params.len();
+    let cov = id.covariance();
+    let sigma: Vec<Real> = (0..t).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
+    let correlation: Vec<Vec<Real>> = (0..t)
+        .map(|i| {
+            (0..t)
+                .map(|k| cov[(i, k)] / (sigma[i] * sigma[k]))
+                .collect()
+        })
+        .collect();
+    let mut flagged_pairs: Vec<Pair> = Vec::new();
+    for (i, row) in correlation.iter().enumerate() {
+        for (k, &rho) in row.iter().enumerate().skip(i + 1) {
+            if rho.abs() > CORRELATION_FLAG {
+                flagged_pairs.push(Pair {
+                    a: s.params[i].to_string(),
+                    b: s.params[k].to_string(),
+                    rho,
+                });
+            }
+        }
+    }
+    flagged_pairs.sort_by(|a, b| b.rho.abs().total_cmp(&a.rho.abs()));
+    let n_inv = id
+        .normal
+        .clone()
+        .cholesky()
+        .map(|c| c.inverse())
+        .unwrap_or_else(|| DMatrix::from_element(t, t, Real::NAN));
+    let mut problem = CalibrationProblem::new(s.nominal, s.params, s.data, s.calibrated.frame, s.k);
+    problem.priors = s.priors.to_vec();
+    let rp = RobotProblem::of(&problem)?;
+    let (r, j) = evaluate(&rp, &id.x);
+    let rows = rp.measure().rows();
+    let m = s.data.len();
+    let s0sq = id.sigma0 * id.sigma0;
+    let mut leverage = Vec::with_capacity(m);
+    let mut cook_distance = Vec::with_capacity(m);
+    for i in 0..m {
+        let w = id.weights.get(i).copied().unwrap_or(1.0);
+        let ji = j.rows(rows * i, rows);
+        let h = (ji * &n_inv * ji.transpose()) * w;
+        leverage.push(h.trace());
+        let ri = r.rows(rows * i, rows).into_owned();
+        let cook = (DMatrix::identity(rows, rows) - &h)
+            .try_inverse()
+            .map_or(Real::NAN, |a| {
+                let v = &a * &ri;
+                w * (v.transpose() * &h * &v)[(0, 0)] / (t as Real * s0sq)
+            });
+        cook_distance.push(cook);
+    }
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&a, &b| {
+        let key = |i: usize| -> Real {
+            let c = cook_distance[i];
+            if c.is_nan() {
+                Real::NEG_INFINITY
+            } else {
+                c
+            }
+        };
+        key(b).total_cmp(&key(a)).then(a.cmp(&b))
+    });
+    let top_points = order
+        .iter()
+        .take(TOP_POINTS)
+        .map(|&row| Influential {
+            row,
+            leverage: leverage[row],
+            cook: cook_distance[row],
+        })
+        .collect();
+    let predicted = predicted_sigma(s, &cov)?;
+    Ok(Diagnostics {
+        sigma,
+        correlation,
+        flagged_pairs,
+        leverage,
+        cook_distance,
+        top_points,
+        predicted,
+    })
+}
+
+/// The residual and Jacobian of `p` at `x`.
+fn evaluate(p: &dyn LeastSquares, x: &DVector<Real>) -> (DVector<Real>, DMatrix<Real>) {
+    let size = p.size();
+    let mut r = DVector::zeros(size.rows());
+    let mut j = DMatrix::zeros(size.rows(), size.params);
+    p.evaluate(x, &mut r, &mut j);
+    (r, j)
+}
+
+/// `√trace(J_p C J_pᵀ)` at the validation poses (else the calibration poses), the position
+/// Jacobian `J_p` of the identified model.
+fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
+    let id = &s.calibrated.identified;
+    let (at, data, measured) = match s.validation {
+        Some((v, rms)) => ("validation", v, rms),
+        None => ("calibration", s.data, id.rms_residual),
+    };
+    let zeros = vec![Vec3::zeros(); data.len()];
+    let rp = RobotProblem::new(
+        s.nominal,
+        s.params,
+        &data.qs,
+        &zeros,
+        None,
+        Measure::Position,
+    )?
+    .with_payloads(data.payload_kg.as_deref())?;
+    let (_, j) = evaluate(&rp, &id.x);
+    let mut sigmas = Vec::with_capacity(data.len());
+    for i in 0..data.len() {
+        let ji = j.rows(3 * i, 3);
+        sigmas.push((ji * cov * ji.transpose()).trace().max(0.0).sqrt());
+    }
+    let stats = super::ErrorStats::of(&sigmas);
+    Ok(Predicted {
+        at,
+        rms_mm: stats.rms,
+        max_mm: stats.max,
+        measured_rms_mm: measured,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::{calibrate, Registration};
+    use crate::numeric::rng::stream;
+
+    /// Leverages sum to the number of parameters (trace of the hat matrix), Cook's distance
+    /// singles out a gross error, and correlations are ±1 on the diagonal.
+    #[test]
+    fn leverage_sums_to_the_parameters_and_cook_finds_the_outlier() {
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let mut g = stream(5, "diag-test");
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 40, &mut g);
+        let mut points: Vec<Vec3> = qs
+            .iter()
+            .enumerate()
+            .map(|(i, q)| {
+                let n = 0.01 * ((i * 7 % 11) as Real - 5.0);
+                nominal.fk(q).pos + Vec3::new(n, -n, 0.5 * n)
+            })
+            .collect();
+        points[13] += Vec3::new(3.0, 0.0, 0.0);
+        let data = Measurements {
+            qs,
+            points,
+            ..Default::default()
+        };
+        let params = crate::robot::param_sets::identified_params_tool_first(
+            &nominal,
+            Measure::Position,
+            false,
+        );
+        let method = crate::identify::method_by_name("ls").unwrap();
+        let frame = crate::numeric::Frame::identity();
+        let c = calibrate(
+            &nominal,
+            &params,
+            &data,
+            Registration::Known,
+            &frame,
+            &method,
+            &mut stream(0, "identify"),
+        )
+        .unwrap();
+        let d = diagnose(&Subject {
+            nominal: &nominal,
+            params: &params,
+            data: &data,
+            calibrated: &c,
+            k: 100.0,
+            priors: &[],
+            validation: None,
+        })
+        .unwrap();
+        let sum: Real = d.leverage.iter().sum();
+        assert!((sum - params.len() as Real).abs() < 1e-6, "{sum}");
+        assert_eq!(d.top_points[0].row, 13);
+        for i in 0..params.len() {
+            assert!((d.correlation[i][i] - 1.0).abs() < 1e-9);
+        }
+        assert!(d.predicted.rms_mm > 0.0 && d.predicted.at == "calibration");
+    }
+}

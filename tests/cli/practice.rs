@@ -1,0 +1,487 @@
+//! Real-data practice end to end: cross-validation and model choice with a held-out split,
+//! fixed parameters and priors, the diagnostics in identified.json, the controller exports,
+//! `compensate --targets`, a URDF tree with `--tip`, and a 7-axis arm through `fk`,
+//! `identifiability`, `identify` and `compensate`.
+
+use calbench::numeric::rng::stream;
+use calbench::numeric::Real;
+use calbench::robot::{builtin, Param};
+
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+
+fn ex(f: &str) -> String {
+    root()
+        .join("examples/ipa-ur10")
+        .join(f)
+        .display()
+        .to_string()
+}
+
+/// The first 200 rows of the UR10 export, positions only, as a measurement CSV in `d`.
+fn ur10_positions(d: &std::path::Path) -> String {
+    let all = d.join("all.csv");
+    calbench_ok(&[
+        "import",
+        &ex("sample-200.csv"),
+        "--mapping",
+        &ex("mapping.toml"),
+        "--out",
+        path_arg(&all),
+    ]);
+    let text: String = read(&all)
+        .lines()
+        .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    let p = d.join("pos.csv");
+    std::fs::write(&p, text).unwrap();
+    p.display().to_string()
+}
+
+#[test]
+fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
+    let d = tmp_dir("practice-cv");
+    let data = ur10_positions(&d);
+    let out = d.join("cv");
+    let o = calbench_ok(&[
+        "identify",
+        "--robot",
+        &ex("ur10.toml"),
+        "--data",
+        &data,
+        "--method",
+        "lm",
+        "--holdout",
+        "3/10",
+        "--cv",
+        "4",
+        "--models",
+        "kinematic,beta",
+        "--export",
+        "ur-yaml,dh-csv",
+        "--out",
+        path_arg(&out),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    assert!(text.contains("(best)"), "{text}");
+    let j = load_json(&out.join("identified.json"));
+    assert_eq!(j["holdout"], "3/10");
+    let cv = &j["cv"];
+    assert_eq!(cv["k"], 4);
+    assert_eq!(cv["fold_rms"].as_array().unwrap().len(), 4);
+    let rms = cv["rms"].as_f64().unwrap();
+    let val = j["validation_after_mm"]["rms"].as_f64().unwrap();
+    assert!(rms > 0.1 && rms < 3.0 * val, "CV {rms} vs validation {val}");
+    assert_eq!(j["cv_models"].as_array().unwrap().len(), 2);
+    assert_eq!(j["cv_best"], cv["model"]);
+    // 199 rows: 140 for calibration, 59 held out.
+    let diag = &j["diagnostics"];
+    assert_eq!(diag["leverage"].as_array().unwrap().len(), 140);
+    assert_eq!(diag["cook_distance"].as_array().unwrap().len(), 140);
+    assert_eq!(diag["top_points"].as_array().unwrap().len(), 10);
+    let t = j["parameters"].as_array().unwrap().len();
+    assert_eq!(diag["correlation"].as_array().unwrap().len(), t);
+    assert_eq!(diag["predicted"]["at"], "validation");
+    assert!(diag["predicted"]["rms_mm"].as_f64().unwrap() > 0.0);
+    let trace: Vec<f64> = j["convergence_trace"]["trace"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(
+        trace.len() > 2 && trace[0] > 10.0 * trace[trace.len() - 1],
+        "{trace:?}"
+    );
+    assert!((trace[trace.len() - 1] - j["rms_residual_mm"].as_f64().unwrap()).abs() < 1e-3);
+    let yaml = read(&out.join("ur-kinematics.yaml"));
+    for seg in [
+        "kinematics:",
+        "shoulder:",
+        "upper_arm:",
+        "forearm:",
+        "wrist_1:",
+        "wrist_2:",
+        "wrist_3:",
+    ] {
+        assert!(yaml.contains(seg), "{seg}");
+    }
+    let dh = read(&out.join("dh-table.csv"));
+    assert!(dh.starts_with("joint,parameter,unit,nominal,identified,delta,sigma\n"));
+    let report = read(&out.join("report.md"));
+    assert!(report.contains("## Model choice") && report.contains("## Diagnostics"));
+    // A bad split rule and a --holdout with --validate are refused.
+    let bad = calbench(&[
+        "identify",
+        "--robot",
+        &ex("ur10.toml"),
+        "--data",
+        &data,
+        "--method",
+        "lm",
+        "--holdout",
+        "10/10",
+        "--out",
+        path_arg(&d.join("x")),
+    ]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("LAST/EVERY"));
+    // ur-yaml of a robot that is not UR-like is refused.
+    let bad = calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        &data,
+        "--method",
+        "lm",
+        "--export",
+        "ur-yaml",
+        "--out",
+        path_arg(&d.join("y")),
+    ]);
+    assert!(!bad.status.success());
+}
+
+#[test]
+fn fix_holds_and_a_prior_pulls_towards_nominal() {
+    let d = tmp_dir("practice-prior");
+    let data = ur10_positions(&d);
+    let robot = ex("ur10.toml");
+    let run = |extra: &[&str], name: &str| {
+        let out = d.join(name);
+        let mut a = vec![
+            "identify", "--robot", &robot, "--data", &data, "--method", "lm",
+        ];
+        a.extend_from_slice(extra);
+        a.extend_from_slice(&["--out", path_arg(&out)]);
+        calbench_ok(&a);
+        load_json(&out.join("identified.json"))
+    };
+    let free = run(&[], "free");
+    let a2 = free["errors"]["a2"].as_f64().unwrap();
+    assert!(a2.abs() > 0.05, "a2 moves freely ({a2} mm)");
+    let fixed = run(&["--fix", "a2,theta3"], "fix");
+    assert!(fixed["errors"].get("a2").is_none() && fixed["errors"].get("theta3").is_none());
+    assert_eq!(fixed["fixed"], serde_json::json!(["a2", "theta3"]));
+    let prior = run(&["--prior", "a2=0.001"], "prior");
+    let p = prior["errors"]["a2"].as_f64().unwrap();
+    assert!(p.abs() < 0.1 * a2.abs(), "{a2} -> {p}");
+    let moved = &prior["priors"][0];
+    assert_eq!(moved["parameter"], "a2");
+    assert!((moved["without_prior"].as_f64().unwrap() - a2).abs() < 1e-9);
+    // The same prior from a file; a loose prior hardly moves the estimate.
+    let f = d.join("priors.toml");
+    std::fs::write(&f, "a2 = 1000.0\n").unwrap();
+    let loose = run(&["--prior", path_arg(&f)], "loose");
+    assert!((loose["errors"]["a2"].as_f64().unwrap() - a2).abs() < 1e-3 * a2.abs());
+    // A prior on a fixed parameter, and a bad σ, are refused.
+    let bad = calbench(&[
+        "identify",
+        "--robot",
+        &ex("ur10.toml"),
+        "--data",
+        &data,
+        "--method",
+        "lm",
+        "--fix",
+        "a2",
+        "--prior",
+        "a2=0.1",
+        "--out",
+        path_arg(&d.join("bad")),
+    ]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("priors.a2"));
+    let bad = calbench(&[
+        "identify",
+        "--robot",
+        &ex("ur10.toml"),
+        "--data",
+        &data,
+        "--method",
+        "lm",
+        "--prior",
+        "a2=-1",
+        "--out",
+        path_arg(&d.join("bad2")),
+    ]);
+    assert!(!bad.status.success());
+}
+
+#[test]
+fn compensate_targets_reaches_cartesian_targets_on_the_identified_robot() {
+    let d = tmp_dir("practice-targets");
+    let data = ur10_positions(&d);
+    let out = d.join("id");
+    calbench_ok(&[
+        "identify",
+        "--robot",
+        &ex("ur10.toml"),
+        "--data",
+        &data,
+        "--method",
+        "lm",
+        "--out",
+        path_arg(&out),
+    ]);
+    let nominal = builtin::load(&ex("ur10.toml")).unwrap();
+    let ident = builtin::load(out.join("robot.toml").to_str().unwrap()).unwrap();
+    let mut g = stream(4, "targets");
+    let qs = calbench::robot::sampling::uniform_joint_poses(&nominal, 8, &mut g);
+    let mut pos = String::from("x,y,z\n");
+    let mut full = String::from("x,y,z,qw,qx,qy,qz\n");
+    for q in &qs {
+        let f = nominal.fk(q);
+        let q4 = calbench::numeric::quaternion(&f.rot);
+        pos += &format!("{},{},{}\n", f.pos.x, f.pos.y, f.pos.z);
+        full += &format!(
+            "{},{},{},{},{},{},{}\n",
+            f.pos.x, f.pos.y, f.pos.z, q4[0], q4[1], q4[2], q4[3]
+        );
+    }
+    for (name, text, pose) in [("pos", pos, false), ("full", full, true)] {
+        let t = d.join(format!("{name}.csv"));
+        std::fs::write(&t, text).unwrap();
+        let c = d.join(format!("{name}-out.csv"));
+        calbench_ok(&[
+            "compensate",
+            "--robot",
+            &ex("ur10.toml"),
+            "--identified",
+            path_arg(&out.join("robot.toml")),
+            "--targets",
+            path_arg(&t),
+            "--out",
+            path_arg(&c),
+        ]);
+        let written = read(&c);
+        let mut lines = written.lines();
+        assert_eq!(
+            lines.next().unwrap(),
+            "q1,q2,q3,q4,q5,q6,residual_mm,residual_deg,flag"
+        );
+        for (line, q) in lines.zip(&qs) {
+            let cells: Vec<&str> = line.split(',').collect();
+            assert_eq!(cells[8], "ok", "{line}");
+            let user: Vec<Real> = cells[..6].iter().map(|c| c.parse().unwrap()).collect();
+            let f = ident.fk(&ident.q_from_user(&user));
+            let t = nominal.fk(q);
+            assert!((f.pos - t.pos).norm() < 1e-6);
+            if pose {
+                let r = calbench::numeric::rotation_vector(&(f.rot.transpose() * t.rot)).norm();
+                assert!(r < 1e-8);
+            }
+        }
+    }
+    // A targets file with joints or without z is refused by line and column.
+    let t = d.join("bad.csv");
+    std::fs::write(&t, "x,y\n1,2\n").unwrap();
+    let bad = calbench(&[
+        "compensate",
+        "--robot",
+        &ex("ur10.toml"),
+        "--identified",
+        path_arg(&out.join("robot.toml")),
+        "--targets",
+        path_arg(&t),
+        "--out",
+        path_arg(&d.join("o.csv")),
+    ]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("\"z\""));
+}
+
+#[test]
+fn a_urdf_tree_with_tip_gives_the_single_chain() {
+    let d = tmp_dir("practice-tree");
+    let src = read(std::path::Path::new(&ex("ur10.urdf")));
+    let extra = "<link name=\"sensor\"/><joint name=\"sensor_joint\" type=\"fixed\">\
+        <parent link=\"base_link\"/><child link=\"sensor\"/><origin xyz=\"0.1 0 0\" rpy=\"0 0 0\"/></joint>";
+    let tree = d.join("tree.urdf");
+    std::fs::write(&tree, src.replace("</robot>", &format!("{extra}</robot>"))).unwrap();
+    let one = builtin::load(&ex("ur10.urdf")).unwrap();
+    let tip =
+        calbench::robot::urdf::UrdfRobot::load(std::path::Path::new(&ex("ur10.urdf"))).unwrap();
+    let leaf = {
+        let s = read(std::path::Path::new(&ex("ur10.urdf")));
+        let links: Vec<String> = s
+            .split("<link name=\"")
+            .skip(1)
+            .map(|t| t[..t.find('"').unwrap()].to_string())
+            .collect();
+        links
+            .into_iter()
+            .find(|l| !s.contains(&format!("<parent link=\"{l}\"")))
+            .unwrap()
+    };
+    let q = "0.1,-1.2,1.0,-0.5,1.4,0.3";
+    let a = calbench_ok(&["fk", "--robot", &ex("ur10.urdf"), "--q", q, "--json"]);
+    let b = calbench_ok(&[
+        "fk",
+        "--robot",
+        path_arg(&tree),
+        "--tip",
+        &leaf,
+        "--q",
+        q,
+        "--json",
+    ]);
+    assert_eq!(a.stdout, b.stdout);
+    let refused = calbench(&["fk", "--robot", path_arg(&tree), "--q", q]);
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--tip"));
+    let refused = calbench(&["fk", "--robot", path_arg(&tree), "--tip", "nope", "--q", q]);
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("no link \"nope\""));
+    let refused = calbench(&[
+        "fk",
+        "--robot",
+        "irb2600",
+        "--tip",
+        "x",
+        "--q",
+        "0,0,0,0,0,0",
+    ]);
+    assert!(!refused.status.success());
+    // The sensor chain from the root: a fixed chain has no joints.
+    assert_eq!(tip.robot.dof(), one.dof());
+}
+
+/// A 7-axis arm (an iiwa-like DH table) with injected errors through every command.
+#[test]
+fn a_seven_axis_arm_end_to_end() {
+    let d = tmp_dir("practice-seven");
+    let dh = [
+        (340.0, -90.0),
+        (0.0, 90.0),
+        (400.0, 90.0),
+        (0.0, -90.0),
+        (400.0, -90.0),
+        (0.0, 90.0),
+        (126.0, 0.0),
+    ];
+    let mut text = String::from(
+        "name = \"seven\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n",
+    );
+    for (dd, al) in dh {
+        text += &format!("\n[[joints]]\ntype = \"revolute\"\nalpha = {al}\na = 0.0\nd = {dd}\ntheta = 0.0\nlimits = [-170.0, 170.0]\n");
+    }
+    let r7 = d.join("r7.toml");
+    std::fs::write(&r7, text).unwrap();
+    let nominal = builtin::load(path_arg(&r7)).unwrap();
+    assert_eq!(nominal.dof(), 7);
+    let errors: Vec<(Param, Real)> = (0..7)
+        .flat_map(|j| {
+            [
+                (Param::D(j), 0.3 - 0.1 * j as Real),
+                (Param::Theta(j), 1e-3 * (j as Real - 3.0)),
+            ]
+        })
+        .collect();
+    let truth = nominal.with_errors(&errors);
+    let mut g = stream(7, "seven");
+    let qs = calbench::robot::sampling::uniform_joint_poses(&nominal, 80, &mut g);
+    let mut m = (1..=7).map(|j| format!("q{j},")).collect::<String>() + "x,y,z\n";
+    for q in &qs {
+        let p = truth.fk(q).pos;
+        for v in nominal.q_to_user(q) {
+            m += &format!("{v:.12},");
+        }
+        m += &format!("{:.9},{:.9},{:.9}\n", p.x, p.y, p.z);
+    }
+    let data = d.join("m7.csv");
+    std::fs::write(&data, m).unwrap();
+    calbench_ok(&[
+        "fk",
+        "--robot",
+        path_arg(&r7),
+        "--q",
+        "10,20,30,40,50,60,70",
+    ]);
+    calbench_ok(&[
+        "identifiability",
+        "--robot",
+        path_arg(&r7),
+        "--poses-file",
+        path_arg(&data),
+    ]);
+    let out = d.join("id");
+    calbench_ok(&[
+        "identify",
+        "--robot",
+        path_arg(&r7),
+        "--data",
+        path_arg(&data),
+        "--method",
+        "lm",
+        "--cv",
+        "3",
+        "--export",
+        "dh-csv",
+        "--out",
+        path_arg(&out),
+    ]);
+    let j = load_json(&out.join("identified.json"));
+    assert!(
+        j["rms_residual_mm"].as_f64().unwrap() < 1e-4,
+        "{}",
+        j["rms_residual_mm"]
+    );
+    assert!(j["cv"]["rms"].as_f64().unwrap() < 1e-3);
+    let program = d.join("program.csv");
+    let rows: String = (1..=7)
+        .map(|j| format!("q{j}"))
+        .collect::<Vec<_>>()
+        .join(",")
+        + "\n10,20,30,40,50,60,70\n-10,25,-30,45,20,-60,5\n";
+    std::fs::write(&program, rows).unwrap();
+    let c = d.join("c.csv");
+    calbench_ok(&[
+        "compensate",
+        "--robot",
+        path_arg(&r7),
+        "--identified",
+        path_arg(&out.join("robot.toml")),
+        "--joints",
+        path_arg(&program),
+        "--out",
+        path_arg(&c),
+    ]);
+    assert!(
+        read(&c).lines().skip(1).all(|l| l.ends_with(",ok")),
+        "{}",
+        read(&c)
+    );
+}
+
+/// A scenario's `priors` in `[[methods]]` run under the entry's label, and a bad σ is
+/// refused naming `priors.NAME`.
+#[test]
+fn scenario_priors_run_and_bad_ones_are_named() {
+    let d = tmp_dir("practice-scenario-priors");
+    let base = read(&root().join("scenarios/ci-guard.toml"));
+    let text = base.replace(
+        "name = \"lm\"",
+        "name = \"lm\"\n\n[[methods]]\nname = \"lm\"\nlabel = \"lm-prior\"\npriors = { a2 = 0.001 }",
+    );
+    let s = d.join("s.toml");
+    std::fs::write(&s, &text).unwrap();
+    let out = d.join("out");
+    calbench_ok(&[
+        "run",
+        path_arg(&s),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&out),
+    ]);
+    let summary = load_json(&out.join("summary.json"));
+    let text_summary = summary.to_string();
+    assert!(text_summary.contains("lm-prior"));
+    std::fs::write(&s, text.replace("a2 = 0.001", "a2 = 0")).unwrap();
+    let bad = calbench(&[
+        "run",
+        path_arg(&s),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&d.join("bad")),
+    ]);
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("priors.a2"));
+}
