@@ -39,11 +39,18 @@ enum Command {
     Compensate(cli::compensate::CompensateArgs),
     /// Choose calibration poses for a scenario's robot.
     Poses(cli::poses::PosesArgs),
+    /// Two runs side by side, entry by entry, as compare.html and compare.md.
+    #[command(
+        after_help = "Regressions are marked by the rules and tolerance of `check`; the \
+                            exit status is 0 whatever the comparison finds (`check` is the guard)."
+    )]
+    Compare(cli::compare::CompareArgs),
 }
 
 fn main() {
     let cli = Cli::parse();
     let done = match &cli.command {
+        Some(Command::Compare(a)) => cli::compare::run(a),
         None => cli::run::default_study(),
         Some(Command::Robots(a)) => cli::robots::run(a),
         Some(Command::Fk(a)) => cli::fk::run(a),

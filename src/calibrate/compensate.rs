@@ -6,18 +6,10 @@
 //! Jacobian (the error itself is exact, so the fixed point is exact).
 
 use crate::calibrate::validation::rotation_angle_deg;
-use crate::numeric::{rotation_vector, Frame, Real};
+use crate::numeric::{Frame, Real};
 use crate::robot::compliance::loaded_fk;
 use crate::robot::Robot;
-use nalgebra::{DMatrix, DVector};
 
-/// mm per rad: the orientation rows' weight in the Newton step (an arm of about one metre).
-const K_MM_PER_RAD: Real = 1000.0;
-/// Newton iterations at most.
-const MAX_ITERATIONS: usize = 50;
-/// Convergence: position (mm) and orientation (rad) errors below these.
-const TOL_MM: Real = 1e-10;
-const TOL_RAD: Real = 1e-12;
 /// What a corrected row must reach to be flagged `ok`: residual_mm and residual_deg.
 pub const ACCEPT_MM: Real = 1e-6;
 /// See [`ACCEPT_MM`].
@@ -37,20 +29,6 @@ pub struct Corrected {
     pub flag: &'static str,
 }
 
-/// The 6-vector pose error of `f` against `target` (mm, then mm-weighted rad).
-fn error(target: &Frame, f: &Frame) -> [Real; 6] {
-    let dp = target.pos - f.pos;
-    let dr = rotation_vector(&(target.rot * f.rot.transpose()));
-    [
-        dp.x,
-        dp.y,
-        dp.z,
-        K_MM_PER_RAD * dr.x,
-        K_MM_PER_RAD * dr.y,
-        K_MM_PER_RAD * dr.z,
-    ]
-}
-
 /// The joints (internal units) at which `identified` reaches `target` under a payload of
 /// `payload_kg` (its gravity sag, when the robot has joint compliances), starting from `q0`.
 /// Fails when the robot has compliances but no link masses.
@@ -60,54 +38,7 @@ pub fn solve(
     q0: &[Real],
     payload_kg: Real,
 ) -> crate::Result<Vec<Real>> {
-    solve_rows(identified, target, q0, payload_kg, 6)
-}
-
-/// [`solve`] on the first `rows` rows of the error: 6 for the pose, 3 for the position only
-/// (the orientation is free; the step is the least-norm one).
-fn solve_rows(
-    identified: &Robot,
-    target: &Frame,
-    q0: &[Real],
-    payload_kg: Real,
-    rows: usize,
-) -> crate::Result<Vec<Real>> {
-    let chain = identified.chain();
-    let pose = |q: &[Real]| loaded_fk(identified, &chain, q, payload_kg);
-    let n = q0.len();
-    let mut q = q0.to_vec();
-    let mut qh = q.clone();
-    let mut jac = DMatrix::<Real>::zeros(rows, n);
-    for _ in 0..MAX_ITERATIONS {
-        let f = pose(&q)?;
-        let mut e = error(target, &f);
-        e[rows..].fill(0.0);
-        let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
-        let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt() / K_MM_PER_RAD;
-        if pos < TOL_MM && rot < TOL_RAD {
-            break;
-        }
-        // Central differences: J = −∂e/∂q (the pose's derivative); the step solves J·Δq = e.
-        let h = 1e-6;
-        for j in 0..n {
-            qh.copy_from_slice(&q);
-            qh[j] += h;
-            let ep = error(target, &pose(&qh)?);
-            qh[j] -= 2.0 * h;
-            let em = error(target, &pose(&qh)?);
-            for r in 0..rows {
-                jac[(r, j)] = -(ep[r] - em[r]) / (2.0 * h);
-            }
-        }
-        let rhs = DVector::from_row_slice(&e[..rows]);
-        let Ok(step) = jac.clone().svd(true, true).solve(&rhs, 1e-12) else {
-            break;
-        };
-        for j in 0..n {
-            q[j] += step[j];
-        }
-    }
-    Ok(q)
+    crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, 6)
 }
 
 /// The flag of a written command `q` with its residuals ([`Corrected::flag`]).
@@ -198,7 +129,8 @@ pub fn compensate_targets(
             .chain(&randoms);
         let mut best: Option<Corrected> = None;
         for q0 in starts {
-            let mut q = solve_rows(identified, target, q0, payload_kg, rows)?;
+            let mut q =
+                crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)?;
             wrap_into_limits(identified, &mut q);
             let q = round(&q);
             let f = loaded_fk(identified, &chain, &q, payload_kg)?;

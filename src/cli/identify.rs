@@ -17,8 +17,9 @@ use calbench::measurement::csv::read_measurements;
 use calbench::measurement::{Measure, Measurements};
 use calbench::numeric::{Frame, Real};
 use calbench::report::exports;
-use calbench::report::identified::{validate_file, write_identified_with, IdentifyRecord};
+use calbench::report::identified::{registration_warning, validate_file, IdentifyRecord};
 use calbench::report::practice::{Practice, PriorMove};
+use calbench::report::write_identified_with;
 use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{param_sets, Param, Robot};
 
@@ -256,19 +257,8 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         let (all, source) = ((&kinematic[..], params.len()), (args.data.as_path(), &d));
         return Err(on_data::undetermined_error(&nominal, all, &c, source, &spec, allow).into());
     }
-    if matches!(
-        c.rounds.termination,
-        RoundsEnd::MaxRounds | RoundsEnd::Stalled
-    ) {
-        eprintln!(
-            "warning: {} registration and identification did not settle within {} mm in {} \
-             rounds ({}; the smallest frame step was {:.3e} mm, and that round is the result)",
-            registration.as_str(),
-            calbench::calibrate::ROUND_TOLERANCE_MM,
-            c.rounds.rounds,
-            c.rounds.termination.as_str(),
-            c.rounds.last_step_mm
-        );
+    if let Some(w) = registration_warning(&c, registration) {
+        eprintln!("warning: {w}");
     }
     let validation = val
         .as_ref()

@@ -31,6 +31,7 @@ macro_rules! out_raw {
 }
 
 pub mod check;
+pub mod compare;
 pub mod compensate;
 pub mod fk;
 pub mod identifiability;

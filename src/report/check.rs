@@ -124,6 +124,28 @@ fn entries(v: &Value) -> &[Value] {
 /// This compares two values as they are; `calbench check` first refuses them unless they are
 /// [`comparable`].
 pub fn compare(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Regression> {
+    compare_all(summary, baseline, tolerance)
+        .into_iter()
+        .filter(|c| c.regressed)
+        .map(|c| c.metric)
+        .collect()
+}
+
+/// One compared metric: the values, and whether it is a regression by [`compare`]'s rules.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compared {
+    /// The entry, the metric and both values (`value` NaN when the summary lacks it).
+    pub metric: Regression,
+    /// Whether the summary's value is worse than the baseline's by the tolerance or more,
+    /// missing or non-finite.
+    pub regressed: bool,
+    /// Whether a higher value of the metric is better (η) or a lower one (errors).
+    pub higher_is_better: bool,
+}
+
+/// Every metric [`compare`] looks at, entry by entry in the baseline's order, each with
+/// both values and whether it regressed: [`compare`] is the regressed ones.
+pub fn compare_all(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Compared> {
     let new = entries(summary);
     let mut out = Vec::new();
     for b in entries(baseline) {
@@ -134,17 +156,24 @@ pub fn compare(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Regres
                 continue;
             };
             let value = found.and_then(|e| lookup(e, &metric)).unwrap_or(Real::NAN);
-            if regressed(value, base, tolerance, dir) || !value.is_finite() {
-                out.push(Regression {
+            out.push(Compared {
+                higher_is_better: dir == Better::Higher,
+                regressed: regressed(value, base, tolerance, dir) || !value.is_finite(),
+                metric: Regression {
                     entry: key.clone(),
                     metric,
                     baseline: base,
                     value,
-                });
-            }
+                },
+            });
         }
     }
     out
+}
+
+/// The entry names (`method / poses [/ sweep value]`) of a summary, in its order.
+pub fn entry_names(summary: &Value) -> Vec<String> {
+    entries(summary).iter().map(entry_key).collect()
 }
 
 /// Refuses, naming `path`, a JSON value that is not a calbench summary: it must be an object

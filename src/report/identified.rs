@@ -10,8 +10,9 @@ use serde_json::{json, Value};
 
 use crate::calibrate::validation::point_residuals;
 pub use crate::calibrate::validation::{validate_file, FileValidation};
-use crate::calibrate::{Calibrated, ErrorStats, Registration};
+use crate::calibrate::{Calibrated, ErrorStats, Registration, RoundsEnd};
 use crate::error::{Error, Result};
+use crate::identify::Termination;
 use crate::measurement::Measurements;
 use crate::numeric::Real;
 use crate::robot::{robot_to_toml, Param, Robot};
@@ -110,40 +111,50 @@ pub fn residuals_csv(r: &IdentifyRecord) -> Result<String> {
     Ok(csv)
 }
 
-/// Writes `residuals.csv`, `identified.json` and `robot.toml` (the compensated robot, named
-/// `<nominal>-calibrated`) into `out`.
-pub fn write_identified(out: &Path, r: &IdentifyRecord) -> Result<()> {
-    write_identified_with(out, r, &Default::default(), &[])
-}
-
 /// What `identify`'s options add to its files: keys of `identified.json` and a section of
-/// `report.md` ([`super::practice`]).
+/// `report.md` and `report.html` ([`super::practice`]).
 #[derive(Default)]
 pub struct Additions {
     /// Keys added to `identified.json`.
     pub json: serde_json::Map<String, Value>,
-    /// Markdown appended to `report.md`.
-    pub markdown: String,
+    /// The section's content, in order: one piece serves both pages.
+    pub blocks: Vec<Block>,
 }
 
-/// [`write_identified`] with `more` keys added to `identified.json` (cross-validation,
-/// priors, diagnostics: [`super::practice`]) and the `files` (name, text) written beside it
-/// (the controller exports).
-pub fn write_identified_with(
-    out: &Path,
-    r: &IdentifyRecord,
-    more: &Additions,
-    files: &[(&str, String)],
-) -> Result<()> {
-    super::atomically(out, |dir| {
-        for (name, text) in files {
-            write(&dir.join(name), text)?;
+/// A piece of a report section, written as Markdown ([`Additions::markdown`]) or HTML
+/// (`report.html`'s identify page).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Block {
+    /// A heading.
+    Heading(String),
+    /// A paragraph of plain text.
+    Para(String),
+    /// A table: header row and rows.
+    Table(Vec<&'static str>, Vec<Vec<String>>),
+}
+
+impl Additions {
+    /// The blocks as Markdown, each after a blank line.
+    pub fn markdown(&self) -> String {
+        let mut md = String::new();
+        for b in &self.blocks {
+            md.push('\n');
+            match b {
+                Block::Heading(h) => md += &format!("## {h}\n"),
+                Block::Para(t) => md += &format!("{t}\n"),
+                Block::Table(headers, rows) => md += &table(headers, rows),
+            }
         }
-        write_into(dir, r, more)
-    })
+        md
+    }
 }
 
-fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
+/// Writes `residuals.csv`, `identified.json` (with the `more` keys: cross-validation, priors,
+/// diagnostics, [`super::practice`]), `report.md` with its plots, `robot.toml` (the
+/// compensated robot, named `<nominal>-calibrated`) and `robot.urdf` if asked for into the
+/// folder `out` ([`super::write_identified_with`] adds `report.html` and the controller exports
+/// and writes them as a whole).
+pub fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
     write(&out.join("residuals.csv"), &residuals_csv(r)?)?;
     let mut j = identified_json(r);
     for (k, v) in &more.json {
@@ -155,7 +166,7 @@ fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
     compensated.name = format!("{}-calibrated", r.nominal.name);
     write(
         &out.join("report.md"),
-        &(report_md(out, r)? + &more.markdown),
+        &(report_md(out, r)? + &more.markdown()),
     )?;
     if let Some(u) = &r.urdf {
         write(&out.join("robot.urdf"), u)?;
@@ -163,8 +174,118 @@ fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
     write(&out.join("robot.toml"), &robot_to_toml(&compensated))
 }
 
-fn write(path: &Path, text: &str) -> Result<()> {
+/// The warning for an alternation of registration and identification that did not settle
+/// (`calbench identify` prints it on stderr); `None` when it settled or did not alternate.
+pub fn registration_warning(c: &Calibrated, registration: Registration) -> Option<String> {
+    matches!(
+        c.rounds.termination,
+        RoundsEnd::MaxRounds | RoundsEnd::Stalled
+    )
+    .then(|| {
+        format!(
+            "{} registration and identification did not settle within {} mm in {} rounds ({}; \
+             the smallest frame step was {:.3e} mm, and that round is the result)",
+            registration.as_str(),
+            crate::calibrate::ROUND_TOLERANCE_MM,
+            c.rounds.rounds,
+            c.rounds.termination.as_str(),
+            c.rounds.last_step_mm
+        )
+    })
+}
+
+/// The warnings of an identification, in plain words: data that do not determine every
+/// parameter (a result kept with `--allow-rank-deficient`), a registration that did not
+/// settle ([`registration_warning`]), and points a robust method rejected (weight 0) or
+/// weighed down.
+pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
+    let id = &r.calibrated.identified;
+    let n = r.params.len();
+    let mut w = Vec::new();
+    let undetermined = matches!(
+        id.termination,
+        Termination::RankDeficient | Termination::Singular
+    ) || id.rank.is_some_and(|k| k < n);
+    if undetermined {
+        w.push(format!(
+            "the data determine only {} of the {n} parameters (rank deficiency; the \
+             identification ended {}). The undetermined directions were filled in by the \
+             method's damping or regularisation, not by the data: measure poses that move \
+             every joint before trusting these values.",
+            id.rank.map_or("some".to_string(), |k| k.to_string()),
+            id.termination.as_str()
+        ));
+    }
+    if let Some(text) = registration_warning(r.calibrated, r.registration) {
+        w.push(format!("the {text}."));
+    }
+    let rejected: Vec<String> = id
+        .weights
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| **x == 0.0)
+        .map(|(i, _)| i.to_string())
+        .collect();
+    let lowered = id.weights.iter().filter(|x| **x > 0.0 && **x < 1.0).count();
+    if !rejected.is_empty() {
+        w.push(format!(
+            "{} of the {} points were rejected as outliers (final weight 0; rows {}): they do \
+             not count in the result. Check those measurements.",
+            rejected.len(),
+            r.data.len(),
+            rejected.join(", ")
+        ));
+    }
+    if lowered > 0 {
+        w.push(format!(
+            "{lowered} points were weighed down (final weight between 0 and 1) as suspect."
+        ));
+    }
+    w
+}
+
+pub(super) fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// The standard error of parameter `i`: the square root of the covariance's diagonal; NaN
+/// where the covariance is not given (its entries NaN) or lacks the parameter.
+pub fn standard_error(covariance: &nalgebra::DMatrix<Real>, i: usize) -> Real {
+    covariance
+        .get((i, i))
+        .filter(|v| v.is_finite())
+        .map_or(Real::NAN, |v| v.max(0.0).sqrt())
+}
+
+/// The headers of [`validation_rows`].
+pub const VALIDATION_HEADERS: [&str; 5] = ["error", "mean", "rms", "max", "std"];
+
+/// The validation table's rows: mean, RMS, max and standard deviation of the position errors
+/// before and after, of the orientation errors on full-pose files, and with `attitude` of
+/// Qiao's attitude errors.
+pub fn validation_rows(v: &FileValidation, attitude: bool) -> Vec<Vec<String>> {
+    let row = |l: &str, e: &ErrorStats| {
+        vec![
+            l.to_string(),
+            fmt_num(e.mean, 4),
+            fmt_num(e.rms, 4),
+            fmt_num(e.max, 4),
+            fmt_num(e.std, 4),
+        ]
+    };
+    let mut rows = vec![
+        row("before (mm)", &v.before_mm),
+        row("after (mm)", &v.after_mm),
+    ];
+    if let Some((b, a)) = &v.deg {
+        rows.push(row("before (deg)", b));
+        rows.push(row("after (deg)", a));
+    }
+    if let (true, Some((b, a))) = (attitude, &v.attitude_deg) {
+        rows.push(row("attitude before (deg)", b));
+        rows.push(row("attitude after (deg)", a));
+    }
+    rows
 }
 
 /// Bins of the residual histogram in `report.md`.
@@ -240,25 +361,8 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         r.params.len(),
     );
     if let Some(v) = r.validation {
-        let row = |l: &str, e: &ErrorStats| {
-            vec![
-                l.to_string(),
-                fmt_num(e.mean, 4),
-                fmt_num(e.rms, 4),
-                fmt_num(e.max, 4),
-                fmt_num(e.std, 4),
-            ]
-        };
-        let mut rows = vec![
-            row("before (mm)", &v.before_mm),
-            row("after (mm)", &v.after_mm),
-        ];
-        if let Some((b, a)) = &v.deg {
-            rows.push(row("before (deg)", b));
-            rows.push(row("after (deg)", a));
-        }
         s += "## Validation\n\n";
-        s += &table(&["error", "mean", "rms", "max", "std"], &rows);
+        s += &table(&VALIDATION_HEADERS, &validation_rows(v, false));
         s.push('\n');
     }
     plots::before_after(
@@ -288,9 +392,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         .iter()
         .enumerate()
         .map(|(i, p)| {
-            let se = covariance
-                .get((i, i))
-                .map_or(Real::NAN, |v| v.max(0.0).sqrt());
+            let se = standard_error(&covariance, i);
             vec![p.to_string(), fmt_num(id.x[i], 4), fmt_num(se, 3)]
         })
         .collect();

@@ -1,6 +1,6 @@
 //! Every writer of calbench's output files (docs/formats.md): [`run`] writes a run's
 //! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
-//! `calbench identify`.
+//! `calbench identify`; [`html`] the self-contained pages `report.html` and `compare.html`.
 //!
 //! The report only reads results that are already computed. [`plots`] draws the
 //! figures of the source papers — η per parameter per method (Guo 2024, fig. 8), validation
@@ -15,6 +15,7 @@
 
 pub mod check;
 pub mod exports;
+pub mod html;
 pub mod identified;
 pub mod markdown;
 pub mod plots;
@@ -48,7 +49,7 @@ pub fn run_study(
             None => {
                 let r = crate::study::run(scenario, opts, &mut csv)?;
                 csv.finish()?;
-                run::write_into(&r, dir)?;
+                write_run(&r, dir)?;
                 r
             }
             Some(_) => {
@@ -66,6 +67,40 @@ pub fn run_study(
         Ok(())
     })?;
     result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
+}
+
+/// Writes every file of a complete run but `trials.csv` into the folder `dir`: those of
+/// [`run::write_into`], then `report.html` ([`html::run`]) with the plots inlined.
+pub fn write_run(r: &crate::study::RunResult, dir: &std::path::Path) -> crate::Result<()> {
+    let plots = run::write_into(r, dir)?;
+    html::run::page(r, &plots, dir)?.write(&dir.join("report.html"))
+}
+
+/// Writes the output folder of `calbench identify` as a whole ([`atomically`]): the files of
+/// [`identified::write_into`], then `report.html` ([`html::identify`]).
+pub fn write_identified(
+    out: &std::path::Path,
+    r: &identified::IdentifyRecord,
+) -> crate::Result<()> {
+    write_identified_with(out, r, &Default::default(), &[])
+}
+
+/// [`write_identified`] with `more` keys added to `identified.json` and a section to
+/// `report.md` (cross-validation, priors, diagnostics: [`practice`]), and the `files`
+/// (name, text) written beside them (the controller exports, [`exports`]).
+pub fn write_identified_with(
+    out: &std::path::Path,
+    r: &identified::IdentifyRecord,
+    more: &identified::Additions,
+    files: &[(&str, String)],
+) -> crate::Result<()> {
+    atomically(out, |dir| {
+        for (name, text) in files {
+            identified::write(&dir.join(name), text)?;
+        }
+        identified::write_into(dir, r, more)?;
+        html::identify::page(dir, r, more)?.write(&dir.join("report.html"))
+    })
 }
 
 /// A complete run held in memory (the Python module's `run`): its result and the bytes of
@@ -103,12 +138,12 @@ impl InMemoryRun {
     }
 
     /// Writes the run's folder `out` as a whole ([`atomically`]), the files of
-    /// `calbench run --out`: `trials.csv`, then [`write_into`].
+    /// `calbench run --out`: `trials.csv`, then [`write_run`], as [`run_study`] does.
     pub fn write(&self, out: &std::path::Path) -> crate::Result<()> {
         atomically(out, |dir| {
             let path = dir.join("trials.csv");
             std::fs::write(&path, &self.trials_csv).map_err(|e| crate::Error::io(&path, e))?;
-            run::write_into(&self.result, dir)
+            write_run(&self.result, dir)
         })
     }
 }

@@ -2,12 +2,10 @@
 //! (docs/formats.md `identify`): the held-out split, the cross-validation and model choice,
 //! the fixed parameters, how each prior moved its estimate, and the diagnostics.
 
-use std::fmt::Write as _;
-
 use serde_json::{json, Value};
 
-use super::identified::Additions;
-use super::markdown::{fmt_num, table};
+use super::identified::{Additions, Block};
+use super::markdown::fmt_num;
 use crate::calibrate::cv::{CrossValidation, Holdout};
 use crate::calibrate::diagnostics::Diagnostics;
 use crate::numeric::Real;
@@ -50,28 +48,28 @@ fn to_value<T: serde::Serialize>(v: &T) -> Value {
 }
 
 impl Practice {
-    /// The keys added to `identified.json` and the section added to `report.md`; nothing
+    /// The keys added to `identified.json` and the section added to `report.md` and `report.html`; nothing
     /// for an option not used.
     pub fn additions(&self) -> Additions {
         let mut a = Additions::default();
         let j = &mut a.json;
-        let md = &mut a.markdown;
+        let md = &mut a.blocks;
         if let Some(h) = self.holdout {
             j.insert("holdout".into(), json!(format!("{}/{}", h.last, h.every)));
         }
         if let Some(cv) = &self.cv {
             j.insert("cv".into(), to_value(cv));
-            let _ = writeln!(
-                md,
-                "\n## Cross-validation\n\n{}-fold ({} model, {} parameters): RMS {} mm over the \
-                 held-out points; per fold {} ± {} mm.",
+            md.push(Block::Heading("Cross-validation".into()));
+            md.push(Block::Para(format!(
+                "{}-fold ({} model, {} parameters): RMS {} mm over the held-out points; per fold \
+                 {} ± {} mm.",
                 cv.k,
                 cv.model,
                 cv.parameters,
                 fmt_num(cv.rms, 4),
                 fmt_num(cv.mean, 4),
                 fmt_num(cv.sd, 4)
-            );
+            )));
         }
         if let Some((cvs, best)) = &self.models {
             j.insert("cv_models".into(), to_value(cvs));
@@ -88,12 +86,16 @@ impl Practice {
                     ]
                 })
                 .collect();
-            *md += "\n## Model choice\n\n";
-            *md += &table(&["model", "parameters", "CV RMS (mm)", "folds (mm)"], &rows);
+            md.push(Block::Heading("Model choice".into()));
+            let headers = vec!["model", "parameters", "CV RMS (mm)", "folds (mm)"];
+            md.push(Block::Table(headers, rows));
         }
         if !self.fixed.is_empty() {
             let names: Vec<String> = self.fixed.iter().map(|p| p.to_string()).collect();
-            let _ = writeln!(md, "\nFixed at nominal: {}.", names.join(", "));
+            md.push(Block::Para(format!(
+                "Fixed at nominal: {}.",
+                names.join(", ")
+            )));
             j.insert("fixed".into(), json!(names));
         }
         if !self.priors.is_empty() {
@@ -103,39 +105,39 @@ impl Practice {
                 let nums = [p.sigma, p.without_prior, p.with_prior].map(|v| fmt_num(v, 4));
                 rows.push(std::iter::once(p.parameter.clone()).chain(nums).collect());
             }
-            *md += "\n## Priors\n\n";
-            *md += &table(&["parameter", "σ", "without prior", "with prior"], &rows);
+            md.push(Block::Heading("Priors".into()));
+            let headers = vec!["parameter", "σ", "without prior", "with prior"];
+            md.push(Block::Table(headers, rows));
         }
         if let Some((what, values)) = &self.trace {
             j.insert(
                 "convergence_trace".into(),
                 json!({"values": what, "trace": values}),
             );
-            let _ = writeln!(
-                md,
-                "\n## Convergence\n\n{what}: {} values, from {} to {}.",
+            md.push(Block::Heading("Convergence".into()));
+            md.push(Block::Para(format!(
+                "{what}: {} values, from {} to {}.",
                 values.len(),
                 values.first().map_or("—".into(), |v| fmt_num(*v, 6)),
                 values.last().map_or("—".into(), |v| fmt_num(*v, 6))
-            );
+            )));
         }
         if let Some(d) = &self.diagnostics {
             j.insert("diagnostics".into(), to_value(d));
-            *md += "\n## Diagnostics\n\n";
+            md.push(Block::Heading("Diagnostics".into()));
             let pairs: Vec<String> = d
                 .flagged_pairs
                 .iter()
                 .map(|p| format!("{}–{} ({})", p.a, p.b, fmt_num(p.rho, 3)))
                 .collect();
-            let _ = writeln!(
-                md,
-                "Correlated pairs (|ρ| > 0.8): {}.\n",
+            md.push(Block::Para(format!(
+                "Correlated pairs (|ρ| > 0.8): {}.",
                 if pairs.is_empty() {
                     "none".to_string()
                 } else {
                     pairs.join(", ")
                 }
-            );
+            )));
             let rows: Vec<Vec<String>> = d
                 .top_points
                 .iter()
@@ -147,17 +149,19 @@ impl Practice {
                     ]
                 })
                 .collect();
-            *md += &table(&["row", "leverage", "Cook's distance"], &rows);
+            md.push(Block::Table(
+                vec!["row", "leverage", "Cook's distance"],
+                rows,
+            ));
             let p = &d.predicted;
-            let _ = writeln!(
-                md,
-                "\nPredicted position σ from the covariance at the {} poses: RMS {} mm, max {} \
+            md.push(Block::Para(format!(
+                "Predicted position σ from the covariance at the {} poses: RMS {} mm, max {} \
                  mm; measured RMS there {} mm.",
                 p.at,
                 fmt_num(p.rms_mm, 4),
                 fmt_num(p.max_mm, 4),
                 fmt_num(p.measured_rms_mm, 4)
-            );
+            )));
         }
         a
     }

@@ -212,15 +212,45 @@ pub mod columns {
     });
 }
 
+/// The validation columns of the results tables: before and after (mean, RMS, max), the
+/// improvement, and on full-pose data the mean orientation errors.
+pub fn validation_columns(pose: bool) -> Vec<Column> {
+    use columns::*;
+    let mut cols = vec![
+        BEFORE_MEAN,
+        BEFORE_RMS,
+        BEFORE_MAX,
+        AFTER_MEAN,
+        AFTER_RMS,
+        AFTER_MAX,
+        IMPROVEMENT,
+    ];
+    if pose {
+        cols.extend([BEFORE_DEG, AFTER_DEG]);
+    }
+    cols
+}
+
 /// The headers and rows of a table with one row per results entry: the swept value (for
 /// sweeps), the method, the poses, then `columns`.
 pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<String>, Vec<Vec<String>>) {
-    let mut headers: Vec<String> = Vec::new();
+    entry_table_by(r, columns.iter().map(|c| c.0.to_string()), |e: &Entry| {
+        columns.iter().map(|c| (c.1)(e)).collect()
+    })
+}
+
+/// [`entry_table`] with any cells: the columns `headers`, filled per entry by `cells`.
+pub fn entry_table_by(
+    r: &RunResult,
+    headers: impl IntoIterator<Item = String>,
+    cells: impl Fn(&Entry) -> Vec<String>,
+) -> (Vec<String>, Vec<Vec<String>>) {
+    let mut head: Vec<String> = Vec::new();
     if let Some(sw) = &r.scenario.sweep {
-        headers.extend(sw.axes.iter().map(|a| a.key.clone()));
+        head.extend(sw.axes.iter().map(|a| a.key.clone()));
     }
-    headers.extend(["method", "poses"].map(String::from));
-    headers.extend(columns.iter().map(|c| c.0.to_string()));
+    head.extend(["method", "poses"].map(String::from));
+    head.extend(headers);
     let mut rows = Vec::new();
     for b in &r.blocks {
         for e in &b.entries {
@@ -229,11 +259,11 @@ pub fn entry_table(r: &RunResult, columns: &[Column]) -> (Vec<String>, Vec<Vec<S
                 row.extend(p.iter().map(|v| v.to_string()));
             }
             row.extend([e.method.clone(), e.poses.clone()]);
-            row.extend(columns.iter().map(|c| (c.1)(e)));
+            row.extend(cells(e));
             rows.push(row);
         }
     }
-    (headers, rows)
+    (head, rows)
 }
 
 /// `trials.csv`, written as trials finish: one row per trial × strategy × method (× sweep
@@ -416,20 +446,8 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     );
     let pose = first.full_pose;
     use columns::*;
-    let mut cols = vec![
-        ETA_MEAN,
-        ETA_MEDIAN,
-        BEFORE_MEAN,
-        BEFORE_RMS,
-        BEFORE_MAX,
-        AFTER_MEAN,
-        AFTER_RMS,
-        AFTER_MAX,
-        IMPROVEMENT,
-    ];
-    if pose {
-        cols.extend([BEFORE_DEG, AFTER_DEG]);
-    }
+    let mut cols = vec![ETA_MEAN, ETA_MEDIAN];
+    cols.extend(validation_columns(pose));
     cols.extend([CRB_RATIO, FAILURES, EVALUATIONS, MS_PER_IDENTIFICATION]);
     let (headers, rows) = entry_table(r, &cols);
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
@@ -440,18 +458,11 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         s += &sweep_tables(r, sw);
     }
     s += "\n## Identification accuracy η per parameter (mean %, Guo 2024 eq. 29)\n\n";
-    let (params, series) = eta_by_parameter(&r.blocks[0]);
-    let mut h: Vec<&str> = vec!["parameter"];
-    h.extend(series.iter().map(|(label, _)| label.as_str()));
-    let eta_rows: Vec<Vec<String>> = params
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let mut row = vec![format!("`{p}`")];
-            row.extend(series.iter().map(|(_, eta)| fmt_num(eta[i], 4)));
-            row
-        })
-        .collect();
+    let (h, mut eta_rows) = eta_table(&r.blocks[0]);
+    for row in &mut eta_rows {
+        row[0] = format!("`{}`", row[0]);
+    }
+    let h: Vec<&str> = h.iter().map(String::as_str).collect();
     s += &table(&h, &eta_rows);
     if r.blocks.len() > 1 {
         s += "\n(η table of the first swept value.)\n";
@@ -461,14 +472,38 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         let _ = writeln!(s, "![{caption}]({file})\n");
     }
     s += "## What the metrics mean\n\n";
-    s += "- **η** = (1 − |x − x̂| / |x|) · 100 % per parameter with a non-zero injected error x (Guo 2024 eq. 29); 100 % is exact recovery.\n";
-    s += "- **before / after**: position error |Δp| at the validation poses of the nominal and of the compensated robot; mean (MAE), RMS, max.\n";
-    s += "- **improvement** = (before − after) / before of the mean error.\n";
-    s += "- **CRB ratio**: trace of the empirical covariance of the identified errors over trials divided by the mean Cramér–Rao trace (JᵀWJ)⁻¹ of the tracker noise; ≈ 1 for an efficient estimator under Gaussian noise, above 1 with outliers and sag.\n";
-    s +=
-        "- **failures**: identifications that diverged, were singular or gave non-finite values.\n";
-    s += "- **evaluations**: model evaluations per identification, mean over trials (residuals for the Jacobian methods, fitness eq. 14 for BAS, PSO and BAS-PSO): the budget each method spent.\n";
+    for (term, text) in METRIC_NOTES {
+        let _ = writeln!(s, "- **{term}**{text}");
+    }
     s
+}
+
+/// The metrics of a run's reports, each as its term and the rest of its explanation.
+pub const METRIC_NOTES: [(&str, &str); 6] = [
+    ("η", " = (1 − |x − x̂| / |x|) · 100 % per parameter with a non-zero injected error x (Guo 2024 eq. 29); 100 % is exact recovery."),
+    ("before / after", ": position error |Δp| at the validation poses of the nominal and of the compensated robot; mean (MAE), RMS, max."),
+    ("improvement", " = (before − after) / before of the mean error."),
+    ("CRB ratio", ": trace of the empirical covariance of the identified errors over trials divided by the mean Cramér–Rao trace (JᵀWJ)⁻¹ of the tracker noise; ≈ 1 for an efficient estimator under Gaussian noise, above 1 with outliers and sag."),
+    ("failures", ": identifications that diverged, were singular or gave non-finite values."),
+    ("evaluations", ": model evaluations per identification, mean over trials (residuals for the Jacobian methods, fitness eq. 14 for BAS, PSO and BAS-PSO): the budget each method spent."),
+];
+
+/// The η table of block `b`: headers (`parameter`, then one per entry) and one row per
+/// parameter with the mean η of each entry (%).
+pub fn eta_table(b: &Block) -> (Vec<String>, Vec<Vec<String>>) {
+    let (params, series) = eta_by_parameter(b);
+    let mut h = vec!["parameter".to_string()];
+    h.extend(series.iter().map(|(label, _)| label.clone()));
+    let rows = params
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut row = vec![p.clone()];
+            row.extend(series.iter().map(|(_, eta)| fmt_num(eta[i], 4)));
+            row
+        })
+        .collect();
+    (h, rows)
 }
 
 /// The sweep section of `report.md`: the headline metrics per sweep point, and for a
@@ -809,9 +844,10 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     Ok(done)
 }
 
-/// Writes every file of a complete run but `trials.csv` (written as the trials finished)
-/// into the folder `dir`.
-pub fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
+/// Writes every file of a complete run but `trials.csv` (written as the trials finished) and
+/// `report.html` ([`super::write_run`]) into the folder `dir`; returns the plots written
+/// (file name, caption), as `report.md` lists them.
+pub fn write_into(r: &RunResult, dir: &Path) -> Result<Vec<(String, String)>> {
     write_json(&dir.join("summary.json"), &summary(r))?;
     let timing: Vec<Value> = r
         .blocks
@@ -829,7 +865,7 @@ pub fn write_into(r: &RunResult, dir: &Path) -> Result<()> {
     )?;
     let plots = write_plots(r, dir)?;
     write(&dir.join("report.md"), &report_md(r, &plots))?;
-    Ok(())
+    Ok(plots)
 }
 
 #[cfg(test)]

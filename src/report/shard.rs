@@ -12,7 +12,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::run::{write_into, TrialsCsv};
+use super::run::TrialsCsv;
+use super::write_run;
 use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
@@ -22,7 +23,7 @@ use crate::study::trial::Outcome;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-2";
+const FORMAT: &str = "calbench-shard-3";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -160,6 +161,7 @@ fn encode(block: usize, t: &TrialResult) -> String {
             o.after_deg,
             o.before_attitude_deg,
             o.after_attitude_deg,
+            o.before_fitted_mm,
         ] {
             match d {
                 Some(d) => {
@@ -267,10 +269,12 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let after_mm = t.stats()?;
         let calibration_before_mm = t.stats()?;
         let calibration_after_mm = t.stats()?;
-        let before_deg = t.optional_stats()?;
-        let after_deg = t.optional_stats()?;
-        let before_attitude_deg = t.optional_stats()?;
-        let after_attitude_deg = t.optional_stats()?;
+        let mut optional = [None; 5];
+        for o in &mut optional {
+            *o = t.optional_stats()?;
+        }
+        let [before_deg, after_deg, before_attitude_deg, after_attitude_deg, before_fitted_mm] =
+            optional;
         let identified = t.reals(n)?;
         outcomes.push(Outcome {
             method,
@@ -284,6 +288,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             after_deg,
             before_attitude_deg,
             after_attitude_deg,
+            before_fitted_mm,
             per_point: None,
             per_point_attitude_deg: None,
             trace: None,
@@ -455,7 +460,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
             seconds,
             shard: None,
         };
-        write_into(&r, dir)?;
+        write_run(&r, dir)?;
         result = Some(r);
         Ok(())
     })?;
@@ -489,6 +494,7 @@ mod tests {
                 before_deg: None,
                 after_deg: Some(stats(0.3)),
                 before_attitude_deg: None,
+                before_fitted_mm: None,
                 after_attitude_deg: None,
                 per_point: None,
                 per_point_attitude_deg: None,

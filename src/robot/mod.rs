@@ -21,6 +21,7 @@ mod chain;
 pub mod compliance;
 mod file;
 pub mod identifiability;
+pub mod ik;
 pub mod jacobian;
 pub mod names;
 mod param;

@@ -6,11 +6,13 @@ use std::path::Path;
 
 use rand::Rng as _;
 
-use super::settings::Region;
+use super::settings::{Region, WorkspaceRegion};
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
-use crate::robot::sampling::{poses_in_box, uniform_joint_poses};
+use crate::robot::sampling::{
+    poses_in_box, poses_in_workspace, uniform_joint_poses, WORKSPACE_TRIES_PER_POSE,
+};
 use crate::robot::{Coupling, JointType, Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
@@ -74,45 +76,125 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
                 _ => Ok(()),
             }
         }
-        Region::Box { center_mm, size_mm } => {
-            let c = Vec3::from(*center_mm);
-            let h = Vec3::from(*size_mm) / 2.0;
-            let base = Vec3::new(
-                robot.get(Param::Base(0)),
-                robot.get(Param::Base(1)),
-                robot.get(Param::Base(2)),
-            );
-            let nearest = Vec3::from_fn(|k, _| base[k].clamp(c[k] - h[k], c[k] + h[k]));
-            let gap = (nearest - base).norm();
-            let reach = reach_bound_mm(robot);
-            let out_of_reach = |how: String| {
-                Error::setting(
-                    key,
-                    format!(
-                        "the box centred at {center_mm:?} mm of size {size_mm:?} mm is out of \
-                         reach of robot \"{}\": {how}",
-                        robot.name
-                    ),
-                )
-            };
-            if gap > reach * (1.0 + 1e-9) + 1e-6 {
-                return Err(out_of_reach(format!(
-                    "its nearest point is {gap:.1} mm from the base origin, and no tool point \
-                     is farther than {reach:.1} mm (the sum of the link lengths, travels and \
-                     tool offset)"
-                )));
+        Region::Workspace(w) => {
+            beyond_reach(robot, &w.center_mm, &w.size_mm, key)?;
+            let mut rng = crate::numeric::rng::stream(0, "reach");
+            if !workspace(robot, w, 1, key, &mut rng)?.is_empty() {
+                return Ok(());
             }
+            Err(Error::setting(
+                key,
+                format!(
+                    "the workspace box centred at {:?} mm of size {:?} mm with the tool axis \
+                     within {}° of {:?} is out of reach of robot \"{}\": not one of \
+                     {WORKSPACE_TRIES_PER_POSE} random targets is reached within the joint \
+                     limits (the search stops there)",
+                    w.center_mm, w.size_mm, w.cone_deg, w.axis, robot.name
+                ),
+            ))
+        }
+        Region::Box { center_mm, size_mm } => {
+            beyond_reach(robot, center_mm, size_mm, key)?;
             let mut rng = crate::numeric::rng::stream(0, "reach");
             let tries = (BOX_TRIES_MIN, BOX_TRIES_MIN);
             if !poses_in_box(robot, 1, *center_mm, *size_mm, tries, &mut rng).is_empty() {
                 return Ok(());
             }
-            Err(out_of_reach(format!(
-                "not one of {BOX_TRIES_MIN} random joint configurations within the limits puts \
-                 the tool point in it (the search stops there)"
-            )))
+            Err(Error::setting(
+                key,
+                format!(
+                    "the box centred at {center_mm:?} mm of size {size_mm:?} mm is out of \
+                     reach of robot \"{}\": not one of {BOX_TRIES_MIN} random joint \
+                     configurations within the limits puts the tool point in it (the search \
+                     stops there)",
+                    robot.name
+                ),
+            ))
         }
     }
+}
+
+/// Up to `n` poses of the workspace region `w` ([`poses_in_workspace`]); its `start` is
+/// refused, naming `key`, when it does not give one value per joint or leaves the limits.
+fn workspace(
+    robot: &Robot,
+    w: &WorkspaceRegion,
+    n: usize,
+    key: &str,
+    rng: &mut Rng,
+) -> Result<Vec<Vec<Real>>> {
+    let start = match &w.start {
+        None => None,
+        Some(s) if s.len() != robot.dof() => {
+            return Err(Error::setting(
+                key,
+                format!(
+                    "start has {} values but robot \"{}\" has {} joints",
+                    s.len(),
+                    robot.name,
+                    robot.dof()
+                ),
+            ))
+        }
+        Some(s) => {
+            let q = robot.q_from_user(s);
+            if !robot.within_limits(&q) {
+                return Err(Error::setting(
+                    key,
+                    format!(
+                        "start {s:?} leaves the joint limits of robot \"{}\"",
+                        robot.name
+                    ),
+                ));
+            }
+            Some(q)
+        }
+    };
+    Ok(poses_in_workspace(
+        robot,
+        n,
+        (w.center_mm, w.size_mm),
+        (w.axis, w.cone_deg),
+        start.as_deref(),
+        rng,
+    ))
+}
+
+/// Refuses, naming `key`, a box wholly beyond [`reach_bound_mm`] of the base origin.
+fn beyond_reach(
+    robot: &Robot,
+    center_mm: &[Real; 3],
+    size_mm: &[Real; 3],
+    key: &str,
+) -> Result<()> {
+    let c = Vec3::from(*center_mm);
+    let h = Vec3::from(*size_mm) / 2.0;
+    let base = Vec3::new(
+        robot.get(Param::Base(0)),
+        robot.get(Param::Base(1)),
+        robot.get(Param::Base(2)),
+    );
+    let nearest = Vec3::from_fn(|k, _| base[k].clamp(c[k] - h[k], c[k] + h[k]));
+    let gap = (nearest - base).norm();
+    let reach = reach_bound_mm(robot);
+    let out_of_reach = |how: String| {
+        Error::setting(
+            key,
+            format!(
+                "the box centred at {center_mm:?} mm of size {size_mm:?} mm is out of \
+                         reach of robot \"{}\": {how}",
+                robot.name
+            ),
+        )
+    };
+    if gap > reach * (1.0 + 1e-9) + 1e-6 {
+        return Err(out_of_reach(format!(
+            "its nearest point is {gap:.1} mm from the base origin, and no tool point \
+                     is farther than {reach:.1} mm (the sum of the link lengths, travels and \
+                     tool offset)"
+        )));
+    }
+    Ok(())
 }
 
 /// `n` joint configurations (internal units) in `region`, errors keyed `calibration.region`.
@@ -160,6 +242,28 @@ pub fn sample_region_keyed(
                          {center_mm:?} mm of size {size_mm:?} mm after {t} random tries (the \
                          search stops there): the box is (nearly) out of reach of robot \"{}\"",
                         out.len(),
+                        robot.name
+                    ),
+                ));
+            }
+            Ok(out)
+        }
+        Region::Workspace(w) => {
+            let out = workspace(robot, w, n, key, rng)?;
+            if out.len() < n {
+                return Err(Error::setting(
+                    key,
+                    format!(
+                        "only {} of {n} poses found in the workspace box centred at {:?} mm of \
+                         size {:?} mm with the tool axis within {}° of {:?} after {} random \
+                         targets (the search stops there): the region is (nearly) out of reach \
+                         of robot \"{}\"",
+                        out.len(),
+                        w.center_mm,
+                        w.size_mm,
+                        w.cone_deg,
+                        w.axis,
+                        WORKSPACE_TRIES_PER_POSE * n,
                         robot.name
                     ),
                 ));
@@ -247,6 +351,64 @@ mod tests {
             center_mm,
             size_mm: [edge_mm; 3],
         }
+    }
+
+    /// The workspace region: every pose's tool point (forward kinematics, independent of the
+    /// inverse kinematics that found it) lies in the box, its tool z axis within the cone, its
+    /// joints within the limits; the same seed gives the same poses.
+    #[test]
+    fn workspace_poses_lie_in_the_box_and_the_cone() {
+        let r = crate::robot::builtin::irb2600();
+        let region = Region::Workspace(WorkspaceRegion {
+            center_mm: [1200.0, 0.0, 900.0],
+            size_mm: [1000.0, 1000.0, 800.0],
+            axis: [2.0, 0.0, 0.0],
+            cone_deg: 30.0,
+            start: None,
+        });
+        check_region(&r, &region, 40, "validation.region").unwrap();
+        let qs = sample_region(&r, &region, 40, &mut stream(3, "poses")).unwrap();
+        assert_eq!(qs.len(), 40);
+        for q in &qs {
+            assert!(r.within_limits(q));
+            let f = r.fk(q);
+            let d = f.pos - Vec3::new(1200.0, 0.0, 900.0);
+            assert!(
+                d.x.abs() <= 500.0 + 1e-6 && d.y.abs() <= 500.0 + 1e-6,
+                "{d:?}"
+            );
+            assert!(d.z.abs() <= 400.0 + 1e-6, "{d:?}");
+            let angle = f.rot.column(2).dot(&Vec3::x()).clamp(-1.0, 1.0).acos();
+            assert!(angle.to_degrees() <= 30.0 + 1e-6, "{}", angle.to_degrees());
+        }
+        let again = sample_region(&r, &region, 40, &mut stream(3, "poses")).unwrap();
+        assert_eq!(qs, again);
+        // Out of reach, a zero axis, a start of the wrong length: refused naming the key.
+        let far = Region::Workspace(WorkspaceRegion {
+            center_mm: [9000.0, 0.0, 900.0],
+            size_mm: [100.0; 3],
+            axis: [1.0, 0.0, 0.0],
+            cone_deg: 30.0,
+            start: None,
+        });
+        let e = check_region(&r, &far, 5, "calibration.region").unwrap_err();
+        assert_eq!(key_of(&e), "calibration.region");
+        let zero = Region::Workspace(WorkspaceRegion {
+            center_mm: [1200.0, 0.0, 900.0],
+            size_mm: [100.0; 3],
+            axis: [0.0; 3],
+            cone_deg: 30.0,
+            start: None,
+        });
+        assert!(check_region(&r, &zero, 5, "k").is_err());
+        let short = Region::Workspace(WorkspaceRegion {
+            center_mm: [1200.0, 0.0, 900.0],
+            size_mm: [100.0; 3],
+            axis: [1.0, 0.0, 0.0],
+            cone_deg: 30.0,
+            start: Some(vec![0.0; 3]),
+        });
+        assert!(check_region(&r, &short, 5, "k").is_err());
     }
 
     /// Qiao 2021 §4: 50 calibration points in a 1000 mm cube centred at (550, 0, 550) mm.

@@ -384,6 +384,9 @@ pub enum Region {
         /// Edge lengths of the box, mm.
         size_mm: [Real; 3],
     },
+    /// Tool points in a box with the tool axis in a cone, joints by inverse kinematics
+    /// ([`WorkspaceRegion`]).
+    Workspace(WorkspaceRegion),
     /// A regular grid of `per_joint` values per joint (cell centres of the joint ranges);
     /// the poses are drawn without repetition from the grid.
     Grid {
@@ -398,21 +401,8 @@ impl Region {
     pub fn check(&self, key: &str) -> Result<()> {
         match self {
             Region::Joint => Ok(()),
-            Region::Box { center_mm, size_mm } => {
-                if center_mm.iter().any(|v| !v.is_finite()) {
-                    return Err(Error::setting(
-                        key,
-                        format!("center_mm must be finite, got {center_mm:?}"),
-                    ));
-                }
-                if size_mm.iter().any(|v| !v.is_finite() || *v <= 0.0) {
-                    return Err(Error::setting(
-                        key,
-                        format!("size_mm must be > 0, got {size_mm:?}"),
-                    ));
-                }
-                Ok(())
-            }
+            Region::Box { center_mm, size_mm } => check_box(key, center_mm, size_mm),
+            Region::Workspace(w) => w.check(key),
             Region::Grid { per_joint } => {
                 if *per_joint == 0 {
                     return Err(Error::setting(key, "per_joint must be ≥ 1, got 0"));
@@ -421,6 +411,74 @@ impl Region {
             }
         }
     }
+}
+
+/// `kind = "workspace"`: tool points drawn uniformly in an axis-aligned box of the base frame,
+/// each with its tool z axis drawn uniformly within `cone_deg` of `axis`; the joints solved by
+/// inverse kinematics on the nominal robot, a target it cannot reach within its joint limits
+/// drawn again (a tracker-visible region: Li 2018 §3).
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorkspaceRegion {
+    /// Centre of the box, mm.
+    pub center_mm: [Real; 3],
+    /// Edge lengths of the box, mm.
+    pub size_mm: [Real; 3],
+    /// Axis of the orientation cone, base frame (normalised; not zero).
+    pub axis: [Real; 3],
+    /// Half-angle of the cone, degrees, in [0, 180].
+    pub cone_deg: Real,
+    /// Start of the inverse kinematics, one value per joint in the robot's units (deg, mm);
+    /// `None`: zero clamped into each joint's range.
+    #[serde(default)]
+    pub start: Option<Vec<Real>>,
+}
+
+impl WorkspaceRegion {
+    /// Refuses a bad box, a zero or non-finite axis, a cone outside [0, 180]° and a
+    /// non-finite start, naming `key`.
+    pub fn check(&self, key: &str) -> Result<()> {
+        check_box(key, &self.center_mm, &self.size_mm)?;
+        let norm = self.axis.iter().map(|v| v * v).sum::<Real>().sqrt();
+        if !(norm.is_finite() && norm > 0.0) {
+            return Err(Error::setting(
+                key,
+                format!("axis must be finite and not zero, got {:?}", self.axis),
+            ));
+        }
+        if !(0.0..=180.0).contains(&self.cone_deg) {
+            return Err(Error::setting(
+                key,
+                format!("cone_deg must be in [0, 180], got {}", self.cone_deg),
+            ));
+        }
+        if let Some(s) = &self.start {
+            if s.iter().any(|v| !v.is_finite()) {
+                return Err(Error::setting(
+                    key,
+                    format!("start must be finite, got {s:?}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Refuses a non-finite box centre and edges ≤ 0, naming `key`.
+fn check_box(key: &str, center_mm: &[Real; 3], size_mm: &[Real; 3]) -> Result<()> {
+    if center_mm.iter().any(|v| !v.is_finite()) {
+        return Err(Error::setting(
+            key,
+            format!("center_mm must be finite, got {center_mm:?}"),
+        ));
+    }
+    if size_mm.iter().any(|v| !v.is_finite() || *v <= 0.0) {
+        return Err(Error::setting(
+            key,
+            format!("size_mm must be > 0, got {size_mm:?}"),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

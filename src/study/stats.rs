@@ -63,6 +63,11 @@ pub struct Entry {
     /// … after.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub validation_after_attitude_deg: Option<ErrorStats>,
+    /// Validation position errors of the nominal robot after the best rigid fit of its
+    /// points to the true ones (mm), with `validation.before_fitted`: "before" as a paper
+    /// that fits the base frame first reports it (Li 2018).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_before_fitted_mm: Option<ErrorStats>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
@@ -188,7 +193,9 @@ struct Cell {
     after: StatsSum,
     calibration: [StatsSum; 2],
     after_rms_sq: Sum,
-    deg: [Option<StatsSum>; 4],
+    /// The optional statistics: before / after in deg, in Qiao's attitude deg, then the
+    /// fitted "before" in mm.
+    deg: [Option<StatsSum>; 5],
     iterations: Sum,
     evaluations: Sum,
 }
@@ -284,6 +291,7 @@ impl Accumulator {
                 o.after_deg,
                 o.before_attitude_deg,
                 o.after_attitude_deg,
+                o.before_fitted_mm,
             ];
             for (acc, d) in c.deg.iter_mut().zip(degs) {
                 if let Some(d) = d {
@@ -358,6 +366,7 @@ impl Accumulator {
             validation_after_deg: deg(1),
             validation_before_attitude_deg: deg(2),
             validation_after_attitude_deg: deg(3),
+            validation_before_fitted_mm: deg(4),
             improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
             param_rmse: rmse,
             param_bias: bias,

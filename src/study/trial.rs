@@ -68,6 +68,9 @@ pub struct Outcome {
     /// Why the calibration gave no result, when it failed with an error (a method supplied
     /// from outside that raised, an inconsistent problem).
     pub error: Option<String>,
+    /// With `validation.before_fitted`: the nominal robot's validation position errors (mm)
+    /// after the best rigid fit of its points to the true ones.
+    pub before_fitted_mm: Option<ErrorStats>,
 }
 
 /// One trial's results.
@@ -257,6 +260,11 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         .collect::<Result<_>>()?;
     let vpayload = vec![study.validation_payload(); vqs.len()];
     let before = validation_errors(&study.nominal, &vqs, Some(&vpayload), &vtruth)?;
+    let before_fitted = if sc.validation.before_fitted {
+        Some(fitted_before(study, &vqs, &vtruth)?)
+    } else {
+        None
+    };
     let full_pose = study.measure == Measure::Pose;
 
     let mut outcomes = Vec::new();
@@ -361,6 +369,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
                 before_attitude_deg: full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
                 after_attitude_deg: full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
+                before_fitted_mm: before_fitted,
                 trace,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 per_point_attitude_deg: (index == 0 && full_pose)
@@ -380,4 +389,16 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         crb_trace: crb,
         outcomes,
     })
+}
+
+/// The nominal robot's position errors at the validation poses after the best rigid fit
+/// (SVD, [`crate::calibrate::registration::register_svd`]) of its points to the true ones:
+/// "before" as a calibration that fits the base frame to the measurements sees it (Li 2018
+/// §1.1 and §3: the base frame is fitted first, then the errors are read).
+fn fitted_before(study: &Study, qs: &[Vec<Real>], truth: &[Frame]) -> Result<ErrorStats> {
+    let chain = study.nominal.chain();
+    let nominal: Vec<_> = qs.iter().map(|q| chain.fk(q).pos).collect();
+    let true_points: Vec<_> = truth.iter().map(|t| t.pos).collect();
+    let fit = crate::calibrate::registration::register_svd(&nominal, &true_points, None)?;
+    Ok(ErrorStats::of(&fit.residuals))
 }

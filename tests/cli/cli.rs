@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::common::{bin, calbench, calbench_ok, load_json, root, tmp_dir};
+use crate::common::{bin, calbench, calbench_ok, load_json, read, root, tmp_dir};
 
 fn scenario() -> String {
     root().join("scenarios/ci-guard.toml").display().to_string()
@@ -169,6 +169,15 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
     ]);
     let j = load_json(&out.join("identified.json"));
     assert_eq!(j["termination"], "rank-deficient");
+    // The page says so in plain words, and gives no σ without a covariance.
+    let page = read(&out.join("report.html"));
+    let warning = format!(
+        "the data determine only {} of the {} parameters (rank deficiency",
+        j["rank"],
+        j["parameters"].as_array().unwrap().len()
+    );
+    assert!(page.contains(&warning), "{warning}");
+    assert!(page.contains("No covariance"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
 

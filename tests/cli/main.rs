@@ -2,13 +2,14 @@
 //! and `compensate` end to end, strict refusals of bad inputs, fuzzing of the robot, scenario
 //! and measurement parsers, real tracker data (the IPA UR10 rows in `examples/ipa-ur10/`), and
 //! typed arguments: allowed values listed, `--out` checked before any work; refusals that name
-//! the file, the line and the key.
+//! the file, the line and the key; the HTML pages opened in headless Chromium.
 
 #[path = "../common/mod.rs"]
 mod common;
 
 mod cli;
 mod fuzz;
+mod html;
 mod practice;
 mod realdata;
 mod refusals;

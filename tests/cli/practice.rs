@@ -109,6 +109,17 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     assert!(dh.starts_with("joint,parameter,unit,nominal,identified,delta,sigma\n"));
     let report = read(&out.join("report.md"));
     assert!(report.contains("## Model choice") && report.contains("## Diagnostics"));
+    // report.html shows the same section, its tables from the same rows.
+    let page = read(&out.join("report.html"));
+    let section = &page[page
+        .find("Cross-validation, priors and diagnostics</h2>")
+        .expect("report.html has the practice section")..];
+    for h in ["Cross-validation", "Model choice", "Diagnostics"] {
+        assert!(section.contains(&format!("<h3>{h}</h3>")), "{h} missing");
+    }
+    assert!(
+        section.contains("aria-label=\"Diagnostics\"") && section.contains("Cook&#39;s distance")
+    );
     // A bad split rule and a --holdout with --validate are refused.
     let bad = calbench(&[
         "identify",

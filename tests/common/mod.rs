@@ -10,6 +10,34 @@ use calbench::numeric::rng::Rng;
 use calbench::numeric::Real;
 use calbench::robot::{Param, Robot};
 
+/// A small study: LS and IGG3 on random poses, no sag (fast).
+pub const SMALL_STUDY: &str = r#"
+name = "small"
+seed = 9
+trials = 5
+[robot]
+builtin = "irb2600"
+[errors]
+kind = "paper"
+[tracker]
+pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]
+[outliers]
+count = 0
+magnitude_mm = [0.5, 1.0]
+[compliance]
+model = "none"
+[calibration]
+count = 25
+strategies = ["random"]
+[validation]
+count = 10
+[[methods]]
+name = "ls"
+[[methods]]
+name = "igg3"
+label = "rob"
+"#;
+
 /// The crate's folder, which holds the shipped files (`scenarios/`, `examples/`, `results/`).
 pub fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))

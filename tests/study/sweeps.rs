@@ -9,35 +9,8 @@ use calbench::study::scenario::Scenario;
 
 use crate::common::{
     bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario,
+    SMALL_STUDY as SMALL,
 };
-
-/// A small study: LS and IGG3 on random poses, no sag (fast).
-const SMALL: &str = r#"
-name = "small"
-seed = 9
-trials = 5
-[robot]
-builtin = "irb2600"
-[errors]
-kind = "paper"
-[tracker]
-pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]
-[outliers]
-count = 0
-magnitude_mm = [0.5, 1.0]
-[compliance]
-model = "none"
-[calibration]
-count = 25
-strategies = ["random"]
-[validation]
-count = 10
-[[methods]]
-name = "ls"
-[[methods]]
-name = "igg3"
-label = "rob"
-"#;
 
 /// Writes `text`, a variant of [`SMALL`], as `dir/name.toml` and named `name`; returns the
 /// file's path as an argument.
@@ -88,6 +61,9 @@ fn shards_merge_into_the_bytes_of_the_unsharded_run() {
             }
         }
         assert!(merged.join("sweep_validation_rms.png").is_file());
+        // The merged run has its page too, with every plot of the unsharded run inlined.
+        let svgs = |d: &Path| read(&d.join("report.html")).matches("<svg").count();
+        assert_eq!(svgs(&merged), svgs(&full), "{n} shards");
     }
     // 10 units (2 points × 5 trials) among 7 shards: every trial once, in order.
     let rows: Vec<String> = read(&full.join("trials.csv"))

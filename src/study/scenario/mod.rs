@@ -480,6 +480,7 @@ impl Scenario {
                 count: v.count,
                 region: v.region,
                 payload_kg: v.payload_kg,
+                before_fitted: v.before_fitted,
             },
             identification: raw.identification,
             methods,

@@ -60,6 +60,7 @@ pub(super) struct ValidationSection {
     pub(super) count: usize,
     pub(super) region: Region,
     pub(super) payload_kg: Option<Real>,
+    pub(super) before_fitted: bool,
 }
 
 impl Default for ValidationSection {
@@ -68,6 +69,7 @@ impl Default for ValidationSection {
             count: 50,
             region: Region::Joint,
             payload_kg: None,
+            before_fitted: false,
         }
     }
 }
@@ -202,4 +204,7 @@ pub struct Validation {
     /// Payload (kg) of the validation poses (docs/formats.md `validation.payload_kg`); `None`:
     /// `compliance.payload_kg`.
     pub payload_kg: Option<Real>,
+    /// Also report the nominal robot's validation errors after the best rigid fit of its
+    /// points to the true ones (docs/formats.md `validation.before_fitted`; Li 2018 §1.1).
+    pub before_fitted: bool,
 }

@@ -1,0 +1,329 @@
+//! `calbench compare A B --out DIR`: two runs side by side, entry by entry, as `compare.html`
+//! and `compare.md`. Every metric `calbench check` guards is listed with both values, the
+//! difference and the relative change; the regressions are the ones [`crate::report::check::compare`]
+//! reports with the same tolerance (B is compared against A as a summary against its
+//! baseline). An entry in only one of the runs is listed as such.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use super::Page;
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+use crate::report::check::{check_summary, compare_all, entry_names, read_json, Compared};
+use crate::report::markdown::{fmt_num, table};
+
+/// One side of a comparison: where its summary was read from, and the summary.
+pub struct Side {
+    /// The `summary.json` read.
+    pub path: PathBuf,
+    /// Its contents.
+    pub summary: Value,
+}
+
+impl Side {
+    /// Reads a run's summary: `path` is the run's folder (its `summary.json` is read) or the
+    /// summary file itself. Refuses, naming the file, what is not a calbench summary.
+    pub fn read(path: &Path) -> Result<Side> {
+        let file = if path.is_dir() {
+            path.join("summary.json")
+        } else {
+            path.to_path_buf()
+        };
+        if !file.exists() {
+            return Err(Error::io(
+                &file,
+                std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "no such file: give a run's folder or its summary.json",
+                ),
+            ));
+        }
+        let summary = read_json(&file)?;
+        check_summary(&summary, &file)?;
+        Ok(Side {
+            path: file,
+            summary,
+        })
+    }
+
+    fn describe(&self) -> String {
+        let s = &self.summary;
+        let field = |k: &str| s.get(k).map_or("?".to_string(), |v| v.to_string());
+        format!(
+            "{} (scenario {}, {} trials, seed {})",
+            self.path.display(),
+            field("scenario").trim_matches('"'),
+            field("trials"),
+            field("seed")
+        )
+    }
+}
+
+/// Run B compared with run A (its baseline) by `check`'s rules: every metric `check` looks
+/// at, with both values ([`compare_all`]).
+pub struct Comparison {
+    /// A, then B.
+    pub runs: [Side; 2],
+    /// Allowed relative worsening (0.05 = 5 %).
+    pub tolerance: Real,
+    all: Vec<Compared>,
+}
+
+impl Comparison {
+    /// Compares run `b` with run `a` at `tolerance`.
+    pub fn new(a: Side, b: Side, tolerance: Real) -> Comparison {
+        let all = compare_all(&b.summary, &a.summary, tolerance);
+        Comparison {
+            runs: [a, b],
+            tolerance,
+            all,
+        }
+    }
+
+    /// The entries of run `i` (0: A, 1: B) that the other run lacks. `check` counts each
+    /// metric of an entry only in A as a regression.
+    pub fn only_in(&self, i: usize) -> Vec<String> {
+        let theirs = entry_names(&self.runs[1 - i].summary);
+        entry_names(&self.runs[i].summary)
+            .into_iter()
+            .filter(|k| !theirs.contains(k))
+            .collect()
+    }
+
+    /// The compared metrics of the entries in both runs, in A's order.
+    pub fn rows(&self) -> Vec<&Compared> {
+        let only_a = self.only_in(0);
+        self.all
+            .iter()
+            .filter(|c| !only_a.contains(&c.metric.entry))
+            .collect()
+    }
+
+    /// The number of regressions `check` would report (an entry only in A's metrics too).
+    pub fn regressions(&self) -> usize {
+        self.all.iter().filter(|c| c.regressed).count()
+    }
+
+    /// The verdict of one compared metric, in words.
+    fn status(c: &Compared) -> &'static str {
+        let m = &c.metric;
+        if c.regressed {
+            if m.value.is_nan() {
+                "regression: missing in B"
+            } else {
+                "regression"
+            }
+        } else if m.value == m.baseline {
+            "same"
+        } else if (m.value > m.baseline) == c.higher_is_better {
+            "better"
+        } else {
+            "worse, within tolerance"
+        }
+    }
+
+    /// The table of the entries in both runs: headers and rows.
+    pub fn table(&self) -> (Vec<&'static str>, Vec<Vec<String>>) {
+        let headers = vec!["entry", "metric", "A", "B", "B − A", "change %", "status"];
+        let rows = self
+            .rows()
+            .into_iter()
+            .map(|c| {
+                let m = &c.metric;
+                let diff = m.value - m.baseline;
+                let rel = if m.baseline != 0.0 {
+                    100.0 * diff / m.baseline.abs()
+                } else {
+                    Real::NAN
+                };
+                vec![
+                    m.entry.clone(),
+                    m.metric.clone(),
+                    fmt_num(m.baseline, 6),
+                    fmt_num(m.value, 6),
+                    fmt_num(diff, 4),
+                    fmt_num(rel, 3),
+                    Self::status(c).to_string(),
+                ]
+            })
+            .collect();
+        (headers, rows)
+    }
+
+    fn verdict(&self) -> String {
+        let pct = fmt_num(100.0 * self.tolerance, 4);
+        if self.regressions() == 0 {
+            format!(
+                "B has no metric worse than A by {pct} % or more (the rules of calbench check)."
+            )
+        } else {
+            format!(
+                "{} metrics of B regressed: worse than A by {pct} % or more, or missing \
+                 (the rules of calbench check, which would fail).",
+                self.regressions()
+            )
+        }
+    }
+
+    fn scenario_note(&self) -> Option<String> {
+        let (sa, sb) = (
+            &self.runs[0].summary["scenario"],
+            &self.runs[1].summary["scenario"],
+        );
+        (sa != sb).then(|| {
+            format!(
+                "A is a run of scenario {sa} and B of scenario {sb}: calbench check refuses \
+                 such a pair; the entries are compared by name all the same."
+            )
+        })
+    }
+
+    /// The entries in only one run: name and `A only` or `B only`.
+    fn only_rows(&self) -> Vec<Vec<String>> {
+        (0..2)
+            .flat_map(|i| {
+                let side = ["A only", "B only"][i];
+                self.only_in(i)
+                    .into_iter()
+                    .map(move |e| vec![e, side.to_string()])
+            })
+            .collect()
+    }
+
+    /// `compare.md`.
+    pub fn markdown(&self) -> String {
+        let mut s = String::from("# Comparison of two runs\n\n");
+        let _ = writeln!(s, "- A: {}", self.runs[0].describe());
+        let _ = writeln!(s, "- B: {}\n", self.runs[1].describe());
+        let _ = writeln!(s, "{}\n", self.verdict());
+        if let Some(n) = self.scenario_note() {
+            let _ = writeln!(s, "{n}\n");
+        }
+        s += "## Entries in both runs\n\n";
+        let (h, rows) = self.table();
+        s += &table(&h, &rows);
+        let only = self.only_rows();
+        if !only.is_empty() {
+            s += "\n## Entries in only one run\n\n";
+            s += &table(&["entry", "in"], &only);
+        }
+        s
+    }
+
+    /// `compare.html`.
+    pub fn page(&self) -> Page {
+        let mut page = Page::new(
+            "Comparison of two runs",
+            &format!(
+                "A: {} — B: {}",
+                self.runs[0].describe(),
+                self.runs[1].describe()
+            ),
+        );
+        page.section("Verdict");
+        if self.regressions() == 0 {
+            page.fine(&self.verdict());
+        } else {
+            page.warning(&self.verdict());
+        }
+        if let Some(n) = self.scenario_note() {
+            page.warning(&n);
+        }
+        page.section("Entries in both runs");
+        let (h, rows) = self.table();
+        let compared = self.rows();
+        page.table_with(
+            "Every guarded metric: A, B, their difference and B's relative change; marked \
+             rows are worse by the tolerance or more",
+            &h,
+            &rows,
+            |i| compared[i].regressed.then_some("regressed"),
+        );
+        let only = self.only_rows();
+        if !only.is_empty() {
+            page.section("Entries in only one run");
+            page.para(
+                "Entries are matched by method, poses and swept value. An entry of A missing \
+                 from B counts as a regression of each of its metrics.",
+            );
+            page.table_with("Entries in only one run", &["entry", "in"], &only, |i| {
+                Some(if only[i][1] == "A only" {
+                    "regressed"
+                } else {
+                    "alone"
+                })
+            });
+        }
+        page.section("How to read this page");
+        page.para(&format!(
+            "η is better higher, errors, parameter RMSE and failures lower. A metric regresses \
+             when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9), \
+             or when B lacks it; this is what calbench check B/summary.json --baseline \
+             A/summary.json --tolerance {} fails on. Timing is not compared.",
+            fmt_num(100.0 * self.tolerance, 4),
+            self.tolerance
+        ));
+        page
+    }
+}
+
+/// The files [`write()`] writes.
+pub const OUTPUTS: [&str; 2] = ["compare.html", "compare.md"];
+
+/// Writes `compare.html` and `compare.md` of `c` into the folder `out` as a whole.
+pub fn write(c: &Comparison, out: &Path) -> Result<()> {
+    crate::report::atomically(out, |dir| {
+        c.page().write(&dir.join("compare.html"))?;
+        let path = dir.join("compare.md");
+        std::fs::write(&path, c.markdown()).map_err(|e| Error::io(&path, e))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde_json::json;
+
+    fn side(eta: Real, methods: &[&str]) -> Side {
+        let results: Vec<Value> = methods
+            .iter()
+            .map(|m| {
+                json!({"method": m, "poses": "random", "eta_mean_pct": eta,
+                       "validation_after_mm": {"rms": 0.1}, "failures": 0})
+            })
+            .collect();
+        Side {
+            path: PathBuf::from(format!("{eta}.json")),
+            summary: json!({"scenario": "s", "trials": 4, "seed": 1, "results": results}),
+        }
+    }
+
+    #[test]
+    fn regressions_are_those_of_check_and_lone_entries_are_listed() {
+        let (a, b) = (side(90.0, &["ls", "lm"]), side(80.0, &["ls", "igg3"]));
+        let expected = crate::report::check::compare(&b.summary, &a.summary, 0.05).len();
+        let c = Comparison::new(a, b, 0.05);
+        assert_eq!(c.regressions(), expected);
+        assert_eq!(c.only_in(0), ["lm / random"]);
+        assert_eq!(c.only_in(1), ["igg3 / random"]);
+        let (_, rows) = c.table();
+        let eta = rows.iter().find(|r| r[1] == "eta_mean_pct").unwrap();
+        assert_eq!(eta[2..], ["90", "80", "-10", "-11.1", "regression"]);
+        let rms = rows
+            .iter()
+            .find(|r| r[1] == "validation_after_mm.rms")
+            .unwrap();
+        assert_eq!(rms[6], "same");
+        let md = c.markdown();
+        let line = |entry: &str| md.lines().find(|l| l.contains(entry)).unwrap_or_default();
+        assert!(line("lm / random").contains("A only"), "{md}");
+        assert!(line("igg3 / random").contains("B only"), "{md}");
+        let same = Comparison::new(side(90.0, &["ls"]), side(90.0, &["ls"]), 0.05);
+        assert_eq!(same.regressions(), 0);
+        assert!(!same.page().finish().contains("class=\"regressed\""));
+        assert!(c.page().finish().contains("<tr class=\"regressed\">"));
+    }
+}
