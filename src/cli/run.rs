@@ -1,5 +1,6 @@
 //! `calbench run SCENARIO [--trials N] [--seed S] [--threads T] [--out DIR] [--shard I/N]`:
-//! a Monte-Carlo study or a registration study; and `calbench` alone, the default study.
+//! a Monte-Carlo study or a registration study; `calbench run --resume DIR`, a killed run
+//! continued from its checkpoint; and `calbench` alone, the default study.
 
 use std::path::{Path, PathBuf};
 
@@ -24,8 +25,9 @@ const STUDY_OUTPUTS: [&str; 2] = ["summary.json", "report.md"];
 #[derive(clap::Args, Default)]
 pub struct RunArgs {
     /// The scenario file.
-    // Required on the command line; `None` is the built-in default study (`calbench` alone).
-    #[arg(required = true)]
+    // Required on the command line (unless --resume); `None` is the built-in default study
+    // (`calbench` alone).
+    #[arg(required_unless_present = "resume")]
     pub scenario: Option<PathBuf>,
     /// Override the number of trials.
     #[arg(long)]
@@ -43,6 +45,11 @@ pub struct RunArgs {
     /// partial result for `calbench merge`.
     #[arg(long, value_name = "I/N", value_parser = shard)]
     pub shard: Option<Shard>,
+    /// Continue the run into DIR that was killed, from the checkpoint it left (the same
+    /// bytes as an uninterrupted run). With SCENARIO, --trials or --seed, refuses a
+    /// checkpoint of another scenario, trial count or seed.
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "shard"])]
+    pub resume: Option<PathBuf>,
 }
 
 /// `--shard I/N`.
@@ -76,17 +83,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
             return registration_study(RegistrationScenario::from_table(table, p)?, args);
         }
     }
-    let mut sc = match &args.scenario {
-        Some(p) => Scenario::load(p)?,
-        None => Scenario::default_study()?,
-    };
-    if let Some(n) = args.trials {
-        sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
+    if let Some(dir) = &args.resume {
+        return resume(args, dir);
     }
-    if let Some(s) = args.seed {
-        let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
-        sc = sc.with_override("seed", toml::Value::Integer(s))?;
-    }
+    let sc = scenario_with_overrides(args)?;
     if args.threads == Some(0) {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }
@@ -114,7 +114,52 @@ pub fn run(args: &RunArgs) -> Result<()> {
         shard,
     };
     let r = run_study(sc, &opts)?;
-    if let Some(s) = shard {
+    finished(&r)
+}
+
+/// The scenario of `args` (or the default study) with `--trials` and `--seed` applied.
+fn scenario_with_overrides(args: &RunArgs) -> Result<Scenario> {
+    let mut sc = match &args.scenario {
+        Some(p) => Scenario::load(p)?,
+        None => Scenario::default_study()?,
+    };
+    if let Some(n) = args.trials {
+        sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
+    }
+    if let Some(s) = args.seed {
+        let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
+        sc = sc.with_override("seed", toml::Value::Integer(s))?;
+    }
+    Ok(sc)
+}
+
+/// `calbench run --resume DIR`: the killed run into DIR, continued from its checkpoint; a
+/// scenario, `--trials` or `--seed` given too must be those of the checkpoint.
+fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
+    if args.threads == Some(0) {
+        return Err(Error::setting("--threads", "must be at least 1").into());
+    }
+    let given = if args.scenario.is_some() {
+        Some(scenario_with_overrides(args)?)
+    } else {
+        if args.trials.is_some() || args.seed.is_some() {
+            return Err(Error::setting(
+                "--resume",
+                "--trials and --seed are those of the checkpoint; to check them, give the                  scenario file too",
+            )
+            .into());
+        }
+        None
+    };
+    writable_folder(dir, &OUTPUTS)?;
+    eprintln!("resuming the run into {}", dir.display());
+    let r = calbench::report::resume_study(dir, given.as_ref(), args.threads)?;
+    finished(&r)
+}
+
+/// Prints a finished run's table and where its report is (or, for a shard, how to merge).
+fn finished(r: &calbench::study::RunResult) -> Result<()> {
+    if let Some(s) = r.shard {
         out!(
             "shard {}/{} of {} in {:.1} s: {}; combine all {} shards with `calbench merge`",
             s.index,
@@ -126,7 +171,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         );
         return Ok(());
     }
-    print_table(&r);
+    print_table(r);
     out!(
         "\n{} trials in {:.1} s; report: {}",
         r.scenario.trials * r.blocks.len(),

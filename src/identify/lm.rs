@@ -123,7 +123,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         if it == 0 {
             cost0 = cost.max(Real::MIN_POSITIVE);
         }
-        work.normal(&w);
+        work.normal(p, &w);
         if !solve_damped(&mut work, o.mu, o.marquardt) {
             termination = Termination::Singular;
             break;
@@ -132,7 +132,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         iterations = it + 1;
         if max_abs(&work.dx) < o.eps {
             termination = Termination::Converged;
-            work.take_step_in_residual();
+            work.take_step_in_residual(p);
             break;
         }
     }
@@ -156,7 +156,7 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
     if !cost.is_finite() {
         termination = Termination::Diverged;
     } else {
-        work.normal(&w);
+        work.normal(p, &w);
         'outer: for _ in 0..o.max_iter {
             loop {
                 let ok = solve_damped(&mut work, lambda, o.marquardt);
@@ -170,7 +170,7 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
                         cost = c;
                         lambda /= o.lambda_factor;
                         iterations += 1;
-                        work.normal(&w);
+                        work.normal(p, &w);
                         fresh = true;
                         if step < o.eps {
                             termination = Termination::Converged;

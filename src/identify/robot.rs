@@ -12,7 +12,9 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::solver::{rank, solve, start_weights, LeastSquares, Size, Solver, Work};
+use super::solver::{
+    self, rank, solve, start_weights, Column, LeastSquares, Matrix, Size, Solver, Work,
+};
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::error::Error;
 use crate::measurement::Measure;
@@ -32,11 +34,17 @@ pub struct RobotProblem<'a> {
     points: &'a [Vec3],
     rotations: Option<&'a [Mat3]>,
     measure: Measure,
+    /// The joint values, from which a streamed problem computes each block's chain
+    /// variables.
+    qs: &'a [Vec<Real>],
     /// Working parameter values and the chain compiled from them, updated in place at each
     /// evaluation.
     work: RefCell<(Vec<Real>, Chain)>,
-    /// The chain variables of every pose and their sines and cosines ([`Chain::variables`]).
+    /// The chain variables of every pose and their sines and cosines ([`Chain::variables`]);
+    /// empty when the problem is streamed ([`solver::streams`]): then `block_vars` holds
+    /// those of one block at a time.
     vars: Vec<ChainVars>,
+    block_vars: RefCell<Vec<ChainVars>>,
     /// Weight of the orientation rows of full-pose data, mm per rad.
     orientation_weight: Real,
     /// Prior weight of each point, if any.
@@ -67,7 +75,7 @@ impl<'a> RobotProblem<'a> {
     pub fn new(
         nominal: &'a Robot,
         params: &[Param],
-        qs: &[Vec<Real>],
+        qs: &'a [Vec<Real>],
         points: &'a [Vec3],
         rotations: Option<&'a [Mat3]>,
         measure: Measure,
@@ -152,7 +160,13 @@ impl<'a> RobotProblem<'a> {
             _ => {}
         }
         let chain = nominal.chain();
-        let vars = chain.variables_of(qs);
+        let streamed = solver::streams(qs.len());
+        let vars = if streamed {
+            Vec::new()
+        } else {
+            chain.variables_of(qs)
+        };
+        let block = if streamed { solver::BLOCK_POINTS } else { 0 };
         let compliant = params
             .iter()
             .enumerate()
@@ -169,8 +183,10 @@ impl<'a> RobotProblem<'a> {
             points,
             rotations,
             measure,
+            qs,
             work: RefCell::new((nominal.values.clone(), chain)),
             vars,
+            block_vars: RefCell::new(vec![([0.0; MAX_JOINTS], [(0.0, 1.0); MAX_JOINTS]); block]),
             orientation_weight: 1.0,
             prior: None,
             tikhonov: None,
@@ -309,8 +325,15 @@ impl LeastSquares for RobotProblem<'_> {
     /// [`pose_rows_vars`] returns (one chain walk per point, the joints' sines and cosines
     /// computed once in [`RobotProblem::new`]). Allocation-free: the chain is
     /// updated in place ([`Chain::set_values`]).
+    /// A streamed problem (no stored chain variables) computes them all here first: the
+    /// solvers evaluate it by blocks ([`LeastSquares::evaluate_points`]) instead.
     fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
-        self.model(x, r, j);
+        if self.vars.is_empty() {
+            let vars = self.work.borrow().1.variables_of(self.qs);
+            self.evaluate_block(x, &vars, 0, r, j);
+        } else {
+            self.evaluate_block(x, &self.vars, 0, r, j);
+        }
         if let Some(t) = &self.trace {
             let rms = (r.norm_squared() / self.points.len() as Real).sqrt();
             if let Ok(mut t) = t.lock() {
@@ -318,11 +341,43 @@ impl LeastSquares for RobotProblem<'_> {
             }
         }
     }
+
+    fn block_points(&self) -> Option<usize> {
+        solver::streams(self.points.len()).then_some(solver::BLOCK_POINTS)
+    }
+
+    /// [`LeastSquares::evaluate`] of one block of points: their chain variables computed
+    /// for the block (allocation-free, into a buffer of [`solver::BLOCK_POINTS`] poses).
+    fn evaluate_points(&self, x: &Column, i: usize, r: &mut Column, j: &mut Matrix) {
+        let count = r.len() / self.measure.rows();
+        if !self.vars.is_empty() {
+            return self.evaluate_block(x, &self.vars[i..i + count], i, r, j);
+        }
+        let mut vars = self.block_vars.borrow_mut();
+        if vars.len() < count {
+            vars.resize(count, ([0.0; MAX_JOINTS], [(0.0, 1.0); MAX_JOINTS]));
+        }
+        {
+            let guard = self.work.borrow();
+            for (v, q) in vars.iter_mut().zip(&self.qs[i..i + count]) {
+                *v = guard.1.variables(q);
+            }
+        }
+        self.evaluate_block(x, &vars[..count], i, r, j);
+    }
 }
 
 impl RobotProblem<'_> {
-    /// [`LeastSquares::evaluate`] without the trace.
-    fn model(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+    /// The rows of the points `first..first + vars.len()` (their chain variables `vars`)
+    /// into `r` and `j` from row 0: the whole problem with `first = 0` and every pose.
+    fn evaluate_block(
+        &self,
+        x: &DVector<Real>,
+        vars: &[ChainVars],
+        first: usize,
+        r: &mut DVector<Real>,
+        j: &mut DMatrix<Real>,
+    ) {
         let mut guard = self.work.borrow_mut();
         let (values, chain) = &mut *guard;
         self.nominal
@@ -334,34 +389,36 @@ impl RobotProblem<'_> {
             Measure::Position => None,
         };
         let dof = self.nominal.dof();
-        // Each point's residual from its tool frame `f` (the rows of `j` are in place).
+        // Each point's residual from its tool frame `f` (the rows of `j` are in place); `i`
+        // counts from the block's first point.
         let residual = |i: usize, f: &Frame, r: &mut DVector<Real>, j: &mut DMatrix<Real>| {
-            let dp = self.points[i] - f.pos;
+            let dp = self.points[first + i] - f.pos;
             for k in 0..3 {
                 r[rows * i + k] = dp[k];
             }
             if let Some(rots) = rots {
                 let w = self.orientation_weight;
-                log_orientation_rows(&rots[i], &f.rot, w, r, j, rows * i + 3);
+                log_orientation_rows(&rots[first + i], &f.rot, w, r, j, rows * i + 3);
             }
         };
         if self.loads.is_empty() {
             // Rigid model: four points per chain walk, the rest one by one.
-            let whole = self.vars.len() / LANES * LANES;
+            let whole = vars.len() / LANES * LANES;
             for i0 in (0..whole).step_by(LANES) {
-                let v = &self.vars[i0..];
+                let v = &vars[i0..];
                 let f = pose_rows4(chain, &self.cols, v, self.measure, j, rows * i0);
                 for l in 0..LANES {
                     residual(i0 + l, &f.frame(l), r, j);
                 }
             }
-            for i in whole..self.vars.len() {
-                let f = pose_rows_vars(chain, &self.cols, &self.vars[i], self.measure, j, rows * i);
+            for (i, v) in vars.iter().enumerate().skip(whole) {
+                let f = pose_rows_vars(chain, &self.cols, v, self.measure, j, rows * i);
                 residual(i, &f, r, j);
             }
             return;
         }
-        for (i, (v, &load)) in self.vars.iter().zip(&self.loads).enumerate() {
+        let loads = &self.loads[first..first + vars.len()];
+        for (i, (v, &load)) in vars.iter().zip(loads).enumerate() {
             // Elasto-geometric model: each chain variable deflected by c_j τ_j, the gravity
             // torques of the current geometry at the commanded pose; the column of c_j is the
             // derivative by that variable times τ_j (τ's own dependence on the geometry is
@@ -410,7 +467,7 @@ pub fn assess(problem: &CalibrationProblem, out: &mut Identified) -> crate::Resu
     let mut work = Work::new(&rp);
     let w = start_weights(&rp);
     work.evaluate(&rp, &out.x, &w);
-    work.normal(&w);
+    work.normal(&rp, &w);
     let rank = rank(&work.n);
     out.rank = Some(rank);
     out.normal = work.n.clone();

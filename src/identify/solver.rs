@@ -15,8 +15,15 @@ use super::{Identified, Termination};
 use crate::error::Result;
 use crate::numeric::gram;
 use crate::numeric::linalg::{self, solve_spd};
+use crate::numeric::normal::NormalEquations;
 use crate::numeric::symeig::symmetric_eigenvalues;
 use crate::numeric::Real;
+
+/// A column vector of the problems (unknowns, residual).
+pub type Column = DVector<Real>;
+
+/// A matrix of the problems (Jacobian, normal equations).
+pub type Matrix = DMatrix<Real>;
 
 /// The size of a [`LeastSquares`] problem.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -64,6 +71,41 @@ pub trait LeastSquares {
     fn tikhonov(&self) -> Option<&[Real]> {
         None
     }
+    /// Whether the problem is large enough that the solvers should evaluate it block by block
+    /// ([`LeastSquares::evaluate_points`]) and accumulate the normal equations
+    /// ([`NormalEquations`]) instead of holding the whole Jacobian: `Some`
+    /// with the points per block. `None` (the default): [`LeastSquares::evaluate`], whole.
+    fn block_points(&self) -> Option<usize> {
+        None
+    }
+    /// [`LeastSquares::evaluate`] of the points `i..i + count` only, `count` the
+    /// points `r` has room for: `r` holds their rows and `j` their Jacobian rows, in the
+    /// order of the whole problem. The default evaluates the whole problem and copies the
+    /// block (correct, not economical: a problem that returns [`LeastSquares::block_points`]
+    /// overrides it).
+    fn evaluate_points(&self, x: &Column, i: usize, r: &mut Column, j: &mut Matrix) {
+        let size = self.size();
+        let mut rw = DVector::zeros(size.rows());
+        let mut jw = DMatrix::zeros(size.rows(), size.params);
+        self.evaluate(x, &mut rw, &mut jw);
+        let row0 = i * size.rows_per_point;
+        r.copy_from(&rw.rows(row0, r.len()));
+        j.copy_from(&jw.rows(row0, r.len()));
+    }
+}
+
+/// Problems of more points than this are evaluated block by block when they can be
+/// ([`LeastSquares::block_points`]): a study's few hundred poses, and any file below this size,
+/// keep the whole-Jacobian path, whose bits the studies' outputs are fixed by.
+pub const STREAM_MIN_POINTS: usize = 4096;
+
+/// Points per block of a streamed problem: a block's Jacobian (1536 × 30 values for
+/// positions and thirty parameters, 370 kB) stays in the processor's cache.
+pub const BLOCK_POINTS: usize = 512;
+
+/// Whether a problem of `points` points is streamed ([`STREAM_MIN_POINTS`]).
+pub fn streams(points: usize) -> bool {
+    points > STREAM_MIN_POINTS
 }
 
 /// A Jacobian-based method: it solves any [`LeastSquares`] problem. Every solver is a
@@ -140,9 +182,15 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
 }
 
 /// Buffers shared by the solvers: residual, Jacobian, weighted Jacobian, normal equations.
+///
+/// A problem that streams ([`LeastSquares::block_points`]) keeps its whole residual but only
+/// one block of Jacobian rows: each evaluation accumulates the normal equations with the
+/// weights it was given ([`Stream`]), and [`Work::normal`] takes them, or makes a second pass
+/// when the weights changed in between (the robust rounds).
 pub(crate) struct Work {
     pub rows: usize,
     pub r: DVector<Real>,
+    /// The Jacobian: whole, or one block of a streamed problem.
     pub j: DMatrix<Real>,
     /// `P J` (rows scaled by their point's weight); allocated on the first use, as most
     /// problems weigh every point 1.
@@ -161,16 +209,51 @@ pub(crate) struct Work {
     pub tikhonov: Vec<Real>,
     /// The `x` last evaluated (kept only with priors, whose gradient needs it).
     pub x: DVector<Real>,
+    /// The block buffers and sums of a streamed problem.
+    stream: Option<Stream>,
+}
+
+/// What [`Work`] keeps for a streamed problem.
+struct Stream {
+    /// Points per block.
+    points: usize,
+    /// One block's residual.
+    r: DVector<Real>,
+    /// The last, shorter block's residual and Jacobian.
+    r_tail: DVector<Real>,
+    j_tail: DMatrix<Real>,
+    /// Where the problem was last evaluated.
+    x: DVector<Real>,
+    /// The normal equations of that evaluation, with the weights `w`; `fresh` until
+    /// [`Work::normal`] takes them.
+    sums: NormalEquations,
+    w: Vec<Real>,
+    fresh: bool,
 }
 
 impl Work {
     pub fn new(p: &dyn LeastSquares) -> Work {
         let size = p.size();
         let (m, t) = (size.rows(), size.params);
+        let rows = size.rows_per_point;
+        let block = p.block_points().filter(|&b| b > 0 && b < size.points);
+        let stream = block.map(|b| {
+            let tail = size.points % b;
+            Stream {
+                points: b,
+                r: DVector::zeros(b * rows),
+                r_tail: DVector::zeros(tail * rows),
+                j_tail: DMatrix::zeros(tail * rows, t),
+                x: DVector::zeros(t),
+                sums: NormalEquations::new(t, b * rows),
+                w: Vec::with_capacity(size.points),
+                fresh: false,
+            }
+        });
         Work {
-            rows: size.rows_per_point,
+            rows,
             r: DVector::zeros(m),
-            j: DMatrix::zeros(m, t),
+            j: DMatrix::zeros(block.map_or(m, |b| b * rows), t),
             pj: DMatrix::zeros(0, 0),
             n: DMatrix::zeros(t, t),
             g: DVector::zeros(t),
@@ -179,15 +262,28 @@ impl Work {
             evaluations: 0,
             tikhonov: p.tikhonov().map_or_else(Vec::new, <[Real]>::to_vec),
             x: DVector::zeros(t),
+            stream,
         }
     }
 
     /// Evaluates the problem at `x` and returns the weighted cost `rᵀPr`, plus the priors'
-    /// `Σ λ_k x_k²` (non-finite when the model is).
+    /// `Σ λ_k x_k²` (non-finite when the model is). A streamed problem also sums its normal
+    /// equations with the weights `w`, for [`Work::normal`].
     pub fn evaluate(&mut self, p: &dyn LeastSquares, x: &DVector<Real>, w: &[Real]) -> Real {
-        p.evaluate(x, &mut self.r, &mut self.j);
         self.evaluations += 1;
-        let cost = weighted_cost(&self.r, self.rows, w);
+        let cost = if self.stream.is_none() {
+            p.evaluate(x, &mut self.r, &mut self.j);
+            weighted_cost(&self.r, self.rows, w)
+        } else {
+            if let Some(s) = &mut self.stream {
+                s.x.copy_from(x);
+                s.w.clear();
+                s.w.extend_from_slice(w);
+                s.fresh = true;
+            }
+            self.pass(p, w, Pass::Evaluate);
+            weighted_cost(&self.r, self.rows, w)
+        };
         if self.tikhonov.is_empty() {
             return cost;
         }
@@ -200,13 +296,52 @@ impl Work {
             .sum::<Real>()
     }
 
+    /// One pass over the blocks of a streamed problem at the point of its last evaluation.
+    fn pass(&mut self, p: &dyn LeastSquares, w: &[Real], what: Pass) {
+        let Some(s) = &mut self.stream else {
+            return;
+        };
+        let rows = self.rows;
+        let points = w.len();
+        if what != Pass::Step {
+            s.sums.clear();
+        }
+        for first in (0..points).step_by(s.points) {
+            let k = s.points.min(points - first);
+            let (r, j) = if k == s.points {
+                (&mut s.r, &mut self.j)
+            } else {
+                (&mut s.r_tail, &mut s.j_tail)
+            };
+            p.evaluate_points(&s.x, first, r, j);
+            let mut seg = self.r.rows_mut(first * rows, k * rows);
+            match what {
+                Pass::Evaluate => seg.copy_from(r),
+                Pass::Normal => {}
+                Pass::Step => {
+                    seg.copy_from(r);
+                    seg.gemv(-1.0, j, &self.dx, 1.0);
+                    continue;
+                }
+            }
+            s.sums.add(j, r.as_slice(), &w[first..first + k]);
+        }
+    }
+
     /// Moves the residual to the point after the step `dx` just solved, to first order:
     /// `r ← r − J dx`. Used once the step is below the stopping tolerance `ε`, so that the
     /// statistics of the estimate need no further evaluation: the neglected term is of the
     /// order of `|dx|²` times the model's curvature (below 1e-9 mm for `|dx| < 1e-6` on a
-    /// 2 m arm), and the normal equations kept are those one step (< ε) before.
-    pub fn take_step_in_residual(&mut self) {
-        self.r.gemv(-1.0, &self.j, &self.dx, 1.0);
+    /// 2 m arm), and the normal equations kept are those one step (< ε) before. A streamed
+    /// problem forms its Jacobian blocks at that point again.
+    pub fn take_step_in_residual(&mut self, p: &dyn LeastSquares) {
+        if self.stream.is_some() {
+            let w = std::mem::take(&mut self.stream.as_mut().expect("streamed").w);
+            self.pass(p, &w, Pass::Step);
+            self.stream.as_mut().expect("streamed").w = w;
+        } else {
+            self.r.gemv(-1.0, &self.j, &self.dx, 1.0);
+        }
         if !self.tikhonov.is_empty() {
             self.x += &self.dx;
         }
@@ -215,8 +350,30 @@ impl Work {
     /// Forms `N = JᵀPJ` and `g = JᵀP r` with per-point weights `w`. Allocation-free: the
     /// lower triangle of `N` by dot products of `J`'s contiguous columns
     /// ([`gram::normal_equations`]), mirrored so that `N` is exactly symmetric; with all
-    /// weights 1 `P J` is not formed.
-    pub fn normal(&mut self, w: &[Real]) {
+    /// weights 1 `P J` is not formed. A streamed problem takes the sums of its last
+    /// evaluation, or sums them again at its point when the weights have changed since.
+    pub fn normal(&mut self, p: &dyn LeastSquares, w: &[Real]) {
+        if let Some(s) = &self.stream {
+            let taken = s.fresh && s.w == w;
+            if !taken {
+                self.pass(p, w, Pass::Normal);
+            }
+            let s = self.stream.as_mut().expect("streamed");
+            s.sums.swap_into(&mut self.n, &mut self.g);
+            s.fresh = false;
+        } else {
+            self.whole_normal(w);
+        }
+        // The priors' Tikhonov terms (Gauss–Newton of `rᵀPr + Σ λ_k x_k²`): `λ` on the
+        // diagonal, `−λ x` in the gradient, added after the last block of a streamed problem.
+        for (k, &l) in self.tikhonov.iter().enumerate() {
+            self.n[(k, k)] += l;
+            self.g[k] -= l * self.x[k];
+        }
+    }
+
+    /// [`Work::normal`] of a problem held whole.
+    fn whole_normal(&mut self, w: &[Real]) {
         let rows = self.rows;
         let unit = w.iter().all(|&wi| wi == 1.0);
         if !unit {
@@ -239,13 +396,18 @@ impl Work {
             self.r.as_slice(),
         );
         gram::normal_equations(js, pjs, r, n, g);
-        // The priors' Tikhonov terms (Gauss–Newton of `rᵀPr + Σ λ_k x_k²`): `λ` on the
-        // diagonal, `−λ x` in the gradient.
-        for (k, &l) in self.tikhonov.iter().enumerate() {
-            self.n[(k, k)] += l;
-            self.g[k] -= l * self.x[k];
-        }
     }
+}
+
+/// What a pass over a streamed problem's blocks does besides evaluating them.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Pass {
+    /// Writes the residual and sums the normal equations.
+    Evaluate,
+    /// Sums the normal equations only (new weights, the same point).
+    Normal,
+    /// Writes the residual moved by the step `dx` ([`Work::take_step_in_residual`]).
+    Step,
 }
 
 /// `Σ_i w_i |r_i|²` over points.
@@ -299,7 +461,7 @@ pub(crate) fn finish(
     // The data's cost only (σ0 is the data's; a prior's term is not a residual).
     if !fresh {
         work.evaluate(p, &x, &weights);
-        work.normal(&weights);
+        work.normal(p, &weights);
     }
     let cost = weighted_cost(&work.r, rows, &weights);
     let n_eff = rows as Real * weights.iter().sum::<Real>();
@@ -568,7 +730,7 @@ pub(crate) fn gauss_newton(
                 Phase::Prior => {}
             }
         }
-        work.normal(&w);
+        work.normal(p, &w);
         if let Some(rc) = &ridge {
             if it == 0 && rc.scale {
                 for k in 0..t {
@@ -614,7 +776,7 @@ pub(crate) fn gauss_newton(
         x += &work.dx;
         if converged {
             termination = Termination::Converged;
-            work.take_step_in_residual();
+            work.take_step_in_residual(p);
             break;
         }
     }
@@ -625,7 +787,7 @@ pub(crate) fn gauss_newton(
     let fresh = termination == Termination::Converged;
     if fresh && ridge.is_some() {
         // The ridge term was added to the normal equations in place: form them again.
-        work.normal(&w);
+        work.normal(p, &w);
     }
     finish(
         p,

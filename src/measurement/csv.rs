@@ -174,42 +174,30 @@ pub(crate) fn read_table(
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
 ) -> Result<Measurements> {
-    let raw = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    // The reader skips empty lines and leaves them out of its line numbers: `#` comment
-    // lines are emptied here (rather than skipped by the reader), and each line number the
-    // reader gives is mapped back to the file's through the lines that are not empty.
-    let mut bytes = Vec::with_capacity(raw.len());
-    let mut kept: Vec<u64> = Vec::new();
-    for (i, line) in raw.split_inclusive(|&b| b == b'\n').enumerate() {
-        if line.first() == Some(&b'#') {
-            bytes.extend(line.iter().filter(|&&b| b == b'\r' || b == b'\n'));
-            continue;
-        }
-        if line.iter().any(|&b| b != b'\r' && b != b'\n') {
-            kept.push(i as u64 + 1);
-        }
-        bytes.extend_from_slice(line);
-    }
-    let line_at = |p: &::csv::Position| {
-        let n = p.line();
-        usize::try_from(n)
-            .ok()
-            .and_then(|n| kept.get(n.checked_sub(1)?))
-            .copied()
-            .unwrap_or(n)
-    };
+    // One pass over the file, a line at a time: `#` comment lines are emptied here (rather
+    // than skipped by the reader), and each line number the reader gives is mapped back to
+    // the file's through the lines that are not empty ([`Uncommented`]).
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let mut rd = ::csv::ReaderBuilder::new()
         .has_headers(true)
         .flexible(true)
         .trim(::csv::Trim::All)
-        .from_reader(bytes.as_slice());
+        .from_reader(Uncommented::new(std::io::BufReader::new(file)));
+    let line_at = |rd: &::csv::Reader<Uncommented<_>>, p: &::csv::Position| {
+        let n = p.line();
+        usize::try_from(n)
+            .ok()
+            .and_then(|n| rd.get_ref().kept.get(n.checked_sub(1)?))
+            .copied()
+            .unwrap_or(n)
+    };
     let bad =
         |line: u64, place: &str, msg: String| Error::file(path, format!("line {line}{place}"), msg);
     let header = rd
         .headers()
         .map_err(|e| bad(1, "", format!("cannot read the header: {e}")))?
         .clone();
-    let header_line = header.position().map_or(1, line_at);
+    let header_line = header.position().map_or(1, |p| line_at(&rd, p));
     let names: Vec<String> = header.iter().map(str::to_string).collect();
     if names.iter().all(|n| n.is_empty()) {
         return Err(bad(
@@ -295,13 +283,13 @@ pub(crate) fn read_table(
     let lim_hi = robot.q_to_user(&(0..dof).map(|j| robot.limits(j).1).collect::<Vec<_>>());
     loop {
         let more = rd.read_record(&mut rec).map_err(|e| {
-            let line = e.position().map_or(0, line_at);
+            let line = e.position().map_or(0, |p| line_at(&rd, p));
             bad(line, "", format!("unreadable row: {e}"))
         })?;
         if !more {
             break;
         }
-        let line = rec.position().map_or(0, line_at);
+        let line = rec.position().map_or(0, |p| line_at(&rd, p));
         if rec.len() == 1 && rec.get(0).is_some_and(str::is_empty) {
             continue; // blank line
         }
@@ -442,6 +430,51 @@ pub(crate) fn read_table(
         sigma_mm: sigma_col.map(|_| sigma),
         payload_kg: payload_col.map(|_| payload),
     })
+}
+
+/// A file read a line at a time with its `#` comment lines emptied (their line breaks kept),
+/// noting the file line number of each line that is not empty: the `n`-th non-empty line
+/// the CSV reader counts is file line `kept[n - 1]`.
+struct Uncommented<R> {
+    inner: R,
+    line: Vec<u8>,
+    at: usize,
+    count: u64,
+    kept: Vec<u64>,
+}
+
+impl<R: std::io::BufRead> Uncommented<R> {
+    fn new(inner: R) -> Self {
+        Uncommented {
+            inner,
+            line: Vec::new(),
+            at: 0,
+            count: 0,
+            kept: Vec::new(),
+        }
+    }
+}
+
+impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        while self.at == self.line.len() {
+            self.line.clear();
+            self.at = 0;
+            if self.inner.read_until(b'\n', &mut self.line)? == 0 {
+                return Ok(0);
+            }
+            self.count += 1;
+            if self.line.first() == Some(&b'#') {
+                self.line.retain(|&b| b == b'\r' || b == b'\n');
+            } else if self.line.iter().any(|&b| b != b'\r' && b != b'\n') {
+                self.kept.push(self.count);
+            }
+        }
+        let n = out.len().min(self.line.len() - self.at);
+        out[..n].copy_from_slice(&self.line[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
 }
 
 /// Refuses rows of fewer than [`MIN_DISTINCT_POSES`] distinct poses (`qs`, read from the

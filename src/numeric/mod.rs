@@ -9,6 +9,7 @@
 //! - [`linalg`]: the Cholesky factorisation and solve of the normal equations.
 //! - [`symeig`]: eigenvalues of small symmetric matrices, several matrices at once.
 //! - `gram`: the normal equations `JᵀPJ`, `JᵀPr` of the Gauss–Newton methods.
+//! - [`normal`]: the same normal equations summed over blocks of rows (streaming).
 //! - [`rng`]: the portable, named random streams.
 //!
 //! The kernels run on vector instructions where the processor has them (AVX2 and FMA on
@@ -18,6 +19,7 @@
 mod frames;
 pub(crate) mod gram;
 pub mod linalg;
+pub mod normal;
 pub mod rng;
 pub(crate) mod simd;
 pub mod symeig;

@@ -288,6 +288,23 @@ pub fn validation_rows(v: &FileValidation, attitude: bool) -> Vec<Vec<String>> {
     rows
 }
 
+/// Points drawn one by one in the residual plot of `report.md`; more are drawn as the
+/// largest of each run ([`largest_of_runs`]).
+const PLOT_POINTS: usize = 4096;
+
+/// The largest finite value of each run of `k` consecutive values of `v` (NaN for a run
+/// with none).
+fn largest_of_runs(v: &[Real], k: usize) -> Vec<Real> {
+    v.chunks(k)
+        .map(|c| {
+            c.iter()
+                .copied()
+                .filter(|x| x.is_finite())
+                .fold(Real::NAN, Real::max)
+        })
+        .collect()
+}
+
 /// Bins of the residual histogram in `report.md`.
 const BINS: usize = 12;
 
@@ -365,12 +382,24 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         s += &table(&VALIDATION_HEADERS, &validation_rows(v, false));
         s.push('\n');
     }
-    plots::before_after(
-        &out.join("residuals"),
-        "Residual per calibration point",
-        &before,
-        &after,
-    )?;
+    // Beyond PLOT_POINTS points the plot shows the largest of each run of k consecutive
+    // points (the outliers stay visible; the figure and its SVG stay small).
+    let k = before.len().div_ceil(PLOT_POINTS).max(1);
+    if k == 1 {
+        plots::before_after(
+            &out.join("residuals"),
+            "Residual per calibration point",
+            &before,
+            &after,
+        )?;
+    } else {
+        plots::before_after(
+            &out.join("residuals"),
+            &format!("Residual per calibration point (largest of each {k})"),
+            &largest_of_runs(&before, k),
+            &largest_of_runs(&after, k),
+        )?;
+    }
     let (labels, counts) = histogram(&[&before, &after]);
     plots::grouped_bars(
         &out.join("histogram"),

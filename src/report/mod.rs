@@ -14,6 +14,7 @@
 //! libraries, and the same data gives the same bytes.
 
 pub mod check;
+pub mod checkpoint;
 pub mod exports;
 pub mod html;
 pub mod identified;
@@ -33,7 +34,9 @@ pub mod shard;
 
 /// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
 /// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
-/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]).
+/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]). A checkpoint
+/// beside the output folder lets `calbench run --resume` continue the run if it is killed
+/// ([`checkpoint`]).
 pub fn run_study(
     scenario: crate::study::scenario::Scenario,
     opts: &crate::study::RunOptions,
@@ -42,12 +45,46 @@ pub fn run_study(
         .out
         .clone()
         .unwrap_or_else(|| std::path::Path::new("results").join(&scenario.name));
+    let cp = checkpoint::Checkpoint::start(&scenario, opts.shard, &out)?;
+    study_into(scenario, opts, &out, cp, None)
+}
+
+/// Continues the run into `out` that was killed (`calbench run --resume DIR`): from its
+/// checkpoint ([`checkpoint`]), which must be of this binary's version and, when `given`,
+/// of that scenario. Writes the same files as an uninterrupted run.
+pub fn resume_study(
+    out: &std::path::Path,
+    given: Option<&crate::study::scenario::Scenario>,
+    threads: Option<usize>,
+) -> crate::Result<crate::study::RunResult> {
+    let (cp, scenario, shard, mut records) = checkpoint::Checkpoint::resume(out, given)?;
+    let opts = crate::study::RunOptions {
+        threads,
+        out: Some(out.to_path_buf()),
+        progress: true,
+        shard,
+    };
+    study_into(scenario, &opts, out, cp, Some(&mut records))
+}
+
+/// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
+/// all; the checkpoint is removed once the run ends, with its output or with an error.
+fn study_into(
+    scenario: crate::study::scenario::Scenario,
+    opts: &crate::study::RunOptions,
+    out: &std::path::Path,
+    mut cp: checkpoint::Checkpoint,
+    replay: Option<&mut dyn crate::study::Replay>,
+) -> crate::Result<crate::study::RunResult> {
     let mut result = None;
-    atomically(&out, |dir| {
+    let done = atomically(out, |dir| {
         let mut csv = run::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
         let r = match opts.shard {
             None => {
-                let r = crate::study::run(scenario, opts, &mut csv)?;
+                let r = {
+                    let mut both = shard::Both(&mut csv, &mut cp);
+                    crate::study::run_resumed(scenario, opts, &mut both, replay)?
+                };
                 csv.finish()?;
                 write_run(&r, dir)?;
                 r
@@ -55,8 +92,9 @@ pub fn run_study(
             Some(_) => {
                 let mut records = shard::Records::create(dir)?;
                 let r = {
-                    let mut both = shard::Both(&mut csv, &mut records);
-                    crate::study::run(scenario, opts, &mut both)?
+                    let mut sinks = shard::Both(&mut csv, &mut records);
+                    let mut all = shard::Both(&mut sinks, &mut cp);
+                    crate::study::run_resumed(scenario, opts, &mut all, replay)?
                 };
                 csv.finish()?;
                 records.finish(&r)?;
@@ -65,7 +103,11 @@ pub fn run_study(
         };
         result = Some(r);
         Ok(())
-    })?;
+    });
+    // A run that ends, with its output or with an error, leaves no checkpoint: only a run
+    // killed from outside does.
+    cp.finish()?;
+    done?;
     result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
 }
 
@@ -103,6 +145,19 @@ pub fn write_identified_with(
     })
 }
 
+/// The folder holding `out` (`.` for a bare name) and `out`'s last part (`out` when it has
+/// none): where the temporary and checkpoint folders of an output folder go.
+pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
+    let name = out
+        .file_name()
+        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    (parent.to_path_buf(), name)
+}
+
 /// The first path that keeps `out` from being written as a folder holding the files `names`:
 /// `out` itself when it exists and is not a folder, or `out/NAME` when that is a folder
 /// (which no file can replace). `None` when nothing is in the way.
@@ -131,13 +186,8 @@ pub fn atomically(
     write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
 ) -> crate::Result<()> {
     use crate::Error;
-    let name = out
-        .file_name()
-        .map_or_else(|| "out".into(), |n| n.to_string_lossy().into_owned());
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(std::path::Path::new("."));
+    let (parent, name) = parent_and_name(out);
+    let parent = parent.as_path();
     let in_the_way = |p: std::path::PathBuf| {
         let why = if p == out {
             "exists and is not a folder; nothing was written"

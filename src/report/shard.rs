@@ -128,7 +128,7 @@ fn push_stats(s: &mut String, e: &ErrorStats) {
 /// One trial as a line of `records.txt`: `block trial n truth… crb… outcomes`, each
 /// outcome `strategy method termination rank-deficient-expected iterations evaluations seconds before×4 after×4`, four optional
 /// orientation statistics (`-` or `+` and four numbers) and the n identified values.
-fn encode(block: usize, t: &TrialResult) -> String {
+pub(crate) fn encode(block: usize, t: &TrialResult) -> String {
     let mut s = format!("{block} {} {}", t.index, t.truth.len());
     for v in &t.truth {
         s.push_str(&format!(" {v:e}"));
@@ -228,7 +228,7 @@ impl<'a> Tokens<'a> {
 }
 
 /// Parses line `line` of `path` (see [`encode`]): the block index and the trial.
-fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> {
+pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> {
     let mut t = Tokens {
         it: text.split_ascii_whitespace(),
         path,
@@ -334,6 +334,38 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
     Ok(meta)
 }
 
+/// The commands that run the shards missing from `by_index` (one line each): the scenario
+/// file, trial count and seed of the given shards, and an output folder beside theirs when
+/// they are named by their index (`shards/NAME/I`).
+fn missing_commands(
+    metas: &[(PathBuf, ShardMeta)],
+    n: usize,
+    by_index: &[Option<&Path>],
+) -> String {
+    let (d0, m0) = &metas[0];
+    let scenario = m0.scenario_file.as_ref().map_or_else(
+        || format!("{}.toml", m0.scenario),
+        |p| p.display().to_string(),
+    );
+    let by_index_names = d0
+        .file_name()
+        .is_some_and(|f| f.to_string_lossy() == m0.shard.index.to_string());
+    (0..n)
+        .filter(|&i| by_index[i].is_none())
+        .map(|i| {
+            let out = match d0.parent() {
+                Some(p) if by_index_names => p.join(i.to_string()).display().to_string(),
+                _ => format!("SHARD_{i}_DIR"),
+            };
+            format!(
+                "  calbench run {scenario} --trials {} --seed {} --shard {i}/{n} --out {out}",
+                m0.trials, m0.seed
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// `calbench merge DIR… --out DIR`: checks that `dirs` are all the shards of one run (same
 /// scenario, settings and seed, each shard once, none missing) and writes the run's output to
 /// `out`, the same bytes (`summary.json`, `trials.csv`) as the unsharded run.
@@ -404,7 +436,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
     if !missing.is_empty() {
         return Err(Error::setting(
             "DIR",
-            format!("shards missing: {}", missing.join(", ")),
+            format!(
+                "shards missing: {}; run them with\n{}",
+                missing.join(", "),
+                missing_commands(&metas, n, &by_index)
+            ),
         ));
     }
     metas.sort_by_key(|(_, m)| m.shard.index);
@@ -452,7 +488,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         }
         csv.finish()?;
         let r = RunResult {
-            blocks: collector.finish(scenario.sweep.as_ref()),
+            blocks: collector.finish(scenario.sweep.as_ref())?,
             scenario: scenario.clone(),
             out: out.to_path_buf(),
             seconds,

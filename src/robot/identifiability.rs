@@ -34,6 +34,25 @@ pub struct Identifiability {
     pub condition_number: Real,
 }
 
+impl Identifiability {
+    /// The analysis of `params` whose columns `ident` are identifiable and `dep` are not.
+    fn of(
+        params: &[Param],
+        ident: &[usize],
+        dep: &[usize],
+        groups: Vec<Vec<Param>>,
+        condition_number: Real,
+    ) -> Identifiability {
+        Identifiability {
+            rank: ident.len(),
+            identifiable: ident.iter().map(|&c| params[c]).collect(),
+            unidentifiable: dep.iter().map(|&c| params[c]).collect(),
+            groups,
+            condition_number,
+        }
+    }
+}
+
 /// Scales each column of `j` to unit norm in place and returns the norms. A column whose
 /// norm is at rounding level (below 1e-9 of the largest column norm, plus 1e-12) is a
 /// parameter with no effect: it is set to zero rather than blown up to unit norm, so it
@@ -54,6 +73,19 @@ pub fn scale_columns(j: &mut DMatrix<Real>) -> Vec<Real> {
     norms
 }
 
+/// The next pivot: the column not yet `used` of the largest remaining norm `norm(c)` (ties to
+/// the earlier column), with that norm; `None` when every column is used.
+fn largest_remaining(used: &[bool], norm: impl Fn(usize) -> Real) -> Option<(usize, Real)> {
+    let mut best: Option<(usize, Real)> = None;
+    for c in (0..used.len()).filter(|&c| !used[c]) {
+        let n = norm(c);
+        if best.is_none_or(|(_, bn)| n > bn * (1.0 + 1e-12)) {
+            best = Some((c, n));
+        }
+    }
+    best
+}
+
 /// Pivoted QR by modified Gram–Schmidt: returns the pivot columns in the order chosen.
 /// A column is chosen while its remaining norm exceeds `tol` (columns are unit norm or zero).
 fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
@@ -61,15 +93,7 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
     let k = a.ncols();
     let mut chosen = Vec::new();
     let mut used = vec![false; k];
-    loop {
-        let mut best: Option<(usize, Real)> = None;
-        for (c, _) in used.iter().enumerate().filter(|(_, u)| !**u) {
-            let n = r.column(c).norm();
-            if best.is_none_or(|(_, bn)| n > bn * (1.0 + 1e-12)) {
-                best = Some((c, n));
-            }
-        }
-        let Some((c, n)) = best else { break };
+    while let Some((c, n)) = largest_remaining(&used, |c| r.column(c).norm()) {
         if n <= tol {
             break;
         }
@@ -82,6 +106,69 @@ fn pivoted_gram_schmidt(a: &DMatrix<Real>, tol: Real) -> Vec<usize> {
         }
     }
     chosen
+}
+
+/// The root of `i` in the union-find forest `p`, compressing the path.
+fn find_root(p: &mut [usize], i: usize) -> usize {
+    let mut r = i;
+    while p[r] != r {
+        r = p[r];
+    }
+    let mut c = i;
+    while p[c] != r {
+        let n = p[c];
+        p[c] = r;
+        c = n;
+    }
+    r
+}
+
+/// The groups of mutually dependent parameters: each dependent column `dep` with the
+/// identifiable ones (`ident`) that take part in its combination `combination(d)` (weights
+/// above 1e-6; `None`: a column with no effect, a group of its own), overlapping groups merged.
+fn dependency_groups(
+    params: &[Param],
+    ident: &[usize],
+    dep: &[usize],
+    combination: impl Fn(usize) -> Option<DVector<Real>>,
+) -> Vec<Vec<Param>> {
+    let mut parent: Vec<usize> = (0..params.len()).collect();
+    let mut in_group = vec![false; params.len()];
+    for &d in dep {
+        in_group[d] = true;
+        let Some(x) = combination(d) else {
+            continue; // no effect at all: a group of its own
+        };
+        for (xi, &c) in x.iter().zip(ident) {
+            if xi.abs() > 1e-6 {
+                in_group[c] = true;
+                let (ra, rb) = (find_root(&mut parent, d), find_root(&mut parent, c));
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    collect_groups(params, &in_group, &mut parent)
+}
+
+/// The groups of mutually dependent parameters: those `in_group`, one group per root of the
+/// union-find forest `parent`, in parameter order.
+fn collect_groups(params: &[Param], in_group: &[bool], parent: &mut [usize]) -> Vec<Vec<Param>> {
+    let mut groups: Vec<Vec<Param>> = Vec::new();
+    let mut root_of_group: Vec<usize> = Vec::new();
+    for c in 0..params.len() {
+        if !in_group[c] {
+            continue;
+        }
+        let r = find_root(parent, c);
+        match root_of_group.iter().position(|&x| x == r) {
+            Some(g) => groups[g].push(params[c]),
+            None => {
+                root_of_group.push(r);
+                groups.push(vec![params[c]]);
+            }
+        }
+    }
+    groups
 }
 
 /// Poses in the fixed random set of [`identifiable_generic`].
@@ -97,13 +184,28 @@ pub fn identifiable_generic(robot: &Robot, candidates: &[Param], measure: Measur
     analyse(robot, candidates, &qs, measure).identifiable
 }
 
-/// Analyses which of `params` are identifiable from the Jacobian over poses `qs`.
+/// Pose sets larger than this are analysed from the Gram matrix of the Jacobian, summed
+/// block by block ([`analyse_gram`]); smaller ones by the QR and SVD of the Jacobian itself.
+/// The studies' sets (a few hundred poses, and the [`GENERIC_POSES`] of
+/// [`identifiable_generic`]) always take the exact path.
+pub const GRAM_MIN_POSES: usize = 4096;
+
+/// Poses per block of [`analyse_gram`].
+const GRAM_BLOCK_POSES: usize = 512;
+
+/// Analyses which of `params` are identifiable from the Jacobian over poses `qs`: by
+/// pivoted QR and SVD of the column-scaled Jacobian, or beyond [`GRAM_MIN_POSES`] poses by
+/// the same steps on its Gram matrix ([`analyse_gram`]), so that memory does not grow with
+/// the poses.
 pub fn analyse(
     robot: &Robot,
     params: &[Param],
     qs: &[Vec<Real>],
     measure: Measure,
 ) -> Identifiability {
+    if qs.len() > GRAM_MIN_POSES {
+        return analyse_gram(robot, params, qs, measure);
+    }
     let cols = Columns::new(params, robot.dof());
     let mut j = jacobian(robot, &cols, qs, measure);
     scale_columns(&mut j);
@@ -118,53 +220,13 @@ pub fn analyse(
     // Groups: each dependent column as a combination of the identifiable ones.
     let a = j.select_columns(&ident_idx);
     let svd = a.clone().svd(true, true);
-    let mut parent: Vec<usize> = (0..params.len()).collect();
-    fn find(p: &mut [usize], i: usize) -> usize {
-        let mut r = i;
-        while p[r] != r {
-            r = p[r];
-        }
-        let mut c = i;
-        while p[c] != r {
-            let n = p[c];
-            p[c] = r;
-            c = n;
-        }
-        r
-    }
-    let mut in_group = vec![false; params.len()];
-    for &d in &dep_idx {
-        in_group[d] = true;
+    let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
         let b = j.column(d).into_owned();
-        if b.norm() < RANK_TOL {
-            continue; // no effect at all: a group of its own
-        }
-        let x = svd
-            .solve(&b, 1e-12)
-            .unwrap_or_else(|_| DVector::zeros(ident_idx.len()));
-        for (xi, &c) in x.iter().zip(&ident_idx) {
-            if xi.abs() > 1e-6 {
-                in_group[c] = true;
-                let (ra, rb) = (find(&mut parent, d), find(&mut parent, c));
-                parent[ra.max(rb)] = ra.min(rb);
-            }
-        }
-    }
-    let mut groups: Vec<Vec<Param>> = Vec::new();
-    let mut root_of_group: Vec<usize> = Vec::new();
-    for c in 0..params.len() {
-        if !in_group[c] {
-            continue;
-        }
-        let r = find(&mut parent, c);
-        match root_of_group.iter().position(|&x| x == r) {
-            Some(g) => groups[g].push(params[c]),
-            None => {
-                root_of_group.push(r);
-                groups.push(vec![params[c]]);
-            }
-        }
-    }
+        (b.norm() >= RANK_TOL).then(|| {
+            svd.solve(&b, 1e-12)
+                .unwrap_or_else(|_| DVector::zeros(ident_idx.len()))
+        })
+    });
 
     let sv = svd.singular_values;
     let (mx, mn) = sv
@@ -175,11 +237,118 @@ pub fn analyse(
     } else {
         mx / mn
     };
-    Identifiability {
-        rank: ident_idx.len(),
-        identifiable: ident_idx.iter().map(|&c| params[c]).collect(),
-        unidentifiable: dep_idx.iter().map(|&c| params[c]).collect(),
-        groups,
-        condition_number,
+    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
+}
+
+/// [`analyse`] from the Gram matrix `JᵀJ` of the Jacobian, summed over blocks of
+/// 512 poses ([`crate::numeric::normal::NormalEquations`]): the same column
+/// scaling (unit diagonal), the pivoted Gram–Schmidt as a pivoted Cholesky factorisation
+/// (the remaining norm of a column is the square root of its Schur complement's diagonal),
+/// each dependent column's combination of the identifiable ones by their normal equations,
+/// and the condition number as the square root of the scaled Gram matrix's eigenvalue ratio.
+/// Squaring costs precision: a column's remaining norm is resolved down to about 1e-8
+/// (square root of the Gram matrix's rounding), so [`RANK_TOL`] = 1e-7 still separates, with
+/// a margin of ten rather than the QR path's 1e8 (docs/performance.md, "Streaming
+/// identification").
+pub fn analyse_gram(
+    robot: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measure: Measure,
+) -> Identifiability {
+    let t = params.len();
+    let cols = Columns::new(params, robot.dof());
+    let chain = robot.chain();
+    let rows = measure.rows();
+    let mut sums = crate::numeric::normal::NormalEquations::new(t, rows * GRAM_BLOCK_POSES);
+    let mut j = DMatrix::zeros(rows * GRAM_BLOCK_POSES, t);
+    let zeros = vec![0.0; rows * GRAM_BLOCK_POSES];
+    for block in qs.chunks(GRAM_BLOCK_POSES) {
+        if block.len() < GRAM_BLOCK_POSES {
+            j = DMatrix::zeros(rows * block.len(), t);
+        }
+        for (i, q) in block.iter().enumerate() {
+            crate::robot::jacobian::pose_rows(&chain, &cols, q, measure, &mut j, rows * i);
+        }
+        sums.add(&j, &zeros[..rows * block.len()], &[1.0]);
+    }
+    let n = sums.n();
+    // Column norms and the scaled Gram matrix (a column at rounding level is zero).
+    let norms: Vec<Real> = (0..t).map(|c| n[(c, c)].max(0.0).sqrt()).collect();
+    let largest = norms.iter().fold(0.0, |a: Real, &b| a.max(b));
+    let floor = 1e-9 * largest + 1e-12;
+    let scale: Vec<Real> = norms
+        .iter()
+        .map(|&v| if v > floor { 1.0 / v } else { 0.0 })
+        .collect();
+    let s = DMatrix::from_fn(t, t, |i, k| n[(i, k)] * scale[i] * scale[k]);
+    // Pivoted Cholesky: the Schur complement of the chosen columns in `a`.
+    let mut a = s.clone();
+    let mut used = vec![false; t];
+    let mut chosen = Vec::new();
+    while let Some((c, v)) = largest_remaining(&used, |c| a[(c, c)].max(0.0).sqrt()) {
+        if v <= RANK_TOL {
+            break;
+        }
+        used[c] = true;
+        chosen.push(c);
+        let pivot = a[(c, c)];
+        let col: Vec<Real> = (0..t).map(|i| a[(i, c)]).collect();
+        for o in (0..t).filter(|&o| !used[o]) {
+            for o2 in (0..t).filter(|&o2| !used[o2]) {
+                a[(o, o2)] -= col[o] * col[o2] / pivot;
+            }
+        }
+    }
+    let ident_idx: Vec<usize> = (0..t).filter(|&c| used[c]).collect();
+    let dep_idx: Vec<usize> = (0..t).filter(|&c| !used[c]).collect();
+    let ss = s.select_rows(&ident_idx).select_columns(&ident_idx);
+    let chol = ss.clone().cholesky();
+    let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
+        (s[(d, d)].max(0.0).sqrt() >= RANK_TOL).then(|| {
+            let b = DVector::from_fn(ident_idx.len(), |i, _| s[(ident_idx[i], d)]);
+            chol.as_ref()
+                .map_or_else(|| DVector::zeros(ident_idx.len()), |c| c.solve(&b))
+        })
+    });
+    let k = ident_idx.len();
+    let mut lower: Vec<Real> = (0..k * k).map(|ik| ss[(ik / k, ik % k)]).collect();
+    let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
+    let ok = crate::numeric::symeig::symmetric_eigenvalues(&mut lower, k, &mut ev, &mut scratch);
+    let (mx, mn) = ev.iter().fold((0.0 as Real, Real::INFINITY), |(a, b), &e| {
+        (a.max(e), b.min(e))
+    });
+    let condition_number = if k == 0 || !ok || mn <= 0.0 {
+        Real::INFINITY
+    } else {
+        (mx / mn).sqrt()
+    };
+    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The Gram path of large pose sets against the QR and SVD of the Jacobian on the same
+    /// poses, for position and full-pose data of robots with dependent parameters: the same
+    /// rank, identifiable set and groups, the condition number to 1e-6.
+    #[test]
+    fn gram_analysis_agrees_with_the_qr_of_the_jacobian() {
+        for name in ["irb2600", "irb2600-mdh", "tx60", "guo-3t2r"] {
+            let robot = crate::robot::builtin::load(name).expect("robot");
+            let mut g = crate::numeric::rng::from_seed(8);
+            let qs = crate::robot::sampling::uniform_joint_poses(&robot, 700, &mut g);
+            for measure in [Measure::Position, Measure::Pose] {
+                let params = robot.params();
+                let qr = analyse(&robot, &params, &qs, measure);
+                let gram = analyse_gram(&robot, &params, &qs, measure);
+                assert_eq!(gram.rank, qr.rank, "{name} {measure:?}");
+                assert_eq!(gram.identifiable, qr.identifiable, "{name} {measure:?}");
+                assert_eq!(gram.groups, qr.groups, "{name} {measure:?}");
+                let (a, b) = (gram.condition_number, qr.condition_number);
+                assert!((a - b).abs() <= 1e-6 * b, "{name} {measure:?}: {a} vs {b}");
+            }
+        }
     }
 }

@@ -16,11 +16,13 @@
 //! Memory: trials run in chunks of [`CHUNK`]; each chunk's results go to a [`TrialSink`]
 //! (the `trials.csv` writer, a shard's record file) and into a streaming
 //! [`stats::Accumulator`], then are dropped, so a run holds a chunk of trials plus the
-//! accumulators' compact per-trial numbers, not the trials themselves.
+//! accumulators' running sums; the per-trial numbers of the exact medians go to a scratch
+//! file ([`spill`]), so memory does not grow with the trials.
 
 pub mod plan;
 pub mod registration_study;
 pub mod scenario;
+pub mod spill;
 pub mod stats;
 pub mod trial;
 
@@ -234,6 +236,16 @@ pub struct RunResult {
     pub shard: Option<Shard>,
 }
 
+/// The trials a killed run had finished, read back in order when it is resumed
+/// (`calbench run --resume`): they go through the same aggregation and sinks as the trials
+/// run now, so the result is the same bytes as an uninterrupted run.
+pub trait Replay {
+    /// Work units (trials) already done, from the start of this run's share.
+    fn done(&self) -> u64;
+    /// The next finished trial and its block.
+    fn next(&mut self) -> Result<(usize, TrialResult)>;
+}
+
 /// Where each trial goes once it has run, in trial order (per block, blocks in order).
 pub trait TrialSink {
     /// Takes trial `t` of the block described by `info`.
@@ -280,7 +292,7 @@ impl Collector {
             .blocks
             .last_mut()
             .ok_or_else(|| Error::Compute("a trial before its block".into()))?;
-        acc.push(t);
+        acc.push(t)?;
         if t.index == 0 && trial0.is_none() {
             *trial0 = Some(Trial0::of(t));
         }
@@ -292,8 +304,9 @@ impl Collector {
         sink.trial(info, t)
     }
 
-    /// The blocks, with their entries.
-    pub fn finish(self, sweep: Option<&crate::study::scenario::Sweep>) -> Vec<Block> {
+    /// The blocks, with their entries. Fails only when the scratch file of the statistics
+    /// cannot be read.
+    pub fn finish(self, sweep: Option<&crate::study::scenario::Sweep>) -> Result<Vec<Block>> {
         self.blocks
             .into_iter()
             .map(|(info, acc, trial0, after_rms)| {
@@ -318,15 +331,15 @@ impl Collector {
                 let mut entries = Vec::new();
                 for (si, s) in info.strategies.iter().enumerate() {
                     for (mi, m) in info.methods.iter().enumerate() {
-                        entries.push(acc.entry(si, mi, (m, s), value.clone(), map.clone()));
+                        entries.push(acc.entry(si, mi, (m, s), value.clone(), map.clone())?);
                     }
                 }
-                Block {
+                Ok(Block {
                     info,
                     entries,
                     trial0,
                     after_rms,
-                }
+                })
             })
             .collect()
     }
@@ -376,6 +389,17 @@ pub fn run_trials(
 /// Runs `scenario` (every sweep point, every trial; with `opts.shard` only its share) and
 /// returns the aggregated results; every trial goes to `sink` in order as it finishes.
 pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> Result<RunResult> {
+    run_resumed(scenario, opts, sink, None)
+}
+
+/// [`run`] continuing a killed run: the first `replay.done()` trials of the share come from
+/// `replay` instead of being run again (and go to `sink` like the others).
+pub fn run_resumed(
+    scenario: Scenario,
+    opts: &RunOptions,
+    sink: &mut dyn TrialSink,
+    mut replay: Option<&mut dyn Replay>,
+) -> Result<RunResult> {
     let t0 = std::time::Instant::now();
     let out = opts
         .out
@@ -421,13 +445,27 @@ pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> R
         }
         let study = pool.install(|| Study::new(plan))?;
         collector.begin(BlockInfo::of(&study, b, point), None);
-        let range = (from - lo) as usize..(to - lo) as usize;
+        let mut range = (from - lo) as usize..(to - lo) as usize;
+        if let Some(r) = replay.as_mut() {
+            let done = (first + r.done()).clamp(from, to);
+            for _ in from..done {
+                let (rb, t) = r.next()?;
+                if rb != b {
+                    return Err(Error::Compute(format!(
+                        "the checkpoint holds a trial of sweep point {rb} where one of point {b}                          was expected"
+                    )));
+                }
+                collector.trial(&t, sink)?;
+                bar.inc(1);
+            }
+            range.start = (done - lo) as usize;
+        }
         run_trials(&study, range, &pool, &bar, &mut |t| {
             collector.trial(&t, sink)
         })?;
     }
     bar.finish_and_clear();
-    let blocks = collector.finish(scenario.sweep.as_ref());
+    let blocks = collector.finish(scenario.sweep.as_ref())?;
     Ok(RunResult {
         scenario,
         blocks,

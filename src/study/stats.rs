@@ -4,6 +4,7 @@
 use serde::Serialize;
 use std::collections::BTreeMap;
 
+use super::spill::Spill;
 use super::trial::{Outcome, TrialResult};
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
@@ -112,18 +113,6 @@ fn mean(v: &[Real]) -> Real {
     }
 }
 
-fn std(v: &[Real]) -> Real {
-    let m = mean(v);
-    if v.is_empty() {
-        return Real::NAN;
-    }
-    (v.iter().map(|x| (x - m) * (x - m)).sum::<Real>() / v.len() as Real).sqrt()
-}
-
-fn median(v: &[Real]) -> Real {
-    crate::numeric::median(&mut v.to_vec())
-}
-
 /// η_i = (1 − |x_i − x̂_i| / |x_i|) · 100 % (Guo 2024 eq. 29); `None` where x_i = 0.
 pub fn eta(truth: Real, identified: Real) -> Option<Real> {
     (truth != 0.0).then(|| (1.0 - (truth - identified).abs() / truth.abs()) * 100.0)
@@ -176,9 +165,9 @@ impl StatsSum {
     }
 }
 
-/// What one (strategy, method) pair has gathered so far: running sums, and per parameter the
-/// compact per-trial numbers an exact median and two-pass deviation need (its error and its
-/// η, 16 bytes per trial and parameter).
+/// What one (strategy, method) pair has gathered so far: running sums (per parameter, the
+/// per-trial numbers an exact median and two-pass deviation need, its error and its η, are in
+/// the accumulator's [`Spill`]).
 #[derive(Clone, Debug, Default)]
 struct Cell {
     outs: usize,
@@ -186,8 +175,6 @@ struct Cell {
     seconds_sq: Sum,
     terminations: BTreeMap<String, usize>,
     ok: usize,
-    errs: Vec<Vec<Real>>,
-    etas: Vec<Vec<Real>>,
     crb: Sum,
     before: StatsSum,
     after: StatsSum,
@@ -213,13 +200,15 @@ pub struct Spread {
 
 /// Streaming aggregation of a block's trials into one [`Entry`] per strategy × method
 ///: trials are pushed in trial order and dropped; what stays is running sums and
-/// the per-parameter numbers of each cell. The sums run in trial order, so the entries are the
-/// same bytes whichever way the trials were split among threads or shards.
-#[derive(Clone, Debug)]
+/// the per-parameter numbers of each cell, spilled to a scratch file in chunks ([`Spill`]) so
+/// that memory does not grow with the trials. The sums run in trial order, so the entries are
+/// the same bytes whichever way the trials were split among threads or shards.
+#[derive(Debug)]
 pub struct Accumulator {
     names: Vec<String>,
     methods: usize,
     cells: Vec<Cell>,
+    spill: Spill,
 }
 
 /// Whether an outcome counts (not a failure). A `rank-deficient` ending counts when the
@@ -242,22 +231,27 @@ fn usable(o: &Outcome) -> bool {
 impl Accumulator {
     /// An empty accumulator for `strategies` × `methods` outcomes over the parameters `names`.
     pub fn new(names: &[String], strategies: usize, methods: usize) -> Accumulator {
-        let cell = Cell {
-            errs: vec![Vec::new(); names.len()],
-            etas: vec![Vec::new(); names.len()],
-            ..Cell::default()
-        };
+        let cells = strategies * methods;
         Accumulator {
             names: names.to_vec(),
             methods,
-            cells: vec![cell; strategies * methods],
+            cells: vec![Cell::default(); cells],
+            spill: Spill::new(cells * names.len() * 2),
         }
     }
 
-    /// Adds one trial (trials must come in trial order).
-    pub fn push(&mut self, t: &TrialResult) {
+    /// The spill streams of cell `c`'s parameter `k`: its errors and its η values.
+    fn streams(&self, c: usize, k: usize) -> (usize, usize) {
+        let s = (c * self.names.len() + k) * 2;
+        (s, s + 1)
+    }
+
+    /// Adds one trial (trials must come in trial order). Fails only when the scratch file
+    /// cannot be written.
+    pub fn push(&mut self, t: &TrialResult) -> crate::error::Result<()> {
         for o in &t.outcomes {
-            let c = &mut self.cells[o.strategy * self.methods + o.method];
+            let ci = o.strategy * self.methods + o.method;
+            let c = &mut self.cells[ci];
             c.outs += 1;
             c.seconds.add(o.seconds);
             c.seconds_sq.add(o.seconds * o.seconds);
@@ -268,16 +262,18 @@ impl Accumulator {
                 continue;
             }
             c.ok += 1;
-            for (k, name) in self.names.iter().enumerate() {
+            for k in 0..self.names.len() {
                 // Base parameters absorb the registration's error: nuisance, not compared.
-                if name.starts_with("base.") {
+                if self.names[k].starts_with("base.") {
                     continue;
                 }
-                c.errs[k].push(o.identified[k] - t.truth[k]);
+                let (se, sn) = self.streams(ci, k);
+                self.spill.push(se, o.identified[k] - t.truth[k])?;
                 if let Some(e) = eta(t.truth[k], o.identified[k]) {
-                    c.etas[k].push(e);
+                    self.spill.push(sn, e)?;
                 }
             }
+            let c = &mut self.cells[ci];
             if let Some(x) = t.crb_trace[o.strategy] {
                 c.crb.add(x);
             }
@@ -301,9 +297,11 @@ impl Accumulator {
             c.iterations.add(o.iterations as Real);
             c.evaluations.add(o.evaluations as Real);
         }
+        Ok(())
     }
 
-    /// The entry of `(strategy, method)`, labelled `(method, poses)`.
+    /// The entry of `(strategy, method)`, labelled `(method, poses)`. Fails only when the
+    /// scratch file cannot be read.
     pub fn entry(
         &self,
         strategy: usize,
@@ -311,8 +309,9 @@ impl Accumulator {
         labels: (&str, &str),
         sweep_value: Option<serde_json::Value>,
         sweep: Option<BTreeMap<String, serde_json::Value>>,
-    ) -> Entry {
-        let c = &self.cells[strategy * self.methods + method];
+    ) -> crate::error::Result<Entry> {
+        let ci = strategy * self.methods + method;
+        let c = &self.cells[ci];
         let failures = c.outs - c.ok;
         let mut eta_map = BTreeMap::new();
         let mut rmse = BTreeMap::new();
@@ -322,21 +321,18 @@ impl Accumulator {
             if name.starts_with("base.") {
                 continue;
             }
-            let errs = &c.errs[k];
-            rmse.insert(
-                name.clone(),
-                (mean(&errs.iter().map(|e| e * e).collect::<Vec<_>>())).sqrt(),
-            );
-            bias.insert(name.clone(), mean(errs));
-            emp_trace += std(errs).powi(2);
-            let etas = &c.etas[k];
-            if !etas.is_empty() {
+            let (errs, etas) = self.streams(ci, k);
+            let sp = &self.spill;
+            rmse.insert(name.clone(), sp.mean_of(errs, |e| e * e)?.sqrt());
+            bias.insert(name.clone(), sp.mean(errs)?);
+            emp_trace += sp.std(errs)?.powi(2);
+            if !sp.is_empty(etas) {
                 eta_map.insert(
                     name.clone(),
                     EtaStats {
-                        mean: mean(etas),
-                        median: median(etas),
-                        std: std(etas),
+                        mean: sp.mean(etas)?,
+                        median: sp.median(etas)?,
+                        std: sp.std(etas)?,
                     },
                 );
             }
@@ -350,7 +346,7 @@ impl Accumulator {
         let after = c.after.average();
         let deg = |i: usize| c.deg[i].as_ref().map(StatsSum::average);
         let spread_of = |s: &Sum, sq: &Sum| (sq.mean() - s.mean().powi(2)).max(0.0).sqrt();
-        Entry {
+        Ok(Entry {
             method: labels.0.to_string(),
             poses: labels.1.to_string(),
             sweep_value,
@@ -381,7 +377,7 @@ impl Accumulator {
                 eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),
                 seconds: spread_of(&c.seconds, &c.seconds_sq),
             },
-        }
+        })
     }
 }
 
@@ -399,8 +395,12 @@ mod tests {
 
     #[test]
     fn median_and_std_by_hand() {
-        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
-        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
-        assert!((std(&[1.0, 3.0]) - 1.0).abs() < 1e-12);
+        let mut s = Spill::new(2);
+        for (k, v) in [(0, [3.0, 1.0, 2.0].as_slice()), (1, &[4.0, 1.0, 2.0, 3.0])] {
+            v.iter().for_each(|&x| s.push(k, x).expect("push"));
+        }
+        assert_eq!(s.median(0).unwrap(), 2.0);
+        assert_eq!(s.median(1).unwrap(), 2.5);
+        assert!((s.std(1).unwrap() - 1.118033988749895).abs() < 1e-12);
     }
 }

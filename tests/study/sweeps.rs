@@ -380,3 +380,261 @@ fn the_readme_shard_commands_run() {
         read(&dir.join("results/ci-guard/summary.json"))
     );
 }
+
+/// A folder holding this build's `calbench`, for examples that call it by name, and the
+/// `PATH` that puts it first.
+fn path_with_calbench(dir: &Path) -> String {
+    let bin = dir.join("bin");
+    std::fs::create_dir_all(&bin).unwrap();
+    let link = bin.join("calbench");
+    let _ = std::fs::remove_file(&link);
+    std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_calbench"), &link).unwrap();
+    format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    )
+}
+
+/// A scratch folder with the project's `scenarios/ci-guard.toml` (8 trials), where the
+/// cluster examples run as written.
+fn with_ci_guard(name: &str) -> PathBuf {
+    let dir = tmp_dir(name);
+    std::fs::create_dir_all(dir.join("scenarios")).unwrap();
+    std::fs::copy(
+        root().join("scenarios/ci-guard.toml"),
+        dir.join("scenarios/ci-guard.toml"),
+    )
+    .unwrap();
+    dir
+}
+
+/// `summary.json` and `trials.csv` of `merged` are those of an unsharded run of ci-guard.
+fn assert_unsharded_bytes(dir: &Path, merged: &Path) {
+    let full = dir.join("unsharded");
+    let sc = dir.join("scenarios/ci-guard.toml");
+    calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&full)]);
+    for f in ["summary.json", "trials.csv"] {
+        assert_eq!(read(&full.join(f)), read(&merged.join(f)), "{f}");
+    }
+}
+
+/// The shell command of a Kubernetes job of `examples/k8s/` (the folded `bash -c` text).
+fn k8s_command(file: &str) -> String {
+    let text = read(&root().join("examples/k8s").join(file));
+    let mut lines = text.lines().skip_while(|l| !l.trim_end().ends_with("- >-"));
+    let head = lines.next().expect("a `- >-` command");
+    let indent = head.len() - head.trim_start().len();
+    lines
+        .take_while(|l| l.len() - l.trim_start().len() > indent)
+        .map(str::trim)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The Kubernetes Indexed Job as its pods run it: the shard command with
+/// `JOB_COMPLETION_INDEX` = 0 … completions − 1, then the merge job's command; the bytes
+/// are the unsharded run's.
+#[test]
+fn the_kubernetes_indexed_job_runs_and_merges() {
+    let dir = with_ci_guard("sweeps-k8s");
+    let path = path_with_calbench(&dir);
+    let jobs = read(&root().join("examples/k8s/shards.yaml"));
+    let completions: usize = jobs
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("completions:"))
+        .expect("completions")
+        .trim()
+        .parse()
+        .unwrap();
+    let shard = k8s_command("shards.yaml");
+    assert!(
+        shard.contains(&format!("\"$JOB_COMPLETION_INDEX/{completions}\"")),
+        "{shard}"
+    );
+    let bash = |cmd: &str, index: Option<usize>| {
+        let mut c = Command::new("bash");
+        c.args(["-c", cmd]).current_dir(&dir).env("PATH", &path);
+        if let Some(i) = index {
+            c.env("JOB_COMPLETION_INDEX", i.to_string());
+        }
+        let o = c.output().unwrap();
+        assert!(
+            o.status.success(),
+            "{cmd}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    };
+    for i in 0..completions {
+        bash(&shard, Some(i));
+    }
+    bash(&k8s_command("merge.yaml"), None);
+    assert_unsharded_bytes(&dir, &dir.join("results/ci-guard"));
+}
+
+/// Whether `tool` is on PATH; without it the test says it was skipped, or fails under CI.
+fn have(tool: &str, test: &str) -> bool {
+    let found = Command::new("sh")
+        .args(["-c", &format!("command -v {tool}")])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !found {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "{test}: `{tool}` is not installed (CI installs it in .ci/run)"
+        );
+        eprintln!("{test}: skipped, `{tool}` is not installed");
+    }
+    found
+}
+
+/// The GNU parallel example on one machine: the script, and the one-liner in its header as
+/// written; both merge into the unsharded bytes.
+#[test]
+fn the_gnu_parallel_example_runs_and_merges() {
+    if !have("parallel", "the_gnu_parallel_example_runs_and_merges") {
+        return;
+    }
+    let script = root().join("examples/parallel/run.sh");
+    let one_liner = read(&script)
+        .lines()
+        .find_map(|l| l.strip_prefix("#   parallel "))
+        .map(|l| format!("parallel --will-cite {l}"))
+        .expect("the one-liner");
+    for (name, cmd) in [
+        (
+            "sweeps-parallel-script",
+            format!("bash {} scenarios/ci-guard.toml 3 2", script.display()),
+        ),
+        ("sweeps-parallel-one-liner", one_liner),
+    ] {
+        let dir = with_ci_guard(name);
+        let o = Command::new("bash")
+            .args(["-c", &cmd])
+            .current_dir(&dir)
+            .env("PATH", path_with_calbench(&dir))
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{cmd}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert_unsharded_bytes(&dir, &dir.join("results/ci-guard"));
+    }
+}
+
+/// The Slurm example on a real one-node Slurm (`scripts/slurm-one-node.sh`: Debian's
+/// slurm-wlm and munge, started here; `CPUS=1 examples/slurm/submit.sh` with 4 shards of
+/// ci-guard against an unsharded run). Under CI it must run; elsewhere it runs where Slurm
+/// is installed and says it was skipped otherwise.
+#[test]
+fn the_slurm_example_runs_on_a_one_node_slurm() {
+    let ci = std::env::var("CI").as_deref() == Ok("true");
+    let installed = Command::new("sh")
+        .args(["-c", "command -v slurmctld || command -v sinfo"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !ci && !installed {
+        eprintln!("the_slurm_example_runs_on_a_one_node_slurm: skipped, Slurm is not installed");
+        return;
+    }
+    let o = Command::new("bash")
+        .arg(root().join("scripts/slurm-one-node.sh"))
+        .arg(env!("CARGO_BIN_EXE_calbench"))
+        .output()
+        .unwrap();
+    let text =
+        String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+    if o.status.code() == Some(2) && !ci {
+        eprintln!("the_slurm_example_runs_on_a_one_node_slurm: {text}");
+        return;
+    }
+    assert!(o.status.success(), "{text}");
+}
+
+/// A run killed (SIGKILL) once its checkpoint holds trials, resumed with `run --resume`,
+/// gives the bytes of an uninterrupted run; a resume naming another seed or scenario is
+/// refused, naming what differs; merge names a missing shard and its command.
+#[test]
+fn a_killed_run_resumes_into_the_same_bytes() {
+    let dir = tmp_dir("sweeps-resume");
+    let sc = write_small(&dir, "long", &SMALL.replace("trials = 5", "trials = 1200"));
+    let full = dir.join("full");
+    calbench_ok(&["run", &sc, "--out", path_arg(&full)]);
+    let out = dir.join("killed");
+    let meta = dir.join(".killed.checkpoint/checkpoint.json");
+    let mut child = bin()
+        .args(["run", &sc, "--threads", "1", "--out", path_arg(&out)])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !std::fs::read_to_string(&meta).is_ok_and(|t| !t.contains("\"done\": 0,")) {
+        assert!(
+            t0.elapsed().as_secs() < 120,
+            "no checkpoint after 2 minutes"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!out.join("summary.json").exists());
+    let other = write_small(&dir, "other", SMALL);
+    for (args, named) in [
+        (vec!["run", &sc, "--seed", "3", "--resume"], "seed"),
+        (vec!["run", &other, "--resume"], "scenario"),
+    ] {
+        let mut a = args.clone();
+        a.push(path_arg(&out));
+        let o = calbench(&a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(named), "{a:?}: {err}");
+    }
+    calbench_ok(&["run", "--resume", path_arg(&out)]);
+    for f in ["summary.json", "trials.csv"] {
+        assert_eq!(read(&full.join(f)), read(&out.join(f)), "{f}");
+    }
+    assert!(
+        !meta.exists(),
+        "the checkpoint is removed once the run is written"
+    );
+    let shards: Vec<PathBuf> = (0..3).map(|i| dir.join(format!("shards/{i}"))).collect();
+    for i in [0, 2] {
+        let s = format!("{i}/3");
+        calbench_ok(&[
+            "run",
+            &sc,
+            "--trials",
+            "6",
+            "--shard",
+            &s,
+            "--out",
+            path_arg(&shards[i]),
+        ]);
+    }
+    let o = calbench(&[
+        "merge",
+        path_arg(&shards[0]),
+        path_arg(&shards[2]),
+        "--out",
+        "m",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    let cmd = err
+        .lines()
+        .find(|l| l.contains("--shard 1/3"))
+        .expect("the command");
+    let words: Vec<&str> = cmd.split_whitespace().skip(1).collect();
+    assert_eq!(words.last(), Some(&path_arg(&dir.join("shards/1"))));
+    calbench_ok(&words);
+    calbench_ok(&[
+        "merge",
+        path_arg(&shards[0]),
+        path_arg(&shards[1]),
+        path_arg(&shards[2]),
+        "--out",
+        path_arg(&dir.join("m")),
+    ]);
+}

@@ -1,0 +1,129 @@
+//! The normal equations `N = JᵀPJ`, `g = JᵀP r` accumulated block by block, so that a
+//! problem of millions of measured points never holds its whole Jacobian (Li 2018 eq. 13 is
+//! a sum over points: each block of points adds its own Gram product).
+//!
+//! [`NormalEquations`] is the accumulator: [`NormalEquations::clear`], then
+//! [`NormalEquations::add`] for each block of rows (its Jacobian rows, residual and point
+//! weights), then read [`NormalEquations::n`] and [`NormalEquations::g`]. Each block's
+//! product is the Gram kernel of the whole-Jacobian path (`gram::normal_equations`); only
+//! the order of the sum over blocks differs from that path, so the two agree to rounding
+//! (docs/performance.md, "Streaming identification"). Terms that do not come from the rows,
+//! a ridge or a prior, are added to `n` and `g` after the last block by the caller.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::gram;
+use super::Real;
+
+/// `JᵀPJ` and `JᵀP r` summed over blocks of rows. Allocation-free after [`NormalEquations::new`]
+/// for blocks of at most the size it was made for.
+#[derive(Clone, Debug)]
+pub struct NormalEquations {
+    n: DMatrix<Real>,
+    g: DVector<Real>,
+    /// One block's `N` and `g`.
+    block_n: Vec<Real>,
+    block_g: Vec<Real>,
+    /// One block's `PJ` (column-major), when some weight differs from 1.
+    pj: Vec<Real>,
+}
+
+impl NormalEquations {
+    /// Empty (zero) normal equations of `params` unknowns, for blocks of up to `block_rows`
+    /// residual rows.
+    pub fn new(params: usize, block_rows: usize) -> NormalEquations {
+        NormalEquations {
+            n: DMatrix::zeros(params, params),
+            g: DVector::zeros(params),
+            block_n: vec![0.0; params * params],
+            block_g: vec![0.0; params],
+            pj: Vec::with_capacity(block_rows * params),
+        }
+    }
+
+    /// Back to zero, for the next pass over the rows.
+    pub fn clear(&mut self) {
+        self.n.fill(0.0);
+        self.g.fill(0.0);
+    }
+
+    /// Adds one block of rows: `j` its Jacobian rows (m × t), `r` its residual (length m)
+    /// and `w` the weight of each of its points, `m / w.len()` rows per point.
+    pub fn add(&mut self, j: &DMatrix<Real>, r: &[Real], w: &[Real]) {
+        let (m, t) = j.shape();
+        assert!(r.len() == m && t == self.g.len() && !w.is_empty() && m % w.len() == 0);
+        let rows = m / w.len();
+        let js = j.as_slice();
+        let pjs: &[Real] = if w.iter().all(|&wi| wi == 1.0) {
+            js
+        } else {
+            self.pj.clear();
+            self.pj.extend_from_slice(js);
+            for c in 0..t {
+                let col = &mut self.pj[c * m..(c + 1) * m];
+                for (i, &wi) in w.iter().enumerate() {
+                    for v in &mut col[i * rows..(i + 1) * rows] {
+                        *v *= wi;
+                    }
+                }
+            }
+            &self.pj
+        };
+        gram::normal_equations(js, pjs, r, &mut self.block_n, &mut self.block_g);
+        for (a, b) in self.n.as_mut_slice().iter_mut().zip(&self.block_n) {
+            *a += b;
+        }
+        for (a, b) in self.g.as_mut_slice().iter_mut().zip(&self.block_g) {
+            *a += b;
+        }
+    }
+
+    /// `JᵀPJ` so far (exactly symmetric).
+    pub fn n(&self) -> &DMatrix<Real> {
+        &self.n
+    }
+
+    /// `JᵀP r` so far.
+    pub fn g(&self) -> &DVector<Real> {
+        &self.g
+    }
+
+    /// Moves the sums into `n` and `g` (swapping buffers: no copy).
+    pub fn swap_into(&mut self, n: &mut DMatrix<Real>, g: &mut DVector<Real>) {
+        std::mem::swap(&mut self.n, n);
+        std::mem::swap(&mut self.g, g);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Block sums against the normal equations of the whole weighted Jacobian, formed by
+    /// nalgebra, for blocks that do not divide the rows evenly.
+    #[test]
+    fn blocks_sum_to_the_whole_normal_equations() {
+        let mut rng = crate::numeric::rng::from_seed(3);
+        let (points, rows, t) = (23, 3, 5);
+        let m = points * rows;
+        let j = DMatrix::from_fn(m, t, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
+        let r = DVector::from_fn(m, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
+        let w: Vec<Real> = (0..points).map(|i| [1.0, 0.5, 0.0][i % 3]).collect();
+        let p = DMatrix::from_diagonal(&DVector::from_fn(m, |i, _| w[i / rows]));
+        let want_n = j.transpose() * &p * &j;
+        let want_g = j.transpose() * &p * &r;
+        let mut acc = NormalEquations::new(t, 7 * rows);
+        for _ in 0..2 {
+            acc.clear();
+            for first in (0..points).step_by(7) {
+                let k = 7.min(points - first);
+                let jb = j.rows(first * rows, k * rows).into_owned();
+                let rb = &r.as_slice()[first * rows..(first + k) * rows];
+                acc.add(&jb, rb, &w[first..first + k]);
+            }
+            assert!((acc.n() - &want_n).amax() <= 1e-12 * want_n.amax());
+            assert!((acc.g() - &want_g).amax() <= 1e-12 * want_g.amax());
+            assert_eq!(acc.n(), &acc.n().transpose());
+        }
+    }
+}

@@ -1,0 +1,289 @@
+//! Checkpoints of a run (docs/formats.md `run --resume`): what a run killed at any moment
+//! needs to continue.
+//!
+//! While `calbench run … --out DIR` runs, the folder `.NAME.checkpoint` beside `DIR` holds
+//! `records.txt`, one line per finished trial in the shard record format
+//! ([`super::shard`]), and `checkpoint.json`: the scenario as run, the binary's version, the
+//! share, and how many trials (and bytes of `records.txt`) are complete. `checkpoint.json`
+//! is rewritten (temporary file and rename) after every [`CHUNK`] trials, once the records
+//! before it are flushed, so whatever moment the run is killed, it names a prefix of
+//! `records.txt` made of whole lines. `calbench run --resume DIR` cuts `records.txt` back
+//! to that prefix, replays it through the same aggregation as a live run
+//! ([`crate::study::run_resumed`]) and runs the rest; the folder is removed when the run
+//! ends, with its output or with an error (only a run killed from outside leaves one).
+
+use std::io::{BufRead, Write as _};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use super::shard::{decode, encode};
+use crate::error::{Error, Result};
+use crate::study::scenario::Scenario;
+use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
+
+/// The `format` of `checkpoint.json`.
+const FORMAT: &str = "calbench-checkpoint-1";
+
+/// `checkpoint.json`.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Meta {
+    format: String,
+    /// The version of the calbench that wrote it.
+    version: String,
+    scenario: String,
+    scenario_file: Option<PathBuf>,
+    /// The scenario as run (overrides applied), TOML.
+    settings: String,
+    seed: u64,
+    trials: usize,
+    shard: Option<Shard>,
+    /// The process that wrote it (its temporary output folder is removed on resume).
+    pid: u32,
+    /// Trials complete, and the bytes of `records.txt` that hold them.
+    done: u64,
+    bytes: u64,
+}
+
+/// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it.
+pub fn folder(out: &Path) -> PathBuf {
+    let (parent, name) = super::parent_and_name(out);
+    parent.join(format!(".{name}.checkpoint"))
+}
+
+/// The checkpoint of a running study: a [`TrialSink`] that records every trial past those
+/// already recorded, and rewrites `checkpoint.json` every [`CHUNK`] trials.
+pub struct Checkpoint {
+    dir: PathBuf,
+    meta: Meta,
+    records: std::io::BufWriter<std::fs::File>,
+    /// Trials handed to the sink so far (replayed ones included).
+    seen: u64,
+    /// Trials already in `records.txt` when this process started.
+    skip: u64,
+}
+
+fn write_meta(dir: &Path, meta: &Meta) -> Result<()> {
+    let path = dir.join("checkpoint.json");
+    let tmp = dir.join("checkpoint.json.tmp");
+    let text = serde_json::to_string_pretty(meta).map_err(|e| Error::Compute(e.to_string()))?;
+    std::fs::write(&tmp, text + "\n").map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))
+}
+
+impl Checkpoint {
+    /// Starts the checkpoint of a new run of `scenario` into `out` (replacing the checkpoint
+    /// of an earlier run into the same folder, with a warning).
+    pub fn start(scenario: &Scenario, shard: Option<Shard>, out: &Path) -> Result<Checkpoint> {
+        let dir = folder(out);
+        if dir.exists() {
+            eprintln!(
+                "warning: {} held the checkpoint of an unfinished run into {}; starting anew \
+                 (`calbench run --resume {}` would have continued it)",
+                dir.display(),
+                out.display(),
+                out.display()
+            );
+            std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        }
+        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let settings = toml::to_string(scenario.table())
+            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
+        let meta = Meta {
+            format: FORMAT.into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            scenario: scenario.name.clone(),
+            scenario_file: scenario.path.clone(),
+            settings,
+            seed: scenario.seed,
+            trials: scenario.trials,
+            shard,
+            pid: std::process::id(),
+            done: 0,
+            bytes: 0,
+        };
+        let path = dir.join("records.txt");
+        let file = std::fs::File::create(&path).map_err(|e| Error::io(&path, e))?;
+        write_meta(&dir, &meta)?;
+        Ok(Checkpoint {
+            dir,
+            meta,
+            records: std::io::BufWriter::new(file),
+            seen: 0,
+            skip: 0,
+        })
+    }
+
+    /// Opens the checkpoint of the killed run into `out`: checks it against this binary and,
+    /// when given, the scenario the user names (its name, seed, trials and settings; an
+    /// error names what differs), cuts `records.txt` back to its complete prefix and
+    /// returns the checkpoint, the scenario as run, its share and the replay of its trials.
+    pub fn resume(
+        out: &Path,
+        given: Option<&Scenario>,
+    ) -> Result<(Checkpoint, Scenario, Option<Shard>, Records)> {
+        let dir = folder(out);
+        let path = dir.join("checkpoint.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| {
+            Error::file(
+                out,
+                "--resume",
+                format!(
+                    "no checkpoint of a run into this folder ({}: {e}); a run leaves one while \
+                     it runs and removes it when it has finished",
+                    path.display()
+                ),
+            )
+        })?;
+        let mut meta: Meta = serde_json::from_str(&text)
+            .map_err(|e| Error::file(&path, "checkpoint.json", e.to_string()))?;
+        let refuse = |what: &str, had: String, now: String| {
+            Error::file(
+                &path,
+                what,
+                format!(
+                    "the checkpoint was written with {what} {had}, this run has {now}: it cannot \
+                     continue (start the run anew without --resume)"
+                ),
+            )
+        };
+        if meta.format != FORMAT {
+            return Err(refuse("format", meta.format, FORMAT.into()));
+        }
+        let version = env!("CARGO_PKG_VERSION");
+        if meta.version != version {
+            return Err(refuse(
+                "calbench version",
+                meta.version,
+                version.to_string(),
+            ));
+        }
+        let scenario = Scenario::parse(&meta.settings, meta.scenario_file.as_deref())?;
+        if let Some(g) = given {
+            if g.name != meta.scenario {
+                return Err(refuse(
+                    "scenario",
+                    format!("\"{}\"", meta.scenario),
+                    format!("\"{}\"", g.name),
+                ));
+            }
+            if g.seed != meta.seed {
+                return Err(refuse("seed", meta.seed.to_string(), g.seed.to_string()));
+            }
+            if g.trials != meta.trials {
+                return Err(refuse(
+                    "trials",
+                    meta.trials.to_string(),
+                    g.trials.to_string(),
+                ));
+            }
+            let differ: Vec<&String> = scenario
+                .table()
+                .keys()
+                .chain(g.table().keys())
+                .filter(|k| scenario.table().get(*k) != g.table().get(*k))
+                .collect();
+            if let Some(k) = differ.first() {
+                return Err(refuse(
+                    "scenario settings",
+                    format!("[{k}] = {:?}", scenario.table().get(*k)),
+                    format!("{:?}", g.table().get(*k)),
+                ));
+            }
+        }
+        // The temporary output folder of the killed process.
+        let (parent, name) = super::parent_and_name(out);
+        let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{}", meta.pid)));
+        let records = dir.join("records.txt");
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .open(&records)
+            .map_err(|e| Error::io(&records, e))?;
+        file.set_len(meta.bytes)
+            .map_err(|e| Error::io(&records, e))?;
+        let reader = std::fs::File::open(&records).map_err(|e| Error::io(&records, e))?;
+        let mut append = file;
+        std::io::Seek::seek(&mut append, std::io::SeekFrom::End(0))
+            .map_err(|e| Error::io(&records, e))?;
+        let shard = meta.shard;
+        let done = meta.done;
+        meta.pid = std::process::id();
+        write_meta(&dir, &meta)?;
+        Ok((
+            Checkpoint {
+                dir,
+                meta,
+                records: std::io::BufWriter::new(append),
+                seen: 0,
+                skip: done,
+            },
+            scenario,
+            shard,
+            Records {
+                path: records,
+                lines: std::io::BufReader::new(reader),
+                done,
+                line: 0,
+            },
+        ))
+    }
+
+    /// Removes the checkpoint once the run's output is written.
+    pub fn finish(self) -> Result<()> {
+        drop(self.records);
+        std::fs::remove_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))
+    }
+}
+
+impl TrialSink for Checkpoint {
+    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
+        self.seen += 1;
+        if self.seen <= self.skip {
+            return Ok(());
+        }
+        let line = encode(info.index, t);
+        let path = self.dir.join("records.txt");
+        self.records
+            .write_all(line.as_bytes())
+            .map_err(|e| Error::io(&path, e))?;
+        self.meta.bytes += line.len() as u64;
+        if self.seen.is_multiple_of(CHUNK as u64) {
+            self.records.flush().map_err(|e| Error::io(&path, e))?;
+            self.meta.done = self.seen;
+            write_meta(&self.dir, &self.meta)?;
+        }
+        Ok(())
+    }
+}
+
+/// The trials of a checkpoint's `records.txt`, read back in order ([`Replay`]).
+pub struct Records {
+    path: PathBuf,
+    lines: std::io::BufReader<std::fs::File>,
+    done: u64,
+    line: usize,
+}
+
+impl Replay for Records {
+    fn done(&self) -> u64 {
+        self.done
+    }
+
+    fn next(&mut self) -> Result<(usize, TrialResult)> {
+        let mut text = String::new();
+        self.line += 1;
+        let n = self
+            .lines
+            .read_line(&mut text)
+            .map_err(|e| Error::io(&self.path, e))?;
+        if n == 0 {
+            return Err(Error::file(
+                &self.path,
+                format!("line {}", self.line),
+                "the checkpoint's records end before the trials it counts",
+            ));
+        }
+        decode(text.trim_end_matches('\n'), &self.path, self.line)
+    }
+}
