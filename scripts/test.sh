@@ -2,10 +2,31 @@
 # The one test command: everything CI checks, in order, from the repository root whatever the
 # caller's working directory. Stops at the first failure.
 #
+# Rust (the library, the CLI and the Python module's crate python/): cargo fmt --check, clippy
+# with warnings denied, rustdoc with warnings denied, cargo test. Then the Python module: built
+# into the virtual environment .venv/ (made by .ci/run: maturin, pytest, numpy, pandas) and its
+# pytest suite python/tests/ run against the CLI. Without that environment the Python part is
+# skipped with a message, except under CI=true, where it fails.
+#
 # usage: scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
-cargo fmt --check
-cargo clippy --all-targets -- -D warnings
-RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps
+cargo fmt --all --check
+cargo clippy --workspace --all-targets -- -D warnings
+RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps --workspace
 cargo test
+
+py=.venv/bin/python
+if ! { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas" 2>/dev/null; }; then
+    msg="the Python module's tests need .venv/ with maturin, pytest, numpy and pandas (.ci/run makes it)"
+    if [ "${CI:-}" = "true" ]; then
+        echo "error: $msg" >&2
+        exit 1
+    fi
+    echo "skipped: $msg" >&2
+    exit 0
+fi
+# The dev profile: its dependencies are those cargo test just built (optimised, as
+# Cargo.toml sets for every dependency).
+VIRTUAL_ENV="$PWD/.venv" "$py" -m maturin develop --quiet
+CALBENCH_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/calbench" "$py" -m pytest -q python/tests

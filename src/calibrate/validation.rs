@@ -141,16 +141,35 @@ pub fn point_residuals(
     c: &Calibrated,
     data: &Measurements,
 ) -> Result<(Vec<Real>, Vec<Real>)> {
-    let (cn, cc) = (nominal.chain(), c.robot.chain());
-    let loads = data.payload_kg.as_deref();
-    let mut before = Vec::with_capacity(data.len());
-    let mut after = Vec::with_capacity(data.len());
-    for (i, (q, p)) in data.qs.iter().zip(&data.points).enumerate() {
-        let load = loads.map_or(0.0, |l| l[i]);
-        before.push((c.nominal_frame.apply(p) - cn.fk(q).pos).norm());
-        after.push((c.frame.apply(p) - loaded_fk(&c.robot, &cc, q, load)?.pos).norm());
-    }
+    let cn = nominal.chain();
+    let before = data
+        .qs
+        .iter()
+        .zip(&data.points)
+        .map(|(q, p)| (c.nominal_frame.apply(p) - cn.fk(q).pos).norm())
+        .collect();
+    let after = residual_vectors(c, data)?
+        .iter()
+        .map(|v| v.norm())
+        .collect();
     Ok((before, after))
+}
+
+/// Per measured point of `data`, the residual of the compensated robot in the final
+/// registration: measured (registered) − predicted, mm (the predicted point under the row's
+/// payload when the robot has compliances).
+pub fn residual_vectors(c: &Calibrated, data: &Measurements) -> Result<Vec<crate::numeric::Vec3>> {
+    let cc = c.robot.chain();
+    let loads = data.payload_kg.as_deref();
+    data.qs
+        .iter()
+        .zip(&data.points)
+        .enumerate()
+        .map(|(i, (q, p))| {
+            let load = loads.map_or(0.0, |l| l[i]);
+            Ok(c.frame.apply(p) - loaded_fk(&c.robot, &cc, q, load)?.pos)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -8,11 +8,11 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use calbench::calibrate::cv;
 use calbench::calibrate::diagnostics::{diagnose, Subject};
 use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
+use calbench::calibrate::{cv, on_data};
 use calbench::error::Error;
-use calbench::identify::{method_by_name, MethodEntry, MethodSpec, Termination, METHODS};
+use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
 use calbench::measurement::{Measure, Measurements};
 use calbench::numeric::{Frame, Real};
@@ -21,7 +21,6 @@ use calbench::report::identified::{registration_warning, validate_file, Identify
 use calbench::report::practice::{Practice, PriorMove};
 use calbench::report::write_identified_with;
 use calbench::robot::compliance::CompliancePick;
-use calbench::robot::identifiability::analyse;
 use calbench::robot::{param_sets, Param, Robot};
 
 use super::check_out_folder;
@@ -253,19 +252,10 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         &traced,
         &mut calbench::numeric::rng::stream(args.seed, "identify"),
     )?;
-    let undetermined = matches!(
-        c.identified.termination,
-        Termination::RankDeficient | Termination::Singular
-    );
-    if undetermined && !args.allow_rank_deficient {
-        let p = Problem {
-            nominal: &nominal,
-            data_path: &args.data,
-            data: &d,
-            kinematic: &kinematic,
-            param_count: params.len(),
-        };
-        return Err(p.undetermined(&c, &spec).into());
+    if on_data::undetermined(&c) && !args.allow_rank_deficient {
+        let allow = "--allow-rank-deficient";
+        let (all, source) = ((&kinematic[..], params.len()), (args.data.as_path(), &d));
+        return Err(on_data::undetermined_error(&nominal, all, &c, source, &spec, allow).into());
     }
     if let Some(w) = registration_warning(&c, registration) {
         eprintln!("warning: {w}");
@@ -376,54 +366,6 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         out.display()
     );
     Ok(())
-}
-
-/// What was identified from what: for the refusal of data that do not determine it.
-struct Problem<'a> {
-    nominal: &'a Robot,
-    data_path: &'a Path,
-    data: &'a Measurements,
-    /// The kinematic parameters (a compliance column's scale is per pose, so the analysis
-    /// is of these).
-    kinematic: &'a [Param],
-    /// The number of identified parameters.
-    param_count: usize,
-}
-
-impl Problem<'_> {
-    /// The refusal of a result whose data do not determine every parameter: the undetermined
-    /// parameters and the dependent groups of the kinematic model.
-    fn undetermined(&self, c: &Calibrated, spec: &MethodSpec) -> Error {
-        let a = analyse(
-            self.nominal,
-            self.kinematic,
-            &self.data.qs,
-            self.data.measure(),
-        );
-        let names = |v: &[Param]| {
-            v.iter()
-                .map(|p| p.to_string())
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
-        Error::file(
-            self.data_path,
-            "data",
-            format!(
-                "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
-                 dependent groups: {}); {} ended {}, so nothing was written. Measure poses \
-                 that move every joint, or pass --allow-rank-deficient",
-                a.rank,
-                self.param_count,
-                c.identified.rank.unwrap_or(a.rank),
-                names(&a.unidentifiable),
-                groups.join(" "),
-                spec.name(),
-                c.identified.termination.as_str(),
-            ),
-        )
-    }
 }
 
 /// The method `name` with the `--set KEY=VALUE` options, read like a scenario's

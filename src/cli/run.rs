@@ -119,18 +119,11 @@ pub fn run(args: &RunArgs) -> Result<()> {
 
 /// The scenario of `args` (or the default study) with `--trials` and `--seed` applied.
 fn scenario_with_overrides(args: &RunArgs) -> Result<Scenario> {
-    let mut sc = match &args.scenario {
+    let sc = match &args.scenario {
         Some(p) => Scenario::load(p)?,
         None => Scenario::default_study()?,
     };
-    if let Some(n) = args.trials {
-        sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
-    }
-    if let Some(s) = args.seed {
-        let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
-        sc = sc.with_override("seed", toml::Value::Integer(s))?;
-    }
-    Ok(sc)
+    Ok(sc.with_run_overrides(args.trials, args.seed)?)
 }
 
 /// `calbench run --resume DIR`: the killed run into DIR, continued from its checkpoint; a

@@ -18,6 +18,8 @@
 //!
 //! - this file: the interface ([`Method`], [`CalibrationProblem`], [`Identified`],
 //!   [`Termination`]);
+//! - [`external`]: a method supplied from outside (a function of the problem), as the
+//!   Python module's methods are;
 //! - [`registry`]: the method names, each with the function that reads its options from a
 //!   scenario's `[[methods]]` entry ([`MethodSpec`]);
 //! - one file per method: [`ls`], [`ridge`], [`robust`], [`lm`], and in [`qiao`] Qiao 2021's
@@ -29,6 +31,7 @@
 //! Adding a method is one file with an options struct that implements [`Method`] and one
 //! line in [`registry::METHODS`] (README, "Adding a method").
 
+pub mod external;
 pub mod lm;
 pub mod ls;
 pub mod qiao;

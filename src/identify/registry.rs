@@ -253,6 +253,24 @@ impl MethodSpec {
     pub fn name(&self) -> &'static str {
         self.name
     }
+
+    /// A method supplied from outside ([`super::external`]) under `label`, with the default
+    /// orientation weight.
+    pub fn external(label: &str, method: super::external::External) -> MethodSpec {
+        MethodSpec {
+            name: super::external::EXTERNAL,
+            label: label.to_string(),
+            k: DEFAULT_K,
+            method: Arc::new(method),
+            priors: Vec::new(),
+            trace: None,
+        }
+    }
+
+    /// Whether the method was supplied from outside rather than read from a scenario.
+    pub fn is_external(&self) -> bool {
+        self.name == super::external::EXTERNAL
+    }
 }
 
 /// One prior `NAME = σ`: a parameter name ([`Param::parse`]) and a finite σ > 0; the message

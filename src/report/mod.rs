@@ -158,6 +158,51 @@ pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
     (parent.to_path_buf(), name)
 }
 
+/// A complete run held in memory (the Python module's `run`): its result and the bytes of
+/// its `trials.csv`, written as a folder on demand with the same files and bytes as
+/// [`run_study`] writes.
+pub struct InMemoryRun {
+    /// The run's results.
+    pub result: crate::study::RunResult,
+    /// `trials.csv`.
+    pub trials_csv: Vec<u8>,
+}
+
+impl InMemoryRun {
+    /// Runs `scenario` (whole: `opts.shard` and `opts.out` are not used) and keeps its
+    /// results.
+    pub fn run(
+        scenario: crate::study::scenario::Scenario,
+        opts: &crate::study::RunOptions,
+    ) -> crate::Result<InMemoryRun> {
+        let mut csv = run::TrialsCsv::in_memory(scenario.sweep.as_ref());
+        let opts = crate::study::RunOptions {
+            shard: None,
+            ..opts.clone()
+        };
+        let result = crate::study::run(scenario, &opts, &mut csv)?;
+        Ok(InMemoryRun {
+            result,
+            trials_csv: csv.into_bytes(),
+        })
+    }
+
+    /// `summary.json`'s text.
+    pub fn summary_json(&self) -> crate::Result<String> {
+        run::json_text(&run::summary(&self.result))
+    }
+
+    /// Writes the run's folder `out` as a whole ([`atomically`]), the files of
+    /// `calbench run --out`: `trials.csv`, then [`write_run`], as [`run_study`] does.
+    pub fn write(&self, out: &std::path::Path) -> crate::Result<()> {
+        atomically(out, |dir| {
+            let path = dir.join("trials.csv");
+            std::fs::write(&path, &self.trials_csv).map_err(|e| crate::Error::io(&path, e))?;
+            write_run(&self.result, dir)
+        })
+    }
+}
+
 /// The first path that keeps `out` from being written as a folder holding the files `names`:
 /// `out` itself when it exists and is not a folder, or `out/NAME` when that is a folder
 /// (which no file can replace). `None` when nothing is in the way.

@@ -2,7 +2,6 @@
 //! `run`). Writers only read results that are already computed.
 
 use std::fmt::Write as _;
-use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
 use serde_json::{json, Value};
@@ -19,10 +18,15 @@ fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 
-/// Writes `v` as pretty-printed JSON with a final newline.
-fn write_json(path: &Path, v: &Value) -> Result<()> {
+/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
+pub fn json_text(v: &Value) -> Result<String> {
     let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
-    write(path, &(s + "\n"))
+    Ok(s + "\n")
+}
+
+/// Writes `v` as [`json_text`].
+fn write_json(path: &Path, v: &Value) -> Result<()> {
+    write(path, &json_text(v)?)
 }
 
 /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
@@ -264,10 +268,11 @@ pub fn entry_table_by(
 
 /// `trials.csv`, written as trials finish: one row per trial × strategy × method (× sweep
 /// point), in trial order. The header comes from the first block; one axis adds the column
-/// `sweep_value`, a grid one column per swept key.
-pub struct TrialsCsv {
+/// `sweep_value`, a grid one column per swept key. It goes to a file ([`TrialsCsv::create`])
+/// or, for a run held in memory, to bytes ([`TrialsCsv::in_memory`]): the same bytes.
+pub struct TrialsCsv<W: std::io::Write = std::io::BufWriter<std::fs::File>> {
     path: PathBuf,
-    out: std::io::BufWriter<std::fs::File>,
+    out: W,
     sweep_columns: Vec<String>,
     header: bool,
 }
@@ -276,17 +281,35 @@ impl TrialsCsv {
     /// Creates `path` for the trials of a run of a scenario with `sweep`.
     pub fn create(path: &Path, sweep: Option<&Sweep>) -> Result<TrialsCsv> {
         let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+        Ok(TrialsCsv::to(path, std::io::BufWriter::new(file), sweep))
+    }
+}
+
+impl TrialsCsv<Vec<u8>> {
+    /// `trials.csv` of a run of a scenario with `sweep`, kept in memory.
+    pub fn in_memory(sweep: Option<&Sweep>) -> TrialsCsv<Vec<u8>> {
+        TrialsCsv::to(Path::new("trials.csv"), Vec::new(), sweep)
+    }
+
+    /// The bytes written.
+    pub fn into_bytes(self) -> Vec<u8> {
+        self.out
+    }
+}
+
+impl<W: std::io::Write> TrialsCsv<W> {
+    fn to(path: &Path, out: W, sweep: Option<&Sweep>) -> TrialsCsv<W> {
         let sweep_columns = match sweep {
             None => Vec::new(),
             Some(sw) if sw.axes.len() == 1 => vec!["sweep_value".into()],
             Some(sw) => sw.axes.iter().map(|a| a.key.clone()).collect(),
         };
-        Ok(TrialsCsv {
+        TrialsCsv {
             path: path.to_path_buf(),
-            out: std::io::BufWriter::new(file),
+            out,
             sweep_columns,
             header: false,
-        })
+        }
     }
 
     /// Flushes the file.
@@ -325,11 +348,14 @@ impl TrialsCsv {
         head.extend(["iterations", "termination"].map(String::from));
         head.extend(info.params.iter().map(|n| format!("true_{n}")));
         head.extend(info.params.iter().map(|n| format!("identified_{n}")));
+        if info.external {
+            head.push("error".into());
+        }
         head.join(",") + "\n"
     }
 }
 
-impl TrialSink for TrialsCsv {
+impl<W: std::io::Write> TrialSink for TrialsCsv<W> {
     fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
         let mut out = String::new();
         if !self.header {
@@ -378,12 +404,25 @@ impl TrialSink for TrialsCsv {
             row.push(o.termination.as_str().into());
             row.extend(t.truth.iter().map(|&v| num(v)));
             row.extend(o.identified.iter().map(|&v| num(v)));
+            if info.external {
+                row.push(csv_text(o.error.as_deref().unwrap_or("")));
+            }
             out += &row.join(",");
             out.push('\n');
         }
         self.out
             .write_all(out.as_bytes())
             .map_err(|e| Error::io(&self.path, e))
+    }
+}
+
+/// `text` as one CSV field: quoted (inner quotes doubled) when it holds a comma, a quote or
+/// a line break.
+fn csv_text(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_string()
     }
 }
 

@@ -297,6 +297,8 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
             termination,
             rank_deficient_expected,
             seconds,
+            // Shards run scenario files, whose methods are all registered ones.
+            error: None,
         });
     }
     if t.it.next().is_some() {
@@ -538,6 +540,7 @@ mod tests {
                 termination: Termination::MaxIterations,
                 rank_deficient_expected: true,
                 seconds: 0.00123,
+                error: None,
             }],
         };
         let line = encode(3, &t);

@@ -133,6 +133,10 @@ pub struct BlockInfo {
     /// The simulated arm's joint compliances (name → rad/(N·m)), when it sags.
     #[serde(default)]
     pub true_compliance: Option<serde_json::Value>,
+    /// Whether a method was supplied from outside the scenario file
+    /// ([`crate::identify::external`]): `trials.csv` then records each failure's message.
+    #[serde(default)]
+    pub external: bool,
 }
 
 impl BlockInfo {
@@ -166,6 +170,7 @@ impl BlockInfo {
                 .collect(),
             separation: study.separation.as_ref().map(|s| s.to_json()),
             true_compliance: study.true_compliance_json(),
+            external: sc.methods.iter().any(|m| m.is_external()),
         }
     }
 }

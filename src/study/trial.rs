@@ -65,6 +65,9 @@ pub struct Outcome {
     pub rank_deficient_expected: bool,
     /// Wall time of registration and identification (s). Not part of the reproducible output.
     pub seconds: Real,
+    /// Why the calibration gave no result, when it failed with an error (a method supplied
+    /// from outside that raised, an inconsistent problem).
+    pub error: Option<String>,
     /// With `validation.before_fitted`: the nominal robot's validation position errors (mm)
     /// after the best rigid fit of its points to the true ones.
     pub before_fitted_mm: Option<ErrorStats>,
@@ -138,6 +141,91 @@ pub fn measure_calibration(
     };
     let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
     measure_poses(truth_robot, qs, &study.tracker, outliers, sag, loads, rng)
+}
+
+/// One trial's measurements as an instrument would deliver them, with their truth
+/// (`calbench simulate`): the first strategy's calibration poses and the validation poses,
+/// each measured by the tracker (the calibration with the study's outliers and payloads).
+pub struct SimulatedTrial {
+    /// The trial.
+    pub trial: usize,
+    /// The trial's seed.
+    pub seed: u64,
+    /// The true robot's injected errors.
+    pub errors: Vec<(crate::robot::Param, Real)>,
+    /// The calibration measurement.
+    pub calibration: Simulated,
+    /// The validation measurement (no outliers).
+    pub validation: Simulated,
+}
+
+/// Simulates the measurements of trial `trial` of `study`; a trial beyond the scenario's is
+/// refused, naming `key`.
+pub fn simulate_trial(study: &Study, trial: usize, key: &str) -> Result<SimulatedTrial> {
+    let sc = &study.scenario;
+    if trial >= sc.trials {
+        return Err(crate::Error::setting(
+            key,
+            format!(
+                "trial {trial} does not exist: the scenario has {} trials (0-based)",
+                sc.trials
+            ),
+        ));
+    }
+    let (errors, truth) = true_robot(study, trial);
+    let seed = rng::trial_seed(sc.seed, trial as u64);
+    let qs = calibration_poses(study, 0, trial)?;
+    let vqs = validation_poses(study, trial)?;
+    let (sag, mut gm) = (sag_fn(study), rng::stream(seed, "measure"));
+    let sag_ref = sag.as_deref();
+    let calibration = measure_calibration(study, &truth, &qs, sag_ref, &mut gm)?;
+    // The validation measurement records its payload when the scenario measures under loads.
+    let loaded = sc.calibration.payloads_kg.is_some() || sc.validation.payload_kg.is_some();
+    let vloads = loaded.then(|| vec![study.validation_payload(); vqs.len()]);
+    let validation = measure_poses(
+        &truth,
+        &vqs,
+        &study.tracker,
+        None,
+        sag_ref,
+        vloads.as_deref(),
+        &mut rng::stream(seed, "measure/validation"),
+    )?;
+    Ok(SimulatedTrial {
+        trial,
+        seed,
+        errors,
+        calibration,
+        validation,
+    })
+}
+
+impl SimulatedTrial {
+    /// `truth.json` of `calbench simulate` (docs/formats.md).
+    pub fn truth_json(&self, study: &Study) -> serde_json::Value {
+        let sc = &study.scenario;
+        let errs: serde_json::Map<String, serde_json::Value> = self
+            .errors
+            .iter()
+            .map(|(p, e)| (p.to_string(), serde_json::json!(e)))
+            .collect();
+        let mut truth = serde_json::json!({
+            "scenario": sc.name,
+            "trial": self.trial,
+            "seed": self.seed,
+            "robot": study.nominal.name,
+            "calibration_poses": sc.calibration.strategies[0].name(),
+            "errors": errs,
+            "tracker_pose": sc.tracker.pose,
+            "outliers": self.calibration.truth.outliers,
+            "sag_mm": self.calibration.truth.sag_mm,
+            "validation_sag_mm": self.validation.truth.sag_mm,
+        });
+        if let Some(c) = study.true_compliance_json() {
+            truth["true_compliance"] = c;
+        }
+        truth
+    }
 }
 
 /// Runs trial `index` of `study`.
@@ -233,6 +321,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let mut trace = None;
+            let error = res.as_ref().err().map(|e| e.to_string());
             let (identified, after, cal_after, iterations, evaluations, termination) = match res {
                 Ok(c) => {
                     // The compensated robot lives in the registered frame: bring the truth
@@ -290,6 +379,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 termination,
                 rank_deficient_expected: !study.undetermined.is_empty(),
                 seconds,
+                error,
             });
         }
     }

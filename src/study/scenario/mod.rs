@@ -195,6 +195,13 @@ impl Scenario {
         Scenario::from_table(table, path, Some(source))
     }
 
+    /// Checks a scenario given as a table rather than as a file's text (the Python module's
+    /// `run` of a dict): refusals name `shown` and the key, without a line; relative file
+    /// paths are taken from the current folder.
+    pub fn from_toml_table(table: toml::Table, shown: &Path) -> Result<Scenario> {
+        Scenario::from_table(table, Some(shown), None)
+    }
+
     /// Checks the parsed `table` of the file `path`; `source` gives the lines of refused keys
     /// (`line 14, calibration.count`).
     fn from_table(

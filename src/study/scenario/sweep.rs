@@ -7,6 +7,7 @@ use serde::Deserialize;
 
 use super::{Scenario, Source};
 use crate::error::{Error, Result};
+use crate::identify::MethodSpec;
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -98,6 +99,50 @@ impl Scenario {
             self.path.as_deref(),
             Source::edit(&self.source, [key.to_string()]),
         )
+        .map(|s| s.keeping_external(self))
+    }
+
+    /// The scenario with a run's overrides (`calbench run --trials N --seed S`): the number of
+    /// trials and the master seed.
+    pub fn with_run_overrides(&self, trials: Option<usize>, seed: Option<u64>) -> Result<Scenario> {
+        let mut sc = self.clone();
+        if let Some(n) = trials {
+            sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
+        }
+        if let Some(s) = seed {
+            let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
+            sc = sc.with_override("seed", toml::Value::Integer(s))?;
+        }
+        Ok(sc)
+    }
+
+    /// `self` with the methods supplied from outside of `from` (which no table holds).
+    fn keeping_external(mut self, from: &Scenario) -> Scenario {
+        self.methods
+            .extend(from.methods.iter().filter(|m| m.is_external()).cloned());
+        self
+    }
+
+    /// A copy with a method supplied from outside ([`crate::identify::external`]), run after
+    /// the file's methods on the same trials. Its label must differ from every other.
+    pub fn with_method(&self, spec: MethodSpec) -> Result<Scenario> {
+        if spec.label.trim().is_empty() || self.methods.iter().any(|m| m.label == spec.label) {
+            return Err(Error::setting(
+                "methods",
+                format!(
+                    "the label \"{}\" is empty or taken; the scenario's methods are {}",
+                    spec.label,
+                    self.methods
+                        .iter()
+                        .map(|m| format!("\"{}\"", m.label))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        let mut s = self.clone();
+        s.methods.push(spec);
+        Ok(s)
     }
 
     /// The study of one sweep point (one value per axis): the scenario with each swept key
@@ -126,13 +171,15 @@ impl Scenario {
                 .map(|a| a.key.clone())
                 .chain(["sweep".into()]),
         );
-        Scenario::from_table(table, self.path.as_deref(), source).map_err(|e| {
-            let msg = match e {
-                Error::File { place, msg, .. } => format!("{place}: {msg}"),
-                other => other.to_string(),
-            };
-            Error::file(&shown, format!("sweep ({})", keys.join(", ")), msg)
-        })
+        Scenario::from_table(table, self.path.as_deref(), source)
+            .map(|s| s.keeping_external(self))
+            .map_err(|e| {
+                let msg = match e {
+                    Error::File { place, msg, .. } => format!("{place}: {msg}"),
+                    other => other.to_string(),
+                };
+                Error::file(&shown, format!("sweep ({})", keys.join(", ")), msg)
+            })
     }
 
     /// `table` with the dotted `key` set to `value`. `methods.<label>.<key>` sets a key of

@@ -1,0 +1,360 @@
+"""The Python module against the command line: the same numbers, bytes and messages."""
+import json
+import math
+import tomllib
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import calbench
+
+CI_GUARD = "scenarios/ci-guard.toml"
+
+
+def load_scenario(root, name=CI_GUARD):
+    with open(root / name, "rb") as f:
+        return tomllib.load(f)
+
+
+def read_measurements(path, n):
+    a = np.genfromtxt(path, delimiter=",", names=True)
+    q = np.stack([a[f"q{i}"] for i in range(1, n + 1)], 1)
+    p = np.stack([a["x"], a["y"], a["z"]], 1)
+    return q, p
+
+
+@pytest.fixture(scope="module")
+def simulated(cli, tmp_path_factory):
+    out = tmp_path_factory.mktemp("sim")
+    cli("simulate", CI_GUARD, "--trial", "1", "--out", out / "sim")
+    return out / "sim"
+
+
+# ----- Robot -----------------------------------------------------------------------------
+
+
+def test_robot_builtin_and_its_names():
+    r = calbench.Robot.builtin("irb2600")
+    assert r.joint_count == 6 and r.name == "irb2600"
+    names = r.parameter_names()
+    assert "a1" in names and "tool.z" in names and len(names) == len(set(names))
+    assert "irb2600" in calbench.robots() and "lm" in calbench.methods()
+    assert "6 joints" in repr(r)
+
+
+def test_fk_matches_the_cli(cli, root):
+    r = calbench.Robot.builtin("irb2600")
+    q = np.array([[10, -20, 30, 40, -50, 60], [0, 0, 0, 0, 0, 0]], dtype=float)
+    p = r.fk(q)
+    assert p.shape == (2, 3)
+    text = cli("fk", "--robot", "irb2600", "--q", "10,-20,30,40,-50,60").stdout
+    nums = [float(t) for t in text.replace(",", " ").replace("[", " ").replace("]", " ").split()
+            if t.lstrip("-").replace(".", "", 1).replace("e-", "", 1).isdigit()]
+    assert any(np.allclose(p[0], nums[i:i + 3], atol=1e-3) for i in range(len(nums) - 2)), text
+    T = r.fk(q, pose=True)
+    assert T.shape == (2, 4, 4)
+    assert np.allclose(T[:, :3, 3], p)
+    R = T[0, :3, :3]
+    assert np.allclose(R @ R.T, np.eye(3), atol=1e-12)
+    assert np.allclose(T[:, 3], [0, 0, 0, 1])
+
+
+def test_with_errors_moves_the_tool_and_to_toml_reads_back(tmp_path):
+    r = calbench.Robot.builtin("irb2600")
+    q = np.array([[10, -20, 30, 40, -50, 60]], dtype=float)
+    moved = r.with_errors({"tool.z": 1.5})
+    d = moved.fk(q) - r.fk(q)
+    assert abs(np.linalg.norm(d) - 1.5) < 1e-9
+    f = tmp_path / "robot.toml"
+    f.write_text(moved.to_toml())
+    back = calbench.Robot.from_file(f)
+    assert np.allclose(back.fk(q), moved.fk(q), atol=1e-9)
+    with pytest.raises(calbench.SettingError, match="nope"):
+        r.with_errors({"nope": 1.0})
+    with pytest.raises(calbench.Error):
+        r.with_errors({"a1": float("nan")})
+
+
+def test_robot_from_urdf(root):
+    urdfs = sorted(root.glob("examples/**/*.urdf"))
+    if not urdfs:
+        pytest.skip("no URDF in the repository")
+    r = calbench.Robot.from_file(urdfs[0])
+    assert r.joint_count >= 1
+    assert r.fk(np.zeros((1, r.joint_count))).shape == (1, 3)
+
+
+# ----- identify --------------------------------------------------------------------------
+
+
+def test_identify_gives_the_cli_numbers(cli, simulated, tmp_path):
+    cli("identify", "--robot", "irb2600", "--data", simulated / "measurements.csv",
+        "--validate", simulated / "validation.csv", "--method", "lm", "--out", tmp_path / "id")
+    ref = json.loads((tmp_path / "id" / "identified.json").read_text())
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    vq, vp = read_measurements(simulated / "validation.csv", 6)
+    robot = calbench.Robot.builtin("irb2600")
+    res = calbench.identify(robot, q, p, method="lm", validate=(vq, vp))
+    assert list(res.parameters) == ref["parameters"]
+    for k, v in ref["errors"].items():
+        assert res.parameters[k] == pytest.approx(v, rel=1e-12, abs=1e-15), k
+    assert np.allclose(res.covariance, np.array(ref["covariance"], dtype=float), rtol=1e-9)
+    assert res.termination == ref["termination"]
+    assert res.iterations == ref["iterations"] and res.rank == ref["rank"]
+    assert res.condition_number == pytest.approx(ref["condition_number"], rel=1e-9)
+    rows = np.genfromtxt(tmp_path / "id" / "residuals.csv", delimiter=",", names=True)
+    assert res.residuals.shape == (len(q), 3)
+    assert np.allclose(np.linalg.norm(res.residuals, axis=1), rows["residual_after_mm"], atol=1e-9)
+    for side in ("before", "after"):
+        for stat, v in ref[f"validation_{side}_mm"].items():
+            assert res.validation[f"{side}_mm"][stat] == pytest.approx(v, rel=1e-9)
+    assert isinstance(res.robot, calbench.Robot)
+    assert res.robot.name == "irb2600-calibrated"
+    assert "converged" in repr(res) or res.termination in repr(res)
+
+
+def test_identify_methods_options_and_registrations(simulated):
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    robot = calbench.Robot.builtin("irb2600")
+    a = calbench.identify(robot, q, p, method="ls", options={"max_iter": 50})
+    b = calbench.identify(robot, q, p, method="ls", registration="svd")
+    assert a.termination == "converged" and b.registration_rounds >= 1
+    with pytest.raises(calbench.SettingError, match="options.epsilon"):
+        calbench.identify(robot, q, p, method="ls", options={"epsilon": 1})
+    with pytest.raises(calbench.SettingError, match="unknown method"):
+        calbench.identify(robot, q, p, method="newton")
+    with pytest.raises(calbench.Error, match="registration"):
+        calbench.identify(robot, q, p, registration="magic")
+    s = calbench.identify(robot, q, p, sigma=np.full(len(q), 0.05), method="ls")
+    assert s.parameters == pytest.approx(a.parameters, rel=1e-9, abs=1e-12)
+
+
+def test_identify_refuses_bad_arrays(simulated):
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.SettingError, match="shape"):
+        calbench.identify(robot, q[:, :5], p)
+    with pytest.raises(calbench.SettingError, match="shape"):
+        calbench.identify(robot, q, p[:, :2])
+    with pytest.raises(calbench.SettingError, match="rows of points"):
+        calbench.identify(robot, q, p[:-1])
+    bad = p.copy()
+    bad[3, 1] = np.nan
+    with pytest.raises(calbench.SettingError, match="row 3, column y: NaN is not a finite"):
+        calbench.identify(robot, q, bad)
+    far = q.copy()
+    far[2, 1] = 400.0
+    with pytest.raises(calbench.SettingError, match="row 2, column q2: 400 is outside the joint limits"):
+        calbench.identify(robot, far, p)
+    with pytest.raises(calbench.SettingError, match="distinct poses"):
+        calbench.identify(robot, np.repeat(q[:1], 5, 0), p[:5])
+    with pytest.raises(calbench.SettingError, match="not an array of numbers"):
+        calbench.identify(robot, [["a"] * 6] * 3, p[:3])
+
+
+def test_identify_full_pose_from_quaternions_and_matrices(root, tmp_path):
+    sc = load_scenario(root)
+    sc["tracker"]["measure"] = "pose"
+    d = calbench.simulate(sc, trial=0)
+    assert d["rotations"].shape == (len(d["q"]), 4)
+    robot = d["robot"]
+    a = calbench.identify(robot, d["q"], d["points"], rotations=d["rotations"], method="lm")
+    qw, qx, qy, qz = d["rotations"].T
+    R = np.stack([
+        np.stack([1 - 2 * (qy**2 + qz**2), 2 * (qx * qy - qz * qw), 2 * (qx * qz + qy * qw)], -1),
+        np.stack([2 * (qx * qy + qz * qw), 1 - 2 * (qx**2 + qz**2), 2 * (qy * qz - qx * qw)], -1),
+        np.stack([2 * (qx * qz - qy * qw), 2 * (qy * qz + qx * qw), 1 - 2 * (qx**2 + qy**2)], -1),
+    ], 1)
+    b = calbench.identify(robot, d["q"], d["points"], rotations=R, method="lm")
+    for k in a.parameters:
+        assert b.parameters[k] == pytest.approx(a.parameters[k], rel=1e-6, abs=1e-9)
+
+
+# ----- simulate --------------------------------------------------------------------------
+
+
+def test_simulate_gives_the_cli_measurements(cli, simulated, root):
+    d = calbench.simulate(root / CI_GUARD, trial=1)
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    assert np.allclose(d["q"], q, atol=1e-8) and np.allclose(d["points"], p, atol=1e-8)
+    vq, vp = read_measurements(simulated / "validation.csv", 6)
+    assert np.allclose(d["validation_q"], vq, atol=1e-8)
+    assert np.allclose(d["validation_points"], vp, atol=1e-8)
+    truth = json.loads((simulated / "truth.json").read_text())
+    assert d["truth"] == truth["errors"] and d["info"] == truth
+    assert d["rotations"] is None
+    with pytest.raises(calbench.SettingError, match="trial 8 does not exist"):
+        calbench.simulate(root / CI_GUARD, trial=8)
+
+
+# ----- run -------------------------------------------------------------------------------
+
+
+def test_run_of_a_dict_is_the_cli_bytes(cli, root, tmp_path):
+    cli("run", CI_GUARD, "--trials", "3", "--seed", "7", "--out", tmp_path / "cli")
+    sc = load_scenario(root)
+    first = calbench.run(sc, trials=3, seed=7)
+    second = calbench.run(root / CI_GUARD, trials=3, seed=7, threads=1)
+    for study in (first, second):
+        assert study.summary_json() == (tmp_path / "cli" / "summary.json").read_text()
+        assert study.trials_csv() == (tmp_path / "cli" / "trials.csv").read_bytes()
+    assert first.summary == json.loads((tmp_path / "cli" / "summary.json").read_text())
+    df = first.results
+    assert isinstance(df, pd.DataFrame) and len(df) == len(first.summary["results"])
+    assert {"method", "poses", "eta_mean_pct", "failures", "validation_after_mm.mean"} <= set(df.columns)
+    t = first.trials
+    assert len(t) == 3 * len(df) and list(t["trial"].unique()) == [0, 1, 2]
+    first.write(tmp_path / "py")
+    cli_files = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == cli_files
+    for name in ("summary.json", "trials.csv"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
+    assert first.seconds > 0 and "ci-guard" in repr(first)
+
+
+def test_run_write_is_whole_or_nothing(root, tmp_path):
+    study = calbench.run(root / CI_GUARD, trials=1, progress=True)
+    blocker = tmp_path / "out"
+    blocker.write_text("keep me")
+    with pytest.raises(calbench.IoError, match="out"):
+        study.write(blocker)
+    assert blocker.read_text() == "keep me"
+
+
+def test_run_refuses_bad_scenarios_naming_the_key(root):
+    sc = load_scenario(root)
+    sc["calibration"]["count"] = -3
+    with pytest.raises(calbench.FileError, match=r"(?s)<scenario dict>.*calibration.count"):
+        calbench.run(sc, trials=1)
+    sc = load_scenario(root)
+    sc["bogus"] = 1
+    with pytest.raises(calbench.Error, match="bogus"):
+        calbench.run(sc, trials=1)
+    with pytest.raises(calbench.IoError, match="missing.toml"):
+        calbench.run(root / "missing.toml")
+    with pytest.raises(calbench.SettingError, match="threads"):
+        calbench.run(root / CI_GUARD, trials=1, threads=0)
+
+
+def gauss_newton(problem):
+    x = np.array(problem.x0, dtype=float)
+    for _ in range(50):
+        r = problem.residual(x)
+        J = problem.jacobian(x)
+        dx = np.linalg.lstsq(J, -r, rcond=None)[0]
+        x = x + dx
+        if np.max(np.abs(dx)) < 1e-10:
+            break
+    return x, "converged"
+
+
+def test_a_python_gauss_newton_gives_the_eta_of_ls(root):
+    sc = load_scenario(root)
+    study = calbench.run(sc, trials=4, methods={"gn": gauss_newton})
+    eta = dict(zip(study.results["method"], study.results["eta_mean_pct"]))
+    assert abs(eta["gn"] - eta["ls"]) < 1e-6 * max(1.0, abs(eta["ls"])), eta
+    rows = [r for r in study.summary["results"] if r["method"] == "gn"]
+    assert rows[0]["failures"] == 0 and rows[0]["terminations"] == {"converged": 4}
+    assert "error" in study.trials.columns
+    assert study.trials["error"].isna().all()
+    # The built-in methods' entries are those of a run without the Python method.
+    plain = calbench.run(sc, trials=4)
+    assert [r for r in study.summary["results"] if r["method"] != "gn"] == plain.summary["results"]
+
+
+def test_the_problem_is_the_weighted_least_squares_of_ls(root):
+    seen = {}
+
+    def probe(problem):
+        x0 = problem.x0
+        r0, J = problem.residual(x0), problem.jacobian(x0)
+        seen["n"] = len(problem.parameter_names)
+        seen["shapes"] = (r0.shape, J.shape, problem.weights.shape, problem.rows_per_point)
+        # J is the derivative of r: central differences along a few parameters.
+        for k in range(0, len(x0), 5):
+            h = 1e-6
+            e = np.zeros_like(x0)
+            e[k] = h
+            fd = (problem.residual(x0 + e) - problem.residual(x0 - e)) / (2 * h)
+            seen.setdefault("fd", []).append(np.max(np.abs(fd - J[:, k])) / max(1.0, np.max(np.abs(J[:, k]))))
+        with pytest.raises(calbench.SettingError):
+            problem.residual(x0[:-1])
+        seen["repr"] = repr(problem)
+        return list(x0)
+
+    sc = load_scenario(root)
+    calbench.run(sc, trials=1, methods={"probe": probe})
+    (rs, js, ws, rows) = seen["shapes"]
+    assert rows == 3 and ws[0] * 3 == rs[0] and js == (rs[0], seen["n"])
+    assert max(seen["fd"]) < 1e-5, seen["fd"]
+    assert "parameters" in seen["repr"]
+
+
+def test_an_exception_in_a_method_is_a_failure_and_the_study_goes_on(root):
+    def boom(problem):
+        raise RuntimeError("deliberate, with a comma")
+
+    def short(problem):
+        return np.zeros(2)
+
+    def bad_name(problem):
+        return problem.x0, "done"
+
+    sc = load_scenario(root)
+    study = calbench.run(sc, trials=2, methods={"boom": boom, "short": short, "name": bad_name})
+    by = {r["method"]: r for r in study.summary["results"]}
+    assert by["boom"]["failures"] == 2 and by["short"]["failures"] == 2 and by["name"]["failures"] == 2
+    assert by["ls"]["failures"] == 0
+    t = study.trials
+    assert set(t[t.method == "boom"]["error"]) == {"RuntimeError: deliberate, with a comma"}
+    assert t[t.method == "short"]["error"].str.contains("2 values for").all()
+    assert t[t.method == "name"]["error"].str.contains('unknown termination "done"').all()
+    with pytest.raises(calbench.SettingError, match="taken"):
+        calbench.run(sc, trials=1, methods={"ls": boom})
+    with pytest.raises(calbench.SettingError, match="function"):
+        calbench.run(sc, trials=1, methods={"x": 3})
+
+
+def test_python_methods_run_in_every_sweep_point(root):
+    sc = load_scenario(root)
+    sc["sweep"] = {"key": "outliers.count", "values": [0, 2]}
+    study = calbench.run(sc, trials=2, methods={"gn": gauss_newton})
+    df = study.results
+    assert sorted(df[df.method == "gn"]["sweep_value"]) == [0, 2]
+
+
+# ----- identifiability -------------------------------------------------------------------
+
+
+def test_identifiability_matches_the_cli(cli, simulated):
+    q, _ = read_measurements(simulated / "measurements.csv", 6)
+    robot = calbench.Robot.builtin("irb2600")
+    a = calbench.identifiability(robot, q)
+    pose_file = simulated / "measurements.csv"
+    ref = json.loads(cli("identifiability", "--robot", "irb2600", "--poses-file", pose_file, "--json").stdout)
+    for k in ("rank", "identifiable", "unidentifiable", "groups"):
+        assert a[k] == ref[k], k
+    assert math.isclose(a["condition_number"], ref["condition_number"], rel_tol=1e-9)
+    b = calbench.identifiability(robot, q, measure="pose")
+    assert b["rank"] >= a["rank"]
+    with pytest.raises(calbench.SettingError, match="measure"):
+        calbench.identifiability(robot, q, measure="force")
+
+
+# ----- errors ----------------------------------------------------------------------------
+
+
+def test_errors_are_calbench_errors_with_the_cli_message(cli, tmp_path):
+    with pytest.raises(calbench.IoError, match="no-such-robot.toml"):
+        calbench.Robot.from_file(tmp_path / "no-such-robot.toml")
+    with pytest.raises(calbench.SettingError, match="not a built-in robot"):
+        calbench.Robot.builtin("r2d2")
+    bad = tmp_path / "bad.toml"
+    bad.write_text("name = 3\n")
+    msg = cli("identify", "--robot", bad, "--data", "x.csv", "--method", "ls", "--out", tmp_path / "o", ok=False).stderr
+    with pytest.raises(calbench.Error) as e:
+        calbench.Robot.from_file(bad)
+    assert str(e.value) in msg, (str(e.value), msg)
+    for cls in (calbench.FileError, calbench.SettingError, calbench.ComputeError, calbench.IoError):
+        assert issubclass(cls, calbench.Error)
