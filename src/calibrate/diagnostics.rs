@@ -15,6 +15,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::Calibrated;
 use crate::error::Result;
+use crate::identify::solver::BLOCK_POINTS;
 use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Real, Vec3};
@@ -133,26 +134,23 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     let mut problem = CalibrationProblem::new(s.nominal, s.params, s.data, s.calibrated.frame, s.k);
     problem.priors = s.priors.to_vec();
     let rp = RobotProblem::of(&problem)?;
-    let (r, j) = evaluate(&rp, &id.x);
     let rows = rp.measure().rows();
     let m = s.data.len();
     let s0sq = id.sigma0 * id.sigma0;
     let mut leverage = Vec::with_capacity(m);
     let mut cook_distance = Vec::with_capacity(m);
-    for i in 0..m {
+    by_points(&rp, &id.x, |i, ri, ji| {
         let w = id.weights.get(i).copied().unwrap_or(1.0);
-        let ji = j.rows(rows * i, rows);
         let h = (ji * &n_inv * ji.transpose()) * w;
         leverage.push(h.trace());
-        let ri = r.rows(rows * i, rows).into_owned();
         let cook = (DMatrix::identity(rows, rows) - &h)
             .try_inverse()
             .map_or(Real::NAN, |a| {
-                let v = &a * &ri;
+                let v = &a * ri;
                 w * (v.transpose() * &h * &v)[(0, 0)] / (t as Real * s0sq)
             });
         cook_distance.push(cook);
-    }
+    });
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| {
         let key = |i: usize| -> Real {
@@ -186,13 +184,28 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     })
 }
 
-/// The residual and Jacobian of `p` at `x`.
-fn evaluate(p: &dyn LeastSquares, x: &DVector<Real>) -> (DVector<Real>, DMatrix<Real>) {
+/// Calls `f(i, r_i, J_i)` with the residual rows and Jacobian rows of each point `i` of `p`
+/// at `x`, in order, evaluating [`BLOCK_POINTS`] points at a time
+/// ([`LeastSquares::evaluate_points`]): memory stays bounded for files of millions of rows.
+fn by_points(
+    p: &dyn LeastSquares,
+    x: &DVector<Real>,
+    mut f: impl FnMut(usize, &DVector<Real>, &DMatrix<Real>),
+) {
     let size = p.size();
-    let mut r = DVector::zeros(size.rows());
-    let mut j = DMatrix::zeros(size.rows(), size.params);
-    p.evaluate(x, &mut r, &mut j);
-    (r, j)
+    let rows = size.rows_per_point;
+    let (mut ri, mut ji) = (DVector::zeros(rows), DMatrix::zeros(rows, size.params));
+    for first in (0..size.points).step_by(BLOCK_POINTS) {
+        let k = BLOCK_POINTS.min(size.points - first);
+        let mut r = DVector::zeros(k * rows);
+        let mut j = DMatrix::zeros(k * rows, size.params);
+        p.evaluate_points(x, first, &mut r, &mut j);
+        for i in 0..k {
+            ri.copy_from(&r.rows(rows * i, rows));
+            ji.copy_from(&j.rows(rows * i, rows));
+            f(first + i, &ri, &ji);
+        }
+    }
 }
 
 /// `√trace(J_p C J_pᵀ)` at the validation poses (else the calibration poses), the position
@@ -213,12 +226,10 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
         Measure::Position,
     )?
     .with_payloads(data.payload_kg.as_deref())?;
-    let (_, j) = evaluate(&rp, &id.x);
     let mut sigmas = Vec::with_capacity(data.len());
-    for i in 0..data.len() {
-        let ji = j.rows(3 * i, 3);
+    by_points(&rp, &id.x, |_, _, ji| {
         sigmas.push((ji * cov * ji.transpose()).trace().max(0.0).sqrt());
-    }
+    });
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {
         at,
