@@ -113,3 +113,12 @@ pub fn alternating_errors(params: &[Param], len: Real, ang: Real) -> Vec<(Param,
 pub fn qiao_cube_poses(robot: &Robot, n: usize, rng: &mut Rng) -> Vec<Vec<Real>> {
     poses_in_cube(robot, n, [550.0, 0.0, 550.0], 1000.0, 200_000, rng).unwrap()
 }
+
+/// The path of `examples/ipa-ur10/FILE`, as a command-line argument.
+pub fn ur10_example(file: &str) -> String {
+    root()
+        .join("examples/ipa-ur10")
+        .join(file)
+        .display()
+        .to_string()
+}
