@@ -11,7 +11,7 @@
 //! (t σ0²)` (Cook & Weisberg 1982, §3.5: the change of the fit when the point is left out, in
 //! units of the parameters' confidence ellipsoid).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
 use super::Calibrated;
 use crate::error::Result;
@@ -139,17 +139,25 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     let s0sq = id.sigma0 * id.sigma0;
     let mut leverage = Vec::with_capacity(m);
     let mut cook_distance = Vec::with_capacity(m);
-    by_points(&rp, &id.x, |i, ri, ji| {
-        let w = id.weights.get(i).copied().unwrap_or(1.0);
-        let h = (ji * &n_inv * ji.transpose()) * w;
-        leverage.push(h.trace());
-        let cook = (DMatrix::identity(rows, rows) - &h)
-            .try_inverse()
-            .map_or(Real::NAN, |a| {
-                let v = &a * ri;
-                w * (v.transpose() * &h * &v)[(0, 0)] / (t as Real * s0sq)
+    // Per block, A = J N⁻¹ in one product; per point, H_ii = w_i A_i J_iᵀ and (I − H_ii)⁻¹ r_i
+    // on the stack (at most 6 rows a point, padded with the identity).
+    let mut a = DMatrix::zeros(0, 0);
+    by_blocks(&rp, &id.x, |first, r, j| {
+        if a.shape() != j.shape() {
+            a = DMatrix::zeros(j.nrows(), t);
+        }
+        j.mul_to(&n_inv, &mut a);
+        for p in 0..r.len() / rows {
+            let w = id.weights.get(first + p).copied().unwrap_or(1.0);
+            let h = point_block(&a, j, p * rows, rows).scale(w);
+            leverage.push(h.trace());
+            let mut ri = Vector6::zeros();
+            ri.rows_mut(0, rows).copy_from(&r.rows(p * rows, rows));
+            let cook = (Matrix6::identity() - h).lu().solve(&ri).map_or(Real::NAN, |v| {
+                w * v.dot(&(h * v)) / (t as Real * s0sq)
             });
-        cook_distance.push(cook);
+            cook_distance.push(cook);
+        }
     });
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| {
@@ -184,28 +192,44 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     })
 }
 
-/// Calls `f(i, r_i, J_i)` with the residual rows and Jacobian rows of each point `i` of `p`
-/// at `x`, in order, evaluating [`BLOCK_POINTS`] points at a time
-/// ([`LeastSquares::evaluate_points`]): memory stays bounded for files of millions of rows.
-fn by_points(
+/// Calls `f(first, r, J)` with the residual rows and Jacobian rows of the points `first..`
+/// of `p` at `x`, in order, [`BLOCK_POINTS`] points at a time
+/// ([`LeastSquares::evaluate_points`]) into buffers made once: memory stays bounded for files
+/// of millions of rows.
+fn by_blocks(
     p: &dyn LeastSquares,
     x: &DVector<Real>,
     mut f: impl FnMut(usize, &DVector<Real>, &DMatrix<Real>),
 ) {
     let size = p.size();
     let rows = size.rows_per_point;
-    let (mut ri, mut ji) = (DVector::zeros(rows), DMatrix::zeros(rows, size.params));
+    let (mut r, mut j) = (DVector::zeros(0), DMatrix::zeros(0, 0));
     for first in (0..size.points).step_by(BLOCK_POINTS) {
         let k = BLOCK_POINTS.min(size.points - first);
-        let mut r = DVector::zeros(k * rows);
-        let mut j = DMatrix::zeros(k * rows, size.params);
+        if r.len() != k * rows {
+            r = DVector::zeros(k * rows);
+            j = DMatrix::zeros(k * rows, size.params);
+        }
         p.evaluate_points(x, first, &mut r, &mut j);
-        for i in 0..k {
-            ri.copy_from(&r.rows(rows * i, rows));
-            ji.copy_from(&j.rows(rows * i, rows));
-            f(first + i, &ri, &ji);
+        f(first, &r, &j);
+    }
+}
+
+/// `A_i J_iᵀ` for the point whose `rows` rows start at `row` of `a` and `j`, padded to 6 × 6
+/// with zeros.
+fn point_block(a: &DMatrix<Real>, j: &DMatrix<Real>, row: usize, rows: usize) -> Matrix6<Real> {
+    let mut h = Matrix6::zeros();
+    // Column by column: the point's rows are contiguous in each (column-major) column.
+    let n = a.nrows();
+    for (ac, jc) in a.as_slice().chunks_exact(n).zip(j.as_slice().chunks_exact(n)) {
+        let (ac, jc) = (&ac[row..row + rows], &jc[row..row + rows]);
+        for (u, au) in ac.iter().enumerate() {
+            for (v, jv) in jc.iter().enumerate() {
+                h[(u, v)] += au * jv;
+            }
         }
     }
+    h
 }
 
 /// `√trace(J_p C J_pᵀ)` at the validation poses (else the calibration poses), the position
@@ -227,8 +251,17 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
     )?
     .with_payloads(data.payload_kg.as_deref())?;
     let mut sigmas = Vec::with_capacity(data.len());
-    by_points(&rp, &id.x, |_, _, ji| {
-        sigmas.push((ji * cov * ji.transpose()).trace().max(0.0).sqrt());
+    let mut a = DMatrix::zeros(0, 0);
+    let rows = Measure::Position.rows();
+    by_blocks(&rp, &id.x, |_, r, j| {
+        if a.shape() != j.shape() {
+            a = DMatrix::zeros(j.nrows(), j.ncols());
+        }
+        j.mul_to(cov, &mut a);
+        for p in 0..r.len() / rows {
+            let h = point_block(&a, j, p * rows, rows);
+            sigmas.push(h.trace().max(0.0).sqrt());
+        }
     });
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {

@@ -311,6 +311,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         calibrated: &c,
         validation: validation.as_ref(),
         urdf: compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?,
+        residuals: Default::default(),
     };
     write_identified_with(out, &record, &practice.additions(), &extra)?;
     if let Some((cvs, best)) = &choice {

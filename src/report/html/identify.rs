@@ -13,7 +13,6 @@ use std::path::Path;
 use nalgebra::DMatrix;
 
 use super::Page;
-use crate::calibrate::validation::point_residuals;
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::identified::{
@@ -33,9 +32,9 @@ pub struct View<'a> {
     /// The output folder, holding the plots.
     pub dir: &'a Path,
     /// Residual per calibration point of the nominal robot (mm).
-    pub before: Vec<Real>,
+    pub before: &'a [Real],
     /// … of the compensated robot (mm).
-    pub after: Vec<Real>,
+    pub after: &'a [Real],
     /// The covariance of the identified errors (its entries NaN when the data do not give one).
     pub covariance: DMatrix<Real>,
 }
@@ -56,7 +55,7 @@ pub const SECTIONS: &[Section] = &[
 /// The page of an identification whose files (and plots) are in `dir`, with what `more`
 /// adds (the practice options' section) after [`SECTIONS`].
 pub fn page(dir: &Path, r: &IdentifyRecord, more: &Additions) -> Result<Page> {
-    let (before, after) = point_residuals(r.nominal, r.calibrated, r.data)?;
+    let (before, after) = r.residuals()?;
     let view = View {
         record: r,
         dir,
