@@ -153,9 +153,10 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
             leverage.push(h.trace());
             let mut ri = Vector6::zeros();
             ri.rows_mut(0, rows).copy_from(&r.rows(p * rows, rows));
-            let cook = (Matrix6::identity() - h).lu().solve(&ri).map_or(Real::NAN, |v| {
-                w * v.dot(&(h * v)) / (t as Real * s0sq)
-            });
+            let cook = (Matrix6::identity() - h)
+                .lu()
+                .solve(&ri)
+                .map_or(Real::NAN, |v| w * v.dot(&(h * v)) / (t as Real * s0sq));
             cook_distance.push(cook);
         }
     });
@@ -221,7 +222,11 @@ fn point_block(a: &DMatrix<Real>, j: &DMatrix<Real>, row: usize, rows: usize) ->
     let mut h = Matrix6::zeros();
     // Column by column: the point's rows are contiguous in each (column-major) column.
     let n = a.nrows();
-    for (ac, jc) in a.as_slice().chunks_exact(n).zip(j.as_slice().chunks_exact(n)) {
+    for (ac, jc) in a
+        .as_slice()
+        .chunks_exact(n)
+        .zip(j.as_slice().chunks_exact(n))
+    {
         let (ac, jc) = (&ac[row..row + rows], &jc[row..row + rows]);
         for (u, au) in ac.iter().enumerate() {
             for (v, jv) in jc.iter().enumerate() {

@@ -202,16 +202,22 @@ pub fn irb2600_mdh() -> Robot {
 
 /// Stäubli TX60 in DH + β.
 ///
-/// Geometry: Qiao 2021 table 1 (θ, α in rad there:
-/// π, π/2, … written here in degrees). Joint limits: Stäubli TX60 data sheet, working range
-/// J1 ±180°, J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
+/// Geometry: Qiao 2021 table 1 (θ, α in rad there: π, π/2, … written here in degrees), but
+/// for d1. Qiao's table starts the chain at the shoulder (d1 = 0); the base frame here is
+/// the arm's mounting face, 375 mm below the shoulder (ROS-Industrial's
+/// `staubli_tx60_support`, `urdf/tx60_macro.xacro`: joint 1 at z = 0.375 m above
+/// `base_link`), so d1 = 375 mm. Qiao measures in the robot's base frame and places the
+/// poses in a 1000 mm cube centred at (550, 0, 550) mm, which the arm (670 mm from the
+/// shoulder to the flange) reaches in part only from the mounting face, not at all in its upper
+/// half from the shoulder. Joint limits: Stäubli TX60 data sheet, working range J1 ±180°,
+/// J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
 pub fn tx60() -> Robot {
     from_table(
         "tx60",
         Convention::DhBeta,
         &R6,
         &[
-            (180.0, 0.0, 0.0, 90.0, 0.0, (-180.0, 180.0)),
+            (180.0, 375.0, 0.0, 90.0, 0.0, (-180.0, 180.0)),
             (90.0, 0.0, 290.0, 0.0, 0.0, (-127.5, 127.5)),
             (90.0, 20.0, 0.0, 90.0, 0.0, (-142.5, 142.5)),
             (180.0, 310.0, 0.0, 90.0, 0.0, (-270.0, 270.0)),

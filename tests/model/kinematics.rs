@@ -54,14 +54,14 @@ fn irb2600_mdh_home_pose_by_hand() {
     );
 }
 
-/// TX60 at q = 0, by hand from Qiao 2021 table 1: upright, flange at (0, 20, 670) mm with the
-/// base orientation.
+/// TX60 at q = 0, by hand from Qiao 2021 table 1 on a base 375 mm below the shoulder: upright,
+/// flange at (0, 20, 375 + 670) mm with the base orientation.
 #[test]
 fn tx60_home_pose_by_hand() {
     let f = fk_user(&builtin::tx60(), &[0.0; 6]);
     assert_frame(
         &f,
-        [0.0, 20.0, 670.0],
+        [0.0, 20.0, 1045.0],
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
     );
 }
