@@ -488,18 +488,18 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         plots::before_after(
             &out.join("residuals"),
             "Residual per calibration point",
-            &before,
-            &after,
+            before,
+            after,
         )?;
     } else {
         plots::before_after(
             &out.join("residuals"),
             &format!("Residual per calibration point (largest of each {k})"),
-            &largest_of_runs(&before, k),
-            &largest_of_runs(&after, k),
+            &largest_of_runs(before, k),
+            &largest_of_runs(after, k),
         )?;
     }
-    let (labels, counts) = histogram(&[&before, &after]);
+    let (labels, counts) = histogram(&[before, after]);
     plots::grouped_bars(
         &out.join("histogram"),
         "Residuals (mm): points per bin",

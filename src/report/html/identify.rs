@@ -274,8 +274,8 @@ fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
             "Residual of each of the {} calibration points before (nominal robot, mean {} mm) \
              and after (compensated robot, mean {} mm); the table below lists them (the largest when there are more than {TABLE_ROWS}).",
             v.before.len(),
-            fmt_num(mean(&v.before), 4),
-            fmt_num(mean(&v.after), 4)
+            fmt_num(mean(v.before), 4),
+            fmt_num(mean(v.after), 4)
         ),
     )?;
     page.figure_file(
