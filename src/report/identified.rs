@@ -211,7 +211,7 @@ pub struct Additions<'a> {
     /// Keys added to `identified.json`.
     pub json: serde_json::Map<String, Value>,
     /// The diagnostics, added to `identified.json` as `diagnostics` (written from their
-    /// vectors: [`IdentifiedJson`]).
+    /// vectors by [`write_into`]).
     pub diagnostics: Option<&'a Diagnostics>,
     /// The section's content, in order: one piece serves both pages.
     pub blocks: Vec<Block>,
