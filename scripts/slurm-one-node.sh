@@ -14,6 +14,7 @@ STARTED=()
 cleanup() {
     scancel --user="$(id -un)" 2>/dev/null
     for p in "${STARTED[@]}"; do [ -f "$p" ] && kill "$(cat "$p")" 2>/dev/null; done
+    rm -rf "$TMP"
 }
 trap cleanup EXIT
 if ! up; then

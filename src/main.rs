@@ -31,7 +31,7 @@ enum Command {
     /// Write the simulated measurement of one trial of a scenario.
     Simulate(cli::simulate::SimulateArgs),
     /// Identify the kinematic errors from a measurement file (real or simulated).
-    Identify(cli::identify::IdentifyArgs),
+    Identify(Box<cli::identify::IdentifyArgs>),
     /// Turn a tracker's raw export into a measurement CSV, as a mapping file says.
     Import(cli::import::ImportArgs),
     /// Joint commands for a robot whose controller keeps the nominal model: per program row,

@@ -11,10 +11,11 @@
 //! (t σ0²)` (Cook & Weisberg 1982, §3.5: the change of the fit when the point is left out, in
 //! units of the parameters' confidence ellipsoid).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
 use super::Calibrated;
 use crate::error::Result;
+use crate::identify::solver::BLOCK_POINTS;
 use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Real, Vec3};
@@ -133,26 +134,32 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     let mut problem = CalibrationProblem::new(s.nominal, s.params, s.data, s.calibrated.frame, s.k);
     problem.priors = s.priors.to_vec();
     let rp = RobotProblem::of(&problem)?;
-    let (r, j) = evaluate(&rp, &id.x);
     let rows = rp.measure().rows();
     let m = s.data.len();
     let s0sq = id.sigma0 * id.sigma0;
     let mut leverage = Vec::with_capacity(m);
     let mut cook_distance = Vec::with_capacity(m);
-    for i in 0..m {
-        let w = id.weights.get(i).copied().unwrap_or(1.0);
-        let ji = j.rows(rows * i, rows);
-        let h = (ji * &n_inv * ji.transpose()) * w;
-        leverage.push(h.trace());
-        let ri = r.rows(rows * i, rows).into_owned();
-        let cook = (DMatrix::identity(rows, rows) - &h)
-            .try_inverse()
-            .map_or(Real::NAN, |a| {
-                let v = &a * &ri;
-                w * (v.transpose() * &h * &v)[(0, 0)] / (t as Real * s0sq)
-            });
-        cook_distance.push(cook);
-    }
+    // Per block, A = J N⁻¹ in one product; per point, H_ii = w_i A_i J_iᵀ and (I − H_ii)⁻¹ r_i
+    // on the stack (at most 6 rows a point, padded with the identity).
+    let mut a = DMatrix::zeros(0, 0);
+    by_blocks(&rp, &id.x, |first, r, j| {
+        if a.shape() != j.shape() {
+            a = DMatrix::zeros(j.nrows(), t);
+        }
+        j.mul_to(&n_inv, &mut a);
+        for p in 0..r.len() / rows {
+            let w = id.weights.get(first + p).copied().unwrap_or(1.0);
+            let h = point_block(&a, j, p * rows, rows).scale(w);
+            leverage.push(h.trace());
+            let mut ri = Vector6::zeros();
+            ri.rows_mut(0, rows).copy_from(&r.rows(p * rows, rows));
+            let cook = (Matrix6::identity() - h)
+                .lu()
+                .solve(&ri)
+                .map_or(Real::NAN, |v| w * v.dot(&(h * v)) / (t as Real * s0sq));
+            cook_distance.push(cook);
+        }
+    });
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| {
         let key = |i: usize| -> Real {
@@ -186,13 +193,48 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     })
 }
 
-/// The residual and Jacobian of `p` at `x`.
-fn evaluate(p: &dyn LeastSquares, x: &DVector<Real>) -> (DVector<Real>, DMatrix<Real>) {
+/// Calls `f(first, r, J)` with the residual rows and Jacobian rows of the points `first..`
+/// of `p` at `x`, in order, [`BLOCK_POINTS`] points at a time
+/// ([`LeastSquares::evaluate_points`]) into buffers made once: memory stays bounded for files
+/// of millions of rows.
+fn by_blocks(
+    p: &dyn LeastSquares,
+    x: &DVector<Real>,
+    mut f: impl FnMut(usize, &DVector<Real>, &DMatrix<Real>),
+) {
     let size = p.size();
-    let mut r = DVector::zeros(size.rows());
-    let mut j = DMatrix::zeros(size.rows(), size.params);
-    p.evaluate(x, &mut r, &mut j);
-    (r, j)
+    let rows = size.rows_per_point;
+    let (mut r, mut j) = (DVector::zeros(0), DMatrix::zeros(0, 0));
+    for first in (0..size.points).step_by(BLOCK_POINTS) {
+        let k = BLOCK_POINTS.min(size.points - first);
+        if r.len() != k * rows {
+            r = DVector::zeros(k * rows);
+            j = DMatrix::zeros(k * rows, size.params);
+        }
+        p.evaluate_points(x, first, &mut r, &mut j);
+        f(first, &r, &j);
+    }
+}
+
+/// `A_i J_iᵀ` for the point whose `rows` rows start at `row` of `a` and `j`, padded to 6 × 6
+/// with zeros.
+fn point_block(a: &DMatrix<Real>, j: &DMatrix<Real>, row: usize, rows: usize) -> Matrix6<Real> {
+    let mut h = Matrix6::zeros();
+    // Column by column: the point's rows are contiguous in each (column-major) column.
+    let n = a.nrows();
+    for (ac, jc) in a
+        .as_slice()
+        .chunks_exact(n)
+        .zip(j.as_slice().chunks_exact(n))
+    {
+        let (ac, jc) = (&ac[row..row + rows], &jc[row..row + rows]);
+        for (u, au) in ac.iter().enumerate() {
+            for (v, jv) in jc.iter().enumerate() {
+                h[(u, v)] += au * jv;
+            }
+        }
+    }
+    h
 }
 
 /// `√trace(J_p C J_pᵀ)` at the validation poses (else the calibration poses), the position
@@ -213,12 +255,19 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
         Measure::Position,
     )?
     .with_payloads(data.payload_kg.as_deref())?;
-    let (_, j) = evaluate(&rp, &id.x);
     let mut sigmas = Vec::with_capacity(data.len());
-    for i in 0..data.len() {
-        let ji = j.rows(3 * i, 3);
-        sigmas.push((ji * cov * ji.transpose()).trace().max(0.0).sqrt());
-    }
+    let mut a = DMatrix::zeros(0, 0);
+    let rows = Measure::Position.rows();
+    by_blocks(&rp, &id.x, |_, r, j| {
+        if a.shape() != j.shape() {
+            a = DMatrix::zeros(j.nrows(), j.ncols());
+        }
+        j.mul_to(cov, &mut a);
+        for p in 0..r.len() / rows {
+            let h = point_block(&a, j, p * rows, rows);
+            sigmas.push(h.trace().max(0.0).sqrt());
+        }
+    });
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {
         at,

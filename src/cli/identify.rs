@@ -1,6 +1,6 @@
 //! `calbench identify --robot R --data CSV --method M [--registration REG] [--validate CSV |
 //! --holdout LAST/EVERY] [--k K] [--set KEY=VALUE …] [--allow-rank-deficient]
-//! [--export urdf,toml,ur-yaml,dh-csv] [--compliance LIST|gravity] [--fix NAMES]
+//! [--export urdf,toml,ur-yaml,dh-csv] [--compliance LIST|gravity] [--params NAMES] [--fix NAMES]
 //! [--prior NAME=σ|FILE …] [--cv K [--cv-seed S]] [--models A,B,…] [--seed S] --out DIR`:
 //! identification on a measurement file, real or simulated.
 
@@ -72,6 +72,11 @@ pub struct IdentifyArgs {
     /// needs link masses), joined by `+`; the best is identified.
     #[arg(long, value_delimiter = ',', conflicts_with = "compliance")]
     pub models: Vec<calbench::calibrate::cv::Model>,
+    /// The identified parameters (comma-separated names, e.g. a paper's model); default: the
+    /// identifiable set, tool parameters offered first, with the base under the `identify`
+    /// registration.
+    #[arg(long, value_delimiter = ',', value_parser = param_name, conflicts_with = "models")]
+    pub params: Vec<Param>,
     /// Parameters held at their nominal values (comma-separated names, e.g. `a2,theta3`).
     #[arg(long, value_delimiter = ',', value_parser = param_name)]
     pub fix: Vec<Param>,
@@ -196,14 +201,19 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         d = cv::subset(&d, &cal);
     }
     let with_base = registration == Registration::Identify;
-    let mut kinematic = param_sets::identified_params_tool_first(&nominal, measure, with_base);
+    let mut kinematic = if args.params.is_empty() {
+        param_sets::identified_params_tool_first(&nominal, measure, with_base)
+    } else {
+        check_names("--params", &nominal, &args.params)?;
+        args.params.clone()
+    };
     kinematic.retain(|p| !args.fix.contains(p));
     let mut params = kinematic.clone();
     if let Some(c) = &args.compliance {
         params.extend(c.params(&nominal, "--compliance")?);
     }
     params.retain(|p| !args.fix.contains(p));
-    check_fixed(&nominal, &args.fix)?;
+    check_names("--fix", &nominal, &args.fix)?;
     let setup = cv::CvSetup {
         method: &spec,
         registration,
@@ -311,6 +321,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         calibrated: &c,
         validation: validation.as_ref(),
         urdf: compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?,
+        residuals: Default::default(),
     };
     write_identified_with(out, &record, &practice.additions(), &extra)?;
     if let Some((cvs, best)) = &choice {
@@ -407,19 +418,24 @@ fn compensated_urdf(
     source.write(compensated).map(Some)
 }
 
-/// Refuses a `--fix` name the robot's model does not have.
-fn check_fixed(nominal: &Robot, fixed: &[Param]) -> calbench::Result<()> {
+/// Refuses a name of `--fix` or `--params` (`option`) the robot's model does not have, a
+/// compliance in `--params` (`--compliance` adds those) and a name given twice.
+fn check_names(option: &str, nominal: &Robot, names: &[Param]) -> calbench::Result<()> {
     let known = nominal.params();
-    match fixed
-        .iter()
-        .find(|p| !known.contains(p) && !p.is_compliance())
-    {
-        Some(p) => Err(Error::setting(
-            "--fix",
-            format!("`{p}` is not a parameter of robot `{}`", nominal.name),
-        )),
-        None => Ok(()),
+    let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
+        (_, true) if option == "--params" => {
+            Some("is a compliance: --compliance adds those".into())
+        }
+        (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name)),
+        _ => None,
+    };
+    for (i, p) in names.iter().enumerate() {
+        let why = bad(p).or(names[..i].contains(p).then(|| "is given twice".into()));
+        if let Some(why) = why {
+            return Err(Error::setting(option, format!("`{p}` {why}")));
+        }
     }
+    Ok(())
 }
 
 /// How each prior moved its parameter's estimate: the same identification without the

@@ -8,6 +8,7 @@ use super::plots;
 
 use serde_json::{json, Value};
 
+use crate::calibrate::diagnostics::Diagnostics;
 use crate::calibrate::validation::point_residuals;
 pub use crate::calibrate::validation::{validate_file, FileValidation};
 use crate::calibrate::{Calibrated, ErrorStats, Registration, RoundsEnd};
@@ -41,6 +42,21 @@ pub struct IdentifyRecord<'a> {
     pub validation: Option<&'a FileValidation>,
     /// The compensated robot as a URDF (written as `robot.urdf`), if asked for.
     pub urdf: Option<String>,
+    /// [`IdentifyRecord::residuals`], computed once for every file that shows them.
+    pub residuals: std::cell::OnceCell<(Vec<Real>, Vec<Real>)>,
+}
+
+impl IdentifyRecord<'_> {
+    /// Per calibration point, the residual before and after (mm): [`point_residuals`],
+    /// computed on first use.
+    pub fn residuals(&self) -> Result<(&[Real], &[Real])> {
+        if self.residuals.get().is_none() {
+            let r = point_residuals(self.nominal, self.calibrated, self.data)?;
+            let _ = self.residuals.set(r);
+        }
+        let (b, a) = self.residuals.get().expect("set above");
+        Ok((b, a))
+    }
 }
 
 /// `identified.json`.
@@ -92,31 +108,111 @@ pub fn identified_json(r: &IdentifyRecord) -> Value {
     j
 }
 
-/// `residuals.csv`: per point, the residual before (the nominal robot in its own
-/// registration) and after (the compensated robot in the final registration), and the final
-/// weight.
-pub fn residuals_csv(r: &IdentifyRecord) -> Result<String> {
-    let (before, after) = point_residuals(r.nominal, r.calibrated, r.data)?;
-    let mut csv = String::from("row,residual_before_mm,residual_after_mm,weight\n");
-    for (i, (b, a)) in before.iter().zip(&after).enumerate() {
-        let w = r
-            .calibrated
-            .identified
-            .weights
-            .get(i)
-            .copied()
-            .unwrap_or(1.0);
-        csv += &format!("{i},{b},{a},{w}\n");
+/// Writes `residuals.csv` to `path`, a row at a time: per point, the residual before (the
+/// nominal robot in its own registration) and after (the compensated robot in the final
+/// registration), and the final weight.
+pub fn write_residuals_csv(path: &Path, r: &IdentifyRecord) -> Result<()> {
+    use std::io::Write as _;
+    let (before, after) = r.residuals()?;
+    let weights = &r.calibrated.identified.weights;
+    write_streamed(path, |w| {
+        w.write_all(b"row,residual_before_mm,residual_after_mm,weight\n")?;
+        for (i, (b, a)) in before.iter().zip(after).enumerate() {
+            let wt = weights.get(i).copied().unwrap_or(1.0);
+            writeln!(w, "{i},{b},{a},{wt}")?;
+        }
+        Ok(())
+    })
+}
+
+/// Writes `path` through a buffer with `body`, naming the file in any error.
+fn write_streamed(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> Result<()> {
+    use std::io::Write as _;
+    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+    let mut w = std::io::BufWriter::new(file);
+    body(&mut w)
+        .and_then(|()| w.flush())
+        .map_err(|e| Error::io(path, e))
+}
+
+/// `identified.json` with `more`'s keys, serialised as it is written: the per-point vectors
+/// of the diagnostics go from their slices to the file, never through a JSON tree. Keys are
+/// in byte order at every level, as a `serde_json::Map` writes them.
+struct IdentifiedJson<'a> {
+    base: &'a serde_json::Map<String, Value>,
+    more: &'a Additions<'a>,
+}
+
+/// A value of [`IdentifiedJson`]: a JSON tree, or the diagnostics.
+enum Entry<'a> {
+    Json(&'a Value),
+    Diagnostics(&'a Diagnostics),
+}
+
+impl serde::Serialize for Entry<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let d = match self {
+            Entry::Json(v) => return v.serialize(s),
+            Entry::Diagnostics(d) => d,
+        };
+        // Everything but the per-point vectors as a (small) tree; those two in its key order.
+        let small = Diagnostics {
+            sigma: d.sigma.clone(),
+            correlation: d.correlation.clone(),
+            flagged_pairs: d.flagged_pairs.clone(),
+            leverage: Vec::new(),
+            cook_distance: Vec::new(),
+            top_points: d.top_points.clone(),
+            predicted: d.predicted.clone(),
+        };
+        let Ok(Value::Object(tree)) = serde_json::to_value(&small) else {
+            return s.serialize_none();
+        };
+        let mut m = s.serialize_map(Some(tree.len()))?;
+        for (k, v) in &tree {
+            match k.as_str() {
+                "leverage" => m.serialize_entry(k, &d.leverage)?,
+                "cook_distance" => m.serialize_entry(k, &d.cook_distance)?,
+                _ => m.serialize_entry(k, v)?,
+            }
+        }
+        m.end()
     }
-    Ok(csv)
+}
+
+impl serde::Serialize for IdentifiedJson<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap as _;
+        let mut keys: std::collections::BTreeMap<&str, Entry> = self
+            .base
+            .iter()
+            .chain(&self.more.json)
+            .map(|(k, v)| (k.as_str(), Entry::Json(v)))
+            .collect();
+        if let Some(d) = self.more.diagnostics {
+            keys.insert("diagnostics", Entry::Diagnostics(d));
+        }
+        let mut m = s.serialize_map(Some(keys.len()))?;
+        for (k, v) in &keys {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
 }
 
 /// What `identify`'s options add to its files: keys of `identified.json` and a section of
 /// `report.md` and `report.html` ([`super::practice`]).
 #[derive(Default)]
-pub struct Additions {
+pub struct Additions<'a> {
     /// Keys added to `identified.json`.
     pub json: serde_json::Map<String, Value>,
+    /// The diagnostics, added to `identified.json` as `diagnostics` (written from their
+    /// vectors by [`write_into`]).
+    pub diagnostics: Option<&'a Diagnostics>,
     /// The section's content, in order: one piece serves both pages.
     pub blocks: Vec<Block>,
 }
@@ -133,7 +229,7 @@ pub enum Block {
     Table(Vec<&'static str>, Vec<Vec<String>>),
 }
 
-impl Additions {
+impl Additions<'_> {
     /// The blocks as Markdown, each after a blank line.
     pub fn markdown(&self) -> String {
         let mut md = String::new();
@@ -155,13 +251,16 @@ impl Additions {
 /// folder `out` ([`super::write_identified_with`] adds `report.html` and the controller exports
 /// and writes them as a whole).
 pub fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
-    write(&out.join("residuals.csv"), &residuals_csv(r)?)?;
-    let mut j = identified_json(r);
-    for (k, v) in &more.json {
-        j[k] = v.clone();
-    }
-    let text = serde_json::to_string_pretty(&j).map_err(|e| Error::Compute(e.to_string()))?;
-    write(&out.join("identified.json"), &(text + "\n"))?;
+    write_residuals_csv(&out.join("residuals.csv"), r)?;
+    let Value::Object(base) = identified_json(r) else {
+        unreachable!("identified_json builds an object")
+    };
+    let path = out.join("identified.json");
+    write_streamed(&path, |w| {
+        use std::io::Write as _;
+        serde_json::to_writer_pretty(&mut *w, &IdentifiedJson { base: &base, more })?;
+        w.write_all(b"\n")
+    })?;
     let mut compensated = r.calibrated.robot.clone();
     compensated.name = format!("{}-calibrated", r.nominal.name);
     write(
@@ -351,7 +450,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
     use std::fmt::Write as _;
     let c = r.calibrated;
     let id = &c.identified;
-    let (before, after) = point_residuals(r.nominal, r.calibrated, r.data)?;
+    let (before, after) = r.residuals()?;
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -389,18 +488,18 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         plots::before_after(
             &out.join("residuals"),
             "Residual per calibration point",
-            &before,
-            &after,
+            before,
+            after,
         )?;
     } else {
         plots::before_after(
             &out.join("residuals"),
             &format!("Residual per calibration point (largest of each {k})"),
-            &largest_of_runs(&before, k),
-            &largest_of_runs(&after, k),
+            &largest_of_runs(before, k),
+            &largest_of_runs(after, k),
         )?;
     }
-    let (labels, counts) = histogram(&[&before, &after]);
+    let (labels, counts) = histogram(&[before, after]);
     plots::grouped_bars(
         &out.join("histogram"),
         "Residuals (mm): points per bin",

@@ -50,7 +50,7 @@ fn to_value<T: serde::Serialize>(v: &T) -> Value {
 impl Practice {
     /// The keys added to `identified.json` and the section added to `report.md` and `report.html`; nothing
     /// for an option not used.
-    pub fn additions(&self) -> Additions {
+    pub fn additions(&self) -> Additions<'_> {
         let mut a = Additions::default();
         let j = &mut a.json;
         let md = &mut a.blocks;
@@ -123,7 +123,7 @@ impl Practice {
             )));
         }
         if let Some(d) = &self.diagnostics {
-            j.insert("diagnostics".into(), to_value(d));
+            a.diagnostics = Some(d);
             md.push(Block::Heading("Diagnostics".into()));
             let pairs: Vec<String> = d
                 .flagged_pairs

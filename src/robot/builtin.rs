@@ -63,14 +63,12 @@ pub const BUILTINS: &[Builtin] = &[
     },
     Builtin {
         name: "guo-3t2r",
-        summary:
-            "approximation of Guo 2024's 3T2R arm: differential screws 1/2, vertical screw 3, \
-                  revolute 4-5 at 45°, β on joint 2 (every length guessed)",
+        summary: "approximation of Guo 2024's 3T2R arm rebuilt from its GCN tables: differential \
+                  screws 1/2, revolute J4-J5 at 45°, screw J3 last, β on joint 2 (lengths guessed)",
         build: guo_3t2r,
-        // Guessed. Joint 1 is the turntable (N·m/rad); joints 2 and 3 are ball screws (N/mm),
-        // rigid in the sag model. In this approximate geometry joints 1 and 4 are vertical and
-        // the link masses after joint 5 lie on its axis, so gravity sag is zero.
-        stiffness: &[1.0e6, 2.0e5, 2.0e5, 5.0e4, 2.0e4],
+        // Guessed. Joints 1, 3 and 4 are revolute (N·m/rad); joints 2 and 5 are ball screws
+        // (N/mm), rigid in the sag model.
+        stiffness: &[1.0e6, 2.0e5, 5.0e4, 2.0e4, 2.0e5],
         link_mass_kg: &[20.0, 15.0, 10.0, 3.0, 1.0],
     },
 ];
@@ -204,16 +202,22 @@ pub fn irb2600_mdh() -> Robot {
 
 /// Stäubli TX60 in DH + β.
 ///
-/// Geometry: Qiao 2021 table 1 (θ, α in rad there:
-/// π, π/2, … written here in degrees). Joint limits: Stäubli TX60 data sheet, working range
-/// J1 ±180°, J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
+/// Geometry: Qiao 2021 table 1 (θ, α in rad there: π, π/2, … written here in degrees), but
+/// for d1. Qiao's table starts the chain at the shoulder (d1 = 0); the base frame here is
+/// the arm's mounting face, 375 mm below the shoulder (ROS-Industrial's
+/// `staubli_tx60_support`, `urdf/tx60_macro.xacro`: joint 1 at z = 0.375 m above
+/// `base_link`), so d1 = 375 mm. Qiao measures in the robot's base frame and places the
+/// poses in a 1000 mm cube centred at (550, 0, 550) mm, which the arm (670 mm from the
+/// shoulder to the flange) reaches in part only from the mounting face, not at all in its upper
+/// half from the shoulder. Joint limits: Stäubli TX60 data sheet, working range J1 ±180°,
+/// J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
 pub fn tx60() -> Robot {
     from_table(
         "tx60",
         Convention::DhBeta,
         &R6,
         &[
-            (180.0, 0.0, 0.0, 90.0, 0.0, (-180.0, 180.0)),
+            (180.0, 375.0, 0.0, 90.0, 0.0, (-180.0, 180.0)),
             (90.0, 0.0, 290.0, 0.0, 0.0, (-127.5, 127.5)),
             (90.0, 20.0, 0.0, 90.0, 0.0, (-142.5, 142.5)),
             (180.0, 310.0, 0.0, 90.0, 0.0, (-270.0, 270.0)),
@@ -236,46 +240,62 @@ pub fn tx60_qiao_params() -> Vec<Param> {
     v
 }
 
-/// An approximation of Guo 2024's 3T2R arm (§1.1 and fig. 1). The paper gives the structure
-/// but not the geometry.
+/// An approximation of Guo 2024's 3T2R arm (§1.1 and fig. 1), rebuilt from what Guo's
+/// tables 1–7 imply about the chain. The paper gives the structure but not the geometry.
 ///
 /// From the paper: joints J1–J3 are ball screws; J1 and J2 drive link 1 together, in
 /// parallel and differentially, so that link 1 turns by ψ = atan(s_x(φ1 − φ2)/(2π L1)) and
 /// moves by ξ = s_x(φ1 + φ2)/(4π) ([`Coupling::Differential`]); ψ stays within ±45°
 /// (eq. 17); J4 and J5 are revolute with axes at 45°.
 ///
-/// Modelled as a standard-DH chain: joint 1 revolute (ψ, the turntable about the vertical),
-/// joint 2 prismatic (ξ, horizontal), joint 3 prismatic (vertical screw), joints 4–5 revolute
-/// with α4 = 45°. Joint values: q1, q2 are the two screw travels (mm), q3 the vertical
-/// travel (mm), q4, q5 in degrees.
+/// From Guo's tables (Guo's parameter names): d2/d3 are dependent (table 3) so z1 ∥ z2 in
+/// every pose (α2 = 0, the one adjacent parallel pair, where β2 lives, eq. 5); a4/a5 are
+/// dependent (table 2) so x4 ∥ x5 in every pose (no joint turns in the last link); a1, a2,
+/// a3, d1, d4, d5 are in no dependency; the θ block is well-conditioned (table 1), so the
+/// measured point lies off every revolute axis.
+///
+/// calbench's chain has one joint variable per link, so Guo's A1 (ψ and ξ together) and
+/// fixed A5 cannot be copied; **chosen** instead, a standard-DH chain whose parameters of the
+/// same names have exactly those dependencies (`calbench identifiability --robot guo-3t2r
+/// --gcn-blocks` removes d3 and a5 and nothing else): joint 1 revolute (ψ, the turntable
+/// about the vertical, α1 = −90°), joint 2 prismatic (ξ, horizontal, θ2 = 90° so that x2 is
+/// not x1), joint 3 revolute (J4) about an axis parallel to the ξ screw (α2 = 0, β2 between
+/// them), joint 4 revolute (J5) at 45° to J4 (α3 = 45°), joint 5 prismatic (the screw J3,
+/// placed last so that its travel turns no axis: x4 ∥ x5 with θ5 = 0, α4 = 90°). A vertical
+/// J3 next to the vertical ψ would make d1 dependent on d2, which Guo's tables rule out.
+/// Joint values: q1, q2 are the two screw travels (mm), q3, q4 in degrees, q5 the J3 travel
+/// (mm).
 ///
 /// The model is Guo's position error model (eqs. 5–7): θ, d, a, α of the five joints and
 /// Hayati's β on joint 2 alone (nominal 0), 21 parameters; Guo introduces β2 for the arm's one
 /// pair of adjacent parallel joints (the text under eq. 6) and sets ∂A_i/∂β_i = 0 for every
 /// other joint. The convention is `dh_beta` with [`Robot::beta_joints`] = joint 2.
 ///
-/// **Guessed** (not in the paper): every length (d1 = 400, d2 = 300, d4 = 150, d5 = 100,
-/// tool z = 60 mm), L1 = 400 mm, the screw travels 0–400 mm (which keep |ψ| ≤ 45° as eq. 17
-/// asks), the vertical travel 0–500 mm and the ranges of J4 (±180°) and J5 (±120°).
+/// **Guessed** (not in the paper): every length (d1 = 400, d2 = 300, a2 = 100, a3 = 100,
+/// d4 = 150 mm, tool point (50, 30, 60) mm, off every revolute axis), L1 = 400 mm, the screw
+/// travels 0–400 mm (which keep |ψ| ≤ 45° as eq. 17 asks), the J3 travel 0–500 mm and the
+/// ranges of J4 (±180°) and J5 (±120°).
 pub fn guo_3t2r() -> Robot {
     use JointType::{Prismatic, Revolute};
     let mut r = from_table(
         "guo-3t2r",
         Convention::DhBeta,
-        &[Revolute, Prismatic, Prismatic, Revolute, Revolute],
+        &[Revolute, Prismatic, Revolute, Revolute, Prismatic],
         &[
             // (θ, d, a, α, β, limits); limits of joints 1–2 are screw travels in mm.
             (0.0, 400.0, 0.0, -90.0, 0.0, (0.0, 400.0)),
-            (0.0, 300.0, 0.0, 90.0, 0.0, (0.0, 400.0)),
+            (90.0, 300.0, 100.0, 0.0, 0.0, (0.0, 400.0)),
+            (0.0, 0.0, 100.0, 45.0, 0.0, (-180.0, 180.0)),
+            (0.0, 150.0, 0.0, 90.0, 0.0, (-120.0, 120.0)),
             (0.0, 0.0, 0.0, 0.0, 0.0, (0.0, 500.0)),
-            (0.0, 150.0, 0.0, 45.0, 0.0, (-180.0, 180.0)),
-            (0.0, 100.0, 0.0, 0.0, 0.0, (-120.0, 120.0)),
         ],
     );
     // Joint 1's limits are screw travels (mm), not angles.
     r.joints[0].limits = (0.0, 400.0);
     r.coupling = Some(Coupling::Differential { l1_mm: 400.0 });
     r.beta_joints = Some(vec![1]);
+    r.set(Param::Tool(0), 50.0);
+    r.set(Param::Tool(1), 30.0);
     r.set(Param::Tool(2), 60.0);
     r
 }

@@ -4,9 +4,11 @@
 
 use nalgebra::{DMatrix, DVector};
 
+use crate::numeric::rng::Rng;
 use crate::numeric::{rotation_vector, Frame, Real, Vec3};
 use crate::robot::compliance::loaded_fk;
 use crate::robot::Robot;
+use rand::Rng as _;
 
 /// mm per rad: the orientation rows' weight in the Newton step (an arm of about one metre).
 const K_MM_PER_RAD: Real = 1000.0;
@@ -137,6 +139,68 @@ pub fn solve_point_axis(
         .to_degrees();
     let reached = (f.pos - point).norm() <= tol_mm && angle <= tol_deg;
     (reached && q.iter().all(|v| v.is_finite()) && robot.within_limits(&q)).then_some(q)
+}
+
+/// Tries per requested pose of [`poses_in_workspace`] before it gives up.
+pub const WORKSPACE_TRIES_PER_POSE: usize = 200;
+
+/// The workspace region (`kind = "workspace"`): `n` joint vectors whose tool point is drawn
+/// uniformly in the axis-aligned box centred at `centre_mm` with edges `size_mm`, with the
+/// tool z axis drawn uniformly (in solid angle) within `cone_deg` of `axis` (normalised here).
+/// The joints are solved by inverse kinematics on `robot` ([`solve_point_axis`]) from one
+/// start, `start` (internal units) or else zero clamped into each joint's range (one elbow and wrist branch, as a measurement
+/// program keeps), except the last joint, whose start is drawn uniformly in its range (the
+/// turn about the tool axis); a target not reached within the joint limits is drawn again.
+/// Per try the draws are: the point (x, y, z), the cone (cos of the angle, then the
+/// azimuth), the last joint's start. Stops after `WORKSPACE_TRIES_PER_POSE · n` tries and
+/// returns those found, in order: fewer than `n` when the region is (nearly) out of reach,
+/// which the caller reports.
+pub fn poses_in_workspace(
+    robot: &Robot,
+    n: usize,
+    (centre_mm, size_mm): ([Real; 3], [Real; 3]),
+    (axis, cone_deg): ([Real; 3], Real),
+    start: Option<&[Real]>,
+    rng: &mut Rng,
+) -> Vec<Vec<Real>> {
+    let a = Vec3::from(axis).normalize();
+    // Two unit vectors perpendicular to the axis.
+    let helper = if a.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let u = a.cross(&helper).normalize();
+    let v = a.cross(&u);
+    let cos_max = cone_deg.to_radians().cos();
+    let mut out = Vec::with_capacity(n);
+    // One start for every target, so that every pose is of the same branch (elbow, wrist)
+    // as a measurement program keeps: zero clamped into each joint's range; the last joint's
+    // start is drawn uniformly in its range (the free turn about the tool axis).
+    let mut q0: Vec<Real> = match start {
+        Some(s) => s.to_vec(),
+        None => robot
+            .joints
+            .iter()
+            .map(|j| 0.0f64.clamp(j.limits.0, j.limits.1))
+            .collect(),
+    };
+    let mut tries = 0;
+    while out.len() < n && tries < WORKSPACE_TRIES_PER_POSE * n.max(1) {
+        tries += 1;
+        let p = Vec3::from_fn(|k, _| centre_mm[k] + size_mm[k] * (rng.random::<Real>() - 0.5));
+        let c = 1.0 - (1.0 - cos_max) * rng.random::<Real>();
+        let s = (1.0 - c * c).max(0.0).sqrt();
+        let phi = 2.0 * std::f64::consts::PI * rng.random::<Real>();
+        let dir = c * a + s * (phi.cos() * u + phi.sin() * v);
+        if let (Some(last), Some(j)) = (q0.last_mut(), robot.joints.last()) {
+            *last = j.limits.0 + (j.limits.1 - j.limits.0) * rng.random::<Real>();
+        }
+        if let Some(q) = solve_point_axis(robot, &p, &dir, &q0, (1e-6, 1e-6)) {
+            out.push(q);
+        }
+    }
+    out
 }
 
 #[cfg(test)]

@@ -10,9 +10,8 @@ use super::settings::{Region, WorkspaceRegion};
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
-use crate::robot::sampling::{
-    poses_in_box, poses_in_workspace, uniform_joint_poses, WORKSPACE_TRIES_PER_POSE,
-};
+use crate::robot::ik::{poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
+use crate::robot::sampling::{poses_in_box, uniform_joint_poses};
 use crate::robot::{Coupling, JointType, Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].

@@ -32,6 +32,9 @@ pub struct Outcome {
     pub before_mm: ErrorStats,
     /// … after compensation.
     pub after_mm: ErrorStats,
+    /// With `validation.before_fitted`: the nominal robot's validation position errors (mm)
+    /// after the best rigid fit of its points to the true ones.
+    pub before_fitted_mm: Option<ErrorStats>,
     /// Position errors (mm) at the calibration poses against their noise-free true points
     /// (sag included): the nominal robot, before.
     pub calibration_before_mm: ErrorStats,
@@ -68,9 +71,6 @@ pub struct Outcome {
     /// Why the calibration gave no result, when it failed with an error (a method supplied
     /// from outside that raised, an inconsistent problem).
     pub error: Option<String>,
-    /// With `validation.before_fitted`: the nominal robot's validation position errors (mm)
-    /// after the best rigid fit of its points to the true ones.
-    pub before_fitted_mm: Option<ErrorStats>,
 }
 
 /// One trial's results.

@@ -7,15 +7,9 @@ use calbench::numeric::rng::stream;
 use calbench::numeric::Real;
 use calbench::robot::{builtin, Param};
 
-use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
-
-fn ex(f: &str) -> String {
-    root()
-        .join("examples/ipa-ur10")
-        .join(f)
-        .display()
-        .to_string()
-}
+use crate::common::{
+    calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, ur10_example as ex,
+};
 
 /// The first 200 rows of the UR10 export, positions only, as a measurement CSV in `d`.
 fn ur10_positions(d: &std::path::Path) -> String {

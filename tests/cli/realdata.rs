@@ -9,15 +9,7 @@ use calbench::robot::builtin;
 use calbench::robot::urdf::UrdfRobot;
 use calbench::robot::Param;
 
-use crate::common::{calbench, calbench_ok, path_arg, root, tmp_dir};
-
-fn ex(f: &str) -> String {
-    root()
-        .join("examples/ipa-ur10")
-        .join(f)
-        .display()
-        .to_string()
-}
+use crate::common::{calbench, calbench_ok, path_arg, tmp_dir, ur10_example as ex};
 
 /// Pose difference (mm, rad) of two robots' FK at internal joint values.
 fn fk_gap(a: &calbench::robot::Robot, b: &calbench::robot::Robot, q: &[Real]) -> (Real, Real) {

@@ -14,7 +14,7 @@ use std::time::{Duration, Instant};
 use crate::common::{calbench, path_arg as path};
 
 /// A fresh folder for one test.
-fn tmp(name: &str) -> PathBuf {
+fn tmp(name: &str) -> crate::common::TmpDir {
     crate::common::tmp_dir(&format!("refusals-{name}"))
 }
 

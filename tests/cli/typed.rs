@@ -9,7 +9,7 @@ use std::process::{Command, Output};
 
 use strum::IntoEnumIterator as _;
 
-fn tmp(name: &str) -> PathBuf {
+fn tmp(name: &str) -> crate::common::TmpDir {
     crate::common::tmp_dir(&format!("typed-{name}"))
 }
 

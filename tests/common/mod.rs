@@ -45,11 +45,43 @@ pub fn root() -> &'static Path {
 
 /// A fresh, empty folder `calbench-NAME-PID` in the temporary folder. `NAME` starts with the
 /// test file's name (`cli-…`, `sweeps-…`), as the tests of one crate share a process.
-pub fn tmp_dir(name: &str) -> PathBuf {
+/// The folder is removed when the value is dropped, unless the test is failing: then it stays
+/// for a look at what the run wrote.
+pub fn tmp_dir(name: &str) -> TmpDir {
     let d = std::env::temp_dir().join(format!("calbench-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
-    d
+    TmpDir(d)
+}
+
+/// A folder of [`tmp_dir`]'s, used as a `Path`.
+pub struct TmpDir(PathBuf);
+
+impl std::ops::Deref for TmpDir {
+    type Target = PathBuf;
+    fn deref(&self) -> &PathBuf {
+        &self.0
+    }
+}
+
+impl AsRef<Path> for TmpDir {
+    fn as_ref(&self) -> &Path {
+        &self.0
+    }
+}
+
+impl AsRef<std::ffi::OsStr> for TmpDir {
+    fn as_ref(&self) -> &std::ffi::OsStr {
+        self.0.as_os_str()
+    }
+}
+
+impl Drop for TmpDir {
+    fn drop(&mut self) {
+        if !std::thread::panicking() {
+            let _ = std::fs::remove_dir_all(&self.0);
+        }
+    }
 }
 
 /// The `calbench` binary of this build, to be given arguments, a folder or an environment.
@@ -112,4 +144,13 @@ pub fn alternating_errors(params: &[Param], len: Real, ang: Real) -> Vec<(Param,
 /// (1 m edge, centred at (550, 0, 550) mm).
 pub fn qiao_cube_poses(robot: &Robot, n: usize, rng: &mut Rng) -> Vec<Vec<Real>> {
     poses_in_cube(robot, n, [550.0, 0.0, 550.0], 1000.0, 200_000, rng).unwrap()
+}
+
+/// The path of `examples/ipa-ur10/FILE`, as a command-line argument.
+pub fn ur10_example(file: &str) -> String {
+    root()
+        .join("examples/ipa-ur10")
+        .join(file)
+        .display()
+        .to_string()
 }

@@ -155,9 +155,17 @@ fn separation_reports_block_gcns_and_brings_every_block_under_the_threshold() {
     // the kept joint parameters of each block are independent (finite block GCN).
     assert_eq!(sep.kept.len() + sep.removed.len(), params.len());
     assert!(sep.removed.iter().all(|p| p.joint().is_some()));
+    // Guo's tables 1–3: a4/a5 and d2/d3 are the only dependent pairs (one of each goes), the
+    // θ, α and β blocks are whole (the tool point lies off every revolute axis).
+    let removed = &sep.removed;
+    assert_eq!(removed.len(), 2, "{removed:?}");
     assert!(
-        !sep.kept.contains(&Param::Theta(4)),
-        "θ5 does not move the tool point"
+        removed.contains(&Param::A(3)) != removed.contains(&Param::A(4)),
+        "{removed:?}"
+    );
+    assert!(
+        removed.contains(&Param::D(1)) != removed.contains(&Param::D(2)),
+        "{removed:?}"
     );
     let json = sep.to_json();
     // Infinite GCNs are written as null; every block has both keys.

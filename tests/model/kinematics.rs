@@ -54,26 +54,32 @@ fn irb2600_mdh_home_pose_by_hand() {
     );
 }
 
-/// TX60 at q = 0, by hand from Qiao 2021 table 1: upright, flange at (0, 20, 670) mm with the
-/// base orientation.
+/// TX60 at q = 0, by hand from Qiao 2021 table 1 on a base 375 mm below the shoulder: upright,
+/// flange at (0, 20, 375 + 670) mm with the base orientation.
 #[test]
 fn tx60_home_pose_by_hand() {
     let f = fk_user(&builtin::tx60(), &[0.0; 6]);
     assert_frame(
         &f,
-        [0.0, 20.0, 670.0],
+        [0.0, 20.0, 1045.0],
         [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
     );
 }
 
-/// guo-3t2r with equal screw travels (ψ = 0, ξ = 200 mm), vertical travel 0: tool point
-/// (0, 500 − 160/√2, 550 + 160/√2) mm — d4 + tool z = 100 + 60 along the 45° axis of joint 4.
+/// guo-3t2r with equal screw travels (ψ = 0, ξ = 200 mm), J4 = J5 = 0, J3 travel 0: by
+/// hand, z1 = z2 = +y (the ξ screw and J4), frame 2 sits at (0, 500, 300) with x2 = −z;
+/// a3 = 100 along x2, then d4 = 150 along z3 = (1, 1, 0)/√2, then x4 = −z, y4 = (1, 1, 0)/√2,
+/// z4 = (1, −1, 0)/√2 carry the tool point (50, 30, 60): (240/√2, 500 + 120/√2, 150) mm.
 #[test]
 fn guo_3t2r_pose_by_hand() {
     let r = builtin::guo_3t2r();
     let f = fk_user(&r, &[200.0, 200.0, 0.0, 0.0, 0.0]);
-    let s = 160.0 / 2f64.sqrt();
-    assert_relative_eq!(f.pos, Vec3::new(0.0, 500.0 - s, 550.0 + s), epsilon = 1e-9);
+    let c = 1.0 / 2f64.sqrt();
+    assert_relative_eq!(
+        f.pos,
+        Vec3::new(240.0 * c, 500.0 + 120.0 * c, 150.0),
+        epsilon = 1e-9
+    );
     // Unequal travels turn the turntable by ψ = atan((q1 − q2) / L1).
     let f2 = fk_user(&r, &[300.0, 100.0, 0.0, 0.0, 0.0]);
     let psi = (200.0f64 / 400.0).atan();

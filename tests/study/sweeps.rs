@@ -398,7 +398,7 @@ fn path_with_calbench(dir: &Path) -> String {
 
 /// A scratch folder with the project's `scenarios/ci-guard.toml` (8 trials), where the
 /// cluster examples run as written.
-fn with_ci_guard(name: &str) -> PathBuf {
+fn with_ci_guard(name: &str) -> crate::common::TmpDir {
     let dir = tmp_dir(name);
     std::fs::create_dir_all(dir.join("scenarios")).unwrap();
     std::fs::copy(

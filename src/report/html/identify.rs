@@ -13,7 +13,6 @@ use std::path::Path;
 use nalgebra::DMatrix;
 
 use super::Page;
-use crate::calibrate::validation::point_residuals;
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::identified::{
@@ -33,9 +32,9 @@ pub struct View<'a> {
     /// The output folder, holding the plots.
     pub dir: &'a Path,
     /// Residual per calibration point of the nominal robot (mm).
-    pub before: Vec<Real>,
+    pub before: &'a [Real],
     /// … of the compensated robot (mm).
-    pub after: Vec<Real>,
+    pub after: &'a [Real],
     /// The covariance of the identified errors (its entries NaN when the data do not give one).
     pub covariance: DMatrix<Real>,
 }
@@ -56,7 +55,7 @@ pub const SECTIONS: &[Section] = &[
 /// The page of an identification whose files (and plots) are in `dir`, with what `more`
 /// adds (the practice options' section) after [`SECTIONS`].
 pub fn page(dir: &Path, r: &IdentifyRecord, more: &Additions) -> Result<Page> {
-    let (before, after) = point_residuals(r.nominal, r.calibrated, r.data)?;
+    let (before, after) = r.residuals()?;
     let view = View {
         record: r,
         dir,
@@ -273,10 +272,10 @@ fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
         "Residual per calibration point",
         &format!(
             "Residual of each of the {} calibration points before (nominal robot, mean {} mm) \
-             and after (compensated robot, mean {} mm); every value is in the table below.",
+             and after (compensated robot, mean {} mm); the table below lists them (the largest when there are more than {TABLE_ROWS}).",
             v.before.len(),
-            fmt_num(mean(&v.before), 4),
-            fmt_num(mean(&v.after), 4)
+            fmt_num(mean(v.before), 4),
+            fmt_num(mean(v.after), 4)
         ),
     )?;
     page.figure_file(
@@ -299,28 +298,45 @@ fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
         )?;
     }
     page.plots_end();
-    let rows: Vec<Vec<String>> = v
-        .before
+    // Beyond TABLE_ROWS points the table lists the TABLE_ROWS largest residuals after
+    // (in row order); residuals.csv holds every point.
+    let n = v.before.len();
+    let mut shown: Vec<usize> = (0..n).collect();
+    if n > TABLE_ROWS {
+        shown.sort_by(|&a, &b| v.after[b].total_cmp(&v.after[a]).then(a.cmp(&b)));
+        shown.truncate(TABLE_ROWS);
+        shown.sort_unstable();
+    }
+    let rows: Vec<Vec<String>> = shown
         .iter()
-        .zip(&v.after)
-        .enumerate()
-        .map(|(i, (b, a))| {
+        .map(|&i| {
             vec![
                 i.to_string(),
-                fmt_num(*b, 4),
-                fmt_num(*a, 4),
+                fmt_num(v.before[i], 4),
+                fmt_num(v.after[i], 4),
                 fmt_num(weights.get(i).copied().unwrap_or(1.0), 3),
             ]
         })
         .collect();
+    let caption = if n > TABLE_ROWS {
+        format!(
+            "Residual per point (mm) and final weight: the {TABLE_ROWS} largest after of {n} \
+             points (residuals.csv holds all; rows weighed below 1 are marked)"
+        )
+    } else {
+        "Residual per point (mm) and final weight (rows weighed below 1 are marked)".to_string()
+    };
     page.table_with(
-        "Residual per point (mm) and final weight (rows weighed below 1 are marked)",
+        &caption,
         &["row", "before mm", "after mm", "weight"],
         &rows,
-        |i| (weights.get(i).is_some_and(|w| *w < 1.0)).then_some("low"),
+        |k| (weights.get(shown[k]).is_some_and(|w| *w < 1.0)).then_some("low"),
     );
     Ok(())
 }
+
+/// Rows of the residual table at most: a larger file lists its largest residuals after.
+pub const TABLE_ROWS: usize = 4096;
 
 fn registration_section(page: &mut Page, v: &View) -> Result<()> {
     let c = v.record.calibrated;
