@@ -11,7 +11,7 @@ use serde_json::json;
 use calbench::error::Error;
 use calbench::measurement::kind::Kind;
 use calbench::numeric::Real;
-use calbench::robot::identifiability::analyse;
+use calbench::robot::identifiability::{analyse, Identifiability};
 use calbench::robot::Param;
 use calbench::sim::instrument::InstrumentSettings;
 use calbench::sim::settings::MeasureSetting;
@@ -89,19 +89,11 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
         kind => return instrument(args, &robot, &qs, kind),
     };
     let a = analyse(&robot, &robot.params(), &qs, measure);
-    let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     // Guo 2024 §3.1: the separation of the joint parameters (θ, α, a, d, β blocks).
     let sep = gcn_blocks
         .map(|t| calbench::poses::separate(&robot, &robot.joint_params(), &qs, measure, t));
     if args.json {
-        let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
-        let mut v = json!({
-            "rank": a.rank,
-            "identifiable": names(&a.identifiable),
-            "unidentifiable": names(&a.unidentifiable),
-            "groups": groups,
-            "condition_number": a.condition_number,
-        });
+        let mut v = analysis_json(&a);
         if let (Some(sep), Some(obj)) = (&sep, v.as_object_mut()) {
             if let Some(extra) = sep.to_json().as_object() {
                 obj.extend(extra.clone());
@@ -111,16 +103,7 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
         return Ok(());
     }
     out!("robot {} ({} poses, {:?})", robot.name, poses, measure);
-    out!("rank {} of {} parameters", a.rank, robot.params().len());
-    out!("identifiable:   {}", names(&a.identifiable).join(" "));
-    out!("unidentifiable: {}", names(&a.unidentifiable).join(" "));
-    for g in &a.groups {
-        out!("dependent group: {}", names(g).join(" "));
-    }
-    out!(
-        "condition number (column-scaled): {:.4e}",
-        a.condition_number
-    );
+    print_analysis(&robot, &a);
     if let Some(sep) = &sep {
         out!("GCN per block (Guo 2024 eq. 14), before and after the separation:");
         for b in &sep.blocks {
@@ -184,22 +167,12 @@ fn instrument(
         values,
     };
     let a = calbench::identify::kind::identifiability(robot, &robot.params(), qs, &data)?;
-    let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     let nuisance = data.instrument.nuisance_names();
     if args.json {
-        let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
-        out!(
-            "{}",
-            json!({
-                "measure": kind.as_str(),
-                "rank": a.rank,
-                "identifiable": names(&a.identifiable),
-                "unidentifiable": names(&a.unidentifiable),
-                "groups": groups,
-                "condition_number": a.condition_number,
-                "instrument_unknowns": nuisance,
-            })
-        );
+        let mut v = analysis_json(&a);
+        v["measure"] = json!(kind.as_str());
+        v["instrument_unknowns"] = json!(nuisance);
+        out!("{v}");
         return Ok(());
     }
     out!(
@@ -209,6 +182,13 @@ fn instrument(
         kind.as_str()
     );
     out!("instrument unknowns: {}", nuisance.join(" "));
+    print_analysis(robot, &a);
+    Ok(())
+}
+
+/// The rank, the identifiable and unidentifiable parameters, the dependent groups and the
+/// condition number of `a`, as text.
+fn print_analysis(robot: &calbench::robot::Robot, a: &Identifiability) {
     out!("rank {} of {} parameters", a.rank, robot.params().len());
     out!("identifiable:   {}", names(&a.identifiable).join(" "));
     out!("unidentifiable: {}", names(&a.unidentifiable).join(" "));
@@ -219,5 +199,22 @@ fn instrument(
         "condition number (column-scaled): {:.4e}",
         a.condition_number
     );
-    Ok(())
+}
+
+/// The parameters' names.
+fn names(v: &[Param]) -> Vec<String> {
+    v.iter().map(|p| p.to_string()).collect()
+}
+
+/// `--json`'s keys of an analysis: rank, identifiable, unidentifiable, groups and condition
+/// number.
+fn analysis_json(a: &Identifiability) -> serde_json::Value {
+    let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
+    json!({
+        "rank": a.rank,
+        "identifiable": names(&a.identifiable),
+        "unidentifiable": names(&a.unidentifiable),
+        "groups": groups,
+        "condition_number": a.condition_number,
+    })
 }

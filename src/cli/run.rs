@@ -74,23 +74,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let table: toml::Table =
             toml::from_str(&text).map_err(|e| Error::file(p, "TOML", e.to_string().trim_end()))?;
         if RegistrationScenario::is_one(&table) {
-            if args.shard.is_some() {
-                return Err(Error::setting(
-                    "--shard",
-                    "a registration study (`[registration_study]`) runs whole, not in shards",
-                )
-                .into());
-            }
             return registration_study(RegistrationScenario::from_table(table, p)?, args);
         }
         if InstrumentsScenario::is_one(&table) {
-            if args.shard.is_some() {
-                return Err(Error::setting(
-                    "--shard",
-                    "an instruments study (`[measurement]`) runs whole, not in shards",
-                )
-                .into());
-            }
             return instruments_study(InstrumentsScenario::from_table(table, p)?, args);
         }
     }
@@ -192,94 +178,95 @@ fn out_folder(args: &RunArgs, name: &str) -> PathBuf {
         .unwrap_or_else(|| Path::new("results").join(name))
 }
 
-/// `calbench run` of a scenario with a `[registration_study]` table (Ban fig. 3): the grid
-/// of SVD against weighted-SVD registration errors, its report and heat map.
-fn registration_study(mut sc: RegistrationScenario, args: &RunArgs) -> Result<()> {
+/// `--trials` (from `min_trials` to [`MAX_TRIALS`]), `--seed` and `--threads` of a study
+/// that runs whole (`what`: a registration or an instruments study; `--shard` is refused),
+/// applied to its `trials` and `seed`; the thread pool it runs in.
+fn whole_study(
+    args: &RunArgs,
+    what: &str,
+    min_trials: usize,
+    trials: &mut usize,
+    seed: &mut u64,
+) -> Result<rayon::ThreadPool> {
+    if args.shard.is_some() {
+        let whole = format!("{what} runs whole, not in shards");
+        return Err(Error::setting("--shard", whole).into());
+    }
     if let Some(n) = args.trials {
-        if n == 0 || n > MAX_TRIALS {
-            return Err(
-                Error::setting("--trials", format!("must be between 1 and {MAX_TRIALS}")).into(),
-            );
+        if !(min_trials..=MAX_TRIALS).contains(&n) {
+            let range = format!("must be between {min_trials} and {MAX_TRIALS}");
+            return Err(Error::setting("--trials", range).into());
         }
-        sc.trials = n;
+        *trials = n;
     }
     if let Some(s) = args.seed {
-        sc.seed = s;
+        *seed = s;
     }
     if args.threads == Some(0) {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }
-    let st = &sc.registration_study;
-    eprintln!(
-        "running {}: registration study, {} × {} cells × {} draws",
-        sc.name,
-        st.outlier_counts.len(),
-        st.magnitude_mm.len(),
-        sc.trials
-    );
-    let out = out_folder(args, &sc.name);
-    writable_folder(&out, &STUDY_OUTPUTS)?;
-    let t0 = std::time::Instant::now();
-    let pool = rayon::ThreadPoolBuilder::new()
+    Ok(rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.unwrap_or(0))
         .build()
-        .map_err(|e| Error::Compute(e.to_string()))?;
-    let cells = pool.install(|| st.run(sc.seed, sc.trials))?;
+        .map_err(|e| Error::Compute(e.to_string()))?)
+}
+
+/// `calbench run` of a scenario with a `[registration_study]` table (Ban fig. 3): the grid
+/// of SVD against weighted-SVD registration errors, its report and heat map.
+fn registration_study(mut sc: RegistrationScenario, args: &RunArgs) -> Result<()> {
+    let what = "a registration study (`[registration_study]`)";
+    let pool = whole_study(args, what, 1, &mut sc.head.trials, &mut sc.head.seed)?;
+    let st = &sc.registration_study;
+    let (n, m) = (st.outlier_counts.len(), st.magnitude_mm.len());
+    let what = format!(
+        "registration study, {n} × {m} cells × {} draws",
+        sc.head.trials
+    );
+    let (out, t0) = start_whole(args, &sc.head.name, &what)?;
+    let cells = pool.install(|| st.run(sc.head.seed, sc.head.trials))?;
     write_all(&sc, &cells, &out)?;
+    let table = report_md(&sc, &cells, "heatmap_difference.png")
+        .lines()
+        .skip_while(|l| !l.starts_with("## "))
+        .take_while(|l| !l.starts_with("!["))
+        .collect::<Vec<_>>()
+        .join("\n");
     out!(
-        "{}\n{} draws per cell in {:.1} s; report: {}",
-        report_md(&sc, &cells, "heatmap_difference.png")
-            .lines()
-            .skip_while(|l| !l.starts_with("## "))
-            .take_while(|l| !l.starts_with("!["))
-            .collect::<Vec<_>>()
-            .join("\n"),
-        sc.trials,
+        "{table}\n{} draws per cell in {:.1} s; report: {}",
+        sc.head.trials,
         t0.elapsed().as_secs_f64(),
         out.join("report.md").display()
     );
     Ok(())
 }
 
+/// Announces a study that runs whole (`what` it runs) and checks that its output folder can
+/// be written: the folder and the start time.
+fn start_whole(args: &RunArgs, name: &str, what: &str) -> Result<(PathBuf, std::time::Instant)> {
+    eprintln!("running {name}: {what}");
+    let out = out_folder(args, name);
+    writable_folder(&out, &STUDY_OUTPUTS)?;
+    Ok((out, std::time::Instant::now()))
+}
+
 /// Runs an instruments study (`[measurement]` tables) and writes its folder.
 fn instruments_study(mut sc: InstrumentsScenario, args: &RunArgs) -> Result<()> {
-    if let Some(n) = args.trials {
-        if !(2..=MAX_TRIALS).contains(&n) {
-            return Err(
-                Error::setting("--trials", format!("must be between 2 and {MAX_TRIALS}")).into(),
-            );
-        }
-        sc.trials = n;
-    }
-    if let Some(s) = args.seed {
-        sc.seed = s;
-    }
-    if args.threads == Some(0) {
-        return Err(Error::setting("--threads", "must be at least 1").into());
-    }
+    let what = "an instruments study (`[measurement]`)";
+    let pool = whole_study(args, what, 2, &mut sc.head.trials, &mut sc.head.seed)?;
     let robot = super::ChainArgs::default().load(&sc.robot)?;
-    eprintln!(
-        "running {}: instruments study, {} instruments × {} pose counts × {} strategies × {} trials",
-        sc.name,
-        sc.instruments().len(),
-        sc.poses.len(),
-        sc.strategies.len(),
-        sc.trials
+    let (k, p, s) = (sc.instruments().len(), sc.poses.len(), sc.strategies.len());
+    let what = format!(
+        "instruments study, {k} instruments × {p} pose counts × {s} strategies × {} trials",
+        sc.head.trials
     );
-    let out = out_folder(args, &sc.name);
-    writable_folder(&out, &STUDY_OUTPUTS)?;
-    let t0 = std::time::Instant::now();
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::Compute(e.to_string()))?;
+    let (out, t0) = start_whole(args, &sc.head.name, &what)?;
     let cells = pool.install(|| sc.run(&robot))?;
     calbench::report::instruments::write_all(&sc, &cells, &out)?;
+    let table = calbench::report::instruments::report_md(&sc, &cells);
+    let took = t0.elapsed().as_secs_f64();
     out!(
-        "{}\n{} trials per cell in {:.1} s; report: {}",
-        calbench::report::instruments::report_md(&sc, &cells),
-        sc.trials,
-        t0.elapsed().as_secs_f64(),
+        "{table}\n{} trials per cell in {took:.1} s; report: {}",
+        sc.head.trials,
         out.join("report.md").display()
     );
     Ok(())

@@ -50,18 +50,12 @@ pub fn write_measurements(
     m: &Measurements,
 ) -> Result<()> {
     let mut s = String::with_capacity(64 * (m.qs.len() + 1));
-    joint_header(&mut s, robot.dof());
-    s.push_str(",x,y,z");
-    if m.quats.is_some() {
-        s.push_str(",qw,qx,qy,qz");
-    }
-    if m.sigma_mm.is_some() {
-        s.push_str(",sigma_mm");
-    }
-    if m.payload_kg.is_some() {
-        s.push_str(",payload_kg");
-    }
-    s.push('\n');
+    let optional = (
+        m.quats.is_some(),
+        m.sigma_mm.is_some(),
+        m.payload_kg.is_some(),
+    );
+    header(&mut s, robot.dof(), optional);
     for (i, q) in m.qs.iter().enumerate() {
         joint_cells(&mut s, robot, q);
         s.push(',');
@@ -112,6 +106,23 @@ pub fn write_pose_list(
         s.push('\n');
     }
     std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
+/// The header line of a measurement file (docs/formats.md § 5): `q1…qN,x,y,z`, then those of
+/// the optional columns that are present: `(qw,qx,qy,qz, sigma_mm, payload_kg)`.
+pub(crate) fn header(s: &mut String, dof: usize, (quats, sigma, payload): (bool, bool, bool)) {
+    joint_header(s, dof);
+    s.push_str(",x,y,z");
+    for (present, columns) in [
+        (quats, ",qw,qx,qy,qz"),
+        (sigma, ",sigma_mm"),
+        (payload, ",payload_kg"),
+    ] {
+        if present {
+            s.push_str(columns);
+        }
+    }
+    s.push('\n');
 }
 
 fn joint_header(s: &mut String, dof: usize) {

@@ -383,16 +383,8 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
 
     let dof = jc.len();
     let mut s = String::with_capacity(128 * 1024);
-    let names: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
-    s.push_str(&names.join(","));
-    s.push_str(",x,y,z");
-    if plan.orientation.is_some() {
-        s.push_str(",qw,qx,qy,qz");
-    }
-    if plan.sigma.is_some() {
-        s.push_str(",sigma_mm");
-    }
-    s.push('\n');
+    let optional = (plan.orientation.is_some(), plan.sigma.is_some(), false);
+    super::csv::header(&mut s, dof, optional);
     let mut rows = 0;
     let mut cell = String::new();
     for (line, l) in lines {

@@ -12,12 +12,12 @@ use crate::study::instruments::{Cell, InstrumentsScenario};
 
 /// `report.md`: the settings, a row per cell, and each instrument's blind parameters.
 pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
-    let mut out = format!("# {}\n\n{}\n\n", s.name, s.description);
+    let mut out = format!("# {}\n\n{}\n\n", s.head.name, s.head.description);
     out += &format!(
         "Instruments study on `{}`: {} trials per cell from seed {}, `ls` weighted by 1/σ², \
          validation RMS = position error at {} fresh poses (mm). η: Guo 2024 eq. 29, a \
          parameter the instrument cannot see counts at its nominal value.\n\n",
-        s.robot, s.trials, s.seed, s.validation
+        s.robot, s.head.trials, s.head.seed, s.validation
     );
     let rows: Vec<Vec<String>> = cells
         .iter()
@@ -83,20 +83,15 @@ pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
 /// Writes `summary.json` and `report.md` into `out` as a whole ([`super::atomically`]).
 pub fn write_all(s: &InstrumentsScenario, cells: &[Cell], out: &Path) -> Result<()> {
     super::atomically(out, |dir| {
-        let summary = json!({
-            "scenario": s.name,
-            "description": s.description,
-            "kind": "instruments",
-            "robot": s.robot,
-            "trials": s.trials,
-            "seed": s.seed,
-            "instruments": serde_json::to_value(s.instruments()).map_err(|e| Error::Compute(e.to_string()))?,
-            "cells": cells,
-        });
-        let path = dir.join("summary.json");
-        let text =
-            serde_json::to_string_pretty(&summary).map_err(|e| Error::Compute(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|e| Error::io(&path, e))?;
+        let instruments =
+            serde_json::to_value(s.instruments()).map_err(|e| Error::Compute(e.to_string()))?;
+        let more = json!({"robot": s.robot, "instruments": instruments, "cells": cells});
+        let head = (
+            s.head.name.as_str(),
+            s.head.description.as_str(),
+            "instruments",
+        );
+        super::write_whole_summary(dir, head, (s.head.trials, s.head.seed), more)?;
         let path = dir.join("report.md");
         std::fs::write(&path, report_md(s, cells)).map_err(|e| Error::io(&path, e))
     })

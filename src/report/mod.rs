@@ -220,6 +220,25 @@ pub fn blocked_output<S: AsRef<std::ffi::OsStr>>(
         .find(|p| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()))
 }
 
+/// Writes `summary.json` of a study that runs whole (a registration or an instruments study)
+/// into `dir`: `scenario`, `description`, `kind`, `trials` and `seed`, then `more`'s keys.
+pub(crate) fn write_whole_summary(
+    dir: &std::path::Path,
+    (scenario, description, kind): (&str, &str, &str),
+    (trials, seed): (usize, u64),
+    more: serde_json::Value,
+) -> crate::Result<()> {
+    let mut summary = serde_json::json!({
+        "scenario": scenario, "description": description, "kind": kind,
+        "trials": trials, "seed": seed,
+    });
+    if let (Some(head), serde_json::Value::Object(more)) = (summary.as_object_mut(), more) {
+        head.extend(more);
+    }
+    let path = dir.join("summary.json");
+    std::fs::write(&path, run::json_text(&summary)?).map_err(|e| crate::Error::io(&path, e))
+}
+
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
 /// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when
 /// `out` is absent or empty; otherwise each new file replaces its namesake in `out`, other

@@ -37,7 +37,7 @@ fn magnitude_names(s: &RegistrationScenario) -> Vec<String> {
 pub fn report_md(s: &RegistrationScenario, cells: &[Cell], plot: &str) -> String {
     let st = &s.registration_study;
     let mut out = String::new();
-    let _ = writeln!(out, "# {}\n\n{}\n", s.name, s.description);
+    let _ = writeln!(out, "# {}\n\n{}\n", s.head.name, s.head.description);
     let _ = writeln!(
         out,
         "Registration study (Ban fig. 3): {} points in a {} mm box centred at ({}) mm, noise uniform in ±{} mm per coordinate, {} draws per cell from seed {}. Registration error = mean distance of the registered noise-free points from the truth.\n",
@@ -45,8 +45,8 @@ pub fn report_md(s: &RegistrationScenario, cells: &[Cell], plot: &str) -> String
         st.size_mm.map(|v| fmt_num(v, 4)).join(" × "),
         st.center_mm.map(|v| fmt_num(v, 4)).join(", "),
         fmt_num(st.noise_mm, 3),
-        s.trials,
-        s.seed
+        s.head.trials,
+        s.head.seed
     );
     let mut headers = vec!["gross errors"];
     let names = magnitude_names(s);
@@ -77,19 +77,15 @@ pub fn report_md(s: &RegistrationScenario, cells: &[Cell], plot: &str) -> String
 /// Writes the study's files into `out` as a whole ([`super::atomically`]).
 pub fn write_all(s: &RegistrationScenario, cells: &[Cell], out: &Path) -> Result<()> {
     super::atomically(out, |dir| {
-        let summary = json!({
-            "scenario": s.name,
-            "description": s.description,
-            "kind": "registration_study",
-            "trials": s.trials,
-            "seed": s.seed,
-            "settings": serde_json::to_value(&s.registration_study).map_err(|e| Error::Compute(e.to_string()))?,
-            "cells": cells,
-        });
-        let path = dir.join("summary.json");
-        let text =
-            serde_json::to_string_pretty(&summary).map_err(|e| Error::Compute(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|e| Error::io(&path, e))?;
+        let settings = serde_json::to_value(&s.registration_study)
+            .map_err(|e| Error::Compute(e.to_string()))?;
+        let more = json!({"settings": settings, "cells": cells});
+        let head = (
+            s.head.name.as_str(),
+            s.head.description.as_str(),
+            "registration_study",
+        );
+        super::write_whole_summary(dir, head, (s.head.trials, s.head.seed), more)?;
         let rows: Vec<String> = s
             .registration_study
             .outlier_counts

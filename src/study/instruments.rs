@@ -24,22 +24,15 @@ use crate::poses::{select, PoseModel, SelectOptions, Strategy};
 use crate::robot::{Param, Robot};
 use crate::sim::instrument::{instrument_poses, measure, touch, InstrumentSettings, Layout};
 use crate::sim::settings::ErrorSettings;
+use crate::study::whole::Head;
 
 /// A scenario file running the instruments study.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct InstrumentsScenario {
-    /// Name (the default output folder `results/<name>/`).
-    pub name: String,
-    /// What the study asks.
-    #[serde(default)]
-    pub description: String,
-    /// Master seed; trial t uses `trial_seed(seed, t)`.
-    #[serde(default = "default_seed")]
-    pub seed: u64,
-    /// Trials per cell.
-    #[serde(default = "default_trials")]
-    pub trials: usize,
+    /// The keys every study takes ([`Head::take`]; trials per cell, default 20, at least 2).
+    #[serde(skip)]
+    pub head: Head,
     /// Built-in robot name or robot file.
     pub robot: String,
     /// Pose counts.
@@ -64,12 +57,6 @@ pub struct InstrumentsScenario {
     pub measurement: Vec<InstrumentSettings>,
 }
 
-fn default_seed() -> u64 {
-    1
-}
-fn default_trials() -> usize {
-    20
-}
 fn default_counts() -> Vec<usize> {
     vec![50, 200]
 }
@@ -117,36 +104,13 @@ impl InstrumentsScenario {
             })?;
             measurement.push(m);
         }
-        let mut s: InstrumentsScenario =
-            toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| {
-                    ferr(
-                        "scenario",
-                        format!(
-                            "{} (a scenario with [measurement] takes name, description, seed, \
-                         trials, robot, poses, strategies, candidates, validation, [errors] \
-                         and its [[measurement]] tables)",
-                            e.to_string().trim_end()
-                        ),
-                    )
-                })?;
+        let takes = "with [measurement] takes name, description, seed, trials, robot, poses, \
+                     strategies, candidates, validation, [errors] and its [[measurement]] tables";
+        let trials = (20, 2..=crate::study::scenario::MAX_TRIALS);
+        let (head, mut s): (Head, InstrumentsScenario) =
+            crate::study::whole::parse(table, path, trials, takes)?;
         s.measurement = measurement;
-        if s.name.trim().is_empty() || s.name.contains(['/', '\\']) {
-            return Err(ferr(
-                "name",
-                "must be a non-empty name without slashes".into(),
-            ));
-        }
-        if !(2..=crate::study::scenario::MAX_TRIALS).contains(&s.trials) {
-            return Err(ferr(
-                "trials",
-                format!(
-                    "must be between 2 and {}",
-                    crate::study::scenario::MAX_TRIALS
-                ),
-            ));
-        }
+        s.head = head;
         for (i, m) in s.instruments().iter().enumerate() {
             m.instrument()
                 .map_err(|e| ferr(&format!("measurement[{i}]"), e.to_string()))?;
@@ -326,7 +290,7 @@ impl InstrumentsScenario {
             .collect();
         let mut cells = Vec::new();
         for (ii, s) in self.instruments().iter().enumerate() {
-            let mut rng = stream(self.seed, &format!("instruments-pool-{ii}"));
+            let mut rng = stream(self.head.seed, &format!("instruments-pool-{ii}"));
             let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
             let values = vec![
                 0.0;
@@ -368,7 +332,8 @@ impl InstrumentsScenario {
                     let fixed = if strat == Strategy::Random {
                         None
                     } else {
-                        let mut r = stream(self.seed, &format!("instruments-select-{ii}-{count}"));
+                        let mut r =
+                            stream(self.head.seed, &format!("instruments-select-{ii}-{count}"));
                         let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)
                             .map_err(|e| Error::setting("poses", format!("{label}: {e}")))?;
                         let g: Vec<usize> = sel
@@ -378,10 +343,10 @@ impl InstrumentsScenario {
                             .collect();
                         Some((sel.poses, g))
                     };
-                    let trials: Vec<Option<Trial>> = (0..self.trials)
+                    let trials: Vec<Option<Trial>> = (0..self.head.trials)
                         .into_par_iter()
                         .map(|t| {
-                            let seed = trial_seed(self.seed, t as u64);
+                            let seed = trial_seed(self.head.seed, t as u64);
                             self.trial(
                                 nominal,
                                 s,

@@ -26,6 +26,7 @@ pub mod scenario;
 pub mod spill;
 pub mod stats;
 pub mod trial;
+pub mod whole;
 
 use std::collections::BTreeMap;
 use std::io::IsTerminal;

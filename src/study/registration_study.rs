@@ -25,6 +25,7 @@ use crate::calibrate::registration::{register_svd, register_wsvd, Registration};
 use crate::error::{finite_non_negative, finite_positive, Error, Result};
 use crate::numeric::rng;
 use crate::numeric::{Frame, Real, Vec3};
+use crate::study::whole::Head;
 
 /// The `[registration_study]` table. Defaults are Ban §3's simulation: 50 points, ±0.02 mm
 /// noise, 2, 4, …, 16 gross errors of 0–0.2 … 0–1 mm, in Ban's 800 mm cube.
@@ -64,31 +65,16 @@ impl Default for RegistrationStudy {
 }
 
 /// A scenario file running the registration study: `name`, `description`, `seed`,
-/// `trials` (draws per cell) as in every scenario, and the `[registration_study]` table.
+/// `trials` (draws per cell, default 100) as in every scenario, and the
+/// `[registration_study]` table.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RegistrationScenario {
-    /// Name (the default output folder `results/<name>/`).
-    pub name: String,
-    /// What the study asks.
-    #[serde(default)]
-    pub description: String,
-    /// Master seed; draw t uses `trial_seed(seed, t)`.
-    #[serde(default = "default_seed")]
-    pub seed: u64,
-    /// Draws per cell of the grid.
-    #[serde(default = "default_trials")]
-    pub trials: usize,
+    /// The keys every study takes ([`Head::take`]).
+    #[serde(skip)]
+    pub head: Head,
     /// The study's settings.
     pub registration_study: RegistrationStudy,
-}
-
-fn default_seed() -> u64 {
-    1
-}
-
-fn default_trials() -> usize {
-    100
 }
 
 impl RegistrationScenario {
@@ -100,35 +86,12 @@ impl RegistrationScenario {
     /// Parses and checks the scenario in `table`, read from `path` (named in errors).
     pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
-        let s: RegistrationScenario =
-            toml::Value::Table(table)
-                .try_into()
-                .map_err(|e: toml::de::Error| {
-                    ferr(
-                        "scenario",
-                        format!(
-                            "{} (a scenario with [registration_study] takes only name, \
-                         description, seed, trials and that table)",
-                            e.to_string().trim_end()
-                        ),
-                    )
-                })?;
-        if s.name.trim().is_empty() || s.name.contains(['/', '\\']) {
-            return Err(ferr(
-                "name",
-                "must be a non-empty name without slashes".into(),
-            ));
-        }
-        if s.trials == 0 || s.trials > crate::study::scenario::MAX_TRIALS {
-            return Err(ferr(
-                "trials",
-                format!(
-                    "must be between 1 and {}, got {}",
-                    crate::study::scenario::MAX_TRIALS,
-                    s.trials
-                ),
-            ));
-        }
+        let takes = "with [registration_study] takes only name, description, seed, trials and \
+                     that table";
+        let trials = (100, 1..=crate::study::scenario::MAX_TRIALS);
+        let (head, mut s): (Head, RegistrationScenario) =
+            crate::study::whole::parse(table, path, trials, takes)?;
+        s.head = head;
         s.registration_study
             .check()
             .map_err(|e| ferr("setting", e.to_string()))?;

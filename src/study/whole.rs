@@ -1,0 +1,89 @@
+//! What every study that runs whole (a registration study, an instruments study) begins with:
+//! the `name`, `description`, `seed` and `trials` keys of its scenario file, read and checked
+//! in one place.
+
+use std::ops::RangeInclusive;
+use std::path::Path;
+
+use serde::Deserialize;
+
+use crate::error::{Error, Result};
+
+/// The scenario keys every study that runs whole takes.
+#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Head {
+    /// Name (the default output folder `results/<name>/`).
+    pub name: String,
+    /// What the study asks.
+    #[serde(default)]
+    pub description: String,
+    /// Master seed; trial (draw) t uses `trial_seed(seed, t)`.
+    #[serde(default = "default_seed")]
+    pub seed: u64,
+    /// Trials (draws) per cell of the study; the study's default when absent.
+    pub trials: usize,
+}
+
+fn default_seed() -> u64 {
+    1
+}
+
+/// The keys of [`Head`].
+const KEYS: [&str; 4] = ["name", "description", "seed", "trials"];
+
+impl Head {
+    /// Takes [`Head`]'s keys out of `table`, read from `path` (named in errors), and checks
+    /// them: a non-empty name without slashes, and `trials` (`default_trials` when absent)
+    /// within `trials`.
+    pub fn take(
+        table: &mut toml::Table,
+        path: &Path,
+        default_trials: usize,
+        trials: RangeInclusive<usize>,
+    ) -> Result<Head> {
+        let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+        let mut keys: toml::Table = KEYS
+            .iter()
+            .filter_map(|k| table.remove(*k).map(|v| (k.to_string(), v)))
+            .collect();
+        let default_trials = i64::try_from(default_trials).unwrap_or(i64::MAX);
+        keys.entry("trials")
+            .or_insert(toml::Value::Integer(default_trials));
+        let head: Head = toml::Value::Table(keys)
+            .try_into()
+            .map_err(|e: toml::de::Error| ferr("scenario", e.to_string().trim_end().into()))?;
+        if head.name.trim().is_empty() || head.name.contains(['/', '\\']) {
+            let msg = "must be a non-empty name without slashes";
+            return Err(ferr("name", msg.into()));
+        }
+        let n = head.trials;
+        if !trials.contains(&n) {
+            let (lo, hi) = (trials.start(), trials.end());
+            return Err(ferr(
+                "trials",
+                format!("must be between {lo} and {hi}, got {n}"),
+            ));
+        }
+        Ok(head)
+    }
+}
+
+/// Reads a study's scenario from `table`, read from `path` (named in errors): its [`Head`]
+/// ([`Head::take`], with `default_trials` and the range `trials`) and the rest as `T`, an
+/// unknown key refused with the keys such a scenario takes (`takes`).
+pub fn parse<T: serde::de::DeserializeOwned>(
+    mut table: toml::Table,
+    path: &Path,
+    (default_trials, trials): (usize, RangeInclusive<usize>),
+    takes: &str,
+) -> Result<(Head, T)> {
+    let head = Head::take(&mut table, path, default_trials, trials)?;
+    let rest = toml::Value::Table(table)
+        .try_into()
+        .map_err(|e: toml::de::Error| {
+            let msg = format!("{} (a scenario {takes})", e.to_string().trim_end());
+            Error::file(path, "scenario", msg)
+        })?;
+    Ok((head, rest))
+}
