@@ -22,7 +22,9 @@ use crate::numeric::rng::{stream, trial_seed};
 use crate::numeric::{Real, Vec3};
 use crate::poses::{select, PoseModel, SelectOptions, Strategy};
 use crate::robot::{Param, Robot};
-use crate::sim::instrument::{instrument_poses, measure, touch, InstrumentSettings, Layout};
+use crate::sim::instrument::{
+    instrument_poses, measure, touch, touching, InstrumentSettings, Layout,
+};
 use crate::sim::settings::ErrorSettings;
 use crate::study::whole::Head;
 
@@ -153,6 +155,36 @@ fn strategy(name: &str) -> Result<Strategy> {
             format!("unknown strategy \"{other}\" (random, detmax, detmax-ide)"),
         )),
     }
+}
+
+/// The selected poses `chosen` commanded as the simulation measures them: each moved onto its
+/// nearest plane or sphere by the nominal robot ([`touching`], inside the joint limits by a
+/// margin, as the candidates were made), so that the true robot touches from it. IDE's new
+/// poses leave the surfaces, and some cannot be moved back within the limits: those are
+/// replaced by the first candidates of `pool` (with their `groups`) not already chosen, so
+/// that the set keeps `count` poses. Other kinds keep the poses as they are.
+fn on_surfaces(
+    nominal: &Robot,
+    lay: &Layout,
+    chosen: Vec<Vec<Real>>,
+    (pool, groups): (&[Vec<Real>], &[usize]),
+    count: usize,
+) -> (Vec<Vec<Real>>, Vec<usize>) {
+    let g: Vec<usize> = chosen
+        .iter()
+        .map(|q| nearest(lay, &nominal.fk(q).pos))
+        .collect();
+    let (mut qs, mut g) = touching(nominal, lay, &chosen, &g);
+    for (q, k) in pool.iter().zip(groups) {
+        if qs.len() >= count {
+            break;
+        }
+        if !qs.contains(q) {
+            qs.push(q.clone());
+            g.push(*k);
+        }
+    }
+    (qs, g)
 }
 
 /// The instrument's information rows of one pose for pose selection: the pose moved onto
@@ -336,12 +368,7 @@ impl InstrumentsScenario {
                             stream(self.head.seed, &format!("instruments-select-{ii}-{count}"));
                         let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)
                             .map_err(|e| Error::setting("poses", format!("{label}: {e}")))?;
-                        let g: Vec<usize> = sel
-                            .poses
-                            .iter()
-                            .map(|q| nearest(&lay, &nominal.fk(q).pos))
-                            .collect();
-                        Some((sel.poses, g))
+                        Some(on_surfaces(nominal, &lay, sel.poses, (&pool, &groups), count))
                     };
                     let trials: Vec<Option<Trial>> = (0..self.head.trials)
                         .into_par_iter()
