@@ -368,7 +368,13 @@ impl InstrumentsScenario {
                             stream(self.head.seed, &format!("instruments-select-{ii}-{count}"));
                         let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)
                             .map_err(|e| Error::setting("poses", format!("{label}: {e}")))?;
-                        Some(on_surfaces(nominal, &lay, sel.poses, (&pool, &groups), count))
+                        Some(on_surfaces(
+                            nominal,
+                            &lay,
+                            sel.poses,
+                            (&pool, &groups),
+                            count,
+                        ))
                     };
                     let trials: Vec<Option<Trial>> = (0..self.head.trials)
                         .into_par_iter()
