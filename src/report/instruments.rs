@@ -1,25 +1,46 @@
 //! The files of the instruments study ([`crate::study::instruments`]): `summary.json` (a cell
-//! per instrument, pose count and strategy) and `report.md` (the table of what each instrument
-//! buys). Writers only read results that are already computed.
+//! per instrument, pose count and strategy), and `report.md` and `report.html` (the table of
+//! what each instrument buys). Writers only read results that are already computed.
 
 use std::path::Path;
 
 use serde_json::json;
 
+use super::html::Page;
 use super::markdown::{fmt_num, table};
 use crate::error::{Error, Result};
 use crate::study::instruments::{Cell, InstrumentsScenario};
 
-/// `report.md`: the settings, a row per cell, and each instrument's blind parameters.
-pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
-    let mut out = format!("# {}\n\n{}\n\n", s.head.name, s.head.description);
-    out += &format!(
+/// The columns of the cells' table.
+const HEADERS: [&str; 10] = [
+    "instrument",
+    "poses",
+    "strategy",
+    "σ (µm)",
+    "identified",
+    "η mean %",
+    "before mm",
+    "after mm",
+    "CRB ratio",
+    "failures",
+];
+
+/// What `report.md` and `report.html` both show: the settings in a sentence, a row per cell,
+/// and per instrument the parameters it cannot see and its own unknowns.
+struct Content {
+    lead: String,
+    rows: Vec<Vec<String>>,
+    blind: Vec<Vec<String>>,
+}
+
+fn content(s: &InstrumentsScenario, cells: &[Cell]) -> Content {
+    let lead = format!(
         "Instruments study on `{}`: {} trials per cell from seed {}, `ls` weighted by 1/σ², \
          validation RMS = position error at {} fresh poses (mm). η: Guo 2024 eq. 29, a \
-         parameter the instrument cannot see counts at its nominal value.\n\n",
+         parameter the instrument cannot see counts at its nominal value.",
         s.robot, s.head.trials, s.head.seed, s.validation
     );
-    let rows: Vec<Vec<String>> = cells
+    let rows = cells
         .iter()
         .map(|c| {
             vec![
@@ -40,47 +61,60 @@ pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
             ]
         })
         .collect();
-    out += &table(
-        &[
-            "instrument",
-            "poses",
-            "strategy",
-            "σ (µm)",
-            "identified",
-            "η mean %",
-            "before mm",
-            "after mm",
-            "CRB ratio",
-            "failures",
-        ],
-        &rows,
-    );
-    out += "\n## Parameters each instrument cannot see\n\n";
-    let mut seen = Vec::new();
-    for c in cells {
-        if seen.contains(&c.kind) {
-            continue;
+    let listed = |v: &[String]| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.join(", ")
         }
-        seen.push(c.kind.clone());
-        out += &format!(
-            "- **{}**: {} (instrument unknowns: {})\n",
-            c.kind,
-            if c.unidentifiable.is_empty() {
-                "none".into()
-            } else {
-                c.unidentifiable.join(", ")
-            },
-            if c.instrument_unknowns.is_empty() {
-                "none".into()
-            } else {
-                c.instrument_unknowns.join(", ")
-            },
-        );
+    };
+    let mut blind: Vec<Vec<String>> = Vec::new();
+    for c in cells {
+        if !blind.iter().any(|b| b[0] == c.kind) {
+            let unknowns = listed(&c.instrument_unknowns);
+            blind.push(vec![c.kind.clone(), listed(&c.unidentifiable), unknowns]);
+        }
+    }
+    Content { lead, rows, blind }
+}
+
+/// `report.md`: the settings, a row per cell, and each instrument's blind parameters.
+pub fn report_md(s: &InstrumentsScenario, cells: &[Cell]) -> String {
+    let c = content(s, cells);
+    let mut out = format!(
+        "# {}\n\n{}\n\n{}\n\n",
+        s.head.name, s.head.description, c.lead
+    );
+    out += &table(&HEADERS, &c.rows);
+    out += "\n## Parameters each instrument cannot see\n\n";
+    for b in &c.blind {
+        out += &format!("- **{}**: {} (instrument unknowns: {})\n", b[0], b[1], b[2]);
     }
     out
 }
 
-/// Writes `summary.json` and `report.md` into `out` as a whole ([`super::atomically`]).
+/// `report.html`: the page of [`report_md`], its tables sortable.
+pub fn report_html(s: &InstrumentsScenario, cells: &[Cell]) -> Page {
+    let c = content(s, cells);
+    let mut page = Page::new(
+        &format!("Instruments study: {}", s.head.name),
+        &s.head.description,
+    );
+    page.section("What each instrument buys");
+    page.para(&c.lead);
+    let caption = "a row per instrument, pose count and pose strategy";
+    page.table(caption, &HEADERS, &c.rows);
+    page.section("Parameters each instrument cannot see");
+    let headers = ["instrument", "cannot see", "instrument unknowns"];
+    page.table(
+        "joint and tool parameters left at their nominal values",
+        &headers,
+        &c.blind,
+    );
+    page
+}
+
+/// Writes `summary.json`, `report.md` and `report.html` into `out` as a whole ([`super::atomically`]).
 pub fn write_all(s: &InstrumentsScenario, cells: &[Cell], out: &Path) -> Result<()> {
     super::atomically(out, |dir| {
         let instruments =
@@ -93,6 +127,7 @@ pub fn write_all(s: &InstrumentsScenario, cells: &[Cell], out: &Path) -> Result<
         );
         super::write_whole_summary(dir, head, (s.head.trials, s.head.seed), more)?;
         let path = dir.join("report.md");
-        std::fs::write(&path, report_md(s, cells)).map_err(|e| Error::io(&path, e))
+        std::fs::write(&path, report_md(s, cells)).map_err(|e| Error::io(&path, e))?;
+        report_html(s, cells).write(&dir.join("report.html"))
     })
 }

@@ -114,6 +114,18 @@ fn instruments_study_runs_every_kind() {
     let a = run("1", "a");
     let b = run("2", "b");
     assert_eq!(read(&a.join("summary.json")), read(&b.join("summary.json")));
+    let html = read(&a.join("report.html"));
+    assert_eq!(html, read(&b.join("report.html")));
+    for k in [
+        "position",
+        "distance",
+        "plane",
+        "sphere",
+        "multi-target",
+        "cannot see",
+    ] {
+        assert!(html.contains(k), "report.html lacks {k}");
+    }
     let s = load_json(&a.join("summary.json"));
     let cells = s["cells"].as_array().unwrap();
     assert_eq!(cells.len(), 5 * 2);
