@@ -501,7 +501,8 @@ impl InstrumentsScenario {
         trials: &[Option<Trial>],
     ) -> Cell {
         let ok: Vec<&Trial> = trials.iter().flatten().collect();
-        let n = ok.len().max(1) as Real;
+        // With no trial left every mean is NaN (`null` in summary.json, "—" in the reports).
+        let n = ok.len() as Real;
         let mut eta = BTreeMap::new();
         if let Some(first) = ok.first() {
             for (k, (p, _)) in first.errors.iter().enumerate() {
@@ -522,7 +523,7 @@ impl InstrumentsScenario {
                 }
             }
         }
-        let eta_mean_pct = eta.values().sum::<Real>() / eta.len().max(1) as Real;
+        let eta_mean_pct = eta.values().sum::<Real>() / eta.len() as Real;
         // Empirical covariance trace of the estimation errors of the identified parameters.
         let t = params.len();
         let err = |tr: &Trial, c: usize| {
