@@ -51,15 +51,15 @@ for name in ("measurements.csv", "validation.csv"):
             w.writerow(r)
 PY
 echo "model,seed,ape_mm,aae_deg,evaluations" >"$out/fig7.csv"
-# Qiao's 24 parameters (§3.2), as the scenario's [identification] params.
-qiao24=$(sed -n 's/^params = \[\(.*\)\]$/\1/p' scenarios/qiao2021-tx60.toml | tail -1 | tr -d '" ')
+# Qiao's 24 parameters (§3.2), the scenario's [errors] params.
+qiao24=$(sed -n 's/^params = \[\(.*\)\]$/\1/p' scenarios/qiao2021-tx60.toml | head -1 | tr -d '" ')
 for model in differential coordinate_transfer direct_fk; do
     set_model=()
     # Model 3 is the search on the forward kinematics, bas-pso's own fitness.
     [ "$model" = direct_fk ] || set_model=(--set "error_model=\"$model\"")
     for seed in $(seq 1 "$runs"); do
         dir="$out/$model-$seed"
-        "$bin" identify --robot tx60 --data "$out/data/base-measurements.csv" \
+        "$bin" identify --robot tx60-floor --data "$out/data/base-measurements.csv" \
             --validate "$out/data/base-validation.csv" --registration known \
             --params "$qiao24" --method bas-pso \
             --set max_evaluations=60000 "${set_model[@]}" --seed "$seed" --out "$dir" >/dev/null

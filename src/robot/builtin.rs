@@ -35,6 +35,13 @@ const IRB2600_STIFFNESS: [Real; 6] = [4.0e6, 3.5e6, 2.5e6, 4.0e5, 4.0e5, 2.0e5];
 /// 284 kg, ABB product specification), less the fixed base.
 const IRB2600_LINK_MASS_KG: [Real; 6] = [60.0, 40.0, 25.0, 10.0, 4.0, 1.0];
 
+/// TX60 joint stiffnesses (N·m/rad), guessed, scaled down from the IRB2600 values for a 51 kg
+/// arm (Stäubli data sheet): median sag 0.09 mm over uniform poses (max 0.23 mm), a realistic
+/// share of a small arm's sub-millimetre pre-calibration error.
+const TX60_STIFFNESS: [Real; 6] = [2.0e5, 2.0e5, 1.0e5, 1.5e4, 1.5e4, 5.0e3];
+/// TX60 link masses (kg), guessed as the stiffnesses.
+const TX60_LINK_MASS_KG: [Real; 6] = [12.0, 10.0, 6.0, 3.0, 1.5, 0.5];
+
 /// The built-in robots.
 pub const BUILTINS: &[Builtin] = &[
     Builtin {
@@ -55,11 +62,16 @@ pub const BUILTINS: &[Builtin] = &[
         name: "tx60",
         summary: "Stäubli TX60, DH + β (Qiao 2021 table 1)",
         build: tx60,
-        // Guessed, scaled down from the IRB2600 values for a 51 kg arm (Stäubli data sheet):
-        // median sag 0.09 mm over uniform poses (max 0.23 mm), a realistic share of a small
-        // arm's sub-millimetre pre-calibration error.
-        stiffness: &[2.0e5, 2.0e5, 1.0e5, 1.5e4, 1.5e4, 5.0e3],
-        link_mass_kg: &[12.0, 10.0, 6.0, 3.0, 1.5, 0.5],
+        stiffness: &TX60_STIFFNESS,
+        link_mass_kg: &TX60_LINK_MASS_KG,
+    },
+    Builtin {
+        name: "tx60-floor",
+        summary: "the same Stäubli TX60 with its base frame at the mounting face, 375 mm below \
+                  the shoulder (d1 = 375 mm; Qiao 2021's cube)",
+        build: tx60_floor,
+        stiffness: &TX60_STIFFNESS,
+        link_mass_kg: &TX60_LINK_MASS_KG,
     },
     Builtin {
         name: "guo-3t2r",
@@ -202,22 +214,16 @@ pub fn irb2600_mdh() -> Robot {
 
 /// Stäubli TX60 in DH + β.
 ///
-/// Geometry: Qiao 2021 table 1 (θ, α in rad there: π, π/2, … written here in degrees), but
-/// for d1. Qiao's table starts the chain at the shoulder (d1 = 0); the base frame here is
-/// the arm's mounting face, 375 mm below the shoulder (ROS-Industrial's
-/// `staubli_tx60_support`, `urdf/tx60_macro.xacro`: joint 1 at z = 0.375 m above
-/// `base_link`), so d1 = 375 mm. Qiao measures in the robot's base frame and places the
-/// poses in a 1000 mm cube centred at (550, 0, 550) mm, which the arm (670 mm from the
-/// shoulder to the flange) reaches in part only from the mounting face, not at all in its upper
-/// half from the shoulder. Joint limits: Stäubli TX60 data sheet, working range J1 ±180°,
-/// J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
+/// Geometry: Qiao 2021 table 1 (θ, α in rad there:
+/// π, π/2, … written here in degrees). Joint limits: Stäubli TX60 data sheet, working range
+/// J1 ±180°, J2 ±127.5°, J3 ±142.5°, J4 ±270°, J5 +133.5°/−121°, J6 ±270°.
 pub fn tx60() -> Robot {
     from_table(
         "tx60",
         Convention::DhBeta,
         &R6,
         &[
-            (180.0, 375.0, 0.0, 90.0, 0.0, (-180.0, 180.0)),
+            (180.0, 0.0, 0.0, 90.0, 0.0, (-180.0, 180.0)),
             (90.0, 0.0, 290.0, 0.0, 0.0, (-127.5, 127.5)),
             (90.0, 20.0, 0.0, 90.0, 0.0, (-142.5, 142.5)),
             (180.0, 310.0, 0.0, 90.0, 0.0, (-270.0, 270.0)),
@@ -225,6 +231,21 @@ pub fn tx60() -> Robot {
             (0.0, 70.0, 0.0, 0.0, 0.0, (-270.0, 270.0)),
         ],
     )
+}
+
+/// [`tx60`] with its base frame at the arm's mounting face. Qiao's table 1 starts the chain at
+/// the shoulder (d1 = 0); the mounting face is 375 mm below it (ROS-Industrial's
+/// `staubli_tx60_support`, `urdf/tx60_macro.xacro`: joint 1 at z = 0.375 m above
+/// `base_link`), so d1 = 375 mm here. Qiao places the poses in a 1000 mm cube centred at
+/// (550, 0, 550) mm of the robot's base frame, which the arm (670 mm from the shoulder to the
+/// flange) reaches in its lower part from the mounting face; from the shoulder the cube's centre
+/// is 778 mm away.
+pub fn tx60_floor() -> Robot {
+    let mut r = tx60();
+    r.name = "tx60-floor".into();
+    let n = r.dof();
+    r.values[Param::D(0).index(n)] = 375.0;
+    r
 }
 
 /// The 24 TX60 parameters Qiao 2021 identifies (§3.2): θ, d, a, α of every joint except

@@ -100,9 +100,9 @@ fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
             out.to_str().unwrap(),
         ])
     };
-    let o = id(&pose, "tx60", "150", &tmp_dir("cli-k-out"));
+    let o = id(&pose, "tx60-floor", "150", &tmp_dir("cli-k-out"));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    for (sim, robot, k) in [(&pose, "tx60", "0"), (&pos, "irb2600", "100")] {
+    for (sim, robot, k) in [(&pose, "tx60-floor", "0"), (&pos, "irb2600", "100")] {
         let o = id(sim, robot, k, &tmp_dir("cli-k-bad"));
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains("--k"), "k = {k}: {err}");
@@ -304,7 +304,7 @@ fn identify_seed_repeats_a_random_search_on_one_data_set() {
     calbench_ok(&[
         "identify",
         "--robot",
-        "tx60",
+        "tx60-floor",
         "--data",
         out.join("data/base-measurements.csv").to_str().unwrap(),
         "--validate",
@@ -337,7 +337,7 @@ fn identify_seed_repeats_a_random_search_on_one_data_set() {
         let o = calbench(&[
             "identify",
             "--robot",
-            "tx60",
+            "tx60-floor",
             "--data",
             out.join("data/base-measurements.csv").to_str().unwrap(),
             "--method",

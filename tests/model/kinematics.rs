@@ -54,16 +54,18 @@ fn irb2600_mdh_home_pose_by_hand() {
     );
 }
 
-/// TX60 at q = 0, by hand from Qiao 2021 table 1 on a base 375 mm below the shoulder: upright,
-/// flange at (0, 20, 375 + 670) mm with the base orientation.
+/// TX60 at q = 0, by hand from Qiao 2021 table 1: upright, flange at (0, 20, 670) mm with the
+/// base orientation; on its mounting face (`tx60-floor`) 375 mm higher.
 #[test]
 fn tx60_home_pose_by_hand() {
-    let f = fk_user(&builtin::tx60(), &[0.0; 6]);
+    let up = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
     assert_frame(
-        &f,
-        [0.0, 20.0, 1045.0],
-        [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]],
+        &fk_user(&builtin::tx60(), &[0.0; 6]),
+        [0.0, 20.0, 670.0],
+        up,
     );
+    let floor = builtin::load("tx60-floor").unwrap();
+    assert_frame(&fk_user(&floor, &[0.0; 6]), [0.0, 20.0, 1045.0], up);
 }
 
 /// guo-3t2r with equal screw travels (ψ = 0, ξ = 200 mm), J4 = J5 = 0, J3 travel 0: by
