@@ -3,32 +3,34 @@
 //! `compensate --targets`, a URDF tree with `--tip`, and a 7-axis arm through `fk`,
 //! `identifiability`, `identify` and `compensate`.
 
+use std::path::Path;
+
 use calbench::numeric::rng::stream;
 use calbench::numeric::Real;
 use calbench::robot::{builtin, Param};
 
 use crate::common::{
-    calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, ur10_example as ex,
+    calbench, calbench_ok, import_ur10_sample, load_json, path_arg, positions_only, read, root,
+    tmp_dir, ur10_example as ex,
 };
 
 /// The first 200 rows of the UR10 export, positions only, as a measurement CSV in `d`.
 fn ur10_positions(d: &std::path::Path) -> String {
     let all = d.join("all.csv");
-    calbench_ok(&[
-        "import",
-        &ex("sample-200.csv"),
-        "--mapping",
-        &ex("mapping.toml"),
-        "--out",
-        path_arg(&all),
-    ]);
-    let text: String = read(&all)
-        .lines()
-        .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
-        .collect();
+    import_ur10_sample(&ex("mapping.toml"), &all);
     let p = d.join("pos.csv");
-    std::fs::write(&p, text).unwrap();
+    positions_only(&all, &p);
     p.display().to_string()
+}
+
+/// The arguments of `calbench identify --robot ROBOT --data DATA --method lm EXTRA… --out OUT`.
+fn lm_args<'a>(robot: &'a str, data: &'a str, extra: &[&'a str], out: &'a Path) -> Vec<&'a str> {
+    let mut a = vec![
+        "identify", "--robot", robot, "--data", data, "--method", "lm",
+    ];
+    a.extend_from_slice(extra);
+    a.extend_from_slice(&["--out", path_arg(out)]);
+    a
 }
 
 #[test]
@@ -36,25 +38,21 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     let d = tmp_dir("practice-cv");
     let data = ur10_positions(&d);
     let out = d.join("cv");
-    let o = calbench_ok(&[
-        "identify",
-        "--robot",
+    let o = calbench_ok(&lm_args(
         &ex("ur10.toml"),
-        "--data",
         &data,
-        "--method",
-        "lm",
-        "--holdout",
-        "3/10",
-        "--cv",
-        "4",
-        "--models",
-        "kinematic,beta",
-        "--export",
-        "ur-yaml,dh-csv",
-        "--out",
-        path_arg(&out),
-    ]);
+        &[
+            "--holdout",
+            "3/10",
+            "--cv",
+            "4",
+            "--models",
+            "kinematic,beta",
+            "--export",
+            "ur-yaml,dh-csv",
+        ],
+        &out,
+    ));
     let text = String::from_utf8_lossy(&o.stdout).to_string();
     assert!(text.contains("(best)"), "{text}");
     let j = load_json(&out.join("identified.json"));
@@ -115,35 +113,21 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         section.contains("aria-label=\"Diagnostics\"") && section.contains("Cook&#39;s distance")
     );
     // A bad split rule and a --holdout with --validate are refused.
-    let bad = calbench(&[
-        "identify",
-        "--robot",
+    let bad = calbench(&lm_args(
         &ex("ur10.toml"),
-        "--data",
         &data,
-        "--method",
-        "lm",
-        "--holdout",
-        "10/10",
-        "--out",
-        path_arg(&d.join("x")),
-    ]);
+        &["--holdout", "10/10"],
+        &d.join("x"),
+    ));
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("LAST/EVERY"));
     // ur-yaml of a robot that is not UR-like is refused.
-    let bad = calbench(&[
-        "identify",
-        "--robot",
+    let bad = calbench(&lm_args(
         "irb2600",
-        "--data",
         &data,
-        "--method",
-        "lm",
-        "--export",
-        "ur-yaml",
-        "--out",
-        path_arg(&d.join("y")),
-    ]);
+        &["--export", "ur-yaml"],
+        &d.join("y"),
+    ));
     assert!(!bad.status.success());
 }
 
@@ -154,12 +138,7 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
     let robot = ex("ur10.toml");
     let run = |extra: &[&str], name: &str| {
         let out = d.join(name);
-        let mut a = vec![
-            "identify", "--robot", &robot, "--data", &data, "--method", "lm",
-        ];
-        a.extend_from_slice(extra);
-        a.extend_from_slice(&["--out", path_arg(&out)]);
-        calbench_ok(&a);
+        calbench_ok(&lm_args(&robot, &data, extra, &out));
         load_json(&out.join("identified.json"))
     };
     let free = run(&[], "free");
@@ -180,35 +159,19 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
     let loose = run(&["--prior", path_arg(&f)], "loose");
     assert!((loose["errors"]["a2"].as_f64().unwrap() - a2).abs() < 1e-3 * a2.abs());
     // A prior on a fixed parameter, and a bad σ, are refused.
-    let bad = calbench(&[
-        "identify",
-        "--robot",
+    let bad = calbench(&lm_args(
         &ex("ur10.toml"),
-        "--data",
         &data,
-        "--method",
-        "lm",
-        "--fix",
-        "a2",
-        "--prior",
-        "a2=0.1",
-        "--out",
-        path_arg(&d.join("bad")),
-    ]);
+        &["--fix", "a2", "--prior", "a2=0.1"],
+        &d.join("bad"),
+    ));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("priors.a2"));
-    let bad = calbench(&[
-        "identify",
-        "--robot",
+    let bad = calbench(&lm_args(
         &ex("ur10.toml"),
-        "--data",
         &data,
-        "--method",
-        "lm",
-        "--prior",
-        "a2=-1",
-        "--out",
-        path_arg(&d.join("bad2")),
-    ]);
+        &["--prior", "a2=-1"],
+        &d.join("bad2"),
+    ));
     assert!(!bad.status.success());
 }
 
@@ -217,17 +180,7 @@ fn compensate_targets_reaches_cartesian_targets_on_the_identified_robot() {
     let d = tmp_dir("practice-targets");
     let data = ur10_positions(&d);
     let out = d.join("id");
-    calbench_ok(&[
-        "identify",
-        "--robot",
-        &ex("ur10.toml"),
-        "--data",
-        &data,
-        "--method",
-        "lm",
-        "--out",
-        path_arg(&out),
-    ]);
+    calbench_ok(&lm_args(&ex("ur10.toml"), &data, &[], &out));
     let nominal = builtin::load(&ex("ur10.toml")).unwrap();
     let ident = builtin::load(out.join("robot.toml").to_str().unwrap()).unwrap();
     let mut g = stream(4, "targets");
@@ -407,21 +360,12 @@ fn a_seven_axis_arm_end_to_end() {
         path_arg(&data),
     ]);
     let out = d.join("id");
-    calbench_ok(&[
-        "identify",
-        "--robot",
+    calbench_ok(&lm_args(
         path_arg(&r7),
-        "--data",
         path_arg(&data),
-        "--method",
-        "lm",
-        "--cv",
-        "3",
-        "--export",
-        "dh-csv",
-        "--out",
-        path_arg(&out),
-    ]);
+        &["--cv", "3", "--export", "dh-csv"],
+        &out,
+    ));
     let j = load_json(&out.join("identified.json"));
     assert!(
         j["rms_residual_mm"].as_f64().unwrap() < 1e-4,

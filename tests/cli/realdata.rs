@@ -9,7 +9,10 @@ use calbench::robot::builtin;
 use calbench::robot::urdf::UrdfRobot;
 use calbench::robot::Param;
 
-use crate::common::{calbench, calbench_ok, path_arg, tmp_dir, ur10_example as ex};
+use crate::common::{
+    calbench, calbench_ok, import_ur10_sample, path_arg, positions_only, tmp_dir,
+    ur10_example as ex,
+};
 
 /// Pose difference (mm, rad) of two robots' FK at internal joint values.
 fn fk_gap(a: &calbench::robot::Robot, b: &calbench::robot::Robot, q: &[Real]) -> (Real, Real) {
@@ -22,14 +25,7 @@ fn fk_gap(a: &calbench::robot::Robot, b: &calbench::robot::Robot, q: &[Real]) ->
 fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
     let d = tmp_dir("realdata-import");
     let out = d.join("m.csv");
-    calbench_ok(&[
-        "import",
-        &ex("sample-200.csv"),
-        "--mapping",
-        &ex("mapping.toml"),
-        "--out",
-        path_arg(&out),
-    ]);
+    import_ur10_sample(&ex("mapping.toml"), &out);
     let text = std::fs::read_to_string(&out).unwrap();
     let mut lines = text.lines();
     assert_eq!(
@@ -148,22 +144,10 @@ fn import_identify_compensate_on_the_shipped_rows() {
         .unwrap()
         .replace("write_unit = \"deg\"", "write_unit = \"rad\"");
     std::fs::write(&mapping, text).unwrap();
-    calbench_ok(&[
-        "import",
-        &ex("sample-200.csv"),
-        "--mapping",
-        path_arg(&mapping),
-        "--out",
-        path_arg(&m),
-    ]);
+    import_ur10_sample(path_arg(&mapping), &m);
     // Position only: the q and xyz columns.
-    let pos: String = std::fs::read_to_string(&m)
-        .unwrap()
-        .lines()
-        .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
-        .collect();
     let p = d.join("pos.csv");
-    std::fs::write(&p, pos).unwrap();
+    positions_only(&m, &p);
     let out = d.join("id");
     calbench_ok(&[
         "identify",

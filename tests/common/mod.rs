@@ -154,3 +154,27 @@ pub fn ur10_example(file: &str) -> String {
         .display()
         .to_string()
 }
+
+/// `calbench import` of the shipped UR10 sample (`examples/ipa-ur10/sample-200.csv`) with the
+/// mapping file `mapping` into the measurement CSV `out`.
+pub fn import_ur10_sample(mapping: &str, out: &Path) {
+    let sample = ur10_example("sample-200.csv");
+    calbench_ok(&[
+        "import",
+        &sample,
+        "--mapping",
+        mapping,
+        "--out",
+        path_arg(out),
+    ]);
+}
+
+/// The measurement CSV `csv` cut to its position columns (the first nine: six joints and x, y,
+/// z), written to `out`.
+pub fn positions_only(csv: &Path, out: &Path) {
+    let text: String = read(csv)
+        .lines()
+        .map(|l| l.split(',').take(9).collect::<Vec<_>>().join(",") + "\n")
+        .collect();
+    std::fs::write(out, text).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
+}
