@@ -134,31 +134,21 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     let mut problem = CalibrationProblem::new(s.nominal, s.params, s.data, s.calibrated.frame, s.k);
     problem.priors = s.priors.to_vec();
     let rp = RobotProblem::of(&problem)?;
-    let rows = rp.measure().rows();
     let m = s.data.len();
     let s0sq = id.sigma0 * id.sigma0;
     let mut leverage = Vec::with_capacity(m);
     let mut cook_distance = Vec::with_capacity(m);
-    // Per block, A = J N⁻¹ in one product; per point, H_ii = w_i A_i J_iᵀ and (I − H_ii)⁻¹ r_i
-    // on the stack (at most 6 rows a point, padded with the identity).
-    let mut a = DMatrix::zeros(0, 0);
-    by_blocks(&rp, &id.x, |first, r, j| {
-        if a.shape() != j.shape() {
-            a = DMatrix::zeros(j.nrows(), t);
-        }
-        j.mul_to(&n_inv, &mut a);
-        for p in 0..r.len() / rows {
-            let w = id.weights.get(first + p).copied().unwrap_or(1.0);
-            let h = point_block(&a, j, p * rows, rows).scale(w);
-            leverage.push(h.trace());
-            let mut ri = Vector6::zeros();
-            ri.rows_mut(0, rows).copy_from(&r.rows(p * rows, rows));
-            let cook = (Matrix6::identity() - h)
-                .lu()
-                .solve(&ri)
-                .map_or(Real::NAN, |v| w * v.dot(&(h * v)) / (t as Real * s0sq));
-            cook_distance.push(cook);
-        }
+    // Per point, H_ii = w_i J_i N⁻¹ J_iᵀ and (I − H_ii)⁻¹ r_i on the stack (at most 6 rows a
+    // point, padded with the identity).
+    by_points(&rp, &id.x, &n_inv, |i, ri, h| {
+        let w = id.weights.get(i).copied().unwrap_or(1.0);
+        let h = h.scale(w);
+        leverage.push(h.trace());
+        let cook = (Matrix6::identity() - h)
+            .lu()
+            .solve(&ri)
+            .map_or(Real::NAN, |v| w * v.dot(&(h * v)) / (t as Real * s0sq));
+        cook_distance.push(cook);
     });
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| {
@@ -193,26 +183,38 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     })
 }
 
-/// Calls `f(first, r, J)` with the residual rows and Jacobian rows of the points `first..`
-/// of `p` at `x`, in order, [`BLOCK_POINTS`] points at a time
-/// ([`LeastSquares::evaluate_points`]) into buffers made once: memory stays bounded for files
-/// of millions of rows.
-fn by_blocks(
+/// Calls `f(i, r_i, H_i)` for each point `i` of `p` at `x`, in order, with its residual rows
+/// and `H_i = J_i M J_iᵀ`, both padded to 6 rows with zeros. The rows are evaluated
+/// [`BLOCK_POINTS`] points at a time ([`LeastSquares::evaluate_points`]) into buffers made
+/// once, and `J M` is formed once a block: memory stays bounded for files of millions of rows,
+/// and nothing is allocated per point.
+fn by_points(
     p: &dyn LeastSquares,
     x: &DVector<Real>,
-    mut f: impl FnMut(usize, &DVector<Real>, &DMatrix<Real>),
+    m: &DMatrix<Real>,
+    mut f: impl FnMut(usize, Vector6<Real>, Matrix6<Real>),
 ) {
     let size = p.size();
     let rows = size.rows_per_point;
-    let (mut r, mut j) = (DVector::zeros(0), DMatrix::zeros(0, 0));
+    let (mut r, mut j, mut a) = (
+        DVector::zeros(0),
+        DMatrix::zeros(0, 0),
+        DMatrix::zeros(0, 0),
+    );
     for first in (0..size.points).step_by(BLOCK_POINTS) {
         let k = BLOCK_POINTS.min(size.points - first);
         if r.len() != k * rows {
             r = DVector::zeros(k * rows);
             j = DMatrix::zeros(k * rows, size.params);
+            a = DMatrix::zeros(k * rows, m.ncols());
         }
         p.evaluate_points(x, first, &mut r, &mut j);
-        f(first, &r, &j);
+        j.mul_to(m, &mut a);
+        for i in 0..k {
+            let mut ri = Vector6::zeros();
+            ri.rows_mut(0, rows).copy_from(&r.rows(i * rows, rows));
+            f(first + i, ri, point_block(&a, &j, i * rows, rows));
+        }
     }
 }
 
@@ -256,17 +258,8 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
     )?
     .with_payloads(data.payload_kg.as_deref())?;
     let mut sigmas = Vec::with_capacity(data.len());
-    let mut a = DMatrix::zeros(0, 0);
-    let rows = Measure::Position.rows();
-    by_blocks(&rp, &id.x, |_, r, j| {
-        if a.shape() != j.shape() {
-            a = DMatrix::zeros(j.nrows(), j.ncols());
-        }
-        j.mul_to(cov, &mut a);
-        for p in 0..r.len() / rows {
-            let h = point_block(&a, j, p * rows, rows);
-            sigmas.push(h.trace().max(0.0).sqrt());
-        }
+    by_points(&rp, &id.x, cov, |_, _, h| {
+        sigmas.push(h.trace().max(0.0).sqrt())
     });
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {
