@@ -74,6 +74,11 @@ fn gauss_newton(
                 jac[(r, j)] = -(ep[r] - em[r]) / (2.0 * h);
             }
         }
+        // A non-finite error or Jacobian (a target so far away that its squares overflow) ends
+        // the iteration: the SVD does not converge on such a matrix.
+        if !(e.iter().all(|v| v.is_finite()) && jac.iter().all(|v| v.is_finite())) {
+            break;
+        }
         let rhs = DVector::from_row_slice(&e[..rows]);
         let Ok(step) = jac.clone().svd(true, true).solve(&rhs, 1e-12) else {
             break;
@@ -239,5 +244,17 @@ mod tests {
         let p = Vec3::new(5000.0, 0.0, 500.0);
         let q0 = vec![0.0; 6];
         assert!(solve_point_axis(&r, &p, &Vec3::x(), &q0, (1e-3, 1e-3)).is_none());
+    }
+
+    /// A target so far away that the error's squares overflow ends the iteration (the SVD does
+    /// not converge on a non-finite Jacobian; found by the scenario fuzzer, which hung here).
+    #[test]
+    fn an_overflowing_target_ends_the_iteration() {
+        let r = crate::robot::builtin::irb2600();
+        let q0 = vec![0.0; 6];
+        for x in [1e200, 8.9e307, -8.9e307] {
+            let p = Vec3::new(x, 0.0, 500.0);
+            assert!(solve_point_axis(&r, &p, &Vec3::x(), &q0, (1e-3, 1e-3)).is_none());
+        }
     }
 }

@@ -465,17 +465,28 @@ impl WorkspaceRegion {
 }
 
 /// Refuses a non-finite box centre and edges ≤ 0, naming `key`.
+/// The bound of a box's centre coordinates and edges, mm (1 km, the bound of a robot file's
+/// lengths): beyond it the draws and the inverse kinematics leave the range where their
+/// arithmetic is meaningful.
+const BOX_BOUND_MM: Real = 1e6;
+
 fn check_box(key: &str, center_mm: &[Real; 3], size_mm: &[Real; 3]) -> Result<()> {
-    if center_mm.iter().any(|v| !v.is_finite()) {
+    if center_mm
+        .iter()
+        .any(|v| !v.is_finite() || v.abs() > BOX_BOUND_MM)
+    {
         return Err(Error::setting(
             key,
-            format!("center_mm must be finite, got {center_mm:?}"),
+            format!("center_mm must be finite and within ±1e6 mm, got {center_mm:?}"),
         ));
     }
-    if size_mm.iter().any(|v| !v.is_finite() || *v <= 0.0) {
+    if size_mm
+        .iter()
+        .any(|v| !v.is_finite() || *v <= 0.0 || *v > 2.0 * BOX_BOUND_MM)
+    {
         return Err(Error::setting(
             key,
-            format!("size_mm must be > 0, got {size_mm:?}"),
+            format!("size_mm must be > 0 and at most 2e6 mm, got {size_mm:?}"),
         ));
     }
     Ok(())

@@ -313,6 +313,35 @@ fn a_scenario_region_no_pose_reaches_is_refused_at_once_naming_file_line_and_key
     }
 }
 
+/// Found by the scenario fuzzer: a workspace box of 1.8e308 mm hung the loading (the inverse
+/// kinematics met an overflowing target). Boxes are bounded at 1 km and refused at once.
+#[test]
+fn a_region_box_beyond_a_kilometre_is_refused_at_once() {
+    let d = tmp("huge-box");
+    for (i, region) in [
+        "{ kind = \"workspace\", center_mm = [1200.0, 0.0, 900.0], size_mm = [1.7976931348623157e308, 1000.0, 800.0], axis = [1.0, 0.0, 0.0], cone_deg = 30.0 }",
+        "{ kind = \"box\", center_mm = [2e6, 0.0, 900.0], size_mm = [100.0, 100.0, 100.0] }",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let text = format!(
+            "name = \"huge\"\nseed = 3\ntrials = 2\n\n[robot]\nbuiltin = \"irb2600\"\n\n\
+             [calibration]\ncount = 12\n\n[validation]\ncount = 6\nregion = {region}\n\n\
+             [[methods]]\nname = \"ls\"\n"
+        );
+        let p = d.join(format!("huge{i}.toml"));
+        std::fs::write(&p, text).unwrap();
+        let t = Instant::now();
+        let o = calbench(&["run", path(&p), "--out", path(&d.join(format!("out{i}")))]);
+        assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
+        refused(
+            &o,
+            &[&format!("huge{i}.toml: line 13"), "`validation.region`", "e6 mm"],
+        );
+    }
+}
+
 #[test]
 fn check_on_a_summary_without_results_says_what_is_missing() {
     let d = tmp("check");
