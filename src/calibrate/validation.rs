@@ -41,6 +41,16 @@ impl ErrorStats {
             std,
         }
     }
+
+    /// [`ErrorStats::of`] for values of either sign: `max` is the largest value, however
+    /// negative (`of` floors it at zero, the least an error magnitude can be).
+    pub fn of_signed(v: &[Real]) -> ErrorStats {
+        let max = v.iter().cloned().fold(Real::NEG_INFINITY, Real::max);
+        ErrorStats {
+            max: if v.is_empty() { 0.0 } else { max },
+            ..ErrorStats::of(v)
+        }
+    }
 }
 
 /// The validation errors of a model at each pose.
@@ -55,6 +65,25 @@ pub struct PoseErrors {
     /// [`crate::identify::qiao::error_models::attitude_error_deg`]); undefined near ±90° pitch, where the angles
     /// are singular (docs/formats.md `validation_*_attitude_deg`; Qiao's ACAE is its mean).
     pub attitude_deg: Vec<Real>,
+    /// Guo 2024's per-point position error (§5.3, table 8), "the mean of the errors in the
+    /// three directions": `(Δx + Δy + Δz) / 3` with `Δ = p_true − p_model` (mm), signed.
+    pub axis_mm: Vec<Real>,
+    /// The same with each axis error taken absolute, `(|Δx| + |Δy| + |Δz|) / 3` (mm).
+    pub axis_abs_mm: Vec<Real>,
+}
+
+impl PoseErrors {
+    /// The errors of a failed calibration at `n` poses: NaN everywhere.
+    pub fn failed(n: usize) -> PoseErrors {
+        let nan = vec![Real::NAN; n];
+        PoseErrors {
+            mm: nan.clone(),
+            deg: nan.clone(),
+            attitude_deg: nan.clone(),
+            axis_mm: nan.clone(),
+            axis_abs_mm: nan,
+        }
+    }
 }
 
 /// The errors of `model` against the true frames at the joint values `qs` ([`PoseErrors`]);
@@ -73,7 +102,10 @@ pub fn validation_errors(
     for (i, (q, t)) in qs.iter().zip(truth).enumerate() {
         let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
         let f = crate::robot::compliance::loaded_fk(model, &c, q, load)?;
-        e.mm.push((f.pos - t.pos).norm());
+        let d = t.pos - f.pos;
+        e.mm.push(d.norm());
+        e.axis_mm.push(d.sum() / 3.0);
+        e.axis_abs_mm.push(d.abs().sum() / 3.0);
         e.deg.push(rotation_angle_deg(&f, t));
         e.attitude_deg.push(attitude_error_deg(t, &f));
     }

@@ -105,20 +105,27 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
     out!("robot {} ({} poses, {:?})", robot.name, poses, measure);
     print_analysis(&robot, &a);
     if let Some(sep) = &sep {
-        out!("GCN per block (Guo 2024 eq. 14), before and after the separation:");
+        out!(
+            "GCN per block (Guo 2024 eq. 14) before and after the separation, all poses and \
+             averaged over pose counts (Guo §4.1):"
+        );
         for b in &sep.blocks {
             out!(
-                "  {:<6} {:>12.4e} {:>12.4e}",
+                "  {:<6} {:>12.4e} {:>12.4e}   {:>12.4e} {:>12.4e}",
                 b.name,
                 b.gcn_before,
-                b.gcn_after
+                b.gcn_after,
+                b.gcn_mean_before,
+                b.gcn_mean_after
             );
         }
         out!("removed: {}", names(&sep.removed).join(" "));
         out!(
-            "GCN full model {:.4e}, separated {:.4e}",
+            "GCN full model {:.4e}, separated {:.4e}; averaged {:.4e}, {:.4e}",
             sep.gcn_full(),
-            sep.gcn_separated()
+            sep.gcn_separated(),
+            sep.gcn_mean_full(),
+            sep.gcn_mean_separated()
         );
     }
     Ok(())

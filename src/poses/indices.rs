@@ -257,6 +257,41 @@ pub fn gcn(j: &DMatrix<Real>, m: usize) -> Real {
     }
 }
 
+/// Guo 2024's GCN of a pose sequence (eq. 14 as §4.1 applies it): cond(J_m)/m for the first
+/// m = 1, 2, …, M poses of the sequence, averaged over m. J is the stacked Jacobian of the M
+/// poses, `rows` rows per pose, J_m its first `rows · m` rows, and cond(J_m) = σ_1/σ_r over
+/// its r = min(rows · m, k) singular values (a 3 × 5 block at m = 1 has three), the
+/// convention of MATLAB's `cond`; infinite when σ_r is zero at any m. Guo averages over
+/// m = 1…100 of one random set of 100 poses.
+///
+/// Each J_m's triangular factor is updated from J_(m−1)'s with the new rows (a QR of at most
+/// k + `rows` rows), so the cost is M small factorisations, not M of the growing stack.
+pub fn gcn_mean(j: &DMatrix<Real>, rows: usize) -> Real {
+    let k = j.ncols();
+    if k == 0 || rows == 0 || j.nrows() < rows {
+        return Real::INFINITY;
+    }
+    let poses = j.nrows() / rows;
+    let mut r = DMatrix::<Real>::zeros(0, k);
+    let mut sum = 0.0;
+    for m in 1..=poses {
+        let mut stack = DMatrix::<Real>::zeros(r.nrows() + rows, k);
+        stack.rows_mut(0, r.nrows()).copy_from(&r);
+        stack
+            .rows_mut(r.nrows(), rows)
+            .copy_from(&j.rows(rows * (m - 1), rows));
+        let n = stack.nrows().min(k);
+        r = stack.qr().r().rows(0, n).into_owned();
+        let sv = r.singular_values();
+        let (mx, mn) = max_min(sv.as_slice());
+        if mn <= 0.0 || !mn.is_finite() {
+            return Real::INFINITY;
+        }
+        sum += mx / mn / m as Real;
+    }
+    sum / poses as Real
+}
+
 /// The stacked Jacobian of `model` over the poses `qs`.
 pub fn stacked_jacobian(model: &dyn PoseModel, qs: &[Vec<Real>]) -> DMatrix<Real> {
     let r = model.rows_per_pose();
@@ -389,5 +424,30 @@ mod tests {
         for x in w {
             assert_relative_eq!(x, 1.0 / 3.0, epsilon = 1e-12);
         }
+    }
+
+    #[test]
+    fn gcn_mean_is_the_average_over_pose_counts_of_each_prefix_cond() {
+        // Against a direct SVD of every prefix of the stack, with MATLAB's convention of
+        // min(rows, columns) singular values (the first prefixes have fewer rows than columns).
+        use rand::Rng as _;
+        let mut rng = crate::numeric::rng::from_seed(14);
+        for (rows, k, poses) in [(3, 5, 40), (3, 21, 30), (6, 4, 10), (1, 3, 12)] {
+            let j = DMatrix::<Real>::from_fn(rows * poses, k, |_, _| rng.random::<Real>() - 0.5);
+            let mut sum = 0.0;
+            for m in 1..=poses {
+                let sv = j.rows(0, rows * m).singular_values();
+                let (mx, mn) = max_min(sv.as_slice());
+                sum += mx / mn / m as Real;
+            }
+            assert_relative_eq!(gcn_mean(&j, rows), sum / poses as Real, max_relative = 1e-9);
+        }
+        // A single column has cond 1 at every count: the mean of 1/m, H_M / M.
+        let col = DMatrix::<Real>::from_fn(300, 1, |i, _| 1.0 + i as Real);
+        let h100: Real = (1..=100).map(|m| 1.0 / m as Real).sum();
+        assert_relative_eq!(gcn_mean(&col, 3), h100 / 100.0, epsilon = 1e-12);
+        // Two equal columns: singular at every count.
+        let twin = DMatrix::<Real>::from_fn(30, 2, |i, _| 1.0 + i as Real);
+        assert!(gcn_mean(&twin, 3) > 1e12 || gcn_mean(&twin, 3).is_infinite());
     }
 }

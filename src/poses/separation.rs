@@ -10,7 +10,13 @@
 //! model J_p (eq. 27), whose GCN ends the table.
 //!
 //! Differences from the paper, on purpose: the paper averages each GCN over pose counts
-//! 1..100 of one random set; here the GCN is that of the poses passed in. The paper finally
+//! 1..100 of one random set (§4.1); here the decisions use the GCN of all the poses passed in,
+//! and Guo's average ([`gcn_mean`]) is reported beside it (`gcn_mean_*`). The average is
+//! dominated by its first counts, at which a block can be singular for want of rows alone: on
+//! the IRB2600, a1, a2 and a3 act along x1, x2 and x3, all normal to the parallel axes z2 and
+//! z3, so one pose never sees them independently and the averaged GCN of the `a` block is
+//! infinite, although 30 poses identify all three (the test
+//! `guo_s_average_flags_a_block_that_one_pose_cannot_see`). The paper finally
 //! removes every parameter whose single removal brings its block under the threshold (both
 //! a4 and a5, both d2 and d3); here one parameter at a time is removed until the block is
 //! under the threshold, which keeps an identifiable partner of a dependent pair.
@@ -20,7 +26,7 @@
 
 use nalgebra::DMatrix;
 
-use super::indices::gcn;
+use super::indices::{gcn, gcn_mean};
 use crate::measurement::Measure;
 use crate::numeric::Real;
 use crate::robot::jacobian::{jacobian, Columns};
@@ -37,6 +43,8 @@ pub struct Separation {
     /// branch `d-d2` (block `d` without `d2`, tables 2–3), each reduced block `d[-d3]` (after
     /// the removals so far), and `separated` (the kept parameters).
     pub table: Vec<(String, Real)>,
+    /// Guo's GCN (eq. 14 averaged over pose counts, [`gcn_mean`]) of each entry of `table`.
+    pub table_mean: Vec<Real>,
     /// Per block, in order of first appearance: its GCN before and after the separation
     /// (Guo 2024 table 1 and the reduced blocks of tables 2–3).
     pub blocks: Vec<BlockGcn>,
@@ -51,6 +59,10 @@ pub struct BlockGcn {
     pub gcn_before: Real,
     /// GCN of the block's kept parameters (0 when none is kept).
     pub gcn_after: Real,
+    /// Guo's GCN of the whole block: eq. 14 averaged over pose counts ([`gcn_mean`]).
+    pub gcn_mean_before: Real,
+    /// … of the block's kept parameters.
+    pub gcn_mean_after: Real,
 }
 
 impl Separation {
@@ -64,11 +76,28 @@ impl Separation {
         self.lookup("separated")
     }
 
+    /// Guo's GCN (averaged over pose counts) of the full model.
+    pub fn gcn_mean_full(&self) -> Real {
+        self.lookup_mean("full")
+    }
+
+    /// Guo's GCN (averaged over pose counts) of the reconstructed model J_p.
+    pub fn gcn_mean_separated(&self) -> Real {
+        self.lookup_mean("separated")
+    }
+
     fn lookup(&self, label: &str) -> Real {
         self.table
             .iter()
             .find(|(l, _)| l == label)
             .map_or(Real::NAN, |x| x.1)
+    }
+
+    fn lookup_mean(&self, label: &str) -> Real {
+        self.table
+            .iter()
+            .position(|(l, _)| l == label)
+            .map_or(Real::NAN, |i| self.table_mean[i])
     }
 
     /// The report as JSON (docs/formats.md `identifiability --gcn-blocks`, `summary.json`
@@ -84,7 +113,12 @@ impl Separation {
             .map(|b| {
                 (
                     b.name.to_string(),
-                    json!({"gcn_before": b.gcn_before, "gcn_after": b.gcn_after}),
+                    json!({
+                        "gcn_before": b.gcn_before,
+                        "gcn_after": b.gcn_after,
+                        "gcn_mean_before": b.gcn_mean_before,
+                        "gcn_mean_after": b.gcn_mean_after,
+                    }),
                 )
             })
             .collect();
@@ -94,10 +128,13 @@ impl Separation {
             "kept": names(&self.kept),
             "gcn_full": self.gcn_full(),
             "gcn_separated": self.gcn_separated(),
+            "gcn_mean_full": self.gcn_mean_full(),
+            "gcn_mean_separated": self.gcn_mean_separated(),
             "table": self
                 .table
                 .iter()
-                .map(|(k, v)| json!({"label": k, "gcn": v}))
+                .zip(&self.table_mean)
+                .map(|((k, v), gm)| json!({"label": k, "gcn": v, "gcn_mean": gm}))
                 .collect::<Vec<_>>(),
         })
     }
@@ -115,15 +152,23 @@ pub fn separate(
     let cols = Columns::new(params, robot.dof());
     let j = jacobian(robot, &cols, qs, measure);
     let m = qs.len();
-    let sub_gcn = |idx: &[usize]| -> Real {
+    // Eq. 14 on the poses passed in (the decisions) and Guo's average over pose counts.
+    let sub_gcn = |idx: &[usize]| -> (Real, Real) {
         if idx.is_empty() {
-            return 0.0;
+            return (0.0, 0.0);
         }
         let s: DMatrix<Real> = j.select_columns(idx);
-        gcn(&s, m)
+        (gcn(&s, m), gcn_mean(&s, measure.rows()))
+    };
+    let mut table = Vec::new();
+    let mut table_mean = Vec::new();
+    let mut record = |label: String, (g, gm): (Real, Real)| {
+        table.push((label, g));
+        table_mean.push(gm);
+        g
     };
     let all: Vec<usize> = (0..params.len()).collect();
-    let mut table = vec![("full".to_string(), sub_gcn(&all))];
+    record("full".to_string(), sub_gcn(&all));
     // Blocks in order of first appearance.
     let mut blocks: Vec<(&'static str, Vec<usize>)> = Vec::new();
     for (c, p) in params.iter().enumerate() {
@@ -137,9 +182,9 @@ pub fn separate(
     let mut before = Vec::with_capacity(blocks.len());
     for (name, idx) in &blocks {
         let g = sub_gcn(idx);
-        table.push((name.to_string(), g));
+        record(name.to_string(), g);
         before.push(g);
-        if g.is_nan() || g > threshold {
+        if g.0.is_nan() || g.0 > threshold {
             offending.push((*name, idx.clone()));
         }
     }
@@ -149,7 +194,7 @@ pub fn separate(
             if idx.len() <= 1 {
                 break;
             }
-            let mut best: Option<(Real, usize)> = None;
+            let mut best: Option<((Real, Real), usize)> = None;
             for pos in 0..idx.len() {
                 let rest: Vec<usize> = idx
                     .iter()
@@ -158,9 +203,9 @@ pub fn separate(
                     .map(|(_, &c)| c)
                     .collect();
                 let g = sub_gcn(&rest);
-                table.push((format!("{name}{tag}-{}", params[idx[pos]]), g));
+                record(format!("{name}{tag}-{}", params[idx[pos]]), g);
                 // Smallest GCN, ties (and NaN-free infinities) to the later parameter.
-                if best.is_none_or(|(bg, _)| g <= bg) {
+                if best.is_none_or(|(bg, _)| g.0 <= bg.0) {
                     best = Some((g, pos));
                 }
             }
@@ -168,8 +213,7 @@ pub fn separate(
             let c = idx.remove(pos);
             removed_cols.push(c);
             tag.push_str(&format!("-{}", params[c]));
-            table.push((format!("{name}[{tag}]"), g));
-            if g <= threshold {
+            if record(format!("{name}[{tag}]"), g) <= threshold {
                 break;
             }
         }
@@ -179,20 +223,23 @@ pub fn separate(
         .copied()
         .filter(|c| !removed_cols.contains(c))
         .collect();
-    table.push(("separated".to_string(), sub_gcn(&kept_idx)));
+    record("separated".to_string(), sub_gcn(&kept_idx));
     let blocks = blocks
         .iter()
         .zip(before)
-        .map(|((name, idx), gcn_before)| {
+        .map(|((name, idx), (gcn_before, gcn_mean_before))| {
             let kept: Vec<usize> = idx
                 .iter()
                 .copied()
                 .filter(|c| !removed_cols.contains(c))
                 .collect();
+            let (gcn_after, gcn_mean_after) = sub_gcn(&kept);
             BlockGcn {
                 name,
                 gcn_before,
-                gcn_after: sub_gcn(&kept),
+                gcn_after,
+                gcn_mean_before,
+                gcn_mean_after,
             }
         })
         .collect();
@@ -200,6 +247,7 @@ pub fn separate(
         kept: kept_idx.iter().map(|&c| params[c]).collect(),
         removed: removed_cols.iter().map(|&c| params[c]).collect(),
         table,
+        table_mean,
         blocks,
     }
 }
@@ -261,5 +309,26 @@ mod tests {
         assert!(sep.removed.is_empty());
         assert_eq!(sep.kept, params);
         assert_eq!(sep.table.len(), 3); // full, a, separated
+    }
+
+    #[test]
+    fn guo_s_average_flags_a_block_that_one_pose_cannot_see() {
+        let robot = crate::robot::builtin::irb2600();
+        let params = vec![Param::A(0), Param::A(1), Param::A(2)];
+        let qs = uniform_joint_poses(&robot, 30, &mut from_seed(6));
+        let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);
+        // All 30 poses: well-conditioned, nothing removed.
+        assert!(sep.blocks[0].gcn_before < 1.0, "{:?}", sep.blocks);
+        // Averaged from one pose up: the first count's 3 × 3 block has rank 2.
+        assert!(sep.blocks[0].gcn_mean_before > 1e2, "{:?}", sep.blocks);
+        let one = jacobian(
+            &robot,
+            &Columns::new(&params, 6),
+            &qs[..1],
+            Measure::Position,
+        );
+        let sv = one.singular_values();
+        assert!(sv.min() <= 1e-12 * sv.max(), "{sv}");
+        assert_eq!(analyse(&robot, &params, &qs, Measure::Position).rank, 3);
     }
 }

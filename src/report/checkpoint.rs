@@ -23,7 +23,7 @@ use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`.
-const FORMAT: &str = "calbench-checkpoint-1";
+const FORMAT: &str = "calbench-checkpoint-2";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]

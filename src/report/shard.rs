@@ -20,10 +20,11 @@ use crate::identify::Termination;
 use crate::numeric::Real;
 use crate::study::scenario::Scenario;
 use crate::study::trial::Outcome;
+use crate::study::trial::OPTIONAL_STATS;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-3";
+const FORMAT: &str = "calbench-shard-4";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -156,13 +157,7 @@ pub(crate) fn encode(block: usize, t: &TrialResult) -> String {
         push_stats(&mut s, &o.after_mm);
         push_stats(&mut s, &o.calibration_before_mm);
         push_stats(&mut s, &o.calibration_after_mm);
-        for d in [
-            o.before_deg,
-            o.after_deg,
-            o.before_attitude_deg,
-            o.after_attitude_deg,
-            o.before_fitted_mm,
-        ] {
+        for d in o.optional_stats() {
             match d {
                 Some(d) => {
                     s.push_str(" +");
@@ -269,14 +264,12 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
         let after_mm = t.stats()?;
         let calibration_before_mm = t.stats()?;
         let calibration_after_mm = t.stats()?;
-        let mut optional = [None; 5];
+        let mut optional = [None; OPTIONAL_STATS];
         for o in &mut optional {
             *o = t.optional_stats()?;
         }
-        let [before_deg, after_deg, before_attitude_deg, after_attitude_deg, before_fitted_mm] =
-            optional;
         let identified = t.reals(n)?;
-        outcomes.push(Outcome {
+        let mut outcome = Outcome {
             method,
             strategy,
             identified,
@@ -284,11 +277,17 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
             after_mm,
             calibration_before_mm,
             calibration_after_mm,
-            before_deg,
-            after_deg,
-            before_attitude_deg,
-            after_attitude_deg,
-            before_fitted_mm,
+            before_deg: None,
+            after_deg: None,
+            before_attitude_deg: None,
+            after_attitude_deg: None,
+            before_fitted_mm: None,
+            before_axis_mm: None,
+            after_axis_mm: None,
+            before_axis_abs_mm: None,
+            after_axis_abs_mm: None,
+            calibration_before_attitude_deg: None,
+            calibration_after_attitude_deg: None,
             per_point: None,
             per_point_attitude_deg: None,
             trace: None,
@@ -299,7 +298,9 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
             seconds,
             // Shards run scenario files, whose methods are all registered ones.
             error: None,
-        });
+        };
+        outcome.set_optional_stats(optional);
+        outcomes.push(outcome);
     }
     if t.it.next().is_some() {
         return Err(t.err("extra fields at the end of the line"));
@@ -532,6 +533,12 @@ mod tests {
                 before_attitude_deg: None,
                 before_fitted_mm: None,
                 after_attitude_deg: None,
+                before_axis_mm: Some(stats(-0.2)),
+                after_axis_mm: None,
+                before_axis_abs_mm: None,
+                after_axis_abs_mm: Some(stats(0.01)),
+                calibration_before_attitude_deg: None,
+                calibration_after_attitude_deg: Some(stats(0.02)),
                 per_point: None,
                 per_point_attitude_deg: None,
                 trace: None,

@@ -45,6 +45,9 @@ pub struct SimTruth {
     pub sag_mm: Vec<[Real; 3]>,
     /// Noise-free target points in the base frame (mm), sag included.
     pub true_points: Vec<Vec3>,
+    /// Noise-free orientations of the target frame in the base frame, sag included: kept when
+    /// the tracker measures full poses (`None` for positions).
+    pub true_rotations: Option<Vec<crate::numeric::Mat3>>,
 }
 
 /// One simulated measurement campaign: the data an instrument would deliver and the truth
@@ -100,6 +103,7 @@ pub fn measure_poses(
     let mut quats = Vec::with_capacity(if full_pose { m } else { 0 });
     let mut sag_mm = Vec::with_capacity(m);
     let mut true_points = Vec::with_capacity(m);
+    let mut true_rotations = Vec::with_capacity(if full_pose { m } else { 0 });
     for (i, q) in qs.iter().enumerate() {
         let rigid = chain.fk(q);
         let world = match sag {
@@ -109,6 +113,9 @@ pub fn measure_poses(
         let d = world.pos - rigid.pos;
         sag_mm.push([d.x, d.y, d.z]);
         true_points.push(world.pos);
+        if full_pose {
+            true_rotations.push(world.rot);
+        }
         let (p, quat) = tracker.measure(&world, rng);
         points.push(p);
         if let Some(qq) = quat {
@@ -131,6 +138,7 @@ pub fn measure_poses(
             outliers,
             sag_mm,
             true_points,
+            true_rotations: full_pose.then_some(true_rotations),
         },
     })
 }

@@ -5,7 +5,7 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 
 use super::spill::Spill;
-use super::trial::{Outcome, TrialResult};
+use super::trial::{Outcome, TrialResult, OPTIONAL_STATS};
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::Real;
@@ -69,6 +69,26 @@ pub struct Entry {
     /// that fits the base frame first reports it (Li 2018).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub validation_before_fitted_mm: Option<ErrorStats>,
+    /// With `validation.axis_errors`: Guo 2024's per-point validation error, the signed mean
+    /// of the three axis errors (mm, table 8), before.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_before_axis_mm: Option<ErrorStats>,
+    /// … after.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_after_axis_mm: Option<ErrorStats>,
+    /// … the mean of the absolute axis errors, before.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_before_axis_abs_mm: Option<ErrorStats>,
+    /// … after.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub validation_after_axis_abs_mm: Option<ErrorStats>,
+    /// Qiao's attitude errors (deg) at the calibration poses, nominal robot, for full-pose
+    /// data (Qiao 2021's calibration-point ACAE is the mean).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibration_before_attitude_deg: Option<ErrorStats>,
+    /// … compensated robot.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub calibration_after_attitude_deg: Option<ErrorStats>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
@@ -182,7 +202,7 @@ struct Cell {
     after_rms_sq: Sum,
     /// The optional statistics: before / after in deg, in Qiao's attitude deg, then the
     /// fitted "before" in mm.
-    deg: [Option<StatsSum>; 5],
+    deg: [Option<StatsSum>; OPTIONAL_STATS],
     iterations: Sum,
     evaluations: Sum,
 }
@@ -282,14 +302,7 @@ impl Accumulator {
             c.calibration[0].add(&o.calibration_before_mm);
             c.calibration[1].add(&o.calibration_after_mm);
             c.after_rms_sq.add(o.after_mm.rms * o.after_mm.rms);
-            let degs = [
-                o.before_deg,
-                o.after_deg,
-                o.before_attitude_deg,
-                o.after_attitude_deg,
-                o.before_fitted_mm,
-            ];
-            for (acc, d) in c.deg.iter_mut().zip(degs) {
+            for (acc, d) in c.deg.iter_mut().zip(o.optional_stats()) {
                 if let Some(d) = d {
                     acc.get_or_insert_with(StatsSum::default).add(&d);
                 }
@@ -363,6 +376,12 @@ impl Accumulator {
             validation_before_attitude_deg: deg(2),
             validation_after_attitude_deg: deg(3),
             validation_before_fitted_mm: deg(4),
+            validation_before_axis_mm: deg(5),
+            validation_after_axis_mm: deg(6),
+            validation_before_axis_abs_mm: deg(7),
+            validation_after_axis_abs_mm: deg(8),
+            calibration_before_attitude_deg: deg(9),
+            calibration_after_attitude_deg: deg(10),
             improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
             param_rmse: rmse,
             param_bias: bias,

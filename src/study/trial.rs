@@ -48,6 +48,20 @@ pub struct Outcome {
     pub before_attitude_deg: Option<ErrorStats>,
     /// … after.
     pub after_attitude_deg: Option<ErrorStats>,
+    /// With `validation.axis_errors`: Guo 2024's per-point validation error (the signed mean
+    /// of the three axis errors, [`PoseErrors::axis_mm`], mm) before.
+    pub before_axis_mm: Option<ErrorStats>,
+    /// … after.
+    pub after_axis_mm: Option<ErrorStats>,
+    /// … the mean of the absolute axis errors ([`PoseErrors::axis_abs_mm`]) before.
+    pub before_axis_abs_mm: Option<ErrorStats>,
+    /// … after.
+    pub after_axis_abs_mm: Option<ErrorStats>,
+    /// Qiao's attitude errors (deg) at the calibration poses against their noise-free true
+    /// frames, nominal robot, for full-pose data.
+    pub calibration_before_attitude_deg: Option<ErrorStats>,
+    /// … the compensated robot, in its registration.
+    pub calibration_after_attitude_deg: Option<ErrorStats>,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
     /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
@@ -228,6 +242,48 @@ impl SimulatedTrial {
     }
 }
 
+/// The number of [`Outcome::optional_stats`].
+pub const OPTIONAL_STATS: usize = 11;
+
+impl Outcome {
+    /// The statistics an outcome has only for some studies, in the order of `records.txt`
+    /// (docs/formats.md § 7.3): validation orientation (rotation angle, then Qiao's attitude)
+    /// before and after, the fitted "before", Guo's axis errors (signed before and after,
+    /// absolute before and after) and the calibration attitude before and after.
+    pub fn optional_stats(&self) -> [Option<ErrorStats>; OPTIONAL_STATS] {
+        [
+            self.before_deg,
+            self.after_deg,
+            self.before_attitude_deg,
+            self.after_attitude_deg,
+            self.before_fitted_mm,
+            self.before_axis_mm,
+            self.after_axis_mm,
+            self.before_axis_abs_mm,
+            self.after_axis_abs_mm,
+            self.calibration_before_attitude_deg,
+            self.calibration_after_attitude_deg,
+        ]
+    }
+
+    /// Sets the statistics of [`Outcome::optional_stats`], in its order.
+    pub fn set_optional_stats(&mut self, s: [Option<ErrorStats>; OPTIONAL_STATS]) {
+        [
+            self.before_deg,
+            self.after_deg,
+            self.before_attitude_deg,
+            self.after_attitude_deg,
+            self.before_fitted_mm,
+            self.before_axis_mm,
+            self.after_axis_mm,
+            self.before_axis_abs_mm,
+            self.after_axis_abs_mm,
+            self.calibration_before_attitude_deg,
+            self.calibration_after_attitude_deg,
+        ] = s;
+    }
+}
+
 /// Runs trial `index` of `study`.
 pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let sc = &study.scenario;
@@ -266,6 +322,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         None
     };
     let full_pose = study.measure == Measure::Pose;
+    let axis = sc.validation.axis_errors;
 
     let mut outcomes = Vec::new();
     let mut crb = Vec::new();
@@ -289,21 +346,25 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             cal_sag,
             &mut rng::stream(seed, "measure"),
         )?;
-        // The calibration rows' noise-free true points (positions; the orientation is not
-        // compared here), and the nominal robot's errors at them.
+        // The calibration rows' noise-free true frames (the orientation where the tracker
+        // measures it), and the nominal robot's errors at them.
         let cal_truth: Vec<Frame> = m
             .truth
             .true_points
             .iter()
-            .map(|&pos| Frame {
-                rot: crate::numeric::Mat3::identity(),
+            .enumerate()
+            .map(|(i, &pos)| Frame {
+                rot: m
+                    .truth
+                    .true_rotations
+                    .as_ref()
+                    .map_or_else(crate::numeric::Mat3::identity, |r| r[i]),
                 pos,
             })
             .collect();
         let cal_loads = m.data.payload_kg.as_deref();
-        let cal_before = ErrorStats::of(
-            &validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?.mm,
-        );
+        let cal_nominal = validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
+        let cal_before = ErrorStats::of(&cal_nominal.mm);
         crb.push(match &study.fixed[si] {
             Some(set) => set.crb_trace,
             None => crb_trace(study, &qs),
@@ -338,7 +399,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     (
                         r.x.iter().copied().collect(),
                         e,
-                        ErrorStats::of(&cal.mm),
+                        cal,
                         r.iterations,
                         r.evaluations,
                         r.termination,
@@ -346,12 +407,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 }
                 Err(_) => (
                     vec![Real::NAN; study.params.len()],
-                    PoseErrors {
-                        mm: vec![Real::NAN; vqs.len()],
-                        deg: vec![Real::NAN; vqs.len()],
-                        attitude_deg: vec![Real::NAN; vqs.len()],
-                    },
-                    ErrorStats::of(&[Real::NAN]),
+                    PoseErrors::failed(vqs.len()),
+                    PoseErrors::failed(m.data.qs.len()),
                     0,
                     0,
                     Termination::InvalidInput,
@@ -364,12 +421,20 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 before_mm: ErrorStats::of(&before.mm),
                 after_mm: ErrorStats::of(&after.mm),
                 calibration_before_mm: cal_before,
-                calibration_after_mm: cal_after,
+                calibration_after_mm: ErrorStats::of(&cal_after.mm),
                 before_deg: full_pose.then(|| ErrorStats::of(&before.deg)),
                 after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
                 before_attitude_deg: full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
                 after_attitude_deg: full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
                 before_fitted_mm: before_fitted,
+                before_axis_mm: axis.then(|| ErrorStats::of_signed(&before.axis_mm)),
+                after_axis_mm: axis.then(|| ErrorStats::of_signed(&after.axis_mm)),
+                before_axis_abs_mm: axis.then(|| ErrorStats::of(&before.axis_abs_mm)),
+                after_axis_abs_mm: axis.then(|| ErrorStats::of(&after.axis_abs_mm)),
+                calibration_before_attitude_deg: full_pose
+                    .then(|| ErrorStats::of(&cal_nominal.attitude_deg)),
+                calibration_after_attitude_deg: full_pose
+                    .then(|| ErrorStats::of(&cal_after.attitude_deg)),
                 trace,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 per_point_attitude_deg: (index == 0 && full_pose)

@@ -489,6 +489,7 @@ impl Scenario {
                 region: v.region,
                 payload_kg: v.payload_kg,
                 before_fitted: v.before_fitted,
+                axis_errors: v.axis_errors,
             },
             identification: raw.identification,
             methods,

@@ -61,6 +61,7 @@ pub(super) struct ValidationSection {
     pub(super) region: Region,
     pub(super) payload_kg: Option<Real>,
     pub(super) before_fitted: bool,
+    pub(super) axis_errors: bool,
 }
 
 impl Default for ValidationSection {
@@ -70,6 +71,7 @@ impl Default for ValidationSection {
             region: Region::Joint,
             payload_kg: None,
             before_fitted: false,
+            axis_errors: false,
         }
     }
 }
@@ -207,4 +209,7 @@ pub struct Validation {
     /// Also report the nominal robot's validation errors after the best rigid fit of its
     /// points to the true ones (docs/formats.md `validation.before_fitted`; Li 2018 §1.1).
     pub before_fitted: bool,
+    /// Also report Guo 2024's per-point position error, the mean of the errors along the
+    /// three axes (docs/formats.md `validation.axis_errors`; Guo 2024 §5.3, table 8).
+    pub axis_errors: bool,
 }
