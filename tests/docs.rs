@@ -569,8 +569,8 @@ fn reproduction_numbers_come_from_the_committed_summaries() {
         for row in &table[2..] {
             let row = cells(row);
             for &c in &cols {
-                for (q, decimals) in number(&row[c]) {
-                    let half = 0.5 * 10f64.powi(-(decimals as i32)) * (1.0 + 1e-9);
+                for (q, half) in number(&row[c]) {
+                    let half = half * (1.0 + 1e-9);
                     assert!(
                         values.iter().any(|v| (v - q).abs() <= half),
                         "REPRODUCTION.md quotes {q} (row \"{}\") but {file} has no such number",
@@ -584,8 +584,9 @@ fn reproduction_numbers_come_from_the_committed_summaries() {
     assert!(checked >= 10, "only {checked} numbers checked");
 }
 
-/// The decimal numbers of `cell` (a digit, a point, digits) and their number of decimals.
-fn regex_lite_decimals(cell: &str) -> Vec<(f64, usize)> {
+/// The decimal numbers of `cell` (an optional sign `-` or `−`, a digit, a point, digits, an
+/// optional exponent `e14` or `e-5`) and the half-width of the last digit quoted.
+fn regex_lite_decimals(cell: &str) -> Vec<(f64, f64)> {
     let b = cell.as_bytes();
     let mut out = Vec::new();
     let mut i = 0;
@@ -593,6 +594,7 @@ fn regex_lite_decimals(cell: &str) -> Vec<(f64, usize)> {
         if b[i].is_ascii_digit()
             && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'.'))
         {
+            let negative = cell[..i].ends_with('-') || cell[..i].ends_with('−');
             let start = i;
             while i < b.len() && b[i].is_ascii_digit() {
                 i += 1;
@@ -603,8 +605,27 @@ fn regex_lite_decimals(cell: &str) -> Vec<(f64, usize)> {
                 while i < b.len() && b[i].is_ascii_digit() {
                     i += 1;
                 }
-                if let Ok(v) = cell[start..i].parse() {
-                    out.push((v, i - frac));
+                let decimals = i - frac;
+                let mut exponent = 0;
+                let e = i;
+                if e < b.len() && b[e] == b'e' {
+                    let mut k = e + 1;
+                    if k < b.len() && (b[k] == b'-' || b[k] == b'+') {
+                        k += 1;
+                    }
+                    let digits = k;
+                    while k < b.len() && b[k].is_ascii_digit() {
+                        k += 1;
+                    }
+                    if k > digits {
+                        exponent = cell[e + 1..k].parse().unwrap_or(0);
+                        i = k;
+                    }
+                }
+                if let Ok(v) = cell[start..start + (frac - start) + decimals].parse::<f64>() {
+                    let scale = 10f64.powi(exponent);
+                    let value = if negative { -v } else { v } * scale;
+                    out.push((value, 0.5 * 10f64.powi(-(decimals as i32)) * scale));
                 }
             }
         } else {
