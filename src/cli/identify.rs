@@ -42,7 +42,8 @@ pub struct IdentifyArgs {
     /// The chain of a URDF tree.
     #[command(flatten)]
     pub chain: super::ChainArgs,
-    /// The measurement CSV (`q1..qn,x,y,z[,qw,qx,qy,qz]`).
+    /// The measurement CSV (`q1..qn,x,y,z[,qw,qx,qy,qz]`), or a distance, plane or sphere
+    /// file (`q1..qn` and `length_mm`, `step_mm`, `plane` or `sphere`).
     #[arg(long)]
     pub data: PathBuf,
     /// The identification method, with its default options.
@@ -172,7 +173,7 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 /// `--allow-rank-deficient`. A measurement-kind file (docs/formats.md § 5.3) goes to
 /// [`super::identify_kind`].
 pub fn run(args: &IdentifyArgs) -> Result<()> {
-    if calbench::measurement::kind_csv::file_kind(&args.data)?.is_some() {
+    if calbench::measurement::kind_csv::file_kind(&args.data).is_some() {
         return super::identify_kind::run(args);
     }
     let out = &args.out;

@@ -75,14 +75,15 @@ pub struct KindFile {
     pub lines: Vec<u64>,
 }
 
-/// The kind of the measurement file at `path` by its header: `Some` when it has a column of
-/// [§ 5.3](crate::measurement::kind_csv), `None` for the tracker's file.
-pub fn file_kind(path: &Path) -> Result<Option<Kind>> {
-    let rows = Rows::open(path, "q1,…,qn and the measured columns")?;
-    Ok(KIND_COLUMNS
+/// The kind of the measurement file at `path` by its header: `Some` when it has one of the
+/// kinds' columns (docs/formats.md § 5.3), `None` for the tracker's file, and for a file
+/// without a readable header, which the tracker's reader then refuses with its own words.
+pub fn file_kind(path: &Path) -> Option<Kind> {
+    let rows = Rows::open(path, "q1,…,qn and the measured columns").ok()?;
+    KIND_COLUMNS
         .iter()
         .find(|(c, _)| rows.names.iter().any(|n| n == c))
-        .map(|(_, k)| *k))
+        .map(|(_, k)| *k)
 }
 
 /// Reads a measurement-kind file for `robot` (see the module docs for what is refused).
