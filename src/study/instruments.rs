@@ -480,7 +480,8 @@ impl InstrumentsScenario {
         let reading = self.reading(nominal, (s, &lay), (&pool, &groups), None, count, seed)?;
         if reading.measured.is_none() {
             return Err(Error::Compute(format!(
-                "trial {trial}: the true robot does not touch its {} from one of the commanded                  poses",
+                "trial {trial}: the true robot does not touch its {} from one of the commanded \
+                 poses",
                 s.kind.as_str()
             )));
         }
