@@ -16,7 +16,7 @@ use crate::identify::{solve, Identified, LeastSquares, Solver};
 use crate::measurement::kind::{choose_plane_axes, nuisance_guess, Instrument, KindData};
 use crate::measurement::kind_csv::KindFile;
 use crate::measurement::Measurements;
-use crate::numeric::{Real, Vec3};
+use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::identifiability::Identifiability;
 use crate::robot::{Param, Robot};
 use crate::sim::instrument::{touch, Layout};
@@ -34,8 +34,11 @@ pub enum Chosen<'a> {
 /// The identification on a kind file and what it found.
 #[derive(Debug)]
 pub struct KindFit {
-    /// The readings as identified (plane axes chosen).
+    /// The readings as identified (plane axes chosen; targets' points in the base frame).
     pub data: KindData,
+    /// Targets: the frame that took the measured points into the base frame (SVD onto the
+    /// nominal robot's target points), after which the base parameters are identified.
+    pub registration: Option<Frame>,
     /// The identified robot parameters, in the order of the estimate.
     pub params: Vec<Param>,
     /// The analysis of the candidates on the file's poses (the instrument's unknowns
@@ -53,13 +56,15 @@ pub struct KindFit {
 /// Identifies `nominal`'s parameters (`chosen`, without `fixed`) and the instrument's
 /// unknowns from the readings of `file` (read from `source`, named in refusals) with
 /// `solver`, observation `i` weighted by `1/σ_i²` (normalised to a mean of 1) when the file
-/// has `sigma_mm`. Refuses parameters the readings cannot determine when they were given and
+/// has `sigma_mm`; targets' points are first registered into the base frame when `register`
+/// ([`register_targets`]; otherwise they are taken as in the base frame and the base is not a
+/// candidate). Refuses parameters the readings cannot determine when they were given and
 /// not allowed, and readings too few for the instrument's first guess (naming the file).
 pub fn identify_kind(
     nominal: &Robot,
     file: &KindFile,
     source: &Path,
-    (chosen, fixed): (Chosen, &[Param]),
+    (chosen, fixed, register): (Chosen, &[Param], bool),
     solver: &dyn Solver,
 ) -> Result<KindFit> {
     let in_file = |e: Error| Error::file(source, "data", e.to_string());
@@ -67,13 +72,21 @@ pub fn identify_kind(
     let chain = nominal.chain();
     let p: Vec<Vec3> = file.qs.iter().map(|q| chain.fk(q).pos).collect();
     choose_plane_axes(&mut data, &p);
+    let targets = matches!(data.instrument, Instrument::Targets(_));
+    let registration = if targets && register {
+        Some(register_targets(nominal, &file.qs, &mut data).map_err(in_file)?)
+    } else {
+        None
+    };
     let mut candidates: Vec<Param> = match chosen {
         Chosen::Given(ps, _) => ps.to_vec(),
         Chosen::Identifiable => {
+            // Targets in the base frame (`known`) leave the base as it is, as the tracker's.
             let all: Vec<Param> = nominal
                 .params()
                 .into_iter()
                 .filter(|p| !p.is_compliance())
+                .filter(|p| !(targets && !register && matches!(p, Param::Base(_))))
                 .collect();
             let first = |p: &Param| matches!(p, Param::Base(_) | Param::Tool(_));
             let head = all.iter().copied().filter(first);
@@ -109,6 +122,7 @@ pub fn identify_kind(
     let robot = kp.robot_with(&identified.x);
     let nuisance = kp.nuisance_at(&identified.x);
     Ok(KindFit {
+        registration,
         data,
         params,
         analysis,
@@ -151,6 +165,34 @@ fn on_first_guess(
         }
     }
     Ok((moved, on))
+}
+
+/// Registers the targets' points of `data` (the instrument's frame) onto the nominal robot's
+/// target points at `qs` (SVD, every point weighing 1) and puts them into the base frame;
+/// the registration's frame. The base parameters, identified with the others, then take up
+/// what the nominal robot's errors left in this frame, as with the tracker's `identify`
+/// registration.
+fn register_targets(nominal: &Robot, qs: &[Vec<Real>], data: &mut KindData) -> Result<Frame> {
+    let Instrument::Targets(targets) = &data.instrument else {
+        return Ok(Frame::identity());
+    };
+    let chain = nominal.chain();
+    let mut model = Vec::with_capacity(targets.len() * qs.len());
+    for q in qs {
+        let f = chain.fk(q);
+        model.extend(targets.iter().map(|o| f.pos + f.rot * o));
+    }
+    let seen: Vec<Vec3> = data
+        .values
+        .chunks(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
+    let frame = register_svd(&model, &seen, None)?.frame;
+    data.values = seen
+        .iter()
+        .flat_map(|p| frame.apply(p).iter().copied().collect::<Vec<_>>())
+        .collect();
+    Ok(frame)
 }
 
 /// The refusal of given parameters that `data` cannot determine (`count` given).

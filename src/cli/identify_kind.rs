@@ -1,6 +1,7 @@
 //! `calbench identify` on a measurement-kind file (docs/formats.md § 5.3: `length_mm`,
-//! `step_mm`, `plane` or `sphere` readings): the robot's parameters and the instrument's
-//! unknowns by a Jacobian method, written to `identified.json` and `robot.toml`.
+//! `step_mm`, `plane`, `sphere` or `target` readings): the robot's parameters and the
+//! instrument's unknowns (or, for targets, the registration) by a Jacobian method, written to
+//! `identified.json` and `robot.toml`.
 
 use anyhow::Result;
 
@@ -24,7 +25,10 @@ fn tracker_only(args: &IdentifyArgs) -> [(&'static str, bool); 8] {
     [
         (
             "--registration",
-            args.registration != Registration::Identify,
+            !matches!(
+                args.registration,
+                Registration::Identify | Registration::Known
+            ),
         ),
         ("--holdout", args.holdout.is_some()),
         ("--cv", args.cv.is_some()),
@@ -55,6 +59,18 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         )
         .into());
     }
+    let targets = matches!(file.data.instrument, Instrument::Targets(_));
+    if !targets && args.registration != Registration::Identify {
+        return Err(Error::setting(
+            "--registration",
+            format!(
+                "{} holds {kind} readings (docs/formats.md § 5.3), whose instrument is placed by \
+                 its own unknowns; only multi-target files take identify or known",
+                args.data.display()
+            ),
+        )
+        .into());
+    }
     let spec = method_with_options(args.method.name, &args.options)?;
     let Some(solver) = spec.method.solver() else {
         return Err(Error::setting(
@@ -80,7 +96,17 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         .as_deref()
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
-    let fit = identify_kind(&nominal, &file, &args.data, (chosen, &args.fix), solver)?;
+    let fit = identify_kind(
+        &nominal,
+        &file,
+        &args.data,
+        (
+            chosen,
+            &args.fix,
+            args.registration == Registration::Identify,
+        ),
+        solver,
+    )?;
     let r = &fit.identified;
     if on_data::undetermined_termination(r.termination) && !args.allow_rank_deficient {
         return Err(Error::file(
@@ -140,12 +166,21 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         "termination": r.termination.as_str(),
     });
     match inst {
+        Instrument::Targets(offsets) => {
+            let offsets: Vec<[Real; 3]> = offsets.iter().map(|o| [o.x, o.y, o.z]).collect();
+            j["targets_mm"] = serde_json::json!(offsets);
+            j["registration"] = serde_json::json!(args.registration.as_str());
+            if let Some(f) = &fit.registration {
+                let (xyz, rpy) = f.to_xyz_rpy();
+                j["registration_frame"] = serde_json::json!({"xyz_mm": xyz, "rpy_rad": rpy});
+            }
+        }
         Instrument::Distance { pivot } => j["pivot"] = serde_json::json!(pivot),
         Instrument::Planes(axes) => {
             let axes: Vec<&str> = axes.iter().map(|&a| ["x", "y", "z"][a]).collect();
             j["plane_axes"] = serde_json::json!(axes);
         }
-        _ => {}
+        Instrument::Spheres(_) => {}
     }
     if !args.fix.is_empty() {
         j["fixed"] = serde_json::json!(strs(&args.fix));

@@ -96,22 +96,16 @@ fn instrument(sc: &InstrumentsScenario, args: &SimulateArgs) -> Result<()> {
             )
         })?,
     };
-    if all[entry].kind == Kind::MultiTarget {
-        return Err(Error::setting(
-            "--measure",
-            "multi-target readings have no file: their points are in the tracker's frame, which \
-             the identification of the kinds does not register (docs/formats.md § 5.3)",
-        )
-        .into());
-    }
     let nominal = super::ChainArgs::default().load(&sc.robot)?;
     let sim = sc.simulate(&nominal, entry, trial)?;
     let r = &sim.reading;
     let Some((qs, data, sigma)) = &r.measured else {
         unreachable!("InstrumentsScenario::simulate returns readings")
     };
-    // σ is written when every reading has one (a noise-free instrument has none).
-    let sigma = sigma.iter().all(|v| *v > 0.0).then_some(&sigma[..]);
+    // σ is written when every reading has one (a noise-free instrument has none); a
+    // multi-target file has no σ column.
+    let multi = all[entry].kind == Kind::MultiTarget;
+    let sigma = (!multi && sigma.iter().all(|v| *v > 0.0)).then_some(&sigma[..]);
     let (vq, seen) = &r.validation;
     let validation = Measurements {
         qs: vq.clone(),

@@ -340,7 +340,7 @@ pub(crate) fn check_joints(
 }
 
 /// A measured coordinate (mm) within ±[`MAX_POINT_MM`].
-fn check_coordinate(v: Real) -> std::result::Result<(), String> {
+pub(crate) fn check_coordinate(v: Real) -> std::result::Result<(), String> {
     if v.abs() > MAX_POINT_MM {
         return Err(format!(
             "{v:?} mm is out of range: a measured coordinate must be within \

@@ -7,28 +7,29 @@
 //! | `distance` between consecutive poses | `step_mm` (empty on the first row) |
 //! | `plane` | `plane` (1, 2, …), optional `offset_mm` |
 //! | `sphere` | `sphere` (1, 2, …), `radius_mm`, optional `offset_mm` |
+//! | `multi-target` | `target` (1, 2, …), `x`, `y`, `z`, `target_x_mm`, `target_y_mm`, `target_z_mm`: one row per target and pose |
 //!
-//! and optionally `sigma_mm`, the reading's standard deviation. A file without any of these
-//! columns is the tracker's ([`super::csv`]). Reading refuses what the tracker's reader
-//! refuses (unknown, missing or repeated columns, rows of another length, values that are not
-//! finite numbers, joints outside their limits, fewer than three distinct poses) and what is
-//! wrong with a reading: a negative length, a plane or sphere number that is not 1, 2, …, a
-//! numbering with gaps, a radius that is not positive or changes within a sphere, naming the
-//! file, the line and the column. Multi-target files (a `target` column) are refused: their
-//! points are in the tracker's frame, which the kinds' identification does not register.
+//! and, but for targets, optionally `sigma_mm`, the reading's standard deviation. A file
+//! without any of these columns is the tracker's ([`super::csv`]). Reading refuses what the
+//! tracker's reader refuses (unknown, missing or repeated columns, rows of another length,
+//! values that are not finite numbers, joints outside their limits, fewer than three distinct
+//! poses) and what is wrong with a reading: a negative length, a plane, sphere or target
+//! number that is not 1, 2, …, a numbering with gaps, a radius that is not positive or
+//! changes within a sphere, a target offset that changes, a pose without every target,
+//! naming the file, the line and the column.
 
 use std::fmt::Write as _;
 use std::path::Path;
 
 use super::csv::{
-    check_joints, check_sigma, distinct_poses, fixed, joint_cells, joint_header, user_limits,
-    MAX_POINT_MM,
+    check_coordinate, check_joints, check_sigma, distinct_poses, fixed, joint_cells, joint_header,
+    user_limits, MAX_POINT_MM,
 };
 use super::kind::{Instrument, Kind, KindData};
 use super::rows::{at_line, number, Rows};
 use super::JointSpace;
 use crate::error::{Error, Result};
-use crate::numeric::Real;
+use crate::numeric::{Real, Vec3};
 
 /// The length from the pivot (`distance`).
 const LENGTH: &str = "length_mm";
@@ -44,8 +45,12 @@ const RADIUS: &str = "radius_mm";
 const OFFSET: &str = "offset_mm";
 /// The reading's standard deviation.
 const SIGMA: &str = "sigma_mm";
-/// The column of a multi-target file (not read).
+/// The target a row measures (multi-target).
 const TARGET: &str = "target";
+/// The measured point of a target, in the tracker's frame.
+const XYZ: [&str; 3] = ["x", "y", "z"];
+/// A target's offset in the tool frame.
+const OFFSETS: [&str; 3] = ["target_x_mm", "target_y_mm", "target_z_mm"];
 
 /// The most planes or spheres of one file.
 pub const MAX_GROUPS: usize = 1000;
@@ -110,14 +115,7 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
         ));
     }
     if kind == Kind::MultiTarget {
-        return Err(bad(
-            t.header_line,
-            TARGET,
-            "multi-target files are not read: their points are in the tracker's frame, which \
-             the identification of the kinds does not register; identify each target's rows \
-             as a tracker file (docs/formats.md § 5.1)"
-                .into(),
-        ));
+        return read_targets(t, robot, path);
     }
     let dof = robot.dof();
     let qnames: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
@@ -176,14 +174,10 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
     let mut radii: Vec<Option<(Real, u64)>> = Vec::new();
     let mut group_line: Vec<Option<u64>> = Vec::new();
     let mut rec = ::csv::StringRecord::new();
-    let mut quser = vec![0.0; dof];
+    let lim = (&lim_lo[..], &lim_hi[..]);
     while let Some(line) = t.next(&mut rec)? {
         let num = |c: usize| number(&rec, &names, c).map_err(|(p, m)| t.bad(line, &p, m));
-        for (j, &c) in qcol.iter().enumerate() {
-            quser[j] = num(c)?;
-        }
-        let q = check_joints(robot, &quser, (&lim_lo, &lim_hi))
-            .map_err(|(c, msg)| bad(line, &c, msg))?;
+        let q = row_joints(robot, (&rec, &names), &qcol, lim, (path, line))?;
         let first = out.qs.is_empty();
         out.qs.push(q);
         out.lines.push(line);
@@ -294,10 +288,198 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
     Ok(out)
 }
 
+/// The joint values of a row (`rec` under the header `names`, line `line` of `path`) from
+/// the columns `qcol`, in internal units and checked against the limits `lim` (the robot's
+/// units, for messages).
+fn row_joints(
+    robot: &(impl JointSpace + ?Sized),
+    (rec, names): (&::csv::StringRecord, &[String]),
+    qcol: &[usize],
+    lim: (&[Real], &[Real]),
+    (path, line): (&Path, u64),
+) -> Result<Vec<Real>> {
+    let mut quser = Vec::with_capacity(qcol.len());
+    for &c in qcol {
+        quser.push(number(rec, names, c).map_err(|(p, m)| at_line(path, line, &p, m))?);
+    }
+    check_joints(robot, &quser, lim)
+        .map_err(|(c, msg)| at_line(path, line, &format!(", column {c}"), msg))
+}
+
+/// Reads a multi-target file from its rows `t` (header read): one row per target and pose,
+/// the rows of a pose consecutive with the same joint values, every pose with every target
+/// once; each target's offset the same on all its rows. The points stay in the tracker's
+/// frame (the identification registers them).
+fn read_targets(mut t: Rows, robot: &(impl JointSpace + ?Sized), path: &Path) -> Result<KindFile> {
+    let names = t.names.clone();
+    let find = |n: &str| names.iter().position(|h| h == n);
+    let bad = |line: u64, column: &str, msg: String| {
+        at_line(path, line, &format!(", column {column}"), msg)
+    };
+    let dof = robot.dof();
+    let qnames: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
+    let required: Vec<&str> = qnames
+        .iter()
+        .map(String::as_str)
+        .chain([TARGET])
+        .chain(XYZ)
+        .chain(OFFSETS)
+        .collect();
+    let expected = format!("q1…q{dof}, target, x, y, z, target_x_mm, target_y_mm, target_z_mm");
+    t.check_columns(|n| required.contains(&n), &expected)?;
+    let cols: Vec<usize> = required
+        .iter()
+        .map(|n| {
+            find(n).ok_or_else(|| {
+                let msg = format!("missing column \"{n}\" (a multi-target file has {expected})");
+                t.bad(t.header_line, "", msg)
+            })
+        })
+        .collect::<Result<_>>()?;
+    let (qcol, rest) = cols.split_at(dof);
+    let (lim_lo, lim_hi) = user_limits(robot);
+    let mut qs: Vec<Vec<Real>> = Vec::new();
+    let mut lines: Vec<u64> = Vec::new();
+    // Per pose, its targets' points by target number; per target, its offset and line.
+    let mut points: Vec<Vec<Option<Vec3>>> = Vec::new();
+    let mut offsets: Vec<Option<(Vec3, u64)>> = Vec::new();
+    let mut rec = ::csv::StringRecord::new();
+    let lim = (&lim_lo[..], &lim_hi[..]);
+    let mut last = 0;
+    while let Some(line) = t.next(&mut rec)? {
+        let num = |c: usize| number(&rec, &names, c).map_err(|(p, m)| t.bad(line, &p, m));
+        let q = row_joints(robot, (&rec, &names), qcol, lim, (path, line))?;
+        let text = &rec[rest[0]];
+        let g = text
+            .parse::<usize>()
+            .ok()
+            .filter(|g| (1..=MAX_GROUPS).contains(g))
+            .ok_or_else(|| {
+                let msg = format!("\"{text}\" is not a target number 1, 2, …, {MAX_GROUPS}");
+                bad(line, TARGET, msg)
+            })?;
+        let mut v = [[0.0; 3]; 2];
+        for (k, &c) in rest[1..].iter().enumerate() {
+            let x = num(c)?;
+            check_coordinate(x).map_err(|msg| bad(line, &names[c], msg))?;
+            v[k / 3][k % 3] = x;
+        }
+        let (p, o) = (Vec3::from(v[0]), Vec3::from(v[1]));
+        if offsets.len() < g {
+            offsets.resize(g, None);
+        }
+        match offsets[g - 1] {
+            Some((o0, l0)) if o0 != o => {
+                let msg = format!(
+                    "target {g} is at [{}, {}, {}] mm in the tool frame on line {l0}: one \
+                     target has one offset",
+                    o0.x, o0.y, o0.z
+                );
+                return Err(bad(line, OFFSETS[0], msg));
+            }
+            _ => offsets[g - 1] = Some((o, line)),
+        }
+        let same_pose = qs
+            .last()
+            .is_some_and(|l: &Vec<Real>| l.iter().zip(&q).all(|(a, b)| a.to_bits() == b.to_bits()));
+        if !same_pose {
+            qs.push(q);
+            lines.push(line);
+            points.push(Vec::new());
+        }
+        let pose = points
+            .last_mut()
+            .unwrap_or_else(|| unreachable!("a pose was pushed"));
+        if pose.len() < g {
+            pose.resize(g, None);
+        }
+        if pose[g - 1].is_some() {
+            let msg = format!(
+                "target {g} twice in the pose that starts on line {}",
+                lines[lines.len() - 1]
+            );
+            return Err(bad(line, TARGET, msg));
+        }
+        pose[g - 1] = Some(p);
+        last = line;
+    }
+    if qs.is_empty() {
+        let msg = "the file has a header but no data rows".to_string();
+        return Err(t.bad(t.header_line, "", msg));
+    }
+    distinct_poses(&qs, &lines, dof).map_err(|(l, msg)| t.bad(l, "", msg))?;
+    let count = offsets.len();
+    if let Some(gap) = offsets.iter().position(Option::is_none) {
+        let line = offsets[count - 1].map_or(last, |o| o.1);
+        let msg = format!(
+            "target {count} but no row of target {}: targets are numbered 1, 2, … without gaps",
+            gap + 1
+        );
+        return Err(bad(line, TARGET, msg));
+    }
+    let mut values = Vec::with_capacity(3 * count * qs.len());
+    for (i, pose) in points.iter().enumerate() {
+        for g in 0..count {
+            let p = pose.get(g).copied().flatten().ok_or_else(|| {
+                let msg = format!(
+                    "the pose that starts here has no row of target {}: every pose measures \
+                     every target",
+                    g + 1
+                );
+                t.bad(lines[i], "", msg)
+            })?;
+            values.extend(p.iter());
+        }
+    }
+    let m = qs.len();
+    let targets = offsets
+        .iter()
+        .map(|o| o.map_or(Vec3::zeros(), |o| o.0))
+        .collect();
+    let data = KindData {
+        instrument: Instrument::Targets(targets),
+        group: vec![0; m],
+        values,
+    };
+    data.check(m)
+        .map_err(|e| t.bad(t.header_line, "", e.to_string()))?;
+    Ok(KindFile {
+        qs,
+        data,
+        sigma_mm: None,
+        lines,
+    })
+}
+
+/// Writes the points `values` (3 per target and pose) of `targets` at joint values `qs` as a
+/// multi-target file: one row per pose and target.
+fn write_targets(
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+    qs: &[Vec<Real>],
+    targets: &[Vec3],
+    values: &[Real],
+) -> Result<()> {
+    let mut s = String::with_capacity(16 * (robot.dof() + 7) * (targets.len() * qs.len() + 1));
+    joint_header(&mut s, robot.dof());
+    s.push_str(",target,x,y,z,target_x_mm,target_y_mm,target_z_mm\n");
+    let cells =
+        |v: &[Real]| -> String { v.iter().map(|x| fixed(*x, 9)).collect::<Vec<_>>().join(",") };
+    for (i, q) in qs.iter().enumerate() {
+        for (k, o) in targets.iter().enumerate() {
+            joint_cells(&mut s, robot, q);
+            let row = 3 * (targets.len() * i + k);
+            let p = cells(&values[row..row + 3]);
+            let _ = writeln!(s, ",{},{p},{}", k + 1, cells(o.as_slice()));
+        }
+    }
+    std::fs::write(path, s).map_err(|e| Error::io(path, e))
+}
+
 /// Writes readings `data` at joint values `qs` of `robot` as a measurement-kind file, with
-/// each observation's standard deviation `sigma_mm` when given (every one > 0). Numbers with 9
-/// decimals, negative zero written as zero, so equal readings give identical bytes. Several
-/// targets per pose are refused (their file is not defined).
+/// each observation's standard deviation `sigma_mm` when given (every one > 0; not for
+/// targets). Numbers with 9 decimals, negative zero written as zero, so equal readings give
+/// identical bytes.
 pub fn write_kind_file(
     path: &Path,
     robot: &(impl JointSpace + ?Sized),
@@ -312,15 +494,14 @@ pub fn write_kind_file(
         Instrument::Distance { pivot: false } => STEP,
         Instrument::Planes(_) => "plane,offset_mm",
         Instrument::Spheres(_) => "sphere,radius_mm,offset_mm",
-        Instrument::Targets(_) => {
-            return Err(Error::setting(
-                "measurement.kind",
-                format!(
-                    "{} readings have no file of their own: position is the tracker's file, \
-                     multi-target files are not defined",
-                    inst.kind().as_str()
-                ),
-            ))
+        Instrument::Targets(targets) => {
+            if sigma_mm.is_some() {
+                return Err(Error::setting(
+                    "sigma_mm",
+                    "a multi-target file has no sigma_mm column",
+                ));
+            }
+            return write_targets(path, robot, qs, targets, &data.values);
         }
     };
     let mut s = String::with_capacity(16 * (robot.dof() + 3) * (qs.len() + 1));
