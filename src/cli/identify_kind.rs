@@ -21,15 +21,8 @@ use super::{check_out_folder, to_json_text, write_file};
 const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
 
 /// The options of `identify` that a kind file does not take: each with whether it was given.
-fn tracker_only(args: &IdentifyArgs) -> [(&'static str, bool); 8] {
+fn tracker_only(args: &IdentifyArgs) -> [(&'static str, bool); 7] {
     [
-        (
-            "--registration",
-            !matches!(
-                args.registration,
-                Registration::Identify | Registration::Known
-            ),
-        ),
         ("--holdout", args.holdout.is_some()),
         ("--cv", args.cv.is_some()),
         ("--models", !args.models.is_empty()),
@@ -53,20 +46,27 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             option,
             format!(
                 "applies to the tracker's measurement file (docs/formats.md § 5.1); {} holds \
-                 {kind} readings (§ 5.3), whose instrument is placed by its own unknowns",
+                 {kind} readings (§ 5.3), which are identified without it",
                 args.data.display()
             ),
         )
         .into());
     }
     let targets = matches!(file.data.instrument, Instrument::Targets(_));
-    if !targets && args.registration != Registration::Identify {
+    let registration = args.registration;
+    if registration != Registration::Identify && !(targets && registration == Registration::Known) {
+        let why = if targets {
+            "multi-target points are registered by SVD onto the nominal robot with the base \
+             identified after (identify), or taken in the base frame (known)"
+        } else {
+            "the instrument is placed by its own unknowns, identified with the robot"
+        };
         return Err(Error::setting(
             "--registration",
             format!(
-                "{} holds {kind} readings (docs/formats.md § 5.3), whose instrument is placed by \
-                 its own unknowns; only multi-target files take identify or known",
-                args.data.display()
+                "{} holds {kind} readings (docs/formats.md § 5.3): {why}; {} is not taken",
+                args.data.display(),
+                registration.as_str()
             ),
         )
         .into());
