@@ -57,8 +57,8 @@ pub struct KindFit {
 /// unknowns from the readings of `file` (read from `source`, named in refusals) with
 /// `solver`, observation `i` weighted by `1/σ_i²` (normalised to a mean of 1) when the file
 /// has `sigma_mm`; targets' points are first registered into the base frame when `register`
-/// ([`register_targets`]; otherwise they are taken as in the base frame and the base is not a
-/// candidate). Refuses parameters the readings cannot determine when they were given and
+/// (SVD onto the nominal robot's target points; otherwise they are taken as in the base frame
+/// and the base is not a candidate). Refuses parameters the readings cannot determine when they were given and
 /// not allowed, and readings too few for the instrument's first guess (naming the file).
 pub fn identify_kind(
     nominal: &Robot,
