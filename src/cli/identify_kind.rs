@@ -33,26 +33,14 @@ fn tracker_only(args: &IdentifyArgs) -> [(&'static str, bool); 7] {
     ]
 }
 
-/// Identifies the robot from the kind file `--data`, writes the output folder and prints
-/// the validation table (with `--validate`, a tracker's file) and a summary line.
-pub fn run(args: &IdentifyArgs) -> Result<()> {
-    let out = &args.out;
-    check_out_folder(out, &OUTPUTS)?;
-    let nominal = args.chain.load(&args.robot)?;
-    let file = read_kind_file(&args.data, &nominal)?;
-    let kind = file.data.instrument.kind().as_str();
+/// The option a kind file (of targets or not) refuses and why, if any: the
+/// tracker's options, a registration the kind does not take, a method that is not a
+/// Jacobian one (`solver`: it is).
+fn refusal(args: &IdentifyArgs, targets: bool, solver: bool) -> Option<(&'static str, String)> {
     if let Some((option, _)) = tracker_only(args).into_iter().find(|o| o.1) {
-        return Err(Error::setting(
-            option,
-            format!(
-                "applies to the tracker's measurement file (docs/formats.md § 5.1); {} holds \
-                 {kind} readings (§ 5.3), which are identified without it",
-                args.data.display()
-            ),
-        )
-        .into());
+        let why = "it applies to the tracker's measurement file (§ 5.1) only";
+        return Some((option, why.to_string()));
     }
-    let targets = matches!(file.data.instrument, Instrument::Targets(_));
     let registration = args.registration;
     if registration != Registration::Identify && !(targets && registration == Registration::Known) {
         let why = if targets {
@@ -61,29 +49,41 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         } else {
             "the instrument is placed by its own unknowns, identified with the robot"
         };
-        return Err(Error::setting(
+        return Some((
             "--registration",
-            format!(
-                "{} holds {kind} readings (docs/formats.md § 5.3): {why}; {} is not taken",
-                args.data.display(),
-                registration.as_str()
-            ),
-        )
-        .into());
+            format!("{} is not taken: {why}", registration.as_str()),
+        ));
     }
+    (!solver).then(|| {
+        let why = format!(
+            "{} is not one of the Jacobian methods (ls, ridge, igg3, lm) that identify them",
+            args.method.name
+        );
+        ("--method", why)
+    })
+}
+
+/// Identifies the robot from the kind file `--data`, writes the output folder and prints
+/// the validation table (with `--validate`, a tracker's file) and a summary line.
+pub fn run(args: &IdentifyArgs) -> Result<()> {
+    let out = &args.out;
+    check_out_folder(out, &OUTPUTS)?;
+    let nominal = args.chain.load(&args.robot)?;
+    let file = read_kind_file(&args.data, &nominal)?;
+    let kind = file.data.instrument.kind().as_str();
+    let targets = matches!(file.data.instrument, Instrument::Targets(_));
     let spec = method_with_options(args.method.name, &args.options)?;
-    let Some(solver) = spec.method.solver() else {
-        return Err(Error::setting(
-            "--method",
-            format!(
-                "{} readings are identified by the Jacobian methods ls, ridge, igg3 and lm; {} \
-                 is not one",
-                kind,
-                spec.name()
-            ),
-        )
-        .into());
-    };
+    if let Some((option, why)) = refusal(args, targets, spec.method.solver().is_some()) {
+        let msg = format!(
+            "{} holds {kind} readings (docs/formats.md § 5.3): {why}",
+            args.data.display()
+        );
+        return Err(Error::setting(option, msg).into());
+    }
+    let solver = spec
+        .method
+        .solver()
+        .unwrap_or_else(|| unreachable!("refusal() refuses the methods that are not solvers"));
     check_names("--params", &nominal, &args.params)?;
     check_names("--fix", &nominal, &args.fix)?;
     let chosen = if args.params.is_empty() {
