@@ -6,6 +6,7 @@
 //! - [`registration`]: SVD (Kabsch/Arun) and Ban's weighted SVD of point sets;
 //! - [`validation`]: validation errors of a model against true (or measured) frames;
 //! - [`on_data`]: identification on a measurement (`identify`), with its refusals;
+//! - [`on_kind`]: identification on a measurement-kind file (distance, plane, sphere);
 //! - [`cv`]: K-fold cross-validation, held-out splits and model choice (`identify --cv`);
 //! - [`diagnostics`]: parameter σ and correlations, leverage and Cook's distance, predicted
 //!   position σ (`identified.json` `diagnostics`);
@@ -15,6 +16,7 @@ pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
 pub mod on_data;
+pub mod on_kind;
 pub mod registration;
 pub mod validation;
 

@@ -56,10 +56,13 @@ impl OnData {
 /// Whether a calibration left parameters undetermined (termination `rank-deficient` or
 /// `singular`).
 pub fn undetermined(c: &Calibrated) -> bool {
-    matches!(
-        c.identified.termination,
-        Termination::RankDeficient | Termination::Singular
-    )
+    undetermined_termination(c.identified.termination)
+}
+
+/// Whether an identification that ended so left parameters undetermined (`rank-deficient`
+/// or `singular`).
+pub fn undetermined_termination(t: Termination) -> bool {
+    matches!(t, Termination::RankDeficient | Termination::Singular)
 }
 
 /// The refusal of a result `c` whose data (`data`, read from `source`) do not determine every
@@ -75,13 +78,7 @@ pub fn undetermined_error(
     allow: &str,
 ) -> Error {
     let a = analyse(nominal, params.0, &data.qs, data.measure());
-    let names = |v: &[Param]| {
-        v.iter()
-            .map(|p| p.to_string())
-            .collect::<Vec<_>>()
-            .join(" ")
-    };
-    let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
+    let (undetermined, groups) = names_and_groups(&a);
     Error::file(
         source,
         "data",
@@ -92,12 +89,25 @@ pub fn undetermined_error(
             a.rank,
             params.1,
             c.identified.rank.unwrap_or(a.rank),
-            names(&a.unidentifiable),
-            groups.join(" "),
+            undetermined,
+            groups,
             spec.name(),
             c.identified.termination.as_str(),
         ),
     )
+}
+
+/// The undetermined parameters of an analysis, space-separated, and its dependent groups
+/// (`[a b] [c d]`), as refusals name them.
+pub fn names_and_groups(a: &crate::robot::identifiability::Identifiability) -> (String, String) {
+    let names = |v: &[Param]| {
+        v.iter()
+            .map(|p| p.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
+    (names(&a.unidentifiable), groups.join(" "))
 }
 
 /// Identifies the errors of `nominal` from the measurement `data` with `spec`: the

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use calbench::calibrate::diagnostics::{diagnose, Subject};
-use calbench::calibrate::{calibrate, Calibrated, Registration, RoundsEnd};
+use calbench::calibrate::{calibrate, Calibrated, ErrorStats, Registration, RoundsEnd};
 use calbench::calibrate::{cv, on_data};
 use calbench::error::Error;
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
@@ -42,7 +42,8 @@ pub struct IdentifyArgs {
     /// The chain of a URDF tree.
     #[command(flatten)]
     pub chain: super::ChainArgs,
-    /// The measurement CSV (`q1..qn,x,y,z[,qw,qx,qy,qz]`).
+    /// The measurement CSV (`q1..qn,x,y,z[,qw,qx,qy,qz]`), or a distance, plane or sphere
+    /// file (`q1..qn` and `length_mm`, `step_mm`, `plane` or `sphere`).
     #[arg(long)]
     pub data: PathBuf,
     /// The identification method, with its default options.
@@ -169,8 +170,12 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 
 /// Identifies the errors, writes the output folder and prints the validation table and a
 /// summary line; data that do not determine every parameter are refused unless
-/// `--allow-rank-deficient`.
+/// `--allow-rank-deficient`. A measurement-kind file (docs/formats.md § 5.3) goes to
+/// [`super::identify_kind`].
 pub fn run(args: &IdentifyArgs) -> Result<()> {
+    if calbench::measurement::kind_csv::file_kind(&args.data).is_some() {
+        return super::identify_kind::run(args);
+    }
     let out = &args.out;
     check_out_folder(out, &OUTPUTS)?;
     let nominal = args.chain.load(&args.robot)?;
@@ -347,16 +352,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         );
     }
     if let Some(v) = &validation {
-        out!("validation error (mm)   mean      rms       max       std");
-        for (label, s) in [("before", v.before_mm), ("after", v.after_mm)] {
-            out!(
-                "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
-                s.mean,
-                s.rms,
-                s.max,
-                s.std
-            );
-        }
+        print_validation(&v.before_mm, &v.after_mm);
     }
     let r = &c.identified;
     let rounds = match c.rounds.termination {
@@ -379,9 +375,23 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     Ok(())
 }
 
+/// Prints the validation table: the position errors before and after (mm).
+pub(super) fn print_validation(before: &ErrorStats, after: &ErrorStats) {
+    out!("validation error (mm)   mean      rms       max       std");
+    for (label, s) in [("before", before), ("after", after)] {
+        out!(
+            "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
+            s.mean,
+            s.rms,
+            s.max,
+            s.std
+        );
+    }
+}
+
 /// The method `name` with the `--set KEY=VALUE` options, read like a scenario's
 /// `[[methods]]` entry.
-fn method_with_options(
+pub(super) fn method_with_options(
     name: &str,
     options: &[(String, toml::Value)],
 ) -> calbench::Result<MethodSpec> {
@@ -420,7 +430,7 @@ fn compensated_urdf(
 
 /// Refuses a name of `--fix` or `--params` (`option`) the robot's model does not have, a
 /// compliance in `--params` (`--compliance` adds those) and a name given twice.
-fn check_names(option: &str, nominal: &Robot, names: &[Param]) -> calbench::Result<()> {
+pub(super) fn check_names(option: &str, nominal: &Robot, names: &[Param]) -> calbench::Result<()> {
     let known = nominal.params();
     let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
         (_, true) if option == "--params" => {

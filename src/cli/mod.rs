@@ -36,6 +36,7 @@ pub mod compensate;
 pub mod fk;
 pub mod identifiability;
 pub mod identify;
+pub mod identify_kind;
 pub mod import;
 pub mod merge;
 pub mod poses;
@@ -137,6 +138,12 @@ pub fn check_out_file(out: &Path) -> Result<()> {
 /// Writes `text` to `path`.
 pub fn write_file(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// A scenario file's TOML table (the kind of study is told by its keys).
+pub fn scenario_table(p: &Path) -> Result<toml::Table> {
+    let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
+    toml::from_str(&text).map_err(|e| Error::file(p, "TOML", e.to_string().trim_end()))
 }
 
 /// `v` as pretty JSON with a final newline.

@@ -70,9 +70,7 @@ pub fn default_study() -> Result<()> {
 /// writes its folder and prints the results table and the report's path.
 pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(p) = &args.scenario {
-        let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
-        let table: toml::Table =
-            toml::from_str(&text).map_err(|e| Error::file(p, "TOML", e.to_string().trim_end()))?;
+        let table = super::scenario_table(p)?;
         if RegistrationScenario::is_one(&table) {
             return registration_study(RegistrationScenario::from_table(table, p)?, args);
         }

@@ -83,6 +83,12 @@ pub trait Method: std::fmt::Debug + Send + Sync {
     fn tolerates_rank_deficiency(&self) -> bool {
         false
     }
+
+    /// The method as a [`Solver`] of any least-squares problem (the Jacobian methods, which
+    /// also solve the measurement kinds' [`kind::KindProblem`]); `None` for the others.
+    fn solver(&self) -> Option<&dyn Solver> {
+        None
+    }
 }
 
 /// Why an identification stopped. The names (serde, kebab-case) are those of reports and

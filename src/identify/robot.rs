@@ -496,4 +496,8 @@ impl<S: Solver> Method for S {
     fn tolerates_rank_deficiency(&self) -> bool {
         Solver::tolerates_rank_deficiency(self)
     }
+
+    fn solver(&self) -> Option<&dyn Solver> {
+        Some(self)
+    }
 }

@@ -18,6 +18,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::measurement::rows::{at_line, number, Rows};
 use crate::measurement::{JointSpace, Measurements};
 use crate::numeric::{Real, Vec3};
 
@@ -125,12 +126,12 @@ pub(crate) fn header(s: &mut String, dof: usize, (quats, sigma, payload): (bool,
     s.push('\n');
 }
 
-fn joint_header(s: &mut String, dof: usize) {
+pub(crate) fn joint_header(s: &mut String, dof: usize) {
     let names: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
     s.push_str(&names.join(","));
 }
 
-fn joint_cells(s: &mut String, robot: &(impl JointSpace + ?Sized), q: &[Real]) {
+pub(crate) fn joint_cells(s: &mut String, robot: &(impl JointSpace + ?Sized), q: &[Real]) {
     let cells: Vec<String> = robot.q_to_user(q).iter().map(|&v| fixed(v, 9)).collect();
     s.push_str(&cells.join(","));
 }
@@ -185,65 +186,22 @@ pub(crate) fn read_table(
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
 ) -> Result<Measurements> {
-    // One pass over the file, a line at a time: `#` comment lines are emptied here (rather
-    // than skipped by the reader), and each line number the reader gives is mapped back to
-    // the file's through the lines that are not empty ([`Uncommented`]).
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let mut rd = ::csv::ReaderBuilder::new()
-        .has_headers(true)
-        .flexible(true)
-        .trim(::csv::Trim::All)
-        .from_reader(Uncommented::new(std::io::BufReader::new(file)));
-    let line_at = |rd: &::csv::Reader<Uncommented<_>>, p: &::csv::Position| {
-        let n = p.line();
-        usize::try_from(n)
-            .ok()
-            .and_then(|n| rd.get_ref().kept.get(n.checked_sub(1)?))
-            .copied()
-            .unwrap_or(n)
-    };
-    let bad =
-        |line: u64, place: &str, msg: String| Error::file(path, format!("line {line}{place}"), msg);
-    let header = rd
-        .headers()
-        .map_err(|e| bad(1, "", format!("cannot read the header: {e}")))?
-        .clone();
-    let header_line = header.position().map_or(1, |p| line_at(&rd, p));
-    let names: Vec<String> = header.iter().map(str::to_string).collect();
-    if names.iter().all(|n| n.is_empty()) {
-        return Err(bad(
-            header_line,
-            "",
-            "empty file: expected a header row q1,…,qn,x,y,z".into(),
-        ));
-    }
+    let mut t = Rows::open(path, "q1,…,qn,x,y,z")?;
+    let (names, header_line) = (t.names.clone(), t.header_line);
+    let bad = |line: u64, place: &str, msg: String| at_line(path, line, place, msg);
     let dof = robot.dof();
     let qnames: Vec<String> = (1..=dof).map(|j| format!("q{j}")).collect();
     let find = |n: &str| names.iter().position(|h| h == n);
-    // Unknown and repeated columns.
-    for (i, n) in names.iter().enumerate() {
-        let known = qnames.contains(n)
-            || XYZ.contains(&n.as_str())
-            || QUAT.contains(&n.as_str())
+    let known = |n: &str| {
+        qnames.iter().any(|q| q == n)
+            || XYZ.contains(&n)
+            || QUAT.contains(&n)
             || n == SIGMA
-            || n == PAYLOAD;
-        if !known {
-            return Err(bad(
-                header_line,
-                &format!(", column {}", i + 1),
-                format!(
-                    "unknown column \"{n}\" (expected q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm, payload_kg)"
-                ),
-            ));
-        }
-        if names[..i].contains(n) {
-            return Err(bad(
-                header_line,
-                &format!(", column {n}"),
-                format!("column \"{n}\" appears twice"),
-            ));
-        }
-    }
+            || n == PAYLOAD
+    };
+    let expected =
+        format!("q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm, payload_kg");
+    t.check_columns(known, &expected)?;
     let missing = |n: &str| {
         bad(
             header_line,
@@ -291,42 +249,8 @@ pub(crate) fn read_table(
     let mut rec = ::csv::StringRecord::new();
     let mut quser = vec![0.0; dof];
     let (lim_lo, lim_hi) = user_limits(robot);
-    loop {
-        let more = rd.read_record(&mut rec).map_err(|e| {
-            let line = e.position().map_or(0, |p| line_at(&rd, p));
-            bad(line, "", format!("unreadable row: {e}"))
-        })?;
-        if !more {
-            break;
-        }
-        let line = rec.position().map_or(0, |p| line_at(&rd, p));
-        if rec.len() == 1 && rec.get(0).is_some_and(str::is_empty) {
-            continue; // blank line
-        }
-        if rec.len() != names.len() {
-            return Err(bad(
-                line,
-                "",
-                format!(
-                    "{} fields, expected {} as in the header",
-                    rec.len(),
-                    names.len()
-                ),
-            ));
-        }
-        let num = |c: usize| -> Result<Real> {
-            let t = rec.get(c).unwrap_or("");
-            t.parse::<Real>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    bad(
-                        line,
-                        &format!(", column {}", names[c]),
-                        format!("\"{t}\" is not a finite number"),
-                    )
-                })
-        };
+    while let Some(line) = t.next(&mut rec)? {
+        let num = |c: usize| number(&rec, &names, c).map_err(|(p, m)| bad(line, &p, m));
         for (j, &c) in qcol.iter().enumerate() {
             quser[j] = num(c)?;
         }
@@ -380,55 +304,10 @@ pub(crate) fn read_table(
     })
 }
 
-/// A file read a line at a time with its `#` comment lines emptied (their line breaks kept),
-/// noting the file line number of each line that is not empty: the `n`-th non-empty line
-/// the CSV reader counts is file line `kept[n - 1]`.
-struct Uncommented<R> {
-    inner: R,
-    line: Vec<u8>,
-    at: usize,
-    count: u64,
-    kept: Vec<u64>,
-}
-
-impl<R: std::io::BufRead> Uncommented<R> {
-    fn new(inner: R) -> Self {
-        Uncommented {
-            inner,
-            line: Vec::new(),
-            at: 0,
-            count: 0,
-            kept: Vec::new(),
-        }
-    }
-}
-
-impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
-    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-        while self.at == self.line.len() {
-            self.line.clear();
-            self.at = 0;
-            if self.inner.read_until(b'\n', &mut self.line)? == 0 {
-                return Ok(0);
-            }
-            self.count += 1;
-            if self.line.first() == Some(&b'#') {
-                self.line.retain(|&b| b == b'\r' || b == b'\n');
-            } else if self.line.iter().any(|&b| b != b'\r' && b != b'\n') {
-                self.kept.push(self.count);
-            }
-        }
-        let n = out.len().min(self.line.len() - self.at);
-        out[..n].copy_from_slice(&self.line[self.at..self.at + n]);
-        self.at += n;
-        Ok(n)
-    }
-}
-
 /// Joint values `quser` (the robot's units) of one pose converted to internal units and
 /// checked: finite after the conversion and within the limits (`lim`: the limits in the
 /// robot's units, for the message). A refusal is (column, message).
-fn check_joints(
+pub(crate) fn check_joints(
     robot: &(impl JointSpace + ?Sized),
     quser: &[Real],
     lim: (&[Real], &[Real]),
@@ -461,7 +340,7 @@ fn check_joints(
 }
 
 /// A measured coordinate (mm) within ±[`MAX_POINT_MM`].
-fn check_coordinate(v: Real) -> std::result::Result<(), String> {
+pub(crate) fn check_coordinate(v: Real) -> std::result::Result<(), String> {
     if v.abs() > MAX_POINT_MM {
         return Err(format!(
             "{v:?} mm is out of range: a measured coordinate must be within \
@@ -483,7 +362,7 @@ fn unit_quaternion(qq: [Real; 4]) -> std::result::Result<[Real; 4], String> {
 }
 
 /// A standard deviation (mm) within [[`MIN_SIGMA_MM`], [`MAX_POINT_MM`]].
-fn check_sigma(v: Real) -> std::result::Result<(), String> {
+pub(crate) fn check_sigma(v: Real) -> std::result::Result<(), String> {
     if v <= 0.0 {
         return Err(format!("{v} is not a positive standard deviation"));
     }
@@ -593,7 +472,7 @@ pub fn measurements_from_arrays(
 }
 
 /// The joint limits in the robot's units (for messages): (lower, upper).
-fn user_limits(robot: &(impl JointSpace + ?Sized)) -> (Vec<Real>, Vec<Real>) {
+pub(crate) fn user_limits(robot: &(impl JointSpace + ?Sized)) -> (Vec<Real>, Vec<Real>) {
     let dof = robot.dof();
     let side = |k: fn((Real, Real)) -> Real| {
         robot.q_to_user(&(0..dof).map(|j| k(robot.limits(j))).collect::<Vec<_>>())
@@ -603,7 +482,7 @@ fn user_limits(robot: &(impl JointSpace + ?Sized)) -> (Vec<Real>, Vec<Real>) {
 
 /// Refuses rows of fewer than [`MIN_DISTINCT_POSES`] distinct poses (`qs`, read from the
 /// file's `lines`): (the first data line, message).
-fn distinct_poses(
+pub(crate) fn distinct_poses(
     qs: &[Vec<Real>],
     lines: &[u64],
     dof: usize,

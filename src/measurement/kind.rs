@@ -252,6 +252,38 @@ pub fn plane_axes(axis: usize) -> (usize, usize, usize) {
     (axis, (axis + 1) % 3, (axis + 2) % 3)
 }
 
+/// Gives each plane of `data` the normal axis its points `p` (the nominal tool points, one
+/// per pose) call for: the axis along which the plane's normal has its largest component
+/// (the normal of the least-squares plane through the group's centred points), so that
+/// `p[axis] = c₀ + c₁ p[u] + c₂ p[v]` is a graph over the other two axes with small slopes.
+/// A plane of fewer than three points keeps its axis. Other kinds are left as they are.
+pub fn choose_plane_axes(data: &mut KindData, p: &[Vec3]) {
+    let Instrument::Planes(axes) = &mut data.instrument else {
+        return;
+    };
+    for (g, axis) in axes.iter_mut().enumerate() {
+        let pts: Vec<&Vec3> = p
+            .iter()
+            .zip(&data.group)
+            .filter(|(_, &gi)| gi == g)
+            .map(|(pt, _)| pt)
+            .collect();
+        if pts.len() < 3 {
+            continue;
+        }
+        let mean = pts.iter().fold(Vec3::zeros(), |a, b| a + *b) / pts.len() as Real;
+        let mut cov = crate::numeric::Mat3::zeros();
+        for pt in &pts {
+            let d = *pt - mean;
+            cov += d * d.transpose();
+        }
+        let eig = cov.symmetric_eigen();
+        let k = eig.eigenvalues.imin();
+        let n = eig.eigenvectors.column(k);
+        *axis = n.iamax();
+    }
+}
+
 /// The residual and Jacobian rows of every observation.
 ///
 /// `tool` holds, per pose `i`, rows `6i..6i+3` = `J_p` and `6i+3..6i+6` = `J_ω` over the

@@ -9,6 +9,8 @@
 pub mod csv;
 pub mod import;
 pub mod kind;
+pub mod kind_csv;
+pub(crate) mod rows;
 
 use crate::error::{Error, Result};
 use crate::numeric::{quaternion_matrix, Frame, Mat3, Real, Vec3};

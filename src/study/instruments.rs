@@ -409,19 +409,19 @@ impl InstrumentsScenario {
         Ok(cells)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn trial(
+    /// What trial `seed` reads with instrument `s` laid out as `lay`: the true robot drawn
+    /// from `[errors]`, the poses (`fixed`, or `count` drawn from the candidates `pool` with
+    /// their planes or spheres), the instrument's readings where the true robot touches, and
+    /// the fresh validation poses with the true robot's tool points.
+    fn reading(
         &self,
         nominal: &Robot,
-        s: &InstrumentSettings,
-        lay: &Layout,
-        params: &[Param],
-        pool: &[Vec<Real>],
-        groups: &[usize],
+        (s, lay): (&InstrumentSettings, &Layout),
+        (pool, groups): (&[Vec<Real>], &[usize]),
         fixed: Option<&(Vec<Vec<Real>>, Vec<usize>)>,
         count: usize,
         seed: u64,
-    ) -> Result<Option<Trial>> {
+    ) -> Result<Reading> {
         let mut rng = stream(seed, "errors");
         let errors = crate::sim::truth::true_errors(
             nominal,
@@ -442,14 +442,79 @@ impl InstrumentsScenario {
             }
         };
         let mut noise = stream(seed, "noise");
-        let Ok((tq, data, sigma)) = measure(s, lay, &truth, &qs, &g, &mut noise) else {
+        let measured = measure(s, lay, &truth, &qs, &g, &mut noise).ok();
+        let mut vr = stream(seed, "validation");
+        let vq = crate::robot::sampling::uniform_joint_poses(nominal, self.validation, &mut vr);
+        let ct = truth.chain();
+        let seen: Vec<Vec3> = vq.iter().map(|q| ct.fk(q).pos).collect();
+        Ok(Reading {
+            errors,
+            truth,
+            measured,
+            validation: (vq, seen),
+        })
+    }
+
+    /// Trial `trial` of instrument `entry` (0-based, in file order) as `calbench simulate`
+    /// writes it: the first pose count, random poses from the candidates, measured as the
+    /// study measures them (the same numbers). Fails when the trial or the entry does not
+    /// exist, or the true robot cannot touch a surface from a commanded pose.
+    pub fn simulate(&self, nominal: &Robot, entry: usize, trial: usize) -> Result<Simulated> {
+        if trial >= self.head.trials {
+            return Err(Error::setting(
+                "--trial",
+                format!(
+                    "{trial} is not below the scenario's trials = {}",
+                    self.head.trials
+                ),
+            ));
+        }
+        let all = self.instruments();
+        let s = all
+            .get(entry)
+            .ok_or_else(|| Error::setting("measurement", format!("no entry {entry}")))?;
+        let mut rng = stream(self.head.seed, &format!("instruments-pool-{entry}"));
+        let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
+        let seed = trial_seed(self.head.seed, trial as u64);
+        let count = self.poses[0];
+        let reading = self.reading(nominal, (s, &lay), (&pool, &groups), None, count, seed)?;
+        if reading.measured.is_none() {
+            return Err(Error::Compute(format!(
+                "trial {trial}: the true robot does not touch its {} from one of the commanded \
+                 poses",
+                s.kind.as_str()
+            )));
+        }
+        Ok(Simulated {
+            settings: s.clone(),
+            layout: lay,
+            seed,
+            reading,
+        })
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn trial(
+        &self,
+        nominal: &Robot,
+        s: &InstrumentSettings,
+        lay: &Layout,
+        params: &[Param],
+        pool: &[Vec<Real>],
+        groups: &[usize],
+        fixed: Option<&(Vec<Vec<Real>>, Vec<usize>)>,
+        count: usize,
+        seed: u64,
+    ) -> Result<Option<Trial>> {
+        let reading = self.reading(nominal, (s, lay), (pool, groups), fixed, count, seed)?;
+        let Some((tq, data, sigma)) = &reading.measured else {
             return Ok(None);
         };
         let w: Option<Vec<Real>> = sigma
             .iter()
             .all(|v| *v > 0.0)
             .then(|| sigma.iter().map(|v| 1.0 / (v * v)).collect());
-        let kp = KindProblem::new(nominal, params, &tq, &data)?.with_prior_weights(w.as_deref())?;
+        let kp = KindProblem::new(nominal, params, tq, data)?.with_prior_weights(w.as_deref())?;
         let out = solve(
             &LsOptions::default(),
             &kp,
@@ -468,23 +533,19 @@ impl InstrumentsScenario {
             .try_inverse()
             .map_or(Real::NAN, |inv| (0..t).map(|c| inv[(c, c)]).sum());
         let ident = kp.robot_with(&out.x);
-        let mut vr = stream(seed, "validation");
-        let vq = crate::robot::sampling::uniform_joint_poses(nominal, self.validation, &mut vr);
-        let (ct, cn, ci) = (truth.chain(), nominal.chain(), ident.chain());
-        let seen: Vec<Vec3> = vq.iter().map(|q| ct.fk(q).pos).collect();
+        let (vq, seen) = &reading.validation;
         // The tracker's sense: the model's points registered onto the measured ones (the
         // frame a tracker fits), then the RMS distance.
-        let rms = |c: &crate::robot::Chain| -> Result<Real> {
-            let model: Vec<Vec3> = vq.iter().map(|q| c.fk(q).pos).collect();
-            let reg = crate::calibrate::registration::register_svd(&seen, &model, None)?;
-            Ok((reg.residuals.iter().map(|r| r * r).sum::<Real>() / vq.len() as Real).sqrt())
+        let rms = |r: &Robot| -> Result<Real> {
+            let d = crate::calibrate::on_kind::registered_distances(r, vq, seen)?;
+            Ok((d.iter().map(|r| r * r).sum::<Real>() / vq.len() as Real).sqrt())
         };
         Ok(Some(Trial {
-            errors,
+            before: rms(nominal)?,
+            after: rms(&ident)?,
+            errors: reading.errors,
             x,
             crb,
-            before: rms(&cn)?,
-            after: rms(&ci)?,
         }))
     }
 
@@ -561,6 +622,34 @@ impl InstrumentsScenario {
             failures: trials.len() - ok.len(),
         }
     }
+}
+
+/// What one trial reads with an instrument.
+#[derive(Clone, Debug)]
+pub struct Reading {
+    /// The true robot's errors.
+    pub errors: Vec<(Param, Real)>,
+    /// The true robot.
+    pub truth: Robot,
+    /// The joints where the true robot touched (the commanded ones for the kinds without a
+    /// surface), the readings and each observation's σ (mm); `None` when the true robot
+    /// could not touch a surface from a commanded pose.
+    pub measured: Option<(Vec<Vec<Real>>, KindData, Vec<Real>)>,
+    /// Fresh validation poses and the true robot's tool points there (base frame, mm).
+    pub validation: (Vec<Vec<Real>>, Vec<Vec3>),
+}
+
+/// One trial of one instrument, as `calbench simulate` writes it.
+#[derive(Clone, Debug)]
+pub struct Simulated {
+    /// The instrument's entry.
+    pub settings: InstrumentSettings,
+    /// Its true geometry in the cell.
+    pub layout: Layout,
+    /// The trial's seed.
+    pub seed: u64,
+    /// What the trial read (`measured` is `Some`).
+    pub reading: Reading,
 }
 
 /// One trial's outcome.

@@ -1,0 +1,236 @@
+//! Identification on a measurement-kind file (`calbench identify` on a `distance`, `plane` or
+//! `sphere` file, docs/formats.md § 5.3): the robot's parameters and the instrument's own
+//! unknowns (pivot, plane coefficients, sphere centres) by any Jacobian method through
+//! [`KindProblem`], the parameters the readings cannot determine named, and the compensated
+//! robot validated, when asked, on a tracker's file.
+
+use std::path::Path;
+
+use nalgebra::DVector;
+
+use super::registration::register_svd;
+use super::validation::ErrorStats;
+use crate::error::{Error, Result};
+use crate::identify::kind::{identifiability, KindProblem};
+use crate::identify::{solve, Identified, LeastSquares, Solver};
+use crate::measurement::kind::{choose_plane_axes, nuisance_guess, Instrument, KindData};
+use crate::measurement::kind_csv::KindFile;
+use crate::measurement::Measurements;
+use crate::numeric::{Frame, Real, Vec3};
+use crate::robot::identifiability::Identifiability;
+use crate::robot::{Param, Robot};
+use crate::sim::instrument::{touch, Layout};
+
+/// What the parameters to identify are: the identifiable set, or the user's.
+#[derive(Clone, Copy, Debug)]
+pub enum Chosen<'a> {
+    /// Every parameter of the robot (base and tool first) that the readings determine.
+    Identifiable,
+    /// These parameters (`--params`), refused when the readings do not determine them all
+    /// unless the flag is set (`--allow-rank-deficient`).
+    Given(&'a [Param], bool),
+}
+
+/// The identification on a kind file and what it found.
+#[derive(Debug)]
+pub struct KindFit {
+    /// The readings as identified (plane axes chosen; targets' points in the base frame).
+    pub data: KindData,
+    /// Targets: the frame that took the measured points into the base frame (SVD onto the
+    /// nominal robot's target points), after which the base parameters are identified.
+    pub registration: Option<Frame>,
+    /// The identified robot parameters, in the order of the estimate.
+    pub params: Vec<Param>,
+    /// The analysis of the candidates on the file's poses (the instrument's unknowns
+    /// projected out).
+    pub analysis: Identifiability,
+    /// The solver's result: robot errors, then the corrections of the instrument's unknowns.
+    pub identified: Identified,
+    /// The compensated robot.
+    pub robot: Robot,
+    /// The instrument's unknowns at the solution (names:
+    /// [`crate::measurement::kind::Instrument::nuisance_names`]).
+    pub nuisance: Vec<Real>,
+}
+
+/// Identifies `nominal`'s parameters (`chosen`, without `fixed`) and the instrument's
+/// unknowns from the readings of `file` (read from `source`, named in refusals) with
+/// `solver`, observation `i` weighted by `1/σ_i²` (normalised to a mean of 1) when the file
+/// has `sigma_mm`; targets' points are first registered into the base frame when `register`
+/// (SVD onto the nominal robot's target points; otherwise they are taken as in the base frame
+/// and the base is not a candidate). Refuses parameters the readings cannot determine when they were given and
+/// not allowed, and readings too few for the instrument's first guess (naming the file).
+pub fn identify_kind(
+    nominal: &Robot,
+    file: &KindFile,
+    source: &Path,
+    (chosen, fixed, register): (Chosen, &[Param], bool),
+    solver: &dyn Solver,
+) -> Result<KindFit> {
+    let in_file = |e: Error| Error::file(source, "data", e.to_string());
+    let mut data = file.data.clone();
+    let chain = nominal.chain();
+    let p: Vec<Vec3> = file.qs.iter().map(|q| chain.fk(q).pos).collect();
+    choose_plane_axes(&mut data, &p);
+    let targets = matches!(data.instrument, Instrument::Targets(_));
+    let registration = if targets && register {
+        Some(register_targets(nominal, &file.qs, &mut data).map_err(in_file)?)
+    } else {
+        None
+    };
+    let mut candidates: Vec<Param> = match chosen {
+        Chosen::Given(ps, _) => ps.to_vec(),
+        Chosen::Identifiable => {
+            // Targets in the base frame (`known`) leave the base as it is, as the tracker's.
+            let all: Vec<Param> = nominal
+                .params()
+                .into_iter()
+                .filter(|p| !p.is_compliance())
+                .filter(|p| !(targets && !register && matches!(p, Param::Base(_))))
+                .collect();
+            let first = |p: &Param| matches!(p, Param::Base(_) | Param::Tool(_));
+            let head = all.iter().copied().filter(first);
+            head.chain(all.iter().copied().filter(|p| !first(p)))
+                .collect()
+        }
+    };
+    candidates.retain(|p| !fixed.contains(p));
+    let (qs, on) = on_first_guess(nominal, &file.qs, &data, &p).map_err(in_file)?;
+    let analysis = identifiability(nominal, &candidates, &qs, &on).map_err(in_file)?;
+    let params = match chosen {
+        Chosen::Given(_, allow) => {
+            if !analysis.unidentifiable.is_empty() && !allow {
+                return Err(undetermined(source, &data, &analysis, candidates.len()));
+            }
+            candidates
+        }
+        Chosen::Identifiable => {
+            let mut ps = analysis.identifiable.clone();
+            ps.sort_by_key(|p| p.index(nominal.dof()));
+            ps
+        }
+    };
+    let weights = file.sigma_mm.as_ref().map(|s| {
+        let inv: Vec<Real> = s.iter().map(|v| 1.0 / (v * v)).collect();
+        let mean = inv.iter().sum::<Real>() / inv.len().max(1) as Real;
+        inv.iter().map(|w| w / mean).collect::<Vec<Real>>()
+    });
+    let kp = KindProblem::new(nominal, &params, &file.qs, &data)
+        .and_then(|k| k.with_prior_weights(weights.as_deref()))
+        .map_err(in_file)?;
+    let identified = solve(solver, &kp, &DVector::zeros(kp.size().params));
+    let robot = kp.robot_with(&identified.x);
+    let nuisance = kp.nuisance_at(&identified.x);
+    Ok(KindFit {
+        registration,
+        data,
+        params,
+        analysis,
+        identified,
+        robot,
+        nuisance,
+    })
+}
+
+/// The file's poses moved, by the nominal robot, onto the planes or spheres of the first
+/// guess of the instrument's unknowns from the nominal tool points `p`
+/// ([`nuisance_guess`], [`touch`]), with their readings: where the model's points lie on its
+/// own surfaces, so that the identifiability is the structure's. At the file's poses
+/// themselves the nominal points lie off the fitted planes by the robot's errors, and a
+/// parameter that a plane's tilt absorbs exactly (a base rotation) would look determined by
+/// them. Poses that cannot be moved so are left out; the other kinds keep every pose.
+fn on_first_guess(
+    nominal: &Robot,
+    qs: &[Vec<Real>],
+    data: &KindData,
+    p: &[Vec3],
+) -> Result<(Vec<Vec<Real>>, KindData)> {
+    let inst = &data.instrument;
+    if !matches!(inst, Instrument::Planes(_) | Instrument::Spheres(_)) {
+        return Ok((qs.to_vec(), data.clone()));
+    }
+    let lay = Layout {
+        instrument: inst.clone(),
+        nuisance: nuisance_guess(inst, &data.group, p, &data.values)?,
+    };
+    let mut on = data.clone();
+    on.group.clear();
+    on.values.clear();
+    let mut moved = Vec::with_capacity(qs.len());
+    for ((q, &g), &v) in qs.iter().zip(&data.group).zip(&data.values) {
+        if let Some(t) = touch(nominal, &lay, g, q, 0.0) {
+            moved.push(t);
+            on.group.push(g);
+            on.values.push(v);
+        }
+    }
+    Ok((moved, on))
+}
+
+/// Registers the targets' points of `data` (the instrument's frame) onto the nominal robot's
+/// target points at `qs` (SVD, every point weighing 1) and puts them into the base frame;
+/// the registration's frame. The base parameters, identified with the others, then take up
+/// what the nominal robot's errors left in this frame, as with the tracker's `identify`
+/// registration.
+fn register_targets(nominal: &Robot, qs: &[Vec<Real>], data: &mut KindData) -> Result<Frame> {
+    let Instrument::Targets(targets) = &data.instrument else {
+        return Ok(Frame::identity());
+    };
+    let chain = nominal.chain();
+    let mut model = Vec::with_capacity(targets.len() * qs.len());
+    for q in qs {
+        let f = chain.fk(q);
+        model.extend(targets.iter().map(|o| f.pos + f.rot * o));
+    }
+    let seen: Vec<Vec3> = data
+        .values
+        .chunks(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
+    let frame = register_svd(&model, &seen, None)?.frame;
+    data.values = seen
+        .iter()
+        .flat_map(|p| frame.apply(p).iter().copied().collect::<Vec<_>>())
+        .collect();
+    Ok(frame)
+}
+
+/// The refusal of given parameters that `data` cannot determine (`count` given).
+fn undetermined(source: &Path, data: &KindData, a: &Identifiability, count: usize) -> Error {
+    let (names, groups) = super::on_data::names_and_groups(a);
+    Error::file(
+        source,
+        "data",
+        format!(
+            "{} readings on these poses determine only {} of the {count} parameters \
+             (undetermined: {names}; dependent groups: {groups}), with the instrument's own \
+             unknowns ({}); nothing was written. Leave the undetermined ones out of --params, \
+             or pass --allow-rank-deficient",
+            data.instrument.kind().as_str(),
+            a.rank,
+            data.instrument.nuisance_names().join(" "),
+        ),
+    )
+}
+
+/// The validation of `nominal` and `compensated` on a tracker's file `v`
+/// (docs/formats.md § 5.1): each robot's tool points at the file's poses registered onto the
+/// measured points (SVD, every point weighing 1), and the distances left (before, after), mm.
+pub fn validate_positions(
+    nominal: &Robot,
+    compensated: &Robot,
+    v: &Measurements,
+) -> Result<(ErrorStats, ErrorStats)> {
+    let stats = |r: &Robot| -> Result<ErrorStats> {
+        Ok(ErrorStats::of(&registered_distances(r, &v.qs, &v.points)?))
+    };
+    Ok((stats(nominal)?, stats(compensated)?))
+}
+
+/// The distances (mm) between `seen` points and `robot`'s tool points at `qs` registered onto
+/// them (SVD): the position error as a tracker sees it, in its own frame.
+pub fn registered_distances(robot: &Robot, qs: &[Vec<Real>], seen: &[Vec3]) -> Result<Vec<Real>> {
+    let c = robot.chain();
+    let model: Vec<Vec3> = qs.iter().map(|q| c.fk(q).pos).collect();
+    Ok(register_svd(seen, &model, None)?.residuals)
+}

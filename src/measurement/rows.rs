@@ -1,0 +1,185 @@
+//! The rows of the measurement CSVs (docs/formats.md § 5): a header of column names, then
+//! data rows read a line at a time, `#` comment and blank lines skipped but counted, so that
+//! every refusal names the file's own line.
+
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+
+/// `message` about line `line` of `path`, at `place` (`", column x"` or empty).
+pub(crate) fn at_line(path: &Path, line: u64, place: &str, message: String) -> Error {
+    Error::file(path, format!("line {line}{place}"), message)
+}
+
+/// Cell `c` of `rec` as a finite number; a refusal is (place, message), the place naming the
+/// column by its header name.
+pub(crate) fn number(
+    rec: &::csv::StringRecord,
+    names: &[String],
+    c: usize,
+) -> std::result::Result<Real, (String, String)> {
+    let t = rec.get(c).unwrap_or("");
+    t.parse::<Real>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| {
+            (
+                format!(", column {}", names[c]),
+                format!("\"{t}\" is not a finite number"),
+            )
+        })
+}
+
+/// The data rows of a CSV file read a line at a time (docs/formats.md § 5): the header's
+/// names, then each row that is not blank with its line in the file (`#` comment and blank
+/// lines counted), every row of as many fields as the header.
+pub(crate) struct Rows {
+    rd: ::csv::Reader<Uncommented<std::io::BufReader<std::fs::File>>>,
+    path: std::path::PathBuf,
+    /// The header's column names, trimmed.
+    pub names: Vec<String>,
+    /// The header's line in the file.
+    pub header_line: u64,
+}
+
+impl Rows {
+    /// Opens `path` and reads its header; an empty file is refused, `expected` saying what
+    /// header it should have had.
+    pub fn open(path: &Path, expected: &str) -> Result<Rows> {
+        // `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
+        // reader), and each line number the reader gives is mapped back to the file's
+        // through the lines that are not empty.
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        let mut rd = ::csv::ReaderBuilder::new()
+            .has_headers(true)
+            .flexible(true)
+            .trim(::csv::Trim::All)
+            .from_reader(Uncommented::new(std::io::BufReader::new(file)));
+        let header = rd
+            .headers()
+            .map_err(|e| at_line(path, 1, "", format!("cannot read the header: {e}")))?
+            .clone();
+        let mut rows = Rows {
+            rd,
+            path: path.to_path_buf(),
+            names: header.iter().map(str::to_string).collect(),
+            header_line: 1,
+        };
+        rows.header_line = header.position().map_or(1, |p| rows.line_of(p));
+        if rows.names.iter().all(|n| n.is_empty()) {
+            let msg = format!("empty file: expected a header row {expected}");
+            return Err(at_line(path, rows.header_line, "", msg));
+        }
+        Ok(rows)
+    }
+
+    fn line_of(&self, p: &::csv::Position) -> u64 {
+        let n = p.line();
+        usize::try_from(n)
+            .ok()
+            .and_then(|n| self.rd.get_ref().kept.get(n.checked_sub(1)?))
+            .copied()
+            .unwrap_or(n)
+    }
+
+    /// Refuses a header column that `known` does not accept (naming its position and what
+    /// was `expected`) and a column given twice.
+    pub fn check_columns(&self, known: impl Fn(&str) -> bool, expected: &str) -> Result<()> {
+        let names = &self.names;
+        for (i, n) in names.iter().enumerate() {
+            if !known(n) {
+                return Err(self.bad(
+                    self.header_line,
+                    &format!(", column {}", i + 1),
+                    format!("unknown column \"{n}\" (expected {expected})"),
+                ));
+            }
+            if names[..i].contains(n) {
+                return Err(self.bad(
+                    self.header_line,
+                    &format!(", column {n}"),
+                    format!("column \"{n}\" appears twice"),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads the next data row into `rec` and gives its line; `None` at the end. A row of
+    /// another number of fields than the header is refused.
+    pub fn next(&mut self, rec: &mut ::csv::StringRecord) -> Result<Option<u64>> {
+        loop {
+            let more = self.rd.read_record(rec).map_err(|e| {
+                let line = e.position().map_or(0, |p| self.line_of(p));
+                self.bad(line, "", format!("unreadable row: {e}"))
+            })?;
+            if !more {
+                return Ok(None);
+            }
+            let line = rec.position().map_or(0, |p| self.line_of(p));
+            if rec.len() == 1 && rec.get(0).is_some_and(str::is_empty) {
+                continue; // blank line
+            }
+            if rec.len() != self.names.len() {
+                let msg = format!(
+                    "{} fields, expected {} as in the header",
+                    rec.len(),
+                    self.names.len()
+                );
+                return Err(self.bad(line, "", msg));
+            }
+            return Ok(Some(line));
+        }
+    }
+
+    /// `msg` about line `line`, at `place` (`", column x"` or empty).
+    pub fn bad(&self, line: u64, place: &str, msg: String) -> Error {
+        at_line(&self.path, line, place, msg)
+    }
+}
+
+/// A file read a line at a time with its `#` comment lines emptied (their line breaks kept),
+/// noting the file line number of each line that is not empty: the `n`-th non-empty line
+/// the CSV reader counts is file line `kept[n - 1]`.
+struct Uncommented<R> {
+    inner: R,
+    line: Vec<u8>,
+    at: usize,
+    count: u64,
+    kept: Vec<u64>,
+}
+
+impl<R: std::io::BufRead> Uncommented<R> {
+    fn new(inner: R) -> Self {
+        Uncommented {
+            inner,
+            line: Vec::new(),
+            at: 0,
+            count: 0,
+            kept: Vec::new(),
+        }
+    }
+}
+
+impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        while self.at == self.line.len() {
+            self.line.clear();
+            self.at = 0;
+            if self.inner.read_until(b'\n', &mut self.line)? == 0 {
+                return Ok(0);
+            }
+            self.count += 1;
+            if self.line.first() == Some(&b'#') {
+                self.line.retain(|&b| b == b'\r' || b == b'\n');
+            } else if self.line.iter().any(|&b| b != b'\r' && b != b'\n') {
+                self.kept.push(self.count);
+            }
+        }
+        let n = out.len().min(self.line.len() - self.at);
+        out[..n].copy_from_slice(&self.line[self.at..self.at + n]);
+        self.at += n;
+        Ok(n)
+    }
+}
