@@ -16,7 +16,7 @@
 //! the IRB2600, a1, a2 and a3 act along x1, x2 and x3, all normal to the parallel axes z2 and
 //! z3, so one pose never sees them independently and the averaged GCN of the `a` block is
 //! infinite, although 30 poses identify all three (the test
-//! `guo_s_average_flags_a_block_that_one_pose_cannot_see`). The paper finally
+//! `a_well_conditioned_block_is_pruned`). The paper finally
 //! removes every parameter whose single removal brings its block under the threshold (both
 //! a4 and a5, both d2 and d3); here one parameter at a time is removed until the block is
 //! under the threshold, which keeps an identifiable partner of a dependent pair.
@@ -309,17 +309,9 @@ mod tests {
         assert!(sep.removed.is_empty());
         assert_eq!(sep.kept, params);
         assert_eq!(sep.table.len(), 3); // full, a, separated
-    }
-
-    #[test]
-    fn guo_s_average_flags_a_block_that_one_pose_cannot_see() {
-        let robot = crate::robot::builtin::irb2600();
-        let params = vec![Param::A(0), Param::A(1), Param::A(2)];
-        let qs = uniform_joint_poses(&robot, 30, &mut from_seed(6));
-        let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);
-        // All 30 poses: well-conditioned, nothing removed.
+                                        // Guo's average flags the block that one pose cannot see in full: the first count's
+                                        // 3 × 3 block has rank 2 (x1, x2 and x3 are all normal to the parallel z2 and z3).
         assert!(sep.blocks[0].gcn_before < 1.0, "{:?}", sep.blocks);
-        // Averaged from one pose up: the first count's 3 × 3 block has rank 2.
         assert!(sep.blocks[0].gcn_mean_before > 1e2, "{:?}", sep.blocks);
         let one = jacobian(
             &robot,

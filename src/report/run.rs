@@ -12,6 +12,7 @@ use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::study::scenario::Sweep;
 use crate::study::stats::{eta, Entry};
+use crate::study::trial::{AFTER_DEG, BEFORE_DEG};
 use crate::study::{toml_to_json, Block, BlockInfo, RunResult, TrialResult, TrialSink};
 
 fn write(path: &Path, text: &str) -> Result<()> {
@@ -192,11 +193,21 @@ pub mod columns {
     pub const IMPROVEMENT: Column = ("improvement %", |e| fmt_num(e.improvement_pct, 4));
     /// Mean orientation error before compensation (full pose).
     pub const BEFORE_DEG: Column = ("before mean °", |e| {
-        fmt_num(e.validation_before_deg.map_or(Real::NAN, |d| d.mean), 4)
+        fmt_num(
+            e.optional
+                .get("validation_before_deg")
+                .map_or(Real::NAN, |d| d.mean),
+            4,
+        )
     });
     /// Mean orientation error after compensation (full pose).
     pub const AFTER_DEG: Column = ("after mean °", |e| {
-        fmt_num(e.validation_after_deg.map_or(Real::NAN, |d| d.mean), 4)
+        fmt_num(
+            e.optional
+                .get("validation_after_deg")
+                .map_or(Real::NAN, |d| d.mean),
+            4,
+        )
     });
     /// Ratio to the Cramér–Rao bound.
     pub const CRB_RATIO: Column = ("CRB ratio", |e| {
@@ -393,8 +404,8 @@ impl<W: std::io::Write> TrialSink for TrialsCsv<W> {
             }
             if info.full_pose {
                 let (bd, ad) = (
-                    o.before_deg.unwrap_or_default(),
-                    o.after_deg.unwrap_or_default(),
+                    o.optional[BEFORE_DEG].unwrap_or_default(),
+                    o.optional[AFTER_DEG].unwrap_or_default(),
                 );
                 for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
                     row.push(num(v));

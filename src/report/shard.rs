@@ -157,7 +157,7 @@ pub(crate) fn encode(block: usize, t: &TrialResult) -> String {
         push_stats(&mut s, &o.after_mm);
         push_stats(&mut s, &o.calibration_before_mm);
         push_stats(&mut s, &o.calibration_after_mm);
-        for d in o.optional_stats() {
+        for d in o.optional {
             match d {
                 Some(d) => {
                     s.push_str(" +");
@@ -264,12 +264,12 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
         let after_mm = t.stats()?;
         let calibration_before_mm = t.stats()?;
         let calibration_after_mm = t.stats()?;
-        let mut optional = [None; OPTIONAL_STATS];
+        let mut optional = [None; OPTIONAL_STATS.len()];
         for o in &mut optional {
             *o = t.optional_stats()?;
         }
         let identified = t.reals(n)?;
-        let mut outcome = Outcome {
+        outcomes.push(Outcome {
             method,
             strategy,
             identified,
@@ -277,17 +277,7 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
             after_mm,
             calibration_before_mm,
             calibration_after_mm,
-            before_deg: None,
-            after_deg: None,
-            before_attitude_deg: None,
-            after_attitude_deg: None,
-            before_fitted_mm: None,
-            before_axis_mm: None,
-            after_axis_mm: None,
-            before_axis_abs_mm: None,
-            after_axis_abs_mm: None,
-            calibration_before_attitude_deg: None,
-            calibration_after_attitude_deg: None,
+            optional,
             per_point: None,
             per_point_attitude_deg: None,
             trace: None,
@@ -298,9 +288,7 @@ pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, Tri
             seconds,
             // Shards run scenario files, whose methods are all registered ones.
             error: None,
-        };
-        outcome.set_optional_stats(optional);
-        outcomes.push(outcome);
+        });
     }
     if t.it.next().is_some() {
         return Err(t.err("extra fields at the end of the line"));
@@ -528,17 +516,19 @@ mod tests {
                 after_mm: stats(0.1),
                 calibration_before_mm: stats(0.6),
                 calibration_after_mm: stats(0.05),
-                before_deg: None,
-                after_deg: Some(stats(0.3)),
-                before_attitude_deg: None,
-                before_fitted_mm: None,
-                after_attitude_deg: None,
-                before_axis_mm: Some(stats(-0.2)),
-                after_axis_mm: None,
-                before_axis_abs_mm: None,
-                after_axis_abs_mm: Some(stats(0.01)),
-                calibration_before_attitude_deg: None,
-                calibration_after_attitude_deg: Some(stats(0.02)),
+                optional: [
+                    None,
+                    Some(stats(0.3)),
+                    None,
+                    None,
+                    None,
+                    Some(stats(-0.2)),
+                    None,
+                    None,
+                    Some(stats(0.01)),
+                    None,
+                    Some(stats(0.02)),
+                ],
                 per_point: None,
                 per_point_attitude_deg: None,
                 trace: None,

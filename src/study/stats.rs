@@ -52,43 +52,12 @@ pub struct Entry {
     pub calibration_before_mm: ErrorStats,
     /// … compensated robot.
     pub calibration_after_mm: ErrorStats,
-    /// Orientation errors (deg, rotation angle) before, for full-pose data.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_before_deg: Option<ErrorStats>,
-    /// … after.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_after_deg: Option<ErrorStats>,
-    /// Qiao's attitude errors (deg) before, for full-pose data (Qiao's ACAE is the mean).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_before_attitude_deg: Option<ErrorStats>,
-    /// … after.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_after_attitude_deg: Option<ErrorStats>,
-    /// Validation position errors of the nominal robot after the best rigid fit of its
-    /// points to the true ones (mm), with `validation.before_fitted`: "before" as a paper
-    /// that fits the base frame first reports it (Li 2018).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_before_fitted_mm: Option<ErrorStats>,
-    /// With `validation.axis_errors`: Guo 2024's per-point validation error, the signed mean
-    /// of the three axis errors (mm, table 8), before.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_before_axis_mm: Option<ErrorStats>,
-    /// … after.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_after_axis_mm: Option<ErrorStats>,
-    /// … the mean of the absolute axis errors, before.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_before_axis_abs_mm: Option<ErrorStats>,
-    /// … after.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub validation_after_axis_abs_mm: Option<ErrorStats>,
-    /// Qiao's attitude errors (deg) at the calibration poses, nominal robot, for full-pose
-    /// data (Qiao 2021's calibration-point ACAE is the mean).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub calibration_before_attitude_deg: Option<ErrorStats>,
-    /// … compensated robot.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub calibration_after_attitude_deg: Option<ErrorStats>,
+    /// The statistics only some studies have, by name ([`OPTIONAL_STATS`]: orientation and
+    /// Qiao's attitude for full-pose data, `validation_before_fitted_mm` with
+    /// `validation.before_fitted`, Guo's axis errors with `validation.axis_errors`), each
+    /// statistic averaged over trials; a statistic no trial has is absent.
+    #[serde(flatten)]
+    pub optional: BTreeMap<&'static str, ErrorStats>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
@@ -202,7 +171,7 @@ struct Cell {
     after_rms_sq: Sum,
     /// The optional statistics: before / after in deg, in Qiao's attitude deg, then the
     /// fitted "before" in mm.
-    deg: [Option<StatsSum>; OPTIONAL_STATS],
+    deg: [Option<StatsSum>; OPTIONAL_STATS.len()],
     iterations: Sum,
     evaluations: Sum,
 }
@@ -302,7 +271,7 @@ impl Accumulator {
             c.calibration[0].add(&o.calibration_before_mm);
             c.calibration[1].add(&o.calibration_after_mm);
             c.after_rms_sq.add(o.after_mm.rms * o.after_mm.rms);
-            for (acc, d) in c.deg.iter_mut().zip(o.optional_stats()) {
+            for (acc, d) in c.deg.iter_mut().zip(o.optional) {
                 if let Some(d) = d {
                     acc.get_or_insert_with(StatsSum::default).add(&d);
                 }
@@ -357,7 +326,6 @@ impl Accumulator {
             .then(|| emp_trace * ok as Real / (ok - 1) as Real / c.crb.mean());
         let before = c.before.average();
         let after = c.after.average();
-        let deg = |i: usize| c.deg[i].as_ref().map(StatsSum::average);
         let spread_of = |s: &Sum, sq: &Sum| (sq.mean() - s.mean().powi(2)).max(0.0).sqrt();
         Ok(Entry {
             method: labels.0.to_string(),
@@ -371,17 +339,11 @@ impl Accumulator {
             validation_after_mm: after,
             calibration_before_mm: c.calibration[0].average(),
             calibration_after_mm: c.calibration[1].average(),
-            validation_before_deg: deg(0),
-            validation_after_deg: deg(1),
-            validation_before_attitude_deg: deg(2),
-            validation_after_attitude_deg: deg(3),
-            validation_before_fitted_mm: deg(4),
-            validation_before_axis_mm: deg(5),
-            validation_after_axis_mm: deg(6),
-            validation_before_axis_abs_mm: deg(7),
-            validation_after_axis_abs_mm: deg(8),
-            calibration_before_attitude_deg: deg(9),
-            calibration_after_attitude_deg: deg(10),
+            optional: OPTIONAL_STATS
+                .iter()
+                .zip(&c.deg)
+                .filter_map(|(k, d)| Some((*k, d.as_ref()?.average())))
+                .collect(),
             improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
             param_rmse: rmse,
             param_bias: bias,

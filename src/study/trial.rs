@@ -32,36 +32,17 @@ pub struct Outcome {
     pub before_mm: ErrorStats,
     /// … after compensation.
     pub after_mm: ErrorStats,
-    /// With `validation.before_fitted`: the nominal robot's validation position errors (mm)
-    /// after the best rigid fit of its points to the true ones.
-    pub before_fitted_mm: Option<ErrorStats>,
     /// Position errors (mm) at the calibration poses against their noise-free true points
     /// (sag included): the nominal robot, before.
     pub calibration_before_mm: ErrorStats,
     /// … the compensated robot, in its registration, after.
     pub calibration_after_mm: ErrorStats,
-    /// Validation orientation errors (deg) before and after, for full-pose data.
-    pub before_deg: Option<ErrorStats>,
-    /// … after.
-    pub after_deg: Option<ErrorStats>,
-    /// Qiao's attitude errors (deg) before and after, for full-pose data.
-    pub before_attitude_deg: Option<ErrorStats>,
-    /// … after.
-    pub after_attitude_deg: Option<ErrorStats>,
-    /// With `validation.axis_errors`: Guo 2024's per-point validation error (the signed mean
-    /// of the three axis errors, [`PoseErrors::axis_mm`], mm) before.
-    pub before_axis_mm: Option<ErrorStats>,
-    /// … after.
-    pub after_axis_mm: Option<ErrorStats>,
-    /// … the mean of the absolute axis errors ([`PoseErrors::axis_abs_mm`]) before.
-    pub before_axis_abs_mm: Option<ErrorStats>,
-    /// … after.
-    pub after_axis_abs_mm: Option<ErrorStats>,
-    /// Qiao's attitude errors (deg) at the calibration poses against their noise-free true
-    /// frames, nominal robot, for full-pose data.
-    pub calibration_before_attitude_deg: Option<ErrorStats>,
-    /// … the compensated robot, in its registration.
-    pub calibration_after_attitude_deg: Option<ErrorStats>,
+    /// The statistics only some studies have, in the order of [`OPTIONAL_STATS`] (absent:
+    /// `None`): validation orientation (rotation angle, Qiao's attitude) before and after for
+    /// full-pose data, the fitted "before" (`validation.before_fitted`), Guo's axis errors
+    /// (`validation.axis_errors`; [`PoseErrors::axis_mm`], [`PoseErrors::axis_abs_mm`]) and
+    /// Qiao's attitude at the calibration poses for full-pose data.
+    pub optional: [Option<ErrorStats>; OPTIONAL_STATS.len()],
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
     /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
@@ -242,47 +223,26 @@ impl SimulatedTrial {
     }
 }
 
-/// The number of [`Outcome::optional_stats`].
-pub const OPTIONAL_STATS: usize = 11;
+/// The `summary.json` names of [`Outcome::optional`], in its order (the order of
+/// `records.txt`).
+pub const OPTIONAL_STATS: [&str; 11] = [
+    "validation_before_deg",
+    "validation_after_deg",
+    "validation_before_attitude_deg",
+    "validation_after_attitude_deg",
+    "validation_before_fitted_mm",
+    "validation_before_axis_mm",
+    "validation_after_axis_mm",
+    "validation_before_axis_abs_mm",
+    "validation_after_axis_abs_mm",
+    "calibration_before_attitude_deg",
+    "calibration_after_attitude_deg",
+];
 
-impl Outcome {
-    /// The statistics an outcome has only for some studies, in the order of `records.txt`
-    /// (docs/formats.md § 7.3): validation orientation (rotation angle, then Qiao's attitude)
-    /// before and after, the fitted "before", Guo's axis errors (signed before and after,
-    /// absolute before and after) and the calibration attitude before and after.
-    pub fn optional_stats(&self) -> [Option<ErrorStats>; OPTIONAL_STATS] {
-        [
-            self.before_deg,
-            self.after_deg,
-            self.before_attitude_deg,
-            self.after_attitude_deg,
-            self.before_fitted_mm,
-            self.before_axis_mm,
-            self.after_axis_mm,
-            self.before_axis_abs_mm,
-            self.after_axis_abs_mm,
-            self.calibration_before_attitude_deg,
-            self.calibration_after_attitude_deg,
-        ]
-    }
-
-    /// Sets the statistics of [`Outcome::optional_stats`], in its order.
-    pub fn set_optional_stats(&mut self, s: [Option<ErrorStats>; OPTIONAL_STATS]) {
-        [
-            self.before_deg,
-            self.after_deg,
-            self.before_attitude_deg,
-            self.after_attitude_deg,
-            self.before_fitted_mm,
-            self.before_axis_mm,
-            self.after_axis_mm,
-            self.before_axis_abs_mm,
-            self.after_axis_abs_mm,
-            self.calibration_before_attitude_deg,
-            self.calibration_after_attitude_deg,
-        ] = s;
-    }
-}
+/// The place of `validation_before_deg` and `validation_after_deg` in [`Outcome::optional`].
+pub const BEFORE_DEG: usize = 0;
+/// See [`BEFORE_DEG`].
+pub const AFTER_DEG: usize = 1;
 
 /// Runs trial `index` of `study`.
 pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
@@ -422,19 +382,19 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 after_mm: ErrorStats::of(&after.mm),
                 calibration_before_mm: cal_before,
                 calibration_after_mm: ErrorStats::of(&cal_after.mm),
-                before_deg: full_pose.then(|| ErrorStats::of(&before.deg)),
-                after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
-                before_attitude_deg: full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
-                after_attitude_deg: full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
-                before_fitted_mm: before_fitted,
-                before_axis_mm: axis.then(|| ErrorStats::of_signed(&before.axis_mm)),
-                after_axis_mm: axis.then(|| ErrorStats::of_signed(&after.axis_mm)),
-                before_axis_abs_mm: axis.then(|| ErrorStats::of(&before.axis_abs_mm)),
-                after_axis_abs_mm: axis.then(|| ErrorStats::of(&after.axis_abs_mm)),
-                calibration_before_attitude_deg: full_pose
-                    .then(|| ErrorStats::of(&cal_nominal.attitude_deg)),
-                calibration_after_attitude_deg: full_pose
-                    .then(|| ErrorStats::of(&cal_after.attitude_deg)),
+                optional: [
+                    full_pose.then(|| ErrorStats::of(&before.deg)),
+                    full_pose.then(|| ErrorStats::of(&after.deg)),
+                    full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
+                    full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
+                    before_fitted,
+                    axis.then(|| ErrorStats::of_signed(&before.axis_mm)),
+                    axis.then(|| ErrorStats::of_signed(&after.axis_mm)),
+                    axis.then(|| ErrorStats::of(&before.axis_abs_mm)),
+                    axis.then(|| ErrorStats::of(&after.axis_abs_mm)),
+                    full_pose.then(|| ErrorStats::of(&cal_nominal.attitude_deg)),
+                    full_pose.then(|| ErrorStats::of(&cal_after.attitude_deg)),
+                ],
                 trace,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 per_point_attitude_deg: (index == 0 && full_pose)
