@@ -170,12 +170,9 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 
 /// Identifies the errors, writes the output folder and prints the validation table and a
 /// summary line; data that do not determine every parameter are refused unless
-/// `--allow-rank-deficient`. A measurement-kind file (docs/formats.md § 5.3) goes to
-/// [`super::identify_kind`].
+/// `--allow-rank-deficient`. For a tracker's file: a measurement-kind file (docs/formats.md
+/// § 5.3) goes to `identify_kind::run` (the choice is `main`'s).
 pub fn run(args: &IdentifyArgs) -> Result<()> {
-    if calbench::measurement::kind_csv::file_kind(&args.data).is_some() {
-        return super::identify_kind::run(args);
-    }
     let out = &args.out;
     check_out_folder(out, &OUTPUTS)?;
     let nominal = args.chain.load(&args.robot)?;
