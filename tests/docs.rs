@@ -584,6 +584,55 @@ fn reproduction_numbers_come_from_the_committed_summaries() {
     assert!(checked >= 10, "only {checked} numbers checked");
 }
 
+/// The committed outputs that REPRODUCTION.md's eq. 17 and GCN tables quote are what their
+/// commands write today, byte for byte (the study summaries take minutes in a debug build and
+/// are checked by the numbers test above only).
+#[test]
+fn the_committed_gcn_and_eq17_outputs_are_what_their_commands_write() {
+    let dir = scratch("committed");
+    let o = calbench(
+        &[
+            "identifiability",
+            "--robot",
+            "guo-3t2r",
+            "--measure",
+            "position",
+            "--gcn-blocks",
+            "--json",
+        ],
+        root(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let committed = root().join("results/reproduction/guo2024/gcn_blocks.json");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        std::fs::read_to_string(&committed).unwrap(),
+        "{} is not what identifiability --gcn-blocks --json writes",
+        committed.display()
+    );
+    let out = dir.join("eq17");
+    let o = calbench(
+        &[
+            "poses",
+            "scenarios/li2018-irb2600.toml",
+            "--strategy",
+            "random",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        root(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let committed = root().join("results/reproduction/li2018/eq17/scores.json");
+    assert_eq!(
+        std::fs::read_to_string(out.join("scores.json")).unwrap(),
+        std::fs::read_to_string(&committed).unwrap(),
+        "{} is not what poses --strategy random writes",
+        committed.display()
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
 /// The decimal numbers of `cell` (an optional sign `-` or `−`, a digit, a point, digits, an
 /// optional exponent `e14` or `e-5`) and the half-width of the last digit quoted.
 fn regex_lite_decimals(cell: &str) -> Vec<(f64, f64)> {
