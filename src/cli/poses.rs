@@ -148,7 +148,7 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         j["gcn"] = json!(s
             .table
             .iter()
-            .map(|(k, v)| json!({"block": k, "gcn": v}))
+            .map(|r| json!({"block": r.label, "gcn": r.gcn}))
             .collect::<Vec<_>>());
         scores["separation"] = j;
     }

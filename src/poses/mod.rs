@@ -24,7 +24,7 @@ use rand::seq::index::sample;
 
 pub use ide::IdeOptions;
 pub use indices::{score, Scores};
-pub use separation::{separate, BlockGcn, Separation};
+pub use separation::{separate, BlockGcn, GcnRow, Separation};
 
 use crate::robot::jacobian::{pose_rows, Columns};
 

@@ -42,12 +42,22 @@ pub struct Separation {
     /// The GCN table: `full` (all parameters), each block (`theta`, `d`, …, tables 1), each
     /// branch `d-d2` (block `d` without `d2`, tables 2–3), each reduced block `d[-d3]` (after
     /// the removals so far), and `separated` (the kept parameters).
-    pub table: Vec<(String, Real)>,
-    /// Guo's GCN (eq. 14 averaged over pose counts, [`gcn_mean`]) of each entry of `table`.
-    pub table_mean: Vec<Real>,
+    pub table: Vec<GcnRow>,
     /// Per block, in order of first appearance: its GCN before and after the separation
     /// (Guo 2024 table 1 and the reduced blocks of tables 2–3).
     pub blocks: Vec<BlockGcn>,
+}
+
+/// One entry of [`Separation::table`]: a set of columns and its two GCNs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GcnRow {
+    /// What the columns are: `full`, a block, a branch `d-d2`, a reduced block `d[-d3]` or
+    /// `separated`.
+    pub label: String,
+    /// Eq. 14 over all the poses (the separation's decisions).
+    pub gcn: Real,
+    /// Guo's GCN, eq. 14 averaged over pose counts ([`gcn_mean`]).
+    pub gcn_mean: Real,
 }
 
 /// One block's GCN (eq. 14) before and after the separation.
@@ -68,36 +78,29 @@ pub struct BlockGcn {
 impl Separation {
     /// GCN of the full model (every parameter passed in).
     pub fn gcn_full(&self) -> Real {
-        self.lookup("full")
+        self.lookup("full", |r| r.gcn)
     }
 
     /// GCN of the reconstructed model J_p (the kept parameters, eq. 27).
     pub fn gcn_separated(&self) -> Real {
-        self.lookup("separated")
+        self.lookup("separated", |r| r.gcn)
     }
 
     /// Guo's GCN (averaged over pose counts) of the full model.
     pub fn gcn_mean_full(&self) -> Real {
-        self.lookup_mean("full")
+        self.lookup("full", |r| r.gcn_mean)
     }
 
     /// Guo's GCN (averaged over pose counts) of the reconstructed model J_p.
     pub fn gcn_mean_separated(&self) -> Real {
-        self.lookup_mean("separated")
+        self.lookup("separated", |r| r.gcn_mean)
     }
 
-    fn lookup(&self, label: &str) -> Real {
+    fn lookup(&self, label: &str, value: impl Fn(&GcnRow) -> Real) -> Real {
         self.table
             .iter()
-            .find(|(l, _)| l == label)
-            .map_or(Real::NAN, |x| x.1)
-    }
-
-    fn lookup_mean(&self, label: &str) -> Real {
-        self.table
-            .iter()
-            .position(|(l, _)| l == label)
-            .map_or(Real::NAN, |i| self.table_mean[i])
+            .find(|r| r.label == label)
+            .map_or(Real::NAN, value)
     }
 
     /// The report as JSON (docs/formats.md `identifiability --gcn-blocks`, `summary.json`
@@ -133,8 +136,7 @@ impl Separation {
             "table": self
                 .table
                 .iter()
-                .zip(&self.table_mean)
-                .map(|((k, v), gm)| json!({"label": k, "gcn": v, "gcn_mean": gm}))
+                .map(|r| json!({"label": r.label, "gcn": r.gcn, "gcn_mean": r.gcn_mean}))
                 .collect::<Vec<_>>(),
         })
     }
@@ -161,11 +163,13 @@ pub fn separate(
         (gcn(&s, m), gcn_mean(&s, measure.rows()))
     };
     let mut table = Vec::new();
-    let mut table_mean = Vec::new();
-    let mut record = |label: String, (g, gm): (Real, Real)| {
-        table.push((label, g));
-        table_mean.push(gm);
-        g
+    let mut record = |label: String, (gcn, gcn_mean): (Real, Real)| {
+        table.push(GcnRow {
+            label,
+            gcn,
+            gcn_mean,
+        });
+        gcn
     };
     let all: Vec<usize> = (0..params.len()).collect();
     record("full".to_string(), sub_gcn(&all));
@@ -247,7 +251,6 @@ pub fn separate(
         kept: kept_idx.iter().map(|&c| params[c]).collect(),
         removed: removed_cols.iter().map(|&c| params[c]).collect(),
         table,
-        table_mean,
         blocks,
     }
 }
@@ -271,7 +274,7 @@ mod tests {
         let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);
         let ident = analyse(&robot, &params, &qs, Measure::Position);
         // The d block is ill-conditioned: d2 and d3 act along parallel axes.
-        let d_gcn = sep.table.iter().find(|(l, _)| l == "d").map(|x| x.1);
+        let d_gcn = sep.table.iter().find(|r| r.label == "d").map(|r| r.gcn);
         assert!(d_gcn.is_some_and(|g| g > 1e6), "{:?}", sep.table);
         let removed_d: Vec<Param> = sep
             .removed
@@ -291,12 +294,12 @@ mod tests {
         let reduced = sep
             .table
             .iter()
-            .find(|(l, _)| l.starts_with("d[") && !l.contains("]-"))
-            .map(|x| x.1);
+            .find(|r| r.label.starts_with("d[") && !r.label.contains("]-"))
+            .map(|r| r.gcn);
         assert!(reduced.is_some_and(|g| g <= 1e2), "{:?}", sep.table);
         assert!(sep.kept.len() + sep.removed.len() == params.len());
-        let sep_gcn = sep.table.last().map(|x| x.1).unwrap_or(0.0);
-        let full_gcn = sep.table[0].1;
+        let sep_gcn = sep.table.last().map(|r| r.gcn).unwrap_or(0.0);
+        let full_gcn = sep.table[0].gcn;
         assert!(sep_gcn <= full_gcn, "{sep_gcn} vs {full_gcn}");
     }
 
@@ -308,9 +311,10 @@ mod tests {
         let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);
         assert!(sep.removed.is_empty());
         assert_eq!(sep.kept, params);
-        assert_eq!(sep.table.len(), 3); // full, a, separated
-                                        // Guo's average flags the block that one pose cannot see in full: the first count's
-                                        // 3 × 3 block has rank 2 (x1, x2 and x3 are all normal to the parallel z2 and z3).
+        // full, a, separated
+        assert_eq!(sep.table.len(), 3);
+        // Guo's average flags the block that one pose cannot see in full: the first count's
+        // 3 × 3 block has rank 2 (x1, x2 and x3 are all normal to the parallel z2 and z3).
         assert!(sep.blocks[0].gcn_before < 1.0, "{:?}", sep.blocks);
         assert!(sep.blocks[0].gcn_mean_before > 1e2, "{:?}", sep.blocks);
         let one = jacobian(
