@@ -230,7 +230,8 @@ fn identify_takes_method_options_and_identifiability_the_users_poses() {
 }
 
 /// `identifiability --gcn-blocks --json` reports Guo 2024's separation of the joint
-/// parameters (README, Commands): each block's GCN before and after, and what was removed.
+/// parameters (README, Commands): each block's GCN before and after, and what was removed;
+/// its output is REPRODUCTION.md's committed `gcn_blocks.json`, byte for byte.
 #[test]
 fn identifiability_reports_gcn_blocks_of_the_separation() {
     let o = calbench_ok(&[
@@ -251,6 +252,14 @@ fn identifiability_reports_gcn_blocks_of_the_separation() {
     }
     assert!(!a["removed"].as_array().unwrap().is_empty());
     assert!(a["rank"].as_u64().is_some());
+    let committed =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("results/reproduction/guo2024/gcn_blocks.json");
+    assert_eq!(
+        String::from_utf8_lossy(&o.stdout),
+        std::fs::read_to_string(&committed).unwrap(),
+        "{} is not what identifiability --gcn-blocks --json writes",
+        committed.display()
+    );
     let o = calbench(&[
         "identifiability",
         "--robot",

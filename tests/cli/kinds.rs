@@ -111,19 +111,8 @@ fn noise_free_round_trip_per_kind() {
             let out = dir.join(format!("id-{name}-{}", method[1]));
             let data = sim.join("measurements.csv");
             let val = sim.join("validation.csv");
-            let mut args = vec![
-                "identify",
-                "--robot",
-                "irb2600",
-                "--data",
-                path_arg(&data),
-                "--validate",
-                path_arg(&val),
-                "--out",
-                path_arg(&out),
-            ];
-            args.extend_from_slice(method);
-            let o = calbench_ok(&args);
+            let validate = [&["--validate", path_arg(&val)][..], method].concat();
+            let o = calbench_ok(&identify_args(&data, &out, &validate));
             let stdout = String::from_utf8_lossy(&o.stdout);
             assert!(stdout.contains("not determined by these"), "{stdout}");
             let id = load_json(&out.join("identified.json"));
@@ -177,22 +166,26 @@ fn noise_free_round_trip_per_kind() {
     }
 }
 
-/// `identify --robot irb2600 --data DATA --validate VAL --out OUT EXTRA…`, which must
-/// succeed; its `identified.json`.
-fn identify(data: &Path, val: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+/// The arguments `identify --robot irb2600 --data DATA --out OUT EXTRA…`.
+fn identify_args<'a>(data: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
         "identify",
         "--robot",
         "irb2600",
         "--data",
         path_arg(data),
-        "--validate",
-        path_arg(val),
         "--out",
         path_arg(out),
     ];
     args.extend_from_slice(extra);
-    calbench_ok(&args);
+    args
+}
+
+/// `identify --robot irb2600 --data DATA --out OUT --validate VAL EXTRA…`, which must
+/// succeed; its `identified.json`.
+fn identify(data: &Path, val: &Path, out: &Path, extra: &[&str]) -> serde_json::Value {
+    let validate = [&["--validate", path_arg(val)][..], extra].concat();
+    calbench_ok(&identify_args(data, out, &validate));
     load_json(&out.join("identified.json"))
 }
 
@@ -276,19 +269,7 @@ fn multi_target_files_are_registered_and_identified() {
         .iter()
         .any(|p| p == "base.x"));
     let svd = ["--method", "ls", "--registration", "svd"];
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        path_arg(&data),
-        "--out",
-        path_arg(&dir.join("svd")),
-        svd[0],
-        svd[1],
-        svd[2],
-        svd[3],
-    ]);
+    let o = calbench(&identify_args(&data, &dir.join("svd"), &svd));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--registration"));
 }
 
@@ -478,17 +459,7 @@ fn malformed_kind_files_are_refused_by_line_and_column() {
         let f = dir.join(format!("bad{i}.csv"));
         std::fs::write(&f, text).unwrap();
         let out = dir.join(format!("o{i}"));
-        let o = calbench(&[
-            "identify",
-            "--robot",
-            "irb2600",
-            "--data",
-            path_arg(&f),
-            "--method",
-            "ls",
-            "--out",
-            path_arg(&out),
-        ]);
+        let o = calbench(&identify_args(&f, &out, &["--method", "ls"]));
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
             !o.status.success()
@@ -511,17 +482,7 @@ fn what_a_kind_cannot_determine_is_refused() {
     let data = sim.join("measurements.csv");
     let run = |extra: &[&str], out: &str| {
         let out = dir.join(out);
-        let mut args = vec![
-            "identify",
-            "--robot",
-            "irb2600",
-            "--data",
-            path_arg(&data),
-            "--out",
-            path_arg(&out),
-        ];
-        args.extend_from_slice(extra);
-        let o = calbench(&args);
+        let o = calbench(&identify_args(&data, &out, extra));
         (o, out)
     };
     let (o, out) = run(&["--method", "ls", "--params", "a2,a3,base.x"], "p");
