@@ -51,6 +51,10 @@ pub struct RunArgs {
     /// checkpoint of another scenario, trial count or seed.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "shard"])]
     pub resume: Option<PathBuf>,
+    /// With --resume: continue even though the process that wrote the checkpoint seems to
+    /// be running on this host (its pid was taken by another program).
+    #[arg(long, requires = "resume")]
+    pub force: bool,
 }
 
 /// `--shard I/N`.
@@ -133,15 +137,17 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
         if args.trials.is_some() || args.seed.is_some() {
             return Err(Error::setting(
                 "--resume",
-                "--trials and --seed are those of the checkpoint; to check them, give the                  scenario file too",
+                "--trials and --seed are those of the checkpoint; to check them, give the \
+                 scenario file too",
             )
             .into());
         }
         None
     };
     writable_folder(dir, &OUTPUTS)?;
+    let checked = calbench::report::Resumable::open(dir, given.as_ref(), args.force)?;
     eprintln!("resuming the run into {}", dir.display());
-    let r = calbench::report::resume_study(dir, given.as_ref(), args.threads)?;
+    let r = calbench::report::resume_study(checked, args.threads)?;
     finished(&r)
 }
 

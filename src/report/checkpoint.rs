@@ -2,28 +2,33 @@
 //! needs to continue.
 //!
 //! While `calbench run … --out DIR` runs, the folder `.NAME.checkpoint` beside `DIR` holds
-//! `records.txt`, one line per finished trial in the shard record format
-//! ([`super::shard`]), and `checkpoint.json`: the scenario as run, the binary's version, the
-//! share, and how many trials (and bytes of `records.txt`) are complete. `checkpoint.json`
-//! is rewritten (temporary file and rename) after every [`CHUNK`] trials, once the records
-//! before it are flushed, so whatever moment the run is killed, it names a prefix of
-//! `records.txt` made of whole lines. `calbench run --resume DIR` cuts `records.txt` back
-//! to that prefix, replays it through the same aggregation as a live run
-//! ([`crate::study::run_resumed`]) and runs the rest; the folder is removed when the run
-//! ends, with its output or with an error (only a run killed from outside leaves one).
+//! `records.txt`, one line per finished trial in the record format ([`super::records`],
+//! each line with its checksum), and `checkpoint.json`: the scenario as run, the binary's
+//! version, the share, the writer's process and host, and how many trials (and bytes of
+//! `records.txt`) are complete. `checkpoint.json` is rewritten (temporary file and rename)
+//! after every [`CHUNK`] trials, once the records before it are flushed, so whatever moment
+//! the run is killed, it names a prefix of `records.txt` made of whole lines.
+//!
+//! `calbench run --resume DIR` first checks the whole checkpoint without changing it: its
+//! format, version and scenario, that its writer is no longer running, and every record of
+//! the prefix (checksum, and the share's trials in order, each once). A refusal leaves the
+//! checkpoint as it was. Then it cuts `records.txt` back to that prefix, replays it through
+//! the same aggregation as a live run ([`crate::study::run_resumed`]) and runs the rest; the
+//! folder is removed when the run ends, with its output or with an error (only a run killed
+//! from outside leaves one).
 
-use std::io::{BufRead, Write as _};
+use std::io::{BufRead, Read as _, Write as _};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::shard::{decode, encode};
+use super::records::{encode, Verifier};
 use crate::error::{Error, Result};
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`.
-const FORMAT: &str = "calbench-checkpoint-2";
+const FORMAT: &str = "calbench-checkpoint-3";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -38,8 +43,10 @@ struct Meta {
     seed: u64,
     trials: usize,
     shard: Option<Shard>,
-    /// The process that wrote it (its temporary output folder is removed on resume).
+    /// The process that wrote it (its temporary output folder is removed on resume), and
+    /// the host it ran on: a resume on that host refuses a checkpoint whose writer runs.
     pid: u32,
+    host: String,
     /// Trials complete, and the bytes of `records.txt` that hold them.
     done: u64,
     bytes: u64,
@@ -99,6 +106,7 @@ impl Checkpoint {
             trials: scenario.trials,
             shard,
             pid: std::process::id(),
+            host: host(),
             done: 0,
             bytes: 0,
         };
@@ -116,11 +124,14 @@ impl Checkpoint {
 
     /// Opens the checkpoint of the killed run into `out`: checks it against this binary and,
     /// when given, the scenario the user names (its name, seed, trials and settings; an
-    /// error names what differs), cuts `records.txt` back to its complete prefix and
-    /// returns the checkpoint, the scenario as run, its share and the replay of its trials.
+    /// error names what differs), that the process that wrote it is not running on this
+    /// host (unless `force`) and every record it counts ([`Verifier`]), all before changing
+    /// anything; then cuts `records.txt` back to its complete prefix and returns the
+    /// checkpoint, the scenario as run, its share and the replay of its trials.
     pub fn resume(
         out: &Path,
         given: Option<&Scenario>,
+        force: bool,
     ) -> Result<(Checkpoint, Scenario, Option<Shard>, Records)> {
         let dir = folder(out);
         let path = dir.join("checkpoint.json");
@@ -191,10 +202,29 @@ impl Checkpoint {
                 ));
             }
         }
+        if !force && meta.host == host() && alive(meta.pid) {
+            return Err(Error::file(
+                &path,
+                "pid",
+                format!(
+                    "the run that writes this checkpoint is still running (process {} on this \
+                     host): stop it first, or give --force if that process is not calbench",
+                    meta.pid
+                ),
+            ));
+        }
+        let records = dir.join("records.txt");
+        let units = units(&scenario, meta.shard, meta.done);
+        let sweep = scenario.sweep.is_some();
+        check_records(
+            &records,
+            &meta,
+            Verifier::new(&records, meta.seed, meta.trials, sweep, units),
+        )?;
+        // Checked: from here on the checkpoint is the resumed run's.
         // The temporary output folder of the killed process.
         let (parent, name) = super::parent_and_name(out);
         let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{}", meta.pid)));
-        let records = dir.join("records.txt");
         let file = std::fs::OpenOptions::new()
             .read(true)
             .write(true)
@@ -208,7 +238,9 @@ impl Checkpoint {
             .map_err(|e| Error::io(&records, e))?;
         let shard = meta.shard;
         let done = meta.done;
+        let (scenario_seed, scenario_trials) = (meta.seed, meta.trials);
         meta.pid = std::process::id();
+        meta.host = host();
         write_meta(&dir, &meta)?;
         Ok((
             Checkpoint {
@@ -221,10 +253,10 @@ impl Checkpoint {
             scenario,
             shard,
             Records {
-                path: records,
+                path: records.clone(),
                 lines: std::io::BufReader::new(reader),
                 done,
-                line: 0,
+                check: Verifier::new(&records, scenario_seed, scenario_trials, sweep, units),
             },
         ))
     }
@@ -242,7 +274,7 @@ impl TrialSink for Checkpoint {
         if self.seen <= self.skip {
             return Ok(());
         }
-        let line = encode(info.index, t);
+        let line = encode(self.meta.seed, info.index, t);
         let path = self.dir.join("records.txt");
         self.records
             .write_all(line.as_bytes())
@@ -257,12 +289,90 @@ impl TrialSink for Checkpoint {
     }
 }
 
-/// The trials of a checkpoint's `records.txt`, read back in order ([`Replay`]).
+/// The work units `[start, start + done)` that the checkpoint of a run of `scenario` (its
+/// share `shard`) counts as done.
+fn units(scenario: &Scenario, shard: Option<Shard>, done: u64) -> (u64, u64) {
+    let points = scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
+    let start = shard.map_or(0, |s| s.range(scenario.trials as u64 * points).0);
+    (start, start + done)
+}
+
+/// Checks, reading only, that `records.txt` at `path` holds at least the `bytes` of `meta`
+/// and that they are its `done` records, whole lines, each verified by `check`.
+fn check_records(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
+    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    if len < meta.bytes {
+        return Err(Error::file(
+            path,
+            format!("byte {len}"),
+            format!(
+                "the file ends before the {} bytes that checkpoint.json counts for its {} \
+                 trials: it was cut short, or checkpoint.json altered",
+                meta.bytes, meta.done
+            ),
+        ));
+    }
+    let mut lines = std::io::BufReader::new(file.take(meta.bytes));
+    let mut text = Vec::new();
+    loop {
+        text.clear();
+        let n = lines
+            .read_until(b'\n', &mut text)
+            .map_err(|e| Error::io(path, e))?;
+        if n == 0 {
+            return check.finish();
+        }
+        if text.pop() != Some(b'\n') {
+            return Err(Error::file(
+                path,
+                format!("line {}", check.lines() + 1),
+                format!(
+                    "the {} bytes that checkpoint.json counts end inside a record: it was \
+                     altered",
+                    meta.bytes
+                ),
+            ));
+        }
+        check.record(&String::from_utf8_lossy(&text))?;
+    }
+}
+
+/// The name of this host (empty where it cannot be read).
+fn host() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .or_else(|_| std::fs::read_to_string("/etc/hostname"))
+        .or_else(|_| std::env::var("HOSTNAME"))
+        .map(|h| h.trim().to_string())
+        .unwrap_or_default()
+}
+
+/// Whether process `pid` (not this one) is running on this host: its `/proc` entry, not a
+/// zombie, where there is a `/proc`; otherwise `kill -0`.
+fn alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return false;
+    }
+    if Path::new("/proc/self").exists() {
+        return std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+            let state = s.rsplit_once(')').map(|(_, rest)| rest.trim_start());
+            !matches!(state.and_then(|r| r.chars().next()), Some('Z' | 'X') | None)
+        });
+    }
+    std::process::Command::new("kill")
+        .args(["-0", &pid.to_string()])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// The trials of a checkpoint's `records.txt`, read back in order ([`Replay`]), each
+/// checked again as it is read.
 pub struct Records {
     path: PathBuf,
     lines: std::io::BufReader<std::fs::File>,
     done: u64,
-    line: usize,
+    check: Verifier,
 }
 
 impl Replay for Records {
@@ -272,18 +382,13 @@ impl Replay for Records {
 
     fn next(&mut self) -> Result<(usize, TrialResult)> {
         let mut text = String::new();
-        self.line += 1;
         let n = self
             .lines
             .read_line(&mut text)
             .map_err(|e| Error::io(&self.path, e))?;
         if n == 0 {
-            return Err(Error::file(
-                &self.path,
-                format!("line {}", self.line),
-                "the checkpoint's records end before the trials it counts",
-            ));
+            self.check.finish()?;
         }
-        decode(text.trim_end_matches('\n'), &self.path, self.line)
+        self.check.record(text.trim_end_matches('\n'))
     }
 }

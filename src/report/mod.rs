@@ -22,6 +22,7 @@ pub mod instruments;
 pub mod markdown;
 pub mod plots;
 pub mod practice;
+pub mod records;
 pub mod registration_study;
 pub mod run;
 
@@ -50,22 +51,57 @@ pub fn run_study(
     study_into(scenario, opts, &out, cp, None)
 }
 
-/// Continues the run into `out` that was killed (`calbench run --resume DIR`): from its
-/// checkpoint ([`checkpoint`]), which must be of this binary's version and, when `given`,
-/// of that scenario. Writes the same files as an uninterrupted run.
+/// The checkpoint of a killed run, checked and ready to continue ([`resume_study`]).
+pub struct Resumable {
+    out: std::path::PathBuf,
+    checkpoint: checkpoint::Checkpoint,
+    scenario: crate::study::scenario::Scenario,
+    shard: Option<crate::study::Shard>,
+    records: checkpoint::Records,
+}
+
+impl Resumable {
+    /// Opens the checkpoint of the run into `out` that was killed (`calbench run --resume
+    /// DIR`, [`checkpoint`]): it must be of this binary's version and, when `given`, of that
+    /// scenario, its writer no longer running on this host (unless `force`), and every
+    /// record it counts intact. A refused checkpoint is left as it was.
+    pub fn open(
+        out: &std::path::Path,
+        given: Option<&crate::study::scenario::Scenario>,
+        force: bool,
+    ) -> crate::Result<Resumable> {
+        let (checkpoint, scenario, shard, records) =
+            checkpoint::Checkpoint::resume(out, given, force)?;
+        Ok(Resumable {
+            out: out.to_path_buf(),
+            checkpoint,
+            scenario,
+            shard,
+            records,
+        })
+    }
+}
+
+/// Continues a killed run from its checked checkpoint ([`Resumable::open`]) with `threads`
+/// worker threads: writes the same files as an uninterrupted run.
 pub fn resume_study(
-    out: &std::path::Path,
-    given: Option<&crate::study::scenario::Scenario>,
+    run: Resumable,
     threads: Option<usize>,
 ) -> crate::Result<crate::study::RunResult> {
-    let (cp, scenario, shard, mut records) = checkpoint::Checkpoint::resume(out, given)?;
+    let Resumable {
+        out,
+        checkpoint,
+        scenario,
+        shard,
+        mut records,
+    } = run;
     let opts = crate::study::RunOptions {
         threads,
-        out: Some(out.to_path_buf()),
+        out: Some(out.clone()),
         progress: true,
         shard,
     };
-    study_into(scenario, &opts, out, cp, Some(&mut records))
+    study_into(scenario, &opts, &out, checkpoint, Some(&mut records))
 }
 
 /// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
@@ -91,7 +127,7 @@ fn study_into(
                 r
             }
             Some(_) => {
-                let mut records = shard::Records::create(dir)?;
+                let mut records = shard::Records::create(dir, scenario.seed)?;
                 let r = {
                     let mut sinks = shard::Both(&mut csv, &mut records);
                     let mut all = shard::Both(&mut sinks, &mut cp);

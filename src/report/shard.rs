@@ -3,28 +3,25 @@
 //!
 //! A shard folder holds `trials.csv` (its own rows), `shard.json` (the scenario as run, the
 //! share, and what the reports need of each block's study and of trial 0) and `records.txt`:
-//! one line per trial with every number the aggregation reads, floats in shortest
-//! round-trip form, so the merge replays the trials in order through the same streaming
-//! aggregation ([`crate::study::Collector`]) and writes the same bytes as one machine.
+//! one line per trial with every number the aggregation reads, each line with its checksum
+//! ([`super::records`]), so the merge checks every record and replays the trials in order
+//! through the same streaming aggregation ([`crate::study::Collector`]) and writes the same
+//! bytes as one machine.
 
 use std::io::{BufRead, Write as _};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::records::{encode, Verifier};
 use super::run::TrialsCsv;
 use super::write_run;
-use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
-use crate::identify::Termination;
-use crate::numeric::Real;
 use crate::study::scenario::Scenario;
-use crate::study::trial::Outcome;
-use crate::study::trial::OPTIONAL_STATS;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-4";
+const FORMAT: &str = "calbench-shard-5";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -44,6 +41,8 @@ struct ShardMeta {
     trials: usize,
     shard: Shard,
     units: (u64, u64),
+    /// The records in `records.txt`: `units.1 - units.0`.
+    records: u64,
     seconds: f64,
     blocks: Vec<ShardBlock>,
 }
@@ -62,16 +61,20 @@ impl<A: TrialSink, B: TrialSink> TrialSink for Both<'_, A, B> {
 pub struct Records {
     dir: PathBuf,
     out: std::io::BufWriter<std::fs::File>,
+    seed: u64,
+    count: u64,
 }
 
 impl Records {
-    /// Creates `records.txt` in `dir`.
-    pub fn create(dir: &Path) -> Result<Records> {
+    /// Creates `records.txt` in `dir` for the records of a run with `seed`.
+    pub fn create(dir: &Path, seed: u64) -> Result<Records> {
         let path = dir.join("records.txt");
         let file = std::fs::File::create(&path).map_err(|e| Error::io(&path, e))?;
         Ok(Records {
             dir: dir.to_path_buf(),
             out: std::io::BufWriter::new(file),
+            seed,
+            count: 0,
         })
     }
 
@@ -93,6 +96,7 @@ impl Records {
             trials: r.scenario.trials,
             shard,
             units: shard.range(total),
+            records: self.count,
             seconds: r.seconds,
             blocks: r
                 .blocks
@@ -112,196 +116,12 @@ impl Records {
 
 impl TrialSink for Records {
     fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
-        let line = encode(info.index, t);
+        let line = encode(self.seed, info.index, t);
+        self.count += 1;
         self.out
             .write_all(line.as_bytes())
             .map_err(|e| Error::io(self.dir.join("records.txt"), e))
     }
-}
-
-fn push_stats(s: &mut String, e: &ErrorStats) {
-    for v in [e.mean, e.rms, e.max, e.std] {
-        s.push(' ');
-        s.push_str(&format!("{v:e}"));
-    }
-}
-
-/// One trial as a line of `records.txt`: `block trial n truth… crb… outcomes`, each
-/// outcome `strategy method termination rank-deficient-expected iterations evaluations seconds before×4 after×4`, four optional
-/// orientation statistics (`-` or `+` and four numbers) and the n identified values.
-pub(crate) fn encode(block: usize, t: &TrialResult) -> String {
-    let mut s = format!("{block} {} {}", t.index, t.truth.len());
-    for v in &t.truth {
-        s.push_str(&format!(" {v:e}"));
-    }
-    s.push_str(&format!(" {}", t.crb_trace.len()));
-    for c in &t.crb_trace {
-        match c {
-            Some(v) => s.push_str(&format!(" {v:e}")),
-            None => s.push_str(" -"),
-        }
-    }
-    s.push_str(&format!(" {}", t.outcomes.len()));
-    for o in &t.outcomes {
-        s.push_str(&format!(
-            " {} {} {} {} {} {} {:e}",
-            o.strategy,
-            o.method,
-            o.termination.as_str(),
-            u8::from(o.rank_deficient_expected),
-            o.iterations,
-            o.evaluations,
-            o.seconds
-        ));
-        push_stats(&mut s, &o.before_mm);
-        push_stats(&mut s, &o.after_mm);
-        push_stats(&mut s, &o.calibration_before_mm);
-        push_stats(&mut s, &o.calibration_after_mm);
-        for d in o.optional {
-            match d {
-                Some(d) => {
-                    s.push_str(" +");
-                    push_stats(&mut s, &d);
-                }
-                None => s.push_str(" -"),
-            }
-        }
-        for v in &o.identified {
-            s.push_str(&format!(" {v:e}"));
-        }
-    }
-    s.push('\n');
-    s
-}
-
-/// Reads the tokens of one record line.
-struct Tokens<'a> {
-    it: std::str::SplitAsciiWhitespace<'a>,
-    path: &'a Path,
-    line: usize,
-}
-
-impl<'a> Tokens<'a> {
-    fn err(&self, what: &str) -> Error {
-        Error::file(
-            self.path,
-            format!("line {}", self.line),
-            format!("{what} (the file is not a calbench shard record, or is cut short)"),
-        )
-    }
-    fn word(&mut self) -> Result<&'a str> {
-        self.it.next().ok_or_else(|| self.err("missing field"))
-    }
-    fn usize(&mut self) -> Result<usize> {
-        let w = self.word()?;
-        w.parse()
-            .map_err(|_| self.err(&format!("\"{w}\" is not a count")))
-    }
-    fn real(&mut self) -> Result<Real> {
-        let w = self.word()?;
-        w.parse()
-            .map_err(|_| self.err(&format!("\"{w}\" is not a number")))
-    }
-    fn reals(&mut self, n: usize) -> Result<Vec<Real>> {
-        (0..n).map(|_| self.real()).collect()
-    }
-    fn stats(&mut self) -> Result<ErrorStats> {
-        Ok(ErrorStats {
-            mean: self.real()?,
-            rms: self.real()?,
-            max: self.real()?,
-            std: self.real()?,
-        })
-    }
-    fn optional_stats(&mut self) -> Result<Option<ErrorStats>> {
-        match self.word()? {
-            "-" => Ok(None),
-            "+" => self.stats().map(Some),
-            w => Err(self.err(&format!("\"{w}\" is neither - nor +"))),
-        }
-    }
-}
-
-/// Parses line `line` of `path` (see [`encode`]): the block index and the trial.
-pub(crate) fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> {
-    let mut t = Tokens {
-        it: text.split_ascii_whitespace(),
-        path,
-        line,
-    };
-    let block = t.usize()?;
-    let index = t.usize()?;
-    let n = t.usize()?;
-    let truth = t.reals(n)?;
-    let ns = t.usize()?;
-    let mut crb_trace = Vec::with_capacity(ns);
-    for _ in 0..ns {
-        crb_trace.push(match t.word()? {
-            "-" => None,
-            w => Some(
-                w.parse()
-                    .map_err(|_| t.err(&format!("\"{w}\" is not a number")))?,
-            ),
-        });
-    }
-    let no = t.usize()?;
-    let mut outcomes = Vec::with_capacity(no);
-    for _ in 0..no {
-        let strategy = t.usize()?;
-        let method = t.usize()?;
-        let name = t.word()?.to_string();
-        let termination: Termination = crate::robot::names::parse("termination", &name)
-            .map_err(|_| t.err(&format!("unknown termination \"{name}\"")))?;
-        let rank_deficient_expected = match t.usize()? {
-            0 => false,
-            1 => true,
-            v => return Err(t.err(&format!("{v} is not a flag (0 or 1)"))),
-        };
-        let iterations = t.usize()?;
-        let evaluations = t.usize()?;
-        let seconds = t.real()?;
-        let before_mm = t.stats()?;
-        let after_mm = t.stats()?;
-        let calibration_before_mm = t.stats()?;
-        let calibration_after_mm = t.stats()?;
-        let mut optional = [None; OPTIONAL_STATS.len()];
-        for o in &mut optional {
-            *o = t.optional_stats()?;
-        }
-        let identified = t.reals(n)?;
-        outcomes.push(Outcome {
-            method,
-            strategy,
-            identified,
-            before_mm,
-            after_mm,
-            calibration_before_mm,
-            calibration_after_mm,
-            optional,
-            per_point: None,
-            per_point_attitude_deg: None,
-            trace: None,
-            iterations,
-            evaluations,
-            termination,
-            rank_deficient_expected,
-            seconds,
-            // Shards run scenario files, whose methods are all registered ones.
-            error: None,
-        });
-    }
-    if t.it.next().is_some() {
-        return Err(t.err("extra fields at the end of the line"));
-    }
-    Ok((
-        block,
-        TrialResult {
-            index,
-            truth,
-            crb_trace,
-            outcomes,
-        },
-    ))
 }
 
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
@@ -436,6 +256,22 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
     }
     metas.sort_by_key(|(_, m)| m.shard.index);
     let scenario = Scenario::parse(&metas[0].1.settings, metas[0].1.scenario_file.as_deref())?;
+    let points = scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
+    let total = scenario.trials as u64 * points;
+    for (d, m) in &metas {
+        let units = m.shard.range(total);
+        if m.units != units || m.records != units.1 - units.0 {
+            return Err(Error::file(
+                d.join("shard.json"),
+                "units",
+                format!(
+                    "shard {}/{n} of {total} work units holds units {}..{} in {} records; it \
+                     should hold {}..{}, one record each (the file was altered)",
+                    m.shard.index, m.units.0, m.units.1, m.records, units.0, units.1
+                ),
+            ));
+        }
+    }
     // The reports' view of every block, and trial 0's extras, from the shard that ran it.
     let mut infos: Vec<Option<(BlockInfo, Option<Trial0>)>> = Vec::new();
     for (_, m) in &metas {
@@ -457,25 +293,36 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         let mut csv = TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
         let mut collector = Collector::new();
         let mut current: Option<usize> = None;
-        for (d, _) in &metas {
+        let mut aggregated = 0u64;
+        for (d, m) in &metas {
             let path = d.join("records.txt");
             let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
-            for (k, line) in std::io::BufReader::new(file).lines().enumerate() {
+            let sweep = scenario.sweep.is_some();
+            let mut records = Verifier::new(&path, m.seed, m.trials, sweep, m.units);
+            for line in std::io::BufReader::new(file).lines() {
                 let line = line.map_err(|e| Error::io(&path, e))?;
-                let (b, t) = decode(&line, &path, k + 1)?;
+                let (b, t) = records.record(&line)?;
                 if current != Some(b) {
                     let (info, t0) = infos.get(b).cloned().flatten().ok_or_else(|| {
                         Error::file(
                             &path,
-                            format!("line {}", k + 1),
-                            format!("block {b} is not in any shard.json"),
+                            format!("line {}", records.lines()),
+                            format!("sweep point {b} is not in any shard.json"),
                         )
                     })?;
                     collector.begin(info, t0);
                     current = Some(b);
                 }
                 collector.trial(&t, &mut csv)?;
+                aggregated += 1;
             }
+            records.finish()?;
+        }
+        // Every shard's units checked and every record read once: the run's trials.
+        if aggregated != total {
+            return Err(Error::Compute(format!(
+                "the merge aggregated {aggregated} records of a run of {total} trials"
+            )));
         }
         csv.finish()?;
         let r = RunResult {
@@ -490,66 +337,4 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         Ok(())
     })?;
     result.ok_or_else(|| Error::Compute("the merge produced no result".into()))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_record_reads_back_bit_for_bit() {
-        let stats = |x: Real| ErrorStats {
-            mean: x,
-            rms: x * 1.1,
-            max: 1e-300,
-            std: Real::NAN,
-        };
-        let t = TrialResult {
-            index: 17,
-            truth: vec![0.1, -0.0, 1.0 / 3.0],
-            crb_trace: vec![Some(2.5e-7), None],
-            outcomes: vec![Outcome {
-                method: 1,
-                strategy: 0,
-                identified: vec![Real::INFINITY, Real::NAN, -1e300],
-                before_mm: stats(0.7),
-                after_mm: stats(0.1),
-                calibration_before_mm: stats(0.6),
-                calibration_after_mm: stats(0.05),
-                optional: [
-                    None,
-                    Some(stats(0.3)),
-                    None,
-                    None,
-                    None,
-                    Some(stats(-0.2)),
-                    None,
-                    None,
-                    Some(stats(0.01)),
-                    None,
-                    Some(stats(0.02)),
-                ],
-                per_point: None,
-                per_point_attitude_deg: None,
-                trace: None,
-                iterations: 12,
-                evaluations: 40,
-                termination: Termination::MaxIterations,
-                rank_deficient_expected: true,
-                seconds: 0.00123,
-                error: None,
-            }],
-        };
-        let line = encode(3, &t);
-        let (b, u) = decode(&line, Path::new("r.txt"), 1).unwrap();
-        assert_eq!(b, 3);
-        assert_eq!(encode(3, &u), line);
-        assert_eq!(u.truth[2].to_bits(), t.truth[2].to_bits());
-        assert_eq!(u.truth[1].to_bits(), (-0.0f64).to_bits());
-        assert!(u.outcomes[0].identified[1].is_nan());
-        assert!(decode("3 17 2 0.1", Path::new("r.txt"), 4)
-            .unwrap_err()
-            .to_string()
-            .contains("line 4"));
-    }
 }

@@ -459,7 +459,8 @@ pub fn run_resumed(
                 let (rb, t) = r.next()?;
                 if rb != b {
                     return Err(Error::Compute(format!(
-                        "the checkpoint holds a trial of sweep point {rb} where one of point {b}                          was expected"
+                        "the checkpoint holds a trial of sweep point {rb} where one of point {b} \
+                         was expected"
                     )));
                 }
                 collector.trial(&t, sink)?;

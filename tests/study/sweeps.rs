@@ -147,6 +147,95 @@ fn merge_refuses_missing_duplicate_and_foreign_shards() {
     }
 }
 
+/// `err` is one line of under 1 kB naming `path`, and holding each of `want`.
+fn one_line_naming(err: &str, path: &Path, want: &[&str]) {
+    let err = err.trim_end();
+    assert!(err.len() < 1024 && !err.contains('\n'), "{err:?}");
+    assert!(err.contains(&path.display().to_string()), "{err}");
+    for w in want {
+        assert!(err.contains(w), "{err}: no \"{w}\"");
+    }
+}
+
+/// Three shards of ci-guard with 6 trials: a `records.txt` with its last line removed, one
+/// digit changed or one record twice is refused by `merge`, naming the file, the line and the
+/// trial, and nothing is written; the untouched shards merge into the unsharded bytes.
+#[test]
+fn merge_refuses_missing_changed_and_duplicated_records() {
+    let dir = tmp_dir("sweeps-records");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let full = dir.join("full");
+    calbench_ok(&[
+        "run",
+        path_arg(&sc),
+        "--trials",
+        "6",
+        "--out",
+        path_arg(&full),
+    ]);
+    let shards: Vec<PathBuf> = (0..3).map(|i| dir.join(format!("s{i}"))).collect();
+    for (i, d) in shards.iter().enumerate() {
+        let share = format!("{i}/3");
+        calbench_ok(&[
+            "run",
+            path_arg(&sc),
+            "--trials",
+            "6",
+            "--shard",
+            &share,
+            "--out",
+            path_arg(d),
+        ]);
+    }
+    let records = shards[1].join("records.txt");
+    let good = read(&records);
+    let lines: Vec<&str> = good.lines().collect();
+    assert_eq!(lines.len(), 2, "{good}");
+    let merge = |out: &str| {
+        let mut args = vec!["merge"];
+        args.extend(shards.iter().map(|d| path_arg(d)));
+        let out = dir.join(out);
+        args.extend(["--out", path_arg(&out)]);
+        (calbench(&args), out)
+    };
+    // Shard 1 holds trials 2 and 3.
+    let digit = {
+        let (body, sum) = lines[1].rsplit_once(" #").unwrap();
+        let at = body.find('e').unwrap() - 1;
+        let c = body.as_bytes()[at];
+        let other = if c == b'7' { '8' } else { '7' };
+        format!(
+            "{}\n{}{other}{} #{sum}\n",
+            lines[0],
+            &body[..at],
+            &body[at + 1..]
+        )
+    };
+    for (damaged, want) in [
+        (
+            format!("{}\n", lines[0]),
+            vec!["line 2", "before trial 3", "missing"],
+        ),
+        (digit, vec!["line 2", "trial 3", "checksum"]),
+        (
+            format!("{}\n{}\n{}\n", lines[0], lines[0], lines[1]),
+            vec!["line 2", "trial 2 again", "duplicated"],
+        ),
+    ] {
+        std::fs::write(&records, &damaged).unwrap();
+        let (o, out) = merge("bad");
+        assert!(!o.status.success(), "accepted: {damaged}");
+        one_line_naming(&String::from_utf8_lossy(&o.stderr), &records, &want);
+        assert!(!out.join("summary.json").exists());
+    }
+    std::fs::write(&records, &good).unwrap();
+    let (o, out) = merge("merged");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for f in ["summary.json", "trials.csv"] {
+        assert_eq!(read(&full.join(f)), read(&out.join(f)), "{f}");
+    }
+}
+
 #[test]
 fn a_grid_runs_its_product_and_draws_heat_maps() {
     let dir = tmp_dir("sweeps-grid");
@@ -580,6 +669,7 @@ fn a_killed_run_resumes_into_the_same_bytes() {
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!out.join("summary.json").exists());
+    refused_checkpoints_stay_as_they_were(&dir, &meta);
     let other = write_small(&dir, "other", SMALL);
     for (args, named) in [
         (vec!["run", &sc, "--seed", "3", "--resume"], "seed"),
@@ -591,7 +681,24 @@ fn a_killed_run_resumes_into_the_same_bytes() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains(named), "{a:?}: {err}");
     }
-    calbench_ok(&["run", "--resume", path_arg(&out)]);
+    // A checkpoint whose writer still runs on this host is refused unless --force.
+    let mut alive = Command::new("sleep").arg("120").spawn().unwrap();
+    let text = read(&meta);
+    let pid_line = text.lines().find(|l| l.contains("\"pid\"")).unwrap();
+    let live = text.replace(pid_line, &format!("  \"pid\": {},", alive.id()));
+    std::fs::write(&meta, &live).unwrap();
+    let o = calbench(&["run", "--resume", path_arg(&out)]);
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    one_line_naming(&err, &meta, &["still running", "--force"]);
+    assert_eq!(
+        read(&meta),
+        live,
+        "a refused resume leaves the checkpoint as it was"
+    );
+    calbench_ok(&["run", "--resume", path_arg(&out), "--force"]);
+    alive.kill().unwrap();
+    alive.wait().unwrap();
     for f in ["summary.json", "trials.csv"] {
         assert_eq!(read(&full.join(f)), read(&out.join(f)), "{f}");
     }
@@ -637,4 +744,88 @@ fn a_killed_run_resumes_into_the_same_bytes() {
         "--out",
         path_arg(&dir.join("m")),
     ]);
+}
+
+/// Copies of the checkpoint `meta`'s folder, each damaged one way (records cut short, `done`
+/// raised by hand, a digit changed, a record twice, a record removed), are each refused by
+/// `run --resume` in one line of under 1 kB naming the file, and left byte for byte as they
+/// were.
+fn refused_checkpoints_stay_as_they_were(dir: &Path, meta: &Path) {
+    let from = meta.parent().unwrap();
+    let records = read(&from.join("records.txt"));
+    let json = read(meta);
+    let lines: Vec<&str> = records.lines().collect();
+    assert!(lines.len() >= 256, "{} records", lines.len());
+    let done_line = json.lines().find(|l| l.contains("\"done\"")).unwrap();
+    let bytes: usize = json
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("\"bytes\": "))
+        .unwrap()
+        .trim_end_matches(',')
+        .parse()
+        .unwrap();
+    let raised = json.replace(done_line, &done_line.replace(": ", ": 1"));
+    let joined = |l: &[&str]| l.iter().map(|l| format!("{l}\n")).collect::<String>();
+    let digit = {
+        let mut l = lines.clone();
+        let line = l[1].replacen("e-1 ", "e-2 ", 1);
+        assert_ne!(line, l[1]);
+        l[1] = &line;
+        joined(&l)
+    };
+    let twice = {
+        let mut l = lines.clone();
+        l.insert(1, lines[0]);
+        joined(&l)
+    };
+    let removed = {
+        let mut l = lines.clone();
+        l.remove(1);
+        joined(&l)
+    };
+    let cases: [(&str, String, String, &str, &[&str]); 5] = [
+        (
+            "cut",
+            records[..bytes / 2].to_string(),
+            json.clone(),
+            "records.txt",
+            &["cut short"],
+        ),
+        (
+            "raised",
+            records.clone(),
+            raised,
+            "records.txt",
+            &["missing"],
+        ),
+        (
+            "digit",
+            digit,
+            json.clone(),
+            "records.txt",
+            &["line 2", "trial 1", "checksum"],
+        ),
+        (
+            "twice",
+            twice,
+            json.clone(),
+            "records.txt",
+            &["line 2", "trial 0 again"],
+        ),
+        ("removed", removed, json.clone(), "records.txt", &[]),
+    ];
+    for (name, rec, js, file, want) in cases {
+        let cp = dir.join(format!(".{name}.checkpoint"));
+        std::fs::create_dir_all(&cp).unwrap();
+        std::fs::write(cp.join("records.txt"), &rec).unwrap();
+        std::fs::write(cp.join("checkpoint.json"), &js).unwrap();
+        let o = calbench(&["run", "--resume", path_arg(&dir.join(name))]);
+        assert!(!o.status.success(), "{name}: accepted");
+        one_line_naming(&String::from_utf8_lossy(&o.stderr), &cp.join(file), want);
+        assert!(
+            read(&cp.join("records.txt")) == rec,
+            "{name}: records.txt changed"
+        );
+        assert_eq!(read(&cp.join("checkpoint.json")), js, "{name}");
+    }
 }
