@@ -28,6 +28,7 @@ pub struct CompareArgs {
 /// do not fail the command (`check` is the guard); unreadable summaries do.
 pub fn run(args: &CompareArgs) -> Result<()> {
     let tolerance = args.tolerance.checked()?;
+    super::guard_out(&args.out, &OUTPUTS, [&args.a, &args.b])?;
     check_out_folder(&args.out, &OUTPUTS)?;
     let c = Comparison::new(Side::read(&args.a)?, Side::read(&args.b)?, tolerance);
     write(&c, &args.out)?;

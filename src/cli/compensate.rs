@@ -3,7 +3,7 @@
 //! (in the nominal robot's units, the controller's) at which the identified robot reaches the
 //! nominal pose (or the Cartesian target), with the residual and a flag.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
@@ -55,6 +55,13 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
         )
         .into());
     }
+    let robots = [Path::new(&args.robot), Path::new(&args.identified)];
+    let programs = [args.joints.as_deref(), args.targets.as_deref()];
+    super::guard_out(
+        &args.out,
+        &[],
+        robots.into_iter().chain(programs.into_iter().flatten()),
+    )?;
     check_out_file(&args.out)?;
     let nominal = args.chain.load(&args.robot)?;
     let ident = if calbench::robot::urdf::is_urdf(&args.identified) {

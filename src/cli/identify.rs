@@ -174,6 +174,7 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 /// § 5.3) goes to `identify_kind::run` (the choice is `main`'s).
 pub fn run(args: &IdentifyArgs) -> Result<()> {
     let out = &args.out;
+    super::guard_out(out, &OUTPUTS, super::identify_inputs(args))?;
     check_out_folder(out, &OUTPUTS)?;
     let nominal = args.chain.load(&args.robot)?;
     let mut spec = method_with_options(args.method.name, &args.options)?;

@@ -67,6 +67,7 @@ fn refusal(args: &IdentifyArgs, targets: bool, solver: bool) -> Option<(&'static
 /// the validation table (with `--validate`, a tracker's file) and a summary line.
 pub fn run(args: &IdentifyArgs) -> Result<()> {
     let out = &args.out;
+    super::guard_out(out, &OUTPUTS, super::identify_inputs(args))?;
     check_out_folder(out, &OUTPUTS)?;
     let nominal = args.chain.load(&args.robot)?;
     let file = read_kind_file(&args.data, &nominal)?;

@@ -79,6 +79,7 @@ fn pose_count(text: &str) -> std::result::Result<usize, String> {
 /// Chooses the poses, writes the output folder and prints the scores (and the curve).
 pub fn run(args: &PosesArgs) -> Result<()> {
     let out = &args.out;
+    super::guard_out(out, &OUTPUTS, [&args.scenario])?;
     check_out_folder(out, &OUTPUTS)?;
     let sc = Scenario::load(&args.scenario)?;
     let (optimiser, full) = selection(args.strategy)

@@ -90,6 +90,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }
     let shard = args.shard;
+    let out = out_folder(args, &sc.name, &OUTPUTS)?;
+    writable_folder(&out, &OUTPUTS)?;
     eprintln!(
         "running {}: {} trials{}{}",
         sc.name,
@@ -104,8 +106,6 @@ pub fn run(args: &RunArgs) -> Result<()> {
             s.index, s.count
         ))
     );
-    let out = out_folder(args, &sc.name);
-    writable_folder(&out, &OUTPUTS)?;
     let opts = RunOptions {
         threads: args.threads,
         out: Some(out),
@@ -144,6 +144,7 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
         }
         None
     };
+    super::guard_out(dir, &OUTPUTS, &args.scenario)?;
     writable_folder(dir, &OUTPUTS)?;
     let checked = calbench::report::Resumable::open(dir, given.as_ref(), args.force)?;
     eprintln!("resuming the run into {}", dir.display());
@@ -175,11 +176,15 @@ fn finished(r: &calbench::study::RunResult) -> Result<()> {
     Ok(())
 }
 
-/// `--out`, or `results/<name>/` under the current folder.
-fn out_folder(args: &RunArgs, name: &str) -> PathBuf {
-    args.out
+/// `--out`, or `results/<name>/` under the current folder, where a run writing the files
+/// `outputs` destroys nothing ([`super::guard_out`]).
+fn out_folder(args: &RunArgs, name: &str, outputs: &[&str]) -> Result<PathBuf> {
+    let out = args
+        .out
         .clone()
-        .unwrap_or_else(|| Path::new("results").join(name))
+        .unwrap_or_else(|| Path::new("results").join(name));
+    super::guard_out(&out, outputs, &args.scenario)?;
+    Ok(out)
 }
 
 /// `--trials` (from `min_trials` to [`MAX_TRIALS`]), `--seed` and `--threads` of a study
@@ -247,9 +252,9 @@ fn registration_study(mut sc: RegistrationScenario, args: &RunArgs) -> Result<()
 /// Announces a study that runs whole (`what` it runs) and checks that its output folder can
 /// be written: the folder and the start time.
 fn start_whole(args: &RunArgs, name: &str, what: &str) -> Result<(PathBuf, std::time::Instant)> {
-    eprintln!("running {name}: {what}");
-    let out = out_folder(args, name);
+    let out = out_folder(args, name, &STUDY_OUTPUTS)?;
     writable_folder(&out, &STUDY_OUTPUTS)?;
+    eprintln!("running {name}: {what}");
     Ok((out, std::time::Instant::now()))
 }
 

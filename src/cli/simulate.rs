@@ -39,6 +39,7 @@ pub struct SimulateArgs {
 /// Simulates trial `--trial` of the scenario and writes its measurements and truth.
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let (out, trial) = (&args.out, args.trial);
+    super::guard_out(out, &OUTPUTS, [&args.scenario])?;
     check_out_folder(out, &OUTPUTS)?;
     let table = super::scenario_table(&args.scenario)?;
     if InstrumentsScenario::is_one(&table) {

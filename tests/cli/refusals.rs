@@ -393,3 +393,106 @@ fn check_on_a_summary_without_results_says_what_is_missing() {
         assert!(e.contains(entry.as_str()), "{entry} missing from: {e}");
     }
 }
+
+/// `--out` that is the root folder, the home folder, an input file or an input folder of the
+/// same command, or a folder where the command would overwrite an input with an output of the
+/// same name, is refused by every command that writes, before any work, and nothing is
+/// written: inputs keep their bytes, and neither `/` nor the home folder gain a file.
+#[test]
+fn outputs_never_land_where_they_destroy() {
+    let dir = tmp("destroy");
+    let home = dir.join("home");
+    std::fs::create_dir_all(&home).unwrap();
+    let root = crate::common::root();
+    let sc = dir.join("ci-guard.toml");
+    std::fs::copy(root.join("scenarios/ci-guard.toml"), &sc).unwrap();
+    let raw = dir.join("raw.csv");
+    std::fs::write(&raw, "a,b\n1,2\n").unwrap();
+    let shard = dir.join("shard0");
+    std::fs::create_dir_all(&shard).unwrap();
+    std::fs::write(shard.join("shard.json"), "{}\n").unwrap();
+    let inside = dir.join("inside");
+    std::fs::create_dir_all(&inside).unwrap();
+    let residuals = inside.join("residuals.csv");
+    std::fs::write(&residuals, "q1\n").unwrap();
+    let (s, r, h) = (path(&sc), path(&raw), path(&home));
+    let sh = path(&shard);
+    let home_dot = format!("{h}/.");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["run", s, "--out", "/"], "root folder"),
+        (vec!["run", s, "--out", h], "home folder"),
+        (vec!["run", s, "--out", &home_dot], "home folder"),
+        (vec!["run", s, "--out", s], "input"),
+        (vec!["run", "--resume", "/"], "root folder"),
+        (vec!["merge", sh, "--out", sh], "input"),
+        (vec!["import", r, "--mapping", s, "--out", r], "input"),
+        (vec!["simulate", s, "--out", s], "input"),
+        (vec!["simulate", s, "--out", h], "home folder"),
+        (
+            vec!["poses", s, "--strategy", "detmax", "--out", "/"],
+            "root folder",
+        ),
+        (vec!["compare", sh, sh, "--out", sh], "input"),
+        (
+            vec![
+                "identify", "--robot", "irb2600", "--data", r, "--method", "ls", "--out", r,
+            ],
+            "input",
+        ),
+        (
+            vec![
+                "identify",
+                "--robot",
+                "irb2600",
+                "--data",
+                path(&residuals),
+                "--method",
+                "ls",
+                "--out",
+                path(&inside),
+            ],
+            "residuals.csv",
+        ),
+        (
+            vec![
+                "compensate",
+                "--robot",
+                "irb2600",
+                "--identified",
+                "irb2600",
+                "--joints",
+                r,
+                "--out",
+                r,
+            ],
+            "input",
+        ),
+    ];
+    let before: Vec<String> = [&sc, &raw, &shard.join("shard.json"), &residuals]
+        .iter()
+        .map(|p| std::fs::read_to_string(p).unwrap())
+        .collect();
+    let root_had_summary = Path::new("/summary.json").exists();
+    for (args, why) in &cases {
+        let o = crate::common::bin()
+            .args(args)
+            .env("HOME", &home)
+            .output()
+            .unwrap();
+        let err = refused(&o, &["--out", why]);
+        assert!(err.trim_end().lines().count() == 1, "{args:?}: {err}");
+    }
+    let after: Vec<String> = [&sc, &raw, &shard.join("shard.json"), &residuals]
+        .iter()
+        .map(|p| std::fs::read_to_string(p).unwrap())
+        .collect();
+    assert_eq!(before, after, "an input changed");
+    assert_eq!(
+        std::fs::read_dir(&home).unwrap().count(),
+        0,
+        "the home folder gained a file"
+    );
+    assert_eq!(std::fs::read_dir(&shard).unwrap().count(), 1);
+    assert_eq!(std::fs::read_dir(&inside).unwrap().count(), 1);
+    assert_eq!(Path::new("/summary.json").exists(), root_had_summary);
+}
