@@ -2,7 +2,8 @@
 //! eight method × strategy pairs, rapier sag, two threads), outputs written to a scratch
 //! folder: the speed table's wall-time line (target ≤ 4 s).
 
-use calbench::report::run_study;
+use calbench::study::reporter::Silent;
+use calbench::study::run::run_study;
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 use criterion::{criterion_group, criterion_main, Criterion};
@@ -18,7 +19,13 @@ fn bench(c: &mut Criterion) {
     let mut g = c.benchmark_group("study");
     g.sample_size(10);
     g.bench_function("default-1000-trials-2-threads", |b| {
-        b.iter(|| run_study(Scenario::default_study().expect("default scenario"), &opts))
+        b.iter(|| {
+            run_study(
+                Scenario::default_study().expect("default scenario"),
+                &opts,
+                &Silent,
+            )
+        })
     });
     g.finish();
     std::fs::remove_dir_all(&out).ok();

@@ -24,9 +24,9 @@ use calbench::identify::MethodSpec;
 use calbench::measurement::csv::measurements_from_arrays;
 use calbench::measurement::{Measure, Measurements};
 use calbench::numeric::{Frame, Real};
-use calbench::report::InMemoryRun;
 use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{builtin, Param, Robot};
+use calbench::study::run::InMemoryRun;
 use calbench::study::scenario::Scenario;
 use calbench::study::{trial, RunOptions, Study};
 

@@ -8,9 +8,10 @@ use anyhow::Result;
 
 use calbench::error::Error;
 use calbench::report::registration_study::{report_md, write_all};
-use calbench::report::run_study;
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::registration_study::RegistrationScenario;
+use calbench::study::reporter::Terminal;
+use calbench::study::run::{resume_study, run_study, Resumable};
 use calbench::study::scenario::{Scenario, MAX_TRIALS};
 use calbench::study::{RunOptions, Shard};
 
@@ -112,7 +113,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
         progress: true,
         shard,
     };
-    let r = run_study(sc, &opts)?;
+    let r = run_study(sc, &opts, &Terminal)?;
     finished(&r)
 }
 
@@ -146,9 +147,9 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     };
     super::guard_out(dir, &OUTPUTS, &args.scenario)?;
     writable_folder(dir, &OUTPUTS)?;
-    let checked = calbench::report::Resumable::open(dir, given.as_ref(), args.force)?;
+    let checked = Resumable::open(dir, given.as_ref(), args.force)?;
     eprintln!("resuming the run into {}", dir.display());
-    let r = calbench::report::resume_study(checked, args.threads)?;
+    let r = resume_study(checked, args.threads, &Terminal)?;
     finished(&r)
 }
 

@@ -2,7 +2,9 @@
 //! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
 //! `calbench identify`; [`html`] the self-contained pages `report.html` and `compare.html`.
 //!
-//! The report only reads results that are already computed. [`plots`] draws the
+//! The report only reads results that are already computed: it runs no study (running,
+//! resuming, sharding and merging a study are [`crate::study::run`] and
+//! [`crate::study::shard`], which call these writers). [`plots`] draws the
 //! figures of the source papers — η per parameter per method (Guo 2024, fig. 8), validation
 //! error per point before and after calibration (Li 2018, fig. 3; Ban, fig. 7), validation
 //! RMS over trials per method, objective or fitness per iteration (Qiao 2021; Guo 2024,
@@ -14,7 +16,6 @@
 //! libraries, and the same data gives the same bytes.
 
 pub mod check;
-pub mod checkpoint;
 pub mod exports;
 pub mod html;
 pub mod identified;
@@ -22,7 +23,6 @@ pub mod instruments;
 pub mod markdown;
 pub mod plots;
 pub mod practice;
-pub mod records;
 pub mod registration_study;
 pub mod run;
 
@@ -32,121 +32,6 @@ pub use plots::{
     PLOT_SIZE,
 };
 pub use run::{columns, entry_table, summary, write_into, Column, TrialsCsv};
-pub mod shard;
-
-/// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
-/// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
-/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]). A checkpoint
-/// beside the output folder lets `calbench run --resume` continue the run if it is killed
-/// ([`checkpoint`]).
-pub fn run_study(
-    scenario: crate::study::scenario::Scenario,
-    opts: &crate::study::RunOptions,
-) -> crate::Result<crate::study::RunResult> {
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| std::path::Path::new("results").join(&scenario.name));
-    let cp = checkpoint::Checkpoint::start(&scenario, opts.shard, &out)?;
-    study_into(scenario, opts, &out, cp, None)
-}
-
-/// The checkpoint of a killed run, checked and ready to continue ([`resume_study`]).
-pub struct Resumable {
-    out: std::path::PathBuf,
-    checkpoint: checkpoint::Checkpoint,
-    scenario: crate::study::scenario::Scenario,
-    shard: Option<crate::study::Shard>,
-    records: checkpoint::Records,
-}
-
-impl Resumable {
-    /// Opens the checkpoint of the run into `out` that was killed (`calbench run --resume
-    /// DIR`, [`checkpoint`]): it must be of this binary's version and, when `given`, of that
-    /// scenario, its writer no longer running on this host (unless `force`), and every
-    /// record it counts intact. A refused checkpoint is left as it was.
-    pub fn open(
-        out: &std::path::Path,
-        given: Option<&crate::study::scenario::Scenario>,
-        force: bool,
-    ) -> crate::Result<Resumable> {
-        let (checkpoint, scenario, shard, records) =
-            checkpoint::Checkpoint::resume(out, given, force)?;
-        Ok(Resumable {
-            out: out.to_path_buf(),
-            checkpoint,
-            scenario,
-            shard,
-            records,
-        })
-    }
-}
-
-/// Continues a killed run from its checked checkpoint ([`Resumable::open`]) with `threads`
-/// worker threads: writes the same files as an uninterrupted run.
-pub fn resume_study(
-    run: Resumable,
-    threads: Option<usize>,
-) -> crate::Result<crate::study::RunResult> {
-    let Resumable {
-        out,
-        checkpoint,
-        scenario,
-        shard,
-        mut records,
-    } = run;
-    let opts = crate::study::RunOptions {
-        threads,
-        out: Some(out.clone()),
-        progress: true,
-        shard,
-    };
-    study_into(scenario, &opts, &out, checkpoint, Some(&mut records))
-}
-
-/// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
-/// all; the checkpoint is removed once the run ends, with its output or with an error.
-fn study_into(
-    scenario: crate::study::scenario::Scenario,
-    opts: &crate::study::RunOptions,
-    out: &std::path::Path,
-    mut cp: checkpoint::Checkpoint,
-    replay: Option<&mut dyn crate::study::Replay>,
-) -> crate::Result<crate::study::RunResult> {
-    let mut result = None;
-    let done = atomically(out, |dir| {
-        let mut csv = run::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
-        let r = match opts.shard {
-            None => {
-                let r = {
-                    let mut both = shard::Both(&mut csv, &mut cp);
-                    crate::study::run_resumed(scenario, opts, &mut both, replay)?
-                };
-                csv.finish()?;
-                write_run(&r, dir)?;
-                r
-            }
-            Some(_) => {
-                let mut records = shard::Records::create(dir, scenario.seed)?;
-                let r = {
-                    let mut sinks = shard::Both(&mut csv, &mut records);
-                    let mut all = shard::Both(&mut sinks, &mut cp);
-                    crate::study::run_resumed(scenario, opts, &mut all, replay)?
-                };
-                csv.finish()?;
-                records.finish(&r)?;
-                r
-            }
-        };
-        result = Some(r);
-        Ok(())
-    });
-    // A run that ends, with its output or with an error, leaves no checkpoint: only a run
-    // killed from outside does.
-    cp.finish()?;
-    done?;
-    result.ok_or_else(|| crate::Error::Compute("the run produced no result".into()))
-}
 
 /// Writes every file of a complete run but `trials.csv` into the folder `dir`: those of
 /// [`run::write_into`], then `report.html` ([`html::run`]) with the plots inlined.
@@ -193,51 +78,6 @@ pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
         .filter(|p| !p.as_os_str().is_empty())
         .unwrap_or(std::path::Path::new("."));
     (parent.to_path_buf(), name)
-}
-
-/// A complete run held in memory (the Python module's `run`): its result and the bytes of
-/// its `trials.csv`, written as a folder on demand with the same files and bytes as
-/// [`run_study`] writes.
-pub struct InMemoryRun {
-    /// The run's results.
-    pub result: crate::study::RunResult,
-    /// `trials.csv`.
-    pub trials_csv: Vec<u8>,
-}
-
-impl InMemoryRun {
-    /// Runs `scenario` (whole: `opts.shard` and `opts.out` are not used) and keeps its
-    /// results.
-    pub fn run(
-        scenario: crate::study::scenario::Scenario,
-        opts: &crate::study::RunOptions,
-    ) -> crate::Result<InMemoryRun> {
-        let mut csv = run::TrialsCsv::in_memory(scenario.sweep.as_ref());
-        let opts = crate::study::RunOptions {
-            shard: None,
-            ..opts.clone()
-        };
-        let result = crate::study::run(scenario, &opts, &mut csv)?;
-        Ok(InMemoryRun {
-            result,
-            trials_csv: csv.into_bytes(),
-        })
-    }
-
-    /// `summary.json`'s text.
-    pub fn summary_json(&self) -> crate::Result<String> {
-        run::json_text(&run::summary(&self.result))
-    }
-
-    /// Writes the run's folder `out` as a whole ([`atomically`]), the files of
-    /// `calbench run --out`: `trials.csv`, then [`write_run`], as [`run_study`] does.
-    pub fn write(&self, out: &std::path::Path) -> crate::Result<()> {
-        atomically(out, |dir| {
-            let path = dir.join("trials.csv");
-            std::fs::write(&path, &self.trials_csv).map_err(|e| crate::Error::io(&path, e))?;
-            write_run(&self.result, dir)
-        })
-    }
 }
 
 /// The first path that keeps `out` from being written as a folder holding the files `names`:

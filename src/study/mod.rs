@@ -1,13 +1,18 @@
 //! The Monte-Carlo harness (docs/formats.md `run`): a scenario's trials in parallel with rayon,
-//! each from its own seed, aggregated per method and pose strategy. It returns values; the
-//! files (`summary.json`, `trials.csv`, `report.md`, plots) are written by
-//! [`crate::report::run_study`].
+//! each from its own seed, aggregated per method and pose strategy, and the orchestration of a
+//! run: its output folder written whole through the report's writers, the checkpoint that lets
+//! a killed run resume, the shards and their merge.
 //!
 //! - [`plan`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
 //!   sets);
 //! - [`scenario`]: the scenario file, parsed and checked (sweeps included);
 //! - [`trial`]: one trial (true robot, measurements, every method's calibration, validation);
-//! - [`stats`]: the aggregation into [`Entry`] values.
+//! - [`stats`]: the aggregation into [`Entry`] values;
+//! - [`run`]: running a study (trials in chunks, in order, into sinks), resuming it from its
+//!   [`checkpoint`], a study held in memory; [`shard`]: a share of a run and the merge of
+//!   all shards; [`records`]: the checked record lines both keep;
+//! - [`reporter`]: where progress and warnings go (the caller supplies it; nothing here
+//!   prints).
 //!
 //! Determinism: trial i draws everything from `rng::trial_seed(seed, i)` and results are
 //! consumed in trial order, so the output is the same whatever the thread count (timing
@@ -19,21 +24,23 @@
 //! accumulators' running sums; the per-trial numbers of the exact medians go to a scratch
 //! file ([`spill`]), so memory does not grow with the trials.
 
+pub mod checkpoint;
 pub mod instruments;
 pub mod plan;
+pub mod records;
 pub mod registration_study;
+pub mod reporter;
+pub mod run;
 pub mod scenario;
+pub mod shard;
 pub mod spill;
 pub mod stats;
 pub mod trial;
 pub mod whole;
 
 use std::collections::BTreeMap;
-use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use indicatif::{ProgressBar, ProgressStyle};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
@@ -361,126 +368,6 @@ impl Default for Collector {
 /// Converts a TOML value to JSON (sweep values in `summary.json`).
 pub fn toml_to_json(v: &toml::Value) -> serde_json::Value {
     serde_json::to_value(v).unwrap_or(serde_json::Value::Null)
-}
-
-/// Runs trials `range` of a prepared study on `pool`, a chunk at a time, handing each
-/// chunk's results in order to `each`.
-pub fn run_trials(
-    study: &Study,
-    range: std::ops::Range<usize>,
-    pool: &rayon::ThreadPool,
-    bar: &ProgressBar,
-    each: &mut dyn FnMut(TrialResult) -> Result<()>,
-) -> Result<()> {
-    let mut start = range.start;
-    while start < range.end {
-        let end = (start + CHUNK).min(range.end);
-        let chunk: Vec<TrialResult> = pool.install(|| {
-            (start..end)
-                .into_par_iter()
-                .map(|i| {
-                    let r = run_trial(study, i);
-                    bar.inc(1);
-                    r
-                })
-                .collect::<Result<_>>()
-        })?;
-        for t in chunk {
-            each(t)?;
-        }
-        start = end;
-    }
-    Ok(())
-}
-
-/// Runs `scenario` (every sweep point, every trial; with `opts.shard` only its share) and
-/// returns the aggregated results; every trial goes to `sink` in order as it finishes.
-pub fn run(scenario: Scenario, opts: &RunOptions, sink: &mut dyn TrialSink) -> Result<RunResult> {
-    run_resumed(scenario, opts, sink, None)
-}
-
-/// [`run`] continuing a killed run: the first `replay.done()` trials of the share come from
-/// `replay` instead of being run again (and go to `sink` like the others).
-pub fn run_resumed(
-    scenario: Scenario,
-    opts: &RunOptions,
-    sink: &mut dyn TrialSink,
-    mut replay: Option<&mut dyn Replay>,
-) -> Result<RunResult> {
-    let t0 = std::time::Instant::now();
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
-    let plans = scenario.sweep_plans()?;
-    let trials = scenario.trials as u64;
-    let total = plans.len() as u64 * trials;
-    let (first, last) = opts.shard.map_or((0, total), |s| s.range(total));
-    let bar = if opts.progress && std::io::stderr().is_terminal() {
-        let b = ProgressBar::new(last - first);
-        if let Ok(style) = ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:40} {pos}/{len} trials ({per_sec}, {eta} left) {msg}",
-        ) {
-            b.set_style(style);
-        }
-        b
-    } else {
-        ProgressBar::hidden()
-    };
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = opts.threads {
-        builder = builder.num_threads(t);
-    }
-    let pool = builder
-        .build()
-        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))?;
-    let mut collector = Collector::new();
-    for (b, (point, plan)) in plans.into_iter().enumerate() {
-        let (lo, hi) = (b as u64 * trials, (b as u64 + 1) * trials);
-        let (from, to) = (first.max(lo), last.min(hi));
-        if from >= to {
-            continue;
-        }
-        if let (Some(p), Some(sw)) = (&point, &scenario.sweep) {
-            let shown: Vec<String> = sw
-                .axes
-                .iter()
-                .zip(p)
-                .map(|(a, v)| format!("{} = {v}", a.key))
-                .collect();
-            bar.set_message(shown.join(", "));
-        }
-        let study = pool.install(|| Study::new(plan))?;
-        collector.begin(BlockInfo::of(&study, b, point), None);
-        let mut range = (from - lo) as usize..(to - lo) as usize;
-        if let Some(r) = replay.as_mut() {
-            let done = (first + r.done()).clamp(from, to);
-            for _ in from..done {
-                let (rb, t) = r.next()?;
-                if rb != b {
-                    return Err(Error::Compute(format!(
-                        "the checkpoint holds a trial of sweep point {rb} where one of point {b} \
-                         was expected"
-                    )));
-                }
-                collector.trial(&t, sink)?;
-                bar.inc(1);
-            }
-            range.start = (done - lo) as usize;
-        }
-        run_trials(&study, range, &pool, &bar, &mut |t| {
-            collector.trial(&t, sink)
-        })?;
-    }
-    bar.finish_and_clear();
-    let blocks = collector.finish(scenario.sweep.as_ref())?;
-    Ok(RunResult {
-        scenario,
-        blocks,
-        out,
-        seconds: t0.elapsed().as_secs_f64(),
-        shard: opts.shard,
-    })
 }
 
 #[cfg(test)]

@@ -7,8 +7,10 @@ use std::path::Path;
 use calbench::poses::separate;
 use calbench::robot::builtin;
 use calbench::robot::{parse_robot_file, robot_to_toml, Param};
+use calbench::study::reporter::Silent;
+use calbench::study::run::run;
 use calbench::study::scenario::Scenario;
-use calbench::study::{run, RunOptions, Study};
+use calbench::study::{RunOptions, Study};
 
 use crate::common::tmp_dir;
 
@@ -106,7 +108,7 @@ fn lm_on_the_full_model_reports_eta_for_every_parameter_noise_free() {
         progress: false,
         shard: None,
     };
-    let res = run(s, &opts, &mut ()).unwrap();
+    let res = run(s, &opts, &mut (), &Silent).unwrap();
     let r = serde_json::to_value(&res.blocks[0].entries[0]).unwrap();
     assert_eq!(r["failures"], 0, "{r}");
     let eta = r["eta"].as_object().unwrap();

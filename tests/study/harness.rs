@@ -42,7 +42,7 @@ fn tiny() -> Scenario {
 }
 
 fn run_to(s: Scenario, out: &Path, threads: usize) {
-    calbench::report::run_study(
+    calbench::study::run::run_study(
         s,
         &RunOptions {
             threads: Some(threads),
@@ -50,6 +50,7 @@ fn run_to(s: Scenario, out: &Path, threads: usize) {
             progress: false,
             shard: None,
         },
+        &calbench::study::reporter::Silent,
     )
     .unwrap();
 }

@@ -6,7 +6,7 @@
 //! of the FNV-1a 64-bit hash of the run's seed (8 bytes, little-endian) and the text before
 //! ` #`. Each step of FNV-1a is a bijection of the hash, so any change of one byte of the line
 //! changes the sum; the seed makes a record of another run fail it too. A reader
-//! ([`Verifier`]) checks every line's sum and that the lines hold the run's trials in order,
+//! (`Verifier`) checks every line's sum and that the lines hold the run's trials in order,
 //! each once: a changed, missing, duplicated or reordered record is refused, naming the file,
 //! the line and the trial.
 

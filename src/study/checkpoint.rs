@@ -13,7 +13,7 @@
 //! format, version and scenario, that its writer is no longer running, and every record of
 //! the prefix (checksum, and the share's trials in order, each once). A refusal leaves the
 //! checkpoint as it was. Then it cuts `records.txt` back to that prefix, replays it through
-//! the same aggregation as a live run ([`crate::study::run_resumed`]) and runs the rest; the
+//! the same aggregation as a live run ([`super::run::run_resumed`]) and runs the rest; the
 //! folder is removed when the run ends, with its output or with an error (only a run killed
 //! from outside leaves one).
 
@@ -23,6 +23,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::records::{encode, Verifier};
+use super::reporter::Reporter;
 use crate::error::{Error, Result};
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
@@ -54,7 +55,7 @@ struct Meta {
 
 /// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it.
 pub fn folder(out: &Path) -> PathBuf {
-    let (parent, name) = super::parent_and_name(out);
+    let (parent, name) = crate::report::parent_and_name(out);
     parent.join(format!(".{name}.checkpoint"))
 }
 
@@ -80,17 +81,22 @@ fn write_meta(dir: &Path, meta: &Meta) -> Result<()> {
 
 impl Checkpoint {
     /// Starts the checkpoint of a new run of `scenario` into `out` (replacing the checkpoint
-    /// of an earlier run into the same folder, with a warning).
-    pub fn start(scenario: &Scenario, shard: Option<Shard>, out: &Path) -> Result<Checkpoint> {
+    /// of an earlier run into the same folder, with a warning to `reporter`).
+    pub fn start(
+        scenario: &Scenario,
+        shard: Option<Shard>,
+        out: &Path,
+        reporter: &dyn Reporter,
+    ) -> Result<Checkpoint> {
         let dir = folder(out);
         if dir.exists() {
-            eprintln!(
-                "warning: {} held the checkpoint of an unfinished run into {}; starting anew \
+            reporter.warning(&format!(
+                "{} held the checkpoint of an unfinished run into {}; starting anew \
                  (`calbench run --resume {}` would have continued it)",
                 dir.display(),
                 out.display(),
                 out.display()
-            );
+            ));
             std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         }
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
@@ -125,7 +131,7 @@ impl Checkpoint {
     /// Opens the checkpoint of the killed run into `out`: checks it against this binary and,
     /// when given, the scenario the user names (its name, seed, trials and settings; an
     /// error names what differs), that the process that wrote it is not running on this
-    /// host (unless `force`) and every record it counts ([`Verifier`]), all before changing
+    /// host (unless `force`) and every record it counts (its `Verifier`), all before changing
     /// anything; then cuts `records.txt` back to its complete prefix and returns the
     /// checkpoint, the scenario as run, its share and the replay of its trials.
     pub fn resume(
@@ -223,7 +229,7 @@ impl Checkpoint {
         )?;
         // Checked: from here on the checkpoint is the resumed run's.
         // The temporary output folder of the killed process.
-        let (parent, name) = super::parent_and_name(out);
+        let (parent, name) = crate::report::parent_and_name(out);
         let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{}", meta.pid)));
         let file = std::fs::OpenOptions::new()
             .read(true)

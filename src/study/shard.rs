@@ -14,9 +14,8 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::records::{encode, Verifier};
-use super::run::TrialsCsv;
-use super::write_run;
 use crate::error::{Error, Result};
+use crate::report::{write_run, TrialsCsv};
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
@@ -289,7 +288,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
     }
     let seconds = metas.iter().map(|(_, m)| m.seconds).sum();
     let mut result = None;
-    super::atomically(out, |dir| {
+    crate::report::atomically(out, |dir| {
         let mut csv = TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
         let mut collector = Collector::new();
         let mut current: Option<usize> = None;

@@ -1,0 +1,315 @@
+//! Running a study (docs/formats.md `run`, `run --resume`): its trials in chunks on rayon,
+//! handed in order to the aggregation and to sinks; its output folder written as a whole
+//! through the report's writers ([`crate::report::write_run`], [`crate::report::TrialsCsv`]);
+//! the checkpoint beside it that lets a killed run continue ([`super::checkpoint`]); a share
+//! of it ([`super::shard`]); and a run held in memory ([`InMemoryRun`]). Progress and
+//! warnings go to the [`Reporter`] the caller supplies.
+
+use std::path::{Path, PathBuf};
+
+use rayon::prelude::*;
+
+use super::checkpoint::{self, Checkpoint};
+use super::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
+use super::scenario::Scenario;
+use super::shard::{self, Both};
+use super::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
+use super::{TrialResult, TrialSink, CHUNK};
+use crate::error::{Error, Result};
+use crate::report::{atomically, run as files, write_run};
+
+/// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
+/// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
+/// plots; with `opts.shard`, the shard's partial result instead ([`shard`]). A checkpoint
+/// beside the output folder lets `calbench run --resume` continue the run if it is killed
+/// ([`checkpoint`]). Progress and warnings go to `reporter`.
+pub fn run_study(
+    scenario: Scenario,
+    opts: &RunOptions,
+    reporter: &dyn Reporter,
+) -> Result<RunResult> {
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    let cp = Checkpoint::start(&scenario, opts.shard, &out, reporter)?;
+    study_into(scenario, opts, &out, cp, None, reporter)
+}
+
+/// The checkpoint of a killed run, checked and ready to continue ([`resume_study`]).
+pub struct Resumable {
+    out: PathBuf,
+    checkpoint: Checkpoint,
+    scenario: Scenario,
+    shard: Option<Shard>,
+    records: checkpoint::Records,
+}
+
+impl Resumable {
+    /// Opens the checkpoint of the run into `out` that was killed (`calbench run --resume
+    /// DIR`, [`checkpoint`]): it must be of this binary's version and, when `given`, of that
+    /// scenario, its writer no longer running on this host (unless `force`), and every
+    /// record it counts intact. A refused checkpoint is left as it was.
+    pub fn open(out: &Path, given: Option<&Scenario>, force: bool) -> Result<Resumable> {
+        let (checkpoint, scenario, shard, records) = Checkpoint::resume(out, given, force)?;
+        Ok(Resumable {
+            out: out.to_path_buf(),
+            checkpoint,
+            scenario,
+            shard,
+            records,
+        })
+    }
+}
+
+/// Continues a killed run from its checked checkpoint ([`Resumable::open`]) with `threads`
+/// worker threads: writes the same files as an uninterrupted run.
+pub fn resume_study(
+    run: Resumable,
+    threads: Option<usize>,
+    reporter: &dyn Reporter,
+) -> Result<RunResult> {
+    let Resumable {
+        out,
+        checkpoint,
+        scenario,
+        shard,
+        mut records,
+    } = run;
+    let opts = RunOptions {
+        threads,
+        out: Some(out.clone()),
+        progress: true,
+        shard,
+    };
+    study_into(
+        scenario,
+        &opts,
+        &out,
+        checkpoint,
+        Some(&mut records),
+        reporter,
+    )
+}
+
+/// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
+/// all; the checkpoint is removed once the run ends, with its output or with an error.
+fn study_into(
+    scenario: Scenario,
+    opts: &RunOptions,
+    out: &Path,
+    mut cp: Checkpoint,
+    replay: Option<&mut dyn Replay>,
+    reporter: &dyn Reporter,
+) -> Result<RunResult> {
+    let mut result = None;
+    let done = atomically(out, |dir| {
+        let mut csv = files::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
+        let r = match opts.shard {
+            None => {
+                let r = {
+                    let mut both = Both(&mut csv, &mut cp);
+                    run_resumed(scenario, opts, &mut both, replay, reporter)?
+                };
+                csv.finish()?;
+                write_run(&r, dir)?;
+                r
+            }
+            Some(_) => {
+                let mut records = shard::Records::create(dir, scenario.seed)?;
+                let r = {
+                    let mut sinks = Both(&mut csv, &mut records);
+                    let mut all = Both(&mut sinks, &mut cp);
+                    run_resumed(scenario, opts, &mut all, replay, reporter)?
+                };
+                csv.finish()?;
+                records.finish(&r)?;
+                r
+            }
+        };
+        result = Some(r);
+        Ok(())
+    });
+    // A run that ends, with its output or with an error, leaves no checkpoint: only a run
+    // killed from outside does.
+    cp.finish()?;
+    done?;
+    result.ok_or_else(|| Error::Compute("the run produced no result".into()))
+}
+
+/// A complete run held in memory (the Python module's `run`): its result and the bytes of
+/// its `trials.csv`, written as a folder on demand with the same files and bytes as
+/// [`run_study`] writes.
+pub struct InMemoryRun {
+    /// The run's results.
+    pub result: RunResult,
+    /// `trials.csv`.
+    pub trials_csv: Vec<u8>,
+}
+
+impl InMemoryRun {
+    /// Runs `scenario` (whole: `opts.shard` and `opts.out` are not used) and keeps its
+    /// results; with `opts.progress`, progress goes to the [`Terminal`] (as `calbench run`
+    /// shows it), otherwise nowhere. [`InMemoryRun::run_with`] takes any reporter.
+    pub fn run(scenario: Scenario, opts: &RunOptions) -> Result<InMemoryRun> {
+        if opts.progress {
+            InMemoryRun::run_with(scenario, opts, &Terminal)
+        } else {
+            InMemoryRun::run_with(scenario, opts, &Silent)
+        }
+    }
+
+    /// [`InMemoryRun::run`] with progress and warnings going to `reporter`.
+    pub fn run_with(
+        scenario: Scenario,
+        opts: &RunOptions,
+        reporter: &dyn Reporter,
+    ) -> Result<InMemoryRun> {
+        let mut csv = files::TrialsCsv::in_memory(scenario.sweep.as_ref());
+        let opts = RunOptions {
+            shard: None,
+            ..opts.clone()
+        };
+        let result = run(scenario, &opts, &mut csv, reporter)?;
+        Ok(InMemoryRun {
+            result,
+            trials_csv: csv.into_bytes(),
+        })
+    }
+
+    /// `summary.json`'s text.
+    pub fn summary_json(&self) -> Result<String> {
+        files::json_text(&files::summary(&self.result))
+    }
+
+    /// Writes the run's folder `out` as a whole ([`atomically`]), the files of
+    /// `calbench run --out`: `trials.csv`, then [`write_run`], as [`run_study`] does.
+    pub fn write(&self, out: &Path) -> Result<()> {
+        atomically(out, |dir| {
+            let path = dir.join("trials.csv");
+            std::fs::write(&path, &self.trials_csv).map_err(|e| Error::io(&path, e))?;
+            write_run(&self.result, dir)
+        })
+    }
+}
+
+/// Runs trials `range` of a prepared study on `pool`, a chunk at a time, handing each
+/// chunk's results in order to `each`.
+pub fn run_trials(
+    study: &Study,
+    range: std::ops::Range<usize>,
+    pool: &rayon::ThreadPool,
+    bar: &dyn Progress,
+    each: &mut dyn FnMut(TrialResult) -> Result<()>,
+) -> Result<()> {
+    let mut start = range.start;
+    while start < range.end {
+        let end = (start + CHUNK).min(range.end);
+        let chunk: Vec<TrialResult> = pool.install(|| {
+            (start..end)
+                .into_par_iter()
+                .map(|i| {
+                    let r = run_trial(study, i);
+                    bar.inc(1);
+                    r
+                })
+                .collect::<Result<_>>()
+        })?;
+        for t in chunk {
+            each(t)?;
+        }
+        start = end;
+    }
+    Ok(())
+}
+
+/// Runs `scenario` (every sweep point, every trial; with `opts.shard` only its share) and
+/// returns the aggregated results; every trial goes to `sink` in order as it finishes, and
+/// the progress (with `opts.progress`) to `reporter`.
+pub fn run(
+    scenario: Scenario,
+    opts: &RunOptions,
+    sink: &mut dyn TrialSink,
+    reporter: &dyn Reporter,
+) -> Result<RunResult> {
+    run_resumed(scenario, opts, sink, None, reporter)
+}
+
+/// [`run`] continuing a killed run: the first `replay.done()` trials of the share come from
+/// `replay` instead of being run again (and go to `sink` like the others).
+pub fn run_resumed(
+    scenario: Scenario,
+    opts: &RunOptions,
+    sink: &mut dyn TrialSink,
+    mut replay: Option<&mut dyn Replay>,
+    reporter: &dyn Reporter,
+) -> Result<RunResult> {
+    let t0 = std::time::Instant::now();
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    let plans = scenario.sweep_plans()?;
+    let trials = scenario.trials as u64;
+    let total = plans.len() as u64 * trials;
+    let (first, last) = opts.shard.map_or((0, total), |s| s.range(total));
+    let bar: Box<dyn Progress + '_> = if opts.progress {
+        reporter.progress(last - first)
+    } else {
+        Box::new(NoProgress)
+    };
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = opts.threads {
+        builder = builder.num_threads(t);
+    }
+    let pool = builder
+        .build()
+        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))?;
+    let mut collector = Collector::new();
+    for (b, (point, plan)) in plans.into_iter().enumerate() {
+        let (lo, hi) = (b as u64 * trials, (b as u64 + 1) * trials);
+        let (from, to) = (first.max(lo), last.min(hi));
+        if from >= to {
+            continue;
+        }
+        if let (Some(p), Some(sw)) = (&point, &scenario.sweep) {
+            let shown: Vec<String> = sw
+                .axes
+                .iter()
+                .zip(p)
+                .map(|(a, v)| format!("{} = {v}", a.key))
+                .collect();
+            bar.message(&shown.join(", "));
+        }
+        let study = pool.install(|| Study::new(plan))?;
+        collector.begin(BlockInfo::of(&study, b, point), None);
+        let mut range = (from - lo) as usize..(to - lo) as usize;
+        if let Some(r) = replay.as_mut() {
+            let done = (first + r.done()).clamp(from, to);
+            for _ in from..done {
+                let (rb, t) = r.next()?;
+                if rb != b {
+                    return Err(Error::Compute(format!(
+                        "the checkpoint holds a trial of sweep point {rb} where one of point {b} \
+                         was expected"
+                    )));
+                }
+                collector.trial(&t, sink)?;
+                bar.inc(1);
+            }
+            range.start = (done - lo) as usize;
+        }
+        run_trials(&study, range, &pool, bar.as_ref(), &mut |t| {
+            collector.trial(&t, sink)
+        })?;
+    }
+    bar.finish();
+    let blocks = collector.finish(scenario.sweep.as_ref())?;
+    Ok(RunResult {
+        scenario,
+        blocks,
+        out,
+        seconds: t0.elapsed().as_secs_f64(),
+        shard: opts.shard,
+    })
+}
