@@ -124,8 +124,7 @@ pub fn additions(o: &TrackerOutcome) -> Additions<'_> {
     let mut a = o.practice.additions();
     a.json = o.more_keys();
     if let Some(w) = o.worse_warning() {
-        a.blocks
-            .insert(0, Block::Para(format!("**Warning:** {w}.")));
+        a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
         a.blocks
             .insert(0, Block::Heading("Worse than the nominal robot".into()));
     }

@@ -1,7 +1,7 @@
-//! Identifications that make the robot worse are refused, naming the file and the cause,
-//! and written with a warning under `--allow-worse`: a plane file whose `plane` column is all
-//! 1, a multi-target file whose `x` column is all 0; a gross reading is named; and
-//! `--export toml,ur-yaml` writes both files.
+//! Identifications that make the robot worse are refused, naming the file and the cause, and
+//! written with a warning under `--allow-worse`: a plane file whose `plane` column is all 1, a
+//! multi-target file whose `x` column is all 0, a tracker's file with a column scaled; a gross
+//! reading is named; and `--export toml,ur-yaml` writes both files.
 
 use std::path::{Path, PathBuf};
 
@@ -149,6 +149,77 @@ fn a_gross_reading_is_named() {
             }
         }
     }
+}
+
+/// A tracker's file whose `y` column is scaled by 0.9: validated on the untouched rows the
+/// robot comes out worse, so it is refused; with `--allow-worse` the warning is on stderr,
+/// in identified.json and in both reports.
+#[test]
+fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
+    let d = tmp_dir("cli-worse-tracker");
+    let all = d.join("all.csv");
+    import_ur10_sample(&ex("mapping.toml"), &all);
+    let pos = d.join("pos.csv");
+    positions_only(&all, &pos);
+    let text = read(&pos);
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let (mut cal, mut bad, mut val) = (header.clone(), header.clone(), header);
+    for (i, line) in lines.enumerate() {
+        if i % 10 >= 7 {
+            val += &format!("\n{line}");
+            continue;
+        }
+        cal += &format!("\n{line}");
+        let mut c: Vec<String> = line.split(',').map(String::from).collect();
+        c[7] = format!("{}", c[7].parse::<f64>().unwrap() * 0.9);
+        bad += &format!("\n{}", c.join(","));
+    }
+    for (name, text) in [("cal.csv", &cal), ("bad.csv", &bad), ("val.csv", &val)] {
+        std::fs::write(d.join(name), format!("{text}\n")).unwrap();
+    }
+    let robot = ex("ur10.toml");
+    let run = |data: &str, out: &Path, extra: &[&str]| {
+        let (data, val) = (d.join(data), d.join("val.csv"));
+        let mut args = vec!["identify", "--robot", &robot, "--data", path_arg(&data)];
+        args.extend_from_slice(&["--validate", path_arg(&val), "--method", "lm"]);
+        args.extend_from_slice(&["--out", path_arg(out)]);
+        args.extend_from_slice(extra);
+        calbench(&args)
+    };
+    let o = run("bad.csv", &d.join("refused"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("bad.csv") && err.contains("makes the robot worse"),
+        "{err}"
+    );
+    assert!(!d.join("refused").exists());
+    let kept = d.join("kept");
+    let o = run("bad.csv", &kept, &["--allow-worse"]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the identification makes the robot worse"),
+        "{err}"
+    );
+    let j = load_json(&kept.join("identified.json"));
+    assert!(j["allowed_worse"][0]
+        .as_str()
+        .unwrap()
+        .contains("validation RMS"));
+    for report in ["report.md", "report.html"] {
+        assert!(
+            read(&kept.join(report)).contains("makes the robot worse"),
+            "{report}"
+        );
+    }
+    let good = d.join("good");
+    let o = run("cal.csv", &good, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(load_json(&good.join("identified.json"))
+        .get("allowed_worse")
+        .is_none());
 }
 
 /// `--export toml,ur-yaml` writes robot.toml and ur-kinematics.yaml (it wrote no YAML), and
