@@ -208,6 +208,10 @@ def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_p
     close(same, ref)
     with pytest.raises(calbench.SettingError, match="fix"):
         calbench.identify(robot, q, p, fix=["nope"])
+    with pytest.raises(calbench.SettingError, match="setting `cv`: needs 2"):
+        calbench.identify(robot, q, p, cv=1)
+    with pytest.raises(calbench.SettingError, match="setting `holdout`: cannot be used with validate"):
+        calbench.identify(robot, q, p, holdout="3/10", validate=(q, p))
     with pytest.raises(calbench.SettingError, match="`q`: is not taken with `data`"):
         calbench.identify(robot, q, p, data=simulated / "measurements.csv")
 

@@ -63,6 +63,17 @@ impl Spelling {
         }
     }
 
+    /// `e` with its setting named as this caller names it (a refusal from a lower layer
+    /// names the command line's option).
+    pub fn respell(self, e: Error) -> Error {
+        match e {
+            Error::Setting { key, msg } if key.starts_with("--") => {
+                Error::setting(self.option(&key), msg)
+            }
+            e => e,
+        }
+    }
+
     /// How this caller turns on the flag the command line calls `cli`.
     pub fn flag(self, cli: &str) -> String {
         match self {
@@ -208,14 +219,15 @@ impl IdentifyRequest {
             let why = format!("cannot be used with {}", s.option(a));
             return Err(Error::setting(s.option(b), why));
         }
-        match &self.data {
+        let outcome = match &self.data {
             IdentifyData::Tracker(d) => self
                 .tracker(d.clone())
                 .map(|o| IdentifyOutcome::Tracker(Box::new(o))),
             IdentifyData::Kind(f) => {
                 super::on_kind::kind_outcome(self, f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
             }
-        }
+        };
+        outcome.map_err(|e| s.respell(e))
     }
 
     /// The identification on a tracker's measurements `d`.

@@ -1,5 +1,5 @@
 //! `calbench identify --robot R --data CSV --method M [--registration REG] [--validate CSV |
-//! --holdout LAST/EVERY] [--k K] [--set KEY=VALUE …] [--allow-rank-deficient]
+//! --holdout LAST/EVERY] [--k K] [--set KEY=VALUE …] [--allow-rank-deficient] [--allow-worse]
 //! [--export urdf,toml,ur-yaml,dh-csv] [--compliance LIST|gravity] [--params NAMES] [--fix NAMES]
 //! [--prior NAME=σ|FILE …] [--cv K [--cv-seed S]] [--models A,B,…] [--seed S] --out DIR`:
 //! identification on a measurement file, real or simulated.
