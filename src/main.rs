@@ -59,11 +59,7 @@ fn main() {
         Some(Command::Merge(a)) => cli::merge::run(a),
         Some(Command::Check(a)) => cli::check::run(a),
         Some(Command::Simulate(a)) => cli::simulate::run(a),
-        // A measurement-kind file (docs/formats.md § 5.3) or a tracker's.
-        Some(Command::Identify(a)) => match calbench::measurement::kind_csv::file_kind(&a.data) {
-            Some(_) => cli::identify_kind::run(a),
-            None => cli::identify::run(a),
-        },
+        Some(Command::Identify(a)) => cli::identify::run(a),
         Some(Command::Import(a)) => cli::import::run(a),
         Some(Command::Compensate(a)) => cli::compensate::run(a),
         Some(Command::Poses(a)) => cli::poses::run(a),

@@ -7,6 +7,7 @@ Every error is a :class:`calbench.Error` (or a subclass) carrying the command li
 
 import io
 import json
+import numbers
 import os
 
 import numpy as np
@@ -41,13 +42,26 @@ __all__ = [
 ]
 
 
+def _numbers(name, value):
+    """``value`` as a float64 array; bool and complex arrays are refused naming ``name``
+    (their values are not joint values or millimetres)."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
+    if raw.dtype.kind in "bc":
+        what = "bool" if raw.dtype.kind == "b" else "complex"
+        raise SettingError(f"setting `{name}`: a {what} array is not taken; give real numbers")
+    try:
+        return np.ascontiguousarray(raw, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
+
+
 def _array(name, value, ndim, columns=None):
     """``value`` as a C-contiguous float64 array of ``ndim`` dimensions (and ``columns``
     columns), refused with a SettingError naming ``name`` otherwise."""
-    try:
-        a = np.ascontiguousarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as e:
-        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
+    a = _numbers(name, value)
     if a.ndim != ndim:
         raise SettingError(f"setting `{name}`: expected {ndim} dimensions, got shape {a.shape}")
     if columns is not None and a.shape[1] != columns:
@@ -60,10 +74,34 @@ def _rotations(name, value):
     """Orientations as (N, 4) quaternions or (N, 3, 3) matrices, float64."""
     if value is None:
         return None
-    a = np.ascontiguousarray(value, dtype=np.float64)
+    a = _numbers(name, value)
     if a.ndim == 2:
         return _array(name, a, 2, 4)
     return _array(name, a, 3)
+
+
+def _count(name, value, least=0):
+    """``value`` as a non-negative 64-bit integer (at least ``least``), or None; refused with
+    a SettingError naming ``name`` otherwise (never a bare OverflowError or TypeError)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise SettingError(f"setting `{name}`: expected an integer, got {type(value).__name__}")
+    value = int(value)
+    if not least <= value < 2**64:
+        raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^64 - 1)")
+    return value
+
+
+def _names(name, value):
+    """A list of names: a list or tuple of strings, or one comma-separated string."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        value = value.split(",")
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+        raise SettingError(f"setting `{name}`: expected a list of names or a comma-separated string")
+    return [v.strip() for v in value]
 
 
 def _scenario(scenario):
@@ -75,31 +113,53 @@ def _scenario(scenario):
     raise SettingError("setting `scenario`: expected a path to a scenario file or a dict")
 
 
-class IdentifyResult:
-    """The result of :func:`identify`.
+class IdentifyResult(dict):
+    """The result of :func:`identify`: a dict of the record ``identified.json`` holds for the
+    same data and options (docs/formats.md ``identify``; keys such as ``parameters``,
+    ``errors``, ``covariance``, ``termination``, ``validation_after_mm``, ``cv``, ``priors``,
+    ``diagnostics``, for a kind file ``instrument_unknowns``), with attributes.
 
     Attributes:
         parameters: dict name → identified error (mm, rad), in the order of the estimate.
         parameter_names: the identified parameters, in order.
-        covariance: ndarray (t, t), σ0² (JᵀPJ)⁻¹ at the solution (NaN where undefined).
         termination: why the iterations stopped (``converged``, ``max-iterations``, …).
         iterations, evaluations: of the identification.
         rank: numerical rank of the column-scaled, weighted Jacobian.
         condition_number: its condition number.
         sigma0: unit-weight standard deviation; rms_residual_mm: RMS point residual.
+        robot: the compensated :class:`Robot` (``robot.toml``).
+        validation: dict of before and after statistics (``before_mm``, ``after_mm``, and
+            for full poses ``*_deg``), when the data were validated; else None.
+        seconds: wall time of the identification in Rust, s.
+
+        For a tracker's data also:
+
+        covariance: ndarray (t, t), σ0² (JᵀPJ)⁻¹ at the solution (NaN where undefined).
         residuals: ndarray (N, 3), measured (registered) − predicted points after
             compensation, mm.
         weights: ndarray (N,), the final weight of each point.
-        robot: the compensated :class:`Robot`.
         registration_frame: ndarray (4, 4), instrument → base frame.
-        validation: dict of before and after statistics (``before_mm``, ``after_mm``, and
-            for full poses ``*_deg``), when ``validate`` was given; else None.
-        seconds: wall time of the identification (and validation) in Rust, s.
+        registration_rounds: identifications run by the registration.
     """
 
     def __init__(self, fields):
+        super().__init__(json.loads(fields.pop("record")))
+        self.parameter_names = list(self["parameters"])
+        self.parameters = {n: self["errors"][n] for n in self.parameter_names}
+        for key in ("termination", "iterations", "evaluations", "rank", "condition_number",
+                    "sigma0", "rms_residual_mm", "registration_rounds"):
+            setattr(self, key, self.get(key))
+        self.validation = None
+        if "validation_before_mm" in self:
+            self.validation = {
+                f"{side}{unit}": self[f"validation_{side}{unit}"]
+                for side in ("before", "after")
+                for unit in ("_mm", "_deg", "_attitude_deg")
+                if f"validation_{side}{unit}" in self
+            }
+        if "registration_matrix" in fields:
+            fields["registration_frame"] = fields.pop("registration_matrix")
         self.__dict__.update(fields)
-        self.parameter_names = list(self.parameters)
 
     def __repr__(self):
         return (
@@ -110,26 +170,38 @@ class IdentifyResult:
 
 def identify(
     robot,
-    q,
-    points,
+    q=None,
+    points=None,
     *,
+    data=None,
     rotations=None,
     sigma=None,
     payload=None,
     method="lm",
     options=None,
     registration="identify",
+    params=None,
+    fix=None,
+    prior=None,
     compliance=None,
+    models=None,
+    cv=None,
+    cv_seed=0,
     validate=None,
+    holdout=None,
     seed=0,
     allow_rank_deficient=False,
+    allow_worse=False,
 ):
-    """Identify the errors of ``robot`` from measured points: ``calbench identify`` on arrays.
+    """Identify the errors of ``robot`` from measured points or a measurement file:
+    ``calbench identify`` with the same options, as keyword arguments.
 
     Args:
         robot: the nominal :class:`Robot`.
         q: joint values (N, n) in the robot's units.
         points: measured points (N, 3), mm, in the instrument's frame.
+        data: instead of ``q`` and ``points``, a measurement file: a tracker's (docs/formats.md
+            § 5.1) or a distance, plane, sphere or multi-target file (§ 5.3).
         rotations: for full-pose data, the measured orientations as unit quaternions
             (N, 4) ``[qw, qx, qy, qz]`` or rotation matrices (N, 3, 3).
         sigma: standard deviation of each point (N,), mm; points are weighed by 1/σ².
@@ -138,24 +210,42 @@ def identify(
         options: dict of the method's options, the keys of a scenario's ``[[methods]]``
             entry (e.g. ``{"max_iter": 50}``; ``k`` for full poses).
         registration: ``identify``, ``svd``, ``wsvd`` or ``known`` (points in the base frame).
+        params: the identified parameters (names; default: the identifiable set).
+        fix: parameters held at their nominal values (``--fix``).
+        prior: dict name → σ of a prior on that parameter's error (``--prior``).
         compliance: joint compliances identified too: ``"c2,c3"`` or ``"gravity"``.
-        validate: a ``(q, points)`` or ``(q, points, rotations)`` validation measurement.
+        models: candidate models compared by K-fold cross-validation (``--models``).
+        cv: K of a K-fold cross-validation (``--cv``); cv_seed: seed of its folds.
+        validate: a validation measurement: a tracker's file, or ``(q, points)`` /
+            ``(q, points, rotations)``.
+        holdout: ``"LAST/EVERY"``: rows held out for validation instead (``--holdout``).
         seed: seed of the random searches.
         allow_rank_deficient: return a result whose data do not determine every parameter
             instead of raising.
+        allow_worse: return a result that makes the robot worse than the nominal one (its
+            causes in ``allowed_worse``) instead of raising.
 
     Returns:
-        an :class:`IdentifyResult`, with the numbers ``calbench identify`` writes for the
-        same data.
+        an :class:`IdentifyResult`: the record ``calbench identify`` writes to
+        ``identified.json`` for the same data and options, as a dict.
     """
     if not isinstance(robot, Robot):
         raise SettingError("setting `robot`: expected a calbench.Robot")
-    q = _array("q", q, 2, robot.joint_count)
-    points = _array("points", points, 2, 3)
+    if data is not None and not isinstance(data, (str, os.PathLike)):
+        raise SettingError("setting `data`: expected a path to a measurement file")
+    if data is None or q is not None:
+        q = _array("q", q, 2, robot.joint_count)
+    if data is None or points is not None:
+        points = _array("points", points, 2, 3)
     val = None
-    if validate is not None:
+    if isinstance(validate, (str, os.PathLike)):
+        val = os.fspath(validate)
+    elif validate is not None:
         if not isinstance(validate, (tuple, list)) or len(validate) not in (2, 3):
-            raise SettingError("setting `validate`: expected (q, points) or (q, points, rotations)")
+            raise SettingError(
+                "setting `validate`: expected a measurement file, (q, points) or "
+                "(q, points, rotations)"
+            )
         val = (
             _array("validate.q", validate[0], 2, robot.joint_count),
             _array("validate.points", validate[1], 2, 3),
@@ -163,6 +253,8 @@ def identify(
         )
     if isinstance(compliance, (list, tuple)):
         compliance = ",".join(compliance)
+    if prior is not None and not isinstance(prior, dict):
+        raise SettingError("setting `prior`: expected a dict parameter name → σ")
     fields = _calbench.identify(
         robot,
         q,
@@ -170,13 +262,22 @@ def identify(
         rotations=_rotations("rotations", rotations),
         sigma=None if sigma is None else _array("sigma", sigma, 1),
         payload=None if payload is None else _array("payload", payload, 1),
+        data=None if data is None else os.fspath(data),
         method=method,
         options=options,
         registration=registration,
         compliance=compliance,
         validate=val,
-        seed=int(seed),
+        holdout=holdout,
+        cv=_count("cv", cv),
+        cv_seed=_count("cv_seed", cv_seed),
+        models=_names("models", models),
+        params=_names("params", params),
+        fix=_names("fix", fix),
+        prior=prior,
+        seed=_count("seed", seed),
         allow_rank_deficient=bool(allow_rank_deficient),
+        allow_worse=bool(allow_worse),
     )
     return IdentifyResult(fields)
 
@@ -195,7 +296,7 @@ def simulate(scenario, trial=0):
         loads, ``truth`` (dict parameter → injected error), ``robot`` (the nominal
         :class:`Robot`) and ``info`` (the rest of ``truth.json``).
     """
-    out = _calbench.simulate(_scenario(scenario), int(trial))
+    out = _calbench.simulate(_scenario(scenario), _count("trial", trial))
     out["info"] = json.loads(out.pop("truth_json"))
     return out
 
@@ -280,9 +381,9 @@ def run(scenario, *, trials=None, seed=None, threads=None, methods=None, progres
         raise SettingError("setting `methods`: expected a dict label → function")
     handle = _calbench.run(
         _scenario(scenario),
-        trials=None if trials is None else int(trials),
-        seed=None if seed is None else int(seed),
-        threads=None if threads is None else int(threads),
+        trials=_count("trials", trials),
+        seed=_count("seed", seed),
+        threads=_count("threads", threads),
         methods=methods,
         progress=bool(progress),
     )
@@ -304,6 +405,8 @@ def identifiability(robot, q, measure="position"):
     """
     if not isinstance(robot, Robot):
         raise SettingError("setting `robot`: expected a calbench.Robot")
+    if not isinstance(measure, str):
+        raise SettingError("setting `measure`: expected \"position\" or \"pose\"")
     return _calbench.identifiability(robot, _array("q", q, 2, robot.joint_count), measure)
 
 

@@ -171,6 +171,102 @@ def test_identify_full_pose_from_quaternions_and_matrices(root, tmp_path):
         assert b.parameters[k] == pytest.approx(a.parameters[k], rel=1e-6, abs=1e-9)
 
 
+def close(a, b, path="record"):
+    """``a`` equals ``b`` (JSON-like values), numbers to 1e-9 relative."""
+    if isinstance(b, dict):
+        assert isinstance(a, dict) and set(a) == set(b), (path, set(a) ^ set(b))
+        for k in b:
+            close(a[k], b[k], f"{path}.{k}")
+    elif isinstance(b, list):
+        assert isinstance(a, list) and len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b)):
+            close(x, y, f"{path}[{i}]")
+    elif isinstance(b, float) and not isinstance(a, bool):
+        assert a == pytest.approx(b, rel=1e-9, abs=1e-300), path
+    else:
+        assert a == b, path
+
+
+def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_path):
+    cli("identify", "--robot", "irb2600", "--data", simulated / "measurements.csv", "--method", "lm",
+        "--fix", "a2,theta3", "--prior", "d2=0.1", "--prior", "a3=0.05", "--cv", "5",
+        "--out", tmp_path / "id")
+    ref = json.loads((tmp_path / "id" / "identified.json").read_text())
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    robot = calbench.Robot.builtin("irb2600")
+    res = calbench.identify(robot, q, p, method="lm", fix=["a2", "theta3"],
+                            prior={"d2": 0.1, "a3": 0.05}, cv=5)
+    assert isinstance(res, dict) and res["data"] == "<arrays>"
+    close({**res, "data": ref["data"]}, ref)
+    assert res["cv"]["rms"] == pytest.approx(ref["cv"]["rms"], rel=1e-9)
+    assert "a2" not in res["errors"] and res["fixed"] == ["a2", "theta3"]
+    assert [m["parameter"] for m in res["priors"]] == ["d2", "a3"]
+    assert list(res.parameters) == ref["parameters"]
+    # The same from the file itself.
+    same = calbench.identify(robot, data=simulated / "measurements.csv", method="lm",
+                             fix="a2,theta3", prior={"d2": 0.1, "a3": 0.05}, cv=5)
+    close(same, ref)
+    with pytest.raises(calbench.SettingError, match="fix"):
+        calbench.identify(robot, q, p, fix=["nope"])
+    with pytest.raises(calbench.SettingError, match="setting `cv`: needs 2"):
+        calbench.identify(robot, q, p, cv=1)
+    with pytest.raises(calbench.SettingError, match="setting `holdout`: cannot be used with validate"):
+        calbench.identify(robot, q, p, holdout="3/10", validate=(q, p))
+    with pytest.raises(calbench.SettingError, match="`q`: is not taken with `data`"):
+        calbench.identify(robot, q, p, data=simulated / "measurements.csv")
+
+
+def test_identify_a_kind_file_returns_the_cli_record(cli, root, tmp_path):
+    cli("simulate", root / "scenarios" / "instruments.toml", "--measure", "plane",
+        "--out", tmp_path / "sim")
+    data, val = tmp_path / "sim" / "measurements.csv", tmp_path / "sim" / "validation.csv"
+    cli("identify", "--robot", "irb2600", "--data", data, "--validate", val, "--method", "ls",
+        "--fix", "a2", "--out", tmp_path / "id")
+    ref = json.loads((tmp_path / "id" / "identified.json").read_text())
+    robot = calbench.Robot.builtin("irb2600")
+    res = calbench.identify(robot, data=str(data), validate=str(val), method="ls", fix=["a2"])
+    close(res, ref)
+    assert res["kind"] == "plane" and res.validation["after_mm"]["rms"] < 1.0
+    assert res.robot.to_toml() == (tmp_path / "id" / "robot.toml").read_text()
+    # A plane column of one value makes the robot worse: refused, or kept with allow_worse.
+    text = data.read_text().splitlines()
+    k = text[0].split(",").index("plane")
+    rows = [text[0]] + [",".join(c if i != k else "1" for i, c in enumerate(r.split(",")))
+                        for r in text[1:]]
+    bad = tmp_path / "plane1.csv"
+    bad.write_text("\n".join(rows) + "\n")
+    with pytest.raises(calbench.FileError, match="makes the robot worse.*allow_worse=True"):
+        calbench.identify(robot, data=bad, validate=val, method="lm")
+    kept = calbench.identify(robot, data=bad, validate=val, method="lm", allow_worse=True)
+    assert "validation RMS" in kept["allowed_worse"][0]
+
+
+def test_every_refusal_is_a_calbench_error(root):
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.zeros((4, 6))
+    for bad in (dict(trials=-1), dict(trials=2**70), dict(seed=-3), dict(threads=1.5),
+                dict(trials=True)):
+        with pytest.raises(calbench.SettingError, match=next(iter(bad))):
+            calbench.run(root / CI_GUARD, **bad)
+    with pytest.raises(calbench.SettingError, match="trial"):
+        calbench.simulate(root / CI_GUARD, trial=-1)
+    with pytest.raises(calbench.SettingError, match="`q`: a complex array"):
+        calbench.identify(robot, q + 1j, np.zeros((4, 3)))
+    with pytest.raises(calbench.SettingError, match="`points`: a bool array"):
+        calbench.identify(robot, q, np.zeros((4, 3), dtype=bool))
+    with pytest.raises(calbench.SettingError, match="`q`: a bool array"):
+        calbench.identifiability(robot, q.astype(bool))
+    with pytest.raises(calbench.SettingError, match="`q`: a complex array"):
+        robot.fk(q.astype(complex))
+    with pytest.raises(calbench.SettingError, match="`q`: a bool array"):
+        robot.fk(q.astype(bool))
+    assert robot.fk([[0.0] * 6]).shape == (1, 3)
+    with pytest.raises(calbench.SettingError, match="errors.a1"):
+        robot.with_errors({"a1": True})
+    with pytest.raises(calbench.SettingError, match="cv"):
+        calbench.identify(robot, q, np.zeros((4, 3)), cv=-2)
+
+
 # ----- simulate --------------------------------------------------------------------------
 
 

@@ -5,8 +5,12 @@
 //!
 //! - [`registration`]: SVD (Kabsch/Arun) and Ban's weighted SVD of point sets;
 //! - [`validation`]: validation errors of a model against true (or measured) frames;
-//! - [`on_data`]: identification on a measurement (`identify`), with its refusals;
-//! - [`on_kind`]: identification on a measurement-kind file (distance, plane, sphere);
+//! - [`request`]: the one identification pipeline of `identify` and the Python module
+//!   ([`request::IdentifyRequest`] → [`request::IdentifyOutcome`]), on a tracker's file or
+//!   a measurement-kind file;
+//! - [`record`]: the identification record (`identified.json`);
+//! - [`verdict`]: whether a result may be written (undetermined data, a worse robot);
+//! - [`on_kind`]: identification on a measurement-kind file (distance, plane, sphere, targets);
 //! - [`cv`]: K-fold cross-validation, held-out splits and model choice (`identify --cv`);
 //! - [`diagnostics`]: parameter σ and correlations, leverage and Cook's distance, predicted
 //!   position σ (`identified.json` `diagnostics`);
@@ -15,10 +19,12 @@
 pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
-pub mod on_data;
 pub mod on_kind;
+pub mod record;
 pub mod registration;
+pub mod request;
 pub mod validation;
+pub mod verdict;
 
 use crate::error::Result;
 use crate::identify::{CalibrationProblem, Identified, MethodSpec};

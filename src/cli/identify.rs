@@ -1,5 +1,5 @@
 //! `calbench identify --robot R --data CSV --method M [--registration REG] [--validate CSV |
-//! --holdout LAST/EVERY] [--k K] [--set KEY=VALUE …] [--allow-rank-deficient]
+//! --holdout LAST/EVERY] [--k K] [--set KEY=VALUE …] [--allow-rank-deficient] [--allow-worse]
 //! [--export urdf,toml,ur-yaml,dh-csv] [--compliance LIST|gravity] [--params NAMES] [--fix NAMES]
 //! [--prior NAME=σ|FILE …] [--cv K [--cv-seed S]] [--models A,B,…] [--seed S] --out DIR`:
 //! identification on a measurement file, real or simulated.
@@ -8,20 +8,21 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use calbench::calibrate::diagnostics::{diagnose, Subject};
-use calbench::calibrate::{calibrate, Calibrated, ErrorStats, Registration, RoundsEnd};
-use calbench::calibrate::{cv, on_data};
+use calbench::calibrate::request::{
+    IdentifyData, IdentifyOutcome, IdentifyRequest, TrackerOutcome,
+};
+use calbench::calibrate::{ErrorStats, Registration, RoundsEnd};
 use calbench::error::Error;
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
-use calbench::measurement::{Measure, Measurements};
-use calbench::numeric::{Frame, Real};
+use calbench::measurement::kind_csv::read_kind_file;
+use calbench::numeric::Real;
 use calbench::report::exports;
-use calbench::report::identified::{registration_warning, validate_file, IdentifyRecord};
-use calbench::report::practice::{Practice, PriorMove};
+use calbench::report::identified::IdentifyRecord;
+use calbench::report::practice::additions;
 use calbench::report::write_identified_with;
 use calbench::robot::compliance::CompliancePick;
-use calbench::robot::{param_sets, Param, Robot};
+use calbench::robot::{Param, Robot};
 
 use super::check_out_folder;
 
@@ -98,6 +99,12 @@ pub struct IdentifyArgs {
     /// `rank-deficient`); without it such a result is refused.
     #[arg(long)]
     pub allow_rank_deficient: bool,
+    /// Write the result even when it makes the robot worse than the nominal one (validation
+    /// or residual RMS after above before, or a solve stopped at its iteration limit with a
+    /// growing cost), with a warning in the terminal, identified.json (`allowed_worse`) and
+    /// the report; without it such a result is refused.
+    #[arg(long)]
+    pub allow_worse: bool,
     /// What is written besides robot.toml, comma-separated (default: `urdf` for a URDF
     /// robot, else `toml`): `ur-yaml` writes UR's kinematics_params_file (ur-kinematics.yaml),
     /// `dh-csv` the parameter table with nominal, identified, Δ and σ (dh-table.csv).
@@ -123,7 +130,7 @@ pub enum Export {
     /// Also robot.urdf: for a URDF robot its source with the joint origins updated, for a
     /// robot file a URDF of the compensated robot.
     Urdf,
-    /// robot.toml only.
+    /// robot.toml (always written); for a URDF robot, without `urdf` as well, no robot.urdf.
     Toml,
     /// Also ur-kinematics.yaml: UR's `kinematics_params_file`.
     UrYaml,
@@ -168,166 +175,84 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
     Ok(CompliancePick::from_arg(text))
 }
 
-/// Identifies the errors, writes the output folder and prints the validation table and a
-/// summary line; data that do not determine every parameter are refused unless
-/// `--allow-rank-deficient`. For a tracker's file: a measurement-kind file (docs/formats.md
-/// § 5.3) goes to `identify_kind::run` (the choice is `main`'s).
+/// Identifies the errors ([`IdentifyRequest`]), writes the output folder and prints the
+/// validation table and a summary line. A measurement-kind file (docs/formats.md § 5.3) is
+/// written by [`super::identify_kind::write`].
 pub fn run(args: &IdentifyArgs) -> Result<()> {
-    let out = &args.out;
-    super::guard_out(out, &OUTPUTS, super::identify_inputs(args))?;
-    check_out_folder(out, &OUTPUTS)?;
+    let kind = calbench::measurement::kind_csv::file_kind(&args.data).is_some();
+    let outputs: &[&str] = if kind {
+        &super::identify_kind::OUTPUTS
+    } else {
+        &OUTPUTS
+    };
+    super::guard_out(&args.out, outputs, super::identify_inputs(args))?;
+    check_out_folder(&args.out, outputs)?;
     let nominal = args.chain.load(&args.robot)?;
-    let mut spec = method_with_options(args.method.name, &args.options)?;
-    spec.priors.extend(args.prior.iter().flatten().copied());
-    let registration = args.registration;
-    let mut d = read_measurements(&args.data, &nominal)?;
-    let measure = d.measure();
-    if let Some(k) = args.k {
-        if measure == Measure::Position {
-            return Err(Error::setting(
-                "--k",
-                "weighs orientation against position errors; the data hold positions only",
-            )
-            .into());
-        }
-        calbench::error::finite_positive("--k", k)?;
-        spec.k = k;
-    }
-    let mut val = args
+    let data = if kind {
+        IdentifyData::Kind(read_kind_file(&args.data, &nominal)?)
+    } else {
+        IdentifyData::Tracker(read_measurements(&args.data, &nominal)?)
+    };
+    let spec = method_with_options(args.method.name, &args.options)?;
+    let validate = args
         .validate
         .as_deref()
         .map(|p| read_measurements(p, &nominal))
         .transpose()?;
-    if let Some(h) = args.holdout {
-        let (cal, held) = h.split(d.len());
-        val = Some(cv::subset(&d, &held));
-        d = cv::subset(&d, &cal);
-    }
-    let with_base = registration == Registration::Identify;
-    let mut kinematic = if args.params.is_empty() {
-        param_sets::identified_params_tool_first(&nominal, measure, with_base)
-    } else {
-        check_names("--params", &nominal, &args.params)?;
-        args.params.clone()
-    };
-    kinematic.retain(|p| !args.fix.contains(p));
-    let mut params = kinematic.clone();
-    if let Some(c) = &args.compliance {
-        params.extend(c.params(&nominal, "--compliance")?);
-    }
-    params.retain(|p| !args.fix.contains(p));
-    check_names("--fix", &nominal, &args.fix)?;
-    let setup = cv::CvSetup {
-        method: &spec,
-        registration,
+    let request = IdentifyRequest {
+        registration: args.registration,
+        k: args.k,
+        priors: args.prior.iter().flatten().copied().collect(),
+        validate,
+        holdout: args.holdout,
+        cv: args.cv,
+        cv_seed: args.cv_seed,
+        models: args.models.clone(),
+        params: args.params.clone(),
+        fix: args.fix.clone(),
+        compliance: args.compliance.clone(),
         seed: args.seed,
-        fold_seed: args.cv_seed,
-        fixed: &args.fix,
+        allow_rank_deficient: args.allow_rank_deficient,
+        allow_worse: args.allow_worse,
+        ..IdentifyRequest::new(nominal, data, args.data.clone(), spec)
     };
-    let folds = args.cv.unwrap_or(5);
-    // With --models the best model by CV is the one identified.
-    let mut robot = nominal.clone();
-    let mut choice = None;
-    if !args.models.is_empty() {
-        let (cvs, best) = cv::choose_model(&nominal, &args.models, &d, folds, &setup)?;
-        (robot, params) =
-            args.models[best].robot_and_params(&nominal, &d, registration, &args.fix)?;
-        choice = Some((cvs, best));
+    if let (IdentifyData::Kind(f), false) = (&request.data, args.export.is_empty()) {
+        let why = "it applies to the tracker's measurement file (§ 5.1) only";
+        let kind = f.data.instrument.kind();
+        return Err(
+            calbench::calibrate::on_kind::kind_refusal(&request, kind, "--export", why).into(),
+        );
     }
-    let nominal = robot;
-    let cross = match (&choice, args.cv) {
-        (Some((cvs, best)), _) => Some(cvs[*best].clone()),
-        (None, Some(k)) => {
-            let name = if args.compliance.is_some() {
-                "kinematic+compliance"
-            } else {
-                "kinematic"
-            };
-            Some(cv::cross_validate(
-                (&nominal, &params, name.to_string()),
-                &d,
-                k,
-                &setup,
-            )?)
-        }
-        (None, None) => None,
-    };
-    // For real data "known" means the points are already in the base frame.
-    let recorder = calbench::identify::TraceRecorder::default();
-    let mut traced = spec.clone();
-    traced.trace = Some(recorder.clone());
-    let c = calibrate(
-        &nominal,
-        &params,
-        &d,
-        registration,
-        &Frame::identity(),
-        &traced,
-        &mut calbench::numeric::rng::stream(args.seed, "identify"),
-    )?;
-    if on_data::undetermined(&c) && !args.allow_rank_deficient {
-        let allow = "--allow-rank-deficient";
-        let (all, source) = ((&kinematic[..], params.len()), (args.data.as_path(), &d));
-        return Err(on_data::undetermined_error(&nominal, all, &c, source, &spec, allow).into());
+    match request.run()? {
+        IdentifyOutcome::Tracker(o) => write(args, &o),
+        IdentifyOutcome::Kind(o) => super::identify_kind::write(args, &o),
     }
-    if let Some(w) = registration_warning(&c, registration) {
+}
+
+/// Writes the output folder of an identification on a tracker's file and prints its
+/// warnings, the cross-validation or model choice, the validation table and a summary line.
+fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
+    let out = &args.out;
+    for w in o.warnings() {
         eprintln!("warning: {w}");
     }
-    let validation = val
-        .as_ref()
-        .map(|v| validate_file(&nominal, &c, v))
-        .transpose()?;
-    let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, args.seed))?;
+    let c = &o.calibrated;
     let mut extra = Vec::new();
-    if !args.export.contains(&Export::Toml) {
-        if args.export.contains(&Export::UrYaml) {
-            extra.push(("ur-kinematics.yaml", exports::ur_yaml(&c.robot)?));
-        }
-        if args.export.contains(&Export::DhCsv) {
-            let cov = c.identified.covariance();
-            let sigma: Vec<Real> = (0..params.len())
-                .map(|i| cov[(i, i)].max(0.0).sqrt())
-                .collect();
-            extra.push((
-                "dh-table.csv",
-                exports::dh_csv(&nominal, &c.robot, &params, &sigma),
-            ));
-        }
+    if args.export.contains(&Export::UrYaml) {
+        extra.push(("ur-kinematics.yaml", exports::ur_yaml(&c.robot)?));
     }
-    let practice = Practice {
-        holdout: args.holdout,
-        cv: cross.clone(),
-        models: choice.clone(),
-        fixed: args.fix.clone(),
-        priors,
-        trace: convergence_trace(&c, &recorder),
-        diagnostics: Some(diagnose(&Subject {
-            nominal: &nominal,
-            params: &params,
-            data: &d,
-            calibrated: &c,
-            k: spec.k,
-            priors: &spec.precisions(&params)?,
-            validation: val
-                .as_ref()
-                .zip(validation.as_ref())
-                .map(|(v, s)| (v, s.after_mm.rms)),
-        })?),
-    };
-    let record = IdentifyRecord {
-        nominal: &nominal,
-        data_path: &args.data,
-        data: &d,
-        method: spec.name(),
-        registration,
-        params: &params,
-        calibrated: &c,
-        validation: validation.as_ref(),
-        urdf: compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?,
-        residuals: Default::default(),
-    };
-    write_identified_with(out, &record, &practice.additions(), &extra)?;
-    if let Some((cvs, best)) = &choice {
+    if args.export.contains(&Export::DhCsv) {
+        let cov = c.identified.covariance();
+        let sigma: Vec<Real> = (0..o.params.len())
+            .map(|i| cov[(i, i)].max(0.0).sqrt())
+            .collect();
+        let table = exports::dh_csv(&o.nominal, &c.robot, &o.params, &sigma);
+        extra.push(("dh-table.csv", table));
+    }
+    let urdf = compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?;
+    let record = IdentifyRecord::of(o, urdf);
+    write_identified_with(out, &record, &additions(o), &extra)?;
+    if let Some((cvs, best)) = &o.practice.models {
         out!("model             CV RMS (mm)  folds mean ± sd   parameters");
         for (i, m) in cvs.iter().enumerate() {
             out!(
@@ -340,7 +265,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
                 if i == *best { "  (best)" } else { "" }
             );
         }
-    } else if let Some(x) = &cross {
+    } else if let Some(x) = &o.practice.cv {
         out!(
             "{}-fold cross-validation: RMS {:.4} mm (folds {:.4} ± {:.4} mm)",
             x.k,
@@ -349,7 +274,7 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
             x.sd
         );
     }
-    if let Some(v) = &validation {
+    if let Some(v) = &o.validation {
         print_validation(&v.before_mm, &v.after_mm);
     }
     let r = &c.identified;
@@ -358,14 +283,14 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         end => format!(
             " ({} rounds of {} registration and identification, {})",
             c.rounds.rounds,
-            registration.as_str(),
+            o.registration.as_str(),
             end.as_str()
         ),
     };
     out!(
         "{} on {} points: {} after {} iterations{rounds}; written to {}",
-        spec.name(),
-        d.len(),
+        o.method,
+        o.data.len(),
         r.termination.as_str(),
         r.iterations,
         out.display()
@@ -405,14 +330,14 @@ pub(super) fn method_with_options(
 }
 
 /// The compensated robot as a URDF: for a URDF robot (its source with the joint origins
-/// moved) unless `--export toml`, for a robot file with `--export urdf`.
+/// moved) unless `--export toml` without `urdf`, for a robot file with `--export urdf`.
 fn compensated_urdf(
     robot: &str,
     chain: &calbench::robot::urdf::UrdfChain,
     export: &[Export],
     compensated: &Robot,
 ) -> calbench::Result<Option<String>> {
-    if export.contains(&Export::Toml) {
+    if export.contains(&Export::Toml) && !export.contains(&Export::Urdf) {
         return Ok(None);
     }
     if !calbench::robot::urdf::is_urdf(robot) {
@@ -424,77 +349,4 @@ fn compensated_urdf(
     }
     let source = calbench::robot::urdf::UrdfRobot::load_chain(Path::new(robot), chain)?;
     source.write(compensated).map(Some)
-}
-
-/// Refuses a name of `--fix` or `--params` (`option`) the robot's model does not have, a
-/// compliance in `--params` (`--compliance` adds those) and a name given twice.
-pub(super) fn check_names(option: &str, nominal: &Robot, names: &[Param]) -> calbench::Result<()> {
-    let known = nominal.params();
-    let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
-        (_, true) if option == "--params" => {
-            Some("is a compliance: --compliance adds those".into())
-        }
-        (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name)),
-        _ => None,
-    };
-    for (i, p) in names.iter().enumerate() {
-        let why = bad(p).or(names[..i].contains(p).then(|| "is given twice".into()));
-        if let Some(why) = why {
-            return Err(Error::setting(option, format!("`{p}` {why}")));
-        }
-    }
-    Ok(())
-}
-
-/// How each prior moved its parameter's estimate: the same identification without the
-/// priors, against the MAP estimate of `c`.
-fn prior_moves(
-    nominal: &Robot,
-    params: &[Param],
-    d: &Measurements,
-    spec: &MethodSpec,
-    c: &Calibrated,
-    (registration, seed): (Registration, u64),
-) -> calbench::Result<Vec<PriorMove>> {
-    if spec.priors.is_empty() {
-        return Ok(Vec::new());
-    }
-    let mut free = spec.clone();
-    free.priors.clear();
-    let f = calibrate(
-        nominal,
-        params,
-        d,
-        registration,
-        &Frame::identity(),
-        &free,
-        &mut calbench::numeric::rng::stream(seed, "identify"),
-    )?;
-    Ok(spec
-        .priors
-        .iter()
-        .filter_map(|&(p, sigma)| {
-            let k = params.iter().position(|q| *q == p)?;
-            Some(PriorMove {
-                parameter: p.to_string(),
-                sigma,
-                without_prior: f.identified.x[k],
-                with_prior: c.identified.x[k],
-            })
-        })
-        .collect())
-}
-
-/// The convergence trace: the searches' best fitness per iteration, or the RMS point
-/// residual (mm) at each evaluation of the Jacobian methods' model (every round of an `svd`
-/// or `wsvd` alternation; adaptive LM's rejected trial steps included).
-fn convergence_trace(
-    c: &Calibrated,
-    recorder: &calbench::identify::TraceRecorder,
-) -> Option<(&'static str, Vec<Real>)> {
-    if let Some(t) = &c.identified.trace {
-        return Some(("best fitness per iteration", t.clone()));
-    }
-    let t = recorder.lock().ok()?.clone();
-    (!t.is_empty()).then_some(("RMS point residual (mm) per evaluation", t))
 }

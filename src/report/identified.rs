@@ -6,21 +6,20 @@ use std::path::Path;
 use super::markdown::{fmt_num, table};
 use super::plots;
 
-use serde_json::{json, Value};
+use serde_json::Value;
 
 use crate::calibrate::diagnostics::Diagnostics;
+use crate::calibrate::record::{tracker_base, IdentifiedJson, TrackerBase};
+pub use crate::calibrate::request::registration_warning;
+use crate::calibrate::request::{worse_warning, TrackerOutcome};
 use crate::calibrate::validation::point_residuals;
 pub use crate::calibrate::validation::{validate_file, FileValidation};
-use crate::calibrate::{Calibrated, ErrorStats, Registration, RoundsEnd};
+use crate::calibrate::{Calibrated, ErrorStats, Registration};
 use crate::error::{Error, Result};
 use crate::identify::Termination;
 use crate::measurement::Measurements;
 use crate::numeric::Real;
 use crate::robot::{robot_to_toml, Param, Robot};
-
-fn stats_json(s: &ErrorStats) -> Value {
-    json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
-}
 
 /// What an identification on a file is written from.
 pub struct IdentifyRecord<'a> {
@@ -44,6 +43,28 @@ pub struct IdentifyRecord<'a> {
     pub urdf: Option<String>,
     /// [`IdentifyRecord::residuals`], computed once for every file that shows them.
     pub residuals: std::cell::OnceCell<(Vec<Real>, Vec<Real>)>,
+    /// Why the result makes the robot worse, when it was kept so (`--allow-worse`).
+    pub worse: &'a [String],
+}
+
+impl<'a> IdentifyRecord<'a> {
+    /// The record of the pipeline's outcome `o`, with the compensated robot as a URDF
+    /// (`urdf`, written as `robot.urdf`) if asked for.
+    pub fn of(o: &'a TrackerOutcome, urdf: Option<String>) -> Self {
+        IdentifyRecord {
+            nominal: &o.nominal,
+            data_path: &o.source,
+            data: &o.data,
+            method: o.method,
+            registration: o.registration,
+            params: &o.params,
+            calibrated: &o.calibrated,
+            validation: o.validation.as_ref(),
+            urdf,
+            residuals: std::cell::OnceCell::from(o.residuals.clone()),
+            worse: &o.worse,
+        }
+    }
 }
 
 impl IdentifyRecord<'_> {
@@ -59,53 +80,17 @@ impl IdentifyRecord<'_> {
     }
 }
 
-/// `identified.json`.
-pub fn identified_json(r: &IdentifyRecord) -> Value {
-    let id = &r.calibrated.identified;
-    let names: Vec<String> = r.params.iter().map(|p| p.to_string()).collect();
-    let errors: serde_json::Map<String, Value> = names
-        .iter()
-        .zip(id.x.iter())
-        .map(|(n, x)| (n.clone(), json!(x)))
-        .collect();
-    let covariance = id.covariance();
-    let cov: Vec<Vec<Real>> = (0..covariance.nrows())
-        .map(|i| covariance.row(i).iter().copied().collect())
-        .collect();
-    let (xyz, rpy) = r.calibrated.frame.to_xyz_rpy();
-    let mut j = json!({
-        "robot": r.nominal.name,
-        "data": r.data_path.display().to_string(),
-        "method": r.method,
-        "registration": r.registration.as_str(),
-        "registration_frame": {"xyz_mm": xyz, "rpy_rad": rpy},
-        "registration_rounds": r.calibrated.rounds.rounds,
-        "registration_termination": r.calibrated.rounds.termination.as_str(),
-        "registration_last_step_mm": r.calibrated.rounds.last_step_mm,
-        "parameters": names,
-        "errors": errors,
-        "covariance": cov,
-        "condition_number": id.condition_number(),
-        "rank": id.rank,
-        "sigma0": id.sigma0,
-        "rms_residual_mm": id.rms_residual,
-        "iterations": id.iterations,
-        "evaluations": id.evaluations,
-        "termination": id.termination.as_str(),
-    });
-    if let Some(v) = r.validation {
-        j["validation_before_mm"] = stats_json(&v.before_mm);
-        j["validation_after_mm"] = stats_json(&v.after_mm);
-        if let Some((b, a)) = &v.deg {
-            j["validation_before_deg"] = stats_json(b);
-            j["validation_after_deg"] = stats_json(a);
-        }
-        if let Some((b, a)) = &v.attitude_deg {
-            j["validation_before_attitude_deg"] = stats_json(b);
-            j["validation_after_attitude_deg"] = stats_json(a);
-        }
-    }
-    j
+/// `identified.json`'s base keys ([`tracker_base`]).
+pub fn identified_json(r: &IdentifyRecord) -> serde_json::Map<String, Value> {
+    tracker_base(&TrackerBase {
+        nominal: r.nominal,
+        source: r.data_path,
+        method: r.method,
+        registration: r.registration,
+        params: r.params,
+        calibrated: r.calibrated,
+        validation: r.validation,
+    })
 }
 
 /// Writes `residuals.csv` to `path`, a row at a time: per point, the residual before (the
@@ -136,72 +121,6 @@ fn write_streamed(
     body(&mut w)
         .and_then(|()| w.flush())
         .map_err(|e| Error::io(path, e))
-}
-
-/// `identified.json` with `more`'s keys, serialised as it is written: the per-point vectors
-/// of the diagnostics go from their slices to the file, never through a JSON tree. Keys are
-/// in byte order at every level, as a `serde_json::Map` writes them.
-struct IdentifiedJson<'a> {
-    base: &'a serde_json::Map<String, Value>,
-    more: &'a Additions<'a>,
-}
-
-/// A value of [`IdentifiedJson`]: a JSON tree, or the diagnostics.
-enum Entry<'a> {
-    Json(&'a Value),
-    Diagnostics(&'a Diagnostics),
-}
-
-impl serde::Serialize for Entry<'_> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap as _;
-        let d = match self {
-            Entry::Json(v) => return v.serialize(s),
-            Entry::Diagnostics(d) => d,
-        };
-        // Everything but the per-point vectors as a (small) tree; those two in its key order.
-        let small = Diagnostics {
-            sigma: d.sigma.clone(),
-            correlation: d.correlation.clone(),
-            flagged_pairs: d.flagged_pairs.clone(),
-            leverage: Vec::new(),
-            cook_distance: Vec::new(),
-            top_points: d.top_points.clone(),
-            predicted: d.predicted.clone(),
-        };
-        let Ok(Value::Object(tree)) = serde_json::to_value(&small) else {
-            return s.serialize_none();
-        };
-        let mut m = s.serialize_map(Some(tree.len()))?;
-        for (k, v) in &tree {
-            match k.as_str() {
-                "leverage" => m.serialize_entry(k, &d.leverage)?,
-                "cook_distance" => m.serialize_entry(k, &d.cook_distance)?,
-                _ => m.serialize_entry(k, v)?,
-            }
-        }
-        m.end()
-    }
-}
-
-impl serde::Serialize for IdentifiedJson<'_> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap as _;
-        let mut keys: std::collections::BTreeMap<&str, Entry> = self
-            .base
-            .iter()
-            .chain(&self.more.json)
-            .map(|(k, v)| (k.as_str(), Entry::Json(v)))
-            .collect();
-        if let Some(d) = self.more.diagnostics {
-            keys.insert("diagnostics", Entry::Diagnostics(d));
-        }
-        let mut m = s.serialize_map(Some(keys.len()))?;
-        for (k, v) in &keys {
-            m.serialize_entry(k, v)?;
-        }
-        m.end()
-    }
 }
 
 /// What `identify`'s options add to its files: keys of `identified.json` and a section of
@@ -252,13 +171,16 @@ impl Additions<'_> {
 /// and writes them as a whole).
 pub fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
     write_residuals_csv(&out.join("residuals.csv"), r)?;
-    let Value::Object(base) = identified_json(r) else {
-        unreachable!("identified_json builds an object")
+    let base = identified_json(r);
+    let record = IdentifiedJson {
+        base: &base,
+        more: &more.json,
+        diagnostics: more.diagnostics,
     };
     let path = out.join("identified.json");
     write_streamed(&path, |w| {
         use std::io::Write as _;
-        serde_json::to_writer_pretty(&mut *w, &IdentifiedJson { base: &base, more })?;
+        serde_json::to_writer_pretty(&mut *w, &record)?;
         w.write_all(b"\n")
     })?;
     let mut compensated = r.calibrated.robot.clone();
@@ -273,30 +195,10 @@ pub fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()
     write(&out.join("robot.toml"), &robot_to_toml(&compensated))
 }
 
-/// The warning for an alternation of registration and identification that did not settle
-/// (`calbench identify` prints it on stderr); `None` when it settled or did not alternate.
-pub fn registration_warning(c: &Calibrated, registration: Registration) -> Option<String> {
-    matches!(
-        c.rounds.termination,
-        RoundsEnd::MaxRounds | RoundsEnd::Stalled
-    )
-    .then(|| {
-        format!(
-            "{} registration and identification did not settle within {} mm in {} rounds ({}; \
-             the smallest frame step was {:.3e} mm, and that round is the result)",
-            registration.as_str(),
-            crate::calibrate::ROUND_TOLERANCE_MM,
-            c.rounds.rounds,
-            c.rounds.termination.as_str(),
-            c.rounds.last_step_mm
-        )
-    })
-}
-
 /// The warnings of an identification, in plain words: data that do not determine every
 /// parameter (a result kept with `--allow-rank-deficient`), a registration that did not
-/// settle ([`registration_warning`]), and points a robust method rejected (weight 0) or
-/// weighed down.
+/// settle ([`registration_warning`]), points a robust method rejected (weight 0) or
+/// weighed down, and a result kept although it makes the robot worse.
 pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     let id = &r.calibrated.identified;
     let n = r.params.len();
@@ -340,6 +242,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
             "{lowered} points were weighed down (final weight between 0 and 1) as suspect."
         ));
     }
+    w.extend(worse_warning(r.worse).map(|t| t + "."));
     w
 }
 

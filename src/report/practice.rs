@@ -2,63 +2,21 @@
 //! (docs/formats.md `identify`): the held-out split, the cross-validation and model choice,
 //! the fixed parameters, how each prior moved its estimate, and the diagnostics.
 
-use serde_json::{json, Value};
-
 use super::identified::{Additions, Block};
 use super::markdown::fmt_num;
-use crate::calibrate::cv::{CrossValidation, Holdout};
-use crate::calibrate::diagnostics::Diagnostics;
-use crate::numeric::Real;
-use crate::robot::Param;
-
-/// A prior's effect: the estimate without and with it.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct PriorMove {
-    /// The parameter.
-    pub parameter: String,
-    /// The prior's σ (mm, rad).
-    pub sigma: Real,
-    /// The estimate without any prior.
-    pub without_prior: Real,
-    /// The MAP estimate.
-    pub with_prior: Real,
-}
-
-/// The practice options' results of one identification.
-#[derive(Clone, Debug, Default)]
-pub struct Practice {
-    /// `--holdout`.
-    pub holdout: Option<Holdout>,
-    /// The cross-validation of the model identified.
-    pub cv: Option<CrossValidation>,
-    /// `--models`: every model's cross-validation and the index of the best.
-    pub models: Option<(Vec<CrossValidation>, usize)>,
-    /// `--fix`.
-    pub fixed: Vec<Param>,
-    /// `--prior`: how each moved its estimate.
-    pub priors: Vec<PriorMove>,
-    /// The convergence trace: what it holds, and its values.
-    pub trace: Option<(&'static str, Vec<Real>)>,
-    /// The diagnostics.
-    pub diagnostics: Option<Diagnostics>,
-}
-
-fn to_value<T: serde::Serialize>(v: &T) -> Value {
-    serde_json::to_value(v).unwrap_or(Value::Null)
-}
+pub use crate::calibrate::record::{Practice, PriorMove};
+use crate::calibrate::request::TrackerOutcome;
 
 impl Practice {
     /// The keys added to `identified.json` and the section added to `report.md` and `report.html`; nothing
     /// for an option not used.
     pub fn additions(&self) -> Additions<'_> {
-        let mut a = Additions::default();
-        let j = &mut a.json;
+        let mut a = Additions {
+            json: self.json(),
+            ..Default::default()
+        };
         let md = &mut a.blocks;
-        if let Some(h) = self.holdout {
-            j.insert("holdout".into(), json!(format!("{}/{}", h.last, h.every)));
-        }
         if let Some(cv) = &self.cv {
-            j.insert("cv".into(), to_value(cv));
             md.push(Block::Heading("Cross-validation".into()));
             md.push(Block::Para(format!(
                 "{}-fold ({} model, {} parameters): RMS {} mm over the held-out points; per fold \
@@ -72,8 +30,6 @@ impl Practice {
             )));
         }
         if let Some((cvs, best)) = &self.models {
-            j.insert("cv_models".into(), to_value(cvs));
-            j.insert("cv_best".into(), json!(cvs[*best].model));
             let rows: Vec<Vec<String>> = cvs
                 .iter()
                 .enumerate()
@@ -96,10 +52,8 @@ impl Practice {
                 "Fixed at nominal: {}.",
                 names.join(", ")
             )));
-            j.insert("fixed".into(), json!(names));
         }
         if !self.priors.is_empty() {
-            j.insert("priors".into(), to_value(&self.priors));
             let mut rows = Vec::with_capacity(self.priors.len());
             for p in &self.priors {
                 let nums = [p.sigma, p.without_prior, p.with_prior].map(|v| fmt_num(v, 4));
@@ -110,10 +64,6 @@ impl Practice {
             md.push(Block::Table(headers, rows));
         }
         if let Some((what, values)) = &self.trace {
-            j.insert(
-                "convergence_trace".into(),
-                json!({"values": what, "trace": values}),
-            );
             md.push(Block::Heading("Convergence".into()));
             md.push(Block::Para(format!(
                 "{what}: {} values, from {} to {}.",
@@ -165,4 +115,18 @@ impl Practice {
         }
         a
     }
+}
+
+/// What an identification on a tracker's file adds to `identified.json` and the reports:
+/// the practice options' keys and section, and a result kept worse than the nominal robot
+/// (`allowed_worse`, and a warning section).
+pub fn additions(o: &TrackerOutcome) -> Additions<'_> {
+    let mut a = o.practice.additions();
+    a.json = o.more_keys();
+    if let Some(w) = o.worse_warning() {
+        a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
+        a.blocks
+            .insert(0, Block::Heading("Worse than the nominal robot".into()));
+    }
+    a
 }

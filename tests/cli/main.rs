@@ -17,3 +17,4 @@ mod realdata;
 mod refusals;
 mod strict_inputs;
 mod typed;
+mod worse;

@@ -1,0 +1,220 @@
+//! Python values and numpy arrays into the library's types, and back.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::DMatrix;
+use numpy::ndarray::{Array2, ShapeBuilder};
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+
+use calbench::measurement::csv::measurements_from_arrays;
+use calbench::measurement::Measurements;
+use calbench::numeric::Real;
+use calbench::robot::Robot;
+use calbench::study::scenario::Scenario;
+
+use crate::errors::{err, setting};
+
+/// `a` as a 2-D float64 array: a float64 array as it is, anything numpy reads as real
+/// numbers converted; bool and complex arrays, and what is not numbers, refused naming `key`.
+pub(crate) fn float_array2<'py>(
+    key: &str,
+    a: &Bound<'py, PyAny>,
+) -> PyResult<PyReadonlyArray2<'py, f64>> {
+    if let Ok(v) = a.extract::<PyReadonlyArray2<'py, f64>>() {
+        return Ok(v);
+    }
+    let np = a.py().import("numpy")?;
+    let raw = np
+        .call_method1("asarray", (a,))
+        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))?;
+    let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
+    if kind == "b" || kind == "c" {
+        let what = if kind == "b" { "bool" } else { "complex" };
+        return Err(setting(
+            key,
+            format!("a {what} array is not taken; give real numbers"),
+        ));
+    }
+    let float = np.getattr("float64")?;
+    raw.call_method1("astype", (float,))
+        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))?
+        .extract::<PyReadonlyArray2<'py, f64>>()
+        .map_err(|_| setting(key, "expected a 2-D array (N, n)"))
+}
+
+/// The rows of a (N, k) array.
+pub(crate) fn rows(a: &PyReadonlyArray2<'_, f64>) -> Vec<Vec<Real>> {
+    a.as_array().outer_iter().map(|r| r.to_vec()).collect()
+}
+
+/// The rows of a (N, 3) array as points.
+pub(crate) fn points3(key: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[Real; 3]>> {
+    let v = a.as_array();
+    if v.ncols() != 3 {
+        return Err(setting(
+            key,
+            format!("expected shape (N, 3), got ({}, {})", v.nrows(), v.ncols()),
+        ));
+    }
+    Ok(v.outer_iter().map(|r| [r[0], r[1], r[2]]).collect())
+}
+
+/// Orientations as unit quaternions `[qw, qx, qy, qz]`: from an (N, 4) array, or from
+/// rotation matrices (N, 3, 3).
+pub(crate) fn quaternions(key: &str, a: &Bound<'_, PyAny>) -> PyResult<Vec<[Real; 4]>> {
+    if let Ok(q) = a.extract::<PyReadonlyArray2<'_, f64>>() {
+        let v = q.as_array();
+        if v.ncols() != 4 {
+            return Err(setting(
+                key,
+                format!(
+                    "expected unit quaternions (N, 4) [qw, qx, qy, qz] or rotation matrices \
+                     (N, 3, 3), got ({}, {})",
+                    v.nrows(),
+                    v.ncols()
+                ),
+            ));
+        }
+        return Ok(v.outer_iter().map(|r| [r[0], r[1], r[2], r[3]]).collect());
+    }
+    let m: PyReadonlyArray3<'_, f64> = a.extract().map_err(|_| {
+        setting(
+            key,
+            "expected unit quaternions (N, 4) or rotation matrices (N, 3, 3) of floats",
+        )
+    })?;
+    let v = m.as_array();
+    if v.shape()[1..] != [3, 3] {
+        return Err(setting(
+            key,
+            format!("expected rotation matrices (N, 3, 3), got {:?}", v.shape()),
+        ));
+    }
+    v.outer_iter()
+        .enumerate()
+        .map(|(i, r)| {
+            let mat = nalgebra::Matrix3::from_fn(|a, b| r[[a, b]]);
+            if !mat.iter().all(|x| x.is_finite())
+                || (mat.transpose() * mat - nalgebra::Matrix3::identity()).amax() > 1e-6
+                || mat.determinant() < 0.0
+            {
+                return Err(setting(key, format!("row {i}: not a rotation matrix")));
+            }
+            let q = nalgebra::UnitQuaternion::from_matrix(&mat);
+            Ok([q.w, q.i, q.j, q.k])
+        })
+        .collect()
+}
+
+/// Measurements from arrays in the robot's units, checked as a measurement file is.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn measurements(
+    robot: &Robot,
+    what: &str,
+    q: &PyReadonlyArray2<'_, f64>,
+    points: &PyReadonlyArray2<'_, f64>,
+    rotations: Option<&Bound<'_, PyAny>>,
+    sigma: Option<&PyReadonlyArray1<'_, f64>>,
+    payload: Option<&PyReadonlyArray1<'_, f64>>,
+) -> PyResult<Measurements> {
+    let quats = rotations
+        .map(|r| quaternions(&format!("{what}.rotations"), r))
+        .transpose()?;
+    let sigma = sigma.map(|s| s.as_array().to_vec());
+    let payload = payload.map(|s| s.as_array().to_vec());
+    measurements_from_arrays(
+        robot,
+        what,
+        &rows(q),
+        &points3(&format!("{what}.points"), points)?,
+        quats.as_deref(),
+        sigma.as_deref(),
+        payload.as_deref(),
+    )
+    .map_err(err)
+}
+
+/// A Python value as a TOML value (scenario dicts, method options).
+pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    if v.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(v.extract()?));
+    }
+    if v.is_instance_of::<PyInt>() {
+        return Ok(toml::Value::Integer(v.extract().map_err(|_| {
+            setting(key, "an integer beyond the 64-bit range")
+        })?));
+    }
+    if v.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(v.extract()?));
+    }
+    if v.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(v.extract()?));
+    }
+    if let Ok(d) = v.cast::<PyDict>() {
+        return Ok(toml::Value::Table(toml_table(key, d)?));
+    }
+    if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+        let items: Vec<toml::Value> = v
+            .try_iter()?
+            .enumerate()
+            .map(|(i, x)| toml_value(&format!("{key}[{i}]"), &x?))
+            .collect::<PyResult<_>>()?;
+        return Ok(toml::Value::Array(items));
+    }
+    // numpy scalars and other numbers.
+    if let Ok(f) = v.extract::<f64>() {
+        return Ok(toml::Value::Float(f));
+    }
+    Err(setting(
+        key,
+        format!(
+            "{} is not a TOML value (bool, int, float, str, list or dict)",
+            v.get_type().name()?
+        ),
+    ))
+}
+
+/// A Python dict as a TOML table.
+pub(crate) fn toml_table(key: &str, d: &Bound<'_, PyDict>) -> PyResult<toml::Table> {
+    let mut t = toml::Table::new();
+    for (k, v) in d.iter() {
+        let k: String = k
+            .extract()
+            .map_err(|_| setting(key, "every key must be a string"))?;
+        let dotted = if key.is_empty() {
+            k.clone()
+        } else {
+            format!("{key}.{k}")
+        };
+        t.insert(k, toml_value(&dotted, &v)?);
+    }
+    Ok(t)
+}
+
+/// A scenario: a path to its TOML file, or a dict shaped like the file.
+pub(crate) fn scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+    if let Ok(d) = scenario.cast::<PyDict>() {
+        let table = toml_table("", d)?;
+        return Scenario::from_toml_table(table, Path::new("<scenario dict>")).map_err(err);
+    }
+    let path: PathBuf = scenario
+        .extract()
+        .map_err(|_| setting("scenario", "expected a path to a scenario file or a dict"))?;
+    Scenario::load(&path).map_err(err)
+}
+
+/// A column-major matrix as a (rows, cols) numpy array.
+pub(crate) fn matrix<'py>(py: Python<'py>, m: &DMatrix<Real>) -> Bound<'py, PyAny> {
+    Array2::from_shape_vec((m.nrows(), m.ncols()).f(), m.as_slice().to_vec())
+        .map(|a| a.into_pyarray(py).into_any())
+        .unwrap_or_else(|_| PyArray1::<f64>::zeros(py, 0, false).into_any())
+}
+
+/// A validation measurement: (q, points, rotations or None).
+pub(crate) type Validation<'py> = (
+    PyReadonlyArray2<'py, f64>,
+    PyReadonlyArray2<'py, f64>,
+    Option<Bound<'py, PyAny>>,
+);

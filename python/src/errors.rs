@@ -1,0 +1,48 @@
+//! The exceptions of `calbench` and how a library error becomes one.
+
+use pyo3::create_exception;
+use pyo3::exceptions::PyException;
+use pyo3::prelude::*;
+
+create_exception!(calbench, Error, PyException, "Every error of calbench.");
+create_exception!(
+    calbench,
+    FileError,
+    Error,
+    "An input file is malformed or holds a value out of range (names the file and the place)."
+);
+create_exception!(
+    calbench,
+    SettingError,
+    Error,
+    "A setting or an argument is out of range (names the key)."
+);
+create_exception!(
+    calbench,
+    ComputeError,
+    Error,
+    "A computation could not be carried out."
+);
+create_exception!(
+    calbench,
+    IoError,
+    Error,
+    "Reading or writing a file failed (names the file)."
+);
+
+/// A library error as the Python exception of its kind, with the command line's message.
+pub(crate) fn err(e: calbench::Error) -> PyErr {
+    let msg = e.to_string();
+    match e {
+        calbench::Error::File { .. } => FileError::new_err(msg),
+        calbench::Error::Setting { .. } => SettingError::new_err(msg),
+        calbench::Error::Compute(_) => ComputeError::new_err(msg),
+        calbench::Error::Io { .. } => IoError::new_err(msg),
+        _ => Error::new_err(msg),
+    }
+}
+
+/// A refused argument.
+pub(crate) fn setting(key: &str, msg: impl Into<String>) -> PyErr {
+    err(calbench::Error::setting(key, msg))
+}

@@ -1,0 +1,285 @@
+//! `calbench.identify`: the library's identification pipeline
+//! ([`calbench::calibrate::request`]) on arrays or on a measurement file (a tracker's or a
+//! measurement-kind file), with the command line's options as keyword arguments; returns
+//! the record `identified.json` holds, with the compensated robot and the arrays.
+
+use std::path::PathBuf;
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+
+use calbench::calibrate::cv::{Holdout, Model};
+use calbench::calibrate::request::{IdentifyData, IdentifyOutcome, IdentifyRequest, Spelling};
+use calbench::calibrate::validation::residual_vectors;
+use calbench::calibrate::Registration;
+use calbench::identify::MethodSpec;
+use calbench::measurement::csv::read_measurements;
+use calbench::measurement::kind_csv::{file_kind, read_kind_file};
+use calbench::measurement::{Measure, Measurements};
+use calbench::numeric::Real;
+use calbench::robot::compliance::CompliancePick;
+use calbench::robot::{Param, Robot};
+
+use crate::convert::{matrix, measurements, toml_table, Validation};
+use crate::errors::{err, setting, ComputeError};
+use crate::robot::PyRobot;
+
+/// The measurements of a file (`data`) or of arrays; `q` and `points` are refused beside a
+/// file.
+struct Readings<'a, 'py> {
+    q: Option<&'a PyReadonlyArray2<'py, f64>>,
+    points: Option<&'a PyReadonlyArray2<'py, f64>>,
+    rotations: Option<&'a Bound<'py, PyAny>>,
+    sigma: Option<&'a PyReadonlyArray1<'py, f64>>,
+    payload: Option<&'a PyReadonlyArray1<'py, f64>>,
+    data: Option<PathBuf>,
+}
+
+impl Readings<'_, '_> {
+    /// The readings and their source (the file, or `<arrays>`).
+    fn read(&self, robot: &Robot) -> PyResult<(IdentifyData, PathBuf)> {
+        let arrays = [
+            ("q", self.q.is_some()),
+            ("points", self.points.is_some()),
+            ("rotations", self.rotations.is_some()),
+            ("sigma", self.sigma.is_some()),
+            ("payload", self.payload.is_some()),
+        ];
+        if let Some(path) = &self.data {
+            if let Some((name, _)) = arrays.iter().find(|a| a.1) {
+                let why = format!("is not taken with `data` (the file {})", path.display());
+                return Err(setting(name, why));
+            }
+            let data = match file_kind(path) {
+                Some(_) => IdentifyData::Kind(read_kind_file(path, robot).map_err(err)?),
+                None => IdentifyData::Tracker(read_measurements(path, robot).map_err(err)?),
+            };
+            return Ok((data, path.clone()));
+        }
+        let (Some(q), Some(points)) = (self.q, self.points) else {
+            return Err(setting(
+                "data",
+                "give q and points, or data (a measurement file)",
+            ));
+        };
+        let m = measurements(
+            robot,
+            "data",
+            q,
+            points,
+            self.rotations,
+            self.sigma,
+            self.payload,
+        )?;
+        Ok((IdentifyData::Tracker(m), PathBuf::from("<arrays>")))
+    }
+}
+
+/// The method `method` with the `options` dict (the keys of a scenario's `[[methods]]`
+/// entry), refused naming `options.KEY`; `k` refused on position data.
+fn method_spec(
+    method: &str,
+    options: Option<&Bound<'_, PyDict>>,
+    position: bool,
+) -> PyResult<MethodSpec> {
+    let mut entry = match options {
+        Some(o) => toml_table("options", o)?,
+        None => toml::Table::new(),
+    };
+    entry.insert("name".into(), toml::Value::String(method.into()));
+    if position && entry.contains_key("k") {
+        return Err(setting(
+            "options.k",
+            "weighs orientation against position errors; the data hold positions only",
+        ));
+    }
+    MethodSpec::from_table(&entry).map_err(|(k, msg)| {
+        let key = match k.as_str() {
+            "name" => "method".to_string(),
+            "" => "options".to_string(),
+            k => format!("options.{k}"),
+        };
+        setting(&key, msg)
+    })
+}
+
+/// Parameter names (`key`: the argument), each refused naming it.
+fn param_list(key: &str, names: Option<Vec<String>>) -> PyResult<Vec<Param>> {
+    names
+        .unwrap_or_default()
+        .iter()
+        .map(|n| {
+            Param::parse(n.trim()).ok_or_else(|| {
+                setting(
+                    key,
+                    format!("`{n}` is not a parameter name (a2, theta3, base.x, …)"),
+                )
+            })
+        })
+        .collect()
+}
+
+/// `prior`: a dict name → σ.
+fn priors(prior: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Param, Real)>> {
+    let Some(d) = prior else {
+        return Ok(Vec::new());
+    };
+    d.iter()
+        .map(|(k, v)| {
+            let name: String = k
+                .extract()
+                .map_err(|_| setting("prior", "every key must be a parameter name"))?;
+            let sigma: Option<Real> = v.extract().ok();
+            calbench::identify::registry::parse_prior(&name, sigma)
+                .map_err(|m| setting(&format!("prior.{name}"), m))
+        })
+        .collect()
+}
+
+/// `validate`: a tracker's file, or arrays (q, points[, rotations]).
+fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Measurements>> {
+    let Some(v) = v else {
+        return Ok(None);
+    };
+    if v.is_instance_of::<PyString>() {
+        let path: PathBuf = v.extract()?;
+        return read_measurements(&path, robot).map(Some).map_err(err);
+    }
+    let (vq, vp, vr): Validation<'_> = v.extract().map_err(|_| {
+        setting(
+            "validate",
+            "expected a measurement file or (q, points[, rotations])",
+        )
+    })?;
+    measurements(robot, "validate", &vq, &vp, vr.as_ref(), None, None).map(Some)
+}
+
+/// Identification (the Python half documents the arguments): the dict of `record` (the
+/// text of `identified.json`), `robot` (compensated), `seconds`, and for a tracker's data
+/// `covariance`, `weights`, `residuals` and `registration_matrix`.
+#[pyfunction]
+#[pyo3(signature = (robot, q = None, points = None, rotations = None, sigma = None,
+    payload = None, data = None, method = "lm", options = None, registration = "identify",
+    compliance = None, validate = None, holdout = None, cv = None, cv_seed = 0, models = None,
+    params = None, fix = None, prior = None, seed = 0, allow_rank_deficient = false,
+    allow_worse = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn identify<'py>(
+    py: Python<'py>,
+    robot: &PyRobot,
+    q: Option<PyReadonlyArray2<'py, f64>>,
+    points: Option<PyReadonlyArray2<'py, f64>>,
+    rotations: Option<Bound<'py, PyAny>>,
+    sigma: Option<PyReadonlyArray1<'py, f64>>,
+    payload: Option<PyReadonlyArray1<'py, f64>>,
+    data: Option<PathBuf>,
+    method: &str,
+    options: Option<Bound<'py, PyDict>>,
+    registration: &str,
+    compliance: Option<&str>,
+    validate: Option<Bound<'py, PyAny>>,
+    holdout: Option<&str>,
+    cv: Option<usize>,
+    cv_seed: u64,
+    models: Option<Vec<String>>,
+    params: Option<Vec<String>>,
+    fix: Option<Vec<String>>,
+    prior: Option<Bound<'py, PyDict>>,
+    seed: u64,
+    allow_rank_deficient: bool,
+    allow_worse: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let nominal = &robot.inner;
+    let readings = Readings {
+        q: q.as_ref(),
+        points: points.as_ref(),
+        rotations: rotations.as_ref(),
+        sigma: sigma.as_ref(),
+        payload: payload.as_ref(),
+        data,
+    };
+    let (data, source) = readings.read(nominal)?;
+    let position = matches!(&data, IdentifyData::Tracker(m) if m.measure() == Measure::Position);
+    let spec = method_spec(method, options.as_ref(), position)?;
+    let registration: Registration = registration.parse().map_err(|_| {
+        setting(
+            "registration",
+            format!("\"{registration}\" is not one of identify, svd, wsvd, known"),
+        )
+    })?;
+    let holdout = holdout
+        .map(|h| h.parse::<Holdout>().map_err(|m| setting("holdout", m)))
+        .transpose()?;
+    let models = models
+        .unwrap_or_default()
+        .iter()
+        .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
+        .collect::<PyResult<Vec<_>>>()?;
+    let request = IdentifyRequest {
+        registration,
+        priors: priors(prior.as_ref())?,
+        validate: validation(nominal, validate.as_ref())?,
+        holdout,
+        cv,
+        cv_seed,
+        models,
+        params: param_list("params", params)?,
+        fix: param_list("fix", fix)?,
+        compliance: compliance.map(CompliancePick::from_arg),
+        seed,
+        allow_rank_deficient,
+        allow_worse,
+        spelling: Spelling::Python,
+        ..IdentifyRequest::new(nominal.clone(), data, source, spec)
+    };
+    // The Rust side, timed as a whole: the identification and everything its record holds.
+    let (outcome, record, seconds) = py
+        .detach(|| {
+            let t0 = std::time::Instant::now();
+            let outcome = request.run()?;
+            let record = serde_json::to_string(&outcome)
+                .map_err(|e| calbench::Error::Compute(e.to_string()))?;
+            Ok((outcome, record, t0.elapsed().as_secs_f64()))
+        })
+        .map_err(err)?;
+    let out = PyDict::new(py);
+    out.set_item("record", record)?;
+    out.set_item("seconds", seconds)?;
+    match &outcome {
+        IdentifyOutcome::Kind(o) => out.set_item(
+            "robot",
+            PyRobot {
+                inner: o.compensated(),
+            },
+        )?,
+        IdentifyOutcome::Tracker(o) => {
+            out.set_item(
+                "robot",
+                PyRobot {
+                    inner: o.compensated(),
+                },
+            )?;
+            let c = &o.calibrated;
+            let id = &c.identified;
+            out.set_item("covariance", matrix(py, &id.covariance()))?;
+            out.set_item("weights", PyArray1::from_slice(py, &id.weights))?;
+            let residuals = residual_vectors(c, &o.data).map_err(err)?;
+            let flat: Vec<f64> = residuals.iter().flat_map(|v| [v[0], v[1], v[2]]).collect();
+            let r = Array2::from_shape_vec((residuals.len(), 3), flat)
+                .map_err(|e| ComputeError::new_err(e.to_string()))?;
+            out.set_item("residuals", r.into_pyarray(py))?;
+            let f = &c.frame;
+            let mut frame = Array2::<f64>::eye(4);
+            for a in 0..3 {
+                for b in 0..3 {
+                    frame[[a, b]] = f.rot[(a, b)];
+                }
+                frame[[a, 3]] = f.pos[a];
+            }
+            out.set_item("registration_matrix", frame.into_pyarray(py))?;
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,174 @@
+//! `calbench.Robot`.
+
+use std::path::PathBuf;
+
+use numpy::ndarray::{Array2, Array3};
+use numpy::IntoPyArray;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use calbench::numeric::{Frame, Real};
+use calbench::robot::{builtin, Param, Robot};
+
+use crate::convert::{float_array2, rows};
+use crate::errors::{err, setting};
+
+/// A robot model with its nominal parameters (lengths in mm, angles in the robot's unit
+/// where joint values are concerned, as in the command line).
+#[pyclass(name = "Robot", module = "calbench", frozen)]
+#[derive(Clone)]
+pub struct PyRobot {
+    pub(crate) inner: Robot,
+}
+
+#[pymethods]
+impl PyRobot {
+    /// The built-in robot `name` (`calbench robots` lists them).
+    #[staticmethod]
+    fn builtin(name: &str) -> PyResult<PyRobot> {
+        match builtin::builtin(name) {
+            Some(b) => Ok(PyRobot { inner: (b.build)() }),
+            None => Err(setting(
+                "robot",
+                format!(
+                    "\"{name}\" is not a built-in robot ({})",
+                    builtin::BUILTINS
+                        .iter()
+                        .map(|b| b.name)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            )),
+        }
+    }
+
+    /// A robot file: TOML (docs/formats.md) or URDF.
+    #[staticmethod]
+    fn from_file(path: PathBuf) -> PyResult<PyRobot> {
+        if !path.is_file() {
+            return Err(err(calbench::Error::io(
+                &path,
+                std::io::Error::new(std::io::ErrorKind::NotFound, "no such robot file"),
+            )));
+        }
+        let shown = path.to_string_lossy().into_owned();
+        builtin::load(&shown)
+            .map(|inner| PyRobot { inner })
+            .map_err(err)
+    }
+
+    /// The robot's name.
+    #[getter]
+    fn name(&self) -> String {
+        self.inner.name.clone()
+    }
+
+    /// The number of joints.
+    #[getter]
+    fn joint_count(&self) -> usize {
+        self.inner.dof()
+    }
+
+    /// Every parameter of the model (θ, d, a, α, β per joint, base, tool), in flat-vector
+    /// order.
+    fn parameter_names(&self) -> Vec<String> {
+        self.inner.params().iter().map(|p| p.to_string()).collect()
+    }
+
+    /// The nominal value of each parameter (mm, rad), by name.
+    fn parameters(&self) -> Vec<(String, Real)> {
+        self.inner
+            .params()
+            .into_iter()
+            .map(|p| (p.to_string(), self.inner.get(p)))
+            .collect()
+    }
+
+    /// Forward kinematics: joint values `q` (N, n) in the robot's units → tool points
+    /// (N, 3) in mm, or with `pose=True` homogeneous tool frames (N, 4, 4).
+    #[pyo3(signature = (q, pose = false))]
+    fn fk<'py>(
+        &self,
+        py: Python<'py>,
+        q: &Bound<'py, PyAny>,
+        pose: bool,
+    ) -> PyResult<Bound<'py, PyAny>> {
+        let q = float_array2("q", q)?;
+        let r = &self.inner;
+        let qs: Vec<Vec<Real>> = rows(&q)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| r.q_from_user_checked(v, &format!("q[{i}]")))
+            .collect::<calbench::Result<_>>()
+            .map_err(err)?;
+        let chain = r.chain();
+        let frames: Vec<Frame> = qs.iter().map(|v| chain.fk(v)).collect();
+        if pose {
+            let mut out = Array3::<f64>::zeros((frames.len(), 4, 4));
+            for (i, f) in frames.iter().enumerate() {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        out[[i, a, b]] = f.rot[(a, b)];
+                    }
+                    out[[i, a, 3]] = f.pos[a];
+                }
+                out[[i, 3, 3]] = 1.0;
+            }
+            return Ok(out.into_pyarray(py).into_any());
+        }
+        let mut out = Array2::<f64>::zeros((frames.len(), 3));
+        for (i, f) in frames.iter().enumerate() {
+            for a in 0..3 {
+                out[[i, a]] = f.pos[a];
+            }
+        }
+        Ok(out.into_pyarray(py).into_any())
+    }
+
+    /// A copy with errors added to parameters: a dict name → error (mm, rad).
+    fn with_errors(&self, errors: &Bound<'_, PyDict>) -> PyResult<PyRobot> {
+        let known = self.inner.params();
+        let mut list: Vec<(Param, Real)> = Vec::new();
+        for (k, v) in errors.iter() {
+            let name: String = k
+                .extract()
+                .map_err(|_| setting("errors", "every key must be a parameter name"))?;
+            let p = Param::parse(&name).filter(|p| known.contains(p));
+            let Some(p) = p else {
+                return Err(setting(
+                    "errors",
+                    format!(
+                        "`{name}` is not a parameter of robot `{}`; its parameters are {}",
+                        self.inner.name,
+                        self.parameter_names().join(" ")
+                    ),
+                ));
+            };
+            let e: Real = v
+                .extract()
+                .ok()
+                .filter(|_| !v.is_instance_of::<pyo3::types::PyBool>())
+                .ok_or_else(|| setting(&format!("errors.{name}"), "must be a number"))?;
+            if !e.is_finite() {
+                return Err(setting(&format!("errors.{name}"), "must be finite"));
+            }
+            list.push((p, e));
+        }
+        Ok(PyRobot {
+            inner: self.inner.with_errors(&list),
+        })
+    }
+
+    /// The robot as a robot file (TOML), as `calbench identify` writes `robot.toml`.
+    fn to_toml(&self) -> String {
+        calbench::robot::robot_to_toml(&self.inner)
+    }
+
+    fn __repr__(&self) -> String {
+        format!(
+            "calbench.Robot(\"{}\", {} joints)",
+            self.inner.name,
+            self.inner.dof()
+        )
+    }
+}

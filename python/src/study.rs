@@ -1,0 +1,283 @@
+//! Studies from Python: `simulate`, `run` (with methods written in Python, `Problem`).
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use numpy::ndarray::Array2;
+use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyTuple};
+
+use calbench::identify::external::{External, ExternalProblem};
+use calbench::identify::MethodSpec;
+use calbench::measurement::Measurements;
+use calbench::numeric::Real;
+use calbench::study::run::InMemoryRun;
+use calbench::robot::Robot;
+use calbench::study::{trial, RunOptions, Study};
+
+use crate::convert::{matrix, scenario_of};
+use crate::errors::{err, setting, ComputeError};
+use crate::robot::PyRobot;
+
+/// A measurement as arrays in the robot's units: (q, points, quaternions or None).
+fn measurement_arrays<'py>(
+    py: Python<'py>,
+    robot: &Robot,
+    m: &Measurements,
+    prefix: &str,
+    out: &Bound<'py, PyDict>,
+) -> PyResult<()> {
+    let n = robot.dof();
+    let mut q = Array2::<f64>::zeros((m.len(), n));
+    let mut p = Array2::<f64>::zeros((m.len(), 3));
+    for (i, (qi, pi)) in m.qs.iter().zip(&m.points).enumerate() {
+        for (j, v) in robot.q_to_user(qi).into_iter().enumerate() {
+            q[[i, j]] = v;
+        }
+        for a in 0..3 {
+            p[[i, a]] = pi[a];
+        }
+    }
+    out.set_item(format!("{prefix}q"), q.into_pyarray(py))?;
+    out.set_item(format!("{prefix}points"), p.into_pyarray(py))?;
+    match &m.quats {
+        None => out.set_item(format!("{prefix}rotations"), py.None())?,
+        Some(qs) => {
+            let flat: Vec<f64> = qs.iter().flatten().copied().collect();
+            let a = Array2::from_shape_vec((qs.len(), 4), flat)
+                .map_err(|e| ComputeError::new_err(e.to_string()))?;
+            out.set_item(format!("{prefix}rotations"), a.into_pyarray(py))?;
+        }
+    }
+    if let Some(s) = &m.payload_kg {
+        out.set_item(format!("{prefix}payload"), PyArray1::from_slice(py, s))?;
+    }
+    Ok(())
+}
+
+/// The measurements of one trial of a scenario (`calbench simulate`), as a dict of arrays.
+#[pyfunction]
+#[pyo3(signature = (scenario, trial = 0))]
+pub(crate) fn simulate<'py>(
+    py: Python<'py>,
+    scenario: &Bound<'py, PyAny>,
+    trial: usize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let sc = scenario_of(scenario)?;
+    let (study, sim) = py
+        .detach(|| {
+            let study = Study::new(sc)?;
+            let sim = trial::simulate_trial(&study, trial, "trial")?;
+            Ok((study, sim))
+        })
+        .map_err(err)?;
+    let out = PyDict::new(py);
+    let robot = &study.nominal;
+    measurement_arrays(py, robot, &sim.calibration.data, "", &out)?;
+    measurement_arrays(py, robot, &sim.validation.data, "validation_", &out)?;
+    let truth = PyDict::new(py);
+    for (p, e) in &sim.errors {
+        truth.set_item(p.to_string(), *e)?;
+    }
+    out.set_item("truth", truth)?;
+    out.set_item(
+        "robot",
+        PyRobot {
+            inner: robot.clone(),
+        },
+    )?;
+    let info = serde_json::to_string(&sim.truth_json(&study))
+        .map_err(|e| ComputeError::new_err(e.to_string()))?;
+    out.set_item("truth_json", info)?;
+    Ok(out)
+}
+
+/// The problem a method written in Python solves (see `calbench.run`): the kinematic least
+/// squares of one trial's calibration, weighted as for the built-in methods.
+#[pyclass(name = "Problem", module = "calbench", frozen)]
+pub struct PyProblem {
+    inner: Arc<ExternalProblem>,
+}
+
+impl PyProblem {
+    /// `x` as a vector (a numpy array or a sequence of floats).
+    fn x(x: &Bound<'_, PyAny>) -> PyResult<Vec<Real>> {
+        if let Ok(a) = x.extract::<PyReadonlyArray1<'_, f64>>() {
+            return Ok(a.as_array().to_vec());
+        }
+        x.extract::<Vec<Real>>()
+            .map_err(|_| setting("x", "expected a 1-D array of floats"))
+    }
+}
+
+#[pymethods]
+impl PyProblem {
+    /// The identified parameters, in the order of the vector.
+    #[getter]
+    fn parameter_names(&self) -> Vec<String> {
+        self.inner.params().iter().map(|p| p.to_string()).collect()
+    }
+
+    /// The start: zero errors.
+    #[getter]
+    fn x0<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.inner.x0())
+    }
+
+    /// The prior weight of each measured point (1 without standard deviations).
+    #[getter]
+    fn weights<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray1<f64>> {
+        PyArray1::from_vec(py, self.inner.weights())
+    }
+
+    /// Rows of the residual per point: 3 (positions) or 6 (full poses).
+    #[getter]
+    fn rows_per_point(&self) -> usize {
+        self.inner.size().rows_per_point
+    }
+
+    /// The weighted residual √P·(measured − model(x)), one row per coordinate.
+    fn residual<'py>(
+        &self,
+        py: Python<'py>,
+        x: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyArray1<f64>>> {
+        let x = PyProblem::x(x)?;
+        let r = self
+            .inner
+            .evaluate(&x, |r, _| r.as_slice().to_vec())
+            .map_err(err)?;
+        Ok(PyArray1::from_vec(py, r))
+    }
+
+    /// The derivative of `residual(x)` (rows × parameters): a Gauss–Newton step is
+    /// `x - lstsq(J, r)`.
+    fn jacobian<'py>(&self, py: Python<'py>, x: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+        let x = PyProblem::x(x)?;
+        let j = self.inner.evaluate(&x, |_, j| j.clone()).map_err(err)?;
+        Ok(matrix(py, &j))
+    }
+
+    fn __repr__(&self) -> String {
+        let s = self.inner.size();
+        format!(
+            "calbench.Problem({} parameters, {} points)",
+            s.params, s.points
+        )
+    }
+}
+
+/// A Python callable as an external method: called with a `Problem` under the GIL; returns
+/// the vector, or (vector, termination name). An exception is the method's failure.
+fn python_method(f: Py<PyAny>) -> External {
+    External {
+        run: Arc::new(move |p: Arc<ExternalProblem>| {
+            Python::attach(|py| {
+                let text = |e: PyErr| {
+                    let name = e
+                        .get_type(py)
+                        .name()
+                        .map_or_else(|_| "Exception".to_string(), |n| n.to_string());
+                    format!("{name}: {}", e.value(py))
+                };
+                let problem = Py::new(py, PyProblem { inner: p }).map_err(text)?;
+                let out = f.bind(py).call1((problem,)).map_err(text)?;
+                let (x, name) = match out.cast::<PyTuple>() {
+                    Ok(t) if t.len() == 2 => {
+                        let name: String = t
+                            .get_item(1)
+                            .and_then(|n| n.extract())
+                            .map_err(|_| "the termination must be a string".to_string())?;
+                        (t.get_item(0).map_err(text)?, Some(name))
+                    }
+                    _ => (out, None),
+                };
+                let x: Vec<Real> = match x.extract::<PyReadonlyArray1<'_, f64>>() {
+                    Ok(a) => a.as_array().to_vec(),
+                    Err(_) => x.extract().map_err(|_| {
+                        "the method must return a 1-D float array (or a tuple of it and a \
+                         termination name)"
+                            .to_string()
+                    })?,
+                };
+                Ok((x, name))
+            })
+        }),
+    }
+}
+
+/// A finished run held in memory (the Python half's `Study` wraps it).
+#[pyclass(name = "_Run", module = "calbench", frozen)]
+pub struct PyRun {
+    inner: InMemoryRun,
+}
+
+#[pymethods]
+impl PyRun {
+    /// The text of `summary.json`.
+    fn summary_json(&self) -> PyResult<String> {
+        self.inner.summary_json().map_err(err)
+    }
+
+    /// The bytes of `trials.csv`.
+    fn trials_csv<'py>(&self, py: Python<'py>) -> Bound<'py, pyo3::types::PyBytes> {
+        pyo3::types::PyBytes::new(py, &self.inner.trials_csv)
+    }
+
+    /// Wall time of the run (s).
+    #[getter]
+    fn seconds(&self) -> f64 {
+        self.inner.result.seconds
+    }
+
+    /// Writes the folder `out` as `calbench run --out` does.
+    fn write(&self, py: Python<'_>, out: PathBuf) -> PyResult<()> {
+        py.detach(|| self.inner.write(&out)).map_err(err)
+    }
+}
+
+/// Runs a study (the Python half documents the arguments).
+#[pyfunction]
+#[pyo3(signature = (scenario, trials = None, seed = None, threads = None, methods = None,
+    progress = false))]
+pub(crate) fn run(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    trials: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    methods: Option<Bound<'_, PyDict>>,
+    progress: bool,
+) -> PyResult<PyRun> {
+    let mut sc = scenario_of(scenario)?
+        .with_run_overrides(trials, seed)
+        .map_err(err)?;
+    if threads == Some(0) {
+        return Err(setting("threads", "must be at least 1"));
+    }
+    if let Some(m) = methods {
+        for (label, f) in m.iter() {
+            let label: String = label
+                .extract()
+                .map_err(|_| setting("methods", "every key must be a label (a string)"))?;
+            if !f.is_callable() {
+                return Err(setting(
+                    &format!("methods.{label}"),
+                    "must be a function of a calbench.Problem",
+                ));
+            }
+            sc = sc
+                .with_method(MethodSpec::external(&label, python_method(f.unbind())))
+                .map_err(err)?;
+        }
+    }
+    let opts = RunOptions {
+        threads,
+        out: None,
+        progress,
+        shard: None,
+    };
+    let inner = py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err)?;
+    Ok(PyRun { inner })
+}

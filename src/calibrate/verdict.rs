@@ -1,0 +1,214 @@
+//! Whether an identification may be written: data that do not determine every parameter
+//! (refused unless `--allow-rank-deficient`), and a result that makes the robot worse than
+//! the nominal one (refused unless `--allow-worse`), each refusal naming the file, the cause
+//! and, where the residuals point to one, the gross reading likely behind it.
+
+use std::path::Path;
+
+use super::Calibrated;
+use crate::error::Error;
+use crate::identify::{MethodSpec, Termination};
+use crate::measurement::Measurements;
+use crate::numeric::Real;
+use crate::robot::identifiability::{analyse, Identifiability};
+use crate::robot::{Param, Robot};
+
+/// Whether a calibration left parameters undetermined (termination `rank-deficient` or
+/// `singular`).
+pub fn undetermined(c: &Calibrated) -> bool {
+    undetermined_termination(c.identified.termination)
+}
+
+/// Whether an identification that ended so left parameters undetermined (`rank-deficient`
+/// or `singular`).
+pub fn undetermined_termination(t: Termination) -> bool {
+    matches!(t, Termination::RankDeficient | Termination::Singular)
+}
+
+/// The refusal of a result `c` whose data (`data`, read from `source`) do not determine every
+/// parameter: the undetermined parameters and the dependent groups of the kinematic model
+/// (`params`: the kinematic parameters, which [`analyse`] can judge, and the number of all
+/// identified). `allow` names the option that accepts such a result. When the poses do
+/// determine every parameter (a solve made singular by the readings themselves), the
+/// message says so and names the gross reading the residuals point to, if any.
+pub fn undetermined_error(
+    nominal: &Robot,
+    params: (&[Param], usize),
+    c: &Calibrated,
+    (source, data): (&Path, &Measurements),
+    spec: &MethodSpec,
+    allow: &str,
+) -> Error {
+    let a = analyse(nominal, params.0, &data.qs, data.measure());
+    let ended = format!(
+        "{} ended {}, so nothing was written",
+        spec.name(),
+        c.identified.termination.as_str()
+    );
+    if a.rank >= params.0.len() && c.identified.rank.is_none_or(|k| k >= params.1) {
+        let gross = super::validation::point_residuals(nominal, c, data)
+            .ok()
+            .and_then(|(before, _)| gross_reading(&before))
+            .map_or(String::new(), |(i, ratio)| {
+                format!(
+                    "; point {i} lies {ratio:.0} times the median distance from the nominal \
+                     robot's: a gross reading is the likely cause"
+                )
+            });
+        return Error::file(
+            source,
+            "data",
+            format!(
+                "the poses determine all {} parameters, yet the solve did not settle{gross}; \
+                 {ended}. Check the readings, or pass {allow}",
+                params.1
+            ),
+        );
+    }
+    let (undetermined, groups) = names_and_groups(&a);
+    Error::file(
+        source,
+        "data",
+        format!(
+            "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
+             dependent groups: {}); {ended}. Measure poses that move every joint, or pass \
+             {allow}",
+            a.rank,
+            params.1,
+            c.identified.rank.unwrap_or(a.rank),
+            undetermined,
+            groups,
+        ),
+    )
+}
+
+/// The undetermined parameters of an analysis, space-separated, and its dependent groups
+/// (`[a b] [c d]`), as refusals name them.
+pub fn names_and_groups(a: &Identifiability) -> (String, String) {
+    let names = |v: &[Param]| {
+        v.iter()
+            .map(|p| p.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let groups: Vec<String> = a.groups.iter().map(|g| format!("[{}]", names(g))).collect();
+    (names(&a.unidentifiable), groups.join(" "))
+}
+
+/// A residual this many times the median of all (and the largest) marks its reading as
+/// gross.
+pub const GROSS_RATIO: Real = 20.0;
+
+/// The reading whose residual (`residuals`, one per reading, magnitudes) stands out: the
+/// largest, when it is at least [`GROSS_RATIO`] times the median and the next largest is
+/// not (one reading, not a drift); its index and its ratio to the median.
+pub fn gross_reading(residuals: &[Real]) -> Option<(usize, Real)> {
+    let mut sorted: Vec<Real> = residuals.iter().map(|r| r.abs()).collect();
+    if sorted.len() < 5 || sorted.iter().any(|r| !r.is_finite()) {
+        return None;
+    }
+    sorted.sort_by(Real::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let (top, next) = (sorted[sorted.len() - 1], sorted[sorted.len() - 2]);
+    let ratio = top / median;
+    if median <= 0.0 || ratio < GROSS_RATIO || next >= top / 2.0 {
+        return None;
+    }
+    let i = residuals.iter().position(|r| r.abs() == top)?;
+    Some((i, ratio))
+}
+
+/// Why a result makes the robot worse than the nominal one, each cause in words: a
+/// validation RMS after above the one before, a residual RMS after above the one before (the
+/// readings the robot was identified on), a solve that stopped at its iteration limit with a
+/// cost that grew (`trace`: the RMS residual at each evaluation). Empty: not worse.
+pub fn worse_causes(
+    validation: Option<(Real, Real)>,
+    residual: (Real, Real),
+    termination: Termination,
+    trace: Option<(Real, Real)>,
+) -> Vec<String> {
+    let mut w = Vec::new();
+    if let Some((before, after)) = validation.filter(|(b, a)| a > b) {
+        w.push(format!(
+            "the validation RMS is {after:.4} mm after calibration against {before:.4} mm before"
+        ));
+    }
+    let (before, after) = residual;
+    if after > before {
+        w.push(format!(
+            "the RMS residual on the calibration readings is {after:.4} mm after against \
+             {before:.4} mm before"
+        ));
+    }
+    if let (Termination::MaxIterations, Some((first, last))) = (termination, trace) {
+        if last > first {
+            w.push(format!(
+                "the solve stopped at its iteration limit with a growing cost (RMS residual \
+                 {first:.4} mm at the start, {last:.4} mm at the end)"
+            ));
+        }
+    }
+    w
+}
+
+/// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
+/// `source`; `gross` names a reading the residuals point to; `allow` the option that keeps
+/// it.
+pub fn worse_error(source: &Path, causes: &[String], gross: Option<String>, allow: &str) -> Error {
+    let gross = gross.map_or(String::new(), |g| {
+        format!("; {g}: a gross reading is the likely cause")
+    });
+    Error::file(
+        source,
+        "data",
+        format!(
+            "the identification makes the robot worse: {}{gross}; nothing was written. Check \
+             the readings (a column of one value, a unit, a swapped column), or pass {allow} \
+             to write it with a warning",
+            causes.join("; ")
+        ),
+    )
+}
+
+/// The root mean square of `v` (NaN when empty).
+pub fn rms(v: &[Real]) -> Real {
+    (v.iter().map(|x| x * x).sum::<Real>() / v.len() as Real).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_gross_reading_stands_out_and_a_drift_does_not() {
+        let mut r: Vec<Real> = (0..20).map(|i| 0.1 + 0.01 * i as Real).collect();
+        assert_eq!(gross_reading(&r), None);
+        r[7] = 999.0;
+        assert_eq!(gross_reading(&r).map(|g| g.0), Some(7));
+        r[8] = 900.0;
+        assert_eq!(gross_reading(&r), None, "two large ones: not one reading");
+    }
+
+    #[test]
+    fn worse_names_each_cause() {
+        let w = worse_causes(
+            Some((2.9, 1327.7)),
+            (0.1, 0.05),
+            Termination::Converged,
+            None,
+        );
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("1327.7000 mm after"), "{w:?}");
+        let w = worse_causes(
+            None,
+            (0.1, 0.2),
+            Termination::MaxIterations,
+            Some((1.0, 2.0)),
+        );
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            worse_causes(Some((2.0, 1.0)), (1.0, 1.0), Termination::Converged, None).is_empty()
+        );
+    }
+}

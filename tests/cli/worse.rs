@@ -1,0 +1,263 @@
+//! Identifications that make the robot worse are refused, naming the file and the cause, and
+//! written with a warning under `--allow-worse`: a plane file whose `plane` column is all 1, a
+//! multi-target file whose `x` column is all 0, a tracker's file with a column scaled; a gross
+//! reading is named; and `--export toml,ur-yaml` writes both files.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{
+    calbench, calbench_ok, import_ur10_sample, load_json, path_arg, positions_only, read, tmp_dir,
+    ur10_example as ex,
+};
+
+/// `simulate scenarios/instruments.toml --measure KIND` into `dir`: the measurement and
+/// validation files.
+fn simulated(dir: &Path, kind: &str) -> (PathBuf, PathBuf) {
+    let out = dir.join(format!("sim-{kind}"));
+    let sc = crate::common::root().join("scenarios/instruments.toml");
+    calbench_ok(&[
+        "simulate",
+        path_arg(&sc),
+        "--measure",
+        kind,
+        "--out",
+        path_arg(&out),
+    ]);
+    (out.join("measurements.csv"), out.join("validation.csv"))
+}
+
+/// `src` with column `column` set to `value` (on row `row` only, 0-based, when given),
+/// written to `dst`.
+fn with_column(src: &Path, dst: &Path, column: &str, value: &str, row: Option<usize>) {
+    let text = read(src);
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let k = header.split(',').position(|c| c == column).unwrap();
+    let mut out = format!("{header}\n");
+    for (i, line) in lines.enumerate() {
+        let mut cells: Vec<&str> = line.split(',').collect();
+        if row.is_none_or(|r| r == i) {
+            cells[k] = value;
+        }
+        out += &(cells.join(",") + "\n");
+    }
+    std::fs::write(dst, out).unwrap();
+}
+
+/// `identify --robot irb2600 --data DATA --validate VAL EXTRA… --out OUT` (EXTRA without
+/// `--method`: `--method lm`).
+fn identify(data: &Path, val: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        path_arg(data),
+        "--validate",
+        path_arg(val),
+        "--out",
+        path_arg(out),
+    ];
+    args.extend_from_slice(extra);
+    if !extra.contains(&"--method") {
+        args.extend_from_slice(&["--method", "lm"]);
+    }
+    calbench(&args)
+}
+
+/// Each bad file: refused (exit non-zero, the file and the validation named, nothing
+/// written); with `--allow-worse` written, the warning on stderr and the causes in
+/// identified.json's `allowed_worse`. The untouched file passes as before.
+#[test]
+fn a_worse_robot_is_refused_unless_allowed() {
+    let d = tmp_dir("cli-worse");
+    let (plane, plane_val) = simulated(&d, "plane");
+    let (targets, targets_val) = simulated(&d, "multi-target");
+    let plane1 = d.join("plane1.csv");
+    with_column(&plane, &plane1, "plane", "1", None);
+    let x0 = d.join("x0.csv");
+    with_column(&targets, &x0, "x", "0", None);
+    for (bad, val) in [(&plane1, &plane_val), (&x0, &targets_val)] {
+        let out = d.join("refused");
+        let o = identify(bad, val, &out, &[]);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(!o.status.success(), "{err}");
+        assert!(err.contains(path_arg(bad)), "{err}");
+        assert!(err.contains("makes the robot worse"), "{err}");
+        assert!(err.contains("validation RMS"), "{err}");
+        assert!(err.contains("--allow-worse"), "{err}");
+        assert!(!out.exists(), "nothing is written");
+        let kept = d.join("kept");
+        let o = identify(bad, val, &kept, &["--allow-worse"]);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{err}");
+        assert!(
+            err.contains("warning: the identification makes the robot worse"),
+            "{err}"
+        );
+        let j = load_json(&kept.join("identified.json"));
+        let causes = j["allowed_worse"].as_array().unwrap();
+        assert!(
+            causes[0].as_str().unwrap().contains("validation RMS"),
+            "{causes:?}"
+        );
+        let after = j["validation_after_mm"]["rms"].as_f64().unwrap();
+        let before = j["validation_before_mm"]["rms"].as_f64().unwrap();
+        assert!(after > 10.0 * before, "{after} {before}");
+        std::fs::remove_dir_all(&kept).unwrap();
+    }
+    for (good, val) in [(&plane, &plane_val), (&targets, &targets_val)] {
+        let out = d.join("good");
+        let o = identify(good, val, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(load_json(&out.join("identified.json"))
+            .get("allowed_worse")
+            .is_none());
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+}
+
+/// One reading of 999999 in a sphere or multi-target file (the third target of the second
+/// pose): refused, naming the reading's place as the likely cause, never with "rank N of N".
+#[test]
+fn a_gross_reading_is_named() {
+    let d = tmp_dir("cli-gross");
+    let places = [
+        ("sphere", "offset_mm", "the reading of line 7"),
+        (
+            "multi-target",
+            "x",
+            "target 3 of the pose that starts on line 5",
+        ),
+    ];
+    for (kind, column, place) in places {
+        let (data, val) = simulated(&d, kind);
+        let bad = d.join(format!("{kind}-gross.csv"));
+        with_column(&data, &bad, column, "999999", Some(5));
+        for method in ["ls", "lm"] {
+            let out = d.join("out");
+            let o = identify(&bad, &val, &out, &["--method", method]);
+            let err = String::from_utf8_lossy(&o.stderr).to_string();
+            assert!(!o.status.success(), "{kind} {method}: {err}");
+            assert!(!out.exists());
+            assert!(err.contains(place), "{kind} {method}: {err}");
+            assert!(err.contains("gross reading"), "{kind} {method}: {err}");
+            let words: Vec<&str> = err.split_whitespace().collect();
+            for w in words.windows(4) {
+                let same = w[0] == "(rank" && w[2] == "of" && w[1] == w[3].trim_end_matches(')');
+                assert!(!same, "{kind} {method}: {err}");
+            }
+        }
+    }
+}
+
+/// A tracker's file whose `y` column is scaled by 0.9: validated on the untouched rows the
+/// robot comes out worse, so it is refused; with `--allow-worse` the warning is on stderr,
+/// in identified.json and in both reports.
+#[test]
+fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
+    let d = tmp_dir("cli-worse-tracker");
+    let all = d.join("all.csv");
+    import_ur10_sample(&ex("mapping.toml"), &all);
+    let pos = d.join("pos.csv");
+    positions_only(&all, &pos);
+    let text = read(&pos);
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let (mut cal, mut bad, mut val) = (header.clone(), header.clone(), header);
+    for (i, line) in lines.enumerate() {
+        if i % 10 >= 7 {
+            val += &format!("\n{line}");
+            continue;
+        }
+        cal += &format!("\n{line}");
+        let mut c: Vec<String> = line.split(',').map(String::from).collect();
+        c[7] = format!("{}", c[7].parse::<f64>().unwrap() * 0.9);
+        bad += &format!("\n{}", c.join(","));
+    }
+    for (name, text) in [("cal.csv", &cal), ("bad.csv", &bad), ("val.csv", &val)] {
+        std::fs::write(d.join(name), format!("{text}\n")).unwrap();
+    }
+    let robot = ex("ur10.toml");
+    let run = |data: &str, out: &Path, extra: &[&str]| {
+        let (data, val) = (d.join(data), d.join("val.csv"));
+        let mut args = vec!["identify", "--robot", &robot, "--data", path_arg(&data)];
+        args.extend_from_slice(&["--validate", path_arg(&val), "--method", "lm"]);
+        args.extend_from_slice(&["--out", path_arg(out)]);
+        args.extend_from_slice(extra);
+        calbench(&args)
+    };
+    let o = run("bad.csv", &d.join("refused"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("bad.csv") && err.contains("makes the robot worse"),
+        "{err}"
+    );
+    assert!(!d.join("refused").exists());
+    let kept = d.join("kept");
+    let o = run("bad.csv", &kept, &["--allow-worse"]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the identification makes the robot worse"),
+        "{err}"
+    );
+    let j = load_json(&kept.join("identified.json"));
+    assert!(j["allowed_worse"][0]
+        .as_str()
+        .unwrap()
+        .contains("validation RMS"));
+    for report in ["report.md", "report.html"] {
+        assert!(
+            read(&kept.join(report)).contains("makes the robot worse"),
+            "{report}"
+        );
+    }
+    let good = d.join("good");
+    let o = run("cal.csv", &good, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(load_json(&good.join("identified.json"))
+        .get("allowed_worse")
+        .is_none());
+}
+
+/// `--export toml,ur-yaml` writes robot.toml and ur-kinematics.yaml (it wrote no YAML), and
+/// the YAML is the one `--export ur-yaml` writes.
+#[test]
+fn export_toml_and_ur_yaml_writes_both() {
+    let d = tmp_dir("cli-export-both");
+    let all = d.join("all.csv");
+    import_ur10_sample(&ex("mapping.toml"), &all);
+    let pos = d.join("pos.csv");
+    positions_only(&all, &pos);
+    let run = |export: &str| {
+        let out = d.join(export.replace(',', "-"));
+        let robot = ex("ur10.toml");
+        calbench_ok(&[
+            "identify",
+            "--robot",
+            &robot,
+            "--data",
+            path_arg(&pos),
+            "--method",
+            "lm",
+            "--export",
+            export,
+            "--out",
+            path_arg(&out),
+        ]);
+        out
+    };
+    let both = run("toml,ur-yaml");
+    let yaml = run("ur-yaml");
+    assert!(both.join("robot.toml").is_file());
+    assert_eq!(
+        read(&both.join("ur-kinematics.yaml")),
+        read(&yaml.join("ur-kinematics.yaml"))
+    );
+    assert_eq!(
+        read(&both.join("robot.toml")),
+        read(&yaml.join("robot.toml"))
+    );
+}
