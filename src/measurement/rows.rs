@@ -1,6 +1,7 @@
-//! The rows of the measurement CSVs (docs/formats.md § 5): a header of column names, then
-//! data rows read a line at a time, `#` comment and blank lines skipped but counted, so that
-//! every refusal names the file's own line.
+//! The rows of the measurement CSVs (docs/formats.md § 5) and of the raw exports `import`
+//! reads (§ 6): a header of column names, then data rows read a line at a time by the `csv`
+//! crate (quoted fields, CRLF line ends, a UTF-8 byte-order mark), `#` comment and blank lines
+//! skipped but counted, so that every refusal names the file's own line.
 
 use std::path::Path;
 
@@ -44,9 +45,17 @@ pub(crate) struct Rows {
 }
 
 impl Rows {
-    /// Opens `path` and reads its header; an empty file is refused, `expected` saying what
-    /// header it should have had.
+    /// Opens the measurement CSV `path` (comma-separated, `#` comment lines) and reads its
+    /// header; an empty file is refused, `expected` saying what header it should have had.
     pub fn open(path: &Path, expected: &str) -> Result<Rows> {
+        Rows::open_with(path, expected, b',', true)
+    }
+
+    /// Opens `path`, its fields separated by `delimiter` (one ASCII byte), its lines that
+    /// start with `#` comments when `comments` says so (a raw export's header may start with
+    /// `#`), and reads its header; an empty file is refused, `expected` saying what header it
+    /// should have had.
+    pub fn open_with(path: &Path, expected: &str, delimiter: u8, comments: bool) -> Result<Rows> {
         // `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
         // reader), and each line number the reader gives is mapped back to the file's
         // through the lines that are not empty.
@@ -54,8 +63,9 @@ impl Rows {
         let mut rd = ::csv::ReaderBuilder::new()
             .has_headers(true)
             .flexible(true)
+            .delimiter(delimiter)
             .trim(::csv::Trim::All)
-            .from_reader(Uncommented::new(std::io::BufReader::new(file)));
+            .from_reader(Uncommented::new(std::io::BufReader::new(file), comments));
         let header = rd
             .headers()
             .map_err(|e| at_line(path, 1, "", format!("cannot read the header: {e}")))?
@@ -139,21 +149,27 @@ impl Rows {
     }
 }
 
-/// A file read a line at a time with its `#` comment lines emptied (their line breaks kept),
-/// noting the file line number of each line that is not empty: the `n`-th non-empty line
-/// the CSV reader counts is file line `kept[n - 1]`.
+/// A file read a line at a time with a UTF-8 byte-order mark at its start dropped, CRLF line
+/// ends read as LF, its lines of blanks and (when `comments`) its `#` comment lines emptied
+/// (their line breaks kept), noting the file line number of each line that is not empty: the
+/// `n`-th non-empty line the CSV reader counts is file line `kept[n - 1]`.
 struct Uncommented<R> {
     inner: R,
+    comments: bool,
     line: Vec<u8>,
     at: usize,
     count: u64,
     kept: Vec<u64>,
 }
 
+/// The UTF-8 byte-order mark.
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
 impl<R: std::io::BufRead> Uncommented<R> {
-    fn new(inner: R) -> Self {
+    fn new(inner: R, comments: bool) -> Self {
         Uncommented {
             inner,
+            comments,
             line: Vec::new(),
             at: 0,
             count: 0,
@@ -171,9 +187,18 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
                 return Ok(0);
             }
             self.count += 1;
-            if self.line.first() == Some(&b'#') {
+            if self.count == 1 && self.line.starts_with(BOM) {
+                self.line.drain(..BOM.len());
+            }
+            // A CRLF line end is read as LF: the reader counts a CRLF row's line from the
+            // line before.
+            if self.line.ends_with(b"\r\n") {
+                self.line.remove(self.line.len() - 2);
+            }
+            let blank = self.line.iter().all(u8::is_ascii_whitespace);
+            if blank || (self.comments && self.line.first() == Some(&b'#')) {
                 self.line.retain(|&b| b == b'\r' || b == b'\n');
-            } else if self.line.iter().any(|&b| b != b'\r' && b != b'\n') {
+            } else {
                 self.kept.push(self.count);
             }
         }
