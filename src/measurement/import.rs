@@ -16,7 +16,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use super::rows::{at_line, Rows};
+use super::rows::{at_line, Dialect, Rows};
 use crate::error::{shown, toml_key_line, Error, Result};
 use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
 
@@ -402,7 +402,10 @@ pub fn euler_matrix(axes: [usize; 3], v: [Real; 3], intrinsic: bool) -> Mat3 {
 /// header is its first line that is not blank.
 pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
     let (_, plan) = Mapping::load_plan(mapping_path)?;
-    let mut t = Rows::open_with(raw, "of column names", plan.sep, false)?;
+    let dialect = Dialect::Export {
+        separator: plan.sep,
+    };
+    let mut t = Rows::open_with(raw, "of column names", dialect)?;
     let header = t.names.clone();
     let header_line = t.header_line;
     let find = |key: &str, name: &str| -> Result<usize> {

@@ -503,3 +503,23 @@ fn a_huge_number_in_a_refusal_is_written_in_exponent_form() {
         assert!(msg.len() < 300, "{msg}");
     }
 }
+
+#[test]
+fn import_reads_an_export_with_latin_1_bytes_in_an_unmapped_column() {
+    let d = tmp_dir("interchange-latin1");
+    let (plain, mapping) = comma_export(&d);
+    let plain_raw = d.join("plain.csv");
+    std::fs::write(&plain_raw, &plain).unwrap();
+    // `note` renamed `t °C` in Latin-1 (0xB0), which is not UTF-8.
+    let mut latin = plain.replacen(",note\n", ",t \u{1}C\n", 1).into_bytes();
+    let at = latin.iter().position(|&b| b == 1).unwrap();
+    latin[at] = 0xB0;
+    let latin_raw = d.join("latin.csv");
+    std::fs::write(&latin_raw, &latin).unwrap();
+    let (a, b) = (d.join("a.csv"), d.join("b.csv"));
+    for (raw, out) in [(&plain_raw, &a), (&latin_raw, &b)] {
+        let o = import(raw, &mapping, out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
