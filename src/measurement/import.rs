@@ -7,7 +7,8 @@
 //! quaternion's component order) and the per-point standard deviations, which become the
 //! `sigma_mm` weight column (weighted least squares in every method, [`Measurements::weights`]).
 //! A cell that is empty or not a finite number is refused naming the file, the line and the
-//! column; nothing is dropped.
+//! column; nothing is dropped. Nothing ambiguous is guessed either: a mapped column whose name
+//! the header holds twice, and a mapping that names one column for two fields, are refused.
 //!
 //! [`Measurements::weights`]: crate::measurement::Measurements::weights
 
@@ -161,7 +162,8 @@ pub struct SigmaColumns {
     pub combine: Combine,
 }
 
-/// A checked mapping: single-character separators, resolved conventions.
+/// A checked mapping: an ASCII separator, a decimal mark, resolved conventions, no column
+/// named twice.
 struct Plan {
     /// The field separator, one ASCII byte.
     sep: u8,
