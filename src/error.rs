@@ -163,6 +163,18 @@ pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
     span.map(|s| line_of(text, s.start))
 }
 
+/// A number as a refusal shows it: as `{}` writes it (`0.5`, `-180`), but in exponent form
+/// (`1e300`, `-2.5e-9`) where that would be a long run of digits (magnitudes from 1e16 on, or
+/// below 1e-5).
+pub fn shown(v: f64) -> String {
+    let a = v.abs();
+    if a.is_finite() && a != 0.0 && !(1e-5..1e16).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// Refuses a setting `v` unless it is finite and positive (the error names `key`).
 pub fn finite_positive(key: &str, v: f64) -> Result<()> {
     if v.is_finite() && v > 0.0 {
@@ -170,7 +182,7 @@ pub fn finite_positive(key: &str, v: f64) -> Result<()> {
     } else {
         Err(Error::setting(
             key,
-            format!("must be finite and positive, got {v}"),
+            format!("must be finite and positive, got {}", shown(v)),
         ))
     }
 }
@@ -182,7 +194,7 @@ pub fn finite_non_negative(key: &str, v: f64) -> Result<()> {
     } else {
         Err(Error::setting(
             key,
-            format!("must be finite and non-negative, got {v}"),
+            format!("must be finite and non-negative, got {}", shown(v)),
         ))
     }
 }
@@ -198,6 +210,25 @@ pub fn check_count(key: &str, n: usize) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn numbers_are_shown_short() {
+        use super::shown;
+        assert_eq!(shown(1e300), "1e300");
+        assert_eq!(shown(-1e300), "-1e300");
+        assert_eq!(shown(1e16), "1e16");
+        assert_eq!(shown(2.5e-9), "2.5e-9");
+        for (v, s) in [
+            (0.5, "0.5"),
+            (-180.0, "-180"),
+            (0.0, "0"),
+            (123456.75, "123456.75"),
+        ] {
+            assert_eq!(shown(v), s);
+        }
+        assert_eq!(shown(f64::INFINITY), "inf");
+        assert_eq!(shown(f64::NAN), "NaN");
+    }
+
     use super::*;
 
     const TEXT: &str = "name = \"x\"\n\n[calibration]\ncount = 5\nregion = { kind = \"box\" }\n\n\

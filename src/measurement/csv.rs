@@ -14,6 +14,8 @@
 //! column. A measurement CSV with fewer than [`MIN_DISTINCT_POSES`] distinct poses is refused
 //! too, naming its data lines: it can neither be registered nor identify anything.
 
+mod checks;
+
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -21,6 +23,10 @@ use crate::error::{Error, Result};
 use crate::measurement::rows::{at_line, number, Rows};
 use crate::measurement::{JointSpace, Measurements};
 use crate::numeric::{Real, Vec3};
+
+pub use checks::measurements_from_arrays;
+pub(crate) use checks::{check_coordinate, check_joints, check_sigma, distinct_poses, user_limits};
+use checks::{check_payload, unit_quaternion};
 
 const QUAT: [&str; 4] = ["qw", "qx", "qy", "qz"];
 const XYZ: [&str; 3] = ["x", "y", "z"];
@@ -302,231 +308,6 @@ pub(crate) fn read_table(
         sigma_mm: sigma_col.map(|_| sigma),
         payload_kg: payload_col.map(|_| payload),
     })
-}
-
-/// Joint values `quser` (the robot's units) of one pose converted to internal units and
-/// checked: finite after the conversion and within the limits (`lim`: the limits in the
-/// robot's units, for the message). A refusal is (column, message).
-pub(crate) fn check_joints(
-    robot: &(impl JointSpace + ?Sized),
-    quser: &[Real],
-    lim: (&[Real], &[Real]),
-) -> std::result::Result<Vec<Real>, (String, String)> {
-    let q = robot.q_from_user(quser);
-    for (j, v) in q.iter().enumerate() {
-        let column = || format!("q{}", j + 1);
-        if !v.is_finite() {
-            return Err((
-                column(),
-                format!(
-                    "{:?} overflows: it is {v} in internal units (mm or rad); the joint \
-                     limits are [{}, {}]",
-                    quser[j], lim.0[j], lim.1[j]
-                ),
-            ));
-        }
-        let (lo, hi) = robot.limits(j);
-        if *v < lo - 1e-9 || *v > hi + 1e-9 {
-            return Err((
-                column(),
-                format!(
-                    "{} is outside the joint limits [{}, {}]",
-                    quser[j], lim.0[j], lim.1[j]
-                ),
-            ));
-        }
-    }
-    Ok(q)
-}
-
-/// A measured coordinate (mm) within ±[`MAX_POINT_MM`].
-pub(crate) fn check_coordinate(v: Real) -> std::result::Result<(), String> {
-    if v.abs() > MAX_POINT_MM {
-        return Err(format!(
-            "{v:?} mm is out of range: a measured coordinate must be within \
-             ±{MAX_POINT_MM} mm (1 km)"
-        ));
-    }
-    Ok(())
-}
-
-/// A quaternion `[qw, qx, qy, qz]` of unit length within 1e-3, normalised.
-fn unit_quaternion(qq: [Real; 4]) -> std::result::Result<[Real; 4], String> {
-    let n = qq.iter().map(|v| v * v).sum::<Real>().sqrt();
-    if (n - 1.0).abs() > 1e-3 {
-        return Err(format!(
-            "the quaternion has length {n}, expected a unit quaternion"
-        ));
-    }
-    Ok(qq.map(|v| v / n))
-}
-
-/// A standard deviation (mm) within [[`MIN_SIGMA_MM`], [`MAX_POINT_MM`]].
-pub(crate) fn check_sigma(v: Real) -> std::result::Result<(), String> {
-    if v <= 0.0 {
-        return Err(format!("{v} is not a positive standard deviation"));
-    }
-    if !(MIN_SIGMA_MM..=MAX_POINT_MM).contains(&v) {
-        return Err(format!(
-            "{v:?} mm is out of range: a standard deviation must be within \
-             [{MIN_SIGMA_MM}, {MAX_POINT_MM}] mm (its weight 1/σ² must not overflow)"
-        ));
-    }
-    Ok(())
-}
-
-/// A payload (kg) ≥ 0.
-fn check_payload(v: Real) -> std::result::Result<(), String> {
-    if v < 0.0 {
-        return Err(format!("{v} is not a payload ≥ 0 kg"));
-    }
-    Ok(())
-}
-
-/// Measured poses given as arrays rather than a file (the Python module's `identify`):
-/// joint values in the robot's units, points in mm, optional unit quaternions
-/// `[qw, qx, qy, qz]`, standard deviations (mm) and payloads (kg), one per pose. Every value
-/// is checked as a measurement CSV's ([`read_measurements`]), a refusal naming the setting
-/// `what`, the row (0-based) and the column.
-pub fn measurements_from_arrays(
-    robot: &(impl JointSpace + ?Sized),
-    what: &str,
-    qs: &[Vec<Real>],
-    points: &[[Real; 3]],
-    quats: Option<&[[Real; 4]]>,
-    sigma_mm: Option<&[Real]>,
-    payload_kg: Option<&[Real]>,
-) -> Result<Measurements> {
-    let n = qs.len();
-    let bad = |msg: String| Error::setting(what, msg);
-    let lengths = [
-        ("points", Some(points.len())),
-        ("rotations", quats.map(<[_]>::len)),
-        ("sigma", sigma_mm.map(<[_]>::len)),
-        ("payload", payload_kg.map(<[_]>::len)),
-    ];
-    for (name, len) in lengths {
-        if let Some(len) = len.filter(|&l| l != n) {
-            return Err(bad(format!("{n} joint vectors but {len} rows of {name}")));
-        }
-    }
-    if n == 0 {
-        return Err(bad("no poses".into()));
-    }
-    let dof = robot.dof();
-    let (lim_lo, lim_hi) = user_limits(robot);
-    let at = |i: usize, column: &str, msg: String| bad(format!("row {i}, column {column}: {msg}"));
-    let finite = |i: usize, column: &str, v: Real| {
-        if v.is_finite() {
-            Ok(v)
-        } else {
-            Err(at(i, column, format!("{v} is not a finite number")))
-        }
-    };
-    let mut m = Measurements {
-        quats: quats.map(|_| Vec::with_capacity(n)),
-        sigma_mm: sigma_mm.map(<[_]>::to_vec),
-        payload_kg: payload_kg.map(<[_]>::to_vec),
-        ..Measurements::default()
-    };
-    for (i, quser) in qs.iter().enumerate() {
-        if quser.len() != dof {
-            return Err(Error::joint_count(
-                what,
-                format_args!("row {i}"),
-                quser.len(),
-                dof,
-            ));
-        }
-        if let Some(j) = quser.iter().position(|v| !v.is_finite()) {
-            finite(i, &format!("q{}", j + 1), quser[j])?;
-        }
-        let q =
-            check_joints(robot, quser, (&lim_lo, &lim_hi)).map_err(|(c, msg)| at(i, &c, msg))?;
-        m.qs.push(q);
-        for (k, &v) in points[i].iter().enumerate() {
-            check_coordinate(finite(i, XYZ[k], v)?).map_err(|msg| at(i, XYZ[k], msg))?;
-        }
-        m.points.push(Vec3::from(points[i]));
-        if let (Some(all), Some(out)) = (quats, m.quats.as_mut()) {
-            for (k, &v) in all[i].iter().enumerate() {
-                finite(i, QUAT[k], v)?;
-            }
-            out.push(unit_quaternion(all[i]).map_err(|msg| at(i, "qw", msg))?);
-        }
-        if let Some(s) = sigma_mm {
-            check_sigma(finite(i, SIGMA, s[i])?).map_err(|msg| at(i, SIGMA, msg))?;
-        }
-        if let Some(p) = payload_kg {
-            check_payload(finite(i, PAYLOAD, p[i])?).map_err(|msg| at(i, PAYLOAD, msg))?;
-        }
-    }
-    let rows: Vec<u64> = (0..n as u64).collect();
-    if distinct_poses(&m.qs, &rows, dof).is_err() {
-        return Err(bad(format!(
-            "fewer than {MIN_DISTINCT_POSES} distinct poses among the {n} rows: the frame \
-             cannot be registered nor anything identified"
-        )));
-    }
-    Ok(m)
-}
-
-/// The joint limits in the robot's units (for messages): (lower, upper).
-pub(crate) fn user_limits(robot: &(impl JointSpace + ?Sized)) -> (Vec<Real>, Vec<Real>) {
-    let dof = robot.dof();
-    let side = |k: fn((Real, Real)) -> Real| {
-        robot.q_to_user(&(0..dof).map(|j| k(robot.limits(j))).collect::<Vec<_>>())
-    };
-    (side(|l| l.0), side(|l| l.1))
-}
-
-/// Refuses rows of fewer than [`MIN_DISTINCT_POSES`] distinct poses (`qs`, read from the
-/// file's `lines`): (the first data line, message).
-pub(crate) fn distinct_poses(
-    qs: &[Vec<Real>],
-    lines: &[u64],
-    dof: usize,
-) -> std::result::Result<(), (u64, String)> {
-    let mut first: Vec<usize> = Vec::new();
-    for (i, q) in qs.iter().enumerate() {
-        let seen = first
-            .iter()
-            .any(|&k| qs[k].iter().zip(q).all(|(a, b)| a.to_bits() == b.to_bits()));
-        if !seen {
-            first.push(i);
-            if first.len() >= MIN_DISTINCT_POSES {
-                return Ok(());
-            }
-        }
-    }
-    let at = |i: usize| lines.get(i).copied().unwrap_or(0);
-    let rows = qs.len();
-    let span = format!("lines {} to {}", at(0), at(rows - 1));
-    let what = if first.len() == 1 {
-        if rows == 1 {
-            format!("the file has one row (line {}), one pose", at(0))
-        } else {
-            format!(
-                "all {rows} rows ({span}) are the same pose, the joint values of line {}",
-                at(0)
-            )
-        }
-    } else {
-        let seen: Vec<String> = first.iter().map(|&i| at(i).to_string()).collect();
-        format!(
-            "the {rows} rows ({span}) hold only {} distinct poses, first seen on lines {}",
-            first.len(),
-            seen.join(" and ")
-        )
-    };
-    Err((
-        at(0),
-        format!(
-            "{what}: a measurement needs at least {MIN_DISTINCT_POSES} distinct poses (rows \
-             of distinct q1…q{dof}): the instrument frame is registered on at least three \
-             points not on a line, and the poses of a calibration must move the joints"
-        ),
-    ))
 }
 
 #[cfg(test)]

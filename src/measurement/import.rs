@@ -7,17 +7,18 @@
 //! quaternion's component order) and the per-point standard deviations, which become the
 //! `sigma_mm` weight column (weighted least squares in every method, [`Measurements::weights`]).
 //! A cell that is empty or not a finite number is refused naming the file, the line and the
-//! column; nothing is dropped.
+//! column; nothing is dropped. Nothing ambiguous is guessed either: a mapped column whose name
+//! the header holds twice, and a mapping that names one column for two fields, are refused.
 //!
 //! [`Measurements::weights`]: crate::measurement::Measurements::weights
 
-use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::error::{Error, Result};
+use super::rows::{at_line, Dialect, Rows};
+use crate::error::{shown, toml_key_line, Error, Result};
 use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
 
 /// A mapping file: how to read one tracker export.
@@ -161,9 +162,11 @@ pub struct SigmaColumns {
     pub combine: Combine,
 }
 
-/// A checked mapping: single-character separators, resolved conventions.
+/// A checked mapping: an ASCII separator, a decimal mark, resolved conventions, no column
+/// named twice.
 struct Plan {
-    sep: char,
+    /// The field separator, one ASCII byte.
+    sep: u8,
     decimal: char,
     joints: (Vec<String>, Real),
     position: ([String; 3], Real),
@@ -188,15 +191,61 @@ enum Orient {
 impl Mapping {
     /// Reads and checks a mapping file.
     pub fn load(path: &Path) -> Result<Mapping> {
+        Mapping::load_plan(path).map(|(m, _)| m)
+    }
+
+    /// Reads and checks a mapping file, and resolves it.
+    fn load_plan(path: &Path) -> Result<(Mapping, Plan)> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let m: Mapping = toml::from_str(&text)
             .map_err(|e| Error::file(path, "mapping", e.message().to_string()))?;
-        m.plan(path)?;
-        Ok(m)
+        let plan = m.plan(path, &text)?;
+        Ok((m, plan))
     }
 
-    fn plan(&self, path: &Path) -> Result<Plan> {
-        let bad = |key: &str, msg: String| Error::file(path, key, msg);
+    /// Every column the mapping names, with its key (`position.columns[1]`), in the order of
+    /// the file.
+    fn named_columns(&self) -> Vec<(String, &str)> {
+        let fields: [(&str, &[String]); 4] = [
+            ("joints.columns", &self.joints.columns),
+            ("position.columns", &self.position.columns),
+            (
+                "orientation.columns",
+                self.orientation.as_ref().map_or(&[], |o| &o.columns),
+            ),
+            (
+                "sigma.position",
+                self.sigma.as_ref().map_or(&[], |s| &s.position),
+            ),
+        ];
+        fields
+            .into_iter()
+            .flat_map(|(key, names)| {
+                names
+                    .iter()
+                    .enumerate()
+                    .map(move |(i, n)| (format!("{key}[{i}]"), n.as_str()))
+            })
+            .collect()
+    }
+
+    fn plan(&self, path: &Path, text: &str) -> Result<Plan> {
+        let bad = |key: &str, msg: String| {
+            let place = crate::error::at_line(toml_key_line(text, key), key);
+            Error::file(path, place, msg)
+        };
+        let named = self.named_columns();
+        for (k, (key, name)) in named.iter().enumerate() {
+            if let Some((first, _)) = named[..k].iter().find(|(_, n)| n == name) {
+                return Err(bad(
+                    key,
+                    format!(
+                        "column \"{name}\" is mapped already by `{first}`: a column gives one \
+                         field"
+                    ),
+                ));
+            }
+        }
         let one_char = |key: &str, s: &str| {
             let mut c = s.chars();
             match (c.next(), c.next()) {
@@ -205,8 +254,17 @@ impl Mapping {
             }
         };
         let sep = one_char("separator", &self.separator)?;
+        let sep = u8::try_from(sep)
+            .ok()
+            .filter(|b| b.is_ascii() && !matches!(b, b'"' | b'\r' | b'\n'))
+            .ok_or_else(|| {
+                bad(
+                    "separator",
+                    format!("\"{sep}\": an ASCII character other than the quote and a line break"),
+                )
+            })?;
         let decimal = one_char("decimal", &self.decimal)?;
-        if !matches!(decimal, '.' | ',') || decimal == sep {
+        if !matches!(decimal, '.' | ',') || decimal == char::from(sep) {
             return Err(bad(
                 "decimal",
                 format!("\"{decimal}\": \".\" or \",\", and not the separator"),
@@ -234,7 +292,7 @@ impl Mapping {
         let orientation = self
             .orientation
             .as_ref()
-            .map(|o| o.plan(path))
+            .map(|o| o.plan(path, text))
             .transpose()?;
         let sigma = match &self.sigma {
             Some(s) if s.position.is_empty() => {
@@ -255,8 +313,12 @@ impl Mapping {
 }
 
 impl OrientationColumns {
-    fn plan(&self, path: &Path) -> Result<Orient> {
-        let bad = |key: &str, msg: &str| Error::file(path, format!("orientation.{key}"), msg);
+    fn plan(&self, path: &Path, text: &str) -> Result<Orient> {
+        let bad = |key: &str, msg: &str| {
+            let key = format!("orientation.{key}");
+            let place = crate::error::at_line(toml_key_line(text, &key), &key);
+            Error::file(path, place, msg)
+        };
         let n = self.columns.len();
         match self.kind {
             OrientationKind::Euler => {
@@ -337,24 +399,33 @@ pub fn euler_matrix(axes: [usize; 3], v: [Real; 3], intrinsic: bool) -> Mat3 {
 }
 
 /// Reads the export `raw` as `mapping` says and writes the measurement CSV `out`; returns the
-/// number of rows written.
+/// number of rows written. The export is read by the `csv` crate as the measurement files are
+/// (docs/formats.md § 5.1): quoted fields, CRLF line ends and a UTF-8 byte-order mark; its
+/// header is its first line that is not blank.
 pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
-    let mapping = Mapping::load(mapping_path)?;
-    let plan = mapping.plan(mapping_path)?;
-    let bytes = std::fs::read(raw).map_err(|e| Error::io(raw, e))?;
-    let text = String::from_utf8_lossy(&bytes);
-    let mut lines = text
-        .lines()
-        .enumerate()
-        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')));
-    let (_, head) = lines
-        .find(|(_, l)| !l.trim().is_empty())
-        .ok_or_else(|| Error::file(raw, "line 1", "the export is empty (no header line)"))?;
-    let header: Vec<&str> = head.split(plan.sep).map(str::trim).collect();
-    let index: HashMap<&str, usize> = header.iter().enumerate().map(|(i, h)| (*h, i)).collect();
-    let find = |key: &str, name: &str| {
-        index.get(name).copied().ok_or_else(|| {
-            Error::file(
+    let (_, plan) = Mapping::load_plan(mapping_path)?;
+    let dialect = Dialect::Export {
+        separator: plan.sep,
+    };
+    let mut t = Rows::open_with(raw, "of column names", dialect)?;
+    let header = t.names.clone();
+    let header_line = t.header_line;
+    let find = |key: &str, name: &str| -> Result<usize> {
+        let mut at = header.iter().enumerate().filter(|(_, h)| *h == name);
+        match (at.next(), at.next()) {
+            (Some((i, _)), None) => Ok(i),
+            (Some((i, _)), Some((k, _))) => Err(at_line(
+                raw,
+                header_line,
+                &format!(", column {name}"),
+                format!(
+                    "column \"{name}\" appears twice in the header (columns {} and {}), and \
+                     the mapping's `{key}` names it: which one is meant is ambiguous",
+                    i + 1,
+                    k + 1
+                ),
+            )),
+            (None, _) => Err(Error::file(
                 mapping_path,
                 key,
                 format!(
@@ -362,8 +433,8 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
                     raw.display(),
                     header.join(", ")
                 ),
-            )
-        })
+            )),
+        }
     };
     let cols = |key: &str, names: &[String]| -> Result<Vec<usize>> {
         names.iter().map(|n| find(key, n)).collect()
@@ -387,23 +458,14 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
     super::csv::header(&mut s, dof, optional);
     let mut rows = 0;
     let mut cell = String::new();
-    for (line, l) in lines {
-        if l.trim().is_empty() {
-            continue;
-        }
-        let fields: Vec<&str> = l.split(plan.sep).collect();
-        if fields.len() != header.len() {
-            return Err(Error::file(
-                raw,
-                format!("line {line}"),
-                format!("{} fields, the header has {}", fields.len(), header.len()),
-            ));
-        }
+    let mut rec = ::csv::StringRecord::new();
+    let mut row = Vec::with_capacity(dof + 3);
+    while let Some(line) = t.next(&mut rec)? {
         let mut num = |c: usize| -> Result<Real> {
-            let f = fields[c].trim();
-            let place = format!("line {line}, column {}", header[c]);
+            let f = rec.get(c).unwrap_or("");
+            let place = format!(", column {}", header[c]);
             if f.is_empty() {
-                return Err(Error::file(raw, place, "empty cell"));
+                return Err(at_line(raw, line, &place, "empty cell".into()));
             }
             cell.clear();
             cell.extend(
@@ -413,9 +475,11 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
             cell.parse::<Real>()
                 .ok()
                 .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')))
-                .ok_or_else(|| Error::file(raw, place, format!("\"{f}\" is not a finite number")))
+                .ok_or_else(|| {
+                    at_line(raw, line, &place, format!("\"{f}\" is not a finite number"))
+                })
         };
-        let mut row = Vec::with_capacity(dof + 8);
+        row.clear();
         for &c in &jc {
             row.push(num(c)? * plan.joints.1);
         }
@@ -449,10 +513,11 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
                     }
                     let n = q.iter().map(|v| v * v).sum::<Real>().sqrt();
                     if (n - 1.0).abs() > 1e-3 {
-                        return Err(Error::file(
+                        return Err(at_line(
                             raw,
-                            format!("line {line}, column {}", header[oc[0]]),
-                            format!("the quaternion has norm {n}, not 1"),
+                            line,
+                            &format!(", column {}", header[oc[0]]),
+                            format!("the quaternion has norm {}, not 1", shown(n)),
                         ));
                     }
                     q.map(|v| v / n)
@@ -467,10 +532,11 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
             for &c in &sc {
                 let v = num(c)? * scale;
                 if v <= 0.0 {
-                    return Err(Error::file(
+                    return Err(at_line(
                         raw,
-                        format!("line {line}, column {}", header[c]),
-                        format!("standard deviation {v} mm: must be positive"),
+                        line,
+                        &format!(", column {}", header[c]),
+                        format!("standard deviation {} mm: must be positive", shown(v)),
                     ));
                 }
                 acc = match combine {

@@ -28,7 +28,7 @@ use super::csv::{
 use super::kind::{Instrument, Kind, KindData};
 use super::rows::{at_line, number, Rows};
 use super::JointSpace;
-use crate::error::{Error, Result};
+use crate::error::{shown, Error, Result};
 use crate::numeric::{Real, Vec3};
 
 /// The length from the pivot (`distance`).
@@ -201,7 +201,7 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
             LENGTH | STEP => {
                 let v = num(c)?;
                 if !(0.0..=MAX_POINT_MM).contains(&v) {
-                    let msg = format!("{v} is not a length within [0, {MAX_POINT_MM}] mm");
+                    let msg = format!("{} is not a length within [0, {MAX_POINT_MM}] mm", shown(v));
                     return Err(bad(line, reading, msg));
                 }
                 out.data.values.push(v);
@@ -228,21 +228,24 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
                     None => 0.0,
                 };
                 if offset.abs() > MAX_POINT_MM {
-                    let msg = format!("{offset} mm is beyond ±{MAX_POINT_MM} mm");
+                    let msg = format!("{} mm is beyond ±{MAX_POINT_MM} mm", shown(offset));
                     return Err(bad(line, OFFSET, msg));
                 }
                 out.data.values.push(offset);
                 if let Some(rc) = radius_col {
                     let r = num(rc)?;
                     if !(r > 0.0 && r <= MAX_POINT_MM) {
-                        let msg = format!("{r} is not a radius within (0, {MAX_POINT_MM}] mm");
+                        let msg =
+                            format!("{} is not a radius within (0, {MAX_POINT_MM}] mm", shown(r));
                         return Err(bad(line, RADIUS, msg));
                     }
                     match radii[g - 1] {
                         Some((r0, l0)) if r0 != r => {
                             let msg = format!(
-                                "{r} mm, but sphere {g} has radius {r0} mm on line {l0}: one \
-                                 sphere has one radius"
+                                "{} mm, but sphere {g} has radius {} mm on line {l0}: one \
+                                 sphere has one radius",
+                                shown(r),
+                                shown(r0)
                             );
                             return Err(bad(line, RADIUS, msg));
                         }
@@ -373,7 +376,9 @@ fn read_targets(mut t: Rows, robot: &(impl JointSpace + ?Sized), path: &Path) ->
                 let msg = format!(
                     "target {g} is at [{}, {}, {}] mm in the tool frame on line {l0}: one \
                      target has one offset",
-                    o0.x, o0.y, o0.z
+                    shown(o0.x),
+                    shown(o0.y),
+                    shown(o0.z)
                 );
                 return Err(bad(line, OFFSETS[0], msg));
             }

@@ -1,6 +1,7 @@
-//! The rows of the measurement CSVs (docs/formats.md § 5): a header of column names, then
-//! data rows read a line at a time, `#` comment and blank lines skipped but counted, so that
-//! every refusal names the file's own line.
+//! The rows of the measurement CSVs (docs/formats.md § 5) and of the raw exports `import`
+//! reads (§ 6): a header of column names, then data rows read a line at a time by the `csv`
+//! crate (quoted fields, CRLF line ends, a UTF-8 byte-order mark), `#` comment and blank lines
+//! skipped but counted, so that every refusal names the file's own line.
 
 use std::path::Path;
 
@@ -31,6 +32,21 @@ pub(crate) fn number(
         })
 }
 
+/// What a CSV file is.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Dialect {
+    /// A measurement file (docs/formats.md § 5): comma-separated, lines starting with `#`
+    /// comments, UTF-8.
+    Measurement,
+    /// A raw export `import` reads (§ 6): fields separated by `separator` (one ASCII byte), no
+    /// comment lines (a header may start with `#`), bytes that are not UTF-8 (a Latin-1 `°` in
+    /// an unmapped column's name) read as U+FFFD.
+    Export {
+        /// The field separator.
+        separator: u8,
+    },
+}
+
 /// The data rows of a CSV file read a line at a time (docs/formats.md § 5): the header's
 /// names, then each row that is not blank with its line in the file (`#` comment and blank
 /// lines counted), every row of as many fields as the header.
@@ -44,9 +60,19 @@ pub(crate) struct Rows {
 }
 
 impl Rows {
-    /// Opens `path` and reads its header; an empty file is refused, `expected` saying what
-    /// header it should have had.
+    /// Opens the measurement CSV `path` and reads its header; an empty file is refused,
+    /// `expected` saying what header it should have had.
     pub fn open(path: &Path, expected: &str) -> Result<Rows> {
+        Rows::open_with(path, expected, Dialect::Measurement)
+    }
+
+    /// Opens `path`, a file of the `dialect`, and reads its header; an empty file is refused,
+    /// `expected` saying what header it should have had.
+    pub fn open_with(path: &Path, expected: &str, dialect: Dialect) -> Result<Rows> {
+        let (delimiter, export) = match dialect {
+            Dialect::Measurement => (b',', false),
+            Dialect::Export { separator } => (separator, true),
+        };
         // `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
         // reader), and each line number the reader gives is mapped back to the file's
         // through the lines that are not empty.
@@ -54,8 +80,9 @@ impl Rows {
         let mut rd = ::csv::ReaderBuilder::new()
             .has_headers(true)
             .flexible(true)
+            .delimiter(delimiter)
             .trim(::csv::Trim::All)
-            .from_reader(Uncommented::new(std::io::BufReader::new(file)));
+            .from_reader(Uncommented::new(std::io::BufReader::new(file), export));
         let header = rd
             .headers()
             .map_err(|e| at_line(path, 1, "", format!("cannot read the header: {e}")))?
@@ -139,21 +166,28 @@ impl Rows {
     }
 }
 
-/// A file read a line at a time with its `#` comment lines emptied (their line breaks kept),
-/// noting the file line number of each line that is not empty: the `n`-th non-empty line
-/// the CSV reader counts is file line `kept[n - 1]`.
+/// A file read a line at a time with a UTF-8 byte-order mark at its start dropped, CRLF line
+/// ends read as LF, its lines of blanks and (but for an `export`) its `#` comment lines
+/// emptied (their line breaks kept), an export's bytes that are not UTF-8 read as U+FFFD,
+/// noting the file line number of each line that is not empty: the
+/// `n`-th non-empty line the CSV reader counts is file line `kept[n - 1]`.
 struct Uncommented<R> {
     inner: R,
+    export: bool,
     line: Vec<u8>,
     at: usize,
     count: u64,
     kept: Vec<u64>,
 }
 
+/// The UTF-8 byte-order mark.
+const BOM: &[u8] = b"\xEF\xBB\xBF";
+
 impl<R: std::io::BufRead> Uncommented<R> {
-    fn new(inner: R) -> Self {
+    fn new(inner: R, export: bool) -> Self {
         Uncommented {
             inner,
+            export,
             line: Vec::new(),
             at: 0,
             count: 0,
@@ -171,9 +205,23 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
                 return Ok(0);
             }
             self.count += 1;
-            if self.line.first() == Some(&b'#') {
+            if self.count == 1 && self.line.starts_with(BOM) {
+                self.line.drain(..BOM.len());
+            }
+            // A CRLF line end is read as LF: the reader counts a CRLF row's line from the
+            // line before.
+            if self.line.ends_with(b"\r\n") {
+                self.line.remove(self.line.len() - 2);
+            }
+            if self.export && std::str::from_utf8(&self.line).is_err() {
+                self.line = String::from_utf8_lossy(&self.line)
+                    .into_owned()
+                    .into_bytes();
+            }
+            let blank = self.line.iter().all(u8::is_ascii_whitespace);
+            if blank || (!self.export && self.line.first() == Some(&b'#')) {
                 self.line.retain(|&b| b == b'\r' || b == b'\n');
-            } else if self.line.iter().any(|&b| b != b'\r' && b != b'\n') {
+            } else {
                 self.kept.push(self.count);
             }
         }

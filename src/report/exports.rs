@@ -37,8 +37,10 @@ pub fn ur_yaml(robot: &Robot) -> Result<String> {
             ),
         ));
     }
+    // The name in double quotes with its quotes, backslashes and line breaks escaped, so
+    // that no name can end the comment line.
     let mut s = format!(
-        "# kinematics_params_file of the calibrated robot \"{}\" (calbench identify)\n\
+        "# kinematics_params_file of the calibrated robot {:?} (calbench identify)\n\
          kinematics:\n",
         robot.name
     );
@@ -159,6 +161,31 @@ mod tests {
         let mut seven = irb.clone();
         seven.joints.push(seven.joints[5]);
         assert!(ur_yaml(&seven).is_err());
+    }
+
+    #[test]
+    fn ur_yaml_keeps_any_name_inside_its_comment() {
+        let mut ur = crate::robot::builtin::load("../examples/ipa-ur10/ur10.toml")
+            .or_else(|_| crate::robot::builtin::load("examples/ipa-ur10/ur10.toml"))
+            .unwrap();
+        let plain = ur_yaml(&ur).unwrap();
+        assert!(plain.starts_with("# kinematics_params_file of the calibrated robot \"ur10\" "));
+        ur.name = "R&D <arm> \"x\"\nkinematics: {}\r\\".into();
+        let y = ur_yaml(&ur).unwrap();
+        let first = y.lines().next().unwrap();
+        assert_eq!(
+            first,
+            r#"# kinematics_params_file of the calibrated robot "R&D <arm> \"x\"\nkinematics: {}\r\\" (calbench identify)"#
+        );
+        // Past the comment, the file is the plain name's line for line.
+        assert_eq!(
+            y.lines().skip(1).take(36).collect::<Vec<_>>(),
+            plain.lines().skip(1).take(36).collect::<Vec<_>>()
+        );
+        assert_eq!(
+            y.lines().filter(|l| l.starts_with("kinematics:")).count(),
+            1
+        );
     }
 
     #[test]

@@ -326,6 +326,7 @@ impl UrdfRobot {
                     .child
                     .link
                     .clone();
+                let parent = xml_attribute(&parent);
                 let mini = urdf_rs::read_from_string(&format!(
                     "<robot name=\"t\"><link name=\"{parent}\"/><link name=\"calbench_tool\"/>\
                      <joint name=\"calbench_tool\" type=\"fixed\"><parent link=\"{parent}\"/>\
@@ -340,6 +341,25 @@ impl UrdfRobot {
         }
         urdf_rs::write_to_string(&out).map_err(|e| Error::Compute(e.to_string()))
     }
+}
+
+/// `text` as the value of an XML attribute in double quotes: `&`, `<`, `>`, `"` and `'` as
+/// entities, and the control characters an attribute would not keep (tab, line breaks) as
+/// character references, so that a reader gives back `text` itself (XML 1.0 §§ 2.4, 3.3.3).
+pub fn xml_attribute(text: &str) -> String {
+    let mut s = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => s.push_str("&amp;"),
+            '<' => s.push_str("&lt;"),
+            '>' => s.push_str("&gt;"),
+            '"' => s.push_str("&quot;"),
+            '\'' => s.push_str("&apos;"),
+            '\t' | '\n' | '\r' => s.push_str(&format!("&#{};", u32::from(c))),
+            c => s.push(c),
+        }
+    }
+    s
 }
 
 /// Whether `robot` names a URDF file (by its extension).
@@ -384,7 +404,7 @@ pub fn robot_to_urdf(robot: &Robot) -> Result<String> {
     };
     let mut s = format!(
         "<?xml version=\"1.0\"?>\n<robot name=\"{}\">\n  <link name=\"world\"/>\n",
-        robot.name
+        xml_attribute(&robot.name)
     );
     let joint = |s: &mut String,
                  name: &str,

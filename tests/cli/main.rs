@@ -11,6 +11,7 @@ mod cli;
 mod fuzz;
 mod html;
 mod instruments;
+mod interchange;
 mod kinds;
 mod practice;
 mod realdata;

@@ -50,15 +50,23 @@ impl Side {
     }
 
     fn describe(&self) -> String {
-        let s = &self.summary;
-        let field = |k: &str| s.get(k).map_or("?".to_string(), |v| v.to_string());
         format!(
             "{} (scenario {}, {} trials, seed {})",
             self.path.display(),
-            field("scenario").trim_matches('"'),
-            field("trials"),
-            field("seed")
+            self.field("scenario"),
+            self.field("trials"),
+            self.field("seed")
         )
+    }
+
+    /// The summary's `key` as written: a string as itself (not as JSON, whose escapes would
+    /// show), a number as JSON writes it, `?` when missing.
+    fn field(&self, key: &str) -> String {
+        match self.summary.get(key) {
+            Some(Value::String(s)) => s.clone(),
+            Some(v) => v.to_string(),
+            None => "?".into(),
+        }
     }
 }
 
@@ -170,12 +178,12 @@ impl Comparison {
 
     fn scenario_note(&self) -> Option<String> {
         let (sa, sb) = (
-            &self.runs[0].summary["scenario"],
-            &self.runs[1].summary["scenario"],
+            self.runs[0].field("scenario"),
+            self.runs[1].field("scenario"),
         );
         (sa != sb).then(|| {
             format!(
-                "A is a run of scenario {sa} and B of scenario {sb}: calbench check refuses \
+                "A is a run of scenario \"{sa}\" and B of scenario \"{sb}\": calbench check refuses \
                  such a pair; the entries are compared by name all the same."
             )
         })
