@@ -1,8 +1,9 @@
-//! The one trait of the files the commands write beside their results — `calbench poses`,
-//! `simulate` and `compensate` (docs/formats.md) — and its writers: a JSON document, a
-//! numbered series, the measurement and pose files (written by [`crate::measurement`]'s
-//! byte-identical writers) and a figure. A command builds its outputs from results already
-//! computed and hands them to [`folder`], which writes them as a whole.
+//! The one trait of an output file, [`Output`] (its name and how its bytes are written), and
+//! the writers that several outputs share: bytes already made, a JSON document, a numbered
+//! series, the measurement and pose files (through [`crate::measurement`]'s byte-identical
+//! writers) and a figure. The files of `calbench poses`, `simulate` and `compensate`
+//! (docs/formats.md) are built from results already computed and handed to [`folder`], which
+//! writes them as a whole.
 
 use std::path::Path;
 
@@ -35,6 +36,23 @@ pub fn folder(out: &Path, outputs: &[&dyn Output]) -> Result<()> {
 /// Writes `text` at `path`.
 pub(crate) fn text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// A file whose bytes are already made (e.g. `trials.csv` of a run held in memory).
+pub struct Bytes<'a> {
+    /// The file's name.
+    pub name: &'a str,
+    /// Its bytes.
+    pub bytes: &'a [u8],
+}
+
+impl Output for Bytes<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        std::fs::write(path, self.bytes).map_err(|e| Error::io(path, e))
+    }
 }
 
 /// A JSON document, pretty-printed with a final newline ([`super::run::json_text`]).
