@@ -182,3 +182,45 @@ impl Output for SweepFigure<'_> {
         super::plots::sweep(path, self.title, x, y, &self.series)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An output whose writing fails.
+    struct Broken;
+
+    impl Output for Broken {
+        fn name(&self) -> &str {
+            "broken.csv"
+        }
+        fn write(&self, _: &Path) -> Result<()> {
+            Err(Error::Compute("disk full".into()))
+        }
+    }
+
+    #[test]
+    fn a_folder_of_outputs_is_written_whole_or_not_at_all() {
+        let root = std::env::temp_dir().join(format!("calbench-outputs-{}", std::process::id()));
+        let out = root.join("poses");
+        let _ = std::fs::remove_dir_all(&root);
+        let value = serde_json::json!({"count": 2});
+        let json = Json {
+            name: "scores.json",
+            value: &value,
+        };
+        let trace = Series {
+            name: "trace.csv",
+            header: "iteration,objective",
+            points: vec![(0, 1.5), (1, 0.25)],
+        };
+        let e = folder(&out, &[&json, &trace, &Broken]).unwrap_err();
+        assert!(e.to_string().contains("disk full"), "{e}");
+        assert!(!out.exists());
+        folder(&out, &[&json, &trace]).unwrap();
+        let read = |name: &str| std::fs::read_to_string(out.join(name)).unwrap();
+        assert_eq!(read("trace.csv"), "iteration,objective\n0,1.5\n1,0.25\n");
+        assert_eq!(read("scores.json"), "{\n  \"count\": 2\n}\n");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}
