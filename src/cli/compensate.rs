@@ -9,13 +9,14 @@ use anyhow::Result;
 
 use calbench::calibrate::compensate::{compensate_row, compensate_targets};
 use calbench::error::Error;
-use calbench::measurement::csv::fixed;
 use calbench::measurement::csv::read_targets;
 use calbench::numeric::Real;
 use calbench::numeric::{quaternion_matrix, Frame, Mat3};
+use calbench::report::program::{cell, CorrectedProgram};
+use calbench::report::Output as _;
 use calbench::robot::builtin;
 
-use super::{check_out_file, write_file};
+use super::check_out_file;
 
 /// Arguments of `calbench compensate`.
 #[derive(clap::Args)]
@@ -74,8 +75,7 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
         let msg = format!("{} has {n} joints, the nominal robot {m}", args.identified);
         return Err(Error::setting("--identified", msg).into());
     }
-    let cell = |v: Real| fixed(v, 9);
-    // What is written: 9 decimals in the nominal robot's units.
+    // What is written: the program's decimals in the nominal robot's units.
     let round = |q: &[Real]| -> Vec<Real> {
         let user: Vec<Real> = nominal
             .q_to_user(q)
@@ -84,8 +84,6 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
             .collect();
         nominal.q_from_user(&user)
     };
-    let mut s: String = (1..=nominal.dof()).map(|j| format!("q{j},")).collect();
-    s.push_str("residual_mm,residual_deg,flag\n");
     let mut flagged = 0;
     let mut worst: (Real, Real) = (0.0, 0.0);
     let rows = if let Some(path) = &args.targets {
@@ -112,18 +110,15 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
             .collect::<calbench::Result<Vec<_>>>()?
     };
     for c in &rows {
-        for v in nominal.q_to_user(&c.q) {
-            s.push_str(&cell(v));
-            s.push(',');
-        }
-        s.push_str(&format!(
-            "{:.3e},{:.3e},{}\n",
-            c.residual_mm, c.residual_deg, c.flag
-        ));
         flagged += usize::from(c.flag != "ok");
         worst = (worst.0.max(c.residual_mm), worst.1.max(c.residual_deg));
     }
-    write_file(&args.out, &s)?;
+    let program = CorrectedProgram {
+        name: "program.csv",
+        robot: &nominal,
+        rows: &rows,
+    };
+    program.write(&args.out)?;
     out!(
         "{} rows corrected ({flagged} flagged), worst residual {:.1e} mm / {:.1e} deg; written to {}",
         rows.len(),

@@ -4,23 +4,20 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use clap::builder::{PossibleValuesParser, TypedValueParser};
-use serde_json::json;
-
 use calbench::calibrate::Registration;
 use calbench::error::Error;
-use calbench::measurement::csv::write_pose_list;
-use calbench::numeric::Real;
 use calbench::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
+use calbench::report::{self, output::PoseList, Output};
 use calbench::robot::param_sets;
 use calbench::sim::poses::sample_region;
 use calbench::study::plan;
 use calbench::study::scenario::{Scenario, StrategyName};
+use clap::builder::{PossibleValuesParser, TypedValueParser};
 
-use super::{check_out_folder, to_json_text, write_file};
+use super::check_out_folder;
 
 /// The files always written (`curve.*` only with `--curve`).
-const OUTPUTS: [&str; 3] = ["poses.csv", "scores.json", "trace.csv"];
+const OUTPUTS: [&str; 3] = report::poses::FILES;
 
 /// Arguments of `calbench poses`.
 #[derive(clap::Args)]
@@ -138,51 +135,30 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         .as_deref()
         .map(|counts| calbench::poses::objective_curve(&model, &pool, counts, &opts, &mut g))
         .transpose()?;
-    let mut scores = serde_json::to_value(sel.scores).map_err(|e| Error::Compute(e.to_string()))?;
-    scores["strategy"] = json!(strategy_name);
-    scores["count"] = json!(sel.poses.len());
-    scores["parameters"] = json!(params.iter().map(|p| p.to_string()).collect::<Vec<_>>());
-    scores["termination"] = json!(sel.termination);
-    if let Some(s) = &separation {
-        let mut j = s.to_json();
-        // The earlier form of the table, kept for scripts that read it.
-        j["gcn"] = json!(s
-            .table
-            .iter()
-            .map(|r| json!({"block": r.label, "gcn": r.gcn}))
-            .collect::<Vec<_>>());
-        scores["separation"] = j;
-    }
-    let mut trace = String::from("iteration,objective\n");
-    for (i, f) in sel.trace.iter().enumerate() {
-        trace += &format!("{i},{f}\n");
-    }
-    let curve_csv = curve.as_ref().map(|pts| {
-        let mut text = String::from("count,objective\n");
-        for (n, f) in pts {
-            text += &format!("{n},{f}\n");
-        }
-        text
+    let scores = report::poses::Scores {
+        strategy: strategy_name,
+        selection: &sel,
+        params: &params,
+        separation: separation.as_ref(),
+    };
+    let pose_list = PoseList {
+        name: OUTPUTS[0],
+        robot: &nominal,
+        poses: &sel.poses,
+    };
+    let trace = report::poses::trace(&sel);
+    let mut outputs: Vec<&dyn Output> = vec![&pose_list, &scores, &trace];
+    let curve_files = curve.as_deref().map(|pts| {
+        let objective = c.objective.as_str();
+        (
+            report::poses::curve(pts),
+            report::poses::curve_figure(objective, pts),
+        )
     });
-    let [poses_csv, scores_json, trace_csv] = OUTPUTS;
-    calbench::report::atomically(out, |dir| {
-        write_pose_list(&dir.join(poses_csv), &nominal, &sel.poses)?;
-        write_file(&dir.join(scores_json), &to_json_text(&scores)?)?;
-        write_file(&dir.join(trace_csv), &trace)?;
-        if let (Some(text), Some(pts)) = (&curve_csv, &curve) {
-            write_file(&dir.join("curve.csv"), text)?;
-            let pts: Vec<(Real, Real, Real)> =
-                pts.iter().map(|&(n, f)| (n as Real, f, 0.0)).collect();
-            calbench::report::plots::sweep(
-                &dir.join("curve"),
-                "Objective against pose count (Guo 2024 fig. 7)",
-                "pose count",
-                "objective",
-                &[(format!("{} objective", c.objective.as_str()), pts)],
-            )?;
-        }
-        Ok(())
-    })?;
+    if let Some((csv, figure)) = &curve_files {
+        outputs.extend([csv as &dyn Output, figure]);
+    }
+    report::output::folder(out, &outputs)?;
     out!(
         "{} of {} candidates by {}: composite {:.4}, O1 {:.4e}, GCN {:.4e}, condition number {:.4e}",
         sel.poses.len(),

@@ -7,17 +7,17 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::error::Error;
-use calbench::measurement::csv::write_measurements;
 use calbench::measurement::kind::Kind;
-use calbench::measurement::Measurements;
+use calbench::report::output::{Json, MeasurementFile};
+use calbench::report::{self, simulated};
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::scenario::Scenario;
 use calbench::study::{trial, Study};
 
-use super::{check_out_folder, to_json_text, write_file};
+use super::check_out_folder;
 
 /// The files written.
-const OUTPUTS: [&str; 3] = ["measurements.csv", "validation.csv", "truth.json"];
+const OUTPUTS: [&str; 3] = simulated::FILES;
 
 /// Arguments of `calbench simulate`.
 #[derive(clap::Args)]
@@ -61,12 +61,26 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let sim = trial::simulate_trial(&study, trial, "--trial")?;
     let (m, v) = (&sim.calibration, &sim.validation);
     let truth_json = sim.truth_json(&study);
-    let [measurements, validation, truth_file] = OUTPUTS;
-    calbench::report::atomically(out, |dir| {
-        write_measurements(&dir.join(measurements), &study.nominal, &m.data)?;
-        write_measurements(&dir.join(validation), &study.nominal, &v.data)?;
-        write_file(&dir.join(truth_file), &to_json_text(&truth_json)?)
-    })?;
+    let [measurements, validation, truth] = OUTPUTS;
+    report::output::folder(
+        out,
+        &[
+            &MeasurementFile {
+                name: measurements,
+                robot: &study.nominal,
+                data: &m.data,
+            },
+            &MeasurementFile {
+                name: validation,
+                robot: &study.nominal,
+                data: &v.data,
+            },
+            &Json {
+                name: truth,
+                value: &truth_json,
+            },
+        ],
+    )?;
     out!(
         "{} calibration and {} validation poses of trial {trial} written to {}",
         m.data.len(),
@@ -99,78 +113,37 @@ fn instrument(sc: &InstrumentsScenario, args: &SimulateArgs) -> Result<()> {
     };
     let nominal = super::ChainArgs::default().load(&sc.robot)?;
     let sim = sc.simulate(&nominal, entry, trial)?;
-    let r = &sim.reading;
-    let Some((qs, data, sigma)) = &r.measured else {
+    let truth = simulated::instrument_truth((&sc.head.name, &nominal.name), (entry, trial), &sim);
+    let validation = simulated::validation(&sim);
+    let [_, validation_file, truth_file] = OUTPUTS;
+    report::output::folder(
+        out,
+        &[
+            &simulated::Readings {
+                robot: &nominal,
+                trial: &sim,
+            },
+            &MeasurementFile {
+                name: validation_file,
+                robot: &nominal,
+                data: &validation,
+            },
+            &Json {
+                name: truth_file,
+                value: &truth,
+            },
+        ],
+    )?;
+    let (inst, r) = (&sim.layout.instrument, &sim.reading);
+    let Some((qs, data, _)) = &r.measured else {
         unreachable!("InstrumentsScenario::simulate returns readings")
     };
-    // σ is written when every reading has one (a noise-free instrument has none); a
-    // multi-target file has no σ column.
-    let multi = all[entry].kind == Kind::MultiTarget;
-    let sigma = (!multi && sigma.iter().all(|v| *v > 0.0)).then_some(&sigma[..]);
-    let (vq, seen) = &r.validation;
-    let validation = Measurements {
-        qs: vq.clone(),
-        points: seen.clone(),
-        ..Measurements::default()
-    };
-    let inst = &sim.layout.instrument;
-    let errors: serde_json::Map<String, serde_json::Value> = r
-        .errors
-        .iter()
-        .map(|(p, e)| (p.to_string(), serde_json::json!(e)))
-        .collect();
-    let unknowns: serde_json::Map<String, serde_json::Value> = inst
-        .nuisance_names()
-        .into_iter()
-        .zip(&sim.layout.nuisance)
-        .map(|(n, v)| (n, serde_json::json!(v)))
-        .collect();
-    let mut truth = serde_json::json!({
-        "scenario": sc.head.name,
-        "trial": trial,
-        "seed": sim.seed,
-        "robot": nominal.name,
-        "calibration_poses": "random",
-        "kind": inst.kind().as_str(),
-        "measurement": entry,
-        "errors": errors,
-        "instrument_unknowns": unknowns,
-    });
-    if let calbench::measurement::kind::Instrument::Planes(axes) = inst {
-        truth["plane_axes"] =
-            serde_json::json!(axes.iter().map(|&a| ["x", "y", "z"][a]).collect::<Vec<_>>());
-    }
-    if let calbench::measurement::kind::Instrument::Distance { pivot } = inst {
-        truth["pivot"] = serde_json::json!(pivot);
-    }
-    let [measurements, validation_file, truth_file] = OUTPUTS;
-    calbench::report::atomically(out, |dir| {
-        let path = dir.join(measurements);
-        if inst.kind() == Kind::Position {
-            let m = Measurements {
-                qs: qs.clone(),
-                points: data
-                    .values
-                    .chunks(3)
-                    .map(|c| [c[0], c[1], c[2]].into())
-                    .collect(),
-                sigma_mm: sigma.map(<[_]>::to_vec),
-                ..Measurements::default()
-            };
-            write_measurements(&path, &nominal, &m)?;
-        } else {
-            let wr = calbench::measurement::kind_csv::write_kind_file;
-            wr(&path, &nominal, qs, data, sigma)?;
-        }
-        write_measurements(&dir.join(validation_file), &nominal, &validation)?;
-        write_file(&dir.join(truth_file), &to_json_text(&truth)?)
-    })?;
     out!(
         "{} {} readings at {} poses and {} validation poses of trial {trial} written to {}",
         data.values.len() / inst.rows_per_observation(),
         inst.kind().as_str(),
         qs.len(),
-        vq.len(),
+        r.validation.0.len(),
         out.display()
     );
     Ok(())

@@ -1,6 +1,8 @@
 //! Every writer of calbench's output files (docs/formats.md): [`run`] writes a run's
 //! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
-//! `calbench identify`; [`html`] the self-contained pages `report.html` and `compare.html`.
+//! `calbench identify`; [`html`] the self-contained pages `report.html` and `compare.html`;
+//! [`poses`], [`simulated`] and [`program`] the files of `calbench poses`, `simulate` and
+//! `compensate`, each an [`Output`] ([`output`]: the trait and its common writers).
 //!
 //! The report only reads results that are already computed: it runs no study (running,
 //! resuming, sharding and merging a study are [`crate::study::run`] and
@@ -21,12 +23,17 @@ pub mod html;
 pub mod identified;
 pub mod instruments;
 pub mod markdown;
+pub mod output;
 pub mod plots;
+pub mod poses;
 pub mod practice;
+pub mod program;
 pub mod registration_study;
 pub mod run;
+pub mod simulated;
 
 pub use markdown::{fmt_num, table};
+pub use output::Output;
 pub use plots::{
     before_after, box_plot, box_stats, grouped_bars, heatmap, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,

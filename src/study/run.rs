@@ -16,7 +16,8 @@ use super::shard::{self, Both};
 use super::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
 use super::{TrialResult, TrialSink, CHUNK};
 use crate::error::{Error, Result};
-use crate::report::{atomically, run as files, write_run};
+use crate::report::output::Bytes;
+use crate::report::{atomically, run as files, write_run, Output as _};
 
 /// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
 /// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
@@ -186,8 +187,11 @@ impl InMemoryRun {
     /// `calbench run --out`: `trials.csv`, then [`write_run`], as [`run_study`] does.
     pub fn write(&self, out: &Path) -> Result<()> {
         atomically(out, |dir| {
-            let path = dir.join("trials.csv");
-            std::fs::write(&path, &self.trials_csv).map_err(|e| Error::io(&path, e))?;
+            let csv = Bytes {
+                name: "trials.csv",
+                bytes: &self.trials_csv,
+            };
+            csv.write(&dir.join(csv.name()))?;
             write_run(&self.result, dir)
         })
     }
