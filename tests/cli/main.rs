@@ -12,6 +12,7 @@ mod fuzz;
 mod html;
 mod instruments;
 mod kinds;
+mod noise;
 mod practice;
 mod realdata;
 mod refusals;

@@ -173,7 +173,8 @@ fn check_fails_on_a_worsened_summary() {
     let rms = worse["results"][0]["validation_after_mm"]["rms"]
         .as_f64()
         .unwrap();
-    worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 1.5);
+    // Far beyond the Monte-Carlo noise of 4 trials: a regression, not an unresolved change.
+    worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 10.0);
     let path = out.join("worse.json");
     std::fs::write(&path, serde_json::to_string(&worse).unwrap()).unwrap();
     let o = calbench(&[
