@@ -497,6 +497,14 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         &groups,
     )?;
     caption(&mut done, "validation_rms", "validation RMS over trials");
+    // The paired comparisons' per-trial differences, each entry against its baseline.
+    for (stem, title, y_label, k) in comparisons::DIFF_PLOTS {
+        let groups = comparisons::differences(b0, k);
+        if !groups.is_empty() {
+            plots::box_plot(&out.join(stem), title, y_label, &groups)?;
+            caption(&mut done, stem, title);
+        }
+    }
     // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
     let traces: Vec<(String, Vec<Real>)> = info
         .strategies

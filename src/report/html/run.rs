@@ -23,6 +23,8 @@ fn section_of(stem: &str) -> &'static str {
         "Validation before and after"
     } else if stem.starts_with("sweep_") || stem.starts_with("heatmap_") {
         "Sweep"
+    } else if stem.starts_with("paired_") {
+        "Paired comparisons"
     } else if stem.ends_with("_trace") {
         "Convergence"
     } else {
@@ -160,6 +162,7 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
     if !rows.is_empty() {
         page.para(crate::report::run::comparisons::NOTE);
         page.table("Paired comparisons on the shared trials", &h, &rows);
+        figures(&mut page, dir, plots, "Paired comparisons")?;
     }
 
     page.section("Validation before and after");

@@ -7,7 +7,7 @@
 use crate::numeric::Real;
 use crate::report::markdown::fmt_num;
 use crate::study::stats::paired::{adjust, compare, Comparison};
-use crate::study::RunResult;
+use crate::study::{Block, RunResult};
 
 use super::fmt_ci;
 
@@ -17,37 +17,49 @@ const METRICS: [(&str, usize, bool); 2] = [
     ("eta_mean_pct", 1, false),
 ];
 
+/// The pairs of entries of block `b` that share their draws (indices, a before b), each with
+/// whether the reports show it (a is b's baseline).
+fn pairs(b: &Block) -> Vec<(usize, usize, bool)> {
+    let (methods, strategies) = (&b.info.methods, &b.info.strategies);
+    let mut out = Vec::new();
+    for (i, ea) in b.entries.iter().enumerate() {
+        for (j, eb) in b.entries.iter().enumerate().skip(i + 1) {
+            let same_poses = ea.poses == eb.poses;
+            if !same_poses && ea.method != eb.method {
+                continue;
+            }
+            let shown = if same_poses {
+                methods.first() == Some(&ea.method)
+            } else {
+                strategies.first() == Some(&ea.poses)
+            };
+            out.push((i, j, shown));
+        }
+    }
+    out
+}
+
+fn label(e: &crate::study::Entry) -> String {
+    format!("{} / {}", e.method, e.poses)
+}
+
 /// Every paired comparison of the run, Holm-adjusted together, with whether each is one of
 /// the reports' (against the baseline entry).
 pub fn comparisons(r: &RunResult) -> Vec<(Comparison, bool)> {
     let mut out = Vec::new();
     for b in &r.blocks {
-        let (methods, strategies) = (&b.info.methods, &b.info.strategies);
-        for (i, ea) in b.entries.iter().enumerate() {
-            for eb in &b.entries[i + 1..] {
-                let same_poses = ea.poses == eb.poses;
-                if !same_poses && ea.method != eb.method {
-                    continue;
-                }
-                let shown = if same_poses {
-                    methods.first() == Some(&ea.method)
-                } else {
-                    strategies.first() == Some(&ea.poses)
-                };
-                let (la, lb) = (
-                    format!("{} / {}", ea.method, ea.poses),
-                    format!("{} / {}", eb.method, eb.poses),
+        for (i, j, shown) in pairs(b) {
+            let (ea, eb) = (&b.entries[i], &b.entries[j]);
+            let (la, lb) = (label(ea), label(eb));
+            for (metric, k, lower) in METRICS {
+                let mut c = compare(
+                    (&la, &lb),
+                    metric,
+                    (&ea.per_trial[k], &eb.per_trial[k]),
+                    lower,
                 );
-                for (metric, k, lower) in METRICS {
-                    let mut c = compare(
-                        (&la, &lb),
-                        metric,
-                        (&ea.per_trial[k], &eb.per_trial[k]),
-                        lower,
-                    );
-                    c.sweep_value = ea.sweep_value.clone();
-                    out.push((c, shown));
-                }
+                c.sweep_value = ea.sweep_value.clone();
+                out.push((c, shown));
             }
         }
     }
@@ -126,3 +138,40 @@ pub const NOTE: &str = "Every method of a study runs on the same trials, so two 
     signed-rank p-value and its Holm adjustment over every comparison of the study \
     (summary.json `comparisons` holds all pairs; this table each entry against the first \
     method on its strategy and the first strategy of its method). Verdict at Holm p < 0.05.";
+
+/// The plots of the per-trial differences (stem, title, y label, index of
+/// [`crate::study::Entry::per_trial`]).
+pub const DIFF_PLOTS: [(&str, &str, &str, usize); 2] = [
+    (
+        "paired_validation_rms",
+        "Validation RMS after, b − a per trial (below 0: b better)",
+        "b − a (mm)",
+        0,
+    ),
+    (
+        "paired_eta",
+        "Mean η, b − a per trial (above 0: b better)",
+        "b − a (%)",
+        1,
+    ),
+];
+
+/// The per-trial differences b − a of value `k` of each shown pair of block `b`, labelled
+/// `b vs a`, on the trials usable in both: where zero lies in each distribution is the
+/// comparison's verdict.
+pub fn differences(b: &Block, k: usize) -> Vec<(String, Vec<Real>)> {
+    pairs(b)
+        .into_iter()
+        .filter(|p| p.2)
+        .map(|(i, j, _)| {
+            let (ea, eb) = (&b.entries[i], &b.entries[j]);
+            let d = ea.per_trial[k]
+                .iter()
+                .zip(&eb.per_trial[k])
+                .map(|(x, y)| y - x)
+                .filter(|d| d.is_finite())
+                .collect();
+            (format!("{} vs {}", label(eb), label(ea)), d)
+        })
+        .collect()
+}
