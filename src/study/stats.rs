@@ -595,6 +595,18 @@ mod tests {
     }
 
     #[test]
+    fn median_ranks_are_the_binomial_order_statistics() {
+        // The largest l with scipy.stats.binom.cdf(l, n, 0.5) <= alpha / 2.
+        assert_eq!(median_ranks(5, 0.05), None);
+        assert_eq!(median_ranks(6, 0.05), Some((0, 5)));
+        assert_eq!(median_ranks(20, 0.05), Some((5, 14)));
+        assert_eq!(median_ranks(100, 0.05), Some((39, 60)));
+        assert_eq!(median_ranks(1000, 0.05), Some((468, 531)));
+        // Bonferroni over 16 parameters.
+        assert_eq!(median_ranks(30, 0.05 / 16.0).map(|r| r.0), Some(6));
+    }
+
+    #[test]
     fn median_and_std_by_hand() {
         let mut s = Spill::new(2);
         for (k, v) in [(0, [3.0, 1.0, 2.0].as_slice()), (1, &[4.0, 1.0, 2.0, 3.0])] {

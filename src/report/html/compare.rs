@@ -76,7 +76,7 @@ impl Side {
 }
 
 /// Run B compared with run A (its baseline) by `check`'s rules: every metric `check` looks
-/// at, with both values ([`compare_all`]).
+/// at, with both values ([`compare_with`], paired when both folders hold the same trials).
 pub struct Comparison {
     /// A, then B.
     pub runs: [Side; 2],
