@@ -1,4 +1,5 @@
-//! `calbench check SUMMARY --baseline BASELINE [--tolerance X]`: the regression guard.
+//! `calbench check SUMMARY --baseline BASELINE [--tolerance X] [--strict]`: the regression
+//! guard.
 
 use std::path::PathBuf;
 
@@ -6,7 +7,8 @@ use anyhow::Result;
 
 use calbench::error::Error;
 use calbench::numeric::Real;
-use calbench::report::check::{comparable, compare, read_json};
+use calbench::report::check::{comparable, compare_with, read_json, Status, Trials};
+use calbench::report::fmt_num;
 
 /// Arguments of `calbench check`.
 #[derive(clap::Args)]
@@ -18,6 +20,23 @@ pub struct CheckArgs {
     pub baseline: PathBuf,
     #[command(flatten)]
     tolerance: Tolerance,
+    /// Fail on unresolved metrics too (worse beyond the tolerance, within the noise).
+    #[arg(long)]
+    pub strict: bool,
+}
+
+/// The per-trial values of the run whose summary is `summary`: its folder's `trials.csv`,
+/// when there is one (a run without a sweep).
+pub fn trials_beside(summary: &std::path::Path) -> calbench::Result<Option<Trials>> {
+    let csv = summary
+        .parent()
+        .unwrap_or(std::path::Path::new("."))
+        .join("trials.csv");
+    if csv.is_file() {
+        Trials::read(&csv)
+    } else {
+        Ok(None)
+    }
 }
 
 /// `--tolerance X`, of `check` and `compare`.
@@ -40,20 +59,68 @@ impl Tolerance {
     }
 }
 
-/// Compares the summary with the baseline: prints `no regression beyond tolerance X`, or
-/// each regression on stderr and fails (exit status 1) naming how many metrics regressed.
+/// Compares the summary with the baseline (trial by trial when both folders hold the same
+/// trials in `trials.csv`): prints every metric that is not "no change" with its status and
+/// the interval of its change, then `no regression beyond tolerance X` and the count of each
+/// status; fails (exit status 1) on a regression, or with `--strict` on an unresolved metric.
 pub fn run(args: &CheckArgs) -> Result<()> {
     let tolerance = args.tolerance.checked()?;
     let s = read_json(&args.summary)?;
     let b = read_json(&args.baseline)?;
     comparable(&s, &args.summary, &b, &args.baseline)?;
-    let regressions = compare(&s, &b, tolerance);
-    if regressions.is_empty() {
-        out!("no regression beyond tolerance {tolerance}");
-        return Ok(());
+    let (ts, tb) = (
+        trials_beside(&args.summary)?,
+        trials_beside(&args.baseline)?,
+    );
+    let pairs = tb.as_ref().zip(ts.as_ref());
+    let all = compare_with(&s, &b, tolerance, pairs);
+    let count = |st: Status| all.iter().filter(|c| c.status == st).count();
+    for c in all.iter().filter(|c| c.status != Status::NoChange) {
+        let m = &c.metric;
+        let line = match c.diff_ci {
+            None => format!("{}: {m}", c.status.as_str()),
+            Some([lo, hi]) => format!(
+                "{}: {}: {}: {} → {} (change {} in [{}, {}], {}, p Holm {}){}",
+                c.status.as_str(),
+                m.entry,
+                m.metric,
+                fmt_num(m.baseline, 6),
+                fmt_num(m.value, 6),
+                fmt_num(m.value - m.baseline, 4),
+                fmt_num(lo, 4),
+                fmt_num(hi, 4),
+                if c.paired { "paired" } else { "unpaired" },
+                fmt_num(c.p_holm, 3),
+                c.trials_needed.map_or(String::new(), |n| format!(
+                    "; about {n} trials per run would resolve it"
+                ))
+            ),
+        };
+        if matches!(c.status, Status::Regression | Status::Unresolved) {
+            eprintln!("{line}");
+        } else {
+            out!("{line}");
+        }
     }
-    for r in &regressions {
-        eprintln!("regression: {r}");
+    let (reg, unres) = (count(Status::Regression), count(Status::Unresolved));
+    let paired = all.iter().filter(|c| c.paired).count();
+    let tally = format!(
+        "{} metrics compared ({paired} paired): {reg} regression, {unres} unresolved, {} \
+         changed within tolerance, {} improved, {} no change",
+        all.len(),
+        count(Status::Changed),
+        count(Status::Improved),
+        count(Status::NoChange)
+    );
+    if reg > 0 {
+        eprintln!("{tally}");
+        anyhow::bail!("{reg} metric(s) regressed");
     }
-    anyhow::bail!("{} metric(s) regressed", regressions.len())
+    if args.strict && unres > 0 {
+        eprintln!("{tally}");
+        anyhow::bail!("{unres} metric(s) unresolved (--strict)");
+    }
+    out!("no regression beyond tolerance {tolerance}");
+    out!("{tally}");
+    Ok(())
 }

@@ -7,7 +7,11 @@
 //! Both files must be calbench summaries ([`check_summary`]) of the same scenario that share
 //! at least one metric ([`comparable`]); otherwise there is nothing to guard and `check`
 //! refuses them, naming the file. A metric regresses when it is worse by the tolerance or
-//! more: a change of exactly the tolerance is a regression ([`compare`]).
+//! more — a change of exactly the tolerance counts — and the change is not Monte-Carlo
+//! noise: its Holm-adjusted interval excludes zero ([`noise`]); worse beyond the tolerance
+//! within the noise is *unresolved* ([`compare_with`]).
+
+pub mod noise;
 
 use std::fmt;
 use std::path::Path;
@@ -16,6 +20,7 @@ use serde_json::Value;
 
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
+pub use noise::{pairable, Status, Trials};
 
 /// Which way a metric improves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -141,13 +146,50 @@ pub struct Compared {
     pub regressed: bool,
     /// Whether a higher value of the metric is better (η) or a lower one (errors).
     pub higher_is_better: bool,
+    /// What the metric did ([`Status`]); `regressed` is `status == Regression`.
+    pub status: Status,
+    /// The interval of the change B − A at the Holm-adjusted level of this metric
+    /// (0.05 / its Holm step: the interval excludes zero exactly when the step rejects), in
+    /// the metric's units; `None` for a missing metric.
+    pub diff_ci: Option<[Real; 2]>,
+    /// The two-sided p-value of "no change" (NaN for a missing metric).
+    pub p_value: Real,
+    /// … Holm-adjusted over the metrics compared.
+    pub p_holm: Real,
+    /// Whether the change was computed trial by trial (from both runs' `trials.csv`).
+    pub paired: bool,
+    /// For an unresolved metric: the trials per run that would detect a change of exactly
+    /// the tolerance with 80 % power at the Bonferroni level 0.05 / m.
+    pub trials_needed: Option<usize>,
 }
 
+/// The significance level of the guard, before the Holm adjustment.
+pub const ALPHA: Real = 0.05;
+
 /// Every metric [`compare`] looks at, entry by entry in the baseline's order, each with
-/// both values and whether it regressed: [`compare`] is the regressed ones.
+/// both values and its status, from the summaries only (unpaired): [`compare_with`]
+/// without per-trial values.
 pub fn compare_all(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Compared> {
+    compare_with(summary, baseline, tolerance, None)
+}
+
+/// Every metric [`compare`] looks at, entry by entry in the baseline's order, each with both
+/// values, the interval of its change and its [`Status`]. `trials` holds the per-trial
+/// values of the baseline's run and of the summary's (their `trials.csv`): when the two runs
+/// are [`pairable`] and an entry has the same trials in both, its metrics are compared trial
+/// by trial; otherwise from the summaries ([`noise::unpaired`]).
+pub fn compare_with(
+    summary: &Value,
+    baseline: &Value,
+    tolerance: Real,
+    trials: Option<(&Trials, &Trials)>,
+) -> Vec<Compared> {
     let new = entries(summary);
+    let count = |v: &Value| v.get("trials").and_then(Value::as_u64).map(|n| n as usize);
+    let counts = [count(baseline), count(summary)];
+    let trials = trials.filter(|_| pairable(baseline, summary));
     let mut out = Vec::new();
+    let mut changes = Vec::new();
     for b in entries(baseline) {
         let key = entry_key(b);
         let found = new.iter().find(|e| entry_key(e) == key);
@@ -156,9 +198,22 @@ pub fn compare_all(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Co
                 continue;
             };
             let value = found.and_then(|e| lookup(e, &metric)).unwrap_or(Real::NAN);
+            let change = found.filter(|_| value.is_finite()).map(|e| {
+                trials
+                    .and_then(|(ta, tb)| noise::paired(ta, tb, &key, &metric))
+                    .filter(|c| c.matches(base, value))
+                    .unwrap_or_else(|| noise::unpaired(b, e, &metric, (base, value), counts))
+            });
+            changes.push(change);
             out.push(Compared {
                 higher_is_better: dir == Better::Higher,
-                regressed: regressed(value, base, tolerance, dir) || !value.is_finite(),
+                regressed: !value.is_finite(),
+                status: Status::Regression,
+                diff_ci: None,
+                p_value: Real::NAN,
+                p_holm: Real::NAN,
+                paired: change.is_some_and(|c| c.paired),
+                trials_needed: None,
                 metric: Regression {
                     entry: key.clone(),
                     metric,
@@ -166,6 +221,45 @@ pub fn compare_all(summary: &Value, baseline: &Value, tolerance: Real) -> Vec<Co
                     value,
                 },
             });
+        }
+    }
+    let p: Vec<Real> = changes
+        .iter()
+        .map(|c| c.map_or(Real::NAN, |c| c.p_value()))
+        .collect();
+    let (p_holm, steps) = noise::holm(&p);
+    let m = p.iter().filter(|p| !p.is_nan()).count().max(1);
+    for (i, c) in out.iter_mut().enumerate() {
+        let Some(change) = changes[i] else {
+            continue;
+        };
+        let dir = if c.higher_is_better {
+            Better::Higher
+        } else {
+            Better::Lower
+        };
+        let (value, base) = (c.metric.value, c.metric.baseline);
+        let worse = regressed(value, base, tolerance, dir);
+        let better = regressed(
+            base,
+            value,
+            tolerance * base.abs() / value.abs().max(Real::MIN_POSITIVE),
+            dir,
+        );
+        let significant = p_holm[i] < ALPHA;
+        c.status = match (worse, better, significant) {
+            (true, _, true) => Status::Regression,
+            (true, _, false) => Status::Unresolved,
+            (_, true, true) => Status::Improved,
+            (_, _, true) => Status::Changed,
+            _ => Status::NoChange,
+        };
+        c.regressed = c.status == Status::Regression;
+        c.p_value = p[i];
+        c.p_holm = p_holm[i];
+        c.diff_ci = Some(change.interval(ALPHA / steps[i] as Real));
+        if c.status == Status::Unresolved {
+            c.trials_needed = change.trials_needed(tolerance * base.abs(), ALPHA / m as Real);
         }
     }
     out

@@ -2,18 +2,23 @@
 //! `run`). Writers only read results that are already computed.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::{json, Value};
 
 use super::markdown::{fmt_num, table};
 use super::plots;
+
+pub mod comparisons;
+mod sweep;
+mod trials_csv;
+
 use crate::error::{Error, Result};
 use crate::numeric::Real;
-use crate::study::scenario::Sweep;
-use crate::study::stats::{eta, Entry};
-use crate::study::trial::{AFTER_DEG, BEFORE_DEG};
-use crate::study::{toml_to_json, Block, BlockInfo, RunResult, TrialResult, TrialSink};
+use crate::study::stats::Entry;
+use crate::study::{toml_to_json, Block, RunResult};
+use sweep::{sweep_tables, write_sweep_plots};
+pub use trials_csv::TrialsCsv;
 
 fn write(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
@@ -132,6 +137,7 @@ pub fn summary(r: &RunResult) -> Value {
         "fitness_trace_trial0": convergence,
         "timing": "timing.json",
         "results": results,
+        "comparisons": comparisons::comparisons(r).into_iter().map(|(c, _)| c).collect::<Vec<_>>(),
     });
     if let Some(sep) = &first.separation {
         s["separation"] = sep.clone();
@@ -155,21 +161,34 @@ pub fn summary(r: &RunResult) -> Value {
     s
 }
 
-fn num(v: Real) -> String {
-    if v.is_finite() {
-        format!("{v}")
-    } else {
-        String::new()
-    }
-}
-
 /// A column of a results table: its header and how an entry fills it.
 pub type Column = (&'static str, fn(&Entry) -> String);
+
+/// A 95 % interval as `[lo, hi]` with `digits` significant digits (empty when there is
+/// none).
+pub fn fmt_ci(ci: Option<[Real; 2]>, digits: usize) -> String {
+    ci.map_or(String::new(), |[lo, hi]| {
+        format!("[{}, {}]", fmt_num(lo, digits), fmt_num(hi, digits))
+    })
+}
 
 /// The columns of the results tables (the printed one and the report's take these in
 /// different selections).
 pub mod columns {
-    use super::{fmt_num, Column, Real};
+    use super::{fmt_ci, fmt_num, Column, Real};
+
+    /// 95 % interval of the mean η.
+    pub const ETA_MEAN_CI: Column = ("η mean 95 % CI", |e| fmt_ci(e.eta_mean_pct_ci95, 4));
+    /// 95 % interval of the median η.
+    pub const ETA_MEDIAN_CI: Column = ("η median 95 % CI", |e| fmt_ci(e.eta_median_pct_ci95, 4));
+    /// 95 % interval of the mean validation error after compensation.
+    pub const AFTER_MEAN_CI: Column = ("after mean 95 % CI", |e| {
+        fmt_ci(e.validation_after_mm.mean_ci95, 4)
+    });
+    /// 95 % interval of the validation RMS after compensation.
+    pub const AFTER_RMS_CI: Column = ("after RMS 95 % CI", |e| {
+        fmt_ci(e.validation_after_mm.rms_ci95, 4)
+    });
 
     /// Mean η.
     pub const ETA_MEAN: Column = ("η mean %", |e| fmt_num(e.eta_mean_pct, 4));
@@ -277,166 +296,6 @@ pub fn entry_table_by(
     (head, rows)
 }
 
-/// `trials.csv`, written as trials finish: one row per trial × strategy × method (× sweep
-/// point), in trial order. The header comes from the first block; one axis adds the column
-/// `sweep_value`, a grid one column per swept key. It goes to a file ([`TrialsCsv::create`])
-/// or, for a run held in memory, to bytes ([`TrialsCsv::in_memory`]): the same bytes.
-pub struct TrialsCsv<W: std::io::Write = std::io::BufWriter<std::fs::File>> {
-    path: PathBuf,
-    out: W,
-    sweep_columns: Vec<String>,
-    header: bool,
-}
-
-impl TrialsCsv {
-    /// Creates `path` for the trials of a run of a scenario with `sweep`.
-    pub fn create(path: &Path, sweep: Option<&Sweep>) -> Result<TrialsCsv> {
-        let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-        Ok(TrialsCsv::to(path, std::io::BufWriter::new(file), sweep))
-    }
-}
-
-impl TrialsCsv<Vec<u8>> {
-    /// `trials.csv` of a run of a scenario with `sweep`, kept in memory.
-    pub fn in_memory(sweep: Option<&Sweep>) -> TrialsCsv<Vec<u8>> {
-        TrialsCsv::to(Path::new("trials.csv"), Vec::new(), sweep)
-    }
-
-    /// The bytes written.
-    pub fn into_bytes(self) -> Vec<u8> {
-        self.out
-    }
-}
-
-impl<W: std::io::Write> TrialsCsv<W> {
-    fn to(path: &Path, out: W, sweep: Option<&Sweep>) -> TrialsCsv<W> {
-        let sweep_columns = match sweep {
-            None => Vec::new(),
-            Some(sw) if sw.axes.len() == 1 => vec!["sweep_value".into()],
-            Some(sw) => sw.axes.iter().map(|a| a.key.clone()).collect(),
-        };
-        TrialsCsv {
-            path: path.to_path_buf(),
-            out,
-            sweep_columns,
-            header: false,
-        }
-    }
-
-    /// Flushes the file.
-    pub fn finish(mut self) -> Result<()> {
-        self.out.flush().map_err(|e| Error::io(&self.path, e))
-    }
-
-    fn header(&self, info: &BlockInfo) -> String {
-        let mut head = vec!["trial".to_string()];
-        head.extend(self.sweep_columns.iter().cloned());
-        head.extend(
-            [
-                "method",
-                "poses",
-                "eta_mean_pct",
-                "before_mean_mm",
-                "before_rms_mm",
-                "before_max_mm",
-                "after_mean_mm",
-                "after_rms_mm",
-                "after_max_mm",
-            ]
-            .map(String::from),
-        );
-        if info.full_pose {
-            head.extend(
-                [
-                    "before_mean_deg",
-                    "before_rms_deg",
-                    "after_mean_deg",
-                    "after_rms_deg",
-                ]
-                .map(String::from),
-            );
-        }
-        head.extend(["iterations", "termination"].map(String::from));
-        head.extend(info.params.iter().map(|n| format!("true_{n}")));
-        head.extend(info.params.iter().map(|n| format!("identified_{n}")));
-        if info.external {
-            head.push("error".into());
-        }
-        head.join(",") + "\n"
-    }
-}
-
-impl<W: std::io::Write> TrialSink for TrialsCsv<W> {
-    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
-        let mut out = String::new();
-        if !self.header {
-            out += &self.header(info);
-            self.header = true;
-        }
-        for o in &t.outcomes {
-            let mut row = vec![t.index.to_string()];
-            if let Some(p) = &info.point {
-                row.extend(p.iter().map(|v| v.to_string().replace(',', ";")));
-            }
-            let etas: Vec<Real> = t
-                .truth
-                .iter()
-                .zip(&o.identified)
-                .filter_map(|(&x, &y)| eta(x, y))
-                .collect();
-            let eta_mean = if etas.is_empty() {
-                Real::NAN
-            } else {
-                etas.iter().sum::<Real>() / etas.len() as Real
-            };
-            row.push(info.methods[o.method].clone());
-            row.push(info.strategies[o.strategy].clone());
-            for v in [
-                eta_mean,
-                o.before_mm.mean,
-                o.before_mm.rms,
-                o.before_mm.max,
-                o.after_mm.mean,
-                o.after_mm.rms,
-                o.after_mm.max,
-            ] {
-                row.push(num(v));
-            }
-            if info.full_pose {
-                let (bd, ad) = (
-                    o.optional[BEFORE_DEG].unwrap_or_default(),
-                    o.optional[AFTER_DEG].unwrap_or_default(),
-                );
-                for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
-                    row.push(num(v));
-                }
-            }
-            row.push(o.iterations.to_string());
-            row.push(o.termination.as_str().into());
-            row.extend(t.truth.iter().map(|&v| num(v)));
-            row.extend(o.identified.iter().map(|&v| num(v)));
-            if info.external {
-                row.push(csv_text(o.error.as_deref().unwrap_or("")));
-            }
-            out += &row.join(",");
-            out.push('\n');
-        }
-        self.out
-            .write_all(out.as_bytes())
-            .map_err(|e| Error::io(&self.path, e))
-    }
-}
-
-/// `text` as one CSV field: quoted (inner quotes doubled) when it holds a comma, a quote or
-/// a line break.
-fn csv_text(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_string()
-    }
-}
-
 /// `report.md`: the tables a paper would print, and the plots.
 pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     let sc = &r.scenario;
@@ -465,6 +324,19 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     s += "## Validation errors and identification accuracy\n\n";
     s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
     s += &table(&headers, &rows);
+    s += "\n## Uncertainty over trials\n\n";
+    s += INTERVAL_NOTE;
+    s += "\n\n";
+    let (headers, rows) = entry_table(r, &INTERVAL_COLUMNS);
+    let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
+    s += &table(&headers, &rows);
+    let (h, rows) = comparisons::table(r);
+    if !rows.is_empty() {
+        s += "\n## Paired comparisons\n\n";
+        s += comparisons::NOTE;
+        s += "\n\n";
+        s += &table(&h, &rows);
+    }
     if let Some(sw) = &sc.sweep {
         s += &sweep_tables(r, sw);
     }
@@ -488,6 +360,29 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     }
     s
 }
+
+/// The headline figures with their 95 % intervals (`report.md`, `report.html`).
+pub const INTERVAL_COLUMNS: [Column; 8] = {
+    use columns::*;
+    [
+        ETA_MEAN,
+        ETA_MEAN_CI,
+        ETA_MEDIAN,
+        ETA_MEDIAN_CI,
+        AFTER_MEAN,
+        AFTER_MEAN_CI,
+        AFTER_RMS,
+        AFTER_RMS_CI,
+    ]
+};
+
+/// What the intervals of the reports are (docs/formats.md "summary.json").
+pub const INTERVAL_NOTE: &str = "95 % intervals of each figure over the Monte-Carlo trials: \
+    the t interval of a mean (mean ± t₀.₉₇₅,ₙ₋₁ · s / √n), and for the median η the \
+    distribution-free interval of order statistics of each parameter's median at level \
+    1 − 0.05 / p, averaged over the p parameters. A difference between two entries whose \
+    intervals overlap may still be real: the entries share their draws, so a paired \
+    comparison is far more precise.";
 
 /// The metrics of a run's reports, each as its term and the rest of its explanation.
 pub const METRIC_NOTES: [(&str, &str); 6] = [
@@ -515,216 +410,6 @@ pub fn eta_table(b: &Block) -> (Vec<String>, Vec<Vec<String>>) {
         })
         .collect();
     (h, rows)
-}
-
-/// The sweep section of `report.md`: the headline metrics per sweep point, and for a
-/// two-axis grid the validation RMS after compensation of each method and strategy as a
-/// table of the first axis (rows) against the second (columns).
-fn sweep_tables(r: &RunResult, sw: &Sweep) -> String {
-    use columns::*;
-    let mut s = String::from("\n## Sweep\n\n");
-    let _ = writeln!(
-        s,
-        "Swept: {}{}.\n",
-        sw.keys()
-            .iter()
-            .map(|k| format!("`{k}`"))
-            .collect::<Vec<_>>()
-            .join(", "),
-        if sw.zip { " (paired)" } else { "" }
-    );
-    let (headers, rows) = entry_table(
-        r,
-        &[AFTER_RMS, ETA_MEDIAN, CRB_RATIO, MS_PER_IDENTIFICATION],
-    );
-    let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
-    s += &table(&headers, &rows);
-    if sw.dims() == 2 {
-        let (xa, ya) = (&sw.axes[0], &sw.axes[1]);
-        for (k, e) in r.blocks[0].entries.iter().enumerate() {
-            let _ = writeln!(
-                s,
-                "\nValidation RMS after (mm), {}: `{}` down, `{}` across.\n",
-                entry_label(e),
-                xa.key,
-                ya.key
-            );
-            let mut h = vec![String::new()];
-            h.extend(ya.values.iter().map(|v| v.to_string()));
-            let h: Vec<&str> = h.iter().map(String::as_str).collect();
-            let rows: Vec<Vec<String>> = xa
-                .values
-                .iter()
-                .enumerate()
-                .map(|(i, xv)| {
-                    let mut row = vec![xv.to_string()];
-                    row.extend((0..ya.values.len()).map(|j| {
-                        r.blocks
-                            .get(i * ya.values.len() + j)
-                            .map_or(String::new(), |b| {
-                                fmt_num(b.entries[k].validation_after_mm.rms, 4)
-                            })
-                    }));
-                    row
-                })
-                .collect();
-            s += &table(&h, &rows);
-        }
-    }
-    s
-}
-
-/// A sweep value as a plot position: the number itself, or `None` (then the plots place the
-/// values at their list positions).
-fn numeric(v: &toml::Value) -> Option<Real> {
-    v.as_float().or(v.as_integer().map(|i| i as Real))
-}
-
-/// The headline metrics of the sweep plots: file stem, title, y label, value and spread
-/// over trials of an entry.
-type SweepMetric = (
-    &'static str,
-    &'static str,
-    &'static str,
-    fn(&Entry) -> (Real, Real),
-);
-
-const SWEEP_METRICS: [SweepMetric; 4] = [
-    (
-        "sweep_validation_rms",
-        "Validation RMS after compensation (± 1 s.d. over trials)",
-        "RMS (mm)",
-        |e| (e.validation_after_mm.rms, e.spread.after_rms),
-    ),
-    (
-        "sweep_eta_median",
-        "Identification accuracy: median η (± mean s.d. of η)",
-        "median η (%)",
-        |e| (e.eta_median_pct, e.spread.eta),
-    ),
-    (
-        "sweep_crb_ratio",
-        "Parameter covariance over the Cramér–Rao bound",
-        "CRB ratio",
-        |e| (e.crb_ratio.unwrap_or(Real::NAN), Real::NAN),
-    ),
-    (
-        "sweep_seconds",
-        "Wall time per identification (± 1 s.d.)",
-        "time (s)",
-        |e| (e.seconds_per_identification, e.spread.seconds),
-    ),
-];
-
-/// The sweep plots: for one axis (or paired axes) each headline metric against the swept
-/// value, one line per method × strategy with its spread; for a two-axis grid a heat map of
-/// the validation RMS after compensation per method × strategy.
-fn write_sweep_plots(r: &RunResult, sw: &Sweep, out: &Path) -> Result<Vec<(String, String)>> {
-    let mut done = Vec::new();
-    let b0 = &r.blocks[0];
-    if sw.dims() == 1 {
-        let axis = &sw.axes[0];
-        // Zipped axes move together: the x axis numbers the points and names every key.
-        let zipped = sw.axes.len() > 1;
-        let numbers: Option<Vec<Real>> = if zipped {
-            None
-        } else {
-            axis.values.iter().map(numeric).collect()
-        };
-        let keys = sw.keys().join(" + ");
-        let (xs, x_label) = match numbers {
-            Some(v) => (v, axis.key.clone()),
-            None => (
-                (0..axis.values.len()).map(|i| i as Real).collect(),
-                format!(
-                    "{keys} (value no.: {})",
-                    (0..axis.values.len())
-                        .map(|i| {
-                            let vals: Vec<String> =
-                                sw.axes.iter().map(|a| a.values[i].to_string()).collect();
-                            if zipped {
-                                format!("{i} = ({})", vals.join(", "))
-                            } else {
-                                format!("{i} = {}", vals[0])
-                            }
-                        })
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            ),
-        };
-        for (stem, title, y_label, metric) in SWEEP_METRICS {
-            let series: Vec<plots::SweepSeries> = b0
-                .entries
-                .iter()
-                .enumerate()
-                .map(|(k, e)| {
-                    let pts = r
-                        .blocks
-                        .iter()
-                        .zip(&xs)
-                        .map(|(b, &x)| {
-                            let (m, sd) = metric(&b.entries[k]);
-                            (x, m, sd)
-                        })
-                        .collect();
-                    (entry_label(e), pts)
-                })
-                .collect();
-            plots::sweep(&out.join(stem), title, &x_label, y_label, &series)?;
-            done.push((format!("{stem}.png"), format!("{title} against {keys}")));
-        }
-    } else if sw.dims() == 2 {
-        let (xa, ya) = (&sw.axes[0], &sw.axes[1]);
-        let names = |a: &crate::study::scenario::SweepAxis| -> Vec<String> {
-            a.values.iter().map(|v| v.to_string()).collect()
-        };
-        let (xn, yn) = (names(xa), names(ya));
-        for (k, e) in b0.entries.iter().enumerate() {
-            let values: Vec<Vec<Real>> = (0..xa.values.len())
-                .map(|i| {
-                    (0..ya.values.len())
-                        .map(|j| {
-                            r.blocks
-                                .get(i * ya.values.len() + j)
-                                .map_or(Real::NAN, |b| b.entries[k].validation_after_mm.rms)
-                        })
-                        .collect()
-                })
-                .collect();
-            let stem = format!("heatmap_{}_{}", file_safe(&e.method), file_safe(&e.poses));
-            plots::heatmap(
-                &out.join(&stem),
-                &format!("Validation RMS after compensation (mm), {}", entry_label(e)),
-                (&xa.key, &xn),
-                (&ya.key, &yn),
-                &values,
-            )?;
-            done.push((
-                format!("{stem}.png"),
-                format!(
-                    "validation RMS after, {}, over {} and {}",
-                    entry_label(e),
-                    xa.key,
-                    ya.key
-                ),
-            ));
-        }
-    }
-    Ok(done)
-}
-
-/// `s` with every character outside `[A-Za-z0-9._-]` replaced by `_` (a file name part).
-fn file_safe(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || "._-".contains(c) {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
 }
 
 /// Records the PNG `<stem>.png` with its caption.
@@ -812,6 +497,14 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         &groups,
     )?;
     caption(&mut done, "validation_rms", "validation RMS over trials");
+    // The paired comparisons' per-trial differences, each entry against its baseline.
+    for (stem, title, y_label, k) in comparisons::DIFF_PLOTS {
+        let groups = comparisons::differences(b0, k);
+        if !groups.is_empty() {
+            plots::box_plot(&out.join(stem), title, y_label, &groups)?;
+            caption(&mut done, stem, title);
+        }
+    }
     // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
     let traces: Vec<(String, Vec<Real>)> = info
         .strategies

@@ -3,6 +3,10 @@
 
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::ops::Deref;
+
+pub mod dist;
+pub mod paired;
 
 use super::spill::Spill;
 use super::trial::{Outcome, TrialResult, OPTIONAL_STATS};
@@ -15,10 +19,68 @@ use crate::numeric::Real;
 pub struct EtaStats {
     /// Mean η (%).
     pub mean: Real,
+    /// The 95 % t interval of the mean ([`dist::t_interval`]; `null` under 2 trials).
+    pub mean_ci95: Option<[Real; 2]>,
     /// Median η (%).
     pub median: Real,
+    /// The distribution-free 95 % interval of the median: the order statistics of ranks
+    /// [`median_ranks`] (`null` under 6 trials).
+    pub median_ci95: Option<[Real; 2]>,
     /// Standard deviation of η (%).
     pub std: Real,
+}
+
+/// Error statistics averaged over trials ([`ErrorStats`]: mean, RMS, max, s.d. of one
+/// trial's errors), each with the 95 % t interval of its mean over trials (`null` under 2
+/// trials): `mean_ci95` is the interval of `mean`, `rms_ci95` of `rms`, and so on.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct Figures {
+    /// The statistics, each averaged over trials.
+    #[serde(flatten)]
+    pub stats: ErrorStats,
+    /// 95 % interval of `mean`.
+    pub mean_ci95: Option<[Real; 2]>,
+    /// 95 % interval of `rms`.
+    pub rms_ci95: Option<[Real; 2]>,
+    /// 95 % interval of `max`.
+    pub max_ci95: Option<[Real; 2]>,
+    /// 95 % interval of `std`.
+    pub std_ci95: Option<[Real; 2]>,
+}
+
+impl Deref for Figures {
+    type Target = ErrorStats;
+    fn deref(&self) -> &ErrorStats {
+        &self.stats
+    }
+}
+
+/// The 0-based ranks (l, u) of the order statistics that bound a distribution-free
+/// interval of the median of `n` values at level 1 − `alpha`: the largest l with
+/// P(B ≤ l) ≤ `alpha` / 2 for B ~ Binomial(n, ½), and u = n − 1 − l, so that
+/// P(x₍ₗ₎ ≤ median ≤ x₍ᵤ₎) ≥ 1 − `alpha` (Conover, *Practical Nonparametric Statistics*,
+/// § 3.2). `None` when even the extreme values do not reach the level (n < 6 at 95 %).
+pub fn median_ranks(n: usize, alpha: Real) -> Option<(usize, usize)> {
+    if n == 0 {
+        return None;
+    }
+    let nf = n as Real;
+    let ln_c = |k: usize| {
+        dist::ln_gamma(nf + 1.0)
+            - dist::ln_gamma(k as Real + 1.0)
+            - dist::ln_gamma(nf - k as Real + 1.0)
+    };
+    let ln2n = nf * std::f64::consts::LN_2;
+    let mut cdf = 0.0;
+    let mut l = None;
+    for k in 0..n.div_ceil(2) {
+        cdf += (ln_c(k) - ln2n).exp();
+        if cdf > alpha / 2.0 {
+            break;
+        }
+        l = Some(k);
+    }
+    l.map(|l| (l, n - 1 - l))
 }
 
 /// One `results` entry of `summary.json` (docs/formats.md "summary.json").
@@ -36,33 +98,44 @@ pub struct Entry {
     pub sweep: Option<BTreeMap<String, serde_json::Value>>,
     /// Mean over parameters of the mean η (%).
     pub eta_mean_pct: Real,
+    /// Its 95 % t interval, from the spread over trials of each trial's mean η over the
+    /// parameters (`null` under 2 trials).
+    pub eta_mean_pct_ci95: Option<[Real; 2]>,
     /// Mean over parameters of the median η (%): with random errors a draw near zero makes
     /// one trial's η hugely negative, which the mean follows and the median does not.
     pub eta_median_pct: Real,
+    /// Its 95 % interval: the mean over parameters of each parameter's distribution-free
+    /// interval of the median at level 1 − 0.05 / p (p parameters; Bonferroni, so that all
+    /// p hold together with probability ≥ 95 % and so does their mean); `null` when a
+    /// parameter has too few trials for its interval.
+    pub eta_median_pct_ci95: Option<[Real; 2]>,
     /// η per parameter with a non-zero injected error.
     pub eta: BTreeMap<String, EtaStats>,
     /// Validation position errors before compensation (mm), each statistic averaged over
     /// trials.
-    pub validation_before_mm: ErrorStats,
+    pub validation_before_mm: Figures,
     /// … after compensation.
-    pub validation_after_mm: ErrorStats,
+    pub validation_after_mm: Figures,
     /// Position errors at the calibration poses against their noise-free true points (mm),
     /// nominal robot, each statistic averaged over trials: what a paper that validates on its
     /// calibration points reports (Ban; Qiao 2021's calibration-point figures).
-    pub calibration_before_mm: ErrorStats,
+    pub calibration_before_mm: Figures,
     /// … compensated robot.
-    pub calibration_after_mm: ErrorStats,
+    pub calibration_after_mm: Figures,
     /// The statistics only some studies have, by name ([`OPTIONAL_STATS`]: orientation and
     /// Qiao's attitude for full-pose data, `validation_before_fitted_mm` with
     /// `validation.before_fitted`, Guo's axis errors with `validation.axis_errors`), each
     /// statistic averaged over trials; a statistic no trial has is absent.
     #[serde(flatten)]
-    pub optional: BTreeMap<&'static str, ErrorStats>,
+    pub optional: BTreeMap<&'static str, Figures>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
     /// which absorb the registration's error, are left out.
     pub param_rmse: BTreeMap<String, Real>,
+    /// The 95 % interval of each `param_rmse`: the t interval of the mean squared error,
+    /// its bounds' square roots (a negative lower bound taken as 0); `null` under 2 trials.
+    pub param_rmse_ci95: BTreeMap<String, Option<[Real; 2]>>,
     /// Mean over trials of each identified parameter's error (identified − true; mm, rad),
     /// base left out as for `param_rmse`: the estimator's bias. Where the truth is the same
     /// in every trial (`errors.kind` `paper` or `values`), the mean identified error is the
@@ -88,6 +161,11 @@ pub struct Entry {
     /// Spreads over trials (plots only).
     #[serde(skip)]
     pub spread: Spread,
+    /// Each trial's validation RMS after compensation (mm) and mean η over the parameters
+    /// (%), in trial order, NaN where the identification failed: what the paired comparisons
+    /// of the entries of one block compare (not written as such).
+    #[serde(skip)]
+    pub per_trial: [Vec<Real>; 2],
 }
 
 fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
@@ -134,22 +212,66 @@ impl Sum {
     }
 }
 
-/// Running sums of the four statistics of [`ErrorStats`] over trials.
+/// The running spread of values in trial order (Welford's update): the sample standard
+/// deviation of an interval without keeping the values.
 #[derive(Clone, Copy, Debug, Default)]
-struct StatsSum([Sum; 4]);
+struct Spread2 {
+    n: usize,
+    mean: Real,
+    m2: Real,
+}
+
+impl Spread2 {
+    fn add(&mut self, x: Real) {
+        self.n += 1;
+        let d = x - self.mean;
+        self.mean += d / self.n as Real;
+        self.m2 += d * (x - self.mean);
+    }
+    /// The sample standard deviation (divisor n − 1; NaN under 2 values).
+    fn sd(&self) -> Real {
+        if self.n < 2 {
+            Real::NAN
+        } else {
+            (self.m2 / (self.n - 1) as Real).sqrt()
+        }
+    }
+    /// The 95 % t interval around `mean` (the in-order mean of the same values).
+    fn interval(&self, mean: Real) -> Option<[Real; 2]> {
+        dist::t_interval(mean, self.sd(), self.n)
+    }
+}
+
+/// Running sums of the four statistics of [`ErrorStats`] over trials, with their spreads.
+#[derive(Clone, Copy, Debug, Default)]
+struct StatsSum([Sum; 4], [Spread2; 4]);
 
 impl StatsSum {
     fn add(&mut self, s: &ErrorStats) {
-        for (a, x) in self.0.iter_mut().zip([s.mean, s.rms, s.max, s.std]) {
+        for ((a, v), x) in self
+            .0
+            .iter_mut()
+            .zip(&mut self.1)
+            .zip([s.mean, s.rms, s.max, s.std])
+        {
             a.add(x);
+            v.add(x);
         }
     }
-    fn average(&self) -> ErrorStats {
-        ErrorStats {
+    fn average(&self) -> Figures {
+        let stats = ErrorStats {
             mean: self.0[0].mean(),
             rms: self.0[1].mean(),
             max: self.0[2].mean(),
             std: self.0[3].mean(),
+        };
+        let ci = |i: usize, m: Real| self.1[i].interval(m);
+        Figures {
+            mean_ci95: ci(0, stats.mean),
+            rms_ci95: ci(1, stats.rms),
+            max_ci95: ci(2, stats.max),
+            std_ci95: ci(3, stats.std),
+            stats,
         }
     }
 }
@@ -174,7 +296,15 @@ struct Cell {
     deg: [Option<StatsSum>; OPTIONAL_STATS.len()],
     iterations: Sum,
     evaluations: Sum,
+    /// Each usable trial's mean η over the parameters.
+    eta_trial: Spread2,
 }
+
+/// The per-trial headline values kept for the paired comparisons, one value per trial of
+/// every cell (NaN where the trial's identification failed), so that the streams of two
+/// cells line up trial by trial: validation RMS after compensation (mm), the trial's mean
+/// η over the parameters (%), and the wall time of the identification (s).
+pub const HEADLINES: usize = 3;
 
 /// Spreads over trials of the headline metrics (for the sweep plots; not in `summary.json`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -225,7 +355,7 @@ impl Accumulator {
             names: names.to_vec(),
             methods,
             cells: vec![Cell::default(); cells],
-            spill: Spill::new(cells * names.len() * 2),
+            spill: Spill::new(cells * (names.len() * 2 + HEADLINES)),
         }
     }
 
@@ -233,6 +363,25 @@ impl Accumulator {
     fn streams(&self, c: usize, k: usize) -> (usize, usize) {
         let s = (c * self.names.len() + k) * 2;
         (s, s + 1)
+    }
+
+    /// The spill stream of cell `c`'s headline value `h` (see [`HEADLINES`]).
+    fn headline(&self, c: usize, h: usize) -> usize {
+        self.cells.len() * self.names.len() * 2 + c * HEADLINES + h
+    }
+
+    /// The per-trial values of headline `h` ([`HEADLINES`]) of `(strategy, method)`, in
+    /// trial order, NaN where the identification failed.
+    pub fn per_trial(
+        &self,
+        strategy: usize,
+        method: usize,
+        h: usize,
+    ) -> crate::error::Result<Vec<Real>> {
+        let s = self.headline(strategy * self.methods + method, h);
+        let mut v = Vec::with_capacity(self.spill.len(s));
+        self.spill.for_each(s, |x| v.push(x))?;
+        Ok(v)
     }
 
     /// Adds one trial (trials must come in trial order). Fails only when the scratch file
@@ -247,10 +396,18 @@ impl Accumulator {
             *c.terminations
                 .entry(o.termination.as_str().to_string())
                 .or_insert(0) += 1;
-            if !usable(o) {
+            let ok = usable(o);
+            let hs = self.headline(ci, 2);
+            self.spill.push(hs, o.seconds)?;
+            if !ok {
+                for h in 0..2 {
+                    let s = self.headline(ci, h);
+                    self.spill.push(s, Real::NAN)?;
+                }
                 continue;
             }
-            c.ok += 1;
+            self.cells[ci].ok += 1;
+            let (mut eta_sum, mut eta_n) = (-0.0, 0usize);
             for k in 0..self.names.len() {
                 // Base parameters absorb the registration's error: nuisance, not compared.
                 if self.names[k].starts_with("base.") {
@@ -260,9 +417,22 @@ impl Accumulator {
                 self.spill.push(se, o.identified[k] - t.truth[k])?;
                 if let Some(e) = eta(t.truth[k], o.identified[k]) {
                     self.spill.push(sn, e)?;
+                    eta_sum += e;
+                    eta_n += 1;
                 }
             }
+            let eta_trial = if eta_n == 0 {
+                Real::NAN
+            } else {
+                eta_sum / eta_n as Real
+            };
+            let (h0, h1) = (self.headline(ci, 0), self.headline(ci, 1));
+            self.spill.push(h0, o.after_mm.rms)?;
+            self.spill.push(h1, eta_trial)?;
             let c = &mut self.cells[ci];
+            if eta_n > 0 {
+                c.eta_trial.add(eta_trial);
+            }
             if let Some(x) = t.crb_trace[o.strategy] {
                 c.crb.add(x);
             }
@@ -298,29 +468,72 @@ impl Accumulator {
         let mut eta_map = BTreeMap::new();
         let mut rmse = BTreeMap::new();
         let mut bias = BTreeMap::new();
+        let mut rmse_ci = BTreeMap::new();
         let mut emp_trace = 0.0;
+        let with_eta = self
+            .names
+            .iter()
+            .enumerate()
+            .filter(|(k, n)| {
+                !n.starts_with("base.") && !self.spill.is_empty(self.streams(ci, *k).1)
+            })
+            .count();
+        let mut median_bounds = Some([-0.0, -0.0]);
         for (k, name) in self.names.iter().enumerate() {
             if name.starts_with("base.") {
                 continue;
             }
             let (errs, etas) = self.streams(ci, k);
             let sp = &self.spill;
-            rmse.insert(name.clone(), sp.mean_of(errs, |e| e * e)?.sqrt());
+            let mse = sp.mean_of(errs, |e| e * e)?;
+            rmse.insert(name.clone(), mse.sqrt());
+            let n = sp.len(errs);
+            let sd_sq = (sp.mean_of(errs, |e| (e * e - mse).powi(2))? * n as Real
+                / (n as Real - 1.0))
+                .sqrt();
+            rmse_ci.insert(
+                name.clone(),
+                dist::t_interval(mse, sd_sq, n).map(|[lo, hi]| [lo.max(0.0).sqrt(), hi.sqrt()]),
+            );
             bias.insert(name.clone(), sp.mean(errs)?);
             emp_trace += sp.std(errs)?.powi(2);
             if !sp.is_empty(etas) {
+                let n = sp.len(etas);
+                let std = sp.std(etas)?;
+                let m = sp.mean(etas)?;
+                let order = |r: Option<(usize, usize)>| -> crate::error::Result<Option<[Real; 2]>> {
+                    match r {
+                        Some((l, u)) => Ok(Some([sp.select(etas, l)?, sp.select(etas, u)?])),
+                        None => Ok(None),
+                    }
+                };
+                let joint = order(median_ranks(n, 0.05 / with_eta as Real))?;
+                median_bounds = match (median_bounds, joint) {
+                    (Some([a, b]), Some([l, u])) => Some([a + l, b + u]),
+                    _ => None,
+                };
                 eta_map.insert(
                     name.clone(),
                     EtaStats {
-                        mean: sp.mean(etas)?,
+                        mean: m,
+                        mean_ci95: dist::t_interval(
+                            m,
+                            std * (n as Real / (n as Real - 1.0)).sqrt(),
+                            n,
+                        ),
                         median: sp.median(etas)?,
-                        std: sp.std(etas)?,
+                        median_ci95: order(median_ranks(n, 0.05))?,
+                        std,
                     },
                 );
             }
         }
         let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
         let eta_median_pct = mean(&eta_map.values().map(|e| e.median).collect::<Vec<_>>());
+        let eta_median_pct_ci95 = median_bounds
+            .filter(|_| with_eta > 0)
+            .map(|[a, b]| [a / with_eta as Real, b / with_eta as Real]);
+        let eta_mean_pct_ci95 = c.eta_trial.interval(eta_mean_pct);
         let ok = c.ok;
         let crb_ratio = (ok >= 2 && c.crb.n == ok)
             .then(|| emp_trace * ok as Real / (ok - 1) as Real / c.crb.mean());
@@ -333,7 +546,9 @@ impl Accumulator {
             sweep_value,
             sweep,
             eta_mean_pct,
+            eta_mean_pct_ci95,
             eta_median_pct,
+            eta_median_pct_ci95,
             eta: eta_map.clone(),
             validation_before_mm: before,
             validation_after_mm: after,
@@ -346,6 +561,7 @@ impl Accumulator {
                 .collect(),
             improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
             param_rmse: rmse,
+            param_rmse_ci95: rmse_ci,
             param_bias: bias,
             crb_ratio,
             failures,
@@ -353,6 +569,10 @@ impl Accumulator {
             iterations_mean: c.iterations.mean(),
             evaluations_mean: c.evaluations.mean(),
             seconds_per_identification: c.seconds.mean(),
+            per_trial: [
+                self.per_trial(strategy, method, 0)?,
+                self.per_trial(strategy, method, 1)?,
+            ],
             spread: Spread {
                 after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),
                 eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),
@@ -372,6 +592,18 @@ mod tests {
         assert!((eta(0.5, 0.4).unwrap() - 80.0).abs() < 1e-12);
         assert!((eta(-0.05, -0.06).unwrap() - 80.0).abs() < 1e-12);
         assert_eq!(eta(0.0, 0.1), None);
+    }
+
+    #[test]
+    fn median_ranks_are_the_binomial_order_statistics() {
+        // The largest l with scipy.stats.binom.cdf(l, n, 0.5) <= alpha / 2.
+        assert_eq!(median_ranks(5, 0.05), None);
+        assert_eq!(median_ranks(6, 0.05), Some((0, 5)));
+        assert_eq!(median_ranks(20, 0.05), Some((5, 14)));
+        assert_eq!(median_ranks(100, 0.05), Some((39, 60)));
+        assert_eq!(median_ranks(1000, 0.05), Some((468, 531)));
+        // Bonferroni over 16 parameters.
+        assert_eq!(median_ranks(30, 0.05 / 16.0).map(|r| r.0), Some(6));
     }
 
     #[test]

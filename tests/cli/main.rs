@@ -13,6 +13,7 @@ mod html;
 mod instruments;
 mod interchange;
 mod kinds;
+mod noise;
 mod practice;
 mod realdata;
 mod refusals;

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use calbench::report::check::{compare, read_json};
+use calbench::report::check::{compare, compare_all, read_json, Status};
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 
@@ -174,7 +174,8 @@ fn check_fails_on_a_worsened_summary() {
     let rms = worse["results"][0]["validation_after_mm"]["rms"]
         .as_f64()
         .unwrap();
-    worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 1.5);
+    // Far beyond the Monte-Carlo noise of 4 trials: a regression, not an unresolved change.
+    worse["results"][0]["validation_after_mm"]["rms"] = serde_json::json!(rms * 10.0);
     let path = out.join("worse.json");
     std::fs::write(&path, serde_json::to_string(&worse).unwrap()).unwrap();
     let o = calbench(&[
@@ -207,15 +208,15 @@ fn ci_guard_matches_the_baseline() {
     run_to(s, &out, 2);
     let now = read_json(&out.join("summary.json")).unwrap();
     let base = read_json(&root().join("results/baselines/ci-guard.json")).unwrap();
-    let r = compare(&now, &base, 0.02);
-    assert!(
-        r.is_empty(),
-        "regressions: {}",
-        r.iter()
-            .map(|r| r.to_string())
-            .collect::<Vec<_>>()
-            .join("; ")
-    );
+    // The baseline holds only a summary, so the comparison is unpaired and a change of a few
+    // per cent in 8 trials is within the noise: the guard fails on unresolved metrics too
+    // (as `check --strict`), so that any change beyond 2 % on the same seed and trials counts.
+    let r: Vec<String> = compare_all(&now, &base, 0.02)
+        .into_iter()
+        .filter(|c| matches!(c.status, Status::Regression | Status::Unresolved))
+        .map(|c| format!("{}: {}", c.status.as_str(), c.metric))
+        .collect();
+    assert!(r.is_empty(), "regressions: {}", r.join("; "));
 }
 
 #[test]

@@ -5,5 +5,6 @@
 mod common;
 
 mod harness;
+mod intervals;
 mod report;
 mod sweeps;

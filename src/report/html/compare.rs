@@ -1,8 +1,10 @@
 //! `calbench compare A B --out DIR`: two runs side by side, entry by entry, as `compare.html`
 //! and `compare.md`. Every metric `calbench check` guards is listed with both values, the
-//! difference and the relative change; the regressions are the ones [`crate::report::check::compare`]
-//! reports with the same tolerance (B is compared against A as a summary against its
-//! baseline). An entry in only one of the runs is listed as such.
+//! difference, the relative change, the Holm-adjusted interval of the change and its status
+//! ([`crate::report::check::Status`]), trial by trial when both folders hold the same trials;
+//! the regressions are the ones `calbench check` reports with the same tolerance (B is
+//! compared against A as a summary against its baseline). An entry in only one of the runs
+//! is listed as such.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -12,7 +14,9 @@ use serde_json::Value;
 use super::Page;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
-use crate::report::check::{check_summary, compare_all, entry_names, read_json, Compared};
+use crate::report::check::{
+    check_summary, compare_with, entry_names, read_json, Compared, Status, Trials,
+};
 use crate::report::markdown::{fmt_num, table};
 
 /// One side of a comparison: where its summary was read from, and the summary.
@@ -21,6 +25,8 @@ pub struct Side {
     pub path: PathBuf,
     /// Its contents.
     pub summary: Value,
+    /// The per-trial values of its folder's `trials.csv`, when it has one (without a sweep).
+    pub trials: Option<Trials>,
 }
 
 impl Side {
@@ -43,9 +49,16 @@ impl Side {
         }
         let summary = read_json(&file)?;
         check_summary(&summary, &file)?;
+        let csv = file.parent().unwrap_or(Path::new(".")).join("trials.csv");
+        let trials = if csv.is_file() {
+            Trials::read(&csv)?
+        } else {
+            None
+        };
         Ok(Side {
             path: file,
             summary,
+            trials,
         })
     }
 
@@ -71,7 +84,7 @@ impl Side {
 }
 
 /// Run B compared with run A (its baseline) by `check`'s rules: every metric `check` looks
-/// at, with both values ([`compare_all`]).
+/// at, with both values ([`compare_with`], paired when both folders hold the same trials).
 pub struct Comparison {
     /// A, then B.
     pub runs: [Side; 2],
@@ -83,7 +96,8 @@ pub struct Comparison {
 impl Comparison {
     /// Compares run `b` with run `a` at `tolerance`.
     pub fn new(a: Side, b: Side, tolerance: Real) -> Comparison {
-        let all = compare_all(&b.summary, &a.summary, tolerance);
+        let pairs = a.trials.as_ref().zip(b.trials.as_ref());
+        let all = compare_with(&b.summary, &a.summary, tolerance, pairs);
         Comparison {
             runs: [a, b],
             tolerance,
@@ -116,26 +130,37 @@ impl Comparison {
     }
 
     /// The verdict of one compared metric, in words.
-    fn status(c: &Compared) -> &'static str {
+    fn status(c: &Compared) -> String {
         let m = &c.metric;
-        if c.regressed {
-            if m.value.is_nan() {
-                "regression: missing in B"
-            } else {
-                "regression"
-            }
-        } else if m.value == m.baseline {
-            "same"
-        } else if (m.value > m.baseline) == c.higher_is_better {
-            "better"
-        } else {
-            "worse, within tolerance"
+        match c.status {
+            Status::Regression if m.value.is_nan() => "regression: missing in B".into(),
+            Status::Unresolved => match c.trials_needed {
+                Some(n) => format!("unresolved (≈ {n} trials would resolve it)"),
+                None => "unresolved".into(),
+            },
+            s => s.as_str().into(),
         }
+    }
+
+    /// How many metrics have status `s`.
+    pub fn count(&self, s: Status) -> usize {
+        self.all.iter().filter(|c| c.status == s).count()
     }
 
     /// The table of the entries in both runs: headers and rows.
     pub fn table(&self) -> (Vec<&'static str>, Vec<Vec<String>>) {
-        let headers = vec!["entry", "metric", "A", "B", "B − A", "change %", "status"];
+        let headers = vec![
+            "entry",
+            "metric",
+            "A",
+            "B",
+            "B − A",
+            "change %",
+            "status",
+            "interval of B − A (Holm)",
+            "p (Holm)",
+            "compared",
+        ];
         let rows = self
             .rows()
             .into_iter()
@@ -154,7 +179,12 @@ impl Comparison {
                     fmt_num(m.value, 6),
                     fmt_num(diff, 4),
                     fmt_num(rel, 3),
-                    Self::status(c).to_string(),
+                    Self::status(c),
+                    c.diff_ci.map_or(String::new(), |[lo, hi]| {
+                        format!("[{}, {}]", fmt_num(lo, 3), fmt_num(hi, 3))
+                    }),
+                    fmt_num(c.p_holm, 3),
+                    if c.paired { "paired" } else { "unpaired" }.into(),
                 ]
             })
             .collect();
@@ -163,14 +193,24 @@ impl Comparison {
 
     fn verdict(&self) -> String {
         let pct = fmt_num(100.0 * self.tolerance, 4);
+        let paired = self.all.iter().filter(|c| c.paired).count();
+        let tally = format!(
+            "{} unresolved (worse by {pct} % or more, within the Monte-Carlo noise), {} changed \
+             within tolerance, {} improved, {} no change; {paired} of {} metrics compared \
+             trial by trial.",
+            self.count(Status::Unresolved),
+            self.count(Status::Changed),
+            self.count(Status::Improved),
+            self.count(Status::NoChange),
+            self.all.len()
+        );
         if self.regressions() == 0 {
-            format!(
-                "B has no metric worse than A by {pct} % or more (the rules of calbench check)."
-            )
+            format!("No regression (the rules of calbench check): {tally}")
         } else {
             format!(
-                "{} metrics of B regressed: worse than A by {pct} % or more, or missing \
-                 (the rules of calbench check, which would fail).",
+                "{} metrics of B regressed: worse than A by {pct} % or more with an interval \
+                 of the change that excludes zero, or missing (calbench check would fail). \
+                 {tally}",
                 self.regressions()
             )
         }
@@ -244,8 +284,8 @@ impl Comparison {
         let (h, rows) = self.table();
         let compared = self.rows();
         page.table_with(
-            "Every guarded metric: A, B, their difference and B's relative change; marked \
-             rows are worse by the tolerance or more",
+            "Every guarded metric: A, B, their difference, B's relative change, its status \
+             and the Holm-adjusted interval of the change; marked rows are regressions",
             &h,
             &rows,
             |i| compared[i].regressed.then_some("regressed"),
@@ -268,9 +308,15 @@ impl Comparison {
         page.section("How to read this page");
         page.para(&format!(
             "η is better higher, errors, parameter RMSE and failures lower. A metric regresses \
-             when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9), \
-             or when B lacks it; this is what calbench check B/summary.json --baseline \
-             A/summary.json --tolerance {} fails on. Timing is not compared.",
+             when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9) \
+             and the interval of the change, Holm-adjusted over the metrics compared, excludes \
+             zero, or when B lacks it; worse by the tolerance within the noise is unresolved \
+             (more trials would tell); a significant change within the tolerance is changed, \
+             within tolerance. The change is paired, trial by trial, when both runs share \
+             scenario, seed and trials and both folders hold trials.csv; otherwise it comes \
+             from the summaries' 95 % intervals (Welch). This is what calbench check \
+             B/summary.json --baseline A/summary.json --tolerance {} fails on (with --strict \
+             also on unresolved). Timing is not compared.",
             fmt_num(100.0 * self.tolerance, 4),
             self.tolerance
         ));
@@ -306,6 +352,7 @@ mod tests {
         Side {
             path: PathBuf::from(format!("{eta}.json")),
             summary: json!({"scenario": "s", "trials": 4, "seed": 1, "results": results}),
+            trials: None,
         }
     }
 
@@ -319,12 +366,12 @@ mod tests {
         assert_eq!(c.only_in(1), ["igg3 / random"]);
         let (_, rows) = c.table();
         let eta = rows.iter().find(|r| r[1] == "eta_mean_pct").unwrap();
-        assert_eq!(eta[2..], ["90", "80", "-10", "-11.1", "regression"]);
+        assert_eq!(eta[2..7], ["90", "80", "-10", "-11.1", "regression"]);
         let rms = rows
             .iter()
             .find(|r| r[1] == "validation_after_mm.rms")
             .unwrap();
-        assert_eq!(rms[6], "same");
+        assert_eq!(rms[6], "no change");
         let md = c.markdown();
         let line = |entry: &str| md.lines().find(|l| l.contains(entry)).unwrap_or_default();
         assert!(line("lm / random").contains("A only"), "{md}");

@@ -10,7 +10,8 @@ use super::Page;
 use crate::error::Result;
 use crate::report::markdown::fmt_num;
 use crate::report::run::{
-    columns::*, entry_table, entry_table_by, eta_table, validation_columns, Column, METRIC_NOTES,
+    columns::*, entry_table, entry_table_by, eta_table, validation_columns, Column,
+    INTERVAL_COLUMNS, INTERVAL_NOTE, METRIC_NOTES,
 };
 use crate::study::RunResult;
 
@@ -22,6 +23,8 @@ fn section_of(stem: &str) -> &'static str {
         "Validation before and after"
     } else if stem.starts_with("sweep_") || stem.starts_with("heatmap_") {
         "Sweep"
+    } else if stem.starts_with("paired_") {
+        "Paired comparisons"
     } else if stem.ends_with("_trace") {
         "Convergence"
     } else {
@@ -146,6 +149,21 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
             MS_PER_IDENTIFICATION,
         ],
     );
+
+    page.para(INTERVAL_NOTE);
+    entries(
+        &mut page,
+        r,
+        "Headline figures with their 95 % intervals over trials",
+        &INTERVAL_COLUMNS,
+    );
+
+    let (h, rows) = crate::report::run::comparisons::table(r);
+    if !rows.is_empty() {
+        page.para(crate::report::run::comparisons::NOTE);
+        page.table("Paired comparisons on the shared trials", &h, &rows);
+        figures(&mut page, dir, plots, "Paired comparisons")?;
+    }
 
     page.section("Validation before and after");
     entries(

@@ -1,0 +1,429 @@
+//! Telling a change from Monte-Carlo noise (docs/formats.md § 8.4): each compared metric gets
+//! the interval of its change and a p-value, Holm-adjusted over the metrics compared, and one
+//! of the statuses of [`Status`].
+//!
+//! Paired when both runs have their `trials.csv` and share the scenario, the seed and the
+//! trials (no sweep): the change is the mean of the per-trial differences, with a t interval
+//! on n − 1 degrees of freedom. Otherwise unpaired, from the summaries: Welch's interval from
+//! each side's 95 % interval of the figure (its half-width over t₀.₉₇₅ is the standard
+//! error); a side without intervals (a summary from before they were written) borrows the
+//! other's spread over trials; with neither, the change is taken as exact, as the plain rule of the tolerance
+//! always did.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+use crate::study::stats::dist;
+use crate::study::stats::eta;
+
+/// What a compared metric did.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Status {
+    /// Worse by the tolerance or more, and the (Holm-adjusted) interval of the change
+    /// excludes zero; or missing, or not finite. `check` fails.
+    Regression,
+    /// Worse by the tolerance or more, but the interval includes zero: more trials would
+    /// tell. `check --strict` fails.
+    Unresolved,
+    /// Within the tolerance, and the interval excludes zero: a real change, allowed.
+    Changed,
+    /// Better by the tolerance or more, and the interval excludes zero.
+    Improved,
+    /// Anything else.
+    NoChange,
+}
+
+impl Status {
+    /// The status as the reports write it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Status::Regression => "regression",
+            Status::Unresolved => "unresolved",
+            Status::Changed => "changed, within tolerance",
+            Status::Improved => "improved",
+            Status::NoChange => "no change",
+        }
+    }
+}
+
+/// The statistics of one change: B − A, its standard error and degrees of freedom, or that
+/// it is exact.
+#[derive(Clone, Copy, Debug)]
+pub struct Change {
+    /// Standard error of the change (0: exact).
+    pub se: Real,
+    /// Degrees of freedom of the t distribution (infinite: normal).
+    pub df: Real,
+    /// Trials behind it (per run).
+    pub n: usize,
+    /// Whether it came from per-trial differences.
+    pub paired: bool,
+    /// For `param_rmse`, compared as mean squared errors: A's mean squared error, so that
+    /// an interval of the squared error maps back to one of the RMSE.
+    pub mse_a: Option<Real>,
+    /// The change in the tested scale (B − A; squared errors for `param_rmse`).
+    pub diff: Real,
+    /// Paired: the means over the paired trials of A's and B's values (for `param_rmse`
+    /// the root of the mean squared error), which must be the summaries' figures for the
+    /// per-trial values to be those of the summaries ([`Change::matches`]).
+    pub means: Option<[Real; 2]>,
+}
+
+/// The per-trial values of a run's `trials.csv`, by entry key (`method / poses`) and metric
+/// key, each a map from trial index to value (only trials whose identification is usable).
+#[derive(Debug, Default)]
+pub struct Trials {
+    /// (entry, metric) → trial → value.
+    pub values: BTreeMap<(String, String), BTreeMap<usize, Real>>,
+    /// Every trial index of each entry, usable or not.
+    pub trials: BTreeMap<String, BTreeSet<usize>>,
+}
+
+/// The terminations of `trials.csv` whose identification gave no usable result.
+const FAILED: [&str; 3] = ["diverged", "singular", "invalid-input"];
+
+impl Trials {
+    /// Reads `trials.csv` of a run without a sweep (`None` for a file with sweep columns).
+    pub fn read(path: &Path) -> Result<Option<Trials>> {
+        let mut r =
+            csv::Reader::from_path(path).map_err(|e| Error::file(path, "CSV", e.to_string()))?;
+        let head: Vec<String> = r
+            .headers()
+            .map_err(|e| Error::file(path, "header", e.to_string()))?
+            .iter()
+            .map(String::from)
+            .collect();
+        if head.iter().any(|h| h == "sweep_value") || head.get(1).is_some_and(|h| h != "method") {
+            return Ok(None);
+        }
+        let col = |name: &str| head.iter().position(|h| h == name);
+        let params: Vec<(String, usize, usize)> = head
+            .iter()
+            .enumerate()
+            .filter_map(|(i, h)| {
+                let name = h.strip_prefix("true_")?;
+                Some((name.to_string(), i, col(&format!("identified_{name}"))?))
+            })
+            .collect();
+        let plain = [
+            ("validation_after_mm.mean", col("after_mean_mm")),
+            ("validation_after_mm.rms", col("after_rms_mm")),
+            ("validation_after_mm.max", col("after_max_mm")),
+            ("validation_after_deg.mean", col("after_mean_deg")),
+            ("validation_after_deg.rms", col("after_rms_deg")),
+        ];
+        let (ti, mi, pi, termi) = (
+            col("trial"),
+            col("method"),
+            col("poses"),
+            col("termination"),
+        );
+        let mut t = Trials::default();
+        for (line, rec) in r.records().enumerate() {
+            let rec =
+                rec.map_err(|e| Error::file(path, format!("line {}", line + 2), e.to_string()))?;
+            let get = |i: Option<usize>| i.and_then(|i| rec.get(i)).unwrap_or("");
+            let num = |i: Option<usize>| get(i).parse::<Real>().unwrap_or(Real::NAN);
+            let index: usize = get(ti).parse().map_err(|_| {
+                Error::file(
+                    path,
+                    format!("line {}, trial", line + 2),
+                    "is not a trial number",
+                )
+            })?;
+            let entry = format!("{} / {}", get(mi), get(pi));
+            t.trials.entry(entry.clone()).or_default().insert(index);
+            let truth: Vec<Real> = params.iter().map(|p| num(Some(p.1))).collect();
+            let found: Vec<Real> = params.iter().map(|p| num(Some(p.2))).collect();
+            let usable = !FAILED.contains(&get(termi))
+                && num(col("after_rms_mm")).is_finite()
+                && found.iter().all(|x| x.is_finite());
+            if !usable {
+                continue;
+            }
+            let mut put = |metric: String, v: Real| {
+                if v.is_finite() {
+                    t.values
+                        .entry((entry.clone(), metric))
+                        .or_default()
+                        .insert(index, v);
+                }
+            };
+            for (m, c) in plain {
+                if c.is_some() {
+                    put(m.to_string(), num(c));
+                }
+            }
+            let (mut sum, mut n) = (-0.0, 0usize);
+            for (k, (name, _, _)) in params.iter().enumerate() {
+                if name.starts_with("base.") {
+                    continue;
+                }
+                put(format!("param_rmse.{name}"), (found[k] - truth[k]).powi(2));
+                if let Some(e) = eta(truth[k], found[k]) {
+                    sum += e;
+                    n += 1;
+                }
+            }
+            if n > 0 {
+                put("eta_mean_pct".into(), sum / n as Real);
+            }
+        }
+        Ok(Some(t))
+    }
+}
+
+/// Whether two runs can be compared trial by trial: the same scenario and seed, and their
+/// `trials.csv` read (runs without a sweep).
+pub fn pairable(a: &Value, b: &Value) -> bool {
+    a.get("scenario") == b.get("scenario")
+        && a.get("seed").is_some()
+        && a.get("seed") == b.get("seed")
+        && a.get("sweep_keys").is_none()
+        && b.get("sweep_keys").is_none()
+}
+
+/// The paired change of `metric` of `entry` from `a` to `b`, when both hold the same trials
+/// of the entry and at least 2 are usable in both.
+pub fn paired(a: &Trials, b: &Trials, entry: &str, metric: &str) -> Option<Change> {
+    if a.trials.get(entry)? != b.trials.get(entry)? {
+        return None;
+    }
+    let key = (entry.to_string(), metric.to_string());
+    let (va, vb) = (a.values.get(&key)?, b.values.get(&key)?);
+    let pairs: Vec<(Real, Real)> = va
+        .iter()
+        .filter_map(|(i, x)| Some((*x, *vb.get(i)?)))
+        .collect();
+    let n = pairs.len();
+    if n < 2 {
+        return None;
+    }
+    let d: Vec<Real> = pairs.iter().map(|(x, y)| y - x).collect();
+    let mean = d.iter().sum::<Real>() / n as Real;
+    let side = |f: fn(&(Real, Real)) -> Real| {
+        let m = pairs.iter().map(f).sum::<Real>() / n as Real;
+        if metric.starts_with("param_rmse.") {
+            m.sqrt()
+        } else {
+            m
+        }
+    };
+    let means = Some([side(|p| p.0), side(|p| p.1)]);
+    let var = d.iter().map(|x| (x - mean).powi(2)).sum::<Real>() / (n - 1) as Real;
+    Some(Change {
+        se: (var / n as Real).sqrt(),
+        df: (n - 1) as Real,
+        n,
+        paired: true,
+        mse_a: metric
+            .starts_with("param_rmse.")
+            .then(|| pairs.iter().map(|p| p.0).sum::<Real>() / n as Real),
+        diff: mean,
+        means,
+    })
+}
+
+/// The usable trials of summary entry `e`: `trials` − `failures`.
+fn usable_trials(e: &Value, trials: Option<usize>) -> Option<usize> {
+    let failures = e.get("failures").and_then(Value::as_u64).unwrap_or(0) as usize;
+    trials?.checked_sub(failures)
+}
+
+/// The standard error of a summary's figure at `path` of entry `e` over its `n` usable
+/// trials, from its 95 % interval (`<path>_ci95`, or `param_rmse_ci95.<name>` for an RMSE,
+/// whose interval is compared on the squared scale).
+fn summary_se(e: &Value, path: &str, n: usize) -> Option<Real> {
+    if n < 2 {
+        return None;
+    }
+    let ci_path = match path.strip_prefix("param_rmse.") {
+        Some(name) => format!("param_rmse_ci95.{name}"),
+        None => format!("{path}_ci95"),
+    };
+    let ci = ci_path
+        .split('.')
+        .try_fold(e, |v, k| v.get(k))?
+        .as_array()?;
+    let (lo, hi) = (ci.first()?.as_f64()?, ci.get(1)?.as_f64()?);
+    let (lo, hi) = if path.starts_with("param_rmse.") {
+        (lo * lo, hi * hi)
+    } else {
+        (lo, hi)
+    };
+    let q = if path == "eta_median_pct" {
+        // Not a t interval: its half-width taken as 1.96 standard errors.
+        dist::normal_quantile(0.975)
+    } else {
+        dist::t_quantile(0.975, (n - 1) as Real)
+    };
+    Some((hi - lo) / (2.0 * q))
+}
+
+/// The unpaired change of `metric` from the baseline entry `a` (value `va`) to `b` (`vb`),
+/// with `trials` the `trials` of each summary: Welch from the two standard errors; a side
+/// without one borrows the other's; exact when neither has one. Failures are compared as
+/// proportions of the trials (pooled two-proportion z).
+pub fn unpaired(
+    a: &Value,
+    b: &Value,
+    metric: &str,
+    (va, vb): (Real, Real),
+    trials: [Option<usize>; 2],
+) -> Change {
+    let exact = Change {
+        se: 0.0,
+        df: Real::INFINITY,
+        n: trials[1].unwrap_or(0),
+        paired: false,
+        mse_a: None,
+        diff: vb - va,
+        means: None,
+    };
+    if metric == "failures" {
+        let (Some(na), Some(nb)) = (trials[0], trials[1]) else {
+            return exact;
+        };
+        if na == 0 || nb == 0 {
+            return exact;
+        }
+        let pooled = (va + vb) / (na + nb) as Real;
+        // The change in counts at B's trial count.
+        let se =
+            (pooled * (1.0 - pooled) * (1.0 / na as Real + 1.0 / nb as Real)).sqrt() * nb as Real;
+        return Change {
+            se,
+            diff: vb / nb as Real * nb as Real - va / na as Real * nb as Real,
+            ..exact
+        };
+    }
+    let (Some(na), Some(nb)) = (usable_trials(a, trials[0]), usable_trials(b, trials[1])) else {
+        return exact;
+    };
+    if na < 2 || nb < 2 {
+        return exact;
+    }
+    // A side without an interval borrows the other's spread over trials, scaled to its own
+    // number of trials.
+    let (se_a, se_b) = match (summary_se(a, metric, na), summary_se(b, metric, nb)) {
+        (Some(x), Some(y)) => (x, y),
+        (Some(x), None) => (x, x * (na as Real / nb as Real).sqrt()),
+        (None, Some(y)) => (y * (nb as Real / na as Real).sqrt(), y),
+        (None, None) => return exact,
+    };
+    let se2 = se_a * se_a + se_b * se_b;
+    let den = se_a.powi(4) / (na - 1) as Real + se_b.powi(4) / (nb - 1) as Real;
+    let rmse = metric.starts_with("param_rmse.");
+    Change {
+        se: se2.sqrt(),
+        df: if den > 0.0 {
+            se2 * se2 / den
+        } else {
+            Real::INFINITY
+        },
+        n: nb,
+        paired: false,
+        mse_a: rmse.then_some(va * va),
+        diff: if rmse { vb * vb - va * va } else { vb - va },
+        means: None,
+    }
+}
+
+impl Change {
+    /// Whether a paired change's per-trial values are those behind the figures `a` and `b`
+    /// of the summaries (their means agree to 1e-9 relative): not so for two summaries of
+    /// different trials in one folder, an edited summary, or trials whose usability the
+    /// file cannot tell; those are compared unpaired.
+    pub fn matches(&self, a: Real, b: Real) -> bool {
+        let near = |x: Real, y: Real| (x - y).abs() <= 1e-9 * x.abs().max(y.abs());
+        self.means.is_none_or(|[ma, mb]| near(ma, a) && near(mb, b))
+    }
+
+    /// The two-sided p-value of "no change".
+    pub fn p_value(&self) -> Real {
+        if self.se == 0.0 || !self.se.is_finite() {
+            return if self.diff == 0.0 || self.diff.is_nan() {
+                1.0
+            } else {
+                0.0
+            };
+        }
+        dist::t_two_sided(self.diff / self.se, self.df)
+    }
+
+    /// The interval of the change at level 1 − `alpha`, in the metric's units (for an RMSE,
+    /// mapped back from the squared errors around A's RMSE).
+    pub fn interval(&self, alpha: Real) -> [Real; 2] {
+        let h = if self.se == 0.0 {
+            0.0
+        } else {
+            dist::t_quantile(1.0 - alpha / 2.0, self.df) * self.se
+        };
+        let (lo, hi) = (self.diff - h, self.diff + h);
+        match self.mse_a {
+            Some(m) => {
+                let r = m.sqrt();
+                [(m + lo).max(0.0).sqrt() - r, (m + hi).max(0.0).sqrt() - r]
+            }
+            None => [lo, hi],
+        }
+    }
+
+    /// The trials per run that would detect a change of `effect` (in the metric's units,
+    /// positive) with 80 % power at level `alpha` (two-sided): (z₁₋α/₂ + z₀.₈)² σ² /
+    /// effect², σ² the per-trial variance behind the standard error. For an RMSE the effect
+    /// is taken on the squared scale at A's RMSE.
+    pub fn trials_needed(&self, effect: Real, alpha: Real) -> Option<usize> {
+        let effect = match self.mse_a {
+            Some(m) => (m.sqrt() + effect).powi(2) - m,
+            None => effect,
+        };
+        if effect.is_nan() || effect <= 0.0 || self.se == 0.0 || self.n == 0 {
+            return None;
+        }
+        let z = dist::normal_quantile(1.0 - alpha / 2.0) + dist::normal_quantile(0.8);
+        let var = self.se * self.se * self.n as Real;
+        Some((z * z * var / (effect * effect)).ceil() as usize)
+    }
+}
+
+pub use crate::study::stats::paired::holm;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_exact_change_is_significant_unless_zero() {
+        let c = Change {
+            se: 0.0,
+            df: Real::INFINITY,
+            n: 8,
+            paired: false,
+            mse_a: None,
+            diff: 0.1,
+            means: None,
+        };
+        assert_eq!(c.p_value(), 0.0);
+        assert_eq!(Change { diff: 0.0, ..c }.p_value(), 1.0);
+    }
+
+    #[test]
+    fn trials_needed_grow_with_the_noise() {
+        let c = Change {
+            se: 0.01,
+            df: 99.0,
+            n: 100,
+            paired: true,
+            mse_a: None,
+            diff: 0.01,
+            means: None,
+        };
+        // σ = 0.1, effect 0.02 at α = 0.05: (1.96 + 0.8416)² · 0.01 / 0.0004 = 196.2.
+        assert_eq!(c.trials_needed(0.02, 0.05), Some(197));
+    }
+}

@@ -1,0 +1,147 @@
+//! `calbench check` and `compare` tell a real change from Monte-Carlo noise (docs/formats.md
+//! § 8.4): runs of `scenarios/ci-guard.toml` that differ only in the seed show no regression;
+//! a tracker ten times noisier on the same seed is a paired regression of the validation
+//! error; one 1.5 times noisier is a real change within the tolerance.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{calbench, calbench_ok, path_arg, read, root, tmp_dir, write_scenario};
+
+/// Trials per run: enough for the seed-to-seed noise of the guarded metrics to stay inside
+/// their intervals and for the small change to be significant on paired draws.
+const TRIALS: &str = "200";
+
+/// `scenarios/ci-guard.toml` with the tracker's MPE scaled by `scale` (1: the file as is).
+fn scenario(dir: &Path, scale: f64) -> PathBuf {
+    let text = read(&root().join("scenarios/ci-guard.toml"));
+    if scale == 1.0 {
+        return root().join("scenarios/ci-guard.toml");
+    }
+    let tracker = format!(
+        "[tracker]\nmpe_a_um = {}\nmpe_b_um_per_m = {}\n",
+        15.0 * scale,
+        6.0 * scale
+    );
+    write_scenario(
+        dir,
+        &format!("noise-{scale}"),
+        &text.replace("[tracker]\n", &tracker),
+    )
+}
+
+fn run(scenario: &Path, seed: &str, out: &Path) {
+    calbench_ok(&[
+        "run",
+        path_arg(scenario),
+        "--trials",
+        TRIALS,
+        "--seed",
+        seed,
+        "--out",
+        path_arg(out),
+        "--threads",
+        "2",
+    ]);
+}
+
+fn check(new: &Path, base: &Path, extra: &[&str]) -> (bool, String) {
+    let (s, b) = (new.join("summary.json"), base.join("summary.json"));
+    let mut args = vec!["check", path_arg(&s), "--baseline", path_arg(&b)];
+    args.extend(extra);
+    let o = calbench(&args);
+    let text = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    (o.status.success(), text)
+}
+
+/// The line of `text` about `metric` of `entry`.
+fn line<'t>(text: &'t str, entry: &str, metric: &str) -> &'t str {
+    text.lines()
+        .find(|l| l.contains(&format!("{entry}: {metric}: ")))
+        .unwrap_or("")
+}
+
+#[test]
+fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
+    let dir = tmp_dir("cli-noise");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    run(&scenario(&dir, 1.0), "42", &a);
+    run(&scenario(&dir, 1.0), "9", &b);
+    // Seeds 42 and 9: unpaired, every metric "no change" or "unresolved".
+    let (ok, text) = check(&b, &a, &[]);
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("no regression beyond tolerance 0.05"),
+        "{text}"
+    );
+    assert!(text.contains("(0 paired): 0 regression"), "{text}");
+    let cmp = dir.join("cmp");
+    let o = calbench_ok(&[
+        "compare",
+        path_arg(&a),
+        path_arg(&b),
+        "--out",
+        path_arg(&cmp),
+    ]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains(", 0 regressed"), "{out}");
+    let md = read(&cmp.join("compare.md"));
+    assert!(md.contains("No regression"), "{md}");
+
+    // Ten times the tracker noise on the same seed: a paired regression of the validation
+    // error, and check fails.
+    let loud = dir.join("loud");
+    run(&scenario(&dir, 10.0), "42", &loud);
+    let (ok, text) = check(&loud, &a, &[]);
+    assert!(!ok, "{text}");
+    let l = line(&text, "lm / random", "validation_after_mm.rms");
+    assert!(
+        l.starts_with("regression: ") && l.contains("paired"),
+        "{text}"
+    );
+    let cmp2 = dir.join("cmp2");
+    calbench_ok(&[
+        "compare",
+        path_arg(&a),
+        path_arg(&loud),
+        "--out",
+        path_arg(&cmp2),
+    ]);
+    let md = read(&cmp2.join("compare.md"));
+    assert!(md.contains("metrics of B regressed"), "{md}");
+
+    // 1.5 times: a real change of the validation error within the tolerance.
+    let mild = dir.join("mild");
+    run(&scenario(&dir, 1.5), "42", &mild);
+    let (_, text) = check(&mild, &a, &[]);
+    let l = line(&text, "lm / random", "validation_after_mm.rms");
+    assert!(
+        l.starts_with("changed, within tolerance: ") && l.contains("paired"),
+        "{text}"
+    );
+}
+
+#[test]
+fn strict_fails_on_unresolved() {
+    // Two trials per run differing in the seed: the guarded errors move by more than the
+    // tolerance, far within the noise.
+    let dir = tmp_dir("cli-noise-strict");
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    for (seed, out) in [("1", &a), ("2", &b)] {
+        calbench_ok(&[
+            "run",
+            path_arg(&root().join("scenarios/ci-guard.toml")),
+            "--trials",
+            "3",
+            "--seed",
+            seed,
+            "--out",
+            path_arg(out),
+        ]);
+    }
+    let (ok, text) = check(&b, &a, &[]);
+    assert!(ok, "{text}");
+    assert!(text.contains("unresolved: "), "{text}");
+    assert!(text.contains("trials per run would resolve it"), "{text}");
+    let (ok, text) = check(&b, &a, &["--strict"]);
+    assert!(!ok && text.contains("unresolved (--strict)"), "{text}");
+}

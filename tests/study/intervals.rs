@@ -1,0 +1,122 @@
+//! The 95 % intervals of `summary.json` (docs/formats.md "Intervals"): present on every
+//! figure, around it, and covering the long-run mean as often as they claim.
+
+use calbench::report::check::read_json;
+use calbench::study::scenario::Scenario;
+use calbench::study::RunOptions;
+use serde_json::Value;
+
+use crate::common::{root, tmp_dir};
+
+/// `scenarios/ci-guard.toml` with LS and LM only, `trials` trials from `seed`.
+fn guard(trials: usize, seed: u64) -> Scenario {
+    let text = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
+    let text = text
+        .replace("seed = 42", &format!("seed = {seed}"))
+        .replace("trials = 8", &format!("trials = {trials}"))
+        .replace("[[methods]]\nname = \"igg3\"\n", "");
+    Scenario::parse(&text, None).unwrap()
+}
+
+fn summary_of(s: Scenario, name: &str) -> Value {
+    let out = tmp_dir(name);
+    calbench::report::run_study(
+        s,
+        &RunOptions {
+            threads: Some(2),
+            out: Some(out.clone()),
+            progress: false,
+            shard: None,
+        },
+    )
+    .unwrap();
+    read_json(&out.join("summary.json")).unwrap()
+}
+
+fn interval(v: &Value) -> [f64; 2] {
+    [v[0].as_f64().unwrap(), v[1].as_f64().unwrap()]
+}
+
+/// The headline figures and their intervals of a summary's first entry: (value, interval)
+/// of the validation RMS after compensation, the mean η and the median η.
+fn headlines(s: &Value) -> [(f64, [f64; 2]); 3] {
+    let e = &s["results"][0];
+    let after = &e["validation_after_mm"];
+    [
+        (after["rms"].as_f64().unwrap(), interval(&after["rms_ci95"])),
+        (
+            e["eta_mean_pct"].as_f64().unwrap(),
+            interval(&e["eta_mean_pct_ci95"]),
+        ),
+        (
+            e["eta_median_pct"].as_f64().unwrap(),
+            interval(&e["eta_median_pct_ci95"]),
+        ),
+    ]
+}
+
+#[test]
+fn every_figure_has_an_interval_around_it() {
+    let s = summary_of(guard(12, 42), "intervals-every");
+    for e in s["results"].as_array().unwrap() {
+        for key in [
+            "validation_before_mm",
+            "validation_after_mm",
+            "calibration_before_mm",
+            "calibration_after_mm",
+        ] {
+            for stat in ["mean", "rms", "max", "std"] {
+                let v = e[key][stat].as_f64().unwrap();
+                let [lo, hi] = interval(&e[key][format!("{stat}_ci95")]);
+                assert!(lo < v && v < hi, "{key}.{stat} {v} outside [{lo}, {hi}]");
+            }
+        }
+        for (name, eta) in e["eta"].as_object().unwrap() {
+            for (stat, ci) in [("mean", "mean_ci95"), ("median", "median_ci95")] {
+                let v = eta[stat].as_f64().unwrap();
+                let [lo, hi] = interval(&eta[ci]);
+                assert!(
+                    lo <= v && v <= hi,
+                    "η {name} {stat} {v} outside [{lo}, {hi}]"
+                );
+            }
+        }
+        for (name, rmse) in e["param_rmse"].as_object().unwrap() {
+            let v = rmse.as_f64().unwrap();
+            let [lo, hi] = interval(&e["param_rmse_ci95"][name]);
+            assert!(
+                lo <= v && v < hi,
+                "param_rmse {name} {v} outside [{lo}, {hi}]"
+            );
+        }
+        for (v, [lo, hi]) in headlines(&s) {
+            assert!(lo <= v && v <= hi, "{v} outside [{lo}, {hi}]");
+        }
+    }
+}
+
+/// Coverage: over 40 runs of 50 trials from different seeds, the 95 % intervals of the
+/// headline figures of LS hold the figure of a 4000-trial run at least 85 % of the time
+/// (binomially, a true 95 % interval does so with probability 0.998). About 3 minutes on
+/// two cores in the test profile: run with `cargo test --test study -- --ignored coverage`.
+#[test]
+#[ignore]
+fn intervals_cover_the_long_run_figure() {
+    let long = headlines(&summary_of(guard(4000, 7), "intervals-long"));
+    let mut hits = [0usize; 3];
+    for seed in 0..40 {
+        let short = headlines(&summary_of(guard(50, 1000 + seed), "intervals-short"));
+        for (k, ((_, [lo, hi]), (truth, _))) in short.iter().zip(&long).enumerate() {
+            if lo <= truth && truth <= hi {
+                hits[k] += 1;
+            }
+        }
+    }
+    for (k, name) in ["validation_after_mm.rms", "eta_mean_pct", "eta_median_pct"]
+        .iter()
+        .enumerate()
+    {
+        assert!(hits[k] >= 34, "{name}: {} of 40 intervals cover", hits[k]);
+    }
+    eprintln!("coverage of 40: {hits:?}");
+}
