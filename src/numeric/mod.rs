@@ -5,7 +5,8 @@
 //!
 //! - `frames`: [`Real`], [`Vec3`], [`Mat3`], [`Frame`], elementary rotations, roll-pitch-yaw
 //!   angles, rotation vectors and quaternions (re-exported here).
-//! - `trig`: [`sin_cos_slice`], the sines and cosines of all joint angles of a pose at once.
+//! - `trig`: [`sin_cos_slice`], the sines and cosines of all joint angles of a pose at once,
+//!   and [`sin_cos`], the same bits for one angle.
 //! - [`linalg`]: the Cholesky factorisation and solve of the normal equations.
 //! - [`symeig`]: eigenvalues of small symmetric matrices, several matrices at once.
 //! - `gram`: the normal equations `JᵀPJ`, `JᵀPr` of the Gauss–Newton methods.
@@ -29,4 +30,4 @@ pub use frames::{
     matrix_rpy, median, quaternion, quaternion_matrix, rot_x, rot_y, rot_z, rotation_vector,
     rpy_matrix, skew, so3_right_jacobian_inverse, Frame, Mat3, Real, Vec3,
 };
-pub use trig::sin_cos_slice;
+pub use trig::{sin_cos, sin_cos_slice};
