@@ -237,13 +237,12 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
     let cross = match (&choice, args.cv) {
         (Some((cvs, best)), _) => Some(cvs[*best].clone()),
         (None, Some(k)) => {
-            let name = if args.compliance.is_some() {
-                "kinematic+compliance"
-            } else {
-                "kinematic"
+            let model = cv::Model {
+                compliance: args.compliance.is_some(),
+                ..cv::Model::KINEMATIC
             };
             Some(cv::cross_validate(
-                (&nominal, &params, name.to_string()),
+                (&nominal, &params, model.name()),
                 &d,
                 k,
                 &setup,
