@@ -49,6 +49,10 @@ enum Command {
 
 fn main() {
     let cli = Cli::parse();
+    if let Err(e) = calbench::numeric::simd_forced_scalar() {
+        eprintln!("error: {e}");
+        std::process::exit(1);
+    }
     let done = match &cli.command {
         Some(Command::Compare(a)) => cli::compare::run(a),
         None => cli::run::default_study(),

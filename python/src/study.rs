@@ -12,8 +12,8 @@ use calbench::identify::external::{External, ExternalProblem};
 use calbench::identify::MethodSpec;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
-use calbench::study::run::InMemoryRun;
 use calbench::robot::Robot;
+use calbench::study::run::InMemoryRun;
 use calbench::study::{trial, RunOptions, Study};
 
 use crate::convert::{matrix, scenario_of};

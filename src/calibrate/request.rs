@@ -288,12 +288,11 @@ impl IdentifyRequest {
         let cross = match (&choice, self.cv) {
             (Some((cvs, best)), _) => Some(cvs[*best].clone()),
             (None, Some(k)) => {
-                let name = if self.compliance.is_some() {
-                    "kinematic+compliance"
-                } else {
-                    "kinematic"
+                let model = Model {
+                    compliance: self.compliance.is_some(),
+                    ..Model::KINEMATIC
                 };
-                let model = (&nominal, &params[..], name.to_string());
+                let model = (&nominal, &params[..], model.name());
                 Some(cv::cross_validate(model, &d, k, &setup)?)
             }
             (None, None) => None,

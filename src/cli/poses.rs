@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use calbench::calibrate::Registration;
 use calbench::error::Error;
-use calbench::poses::{RobotPoseModel, SelectOptions, Strategy as Optimiser};
+use calbench::poses::{RobotPoseModel, SelectOptions};
 use calbench::report::{self, output::PoseList, Output};
 use calbench::robot::param_sets;
 use calbench::sim::poses::sample_region;
@@ -39,26 +39,11 @@ pub struct PosesArgs {
     pub out: PathBuf,
 }
 
-/// The optimiser a strategy name runs on the candidates and whether over the full model
-/// (`-full`); `None` for `box`, `grid` and `file`, which choose no poses among candidates.
-fn selection(name: StrategyName) -> Option<(Optimiser, bool)> {
-    match name {
-        StrategyName::Random => Some((Optimiser::Random, false)),
-        StrategyName::Box | StrategyName::Grid | StrategyName::File => None,
-        StrategyName::Detmax => Some((Optimiser::Detmax, false)),
-        StrategyName::Ide => Some((Optimiser::Ide, false)),
-        StrategyName::DetmaxIde => Some((Optimiser::DetmaxIde, false)),
-        StrategyName::DetmaxFull => Some((Optimiser::Detmax, true)),
-        StrategyName::IdeFull => Some((Optimiser::Ide, true)),
-        StrategyName::DetmaxIdeFull => Some((Optimiser::DetmaxIde, true)),
-    }
-}
-
 /// `--strategy`: the names of the scenario strategies that choose among candidates.
 fn strategies() -> impl TypedValueParser<Value = StrategyName> {
     use strum::IntoEnumIterator as _;
     let names = StrategyName::iter()
-        .filter(|&s| selection(s).is_some())
+        .filter(|s| s.selection().is_some())
         .map(<&'static str>::from);
     PossibleValuesParser::new(names).map(|name| {
         name.parse::<StrategyName>()
@@ -79,7 +64,9 @@ pub fn run(args: &PosesArgs) -> Result<()> {
     super::guard_out(out, &OUTPUTS, [&args.scenario])?;
     check_out_folder(out, &OUTPUTS)?;
     let sc = Scenario::load(&args.scenario)?;
-    let (optimiser, full) = selection(args.strategy)
+    let (optimiser, full) = args
+        .strategy
+        .selection()
         .unwrap_or_else(|| unreachable!("--strategy takes the optimising strategies only"));
     let strategy_name: &'static str = args.strategy.into();
     let nominal = sc.robot()?;

@@ -5,7 +5,8 @@
 //!
 //! - `frames`: [`Real`], [`Vec3`], [`Mat3`], [`Frame`], elementary rotations, roll-pitch-yaw
 //!   angles, rotation vectors and quaternions (re-exported here).
-//! - `trig`: [`sin_cos_slice`], the sines and cosines of all joint angles of a pose at once.
+//! - `trig`: [`sin_cos_slice`], the sines and cosines of all joint angles of a pose at once,
+//!   and [`sin_cos`], the same bits for one angle.
 //! - [`linalg`]: the Cholesky factorisation and solve of the normal equations.
 //! - [`symeig`]: eigenvalues of small symmetric matrices, several matrices at once.
 //! - `gram`: the normal equations `JᵀPJ`, `JᵀPr` of the Gauss–Newton methods.
@@ -14,7 +15,8 @@
 //!
 //! The kernels run on vector instructions where the processor has them (AVX2 and FMA on
 //! x86-64) and on portable code elsewhere, chosen at run time in one place (`simd`), with the
-//! same bits either way; nothing outside this module chooses an instruction set.
+//! same bits either way; nothing outside this module chooses an instruction set. The environment
+//! variable [`SIMD_VARIABLE`] (`CALBENCH_SIMD=scalar`) forces the portable code.
 
 mod frames;
 pub(crate) mod gram;
@@ -29,4 +31,5 @@ pub use frames::{
     matrix_rpy, median, quaternion, quaternion_matrix, rot_x, rot_y, rot_z, rotation_vector,
     rpy_matrix, skew, so3_right_jacobian_inverse, Frame, Mat3, Real, Vec3,
 };
-pub use trig::sin_cos_slice;
+pub use simd::{simd_forced_scalar, SIMD_VARIABLE};
+pub use trig::{sin_cos, sin_cos_slice};

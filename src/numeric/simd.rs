@@ -43,16 +43,43 @@ const PORTABLE: u8 = 1;
 #[cfg(target_arch = "x86_64")]
 const AVX2_FMA: u8 = 2;
 
-/// The best instruction set of this processor, checked on the first call and kept.
+/// The environment variable that chooses the instruction set: `scalar` forces the portable
+/// path, `auto` (or unset, or empty) takes the best one the processor has (docs/formats.md).
+pub const SIMD_VARIABLE: &str = "CALBENCH_SIMD";
+
+/// Whether [`SIMD_VARIABLE`] forces the portable path: `Ok(true)` for `scalar`, `Ok(false)`
+/// for `auto`, empty or unset, and an error naming the variable and its allowed values
+/// otherwise. Programs call it once at start to refuse a misspelt value; the kernels read
+/// the same answer.
+pub fn simd_forced_scalar() -> Result<bool, String> {
+    match std::env::var(SIMD_VARIABLE) {
+        Err(std::env::VarError::NotPresent) => Ok(false),
+        Ok(v) if v.is_empty() || v == "auto" => Ok(false),
+        Ok(v) if v == "scalar" => Ok(true),
+        Ok(v) => Err(format!(
+            "environment variable {SIMD_VARIABLE}=\"{v}\": allowed values are \"scalar\" \
+             (the portable path) and \"auto\" (the best path of this processor)"
+        )),
+        Err(e) => Err(format!("environment variable {SIMD_VARIABLE}: {e}")),
+    }
+}
+
+/// The best instruction set of this processor, checked on the first call and kept; the
+/// portable one if [`SIMD_VARIABLE`] is `scalar`.
+///
+/// # Panics
+/// If [`SIMD_VARIABLE`] holds another value than those of [`simd_forced_scalar`] (the
+/// command line refuses it before any kernel runs).
 #[inline]
 pub(crate) fn detected() -> Isa {
     #[cfg(target_arch = "x86_64")]
     {
         let mut v = DETECTED.load(Ordering::Relaxed);
         if v == UNKNOWN {
+            let scalar = simd_forced_scalar().unwrap_or_else(|e| panic!("{e}"));
             let both = std::arch::is_x86_feature_detected!("avx2")
                 && std::arch::is_x86_feature_detected!("fma");
-            v = if both { AVX2_FMA } else { PORTABLE };
+            v = if both && !scalar { AVX2_FMA } else { PORTABLE };
             DETECTED.store(v, Ordering::Relaxed);
         }
         if v == AVX2_FMA {

@@ -100,36 +100,53 @@ fn in_sixteens(x: &[Real], out: &mut [(Real, Real)], kernel: impl Fn([[Real; 4];
 /// [`sin_cos_slice`]'s arithmetic one value at a time (before the library's values for large or
 /// non-finite arguments).
 fn sin_cos_portable(x: [[Real; 4]; 4]) -> Sixteen {
-    use std::f64::consts::{FRAC_2_PI, FRAC_PI_2};
     let mut sin = [[0.0; 4]; 4];
     let mut cos = [[0.0; 4]; 4];
     for v in 0..4 {
         for l in 0..4 {
-            let x = x[v][l];
-            let m = x.mul_add(FRAC_2_PI, ROUND);
-            let q = m - ROUND;
-            let r = (-q).mul_add(PIO2_LO, (-q).mul_add(FRAC_PI_2, x));
-            let z = r * r;
-            let mut ps = SIN[7];
-            for &c in SIN[..7].iter().rev() {
-                ps = ps.mul_add(z, c);
-            }
-            let mut pc = COS[8];
-            for &c in COS[..8].iter().rev() {
-                pc = pc.mul_add(z, c);
-            }
-            // |sin r| < |r| here, so the sign is r's; copying it keeps sin(−0) = −0.
-            let s = (r * z).mul_add(ps, r).copysign(r);
-            let c = z.mul_add(pc, 1.0);
-            // Odd quadrants swap sin and cos, quadrants 2 and 3 negate sin, 1 and 2 negate
-            // cos.
-            let quadrant = m.to_bits() & 3;
-            let (s, c) = if quadrant & 1 == 0 { (s, c) } else { (c, s) };
-            sin[v][l] = if quadrant & 2 == 0 { s } else { -s };
-            cos[v][l] = if (quadrant + 1) & 2 == 0 { c } else { -c };
+            (sin[v][l], cos[v][l]) = reduced_series(x[v][l]);
         }
     }
     (sin, cos)
+}
+
+/// `(sin x, cos x)` of one value, the same bits as [`sin_cos_slice`] gives it (the portable
+/// arithmetic, and the library's values beyond |x| = 1e5 or for non-finite `x`): for a walk
+/// that needs one angle at a time.
+#[inline]
+pub fn sin_cos(x: Real) -> (Real, Real) {
+    if !x.is_finite() || x.abs() > SIN_COS_LIMIT {
+        return x.sin_cos();
+    }
+    reduced_series(x)
+}
+
+/// The reduction by π/2, the two series and the quadrant of [`sin_cos_slice`] for one value.
+#[inline(always)]
+fn reduced_series(x: Real) -> (Real, Real) {
+    use std::f64::consts::{FRAC_2_PI, FRAC_PI_2};
+    let m = x.mul_add(FRAC_2_PI, ROUND);
+    let q = m - ROUND;
+    let r = (-q).mul_add(PIO2_LO, (-q).mul_add(FRAC_PI_2, x));
+    let z = r * r;
+    let mut ps = SIN[7];
+    for &c in SIN[..7].iter().rev() {
+        ps = ps.mul_add(z, c);
+    }
+    let mut pc = COS[8];
+    for &c in COS[..8].iter().rev() {
+        pc = pc.mul_add(z, c);
+    }
+    // |sin r| < |r| here, so the sign is r's; copying it keeps sin(−0) = −0.
+    let s = (r * z).mul_add(ps, r).copysign(r);
+    let c = z.mul_add(pc, 1.0);
+    // Odd quadrants swap sin and cos, quadrants 2 and 3 negate sin, 1 and 2 negate cos.
+    let quadrant = m.to_bits() & 3;
+    let (s, c) = if quadrant & 1 == 0 { (s, c) } else { (c, s) };
+    (
+        if quadrant & 2 == 0 { s } else { -s },
+        if (quadrant + 1) & 2 == 0 { c } else { -c },
+    )
 }
 
 /// [`sin_cos_portable`] in AVX2 vectors, one per group of four, each step applied to every
@@ -266,6 +283,12 @@ mod tests {
         let mut zero = [(0.0, 0.0)];
         sin_cos_slice(&[-0.0], &mut zero);
         assert_eq!(zero[0].0.to_bits(), (-0.0 as Real).to_bits());
+        // One value at a time, the same bits.
+        for (k, &x) in xs.iter().enumerate() {
+            let (s, c) = sin_cos(x);
+            assert_eq!(s.to_bits(), out[k].0.to_bits(), "sin {x:e}");
+            assert_eq!(c.to_bits(), out[k].1.to_bits(), "cos {x:e}");
+        }
         // The same bits whatever a value's neighbours and place in a group of sixteen.
         for start in [0, 1, 7, 15, 16, 33] {
             for len in [1, 5, 16, 17, 35] {

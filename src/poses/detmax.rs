@@ -370,7 +370,7 @@ mod tests {
     /// [`crate::numeric::symeig`].
     fn nalgebra_objective(a: &DMatrix<Real>, o: Objective, m: usize) -> Real {
         let mut ev = a.symmetric_eigenvalues();
-        super::super::objective_of_eigenvalues(ev.as_mut_slice(), o, m)
+        crate::poses::spectra::objective_of_eigenvalues(ev.as_mut_slice(), o, m)
     }
 
     /// The former DETMAX scans (a nalgebra eigen-decomposition of each candidate's Gram

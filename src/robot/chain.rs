@@ -365,7 +365,7 @@ impl Chain {
             |_, op| (op.value, op.sc),
             |value, _, v| {
                 let t = value + c[v];
-                let (s, cs) = t.sin_cos();
+                let (s, cs) = crate::numeric::sin_cos(t);
                 ([t], [s], [cs])
             },
             visit,

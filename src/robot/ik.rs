@@ -135,13 +135,10 @@ pub fn solve_point_axis(
     let chain = robot.chain();
     let q = gauss_newton(q0, |q| Ok(chain.fk(q)), |f| axis_error(point, axis, f), 6).ok()?;
     let f = chain.fk(&q);
-    let angle = f
-        .rot
-        .column(2)
-        .dot(axis)
-        .clamp(-1.0, 1.0)
-        .acos()
-        .to_degrees();
+    // The angle between the flange z axis and `axis` from both its sine and cosine: `acos` of
+    // the dot product alone cannot tell angles below about 1e-6° apart (acos(1 − ε) ≈ √(2ε)).
+    let z = f.rot.column(2);
+    let angle = z.cross(axis).norm().atan2(z.dot(axis)).to_degrees();
     let reached = (f.pos - point).norm() <= tol_mm && angle <= tol_deg;
     (reached && q.iter().all(|v| v.is_finite()) && robot.within_limits(&q)).then_some(q)
 }

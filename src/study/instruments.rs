@@ -26,6 +26,7 @@ use crate::sim::instrument::{
     instrument_poses, measure, touch, touching, InstrumentSettings, Layout,
 };
 use crate::sim::settings::ErrorSettings;
+use crate::study::scenario::StrategyName;
 use crate::study::whole::Head;
 
 /// A scenario file running the instruments study.
@@ -63,8 +64,14 @@ fn default_counts() -> Vec<usize> {
     vec![50, 200]
 }
 fn default_strategies() -> Vec<String> {
-    vec!["random".into(), "detmax-ide".into()]
+    [Strategy::Random, Strategy::DetmaxIde]
+        .map(|s| StrategyName::of(s, false).as_str().to_string())
+        .into()
 }
+
+/// The optimisers an instruments study compares (by their names in
+/// [`StrategyName`]).
+const STRATEGIES: [Strategy; 3] = [Strategy::Random, Strategy::Detmax, Strategy::DetmaxIde];
 fn default_candidates() -> usize {
     400
 }
@@ -146,13 +153,21 @@ impl InstrumentsScenario {
 }
 
 fn strategy(name: &str) -> Result<Strategy> {
-    match name {
-        "random" => Ok(Strategy::Random),
-        "detmax" => Ok(Strategy::Detmax),
-        "detmax-ide" => Ok(Strategy::DetmaxIde),
-        other => Err(Error::setting(
+    let allowed = |s: &Strategy| STRATEGIES.contains(s);
+    match name
+        .parse::<StrategyName>()
+        .ok()
+        .and_then(|n| n.selection())
+    {
+        Some((s, false)) if allowed(&s) => Ok(s),
+        _ => Err(Error::setting(
             "strategies",
-            format!("unknown strategy \"{other}\" (random, detmax, detmax-ide)"),
+            format!(
+                "unknown strategy \"{name}\" ({})",
+                STRATEGIES
+                    .map(|s| StrategyName::of(s, false).as_str())
+                    .join(", ")
+            ),
         )),
     }
 }

@@ -16,8 +16,8 @@ use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
 use crate::numeric::Real;
+use crate::study::trial::OptionalStats;
 use crate::study::trial::Outcome;
-use crate::study::trial::OPTIONAL_STATS;
 use crate::study::TrialResult;
 
 /// FNV-1a, 64 bits: the hash of `seed` (little-endian) then `body`.
@@ -85,7 +85,7 @@ pub(crate) fn encode(seed: u64, block: usize, t: &TrialResult) -> String {
         push_stats(&mut s, &o.after_mm);
         push_stats(&mut s, &o.calibration_before_mm);
         push_stats(&mut s, &o.calibration_after_mm);
-        for d in o.optional {
+        for d in o.optional.values() {
             match d {
                 Some(d) => {
                     s.push_str(" +");
@@ -194,8 +194,8 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
         let after_mm = t.stats()?;
         let calibration_before_mm = t.stats()?;
         let calibration_after_mm = t.stats()?;
-        let mut optional = [None; OPTIONAL_STATS.len()];
-        for o in &mut optional {
+        let mut optional = OptionalStats::default();
+        for o in optional.values_mut() {
             *o = t.optional_stats()?;
         }
         let identified = t.reals(n)?;
@@ -393,19 +393,13 @@ mod tests {
                 after_mm: stats(0.1),
                 calibration_before_mm: stats(0.6),
                 calibration_after_mm: stats(0.05),
-                optional: [
-                    None,
-                    Some(stats(0.3)),
-                    None,
-                    None,
-                    None,
-                    Some(stats(-0.2)),
-                    None,
-                    None,
-                    Some(stats(0.01)),
-                    None,
-                    Some(stats(0.02)),
-                ],
+                optional: crate::study::trial::OptionalStats {
+                    validation_after_deg: Some(stats(0.3)),
+                    validation_before_axis_mm: Some(stats(-0.2)),
+                    validation_after_axis_abs_mm: Some(stats(0.01)),
+                    calibration_after_attitude_deg: Some(stats(0.02)),
+                    ..Default::default()
+                },
                 per_point: None,
                 per_point_attitude_deg: None,
                 trace: None,

@@ -441,7 +441,7 @@ impl Accumulator {
             c.calibration[0].add(&o.calibration_before_mm);
             c.calibration[1].add(&o.calibration_after_mm);
             c.after_rms_sq.add(o.after_mm.rms * o.after_mm.rms);
-            for (acc, d) in c.deg.iter_mut().zip(o.optional) {
+            for (acc, d) in c.deg.iter_mut().zip(o.optional.values()) {
                 if let Some(d) = d {
                     acc.get_or_insert_with(StatsSum::default).add(&d);
                 }

@@ -37,12 +37,8 @@ pub struct Outcome {
     pub calibration_before_mm: ErrorStats,
     /// … the compensated robot, in its registration, after.
     pub calibration_after_mm: ErrorStats,
-    /// The statistics only some studies have, in the order of [`OPTIONAL_STATS`] (absent:
-    /// `None`): validation orientation (rotation angle, Qiao's attitude) before and after for
-    /// full-pose data, the fitted "before" (`validation.before_fitted`), Guo's axis errors
-    /// (`validation.axis_errors`; [`PoseErrors::axis_mm`], [`PoseErrors::axis_abs_mm`]) and
-    /// Qiao's attitude at the calibration poses for full-pose data.
-    pub optional: [Option<ErrorStats>; OPTIONAL_STATS.len()],
+    /// The statistics only some studies have (absent: `None`).
+    pub optional: OptionalStats,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
     /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
@@ -223,26 +219,67 @@ impl SimulatedTrial {
     }
 }
 
+/// Declares [`OptionalStats`] from its fields: the field names are the `summary.json` names,
+/// and the order of the fields is that of `records.txt`.
+macro_rules! optional_stats {
+    ($($(#[$doc:meta])* $name:ident,)*) => {
+        /// The statistics only some studies have, each `None` where a study has none:
+        /// validation orientation (rotation angle, Qiao's attitude) before and after for
+        /// full-pose data, the fitted "before" (`validation.before_fitted`), Guo's axis errors
+        /// (`validation.axis_errors`; [`PoseErrors::axis_mm`], [`PoseErrors::axis_abs_mm`]) and
+        /// Qiao's attitude at the calibration poses for full-pose data. Each field's name is
+        /// its key in `summary.json` (docs/formats.md § 7.1).
+        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        pub struct OptionalStats {
+            $($(#[$doc])* pub $name: Option<ErrorStats>,)*
+        }
+
+        impl OptionalStats {
+            /// The fields' names, in their order.
+            pub const NAMES: [&'static str; [$(stringify!($name)),*].len()] =
+                [$(stringify!($name)),*];
+
+            /// The fields' values, in the order of [`OptionalStats::NAMES`].
+            pub fn values(&self) -> [Option<ErrorStats>; OptionalStats::NAMES.len()] {
+                [$(self.$name),*]
+            }
+
+            /// The fields, mutable, in the order of [`OptionalStats::NAMES`].
+            pub fn values_mut(&mut self) -> [&mut Option<ErrorStats>; OptionalStats::NAMES.len()] {
+                [$(&mut self.$name),*]
+            }
+        }
+    };
+}
+
+optional_stats! {
+    /// Validation orientation error before, rotation angle (deg).
+    validation_before_deg,
+    /// … after.
+    validation_after_deg,
+    /// Validation attitude error (Qiao 2021) before (deg).
+    validation_before_attitude_deg,
+    /// … after.
+    validation_after_attitude_deg,
+    /// The "before" of a nominal model fitted in its registration (mm).
+    validation_before_fitted_mm,
+    /// Guo's signed axis errors before (mm).
+    validation_before_axis_mm,
+    /// … after.
+    validation_after_axis_mm,
+    /// Guo's absolute axis errors before (mm).
+    validation_before_axis_abs_mm,
+    /// … after.
+    validation_after_axis_abs_mm,
+    /// Attitude error at the calibration poses before (deg).
+    calibration_before_attitude_deg,
+    /// … after.
+    calibration_after_attitude_deg,
+}
+
 /// The `summary.json` names of [`Outcome::optional`], in its order (the order of
 /// `records.txt`).
-pub const OPTIONAL_STATS: [&str; 11] = [
-    "validation_before_deg",
-    "validation_after_deg",
-    "validation_before_attitude_deg",
-    "validation_after_attitude_deg",
-    "validation_before_fitted_mm",
-    "validation_before_axis_mm",
-    "validation_after_axis_mm",
-    "validation_before_axis_abs_mm",
-    "validation_after_axis_abs_mm",
-    "calibration_before_attitude_deg",
-    "calibration_after_attitude_deg",
-];
-
-/// The place of `validation_before_deg` and `validation_after_deg` in [`Outcome::optional`].
-pub const BEFORE_DEG: usize = 0;
-/// See [`BEFORE_DEG`].
-pub const AFTER_DEG: usize = 1;
+pub const OPTIONAL_STATS: [&str; OptionalStats::NAMES.len()] = OptionalStats::NAMES;
 
 /// Runs trial `index` of `study`.
 pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
@@ -382,19 +419,24 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 after_mm: ErrorStats::of(&after.mm),
                 calibration_before_mm: cal_before,
                 calibration_after_mm: ErrorStats::of(&cal_after.mm),
-                optional: [
-                    full_pose.then(|| ErrorStats::of(&before.deg)),
-                    full_pose.then(|| ErrorStats::of(&after.deg)),
-                    full_pose.then(|| ErrorStats::of(&before.attitude_deg)),
-                    full_pose.then(|| ErrorStats::of(&after.attitude_deg)),
-                    before_fitted,
-                    axis.then(|| ErrorStats::of_signed(&before.axis_mm)),
-                    axis.then(|| ErrorStats::of_signed(&after.axis_mm)),
-                    axis.then(|| ErrorStats::of(&before.axis_abs_mm)),
-                    axis.then(|| ErrorStats::of(&after.axis_abs_mm)),
-                    full_pose.then(|| ErrorStats::of(&cal_nominal.attitude_deg)),
-                    full_pose.then(|| ErrorStats::of(&cal_after.attitude_deg)),
-                ],
+                optional: OptionalStats {
+                    validation_before_deg: full_pose.then(|| ErrorStats::of(&before.deg)),
+                    validation_after_deg: full_pose.then(|| ErrorStats::of(&after.deg)),
+                    validation_before_attitude_deg: full_pose
+                        .then(|| ErrorStats::of(&before.attitude_deg)),
+                    validation_after_attitude_deg: full_pose
+                        .then(|| ErrorStats::of(&after.attitude_deg)),
+                    validation_before_fitted_mm: before_fitted,
+                    validation_before_axis_mm: axis.then(|| ErrorStats::of_signed(&before.axis_mm)),
+                    validation_after_axis_mm: axis.then(|| ErrorStats::of_signed(&after.axis_mm)),
+                    validation_before_axis_abs_mm: axis
+                        .then(|| ErrorStats::of(&before.axis_abs_mm)),
+                    validation_after_axis_abs_mm: axis.then(|| ErrorStats::of(&after.axis_abs_mm)),
+                    calibration_before_attitude_deg: full_pose
+                        .then(|| ErrorStats::of(&cal_nominal.attitude_deg)),
+                    calibration_after_attitude_deg: full_pose
+                        .then(|| ErrorStats::of(&cal_after.attitude_deg)),
+                },
                 trace,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 per_point_attitude_deg: (index == 0 && full_pose)

@@ -469,3 +469,44 @@ fn an_unknown_scenario_strategy_lists_every_strategy() {
     words.extend(STRATEGIES);
     refused(&o, 1, &words);
 }
+
+/// The pose strategies are one table: every optimiser has a name on the separated and on the
+/// full model, each name maps back to its optimiser, `Strategy`'s own names are the table's,
+/// and no source file under `src/` or `python/src/` spells a full-model name out beside the
+/// table (outside its tests).
+#[test]
+fn the_pose_strategies_are_declared_once() {
+    use calbench::poses::Strategy;
+    use calbench::study::scenario::StrategyName;
+    use strum::IntoEnumIterator as _;
+    for o in Strategy::iter() {
+        for full in [false, true] {
+            let name = StrategyName::of(o, full);
+            let model = if o == Strategy::Random { false } else { full };
+            assert_eq!(name.selection(), Some((o, model)), "{}", name.as_str());
+        }
+        assert_eq!(o.as_str(), StrategyName::of(o, false).as_str());
+    }
+    let mut hits = Vec::new();
+    let top = crate::common::root();
+    let mut stack = vec![top.join("src"), top.join("python/src")];
+    while let Some(dir) = stack.pop() {
+        for e in std::fs::read_dir(&dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs")
+                && p.file_name().unwrap() != "tests.rs"
+            {
+                let text = std::fs::read_to_string(&p).unwrap();
+                // The file's own tests start at its `#[cfg(test)]` module.
+                let code = text.split("#[cfg(test)]\nmod tests").next().unwrap();
+                hits.extend(
+                    code.matches("detmax-ide-full")
+                        .map(|_| p.display().to_string()),
+                );
+            }
+        }
+    }
+    assert!(hits.len() <= 1, "{hits:?}");
+}

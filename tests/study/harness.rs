@@ -410,3 +410,63 @@ fn full_pose_study_plots_the_attitude_error_per_point() {
     let report = read(&out.join("report.md"));
     assert!(report.contains("validation_trial0_attitude.png"));
 }
+
+/// `CALBENCH_SIMD=scalar` (docs/formats.md) forces the portable kernels: the default study
+/// writes the same `summary.json` and `trials.csv` bytes on them as on the processor's best
+/// path (AVX2 and FMA where it has them), and a misspelt value is refused before any work.
+#[test]
+fn the_portable_path_writes_the_same_bytes_as_the_vector_path() {
+    // The study `calbench` runs without arguments.
+    let default_study = root().join("scenarios/default.toml").display().to_string();
+    let run = |simd: &str, name: &str| {
+        let out = tmp_dir(name);
+        let o = crate::common::bin()
+            .env("CALBENCH_SIMD", simd)
+            .args([
+                "run",
+                &default_study,
+                "--trials",
+                "3",
+                "--out",
+                path_arg(&out),
+            ])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        out
+    };
+    let (scalar, best) = (
+        run("scalar", "harness-simd-scalar"),
+        run("auto", "harness-simd-auto"),
+    );
+    for f in ["summary.json", "trials.csv"] {
+        let (a, b) = (
+            std::fs::read(scalar.join(f)).unwrap(),
+            std::fs::read(best.join(f)).unwrap(),
+        );
+        assert!(
+            !a.is_empty() && a == b,
+            "{f} differs between the SIMD paths"
+        );
+    }
+    let bad = tmp_dir("harness-simd-bad");
+    let o = crate::common::bin()
+        .env("CALBENCH_SIMD", "avx512")
+        .args([
+            "run",
+            &default_study,
+            "--trials",
+            "1",
+            "--out",
+            path_arg(&bad),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("CALBENCH_SIMD=\"avx512\"") && err.contains("\"scalar\""),
+        "{err}"
+    );
+    assert!(!bad.join("summary.json").exists());
+}

@@ -20,7 +20,7 @@ fn guard(trials: usize, seed: u64) -> Scenario {
 
 fn summary_of(s: Scenario, name: &str) -> Value {
     let out = tmp_dir(name);
-    calbench::report::run_study(
+    calbench::study::run::run_study(
         s,
         &RunOptions {
             threads: Some(2),
@@ -28,6 +28,7 @@ fn summary_of(s: Scenario, name: &str) -> Value {
             progress: false,
             shard: None,
         },
+        &calbench::study::reporter::Silent,
     )
     .unwrap();
     read_json(&out.join("summary.json")).unwrap()

@@ -7,7 +7,6 @@ use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::study::scenario::Sweep;
 use crate::study::stats::eta;
-use crate::study::trial::{AFTER_DEG, BEFORE_DEG};
 use crate::study::{BlockInfo, TrialResult, TrialSink};
 
 fn num(v: Real) -> String {
@@ -145,8 +144,8 @@ impl<W: std::io::Write> TrialSink for TrialsCsv<W> {
             }
             if info.full_pose {
                 let (bd, ad) = (
-                    o.optional[BEFORE_DEG].unwrap_or_default(),
-                    o.optional[AFTER_DEG].unwrap_or_default(),
+                    o.optional.validation_before_deg.unwrap_or_default(),
+                    o.optional.validation_after_deg.unwrap_or_default(),
                 );
                 for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
                     row.push(num(v));

@@ -18,7 +18,7 @@ use crate::error::{at_line, Error, Result};
 use crate::identify::registry::method_names;
 pub use crate::identify::MethodSpec;
 use crate::numeric::Real;
-use crate::poses::{Objective, Strategy as Optimiser};
+use crate::poses::Objective;
 use crate::robot::builtin;
 use crate::robot::Robot;
 use crate::sim::poses::check_region;
@@ -325,12 +325,11 @@ impl Scenario {
                         ))
                     }
                 },
-                StrategyName::Detmax => PoseStrategy::Optimised(Optimiser::Detmax),
-                StrategyName::Ide => PoseStrategy::Optimised(Optimiser::Ide),
-                StrategyName::DetmaxIde => PoseStrategy::Optimised(Optimiser::DetmaxIde),
-                StrategyName::DetmaxFull => PoseStrategy::OptimisedFull(Optimiser::Detmax),
-                StrategyName::IdeFull => PoseStrategy::OptimisedFull(Optimiser::Ide),
-                StrategyName::DetmaxIdeFull => PoseStrategy::OptimisedFull(Optimiser::DetmaxIde),
+                other => match other.selection() {
+                    Some((o, false)) => PoseStrategy::Optimised(o),
+                    Some((o, true)) => PoseStrategy::OptimisedFull(o),
+                    None => unreachable!("box, grid and file are matched above"),
+                },
             };
             if strategies
                 .iter()

@@ -120,7 +120,9 @@ pub enum PoseStrategy {
     OptimisedFull(Optimiser),
 }
 
-/// The names accepted in `calibration.strategies` (serde, kebab-case).
+/// Every pose strategy by name: the one table of the names accepted in
+/// `calibration.strategies` (serde, kebab-case), by `calbench poses --strategy` and in the
+/// messages that list them, with what each runs ([`StrategyName::selection`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 #[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
@@ -148,6 +150,41 @@ pub enum StrategyName {
     DetmaxIdeFull,
 }
 
+impl StrategyName {
+    /// The optimiser the strategy runs on a candidate pool and whether over the full model
+    /// (every joint parameter, no separation); `None` for `box`, `grid` and `file`, which
+    /// choose no poses among candidates.
+    pub fn selection(self) -> Option<(Optimiser, bool)> {
+        use StrategyName as N;
+        Some(match self {
+            N::Random => (Optimiser::Random, false),
+            N::Box | N::Grid | N::File => return None,
+            N::Detmax => (Optimiser::Detmax, false),
+            N::Ide => (Optimiser::Ide, false),
+            N::DetmaxIde => (Optimiser::DetmaxIde, false),
+            N::DetmaxFull => (Optimiser::Detmax, true),
+            N::IdeFull => (Optimiser::Ide, true),
+            N::DetmaxIdeFull => (Optimiser::DetmaxIde, true),
+        })
+    }
+
+    /// The name of `optimiser` over the separated (`full = false`) or the full model: the
+    /// inverse of [`StrategyName::selection`]. `random` has one name on either model (a random
+    /// subset depends on no model).
+    pub fn of(optimiser: Optimiser, full: bool) -> StrategyName {
+        use strum::IntoEnumIterator as _;
+        let on = |full| StrategyName::iter().find(|n| n.selection() == Some((optimiser, full)));
+        on(full)
+            .or_else(|| on(!full))
+            .unwrap_or_else(|| unreachable!("the table names every optimiser"))
+    }
+
+    /// The name used in files and messages.
+    pub fn as_str(self) -> &'static str {
+        self.into()
+    }
+}
+
 /// The names of `calibration.strategies`, comma-separated (for messages).
 pub(crate) fn strategy_names() -> String {
     <StrategyName as strum::VariantNames>::VARIANTS.join(", ")
@@ -157,18 +194,12 @@ impl PoseStrategy {
     /// The name used in files and reports.
     pub fn name(&self) -> &'static str {
         let name = match self {
-            PoseStrategy::Random
-            | PoseStrategy::Optimised(Optimiser::Random)
-            | PoseStrategy::OptimisedFull(Optimiser::Random) => StrategyName::Random,
+            PoseStrategy::Random => StrategyName::Random,
             PoseStrategy::Box => StrategyName::Box,
             PoseStrategy::Grid => StrategyName::Grid,
             PoseStrategy::File(_) => StrategyName::File,
-            PoseStrategy::Optimised(Optimiser::Detmax) => StrategyName::Detmax,
-            PoseStrategy::Optimised(Optimiser::Ide) => StrategyName::Ide,
-            PoseStrategy::Optimised(Optimiser::DetmaxIde) => StrategyName::DetmaxIde,
-            PoseStrategy::OptimisedFull(Optimiser::Detmax) => StrategyName::DetmaxFull,
-            PoseStrategy::OptimisedFull(Optimiser::Ide) => StrategyName::IdeFull,
-            PoseStrategy::OptimisedFull(Optimiser::DetmaxIde) => StrategyName::DetmaxIdeFull,
+            PoseStrategy::Optimised(o) => StrategyName::of(*o, false),
+            PoseStrategy::OptimisedFull(o) => StrategyName::of(*o, true),
         };
         name.into()
     }
