@@ -4,8 +4,9 @@
 #
 # Rust (the library, the CLI and the Python module's crate python/): cargo fmt --check, clippy
 # with warnings denied, rustdoc with warnings denied, cargo test. Then the Python module: built
-# into the virtual environment .venv/ (maturin, pytest, numpy, pandas, matplotlib) and its
-# pytest suite python/tests/ run against the CLI; a fresh clone's .venv/ is made here first
+# into the virtual environment .venv/ (maturin, pytest, numpy, pandas, matplotlib, and scipy,
+# which the paired comparisons are tested against) and its pytest suite python/tests/ run
+# against the CLI; a fresh clone's .venv/ is made here first
 # (python3 -m venv, pip install from PyPI). When it cannot be made the Python part is skipped
 # with a message, except under CI=true, where it fails.
 #
@@ -18,15 +19,15 @@ RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps --workspace
 cargo test
 
 py=.venv/bin/python
-has_tools() { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas" 2>/dev/null; }
+has_tools() { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas, scipy" 2>/dev/null; }
 if ! has_tools; then
     # A fresh clone: make the environment (PyPI), as the README's set-up promises.
-    echo "making .venv/ with maturin, pytest, numpy, pandas and matplotlib from PyPI" >&2
+    echo "making .venv/ with maturin, pytest, numpy, pandas, matplotlib and scipy from PyPI" >&2
     { [ -x "$py" ] || python3 -m venv .venv; } &&
-        "$py" -m pip install --quiet --upgrade maturin pytest numpy pandas matplotlib >&2 || true
+        "$py" -m pip install --quiet --upgrade maturin pytest numpy pandas matplotlib scipy >&2 || true
 fi
 if ! has_tools; then
-    msg="the Python module's tests need .venv/ with maturin, pytest, numpy and pandas, which could not be made (python3 -m venv, pip install from PyPI)"
+    msg="the Python module's tests need .venv/ with maturin, pytest, numpy, pandas and scipy, which could not be made (python3 -m venv, pip install from PyPI)"
     if [ "${CI:-}" = "true" ]; then
         echo "error: $msg" >&2
         exit 1
