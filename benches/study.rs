@@ -2,8 +2,8 @@
 //! eight method × strategy pairs, rapier sag, two threads), outputs written to a scratch
 //! folder: the speed table's wall-time line (target ≤ 4 s).
 
+use calbench::runner::run::run_study;
 use calbench::study::reporter::Silent;
-use calbench::study::run::run_study;
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 use criterion::{criterion_group, criterion_main, Criterion};

@@ -177,24 +177,22 @@ pub fn shown(v: f64) -> String {
 
 /// Refuses a setting `v` unless it is finite and positive (the error names `key`).
 pub fn finite_positive(key: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v > 0.0 {
-        Ok(())
-    } else {
-        Err(Error::setting(
-            key,
-            format!("must be finite and positive, got {}", shown(v)),
-        ))
-    }
+    finite_where(key, v, v > 0.0, "positive")
 }
 
 /// Checks that setting `key` is finite and at least 0.
 pub fn finite_non_negative(key: &str, v: f64) -> Result<()> {
-    if v.is_finite() && v >= 0.0 {
+    finite_where(key, v, v >= 0.0, "non-negative")
+}
+
+/// Refuses `v` unless it is finite and `holds`, saying it must be finite and `what`.
+fn finite_where(key: &str, v: f64, holds: bool, what: &str) -> Result<()> {
+    if v.is_finite() && holds {
         Ok(())
     } else {
         Err(Error::setting(
             key,
-            format!("must be finite and non-negative, got {}", shown(v)),
+            format!("must be finite and {what}, got {}", shown(v)),
         ))
     }
 }

@@ -15,7 +15,8 @@
 //! - [`poses`]: measurement-pose selection (observability indices, DETMAX, IDE);
 //! - [`calibrate`]: registration with identification, validation, compensation;
 //! - [`study`]: scenarios and the Monte-Carlo harness;
-//! - [`report`]: the output files, plots, shards and the regression check.
+//! - [`report`]: the output files, plots and the regression check;
+//! - [`runner`]: running, resuming, sharding and merging a study, through the report's writers.
 #![warn(missing_docs)]
 
 pub mod error;
@@ -39,6 +40,8 @@ pub mod calibrate;
 pub mod study;
 
 pub mod report;
+
+pub mod runner;
 
 /// The README's Rust examples ("Adding a method"), compiled and run as doctests.
 #[cfg(doctest)]

@@ -13,7 +13,7 @@ use calbench::identify::MethodSpec;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::robot::Robot;
-use calbench::study::run::InMemoryRun;
+use calbench::runner::run::InMemoryRun;
 use calbench::study::{trial, RunOptions, Study};
 
 use crate::convert::{matrix, scenario_of};

@@ -22,7 +22,7 @@ use super::record::{
 };
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{self, gross_reading, rms, worse_causes, worse_error};
-use super::{calibrate, Calibrated, Registration, RoundsEnd};
+use super::{calibrate, Calibrated, Registration};
 use crate::error::{Error, Result};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::kind_csv::KindFile;
@@ -33,6 +33,9 @@ use crate::robot::{param_sets, Param, Robot};
 use serde_json::{Map, Value};
 
 pub use super::on_kind::KindOutcome;
+use super::on_kind::{identify_kind, validate_positions, Chosen};
+pub use super::verdict::{check_names, registration_warning, worse_warning};
+use crate::measurement::kind::{Instrument, Kind};
 
 /// The readings an identification runs on.
 #[derive(Clone, Debug)]
@@ -224,7 +227,7 @@ impl IdentifyRequest {
                 .tracker(d.clone())
                 .map(|o| IdentifyOutcome::Tracker(Box::new(o))),
             IdentifyData::Kind(f) => {
-                super::on_kind::kind_outcome(self, f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
+                kind_outcome(self, f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
             }
         };
         outcome.map_err(|e| s.respell(e))
@@ -447,36 +450,6 @@ impl serde::Serialize for IdentifyOutcome {
     }
 }
 
-/// The warning of a result kept although it makes the robot worse (`causes`), if any.
-pub fn worse_warning(causes: &[String]) -> Option<String> {
-    (!causes.is_empty()).then(|| {
-        format!(
-            "the identification makes the robot worse ({}); kept because of --allow-worse",
-            causes.join("; ")
-        )
-    })
-}
-
-/// The warning for an alternation of registration and identification that did not settle;
-/// `None` when it settled or did not alternate.
-pub fn registration_warning(c: &Calibrated, registration: Registration) -> Option<String> {
-    matches!(
-        c.rounds.termination,
-        RoundsEnd::MaxRounds | RoundsEnd::Stalled
-    )
-    .then(|| {
-        format!(
-            "{} registration and identification did not settle within {} mm in {} rounds ({}; \
-             the smallest frame step was {:.3e} mm, and that round is the result)",
-            registration.as_str(),
-            super::ROUND_TOLERANCE_MM,
-            c.rounds.rounds,
-            c.rounds.termination.as_str(),
-            c.rounds.last_step_mm
-        )
-    })
-}
-
 /// [`calibrate`] of real data (`known`: the points are in the base frame) with the method's
 /// stream `identify` of `seed`.
 fn calibrate_on(
@@ -497,25 +470,6 @@ fn calibrate_on(
         spec,
         &mut rng,
     )
-}
-
-/// Refuses a name of the fixed or the given parameters (`option`; `given`: the latter) the
-/// robot's model does not have, a given compliance (the compliance option adds those) and a
-/// name given twice.
-pub fn check_names(option: &str, given: bool, nominal: &Robot, names: &[Param]) -> Result<()> {
-    let known = nominal.params();
-    let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
-        (_, true) if given => Some("is a compliance: --compliance adds those".into()),
-        (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name)),
-        _ => None,
-    };
-    for (i, p) in names.iter().enumerate() {
-        let why = bad(p).or(names[..i].contains(p).then(|| "is given twice".into()));
-        if let Some(why) = why {
-            return Err(Error::setting(option, format!("`{p}` {why}")));
-        }
-    }
-    Ok(())
 }
 
 /// How each prior moved its parameter's estimate: the same identification without the
@@ -561,4 +515,170 @@ fn convergence_trace(
     }
     let t = recorder.lock().ok()?.clone();
     (!t.is_empty()).then_some(("RMS point residual (mm) per evaluation", t))
+}
+
+/// The options of a request that a kind file does not take: each with whether it was given.
+fn tracker_only(q: &IdentifyRequest) -> [(&'static str, bool); 6] {
+    [
+        ("--holdout", q.holdout.is_some()),
+        ("--cv", q.cv.is_some()),
+        ("--models", !q.models.is_empty()),
+        ("--compliance", q.compliance.is_some()),
+        (
+            "--prior",
+            !q.priors.is_empty() || !q.method.priors.is_empty(),
+        ),
+        ("--k", q.k.is_some()),
+    ]
+}
+
+/// The option a kind file (of targets or not) refuses and why, if any: the tracker's
+/// options, a registration the kind does not take, a method that is not a Jacobian one
+/// (`solver`: it is).
+fn refusal(q: &IdentifyRequest, targets: bool, solver: bool) -> Option<(&'static str, String)> {
+    if let Some((option, _)) = tracker_only(q).into_iter().find(|o| o.1) {
+        let why = "it applies to the tracker's measurement file (§ 5.1) only";
+        return Some((option, why.to_string()));
+    }
+    let registration = q.registration;
+    if registration != Registration::Identify && !(targets && registration == Registration::Known) {
+        let why = if targets {
+            "multi-target points are registered by SVD onto the nominal robot with the base \
+             identified after (identify), or taken in the base frame (known)"
+        } else {
+            "the instrument is placed by its own unknowns, identified with the robot"
+        };
+        return Some((
+            "--registration",
+            format!("{} is not taken: {why}", registration.as_str()),
+        ));
+    }
+    (!solver).then(|| {
+        let why = format!(
+            "{} is not one of the Jacobian methods (ls, ridge, igg3, lm) that identify them",
+            q.method.name()
+        );
+        ("--method", why)
+    })
+}
+
+/// The refusal, by file, of an option `option` a kind file does not take (`why`).
+pub fn kind_refusal(q: &IdentifyRequest, kind: Kind, option: &str, why: &str) -> Error {
+    let msg = format!(
+        "{} holds {} readings (docs/formats.md § 5.3): {why}",
+        q.source.display(),
+        kind.as_str()
+    );
+    Error::setting(q.spelling.option(option), msg)
+}
+
+/// The identification of request `q` on the kind file `file` ([`identify_kind`]), with its
+/// refusals: options the kind does not take, undetermined data, a worse robot.
+fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindOutcome> {
+    let s = q.spelling;
+    let nominal = &q.robot;
+    let kind = file.data.instrument.kind();
+    let targets = matches!(file.data.instrument, Instrument::Targets(_));
+    if let Some((option, why)) = refusal(q, targets, q.method.method.solver().is_some()) {
+        return Err(kind_refusal(q, kind, option, &why));
+    }
+    let solver = q
+        .method
+        .method
+        .solver()
+        .unwrap_or_else(|| unreachable!("refusal() refuses the methods that are not solvers"));
+    check_names(&s.option("--params"), true, nominal, &q.params)?;
+    check_names(&s.option("--fix"), false, nominal, &q.fix)?;
+    let chosen = if q.params.is_empty() {
+        Chosen::Identifiable
+    } else {
+        Chosen::Given(&q.params, q.allow_rank_deficient)
+    };
+    let register = q.registration == Registration::Identify;
+    let fit = identify_kind(nominal, file, &q.source, (chosen, &q.fix, register), solver)?;
+    let r = &fit.identified;
+    let readings = fit.data.instrument.observations(file.qs.len());
+    // The file row of reading `i` (a step of distances is read at its second row).
+    let line = |i: usize| match &fit.data.instrument {
+        Instrument::Targets(t) => {
+            let (pose, target) = (i / t.len().max(1), i % t.len().max(1) + 1);
+            file.lines.get(pose).map_or(format!("reading {i}"), |l| {
+                format!("target {target} of the pose that starts on line {l}")
+            })
+        }
+        _ => {
+            let row = i + file.qs.len() - readings;
+            file.lines
+                .get(row)
+                .map_or(format!("reading {i}"), |l| format!("line {l}"))
+        }
+    };
+    let gross = || {
+        let (before, after) = &fit.residuals;
+        let (at, (i, ratio)) = gross_reading(after)
+            .map(|g| ("after", g))
+            .or_else(|| gross_reading(before).map(|g| ("before", g)))?;
+        Some(format!(
+            "the reading of {} has a residual {ratio:.0} times the median {at} calibration",
+            line(i)
+        ))
+    };
+    if super::verdict::undetermined_termination(r.termination) && !q.allow_rank_deficient {
+        let total = r.x.len();
+        let cause = match r.rank {
+            Some(k) if k < total => {
+                format!("do not determine every parameter (rank {k} of {total})")
+            }
+            Some(_) => "determine every parameter, yet the solve did not settle".to_string(),
+            None => "do not give a finite solve".to_string(),
+        };
+        let hint = gross().map_or(String::new(), |g| {
+            format!("; {g}: a gross reading is the likely cause")
+        });
+        return Err(Error::file(
+            &q.source,
+            "data",
+            format!(
+                "the {} readings {cause}{hint}; {} ended {}, so nothing was written. Measure \
+                 poses that move every joint, leave parameters out with {}, or pass {}",
+                kind.as_str(),
+                q.method.name(),
+                r.termination.as_str(),
+                s.option("--fix"),
+                s.flag("--allow-rank-deficient"),
+            ),
+        ));
+    }
+    let validation = q
+        .validate
+        .as_ref()
+        .map(|v| validate_positions(nominal, &fit.robot, v))
+        .transpose()?;
+    let worse = worse_causes(
+        validation.as_ref().map(|(b, a)| (b.rms, a.rms)),
+        fit.rms,
+        r.termination,
+        None,
+    );
+    if !worse.is_empty() && !q.allow_worse {
+        return Err(worse_error(
+            &q.source,
+            &worse,
+            gross(),
+            &s.flag("--allow-worse"),
+        ));
+    }
+    Ok(KindOutcome {
+        nominal: nominal.clone(),
+        source: q.source.clone(),
+        kind,
+        readings,
+        method: q.method.name(),
+        registration: q.registration,
+        fixed: q.fix.clone(),
+        identifiable: matches!(chosen, Chosen::Identifiable),
+        fit,
+        validation,
+        worse,
+    })
 }

@@ -5,8 +5,8 @@
 
 use std::path::Path;
 
-use super::Calibrated;
-use crate::error::Error;
+use super::{Calibrated, Registration, RoundsEnd};
+use crate::error::{Error, Result};
 use crate::identify::{MethodSpec, Termination};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
@@ -211,4 +211,53 @@ mod tests {
             worse_causes(Some((2.0, 1.0)), (1.0, 1.0), Termination::Converged, None).is_empty()
         );
     }
+}
+
+/// The warning of a result kept although it makes the robot worse (`causes`), if any.
+pub fn worse_warning(causes: &[String]) -> Option<String> {
+    (!causes.is_empty()).then(|| {
+        format!(
+            "the identification makes the robot worse ({}); kept because of --allow-worse",
+            causes.join("; ")
+        )
+    })
+}
+
+/// The warning for an alternation of registration and identification that did not settle;
+/// `None` when it settled or did not alternate.
+pub fn registration_warning(c: &Calibrated, registration: Registration) -> Option<String> {
+    matches!(
+        c.rounds.termination,
+        RoundsEnd::MaxRounds | RoundsEnd::Stalled
+    )
+    .then(|| {
+        format!(
+            "{} registration and identification did not settle within {} mm in {} rounds ({}; \
+             the smallest frame step was {:.3e} mm, and that round is the result)",
+            registration.as_str(),
+            super::ROUND_TOLERANCE_MM,
+            c.rounds.rounds,
+            c.rounds.termination.as_str(),
+            c.rounds.last_step_mm
+        )
+    })
+}
+
+/// Refuses a name of the fixed or the given parameters (`option`; `given`: the latter) the
+/// robot's model does not have, a given compliance (the compliance option adds those) and a
+/// name given twice.
+pub fn check_names(option: &str, given: bool, nominal: &Robot, names: &[Param]) -> Result<()> {
+    let known = nominal.params();
+    let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
+        (_, true) if given => Some("is a compliance: --compliance adds those".into()),
+        (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name)),
+        _ => None,
+    };
+    for (i, p) in names.iter().enumerate() {
+        let why = bad(p).or(names[..i].contains(p).then(|| "is given twice".into()));
+        if let Some(why) = why {
+            return Err(Error::setting(option, format!("`{p}` {why}")));
+        }
+    }
+    Ok(())
 }

@@ -11,7 +11,7 @@ use anyhow::Result;
 use calbench::calibrate::request::{
     IdentifyData, IdentifyOutcome, IdentifyRequest, TrackerOutcome,
 };
-use calbench::calibrate::{ErrorStats, Registration, RoundsEnd};
+use calbench::calibrate::{Registration, RoundsEnd};
 use calbench::error::Error;
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
@@ -220,12 +220,12 @@ pub fn run(args: &IdentifyArgs) -> Result<()> {
         let why = "it applies to the tracker's measurement file (§ 5.1) only";
         let kind = f.data.instrument.kind();
         return Err(
-            calbench::calibrate::on_kind::kind_refusal(&request, kind, "--export", why).into(),
+            calbench::calibrate::request::kind_refusal(&request, kind, "--export", why).into(),
         );
     }
     match request.run()? {
         IdentifyOutcome::Tracker(o) => write(args, &o),
-        IdentifyOutcome::Kind(o) => super::identify_kind::write(args, &o),
+        IdentifyOutcome::Kind(o) => super::identify_kind::write(&args.out, &o),
     }
 }
 
@@ -275,7 +275,7 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         );
     }
     if let Some(v) = &o.validation {
-        print_validation(&v.before_mm, &v.after_mm);
+        super::identify_kind::print_validation(&v.before_mm, &v.after_mm);
     }
     let r = &c.identified;
     let rounds = match c.rounds.termination {
@@ -296,20 +296,6 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         out.display()
     );
     Ok(())
-}
-
-/// Prints the validation table: the position errors before and after (mm).
-pub(super) fn print_validation(before: &ErrorStats, after: &ErrorStats) {
-    out!("validation error (mm)   mean      rms       max       std");
-    for (label, s) in [("before", before), ("after", after)] {
-        out!(
-            "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
-            s.mean,
-            s.rms,
-            s.max,
-            s.std
-        );
-    }
 }
 
 /// The method `name` with the `--set KEY=VALUE` options, read like a scenario's

@@ -3,12 +3,14 @@
 //! ([`calbench::calibrate::request`]) written to `identified.json` and `robot.toml`, with
 //! the validation table and a summary line.
 
+use std::path::Path;
+
 use anyhow::Result;
 
 use calbench::calibrate::request::KindOutcome;
+use calbench::calibrate::ErrorStats;
 use calbench::robot::robot_to_toml;
 
-use super::identify::IdentifyArgs;
 use super::{to_json_text, write_file};
 
 /// The files written.
@@ -16,8 +18,7 @@ pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
 
 /// Writes the output folder of the identification `o` and prints its warning, the
 /// validation table (with `--validate`, a tracker's file) and a summary line.
-pub fn write(args: &IdentifyArgs, o: &KindOutcome) -> Result<()> {
-    let out = &args.out;
+pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     if let Some(w) = o.worse_warning() {
         eprintln!("warning: {w}");
     }
@@ -28,7 +29,7 @@ pub fn write(args: &IdentifyArgs, o: &KindOutcome) -> Result<()> {
         write_file(&dir.join(robot_file), &compensated)
     })?;
     if let Some((before, after)) = &o.validation {
-        super::identify::print_validation(before, after);
+        print_validation(before, after);
     }
     let kind = o.kind.as_str();
     let unidentifiable = &o.fit.analysis.unidentifiable;
@@ -54,4 +55,18 @@ pub fn write(args: &IdentifyArgs, o: &KindOutcome) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// Prints the validation table: the position errors before and after (mm).
+pub(super) fn print_validation(before: &ErrorStats, after: &ErrorStats) {
+    out!("validation error (mm)   mean      rms       max       std");
+    for (label, s) in [("before", before), ("after", after)] {
+        out!(
+            "  {label:<8} {:>10.4} {:>9.4} {:>9.4} {:>9.4}",
+            s.mean,
+            s.rms,
+            s.max,
+            s.std
+        );
+    }
 }

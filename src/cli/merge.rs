@@ -24,7 +24,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let out = &args.out;
     super::guard_out(out, &super::run::OUTPUTS, &args.dirs)?;
     writable_folder(out, &super::run::OUTPUTS)?;
-    let r = calbench::study::shard::merge(&args.dirs, out)?;
+    let r = calbench::runner::shard::merge(&args.dirs, out)?;
     print_table(&r);
     out!(
         "\nmerged {} shards; report: {}",

@@ -8,10 +8,10 @@ use anyhow::Result;
 
 use calbench::error::Error;
 use calbench::report::registration_study::{report_md, write_all};
+use calbench::runner::run::{resume_study, run_study, Resumable};
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::registration_study::RegistrationScenario;
 use calbench::study::reporter::Terminal;
-use calbench::study::run::{resume_study, run_study, Resumable};
 use calbench::study::scenario::{Scenario, MAX_TRIALS};
 use calbench::study::{RunOptions, Shard};
 

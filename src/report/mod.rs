@@ -5,8 +5,8 @@
 //! `compensate`, each an [`Output`] ([`output`]: the trait and its common writers).
 //!
 //! The report only reads results that are already computed: it runs no study (running,
-//! resuming, sharding and merging a study are [`crate::study::run`] and
-//! [`crate::study::shard`], which call these writers). [`plots`] draws the
+//! resuming, sharding and merging a study are [`crate::runner::run`] and
+//! [`crate::runner::shard`], which call these writers). [`plots`] draws the
 //! figures of the source papers — η per parameter per method (Guo 2024, fig. 8), validation
 //! error per point before and after calibration (Li 2018, fig. 3; Ban, fig. 7), validation
 //! RMS over trials per method, objective or fitness per iteration (Qiao 2021; Guo 2024,

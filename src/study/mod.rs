@@ -24,15 +24,12 @@
 //! accumulators' running sums; the per-trial numbers of the exact medians go to a scratch
 //! file ([`spill`]), so memory does not grow with the trials.
 
-pub mod checkpoint;
 pub mod instruments;
 pub mod plan;
 pub mod records;
 pub mod registration_study;
 pub mod reporter;
-pub mod run;
 pub mod scenario;
-pub mod shard;
 pub mod spill;
 pub mod stats;
 pub mod trial;

@@ -7,8 +7,8 @@ use std::path::Path;
 use calbench::poses::separate;
 use calbench::robot::builtin;
 use calbench::robot::{parse_robot_file, robot_to_toml, Param};
+use calbench::runner::run::run;
 use calbench::study::reporter::Silent;
-use calbench::study::run::run;
 use calbench::study::scenario::Scenario;
 use calbench::study::{RunOptions, Study};
 

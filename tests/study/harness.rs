@@ -42,7 +42,7 @@ fn tiny() -> Scenario {
 }
 
 fn run_to(s: Scenario, out: &Path, threads: usize) {
-    calbench::study::run::run_study(
+    calbench::runner::run::run_study(
         s,
         &RunOptions {
             threads: Some(threads),

@@ -20,7 +20,7 @@ fn guard(trials: usize, seed: u64) -> Scenario {
 
 fn summary_of(s: Scenario, name: &str) -> Value {
     let out = tmp_dir(name);
-    calbench::study::run::run_study(
+    calbench::runner::run::run_study(
         s,
         &RunOptions {
             threads: Some(2),

@@ -4,7 +4,7 @@
 //! A shard folder holds `trials.csv` (its own rows), `shard.json` (the scenario as run, the
 //! share, and what the reports need of each block's study and of trial 0) and `records.txt`:
 //! one line per trial with every number the aggregation reads, each line with its checksum
-//! ([`super::records`]), so the merge checks every record and replays the trials in order
+//! ([`crate::study::records`]), so the merge checks every record and replays the trials in order
 //! through the same streaming aggregation ([`crate::study::Collector`]) and writes the same
 //! bytes as one machine.
 
@@ -13,9 +13,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::records::{encode, Verifier};
 use crate::error::{Error, Result};
 use crate::report::{write_run, TrialsCsv};
+use crate::study::records::{encode, Verifier};
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 

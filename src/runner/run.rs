@@ -10,14 +10,14 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use super::checkpoint::{self, Checkpoint};
-use super::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
-use super::scenario::Scenario;
 use super::shard::{self, Both};
-use super::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
-use super::{TrialResult, TrialSink, CHUNK};
 use crate::error::{Error, Result};
 use crate::report::output::Bytes;
 use crate::report::{atomically, run as files, write_run, Output as _};
+use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
+use crate::study::scenario::Scenario;
+use crate::study::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
+use crate::study::{TrialResult, TrialSink, CHUNK};
 
 /// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
 /// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the

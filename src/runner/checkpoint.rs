@@ -2,7 +2,7 @@
 //! needs to continue.
 //!
 //! While `calbench run … --out DIR` runs, the folder `.NAME.checkpoint` beside `DIR` holds
-//! `records.txt`, one line per finished trial in the record format ([`super::records`],
+//! `records.txt`, one line per finished trial in the record format ([`crate::study::records`],
 //! each line with its checksum), and `checkpoint.json`: the scenario as run, the binary's
 //! version, the share, the writer's process and host, and how many trials (and bytes of
 //! `records.txt`) are complete. `checkpoint.json` is rewritten (temporary file and rename)
@@ -22,9 +22,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::records::{encode, Verifier};
-use super::reporter::Reporter;
 use crate::error::{Error, Result};
+use crate::study::records::{encode, Verifier};
+use crate::study::reporter::Reporter;
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
