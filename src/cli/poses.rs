@@ -131,7 +131,7 @@ pub fn run(args: &PosesArgs) -> Result<()> {
     let pose_list = PoseList {
         name: OUTPUTS[0],
         robot: &nominal,
-        poses: &sel.poses,
+        rows: &sel.poses[..],
     };
     let trace = report::poses::trace(&sel);
     let mut outputs: Vec<&dyn Output> = vec![&pose_list, &scores, &trace];

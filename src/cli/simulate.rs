@@ -68,12 +68,12 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
             &MeasurementFile {
                 name: measurements,
                 robot: &study.nominal,
-                data: &m.data,
+                rows: &m.data,
             },
             &MeasurementFile {
                 name: validation,
                 robot: &study.nominal,
-                data: &v.data,
+                rows: &v.data,
             },
             &Json {
                 name: truth,
@@ -126,7 +126,7 @@ fn instrument(sc: &InstrumentsScenario, args: &SimulateArgs) -> Result<()> {
             &MeasurementFile {
                 name: validation_file,
                 robot: &nominal,
-                data: &validation,
+                rows: &validation,
             },
             &Json {
                 name: truth_file,

@@ -12,84 +12,54 @@ use crate::calibrate::diagnostics::Diagnostics;
 use crate::calibrate::record::{tracker_base, IdentifiedJson, TrackerBase};
 pub use crate::calibrate::request::registration_warning;
 use crate::calibrate::request::{worse_warning, TrackerOutcome};
-use crate::calibrate::validation::point_residuals;
 pub use crate::calibrate::validation::{validate_file, FileValidation};
-use crate::calibrate::{Calibrated, ErrorStats, Registration};
+use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
-use crate::measurement::Measurements;
 use crate::numeric::Real;
-use crate::robot::{robot_to_toml, Param, Robot};
+use crate::robot::{robot_to_toml, Param};
 
-/// What an identification on a file is written from.
+/// What an identification on a file is written from: the pipeline's outcome (its fields read
+/// through [`std::ops::Deref`]) and the compensated robot as a URDF, if asked for.
 pub struct IdentifyRecord<'a> {
-    /// The nominal robot.
-    pub nominal: &'a Robot,
-    /// The measurement file.
-    pub data_path: &'a Path,
-    /// The measurements.
-    pub data: &'a Measurements,
-    /// The method's name.
-    pub method: &'a str,
-    /// The registration used.
-    pub registration: Registration,
-    /// The identified parameters.
-    pub params: &'a [Param],
-    /// The calibration.
-    pub calibrated: &'a Calibrated,
-    /// The validation on a separate file, if any.
-    pub validation: Option<&'a FileValidation>,
+    /// The outcome of [`crate::calibrate::request`].
+    pub outcome: &'a TrackerOutcome,
     /// The compensated robot as a URDF (written as `robot.urdf`), if asked for.
     pub urdf: Option<String>,
-    /// [`IdentifyRecord::residuals`], computed once for every file that shows them.
-    pub residuals: std::cell::OnceCell<(Vec<Real>, Vec<Real>)>,
-    /// Why the result makes the robot worse, when it was kept so (`--allow-worse`).
-    pub worse: &'a [String],
 }
 
 impl<'a> IdentifyRecord<'a> {
     /// The record of the pipeline's outcome `o`, with the compensated robot as a URDF
     /// (`urdf`, written as `robot.urdf`) if asked for.
     pub fn of(o: &'a TrackerOutcome, urdf: Option<String>) -> Self {
-        IdentifyRecord {
-            nominal: &o.nominal,
-            data_path: &o.source,
-            data: &o.data,
-            method: o.method,
-            registration: o.registration,
-            params: &o.params,
-            calibrated: &o.calibrated,
-            validation: o.validation.as_ref(),
-            urdf,
-            residuals: std::cell::OnceCell::from(o.residuals.clone()),
-            worse: &o.worse,
-        }
+        IdentifyRecord { outcome: o, urdf }
+    }
+
+    /// Per calibration point, the residual before and after (mm), as the pipeline computed
+    /// them ([`crate::calibrate::validation::point_residuals`]).
+    pub fn residuals(&self) -> Result<(&[Real], &[Real])> {
+        let (b, a) = &self.outcome.residuals;
+        Ok((b, a))
     }
 }
 
-impl IdentifyRecord<'_> {
-    /// Per calibration point, the residual before and after (mm): [`point_residuals`],
-    /// computed on first use.
-    pub fn residuals(&self) -> Result<(&[Real], &[Real])> {
-        if self.residuals.get().is_none() {
-            let r = point_residuals(self.nominal, self.calibrated, self.data)?;
-            let _ = self.residuals.set(r);
-        }
-        let (b, a) = self.residuals.get().expect("set above");
-        Ok((b, a))
+impl std::ops::Deref for IdentifyRecord<'_> {
+    type Target = TrackerOutcome;
+    fn deref(&self) -> &TrackerOutcome {
+        self.outcome
     }
 }
 
 /// `identified.json`'s base keys ([`tracker_base`]).
 pub fn identified_json(r: &IdentifyRecord) -> serde_json::Map<String, Value> {
     tracker_base(&TrackerBase {
-        nominal: r.nominal,
-        source: r.data_path,
+        nominal: &r.nominal,
+        source: &r.source,
         method: r.method,
         registration: r.registration,
-        params: r.params,
-        calibrated: r.calibrated,
-        validation: r.validation,
+        params: &r.params,
+        calibrated: &r.calibrated,
+        validation: r.validation.as_ref(),
     })
 }
 
@@ -217,7 +187,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
             id.termination.as_str()
         ));
     }
-    if let Some(text) = registration_warning(r.calibrated, r.registration) {
+    if let Some(text) = registration_warning(&r.calibrated, r.registration) {
         w.push(format!("the {text}."));
     }
     let rejected: Vec<String> = id
@@ -242,7 +212,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
             "{lowered} points were weighed down (final weight between 0 and 1) as suspect."
         ));
     }
-    w.extend(worse_warning(r.worse).map(|t| t + "."));
+    w.extend(worse_warning(&r.worse).map(|t| t + "."));
     w
 }
 
@@ -351,7 +321,7 @@ fn histogram(series: &[&[Real]]) -> (Vec<String>, Vec<Vec<Real>>) {
 /// point weights.
 pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
     use std::fmt::Write as _;
-    let c = r.calibrated;
+    let c = &r.calibrated;
     let id = &c.identified;
     let (before, after) = r.residuals()?;
     let mut s = String::new();
@@ -359,7 +329,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         s,
         "# Identification of {} on {}\n",
         r.nominal.name,
-        r.data_path.display()
+        r.source.display()
     );
     let _ = writeln!(
         s,
@@ -379,7 +349,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         id.rank.map_or("—".to_string(), |k| k.to_string()),
         r.params.len(),
     );
-    if let Some(v) = r.validation {
+    if let Some(v) = &r.validation {
         s += "## Validation\n\n";
         s += &table(&VALIDATION_HEADERS, &validation_rows(v, false));
         s.push('\n');
@@ -429,7 +399,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         .collect();
     s += &table(&["parameter", "error", "standard error"], &rows);
     let all = r.nominal.params();
-    let a = crate::robot::identifiability::analyse(r.nominal, &all, &r.data.qs, r.data.measure());
+    let a = crate::robot::identifiability::analyse(&r.nominal, &all, &r.data.qs, r.data.measure());
     s += "\n## Identifiability on these poses\n\n";
     let names = |v: &[Param]| {
         v.iter()

@@ -97,41 +97,48 @@ impl Output for Series<'_> {
     }
 }
 
-/// A pose list (columns q1..qn in the robot's units, docs/formats.md).
-pub struct PoseList<'a, R: JointSpace + ?Sized> {
+/// Rows whose joint values a file writes in a robot's units: a pose list or a tracker's
+/// measurements.
+pub trait JointRows {
+    /// Writes the rows to `path` with `robot`'s units.
+    fn write_rows<R: JointSpace + ?Sized>(&self, path: &Path, robot: &R) -> Result<()>;
+}
+
+impl JointRows for [Vec<Real>] {
+    fn write_rows<R: JointSpace + ?Sized>(&self, path: &Path, robot: &R) -> Result<()> {
+        crate::measurement::csv::write_pose_list(path, robot, self)
+    }
+}
+
+impl JointRows for Measurements {
+    fn write_rows<R: JointSpace + ?Sized>(&self, path: &Path, robot: &R) -> Result<()> {
+        crate::measurement::csv::write_measurements(path, robot, self)
+    }
+}
+
+/// A file of joint values in a robot's units: a pose list (columns q1..qn,
+/// [`PoseList`]) or a tracker's measurement file (docs/formats.md § 2.5, [`MeasurementFile`]).
+pub struct JointFile<'a, R: JointSpace + ?Sized, T: JointRows + ?Sized> {
     /// The file's name.
     pub name: &'a str,
     /// The robot whose units the joints are written in.
     pub robot: &'a R,
-    /// The poses (internal units).
-    pub poses: &'a [Vec<Real>],
+    /// The rows (internal units).
+    pub rows: &'a T,
 }
 
-impl<R: JointSpace + ?Sized> Output for PoseList<'_, R> {
+/// A pose list.
+pub type PoseList<'a, R> = JointFile<'a, R, [Vec<Real>]>;
+
+/// A tracker's measurement file.
+pub type MeasurementFile<'a, R> = JointFile<'a, R, Measurements>;
+
+impl<R: JointSpace + ?Sized, T: JointRows + ?Sized> Output for JointFile<'_, R, T> {
     fn name(&self) -> &str {
         self.name
     }
     fn write(&self, path: &Path) -> Result<()> {
-        crate::measurement::csv::write_pose_list(path, self.robot, self.poses)
-    }
-}
-
-/// A tracker's measurement file (docs/formats.md § 2.5).
-pub struct MeasurementFile<'a, R: JointSpace + ?Sized> {
-    /// The file's name.
-    pub name: &'a str,
-    /// The robot whose units the joints are written in.
-    pub robot: &'a R,
-    /// The measurements.
-    pub data: &'a Measurements,
-}
-
-impl<R: JointSpace + ?Sized> Output for MeasurementFile<'_, R> {
-    fn name(&self) -> &str {
-        self.name
-    }
-    fn write(&self, path: &Path) -> Result<()> {
-        crate::measurement::csv::write_measurements(path, self.robot, self.data)
+        self.rows.write_rows(path, self.robot)
     }
 }
 

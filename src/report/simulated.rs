@@ -63,7 +63,7 @@ impl Output for Readings<'_> {
         MeasurementFile {
             name: FILES[0],
             robot,
-            data: &m,
+            rows: &m,
         }
         .write(path)
     }

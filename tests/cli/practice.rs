@@ -110,7 +110,7 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         assert!(section.contains(&format!("<h3>{h}</h3>")), "{h} missing");
     }
     assert!(
-        section.contains("aria-label=\"Diagnostics\"") && section.contains("Cook&#39;s distance")
+        section.contains("aria-label=\"Diagnostics\"") && section.contains("Cook&apos;s distance")
     );
     // A bad split rule and a --holdout with --validate are refused.
     let bad = calbench(&lm_args(

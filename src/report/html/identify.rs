@@ -69,7 +69,7 @@ pub fn page(dir: &Path, r: &IdentifyRecord, more: &Additions) -> Result<Page> {
             "{} on {} points of {} ({}), registration {}.",
             r.method,
             r.data.len(),
-            r.data_path.display(),
+            r.source.display(),
             if r.data.quats.is_some() {
                 "full pose"
             } else {
@@ -158,7 +158,7 @@ fn result_section(page: &mut Page, v: &View) -> Result<()> {
 }
 
 fn validation_section(page: &mut Page, v: &View) -> Result<()> {
-    let Some(val) = v.record.validation else {
+    let Some(val) = &v.record.validation else {
         page.para("No validation file was given (--validate).");
         return Ok(());
     };
@@ -339,7 +339,7 @@ fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
 pub const TABLE_ROWS: usize = 4096;
 
 fn registration_section(page: &mut Page, v: &View) -> Result<()> {
-    let c = v.record.calibrated;
+    let c = &v.record.calibrated;
     let (xyz, rpy) = c.frame.to_xyz_rpy();
     let f = |v: &[Real]| {
         v.iter()

@@ -55,20 +55,11 @@ y=s.cells[i]?s.cells[i].textContent:'',p=parseFloat(x),q=parseFloat(y);\
 return d*(isNaN(p)||isNaN(q)?x.localeCompare(y):p-q);});\
 rows.forEach(function(r){b.appendChild(r);});});});";
 
-/// `text` with the characters that mean something in HTML escaped.
+/// `text` with the characters that mean something in HTML escaped: the escaping of an XML
+/// attribute ([`crate::robot::urdf::xml_attribute`], whose entities HTML5 reads the same), so
+/// that one function escapes every markup calbench writes.
 pub fn escape(text: &str) -> String {
-    let mut s = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => s.push_str("&amp;"),
-            '<' => s.push_str("&lt;"),
-            '>' => s.push_str("&gt;"),
-            '"' => s.push_str("&quot;"),
-            '\'' => s.push_str("&#39;"),
-            c => s.push(c),
-        }
-    }
-    s
+    crate::robot::urdf::xml_attribute(text)
 }
 
 /// Whether a table cell reads as a number (right-aligned) rather than text.
@@ -291,7 +282,7 @@ mod tests {
 
     #[test]
     fn text_is_escaped_and_figures_get_a_title_and_description() {
-        assert_eq!(escape("a<b & \"c\"'"), "a&lt;b &amp; &quot;c&quot;&#39;");
+        assert_eq!(escape("a<b & \"c\"'"), "a&lt;b &amp; &quot;c&quot;&apos;");
         let mut p = Page::new("T <1>", "lead");
         p.section("One");
         p.figure(
