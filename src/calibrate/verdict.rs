@@ -176,43 +176,6 @@ pub fn rms(v: &[Real]) -> Real {
     (v.iter().map(|x| x * x).sum::<Real>() / v.len() as Real).sqrt()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_gross_reading_stands_out_and_a_drift_does_not() {
-        let mut r: Vec<Real> = (0..20).map(|i| 0.1 + 0.01 * i as Real).collect();
-        assert_eq!(gross_reading(&r), None);
-        r[7] = 999.0;
-        assert_eq!(gross_reading(&r).map(|g| g.0), Some(7));
-        r[8] = 900.0;
-        assert_eq!(gross_reading(&r), None, "two large ones: not one reading");
-    }
-
-    #[test]
-    fn worse_names_each_cause() {
-        let w = worse_causes(
-            Some((2.9, 1327.7)),
-            (0.1, 0.05),
-            Termination::Converged,
-            None,
-        );
-        assert_eq!(w.len(), 1);
-        assert!(w[0].contains("1327.7000 mm after"), "{w:?}");
-        let w = worse_causes(
-            None,
-            (0.1, 0.2),
-            Termination::MaxIterations,
-            Some((1.0, 2.0)),
-        );
-        assert_eq!(w.len(), 2, "{w:?}");
-        assert!(
-            worse_causes(Some((2.0, 1.0)), (1.0, 1.0), Termination::Converged, None).is_empty()
-        );
-    }
-}
-
 /// The warning of a result kept although it makes the robot worse (`causes`), if any.
 pub fn worse_warning(causes: &[String]) -> Option<String> {
     (!causes.is_empty()).then(|| {
@@ -260,4 +223,41 @@ pub fn check_names(option: &str, given: bool, nominal: &Robot, names: &[Param]) 
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_gross_reading_stands_out_and_a_drift_does_not() {
+        let mut r: Vec<Real> = (0..20).map(|i| 0.1 + 0.01 * i as Real).collect();
+        assert_eq!(gross_reading(&r), None);
+        r[7] = 999.0;
+        assert_eq!(gross_reading(&r).map(|g| g.0), Some(7));
+        r[8] = 900.0;
+        assert_eq!(gross_reading(&r), None, "two large ones: not one reading");
+    }
+
+    #[test]
+    fn worse_names_each_cause() {
+        let w = worse_causes(
+            Some((2.9, 1327.7)),
+            (0.1, 0.05),
+            Termination::Converged,
+            None,
+        );
+        assert_eq!(w.len(), 1);
+        assert!(w[0].contains("1327.7000 mm after"), "{w:?}");
+        let w = worse_causes(
+            None,
+            (0.1, 0.2),
+            Termination::MaxIterations,
+            Some((1.0, 2.0)),
+        );
+        assert_eq!(w.len(), 2, "{w:?}");
+        assert!(
+            worse_causes(Some((2.0, 1.0)), (1.0, 1.0), Termination::Converged, None).is_empty()
+        );
+    }
 }
