@@ -1,16 +1,14 @@
-//! The Monte-Carlo harness (docs/formats.md `run`): a scenario's trials in parallel with rayon,
-//! each from its own seed, aggregated per method and pose strategy, and the orchestration of a
-//! run: its output folder written whole through the report's writers, the checkpoint that lets
-//! a killed run resume, the shards and their merge.
+//! The Monte-Carlo harness (docs/formats.md `run`): a scenario's trials, each from its own
+//! seed, aggregated per method and pose strategy. Running a study (in parallel with rayon, its
+//! output folder written whole, the checkpoint, the shards and their merge) is
+//! [`crate::runner`], above this module and the report.
 //!
 //! - [`plan`]: what a scenario needs once (nominal robot, parameters, tracker, fixed pose
 //!   sets);
 //! - [`scenario`]: the scenario file, parsed and checked (sweeps included);
 //! - [`trial`]: one trial (true robot, measurements, every method's calibration, validation);
 //! - [`stats`]: the aggregation into [`Entry`] values;
-//! - [`run`]: running a study (trials in chunks, in order, into sinks), resuming it from its
-//!   [`checkpoint`], a study held in memory; [`shard`]: a share of a run and the merge of
-//!   all shards; [`records`]: the checked record lines both keep;
+//! - [`records`]: the checked record lines that a shard and a checkpoint keep;
 //! - [`reporter`]: where progress and warnings go (the caller supplies it; nothing here
 //!   prints).
 //!
