@@ -5,6 +5,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod alloc;
 mod compliance;
 mod kinematics;
 mod registration;
