@@ -271,23 +271,25 @@ fn renamed_irb2600(dir: &Path, file: &str, name: &str) -> std::path::PathBuf {
     path
 }
 
-#[test]
-fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot() {
-    let d = tmp_dir("interchange-urdf");
-    let name = "R&D <arm> \"x\"";
-    let robot = renamed_irb2600(&d, "rd.toml", name);
-    let sim = d.join("sim");
+/// `calbench simulate scenarios/ci-guard.toml` into `DIR/sim`, which it returns.
+fn simulated_ci_guard(dir: &Path) -> std::path::PathBuf {
+    let sim = dir.join("sim");
     calbench_ok(&[
         "simulate",
         path_arg(&crate::common::root().join("scenarios/ci-guard.toml")),
         "--out",
         path_arg(&sim),
     ]);
-    let first = d.join("first");
+    sim
+}
+
+/// `calbench identify --robot ROBOT --data SIM/measurements.csv --method lm --export urdf
+/// --out OUT`.
+fn identify_to_urdf(robot: &Path, sim: &Path, out: &Path) {
     calbench_ok(&[
         "identify",
         "--robot",
-        path_arg(&robot),
+        path_arg(robot),
         "--data",
         path_arg(&sim.join("measurements.csv")),
         "--method",
@@ -295,8 +297,18 @@ fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot
         "--export",
         "urdf",
         "--out",
-        path_arg(&first),
+        path_arg(out),
     ]);
+}
+
+#[test]
+fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot() {
+    let d = tmp_dir("interchange-urdf");
+    let name = "R&D <arm> \"x\"";
+    let robot = renamed_irb2600(&d, "rd.toml", name);
+    let sim = simulated_ci_guard(&d);
+    let first = d.join("first");
+    identify_to_urdf(&robot, &sim, &first);
     let urdf = first.join("robot.urdf");
     let text = read(&urdf);
     assert!(
@@ -369,27 +381,9 @@ fn a_hostile_robot_name_gives_no_markup_in_the_urdf() {
     let d = tmp_dir("interchange-urdf-hostile");
     let name = "x\"/><link name=\"evil\"/><joint name='j' type=\"fixed\"><!--";
     let robot = renamed_irb2600(&d, "evil.toml", name);
-    let sim = d.join("sim");
-    calbench_ok(&[
-        "simulate",
-        path_arg(&crate::common::root().join("scenarios/ci-guard.toml")),
-        "--out",
-        path_arg(&sim),
-    ]);
+    let sim = simulated_ci_guard(&d);
     let out = d.join("out");
-    calbench_ok(&[
-        "identify",
-        "--robot",
-        path_arg(&robot),
-        "--data",
-        path_arg(&sim.join("measurements.csv")),
-        "--method",
-        "lm",
-        "--export",
-        "urdf",
-        "--out",
-        path_arg(&out),
-    ]);
+    identify_to_urdf(&robot, &sim, &out);
     let text = read(&out.join("robot.urdf"));
     assert!(
         !text.contains("evil\"/>") && !text.contains("<!--"),

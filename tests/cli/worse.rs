@@ -65,6 +65,18 @@ fn identify(data: &Path, val: &Path, out: &Path, extra: &[&str]) -> std::process
     calbench(&args)
 }
 
+/// An `identify --allow-worse` that succeeded with the warning on stderr: its
+/// `OUT/identified.json`.
+fn written_with_warning(o: &std::process::Output, out: &Path) -> serde_json::Value {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the identification makes the robot worse"),
+        "{err}"
+    );
+    load_json(&out.join("identified.json"))
+}
+
 /// Each bad file: refused (exit non-zero, the file and the validation named, nothing
 /// written); with `--allow-worse` written, the warning on stderr and the causes in
 /// identified.json's `allowed_worse`. The untouched file passes as before.
@@ -88,14 +100,7 @@ fn a_worse_robot_is_refused_unless_allowed() {
         assert!(err.contains("--allow-worse"), "{err}");
         assert!(!out.exists(), "nothing is written");
         let kept = d.join("kept");
-        let o = identify(bad, val, &kept, &["--allow-worse"]);
-        let err = String::from_utf8_lossy(&o.stderr).to_string();
-        assert!(o.status.success(), "{err}");
-        assert!(
-            err.contains("warning: the identification makes the robot worse"),
-            "{err}"
-        );
-        let j = load_json(&kept.join("identified.json"));
+        let j = written_with_warning(&identify(bad, val, &kept, &["--allow-worse"]), &kept);
         let causes = j["allowed_worse"].as_array().unwrap();
         assert!(
             causes[0].as_str().unwrap().contains("validation RMS"),
@@ -196,14 +201,7 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     );
     assert!(!d.join("refused").exists());
     let kept = d.join("kept");
-    let o = run("bad.csv", &kept, &["--allow-worse"]);
-    let err = String::from_utf8_lossy(&o.stderr).to_string();
-    assert!(o.status.success(), "{err}");
-    assert!(
-        err.contains("warning: the identification makes the robot worse"),
-        "{err}"
-    );
-    let j = load_json(&kept.join("identified.json"));
+    let j = written_with_warning(&run("bad.csv", &kept, &["--allow-worse"]), &kept);
     assert!(j["allowed_worse"][0]
         .as_str()
         .unwrap()
