@@ -28,10 +28,12 @@ __all__ = [
     "Problem",
     "IdentifyResult",
     "Study",
+    "Comparison",
     "identify",
     "simulate",
     "run",
     "identifiability",
+    "compare",
     "robots",
     "methods",
     "Error",
@@ -301,13 +303,41 @@ def simulate(scenario, trial=0):
     return out
 
 
+_COMPARISON_KEYS = ["a", "b", "metric", "n", "diff_mean", "diff_ci95", "ratio", "win_rate",
+                    "p_value", "p_holm"]
+
+
+def _split_intervals(df):
+    """``df`` with each interval column — ``…_ci95``, or ``…_ci95.<name>`` as
+    ``param_rmse_ci95.d2``; cells ``[lo, hi]`` or None — followed by the columns of its bounds,
+    the name with ``_lo`` and ``_hi`` appended (NaN where there is no interval)."""
+    import pandas as pd
+
+    columns = {}
+    for name in df.columns:
+        columns[name] = df[name]
+        if not any(part.endswith("_ci95") for part in str(name).split(".")):
+            continue
+        bounds = [
+            (float(v[0]), float(v[1])) if isinstance(v, (list, tuple)) and len(v) == 2
+            and v[0] is not None and v[1] is not None else (np.nan, np.nan)
+            for v in df[name]
+        ]
+        columns[f"{name}_lo"] = pd.Series([lo for lo, _ in bounds], index=df.index, dtype=float)
+        columns[f"{name}_hi"] = pd.Series([hi for _, hi in bounds], index=df.index, dtype=float)
+    return pd.DataFrame(columns, index=df.index)
+
+
 class Study:
     """A finished study (:func:`run`), held in memory.
 
     Attributes:
         summary: the dict of ``summary.json``.
         results: a pandas DataFrame of ``summary["results"]``, one row per method × poses
-            × sweep point; nested statistics become dotted columns (``eta.a1.mean``).
+            × sweep point; nested statistics become dotted columns (``eta.a1.mean``), and
+            each 95 % interval ``…_ci95`` also its bounds ``…_ci95_lo``, ``…_ci95_hi``.
+        comparisons: a pandas DataFrame of ``summary["comparisons"]``, the paired
+            comparisons of the entries that share their draws.
         trials: a pandas DataFrame of ``trials.csv``.
         seconds: the run's wall time (s).
     """
@@ -317,16 +347,33 @@ class Study:
         self.summary = json.loads(handle.summary_json())
         self.seconds = handle.seconds
         self._results = None
+        self._comparisons = None
         self._trials = None
 
     @property
     def results(self):
-        """The summary's entries as a DataFrame (pandas is imported on first use)."""
+        """The summary's entries as a DataFrame (pandas is imported on first use); each
+        interval column (``…_ci95``, ``param_rmse_ci95.<name>``: a list ``[lo, hi]``) is
+        followed by its bounds, the column's name with ``_lo`` and ``_hi`` appended."""
         if self._results is None:
             import pandas as pd
 
-            self._results = pd.json_normalize(self.summary["results"])
+            self._results = _split_intervals(pd.json_normalize(self.summary["results"]))
         return self._results
+
+    @property
+    def comparisons(self):
+        """The paired comparisons of ``summary["comparisons"]`` as a DataFrame, one row per
+        comparison with the same keys (``a``, ``b``, ``metric``, ``n``, ``diff_mean``,
+        ``diff_ci95``, ``ratio``, ``win_rate``, ``p_value``, ``p_holm``; ``sweep_value`` in a
+        sweep), ``diff_ci95`` also split into ``diff_ci95_lo`` and ``diff_ci95_hi``."""
+        if self._comparisons is None:
+            import pandas as pd
+
+            rows = self.summary.get("comparisons", [])
+            df = pd.DataFrame(rows, columns=None if rows else _COMPARISON_KEYS)
+            self._comparisons = _split_intervals(df)
+        return self._comparisons
 
     @property
     def trials(self):
@@ -418,3 +465,68 @@ def robots():
 def methods():
     """The names of the built-in identification methods."""
     return list(_calbench.catalogue()["methods"])
+
+
+class Comparison:
+    """Run B against run A (its baseline) by the rules of ``calbench check``: what
+    :func:`compare` returns, and what ``calbench compare`` writes to its pages.
+
+    Attributes:
+        metrics: a pandas DataFrame, one row per metric ``check`` guards, in A's order:
+            ``entry``, ``metric``, ``a``, ``b``, ``diff`` (b − a), ``status``
+            (``regression``, ``unresolved``, ``changed, within tolerance``, ``improved``,
+            ``no change``), ``diff_ci_lo`` / ``diff_ci_hi`` (the Holm-adjusted interval of
+            the change), ``p_value``, ``p_holm``, ``paired`` (trial by trial), ``trials_needed``
+            (for an unresolved metric, trials per run that would resolve it, else None) and
+            ``higher_is_better``. A metric of an entry only in A is a regression with ``b``
+            NaN.
+        only_in_a, only_in_b: the entries (``method / poses [/ sweep value]``) of one run only.
+        regressions: the number of regressions (``calbench check`` fails when it is not 0).
+        unresolved: the number of unresolved metrics (``check --strict`` fails on them too).
+        verdict: the sentence the compare page leads with.
+        tolerance: the allowed relative worsening.
+    """
+
+    def __init__(self, fields, tolerance):
+        import pandas as pd
+
+        self.metrics = pd.DataFrame(fields["metrics"], columns=_COMPARE_COLUMNS)
+        self.only_in_a = list(fields["only_in_a"])
+        self.only_in_b = list(fields["only_in_b"])
+        self.regressions = int(fields["regressions"])
+        self.unresolved = int((self.metrics["status"] == "unresolved").sum())
+        self.verdict = fields["verdict"]
+        self.tolerance = tolerance
+
+    def __repr__(self):
+        return (
+            f"Comparison({len(self.metrics)} metrics, {self.regressions} regressions, "
+            f"{self.unresolved} unresolved)"
+        )
+
+
+_COMPARE_COLUMNS = ["entry", "metric", "a", "b", "diff", "status", "diff_ci_lo", "diff_ci_hi",
+                    "p_value", "p_holm", "paired", "trials_needed", "higher_is_better"]
+
+
+def compare(a, b, *, tolerance=0.05):
+    """Run ``b`` against run ``a``: ``calbench compare A B`` (and ``calbench check
+    B/summary.json --baseline A/summary.json``) without the pages.
+
+    Args:
+        a: the baseline run: its folder or its ``summary.json``.
+        b: the run compared with it: its folder or its ``summary.json``.
+        tolerance: allowed relative worsening of each metric (0.05 = 5 %).
+
+    Returns:
+        a :class:`Comparison`: each guarded metric with its status, computed by the library
+        exactly as the command line's: paired, trial by trial, when both folders hold
+        ``trials.csv`` of the same scenario, seed and trials; otherwise from the summaries.
+    """
+    for name, value in (("a", a), ("b", b)):
+        if not isinstance(value, (str, os.PathLike)):
+            raise SettingError(f"setting `{name}`: expected a run's folder or its summary.json")
+    if isinstance(tolerance, bool) or not isinstance(tolerance, numbers.Real):
+        raise SettingError("setting `tolerance`: expected a number ≥ 0")
+    tolerance = float(tolerance)
+    return Comparison(_calbench.compare(os.fspath(a), os.fspath(b), tolerance), tolerance)

@@ -5,6 +5,7 @@
 //! released; a method written in Python takes the GIL for its call, so such methods run one
 //! at a time while the rest of each trial runs in parallel.
 
+mod compare;
 mod convert;
 mod errors;
 mod identify;
@@ -93,6 +94,7 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(study::run, m)?)?;
     m.add_function(wrap_pyfunction!(identifiability, m)?)?;
+    m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;
     Ok(())
 }

@@ -26,7 +26,7 @@ pub struct CheckArgs {
 }
 
 /// The per-trial values of the run whose summary is `summary`: its folder's `trials.csv`,
-/// when there is one (a run without a sweep).
+/// when there is one.
 pub fn trials_beside(summary: &std::path::Path) -> calbench::Result<Option<Trials>> {
     let csv = summary
         .parent()

@@ -200,7 +200,13 @@ pub fn compare_with(
             let value = found.and_then(|e| lookup(e, &metric)).unwrap_or(Real::NAN);
             let change = found.filter(|_| value.is_finite()).map(|e| {
                 trials
-                    .and_then(|(ta, tb)| noise::paired(ta, tb, &key, &metric))
+                    .and_then(|(ta, tb)| {
+                        let keys = (
+                            noise::trials_key(b, baseline),
+                            noise::trials_key(e, summary),
+                        );
+                        noise::paired(ta, tb, (&keys.0, &keys.1), &metric)
+                    })
                     .filter(|c| c.matches(base, value))
                     .unwrap_or_else(|| noise::unpaired(b, e, &metric, (base, value), counts))
             });

@@ -57,9 +57,13 @@ fn entry_label(e: &Entry) -> String {
     format!("{} / {}", e.method, e.poses)
 }
 
+/// Per entry of a block: its label, and a value per parameter.
+type EtaSeries<T> = Vec<(String, Vec<T>)>;
+
 /// The parameters with an η (those of the first entry) and, per entry of `b`, its label and
-/// mean η of each of those parameters (NaN where it has none).
-fn eta_by_parameter(b: &Block) -> (Vec<String>, Vec<(String, Vec<Real>)>) {
+/// mean η of each of those parameters (NaN where it has none), and the 95 % interval of
+/// each mean (`None` where it has none).
+fn eta_by_parameter(b: &Block) -> (Vec<String>, EtaSeries<Real>, EtaSeries<Option<[Real; 2]>>) {
     let params: Vec<String> = b
         .entries
         .first()
@@ -76,7 +80,18 @@ fn eta_by_parameter(b: &Block) -> (Vec<String>, Vec<(String, Vec<Real>)>) {
             (entry_label(e), eta)
         })
         .collect();
-    (params, series)
+    let intervals = b
+        .entries
+        .iter()
+        .map(|e| {
+            let ci = params
+                .iter()
+                .map(|p| e.eta.get(p).and_then(|x| x.mean_ci95))
+                .collect();
+            (entry_label(e), ci)
+        })
+        .collect();
+    (params, series, intervals)
 }
 
 /// The relative distance from the final objective within which a pose optimisation counts
@@ -397,7 +412,7 @@ pub const METRIC_NOTES: [(&str, &str); 6] = [
 /// The η table of block `b`: headers (`parameter`, then one per entry) and one row per
 /// parameter with the mean η of each entry (%).
 pub fn eta_table(b: &Block) -> (Vec<String>, Vec<Vec<String>>) {
-    let (params, series) = eta_by_parameter(b);
+    let (params, series, _) = eta_by_parameter(b);
     let mut h = vec!["parameter".to_string()];
     h.extend(series.iter().map(|(label, _)| label.clone()));
     let rows = params
@@ -441,16 +456,22 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
     let info = &b0.info;
-    // η per parameter per method × strategy (Guo 2024 fig. 8).
-    let (params, series) = eta_by_parameter(b0);
-    plots::grouped_bars(
+    // η per parameter per method × strategy (Guo 2024 fig. 8), with its 95 % interval.
+    let (params, series, intervals) = eta_by_parameter(b0);
+    let intervals: Vec<Vec<Option<[Real; 2]>>> = intervals.into_iter().map(|(_, v)| v).collect();
+    plots::grouped_bars_with_intervals(
         &out.join("eta"),
         "Identification accuracy per parameter",
-        "mean η (%)",
+        "mean η (%) with its 95 % interval",
         &params,
         &series,
+        &intervals,
     )?;
-    caption(&mut done, "eta", "η per parameter and method");
+    caption(
+        &mut done,
+        "eta",
+        "η per parameter and method, with the 95 % interval of each mean",
+    );
     // Validation error per point, trial 0, the first method and strategy (Li 2018 fig. 3).
     if let Some((si, mi, before, after)) = b0.trial0.as_ref().and_then(|t| t.per_point.as_ref()) {
         let title = format!(
@@ -499,7 +520,7 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     caption(&mut done, "validation_rms", "validation RMS over trials");
     // The paired comparisons' per-trial differences, each entry against its baseline.
     for (stem, title, y_label, k) in comparisons::DIFF_PLOTS {
-        let groups = comparisons::differences(b0, k);
+        let groups = comparisons::differences(r, b0, k);
         if !groups.is_empty() {
             plots::box_plot(&out.join(stem), title, y_label, &groups)?;
             caption(&mut done, stem, title);

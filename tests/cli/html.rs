@@ -315,7 +315,9 @@ fn every_page_is_self_contained_and_renders_in_chromium() {
         path_arg(&dir.join("same")),
     ]);
     assert!(!read(&dir.join("same/compare.html")).contains("<tr class=\"regressed\">"));
-    pages.push((page, 0));
+    // The compare page inlines its plot of the changes.
+    assert_eq!(html.matches("<svg").count(), 1);
+    pages.push((page, 1));
 
     let Some(chrome) = chromium() else {
         assert!(

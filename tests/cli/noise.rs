@@ -145,3 +145,69 @@ fn strict_fails_on_unresolved() {
     let (ok, text) = check(&b, &a, &["--strict"]);
     assert!(!ok && text.contains("unresolved (--strict)"), "{text}");
 }
+
+#[test]
+fn two_sweeps_are_compared_point_by_point_on_their_shared_trials() {
+    // A sweep of the outlier count, run twice on one seed: the second with a tracker ten
+    // times noisier. Each entry is paired at its own sweep point.
+    let dir = tmp_dir("cli-noise-sweep");
+    let sweep = "\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n";
+    let plain = write_scenario(
+        &dir,
+        "plain",
+        &format!("{}{sweep}", read(&root().join("scenarios/ci-guard.toml"))),
+    );
+    let loud = write_scenario(
+        &dir,
+        "loud",
+        &format!("{}{sweep}", read(&scenario(&dir, 10.0))),
+    );
+    // The two files must name one scenario: `check` refuses two scenarios.
+    let (a, b, same) = (dir.join("a"), dir.join("b"), dir.join("same"));
+    for (sc, out) in [(&plain, &a), (&loud, &b), (&plain, &same)] {
+        calbench_ok(&[
+            "run",
+            path_arg(sc),
+            "--trials",
+            "30",
+            "--seed",
+            "42",
+            "--out",
+            path_arg(out),
+            "--threads",
+            "2",
+        ]);
+    }
+    // The same run again: every metric paired, nothing changed.
+    let (ok, text) = check(&same, &a, &[]);
+    assert!(ok, "{text}");
+    // "N metrics compared (P paired)": all but failures and eta_median_pct, which are
+    // always compared unpaired (2 of each entry's metrics; 2 points × 3 methods).
+    let counts: Vec<usize> = text
+        .split(" metrics compared (")
+        .flat_map(|s| s.split(" paired)"))
+        .filter_map(|s| s.rsplit(['\n', ' ']).next()?.parse().ok())
+        .collect();
+    let [compared, paired] = counts[..] else {
+        panic!("no tally: {text}");
+    };
+    assert_eq!(paired, compared - 2 * 6, "{text}");
+    assert!(
+        text.contains(" 0 regression, 0 unresolved, 0 changed within tolerance, 0 improved"),
+        "{text}"
+    );
+    // The noisier tracker: the validation error regresses at both sweep points, paired.
+    let (ok, text) = check(&b, &a, &[]);
+    assert!(!ok, "{text}");
+    for point in ["0", "2"] {
+        let l = line(
+            &text,
+            &format!("lm / random / {point}"),
+            "validation_after_mm.rms",
+        );
+        assert!(
+            l.starts_with("regression: ") && l.contains("paired") && !l.contains("unpaired"),
+            "point {point}: {text}"
+        );
+    }
+}

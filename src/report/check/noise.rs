@@ -2,8 +2,8 @@
 //! the interval of its change and a p-value, Holm-adjusted over the metrics compared, and one
 //! of the statuses of [`Status`].
 //!
-//! Paired when both runs have their `trials.csv` and share the scenario, the seed and the
-//! trials (no sweep): the change is the mean of the per-trial differences, with a t interval
+//! Paired when both runs have their `trials.csv` and share the scenario, the seed, the sweep
+//! and the trials (a sweep's entries point by point): the change is the mean of the per-trial differences, with a t interval
 //! on n − 1 degrees of freedom. Otherwise unpaired, from the summaries: Welch's interval from
 //! each side's 95 % interval of the figure (its half-width over t₀.₉₇₅ is the standard
 //! error); a side without intervals (a summary from before they were written) borrows the
@@ -87,7 +87,10 @@ pub struct Trials {
 const FAILED: [&str; 3] = ["diverged", "singular", "invalid-input"];
 
 impl Trials {
-    /// Reads `trials.csv` of a run without a sweep (`None` for a file with sweep columns).
+    /// Reads a run's `trials.csv` (`None` for a file without `trial` and `method` columns).
+    /// In a sweep, the columns between `trial` and `method` hold the sweep point: the rows
+    /// of the k-th point in order of appearance (0-based) are entry `method / poses @ k`
+    /// ([`trials_key`]).
     pub fn read(path: &Path) -> Result<Option<Trials>> {
         let mut r =
             csv::Reader::from_path(path).map_err(|e| Error::file(path, "CSV", e.to_string()))?;
@@ -97,10 +100,12 @@ impl Trials {
             .iter()
             .map(String::from)
             .collect();
-        if head.iter().any(|h| h == "sweep_value") || head.get(1).is_some_and(|h| h != "method") {
-            return Ok(None);
-        }
         let col = |name: &str| head.iter().position(|h| h == name);
+        let Some(method_col) = col("method").filter(|_| head.first().is_some_and(|h| h == "trial"))
+        else {
+            return Ok(None);
+        };
+        let mut points: Vec<Vec<String>> = Vec::new();
         let params: Vec<(String, usize, usize)> = head
             .iter()
             .enumerate()
@@ -135,7 +140,20 @@ impl Trials {
                     "is not a trial number",
                 )
             })?;
-            let entry = format!("{} / {}", get(mi), get(pi));
+            let entry = if method_col > 1 {
+                let point: Vec<String> =
+                    (1..method_col).map(|i| get(Some(i)).to_string()).collect();
+                let k = match points.iter().position(|p| *p == point) {
+                    Some(k) => k,
+                    None => {
+                        points.push(point);
+                        points.len() - 1
+                    }
+                };
+                format!("{} / {} @ {k}", get(mi), get(pi))
+            } else {
+                format!("{} / {}", get(mi), get(pi))
+            };
             t.trials.entry(entry.clone()).or_default().insert(index);
             let truth: Vec<Real> = params.iter().map(|p| num(Some(p.1))).collect();
             let found: Vec<Real> = params.iter().map(|p| num(Some(p.2))).collect();
@@ -177,24 +195,59 @@ impl Trials {
     }
 }
 
-/// Whether two runs can be compared trial by trial: the same scenario and seed, and their
-/// `trials.csv` read (runs without a sweep).
+/// Whether two runs can be compared trial by trial: the same scenario and seed, and the
+/// same sweep (swept keys and, for one axis, values), if any.
 pub fn pairable(a: &Value, b: &Value) -> bool {
     a.get("scenario") == b.get("scenario")
         && a.get("seed").is_some()
         && a.get("seed") == b.get("seed")
-        && a.get("sweep_keys").is_none()
-        && b.get("sweep_keys").is_none()
+        && a.get("sweep_keys") == b.get("sweep_keys")
+        && a.get("sweep_values") == b.get("sweep_values")
 }
 
-/// The paired change of `metric` of `entry` from `a` to `b`, when both hold the same trials
-/// of the entry and at least 2 are usable in both.
-pub fn paired(a: &Trials, b: &Trials, entry: &str, metric: &str) -> Option<Change> {
-    if a.trials.get(entry)? != b.trials.get(entry)? {
+/// The key of summary entry `e` of `summary` in its run's [`Trials`]: `method / poses`, and
+/// in a sweep ` @ k`, k the place of the entry's `sweep_value` among the summary's distinct
+/// sweep values in `results` order (the order in which `trials.csv` holds the points).
+pub fn trials_key(e: &Value, summary: &Value) -> String {
+    let s = |k: &str| match e.get(k) {
+        Some(Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => String::new(),
+    };
+    let plain = format!("{} / {}", s("method"), s("poses"));
+    let Some(v) = e.get("sweep_value") else {
+        return plain;
+    };
+    let mut seen: Vec<&Value> = Vec::new();
+    for r in summary
+        .get("results")
+        .and_then(Value::as_array)
+        .into_iter()
+        .flatten()
+    {
+        if let Some(x) = r.get("sweep_value") {
+            if !seen.contains(&x) {
+                seen.push(x);
+            }
+        }
+    }
+    match seen.iter().position(|x| *x == v) {
+        Some(k) => format!("{plain} @ {k}"),
+        None => plain,
+    }
+}
+
+/// The paired change of `metric` from entry `ka` of `a` to entry `kb` of `b` (their
+/// [`trials_key`]s), when both hold the same trials of the entry and at least 2 are usable
+/// in both.
+pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> Option<Change> {
+    if a.trials.get(ka)? != b.trials.get(kb)? {
         return None;
     }
-    let key = (entry.to_string(), metric.to_string());
-    let (va, vb) = (a.values.get(&key)?, b.values.get(&key)?);
+    let (va, vb) = (
+        a.values.get(&(ka.to_string(), metric.to_string()))?,
+        b.values.get(&(kb.to_string(), metric.to_string()))?,
+    );
     let pairs: Vec<(Real, Real)> = va
         .iter()
         .filter_map(|(i, x)| Some((*x, *vb.get(i)?)))

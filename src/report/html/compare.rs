@@ -18,6 +18,7 @@ use crate::report::check::{
     check_summary, compare_with, entry_names, read_json, Compared, Status, Trials,
 };
 use crate::report::markdown::{fmt_num, table};
+use crate::report::plots::{changes_svg, ChangePoint};
 
 /// One side of a comparison: where its summary was read from, and the summary.
 pub struct Side {
@@ -25,7 +26,7 @@ pub struct Side {
     pub path: PathBuf,
     /// Its contents.
     pub summary: Value,
-    /// The per-trial values of its folder's `trials.csv`, when it has one (without a sweep).
+    /// The per-trial values of its folder's `trials.csv`, when it has one.
     pub trials: Option<Trials>,
 }
 
@@ -124,13 +125,19 @@ impl Comparison {
             .collect()
     }
 
+    /// Every metric `check` looks at, in A's order, an entry only in A's metrics included
+    /// (each a regression: missing in B).
+    pub fn all(&self) -> &[Compared] {
+        &self.all
+    }
+
     /// The number of regressions `check` would report (an entry only in A's metrics too).
     pub fn regressions(&self) -> usize {
         self.all.iter().filter(|c| c.regressed).count()
     }
 
     /// The verdict of one compared metric, in words.
-    fn status(c: &Compared) -> String {
+    pub fn status(c: &Compared) -> String {
         let m = &c.metric;
         match c.status {
             Status::Regression if m.value.is_nan() => "regression: missing in B".into(),
@@ -191,7 +198,9 @@ impl Comparison {
         (headers, rows)
     }
 
-    fn verdict(&self) -> String {
+    /// The verdict the pages lead with: no regression or how many, then the count of each
+    /// status.
+    pub fn verdict(&self) -> String {
         let pct = fmt_num(100.0 * self.tolerance, 4);
         let paired = self.all.iter().filter(|c| c.paired).count();
         let tally = format!(
@@ -261,6 +270,53 @@ impl Comparison {
         s
     }
 
+    /// The plot of the changes of the metrics of the entries in both runs (toward worse,
+    /// % of A, with their intervals), as SVG; `None` when none has a finite change (or
+    /// the plot cannot be drawn: the table below says it all).
+    fn changes_plot(&self) -> Option<String> {
+        let order = [
+            Status::Regression,
+            Status::Unresolved,
+            Status::Changed,
+            Status::Improved,
+            Status::NoChange,
+        ];
+        let points: Vec<ChangePoint> = self
+            .rows()
+            .into_iter()
+            .filter_map(|c| {
+                let m = &c.metric;
+                let scale = 100.0 / m.baseline.abs();
+                let sign = if c.higher_is_better { -1.0 } else { 1.0 };
+                let worse = sign * (m.value - m.baseline) * scale;
+                if !worse.is_finite() {
+                    return None;
+                }
+                let interval = c.diff_ci.map(|[lo, hi]| {
+                    let (a, b) = (sign * lo * scale, sign * hi * scale);
+                    [a.min(b), a.max(b)]
+                });
+                Some(ChangePoint {
+                    label: format!("{}: {}", m.entry, m.metric),
+                    worse_pct: worse,
+                    interval,
+                    status: order.iter().position(|s| *s == c.status).unwrap_or(4),
+                })
+            })
+            .collect();
+        if points.is_empty() {
+            return None;
+        }
+        let names: Vec<&str> = order.iter().map(|s| s.as_str()).collect();
+        changes_svg(
+            "B against A: change toward worse, % of A",
+            &points,
+            &names,
+            100.0 * self.tolerance,
+        )
+        .ok()
+    }
+
     /// `compare.html`.
     pub fn page(&self) -> Page {
         let mut page = Page::new(
@@ -279,6 +335,19 @@ impl Comparison {
         }
         if let Some(n) = self.scenario_note() {
             page.warning(&n);
+        }
+        if let Some(svg) = self.changes_plot() {
+            page.figure(
+                &svg,
+                "The changes from A to B toward worse, with their Holm-adjusted intervals",
+                &format!(
+                    "One point per compared metric of the entries in both runs: B's change \
+                     toward worse in % of A, with the interval of the change as a bar, \
+                     coloured by status; the dashed line is the tolerance ({} %). {}",
+                    fmt_num(100.0 * self.tolerance, 4),
+                    self.verdict()
+                ),
+            );
         }
         page.section("Entries in both runs");
         let (h, rows) = self.table();

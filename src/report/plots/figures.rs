@@ -11,6 +11,18 @@ struct GroupedBars<'d> {
     y_label: &'d str,
     categories: &'d [String],
     series: &'d [(String, Vec<Real>)],
+    /// Per series and category, the interval drawn as an error bar on the bar (none: no bar).
+    intervals: &'d [Vec<Option<[Real; 2]>>],
+}
+
+impl GroupedBars<'_> {
+    /// The finite interval of series `s` at category `i`.
+    fn interval(&self, s: usize, i: usize) -> Option<[Real; 2]> {
+        self.intervals
+            .get(s)
+            .and_then(|v| v.get(i).copied().flatten())
+            .filter(|[lo, hi]| lo.is_finite() && hi.is_finite() && lo <= hi)
+    }
 }
 
 impl Figure for GroupedBars<'_> {
@@ -22,8 +34,17 @@ impl Figure for GroupedBars<'_> {
             .max()
             .unwrap_or(0)
             .max(self.categories.len());
+        let bounds = (0..self.series.len())
+            .flat_map(|s| (0..n).filter_map(move |i| self.interval(s, i)))
+            .flatten();
         let y = with_headroom(
-            span(self.series.iter().flat_map(|(_, v)| finite(v)), true),
+            span(
+                self.series
+                    .iter()
+                    .flat_map(|(_, v)| finite(v))
+                    .chain(bounds),
+                true,
+            ),
             self.series.len(),
         );
         let mut chart = categorical_chart(root, self.title, self.y_label, self.categories, n, y)?;
@@ -47,6 +68,23 @@ impl Figure for GroupedBars<'_> {
                 .label(name.as_str())
                 .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], c.filled()));
         }
+        // The error bars over the bars, in black so that they show on every colour.
+        for (s, (_, values)) in self.series.iter().enumerate() {
+            let x0 = -0.4 + s as Real * w;
+            chart.draw_series(values.iter().enumerate().filter_map(|(i, &v)| {
+                let [lo, hi] = self.interval(s, i)?;
+                let mid = if v.is_finite() { v } else { (lo + hi) / 2.0 };
+                let x = i as Real + x0 + w / 2.0;
+                Some(ErrorBar::new_vertical(
+                    x,
+                    lo,
+                    mid,
+                    hi,
+                    BLACK.stroke_width(1),
+                    6,
+                ))
+            }))?;
+        }
         legend(&mut chart, !self.series.is_empty())
     }
 }
@@ -63,6 +101,21 @@ pub fn grouped_bars(
     categories: &[String],
     series: &[(String, Vec<Real>)],
 ) -> Result<()> {
+    grouped_bars_with_intervals(stem, title, y_label, categories, series, &[])
+}
+
+/// [`grouped_bars`] with an error bar on each bar that has an interval: `intervals[s][i]`
+/// is the `[lo, hi]` of series `s` at category `i` (the 95 % interval of a mean), drawn as a
+/// black vertical bar with caps; a missing, non-finite or reversed interval draws none, and
+/// the axis reaches the bounds drawn.
+pub fn grouped_bars_with_intervals(
+    stem: &Path,
+    title: &str,
+    y_label: &str,
+    categories: &[String],
+    series: &[(String, Vec<Real>)],
+    intervals: &[Vec<Option<[Real; 2]>>],
+) -> Result<()> {
     render(
         stem,
         &GroupedBars {
@@ -70,6 +123,7 @@ pub fn grouped_bars(
             y_label,
             categories,
             series,
+            intervals,
         },
     )
 }

@@ -6,6 +6,7 @@
 //! draw; it never panics on its data. Output is deterministic: the same data gives the same
 //! bytes (text is laid out with the bundled DejaVu Sans, no system fonts).
 
+mod changes;
 mod figures;
 
 use std::ops::Range;
@@ -23,9 +24,10 @@ use plotters::style::{register_font, FontStyle, FontTransform};
 use super::markdown::fmt_num;
 use crate::numeric::Real;
 use crate::{Error, Result};
+pub use changes::{changes_svg, ChangePoint};
 pub use figures::{
-    before_after, before_after_in, box_plot, box_stats, grouped_bars, heatmap, sweep, traces,
-    BoxStats, SweepSeries,
+    before_after, before_after_in, box_plot, box_stats, grouped_bars, grouped_bars_with_intervals,
+    heatmap, sweep, traces, BoxStats, SweepSeries,
 };
 
 /// Size of every plot in pixels (PNG) or user units (SVG), width × height.

@@ -8,6 +8,7 @@
 //! the whole. Sweeps and command-line overrides edit the parsed TOML and check it again, so a
 //! swept value is held to the same rules as a written one.
 
+mod report;
 mod sections;
 mod sweep;
 
@@ -27,6 +28,7 @@ use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
 use crate::sim::truth::selected_params;
+pub use report::ReportSettings;
 use sections::{
     strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
 };
@@ -67,6 +69,8 @@ struct RawScenario {
     identification: IdentificationSpec,
     methods: Vec<toml::Table>,
     sweep: Option<SweepField>,
+    #[serde(default)]
+    report: ReportSettings,
 }
 
 fn default_seed() -> u64 {
@@ -111,6 +115,8 @@ pub struct Scenario {
     pub methods: Vec<MethodSpec>,
     /// The optional sweep.
     pub sweep: Option<Sweep>,
+    /// How the reports present the study (`[report]`).
+    pub report: ReportSettings,
     table: toml::Table,
     source: Option<Source>,
 }
@@ -455,6 +461,7 @@ impl Scenario {
             }
             methods.push(m);
         }
+        raw.report.check(&methods).map_err(|(k, m)| ferr(&k, m))?;
 
         let sweep = match raw.sweep {
             None => None,
@@ -493,6 +500,7 @@ impl Scenario {
             identification: raw.identification,
             methods,
             sweep,
+            report: raw.report,
             table,
             source: source.clone(),
         };
