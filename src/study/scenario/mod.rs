@@ -67,6 +67,8 @@ struct RawScenario {
     identification: IdentificationSpec,
     methods: Vec<toml::Table>,
     sweep: Option<SweepField>,
+    #[serde(default)]
+    claims: Vec<toml::Table>,
 }
 
 fn default_seed() -> u64 {
@@ -111,6 +113,8 @@ pub struct Scenario {
     pub methods: Vec<MethodSpec>,
     /// The optional sweep.
     pub sweep: Option<Sweep>,
+    /// The paper's claims the run evaluates (`[[claims]]`).
+    pub claims: Vec<crate::study::claims::Claim>,
     table: toml::Table,
     source: Option<Source>,
 }
@@ -456,6 +460,20 @@ impl Scenario {
             methods.push(m);
         }
 
+        let strategy_names: Vec<String> = strategies.iter().map(|s| s.name().to_string()).collect();
+        let labels: Vec<String> = methods
+            .iter()
+            .map(|m: &MethodSpec| m.label.clone())
+            .collect();
+        let names = crate::study::claims::Names {
+            methods: &labels,
+            strategies: &strategy_names,
+            pose: raw.tracker.measure.measure() == crate::measurement::Measure::Pose,
+            axis: v.axis_errors,
+        };
+        let claims =
+            crate::study::claims::parse(&raw.claims, &names).map_err(|(k, m)| ferr(&k, m))?;
+
         let sweep = match raw.sweep {
             None => None,
             Some(field) => Some(sweep::check_sweep(field).map_err(|(k, m)| ferr(&k, m))?),
@@ -493,6 +511,7 @@ impl Scenario {
             identification: raw.identification,
             methods,
             sweep,
+            claims,
             table,
             source: source.clone(),
         };
