@@ -751,3 +751,111 @@ fn method_option_tables_match_the_declarations() {
         "{defaults} defaults, {ranges} ranges checked"
     );
 }
+
+/// The papers of REPRODUCTION.md's verdict table: the committed summary's folder and the
+/// scenario that states the paper's claims.
+const CLAIM_PAPERS: [(&str, &str); 4] = [
+    ("li2018", "scenarios/li2018-irb2600.toml"),
+    ("ban", "scenarios/ban-irb2600.toml"),
+    ("guo2024", "scenarios/guo2024-3t2r.toml"),
+    ("qiao2021", "scenarios/qiao2021-tx60.toml"),
+];
+
+/// The cells of a markdown table row.
+fn row_cells(l: &str) -> Vec<String> {
+    l.trim()
+        .trim_matches('|')
+        .split('|')
+        .map(|c| c.trim().to_string())
+        .collect()
+}
+
+/// The verdict table REPRODUCTION.md leads with, generated from the committed summaries'
+/// `claims` (docs/formats.md § 4.16): one row per claim of each paper's scenario. A summary
+/// committed before its scenario stated the claim gives "no committed run" and
+/// "not evaluated". The last column, why a claim does not reproduce, is written by hand
+/// (`why`, by claim id).
+fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
+    use calbench::report::markdown::fmt_num;
+    let mut s = String::from(
+        "| paper | claim | statement | paper's value | relation (metric) | calbench: estimate [95 % CI] (trials) | verdict | why |\n\
+         |---|---|---|---|---|---|---|---|\n",
+    );
+    for (dir, scenario) in CLAIM_PAPERS {
+        let file = root().join(format!("results/reproduction/{dir}/summary.json"));
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&file).expect("summary")).expect("json");
+        let sc = calbench::study::scenario::Scenario::load(&root().join(scenario))
+            .unwrap_or_else(|e| panic!("{scenario}: {e}"));
+        for c in &sc.claims {
+            let got = summary["claims"]
+                .as_array()
+                .and_then(|a| a.iter().find(|x| x["id"] == c.id.as_str()));
+            let (calbench, verdict) = match got {
+                Some(g) => {
+                    let num = |v: &serde_json::Value| fmt_num(v.as_f64().unwrap_or(f64::NAN), 4);
+                    let ci = match g["ci95"].as_array() {
+                        Some(ci) => format!(" [{}, {}]", num(&ci[0]), num(&ci[1])),
+                        None => String::new(),
+                    };
+                    let kind = g["interval"].as_str().unwrap_or("");
+                    let more = g["trials_to_resolve"].as_u64().map_or(String::new(), |t| {
+                        format!("; about {t} trials would resolve it")
+                    });
+                    (
+                        format!("{kind} {}{ci} ({}){more}", num(&g["estimate"]), g["n"]),
+                        g["verdict"].as_str().unwrap_or("").to_string(),
+                    )
+                }
+                None => ("no committed run".to_string(), "not evaluated".to_string()),
+            };
+            let value = match &c.value {
+                toml::Value::String(s) => s.clone(),
+                v => v.to_string(),
+            };
+            let metric = calbench::study::claims::METRICS[c.metric].0;
+            s += &format!(
+                "| {} | {} | {} | {} | `{}` (`{metric}`) | {calbench} | {verdict} | {} |\n",
+                c.paper,
+                c.id,
+                c.statement,
+                value,
+                c.relation,
+                why.get(&c.id).map_or("", String::as_str)
+            );
+        }
+    }
+    s
+}
+
+/// REPRODUCTION.md's verdict table is the one the committed summaries give (regenerated here
+/// and compared); every claim that does not reproduce says why, or "not known".
+#[test]
+fn reproduction_verdict_table_comes_from_the_committed_summaries() {
+    let text = std::fs::read_to_string(root().join("REPRODUCTION.md")).expect("REPRODUCTION.md");
+    let start = "<!-- verdicts: generated from results/reproduction/*/summary.json -->";
+    let at = text.find(start).expect("the verdict table's marker");
+    let table: Vec<&str> = text[at + start.len()..]
+        .lines()
+        .skip_while(|l| !l.starts_with('|'))
+        .take_while(|l| l.starts_with('|'))
+        .collect();
+    let mut why = std::collections::BTreeMap::new();
+    for l in table.iter().skip(2) {
+        let c = row_cells(l);
+        let reason = c.last().cloned().unwrap_or_default();
+        let verdict = &c[c.len() - 2];
+        assert!(
+            verdict == "reproduces" || !reason.is_empty(),
+            "claim {}: {verdict} without a reason (write \"not known\" when no run says why)",
+            c[1]
+        );
+        why.insert(c[1].clone(), reason);
+    }
+    let want = verdict_table(&why);
+    let got = table.join("\n") + "\n";
+    assert_eq!(
+        got, want,
+        "REPRODUCTION.md's verdict table differs from the committed summaries; it should read:\n{want}"
+    );
+}

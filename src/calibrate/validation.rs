@@ -65,7 +65,7 @@ pub struct PoseErrors {
     /// [`crate::identify::qiao::error_models::attitude_error_deg`]); undefined near ±90° pitch, where the angles
     /// are singular (docs/formats.md `validation_*_attitude_deg`; Qiao's ACAE is its mean).
     pub attitude_deg: Vec<Real>,
-    /// Guo 2024's per-point position error (§5.3, table 8), "the mean of the errors in the
+    /// Guo 2024's per-point position error (§5.2, table 8), "the mean of the errors in the
     /// three directions": `(Δx + Δy + Δz) / 3` with `Δ = p_true − p_model` (mm), signed.
     pub axis_mm: Vec<Real>,
     /// The same with each axis error taken absolute, `(|Δx| + |Δy| + |Δz|) / 3` (mm).

@@ -9,6 +9,7 @@ use serde_json::{json, Value};
 use super::markdown::{fmt_num, table};
 use super::plots;
 
+pub mod claims;
 pub mod comparisons;
 mod sweep;
 mod trials_csv;
@@ -154,6 +155,9 @@ pub fn summary(r: &RunResult) -> Value {
         "results": results,
         "comparisons": comparisons::comparisons(r).into_iter().map(|(c, _)| c).collect::<Vec<_>>(),
     });
+    if !sc.claims.is_empty() {
+        s["claims"] = claims::summary(r);
+    }
     if let Some(sep) = &first.separation {
         s["separation"] = sep.clone();
     }
@@ -329,6 +333,14 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         sc.validation.count,
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
+    let (h, rows) = claims::table(r);
+    if !rows.is_empty() {
+        s += "## The paper's claims\n\n";
+        s += claims::NOTE;
+        s += "\n\n";
+        s += &table(&h, &rows);
+        s += "\n";
+    }
     let pose = first.full_pose;
     use columns::*;
     let mut cols = vec![ETA_MEAN, ETA_MEDIAN];

@@ -22,6 +22,7 @@
 //! accumulators' running sums; the per-trial numbers of the exact medians go to a scratch
 //! file ([`spill`]), so memory does not grow with the trials.
 
+pub mod claims;
 pub mod instruments;
 pub mod plan;
 pub mod records;

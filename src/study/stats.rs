@@ -8,6 +8,7 @@ use std::ops::Deref;
 pub mod dist;
 pub mod paired;
 
+use super::claims::METRICS;
 use super::spill::Spill;
 use super::trial::{Outcome, TrialResult, OPTIONAL_STATS};
 use crate::calibrate::ErrorStats;
@@ -161,11 +162,12 @@ pub struct Entry {
     /// Spreads over trials (plots only).
     #[serde(skip)]
     pub spread: Spread,
-    /// Each trial's validation RMS after compensation (mm) and mean η over the parameters
-    /// (%), in trial order, NaN where the identification failed: what the paired comparisons
-    /// of the entries of one block compare (not written as such).
+    /// Each trial's value of every per-trial metric ([`crate::study::claims::METRICS`]: the
+    /// validation RMS after compensation (mm) and the mean η over the parameters (%) first),
+    /// in trial order, NaN where the identification failed: what the paired comparisons and
+    /// the claims of the entries of one block compare (not written as such).
     #[serde(skip)]
-    pub per_trial: [Vec<Real>; 2],
+    pub per_trial: Vec<Vec<Real>>,
 }
 
 fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
@@ -300,11 +302,11 @@ struct Cell {
     eta_trial: Spread2,
 }
 
-/// The per-trial headline values kept for the paired comparisons, one value per trial of
-/// every cell (NaN where the trial's identification failed), so that the streams of two
-/// cells line up trial by trial: validation RMS after compensation (mm), the trial's mean
-/// η over the parameters (%), and the wall time of the identification (s).
-pub const HEADLINES: usize = 3;
+/// The per-trial headline values kept for the paired comparisons and the claims, one value
+/// per trial of every cell (NaN where the trial's identification failed), so that the
+/// streams of two cells line up trial by trial: every per-trial metric
+/// ([`crate::study::claims::METRICS`]) and the wall time of the identification (s).
+pub const HEADLINES: usize = METRICS.len() + 1;
 
 /// Spreads over trials of the headline metrics (for the sweep plots; not in `summary.json`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -397,10 +399,10 @@ impl Accumulator {
                 .entry(o.termination.as_str().to_string())
                 .or_insert(0) += 1;
             let ok = usable(o);
-            let hs = self.headline(ci, 2);
+            let hs = self.headline(ci, METRICS.len());
             self.spill.push(hs, o.seconds)?;
             if !ok {
-                for h in 0..2 {
+                for h in 0..METRICS.len() {
                     let s = self.headline(ci, h);
                     self.spill.push(s, Real::NAN)?;
                 }
@@ -426,9 +428,10 @@ impl Accumulator {
             } else {
                 eta_sum / eta_n as Real
             };
-            let (h0, h1) = (self.headline(ci, 0), self.headline(ci, 1));
-            self.spill.push(h0, o.after_mm.rms)?;
-            self.spill.push(h1, eta_trial)?;
+            for (h, m) in METRICS.iter().enumerate() {
+                let s = self.headline(ci, h);
+                self.spill.push(s, (m.2)(o, eta_trial))?;
+            }
             let c = &mut self.cells[ci];
             if eta_n > 0 {
                 c.eta_trial.add(eta_trial);
@@ -569,10 +572,9 @@ impl Accumulator {
             iterations_mean: c.iterations.mean(),
             evaluations_mean: c.evaluations.mean(),
             seconds_per_identification: c.seconds.mean(),
-            per_trial: [
-                self.per_trial(strategy, method, 0)?,
-                self.per_trial(strategy, method, 1)?,
-            ],
+            per_trial: (0..METRICS.len())
+                .map(|h| self.per_trial(strategy, method, h))
+                .collect::<crate::error::Result<_>>()?,
             spread: Spread {
                 after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),
                 eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),

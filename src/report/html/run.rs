@@ -93,6 +93,13 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
         ),
     );
 
+    let (h, rows) = crate::report::run::claims::table(r);
+    if !rows.is_empty() {
+        page.section("The paper's claims");
+        page.para(crate::report::run::claims::NOTE);
+        page.table("Claims and their verdicts", &h, &rows);
+    }
+
     page.section("Settings");
     page.facts(&[
         ("robot", first.robot.clone()),

@@ -71,6 +71,7 @@ struct RawScenario {
     sweep: Option<SweepField>,
     #[serde(default)]
     report: ReportSettings,
+    claims: Vec<toml::Table>,
 }
 
 fn default_seed() -> u64 {
@@ -117,6 +118,8 @@ pub struct Scenario {
     pub sweep: Option<Sweep>,
     /// How the reports present the study (`[report]`).
     pub report: ReportSettings,
+    /// The paper's claims the run evaluates (`[[claims]]`).
+    pub claims: Vec<crate::study::claims::Claim>,
     table: toml::Table,
     source: Option<Source>,
 }
@@ -463,6 +466,20 @@ impl Scenario {
         }
         raw.report.check(&methods).map_err(|(k, m)| ferr(&k, m))?;
 
+        let strategy_names: Vec<String> = strategies.iter().map(|s| s.name().to_string()).collect();
+        let labels: Vec<String> = methods
+            .iter()
+            .map(|m: &MethodSpec| m.label.clone())
+            .collect();
+        let names = crate::study::claims::Names {
+            methods: &labels,
+            strategies: &strategy_names,
+            pose: raw.tracker.measure.measure() == crate::measurement::Measure::Pose,
+            axis: v.axis_errors,
+        };
+        let claims =
+            crate::study::claims::parse(&raw.claims, &names).map_err(|(k, m)| ferr(&k, m))?;
+
         let sweep = match raw.sweep {
             None => None,
             Some(field) => Some(sweep::check_sweep(field).map_err(|(k, m)| ferr(&k, m))?),
@@ -501,6 +518,7 @@ impl Scenario {
             methods,
             sweep,
             report: raw.report,
+            claims,
             table,
             source: source.clone(),
         };
