@@ -45,6 +45,9 @@ enum Command {
                             exit status is 0 whatever the comparison finds (`check` is the guard)."
     )]
     Compare(cli::compare::CompareArgs),
+    /// One entry of a fixed real-data task under tasks/: identify on its calibration rows,
+    /// score on its validation rows, write the identify outputs and task.json.
+    Task(Box<cli::task::TaskArgs>),
 }
 
 fn main() {
@@ -55,6 +58,7 @@ fn main() {
     }
     let done = match &cli.command {
         Some(Command::Compare(a)) => cli::compare::run(a),
+        Some(Command::Task(a)) => cli::task::run(a),
         None => cli::run::default_study(),
         Some(Command::Robots(a)) => cli::robots::run(a),
         Some(Command::Fk(a)) => cli::fk::run(a),

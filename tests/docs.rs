@@ -37,8 +37,9 @@ const REQUIRED: [&str; 4] = [
 ];
 
 /// What a shell example may read: the tracked folders a user's clone has.
-const COPIED: [&str; 6] = [
+const COPIED: [&str; 7] = [
     "scenarios",
+    "tasks",
     "robots",
     "examples",
     "data",

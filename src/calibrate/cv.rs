@@ -185,6 +185,11 @@ impl Model {
         compliance: false,
     };
 
+    /// Whether the model is kinematic only (β included): a task's closed division.
+    pub fn is_kinematic(&self) -> bool {
+        !self.compliance
+    }
+
     /// `kinematic`, `beta`, `compliance` or `beta+compliance`.
     pub fn name(&self) -> String {
         match (self.beta, self.compliance) {

@@ -23,6 +23,7 @@ pub mod on_kind;
 pub mod record;
 pub mod registration;
 pub mod request;
+pub mod task;
 pub mod validation;
 pub mod verdict;
 

@@ -161,7 +161,7 @@ fn prior_arg(text: &str) -> std::result::Result<Vec<(Param, Real)>, String> {
 }
 
 /// One `--set KEY=VALUE`: the key, and the value read as TOML.
-fn method_option(text: &str) -> std::result::Result<(String, toml::Value), String> {
+pub(super) fn method_option(text: &str) -> std::result::Result<(String, toml::Value), String> {
     let (key, value) = text
         .split_once('=')
         .ok_or_else(|| "not KEY=VALUE".to_string())?;

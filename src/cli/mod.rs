@@ -43,6 +43,7 @@ pub mod poses;
 pub mod robots;
 pub mod run;
 pub mod simulate;
+pub mod task;
 
 /// A value parser for a library enum named by its `strum` derive: it accepts exactly the
 /// names of `T`'s variants (the names of files and reports), which `--help` lists and the

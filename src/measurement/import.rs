@@ -96,6 +96,9 @@ pub struct PositionColumns {
     pub columns: [String; 3],
     /// `"mm"` or `"m"`.
     pub unit: Unit,
+    /// Columns added to x, y, z, in the same unit: an export that gives a target point and
+    /// its measured difference.
+    pub plus: Option<[String; 3]>,
 }
 
 /// How an orientation is written.
@@ -170,6 +173,7 @@ struct Plan {
     decimal: char,
     joints: (Vec<String>, Real),
     position: ([String; 3], Real),
+    plus: Vec<String>,
     orientation: Option<Orient>,
     sigma: Option<(Vec<String>, Real, Combine)>,
 }
@@ -206,9 +210,13 @@ impl Mapping {
     /// Every column the mapping names, with its key (`position.columns[1]`), in the order of
     /// the file.
     fn named_columns(&self) -> Vec<(String, &str)> {
-        let fields: [(&str, &[String]); 4] = [
+        let fields: [(&str, &[String]); 5] = [
             ("joints.columns", &self.joints.columns),
             ("position.columns", &self.position.columns),
+            (
+                "position.plus",
+                self.position.plus.as_ref().map_or(&[], |p| &p[..]),
+            ),
             (
                 "orientation.columns",
                 self.orientation.as_ref().map_or(&[], |o| &o.columns),
@@ -306,6 +314,7 @@ impl Mapping {
             decimal,
             joints: (self.joints.columns.clone(), from / to),
             position,
+            plus: self.position.plus.clone().map_or(Vec::new(), Vec::from),
             orientation,
             sigma,
         })
@@ -403,6 +412,14 @@ pub fn euler_matrix(axes: [usize; 3], v: [Real; 3], intrinsic: bool) -> Mat3 {
 /// (docs/formats.md § 5.1): quoted fields, CRLF line ends and a UTF-8 byte-order mark; its
 /// header is its first line that is not blank.
 pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
+    let (s, rows) = import_text(raw, mapping_path)?;
+    std::fs::write(out, s).map_err(|e| Error::io(out, e))?;
+    Ok(rows)
+}
+
+/// Reads the export `raw` as `mapping` says: the measurement CSV's text ([`import`]) and its
+/// number of rows.
+pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
     let (_, plan) = Mapping::load_plan(mapping_path)?;
     let dialect = Dialect::Export {
         separator: plan.sep,
@@ -441,6 +458,7 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
     };
     let jc = cols("joints.columns", &plan.joints.0)?;
     let pc = cols("position.columns", &plan.position.0)?;
+    let plus = cols("position.plus", &plan.plus)?;
     let oc = match &plan.orientation {
         Some(Orient::Euler { cols: c, .. } | Orient::Quat { cols: c, .. }) => {
             cols("orientation.columns", c)?
@@ -483,8 +501,12 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
         for &c in &jc {
             row.push(num(c)? * plan.joints.1);
         }
-        for &c in &pc {
-            row.push(num(c)? * plan.position.1);
+        for (k, &c) in pc.iter().enumerate() {
+            let v = match plus.get(k) {
+                Some(&p) => num(c)? + num(p)?,
+                None => num(c)?,
+            };
+            row.push(v * plan.position.1);
         }
         let cells: Vec<String> = row
             .iter()
@@ -560,8 +582,7 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
             "the export has a header and no data rows",
         ));
     }
-    std::fs::write(out, s).map_err(|e| Error::io(out, e))?;
-    Ok(rows)
+    Ok((s, rows))
 }
 
 #[cfg(test)]

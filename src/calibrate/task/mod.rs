@@ -1,0 +1,522 @@
+//! Fixed real-data tasks (docs/formats.md § 9): a task file names the data, the mapping that
+//! reads them, the nominal robot, the split (a committed file of row indices, or a
+//! calibration file and a validation file), the metric and the data's authors' published
+//! figures. [`Task::request`] turns it into the one identification pipeline's request
+//! ([`IdentifyRequest`]); [`TaskEntry::json`] is the entry's `task.json`.
+
+pub mod sha256;
+pub mod split;
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+use super::cv::Model;
+use super::request::{IdentifyData, IdentifyRequest, TrackerOutcome};
+use super::validation::residual_vectors;
+use crate::error::{line_of, Error, Result};
+use crate::identify::MethodSpec;
+use crate::measurement::csv::read_measurements;
+use crate::measurement::import::{import_text, Mapping};
+use crate::measurement::Measurements;
+use crate::numeric::Real;
+use crate::robot::Robot;
+pub use split::Split;
+
+/// The `format` of `task.json`.
+pub const TASK_FORMAT: &str = "calbench-task-1";
+
+/// A task's ranking metric, on its validation rows; lower is better.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Metric {
+    /// The mean position error (mm).
+    ValidationMeanMm,
+    /// The RMS position error (mm).
+    ValidationRmsMm,
+}
+
+impl Metric {
+    /// The name in task files and `task.json`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Metric::ValidationMeanMm => "validation_mean_mm",
+            Metric::ValidationRmsMm => "validation_rms_mm",
+        }
+    }
+
+    /// The metric of the per-point errors `e` (mm) and its 95 % interval: Student's t on the
+    /// errors (mean) or on their squares (RMS, the interval's ends square-rooted); `None`
+    /// below two points.
+    pub fn of(self, e: &[Real]) -> (Real, Option<[Real; 2]>) {
+        let n = e.len() as Real;
+        let sq: Vec<Real>;
+        let x: &[Real] = match self {
+            Metric::ValidationMeanMm => e,
+            Metric::ValidationRmsMm => {
+                sq = e.iter().map(|v| v * v).collect();
+                &sq
+            }
+        };
+        let mean = x.iter().sum::<Real>() / n;
+        let ci = (e.len() >= 2).then(|| {
+            let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / (n - 1.0)).sqrt();
+            let h = crate::study::stats::dist::t_quantile(0.975, n - 1.0) * sd / n.sqrt();
+            [mean - h, mean + h]
+        });
+        match self {
+            Metric::ValidationMeanMm => (mean, ci),
+            Metric::ValidationRmsMm => (
+                mean.sqrt(),
+                ci.map(|[lo, hi]| [lo.max(0.0).sqrt(), hi.sqrt()]),
+            ),
+        }
+    }
+}
+
+/// A division of the leaderboard.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Division {
+    /// Kinematic models only: DH, β, tool, base.
+    Closed,
+    /// Any model: compliance, harmonics, a Python method.
+    Open,
+}
+
+/// One of the data's authors' figures on the task, with its source.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Published {
+    /// What was calibrated, as the source names it.
+    pub label: String,
+    /// The figure, in the task's metric (mm).
+    pub value: Real,
+    /// Where it is published.
+    pub source: String,
+    /// The division its model belongs to.
+    pub division: Division,
+}
+
+/// The keys of a task file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TaskKeys {
+    title: String,
+    robot: String,
+    mapping: String,
+    metric: Metric,
+    data: DataKeys,
+    #[serde(default)]
+    published: Vec<Published>,
+    unpublished: Option<String>,
+}
+
+/// `[data]`: one file and a split, or a calibration file and a validation file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct DataKeys {
+    file: Option<String>,
+    split: Option<String>,
+    calibration: Option<String>,
+    validation: Option<String>,
+}
+
+/// Where a task's calibration and validation rows come from.
+#[derive(Clone, Debug)]
+pub enum TaskData {
+    /// Rows of one file, split by a committed split file.
+    Split {
+        /// The data file.
+        file: PathBuf,
+        /// The split file.
+        split_path: PathBuf,
+        /// Its rows.
+        split: Split,
+    },
+    /// A calibration file and a validation file, every row of each.
+    Files {
+        /// The calibration file.
+        calibration: PathBuf,
+        /// The validation file.
+        validation: PathBuf,
+    },
+}
+
+/// A task, read and checked.
+#[derive(Clone, Debug)]
+pub struct Task {
+    /// The task's name: its file's stem.
+    pub name: String,
+    /// The task file.
+    pub path: PathBuf,
+    /// SHA-256 of its canonical text ([`Task::canonical_text`]), hex.
+    pub hash: String,
+    /// What the task is.
+    pub title: String,
+    /// The nominal robot file.
+    pub robot: PathBuf,
+    /// The mapping that reads the data files (docs/formats.md § 6).
+    pub mapping: PathBuf,
+    /// The ranking metric.
+    pub metric: Metric,
+    /// The data and the split.
+    pub data: TaskData,
+    /// The data's authors' figures.
+    pub published: Vec<Published>,
+    /// Why there is no published figure.
+    pub unpublished: Option<String>,
+}
+
+/// `NAME` (a task under `tasks/`) or the path of a task file.
+pub fn task_path(name_or_path: &str) -> PathBuf {
+    let p = Path::new(name_or_path);
+    if p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1 {
+        p.to_path_buf()
+    } else {
+        Path::new("tasks").join(format!("{name_or_path}.toml"))
+    }
+}
+
+impl Task {
+    /// Reads and checks the task file `path`: its keys (an unknown or missing key refused,
+    /// naming the file, line and key), the files it names (relative to its folder), the
+    /// split, and the published figures (or the `unpublished` note, not both).
+    pub fn load(path: &Path) -> Result<Task> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let table: toml::Table = toml::from_str(&text)
+            .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
+        let keys: TaskKeys = toml::from_str(&text)
+            .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
+        let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let file = |key: &str, rel: &str| -> Result<PathBuf> {
+            let p = dir.join(rel);
+            if p.is_file() {
+                Ok(p)
+            } else {
+                Err(bad(key, format!("{} is not a file", p.display())))
+            }
+        };
+        let d = &keys.data;
+        let data = match (&d.file, &d.split, &d.calibration, &d.validation) {
+            (Some(f), Some(s), None, None) => {
+                let split_path = file("data.split", s)?;
+                TaskData::Split {
+                    file: file("data.file", f)?,
+                    split: Split::load(&split_path)?,
+                    split_path,
+                }
+            }
+            (None, None, Some(c), Some(v)) => TaskData::Files {
+                calibration: file("data.calibration", c)?,
+                validation: file("data.validation", v)?,
+            },
+            _ => {
+                return Err(bad(
+                    "data",
+                    "takes `file` and `split` (rows of one file), or `calibration` and \
+                     `validation` (two files), and nothing else"
+                        .into(),
+                ))
+            }
+        };
+        match (keys.published.is_empty(), &keys.unpublished) {
+            (true, None) => {
+                return Err(bad(
+                    "published",
+                    "missing: the data's authors' figures ([[published]] label, value, \
+                     source, division), or `unpublished` saying why there are none"
+                        .into(),
+                ))
+            }
+            (false, Some(_)) => {
+                return Err(bad(
+                    "unpublished",
+                    "given with [[published]] figures: one or the other".into(),
+                ))
+            }
+            _ => {}
+        }
+        for (i, p) in keys.published.iter().enumerate() {
+            if !(p.value.is_finite() && p.value >= 0.0) {
+                let key = format!("published[{i}].value");
+                return Err(bad(
+                    &key,
+                    format!("{}: a figure in mm, finite and ≥ 0", p.value),
+                ));
+            }
+            if p.source.trim().is_empty() || p.label.trim().is_empty() {
+                let key = format!("published[{i}].source");
+                return Err(bad(&key, "a figure needs its label and its source".into()));
+            }
+        }
+        let name = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("task")
+            .to_string();
+        let mut canonical = canonical_text(&toml::Value::Table(table));
+        if let TaskData::Split { split_path, .. } = &data {
+            let bytes = std::fs::read(split_path).map_err(|e| Error::io(split_path, e))?;
+            canonical.push_str(&format!(
+                "split.sha256 = \"{}\"\n",
+                sha256::sha256_hex(&bytes)
+            ));
+        }
+        Ok(Task {
+            name,
+            path: path.to_path_buf(),
+            hash: sha256::sha256_hex(canonical.as_bytes()),
+            title: keys.title,
+            robot: file("robot", &keys.robot)?,
+            mapping: file("mapping", &keys.mapping)?,
+            metric: keys.metric,
+            data,
+            published: keys.published,
+            unpublished: keys.unpublished,
+        })
+    }
+
+    /// The nominal robot.
+    pub fn load_robot(&self) -> Result<Robot> {
+        crate::robot::builtin::load(&self.robot.to_string_lossy())
+    }
+
+    /// The calibration and the validation measurements, read through the mapping; the split
+    /// is checked against the data's row count.
+    pub fn measurements(&self, robot: &Robot) -> Result<(Measurements, Measurements)> {
+        let mapping = Mapping::load(&self.mapping)?;
+        if mapping.joints.columns.len() != robot.dof() {
+            return Err(Error::file(
+                &self.mapping,
+                "joints.columns",
+                format!(
+                    "{} joint columns for the {}-joint robot {}",
+                    mapping.joints.columns.len(),
+                    robot.dof(),
+                    self.robot.display()
+                ),
+            ));
+        }
+        match &self.data {
+            TaskData::Split {
+                file,
+                split_path,
+                split,
+            } => {
+                let all = self.read(file, robot)?;
+                split.check_rows(split_path, file, all.len())?;
+                Ok((
+                    super::cv::subset(&all, &split.calibration),
+                    super::cv::subset(&all, &split.validation),
+                ))
+            }
+            TaskData::Files {
+                calibration,
+                validation,
+            } => Ok((
+                self.read(calibration, robot)?,
+                self.read(validation, robot)?,
+            )),
+        }
+    }
+
+    /// The data file `raw` read through the mapping.
+    fn read(&self, raw: &Path, robot: &Robot) -> Result<Measurements> {
+        static N: AtomicUsize = AtomicUsize::new(0);
+        let (text, _) = import_text(raw, &self.mapping)?;
+        let tmp = std::env::temp_dir().join(format!(
+            "calbench-task-{}-{}.csv",
+            std::process::id(),
+            N.fetch_add(1, Ordering::Relaxed)
+        ));
+        std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
+        let m = read_measurements(&tmp, robot);
+        let _ = std::fs::remove_file(&tmp);
+        m
+    }
+
+    /// The identification request of an entry: the nominal robot, the calibration rows, the
+    /// validation rows, the method and the candidate models (several: chosen by 5-fold
+    /// cross-validation on the calibration rows alone; one: given). Also returns the
+    /// validation rows.
+    pub fn request(
+        &self,
+        method: MethodSpec,
+        models: &[Model],
+    ) -> Result<(IdentifyRequest, Measurements)> {
+        let robot = self.load_robot()?;
+        let (cal, val) = self.measurements(&robot)?;
+        let source = match &self.data {
+            TaskData::Split { file, .. } => file.clone(),
+            TaskData::Files { calibration, .. } => calibration.clone(),
+        };
+        let mut q = IdentifyRequest::new(robot, IdentifyData::Tracker(cal), source, method);
+        q.validate = Some(val.clone());
+        if models != [Model::KINEMATIC] {
+            q.models = models.to_vec();
+        }
+        if models.len() > 1 {
+            q.cv = Some(5);
+        }
+        Ok((q, val))
+    }
+}
+
+/// `key = value` lines of every leaf of `v`, keys sorted and dotted (arrays of tables
+/// indexed): a task's text without its comments and layout.
+fn canonical_text(v: &toml::Value) -> String {
+    fn walk(prefix: &str, v: &toml::Value, out: &mut String) {
+        match v {
+            toml::Value::Table(t) => {
+                let mut keys: Vec<&String> = t.keys().collect();
+                keys.sort();
+                for k in keys {
+                    let p = if prefix.is_empty() {
+                        k.clone()
+                    } else {
+                        format!("{prefix}.{k}")
+                    };
+                    walk(&p, &t[k], out);
+                }
+            }
+            toml::Value::Array(a) if a.iter().all(toml::Value::is_table) && !a.is_empty() => {
+                for (i, x) in a.iter().enumerate() {
+                    walk(&format!("{prefix}[{i}]"), x, out);
+                }
+            }
+            leaf => out.push_str(&format!("{prefix} = {leaf}\n")),
+        }
+    }
+    let mut out = String::new();
+    walk("", v, &mut out);
+    out
+}
+
+/// `line N` of a TOML error, where it has a place.
+fn place_of(text: &str, e: &toml::de::Error) -> String {
+    e.span().map_or("TOML".into(), |s| {
+        format!("line {}", line_of(text, s.start))
+    })
+}
+
+/// Who ran an entry and with what: for `task.json`.
+pub struct TaskEntry<'a> {
+    /// The task.
+    pub task: &'a Task,
+    /// The method's name.
+    pub method: String,
+    /// The candidate models (`[kinematic]` by default).
+    pub candidates: &'a [Model],
+    /// `calbench`, or `python:<name>` for a Python method.
+    pub entrant: String,
+}
+
+impl TaskEntry<'_> {
+    /// The terms of the model identified: `kinematic`, then each term added.
+    pub fn model_terms(outcome: &TrackerOutcome, candidates: &[Model]) -> (Vec<String>, bool) {
+        let chosen = match &outcome.practice.models {
+            Some((_, best)) => candidates.get(*best).copied(),
+            None => candidates.first().copied(),
+        }
+        .unwrap_or(Model::KINEMATIC);
+        let mut terms = vec!["kinematic".to_string()];
+        terms.extend(
+            chosen
+                .name()
+                .split('+')
+                .filter(|t| *t != "kinematic")
+                .map(str::to_string),
+        );
+        (terms, chosen.is_kinematic())
+    }
+
+    /// `task.json` of the entry whose identification is `outcome`, scored on the validation
+    /// rows `val` (docs/formats.md § 9.3).
+    pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<Value> {
+        let errors: Vec<Real> = residual_vectors(&outcome.calibrated, val)?
+            .iter()
+            .map(|v| v.norm())
+            .collect();
+        let (value, ci) = self.task.metric.of(&errors);
+        let (models, kinematic) = Self::model_terms(outcome, self.candidates);
+        let open = !kinematic || self.entrant != "calbench";
+        Ok(self.record(value, ci, models, open))
+    }
+
+    /// `task.json` of an entry with the figure `value` and interval `ci`, the model terms
+    /// `models`, in the open division or not.
+    pub fn record(
+        &self,
+        value: Real,
+        ci: Option<[Real; 2]>,
+        models: Vec<String>,
+        open: bool,
+    ) -> Value {
+        let t = self.task;
+        json!({
+            "format": TASK_FORMAT,
+            "task": t.name,
+            "task_hash": t.hash,
+            "metric": t.metric.as_str(),
+            "value": value,
+            "ci95": ci,
+            "division": if open { Division::Open } else { Division::Closed },
+            "method": self.method,
+            "models": models,
+            "chosen_by": if self.candidates.len() > 1 { "cv" } else { "given" },
+            "entrant": self.entrant,
+            "calbench_version": env!("CARGO_PKG_VERSION"),
+            "git_commit": git_commit(t.path.parent().unwrap_or(Path::new("."))),
+            "published": t.published,
+        })
+    }
+}
+
+/// The commit checked out in the repository holding `dir` (`git rev-parse HEAD`), if any.
+fn git_commit(dir: &Path) -> Option<String> {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let o = std::process::Command::new("git")
+        .arg("-C")
+        .arg(dir)
+        .args(["rev-parse", "HEAD"])
+        .output()
+        .ok()?;
+    let s = String::from_utf8(o.stdout).ok()?.trim().to_string();
+    (o.status.success() && s.len() == 40).then_some(s)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn metric_and_interval() {
+        let e = [1.0, 2.0, 3.0, 4.0];
+        let (m, ci) = Metric::ValidationMeanMm.of(&e);
+        assert_eq!(m, 2.5);
+        let [lo, hi] = ci.unwrap();
+        // t(0.975, 3) = 3.182446; sd = 1.290994
+        assert!(
+            (hi - 2.5 - 3.182446 * 1.290994 / 2.0).abs() < 1e-5 && (lo + hi - 5.0).abs() < 1e-12
+        );
+        let (r, _) = Metric::ValidationRmsMm.of(&e);
+        assert!((r - 7.5f64.sqrt()).abs() < 1e-12);
+        assert_eq!(Metric::ValidationRmsMm.of(&[2.0]), (2.0, None));
+    }
+
+    #[test]
+    fn canonical_text_ignores_comments_and_order() {
+        let a: toml::Value = toml::from_str("# x\nb = 1\na = \"s\"\n[[p]]\nv = 2.5\n").unwrap();
+        let b: toml::Value = toml::from_str("a = \"s\" # y\nb = 1\n\n[[p]]\nv = 2.5").unwrap();
+        assert_eq!(canonical_text(&a), canonical_text(&b));
+        assert_eq!(canonical_text(&a), "a = \"s\"\nb = 1\np[0].v = 2.5\n");
+    }
+}
