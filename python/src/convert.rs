@@ -49,6 +49,17 @@ pub(crate) fn rows(a: &PyReadonlyArray2<'_, f64>) -> Vec<Vec<Real>> {
     a.as_array().outer_iter().map(|r| r.to_vec()).collect()
 }
 
+/// The rows of `q` as joint values of `robot` in its internal units, each checked
+/// ([`Robot::q_from_user_checked`]; an error names `q[i]`).
+pub(crate) fn joint_rows(robot: &Robot, q: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec<Real>>> {
+    rows(q)
+        .iter()
+        .enumerate()
+        .map(|(i, v)| robot.q_from_user_checked(v, &format!("q[{i}]")))
+        .collect::<calbench::Result<_>>()
+        .map_err(err)
+}
+
 /// The rows of a (N, 3) array as points.
 pub(crate) fn points3(key: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<[Real; 3]>> {
     let v = a.as_array();

@@ -17,11 +17,10 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use calbench::measurement::Measure;
-use calbench::numeric::Real;
 use calbench::robot::{builtin, Param};
 
-use convert::rows;
-use errors::{err, setting, ComputeError, Error, FileError, IoError, SettingError};
+use convert::joint_rows;
+use errors::{setting, ComputeError, Error, FileError, IoError, SettingError};
 use robot::PyRobot;
 
 /// Rank, identifiable parameters and dependent groups of every parameter of `robot` over
@@ -45,12 +44,7 @@ fn identifiability<'py>(
             ))
         }
     };
-    let qs: Vec<Vec<Real>> = rows(&q)
-        .iter()
-        .enumerate()
-        .map(|(i, v)| r.q_from_user_checked(v, &format!("q[{i}]")))
-        .collect::<calbench::Result<_>>()
-        .map_err(err)?;
+    let qs = joint_rows(r, &q)?;
     if qs.is_empty() {
         return Err(setting("q", "no poses"));
     }

@@ -10,7 +10,7 @@ use pyo3::types::PyDict;
 use calbench::numeric::{Frame, Real};
 use calbench::robot::{builtin, Param, Robot};
 
-use crate::convert::{float_array2, rows};
+use crate::convert::{float_array2, joint_rows};
 use crate::errors::{err, setting};
 
 /// A robot model with its nominal parameters (lengths in mm, angles in the robot's unit
@@ -95,12 +95,7 @@ impl PyRobot {
     ) -> PyResult<Bound<'py, PyAny>> {
         let q = float_array2("q", q)?;
         let r = &self.inner;
-        let qs: Vec<Vec<Real>> = rows(&q)
-            .iter()
-            .enumerate()
-            .map(|(i, v)| r.q_from_user_checked(v, &format!("q[{i}]")))
-            .collect::<calbench::Result<_>>()
-            .map_err(err)?;
+        let qs = joint_rows(r, &q)?;
         let chain = r.chain();
         let frames: Vec<Frame> = qs.iter().map(|v| chain.fk(v)).collect();
         if pose {

@@ -1,7 +1,7 @@
 //! `calbench identify` on a measurement-kind file (docs/formats.md § 5.3: `length_mm`,
 //! `step_mm`, `plane`, `sphere` or `target` readings): the outcome of the pipeline
-//! ([`calbench::calibrate::request`]) written to `identified.json` and `robot.toml`, with
-//! the validation table and a summary line.
+//! ([`calbench::calibrate::request`]) handed to the report's writers (`identified.json`,
+//! `robot.toml`), with the validation table and a summary line.
 
 use std::path::Path;
 
@@ -9,9 +9,7 @@ use anyhow::Result;
 
 use calbench::calibrate::request::KindOutcome;
 use calbench::calibrate::ErrorStats;
-use calbench::robot::robot_to_toml;
-
-use super::{to_json_text, write_file};
+use calbench::report::output::{folder, Json, RobotToml};
 
 /// The files written.
 pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
@@ -23,11 +21,20 @@ pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
         eprintln!("warning: {w}");
     }
     let [identified, robot_file] = OUTPUTS;
-    let (record, compensated) = (to_json_text(&o.record())?, robot_to_toml(&o.compensated()));
-    calbench::report::atomically(out, |dir| {
-        write_file(&dir.join(identified), &record)?;
-        write_file(&dir.join(robot_file), &compensated)
-    })?;
+    let (record, compensated) = (o.record(), o.compensated());
+    folder(
+        out,
+        &[
+            &Json {
+                name: identified,
+                value: &record,
+            },
+            &RobotToml {
+                name: robot_file,
+                robot: &compensated,
+            },
+        ],
+    )?;
     if let Some((before, after)) = &o.validation {
         print_validation(before, after);
     }

@@ -233,22 +233,10 @@ pub fn check_out_file(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes `text` to `path`.
-pub fn write_file(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::io(path, e))
-}
-
 /// A scenario file's TOML table (the kind of study is told by its keys).
 pub fn scenario_table(p: &Path) -> Result<toml::Table> {
     let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
     toml::from_str(&text).map_err(|e| Error::file(p, "TOML", e.to_string().trim_end()))
-}
-
-/// `v` as pretty JSON with a final newline.
-pub fn to_json_text(v: &serde_json::Value) -> Result<String> {
-    serde_json::to_string_pretty(v)
-        .map(|s| s + "\n")
-        .map_err(|e| Error::Compute(e.to_string()))
 }
 
 /// Prints the main table of a run.

@@ -21,7 +21,8 @@
 //! - [`external`]: a method supplied from outside (a function of the problem), as the
 //!   Python module's methods are;
 //! - [`registry`]: the method names, each with the function that reads its options from a
-//!   scenario's `[[methods]]` entry ([`MethodSpec`]);
+//!   scenario's `[[methods]]` entry ([`MethodSpec`]); [`options`]: how one table feeds two
+//!   options structs, each declaring its own keys;
 //! - one file per method: [`ls`], [`ridge`], [`robust`], [`lm`], and in [`qiao`] Qiao 2021's
 //!   searches and pose-error models;
 //! - the shared machinery of the Jacobian-based methods: [`solver`] (the least-squares
@@ -35,6 +36,7 @@ pub mod external;
 pub mod kind;
 pub mod lm;
 pub mod ls;
+pub mod options;
 pub mod qiao;
 pub mod registry;
 pub mod ridge;

@@ -86,7 +86,7 @@ pub fn method_names() -> String {
 /// `ls` is plain Gauss–Newton, or with the key `error_model` least squares on a pose-error
 /// model.
 fn ls(t: &toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError> {
-    if t.contains_key("error_model") {
+    if t.contains_key(crate::identify::qiao::error_models::ERROR_MODEL) {
         options::<PoseErrorLs>(t)
     } else {
         options::<LsOptions>(t)
@@ -97,46 +97,9 @@ fn ls(t: &toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError> {
 pub fn options<M: Method + DeserializeOwned + 'static>(
     t: &toml::Table,
 ) -> std::result::Result<Arc<dyn Method>, EntryError> {
-    let m: M = deserialize_named(t)?;
+    let m: M = super::options::read(t)?;
     m.check().map_err(split)?;
     Ok(Arc::new(m))
-}
-
-/// Deserialises `t`; on failure names the key: the first whose removal makes the rest
-/// deserialise (an unknown key, or a value of the wrong type).
-fn deserialize_named<T: DeserializeOwned>(t: &toml::Table) -> std::result::Result<T, EntryError> {
-    let text = |e: toml::de::Error| e.to_string().trim_end().to_string();
-    match T::deserialize(toml::Value::Table(t.clone())) {
-        Ok(v) => Ok(v),
-        Err(e) => {
-            for k in t.keys() {
-                let mut rest = t.clone();
-                let v = rest.remove(k);
-                if T::deserialize(toml::Value::Table(rest)).is_ok() {
-                    let mut one = toml::Table::new();
-                    one.insert(k.clone(), v.unwrap_or(toml::Value::Boolean(false)));
-                    let msg = match T::deserialize(toml::Value::Table(one)) {
-                        Err(e1) => text(e1),
-                        Ok(_) => text(e),
-                    };
-                    return Err((k.clone(), msg));
-                }
-            }
-            // A required key with a bad value: the key that fails alone for another reason
-            // than the missing required ones.
-            for (k, v) in t {
-                let mut one = toml::Table::new();
-                one.insert(k.clone(), v.clone());
-                if let Err(e1) = T::deserialize(toml::Value::Table(one)) {
-                    let msg = text(e1);
-                    if !msg.contains("missing field") {
-                        return Err((k.clone(), msg));
-                    }
-                }
-            }
-            Err((String::new(), text(e)))
-        }
-    }
 }
 
 /// A setting error as (key, message).

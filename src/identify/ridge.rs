@@ -8,7 +8,7 @@
 //! chosen anew at every iteration by one of the rules of [`super::xi`].
 
 use nalgebra::DVector;
-use serde::Deserialize;
+use serde::{Deserialize, Serialize};
 
 use super::solver::{check_stop, gauss_newton, LeastSquares, RidgeCfg, Solver};
 use super::xi::XiRule;
@@ -17,7 +17,7 @@ use crate::error::Result;
 use crate::numeric::Real;
 
 /// Options of `ridge` (docs/formats.md `[[methods]]`).
-#[derive(Clone, Debug, Deserialize)]
+#[derive(Clone, Debug, Deserialize, Serialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct RidgeOptions {
     /// The ξ rule. Default [`XiRule::DoubleH`].

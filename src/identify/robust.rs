@@ -37,6 +37,7 @@
 use nalgebra::DVector;
 use serde::Deserialize;
 
+use super::options;
 use super::ridge::RidgeOptions;
 use super::solver::{gauss_newton, LeastSquares, Solver};
 use super::weights::Robustness;
@@ -46,7 +47,7 @@ use crate::numeric::Real;
 
 /// Options of `igg3` (docs/formats.md `[[methods]]`): the ridge's options (`xi`, `scale`, `eps`,
 /// `max_iter`; here with an iteration limit of 200 over all phases) and the robust weights.
-/// Read from one table: the keys of [`Robustness`] go to `robust`, every other key to
+/// Read from one table: the keys [`Robustness`] declares go to `robust`, every other key to
 /// `ridge`.
 #[derive(Clone, Debug)]
 pub struct RobustOptions {
@@ -72,15 +73,10 @@ impl<'de> Deserialize<'de> for RobustOptions {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
         let mut ridge = toml::Table::deserialize(d)?;
-        let robust = crate::robot::names::take_keys(&mut ridge, &["weight", "k0", "k1", "sigma0"]);
-        let limit_given = ridge.contains_key("max_iter");
-        let mut r =
-            RidgeOptions::deserialize(toml::Value::Table(ridge)).map_err(D::Error::custom)?;
-        if !limit_given {
-            r.max_iter = RobustOptions::default().ridge.max_iter;
-        }
+        let robust = options::split::<Robustness>(&mut ridge);
         Ok(RobustOptions {
-            ridge: r,
+            ridge: options::with_defaults(&RobustOptions::default().ridge, ridge)
+                .map_err(D::Error::custom)?,
             robust: Robustness::deserialize(toml::Value::Table(robust))
                 .map_err(D::Error::custom)?,
         })

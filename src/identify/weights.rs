@@ -28,7 +28,7 @@ pub enum Sigma0 {
     Mad,
 }
 
-/// The robust part of IGG3's options (keys `weight`, `k0`, `k1`, `sigma0`).
+/// The robust part of IGG3's options: its fields are the keys.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Robustness {
@@ -57,11 +57,13 @@ impl Robustness {
     /// Checks the thresholds: positive, `k1 > k0`.
     pub fn check(&self) -> crate::Result<()> {
         crate::error::finite_positive("k0", self.k0)?;
-        crate::error::finite_positive("k1", self.k1)?;
-        if self.k1 <= self.k0 {
+        if !(self.k1.is_finite() && self.k1 > self.k0) {
             return Err(crate::Error::setting(
                 "k1",
-                format!("must exceed k0 ({}), got {}", self.k0, self.k1),
+                format!(
+                    "must be finite and exceed k0 ({}), got {}",
+                    self.k0, self.k1
+                ),
             ));
         }
         Ok(())

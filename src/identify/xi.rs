@@ -81,6 +81,16 @@ impl<'de> serde::Deserialize<'de> for XiRule {
     }
 }
 
+impl serde::Serialize for XiRule {
+    /// The number, or the rule's name.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            XiRule::Fixed(v) => s.serialize_f64(*v),
+            named => s.serialize_str(&named.name()),
+        }
+    }
+}
+
 impl XiRule {
     /// Checks a fixed ξ (finite, ≥ 0); errors name `key`.
     pub fn check(&self, key: &str) -> crate::Result<()> {

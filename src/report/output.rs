@@ -1,8 +1,8 @@
 //! The one trait of an output file, [`Output`] (its name and how its bytes are written), and
 //! the writers that several outputs share: bytes already made, a JSON document, a numbered
 //! series, the measurement and pose files (through [`crate::measurement`]'s byte-identical
-//! writers) and a figure. The files of `calbench poses`, `simulate` and `compensate`
-//! (docs/formats.md) are built from results already computed and handed to [`folder`], which
+//! writers), a robot file and a figure. The files of `calbench poses`, `simulate`,
+//! `compensate` and `identify` on a measurement-kind file (docs/formats.md) are built from results already computed and handed to [`folder`], which
 //! writes them as a whole.
 
 use std::path::Path;
@@ -69,6 +69,23 @@ impl Output for Json<'_> {
     }
     fn write(&self, path: &Path) -> Result<()> {
         text(path, &super::run::json_text(self.value)?)
+    }
+}
+
+/// A robot file ([`crate::robot::robot_to_toml`], docs/formats.md § 3.1).
+pub struct RobotToml<'a> {
+    /// The file's name.
+    pub name: &'a str,
+    /// The robot.
+    pub robot: &'a crate::robot::Robot,
+}
+
+impl Output for RobotToml<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        text(path, &crate::robot::robot_to_toml(self.robot))
     }
 }
 

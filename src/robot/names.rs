@@ -3,8 +3,7 @@
 //! `EnumString`, `VariantNames` and `EnumIter` with the same rule (`serialize_all`): its
 //! `as_str` is `self.into()`, the command line accepts and lists `VARIANTS`, and messages
 //! list them, so no enum carries a hand-written name list or `as_str` / `FromStr` pair.
-//! [`parse`] reads a name through serde, with serde's message naming the allowed names;
-//! [`take_keys`] splits one options table between two structs.
+//! [`parse`] reads a name through serde, with serde's message naming the allowed names.
 
 use serde::de::value::{Error as ValueError, StrDeserializer};
 use serde::de::{DeserializeOwned, IntoDeserializer};
@@ -25,14 +24,6 @@ pub fn parse_in<T: DeserializeOwned>(file: &std::path::Path, place: &str, s: &st
         Error::Setting { msg, .. } => Error::file(file, place, msg),
         other => other,
     })
-}
-
-/// Removes the entries of `keys` from `table` and returns them as a table of their own: for
-/// options read from one table into two structs (each refusing keys it does not know).
-pub fn take_keys(table: &mut toml::Table, keys: &[&str]) -> toml::Table {
-    keys.iter()
-        .filter_map(|k| table.remove(*k).map(|v| (k.to_string(), v)))
-        .collect()
 }
 
 #[cfg(test)]

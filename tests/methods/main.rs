@@ -8,4 +8,5 @@ mod common;
 mod errmodel;
 mod guo;
 mod metaheur;
+mod options;
 mod poses;

@@ -282,10 +282,7 @@ fn metaheuristic_schedules_and_velocity_rules_are_settable() {
     let bas = format!("{:?}", s.methods[1].method);
     assert_eq!(s.methods[1].name(), "bas");
     assert!(bas.contains("start: Halton"), "{bas}");
-    assert!(
-        bas.contains("antenna_floor: 0.0, step_floor: 0.0002"),
-        "{bas}"
-    );
+    assert!(bas.contains("d0: 0.0, delta0: 0.0002"), "{bas}");
     let hybrid = format!("{:?}", s.methods[2].method);
     assert_eq!(s.methods[2].name(), "bas-pso");
     assert!(
@@ -293,7 +290,7 @@ fn metaheuristic_schedules_and_velocity_rules_are_settable() {
         "{hybrid}"
     );
     assert!(hybrid.contains("max_velocity: 0.3"), "{hybrid}");
-    assert!(hybrid.contains("step_floor: 0.0"), "{hybrid}");
+    assert!(hybrid.contains("delta0: 0.0"), "{hybrid}");
 }
 
 #[test]

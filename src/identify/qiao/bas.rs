@@ -4,10 +4,10 @@
 use rand::Rng as _;
 
 use super::search::{
-    check_budget, check_schedules, check_target, eq13, halton, offset, primes, random_direction,
-    reached, sane, sign, Bounds, Fitness, Limit, MetaResult, HALTON_SKIP,
+    check_budget, check_iterations, check_target, halton, offset, primes, random_direction,
+    reached, sane, sign, Bounds, Fitness, Limit, MetaResult, Schedules, HALTON_SKIP,
 };
-use crate::error::{check_count, Result};
+use crate::error::Result;
 use crate::numeric::rng::Rng;
 use crate::numeric::Real;
 
@@ -30,20 +30,14 @@ pub struct BasOptions {
     /// exceed it (and after `iterations` at the latest), so that searches of different
     /// cost per iteration can be compared at equal budgets. Default none.
     pub max_evaluations: Option<usize>,
-    /// Initial antenna width `d` (eq. 13). Default 0.05.
-    pub antenna: Real,
-    /// Initial step `δ` (eq. 13). Default 0.05.
-    pub step: Real,
-    /// Decay factor of both schedules (eq. 13: 0.95). Default 0.95.
-    pub decay: Real,
-    /// `d0` of eq. 13: the width tends to `d0 / (1 − decay)`. Default 1e-4.
-    pub antenna_floor: Real,
-    /// `δ0` of eq. 13: the step tends to `δ0 / (1 − decay)`. Default 1e-4.
-    pub step_floor: Real,
     /// Stop as soon as the best fitness is at or below this. Default −∞ (never).
     pub target: Real,
     /// Where the beetle starts. Default [`BasStart::Centre`].
     pub start: BasStart,
+    /// The schedules of eq. 13, keys of their own ([`Schedules`]). Default: width and step
+    /// 0.05, decay 0.95, floors 1e-4.
+    #[serde(skip)]
+    pub schedules: Schedules,
 }
 
 /// The starting point of [`bas`] (`start = "centre"` or `"halton"`).
@@ -61,16 +55,10 @@ pub enum BasStart {
 impl BasOptions {
     /// Checks the option values (keys as in the scenario).
     pub fn check(&self) -> Result<()> {
-        check_count("iterations", self.iterations)?;
+        check_iterations(self.iterations)?;
         check_budget(self.max_evaluations, 1, 3)?;
-        check_schedules(
-            self.antenna,
-            self.step,
-            self.decay,
-            self.antenna_floor,
-            self.step_floor,
-        )?;
-        check_target("target", self.target)
+        self.schedules.check()?;
+        check_target(self.target)
     }
 }
 
@@ -79,13 +67,9 @@ impl Default for BasOptions {
         BasOptions {
             iterations: 2000,
             max_evaluations: None,
-            antenna: 0.05,
-            step: 0.05,
-            decay: 0.95,
-            antenna_floor: 1e-4,
-            step_floor: 1e-4,
             target: Real::NEG_INFINITY,
             start: BasStart::Centre,
+            schedules: Schedules::new(0.05, 0.05, 0.95, 1e-4, 1e-4),
         }
     }
 }
@@ -120,7 +104,7 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
     let mut best_f = sane(f(&x));
     let mut best_x = x.clone();
     let mut evaluations = 1;
-    let (mut d, mut delta) = (o.antenna, o.step);
+    let (mut d, mut delta) = (o.schedules.antenna, o.schedules.step);
     let limit = Limit::of(o.iterations, o.max_evaluations, 1, 3);
     let mut trace = Vec::with_capacity(limit.iterations);
     while trace.len() < limit.iterations && !reached(&trace, o.target) {
@@ -148,7 +132,7 @@ pub fn bas(f: &Fitness, b: &Bounds, o: &BasOptions, rng: &mut Rng) -> Result<Met
             best_f = fy;
             best_x.copy_from_slice(&x);
         }
-        (d, delta) = eq13(d, delta, o.decay, o.antenna_floor, o.step_floor);
+        (d, delta) = o.schedules.next(d, delta);
         trace.push(best_f);
     }
     Ok(MetaResult::new(

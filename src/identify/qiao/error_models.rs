@@ -47,6 +47,10 @@ use crate::numeric::{matrix_rpy, Frame, Mat3, Real, Vec3};
 use crate::robot::jacobian::{log_orientation_rows, pose_rows, Columns};
 use crate::robot::{Chain, Param, Robot};
 
+/// The options key that picks a pose-error model (`ls`, `bas`, `pso`, `bas-pso`); errors
+/// about the model name it.
+pub const ERROR_MODEL: &str = "error_model";
+
 /// The pose-error model of an identification (see the module docs for the formulas).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -179,7 +183,7 @@ pub fn residual_and_jacobian(
     let rows = model.rows();
     if out_r.len() != rows || out_j.nrows() != rows || out_j.ncols() != params.len() {
         return Err(Error::setting(
-            "error_model",
+            ERROR_MODEL,
             format!(
                 "{model} needs a residual of {rows} and a Jacobian of {rows}×{}",
                 params.len()
@@ -392,9 +396,7 @@ pub fn identify(
     k: Real,
     weights: Option<&[Real]>,
 ) -> Result<ModelFit> {
-    if iterations == 0 {
-        return Err(Error::setting("iterations", "must be at least 1"));
-    }
+    crate::identify::qiao::search::check_iterations(iterations)?;
     let problem =
         PoseErrorProblem::new(model, nominal, params, qs, measured, k)?.with_weights(weights)?;
     let options = LsOptions {

@@ -9,10 +9,11 @@
 use serde::Deserialize;
 
 use crate::error::{finite_positive, Error, Result};
-use crate::identify::qiao::error_models::ErrorModel;
+use crate::identify::options;
+use crate::identify::qiao::error_models::{ErrorModel, ERROR_MODEL};
 use crate::identify::qiao::{
     bas, bas_pso, pso, BasOptions, BasPsoOptions, Bounds, Fitness, MetaProblem, MetaResult,
-    PsoOptions,
+    PsoOptions, Schedules,
 };
 use crate::identify::{CalibrationProblem, Identified, Method, Termination};
 use crate::numeric::rng::Rng;
@@ -22,17 +23,24 @@ use crate::numeric::Real;
 pub trait Search: std::fmt::Debug + Send + Sync {
     /// Checks the option values.
     fn check(&self) -> Result<()>;
+    /// The schedules of eq. 13, when the search has them (their keys are read into them).
+    fn schedules(&mut self) -> Option<&mut Schedules> {
+        None
+    }
     /// Minimises `f` over `b`.
     fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult>;
 }
 
 /// Each search's options check themselves and run their search.
 macro_rules! search {
-    ($options:ty, $run:path) => {
+    ($options:ty, $run:path $(, $($schedules:ident).+)?) => {
         impl Search for $options {
             fn check(&self) -> Result<()> {
                 <$options>::check(self)
             }
+            $(fn schedules(&mut self) -> Option<&mut Schedules> {
+                Some(&mut self.$($schedules).+)
+            })?
             fn search(&self, f: &Fitness, b: &Bounds, rng: &mut Rng) -> Result<MetaResult> {
                 $run(f, b, self, rng)
             }
@@ -40,17 +48,25 @@ macro_rules! search {
     };
 }
 
-search!(BasOptions, bas);
+search!(BasOptions, bas, schedules);
 search!(PsoOptions, pso);
-search!(BasPsoOptions, bas_pso);
+search!(BasPsoOptions, bas_pso, beetle.schedules);
 
 /// Options of `bas`, `pso` and `bas-pso` (docs/formats.md `[[methods]]`): the search's own
-/// options and the search box. Deserialised from one table: `bound_mm` and `bound_rad`
-/// here, every other key into the search's options (which refuse unknown keys).
-#[derive(Clone, Debug)]
+/// options and the search box. Deserialised from one table: the keys [`SearchBox`] declares
+/// go to `bounds`, every other key into the search's options (which refuse unknown keys).
+#[derive(Clone, Debug, Default)]
 pub struct Metaheuristic<S> {
     /// The search and its options.
     pub search: S,
+    /// The box searched, and the fitness.
+    pub bounds: SearchBox,
+}
+
+/// The box a search explores around the nominal values, and the fitness it minimises.
+#[derive(Clone, Debug, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SearchBox {
     /// Half-width of the search box on length parameters, mm. Default 2.
     pub bound_mm: Real,
     /// Half-width of the search box on angle parameters, rad. Default 0.02.
@@ -64,66 +80,49 @@ pub struct Metaheuristic<S> {
     pub error_model: Option<ErrorModel>,
 }
 
-impl<'de, S: serde::de::DeserializeOwned> Deserialize<'de> for Metaheuristic<S> {
-    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        use serde::de::Error as _;
-        let mut t = toml::Table::deserialize(d)?;
-        let bounds = crate::robot::names::take_keys(
-            &mut t,
-            &["bound_mm", "bound_rad", "bound_compliance", "error_model"],
-        );
-        let bound = |key: &str, default: Real| match bounds.get(key) {
-            None => Ok(default),
-            Some(v) => Real::deserialize(v.clone()).map_err(D::Error::custom),
-        };
-        let bound_mm = bound("bound_mm", default_bound_mm())?;
-        let bound_rad = bound("bound_rad", default_bound_rad())?;
-        let bound_compliance = bound("bound_compliance", default_bound_compliance())?;
-        let error_model = bounds
-            .get("error_model")
-            .map(|v| ErrorModel::deserialize(v.clone()).map_err(D::Error::custom))
-            .transpose()?;
-        let search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
-        Ok(Metaheuristic {
-            search,
-            bound_mm,
-            bound_rad,
-            bound_compliance,
-            error_model,
-        })
+impl Default for SearchBox {
+    fn default() -> Self {
+        SearchBox {
+            bound_mm: 2.0,
+            bound_rad: 0.02,
+            bound_compliance: 1e-5,
+            error_model: None,
+        }
     }
 }
 
-fn default_bound_mm() -> Real {
-    2.0
-}
-
-fn default_bound_rad() -> Real {
-    0.02
-}
-
-fn default_bound_compliance() -> Real {
-    1e-5
-}
-
-impl<S: Default> Default for Metaheuristic<S> {
-    fn default() -> Self {
-        Metaheuristic {
-            search: S::default(),
-            bound_mm: default_bound_mm(),
-            bound_rad: default_bound_rad(),
-            bound_compliance: default_bound_compliance(),
-            error_model: None,
+impl<'de, S> Deserialize<'de> for Metaheuristic<S>
+where
+    S: Search + Default + serde::de::DeserializeOwned,
+{
+    /// The box's keys to [`SearchBox`], the schedules' keys (if the search has schedules) to
+    /// [`Schedules`] over the search's defaults, the rest to the search's options.
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let mut t = toml::Table::deserialize(d)?;
+        let bounds = options::split::<SearchBox>(&mut t);
+        let schedules = S::default()
+            .schedules()
+            .is_some()
+            .then(|| options::split::<Schedules>(&mut t));
+        let mut search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
+        if let (Some(given), Some(s)) = (schedules, search.schedules()) {
+            *s = options::with_defaults(&*s, given).map_err(D::Error::custom)?;
         }
+        Ok(Metaheuristic {
+            bounds: SearchBox::deserialize(toml::Value::Table(bounds)).map_err(D::Error::custom)?,
+            search,
+        })
     }
 }
 
 impl<S: Search> Method for Metaheuristic<S> {
     fn check(&self) -> Result<()> {
         self.search.check()?;
-        finite_positive("bound_mm", self.bound_mm)?;
-        finite_positive("bound_rad", self.bound_rad)?;
-        finite_positive("bound_compliance", self.bound_compliance)
+        let b = &self.bounds;
+        finite_positive("bound_mm", b.bound_mm)?;
+        finite_positive("bound_rad", b.bound_rad)?;
+        finite_positive("bound_compliance", b.bound_compliance)
     }
 
     /// The search's best point; [`Termination::TargetReached`] when it stopped at its target
@@ -141,8 +140,9 @@ impl<S: Search> Method for Metaheuristic<S> {
         )?
         .with_weights(problem.weights.as_deref())?
         .with_payloads(problem.data.payload_kg.as_deref())?;
-        let bounds = mp.bounds(self.bound_mm, self.bound_rad, self.bound_compliance);
-        let r = match self.error_model {
+        let b = &self.bounds;
+        let bounds = mp.bounds(b.bound_mm, b.bound_rad, b.bound_compliance);
+        let r = match b.error_model {
             None | Some(ErrorModel::DirectFk) => {
                 let f = |x: &[Real]| mp.fitness(x);
                 self.search.search(&f, &bounds, rng)?
@@ -197,12 +197,12 @@ impl LinearFitness {
     pub fn new(model: ErrorModel, problem: &CalibrationProblem) -> Result<LinearFitness> {
         if problem.params.iter().any(|p| p.is_compliance()) {
             return Err(Error::setting(
-                "error_model",
+                ERROR_MODEL,
                 "the pose-error models (Qiao 2021 §2) are kinematic: search joint \
                  compliances without error_model",
             ));
         }
-        let frames = problem.measured_frames("error_model")?;
+        let frames = problem.measured_frames(ERROR_MODEL)?;
         let (r, j) = crate::identify::qiao::error_models::stack(
             model,
             problem.nominal,

@@ -49,7 +49,9 @@ mod search;
 pub use bas::{bas, BasOptions, BasStart};
 pub use fitness::{qiao_fitness, qiao_term, MetaProblem, DEFAULT_K};
 pub use pso::{bas_pso, pso, BasPsoOptions, BeetleTerm, PsoOptions, Velocity};
-pub use search::{halton, halton_population, halton_population_at, Bounds, Fitness, MetaResult};
+pub use search::{
+    halton, halton_population, halton_population_at, Bounds, Fitness, MetaResult, Schedules,
+};
 
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;

@@ -4,8 +4,9 @@
 
 use serde::Deserialize;
 
-use crate::error::{check_count, Error, Result};
-use crate::identify::qiao::error_models::ErrorModel;
+use crate::error::{Error, Result};
+use crate::identify::qiao::error_models::{ErrorModel, ERROR_MODEL};
+use crate::identify::qiao::search::check_iterations;
 use crate::identify::{CalibrationProblem, Identified, Method};
 use crate::numeric::rng::Rng;
 
@@ -27,7 +28,7 @@ fn default_iterations() -> usize {
 
 impl Method for PoseErrorLs {
     fn check(&self) -> Result<()> {
-        check_count("iterations", self.iterations)
+        check_iterations(self.iterations)
     }
 
     /// Runs the Gauss–Newton iteration of
@@ -39,12 +40,12 @@ impl Method for PoseErrorLs {
     fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
         if problem.params.iter().any(|p| p.is_compliance()) {
             return Err(Error::setting(
-                "error_model",
+                ERROR_MODEL,
                 "the pose-error models (Qiao 2021 §2) are kinematic: identify joint \
                  compliances with ls, ridge, igg3, lm or a search",
             ));
         }
-        let frames = problem.measured_frames("error_model")?;
+        let frames = problem.measured_frames(ERROR_MODEL)?;
         let fit = crate::identify::qiao::error_models::identify(
             self.error_model,
             problem.nominal,

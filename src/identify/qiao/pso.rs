@@ -5,10 +5,11 @@ use rand::Rng as _;
 use rayon::prelude::*;
 
 use super::search::{
-    check_budget, check_schedules, check_target, eq13, halton, offset, primes, random_direction,
-    reached, sane, sign, Bounds, Fitness, Limit, MetaResult, HALTON_SKIP,
+    check_budget, check_iterations, check_target, halton, offset, primes, random_direction,
+    reached, sane, sign, Bounds, Fitness, Limit, MetaResult, Schedules, HALTON_SKIP,
 };
 use crate::error::{check_count, finite_non_negative, finite_positive, Error, Result};
+use crate::identify::options;
 use crate::numeric::rng::Rng;
 use crate::numeric::Real;
 
@@ -46,7 +47,7 @@ pub struct PsoOptions {
     pub c2: Real,
     /// Velocity damping. Default [`Velocity::Constriction`] (Qiao eq. 12); the key
     /// `inertia = [start, end]` selects [`Velocity::Inertia`].
-    #[serde(rename = "inertia", deserialize_with = "inertia")]
+    #[serde(rename = "inertia", deserialize_with = "inertia_weights")]
     pub velocity: Velocity,
     /// Largest velocity component. Default 0.5.
     pub max_velocity: Real,
@@ -77,7 +78,8 @@ impl Default for PsoOptions {
 /// beetle term. Widths and velocities are fractions of each coordinate's range. Qiao gives
 /// the form of the update and the 0.95 decay but no values of `c1`, `c2`, `c3`, `d`, `δ`: the
 /// defaults are Clerc's `c1 = c2 = 2.05` and this implementation's choice for the rest. Read
-/// from one table: the keys of [`BeetleTerm`] go to `beetle`, every other key to `swarm`.
+/// from one table: the keys [`BeetleTerm`] declares go to `beetle` (the schedules' keys to
+/// its schedules, see [`crate::identify::Metaheuristic`]), every other key to `swarm`.
 #[derive(Clone, Debug, Default)]
 pub struct BasPsoOptions {
     /// The swarm (population, iterations — three evaluations per particle each —,
@@ -93,27 +95,17 @@ pub struct BasPsoOptions {
 pub struct BeetleTerm {
     /// Weight `c3` of the beetle velocity `B` (eq. 12). Default 1.0.
     pub c3: Real,
-    /// Initial antenna width `d` (eq. 13). Default 0.1.
-    pub antenna: Real,
-    /// Initial beetle step `δ` (eq. 13). Default 0.1.
-    pub step: Real,
-    /// Decay factor of both schedules (eq. 13: 0.95). Default 0.95.
-    pub decay: Real,
-    /// `d0` of eq. 13 (the width tends to `d0 / (1 − decay)`). Default 1e-6.
-    pub antenna_floor: Real,
-    /// `δ0` of eq. 13 (the step tends to `δ0 / (1 − decay)`). Default 1e-6.
-    pub step_floor: Real,
+    /// The schedules of eq. 13, keys of their own ([`Schedules`]). Default: width and step
+    /// 0.1, decay 0.95, floors 1e-6.
+    #[serde(skip)]
+    pub schedules: Schedules,
 }
 
 impl Default for BeetleTerm {
     fn default() -> Self {
         BeetleTerm {
             c3: 1.0,
-            antenna: 0.1,
-            step: 0.1,
-            decay: 0.95,
-            antenna_floor: 1e-6,
-            step_floor: 1e-6,
+            schedules: Schedules::new(0.1, 0.1, 0.95, 1e-6, 1e-6),
         }
     }
 }
@@ -122,17 +114,7 @@ impl<'de> serde::Deserialize<'de> for BasPsoOptions {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         use serde::de::Error as _;
         let mut swarm = toml::Table::deserialize(d)?;
-        let beetle = crate::robot::names::take_keys(
-            &mut swarm,
-            &[
-                "c3",
-                "antenna",
-                "step",
-                "decay",
-                "antenna_floor",
-                "step_floor",
-            ],
-        );
+        let beetle = options::split::<BeetleTerm>(&mut swarm);
         Ok(BasPsoOptions {
             swarm: PsoOptions::deserialize(toml::Value::Table(swarm)).map_err(D::Error::custom)?,
             beetle: BeetleTerm::deserialize(toml::Value::Table(beetle))
@@ -146,7 +128,9 @@ fn yes() -> bool {
 }
 
 /// `inertia = [start, end]`: the inertia weights of [`Velocity::Inertia`].
-fn inertia<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Velocity, D::Error> {
+fn inertia_weights<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> std::result::Result<Velocity, D::Error> {
     let [start, end] = <[Real; 2] as serde::Deserialize>::deserialize(d)?;
     Ok(Velocity::Inertia { start, end })
 }
@@ -168,17 +152,18 @@ struct Swarm {
 
 fn check_swarm(s: &Swarm) -> Result<()> {
     check_count("population", s.population)?;
-    check_count("iterations", s.iterations)?;
+    check_iterations(s.iterations)?;
     check_budget(s.max_evaluations, s.population, s.per_iteration())?;
-    finite_non_negative("c1", s.c1)?;
+    let c1 = "c1";
+    finite_non_negative(c1, s.c1)?;
     finite_non_negative("c2", s.c2)?;
     finite_positive("max_velocity", s.max_velocity)?;
-    check_target("target", s.target)?;
+    check_target(s.target)?;
     match s.velocity {
         Velocity::Constriction => {
             if s.c1 + s.c2 <= 4.0 {
                 return Err(Error::setting(
-                    "c1",
+                    c1,
                     format!(
                         "the constriction factor needs c1 + c2 > 4, got {}",
                         s.c1 + s.c2
@@ -193,7 +178,7 @@ fn check_swarm(s: &Swarm) -> Result<()> {
     }
     if let Some(b) = s.beetle {
         finite_non_negative("c3", b.c3)?;
-        check_schedules(b.antenna, b.step, b.decay, b.antenna_floor, b.step_floor)?;
+        b.schedules.check()?;
     }
     Ok(())
 }
@@ -329,7 +314,9 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
         }
         Velocity::Inertia { .. } => 1.0,
     };
-    let (mut d, mut delta) = s.beetle.map_or((0.0, 0.0), |bt| (bt.antenna, bt.step));
+    let (mut d, mut delta) = s
+        .beetle
+        .map_or((0.0, 0.0), |bt| (bt.schedules.antenna, bt.schedules.step));
     let limit = s.limit();
     let mut trace = Vec::with_capacity(limit.iterations);
     while trace.len() < limit.iterations && !reached(&trace, s.target) {
@@ -412,7 +399,7 @@ fn swarm(f: &Fitness, b: &Bounds, s: &Swarm, rng: &mut Rng) -> Result<MetaResult
             }
         }
         if let Some(bt) = s.beetle {
-            (d, delta) = eq13(d, delta, bt.decay, bt.antenna_floor, bt.step_floor);
+            (d, delta) = bt.schedules.next(d, delta);
         }
         trace.push(gbest_f);
     }

@@ -4,7 +4,8 @@
 
 use rand::Rng as _;
 
-use crate::error::{finite_non_negative, finite_positive, Error, Result};
+use crate::error::{Error, Result};
+use crate::identify::options;
 use crate::numeric::rng::Rng;
 use crate::numeric::Real;
 
@@ -172,17 +173,13 @@ pub(super) fn check_budget(
 /// The fitness to minimise.
 pub type Fitness<'f> = dyn Fn(&[Real]) -> Real + Sync + 'f;
 
-fn check_decay(key: &str, v: Real) -> Result<()> {
-    if v.is_finite() && (0.0..1.0).contains(&v) {
-        Ok(())
-    } else {
-        Err(Error::setting(key, format!("must be in [0, 1), got {v}")))
-    }
-}
-
-pub(super) fn check_target(key: &str, v: Real) -> Result<()> {
+/// Checks the `target` fitness of a search: below +∞.
+pub(super) fn check_target(v: Real) -> Result<()> {
     if v.is_nan() || v == Real::INFINITY {
-        Err(Error::setting(key, format!("must be below +∞, got {v}")))
+        Err(Error::setting(
+            "target",
+            format!("must be below +∞, got {v}"),
+        ))
     } else {
         Ok(())
     }
@@ -198,20 +195,58 @@ pub(super) fn sane(v: Real) -> Real {
     }
 }
 
-/// Checks the settings of eq. 13's schedules: initial width and step positive, decay in
-/// [0, 1), floors at least 0.
-pub(super) fn check_schedules(
-    antenna: Real,
-    step: Real,
-    decay: Real,
-    d0: Real,
-    delta0: Real,
-) -> Result<()> {
-    finite_positive("antenna", antenna)?;
-    finite_positive("step", step)?;
-    check_decay("decay", decay)?;
-    finite_non_negative("antenna_floor", d0)?;
-    finite_non_negative("step_floor", delta0)
+/// The antenna width and step schedules of eq. 13, `d ← decay·d + d0`, `δ ← decay·δ + δ0`,
+/// of BAS and of BAS-PSO's beetle term (each with its own defaults). Widths and steps are
+/// fractions of each coordinate's range. The checks are on the fields: a bad value is
+/// refused as it is read, and [`Schedules::check`] reads values set in code the same way.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Schedules {
+    /// Initial antenna width `d`, > 0.
+    #[serde(deserialize_with = "options::positive")]
+    pub antenna: Real,
+    /// Initial step `δ`, > 0.
+    #[serde(deserialize_with = "options::positive")]
+    pub step: Real,
+    /// Decay factor of both schedules (Qiao: 0.95), in [0, 1).
+    #[serde(deserialize_with = "options::fraction")]
+    pub decay: Real,
+    /// `d0`: the width tends to `d0 / (1 − decay)`, ≥ 0.
+    #[serde(rename = "antenna_floor", deserialize_with = "options::non_negative")]
+    pub d0: Real,
+    /// `δ0`: the step tends to `δ0 / (1 − decay)`, ≥ 0.
+    #[serde(rename = "step_floor", deserialize_with = "options::non_negative")]
+    pub delta0: Real,
+}
+
+impl Schedules {
+    /// Width and step `d`, `δ` from `antenna`, `step`, decaying by `decay` towards the
+    /// floors `d0 / (1 − decay)`, `δ0 / (1 − decay)`.
+    pub const fn new(antenna: Real, step: Real, decay: Real, d0: Real, delta0: Real) -> Self {
+        Schedules {
+            antenna,
+            step,
+            decay,
+            d0,
+            delta0,
+        }
+    }
+
+    /// Checks the values (as a scenario's are checked); the error names the key.
+    pub fn check(&self) -> Result<()> {
+        options::recheck(self)
+    }
+
+    /// One step of eq. 13: the next `(d, δ)`.
+    #[inline]
+    pub(super) fn next(&self, d: Real, delta: Real) -> (Real, Real) {
+        eq13(d, delta, self.decay, self.d0, self.delta0)
+    }
+}
+
+/// The options key of a search's iteration count, checked here for every search.
+pub(super) fn check_iterations(n: usize) -> Result<()> {
+    crate::error::check_count("iterations", n)
 }
 
 /// The `index`-th element of the van der Corput sequence in `base` (the radical inverse of

@@ -189,13 +189,16 @@ fn bad_options_are_refused_by_name() {
     );
     assert_eq!(
         refused(
-            |o: &mut BasPsoOptions| o.beetle.antenna = Real::INFINITY,
+            |o: &mut BasPsoOptions| o.beetle.schedules.antenna = Real::INFINITY,
             hybrid
         ),
         "antenna"
     );
     let beetle = |o: &BasOptions| bas(&sphere, &b, o, &mut stream(3, "y"));
-    assert_eq!(refused(|o: &mut BasOptions| o.decay = 1.0, beetle), "decay");
+    assert_eq!(
+        refused(|o: &mut BasOptions| o.schedules.decay = 1.0, beetle),
+        "decay"
+    );
     assert_eq!(
         refused(|o: &mut BasOptions| o.iterations = 0, beetle),
         "iterations"

@@ -1,0 +1,169 @@
+//! Reading the methods' options structs: each method's options are one
+//! `#[derive(Deserialize)]` struct (`deny_unknown_fields`, defaults), and its keys are the
+//! struct's fields, nowhere else. When one `[[methods]]` table feeds two structs (the
+//! robust ridge's ridge and weights, a search and its box), [`split`] hands each struct the
+//! keys it declares, read from the struct itself ([`fields`]), so no list of keys is kept by
+//! hand.
+
+use serde::de::{self, DeserializeOwned, Visitor};
+use serde::Serialize;
+
+/// The keys of the derived `Deserialize` struct `T` (its fields under their serde names),
+/// as serde's derive declares them; empty for a type that is not a derived struct.
+pub fn fields<T: DeserializeOwned>() -> &'static [&'static str] {
+    let mut out: &'static [&'static str] = &[];
+    let _ = T::deserialize(Fields(&mut out));
+    out
+}
+
+/// A deserializer that records the field list a derived struct asks for and reads nothing.
+struct Fields<'a>(&'a mut &'static [&'static str]);
+
+impl<'de> de::Deserializer<'de> for Fields<'_> {
+    type Error = de::value::Error;
+
+    fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
+        Err(de::Error::custom("not a struct"))
+    }
+
+    fn deserialize_struct<V: Visitor<'de>>(
+        self,
+        _: &'static str,
+        fields: &'static [&'static str],
+        _: V,
+    ) -> Result<V::Value, Self::Error> {
+        *self.0 = fields;
+        Err(de::Error::custom("fields recorded"))
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+        option unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+        ignored_any
+    }
+}
+
+/// Deserialises `t`; on failure names the key as (key, message): the first whose removal makes the rest
+/// deserialise (an unknown key, or a value of the wrong type).
+pub fn read<T: DeserializeOwned>(t: &toml::Table) -> Result<T, (String, String)> {
+    let text = |e: toml::de::Error| e.to_string().trim_end().to_string();
+    match T::deserialize(toml::Value::Table(t.clone())) {
+        Ok(v) => Ok(v),
+        Err(e) => {
+            for k in t.keys() {
+                let mut rest = t.clone();
+                let v = rest.remove(k);
+                if T::deserialize(toml::Value::Table(rest)).is_ok() {
+                    let mut one = toml::Table::new();
+                    one.insert(k.clone(), v.unwrap_or(toml::Value::Boolean(false)));
+                    let msg = match T::deserialize(toml::Value::Table(one)) {
+                        Err(e1) => text(e1),
+                        Ok(_) => text(e),
+                    };
+                    return Err((k.clone(), msg));
+                }
+            }
+            // A required key with a bad value: the key that fails alone for another reason
+            // than the missing required ones.
+            for (k, v) in t {
+                let mut one = toml::Table::new();
+                one.insert(k.clone(), v.clone());
+                if let Err(e1) = T::deserialize(toml::Value::Table(one)) {
+                    let msg = text(e1);
+                    if !msg.contains("missing field") {
+                        return Err((k.clone(), msg));
+                    }
+                }
+            }
+            Err((String::new(), text(e)))
+        }
+    }
+}
+
+/// Checks options built in code the way a scenario's are read: `v` written as a table and
+/// read back, so that checks declared on the fields (`deserialize_with`) apply; the error
+/// names the key.
+pub fn recheck<T: Serialize + DeserializeOwned>(v: &T) -> crate::Result<()> {
+    let t = toml::Table::try_from(v).map_err(|e| crate::Error::setting("", e.to_string()))?;
+    read::<T>(&t)
+        .map(|_| ())
+        .map_err(|(key, msg)| crate::Error::setting(key, msg))
+}
+
+/// `v`, a number, refused unless finite and above 0.
+pub fn positive<'de, D: serde::Deserializer<'de>>(d: D) -> Result<crate::numeric::Real, D::Error> {
+    number(d, |v| v > 0.0, "positive")
+}
+
+/// `v`, a number, refused unless finite and at least 0.
+pub fn non_negative<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<crate::numeric::Real, D::Error> {
+    number(d, |v| v >= 0.0, "non-negative")
+}
+
+/// `v`, a number, refused unless in [0, 1).
+pub fn fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<crate::numeric::Real, D::Error> {
+    number(d, |v| (0.0..1.0).contains(&v), "in [0, 1)")
+}
+
+fn number<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    holds: impl Fn(crate::numeric::Real) -> bool,
+    what: &str,
+) -> Result<crate::numeric::Real, D::Error> {
+    let v = <crate::numeric::Real as serde::Deserialize>::deserialize(d)?;
+    if v.is_finite() && holds(v) {
+        Ok(v)
+    } else {
+        Err(de::Error::custom(format!(
+            "must be finite and {what}, got {v}"
+        )))
+    }
+}
+
+/// Removes the keys of the struct `T` from `table` and returns them as a table of their own.
+pub fn split<T: DeserializeOwned>(table: &mut toml::Table) -> toml::Table {
+    fields::<T>()
+        .iter()
+        .filter_map(|k| table.remove(*k).map(|v| (k.to_string(), v)))
+        .collect()
+}
+
+/// `T` read from `given` with the values of `defaults` for the keys `given` lacks: for a
+/// struct whose defaults depend on the method that embeds it.
+pub fn with_defaults<T: Serialize + DeserializeOwned>(
+    defaults: &T,
+    given: toml::Table,
+) -> Result<T, toml::de::Error> {
+    let mut t = toml::Table::try_from(defaults).map_err(de::Error::custom)?;
+    t.extend(given);
+    T::deserialize(toml::Value::Table(t))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Debug, PartialEq, Serialize, serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Two {
+        a: f64,
+        #[serde(rename = "b_key")]
+        b: usize,
+    }
+
+    #[test]
+    fn a_struct_names_its_keys() {
+        assert_eq!(fields::<Two>(), ["a", "b_key"]);
+        assert!(fields::<f64>().is_empty());
+        let mut t: toml::Table = toml::from_str("a = 1.5\nb_key = 2\nc = 3").unwrap();
+        let mine = split::<Two>(&mut t);
+        assert_eq!(mine.len(), 2);
+        assert_eq!(t.keys().collect::<Vec<_>>(), ["c"]);
+        let mut only_b = toml::Table::new();
+        only_b.insert("b_key".into(), toml::Value::Integer(7));
+        let two = with_defaults(&Two { a: 0.5, b: 1 }, only_b).unwrap();
+        assert_eq!(two, Two { a: 0.5, b: 7 });
+    }
+}
