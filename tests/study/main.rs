@@ -8,3 +8,4 @@ mod harness;
 mod intervals;
 mod report;
 mod sweeps;
+mod unmodelled;
