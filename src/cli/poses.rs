@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 use calbench::calibrate::Registration;
 use calbench::error::Error;
-use calbench::poses::{RobotPoseModel, SelectOptions};
+use calbench::poses::SelectOptions;
 use calbench::report::{self, output::PoseList, Output};
 use calbench::robot::param_sets;
 use calbench::sim::poses::sample_region;
@@ -99,20 +99,14 @@ pub fn run(args: &PosesArgs) -> Result<()> {
     let with_base = sc.registration == Registration::Identify;
     let mut g = calbench::numeric::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
-    let mut separation = None;
-    let params = if full {
-        // As a scenario's `-full` strategies: every joint parameter, no separation.
-        let all = param_sets::full_params(&nominal, measure, with_base);
-        param_sets::optimisable(&nominal, &all, measure)
-    } else if c.separate {
-        let (kept, s) =
-            plan::separated_params(&nominal, measure, with_base, &pool, c.separate_threshold);
-        separation = Some(s);
-        kept
-    } else {
-        param_sets::identified_params(&nominal, measure, with_base)
+    let scored = match (full, c.separate) {
+        (true, _) => plan::ScoredModel::Full,
+        (false, true) => plan::ScoredModel::Separated(c.separate_threshold),
+        (false, false) => plan::ScoredModel::Plain,
     };
-    let model = RobotPoseModel::new(&nominal, &params, measure);
+    let plain = param_sets::identified_params(&nominal, measure, with_base);
+    let (model, params, separation) =
+        plan::optimiser_model(&nominal, measure, with_base, &pool, scored, &plain);
     let mut opts = SelectOptions::new(count);
     opts.objective = c.objective;
     let sel = calbench::poses::select(&model, &pool, optimiser, &opts, &mut g)?;

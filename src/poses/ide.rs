@@ -7,6 +7,13 @@
 //!    ·N(0, 1), element by element, brought inside the limits by the reverse search of
 //!    eqs. 23–24 around ε. This population is the fixed library the difference vectors are
 //!    drawn from (the paper's "备选测量构型库").
+//!
+//!    **Changed from the paper:** Guo's eq. 19 is x = ε + ε·Gauss(0, 1), noise proportional
+//!    to each joint value with a standard deviation of 100 % of it. A joint at 0 would then
+//!    never move, a prismatic joint (mm) and a revolute one (rad) would be perturbed on
+//!    unrelated scales, and most values would land past the limits (to be pulled back by
+//!    eqs. 23–24). calbench scales the noise by the joint's range, σ·(q_max − q_min), σ =
+//!    `sigma` (docs/formats.md; REPRODUCTION.md, Guo 2024).
 //! 2. Per generation g = 1..G, with the adaptive factor F = F0 − log2(1 + (g − 1)/G) (eq. 21),
 //!    for each of `population` trials:
 //!    - **mutation** (eq. 20): e = ε_opt + F (x_r1 − x_r2) + F (x_r3 − x_r4), r1..r4 distinct;

@@ -64,10 +64,14 @@ pub struct RobotPoseModel {
     measure: Measure,
     limits: Vec<(Real, Real)>,
     scale: Option<Vec<Real>>,
+    /// An orthonormal basis (k × r) of the row space of the parameters' Jacobian: the model's
+    /// columns are J·basis ([`RobotPoseModel::on_row_space`]).
+    basis: Option<DMatrix<Real>>,
 }
 
 thread_local! {
     static SCRATCH: RefCell<DMatrix<Real>> = RefCell::new(DMatrix::zeros(0, 0));
+    static RAW: RefCell<DMatrix<Real>> = RefCell::new(DMatrix::zeros(0, 0));
 }
 
 impl RobotPoseModel {
@@ -82,7 +86,44 @@ impl RobotPoseModel {
             measure,
             limits: robot.joints.iter().map(|j| j.limits).collect(),
             scale: None,
+            basis: None,
         }
+    }
+
+    /// The same model scored on its nonzero spectrum: the Jacobian J of the parameters
+    /// (scaled, when set) is replaced by J·V, V an orthonormal basis of J's row space over the
+    /// poses `qs` (the right singular vectors whose singular values exceed 1e-9 of the
+    /// largest). A structurally rank-deficient model (Guo 2024's full model, eq. 7, and its
+    /// reconstructed model J_p, eq. 27) has singular values that are zero at every pose set,
+    /// which make every observability index zero (eqs. 9–15); J·V has exactly J's nonzero
+    /// singular values at any pose set whose Jacobian has the same null space as over `qs`
+    /// (generic poses), so the indices compare pose sets on the model as it is, with no
+    /// parameter left out. `qs` should be generic (e.g. the candidate pool). A model of
+    /// full rank keeps its singular values (V is then square).
+    pub fn on_row_space(mut self, qs: &[Vec<Real>]) -> Self {
+        self.basis = None;
+        let (r, k) = (self.measure.rows(), self.cols.len());
+        let mut j = DMatrix::zeros(r * qs.len(), k);
+        let mut block = DMatrix::zeros(r, k);
+        for (i, q) in qs.iter().enumerate() {
+            self.jacobian_block_into(q, &mut block);
+            j.rows_mut(r * i, r).copy_from(&block);
+        }
+        let svd = j.svd(false, true);
+        let v_t = svd.v_t.expect("v_t was requested");
+        let max = svd
+            .singular_values
+            .iter()
+            .fold(0.0 as Real, |a, &b| a.max(b));
+        let keep: Vec<usize> = (0..svd.singular_values.len())
+            .filter(|&i| svd.singular_values[i] > 1e-9 * max)
+            .collect();
+        let mut basis = DMatrix::zeros(k, keep.len());
+        for (c, &i) in keep.iter().enumerate() {
+            basis.column_mut(c).copy_from(&v_t.row(i).transpose());
+        }
+        self.basis = Some(basis);
+        self
     }
 
     /// The same model with column `c` multiplied by `scale[c]` (e.g. the inverse column norms
@@ -106,9 +147,20 @@ impl RobotPoseModel {
         Ok(self)
     }
 
-    /// The parameters, one per column.
+    /// The parameters, one per column (before any [`RobotPoseModel::on_row_space`]).
     pub fn params(&self) -> &[Param] {
         self.cols.params()
+    }
+
+    /// The Jacobian block of the parameters, scaled when set (no basis).
+    fn raw_block(&self, q: &[Real], out: &mut DMatrix<Real>) {
+        out.fill(0.0);
+        pose_rows(&self.chain, &self.cols, q, self.measure, out, 0);
+        if let Some(sc) = &self.scale {
+            for (mut c, f) in out.column_iter_mut().zip(sc) {
+                c *= *f;
+            }
+        }
     }
 }
 
@@ -117,7 +169,7 @@ impl PoseModel for RobotPoseModel {
         self.limits.len()
     }
     fn n_params(&self) -> usize {
-        self.cols.len()
+        self.basis.as_ref().map_or(self.cols.len(), |b| b.ncols())
     }
     fn rows_per_pose(&self) -> usize {
         self.measure.rows()
@@ -126,7 +178,7 @@ impl PoseModel for RobotPoseModel {
         &self.limits
     }
     fn jacobian_block(&self, q: &[Real], out: &mut DMatrixViewMut<Real>) {
-        let (r, k) = (self.measure.rows(), self.cols.len());
+        let (r, k) = (self.measure.rows(), self.n_params());
         SCRATCH.with(|s| {
             let mut s = s.borrow_mut();
             if s.shape() != (r, k) {
@@ -137,13 +189,19 @@ impl PoseModel for RobotPoseModel {
         });
     }
     fn jacobian_block_into(&self, q: &[Real], out: &mut DMatrix<Real>) {
-        out.fill(0.0);
-        pose_rows(&self.chain, &self.cols, q, self.measure, out, 0);
-        if let Some(sc) = &self.scale {
-            for (mut c, f) in out.column_iter_mut().zip(sc) {
-                c *= *f;
+        let Some(basis) = &self.basis else {
+            self.raw_block(q, out);
+            return;
+        };
+        RAW.with(|s| {
+            let mut s = s.borrow_mut();
+            let shape = (self.measure.rows(), self.cols.len());
+            if s.shape() != shape {
+                *s = DMatrix::zeros(shape.0, shape.1);
             }
-        }
+            self.raw_block(q, &mut s);
+            out.gemm(1.0, &*s, basis, 0.0);
+        });
     }
 }
 

@@ -6,8 +6,9 @@
 //! it, the branch step removes each parameter in turn and computes the GCN of what is left
 //! (tables 2–3); backward elimination then removes the parameter whose removal leaves the
 //! smallest GCN (ties to the later parameter), and repeats on the reduced block until it is
-//! under the threshold. The kept parameters of all blocks form the reconstructed
-//! model J_p (eq. 27), whose GCN ends the table.
+//! under the threshold. The kept parameters of all blocks form Guo's model J_p° (eq. 28,
+//! `separated` in the table); without the partners too, Guo's J_p (eq. 27, `reduced`, the
+//! table's last row).
 //!
 //! Differences from the paper, on purpose: the paper averages each GCN over pose counts
 //! 1..100 of one random set (§4.1); here the decisions use the GCN of all the poses passed in,
@@ -35,10 +36,16 @@ use crate::robot::{Param, Robot};
 /// The outcome of [`separate`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Separation {
-    /// Parameters kept (the reconstructed model J_p, eq. 27), in the input order.
+    /// Parameters kept by the one-at-a-time elimination (Guo's J_p°, eq. 28), in the input
+    /// order.
     pub kept: Vec<Param>,
     /// Parameters separated as ill-conditioned, in the order removed.
     pub removed: Vec<Param>,
+    /// Guo's reading of eq. 27, in the input order: every parameter whose single removal
+    /// brings its block to or under the threshold (both members of a dependent pair: Guo's
+    /// a4, a5, d2 and d3), with those [`Separation::removed`] holds. The model without them is
+    /// Guo's J_p ([`Separation::reduced`]); `kept` is Guo's J_p° (eq. 28).
+    pub ill_conditioned: Vec<Param>,
     /// The GCN table: `full` (all parameters), each block (`theta`, `d`, …, tables 1), each
     /// branch `d-d2` (block `d` without `d2`, tables 2–3), each reduced block `d[-d3]` (after
     /// the removals so far), and `separated` (the kept parameters).
@@ -81,9 +88,19 @@ impl Separation {
         self.lookup("full", |r| r.gcn)
     }
 
-    /// GCN of the reconstructed model J_p (the kept parameters, eq. 27).
+    /// GCN of the kept parameters (Guo's J_p°, eq. 28).
     pub fn gcn_separated(&self) -> Real {
         self.lookup("separated", |r| r.gcn)
+    }
+
+    /// Guo's reconstructed model J_p (eq. 27): the input parameters without every
+    /// [`Separation::ill_conditioned`] one, in the input order.
+    pub fn reduced(&self, params: &[Param]) -> Vec<Param> {
+        params
+            .iter()
+            .copied()
+            .filter(|p| !self.ill_conditioned.contains(p))
+            .collect()
     }
 
     /// Guo's GCN (averaged over pose counts) of the full model.
@@ -91,7 +108,7 @@ impl Separation {
         self.lookup("full", |r| r.gcn_mean)
     }
 
-    /// Guo's GCN (averaged over pose counts) of the reconstructed model J_p.
+    /// Guo's GCN (averaged over pose counts) of the kept parameters (J_p°, eq. 28).
     pub fn gcn_mean_separated(&self) -> Real {
         self.lookup("separated", |r| r.gcn_mean)
     }
@@ -129,6 +146,7 @@ impl Separation {
             "blocks": blocks,
             "removed": names(&self.removed),
             "kept": names(&self.kept),
+            "ill_conditioned": names(&self.ill_conditioned),
             "gcn_full": self.gcn_full(),
             "gcn_separated": self.gcn_separated(),
             "gcn_mean_full": self.gcn_mean_full(),
@@ -182,6 +200,8 @@ pub fn separate(
         }
     }
     let mut removed_cols: Vec<usize> = Vec::new();
+    // Guo's eq. 27: the parameters whose single removal brings their block under.
+    let mut single: Vec<usize> = Vec::new();
     let mut offending = Vec::new();
     let mut before = Vec::with_capacity(blocks.len());
     for (name, idx) in &blocks {
@@ -208,6 +228,9 @@ pub fn separate(
                     .collect();
                 let g = sub_gcn(&rest);
                 record(format!("{name}{tag}-{}", params[idx[pos]]), g);
+                if tag.is_empty() && g.0 <= threshold {
+                    single.push(idx[pos]);
+                }
                 // Smallest GCN, ties (and NaN-free infinities) to the later parameter.
                 if best.is_none_or(|(bg, _)| g.0 <= bg.0) {
                     best = Some((g, pos));
@@ -228,6 +251,13 @@ pub fn separate(
         .filter(|c| !removed_cols.contains(c))
         .collect();
     record("separated".to_string(), sub_gcn(&kept_idx));
+    let ill: Vec<usize> = all
+        .iter()
+        .copied()
+        .filter(|c| removed_cols.contains(c) || single.contains(c))
+        .collect();
+    let reduced_idx: Vec<usize> = all.iter().copied().filter(|c| !ill.contains(c)).collect();
+    record("reduced".to_string(), sub_gcn(&reduced_idx));
     let blocks = blocks
         .iter()
         .zip(before)
@@ -250,6 +280,7 @@ pub fn separate(
     Separation {
         kept: kept_idx.iter().map(|&c| params[c]).collect(),
         removed: removed_cols.iter().map(|&c| params[c]).collect(),
+        ill_conditioned: ill.iter().map(|&c| params[c]).collect(),
         table,
         blocks,
     }
@@ -298,7 +329,12 @@ mod tests {
             .map(|r| r.gcn);
         assert!(reduced.is_some_and(|g| g <= 1e2), "{:?}", sep.table);
         assert!(sep.kept.len() + sep.removed.len() == params.len());
-        let sep_gcn = sep.table.last().map(|r| r.gcn).unwrap_or(0.0);
+        let sep_gcn = sep.gcn_separated();
+        // Guo's J_p removes both members of the pair.
+        assert!(sep.ill_conditioned.contains(&Param::D(1)), "{:?}", sep);
+        assert!(sep.ill_conditioned.contains(&Param::D(2)), "{:?}", sep);
+        assert!(!sep.reduced(&params).contains(&Param::D(1)));
+        assert_eq!(sep.table.last().map(|r| r.label.as_str()), Some("reduced"));
         let full_gcn = sep.table[0].gcn;
         assert!(sep_gcn <= full_gcn, "{sep_gcn} vs {full_gcn}");
     }
@@ -311,8 +347,9 @@ mod tests {
         let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);
         assert!(sep.removed.is_empty());
         assert_eq!(sep.kept, params);
-        // full, a, separated
-        assert_eq!(sep.table.len(), 3);
+        // full, a, separated, reduced
+        assert_eq!(sep.table.len(), 4);
+        assert!(sep.ill_conditioned.is_empty());
         // Guo's average flags the block that one pose cannot see in full: the first count's
         // 3 × 3 block has rank 2 (x1, x2 and x3 are all normal to the parallel z2 and z3).
         assert!(sep.blocks[0].gcn_before < 1.0, "{:?}", sep.blocks);

@@ -19,6 +19,7 @@ pub mod sag;
 pub mod settings;
 pub mod tracker;
 pub mod truth;
+pub mod unmodelled;
 
 pub use settings::{
     ErrorKind, ErrorSettings, MeasureSetting, OutlierSettings, ParamSelection, Region,
@@ -78,6 +79,45 @@ pub fn measure_poses(
     payloads: Option<&[Real]>,
     rng: &mut Rng,
 ) -> Result<Simulated> {
+    let reached = Reached {
+        commanded: qs,
+        actual: None,
+    };
+    measure_reached(true_robot, reached, tracker, outliers, sag, payloads, rng)
+}
+
+/// The joint values of a measurement: those commanded (recorded in the data) and, when the
+/// arm has error outside its model ([`unmodelled`]), those it reaches (the true frames'),
+/// one per commanded pose.
+#[derive(Clone, Copy)]
+pub struct Reached<'a> {
+    /// The commanded joint values.
+    pub commanded: &'a [Vec<Real>],
+    /// The reached ones; `None`: the commanded ones.
+    pub actual: Option<&'a [Vec<Real>]>,
+}
+
+/// [`measure_poses`] of an arm that reaches `reached.actual` when commanded to
+/// `reached.commanded`: the true frames (and sag) are those of the reached joint values, the
+/// data record the commanded ones.
+pub fn measure_reached(
+    true_robot: &Robot,
+    reached: Reached,
+    tracker: &Tracker,
+    outliers: Option<&OutlierSettings>,
+    sag: Option<&SagFn>,
+    payloads: Option<&[Real]>,
+    rng: &mut Rng,
+) -> Result<Simulated> {
+    let qs = reached.commanded;
+    let actual = reached.actual.unwrap_or(qs);
+    if actual.len() != qs.len() {
+        return Err(Error::Compute(format!(
+            "{} reached poses for {} commanded",
+            actual.len(),
+            qs.len()
+        )));
+    }
     if let Some(p) = payloads.filter(|p| p.len() != qs.len()) {
         return Err(Error::Compute(format!(
             "{} payloads for {} poses",
@@ -104,7 +144,7 @@ pub fn measure_poses(
     let mut sag_mm = Vec::with_capacity(m);
     let mut true_points = Vec::with_capacity(m);
     let mut true_rotations = Vec::with_capacity(if full_pose { m } else { 0 });
-    for (i, q) in qs.iter().enumerate() {
+    for (i, q) in actual.iter().enumerate() {
         let rigid = chain.fk(q);
         let world = match sag {
             Some(f) => f(true_robot, q, payloads.map(|p| p[i]))?,

@@ -9,13 +9,14 @@ use crate::numeric::{Frame, Real};
 use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::robot::identifiability::identifiable_generic;
 use crate::robot::jacobian::{jacobian, Columns};
-use crate::robot::param_sets::{ends, full_params, identified_params, optimisable};
+use crate::robot::param_sets::{ends, full_params, identified_params};
 use crate::robot::{Param, Robot};
 use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::sag::Compliance;
 use crate::sim::settings::{ErrorKind, ParamSelection, Region};
 use crate::sim::tracker::Tracker;
 use crate::sim::truth::{draw_errors, selected_params};
+use crate::sim::unmodelled::Unmodelled;
 use crate::sim::SagFn;
 use crate::study::scenario::{PoseStrategy, Registration, Scenario};
 use nalgebra::DMatrix;
@@ -135,21 +136,51 @@ pub struct Study {
     pub separation: Option<Separation>,
 }
 
-/// The separated model (Guo 2024 §3.1, eq. 27) as the pose optimisers use it: the joint
-/// parameters that the ill-conditioned parameter separation keeps over the poses `pool`, with
-/// the base and tool parameters of [`identified_params`], reduced to those pivoted QR finds
-/// identifiable ([`optimisable`]), in flat-vector order; and the separation itself.
-pub fn separated_params(
+/// Which model a pose optimiser scores (docs/formats.md `calibration.strategies`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ScoredModel {
+    /// Guo 2024's full model: every joint parameter with the tool and base parameters of
+    /// [`full_params`] (the `-full` strategies).
+    Full,
+    /// Guo 2024's reconstructed model J_p (eq. 27): the joint parameters without every
+    /// ill-conditioned one the separation at this GCN threshold finds
+    /// ([`Separation::ill_conditioned`]), with the base and tool parameters of
+    /// [`identified_params`] (`calibration.separate`).
+    Separated(Real),
+    /// These parameters as they are.
+    Plain,
+}
+
+/// The pose model an optimiser scores over the candidate pool `pool`, its parameters and,
+/// for [`ScoredModel::Separated`], the separation. [`ScoredModel::Plain`] scores `plain`.
+/// The full and the separated models are rank-deficient (Guo's GCNs of 2.9e35 and 2.3e18):
+/// both are scored on their nonzero spectrum ([`RobotPoseModel::on_row_space`] over `pool`),
+/// so that every one of their parameters counts and they differ by the separated ones.
+pub fn optimiser_model(
     robot: &Robot,
     measure: Measure,
     with_base: bool,
     pool: &[Vec<Real>],
-    threshold: Real,
-) -> (Vec<Param>, Separation) {
-    let sep = poses::separate(robot, &robot.joint_params(), pool, measure, threshold);
-    let mut v = sep.kept.clone();
-    v.extend(ends(&identified_params(robot, measure, with_base)));
-    (optimisable(robot, &v, measure), sep)
+    scored: ScoredModel,
+    plain: &[Param],
+) -> (RobotPoseModel, Vec<Param>, Option<Separation>) {
+    let (params, sep) = match scored {
+        ScoredModel::Plain => {
+            let model = RobotPoseModel::new(robot, plain, measure);
+            return (model, plain.to_vec(), None);
+        }
+        ScoredModel::Full => (full_params(robot, measure, with_base), None),
+        ScoredModel::Separated(threshold) => {
+            let joints = robot.joint_params();
+            let sep = poses::separate(robot, &joints, pool, measure, threshold);
+            let mut v = sep.reduced(&joints);
+            v.extend(ends(&identified_params(robot, measure, with_base)));
+            v.sort_by_key(|p| p.index(robot.dof()));
+            (v, Some(sep))
+        }
+    };
+    let model = RobotPoseModel::new(robot, &params, measure).on_row_space(pool);
+    (model, params, sep)
 }
 
 /// The parameters `scenario` identifies (`identification.params`): [`identified_params`],
@@ -283,26 +314,16 @@ impl Study {
                 PoseStrategy::Optimised(strategy) | PoseStrategy::OptimisedFull(strategy) => {
                     let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));
                     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
-                    let opt_params = if matches!(s, PoseStrategy::OptimisedFull(_)) {
-                        optimisable(
-                            &nominal,
-                            &full_params(&nominal, measure, with_base),
-                            measure,
-                        )
-                    } else if c.separate {
-                        let (kept, sep) = separated_params(
-                            &nominal,
-                            measure,
-                            with_base,
-                            &pool,
-                            c.separate_threshold,
-                        );
-                        separation.get_or_insert(sep);
-                        kept
-                    } else {
-                        kinematic.clone()
+                    let scored = match (s, c.separate) {
+                        (PoseStrategy::OptimisedFull(_), _) => ScoredModel::Full,
+                        (_, true) => ScoredModel::Separated(c.separate_threshold),
+                        _ => ScoredModel::Plain,
                     };
-                    let model = RobotPoseModel::new(&nominal, &opt_params, measure);
+                    let (model, _, sep) =
+                        optimiser_model(&nominal, measure, with_base, &pool, scored, &kinematic);
+                    if let Some(sep) = sep {
+                        separation.get_or_insert(sep);
+                    }
                     let mut opts = SelectOptions::new(c.count);
                     opts.objective = c.objective;
                     let sel = poses::select(&model, &pool, *strategy, &opts, &mut g)?;
@@ -408,6 +429,18 @@ pub fn true_robot(study: &Study, index: usize) -> (Vec<(Param, Real)>, Robot) {
     );
     let robot = study.nominal.with_errors(&errors);
     (errors, robot)
+}
+
+/// The error outside the kinematic model of trial `index` (docs/formats.md `[unmodelled]`),
+/// drawn from the trial's own `unmodelled` stream; `None` when the section adds nothing.
+pub fn unmodelled(study: &Study, index: usize) -> Option<Unmodelled> {
+    let settings = &study.scenario.unmodelled;
+    if !settings.is_active() {
+        return None;
+    }
+    let seed = rng::trial_seed(study.scenario.seed, index as u64);
+    let mut g = rng::stream(seed, "unmodelled");
+    Some(Unmodelled::draw(settings, &study.nominal, &mut g))
 }
 
 /// The study's gravity sag as the simulator's callback (the deflected tool frame), if any.

@@ -7,7 +7,7 @@
 
 use std::time::Instant;
 
-pub use super::plan::{calibration_rows, sag_fn, true_robot};
+pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
 use super::plan::{crb_trace, Study};
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
@@ -17,7 +17,8 @@ use crate::numeric::rng;
 use crate::numeric::{Frame, Real};
 use crate::robot::Robot;
 use crate::sim::poses::{sample_region, sample_region_keyed};
-use crate::sim::{measure_poses, SagFn, Simulated};
+use crate::sim::unmodelled::Unmodelled;
+use crate::sim::{measure_reached, Reached, SagFn, Simulated};
 
 /// What one method on one strategy's measurement gave in one trial.
 #[derive(Clone, Debug)]
@@ -113,11 +114,14 @@ pub fn validation_poses(study: &Study, index: usize) -> Result<Vec<Vec<Real>>> {
 /// and sag): once each, or, with `calibration.payloads_kg`, once per payload, every pose under
 /// the first payload, then every pose under the next, and so on (the measurement then
 /// records each row's payload).
+///
+/// With `unmodelled`, the arm reaches the rows' joint values with that error, in the order
+/// measured ([`Unmodelled::actual`]).
 pub fn measure_calibration(
     study: &Study,
     truth_robot: &Robot,
     qs: &[Vec<Real>],
-    sag: Option<&SagFn>,
+    (sag, unmodelled): (Option<&SagFn>, Option<&Unmodelled>),
     rng: &mut crate::numeric::rng::Rng,
 ) -> Result<Simulated> {
     let sc = &study.scenario;
@@ -131,7 +135,20 @@ pub fn measure_calibration(
         }
     };
     let outliers = (sc.outliers.count_for(qs.len())? > 0).then_some(&sc.outliers);
-    measure_poses(truth_robot, qs, &study.tracker, outliers, sag, loads, rng)
+    let actual = unmodelled.map(|u| u.actual(qs));
+    let reached = Reached {
+        commanded: qs,
+        actual: actual.as_deref(),
+    };
+    measure_reached(
+        truth_robot,
+        reached,
+        &study.tracker,
+        outliers,
+        sag,
+        loads,
+        rng,
+    )
 }
 
 /// One trial's measurements as an instrument would deliver them, with their truth
@@ -169,13 +186,19 @@ pub fn simulate_trial(study: &Study, trial: usize, key: &str) -> Result<Simulate
     let vqs = validation_poses(study, trial)?;
     let (sag, mut gm) = (sag_fn(study), rng::stream(seed, "measure"));
     let sag_ref = sag.as_deref();
-    let calibration = measure_calibration(study, &truth, &qs, sag_ref, &mut gm)?;
+    let um = unmodelled(study, trial);
+    let calibration = measure_calibration(study, &truth, &qs, (sag_ref, um.as_ref()), &mut gm)?;
     // The validation measurement records its payload when the scenario measures under loads.
     let loaded = sc.calibration.payloads_kg.is_some() || sc.validation.payload_kg.is_some();
     let vloads = loaded.then(|| vec![study.validation_payload(); vqs.len()]);
-    let validation = measure_poses(
+    let vactual = um.as_ref().map(|u| u.actual(&vqs));
+    let reached = Reached {
+        commanded: &vqs,
+        actual: vactual.as_deref(),
+    };
+    let validation = measure_reached(
         &truth,
-        &vqs,
+        reached,
         &study.tracker,
         None,
         sag_ref,
@@ -301,10 +324,16 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let sag = sag_fn(study);
     let sag_ref = sag.as_deref();
 
-    // Validation: fresh poses, true frames of the sagging true arm, free of tracker noise.
+    let um = unmodelled(study, index);
+
+    // Validation: fresh poses, true frames of the sagging true arm (at the joint values it
+    // reaches), free of tracker noise.
     let vqs = validation_poses(study, index)?;
     let vload = sc.validation.payload_kg;
-    let vtruth: Vec<Frame> = vqs
+    let vactual = um.as_ref().map(|u| u.actual(&vqs));
+    let vtruth: Vec<Frame> = vactual
+        .as_ref()
+        .unwrap_or(&vqs)
         .iter()
         .map(|q| match &sag_ref {
             Some(f) => f(&truth_robot, q, vload),
@@ -340,7 +369,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             study,
             &truth_robot,
             &qs,
-            cal_sag,
+            (cal_sag, um.as_ref()),
             &mut rng::stream(seed, "measure"),
         )?;
         // The calibration rows' noise-free true frames (the orientation where the tracker

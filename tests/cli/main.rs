@@ -9,6 +9,7 @@ mod common;
 
 mod cli;
 mod fuzz;
+mod guo;
 mod html;
 mod instruments;
 mod interchange;

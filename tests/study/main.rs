@@ -9,3 +9,4 @@ mod harness;
 mod intervals;
 mod report;
 mod sweeps;
+mod unmodelled;

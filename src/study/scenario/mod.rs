@@ -29,6 +29,7 @@ use crate::sim::settings::{
 };
 use crate::sim::truth::selected_params;
 pub use report::ReportSettings;
+use crate::sim::unmodelled::UnmodelledSettings;
 use sections::{
     strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
 };
@@ -59,6 +60,8 @@ struct RawScenario {
     outliers: OutlierSettings,
     #[serde(default)]
     compliance: ComplianceSettings,
+    #[serde(default)]
+    unmodelled: UnmodelledSettings,
     #[serde(default)]
     registration: RegistrationSection,
     #[serde(default)]
@@ -104,6 +107,8 @@ pub struct Scenario {
     pub outliers: OutlierSettings,
     /// Gravity sag.
     pub compliance: ComplianceSettings,
+    /// Error outside the kinematic model (joint harmonics, backlash).
+    pub unmodelled: UnmodelledSettings,
     /// Registration of the tracker frame.
     pub registration: Registration,
     /// Calibration poses.
@@ -293,6 +298,7 @@ impl Scenario {
         check(raw.errors.check())?;
         check(raw.tracker.check())?;
         check(raw.outliers.check())?;
+        check(raw.unmodelled.check())?;
 
         let c = raw.calibration;
         if c.count == 0 {
@@ -496,6 +502,7 @@ impl Scenario {
             tracker: raw.tracker,
             outliers: raw.outliers,
             compliance: raw.compliance,
+            unmodelled: raw.unmodelled,
             registration: raw.registration.method,
             calibration: Calibration {
                 count: c.count,
