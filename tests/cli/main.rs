@@ -17,6 +17,7 @@ mod noise;
 mod practice;
 mod realdata;
 mod refusals;
+mod results;
 mod strict_inputs;
 mod typed;
 mod worse;
