@@ -16,7 +16,9 @@
 //! - [`calibrate`]: registration with identification, validation, compensation;
 //! - [`study`]: scenarios and the Monte-Carlo harness;
 //! - [`report`]: the output files, plots and the regression check;
-//! - [`runner`]: running, resuming, sharding and merging a study, through the report's writers.
+//! - [`runner`]: running, resuming, sharding and merging a study, through the report's writers;
+//! - [`results`]: the results database (records of runs, identifications and tasks), the
+//!   history of a metric across versions and the tasks' leaderboard.
 #![warn(missing_docs)]
 
 pub mod error;
@@ -42,6 +44,8 @@ pub mod study;
 pub mod report;
 
 pub mod runner;
+
+pub mod results;
 
 /// The README's Rust examples ("Adding a method"), compiled and run as doctests.
 #[cfg(doctest)]

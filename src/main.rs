@@ -48,6 +48,13 @@ enum Command {
     /// One entry of a fixed real-data task under tasks/: identify on its calibration rows,
     /// score on its validation rows, write the identify outputs and task.json.
     Task(Box<cli::task::TaskArgs>),
+    /// Store the results of run, merge, identify and task folders in the results database.
+    Record(cli::record::RecordArgs),
+    /// The recorded metrics across versions (history.html, history.csv), and the
+    /// regressions of the latest version.
+    History(cli::history::HistoryArgs),
+    /// The tasks' leaderboard from the results database (leaderboard.html, .csv).
+    Leaderboard(cli::leaderboard::LeaderboardArgs),
 }
 
 fn main() {
@@ -71,6 +78,9 @@ fn main() {
         Some(Command::Import(a)) => cli::import::run(a),
         Some(Command::Compensate(a)) => cli::compensate::run(a),
         Some(Command::Poses(a)) => cli::poses::run(a),
+        Some(Command::Record(a)) => cli::record::run(a),
+        Some(Command::History(a)) => cli::history::run(a),
+        Some(Command::Leaderboard(a)) => cli::leaderboard::run(a),
     };
     if let Err(e) = done {
         eprintln!("error: {e:#}");

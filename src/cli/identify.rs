@@ -122,6 +122,8 @@ pub struct IdentifyArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub record: super::record::RecordFlags,
 }
 
 /// `--export`: the compensated robot's format besides `robot.toml`.
@@ -179,6 +181,14 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 /// validation table and a summary line. A measurement-kind file (docs/formats.md § 5.3) is
 /// written by [`super::identify_kind::write`].
 pub fn run(args: &IdentifyArgs) -> Result<()> {
+    let db = args.record.open()?;
+    identify(args)?;
+    let record = || Ok(calbench::results::Record::of_folder(&args.out, None)?);
+    args.record.finish(db, record)
+}
+
+/// [`run`] without the recording.
+fn identify(args: &IdentifyArgs) -> Result<()> {
     let kind = calbench::measurement::kind_csv::file_kind(&args.data).is_some();
     let outputs: &[&str] = if kind {
         &super::identify_kind::OUTPUTS

@@ -16,6 +16,8 @@ pub struct MergeArgs {
     /// Output folder.
     #[arg(long)]
     pub out: PathBuf,
+    #[command(flatten)]
+    pub record: super::record::RecordFlags,
 }
 
 /// Checks that the folders are the N shards of one run, writes the whole run's files and
@@ -24,6 +26,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     let out = &args.out;
     super::guard_out(out, &super::run::OUTPUTS, &args.dirs)?;
     writable_folder(out, &super::run::OUTPUTS)?;
+    let db = args.record.open()?;
     let r = calbench::runner::shard::merge(&args.dirs, out)?;
     print_table(&r);
     out!(
@@ -31,5 +34,6 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         args.dirs.len(),
         out.join("report.md").display()
     );
-    Ok(())
+    let record = || super::record::of_run(out, &r.scenario, calbench::results::Kind::Merge);
+    args.record.finish(db, record)
 }

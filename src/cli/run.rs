@@ -8,6 +8,7 @@ use anyhow::Result;
 
 use calbench::error::Error;
 use calbench::report::registration_study::{report_md, write_all};
+use calbench::results::Kind;
 use calbench::runner::run::{resume_study, run_study, Resumable};
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::registration_study::RegistrationScenario;
@@ -56,6 +57,8 @@ pub struct RunArgs {
     /// be running on this host (its pid was taken by another program).
     #[arg(long, requires = "resume")]
     pub force: bool,
+    #[command(flatten)]
+    pub record: super::record::RecordFlags,
 }
 
 /// `--shard I/N`.
@@ -76,6 +79,12 @@ pub fn default_study() -> Result<()> {
 pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(p) = &args.scenario {
         let table = super::scenario_table(p)?;
+        let whole = RegistrationScenario::is_one(&table) || InstrumentsScenario::is_one(&table);
+        if whole && args.record.record {
+            let why = "records the runs of Monte-Carlo studies; a registration or instruments \
+                       study has no entries to record";
+            return Err(Error::setting("--record", why).into());
+        }
         if RegistrationScenario::is_one(&table) {
             return registration_study(RegistrationScenario::from_table(table, p)?, args);
         }
@@ -91,7 +100,12 @@ pub fn run(args: &RunArgs) -> Result<()> {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }
     let shard = args.shard;
+    if shard.is_some() && args.record.record {
+        let why = "a shard is part of a run; record the merged run (`merge --record`)";
+        return Err(Error::setting("--record", why).into());
+    }
     let out = out_folder(args, &sc.name, &OUTPUTS)?;
+    let db = args.record.open()?;
     writable_folder(&out, &OUTPUTS)?;
     eprintln!(
         "running {}: {} trials{}{}",
@@ -114,7 +128,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
         shard,
     };
     let r = run_study(sc, &opts, &Terminal)?;
-    finished(&r)
+    finished(&r)?;
+    let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
+    args.record.finish(db, record)
 }
 
 /// The scenario of `args` (or the default study) with `--trials` and `--seed` applied.
@@ -148,9 +164,12 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     super::guard_out(dir, &OUTPUTS, &args.scenario)?;
     writable_folder(dir, &OUTPUTS)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
+    let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
     let r = resume_study(checked, args.threads, &Terminal)?;
-    finished(&r)
+    finished(&r)?;
+    let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
+    args.record.finish(db, record)
 }
 
 /// Prints a finished run's table and where its report is (or, for a shard, how to merge).

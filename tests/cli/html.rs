@@ -12,12 +12,12 @@ use crate::common::{
     calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario, SMALL_STUDY as SMALL,
 };
 
-fn ci() -> bool {
+pub(crate) fn ci() -> bool {
     std::env::var("CI").is_ok_and(|v| v == "true" || v == "1")
 }
 
 /// Debian's `chromium` (or another Chromium build on the PATH).
-fn chromium() -> Option<PathBuf> {
+pub(crate) fn chromium() -> Option<PathBuf> {
     let path = std::env::var_os("PATH")?;
     ["chromium", "chromium-browser", "google-chrome"]
         .iter()
@@ -129,7 +129,7 @@ fn screenshot(chrome: &Path, page: &Path, work: &Path) -> (f64, usize) {
 }
 
 /// The static checks of a page: one file that refers to nothing outside itself, under 3 MB.
-fn self_contained(page: &Path) -> String {
+pub(crate) fn self_contained(page: &Path) -> String {
     let html = read(page);
     for attr in ["src=", "href=", "url("] {
         for (i, _) in html.match_indices(attr) {
@@ -152,7 +152,7 @@ fn self_contained(page: &Path) -> String {
     html
 }
 
-fn browse(chrome: &Path, page: &Path, work: &Path, plots: usize) {
+pub(crate) fn browse(chrome: &Path, page: &Path, work: &Path, plots: usize) {
     std::fs::create_dir_all(work).unwrap();
     // 500 px: the narrowest window headless Chromium lays out (a phone's width).
     for width in [1280, 500] {

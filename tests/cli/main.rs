@@ -19,6 +19,7 @@ mod practice;
 mod realdata;
 mod refusals;
 mod report_baseline;
+mod results;
 mod strict_inputs;
 mod typed;
 mod worse;

@@ -8,7 +8,9 @@
 //! [`compare`] fill one each from results that are already computed.
 
 pub mod compare;
+pub mod history;
 pub mod identify;
+pub mod leaderboard;
 pub mod run;
 
 use std::fmt::Write as _;

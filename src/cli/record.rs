@@ -1,0 +1,110 @@
+//! `calbench record DIR… [--db PATH] [--scenario FILE] [--label L] [--machine NAME]`: the
+//! results of run, merge, identify and task folders stored in the results database; and the
+//! `--record` flags of `run`, `identify` and `merge`, which do it as they finish.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::Result;
+
+use calbench::results::{db_path, Db, Kind, Provenance, Record, Recorded};
+
+/// Arguments of `calbench record`.
+#[derive(clap::Args)]
+pub struct RecordArgs {
+    /// The folders to record: run or merge (summary.json), identify (identified.json) or
+    /// task (task.json) outputs.
+    #[arg(required = true)]
+    pub dirs: Vec<PathBuf>,
+    /// The results database (default: $CALBENCH_DB, else results/calbench.sqlite).
+    #[arg(long, value_name = "PATH")]
+    pub db: Option<PathBuf>,
+    /// The scenario file of the run folders (default: scenarios/<name>.toml, the name their
+    /// summary.json gives); its trials and seed are those of the run.
+    #[arg(long, value_name = "FILE")]
+    pub scenario: Option<PathBuf>,
+    /// The version label history orders and compares by (default: VERSION+COMMIT).
+    #[arg(long, value_name = "L")]
+    pub label: Option<String>,
+    /// The machine's name (default: the host name).
+    #[arg(long, value_name = "NAME")]
+    pub machine: Option<String>,
+}
+
+/// `--record`, `--db` and `--label` of `run`, `identify` and `merge`.
+#[derive(clap::Args, Clone, Default)]
+pub struct RecordFlags {
+    /// Record the results in the results database when the command finishes (`calbench
+    /// record`).
+    #[arg(long)]
+    pub record: bool,
+    /// With --record: the results database (default: $CALBENCH_DB, else
+    /// results/calbench.sqlite).
+    #[arg(long, value_name = "PATH", requires = "record")]
+    pub db: Option<PathBuf>,
+    /// With --record: the version label (default: VERSION+COMMIT).
+    #[arg(long, value_name = "L", requires = "record")]
+    pub label: Option<String>,
+}
+
+impl RecordFlags {
+    /// The database opened (and migrated) before any work, so that one calbench cannot use
+    /// is refused first; `None` without `--record`.
+    pub fn open(&self) -> Result<Option<Db>> {
+        if !self.record {
+            return Ok(None);
+        }
+        Ok(Some(Db::open(&db_path(self.db.as_deref()), true)?))
+    }
+
+    /// Records `record` in `db` (opened by [`RecordFlags::open`]) and says so.
+    pub fn finish(&self, db: Option<Db>, record: impl FnOnce() -> Result<Record>) -> Result<()> {
+        let Some(mut db) = db else {
+            return Ok(());
+        };
+        let record = record()?;
+        let p = Provenance::here(self.label.as_deref(), None);
+        report(&record, db.record(&record, &p)?, &db);
+        Ok(())
+    }
+}
+
+fn report(record: &Record, done: Recorded, db: &Db) {
+    match done {
+        Recorded::Added(id) => out!(
+            "recorded {} as {} #{id} of {} ({} entries, {} figures) in {}",
+            record.output.source_and_document.0,
+            record.kind.as_str(),
+            record.scenario.name,
+            record.results.entries.len(),
+            record.results.figures.len(),
+            db.path().display()
+        ),
+        Recorded::AlreadyThere(id) => out!(
+            "{}: already recorded as #{id} in {}; nothing added",
+            record.output.source_and_document.0,
+            db.path().display()
+        ),
+    }
+}
+
+/// Reads every folder first (a bad one is refused before anything is stored), then records
+/// each.
+pub fn run(args: &RecordArgs) -> Result<()> {
+    let records = args
+        .dirs
+        .iter()
+        .map(|d| Record::of_folder(d, args.scenario.as_deref()))
+        .collect::<calbench::Result<Vec<Record>>>()?;
+    let mut db = Db::open(&db_path(args.db.as_deref()), true)?;
+    let p = Provenance::here(args.label.as_deref(), args.machine.as_deref());
+    for r in &records {
+        let done = db.record(r, &p)?;
+        report(r, done, &db);
+    }
+    Ok(())
+}
+
+/// The record of a finished run or merge into `out` of the scenario `sc`.
+pub fn of_run(out: &Path, sc: &calbench::study::scenario::Scenario, kind: Kind) -> Result<Record> {
+    Ok(Record::of_run(out, sc, kind)?)
+}

@@ -1,0 +1,280 @@
+//! `history.html` and `history.csv` of `calbench history` (docs/formats.md): each metric of
+//! each scenario against the version labels recorded, per machine and entry, with its 95 %
+//! interval, and each step marked that `check`'s rule calls a regression or an improvement.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+use super::{escape, Page};
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+
+/// One recorded figure.
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// The scenario (task, identification).
+    pub scenario: String,
+    /// The machine it was recorded on.
+    pub machine: String,
+    /// `run`, `merge`, `identify` or `task`.
+    pub kind: String,
+    /// The entry.
+    pub entry: String,
+    /// The metric.
+    pub metric: String,
+    /// The version label.
+    pub label: String,
+    /// calbench's version.
+    pub version: String,
+    /// calbench's git commit.
+    pub git_commit: String,
+    /// When it was recorded (UTC).
+    pub recorded_at: String,
+    /// The value.
+    pub value: Real,
+    /// Its 95 % interval.
+    pub ci: Option<[Real; 2]>,
+    /// What the step from the record before it in its series did (`check`'s status), for
+    /// runs.
+    pub step: Option<&'static str>,
+}
+
+/// A CSV text of `header` and `rows` (quoted where needed).
+pub(crate) fn csv_text(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Result<String> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    w.write_record(header)
+        .map_err(|e| Error::Compute(e.to_string()))?;
+    for row in rows {
+        w.write_record(&row)
+            .map_err(|e| Error::Compute(e.to_string()))?;
+    }
+    let bytes = w.into_inner().map_err(|e| Error::Compute(e.to_string()))?;
+    String::from_utf8(bytes).map_err(|e| Error::Compute(e.to_string()))
+}
+
+/// An interval as two CSV cells (empty without one).
+pub(crate) fn ci_cells(ci: Option<[Real; 2]>) -> [String; 2] {
+    ci.map_or([String::new(), String::new()], |[l, h]| {
+        [l.to_string(), h.to_string()]
+    })
+}
+
+/// `history.csv`: one row per point.
+pub fn csv(points: &[Point]) -> Result<String> {
+    let header = "scenario,machine,kind,entry,metric,label,calbench_version,git_commit,\
+                  recorded_at,value,ci_lo,ci_hi,step";
+    let header: Vec<&str> = header.split(',').collect();
+    csv_text(
+        &header,
+        points.iter().map(|p| {
+            let [lo, hi] = ci_cells(p.ci);
+            let mut row = vec![p.scenario.clone(), p.machine.clone(), p.kind.clone()];
+            row.extend([p.entry.clone(), p.metric.clone(), p.label.clone()]);
+            row.extend([
+                p.version.clone(),
+                p.git_commit.clone(),
+                p.recorded_at.clone(),
+            ]);
+            row.extend([
+                p.value.to_string(),
+                lo,
+                hi,
+                p.step.unwrap_or("").to_string(),
+            ]);
+            row
+        }),
+    )
+}
+
+const COLOURS: [&str; 8] = [
+    "#1565c0", "#ef6c00", "#2e7d32", "#6a1b9a", "#00838f", "#ad1457", "#5d4037", "#455a64",
+];
+
+/// The SVG drawing of one metric: x the records in order (labelled by version label), one
+/// series per machine and entry, a bar for each interval, a red ring on a regression and a
+/// green one on an improvement.
+fn chart(points: &[&Point]) -> String {
+    let (w, h, left, right, top, bottom) = (960.0, 420.0, 80.0, 250.0, 20.0, 70.0);
+    let mut xs: Vec<(&str, &str)> = Vec::new();
+    for p in points {
+        let key = (p.recorded_at.as_str(), p.label.as_str());
+        if !xs.contains(&key) {
+            xs.push(key);
+        }
+    }
+    let x_of = |p: &Point| {
+        let i = xs
+            .iter()
+            .position(|k| *k == (p.recorded_at.as_str(), p.label.as_str()))
+            .unwrap_or(0);
+        left + (i as Real + 0.5) * (w - left - right) / xs.len().max(1) as Real
+    };
+    let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
+    for p in points {
+        let [a, b] = p.ci.unwrap_or([p.value, p.value]);
+        lo = lo.min(a.min(p.value));
+        hi = hi.max(b.max(p.value));
+    }
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+        let pad = lo.abs().max(1.0) * 0.05;
+        (lo, hi) = (lo - pad, hi + pad);
+    }
+    let pad = (hi - lo) * 0.08;
+    let (lo, hi) = (lo - pad, hi + pad);
+    let y_of = |v: Real| top + (hi - v) / (hi - lo) * (h - top - bottom);
+    let mut s = format!(
+        "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 {w} {h}\">\
+         <rect width=\"{w}\" height=\"{h}\" fill=\"#fff\"/>\
+         <g font-family=\"sans-serif\" font-size=\"12\" fill=\"#333\">"
+    );
+    for k in 0..=4 {
+        let v = lo + (hi - lo) * k as Real / 4.0;
+        let y = y_of(v);
+        let _ = write!(
+            s,
+            "<line x1=\"{left}\" x2=\"{}\" y1=\"{y:.1}\" y2=\"{y:.1}\" stroke=\"#e3e3e3\"/>\
+             <text x=\"{}\" y=\"{:.1}\" text-anchor=\"end\">{}</text>",
+            w - right,
+            left - 6.0,
+            y + 4.0,
+            escape(&format!("{v:.4}"))
+        );
+    }
+    for (i, (_, label)) in xs.iter().enumerate() {
+        let x = left + (i as Real + 0.5) * (w - left - right) / xs.len().max(1) as Real;
+        let _ = write!(
+            s,
+            "<text x=\"{x:.1}\" y=\"{:.1}\" text-anchor=\"end\" transform=\"rotate(-30 {x:.1} {:.1})\">{}</text>",
+            h - bottom + 16.0,
+            h - bottom + 16.0,
+            escape(label)
+        );
+    }
+    let mut series: BTreeMap<(&str, &str), Vec<&Point>> = BTreeMap::new();
+    for p in points {
+        series.entry((&p.machine, &p.entry)).or_default().push(p);
+    }
+    for (k, ((machine, entry), list)) in series.iter().enumerate() {
+        let c = COLOURS[k % COLOURS.len()];
+        let path: Vec<String> = list
+            .iter()
+            .map(|p| format!("{:.1},{:.1}", x_of(p), y_of(p.value)))
+            .collect();
+        let _ = write!(
+            s,
+            "<polyline fill=\"none\" stroke=\"{c}\" stroke-width=\"1.5\" points=\"{}\"/>",
+            path.join(" ")
+        );
+        for p in list {
+            let (x, y) = (x_of(p), y_of(p.value));
+            if let Some([a, b]) = p.ci {
+                let _ = write!(
+                    s,
+                    "<line x1=\"{x:.1}\" x2=\"{x:.1}\" y1=\"{:.1}\" y2=\"{:.1}\" stroke=\"{c}\"/>",
+                    y_of(a),
+                    y_of(b)
+                );
+            }
+            let _ = write!(
+                s,
+                "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"3.5\" fill=\"{c}\"/>"
+            );
+            let ring = match p.step {
+                Some("regression") => Some("#c62828"),
+                Some("improved") => Some("#2e7d32"),
+                _ => None,
+            };
+            if let Some(r) = ring {
+                let _ = write!(
+                    s,
+                    "<circle cx=\"{x:.1}\" cy=\"{y:.1}\" r=\"8\" fill=\"none\" stroke=\"{r}\" stroke-width=\"2.5\"/>"
+                );
+            }
+        }
+        let ly = top + 16.0 * (k as Real + 1.0);
+        let _ = write!(
+            s,
+            "<rect x=\"{}\" y=\"{:.1}\" width=\"12\" height=\"4\" fill=\"{c}\"/>\
+             <text x=\"{}\" y=\"{ly:.1}\">{}</text>",
+            w - right + 12.0,
+            ly - 5.0,
+            w - right + 30.0,
+            escape(&format!("{entry} ({machine})"))
+        );
+    }
+    s.push_str("</g></svg>");
+    s
+}
+
+/// `history.html`: per scenario, a figure per metric and the table of its points; the
+/// `regressions` of the latest versions at the top.
+pub fn page(points: &[Point], regressions: &[String]) -> String {
+    let mut page = Page::new(
+        "calbench history",
+        "Each recorded metric against the version labels, per machine and entry, with its \
+         95 % interval; a red ring marks a step that calbench check's rule calls a regression \
+         (worse by the tolerance and beyond the noise), a green ring an improvement.",
+    );
+    page.section("Latest versions");
+    if regressions.is_empty() {
+        page.fine("No regression of the latest version against the one before it.");
+    } else {
+        for r in regressions {
+            page.warning(r);
+        }
+    }
+    let mut by_scenario: BTreeMap<&str, BTreeMap<&str, Vec<&Point>>> = BTreeMap::new();
+    for p in points {
+        by_scenario
+            .entry(&p.scenario)
+            .or_default()
+            .entry(&p.metric)
+            .or_default()
+            .push(p);
+    }
+    if by_scenario.is_empty() {
+        page.para("Nothing recorded matches.");
+    }
+    for (scenario, metrics) in &by_scenario {
+        page.section(scenario);
+        page.plots_begin();
+        for (metric, list) in metrics {
+            page.figure(
+                &chart(list),
+                &format!("{scenario}: {metric}"),
+                &format!("{metric} of {scenario} against the version label, one line per machine and entry"),
+            );
+        }
+        page.plots_end();
+        for (metric, list) in metrics {
+            let rows: Vec<Vec<String>> = list
+                .iter()
+                .map(|p| {
+                    let head = [&p.label, &p.recorded_at, &p.machine, &p.entry].map(String::clone);
+                    let ci =
+                        p.ci.map_or(String::new(), |[a, b]| format!("{a:.6} – {b:.6}"));
+                    let step = p.step.unwrap_or("").to_string();
+                    let mut row = head.to_vec();
+                    row.extend([format!("{:.6}", p.value), ci, step]);
+                    row
+                })
+                .collect();
+            let flagged: Vec<bool> = list.iter().map(|p| p.step == Some("regression")).collect();
+            page.table_with(
+                metric,
+                &[
+                    "label",
+                    "recorded",
+                    "machine",
+                    "entry",
+                    "value",
+                    "95 % interval",
+                    "step",
+                ],
+                &rows,
+                |i| flagged[i].then_some("regressed"),
+            );
+        }
+    }
+    page.finish()
+}

@@ -1,0 +1,426 @@
+//! What a recorded folder holds, read into a [`Record`]: a run or merge folder
+//! (`summary.json`), an identify folder (`identified.json`) or a task folder (`task.json`,
+//! docs/formats.md "The results database").
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::provenance::sha256_hex;
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+use crate::report::check::{check_summary, entry_names};
+use crate::study::scenario::Scenario;
+
+/// What kind of output a record is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// `calbench run`'s folder.
+    Run,
+    /// `calbench merge`'s folder.
+    Merge,
+    /// `calbench identify`'s folder.
+    Identify,
+    /// `calbench task`'s folder.
+    Task,
+}
+
+impl Kind {
+    /// The name in the database's `kind` column.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Kind::Run => "run",
+            Kind::Merge => "merge",
+            Kind::Identify => "identify",
+            Kind::Task => "task",
+        }
+    }
+}
+
+/// One entry of a record (`method / poses [/ sweep value]` of a run).
+#[derive(Clone, Debug)]
+pub struct Entry {
+    /// The entry's name.
+    pub name: String,
+    /// Its method.
+    pub method: String,
+}
+
+/// One figure: a metric of an entry with its 95 % interval.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// The entry's name.
+    pub entry: String,
+    /// The metric's key path, e.g. `validation_after_mm.mean`.
+    pub metric: String,
+    /// Its value.
+    pub value: Real,
+    /// Its 95 % interval, where the output gives one.
+    pub ci: Option<[Real; 2]>,
+}
+
+/// A task entry's result (the contract of `task.json`).
+#[derive(Clone, Debug)]
+pub struct TaskResult {
+    /// The task's name.
+    pub task: String,
+    /// The ranking metric (lower is better).
+    pub metric: String,
+    /// The entry's value of it.
+    pub value: Real,
+    /// Its 95 % interval.
+    pub ci: Option<[Real; 2]>,
+    /// `closed` or `open`.
+    pub division: String,
+    /// The method.
+    pub method: String,
+    /// The models used, joined by `+`.
+    pub models: String,
+    /// `cv` or `given`.
+    pub chosen_by: String,
+    /// `calbench` or `python:<name>`.
+    pub entrant: String,
+    /// The authors' published figures: label, value, source, division.
+    pub published: Vec<(String, Real, String, String)>,
+}
+
+/// A scenario's (a task's, an identification's) name with its canonical text and the
+/// text's hex SHA-256 (a task's `task_hash`). The text is the scenario as run (TOML,
+/// overrides applied), an identification's settings (JSON), or a task's `task.json`.
+#[derive(Clone, Debug)]
+pub struct Canonical {
+    /// The name.
+    pub name: String,
+    /// The hash.
+    pub hash: String,
+    /// The text.
+    pub text: String,
+}
+
+/// Where a record comes from: the output document, its folder, and the seed and trials.
+#[derive(Clone, Debug)]
+pub struct Output {
+    /// The master seed, where there is one.
+    pub seed: Option<u64>,
+    /// The trial indices run per sweep point, e.g. `0..8`.
+    pub trials: Option<String>,
+    /// The folder it was read from, and the document as written there (`summary.json`,
+    /// `identified.json`, `task.json`): what the content hash covers, with the scenario's
+    /// hash, label and machine.
+    pub source_and_document: (String, String),
+}
+
+/// What a record holds: entries, figures, a task entry's result.
+#[derive(Clone, Debug, Default)]
+pub struct Results {
+    /// The entries: a run's `method / poses [/ sweep value]`, an identification's method,
+    /// a task's `entrant / method [/ models]`.
+    pub entries: Vec<Entry>,
+    /// Every figure of every entry.
+    pub figures: Vec<Figure>,
+    /// A task entry's result.
+    pub task: Option<TaskResult>,
+    /// The version and commit a task's `task.json` names (the binary that ran it).
+    pub ran_with: Option<(String, String)>,
+}
+
+/// A folder's results, ready to be stored.
+#[derive(Clone, Debug)]
+pub struct Record {
+    /// The kind of output.
+    pub kind: Kind,
+    /// What was run.
+    pub scenario: Canonical,
+    /// The output it was read from.
+    pub output: Output,
+    /// Its results.
+    pub results: Results,
+}
+
+fn read(path: &Path) -> Result<(String, Value)> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
+    Ok((text, v))
+}
+
+impl Record {
+    /// A record of `kind` read from `dir` with its `document`, of the scenario `name` whose
+    /// canonical text is `text`; no seed, trials, entries, figures or task yet.
+    fn new(kind: Kind, dir: &Path, document: String, name: String, text: String) -> Record {
+        Record {
+            kind,
+            scenario: Canonical {
+                name,
+                hash: sha256_hex(text.as_bytes()),
+                text,
+            },
+            output: Output {
+                seed: None,
+                trials: None,
+                source_and_document: (dir.display().to_string(), document),
+            },
+            results: Results::default(),
+        }
+    }
+
+    /// Reads the folder `dir`: a task folder (`task.json`), a run or merge folder
+    /// (`summary.json`, whose scenario is `scenario`, else `scenarios/<name>.toml` under the
+    /// current folder) or an identify folder (`identified.json`).
+    pub fn of_folder(dir: &Path, scenario: Option<&Path>) -> Result<Record> {
+        if dir.join("task.json").is_file() {
+            return Record::of_task(dir);
+        }
+        if dir.join("summary.json").is_file() {
+            let (_, v) = read(&dir.join("summary.json"))?;
+            let name = v.get("scenario").and_then(Value::as_str).unwrap_or("");
+            let fallback = Path::new("scenarios").join(format!("{name}.toml"));
+            let file = match scenario {
+                Some(p) => p.to_path_buf(),
+                None if !name.is_empty() && fallback.is_file() => fallback,
+                None => {
+                    return Err(Error::file(
+                        dir,
+                        "summary.json",
+                        format!(
+                            "the scenario `{name}` of this run is not at {}; give its file \
+                             with --scenario FILE",
+                            fallback.display()
+                        ),
+                    ))
+                }
+            };
+            let trials = v.get("trials").and_then(Value::as_u64).map(|n| n as usize);
+            let seed = v.get("seed").and_then(Value::as_u64);
+            let sc = Scenario::load(&file)?.with_run_overrides(trials, seed)?;
+            return Record::of_run(dir, &sc, Kind::Run);
+        }
+        if dir.join("identified.json").is_file() {
+            return Record::of_identify(dir);
+        }
+        Err(Error::file(
+            dir,
+            "folder",
+            "holds none of summary.json (run, merge), identified.json (identify) and \
+             task.json (task); nothing to record",
+        ))
+    }
+
+    /// The run or merge folder `dir` of the scenario `sc` (as run: overrides applied).
+    pub fn of_run(dir: &Path, sc: &Scenario, kind: Kind) -> Result<Record> {
+        let path = dir.join("summary.json");
+        let (document, v) = read(&path)?;
+        check_summary(&v, &path)?;
+        let named = v.get("scenario").and_then(Value::as_str).unwrap_or("");
+        let seed = v.get("seed").and_then(Value::as_u64);
+        if named != sc.name || seed.is_some_and(|s| s != sc.seed) {
+            return Err(Error::file(
+                &path,
+                "scenario",
+                format!(
+                    "the run is of `{named}` with seed {}, the scenario given is `{}` with \
+                     seed {}",
+                    seed.map_or("?".into(), |s| s.to_string()),
+                    sc.name,
+                    sc.seed
+                ),
+            ));
+        }
+        let scenario_text = toml::to_string(sc.table())
+            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
+        let names = entry_names(&v);
+        let results = v.get("results").and_then(Value::as_array);
+        let mut entries = Vec::new();
+        let mut figures = Vec::new();
+        for (name, e) in names.iter().zip(results.into_iter().flatten()) {
+            entries.push(Entry {
+                name: name.clone(),
+                method: e.get("method").and_then(Value::as_str).unwrap_or("").into(),
+            });
+            if let Value::Object(m) = e {
+                flatten(name, "", m, None, &mut figures);
+            }
+        }
+        let mut r = Record::new(kind, dir, document, sc.name.clone(), scenario_text);
+        (r.output.seed, r.output.trials) = (Some(sc.seed), Some(format!("0..{}", sc.trials)));
+        (r.results.entries, r.results.figures) = (entries, figures);
+        Ok(r)
+    }
+
+    fn of_identify(dir: &Path) -> Result<Record> {
+        let path = dir.join("identified.json");
+        let (document, v) = read(&path)?;
+        let Value::Object(m) = &v else {
+            return Err(Error::file(&path, "identified.json", "not a JSON object"));
+        };
+        let s = |k: &str| m.get(k).and_then(Value::as_str).unwrap_or("").to_string();
+        let method = s("method");
+        if method.is_empty() {
+            return Err(Error::file(
+                &path,
+                "method",
+                "missing: not an identify output",
+            ));
+        }
+        let settings: serde_json::Map<String, Value> = m
+            .iter()
+            .filter(|(_, v)| v.is_string())
+            .filter(|(k, _)| !k.ends_with("termination"))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        let scenario_text =
+            serde_json::to_string(&settings).map_err(|e| Error::Compute(e.to_string()))?;
+        let data = Path::new(&s("data"))
+            .file_name()
+            .map_or(String::new(), |f| f.to_string_lossy().into_owned());
+        let mut figures = Vec::new();
+        let kept: serde_json::Map<String, Value> = m
+            .iter()
+            .filter(|(k, v)| v.is_number() || k.starts_with("validation_"))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        flatten(&method, "", &kept, None, &mut figures);
+        let name = format!("identify {} {data}", s("robot"));
+        let mut r = Record::new(Kind::Identify, dir, document, name, scenario_text);
+        r.output.seed = m.get("seed").and_then(Value::as_u64);
+        r.results.entries = vec![Entry {
+            name: method.clone(),
+            method,
+        }];
+        r.results.figures = figures;
+        Ok(r)
+    }
+
+    fn of_task(dir: &Path) -> Result<Record> {
+        let path = dir.join("task.json");
+        let (document, v) = read(&path)?;
+        let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
+        if v.get("format").and_then(Value::as_str) != Some("calbench-task-1") {
+            return Err(bad("format", "must be \"calbench-task-1\""));
+        }
+        let text = |key: &str| -> Result<String> {
+            v.get(key)
+                .and_then(Value::as_str)
+                .map(str::to_string)
+                .ok_or_else(|| bad(key, "missing or not a string"))
+        };
+        let value = v
+            .get("value")
+            .and_then(Value::as_f64)
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| bad("value", "missing or not a finite number"))?;
+        let ci = interval(v.get("ci95"));
+        let division = text("division")?;
+        if division != "closed" && division != "open" {
+            return Err(bad("division", "must be \"closed\" or \"open\""));
+        }
+        let models = v
+            .get("models")
+            .and_then(Value::as_array)
+            .map(|a| {
+                a.iter()
+                    .filter_map(Value::as_str)
+                    .collect::<Vec<_>>()
+                    .join("+")
+            })
+            .unwrap_or_default();
+        let mut published = Vec::new();
+        for (i, p) in v
+            .get("published")
+            .and_then(Value::as_array)
+            .into_iter()
+            .flatten()
+            .enumerate()
+        {
+            let key = format!("published[{i}]");
+            let s = |k: &str| p.get(k).and_then(Value::as_str).map(str::to_string);
+            let (Some(label), Some(value)) = (s("label"), p.get("value").and_then(Value::as_f64))
+            else {
+                return Err(bad(&key, "needs a `label` and a numeric `value`"));
+            };
+            published.push((
+                label,
+                value,
+                s("source").unwrap_or_default(),
+                s("division").unwrap_or_else(|| "open".into()),
+            ));
+        }
+        let (task, metric, method) = (text("task")?, text("metric")?, text("method")?);
+        let entrant = text("entrant").unwrap_or_else(|_| "calbench".into());
+        let entry = if models.is_empty() {
+            format!("{entrant} / {method}")
+        } else {
+            format!("{entrant} / {method} / {models}")
+        };
+        let ran_with = match (text("calbench_version"), text("git_commit")) {
+            (Ok(v), Ok(c)) => Some((v, c)),
+            _ => None,
+        };
+        let mut r = Record::new(Kind::Task, dir, document.clone(), task.clone(), document);
+        r.scenario.hash = text("task_hash")?;
+        r.results.entries = vec![Entry {
+            name: entry.clone(),
+            method: method.clone(),
+        }];
+        r.results.figures = vec![Figure {
+            entry,
+            metric: metric.clone(),
+            value,
+            ci,
+        }];
+        r.results.ran_with = ran_with;
+        r.results.task = Some(TaskResult {
+            task,
+            metric,
+            value,
+            ci,
+            division,
+            method,
+            models,
+            chosen_by: text("chosen_by").unwrap_or_default(),
+            entrant,
+            published,
+        });
+        Ok(r)
+    }
+}
+
+fn interval(v: Option<&Value>) -> Option<[Real; 2]> {
+    let a = v?.as_array()?;
+    match (a.first()?.as_f64(), a.get(1)?.as_f64()) {
+        (Some(lo), Some(hi)) => Some([lo, hi]),
+        _ => None,
+    }
+}
+
+/// Every number under `m` as a figure `prefix + key` of `entry`, with the interval of its
+/// sibling `<key>_ci95` (or of the same key in `cis`, the `_ci95` sibling of `m` itself, as
+/// `param_rmse_ci95` is of `param_rmse`); objects are walked, `*_ci95`, strings and lists
+/// skipped.
+fn flatten(
+    entry: &str,
+    prefix: &str,
+    m: &serde_json::Map<String, Value>,
+    cis: Option<&Value>,
+    out: &mut Vec<Figure>,
+) {
+    for (k, v) in m {
+        if k.ends_with("_ci95") || (prefix.is_empty() && k == "sweep_value") {
+            continue;
+        }
+        let sibling = m.get(&format!("{k}_ci95"));
+        match v {
+            Value::Number(n) => {
+                if let Some(value) = n.as_f64() {
+                    out.push(Figure {
+                        entry: entry.to_string(),
+                        metric: format!("{prefix}{k}"),
+                        value,
+                        ci: interval(sibling).or_else(|| interval(cis.and_then(|c| c.get(k)))),
+                    });
+                }
+            }
+            Value::Object(inner) => flatten(entry, &format!("{prefix}{k}."), inner, sibling, out),
+            _ => {}
+        }
+    }
+}

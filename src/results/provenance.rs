@@ -1,0 +1,155 @@
+//! Where and with what a result was recorded: calbench's version and git commit, a hash of
+//! `Cargo.lock`, the machine (host name, CPU model, cores, operating system) and the date.
+//!
+//! The commit is fixed when calbench is built (`build.rs`: `CALBENCH_GIT_COMMIT` from the
+//! build's environment, else `git rev-parse HEAD` of the source tree, else `unknown` for a
+//! tarball without `.git`); `Cargo.lock` is compiled in, so neither needs the source tree
+//! when recording.
+
+use sha2::{Digest, Sha256};
+
+/// calbench's version (`Cargo.toml`).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The git commit calbench was built from, or `unknown`.
+pub const GIT_COMMIT: &str = env!("CALBENCH_GIT_COMMIT");
+
+/// `Cargo.lock` as built.
+const CARGO_LOCK: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.lock"));
+
+/// The lowercase hex SHA-256 of `bytes`.
+pub fn sha256_hex(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// The record's provenance.
+#[derive(Clone, Debug)]
+pub struct Provenance {
+    /// The version label history orders and groups by: `--label`, or `VERSION+COMMIT12`.
+    pub label: String,
+    /// calbench's version.
+    pub version: String,
+    /// calbench's git commit.
+    pub git_commit: String,
+    /// SHA-256 of `Cargo.lock`.
+    pub cargo_lock_hash: String,
+    /// The machine's name: `--machine`, else the host name.
+    pub machine: String,
+    /// The CPU model (`/proc/cpuinfo`'s `model name`, else the architecture).
+    pub cpu: String,
+    /// The logical cores.
+    pub cores: u32,
+    /// The operating system, its kernel release and architecture.
+    pub os: String,
+    /// When it was recorded, UTC, `YYYY-MM-DDTHH:MM:SSZ`.
+    pub recorded_at: String,
+}
+
+impl Provenance {
+    /// This calbench on this machine now; `label` and `machine` override the defaults.
+    pub fn here(label: Option<&str>, machine: Option<&str>) -> Provenance {
+        let short: String = GIT_COMMIT.chars().take(12).collect();
+        Provenance {
+            label: label.map_or_else(|| format!("{VERSION}+{short}"), str::to_string),
+            version: VERSION.to_string(),
+            git_commit: GIT_COMMIT.to_string(),
+            cargo_lock_hash: sha256_hex(CARGO_LOCK),
+            machine: machine.map_or_else(host_name, str::to_string),
+            cpu: cpu_model(),
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get() as u32),
+            os: os(),
+            recorded_at: utc_now(),
+        }
+    }
+}
+
+fn read_trimmed(path: &str) -> Option<String> {
+    let s = std::fs::read_to_string(path).ok()?;
+    let s = s.trim();
+    (!s.is_empty()).then(|| s.to_string())
+}
+
+fn host_name() -> String {
+    read_trimmed("/proc/sys/kernel/hostname")
+        .or_else(|| read_trimmed("/etc/hostname"))
+        .or_else(|| std::env::var("COMPUTERNAME").ok())
+        .unwrap_or_else(|| "unknown".to_string())
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}
+
+fn os() -> String {
+    let name = std::fs::read_to_string("/etc/os-release")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find_map(|l| l.strip_prefix("PRETTY_NAME="))
+                .map(|v| v.trim_matches('"').to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::OS.to_string());
+    match read_trimmed("/proc/sys/kernel/osrelease") {
+        Some(k) => format!("{name}, kernel {k}, {}", std::env::consts::ARCH),
+        None => format!("{name}, {}", std::env::consts::ARCH),
+    }
+}
+
+/// Now, UTC, as `YYYY-MM-DDTHH:MM:SSZ`.
+fn utc_now() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let (days, rem) = ((secs / 86_400) as i64, secs % 86_400);
+    let (y, m, d) = civil(days);
+    format!(
+        "{y:04}-{m:02}-{d:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    )
+}
+
+/// The proleptic Gregorian date of `days` after 1970-01-01 (H. Hinnant's days-to-civil).
+fn civil(days: i64) -> (i64, u32, u32) {
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = (doy - (153 * mp + 2) / 5 + 1) as u32;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 } as u32;
+    (yoe + era * 400 + i64::from(m <= 2), m, d)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn civil_dates() {
+        assert_eq!(civil(0), (1970, 1, 1));
+        assert_eq!(civil(19_782), (2024, 2, 29));
+        assert_eq!(civil(20_784), (2026, 11, 27));
+    }
+
+    #[test]
+    fn sha256_of_abc() {
+        assert_eq!(
+            sha256_hex(b"abc"),
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+    }
+}

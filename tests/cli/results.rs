@@ -1,0 +1,275 @@
+//! The results database end to end (docs/formats.md, "The results database"): `run
+//! --record` and `record` of ci-guard runs, idempotent recording, the refusal of a newer
+//! schema, `history` and its regressions (a planted one: the tracker noise ten times larger
+//! under a newer label), and `leaderboard` from task folders written to the `task.json`
+//! contract; both pages opened in Chromium.
+
+use std::path::Path;
+
+use crate::common::{calbench, calbench_ok, path_arg, read, root, tmp_dir, write_scenario};
+use crate::html::{browse, chromium, ci, self_contained};
+
+fn ci_guard() -> String {
+    root().join("scenarios/ci-guard.toml").display().to_string()
+}
+
+fn count(db: &Path, sql: &str) -> i64 {
+    let c = rusqlite::Connection::open(db).unwrap();
+    c.query_row(sql, [], |r| r.get(0)).unwrap()
+}
+
+fn stdout(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+#[test]
+fn recorded_ci_guard_runs_give_a_history_that_catches_a_planted_regression() {
+    let dir = tmp_dir("cli-results-history");
+    let db = dir.join("db/calbench.sqlite");
+    let sc = ci_guard();
+    let run = |seed: &str, out: &str, extra: &[&str]| {
+        let mut args = vec!["run", &sc, "--trials", "12", "--seed", seed, "--out"];
+        let out = dir.join(out);
+        args.push(path_arg(&out));
+        args.extend_from_slice(extra);
+        calbench_ok(&args)
+    };
+    // One run recorded as it finishes, one recorded afterwards.
+    let o = run(
+        "1",
+        "a",
+        &["--record", "--db", path_arg(&db), "--label", "v1"],
+    );
+    assert!(stdout(&o).contains("recorded"), "{}", stdout(&o));
+    run("2", "b", &[]);
+    let rec = |what: &str, label: &str| {
+        calbench_ok(&[
+            "record",
+            path_arg(&dir.join(what)),
+            "--db",
+            path_arg(&db),
+            "--scenario",
+            &sc,
+            "--label",
+            label,
+        ])
+    };
+    rec("b", "v1");
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 2);
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM entries"), 6);
+    let figures = count(&db, "SELECT COUNT(*) FROM figures");
+    // The first again: nothing added.
+    let again = rec("a", "v1");
+    assert!(
+        stdout(&again).contains("nothing added"),
+        "{}",
+        stdout(&again)
+    );
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 2);
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM figures"), figures);
+
+    let history = |extra: &[&str]| {
+        let mut args = vec!["history", "--db", path_arg(&db)];
+        args.extend_from_slice(extra);
+        calbench(&args)
+    };
+    let o = history(&["--regressions"]);
+    assert!(
+        o.status.success(),
+        "{}{}",
+        stdout(&o),
+        String::from_utf8_lossy(&o.stderr)
+    );
+
+    // The planted regression: the same scenario with the tracker's noise ten times larger,
+    // recorded under a newer label.
+    let noisy = read(&root().join("scenarios/ci-guard.toml")).replace(
+        "[tracker]\n",
+        "[tracker]\nmpe_a_um = 150.0\nmpe_b_um_per_m = 60.0\n",
+    );
+    let noisy = write_scenario(&dir, "noisy", &noisy);
+    calbench_ok(&[
+        "run",
+        path_arg(&noisy),
+        "--trials",
+        "12",
+        "--seed",
+        "3",
+        "--out",
+        path_arg(&dir.join("c")),
+        "--record",
+        "--db",
+        path_arg(&db),
+        "--label",
+        "v2",
+    ]);
+    let o = history(&["--regressions"]);
+    let text = stdout(&o);
+    assert!(!o.status.success(), "{text}");
+    assert!(
+        text.contains("ci-guard")
+            && text.contains("v1 → v2")
+            && text.contains("validation_after_mm"),
+        "{text}"
+    );
+
+    let out = dir.join("hist");
+    let o = history(&["--out", path_arg(&out), "--scenario", "ci-guard"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let csv = read(&out.join("history.csv"));
+    assert!(
+        csv.starts_with("scenario,machine,kind,entry,metric,label,"),
+        "{csv}"
+    );
+    assert_eq!(
+        csv.lines().filter(|l| l.contains(",v2,")).count(),
+        3 * 5,
+        "{csv}"
+    );
+    assert!(csv
+        .lines()
+        .any(|l| l.contains("validation_after_mm.mean") && l.ends_with(",regression")));
+    let page = out.join("history.html");
+    let html = self_contained(&page);
+    assert!(html.contains("validation_after_mm.mean") && html.contains("class=\"warn\""));
+    if let Some(chrome) = chromium() {
+        browse(&chrome, &page, &dir.join("browser"), 5);
+    } else {
+        assert!(!ci(), "no Chromium on the PATH");
+    }
+}
+
+/// A task folder as `calbench task` writes it (the `task.json` contract).
+fn task_folder(dir: &Path, name: &str, value: f64, division: &str, models: &str) {
+    std::fs::create_dir_all(dir.join(name)).unwrap();
+    let json = format!(
+        r#"{{
+  "format": "calbench-task-1",
+  "task": "barrett-wam",
+  "task_hash": "0f3c",
+  "metric": "validation_mean_mm",
+  "value": {value},
+  "ci95": [{}, {}],
+  "division": "{division}",
+  "method": "lm",
+  "models": [{models}],
+  "chosen_by": "cv",
+  "entrant": "calbench",
+  "calbench_version": "0.1.0", "git_commit": "abc",
+  "published": [ {{"label": "MDH + learned residual", "value": 2.92, "source": "Jacobi 2025, table 3", "division": "open"}} ]
+}}
+"#,
+        value - 0.2,
+        value + 0.2
+    );
+    std::fs::write(dir.join(name).join("task.json"), json).unwrap();
+}
+
+#[test]
+fn leaderboard_ranks_task_entries_beside_the_published_figures() {
+    let dir = tmp_dir("cli-results-board");
+    let db = dir.join("calbench.sqlite");
+    task_folder(&dir, "closed", 3.09, "closed", "\"kinematic\"");
+    task_folder(&dir, "open", 2.80, "open", "\"kinematic\", \"harmonics\"");
+    let closed = dir.join("closed");
+    let open = dir.join("open");
+    calbench_ok(&[
+        "record",
+        path_arg(&closed),
+        path_arg(&open),
+        "--db",
+        path_arg(&db),
+    ]);
+    let again = calbench_ok(&["record", path_arg(&open), "--db", path_arg(&db)]);
+    assert!(stdout(&again).contains("nothing added"));
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM tasks"), 2);
+    let out = dir.join("board");
+    calbench_ok(&[
+        "leaderboard",
+        "--db",
+        path_arg(&db),
+        "--out",
+        path_arg(&out),
+    ]);
+    let csv = read(&out.join("leaderboard.csv"));
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let pick: Vec<(&str, &str, &str, &str)> =
+        rows.iter().map(|r| (r[3], r[4], r[5], r[8])).collect();
+    assert_eq!(
+        pick,
+        [
+            ("closed", "1", "entry", "3.09"),
+            ("open", "1", "entry", "2.8"),
+            ("open", "2", "published", "2.92"),
+        ],
+        "{csv}"
+    );
+    let page = out.join("leaderboard.html");
+    let html = self_contained(&page);
+    assert!(html.contains("barrett-wam") && html.contains("MDH + learned residual"));
+    assert!(html.contains("closed division") && html.contains("open division"));
+    if let Some(chrome) = chromium() {
+        browse(&chrome, &page, &dir.join("browser"), 0);
+    } else {
+        assert!(!ci(), "no Chromium on the PATH");
+    }
+}
+
+#[test]
+fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
+    let dir = tmp_dir("cli-results-refusals");
+    let db = dir.join("new.sqlite");
+    rusqlite::Connection::open(&db)
+        .unwrap()
+        .pragma_update(None, "user_version", 99)
+        .unwrap();
+    task_folder(&dir, "t", 3.0, "closed", "\"kinematic\"");
+    let o = calbench(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        err.contains("new.sqlite") && err.contains("schema version 99") && err.contains("newer"),
+        "{err}"
+    );
+    assert_eq!(count(&db, "PRAGMA user_version"), 99);
+    std::fs::create_dir_all(dir.join("empty")).unwrap();
+    let o = calbench(&[
+        "record",
+        path_arg(&dir.join("empty")),
+        "--db",
+        path_arg(&dir.join("x.sqlite")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("empty") && err.contains("nothing to record"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("x.sqlite").exists()
+            || count(&dir.join("x.sqlite"), "SELECT COUNT(*) FROM runs") == 0
+    );
+    let o = calbench(&[
+        "history",
+        "--regressions",
+        "--db",
+        path_arg(&dir.join("absent.sqlite")),
+    ]);
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("absent.sqlite"));
+    let bad = dir.join("t/task.json");
+    std::fs::write(&bad, read(&bad).replace("\"closed\"", "\"middle\"")).unwrap();
+    let o = calbench(&[
+        "record",
+        path_arg(&dir.join("t")),
+        "--db",
+        path_arg(&dir.join("y.sqlite")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("task.json") && err.contains("division"),
+        "{err}"
+    );
+}
