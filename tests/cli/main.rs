@@ -18,5 +18,6 @@ mod practice;
 mod realdata;
 mod refusals;
 mod strict_inputs;
+mod task;
 mod typed;
 mod worse;
