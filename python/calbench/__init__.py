@@ -30,6 +30,7 @@ __all__ = [
     "Study",
     "Comparison",
     "identify",
+    "task",
     "simulate",
     "run",
     "identifiability",
@@ -530,3 +531,37 @@ def compare(a, b, *, tolerance=0.05):
         raise SettingError("setting `tolerance`: expected a number ≥ 0")
     tolerance = float(tolerance)
     return Comparison(_calbench.compare(os.fspath(a), os.fspath(b), tolerance), tolerance)
+
+
+def task(task, method="lm", *, models=None, name=None, out=None):
+    """One entry of a fixed real-data task: ``calbench task`` (docs/formats.md § 9).
+
+    Args:
+        task: a task under ``tasks/`` by name (``"barrett-wam"``, relative to the working
+            folder) or the path of a task file.
+        method: a method's name, or a Python function that receives a :class:`Problem`
+            and returns the parameter vector, or (vector, termination name), as ``run``'s
+            ``methods``. A Python function enters the open division as ``python:<name>``.
+        models: candidate models (``["kinematic", "beta"]``), chosen by 5-fold
+            cross-validation on the task's calibration rows alone when there are several.
+        name: the Python method's name (default: the function's ``__name__``).
+        out: a folder to write the identify outputs and ``task.json`` into.
+
+    Returns:
+        a dict: ``task`` (the content of ``task.json``), ``record`` (of ``identified.json``)
+        and ``robot`` (the compensated :class:`Robot`).
+    """
+    if models is not None:
+        models = _names("models", models)
+    d = _calbench.task(
+        os.fspath(task),
+        method,
+        models=models,
+        name=name,
+        out=None if out is None else os.fspath(out),
+    )
+    return {
+        "task": json.loads(d["task"]),
+        "record": json.loads(d["record"]),
+        "robot": d["robot"],
+    }

@@ -11,6 +11,7 @@ mod errors;
 mod identify;
 mod robot;
 mod study;
+mod task;
 
 use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
@@ -90,5 +91,6 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(identifiability, m)?)?;
     m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;
+    m.add_function(wrap_pyfunction!(task::task, m)?)?;
     Ok(())
 }

@@ -170,7 +170,7 @@ impl PyProblem {
 
 /// A Python callable as an external method: called with a `Problem` under the GIL; returns
 /// the vector, or (vector, termination name). An exception is the method's failure.
-fn python_method(f: Py<PyAny>) -> External {
+pub(crate) fn python_method(f: Py<PyAny>) -> External {
     External {
         run: Arc::new(move |p: Arc<ExternalProblem>| {
             Python::attach(|py| {

@@ -21,5 +21,6 @@ mod refusals;
 mod report_baseline;
 mod results;
 mod strict_inputs;
+mod task;
 mod typed;
 mod worse;

@@ -152,7 +152,7 @@ pub struct Task {
     pub name: String,
     /// The task file.
     pub path: PathBuf,
-    /// SHA-256 of its canonical text ([`Task::canonical_text`]), hex.
+    /// SHA-256 of its canonical text (docs/formats.md § 9.3), hex.
     pub hash: String,
     /// What the task is.
     pub title: String,

@@ -80,15 +80,15 @@ impl Split {
                             ),
                         ));
                     }
-                    for r in a..=b {
-                        if let Some((first, part)) = owner[r] {
+                    for (r, o) in owner.iter_mut().enumerate().take(b + 1).skip(a) {
+                        if let Some((first, part)) = *o {
                             let part = if part { "calibration" } else { "validation" };
                             return Err(at(
                                 line,
                                 format!("row {r} is already in {part} (line {first}): a row lies in one part"),
                             ));
                         }
-                        owner[r] = Some((line, word == "calibration"));
+                        *o = Some((line, word == "calibration"));
                     }
                 }
                 other => {

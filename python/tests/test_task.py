@@ -1,0 +1,43 @@
+"""``calbench.task``: a Python method enters a real-data task's open division through the
+identify pipeline, scored on the task's validation rows like the command line's entries."""
+import json
+
+import numpy as np
+
+import calbench
+
+
+def gauss_newton(problem):
+    x = np.array(problem.x0, dtype=float)
+    for _ in range(50):
+        r = problem.residual(x)
+        J = problem.jacobian(x)
+        dx = np.linalg.lstsq(J, -r, rcond=None)[0]
+        x = x + dx
+        if np.max(np.abs(dx)) < 1e-10:
+            break
+    return x, "converged"
+
+
+def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp_path):
+    task = root / "tasks" / "barrett-wam.toml"
+    py = calbench.task(task, gauss_newton, out=tmp_path / "py")
+    j = py["task"]
+    assert j["format"] == "calbench-task-1"
+    assert j["task"] == "barrett-wam"
+    assert j["entrant"] == "python:gauss_newton" and j["method"] == "gauss_newton"
+    assert j["division"] == "open"
+    assert j["models"] == ["kinematic"] and j["chosen_by"] == "given"
+    assert [p["value"] for p in j["published"]] == [2.92]
+    lo, hi = j["ci95"]
+    assert lo < j["value"] < hi
+    assert json.loads((tmp_path / "py" / "task.json").read_text()) == j
+    # The same least squares as the command line's lm, on the same rows: the same figure.
+    cli("task", task, "--method", "lm", "--out", tmp_path / "lm")
+    lm = json.loads((tmp_path / "lm" / "task.json").read_text())
+    assert lm["division"] == "closed" and lm["entrant"] == "calbench"
+    assert lm["task_hash"] == j["task_hash"]
+    assert abs(lm["value"] - j["value"]) < 1e-3 * lm["value"], (lm["value"], j["value"])
+    # A calbench method by name is the command line's entry.
+    same = calbench.task(task, "lm")["task"]
+    assert same["value"] == lm["value"] and same["division"] == "closed"

@@ -1,0 +1,325 @@
+//! `calbench task`: the shipped real-data tasks run the way a user runs them, `task.json`
+//! checked against its contract (docs/formats.md § 9.3), the model chosen by cross-validation
+//! on the calibration rows alone, and task files and splits that do not fit refused by name.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{calbench, calbench_ok, load_json, path_arg, root, tmp_dir};
+
+fn task(name: &str) -> PathBuf {
+    root().join("tasks").join(format!("{name}.toml"))
+}
+
+/// The keys and values `task.json` must hold for an entry of `calbench` with `lm`; returns
+/// the value.
+fn check_contract(dir: &Path, name: &str, metric: &str) -> f64 {
+    let j = load_json(&dir.join("task.json"));
+    let keys: Vec<&str> = j.as_object().unwrap().keys().map(String::as_str).collect();
+    let mut want = vec![
+        "calbench_version",
+        "chosen_by",
+        "ci95",
+        "division",
+        "entrant",
+        "format",
+        "git_commit",
+        "method",
+        "metric",
+        "models",
+        "published",
+        "task",
+        "task_hash",
+        "value",
+    ];
+    want.sort();
+    let mut got = keys.clone();
+    got.sort();
+    assert_eq!(got, want);
+    assert_eq!(j["format"], "calbench-task-1");
+    assert_eq!(j["task"], name);
+    let hash = j["task_hash"].as_str().unwrap();
+    assert!(
+        hash.len() == 64 && hash.bytes().all(|b| b.is_ascii_hexdigit()),
+        "{hash}"
+    );
+    assert_eq!(j["metric"], metric);
+    assert_eq!(j["method"], "lm");
+    assert_eq!(j["entrant"], "calbench");
+    assert_eq!(j["calbench_version"], env!("CARGO_PKG_VERSION"));
+    assert!(j["git_commit"].is_null() || j["git_commit"].as_str().unwrap().len() == 40);
+    assert_eq!(j["models"][0], "kinematic");
+    let value = j["value"].as_f64().unwrap();
+    let ci = j["ci95"].as_array().unwrap();
+    let (lo, hi) = (ci[0].as_f64().unwrap(), ci[1].as_f64().unwrap());
+    assert!(lo < value && value < hi, "{lo} {value} {hi}");
+    // The figure is the identification's own validation figure.
+    let id = load_json(&dir.join("identified.json"));
+    let key = if metric == "validation_mean_mm" {
+        "mean"
+    } else {
+        "rms"
+    };
+    let v = id["validation_after_mm"][key].as_f64().unwrap();
+    assert!((v - value).abs() < 1e-9 * v, "{v} {value}");
+    value
+}
+
+#[test]
+fn the_wam_task_scores_the_20_random_poses_beside_the_published_figure() {
+    let d = tmp_dir("cli-task-wam");
+    let out = d.join("wam");
+    let o = calbench_ok(&[
+        "task",
+        path_arg(&task("barrett-wam")),
+        "--method",
+        "lm",
+        "--out",
+        path_arg(&out),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(stdout.contains("validation_mean_mm = 3.09"), "{stdout}");
+    let value = check_contract(&out, "barrett-wam", "validation_mean_mm");
+    // docs/results.md: 3.09 mm with the kinematic model.
+    assert!((value - 3.09).abs() < 0.005, "{value}");
+    let j = load_json(&out.join("task.json"));
+    assert_eq!(j["division"], "closed");
+    assert_eq!(j["chosen_by"], "given");
+    assert_eq!(j["models"], serde_json::json!(["kinematic"]));
+    let p = &j["published"][0];
+    assert_eq!(p["value"], 2.92);
+    assert_eq!(p["division"], "open");
+    assert!(p["source"].as_str().unwrap().contains("Jacobi (2025)"));
+    for f in [
+        "identified.json",
+        "robot.toml",
+        "report.html",
+        "residuals.csv",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let id = load_json(&out.join("identified.json"));
+    assert_eq!(id["validation_after_mm"]["mean"], j["value"]);
+}
+
+#[test]
+fn a_ur10_task_chooses_its_model_by_cv_on_its_split() {
+    let d = tmp_dir("cli-task-ur10");
+    let out = d.join("d");
+    let o = calbench_ok(&[
+        "task",
+        path_arg(&task("ipa-ur10-series-d")),
+        "--method",
+        "lm",
+        "--models",
+        "kinematic,beta",
+        "--out",
+        path_arg(&out),
+    ]);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("not published in a source found"),
+        "{stdout}"
+    );
+    let value = check_contract(&out, "ipa-ur10-series-d", "validation_rms_mm");
+    let j = load_json(&out.join("task.json"));
+    assert_eq!(j["chosen_by"], "cv");
+    assert_eq!(j["division"], "closed");
+    assert_eq!(j["published"], serde_json::json!([]));
+    let id = load_json(&out.join("identified.json"));
+    // The split's 443 calibration rows (of every 10 rows the first 7 of 632) calibrate.
+    let cvs = id["cv_models"].as_array().unwrap();
+    assert_eq!(cvs.len(), 2);
+    let best = id["cv_best"].as_str().unwrap();
+    let chosen = if best == "kinematic" {
+        vec!["kinematic"]
+    } else {
+        vec!["kinematic", best]
+    };
+    assert_eq!(j["models"], serde_json::json!(chosen));
+    // docs/results.md: Series D, β chosen, 0.393 mm held out.
+    assert!((value - 0.393).abs() < 0.001, "{value}");
+    let again = d.join("again");
+    calbench_ok(&[
+        "task",
+        path_arg(&task("ipa-ur10-series-d")),
+        "--method",
+        "lm",
+        "--models",
+        "kinematic,beta",
+        "--out",
+        path_arg(&again),
+    ]);
+    assert_eq!(
+        std::fs::read(out.join("task.json")).unwrap(),
+        std::fs::read(again.join("task.json")).unwrap(),
+        "a task's entry is reproducible byte for byte"
+    );
+}
+
+/// A copy of the WAM task whose validation file holds only the random poses `rows`.
+fn wam_with_validation(dir: &Path, rows: std::ops::Range<usize>) -> PathBuf {
+    let data = root().join("data/barrett-wam");
+    let text =
+        std::fs::read_to_string(data.join("3D_WAM_uncalibrated_random_cleaned.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut kept = vec![lines.next().unwrap()];
+    kept.extend(lines.skip(rows.start).take(rows.len()));
+    let val = dir.join("random.csv");
+    std::fs::write(&val, kept.join("\n") + "\n").unwrap();
+    let t = std::fs::read_to_string(task("barrett-wam"))
+        .unwrap()
+        .replace("../examples/", &format!("{}/examples/", root().display()))
+        .replace(
+            "\"../data/barrett-wam/3D_WAM_uncalibrated_grid_cleaned.csv\"",
+            &format!(
+                "\"{}\"",
+                data.join("3D_WAM_uncalibrated_grid_cleaned.csv").display()
+            ),
+        )
+        .replace(
+            "\"../data/barrett-wam/3D_WAM_uncalibrated_random_cleaned.csv\"",
+            &format!("\"{}\"", val.display()),
+        )
+        .replace(
+            "\"barrett-wam.mapping.toml\"",
+            &format!(
+                "\"{}\"",
+                root().join("tasks/barrett-wam.mapping.toml").display()
+            ),
+        );
+    let p = dir.join("barrett-wam.toml");
+    std::fs::write(&p, t).unwrap();
+    p
+}
+
+#[test]
+fn the_validation_rows_do_not_change_the_chosen_model() {
+    let d = tmp_dir("cli-task-cv-only");
+    let mut runs = Vec::new();
+    for (i, rows) in [0..20, 5..13].into_iter().enumerate() {
+        let sub = d.join(format!("v{i}"));
+        std::fs::create_dir_all(&sub).unwrap();
+        let t = wam_with_validation(&sub, rows);
+        let out = sub.join("out");
+        calbench_ok(&[
+            "task",
+            path_arg(&t),
+            "--method",
+            "lm",
+            "--models",
+            "kinematic,beta",
+            "--out",
+            path_arg(&out),
+        ]);
+        runs.push((
+            load_json(&out.join("identified.json")),
+            load_json(&out.join("task.json")),
+        ));
+    }
+    let (a, b) = (&runs[0], &runs[1]);
+    assert_eq!(
+        a.0["cv_models"], b.0["cv_models"],
+        "the CV sees the calibration rows only"
+    );
+    assert_eq!(a.0["cv_best"], b.0["cv_best"]);
+    assert_eq!(a.1["models"], b.1["models"]);
+    assert_eq!(a.1["chosen_by"], "cv");
+    assert_ne!(a.1["value"], b.1["value"], "the validation rows did change");
+    assert_ne!(a.1["task_hash"], b.1["task_hash"]);
+}
+
+#[test]
+fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
+    let d = tmp_dir("cli-task-refusals");
+    let src = std::fs::read_to_string(task("ipa-ur10-series-d")).unwrap();
+    let abs = |s: &str| {
+        s.replace("\"../", &format!("\"{}/", root().display()))
+            .replace(
+                "\"ipa-ur10.mapping.toml\"",
+                &format!(
+                    "\"{}\"",
+                    root().join("tasks/ipa-ur10.mapping.toml").display()
+                ),
+            )
+    };
+    let refused = |name: &str, text: &str, split: Option<&str>| -> String {
+        let p = d.join(format!("{name}.toml"));
+        let mut text = abs(text);
+        if let Some(s) = split {
+            let sp = d.join(format!("{name}.split"));
+            std::fs::write(&sp, s).unwrap();
+            text = text.replace(
+                "\"ipa-ur10-series-d.split\"",
+                &format!("\"{}\"", sp.display()),
+            );
+        } else {
+            text = text.replace(
+                "\"ipa-ur10-series-d.split\"",
+                &format!(
+                    "\"{}\"",
+                    root().join("tasks/ipa-ur10-series-d.split").display()
+                ),
+            );
+        }
+        std::fs::write(&p, text).unwrap();
+        let o = calbench(&[
+            "task",
+            path_arg(&p),
+            "--method",
+            "lm",
+            "--out",
+            path_arg(&d.join("out")),
+        ]);
+        assert!(!o.status.success(), "{name} was accepted");
+        assert!(!d.join("out").exists(), "nothing is written");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let e = refused("key", &src.replace("metric =", "metrik ="), None);
+    assert!(e.contains("key.toml: line") && e.contains("metrik"), "{e}");
+    let e = refused(
+        "metric",
+        &src.replace("validation_rms_mm", "validation_p95"),
+        None,
+    );
+    assert!(
+        e.contains("metric.toml: line") && e.contains("validation_p95"),
+        "{e}"
+    );
+    let both = format!(
+        "{src}\n[[published]]\nlabel = \"x\"\nvalue = 1.0\nsource = \"s\"\ndivision = \"open\"\n"
+    );
+    let e = refused("both", &both, None);
+    assert!(
+        e.contains("both.toml: line 7, unpublished") && e.contains("one or the other"),
+        "{e}"
+    );
+    let e = refused(
+        "rows",
+        &src,
+        Some("rows 631\ncalibration 0-400\nvalidation 401-630\n"),
+    );
+    assert!(
+        e.contains("rows.split: rows:")
+            && e.contains("the split is of 631 rows")
+            && e.contains("has 632"),
+        "{e}"
+    );
+    let e = refused(
+        "overlap",
+        &src,
+        Some("rows 632\ncalibration 0-400\nvalidation 400-631\n"),
+    );
+    assert!(
+        e.contains("overlap.split: line 3") && e.contains("row 400 is already in calibration"),
+        "{e}"
+    );
+    let e = refused(
+        "range",
+        &src,
+        Some("rows 632\ncalibration 0-400\nvalidation 401-632\n"),
+    );
+    assert!(
+        e.contains("range.split: line 3") && e.contains("row 632 is out of range"),
+        "{e}"
+    );
+}
