@@ -73,7 +73,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
         entrant: "calbench".into(),
     };
     let j = entry.json(&o, &val)?;
-    let text = super::to_json_text(&j)?;
+    let text = calbench::report::run::json_text(&j)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
     write_identified_with(&args.out, &record, &additions(&o), &[("task.json", text)])?;
