@@ -614,6 +614,11 @@ mod tests {
         let e = evaluate(&c, |k| if k == (1, 0) { &a } else { &better });
         assert!((e.estimate - 2.0 / 3.0).abs() < 1e-12);
         assert_eq!((e.interval, e.bound), ("ratio", 0.5));
-        assert_eq!(e.verdict, Verdict::Contradicts);
+        // Residuals a − R b: −1/3, −1/15, 2/5; half-width t · s / (√3 · 3) ≈ 0.307.
+        let s = ((1.0 / 9.0 + 1.0 / 225.0 + 4.0 / 25.0) / 2.0 as Real).sqrt();
+        let h = 4.302652729749464 * s / (3f64.sqrt() * 3.0);
+        let [lo, hi] = e.ci95.expect("ci");
+        assert!((lo - (2.0 / 3.0 - h)).abs() < 1e-9 && (hi - (2.0 / 3.0 + h)).abs() < 1e-9);
+        assert_eq!(e.verdict, Verdict::Unresolved);
     }
 }
