@@ -139,6 +139,12 @@ pub fn summary(r: &RunResult) -> Value {
         "results": results,
         "comparisons": comparisons::comparisons(r).into_iter().map(|(c, _)| c).collect::<Vec<_>>(),
     });
+    if let Some(p) = sweep::performance_profile(r) {
+        s["performance_profile"] = p;
+    }
+    if let Some(st) = &r.stopping {
+        s["stopping"] = json!(st);
+    }
     if let Some(sep) = &first.separation {
         s["separation"] = sep.clone();
     }

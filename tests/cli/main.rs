@@ -15,6 +15,8 @@ mod interchange;
 mod kinds;
 mod noise;
 mod practice;
+mod precision;
+mod profiles;
 mod realdata;
 mod refusals;
 mod strict_inputs;
