@@ -15,6 +15,7 @@ fn bench(c: &mut Criterion) {
         out: Some(out.clone()),
         progress: false,
         shard: None,
+        precision: None,
     };
     let mut g = c.benchmark_group("study");
     g.sample_size(10);

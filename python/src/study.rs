@@ -277,6 +277,7 @@ pub(crate) fn run(
         out: None,
         progress,
         shard: None,
+        precision: None,
     };
     let inner = py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err)?;
     Ok(PyRun { inner })

@@ -1,4 +1,5 @@
-//! `calbench run SCENARIO [--trials N] [--seed S] [--threads T] [--out DIR] [--shard I/N]`:
+//! `calbench run SCENARIO [--trials N] [--seed S] [--threads T] [--out DIR] [--shard I/N]
+//! [--precision TARGET]`:
 //! a Monte-Carlo study or a registration study; `calbench run --resume DIR`, a killed run
 //! continued from its checkpoint; and `calbench` alone, the default study.
 
@@ -9,11 +10,12 @@ use anyhow::Result;
 use calbench::error::Error;
 use calbench::report::registration_study::{report_md, write_all};
 use calbench::results::Kind;
-use calbench::runner::run::{resume_study, run_study, Resumable};
+use calbench::runner::run::{refuse_precision, resume_study, run_study, Resumable};
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::registration_study::RegistrationScenario;
 use calbench::study::reporter::Terminal;
 use calbench::study::scenario::{Scenario, MAX_TRIALS};
+use calbench::study::stats::precision::Precision;
 use calbench::study::{RunOptions, Shard};
 
 use super::{print_table, writable_folder};
@@ -48,10 +50,17 @@ pub struct RunArgs {
     /// partial result for `calbench merge`.
     #[arg(long, value_name = "I/N", value_parser = shard)]
     pub shard: Option<Shard>,
+    /// Run trials in blocks of 32 until every entry's 95 % interval of the mean validation
+    /// error after compensation has at most this half-width: relative to the mean (`0.5%`)
+    /// or absolute (`0.002mm`); the trials (--trials or the scenario's) are the cap. The
+    /// output is that of `--trials N` with the N it stopped at, plus `stopping` in
+    /// summary.json. Not with a sweep or --shard.
+    #[arg(long, value_name = "TARGET", value_parser = precision, allow_hyphen_values = true)]
+    pub precision: Option<Precision>,
     /// Continue the run into DIR that was killed, from the checkpoint it left (the same
     /// bytes as an uninterrupted run). With SCENARIO, --trials or --seed, refuses a
     /// checkpoint of another scenario, trial count or seed.
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "shard"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "shard", "precision"])]
     pub resume: Option<PathBuf>,
     /// With --resume: continue even though the process that wrote the checkpoint seems to
     /// be running on this host (its pid was taken by another program).
@@ -64,6 +73,14 @@ pub struct RunArgs {
 /// `--shard I/N`.
 fn shard(text: &str) -> std::result::Result<Shard, String> {
     Shard::parse(text).map_err(|e| match e {
+        Error::Setting { msg, .. } => msg,
+        other => other.to_string(),
+    })
+}
+
+/// `--precision 0.5%` or `--precision 0.002mm`.
+fn precision(text: &str) -> std::result::Result<Precision, String> {
+    Precision::parse(text).map_err(|e| match e {
         Error::Setting { msg, .. } => msg,
         other => other.to_string(),
     })
@@ -104,12 +121,25 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let why = "a shard is part of a run; record the merged run (`merge --record`)";
         return Err(Error::setting("--record", why).into());
     }
+    let opts = RunOptions {
+        threads: args.threads,
+        out: None,
+        progress: true,
+        shard,
+        precision: args.precision.clone(),
+    };
+    if opts.precision.is_some() {
+        refuse_precision(&sc, &opts)?;
+    }
     let out = out_folder(args, &sc.name, &OUTPUTS)?;
     let db = args.record.open()?;
     writable_folder(&out, &OUTPUTS)?;
     eprintln!(
-        "running {}: {} trials{}{}",
+        "running {}: {}{} trials{}{}",
         sc.name,
+        args.precision
+            .as_ref()
+            .map_or(String::new(), |p| format!("until ±{} or ", p.text)),
         sc.trials,
         sc.sweep.as_ref().map_or(String::new(), |s| format!(
             " × {} sweep points of {}",
@@ -122,10 +152,8 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ))
     );
     let opts = RunOptions {
-        threads: args.threads,
         out: Some(out),
-        progress: true,
-        shard,
+        ..opts
     };
     let r = run_study(sc, &opts, &Terminal)?;
     finished(&r)?;
@@ -220,6 +248,10 @@ fn whole_study(
     if args.shard.is_some() {
         let whole = format!("{what} runs whole, not in shards");
         return Err(Error::setting("--shard", whole).into());
+    }
+    if args.precision.is_some() {
+        let fixed = format!("{what} runs its --trials draws in every cell");
+        return Err(Error::setting("--precision", fixed).into());
     }
     if let Some(n) = args.trials {
         if !(min_trials..=MAX_TRIALS).contains(&n) {

@@ -158,6 +158,12 @@ pub fn summary(r: &RunResult) -> Value {
     if !sc.claims.is_empty() {
         s["claims"] = claims::summary(r);
     }
+    if let Some(p) = sweep::performance_profile(r) {
+        s["performance_profile"] = p;
+    }
+    if let Some(st) = &r.stopping {
+        s["stopping"] = json!(st);
+    }
     if let Some(sep) = &first.separation {
         s["separation"] = sep.clone();
     }

@@ -26,6 +26,7 @@ use crate::error::{Error, Result};
 use crate::study::records::{encode, Verifier};
 use crate::study::reporter::Reporter;
 use crate::study::scenario::Scenario;
+use crate::study::stats::precision::Precision;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`.
@@ -44,6 +45,9 @@ struct Meta {
     seed: u64,
     trials: usize,
     shard: Option<Shard>,
+    /// `--precision`, as given: a resumed run stops where the uninterrupted one would.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    precision: Option<String>,
     /// The process that wrote it (its temporary output folder is removed on resume), and
     /// the host it ran on: a resume on that host refuses a checkpoint whose writer runs.
     pid: u32,
@@ -85,6 +89,7 @@ impl Checkpoint {
     pub fn start(
         scenario: &Scenario,
         shard: Option<Shard>,
+        precision: Option<&Precision>,
         out: &Path,
         reporter: &dyn Reporter,
     ) -> Result<Checkpoint> {
@@ -111,6 +116,7 @@ impl Checkpoint {
             seed: scenario.seed,
             trials: scenario.trials,
             shard,
+            precision: precision.map(|p| p.text.clone()),
             pid: std::process::id(),
             host: host(),
             done: 0,
@@ -265,6 +271,15 @@ impl Checkpoint {
                 check: Verifier::new(&records, scenario_seed, scenario_trials, sweep, units),
             },
         ))
+    }
+
+    /// The `--precision` of the run it checkpoints.
+    pub fn precision(&self) -> Result<Option<Precision>> {
+        self.meta
+            .precision
+            .as_deref()
+            .map(Precision::parse)
+            .transpose()
     }
 
     /// Removes the checkpoint once the run's output is written.

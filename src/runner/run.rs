@@ -16,6 +16,7 @@ use crate::report::output::Bytes;
 use crate::report::{atomically, run as files, write_run, Output as _};
 use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
 use crate::study::scenario::Scenario;
+use crate::study::stats::precision::{Stopping, BLOCK};
 use crate::study::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
 use crate::study::{TrialResult, TrialSink, CHUNK};
 
@@ -33,7 +34,13 @@ pub fn run_study(
         .out
         .clone()
         .unwrap_or_else(|| Path::new("results").join(&scenario.name));
-    let cp = Checkpoint::start(&scenario, opts.shard, &out, reporter)?;
+    let cp = Checkpoint::start(
+        &scenario,
+        opts.shard,
+        opts.precision.as_ref(),
+        &out,
+        reporter,
+    )?;
     study_into(scenario, opts, &out, cp, None, reporter)
 }
 
@@ -82,6 +89,7 @@ pub fn resume_study(
         out: Some(out.clone()),
         progress: true,
         shard,
+        precision: checkpoint.precision()?,
     };
     study_into(
         scenario,
@@ -269,7 +277,13 @@ pub fn run_resumed(
     let pool = builder
         .build()
         .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))?;
+    if opts.precision.is_some() {
+        refuse_precision(&scenario, opts)?;
+    }
     let mut collector = Collector::new();
+    // With --precision, the trials run so far, and the count the rule stopped at.
+    let mut seen = 0usize;
+    let mut stop = None;
     for (b, (point, plan)) in plans.into_iter().enumerate() {
         let (lo, hi) = (b as u64 * trials, (b as u64 + 1) * trials);
         let (from, to) = (first.max(lo), last.min(hi));
@@ -300,14 +314,53 @@ pub fn run_resumed(
                 }
                 collector.trial(&t, sink)?;
                 bar.inc(1);
+                seen += 1;
+                if look(opts, &collector, seen) {
+                    stop = Some(seen);
+                    break;
+                }
             }
             range.start = (done - lo) as usize;
         }
-        run_trials(&study, range, &pool, bar.as_ref(), &mut |t| {
-            collector.trial(&t, sink)
-        })?;
+        match &opts.precision {
+            None => run_trials(&study, range, &pool, bar.as_ref(), &mut |t| {
+                collector.trial(&t, sink)
+            })?,
+            Some(_) => {
+                // Whole blocks of BLOCK trials, a look after each: where the run stops
+                // does not depend on how the trials were spread over the threads.
+                while stop.is_none() && range.start < range.end {
+                    let end = ((range.start / BLOCK + 1) * BLOCK).min(range.end);
+                    run_trials(&study, range.start..end, &pool, bar.as_ref(), &mut |t| {
+                        collector.trial(&t, sink)
+                    })?;
+                    seen = end;
+                    range.start = end;
+                    if look(opts, &collector, seen) {
+                        stop = Some(seen);
+                    }
+                }
+            }
+        }
     }
     bar.finish();
+    let (scenario, stopping) = match &opts.precision {
+        None => (scenario, None),
+        Some(p) => {
+            let headlines = collector.current().map_or(Vec::new(), |a| a.headlines());
+            let n = stop.unwrap_or(seen);
+            let stopping = Stopping {
+                rule: "precision",
+                target: p.text.clone(),
+                reached: p.reached(&headlines),
+                trials: n,
+                max_trials: scenario.trials,
+                block: BLOCK,
+                widest: p.widest(&headlines),
+            };
+            (scenario.with_run_overrides(Some(n), None)?, Some(stopping))
+        }
+    };
     let blocks = collector.finish(scenario.sweep.as_ref())?;
     Ok(RunResult {
         scenario,
@@ -315,5 +368,36 @@ pub fn run_resumed(
         out,
         seconds: t0.elapsed().as_secs_f64(),
         shard: opts.shard,
+        stopping,
     })
+}
+
+/// With `--precision`, whether the run stops after `seen` trials: at a whole block of
+/// [`BLOCK`] trials where every entry's headline interval is narrow enough.
+fn look(opts: &RunOptions, collector: &Collector, seen: usize) -> bool {
+    match (&opts.precision, collector.current()) {
+        (Some(p), Some(acc)) => seen.is_multiple_of(BLOCK) && p.reached(&acc.headlines()),
+        _ => false,
+    }
+}
+
+/// Refuses `--precision` where it makes no sense: with a sweep (every point runs the same
+/// trials, one point after the other) and with `--shard` (a share's trials are fixed before
+/// it starts).
+pub fn refuse_precision(scenario: &Scenario, opts: &RunOptions) -> Result<()> {
+    if scenario.sweep.is_some() {
+        return Err(Error::setting(
+            "--precision",
+            "a sweep runs the same trials at every point, one point after the other; give \
+             --trials instead (a run of one point with --precision tells how many are needed)",
+        ));
+    }
+    if opts.shard.is_some() {
+        return Err(Error::setting(
+            "--precision",
+            "a shard's trials are fixed before it starts; find the trial count with a whole \
+             run with --precision, then shard the run with --trials N",
+        ));
+    }
+    Ok(())
 }

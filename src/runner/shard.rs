@@ -330,6 +330,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
             out: out.to_path_buf(),
             seconds,
             shard: None,
+            stopping: None,
         };
         write_run(&r, dir)?;
         result = Some(r);

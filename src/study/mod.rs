@@ -98,6 +98,9 @@ pub struct RunOptions {
     pub progress: bool,
     /// Run only this share of the work.
     pub shard: Option<Shard>,
+    /// Stop once every entry's headline interval is this narrow (`--precision`; the
+    /// scenario's `trials` is then the cap).
+    pub precision: Option<stats::precision::Precision>,
 }
 
 /// A fixed calibration pose set as the reports show it.
@@ -244,6 +247,8 @@ pub struct RunResult {
     pub seconds: f64,
     /// The share of the work run, if not all.
     pub shard: Option<Shard>,
+    /// Why a run with `--precision` stopped (`summary.json`'s `stopping`).
+    pub stopping: Option<stats::precision::Stopping>,
 }
 
 /// The trials a killed run had finished, read back in order when it is resumed
@@ -294,6 +299,11 @@ impl Collector {
             Vec::new()
         };
         self.blocks.push((info, acc, trial0, cells));
+    }
+
+    /// The statistics of the block being collected.
+    pub fn current(&self) -> Option<&Accumulator> {
+        self.blocks.last().map(|b| &b.1)
     }
 
     /// Adds trial `t` to the current block and hands it to `sink`.

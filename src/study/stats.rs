@@ -7,6 +7,7 @@ use std::ops::Deref;
 
 pub mod dist;
 pub mod paired;
+pub mod precision;
 
 use super::claims::METRICS;
 use super::spill::Spill;
@@ -384,6 +385,19 @@ impl Accumulator {
         let mut v = Vec::with_capacity(self.spill.len(s));
         self.spill.for_each(s, |x| v.push(x))?;
         Ok(v)
+    }
+
+    /// Each cell's headline figure so far, in cell order (strategy × method): the mean
+    /// validation error after compensation and its 95 % interval, as `summary.json` would
+    /// write them now ([`precision`]).
+    pub fn headlines(&self) -> Vec<(Real, Option<[Real; 2]>)> {
+        self.cells
+            .iter()
+            .map(|c| {
+                let f = c.after.average();
+                (f.stats.mean, f.mean_ci95)
+            })
+            .collect()
     }
 
     /// Adds one trial (trials must come in trial order). Fails only when the scratch file

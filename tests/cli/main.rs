@@ -16,6 +16,8 @@ mod interchange;
 mod kinds;
 mod noise;
 mod practice;
+mod precision;
+mod profiles;
 mod realdata;
 mod refusals;
 mod report_baseline;

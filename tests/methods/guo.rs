@@ -107,6 +107,7 @@ fn lm_on_the_full_model_reports_eta_for_every_parameter_noise_free() {
         threads: Some(1),
         progress: false,
         shard: None,
+        precision: None,
     };
     let res = run(s, &opts, &mut (), &Silent).unwrap();
     let r = serde_json::to_value(&res.blocks[0].entries[0]).unwrap();

@@ -49,6 +49,7 @@ fn run_to(s: Scenario, out: &Path, threads: usize) {
             out: Some(out.to_path_buf()),
             progress: false,
             shard: None,
+            precision: None,
         },
         &calbench::study::reporter::Silent,
     )

@@ -27,6 +27,7 @@ fn summary_of(s: Scenario, name: &str) -> Value {
             out: Some(out.clone()),
             progress: false,
             shard: None,
+            precision: None,
         },
         &calbench::study::reporter::Silent,
     )

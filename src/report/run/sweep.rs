@@ -64,6 +64,34 @@ pub(super) fn sweep_tables(r: &RunResult, sw: &Sweep) -> String {
             s += &table(&h, &rows);
         }
     }
+    if let Some(p) = performance_profile(r) {
+        let _ = writeln!(
+            s,
+            "\nPerformance profile (Dolan & Moré): the share of sweep points where the \
+             validation RMS after compensation is within a factor τ of the point's best.\n"
+        );
+        let mut h = vec!["method / poses".to_string()];
+        h.extend(PROFILE_TAUS.iter().map(|t| format!("τ = {t}")));
+        let h: Vec<&str> = h.iter().map(String::as_str).collect();
+        let rows: Vec<Vec<String>> = p["profiles"]
+            .as_array()
+            .into_iter()
+            .flatten()
+            .zip(&r.blocks[0].entries)
+            .map(|(prof, e)| {
+                let mut row = vec![entry_label(e)];
+                row.extend(
+                    prof["share"]
+                        .as_array()
+                        .into_iter()
+                        .flatten()
+                        .map(|v| fmt_num(v.as_f64().unwrap_or(Real::NAN), 3)),
+                );
+                row
+            })
+            .collect();
+        s += &table(&h, &rows);
+    }
     s
 }
 
@@ -214,6 +242,7 @@ pub(super) fn write_sweep_plots(
             ));
         }
     }
+    done.extend(write_profile_plot(r, out)?);
     Ok(done)
 }
 
@@ -228,4 +257,105 @@ fn file_safe(s: &str) -> String {
             }
         })
         .collect()
+}
+
+/// The factors τ of the performance profiles ([`performance_profile`]).
+pub const PROFILE_TAUS: [Real; 12] = [
+    1.0, 1.01, 1.02, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0, 100.0,
+];
+
+/// The performance profiles of a sweep (Dolan & Moré 2002, *Math. Program.* 91): at every
+/// sweep point, each entry's validation RMS after compensation over the best of the point's
+/// entries (the ratio r; `null`, never within any τ, where the entry failed), and for each
+/// entry the share of points where r ≤ τ for τ in [`PROFILE_TAUS`]. `None` without a sweep
+/// of two or more points.
+pub fn performance_profile(r: &RunResult) -> Option<serde_json::Value> {
+    r.scenario.sweep.as_ref()?;
+    if r.blocks.len() < 2 {
+        return None;
+    }
+    let entries = r.blocks[0].entries.len();
+    let metric = |b: &crate::study::Block, k: usize| {
+        b.entries
+            .get(k)
+            .map_or(Real::NAN, |e| e.validation_after_mm.rms)
+    };
+    let best: Vec<Real> = r
+        .blocks
+        .iter()
+        .map(|b| {
+            (0..entries)
+                .map(|k| metric(b, k))
+                .filter(|m| m.is_finite())
+                .fold(Real::INFINITY, Real::min)
+        })
+        .collect();
+    let profiles: Vec<serde_json::Value> = (0..entries)
+        .map(|k| {
+            let ratios: Vec<Option<Real>> = r
+                .blocks
+                .iter()
+                .zip(&best)
+                .map(|(b, &best)| {
+                    let m = metric(b, k);
+                    let ratio = if m == best { 1.0 } else { m / best };
+                    ratio.is_finite().then_some(ratio)
+                })
+                .collect();
+            let share: Vec<Real> = PROFILE_TAUS
+                .iter()
+                .map(|&tau| {
+                    let within = ratios
+                        .iter()
+                        .filter(|x| x.is_some_and(|x| x <= tau))
+                        .count();
+                    within as Real / ratios.len() as Real
+                })
+                .collect();
+            let e = &r.blocks[0].entries[k];
+            serde_json::json!({
+                "method": e.method,
+                "poses": e.poses,
+                "ratio": ratios,
+                "share": share,
+            })
+        })
+        .collect();
+    Some(serde_json::json!({
+        "metric": "validation_after_mm.rms",
+        "tau": PROFILE_TAUS,
+        "profiles": profiles,
+    }))
+}
+
+/// The plot of [`performance_profile`]: the share of sweep points within τ of the best
+/// against τ, one line per method × strategy (`performance_profile.png`).
+pub(super) fn write_profile_plot(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
+    let Some(p) = performance_profile(r) else {
+        return Ok(Vec::new());
+    };
+    let series: Vec<plots::SweepSeries> = p["profiles"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .zip(&r.blocks[0].entries)
+        .map(|(prof, e)| {
+            let pts = PROFILE_TAUS
+                .iter()
+                .zip(prof["share"].as_array().into_iter().flatten())
+                .map(|(&tau, s)| (tau.log10(), s.as_f64().unwrap_or(Real::NAN), Real::NAN))
+                .collect();
+            (entry_label(e), pts)
+        })
+        .collect();
+    let stem = "performance_profile";
+    let title = "Performance profile: share of sweep points within τ of the best validation RMS";
+    plots::sweep(
+        &out.join(stem),
+        title,
+        "log10 τ (validation RMS after over the point's best)",
+        "share of sweep points",
+        &series,
+    )?;
+    Ok(vec![(format!("{stem}.png"), title.to_string())])
 }

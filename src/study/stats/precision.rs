@@ -1,0 +1,177 @@
+//! `calbench run --precision` (docs/formats.md "Stopping at a precision"): run trials until
+//! every entry's headline interval is narrow enough. The headline interval is the 95 % t
+//! interval of the mean validation error after compensation (`validation_after_mm.mean_ci95`),
+//! its half-width compared with an absolute target in mm or with a share of the mean.
+//!
+//! The rule looks at the statistics only after whole blocks of [`BLOCK`] trials (trials
+//! 0‥32, 0‥64, …) and at the trial cap, so where a run stops depends on the seed alone, never
+//! on the thread count: the run that stops after N trials is the run of `--trials N`.
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+
+/// Trials between two looks at the intervals.
+pub const BLOCK: usize = 32;
+
+/// How narrow the headline interval must be.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Target {
+    /// Half-width over |mean|, as a fraction (`0.5%` is 0.005).
+    Relative(Real),
+    /// Half-width in mm.
+    Absolute(Real),
+}
+
+/// A `--precision` target, with the text it was given as.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Precision {
+    /// The target.
+    pub target: Target,
+    /// As given (`0.5%`, `0.002mm`), for `summary.json` and the checkpoint.
+    pub text: String,
+}
+
+impl Precision {
+    /// Parses `0.5%` (half-width relative to the mean) or `0.002mm` (absolute); refuses
+    /// anything else, a value that is not a positive finite number, and a relative target of
+    /// 100 % or more, naming `--precision`.
+    pub fn parse(text: &str) -> Result<Precision> {
+        let t = text.trim();
+        let bad = |why: &str| {
+            Error::setting(
+                "--precision",
+                format!(
+                    "\"{text}\" {why}; give a relative half-width of the headline interval \
+                     such as 0.5% or an absolute one such as 0.002mm"
+                ),
+            )
+        };
+        let (number, relative) = if let Some(n) = t.strip_suffix('%') {
+            (n, true)
+        } else if let Some(n) = t.strip_suffix("mm") {
+            (n, false)
+        } else {
+            return Err(bad("has no unit (% or mm)"));
+        };
+        let v: Real = number
+            .trim()
+            .parse()
+            .map_err(|_| bad("is not a number followed by % or mm"))?;
+        if !v.is_finite() || v <= 0.0 {
+            return Err(bad("must be positive"));
+        }
+        if relative && v >= 100.0 {
+            return Err(bad("must be below 100%"));
+        }
+        let target = if relative {
+            Target::Relative(v / 100.0)
+        } else {
+            Target::Absolute(v)
+        };
+        Ok(Precision {
+            target,
+            text: t.to_string(),
+        })
+    }
+
+    /// The width of an interval `ci` around `mean` in the target's unit: the half-width in
+    /// mm, or over |mean|; `None` when there is no interval (under 2 usable trials) or it
+    /// is not finite.
+    pub fn width(&self, mean: Real, ci: Option<[Real; 2]>) -> Option<Real> {
+        let [lo, hi] = ci?;
+        let h = (hi - lo) / 2.0;
+        let w = match self.target {
+            Target::Absolute(_) => h,
+            Target::Relative(_) => h / mean.abs(),
+        };
+        w.is_finite().then_some(w)
+    }
+
+    /// The target in the unit of [`Precision::width`].
+    pub fn goal(&self) -> Real {
+        match self.target {
+            Target::Absolute(v) | Target::Relative(v) => v,
+        }
+    }
+
+    /// Whether every interval of `headlines` ((mean, interval) per entry) is narrow enough.
+    pub fn reached(&self, headlines: &[(Real, Option<[Real; 2]>)]) -> bool {
+        !headlines.is_empty()
+            && headlines
+                .iter()
+                .all(|&(m, ci)| self.width(m, ci).is_some_and(|w| w <= self.goal()))
+    }
+
+    /// The widest interval of `headlines` in the target's unit (`None` when an entry has
+    /// none).
+    pub fn widest(&self, headlines: &[(Real, Option<[Real; 2]>)]) -> Option<Real> {
+        headlines
+            .iter()
+            .map(|&(m, ci)| self.width(m, ci))
+            .try_fold(0.0, |acc: Real, w| w.map(|w| acc.max(w)))
+    }
+}
+
+/// Why a run with `--precision` stopped: `summary.json`'s `stopping`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Stopping {
+    /// `precision`.
+    pub rule: &'static str,
+    /// The target as given (`0.5%`, `0.002mm`).
+    pub target: String,
+    /// Whether every entry's headline interval reached it (false: the trial cap was hit
+    /// first).
+    pub reached: bool,
+    /// The trials run, the run's `trials`.
+    pub trials: usize,
+    /// The cap (`--trials`, or the scenario's `trials`).
+    pub max_trials: usize,
+    /// Trials between two looks ([`BLOCK`]).
+    pub block: usize,
+    /// The widest headline interval at the stop, in the target's unit: a half-width in mm,
+    /// or the half-width over the mean (a fraction, 0.005 for 0.5 %); `null` when an entry
+    /// had no interval.
+    pub widest: Option<Real>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn targets_parse_and_bad_ones_name_the_flag() {
+        assert_eq!(
+            Precision::parse("0.5%").unwrap().target,
+            Target::Relative(0.005)
+        );
+        assert_eq!(
+            Precision::parse("0.002mm").unwrap().target,
+            Target::Absolute(0.002)
+        );
+        assert_eq!(
+            Precision::parse(" 1 % ").unwrap().target,
+            Target::Relative(0.01)
+        );
+        for bad in ["5", "-1%", "0mm", "nan%", "inf mm", "%", "x%", "100%", ""] {
+            let e = Precision::parse(bad).unwrap_err().to_string();
+            assert!(e.contains("--precision"), "{bad}: {e}");
+        }
+    }
+
+    #[test]
+    fn reached_when_every_half_width_is_within_the_goal() {
+        let p = Precision::parse("1%").unwrap();
+        let ok = (1.0, Some([0.995, 1.005]));
+        let wide = (1.0, Some([0.98, 1.02]));
+        assert!(p.reached(&[ok, ok]));
+        assert!(!p.reached(&[ok, wide]));
+        assert!(!p.reached(&[ok, (1.0, None)]));
+        assert!(!p.reached(&[]));
+        assert!((p.widest(&[ok, wide]).unwrap() - 0.02).abs() < 1e-12);
+        assert_eq!(p.widest(&[ok, (1.0, None)]), None);
+        let a = Precision::parse("0.01mm").unwrap();
+        assert!(a.reached(&[(5.0, Some([4.99, 5.01]))]));
+    }
+}
