@@ -47,9 +47,15 @@ pub struct RunArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Run only share I of N (0 ≤ I < N) of the trials and sweep points, writing a
-    /// partial result for `calbench merge`.
-    #[arg(long, value_name = "I/N", value_parser = shard)]
-    pub shard: Option<Shard>,
+    /// partial result for `calbench merge`. `auto`: I and N from the scheduler (a Slurm job
+    /// array's SLURM_ARRAY_TASK_ID − SLURM_ARRAY_TASK_MIN and SLURM_ARRAY_TASK_COUNT, or a
+    /// Kubernetes Indexed Job's JOB_COMPLETION_INDEX with N from --shard-count).
+    #[arg(long, value_name = "I/N|auto", value_parser = shard)]
+    pub shard: Option<ShardArg>,
+    /// With --shard auto: the number of shards (a Kubernetes Job's completions; under Slurm,
+    /// checked against SLURM_ARRAY_TASK_COUNT).
+    #[arg(long, value_name = "N")]
+    pub shard_count: Option<u64>,
     /// Run trials in blocks of 32 until every entry's 95 % interval of the mean validation
     /// error after compensation has at most this half-width: relative to the mean (`0.5%`)
     /// or absolute (`0.002mm`); the trials (--trials or the scenario's) are the cap. The
@@ -70,12 +76,26 @@ pub struct RunArgs {
     pub record: super::record::RecordFlags,
 }
 
-/// `--shard I/N`.
-fn shard(text: &str) -> std::result::Result<Shard, String> {
-    Shard::parse(text).map_err(|e| match e {
-        Error::Setting { msg, .. } => msg,
-        other => other.to_string(),
-    })
+/// `--shard I/N` or `--shard auto`.
+#[derive(Clone, Copy, Debug)]
+pub enum ShardArg {
+    /// The share given.
+    Given(Shard),
+    /// The share the scheduler's environment gives ([`auto_shard`]).
+    Auto,
+}
+
+/// `--shard I/N` or `auto`.
+fn shard(text: &str) -> std::result::Result<ShardArg, String> {
+    if text == "auto" {
+        return Ok(ShardArg::Auto);
+    }
+    Shard::parse(text)
+        .map(ShardArg::Given)
+        .map_err(|e| match e {
+            Error::Setting { msg, .. } => msg,
+            other => other.to_string(),
+        })
 }
 
 /// `--precision 0.5%` or `--precision 0.002mm`.
@@ -116,13 +136,17 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if args.threads == Some(0) {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }
-    let shard = args.shard;
+    let shard = match args.shard {
+        None => None,
+        Some(ShardArg::Given(s)) => Some(s),
+        Some(ShardArg::Auto) => Some(auto_shard(args.shard_count, &|k| std::env::var(k).ok())?),
+    };
     if shard.is_some() && args.record.record {
         let why = "a shard is part of a run; record the merged run (`merge --record`)";
         return Err(Error::setting("--record", why).into());
     }
     let opts = RunOptions {
-        threads: args.threads,
+        threads: threads(args.threads)?,
         out: None,
         progress: true,
         shard,
@@ -331,4 +355,80 @@ fn instruments_study(mut sc: InstrumentsScenario, args: &RunArgs) -> Result<()> 
         out.join("report.md").display()
     );
     Ok(())
+}
+
+/// `--threads`, else `SLURM_CPUS_PER_TASK` when set (the CPUs Slurm gave the task), else
+/// `None` (one per core).
+fn threads(given: Option<usize>) -> Result<Option<usize>> {
+    if given.is_some() {
+        return Ok(given);
+    }
+    match std::env::var("SLURM_CPUS_PER_TASK") {
+        Err(_) => Ok(None),
+        Ok(v) => match v.trim().parse::<usize>() {
+            Ok(n) if n >= 1 => Ok(Some(n)),
+            _ => Err(Error::setting(
+                "--threads",
+                format!("SLURM_CPUS_PER_TASK is \"{v}\", not a whole number ≥ 1"),
+            )
+            .into()),
+        },
+    }
+}
+
+/// `--shard auto`: the share from the scheduler's environment (`var` reads a variable).
+/// Slurm: I = `SLURM_ARRAY_TASK_ID` − `SLURM_ARRAY_TASK_MIN`, N = `SLURM_ARRAY_TASK_COUNT`
+/// (`count`, when given, must agree); Kubernetes: I = `JOB_COMPLETION_INDEX`, N = `count`.
+fn auto_shard(count: Option<u64>, var: &dyn Fn(&str) -> Option<String>) -> Result<Shard> {
+    let refuse = |why: String| -> anyhow::Error { Error::setting("--shard", why).into() };
+    let number =
+        |name: &str| -> Result<Option<u64>> {
+            match var(name) {
+                None => Ok(None),
+                Some(v) => v.trim().parse::<u64>().map(Some).map_err(|_| {
+                    refuse(format!("auto: {name} is \"{v}\", not a whole number ≥ 0"))
+                }),
+            }
+        };
+    let (index, n) = if let Some(id) = number("SLURM_ARRAY_TASK_ID")? {
+        let (Some(min), Some(n)) = (
+            number("SLURM_ARRAY_TASK_MIN")?,
+            number("SLURM_ARRAY_TASK_COUNT")?,
+        ) else {
+            return Err(refuse(
+                "auto: SLURM_ARRAY_TASK_ID is set without SLURM_ARRAY_TASK_MIN and \
+                 SLURM_ARRAY_TASK_COUNT (run as a job array: sbatch --array=0-N)"
+                    .into(),
+            ));
+        };
+        if id < min || id - min >= n {
+            return Err(refuse(format!(
+                "auto: SLURM_ARRAY_TASK_ID {id} is outside the array of \
+                 SLURM_ARRAY_TASK_MIN {min} and SLURM_ARRAY_TASK_COUNT {n}; an array with \
+                 gaps or a step (--array=0-9:2) cannot be shards"
+            )));
+        }
+        if let Some(c) = count.filter(|&c| c != n) {
+            return Err(refuse(format!(
+                "auto: --shard-count {c} differs from SLURM_ARRAY_TASK_COUNT {n}"
+            )));
+        }
+        (id - min, n)
+    } else if let Some(i) = number("JOB_COMPLETION_INDEX")? {
+        let Some(n) = count else {
+            return Err(refuse(
+                "auto: JOB_COMPLETION_INDEX is set; give the number of shards (the Job's \
+                 completions) with --shard-count N"
+                    .into(),
+            ));
+        };
+        (i, n)
+    } else {
+        return Err(refuse(
+            "auto: neither SLURM_ARRAY_TASK_ID (a Slurm job array) nor JOB_COMPLETION_INDEX \
+             (a Kubernetes Indexed Job) is set; give --shard I/N"
+                .into(),
+        ));
+    };
+    Shard::parse(&format!("{index}/{n}")).map_err(|e| refuse(format!("auto: {e}")))
 }
