@@ -6,8 +6,6 @@
 //! tarball without `.git`); `Cargo.lock` is compiled in, so neither needs the source tree
 //! when recording.
 
-use sha2::{Digest, Sha256};
-
 /// calbench's version (`Cargo.toml`).
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -17,13 +15,7 @@ pub const GIT_COMMIT: &str = env!("CALBENCH_GIT_COMMIT");
 /// `Cargo.lock` as built.
 const CARGO_LOCK: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.lock"));
 
-/// The lowercase hex SHA-256 of `bytes`.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
+pub use crate::calibrate::task::sha256::sha256_hex;
 
 /// The record's provenance.
 #[derive(Clone, Debug)]
@@ -143,13 +135,5 @@ mod tests {
         assert_eq!(civil(0), (1970, 1, 1));
         assert_eq!(civil(19_782), (2024, 2, 29));
         assert_eq!(civil(20_784), (2026, 11, 27));
-    }
-
-    #[test]
-    fn sha256_of_abc() {
-        assert_eq!(
-            sha256_hex(b"abc"),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
     }
 }
