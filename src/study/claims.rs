@@ -254,20 +254,11 @@ fn tokens(s: &str) -> Result<Vec<Tok>, String> {
             let end = r.find('"').ok_or("an entry's name is not closed by '\"'")?;
             out.push(Tok::Name(r[..end].to_string()));
             rest = &r[end + 1..];
-        } else if let Some(r) = rest.strip_prefix("<=") {
-            out.push(Tok::Op(Op::Le));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix(">=") {
-            out.push(Tok::Op(Op::Ge));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix('<') {
-            out.push(Tok::Op(Op::Lt));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix('>') {
-            out.push(Tok::Op(Op::Gt));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix('/') {
-            out.push(Tok::Slash);
+        } else if let Some((tok, r)) = SYMBOLS
+            .iter()
+            .find_map(|(text, tok)| rest.strip_prefix(text).map(|r| (tok.clone(), r)))
+        {
+            out.push(tok);
             rest = r;
         } else {
             let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
@@ -286,6 +277,15 @@ fn tokens(s: &str) -> Result<Vec<Tok>, String> {
     }
     Ok(out)
 }
+
+/// The relation's symbols, the two-character ones first.
+const SYMBOLS: [(&str, Tok); 5] = [
+    ("<=", Tok::Op(Op::Le)),
+    (">=", Tok::Op(Op::Ge)),
+    ("<", Tok::Op(Op::Lt)),
+    (">", Tok::Op(Op::Gt)),
+    ("/", Tok::Slash),
+];
 
 #[derive(Clone, Debug)]
 enum Tok {

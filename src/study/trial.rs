@@ -18,7 +18,7 @@ use crate::numeric::{Frame, Real};
 use crate::robot::Robot;
 use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::unmodelled::Unmodelled;
-use crate::sim::{measure_reached, Reached, SagFn, Simulated};
+use crate::sim::{measure_poses, Reached, SagFn, Simulated};
 
 /// What one method on one strategy's measurement gave in one trial.
 #[derive(Clone, Debug)]
@@ -140,7 +140,7 @@ pub fn measure_calibration(
         commanded: qs,
         actual: actual.as_deref(),
     };
-    measure_reached(
+    measure_poses(
         truth_robot,
         reached,
         &study.tracker,
@@ -196,7 +196,7 @@ pub fn simulate_trial(study: &Study, trial: usize, key: &str) -> Result<Simulate
         commanded: &vqs,
         actual: vactual.as_deref(),
     };
-    let validation = measure_reached(
+    let validation = measure_poses(
         &truth,
         reached,
         &study.tracker,
