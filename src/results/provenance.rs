@@ -17,6 +17,32 @@ const CARGO_LOCK: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/C
 
 pub use crate::calibrate::task::sha256::sha256_hex;
 
+/// A machine: what a result was computed or recorded on (also each shard's `machine` in
+/// `shard.json`, docs/formats.md § 7.3).
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Machine {
+    /// The host name.
+    pub host: String,
+    /// The CPU model (`/proc/cpuinfo`'s `model name`, else the architecture).
+    pub cpu: String,
+    /// The logical cores.
+    pub cores: u32,
+    /// The operating system, its kernel release and architecture.
+    pub os: String,
+}
+
+impl Machine {
+    /// This machine.
+    pub fn here() -> Machine {
+        Machine {
+            host: host_name(),
+            cpu: cpu_model(),
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get() as u32),
+            os: os(),
+        }
+    }
+}
+
 /// The record's provenance.
 #[derive(Clone, Debug)]
 pub struct Provenance {
@@ -44,15 +70,16 @@ impl Provenance {
     /// This calbench on this machine now; `label` and `machine` override the defaults.
     pub fn here(label: Option<&str>, machine: Option<&str>) -> Provenance {
         let short: String = GIT_COMMIT.chars().take(12).collect();
+        let here = Machine::here();
         Provenance {
             label: label.map_or_else(|| format!("{VERSION}+{short}"), str::to_string),
             version: VERSION.to_string(),
             git_commit: GIT_COMMIT.to_string(),
             cargo_lock_hash: sha256_hex(CARGO_LOCK),
-            machine: machine.map_or_else(host_name, str::to_string),
-            cpu: cpu_model(),
-            cores: std::thread::available_parallelism().map_or(1, |n| n.get() as u32),
-            os: os(),
+            machine: machine.map_or(here.host, str::to_string),
+            cpu: here.cpu,
+            cores: here.cores,
+            os: here.os,
             recorded_at: utc_now(),
         }
     }

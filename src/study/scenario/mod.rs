@@ -74,6 +74,7 @@ struct RawScenario {
     sweep: Option<SweepField>,
     #[serde(default)]
     report: ReportSettings,
+    #[serde(default)]
     claims: Vec<toml::Table>,
 }
 
