@@ -26,8 +26,8 @@
 //! - `"a" op x`: the mean of a over trials, against x: its t interval.
 
 use crate::numeric::Real;
+use crate::study::outcome::Outcome;
 use crate::study::stats::dist;
-use crate::study::trial::Outcome;
 
 /// What a per-trial metric needs of the study: nothing, full-pose data, or Guo's axis
 /// errors (`validation.axis_errors`).
@@ -49,9 +49,9 @@ fn opt(o: &Outcome, k: usize, f: fn(&crate::calibrate::ErrorStats) -> Real) -> R
     o.optional.values()[k].as_ref().map_or(Real::NAN, f)
 }
 
-/// The index of optional statistic `name` in [`crate::study::trial::OPTIONAL_STATS`].
+/// The index of optional statistic `name` in [`crate::study::outcome::OPTIONAL_STATS`].
 const fn optional(name: &str) -> usize {
-    let names = crate::study::trial::OPTIONAL_STATS;
+    let names = crate::study::outcome::OPTIONAL_STATS;
     let mut i = 0;
     while i < names.len() {
         if const_eq(names[i], name) {
