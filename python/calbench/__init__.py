@@ -9,6 +9,7 @@ import io
 import json
 import numbers
 import os
+import pathlib
 
 import numpy as np
 
@@ -404,7 +405,31 @@ class Study:
         return f"Study({s['scenario']!r}, {s['trials']} trials, {len(s['results'])} entries)"
 
 
-def run(scenario, *, trials=None, seed=None, threads=None, methods=None, progress=False):
+def _shard(shard):
+    """``shard`` as (i, n) with 0 <= i < n, or a SettingError naming it."""
+    if (
+        not isinstance(shard, (tuple, list))
+        or len(shard) != 2
+        or any(isinstance(v, bool) or not isinstance(v, numbers.Integral) for v in shard)
+    ):
+        raise SettingError(f"setting `shard`: expected (i, n), two integers, got {shard!r}")
+    i, n = (int(v) for v in shard)
+    if not 0 <= i < n < 2**63:
+        raise SettingError(f"setting `shard`: ({i}, {n}) is not (i, n) with 0 <= i < n, e.g. (0, 8)")
+    return i, n
+
+
+def run(
+    scenario,
+    *,
+    trials=None,
+    seed=None,
+    threads=None,
+    methods=None,
+    progress=False,
+    shard=None,
+    out=None,
+):
     """Run a Monte-Carlo study: ``calbench run`` without the files.
 
     Args:
@@ -420,13 +445,40 @@ def run(scenario, *, trials=None, seed=None, threads=None, methods=None, progres
             in the ``error`` column of ``trials``) and the study goes on. Python methods run
             one at a time under the GIL while the rest of each trial runs in parallel.
         progress: draw a progress bar on a terminal.
+        shard: ``(i, n)``: run only share ``i`` of ``n`` of the (sweep point × trial) work,
+            as ``calbench run --shard i/n``, into the shard folder ``out`` (required), which
+            ``calbench merge`` merges with the other shards into the bytes of the whole run.
+            Not with ``methods`` (the merge rebuilds the scenario from its text).
+        out: the shard folder (only with ``shard``).
 
     Returns:
         a :class:`Study`; ``study.summary`` equals the command line's ``summary.json`` for
-        the same scenario and options.
+        the same scenario and options. With ``shard``: the shard folder, a ``pathlib.Path``.
     """
     if methods is not None and not isinstance(methods, dict):
         raise SettingError("setting `methods`: expected a dict label → function")
+    if shard is not None:
+        i, n = _shard(shard)
+        if out is None:
+            raise SettingError("setting `out`: a run with `shard` writes a shard folder; give out=")
+        if methods:
+            raise SettingError(
+                "setting `shard`: not with `methods` written in Python (calbench merge "
+                "rebuilds the scenario from its text, which cannot hold them)"
+            )
+        _calbench.run_shard(
+            _scenario(scenario),
+            i,
+            n,
+            os.fspath(out),
+            trials=_count("trials", trials),
+            seed=_count("seed", seed),
+            threads=_count("threads", threads),
+            progress=bool(progress),
+        )
+        return pathlib.Path(out)
+    if out is not None:
+        raise SettingError("setting `out`: only with `shard` (write a whole run with study.write(dir))")
     handle = _calbench.run(
         _scenario(scenario),
         trials=_count("trials", trials),

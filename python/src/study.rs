@@ -1,4 +1,5 @@
-//! Studies from Python: `simulate`, `run` (with methods written in Python, `Problem`).
+//! Studies from Python: `simulate`, `run` (with methods written in Python, `Problem`), a
+//! shard of a run (`run_shard`) for `calbench merge`.
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -13,8 +14,9 @@ use calbench::identify::MethodSpec;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::robot::Robot;
-use calbench::runner::run::InMemoryRun;
-use calbench::study::{trial, RunOptions, Study};
+use calbench::runner::run::{run_study, InMemoryRun};
+use calbench::study::reporter::{Silent, Terminal};
+use calbench::study::{trial, RunOptions, Shard, Study};
 
 use crate::convert::{matrix, scenario_of};
 use crate::errors::{err, setting, ComputeError};
@@ -281,4 +283,53 @@ pub(crate) fn run(
     };
     let inner = py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err)?;
     Ok(PyRun { inner })
+}
+
+/// Runs shard `index`/`count` of a study into the shard folder `out`, the folder
+/// `calbench run --shard I/N --out DIR` writes, for `calbench merge` (the Python half
+/// documents the arguments). Returns the run's wall time (s).
+#[pyfunction]
+#[pyo3(signature = (scenario, index, count, out, trials = None, seed = None, threads = None,
+    progress = false))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_shard(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    index: usize,
+    count: usize,
+    out: PathBuf,
+    trials: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    progress: bool,
+) -> PyResult<f64> {
+    if count == 0 || index >= count {
+        return Err(setting(
+            "shard",
+            format!("({index}, {count}) is not (i, n) with 0 ≤ i < n, e.g. (0, 8)"),
+        ));
+    }
+    if threads == Some(0) {
+        return Err(setting("threads", "must be at least 1"));
+    }
+    let sc = scenario_of(scenario)?
+        .with_run_overrides(trials, seed)
+        .map_err(err)?;
+    let opts = RunOptions {
+        threads,
+        out: Some(out),
+        progress,
+        shard: Some(Shard::parse(&format!("{index}/{count}")).map_err(err)?),
+        precision: None,
+    };
+    let r = py
+        .detach(|| {
+            if progress {
+                run_study(sc, &opts, &Terminal)
+            } else {
+                run_study(sc, &opts, &Silent)
+            }
+        })
+        .map_err(err)?;
+    Ok(r.seconds)
 }

@@ -1,0 +1,60 @@
+"""`calbench.run(..., shard=(i, n), out=DIR)`: shard folders that `calbench merge` merges into
+the bytes of the whole run; bad shards refused."""
+import json
+import tomllib
+
+import pytest
+
+import calbench
+
+CI_GUARD = "scenarios/ci-guard.toml"
+
+
+def test_two_python_shards_merge_into_the_bytes_of_one_cli_run(cli, root, tmp_path):
+    cli("run", CI_GUARD, "--trials", "5", "--seed", "11", "--out", tmp_path / "whole")
+    with open(root / CI_GUARD, "rb") as f:
+        as_dict = tomllib.load(f)
+    # One shard from the file, one from the dict, with different thread counts.
+    s0 = calbench.run(root / CI_GUARD, trials=5, seed=11, threads=1, shard=(0, 2), out=tmp_path / "s0")
+    s1 = calbench.run(as_dict, trials=5, seed=11, threads=2, shard=(1, 2), out=tmp_path / "s1")
+    assert s0 == tmp_path / "s0" and s1 == tmp_path / "s1"
+    meta = json.loads((s1 / "shard.json").read_text())
+    assert meta["shard"] == {"index": 1, "count": 2}
+    assert set(meta["machine"]) == {"host", "cpu", "cores", "os"} and meta["machine"]["cores"] >= 1
+    cli("merge", s1, s0, "--out", tmp_path / "merged")
+    for name in ("summary.json", "trials.csv"):
+        assert (tmp_path / "merged" / name).read_bytes() == (tmp_path / "whole" / name).read_bytes()
+
+
+@pytest.mark.parametrize(
+    "shard, match",
+    [
+        ((2, 2), r"shard.*\(2, 2\)"),
+        ((-1, 2), "shard"),
+        ((0, 0), "shard"),
+        ((0,), "shard"),
+        ("0/2", "shard"),
+        ((True, 2), "shard"),
+        ((0.0, 2), "shard"),
+    ],
+)
+def test_bad_shards_are_refused(root, tmp_path, shard, match):
+    with pytest.raises(calbench.SettingError, match=match):
+        calbench.run(root / CI_GUARD, trials=1, shard=shard, out=tmp_path / "s")
+    assert not (tmp_path / "s").exists()
+
+
+def test_a_shard_needs_out_and_no_python_methods(root, tmp_path):
+    with pytest.raises(calbench.SettingError, match="out"):
+        calbench.run(root / CI_GUARD, trials=1, shard=(0, 2))
+    with pytest.raises(calbench.SettingError, match="out"):
+        calbench.run(root / CI_GUARD, trials=1, out=tmp_path / "s")
+    with pytest.raises(calbench.SettingError, match="methods"):
+        calbench.run(
+            root / CI_GUARD,
+            trials=1,
+            shard=(0, 2),
+            out=tmp_path / "s",
+            methods={"mine": lambda p: p.x0},
+        )
+    assert not (tmp_path / "s").exists()
