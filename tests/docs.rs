@@ -331,6 +331,7 @@ fn shell_examples_run() {
     .unwrap();
     let mut tally = Tally::default();
     let mut real_data = false;
+    let mut noise_tour = false;
     for doc in documents() {
         for b in blocks(&doc) {
             if b.lang != "sh" && b.lang != "bash" {
@@ -362,6 +363,10 @@ fn shell_examples_run() {
                 b.body,
                 text(&o)
             );
+            if b.doc == "README.md" && b.body.contains("--seed 9 --out b") {
+                noise_tour_quotes_its_run(&dir, &text(&o));
+                noise_tour = true;
+            }
             std::fs::remove_dir_all(&dir).unwrap();
             real_data |= b.doc == "README.md" && b.body.contains("calbench import");
             tally.run += 1;
@@ -372,6 +377,106 @@ fn shell_examples_run() {
         real_data,
         "the README's real-data example (`calbench import …`) did not run"
     );
+    assert!(
+        noise_tour,
+        "the README's noise tour (`--seed 9 --out b`) did not run"
+    );
+}
+
+/// The README's "Noise or a real difference" quotes the figures of the runs its block makes
+/// (`a` and `b` under `dir`; `said`: the block's output): each interval, the paired verdict
+/// and `check`'s count, formatted as the README rounds them, must be in its text.
+fn noise_tour_quotes_its_run(dir: &Path, said: &str) {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    let section = readme
+        .split("### Noise or a real difference")
+        .nth(1)
+        .and_then(|s| s.split("\n## ").next())
+        .expect("README: the section \"Noise or a real difference\"");
+    let prose = section.split_whitespace().collect::<Vec<_>>().join(" ");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("a/summary.json")).unwrap())
+            .unwrap();
+    let entry = |m: &str| {
+        summary["results"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["method"] == m)
+            .unwrap_or_else(|| panic!("no entry {m}"))["validation_after_mm"]
+            .clone()
+    };
+    let f = |v: &serde_json::Value| v.as_f64().unwrap();
+    let (igg3, ls) = (entry("igg3"), entry("ls"));
+    let c = summary["comparisons"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| {
+            c["a"] == "ls / random"
+                && c["b"] == "igg3 / random"
+                && c["metric"] == "validation_after_mm.rms"
+        })
+        .expect("the comparison of igg3 against ls")
+        .clone();
+    let mut expected = vec![
+        format!("{:.4} mm", f(&igg3["rms"])),
+        format!(
+            "[{:.4}, {:.4}]",
+            f(&igg3["rms_ci95"][0]),
+            f(&igg3["rms_ci95"][1])
+        ),
+        format!("{:.4} mm", f(&ls["rms"])),
+        format!(
+            "[{:.4}, {:.4}]",
+            f(&ls["rms_ci95"][0]),
+            f(&ls["rms_ci95"][1])
+        ),
+        format!(
+            "lower by {:.4} mm [{:.4}, {:.4}]",
+            -f(&c["diff_mean"]),
+            -f(&c["diff_ci95"][1]),
+            -f(&c["diff_ci95"][0])
+        ),
+        format!("wins {:.0} %", 100.0 * f(&c["win_rate"])),
+        format!("p = {:.0e}", f(&c["p_holm"])),
+    ];
+    let counts = said
+        .lines()
+        .find(|l| l.contains("metrics compared"))
+        .expect("check's count line");
+    let count = |what: &str| -> String {
+        let at = counts
+            .find(what)
+            .unwrap_or_else(|| panic!("{what} in {counts}"));
+        counts[..at]
+            .split([' ', ','])
+            .rfind(|w| !w.is_empty())
+            .unwrap()
+            .to_string()
+    };
+    let compared = counts.split_whitespace().next().unwrap();
+    expected.push(format!(
+        "{} of the {compared} metrics `no change`",
+        count(" no change")
+    ));
+    let unresolved = count(" unresolved");
+    let of_params = said
+        .lines()
+        .filter(|l| l.starts_with("unresolved:") && l.contains("param_rmse."))
+        .count();
+    assert_eq!(
+        of_params.to_string(),
+        unresolved,
+        "every unresolved metric a parameter RMSE"
+    );
+    expected.push(format!("{unresolved} parameter RMSEs `unresolved`"));
+    for e in expected {
+        assert!(
+            prose.contains(&e),
+            "README's noise tour should say \"{e}\" (what its commands give)"
+        );
+    }
 }
 
 #[test]
