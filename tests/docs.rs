@@ -860,16 +860,37 @@ fn method_option_tables_match_the_declarations() {
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 5] = [
+const CLAIM_PAPERS: [(&str, &str); 6] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
         "scenarios/li2018-irb2600-unmodelled.toml",
     ),
     ("ban/summary.json", "scenarios/ban-irb2600.toml"),
+    ("ban/summary-fig3.json", "scenarios/ban-fig3.toml"),
     ("guo2024/summary.json", "scenarios/guo2024-3t2r.toml"),
     ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
 ];
+
+/// The claims of a paper's scenario (a Monte-Carlo study's or a registration study's), each
+/// with its metric's name.
+fn paper_claims(scenario: &str) -> Vec<(calbench::study::claims::Claim, &'static str)> {
+    use calbench::study::registration_study::{RegistrationScenario, METRIC};
+    let path = root().join(scenario);
+    let table: toml::Table = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    if RegistrationScenario::is_one(&table) {
+        let sc = RegistrationScenario::from_table(table, &path)
+            .unwrap_or_else(|e| panic!("{scenario}: {e}"));
+        return sc.claims.into_iter().map(|c| (c, METRIC)).collect();
+    }
+    let sc = calbench::study::scenario::Scenario::load(&path)
+        .unwrap_or_else(|e| panic!("{scenario}: {e}"));
+    let metric = |c: &calbench::study::claims::Claim| calbench::study::claims::METRICS[c.metric].0;
+    sc.claims
+        .into_iter()
+        .map(|c| (c.clone(), metric(&c)))
+        .collect()
+}
 
 /// The cells of a markdown table row.
 fn row_cells(l: &str) -> Vec<String> {
@@ -895,9 +916,7 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
         let file = root().join(format!("results/reproduction/{summary}"));
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&file).expect("summary")).expect("json");
-        let sc = calbench::study::scenario::Scenario::load(&root().join(scenario))
-            .unwrap_or_else(|e| panic!("{scenario}: {e}"));
-        for c in &sc.claims {
+        for (c, metric) in paper_claims(scenario) {
             let got = summary["claims"]
                 .as_array()
                 .and_then(|a| a.iter().find(|x| x["id"] == c.id.as_str()));
@@ -923,7 +942,6 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
                 toml::Value::String(s) => s.clone(),
                 v => v.to_string(),
             };
-            let metric = calbench::study::claims::METRICS[c.metric].0;
             s += &format!(
                 "| {} | {} | {} | {} | `{}` (`{metric}`) | {calbench} | {verdict} | {} |\n",
                 c.paper,

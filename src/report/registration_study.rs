@@ -12,7 +12,8 @@ use super::markdown::{fmt_num, table};
 use super::plots;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
-use crate::study::registration_study::{Cell, RegistrationScenario};
+use crate::study::claims::{Claim, Evaluation};
+use crate::study::registration_study::{Cell, RegistrationScenario, METRIC};
 
 /// `values[row][column]` of `f` over the grid: a row per outlier count, a column per
 /// magnitude.
@@ -33,11 +34,29 @@ fn magnitude_names(s: &RegistrationScenario) -> Vec<String> {
         .collect()
 }
 
-/// `report.md`: the settings, the difference grid in µm, and each method's mean error.
-pub fn report_md(s: &RegistrationScenario, cells: &[Cell], plot: &str) -> String {
+/// `report.md`: the claims (if any), the settings, the difference grid in µm, and each
+/// method's mean error.
+pub fn report_md(
+    s: &RegistrationScenario,
+    cells: &[Cell],
+    claims: &[(&Claim, Evaluation)],
+    plot: &str,
+) -> String {
     let st = &s.registration_study;
     let mut out = String::new();
     let _ = writeln!(out, "# {}\n\n{}\n", s.head.name, s.head.description);
+    if !claims.is_empty() {
+        use super::run::claims::{headers, row, NOTE};
+        let rows: Vec<Vec<String>> = claims
+            .iter()
+            .map(|(c, e)| row(c, METRIC, None, e))
+            .collect();
+        let _ = writeln!(
+            out,
+            "## Claims\n\n{}\n{NOTE}\n",
+            table(&headers(false), &rows)
+        );
+    }
     let _ = writeln!(
         out,
         "Registration study (Ban fig. 3): {} points in a {} mm box centred at ({}) mm, noise uniform in ±{} mm per coordinate, {} draws per cell from seed {}. Registration error = mean distance of the registered noise-free points from the truth.\n",
@@ -74,12 +93,26 @@ pub fn report_md(s: &RegistrationScenario, cells: &[Cell], plot: &str) -> String
     out
 }
 
-/// Writes the study's files into `out` as a whole ([`super::atomically`]).
-pub fn write_all(s: &RegistrationScenario, cells: &[Cell], out: &Path) -> Result<()> {
+/// Writes the study's files into `out` as a whole ([`super::atomically`]), with its claims
+/// evaluated ([`RegistrationScenario::evaluate_claims`]; `summary.json`'s `claims` when the
+/// scenario states any).
+pub fn write_all(
+    s: &RegistrationScenario,
+    cells: &[Cell],
+    claims: &[(&Claim, Evaluation)],
+    out: &Path,
+) -> Result<()> {
     super::atomically(out, |dir| {
         let settings = serde_json::to_value(&s.registration_study)
             .map_err(|e| Error::Compute(e.to_string()))?;
-        let more = json!({"settings": settings, "cells": cells});
+        let mut more = json!({"settings": settings, "cells": cells});
+        if !claims.is_empty() {
+            let evaluated = claims
+                .iter()
+                .map(|(c, e)| super::run::claims::claim_json(c, METRIC, e))
+                .collect();
+            more["claims"] = serde_json::Value::Array(evaluated);
+        }
         let head = (
             s.head.name.as_str(),
             s.head.description.as_str(),
@@ -106,7 +139,7 @@ pub fn write_all(s: &RegistrationScenario, cells: &[Cell], out: &Path) -> Result
             &by_column,
         )?;
         let path = dir.join("report.md");
-        std::fs::write(&path, report_md(s, cells, "heatmap_difference.png"))
+        std::fs::write(&path, report_md(s, cells, claims, "heatmap_difference.png"))
             .map_err(|e| Error::io(&path, e))
     })
 }

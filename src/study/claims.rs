@@ -179,7 +179,8 @@ pub struct Claim {
     pub paper: String,
     /// The paper's figure(s), as written.
     pub value: toml::Value,
-    /// Index into [`METRICS`].
+    /// Index into [`METRICS`] (or into the metrics of a study that has its own,
+    /// [`parse_with`]).
     pub metric: usize,
     /// The relation as written.
     pub relation: String,
@@ -331,6 +332,30 @@ fn relation(s: &str, names: &Names) -> Result<(Term, Op, Bound), String> {
 /// Checks a scenario's `[[claims]]` against its entries. A refusal is the key (`claims[i]`,
 /// `claims[i].metric`, …) and a message naming the claim's id.
 pub fn parse(raw: &[toml::Table], names: &Names) -> Result<Vec<Claim>, (String, String)> {
+    parse_with(raw, names, |name| {
+        let metric = METRICS.iter().position(|m| m.0 == name).ok_or_else(|| {
+            let all: Vec<&str> = METRICS.iter().map(|m| m.0).collect();
+            format!(
+                "unknown metric \"{name}\"; per-trial metrics are {}",
+                all.join(", ")
+            )
+        })?;
+        match METRICS[metric].1 {
+            Needs::Pose if !names.pose => Some("tracker.measure = \"pose\""),
+            Needs::Axis if !names.axis => Some("validation.axis_errors = true"),
+            _ => None,
+        }
+        .map_or(Ok(metric), |need| Err(format!("\"{name}\" needs {need}")))
+    })
+}
+
+/// [`parse`] for a study with metrics of its own (the registration study's): `metric` gives
+/// a metric's index in the study's list, or why the name is refused.
+pub fn parse_with(
+    raw: &[toml::Table],
+    names: &Names,
+    metric: impl Fn(&str) -> Result<usize, String>,
+) -> Result<Vec<Claim>, (String, String)> {
     let mut out: Vec<Claim> = Vec::new();
     for (i, t) in raw.iter().enumerate() {
         let id = t
@@ -360,31 +385,7 @@ pub fn parse(raw: &[toml::Table], names: &Names) -> Result<Vec<Claim>, (String, 
                 format!("\"{}\" is used twice: give each claim a distinct id", c.id),
             ));
         }
-        let metric = METRICS
-            .iter()
-            .position(|m| m.0 == c.metric)
-            .ok_or_else(|| {
-                let all: Vec<&str> = METRICS.iter().map(|m| m.0).collect();
-                (
-                    format!("claims[{i}].metric"),
-                    named(format!(
-                        "unknown metric \"{}\"; per-trial metrics are {}",
-                        c.metric,
-                        all.join(", ")
-                    )),
-                )
-            })?;
-        let missing = match METRICS[metric].1 {
-            Needs::Pose if !names.pose => Some("tracker.measure = \"pose\""),
-            Needs::Axis if !names.axis => Some("validation.axis_errors = true"),
-            _ => None,
-        };
-        if let Some(need) = missing {
-            return Err((
-                format!("claims[{i}].metric"),
-                named(format!("\"{}\" needs {need}", c.metric)),
-            ));
-        }
+        let metric = metric(&c.metric).map_err(|m| (format!("claims[{i}].metric"), named(m)))?;
         let (term, op, bound) = relation(&c.relation, names)
             .map_err(|m| (format!("claims[{i}].relation"), named(m)))?;
         out.push(Claim {

@@ -25,6 +25,7 @@ use crate::calibrate::registration::{register_svd, register_wsvd, Registration};
 use crate::error::{finite_non_negative, finite_positive, Error, Result};
 use crate::numeric::rng;
 use crate::numeric::{Frame, Real, Vec3};
+use crate::study::claims::{self, Claim, Evaluation};
 use crate::study::whole::Head;
 
 /// The `[registration_study]` table. Defaults are Ban §3's simulation: 50 points, ±0.02 mm
@@ -65,9 +66,9 @@ impl Default for RegistrationStudy {
 }
 
 /// A scenario file running the registration study: `name`, `description`, `seed`,
-/// `trials` (draws per cell, default 100) as in every scenario, and the
-/// `[registration_study]` table.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+/// `trials` (draws per cell, default 100) as in every scenario, the
+/// `[registration_study]` table and the paper's `[[claims]]` on it ([`ENTRIES`], [`METRIC`]).
+#[derive(Clone, Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct RegistrationScenario {
     /// The keys every study takes ([`Head::take`]).
@@ -75,7 +76,21 @@ pub struct RegistrationScenario {
     pub head: Head,
     /// The study's settings.
     pub registration_study: RegistrationStudy,
+    /// `[[claims]]` as written.
+    #[serde(default, rename = "claims")]
+    raw_claims: Vec<toml::Table>,
+    /// The claims, checked against the grid's entries.
+    #[serde(skip)]
+    pub claims: Vec<Claim>,
 }
+
+/// What a claim of the registration study names: per cell, the SVD's registration error,
+/// the weighted SVD's, and their difference SVD − weighted SVD (Ban fig. 3), each an entry
+/// `"svd / 16 × 0–1 mm"` (method / cell, [`RegistrationStudy::cell_names`]).
+pub const ENTRIES: [&str; 3] = ["svd", "wsvd", "difference"];
+
+/// The one metric of a registration-study claim: a draw's registration error, mm.
+pub const METRIC: &str = "registration_error_mm";
 
 impl RegistrationScenario {
     /// True when a scenario file's table asks for the registration study.
@@ -86,8 +101,8 @@ impl RegistrationScenario {
     /// Parses and checks the scenario in `table`, read from `path` (named in errors).
     pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
-        let takes = "with [registration_study] takes only name, description, seed, trials and \
-                     that table";
+        let takes = "with [registration_study] takes only name, description, seed, trials, \
+                     that table and [[claims]]";
         let trials = (100, 1..=crate::study::scenario::MAX_TRIALS);
         let (head, mut s): (Head, RegistrationScenario) =
             crate::study::whole::parse(table, path, trials, takes)?;
@@ -95,7 +110,48 @@ impl RegistrationScenario {
         s.registration_study
             .check()
             .map_err(|e| ferr("setting", e.to_string()))?;
+        let methods = ENTRIES.map(String::from);
+        let cells = s.registration_study.cell_names();
+        let names = claims::Names {
+            methods: &methods,
+            strategies: &cells,
+            pose: false,
+            axis: false,
+        };
+        s.claims = claims::parse_with(&s.raw_claims, &names, |m| {
+            (m == METRIC).then_some(0).ok_or_else(|| {
+                format!("unknown metric \"{m}\"; a registration study's claims take \"{METRIC}\"")
+            })
+        })
+        .map_err(|(k, m)| ferr(&k, m))?;
         Ok(s)
+    }
+
+    /// Each claim evaluated on the study's `draws` ([`RegistrationStudy::draws`]): paired by
+    /// draw, whichever cells and registrations it names.
+    pub fn evaluate_claims(&self, draws: &[Vec<(Real, Real)>]) -> Vec<(&Claim, Evaluation)> {
+        let cells = draws.first().map_or(0, Vec::len);
+        // values[entry][cell]: one value per draw, in draw order.
+        let values: Vec<Vec<Vec<Real>>> = (0..ENTRIES.len())
+            .map(|e| {
+                (0..cells)
+                    .map(|k| {
+                        draws
+                            .iter()
+                            .map(|d| match e {
+                                0 => d[k].0,
+                                1 => d[k].1,
+                                _ => d[k].0 - d[k].1,
+                            })
+                            .collect()
+                    })
+                    .collect()
+            })
+            .collect();
+        self.claims
+            .iter()
+            .map(|c| (c, claims::evaluate(c, |(e, k)| &values[e][k])))
+            .collect()
     }
 }
 
@@ -159,21 +215,44 @@ impl RegistrationStudy {
         Ok(())
     }
 
+    /// The cells' names in grid order (outlier counts outer, magnitudes inner), as a claim
+    /// names them: `16 × 0–1 mm`.
+    pub fn cell_names(&self) -> Vec<String> {
+        self.outlier_counts
+            .iter()
+            .flat_map(|c| {
+                self.magnitude_mm
+                    .iter()
+                    .map(move |m| format!("{c} × 0–{m} mm"))
+            })
+            .collect()
+    }
+
     /// The grid's cells (outlier counts outer, magnitudes inner), each averaged over
     /// `trials` draws from `seed`.
     pub fn run(&self, seed: u64, trials: usize) -> Result<Vec<Cell>> {
+        Ok(self.cells(&self.draws(seed, trials)?))
+    }
+
+    /// Every draw's (SVD, weighted SVD) registration errors per cell, in grid order: `trials`
+    /// draws from `seed`, in draw order whatever the thread count.
+    pub fn draws(&self, seed: u64, trials: usize) -> Result<Vec<Vec<(Real, Real)>>> {
         self.check()?;
-        let per_trial: Vec<Vec<(Real, Real)>> = (0..trials)
+        (0..trials)
             .into_par_iter()
             .map(|t| self.draw(rng::trial_seed(seed, t as u64)))
-            .collect::<Result<_>>()?;
-        let n = trials as Real;
+            .collect()
+    }
+
+    /// The cells' means over `per_trial` ([`RegistrationStudy::draws`]).
+    pub fn cells(&self, per_trial: &[Vec<(Real, Real)>]) -> Vec<Cell> {
+        let n = per_trial.len() as Real;
         let mut cells = Vec::new();
         for (ci, &count) in self.outlier_counts.iter().enumerate() {
             for (mi, &m) in self.magnitude_mm.iter().enumerate() {
                 let k = ci * self.magnitude_mm.len() + mi;
                 let (mut svd, mut wsvd, mut better) = (0.0, 0.0, 0.0);
-                for d in &per_trial {
+                for d in per_trial {
                     svd += d[k].0;
                     wsvd += d[k].1;
                     if d[k].1 < d[k].0 {
@@ -190,7 +269,7 @@ impl RegistrationStudy {
                 });
             }
         }
-        Ok(cells)
+        cells
     }
 
     /// One draw: the (SVD, weighted SVD) registration errors of every cell, in grid order.
@@ -278,6 +357,84 @@ mod tests {
                     assert!(gap(i, k) > gap(i, k - 1), "size: {cells:?}");
                 }
             }
+        }
+    }
+
+    fn scenario(claims: &str) -> Result<RegistrationScenario> {
+        let text = format!(
+            "name = \"r\"\nseed = 5\ntrials = 30\n[registration_study]\n\
+             outlier_counts = [2, 8]\nmagnitude_mm = [0.2, 1.0]\n{claims}"
+        );
+        RegistrationScenario::from_table(toml::from_str(&text).unwrap(), "r.toml".as_ref())
+    }
+
+    /// A claim's estimate is the paired mean over the draws, so it equals what the cells'
+    /// means give: wsvd − svd in a cell, and a difference of two cells' differences.
+    #[test]
+    fn claims_are_paired_over_the_draws_and_agree_with_the_cells() {
+        let claim = |id: &str, rel: &str| {
+            format!(
+                "[[claims]]\nid = \"{id}\"\nstatement = \"s\"\npaper = \"p\"\nvalue = 1\n\
+                 metric = \"{METRIC}\"\nrelation = '{rel}'\n"
+            )
+        };
+        let sc = scenario(
+            &(claim("below", r#""wsvd / 8 × 0–1 mm" < "svd / 8 × 0–1 mm""#)
+                + &claim(
+                    "grows",
+                    r#""difference / 8 × 0–1 mm" > "difference / 2 × 0–0.2 mm""#,
+                )),
+        )
+        .unwrap();
+        let draws = sc.registration_study.draws(5, 30).unwrap();
+        let cells = sc.registration_study.cells(&draws);
+        let names = sc.registration_study.cell_names();
+        assert_eq!(
+            names,
+            ["2 × 0–0.2 mm", "2 × 0–1 mm", "8 × 0–0.2 mm", "8 × 0–1 mm"]
+        );
+        let evaluated = sc.evaluate_claims(&draws);
+        let (below, grows) = (&evaluated[0].1, &evaluated[1].1);
+        assert_eq!((below.n, grows.n), (30, 30));
+        approx::assert_relative_eq!(
+            below.estimate,
+            -cells[3].difference_mm,
+            max_relative = 1e-12
+        );
+        approx::assert_relative_eq!(
+            grows.estimate,
+            cells[3].difference_mm - cells[0].difference_mm,
+            max_relative = 1e-12
+        );
+        assert_eq!(below.verdict, claims::Verdict::Reproduces, "{below:?}");
+    }
+
+    /// A claim on an entry the grid lacks, or with another metric, is refused by its key.
+    #[test]
+    fn bad_claims_are_refused_by_key() {
+        let bad = [
+            (
+                "relation = '\"svd / 3 × 0–1 mm\" < 1'",
+                "claims[0].relation",
+                "no entry",
+            ),
+            (
+                "relation = '\"svd / 8 × 0–1 mm\" < 1'\nmetric = \"eta_mean_pct\"",
+                "claims[0].metric",
+                METRIC,
+            ),
+        ];
+        for (rel, key, says) in bad {
+            let metric = if rel.contains("metric") {
+                ""
+            } else {
+                "metric = \"registration_error_mm\"\n"
+            };
+            let text = format!(
+                "[[claims]]\nid = \"c\"\nstatement = \"s\"\npaper = \"p\"\nvalue = 1\n{metric}{rel}\n"
+            );
+            let e = scenario(&text).unwrap_err().to_string();
+            assert!(e.contains(key) && e.contains(says), "{e}");
         }
     }
 

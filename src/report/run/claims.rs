@@ -30,21 +30,7 @@ pub fn summary(r: &RunResult) -> Value {
         evaluations(r)
             .into_iter()
             .map(|(c, sweep_value, e)| {
-                let mut v = json!({
-                    "id": c.id,
-                    "statement": c.statement,
-                    "paper": c.paper,
-                    "value": toml_to_json(&c.value),
-                    "metric": METRICS[c.metric].0,
-                    "relation": c.relation,
-                    "interval": e.interval,
-                    "bound": e.bound,
-                    "n": e.n,
-                    "estimate": e.estimate,
-                    "ci95": e.ci95,
-                    "verdict": e.verdict.as_str(),
-                    "trials_to_resolve": e.trials_to_resolve,
-                });
+                let mut v = claim_json(c, METRICS[c.metric].0, &e);
                 if let Some(s) = sweep_value {
                     v["sweep_value"] = s;
                 }
@@ -52,6 +38,25 @@ pub fn summary(r: &RunResult) -> Value {
             })
             .collect(),
     )
+}
+
+/// One evaluated claim as `summary.json` holds it; `metric`: the name of its metric.
+pub fn claim_json(c: &Claim, metric: &str, e: &Evaluation) -> Value {
+    json!({
+        "id": c.id,
+        "statement": c.statement,
+        "paper": c.paper,
+        "value": toml_to_json(&c.value),
+        "metric": metric,
+        "relation": c.relation,
+        "interval": e.interval,
+        "bound": e.bound,
+        "n": e.n,
+        "estimate": e.estimate,
+        "ci95": e.ci95,
+        "verdict": e.verdict.as_str(),
+        "trials_to_resolve": e.trials_to_resolve,
+    })
 }
 
 /// The paper's value as the tables print it: a string as written, anything else as JSON.
@@ -65,6 +70,18 @@ pub fn paper_value(v: &toml::Value) -> String {
 /// The reports' claims table: headers and one row per claim (and sweep point).
 pub fn table(r: &RunResult) -> (Vec<&'static str>, Vec<Vec<String>>) {
     let sweep = r.scenario.sweep.is_some();
+    let rows = evaluations(r)
+        .into_iter()
+        .map(|(c, sweep_value, e)| {
+            let swept = sweep.then(|| sweep_value.map_or(String::new(), |v| v.to_string()));
+            row(c, METRICS[c.metric].0, swept, &e)
+        })
+        .collect();
+    (headers(sweep), rows)
+}
+
+/// The claims table's headers, with a sweep-value column for a sweep.
+pub fn headers(sweep: bool) -> Vec<&'static str> {
     let mut h = vec!["claim", "paper", "statement", "paper's value"];
     if sweep {
         h.push("sweep value");
@@ -78,31 +95,28 @@ pub fn table(r: &RunResult) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "verdict",
         "trials to resolve",
     ]);
-    let rows = evaluations(r)
-        .into_iter()
-        .map(|(c, sweep_value, e)| {
-            let mut row = vec![
-                c.id.clone(),
-                c.paper.clone(),
-                c.statement.clone(),
-                paper_value(&c.value),
-            ];
-            if sweep {
-                row.push(sweep_value.map_or(String::new(), |v| v.to_string()));
-            }
-            row.extend([
-                c.relation.clone(),
-                format!("{} ({})", METRICS[c.metric].0, e.interval),
-                e.n.to_string(),
-                fmt_num(e.estimate, 4),
-                fmt_ci(e.ci95, 4),
-                e.verdict.as_str().to_string(),
-                e.trials_to_resolve.map_or(String::new(), |t| t.to_string()),
-            ]);
-            row
-        })
-        .collect();
-    (h, rows)
+    h
+}
+
+/// One row of the claims table ([`headers`]); `sweep_value`: the cell of a sweep's column.
+pub fn row(c: &Claim, metric: &str, sweep_value: Option<String>, e: &Evaluation) -> Vec<String> {
+    let mut row = vec![
+        c.id.clone(),
+        c.paper.clone(),
+        c.statement.clone(),
+        paper_value(&c.value),
+    ];
+    row.extend(sweep_value);
+    row.extend([
+        c.relation.clone(),
+        format!("{metric} ({})", e.interval),
+        e.n.to_string(),
+        fmt_num(e.estimate, 4),
+        fmt_ci(e.ci95, 4),
+        e.verdict.as_str().to_string(),
+        e.trials_to_resolve.map_or(String::new(), |t| t.to_string()),
+    ]);
+    row
 }
 
 /// What the claims table says, for the reports.
