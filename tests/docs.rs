@@ -860,13 +860,17 @@ fn method_option_tables_match_the_declarations() {
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 6] = [
+const CLAIM_PAPERS: [(&str, &str); 7] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
         "scenarios/li2018-irb2600-unmodelled.toml",
     ),
     ("ban/summary.json", "scenarios/ban-irb2600.toml"),
+    (
+        "ban/summary-unmodelled.json",
+        "scenarios/ban-irb2600-unmodelled.toml",
+    ),
     ("ban/summary-fig3.json", "scenarios/ban-fig3.toml"),
     ("guo2024/summary.json", "scenarios/guo2024-3t2r.toml"),
     ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
