@@ -860,7 +860,7 @@ fn method_option_tables_match_the_declarations() {
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 7] = [
+const CLAIM_PAPERS: [(&str, &str); 8] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
@@ -873,6 +873,10 @@ const CLAIM_PAPERS: [(&str, &str); 7] = [
     ),
     ("ban/summary-fig3.json", "scenarios/ban-fig3.toml"),
     ("guo2024/summary.json", "scenarios/guo2024-3t2r.toml"),
+    (
+        "guo2024/summary-unmodelled.json",
+        "scenarios/guo2024-3t2r-unmodelled.toml",
+    ),
     ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
 ];
 
