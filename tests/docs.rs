@@ -860,7 +860,7 @@ fn method_option_tables_match_the_declarations() {
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 8] = [
+const CLAIM_PAPERS: [(&str, &str); 9] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
@@ -878,6 +878,10 @@ const CLAIM_PAPERS: [(&str, &str); 8] = [
         "scenarios/guo2024-3t2r-unmodelled.toml",
     ),
     ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
+    (
+        "qiao2021/summary-unmodelled.json",
+        "scenarios/qiao2021-tx60-unmodelled.toml",
+    ),
 ];
 
 /// The claims of a paper's scenario (a Monte-Carlo study's or a registration study's), each
