@@ -38,17 +38,22 @@ pub use plots::{
     before_after, box_plot, box_stats, grouped_bars, heatmap, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,
 };
-pub use run::{columns, entry_table, summary, write_into, Column, TrialsCsv};
+pub use run::{columns, entry_table, summary, Column, TrialsCsv};
 
-/// Writes every file of a complete run but `trials.csv` into the folder `dir`: those of
-/// [`run::write_into`], then `report.html` ([`html::run`]) with the plots inlined.
-pub fn write_run(r: &crate::study::RunResult, dir: &std::path::Path) -> crate::Result<()> {
-    let plots = run::write_into(r, dir)?;
-    html::run::page(r, &plots, dir)?.write(&dir.join("report.html"))
+/// Writes every file of a complete run into the folder `dir`: its finished `trials.csv`,
+/// then those of [`run::outputs`] (`report.html` last, with the plots inlined).
+pub fn write_run(
+    r: &crate::study::RunResult,
+    trials_csv: Box<dyn Output>,
+    dir: &std::path::Path,
+) -> crate::Result<()> {
+    let mut outputs = vec![trials_csv];
+    outputs.extend(run::outputs(r)?);
+    output::write_all(dir, &outputs)
 }
 
 /// Writes the output folder of `calbench identify` as a whole ([`atomically`]): the files of
-/// [`identified::write_into`], then `report.html` ([`html::identify`]).
+/// [`identified::outputs`], then `report.html` ([`html::identify`]).
 pub fn write_identified(
     out: &std::path::Path,
     r: &identified::IdentifyRecord,
@@ -65,13 +70,21 @@ pub fn write_identified_with(
     more: &identified::Additions,
     files: &[(&str, String)],
 ) -> crate::Result<()> {
-    atomically(out, |dir| {
-        for (name, text) in files {
-            identified::write(&dir.join(name), text)?;
-        }
-        identified::write_into(dir, r, more)?;
-        html::identify::page(dir, r, more)?.write(&dir.join("report.html"))
-    })
+    let mut outputs: output::Outputs<'_> = files
+        .iter()
+        .map(|(name, text)| {
+            Box::new(output::Text {
+                name,
+                text: text.clone(),
+            }) as Box<dyn Output>
+        })
+        .collect();
+    outputs.extend(identified::outputs(r, more)?);
+    outputs.push(Box::new(output::FromFolder {
+        name: "report.html",
+        make: Box::new(|dir| Ok(html::identify::page(dir, r, more)?.finish())),
+    }));
+    output::folder_of(out, &outputs)
 }
 
 /// The folder holding `out` (`.` for a bare name) and `out`'s last part (`out` when it has
@@ -103,14 +116,13 @@ pub fn blocked_output<S: AsRef<std::ffi::OsStr>>(
         .find(|p| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()))
 }
 
-/// Writes `summary.json` of a study that runs whole (a registration or an instruments study)
-/// into `dir`: `scenario`, `description`, `kind`, `trials` and `seed`, then `more`'s keys.
-pub(crate) fn write_whole_summary(
-    dir: &std::path::Path,
+/// `summary.json` of a study that runs whole (a registration or an instruments study):
+/// `scenario`, `description`, `kind`, `trials` and `seed`, then `more`'s keys.
+pub(crate) fn whole_summary(
     (scenario, description, kind): (&str, &str, &str),
     (trials, seed): (usize, u64),
     more: serde_json::Value,
-) -> crate::Result<()> {
+) -> crate::Result<output::Text<'static>> {
     let mut summary = serde_json::json!({
         "scenario": scenario, "description": description, "kind": kind,
         "trials": trials, "seed": seed,
@@ -118,8 +130,10 @@ pub(crate) fn write_whole_summary(
     if let (Some(head), serde_json::Value::Object(more)) = (summary.as_object_mut(), more) {
         head.extend(more);
     }
-    let path = dir.join("summary.json");
-    std::fs::write(&path, run::json_text(&summary)?).map_err(|e| crate::Error::io(&path, e))
+    Ok(output::Text {
+        name: "summary.json",
+        text: run::json_text(&summary)?,
+    })
 }
 
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`

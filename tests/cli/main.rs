@@ -16,6 +16,7 @@ mod instruments;
 mod interchange;
 mod kinds;
 mod noise;
+mod outputs;
 mod practice;
 mod precision;
 mod profiles;

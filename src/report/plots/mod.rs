@@ -111,7 +111,7 @@ fn render(stem: &Path, fig: &impl Figure) -> Result<()> {
         paint(&root, fig).map_err(|e| cannot(&svg_path, &e))?;
         root.present().map_err(|e| cannot(&svg_path, &e))?;
     }
-    std::fs::write(&svg_path, svg.as_bytes()).map_err(|e| Error::io(&svg_path, e))?;
+    super::output::text(&svg_path, &svg)?;
 
     let root = BitMapBackend::new(&png_path, PLOT_SIZE).into_drawing_area();
     paint(&root, fig).map_err(|e| cannot(&png_path, &e))?;
