@@ -40,15 +40,29 @@ pub use plots::{
 };
 pub use run::{columns, entry_table, summary, Column, TrialsCsv};
 
+/// The files of a complete run but `trials.csv` (streamed as the trials finish,
+/// [`TrialsCsv`]), in the order they are written: those of [`run::outputs`] with the run's
+/// figures ([`run::figures`]), then `report.html` ([`html::run`]), which inlines them.
+pub fn run_outputs(r: &crate::study::RunResult) -> crate::Result<output::Outputs<'_>> {
+    let figures = run::figures(r);
+    let listed: Vec<(String, String)> = figures.iter().map(output::Figure::listed).collect();
+    let mut outputs = run::outputs(r, figures)?;
+    outputs.push(Box::new(output::FromFolder {
+        name: "report.html",
+        make: Box::new(move |dir| Ok(html::run::page(r, &listed, dir)?.finish())),
+    }));
+    Ok(outputs)
+}
+
 /// Writes every file of a complete run into the folder `dir`: its finished `trials.csv`,
-/// then those of [`run::outputs`] (`report.html` last, with the plots inlined).
+/// then those of [`run_outputs`].
 pub fn write_run(
     r: &crate::study::RunResult,
     trials_csv: Box<dyn Output>,
     dir: &std::path::Path,
 ) -> crate::Result<()> {
     let mut outputs = vec![trials_csv];
-    outputs.extend(run::outputs(r)?);
+    outputs.extend(run_outputs(r)?);
     output::write_all(dir, &outputs)
 }
 

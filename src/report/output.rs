@@ -111,7 +111,7 @@ pub type FromDir<'a, T> = Box<dyn Fn(&Path) -> Result<T> + 'a>;
 pub type Body<'a> = Box<dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()> + 'a>;
 
 /// The text of a file made when it is written, from the folder it is written in: a page that
-/// inlines the figures written before it ([`super::html::Page::figure_file`]).
+/// inlines the figures written before it.
 pub struct FromFolder<'a> {
     /// The file's name.
     pub name: &'a str,
@@ -147,7 +147,7 @@ impl Output for Buffered<'_> {
     }
 }
 
-/// A figure drawn by [`super::plots`] as `<stem>.png` and `<stem>.svg`, with the caption
+/// A figure drawn as `<stem>.png` and `<stem>.svg` (by the report's plots), with the caption
 /// the reports give it.
 pub struct Figure<'a> {
     /// The files' stem.
@@ -179,7 +179,7 @@ impl<'a> Figure<'a> {
 }
 
 /// The file names of a figure of stem `stem`.
-fn figure_files(stem: &str) -> Vec<String> {
+pub fn figure_files(stem: &str) -> Vec<String> {
     vec![format!("{stem}.png"), format!("{stem}.svg")]
 }
 
@@ -266,7 +266,13 @@ impl Output for Bytes<'_> {
     }
 }
 
-/// A JSON document, pretty-printed with a final newline ([`super::run::json_text`]).
+/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
+pub fn json_text(v: &Value) -> Result<String> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
+    Ok(s + "\n")
+}
+
+/// A JSON document, pretty-printed with a final newline ([`json_text`]).
 pub struct Json<'a> {
     /// The file's name.
     pub name: &'a str,
@@ -279,7 +285,7 @@ impl Output for Json<'_> {
         self.name
     }
     fn write(&self, path: &Path) -> Result<()> {
-        text(path, &super::run::json_text(self.value)?)
+        text(path, &json_text(self.value)?)
     }
 }
 
@@ -392,32 +398,6 @@ impl<R: JointSpace + ?Sized> Output for KindFile<'_, R> {
     fn write(&self, path: &Path) -> Result<()> {
         let (qs, data) = (self.qs, self.data);
         crate::measurement::kind_csv::write_kind_file(path, self.robot, qs, data, self.sigma_mm)
-    }
-}
-
-/// A metric against a swept setting ([`super::plots::sweep`]), as `<name>.png` and
-/// `<name>.svg`.
-pub struct SweepFigure<'a> {
-    /// The figure's stem.
-    pub name: &'a str,
-    /// Its title.
-    pub title: &'a str,
-    /// The labels of the x and y axes.
-    pub axes: (&'a str, &'a str),
-    /// The series drawn.
-    pub series: Vec<super::SweepSeries>,
-}
-
-impl Output for SweepFigure<'_> {
-    fn name(&self) -> &str {
-        self.name
-    }
-    fn write(&self, path: &Path) -> Result<()> {
-        let (x, y) = self.axes;
-        super::plots::sweep(path, self.title, x, y, &self.series)
-    }
-    fn files(&self) -> Vec<String> {
-        figure_files(self.name)
     }
 }
 

@@ -14,19 +14,15 @@ mod sweep;
 pub mod trials_csv;
 
 pub use super::output::Figure;
-use super::output::{FromFolder, Output, Outputs, Text};
-use crate::error::{Error, Result};
+use super::output::{Output, Outputs, Text};
+use crate::error::Result;
 use crate::numeric::Real;
 use crate::study::stats::{Entry, EtaStats};
 use crate::study::{toml_to_json, Block, RunResult};
 use sweep::{sweep_figures, sweep_tables};
 pub use trials_csv::TrialsCsv;
 
-/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
-pub fn json_text(v: &Value) -> Result<String> {
-    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
-    Ok(s + "\n")
-}
+pub use super::output::json_text;
 
 /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
 /// `method / poses`.
@@ -563,10 +559,10 @@ pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
 }
 
 /// The files of a complete run but `trials.csv` (streamed as the trials finished,
-/// [`TrialsCsv`]), in the order they are written: `summary.json`, `timing.json`, the
-/// figures, `report.md`, then `report.html` ([`super::html::run`]), which inlines the
-/// figures.
-pub fn outputs(r: &RunResult) -> Result<Outputs<'_>> {
+/// [`TrialsCsv`]) and `report.html` ([`super::run_outputs`] adds it), in the order they are
+/// written: `summary.json`, `timing.json`, the `figures` ([`figures`]), then `report.md`,
+/// which shows them.
+pub fn outputs<'a>(r: &'a RunResult, figures: Vec<Figure<'a>>) -> Result<Outputs<'a>> {
     let timing: Vec<Value> = r
         .blocks
         .iter()
@@ -578,9 +574,8 @@ pub fn outputs(r: &RunResult) -> Result<Outputs<'_>> {
         })
         .collect();
     let timing = json!({"run_seconds": r.seconds, "results": timing});
-    let figures = figures(r);
     let listed: Vec<(String, String)> = figures.iter().map(Figure::listed).collect();
-    let mut out: Outputs<'_> = vec![
+    let mut out: Outputs<'a> = vec![
         Box::new(Text {
             name: "summary.json",
             text: json_text(&summary(r))?,
@@ -594,10 +589,6 @@ pub fn outputs(r: &RunResult) -> Result<Outputs<'_>> {
     out.push(Box::new(Text {
         name: "report.md",
         text: report_md(r, &listed),
-    }));
-    out.push(Box::new(FromFolder {
-        name: "report.html",
-        make: Box::new(move |dir| Ok(super::html::run::page(r, &listed, dir)?.finish())),
     }));
     Ok(out)
 }

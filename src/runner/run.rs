@@ -13,7 +13,7 @@ use super::checkpoint::{self, Checkpoint};
 use super::shard::{self, Both};
 use crate::error::{Error, Result};
 use crate::report::output::{write_all, Bytes, Outputs};
-use crate::report::{atomically, run as files, write_run};
+use crate::report::{atomically, run as files, run_outputs, write_run};
 use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
 use crate::study::scenario::Scenario;
 use crate::study::stats::precision::{Stopping, BLOCK};
@@ -200,7 +200,7 @@ impl InMemoryRun {
                 bytes: &self.trials_csv,
             };
             let mut outputs: Outputs<'_> = vec![Box::new(csv)];
-            outputs.extend(files::outputs(&self.result)?);
+            outputs.extend(run_outputs(&self.result)?);
             write_all(dir, &outputs)
         })
     }

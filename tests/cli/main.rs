@@ -15,6 +15,7 @@ mod html;
 mod instruments;
 mod interchange;
 mod kinds;
+mod layers;
 mod noise;
 mod outputs;
 mod practice;

@@ -7,7 +7,8 @@ use std::path::Path;
 
 use calbench::report::html::compare::{outputs as compare_outputs, Comparison, Side};
 use calbench::report::output::file_names;
-use calbench::report::run::{outputs as run_outputs, trials_csv};
+use calbench::report::run::trials_csv;
+use calbench::report::run_outputs;
 use calbench::runner::run::InMemoryRun;
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
@@ -24,7 +25,7 @@ fn files_in(dir: &Path) -> BTreeSet<String> {
 
 /// Runs the scenario `sc` with `calbench run --out OUT` and checks that OUT holds exactly the
 /// files of the run's outputs (the same study held in memory): `trials.csv` and the names of
-/// `report::run::outputs`, each written by one output.
+/// `report::run_outputs`, each written by one output.
 fn run_folder_is_its_outputs(sc: &Path, out: &Path) {
     calbench_ok(&[
         "run",
