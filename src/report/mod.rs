@@ -1,8 +1,9 @@
-//! Every writer of calbench's output files (docs/formats.md): [`run`] writes a run's
-//! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
-//! `calbench identify`; [`html`] the self-contained pages `report.html` and `compare.html`;
-//! [`poses`], [`simulated`] and [`program`] the files of `calbench poses`, `simulate` and
-//! `compensate`, each an [`Output`] ([`output`]: the trait and its common writers).
+//! Every writer of calbench's output files (docs/formats.md), each file an [`Output`]
+//! ([`output`]: the trait, its common writers, and the writing of a folder): [`run`] makes a
+//! run's `summary.json`, `trials.csv`, `timing.json`, `report.md` and figures
+//! ([`run_outputs`] adds `report.html`); [`identified`] the files of `calbench identify`;
+//! [`html`] the self-contained pages `report.html` and `compare.html`; [`poses`],
+//! [`simulated`] and [`program`] the files of `calbench poses`, `simulate` and `compensate`.
 //!
 //! The report only reads results that are already computed: it runs no study (running,
 //! resuming, sharding and merging a study are [`crate::runner::run`] and
