@@ -207,12 +207,16 @@ pub fn registration_warning(c: &Calibrated, registration: Registration) -> Optio
 }
 
 /// Refuses a name of the fixed or the given parameters (`option`; `given`: the latter) the
-/// robot's model does not have, a given compliance (the compliance option adds those) and a
-/// name given twice.
+/// robot's model does not have, a given compliance (the compliance model adds those, chosen
+/// by the `compliance` option whatever the caller calls it) and a name given twice.
 pub fn check_names(option: &str, given: bool, nominal: &Robot, names: &[Param]) -> Result<()> {
     let known = nominal.params();
     let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
-        (_, true) if given => Some("is a compliance: --compliance adds those".into()),
+        (_, true) if given => Some(
+            "is a joint compliance: the compliance model adds those (the `compliance` option), \
+             not a list of parameters"
+                .into(),
+        ),
         (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name)),
         _ => None,
     };

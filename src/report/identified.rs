@@ -1,20 +1,20 @@
 //! The files of `calbench identify` (docs/formats.md `identify`): `identified.json`,
-//! `residuals.csv` and the compensated `robot.toml`.
-
-use std::path::Path;
+//! `residuals.csv`, `report.md` and its figures, and the compensated `robot.toml`, each an
+//! [`Output`] ([`outputs`]).
 
 use super::markdown::{fmt_num, table};
 use super::plots;
 
 use serde_json::Value;
 
+use super::output::{Buffered, Figure, Output, Outputs, Text};
 use crate::calibrate::diagnostics::Diagnostics;
 use crate::calibrate::record::{tracker_base, IdentifiedJson, TrackerBase};
 pub use crate::calibrate::request::registration_warning;
 use crate::calibrate::request::{worse_warning, TrackerOutcome};
 pub use crate::calibrate::validation::{validate_file, FileValidation};
 use crate::calibrate::ErrorStats;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::identify::Termination;
 use crate::numeric::Real;
 use crate::robot::{robot_to_toml, Param};
@@ -63,34 +63,23 @@ pub fn identified_json(r: &IdentifyRecord) -> serde_json::Map<String, Value> {
     })
 }
 
-/// Writes `residuals.csv` to `path`, a row at a time: per point, the residual before (the
-/// nominal robot in its own registration) and after (the compensated robot in the final
+/// `residuals.csv`, written a row at a time: per point, the residual before (the nominal
+/// robot in its own registration) and after (the compensated robot in the final
 /// registration), and the final weight.
-pub fn write_residuals_csv(path: &Path, r: &IdentifyRecord) -> Result<()> {
-    use std::io::Write as _;
+pub fn residuals_csv<'a>(r: &'a IdentifyRecord) -> Result<Buffered<'a>> {
     let (before, after) = r.residuals()?;
     let weights = &r.calibrated.identified.weights;
-    write_streamed(path, |w| {
-        w.write_all(b"row,residual_before_mm,residual_after_mm,weight\n")?;
-        for (i, (b, a)) in before.iter().zip(after).enumerate() {
-            let wt = weights.get(i).copied().unwrap_or(1.0);
-            writeln!(w, "{i},{b},{a},{wt}")?;
-        }
-        Ok(())
+    Ok(Buffered {
+        name: "residuals.csv",
+        body: Box::new(move |w| {
+            w.write_all(b"row,residual_before_mm,residual_after_mm,weight\n")?;
+            for (i, (b, a)) in before.iter().zip(after).enumerate() {
+                let wt = weights.get(i).copied().unwrap_or(1.0);
+                writeln!(w, "{i},{b},{a},{wt}")?;
+            }
+            Ok(())
+        }),
     })
-}
-
-/// Writes `path` through a buffer with `body`, naming the file in any error.
-fn write_streamed(
-    path: &Path,
-    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> Result<()> {
-    use std::io::Write as _;
-    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-    let mut w = std::io::BufWriter::new(file);
-    body(&mut w)
-        .and_then(|()| w.flush())
-        .map_err(|e| Error::io(path, e))
 }
 
 /// What `identify`'s options add to its files: keys of `identified.json` and a section of
@@ -100,7 +89,7 @@ pub struct Additions<'a> {
     /// Keys added to `identified.json`.
     pub json: serde_json::Map<String, Value>,
     /// The diagnostics, added to `identified.json` as `diagnostics` (written from their
-    /// vectors by [`write_into`]).
+    /// vectors by [`outputs`]).
     pub diagnostics: Option<&'a Diagnostics>,
     /// The section's content, in order: one piece serves both pages.
     pub blocks: Vec<Block>,
@@ -134,35 +123,50 @@ impl Additions<'_> {
     }
 }
 
-/// Writes `residuals.csv`, `identified.json` (with the `more` keys: cross-validation, priors,
-/// diagnostics, [`super::practice`]), `report.md` with its plots, `robot.toml` (the
-/// compensated robot, named `<nominal>-calibrated`) and `robot.urdf` if asked for into the
-/// folder `out` ([`super::write_identified_with`] adds `report.html` and the controller exports
-/// and writes them as a whole).
-pub fn write_into(out: &Path, r: &IdentifyRecord, more: &Additions) -> Result<()> {
-    write_residuals_csv(&out.join("residuals.csv"), r)?;
+/// The files of `calbench identify` but `report.html` and the controller exports
+/// ([`super::write_identified_with`] adds them), in the order they are written:
+/// `residuals.csv`, `identified.json` (with the `more` keys: cross-validation, priors,
+/// diagnostics, [`super::practice`]), the figures, `report.md`, `robot.urdf` if asked for and
+/// `robot.toml` (the compensated robot, named `<nominal>-calibrated`).
+pub fn outputs<'a>(r: &'a IdentifyRecord, more: &'a Additions) -> Result<Outputs<'a>> {
     let base = identified_json(r);
-    let record = IdentifiedJson {
-        base: &base,
-        more: &more.json,
-        diagnostics: more.diagnostics,
-    };
-    let path = out.join("identified.json");
-    write_streamed(&path, |w| {
-        use std::io::Write as _;
-        serde_json::to_writer_pretty(&mut *w, &record)?;
-        w.write_all(b"\n")
-    })?;
+    let mut out: Outputs<'a> = vec![
+        Box::new(residuals_csv(r)?),
+        Box::new(Buffered {
+            name: "identified.json",
+            body: Box::new(move |w| {
+                let record = IdentifiedJson {
+                    base: &base,
+                    more: &more.json,
+                    diagnostics: more.diagnostics,
+                };
+                serde_json::to_writer_pretty(&mut *w, &record)?;
+                w.write_all(b"\n")
+            }),
+        }),
+    ];
+    out.extend(
+        figures(r)?
+            .into_iter()
+            .map(|f| Box::new(f) as Box<dyn Output>),
+    );
+    out.push(Box::new(Text {
+        name: "report.md",
+        text: report_md(r)? + &more.markdown(),
+    }));
+    if let Some(u) = &r.urdf {
+        out.push(Box::new(Text {
+            name: "robot.urdf",
+            text: u.clone(),
+        }));
+    }
     let mut compensated = r.calibrated.robot.clone();
     compensated.name = format!("{}-calibrated", r.nominal.name);
-    write(
-        &out.join("report.md"),
-        &(report_md(out, r)? + &more.markdown()),
-    )?;
-    if let Some(u) = &r.urdf {
-        write(&out.join("robot.urdf"), u)?;
-    }
-    write(&out.join("robot.toml"), &robot_to_toml(&compensated))
+    out.push(Box::new(Text {
+        name: "robot.toml",
+        text: robot_to_toml(&compensated),
+    }));
+    Ok(out)
 }
 
 /// The warnings of an identification, in plain words: data that do not determine every
@@ -214,10 +218,6 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     }
     w.extend(worse_warning(&r.worse).map(|t| t + "."));
     w
-}
-
-pub(super) fn write(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 
 /// The standard error of parameter `i`: the square root of the covariance's diagonal; NaN
@@ -314,16 +314,15 @@ fn histogram(series: &[&[Real]]) -> (Vec<String>, Vec<Vec<Real>>) {
     (labels, counts)
 }
 
-/// `report.md` of `identify` on real data, with its plots in `out`: residual per calibration
+/// `report.md` of `identify` on real data, showing its [`figures`]: residual per calibration
 /// point before and after, their histogram, the identified errors with standard errors (the
 /// square roots of the covariance's diagonal), the condition number and the dependent groups of
 /// the parameters the robot offers, and, for a robust method (IGG3, Qiao 2021 eq. 15), the final
 /// point weights.
-pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
+pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     use std::fmt::Write as _;
     let c = &r.calibrated;
     let id = &c.identified;
-    let (before, after) = r.residuals()?;
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -354,36 +353,6 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         s += &table(&VALIDATION_HEADERS, &validation_rows(v, false));
         s.push('\n');
     }
-    // Beyond PLOT_POINTS points the plot shows the largest of each run of k consecutive
-    // points (the outliers stay visible; the figure and its SVG stay small).
-    let k = before.len().div_ceil(PLOT_POINTS).max(1);
-    if k == 1 {
-        plots::before_after(
-            &out.join("residuals"),
-            "Residual per calibration point",
-            before,
-            after,
-        )?;
-    } else {
-        plots::before_after(
-            &out.join("residuals"),
-            &format!("Residual per calibration point (largest of each {k})"),
-            &largest_of_runs(before, k),
-            &largest_of_runs(after, k),
-        )?;
-    }
-    let (labels, counts) = histogram(&[before, after]);
-    plots::grouped_bars(
-        &out.join("histogram"),
-        "Residuals (mm): points per bin",
-        "points",
-        &labels,
-        &["before", "after"]
-            .into_iter()
-            .map(String::from)
-            .zip(counts)
-            .collect::<Vec<_>>(),
-    )?;
     s += "## Residuals\n\n![residual per point](residuals.png)\n\n![histogram](histogram.png)\n\n";
     s += "## Identified errors\n\nmm and rad (joint compliances c<j>: rad/(N·m)); standard error = √ of the \
           covariance's diagonal.\n\n";
@@ -418,15 +387,7 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
     for g in &a.groups {
         let _ = writeln!(s, "- dependent group: {}", names(g));
     }
-    if r.method == "igg3" && !id.weights.is_empty() {
-        let (labels, mut counts) = histogram(&[&id.weights]);
-        plots::grouped_bars(
-            &out.join("weights"),
-            "IGG3 final point weights",
-            "points",
-            &labels,
-            &[("points".to_string(), counts.remove(0))],
-        )?;
+    if igg3_weights(r) {
         let low: Vec<String> = id
             .weights
             .iter()
@@ -441,4 +402,55 @@ pub fn report_md(out: &Path, r: &IdentifyRecord) -> Result<String> {
         );
     }
     Ok(s)
+}
+
+/// Whether the report shows the final point weights: those of IGG3.
+fn igg3_weights(r: &IdentifyRecord) -> bool {
+    r.method == "igg3" && !r.calibrated.identified.weights.is_empty()
+}
+
+/// The figures of `report.md`: the residual per point before and after, their histogram,
+/// and IGG3's final weights.
+pub fn figures<'a>(r: &'a IdentifyRecord) -> Result<Vec<Figure<'a>>> {
+    let (before, after) = r.residuals()?;
+    // Beyond PLOT_POINTS points the plot shows the largest of each run of k consecutive
+    // points (the outliers stay visible; the figure and its SVG stay small).
+    let k = before.len().div_ceil(PLOT_POINTS).max(1);
+    let per_point = if k == 1 {
+        Figure::new("residuals", "residual per point", move |p| {
+            plots::before_after(p, "Residual per calibration point", before, after)
+        })
+    } else {
+        let title = format!("Residual per calibration point (largest of each {k})");
+        let (b, a) = (largest_of_runs(before, k), largest_of_runs(after, k));
+        Figure::new("residuals", "residual per point", move |p| {
+            plots::before_after(p, &title, &b, &a)
+        })
+    };
+    let (labels, counts) = histogram(&[before, after]);
+    let series: Vec<(String, Vec<Real>)> = ["before", "after"]
+        .into_iter()
+        .map(String::from)
+        .zip(counts)
+        .collect();
+    let mut figs = vec![
+        per_point,
+        Figure::new("histogram", "histogram", move |p| {
+            plots::grouped_bars(
+                p,
+                "Residuals (mm): points per bin",
+                "points",
+                &labels,
+                &series,
+            )
+        }),
+    ];
+    if igg3_weights(r) {
+        let (labels, mut counts) = histogram(&[&r.calibrated.identified.weights]);
+        let series = [("points".to_string(), counts.remove(0))];
+        figs.push(Figure::new("weights", "weights", move |p| {
+            plots::grouped_bars(p, "IGG3 final point weights", "points", &labels, &series)
+        }));
+    }
+    Ok(figs)
 }

@@ -8,6 +8,7 @@ use serde_json::json;
 
 use super::html::Page;
 use super::markdown::{fmt_num, table};
+use super::output::{Outputs, Text};
 use crate::error::{Error, Result};
 use crate::study::instruments::{Cell, InstrumentsScenario};
 
@@ -114,20 +115,26 @@ pub fn report_html(s: &InstrumentsScenario, cells: &[Cell]) -> Page {
     page
 }
 
-/// Writes `summary.json`, `report.md` and `report.html` into `out` as a whole ([`super::atomically`]).
+/// The study's files: `summary.json`, `report.md` and `report.html`.
+pub fn outputs<'a>(s: &'a InstrumentsScenario, cells: &'a [Cell]) -> Result<Outputs<'a>> {
+    let instruments =
+        serde_json::to_value(s.instruments()).map_err(|e| Error::Compute(e.to_string()))?;
+    let more = json!({"robot": s.robot, "instruments": instruments, "cells": cells});
+    let head = (
+        s.head.name.as_str(),
+        s.head.description.as_str(),
+        "instruments",
+    );
+    let summary = super::whole_summary(head, (s.head.trials, s.head.seed), more)?;
+    let report = Text {
+        name: "report.md",
+        text: report_md(s, cells),
+    };
+    let page = report_html(s, cells).output("report.html");
+    Ok(vec![Box::new(summary), Box::new(report), Box::new(page)])
+}
+
+/// Writes the study's files into `out` as a whole ([`super::output::folder_of`]).
 pub fn write_all(s: &InstrumentsScenario, cells: &[Cell], out: &Path) -> Result<()> {
-    super::atomically(out, |dir| {
-        let instruments =
-            serde_json::to_value(s.instruments()).map_err(|e| Error::Compute(e.to_string()))?;
-        let more = json!({"robot": s.robot, "instruments": instruments, "cells": cells});
-        let head = (
-            s.head.name.as_str(),
-            s.head.description.as_str(),
-            "instruments",
-        );
-        super::write_whole_summary(dir, head, (s.head.trials, s.head.seed), more)?;
-        let path = dir.join("report.md");
-        std::fs::write(&path, report_md(s, cells)).map_err(|e| Error::io(&path, e))?;
-        report_html(s, cells).write(&dir.join("report.html"))
-    })
+    super::output::folder_of(out, &outputs(s, cells)?)
 }

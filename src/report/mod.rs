@@ -1,8 +1,9 @@
-//! Every writer of calbench's output files (docs/formats.md): [`run`] writes a run's
-//! `summary.json`, `trials.csv`, `report.md` and plots; [`identified`] the files of
-//! `calbench identify`; [`html`] the self-contained pages `report.html` and `compare.html`;
-//! [`poses`], [`simulated`] and [`program`] the files of `calbench poses`, `simulate` and
-//! `compensate`, each an [`Output`] ([`output`]: the trait and its common writers).
+//! Every writer of calbench's output files (docs/formats.md), each file an [`Output`]
+//! ([`output`]: the trait, its common writers, and the writing of a folder): [`run`] makes a
+//! run's `summary.json`, `trials.csv`, `timing.json`, `report.md` and figures
+//! ([`run_outputs`] adds `report.html`); [`identified`] the files of `calbench identify`;
+//! [`html`] the self-contained pages `report.html` and `compare.html`; [`poses`],
+//! [`simulated`] and [`program`] the files of `calbench poses`, `simulate` and `compensate`.
 //!
 //! The report only reads results that are already computed: it runs no study (running,
 //! resuming, sharding and merging a study are [`crate::runner::run`] and
@@ -38,17 +39,36 @@ pub use plots::{
     before_after, box_plot, box_stats, grouped_bars, heatmap, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,
 };
-pub use run::{columns, entry_table, summary, write_into, Column, TrialsCsv};
+pub use run::{columns, entry_table, summary, Column, TrialsCsv};
 
-/// Writes every file of a complete run but `trials.csv` into the folder `dir`: those of
-/// [`run::write_into`], then `report.html` ([`html::run`]) with the plots inlined.
-pub fn write_run(r: &crate::study::RunResult, dir: &std::path::Path) -> crate::Result<()> {
-    let plots = run::write_into(r, dir)?;
-    html::run::page(r, &plots, dir)?.write(&dir.join("report.html"))
+/// The files of a complete run but `trials.csv` (streamed as the trials finish,
+/// [`TrialsCsv`]), in the order they are written: those of [`run::outputs`] with the run's
+/// figures ([`run::figures`]), then `report.html` ([`html::run`]), which inlines them.
+pub fn run_outputs(r: &crate::study::RunResult) -> crate::Result<output::Outputs<'_>> {
+    let figures = run::figures(r);
+    let listed: Vec<(String, String)> = figures.iter().map(output::Figure::listed).collect();
+    let mut outputs = run::outputs(r, figures)?;
+    outputs.push(Box::new(output::FromFolder {
+        name: "report.html",
+        make: Box::new(move |dir| Ok(html::run::page(r, &listed, dir)?.finish())),
+    }));
+    Ok(outputs)
+}
+
+/// Writes every file of a complete run into the folder `dir`: its finished `trials.csv`,
+/// then those of [`run_outputs`].
+pub fn write_run(
+    r: &crate::study::RunResult,
+    trials_csv: Box<dyn Output>,
+    dir: &std::path::Path,
+) -> crate::Result<()> {
+    let mut outputs = vec![trials_csv];
+    outputs.extend(run_outputs(r)?);
+    output::write_all(dir, &outputs)
 }
 
 /// Writes the output folder of `calbench identify` as a whole ([`atomically`]): the files of
-/// [`identified::write_into`], then `report.html` ([`html::identify`]).
+/// [`identified::outputs`], then `report.html` ([`html::identify`]).
 pub fn write_identified(
     out: &std::path::Path,
     r: &identified::IdentifyRecord,
@@ -65,13 +85,21 @@ pub fn write_identified_with(
     more: &identified::Additions,
     files: &[(&str, String)],
 ) -> crate::Result<()> {
-    atomically(out, |dir| {
-        for (name, text) in files {
-            identified::write(&dir.join(name), text)?;
-        }
-        identified::write_into(dir, r, more)?;
-        html::identify::page(dir, r, more)?.write(&dir.join("report.html"))
-    })
+    let mut outputs: output::Outputs<'_> = files
+        .iter()
+        .map(|(name, text)| {
+            Box::new(output::Text {
+                name,
+                text: text.clone(),
+            }) as Box<dyn Output>
+        })
+        .collect();
+    outputs.extend(identified::outputs(r, more)?);
+    outputs.push(Box::new(output::FromFolder {
+        name: "report.html",
+        make: Box::new(|dir| Ok(html::identify::page(dir, r, more)?.finish())),
+    }));
+    output::folder_of(out, &outputs)
 }
 
 /// The folder holding `out` (`.` for a bare name) and `out`'s last part (`out` when it has
@@ -103,14 +131,13 @@ pub fn blocked_output<S: AsRef<std::ffi::OsStr>>(
         .find(|p| std::fs::symlink_metadata(p).is_ok_and(|m| m.is_dir()))
 }
 
-/// Writes `summary.json` of a study that runs whole (a registration or an instruments study)
-/// into `dir`: `scenario`, `description`, `kind`, `trials` and `seed`, then `more`'s keys.
-pub(crate) fn write_whole_summary(
-    dir: &std::path::Path,
+/// `summary.json` of a study that runs whole (a registration or an instruments study):
+/// `scenario`, `description`, `kind`, `trials` and `seed`, then `more`'s keys.
+pub(crate) fn whole_summary(
     (scenario, description, kind): (&str, &str, &str),
     (trials, seed): (usize, u64),
     more: serde_json::Value,
-) -> crate::Result<()> {
+) -> crate::Result<output::Text<'static>> {
     let mut summary = serde_json::json!({
         "scenario": scenario, "description": description, "kind": kind,
         "trials": trials, "seed": seed,
@@ -118,8 +145,10 @@ pub(crate) fn write_whole_summary(
     if let (Some(head), serde_json::Value::Object(more)) = (summary.as_object_mut(), more) {
         head.extend(more);
     }
-    let path = dir.join("summary.json");
-    std::fs::write(&path, run::json_text(&summary)?).map_err(|e| crate::Error::io(&path, e))
+    Ok(output::Text {
+        name: "summary.json",
+        text: run::json_text(&summary)?,
+    })
 }
 
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`

@@ -1,11 +1,20 @@
 //! The one trait of an output file, [`Output`] (its name and how its bytes are written), and
-//! the writers that several outputs share: bytes already made, a JSON document, a numbered
-//! series, the measurement and pose files (through [`crate::measurement`]'s byte-identical
-//! writers), a robot file and a figure. The files of `calbench poses`, `simulate`,
-//! `compensate` and `identify` on a measurement-kind file (docs/formats.md) are built from results already computed and handed to [`folder`], which
-//! writes them as a whole.
+//! the writers that several outputs share: bytes or text already made, a text made from the
+//! folder it is written in (a page inlining the figures beside it), a JSON document, a
+//! numbered series, the measurement and pose files (through [`crate::measurement`]'s
+//! byte-identical writers), a robot file, a figure, and a file streamed as it is produced
+//! ([`Stream`]). Every file calbench writes into an output folder is one of these, written
+//! by [`write_all`] (and as a whole by [`folder`]): the files of `calbench run`, `merge`,
+//! `compare`, `poses`, `simulate`, `compensate` and `identify` (docs/formats.md) are built
+//! from results already computed.
+//!
+//! A run's `trials.csv` and a shard's `records.txt` are streamed: a run's memory must not
+//! grow with its trials (the aggregation spills its per-trial numbers to disk for the same
+//! reason), so their rows go to a [`Stream`] in the folder as the trials finish, and the
+//! finished stream ([`Streamed`]) is an output like the others, written when the folder is.
 
-use std::path::Path;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
@@ -21,21 +30,223 @@ pub trait Output {
     fn name(&self) -> &str;
     /// Writes the file at `path` (a figure: at `path` with `.png` and `.svg` added).
     fn write(&self, path: &Path) -> Result<()>;
+    /// The names of the files it writes in the folder: its name (a figure: `<name>.png` and
+    /// `<name>.svg`).
+    fn files(&self) -> Vec<String> {
+        vec![self.name().to_string()]
+    }
 }
 
-/// Writes `outputs` into the folder `out` as a whole ([`super::atomically`]), each under its
+/// The outputs of a command, in the order they are written.
+pub type Outputs<'a> = Vec<Box<dyn Output + 'a>>;
+
+/// Writes `outputs` into the existing folder `dir` in their order (an output that reads the
+/// folder, such as a page inlining figures, comes after what it reads), each under its
 /// [`Output::name`].
-pub fn folder(out: &Path, outputs: &[&dyn Output]) -> Result<()> {
-    super::atomically(out, |dir| {
-        outputs
-            .iter()
-            .try_for_each(|o| o.write(&dir.join(o.name())))
+pub fn write_all<'o, O: std::borrow::Borrow<dyn Output + 'o>>(
+    dir: &Path,
+    outputs: &[O],
+) -> Result<()> {
+    outputs.iter().try_for_each(|o| {
+        let o = o.borrow();
+        o.write(&dir.join(o.name()))
     })
+}
+
+/// Writes `outputs` into the folder `out` as a whole ([`super::atomically`], [`write_all`]).
+pub fn folder(out: &Path, outputs: &[&dyn Output]) -> Result<()> {
+    super::atomically(out, |dir| write_all(dir, outputs))
+}
+
+/// [`folder`] of outputs held in boxes.
+pub fn folder_of(out: &Path, outputs: &Outputs) -> Result<()> {
+    super::atomically(out, |dir| write_all(dir, outputs))
+}
+
+/// The names of the files `outputs` write ([`Output::files`]), sorted.
+pub fn file_names<'o, O: std::borrow::Borrow<dyn Output + 'o>>(outputs: &[O]) -> Vec<String> {
+    let mut names: Vec<String> = outputs.iter().flat_map(|o| o.borrow().files()).collect();
+    names.sort();
+    names
 }
 
 /// Writes `text` at `path`.
 pub(crate) fn text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
+}
+
+/// Writes `path` through a buffer with `body`, naming the file in any error.
+pub(crate) fn buffered(
+    path: &Path,
+    body: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
+) -> Result<()> {
+    let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+    let mut w = std::io::BufWriter::new(file);
+    body(&mut w)
+        .and_then(|()| w.flush())
+        .map_err(|e| Error::io(path, e))
+}
+
+/// A file whose text is already made (`summary.json`, `report.md`, a page).
+pub struct Text<'a> {
+    /// The file's name.
+    pub name: &'a str,
+    /// Its text.
+    pub text: String,
+}
+
+impl Output for Text<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        text(path, &self.text)
+    }
+}
+
+/// A function of a path: the folder a text is made from, the stem a figure is drawn at.
+pub type FromDir<'a, T> = Box<dyn Fn(&Path) -> Result<T> + 'a>;
+
+/// A function that writes a file's bytes to a writer.
+pub type Body<'a> = Box<dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()> + 'a>;
+
+/// The text of a file made when it is written, from the folder it is written in: a page that
+/// inlines the figures written before it.
+pub struct FromFolder<'a> {
+    /// The file's name.
+    pub name: &'a str,
+    /// Its text, made from the folder.
+    pub make: FromDir<'a, String>,
+}
+
+impl Output for FromFolder<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        text(path, &(self.make)(dir)?)
+    }
+}
+
+/// A file written through a buffer by a function of its writer (an `identified.json` or a
+/// `residuals.csv` too long to hold as one text).
+pub struct Buffered<'a> {
+    /// The file's name.
+    pub name: &'a str,
+    /// Writes the file's bytes.
+    pub body: Body<'a>,
+}
+
+impl Output for Buffered<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        buffered(path, |w| (self.body)(w))
+    }
+}
+
+/// A figure drawn as `<stem>.png` and `<stem>.svg` (by the report's plots), with the caption
+/// the reports give it.
+pub struct Figure<'a> {
+    /// The files' stem.
+    pub stem: String,
+    /// The caption (`report.md`, `report.html`).
+    pub caption: String,
+    /// Draws the figure at a stem.
+    pub draw: FromDir<'a, ()>,
+}
+
+impl<'a> Figure<'a> {
+    /// The figure `stem` with `caption`, drawn by `draw`.
+    pub fn new(
+        stem: impl Into<String>,
+        caption: impl Into<String>,
+        draw: impl Fn(&Path) -> Result<()> + 'a,
+    ) -> Figure<'a> {
+        Figure {
+            stem: stem.into(),
+            caption: caption.into(),
+            draw: Box::new(draw),
+        }
+    }
+
+    /// The PNG's file name and the caption, as `report.md` lists a figure.
+    pub fn listed(&self) -> (String, String) {
+        (format!("{}.png", self.stem), self.caption.clone())
+    }
+}
+
+/// The file names of a figure of stem `stem`.
+pub fn figure_files(stem: &str) -> Vec<String> {
+    vec![format!("{stem}.png"), format!("{stem}.svg")]
+}
+
+impl Output for Figure<'_> {
+    fn name(&self) -> &str {
+        &self.stem
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        (self.draw)(path)
+    }
+    fn files(&self) -> Vec<String> {
+        figure_files(&self.stem)
+    }
+}
+
+/// A file written as it is produced (a run's `trials.csv`, a shard's `records.txt`): its
+/// bytes go to `.<name>.partial` in the output folder; [`Stream::finish`] gives the
+/// [`Streamed`] output that puts it under its name.
+pub struct Stream {
+    name: String,
+    partial: PathBuf,
+    out: std::io::BufWriter<std::fs::File>,
+}
+
+impl Stream {
+    /// Starts the file `name` in the folder `dir`.
+    pub fn create(dir: &Path, name: &str) -> Result<Stream> {
+        let partial = dir.join(format!(".{name}.partial"));
+        let file = std::fs::File::create(&partial).map_err(|e| Error::io(&partial, e))?;
+        Ok(Stream {
+            name: name.to_string(),
+            partial,
+            out: std::io::BufWriter::new(file),
+        })
+    }
+
+    /// Appends `bytes`, naming the file in an error.
+    pub fn append(&mut self, bytes: &[u8]) -> Result<()> {
+        self.out
+            .write_all(bytes)
+            .map_err(|e| Error::io(self.partial.with_file_name(&self.name), e))
+    }
+
+    /// Flushes the bytes: the finished file, to be written under its name.
+    pub fn finish(mut self) -> Result<Streamed> {
+        let path = self.partial.with_file_name(&self.name);
+        self.out.flush().map_err(|e| Error::io(&path, e))?;
+        Ok(Streamed {
+            name: self.name,
+            partial: self.partial,
+        })
+    }
+}
+
+/// A finished [`Stream`]: writing it moves its bytes under its name.
+pub struct Streamed {
+    name: String,
+    partial: PathBuf,
+}
+
+impl Output for Streamed {
+    fn name(&self) -> &str {
+        &self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        std::fs::rename(&self.partial, path).map_err(|e| Error::io(path, e))
+    }
 }
 
 /// A file whose bytes are already made (e.g. `trials.csv` of a run held in memory).
@@ -55,7 +266,13 @@ impl Output for Bytes<'_> {
     }
 }
 
-/// A JSON document, pretty-printed with a final newline ([`super::run::json_text`]).
+/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
+pub fn json_text(v: &Value) -> Result<String> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
+    Ok(s + "\n")
+}
+
+/// A JSON document, pretty-printed with a final newline ([`json_text`]).
 pub struct Json<'a> {
     /// The file's name.
     pub name: &'a str,
@@ -68,7 +285,7 @@ impl Output for Json<'_> {
         self.name
     }
     fn write(&self, path: &Path) -> Result<()> {
-        text(path, &super::run::json_text(self.value)?)
+        text(path, &json_text(self.value)?)
     }
 }
 
@@ -181,29 +398,6 @@ impl<R: JointSpace + ?Sized> Output for KindFile<'_, R> {
     fn write(&self, path: &Path) -> Result<()> {
         let (qs, data) = (self.qs, self.data);
         crate::measurement::kind_csv::write_kind_file(path, self.robot, qs, data, self.sigma_mm)
-    }
-}
-
-/// A metric against a swept setting ([`super::plots::sweep`]), as `<name>.png` and
-/// `<name>.svg`.
-pub struct SweepFigure<'a> {
-    /// The figure's stem.
-    pub name: &'a str,
-    /// Its title.
-    pub title: &'a str,
-    /// The labels of the x and y axes.
-    pub axes: (&'a str, &'a str),
-    /// The series drawn.
-    pub series: Vec<super::SweepSeries>,
-}
-
-impl Output for SweepFigure<'_> {
-    fn name(&self) -> &str {
-        self.name
-    }
-    fn write(&self, path: &Path) -> Result<()> {
-        let (x, y) = self.axes;
-        super::plots::sweep(path, self.title, x, y, &self.series)
     }
 }
 

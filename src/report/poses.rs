@@ -7,7 +7,8 @@ use std::path::Path;
 
 use serde_json::json;
 
-use super::output::{Json, Output, Series, SweepFigure};
+use super::output::{Json, Output, Series};
+use super::plots::SweepFigure;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::poses::{Selection, Separation};

@@ -9,6 +9,7 @@ use std::path::Path;
 use serde_json::json;
 
 use super::markdown::{fmt_num, table};
+use super::output::{Figure, Outputs, Text};
 use super::plots;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -93,53 +94,65 @@ pub fn report_md(
     out
 }
 
-/// Writes the study's files into `out` as a whole ([`super::atomically`]), with its claims
-/// evaluated ([`RegistrationScenario::evaluate_claims`]; `summary.json`'s `claims` when the
-/// scenario states any).
+/// The study's files, in the order they are written: `summary.json` (with the claims
+/// evaluated, [`RegistrationScenario::evaluate_claims`], when the scenario states any), the
+/// heat map and `report.md`.
+pub fn outputs<'a>(
+    s: &'a RegistrationScenario,
+    cells: &'a [Cell],
+    claims: &[(&Claim, Evaluation)],
+) -> Result<Outputs<'a>> {
+    let settings =
+        serde_json::to_value(&s.registration_study).map_err(|e| Error::Compute(e.to_string()))?;
+    let mut more = json!({"settings": settings, "cells": cells});
+    if !claims.is_empty() {
+        let evaluated = claims
+            .iter()
+            .map(|(c, e)| super::run::claims::claim_json(c, METRIC, e))
+            .collect();
+        more["claims"] = serde_json::Value::Array(evaluated);
+    }
+    let head = (
+        s.head.name.as_str(),
+        s.head.description.as_str(),
+        "registration_study",
+    );
+    let summary = super::whole_summary(head, (s.head.trials, s.head.seed), more)?;
+    let rows: Vec<String> = s
+        .registration_study
+        .outlier_counts
+        .iter()
+        .map(|c| c.to_string())
+        .collect();
+    // `grid` is by row (outlier count), the plot's values by column (magnitude range).
+    let by_row = grid(s, cells, |c| c.difference_mm * 1e3);
+    let columns = magnitude_names(s);
+    let by_column: Vec<Vec<Real>> = (0..columns.len())
+        .map(|j| by_row.iter().map(|row| row[j]).collect())
+        .collect();
+    let title = "Mean registration error, SVD − weighted SVD (µm)";
+    let heatmap = Figure::new("heatmap_difference", title, move |p| {
+        plots::heatmap(
+            p,
+            title,
+            ("gross-error magnitude range", &columns),
+            ("points with a gross error", &rows),
+            &by_column,
+        )
+    });
+    let report = Text {
+        name: "report.md",
+        text: report_md(s, cells, claims, &heatmap.listed().0),
+    };
+    Ok(vec![Box::new(summary), Box::new(heatmap), Box::new(report)])
+}
+
+/// Writes the study's files into `out` as a whole ([`super::output::folder_of`]).
 pub fn write_all(
     s: &RegistrationScenario,
     cells: &[Cell],
     claims: &[(&Claim, Evaluation)],
     out: &Path,
 ) -> Result<()> {
-    super::atomically(out, |dir| {
-        let settings = serde_json::to_value(&s.registration_study)
-            .map_err(|e| Error::Compute(e.to_string()))?;
-        let mut more = json!({"settings": settings, "cells": cells});
-        if !claims.is_empty() {
-            let evaluated = claims
-                .iter()
-                .map(|(c, e)| super::run::claims::claim_json(c, METRIC, e))
-                .collect();
-            more["claims"] = serde_json::Value::Array(evaluated);
-        }
-        let head = (
-            s.head.name.as_str(),
-            s.head.description.as_str(),
-            "registration_study",
-        );
-        super::write_whole_summary(dir, head, (s.head.trials, s.head.seed), more)?;
-        let rows: Vec<String> = s
-            .registration_study
-            .outlier_counts
-            .iter()
-            .map(|c| c.to_string())
-            .collect();
-        // `grid` is by row (outlier count), the plot's values by column (magnitude range).
-        let by_row = grid(s, cells, |c| c.difference_mm * 1e3);
-        let columns = magnitude_names(s);
-        let by_column: Vec<Vec<Real>> = (0..columns.len())
-            .map(|j| by_row.iter().map(|row| row[j]).collect())
-            .collect();
-        plots::heatmap(
-            &dir.join("heatmap_difference"),
-            "Mean registration error, SVD − weighted SVD (µm)",
-            ("gross-error magnitude range", &columns),
-            ("points with a gross error", &rows),
-            &by_column,
-        )?;
-        let path = dir.join("report.md");
-        std::fs::write(&path, report_md(s, cells, claims, "heatmap_difference.png"))
-            .map_err(|e| Error::io(&path, e))
-    })
+    super::output::folder_of(out, &outputs(s, cells, claims)?)
 }

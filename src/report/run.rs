@@ -2,7 +2,6 @@
 //! `run`). Writers only read results that are already computed.
 
 use std::fmt::Write as _;
-use std::path::Path;
 
 use serde_json::{json, Value};
 
@@ -12,29 +11,18 @@ use super::plots;
 pub mod claims;
 pub mod comparisons;
 mod sweep;
-mod trials_csv;
+pub mod trials_csv;
 
-use crate::error::{Error, Result};
+pub use super::output::Figure;
+use super::output::{Output, Outputs, Text};
+use crate::error::Result;
 use crate::numeric::Real;
 use crate::study::stats::{Entry, EtaStats};
 use crate::study::{toml_to_json, Block, RunResult};
-use sweep::{sweep_tables, write_sweep_plots};
+use sweep::{sweep_figures, sweep_tables};
 pub use trials_csv::TrialsCsv;
 
-fn write(path: &Path, text: &str) -> Result<()> {
-    std::fs::write(path, text).map_err(|e| Error::io(path, e))
-}
-
-/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
-pub fn json_text(v: &Value) -> Result<String> {
-    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
-    Ok(s + "\n")
-}
-
-/// Writes `v` as [`json_text`].
-fn write_json(path: &Path, v: &Value) -> Result<()> {
-    write(path, &json_text(v)?)
-}
+pub use super::output::json_text;
 
 /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
 /// `method / poses`.
@@ -439,82 +427,70 @@ pub fn eta_table(b: &Block) -> (Vec<String>, Vec<Vec<String>>) {
     (h, rows)
 }
 
-/// Records the PNG `<stem>.png` with its caption.
-fn caption(done: &mut Vec<(String, String)>, stem: &str, text: &str) {
-    done.push((format!("{stem}.png"), text.to_string()));
-}
-
-/// Plots `traces` against the iteration as `<stem>.png` / `.svg` (`names` = stem, title,
-/// y label; log scale with `log_y`) and records it with `text`; nothing without traces.
-fn trace_plot(
-    out: &Path,
-    done: &mut Vec<(String, String)>,
-    names: (&str, &str, &str),
-    traces: &[(String, Vec<Real>)],
+/// The figure of `traces` against the iteration (`names` = stem, title, y label; log scale
+/// with `log_y`) captioned `text`; none without traces.
+fn trace_figure<'a>(
+    names: (&'a str, &'a str, &'a str),
+    traces: Vec<(String, Vec<Real>)>,
     log_y: bool,
     text: &str,
-) -> Result<()> {
+) -> Option<Figure<'a>> {
     if traces.is_empty() {
-        return Ok(());
+        return None;
     }
     let (stem, title, y_label) = names;
-    plots::traces(&out.join(stem), title, "iteration", y_label, traces, log_y)?;
-    caption(done, stem, text);
-    Ok(())
+    Some(Figure::new(stem, text, move |p| {
+        plots::traces(p, title, "iteration", y_label, &traces, log_y)
+    }))
 }
 
-/// Renders the plots; returns (file name, caption) of each PNG.
-pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
-    let mut done = Vec::new();
+/// The run's figures, in the order `report.md` lists them.
+pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
+    let mut figs = Vec::new();
     let b0 = &r.blocks[0];
     let info = &b0.info;
     // η per parameter per method × strategy (Guo 2024 fig. 8), with its 95 % interval.
     let (params, series, intervals) = eta_by_parameter(b0);
     let intervals: Vec<Vec<Option<[Real; 2]>>> = intervals.into_iter().map(|(_, v)| v).collect();
-    plots::grouped_bars_with_intervals(
-        &out.join("eta"),
-        "Identification accuracy per parameter",
-        "mean η (%) with its 95 % interval",
-        &params,
-        &series,
-        &intervals,
-    )?;
-    caption(
-        &mut done,
+    figs.push(Figure::new(
         "eta",
         "η per parameter and method, with the 95 % interval of each mean",
-    );
+        move |p| {
+            plots::grouped_bars_with_intervals(
+                p,
+                "Identification accuracy per parameter",
+                "mean η (%) with its 95 % interval",
+                &params,
+                &series,
+                &intervals,
+            )
+        },
+    ));
     // Validation error per point, trial 0, the first method and strategy (Li 2018 fig. 3).
     if let Some((si, mi, before, after)) = b0.trial0.as_ref().and_then(|t| t.per_point.as_ref()) {
         let title = format!(
             "Validation errors, trial 0, {} on {} poses",
             info.methods[*mi], info.strategies[*si]
         );
-        plots::before_after(&out.join("validation_trial0"), &title, before, after)?;
-        caption(
-            &mut done,
-            "validation_trial0",
-            "validation error per point before and after compensation, trial 0",
-        );
         // Full-pose data: the attitude errors of the same points (Qiao 2021 fig. 6).
-        if let Some((b, a)) = b0
+        let attitude = b0
             .trial0
             .as_ref()
             .and_then(|t| t.per_point_attitude_deg.as_ref())
-        {
-            plots::before_after_in(
-                &out.join("validation_trial0_attitude"),
-                &format!("{title}: attitude"),
-                "attitude error (deg)",
-                b,
-                a,
-            )?;
-            caption(
-                &mut done,
-                "validation_trial0_attitude",
-                "validation attitude error per point before and after compensation, trial 0",
-            );
-        }
+            .map(|(b, a)| {
+                let title = format!("{title}: attitude");
+                Figure::new(
+                    "validation_trial0_attitude",
+                    "validation attitude error per point before and after compensation, trial 0",
+                    move |p| plots::before_after_in(p, &title, "attitude error (deg)", b, a),
+                )
+            });
+        figs.push(Figure::new(
+            "validation_trial0",
+            "validation error per point before and after compensation, trial 0",
+            move |p| plots::before_after(p, &title, before, after),
+        ));
+        figs.extend(attitude);
     }
     // Validation RMS over trials per method × strategy.
     let groups: Vec<(String, Vec<Real>)> = b0
@@ -523,19 +499,25 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
         .zip(&b0.after_rms)
         .map(|(e, v)| (entry_label(e), v.clone()))
         .collect();
-    plots::box_plot(
-        &out.join("validation_rms"),
-        "Validation RMS after compensation over trials",
-        "RMS (mm)",
-        &groups,
-    )?;
-    caption(&mut done, "validation_rms", "validation RMS over trials");
+    figs.push(Figure::new(
+        "validation_rms",
+        "validation RMS over trials",
+        move |p| {
+            plots::box_plot(
+                p,
+                "Validation RMS after compensation over trials",
+                "RMS (mm)",
+                &groups,
+            )
+        },
+    ));
     // The paired comparisons' per-trial differences, each entry against its baseline.
     for (stem, title, y_label, k) in comparisons::DIFF_PLOTS {
         let groups = comparisons::differences(r, b0, k);
         if !groups.is_empty() {
-            plots::box_plot(&out.join(stem), title, y_label, &groups)?;
-            caption(&mut done, stem, title);
+            figs.push(Figure::new(stem, title, move |p| {
+                plots::box_plot(p, title, y_label, &groups)
+            }));
         }
     }
     // Objective traces of the optimised pose sets (Guo 2024 fig. 9).
@@ -549,43 +531,38 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
                 .map(|f| (s.clone(), f.trace.clone()))
         })
         .collect();
+    figs.extend(trace_figure(
+        (
+            "objective_trace",
+            "Pose-set objective per iteration",
+            "objective",
+        ),
+        traces,
+        false,
+        "pose optimisation objective per iteration",
+    ));
     // … and the metaheuristics' convergence (Qiao 2021 fig. 4).
-    let fit = fitness_traces(b0);
-    for (names, series, log_y, text) in [
+    figs.extend(trace_figure(
         (
-            (
-                "objective_trace",
-                "Pose-set objective per iteration",
-                "objective",
-            ),
-            &traces,
-            false,
-            "pose optimisation objective per iteration",
+            "fitness_trace",
+            "Best fitness per iteration, trial 0",
+            "fitness (eq. 14)",
         ),
-        (
-            (
-                "fitness_trace",
-                "Best fitness per iteration, trial 0",
-                "fitness (eq. 14)",
-            ),
-            &fit,
-            true,
-            "metaheuristic convergence, trial 0",
-        ),
-    ] {
-        trace_plot(out, &mut done, names, series, log_y, text)?;
-    }
+        fitness_traces(b0),
+        true,
+        "metaheuristic convergence, trial 0",
+    ));
     if let Some(sw) = &r.scenario.sweep {
-        done.extend(write_sweep_plots(r, sw, out)?);
+        figs.extend(sweep_figures(r, sw));
     }
-    Ok(done)
+    figs
 }
 
-/// Writes every file of a complete run but `trials.csv` (written as the trials finished) and
-/// `report.html` ([`super::write_run`]) into the folder `dir`; returns the plots written
-/// (file name, caption), as `report.md` lists them.
-pub fn write_into(r: &RunResult, dir: &Path) -> Result<Vec<(String, String)>> {
-    write_json(&dir.join("summary.json"), &summary(r))?;
+/// The files of a complete run but `trials.csv` (streamed as the trials finished,
+/// [`TrialsCsv`]) and `report.html` ([`super::run_outputs`] adds it), in the order they are
+/// written: `summary.json`, `timing.json`, the `figures` ([`figures`]), then `report.md`,
+/// which shows them.
+pub fn outputs<'a>(r: &'a RunResult, figures: Vec<Figure<'a>>) -> Result<Outputs<'a>> {
     let timing: Vec<Value> = r
         .blocks
         .iter()
@@ -596,13 +573,24 @@ pub fn write_into(r: &RunResult, dir: &Path) -> Result<Vec<(String, String)>> {
             })
         })
         .collect();
-    write_json(
-        &dir.join("timing.json"),
-        &json!({"run_seconds": r.seconds, "results": timing}),
-    )?;
-    let plots = write_plots(r, dir)?;
-    write(&dir.join("report.md"), &report_md(r, &plots))?;
-    Ok(plots)
+    let timing = json!({"run_seconds": r.seconds, "results": timing});
+    let listed: Vec<(String, String)> = figures.iter().map(Figure::listed).collect();
+    let mut out: Outputs<'a> = vec![
+        Box::new(Text {
+            name: "summary.json",
+            text: json_text(&summary(r))?,
+        }),
+        Box::new(Text {
+            name: "timing.json",
+            text: json_text(&timing)?,
+        }),
+    ];
+    out.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Output>));
+    out.push(Box::new(Text {
+        name: "report.md",
+        text: report_md(r, &listed),
+    }));
+    Ok(out)
 }
 
 #[cfg(test)]

@@ -16,6 +16,12 @@
 //! the same aggregation as a live run ([`super::run::run_resumed`]) and runs the rest; the
 //! folder is removed when the run ends, with its output or with an error (only a run killed
 //! from outside leaves one).
+//!
+//! The checkpoint is not an output of the run, so it is written here and not through
+//! [`crate::report::output`]: it lives beside the output folder, and it must be on disk at
+//! every moment for a killed run to resume, so its records are appended and flushed as the
+//! trials finish and `checkpoint.json` is replaced by a rename, where an output is written
+//! once the run is complete.
 
 use std::io::{BufRead, Read as _, Write as _};
 use std::path::{Path, PathBuf};

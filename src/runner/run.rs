@@ -1,6 +1,6 @@
 //! Running a study (docs/formats.md `run`, `run --resume`): its trials in chunks on rayon,
 //! handed in order to the aggregation and to sinks; its output folder written as a whole
-//! through the report's writers ([`crate::report::write_run`], [`crate::report::TrialsCsv`]);
+//! through the report's outputs ([`crate::report::write_run`], [`crate::report::TrialsCsv`]);
 //! the checkpoint beside it that lets a killed run continue ([`super::checkpoint`]); a share
 //! of it ([`super::shard`]); and a run held in memory ([`InMemoryRun`]). Progress and
 //! warnings go to the [`Reporter`] the caller supplies.
@@ -12,8 +12,8 @@ use rayon::prelude::*;
 use super::checkpoint::{self, Checkpoint};
 use super::shard::{self, Both};
 use crate::error::{Error, Result};
-use crate::report::output::Bytes;
-use crate::report::{atomically, run as files, write_run, Output as _};
+use crate::report::output::{write_all, Bytes, Outputs};
+use crate::report::{atomically, run as files, run_outputs, write_run};
 use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
 use crate::study::scenario::Scenario;
 use crate::study::stats::precision::{Stopping, BLOCK};
@@ -113,15 +113,14 @@ fn study_into(
 ) -> Result<RunResult> {
     let mut result = None;
     let done = atomically(out, |dir| {
-        let mut csv = files::TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
+        let mut csv = files::TrialsCsv::create(dir, scenario.sweep.as_ref())?;
         let r = match opts.shard {
             None => {
                 let r = {
                     let mut both = Both(&mut csv, &mut cp);
                     run_resumed(scenario, opts, &mut both, replay, reporter)?
                 };
-                csv.finish()?;
-                write_run(&r, dir)?;
+                write_run(&r, csv.finish()?, dir)?;
                 r
             }
             Some(_) => {
@@ -131,8 +130,9 @@ fn study_into(
                     let mut all = Both(&mut sinks, &mut cp);
                     run_resumed(scenario, opts, &mut all, replay, reporter)?
                 };
-                csv.finish()?;
-                records.finish(&r)?;
+                let mut outputs = vec![csv.finish()?];
+                outputs.extend(records.finish(&r)?);
+                write_all(dir, &outputs)?;
                 r
             }
         };
@@ -196,11 +196,12 @@ impl InMemoryRun {
     pub fn write(&self, out: &Path) -> Result<()> {
         atomically(out, |dir| {
             let csv = Bytes {
-                name: "trials.csv",
+                name: files::trials_csv::NAME,
                 bytes: &self.trials_csv,
             };
-            csv.write(&dir.join(csv.name()))?;
-            write_run(&self.result, dir)
+            let mut outputs: Outputs<'_> = vec![Box::new(csv)];
+            outputs.extend(run_outputs(&self.result)?);
+            write_all(dir, &outputs)
         })
     }
 }

@@ -9,12 +9,13 @@
 //! through the same streaming aggregation ([`crate::study::Collector`]) and writes the same
 //! bytes as one machine.
 
-use std::io::{BufRead, Write as _};
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::report::output::{Outputs, Stream, Text};
 use crate::report::{write_run, TrialsCsv};
 use crate::results::provenance::Machine;
 use crate::study::records::{encode, Verifier};
@@ -62,31 +63,27 @@ impl<A: TrialSink, B: TrialSink> TrialSink for Both<'_, A, B> {
     }
 }
 
-/// The writer of a shard's `records.txt` and `shard.json`.
+/// The writer of a shard's `records.txt` (streamed as the trials finish, like `trials.csv`)
+/// and `shard.json`.
 pub struct Records {
-    dir: PathBuf,
-    out: std::io::BufWriter<std::fs::File>,
+    out: Stream,
     seed: u64,
     count: u64,
 }
 
 impl Records {
-    /// Creates `records.txt` in `dir` for the records of a run with `seed`.
+    /// Starts `records.txt` in the output folder `dir` for the records of a run with `seed`.
     pub fn create(dir: &Path, seed: u64) -> Result<Records> {
-        let path = dir.join("records.txt");
-        let file = std::fs::File::create(&path).map_err(|e| Error::io(&path, e))?;
         Ok(Records {
-            dir: dir.to_path_buf(),
-            out: std::io::BufWriter::new(file),
+            out: Stream::create(dir, "records.txt")?,
             seed,
             count: 0,
         })
     }
 
-    /// Flushes the records and writes `shard.json` for the run `r`.
-    pub fn finish(mut self, r: &RunResult) -> Result<()> {
-        let path = self.dir.join("records.txt");
-        self.out.flush().map_err(|e| Error::io(&path, e))?;
+    /// The finished `records.txt` and `shard.json` of the run `r`.
+    pub fn finish(self, r: &RunResult) -> Result<Outputs<'static>> {
+        let records = self.out.finish()?;
         let shard = r.shard.unwrap_or(Shard { index: 0, count: 1 });
         let total = r.scenario.trials as u64
             * r.scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
@@ -113,10 +110,13 @@ impl Records {
                 })
                 .collect(),
         };
-        let path = self.dir.join("shard.json");
         let text =
             serde_json::to_string_pretty(&meta).map_err(|e| Error::Compute(e.to_string()))?;
-        std::fs::write(&path, text + "\n").map_err(|e| Error::io(&path, e))
+        let meta = Text {
+            name: "shard.json",
+            text: text + "\n",
+        };
+        Ok(vec![Box::new(records), Box::new(meta)])
     }
 }
 
@@ -124,9 +124,7 @@ impl TrialSink for Records {
     fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
         let line = encode(self.seed, info.index, t);
         self.count += 1;
-        self.out
-            .write_all(line.as_bytes())
-            .map_err(|e| Error::io(self.dir.join("records.txt"), e))
+        self.out.append(line.as_bytes())
     }
 }
 
@@ -296,7 +294,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
     let seconds = metas.iter().map(|(_, m)| m.seconds).sum();
     let mut result = None;
     crate::report::atomically(out, |dir| {
-        let mut csv = TrialsCsv::create(&dir.join("trials.csv"), scenario.sweep.as_ref())?;
+        let mut csv = TrialsCsv::create(dir, scenario.sweep.as_ref())?;
         let mut collector = Collector::new();
         let mut current: Option<usize> = None;
         let mut aggregated = 0u64;
@@ -330,7 +328,6 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
                 "the merge aggregated {aggregated} records of a run of {total} trials"
             )));
         }
-        csv.finish()?;
         let r = RunResult {
             blocks: collector.finish(scenario.sweep.as_ref())?,
             scenario: scenario.clone(),
@@ -339,7 +336,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
             shard: None,
             stopping: None,
         };
-        write_run(&r, dir)?;
+        write_run(&r, csv.finish()?, dir)?;
         result = Some(r);
         Ok(())
     })?;

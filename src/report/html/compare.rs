@@ -18,6 +18,7 @@ use crate::report::check::{
     check_summary, compare_with, entry_names, read_json, Compared, Status, Trials,
 };
 use crate::report::markdown::{fmt_num, table};
+use crate::report::output::{Outputs, Text};
 use crate::report::plots::{changes_svg, ChangePoint};
 
 /// One side of a comparison: where its summary was read from, and the summary.
@@ -396,13 +397,19 @@ impl Comparison {
 /// The files [`write()`] writes.
 pub const OUTPUTS: [&str; 2] = ["compare.html", "compare.md"];
 
+/// The files of `c`: `compare.html` and `compare.md`.
+pub fn outputs(c: &Comparison) -> Outputs<'static> {
+    let page = c.page().output(OUTPUTS[0]);
+    let md = Text {
+        name: OUTPUTS[1],
+        text: c.markdown(),
+    };
+    vec![Box::new(page), Box::new(md)]
+}
+
 /// Writes `compare.html` and `compare.md` of `c` into the folder `out` as a whole.
 pub fn write(c: &Comparison, out: &Path) -> Result<()> {
-    crate::report::atomically(out, |dir| {
-        c.page().write(&dir.join("compare.html"))?;
-        let path = dir.join("compare.md");
-        std::fs::write(&path, c.markdown()).map_err(|e| Error::io(&path, e))
-    })
+    crate::report::output::folder_of(out, &outputs(c))
 }
 
 #[cfg(test)]

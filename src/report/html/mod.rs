@@ -272,9 +272,12 @@ impl Page {
         s
     }
 
-    /// Writes the page to `path`.
-    pub fn write(self, path: &Path) -> Result<()> {
-        std::fs::write(path, self.finish()).map_err(|e| Error::io(path, e))
+    /// The page as the output file `name`.
+    pub fn output(self, name: &str) -> crate::report::output::Text<'_> {
+        crate::report::output::Text {
+            name,
+            text: self.finish(),
+        }
     }
 }
 

@@ -22,6 +22,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::{register_font, FontStyle, FontTransform};
 
 use super::markdown::fmt_num;
+use super::output::Output;
 use crate::numeric::Real;
 use crate::{Error, Result};
 pub use changes::{changes_svg, ChangePoint};
@@ -111,13 +112,38 @@ fn render(stem: &Path, fig: &impl Figure) -> Result<()> {
         paint(&root, fig).map_err(|e| cannot(&svg_path, &e))?;
         root.present().map_err(|e| cannot(&svg_path, &e))?;
     }
-    std::fs::write(&svg_path, svg.as_bytes()).map_err(|e| Error::io(&svg_path, e))?;
+    super::output::text(&svg_path, &svg)?;
 
     let root = BitMapBackend::new(&png_path, PLOT_SIZE).into_drawing_area();
     paint(&root, fig).map_err(|e| cannot(&png_path, &e))?;
     root.present()
         .map_err(|e| Error::io(&png_path, std::io::Error::other(e.to_string())))?;
     Ok(())
+}
+
+/// A metric against a swept setting ([`sweep`]), as `<name>.png` and `<name>.svg`.
+pub struct SweepFigure<'a> {
+    /// The figure's stem.
+    pub name: &'a str,
+    /// Its title.
+    pub title: &'a str,
+    /// The labels of the x and y axes.
+    pub axes: (&'a str, &'a str),
+    /// The series drawn.
+    pub series: Vec<SweepSeries>,
+}
+
+impl Output for SweepFigure<'_> {
+    fn name(&self) -> &str {
+        self.name
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        let (x, y) = self.axes;
+        sweep(path, self.title, x, y, &self.series)
+    }
+    fn files(&self) -> Vec<String> {
+        crate::report::output::figure_files(self.name)
+    }
 }
 
 /// The finite values of `v`.

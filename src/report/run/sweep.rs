@@ -1,14 +1,11 @@
 //! The sweep section of `report.md` and the sweep plots (docs/formats.md `run`).
 
-use std::fmt::Write as _;
-use std::path::Path;
-
-use super::{columns, entry_label, entry_table, fmt_num, plots, table};
-use crate::error::Result;
+use super::{columns, entry_label, entry_table, fmt_num, plots, table, Figure};
 use crate::numeric::Real;
 use crate::study::scenario::Sweep;
 use crate::study::stats::Entry;
 use crate::study::RunResult;
+use std::fmt::Write as _;
 
 /// The sweep section of `report.md`: the headline metrics per sweep point, and for a
 /// two-axis grid the validation RMS after compensation of each method and strategy as a
@@ -146,11 +143,7 @@ const SWEEP_METRICS: [SweepMetric; 4] = [
 /// The sweep plots: for one axis (or paired axes) each headline metric against the swept
 /// value, one line per method × strategy with its spread; for a two-axis grid a heat map of
 /// the validation RMS after compensation per method × strategy.
-pub(super) fn write_sweep_plots(
-    r: &RunResult,
-    sw: &Sweep,
-    out: &Path,
-) -> Result<Vec<(String, String)>> {
+pub(super) fn sweep_figures<'a>(r: &'a RunResult, sw: &'a Sweep) -> Vec<Figure<'a>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
     if sw.dims() == 1 {
@@ -202,8 +195,12 @@ pub(super) fn write_sweep_plots(
                     (entry_label(e), pts)
                 })
                 .collect();
-            plots::sweep(&out.join(stem), title, &x_label, y_label, &series)?;
-            done.push((format!("{stem}.png"), format!("{title} against {keys}")));
+            let x_label = x_label.clone();
+            done.push(Figure::new(
+                stem,
+                format!("{title} against {keys}"),
+                move |p| plots::sweep(p, title, &x_label, y_label, &series),
+            ));
         }
     } else if sw.dims() == 2 {
         let (xa, ya) = (&sw.axes[0], &sw.axes[1]);
@@ -224,26 +221,22 @@ pub(super) fn write_sweep_plots(
                 })
                 .collect();
             let stem = format!("heatmap_{}_{}", file_safe(&e.method), file_safe(&e.poses));
-            plots::heatmap(
-                &out.join(&stem),
-                &format!("Validation RMS after compensation (mm), {}", entry_label(e)),
-                (&xa.key, &xn),
-                (&ya.key, &yn),
-                &values,
-            )?;
-            done.push((
-                format!("{stem}.png"),
+            let title = format!("Validation RMS after compensation (mm), {}", entry_label(e));
+            let (xn, yn) = (xn.clone(), yn.clone());
+            done.push(Figure::new(
+                stem,
                 format!(
                     "validation RMS after, {}, over {} and {}",
                     entry_label(e),
                     xa.key,
                     ya.key
                 ),
+                move |p| plots::heatmap(p, &title, (&xa.key, &xn), (&ya.key, &yn), &values),
             ));
         }
     }
-    done.extend(write_profile_plot(r, out)?);
-    Ok(done)
+    done.extend(profile_figure(r));
+    done
 }
 
 /// `s` with every character outside `[A-Za-z0-9._-]` replaced by `_` (a file name part).
@@ -330,10 +323,8 @@ pub fn performance_profile(r: &RunResult) -> Option<serde_json::Value> {
 
 /// The plot of [`performance_profile`]: the share of sweep points within τ of the best
 /// against τ, one line per method × strategy (`performance_profile.png`).
-pub(super) fn write_profile_plot(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
-    let Some(p) = performance_profile(r) else {
-        return Ok(Vec::new());
-    };
+pub(super) fn profile_figure(r: &RunResult) -> Option<Figure<'static>> {
+    let p = performance_profile(r)?;
     let series: Vec<plots::SweepSeries> = p["profiles"]
         .as_array()
         .into_iter()
@@ -350,12 +341,13 @@ pub(super) fn write_profile_plot(r: &RunResult, out: &Path) -> Result<Vec<(Strin
         .collect();
     let stem = "performance_profile";
     let title = "Performance profile: share of sweep points within τ of the best validation RMS";
-    plots::sweep(
-        &out.join(stem),
-        title,
-        "log10 τ (validation RMS after over the point's best)",
-        "share of sweep points",
-        &series,
-    )?;
-    Ok(vec![(format!("{stem}.png"), title.to_string())])
+    Some(Figure::new(stem, title, move |p| {
+        plots::sweep(
+            p,
+            title,
+            "log10 τ (validation RMS after over the point's best)",
+            "share of sweep points",
+            &series,
+        )
+    }))
 }

@@ -1,10 +1,11 @@
-//! `trials.csv` (docs/formats.md `run`): one row per trial × strategy × method, written as
-//! the trials finish.
+//! `trials.csv` (docs/formats.md `run`): one row per trial × strategy × method, streamed as
+//! the trials finish ([`crate::report::output::Stream`]).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::numeric::Real;
+use crate::report::output::{Bytes, Output, Stream};
 use crate::study::scenario::Sweep;
 use crate::study::stats::eta;
 use crate::study::{BlockInfo, TrialResult, TrialSink};
@@ -17,55 +18,68 @@ fn num(v: Real) -> String {
     }
 }
 
+/// The name of the file.
+pub const NAME: &str = "trials.csv";
+
 /// `trials.csv`, written as trials finish: one row per trial × strategy × method (× sweep
 /// point), in trial order. The header comes from the first block; one axis adds the column
-/// `sweep_value`, a grid one column per swept key. It goes to a file ([`TrialsCsv::create`])
-/// or, for a run held in memory, to bytes ([`TrialsCsv::in_memory`]): the same bytes.
-pub struct TrialsCsv<W: std::io::Write = std::io::BufWriter<std::fs::File>> {
-    path: PathBuf,
-    out: W,
+/// `sweep_value`, a grid one column per swept key. It streams into an output folder
+/// ([`TrialsCsv::create`], a [`Stream`] whose memory does not grow with the trials) or, for
+/// a run held in memory, to bytes ([`TrialsCsv::in_memory`]): the same bytes.
+pub struct TrialsCsv {
+    out: Rows,
     sweep_columns: Vec<String>,
     header: bool,
 }
 
+/// Where the rows go.
+enum Rows {
+    Stream(Stream),
+    Memory(Vec<u8>),
+}
+
 impl TrialsCsv {
-    /// Creates `path` for the trials of a run of a scenario with `sweep`.
-    pub fn create(path: &Path, sweep: Option<&Sweep>) -> Result<TrialsCsv> {
-        let file = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
-        Ok(TrialsCsv::to(path, std::io::BufWriter::new(file), sweep))
+    /// Starts `trials.csv` in the output folder `dir` for the trials of a run of a scenario
+    /// with `sweep`.
+    pub fn create(dir: &Path, sweep: Option<&Sweep>) -> Result<TrialsCsv> {
+        Ok(TrialsCsv::to(
+            Rows::Stream(Stream::create(dir, NAME)?),
+            sweep,
+        ))
     }
-}
 
-impl TrialsCsv<Vec<u8>> {
     /// `trials.csv` of a run of a scenario with `sweep`, kept in memory.
-    pub fn in_memory(sweep: Option<&Sweep>) -> TrialsCsv<Vec<u8>> {
-        TrialsCsv::to(Path::new("trials.csv"), Vec::new(), sweep)
+    pub fn in_memory(sweep: Option<&Sweep>) -> TrialsCsv {
+        TrialsCsv::to(Rows::Memory(Vec::new()), sweep)
     }
 
-    /// The bytes written.
+    /// The bytes written (empty for a file streamed into a folder).
     pub fn into_bytes(self) -> Vec<u8> {
-        self.out
+        match self.out {
+            Rows::Memory(b) => b,
+            Rows::Stream(_) => Vec::new(),
+        }
     }
-}
 
-impl<W: std::io::Write> TrialsCsv<W> {
-    fn to(path: &Path, out: W, sweep: Option<&Sweep>) -> TrialsCsv<W> {
+    fn to(out: Rows, sweep: Option<&Sweep>) -> TrialsCsv {
         let sweep_columns = match sweep {
             None => Vec::new(),
             Some(sw) if sw.axes.len() == 1 => vec!["sweep_value".into()],
             Some(sw) => sw.axes.iter().map(|a| a.key.clone()).collect(),
         };
         TrialsCsv {
-            path: path.to_path_buf(),
             out,
             sweep_columns,
             header: false,
         }
     }
 
-    /// Flushes the file.
-    pub fn finish(mut self) -> Result<()> {
-        self.out.flush().map_err(|e| Error::io(&self.path, e))
+    /// The finished file, written under its name with the run's other outputs.
+    pub fn finish(self) -> Result<Box<dyn Output>> {
+        Ok(match self.out {
+            Rows::Stream(s) => Box::new(s.finish()?),
+            Rows::Memory(bytes) => Box::new(Owned { bytes }),
+        })
     }
 
     fn header(&self, info: &BlockInfo) -> String {
@@ -106,7 +120,7 @@ impl<W: std::io::Write> TrialsCsv<W> {
     }
 }
 
-impl<W: std::io::Write> TrialSink for TrialsCsv<W> {
+impl TrialSink for TrialsCsv {
     fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
         let mut out = String::new();
         if !self.header {
@@ -161,9 +175,31 @@ impl<W: std::io::Write> TrialSink for TrialsCsv<W> {
             out += &row.join(",");
             out.push('\n');
         }
-        self.out
-            .write_all(out.as_bytes())
-            .map_err(|e| Error::io(&self.path, e))
+        match &mut self.out {
+            Rows::Stream(s) => s.append(out.as_bytes()),
+            Rows::Memory(b) => {
+                b.extend_from_slice(out.as_bytes());
+                Ok(())
+            }
+        }
+    }
+}
+
+/// `trials.csv` of a run held in memory.
+struct Owned {
+    bytes: Vec<u8>,
+}
+
+impl Output for Owned {
+    fn name(&self) -> &str {
+        NAME
+    }
+    fn write(&self, path: &Path) -> Result<()> {
+        let bytes = Bytes {
+            name: NAME,
+            bytes: &self.bytes,
+        };
+        bytes.write(path)
     }
 }
 
