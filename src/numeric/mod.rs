@@ -18,6 +18,7 @@
 //! same bits either way; nothing outside this module chooses an instruction set. The environment
 //! variable [`SIMD_VARIABLE`] (`CALBENCH_SIMD=scalar`) forces the portable code.
 
+pub mod dist;
 mod frames;
 pub(crate) mod gram;
 pub mod linalg;

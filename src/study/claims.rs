@@ -25,9 +25,9 @@
 //!   Cochran, *Sampling Techniques*, § 6.4);
 //! - `"a" op x`: the mean of a over trials, against x: its t interval.
 
+use crate::numeric::dist;
 use crate::numeric::Real;
 use crate::study::outcome::Outcome;
-use crate::study::stats::dist;
 
 /// What a per-trial metric needs of the study: nothing, full-pose data, or Guo's axis
 /// errors (`validation.axis_errors`).

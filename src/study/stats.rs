@@ -5,7 +5,9 @@ use serde::Serialize;
 use std::collections::BTreeMap;
 use std::ops::Deref;
 
-pub mod dist;
+/// The distributions live with the numerics ([`crate::numeric::dist`]), below every layer that
+/// takes an interval.
+pub use crate::numeric::dist;
 pub mod paired;
 pub mod precision;
 

@@ -63,7 +63,7 @@ impl Metric {
         let mean = x.iter().sum::<Real>() / n;
         let ci = (e.len() >= 2).then(|| {
             let sd = (x.iter().map(|v| (v - mean).powi(2)).sum::<Real>() / (n - 1.0)).sqrt();
-            let h = crate::study::stats::dist::t_quantile(0.975, n - 1.0) * sd / n.sqrt();
+            let h = crate::numeric::dist::t_quantile(0.975, n - 1.0) * sd / n.sqrt();
             [mean - h, mean + h]
         });
         match self {

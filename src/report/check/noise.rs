@@ -16,8 +16,8 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::error::{Error, Result};
+use crate::numeric::dist;
 use crate::numeric::Real;
-use crate::study::stats::dist;
 use crate::study::stats::eta;
 
 /// What a compared metric did.
