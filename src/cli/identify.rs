@@ -336,6 +336,14 @@ fn compensated_urdf(
     if export.contains(&Export::Toml) && !export.contains(&Export::Urdf) {
         return Ok(None);
     }
+    let wants_urdf = export.contains(&Export::Urdf) || calbench::robot::urdf::is_urdf(robot);
+    if wants_urdf && calbench::robot::harmonics::has_harmonics(compensated) {
+        return Err(calbench::Error::setting(
+            "--export",
+            "a URDF cannot carry the joint-angle harmonics of the chosen model; use \
+             `--export toml` (robot.toml's `harmonics` key) or a model without harmonics",
+        ));
+    }
     if !calbench::robot::urdf::is_urdf(robot) {
         return if export.contains(&Export::Urdf) {
             calbench::robot::urdf::robot_to_urdf(compensated).map(Some)
