@@ -28,8 +28,8 @@ use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
 use crate::sim::truth::selected_params;
-use crate::sim::unmodelled::UnmodelledSettings;
 pub use report::ReportSettings;
+use crate::sim::unmodelled::UnmodelledSettings;
 use sections::{
     strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
 };
