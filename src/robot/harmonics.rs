@@ -17,9 +17,18 @@ pub fn factors(s: Real, c: Real) -> [Real; HARMONIC_TERMS] {
     [s, c, 2.0 * s * c, c * c - s * s]
 }
 
-/// Whether any harmonic coefficient of `robot` is non-zero.
+/// Whether any harmonic coefficient of `robot` is non-zero. A robot whose values do not
+/// hold the harmonic block of its joint count (one being built) has none.
 pub fn has_harmonics(robot: &Robot) -> bool {
-    (0..robot.dof()).any(|j| (0..HARMONIC_TERMS).any(|k| robot.get(Param::Harmonic(j, k)) != 0.0))
+    let dof = robot.dof();
+    (0..dof).any(|j| {
+        (0..HARMONIC_TERMS).any(|k| {
+            robot
+                .values
+                .get(Param::Harmonic(j, k).index(dof))
+                .is_some_and(|v| *v != 0.0)
+        })
+    })
 }
 
 /// Adds to `dv[j]` the harmonic offset of joint `j` at the (undeflected) chain variables
