@@ -13,6 +13,7 @@ use crate::measurement::Measurements;
 use crate::numeric::rng::stream;
 use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
+use crate::robot::identifiability::identifiable_extension;
 use crate::robot::{param_sets, Convention, JointType, Param, Robot};
 
 /// `--holdout LAST/EVERY`: of every `every` consecutive rows, the last `last` are held out
@@ -177,8 +178,9 @@ pub struct Model {
     /// The compliances of the gravity-loaded joints (needs the robot's link masses).
     pub compliance: bool,
     /// Joint-angle harmonics up to this order (0: none; 1: `sin q`, `cos q`; 2: also
-    /// `sin 2q`, `cos 2q`) on every revolute joint whose angle offset θ is identified
-    /// ([`Param::Harmonic`]).
+    /// `sin 2q`, `cos 2q`) on every revolute joint, each term kept when it is identifiable
+    /// beside the kinematic parameters over generic poses ([`Param::Harmonic`],
+    /// [`identifiable_extension`]).
     pub harmonics: u8,
 }
 
@@ -219,8 +221,8 @@ impl Model {
 
     /// The robot to identify (for β, a `dh` robot as `dh_beta` with β = 0: the same
     /// kinematics) and the parameters: those `identify` takes for measured data
-    /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances,
-    /// less the `fixed` ones.
+    /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances
+    /// and the identifiable joint-angle harmonics, less the `fixed` ones.
     pub fn robot_and_params(
         &self,
         nominal: &Robot,
@@ -239,14 +241,21 @@ impl Model {
             params.extend(CompliancePick::Gravity.params(&robot, "--models")?);
         }
         if self.harmonics > 0 {
+            // Every revolute joint's terms that the poses of a generic set can tell apart
+            // from the kinematic parameters and from each other: joint 1's although θ1 is
+            // left to base.rz (a constant offset is, sin q1 and cos q1 are not), not the last
+            // joint's when the tool point lies on its axis.
             let terms = 2 * usize::from(self.harmonics.min(2));
             let harmonic: Vec<Param> = (0..robot.dof())
-                .filter(|&j| {
-                    robot.joints[j].kind == JointType::Revolute && params.contains(&Param::Theta(j))
-                })
+                .filter(|&j| robot.joints[j].kind == JointType::Revolute)
                 .flat_map(|j| (0..terms).map(move |k| Param::Harmonic(j, k)))
                 .collect();
-            params.extend(harmonic);
+            params.extend(identifiable_extension(
+                &robot,
+                &params,
+                &harmonic,
+                data.measure(),
+            ));
         }
         params.retain(|p| !fixed.contains(p));
         Ok((robot, params))

@@ -343,7 +343,9 @@ impl<const L: usize> Rows<'_, L> {
 }
 
 /// The stacked identification Jacobian of `robot` over poses `qs` (internal units) for the
-/// parameters of `cols`: `rows(measure) · m` × `cols.len()`.
+/// parameters of `cols`: `rows(measure) · m` × `cols.len()`. Harmonic columns
+/// ([`Columns::fill_harmonics`]) are those of the chain at `robot`'s geometry, its own
+/// harmonic offsets left out (the nominal robot's, zero, for identifiability).
 pub fn jacobian(
     robot: &Robot,
     cols: &Columns,
@@ -355,6 +357,9 @@ pub fn jacobian(
     let mut j = DMatrix::zeros(rows * qs.len(), cols.len());
     for (i, q) in qs.iter().enumerate() {
         pose_rows(&chain, cols, q, measure, &mut j, rows * i);
+        if cols.has_harmonics() {
+            cols.fill_harmonics(&chain.variables(q), &mut j, rows * i, rows);
+        }
     }
     j
 }
