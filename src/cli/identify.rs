@@ -71,7 +71,8 @@ pub struct IdentifyArgs {
     pub cv_seed: u64,
     /// Candidate models compared by their K-fold CV RMS (K from --cv, default 5): terms
     /// `kinematic`, `beta` (Hayati's β where identifiable), `compliance` (the gravity joints;
-    /// needs link masses), joined by `+`; the best is identified.
+    /// needs link masses), `harmonics`, `harmonics2` (joint-angle harmonics of the revolute
+    /// joints), joined by `+`; the best is identified.
     #[arg(long, value_delimiter = ',', conflicts_with = "compliance")]
     pub models: Vec<calbench::calibrate::cv::Model>,
     /// The identified parameters (comma-separated names, e.g. a paper's model); default: the
