@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir};
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, tmp_dir};
 use crate::task::{task, task_lm, wam_with_validation};
 
 /// The models of the open entry.
@@ -180,4 +180,20 @@ fn a_closed_and_an_open_wam_entry_recorded_rank_in_their_divisions_on_the_leader
     }
     let html = read(&board.join("leaderboard.html"));
     assert!(html.contains("kinematic+harmonics") && html.contains("2.92"));
+    // A harmonics entry that calls itself closed is refused: it would rank among the
+    // kinematic models.
+    let forged = d.join("forged");
+    std::fs::create_dir_all(&forged).unwrap();
+    let text = read(&open.join("task.json")).replacen("\"open\"", "\"closed\"", 1);
+    assert!(text.contains("\"division\": \"closed\""), "{text}");
+    std::fs::write(forged.join("task.json"), text).unwrap();
+    let o = calbench(&["record", path_arg(&forged), "--db", path_arg(&db)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains("task.json")
+            && err.contains("division")
+            && err.contains("kinematic+harmonics"),
+        "{err}"
+    );
 }
