@@ -13,7 +13,8 @@ use crate::measurement::Measurements;
 use crate::numeric::rng::stream;
 use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
-use crate::robot::{param_sets, Convention, Param, Robot};
+use crate::robot::identifiability::identifiable_extension;
+use crate::robot::{param_sets, Convention, JointType, Param, Robot};
 
 /// `--holdout LAST/EVERY`: of every `every` consecutive rows, the last `last` are held out
 /// for validation (`3/10`: rows whose 0-based index % 10 ≥ 7).
@@ -176,6 +177,11 @@ pub struct Model {
     pub beta: bool,
     /// The compliances of the gravity-loaded joints (needs the robot's link masses).
     pub compliance: bool,
+    /// Joint-angle harmonics up to this order (0: none; 1: `sin q`, `cos q`; 2: also
+    /// `sin 2q`, `cos 2q`) on every revolute joint, each term kept when it is identifiable
+    /// beside the kinematic parameters over generic poses ([`Param::Harmonic`],
+    /// [`identifiable_extension`]).
+    pub harmonics: u8,
 }
 
 impl Model {
@@ -183,27 +189,40 @@ impl Model {
     pub const KINEMATIC: Model = Model {
         beta: false,
         compliance: false,
+        harmonics: 0,
     };
 
     /// Whether the model is kinematic only (β included): a task's closed division.
     pub fn is_kinematic(&self) -> bool {
-        !self.compliance
+        !self.compliance && self.harmonics == 0
     }
 
-    /// `kinematic`, `beta`, `compliance` or `beta+compliance`.
+    /// `kinematic`, or its terms joined by `+` in the order `beta`, `compliance`,
+    /// `harmonics`/`harmonics2` (`beta+compliance`, `beta+harmonics2`).
     pub fn name(&self) -> String {
-        match (self.beta, self.compliance) {
-            (false, false) => "kinematic".into(),
-            (true, false) => "beta".into(),
-            (false, true) => "compliance".into(),
-            (true, true) => "beta+compliance".into(),
+        let mut terms = Vec::new();
+        if self.beta {
+            terms.push("beta");
+        }
+        if self.compliance {
+            terms.push("compliance");
+        }
+        match self.harmonics {
+            0 => {}
+            1 => terms.push("harmonics"),
+            _ => terms.push("harmonics2"),
+        }
+        if terms.is_empty() {
+            "kinematic".into()
+        } else {
+            terms.join("+")
         }
     }
 
     /// The robot to identify (for β, a `dh` robot as `dh_beta` with β = 0: the same
     /// kinematics) and the parameters: those `identify` takes for measured data
-    /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances,
-    /// less the `fixed` ones.
+    /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances
+    /// and the identifiable joint-angle harmonics, less the `fixed` ones.
     pub fn robot_and_params(
         &self,
         nominal: &Robot,
@@ -221,6 +240,23 @@ impl Model {
         if self.compliance {
             params.extend(CompliancePick::Gravity.params(&robot, "--models")?);
         }
+        if self.harmonics > 0 {
+            // Every revolute joint's terms that the poses of a generic set can tell apart
+            // from the kinematic parameters and from each other: joint 1's although θ1 is
+            // left to base.rz (a constant offset is, sin q1 and cos q1 are not), not the last
+            // joint's when the tool point lies on its axis.
+            let terms = 2 * usize::from(self.harmonics.min(2));
+            let harmonic: Vec<Param> = (0..robot.dof())
+                .filter(|&j| robot.joints[j].kind == JointType::Revolute)
+                .flat_map(|j| (0..terms).map(move |k| Param::Harmonic(j, k)))
+                .collect();
+            params.extend(identifiable_extension(
+                &robot,
+                &params,
+                &harmonic,
+                data.measure(),
+            ));
+        }
         params.retain(|p| !fixed.contains(p));
         Ok((robot, params))
     }
@@ -229,7 +265,8 @@ impl Model {
 impl FromStr for Model {
     type Err = String;
 
-    /// `kinematic`, `beta`, `compliance`, or terms joined by `+` (`beta+compliance`).
+    /// `kinematic`, `beta`, `compliance`, `harmonics` (first harmonic), `harmonics2` (first
+    /// and second), or terms joined by `+` (`beta+compliance`, `beta+harmonics`).
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let mut m = Model::KINEMATIC;
         for term in s.split('+').map(str::trim) {
@@ -237,10 +274,12 @@ impl FromStr for Model {
                 "kinematic" => {}
                 "beta" => m.beta = true,
                 "compliance" => m.compliance = true,
+                "harmonics" => m.harmonics = m.harmonics.max(1),
+                "harmonics2" => m.harmonics = 2,
                 other => {
                     return Err(format!(
-                        "unknown model term `{other}`; known: kinematic, beta, compliance \
-                         (joined by +)"
+                        "unknown model term `{other}`; known: kinematic, beta, compliance, \
+                         harmonics, harmonics2 (joined by +)"
                     ))
                 }
             }
@@ -330,6 +369,7 @@ mod tests {
         let (robot, _) = Model {
             beta: true,
             compliance: false,
+            harmonics: 0,
         }
         .robot_and_params(&nominal, &data, Registration::Identify, &[])
         .unwrap();

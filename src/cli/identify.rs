@@ -71,7 +71,8 @@ pub struct IdentifyArgs {
     pub cv_seed: u64,
     /// Candidate models compared by their K-fold CV RMS (K from --cv, default 5): terms
     /// `kinematic`, `beta` (Hayati's β where identifiable), `compliance` (the gravity joints;
-    /// needs link masses), joined by `+`; the best is identified.
+    /// needs link masses), `harmonics`, `harmonics2` (joint-angle harmonics of the revolute
+    /// joints), joined by `+`; the best is identified.
     #[arg(long, value_delimiter = ',', conflicts_with = "compliance")]
     pub models: Vec<calbench::calibrate::cv::Model>,
     /// The identified parameters (comma-separated names, e.g. a paper's model); default: the
@@ -335,6 +336,14 @@ fn compensated_urdf(
 ) -> calbench::Result<Option<String>> {
     if export.contains(&Export::Toml) && !export.contains(&Export::Urdf) {
         return Ok(None);
+    }
+    let wants_urdf = export.contains(&Export::Urdf) || calbench::robot::urdf::is_urdf(robot);
+    if wants_urdf && calbench::robot::harmonics::has_harmonics(compensated) {
+        return Err(calbench::Error::setting(
+            "--export",
+            "a URDF cannot carry the joint-angle harmonics of the chosen model; use \
+             `--export toml` (robot.toml's `harmonics` key) or a model without harmonics",
+        ));
     }
     if !calbench::robot::urdf::is_urdf(robot) {
         return if export.contains(&Export::Urdf) {

@@ -34,7 +34,8 @@ pub struct TaskArgs {
     /// The identification method, with its default options.
     #[arg(long, value_parser = super::entry_of(METHODS, |m| m.name, |m| m.summary))]
     pub method: &'static MethodEntry,
-    /// Candidate models (terms `kinematic`, `beta`, `compliance`, joined by `+`);
+    /// Candidate models (terms `kinematic`, `beta`, `compliance`, `harmonics`,
+    /// `harmonics2`, joined by `+`);
     /// several are compared by 5-fold cross-validation on the calibration rows alone and the
     /// best is identified. Default: `kinematic`.
     #[arg(long, value_delimiter = ',')]

@@ -62,6 +62,9 @@ pub struct RobotProblem<'a> {
     loads: Vec<Real>,
     /// The nominal robot's link masses (kg), when the model has compliances.
     masses: Vec<Real>,
+    /// Whether the model has joint-angle harmonics (identified, or in the nominal robot):
+    /// each pose's chain variables are then offset by them ([`crate::robot::harmonics`]).
+    harmonic: bool,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -85,13 +88,13 @@ impl<'a> RobotProblem<'a> {
         }
         let known = nominal.params();
         for (i, p) in params.iter().enumerate() {
-            if let Param::Compliance(j) = *p {
+            if let Param::Compliance(j) | Param::Harmonic(j, _) = *p {
                 if j >= nominal.dof() || nominal.joints[j].kind != JointType::Revolute {
                     return Err(Error::setting(
-                        "compliance",
+                        p.block(),
                         format!(
                             "`{p}`: robot `{}` has no revolute joint {} (only revolute joints \
-                             are compliant in calbench's model)",
+                             are compliant or have joint-angle harmonics in calbench's model)",
                             nominal.name,
                             j + 1
                         ),
@@ -175,11 +178,13 @@ impl<'a> RobotProblem<'a> {
                 _ => None,
             })
             .collect();
+        let cols = Columns::new(params, dof);
+        let harmonic = cols.has_harmonics() || crate::robot::harmonics::has_harmonics(nominal);
         let problem = RobotProblem {
             nominal,
             params: params.to_vec(),
             index: params.iter().map(|p| p.index(dof)).collect(),
-            cols: Columns::new(params, dof),
+            cols,
             points,
             rotations,
             measure,
@@ -194,6 +199,7 @@ impl<'a> RobotProblem<'a> {
             compliant,
             loads: Vec::new(),
             masses: Vec::new(),
+            harmonic,
         };
         problem.with_payloads(None)
     }
@@ -401,7 +407,7 @@ impl RobotProblem<'_> {
                 log_orientation_rows(&rots[first + i], &f.rot, w, r, j, rows * i + 3);
             }
         };
-        if self.loads.is_empty() {
+        if self.loads.is_empty() && !self.harmonic {
             // Rigid model: four points per chain walk, the rest one by one.
             let whole = vars.len() / LANES * LANES;
             for i0 in (0..whole).step_by(LANES) {
@@ -417,21 +423,29 @@ impl RobotProblem<'_> {
             }
             return;
         }
-        let loads = &self.loads[first..first + vars.len()];
-        for (i, (v, &load)) in vars.iter().zip(loads).enumerate() {
+        for (i, v) in vars.iter().enumerate() {
             // Elasto-geometric model: each chain variable deflected by c_j τ_j, the gravity
             // torques of the current geometry at the commanded pose; the column of c_j is the
             // derivative by that variable times τ_j (τ's own dependence on the geometry is
-            // second order and left out).
+            // second order and left out). Joint-angle harmonics offset each variable by
+            // Σ h_jk f_k(q_j); the column of h_jk is the derivative by that variable times
+            // f_k(q_j) ([`Columns::fill_harmonics`]).
             let mut tau = [0.0; MAX_JOINTS];
-            gravity_torques_vars(self.nominal, chain, v, &self.masses, load, &mut tau[..dof]);
             let mut dv = [0.0; MAX_JOINTS];
-            for (k, d) in dv.iter_mut().enumerate().take(dof) {
-                *d = values[Param::Compliance(k).index(dof)] * tau[k];
+            if !self.loads.is_empty() {
+                let load = self.loads[first + i];
+                gravity_torques_vars(self.nominal, chain, v, &self.masses, load, &mut tau[..dof]);
+                for (k, d) in dv.iter_mut().enumerate().take(dof) {
+                    *d = values[Param::Compliance(k).index(dof)] * tau[k];
+                }
+            }
+            if self.harmonic {
+                crate::robot::harmonics::add_offsets(values, v, &mut dv[..dof]);
             }
             let mut vd = *v;
             deflect_vars(&mut vd, &dv[..dof]);
             let f = pose_rows_vars(chain, &self.cols, &vd, self.measure, j, rows * i);
+            self.cols.fill_harmonics(v, j, rows * i, rows);
             for &(k, c) in &self.compliant {
                 for r in rows * i..rows * (i + 1) {
                     j[(r, c)] *= tau[k];

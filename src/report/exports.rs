@@ -23,8 +23,16 @@ const UR_SEGMENTS: [&str; 6] = [
 /// `x, y, z` (m) and fixed-axis `roll, pitch, yaw` (rad). The robot's base and tool
 /// transforms and its last link's `a, α, β` are not part of the file (they stay in
 /// `robot.toml`). Refused unless the robot has six revolute joints in the `dh` or `dh_beta`
-/// convention.
+/// convention, and when it has joint-angle harmonics (the file cannot carry them: writing the
+/// geometric part alone would leave the controller short of the model that was chosen).
 pub fn ur_yaml(robot: &Robot) -> Result<String> {
+    if crate::robot::harmonics::has_harmonics(robot) {
+        return Err(Error::setting(
+            "--export",
+            "ur-yaml cannot carry the joint-angle harmonics of the chosen model; export \
+             dh-csv or use robot.toml (its `harmonics` key)",
+        ));
+    }
     let six_revolute =
         robot.dof() == 6 && robot.joints.iter().all(|j| j.kind == JointType::Revolute);
     if !six_revolute || robot.convention == Convention::Mdh || robot.coupling.is_some() {
@@ -99,13 +107,15 @@ pub fn dh_csv(nominal: &Robot, identified: &Robot, params: &[Param], sigma: &[Re
     for p in all {
         let (scale, unit) = if p.is_compliance() {
             (1.0, "rad/(N·m)")
+        } else if matches!(p, Param::Harmonic(..)) {
+            (1.0, "rad")
         } else if p.is_length() {
             (len, nominal.units.length_name())
         } else {
             (ang, nominal.units.angle_name())
         };
         let joint = p.joint().or(match p {
-            Param::Compliance(j) => Some(j),
+            Param::Compliance(j) | Param::Harmonic(j, _) => Some(j),
             _ => None,
         });
         let name = p.to_string();

@@ -346,6 +346,27 @@ impl Record {
         }
         let (task, metric, method) = (text("task")?, text("metric")?, text("method")?);
         let entrant = text("entrant").unwrap_or_else(|_| "calbench".into());
+        // The closed division is calbench's kinematic models only (DH, β, tool, base): an
+        // entry that says `closed` with another term or entrant would rank among them.
+        if division == "closed" {
+            let terms = if models.is_empty() {
+                "kinematic"
+            } else {
+                &models
+            };
+            let kinematic = terms
+                .parse::<crate::calibrate::cv::Model>()
+                .is_ok_and(|m| m.is_kinematic());
+            if !kinematic || entrant != "calbench" {
+                return Err(bad(
+                    "division",
+                    &format!(
+                        "\"closed\" is for calbench's kinematic models (DH, β, tool, base); \
+                         models `{terms}` of entrant `{entrant}` are in the open division"
+                    ),
+                ));
+            }
+        }
         let entry = if models.is_empty() {
             format!("{entrant} / {method}")
         } else {

@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 use super::{
     joint_place, to_internal, value_count, AngleUnit, Convention, Coupling, Joint, JointType,
-    LengthUnit, Param, Quantity, Robot, Units, MAX_JOINTS,
+    LengthUnit, Param, Quantity, Robot, Units, HARMONIC_TERMS, MAX_JOINTS,
 };
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -41,6 +41,9 @@ struct JointEntry {
     mass_kg: Option<Real>,
     /// Joint compliance, rad/(N·m) whatever the file's units (default 0: rigid).
     compliance: Option<Real>,
+    /// Joint-angle harmonic coefficients `[a, b]` or `[a, b, c, d]`, rad whatever the file's
+    /// units: `Δq = a sin q + b cos q + c sin 2q + d cos 2q` (default none).
+    harmonics: Option<Vec<Real>>,
 }
 
 #[derive(Deserialize)]
@@ -187,6 +190,20 @@ fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
             limits: (lo, hi),
         });
         values[Param::Compliance(j).index(n)] = e.compliance.unwrap_or(0.0);
+        if let Some(h) = &e.harmonics {
+            if h.len() != 2 && h.len() != HARMONIC_TERMS {
+                return Err(err(
+                    joint_place(j, "harmonics"),
+                    format!(
+                        "must be [a, b] or [a, b, c, d] (rad), got {} values",
+                        h.len()
+                    ),
+                ));
+            }
+            for (k, v) in h.iter().enumerate() {
+                values[Param::Harmonic(j, k).index(n)] = *v;
+            }
+        }
     }
     let link_mass_kg = match f.joints.iter().filter(|e| e.mass_kg.is_some()).count() {
         0 => None,
@@ -390,6 +407,21 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
         let c = g(Param::Compliance(j));
         if c != 0.0 {
             let _ = writeln!(s, "compliance = {}", self::num(c, false));
+        }
+        // Harmonic coefficients (rad, small): written exactly, two or four.
+        let h: Vec<Real> = (0..HARMONIC_TERMS)
+            .map(|k| g(Param::Harmonic(j, k)))
+            .collect();
+        let used = if h[2] != 0.0 || h[3] != 0.0 {
+            4
+        } else if h[0] != 0.0 || h[1] != 0.0 {
+            2
+        } else {
+            0
+        };
+        if used > 0 {
+            let list: Vec<String> = h[..used].iter().map(|v| self::num(*v, false)).collect();
+            let _ = writeln!(s, "harmonics = [{}]", list.join(", "));
         }
     }
     for (name, make) in [

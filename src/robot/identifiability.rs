@@ -184,6 +184,43 @@ pub fn identifiable_generic(robot: &Robot, candidates: &[Param], measure: Measur
     analyse(robot, candidates, &qs, measure).identifiable
 }
 
+/// Of `extra`, the parameters that each add a rank to `params` (identifiable among
+/// themselves) over the generic poses of [`identifiable_generic`], taken in their order: a
+/// parameter is kept when its scaled column keeps more than [`RANK_TOL`] of its norm once
+/// projected off the columns of `params` and of the parameters kept before it. Unlike
+/// [`identifiable_generic`] over `params` and `extra` together, the choice among `params` is
+/// left as it is: a term of a richer model never displaces a kinematic parameter.
+pub fn identifiable_extension(
+    robot: &Robot,
+    params: &[Param],
+    extra: &[Param],
+    measure: Measure,
+) -> Vec<Param> {
+    let mut g = crate::numeric::rng::stream(0x1D, "identifiability");
+    let qs = crate::robot::sampling::uniform_joint_poses(robot, GENERIC_POSES, &mut g);
+    let all: Vec<Param> = params.iter().chain(extra).copied().collect();
+    let mut j = jacobian(robot, &Columns::new(&all, robot.dof()), &qs, measure);
+    scale_columns(&mut j);
+    // Modified Gram-Schmidt, `params` first.
+    let mut basis: Vec<DVector<Real>> = Vec::new();
+    let mut kept = Vec::new();
+    for (c, p) in all.iter().enumerate() {
+        let mut v = j.column(c).into_owned();
+        for b in &basis {
+            let d = b.dot(&v);
+            v.axpy(-d, b, 1.0);
+        }
+        let n = v.norm();
+        if n > RANK_TOL {
+            basis.push(v / n);
+            if c >= params.len() {
+                kept.push(*p);
+            }
+        }
+    }
+    kept
+}
+
 /// Pose sets larger than this are analysed from the Gram matrix of the Jacobian, summed
 /// block by block ([`analyse_gram`]); smaller ones by the QR and SVD of the Jacobian itself.
 /// The studies' sets (a few hundred poses, and the [`GENERIC_POSES`] of
@@ -274,6 +311,9 @@ pub fn analyse_gram(
         }
         for (i, q) in block.iter().enumerate() {
             crate::robot::jacobian::pose_rows(&chain, &cols, q, measure, &mut j, rows * i);
+            if cols.has_harmonics() {
+                cols.fill_harmonics(&chain.variables(q), &mut j, rows * i, rows);
+            }
         }
         sums.add(&j, &zeros[..rows * block.len()], &[1.0]);
     }

@@ -17,7 +17,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::measurement::Measure;
 use crate::numeric::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
-use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot, MAX_JOINTS};
+use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot, HARMONIC_TERMS, MAX_JOINTS};
 
 /// Maps flat parameter indices to Jacobian columns, for a chosen parameter list.
 #[derive(Clone, Debug)]
@@ -29,6 +29,13 @@ pub struct Columns {
     of_var: [Option<usize>; MAX_JOINTS],
     /// Whether any entry of `of_var` is set.
     any_var: bool,
+    /// Per joint, the columns of its harmonic coefficients ([`Param::Harmonic`]); the
+    /// derivative by the joint's chain variable is written into `of_var` (its compliance's
+    /// column, or else its first harmonic's) and [`Columns::fill_harmonics`] scales it into
+    /// each harmonic column.
+    harmonic: [[Option<usize>; HARMONIC_TERMS]; MAX_JOINTS],
+    /// Whether any entry of `harmonic` is set.
+    any_harmonic: bool,
     params: Vec<Param>,
 }
 
@@ -38,17 +45,65 @@ impl Columns {
     pub fn new(params: &[Param], dof: usize) -> Columns {
         let mut of_param = vec![None; crate::robot::value_count(dof)];
         let mut of_var = [None; MAX_JOINTS];
+        let mut harmonic = [[None; HARMONIC_TERMS]; MAX_JOINTS];
         for (c, p) in params.iter().enumerate() {
             match *p {
                 Param::Compliance(j) => of_var[j] = Some(c),
+                Param::Harmonic(j, k) => harmonic[j][k] = Some(c),
                 p => of_param[p.index(dof)] = Some(c),
+            }
+        }
+        for (v, h) in of_var.iter_mut().zip(&harmonic) {
+            if v.is_none() {
+                *v = h.iter().flatten().next().copied();
             }
         }
         Columns {
             of_param,
             any_var: of_var.iter().any(Option::is_some),
             of_var,
+            any_harmonic: harmonic.iter().flatten().any(Option::is_some),
+            harmonic,
             params: params.to_vec(),
+        }
+    }
+
+    /// Whether any column is a harmonic coefficient ([`Param::Harmonic`]).
+    pub fn has_harmonics(&self) -> bool {
+        self.any_harmonic
+    }
+
+    /// Turns the rows `row0..row0 + rows` of one pose (written by [`pose_rows_vars`]) into
+    /// the harmonic columns: `∂/∂a_j = (∂p/∂q_j) sin q_j`, `∂/∂b_j = (∂p/∂q_j) cos q_j`,
+    /// and `sin 2q_j`, `cos 2q_j` for the second harmonic, from the derivative by joint `j`'s
+    /// chain variable (its `of_var` column, unscaled) and the pose's undeflected chain
+    /// variables `vars`. Call it before a compliance column is scaled by its torque.
+    /// Allocation-free.
+    pub fn fill_harmonics(
+        &self,
+        vars: &ChainVars,
+        j: &mut DMatrix<Real>,
+        row0: usize,
+        rows: usize,
+    ) {
+        if !self.any_harmonic {
+            return;
+        }
+        for (v, h) in self.harmonic.iter().enumerate() {
+            let Some(src) = self.of_var[v] else { continue };
+            if h.iter().all(Option::is_none) {
+                continue;
+            }
+            let (s, c) = vars.1[v];
+            let f = crate::robot::harmonics::factors(s, c);
+            for r in row0..row0 + rows {
+                let d = j[(r, src)];
+                for (col, fk) in h.iter().zip(f) {
+                    if let Some(col) = *col {
+                        j[(r, col)] = d * fk;
+                    }
+                }
+            }
         }
     }
 
@@ -288,7 +343,9 @@ impl<const L: usize> Rows<'_, L> {
 }
 
 /// The stacked identification Jacobian of `robot` over poses `qs` (internal units) for the
-/// parameters of `cols`: `rows(measure) · m` × `cols.len()`.
+/// parameters of `cols`: `rows(measure) · m` × `cols.len()`. Harmonic columns
+/// ([`Columns::fill_harmonics`]) are those of the chain at `robot`'s geometry, its own
+/// harmonic offsets left out (the nominal robot's, zero, for identifiability).
 pub fn jacobian(
     robot: &Robot,
     cols: &Columns,
@@ -300,6 +357,9 @@ pub fn jacobian(
     let mut j = DMatrix::zeros(rows * qs.len(), cols.len());
     for (i, q) in qs.iter().enumerate() {
         pose_rows(&chain, cols, q, measure, &mut j, rows * i);
+        if cols.has_harmonics() {
+            cols.fill_harmonics(&chain.variables(q), &mut j, rows * i, rows);
+        }
     }
     j
 }

@@ -20,6 +20,7 @@ pub mod builtin;
 mod chain;
 pub mod compliance;
 mod file;
+pub mod harmonics;
 pub mod identifiability;
 pub mod ik;
 pub mod jacobian;
@@ -31,7 +32,7 @@ pub mod urdf;
 
 pub use chain::{Chain, ChainVars, Lanes, Op, OpKind, OpValues, MAX_OPS};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
-pub use param::{value_count, Param, PARAMS_PER_JOINT};
+pub use param::{value_count, Param, HARMONIC_TERMS, PARAMS_PER_JOINT};
 
 use crate::error::{Error, Result};
 use crate::numeric::{Frame, Real};
@@ -510,7 +511,7 @@ impl Robot {
                         (format!("{part}.rpy"), Quantity::Angle)
                     }
                 }
-                Param::Compliance(_) => continue,
+                Param::Compliance(_) | Param::Harmonic(..) => continue,
             };
             let unit = quantity.inner_unit();
             to_internal(quantity, v, 1.0, unit).map_err(|m| issue(place.clone(), m))?;
@@ -608,6 +609,7 @@ impl Robot {
                 ));
             }
         }
+        harmonics::check(self)?;
         if let Some(Coupling::Differential { l1_mm }) = self.coupling {
             to_internal(Quantity::Length, l1_mm, 1.0, "mm")
                 .ok()

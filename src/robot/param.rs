@@ -9,10 +9,17 @@ type Maker = (&'static str, fn(usize) -> Param);
 pub const PARAMS_PER_JOINT: usize = 5;
 
 /// Length of the flat parameter vector of a robot with `dof` joints: the joint parameters,
-/// the six base and six tool parameters, then one joint compliance per joint.
+/// the six base and six tool parameters, one joint compliance per joint, then the
+/// [`HARMONIC_TERMS`] joint-angle harmonic coefficients per joint.
 pub fn value_count(dof: usize) -> usize {
-    PARAMS_PER_JOINT * dof + 12 + dof
+    PARAMS_PER_JOINT * dof + 12 + dof + HARMONIC_TERMS * dof
 }
+
+/// Harmonic coefficients per joint ([`Param::Harmonic`]): sin q, cos q, sin 2q, cos 2q.
+pub const HARMONIC_TERMS: usize = 4;
+
+/// The name prefix of each harmonic term ([`Param::Harmonic`]'s second index).
+const HARMONIC_PREFIX: [&str; HARMONIC_TERMS] = ["hs", "hc", "h2s", "h2c"];
 
 const PART: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
@@ -38,6 +45,12 @@ pub enum Param {
     /// torque `τ_j` of the links and the payload (elasto-geometric model, docs/formats.md
     /// "Elasto-geometric calibration"). Not part of [`Param::all`]: a study identifies it only when it asks to.
     Compliance(usize),
+    /// Coefficient of a joint-angle harmonic (rad): joint `j`'s chain variable is offset by
+    /// `Δq_j = a_j sin q_j + b_j cos q_j + c_j sin 2q_j + d_j cos 2q_j` (encoder and gear
+    /// eccentricity); `Harmonic(j, k)` is `a_j`, `b_j`, `c_j`, `d_j` for `k` = 0..4, named
+    /// `hs`, `hc`, `h2s`, `h2c` and the joint number (docs/formats.md "Joint-angle
+    /// harmonics"). Not part of [`Param::all`]; revolute joints only.
+    Harmonic(usize, usize),
 }
 
 impl Param {
@@ -66,6 +79,7 @@ impl Param {
             Param::Base(c) => PARAMS_PER_JOINT * dof + c,
             Param::Tool(c) => PARAMS_PER_JOINT * dof + 6 + c,
             Param::Compliance(j) => PARAMS_PER_JOINT * dof + 12 + j,
+            Param::Harmonic(j, k) => PARAMS_PER_JOINT * dof + 12 + dof + HARMONIC_TERMS * j + k,
         }
     }
 
@@ -90,6 +104,7 @@ impl Param {
             Param::Base(_) => "base",
             Param::Tool(_) => "tool",
             Param::Compliance(_) => "compliance",
+            Param::Harmonic(..) => "harmonics",
         }
     }
 
@@ -100,6 +115,19 @@ impl Param {
         }
         if let Some(c) = name.strip_prefix("tool.") {
             return PART.iter().position(|p| *p == c).map(Param::Tool);
+        }
+        for (k, prefix) in HARMONIC_PREFIX.iter().enumerate().rev() {
+            if let Some(num) = name.strip_prefix(prefix) {
+                if num.is_empty() || !num.bytes().all(|b| b.is_ascii_digit()) {
+                    return None;
+                }
+                let j: usize = num.parse().ok()?;
+                return if j >= 1 {
+                    Some(Param::Harmonic(j - 1, k))
+                } else {
+                    None
+                };
+            }
         }
         // Longest prefixes first: "alpha" before "a".
         let kinds: [Maker; 6] = [
@@ -134,7 +162,7 @@ impl Param {
             Param::Theta(j) | Param::D(j) | Param::A(j) | Param::Alpha(j) | Param::Beta(j) => {
                 Some(j)
             }
-            Param::Base(_) | Param::Tool(_) | Param::Compliance(_) => None,
+            Param::Base(_) | Param::Tool(_) | Param::Compliance(_) | Param::Harmonic(..) => None,
         }
     }
 }
@@ -150,6 +178,7 @@ impl fmt::Display for Param {
             Param::Base(c) => write!(f, "base.{}", PART[c]),
             Param::Tool(c) => write!(f, "tool.{}", PART[c]),
             Param::Compliance(j) => write!(f, "c{}", j + 1),
+            Param::Harmonic(j, k) => write!(f, "{}{}", HARMONIC_PREFIX[k], j + 1),
         }
     }
 }
@@ -164,6 +193,14 @@ mod tests {
             assert_eq!(Param::parse(&p.to_string()), Some(p), "{p}");
         }
         assert_eq!(Param::parse("alpha10"), Some(Param::Alpha(9)));
+        for j in 0..7 {
+            for k in 0..HARMONIC_TERMS {
+                let p = Param::Harmonic(j, k);
+                assert_eq!(Param::parse(&p.to_string()), Some(p), "{p}");
+            }
+        }
+        assert_eq!(Param::parse("h2c3"), Some(Param::Harmonic(2, 3)));
+        assert_eq!(Param::parse("hs0"), None);
         for bad in ["theta0", "theta", "x1", "base.q", "a1b", "d-1", ""] {
             assert_eq!(Param::parse(bad), None, "{bad}");
         }

@@ -11,6 +11,7 @@ mod cli;
 mod cluster;
 mod fuzz;
 mod guo;
+mod harmonics;
 mod html;
 mod instruments;
 mod interchange;

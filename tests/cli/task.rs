@@ -8,7 +8,7 @@ use crate::common::{calbench, calbench_ok, load_json, path_arg, root, tmp_dir};
 
 /// `calbench task TASK --method lm [--models MODELS] --out OUT` through `run` (`calbench`,
 /// or `calbench_ok` to require success).
-fn task_lm(
+pub(crate) fn task_lm(
     run: fn(&[&str]) -> std::process::Output,
     task: &Path,
     models: Option<&str>,
@@ -22,7 +22,7 @@ fn task_lm(
     run(&args)
 }
 
-fn task(name: &str) -> PathBuf {
+pub(crate) fn task(name: &str) -> PathBuf {
     root().join("tasks").join(format!("{name}.toml"))
 }
 
@@ -158,7 +158,7 @@ fn a_ur10_task_chooses_its_model_by_cv_on_its_split() {
 }
 
 /// A copy of the WAM task whose validation file holds only the random poses `rows`.
-fn wam_with_validation(dir: &Path, rows: std::ops::Range<usize>) -> PathBuf {
+pub(crate) fn wam_with_validation(dir: &Path, rows: std::ops::Range<usize>) -> PathBuf {
     let data = root().join("data/barrett-wam");
     let text =
         std::fs::read_to_string(data.join("3D_WAM_uncalibrated_random_cleaned.csv")).unwrap();
