@@ -755,7 +755,7 @@ fn method_option_tables_match_the_declarations() {
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 5] = [
+const CLAIM_PAPERS: [(&str, &str); 7] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
@@ -764,7 +764,39 @@ const CLAIM_PAPERS: [(&str, &str); 5] = [
     ("ban/summary.json", "scenarios/ban-irb2600.toml"),
     ("guo2024/summary.json", "scenarios/guo2024-3t2r.toml"),
     ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
+    (
+        "qiao2021/summary-constants.json",
+        "scenarios/qiao2021-tx60-constants.toml",
+    ),
+    (
+        "qiao2021/summary-population.json",
+        "scenarios/qiao2021-tx60-population.toml",
+    ),
 ];
+
+/// A sweep point as the verdict table names it: `key = value` per swept key, the key by its
+/// last part (`population` for `methods.bas-pso.population`), and one `key = value` for axes
+/// that are the same key of several entries set to the same value.
+fn sweep_point(keys: &serde_json::Value, value: &serde_json::Value) -> String {
+    let values: Vec<&serde_json::Value> = match value {
+        serde_json::Value::Array(a) if keys.as_array().is_some_and(|k| k.len() > 1) => {
+            a.iter().collect()
+        }
+        v => vec![v],
+    };
+    let keys: Vec<&str> = keys
+        .as_array()
+        .map(|k| k.iter().filter_map(|k| k.as_str()).collect())
+        .unwrap_or_default();
+    let mut parts: Vec<String> = Vec::new();
+    for (k, v) in keys.iter().zip(values) {
+        let part = format!("{} = {v}", k.rsplit('.').next().unwrap_or(k));
+        if !parts.contains(&part) {
+            parts.push(part);
+        }
+    }
+    parts.join(", ")
+}
 
 /// The cells of a markdown table row.
 fn row_cells(l: &str) -> Vec<String> {
@@ -776,7 +808,8 @@ fn row_cells(l: &str) -> Vec<String> {
 }
 
 /// The verdict table REPRODUCTION.md leads with, generated from the committed summaries'
-/// `claims` (docs/formats.md § 4.16): one row per claim of each paper's scenario. A summary
+/// `claims` (docs/formats.md § 4.17): one row per claim of each paper's scenario, and per
+/// sweep point of a swept one (the point after the claim's id). A summary
 /// committed before its scenario stated the claim gives "no committed run" and
 /// "not evaluated". The last column, why a claim does not reproduce, is written by hand
 /// (`why`, by claim id).
@@ -793,41 +826,57 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
         let sc = calbench::study::scenario::Scenario::load(&root().join(scenario))
             .unwrap_or_else(|e| panic!("{scenario}: {e}"));
         for c in &sc.claims {
-            let got = summary["claims"]
+            // One row per sweep point (a run without a sweep has one).
+            let got: Vec<Option<&serde_json::Value>> = summary["claims"]
                 .as_array()
-                .and_then(|a| a.iter().find(|x| x["id"] == c.id.as_str()));
-            let (calbench, verdict) = match got {
-                Some(g) => {
-                    let num = |v: &serde_json::Value| fmt_num(v.as_f64().unwrap_or(f64::NAN), 4);
-                    let ci = match g["ci95"].as_array() {
-                        Some(ci) => format!(" [{}, {}]", num(&ci[0]), num(&ci[1])),
-                        None => String::new(),
-                    };
-                    let kind = g["interval"].as_str().unwrap_or("");
-                    let more = g["trials_to_resolve"].as_u64().map_or(String::new(), |t| {
-                        format!("; about {t} trials would resolve it")
-                    });
-                    (
-                        format!("{kind} {}{ci} ({}){more}", num(&g["estimate"]), g["n"]),
-                        g["verdict"].as_str().unwrap_or("").to_string(),
-                    )
-                }
-                None => ("no committed run".to_string(), "not evaluated".to_string()),
-            };
-            let value = match &c.value {
-                toml::Value::String(s) => s.clone(),
-                v => v.to_string(),
-            };
-            let metric = calbench::study::claims::METRICS[c.metric].0;
-            s += &format!(
-                "| {} | {} | {} | {} | `{}` (`{metric}`) | {calbench} | {verdict} | {} |\n",
-                c.paper,
-                c.id,
-                c.statement,
-                value,
-                c.relation,
-                why.get(&c.id).map_or("", String::as_str)
-            );
+                .map(|a| {
+                    a.iter()
+                        .filter(|x| x["id"] == c.id.as_str())
+                        .map(Some)
+                        .collect()
+                })
+                .filter(|v: &Vec<_>| !v.is_empty())
+                .unwrap_or_else(|| vec![None]);
+            for got in got {
+                let id = match got.map(|g| &g["sweep_value"]) {
+                    Some(v) if !v.is_null() => {
+                        format!("{} ({})", c.id, sweep_point(&summary["sweep_keys"], v))
+                    }
+                    _ => c.id.clone(),
+                };
+                let (calbench, verdict) = match got {
+                    Some(g) => {
+                        let num =
+                            |v: &serde_json::Value| fmt_num(v.as_f64().unwrap_or(f64::NAN), 4);
+                        let ci = match g["ci95"].as_array() {
+                            Some(ci) => format!(" [{}, {}]", num(&ci[0]), num(&ci[1])),
+                            None => String::new(),
+                        };
+                        let kind = g["interval"].as_str().unwrap_or("");
+                        let more = g["trials_to_resolve"].as_u64().map_or(String::new(), |t| {
+                            format!("; about {t} trials would resolve it")
+                        });
+                        (
+                            format!("{kind} {}{ci} ({}){more}", num(&g["estimate"]), g["n"]),
+                            g["verdict"].as_str().unwrap_or("").to_string(),
+                        )
+                    }
+                    None => ("no committed run".to_string(), "not evaluated".to_string()),
+                };
+                let value = match &c.value {
+                    toml::Value::String(s) => s.clone(),
+                    v => v.to_string(),
+                };
+                let metric = calbench::study::claims::METRICS[c.metric].0;
+                s += &format!(
+                    "| {} | {id} | {} | {} | `{}` (`{metric}`) | {calbench} | {verdict} | {} |\n",
+                    c.paper,
+                    c.statement,
+                    value,
+                    c.relation,
+                    why.get(&id).map_or("", String::as_str)
+                );
+            }
         }
     }
     s
@@ -856,6 +905,21 @@ fn reproduction_verdict_table_comes_from_the_committed_summaries() {
             c[1]
         );
         why.insert(c[1].clone(), reason);
+    }
+    // Every paper scenario that states claims has its committed run in the table.
+    for e in std::fs::read_dir(root().join("scenarios")).expect("scenarios") {
+        let p = e.expect("scenario").path();
+        let name = format!("scenarios/{}", p.file_name().unwrap().to_string_lossy());
+        let paper = ["li2018-", "ban-", "guo2024-", "qiao2021-"]
+            .iter()
+            .any(|s| name.starts_with(&format!("scenarios/{s}")));
+        let text = std::fs::read_to_string(&p).expect("scenario");
+        if paper && text.contains("[[claims]]") {
+            assert!(
+                CLAIM_PAPERS.iter().any(|(_, s)| *s == name),
+                "{name} states claims but has no committed summary in the verdict table"
+            );
+        }
     }
     let want = verdict_table(&why);
     let got = table.join("\n") + "\n";
