@@ -331,7 +331,6 @@ fn shell_examples_run() {
     .unwrap();
     let mut tally = Tally::default();
     let mut real_data = false;
-    let mut noise_tour = false;
     for doc in documents() {
         for b in blocks(&doc) {
             if b.lang != "sh" && b.lang != "bash" {
@@ -363,10 +362,6 @@ fn shell_examples_run() {
                 b.body,
                 text(&o)
             );
-            if b.doc == "README.md" && b.body.contains("--seed 9 --out b") {
-                noise_tour_quotes_its_run(&dir, &text(&o));
-                noise_tour = true;
-            }
             std::fs::remove_dir_all(&dir).unwrap();
             real_data |= b.doc == "README.md" && b.body.contains("calbench import");
             tally.run += 1;
@@ -377,106 +372,6 @@ fn shell_examples_run() {
         real_data,
         "the README's real-data example (`calbench import …`) did not run"
     );
-    assert!(
-        noise_tour,
-        "the README's noise tour (`--seed 9 --out b`) did not run"
-    );
-}
-
-/// The README's "Noise or a real difference" quotes the figures of the runs its block makes
-/// (`a` and `b` under `dir`; `said`: the block's output): each interval, the paired verdict
-/// and `check`'s count, formatted as the README rounds them, must be in its text.
-fn noise_tour_quotes_its_run(dir: &Path, said: &str) {
-    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
-    let section = readme
-        .split("### Noise or a real difference")
-        .nth(1)
-        .and_then(|s| s.split("\n## ").next())
-        .expect("README: the section \"Noise or a real difference\"");
-    let prose = section.split_whitespace().collect::<Vec<_>>().join(" ");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("a/summary.json")).unwrap())
-            .unwrap();
-    let entry = |m: &str| {
-        summary["results"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|e| e["method"] == m)
-            .unwrap_or_else(|| panic!("no entry {m}"))["validation_after_mm"]
-            .clone()
-    };
-    let f = |v: &serde_json::Value| v.as_f64().unwrap();
-    let (igg3, ls) = (entry("igg3"), entry("ls"));
-    let c = summary["comparisons"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|c| {
-            c["a"] == "ls / random"
-                && c["b"] == "igg3 / random"
-                && c["metric"] == "validation_after_mm.rms"
-        })
-        .expect("the comparison of igg3 against ls")
-        .clone();
-    let mut expected = vec![
-        format!("{:.4} mm", f(&igg3["rms"])),
-        format!(
-            "[{:.4}, {:.4}]",
-            f(&igg3["rms_ci95"][0]),
-            f(&igg3["rms_ci95"][1])
-        ),
-        format!("{:.4} mm", f(&ls["rms"])),
-        format!(
-            "[{:.4}, {:.4}]",
-            f(&ls["rms_ci95"][0]),
-            f(&ls["rms_ci95"][1])
-        ),
-        format!(
-            "lower by {:.4} mm [{:.4}, {:.4}]",
-            -f(&c["diff_mean"]),
-            -f(&c["diff_ci95"][1]),
-            -f(&c["diff_ci95"][0])
-        ),
-        format!("wins {:.0} %", 100.0 * f(&c["win_rate"])),
-        format!("p = {:.0e}", f(&c["p_holm"])),
-    ];
-    let counts = said
-        .lines()
-        .find(|l| l.contains("metrics compared"))
-        .expect("check's count line");
-    let count = |what: &str| -> String {
-        let at = counts
-            .find(what)
-            .unwrap_or_else(|| panic!("{what} in {counts}"));
-        counts[..at]
-            .split([' ', ','])
-            .rfind(|w| !w.is_empty())
-            .unwrap()
-            .to_string()
-    };
-    let compared = counts.split_whitespace().next().unwrap();
-    expected.push(format!(
-        "{} of the {compared} metrics `no change`",
-        count(" no change")
-    ));
-    let unresolved = count(" unresolved");
-    let of_params = said
-        .lines()
-        .filter(|l| l.starts_with("unresolved:") && l.contains("param_rmse."))
-        .count();
-    assert_eq!(
-        of_params.to_string(),
-        unresolved,
-        "every unresolved metric a parameter RMSE"
-    );
-    expected.push(format!("{unresolved} parameter RMSEs `unresolved`"));
-    for e in expected {
-        assert!(
-            prose.contains(&e),
-            "README's noise tour should say \"{e}\" (what its commands give)"
-        );
-    }
 }
 
 #[test]
@@ -860,7 +755,7 @@ fn method_option_tables_match_the_declarations() {
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 9] = [
+const CLAIM_PAPERS: [(&str, &str); 11] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
@@ -881,6 +776,14 @@ const CLAIM_PAPERS: [(&str, &str); 9] = [
     (
         "qiao2021/summary-unmodelled.json",
         "scenarios/qiao2021-tx60-unmodelled.toml",
+    ),
+    (
+        "qiao2021/summary-constants.json",
+        "scenarios/qiao2021-tx60-constants.toml",
+    ),
+    (
+        "qiao2021/summary-population.json",
+        "scenarios/qiao2021-tx60-population.toml",
     ),
 ];
 
@@ -904,6 +807,30 @@ fn paper_claims(scenario: &str) -> Vec<(calbench::study::claims::Claim, &'static
         .collect()
 }
 
+/// A sweep point as the verdict table names it: `key = value` per swept key, the key by its
+/// last part (`population` for `methods.bas-pso.population`), and one `key = value` for axes
+/// that are the same key of several entries set to the same value.
+fn sweep_point(keys: &serde_json::Value, value: &serde_json::Value) -> String {
+    let values: Vec<&serde_json::Value> = match value {
+        serde_json::Value::Array(a) if keys.as_array().is_some_and(|k| k.len() > 1) => {
+            a.iter().collect()
+        }
+        v => vec![v],
+    };
+    let keys: Vec<&str> = keys
+        .as_array()
+        .map(|k| k.iter().filter_map(|k| k.as_str()).collect())
+        .unwrap_or_default();
+    let mut parts: Vec<String> = Vec::new();
+    for (k, v) in keys.iter().zip(values) {
+        let part = format!("{} = {v}", k.rsplit('.').next().unwrap_or(k));
+        if !parts.contains(&part) {
+            parts.push(part);
+        }
+    }
+    parts.join(", ")
+}
+
 /// The cells of a markdown table row.
 fn row_cells(l: &str) -> Vec<String> {
     l.trim()
@@ -914,7 +841,8 @@ fn row_cells(l: &str) -> Vec<String> {
 }
 
 /// The verdict table REPRODUCTION.md leads with, generated from the committed summaries'
-/// `claims` (docs/formats.md § 4.16): one row per claim of each paper's scenario. A summary
+/// `claims` (docs/formats.md § 4.17): one row per claim of each paper's scenario, and per
+/// sweep point of a swept one (the point after the claim's id). A summary
 /// committed before its scenario stated the claim gives "no committed run" and
 /// "not evaluated". The last column, why a claim does not reproduce, is written by hand
 /// (`why`, by claim id).
@@ -929,40 +857,56 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&file).expect("summary")).expect("json");
         for (c, metric) in paper_claims(scenario) {
-            let got = summary["claims"]
+            // One row per sweep point (a run without a sweep has one).
+            let got: Vec<Option<&serde_json::Value>> = summary["claims"]
                 .as_array()
-                .and_then(|a| a.iter().find(|x| x["id"] == c.id.as_str()));
-            let (calbench, verdict) = match got {
-                Some(g) => {
-                    let num = |v: &serde_json::Value| fmt_num(v.as_f64().unwrap_or(f64::NAN), 4);
-                    let ci = match g["ci95"].as_array() {
-                        Some(ci) => format!(" [{}, {}]", num(&ci[0]), num(&ci[1])),
-                        None => String::new(),
-                    };
-                    let kind = g["interval"].as_str().unwrap_or("");
-                    let more = g["trials_to_resolve"].as_u64().map_or(String::new(), |t| {
-                        format!("; about {t} trials would resolve it")
-                    });
-                    (
-                        format!("{kind} {}{ci} ({}){more}", num(&g["estimate"]), g["n"]),
-                        g["verdict"].as_str().unwrap_or("").to_string(),
-                    )
-                }
-                None => ("no committed run".to_string(), "not evaluated".to_string()),
-            };
-            let value = match &c.value {
-                toml::Value::String(s) => s.clone(),
-                v => v.to_string(),
-            };
-            s += &format!(
-                "| {} | {} | {} | {} | `{}` (`{metric}`) | {calbench} | {verdict} | {} |\n",
-                c.paper,
-                c.id,
-                c.statement,
-                value,
-                c.relation,
-                why.get(&c.id).map_or("", String::as_str)
-            );
+                .map(|a| {
+                    a.iter()
+                        .filter(|x| x["id"] == c.id.as_str())
+                        .map(Some)
+                        .collect()
+                })
+                .filter(|v: &Vec<_>| !v.is_empty())
+                .unwrap_or_else(|| vec![None]);
+            for got in got {
+                let id = match got.map(|g| &g["sweep_value"]) {
+                    Some(v) if !v.is_null() => {
+                        format!("{} ({})", c.id, sweep_point(&summary["sweep_keys"], v))
+                    }
+                    _ => c.id.clone(),
+                };
+                let (calbench, verdict) = match got {
+                    Some(g) => {
+                        let num =
+                            |v: &serde_json::Value| fmt_num(v.as_f64().unwrap_or(f64::NAN), 4);
+                        let ci = match g["ci95"].as_array() {
+                            Some(ci) => format!(" [{}, {}]", num(&ci[0]), num(&ci[1])),
+                            None => String::new(),
+                        };
+                        let kind = g["interval"].as_str().unwrap_or("");
+                        let more = g["trials_to_resolve"].as_u64().map_or(String::new(), |t| {
+                            format!("; about {t} trials would resolve it")
+                        });
+                        (
+                            format!("{kind} {}{ci} ({}){more}", num(&g["estimate"]), g["n"]),
+                            g["verdict"].as_str().unwrap_or("").to_string(),
+                        )
+                    }
+                    None => ("no committed run".to_string(), "not evaluated".to_string()),
+                };
+                let value = match &c.value {
+                    toml::Value::String(s) => s.clone(),
+                    v => v.to_string(),
+                };
+                s += &format!(
+                    "| {} | {id} | {} | {} | `{}` (`{metric}`) | {calbench} | {verdict} | {} |\n",
+                    c.paper,
+                    c.statement,
+                    value,
+                    c.relation,
+                    why.get(&id).map_or("", String::as_str)
+                );
+            }
         }
     }
     s
@@ -991,6 +935,21 @@ fn reproduction_verdict_table_comes_from_the_committed_summaries() {
             c[1]
         );
         why.insert(c[1].clone(), reason);
+    }
+    // Every paper scenario that states claims has its committed run in the table.
+    for e in std::fs::read_dir(root().join("scenarios")).expect("scenarios") {
+        let p = e.expect("scenario").path();
+        let name = format!("scenarios/{}", p.file_name().unwrap().to_string_lossy());
+        let paper = ["li2018-", "ban-", "guo2024-", "qiao2021-"]
+            .iter()
+            .any(|s| name.starts_with(&format!("scenarios/{s}")));
+        let text = std::fs::read_to_string(&p).expect("scenario");
+        if paper && text.contains("[[claims]]") {
+            assert!(
+                CLAIM_PAPERS.iter().any(|(_, s)| *s == name),
+                "{name} states claims but has no committed summary in the verdict table"
+            );
+        }
     }
     let want = verdict_table(&why);
     let got = table.join("\n") + "\n";

@@ -64,7 +64,7 @@ pub use ridge::RidgeOptions;
 pub use robot::RobotProblem;
 pub use robust::RobustOptions;
 pub use solver::{solve, LeastSquares, Size, Solver};
-pub use weights::{Robustness, Sigma0, WeightFn};
+pub use weights::{Per, Robustness, Sigma0, WeightFn};
 pub use xi::XiRule;
 
 /// An identification method with its options: the one interface through which `run` and

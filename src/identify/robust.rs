@@ -25,7 +25,15 @@
 //! - [`crate::identify::Sigma0::Mad`]: `1.4826 · median |v_k|` over all residual rows (zero-centred MAD).
 //!
 //! When σ0 falls below `1e-9` times the RMS point residual at the start (consistent,
-//! noise-free data), every point keeps weight 1.
+//! noise-free data), every point keeps its weight: its prior weight in the first round, and
+//! after a round that rejected gross errors, the weights of that round (the kept points then
+//! fit exactly).
+//!
+//! With `per = "coordinate"` ([`Per::Coordinate`]) every residual row is weighed on its
+//! own, as Li weighs each observation (eq. 16): the same three phases run on the problem
+//! seen row by row (`Rows`), so `u_k = |v_k| / σ0` for row `k`, σ0 counts rows, and the
+//! final refit keeps or rejects single rows; a point with one gross coordinate keeps its
+//! other rows. The solution's `weights` are then each point's mean over its rows.
 //!
 //! Weight functions ([`crate::identify::WeightFn`]):
 //! - IGG3 (Li eq. 18): `1` for `u ≤ k0`; `(k0/u)·((k1 − u)/(k1 − k0))²` for `k0 < u ≤ k1`;
@@ -39,8 +47,8 @@ use serde::Deserialize;
 
 use super::options;
 use super::ridge::RidgeOptions;
-use super::solver::{gauss_newton, LeastSquares, Solver};
-use super::weights::Robustness;
+use super::solver::{gauss_newton, Column, LeastSquares, Matrix, Size, Solver};
+use super::weights::{Per, Robustness};
 use super::Identified;
 use crate::error::Result;
 use crate::numeric::Real;
@@ -95,6 +103,96 @@ impl Solver for RobustOptions {
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         let r = &self.ridge;
-        gauss_newton(p, x0, r.eps, r.max_iter, Some(r.cfg()), Some(&self.robust))
+        match self.robust.per {
+            Per::Point => gauss_newton(p, x0, r.eps, r.max_iter, Some(r.cfg()), Some(&self.robust)),
+            Per::Coordinate => {
+                let rows = Rows::of(p);
+                let out = gauss_newton(
+                    &rows,
+                    x0,
+                    r.eps,
+                    r.max_iter,
+                    Some(r.cfg()),
+                    Some(&self.robust),
+                );
+                rows.per_point(out)
+            }
+        }
+    }
+}
+
+/// A problem seen row by row: every residual row of `inner` is a point of one row, so that
+/// the robust weights, σ0 and the refit's rejection of [`gauss_newton`] act on each coordinate
+/// on its own (`per = "coordinate"`, Li 2018 eq. 16). The residual, the Jacobian and the
+/// normal equations are those of `inner`, in the same order.
+struct Rows<'a> {
+    inner: &'a dyn LeastSquares,
+    /// Rows per point of `inner`.
+    rows: usize,
+    /// The prior weight of each row: its point's.
+    prior: Option<Vec<Real>>,
+}
+
+impl<'a> Rows<'a> {
+    fn of(inner: &'a dyn LeastSquares) -> Rows<'a> {
+        let rows = inner.size().rows_per_point;
+        let prior = inner.prior().map(|p| {
+            p.iter()
+                .flat_map(|&w| std::iter::repeat_n(w, rows))
+                .collect()
+        });
+        Rows { inner, rows, prior }
+    }
+
+    /// The solution as one of `inner`: each point's weight is the mean of its rows' weights
+    /// (1 when every row kept its weight, 0 when every row was rejected), and the RMS residual
+    /// is per point again.
+    fn per_point(&self, mut out: Identified) -> Identified {
+        let r = self.rows.max(1);
+        out.weights = out
+            .weights
+            .chunks(r)
+            .map(|c| c.iter().sum::<Real>() / r as Real)
+            .collect();
+        out.rms_residual *= (r as Real).sqrt();
+        out
+    }
+}
+
+impl LeastSquares for Rows<'_> {
+    fn size(&self) -> Size {
+        let s = self.inner.size();
+        Size::new(s.params, s.rows(), 1)
+    }
+
+    fn prior(&self) -> Option<&[Real]> {
+        self.prior.as_deref()
+    }
+
+    fn evaluate(&self, x: &Column, r: &mut Column, j: &mut Matrix) {
+        self.inner.evaluate(x, r, j);
+    }
+
+    fn tikhonov(&self) -> Option<&[Real]> {
+        self.inner.tikhonov()
+    }
+
+    /// The inner problem's blocks, in rows: they start and end on its points.
+    fn block_points(&self) -> Option<usize> {
+        self.inner.block_points().map(|b| b * self.rows)
+    }
+
+    fn evaluate_points(&self, x: &Column, i: usize, r: &mut Column, j: &mut Matrix) {
+        if i.is_multiple_of(self.rows) && r.len().is_multiple_of(self.rows) {
+            self.inner.evaluate_points(x, i / self.rows, r, j);
+        } else {
+            // Not on a point's boundary (never with the blocks above): the whole problem.
+            let size = self.inner.size();
+            let mut rw = Column::zeros(size.rows());
+            let mut jw = Matrix::zeros(size.rows(), size.params);
+            self.inner.evaluate(x, &mut rw, &mut jw);
+            r.copy_from(&rw.rows(i, r.len()));
+            j.copy_from(&jw.rows(i, r.len()));
+        }
     }
 }

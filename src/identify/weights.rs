@@ -28,6 +28,17 @@ pub enum Sigma0 {
     Mad,
 }
 
+/// What one robust weight belongs to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Per {
+    /// One weight per point, from the RMS of its residual rows.
+    Point,
+    /// One weight per residual row (x, y, z and, with full poses, the orientation rows),
+    /// from that row alone, as Li 2018 weighs each observation (eq. 16).
+    Coordinate,
+}
+
 /// The robust part of IGG3's options: its fields are the keys.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -40,6 +51,9 @@ pub struct Robustness {
     pub k1: Real,
     /// σ0 estimate. Default [`Sigma0::Classical`].
     pub sigma0: Sigma0,
+    /// Whether a weight belongs to a point or to each of its residual rows. Default
+    /// [`Per::Point`].
+    pub per: Per,
 }
 
 impl Default for Robustness {
@@ -49,6 +63,7 @@ impl Default for Robustness {
             k0: 1.5,
             k1: 2.5,
             sigma0: Sigma0::Classical,
+            per: Per::Point,
         }
     }
 }
@@ -182,7 +197,9 @@ pub(crate) fn point_weights(res: &Residuals, w: &mut [Real], buf: &mut Vec<Real>
     };
     let mad = (o.sigma0 == Sigma0::Mad).then_some(sigma0);
     if res.uninformative(sigma0) {
-        res.reset(w);
+        // The weighted points fit exactly (noise-free data): the weights stay as they are,
+        // the prior ones in the first round. (Giving a rejected point its weight back here
+        // made the rounds alternate between the two sets until the iteration limit.)
         return WeightStats { mad };
     }
     let scale = sigma0 * (rows as Real).sqrt();

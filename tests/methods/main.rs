@@ -7,6 +7,7 @@ mod common;
 
 mod errmodel;
 mod guo;
+mod igg3_coordinate;
 mod metaheur;
 mod options;
 mod poses;
