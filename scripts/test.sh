@@ -3,7 +3,8 @@
 # caller's working directory. Stops at the first failure.
 #
 # Rust (the library, the CLI and the Python module's crate python/): cargo fmt --check, clippy
-# with warnings denied, rustdoc with warnings denied, cargo test. Then the Python module: built
+# with warnings denied, rustdoc with warnings denied, cargo test (with CI=true also the slow
+# coverage test of the intervals, ignored by default). Then the Python module: built
 # into the virtual environment .venv/ (maturin, pytest, numpy, pandas, matplotlib, and scipy,
 # which the paired comparisons are tested against) and its pytest suite python/tests/ run
 # against the CLI; a fresh clone's .venv/ is made here first
@@ -17,6 +18,11 @@ cargo fmt --all --check
 cargo clippy --workspace --all-targets -- -D warnings
 RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps --workspace
 cargo test
+# The coverage of the 95 % intervals (40 runs of 50 trials against a 4000-trial run, a few
+# minutes) is ignored by default; CI runs it.
+if [ "${CI:-}" = "true" ]; then
+    cargo test --test study -- --ignored intervals_cover_the_long_run_figure
+fi
 
 py=.venv/bin/python
 has_tools() { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas, scipy" 2>/dev/null; }
