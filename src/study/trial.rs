@@ -9,6 +9,7 @@ use std::time::Instant;
 
 pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
 use super::plan::{crb_trace, Study};
+use super::stats::ecdf::{self, SearchRun};
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
 use crate::identify::Termination;
@@ -47,6 +48,9 @@ pub struct Outcome {
     pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
     /// A metaheuristic's best fitness per iteration (trial 0 only).
     pub trace: Option<Vec<Real>>,
+    /// A search's runtime and fixed-budget numbers on this trial (`None` for the methods
+    /// without a fitness trace; [`crate::study::stats::ecdf`]).
+    pub search: Option<SearchRun>,
     /// Iterations of the identification.
     pub iterations: usize,
     /// Evaluations of the model in the identification ([`crate::identify::Identified`]'s
@@ -304,6 +308,18 @@ optional_stats! {
 /// `records.txt`).
 pub const OPTIONAL_STATS: [&str; OptionalStats::NAMES.len()] = OptionalStats::NAMES;
 
+/// The searches whose best fitnesses are compared on one trial: those of strategy `si` with
+/// the same fitness (the same orientation weight `k` and the same Qiao error model, which the
+/// method's options name `error_model`).
+fn search_group(si: usize, spec: &crate::identify::MethodSpec) -> String {
+    let opts = format!("{:?}", spec.method);
+    let model = opts
+        .split("error_model: ")
+        .nth(1)
+        .map_or("", |r| r.split([',', '}']).next().unwrap_or(""));
+    format!("{si} {:e} {}", spec.k, model.trim())
+}
+
 /// Runs trial `index` of `study`.
 pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let sc = &study.scenario;
@@ -351,6 +367,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let axis = sc.validation.axis_errors;
 
     let mut outcomes = Vec::new();
+    // Each search's whole trace on this trial, dropped once reduced to its `SearchRun`.
+    let mut searches: Vec<Option<(String, Vec<Real>, usize)>> = Vec::new();
     let mut crb = Vec::new();
     for si in 0..sc.calibration.strategies.len() {
         let qs = calibration_poses(study, si, index)?;
@@ -408,6 +426,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let mut trace = None;
+            let mut full_trace = None;
             let error = res.as_ref().err().map(|e| e.to_string());
             let (identified, after, cal_after, iterations, evaluations, termination) = match res {
                 Ok(c) => {
@@ -418,10 +437,11 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     let e = validation_errors(&c.robot, &vqs, Some(&vpayload), &seen)?;
                     let cal_seen: Vec<Frame> = cal_truth.iter().map(|t| map.compose(t)).collect();
                     let cal = validation_errors(&c.robot, &m.data.qs, cal_loads, &cal_seen)?;
-                    if index == 0 {
-                        trace = c.identified.trace.clone().filter(|t| !t.is_empty());
-                    }
                     let r = c.identified;
+                    full_trace = r.trace.clone().filter(|t| !t.is_empty());
+                    if index == 0 {
+                        trace = full_trace.clone();
+                    }
                     (
                         r.x.iter().copied().collect(),
                         e,
@@ -467,6 +487,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                         .then(|| ErrorStats::of(&cal_after.attitude_deg)),
                 },
                 trace,
+                search: None,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 per_point_attitude_deg: (index == 0 && full_pose)
                     .then(|| (before.attitude_deg.clone(), after.attitude_deg.clone())),
@@ -477,7 +498,15 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 seconds,
                 error,
             });
+            searches.push(full_trace.map(|t| (search_group(si, spec), t, evaluations)));
         }
+    }
+    let runs: Vec<_> = searches
+        .iter()
+        .map(|r| r.as_ref().map(|(g, t, e)| (g.clone(), &t[..], *e)))
+        .collect();
+    for (o, r) in outcomes.iter_mut().zip(ecdf::of_trial(&runs)) {
+        o.search = r;
     }
     Ok(TrialResult {
         index,
