@@ -753,13 +753,17 @@ fn method_option_tables_match_the_declarations() {
     );
 }
 
-/// The papers of REPRODUCTION.md's verdict table: the committed summary's folder and the
-/// scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 4] = [
-    ("li2018", "scenarios/li2018-irb2600.toml"),
-    ("ban", "scenarios/ban-irb2600.toml"),
-    ("guo2024", "scenarios/guo2024-3t2r.toml"),
-    ("qiao2021", "scenarios/qiao2021-tx60.toml"),
+/// The runs of REPRODUCTION.md's verdict table: the committed summary (under
+/// `results/reproduction/`) and the scenario that states the paper's claims.
+const CLAIM_PAPERS: [(&str, &str); 5] = [
+    ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
+    (
+        "li2018/summary-unmodelled.json",
+        "scenarios/li2018-irb2600-unmodelled.toml",
+    ),
+    ("ban/summary.json", "scenarios/ban-irb2600.toml"),
+    ("guo2024/summary.json", "scenarios/guo2024-3t2r.toml"),
+    ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
 ];
 
 /// The cells of a markdown table row.
@@ -782,8 +786,8 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
         "| paper | claim | statement | paper's value | relation (metric) | calbench: estimate [95 % CI] (trials) | verdict | why |\n\
          |---|---|---|---|---|---|---|---|\n",
     );
-    for (dir, scenario) in CLAIM_PAPERS {
-        let file = root().join(format!("results/reproduction/{dir}/summary.json"));
+    for (summary, scenario) in CLAIM_PAPERS {
+        let file = root().join(format!("results/reproduction/{summary}"));
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&file).expect("summary")).expect("json");
         let sc = calbench::study::scenario::Scenario::load(&root().join(scenario))

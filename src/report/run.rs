@@ -16,7 +16,7 @@ mod trials_csv;
 
 use crate::error::{Error, Result};
 use crate::numeric::Real;
-use crate::study::stats::Entry;
+use crate::study::stats::{Entry, EtaStats};
 use crate::study::{toml_to_json, Block, RunResult};
 use sweep::{sweep_tables, write_sweep_plots};
 pub use trials_csv::TrialsCsv;
@@ -70,29 +70,30 @@ fn eta_by_parameter(b: &Block) -> (Vec<String>, EtaSeries<Real>, EtaSeries<Optio
         .first()
         .map(|e| e.eta.keys().cloned().collect())
         .unwrap_or_default();
-    let series = b
-        .entries
-        .iter()
-        .map(|e| {
-            let eta = params
-                .iter()
-                .map(|p| e.eta.get(p).map_or(Real::NAN, |x| x.mean))
-                .collect();
-            (entry_label(e), eta)
-        })
-        .collect();
-    let intervals = b
-        .entries
-        .iter()
-        .map(|e| {
-            let ci = params
-                .iter()
-                .map(|p| e.eta.get(p).and_then(|x| x.mean_ci95))
-                .collect();
-            (entry_label(e), ci)
-        })
-        .collect();
+    let series = per_parameter(b, &params, |x| x.map_or(Real::NAN, |x| x.mean));
+    let intervals = per_parameter(b, &params, |x| x.and_then(|x| x.mean_ci95));
     (params, series, intervals)
+}
+
+/// A section of `report.md`: `## TITLE`, the note that says how to read it, the table.
+fn noted_table(title: &str, note: &str, headers: &[&str], rows: &[Vec<String>]) -> String {
+    format!("## {title}\n\n{note}\n\n{}", table(headers, rows))
+}
+
+/// Per entry of `b`, its label and `f` of its η statistics of each of `params` (`None` where
+/// it has none).
+fn per_parameter<T>(
+    b: &Block,
+    params: &[String],
+    f: impl Fn(Option<&EtaStats>) -> T,
+) -> EtaSeries<T> {
+    b.entries
+        .iter()
+        .map(|e| {
+            let values = params.iter().map(|p| f(e.eta.get(p))).collect();
+            (entry_label(e), values)
+        })
+        .collect()
 }
 
 /// The relative distance from the final objective within which a pose optimisation counts
@@ -341,10 +342,7 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     );
     let (h, rows) = claims::table(r);
     if !rows.is_empty() {
-        s += "## The paper's claims\n\n";
-        s += claims::NOTE;
-        s += "\n\n";
-        s += &table(&h, &rows);
+        s += &noted_table("The paper's claims", claims::NOTE, &h, &rows);
         s += "\n";
     }
     let pose = first.full_pose;
@@ -357,18 +355,14 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     s += "## Validation errors and identification accuracy\n\n";
     s += "Validation errors are against the true (sagging) arm at fresh poses, free of tracker noise; each statistic is averaged over trials.\n\n";
     s += &table(&headers, &rows);
-    s += "\n## Uncertainty over trials\n\n";
-    s += INTERVAL_NOTE;
-    s += "\n\n";
     let (headers, rows) = entry_table(r, &INTERVAL_COLUMNS);
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
-    s += &table(&headers, &rows);
+    s += "\n";
+    s += &noted_table("Uncertainty over trials", INTERVAL_NOTE, &headers, &rows);
     let (h, rows) = comparisons::table(r);
     if !rows.is_empty() {
-        s += "\n## Paired comparisons\n\n";
-        s += comparisons::NOTE;
-        s += "\n\n";
-        s += &table(&h, &rows);
+        s += "\n";
+        s += &noted_table("Paired comparisons", comparisons::NOTE, &h, &rows);
     }
     if let Some(sw) = &sc.sweep {
         s += &sweep_tables(r, sw);

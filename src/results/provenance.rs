@@ -6,8 +6,6 @@
 //! tarball without `.git`); `Cargo.lock` is compiled in, so neither needs the source tree
 //! when recording.
 
-use sha2::{Digest, Sha256};
-
 /// calbench's version (`Cargo.toml`).
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
@@ -17,12 +15,32 @@ pub const GIT_COMMIT: &str = env!("CALBENCH_GIT_COMMIT");
 /// `Cargo.lock` as built.
 const CARGO_LOCK: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.lock"));
 
-/// The lowercase hex SHA-256 of `bytes`.
-pub fn sha256_hex(bytes: &[u8]) -> String {
-    Sha256::digest(bytes)
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
+pub use crate::calibrate::task::sha256::sha256_hex;
+
+/// A machine: what a result was computed or recorded on (also each shard's `machine` in
+/// `shard.json`, docs/formats.md § 7.3).
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Machine {
+    /// The host name.
+    pub host: String,
+    /// The CPU model (`/proc/cpuinfo`'s `model name`, else the architecture).
+    pub cpu: String,
+    /// The logical cores.
+    pub cores: u32,
+    /// The operating system, its kernel release and architecture.
+    pub os: String,
+}
+
+impl Machine {
+    /// This machine.
+    pub fn here() -> Machine {
+        Machine {
+            host: host_name(),
+            cpu: cpu_model(),
+            cores: std::thread::available_parallelism().map_or(1, |n| n.get() as u32),
+            os: os(),
+        }
+    }
 }
 
 /// The record's provenance.
@@ -52,15 +70,16 @@ impl Provenance {
     /// This calbench on this machine now; `label` and `machine` override the defaults.
     pub fn here(label: Option<&str>, machine: Option<&str>) -> Provenance {
         let short: String = GIT_COMMIT.chars().take(12).collect();
+        let here = Machine::here();
         Provenance {
             label: label.map_or_else(|| format!("{VERSION}+{short}"), str::to_string),
             version: VERSION.to_string(),
             git_commit: GIT_COMMIT.to_string(),
             cargo_lock_hash: sha256_hex(CARGO_LOCK),
-            machine: machine.map_or_else(host_name, str::to_string),
-            cpu: cpu_model(),
-            cores: std::thread::available_parallelism().map_or(1, |n| n.get() as u32),
-            os: os(),
+            machine: machine.map_or(here.host, str::to_string),
+            cpu: here.cpu,
+            cores: here.cores,
+            os: here.os,
             recorded_at: utc_now(),
         }
     }
@@ -143,13 +162,5 @@ mod tests {
         assert_eq!(civil(0), (1970, 1, 1));
         assert_eq!(civil(19_782), (2024, 2, 29));
         assert_eq!(civil(20_784), (2026, 11, 27));
-    }
-
-    #[test]
-    fn sha256_of_abc() {
-        assert_eq!(
-            sha256_hex(b"abc"),
-            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
-        );
     }
 }

@@ -2,7 +2,8 @@
 //! of all shards into the output of the unsharded run.
 //!
 //! A shard folder holds `trials.csv` (its own rows), `shard.json` (the scenario as run, the
-//! share, and what the reports need of each block's study and of trial 0) and `records.txt`:
+//! share, the machine that ran it, and what the reports need of each block's study and of
+//! trial 0) and `records.txt`:
 //! one line per trial with every number the aggregation reads, each line with its checksum
 //! ([`crate::study::records`]), so the merge checks every record and replays the trials in order
 //! through the same streaming aggregation ([`crate::study::Collector`]) and writes the same
@@ -15,6 +16,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::report::{write_run, TrialsCsv};
+use crate::results::provenance::Machine;
 use crate::study::records::{encode, Verifier};
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
@@ -43,6 +45,10 @@ struct ShardMeta {
     /// The records in `records.txt`: `units.1 - units.0`.
     records: u64,
     seconds: f64,
+    /// The machine that ran the shard (absent in shards written before it was recorded);
+    /// `merge` does not compare it: shards of one run are meant to run on different machines.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    machine: Option<Machine>,
     blocks: Vec<ShardBlock>,
 }
 
@@ -97,6 +103,7 @@ impl Records {
             units: shard.range(total),
             records: self.count,
             seconds: r.seconds,
+            machine: Some(Machine::here()),
             blocks: r
                 .blocks
                 .iter()

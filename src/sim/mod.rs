@@ -65,27 +65,6 @@ pub struct Simulated {
 /// robot at joint values `q` under a payload (kg; `None`: the model's configured payload).
 pub type SagFn = dyn Fn(&Robot, &[Real], Option<Real>) -> Result<Frame> + Sync;
 
-/// Measures `true_robot` at each of `qs` (internal units) with `tracker`, then displaces
-/// outliers (`outliers`, if given). `sag` gives the deflected tool frame of the true robot at
-/// q; `None` means a rigid arm. `payloads` gives the payload (kg) of each pose, recorded in
-/// the measurement's `payload_kg` and passed to `sag`. Draws the tracker noise of pose 0, 1,
-/// … in order, then the outliers, all from `rng`.
-pub fn measure_poses(
-    true_robot: &Robot,
-    qs: &[Vec<Real>],
-    tracker: &Tracker,
-    outliers: Option<&OutlierSettings>,
-    sag: Option<&SagFn>,
-    payloads: Option<&[Real]>,
-    rng: &mut Rng,
-) -> Result<Simulated> {
-    let reached = Reached {
-        commanded: qs,
-        actual: None,
-    };
-    measure_reached(true_robot, reached, tracker, outliers, sag, payloads, rng)
-}
-
 /// The joint values of a measurement: those commanded (recorded in the data) and, when the
 /// arm has error outside its model ([`unmodelled`]), those it reaches (the true frames'),
 /// one per commanded pose.
@@ -97,18 +76,39 @@ pub struct Reached<'a> {
     pub actual: Option<&'a [Vec<Real>]>,
 }
 
-/// [`measure_poses`] of an arm that reaches `reached.actual` when commanded to
-/// `reached.commanded`: the true frames (and sag) are those of the reached joint values, the
-/// data record the commanded ones.
-pub fn measure_reached(
+/// The commanded poses of an arm that reaches them.
+impl<'a> From<&'a [Vec<Real>]> for Reached<'a> {
+    fn from(commanded: &'a [Vec<Real>]) -> Self {
+        Reached {
+            commanded,
+            actual: None,
+        }
+    }
+}
+
+impl<'a> From<&'a Vec<Vec<Real>>> for Reached<'a> {
+    fn from(commanded: &'a Vec<Vec<Real>>) -> Self {
+        commanded.as_slice().into()
+    }
+}
+
+/// Measures `true_robot` at each of the poses `reached` (internal units: the joint values
+/// commanded, or a [`Reached`] whose arm reaches others) with `tracker`, then displaces
+/// outliers (`outliers`, if given). The true frames (and sag) are those of the reached joint
+/// values, the data record the commanded ones. `sag` gives the deflected tool frame of the
+/// true robot at q; `None` means a rigid arm. `payloads` gives the payload (kg) of each pose,
+/// recorded in the measurement's `payload_kg` and passed to `sag`. Draws the tracker noise of
+/// pose 0, 1, … in order, then the outliers, all from `rng`.
+pub fn measure_poses<'a>(
     true_robot: &Robot,
-    reached: Reached,
+    reached: impl Into<Reached<'a>>,
     tracker: &Tracker,
     outliers: Option<&OutlierSettings>,
     sag: Option<&SagFn>,
     payloads: Option<&[Real]>,
     rng: &mut Rng,
 ) -> Result<Simulated> {
+    let reached = reached.into();
     let qs = reached.commanded;
     let actual = reached.actual.unwrap_or(qs);
     if actual.len() != qs.len() {

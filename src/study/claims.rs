@@ -26,8 +26,8 @@
 //! - `"a" op x`: the mean of a over trials, against x: its t interval.
 
 use crate::numeric::Real;
+use crate::study::outcome::Outcome;
 use crate::study::stats::dist;
-use crate::study::trial::Outcome;
 
 /// What a per-trial metric needs of the study: nothing, full-pose data, or Guo's axis
 /// errors (`validation.axis_errors`).
@@ -49,9 +49,9 @@ fn opt(o: &Outcome, k: usize, f: fn(&crate::calibrate::ErrorStats) -> Real) -> R
     o.optional.values()[k].as_ref().map_or(Real::NAN, f)
 }
 
-/// The index of optional statistic `name` in [`crate::study::trial::OPTIONAL_STATS`].
+/// The index of optional statistic `name` in [`crate::study::outcome::OPTIONAL_STATS`].
 const fn optional(name: &str) -> usize {
-    let names = crate::study::trial::OPTIONAL_STATS;
+    let names = crate::study::outcome::OPTIONAL_STATS;
     let mut i = 0;
     while i < names.len() {
         if const_eq(names[i], name) {
@@ -254,20 +254,11 @@ fn tokens(s: &str) -> Result<Vec<Tok>, String> {
             let end = r.find('"').ok_or("an entry's name is not closed by '\"'")?;
             out.push(Tok::Name(r[..end].to_string()));
             rest = &r[end + 1..];
-        } else if let Some(r) = rest.strip_prefix("<=") {
-            out.push(Tok::Op(Op::Le));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix(">=") {
-            out.push(Tok::Op(Op::Ge));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix('<') {
-            out.push(Tok::Op(Op::Lt));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix('>') {
-            out.push(Tok::Op(Op::Gt));
-            rest = r;
-        } else if let Some(r) = rest.strip_prefix('/') {
-            out.push(Tok::Slash);
+        } else if let Some((tok, r)) = SYMBOLS
+            .iter()
+            .find_map(|(text, tok)| rest.strip_prefix(text).map(|r| (tok.clone(), r)))
+        {
+            out.push(tok);
             rest = r;
         } else {
             let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
@@ -286,6 +277,15 @@ fn tokens(s: &str) -> Result<Vec<Tok>, String> {
     }
     Ok(out)
 }
+
+/// The relation's symbols, the two-character ones first.
+const SYMBOLS: [(&str, Tok); 5] = [
+    ("<=", Tok::Op(Op::Le)),
+    (">=", Tok::Op(Op::Ge)),
+    ("<", Tok::Op(Op::Lt)),
+    (">", Tok::Op(Op::Gt)),
+    ("/", Tok::Slash),
+];
 
 #[derive(Clone, Debug)]
 enum Tok {

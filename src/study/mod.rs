@@ -24,6 +24,7 @@
 
 pub mod claims;
 pub mod instruments;
+pub mod outcome;
 pub mod plan;
 pub mod records;
 pub mod registration_study;

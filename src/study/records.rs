@@ -16,9 +16,8 @@ use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
 use crate::numeric::Real;
+use crate::study::outcome::{OptionalStats, Outcome};
 use crate::study::stats::ecdf::{self, SearchRun};
-use crate::study::trial::OptionalStats;
-use crate::study::trial::Outcome;
 use crate::study::TrialResult;
 
 /// FNV-1a, 64 bits: the hash of `seed` (little-endian) then `body`.

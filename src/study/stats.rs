@@ -11,8 +11,8 @@ pub mod paired;
 pub mod precision;
 
 use super::claims::METRICS;
+use super::outcome::{Outcome, TrialResult, OPTIONAL_STATS};
 use super::spill::Spill;
-use super::trial::{Outcome, TrialResult, OPTIONAL_STATS};
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::Real;

@@ -9,7 +9,7 @@ use std::time::Instant;
 
 pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
 use super::plan::{crb_trace, Study};
-use super::stats::ecdf::{self, SearchRun};
+use super::stats::ecdf;
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
 use crate::identify::Termination;
@@ -19,68 +19,9 @@ use crate::numeric::{Frame, Real};
 use crate::robot::Robot;
 use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::unmodelled::Unmodelled;
-use crate::sim::{measure_reached, Reached, SagFn, Simulated};
+use crate::sim::{measure_poses, Reached, SagFn, Simulated};
 
-/// What one method on one strategy's measurement gave in one trial.
-#[derive(Clone, Debug)]
-pub struct Outcome {
-    /// Index into the scenario's methods.
-    pub method: usize,
-    /// Index into the scenario's strategies.
-    pub strategy: usize,
-    /// Identified errors, one per study parameter (mm, rad).
-    pub identified: Vec<Real>,
-    /// Validation position errors (mm) before compensation: statistics.
-    pub before_mm: ErrorStats,
-    /// … after compensation.
-    pub after_mm: ErrorStats,
-    /// Position errors (mm) at the calibration poses against their noise-free true points
-    /// (sag included): the nominal robot, before.
-    pub calibration_before_mm: ErrorStats,
-    /// … the compensated robot, in its registration, after.
-    pub calibration_after_mm: ErrorStats,
-    /// The statistics only some studies have (absent: `None`).
-    pub optional: OptionalStats,
-    /// Per-point validation errors before and after (kept for trial 0's plot only).
-    pub per_point: Option<(Vec<Real>, Vec<Real>)>,
-    /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
-    /// only; Qiao 2021 fig. 6).
-    pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
-    /// A metaheuristic's best fitness per iteration (trial 0 only).
-    pub trace: Option<Vec<Real>>,
-    /// A search's runtime and fixed-budget numbers on this trial (`None` for the methods
-    /// without a fitness trace; [`crate::study::stats::ecdf`]).
-    pub search: Option<SearchRun>,
-    /// Iterations of the identification.
-    pub iterations: usize,
-    /// Evaluations of the model in the identification ([`crate::identify::Identified`]'s
-    /// `evaluations`: residuals for the Jacobian methods, fitness for the searches).
-    pub evaluations: usize,
-    /// How it ended.
-    pub termination: Termination,
-    /// Whether the identified list is known to be rank-deficient (`identification.params`
-    /// names undetermined parameters): a `rank-deficient` termination is then the expected
-    /// outcome of a damped method, not a failure.
-    pub rank_deficient_expected: bool,
-    /// Wall time of registration and identification (s). Not part of the reproducible output.
-    pub seconds: Real,
-    /// Why the calibration gave no result, when it failed with an error (a method supplied
-    /// from outside that raised, an inconsistent problem).
-    pub error: Option<String>,
-}
-
-/// One trial's results.
-#[derive(Clone, Debug)]
-pub struct TrialResult {
-    /// Trial index.
-    pub index: usize,
-    /// The injected errors, one per study parameter (0 where none was injected).
-    pub truth: Vec<Real>,
-    /// The Cramér–Rao trace per strategy (`None` without tracker noise).
-    pub crb_trace: Vec<Option<Real>>,
-    /// One outcome per strategy × method.
-    pub outcomes: Vec<Outcome>,
-}
+pub use super::outcome::{OptionalStats, Outcome, TrialResult, OPTIONAL_STATS};
 
 /// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
 /// fresh draw from the trial's seed.
@@ -144,7 +85,7 @@ pub fn measure_calibration(
         commanded: qs,
         actual: actual.as_deref(),
     };
-    measure_reached(
+    measure_poses(
         truth_robot,
         reached,
         &study.tracker,
@@ -200,7 +141,7 @@ pub fn simulate_trial(study: &Study, trial: usize, key: &str) -> Result<Simulate
         commanded: &vqs,
         actual: vactual.as_deref(),
     };
-    let validation = measure_reached(
+    let validation = measure_poses(
         &truth,
         reached,
         &study.tracker,
@@ -246,78 +187,12 @@ impl SimulatedTrial {
     }
 }
 
-/// Declares [`OptionalStats`] from its fields: the field names are the `summary.json` names,
-/// and the order of the fields is that of `records.txt`.
-macro_rules! optional_stats {
-    ($($(#[$doc:meta])* $name:ident,)*) => {
-        /// The statistics only some studies have, each `None` where a study has none:
-        /// validation orientation (rotation angle, Qiao's attitude) before and after for
-        /// full-pose data, the fitted "before" (`validation.before_fitted`), Guo's axis errors
-        /// (`validation.axis_errors`; [`PoseErrors::axis_mm`], [`PoseErrors::axis_abs_mm`]) and
-        /// Qiao's attitude at the calibration poses for full-pose data. Each field's name is
-        /// its key in `summary.json` (docs/formats.md § 7.1).
-        #[derive(Clone, Copy, Debug, Default, PartialEq)]
-        pub struct OptionalStats {
-            $($(#[$doc])* pub $name: Option<ErrorStats>,)*
-        }
-
-        impl OptionalStats {
-            /// The fields' names, in their order.
-            pub const NAMES: [&'static str; [$(stringify!($name)),*].len()] =
-                [$(stringify!($name)),*];
-
-            /// The fields' values, in the order of [`OptionalStats::NAMES`].
-            pub fn values(&self) -> [Option<ErrorStats>; OptionalStats::NAMES.len()] {
-                [$(self.$name),*]
-            }
-
-            /// The fields, mutable, in the order of [`OptionalStats::NAMES`].
-            pub fn values_mut(&mut self) -> [&mut Option<ErrorStats>; OptionalStats::NAMES.len()] {
-                [$(&mut self.$name),*]
-            }
-        }
-    };
-}
-
-optional_stats! {
-    /// Validation orientation error before, rotation angle (deg).
-    validation_before_deg,
-    /// … after.
-    validation_after_deg,
-    /// Validation attitude error (Qiao 2021) before (deg).
-    validation_before_attitude_deg,
-    /// … after.
-    validation_after_attitude_deg,
-    /// The "before" of a nominal model fitted in its registration (mm).
-    validation_before_fitted_mm,
-    /// Guo's signed axis errors before (mm).
-    validation_before_axis_mm,
-    /// … after.
-    validation_after_axis_mm,
-    /// Guo's absolute axis errors before (mm).
-    validation_before_axis_abs_mm,
-    /// … after.
-    validation_after_axis_abs_mm,
-    /// Attitude error at the calibration poses before (deg).
-    calibration_before_attitude_deg,
-    /// … after.
-    calibration_after_attitude_deg,
-}
-
-/// The `summary.json` names of [`Outcome::optional`], in its order (the order of
-/// `records.txt`).
-pub const OPTIONAL_STATS: [&str; OptionalStats::NAMES.len()] = OptionalStats::NAMES;
-
-/// The searches whose best fitnesses are compared on one trial: those of strategy `si` with
-/// the same fitness (the same orientation weight `k` and the same Qiao error model, which the
-/// method's options name `error_model`).
-fn search_group(si: usize, spec: &crate::identify::MethodSpec) -> String {
-    let opts = format!("{:?}", spec.method);
-    let model = opts
-        .split("error_model: ")
-        .nth(1)
-        .map_or("", |r| r.split([',', '}']).next().unwrap_or(""));
-    format!("{si} {:e} {}", spec.k, model.trim())
+/// The searches whose best fitnesses are compared on one trial: those of strategy `si` that
+/// minimise the same fitness (the same orientation weight `k` and the same pose-error model,
+/// [`crate::identify::Method::fitness_model`]); `None` for a method that is not a search.
+fn search_group(si: usize, spec: &crate::identify::MethodSpec) -> Option<ecdf::Group> {
+    let model = spec.method.fitness_model()?;
+    Some((si, spec.k.to_bits(), model.into()))
 }
 
 /// Runs trial `index` of `study`.
@@ -368,7 +243,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
 
     let mut outcomes = Vec::new();
     // Each search's whole trace on this trial, dropped once reduced to its `SearchRun`.
-    let mut searches: Vec<Option<(String, Vec<Real>, usize)>> = Vec::new();
+    let mut searches: Vec<Option<(ecdf::Group, Vec<Real>, usize)>> = Vec::new();
     let mut crb = Vec::new();
     for si in 0..sc.calibration.strategies.len() {
         let qs = calibration_poses(study, si, index)?;
@@ -498,12 +373,13 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 seconds,
                 error,
             });
-            searches.push(full_trace.map(|t| (search_group(si, spec), t, evaluations)));
+            let group = search_group(si, spec);
+            searches.push(group.zip(full_trace).map(|(g, t)| (g, t, evaluations)));
         }
     }
     let runs: Vec<_> = searches
         .iter()
-        .map(|r| r.as_ref().map(|(g, t, e)| (g.clone(), &t[..], *e)))
+        .map(|r| r.as_ref().map(|(g, t, e)| (*g, &t[..], *e)))
         .collect();
     for (o, r) in outcomes.iter_mut().zip(ecdf::of_trial(&runs)) {
         o.search = r;

@@ -6,6 +6,22 @@ use std::path::{Path, PathBuf};
 
 use crate::common::{calbench, calbench_ok, load_json, path_arg, root, tmp_dir};
 
+/// `calbench task TASK --method lm [--models MODELS] --out OUT` through `run` (`calbench`,
+/// or `calbench_ok` to require success).
+fn task_lm(
+    run: fn(&[&str]) -> std::process::Output,
+    task: &Path,
+    models: Option<&str>,
+    out: &Path,
+) -> std::process::Output {
+    let mut args = vec!["task", path_arg(task), "--method", "lm"];
+    if let Some(m) = models {
+        args.extend_from_slice(&["--models", m]);
+    }
+    args.extend_from_slice(&["--out", path_arg(out)]);
+    run(&args)
+}
+
 fn task(name: &str) -> PathBuf {
     root().join("tasks").join(format!("{name}.toml"))
 }
@@ -68,14 +84,7 @@ fn check_contract(dir: &Path, name: &str, metric: &str) -> f64 {
 fn the_wam_task_scores_the_20_random_poses_beside_the_published_figure() {
     let d = tmp_dir("cli-task-wam");
     let out = d.join("wam");
-    let o = calbench_ok(&[
-        "task",
-        path_arg(&task("barrett-wam")),
-        "--method",
-        "lm",
-        "--out",
-        path_arg(&out),
-    ]);
+    let o = task_lm(calbench_ok, &task("barrett-wam"), None, &out);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("validation_mean_mm = 3.09"), "{stdout}");
     let value = check_contract(&out, "barrett-wam", "validation_mean_mm");
@@ -105,16 +114,12 @@ fn the_wam_task_scores_the_20_random_poses_beside_the_published_figure() {
 fn a_ur10_task_chooses_its_model_by_cv_on_its_split() {
     let d = tmp_dir("cli-task-ur10");
     let out = d.join("d");
-    let o = calbench_ok(&[
-        "task",
-        path_arg(&task("ipa-ur10-series-d")),
-        "--method",
-        "lm",
-        "--models",
-        "kinematic,beta",
-        "--out",
-        path_arg(&out),
-    ]);
+    let o = task_lm(
+        calbench_ok,
+        &task("ipa-ur10-series-d"),
+        Some("kinematic,beta"),
+        &out,
+    );
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(
         stdout.contains("not published in a source found"),
@@ -139,16 +144,12 @@ fn a_ur10_task_chooses_its_model_by_cv_on_its_split() {
     // docs/results.md: Series D, β chosen, 0.393 mm held out.
     assert!((value - 0.393).abs() < 0.001, "{value}");
     let again = d.join("again");
-    calbench_ok(&[
-        "task",
-        path_arg(&task("ipa-ur10-series-d")),
-        "--method",
-        "lm",
-        "--models",
-        "kinematic,beta",
-        "--out",
-        path_arg(&again),
-    ]);
+    task_lm(
+        calbench_ok,
+        &task("ipa-ur10-series-d"),
+        Some("kinematic,beta"),
+        &again,
+    );
     assert_eq!(
         std::fs::read(out.join("task.json")).unwrap(),
         std::fs::read(again.join("task.json")).unwrap(),
@@ -201,16 +202,7 @@ fn the_validation_rows_do_not_change_the_chosen_model() {
         std::fs::create_dir_all(&sub).unwrap();
         let t = wam_with_validation(&sub, rows);
         let out = sub.join("out");
-        calbench_ok(&[
-            "task",
-            path_arg(&t),
-            "--method",
-            "lm",
-            "--models",
-            "kinematic,beta",
-            "--out",
-            path_arg(&out),
-        ]);
+        task_lm(calbench_ok, &t, Some("kinematic,beta"), &out);
         runs.push((
             load_json(&out.join("identified.json")),
             load_json(&out.join("task.json")),
@@ -262,14 +254,7 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
             );
         }
         std::fs::write(&p, text).unwrap();
-        let o = calbench(&[
-            "task",
-            path_arg(&p),
-            "--method",
-            "lm",
-            "--out",
-            path_arg(&d.join("out")),
-        ]);
+        let o = task_lm(calbench, &p, None, &d.join("out"));
         assert!(!o.status.success(), "{name} was accepted");
         assert!(!d.join("out").exists(), "nothing is written");
         String::from_utf8_lossy(&o.stderr).into_owned()

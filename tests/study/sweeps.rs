@@ -399,7 +399,12 @@ fn the_slurm_example_runs_and_merges() {
             .env("N", "4")
             .env("CALBENCH", env!("CARGO_BIN_EXE_calbench"));
         if let Some(t) = task {
-            c.env("SLURM_ARRAY_TASK_ID", t.to_string());
+            // As sbatch --array=3-6 --cpus-per-task=T would: `--shard auto` takes the share
+            // (task ID − MIN of COUNT) and the threads from these.
+            c.env("SLURM_ARRAY_TASK_ID", (t + 3).to_string())
+                .env("SLURM_ARRAY_TASK_MIN", "3")
+                .env("SLURM_ARRAY_TASK_COUNT", "4")
+                .env("SLURM_CPUS_PER_TASK", (1 + t % 2).to_string());
         }
         let o = c.output().unwrap();
         assert!(
@@ -538,7 +543,7 @@ fn the_kubernetes_indexed_job_runs_and_merges() {
         .unwrap();
     let shard = k8s_command("shards.yaml");
     assert!(
-        shard.contains(&format!("\"$JOB_COMPLETION_INDEX/{completions}\"")),
+        shard.contains(&format!("--shard auto --shard-count {completions}")),
         "{shard}"
     );
     let bash = |cmd: &str, index: Option<usize>| {

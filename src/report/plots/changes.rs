@@ -17,12 +17,13 @@ pub struct ChangePoint {
 }
 
 /// The colours of the statuses, in the order `check` names them: regression (red),
-/// unresolved (orange), changed within tolerance (blue), improved (green), no change (grey).
+/// unresolved (orange), changed within tolerance (blue), improved (green) from the series
+/// palette, no change (grey).
 const STATUS_COLOURS: [RGBColor; 5] = [
-    RGBColor(214, 39, 40),
-    RGBColor(255, 127, 14),
-    RGBColor(31, 119, 180),
-    RGBColor(44, 160, 44),
+    super::PALETTE[3],
+    super::PALETTE[1],
+    super::PALETTE[0],
+    super::PALETTE[2],
     RGBColor(127, 127, 127),
 ];
 

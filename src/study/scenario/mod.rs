@@ -28,8 +28,8 @@ use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
 use crate::sim::truth::selected_params;
-pub use report::ReportSettings;
 use crate::sim::unmodelled::UnmodelledSettings;
+pub use report::ReportSettings;
 use sections::{
     strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
 };
@@ -74,6 +74,7 @@ struct RawScenario {
     sweep: Option<SweepField>,
     #[serde(default)]
     report: ReportSettings,
+    #[serde(default)]
     claims: Vec<toml::Table>,
 }
 

@@ -15,30 +15,10 @@ use crate::numeric::Real;
 
 use super::dist;
 
-/// The targets' precisions Δ: a search reaches target Δ on a trial when its best fitness is
-/// at most f_ref · (1 + Δ), f_ref the best final fitness of the searches of the same fitness
-/// on the trial's draws.
-pub const DELTAS: [Real; 4] = [1.0, 0.1, 0.01, 0.001];
-
-/// The budget grid: shares of the smallest evaluation count the searches of the same fitness
-/// spent on the trial.
-pub const BUDGET_FRACTIONS: [Real; 4] = [0.1, 0.25, 0.5, 1.0];
+pub use crate::study::outcome::{SearchRun, BUDGET_FRACTIONS, DELTAS};
 
 /// 97.5 % quantile of the standard normal distribution.
 const Z975: Real = 1.959_963_984_540_054;
-
-/// One search's numbers on one trial.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SearchRun {
-    /// The smallest evaluation count of the searches of the same fitness on the trial: the
-    /// budget the grid's shares apply to.
-    pub budget: usize,
-    /// Per target ([`DELTAS`]), the evaluations at which the best fitness first reached it.
-    pub hits: [Option<usize>; DELTAS.len()],
-    /// Per budget ([`BUDGET_FRACTIONS`]), the best fitness after that many evaluations
-    /// (NaN before the first iteration's end).
-    pub at_budget: [Real; BUDGET_FRACTIONS.len()],
-}
 
 /// The evaluations spent at the end of iteration `k` (0-based) of a search that spent
 /// `evaluations` in `n` iterations: the searches spend the same number per iteration, the
@@ -80,16 +60,18 @@ impl SearchRun {
     }
 }
 
+/// What the searches compared on one trial share: the pose strategy (its index), the
+/// orientation weight `k` (its bits) and the fitness's pose-error model (its name).
+pub type Group = (usize, u64, &'static str);
+
 /// The [`SearchRun`]s of one trial's searches: `runs[i]` is `(group, trace, evaluations)`
 /// for outcome `i` (`None` for an outcome that is not a search or has no trace), where
-/// searches of one group share their fitness and their draws.
-pub fn of_trial(runs: &[Option<(String, &[Real], usize)>]) -> Vec<Option<SearchRun>> {
-    let mut best: BTreeMap<&str, (Real, usize)> = BTreeMap::new();
+/// searches of one [`Group`] share their fitness and their draws.
+pub fn of_trial(runs: &[Option<(Group, &[Real], usize)>]) -> Vec<Option<SearchRun>> {
+    let mut best: BTreeMap<Group, (Real, usize)> = BTreeMap::new();
     for (g, trace, evals) in runs.iter().flatten() {
         let f = trace.last().copied().unwrap_or(Real::NAN);
-        let e = best
-            .entry(g.as_str())
-            .or_insert((Real::INFINITY, usize::MAX));
+        let e = best.entry(*g).or_insert((Real::INFINITY, usize::MAX));
         if f < e.0 {
             e.0 = f;
         }
@@ -98,7 +80,7 @@ pub fn of_trial(runs: &[Option<(String, &[Real], usize)>]) -> Vec<Option<SearchR
     runs.iter()
         .map(|r| {
             r.as_ref().map(|(g, trace, evals)| {
-                let (f_ref, budget) = best[g.as_str()];
+                let (f_ref, budget) = best[g];
                 SearchRun::of(trace, *evals, f_ref, budget)
             })
         })
@@ -270,10 +252,13 @@ mod tests {
     fn reference_is_the_best_of_the_group() {
         let a = [3.0, 1.0];
         let b = [2.0, 2.0];
+        let (g, other) = ((0, 1, "direct_fk"), (0, 1, "differential"));
+        let c = [0.5];
         let runs = vec![
-            Some(("g".to_string(), &a[..], 20)),
+            Some((g, &a[..], 20)),
             None,
-            Some(("g".to_string(), &b[..], 10)),
+            Some((g, &b[..], 10)),
+            Some((other, &c[..], 5)),
         ];
         let out = of_trial(&runs);
         assert!(out[1].is_none());
@@ -281,6 +266,8 @@ mod tests {
         assert_eq!(ra.budget, 10);
         assert_eq!(ra.hits[0], Some(20));
         assert_eq!(rb.hits, [Some(5), None, None, None]);
+        // Another fitness is its own reference: it reaches every target.
+        assert_eq!(out[3].clone().unwrap().hits, [Some(5); 4]);
     }
 
     #[test]

@@ -1,0 +1,155 @@
+//! What one method on one strategy's measurement gave in one trial ([`Outcome`]), with the
+//! statistics only some studies have ([`OptionalStats`]) and a search's runtime numbers
+//! ([`SearchRun`]), and a whole trial's ([`TrialResult`]): the values the aggregation, the
+//! records and the claims read, apart from how a trial computes them (`super::trial`) and how
+//! they are aggregated (`super::stats`). This module imports neither.
+
+use crate::calibrate::ErrorStats;
+use crate::identify::Termination;
+use crate::numeric::Real;
+
+/// One trial's results.
+#[derive(Clone, Debug)]
+pub struct TrialResult {
+    /// Trial index.
+    pub index: usize,
+    /// The injected errors, one per study parameter (0 where none was injected).
+    pub truth: Vec<Real>,
+    /// The Cramér–Rao trace per strategy (`None` without tracker noise).
+    pub crb_trace: Vec<Option<Real>>,
+    /// One outcome per strategy × method.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// The targets' precisions Δ: a search reaches target Δ on a trial when its best fitness is
+/// at most f_ref · (1 + Δ), f_ref the best final fitness of the searches of the same fitness
+/// on the trial's draws (docs/formats.md "Searches compared").
+pub const DELTAS: [Real; 4] = [1.0, 0.1, 0.01, 0.001];
+
+/// The budget grid: shares of the smallest evaluation count the searches of the same fitness
+/// spent on the trial.
+pub const BUDGET_FRACTIONS: [Real; 4] = [0.1, 0.25, 0.5, 1.0];
+
+/// One search's numbers on one trial ([`crate::study::stats::ecdf`] computes and aggregates
+/// them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SearchRun {
+    /// The smallest evaluation count of the searches of the same fitness on the trial: the
+    /// budget the grid's shares apply to.
+    pub budget: usize,
+    /// Per target ([`DELTAS`]), the evaluations at which the best fitness first reached it.
+    pub hits: [Option<usize>; DELTAS.len()],
+    /// Per budget ([`BUDGET_FRACTIONS`]), the best fitness after that many evaluations
+    /// (NaN before the first iteration's end).
+    pub at_budget: [Real; BUDGET_FRACTIONS.len()],
+}
+
+/// What one method on one strategy's measurement gave in one trial.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// Index into the scenario's methods.
+    pub method: usize,
+    /// Index into the scenario's strategies.
+    pub strategy: usize,
+    /// Identified errors, one per study parameter (mm, rad).
+    pub identified: Vec<Real>,
+    /// Validation position errors (mm) before compensation: statistics.
+    pub before_mm: ErrorStats,
+    /// … after compensation.
+    pub after_mm: ErrorStats,
+    /// Position errors (mm) at the calibration poses against their noise-free true points
+    /// (sag included): the nominal robot, before.
+    pub calibration_before_mm: ErrorStats,
+    /// … the compensated robot, in its registration, after.
+    pub calibration_after_mm: ErrorStats,
+    /// The statistics only some studies have (absent: `None`).
+    pub optional: OptionalStats,
+    /// Per-point validation errors before and after (kept for trial 0's plot only).
+    pub per_point: Option<(Vec<Real>, Vec<Real>)>,
+    /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
+    /// only; Qiao 2021 fig. 6).
+    pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
+    /// A metaheuristic's best fitness per iteration (trial 0 only).
+    pub trace: Option<Vec<Real>>,
+    /// A search's runtime and fixed-budget numbers on this trial (`None` for the methods
+    /// without a fitness trace; [`crate::study::stats::ecdf`]).
+    pub search: Option<SearchRun>,
+    /// Iterations of the identification.
+    pub iterations: usize,
+    /// Evaluations of the model in the identification ([`crate::identify::Identified`]'s
+    /// `evaluations`: residuals for the Jacobian methods, fitness for the searches).
+    pub evaluations: usize,
+    /// How it ended.
+    pub termination: Termination,
+    /// Whether the identified list is known to be rank-deficient (`identification.params`
+    /// names undetermined parameters): a `rank-deficient` termination is then the expected
+    /// outcome of a damped method, not a failure.
+    pub rank_deficient_expected: bool,
+    /// Wall time of registration and identification (s). Not part of the reproducible output.
+    pub seconds: Real,
+    /// Why the calibration gave no result, when it failed with an error (a method supplied
+    /// from outside that raised, an inconsistent problem).
+    pub error: Option<String>,
+}
+
+/// Declares [`OptionalStats`] from its fields: the field names are the `summary.json` names,
+/// and the order of the fields is that of `records.txt`.
+macro_rules! optional_stats {
+    ($($(#[$doc:meta])* $name:ident,)*) => {
+        /// The statistics only some studies have, each `None` where a study has none:
+        /// validation orientation (rotation angle, Qiao's attitude) before and after for
+        /// full-pose data, the fitted "before" (`validation.before_fitted`), Guo's axis errors
+        /// (`validation.axis_errors`; [`crate::calibrate::PoseErrors::axis_mm`], [`crate::calibrate::PoseErrors::axis_abs_mm`]) and
+        /// Qiao's attitude at the calibration poses for full-pose data. Each field's name is
+        /// its key in `summary.json` (docs/formats.md § 7.1).
+        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        pub struct OptionalStats {
+            $($(#[$doc])* pub $name: Option<ErrorStats>,)*
+        }
+
+        impl OptionalStats {
+            /// The fields' names, in their order.
+            pub const NAMES: [&'static str; [$(stringify!($name)),*].len()] =
+                [$(stringify!($name)),*];
+
+            /// The fields' values, in the order of [`OptionalStats::NAMES`].
+            pub fn values(&self) -> [Option<ErrorStats>; OptionalStats::NAMES.len()] {
+                [$(self.$name),*]
+            }
+
+            /// The fields, mutable, in the order of [`OptionalStats::NAMES`].
+            pub fn values_mut(&mut self) -> [&mut Option<ErrorStats>; OptionalStats::NAMES.len()] {
+                [$(&mut self.$name),*]
+            }
+        }
+    };
+}
+
+optional_stats! {
+    /// Validation orientation error before, rotation angle (deg).
+    validation_before_deg,
+    /// … after.
+    validation_after_deg,
+    /// Validation attitude error (Qiao 2021) before (deg).
+    validation_before_attitude_deg,
+    /// … after.
+    validation_after_attitude_deg,
+    /// The "before" of a nominal model fitted in its registration (mm).
+    validation_before_fitted_mm,
+    /// Guo's signed axis errors before (mm).
+    validation_before_axis_mm,
+    /// … after.
+    validation_after_axis_mm,
+    /// Guo's absolute axis errors before (mm).
+    validation_before_axis_abs_mm,
+    /// … after.
+    validation_after_axis_abs_mm,
+    /// Attitude error at the calibration poses before (deg).
+    calibration_before_attitude_deg,
+    /// … after.
+    calibration_after_attitude_deg,
+}
+
+/// The `summary.json` names of [`Outcome::optional`], in its order (the order of
+/// `records.txt`).
+pub const OPTIONAL_STATS: [&str; OptionalStats::NAMES.len()] = OptionalStats::NAMES;
