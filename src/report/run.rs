@@ -11,6 +11,7 @@ use super::plots;
 
 pub mod claims;
 pub mod comparisons;
+pub mod searches;
 mod sweep;
 mod trials_csv;
 
@@ -364,6 +365,12 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         s += "\n";
         s += &noted_table("Paired comparisons", comparisons::NOTE, &h, &rows);
     }
+    let (h, rows) = searches::table(r);
+    if !rows.is_empty() {
+        let h: Vec<&str> = h.iter().map(String::as_str).collect();
+        s += "\n";
+        s += &noted_table("Searches compared", searches::NOTE, &h, &rows);
+    }
     if let Some(sw) = &sc.sweep {
         s += &sweep_tables(r, sw);
     }
@@ -575,6 +582,7 @@ pub fn write_plots(r: &RunResult, out: &Path) -> Result<Vec<(String, String)>> {
     ] {
         trace_plot(out, &mut done, names, series, log_y, text)?;
     }
+    done.extend(searches::write_plots(r, out)?);
     if let Some(sw) = &r.scenario.sweep {
         done.extend(write_sweep_plots(r, sw, out)?);
     }

@@ -97,7 +97,10 @@ pub fn wilson(k: usize, n: usize) -> Option<[Real; 2]> {
     let z2 = Z975 * Z975;
     let centre = (p + z2 / (2.0 * n)) / (1.0 + z2 / n);
     let half = Z975 / (1.0 + z2 / n) * (p * (1.0 - p) / n + z2 / (4.0 * n * n)).sqrt();
-    Some([(centre - half).max(0.0), (centre + half).min(1.0)])
+    // At k = 0 and k = n the bounds 0 and 1 are exact; rounding must not move them inside.
+    let lo = if k == 0.0 { 0.0 } else { centre - half };
+    let hi = if k == n { 1.0 } else { centre + half };
+    Some([lo.max(0.0), hi.min(1.0)])
 }
 
 /// Running numbers of one entry's searches over the trials, in trial order.
@@ -140,6 +143,9 @@ pub struct SearchEcdf {
     pub trials: usize,
     /// One ECDF per target.
     pub targets: Vec<TargetEcdf>,
+    /// The targets aggregated as COCO aggregates them: the share of the (trial, target)
+    /// pairs reached within so many evaluations, evaluations increasing.
+    pub all_targets: Vec<EcdfPoint>,
 }
 
 /// One budget of an entry's `fixed_budget`.
@@ -208,7 +214,27 @@ impl SearchAcc {
                 }
             })
             .collect();
-        SearchEcdf { trials: n, targets }
+        let mut all: BTreeMap<usize, usize> = BTreeMap::new();
+        for (&e, &c) in self.hits.iter().flatten() {
+            *all.entry(e).or_insert(0) += c;
+        }
+        let pairs = (n * DELTAS.len()) as Real;
+        let mut k = 0;
+        let all_targets = all
+            .into_iter()
+            .map(|(evaluations, c)| {
+                k += c;
+                EcdfPoint {
+                    evaluations,
+                    share: k as Real / pairs,
+                }
+            })
+            .collect();
+        SearchEcdf {
+            trials: n,
+            targets,
+            all_targets,
+        }
     }
 
     /// The entry's `fixed_budget`.
@@ -271,9 +297,38 @@ mod tests {
     }
 
     #[test]
+    fn the_targets_aggregate_into_shares_of_trial_target_pairs() {
+        let mut acc = SearchAcc::default();
+        for hits in [
+            [Some(10), Some(20), Some(20), None],
+            [Some(20), Some(20), None, None],
+        ] {
+            acc.add(&SearchRun {
+                budget: 40,
+                hits,
+                at_budget: [1.0; 4],
+            });
+        }
+        let e = acc.ecdf();
+        let all: Vec<(usize, Real)> = e
+            .all_targets
+            .iter()
+            .map(|p| (p.evaluations, p.share))
+            .collect();
+        // 8 pairs: 1 reached by 10 evaluations, 5 by 20.
+        assert_eq!(all, [(10, 1.0 / 8.0), (20, 5.0 / 8.0)]);
+        // The aggregate at the end is the mean of the targets' shares reached.
+        let mean = e.targets.iter().map(|t| t.reached).sum::<Real>() / 4.0;
+        assert_eq!(all[1].1, mean);
+    }
+
+    #[test]
     fn wilson_matches_a_known_value() {
         // 8 of 10, by hand: centre 0.71674, half-width 0.22657.
         let [lo, hi] = wilson(8, 10).unwrap();
         assert!((lo - 0.4902).abs() < 1e-4 && (hi - 0.9433).abs() < 1e-4);
+        // All or none reached: the interval reaches 1 or 0 exactly (300 rounds just below).
+        assert_eq!(wilson(300, 300).unwrap()[1], 1.0);
+        assert_eq!(wilson(0, 300).unwrap()[0], 0.0);
     }
 }
