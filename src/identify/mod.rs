@@ -91,6 +91,13 @@ pub trait Method: std::fmt::Debug + Send + Sync {
     fn solver(&self) -> Option<&dyn Solver> {
         None
     }
+
+    /// For a search on Qiao's fitness (eq. 14), the pose-error model the fitness is built on:
+    /// two searches with the same model and the same `k` minimise the same function of the
+    /// same data, so their best fitnesses compare. `None` for the other methods.
+    fn fitness_model(&self) -> Option<qiao::error_models::ErrorModel> {
+        None
+    }
 }
 
 /// Why an identification stopped. The names (serde, kebab-case) are those of reports and

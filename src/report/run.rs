@@ -10,6 +10,7 @@ use super::plots;
 
 pub mod claims;
 pub mod comparisons;
+pub mod searches;
 mod sweep;
 pub mod trials_csv;
 
@@ -352,6 +353,12 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         s += "\n";
         s += &noted_table("Paired comparisons", comparisons::NOTE, &h, &rows);
     }
+    let (h, rows) = searches::table(r);
+    if !rows.is_empty() {
+        let h: Vec<&str> = h.iter().map(String::as_str).collect();
+        s += "\n";
+        s += &noted_table("Searches compared", searches::NOTE, &h, &rows);
+    }
     if let Some(sw) = &sc.sweep {
         s += &sweep_tables(r, sw);
     }
@@ -552,6 +559,7 @@ pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
         true,
         "metaheuristic convergence, trial 0",
     ));
+    figs.extend(searches::figures(r));
     if let Some(sw) = &r.scenario.sweep {
         figs.extend(sweep_figures(r, sw));
     }

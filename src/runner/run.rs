@@ -248,6 +248,19 @@ pub fn run(
     run_resumed(scenario, opts, sink, None, reporter)
 }
 
+/// Gives the replayed trial 0 `t` what a record does not keep and the summary and the
+/// plots show (the searches' fitness traces, the per-point errors): trial 0 is run again,
+/// and its seed gives the same numbers.
+fn restore_trial0(study: &Study, pool: &rayon::ThreadPool, t: &mut TrialResult) -> Result<()> {
+    let fresh = pool.install(|| run_trial(study, 0))?;
+    for (o, f) in t.outcomes.iter_mut().zip(fresh.outcomes) {
+        o.trace = f.trace;
+        o.per_point = f.per_point;
+        o.per_point_attitude_deg = f.per_point_attitude_deg;
+    }
+    Ok(())
+}
+
 /// [`run`] continuing a killed run: the first `replay.done()` trials of the share come from
 /// `replay` instead of being run again (and go to `sink` like the others).
 pub fn run_resumed(
@@ -306,12 +319,15 @@ pub fn run_resumed(
         if let Some(r) = replay.as_mut() {
             let done = (first + r.done()).clamp(from, to);
             for _ in from..done {
-                let (rb, t) = r.next()?;
+                let (rb, mut t) = r.next()?;
                 if rb != b {
                     return Err(Error::Compute(format!(
                         "the checkpoint holds a trial of sweep point {rb} where one of point {b} \
                          was expected"
                     )));
+                }
+                if t.index == 0 {
+                    restore_trial0(&study, &pool, &mut t)?;
                 }
                 collector.trial(&t, sink)?;
                 bar.inc(1);

@@ -1,10 +1,48 @@
 //! What one method on one strategy's measurement gave in one trial ([`Outcome`]), with the
-//! statistics only some studies have ([`OptionalStats`]): the values the aggregation, the
-//! records and the claims read, apart from how a trial computes them (`super::trial`).
+//! statistics only some studies have ([`OptionalStats`]) and a search's runtime numbers
+//! ([`SearchRun`]), and a whole trial's ([`TrialResult`]): the values the aggregation, the
+//! records and the claims read, apart from how a trial computes them (`super::trial`) and how
+//! they are aggregated (`super::stats`). This module imports neither.
 
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::Real;
+
+/// One trial's results.
+#[derive(Clone, Debug)]
+pub struct TrialResult {
+    /// Trial index.
+    pub index: usize,
+    /// The injected errors, one per study parameter (0 where none was injected).
+    pub truth: Vec<Real>,
+    /// The Cramér–Rao trace per strategy (`None` without tracker noise).
+    pub crb_trace: Vec<Option<Real>>,
+    /// One outcome per strategy × method.
+    pub outcomes: Vec<Outcome>,
+}
+
+/// The targets' precisions Δ: a search reaches target Δ on a trial when its best fitness is
+/// at most f_ref · (1 + Δ), f_ref the best final fitness of the searches of the same fitness
+/// on the trial's draws (docs/formats.md "Searches compared").
+pub const DELTAS: [Real; 4] = [1.0, 0.1, 0.01, 0.001];
+
+/// The budget grid: shares of the smallest evaluation count the searches of the same fitness
+/// spent on the trial.
+pub const BUDGET_FRACTIONS: [Real; 4] = [0.1, 0.25, 0.5, 1.0];
+
+/// One search's numbers on one trial ([`crate::study::stats::ecdf`] computes and aggregates
+/// them).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SearchRun {
+    /// The smallest evaluation count of the searches of the same fitness on the trial: the
+    /// budget the grid's shares apply to.
+    pub budget: usize,
+    /// Per target ([`DELTAS`]), the evaluations at which the best fitness first reached it.
+    pub hits: [Option<usize>; DELTAS.len()],
+    /// Per budget ([`BUDGET_FRACTIONS`]), the best fitness after that many evaluations
+    /// (NaN before the first iteration's end).
+    pub at_budget: [Real; BUDGET_FRACTIONS.len()],
+}
 
 /// What one method on one strategy's measurement gave in one trial.
 #[derive(Clone, Debug)]
@@ -33,6 +71,9 @@ pub struct Outcome {
     pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
     /// A metaheuristic's best fitness per iteration (trial 0 only).
     pub trace: Option<Vec<Real>>,
+    /// A search's runtime and fixed-budget numbers on this trial (`None` for the methods
+    /// without a fitness trace; [`crate::study::stats::ecdf`]).
+    pub search: Option<SearchRun>,
     /// Iterations of the identification.
     pub iterations: usize,
     /// Evaluations of the model in the identification ([`crate::identify::Identified`]'s

@@ -16,8 +16,8 @@ use crate::calibrate::ErrorStats;
 use crate::error::{Error, Result};
 use crate::identify::Termination;
 use crate::numeric::Real;
-use crate::study::trial::OptionalStats;
-use crate::study::trial::Outcome;
+use crate::study::outcome::{OptionalStats, Outcome};
+use crate::study::stats::ecdf::{self, SearchRun};
 use crate::study::TrialResult;
 
 /// FNV-1a, 64 bits: the hash of `seed` (little-endian) then `body`.
@@ -52,11 +52,27 @@ fn push_stats(s: &mut String, e: &ErrorStats) {
     }
 }
 
+/// A search's numbers ([`SearchRun`]): `+ budget`, the evaluations of each target (`-`: not
+/// reached), the best fitness at each budget. Written only for the searches, so the records
+/// of the other methods are those of before.
+fn push_search(s: &mut String, r: &SearchRun) {
+    s.push_str(&format!(" + {}", r.budget));
+    for h in r.hits {
+        match h {
+            Some(e) => s.push_str(&format!(" {e}")),
+            None => s.push_str(" -"),
+        }
+    }
+    for v in r.at_budget {
+        s.push_str(&format!(" {v:e}"));
+    }
+}
+
 /// One trial of the run with `seed` as a line of `records.txt`: `block trial n truth… crb…
 /// outcomes #SUM`, each outcome `strategy method termination rank-deficient-expected
 /// iterations evaluations seconds`, four statistics of four numbers (validation and
 /// calibration, before and after), the optional statistics (`-`, or `+` and four numbers)
-/// and the n identified values; `SUM` is the line's [`checksum`].
+/// and the n identified values, then for a search `+` and its [`SearchRun`]; `SUM` is the line's [`checksum`].
 pub(crate) fn encode(seed: u64, block: usize, t: &TrialResult) -> String {
     let mut s = format!("{block} {} {}", t.index, t.truth.len());
     for v in &t.truth {
@@ -97,6 +113,9 @@ pub(crate) fn encode(seed: u64, block: usize, t: &TrialResult) -> String {
         for v in &o.identified {
             s.push_str(&format!(" {v:e}"));
         }
+        if let Some(r) = &o.search {
+            push_search(&mut s, r);
+        }
     }
     let sum = checksum(seed, &s);
     s.push_str(&format!(" #{sum:016x}\n"));
@@ -105,7 +124,7 @@ pub(crate) fn encode(seed: u64, block: usize, t: &TrialResult) -> String {
 
 /// Reads the tokens of one record line.
 struct Tokens<'a> {
-    it: std::str::SplitAsciiWhitespace<'a>,
+    it: std::iter::Peekable<std::str::SplitAsciiWhitespace<'a>>,
     path: &'a Path,
     line: usize,
 }
@@ -142,6 +161,33 @@ impl<'a> Tokens<'a> {
             std: self.real()?,
         })
     }
+    /// A search's numbers, if the next word is `+` (see [`push_search`]).
+    fn search(&mut self) -> Result<Option<SearchRun>> {
+        if self.it.peek() != Some(&"+") {
+            return Ok(None);
+        }
+        self.word()?;
+        let budget = self.usize()?;
+        let mut hits = [None; ecdf::DELTAS.len()];
+        for h in &mut hits {
+            *h = match self.word()? {
+                "-" => None,
+                w => Some(
+                    w.parse()
+                        .map_err(|_| self.err(&format!("\"{}\" is not a count", shown(w))))?,
+                ),
+            };
+        }
+        let mut at_budget = [0.0; ecdf::BUDGET_FRACTIONS.len()];
+        for v in &mut at_budget {
+            *v = self.real()?;
+        }
+        Ok(Some(SearchRun {
+            budget,
+            hits,
+            at_budget,
+        }))
+    }
     fn optional_stats(&mut self) -> Result<Option<ErrorStats>> {
         match self.word()? {
             "-" => Ok(None),
@@ -155,7 +201,7 @@ impl<'a> Tokens<'a> {
 /// index and the trial.
 fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> {
     let mut t = Tokens {
-        it: text.split_ascii_whitespace(),
+        it: text.split_ascii_whitespace().peekable(),
         path,
         line,
     };
@@ -199,6 +245,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             *o = t.optional_stats()?;
         }
         let identified = t.reals(n)?;
+        let search = t.search()?;
         outcomes.push(Outcome {
             method,
             strategy,
@@ -211,6 +258,7 @@ fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> 
             per_point: None,
             per_point_attitude_deg: None,
             trace: None,
+            search,
             iterations,
             evaluations,
             termination,
@@ -403,6 +451,11 @@ mod tests {
                 per_point: None,
                 per_point_attitude_deg: None,
                 trace: None,
+                search: Some(SearchRun {
+                    budget: 40,
+                    hits: [Some(10), None, Some(30), None],
+                    at_budget: [Real::NAN, 1.5, 1.0 / 3.0, 0.25],
+                }),
                 iterations: 12,
                 evaluations: 40,
                 termination: Termination::MaxIterations,

@@ -8,12 +8,13 @@ use std::ops::Deref;
 /// The distributions live with the numerics ([`crate::numeric::dist`]), below every layer that
 /// takes an interval.
 pub use crate::numeric::dist;
+pub mod ecdf;
 pub mod paired;
 pub mod precision;
 
 use super::claims::METRICS;
+use super::outcome::{Outcome, TrialResult, OPTIONAL_STATS};
 use super::spill::Spill;
-use super::trial::{Outcome, TrialResult, OPTIONAL_STATS};
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::Real;
@@ -162,6 +163,14 @@ pub struct Entry {
     /// whatever the thread count) and with its value in `timing.json` and `report.md`.
     #[serde(serialize_with = "as_null")]
     pub seconds_per_identification: Real,
+    /// For a search (BAS, PSO, BAS-PSO): its fixed-target runtime ECDFs
+    /// ([`ecdf::SearchAcc::ecdf`]); absent for the other methods.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub search_ecdf: Option<ecdf::SearchEcdf>,
+    /// For a search: its mean best fitness at each budget of the grid with a 95 % t interval
+    /// ([`ecdf::SearchAcc::fixed_budget`]); absent for the other methods.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub fixed_budget: Option<Vec<ecdf::BudgetPoint>>,
     /// Spreads over trials (plots only).
     #[serde(skip)]
     pub spread: Spread,
@@ -303,6 +312,8 @@ struct Cell {
     evaluations: Sum,
     /// Each usable trial's mean η over the parameters.
     eta_trial: Spread2,
+    /// The searches' runtime and fixed-budget numbers.
+    search: ecdf::SearchAcc,
 }
 
 /// The per-trial headline values kept for the paired comparisons and the claims, one value
@@ -414,6 +425,9 @@ impl Accumulator {
             *c.terminations
                 .entry(o.termination.as_str().to_string())
                 .or_insert(0) += 1;
+            if let Some(r) = &o.search {
+                c.search.add(r);
+            }
             let ok = usable(o);
             let hs = self.headline(ci, METRICS.len());
             self.spill.push(hs, o.seconds)?;
@@ -588,6 +602,8 @@ impl Accumulator {
             iterations_mean: c.iterations.mean(),
             evaluations_mean: c.evaluations.mean(),
             seconds_per_identification: c.seconds.mean(),
+            search_ecdf: (!c.search.is_empty()).then(|| c.search.ecdf()),
+            fixed_budget: (!c.search.is_empty()).then(|| c.search.fixed_budget()),
             per_trial: (0..METRICS.len())
                 .map(|h| self.per_trial(strategy, method, h))
                 .collect::<crate::error::Result<_>>()?,

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
 use super::plan::{crb_trace, Study};
+use super::stats::ecdf;
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
 use crate::identify::Termination;
@@ -20,20 +21,7 @@ use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::unmodelled::Unmodelled;
 use crate::sim::{measure_poses, Reached, SagFn, Simulated};
 
-pub use super::outcome::{OptionalStats, Outcome, OPTIONAL_STATS};
-
-/// One trial's results.
-#[derive(Clone, Debug)]
-pub struct TrialResult {
-    /// Trial index.
-    pub index: usize,
-    /// The injected errors, one per study parameter (0 where none was injected).
-    pub truth: Vec<Real>,
-    /// The Cramér–Rao trace per strategy (`None` without tracker noise).
-    pub crb_trace: Vec<Option<Real>>,
-    /// One outcome per strategy × method.
-    pub outcomes: Vec<Outcome>,
-}
+pub use super::outcome::{OptionalStats, Outcome, TrialResult, OPTIONAL_STATS};
 
 /// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
 /// fresh draw from the trial's seed.
@@ -199,6 +187,14 @@ impl SimulatedTrial {
     }
 }
 
+/// The searches whose best fitnesses are compared on one trial: those of strategy `si` that
+/// minimise the same fitness (the same orientation weight `k` and the same pose-error model,
+/// [`crate::identify::Method::fitness_model`]); `None` for a method that is not a search.
+fn search_group(si: usize, spec: &crate::identify::MethodSpec) -> Option<ecdf::Group> {
+    let model = spec.method.fitness_model()?;
+    Some((si, spec.k.to_bits(), model.into()))
+}
+
 /// Runs trial `index` of `study`.
 pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let sc = &study.scenario;
@@ -246,6 +242,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let axis = sc.validation.axis_errors;
 
     let mut outcomes = Vec::new();
+    // Each search's whole trace on this trial, dropped once reduced to its `SearchRun`.
+    let mut searches: Vec<Option<(ecdf::Group, Vec<Real>, usize)>> = Vec::new();
     let mut crb = Vec::new();
     for si in 0..sc.calibration.strategies.len() {
         let qs = calibration_poses(study, si, index)?;
@@ -303,6 +301,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             );
             let seconds = t0.elapsed().as_secs_f64();
             let mut trace = None;
+            let mut full_trace = None;
             let error = res.as_ref().err().map(|e| e.to_string());
             let (identified, after, cal_after, iterations, evaluations, termination) = match res {
                 Ok(c) => {
@@ -313,10 +312,11 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     let e = validation_errors(&c.robot, &vqs, Some(&vpayload), &seen)?;
                     let cal_seen: Vec<Frame> = cal_truth.iter().map(|t| map.compose(t)).collect();
                     let cal = validation_errors(&c.robot, &m.data.qs, cal_loads, &cal_seen)?;
-                    if index == 0 {
-                        trace = c.identified.trace.clone().filter(|t| !t.is_empty());
-                    }
                     let r = c.identified;
+                    full_trace = r.trace.clone().filter(|t| !t.is_empty());
+                    if index == 0 {
+                        trace = full_trace.clone();
+                    }
                     (
                         r.x.iter().copied().collect(),
                         e,
@@ -362,6 +362,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                         .then(|| ErrorStats::of(&cal_after.attitude_deg)),
                 },
                 trace,
+                search: None,
                 per_point: (index == 0).then(|| (before.mm.clone(), after.mm.clone())),
                 per_point_attitude_deg: (index == 0 && full_pose)
                     .then(|| (before.attitude_deg.clone(), after.attitude_deg.clone())),
@@ -372,7 +373,16 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 seconds,
                 error,
             });
+            let group = search_group(si, spec);
+            searches.push(group.zip(full_trace).map(|(g, t)| (g, t, evaluations)));
         }
+    }
+    let runs: Vec<_> = searches
+        .iter()
+        .map(|r| r.as_ref().map(|(g, t, e)| (*g, &t[..], *e)))
+        .collect();
+    for (o, r) in outcomes.iter_mut().zip(ecdf::of_trial(&runs)) {
+        o.search = r;
     }
     Ok(TrialResult {
         index,

@@ -26,6 +26,7 @@ mod realdata;
 mod refusals;
 mod report_baseline;
 mod results;
+mod search_ecdf;
 mod strict_inputs;
 mod task;
 mod typed;

@@ -91,6 +91,14 @@ impl Default for SearchBox {
     }
 }
 
+impl SearchBox {
+    /// The pose-error model of the fitness searched: [`ErrorModel::DirectFk`] when none is
+    /// named (the forward kinematics themselves, the same fitness).
+    pub fn fitness_model(&self) -> ErrorModel {
+        self.error_model.unwrap_or(ErrorModel::DirectFk)
+    }
+}
+
 impl<'de, S> Deserialize<'de> for Metaheuristic<S>
 where
     S: Search + Default + serde::de::DeserializeOwned,
@@ -123,6 +131,10 @@ impl<S: Search> Method for Metaheuristic<S> {
         finite_positive("bound_mm", b.bound_mm)?;
         finite_positive("bound_rad", b.bound_rad)?;
         finite_positive("bound_compliance", b.bound_compliance)
+    }
+
+    fn fitness_model(&self) -> Option<ErrorModel> {
+        Some(self.bounds.fitness_model())
     }
 
     /// The search's best point; [`Termination::TargetReached`] when it stopped at its target

@@ -25,6 +25,8 @@ fn section_of(stem: &str) -> &'static str {
         "Sweep"
     } else if stem.starts_with("paired_") {
         "Paired comparisons"
+    } else if stem == "search_ecdf" || stem == "fixed_budget" {
+        "Searches compared"
     } else if stem.ends_with("_trace") {
         "Convergence"
     } else {
@@ -170,6 +172,14 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
         page.para(crate::report::run::comparisons::NOTE);
         page.table("Paired comparisons on the shared trials", &h, &rows);
         figures(&mut page, dir, plots, "Paired comparisons")?;
+    }
+
+    let (h, rows) = crate::report::run::searches::table(r);
+    if !rows.is_empty() {
+        page.section("Searches compared");
+        page.para(crate::report::run::searches::NOTE);
+        page.table("Targets reached and fitness at the full budget", &h, &rows);
+        figures(&mut page, dir, plots, "Searches compared")?;
     }
 
     page.section("Validation before and after");

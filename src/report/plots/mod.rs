@@ -7,6 +7,7 @@
 //! bytes (text is laid out with the bundled DejaVu Sans, no system fonts).
 
 mod changes;
+mod ecdf;
 mod figures;
 
 use std::ops::Range;
@@ -26,6 +27,7 @@ use super::output::Output;
 use crate::numeric::Real;
 use crate::{Error, Result};
 pub use changes::{changes_svg, ChangePoint};
+pub use ecdf::{fixed_budget, runtime_ecdf, BudgetSeries, EcdfSeries};
 pub use figures::{
     before_after, before_after_in, box_plot, box_stats, grouped_bars, grouped_bars_with_intervals,
     heatmap, sweep, traces, BoxStats, SweepSeries,
