@@ -18,8 +18,8 @@ cargo fmt --all --check
 cargo clippy --workspace --all-targets -- -D warnings
 RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps --workspace
 cargo test
-# The coverage of the 95 % intervals (40 runs of 50 trials against a 4000-trial run, a few
-# minutes) is ignored by default; CI runs it.
+# The coverage of the 95 % intervals (40 runs of 50 trials against a 4000-trial run, seconds
+# on an idle machine, minutes on a loaded one) is ignored by default; CI runs it.
 if [ "${CI:-}" = "true" ]; then
     cargo test --test study -- --ignored intervals_cover_the_long_run_figure
 fi

@@ -99,8 +99,10 @@ fn every_figure_has_an_interval_around_it() {
 
 /// Coverage: over 40 runs of 50 trials from different seeds, the 95 % intervals of the
 /// headline figures of LS hold the figure of a 4000-trial run at least 85 % of the time
-/// (binomially, a true 95 % interval does so with probability 0.998). About 3 minutes on
-/// two cores in the test profile: run with `cargo test --test study -- --ignored coverage`.
+/// (binomially, a true 95 % interval does so with probability 0.998). 13 s on two cores in
+/// the test profile (2026-11-27), minutes on a loaded machine: run with
+/// `cargo test --test study -- --ignored intervals_cover` (`scripts/test.sh` does with
+/// `CI=true`).
 #[test]
 #[ignore]
 fn intervals_cover_the_long_run_figure() {
