@@ -28,6 +28,9 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+#[path = "common/mod.rs"]
+mod common;
+
 /// The documents that must exist.
 const REQUIRED: [&str; 4] = [
     "README.md",
@@ -787,26 +790,6 @@ const CLAIM_PAPERS: [(&str, &str); 11] = [
     ),
 ];
 
-/// The claims of a paper's scenario (a Monte-Carlo study's or a registration study's), each
-/// with its metric's name.
-fn paper_claims(scenario: &str) -> Vec<(calbench::study::claims::Claim, &'static str)> {
-    use calbench::study::registration_study::{RegistrationScenario, METRIC};
-    let path = root().join(scenario);
-    let table: toml::Table = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    if RegistrationScenario::is_one(&table) {
-        let sc = RegistrationScenario::from_table(table, &path)
-            .unwrap_or_else(|e| panic!("{scenario}: {e}"));
-        return sc.claims.into_iter().map(|c| (c, METRIC)).collect();
-    }
-    let sc = calbench::study::scenario::Scenario::load(&path)
-        .unwrap_or_else(|e| panic!("{scenario}: {e}"));
-    let metric = |c: &calbench::study::claims::Claim| calbench::study::claims::METRICS[c.metric].0;
-    sc.claims
-        .into_iter()
-        .map(|c| (c.clone(), metric(&c)))
-        .collect()
-}
-
 /// A sweep point as the verdict table names it: `key = value` per swept key, the key by its
 /// last part (`population` for `methods.bas-pso.population`), and one `key = value` for axes
 /// that are the same key of several entries set to the same value.
@@ -856,7 +839,7 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
         let file = root().join(format!("results/reproduction/{summary}"));
         let summary: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(&file).expect("summary")).expect("json");
-        for (c, metric) in paper_claims(scenario) {
+        for (c, metric) in common::scenario_claims(&root().join(scenario)) {
             // One row per sweep point (a run without a sweep has one).
             let got: Vec<Option<&serde_json::Value>> = summary["claims"]
                 .as_array()
@@ -940,7 +923,7 @@ fn reproduction_verdict_table_comes_from_the_committed_summaries() {
     for e in std::fs::read_dir(root().join("scenarios")).expect("scenarios") {
         let p = e.expect("scenario").path();
         let name = format!("scenarios/{}", p.file_name().unwrap().to_string_lossy());
-        let paper = ["li2018-", "ban-", "guo2024-", "qiao2021-"]
+        let paper = common::PAPER_SCENARIOS
             .iter()
             .any(|s| name.starts_with(&format!("scenarios/{s}")));
         let text = std::fs::read_to_string(&p).expect("scenario");

@@ -5,12 +5,9 @@
 
 use std::path::PathBuf;
 
-use calbench::study::registration_study::RegistrationScenario;
-use calbench::study::scenario::Scenario;
-
 use crate::common::{
-    calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario,
-    SMALL_STUDY as SMALL,
+    calbench, calbench_ok, load_json, path_arg, read, root, scenario_claims, tmp_dir,
+    write_scenario, PAPER_SCENARIOS, SMALL_STUDY as SMALL,
 };
 
 /// [`SMALL`] with outliers (IGG3, labelled `rob`, against LS) and four claims.
@@ -252,9 +249,7 @@ fn paper_scenarios() -> Vec<PathBuf> {
         .map(|e| e.unwrap().path())
         .filter(|p| {
             let n = p.file_name().unwrap().to_string_lossy().to_string();
-            ["li2018-", "ban-", "guo2024-", "qiao2021-"]
-                .iter()
-                .any(|s| n.starts_with(s))
+            PAPER_SCENARIOS.iter().any(|s| n.starts_with(s))
         })
         .collect();
     v.sort();
@@ -266,13 +261,7 @@ fn every_paper_scenario_states_at_least_two_claims() {
     let files = paper_scenarios();
     assert!(files.len() >= 4, "{files:?}");
     for f in files {
-        let table: toml::Table = toml::from_str(&read(&f)).unwrap();
-        let claims = if RegistrationScenario::is_one(&table) {
-            RegistrationScenario::from_table(table, &f).map(|s| s.claims)
-        } else {
-            Scenario::load(&f).map(|s| s.claims)
-        }
-        .unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+        let claims: Vec<_> = scenario_claims(&f).into_iter().map(|(c, _)| c).collect();
         assert!(
             claims.len() >= 2,
             "{}: {} claims",
