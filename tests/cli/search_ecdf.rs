@@ -5,7 +5,9 @@
 
 use serde_json::Value;
 
-use crate::common::{bin, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario};
+use crate::common::{
+    calbench_ok, kill_once_checkpointed, load_json, path_arg, read, root, tmp_dir, write_scenario,
+};
 use crate::html::{browse, chromium, ci, self_contained};
 
 /// The trials of the small study: more than one checkpoint block (256 trials), so that a run
@@ -37,27 +39,8 @@ fn num(v: &Value) -> f64 {
 /// Runs `sc` with `--threads 1` into `out`, kills it (SIGKILL) once its checkpoint holds
 /// trials, and resumes it.
 fn killed_and_resumed(sc: &std::path::Path, out: &std::path::Path) {
-    let name = out.file_name().unwrap().to_str().unwrap();
-    let meta = out
-        .parent()
-        .unwrap()
-        .join(format!(".{name}.checkpoint/checkpoint.json"));
-    let mut child = bin()
-        .args(["run", path_arg(sc), "--trials", TRIALS, "--threads", "1"])
-        .args(["--out", path_arg(out)])
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let t0 = std::time::Instant::now();
-    while !std::fs::read_to_string(&meta).is_ok_and(|t| !t.contains("\"done\": 0,")) {
-        assert!(
-            t0.elapsed().as_secs() < 300,
-            "no checkpoint after 5 minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
+    let args = ["run", path_arg(sc), "--trials", TRIALS, "--threads", "1"];
+    let meta = kill_once_checkpointed(&[&args[..], &["--out", path_arg(out)]].concat(), out, 300);
     assert!(
         !out.join("summary.json").exists(),
         "the run ended before it was killed"

@@ -203,3 +203,30 @@ pub fn scenario_claims(path: &Path) -> Vec<(calbench::study::claims::Claim, &'st
         })
         .collect()
 }
+
+/// Starts `calbench ARGS` (a run writing to `out`), waits until its checkpoint holds a
+/// finished trial (at most `limit_s` seconds), kills it (SIGKILL) and returns the path of the
+/// checkpoint's `checkpoint.json`.
+pub fn kill_once_checkpointed(args: &[&str], out: &Path, limit_s: u64) -> PathBuf {
+    let name = out.file_name().unwrap().to_str().unwrap();
+    let meta = out
+        .parent()
+        .unwrap()
+        .join(format!(".{name}.checkpoint/checkpoint.json"));
+    let mut child = bin()
+        .args(args)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let t0 = std::time::Instant::now();
+    while !std::fs::read_to_string(&meta).is_ok_and(|t| !t.contains("\"done\": 0,")) {
+        assert!(
+            t0.elapsed().as_secs() < limit_s,
+            "no checkpoint after {limit_s} s"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    meta
+}

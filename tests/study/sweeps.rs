@@ -8,8 +8,8 @@ use std::process::Command;
 use calbench::study::scenario::Scenario;
 
 use crate::common::{
-    bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario,
-    SMALL_STUDY as SMALL,
+    bin, calbench, calbench_ok, kill_once_checkpointed, load_json, path_arg, read, root, tmp_dir,
+    write_scenario, SMALL_STUDY as SMALL,
 };
 
 /// Writes `text`, a variant of [`SMALL`], as `dir/name.toml` and named `name`; returns the
@@ -657,22 +657,8 @@ fn a_killed_run_resumes_into_the_same_bytes() {
     let full = dir.join("full");
     calbench_ok(&["run", &sc, "--out", path_arg(&full)]);
     let out = dir.join("killed");
-    let meta = dir.join(".killed.checkpoint/checkpoint.json");
-    let mut child = bin()
-        .args(["run", &sc, "--threads", "1", "--out", path_arg(&out)])
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
-    let t0 = std::time::Instant::now();
-    while !std::fs::read_to_string(&meta).is_ok_and(|t| !t.contains("\"done\": 0,")) {
-        assert!(
-            t0.elapsed().as_secs() < 120,
-            "no checkpoint after 2 minutes"
-        );
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
+    let args = ["run", &sc, "--threads", "1", "--out", path_arg(&out)];
+    let meta = kill_once_checkpointed(&args, &out, 120);
     assert!(!out.join("summary.json").exists());
     refused_checkpoints_stay_as_they_were(&dir, &meta);
     let other = write_small(&dir, "other", SMALL);
