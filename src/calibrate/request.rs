@@ -195,8 +195,9 @@ impl IdentifyRequest {
 
     /// Runs the identification: refuses options that conflict, data that do not determine
     /// every parameter (unless `allow_rank_deficient`) and a result worse than the nominal
-    /// robot (unless `allow_worse`), naming the file and the cause.
-    pub fn run(&self) -> Result<IdentifyOutcome> {
+    /// robot (unless `allow_worse`), naming the file and the cause. The readings move into
+    /// the pipeline: no second copy of them lives while it runs.
+    pub fn run(mut self) -> Result<IdentifyOutcome> {
         let s = self.spelling;
         let conflicts = [
             (
@@ -222,12 +223,13 @@ impl IdentifyRequest {
             let why = format!("cannot be used with {}", s.option(a));
             return Err(Error::setting(s.option(b), why));
         }
-        let outcome = match &self.data {
+        let data = std::mem::replace(&mut self.data, IdentifyData::Tracker(Default::default()));
+        let outcome = match data {
             IdentifyData::Tracker(d) => self
-                .tracker(d.clone())
+                .tracker(d)
                 .map(|o| IdentifyOutcome::Tracker(Box::new(o))),
             IdentifyData::Kind(f) => {
-                kind_outcome(self, f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
+                kind_outcome(&self, &f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
             }
         };
         outcome.map_err(|e| s.respell(e))
@@ -316,7 +318,9 @@ impl IdentifyRequest {
             .as_ref()
             .map(|v| validate_file(&nominal, &c, v))
             .transpose()?;
-        let residuals = point_residuals(&nominal, &c, &d)?;
+        // The per-point residuals (16 bytes a row) are dropped after the check of a worse
+        // robot and computed again after the diagnostics, which need memory of their own.
+        let (before, after) = point_residuals(&nominal, &c, &d)?;
         let trace = convergence_trace(&c, &recorder);
         let evaluations = match (&c.identified.trace, &trace) {
             (None, Some((_, t))) => t.first().map(|&first| (first, c.identified.rms_residual)),
@@ -326,14 +330,14 @@ impl IdentifyRequest {
             validation
                 .as_ref()
                 .map(|v| (v.before_mm.rms, v.after_mm.rms)),
-            (rms(&residuals.0), rms(&residuals.1)),
+            (rms(&before), rms(&after)),
             c.identified.termination,
             evaluations,
         );
         if !worse.is_empty() && !self.allow_worse {
-            let gross = gross_reading(&residuals.1)
+            let gross = gross_reading(&after)
                 .map(|g| ("after", g))
-                .or_else(|| gross_reading(&residuals.0).map(|g| ("before", g)))
+                .or_else(|| gross_reading(&before).map(|g| ("before", g)))
                 .map(|(at, (i, r))| {
                     format!("point {i} has a residual {r:.0} times the median {at} calibration")
                 });
@@ -344,6 +348,7 @@ impl IdentifyRequest {
                 &s.flag("--allow-worse"),
             ));
         }
+        drop((before, after));
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
         let diagnostics = diagnose(&Subject {
             nominal: &nominal,
@@ -366,6 +371,7 @@ impl IdentifyRequest {
             trace,
             diagnostics: Some(diagnostics),
         };
+        let residuals = point_residuals(&nominal, &c, &d)?;
         Ok(TrackerOutcome {
             nominal,
             source: self.source.clone(),

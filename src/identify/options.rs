@@ -43,41 +43,18 @@ impl<'de> de::Deserializer<'de> for Fields<'_> {
     }
 }
 
-/// Deserialises `t`; on failure names the key as (key, message): the first whose removal makes the rest
-/// deserialise (an unknown key, or a value of the wrong type).
+/// Deserialises `t`; on failure names the key as (key, message): serde's path to the value
+/// that failed (an unknown key, a value of the wrong type or out of range, `box.lo` or
+/// `weights[1]` inside a value), empty when the table itself fails (a required key missing).
 pub fn read<T: DeserializeOwned>(t: &toml::Table) -> Result<T, (String, String)> {
-    let text = |e: toml::de::Error| e.to_string().trim_end().to_string();
-    match T::deserialize(toml::Value::Table(t.clone())) {
-        Ok(v) => Ok(v),
-        Err(e) => {
-            for k in t.keys() {
-                let mut rest = t.clone();
-                let v = rest.remove(k);
-                if T::deserialize(toml::Value::Table(rest)).is_ok() {
-                    let mut one = toml::Table::new();
-                    one.insert(k.clone(), v.unwrap_or(toml::Value::Boolean(false)));
-                    let msg = match T::deserialize(toml::Value::Table(one)) {
-                        Err(e1) => text(e1),
-                        Ok(_) => text(e),
-                    };
-                    return Err((k.clone(), msg));
-                }
-            }
-            // A required key with a bad value: the key that fails alone for another reason
-            // than the missing required ones.
-            for (k, v) in t {
-                let mut one = toml::Table::new();
-                one.insert(k.clone(), v.clone());
-                if let Err(e1) = T::deserialize(toml::Value::Table(one)) {
-                    let msg = text(e1);
-                    if !msg.contains("missing field") {
-                        return Err((k.clone(), msg));
-                    }
-                }
-            }
-            Err((String::new(), text(e)))
-        }
-    }
+    serde_path_to_error::deserialize(toml::Value::Table(t.clone())).map_err(|e| {
+        let key = e
+            .path()
+            .iter()
+            .next()
+            .map_or(String::new(), |_| e.path().to_string());
+        (key, e.into_inner().to_string().trim_end().to_string())
+    })
 }
 
 /// Checks options built in code the way a scenario's are read: `v` written as a table and

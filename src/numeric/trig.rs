@@ -112,13 +112,18 @@ fn sin_cos_portable(x: [[Real; 4]; 4]) -> Sixteen {
 
 /// `(sin x, cos x)` of one value, the same bits as [`sin_cos_slice`] gives it (the portable
 /// arithmetic, and the library's values beyond |x| = 1e5 or for non-finite `x`): for a walk
-/// that needs one angle at a time.
+/// that needs one angle at a time. It runs on the numeric kernels' dispatch, so its
+/// multiply-adds are instructions where the processor has FMA, not calls into the library's
+/// software `fma`.
 #[inline]
 pub fn sin_cos(x: Real) -> (Real, Real) {
     if !x.is_finite() || x.abs() > SIN_COS_LIMIT {
         return x.sin_cos();
     }
-    reduced_series(x)
+    simd::dispatch(
+        #[inline(always)]
+        |_| reduced_series(x),
+    )
 }
 
 /// The reduction by π/2, the two series and the quadrant of [`sin_cos_slice`] for one value.

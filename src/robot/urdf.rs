@@ -347,19 +347,10 @@ impl UrdfRobot {
 /// entities, and the control characters an attribute would not keep (tab, line breaks) as
 /// character references, so that a reader gives back `text` itself (XML 1.0 §§ 2.4, 3.3.3).
 pub fn xml_attribute(text: &str) -> String {
-    let mut s = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => s.push_str("&amp;"),
-            '<' => s.push_str("&lt;"),
-            '>' => s.push_str("&gt;"),
-            '"' => s.push_str("&quot;"),
-            '\'' => s.push_str("&apos;"),
-            '\t' | '\n' | '\r' => s.push_str(&format!("&#{};", u32::from(c))),
-            c => s.push(c),
-        }
-    }
-    s
+    let s = quick_xml::escape::escape(text);
+    s.replace('\t', "&#9;")
+        .replace('\n', "&#10;")
+        .replace('\r', "&#13;")
 }
 
 /// Whether `robot` names a URDF file (by its extension).

@@ -26,7 +26,7 @@ fn layers() -> Vec<String> {
 
 /// The code of every source file under `dir` but its tests (`tests` folders, `tests.rs`, and
 /// the `#[cfg(test)]` module at a file's end), as (path, code without comment lines).
-fn code_under(dir: &Path) -> Vec<(String, String)> {
+pub(crate) fn code_under(dir: &Path) -> Vec<(String, String)> {
     let mut out = Vec::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {

@@ -9,6 +9,7 @@ mod common;
 
 mod cli;
 mod cluster;
+mod determinism;
 mod fuzz;
 mod guo;
 mod harmonics;
@@ -17,6 +18,7 @@ mod instruments;
 mod interchange;
 mod kinds;
 mod layers;
+mod memory;
 mod noise;
 mod outputs;
 mod practice;

@@ -7,6 +7,8 @@ mod common;
 
 mod alloc;
 mod compliance;
+#[cfg(all(target_arch = "x86_64", target_os = "linux", target_env = "gnu"))]
+mod fma;
 mod kinematics;
 mod registration;
 mod weights;

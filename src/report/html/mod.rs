@@ -57,11 +57,11 @@ y=s.cells[i]?s.cells[i].textContent:'',p=parseFloat(x),q=parseFloat(y);\
 return d*(isNaN(p)||isNaN(q)?x.localeCompare(y):p-q);});\
 rows.forEach(function(r){b.appendChild(r);});});});";
 
-/// `text` with the characters that mean something in HTML escaped: the escaping of an XML
-/// attribute ([`crate::robot::urdf::xml_attribute`], whose entities HTML5 reads the same), so
-/// that one function escapes every markup calbench writes.
+/// `text` with the five characters that mean something in HTML (`&`, `<`, `>`, `"`, `'`) as
+/// entities, for element text and quoted attribute values alike: the one escaping every page
+/// writer uses (quick-xml's, whose entities HTML5 reads the same).
 pub fn escape(text: &str) -> String {
-    crate::robot::urdf::xml_attribute(text)
+    quick_xml::escape::escape(text).into_owned()
 }
 
 /// Whether a table cell reads as a number (right-aligned) rather than text.
