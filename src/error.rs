@@ -15,17 +15,33 @@ pub enum Error {
         file: PathBuf,
         /// Where in the file: a key path such as `joints[2].limits` or `line 14`.
         place: String,
-        /// What is wrong and what is allowed.
-        msg: String,
+        /// What is wrong and what is allowed (it may name a front end's options).
+        msg: Said,
     },
     /// A setting (from a scenario, the command line or an API call) is out of range.
     #[error("setting `{key}`: {msg}")]
     Setting {
         /// The setting's key, e.g. `tracker.mpe_a_um`.
         key: String,
-        /// What is wrong and what is allowed.
-        msg: String,
+        /// What is wrong and what is allowed (it may name a front end's options).
+        msg: Said,
     },
+    /// A front end's option is out of range: a setting whose key each front end spells.
+    #[error("setting `{}`: {msg}", option.name())]
+    Option {
+        /// The option.
+        option: Opt,
+        /// What is wrong and what is allowed (it may name other options).
+        msg: Said,
+    },
+    /// The points of a registration do not determine the frame (fewer than 3, collinear,
+    /// all weights zero), or a solve is singular: the data, not the code, are the cause.
+    #[error("{0}")]
+    Singular(String),
+    /// An iteration did not converge to a usable result (the alternation of registration
+    /// and identification diverged).
+    #[error("{0}")]
+    Diverged(String),
     /// A computation could not be carried out (e.g. too few reachable poses in a box).
     #[error("{0}")]
     Compute(String),
@@ -44,18 +60,182 @@ pub enum Error {
 /// The library's result type.
 pub type Result<T> = std::result::Result<T, Error>;
 
+/// An option of a front end (the `calbench` command line, the Python module) that a message
+/// names. The library names it by this type only and names no flag; each front end spells
+/// it its own way ([`Spell`]: the command line `--allow-worse`, Python `allow_worse=True`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, strum::IntoStaticStr, strum::EnumIter)]
+#[strum(serialize_all = "snake_case")]
+#[non_exhaustive]
+pub enum Opt {
+    /// Keep a result whose data do not determine every parameter.
+    AllowRankDeficient,
+    /// Keep a result that makes the robot worse than the nominal one.
+    AllowWorse,
+    /// The joint compliances identified with the kinematic errors.
+    Compliance,
+    /// K-fold cross-validation.
+    Cv,
+    /// The compensated robot's formats.
+    Export,
+    /// Parameters held at their nominal values.
+    Fix,
+    /// Rows held out for validation.
+    Holdout,
+    /// The orientation weight of full-pose data.
+    K,
+    /// The identification method.
+    Method,
+    /// Candidate models compared by cross-validation.
+    Models,
+    /// The identified parameters.
+    Params,
+    /// The precision a run stops at.
+    Precision,
+    /// Priors on parameters' errors.
+    Prior,
+    /// The registration.
+    Registration,
+    /// The run's seed.
+    Seed,
+    /// A shard of a run.
+    Shard,
+    /// The trial of a study.
+    Trial,
+    /// A validation measurement.
+    Validate,
+    /// The base link of a URDF chain.
+    Base,
+    /// The tip link of a URDF chain.
+    Tip,
+    /// Joint values given to a command.
+    Q,
+}
+
+impl Opt {
+    /// The option's name in words of the library (`allow_worse`): how [`Said`]'s own
+    /// `Display` writes it, and the stem each front end spells.
+    pub fn name(self) -> &'static str {
+        self.into()
+    }
+}
+
+/// How a front end writes an option: `on` false names it (`--fix`, `fix`), true says how it
+/// is turned on (`--allow-worse`, `allow_worse=True`).
+pub type Spell = fn(opt: Opt, on: bool) -> String;
+
+/// A message that may name front ends' options: text, and options typed ([`Opt`]), which
+/// each front end spells ([`Said::spell`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Said(Vec<Piece>);
+
+/// A piece of a [`Said`]: text, or an option named (`false`) or turned on (`true`).
+#[derive(Clone, Debug, PartialEq)]
+enum Piece {
+    Text(String),
+    Opt(Opt, bool),
+}
+
+impl Said {
+    /// The message with `t` added.
+    pub fn text(mut self, t: impl Into<String>) -> Self {
+        self.0.push(Piece::Text(t.into()));
+        self
+    }
+
+    /// The message naming the option `o`.
+    pub fn name(mut self, o: Opt) -> Self {
+        self.0.push(Piece::Opt(o, false));
+        self
+    }
+
+    /// The message saying how the option `o` is turned on.
+    pub fn on(mut self, o: Opt) -> Self {
+        self.0.push(Piece::Opt(o, true));
+        self
+    }
+
+    /// The message followed by `more`.
+    pub fn then(mut self, more: Said) -> Self {
+        self.0.extend(more.0);
+        self
+    }
+
+    /// The message with its options as `spell` writes them.
+    pub fn spell(&self, spell: Spell) -> String {
+        self.0
+            .iter()
+            .map(|p| match p {
+                Piece::Text(t) => t.clone(),
+                Piece::Opt(o, on) => spell(*o, *on),
+            })
+            .collect()
+    }
+}
+
+impl std::fmt::Display for Said {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        // The library's own spelling: the name in backquotes.
+        f.write_str(&self.spell(|o, _| format!("`{}`", o.name())))
+    }
+}
+
+impl From<String> for Said {
+    fn from(t: String) -> Self {
+        Said::default().text(t)
+    }
+}
+
+impl From<&str> for Said {
+    fn from(t: &str) -> Self {
+        Said::default().text(t)
+    }
+}
+
 impl Error {
     /// The key of a [`Error::Setting`] (`None` for other errors): for callers that report
     /// or test which setting was refused.
     pub fn key(&self) -> Option<&str> {
         match self {
             Error::Setting { key, .. } => Some(key),
+            Error::Option { option, .. } => Some(option.name()),
             _ => None,
         }
     }
 
+    /// The message as the front end that spells options with `spell` shows it (the
+    /// `Display` of the error, with its options so spelled).
+    pub fn spelled(&self, spell: Spell) -> String {
+        match self {
+            Error::File { file, place, msg } => {
+                format!("{}: {place}: {}", file.display(), msg.spell(spell))
+            }
+            Error::Setting { key, msg } => format!("setting `{key}`: {}", msg.spell(spell)),
+            Error::Option { option, msg } => {
+                format!("setting `{}`: {}", spell(*option, false), msg.spell(spell))
+            }
+            e => e.to_string(),
+        }
+    }
+
+    /// An error about the front end's option `option`.
+    pub fn option(option: Opt, msg: impl Into<Said>) -> Self {
+        Error::Option {
+            option,
+            msg: msg.into(),
+        }
+    }
+
+    /// A refused setting as the refusal of the front end's option `option` that gave it;
+    /// any other error as it is.
+    pub fn of_option(self, option: Opt) -> Self {
+        match self {
+            Error::Setting { msg, .. } => Error::option(option, msg),
+            e => e,
+        }
+    }
+
     /// An error about a setting.
-    pub fn setting(key: impl Into<String>, msg: impl Into<String>) -> Self {
+    pub fn setting(key: impl Into<String>, msg: impl Into<Said>) -> Self {
         Error::Setting {
             key: key.into(),
             msg: msg.into(),
@@ -63,11 +243,7 @@ impl Error {
     }
 
     /// An error about a place in an input file.
-    pub fn file(
-        file: impl Into<PathBuf>,
-        place: impl Into<String>,
-        msg: impl Into<String>,
-    ) -> Self {
+    pub fn file(file: impl Into<PathBuf>, place: impl Into<String>, msg: impl Into<Said>) -> Self {
         Error::File {
             file: file.into(),
             place: place.into(),
@@ -92,7 +268,7 @@ impl Error {
         text: &str,
         key: &str,
         place: impl Into<String>,
-        msg: impl Into<String>,
+        msg: impl Into<Said>,
     ) -> Self {
         Error::file(file, at_line(toml_key_line(text, key), place), msg)
     }

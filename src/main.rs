@@ -83,7 +83,7 @@ fn main() {
         Some(Command::Leaderboard(a)) => cli::leaderboard::run(a),
     };
     if let Err(e) = done {
-        eprintln!("error: {e:#}");
+        eprintln!("error: {}", cli::message(&e));
         std::process::exit(1);
     }
 }

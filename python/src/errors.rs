@@ -30,13 +30,28 @@ create_exception!(
     "Reading or writing a file failed (names the file)."
 );
 
-/// A library error as the Python exception of its kind, with the command line's message.
+/// How the Python module spells an option the library names: its keyword argument
+/// (`fix`), or how it is turned on (`allow_worse=True`).
+pub(crate) fn spell(opt: calbench::error::Opt, on: bool) -> String {
+    if on {
+        format!("{}=True", opt.name())
+    } else {
+        opt.name().to_string()
+    }
+}
+
+/// A library error as the Python exception of its kind, with the command line's message and
+/// the options as keyword arguments ([`spell`]).
 pub(crate) fn err(e: calbench::Error) -> PyErr {
-    let msg = e.to_string();
+    let msg = e.spelled(spell);
     match e {
         calbench::Error::File { .. } => FileError::new_err(msg),
-        calbench::Error::Setting { .. } => SettingError::new_err(msg),
-        calbench::Error::Compute(_) => ComputeError::new_err(msg),
+        calbench::Error::Setting { .. } | calbench::Error::Option { .. } => {
+            SettingError::new_err(msg)
+        }
+        calbench::Error::Compute(_)
+        | calbench::Error::Singular(_)
+        | calbench::Error::Diverged(_) => ComputeError::new_err(msg),
         calbench::Error::Io { .. } => IoError::new_err(msg),
         _ => Error::new_err(msg),
     }

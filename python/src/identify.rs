@@ -11,7 +11,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use calbench::calibrate::cv::{Holdout, Model};
-use calbench::calibrate::request::{IdentifyData, IdentifyOutcome, IdentifyRequest, Spelling};
+use calbench::calibrate::request::{IdentifyData, IdentifyOutcome, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
@@ -231,7 +231,6 @@ pub(crate) fn identify<'py>(
         seed,
         allow_rank_deficient,
         allow_worse,
-        spelling: Spelling::Python,
         ..IdentifyRequest::new(nominal.clone(), data, source, spec)
     };
     // The Rust side, timed as a whole: the identification and everything its record holds.

@@ -79,8 +79,8 @@ pub(crate) fn task<'py>(
                 let rec = IdentifyRecord::of(&o, None);
                 write_identified_with(out, &rec, &additions(&o), &[("task.json", text.clone())])?;
             }
-            let record =
-                serde_json::to_string(&*o).map_err(|e| calbench::Error::Compute(e.to_string()))?;
+            let record = serde_json::to_string(&o.record)
+                .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             Ok((text, record, o.compensated()))
         })
         .map_err(|e: calbench::Error| match e {

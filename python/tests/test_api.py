@@ -241,6 +241,24 @@ def test_identify_a_kind_file_returns_the_cli_record(cli, root, tmp_path):
     assert "validation RMS" in kept["allowed_worse"][0]
 
 
+def test_refusals_name_the_options_as_each_front_end_spells_them(cli, root, tmp_path):
+    # The library names the options by type: Python says `params` and `allow_rank_deficient=True`
+    # where the command line says `--params` and `--allow-rank-deficient`, in the same refusal.
+    cli("simulate", root / "scenarios" / "instruments.toml", "--measure", "plane",
+        "--out", tmp_path / "sim")
+    data = tmp_path / "sim" / "measurements.csv"
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.FileError,
+                       match="out of params, or pass allow_rank_deficient=True$"):
+        calbench.identify(robot, data=data, method="ls", params=["base.x", "a2"])
+    r = cli("identify", "--robot", "irb2600", "--data", data, "--method", "ls",
+            "--params", "base.x,a2", "--out", tmp_path / "id", ok=False)
+    assert r.returncode != 0
+    assert r.stderr.rstrip().endswith("out of --params, or pass --allow-rank-deficient"), r.stderr
+    with pytest.raises(calbench.SettingError, match="setting `registration`: .* holds plane"):
+        calbench.identify(robot, data=data, method="ls", registration="svd")
+
+
 def test_every_refusal_is_a_calbench_error(root):
     robot = calbench.Robot.builtin("irb2600")
     q = np.zeros((4, 6))

@@ -126,8 +126,8 @@ pub fn cross_validate(
 ) -> Result<CrossValidation> {
     let n = data.len();
     if k < 2 || k > n {
-        return Err(Error::setting(
-            "--cv",
+        return Err(Error::option(
+            crate::error::Opt::Cv,
             format!("needs 2 ≤ K ≤ the number of points ({n}), got {k}"),
         ));
     }
@@ -238,7 +238,11 @@ impl Model {
         let mut params =
             param_sets::identified_params_tool_first(&robot, data.measure(), with_base);
         if self.compliance {
-            params.extend(CompliancePick::Gravity.params(&robot, "--models")?);
+            params.extend(
+                CompliancePick::Gravity
+                    .params(&robot, "models")
+                    .map_err(|e| e.of_option(crate::error::Opt::Models))?,
+            );
         }
         if self.harmonics > 0 {
             // Every revolute joint's terms that the poses of a generic set can tell apart

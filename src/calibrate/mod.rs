@@ -249,7 +249,7 @@ pub fn calibrate(
         if rounds >= MAX_ROUNDS || stalled {
             // The round with the smallest step is returned, with the rounds run in all.
             let mut b = best.ok_or_else(|| {
-                crate::error::Error::Compute(
+                crate::error::Error::Diverged(
                     "the alternation of registration and identification diverged".into(),
                 )
             })?;

@@ -8,11 +8,13 @@ use std::path::Path;
 
 use nalgebra::DVector;
 
+use super::record::{names, FrameRecord, IdentifiedRecord};
 use super::registration::register_svd;
+use super::request::{check_names, IdentifyRequest};
 use super::validation::ErrorStats;
-use super::verdict::worse_warning;
+use super::verdict::{gross_reading, worse_causes, worse_error, worse_warning};
 use super::Registration;
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result, Said};
 use crate::identify::kind::{identifiability, KindProblem};
 use crate::identify::{solve, Identified, LeastSquares, Solver};
 use crate::measurement::kind::Kind;
@@ -232,19 +234,16 @@ fn register_targets(nominal: &Robot, qs: &[Vec<Real>], data: &mut KindData) -> R
 /// The refusal of given parameters that `data` cannot determine (`count` given).
 fn undetermined(source: &Path, data: &KindData, a: &Identifiability, count: usize) -> Error {
     let (names, groups) = super::verdict::names_and_groups(a);
-    Error::file(
-        source,
-        "data",
-        format!(
-            "{} readings on these poses determine only {} of the {count} parameters \
-             (undetermined: {names}; dependent groups: {groups}), with the instrument's own \
-             unknowns ({}); nothing was written. Leave the undetermined ones out of --params, \
-             or pass --allow-rank-deficient",
-            data.instrument.kind().as_str(),
-            a.rank,
-            data.instrument.nuisance_names().join(" "),
-        ),
-    )
+    let msg = format!(
+        "{} readings on these poses determine only {} of the {count} parameters (undetermined: \
+         {names}; dependent groups: {groups}), with the instrument's own unknowns ({}); nothing \
+         was written. Leave the undetermined ones out of ",
+        data.instrument.kind().as_str(),
+        a.rank,
+        data.instrument.nuisance_names().join(" "),
+    );
+    let msg = Said::from(msg).name(Opt::Params).text(", or pass ");
+    Error::file(source, "data", msg.on(Opt::AllowRankDeficient))
 }
 
 /// The validation of `nominal` and `compensated` on a tracker's file `v`
@@ -273,18 +272,10 @@ pub fn registered_distances(robot: &Robot, qs: &[Vec<Real>], seen: &[Vec3]) -> R
 pub struct KindOutcome {
     /// The nominal robot.
     pub nominal: Robot,
-    /// Where the readings were read from.
-    pub source: std::path::PathBuf,
     /// The readings' kind.
     pub kind: Kind,
     /// The number of readings.
     pub readings: usize,
-    /// The method's name.
-    pub method: &'static str,
-    /// The registration (targets: `identify` or `known`).
-    pub registration: Registration,
-    /// Parameters held at their nominal values.
-    pub fixed: Vec<Param>,
     /// Whether the parameters were the identifiable set (the undetermined ones left at their
     /// nominal values) rather than given.
     pub identifiable: bool,
@@ -292,8 +283,9 @@ pub struct KindOutcome {
     pub fit: KindFit,
     /// The position errors on a tracker's validation file, before and after (mm).
     pub validation: Option<(ErrorStats, ErrorStats)>,
-    /// Why the result makes the robot worse (kept with `allow_worse`); empty: it does not.
-    pub worse: Vec<String>,
+    /// `identified.json`, with why the result makes the robot worse (kept with
+    /// `allow_worse`) among the rest.
+    pub record: IdentifiedRecord,
 }
 
 impl KindOutcome {
@@ -305,76 +297,210 @@ impl KindOutcome {
     }
 
     /// The warning of a result kept worse than the nominal robot, if it is.
-    pub fn worse_warning(&self) -> Option<String> {
-        worse_warning(&self.worse)
+    pub fn worse_warning(&self) -> Option<Said> {
+        worse_warning(&self.record.allowed_worse)
     }
+}
 
-    /// `identified.json` (docs/formats.md `identify`, measurement-kind files).
-    pub fn record(&self) -> serde_json::Value {
-        use serde_json::json;
-        let (fit, r) = (&self.fit, &self.fit.identified);
-        let inst = &fit.data.instrument;
-        let t = fit.params.len();
-        let cov = r.covariance();
-        let sigma = |k: usize| cov.get((k, k)).map_or(Real::NAN, |v| v.sqrt());
-        let names: Vec<String> = fit
-            .params
-            .iter()
-            .map(|p| p.to_string())
-            .chain(inst.nuisance_names())
-            .collect();
-        let map = |f: &dyn Fn(usize) -> Real, range: std::ops::Range<usize>| -> serde_json::Value {
-            range
-                .map(|k| (names[k].clone(), json!(f(k))))
-                .collect::<serde_json::Map<_, _>>()
-                .into()
-        };
-        let mut j = json!({
-            "robot": self.nominal.name,
-            "data": self.source.display().to_string(),
-            "kind": self.kind.as_str(),
-            "method": self.method,
-            "parameters": &names[..t],
-            "errors": map(&|k| r.x[k], 0..t),
-            "instrument_unknowns": map(&|k| fit.nuisance[k - t], t..names.len()),
-            "standard_errors": map(&sigma, 0..names.len()),
-            "unidentifiable": super::record::names(&fit.analysis.unidentifiable),
-            "readings": self.readings,
-            "condition_number": r.condition_number(),
-            "rank": r.rank,
-            "sigma0": r.sigma0,
-            "rms_residual_mm": r.rms_residual,
-            "iterations": r.iterations,
-            "evaluations": r.evaluations,
-            "termination": r.termination.as_str(),
-        });
-        match inst {
-            Instrument::Targets(offsets) => {
-                let offsets: Vec<[Real; 3]> = offsets.iter().map(|o| [o.x, o.y, o.z]).collect();
-                j["targets_mm"] = json!(offsets);
-                j["registration"] = json!(self.registration.as_str());
-                if let Some(f) = &fit.registration {
-                    let (xyz, rpy) = f.to_xyz_rpy();
-                    j["registration_frame"] = json!({"xyz_mm": xyz, "rpy_rad": rpy});
-                }
-            }
-            Instrument::Distance { pivot } => j["pivot"] = json!(pivot),
-            Instrument::Planes(axes) => {
-                let axes: Vec<&str> = axes.iter().map(|&a| ["x", "y", "z"][a]).collect();
-                j["plane_axes"] = json!(axes);
-            }
-            Instrument::Spheres(_) => {}
+/// The keys of `identified.json` that a kind file adds to those of every identification:
+/// the kind, the readings, the instrument's unknowns and standard errors, and what describes
+/// the instrument (targets' offsets and registration, the pivot, the planes' axes).
+fn kind_keys(
+    record: IdentifiedRecord,
+    fit: &KindFit,
+    (kind, readings): (Kind, usize),
+    registration: Registration,
+) -> IdentifiedRecord {
+    let (inst, r) = (&fit.data.instrument, &fit.identified);
+    let cov = r.covariance();
+    let sigma = |k: usize| cov.get((k, k)).map_or(Real::NAN, |v| v.sqrt());
+    let nuisance = inst.nuisance_names();
+    let all = record.parameters.iter().chain(&nuisance).cloned();
+    let mut record = IdentifiedRecord {
+        kind: Some(kind),
+        readings: Some(readings),
+        instrument_unknowns: Some(nuisance.iter().cloned().zip(fit.nuisance.clone()).collect()),
+        standard_errors: Some(all.enumerate().map(|(k, n)| (n, sigma(k))).collect()),
+        unidentifiable: Some(names(&fit.analysis.unidentifiable)),
+        ..record
+    };
+    match inst {
+        Instrument::Targets(offsets) => {
+            record.targets_mm = Some(offsets.iter().map(|o| [o.x, o.y, o.z]).collect());
+            record.registration = Some(registration);
+            record.registration_frame = fit.registration.as_ref().map(FrameRecord::from);
         }
-        if !self.fixed.is_empty() {
-            j["fixed"] = json!(super::record::names(&self.fixed));
+        Instrument::Distance { pivot } => record.pivot = Some(*pivot),
+        Instrument::Planes(axes) => {
+            record.plane_axes = Some(axes.iter().map(|&a| ["x", "y", "z"][a]).collect());
         }
-        if let Some((before, after)) = &self.validation {
-            j["validation_before_mm"] = json!(before);
-            j["validation_after_mm"] = json!(after);
-        }
-        if !self.worse.is_empty() {
-            j[super::record::ALLOWED_WORSE] = json!(self.worse);
-        }
-        j
+        Instrument::Spheres(_) => {}
     }
+    record
+}
+
+/// The options of a request that a kind file does not take: each with whether it was given.
+fn tracker_only(q: &IdentifyRequest) -> [(Opt, bool); 6] {
+    [
+        (Opt::Holdout, q.holdout.is_some()),
+        (Opt::Cv, q.cv.is_some()),
+        (Opt::Models, !q.models.is_empty()),
+        (Opt::Compliance, q.compliance.is_some()),
+        (
+            Opt::Prior,
+            !q.priors.is_empty() || !q.method.priors.is_empty(),
+        ),
+        (Opt::K, q.k.is_some()),
+    ]
+}
+
+/// The option a kind file (of targets or not) refuses and why, if any: the tracker's
+/// options, a registration the kind does not take, a method that is not a Jacobian one
+/// (`solver`: it is).
+fn refusal(q: &IdentifyRequest, targets: bool, solver: bool) -> Option<(Opt, String)> {
+    if let Some((option, _)) = tracker_only(q).into_iter().find(|o| o.1) {
+        let why = "it applies to the tracker's measurement file (§ 5.1) only";
+        return Some((option, why.to_string()));
+    }
+    let registration = q.registration;
+    if registration != Registration::Identify && !(targets && registration == Registration::Known) {
+        let why = if targets {
+            "multi-target points are registered by SVD onto the nominal robot with the base \
+             identified after (identify), or taken in the base frame (known)"
+        } else {
+            "the instrument is placed by its own unknowns, identified with the robot"
+        };
+        return Some((
+            Opt::Registration,
+            format!("{} is not taken: {why}", registration.as_str()),
+        ));
+    }
+    (!solver).then(|| {
+        let why = format!(
+            "{} is not one of the Jacobian methods (ls, ridge, igg3, lm) that identify them",
+            q.method.name()
+        );
+        (Opt::Method, why)
+    })
+}
+
+/// The refusal, by file, of an option `option` a kind file does not take (`why`).
+pub fn kind_refusal(q: &IdentifyRequest, kind: Kind, option: Opt, why: &str) -> Error {
+    let msg = format!(
+        "{} holds {} readings (docs/formats.md § 5.3): {why}",
+        q.source.display(),
+        kind.as_str()
+    );
+    Error::option(option, msg)
+}
+
+/// The identification of request `q` on the kind file `file` ([`identify_kind`]), with its
+/// refusals: options the kind does not take, undetermined data, a worse robot.
+pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindOutcome> {
+    let nominal = &q.robot;
+    let kind = file.data.instrument.kind();
+    let targets = matches!(file.data.instrument, Instrument::Targets(_));
+    if let Some((option, why)) = refusal(q, targets, q.method.method.solver().is_some()) {
+        return Err(kind_refusal(q, kind, option, &why));
+    }
+    let solver = q
+        .method
+        .method
+        .solver()
+        .unwrap_or_else(|| unreachable!("refusal() refuses the methods that are not solvers"));
+    check_names(Opt::Params, nominal, &q.params)?;
+    check_names(Opt::Fix, nominal, &q.fix)?;
+    let chosen = if q.params.is_empty() {
+        Chosen::Identifiable
+    } else {
+        Chosen::Given(&q.params, q.allow_rank_deficient)
+    };
+    let register = q.registration == Registration::Identify;
+    let fit = identify_kind(nominal, file, &q.source, (chosen, &q.fix, register), solver)?;
+    let r = &fit.identified;
+    let readings = fit.data.instrument.observations(file.qs.len());
+    // The file row of reading `i` (a step of distances is read at its second row).
+    let line = |i: usize| match &fit.data.instrument {
+        Instrument::Targets(t) => {
+            let (pose, target) = (i / t.len().max(1), i % t.len().max(1) + 1);
+            file.lines.get(pose).map_or(format!("reading {i}"), |l| {
+                format!("target {target} of the pose that starts on line {l}")
+            })
+        }
+        _ => {
+            let row = i + file.qs.len() - readings;
+            file.lines
+                .get(row)
+                .map_or(format!("reading {i}"), |l| format!("line {l}"))
+        }
+    };
+    let gross = || {
+        let (before, after) = &fit.residuals;
+        let (at, (i, ratio)) = gross_reading(after)
+            .map(|g| ("after", g))
+            .or_else(|| gross_reading(before).map(|g| ("before", g)))?;
+        Some(format!(
+            "the reading of {} has a residual {ratio:.0} times the median {at} calibration",
+            line(i)
+        ))
+    };
+    if super::verdict::undetermined_termination(r.termination) && !q.allow_rank_deficient {
+        let total = r.x.len();
+        let cause = match r.rank {
+            Some(k) if k < total => {
+                format!("do not determine every parameter (rank {k} of {total})")
+            }
+            Some(_) => "determine every parameter, yet the solve did not settle".to_string(),
+            None => "do not give a finite solve".to_string(),
+        };
+        let hint = gross().map_or(String::new(), |g| {
+            format!("; {g}: a gross reading is the likely cause")
+        });
+        let msg = format!(
+            "the {} readings {cause}{hint}; {} ended {}, so nothing was written. Measure \
+             poses that move every joint, leave parameters out with ",
+            kind.as_str(),
+            q.method.name(),
+            r.termination.as_str(),
+        );
+        let msg = Said::from(msg).name(Opt::Fix).text(", or pass ");
+        return Err(Error::file(
+            &q.source,
+            "data",
+            msg.on(Opt::AllowRankDeficient),
+        ));
+    }
+    let validation = q
+        .validate
+        .as_ref()
+        .map(|v| validate_positions(nominal, &fit.robot, v))
+        .transpose()?;
+    let worse = worse_causes(
+        validation.as_ref().map(|(b, a)| (b.rms, a.rms)),
+        fit.rms,
+        r.termination,
+        None,
+    );
+    if !worse.is_empty() && !q.allow_worse {
+        return Err(worse_error(&q.source, &worse, gross()));
+    }
+    let mut record =
+        IdentifiedRecord::of(&nominal.name, &q.source, q.method.name(), &fit.params, r);
+    if let Some((before, after)) = validation {
+        record = record.validated(before, after);
+    }
+    let record = IdentifiedRecord {
+        fixed: names(&q.fix),
+        allowed_worse: worse,
+        ..kind_keys(record, &fit, (kind, readings), q.registration)
+    };
+    Ok(KindOutcome {
+        nominal: nominal.clone(),
+        kind,
+        readings,
+        identifiable: matches!(chosen, Chosen::Identifiable),
+        fit,
+        validation,
+        record,
+    })
 }

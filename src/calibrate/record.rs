@@ -1,24 +1,29 @@
-//! The identification record: what `identified.json` holds (docs/formats.md `identify`), built
-//! here once from an [`IdentifyOutcome`](super::request::IdentifyOutcome) for every caller
-//! (the `identify` command writes it, the Python module returns it as a dict).
+//! The identification record: what `identified.json` holds (docs/formats.md `identify`), one
+//! type for a tracker's file and a measurement-kind file, built once by the pipeline
+//! ([`super::request`]) and serialised as it is: the `identify` command writes it, the
+//! Python module returns it.
 //!
-//! The tracker's record is serialised as it is written: the per-point vectors of the
-//! diagnostics go from their slices to the file, never through a JSON tree. Keys are in byte
-//! order at every level, as a `serde_json::Map` writes them.
+//! The keys are the fields, declared in byte order (as the file has always listed them); the
+//! keys a file does not have are left out. Small nested values are written through a JSON
+//! tree so that their keys are in byte order too; the per-point vectors of the diagnostics
+//! go from their slices to the file, never through a tree.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
-use serde_json::{json, Map, Value};
+use serde::{Serialize, Serializer};
 
-use super::cv::{CrossValidation, Holdout};
+use super::cv::CrossValidation;
 use super::diagnostics::Diagnostics;
 use super::validation::FileValidation;
-use super::{Calibrated, ErrorStats, Registration};
-use crate::numeric::Real;
-use crate::robot::{Param, Robot};
+use super::{ErrorStats, Registration, RoundsEnd};
+use crate::identify::{Identified, Termination};
+use crate::measurement::kind::Kind;
+use crate::numeric::{Frame, Real};
+use crate::robot::Param;
 
 /// A prior's effect: the estimate without and with it.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PriorMove {
     /// The parameter.
     pub parameter: String,
@@ -30,27 +35,153 @@ pub struct PriorMove {
     pub with_prior: Real,
 }
 
-/// The practice options' results of one identification on a tracker's file.
-#[derive(Clone, Debug, Default)]
-pub struct Practice {
-    /// `--holdout`.
-    pub holdout: Option<Holdout>,
-    /// The cross-validation of the model identified.
-    pub cv: Option<CrossValidation>,
-    /// `--models`: every model's cross-validation and the index of the best.
-    pub models: Option<(Vec<CrossValidation>, usize)>,
-    /// `--fix`.
-    pub fixed: Vec<Param>,
-    /// `--prior`: how each moved its estimate.
-    pub priors: Vec<PriorMove>,
-    /// The convergence trace: what it holds, and its values.
-    pub trace: Option<(&'static str, Vec<Real>)>,
-    /// The diagnostics.
-    pub diagnostics: Option<Diagnostics>,
+/// A registration's frame: measured (instrument) coordinates → base frame.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FrameRecord {
+    /// Roll, pitch, yaw (rad).
+    pub rpy_rad: [Real; 3],
+    /// Translation (mm).
+    pub xyz_mm: [Real; 3],
 }
 
-fn to_value<T: serde::Serialize>(v: &T) -> Value {
-    serde_json::to_value(v).unwrap_or(Value::Null)
+impl From<&Frame> for FrameRecord {
+    fn from(f: &Frame) -> Self {
+        let (xyz_mm, rpy_rad) = f.to_xyz_rpy();
+        FrameRecord { rpy_rad, xyz_mm }
+    }
+}
+
+/// The convergence trace: what it holds, and its values.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Trace {
+    /// The values, one per iteration or evaluation.
+    pub trace: Vec<Real>,
+    /// What they are.
+    pub values: &'static str,
+}
+
+/// `identified.json` (docs/formats.md `identify`): the keys of every identification, those of
+/// a tracker's file (`covariance`, the registration rounds, the practice options' and the
+/// diagnostics) and those of a measurement-kind file (`kind`, the instrument's unknowns and
+/// description, `standard_errors`, `unidentifiable`, `readings`). `None` and empty lists are
+/// keys the file does not have, but `rank`, which is written as `null`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct IdentifiedRecord {
+    /// Why the result makes the robot worse (a result kept although it does); empty: it
+    /// does not.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub allowed_worse: Vec<String>,
+    /// The column-scaled condition number of the solve.
+    pub condition_number: Real,
+    /// The convergence trace.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub convergence_trace: Option<Trace>,
+    /// The estimate's covariance (tracker's file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub covariance: Option<Vec<Vec<Real>>>,
+    /// The cross-validation of the model identified.
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub cv: Option<CrossValidation>,
+    /// The best of the models compared.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cv_best: Option<String>,
+    /// Every model's cross-validation.
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub cv_models: Option<Vec<CrossValidation>>,
+    /// Where the readings were read from.
+    pub data: String,
+    /// The diagnostics (tracker's file).
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        serialize_with = "diagnostics"
+    )]
+    pub diagnostics: Option<Diagnostics>,
+    /// The identified robot errors by parameter.
+    pub errors: BTreeMap<String, Real>,
+    /// Model evaluations.
+    pub evaluations: usize,
+    /// Parameters held at their nominal values.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub fixed: Vec<String>,
+    /// The rows held out for validation (`LAST/EVERY`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub holdout: Option<String>,
+    /// The instrument's unknowns at the solution (kind file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub instrument_unknowns: Option<BTreeMap<String, Real>>,
+    /// Iterations of the solve.
+    pub iterations: usize,
+    /// The readings' kind (kind file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kind: Option<Kind>,
+    /// The method's name.
+    pub method: String,
+    /// The identified robot parameters, in the order of the estimate.
+    pub parameters: Vec<String>,
+    /// Distances: whether from a fixed pivot.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pivot: Option<bool>,
+    /// Planes: the axis each plane is solved for.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub plane_axes: Option<Vec<&'static str>>,
+    /// How each prior moved its estimate.
+    #[serde(skip_serializing_if = "Vec::is_empty", serialize_with = "sorted")]
+    pub priors: Vec<PriorMove>,
+    /// The rank of the solve (`null`: not known).
+    pub rank: Option<usize>,
+    /// The number of readings (kind file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub readings: Option<usize>,
+    /// The registration.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registration: Option<Registration>,
+    /// The registration's frame.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registration_frame: Option<FrameRecord>,
+    /// The last frame step of the alternation (mm; tracker's file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registration_last_step_mm: Option<Real>,
+    /// Rounds of registration and identification (tracker's file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registration_rounds: Option<usize>,
+    /// How the alternation ended (tracker's file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub registration_termination: Option<RoundsEnd>,
+    /// The RMS residual (mm).
+    pub rms_residual_mm: Real,
+    /// The nominal robot's name.
+    pub robot: String,
+    /// The a-posteriori σ₀.
+    pub sigma0: Real,
+    /// The standard error of every unknown, robot's and instrument's (kind file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub standard_errors: Option<BTreeMap<String, Real>>,
+    /// Targets: their offsets on the flange (mm).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub targets_mm: Option<Vec<[Real; 3]>>,
+    /// How the solve ended.
+    pub termination: Termination,
+    /// Parameters the readings cannot determine (kind file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unidentifiable: Option<Vec<String>>,
+    /// Qiao's attitude errors after (deg).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub validation_after_attitude_deg: Option<ErrorStats>,
+    /// Orientation errors after (deg).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub validation_after_deg: Option<ErrorStats>,
+    /// Position errors after (mm).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub validation_after_mm: Option<ErrorStats>,
+    /// Qiao's attitude errors before (deg).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub validation_before_attitude_deg: Option<ErrorStats>,
+    /// Orientation errors before (deg).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub validation_before_deg: Option<ErrorStats>,
+    /// Position errors before (mm).
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    pub validation_before_mm: Option<ErrorStats>,
 }
 
 /// Names as strings.
@@ -58,181 +189,97 @@ pub(crate) fn names(v: &[Param]) -> Vec<String> {
     v.iter().map(|p| p.to_string()).collect()
 }
 
-impl Practice {
-    /// The keys the practice options add to `identified.json` (the diagnostics apart:
-    /// [`IdentifiedJson`] writes them); nothing for an option not used.
-    pub fn json(&self) -> Map<String, Value> {
-        let mut j = Map::new();
-        if let Some(h) = self.holdout {
-            j.insert("holdout".into(), json!(format!("{}/{}", h.last, h.every)));
-        }
-        if let Some(cv) = &self.cv {
-            j.insert("cv".into(), to_value(cv));
-        }
-        if let Some((cvs, best)) = &self.models {
-            j.insert("cv_models".into(), to_value(cvs));
-            j.insert("cv_best".into(), json!(cvs[*best].model));
-        }
-        if !self.fixed.is_empty() {
-            j.insert("fixed".into(), json!(names(&self.fixed)));
-        }
-        if !self.priors.is_empty() {
-            j.insert("priors".into(), to_value(&self.priors));
-        }
-        if let Some((what, values)) = &self.trace {
-            j.insert(
-                "convergence_trace".into(),
-                json!({"values": what, "trace": values}),
-            );
-        }
-        j
-    }
-}
-
-fn stats_json(s: &ErrorStats) -> Value {
-    json!({"mean": s.mean, "rms": s.rms, "max": s.max, "std": s.std})
-}
-
-/// What the base keys of a tracker's record are built from.
-pub struct TrackerBase<'a> {
-    /// The nominal robot (of the model identified).
-    pub nominal: &'a Robot,
-    /// The measurement file (its name in the record).
-    pub source: &'a Path,
-    /// The method's name.
-    pub method: &'a str,
-    /// The registration used.
-    pub registration: Registration,
-    /// The identified parameters.
-    pub params: &'a [Param],
-    /// The calibration.
-    pub calibrated: &'a Calibrated,
-    /// The validation on a separate file or the held-out rows, if any.
-    pub validation: Option<&'a FileValidation>,
-}
-
-/// The base keys of a tracker's `identified.json`: robot, data, method, registration, the
-/// estimate with its covariance and statistics, and the validation.
-pub fn tracker_base(r: &TrackerBase) -> Map<String, Value> {
-    let id = &r.calibrated.identified;
-    let names = names(r.params);
-    let errors: Map<String, Value> = names
-        .iter()
-        .zip(id.x.iter())
-        .map(|(n, x)| (n.clone(), json!(x)))
-        .collect();
-    let covariance = id.covariance();
-    let cov: Vec<Vec<Real>> = (0..covariance.nrows())
-        .map(|i| covariance.row(i).iter().copied().collect())
-        .collect();
-    let (xyz, rpy) = r.calibrated.frame.to_xyz_rpy();
-    let mut j = json!({
-        "robot": r.nominal.name,
-        "data": r.source.display().to_string(),
-        "method": r.method,
-        "registration": r.registration.as_str(),
-        "registration_frame": {"xyz_mm": xyz, "rpy_rad": rpy},
-        "registration_rounds": r.calibrated.rounds.rounds,
-        "registration_termination": r.calibrated.rounds.termination.as_str(),
-        "registration_last_step_mm": r.calibrated.rounds.last_step_mm,
-        "parameters": names,
-        "errors": errors,
-        "covariance": cov,
-        "condition_number": id.condition_number(),
-        "rank": id.rank,
-        "sigma0": id.sigma0,
-        "rms_residual_mm": id.rms_residual,
-        "iterations": id.iterations,
-        "evaluations": id.evaluations,
-        "termination": id.termination.as_str(),
-    });
-    if let Some(v) = r.validation {
-        j["validation_before_mm"] = stats_json(&v.before_mm);
-        j["validation_after_mm"] = stats_json(&v.after_mm);
-        if let Some((b, a)) = &v.deg {
-            j["validation_before_deg"] = stats_json(b);
-            j["validation_after_deg"] = stats_json(a);
-        }
-        if let Some((b, a)) = &v.attitude_deg {
-            j["validation_before_attitude_deg"] = stats_json(b);
-            j["validation_after_attitude_deg"] = stats_json(a);
+impl IdentifiedRecord {
+    /// The keys every identification has: the robot, the file, the method, and the solve
+    /// `id` of the robot parameters `params` (its estimate's first entries); no other key.
+    pub fn of(robot: &str, data: &Path, method: &str, params: &[Param], id: &Identified) -> Self {
+        let parameters = names(params);
+        IdentifiedRecord {
+            condition_number: id.condition_number(),
+            data: data.display().to_string(),
+            errors: parameters
+                .iter()
+                .cloned()
+                .zip(id.x.iter().copied())
+                .collect(),
+            evaluations: id.evaluations,
+            iterations: id.iterations,
+            method: method.to_string(),
+            parameters,
+            rank: id.rank,
+            rms_residual_mm: id.rms_residual,
+            robot: robot.to_string(),
+            sigma0: id.sigma0,
+            termination: id.termination,
+            ..Default::default()
         }
     }
-    let Value::Object(m) = j else {
-        unreachable!("json! of an object")
-    };
-    m
-}
 
-/// The key of `identified.json` that lists why a result kept with `--allow-worse` is worse
-/// than the nominal robot (docs/formats.md `identify`).
-pub const ALLOWED_WORSE: &str = "allowed_worse";
-
-/// A tracker's `identified.json`: the base keys, the `more` keys (the practice options',
-/// [`ALLOWED_WORSE`]) and the diagnostics, serialised in key order.
-pub struct IdentifiedJson<'a> {
-    /// The base keys ([`tracker_base`]).
-    pub base: &'a Map<String, Value>,
-    /// Keys added to them.
-    pub more: &'a Map<String, Value>,
-    /// The diagnostics, written from their vectors as `diagnostics`.
-    pub diagnostics: Option<&'a Diagnostics>,
-}
-
-/// A value of [`IdentifiedJson`]: a JSON tree, or the diagnostics.
-enum Entry<'a> {
-    Json(&'a Value),
-    Diagnostics(&'a Diagnostics),
-}
-
-impl serde::Serialize for Entry<'_> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap as _;
-        let d = match self {
-            Entry::Json(v) => return v.serialize(s),
-            Entry::Diagnostics(d) => d,
-        };
-        // Everything but the per-point vectors as a (small) tree; those two in its key order.
-        let small = Diagnostics {
-            sigma: d.sigma.clone(),
-            correlation: d.correlation.clone(),
-            flagged_pairs: d.flagged_pairs.clone(),
-            leverage: Vec::new(),
-            cook_distance: Vec::new(),
-            top_points: d.top_points.clone(),
-            predicted: d.predicted.clone(),
-        };
-        let Ok(Value::Object(tree)) = serde_json::to_value(&small) else {
-            return s.serialize_none();
-        };
-        let mut m = s.serialize_map(Some(tree.len()))?;
-        for (k, v) in &tree {
-            match k.as_str() {
-                "leverage" => m.serialize_entry(k, &d.leverage)?,
-                "cook_distance" => m.serialize_entry(k, &d.cook_distance)?,
-                _ => m.serialize_entry(k, v)?,
-            }
+    /// The record with the position errors before and after on a validation file.
+    pub fn validated(self, before: ErrorStats, after: ErrorStats) -> Self {
+        IdentifiedRecord {
+            validation_before_mm: Some(before),
+            validation_after_mm: Some(after),
+            ..self
         }
-        m.end()
     }
-}
 
-impl serde::Serialize for IdentifiedJson<'_> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap as _;
-        let mut keys: std::collections::BTreeMap<&str, Entry> = self
-            .base
+    /// The record with a tracker's validation `v`: positions, and orientations and
+    /// attitudes where the file has them.
+    pub fn validated_file(self, v: &FileValidation) -> Self {
+        let (bd, ad) = v.deg.unzip();
+        let (bt, at) = v.attitude_deg.unzip();
+        IdentifiedRecord {
+            validation_before_deg: bd,
+            validation_after_deg: ad,
+            validation_before_attitude_deg: bt,
+            validation_after_attitude_deg: at,
+            ..self.validated(v.before_mm, v.after_mm)
+        }
+    }
+
+    /// The model the cross-validation chose, with every model's results (`cv_models`,
+    /// `cv_best`): its index in `cv_models`.
+    pub fn best_model(&self) -> Option<usize> {
+        let best = self.cv_best.as_ref()?;
+        self.cv_models
+            .as_ref()?
             .iter()
-            .chain(self.more)
-            .map(|(k, v)| (k.as_str(), Entry::Json(v)))
-            .collect();
-        if let Some(d) = self.diagnostics {
-            keys.insert("diagnostics", Entry::Diagnostics(d));
-        }
-        let mut m = s.serialize_map(Some(keys.len()))?;
-        for (k, v) in &keys {
-            m.serialize_entry(k, v)?;
-        }
-        m.end()
+            .position(|m| &m.model == best)
     }
+}
+
+/// `v` written through a JSON tree: its keys in byte order.
+fn sorted<T: Serialize, S: Serializer>(v: &T, s: S) -> Result<S::Ok, S::Error> {
+    serde_json::to_value(v)
+        .map_err(serde::ser::Error::custom)?
+        .serialize(s)
+}
+
+/// The diagnostics with their keys in byte order: everything but the per-point vectors as a
+/// (small) tree, those two from their slices.
+fn diagnostics<S: Serializer>(d: &Option<Diagnostics>, s: S) -> Result<S::Ok, S::Error> {
+    use serde::ser::SerializeMap as _;
+    let Some(d) = d else {
+        return s.serialize_none();
+    };
+    let small = Diagnostics {
+        leverage: Vec::new(),
+        cook_distance: Vec::new(),
+        ..d.clone()
+    };
+    let serde_json::Value::Object(tree) =
+        serde_json::to_value(&small).map_err(serde::ser::Error::custom)?
+    else {
+        return s.serialize_none();
+    };
+    let mut m = s.serialize_map(Some(tree.len()))?;
+    for (k, v) in &tree {
+        match k.as_str() {
+            "leverage" => m.serialize_entry(k, &d.leverage)?,
+            "cook_distance" => m.serialize_entry(k, &d.cook_distance)?,
+            _ => m.serialize_entry(k, v)?,
+        }
+    }
+    m.end()
 }

@@ -52,7 +52,7 @@ pub fn register_svd(
         )));
     }
     if m < 3 {
-        return Err(Error::Compute(format!(
+        return Err(Error::Singular(format!(
             "registration needs at least 3 points, got {m}"
         )));
     }
@@ -78,7 +78,7 @@ pub fn register_svd(
             }
             let s: Real = w.iter().sum();
             if s <= 0.0 {
-                return Err(Error::Compute("registration: all weights are zero".into()));
+                return Err(Error::Singular("registration: all weights are zero".into()));
             }
             w.iter().map(|v| v * m as Real / s).collect()
         }
@@ -99,12 +99,12 @@ pub fn register_svd(
     }
     let svd = h.svd(true, true);
     let (Some(u), Some(vt)) = (svd.u, svd.v_t) else {
-        return Err(Error::Compute("registration: SVD failed".into()));
+        return Err(Error::Singular("registration: SVD failed".into()));
     };
     // Singular values are sorted in decreasing order by nalgebra.
     let s = svd.singular_values;
     if s[1].is_nan() || s[1] <= 1e-12 * s[0].max(Real::MIN_POSITIVE) {
-        return Err(Error::Compute(
+        return Err(Error::Singular(
             "registration: the points are (nearly) collinear; the rotation is undetermined".into(),
         ));
     }

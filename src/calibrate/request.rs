@@ -17,25 +17,20 @@ use std::path::PathBuf;
 
 use super::cv::{self, Holdout, Model};
 use super::diagnostics::{diagnose, Subject};
-use super::record::{
-    tracker_base, IdentifiedJson, Practice, PriorMove, TrackerBase, ALLOWED_WORSE,
-};
+use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{self, gross_reading, rms, worse_causes, worse_error};
 use super::{calibrate, Calibrated, Registration};
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::kind_csv::KindFile;
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
 use crate::robot::{param_sets, Param, Robot};
-use serde_json::{Map, Value};
 
-pub use super::on_kind::KindOutcome;
-use super::on_kind::{identify_kind, validate_positions, Chosen};
+pub use super::on_kind::{kind_refusal, KindOutcome};
 pub use super::verdict::{check_names, registration_warning, worse_warning};
-use crate::measurement::kind::{Instrument, Kind};
 
 /// The readings an identification runs on.
 #[derive(Clone, Debug)]
@@ -44,46 +39,6 @@ pub enum IdentifyData {
     Tracker(Measurements),
     /// A measurement-kind file: distance, plane, sphere or targets (§ 5.3).
     Kind(KindFile),
-}
-
-/// How the caller spells its options in messages: the command line's `--fix`,
-/// `--allow-rank-deficient`, or Python's `fix`, `allow_rank_deficient=True`.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Spelling {
-    /// `calbench identify`.
-    #[default]
-    Cli,
-    /// The Python module's keyword arguments.
-    Python,
-}
-
-impl Spelling {
-    /// The option the command line calls `cli` (`--fix`), as this caller names it.
-    pub fn option(self, cli: &str) -> String {
-        match self {
-            Spelling::Cli => cli.to_string(),
-            Spelling::Python => cli.trim_start_matches("--").replace('-', "_"),
-        }
-    }
-
-    /// `e` with its setting named as this caller names it (a refusal from a lower layer
-    /// names the command line's option).
-    pub fn respell(self, e: Error) -> Error {
-        match e {
-            Error::Setting { key, msg } if key.starts_with("--") => {
-                Error::setting(self.option(&key), msg)
-            }
-            e => e,
-        }
-    }
-
-    /// How this caller turns on the flag the command line calls `cli`.
-    pub fn flag(self, cli: &str) -> String {
-        match self {
-            Spelling::Cli => cli.to_string(),
-            Spelling::Python => format!("{}=True", self.option(cli)),
-        }
-    }
 }
 
 /// Everything one identification takes (the options of `calbench identify`,
@@ -126,12 +81,10 @@ pub struct IdentifyRequest {
     pub allow_rank_deficient: bool,
     /// Keep a result that makes the robot worse than the nominal one (with a warning).
     pub allow_worse: bool,
-    /// How the caller's options are named in messages.
-    pub spelling: Spelling,
 }
 
-/// An identification's result: on a tracker's file or on a kind file. Serialised
-/// (`serde_json`), it is `identified.json`.
+/// An identification's result: on a tracker's file or on a kind file. Its
+/// [`IdentifyOutcome::record`] is `identified.json` (and so is its serialisation).
 pub enum IdentifyOutcome {
     /// On a tracker's measurements.
     Tracker(Box<TrackerOutcome>),
@@ -144,12 +97,8 @@ pub struct TrackerOutcome {
     /// The nominal robot of the model identified (a `dh` robot read as `dh_beta` for a β
     /// model).
     pub nominal: Robot,
-    /// Where the data were read from.
-    pub source: PathBuf,
     /// The calibration rows (without held-out ones).
     pub data: Measurements,
-    /// The method's name.
-    pub method: &'static str,
     /// The registration.
     pub registration: Registration,
     /// The identified parameters, in the order of the estimate.
@@ -158,13 +107,12 @@ pub struct TrackerOutcome {
     pub calibrated: Calibrated,
     /// The validation (a separate file or the held-out rows).
     pub validation: Option<FileValidation>,
-    /// The practice options' results and the diagnostics.
-    pub practice: Practice,
     /// Per calibration point, the residual before and after (mm)
     /// ([`point_residuals`]).
     pub residuals: (Vec<Real>, Vec<Real>),
-    /// Why the result makes the robot worse (kept with `allow_worse`); empty: it does not.
-    pub worse: Vec<String>,
+    /// `identified.json`: the practice options' results, the diagnostics and why the result
+    /// makes the robot worse (kept with `allow_worse`) among the rest.
+    pub record: IdentifiedRecord,
 }
 
 impl IdentifyRequest {
@@ -189,67 +137,63 @@ impl IdentifyRequest {
             seed: 0,
             allow_rank_deficient: false,
             allow_worse: false,
-            spelling: Spelling::Cli,
         }
     }
 
     /// Runs the identification: refuses options that conflict, data that do not determine
     /// every parameter (unless `allow_rank_deficient`) and a result worse than the nominal
     /// robot (unless `allow_worse`), naming the file and the cause. The readings move into
-    /// the pipeline: no second copy of them lives while it runs.
+    /// the pipeline (a tracker's rows are not copied).
     pub fn run(mut self) -> Result<IdentifyOutcome> {
-        let s = self.spelling;
+        use Opt::{Compliance, Holdout, Models, Params, Validate};
         let conflicts = [
             (
-                "--validate",
+                Validate,
                 self.validate.is_some(),
-                "--holdout",
+                Holdout,
                 self.holdout.is_some(),
             ),
             (
-                "--models",
+                Models,
                 !self.models.is_empty(),
-                "--compliance",
+                Compliance,
                 self.compliance.is_some(),
             ),
             (
-                "--models",
+                Models,
                 !self.models.is_empty(),
-                "--params",
+                Params,
                 !self.params.is_empty(),
             ),
         ];
         if let Some((a, _, b, _)) = conflicts.iter().find(|c| c.1 && c.3) {
-            let why = format!("cannot be used with {}", s.option(a));
-            return Err(Error::setting(s.option(b), why));
+            let why = Said::from("cannot be used with ").name(*a);
+            return Err(Error::option(*b, why));
         }
-        let data = std::mem::replace(&mut self.data, IdentifyData::Tracker(Default::default()));
-        let outcome = match data {
+        let empty = IdentifyData::Tracker(Measurements::default());
+        match std::mem::replace(&mut self.data, empty) {
             IdentifyData::Tracker(d) => self
                 .tracker(d)
                 .map(|o| IdentifyOutcome::Tracker(Box::new(o))),
             IdentifyData::Kind(f) => {
-                kind_outcome(&self, &f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
+                super::on_kind::kind_outcome(&self, &f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
             }
-        };
-        outcome.map_err(|e| s.respell(e))
+        }
     }
 
     /// The identification on a tracker's measurements `d`.
     fn tracker(&self, mut d: Measurements) -> Result<TrackerOutcome> {
-        let s = self.spelling;
         let nominal = &self.robot;
         let mut spec = self.method.clone();
         spec.priors.extend(self.priors.iter().copied());
         let registration = self.registration;
         if let Some(k) = self.k {
-            let key = s.option("--k");
             if d.measure() == Measure::Position {
                 let why =
                     "weighs orientation against position errors; the data hold positions only";
-                return Err(Error::setting(key, why));
+                return Err(Error::option(Opt::K, why));
             }
-            crate::error::finite_positive(&key, k)?;
+            crate::error::finite_positive("k", k).map_err(|e| e.of_option(Opt::K))?;
             spec.k = k;
         }
         let mut val = self.validate.clone();
@@ -262,16 +206,17 @@ impl IdentifyRequest {
         let mut kinematic = if self.params.is_empty() {
             param_sets::identified_params_tool_first(nominal, d.measure(), with_base)
         } else {
-            check_names(&s.option("--params"), true, nominal, &self.params)?;
+            check_names(Opt::Params, nominal, &self.params)?;
             self.params.clone()
         };
         kinematic.retain(|p| !self.fix.contains(p));
         let mut params = kinematic.clone();
         if let Some(c) = &self.compliance {
-            params.extend(c.params(nominal, &s.option("--compliance"))?);
+            let compliances = c.params(nominal, "compliance");
+            params.extend(compliances.map_err(|e| e.of_option(Opt::Compliance))?);
         }
         params.retain(|p| !self.fix.contains(p));
-        check_names(&s.option("--fix"), false, nominal, &self.fix)?;
+        check_names(Opt::Fix, nominal, &self.fix)?;
         let setup = cv::CvSetup {
             method: &spec,
             registration,
@@ -306,12 +251,12 @@ impl IdentifyRequest {
         let recorder = TraceRecorder::default();
         let mut traced = spec.clone();
         traced.trace = Some(recorder.clone());
-        let c = calibrate_on(&nominal, &params, &d, registration, &traced, self.seed)?;
+        let c = calibrate_on(&nominal, &params, &d, registration, &traced, self.seed)
+            .map_err(|e| in_data(&self.source, e))?;
         if verdict::undetermined(&c) && !self.allow_rank_deficient {
-            let allow = s.flag("--allow-rank-deficient");
             let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
             return Err(verdict::undetermined_error(
-                &nominal, all, &c, source, &spec, &allow,
+                &nominal, all, &c, source, &spec,
             ));
         }
         let validation = val
@@ -323,7 +268,7 @@ impl IdentifyRequest {
         let (before, after) = point_residuals(&nominal, &c, &d)?;
         let trace = convergence_trace(&c, &recorder);
         let evaluations = match (&c.identified.trace, &trace) {
-            (None, Some((_, t))) => t.first().map(|&first| (first, c.identified.rms_residual)),
+            (None, Some(t)) => t.trace.first().map(|&f| (f, c.identified.rms_residual)),
             _ => None,
         };
         let worse = worse_causes(
@@ -341,12 +286,7 @@ impl IdentifyRequest {
                 .map(|(at, (i, r))| {
                     format!("point {i} has a residual {r:.0} times the median {at} calibration")
                 });
-            return Err(worse_error(
-                &self.source,
-                &worse,
-                gross,
-                &s.flag("--allow-worse"),
-            ));
+            return Err(worse_error(&self.source, &worse, gross));
         }
         drop((before, after));
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
@@ -362,56 +302,65 @@ impl IdentifyRequest {
                 .zip(validation.as_ref())
                 .map(|(v, s)| (v, s.after_mm.rms)),
         })?;
-        let practice = Practice {
-            holdout: self.holdout,
+        let id = &c.identified;
+        let mut record =
+            IdentifiedRecord::of(&nominal.name, &self.source, spec.name(), &params, id);
+        if let Some(v) = &validation {
+            record = record.validated_file(v);
+        }
+        let covariance = c.identified.covariance();
+        let (cv_models, cv_best) = choice
+            .map(|(cvs, best)| (cvs[best].model.clone(), cvs))
+            .map(|(best, cvs)| (Some(cvs), Some(best)))
+            .unwrap_or_default();
+        let record = IdentifiedRecord {
+            allowed_worse: worse,
+            convergence_trace: trace,
+            covariance: Some(
+                covariance
+                    .row_iter()
+                    .map(|r| r.iter().copied().collect())
+                    .collect(),
+            ),
             cv: cross,
-            models: choice,
-            fixed: self.fix.clone(),
-            priors,
-            trace,
+            cv_best,
+            cv_models,
             diagnostics: Some(diagnostics),
+            fixed: super::record::names(&self.fix),
+            holdout: self.holdout.map(|h| format!("{}/{}", h.last, h.every)),
+            priors,
+            registration: Some(registration),
+            registration_frame: Some((&c.frame).into()),
+            registration_last_step_mm: Some(c.rounds.last_step_mm),
+            registration_rounds: Some(c.rounds.rounds),
+            registration_termination: Some(c.rounds.termination),
+            ..record
         };
         let residuals = point_residuals(&nominal, &c, &d)?;
         Ok(TrackerOutcome {
             nominal,
-            source: self.source.clone(),
             data: d,
-            method: spec.name(),
             registration,
             params,
             calibrated: c,
             validation,
-            practice,
             residuals,
-            worse,
+            record,
         })
     }
 }
 
+/// A failure the data read from `source` cause ([`Error::Singular`]: the points do not
+/// determine the registration; [`Error::Diverged`]: the alternation diverged on them) as a
+/// refusal of that file; any other error as it is.
+fn in_data(source: &std::path::Path, e: Error) -> Error {
+    match e {
+        Error::Singular(m) | Error::Diverged(m) => Error::file(source, "data", m),
+        e => e,
+    }
+}
+
 impl TrackerOutcome {
-    /// The base keys of `identified.json` ([`tracker_base`]).
-    pub fn base_keys(&self) -> Map<String, Value> {
-        tracker_base(&TrackerBase {
-            nominal: &self.nominal,
-            source: &self.source,
-            method: self.method,
-            registration: self.registration,
-            params: &self.params,
-            calibrated: &self.calibrated,
-            validation: self.validation.as_ref(),
-        })
-    }
-
-    /// The keys the options add to them: the practice options' ([`Practice::json`]) and,
-    /// for a result kept worse than the nominal robot, [`ALLOWED_WORSE`].
-    pub fn more_keys(&self) -> Map<String, Value> {
-        let mut j = self.practice.json();
-        if !self.worse.is_empty() {
-            j.insert(ALLOWED_WORSE.into(), serde_json::json!(self.worse));
-        }
-        j
-    }
-
     /// The compensated robot, named `<nominal>-calibrated`, as `robot.toml` holds it.
     pub fn compensated(&self) -> Robot {
         let mut r = self.calibrated.robot.clone();
@@ -422,37 +371,39 @@ impl TrackerOutcome {
     /// The warnings printed when the result is written: a registration that did not settle
     /// ([`registration_warning`]) and the causes of a result kept worse than the nominal
     /// robot.
-    pub fn warnings(&self) -> Vec<String> {
-        let settle = registration_warning(&self.calibrated, self.registration);
+    pub fn warnings(&self) -> Vec<Said> {
+        let settle = registration_warning(&self.calibrated, self.registration).map(Said::from);
         settle.into_iter().chain(self.worse_warning()).collect()
     }
 
     /// The warning of a result kept worse than the nominal robot, if it is.
-    pub fn worse_warning(&self) -> Option<String> {
-        worse_warning(&self.worse)
+    pub fn worse_warning(&self) -> Option<Said> {
+        worse_warning(&self.record.allowed_worse)
     }
 }
 
-impl serde::Serialize for TrackerOutcome {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        let (base, more) = (self.base_keys(), self.more_keys());
-        let diagnostics = self.practice.diagnostics.as_ref();
-        IdentifiedJson {
-            base: &base,
-            more: &more,
-            diagnostics,
+impl IdentifyOutcome {
+    /// `identified.json`.
+    pub fn record(&self) -> &IdentifiedRecord {
+        match self {
+            IdentifyOutcome::Tracker(o) => &o.record,
+            IdentifyOutcome::Kind(o) => &o.record,
         }
-        .serialize(s)
+    }
+
+    /// The compensated robot, named `<nominal>-calibrated`, as `robot.toml` holds it.
+    pub fn compensated(&self) -> Robot {
+        match self {
+            IdentifyOutcome::Tracker(o) => o.compensated(),
+            IdentifyOutcome::Kind(o) => o.compensated(),
+        }
     }
 }
 
 /// `identified.json`.
 impl serde::Serialize for IdentifyOutcome {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
-        match self {
-            IdentifyOutcome::Tracker(o) => o.serialize(s),
-            IdentifyOutcome::Kind(o) => o.record().serialize(s),
-        }
+        self.record().serialize(s)
     }
 }
 
@@ -512,179 +463,16 @@ fn prior_moves(
 /// The convergence trace: the searches' best fitness per iteration, or the RMS point
 /// residual (mm) at each evaluation of the Jacobian methods' model (every round of an `svd`
 /// or `wsvd` alternation; adaptive LM's rejected trial steps included).
-fn convergence_trace(
-    c: &Calibrated,
-    recorder: &TraceRecorder,
-) -> Option<(&'static str, Vec<Real>)> {
+fn convergence_trace(c: &Calibrated, recorder: &TraceRecorder) -> Option<Trace> {
     if let Some(t) = &c.identified.trace {
-        return Some(("best fitness per iteration", t.clone()));
+        return Some(Trace {
+            values: "best fitness per iteration",
+            trace: t.clone(),
+        });
     }
     let t = recorder.lock().ok()?.clone();
-    (!t.is_empty()).then_some(("RMS point residual (mm) per evaluation", t))
-}
-
-/// The options of a request that a kind file does not take: each with whether it was given.
-fn tracker_only(q: &IdentifyRequest) -> [(&'static str, bool); 6] {
-    [
-        ("--holdout", q.holdout.is_some()),
-        ("--cv", q.cv.is_some()),
-        ("--models", !q.models.is_empty()),
-        ("--compliance", q.compliance.is_some()),
-        (
-            "--prior",
-            !q.priors.is_empty() || !q.method.priors.is_empty(),
-        ),
-        ("--k", q.k.is_some()),
-    ]
-}
-
-/// The option a kind file (of targets or not) refuses and why, if any: the tracker's
-/// options, a registration the kind does not take, a method that is not a Jacobian one
-/// (`solver`: it is).
-fn refusal(q: &IdentifyRequest, targets: bool, solver: bool) -> Option<(&'static str, String)> {
-    if let Some((option, _)) = tracker_only(q).into_iter().find(|o| o.1) {
-        let why = "it applies to the tracker's measurement file (§ 5.1) only";
-        return Some((option, why.to_string()));
-    }
-    let registration = q.registration;
-    if registration != Registration::Identify && !(targets && registration == Registration::Known) {
-        let why = if targets {
-            "multi-target points are registered by SVD onto the nominal robot with the base \
-             identified after (identify), or taken in the base frame (known)"
-        } else {
-            "the instrument is placed by its own unknowns, identified with the robot"
-        };
-        return Some((
-            "--registration",
-            format!("{} is not taken: {why}", registration.as_str()),
-        ));
-    }
-    (!solver).then(|| {
-        let why = format!(
-            "{} is not one of the Jacobian methods (ls, ridge, igg3, lm) that identify them",
-            q.method.name()
-        );
-        ("--method", why)
-    })
-}
-
-/// The refusal, by file, of an option `option` a kind file does not take (`why`).
-pub fn kind_refusal(q: &IdentifyRequest, kind: Kind, option: &str, why: &str) -> Error {
-    let msg = format!(
-        "{} holds {} readings (docs/formats.md § 5.3): {why}",
-        q.source.display(),
-        kind.as_str()
-    );
-    Error::setting(q.spelling.option(option), msg)
-}
-
-/// The identification of request `q` on the kind file `file` ([`identify_kind`]), with its
-/// refusals: options the kind does not take, undetermined data, a worse robot.
-fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindOutcome> {
-    let s = q.spelling;
-    let nominal = &q.robot;
-    let kind = file.data.instrument.kind();
-    let targets = matches!(file.data.instrument, Instrument::Targets(_));
-    if let Some((option, why)) = refusal(q, targets, q.method.method.solver().is_some()) {
-        return Err(kind_refusal(q, kind, option, &why));
-    }
-    let solver = q
-        .method
-        .method
-        .solver()
-        .unwrap_or_else(|| unreachable!("refusal() refuses the methods that are not solvers"));
-    check_names(&s.option("--params"), true, nominal, &q.params)?;
-    check_names(&s.option("--fix"), false, nominal, &q.fix)?;
-    let chosen = if q.params.is_empty() {
-        Chosen::Identifiable
-    } else {
-        Chosen::Given(&q.params, q.allow_rank_deficient)
-    };
-    let register = q.registration == Registration::Identify;
-    let fit = identify_kind(nominal, file, &q.source, (chosen, &q.fix, register), solver)?;
-    let r = &fit.identified;
-    let readings = fit.data.instrument.observations(file.qs.len());
-    // The file row of reading `i` (a step of distances is read at its second row).
-    let line = |i: usize| match &fit.data.instrument {
-        Instrument::Targets(t) => {
-            let (pose, target) = (i / t.len().max(1), i % t.len().max(1) + 1);
-            file.lines.get(pose).map_or(format!("reading {i}"), |l| {
-                format!("target {target} of the pose that starts on line {l}")
-            })
-        }
-        _ => {
-            let row = i + file.qs.len() - readings;
-            file.lines
-                .get(row)
-                .map_or(format!("reading {i}"), |l| format!("line {l}"))
-        }
-    };
-    let gross = || {
-        let (before, after) = &fit.residuals;
-        let (at, (i, ratio)) = gross_reading(after)
-            .map(|g| ("after", g))
-            .or_else(|| gross_reading(before).map(|g| ("before", g)))?;
-        Some(format!(
-            "the reading of {} has a residual {ratio:.0} times the median {at} calibration",
-            line(i)
-        ))
-    };
-    if super::verdict::undetermined_termination(r.termination) && !q.allow_rank_deficient {
-        let total = r.x.len();
-        let cause = match r.rank {
-            Some(k) if k < total => {
-                format!("do not determine every parameter (rank {k} of {total})")
-            }
-            Some(_) => "determine every parameter, yet the solve did not settle".to_string(),
-            None => "do not give a finite solve".to_string(),
-        };
-        let hint = gross().map_or(String::new(), |g| {
-            format!("; {g}: a gross reading is the likely cause")
-        });
-        return Err(Error::file(
-            &q.source,
-            "data",
-            format!(
-                "the {} readings {cause}{hint}; {} ended {}, so nothing was written. Measure \
-                 poses that move every joint, leave parameters out with {}, or pass {}",
-                kind.as_str(),
-                q.method.name(),
-                r.termination.as_str(),
-                s.option("--fix"),
-                s.flag("--allow-rank-deficient"),
-            ),
-        ));
-    }
-    let validation = q
-        .validate
-        .as_ref()
-        .map(|v| validate_positions(nominal, &fit.robot, v))
-        .transpose()?;
-    let worse = worse_causes(
-        validation.as_ref().map(|(b, a)| (b.rms, a.rms)),
-        fit.rms,
-        r.termination,
-        None,
-    );
-    if !worse.is_empty() && !q.allow_worse {
-        return Err(worse_error(
-            &q.source,
-            &worse,
-            gross(),
-            &s.flag("--allow-worse"),
-        ));
-    }
-    Ok(KindOutcome {
-        nominal: nominal.clone(),
-        source: q.source.clone(),
-        kind,
-        readings,
-        method: q.method.name(),
-        registration: q.registration,
-        fixed: q.fix.clone(),
-        identifiable: matches!(chosen, Chosen::Identifiable),
-        fit,
-        validation,
-        worse,
+    (!t.is_empty()).then_some(Trace {
+        values: "RMS point residual (mm) per evaluation",
+        trace: t,
     })
 }

@@ -1,12 +1,13 @@
 //! Whether an identification may be written: data that do not determine every parameter
-//! (refused unless `--allow-rank-deficient`), and a result that makes the robot worse than
-//! the nominal one (refused unless `--allow-worse`), each refusal naming the file, the cause
-//! and, where the residuals point to one, the gross reading likely behind it.
+//! (refused unless [`Opt::AllowRankDeficient`]), and a result that makes the robot worse than
+//! the nominal one (refused unless [`Opt::AllowWorse`]), each refusal naming the file, the
+//! cause, the option that keeps it (typed: each front end spells it) and, where the residuals
+//! point to one, the gross reading likely behind it.
 
 use std::path::Path;
 
 use super::{Calibrated, Registration, RoundsEnd};
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, Termination};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
@@ -28,7 +29,7 @@ pub fn undetermined_termination(t: Termination) -> bool {
 /// The refusal of a result `c` whose data (`data`, read from `source`) do not determine every
 /// parameter: the undetermined parameters and the dependent groups of the kinematic model
 /// (`params`: the kinematic parameters, which [`analyse`] can judge, and the number of all
-/// identified). `allow` names the option that accepts such a result. When the poses do
+/// identified). The refusal names the option that accepts such a result. When the poses do
 /// determine every parameter (a solve made singular by the readings themselves), the
 /// message says so and names the gross reading the residuals point to, if any.
 pub fn undetermined_error(
@@ -37,7 +38,6 @@ pub fn undetermined_error(
     c: &Calibrated,
     (source, data): (&Path, &Measurements),
     spec: &MethodSpec,
-    allow: &str,
 ) -> Error {
     let a = analyse(nominal, params.0, &data.qs, data.measure());
     let ended = format!(
@@ -55,31 +55,29 @@ pub fn undetermined_error(
                      robot's: a gross reading is the likely cause"
                 )
             });
-        return Error::file(
-            source,
-            "data",
-            format!(
-                "the poses determine all {} parameters, yet the solve did not settle{gross}; \
-                 {ended}. Check the readings, or pass {allow}",
-                params.1
-            ),
+        let msg = format!(
+            "the poses determine all {} parameters, yet the solve did not settle{gross}; \
+             {ended}. Check the readings, or pass ",
+            params.1
         );
+        return Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient));
     }
     let (undetermined, groups) = names_and_groups(&a);
-    Error::file(
-        source,
-        "data",
-        format!(
-            "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
-             dependent groups: {}); {ended}. Measure poses that move every joint, or pass \
-             {allow}",
-            a.rank,
-            params.1,
-            c.identified.rank.unwrap_or(a.rank),
-            undetermined,
-            groups,
-        ),
-    )
+    let msg = format!(
+        "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
+         dependent groups: {}); {ended}. Measure poses that move every joint, or pass ",
+        a.rank,
+        params.1,
+        c.identified.rank.unwrap_or(a.rank),
+        undetermined,
+        groups,
+    );
+    Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient))
+}
+
+/// `msg` followed by how the option `allow` is turned on.
+pub fn allowing(msg: String, allow: Opt) -> Said {
+    Said::from(msg).on(allow)
 }
 
 /// The undetermined parameters of an analysis, space-separated, and its dependent groups
@@ -153,21 +151,21 @@ pub fn worse_causes(
 }
 
 /// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
-/// `source`; `gross` names a reading the residuals point to; `allow` the option that keeps
-/// it.
-pub fn worse_error(source: &Path, causes: &[String], gross: Option<String>, allow: &str) -> Error {
+/// `source`; `gross` names a reading the residuals point to; the refusal names the option
+/// that keeps it ([`Opt::AllowWorse`]).
+pub fn worse_error(source: &Path, causes: &[String], gross: Option<String>) -> Error {
     let gross = gross.map_or(String::new(), |g| {
         format!("; {g}: a gross reading is the likely cause")
     });
+    let msg = format!(
+        "the identification makes the robot worse: {}{gross}; nothing was written. Check the \
+         readings (a column of one value, a unit, a swapped column), or pass ",
+        causes.join("; ")
+    );
     Error::file(
         source,
         "data",
-        format!(
-            "the identification makes the robot worse: {}{gross}; nothing was written. Check \
-             the readings (a column of one value, a unit, a swapped column), or pass {allow} \
-             to write it with a warning",
-            causes.join("; ")
-        ),
+        allowing(msg, Opt::AllowWorse).text(" to write it with a warning"),
     )
 }
 
@@ -177,12 +175,13 @@ pub fn rms(v: &[Real]) -> Real {
 }
 
 /// The warning of a result kept although it makes the robot worse (`causes`), if any.
-pub fn worse_warning(causes: &[String]) -> Option<String> {
+pub fn worse_warning(causes: &[String]) -> Option<Said> {
     (!causes.is_empty()).then(|| {
-        format!(
-            "the identification makes the robot worse ({}); kept because of --allow-worse",
+        let msg = format!(
+            "the identification makes the robot worse ({}); kept because of ",
             causes.join("; ")
-        )
+        );
+        Said::from(msg).name(Opt::AllowWorse)
     })
 }
 
@@ -206,24 +205,28 @@ pub fn registration_warning(c: &Calibrated, registration: Registration) -> Optio
     })
 }
 
-/// Refuses a name of the fixed or the given parameters (`option`; `given`: the latter) the
-/// robot's model does not have, a given compliance (the compliance model adds those, chosen
-/// by the `compliance` option whatever the caller calls it) and a name given twice.
-pub fn check_names(option: &str, given: bool, nominal: &Robot, names: &[Param]) -> Result<()> {
+/// Refuses a name of the fixed or the given parameters (`option`: [`Opt::Fix`] or
+/// [`Opt::Params`], the latter given) the robot's model does not have, a given compliance
+/// (the compliance model adds those) and a name given twice.
+pub fn check_names(option: Opt, nominal: &Robot, names: &[Param]) -> Result<()> {
     let known = nominal.params();
+    let given = option == Opt::Params;
     let bad = |p: &Param| match (known.contains(p), p.is_compliance()) {
         (_, true) if given => Some(
-            "is a joint compliance: the compliance model adds those (the `compliance` option), \
-             not a list of parameters"
-                .into(),
+            Said::from("is a joint compliance: the compliance model adds those (")
+                .name(Opt::Compliance)
+                .text("), not a list of parameters"),
         ),
-        (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name)),
+        (false, false) => Some(format!("is not a parameter of robot `{}`", nominal.name).into()),
         _ => None,
     };
     for (i, p) in names.iter().enumerate() {
         let why = bad(p).or(names[..i].contains(p).then(|| "is given twice".into()));
         if let Some(why) = why {
-            return Err(Error::setting(option, format!("`{p}` {why}")));
+            return Err(Error::option(
+                option,
+                Said::from(format!("`{p}` ")).then(why),
+            ));
         }
     }
     Ok(())

@@ -38,7 +38,9 @@ pub fn run(args: &FkArgs) -> Result<()> {
         let e = Error::joint_count("--q", "the values given", args.q.len(), robot.dof());
         return Err(e.into());
     }
-    let q = robot.q_from_user_checked(&args.q, "--q")?;
+    let q = robot
+        .q_from_user_checked(&args.q, "q")
+        .map_err(|e| e.of_option(calbench::error::Opt::Q))?;
     let f = robot.fk(&q);
     let rot: Vec<[Real; 3]> = (0..3)
         .map(|i| [f.rot[(i, 0)], f.rot[(i, 1)], f.rot[(i, 2)]])

@@ -12,7 +12,7 @@ use calbench::calibrate::request::{
     IdentifyData, IdentifyOutcome, IdentifyRequest, TrackerOutcome,
 };
 use calbench::calibrate::{Registration, RoundsEnd};
-use calbench::error::Error;
+use calbench::error::{Error, Opt};
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
 use calbench::measurement::kind_csv::read_kind_file;
@@ -231,7 +231,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         let why = "it applies to the tracker's measurement file (§ 5.1) only";
         let kind = f.data.instrument.kind();
         return Err(
-            calbench::calibrate::request::kind_refusal(&request, kind, "--export", why).into(),
+            calbench::calibrate::request::kind_refusal(&request, kind, Opt::Export, why).into(),
         );
     }
     match request.run()? {
@@ -245,7 +245,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
 fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     let out = &args.out;
     for w in o.warnings() {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", w.spell(super::spell));
     }
     let c = &o.calibrated;
     let mut extra = Vec::new();
@@ -263,7 +263,7 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     let urdf = compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?;
     let record = IdentifyRecord::of(o, urdf);
     write_identified_with(out, &record, &additions(o), &extra)?;
-    if let Some((cvs, best)) = &o.practice.models {
+    if let (Some(cvs), Some(best)) = (&o.record.cv_models, o.record.best_model()) {
         out!("model             CV RMS (mm)  folds mean ± sd   parameters");
         for (i, m) in cvs.iter().enumerate() {
             out!(
@@ -273,10 +273,10 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
                 m.mean,
                 m.sd,
                 m.parameters,
-                if i == *best { "  (best)" } else { "" }
+                if i == best { "  (best)" } else { "" }
             );
         }
-    } else if let Some(x) = &o.practice.cv {
+    } else if let Some(x) = &o.record.cv {
         out!(
             "{}-fold cross-validation: RMS {:.4} mm (folds {:.4} ± {:.4} mm)",
             x.k,
@@ -300,7 +300,7 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     };
     out!(
         "{} on {} points: {} after {} iterations{rounds}; written to {}",
-        o.method,
+        o.record.method,
         o.data.len(),
         r.termination.as_str(),
         r.iterations,

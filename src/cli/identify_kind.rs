@@ -9,7 +9,8 @@ use anyhow::Result;
 
 use calbench::calibrate::request::KindOutcome;
 use calbench::calibrate::ErrorStats;
-use calbench::report::output::{folder, Json, RobotToml};
+use calbench::report::identified::identified_json;
+use calbench::report::output::{folder, RobotToml};
 
 /// The files written.
 pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
@@ -18,17 +19,14 @@ pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
 /// validation table (with `--validate`, a tracker's file) and a summary line.
 pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     if let Some(w) = o.worse_warning() {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", w.spell(super::spell));
     }
-    let [identified, robot_file] = OUTPUTS;
-    let (record, compensated) = (o.record(), o.compensated());
+    let [_, robot_file] = OUTPUTS;
+    let compensated = o.compensated();
     folder(
         out,
         &[
-            &Json {
-                name: identified,
-                value: &record,
-            },
+            &identified_json(&o.record),
             &RobotToml {
                 name: robot_file,
                 robot: &compensated,
@@ -55,7 +53,7 @@ pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     let r = &o.fit.identified;
     out!(
         "{} on {} {kind} readings: {} after {} iterations; written to {}",
-        o.method,
+        o.record.method,
         o.readings,
         r.termination.as_str(),
         r.iterations,

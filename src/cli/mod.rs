@@ -48,6 +48,25 @@ pub mod run;
 pub mod simulate;
 pub mod task;
 
+/// How the command line spells an option the library names ([`calbench::error::Opt`]):
+/// `--allow-worse`, named and turned on alike.
+pub fn spell(opt: calbench::error::Opt, _on: bool) -> String {
+    format!("--{}", opt.name().replace('_', "-"))
+}
+
+/// An error as the command line shows it: its causes joined as `{:#}` joins them, the
+/// library's errors with their options spelled as flags ([`spell`]).
+pub fn message(e: &anyhow::Error) -> String {
+    let parts: Vec<String> = e
+        .chain()
+        .map(|c| match c.downcast_ref::<Error>() {
+            Some(e) => e.spelled(spell),
+            None => c.to_string(),
+        })
+        .collect();
+    parts.join(": ")
+}
+
 /// A value parser for a library enum named by its `strum` derive: it accepts exactly the
 /// names of `T`'s variants (the names of files and reports), which `--help` lists and the
 /// refusal of any other value repeats.

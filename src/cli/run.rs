@@ -90,20 +90,21 @@ fn shard(text: &str) -> std::result::Result<ShardArg, String> {
     if text == "auto" {
         return Ok(ShardArg::Auto);
     }
-    Shard::parse(text)
-        .map(ShardArg::Given)
-        .map_err(|e| match e {
-            Error::Setting { msg, .. } => msg,
-            other => other.to_string(),
-        })
+    Shard::parse(text).map(ShardArg::Given).map_err(why)
 }
 
 /// `--precision 0.5%` or `--precision 0.002mm`.
 fn precision(text: &str) -> std::result::Result<Precision, String> {
-    Precision::parse(text).map_err(|e| match e {
-        Error::Setting { msg, .. } => msg,
-        other => other.to_string(),
-    })
+    Precision::parse(text).map_err(why)
+}
+
+/// What a value parser says of a refused value: the setting's message (the parser names the
+/// flag), or the whole error.
+fn why(e: Error) -> String {
+    match e {
+        Error::Setting { msg, .. } | Error::Option { msg, .. } => msg.spell(super::spell),
+        other => other.spelled(super::spell),
+    }
 }
 
 /// `calbench` without arguments: the built-in default study into `results/default/`.

@@ -65,7 +65,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
         unreachable!("a task's data are a tracker's measurements")
     };
     for w in o.warnings() {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", w.spell(super::spell));
     }
     let entry = TaskEntry {
         task: &task,
@@ -78,13 +78,13 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
     write_identified_with(&args.out, &record, &additions(&o), &[("task.json", text)])?;
-    if let Some((cvs, best)) = &o.practice.models {
+    if let (Some(cvs), Some(best)) = (&o.record.cv_models, o.record.best_model()) {
         for (i, m) in cvs.iter().enumerate() {
             out!(
                 "  {:<24} CV RMS {:>8.4} mm{}",
                 m.model,
                 m.rms,
-                if i == *best { "  (chosen)" } else { "" }
+                if i == best { "  (chosen)" } else { "" }
             );
         }
     }

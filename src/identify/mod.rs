@@ -102,7 +102,7 @@ pub trait Method: std::fmt::Debug + Send + Sync {
 
 /// Why an identification stopped. The names (serde, kebab-case) are those of reports and
 /// `trials.csv`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 #[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
 #[strum(serialize_all = "kebab-case")]
@@ -125,7 +125,9 @@ pub enum Termination {
     RankDeficient,
     /// Levenberg–Marquardt could not find a step that lowers the cost.
     NoProgress,
-    /// The problem or the settings are inconsistent (sizes, non-finite start, bad options).
+    /// The problem or the settings are inconsistent (sizes, non-finite start, bad options);
+    /// the default: no solve ran.
+    #[default]
     InvalidInput,
 }
 

@@ -67,6 +67,54 @@ pub fn recheck<T: Serialize + DeserializeOwned>(v: &T) -> crate::Result<()> {
         .map_err(|(key, msg)| crate::Error::setting(key, msg))
 }
 
+/// [`recheck`] of the settings of the scenario section `section` (`tracker`): the error
+/// names the key under it (`tracker.coverage`).
+pub fn recheck_at<T: Serialize + DeserializeOwned>(section: &str, v: &T) -> crate::Result<()> {
+    recheck(v).map_err(|e| match e {
+        crate::Error::Setting { key, msg } => {
+            crate::Error::setting(format!("{section}.{key}"), msg)
+        }
+        e => e,
+    })
+}
+
+/// `v`, numbers, refused unless each is finite.
+pub fn finite<'de, D, T>(d: D) -> Result<T, D::Error>
+where
+    D: serde::Deserializer<'de>,
+    T: serde::Deserialize<'de> + AsRef<[crate::numeric::Real]>,
+{
+    let v = T::deserialize(d)?;
+    let (n, bad) = (v.as_ref().len(), v.as_ref().iter().find(|x| !x.is_finite()));
+    match bad {
+        Some(x) => Err(de::Error::custom(format!(
+            "must be {n} finite numbers, got {x}"
+        ))),
+        None => Ok(v),
+    }
+}
+
+/// `v`, a range `[lo, hi]`, refused unless `0 ≤ lo ≤ hi` (finite).
+pub fn range<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<[crate::numeric::Real; 2], D::Error> {
+    let [lo, hi] = <[crate::numeric::Real; 2] as serde::Deserialize>::deserialize(d)?;
+    if lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi {
+        Ok([lo, hi])
+    } else {
+        Err(de::Error::custom(format!(
+            "must be [lo, hi] with 0 ≤ lo ≤ hi, got [{lo}, {hi}]"
+        )))
+    }
+}
+
+/// `v`, an optional number, refused unless finite and in [0, 1].
+pub fn share<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<Option<crate::numeric::Real>, D::Error> {
+    number(d, |v| (0.0..=1.0).contains(&v), "in [0, 1]").map(Some)
+}
+
 /// `v`, a number, refused unless finite and above 0.
 pub fn positive<'de, D: serde::Deserializer<'de>>(d: D) -> Result<crate::numeric::Real, D::Error> {
     number(d, |v| v > 0.0, "positive")

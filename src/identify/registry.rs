@@ -105,7 +105,7 @@ pub fn options<M: Method + DeserializeOwned + 'static>(
 /// A setting error as (key, message).
 fn split(e: Error) -> EntryError {
     match e {
-        Error::Setting { key, msg } => (key, msg),
+        Error::Setting { key, msg } => (key, msg.to_string()),
         other => (String::new(), other.to_string()),
     }
 }
@@ -252,7 +252,7 @@ pub fn parse_prior(name: &str, sigma: Option<Real>) -> std::result::Result<(Para
 pub fn method_by_name(name: &str) -> Result<MethodSpec> {
     let mut t = toml::Table::new();
     t.insert("name".into(), toml::Value::String(name.into()));
-    MethodSpec::from_table(&t).map_err(|(_, msg)| Error::setting("--method", msg))
+    MethodSpec::from_table(&t).map_err(|(_, msg)| Error::option(crate::error::Opt::Method, msg))
 }
 
 #[cfg(test)]

@@ -27,8 +27,8 @@ const UR_SEGMENTS: [&str; 6] = [
 /// geometric part alone would leave the controller short of the model that was chosen).
 pub fn ur_yaml(robot: &Robot) -> Result<String> {
     if crate::robot::harmonics::has_harmonics(robot) {
-        return Err(Error::setting(
-            "--export",
+        return Err(Error::option(
+            crate::error::Opt::Export,
             "ur-yaml cannot carry the joint-angle harmonics of the chosen model; export \
              dh-csv or use robot.toml (its `harmonics` key)",
         ));
@@ -36,8 +36,8 @@ pub fn ur_yaml(robot: &Robot) -> Result<String> {
     let six_revolute =
         robot.dof() == 6 && robot.joints.iter().all(|j| j.kind == JointType::Revolute);
     if !six_revolute || robot.convention == Convention::Mdh || robot.coupling.is_some() {
-        return Err(Error::setting(
-            "--export",
+        return Err(Error::option(
+            crate::error::Opt::Export,
             format!(
                 "ur-yaml needs a UR-like robot: six revolute, uncoupled joints in the dh or \
                  dh_beta convention; robot \"{}\" is not",

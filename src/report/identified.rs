@@ -5,11 +5,8 @@
 use super::markdown::{fmt_num, table};
 use super::plots;
 
-use serde_json::Value;
-
 use super::output::{Buffered, Figure, Output, Outputs, Text};
-use crate::calibrate::diagnostics::Diagnostics;
-use crate::calibrate::record::{tracker_base, IdentifiedJson, TrackerBase};
+use crate::calibrate::record::IdentifiedRecord;
 pub use crate::calibrate::request::registration_warning;
 use crate::calibrate::request::{worse_warning, TrackerOutcome};
 pub use crate::calibrate::validation::{validate_file, FileValidation};
@@ -34,13 +31,6 @@ impl<'a> IdentifyRecord<'a> {
     pub fn of(o: &'a TrackerOutcome, urdf: Option<String>) -> Self {
         IdentifyRecord { outcome: o, urdf }
     }
-
-    /// Per calibration point, the residual before and after (mm), as the pipeline computed
-    /// them ([`crate::calibrate::validation::point_residuals`]).
-    pub fn residuals(&self) -> Result<(&[Real], &[Real])> {
-        let (b, a) = &self.outcome.residuals;
-        Ok((b, a))
-    }
 }
 
 impl std::ops::Deref for IdentifyRecord<'_> {
@@ -50,24 +40,23 @@ impl std::ops::Deref for IdentifyRecord<'_> {
     }
 }
 
-/// `identified.json`'s base keys ([`tracker_base`]).
-pub fn identified_json(r: &IdentifyRecord) -> serde_json::Map<String, Value> {
-    tracker_base(&TrackerBase {
-        nominal: &r.nominal,
-        source: &r.source,
-        method: r.method,
-        registration: r.registration,
-        params: &r.params,
-        calibrated: &r.calibrated,
-        validation: r.validation.as_ref(),
-    })
+/// `identified.json` of any identification, tracker's or kind file's: the record
+/// pretty-printed, with a final newline; the one writer of the file.
+pub fn identified_json(record: &IdentifiedRecord) -> Buffered<'_> {
+    Buffered {
+        name: "identified.json",
+        body: Box::new(move |w| {
+            serde_json::to_writer_pretty(&mut *w, record)?;
+            w.write_all(b"\n")
+        }),
+    }
 }
 
 /// `residuals.csv`, written a row at a time: per point, the residual before (the nominal
 /// robot in its own registration) and after (the compensated robot in the final
 /// registration), and the final weight.
 pub fn residuals_csv<'a>(r: &'a IdentifyRecord) -> Result<Buffered<'a>> {
-    let (before, after) = r.residuals()?;
+    let (before, after) = (&r.outcome.residuals.0[..], &r.outcome.residuals.1[..]);
     let weights = &r.calibrated.identified.weights;
     Ok(Buffered {
         name: "residuals.csv",
@@ -82,15 +71,10 @@ pub fn residuals_csv<'a>(r: &'a IdentifyRecord) -> Result<Buffered<'a>> {
     })
 }
 
-/// What `identify`'s options add to its files: keys of `identified.json` and a section of
-/// `report.md` and `report.html` ([`super::practice`]).
+/// What `identify`'s options add to its reports: a section of `report.md` and `report.html`
+/// ([`super::practice`]).
 #[derive(Default)]
-pub struct Additions<'a> {
-    /// Keys added to `identified.json`.
-    pub json: serde_json::Map<String, Value>,
-    /// The diagnostics, added to `identified.json` as `diagnostics` (written from their
-    /// vectors by [`outputs`]).
-    pub diagnostics: Option<&'a Diagnostics>,
+pub struct Additions {
     /// The section's content, in order: one piece serves both pages.
     pub blocks: Vec<Block>,
 }
@@ -107,7 +91,7 @@ pub enum Block {
     Table(Vec<&'static str>, Vec<Vec<String>>),
 }
 
-impl Additions<'_> {
+impl Additions {
     /// The blocks as Markdown, each after a blank line.
     pub fn markdown(&self) -> String {
         let mut md = String::new();
@@ -125,25 +109,14 @@ impl Additions<'_> {
 
 /// The files of `calbench identify` but `report.html` and the controller exports
 /// ([`super::write_identified_with`] adds them), in the order they are written:
-/// `residuals.csv`, `identified.json` (with the `more` keys: cross-validation, priors,
-/// diagnostics, [`super::practice`]), the figures, `report.md`, `robot.urdf` if asked for and
-/// `robot.toml` (the compensated robot, named `<nominal>-calibrated`).
+/// `residuals.csv`, `identified.json` ([`identified_json`]), the figures, `report.md` (with
+/// the `more` section: cross-validation, priors, diagnostics, [`super::practice`]),
+/// `robot.urdf` if asked for and `robot.toml` (the compensated robot, named
+/// `<nominal>-calibrated`).
 pub fn outputs<'a>(r: &'a IdentifyRecord, more: &'a Additions) -> Result<Outputs<'a>> {
-    let base = identified_json(r);
     let mut out: Outputs<'a> = vec![
         Box::new(residuals_csv(r)?),
-        Box::new(Buffered {
-            name: "identified.json",
-            body: Box::new(move |w| {
-                let record = IdentifiedJson {
-                    base: &base,
-                    more: &more.json,
-                    diagnostics: more.diagnostics,
-                };
-                serde_json::to_writer_pretty(&mut *w, &record)?;
-                w.write_all(b"\n")
-            }),
-        }),
+        Box::new(identified_json(&r.record)),
     ];
     out.extend(
         figures(r)?
@@ -160,11 +133,9 @@ pub fn outputs<'a>(r: &'a IdentifyRecord, more: &'a Additions) -> Result<Outputs
             text: u.clone(),
         }));
     }
-    let mut compensated = r.calibrated.robot.clone();
-    compensated.name = format!("{}-calibrated", r.nominal.name);
     out.push(Box::new(Text {
         name: "robot.toml",
-        text: robot_to_toml(&compensated),
+        text: robot_to_toml(&r.compensated()),
     }));
     Ok(out)
 }
@@ -216,7 +187,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
             "{lowered} points were weighed down (final weight between 0 and 1) as suspect."
         ));
     }
-    w.extend(worse_warning(&r.worse).map(|t| t + "."));
+    w.extend(worse_warning(&r.record.allowed_worse).map(|t| t.to_string() + "."));
     w
 }
 
@@ -327,14 +298,13 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     let _ = writeln!(
         s,
         "# Identification of {} on {}\n",
-        r.nominal.name,
-        r.source.display()
+        r.nominal.name, r.record.data
     );
     let _ = writeln!(
         s,
         "{} on {} points ({}), registration {}: {} after {} iterations; condition number \
          (column-scaled) {}, rank {} of {} parameters.\n",
-        r.method,
+        r.record.method,
         r.data.len(),
         if r.data.quats.is_some() {
             "full pose"
@@ -406,13 +376,13 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
 
 /// Whether the report shows the final point weights: those of IGG3.
 fn igg3_weights(r: &IdentifyRecord) -> bool {
-    r.method == "igg3" && !r.calibrated.identified.weights.is_empty()
+    r.record.method == "igg3" && !r.calibrated.identified.weights.is_empty()
 }
 
 /// The figures of `report.md`: the residual per point before and after, their histogram,
 /// and IGG3's final weights.
 pub fn figures<'a>(r: &'a IdentifyRecord) -> Result<Vec<Figure<'a>>> {
-    let (before, after) = r.residuals()?;
+    let (before, after) = (&r.outcome.residuals.0[..], &r.outcome.residuals.1[..]);
     // Beyond PLOT_POINTS points the plot shows the largest of each run of k consecutive
     // points (the outliers stay visible; the figure and its SVG stay small).
     let k = before.len().div_ceil(PLOT_POINTS).max(1);

@@ -1,20 +1,18 @@
-//! What `calbench identify`'s practice options add to `identified.json` and `report.md`
-//! (docs/formats.md `identify`): the held-out split, the cross-validation and model choice,
-//! the fixed parameters, how each prior moved its estimate, and the diagnostics.
+//! What `calbench identify`'s practice options add to `report.md` and `report.html`
+//! (docs/formats.md `identify`), rendered from the identification record: the
+//! cross-validation and model choice, the fixed parameters, how each prior moved its
+//! estimate, the convergence trace and the diagnostics.
 
 use super::identified::{Additions, Block};
 use super::markdown::fmt_num;
-pub use crate::calibrate::record::{Practice, PriorMove};
+pub use crate::calibrate::record::{IdentifiedRecord, PriorMove};
 use crate::calibrate::request::TrackerOutcome;
 
-impl Practice {
-    /// The keys added to `identified.json` and the section added to `report.md` and `report.html`; nothing
-    /// for an option not used.
-    pub fn additions(&self) -> Additions<'_> {
-        let mut a = Additions {
-            json: self.json(),
-            ..Default::default()
-        };
+impl IdentifiedRecord {
+    /// The section the practice options add to `report.md` and `report.html`; nothing for
+    /// an option not used.
+    pub fn additions(&self) -> Additions {
+        let mut a = Additions::default();
         let md = &mut a.blocks;
         if let Some(cv) = &self.cv {
             md.push(Block::Heading("Cross-validation".into()));
@@ -29,13 +27,13 @@ impl Practice {
                 fmt_num(cv.sd, 4)
             )));
         }
-        if let Some((cvs, best)) = &self.models {
+        if let (Some(cvs), Some(best)) = (&self.cv_models, self.best_model()) {
             let rows: Vec<Vec<String>> = cvs
                 .iter()
                 .enumerate()
                 .map(|(i, m)| {
                     vec![
-                        format!("{}{}", m.model, if i == *best { " (best)" } else { "" }),
+                        format!("{}{}", m.model, if i == best { " (best)" } else { "" }),
                         m.parameters.to_string(),
                         fmt_num(m.rms, 4),
                         format!("{} ± {}", fmt_num(m.mean, 4), fmt_num(m.sd, 4)),
@@ -47,10 +45,9 @@ impl Practice {
             md.push(Block::Table(headers, rows));
         }
         if !self.fixed.is_empty() {
-            let names: Vec<String> = self.fixed.iter().map(|p| p.to_string()).collect();
             md.push(Block::Para(format!(
                 "Fixed at nominal: {}.",
-                names.join(", ")
+                self.fixed.join(", ")
             )));
         }
         if !self.priors.is_empty() {
@@ -63,7 +60,8 @@ impl Practice {
             let headers = vec!["parameter", "σ", "without prior", "with prior"];
             md.push(Block::Table(headers, rows));
         }
-        if let Some((what, values)) = &self.trace {
+        if let Some(t) = &self.convergence_trace {
+            let (what, values) = (t.values, &t.trace);
             md.push(Block::Heading("Convergence".into()));
             md.push(Block::Para(format!(
                 "{what}: {} values, from {} to {}.",
@@ -73,7 +71,6 @@ impl Practice {
             )));
         }
         if let Some(d) = &self.diagnostics {
-            a.diagnostics = Some(d);
             md.push(Block::Heading("Diagnostics".into()));
             let pairs: Vec<String> = d
                 .flagged_pairs
@@ -117,12 +114,10 @@ impl Practice {
     }
 }
 
-/// What an identification on a tracker's file adds to `identified.json` and the reports:
-/// the practice options' keys and section, and a result kept worse than the nominal robot
-/// (`allowed_worse`, and a warning section).
-pub fn additions(o: &TrackerOutcome) -> Additions<'_> {
-    let mut a = o.practice.additions();
-    a.json = o.more_keys();
+/// What an identification on a tracker's file adds to the reports: the practice options'
+/// section, and a result kept worse than the nominal robot (a warning section).
+pub fn additions(o: &TrackerOutcome) -> Additions {
+    let mut a = o.record.additions();
     if let Some(w) = o.worse_warning() {
         a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
         a.blocks

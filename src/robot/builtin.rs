@@ -101,10 +101,14 @@ pub fn load_chain(name_or_path: &str, which: &crate::robot::urdf::UrdfChain) -> 
     let path = Path::new(name_or_path);
     let urdf = path.exists() && crate::robot::urdf::is_urdf(name_or_path);
     if !urdf && *which != crate::robot::urdf::UrdfChain::default() {
-        return Err(Error::setting(
-            "--tip",
-            format!("--base and --tip choose a chain of a URDF; \"{name_or_path}\" is not one"),
+        let msg = crate::error::Said::default()
+            .name(crate::error::Opt::Base)
+            .text(" and ");
+        let msg = msg.name(crate::error::Opt::Tip);
+        let msg = msg.text(format!(
+            " choose a chain of a URDF; \"{name_or_path}\" is not one"
         ));
+        return Err(Error::option(crate::error::Opt::Tip, msg));
     }
     if let Some(b) = builtin(name_or_path) {
         return Ok((b.build)());

@@ -605,13 +605,13 @@ mod tests {
             + "[[joints]]\ntype = \"revolute\"\n"
             + JOINT;
         let r = parse_robot_file(&text, Path::new("p.toml")).unwrap();
-        let q = r.q_from_user_checked(&[0.5, 30.0], "--q").unwrap();
+        let q = r.q_from_user_checked(&[0.5, 30.0], "q").unwrap();
         assert!((q[0] - 500.0).abs() < 1e-12 && (q[1] - 30.0_f64.to_radians()).abs() < 1e-12);
         for bad in [[1e306, 0.0], [0.0, 1e300], [Real::NAN, 0.0]] {
-            let e = r.q_from_user_checked(&bad, "--q").unwrap_err().to_string();
-            assert!(e.contains("--q") && e.contains("joint"), "{e}");
+            let e = r.q_from_user_checked(&bad, "q").unwrap_err().to_string();
+            assert!(e.contains("`q`") && e.contains("joint"), "{e}");
         }
-        assert!(r.q_from_user_checked(&[0.0], "--q").is_err());
+        assert!(r.q_from_user_checked(&[0.0], "q").is_err());
     }
 
     #[test]

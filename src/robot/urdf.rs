@@ -20,7 +20,7 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result, Said};
 use crate::numeric::{matrix_rpy, rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
 use crate::robot::{
     value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Robot, Units,
@@ -135,6 +135,7 @@ impl UrdfRobot {
     /// way from the root to the tip.
     pub fn load_chain(path: &Path, which: &UrdfChain) -> Result<UrdfRobot> {
         let bad = |msg: String| Error::file(path, "URDF", msg);
+        let said = |msg: Said| Error::file(path, "URDF", msg);
         let source = urdf_rs::read_file(path).map_err(|e| bad(e.to_string()))?;
         let js = &source.joints;
         let parents: std::collections::HashSet<&str> =
@@ -145,21 +146,23 @@ impl UrdfRobot {
             .filter(|c| !parents.contains(c))
             .collect();
         let known = |l: &str| source.links.iter().any(|k| k.name == l);
-        for (key, l) in [("--base", &which.base), ("--tip", &which.tip)] {
+        for (key, l) in [(Opt::Base, &which.base), (Opt::Tip, &which.tip)] {
             if let Some(l) = l.as_deref().filter(|l| !known(l)) {
-                return Err(bad(format!("{key}: no link \"{l}\" in the URDF")));
+                let msg = format!(": no link \"{l}\" in the URDF");
+                return Err(said(Said::default().name(key).text(msg)));
             }
         }
         let tip = match (&which.tip, leaves.as_slice()) {
             (Some(t), _) => t.as_str(),
             (None, [one]) => one,
             (None, _) => {
-                return Err(bad(format!(
+                let msg = format!(
                     "{} leaf links ({}): calbench takes a serial chain to one tip link; name \
-                     it with --tip LINK",
+                     it with ",
                     leaves.len(),
                     leaves.join(", ")
-                )))
+                );
+                return Err(said(Said::from(msg).name(Opt::Tip).text(" LINK")));
             }
         };
         let mut chain = Vec::new();
@@ -167,9 +170,9 @@ impl UrdfRobot {
         while which.base.as_deref() != Some(link) {
             let Some(i) = js.iter().position(|j| j.child.link == link) else {
                 if let Some(b) = &which.base {
-                    return Err(bad(format!(
-                        "--base: link \"{b}\" is not on the chain from the root to \"{tip}\""
-                    )));
+                    let msg =
+                        format!(": link \"{b}\" is not on the chain from the root to \"{tip}\"");
+                    return Err(said(Said::default().name(Opt::Base).text(msg)));
                 }
                 break;
             };
@@ -367,8 +370,8 @@ pub fn is_urdf(robot: &str) -> bool {
 /// last link and one to `tcp` with the `[tool]` frame. Lengths in m, angles in rad.
 pub fn robot_to_urdf(robot: &Robot) -> Result<String> {
     if robot.coupling.is_some() {
-        return Err(Error::setting(
-            "--export",
+        return Err(Error::option(
+            Opt::Export,
             "urdf: a robot with an actuator coupling has no URDF form",
         ));
     }

@@ -1,14 +1,20 @@
 //! The scenario sections of the virtual measurement (docs/formats.md: `[errors]`, `[tracker]`,
 //! `[outliers]` and the `region` of `[calibration]` / `[validation]`), as serde structs with
-//! the documented defaults and a `check` that refuses bad values naming the key.
+//! the documented defaults and a `check` that refuses bad values naming the key. `[tracker]`
+//! and `[outliers]` are checked on their fields as the methods' options are
+//! ([`crate::identify::options`]): a value out of range is refused as the scenario is read,
+//! at its line, and `check` reads settings built in code the same way.
 //!
 //! Every struct denies unknown keys, so a typo in a scenario is refused by name.
 
 use std::collections::BTreeMap;
 
-use serde::{Deserialize, Deserializer};
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::error::{Error, Result};
+use crate::identify::options::{
+    finite, non_negative as at_least_0, positive, range, recheck_at, share,
+};
 use crate::measurement::Measure;
 use crate::numeric::Real;
 use crate::robot::Param;
@@ -226,7 +232,7 @@ impl ErrorSettings {
 }
 
 /// What the tracker measures.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 #[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
 #[strum(serialize_all = "lowercase")]
@@ -249,21 +255,26 @@ impl MeasureSetting {
 
 /// `[tracker]`: the simulated laser tracker (Li 2018 §3 and Qiao 2021 §4: Leica
 /// AT901/AT960, MPE = 15 µm + 6 µm/m).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct TrackerSettings {
     /// The tracker frame in the robot base frame: x, y, z in mm, rx, ry, rz in degrees
     /// (fixed X-Y-Z, as in robot files); default `[2500, 0, 500, 0, 0, 180]`.
+    #[serde(deserialize_with = "finite")]
     pub pose: [Real; 6],
     /// Constant part of the MPE, µm; default 15.
+    #[serde(deserialize_with = "at_least_0")]
     pub mpe_a_um: Real,
     /// Range-proportional part of the MPE, µm per m; default 6.
+    #[serde(deserialize_with = "at_least_0")]
     pub mpe_b_um_per_m: Real,
     /// Coverage factor: σ = MPE / coverage; default 2.
+    #[serde(deserialize_with = "positive")]
     pub coverage: Real,
     /// Position or full pose; default position.
     pub measure: MeasureSetting,
     /// Orientation noise per axis (σ, degrees) for `pose`; default 0.
+    #[serde(deserialize_with = "at_least_0")]
     pub angle_noise_deg: Real,
 }
 
@@ -281,37 +292,26 @@ impl Default for TrackerSettings {
 }
 
 impl TrackerSettings {
-    /// Refuses a non-finite pose, negative MPE terms or angle noise, and a coverage ≤ 0.
+    /// Settings built in code checked as a scenario's are read, on their fields: refuses a
+    /// non-finite pose, negative MPE terms or angle noise, and a coverage ≤ 0.
     pub fn check(&self) -> Result<()> {
-        if let Some(v) = self.pose.iter().find(|v| !v.is_finite()) {
-            return Err(Error::setting(
-                "tracker.pose",
-                format!("must be 6 finite numbers, got {v}"),
-            ));
-        }
-        non_negative("tracker.mpe_a_um", self.mpe_a_um)?;
-        non_negative("tracker.mpe_b_um_per_m", self.mpe_b_um_per_m)?;
-        if !self.coverage.is_finite() || self.coverage <= 0.0 {
-            return Err(Error::setting(
-                "tracker.coverage",
-                format!("must be > 0, got {}", self.coverage),
-            ));
-        }
-        non_negative("tracker.angle_noise_deg", self.angle_noise_deg)?;
-        Ok(())
+        recheck_at("tracker", self)
     }
 }
 
 /// `[outliers]`: gross errors added to some measured points (Ban §3: 2..16 of 50
 /// points, magnitudes 0–0.2 … 0–1.0 mm).
-#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OutlierSettings {
     /// Number of displaced points (exclusive with `fraction`); default none (0 outliers).
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub count: Option<usize>,
     /// Fraction of displaced points in [0, 1], rounded to the nearest count.
+    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "share")]
     pub fraction: Option<Real>,
     /// Range of the displacement magnitude, mm; default `[0.5, 1.0]`.
+    #[serde(deserialize_with = "range")]
     pub magnitude_mm: [Real; 2],
 }
 
@@ -326,8 +326,9 @@ impl Default for OutlierSettings {
 }
 
 impl OutlierSettings {
-    /// Refuses `count` together with `fraction`, a fraction outside [0, 1] and a magnitude
-    /// range that is not `0 ≤ lo ≤ hi` (finite).
+    /// Refuses `count` together with `fraction`; and, on the fields (as a scenario's are
+    /// read), a fraction outside [0, 1] and a magnitude range that is not `0 ≤ lo ≤ hi`
+    /// (finite).
     pub fn check(&self) -> Result<()> {
         if self.count.is_some() && self.fraction.is_some() {
             return Err(Error::setting(
@@ -335,22 +336,7 @@ impl OutlierSettings {
                 "give either outliers.count or outliers.fraction, not both",
             ));
         }
-        if let Some(f) = self.fraction {
-            if !(0.0..=1.0).contains(&f) {
-                return Err(Error::setting(
-                    "outliers.fraction",
-                    format!("must be in [0, 1], got {f}"),
-                ));
-            }
-        }
-        let [lo, hi] = self.magnitude_mm;
-        if !lo.is_finite() || !hi.is_finite() || lo < 0.0 || hi < lo {
-            return Err(Error::setting(
-                "outliers.magnitude_mm",
-                format!("must be [lo, hi] with 0 ≤ lo ≤ hi, got [{lo}, {hi}]"),
-            ));
-        }
-        Ok(())
+        recheck_at("outliers", self)
     }
 
     /// The number of outliers among `n` measured points; a count larger than `n` is refused
@@ -550,8 +536,32 @@ mod tests {
             ..Default::default()
         };
         let e = t.check().unwrap_err();
-        assert!(e.to_string().contains("must be ≥ 0, got -1"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("must be finite and non-negative, got -1"),
+            "{e}"
+        );
         assert_eq!(e.key(), Some("tracker.mpe_a_um"));
+        // Read from a scenario's text, the same value is refused on its field, as it is read.
+        for (text, why) in [
+            ("mpe_a_um = -1.0", "non-negative"),
+            ("coverage = 0.0", "positive"),
+            ("pose = [0.0, 0.0, 0.0, 0.0, 0.0, inf]", "6 finite numbers"),
+        ] {
+            let e = toml::from_str::<TrackerSettings>(text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(why), "{text}: {e}");
+        }
+        for (text, why) in [
+            ("fraction = 1.5", "in [0, 1]"),
+            ("magnitude_mm = [2.0, 1.0]", "lo ≤ hi"),
+        ] {
+            let e = toml::from_str::<OutlierSettings>(text)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(why), "{text}: {e}");
+        }
         let t = TrackerSettings {
             coverage: 0.0,
             ..Default::default()

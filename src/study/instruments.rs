@@ -476,8 +476,8 @@ impl InstrumentsScenario {
     /// exist, or the true robot cannot touch a surface from a commanded pose.
     pub fn simulate(&self, nominal: &Robot, entry: usize, trial: usize) -> Result<Simulated> {
         if trial >= self.head.trials {
-            return Err(Error::setting(
-                "--trial",
+            return Err(Error::option(
+                crate::error::Opt::Trial,
                 format!(
                     "{trial} is not below the scenario's trials = {}",
                     self.head.trials

@@ -65,8 +65,8 @@ impl Shard {
     /// Parses `I/N` (0 ≤ I < N).
     pub fn parse(text: &str) -> Result<Shard> {
         let bad = || {
-            Error::setting(
-                "--shard",
+            Error::option(
+                crate::error::Opt::Shard,
                 format!("\"{text}\" is not I/N with 0 ≤ I < N (e.g. 0/8)"),
             )
         };

@@ -418,8 +418,8 @@ pub struct TaskEntry<'a> {
 impl TaskEntry<'_> {
     /// The terms of the model identified: `kinematic`, then each term added.
     pub fn model_terms(outcome: &TrackerOutcome, candidates: &[Model]) -> (Vec<String>, bool) {
-        let chosen = match &outcome.practice.models {
-            Some((_, best)) => candidates.get(*best).copied(),
+        let chosen = match outcome.record.best_model() {
+            Some(best) => candidates.get(best).copied(),
             None => candidates.first().copied(),
         }
         .unwrap_or(Model::KINEMATIC);

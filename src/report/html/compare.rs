@@ -384,9 +384,9 @@ impl Comparison {
              (more trials would tell); a significant change within the tolerance is changed, \
              within tolerance. The change is paired, trial by trial, when both runs share \
              scenario, seed and trials and both folders hold trials.csv; otherwise it comes \
-             from the summaries' 95 % intervals (Welch). This is what calbench check \
-             B/summary.json --baseline A/summary.json --tolerance {} fails on (with --strict \
-             also on unresolved). Timing is not compared.",
+             from the summaries' 95 % intervals (Welch). This is the rule calbench check \
+             applies to B against the baseline A with a tolerance of {} (strict, it also \
+             fails on unresolved). Timing is not compared.",
             fmt_num(100.0 * self.tolerance, 4),
             self.tolerance
         ));

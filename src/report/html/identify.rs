@@ -55,7 +55,7 @@ pub const SECTIONS: &[Section] = &[
 /// The page of an identification whose files (and plots) are in `dir`, with what `more`
 /// adds (the practice options' section) after [`SECTIONS`].
 pub fn page(dir: &Path, r: &IdentifyRecord, more: &Additions) -> Result<Page> {
-    let (before, after) = r.residuals()?;
+    let (before, after) = (&r.residuals.0[..], &r.residuals.1[..]);
     let view = View {
         record: r,
         dir,
@@ -67,9 +67,9 @@ pub fn page(dir: &Path, r: &IdentifyRecord, more: &Additions) -> Result<Page> {
         &format!("Identification of {}", r.nominal.name),
         &format!(
             "{} on {} points of {} ({}), registration {}.",
-            r.method,
+            r.record.method,
             r.data.len(),
-            r.source.display(),
+            r.record.data,
             if r.data.quats.is_some() {
                 "full pose"
             } else {
@@ -124,7 +124,7 @@ fn result_section(page: &mut Page, v: &View) -> Result<()> {
     let id = &r.calibrated.identified;
     let n = r.params.len();
     page.facts(&[
-        ("method", r.method.to_string()),
+        ("method", r.record.method.clone()),
         (
             "termination",
             format!(
@@ -159,7 +159,7 @@ fn result_section(page: &mut Page, v: &View) -> Result<()> {
 
 fn validation_section(page: &mut Page, v: &View) -> Result<()> {
     let Some(val) = &v.record.validation else {
-        page.para("No validation file was given (--validate).");
+        page.para("No validation was asked for (a validation file or held-out rows).");
         return Ok(());
     };
     page.table(

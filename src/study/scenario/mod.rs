@@ -532,7 +532,7 @@ impl Scenario {
         };
         // Settings that need the robot: joint counts of lists, parameter names.
         let robot = scenario.robot().map_err(|e| match e {
-            Error::Setting { key, msg } => ferr(&key, msg),
+            Error::Setting { key, msg } => ferr(&key, msg.to_string()),
             Error::File { .. } => e,
             other => ferr("robot.file", other.to_string()),
         })?;
@@ -540,7 +540,7 @@ impl Scenario {
         // Regions no pose reaches, refused now rather than after a search in the run.
         let keyed = |r: Result<()>| {
             r.map_err(|e| match e {
-                Error::Setting { key, msg } => ferr(&key, msg),
+                Error::Setting { key, msg } => ferr(&key, msg.to_string()),
                 other => other,
             })
         };
@@ -595,7 +595,7 @@ impl Scenario {
                     })
             })
             .map_err(|e| match e {
-                Error::Setting { msg, .. } => ferr("identification.params", msg),
+                Error::Setting { msg, .. } => ferr("identification.params", msg.to_string()),
                 other => other,
             })?;
             if names.is_empty() {

@@ -110,7 +110,8 @@ impl Scenario {
             sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
         }
         if let Some(s) = seed {
-            let s = i64::try_from(s).map_err(|_| Error::setting("--seed", "must be below 2^63"))?;
+            let s = i64::try_from(s)
+                .map_err(|_| Error::option(crate::error::Opt::Seed, "must be below 2^63"))?;
             sc = sc.with_override("seed", toml::Value::Integer(s))?;
         }
         Ok(sc)

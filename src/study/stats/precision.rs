@@ -40,8 +40,8 @@ impl Precision {
     pub fn parse(text: &str) -> Result<Precision> {
         let t = text.trim();
         let bad = |why: &str| {
-            Error::setting(
-                "--precision",
+            Error::option(
+                crate::error::Opt::Precision,
                 format!(
                     "\"{text}\" {why}; give a relative half-width of the headline interval \
                      such as 0.5% or an absolute one such as 0.002mm"
@@ -155,8 +155,8 @@ mod tests {
             Target::Relative(0.01)
         );
         for bad in ["5", "-1%", "0mm", "nan%", "inf mm", "%", "x%", "100%", ""] {
-            let e = Precision::parse(bad).unwrap_err().to_string();
-            assert!(e.contains("--precision"), "{bad}: {e}");
+            let e = Precision::parse(bad).unwrap_err();
+            assert_eq!(e.key(), Some("precision"), "{bad}: {e}");
         }
     }
 
