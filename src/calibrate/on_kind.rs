@@ -369,8 +369,9 @@ impl KindOutcome {
             j["fixed"] = json!(super::record::names(&self.fixed));
         }
         if let Some((before, after)) = &self.validation {
-            j["validation_before_mm"] = json!(before);
-            j["validation_after_mm"] = json!(after);
+            use super::validation::keys;
+            j[keys::BEFORE_MM] = json!(before);
+            j[keys::AFTER_MM] = json!(after);
         }
         if !self.worse.is_empty() {
             j[super::record::ALLOWED_WORSE] = json!(self.worse);

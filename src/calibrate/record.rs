@@ -12,7 +12,7 @@ use serde_json::{json, Map, Value};
 
 use super::cv::{CrossValidation, Holdout};
 use super::diagnostics::Diagnostics;
-use super::validation::FileValidation;
+use super::validation::{keys, FileValidation};
 use super::{Calibrated, ErrorStats, Registration};
 use crate::numeric::Real;
 use crate::robot::{Param, Robot};
@@ -147,15 +147,15 @@ pub fn tracker_base(r: &TrackerBase) -> Map<String, Value> {
         "termination": id.termination.as_str(),
     });
     if let Some(v) = r.validation {
-        j["validation_before_mm"] = stats_json(&v.before_mm);
-        j["validation_after_mm"] = stats_json(&v.after_mm);
+        j[keys::BEFORE_MM] = stats_json(&v.before_mm);
+        j[keys::AFTER_MM] = stats_json(&v.after_mm);
         if let Some((b, a)) = &v.deg {
             j["validation_before_deg"] = stats_json(b);
-            j["validation_after_deg"] = stats_json(a);
+            j[keys::AFTER_DEG] = stats_json(a);
         }
         if let Some((b, a)) = &v.attitude_deg {
             j["validation_before_attitude_deg"] = stats_json(b);
-            j["validation_after_attitude_deg"] = stats_json(a);
+            j[keys::AFTER_ATTITUDE_DEG] = stats_json(a);
         }
     }
     let Value::Object(m) = j else {

@@ -29,6 +29,7 @@ use crate::measurement::kind_csv::KindFile;
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
+use crate::robot::identifiability::{analyse, Identifiability};
 use crate::robot::{param_sets, Param, Robot};
 use serde_json::{Map, Value};
 
@@ -165,6 +166,8 @@ pub struct TrackerOutcome {
     pub residuals: (Vec<Real>, Vec<Real>),
     /// Why the result makes the robot worse (kept with `allow_worse`); empty: it does not.
     pub worse: Vec<String>,
+    /// Which of all the nominal robot's parameters the calibration poses identify.
+    pub identifiability: Identifiability,
 }
 
 impl IdentifyRequest {
@@ -366,7 +369,10 @@ impl IdentifyRequest {
             trace,
             diagnostics: Some(diagnostics),
         };
+        let all = nominal.params();
+        let identifiability = analyse(&nominal, &all, &d.qs, d.measure());
         Ok(TrackerOutcome {
+            identifiability,
             nominal,
             source: self.source.clone(),
             data: d,
