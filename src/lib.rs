@@ -15,6 +15,7 @@
 //! - [`poses`]: measurement-pose selection (observability indices, DETMAX, IDE);
 //! - [`calibrate`]: registration with identification, validation, compensation;
 //! - [`study`]: scenarios and the Monte-Carlo harness;
+//! - [`analysis`]: a run's summary, with every comparison and verdict decided once;
 //! - [`report`]: the output files, plots and the regression check;
 //! - [`runner`]: running, resuming, sharding and merging a study, through the report's writers;
 //! - [`results`]: the results database (records of runs, identifications and tasks), the
@@ -40,6 +41,8 @@ pub mod poses;
 pub mod calibrate;
 
 pub mod study;
+
+pub mod analysis;
 
 pub mod report;
 

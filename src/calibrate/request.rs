@@ -27,6 +27,7 @@ use crate::measurement::kind_csv::KindFile;
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
+use crate::robot::identifiability::{analyse, Identifiability};
 use crate::robot::{param_sets, Param, Robot};
 
 pub use super::on_kind::{kind_refusal, KindOutcome};
@@ -338,6 +339,7 @@ impl IdentifyRequest {
         };
         let residuals = point_residuals(&nominal, &c, &d)?;
         Ok(TrackerOutcome {
+            identifiability,
             nominal,
             data: d,
             registration,

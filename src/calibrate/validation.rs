@@ -10,16 +10,33 @@ use crate::numeric::{rotation_vector, Frame, Mat3, Real};
 use crate::robot::compliance::loaded_fk;
 use crate::robot::Robot;
 
+/// The keys of the validation errors' statistics in `summary.json` and `identified.json`
+/// (docs/formats.md), each written once ([`crate::study::metric::Metric`] names them).
+pub mod keys {
+    /// Validation position errors of the nominal robot (mm).
+    pub const BEFORE_MM: &str = "validation_before_mm";
+    /// … of the compensated robot.
+    pub const AFTER_MM: &str = "validation_after_mm";
+    /// Validation orientation errors of the compensated robot, rotation angle (deg).
+    pub const AFTER_DEG: &str = "validation_after_deg";
+    /// Qiao's attitude errors of the compensated robot (deg).
+    pub const AFTER_ATTITUDE_DEG: &str = "validation_after_attitude_deg";
+}
+
 /// Mean, RMS, max and standard deviation of a set of errors.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ErrorStats {
     /// Mean (MAE).
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub mean: Real,
     /// Root mean square.
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub rms: Real,
     /// Maximum.
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub max: Real,
     /// Standard deviation (population).
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub std: Real,
 }
 

@@ -22,6 +22,7 @@ pub mod dist;
 mod frames;
 pub(crate) mod gram;
 pub mod linalg;
+pub mod nan;
 pub mod normal;
 pub mod rng;
 pub(crate) mod simd;

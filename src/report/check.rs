@@ -18,16 +18,12 @@ use std::path::Path;
 
 use serde_json::Value;
 
+use crate::analysis::summary::Summary;
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 pub use noise::{pairable, Status, Trials};
 
-/// Which way a metric improves.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Better {
-    Higher,
-    Lower,
-}
+use crate::study::metric::{Better, Metric};
 
 /// One metric that got worse beyond the tolerance.
 #[derive(Clone, Debug, PartialEq)]
@@ -62,15 +58,15 @@ impl fmt::Display for Regression {
 
 /// The compared metrics, with the direction each improves in. `param_rmse` is compared per
 /// parameter name.
-const METRICS: &[(&str, Better)] = &[
-    ("eta_mean_pct", Better::Higher),
-    ("eta_median_pct", Better::Higher),
-    ("validation_after_mm.mean", Better::Lower),
-    ("validation_after_mm.rms", Better::Lower),
-    ("validation_after_mm.max", Better::Lower),
-    ("validation_after_deg.mean", Better::Lower),
-    ("validation_after_deg.rms", Better::Lower),
-    ("failures", Better::Lower),
+const METRICS: [Metric; 8] = [
+    Metric::EtaMean,
+    Metric::EtaMedian,
+    Metric::ValidationAfterMean,
+    Metric::ValidationAfterRms,
+    Metric::ValidationAfterMax,
+    Metric::DegAfterMean,
+    Metric::DegAfterRms,
+    Metric::Failures,
 ];
 
 fn entry_key(e: &Value) -> String {
@@ -107,9 +103,10 @@ fn regressed(value: Real, base: Real, tolerance: Real, dir: Better) -> bool {
 /// The metrics compared for one baseline entry: [`METRICS`] and its `param_rmse` names.
 fn entry_metrics(b: &Value) -> Vec<(String, Better)> {
     let mut metrics: Vec<(String, Better)> =
-        METRICS.iter().map(|(m, d)| (m.to_string(), *d)).collect();
-    if let Some(Value::Object(m)) = b.get("param_rmse") {
-        metrics.extend(m.keys().map(|k| (format!("param_rmse.{k}"), Better::Lower)));
+        METRICS.iter().map(|m| (m.key(), m.spec().better)).collect();
+    let rmse = Metric::ParamRmse;
+    if let Some(Value::Object(m)) = b.get(rmse.spec().field) {
+        metrics.extend(m.keys().map(|k| (rmse.of_parameter(k), rmse.spec().better)));
     }
     metrics
 }
@@ -311,7 +308,8 @@ pub fn check_summary(value: &Value, path: &Path) -> Result<()> {
             ));
         }
     }
-    Ok(())
+    // Typed: a figure of the wrong type, or a later format, is refused naming the file.
+    Summary::from_value(value.clone(), path).map(|_| ())
 }
 
 /// A JSON value's kind, for messages.

@@ -337,8 +337,7 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
         })
         .collect();
     s += &table(&["parameter", "error", "standard error"], &rows);
-    let all = r.nominal.params();
-    let a = crate::robot::identifiability::analyse(&r.nominal, &all, &r.data.qs, r.data.measure());
+    let a = &r.identifiability;
     s += "\n## Identifiability on these poses\n\n";
     let names = |v: &[Param]| {
         v.iter()
@@ -349,7 +348,7 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     let _ = writeln!(
         s,
         "Of all {} parameters: rank {}, condition number {}; not identifiable: {}.\n",
-        all.len(),
+        a.identifiable.len() + a.unidentifiable.len(),
         a.rank,
         fmt_num(a.condition_number, 4),
         names(&a.unidentifiable)

@@ -39,31 +39,37 @@ pub use plots::{
     before_after, box_plot, box_stats, grouped_bars, heatmap, sweep, traces, BoxStats, SweepSeries,
     PLOT_SIZE,
 };
-pub use run::{columns, entry_table, summary, Column, TrialsCsv};
+pub use run::{columns, entry_table, Column, TrialsCsv};
+
+use crate::analysis::summary::Summary;
 
 /// The files of a complete run but `trials.csv` (streamed as the trials finish,
 /// [`TrialsCsv`]), in the order they are written: those of [`run::outputs`] with the run's
 /// figures ([`run::figures`]), then `report.html` ([`html::run`]), which inlines them.
-pub fn run_outputs(r: &crate::study::RunResult) -> crate::Result<output::Outputs<'_>> {
-    let figures = run::figures(r);
+pub fn run_outputs<'a>(
+    r: &'a crate::study::RunResult,
+    summary: &'a Summary,
+) -> crate::Result<output::Outputs<'a>> {
+    let figures = run::figures(r, summary);
     let listed: Vec<(String, String)> = figures.iter().map(output::Figure::listed).collect();
-    let mut outputs = run::outputs(r, figures)?;
+    let mut outputs = run::outputs(r, summary, figures)?;
     outputs.push(Box::new(output::FromFolder {
         name: "report.html",
-        make: Box::new(move |dir| Ok(html::run::page(r, &listed, dir)?.finish())),
+        make: Box::new(move |dir| Ok(html::run::page(r, summary, &listed, dir)?.finish())),
     }));
     Ok(outputs)
 }
 
 /// Writes every file of a complete run into the folder `dir`: its finished `trials.csv`,
-/// then those of [`run_outputs`].
+/// then those of [`run_outputs`] rendering its `summary`.
 pub fn write_run(
     r: &crate::study::RunResult,
+    summary: &Summary,
     trials_csv: Box<dyn Output>,
     dir: &std::path::Path,
 ) -> crate::Result<()> {
     let mut outputs = vec![trials_csv];
-    outputs.extend(run_outputs(r)?);
+    outputs.extend(run_outputs(r, summary)?);
     output::write_all(dir, &outputs)
 }
 

@@ -11,10 +11,11 @@ use serde_json::json;
 use super::markdown::{fmt_num, table};
 use super::output::{Figure, Outputs, Text};
 use super::plots;
+use crate::analysis::claims::ClaimResult;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::study::claims::{Claim, Evaluation};
-use crate::study::registration_study::{Cell, RegistrationScenario, METRIC};
+use crate::study::registration_study::{Cell, RegistrationScenario};
 
 /// `values[row][column]` of `f` over the grid: a row per outlier count, a column per
 /// magnitude.
@@ -50,7 +51,7 @@ pub fn report_md(
         use super::run::claims::{headers, row, NOTE};
         let rows: Vec<Vec<String>> = claims
             .iter()
-            .map(|(c, e)| row(c, METRIC, None, e))
+            .map(|(c, e)| row(&ClaimResult::new(c, e, None), None))
             .collect();
         let _ = writeln!(
             out,
@@ -108,8 +109,9 @@ pub fn outputs<'a>(
     if !claims.is_empty() {
         let evaluated = claims
             .iter()
-            .map(|(c, e)| super::run::claims::claim_json(c, METRIC, e))
-            .collect();
+            .map(|(c, e)| serde_json::to_value(ClaimResult::new(c, e, None)))
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|e| Error::Compute(e.to_string()))?;
         more["claims"] = serde_json::Value::Array(evaluated);
     }
     let head = (

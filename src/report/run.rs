@@ -5,6 +5,9 @@ use std::fmt::Write as _;
 
 use serde_json::{json, Value};
 
+use crate::analysis::summary::Summary;
+use crate::study::metric::Metric;
+
 use super::markdown::{fmt_num, table};
 use super::plots;
 
@@ -19,28 +22,11 @@ use super::output::{Output, Outputs, Text};
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::study::stats::{Entry, EtaStats};
-use crate::study::{toml_to_json, Block, RunResult};
+use crate::study::{Block, RunResult};
 use sweep::{sweep_figures, sweep_tables};
 pub use trials_csv::TrialsCsv;
 
 pub use super::output::json_text;
-
-/// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
-/// `method / poses`.
-fn fitness_traces(b: &Block) -> Vec<(String, Vec<Real>)> {
-    b.trial0
-        .as_ref()
-        .map(|t| {
-            t.traces
-                .iter()
-                .map(|(si, mi, tr)| {
-                    let label = format!("{} / {}", b.info.methods[*mi], b.info.strategies[*si]);
-                    (label, tr.clone())
-                })
-                .collect()
-        })
-        .unwrap_or_default()
-}
 
 /// The label of a results entry in tables and plots: `method / poses`.
 fn entry_label(e: &Entry) -> String {
@@ -85,97 +71,6 @@ fn per_parameter<T>(
         .collect()
 }
 
-/// The relative distance from the final objective within which a pose optimisation counts
-/// as settled (`settled_iteration` in `summary.json`).
-pub const SETTLED: Real = 1e-3;
-
-/// The first iteration (1-based) from which the objective `trace` stays within `rel` of
-/// its final value (relative to it): the iteration count at which an objective curve such
-/// as Guo 2024 fig. 6 flattens. `None` for an empty trace.
-pub fn settled_iteration(trace: &[Real], rel: Real) -> Option<usize> {
-    let last = *trace.last()?;
-    let tol = rel * last.abs();
-    let outside = trace.iter().rposition(|v| (v - last).abs() > tol);
-    Some(outside.map_or(1, |i| i + 2))
-}
-
-/// `summary.json` as a JSON value.
-pub fn summary(r: &RunResult) -> Value {
-    let sc = &r.scenario;
-    let first = &r.blocks[0].info;
-    let mut optimised = serde_json::Map::new();
-    for (si, s) in first.strategies.iter().enumerate() {
-        if let Some(set) = &first.fixed[si] {
-            optimised.insert(
-                s.clone(),
-                json!({"poses": set.poses, "iterations": set.trace.len(),
-                       "final_objective": set.trace.last(), "scores": set.scores,
-                       "trace": set.trace,
-                       "settled_iteration": settled_iteration(&set.trace, SETTLED)}),
-            );
-        }
-    }
-    let results: Vec<Value> = r
-        .blocks
-        .iter()
-        .flat_map(|b| {
-            b.entries
-                .iter()
-                .map(|e| serde_json::to_value(e).unwrap_or(Value::Null))
-        })
-        .collect();
-    let b0 = &r.blocks[0];
-    let mut convergence = serde_json::Map::new();
-    for (label, trace) in fitness_traces(b0) {
-        convergence.insert(label, json!(trace));
-    }
-    let mut s = json!({
-        "scenario": sc.name,
-        "description": sc.description,
-        "robot": first.robot,
-        "trials": sc.trials,
-        "seed": sc.seed,
-        "measure": if first.full_pose { "pose" } else { "position" },
-        "registration": sc.registration.as_str(),
-        "parameters": first.params,
-        "error_parameters": first.error_params,
-        "fixed_pose_sets": optimised,
-        "fitness_trace_trial0": convergence,
-        "timing": "timing.json",
-        "results": results,
-        "comparisons": comparisons::comparisons(r).into_iter().map(|(c, _)| c).collect::<Vec<_>>(),
-    });
-    if !sc.claims.is_empty() {
-        s["claims"] = claims::summary(r);
-    }
-    if let Some(p) = sweep::performance_profile(r) {
-        s["performance_profile"] = p;
-    }
-    if let Some(st) = &r.stopping {
-        s["stopping"] = json!(st);
-    }
-    if let Some(sep) = &first.separation {
-        s["separation"] = sep.clone();
-    }
-    // The simulated arm's compliances, from the first sweep point that sags.
-    if let Some(c) = r
-        .blocks
-        .iter()
-        .find_map(|b| b.info.true_compliance.as_ref())
-    {
-        s["true_compliance"] = c.clone();
-    }
-    if let Some(sw) = &sc.sweep {
-        if let [axis] = sw.axes.as_slice() {
-            s["sweep_key"] = json!(axis.key);
-            s["sweep_values"] = Value::Array(axis.values.iter().map(toml_to_json).collect());
-        }
-        s["sweep_keys"] = json!(sw.keys());
-        s["sweep_zip"] = json!(sw.zip);
-    }
-    s
-}
-
 /// A column of a results table: its header and how an entry fills it.
 pub type Column = (&'static str, fn(&Entry) -> String);
 
@@ -190,7 +85,7 @@ pub fn fmt_ci(ci: Option<[Real; 2]>, digits: usize) -> String {
 /// The columns of the results tables (the printed one and the report's take these in
 /// different selections).
 pub mod columns {
-    use super::{fmt_ci, fmt_num, Column, Real};
+    use super::{fmt_ci, fmt_num, Column, Metric, Real};
 
     /// 95 % interval of the mean η.
     pub const ETA_MEAN_CI: Column = ("η mean 95 % CI", |e| fmt_ci(e.eta_mean_pct_ci95, 4));
@@ -238,7 +133,7 @@ pub mod columns {
     pub const AFTER_DEG: Column = ("after mean °", |e| {
         fmt_num(
             e.optional
-                .get("validation_after_deg")
+                .get(Metric::DegAfterMean.spec().field)
                 .map_or(Real::NAN, |d| d.mean),
             4,
         )
@@ -312,7 +207,7 @@ pub fn entry_table_by(
 }
 
 /// `report.md`: the tables a paper would print, and the plots.
-pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
+pub fn report_md(r: &RunResult, summary: &Summary, plots_written: &[(String, String)]) -> String {
     let sc = &r.scenario;
     let first = &r.blocks[0].info;
     let mut s = String::new();
@@ -329,7 +224,7 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         sc.validation.count,
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
-    let (h, rows) = claims::table(r);
+    let (h, rows) = claims::table(summary);
     if !rows.is_empty() {
         s += &noted_table("The paper's claims", claims::NOTE, &h, &rows);
         s += "\n";
@@ -348,7 +243,7 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
     s += "\n";
     s += &noted_table("Uncertainty over trials", INTERVAL_NOTE, &headers, &rows);
-    let (h, rows) = comparisons::table(r);
+    let (h, rows) = comparisons::table(summary);
     if !rows.is_empty() {
         s += "\n";
         s += &noted_table("Paired comparisons", comparisons::NOTE, &h, &rows);
@@ -360,7 +255,7 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         s += &noted_table("Searches compared", searches::NOTE, &h, &rows);
     }
     if let Some(sw) = &sc.sweep {
-        s += &sweep_tables(r, sw);
+        s += &sweep_tables(r, summary, sw);
     }
     s += "\n## Identification accuracy η per parameter (mean %, Guo 2024 eq. 29)\n\n";
     let (h, mut eta_rows) = eta_table(&r.blocks[0]);
@@ -452,7 +347,7 @@ fn trace_figure<'a>(
 }
 
 /// The run's figures, in the order `report.md` lists them.
-pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
+pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
     let mut figs = Vec::new();
     let b0 = &r.blocks[0];
     let info = &b0.info;
@@ -519,8 +414,13 @@ pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
         },
     ));
     // The paired comparisons' per-trial differences, each entry against its baseline.
-    for (stem, title, y_label, k) in comparisons::DIFF_PLOTS {
-        let groups = comparisons::differences(r, b0, k);
+    for (stem, title, y_label, metric) in comparisons::DIFF_PLOTS {
+        let groups: Vec<(String, Vec<Real>)> = summary
+            .differences
+            .iter()
+            .filter(|d| d.metric == metric)
+            .map(|d| (d.label.clone(), d.values.clone()))
+            .collect();
         if !groups.is_empty() {
             figs.push(Figure::new(stem, title, move |p| {
                 plots::box_plot(p, title, y_label, &groups)
@@ -555,13 +455,13 @@ pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
             "Best fitness per iteration, trial 0",
             "fitness (eq. 14)",
         ),
-        fitness_traces(b0),
+        b0.fitness_traces(),
         true,
         "metaheuristic convergence, trial 0",
     ));
     figs.extend(searches::figures(r));
     if let Some(sw) = &r.scenario.sweep {
-        figs.extend(sweep_figures(r, sw));
+        figs.extend(sweep_figures(r, summary, sw));
     }
     figs
 }
@@ -570,7 +470,11 @@ pub fn figures(r: &RunResult) -> Vec<Figure<'_>> {
 /// [`TrialsCsv`]) and `report.html` ([`super::run_outputs`] adds it), in the order they are
 /// written: `summary.json`, `timing.json`, the `figures` ([`figures`]), then `report.md`,
 /// which shows them.
-pub fn outputs<'a>(r: &'a RunResult, figures: Vec<Figure<'a>>) -> Result<Outputs<'a>> {
+pub fn outputs<'a>(
+    r: &'a RunResult,
+    summary: &Summary,
+    figures: Vec<Figure<'a>>,
+) -> Result<Outputs<'a>> {
     let timing: Vec<Value> = r
         .blocks
         .iter()
@@ -586,7 +490,7 @@ pub fn outputs<'a>(r: &'a RunResult, figures: Vec<Figure<'a>>) -> Result<Outputs
     let mut out: Outputs<'a> = vec![
         Box::new(Text {
             name: "summary.json",
-            text: json_text(&summary(r))?,
+            text: summary.to_json()?,
         }),
         Box::new(Text {
             name: "timing.json",
@@ -596,24 +500,7 @@ pub fn outputs<'a>(r: &'a RunResult, figures: Vec<Figure<'a>>) -> Result<Outputs
     out.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Output>));
     out.push(Box::new(Text {
         name: "report.md",
-        text: report_md(r, &listed),
+        text: report_md(r, summary, &listed),
     }));
     Ok(out)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::settled_iteration;
-
-    #[test]
-    fn settled_iteration_is_where_the_curve_stays_near_its_end() {
-        assert_eq!(settled_iteration(&[], 1e-3), None);
-        assert_eq!(settled_iteration(&[2.0], 1e-3), Some(1));
-        // Within 0.1 % of 2.0 from the fourth value on (1.9985 is 0.075 % away).
-        let t = [1.0, 1.5, 1.99, 1.9985, 1.9995, 2.0];
-        assert_eq!(settled_iteration(&t, 1e-3), Some(4));
-        // A dip after settling counts as not settled yet.
-        let t = [1.0, 2.0, 1.0, 2.0];
-        assert_eq!(settled_iteration(&t, 1e-3), Some(4));
-    }
 }

@@ -7,6 +7,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::provenance::sha256_hex;
+use crate::analysis::summary::Summary;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::report::check::{check_summary, entry_names};
@@ -210,8 +211,8 @@ impl Record {
         let path = dir.join("summary.json");
         let (document, v) = read(&path)?;
         check_summary(&v, &path)?;
-        let named = v.get("scenario").and_then(Value::as_str).unwrap_or("");
-        let seed = v.get("seed").and_then(Value::as_u64);
+        let s = Summary::from_value(v.clone(), &path)?;
+        let (named, seed) = (s.scenario.as_str(), s.seed);
         if named != sc.name || seed.is_some_and(|s| s != sc.seed) {
             return Err(Error::file(
                 &path,

@@ -13,14 +13,15 @@ use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::check::{compare_with, Status};
 use crate::report::html::history::Point;
+use crate::study::metric::Metric;
 
 /// The metrics shown when none is asked for (a task's ranking metric is always shown).
-pub const DEFAULT_METRICS: [&str; 5] = [
-    "validation_after_mm.mean",
-    "validation_after_mm.rms",
-    "validation_after_mm.max",
-    "eta_mean_pct",
-    "failures",
+pub const DEFAULT_METRICS: [Metric; 5] = [
+    Metric::ValidationAfterMean,
+    Metric::ValidationAfterRms,
+    Metric::ValidationAfterMax,
+    Metric::EtaMean,
+    Metric::Failures,
 ];
 
 /// One recorded run as history reads it.
@@ -105,7 +106,7 @@ pub fn points(
     let by_id: BTreeMap<i64, &Run> = runs.iter().map(|r| (r.id, r)).collect();
     let wanted = |metric: &str, kind: &str| {
         if metrics.is_empty() {
-            kind == "task" || DEFAULT_METRICS.contains(&metric)
+            kind == "task" || Metric::from_key(metric).is_some_and(|m| DEFAULT_METRICS.contains(&m))
         } else {
             metrics.iter().any(|m| {
                 metric == m

@@ -11,6 +11,7 @@ use rayon::prelude::*;
 
 use super::checkpoint::{self, Checkpoint};
 use super::shard::{self, Both};
+use crate::analysis::{analyse::analyse, summary::Summary};
 use crate::error::{Error, Result};
 use crate::report::output::{write_all, Bytes, Outputs};
 use crate::report::{atomically, run as files, run_outputs, write_run};
@@ -120,7 +121,7 @@ fn study_into(
                     let mut both = Both(&mut csv, &mut cp);
                     run_resumed(scenario, opts, &mut both, replay, reporter)?
                 };
-                write_run(&r, csv.finish()?, dir)?;
+                write_run(&r, &analyse(&r), csv.finish()?, dir)?;
                 r
             }
             Some(_) => {
@@ -154,6 +155,8 @@ pub struct InMemoryRun {
     pub result: RunResult,
     /// `trials.csv`.
     pub trials_csv: Vec<u8>,
+    /// Its summary.
+    pub summary: Summary,
 }
 
 impl InMemoryRun {
@@ -181,6 +184,7 @@ impl InMemoryRun {
         };
         let result = run(scenario, &opts, &mut csv, reporter)?;
         Ok(InMemoryRun {
+            summary: analyse(&result),
             result,
             trials_csv: csv.into_bytes(),
         })
@@ -188,7 +192,7 @@ impl InMemoryRun {
 
     /// `summary.json`'s text.
     pub fn summary_json(&self) -> Result<String> {
-        files::json_text(&files::summary(&self.result))
+        self.summary.to_json()
     }
 
     /// Writes the run's folder `out` as a whole ([`atomically`]), the files of
@@ -200,7 +204,7 @@ impl InMemoryRun {
                 bytes: &self.trials_csv,
             };
             let mut outputs: Outputs<'_> = vec![Box::new(csv)];
-            outputs.extend(run_outputs(&self.result)?);
+            outputs.extend(run_outputs(&self.result, &self.summary)?);
             write_all(dir, &outputs)
         })
     }
@@ -367,7 +371,7 @@ pub fn run_resumed(
             let headlines = collector.current().map_or(Vec::new(), |a| a.headlines());
             let n = stop.unwrap_or(seen);
             let stopping = Stopping {
-                rule: "precision",
+                rule: "precision".into(),
                 target: p.text.clone(),
                 reached: p.reached(&headlines),
                 trials: n,

@@ -336,7 +336,12 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
             shard: None,
             stopping: None,
         };
-        write_run(&r, csv.finish()?, dir)?;
+        write_run(
+            &r,
+            &crate::analysis::analyse::analyse(&r),
+            csv.finish()?,
+            dir,
+        )?;
         result = Some(r);
         Ok(())
     })?;

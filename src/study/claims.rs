@@ -27,115 +27,7 @@
 
 use crate::numeric::dist;
 use crate::numeric::Real;
-use crate::study::outcome::Outcome;
-
-/// What a per-trial metric needs of the study: nothing, full-pose data, or Guo's axis
-/// errors (`validation.axis_errors`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Needs {
-    /// Every study has it.
-    Nothing,
-    /// `tracker.measure = "pose"`.
-    Pose,
-    /// `validation.axis_errors = true`.
-    Axis,
-}
-
-/// A per-trial metric: its key (as in `summary.json`'s entries), what it needs, and its value
-/// from one outcome and that trial's mean η over the parameters (NaN where the study has none).
-pub type Metric = (&'static str, Needs, fn(&Outcome, Real) -> Real);
-
-fn opt(o: &Outcome, k: usize, f: fn(&crate::calibrate::ErrorStats) -> Real) -> Real {
-    o.optional.values()[k].as_ref().map_or(Real::NAN, f)
-}
-
-/// The index of optional statistic `name` in [`crate::study::outcome::OPTIONAL_STATS`].
-const fn optional(name: &str) -> usize {
-    let names = crate::study::outcome::OPTIONAL_STATS;
-    let mut i = 0;
-    while i < names.len() {
-        if const_eq(names[i], name) {
-            return i;
-        }
-        i += 1;
-    }
-    panic!("no such optional statistic")
-}
-
-const fn const_eq(a: &str, b: &str) -> bool {
-    let (a, b) = (a.as_bytes(), b.as_bytes());
-    if a.len() != b.len() {
-        return false;
-    }
-    let mut i = 0;
-    while i < a.len() {
-        if a[i] != b[i] {
-            return false;
-        }
-        i += 1;
-    }
-    true
-}
-
-const AXIS_AFTER: usize = optional("validation_after_axis_mm");
-const AXIS_ABS_AFTER: usize = optional("validation_after_axis_abs_mm");
-const DEG_AFTER: usize = optional("validation_after_deg");
-const ATT_AFTER: usize = optional("validation_after_attitude_deg");
-
-/// The per-trial metrics a claim may name, in the order the aggregation keeps them (the
-/// first two are the paired comparisons' metrics).
-pub const METRICS: [Metric; 18] = [
-    ("validation_after_mm.rms", Needs::Nothing, |o, _| {
-        o.after_mm.rms
-    }),
-    ("eta_mean_pct", Needs::Nothing, |_, eta| eta),
-    ("validation_after_mm.mean", Needs::Nothing, |o, _| {
-        o.after_mm.mean
-    }),
-    ("validation_after_mm.max", Needs::Nothing, |o, _| {
-        o.after_mm.max
-    }),
-    ("validation_before_mm.mean", Needs::Nothing, |o, _| {
-        o.before_mm.mean
-    }),
-    ("validation_before_mm.rms", Needs::Nothing, |o, _| {
-        o.before_mm.rms
-    }),
-    ("improvement_pct", Needs::Nothing, |o, _| {
-        (o.before_mm.mean - o.after_mm.mean) / o.before_mm.mean * 100.0
-    }),
-    ("calibration_improvement_pct", Needs::Nothing, |o, _| {
-        let (b, a) = (o.calibration_before_mm.mean, o.calibration_after_mm.mean);
-        (b - a) / b * 100.0
-    }),
-    ("calibration_improvement_rms_pct", Needs::Nothing, |o, _| {
-        let (b, a) = (o.calibration_before_mm.rms, o.calibration_after_mm.rms);
-        (b - a) / b * 100.0
-    }),
-    ("calibration_after_mm.mean", Needs::Nothing, |o, _| {
-        o.calibration_after_mm.mean
-    }),
-    ("calibration_after_mm.rms", Needs::Nothing, |o, _| {
-        o.calibration_after_mm.rms
-    }),
-    ("validation_after_axis_mm.rms", Needs::Axis, |o, _| {
-        opt(o, AXIS_AFTER, |s| s.rms)
-    }),
-    ("validation_after_axis_mm.mean", Needs::Axis, |o, _| {
-        opt(o, AXIS_AFTER, |s| s.mean)
-    }),
-    ("validation_after_axis_abs_mm.mean", Needs::Axis, |o, _| {
-        opt(o, AXIS_ABS_AFTER, |s| s.mean)
-    }),
-    ("validation_after_deg.mean", Needs::Pose, |o, _| {
-        opt(o, DEG_AFTER, |s| s.mean)
-    }),
-    ("validation_after_attitude_deg.mean", Needs::Pose, |o, _| {
-        opt(o, ATT_AFTER, |s| s.mean)
-    }),
-    ("evaluations", Needs::Nothing, |o, _| o.evaluations as Real),
-    ("iterations", Needs::Nothing, |o, _| o.iterations as Real),
-];
+pub use crate::study::metric::{Metric, Needs};
 
 /// A relation's comparison.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -179,9 +71,8 @@ pub struct Claim {
     pub paper: String,
     /// The paper's figure(s), as written.
     pub value: toml::Value,
-    /// Index into [`METRICS`] (or into the metrics of a study that has its own,
-    /// [`parse_with`]).
-    pub metric: usize,
+    /// The metric it compares.
+    pub metric: Metric,
     /// The relation as written.
     pub relation: String,
     /// Its left side.
@@ -333,14 +224,17 @@ fn relation(s: &str, names: &Names) -> Result<(Term, Op, Bound), String> {
 /// `claims[i].metric`, …) and a message naming the claim's id.
 pub fn parse(raw: &[toml::Table], names: &Names) -> Result<Vec<Claim>, (String, String)> {
     parse_with(raw, names, |name| {
-        let metric = METRICS.iter().position(|m| m.0 == name).ok_or_else(|| {
-            let all: Vec<&str> = METRICS.iter().map(|m| m.0).collect();
-            format!(
-                "unknown metric \"{name}\"; per-trial metrics are {}",
-                all.join(", ")
-            )
-        })?;
-        match METRICS[metric].1 {
+        let metric = Metric::PER_TRIAL
+            .into_iter()
+            .find(|m| m.key() == name)
+            .ok_or_else(|| {
+                let all: Vec<String> = Metric::PER_TRIAL.iter().map(|m| m.key()).collect();
+                format!(
+                    "unknown metric \"{name}\"; per-trial metrics are {}",
+                    all.join(", ")
+                )
+            })?;
+        match metric.spec().needs {
             Needs::Pose if !names.pose => Some("tracker.measure = \"pose\""),
             Needs::Axis if !names.axis => Some("validation.axis_errors = true"),
             _ => None,
@@ -350,11 +244,11 @@ pub fn parse(raw: &[toml::Table], names: &Names) -> Result<Vec<Claim>, (String, 
 }
 
 /// [`parse`] for a study with metrics of its own (the registration study's): `metric` gives
-/// a metric's index in the study's list, or why the name is refused.
+/// the metric of a name, or why the name is refused.
 pub fn parse_with(
     raw: &[toml::Table],
     names: &Names,
-    metric: impl Fn(&str) -> Result<usize, String>,
+    metric: impl Fn(&str) -> Result<Metric, String>,
 ) -> Result<Vec<Claim>, (String, String)> {
     let mut out: Vec<Claim> = Vec::new();
     for (i, t) in raw.iter().enumerate() {
@@ -404,7 +298,7 @@ pub fn parse_with(
 }
 
 /// A claim's verdict.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Verdict {
     /// The interval lies wholly on the claimed side.

@@ -24,6 +24,7 @@
 
 pub mod claims;
 pub mod instruments;
+pub mod metric;
 pub mod outcome;
 pub mod plan;
 pub mod records;
@@ -234,6 +235,21 @@ pub struct Block {
     /// Block 0 only: each trial's validation RMS after compensation, per strategy × method
     /// (the box plot).
     pub after_rms: Vec<Vec<Real>>,
+}
+
+impl Block {
+    /// The metaheuristics' best fitness per iteration in trial 0 (Qiao 2021 fig. 4), labelled
+    /// `method / poses`.
+    pub fn fitness_traces(&self) -> Vec<(String, Vec<Real>)> {
+        let label = |si: usize, mi: usize| {
+            format!("{} / {}", self.info.methods[mi], self.info.strategies[si])
+        };
+        let traces = self.trial0.as_ref().map(|t| t.traces.as_slice());
+        let traces = traces.unwrap_or_default().iter();
+        traces
+            .map(|(si, mi, tr)| (label(*si, *mi), tr.clone()))
+            .collect()
+    }
 }
 
 /// Everything a run produced.

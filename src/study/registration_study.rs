@@ -90,7 +90,7 @@ pub struct RegistrationScenario {
 pub const ENTRIES: [&str; 3] = ["svd", "wsvd", "difference"];
 
 /// The one metric of a registration-study claim: a draw's registration error, mm.
-pub const METRIC: &str = "registration_error_mm";
+pub const METRIC: claims::Metric = claims::Metric::RegistrationError;
 
 impl RegistrationScenario {
     /// True when a scenario file's table asks for the registration study.
@@ -119,7 +119,7 @@ impl RegistrationScenario {
             axis: false,
         };
         s.claims = claims::parse_with(&s.raw_claims, &names, |m| {
-            (m == METRIC).then_some(0).ok_or_else(|| {
+            (m == METRIC.key()).then_some(METRIC).ok_or_else(|| {
                 format!("unknown metric \"{m}\"; a registration study's claims take \"{METRIC}\"")
             })
         })
@@ -412,6 +412,7 @@ mod tests {
     /// A claim on an entry the grid lacks, or with another metric, is refused by its key.
     #[test]
     fn bad_claims_are_refused_by_key() {
+        let key = METRIC.key();
         let bad = [
             (
                 "relation = '\"svd / 3 × 0–1 mm\" < 1'",
@@ -421,7 +422,7 @@ mod tests {
             (
                 "relation = '\"svd / 8 × 0–1 mm\" < 1'\nmetric = \"eta_mean_pct\"",
                 "claims[0].metric",
-                METRIC,
+                key.as_str(),
             ),
         ];
         for (rel, key, says) in bad {

@@ -1,7 +1,7 @@
 //! Monte-Carlo statistics: identification accuracy η (Guo 2024 eq. 29), validation errors
 //! averaged over trials, parameter RMSE and its ratio to the Cramér–Rao bound.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::ops::Deref;
 
@@ -12,33 +12,37 @@ pub mod ecdf;
 pub mod paired;
 pub mod precision;
 
-use super::claims::METRICS;
+use super::metric::{Metric, PerTrial};
 use super::outcome::{Outcome, TrialResult, OPTIONAL_STATS};
 use super::spill::Spill;
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
-use crate::numeric::Real;
+use crate::numeric::{nan, Real};
 
 /// Mean, median and standard deviation of η for one parameter, over trials (%).
-#[derive(Clone, Copy, Debug, Serialize)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct EtaStats {
     /// Mean η (%).
+    #[serde(deserialize_with = "nan::real")]
     pub mean: Real,
     /// The 95 % t interval of the mean ([`dist::t_interval`]; `null` under 2 trials).
     pub mean_ci95: Option<[Real; 2]>,
     /// Median η (%).
+    #[serde(deserialize_with = "nan::real")]
     pub median: Real,
     /// The distribution-free 95 % interval of the median: the order statistics of ranks
     /// [`median_ranks`] (`null` under 6 trials).
     pub median_ci95: Option<[Real; 2]>,
     /// Standard deviation of η (%).
+    #[serde(deserialize_with = "nan::real")]
     pub std: Real,
 }
 
 /// Error statistics averaged over trials ([`ErrorStats`]: mean, RMS, max, s.d. of one
 /// trial's errors), each with the 95 % t interval of its mean over trials (`null` under 2
 /// trials): `mean_ci95` is the interval of `mean`, `rms_ci95` of `rms`, and so on.
-#[derive(Clone, Copy, Debug, Default, Serialize)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Figures {
     /// The statistics, each averaged over trials.
     #[serde(flatten)]
@@ -88,8 +92,10 @@ pub fn median_ranks(n: usize, alpha: Real) -> Option<(usize, usize)> {
     l.map(|l| (l, n - 1 - l))
 }
 
-/// One `results` entry of `summary.json` (docs/formats.md "summary.json").
-#[derive(Clone, Debug, Serialize)]
+/// One `results` entry of `summary.json` (docs/formats.md "summary.json"); a figure an older
+/// summary lacks reads as its default.
+#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(default)]
 pub struct Entry {
     /// The method's label.
     pub method: String,
@@ -102,12 +108,14 @@ pub struct Entry {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sweep: Option<BTreeMap<String, serde_json::Value>>,
     /// Mean over parameters of the mean η (%).
+    #[serde(deserialize_with = "nan::real")]
     pub eta_mean_pct: Real,
     /// Its 95 % t interval, from the spread over trials of each trial's mean η over the
     /// parameters (`null` under 2 trials).
     pub eta_mean_pct_ci95: Option<[Real; 2]>,
     /// Mean over parameters of the median η (%): with random errors a draw near zero makes
     /// one trial's η hugely negative, which the mean follows and the median does not.
+    #[serde(deserialize_with = "nan::real")]
     pub eta_median_pct: Real,
     /// Its 95 % interval: the mean over parameters of each parameter's distribution-free
     /// interval of the median at level 1 − 0.05 / p (p parameters; Bonferroni, so that all
@@ -132,11 +140,13 @@ pub struct Entry {
     /// `validation.before_fitted`, Guo's axis errors with `validation.axis_errors`), each
     /// statistic averaged over trials; a statistic no trial has is absent.
     #[serde(flatten)]
-    pub optional: BTreeMap<&'static str, Figures>,
+    pub optional: BTreeMap<String, Figures>,
     /// Improvement of the mean validation error, % ((before − after) / before).
+    #[serde(deserialize_with = "nan::real")]
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
     /// which absorb the registration's error, are left out.
+    #[serde(deserialize_with = "nan::map")]
     pub param_rmse: BTreeMap<String, Real>,
     /// The 95 % interval of each `param_rmse`: the t interval of the mean squared error,
     /// its bounds' square roots (a negative lower bound taken as 0); `null` under 2 trials.
@@ -145,6 +155,7 @@ pub struct Entry {
     /// base left out as for `param_rmse`: the estimator's bias. Where the truth is the same
     /// in every trial (`errors.kind` `paper` or `values`), the mean identified error is the
     /// injected one plus this.
+    #[serde(deserialize_with = "nan::map")]
     pub param_bias: BTreeMap<String, Real>,
     /// Trace of the empirical covariance of the estimates over the mean Cramér–Rao trace
     /// σ²(JᵀWJ)⁻¹ (`null` without tracker noise or with fewer than 2 trials).
@@ -154,14 +165,16 @@ pub struct Entry {
     /// How the identifications ended, by termination reason.
     pub terminations: BTreeMap<String, usize>,
     /// Mean iterations.
+    #[serde(deserialize_with = "nan::real")]
     pub iterations_mean: Real,
     /// Mean evaluations of the model per identification (residuals for the Jacobian
     /// methods, fitness for BAS, PSO and BAS-PSO): the budget a method spent.
+    #[serde(deserialize_with = "nan::real")]
     pub evaluations_mean: Real,
     /// Mean wall time of one registration + identification (s). Machine-dependent, so it
     /// is written as `null` in `summary.json` (which must be the same bytes for a seed
     /// whatever the thread count) and with its value in `timing.json` and `report.md`.
-    #[serde(serialize_with = "as_null")]
+    #[serde(serialize_with = "as_null", deserialize_with = "nan::real")]
     pub seconds_per_identification: Real,
     /// For a search (BAS, PSO, BAS-PSO): its fixed-target runtime ECDFs
     /// ([`ecdf::SearchAcc::ecdf`]); absent for the other methods.
@@ -174,12 +187,11 @@ pub struct Entry {
     /// Spreads over trials (plots only).
     #[serde(skip)]
     pub spread: Spread,
-    /// Each trial's value of every per-trial metric ([`crate::study::claims::METRICS`]: the
-    /// validation RMS after compensation (mm) and the mean η over the parameters (%) first),
-    /// in trial order, NaN where the identification failed: what the paired comparisons and
-    /// the claims of the entries of one block compare (not written as such).
+    /// Each trial's value of every per-trial metric ([`Metric::PER_TRIAL`]), in trial order,
+    /// NaN where the identification failed: what the paired comparisons and the claims of
+    /// the entries of one block compare (not written as such).
     #[serde(skip)]
-    pub per_trial: Vec<Vec<Real>>,
+    pub per_trial: PerTrial,
 }
 
 fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
@@ -319,8 +331,8 @@ struct Cell {
 /// The per-trial headline values kept for the paired comparisons and the claims, one value
 /// per trial of every cell (NaN where the trial's identification failed), so that the
 /// streams of two cells line up trial by trial: every per-trial metric
-/// ([`crate::study::claims::METRICS`]) and the wall time of the identification (s).
-pub const HEADLINES: usize = METRICS.len() + 1;
+/// ([`Metric::PER_TRIAL`]) and the wall time of the identification (s).
+pub const HEADLINES: usize = Metric::PER_TRIAL.len() + 1;
 
 /// Spreads over trials of the headline metrics (for the sweep plots; not in `summary.json`).
 #[derive(Clone, Copy, Debug, Default)]
@@ -429,10 +441,10 @@ impl Accumulator {
                 c.search.add(r);
             }
             let ok = usable(o);
-            let hs = self.headline(ci, METRICS.len());
+            let hs = self.headline(ci, Metric::PER_TRIAL.len());
             self.spill.push(hs, o.seconds)?;
             if !ok {
-                for h in 0..METRICS.len() {
+                for h in 0..Metric::PER_TRIAL.len() {
                     let s = self.headline(ci, h);
                     self.spill.push(s, Real::NAN)?;
                 }
@@ -458,9 +470,10 @@ impl Accumulator {
             } else {
                 eta_sum / eta_n as Real
             };
-            for (h, m) in METRICS.iter().enumerate() {
+            for (h, m) in Metric::PER_TRIAL.iter().enumerate() {
                 let s = self.headline(ci, h);
-                self.spill.push(s, (m.2)(o, eta_trial))?;
+                let of_trial = m.spec().of_trial.unwrap_or(|_, _| Real::NAN);
+                self.spill.push(s, of_trial(o, eta_trial))?;
             }
             let c = &mut self.cells[ci];
             if eta_n > 0 {
@@ -590,7 +603,7 @@ impl Accumulator {
             optional: OPTIONAL_STATS
                 .iter()
                 .zip(&c.deg)
-                .filter_map(|(k, d)| Some((*k, d.as_ref()?.average())))
+                .filter_map(|(k, d)| Some((k.to_string(), d.as_ref()?.average())))
                 .collect(),
             improvement_pct: (before.mean - after.mean) / before.mean * 100.0,
             param_rmse: rmse,
@@ -604,9 +617,11 @@ impl Accumulator {
             seconds_per_identification: c.seconds.mean(),
             search_ecdf: (!c.search.is_empty()).then(|| c.search.ecdf()),
             fixed_budget: (!c.search.is_empty()).then(|| c.search.fixed_budget()),
-            per_trial: (0..METRICS.len())
-                .map(|h| self.per_trial(strategy, method, h))
-                .collect::<crate::error::Result<_>>()?,
+            per_trial: PerTrial::new(
+                (0..Metric::PER_TRIAL.len())
+                    .map(|h| self.per_trial(strategy, method, h))
+                    .collect::<crate::error::Result<_>>()?,
+            ),
             spread: Spread {
                 after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),
                 eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),

@@ -144,3 +144,124 @@ fn each_module_imports_only_the_layers_below_it() {
         }
     }
 }
+
+/// Whether `code` names the item or module `path` (`a::b::c`): written out, or imported in a
+/// group (`a::b::{x, c}`).
+fn names_path(code: &str, path: &str) -> bool {
+    if code.contains(path) {
+        return true;
+    }
+    let Some((parent, last)) = path.rsplit_once("::") else {
+        return false;
+    };
+    code.split(&format!("{parent}::{{")).skip(1).any(|group| {
+        let group = group.split('}').next().unwrap_or_default();
+        group.split(',').any(|item| item.trim() == last)
+    })
+}
+
+/// The modules and items `report/` must not import, as docs/architecture.md lists them (the
+/// rule that begins "The report renders what the analysis decided").
+fn forbidden_in_report() -> Vec<String> {
+    let doc = read(&root().join("docs/architecture.md"));
+    let rule = doc
+        .split("- The report renders what the analysis decided")
+        .nth(1)
+        .expect("the rule of what the report imports");
+    let rule = rule
+        .split("\n- ")
+        .next()
+        .unwrap()
+        .split("(tests/cli/layers.rs")
+        .next()
+        .unwrap();
+    let names: Vec<String> = rule
+        .split('`')
+        .skip(1)
+        .step_by(2)
+        .filter(|n| n.contains("::"))
+        .skip(2) // the Summary and analyse named first, as what the report renders
+        .map(String::from)
+        .collect();
+    names
+}
+
+/// `report/` renders a `Summary`: it imports nothing that computes a statistic, a test, a
+/// claim's verdict or an identifiability (docs/architecture.md), but for `check`'s regression
+/// rule, named here.
+#[test]
+fn the_report_imports_no_statistics() {
+    let forbidden = forbidden_in_report();
+    for must in [
+        "numeric::dist",
+        "study::stats::paired",
+        "study::claims::evaluate",
+        "robot::identifiability",
+    ] {
+        assert!(
+            forbidden.iter().any(|f| f == must),
+            "{must} not in {forbidden:?}"
+        );
+    }
+    let known = [
+        ("src/report/check/noise.rs", "numeric::dist"),
+        ("src/report/check/noise.rs", "study::stats::paired"),
+    ];
+    let mut found = Vec::new();
+    for (path, code) in code_under(&root().join("src/report")) {
+        let rel = path
+            .strip_prefix(&root().display().to_string())
+            .unwrap_or(&path)
+            .trim_start_matches('/')
+            .to_string();
+        for f in &forbidden {
+            if names_path(&code, f) {
+                found.push((rel.clone(), f.clone()));
+            }
+        }
+    }
+    found.sort();
+    let known: Vec<(String, String)> = known
+        .iter()
+        .map(|(p, m)| (p.to_string(), m.to_string()))
+        .collect();
+    assert_eq!(found, known, "report/ imports what computes a statistic");
+    // The check has teeth: a report that named one would be caught.
+    assert!(names_path(
+        "use crate::study::claims::{Claim, evaluate};",
+        "study::claims::evaluate"
+    ));
+}
+
+/// Each metric's key in `summary.json` (for example `validation_after_mm`, `eta_mean_pct`,
+/// `param_rmse`) is written as a string literal in at most one place of the library's and the
+/// Python module's code: where the metric is declared (`study::metric`, or the validation
+/// keys it names). The plain words `failures`, `iterations` and `evaluations`, which other
+/// files use as their own keys and column headers, are left out.
+#[test]
+fn each_metric_key_is_written_once() {
+    use calbench::study::metric::Metric;
+    let mut code = code_under(&root().join("src"));
+    code.extend(code_under(&root().join("python/src")));
+    let fields: BTreeSet<&str> = Metric::ALL
+        .iter()
+        .map(|m| m.spec().field)
+        .filter(|f| f.contains('_'))
+        .collect();
+    assert!(fields.len() >= 12, "{fields:?}");
+    for field in fields {
+        let quoted = format!("\"{field}");
+        let places: Vec<&str> = code
+            .iter()
+            .flat_map(|(path, text)| {
+                text.match_indices(&quoted)
+                    .filter(|(i, _)| {
+                        let next = text[i + quoted.len()..].chars().next();
+                        matches!(next, Some('"' | '.'))
+                    })
+                    .map(move |_| path.as_str())
+            })
+            .collect();
+        assert_eq!(places.len(), 1, "\"{field}\" written in {places:?}");
+    }
+}

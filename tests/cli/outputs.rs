@@ -40,7 +40,7 @@ fn run_folder_is_its_outputs(sc: &Path, out: &Path) {
         ..RunOptions::default()
     };
     let run = InMemoryRun::run(Scenario::load(sc).unwrap(), &opts).unwrap();
-    let outputs = run_outputs(&run.result).unwrap();
+    let outputs = run_outputs(&run.result, &run.summary).unwrap();
     let mut names = file_names(&outputs);
     names.push(trials_csv::NAME.to_string());
     let listed: BTreeSet<String> = names.iter().cloned().collect();

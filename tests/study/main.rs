@@ -8,5 +8,6 @@ mod claims;
 mod harness;
 mod intervals;
 mod report;
+mod summary;
 mod sweeps;
 mod unmodelled;

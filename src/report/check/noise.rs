@@ -18,6 +18,7 @@ use serde_json::Value;
 use crate::error::{Error, Result};
 use crate::numeric::dist;
 use crate::numeric::Real;
+use crate::study::metric::Metric;
 use crate::study::stats::eta;
 
 /// What a compared metric did.
@@ -115,12 +116,13 @@ impl Trials {
             })
             .collect();
         let plain = [
-            ("validation_after_mm.mean", col("after_mean_mm")),
-            ("validation_after_mm.rms", col("after_rms_mm")),
-            ("validation_after_mm.max", col("after_max_mm")),
-            ("validation_after_deg.mean", col("after_mean_deg")),
-            ("validation_after_deg.rms", col("after_rms_deg")),
-        ];
+            Metric::ValidationAfterMean,
+            Metric::ValidationAfterRms,
+            Metric::ValidationAfterMax,
+            Metric::DegAfterMean,
+            Metric::DegAfterRms,
+        ]
+        .map(|m| (m.key(), m.column().and_then(col)));
         let (ti, mi, pi, termi) = (
             col("trial"),
             col("method"),
@@ -171,9 +173,9 @@ impl Trials {
                         .insert(index, v);
                 }
             };
-            for (m, c) in plain {
+            for (m, c) in &plain {
                 if c.is_some() {
-                    put(m.to_string(), num(c));
+                    put(m.clone(), num(*c));
                 }
             }
             let (mut sum, mut n) = (-0.0, 0usize);
@@ -181,14 +183,17 @@ impl Trials {
                 if name.starts_with("base.") {
                     continue;
                 }
-                put(format!("param_rmse.{name}"), (found[k] - truth[k]).powi(2));
+                put(
+                    Metric::ParamRmse.of_parameter(name),
+                    (found[k] - truth[k]).powi(2),
+                );
                 if let Some(e) = eta(truth[k], found[k]) {
                     sum += e;
                     n += 1;
                 }
             }
             if n > 0 {
-                put("eta_mean_pct".into(), sum / n as Real);
+                put(Metric::EtaMean.key(), sum / n as Real);
             }
         }
         Ok(Some(t))
@@ -260,7 +265,7 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
     let mean = d.iter().sum::<Real>() / n as Real;
     let side = |f: fn(&(Real, Real)) -> Real| {
         let m = pairs.iter().map(f).sum::<Real>() / n as Real;
-        if metric.starts_with("param_rmse.") {
+        if is_rmse(metric) {
             m.sqrt()
         } else {
             m
@@ -273,12 +278,15 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
         df: (n - 1) as Real,
         n,
         paired: true,
-        mse_a: metric
-            .starts_with("param_rmse.")
-            .then(|| pairs.iter().map(|p| p.0).sum::<Real>() / n as Real),
+        mse_a: is_rmse(metric).then(|| pairs.iter().map(|p| p.0).sum::<Real>() / n as Real),
         diff: mean,
         means,
     })
+}
+
+/// Whether `metric` is a parameter's RMSE (`param_rmse.NAME`).
+fn is_rmse(metric: &str) -> bool {
+    Metric::ParamRmse.parameter_of(metric).is_some()
 }
 
 /// The usable trials of summary entry `e`: `trials` − `failures`.
@@ -294,7 +302,7 @@ fn summary_se(e: &Value, path: &str, n: usize) -> Option<Real> {
     if n < 2 {
         return None;
     }
-    let ci_path = match path.strip_prefix("param_rmse.") {
+    let ci_path = match Metric::ParamRmse.parameter_of(path) {
         Some(name) => format!("param_rmse_ci95.{name}"),
         None => format!("{path}_ci95"),
     };
@@ -303,12 +311,12 @@ fn summary_se(e: &Value, path: &str, n: usize) -> Option<Real> {
         .try_fold(e, |v, k| v.get(k))?
         .as_array()?;
     let (lo, hi) = (ci.first()?.as_f64()?, ci.get(1)?.as_f64()?);
-    let (lo, hi) = if path.starts_with("param_rmse.") {
+    let (lo, hi) = if is_rmse(path) {
         (lo * lo, hi * hi)
     } else {
         (lo, hi)
     };
-    let q = if path == "eta_median_pct" {
+    let q = if Metric::from_key(path) == Some(Metric::EtaMedian) {
         // Not a t interval: its half-width taken as 1.96 standard errors.
         dist::normal_quantile(0.975)
     } else {
@@ -370,7 +378,7 @@ pub fn unpaired(
     };
     let se2 = se_a * se_a + se_b * se_b;
     let den = se_a.powi(4) / (na - 1) as Real + se_b.powi(4) / (nb - 1) as Real;
-    let rmse = metric.starts_with("param_rmse.");
+    let rmse = is_rmse(metric);
     Change {
         se: se2.sqrt(),
         df: if den > 0.0 {

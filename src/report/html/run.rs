@@ -7,6 +7,7 @@ use std::collections::BTreeSet;
 use std::path::Path;
 
 use super::Page;
+use crate::analysis::summary::Summary;
 use crate::error::Result;
 use crate::report::markdown::fmt_num;
 use crate::report::run::{
@@ -75,7 +76,12 @@ fn entries(page: &mut Page, r: &RunResult, caption: &str, cols: &[Column]) {
 
 /// The page of run `r` whose plots (`plots`: file name, caption, as `report.md` lists them)
 /// are in `dir`.
-pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Page> {
+pub fn page(
+    r: &RunResult,
+    summary: &Summary,
+    plots: &[(String, String)],
+    dir: &Path,
+) -> Result<Page> {
     let sc = &r.scenario;
     let first = &r.blocks[0].info;
     let pose = first.full_pose;
@@ -95,7 +101,7 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
         ),
     );
 
-    let (h, rows) = crate::report::run::claims::table(r);
+    let (h, rows) = crate::report::run::claims::table(summary);
     if !rows.is_empty() {
         page.section("The paper's claims");
         page.para(crate::report::run::claims::NOTE);
@@ -167,7 +173,7 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
         &INTERVAL_COLUMNS,
     );
 
-    let (h, rows) = crate::report::run::comparisons::table(r);
+    let (h, rows) = crate::report::run::comparisons::table(summary);
     if !rows.is_empty() {
         page.para(crate::report::run::comparisons::NOTE);
         page.table("Paired comparisons on the shared trials", &h, &rows);

@@ -1,80 +1,36 @@
-//! The scenario's claims evaluated on the run (docs/formats.md "claims"): `summary.json`'s
-//! `claims` and the claims table at the top of `report.md` and `report.html`.
+//! The claims table at the top of `report.md` and `report.html` (docs/formats.md "claims"):
+//! the claims the analysis evaluated (`summary.json`'s `claims`).
 
-use serde_json::{json, Value};
+use serde_json::Value;
 
+use crate::analysis::claims::ClaimResult;
+use crate::analysis::summary::Summary;
 use crate::report::markdown::fmt_num;
-use crate::study::claims::{evaluate, Claim, Evaluation, METRICS};
-use crate::study::{toml_to_json, RunResult};
 
 use super::fmt_ci;
 
-/// Every claim evaluated on every block, in claim order then block order, with the block's
-/// swept value.
-pub fn evaluations(r: &RunResult) -> Vec<(&Claim, Option<Value>, Evaluation)> {
-    let mut out = Vec::new();
-    for c in &r.scenario.claims {
-        for b in &r.blocks {
-            let n = b.info.methods.len();
-            let e = evaluate(c, |(mi, si)| &b.entries[si * n + mi].per_trial[c.metric]);
-            let sweep_value = b.entries.first().and_then(|e| e.sweep_value.clone());
-            out.push((c, sweep_value, e));
-        }
-    }
-    out
-}
-
-/// `summary.json`'s `claims`.
-pub fn summary(r: &RunResult) -> Value {
-    Value::Array(
-        evaluations(r)
-            .into_iter()
-            .map(|(c, sweep_value, e)| {
-                let mut v = claim_json(c, METRICS[c.metric].0, &e);
-                if let Some(s) = sweep_value {
-                    v["sweep_value"] = s;
-                }
-                v
-            })
-            .collect(),
-    )
-}
-
-/// One evaluated claim as `summary.json` holds it; `metric`: the name of its metric.
-pub fn claim_json(c: &Claim, metric: &str, e: &Evaluation) -> Value {
-    json!({
-        "id": c.id,
-        "statement": c.statement,
-        "paper": c.paper,
-        "value": toml_to_json(&c.value),
-        "metric": metric,
-        "relation": c.relation,
-        "interval": e.interval,
-        "bound": e.bound,
-        "n": e.n,
-        "estimate": e.estimate,
-        "ci95": e.ci95,
-        "verdict": e.verdict.as_str(),
-        "trials_to_resolve": e.trials_to_resolve,
-    })
-}
-
 /// The paper's value as the tables print it: a string as written, anything else as JSON.
-pub fn paper_value(v: &toml::Value) -> String {
+pub fn paper_value(v: &Value) -> String {
     match v {
-        toml::Value::String(s) => s.clone(),
-        other => toml_to_json(other).to_string(),
+        Value::String(s) => s.clone(),
+        other => other.to_string(),
     }
 }
 
 /// The reports' claims table: headers and one row per claim (and sweep point).
-pub fn table(r: &RunResult) -> (Vec<&'static str>, Vec<Vec<String>>) {
-    let sweep = r.scenario.sweep.is_some();
-    let rows = evaluations(r)
-        .into_iter()
-        .map(|(c, sweep_value, e)| {
-            let swept = sweep.then(|| sweep_value.map_or(String::new(), |v| v.to_string()));
-            row(c, METRICS[c.metric].0, swept, &e)
+pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let sweep = s.sweep_keys.is_some();
+    let rows = s
+        .claims
+        .iter()
+        .flatten()
+        .map(|c| {
+            let swept = sweep.then(|| {
+                c.sweep_value
+                    .as_ref()
+                    .map_or(String::new(), Value::to_string)
+            });
+            row(c, swept)
         })
         .collect();
     (headers(sweep), rows)
@@ -99,7 +55,7 @@ pub fn headers(sweep: bool) -> Vec<&'static str> {
 }
 
 /// One row of the claims table ([`headers`]); `sweep_value`: the cell of a sweep's column.
-pub fn row(c: &Claim, metric: &str, sweep_value: Option<String>, e: &Evaluation) -> Vec<String> {
+pub fn row(c: &ClaimResult, sweep_value: Option<String>) -> Vec<String> {
     let mut row = vec![
         c.id.clone(),
         c.paper.clone(),
@@ -109,12 +65,12 @@ pub fn row(c: &Claim, metric: &str, sweep_value: Option<String>, e: &Evaluation)
     row.extend(sweep_value);
     row.extend([
         c.relation.clone(),
-        format!("{metric} ({})", e.interval),
-        e.n.to_string(),
-        fmt_num(e.estimate, 4),
-        fmt_ci(e.ci95, 4),
-        e.verdict.as_str().to_string(),
-        e.trials_to_resolve.map_or(String::new(), |t| t.to_string()),
+        format!("{} ({})", c.metric, c.interval),
+        c.n.to_string(),
+        fmt_num(c.estimate, 4),
+        fmt_ci(c.ci95, 4),
+        c.verdict.as_str().to_string(),
+        c.trials_to_resolve.map_or(String::new(), |t| t.to_string()),
     ]);
     row
 }

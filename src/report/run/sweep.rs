@@ -1,6 +1,7 @@
 //! The sweep section of `report.md` and the sweep plots (docs/formats.md `run`).
 
 use super::{columns, entry_label, entry_table, fmt_num, plots, table, Figure};
+use crate::analysis::summary::{Profile, Summary};
 use crate::numeric::Real;
 use crate::study::scenario::Sweep;
 use crate::study::stats::Entry;
@@ -10,7 +11,7 @@ use std::fmt::Write as _;
 /// The sweep section of `report.md`: the headline metrics per sweep point, and for a
 /// two-axis grid the validation RMS after compensation of each method and strategy as a
 /// table of the first axis (rows) against the second (columns).
-pub(super) fn sweep_tables(r: &RunResult, sw: &Sweep) -> String {
+pub(super) fn sweep_tables(r: &RunResult, summary: &Summary, sw: &Sweep) -> String {
     use columns::*;
     let mut s = String::from("\n## Sweep\n\n");
     let _ = writeln!(
@@ -61,29 +62,21 @@ pub(super) fn sweep_tables(r: &RunResult, sw: &Sweep) -> String {
             s += &table(&h, &rows);
         }
     }
-    if let Some(p) = performance_profile(r) {
+    if let Some(p) = &summary.performance_profile {
         let _ = writeln!(
             s,
             "\nPerformance profile (Dolan & Moré): the share of sweep points where the \
              validation RMS after compensation is within a factor τ of the point's best.\n"
         );
         let mut h = vec!["method / poses".to_string()];
-        h.extend(PROFILE_TAUS.iter().map(|t| format!("τ = {t}")));
+        h.extend(p.tau.iter().map(|t| format!("τ = {t}")));
         let h: Vec<&str> = h.iter().map(String::as_str).collect();
-        let rows: Vec<Vec<String>> = p["profiles"]
-            .as_array()
-            .into_iter()
-            .flatten()
-            .zip(&r.blocks[0].entries)
-            .map(|(prof, e)| {
-                let mut row = vec![entry_label(e)];
-                row.extend(
-                    prof["share"]
-                        .as_array()
-                        .into_iter()
-                        .flatten()
-                        .map(|v| fmt_num(v.as_f64().unwrap_or(Real::NAN), 3)),
-                );
+        let rows: Vec<Vec<String>> = p
+            .profiles
+            .iter()
+            .map(|prof| {
+                let mut row = vec![format!("{} / {}", prof.method, prof.poses)];
+                row.extend(prof.share.iter().map(|&v| fmt_num(v, 3)));
                 row
             })
             .collect();
@@ -143,7 +136,11 @@ const SWEEP_METRICS: [SweepMetric; 4] = [
 /// The sweep plots: for one axis (or paired axes) each headline metric against the swept
 /// value, one line per method × strategy with its spread; for a two-axis grid a heat map of
 /// the validation RMS after compensation per method × strategy.
-pub(super) fn sweep_figures<'a>(r: &'a RunResult, sw: &'a Sweep) -> Vec<Figure<'a>> {
+pub(super) fn sweep_figures<'a>(
+    r: &'a RunResult,
+    summary: &Summary,
+    sw: &'a Sweep,
+) -> Vec<Figure<'a>> {
     let mut done = Vec::new();
     let b0 = &r.blocks[0];
     if sw.dims() == 1 {
@@ -235,7 +232,7 @@ pub(super) fn sweep_figures<'a>(r: &'a RunResult, sw: &'a Sweep) -> Vec<Figure<'
             ));
         }
     }
-    done.extend(profile_figure(r));
+    done.extend(summary.performance_profile.as_ref().map(profile_figure));
     done
 }
 
@@ -252,96 +249,21 @@ fn file_safe(s: &str) -> String {
         .collect()
 }
 
-/// The factors τ of the performance profiles ([`performance_profile`]).
-pub const PROFILE_TAUS: [Real; 12] = [
-    1.0, 1.01, 1.02, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0, 100.0,
-];
-
-/// The performance profiles of a sweep (Dolan & Moré 2002, *Math. Program.* 91): at every
-/// sweep point, each entry's validation RMS after compensation over the best of the point's
-/// entries (the ratio r; `null`, never within any τ, where the entry failed), and for each
-/// entry the share of points where r ≤ τ for τ in [`PROFILE_TAUS`]. `None` without a sweep
-/// of two or more points.
-pub fn performance_profile(r: &RunResult) -> Option<serde_json::Value> {
-    r.scenario.sweep.as_ref()?;
-    if r.blocks.len() < 2 {
-        return None;
-    }
-    let entries = r.blocks[0].entries.len();
-    let metric = |b: &crate::study::Block, k: usize| {
-        b.entries
-            .get(k)
-            .map_or(Real::NAN, |e| e.validation_after_mm.rms)
-    };
-    let best: Vec<Real> = r
-        .blocks
+/// The plot of the performance profile ([`Profile`]): the share of sweep points within τ of
+/// the best against τ, one line per method × strategy (`performance_profile.png`).
+fn profile_figure(p: &Profile) -> Figure<'static> {
+    let series: Vec<plots::SweepSeries> = p
+        .profiles
         .iter()
-        .map(|b| {
-            (0..entries)
-                .map(|k| metric(b, k))
-                .filter(|m| m.is_finite())
-                .fold(Real::INFINITY, Real::min)
-        })
-        .collect();
-    let profiles: Vec<serde_json::Value> = (0..entries)
-        .map(|k| {
-            let ratios: Vec<Option<Real>> = r
-                .blocks
-                .iter()
-                .zip(&best)
-                .map(|(b, &best)| {
-                    let m = metric(b, k);
-                    let ratio = if m == best { 1.0 } else { m / best };
-                    ratio.is_finite().then_some(ratio)
-                })
-                .collect();
-            let share: Vec<Real> = PROFILE_TAUS
-                .iter()
-                .map(|&tau| {
-                    let within = ratios
-                        .iter()
-                        .filter(|x| x.is_some_and(|x| x <= tau))
-                        .count();
-                    within as Real / ratios.len() as Real
-                })
-                .collect();
-            let e = &r.blocks[0].entries[k];
-            serde_json::json!({
-                "method": e.method,
-                "poses": e.poses,
-                "ratio": ratios,
-                "share": share,
-            })
-        })
-        .collect();
-    Some(serde_json::json!({
-        "metric": "validation_after_mm.rms",
-        "tau": PROFILE_TAUS,
-        "profiles": profiles,
-    }))
-}
-
-/// The plot of [`performance_profile`]: the share of sweep points within τ of the best
-/// against τ, one line per method × strategy (`performance_profile.png`).
-pub(super) fn profile_figure(r: &RunResult) -> Option<Figure<'static>> {
-    let p = performance_profile(r)?;
-    let series: Vec<plots::SweepSeries> = p["profiles"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .zip(&r.blocks[0].entries)
-        .map(|(prof, e)| {
-            let pts = PROFILE_TAUS
-                .iter()
-                .zip(prof["share"].as_array().into_iter().flatten())
-                .map(|(&tau, s)| (tau.log10(), s.as_f64().unwrap_or(Real::NAN), Real::NAN))
-                .collect();
-            (entry_label(e), pts)
+        .map(|prof| {
+            let pts = p.tau.iter().zip(&prof.share);
+            let pts = pts.map(|(&tau, &s)| (tau.log10(), s, Real::NAN)).collect();
+            (format!("{} / {}", prof.method, prof.poses), pts)
         })
         .collect();
     let stem = "performance_profile";
     let title = "Performance profile: share of sweep points within τ of the best validation RMS";
-    Some(Figure::new(stem, title, move |p| {
+    Figure::new(stem, title, move |p| {
         plots::sweep(
             p,
             title,
@@ -349,5 +271,5 @@ pub(super) fn profile_figure(r: &RunResult) -> Option<Figure<'static>> {
             "share of sweep points",
             &series,
         )
-    }))
+    })
 }

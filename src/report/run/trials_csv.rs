@@ -6,6 +6,7 @@ use std::path::Path;
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::output::{Bytes, Output, Stream};
+use crate::study::metric::Metric;
 use crate::study::scenario::Sweep;
 use crate::study::stats::eta;
 use crate::study::{BlockInfo, TrialResult, TrialSink};
@@ -85,32 +86,30 @@ impl TrialsCsv {
     fn header(&self, info: &BlockInfo) -> String {
         let mut head = vec!["trial".to_string()];
         head.extend(self.sweep_columns.iter().cloned());
+        head.extend(["method", "poses"].map(String::from));
+        let column = |m: Metric| m.column().unwrap_or_default().to_string();
         head.extend(
             [
-                "method",
-                "poses",
-                "eta_mean_pct",
-                "before_mean_mm",
-                "before_rms_mm",
-                "before_max_mm",
-                "after_mean_mm",
-                "after_rms_mm",
-                "after_max_mm",
+                Metric::EtaMean,
+                Metric::ValidationBeforeMean,
+                Metric::ValidationBeforeRms,
             ]
-            .map(String::from),
+            .map(column),
+        );
+        head.push("before_max_mm".into());
+        head.extend(
+            [
+                Metric::ValidationAfterMean,
+                Metric::ValidationAfterRms,
+                Metric::ValidationAfterMax,
+            ]
+            .map(column),
         );
         if info.full_pose {
-            head.extend(
-                [
-                    "before_mean_deg",
-                    "before_rms_deg",
-                    "after_mean_deg",
-                    "after_rms_deg",
-                ]
-                .map(String::from),
-            );
+            head.extend(["before_mean_deg", "before_rms_deg"].map(String::from));
+            head.extend([Metric::DegAfterMean, Metric::DegAfterRms].map(column));
         }
-        head.extend(["iterations", "termination"].map(String::from));
+        head.extend([column(Metric::Iterations), "termination".into()]);
         head.extend(info.params.iter().map(|n| format!("true_{n}")));
         head.extend(info.params.iter().map(|n| format!("identified_{n}")));
         if info.external {

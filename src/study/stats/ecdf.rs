@@ -9,9 +9,9 @@
 
 use std::collections::BTreeMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use crate::numeric::Real;
+use crate::numeric::{nan, Real};
 
 use super::dist;
 
@@ -115,29 +115,32 @@ pub struct SearchAcc {
 }
 
 /// One point of a runtime ECDF.
-#[derive(Clone, Debug, Serialize, PartialEq)]
+#[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct EcdfPoint {
     /// Evaluations.
     pub evaluations: usize,
     /// Share of the trials that reached the target within them.
+    #[serde(deserialize_with = "nan::real")]
     pub share: Real,
 }
 
 /// A target's runtime ECDF (`search_ecdf` of an entry).
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TargetEcdf {
     /// Δ: the target is f_ref · (1 + Δ).
+    #[serde(deserialize_with = "nan::real")]
     pub delta: Real,
     /// The ECDF's steps, evaluations increasing.
     pub points: Vec<EcdfPoint>,
     /// Share of the trials that reached the target by the end.
+    #[serde(deserialize_with = "nan::real")]
     pub reached: Real,
     /// Its 95 % Wilson interval.
     pub reached_ci95: Option<[Real; 2]>,
 }
 
 /// An entry's `search_ecdf`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SearchEcdf {
     /// Trials with a search trace.
     pub trials: usize,
@@ -149,15 +152,18 @@ pub struct SearchEcdf {
 }
 
 /// One budget of an entry's `fixed_budget`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BudgetPoint {
     /// The share of the smallest evaluation count of the searches.
+    #[serde(deserialize_with = "nan::real")]
     pub fraction: Real,
     /// The budget in evaluations: the fraction of the budget, the mean over trials.
+    #[serde(deserialize_with = "nan::real")]
     pub evaluations_mean: Real,
     /// Trials with a best fitness at this budget.
     pub n: usize,
     /// Mean over trials of the best fitness within the budget.
+    #[serde(deserialize_with = "nan::real")]
     pub fitness_mean: Real,
     /// Its 95 % t interval.
     pub fitness_mean_ci95: Option<[Real; 2]>,

@@ -3,13 +3,15 @@
 //! the same trials, their mean and t interval, the share of trials one wins, the Wilcoxon
 //! signed-rank test computed as `scipy.stats.wilcoxon` does by default, and Holm's adjustment.
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::dist;
+use crate::numeric::nan;
 use crate::numeric::Real;
+use crate::study::metric::Metric;
 
 /// One paired comparison of `summary.json`'s `comparisons`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Comparison {
     /// The first entry, `method / poses`.
     pub a: String,
@@ -19,20 +21,24 @@ pub struct Comparison {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub sweep_value: Option<serde_json::Value>,
     /// The metric compared (its key in the entries).
-    pub metric: &'static str,
+    pub metric: Metric,
     /// Trials usable in both.
     pub n: usize,
     /// Mean over those trials of b − a.
+    #[serde(deserialize_with = "nan::real")]
     pub diff_mean: Real,
     /// Its 95 % t interval (`null` under 2 trials).
     pub diff_ci95: Option<[Real; 2]>,
     /// Mean of b over mean of a, for a metric on a ratio scale (errors); `null` otherwise.
     pub ratio: Option<Real>,
     /// Share of the trials where b is strictly better than a.
+    #[serde(deserialize_with = "nan::real")]
     pub win_rate: Real,
     /// Two-sided p-value of the Wilcoxon signed-rank test of b − a ([`wilcoxon`]).
+    #[serde(deserialize_with = "nan::real")]
     pub p_value: Real,
     /// `p_value` Holm-adjusted over every comparison of the study.
+    #[serde(deserialize_with = "nan::real")]
     pub p_holm: Real,
 }
 
@@ -129,14 +135,10 @@ pub fn holm(p: &[Real]) -> (Vec<Real>, Vec<usize>) {
 }
 
 /// The paired comparison of `metric` between per-trial values `a` and `b` (aligned by trial,
-/// NaN where a trial failed), `lower_is_better` saying which way wins; `p_holm` is left NaN
+/// NaN where a trial failed), the metric's direction saying which way wins; `p_holm` is left NaN
 /// for [`adjust`].
-pub fn compare(
-    labels: (&str, &str),
-    metric: &'static str,
-    (a, b): (&[Real], &[Real]),
-    lower_is_better: bool,
-) -> Comparison {
+pub fn compare(labels: (&str, &str), metric: Metric, (a, b): (&[Real], &[Real])) -> Comparison {
+    let lower_is_better = metric.lower_is_better();
     let pairs: Vec<(Real, Real)> = a
         .iter()
         .zip(b)

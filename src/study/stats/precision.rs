@@ -115,10 +115,10 @@ impl Precision {
 }
 
 /// Why a run with `--precision` stopped: `summary.json`'s `stopping`.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Stopping {
     /// `precision`.
-    pub rule: &'static str,
+    pub rule: String,
     /// The target as given (`0.5%`, `0.002mm`).
     pub target: String,
     /// Whether every entry's headline interval reached it (false: the trial cap was hit

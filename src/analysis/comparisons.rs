@@ -1,0 +1,143 @@
+//! The paired comparisons of a study's entries (docs/formats.md "comparisons"): every pair of
+//! entries of one block that share their draws — the same strategy, or the same method —
+//! on each trial's validation RMS after compensation and mean η; in `summary.json` all of
+//! them, in the reports each entry against its block's baseline (the scenario's
+//! `[report] baseline` method, else its first method, on the same strategy; the first
+//! strategy with the same method).
+
+use crate::numeric::Real;
+use crate::study::metric::Metric;
+use crate::study::stats::paired::{adjust, compare, Comparison};
+use crate::study::{Block, Entry, RunResult};
+
+/// The metrics compared.
+pub const METRICS: [Metric; 2] = [Metric::ValidationAfterRms, Metric::EtaMean];
+
+/// How the reports show a pair of entries a before b (in `results` order).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum View {
+    /// Not shown: neither is the other's baseline.
+    Hidden,
+    /// Shown as it is: a is b's baseline.
+    AsIs,
+    /// Shown the other way round: b is a's baseline (a `[report] baseline` after a).
+    Flipped,
+}
+
+/// The pairs of entries of block `b` that share their draws (indices, a before b), each with
+/// how the reports show it; `baseline` is the method the other methods of a strategy are
+/// shown against (`None`: the block's first).
+fn pairs(b: &Block, baseline: Option<&str>) -> Vec<(usize, usize, View)> {
+    let (methods, strategies) = (&b.info.methods, &b.info.strategies);
+    let base = baseline.or(methods.first().map(String::as_str));
+    let mut out = Vec::new();
+    for (i, ea) in b.entries.iter().enumerate() {
+        for (j, eb) in b.entries.iter().enumerate().skip(i + 1) {
+            let same_poses = ea.poses == eb.poses;
+            if !same_poses && ea.method != eb.method {
+                continue;
+            }
+            let view = if same_poses {
+                if base == Some(ea.method.as_str()) {
+                    View::AsIs
+                } else if base == Some(eb.method.as_str()) {
+                    View::Flipped
+                } else {
+                    View::Hidden
+                }
+            } else if strategies.first() == Some(&ea.poses) {
+                View::AsIs
+            } else {
+                View::Hidden
+            };
+            out.push((i, j, view));
+        }
+    }
+    out
+}
+
+/// The label of an entry in the comparisons: `method / poses`.
+pub fn label(e: &Entry) -> String {
+    format!("{} / {}", e.method, e.poses)
+}
+
+/// The per-trial differences b − a of one metric between an entry b and its baseline a, on
+/// the trials usable in both (the reports' box plots: where zero lies is the verdict).
+#[derive(Clone, Debug)]
+pub struct Differences {
+    /// The metric.
+    pub metric: Metric,
+    /// `b vs a`.
+    pub label: String,
+    /// b − a per trial.
+    pub values: Vec<Real>,
+}
+
+/// The run's comparisons: all of them (a before b in `results` order), Holm-adjusted
+/// together, and the ones the reports show, each as baseline (a) against entry (b): a pair
+/// whose baseline comes second in `results` is computed the other way round, with the same
+/// Wilcoxon p-value and Holm adjustment (the signed-rank test is symmetric). With the
+/// per-trial differences of the shown pairs of the first block.
+pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Differences>) {
+    let baseline = r.scenario.report.baseline.as_deref();
+    let mut all = Vec::new();
+    let mut views = Vec::new();
+    for b in &r.blocks {
+        for (i, j, view) in pairs(b, baseline) {
+            let (ea, eb) = (&b.entries[i], &b.entries[j]);
+            for metric in METRICS {
+                let per_trial = (&ea.per_trial[metric], &eb.per_trial[metric]);
+                let mut c = compare((&label(ea), &label(eb)), metric, per_trial);
+                c.sweep_value = ea.sweep_value.clone();
+                all.push(c);
+                views.push((b, i, j, view));
+            }
+        }
+    }
+    adjust(&mut all);
+    let mut shown = Vec::new();
+    for (c, (b, i, j, view)) in all.iter().zip(views) {
+        match view {
+            View::Hidden => {}
+            View::AsIs => shown.push(c.clone()),
+            View::Flipped => {
+                let (ea, eb) = (&b.entries[i], &b.entries[j]);
+                let m = c.metric;
+                let mut f = compare(
+                    (&label(eb), &label(ea)),
+                    m,
+                    (&eb.per_trial[m], &ea.per_trial[m]),
+                );
+                f.sweep_value.clone_from(&c.sweep_value);
+                f.p_holm = c.p_holm;
+                shown.push(f);
+            }
+        }
+    }
+    let mut differences = Vec::new();
+    if let Some(b) = r.blocks.first() {
+        for metric in METRICS {
+            for (i, j, view) in pairs(b, baseline) {
+                let (i, j) = match view {
+                    View::Hidden => continue,
+                    View::AsIs => (i, j),
+                    View::Flipped => (j, i),
+                };
+                let (ea, eb) = (&b.entries[i], &b.entries[j]);
+                let values = ea.per_trial[metric]
+                    .iter()
+                    .zip(&eb.per_trial[metric])
+                    .map(|(x, y)| y - x)
+                    .filter(|d| d.is_finite())
+                    .collect();
+                let label = format!("{} vs {}", label(eb), label(ea));
+                differences.push(Differences {
+                    metric,
+                    label,
+                    values,
+                });
+            }
+        }
+    }
+    (all, shown, differences)
+}
