@@ -55,6 +55,8 @@ pub struct Spec {
 use crate::calibrate::validation::keys::{AFTER_ATTITUDE_DEG, BEFORE_MM as VALIDATION_BEFORE};
 use crate::calibrate::validation::keys::{AFTER_DEG as DEG_AFTER, AFTER_MM as VALIDATION_AFTER};
 const CALIBRATION_AFTER: &str = "calibration_after_mm";
+/// Also `trials.csv`'s column of each trial's mean η.
+const ETA_MEAN: &str = "eta_mean_pct";
 const AXIS_AFTER: &str = "validation_after_axis_mm";
 
 macro_rules! metrics {
@@ -98,7 +100,7 @@ metrics! {
     ValidationAfterRms = VALIDATION_AFTER, Some("rms"), Some("after_rms_mm"), Lower, "mm",
         Nothing, Some(|o, _| o.after_mm.rms);
     /// The mean over the parameters of η (Guo 2024 eq. 29).
-    EtaMean = "eta_mean_pct", None, Some("eta_mean_pct"), Higher, "%", Nothing,
+    EtaMean = ETA_MEAN, None, Some(ETA_MEAN), Higher, "%", Nothing,
         Some(|_, eta| eta);
     /// The mean validation error after compensation.
     ValidationAfterMean = VALIDATION_AFTER, Some("mean"), Some("after_mean_mm"), Lower, "mm",
