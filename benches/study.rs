@@ -9,7 +9,7 @@
 //! of the run (the means and maxima that reports had before are in it too); the budget is
 //! at most 5 % (docs/performance.md).
 
-use calbench::report::run::{json_text, summary};
+use calbench::analysis::analyse::analyse;
 use calbench::runner::run::{run, run_study};
 use calbench::study::reporter::Silent;
 use calbench::study::scenario::Scenario;
@@ -42,7 +42,7 @@ fn aggregate(kept: &[(BlockInfo, TrialResult)], like: &RunResult) -> String {
         shard: None,
         stopping: None,
     };
-    json_text(&summary(&r)).expect("summary")
+    analyse(&r).to_json().expect("summary")
 }
 
 fn bench(c: &mut Criterion) {
@@ -76,7 +76,7 @@ fn bench(c: &mut Criterion) {
     // The same bytes as the run's own summary: the bench times what the run does.
     assert_eq!(
         aggregate(&kept.0, &whole),
-        json_text(&summary(&whole)).expect("summary")
+        analyse(&whole).to_json().expect("summary")
     );
     g.bench_function("default-1000-trials-statistics", |b| {
         b.iter(|| aggregate(&kept.0, &whole))

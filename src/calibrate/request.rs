@@ -114,6 +114,8 @@ pub struct TrackerOutcome {
     /// `identified.json`: the practice options' results, the diagnostics and why the result
     /// makes the robot worse (kept with `allow_worse`) among the rest.
     pub record: IdentifiedRecord,
+    /// Which of all the nominal robot's parameters the calibration poses identify.
+    pub identifiability: Identifiability,
 }
 
 impl IdentifyRequest {
@@ -338,6 +340,7 @@ impl IdentifyRequest {
             ..record
         };
         let residuals = point_residuals(&nominal, &c, &d)?;
+        let identifiability = analyse(&nominal, &nominal.params(), &d.qs, d.measure());
         Ok(TrackerOutcome {
             identifiability,
             nominal,
