@@ -139,7 +139,7 @@ fn options_are_spelled_by_the_front_end() {
         e.to_string(),
         "d.csv: data: leave it out of `params`, or pass `allow_rank_deficient`"
     );
-    let e = Error::setting(Opt::Fix, "`a2` is given twice");
+    let e = Error::option(Opt::Fix, "`a2` is given twice");
     assert_eq!(e.spelled(cli), "setting `--fix`: `a2` is given twice");
     assert_eq!(e.spelled(py), "setting `fix`: `a2` is given twice");
     assert_eq!(e.key(), Some("fix"));
