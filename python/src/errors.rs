@@ -59,5 +59,5 @@ pub(crate) fn err(e: calbench::Error) -> PyErr {
 
 /// A refused argument.
 pub(crate) fn setting(key: &str, msg: impl Into<String>) -> PyErr {
-    err(calbench::Error::setting(key, msg))
+    err(calbench::Error::setting(key, msg.into()))
 }
