@@ -41,7 +41,9 @@ fn identify_peak_memory_on_two_million_rows() {
         .arg("-v")
         .arg(bin().get_program())
         .args(["identify", "--robot", "irb2600", "--method", "ls", "--data"])
-        .args([&data, &out])
+        .arg(&data)
+        .arg("--out")
+        .arg(&out)
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
