@@ -11,7 +11,7 @@ use crate::robot::compliance::loaded_fk;
 use crate::robot::Robot;
 
 /// Mean, RMS, max and standard deviation of a set of errors.
-#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct ErrorStats {
     /// Mean (MAE).
     pub mean: Real,

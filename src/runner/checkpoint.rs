@@ -29,14 +29,14 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::study::records::{encode, Verifier};
+use crate::study::records::{encode, RunId, Verifier};
 use crate::study::reporter::Reporter;
 use crate::study::scenario::Scenario;
 use crate::study::stats::precision::Precision;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`.
-const FORMAT: &str = "calbench-checkpoint-3";
+const FORMAT: &str = "calbench-checkpoint-4";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -74,6 +74,8 @@ pub fn folder(out: &Path) -> PathBuf {
 pub struct Checkpoint {
     dir: PathBuf,
     meta: Meta,
+    /// What the records' checksums bind.
+    id: RunId,
     records: std::io::BufWriter<std::fs::File>,
     /// Trials handed to the sink so far (replayed ones included).
     seen: u64,
@@ -113,6 +115,7 @@ impl Checkpoint {
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         let settings = toml::to_string(scenario.table())
             .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
+        let id = RunId::new(&settings, scenario.seed);
         let meta = Meta {
             format: FORMAT.into(),
             version: env!("CARGO_PKG_VERSION").into(),
@@ -134,6 +137,7 @@ impl Checkpoint {
         Ok(Checkpoint {
             dir,
             meta,
+            id,
             records: std::io::BufWriter::new(file),
             seen: 0,
             skip: 0,
@@ -233,12 +237,10 @@ impl Checkpoint {
         }
         let records = dir.join("records.txt");
         let units = units(&scenario, meta.shard, meta.done);
-        let sweep = scenario.sweep.is_some();
-        check_records(
-            &records,
-            &meta,
-            Verifier::new(&records, meta.seed, meta.trials, sweep, units),
-        )?;
+        let sweep = scenario.sweep.is_some().then_some("sweep point");
+        let id = RunId::new(&meta.settings, meta.seed);
+        let verifier = || Verifier::new(&records, id, meta.trials, sweep, units);
+        check_records(&records, &meta, verifier())?;
         // Checked: from here on the checkpoint is the resumed run's.
         // The temporary output folder of the killed process.
         let (parent, name) = crate::report::parent_and_name(out);
@@ -254,9 +256,8 @@ impl Checkpoint {
         let mut append = file;
         std::io::Seek::seek(&mut append, std::io::SeekFrom::End(0))
             .map_err(|e| Error::io(&records, e))?;
-        let shard = meta.shard;
-        let done = meta.done;
-        let (scenario_seed, scenario_trials) = (meta.seed, meta.trials);
+        let (shard, done) = (meta.shard, meta.done);
+        let check = verifier();
         meta.pid = std::process::id();
         meta.host = host();
         write_meta(&dir, &meta)?;
@@ -264,6 +265,7 @@ impl Checkpoint {
             Checkpoint {
                 dir,
                 meta,
+                id,
                 records: std::io::BufWriter::new(append),
                 seen: 0,
                 skip: done,
@@ -274,7 +276,7 @@ impl Checkpoint {
                 path: records.clone(),
                 lines: std::io::BufReader::new(reader),
                 done,
-                check: Verifier::new(&records, scenario_seed, scenario_trials, sweep, units),
+                check,
             },
         ))
     }
@@ -301,7 +303,7 @@ impl TrialSink for Checkpoint {
         if self.seen <= self.skip {
             return Ok(());
         }
-        let line = encode(self.meta.seed, info.index, t);
+        let line = encode(&self.id, info.index, t.index, t)?;
         let path = self.dir.join("records.txt");
         self.records
             .write_all(line.as_bytes())
@@ -361,7 +363,7 @@ fn check_records(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
                 ),
             ));
         }
-        check.record(&String::from_utf8_lossy(&text))?;
+        check.record::<serde::de::IgnoredAny>(&String::from_utf8_lossy(&text))?;
     }
 }
 
@@ -416,6 +418,7 @@ impl Replay for Records {
         if n == 0 {
             self.check.finish()?;
         }
-        self.check.record(text.trim_end_matches('\n'))
+        let (point, index, t) = self.check.record(text.trim_end_matches('\n'))?;
+        Ok((point, TrialResult { index, ..t }))
     }
 }

@@ -124,7 +124,7 @@ fn study_into(
                 r
             }
             Some(_) => {
-                let mut records = shard::Records::create(dir, scenario.seed)?;
+                let mut records = shard::Records::create(dir, &scenario)?;
                 let r = {
                     let mut sinks = Both(&mut csv, &mut records);
                     let mut all = Both(&mut sinks, &mut cp);

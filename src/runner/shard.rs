@@ -18,12 +18,12 @@ use crate::error::{Error, Result};
 use crate::report::output::{Outputs, Stream, Text};
 use crate::report::{write_run, TrialsCsv};
 use crate::results::provenance::Machine;
-use crate::study::records::{encode, Verifier};
+use crate::study::records::{encode, RunId, Verifier};
 use crate::study::scenario::Scenario;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-5";
+const FORMAT: &str = "calbench-shard-6";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -67,16 +67,21 @@ impl<A: TrialSink, B: TrialSink> TrialSink for Both<'_, A, B> {
 /// and `shard.json`.
 pub struct Records {
     out: Stream,
-    seed: u64,
+    /// The scenario as run (TOML), and what the records' checksums bind.
+    settings: String,
+    id: RunId,
     count: u64,
 }
 
 impl Records {
-    /// Starts `records.txt` in the output folder `dir` for the records of a run with `seed`.
-    pub fn create(dir: &Path, seed: u64) -> Result<Records> {
+    /// Starts `records.txt` in the output folder `dir` for the records of a run of `scenario`.
+    pub fn create(dir: &Path, scenario: &Scenario) -> Result<Records> {
+        let settings = toml::to_string(scenario.table())
+            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
         Ok(Records {
             out: Stream::create(dir, "records.txt")?,
-            seed,
+            id: RunId::new(&settings, scenario.seed),
+            settings,
             count: 0,
         })
     }
@@ -87,8 +92,7 @@ impl Records {
         let shard = r.shard.unwrap_or(Shard { index: 0, count: 1 });
         let total = r.scenario.trials as u64
             * r.scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
-        let settings = toml::to_string(r.scenario.table())
-            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
+        let settings = self.settings;
         let meta = ShardMeta {
             format: FORMAT.into(),
             scenario: r.scenario.name.clone(),
@@ -122,7 +126,7 @@ impl Records {
 
 impl TrialSink for Records {
     fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
-        let line = encode(self.seed, info.index, t);
+        let line = encode(&self.id, info.index, t.index, t)?;
         self.count += 1;
         self.out.append(line.as_bytes())
     }
@@ -301,11 +305,13 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         for (d, m) in &metas {
             let path = d.join("records.txt");
             let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
-            let sweep = scenario.sweep.is_some();
-            let mut records = Verifier::new(&path, m.seed, m.trials, sweep, m.units);
+            let sweep = scenario.sweep.is_some().then_some("sweep point");
+            let id = RunId::new(&m.settings, m.seed);
+            let mut records = Verifier::new(&path, id, m.trials, sweep, m.units);
             for line in std::io::BufReader::new(file).lines() {
                 let line = line.map_err(|e| Error::io(&path, e))?;
-                let (b, t) = records.record(&line)?;
+                let (b, index, t) = records.record(&line)?;
+                let t = TrialResult { index, ..t };
                 if current != Some(b) {
                     let (info, t0) = infos.get(b).cloned().flatten().ok_or_else(|| {
                         Error::file(

@@ -23,6 +23,7 @@ mod practice;
 mod precision;
 mod profiles;
 mod realdata;
+mod records;
 mod refusals;
 mod report_baseline;
 mod results;
