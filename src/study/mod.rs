@@ -24,6 +24,7 @@
 
 pub mod claims;
 pub mod instruments;
+pub mod kind;
 pub mod outcome;
 pub mod plan;
 pub mod records;
