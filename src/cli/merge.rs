@@ -27,7 +27,17 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     super::guard_out(out, &super::run::OUTPUTS, &args.dirs)?;
     writable_folder(out, &super::run::OUTPUTS)?;
     let db = args.record.open()?;
-    let r = calbench::runner::shard::merge(&args.dirs, out)?;
+    let r = match calbench::runner::shard::merge(&args.dirs, out)? {
+        calbench::runner::shard::Merged::Run(r) => r,
+        calbench::runner::shard::Merged::Cells(table) => {
+            out!(
+                "{table}\nmerged {} shards; report: {}",
+                args.dirs.len(),
+                out.join("report.md").display()
+            );
+            return Ok(());
+        }
+    };
     print_table(&r);
     out!(
         "\nmerged {} shards; report: {}",

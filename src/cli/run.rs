@@ -8,13 +8,12 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use calbench::error::Error;
-use calbench::report::registration_study::{report_md, write_all};
 use calbench::results::Kind;
 use calbench::runner::run::{refuse_precision, resume_study, run_study, Resumable};
-use calbench::study::instruments::InstrumentsScenario;
-use calbench::study::registration_study::RegistrationScenario;
+use calbench::runner::whole::{resume_cells, run_cells_study};
+use calbench::study::kind::AnyScenario;
 use calbench::study::reporter::Terminal;
-use calbench::study::scenario::{Scenario, MAX_TRIALS};
+use calbench::study::scenario::Scenario;
 use calbench::study::stats::precision::Precision;
 use calbench::study::{RunOptions, Shard};
 
@@ -112,28 +111,12 @@ pub fn default_study() -> Result<()> {
     run(&RunArgs::default())
 }
 
-/// Runs the scenario (a registration study when it has a `[registration_study]` table),
-/// writes its folder and prints the results table and the report's path.
+/// Runs the scenario (of the kind its sections give, [`AnyScenario`]), writes its folder and
+/// prints the results table and the report's path.
 pub fn run(args: &RunArgs) -> Result<()> {
-    if let Some(p) = &args.scenario {
-        let table = super::scenario_table(p)?;
-        let whole = RegistrationScenario::is_one(&table) || InstrumentsScenario::is_one(&table);
-        if whole && args.record.record {
-            let why = "records the runs of Monte-Carlo studies; a registration or instruments \
-                       study has no entries to record";
-            return Err(Error::setting("--record", why).into());
-        }
-        if RegistrationScenario::is_one(&table) {
-            return registration_study(RegistrationScenario::from_table(table, p)?, args);
-        }
-        if InstrumentsScenario::is_one(&table) {
-            return instruments_study(InstrumentsScenario::from_table(table, p)?, args);
-        }
-    }
     if let Some(dir) = &args.resume {
         return resume(args, dir);
     }
-    let sc = scenario_with_overrides(args)?;
     if args.threads == Some(0) {
         return Err(Error::setting("--threads", "must be at least 1").into());
     }
@@ -141,6 +124,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
         None => None,
         Some(ShardArg::Given(s)) => Some(s),
         Some(ShardArg::Auto) => Some(auto_shard(args.shard_count, &|k| std::env::var(k).ok())?),
+    };
+    let sc = match scenario_with_overrides(args)? {
+        AnyScenario::MonteCarlo(sc) => sc,
+        cells => return cells_study(&cells, shard, args),
     };
     if shard.is_some() && args.record.record {
         let why = "a shard is part of a run; record the merged run (`merge --record`)";
@@ -187,10 +174,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
 }
 
 /// The scenario of `args` (or the default study) with `--trials` and `--seed` applied.
-fn scenario_with_overrides(args: &RunArgs) -> Result<Scenario> {
+fn scenario_with_overrides(args: &RunArgs) -> Result<AnyScenario> {
     let sc = match &args.scenario {
-        Some(p) => Scenario::load(p)?,
-        None => Scenario::default_study()?,
+        Some(p) => AnyScenario::load(p)?,
+        None => AnyScenario::MonteCarlo(Scenario::default_study()?),
     };
     Ok(sc.with_run_overrides(args.trials, args.seed)?)
 }
@@ -217,6 +204,12 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     super::guard_out(dir, &OUTPUTS, &args.scenario)?;
     writable_folder(dir, &OUTPUTS)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
+    if !matches!(checked.scenario(), AnyScenario::MonteCarlo(_)) {
+        eprintln!("resuming the run into {}", dir.display());
+        let t0 = std::time::Instant::now();
+        let table = resume_cells(checked, args.threads, &Terminal)?;
+        return cells_finished(checked_name(dir), &table, t0, dir);
+    }
     let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
     let r = resume_study(checked, args.threads, &Terminal)?;
@@ -260,101 +253,77 @@ fn out_folder(args: &RunArgs, name: &str, outputs: &[&str]) -> Result<PathBuf> {
     Ok(out)
 }
 
-/// `--trials` (from `min_trials` to [`MAX_TRIALS`]), `--seed` and `--threads` of a study
-/// that runs whole (`what`: a registration or an instruments study; `--shard` is refused),
-/// applied to its `trials` and `seed`; the thread pool it runs in.
-fn whole_study(
-    args: &RunArgs,
-    what: &str,
-    min_trials: usize,
-    trials: &mut usize,
-    seed: &mut u64,
-) -> Result<rayon::ThreadPool> {
-    if args.shard.is_some() {
-        let whole = format!("{what} runs whole, not in shards");
-        return Err(Error::setting("--shard", whole).into());
-    }
+/// `calbench run` of a registration study (`[registration_study]`, Ban fig. 3) or an
+/// instruments study (`[[measurement]]`): its cells on the runner of every study (checkpoint,
+/// `--shard`), its files and the table of its cells.
+fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result<()> {
+    let what = match sc {
+        AnyScenario::Registration(_) => "a registration study (`[registration_study]`)",
+        _ => "an instruments study (`[[measurement]]`)",
+    };
     if args.precision.is_some() {
         let fixed = format!("{what} runs its --trials draws in every cell");
         return Err(Error::setting("--precision", fixed).into());
     }
-    if let Some(n) = args.trials {
-        if !(min_trials..=MAX_TRIALS).contains(&n) {
-            let range = format!("must be between {min_trials} and {MAX_TRIALS}");
-            return Err(Error::setting("--trials", range).into());
-        }
-        *trials = n;
+    if args.record.record {
+        let why = "records the runs of Monte-Carlo studies; a registration or instruments \
+                   study has no entries to record";
+        return Err(Error::setting("--record", why).into());
     }
-    if let Some(s) = args.seed {
-        *seed = s;
-    }
-    if args.threads == Some(0) {
-        return Err(Error::setting("--threads", "must be at least 1").into());
-    }
-    Ok(rayon::ThreadPoolBuilder::new()
-        .num_threads(args.threads.unwrap_or(0))
-        .build()
-        .map_err(|e| Error::Compute(e.to_string()))?)
-}
-
-/// `calbench run` of a scenario with a `[registration_study]` table (Ban fig. 3): the grid
-/// of SVD against weighted-SVD registration errors, its report and heat map.
-fn registration_study(mut sc: RegistrationScenario, args: &RunArgs) -> Result<()> {
-    let what = "a registration study (`[registration_study]`)";
-    let pool = whole_study(args, what, 1, &mut sc.head.trials, &mut sc.head.seed)?;
-    let st = &sc.registration_study;
-    let (n, m) = (st.outlier_counts.len(), st.magnitude_mm.len());
-    let what = format!(
-        "registration study, {n} × {m} cells × {} draws",
-        sc.head.trials
-    );
-    let (out, t0) = start_whole(args, &sc.head.name, &what)?;
-    let draws = pool.install(|| st.draws(sc.head.seed, sc.head.trials))?;
-    let cells = st.cells(&draws);
-    let claims = sc.evaluate_claims(&draws);
-    write_all(&sc, &cells, &claims, &out)?;
-    let table = report_md(&sc, &cells, &[], "heatmap_difference.png")
-        .lines()
-        .skip_while(|l| !l.starts_with("## "))
-        .take_while(|l| !l.starts_with("!["))
-        .collect::<Vec<_>>()
-        .join("\n");
-    out!(
-        "{table}\n{} draws per cell in {:.1} s; report: {}",
-        sc.head.trials,
-        t0.elapsed().as_secs_f64(),
-        out.join("report.md").display()
-    );
-    Ok(())
-}
-
-/// Announces a study that runs whole (`what` it runs) and checks that its output folder can
-/// be written: the folder and the start time.
-fn start_whole(args: &RunArgs, name: &str, what: &str) -> Result<(PathBuf, std::time::Instant)> {
-    let out = out_folder(args, name, &STUDY_OUTPUTS)?;
+    let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
     writable_folder(&out, &STUDY_OUTPUTS)?;
-    eprintln!("running {name}: {what}");
-    Ok((out, std::time::Instant::now()))
+    let (cells, _) = sc.blocks();
+    eprintln!(
+        "running {}: {what}, {cells} cells × {} trials{}",
+        sc.name(),
+        sc.trials(),
+        shard.map_or(String::new(), |s| format!(
+            ", shard {}/{}",
+            s.index, s.count
+        ))
+    );
+    let opts = RunOptions {
+        threads: threads(args.threads)?,
+        out: Some(out.clone()),
+        progress: true,
+        shard,
+        precision: None,
+    };
+    let t0 = std::time::Instant::now();
+    let table = run_cells_study(sc, &opts, &Terminal)?;
+    if let Some(s) = shard {
+        out!(
+            "shard {}/{} of {}: {}; combine all {} shards with `calbench merge`",
+            s.index,
+            s.count,
+            sc.name(),
+            out.display(),
+            s.count
+        );
+        return Ok(());
+    }
+    cells_finished(sc.name().to_string(), &table, t0, &out)
 }
 
-/// Runs an instruments study (`[measurement]` tables) and writes its folder.
-fn instruments_study(mut sc: InstrumentsScenario, args: &RunArgs) -> Result<()> {
-    let what = "an instruments study (`[measurement]`)";
-    let pool = whole_study(args, what, 2, &mut sc.head.trials, &mut sc.head.seed)?;
-    let robot = super::ChainArgs::default().load(&sc.robot)?;
-    let (k, p, s) = (sc.instruments().len(), sc.poses.len(), sc.strategies.len());
-    let what = format!(
-        "instruments study, {k} instruments × {p} pose counts × {s} strategies × {} trials",
-        sc.head.trials
-    );
-    let (out, t0) = start_whole(args, &sc.head.name, &what)?;
-    let cells = pool.install(|| sc.run(&robot))?;
-    calbench::report::instruments::write_all(&sc, &cells, &out)?;
-    let table = calbench::report::instruments::report_md(&sc, &cells);
-    let took = t0.elapsed().as_secs_f64();
+/// The name of the folder `dir`.
+fn checked_name(dir: &Path) -> String {
+    dir.file_name()
+        .map_or(String::new(), |n| n.to_string_lossy().into_owned())
+}
+
+/// Prints a finished study of cells' `table` and where its report is (a shard's table is
+/// empty).
+fn cells_finished(_name: String, table: &str, t0: std::time::Instant, out: &Path) -> Result<()> {
+    if table.is_empty() {
+        out!(
+            "shard written: {}; combine all shards with `calbench merge`",
+            out.display()
+        );
+        return Ok(());
+    }
     out!(
-        "{table}\n{} trials per cell in {took:.1} s; report: {}",
-        sc.head.trials,
+        "{table}\nin {:.1} s; report: {}",
+        t0.elapsed().as_secs_f64(),
         out.join("report.md").display()
     );
     Ok(())

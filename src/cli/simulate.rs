@@ -95,7 +95,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 /// base frame), the validation poses as a tracker reads them and the truth.
 fn instrument(sc: &InstrumentsScenario, args: &SimulateArgs) -> Result<()> {
     let (out, trial) = (&args.out, args.trial);
-    let all = sc.instruments();
+    let all = &sc.measurement;
     let entry = match args.measure {
         None => 0,
         Some(k) => all.iter().position(|s| s.kind == k).ok_or_else(|| {

@@ -2,8 +2,6 @@
 //! per instrument, pose count and strategy), and `report.md` and `report.html` (the table of
 //! what each instrument buys). Writers only read results that are already computed.
 
-use std::path::Path;
-
 use serde_json::json;
 
 use super::html::Page;
@@ -115,10 +113,11 @@ pub fn report_html(s: &InstrumentsScenario, cells: &[Cell]) -> Page {
     page
 }
 
-/// The study's files: `summary.json`, `report.md` and `report.html`.
-pub fn outputs<'a>(s: &'a InstrumentsScenario, cells: &'a [Cell]) -> Result<Outputs<'a>> {
+/// The study's files: `summary.json`, `report.md` and `report.html`; and the cells' table as
+/// the terminal shows it.
+pub fn outputs<'a>(s: &'a InstrumentsScenario, cells: &[Cell]) -> Result<(Outputs<'a>, String)> {
     let instruments =
-        serde_json::to_value(s.instruments()).map_err(|e| Error::Compute(e.to_string()))?;
+        serde_json::to_value(&s.measurement).map_err(|e| Error::Compute(e.to_string()))?;
     let more = json!({"robot": s.robot, "instruments": instruments, "cells": cells});
     let head = (
         s.head.name.as_str(),
@@ -131,10 +130,7 @@ pub fn outputs<'a>(s: &'a InstrumentsScenario, cells: &'a [Cell]) -> Result<Outp
         text: report_md(s, cells),
     };
     let page = report_html(s, cells).output("report.html");
-    Ok(vec![Box::new(summary), Box::new(report), Box::new(page)])
-}
-
-/// Writes the study's files into `out` as a whole ([`super::output::folder_of`]).
-pub fn write_all(s: &InstrumentsScenario, cells: &[Cell], out: &Path) -> Result<()> {
-    super::output::folder_of(out, &outputs(s, cells)?)
+    let table = report_md(s, cells);
+    let outputs: Outputs<'a> = vec![Box::new(summary), Box::new(report), Box::new(page)];
+    Ok((outputs, table))
 }

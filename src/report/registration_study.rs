@@ -3,10 +3,8 @@
 //! `heatmap_difference.png` / `.svg` of the mean registration-error difference SVD −
 //! weighted SVD. Writers only read results that are already computed.
 
-use std::fmt::Write as _;
-use std::path::Path;
-
 use serde_json::json;
+use std::fmt::Write as _;
 
 use super::markdown::{fmt_num, table};
 use super::output::{Figure, Outputs, Text};
@@ -97,12 +95,12 @@ pub fn report_md(
 
 /// The study's files, in the order they are written: `summary.json` (with the claims
 /// evaluated, [`RegistrationScenario::evaluate_claims`], when the scenario states any), the
-/// heat map and `report.md`.
+/// heat map and `report.md`; and the grid's table as the terminal shows it.
 pub fn outputs<'a>(
     s: &'a RegistrationScenario,
-    cells: &'a [Cell],
+    cells: &[Cell],
     claims: &[(&Claim, Evaluation)],
-) -> Result<Outputs<'a>> {
+) -> Result<(Outputs<'a>, String)> {
     let settings =
         serde_json::to_value(&s.registration_study).map_err(|e| Error::Compute(e.to_string()))?;
     let mut more = json!({"settings": settings, "cells": cells});
@@ -142,19 +140,17 @@ pub fn outputs<'a>(
             &by_column,
         )
     });
+    let text = report_md(s, cells, claims, &heatmap.listed().0);
+    let table = text
+        .lines()
+        .skip_while(|l| !l.starts_with("## Mean"))
+        .take_while(|l| !l.starts_with("!["))
+        .collect::<Vec<_>>()
+        .join("\n");
     let report = Text {
         name: "report.md",
-        text: report_md(s, cells, claims, &heatmap.listed().0),
+        text,
     };
-    Ok(vec![Box::new(summary), Box::new(heatmap), Box::new(report)])
-}
-
-/// Writes the study's files into `out` as a whole ([`super::output::folder_of`]).
-pub fn write_all(
-    s: &RegistrationScenario,
-    cells: &[Cell],
-    claims: &[(&Claim, Evaluation)],
-    out: &Path,
-) -> Result<()> {
-    super::output::folder_of(out, &outputs(s, cells, claims)?)
+    let outputs: Outputs<'a> = vec![Box::new(summary), Box::new(heatmap), Box::new(report)];
+    Ok((outputs, table))
 }

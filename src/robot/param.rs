@@ -167,6 +167,21 @@ impl Param {
     }
 }
 
+/// A parameter's serde form is its name (`theta1`, `base.rz`), as [`Param::parse`] reads it.
+impl serde::Serialize for Param {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for Param {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Param, D::Error> {
+        let name = String::deserialize(d)?;
+        Param::parse(&name)
+            .ok_or_else(|| serde::de::Error::custom(format!("unknown parameter \"{name}\"")))
+    }
+}
+
 impl fmt::Display for Param {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {

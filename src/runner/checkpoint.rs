@@ -29,14 +29,14 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
-use crate::study::records::{encode, Verifier};
+use crate::study::kind::AnyScenario;
+use crate::study::records::{encode, RunId, Verifier};
 use crate::study::reporter::Reporter;
-use crate::study::scenario::Scenario;
 use crate::study::stats::precision::Precision;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`.
-const FORMAT: &str = "calbench-checkpoint-3";
+const FORMAT: &str = "calbench-checkpoint-4";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -74,6 +74,8 @@ pub fn folder(out: &Path) -> PathBuf {
 pub struct Checkpoint {
     dir: PathBuf,
     meta: Meta,
+    /// What the records' checksums bind.
+    id: RunId,
     records: std::io::BufWriter<std::fs::File>,
     /// Trials handed to the sink so far (replayed ones included).
     seen: u64,
@@ -93,7 +95,7 @@ impl Checkpoint {
     /// Starts the checkpoint of a new run of `scenario` into `out` (replacing the checkpoint
     /// of an earlier run into the same folder, with a warning to `reporter`).
     pub fn start(
-        scenario: &Scenario,
+        scenario: &AnyScenario,
         shard: Option<Shard>,
         precision: Option<&Precision>,
         out: &Path,
@@ -111,16 +113,16 @@ impl Checkpoint {
             std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         }
         std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
-        let settings = toml::to_string(scenario.table())
-            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
+        let settings = scenario.settings()?;
+        let id = RunId::new(&settings, scenario.seed());
         let meta = Meta {
             format: FORMAT.into(),
             version: env!("CARGO_PKG_VERSION").into(),
-            scenario: scenario.name.clone(),
-            scenario_file: scenario.path.clone(),
+            scenario: scenario.name().to_string(),
+            scenario_file: scenario.path().map(Path::to_path_buf),
             settings,
-            seed: scenario.seed,
-            trials: scenario.trials,
+            seed: scenario.seed(),
+            trials: scenario.trials(),
             shard,
             precision: precision.map(|p| p.text.clone()),
             pid: std::process::id(),
@@ -134,6 +136,7 @@ impl Checkpoint {
         Ok(Checkpoint {
             dir,
             meta,
+            id,
             records: std::io::BufWriter::new(file),
             seen: 0,
             skip: 0,
@@ -148,9 +151,9 @@ impl Checkpoint {
     /// checkpoint, the scenario as run, its share and the replay of its trials.
     pub fn resume(
         out: &Path,
-        given: Option<&Scenario>,
+        given: Option<&AnyScenario>,
         force: bool,
-    ) -> Result<(Checkpoint, Scenario, Option<Shard>, Records)> {
+    ) -> Result<(Checkpoint, AnyScenario, Option<Shard>, Records)> {
         let dir = folder(out);
         let path = dir.join("checkpoint.json");
         let text = std::fs::read_to_string(&path).map_err(|e| {
@@ -187,36 +190,37 @@ impl Checkpoint {
                 version.to_string(),
             ));
         }
-        let scenario = Scenario::parse(&meta.settings, meta.scenario_file.as_deref())?;
+        let scenario = AnyScenario::parse(&meta.settings, meta.scenario_file.as_deref())?;
         if let Some(g) = given {
-            if g.name != meta.scenario {
+            if g.name() != meta.scenario {
                 return Err(refuse(
                     "scenario",
                     format!("\"{}\"", meta.scenario),
-                    format!("\"{}\"", g.name),
+                    format!("\"{}\"", g.name()),
                 ));
             }
-            if g.seed != meta.seed {
-                return Err(refuse("seed", meta.seed.to_string(), g.seed.to_string()));
+            if g.seed() != meta.seed {
+                return Err(refuse("seed", meta.seed.to_string(), g.seed().to_string()));
             }
-            if g.trials != meta.trials {
+            if g.trials() != meta.trials {
                 return Err(refuse(
                     "trials",
                     meta.trials.to_string(),
-                    g.trials.to_string(),
+                    g.trials().to_string(),
                 ));
             }
-            let differ: Vec<&String> = scenario
-                .table()
+            let table = |t: &str| toml::from_str::<toml::Table>(t).unwrap_or_default();
+            let (had, now) = (table(&meta.settings), table(&g.settings()?));
+            let differ: Vec<&String> = had
                 .keys()
-                .chain(g.table().keys())
-                .filter(|k| scenario.table().get(*k) != g.table().get(*k))
+                .chain(now.keys())
+                .filter(|k| had.get(*k) != now.get(*k))
                 .collect();
             if let Some(k) = differ.first() {
                 return Err(refuse(
                     "scenario settings",
-                    format!("[{k}] = {:?}", scenario.table().get(*k)),
-                    format!("{:?}", g.table().get(*k)),
+                    format!("[{k}] = {:?}", had.get(*k)),
+                    format!("{:?}", now.get(*k)),
                 ));
             }
         }
@@ -233,12 +237,10 @@ impl Checkpoint {
         }
         let records = dir.join("records.txt");
         let units = units(&scenario, meta.shard, meta.done);
-        let sweep = scenario.sweep.is_some();
-        check_records(
-            &records,
-            &meta,
-            Verifier::new(&records, meta.seed, meta.trials, sweep, units),
-        )?;
+        let sweep = scenario.blocks().1;
+        let id = RunId::new(&meta.settings, meta.seed);
+        let verifier = || Verifier::new(&records, id, meta.trials, sweep, units);
+        check_records(&records, &meta, verifier())?;
         // Checked: from here on the checkpoint is the resumed run's.
         // The temporary output folder of the killed process.
         let (parent, name) = crate::report::parent_and_name(out);
@@ -254,9 +256,8 @@ impl Checkpoint {
         let mut append = file;
         std::io::Seek::seek(&mut append, std::io::SeekFrom::End(0))
             .map_err(|e| Error::io(&records, e))?;
-        let shard = meta.shard;
-        let done = meta.done;
-        let (scenario_seed, scenario_trials) = (meta.seed, meta.trials);
+        let (shard, done) = (meta.shard, meta.done);
+        let check = verifier();
         meta.pid = std::process::id();
         meta.host = host();
         write_meta(&dir, &meta)?;
@@ -264,6 +265,7 @@ impl Checkpoint {
             Checkpoint {
                 dir,
                 meta,
+                id,
                 records: std::io::BufWriter::new(append),
                 seen: 0,
                 skip: done,
@@ -274,7 +276,7 @@ impl Checkpoint {
                 path: records.clone(),
                 lines: std::io::BufReader::new(reader),
                 done,
-                check: Verifier::new(&records, scenario_seed, scenario_trials, sweep, units),
+                check,
             },
         ))
     }
@@ -295,20 +297,31 @@ impl Checkpoint {
     }
 }
 
-impl TrialSink for Checkpoint {
-    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
+impl Checkpoint {
+    /// Records trial `trial` of block `point`, which gave `t` (unless it was already recorded
+    /// when this process started), and rewrites `checkpoint.json` every [`CHUNK`] trials.
+    pub fn record<T: serde::Serialize>(&mut self, point: usize, trial: usize, t: &T) -> Result<()> {
         self.seen += 1;
         if self.seen <= self.skip {
             return Ok(());
         }
-        let line = encode(self.meta.seed, info.index, t);
+        let line = encode(&self.id, point, trial, t)?;
         let path = self.dir.join("records.txt");
         self.records
             .write_all(line.as_bytes())
             .map_err(|e| Error::io(&path, e))?;
         self.meta.bytes += line.len() as u64;
         if self.seen.is_multiple_of(CHUNK as u64) {
-            self.records.flush().map_err(|e| Error::io(&path, e))?;
+            self.sync()?;
+        }
+        Ok(())
+    }
+
+    /// Flushes the records and counts them in `checkpoint.json` (at the end of a block too).
+    pub fn sync(&mut self) -> Result<()> {
+        let path = self.dir.join("records.txt");
+        self.records.flush().map_err(|e| Error::io(&path, e))?;
+        if self.seen > self.meta.done && self.seen >= self.skip {
             self.meta.done = self.seen;
             write_meta(&self.dir, &self.meta)?;
         }
@@ -316,11 +329,16 @@ impl TrialSink for Checkpoint {
     }
 }
 
+impl TrialSink for Checkpoint {
+    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
+        self.record(info.index, t.index, t)
+    }
+}
+
 /// The work units `[start, start + done)` that the checkpoint of a run of `scenario` (its
 /// share `shard`) counts as done.
-fn units(scenario: &Scenario, shard: Option<Shard>, done: u64) -> (u64, u64) {
-    let points = scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
-    let start = shard.map_or(0, |s| s.range(scenario.trials as u64 * points).0);
+fn units(scenario: &AnyScenario, shard: Option<Shard>, done: u64) -> (u64, u64) {
+    let start = shard.map_or(0, |s| s.range(scenario.units()).0);
     (start, start + done)
 }
 
@@ -361,7 +379,7 @@ fn check_records(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
                 ),
             ));
         }
-        check.record(&String::from_utf8_lossy(&text))?;
+        check.record::<serde::de::IgnoredAny>(&String::from_utf8_lossy(&text))?;
     }
 }
 
@@ -408,6 +426,14 @@ impl Replay for Records {
     }
 
     fn next(&mut self) -> Result<(usize, TrialResult)> {
+        let (point, index, t) = self.next_record::<TrialResult>()?;
+        Ok((point, TrialResult { index, ..t }))
+    }
+}
+
+impl Records {
+    /// The next finished trial: its block, its index and what it gave.
+    pub fn next_record<T: serde::de::DeserializeOwned>(&mut self) -> Result<(usize, usize, T)> {
         let mut text = String::new();
         let n = self
             .lines

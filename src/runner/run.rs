@@ -15,6 +15,7 @@ use crate::analysis::{analyse::analyse, summary::Summary};
 use crate::error::{Error, Result};
 use crate::report::output::{write_all, Bytes, Outputs};
 use crate::report::{atomically, run as files, run_outputs, write_run};
+use crate::study::kind::AnyScenario;
 use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
 use crate::study::scenario::Scenario;
 use crate::study::stats::precision::{Stopping, BLOCK};
@@ -36,7 +37,7 @@ pub fn run_study(
         .clone()
         .unwrap_or_else(|| Path::new("results").join(&scenario.name));
     let cp = Checkpoint::start(
-        &scenario,
+        &AnyScenario::MonteCarlo(scenario.clone()),
         opts.shard,
         opts.precision.as_ref(),
         &out,
@@ -47,11 +48,11 @@ pub fn run_study(
 
 /// The checkpoint of a killed run, checked and ready to continue ([`resume_study`]).
 pub struct Resumable {
-    out: PathBuf,
-    checkpoint: Checkpoint,
-    scenario: Scenario,
-    shard: Option<Shard>,
-    records: checkpoint::Records,
+    pub(super) out: PathBuf,
+    pub(super) checkpoint: Checkpoint,
+    pub(super) scenario: AnyScenario,
+    pub(super) shard: Option<Shard>,
+    pub(super) records: checkpoint::Records,
 }
 
 impl Resumable {
@@ -59,7 +60,7 @@ impl Resumable {
     /// DIR`, [`checkpoint`]): it must be of this binary's version and, when `given`, of that
     /// scenario, its writer no longer running on this host (unless `force`), and every
     /// record it counts intact. A refused checkpoint is left as it was.
-    pub fn open(out: &Path, given: Option<&Scenario>, force: bool) -> Result<Resumable> {
+    pub fn open(out: &Path, given: Option<&AnyScenario>, force: bool) -> Result<Resumable> {
         let (checkpoint, scenario, shard, records) = Checkpoint::resume(out, given, force)?;
         Ok(Resumable {
             out: out.to_path_buf(),
@@ -69,10 +70,16 @@ impl Resumable {
             records,
         })
     }
+
+    /// The scenario of the killed run.
+    pub fn scenario(&self) -> &AnyScenario {
+        &self.scenario
+    }
 }
 
-/// Continues a killed run from its checked checkpoint ([`Resumable::open`]) with `threads`
-/// worker threads: writes the same files as an uninterrupted run.
+/// Continues a killed Monte-Carlo run from its checked checkpoint ([`Resumable::open`]) with
+/// `threads` worker threads: writes the same files as an uninterrupted run (a study of cells
+/// continues with [`super::whole::resume_cells`]).
 pub fn resume_study(
     run: Resumable,
     threads: Option<usize>,
@@ -91,6 +98,9 @@ pub fn resume_study(
         progress: true,
         shard,
         precision: checkpoint.precision()?,
+    };
+    let AnyScenario::MonteCarlo(scenario) = scenario else {
+        return Err(Error::Compute("not a Monte-Carlo run".into()));
     };
     study_into(
         scenario,
@@ -125,7 +135,8 @@ fn study_into(
                 r
             }
             Some(_) => {
-                let mut records = shard::Records::create(dir, scenario.seed)?;
+                let any = AnyScenario::MonteCarlo(scenario.clone());
+                let mut records = shard::Records::create(dir, &any)?;
                 let r = {
                     let mut sinks = Both(&mut csv, &mut records);
                     let mut all = Both(&mut sinks, &mut cp);
@@ -288,13 +299,7 @@ pub fn run_resumed(
     } else {
         Box::new(NoProgress)
     };
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = opts.threads {
-        builder = builder.num_threads(t);
-    }
-    let pool = builder
-        .build()
-        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))?;
+    let pool = pool(opts.threads)?;
     if opts.precision.is_some() {
         refuse_precision(&scenario, opts)?;
     }
@@ -391,6 +396,17 @@ pub fn run_resumed(
         shard: opts.shard,
         stopping,
     })
+}
+
+/// The worker threads of a run: `threads` of them (`None`: one per core).
+pub(super) fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        builder = builder.num_threads(t);
+    }
+    builder
+        .build()
+        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))
 }
 
 /// With `--precision`, whether the run stops after `seen` trials: at a whole block of

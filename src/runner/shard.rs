@@ -14,20 +14,21 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use super::whole::{Cells, Instruments};
 use crate::error::{Error, Result};
-use crate::report::output::{Outputs, Stream, Text};
+use crate::report::output::{write_all, Outputs, Stream, Text};
 use crate::report::{write_run, TrialsCsv};
 use crate::results::provenance::Machine;
-use crate::study::records::{encode, Verifier};
-use crate::study::scenario::Scenario;
+use crate::study::kind::AnyScenario;
+use crate::study::records::{encode, RunId, Verifier};
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-5";
+const FORMAT: &str = "calbench-shard-6";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
-struct ShardBlock {
+pub(crate) struct ShardBlock {
     info: BlockInfo,
     trial0: Option<Trial0>,
 }
@@ -67,48 +68,58 @@ impl<A: TrialSink, B: TrialSink> TrialSink for Both<'_, A, B> {
 /// and `shard.json`.
 pub struct Records {
     out: Stream,
-    seed: u64,
+    /// The scenario as run (TOML), and what the records' checksums bind.
+    settings: String,
+    id: RunId,
     count: u64,
 }
 
 impl Records {
-    /// Starts `records.txt` in the output folder `dir` for the records of a run with `seed`.
-    pub fn create(dir: &Path, seed: u64) -> Result<Records> {
+    /// Starts `records.txt` in the output folder `dir` for the records of a run of `scenario`.
+    pub fn create(dir: &Path, scenario: &AnyScenario) -> Result<Records> {
+        let settings = scenario.settings()?;
         Ok(Records {
             out: Stream::create(dir, "records.txt")?,
-            seed,
+            id: RunId::new(&settings, scenario.seed()),
+            settings,
             count: 0,
         })
     }
 
     /// The finished `records.txt` and `shard.json` of the run `r`.
     pub fn finish(self, r: &RunResult) -> Result<Outputs<'static>> {
-        let records = self.out.finish()?;
         let shard = r.shard.unwrap_or(Shard { index: 0, count: 1 });
-        let total = r.scenario.trials as u64
-            * r.scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
-        let settings = toml::to_string(r.scenario.table())
-            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
+        let blocks = r.blocks.iter().map(|b| ShardBlock {
+            info: b.info.clone(),
+            trial0: b.trial0.clone(),
+        });
+        let sc = AnyScenario::MonteCarlo(r.scenario.clone());
+        self.finish_with(&sc, shard, r.seconds, blocks.collect())
+    }
+
+    /// The finished `records.txt` and `shard.json` of share `shard` of `sc`, run in
+    /// `seconds`, with what the reports need of each block it touched (`blocks`).
+    pub(crate) fn finish_with(
+        self,
+        sc: &AnyScenario,
+        shard: Shard,
+        seconds: f64,
+        blocks: Vec<ShardBlock>,
+    ) -> Result<Outputs<'static>> {
+        let records = self.out.finish()?;
         let meta = ShardMeta {
             format: FORMAT.into(),
-            scenario: r.scenario.name.clone(),
-            scenario_file: r.scenario.path.clone(),
-            settings,
-            seed: r.scenario.seed,
-            trials: r.scenario.trials,
+            scenario: sc.name().to_string(),
+            scenario_file: sc.path().map(Path::to_path_buf),
+            settings: self.settings,
+            seed: sc.seed(),
+            trials: sc.trials(),
             shard,
-            units: shard.range(total),
+            units: shard.range(sc.units()),
             records: self.count,
-            seconds: r.seconds,
+            seconds,
             machine: Some(Machine::here()),
-            blocks: r
-                .blocks
-                .iter()
-                .map(|b| ShardBlock {
-                    info: b.info.clone(),
-                    trial0: b.trial0.clone(),
-                })
-                .collect(),
+            blocks,
         };
         let text =
             serde_json::to_string_pretty(&meta).map_err(|e| Error::Compute(e.to_string()))?;
@@ -120,11 +131,18 @@ impl Records {
     }
 }
 
-impl TrialSink for Records {
-    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
-        let line = encode(self.seed, info.index, t);
+impl Records {
+    /// Appends trial `trial` of block `point`, which gave `t`.
+    pub fn record<T: Serialize>(&mut self, point: usize, trial: usize, t: &T) -> Result<()> {
+        let line = encode(&self.id, point, trial, t)?;
         self.count += 1;
         self.out.append(line.as_bytes())
+    }
+}
+
+impl TrialSink for Records {
+    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
+        self.record(info.index, t.index, t)
     }
 }
 
@@ -181,10 +199,18 @@ fn missing_commands(
         .join("\n")
 }
 
+/// What a merge wrote: a Monte-Carlo run, or the study of cells whose table it gives.
+pub enum Merged {
+    /// A Monte-Carlo run's results.
+    Run(RunResult),
+    /// A registration or instruments study: the table the terminal shows.
+    Cells(String),
+}
+
 /// `calbench merge DIR… --out DIR`: checks that `dirs` are all the shards of one run (same
 /// scenario, settings and seed, each shard once, none missing) and writes the run's output to
 /// `out`, the same bytes (`summary.json`, `trials.csv`) as the unsharded run.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
+pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     if dirs.is_empty() {
         return Err(Error::setting("DIR", "give the shard folders to merge"));
     }
@@ -259,9 +285,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         ));
     }
     metas.sort_by_key(|(_, m)| m.shard.index);
-    let scenario = Scenario::parse(&metas[0].1.settings, metas[0].1.scenario_file.as_deref())?;
-    let points = scenario.sweep.as_ref().map_or(1, |s| s.points().len()) as u64;
-    let total = scenario.trials as u64 * points;
+    let any = AnyScenario::parse(&metas[0].1.settings, metas[0].1.scenario_file.as_deref())?;
+    let total = any.units();
     for (d, m) in &metas {
         let units = m.shard.range(total);
         if m.units != units || m.records != units.1 - units.0 {
@@ -276,6 +301,16 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
             ));
         }
     }
+    let scenario = match &any {
+        AnyScenario::MonteCarlo(s) => s.clone(),
+        AnyScenario::Registration(s) => {
+            return merge_cells(s, &any, &metas, out).map(Merged::Cells)
+        }
+        AnyScenario::Instruments(s) => {
+            let c = Instruments::new(s)?;
+            return merge_cells(&c, &any, &metas, out).map(Merged::Cells);
+        }
+    };
     // The reports' view of every block, and trial 0's extras, from the shard that ran it.
     let mut infos: Vec<Option<(BlockInfo, Option<Trial0>)>> = Vec::new();
     for (_, m) in &metas {
@@ -301,11 +336,13 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         for (d, m) in &metas {
             let path = d.join("records.txt");
             let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
-            let sweep = scenario.sweep.is_some();
-            let mut records = Verifier::new(&path, m.seed, m.trials, sweep, m.units);
+            let sweep = scenario.sweep.is_some().then_some("sweep point");
+            let id = RunId::new(&m.settings, m.seed);
+            let mut records = Verifier::new(&path, id, m.trials, sweep, m.units);
             for line in std::io::BufReader::new(file).lines() {
                 let line = line.map_err(|e| Error::io(&path, e))?;
-                let (b, t) = records.record(&line)?;
+                let (b, index, t) = records.record(&line)?;
+                let t = TrialResult { index, ..t };
                 if current != Some(b) {
                     let (info, t0) = infos.get(b).cloned().flatten().ok_or_else(|| {
                         Error::file(
@@ -345,5 +382,40 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<RunResult> {
         result = Some(r);
         Ok(())
     })?;
-    result.ok_or_else(|| Error::Compute("the merge produced no result".into()))
+    let r = result.ok_or_else(|| Error::Compute("the merge produced no result".into()))?;
+    Ok(Merged::Run(r))
+}
+
+/// The merge of a study of cells: every shard's records, checked, into their blocks in
+/// order, then the study's files into `out`, as a whole; the table the terminal shows.
+fn merge_cells<C: Cells>(
+    cells: &C,
+    sc: &AnyScenario,
+    metas: &[(PathBuf, ShardMeta)],
+    out: &Path,
+) -> Result<String> {
+    let mut table = String::new();
+    crate::report::atomically(out, |dir| {
+        let mut done: Vec<(C::Block, Vec<C::Trial>)> = Vec::new();
+        for (d, m) in metas {
+            let path = d.join("records.txt");
+            let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
+            let id = RunId::new(&m.settings, m.seed);
+            let mut records = Verifier::new(&path, id, m.trials, sc.blocks().1, m.units);
+            for line in std::io::BufReader::new(file).lines() {
+                let line = line.map_err(|e| Error::io(&path, e))?;
+                let (b, _, t) = records.record::<C::Trial>(&line)?;
+                while done.len() <= b {
+                    let block = cells.block(done.len(), done.last().map(|d| &d.0))?;
+                    done.push((block, Vec::new()));
+                }
+                done[b].1.push(t);
+            }
+            records.finish()?;
+        }
+        let (outputs, text) = cells.outputs(done)?;
+        table = text;
+        write_all(dir, &outputs)
+    })?;
+    Ok(table)
 }

@@ -85,14 +85,10 @@ impl InstrumentsScenario {
         table.contains_key("measurement")
     }
 
-    /// The instruments, in file order.
-    pub fn instruments(&self) -> Vec<InstrumentSettings> {
-        self.measurement.clone()
-    }
-
     /// Parses and checks the scenario in `table`, read from `path` (named in errors).
     pub fn from_table(mut table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+        let whole = table.clone();
         let entries = match table.remove("measurement") {
             Some(toml::Value::Array(a)) => a,
             Some(t @ toml::Value::Table(_)) => vec![t],
@@ -120,11 +116,12 @@ impl InstrumentsScenario {
             crate::study::whole::parse(table, path, trials, takes)?;
         s.measurement = measurement;
         s.head = head;
-        for (i, m) in s.instruments().iter().enumerate() {
+        s.head.table = whole;
+        for (i, m) in s.measurement.iter().enumerate() {
             m.instrument()
                 .map_err(|e| ferr(&format!("measurement[{i}]"), e.to_string()))?;
         }
-        if s.instruments().is_empty() || s.poses.is_empty() || s.strategies.is_empty() {
+        if s.measurement.is_empty() || s.poses.is_empty() || s.strategies.is_empty() {
             return Err(ferr(
                 "measurement",
                 "needs at least one instrument, pose count and strategy".into(),
@@ -325,105 +322,130 @@ pub struct Cell {
     pub failures: usize,
 }
 
+/// What every cell of one instrument shares: its layout and candidate poses, the robot's
+/// parameters it identifies on them and those it cannot see, and the column scale of pose
+/// selection.
+#[derive(Debug)]
+struct Prepared {
+    index: usize,
+    settings: InstrumentSettings,
+    label: String,
+    lay: Layout,
+    pool: Vec<Vec<Real>>,
+    groups: Vec<usize>,
+    params: Vec<Param>,
+    unidentifiable: Vec<Param>,
+    scale: Vec<Real>,
+}
+
+/// One cell ready to run its trials: its instrument, pose count, strategy and, for a
+/// strategy other than `random`, the pose set it selected.
+#[derive(Debug)]
+pub struct CellPlan {
+    prepared: std::sync::Arc<Prepared>,
+    count: usize,
+    strategy: String,
+    fixed: Option<(Vec<Vec<Real>>, Vec<usize>)>,
+}
+
 impl InstrumentsScenario {
-    /// Runs every cell, trials in parallel on rayon (each trial from its own seed, results
-    /// in trial order, so the bytes do not depend on the thread count).
-    pub fn run(&self, nominal: &Robot) -> Result<Vec<Cell>> {
-        use rayon::prelude::*;
+    /// The cells: instruments × pose counts × strategies.
+    pub fn cells(&self) -> usize {
+        self.measurement.len() * self.poses.len() * self.strategies.len()
+    }
+
+    /// Instrument `ii` on `nominal`, prepared for its cells.
+    fn prepare(&self, nominal: &Robot, ii: usize) -> Result<Prepared> {
+        let s = &self.measurement[ii];
         let joint_tool: Vec<Param> = nominal
             .params()
             .into_iter()
             .filter(|p| !matches!(p, Param::Base(_)))
             .collect();
-        let mut cells = Vec::new();
-        for (ii, s) in self.instruments().iter().enumerate() {
-            let mut rng = stream(self.head.seed, &format!("instruments-pool-{ii}"));
-            let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
-            let values = vec![
-                0.0;
-                lay.instrument.observations(pool.len())
-                    * lay.instrument.rows_per_observation()
-            ];
-            let pool_data = KindData {
-                instrument: lay.instrument.clone(),
-                group: groups.clone(),
-                values,
-            };
-            let a = identifiability(nominal, &joint_tool, &pool, &pool_data)?;
-            let params = a.identifiable.clone();
-            let label = match lay.instrument {
-                Instrument::Distance { pivot: false } => "distance-chain".to_string(),
-                _ => s.kind.as_str().to_string(),
-            };
-            // Column scale for pose selection: the pool's column norms.
-            let scale: Vec<Real> = {
-                let kp = KindProblem::new(nominal, &params, &pool, &pool_data)?;
-                let size = kp.size();
-                let mut r = DVector::zeros(size.rows());
-                let mut j = DMatrix::zeros(size.rows(), size.params);
-                kp.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
-                (0..size.params)
-                    .map(|c| 1.0 / j.column(c).norm().max(1e-12))
-                    .collect()
-            };
-            let model = KindPoseModel {
-                robot: nominal,
-                params: params.clone(),
-                lay: &lay,
-                limits: nominal.joints.iter().map(|j| j.limits).collect(),
-                scale,
-            };
-            for &count in &self.poses {
-                for st in &self.strategies {
-                    let strat = strategy(st)?;
-                    let fixed = if strat == Strategy::Random {
-                        None
-                    } else {
-                        let mut r =
-                            stream(self.head.seed, &format!("instruments-select-{ii}-{count}"));
-                        let sel = select(&model, &pool, strat, &SelectOptions::new(count), &mut r)
-                            .map_err(|e| Error::setting("poses", format!("{label}: {e}")))?;
-                        Some(on_surfaces(
-                            nominal,
-                            &lay,
-                            sel.poses,
-                            (&pool, &groups),
-                            count,
-                        ))
-                    };
-                    let trials: Vec<Option<Trial>> = (0..self.head.trials)
-                        .into_par_iter()
-                        .map(|t| {
-                            let seed = trial_seed(self.head.seed, t as u64);
-                            self.trial(
-                                nominal,
-                                s,
-                                &lay,
-                                &params,
-                                &pool,
-                                &groups,
-                                fixed.as_ref(),
-                                count,
-                                seed,
-                            )
-                        })
-                        .collect::<Result<_>>()?;
-                    cells.push(self.cell(
-                        &label,
-                        s,
-                        &lay,
-                        &params,
-                        &a.unidentifiable,
-                        count,
-                        st,
-                        &trials,
-                    ));
-                }
-            }
-        }
-        Ok(cells)
+        let mut rng = stream(self.head.seed, &format!("instruments-pool-{ii}"));
+        let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
+        let rows = lay.instrument.observations(pool.len()) * lay.instrument.rows_per_observation();
+        let pool_data = KindData {
+            instrument: lay.instrument.clone(),
+            group: groups.clone(),
+            values: vec![0.0; rows],
+        };
+        let a = identifiability(nominal, &joint_tool, &pool, &pool_data)?;
+        let label = match lay.instrument {
+            Instrument::Distance { pivot: false } => "distance-chain".to_string(),
+            _ => s.kind.as_str().to_string(),
+        };
+        // Column scale for pose selection: the pool's column norms.
+        let kp = KindProblem::new(nominal, &a.identifiable, &pool, &pool_data)?;
+        let size = kp.size();
+        let mut r = DVector::zeros(size.rows());
+        let mut j = DMatrix::zeros(size.rows(), size.params);
+        kp.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
+        let scale = (0..size.params)
+            .map(|c| 1.0 / j.column(c).norm().max(1e-12))
+            .collect();
+        Ok(Prepared {
+            index: ii,
+            settings: s.clone(),
+            label,
+            lay,
+            pool,
+            groups,
+            params: a.identifiable,
+            unidentifiable: a.unidentifiable,
+            scale,
+        })
     }
 
+    /// Cell `c` (instruments outer, then pose counts, then strategies) on `nominal`, its
+    /// instrument's preparation taken from `prev` when it is the same instrument's.
+    pub fn plan(&self, nominal: &Robot, c: usize, prev: Option<&CellPlan>) -> Result<CellPlan> {
+        let (ns, np) = (self.strategies.len(), self.poses.len());
+        let (ii, count, st) = (
+            c / (ns * np),
+            self.poses[c / ns % np],
+            &self.strategies[c % ns],
+        );
+        let prepared = match prev.filter(|p| p.prepared.index == ii) {
+            Some(p) => p.prepared.clone(),
+            None => std::sync::Arc::new(self.prepare(nominal, ii)?),
+        };
+        let strat = strategy(st)?;
+        let fixed = if strat == Strategy::Random {
+            None
+        } else {
+            let p = &prepared;
+            let model = KindPoseModel {
+                robot: nominal,
+                params: p.params.clone(),
+                lay: &p.lay,
+                limits: nominal.joints.iter().map(|j| j.limits).collect(),
+                scale: p.scale.clone(),
+            };
+            let mut r = stream(self.head.seed, &format!("instruments-select-{ii}-{count}"));
+            let sel = select(&model, &p.pool, strat, &SelectOptions::new(count), &mut r)
+                .map_err(|e| Error::setting("poses", format!("{}: {e}", p.label)))?;
+            let pool = (p.pool.as_slice(), p.groups.as_slice());
+            Some(on_surfaces(nominal, &p.lay, sel.poses, pool, count))
+        };
+        Ok(CellPlan {
+            prepared,
+            count,
+            strategy: st.clone(),
+            fixed,
+        })
+    }
+
+    /// The cell `plan`'s results from its `trials`, in trial order.
+    pub fn cell_of(&self, plan: &CellPlan, trials: &[Option<Trial>]) -> Cell {
+        let p = &plan.prepared;
+        let what = (p.label.as_str(), &p.settings, &p.lay);
+        let params = (p.params.as_slice(), p.unidentifiable.as_slice());
+        self.cell(what, params, plan.count, &plan.strategy, trials)
+    }
+}
+
+impl InstrumentsScenario {
     /// What trial `seed` reads with instrument `s` laid out as `lay`: the true robot drawn
     /// from `[errors]`, the poses (`fixed`, or `count` drawn from the candidates `pool` with
     /// their planes or spheres), the instrument's readings where the true robot touches, and
@@ -484,7 +506,7 @@ impl InstrumentsScenario {
                 ),
             ));
         }
-        let all = self.instruments();
+        let all = &self.measurement;
         let s = all
             .get(entry)
             .ok_or_else(|| Error::setting("measurement", format!("no entry {entry}")))?;
@@ -508,20 +530,19 @@ impl InstrumentsScenario {
         })
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn trial(
-        &self,
-        nominal: &Robot,
-        s: &InstrumentSettings,
-        lay: &Layout,
-        params: &[Param],
-        pool: &[Vec<Real>],
-        groups: &[usize],
-        fixed: Option<&(Vec<Vec<Real>>, Vec<usize>)>,
-        count: usize,
-        seed: u64,
-    ) -> Result<Option<Trial>> {
-        let reading = self.reading(nominal, (s, lay), (pool, groups), fixed, count, seed)?;
+    /// Trial `t` of the cell `plan` on `nominal` (its own seed, `trial_seed(seed, t)`):
+    /// `None` when the true robot could not touch or the identification did not converge.
+    pub fn run_trial(&self, nominal: &Robot, plan: &CellPlan, t: usize) -> Result<Option<Trial>> {
+        let (p, seed) = (&plan.prepared, trial_seed(self.head.seed, t as u64));
+        let (pool, fixed, params) = ((&p.pool[..], &p.groups[..]), plan.fixed.as_ref(), &p.params);
+        let reading = self.reading(
+            nominal,
+            (&p.settings, &p.lay),
+            pool,
+            fixed,
+            plan.count,
+            seed,
+        )?;
         let Some((tq, data, sigma)) = &reading.measured else {
             return Ok(None);
         };
@@ -564,14 +585,10 @@ impl InstrumentsScenario {
         }))
     }
 
-    #[allow(clippy::too_many_arguments)]
     fn cell(
         &self,
-        label: &str,
-        s: &InstrumentSettings,
-        lay: &Layout,
-        params: &[Param],
-        unident: &[Param],
+        (label, s, lay): (&str, &InstrumentSettings, &Layout),
+        (params, unident): (&[Param], &[Param]),
         count: usize,
         st: &str,
         trials: &[Option<Trial>],
@@ -667,8 +684,10 @@ pub struct Simulated {
     pub reading: Reading,
 }
 
-/// One trial's outcome.
-struct Trial {
+/// One trial's outcome: the true errors, the identified values, the Cramér–Rao trace and the
+/// validation RMS before and after (its serde form is its record in `records.txt`).
+#[derive(Clone, Debug, serde::Serialize, Deserialize)]
+pub struct Trial {
     errors: Vec<(Param, Real)>,
     x: Vec<Real>,
     crb: Real,

@@ -25,6 +25,7 @@
 pub mod claims;
 pub mod instruments;
 pub mod metric;
+pub mod kind;
 pub mod outcome;
 pub mod plan;
 pub mod records;

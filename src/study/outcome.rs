@@ -4,14 +4,18 @@
 //! records and the claims read, apart from how a trial computes them (`super::trial`) and how
 //! they are aggregated (`super::stats`). This module imports neither.
 
+use serde::{Deserialize, Serialize};
+
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::Real;
 
-/// One trial's results.
-#[derive(Clone, Debug)]
+/// One trial's results. Its serde form (trial 0's details and the index aside) is what a
+/// record of `records.txt` holds ([`crate::study::records`]).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct TrialResult {
-    /// Trial index.
+    /// Trial index (a record holds it beside the trial).
+    #[serde(skip)]
     pub index: usize,
     /// The injected errors, one per study parameter (0 where none was injected).
     pub truth: Vec<Real>,
@@ -32,7 +36,7 @@ pub const BUDGET_FRACTIONS: [Real; 4] = [0.1, 0.25, 0.5, 1.0];
 
 /// One search's numbers on one trial ([`crate::study::stats::ecdf`] computes and aggregates
 /// them).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SearchRun {
     /// The smallest evaluation count of the searches of the same fitness on the trial: the
     /// budget the grid's shares apply to.
@@ -45,7 +49,7 @@ pub struct SearchRun {
 }
 
 /// What one method on one strategy's measurement gave in one trial.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Outcome {
     /// Index into the scenario's methods.
     pub method: usize,
@@ -65,11 +69,14 @@ pub struct Outcome {
     /// The statistics only some studies have (absent: `None`).
     pub optional: OptionalStats,
     /// Per-point validation errors before and after (kept for trial 0's plot only).
+    #[serde(skip)]
     pub per_point: Option<(Vec<Real>, Vec<Real>)>,
     /// Per-point attitude errors (Qiao's, deg) before and after, for full-pose data (trial 0
     /// only; Qiao 2021 fig. 6).
+    #[serde(skip)]
     pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
     /// A metaheuristic's best fitness per iteration (trial 0 only).
+    #[serde(skip)]
     pub trace: Option<Vec<Real>>,
     /// A search's runtime and fixed-budget numbers on this trial (`None` for the methods
     /// without a fitness trace; [`crate::study::stats::ecdf`]).
@@ -89,11 +96,12 @@ pub struct Outcome {
     pub seconds: Real,
     /// Why the calibration gave no result, when it failed with an error (a method supplied
     /// from outside that raised, an inconsistent problem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
 }
 
-/// Declares [`OptionalStats`] from its fields: the field names are the `summary.json` names,
-/// and the order of the fields is that of `records.txt`.
+/// Declares [`OptionalStats`] from its fields: the field names are the `summary.json` names
+/// (and those of a record in `records.txt`).
 macro_rules! optional_stats {
     ($($(#[$doc:meta])* $name:ident,)*) => {
         /// The statistics only some studies have, each `None` where a study has none:
@@ -102,7 +110,7 @@ macro_rules! optional_stats {
         /// (`validation.axis_errors`; [`crate::calibrate::PoseErrors::axis_mm`], [`crate::calibrate::PoseErrors::axis_abs_mm`]) and
         /// Qiao's attitude at the calibration poses for full-pose data. Each field's name is
         /// its key in `summary.json` (docs/formats.md § 7.1).
-        #[derive(Clone, Copy, Debug, Default, PartialEq)]
+        #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
         pub struct OptionalStats {
             $($(#[$doc])* pub $name: Option<ErrorStats>,)*
         }
@@ -115,11 +123,6 @@ macro_rules! optional_stats {
             /// The fields' values, in the order of [`OptionalStats::NAMES`].
             pub fn values(&self) -> [Option<ErrorStats>; OptionalStats::NAMES.len()] {
                 [$(self.$name),*]
-            }
-
-            /// The fields, mutable, in the order of [`OptionalStats::NAMES`].
-            pub fn values_mut(&mut self) -> [&mut Option<ErrorStats>; OptionalStats::NAMES.len()] {
-                [$(&mut self.$name),*]
             }
         }
     };
@@ -150,6 +153,5 @@ optional_stats! {
     calibration_after_attitude_deg,
 }
 
-/// The `summary.json` names of [`Outcome::optional`], in its order (the order of
-/// `records.txt`).
+/// The `summary.json` names of [`Outcome::optional`], in its order.
 pub const OPTIONAL_STATS: [&str; OptionalStats::NAMES.len()] = OptionalStats::NAMES;

@@ -1,329 +1,129 @@
 //! The record format of `records.txt`, in a shard folder and in a checkpoint
-//! (docs/formats.md § 7.3): one line per trial with every number the aggregation reads,
-//! floats in shortest round-trip form, ending in a checksum of the line.
+//! (docs/formats.md § 7.3): one line per trial, the serde form of what the trial gave
+//! ([`Record`]: its sweep point, its index and its result), then ` #` and a checksum.
 //!
-//! A line is `block trial n truth… crb… outcomes #SUM`, where `SUM` is 16 hexadecimal digits
-//! of the FNV-1a 64-bit hash of the run's seed (8 bytes, little-endian) and the text before
-//! ` #`. Each step of FNV-1a is a bijection of the hash, so any change of one byte of the line
-//! changes the sum; the seed makes a record of another run fail it too. A reader
-//! (`Verifier`) checks every line's sum and that the lines hold the run's trials in order,
-//! each once: a changed, missing, duplicated or reordered record is refused, naming the file,
-//! the line and the trial.
+//! The serde form is RON (the `ron` crate): it writes every float in its shortest round-trip
+//! form, `NaN` and `inf` included, so a record reads back bit for bit (JSON has no NaN, and a
+//! search's fitness before its first iteration is one).
+//!
+//! The checksum binds the record to its run: 32 hexadecimal digits, the first 16 bytes of the
+//! SHA-256 (the `sha2` crate) of the run's identity — the SHA-256 of its scenario as run (the
+//! settings' TOML text that `shard.json` and `checkpoint.json` hold) and its seed — then the
+//! record's sweep point and trial, then the text before ` #`. A changed byte, a record of
+//! another run (another scenario's content, another seed, or the same name and seed with other
+//! settings) and a record moved to another sweep point or trial each fail it. A reader
+//! ([`Verifier`]) checks every line's sum and that the lines hold the run's trials in order,
+//! each once: a changed, foreign, missing, duplicated or reordered record is refused, naming the
+//! file, the line and the trial.
 
 use std::path::{Path, PathBuf};
 
-use crate::calibrate::ErrorStats;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
 use crate::error::{Error, Result};
-use crate::identify::Termination;
-use crate::numeric::Real;
-use crate::study::outcome::{OptionalStats, Outcome};
-use crate::study::stats::ecdf::{self, SearchRun};
-use crate::study::TrialResult;
 
-/// FNV-1a, 64 bits: the hash of `seed` (little-endian) then `body`.
-fn checksum(seed: u64, body: &str) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in seed.to_le_bytes().iter().chain(body.as_bytes()) {
-        h ^= u64::from(*b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
+/// One line of `records.txt` before its checksum: trial `trial` of sweep point `point` (0
+/// without a sweep) and what it gave.
+#[derive(Serialize, Deserialize)]
+struct Record<T> {
+    point: usize,
+    trial: usize,
+    result: T,
 }
 
-/// A word of a record as a message quotes it: at most 24 characters, escaped, so that a
-/// damaged file never makes a long or multi-line message.
-fn shown(w: &str) -> String {
-    let mut s: String = w
-        .chars()
-        .take(24)
-        .collect::<String>()
-        .escape_debug()
-        .to_string();
-    if w.chars().count() > 24 {
-        s.push('…');
-    }
-    s
+/// What a record's checksum binds of its run: its scenario as run and its seed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct RunId {
+    scenario: [u8; 32],
+    seed: u64,
 }
 
-fn push_stats(s: &mut String, e: &ErrorStats) {
-    for v in [e.mean, e.rms, e.max, e.std] {
-        s.push(' ');
-        s.push_str(&format!("{v:e}"));
-    }
-}
-
-/// A search's numbers ([`SearchRun`]): `+ budget`, the evaluations of each target (`-`: not
-/// reached), the best fitness at each budget. Written only for the searches, so the records
-/// of the other methods are those of before.
-fn push_search(s: &mut String, r: &SearchRun) {
-    s.push_str(&format!(" + {}", r.budget));
-    for h in r.hits {
-        match h {
-            Some(e) => s.push_str(&format!(" {e}")),
-            None => s.push_str(" -"),
+impl RunId {
+    /// The run of the scenario whose settings as run are the TOML text `settings`, with `seed`.
+    pub(crate) fn new(settings: &str, seed: u64) -> RunId {
+        RunId {
+            scenario: Sha256::digest(settings.as_bytes()).into(),
+            seed,
         }
     }
-    for v in r.at_budget {
-        s.push_str(&format!(" {v:e}"));
+
+    /// The checksum of the record text `body` of trial `trial` of sweep point `point`.
+    fn checksum(&self, point: usize, trial: usize, body: &str) -> String {
+        let mut h = Sha256::new();
+        h.update(self.scenario);
+        h.update(self.seed.to_le_bytes());
+        h.update((point as u64).to_le_bytes());
+        h.update((trial as u64).to_le_bytes());
+        h.update(body.as_bytes());
+        h.finalize()[..16]
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect()
     }
 }
 
-/// One trial of the run with `seed` as a line of `records.txt`: `block trial n truth… crb…
-/// outcomes #SUM`, each outcome `strategy method termination rank-deficient-expected
-/// iterations evaluations seconds`, four statistics of four numbers (validation and
-/// calibration, before and after), the optional statistics (`-`, or `+` and four numbers)
-/// and the n identified values, then for a search `+` and its [`SearchRun`]; `SUM` is the line's [`checksum`].
-pub(crate) fn encode(seed: u64, block: usize, t: &TrialResult) -> String {
-    let mut s = format!("{block} {} {}", t.index, t.truth.len());
-    for v in &t.truth {
-        s.push_str(&format!(" {v:e}"));
-    }
-    s.push_str(&format!(" {}", t.crb_trace.len()));
-    for c in &t.crb_trace {
-        match c {
-            Some(v) => s.push_str(&format!(" {v:e}")),
-            None => s.push_str(" -"),
-        }
-    }
-    s.push_str(&format!(" {}", t.outcomes.len()));
-    for o in &t.outcomes {
-        s.push_str(&format!(
-            " {} {} {} {} {} {} {:e}",
-            o.strategy,
-            o.method,
-            o.termination.as_str(),
-            u8::from(o.rank_deficient_expected),
-            o.iterations,
-            o.evaluations,
-            o.seconds
-        ));
-        push_stats(&mut s, &o.before_mm);
-        push_stats(&mut s, &o.after_mm);
-        push_stats(&mut s, &o.calibration_before_mm);
-        push_stats(&mut s, &o.calibration_after_mm);
-        for d in o.optional.values() {
-            match d {
-                Some(d) => {
-                    s.push_str(" +");
-                    push_stats(&mut s, &d);
-                }
-                None => s.push_str(" -"),
-            }
-        }
-        for v in &o.identified {
-            s.push_str(&format!(" {v:e}"));
-        }
-        if let Some(r) = &o.search {
-            push_search(&mut s, r);
-        }
-    }
-    let sum = checksum(seed, &s);
-    s.push_str(&format!(" #{sum:016x}\n"));
-    s
-}
-
-/// Reads the tokens of one record line.
-struct Tokens<'a> {
-    it: std::iter::Peekable<std::str::SplitAsciiWhitespace<'a>>,
-    path: &'a Path,
-    line: usize,
-}
-
-impl<'a> Tokens<'a> {
-    fn err(&self, what: &str) -> Error {
-        Error::file(
-            self.path,
-            format!("line {}", self.line),
-            format!("{what} (the file is not a calbench record, or is cut short)"),
-        )
-    }
-    fn word(&mut self) -> Result<&'a str> {
-        self.it.next().ok_or_else(|| self.err("missing field"))
-    }
-    fn usize(&mut self) -> Result<usize> {
-        let w = self.word()?;
-        w.parse()
-            .map_err(|_| self.err(&format!("\"{}\" is not a count", shown(w))))
-    }
-    fn real(&mut self) -> Result<Real> {
-        let w = self.word()?;
-        w.parse()
-            .map_err(|_| self.err(&format!("\"{}\" is not a number", shown(w))))
-    }
-    fn reals(&mut self, n: usize) -> Result<Vec<Real>> {
-        (0..n).map(|_| self.real()).collect()
-    }
-    fn stats(&mut self) -> Result<ErrorStats> {
-        Ok(ErrorStats {
-            mean: self.real()?,
-            rms: self.real()?,
-            max: self.real()?,
-            std: self.real()?,
-        })
-    }
-    /// A search's numbers, if the next word is `+` (see [`push_search`]).
-    fn search(&mut self) -> Result<Option<SearchRun>> {
-        if self.it.peek() != Some(&"+") {
-            return Ok(None);
-        }
-        self.word()?;
-        let budget = self.usize()?;
-        let mut hits = [None; ecdf::DELTAS.len()];
-        for h in &mut hits {
-            *h = match self.word()? {
-                "-" => None,
-                w => Some(
-                    w.parse()
-                        .map_err(|_| self.err(&format!("\"{}\" is not a count", shown(w))))?,
-                ),
-            };
-        }
-        let mut at_budget = [0.0; ecdf::BUDGET_FRACTIONS.len()];
-        for v in &mut at_budget {
-            *v = self.real()?;
-        }
-        Ok(Some(SearchRun {
-            budget,
-            hits,
-            at_budget,
-        }))
-    }
-    fn optional_stats(&mut self) -> Result<Option<ErrorStats>> {
-        match self.word()? {
-            "-" => Ok(None),
-            "+" => self.stats().map(Some),
-            w => Err(self.err(&format!("\"{}\" is neither - nor +", shown(w)))),
-        }
-    }
-}
-
-/// Parses the text before the checksum of line `line` of `path` (see [`encode`]): the block
-/// index and the trial.
-fn decode(text: &str, path: &Path, line: usize) -> Result<(usize, TrialResult)> {
-    let mut t = Tokens {
-        it: text.split_ascii_whitespace().peekable(),
-        path,
-        line,
+/// Trial `trial` of sweep point `point` of the run `id`, which gave `result`, as a line of
+/// `records.txt` ending in its checksum and a line end.
+pub(crate) fn encode<T: Serialize>(
+    id: &RunId,
+    point: usize,
+    trial: usize,
+    result: &T,
+) -> Result<String> {
+    let record = Record {
+        point,
+        trial,
+        result,
     };
-    let block = t.usize()?;
-    let index = t.usize()?;
-    let n = t.usize()?;
-    let truth = t.reals(n)?;
-    let ns = t.usize()?;
-    let mut crb_trace = Vec::with_capacity(ns);
-    for _ in 0..ns {
-        crb_trace.push(match t.word()? {
-            "-" => None,
-            w => Some(
-                w.parse()
-                    .map_err(|_| t.err(&format!("\"{}\" is not a number", shown(w))))?,
-            ),
-        });
-    }
-    let no = t.usize()?;
-    let mut outcomes = Vec::with_capacity(no);
-    for _ in 0..no {
-        let strategy = t.usize()?;
-        let method = t.usize()?;
-        let name = t.word()?.to_string();
-        let termination: Termination = crate::robot::names::parse("termination", &name)
-            .map_err(|_| t.err(&format!("unknown termination \"{}\"", shown(&name))))?;
-        let rank_deficient_expected = match t.usize()? {
-            0 => false,
-            1 => true,
-            v => return Err(t.err(&format!("{v} is not a flag (0 or 1)"))),
-        };
-        let iterations = t.usize()?;
-        let evaluations = t.usize()?;
-        let seconds = t.real()?;
-        let before_mm = t.stats()?;
-        let after_mm = t.stats()?;
-        let calibration_before_mm = t.stats()?;
-        let calibration_after_mm = t.stats()?;
-        let mut optional = OptionalStats::default();
-        for o in optional.values_mut() {
-            *o = t.optional_stats()?;
-        }
-        let identified = t.reals(n)?;
-        let search = t.search()?;
-        outcomes.push(Outcome {
-            method,
-            strategy,
-            identified,
-            before_mm,
-            after_mm,
-            calibration_before_mm,
-            calibration_after_mm,
-            optional,
-            per_point: None,
-            per_point_attitude_deg: None,
-            trace: None,
-            search,
-            iterations,
-            evaluations,
-            termination,
-            rank_deficient_expected,
-            seconds,
-            // Shards run scenario files, whose methods are all registered ones.
-            error: None,
-        });
-    }
-    if t.it.next().is_some() {
-        return Err(t.err("extra fields at the end of the line"));
-    }
-    Ok((
-        block,
-        TrialResult {
-            index,
-            truth,
-            crb_trace,
-            outcomes,
-        },
-    ))
+    let body = ron::to_string(&record)
+        .map_err(|e| Error::Compute(format!("cannot write a trial's record: {e}")))?;
+    let sum = id.checksum(point, trial, &body);
+    Ok(format!("{body} #{sum}\n"))
 }
 
 /// The reader of one `records.txt` that holds the work units `[start, end)` of a run (unit
-/// `u` is trial `u % trials` of block `u / trials`): every line must carry its checksum and
-/// the next unit, so a changed, missing, duplicated or reordered record is refused, naming
-/// the file, the line and the trial.
+/// `u` is trial `u % trials` of sweep point `u / trials`): every line must carry its checksum
+/// and the next unit, so a changed, foreign, missing, duplicated or reordered record is
+/// refused, naming the file, the line and the trial.
 pub(crate) struct Verifier {
     path: PathBuf,
-    seed: u64,
+    id: RunId,
     trials: u64,
-    sweep: bool,
+    block: Option<&'static str>,
     next: u64,
     end: u64,
     line: usize,
 }
 
 impl Verifier {
-    /// The reader of `path`, records of the run with `seed` and `trials` trials per block
-    /// (`sweep`: whether blocks are sweep points), holding the units `units`.
+    /// The reader of `path`, records of the run `id` with `trials` trials per block (`block`:
+    /// what the messages call one, `None` for a run of one block), holding the units `units`.
     pub(crate) fn new(
         path: &Path,
-        seed: u64,
+        id: RunId,
         trials: usize,
-        sweep: bool,
+        block: Option<&'static str>,
         units: (u64, u64),
     ) -> Verifier {
         Verifier {
             path: path.to_path_buf(),
-            seed,
+            id,
             trials: trials.max(1) as u64,
-            sweep,
+            block,
             next: units.0,
             end: units.1,
             line: 0,
         }
     }
 
-    /// Unit `u` as the messages name it: `trial I`, and its sweep point in a sweep.
+    /// Unit `u` as the messages name it: `trial I`, and its block (`of sweep point P`).
     fn trial(&self, u: u64) -> String {
         let (b, i) = (u / self.trials, u % self.trials);
-        if self.sweep {
-            format!("trial {i} of sweep point {b}")
-        } else {
-            format!("trial {i}")
+        match self.block {
+            Some(what) => format!("trial {i} of {what} {b}"),
+            None => format!("trial {i}"),
         }
     }
 
@@ -337,42 +137,37 @@ impl Verifier {
     }
 
     /// Reads the next line, `text` (without its line end): checks its checksum and that it
-    /// holds the next unit; returns its block and trial.
-    pub(crate) fn record(&mut self, text: &str) -> Result<(usize, TrialResult)> {
+    /// holds the next unit; returns its sweep point, its trial and what the trial gave.
+    pub(crate) fn record<T: DeserializeOwned>(&mut self, text: &str) -> Result<(usize, usize, T)> {
         self.line += 1;
-        let claim = {
-            let mut w = text.split_ascii_whitespace();
-            match (
-                w.next().and_then(|b| b.parse::<u64>().ok()),
-                w.next().and_then(|i| i.parse::<u64>().ok()),
-            ) {
-                (Some(b), Some(i)) if i < self.trials => {
-                    format!("the record of {}", self.trial(b * self.trials + i))
-                }
-                _ => "the record".to_string(),
-            }
-        };
         let Some((body, sum)) = text.rsplit_once(" #") else {
             return Err(self.err(format!(
-                "{claim} has no checksum at its end: it was cut short or altered"
+                "the record where {} was expected has no checksum at its end: it was cut short \
+                 or altered",
+                self.trial(self.next)
             )));
         };
-        let sum = u64::from_str_radix(sum, 16)
-            .ok()
-            .filter(|_| sum.len() == 16);
-        if sum != Some(checksum(self.seed, body)) {
-            return Err(self.err(format!(
-                "{claim} does not match its checksum: it was altered, or belongs to another run"
-            )));
-        }
-        let (b, t) = decode(body, &self.path, self.line)?;
-        if t.index as u64 >= self.trials {
+        let r: Record<T> = ron::from_str(body).map_err(|e| {
+            self.err(format!(
+                "the record where {} was expected cannot be read ({e}): it was altered, or the \
+                 file is not a calbench record",
+                self.trial(self.next)
+            ))
+        })?;
+        let u = r.point as u64 * self.trials + r.trial as u64;
+        if r.trial as u64 >= self.trials {
             return Err(self.err(format!(
                 "trial {} is beyond the run's {} trials",
-                t.index, self.trials
+                r.trial, self.trials
             )));
         }
-        let u = b as u64 * self.trials + t.index as u64;
+        if sum != self.id.checksum(r.point, r.trial, body) {
+            return Err(self.err(format!(
+                "the record of {} does not match its checksum: it was altered, or belongs to \
+                 another run (another scenario, seed, sweep point or trial)",
+                self.trial(u)
+            )));
+        }
         if self.next >= self.end {
             return Err(self.err(format!(
                 "{} is past the last trial these records hold ({}): an extra record",
@@ -396,7 +191,7 @@ impl Verifier {
             )));
         }
         self.next += 1;
-        Ok((b, t))
+        Ok((r.point, r.trial, r.result))
     }
 
     /// Checks, once every line is read, that no unit is missing at the end.
@@ -420,6 +215,13 @@ impl Verifier {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::calibrate::ErrorStats;
+    use crate::identify::Termination;
+    use crate::numeric::Real;
+    use crate::study::outcome::{Outcome, SearchRun};
+    use crate::study::TrialResult;
+
+    const SETTINGS: &str = "name = \"r\"\nseed = 5\n";
 
     #[test]
     fn a_record_reads_back_bit_for_bit() {
@@ -461,64 +263,92 @@ mod tests {
                 termination: Termination::MaxIterations,
                 rank_deficient_expected: true,
                 seconds: 0.00123,
-                error: None,
+                error: Some("a \"quoted\"\nmessage #1".into()),
             }],
         };
-        let line = encode(5, 3, &t);
-        let mut v = Verifier::new(Path::new("r.txt"), 5, 20, true, (77, 78));
-        let (b, u) = v.record(line.trim_end()).unwrap();
+        let id = RunId::new(SETTINGS, 5);
+        let line = encode(&id, 3, 17, &t).unwrap();
+        assert_eq!(line.lines().count(), 1, "{line}");
+        let mut v = Verifier::new(Path::new("r.txt"), id, 20, Some("sweep point"), (77, 78));
+        let (b, i, u): (usize, usize, TrialResult) = v.record(line.trim_end()).unwrap();
         v.finish().unwrap();
-        assert_eq!(b, 3);
-        assert_eq!(encode(5, 3, &u), line);
-        assert_eq!(u.truth[2].to_bits(), t.truth[2].to_bits());
-        assert_eq!(u.truth[1].to_bits(), (-0.0f64).to_bits());
-        assert!(u.outcomes[0].identified[1].is_nan());
-        assert!(decode("3 17 2 0.1", Path::new("r.txt"), 4)
-            .unwrap_err()
-            .to_string()
-            .contains("line 4"));
+        assert_eq!((b, i), (3, 17));
+        assert_eq!(encode(&id, 3, 17, &u).unwrap(), line);
+        let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&u.truth), bits(&t.truth));
+        assert_eq!(
+            bits(&u.outcomes[0].identified),
+            bits(&t.outcomes[0].identified)
+        );
+        let (a, o) = (&u.outcomes[0], &t.outcomes[0]);
+        assert_eq!(format!("{:?}", a.optional), format!("{:?}", o.optional));
+        assert_eq!(a.error, o.error);
+        assert_eq!(a.termination, o.termination);
+        assert_eq!(
+            a.search.as_ref().unwrap().hits,
+            o.search.as_ref().unwrap().hits
+        );
+        let mut v = Verifier::new(Path::new("r.txt"), id, 20, Some("sweep point"), (77, 78));
+        let e = v
+            .record::<TrialResult>("(point:3,trial:17) #00")
+            .unwrap_err();
+        assert!(e.to_string().contains("line 1") && e.to_string().contains("cannot be read"));
     }
 
-    /// A changed digit, a record missing, twice or out of place, and a record of another
-    /// seed are each refused naming the line and the trial; untouched records read back.
+    /// A changed digit, a record missing, twice or out of place, a record of another seed or
+    /// of another scenario with the same name and seed, and a record moved to another trial or
+    /// sweep point, are each refused naming the line and the trial; untouched records read back.
     #[test]
-    fn damaged_records_are_refused_naming_the_line_and_the_trial() {
+    fn damaged_and_foreign_records_are_refused_naming_the_line_and_the_trial() {
         let t = |index| TrialResult {
             index,
             truth: vec![0.25, -1.5],
             crb_trace: vec![None],
             outcomes: Vec::new(),
         };
-        let lines: Vec<String> = (0..4).map(|i| encode(9, 0, &t(i))).collect();
-        let read = |seed: u64, lines: &[String]| -> Result<usize> {
-            let mut v = Verifier::new(Path::new("r.txt"), seed, 4, false, (0, 4));
+        let id = RunId::new(SETTINGS, 9);
+        let lines: Vec<String> = (0..4).map(|i| encode(&id, 0, i, &t(i)).unwrap()).collect();
+        let read = |id: RunId, lines: &[String]| -> Result<usize> {
+            let mut v = Verifier::new(Path::new("r.txt"), id, 4, None, (0, 4));
             for l in lines {
-                v.record(l.trim_end())?;
+                v.record::<TrialResult>(l.trim_end())?;
             }
             v.finish()?;
             Ok(v.lines())
         };
-        assert_eq!(read(9, &lines).unwrap(), 4);
-        let refused = |seed: u64, lines: &[String], want: &[&str]| {
-            let e = read(seed, lines).unwrap_err().to_string();
+        assert_eq!(read(id, &lines).unwrap(), 4);
+        let refused = |id: RunId, lines: &[String], want: &[&str]| {
+            let e = read(id, lines).unwrap_err().to_string();
             for w in want {
                 assert!(e.contains(w), "{e}: no {w}");
             }
         };
         let mut changed = lines.clone();
-        changed[2] = changed[2].replace("2.5e-1", "3.5e-1");
-        refused(9, &changed, &["line 3", "trial 2", "checksum"]);
-        refused(8, &lines, &["line 1", "trial 0", "another run"]);
+        changed[2] = changed[2].replace("0.25", "0.35");
+        refused(id, &changed, &["line 3", "trial 2", "checksum"]);
+        refused(
+            RunId::new(SETTINGS, 8),
+            &lines,
+            &["line 1", "trial 0", "another run"],
+        );
+        let other = RunId::new(&format!("{SETTINGS}trials = 9\n"), 9);
+        refused(other, &lines, &["line 1", "trial 0", "another run"]);
+        let mut moved = lines.clone();
+        moved[1] = moved[1].replacen("trial:1", "trial:2", 1);
+        refused(id, &moved, &["line 2", "trial 2", "checksum"]);
+        let mut point = lines.clone();
+        point[1] = point[1].replacen("point:0", "point:1", 1);
+        refused(id, &point, &["line 2", "checksum"]);
         let mut gone = lines.clone();
         gone.remove(1);
-        refused(9, &gone, &["line 2", "trial 2", "trial 1 was expected"]);
+        refused(id, &gone, &["line 2", "trial 2", "trial 1 was expected"]);
         gone = lines[..3].to_vec();
-        refused(9, &gone, &["line 4", "before trial 3", "1 of the 4"]);
+        refused(id, &gone, &["line 4", "before trial 3", "1 of the 4"]);
         let mut twice = lines.clone();
         twice.insert(2, lines[1].clone());
-        refused(9, &twice, &["line 3", "trial 1 again", "duplicated"]);
+        refused(id, &twice, &["line 3", "trial 1 again", "duplicated"]);
         let mut cut = lines.clone();
         cut[3] = cut[3][..cut[3].len() - 8].to_string();
-        refused(9, &cut, &["line 4", "trial 3"]);
+        refused(id, &cut, &["line 4", "trial 3"]);
     }
 }

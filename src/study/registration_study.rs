@@ -273,7 +273,7 @@ impl RegistrationStudy {
     }
 
     /// One draw: the (SVD, weighted SVD) registration errors of every cell, in grid order.
-    fn draw(&self, seed: u64) -> Result<Vec<(Real, Real)>> {
+    pub fn draw(&self, seed: u64) -> Result<Vec<(Real, Real)>> {
         let p = &self.tracker_pose;
         let tracker =
             Frame::from_xyz_rpy([p[0], p[1], p[2]], [p[3], p[4], p[5]].map(Real::to_radians));

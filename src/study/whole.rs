@@ -1,6 +1,7 @@
 //! What every study that runs whole (a registration study, an instruments study) begins with:
 //! the `name`, `description`, `seed` and `trials` keys of its scenario file, read and checked
-//! in one place.
+//! in one place, and the scenario's table as run (`--trials` and `--seed` applied), which the
+//! checkpoint and a shard keep to read the study back.
 
 use std::ops::RangeInclusive;
 use std::path::Path;
@@ -23,6 +24,12 @@ pub struct Head {
     pub seed: u64,
     /// Trials (draws) per cell of the study; the study's default when absent.
     pub trials: usize,
+    /// The scenario file's whole table, with the overrides of the run.
+    #[serde(skip)]
+    pub table: toml::Table,
+    /// The file it was read from.
+    #[serde(skip)]
+    pub path: std::path::PathBuf,
 }
 
 fn default_seed() -> u64 {
@@ -43,6 +50,7 @@ impl Head {
         trials: RangeInclusive<usize>,
     ) -> Result<Head> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+        let whole = table.clone();
         let mut keys: toml::Table = KEYS
             .iter()
             .filter_map(|k| table.remove(*k).map(|v| (k.to_string(), v)))
@@ -50,9 +58,11 @@ impl Head {
         let default_trials = i64::try_from(default_trials).unwrap_or(i64::MAX);
         keys.entry("trials")
             .or_insert(toml::Value::Integer(default_trials));
-        let head: Head = toml::Value::Table(keys)
+        let mut head: Head = toml::Value::Table(keys)
             .try_into()
             .map_err(|e: toml::de::Error| ferr("scenario", e.to_string().trim_end().into()))?;
+        head.table = whole;
+        head.path = path.to_path_buf();
         if head.name.trim().is_empty() || head.name.contains(['/', '\\']) {
             let msg = "must be a non-empty name without slashes";
             return Err(ferr("name", msg.into()));
@@ -65,7 +75,25 @@ impl Head {
                 format!("must be between {lo} and {hi}, got {n}"),
             ));
         }
+        head.set(head.trials, head.seed)?;
         Ok(head)
+    }
+
+    /// Sets `trials` and `seed`, in the table too (`--trials`, `--seed`).
+    pub fn set(&mut self, trials: usize, seed: u64) -> Result<()> {
+        let big = |key: &str| Error::setting(key, "must be below 2^63");
+        let n = i64::try_from(trials).map_err(|_| big("--trials"))?;
+        let s = i64::try_from(seed).map_err(|_| big("--seed"))?;
+        self.table.insert("trials".into(), toml::Value::Integer(n));
+        self.table.insert("seed".into(), toml::Value::Integer(s));
+        (self.trials, self.seed) = (trials, seed);
+        Ok(())
+    }
+
+    /// The scenario as run, TOML text: what a checkpoint and a shard keep.
+    pub fn settings(&self) -> Result<String> {
+        toml::to_string(&self.table)
+            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))
     }
 }
 

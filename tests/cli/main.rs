@@ -7,6 +7,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod cells;
 mod cli;
 mod cluster;
 mod determinism;
@@ -26,6 +27,7 @@ mod precision;
 mod profiles;
 mod realdata;
 mod record_keys;
+mod records;
 mod refusals;
 mod report_baseline;
 mod results;

@@ -45,10 +45,14 @@ fn killed_and_resumed(sc: &std::path::Path, out: &std::path::Path) {
         !out.join("summary.json").exists(),
         "the run ended before it was killed"
     );
-    // The checkpoint carries the searches' per-trial numbers (`+ budget hits… fitnesses…`).
+    // The checkpoint carries the searches' per-trial numbers (`search:Some((budget:…))`).
     let records = read(&meta.with_file_name("records.txt"));
     assert!(
-        records.lines().next().unwrap().contains(" + "),
+        records
+            .lines()
+            .next()
+            .unwrap()
+            .contains("search:Some((budget:"),
         "{records:.300}"
     );
     calbench_ok(&["run", "--resume", path_arg(out)]);

@@ -229,3 +229,22 @@ pub fn kill_once_checkpointed(args: &[&str], out: &Path, limit_s: u64) -> PathBu
     child.wait().unwrap();
     meta
 }
+
+/// `err` is one line of under 1 kB naming `path`, and holding each of `want`.
+pub fn one_line_naming(err: &str, path: &Path, want: &[&str]) {
+    let err = err.trim_end();
+    assert!(err.len() < 1024 && !err.contains('\n'), "{err:?}");
+    assert!(err.contains(&path.display().to_string()), "{err}");
+    for w in want {
+        assert!(err.contains(w), "{err}: no \"{w}\"");
+    }
+}
+
+/// A record line of `records.txt` with one digit of its trial's numbers changed (the first
+/// digit after `truth:[`, its checksum kept).
+pub fn another_digit(line: &str) -> String {
+    let from = line.find("truth:[").expect("a record line") + "truth:[".len();
+    let at = from + line[from..].find(|c: char| c.is_ascii_digit()).unwrap();
+    let other = if &line[at..=at] == "7" { "8" } else { "7" };
+    format!("{}{other}{}", &line[..at], &line[at + 1..])
+}

@@ -1,0 +1,262 @@
+//! The studies that run cells rather than calibration trials — Ban fig. 3's registration
+//! study and an instruments study — on the runner of every study: their work units (cell ×
+//! trial, in run order) in chunks on rayon, in order, into the checkpoint beside the output
+//! folder and, with `--shard I/N`, into the shard's `records.txt`; `run --resume` replays a
+//! killed run's records and `merge` the shards', so each gives the bytes of one run.
+
+use std::path::Path;
+
+use rayon::prelude::*;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+use super::checkpoint::{Checkpoint, Records as Replayed};
+use super::run::Resumable;
+use super::shard;
+use crate::error::{Error, Result};
+use crate::numeric::rng::trial_seed;
+use crate::numeric::Real;
+use crate::report::output::{write_all, Outputs};
+use crate::robot::Robot;
+use crate::study::instruments::{CellPlan, InstrumentsScenario, Trial};
+use crate::study::kind::AnyScenario;
+use crate::study::registration_study::RegistrationScenario;
+use crate::study::reporter::{NoProgress, Progress, Reporter};
+use crate::study::{Replay as _, RunOptions, CHUNK};
+
+/// A study whose work units are its blocks' trials, each trial's result a record
+/// ([`crate::study::records`]), its files written from every block's results.
+pub trait Cells: Sync {
+    /// What a block's trials share.
+    type Block: Send + Sync;
+    /// One trial's result.
+    type Trial: Serialize + DeserializeOwned + Send + Sync;
+    /// Block `b`, from the previous one when it is given (what they share is not redone).
+    fn block(&self, b: usize, prev: Option<&Self::Block>) -> Result<Self::Block>;
+    /// Trial `i` of `block`.
+    fn trial(&self, block: &Self::Block, i: usize) -> Result<Self::Trial>;
+    /// The study's files from every block's trials, in order, and the table the terminal
+    /// shows.
+    fn outputs(&self, done: Vec<(Self::Block, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)>;
+}
+
+impl Cells for RegistrationScenario {
+    type Block = ();
+    type Trial = Vec<(Real, Real)>;
+    fn block(&self, _: usize, _: Option<&()>) -> Result<()> {
+        self.registration_study.check()
+    }
+    fn trial(&self, _: &(), i: usize) -> Result<Self::Trial> {
+        self.registration_study
+            .draw(trial_seed(self.head.seed, i as u64))
+    }
+    fn outputs(&self, done: Vec<((), Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
+        let draws = done.into_iter().next().map(|d| d.1).unwrap_or_default();
+        let cells = self.registration_study.cells(&draws);
+        let claims = self.evaluate_claims(&draws);
+        crate::report::registration_study::outputs(self, &cells, &claims)
+    }
+}
+
+/// An instruments study and its nominal robot.
+pub struct Instruments<'a> {
+    /// The study.
+    pub scenario: &'a InstrumentsScenario,
+    /// The nominal robot (`robot` of the scenario).
+    pub robot: Robot,
+}
+
+impl Cells for Instruments<'_> {
+    type Block = CellPlan;
+    type Trial = Option<Trial>;
+    fn block(&self, b: usize, prev: Option<&CellPlan>) -> Result<CellPlan> {
+        self.scenario.plan(&self.robot, b, prev)
+    }
+    fn trial(&self, block: &CellPlan, i: usize) -> Result<Self::Trial> {
+        self.scenario.run_trial(&self.robot, block, i)
+    }
+    fn outputs(&self, done: Vec<(CellPlan, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
+        let cells: Vec<_> = done
+            .iter()
+            .map(|(p, t)| self.scenario.cell_of(p, t))
+            .collect();
+        crate::report::instruments::outputs(self.scenario, &cells)
+    }
+}
+
+/// Runs `cells`, the study `sc` (or its share `opts.shard`), into the folder `out` as a
+/// whole, with its checkpoint `cp` (removed once the run ends) and, when resumed, the records
+/// `replay` of the killed run first; returns the table the terminal shows (nothing for a
+/// shard).
+pub fn run_cells<C: Cells>(
+    cells: &C,
+    sc: &AnyScenario,
+    opts: &RunOptions,
+    out: &Path,
+    mut cp: Checkpoint,
+    mut replay: Option<&mut Replayed>,
+    reporter: &dyn Reporter,
+) -> Result<String> {
+    let t0 = std::time::Instant::now();
+    let (blocks, trials) = (sc.blocks().0, sc.trials() as u64);
+    let total = blocks as u64 * trials;
+    let (first, last) = opts.shard.map_or((0, total), |s| s.range(total));
+    let pool = super::run::pool(opts.threads)?;
+    let bar: Box<dyn Progress + '_> = match opts.progress {
+        true => reporter.progress(last - first),
+        false => Box::new(NoProgress),
+    };
+    let mut table = String::new();
+    let done = crate::report::atomically(out, |dir| {
+        let mut records = match opts.shard {
+            Some(_) => Some(shard::Records::create(dir, sc)?),
+            None => None,
+        };
+        let mut done: Vec<(C::Block, Vec<C::Trial>)> = Vec::new();
+        for b in 0..blocks {
+            let (lo, hi) = (b as u64 * trials, (b as u64 + 1) * trials);
+            let (from, to) = (first.max(lo), last.min(hi));
+            if from >= to {
+                continue;
+            }
+            let prev = done.last().map(|d| &d.0);
+            let block = pool.install(|| cells.block(b, prev))?;
+            let mut results = Vec::with_capacity((to - from) as usize);
+            let mut keep = |i: u64, t: C::Trial| -> Result<()> {
+                let i = (i - lo) as usize;
+                cp.record(b, i, &t)?;
+                if let Some(r) = records.as_mut() {
+                    r.record(b, i, &t)?;
+                }
+                results.push(t);
+                Ok(())
+            };
+            let mut next = from;
+            if let Some(r) = replay.as_mut() {
+                let upto = (first + r.done()).clamp(from, to);
+                while next < upto {
+                    let (rb, i, t) = r.next_record::<C::Trial>()?;
+                    if (rb, i as u64) != (b, next - lo) {
+                        return Err(Error::Compute(format!(
+                            "the checkpoint holds trial {i} of block {rb} where trial {} of \
+                             block {b} was expected",
+                            next - lo
+                        )));
+                    }
+                    keep(next, t)?;
+                    bar.inc(1);
+                    next += 1;
+                }
+            }
+            while next < to {
+                let end = (next + CHUNK as u64).min(to);
+                let chunk: Vec<C::Trial> = pool.install(|| {
+                    (next..end)
+                        .into_par_iter()
+                        .map(|u| {
+                            let t = cells.trial(&block, (u - lo) as usize);
+                            bar.inc(1);
+                            t
+                        })
+                        .collect::<Result<_>>()
+                })?;
+                for (u, t) in (next..end).zip(chunk) {
+                    keep(u, t)?;
+                }
+                next = end;
+            }
+            cp.sync()?;
+            done.push((block, results));
+        }
+        bar.finish();
+        let outputs = match (records, opts.shard) {
+            (Some(r), Some(s)) => r.finish_with(sc, s, t0.elapsed().as_secs_f64(), Vec::new())?,
+            _ => {
+                let (outputs, text) = cells.outputs(done)?;
+                table = text;
+                outputs
+            }
+        };
+        write_all(dir, &outputs)
+    });
+    cp.finish()?;
+    done?;
+    Ok(table)
+}
+
+impl<'a> Instruments<'a> {
+    /// The study `scenario` with its nominal robot loaded.
+    pub fn new(scenario: &'a InstrumentsScenario) -> Result<Instruments<'a>> {
+        let chain = crate::robot::urdf::UrdfChain::default();
+        let robot = crate::robot::builtin::load_chain(&scenario.robot, &chain)?;
+        Ok(Instruments { scenario, robot })
+    }
+}
+
+/// Runs `sc`, a registration or instruments study (or its share `opts.shard`), into
+/// `opts.out` (default `results/<name>/`) as a whole, with a checkpoint beside it that
+/// `calbench run --resume` continues from if it is killed; returns the table the terminal
+/// shows.
+pub fn run_cells_study(
+    sc: &AnyScenario,
+    opts: &RunOptions,
+    reporter: &dyn Reporter,
+) -> Result<String> {
+    let out = opts
+        .out
+        .clone()
+        .unwrap_or_else(|| Path::new("results").join(sc.name()));
+    let cp = Checkpoint::start(sc, opts.shard, None, &out, reporter)?;
+    dispatch(sc, opts, &out, cp, None, reporter)
+}
+
+/// Continues a killed registration or instruments study from its checked checkpoint with
+/// `threads` worker threads: the same files as an uninterrupted run, and its table.
+pub fn resume_cells(
+    run: Resumable,
+    threads: Option<usize>,
+    reporter: &dyn Reporter,
+) -> Result<String> {
+    let Resumable {
+        out,
+        checkpoint,
+        scenario,
+        shard,
+        mut records,
+    } = run;
+    let opts = RunOptions {
+        threads,
+        out: Some(out.clone()),
+        progress: true,
+        shard,
+        precision: None,
+    };
+    dispatch(
+        &scenario,
+        &opts,
+        &out,
+        checkpoint,
+        Some(&mut records),
+        reporter,
+    )
+}
+
+/// [`run_cells`] with the study of `sc`'s kind.
+fn dispatch(
+    sc: &AnyScenario,
+    opts: &RunOptions,
+    out: &Path,
+    cp: Checkpoint,
+    replay: Option<&mut Replayed>,
+    reporter: &dyn Reporter,
+) -> Result<String> {
+    match sc {
+        AnyScenario::Registration(s) => run_cells(s, sc, opts, out, cp, replay, reporter),
+        AnyScenario::Instruments(s) => {
+            run_cells(&Instruments::new(s)?, sc, opts, out, cp, replay, reporter)
+        }
+        AnyScenario::MonteCarlo(_) => Err(Error::Compute(
+            "a Monte-Carlo study runs through runner::run::run_study".into(),
+        )),
+    }
+}
