@@ -227,8 +227,7 @@ impl Db {
         loop {
             match conn.query_row("PRAGMA journal_mode = WAL", [], |r| r.get::<_, String>(0)) {
                 Ok(_) => break,
-                Err(e) if start.elapsed() < BUSY_TIMEOUT => {
-                    let _ = e;
+                Err(_) if start.elapsed() < BUSY_TIMEOUT => {
                     std::thread::sleep(std::time::Duration::from_millis(20));
                 }
                 Err(e) => return Err(bad(e)),
