@@ -523,7 +523,7 @@ fn signed(metric: &str) -> bool {
 /// its own 95 % interval, or an interval whose ends are reversed.
 fn check_figures(path: &Path, v: &Value, figures: &[Figure]) -> Result<()> {
     if let Some(t) = v.get("trials") {
-        if !t.as_u64().is_some_and(|n| n > 0) {
+        if t.as_u64().is_none_or(|n| n == 0) {
             return Err(Error::file(
                 path,
                 "trials",
