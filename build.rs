@@ -47,4 +47,11 @@ fn main() {
         },
     };
     println!("cargo:rustc-env=CALBENCH_GIT_COMMIT={commit}");
+    println!("cargo:rerun-if-env-changed=CALBENCH_GIT_COMMIT_TIME");
+    let time = match std::env::var("CALBENCH_GIT_COMMIT_TIME") {
+        Ok(t) if !t.trim().is_empty() => t.trim().to_string(),
+        _ if commit == "unknown" => String::new(),
+        _ => git(&dir, &["show", "-s", "--format=%ct", &commit]).unwrap_or_default(),
+    };
+    println!("cargo:rustc-env=CALBENCH_GIT_COMMIT_TIME={time}");
 }

@@ -15,8 +15,9 @@
 //! - [`poses`]: measurement-pose selection (observability indices, DETMAX, IDE);
 //! - [`calibrate`]: registration with identification, validation, compensation;
 //! - [`study`]: scenarios and the Monte-Carlo harness;
-//! - [`analysis`]: a run's summary, with every comparison and verdict decided once;
-//! - [`report`]: the output files, plots and the regression check;
+//! - [`analysis`]: a run's summary, with every comparison and verdict decided once, and the
+//!   regression rule of `check`, `compare` and `history` against a baseline;
+//! - [`report`]: the output files and plots;
 //! - [`runner`]: running, resuming, sharding and merging a study, through the report's writers;
 //! - [`results`]: the results database (records of runs, identifications and tasks), the
 //!   history of a metric across versions and the tasks' leaderboard.

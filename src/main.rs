@@ -28,6 +28,9 @@ enum Command {
     Merge(cli::merge::MergeArgs),
     /// Regression guard: compare a summary.json with a baseline.
     Check(cli::check::CheckArgs),
+    /// Write a baseline for `check` from a run folder: its summary.json with the per-trial
+    /// values that let `check` compare a run of the same seed trial by trial.
+    Baseline(cli::check::BaselineArgs),
     /// Write the simulated measurement of one trial of a scenario.
     Simulate(cli::simulate::SimulateArgs),
     /// Identify the kinematic errors from a measurement file (real or simulated).
@@ -73,6 +76,7 @@ fn main() {
         Some(Command::Run(a)) => cli::run::run(a),
         Some(Command::Merge(a)) => cli::merge::run(a),
         Some(Command::Check(a)) => cli::check::run(a),
+        Some(Command::Baseline(a)) => cli::check::baseline(a),
         Some(Command::Simulate(a)) => cli::simulate::run(a),
         Some(Command::Identify(a)) => cli::identify::run(a),
         Some(Command::Import(a)) => cli::import::run(a),

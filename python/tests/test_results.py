@@ -25,7 +25,7 @@ def test_two_recorded_ci_guard_runs_open_in_sqlite3(binary, root, tmp_path):
 
     con = sqlite3.connect(db)
     try:
-        assert con.execute("PRAGMA user_version").fetchone()[0] == 1
+        assert con.execute("PRAGMA user_version").fetchone()[0] == 2
         runs = con.execute("SELECT id, kind, scenario, seed, trials, calbench_version, "
                            "git_commit, cargo_lock_hash, cpu, cores, os, recorded_at "
                            "FROM runs ORDER BY id").fetchall()

@@ -5,9 +5,11 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
+use calbench::analysis::regression::{
+    baseline_document, comparable, compare_with, unpaired_because, Side, Status, Unpaired, Which,
+};
 use calbench::error::Error;
 use calbench::numeric::Real;
-use calbench::report::check::{comparable, compare_with, read_json, Status, Trials};
 use calbench::report::fmt_num;
 
 /// Arguments of `calbench check`.
@@ -25,18 +27,38 @@ pub struct CheckArgs {
     pub strict: bool,
 }
 
-/// The per-trial values of the run whose summary is `summary`: its folder's `trials.csv`,
-/// when there is one.
-pub fn trials_beside(summary: &std::path::Path) -> calbench::Result<Option<Trials>> {
-    let csv = summary
-        .parent()
-        .unwrap_or(std::path::Path::new("."))
-        .join("trials.csv");
-    if csv.is_file() {
-        Trials::read(&csv)
-    } else {
-        Ok(None)
-    }
+/// Arguments of `calbench baseline`.
+#[derive(clap::Args)]
+pub struct BaselineArgs {
+    /// The run: its folder (summary.json and trials.csv) or its summary.json.
+    pub run: PathBuf,
+    /// The baseline file to write (JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Writes the baseline of a run: its summary with the per-trial values of the guarded
+/// metrics (`per_trial`), read from its trials.csv; refuses a run without them.
+pub fn baseline(args: &BaselineArgs) -> Result<()> {
+    let side = Side::read(&args.run)?;
+    let Some(trials) = &side.trials else {
+        return Err(Error::file(
+            &side.path,
+            "trials.csv",
+            "is not beside this summary: a baseline that pairs needs the run's per-trial \
+             values; give the run's folder",
+        )
+        .into());
+    };
+    let doc = baseline_document(&side.summary, trials)?;
+    calbench::report::output::json_file(&args.out, &doc)?;
+    out!(
+        "wrote {}: the summary of {} with the per-trial values of {} entries",
+        args.out.display(),
+        side.path.display(),
+        trials.trials.len()
+    );
+    Ok(())
 }
 
 /// `--tolerance X`, of `check` and `compare`.
@@ -65,15 +87,13 @@ impl Tolerance {
 /// status; fails (exit status 1) on a regression, or with `--strict` on an unresolved metric.
 pub fn run(args: &CheckArgs) -> Result<()> {
     let tolerance = args.tolerance.checked()?;
-    let s = read_json(&args.summary)?;
-    let b = read_json(&args.baseline)?;
-    comparable(&s, &args.summary, &b, &args.baseline)?;
-    let (ts, tb) = (
-        trials_beside(&args.summary)?,
-        trials_beside(&args.baseline)?,
-    );
-    let pairs = tb.as_ref().zip(ts.as_ref());
-    let all = compare_with(&s, &b, tolerance, pairs);
+    let (s, b) = (Side::read(&args.summary)?, Side::read(&args.baseline)?);
+    comparable(&s.summary, &s.path, &b.summary, &b.path)?;
+    let pairs = b.trials.as_ref().zip(s.trials.as_ref());
+    let all = compare_with(&s.summary, &b.summary, tolerance, pairs);
+    if let Some(why) = unpaired_because(&b, &s) {
+        out!("unpaired: {}", unpaired_text(&why, &b));
+    }
     let count = |st: Status| all.iter().filter(|c| c.status == st).count();
     for c in all.iter().filter(|c| c.status != Status::NoChange) {
         let m = &c.metric;
@@ -123,4 +143,36 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     out!("no regression beyond tolerance {tolerance}");
     out!("{tally}");
     Ok(())
+}
+
+/// Why a comparison is unpaired, and what a paired one would take, in words.
+pub fn unpaired_text(why: &Unpaired, baseline: &Side) -> String {
+    match why {
+        Unpaired::NoTrials(Which::Baseline) => format!(
+            "{} holds a summary without per-trial values, so every metric is compared from \
+             the summaries' intervals; a baseline written by `calbench baseline RUN --out \
+             FILE` (or a run folder with its trials.csv) is compared trial by trial",
+            baseline.path.display()
+        ),
+        Unpaired::NoTrials(Which::Summary) => "the summary's folder holds no trials.csv, so \
+             every metric is compared from the summaries' intervals; compare the run's \
+             summary.json in its folder to pair"
+            .to_string(),
+        Unpaired::Differs {
+            key,
+            baseline: a,
+            summary: b,
+        } => {
+            let take = match *key {
+                "seed" => format!("a run with --seed {a}"),
+                "trials" => format!("a run with --trials {a}"),
+                _ => "a run of the baseline's scenario and sweep".to_string(),
+            };
+            format!(
+                "the {key} differs (baseline {a}, this run {b}), so every metric is compared \
+                 from the summaries' intervals; {take} (the baseline's seed, trials and \
+                 sweep) is compared trial by trial"
+            )
+        }
+    }
 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
+use calbench::analysis::regression::Status;
 use calbench::report::html::compare::{write, Comparison, Side, OUTPUTS};
 
 use super::check::Tolerance;
@@ -32,11 +33,17 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     check_out_folder(&args.out, &OUTPUTS)?;
     let c = Comparison::new(Side::read(&args.a)?, Side::read(&args.b)?, tolerance);
     write(&c, &args.out)?;
+    let missing = c.all().len() - c.rows().len();
     out!(
-        "{} metrics compared, {} regressed beyond tolerance {tolerance}; {} entries only in A, \
-         {} only in B; report: {}",
-        c.rows().len(),
-        c.regressions(),
+        "{} metrics compared: {} regressed ({missing} of them missing in B), {} unresolved, {} \
+         changed within tolerance, {} improved, {} no change (tolerance {tolerance}); {} \
+         entries only in A, {} only in B; report: {}",
+        c.all().len(),
+        c.count(Status::Regression),
+        c.count(Status::Unresolved),
+        c.count(Status::Changed),
+        c.count(Status::Improved),
+        c.count(Status::NoChange),
         c.only_in(0).len(),
         c.only_in(1).len(),
         args.out.join("compare.html").display()

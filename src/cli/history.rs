@@ -7,8 +7,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::numeric::Real;
-use calbench::report::html::history::{csv, page};
+use calbench::report::html::history::{csv, page, Point, Series};
 use calbench::report::output::{folder, Bytes};
+use calbench::results::history::{Flag, Regressed};
 use calbench::results::{db_path, history, Db};
 
 /// The files `history` writes.
@@ -53,18 +54,10 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
     let db = Db::open(&db_path(args.db.as_deref()), false)?;
     let scenario = args.scenario.as_deref();
     let (regressed, compared) = history::regressions(&db, scenario, args.tolerance)?;
-    let lines: Vec<String> = regressed
-        .iter()
-        .map(|r| {
-            format!(
-                "{} on {}, {} → {}: {}",
-                r.scenario, r.machine, r.from, r.to, r.what
-            )
-        })
-        .collect();
+    let lines: Vec<String> = regressed.iter().map(line).collect();
     if let Some(out) = &args.out {
         let points = history::points(&db, scenario, &args.metric, args.tolerance)?;
-        let html = page(&points, &lines);
+        let html = page(&points, &series(&points, &regressed));
         let table = csv(&points)?;
         folder(
             out,
@@ -87,16 +80,95 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
     }
     if args.regressions {
         for l in &lines {
-            out!("regression: {l}");
+            out!("{l}");
         }
-        if !lines.is_empty() {
+        let count = |f: Flag| regressed.iter().filter(|r| r.flag == f).count();
+        let (reg, drift) = (count(Flag::Regression), count(Flag::Drift));
+        if reg + drift > 0 {
             anyhow::bail!(
-                "{} regressions of the latest version ({} scenario-machine pairs compared)",
-                lines.len(),
-                compared
+                "{reg} regressions and {drift} drifts of the latest version ({compared} \
+                 scenario-machine pairs compared)"
             );
         }
-        out!("no regression of the latest version ({compared} scenario-machine pairs compared)");
+        out!(
+            "no regression or drift of the latest version ({compared} scenario-machine pairs \
+             compared, {} with a changed scenario)",
+            count(Flag::ScenarioChanged)
+        );
     }
     Ok(())
+}
+
+/// One flagged change as `--regressions` prints it and the page lists it.
+fn line(r: &Regressed) -> String {
+    let path = if r.through.is_empty() {
+        format!("{} → {}", r.from, r.to)
+    } else {
+        format!("{} → {} → {}", r.from, r.through.join(" → "), r.to)
+    };
+    match r.flag {
+        Flag::Regression => format!(
+            "regression: {} on {}, {path}: {}",
+            r.scenario, r.machine, r.what
+        ),
+        Flag::Drift => format!(
+            "drift: {} on {}, {path} ({} steps, each within the tolerance): {}",
+            r.scenario,
+            r.machine,
+            r.through.len() + 1,
+            r.what
+        ),
+        Flag::ScenarioChanged => format!(
+            "scenario changed: {} on {}, {path}: the scenario differs (beyond seed and trials), \
+             so the versions are not compared",
+            r.scenario, r.machine
+        ),
+    }
+}
+
+/// The opening lines of the page: each scenario and machine with runs among `points`, its
+/// state from what `regressed` flags, and the lines of its flags.
+fn series(points: &[Point], regressed: &[Regressed]) -> Vec<Series> {
+    let mut out: Vec<Series> = Vec::new();
+    for p in points
+        .iter()
+        .filter(|p| p.kind == "run" || p.kind == "merge")
+    {
+        if out
+            .iter()
+            .any(|s| s.scenario == p.scenario && s.machine == p.machine)
+        {
+            continue;
+        }
+        let mine: Vec<&Regressed> = regressed
+            .iter()
+            .filter(|r| r.scenario == p.scenario && r.machine == p.machine)
+            .collect();
+        let has = |f: Flag| mine.iter().any(|r| r.flag == f);
+        let versions = points
+            .iter()
+            .filter(|q| q.scenario == p.scenario && q.machine == p.machine)
+            .map(|q| q.label.as_str())
+            .collect::<std::collections::BTreeSet<_>>()
+            .len();
+        let state = if has(Flag::Regression) {
+            "regressed"
+        } else if has(Flag::Drift) {
+            "drifting"
+        } else if has(Flag::ScenarioChanged) {
+            "scenario changed"
+        } else if versions < 2 {
+            "one version"
+        } else {
+            "unchanged"
+        };
+        out.push(Series {
+            scenario: p.scenario.clone(),
+            machine: p.machine.clone(),
+            state: state.to_string(),
+            flags: mine.into_iter().map(line).collect(),
+        });
+    }
+    out.sort_by(|a, b| (&a.scenario, &a.machine).cmp(&(&b.scenario, &b.machine)));
+    out
 }

@@ -18,7 +18,6 @@
 //! family `sans-serif`), so plots render the same on every machine without system font
 //! libraries, and the same data gives the same bytes.
 
-pub mod check;
 pub mod exports;
 pub mod html;
 pub mod identified;
@@ -31,6 +30,7 @@ pub mod practice;
 pub mod program;
 pub mod registration_study;
 pub mod run;
+pub mod scenario_file;
 pub mod simulated;
 
 pub use markdown::{fmt_num, table};

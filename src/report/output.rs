@@ -75,6 +75,21 @@ pub(crate) fn text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
 }
 
+/// Writes the JSON document `v` ([`json_text`]) to the file `path` whole or not at all: into
+/// a temporary file beside it, then renamed over it.
+pub fn json_file(path: &Path, v: &Value) -> Result<()> {
+    let name = path
+        .file_name()
+        .map_or("out".into(), |n| n.to_string_lossy().into_owned());
+    let tmp = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
+    let done = text(&tmp, &json_text(v)?)
+        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
+    if done.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    done
+}
+
 /// Writes `path` through a buffer with `body`, naming the file in any error.
 pub(crate) fn buffered(
     path: &Path,

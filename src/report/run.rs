@@ -468,7 +468,8 @@ pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
 
 /// The files of a complete run but `trials.csv` (streamed as the trials finished,
 /// [`TrialsCsv`]) and `report.html` ([`super::run_outputs`] adds it), in the order they are
-/// written: `summary.json`, `timing.json`, the `figures` ([`figures`]), then `report.md`,
+/// written: `summary.json`, `timing.json`, `scenario.toml` ([`super::scenario_file`]), the
+/// `figures` ([`figures`]), then `report.md`,
 /// which shows them.
 pub fn outputs<'a>(
     r: &'a RunResult,
@@ -495,6 +496,10 @@ pub fn outputs<'a>(
         Box::new(Text {
             name: "timing.json",
             text: json_text(&timing)?,
+        }),
+        Box::new(Text {
+            name: super::scenario_file::NAME,
+            text: super::scenario_file::text(&r.scenario)?,
         }),
     ];
     out.extend(figures.into_iter().map(|f| Box::new(f) as Box<dyn Output>));

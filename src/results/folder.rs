@@ -7,10 +7,11 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::provenance::sha256_hex;
+use crate::analysis::regression::{check_summary, entry_names};
 use crate::analysis::summary::Summary;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
-use crate::report::check::{check_summary, entry_names};
+use crate::report::scenario_file;
 use crate::study::scenario::Scenario;
 
 /// What kind of output a record is.
@@ -174,6 +175,35 @@ impl Record {
         if dir.join("summary.json").is_file() {
             let (_, v) = read(&dir.join("summary.json"))?;
             let name = v.get("scenario").and_then(Value::as_str).unwrap_or("");
+            let trials = v.get("trials").and_then(Value::as_u64).map(|n| n as usize);
+            let seed = v.get("seed").and_then(Value::as_u64);
+            let given = |file: &Path| -> Result<Scenario> {
+                Scenario::load(file)?.with_run_overrides(trials, seed)
+            };
+            // The scenario the run ran, as its folder carries it; a scenario file given is
+            // checked against it.
+            let ran = dir.join(scenario_file::NAME);
+            if ran.is_file() {
+                let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
+                let (text, hash) = scenario_file::read(&text, &ran)?;
+                if let Some(file) = scenario {
+                    let other = sha256_hex(scenario_file::canonical(&given(file)?)?.as_bytes());
+                    if other != hash {
+                        return Err(Error::file(
+                            file,
+                            "scenario",
+                            format!(
+                                "is not the scenario the run ran: with the run's trials and \
+                                 seed it has SHA-256 {other}, but {} (the scenario as run) \
+                                 has {hash}; record the folder without a scenario file, or \
+                                 with the one it ran",
+                                ran.display()
+                            ),
+                        ));
+                    }
+                }
+                return Record::of_run_text(dir, (name, seed, trials), text, Kind::Run);
+            }
             let fallback = Path::new("scenarios").join(format!("{name}.toml"));
             let file = match scenario {
                 Some(p) => p.to_path_buf(),
@@ -183,17 +213,14 @@ impl Record {
                         dir,
                         "summary.json",
                         format!(
-                            "the scenario `{name}` of this run is not at {}; give its file \
-                             with --scenario FILE",
+                            "the folder holds no scenario.toml and the scenario `{name}` of \
+                             this run is not at {}; give its file with --scenario FILE",
                             fallback.display()
                         ),
                     ))
                 }
             };
-            let trials = v.get("trials").and_then(Value::as_u64).map(|n| n as usize);
-            let seed = v.get("seed").and_then(Value::as_u64);
-            let sc = Scenario::load(&file)?.with_run_overrides(trials, seed)?;
-            return Record::of_run(dir, &sc, Kind::Run);
+            return Record::of_run(dir, &given(&file)?, Kind::Run);
         }
         if dir.join("identified.json").is_file() {
             return Record::of_identify(dir);
@@ -208,26 +235,37 @@ impl Record {
 
     /// The run or merge folder `dir` of the scenario `sc` (as run: overrides applied).
     pub fn of_run(dir: &Path, sc: &Scenario, kind: Kind) -> Result<Record> {
+        let text = scenario_file::canonical(sc)?;
+        let trials = Some(sc.trials);
+        Record::of_run_text(dir, (&sc.name, Some(sc.seed), trials), text, kind)
+    }
+
+    /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
+    /// whose canonical text as run is `text`; its `summary.json` checked ([`check_figures`]).
+    fn of_run_text(
+        dir: &Path,
+        (name, seed, trials): (&str, Option<u64>, Option<usize>),
+        text: String,
+        kind: Kind,
+    ) -> Result<Record> {
         let path = dir.join("summary.json");
         let (document, v) = read(&path)?;
         check_summary(&v, &path)?;
         let s = Summary::from_value(v.clone(), &path)?;
-        let (named, seed) = (s.scenario.as_str(), s.seed);
-        if named != sc.name || seed.is_some_and(|s| s != sc.seed) {
+        let (named, ran_seed) = (s.scenario.as_str(), s.seed);
+        if named != name || (ran_seed.is_some() && seed.is_some() && ran_seed != seed) {
+            let show = |s: Option<u64>| s.map_or("?".into(), |s| s.to_string());
             return Err(Error::file(
                 &path,
                 "scenario",
                 format!(
-                    "the run is of `{named}` with seed {}, the scenario given is `{}` with \
+                    "the run is of `{named}` with seed {}, the scenario given is `{name}` with \
                      seed {}",
-                    seed.map_or("?".into(), |s| s.to_string()),
-                    sc.name,
-                    sc.seed
+                    show(ran_seed),
+                    show(seed)
                 ),
             ));
         }
-        let scenario_text = toml::to_string(sc.table())
-            .map_err(|e| Error::Compute(format!("cannot write the scenario: {e}")))?;
         let names = entry_names(&v);
         let results = v.get("results").and_then(Value::as_array);
         let mut entries = Vec::new();
@@ -241,8 +279,10 @@ impl Record {
                 flatten(name, "", m, None, &mut figures);
             }
         }
-        let mut r = Record::new(kind, dir, document, sc.name.clone(), scenario_text);
-        (r.output.seed, r.output.trials) = (Some(sc.seed), Some(format!("0..{}", sc.trials)));
+        check_figures(&path, &v, &figures)?;
+        let mut r = Record::new(kind, dir, document, name.to_string(), text);
+        r.output.seed = seed.or(ran_seed);
+        r.output.trials = trials.map(|n| format!("0..{n}"));
         (r.results.entries, r.results.figures) = (entries, figures);
         Ok(r)
     }
@@ -310,6 +350,21 @@ impl Record {
             .filter(|x| x.is_finite())
             .ok_or_else(|| bad("value", "missing or not a finite number"))?;
         let ci = interval(v.get("ci95"));
+        // The metric is an error (mm): never negative, and inside its own interval.
+        if value < 0.0 {
+            return Err(bad(
+                "value",
+                "is negative: the task's metric is an error (mm), ≥ 0",
+            ));
+        }
+        if let Some([lo, hi]) = ci {
+            if lo > hi || value < lo || value > hi {
+                return Err(bad(
+                    "ci95",
+                    &format!("[{lo}, {hi}] does not hold the value {value}: edited figures"),
+                ));
+            }
+        }
         let division = text("division")?;
         if division != "closed" && division != "open" {
             return Err(bad("division", "must be \"closed\" or \"open\""));
@@ -338,6 +393,12 @@ impl Record {
             else {
                 return Err(bad(&key, "needs a `label` and a numeric `value`"));
             };
+            if value < 0.0 {
+                return Err(bad(
+                    &format!("{key}.value"),
+                    "is negative: an error (mm) is ≥ 0",
+                ));
+            }
             published.push((
                 label,
                 value,
@@ -445,4 +506,63 @@ fn flatten(
             _ => {}
         }
     }
+}
+
+/// Whether a figure can be negative: η (an improvement can be a worsening), a parameter's
+/// bias, the improvement in per cent and a signed error along the tool axis; every other
+/// figure (an error, an RMSE, a spread, a count, a ratio) is ≥ 0.
+fn signed(metric: &str) -> bool {
+    metric.starts_with("eta")
+        || metric.starts_with("param_bias.")
+        || metric == "improvement_pct"
+        || metric.contains("_axis_mm.")
+}
+
+/// Refuses, naming the summary `path` and the key, a document that cannot be what a run
+/// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
+/// a whole number ≥ 0; a figure that must be ≥ 0 below zero ([`signed`]); a figure outside
+/// its own 95 % interval, or an interval whose ends are reversed.
+fn check_figures(path: &Path, v: &Value, figures: &[Figure]) -> Result<()> {
+    if let Some(t) = v.get("trials") {
+        if t.as_u64().is_none_or(|n| n == 0) {
+            return Err(Error::file(
+                path,
+                "trials",
+                format!("is {t}: the trials of a run are a whole number above 0"),
+            ));
+        }
+    }
+    for f in figures {
+        let key = || format!("results ({}), {}", f.entry, f.metric);
+        let count = f.metric == "failures" || f.metric.starts_with("terminations.");
+        if count && (f.value < 0.0 || f.value.fract() != 0.0) {
+            return Err(Error::file(
+                path,
+                key(),
+                format!("is {}: a count is a whole number ≥ 0", f.value),
+            ));
+        }
+        if !signed(&f.metric) && f.value < 0.0 {
+            return Err(Error::file(
+                path,
+                key(),
+                format!("is {}: this figure is never negative", f.value),
+            ));
+        }
+        if let Some([lo, hi]) = f.ci {
+            let slack = 1e-9 * f.value.abs().max(lo.abs()).max(hi.abs());
+            if lo > hi || f.value < lo - slack || f.value > hi + slack {
+                return Err(Error::file(
+                    path,
+                    key(),
+                    format!(
+                        "is {} outside its own 95 % interval [{lo}, {hi}]: the figures were \
+                         edited",
+                        f.value
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }

@@ -1,17 +1,21 @@
 //! A metric across recorded versions (docs/formats.md, `calbench history`): every figure of
-//! the runs recorded, per scenario, machine and entry, each step between consecutive records
-//! of a run's scenario on one machine judged by the rule of `calbench check`
-//! ([`crate::report::check::compare_with`]: the tolerance, and the Holm-adjusted interval of
-//! the change from the summaries' intervals), and the regressions of the latest version.
+//! the runs recorded, per scenario, machine and entry, in the order of the versions — by
+//! semantic version ([`VersionKey`]), then by the time of calbench's commit, never by the
+//! order of recording — each step between consecutive versions of a run's scenario on one
+//! machine judged by the rule of `calbench check`
+//! ([`crate::analysis::regression::compare_with`]: the tolerance, and the Holm-adjusted
+//! interval of the change from the summaries' intervals); the regressions and the drift of
+//! the latest version ([`regressions`]).
 
+use std::cmp::Ordering;
 use std::collections::BTreeMap;
 
 use serde_json::Value;
 
 use super::Db;
+use crate::analysis::regression::{compare_with, Compared, Status};
 use crate::error::Result;
 use crate::numeric::Real;
-use crate::report::check::{compare_with, Status};
 use crate::report::html::history::Point;
 use crate::study::metric::Metric;
 
@@ -24,35 +28,48 @@ pub const DEFAULT_METRICS: [Metric; 5] = [
     Metric::Failures,
 ];
 
+/// The step of a version whose scenario differs from the version's before it (other than
+/// in `seed` and `trials`): not compared.
+pub const SCENARIO_CHANGED: &str = "scenario changed";
+
 /// One recorded run as history reads it.
 struct Run {
     id: i64,
     kind: String,
     scenario: String,
+    scenario_text: String,
     label: String,
     version: String,
     commit: String,
+    commit_time: Option<i64>,
     machine: String,
     recorded_at: String,
+    source: String,
+    seed: Option<i64>,
     document: String,
 }
 
 fn runs(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
     db.query(
-        "SELECT id, kind, scenario, label, calbench_version, git_commit, machine, recorded_at, \
-         document FROM runs WHERE ?1 IS NULL OR scenario = ?1 ORDER BY id",
+        "SELECT id, kind, scenario, scenario_text, label, calbench_version, git_commit, \
+         commit_time, machine, recorded_at, source, seed, document FROM runs \
+         WHERE ?1 IS NULL OR scenario = ?1 ORDER BY id",
         [scenario],
         |r| {
             Ok(Run {
                 id: r.get(0)?,
                 kind: r.get(1)?,
                 scenario: r.get(2)?,
-                label: r.get(3)?,
-                version: r.get(4)?,
-                commit: r.get(5)?,
-                machine: r.get(6)?,
-                recorded_at: r.get(7)?,
-                document: r.get(8)?,
+                scenario_text: r.get(3)?,
+                label: r.get(4)?,
+                version: r.get(5)?,
+                commit: r.get(6)?,
+                commit_time: r.get(7)?,
+                machine: r.get(8)?,
+                recorded_at: r.get(9)?,
+                source: r.get(10)?,
+                seed: r.get(11)?,
+                document: r.get(12)?,
             })
         },
     )
@@ -62,32 +79,152 @@ fn is_run(r: &Run) -> bool {
     r.kind == "run" || r.kind == "merge"
 }
 
-/// The records of each scenario on each machine, in the order recorded.
+/// A version label's place among versions: semantic versioning's precedence (semver.org
+/// § 11) of `MAJOR[.MINOR[.PATCH]][-PRE][+BUILD]`, a leading `v` allowed, missing numbers
+/// taken as 0 and the build metadata ignored; `None` for a label that is not a version.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct VersionKey {
+    numbers: Vec<u64>,
+    pre: Vec<String>,
+}
+
+impl VersionKey {
+    /// Parses `label`.
+    pub fn parse(label: &str) -> Option<VersionKey> {
+        let l = label.strip_prefix(['v', 'V']).unwrap_or(label);
+        let l = l.split('+').next()?;
+        let (core, pre) = match l.split_once('-') {
+            Some((c, p)) => (c, p.split('.').map(str::to_string).collect()),
+            None => (l, Vec::new()),
+        };
+        let mut numbers = core
+            .split('.')
+            .map(|n| n.parse::<u64>().ok())
+            .collect::<Option<Vec<u64>>>()?;
+        if numbers.is_empty() || numbers.len() > 3 {
+            return None;
+        }
+        numbers.resize(3, 0);
+        Some(VersionKey { numbers, pre })
+    }
+}
+
+impl Ord for VersionKey {
+    fn cmp(&self, o: &Self) -> Ordering {
+        self.numbers
+            .cmp(&o.numbers)
+            .then_with(|| match (self.pre.is_empty(), o.pre.is_empty()) {
+                (true, true) => Ordering::Equal,
+                (true, false) => Ordering::Greater,
+                (false, true) => Ordering::Less,
+                (false, false) => {
+                    for (a, b) in self.pre.iter().zip(&o.pre) {
+                        let c = match (a.parse::<u64>(), b.parse::<u64>()) {
+                            (Ok(x), Ok(y)) => x.cmp(&y),
+                            (Ok(_), Err(_)) => Ordering::Less,
+                            (Err(_), Ok(_)) => Ordering::Greater,
+                            _ => a.cmp(b),
+                        };
+                        if c != Ordering::Equal {
+                            return c;
+                        }
+                    }
+                    self.pre.len().cmp(&o.pre.len())
+                }
+            })
+    }
+}
+
+impl PartialOrd for VersionKey {
+    fn partial_cmp(&self, o: &Self) -> Option<Ordering> {
+        Some(self.cmp(o))
+    }
+}
+
+/// The order of records: by the version of the label (else of calbench's version), then by
+/// the time of calbench's commit (unknown first), then — for records of one version and
+/// commit — by the label, the time recorded and the record's number.
+fn order(a: &Run, b: &Run) -> Ordering {
+    let key = |r: &Run| VersionKey::parse(&r.label).or_else(|| VersionKey::parse(&r.version));
+    key(a)
+        .cmp(&key(b))
+        .then(a.commit_time.cmp(&b.commit_time))
+        .then_with(|| a.label.cmp(&b.label))
+        .then_with(|| a.recorded_at.cmp(&b.recorded_at))
+        .then(a.id.cmp(&b.id))
+}
+
+/// The records of each scenario on each machine, in [`order`].
 fn series(runs: &[Run]) -> BTreeMap<(&str, &str), Vec<&Run>> {
     let mut m: BTreeMap<(&str, &str), Vec<&Run>> = BTreeMap::new();
     for r in runs {
         m.entry((&r.scenario, &r.machine)).or_default().push(r);
     }
+    for list in m.values_mut() {
+        list.sort_by(|a, b| order(a, b));
+    }
     m
 }
 
-/// Each metric's status from run `a` to run `b` by `check`'s rule, by (entry, metric).
-fn steps(a: &Run, b: &Run, tolerance: Real) -> BTreeMap<(String, String), Status> {
+/// The versions of a series of runs: each label's records, in order, and the record that
+/// stands for the label in comparisons (its last in [`order`]).
+fn versions<'r>(list: &[&'r Run]) -> Vec<Vec<&'r Run>> {
+    let mut out: Vec<Vec<&Run>> = Vec::new();
+    for r in list.iter().filter(|r| is_run(r)) {
+        match out.last_mut() {
+            Some(v) if v[0].label == r.label => v.push(r),
+            _ => out.push(vec![r]),
+        }
+    }
+    out
+}
+
+/// The scenario a record ran, without the keys that only choose its draws (`seed`,
+/// `trials`): two records whose scenarios differ otherwise are not compared.
+fn scenario_of(r: &Run) -> Option<toml::Table> {
+    let mut t: toml::Table = toml::from_str(&r.scenario_text).ok()?;
+    t.remove("seed");
+    t.remove("trials");
+    Some(t)
+}
+
+/// Whether `a` and `b` ran the same scenario, up to seed and trials.
+fn same_scenario(a: &Run, b: &Run) -> bool {
+    scenario_of(a) == scenario_of(b)
+}
+
+/// Every metric compared from run `a` to run `b` by `check`'s rule (unpaired: the records
+/// hold summaries).
+fn compared(a: &Run, b: &Run, tolerance: Real) -> Vec<Compared> {
     let (Ok(va), Ok(vb)) = (
         serde_json::from_str::<Value>(&a.document),
         serde_json::from_str::<Value>(&b.document),
     ) else {
-        return BTreeMap::new();
+        return Vec::new();
     };
     compare_with(&vb, &va, tolerance, None)
+}
+
+/// Each metric's step from `a` to `b`, by (entry, metric): `check`'s status, or
+/// [`SCENARIO_CHANGED`].
+fn steps(a: &Run, b: &Run, tolerance: Real) -> BTreeMap<(String, String), &'static str> {
+    if !same_scenario(a, b) {
+        let doc: Value = serde_json::from_str(&b.document).unwrap_or(Value::Null);
+        return crate::analysis::regression::compare_all(&doc, &doc, 0.0)
+            .into_iter()
+            .map(|c| ((c.metric.entry, c.metric.metric), SCENARIO_CHANGED))
+            .collect();
+    }
+    compared(a, b, tolerance)
         .into_iter()
-        .map(|c| ((c.metric.entry, c.metric.metric), c.status))
+        .map(|c| ((c.metric.entry, c.metric.metric), c.status.as_str()))
         .collect()
 }
 
 /// Every figure of the runs recorded (of `scenario` when given) whose metric is one of
-/// `metrics` (a name or its prefix before a `.`; [`DEFAULT_METRICS`] when empty), in the
-/// order recorded, each with its step from the record before it in its series.
+/// `metrics` (a name or its prefix before a `.`; [`DEFAULT_METRICS`] when empty), series by
+/// series in the order of versions ([`order`]), each with its step from the version before
+/// it.
 pub fn points(
     db: &Db,
     scenario: Option<&str>,
@@ -95,15 +232,19 @@ pub fn points(
     tolerance: Real,
 ) -> Result<Vec<Point>> {
     let runs = runs(db, scenario)?;
-    let mut step_of: BTreeMap<i64, BTreeMap<(String, String), Status>> = BTreeMap::new();
-    for list in series(&runs).values() {
-        for w in list.windows(2) {
-            if is_run(w[0]) && is_run(w[1]) {
-                step_of.insert(w[1].id, steps(w[0], w[1], tolerance));
+    let mut step_of: BTreeMap<i64, BTreeMap<(String, String), &'static str>> = BTreeMap::new();
+    let series = series(&runs);
+    for list in series.values() {
+        let v = versions(list);
+        for w in v.windows(2) {
+            let before = w[0].last().copied();
+            for r in &w[1] {
+                if let Some(b) = before {
+                    step_of.insert(r.id, steps(b, r, tolerance));
+                }
             }
         }
     }
-    let by_id: BTreeMap<i64, &Run> = runs.iter().map(|r| (r.id, r)).collect();
     let wanted = |metric: &str, kind: &str| {
         if metrics.is_empty() {
             kind == "task" || Metric::from_key(metric).is_some_and(|m| DEFAULT_METRICS.contains(&m))
@@ -130,56 +271,89 @@ pub fn points(
             ))
         },
     )?;
+    let mut by_run: BTreeMap<i64, Vec<_>> = BTreeMap::new();
+    for f in figures {
+        by_run.entry(f.0).or_default().push(f);
+    }
     let mut out = Vec::new();
-    for (id, entry, metric, value, lo, hi) in figures {
-        let Some(run) = by_id.get(&id) else {
-            continue;
-        };
-        if !wanted(&metric, &run.kind) {
-            continue;
+    for run in series.values().flatten() {
+        for (_, entry, metric, value, lo, hi) in by_run.remove(&run.id).unwrap_or_default() {
+            if !wanted(&metric, &run.kind) {
+                continue;
+            }
+            let step = step_of
+                .get(&run.id)
+                .and_then(|s| s.get(&(entry.clone(), metric.clone())))
+                .copied();
+            out.push(Point {
+                scenario: run.scenario.clone(),
+                machine: run.machine.clone(),
+                kind: run.kind.clone(),
+                entry,
+                metric,
+                label: run.label.clone(),
+                version: run.version.clone(),
+                git_commit: run.commit.clone(),
+                recorded_at: run.recorded_at.clone(),
+                value,
+                ci: lo.zip(hi).map(|(l, h)| [l, h]),
+                step,
+                record: run.id,
+                seed: run.seed,
+                source: run.source.clone(),
+            });
         }
-        let step = step_of
-            .get(&id)
-            .and_then(|s| s.get(&(entry.clone(), metric.clone())))
-            .map(|s| s.as_str());
-        out.push(Point {
-            scenario: run.scenario.clone(),
-            machine: run.machine.clone(),
-            kind: run.kind.clone(),
-            entry,
-            metric,
-            label: run.label.clone(),
-            version: run.version.clone(),
-            git_commit: run.commit.clone(),
-            recorded_at: run.recorded_at.clone(),
-            value,
-            ci: lo.zip(hi).map(|(l, h)| [l, h]),
-            step,
-        });
     }
     Ok(out)
 }
 
-/// A regression of the latest version of a scenario on a machine against the version
-/// before it.
+/// What a flagged change of the latest version is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flag {
+    /// Worse than the version before it, by `check`'s rule.
+    Regression,
+    /// Each step since an earlier version within the tolerance (no step a regression),
+    /// together a regression by `check`'s rule against that version.
+    Drift,
+    /// The scenario differs from the version's before it: not compared.
+    ScenarioChanged,
+}
+
+/// A flagged change of the latest version of a scenario on a machine.
 #[derive(Clone, Debug)]
 pub struct Regressed {
     /// The scenario.
     pub scenario: String,
     /// The machine.
     pub machine: String,
-    /// The version label before.
+    /// What it is.
+    pub flag: Flag,
+    /// The version label compared against: the one before the latest, or for a drift the
+    /// earliest from which the metric drifted.
     pub from: String,
+    /// The versions between `from` and `to`, exclusive (a drift's path).
+    pub through: Vec<String>,
     /// The latest version label.
     pub to: String,
     /// What got worse (`entry: metric got worse: value (baseline b)`), with the interval of
-    /// the change.
+    /// the change; empty for a changed scenario.
     pub what: String,
 }
 
-/// For each scenario (or `scenario`) and machine with runs of at least two version labels:
-/// the latest run against the last run of the label before the latest one, by `check`'s rule;
-/// every metric that regressed, and how many such pairs were compared.
+/// The flagged changes of the latest version, for each scenario (or `scenario`) and machine
+/// with runs of at least two version labels, versions in [`order`]:
+///
+/// - **regression**: the latest version (its last record) against the version before it, by
+///   `check`'s rule at `tolerance`;
+/// - **drift** (a cumulative rule): for each metric that is not a regression of that step,
+///   the latest version against every earlier version back to the last step that was a
+///   regression of that metric (a regression already flagged) or the last change of the
+///   scenario; when it is a regression against one of them, the earliest such version is
+///   reported: several steps each within the tolerance that together are beyond it;
+/// - **scenario changed**: the latest version ran another scenario than the version before
+///   it (up to `seed` and `trials`): nothing is compared, and no regression is claimed.
+///
+/// Returns them and how many scenario-machine pairs were compared.
 pub fn regressions(
     db: &Db,
     scenario: Option<&str>,
@@ -187,39 +361,93 @@ pub fn regressions(
 ) -> Result<(Vec<Regressed>, usize)> {
     let runs = runs(db, scenario)?;
     let mut out = Vec::new();
-    let mut compared = 0;
+    let mut pairs = 0;
     for ((scenario, machine), list) in series(&runs) {
-        let list: Vec<&Run> = list.into_iter().filter(|r| is_run(r)).collect();
-        let Some(latest) = list.last() else {
+        let v: Vec<&Run> = versions(&list)
+            .into_iter()
+            .filter_map(|g| g.last().copied())
+            .collect();
+        if v.len() < 2 {
             continue;
+        }
+        pairs += 1;
+        let k = v.len() - 1;
+        let flag = |flag, from: &Run, through: &[&Run], what: String| Regressed {
+            scenario: scenario.to_string(),
+            machine: machine.to_string(),
+            flag,
+            from: from.label.clone(),
+            through: through.iter().map(|r| r.label.clone()).collect(),
+            to: v[k].label.clone(),
+            what,
         };
-        let Some(before) = list.iter().rev().find(|r| r.label != latest.label) else {
+        if !same_scenario(v[k - 1], v[k]) {
+            out.push(flag(Flag::ScenarioChanged, v[k - 1], &[], String::new()));
             continue;
+        }
+        let describe = |c: &Compared| {
+            let ci = c.diff_ci.map_or(String::new(), |[lo, hi]| {
+                format!(
+                    " (change {}..{}, Holm-adjusted p {:.2e})",
+                    crate::report::markdown::fmt_num(lo, 3),
+                    crate::report::markdown::fmt_num(hi, 3),
+                    c.p_holm
+                )
+            });
+            format!("{}{ci}", c.metric)
         };
-        compared += 1;
-        let (Ok(va), Ok(vb)) = (
-            serde_json::from_str::<Value>(&before.document),
-            serde_json::from_str::<Value>(&latest.document),
-        ) else {
-            continue;
-        };
-        for c in compare_with(&vb, &va, tolerance, None) {
-            if c.status == Status::Regression {
-                let ci = c.diff_ci.map_or(String::new(), |[lo, hi]| {
-                    format!(
-                        " (change {lo:.4}..{hi:.4}, Holm-adjusted p {:.2e})",
-                        c.p_holm
-                    )
-                });
-                out.push(Regressed {
-                    scenario: scenario.to_string(),
-                    machine: machine.to_string(),
-                    from: before.label.clone(),
-                    to: latest.label.clone(),
-                    what: format!("{}{ci}", c.metric),
-                });
+        let last = compared(v[k - 1], v[k], tolerance);
+        let key = |c: &Compared| (c.metric.entry.clone(), c.metric.metric.clone());
+        let mut done: Vec<(String, String)> = Vec::new();
+        for c in last.iter().filter(|c| c.status == Status::Regression) {
+            out.push(flag(Flag::Regression, v[k - 1], &[], describe(c)));
+            done.push(key(c));
+        }
+        // Drift: walk back, stopping per metric at a step that was a regression, and for
+        // every metric at a change of the scenario.
+        let mut stopped: Vec<(String, String)> = done.clone();
+        let mut drift: BTreeMap<(String, String), (usize, Compared)> = BTreeMap::new();
+        for j in (0..k - 1).rev() {
+            if !same_scenario(v[j], v[j + 1]) {
+                break;
+            }
+            for c in compared(v[j], v[j + 1], tolerance) {
+                if c.status == Status::Regression {
+                    stopped.push(key(&c));
+                }
+            }
+            for c in compared(v[j], v[k], tolerance) {
+                let id = key(&c);
+                if c.status == Status::Regression && !stopped.contains(&id) {
+                    drift.insert(id, (j, c));
+                }
             }
         }
+        let mut drift: Vec<(usize, Compared)> = drift.into_values().collect();
+        drift.sort_by_key(|(j, _)| *j);
+        for (j, c) in drift {
+            out.push(flag(Flag::Drift, v[j], &v[j + 1..k], describe(&c)));
+        }
     }
-    Ok((out, compared))
+    Ok((out, pairs))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::VersionKey;
+
+    #[test]
+    fn versions_order_by_semantic_version() {
+        let k = |l: &str| VersionKey::parse(l).unwrap();
+        assert!(k("v0.9") < k("v1.0"));
+        assert!(k("1.0") == k("v1.0.0"));
+        assert!(k("v1.10") > k("v1.9"));
+        assert!(k("2.0.0-rc.1") < k("2.0.0"));
+        assert!(k("2.0.0-alpha") < k("2.0.0-alpha.1"));
+        assert!(k("2.0.0-alpha.2") < k("2.0.0-alpha.10"));
+        assert!(k("2.0.0-1") < k("2.0.0-alpha"));
+        assert!(k("0.1.0+abc") == k("0.1.0+def"));
+        assert!(VersionKey::parse("nightly").is_none());
+        assert!(VersionKey::parse("1.2.3.4").is_none());
+    }
 }

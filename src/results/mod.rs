@@ -18,7 +18,7 @@ pub mod provenance;
 
 use std::path::{Path, PathBuf};
 
-use rusqlite::{params, Connection, OptionalExtension};
+use rusqlite::{params, Connection, OpenFlags, OptionalExtension, TransactionBehavior};
 
 pub use folder::{Kind, Record};
 pub use provenance::Provenance;
@@ -28,11 +28,16 @@ use crate::error::{Error, Result};
 /// The database's default path, under the current folder.
 pub const DEFAULT_PATH: &str = "results/calbench.sqlite";
 
+/// How long a connection waits for another process's write before it gives up.
+pub const BUSY_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(60);
+
 /// The schema version this calbench writes (`PRAGMA user_version`).
-pub const SCHEMA_VERSION: i64 = 1;
+pub const SCHEMA_VERSION: i64 = 2;
 
 /// The migrations, in order: `MIGRATIONS[i]` takes a database from version `i` to `i + 1`.
-const MIGRATIONS: [&str; 1] = [r"
+/// Version 2 adds the time of calbench's commit, which orders versions of equal number.
+const MIGRATIONS: [&str; 2] = [
+    r"
 CREATE TABLE runs (
   id INTEGER PRIMARY KEY,
   content_hash TEXT NOT NULL UNIQUE,
@@ -93,7 +98,9 @@ CREATE TABLE published (
 );
 CREATE INDEX figures_metric ON figures (metric);
 CREATE INDEX runs_scenario ON runs (scenario, machine);
-"];
+",
+    "ALTER TABLE runs ADD COLUMN commit_time INTEGER;",
+];
 
 /// An open results database.
 pub struct Db {
@@ -123,8 +130,16 @@ pub fn db_path(given: Option<&Path>) -> PathBuf {
 }
 
 impl Db {
-    /// Opens (`create`: or creates, with its folder) the database at `path` and migrates it
-    /// to [`SCHEMA_VERSION`]; refuses a database of a newer schema, or a file that is not one.
+    /// Opens the database at `path`. With `create` (the commands that record) it is opened
+    /// for writing, created with its folder when absent, put in write-ahead-log mode (readers
+    /// never block the writer) and migrated to [`SCHEMA_VERSION`] in one immediate
+    /// transaction that reads the version again once it holds the lock, so that two processes
+    /// creating or migrating the same database at once do it once; without `create` (the
+    /// commands that only read) it is opened read-only and nothing is written to it, and a
+    /// database of an older schema is refused until a recording command migrates it. Every
+    /// connection waits up to [`BUSY_TIMEOUT`] for another writer. Refuses a file that is not
+    /// an SQLite database, one whose integrity check fails (damaged pages: it would answer
+    /// wrongly), and a database of a newer schema.
     pub fn open(path: &Path, create: bool) -> Result<Db> {
         let bad = |e: rusqlite::Error| {
             Error::file(
@@ -145,34 +160,93 @@ impl Db {
                 std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
             }
         }
-        let conn = Connection::open(path).map_err(bad)?;
-        conn.busy_timeout(std::time::Duration::from_secs(30))
+        let flags = if create {
+            OpenFlags::SQLITE_OPEN_READ_WRITE | OpenFlags::SQLITE_OPEN_CREATE
+        } else {
+            OpenFlags::SQLITE_OPEN_READ_ONLY
+        } | OpenFlags::SQLITE_OPEN_NO_MUTEX
+            | OpenFlags::SQLITE_OPEN_URI;
+        let mut conn = Connection::open_with_flags(path, flags).map_err(bad)?;
+        conn.busy_timeout(BUSY_TIMEOUT).map_err(bad)?;
+        let check: String = conn
+            .query_row("PRAGMA quick_check", [], |r| r.get(0))
             .map_err(bad)?;
-        let version: i64 = conn
-            .query_row("PRAGMA user_version", [], |r| r.get(0))
-            .map_err(bad)?;
-        if version > SCHEMA_VERSION {
+        if check != "ok" {
             return Err(Error::file(
                 path,
-                "user_version",
+                "database",
                 format!(
-                    "the database has schema version {version}, newer than this calbench's \
-                     {SCHEMA_VERSION}; use a newer calbench (nothing was changed)"
+                    "fails SQLite's integrity check ({check}): the file is damaged, and its \
+                     answers could be wrong; restore it from a copy (nothing was changed)"
                 ),
             ));
         }
-        if version < 0 {
+        let version = |c: &Connection| -> rusqlite::Result<i64> {
+            c.query_row("PRAGMA user_version", [], |r| r.get(0))
+        };
+        let newer = |v: i64| {
+            Error::file(
+                path,
+                "user_version",
+                format!(
+                    "the database has schema version {v}, newer than this calbench's \
+                     {SCHEMA_VERSION}; use a newer calbench (nothing was changed)"
+                ),
+            )
+        };
+        let v = version(&conn).map_err(bad)?;
+        if v > SCHEMA_VERSION {
+            return Err(newer(v));
+        }
+        if v < 0 {
             return Err(Error::file(
                 path,
                 "user_version",
-                format!("{version} is not a schema version"),
+                format!("{v} is not a schema version"),
             ));
         }
-        for (i, sql) in MIGRATIONS.iter().enumerate().skip(version as usize) {
-            let tx = conn.unchecked_transaction().map_err(bad)?;
-            tx.execute_batch(sql).map_err(bad)?;
-            tx.pragma_update(None, "user_version", (i + 1) as i64)
+        if !create {
+            if v < SCHEMA_VERSION {
+                return Err(Error::file(
+                    path,
+                    "user_version",
+                    format!(
+                        "the database has schema version {v}, older than this calbench's \
+                         {SCHEMA_VERSION}; `calbench record` migrates it (nothing was changed)"
+                    ),
+                ));
+            }
+            return Ok(Db {
+                conn,
+                path: path.to_path_buf(),
+            });
+        }
+        // WAL: a writer and readers at once; the mode is kept in the file. Setting it takes a
+        // lock, which the busy handler does not wait for: retried until the timeout.
+        let start = std::time::Instant::now();
+        loop {
+            match conn.query_row("PRAGMA journal_mode = WAL", [], |r| r.get::<_, String>(0)) {
+                Ok(_) => break,
+                Err(_) if start.elapsed() < BUSY_TIMEOUT => {
+                    std::thread::sleep(std::time::Duration::from_millis(20));
+                }
+                Err(e) => return Err(bad(e)),
+            }
+        }
+        if v < SCHEMA_VERSION {
+            let tx = conn
+                .transaction_with_behavior(TransactionBehavior::Immediate)
                 .map_err(bad)?;
+            // Another process may have migrated it while this one waited for the lock.
+            let now = version(&tx).map_err(bad)?;
+            if now > SCHEMA_VERSION {
+                return Err(newer(now));
+            }
+            for (i, sql) in MIGRATIONS.iter().enumerate().skip(now.max(0) as usize) {
+                tx.execute_batch(sql).map_err(bad)?;
+                tx.pragma_update(None, "user_version", (i + 1) as i64)
+                    .map_err(bad)?;
+            }
             tx.commit().map_err(bad)?;
         }
         Ok(Db {
@@ -193,9 +267,9 @@ impl Db {
     /// Stores `record` with its provenance `p`, in one transaction; nothing when a record of
     /// the same content hash is there.
     pub fn record(&mut self, record: &Record, p: &Provenance) -> Result<Recorded> {
-        let (version, commit) = match &record.results.ran_with {
-            Some((v, c)) => (v.as_str(), c.as_str()),
-            None => (p.version.as_str(), p.git_commit.as_str()),
+        let (version, commit, commit_time) = match &record.results.ran_with {
+            Some((v, c)) => (v.as_str(), c.as_str(), None),
+            None => (p.version.as_str(), p.git_commit.as_str(), p.commit_time),
         };
         let hash = provenance::sha256_hex(
             [
@@ -210,7 +284,12 @@ impl Db {
         );
         let path = self.path.clone();
         let err = move |e: rusqlite::Error| Error::file(&path, "database", e.to_string());
-        let tx = self.conn.transaction().map_err(&err)?;
+        // Immediate: the write lock is taken (waiting for another writer) before the
+        // content hash is looked up, so two processes recording the same folder add it once.
+        let tx = self
+            .conn
+            .transaction_with_behavior(TransactionBehavior::Immediate)
+            .map_err(&err)?;
         let had: Option<i64> = tx
             .query_row(
                 "SELECT id FROM runs WHERE content_hash = ?1",
@@ -225,8 +304,8 @@ impl Db {
         tx.execute(
             "INSERT INTO runs (content_hash, kind, scenario, scenario_hash, scenario_text, seed, \
              trials, label, calbench_version, git_commit, cargo_lock_hash, machine, cpu, cores, \
-             os, recorded_at, source, document) VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, \
-             ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18)",
+             os, recorded_at, source, document, commit_time) VALUES (?1, ?2, ?3, ?4, ?5, ?6, \
+             ?7, ?8, ?9, ?10, ?11, ?12, ?13, ?14, ?15, ?16, ?17, ?18, ?19)",
             params![
                 hash,
                 record.kind.as_str(),
@@ -245,7 +324,8 @@ impl Db {
                 p.os,
                 p.recorded_at,
                 record.output.source_and_document.0,
-                record.output.source_and_document.1
+                record.output.source_and_document.1,
+                commit_time
             ],
         )
         .map_err(&err)?;

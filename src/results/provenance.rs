@@ -12,6 +12,9 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The git commit calbench was built from, or `unknown`.
 pub const GIT_COMMIT: &str = env!("CALBENCH_GIT_COMMIT");
 
+/// The time of that commit, seconds since 1970 UTC, or empty when unknown.
+pub const GIT_COMMIT_TIME: &str = env!("CALBENCH_GIT_COMMIT_TIME");
+
 /// `Cargo.lock` as built.
 const CARGO_LOCK: &[u8] = include_bytes!(concat!(env!("CARGO_MANIFEST_DIR"), "/Cargo.lock"));
 
@@ -64,6 +67,8 @@ pub struct Provenance {
     pub os: String,
     /// When it was recorded, UTC, `YYYY-MM-DDTHH:MM:SSZ`.
     pub recorded_at: String,
+    /// The time of calbench's git commit, seconds since 1970 UTC, when known.
+    pub commit_time: Option<i64>,
 }
 
 impl Provenance {
@@ -81,6 +86,7 @@ impl Provenance {
             cores: here.cores,
             os: here.os,
             recorded_at: utc_now(),
+            commit_time: GIT_COMMIT_TIME.parse().ok(),
         }
     }
 }

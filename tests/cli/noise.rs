@@ -83,7 +83,18 @@ fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
         path_arg(&cmp),
     ]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains(", 0 regressed"), "{out}");
+    assert!(
+        out.contains(": 0 regressed (0 of them missing in B)"),
+        "{out}"
+    );
+    // The counts add up to the metrics compared.
+    let (m, rest) = out.split_once(" metrics compared: ").unwrap();
+    let sum: usize = rest
+        .split(", ")
+        .take(5)
+        .map(|p| p.split(' ').next().unwrap().parse::<usize>().unwrap())
+        .sum();
+    assert_eq!(sum, m.trim().parse::<usize>().unwrap(), "{out}");
     let md = read(&cmp.join("compare.md"));
     assert!(md.contains("No regression"), "{md}");
 

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use calbench::report::check::{compare, compare_all, read_json, Status};
+use calbench::analysis::regression::{compare, compare_with, read_json, trials_of, Status, Trials};
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 
@@ -199,26 +199,36 @@ fn check_fails_on_a_worsened_summary() {
 }
 
 /// The regression guard CI runs: the small study `scenarios/ci-guard.toml` against
-/// `results/baselines/ci-guard.json`. After a deliberate change of results, refresh the
-/// baseline with `cargo run --release -- run scenarios/ci-guard.toml --out results/ci-guard`
-/// and copy its `summary.json` there.
+/// `results/baselines/ci-guard.json`, which carries its run's per-trial values, so the two
+/// are compared trial by trial (docs/guard.md). After a deliberate change of results,
+/// refresh the baseline with `calbench run scenarios/ci-guard.toml --out guard` and
+/// `calbench baseline guard --out results/baselines/ci-guard.json`.
 #[test]
 fn ci_guard_matches_the_baseline() {
     let s = Scenario::load(&root().join("scenarios/ci-guard.toml")).unwrap();
     let out = tmp_dir("harness-ci-guard");
     run_to(s, &out, 2);
     let now = read_json(&out.join("summary.json")).unwrap();
-    let base = read_json(&root().join("results/baselines/ci-guard.json")).unwrap();
-    // The baseline holds only a summary, so the comparison is unpaired and a change of a few
-    // per cent in 8 trials is within the noise: the guard fails on unresolved metrics too
-    // (as `check --strict`), so that any change beyond 2 % on the same seed and trials counts.
-    let r: Vec<String> = compare_all(&now, &base, 0.02)
+    let path = root().join("results/baselines/ci-guard.json");
+    let base = read_json(&path).unwrap();
+    let tb = trials_of(&base, &path)
+        .unwrap()
+        .expect("the baseline's per-trial values");
+    let tn = Trials::read(&out.join("trials.csv")).unwrap().unwrap();
+    // The guard's rule at its tolerance (docs/guard.md): every metric that has per-trial
+    // values compared trial by trial, and none a regression.
+    let all = compare_with(&now, &base, GUARD_TOLERANCE, Some((&tb, &tn)));
+    assert!(all.iter().filter(|c| c.paired).count() > all.len() / 2);
+    let r: Vec<String> = all
         .into_iter()
-        .filter(|c| matches!(c.status, Status::Regression | Status::Unresolved))
+        .filter(|c| c.status == Status::Regression)
         .map(|c| format!("{}: {}", c.status.as_str(), c.metric))
         .collect();
     assert!(r.is_empty(), "regressions: {}", r.join("; "));
 }
+
+/// The CI guard's tolerance, chosen from its measured error rates (docs/guard.md).
+const GUARD_TOLERANCE: f64 = 0.02;
 
 #[test]
 fn bad_scenarios_are_refused_naming_the_key() {

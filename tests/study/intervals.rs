@@ -1,7 +1,7 @@
 //! The 95 % intervals of `summary.json` (docs/formats.md "Intervals"): present on every
 //! figure, around it, and covering the long-run mean as often as they claim.
 
-use calbench::report::check::read_json;
+use calbench::analysis::regression::read_json;
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 use serde_json::Value;

@@ -1,69 +1,26 @@
 //! `calbench compare A B --out DIR`: two runs side by side, entry by entry, as `compare.html`
 //! and `compare.md`. Every metric `calbench check` guards is listed with both values, the
 //! difference, the relative change, the Holm-adjusted interval of the change and its status
-//! ([`crate::report::check::Status`]), trial by trial when both folders hold the same trials;
+//! ([`crate::analysis::regression::Status`]), trial by trial when both folders hold the same trials;
 //! the regressions are the ones `calbench check` reports with the same tolerance (B is
 //! compared against A as a summary against its baseline). An entry in only one of the runs
 //! is listed as such.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde_json::Value;
 
 use super::Page;
-use crate::error::{Error, Result};
+pub use crate::analysis::regression::Side;
+use crate::analysis::regression::{compare_with, entry_names, Compared, Status};
+use crate::error::Result;
 use crate::numeric::Real;
-use crate::report::check::{
-    check_summary, compare_with, entry_names, read_json, Compared, Status, Trials,
-};
 use crate::report::markdown::{fmt_num, table};
 use crate::report::output::{Outputs, Text};
 use crate::report::plots::{changes_svg, ChangePoint};
 
-/// One side of a comparison: where its summary was read from, and the summary.
-pub struct Side {
-    /// The `summary.json` read.
-    pub path: PathBuf,
-    /// Its contents.
-    pub summary: Value,
-    /// The per-trial values of its folder's `trials.csv`, when it has one.
-    pub trials: Option<Trials>,
-}
-
 impl Side {
-    /// Reads a run's summary: `path` is the run's folder (its `summary.json` is read) or the
-    /// summary file itself. Refuses, naming the file, what is not a calbench summary.
-    pub fn read(path: &Path) -> Result<Side> {
-        let file = if path.is_dir() {
-            path.join("summary.json")
-        } else {
-            path.to_path_buf()
-        };
-        if !file.exists() {
-            return Err(Error::io(
-                &file,
-                std::io::Error::new(
-                    std::io::ErrorKind::NotFound,
-                    "no such file: give a run's folder or its summary.json",
-                ),
-            ));
-        }
-        let summary = read_json(&file)?;
-        check_summary(&summary, &file)?;
-        let csv = file.parent().unwrap_or(Path::new(".")).join("trials.csv");
-        let trials = if csv.is_file() {
-            Trials::read(&csv)?
-        } else {
-            None
-        };
-        Ok(Side {
-            path: file,
-            summary,
-            trials,
-        })
-    }
-
     fn describe(&self) -> String {
         format!(
             "{} (scenario {}, {} trials, seed {})",
@@ -416,6 +373,7 @@ pub fn write(c: &Comparison, out: &Path) -> Result<()> {
 mod tests {
     use super::*;
     use serde_json::json;
+    use std::path::PathBuf;
 
     fn side(eta: Real, methods: &[&str]) -> Side {
         let results: Vec<Value> = methods
@@ -435,7 +393,7 @@ mod tests {
     #[test]
     fn regressions_are_those_of_check_and_lone_entries_are_listed() {
         let (a, b) = (side(90.0, &["ls", "lm"]), side(80.0, &["ls", "igg3"]));
-        let expected = crate::report::check::compare(&b.summary, &a.summary, 0.05).len();
+        let expected = crate::analysis::regression::compare(&b.summary, &a.summary, 0.05).len();
         let c = Comparison::new(a, b, 0.05);
         assert_eq!(c.regressions(), expected);
         assert_eq!(c.only_in(0), ["lm / random"]);

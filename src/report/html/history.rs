@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 use super::{escape, Page};
 use crate::error::{Error, Result};
 use crate::numeric::Real;
+use crate::report::markdown::fmt_num;
 
 /// One recorded figure.
 #[derive(Clone, Debug)]
@@ -34,9 +35,15 @@ pub struct Point {
     pub value: Real,
     /// Its 95 % interval.
     pub ci: Option<[Real; 2]>,
-    /// What the step from the record before it in its series did (`check`'s status), for
-    /// runs.
+    /// What the step from the version before it in its series did (`check`'s status, or
+    /// `scenario changed`), for runs.
     pub step: Option<&'static str>,
+    /// The record's number in the database.
+    pub record: i64,
+    /// The run's master seed, where there is one.
+    pub seed: Option<i64>,
+    /// The folder recorded.
+    pub source: String,
 }
 
 /// A CSV text of `header` and `rows` (quoted where needed).
@@ -95,18 +102,16 @@ const COLOURS: [&str; 8] = [
 /// green one on an improvement.
 fn chart(points: &[&Point]) -> String {
     let (w, h, left, right, top, bottom) = (960.0, 420.0, 80.0, 250.0, 20.0, 70.0);
-    let mut xs: Vec<(&str, &str)> = Vec::new();
+    // One place per record, in the order of versions: several records under one label are
+    // shown apart, each labelled with its number.
+    let mut xs: Vec<(i64, String)> = Vec::new();
     for p in points {
-        let key = (p.recorded_at.as_str(), p.label.as_str());
-        if !xs.contains(&key) {
-            xs.push(key);
+        if !xs.iter().any(|(r, _)| *r == p.record) {
+            xs.push((p.record, format!("{} #{}", p.label, p.record)));
         }
     }
     let x_of = |p: &Point| {
-        let i = xs
-            .iter()
-            .position(|k| *k == (p.recorded_at.as_str(), p.label.as_str()))
-            .unwrap_or(0);
+        let i = xs.iter().position(|(r, _)| *r == p.record).unwrap_or(0);
         left + (i as Real + 0.5) * (w - left - right) / xs.len().max(1) as Real
     };
     let (mut lo, mut hi) = (Real::INFINITY, Real::NEG_INFINITY);
@@ -137,7 +142,7 @@ fn chart(points: &[&Point]) -> String {
             w - right,
             left - 6.0,
             y + 4.0,
-            escape(&format!("{v:.4}"))
+            escape(&fmt_num(v, 4))
         );
     }
     for (i, (_, label)) in xs.iter().enumerate() {
@@ -206,21 +211,86 @@ fn chart(points: &[&Point]) -> String {
     s
 }
 
-/// `history.html`: per scenario, a figure per metric and the table of its points; the
-/// `regressions` of the latest versions at the top.
-pub fn page(points: &[Point], regressions: &[String]) -> String {
+/// One scenario on one machine at the top of `history.html`: its state (`regressed`,
+/// `drifting`, `scenario changed`, `unchanged`, or `one version`) and the lines of what was
+/// flagged.
+pub struct Series {
+    /// The scenario.
+    pub scenario: String,
+    /// The machine.
+    pub machine: String,
+    /// Its state.
+    pub state: String,
+    /// The flagged changes of its latest version, one line each.
+    pub flags: Vec<String>,
+}
+
+/// A value and its interval with the decimals the interval supports: two significant digits
+/// of its half-width (at least one of the value when the interval is nil), else four
+/// significant digits.
+pub fn with_interval(value: Real, ci: Option<[Real; 2]>) -> (String, String) {
+    let Some([lo, hi]) = ci.filter(|[l, h]| l.is_finite() && h.is_finite()) else {
+        return (fmt_num(value, 4), String::new());
+    };
+    let half = (hi - lo).abs() / 2.0;
+    let scale = if half > 0.0 { half } else { value.abs() };
+    if scale == 0.0 || !scale.is_finite() {
+        return (
+            fmt_num(value, 4),
+            format!("{} – {}", fmt_num(lo, 4), fmt_num(hi, 4)),
+        );
+    }
+    let decimals = (1 - scale.log10().floor() as i32).clamp(0, 12) as usize;
+    let f = |x: Real| format!("{x:.decimals$}");
+    (f(value), format!("{} – {}", f(lo), f(hi)))
+}
+
+/// `history.html`: one line per scenario and machine (its state), the flagged changes folded
+/// under it; then per scenario a figure per metric and the table of its points.
+pub fn page(points: &[Point], series: &[Series]) -> String {
     let mut page = Page::new(
         "calbench history",
-        "Each recorded metric against the version labels, per machine and entry, with its \
-         95 % interval; a red ring marks a step that calbench check's rule calls a regression \
-         (worse by the tolerance and beyond the noise), a green ring an improvement.",
+        "Each recorded metric against the versions, in version order, per machine and entry, \
+         with its 95 % interval; a red ring marks a step that calbench check's rule calls a \
+         regression (worse by the tolerance and beyond the noise), a green ring an \
+         improvement.",
     );
     page.section("Latest versions");
-    if regressions.is_empty() {
-        page.fine("No regression of the latest version against the one before it.");
+    if series.is_empty() {
+        page.para("No run recorded.");
     } else {
-        for r in regressions {
-            page.warning(r);
+        let rows: Vec<Vec<String>> = series
+            .iter()
+            .map(|s| {
+                vec![
+                    s.scenario.clone(),
+                    s.machine.clone(),
+                    s.state.clone(),
+                    s.flags.len().to_string(),
+                ]
+            })
+            .collect();
+        let flagged: Vec<bool> = series
+            .iter()
+            .map(|s| s.state == "regressed" || s.state == "drifting")
+            .collect();
+        page.table_with(
+            "Each scenario on each machine: its latest version against the versions before it",
+            &["scenario", "machine", "latest version", "flagged"],
+            &rows,
+            |i| flagged[i].then_some("regressed"),
+        );
+        for s in series.iter().filter(|s| !s.flags.is_empty()) {
+            page.folded(
+                &format!(
+                    "{} on {}: {} ({} flagged)",
+                    s.scenario,
+                    s.machine,
+                    s.state,
+                    s.flags.len()
+                ),
+                &s.flags,
+            );
         }
     }
     let mut by_scenario: BTreeMap<&str, BTreeMap<&str, Vec<&Point>>> = BTreeMap::new();
@@ -242,7 +312,7 @@ pub fn page(points: &[Point], regressions: &[String]) -> String {
             page.figure(
                 &chart(list),
                 &format!("{scenario}: {metric}"),
-                &format!("{metric} of {scenario} against the version label, one line per machine and entry"),
+                &format!("{metric} of {scenario} against the records in version order, one line per machine and entry"),
             );
         }
         page.plots_end();
@@ -250,13 +320,19 @@ pub fn page(points: &[Point], regressions: &[String]) -> String {
             let rows: Vec<Vec<String>> = list
                 .iter()
                 .map(|p| {
-                    let head = [&p.label, &p.recorded_at, &p.machine, &p.entry].map(String::clone);
-                    let ci =
-                        p.ci.map_or(String::new(), |[a, b]| format!("{a:.6} – {b:.6}"));
-                    let step = p.step.unwrap_or("").to_string();
-                    let mut row = head.to_vec();
-                    row.extend([format!("{:.6}", p.value), ci, step]);
-                    row
+                    let (value, ci) = with_interval(p.value, p.ci);
+                    vec![
+                        p.label.clone(),
+                        format!("#{}", p.record),
+                        p.seed.map_or(String::new(), |s| s.to_string()),
+                        p.source.clone(),
+                        p.recorded_at.clone(),
+                        p.machine.clone(),
+                        p.entry.clone(),
+                        value,
+                        ci,
+                        p.step.unwrap_or("").to_string(),
+                    ]
                 })
                 .collect();
             let flagged: Vec<bool> = list.iter().map(|p| p.step == Some("regression")).collect();
@@ -264,6 +340,9 @@ pub fn page(points: &[Point], regressions: &[String]) -> String {
                 metric,
                 &[
                     "label",
+                    "record",
+                    "seed",
+                    "source",
                     "recorded",
                     "machine",
                     "entry",
@@ -277,4 +356,28 @@ pub fn page(points: &[Point], regressions: &[String]) -> String {
         }
     }
     page.finish()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::with_interval;
+
+    #[test]
+    fn values_have_the_decimals_of_their_interval() {
+        assert_eq!(
+            with_interval(0.123456789, Some([0.1200001, 0.1269999])),
+            ("0.1235".to_string(), "0.1200 – 0.1270".to_string())
+        );
+        assert_eq!(
+            with_interval(12.3456, Some([10.0, 15.0])),
+            ("12.3".to_string(), "10.0 – 15.0".to_string())
+        );
+        // Angles of a few µrad: the interval's digits, not 0.0000.
+        let (v, ci) = with_interval(3.2e-6, Some([3.0e-6, 3.4e-6]));
+        assert_eq!(
+            (v.as_str(), ci.as_str()),
+            ("0.00000320", "0.00000300 – 0.00000340")
+        );
+        assert_eq!(with_interval(0.5, None).0, "0.5");
+    }
 }

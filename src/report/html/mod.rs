@@ -122,6 +122,19 @@ impl Page {
         let _ = writeln!(self.body, "<p class=\"good\">{}</p>", escape(text));
     }
 
+    /// Lines of plain text folded under a line that opens them (a group of warnings).
+    pub fn folded(&mut self, summary: &str, lines: &[String]) {
+        let _ = write!(
+            self.body,
+            "<details class=\"warn\"><summary>{}</summary><ul>",
+            escape(summary)
+        );
+        for l in lines {
+            let _ = write!(self.body, "<li>{}</li>", escape(l));
+        }
+        self.body += "</ul></details>\n";
+    }
+
     /// Pairs of term and value as a definition list.
     pub fn facts(&mut self, items: &[(&str, String)]) {
         self.body += "<dl>";

@@ -1,4 +1,5 @@
-//! `calbench check`: the regression guard on identification accuracy (docs/formats.md).
+//! The regression rule of `calbench check`, `compare` and `history`: the guard on
+//! identification accuracy (docs/formats.md § 8.4).
 //!
 //! A summary is compared with a baseline entry by entry — entries are matched by method,
 //! pose strategy and swept value — on the metrics that say how well the calibration worked.
@@ -9,8 +10,10 @@
 //! refuses them, naming the file. A metric regresses when it is worse by the tolerance or
 //! more — a change of exactly the tolerance counts — and the change is not Monte-Carlo
 //! noise: its Holm-adjusted interval excludes zero ([`noise`]); worse beyond the tolerance
-//! within the noise is *unresolved* ([`compare_with`]).
+//! within the noise is *unresolved* ([`compare_with`]). A baseline file carries the per-trial
+//! values that pairing needs ([`baseline`]).
 
+pub mod baseline;
 pub mod noise;
 
 use std::fmt;
@@ -21,6 +24,7 @@ use serde_json::Value;
 use crate::analysis::summary::Summary;
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
+pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
 pub use noise::{pairable, Status, Trials};
 
 use crate::study::metric::{Better, Metric};

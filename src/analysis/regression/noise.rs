@@ -2,13 +2,17 @@
 //! the interval of its change and a p-value, Holm-adjusted over the metrics compared, and one
 //! of the statuses of [`Status`].
 //!
-//! Paired when both runs have their `trials.csv` and share the scenario, the seed, the sweep
-//! and the trials (a sweep's entries point by point): the change is the mean of the per-trial differences, with a t interval
-//! on n − 1 degrees of freedom. Otherwise unpaired, from the summaries: Welch's interval from
-//! each side's 95 % interval of the figure (its half-width over t₀.₉₇₅ is the standard
-//! error); a side without intervals (a summary from before they were written) borrows the
-//! other's spread over trials; with neither, the change is taken as exact, as the plain rule of the tolerance
-//! always did.
+//! Paired when both sides hold per-trial values (a run's `trials.csv`, or the `per_trial` of a
+//! baseline file, [`super::baseline`]) and share the scenario, the seed, the sweep and the
+//! trials (a sweep's entries point by point): the p-value is that of the Wilcoxon signed-rank
+//! test of the per-trial differences, the one test the report's comparisons of two entries
+//! use ([`crate::study::stats::paired::compare`]), and the interval shown is the t interval of
+//! their mean on n − 1 degrees of freedom. Otherwise unpaired, from the summaries: Welch's
+//! interval from each side's 95 % interval of the figure (its half-width over t₀.₉₇₅ is the
+//! standard error); a side without intervals (a summary from before they were written) borrows
+//! the other's spread over trials; with neither, the change is taken as exact, as the plain
+//! rule of the tolerance always did. A change within the rounding of the numbers (1e-12 of
+//! their size, per trial or in the summaries) is no change.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -20,6 +24,7 @@ use crate::numeric::dist;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
 use crate::study::stats::eta;
+use crate::study::stats::paired::compare;
 
 /// What a compared metric did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,6 +77,16 @@ pub struct Change {
     /// the root of the mean squared error), which must be the summaries' figures for the
     /// per-trial values to be those of the summaries ([`Change::matches`]).
     pub means: Option<[Real; 2]>,
+    /// Paired: the two-sided p-value of the Wilcoxon signed-rank test of the per-trial
+    /// differences (1 when every difference is within rounding), which decides; `None`
+    /// unpaired (the t or z test of `diff` over `se`).
+    pub p_test: Option<Real>,
+}
+
+/// Whether `a` and `b` differ by no more than the rounding of decimal numbers (1e-12 of the
+/// larger): such a change is no change.
+pub fn within_rounding(a: Real, b: Real) -> bool {
+    (a - b).abs() <= 1e-12 * a.abs().max(b.abs())
 }
 
 /// The per-trial values of a run's `trials.csv`, by entry key (`method / poses`) and metric
@@ -255,14 +270,22 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
     );
     let pairs: Vec<(Real, Real)> = va
         .iter()
-        .filter_map(|(i, x)| Some((*x, *vb.get(i)?)))
+        .filter_map(|(i, x)| {
+            let y = *vb.get(i)?;
+            // A difference within rounding is none: the test sees a zero.
+            Some((*x, if within_rounding(*x, y) { *x } else { y }))
+        })
         .collect();
     let n = pairs.len();
     if n < 2 {
         return None;
     }
+    let (xa, xb): (Vec<Real>, Vec<Real>) = pairs.iter().copied().unzip();
+    // The report's paired comparison of two entries, on the same per-trial values: its
+    // Wilcoxon p-value decides, its mean difference is the change.
+    let test = compare((ka, kb), "", (&xa, &xb), true);
+    let mean = test.diff_mean;
     let d: Vec<Real> = pairs.iter().map(|(x, y)| y - x).collect();
-    let mean = d.iter().sum::<Real>() / n as Real;
     let side = |f: fn(&(Real, Real)) -> Real| {
         let m = pairs.iter().map(f).sum::<Real>() / n as Real;
         if is_rmse(metric) {
@@ -281,6 +304,11 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
         mse_a: is_rmse(metric).then(|| pairs.iter().map(|p| p.0).sum::<Real>() / n as Real),
         diff: mean,
         means,
+        p_test: Some(if test.p_value.is_nan() {
+            1.0
+        } else {
+            test.p_value
+        }),
     })
 }
 
@@ -336,6 +364,8 @@ pub fn unpaired(
     (va, vb): (Real, Real),
     trials: [Option<usize>; 2],
 ) -> Change {
+    // A change within rounding is none.
+    let vb = if within_rounding(va, vb) { va } else { vb };
     let exact = Change {
         se: 0.0,
         df: Real::INFINITY,
@@ -344,6 +374,7 @@ pub fn unpaired(
         mse_a: None,
         diff: vb - va,
         means: None,
+        p_test: None,
     };
     if metric == "failures" {
         let (Some(na), Some(nb)) = (trials[0], trials[1]) else {
@@ -391,6 +422,7 @@ pub fn unpaired(
         mse_a: rmse.then_some(va * va),
         diff: if rmse { vb * vb - va * va } else { vb - va },
         means: None,
+        p_test: None,
     }
 }
 
@@ -404,8 +436,13 @@ impl Change {
         self.means.is_none_or(|[ma, mb]| near(ma, a) && near(mb, b))
     }
 
-    /// The two-sided p-value of "no change".
+    /// The two-sided p-value of "no change": paired, the Wilcoxon signed-rank test's;
+    /// unpaired, the t (z) test's of the change over its standard error, and for an exact
+    /// change 0, or 1 when it is within rounding.
     pub fn p_value(&self) -> Real {
+        if let Some(p) = self.p_test {
+            return p;
+        }
         if self.se == 0.0 || !self.se.is_finite() {
             return if self.diff == 0.0 || self.diff.is_nan() {
                 1.0
@@ -437,7 +474,8 @@ impl Change {
     /// The trials per run that would detect a change of `effect` (in the metric's units,
     /// positive) with 80 % power at level `alpha` (two-sided): (z₁₋α/₂ + z₀.₈)² σ² /
     /// effect², σ² the per-trial variance behind the standard error. For an RMSE the effect
-    /// is taken on the squared scale at A's RMSE.
+    /// is taken on the squared scale at A's RMSE. Paired, at least the trials whose smallest
+    /// Wilcoxon p-value (every difference of one sign, 2 / 2ⁿ) is below `alpha`.
     pub fn trials_needed(&self, effect: Real, alpha: Real) -> Option<usize> {
         let effect = match self.mse_a {
             Some(m) => (m.sqrt() + effect).powi(2) - m,
@@ -448,7 +486,13 @@ impl Change {
         }
         let z = dist::normal_quantile(1.0 - alpha / 2.0) + dist::normal_quantile(0.8);
         let var = self.se * self.se * self.n as Real;
-        Some((z * z * var / (effect * effect)).ceil() as usize)
+        let by_power = (z * z * var / (effect * effect)).ceil() as usize;
+        let floor = if self.paired {
+            (2.0 / alpha).log2().floor() as usize + 1
+        } else {
+            0
+        };
+        Some(by_power.max(floor))
     }
 }
 
@@ -468,6 +512,7 @@ mod tests {
             mse_a: None,
             diff: 0.1,
             means: None,
+            p_test: None,
         };
         assert_eq!(c.p_value(), 0.0);
         assert_eq!(Change { diff: 0.0, ..c }.p_value(), 1.0);
@@ -483,6 +528,7 @@ mod tests {
             mse_a: None,
             diff: 0.01,
             means: None,
+            p_test: None,
         };
         // σ = 0.1, effect 0.02 at α = 0.05: (1.96 + 0.8416)² · 0.01 / 0.0004 = 196.2.
         assert_eq!(c.trials_needed(0.02, 0.05), Some(197));

@@ -1,0 +1,297 @@
+//! What a baseline carries so that `check` can compare against it trial by trial
+//! (docs/formats.md § 8.4): the run's `summary.json` with, under `per_trial`, each entry's
+//! trial numbers and the per-trial values of the guarded metrics ([`Trials`]) — those
+//! `check` reads from a run folder's `trials.csv`, in a few kilobytes instead of the whole
+//! file. A run compared with such a baseline is paired whenever the seed, the sweep and the
+//! trials agree; otherwise [`unpaired_because`] says what differs, and so what a paired
+//! comparison would take.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::noise::Trials;
+use super::{check_summary, read_json};
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+
+/// The key of a baseline's per-trial values in its document.
+pub const KEY: &str = "per_trial";
+
+/// The `format` of [`PerTrial`].
+pub const FORMAT: &str = "calbench-per-trial-1";
+
+/// The per-trial values of a run's guarded metrics, as a baseline file holds them.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerTrial {
+    /// [`FORMAT`].
+    pub format: String,
+    /// By entry key ([`super::noise::trials_key`]).
+    pub entries: BTreeMap<String, EntryTrials>,
+}
+
+/// One entry's trials and values.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EntryTrials {
+    /// Every trial number of the entry, usable or not, ascending.
+    pub trials: Vec<usize>,
+    /// By metric key: the value of each trial of `trials`, in its order (`null` where the
+    /// trial gave no usable value).
+    pub values: BTreeMap<String, Vec<Option<Real>>>,
+}
+
+impl From<&Trials> for PerTrial {
+    fn from(t: &Trials) -> PerTrial {
+        let mut entries = BTreeMap::new();
+        for (entry, trials) in &t.trials {
+            let trials: Vec<usize> = trials.iter().copied().collect();
+            let values = t
+                .values
+                .iter()
+                .filter(|((e, _), _)| e == entry)
+                .map(|((_, metric), by_trial)| {
+                    let row = trials.iter().map(|i| by_trial.get(i).copied()).collect();
+                    (metric.clone(), row)
+                })
+                .collect();
+            entries.insert(entry.clone(), EntryTrials { trials, values });
+        }
+        PerTrial {
+            format: FORMAT.into(),
+            entries,
+        }
+    }
+}
+
+impl PerTrial {
+    /// The per-trial values as `check` compares them; refuses, naming `path` and the key, a
+    /// list whose length is not the entry's number of trials, a trial listed twice or out of
+    /// order, or a value that is not finite.
+    pub fn to_trials(&self, path: &Path) -> Result<Trials> {
+        let bad = |key: String, what: String| Error::file(path, key, what);
+        if self.format != FORMAT {
+            return Err(bad(
+                format!("{KEY}.format"),
+                format!("is \"{}\", not \"{FORMAT}\"", self.format),
+            ));
+        }
+        let mut t = Trials::default();
+        for (entry, e) in &self.entries {
+            if e.trials.windows(2).any(|w| w[0] >= w[1]) {
+                return Err(bad(
+                    format!("{KEY}.entries.{entry}.trials"),
+                    "must list each trial once, ascending".into(),
+                ));
+            }
+            t.trials
+                .insert(entry.clone(), e.trials.iter().copied().collect());
+            for (metric, row) in &e.values {
+                let key = format!("{KEY}.entries.{entry}.values.{metric}");
+                if row.len() != e.trials.len() {
+                    return Err(bad(
+                        key,
+                        format!(
+                            "has {} values for the entry's {} trials",
+                            row.len(),
+                            e.trials.len()
+                        ),
+                    ));
+                }
+                let mut by_trial = BTreeMap::new();
+                for (i, v) in e.trials.iter().zip(row) {
+                    match v {
+                        Some(x) if !x.is_finite() => {
+                            return Err(bad(key, format!("trial {i} is not finite")))
+                        }
+                        Some(x) => {
+                            by_trial.insert(*i, *x);
+                        }
+                        None => {}
+                    }
+                }
+                t.values.insert((entry.clone(), metric.clone()), by_trial);
+            }
+        }
+        Ok(t)
+    }
+}
+
+/// The baseline document of a run: its `summary` with the per-trial values `trials` (read
+/// from its `trials.csv`) under [`KEY`].
+pub fn baseline_document(summary: &Value, trials: &Trials) -> Result<Value> {
+    let mut doc = summary.clone();
+    let per_trial =
+        serde_json::to_value(PerTrial::from(trials)).map_err(|e| Error::Compute(e.to_string()))?;
+    match doc.as_object_mut() {
+        Some(m) => {
+            m.insert(KEY.into(), per_trial);
+            Ok(doc)
+        }
+        None => Err(Error::Compute("a summary is a JSON object".into())),
+    }
+}
+
+/// The per-trial values behind the summary `doc` read from `path`: its own [`KEY`] (a
+/// baseline file), else the `trials.csv` beside it (a run folder); `None` when it has
+/// neither.
+pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
+    if let Some(v) = doc.get(KEY) {
+        let p: PerTrial =
+            serde_json::from_value(v.clone()).map_err(|e| Error::file(path, KEY, e.to_string()))?;
+        return p.to_trials(path).map(Some);
+    }
+    let csv = path.parent().unwrap_or(Path::new(".")).join("trials.csv");
+    if csv.is_file() {
+        Trials::read(&csv)
+    } else {
+        Ok(None)
+    }
+}
+
+/// One side of a comparison: where its summary was read from, the summary, and its
+/// per-trial values ([`trials_of`]).
+pub struct Side {
+    /// The summary file read.
+    pub path: PathBuf,
+    /// Its contents.
+    pub summary: Value,
+    /// Its per-trial values, when it has them.
+    pub trials: Option<Trials>,
+}
+
+impl Side {
+    /// Reads a run's summary: `path` is the run's folder (its `summary.json` is read), its
+    /// `summary.json` or a baseline file. Refuses, naming the file, what is not a calbench
+    /// summary, and a missing file.
+    pub fn read(path: &Path) -> Result<Side> {
+        let file = if path.is_dir() {
+            path.join("summary.json")
+        } else {
+            path.to_path_buf()
+        };
+        if !file.exists() {
+            return Err(Error::io(
+                &file,
+                std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "no such file: give a run's folder or its summary.json",
+                ),
+            ));
+        }
+        let summary = read_json(&file)?;
+        check_summary(&summary, &file)?;
+        let trials = trials_of(&summary, &file)?;
+        Ok(Side {
+            path: file,
+            summary,
+            trials,
+        })
+    }
+}
+
+/// Which side of a comparison.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Which {
+    /// The baseline (A).
+    Baseline,
+    /// The summary compared with it (B).
+    Summary,
+}
+
+/// Why a comparison is made from the summaries rather than trial by trial.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Unpaired {
+    /// That side has no per-trial values: a summary alone, without `trials.csv` beside it or
+    /// [`KEY`] in it.
+    NoTrials(Which),
+    /// The two summaries differ in `key` (`scenario`, `seed`, `trials`, `sweep_keys`,
+    /// `sweep_values`): the baseline's value, then the summary's, as JSON.
+    Differs {
+        /// The key.
+        key: &'static str,
+        /// The baseline's value (`none` when missing).
+        baseline: String,
+        /// The summary's.
+        summary: String,
+    },
+}
+
+/// Why `summary` cannot be compared with `baseline` trial by trial; `None` when it can
+/// (each entry is then paired when it holds the same trials on both sides).
+pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
+    if baseline.trials.is_none() {
+        return Some(Unpaired::NoTrials(Which::Baseline));
+    }
+    if summary.trials.is_none() {
+        return Some(Unpaired::NoTrials(Which::Summary));
+    }
+    for key in ["scenario", "seed", "trials", "sweep_keys", "sweep_values"] {
+        let (a, b) = (baseline.summary.get(key), summary.summary.get(key));
+        let missing_seed = key == "seed" && a.is_none();
+        if a != b || missing_seed {
+            let show = |v: Option<&Value>| v.map_or("none".to_string(), Value::to_string);
+            return Some(Unpaired::Differs {
+                key,
+                baseline: show(a),
+                summary: show(b),
+            });
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn per_trial_values_round_trip() {
+        let mut t = Trials::default();
+        t.trials.insert("ls / random".into(), [0, 1, 2].into());
+        let vals: BTreeMap<usize, Real> = [(0, 0.5), (2, 0.25)].into();
+        t.values.insert(
+            ("ls / random".into(), "validation_after_mm.rms".into()),
+            vals,
+        );
+        let p = PerTrial::from(&t);
+        let e = &p.entries["ls / random"];
+        assert_eq!(e.trials, [0, 1, 2]);
+        assert_eq!(
+            e.values["validation_after_mm.rms"],
+            [Some(0.5), None, Some(0.25)]
+        );
+        let back = p.to_trials(Path::new("b.json")).unwrap();
+        assert_eq!(back.values, t.values);
+        assert_eq!(back.trials, t.trials);
+        let text = serde_json::to_string(&p).unwrap();
+        let again: PerTrial = serde_json::from_str(&text).unwrap();
+        assert_eq!(again, p);
+    }
+
+    #[test]
+    fn inconsistent_per_trial_values_are_refused_naming_the_key() {
+        let mut p = PerTrial {
+            format: FORMAT.into(),
+            entries: BTreeMap::new(),
+        };
+        p.entries.insert(
+            "ls / random".into(),
+            EntryTrials {
+                trials: vec![0, 1],
+                values: [("eta_mean_pct".to_string(), vec![Some(1.0)])].into(),
+            },
+        );
+        let e = p.to_trials(Path::new("b.json")).unwrap_err().to_string();
+        assert!(
+            e.contains("b.json") && e.contains("eta_mean_pct") && e.contains("1 values"),
+            "{e}"
+        );
+        p.entries.get_mut("ls / random").unwrap().trials = vec![1, 0];
+        let e = p.to_trials(Path::new("b.json")).unwrap_err().to_string();
+        assert!(e.contains("trials") && e.contains("ascending"), "{e}");
+    }
+}

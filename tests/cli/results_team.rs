@@ -1,0 +1,335 @@
+//! The results database as a team uses it (docs/formats.md § 2.15–2.16, § 7.11): concurrent
+//! `record`s all land; a damaged database is refused; the reading commands write nothing;
+//! `record` stores the scenario a run ran and refuses another file or edited figures;
+//! `history --regressions` orders versions by version, flags a drift spread over several
+//! versions, and reports a changed scenario as such rather than as a regression.
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+
+fn count(db: &Path, sql: &str) -> i64 {
+    let c = rusqlite::Connection::open(db).unwrap();
+    c.query_row(sql, [], |r| r.get(0)).unwrap()
+}
+
+fn text(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr)
+}
+
+/// A run of `scenarios/ci-guard.toml` into `dir/NAME` (`trials` trials, `seed`).
+fn guard_run(dir: &Path, name: &str, trials: &str, seed: &str) -> PathBuf {
+    let out = dir.join(name);
+    let sc = root().join("scenarios/ci-guard.toml");
+    calbench_ok(&[
+        "run",
+        path_arg(&sc),
+        "--trials",
+        trials,
+        "--seed",
+        seed,
+        "--threads",
+        "2",
+        "--out",
+        path_arg(&out),
+    ]);
+    out
+}
+
+/// A copy of run folder `src` at `dir/name` whose summary's validation_after_mm figures and
+/// their intervals are multiplied by `scale` (a planted change of the run's accuracy).
+pub fn planted(src: &Path, dir: &Path, name: &str, scale: f64) -> PathBuf {
+    let out = dir.join(name);
+    std::fs::create_dir_all(&out).unwrap();
+    for f in std::fs::read_dir(src).unwrap() {
+        let f = f.unwrap().path();
+        if f.is_file() {
+            std::fs::copy(&f, out.join(f.file_name().unwrap())).unwrap();
+        }
+    }
+    let mut s = load_json(&src.join("summary.json"));
+    for e in s["results"].as_array_mut().unwrap() {
+        for key in ["validation_after_mm", "validation_after_mm_ci95"] {
+            let Some(m) = e.get_mut(key).and_then(Value::as_object_mut) else {
+                continue;
+            };
+            for v in m.values_mut() {
+                *v = match v.take() {
+                    Value::Number(n) => (n.as_f64().unwrap() * scale).into(),
+                    Value::Array(a) => a
+                        .iter()
+                        .map(|x| x.as_f64().map_or(Value::Null, |x| (x * scale).into()))
+                        .collect(),
+                    other => other,
+                };
+            }
+        }
+    }
+    let text = serde_json::to_string_pretty(&s).unwrap() + "\n";
+    std::fs::write(out.join("summary.json"), text).unwrap();
+    out
+}
+
+fn record(dir: &Path, db: &Path, label: &str) -> std::process::Output {
+    calbench(&[
+        "record",
+        path_arg(dir),
+        "--db",
+        path_arg(db),
+        "--label",
+        label,
+    ])
+}
+
+fn regressions(db: &Path) -> (bool, String) {
+    let o = calbench(&["history", "--db", path_arg(db), "--regressions"]);
+    (o.status.success(), text(&o))
+}
+
+#[test]
+fn twenty_concurrent_records_all_land() {
+    let dir = tmp_dir("cli-team-concurrent");
+    let run = guard_run(&dir, "a", "2", "1");
+    let db = dir.join("fresh/calbench.sqlite");
+    // Twenty processes at once into a database none of them finds: each creates or waits.
+    let children: Vec<_> = (0..20)
+        .map(|i| {
+            crate::common::bin()
+                .args(["record", path_arg(&run), "--db", path_arg(&db)])
+                .args(["--label", &format!("v1.{i}")])
+                .stdout(std::process::Stdio::piped())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap()
+        })
+        .collect();
+    for c in children {
+        let o = c.wait_with_output().unwrap();
+        assert!(o.status.success(), "{}", text(&o));
+    }
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 20);
+    assert_eq!(count(&db, "SELECT COUNT(DISTINCT label) FROM runs"), 20);
+}
+
+#[test]
+fn a_damaged_database_is_refused_and_reading_writes_nothing() {
+    let dir = tmp_dir("cli-team-damaged");
+    let run = guard_run(&dir, "a", "2", "1");
+    let db = dir.join("calbench.sqlite");
+    for label in ["v1", "v2"] {
+        assert!(record(&run, &db, label).status.success());
+    }
+    // Reading: the database is the same bytes afterwards, and no write-ahead log holds a
+    // change (a read-only connection may leave SQLite's empty shared-memory index beside it).
+    let files = |p: &Path| -> (Vec<u8>, u64) {
+        let wal = p.with_file_name("calbench.sqlite-wal");
+        let logged = std::fs::metadata(&wal).map_or(0, |m| m.len());
+        (std::fs::read(p).unwrap(), logged)
+    };
+    let before = files(&db);
+    calbench_ok(&["history", "--db", path_arg(&db), "--regressions"]);
+    calbench_ok(&[
+        "history",
+        "--db",
+        path_arg(&db),
+        "--out",
+        path_arg(&dir.join("h")),
+    ]);
+    calbench_ok(&[
+        "leaderboard",
+        "--db",
+        path_arg(&db),
+        "--out",
+        path_arg(&dir.join("b")),
+    ]);
+    assert!(
+        files(&db) == before,
+        "a reading command changed the database"
+    );
+    // Damage the head of every page but the first (the b-tree pages' headers, the overflow
+    // pages' links): every command refuses the file.
+    let mut bytes = std::fs::read(&db).unwrap();
+    assert!(bytes.len() > 3 * 4096, "{}", bytes.len());
+    for page in bytes.chunks_mut(4096).skip(1) {
+        for b in &mut page[..12] {
+            *b = 0x5a;
+        }
+    }
+    std::fs::write(&db, &bytes).unwrap();
+    for args in [
+        vec!["history", "--regressions"],
+        vec!["leaderboard", "--out", path_arg(&dir.join("b2"))],
+        vec!["record", path_arg(&run), "--label", "v3"],
+    ] {
+        let mut a = args.clone();
+        a.extend(["--db", path_arg(&db)]);
+        let o = calbench(&a);
+        let t = text(&o);
+        assert!(
+            !o.status.success() && t.contains("calbench.sqlite") && t.contains("integrity"),
+            "{args:?}: {t}"
+        );
+    }
+}
+
+#[test]
+fn record_stores_the_scenario_that_ran_and_refuses_another_or_edited_figures() {
+    let dir = tmp_dir("cli-team-record");
+    let run = guard_run(&dir, "a", "3", "1");
+    let db = dir.join("calbench.sqlite");
+    let ran = read(&run.join("scenario.toml"));
+    // Another scenario file: the tracker eight times noisier, under the same name.
+    let other = read(&root().join("scenarios/ci-guard.toml")).replace(
+        "[tracker]\n",
+        "[tracker]\nmpe_a_um = 120.0\nmpe_b_um_per_m = 48.0\n",
+    );
+    let other_path = dir.join("ci-guard.toml");
+    std::fs::write(&other_path, other).unwrap();
+    let o = calbench(&[
+        "record",
+        path_arg(&run),
+        "--db",
+        path_arg(&db),
+        "--scenario",
+        path_arg(&other_path),
+    ]);
+    let t = text(&o);
+    let stated = ran.lines().next().unwrap().rsplit(' ').next().unwrap();
+    assert!(!o.status.success(), "{t}");
+    assert!(
+        t.contains("ci-guard.toml") && t.contains(stated) && t.contains("is not the scenario"),
+        "{t}"
+    );
+    assert!(!db.exists() || count(&db, "SELECT COUNT(*) FROM runs") == 0);
+    // The file it ran, and no file at all: both store the scenario as run.
+    let given = root().join("scenarios/ci-guard.toml");
+    calbench_ok(&[
+        "record",
+        path_arg(&run),
+        "--db",
+        path_arg(&db),
+        "--scenario",
+        path_arg(&given),
+        "--label",
+        "v1",
+    ]);
+    assert!(record(&run, &db, "v2").status.success());
+    let c = rusqlite::Connection::open(&db).unwrap();
+    let hashes: Vec<(String, String)> = c
+        .prepare("SELECT scenario_hash, scenario_text FROM runs")
+        .unwrap()
+        .query_map([], |r| Ok((r.get(0)?, r.get(1)?)))
+        .unwrap()
+        .map(Result::unwrap)
+        .collect();
+    assert_eq!(hashes.len(), 2);
+    for (h, t) in &hashes {
+        assert_eq!(h, stated);
+        assert!(ran.ends_with(t.as_str()));
+    }
+    // An edited scenario.toml is refused by its own hash.
+    let edited = planted(&run, &dir, "edited", 1.0);
+    std::fs::write(
+        edited.join("scenario.toml"),
+        ran.replace("trials = 3", "trials = 4"),
+    )
+    .unwrap();
+    let o = record(&edited, &db, "v3");
+    assert!(
+        !o.status.success() && text(&o).contains("scenario.toml") && text(&o).contains("edited"),
+        "{}",
+        text(&o)
+    );
+    // Edited figures: a mean outside its interval, a negative count of trials.
+    let s = load_json(&run.join("summary.json"));
+    let mut outside = s.clone();
+    outside["results"][0]["validation_after_mm"]["mean"] = 99.0.into();
+    let mut negative = s.clone();
+    negative["trials"] = (-5).into();
+    for (doc, key) in [(outside, "validation_after_mm.mean"), (negative, "trials")] {
+        let bad = planted(&run, &dir, "bad", 1.0);
+        std::fs::write(
+            bad.join("summary.json"),
+            serde_json::to_string_pretty(&doc).unwrap(),
+        )
+        .unwrap();
+        let o = record(&bad, &db, "v4");
+        let t = text(&o);
+        assert!(
+            !o.status.success() && t.contains("summary.json") && t.contains(key),
+            "{key}: {t}"
+        );
+    }
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 2);
+}
+
+#[test]
+fn history_orders_versions_by_version_and_flags_a_drift() {
+    let dir = tmp_dir("cli-team-history");
+    let run = guard_run(&dir, "a", "60", "1");
+    // v1.0, then v2.0 with the validation error 40 % worse, then a back-filled v0.9: the
+    // latest version is v2.0, and it regressed against v1.0.
+    let db = dir.join("order.sqlite");
+    let worse = planted(&run, &dir, "worse", 1.4);
+    let old = planted(&run, &dir, "old", 1.0);
+    assert!(record(&run, &db, "v1.0").status.success());
+    assert!(record(&worse, &db, "v2.0").status.success());
+    assert!(record(&old, &db, "v0.9").status.success());
+    let (ok, t) = regressions(&db);
+    assert!(!ok, "{t}");
+    assert!(
+        t.contains("regression: ci-guard on ")
+            && t.contains("v1.0 → v2.0")
+            && t.contains("validation_after_mm"),
+        "{t}"
+    );
+    // Three versions, each 4.9 % worse than the one before (within the tolerance of 5 %),
+    // 15 % together: a drift from v1.0 to v1.3.
+    let db = dir.join("drift.sqlite");
+    assert!(record(&run, &db, "v1.0").status.success());
+    for (k, label) in ["v1.1", "v1.2", "v1.3"].iter().enumerate() {
+        let step = planted(&run, &dir, label, 1.049f64.powi(k as i32 + 1));
+        assert!(record(&step, &db, label).status.success());
+    }
+    let (ok, t) = regressions(&db);
+    assert!(!ok, "{t}");
+    assert!(!t.contains("regression: ci-guard"), "{t}");
+    assert!(
+        t.contains("drift: ci-guard on ")
+            && t.contains("v1.0 → v1.1 → v1.2 → v1.3 (3 steps, each within the tolerance)")
+            && t.contains("validation_after_mm.mean"),
+        "{t}"
+    );
+    // A version that ran another scenario: "scenario changed", not a regression.
+    let db = dir.join("changed.sqlite");
+    assert!(record(&run, &db, "v1.0").status.success());
+    let changed = planted(&worse, &dir, "changed", 1.0);
+    let sc = read(&changed.join("scenario.toml"));
+    let body = sc
+        .split_once('\n')
+        .unwrap()
+        .1
+        .replace("count = 40", "count = 41");
+    let head = sc.lines().next().unwrap();
+    let (prefix, _) = head.rsplit_once(' ').unwrap();
+    let hash = {
+        use sha2::Digest;
+        let d = sha2::Sha256::digest(body.as_bytes());
+        d.iter().map(|b| format!("{b:02x}")).collect::<String>()
+    };
+    std::fs::write(
+        changed.join("scenario.toml"),
+        format!("{prefix} {hash}\n{body}"),
+    )
+    .unwrap();
+    assert!(record(&changed, &db, "v2.0").status.success());
+    let (ok, t) = regressions(&db);
+    assert!(ok, "{t}");
+    assert!(
+        t.contains("scenario changed: ci-guard on ") && t.contains("v1.0 → v2.0"),
+        "{t}"
+    );
+    assert!(!t.contains("regression: "), "{t}");
+}
