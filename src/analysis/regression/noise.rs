@@ -283,7 +283,8 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
     let (xa, xb): (Vec<Real>, Vec<Real>) = pairs.iter().copied().unzip();
     // The report's paired comparison of two entries, on the same per-trial values: its
     // Wilcoxon p-value decides, its mean difference is the change.
-    let test = compare((ka, kb), "", (&xa, &xb), true);
+    let m = Metric::from_key(metric).unwrap_or(Metric::ParamRmse);
+    let test = compare((ka, kb), m, (&xa, &xb));
     let mean = test.diff_mean;
     let d: Vec<Real> = pairs.iter().map(|(x, y)| y - x).collect();
     let side = |f: fn(&(Real, Real)) -> Real| {
