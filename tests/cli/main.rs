@@ -29,5 +29,6 @@ mod results;
 mod search_ecdf;
 mod strict_inputs;
 mod task;
+mod task_rows;
 mod typed;
 mod worse;

@@ -13,7 +13,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
-use super::cv::Model;
+use super::cv::{choose_model_repeated, Model, RepeatedChoice};
 use super::request::{IdentifyData, IdentifyRequest, TrackerOutcome};
 use super::validation::residual_vectors;
 use crate::error::{line_of, Error, Result};
@@ -112,6 +112,28 @@ struct TaskKeys {
     #[serde(default)]
     published: Vec<Published>,
     unpublished: Option<String>,
+    models: Option<ModelKeys>,
+}
+
+/// `[models]`: the candidate models a task fixes before any entry sees its validation rows.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelKeys {
+    candidates: Vec<String>,
+    folds: Option<usize>,
+    fold_seeds: Option<Vec<u64>>,
+}
+
+/// The candidate models a task fixes (`[models]`, docs/formats.md § 9.1) and the repeated
+/// K-fold cross-validation on its calibration rows that chooses among them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TaskModels {
+    /// The candidates, in the task file's order (the first of equals wins).
+    pub candidates: Vec<Model>,
+    /// Folds per repetition (default 5).
+    pub folds: usize,
+    /// The fold seeds, one repetition each (default 0 to 7).
+    pub fold_seeds: Vec<u64>,
 }
 
 /// `[data]`: one file and a split, or a calibration file and a validation file.
@@ -152,7 +174,8 @@ pub struct Task {
     pub name: String,
     /// The task file.
     pub path: PathBuf,
-    /// SHA-256 of its canonical text (docs/formats.md § 9.3), hex.
+    /// SHA-256 of its canonical text and of the bytes of every file it fixes (data, split,
+    /// mapping, robot; docs/formats.md § 9.3), hex.
     pub hash: String,
     /// What the task is.
     pub title: String,
@@ -168,6 +191,8 @@ pub struct Task {
     pub published: Vec<Published>,
     /// Why there is no published figure.
     pub unpublished: Option<String>,
+    /// The candidate models the task fixes, if it does.
+    pub models: Option<TaskModels>,
 }
 
 /// `NAME` (a task under `tasks/`) or the path of a task file.
@@ -253,16 +278,62 @@ impl Task {
                 return Err(bad(&key, "a figure needs its label and its source".into()));
             }
         }
+        let models = match &keys.models {
+            None => None,
+            Some(m) => {
+                if m.candidates.is_empty() {
+                    return Err(bad("models.candidates", "lists no model".into()));
+                }
+                let mut candidates = Vec::with_capacity(m.candidates.len());
+                for (i, c) in m.candidates.iter().enumerate() {
+                    let key = format!("models.candidates[{i}]");
+                    let model: Model = c.parse().map_err(|e: String| bad("models.candidates", format!("{key}: {e}")))?;
+                    if candidates.contains(&model) {
+                        return Err(bad("models.candidates", format!("{key}: `{c}` is listed twice")));
+                    }
+                    candidates.push(model);
+                }
+                let folds = m.folds.unwrap_or(5);
+                if folds < 2 {
+                    return Err(bad("models.folds", format!("{folds}: at least 2 folds")));
+                }
+                let fold_seeds = m.fold_seeds.clone().unwrap_or_else(|| (0..8).collect());
+                if fold_seeds.is_empty() {
+                    return Err(bad("models.fold_seeds", "lists no seed".into()));
+                }
+                Some(TaskModels {
+                    candidates,
+                    folds,
+                    fold_seeds,
+                })
+            }
+        };
         let name = path
             .file_stem()
             .and_then(|s| s.to_str())
             .unwrap_or("task")
             .to_string();
+        let robot = file("robot", &keys.robot)?;
+        let mapping = file("mapping", &keys.mapping)?;
         let mut canonical = canonical_text(&toml::Value::Table(table));
-        if let TaskData::Split { split_path, .. } = &data {
-            let bytes = std::fs::read(split_path).map_err(|e| Error::io(split_path, e))?;
+        let mut fixed: Vec<(&str, &Path)> = vec![("mapping", &mapping), ("robot", &robot)];
+        match &data {
+            TaskData::Split {
+                file, split_path, ..
+            } => fixed.extend([("data.file", file.as_path()), ("data.split", split_path)]),
+            TaskData::Files {
+                calibration,
+                validation,
+            } => fixed.extend([
+                ("data.calibration", calibration.as_path()),
+                ("data.validation", validation),
+            ]),
+        }
+        fixed.sort_by_key(|(k, _)| *k);
+        for (key, p) in fixed {
+            let bytes = std::fs::read(p).map_err(|e| Error::io(p, e))?;
             canonical.push_str(&format!(
-                "split.sha256 = \"{}\"\n",
+                "{key}.sha256 = \"{}\"\n",
                 sha256::sha256_hex(&bytes)
             ));
         }
@@ -271,12 +342,13 @@ impl Task {
             path: path.to_path_buf(),
             hash: sha256::sha256_hex(canonical.as_bytes()),
             title: keys.title,
-            robot: file("robot", &keys.robot)?,
-            mapping: file("mapping", &keys.mapping)?,
+            robot,
+            mapping,
             metric: keys.metric,
             data,
             published: keys.published,
             unpublished: keys.unpublished,
+            models,
         })
     }
 
@@ -309,19 +381,63 @@ impl Task {
             } => {
                 let all = self.read(file, robot)?;
                 split.check_rows(split_path, file, all.len())?;
-                Ok((
+                let (cal, val) = (
                     super::cv::subset(&all, &split.calibration),
                     super::cv::subset(&all, &split.validation),
-                ))
+                );
+                let shared = shared_rows(&cal, &val);
+                if !shared.is_empty() {
+                    let rows: Vec<(usize, usize)> = shared
+                        .iter()
+                        .map(|&(c, v)| (split.calibration[c], split.validation[v]))
+                        .collect();
+                    return Err(self.overlap(&rows, file, file));
+                }
+                Ok((cal, val))
             }
             TaskData::Files {
                 calibration,
                 validation,
-            } => Ok((
-                self.read(calibration, robot)?,
-                self.read(validation, robot)?,
-            )),
+            } => {
+                let (cal, val) = (
+                    self.read(calibration, robot)?,
+                    self.read(validation, robot)?,
+                );
+                let shared = shared_rows(&cal, &val);
+                if !shared.is_empty() {
+                    return Err(self.overlap(&shared, calibration, validation));
+                }
+                Ok((cal, val))
+            }
         }
+    }
+
+    /// The refusal of a task whose calibration and validation share the measurements `rows`
+    /// (each a calibration row of `cal` and a validation row of `val`, 0-based data rows).
+    fn overlap(&self, rows: &[(usize, usize)], cal: &Path, val: &Path) -> Error {
+        let shown: Vec<String> = rows
+            .iter()
+            .take(5)
+            .map(|(c, v)| format!("calibration row {c} = validation row {v}"))
+            .collect();
+        let more = if rows.len() > shown.len() {
+            format!(", and {} more", rows.len() - shown.len())
+        } else {
+            String::new()
+        };
+        Error::file(
+            &self.path,
+            "data",
+            format!(
+                "{} validation row(s) repeat a calibration row (the same joint values and \
+                 measured point; 0-based data rows of {} and {}): {}{more}; a validation row \
+                 must not calibrate",
+                rows.len(),
+                cal.display(),
+                val.display(),
+                shown.join(", ")
+            ),
+        )
     }
 
     /// The data file `raw` read through the mapping.
@@ -363,6 +479,96 @@ impl Task {
             q.cv = Some(5);
         }
         Ok((q, val))
+    }
+}
+
+/// The pairs (calibration row, validation row) of `cal` and `val` that hold the same
+/// measurement: the same joint values, measured point and orientation, to the bit. In
+/// validation-row order.
+pub fn shared_rows(cal: &Measurements, val: &Measurements) -> Vec<(usize, usize)> {
+    let key = |m: &Measurements, i: usize| -> Vec<u64> {
+        let mut k: Vec<u64> = m.qs[i].iter().map(|v| v.to_bits()).collect();
+        k.extend(m.points[i].iter().map(|v| v.to_bits()));
+        if let Some(q) = &m.quats {
+            k.extend(q[i].iter().map(|v| v.to_bits()));
+        }
+        k
+    };
+    let seen: std::collections::HashMap<Vec<u64>, usize> =
+        (0..cal.len()).rev().map(|i| (key(cal, i), i)).collect();
+    (0..val.len())
+        .filter_map(|v| seen.get(&key(val, v)).map(|&c| (c, v)))
+        .collect()
+}
+
+/// The candidate models of an entry, where they come from, and the repeated choice among
+/// them when the task fixes them.
+pub struct EntryModels {
+    /// The candidates considered.
+    pub candidates: Vec<Model>,
+    /// `task` (the task file's `[models]`), `command line` or `default` (`kinematic`).
+    pub fixed_by: &'static str,
+    /// The repeated K-fold choice among the task's candidates, when there are several.
+    pub choice: Option<RepeatedChoice>,
+}
+
+impl Task {
+    /// The request of an entry whose candidate models are `given` (the command line's), or
+    /// when none are given the task's own (`[models]`): several of the task's are compared
+    /// by repeated K-fold cross-validation on the calibration rows alone
+    /// ([`choose_model_repeated`]) and the chosen one is identified; else `kinematic`.
+    pub fn entry_request(
+        &self,
+        method: MethodSpec,
+        given: &[Model],
+    ) -> Result<(IdentifyRequest, Measurements, EntryModels)> {
+        if !given.is_empty() {
+            let (q, val) = self.request(method, given)?;
+            let m = EntryModels {
+                candidates: given.to_vec(),
+                fixed_by: "command line",
+                choice: None,
+            };
+            return Ok((q, val, m));
+        }
+        let Some(tm) = &self.models else {
+            let (q, val) = self.request(method, &[Model::KINEMATIC])?;
+            let m = EntryModels {
+                candidates: vec![Model::KINEMATIC],
+                fixed_by: "default",
+                choice: None,
+            };
+            return Ok((q, val, m));
+        };
+        let choice = if tm.candidates.len() > 1 {
+            let robot = self.load_robot()?;
+            let (cal, _) = self.measurements(&robot)?;
+            let setup = super::cv::CvSetup {
+                method: &method,
+                registration: super::Registration::Identify,
+                seed: 0,
+                fold_seed: 0,
+                fixed: &[],
+            };
+            Some(choose_model_repeated(
+                &robot,
+                &tm.candidates,
+                &cal,
+                tm.folds,
+                &tm.fold_seeds,
+                &setup,
+            )?)
+        } else {
+            None
+        };
+        let chosen = tm.candidates[choice.as_ref().map_or(0, |c| c.best)];
+        let (q, val) = self.request(method, &[chosen])?;
+        let m = EntryModels {
+            candidates: tm.candidates.clone(),
+            fixed_by: "task",
+            choice,
+        };
+        Ok((q, val, m))
     }
 }
 
@@ -413,6 +619,9 @@ pub struct TaskEntry<'a> {
     pub candidates: &'a [Model],
     /// `calbench`, or `python:<name>` for a Python method.
     pub entrant: String,
+    /// Where the candidates came from and the repeated choice among a task's own
+    /// ([`Task::entry_request`]); `None`: given by the caller.
+    pub origin: Option<&'a EntryModels>,
 }
 
 impl TaskEntry<'_> {
@@ -442,9 +651,18 @@ impl TaskEntry<'_> {
             .map(|v| v.norm())
             .collect();
         let (value, ci) = self.task.metric.of(&errors);
-        let (models, kinematic) = Self::model_terms(outcome, self.candidates);
+        let (models, kinematic) = match self.origin.and_then(|o| o.choice.as_ref()) {
+            // The task's candidates, chosen before the request: the request holds one.
+            Some(c) => Self::model_terms(outcome, &[self.candidates_considered()[c.best]]),
+            None => Self::model_terms(outcome, self.candidates),
+        };
         let open = !kinematic || self.entrant != "calbench";
         Ok(self.record(value, ci, models, open))
+    }
+
+    /// The candidate models considered: the task's, or the caller's.
+    fn candidates_considered(&self) -> &[Model] {
+        self.origin.map_or(self.candidates, |o| &o.candidates)
     }
 
     /// `task.json` of an entry with the figure `value` and interval `ci`, the model terms
@@ -467,7 +685,10 @@ impl TaskEntry<'_> {
             "division": if open { Division::Open } else { Division::Closed },
             "method": self.method,
             "models": models,
-            "chosen_by": if self.candidates.len() > 1 { "cv" } else { "given" },
+            "chosen_by": if self.candidates_considered().len() > 1 { "cv" } else { "given" },
+            "candidates": self.candidates_considered().iter().map(Model::name).collect::<Vec<_>>(),
+            "candidates_fixed_by": self.origin.map_or("caller", |o| o.fixed_by),
+            "cv_choice": self.origin.and_then(|o| o.choice.as_ref()),
             "entrant": self.entrant,
             "calbench_version": env!("CARGO_PKG_VERSION"),
             "git_commit": git_commit(t.path.parent().unwrap_or(Path::new("."))),
