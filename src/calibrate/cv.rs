@@ -363,7 +363,8 @@ impl FromStr for Model {
 /// [`MAX_JOINTS`]).
 fn order_term(term: &str) -> Option<(usize, usize)> {
     let (n, j) = term.strip_prefix('h')?.split_once('q')?;
-    let plain = |s: &str| !s.is_empty() && !s.starts_with('0') && s.bytes().all(|b| b.is_ascii_digit());
+    let plain =
+        |s: &str| !s.is_empty() && !s.starts_with('0') && s.bytes().all(|b| b.is_ascii_digit());
     if !plain(n) || !plain(j) {
         return None;
     }

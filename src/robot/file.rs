@@ -432,7 +432,10 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
         let h: Vec<Real> = (0..HARMONIC_TERMS)
             .map(|k| g(Param::Harmonic(j, k)))
             .collect();
-        let used = h.iter().rposition(|v| *v != 0.0).map_or(0, |k| 2 * (k / 2 + 1));
+        let used = h
+            .iter()
+            .rposition(|v| *v != 0.0)
+            .map_or(0, |k| 2 * (k / 2 + 1));
         if used > 0 {
             let list: Vec<String> = h[..used].iter().map(|v| self::num(*v, false)).collect();
             let _ = writeln!(s, "harmonics = [{}]", list.join(", "));

@@ -19,9 +19,10 @@ use crate::numeric::{Real, Vec3};
 use crate::robot::compliance::masses_with;
 use crate::robot::{Chain, ChainVars, JointType, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
-/// Largest magnitude of a gravity-basis coefficient, rad per N·m: a deflection of 0.1 rad
-/// under a weight of 1 kN at 1 m — far beyond any arm, small enough to stay a correction.
-pub const MAX_GRAVITY_RAD_PER_NM: Real = 1e-4;
+/// Largest magnitude of a gravity-basis coefficient, rad per N·m of a 1 N weight's torque: a
+/// compliance of 1e-3 rad/(N·m) times a weight of 100 N, a deflection of 0.1 rad on a lever of
+/// 1 m — far beyond any arm, small enough to stay a correction.
+pub const MAX_GRAVITY_RAD_PER_NM: Real = 0.1;
 
 /// The torques of the basis at one pose: `τ[j][l]`, N·m.
 pub type Torques = [[Real; GRAVITY_POINTS]; MAX_JOINTS];

@@ -269,7 +269,9 @@ mod tests {
             let p = Param::Gravity(6, l);
             assert_eq!(Param::parse(&p.to_string()), Some(p), "{p}");
         }
-        for bad in ["hs0", "h1s1", "h17s1", "h02s1", "hx1", "h2", "hs", "g1", "ge0"] {
+        for bad in [
+            "hs0", "h1s1", "h17s1", "h02s1", "hx1", "h2", "hs", "g1", "ge0",
+        ] {
             assert_eq!(Param::parse(bad), None, "{bad}");
         }
         for bad in ["theta0", "theta", "x1", "base.q", "a1b", "d-1", ""] {

@@ -7,6 +7,7 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod blocked;
 mod cli;
 mod cluster;
 mod fuzz;

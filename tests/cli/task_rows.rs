@@ -15,7 +15,10 @@ fn wam_task(dir: &Path, data: &str) -> PathBuf {
     let (head, rest) = text.split_once("[data]").unwrap();
     let published = &rest[rest.find("[[published]]").unwrap()..];
     let head = head
-        .replace("\"../examples/", &format!("\"{}/examples/", root().display()))
+        .replace(
+            "\"../examples/",
+            &format!("\"{}/examples/", root().display()),
+        )
         .replace(
             "\"barrett-wam.mapping.toml\"",
             &format!(
@@ -93,7 +96,10 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
         ),
     );
     let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
-    assert!(!o.status.success(), "a validation file equal to the calibration file ran");
+    assert!(
+        !o.status.success(),
+        "a validation file equal to the calibration file ran"
+    );
     assert!(!d.join("out").exists(), "nothing is written");
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(

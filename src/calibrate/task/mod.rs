@@ -287,9 +287,14 @@ impl Task {
                 let mut candidates = Vec::with_capacity(m.candidates.len());
                 for (i, c) in m.candidates.iter().enumerate() {
                     let key = format!("models.candidates[{i}]");
-                    let model: Model = c.parse().map_err(|e: String| bad("models.candidates", format!("{key}: {e}")))?;
+                    let model: Model = c
+                        .parse()
+                        .map_err(|e: String| bad("models.candidates", format!("{key}: {e}")))?;
                     if candidates.contains(&model) {
-                        return Err(bad("models.candidates", format!("{key}: `{c}` is listed twice")));
+                        return Err(bad(
+                            "models.candidates",
+                            format!("{key}: `{c}` is listed twice"),
+                        ));
                     }
                     candidates.push(model);
                 }

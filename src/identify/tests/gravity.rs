@@ -18,19 +18,22 @@ fn setup() -> (Robot, Vec<Param>) {
     let mut extra = crate::robot::gravity_basis::params(&nominal);
     extra.extend([Param::Harmonic(0, 22), Param::Harmonic(0, 23)]);
     let kept = identifiable_extension(&nominal, &params, &extra, Measure::Position);
-    assert!(kept.iter().all(|p| !matches!(p, Param::Gravity(0, _))), "{kept:?}");
+    assert!(
+        kept.iter().all(|p| !matches!(p, Param::Gravity(0, _))),
+        "{kept:?}"
+    );
     assert!(kept.contains(&Param::Gravity(1, 2)) && kept.contains(&Param::Harmonic(0, 23)));
     params.extend(kept);
     (nominal, params)
 }
 
-/// 0.2 mm and 1 mrad on the geometry; 2–4e-6 rad/(N·m) on the gravity basis (some 0.5 to
-/// 3 mrad under a weight of 1 kN on a lever of 1 m); 0.3 mrad on the harmonic.
+/// 0.2 mm and 1 mrad on the geometry; 0.5–1e-3 rad/(N·m) on the gravity basis (the sag of
+/// a compliance of 5e-6 rad/(N·m) under a weight of 100–200 N); 0.3 mrad on the harmonic.
 fn errors(params: &[Param]) -> DVector<Real> {
     DVector::from_iterator(
         params.len(),
         params.iter().enumerate().map(|(i, p)| match p {
-            Param::Gravity(j, l) => 2e-6 * (1.0 + ((j + l) % 2) as Real) * [1.0, -1.0][l % 2],
+            Param::Gravity(j, l) => 5e-4 * (1.0 + ((j + l) % 2) as Real) * [1.0, -1.0][l % 2],
             Param::Harmonic(..) => 3e-4 * [1.0, -1.0][i % 2],
             p if p.is_length() => 0.2 * [1.0, -1.0][i % 2],
             _ => 1e-3 * [1.0, -1.0][i % 2],
@@ -72,11 +75,7 @@ fn gravity_and_high_order_columns_match_finite_differences() {
     for c in 0..n {
         // Steps sized to each column: a gravity coefficient moves the point by ~1e3 mm per
         // unit.
-        let h = if matches!(params[c], Param::Gravity(..)) {
-            1e-9
-        } else {
-            1e-6
-        };
+        let h = 1e-6;
         let mut xp = x0.clone();
         xp[c] += h;
         let mut xm = x0.clone();
@@ -86,7 +85,7 @@ fn gravity_and_high_order_columns_match_finite_differences() {
         let fd = (&rm - &rp) / (2.0 * h);
         let scale = 1.0 + fd.amax();
         let err = (&fd - j.column(c)).amax();
-        assert!(err < 2e-3 * scale, "{}: |J − FD| = {err:e}", params[c]);
+        assert!(err < 5e-3 * scale, "{}: |J − FD| = {err:e}", params[c]);
         if matches!(params[c], Param::Gravity(..) | Param::Harmonic(..)) {
             assert!(fd.amax() > 1.0, "{}: column ≈ 0", params[c]);
         }
@@ -96,7 +95,7 @@ fn gravity_and_high_order_columns_match_finite_differences() {
     let x0 = DVector::zeros(n);
     p.evaluate(&x0, &mut r, &mut j);
     for c in (0..n).filter(|&c| matches!(params[c], Param::Gravity(..))) {
-        let h = 1e-9;
+        let h = 1e-6;
         let mut xp = x0.clone();
         xp[c] += h;
         let mut xm = x0.clone();
@@ -105,7 +104,7 @@ fn gravity_and_high_order_columns_match_finite_differences() {
         p.evaluate(&xm, &mut rm, &mut jj);
         let fd = (&rm - &rp) / (2.0 * h);
         let err = (&fd - j.column(c)).amax();
-        assert!(err < 1e-5 * (1.0 + fd.amax()), "{}: {err:e}", params[c]);
+        assert!(err < 1e-6 * (1.0 + fd.amax()), "{}: {err:e}", params[c]);
     }
 }
 
@@ -120,10 +119,10 @@ fn gravity_and_high_order_coefficients_are_recovered_noise_free() {
     let d = data(&nominal, &truth, 300);
     let p = d.problem(&nominal, &params, Measure::Position).unwrap();
     let out = solve(&LmOptions::default(), &p, &DVector::zeros(params.len()));
-    assert!(out.rms_residual < 1e-8, "rms {:e}", out.rms_residual);
+    assert!(out.rms_residual < 1e-7, "rms {:e}", out.rms_residual);
     for (c, q) in params.iter().enumerate() {
         let tol = match q {
-            Param::Gravity(..) => 1e-12,
+            Param::Gravity(..) => 1e-9,
             q if q.is_length() => 1e-6,
             _ => 1e-9,
         };
@@ -137,7 +136,10 @@ fn gravity_and_high_order_coefficients_are_recovered_noise_free() {
     // robot.toml carries the model: written, read back, the same points.
     let got = p.robot_with(&out.x);
     let text = crate::robot::robot_to_toml(&got);
-    assert!(text.contains("gravity = [") && text.contains("harmonics = ["), "{text}");
+    assert!(
+        text.contains("gravity = [") && text.contains("harmonics = ["),
+        "{text}"
+    );
     let dir = std::env::temp_dir().join(format!("calbench-gravity-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let f = dir.join("robot.toml");
@@ -146,8 +148,8 @@ fn gravity_and_high_order_coefficients_are_recovered_noise_free() {
     let _ = std::fs::remove_dir_all(&dir);
     let (cb, ct) = (back.chain(), truth.chain());
     for q in &d.qs[..10] {
-        let e =
-            loaded_fk(&back, &cb, q, 0.0).unwrap().pos - loaded_fk(&truth, &ct, q, 0.0).unwrap().pos;
+        let e = loaded_fk(&back, &cb, q, 0.0).unwrap().pos
+            - loaded_fk(&truth, &ct, q, 0.0).unwrap().pos;
         assert!(e.norm() < 1e-8, "{e}");
     }
     // Without the basis the same data leave a residual the size of the sag.
@@ -165,12 +167,15 @@ fn gravity_and_high_order_coefficients_are_recovered_noise_free() {
 fn gravity_coefficients_only_where_their_weight_loads_the_joint() {
     let (nominal, _) = setup();
     let mut bad = nominal.clone();
-    bad.set(Param::Gravity(4, 0), 1e-6);
+    bad.set(Param::Gravity(4, 0), 1e-3);
     let issue = bad.check().unwrap_err();
-    assert!(issue.place.contains("gravity") && issue.msg.contains("ge5"), "{issue:?}");
+    assert!(
+        issue.place.contains("gravity") && issue.msg.contains("ge5"),
+        "{issue:?}"
+    );
     bad.set(Param::Gravity(4, 0), 0.0);
     bad.set(Param::Gravity(4, 2), 1.0);
     assert!(bad.check().unwrap_err().msg.contains("within"));
-    bad.set(Param::Gravity(4, 2), 1e-6);
+    bad.set(Param::Gravity(4, 2), 1e-3);
     assert!(bad.check().is_ok());
 }
