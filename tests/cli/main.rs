@@ -10,6 +10,7 @@ mod common;
 mod blocked;
 mod cli;
 mod cluster;
+mod fixed_models;
 mod fuzz;
 mod guo;
 mod harmonics;

@@ -150,7 +150,7 @@ fn gravity_and_high_order_coefficients_are_recovered_noise_free() {
     for q in &d.qs[..10] {
         let e = loaded_fk(&back, &cb, q, 0.0).unwrap().pos
             - loaded_fk(&truth, &ct, q, 0.0).unwrap().pos;
-        assert!(e.norm() < 1e-8, "{e}");
+        assert!(e.norm() < 1e-6, "{e}");
     }
     // Without the basis the same data leave a residual the size of the sag.
     let kin: Vec<Param> = params
