@@ -70,6 +70,7 @@ pub(crate) fn task<'py>(
                 method: method_name,
                 candidates: &candidates,
                 entrant,
+                origin: None,
             };
             let j = entry.json(&o, &val)?;
             let text = serde_json::to_string_pretty(&j)

@@ -14,7 +14,9 @@ use crate::numeric::rng::stream;
 use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
 use crate::robot::identifiability::identifiable_extension;
-use crate::robot::{param_sets, Convention, JointType, Param, Robot};
+use crate::robot::{
+    param_sets, Convention, JointType, Param, Robot, MAX_HARMONIC_ORDER, MAX_JOINTS,
+};
 
 /// `--holdout LAST/EVERY`: of every `every` consecutive rows, the last `last` are held out
 /// for validation (`3/10`: rows whose 0-based index % 10 ≥ 7).
@@ -182,6 +184,13 @@ pub struct Model {
     /// beside the kinematic parameters over generic poses ([`Param::Harmonic`],
     /// [`identifiable_extension`]).
     pub harmonics: u8,
+    /// The mass-free gravity basis ([`Param::Gravity`], [`crate::robot::gravity_basis`]):
+    /// the joint deflections of unit weights at the elbow, the wrist centre and the tool
+    /// point, with free coefficients (no masses needed).
+    pub gravity: bool,
+    /// Harmonics of chosen orders on chosen joints (`h12q1`: `sin 12q1`, `cos 12q1`): per
+    /// joint (0-based), bit `n − 1` for order `n`.
+    pub orders: [u16; MAX_JOINTS],
 }
 
 impl Model {
@@ -190,27 +199,40 @@ impl Model {
         beta: false,
         compliance: false,
         harmonics: 0,
+        gravity: false,
+        orders: [0; MAX_JOINTS],
     };
 
     /// Whether the model is kinematic only (β included): a task's closed division.
     pub fn is_kinematic(&self) -> bool {
-        !self.compliance && self.harmonics == 0
+        !self.compliance && self.harmonics == 0 && !self.gravity && self.orders == [0; MAX_JOINTS]
     }
 
-    /// `kinematic`, or its terms joined by `+` in the order `beta`, `compliance`,
-    /// `harmonics`/`harmonics2` (`beta+compliance`, `beta+harmonics2`).
+    /// `kinematic`, or its terms joined by `+` in the order `beta`, `compliance`, `gravity`,
+    /// `harmonics`/`harmonics2`, then each `h{n}q{j}` by joint and order
+    /// (`beta+compliance`, `gravity+harmonics+h12q1`).
     pub fn name(&self) -> String {
-        let mut terms = Vec::new();
+        let mut terms: Vec<String> = Vec::new();
         if self.beta {
-            terms.push("beta");
+            terms.push("beta".into());
         }
         if self.compliance {
-            terms.push("compliance");
+            terms.push("compliance".into());
+        }
+        if self.gravity {
+            terms.push("gravity".into());
         }
         match self.harmonics {
             0 => {}
-            1 => terms.push("harmonics"),
-            _ => terms.push("harmonics2"),
+            1 => terms.push("harmonics".into()),
+            _ => terms.push("harmonics2".into()),
+        }
+        for (j, bits) in self.orders.iter().enumerate() {
+            for n in 1..=MAX_HARMONIC_ORDER {
+                if bits & (1 << (n - 1)) != 0 {
+                    terms.push(format!("h{n}q{}", j + 1));
+                }
+            }
         }
         if terms.is_empty() {
             "kinematic".into()
@@ -222,7 +244,10 @@ impl Model {
     /// The robot to identify (for β, a `dh` robot as `dh_beta` with β = 0: the same
     /// kinematics) and the parameters: those `identify` takes for measured data
     /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances
-    /// and the identifiable joint-angle harmonics, less the `fixed` ones.
+    /// and the identifiable joint-angle harmonics and gravity-basis terms (harmonics first,
+    /// then the gravity basis, then the chosen orders), less the `fixed` ones. Fails when a
+    /// chosen order names a joint the robot does not have or one that is not revolute, or the
+    /// gravity basis is asked of a robot of fewer than four joints.
     pub fn robot_and_params(
         &self,
         nominal: &Robot,
@@ -244,20 +269,59 @@ impl Model {
                     .map_err(|e| e.of_option(crate::error::Opt::Models))?,
             );
         }
+        // Every revolute joint's terms that the poses of a generic set can tell apart from
+        // the kinematic parameters and from each other: joint 1's harmonics although θ1 is
+        // left to base.rz (a constant offset is, sin q1 and cos q1 are not), not the last
+        // joint's when the tool point lies on its axis.
+        let mut extra: Vec<Param> = Vec::new();
         if self.harmonics > 0 {
-            // Every revolute joint's terms that the poses of a generic set can tell apart
-            // from the kinematic parameters and from each other: joint 1's although θ1 is
-            // left to base.rz (a constant offset is, sin q1 and cos q1 are not), not the last
-            // joint's when the tool point lies on its axis.
             let terms = 2 * usize::from(self.harmonics.min(2));
-            let harmonic: Vec<Param> = (0..robot.dof())
-                .filter(|&j| robot.joints[j].kind == JointType::Revolute)
-                .flat_map(|j| (0..terms).map(move |k| Param::Harmonic(j, k)))
-                .collect();
+            extra.extend(
+                (0..robot.dof())
+                    .filter(|&j| robot.joints[j].kind == JointType::Revolute)
+                    .flat_map(|j| (0..terms).map(move |k| Param::Harmonic(j, k))),
+            );
+        }
+        if self.gravity {
+            let basis = crate::robot::gravity_basis::params(&robot);
+            if basis.is_empty() {
+                return Err(Error::setting(
+                    "--models",
+                    format!(
+                        "`gravity`: robot \"{}\" has {} joints; the gravity basis needs an \
+                         elbow and a wrist centre (at least four joints)",
+                        robot.name,
+                        robot.dof()
+                    ),
+                ));
+            }
+            extra.extend(basis);
+        }
+        for (j, bits) in self.orders.iter().enumerate() {
+            for n in (1..=MAX_HARMONIC_ORDER).filter(|n| bits & (1 << (n - 1)) != 0) {
+                if j >= robot.dof() || robot.joints[j].kind != JointType::Revolute {
+                    return Err(Error::setting(
+                        "--models",
+                        format!(
+                            "`h{n}q{}`: robot \"{}\" has no revolute joint {}",
+                            j + 1,
+                            robot.name,
+                            j + 1
+                        ),
+                    ));
+                }
+                for k in [2 * (n - 1), 2 * (n - 1) + 1] {
+                    if !extra.contains(&Param::Harmonic(j, k)) {
+                        extra.push(Param::Harmonic(j, k));
+                    }
+                }
+            }
+        }
+        if !extra.is_empty() {
             params.extend(identifiable_extension(
                 &robot,
                 &params,
-                &harmonic,
+                &extra,
                 data.measure(),
             ));
         }
@@ -269,8 +333,10 @@ impl Model {
 impl FromStr for Model {
     type Err = String;
 
-    /// `kinematic`, `beta`, `compliance`, `harmonics` (first harmonic), `harmonics2` (first
-    /// and second), or terms joined by `+` (`beta+compliance`, `beta+harmonics`).
+    /// `kinematic`, `beta`, `compliance`, `gravity` (the mass-free gravity basis),
+    /// `harmonics` (first harmonic), `harmonics2` (first and second), `h{n}q{j}` (the
+    /// harmonic of order n, 1 to 16, of joint j), or terms joined by `+` (`beta+compliance`,
+    /// `gravity+harmonics+h12q1`).
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let mut m = Model::KINEMATIC;
         for term in s.split('+').map(str::trim) {
@@ -278,18 +344,36 @@ impl FromStr for Model {
                 "kinematic" => {}
                 "beta" => m.beta = true,
                 "compliance" => m.compliance = true,
+                "gravity" => m.gravity = true,
                 "harmonics" => m.harmonics = m.harmonics.max(1),
                 "harmonics2" => m.harmonics = 2,
                 other => {
-                    return Err(format!(
-                        "unknown model term `{other}`; known: kinematic, beta, compliance, \
-                         harmonics, harmonics2 (joined by +)"
-                    ))
+                    let Some((n, j)) = order_term(other) else {
+                        return Err(format!(
+                            "unknown model term `{other}`; known: kinematic, beta, compliance, \
+                             gravity, harmonics, harmonics2, h{{n}}q{{j}} (order n of 1 to \
+                             {MAX_HARMONIC_ORDER} on joint j, `h12q1`; joined by +)"
+                        ));
+                    };
+                    m.orders[j - 1] |= 1 << (n - 1);
                 }
             }
         }
         Ok(m)
     }
+}
+
+/// `h{n}q{j}`: the order n (1 to [`MAX_HARMONIC_ORDER`]) and the joint j (1 to
+/// [`MAX_JOINTS`]).
+fn order_term(term: &str) -> Option<(usize, usize)> {
+    let (n, j) = term.strip_prefix('h')?.split_once('q')?;
+    let plain =
+        |s: &str| !s.is_empty() && !s.starts_with('0') && s.bytes().all(|b| b.is_ascii_digit());
+    if !plain(n) || !plain(j) {
+        return None;
+    }
+    let (n, j): (usize, usize) = (n.parse().ok()?, j.parse().ok()?);
+    ((1..=MAX_HARMONIC_ORDER).contains(&n) && (1..=MAX_JOINTS).contains(&j)).then_some((n, j))
 }
 
 /// Each model's cross-validation on the same folds, and the index of the best (lowest CV
@@ -312,6 +396,93 @@ pub fn choose_model(
         .min_by(|&a, &b| cvs[a].rms.total_cmp(&cvs[b].rms))
         .unwrap_or(0);
     Ok((cvs, best))
+}
+
+/// The choice among candidate models by repeated K-fold cross-validation: the same
+/// candidates on the folds of several fold seeds, the best the lowest mean CV RMS over the
+/// seeds, and how stable that choice is (at how many seeds each candidate wins alone).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RepeatedChoice {
+    /// Folds per seed.
+    pub folds: usize,
+    /// The fold seeds (`--cv-seed` of each repetition).
+    pub fold_seeds: Vec<u64>,
+    /// Per candidate, in the order given.
+    pub models: Vec<RepeatedCv>,
+    /// The index of the chosen candidate: the lowest mean CV RMS (the first of equals).
+    pub best: usize,
+    /// The share of the seeds at which the chosen candidate also has the lowest CV RMS.
+    pub stability: Real,
+}
+
+/// One candidate's cross-validation at every fold seed of a [`RepeatedChoice`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RepeatedCv {
+    /// The model's name ([`Model::name`]).
+    pub model: String,
+    /// The number of parameters identified.
+    pub parameters: usize,
+    /// Its CV RMS (mm) at each fold seed.
+    pub rms: Vec<Real>,
+    /// Their mean (mm).
+    pub mean: Real,
+    /// At how many seeds it has the lowest CV RMS of the candidates.
+    pub wins: usize,
+}
+
+/// [`choose_model`] at each of `fold_seeds` (the setup's own fold seed ignored), and the
+/// candidate with the lowest mean CV RMS over them. Fails on an empty list of seeds.
+pub fn choose_model_repeated(
+    nominal: &Robot,
+    models: &[Model],
+    data: &Measurements,
+    k: usize,
+    fold_seeds: &[u64],
+    s: &CvSetup,
+) -> Result<RepeatedChoice> {
+    if fold_seeds.is_empty() || models.is_empty() {
+        return Err(Error::setting(
+            "fold_seeds",
+            "a repeated cross-validation needs at least one fold seed and one model",
+        ));
+    }
+    let mut out: Vec<RepeatedCv> = Vec::with_capacity(models.len());
+    for &fold_seed in fold_seeds {
+        let setup = CvSetup {
+            fold_seed,
+            fixed: s.fixed,
+            method: s.method,
+            registration: s.registration,
+            seed: s.seed,
+        };
+        let (cvs, best) = choose_model(nominal, models, data, k, &setup)?;
+        for (i, cv) in cvs.into_iter().enumerate() {
+            if out.len() <= i {
+                out.push(RepeatedCv {
+                    model: cv.model.clone(),
+                    parameters: cv.parameters,
+                    rms: Vec::new(),
+                    mean: 0.0,
+                    wins: 0,
+                });
+            }
+            out[i].rms.push(cv.rms);
+        }
+        out[best].wins += 1;
+    }
+    for m in &mut out {
+        m.mean = m.rms.iter().sum::<Real>() / m.rms.len() as Real;
+    }
+    let best = (0..out.len())
+        .min_by(|&a, &b| out[a].mean.total_cmp(&out[b].mean))
+        .unwrap_or(0);
+    Ok(RepeatedChoice {
+        folds: k,
+        fold_seeds: fold_seeds.to_vec(),
+        stability: out[best].wins as Real / fold_seeds.len() as Real,
+        models: out,
+        best,
+    })
 }
 
 #[cfg(test)]
@@ -343,6 +514,13 @@ mod tests {
         assert!(m.beta && m.compliance);
         assert_eq!(m.name(), "beta+compliance");
         assert!("harmonic".parse::<Model>().is_err());
+        let m: Model = "gravity+h12q1+harmonics+h3q2".parse().unwrap();
+        assert!(m.gravity && m.harmonics == 1 && !m.is_kinematic());
+        assert_eq!(m.name(), "gravity+harmonics+h12q1+h3q2");
+        assert_eq!(m.name().parse::<Model>().unwrap(), m);
+        for bad in ["h0q1", "h17q1", "h12q0", "h12q17", "h12", "hq1", "h012q1"] {
+            assert!(bad.parse::<Model>().is_err(), "{bad}");
+        }
     }
 
     /// Noise-free data of a robot with errors: every fold's held-out points are predicted
@@ -372,8 +550,7 @@ mod tests {
         assert_eq!(cv.fold_rms.len(), 4);
         let (robot, _) = Model {
             beta: true,
-            compliance: false,
-            harmonics: 0,
+            ..Model::KINEMATIC
         }
         .robot_and_params(&nominal, &data, Registration::Identify, &[])
         .unwrap();

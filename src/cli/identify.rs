@@ -71,8 +71,10 @@ pub struct IdentifyArgs {
     pub cv_seed: u64,
     /// Candidate models compared by their K-fold CV RMS (K from --cv, default 5): terms
     /// `kinematic`, `beta` (Hayati's β where identifiable), `compliance` (the gravity joints;
-    /// needs link masses), `harmonics`, `harmonics2` (joint-angle harmonics of the revolute
-    /// joints), joined by `+`; the best is identified.
+    /// needs link masses), `gravity` (the mass-free gravity basis: unit weights at the elbow,
+    /// the wrist centre and the tool point), `harmonics`, `harmonics2` (joint-angle harmonics
+    /// of the revolute joints), `h{n}q{j}` (order n of joint j, `h12q1`), joined by `+`; the
+    /// best is identified.
     #[arg(long, value_delimiter = ',', conflicts_with = "compliance")]
     pub models: Vec<calbench::calibrate::cv::Model>,
     /// The identified parameters (comma-separated names, e.g. a paper's model); default: the
@@ -343,6 +345,13 @@ fn compensated_urdf(
             "--export",
             "a URDF cannot carry the joint-angle harmonics of the chosen model; use \
              `--export toml` (robot.toml's `harmonics` key) or a model without harmonics",
+        ));
+    }
+    if wants_urdf && calbench::robot::gravity_basis::has_gravity(compensated) {
+        return Err(calbench::Error::setting(
+            "--export",
+            "a URDF cannot carry the gravity basis of the chosen model; use `--export toml` \
+             (robot.toml's `gravity` key) or a model without it",
         ));
     }
     if !calbench::robot::urdf::is_urdf(robot) {

@@ -34,8 +34,8 @@ pub struct TaskArgs {
     /// The identification method, with its default options.
     #[arg(long, value_parser = super::entry_of(METHODS, |m| m.name, |m| m.summary))]
     pub method: &'static MethodEntry,
-    /// Candidate models (terms `kinematic`, `beta`, `compliance`, `harmonics`,
-    /// `harmonics2`, joined by `+`);
+    /// Candidate models (terms `kinematic`, `beta`, `compliance`, `gravity`, `harmonics`,
+    /// `harmonics2`, `h{n}q{j}`, joined by `+`);
     /// several are compared by 5-fold cross-validation on the calibration rows alone and the
     /// best is identified. Default: `kinematic`.
     #[arg(long, value_delimiter = ',')]
@@ -55,12 +55,8 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     super::guard_out(&args.out, &OUTPUTS, [&path, &task.robot, &task.mapping])?;
     check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
-    let candidates = if args.models.is_empty() {
-        vec![Model::KINEMATIC]
-    } else {
-        args.models.clone()
-    };
-    let (request, val) = task.request(spec, &candidates)?;
+    let (request, val, origin) = task.entry_request(spec, &args.models)?;
+    let candidates = origin.candidates.clone();
     let IdentifyOutcome::Tracker(o) = request.run()? else {
         unreachable!("a task's data are a tracker's measurements")
     };
@@ -72,12 +68,30 @@ pub fn run(args: &TaskArgs) -> Result<()> {
         method: args.method.name.to_string(),
         candidates: &candidates,
         entrant: "calbench".into(),
+        origin: Some(&origin),
     };
     let j = entry.json(&o, &val)?;
     let text = calbench::report::run::json_text(&j)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
     write_identified_with(&args.out, &record, &additions(&o), &[("task.json", text)])?;
+    if let Some(c) = &origin.choice {
+        out!(
+            "  the task's candidates, {}-fold CV repeated over fold seeds {:?}:",
+            c.folds,
+            c.fold_seeds
+        );
+        for (i, m) in c.models.iter().enumerate() {
+            out!(
+                "  {:<24} mean CV RMS {:>8.4} mm, lowest at {} of {} seeds{}",
+                m.model,
+                m.mean,
+                m.wins,
+                c.fold_seeds.len(),
+                if i == c.best { "  (chosen)" } else { "" }
+            );
+        }
+    }
     if let (Some(cvs), Some(best)) = (&o.record.cv_models, o.record.best_model()) {
         for (i, m) in cvs.iter().enumerate() {
             out!(

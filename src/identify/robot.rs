@@ -22,7 +22,7 @@ use crate::numeric::rng::Rng;
 use crate::numeric::{Frame, Mat3, Real, Vec3};
 use crate::robot::compliance::{deflect_vars, gravity_torques_vars};
 use crate::robot::jacobian::{log_orientation_rows, pose_rows4, pose_rows_vars, Columns, LANES};
-use crate::robot::{Chain, ChainVars, JointType, Param, Robot, MAX_JOINTS};
+use crate::robot::{Chain, ChainVars, JointType, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// A [`LeastSquares`] problem over a robot's parameter errors.
 #[derive(Debug)]
@@ -65,6 +65,10 @@ pub struct RobotProblem<'a> {
     /// Whether the model has joint-angle harmonics (identified, or in the nominal robot):
     /// each pose's chain variables are then offset by them ([`crate::robot::harmonics`]).
     harmonic: bool,
+    /// Whether the model has the mass-free gravity basis (identified, or in the nominal
+    /// robot): each pose's chain variables are then offset by `Σ_l k_jl τ_jl`
+    /// ([`crate::robot::gravity_basis`]).
+    gravity: bool,
 }
 
 impl<'a> RobotProblem<'a> {
@@ -88,7 +92,7 @@ impl<'a> RobotProblem<'a> {
         }
         let known = nominal.params();
         for (i, p) in params.iter().enumerate() {
-            if let Param::Compliance(j) | Param::Harmonic(j, _) = *p {
+            if let Param::Compliance(j) | Param::Harmonic(j, _) | Param::Gravity(j, _) = *p {
                 if j >= nominal.dof() || nominal.joints[j].kind != JointType::Revolute {
                     return Err(Error::setting(
                         p.block(),
@@ -180,6 +184,7 @@ impl<'a> RobotProblem<'a> {
             .collect();
         let cols = Columns::new(params, dof);
         let harmonic = cols.has_harmonics() || crate::robot::harmonics::has_harmonics(nominal);
+        let gravity = cols.has_gravity() || crate::robot::gravity_basis::has_gravity(nominal);
         let problem = RobotProblem {
             nominal,
             params: params.to_vec(),
@@ -200,6 +205,7 @@ impl<'a> RobotProblem<'a> {
             loads: Vec::new(),
             masses: Vec::new(),
             harmonic,
+            gravity,
         };
         problem.with_payloads(None)
     }
@@ -407,7 +413,7 @@ impl RobotProblem<'_> {
                 log_orientation_rows(&rots[first + i], &f.rot, w, r, j, rows * i + 3);
             }
         };
-        if self.loads.is_empty() && !self.harmonic {
+        if self.loads.is_empty() && !self.harmonic && !self.gravity {
             // Rigid model: four points per chain walk, the rest one by one.
             let whole = vars.len() / LANES * LANES;
             for i0 in (0..whole).step_by(LANES) {
@@ -442,10 +448,18 @@ impl RobotProblem<'_> {
             if self.harmonic {
                 crate::robot::harmonics::add_offsets(values, v, &mut dv[..dof]);
             }
+            // The mass-free gravity basis: the torques of unit weights at the current
+            // geometry's elbow, wrist centre and tool point at the commanded pose; the
+            // column of k_jl is the derivative by joint j's variable times τ_jl.
+            let mut basis = [[0.0; GRAVITY_POINTS]; MAX_JOINTS];
+            if self.gravity {
+                crate::robot::gravity_basis::torques(self.nominal, chain, v, &mut basis);
+                crate::robot::gravity_basis::add_offsets(values, &basis, &mut dv[..dof]);
+            }
             let mut vd = *v;
             deflect_vars(&mut vd, &dv[..dof]);
             let f = pose_rows_vars(chain, &self.cols, &vd, self.measure, j, rows * i);
-            self.cols.fill_harmonics(v, j, rows * i, rows);
+            self.cols.fill_terms(v, &basis, j, rows * i, rows);
             for &(k, c) in &self.compliant {
                 for r in rows * i..rows * (i + 1) {
                     j[(r, c)] *= tau[k];

@@ -23,14 +23,22 @@ const UR_SEGMENTS: [&str; 6] = [
 /// `x, y, z` (m) and fixed-axis `roll, pitch, yaw` (rad). The robot's base and tool
 /// transforms and its last link's `a, α, β` are not part of the file (they stay in
 /// `robot.toml`). Refused unless the robot has six revolute joints in the `dh` or `dh_beta`
-/// convention, and when it has joint-angle harmonics (the file cannot carry them: writing the
-/// geometric part alone would leave the controller short of the model that was chosen).
+/// convention, and when it has joint-angle harmonics or a gravity basis (the file cannot carry
+/// them: writing the geometric part alone would leave the controller short of the model that
+/// was chosen).
 pub fn ur_yaml(robot: &Robot) -> Result<String> {
     if crate::robot::harmonics::has_harmonics(robot) {
         return Err(Error::option(
             crate::error::Opt::Export,
             "ur-yaml cannot carry the joint-angle harmonics of the chosen model; export \
              dh-csv or use robot.toml (its `harmonics` key)",
+        ));
+    }
+    if crate::robot::gravity_basis::has_gravity(robot) {
+        return Err(Error::setting(
+            "--export",
+            "ur-yaml cannot carry the gravity basis of the chosen model (joint deflections \
+             that depend on the pose); export dh-csv or use robot.toml (its `gravity` key)",
         ));
     }
     let six_revolute =
@@ -105,7 +113,7 @@ pub fn dh_csv(nominal: &Robot, identified: &Robot, params: &[Param], sigma: &[Re
         }
     }
     for p in all {
-        let (scale, unit) = if p.is_compliance() {
+        let (scale, unit) = if p.is_compliance() || matches!(p, Param::Gravity(..)) {
             (1.0, "rad/(N·m)")
         } else if matches!(p, Param::Harmonic(..)) {
             (1.0, "rad")
@@ -115,7 +123,7 @@ pub fn dh_csv(nominal: &Robot, identified: &Robot, params: &[Param], sigma: &[Re
             (ang, nominal.units.angle_name())
         };
         let joint = p.joint().or(match p {
-            Param::Compliance(j) | Param::Harmonic(j, _) => Some(j),
+            Param::Compliance(j) | Param::Harmonic(j, _) | Param::Gravity(j, _) => Some(j),
             _ => None,
         });
         let name = p.to_string();

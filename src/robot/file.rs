@@ -7,7 +7,7 @@ use serde::Deserialize;
 
 use super::{
     joint_place, to_internal, value_count, AngleUnit, Convention, Coupling, Joint, JointType,
-    LengthUnit, Param, Quantity, Robot, Units, HARMONIC_TERMS, MAX_JOINTS,
+    LengthUnit, Param, Quantity, Robot, Units, GRAVITY_POINTS, HARMONIC_TERMS, MAX_JOINTS,
 };
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -44,6 +44,9 @@ struct JointEntry {
     /// Joint-angle harmonic coefficients `[a, b]` or `[a, b, c, d]`, rad whatever the file's
     /// units: `Δq = a sin q + b cos q + c sin 2q + d cos 2q` (default none).
     harmonics: Option<Vec<Real>>,
+    /// Coefficients of the mass-free gravity basis (elbow, wrist centre, tool point), rad per
+    /// N·m of a 1 N weight ([`crate::robot::gravity_basis`]).
+    gravity: Option<Vec<Real>>,
 }
 
 #[derive(Deserialize)]
@@ -191,17 +194,33 @@ fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
         });
         values[Param::Compliance(j).index(n)] = e.compliance.unwrap_or(0.0);
         if let Some(h) = &e.harmonics {
-            if h.len() != 2 && h.len() != HARMONIC_TERMS {
+            if h.is_empty() || h.len() % 2 != 0 || h.len() > HARMONIC_TERMS {
                 return Err(err(
                     joint_place(j, "harmonics"),
                     format!(
-                        "must be [a, b] or [a, b, c, d] (rad), got {} values",
+                        "must be [a1, b1, a2, b2, …] (rad): sine and cosine of each order from \
+                         1, at most order {}, got {} values",
+                        HARMONIC_TERMS / 2,
                         h.len()
                     ),
                 ));
             }
             for (k, v) in h.iter().enumerate() {
                 values[Param::Harmonic(j, k).index(n)] = *v;
+            }
+        }
+        if let Some(g) = &e.gravity {
+            if g.len() != GRAVITY_POINTS {
+                return Err(err(
+                    joint_place(j, "gravity"),
+                    format!(
+                        "must be [elbow, wrist, tool] (rad per N·m), got {} values",
+                        g.len()
+                    ),
+                ));
+            }
+            for (l, v) in g.iter().enumerate() {
+                values[Param::Gravity(j, l).index(n)] = *v;
             }
         }
     }
@@ -408,20 +427,25 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
         if c != 0.0 {
             let _ = writeln!(s, "compliance = {}", self::num(c, false));
         }
-        // Harmonic coefficients (rad, small): written exactly, two or four.
+        // Harmonic coefficients (rad, small): written exactly, every order up to the highest
+        // non-zero one.
         let h: Vec<Real> = (0..HARMONIC_TERMS)
             .map(|k| g(Param::Harmonic(j, k)))
             .collect();
-        let used = if h[2] != 0.0 || h[3] != 0.0 {
-            4
-        } else if h[0] != 0.0 || h[1] != 0.0 {
-            2
-        } else {
-            0
-        };
+        let used = h
+            .iter()
+            .rposition(|v| *v != 0.0)
+            .map_or(0, |k| 2 * (k / 2 + 1));
         if used > 0 {
             let list: Vec<String> = h[..used].iter().map(|v| self::num(*v, false)).collect();
             let _ = writeln!(s, "harmonics = [{}]", list.join(", "));
+        }
+        let k: Vec<Real> = (0..GRAVITY_POINTS)
+            .map(|l| g(Param::Gravity(j, l)))
+            .collect();
+        if k.iter().any(|v| *v != 0.0) {
+            let list: Vec<String> = k.iter().map(|v| self::num(*v, false)).collect();
+            let _ = writeln!(s, "gravity = [{}]", list.join(", "));
         }
     }
     for (name, make) in [

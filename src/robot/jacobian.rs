@@ -17,7 +17,9 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::measurement::Measure;
 use crate::numeric::{rotation_vector, so3_right_jacobian_inverse, Mat3, Real, Vec3};
-use crate::robot::{Chain, ChainVars, Lanes, Op, Param, Robot, HARMONIC_TERMS, MAX_JOINTS};
+use crate::robot::{
+    Chain, ChainVars, Lanes, Op, Param, Robot, GRAVITY_POINTS, HARMONIC_TERMS, MAX_JOINTS,
+};
 
 /// Maps flat parameter indices to Jacobian columns, for a chosen parameter list.
 #[derive(Clone, Debug)]
@@ -34,8 +36,15 @@ pub struct Columns {
     /// column, or else its first harmonic's) and [`Columns::fill_harmonics`] scales it into
     /// each harmonic column.
     harmonic: [[Option<usize>; HARMONIC_TERMS]; MAX_JOINTS],
+    /// Per joint, the highest harmonic order among its columns (0: none).
+    orders: [usize; MAX_JOINTS],
     /// Whether any entry of `harmonic` is set.
     any_harmonic: bool,
+    /// Per joint, the columns of its gravity-basis coefficients ([`Param::Gravity`]), filled
+    /// like the harmonics' from the derivative by the joint's chain variable.
+    gravity: [[Option<usize>; GRAVITY_POINTS]; MAX_JOINTS],
+    /// Whether any entry of `gravity` is set.
+    any_gravity: bool,
     params: Vec<Param>,
 }
 
@@ -46,16 +55,24 @@ impl Columns {
         let mut of_param = vec![None; crate::robot::value_count(dof)];
         let mut of_var = [None; MAX_JOINTS];
         let mut harmonic = [[None; HARMONIC_TERMS]; MAX_JOINTS];
+        let mut gravity = [[None; GRAVITY_POINTS]; MAX_JOINTS];
         for (c, p) in params.iter().enumerate() {
             match *p {
                 Param::Compliance(j) => of_var[j] = Some(c),
                 Param::Harmonic(j, k) => harmonic[j][k] = Some(c),
+                Param::Gravity(j, l) => gravity[j][l] = Some(c),
                 p => of_param[p.index(dof)] = Some(c),
             }
         }
-        for (v, h) in of_var.iter_mut().zip(&harmonic) {
+        for ((v, h), g) in of_var.iter_mut().zip(&harmonic).zip(&gravity) {
             if v.is_none() {
-                *v = h.iter().flatten().next().copied();
+                *v = h.iter().chain(g).flatten().next().copied();
+            }
+        }
+        let mut orders = [0; MAX_JOINTS];
+        for (o, h) in orders.iter_mut().zip(&harmonic) {
+            if h.iter().any(Option::is_some) {
+                *o = crate::robot::harmonics::orders_used(h.iter().map(Option::is_some));
             }
         }
         Columns {
@@ -64,6 +81,9 @@ impl Columns {
             of_var,
             any_harmonic: harmonic.iter().flatten().any(Option::is_some),
             harmonic,
+            orders,
+            any_gravity: gravity.iter().flatten().any(Option::is_some),
+            gravity,
             params: params.to_vec(),
         }
     }
@@ -71,6 +91,70 @@ impl Columns {
     /// Whether any column is a harmonic coefficient ([`Param::Harmonic`]).
     pub fn has_harmonics(&self) -> bool {
         self.any_harmonic
+    }
+
+    /// Whether any column is a gravity-basis coefficient ([`Param::Gravity`]).
+    pub fn has_gravity(&self) -> bool {
+        self.any_gravity
+    }
+
+    /// Turns the rows `row0..row0 + rows` of one pose (written by [`pose_rows_vars`]) into
+    /// the columns of every joint term: the harmonics' ([`Columns::fill_harmonics`]) and the
+    /// gravity basis', `∂/∂k_jl = (∂p/∂q_j) τ_jl` with `τ` the pose's basis torques
+    /// ([`crate::robot::gravity_basis::torques`]), from the derivative by joint `j`'s chain
+    /// variable. Call it before a compliance column is scaled by its torque.
+    /// Allocation-free.
+    pub fn fill_terms(
+        &self,
+        vars: &ChainVars,
+        tau: &crate::robot::gravity_basis::Torques,
+        j: &mut DMatrix<Real>,
+        row0: usize,
+        rows: usize,
+    ) {
+        if !self.any_gravity {
+            return self.fill_harmonics(vars, j, row0, rows);
+        }
+        for (v, g) in self.gravity.iter().enumerate() {
+            let Some(src) = self.of_var[v] else { continue };
+            if g.iter().all(Option::is_none) {
+                continue;
+            }
+            // The source column may be one of the terms filled: read it once per row, and
+            // the harmonics' from a copy of the derivative when the source is a gravity
+            // column.
+            let h = &self.harmonic[v];
+            let f = crate::robot::harmonics::factors(vars.1[v].0, vars.1[v].1, self.orders[v]);
+            for r in row0..row0 + rows {
+                let d = j[(r, src)];
+                for (col, t) in g.iter().zip(&tau[v]) {
+                    if let Some(col) = *col {
+                        j[(r, col)] = d * t;
+                    }
+                }
+                for (col, fk) in h.iter().zip(f) {
+                    if let Some(col) = *col {
+                        j[(r, col)] = d * fk;
+                    }
+                }
+            }
+        }
+        // Joints with harmonics and no gravity column.
+        for (v, h) in self.harmonic.iter().enumerate() {
+            let Some(src) = self.of_var[v] else { continue };
+            if h.iter().all(Option::is_none) || self.gravity[v].iter().any(Option::is_some) {
+                continue;
+            }
+            let f = crate::robot::harmonics::factors(vars.1[v].0, vars.1[v].1, self.orders[v]);
+            for r in row0..row0 + rows {
+                let d = j[(r, src)];
+                for (col, fk) in h.iter().zip(f) {
+                    if let Some(col) = *col {
+                        j[(r, col)] = d * fk;
+                    }
+                }
+            }
+        }
     }
 
     /// Turns the rows `row0..row0 + rows` of one pose (written by [`pose_rows_vars`]) into
@@ -95,7 +179,7 @@ impl Columns {
                 continue;
             }
             let (s, c) = vars.1[v];
-            let f = crate::robot::harmonics::factors(s, c);
+            let f = crate::robot::harmonics::factors(s, c, self.orders[v]);
             for r in row0..row0 + rows {
                 let d = j[(r, src)];
                 for (col, fk) in h.iter().zip(f) {
@@ -343,9 +427,9 @@ impl<const L: usize> Rows<'_, L> {
 }
 
 /// The stacked identification Jacobian of `robot` over poses `qs` (internal units) for the
-/// parameters of `cols`: `rows(measure) · m` × `cols.len()`. Harmonic columns
-/// ([`Columns::fill_harmonics`]) are those of the chain at `robot`'s geometry, its own
-/// harmonic offsets left out (the nominal robot's, zero, for identifiability).
+/// parameters of `cols`: `rows(measure) · m` × `cols.len()`. Harmonic and gravity-basis
+/// columns ([`Columns::fill_terms`]) are those of the chain at `robot`'s geometry, its own
+/// offsets left out (the nominal robot's, zero, for identifiability).
 pub fn jacobian(
     robot: &Robot,
     cols: &Columns,
@@ -357,8 +441,13 @@ pub fn jacobian(
     let mut j = DMatrix::zeros(rows * qs.len(), cols.len());
     for (i, q) in qs.iter().enumerate() {
         pose_rows(&chain, cols, q, measure, &mut j, rows * i);
-        if cols.has_harmonics() {
-            cols.fill_harmonics(&chain.variables(q), &mut j, rows * i, rows);
+        if cols.has_harmonics() || cols.has_gravity() {
+            let vars = chain.variables(q);
+            let mut tau = [[0.0; GRAVITY_POINTS]; MAX_JOINTS];
+            if cols.has_gravity() {
+                crate::robot::gravity_basis::torques(robot, &chain, &vars, &mut tau);
+            }
+            cols.fill_terms(&vars, &tau, &mut j, rows * i, rows);
         }
     }
     j

@@ -20,6 +20,7 @@ pub mod builtin;
 mod chain;
 pub mod compliance;
 mod file;
+pub mod gravity_basis;
 pub mod harmonics;
 pub mod identifiability;
 pub mod ik;
@@ -32,7 +33,9 @@ pub mod urdf;
 
 pub use chain::{Chain, ChainVars, Lanes, Op, OpKind, OpValues, MAX_OPS};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
-pub use param::{value_count, Param, HARMONIC_TERMS, PARAMS_PER_JOINT};
+pub use param::{
+    value_count, Param, GRAVITY_POINTS, HARMONIC_TERMS, MAX_HARMONIC_ORDER, PARAMS_PER_JOINT,
+};
 
 use crate::error::{Error, Result};
 use crate::numeric::{Frame, Real};
@@ -511,7 +514,7 @@ impl Robot {
                         (format!("{part}.rpy"), Quantity::Angle)
                     }
                 }
-                Param::Compliance(_) | Param::Harmonic(..) => continue,
+                Param::Compliance(_) | Param::Harmonic(..) | Param::Gravity(..) => continue,
             };
             let unit = quantity.inner_unit();
             to_internal(quantity, v, 1.0, unit).map_err(|m| issue(place.clone(), m))?;
@@ -610,6 +613,7 @@ impl Robot {
             }
         }
         harmonics::check(self)?;
+        gravity_basis::check(self)?;
         if let Some(Coupling::Differential { l1_mm }) = self.coupling {
             to_internal(Quantity::Length, l1_mm, 1.0, "mm")
                 .ok()

@@ -9,17 +9,64 @@ type Maker = (&'static str, fn(usize) -> Param);
 pub const PARAMS_PER_JOINT: usize = 5;
 
 /// Length of the flat parameter vector of a robot with `dof` joints: the joint parameters,
-/// the six base and six tool parameters, one joint compliance per joint, then the
-/// [`HARMONIC_TERMS`] joint-angle harmonic coefficients per joint.
+/// the six base and six tool parameters, one joint compliance per joint, the
+/// [`HARMONIC_TERMS`] joint-angle harmonic coefficients per joint, then the
+/// [`GRAVITY_POINTS`] gravity-basis coefficients per joint.
 pub fn value_count(dof: usize) -> usize {
-    PARAMS_PER_JOINT * dof + 12 + dof + HARMONIC_TERMS * dof
+    PARAMS_PER_JOINT * dof + 12 + dof + HARMONIC_TERMS * dof + GRAVITY_POINTS * dof
 }
 
-/// Harmonic coefficients per joint ([`Param::Harmonic`]): sin q, cos q, sin 2q, cos 2q.
-pub const HARMONIC_TERMS: usize = 4;
+/// The highest order of a joint-angle harmonic ([`Param::Harmonic`]).
+pub const MAX_HARMONIC_ORDER: usize = 16;
 
-/// The name prefix of each harmonic term ([`Param::Harmonic`]'s second index).
-const HARMONIC_PREFIX: [&str; HARMONIC_TERMS] = ["hs", "hc", "h2s", "h2c"];
+/// Harmonic coefficients per joint ([`Param::Harmonic`]): `sin nq`, `cos nq` for each order
+/// `n` from 1 to [`MAX_HARMONIC_ORDER`].
+pub const HARMONIC_TERMS: usize = 2 * MAX_HARMONIC_ORDER;
+
+/// The points of the mass-free gravity basis ([`Param::Gravity`]): the elbow, the wrist
+/// centre and the tool point.
+pub const GRAVITY_POINTS: usize = 3;
+
+/// The name prefix of each gravity-basis point ([`Param::Gravity`]'s second index).
+const GRAVITY_PREFIX: [&str; GRAVITY_POINTS] = ["ge", "gw", "gt"];
+
+/// The name of harmonic term `k` of joint `j` (0-based): `hs`/`hc` for the first order,
+/// `h{n}s`/`h{n}c` for order `n` ≥ 2, then the joint number.
+fn harmonic_name(j: usize, k: usize) -> String {
+    let (order, part) = (k / 2 + 1, ["s", "c"][k % 2]);
+    if order == 1 {
+        format!("h{part}{}", j + 1)
+    } else {
+        format!("h{order}{part}{}", j + 1)
+    }
+}
+
+/// Parses a harmonic name (`hs3`, `hc3`, `h2s3`, `h12c1`): the joint (0-based) and term.
+fn parse_harmonic(name: &str) -> Option<Param> {
+    let rest = name.strip_prefix('h')?;
+    let digits = rest.bytes().take_while(u8::is_ascii_digit).count();
+    let order = if digits == 0 {
+        1
+    } else {
+        let n: usize = rest[..digits].parse().ok()?;
+        if !(2..=MAX_HARMONIC_ORDER).contains(&n) || rest.starts_with('0') {
+            return None;
+        }
+        n
+    };
+    let rest = &rest[digits..];
+    let part = match rest.as_bytes().first()? {
+        b's' => 0,
+        b'c' => 1,
+        _ => return None,
+    };
+    let num = &rest[1..];
+    if num.is_empty() || !num.bytes().all(|b| b.is_ascii_digit()) || num.starts_with('0') {
+        return None;
+    }
+    let j: usize = num.parse().ok()?;
+    Some(Param::Harmonic(j - 1, 2 * (order - 1) + part))
+}
 
 const PART: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
 
@@ -46,11 +93,18 @@ pub enum Param {
     /// "Elasto-geometric calibration"). Not part of [`Param::all`]: a study identifies it only when it asks to.
     Compliance(usize),
     /// Coefficient of a joint-angle harmonic (rad): joint `j`'s chain variable is offset by
-    /// `Δq_j = a_j sin q_j + b_j cos q_j + c_j sin 2q_j + d_j cos 2q_j` (encoder and gear
-    /// eccentricity); `Harmonic(j, k)` is `a_j`, `b_j`, `c_j`, `d_j` for `k` = 0..4, named
-    /// `hs`, `hc`, `h2s`, `h2c` and the joint number (docs/formats.md "Joint-angle
-    /// harmonics"). Not part of [`Param::all`]; revolute joints only.
+    /// `Δq_j = Σ_n a_jn sin n q_j + b_jn cos n q_j` (encoder and gear eccentricity, and
+    /// finer periodic errors of the drive); `Harmonic(j, k)` is `a_jn` for `k = 2(n − 1)`
+    /// and `b_jn` for `k = 2(n − 1) + 1`, named `hs`, `hc` (n = 1), `h{n}s`, `h{n}c` (n ≥ 2)
+    /// and the joint number (docs/formats.md "Joint-angle harmonics"). Not part of
+    /// [`Param::all`]; revolute joints only.
     Harmonic(usize, usize),
+    /// Coefficient of the mass-free gravity basis (rad per N·m): joint `j`'s chain variable is
+    /// offset by `Δq_j = Σ_l k_jl τ_jl(q)`, `τ_jl` the torque about joint `j`'s axis of a
+    /// weight of 1 N at the elbow (`l` = 0), the wrist centre (1) or the tool point (2)
+    /// ([`crate::robot::gravity_basis`]); named `ge`, `gw`, `gt` and the joint number. Not
+    /// part of [`Param::all`]; revolute joints only.
+    Gravity(usize, usize),
 }
 
 impl Param {
@@ -80,6 +134,9 @@ impl Param {
             Param::Tool(c) => PARAMS_PER_JOINT * dof + 6 + c,
             Param::Compliance(j) => PARAMS_PER_JOINT * dof + 12 + j,
             Param::Harmonic(j, k) => PARAMS_PER_JOINT * dof + 12 + dof + HARMONIC_TERMS * j + k,
+            Param::Gravity(j, l) => {
+                PARAMS_PER_JOINT * dof + 12 + dof + HARMONIC_TERMS * dof + GRAVITY_POINTS * j + l
+            }
         }
     }
 
@@ -105,6 +162,7 @@ impl Param {
             Param::Tool(_) => "tool",
             Param::Compliance(_) => "compliance",
             Param::Harmonic(..) => "harmonics",
+            Param::Gravity(..) => "gravity",
         }
     }
 
@@ -116,17 +174,16 @@ impl Param {
         if let Some(c) = name.strip_prefix("tool.") {
             return PART.iter().position(|p| *p == c).map(Param::Tool);
         }
-        for (k, prefix) in HARMONIC_PREFIX.iter().enumerate().rev() {
+        if name.starts_with('h') {
+            return parse_harmonic(name);
+        }
+        for (l, prefix) in GRAVITY_PREFIX.iter().enumerate() {
             if let Some(num) = name.strip_prefix(prefix) {
                 if num.is_empty() || !num.bytes().all(|b| b.is_ascii_digit()) {
                     return None;
                 }
                 let j: usize = num.parse().ok()?;
-                return if j >= 1 {
-                    Some(Param::Harmonic(j - 1, k))
-                } else {
-                    None
-                };
+                return (j >= 1).then(|| Param::Gravity(j - 1, l));
             }
         }
         // Longest prefixes first: "alpha" before "a".
@@ -162,7 +219,11 @@ impl Param {
             Param::Theta(j) | Param::D(j) | Param::A(j) | Param::Alpha(j) | Param::Beta(j) => {
                 Some(j)
             }
-            Param::Base(_) | Param::Tool(_) | Param::Compliance(_) | Param::Harmonic(..) => None,
+            Param::Base(_)
+            | Param::Tool(_)
+            | Param::Compliance(_)
+            | Param::Harmonic(..)
+            | Param::Gravity(..) => None,
         }
     }
 }
@@ -193,7 +254,8 @@ impl fmt::Display for Param {
             Param::Base(c) => write!(f, "base.{}", PART[c]),
             Param::Tool(c) => write!(f, "tool.{}", PART[c]),
             Param::Compliance(j) => write!(f, "c{}", j + 1),
-            Param::Harmonic(j, k) => write!(f, "{}{}", HARMONIC_PREFIX[k], j + 1),
+            Param::Harmonic(j, k) => f.write_str(&harmonic_name(j, k)),
+            Param::Gravity(j, l) => write!(f, "{}{}", GRAVITY_PREFIX[l], j + 1),
         }
     }
 }
@@ -215,7 +277,18 @@ mod tests {
             }
         }
         assert_eq!(Param::parse("h2c3"), Some(Param::Harmonic(2, 3)));
-        assert_eq!(Param::parse("hs0"), None);
+        assert_eq!(Param::parse("h12s1"), Some(Param::Harmonic(0, 22)));
+        assert_eq!(Param::Harmonic(0, 23).to_string(), "h12c1");
+        assert_eq!(Param::parse("gt2"), Some(Param::Gravity(1, 2)));
+        for l in 0..GRAVITY_POINTS {
+            let p = Param::Gravity(6, l);
+            assert_eq!(Param::parse(&p.to_string()), Some(p), "{p}");
+        }
+        for bad in [
+            "hs0", "h1s1", "h17s1", "h02s1", "hx1", "h2", "hs", "g1", "ge0",
+        ] {
+            assert_eq!(Param::parse(bad), None, "{bad}");
+        }
         for bad in ["theta0", "theta", "x1", "base.q", "a1b", "d-1", ""] {
             assert_eq!(Param::parse(bad), None, "{bad}");
         }

@@ -113,7 +113,12 @@ fn a_closed_and_an_open_wam_entry_recorded_rank_in_their_divisions_on_the_leader
     let d = tmp_dir("cli-harmonics-board");
     let db = d.join("db/calbench.sqlite");
     let (closed, open) = (d.join("closed"), d.join("open"));
-    task_lm(calbench_ok, &task("barrett-wam"), None, &closed);
+    task_lm(
+        calbench_ok,
+        &task("barrett-wam"),
+        Some("kinematic"),
+        &closed,
+    );
     task_lm(calbench_ok, &task("barrett-wam"), Some(MODELS), &open);
     for dir in [&closed, &open] {
         let o = calbench_ok(&["record", path_arg(dir), "--db", path_arg(&db)]);

@@ -33,7 +33,10 @@ fn check_contract(dir: &Path, name: &str, metric: &str) -> f64 {
     let keys: Vec<&str> = j.as_object().unwrap().keys().map(String::as_str).collect();
     let mut want = vec![
         "calbench_version",
+        "candidates",
+        "candidates_fixed_by",
         "chosen_by",
+        "cv_choice",
         "ci95",
         "division",
         "entrant",
@@ -84,7 +87,7 @@ fn check_contract(dir: &Path, name: &str, metric: &str) -> f64 {
 fn the_wam_task_scores_the_20_random_poses_beside_the_published_figure() {
     let d = tmp_dir("cli-task-wam");
     let out = d.join("wam");
-    let o = task_lm(calbench_ok, &task("barrett-wam"), None, &out);
+    let o = task_lm(calbench_ok, &task("barrett-wam"), Some("kinematic"), &out);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(stdout.contains("validation_mean_mm = 3.09"), "{stdout}");
     let value = check_contract(&out, "barrett-wam", "validation_mean_mm");

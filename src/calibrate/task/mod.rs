@@ -4,8 +4,11 @@
 //! figures. [`Task::request`] turns it into the one identification pipeline's request
 //! ([`IdentifyRequest`]); [`TaskEntry::json`] is the entry's `task.json`.
 
+mod entry;
 pub mod sha256;
 pub mod split;
+
+pub use entry::{shared_rows, EntryModels};
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -112,6 +115,28 @@ struct TaskKeys {
     #[serde(default)]
     published: Vec<Published>,
     unpublished: Option<String>,
+    models: Option<ModelKeys>,
+}
+
+/// `[models]`: the candidate models a task fixes before any entry sees its validation rows.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ModelKeys {
+    candidates: Vec<String>,
+    folds: Option<usize>,
+    fold_seeds: Option<Vec<u64>>,
+}
+
+/// The candidate models a task fixes (`[models]`, docs/formats.md § 9.1) and the repeated
+/// K-fold cross-validation on its calibration rows that chooses among them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TaskModels {
+    /// The candidates, in the task file's order (the first of equals wins).
+    pub candidates: Vec<Model>,
+    /// Folds per repetition (default 5).
+    pub folds: usize,
+    /// The fold seeds, one repetition each (default 0 to 7).
+    pub fold_seeds: Vec<u64>,
 }
 
 /// `[data]`: one file and a split, or a calibration file and a validation file.
@@ -152,7 +177,8 @@ pub struct Task {
     pub name: String,
     /// The task file.
     pub path: PathBuf,
-    /// SHA-256 of its canonical text (docs/formats.md § 9.3), hex.
+    /// SHA-256 of its canonical text and of the bytes of every file it fixes (data, split,
+    /// mapping, robot; docs/formats.md § 9.3), hex.
     pub hash: String,
     /// What the task is.
     pub title: String,
@@ -168,6 +194,8 @@ pub struct Task {
     pub published: Vec<Published>,
     /// Why there is no published figure.
     pub unpublished: Option<String>,
+    /// The candidate models the task fixes, if it does.
+    pub models: Option<TaskModels>,
 }
 
 /// `NAME` (a task under `tasks/`) or the path of a task file.
@@ -253,16 +281,67 @@ impl Task {
                 return Err(bad(&key, "a figure needs its label and its source".into()));
             }
         }
+        let models = match &keys.models {
+            None => None,
+            Some(m) => {
+                if m.candidates.is_empty() {
+                    return Err(bad("models.candidates", "lists no model".into()));
+                }
+                let mut candidates = Vec::with_capacity(m.candidates.len());
+                for (i, c) in m.candidates.iter().enumerate() {
+                    let key = format!("models.candidates[{i}]");
+                    let model: Model = c
+                        .parse()
+                        .map_err(|e: String| bad("models.candidates", format!("{key}: {e}")))?;
+                    if candidates.contains(&model) {
+                        return Err(bad(
+                            "models.candidates",
+                            format!("{key}: `{c}` is listed twice"),
+                        ));
+                    }
+                    candidates.push(model);
+                }
+                let folds = m.folds.unwrap_or(5);
+                if folds < 2 {
+                    return Err(bad("models.folds", format!("{folds}: at least 2 folds")));
+                }
+                let fold_seeds = m.fold_seeds.clone().unwrap_or_else(|| (0..8).collect());
+                if fold_seeds.is_empty() {
+                    return Err(bad("models.fold_seeds", "lists no seed".into()));
+                }
+                Some(TaskModels {
+                    candidates,
+                    folds,
+                    fold_seeds,
+                })
+            }
+        };
         let name = path
             .file_stem()
             .and_then(|s| s.to_str())
             .unwrap_or("task")
             .to_string();
+        let robot = file("robot", &keys.robot)?;
+        let mapping = file("mapping", &keys.mapping)?;
         let mut canonical = canonical_text(&toml::Value::Table(table));
-        if let TaskData::Split { split_path, .. } = &data {
-            let bytes = std::fs::read(split_path).map_err(|e| Error::io(split_path, e))?;
+        let mut fixed: Vec<(&str, &Path)> = vec![("mapping", &mapping), ("robot", &robot)];
+        match &data {
+            TaskData::Split {
+                file, split_path, ..
+            } => fixed.extend([("data.file", file.as_path()), ("data.split", split_path)]),
+            TaskData::Files {
+                calibration,
+                validation,
+            } => fixed.extend([
+                ("data.calibration", calibration.as_path()),
+                ("data.validation", validation),
+            ]),
+        }
+        fixed.sort_by_key(|(k, _)| *k);
+        for (key, p) in fixed {
+            let bytes = std::fs::read(p).map_err(|e| Error::io(p, e))?;
             canonical.push_str(&format!(
-                "split.sha256 = \"{}\"\n",
+                "{key}.sha256 = \"{}\"\n",
                 sha256::sha256_hex(&bytes)
             ));
         }
@@ -271,12 +350,13 @@ impl Task {
             path: path.to_path_buf(),
             hash: sha256::sha256_hex(canonical.as_bytes()),
             title: keys.title,
-            robot: file("robot", &keys.robot)?,
-            mapping: file("mapping", &keys.mapping)?,
+            robot,
+            mapping,
             metric: keys.metric,
             data,
             published: keys.published,
             unpublished: keys.unpublished,
+            models,
         })
     }
 
@@ -309,19 +389,63 @@ impl Task {
             } => {
                 let all = self.read(file, robot)?;
                 split.check_rows(split_path, file, all.len())?;
-                Ok((
+                let (cal, val) = (
                     super::cv::subset(&all, &split.calibration),
                     super::cv::subset(&all, &split.validation),
-                ))
+                );
+                let shared = shared_rows(&cal, &val);
+                if !shared.is_empty() {
+                    let rows: Vec<(usize, usize)> = shared
+                        .iter()
+                        .map(|&(c, v)| (split.calibration[c], split.validation[v]))
+                        .collect();
+                    return Err(self.overlap(&rows, file, file));
+                }
+                Ok((cal, val))
             }
             TaskData::Files {
                 calibration,
                 validation,
-            } => Ok((
-                self.read(calibration, robot)?,
-                self.read(validation, robot)?,
-            )),
+            } => {
+                let (cal, val) = (
+                    self.read(calibration, robot)?,
+                    self.read(validation, robot)?,
+                );
+                let shared = shared_rows(&cal, &val);
+                if !shared.is_empty() {
+                    return Err(self.overlap(&shared, calibration, validation));
+                }
+                Ok((cal, val))
+            }
         }
+    }
+
+    /// The refusal of a task whose calibration and validation share the measurements `rows`
+    /// (each a calibration row of `cal` and a validation row of `val`, 0-based data rows).
+    fn overlap(&self, rows: &[(usize, usize)], cal: &Path, val: &Path) -> Error {
+        let shown: Vec<String> = rows
+            .iter()
+            .take(5)
+            .map(|(c, v)| format!("calibration row {c} = validation row {v}"))
+            .collect();
+        let more = if rows.len() > shown.len() {
+            format!(", and {} more", rows.len() - shown.len())
+        } else {
+            String::new()
+        };
+        Error::file(
+            &self.path,
+            "data",
+            format!(
+                "{} validation row(s) repeat a calibration row (the same joint values and \
+                 measured point; 0-based data rows of {} and {}): {}{more}; a validation row \
+                 must not calibrate",
+                rows.len(),
+                cal.display(),
+                val.display(),
+                shown.join(", ")
+            ),
+        )
     }
 
     /// The data file `raw` read through the mapping.
@@ -413,6 +537,9 @@ pub struct TaskEntry<'a> {
     pub candidates: &'a [Model],
     /// `calbench`, or `python:<name>` for a Python method.
     pub entrant: String,
+    /// Where the candidates came from and the repeated choice among a task's own
+    /// ([`Task::entry_request`]); `None`: given by the caller.
+    pub origin: Option<&'a EntryModels>,
 }
 
 impl TaskEntry<'_> {
@@ -442,9 +569,18 @@ impl TaskEntry<'_> {
             .map(|v| v.norm())
             .collect();
         let (value, ci) = self.task.metric.of(&errors);
-        let (models, kinematic) = Self::model_terms(outcome, self.candidates);
+        let (models, kinematic) = match self.origin.and_then(|o| o.choice.as_ref()) {
+            // The task's candidates, chosen before the request: the request holds one.
+            Some(c) => Self::model_terms(outcome, &[self.candidates_considered()[c.best]]),
+            None => Self::model_terms(outcome, self.candidates),
+        };
         let open = !kinematic || self.entrant != "calbench";
         Ok(self.record(value, ci, models, open))
+    }
+
+    /// The candidate models considered: the task's, or the caller's.
+    fn candidates_considered(&self) -> &[Model] {
+        self.origin.map_or(self.candidates, |o| &o.candidates)
     }
 
     /// `task.json` of an entry with the figure `value` and interval `ci`, the model terms
@@ -467,7 +603,10 @@ impl TaskEntry<'_> {
             "division": if open { Division::Open } else { Division::Closed },
             "method": self.method,
             "models": models,
-            "chosen_by": if self.candidates.len() > 1 { "cv" } else { "given" },
+            "chosen_by": if self.candidates_considered().len() > 1 { "cv" } else { "given" },
+            "candidates": self.candidates_considered().iter().map(Model::name).collect::<Vec<_>>(),
+            "candidates_fixed_by": self.origin.map_or("caller", |o| o.fixed_by),
+            "cv_choice": self.origin.and_then(|o| o.choice.as_ref()),
             "entrant": self.entrant,
             "calbench_version": env!("CARGO_PKG_VERSION"),
             "git_commit": git_commit(t.path.parent().unwrap_or(Path::new("."))),

@@ -4,7 +4,6 @@
 use super::*;
 use crate::robot::compliance::loaded_fk;
 use crate::robot::param_sets::identified_params_tool_first;
-use crate::robot::HARMONIC_TERMS;
 
 /// irb2600 with a tool offset, its identifiable kinematic parameters and the harmonics of
 /// every joint whose θ is among them.
@@ -17,7 +16,7 @@ fn setup() -> (Robot, Vec<Param>) {
         .filter(|&j| params.contains(&Param::Theta(j)))
         .collect();
     for j in joints {
-        params.extend((0..HARMONIC_TERMS).map(|k| Param::Harmonic(j, k)));
+        params.extend((0..4).map(|k| Param::Harmonic(j, k)));
     }
     (nominal, params)
 }

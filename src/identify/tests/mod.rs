@@ -402,6 +402,7 @@ fn priors_give_the_closed_form_map_estimate() {
     assert!(free.x[2].abs() > want[2].abs());
 }
 
+mod gravity;
 mod harmonics;
 mod simulated;
 mod streamed;

@@ -1,0 +1,101 @@
+//! What an entry of a task compares and on which rows: the candidate models (the command
+//! line's, or the task's own `[models]`, chosen by repeated K-fold cross-validation on the
+//! calibration rows alone), and the check that no validation row repeats a calibration row
+//! (docs/formats.md § 9.1).
+
+use super::Task;
+use crate::calibrate::cv::{choose_model_repeated, Model, RepeatedChoice};
+use crate::calibrate::request::IdentifyRequest;
+use crate::error::Result;
+use crate::identify::MethodSpec;
+use crate::measurement::Measurements;
+
+/// The pairs (calibration row, validation row) of `cal` and `val` that hold the same
+/// measurement: the same joint values, measured point and orientation, to the bit. In
+/// validation-row order.
+pub fn shared_rows(cal: &Measurements, val: &Measurements) -> Vec<(usize, usize)> {
+    let key = |m: &Measurements, i: usize| -> Vec<u64> {
+        let mut k: Vec<u64> = m.qs[i].iter().map(|v| v.to_bits()).collect();
+        k.extend(m.points[i].iter().map(|v| v.to_bits()));
+        if let Some(q) = &m.quats {
+            k.extend(q[i].iter().map(|v| v.to_bits()));
+        }
+        k
+    };
+    let seen: std::collections::HashMap<Vec<u64>, usize> =
+        (0..cal.len()).rev().map(|i| (key(cal, i), i)).collect();
+    (0..val.len())
+        .filter_map(|v| seen.get(&key(val, v)).map(|&c| (c, v)))
+        .collect()
+}
+
+/// The candidate models of an entry, where they come from, and the repeated choice among
+/// them when the task fixes them.
+pub struct EntryModels {
+    /// The candidates considered.
+    pub candidates: Vec<Model>,
+    /// `task` (the task file's `[models]`), `command line` or `default` (`kinematic`).
+    pub fixed_by: &'static str,
+    /// The repeated K-fold choice among the task's candidates, when there are several.
+    pub choice: Option<RepeatedChoice>,
+}
+
+impl Task {
+    /// The request of an entry whose candidate models are `given` (the command line's), or
+    /// when none are given the task's own (`[models]`): several of the task's are compared
+    /// by repeated K-fold cross-validation on the calibration rows alone
+    /// ([`choose_model_repeated`]) and the chosen one is identified; else `kinematic`.
+    pub fn entry_request(
+        &self,
+        method: MethodSpec,
+        given: &[Model],
+    ) -> Result<(IdentifyRequest, Measurements, EntryModels)> {
+        if !given.is_empty() {
+            let (q, val) = self.request(method, given)?;
+            let m = EntryModels {
+                candidates: given.to_vec(),
+                fixed_by: "command line",
+                choice: None,
+            };
+            return Ok((q, val, m));
+        }
+        let Some(tm) = &self.models else {
+            let (q, val) = self.request(method, &[Model::KINEMATIC])?;
+            let m = EntryModels {
+                candidates: vec![Model::KINEMATIC],
+                fixed_by: "default",
+                choice: None,
+            };
+            return Ok((q, val, m));
+        };
+        let choice = if tm.candidates.len() > 1 {
+            let robot = self.load_robot()?;
+            let (cal, _) = self.measurements(&robot)?;
+            let setup = crate::calibrate::cv::CvSetup {
+                method: &method,
+                registration: crate::calibrate::Registration::Identify,
+                seed: 0,
+                fold_seed: 0,
+                fixed: &[],
+            };
+            Some(choose_model_repeated(
+                &robot,
+                &tm.candidates,
+                &cal,
+                tm.folds,
+                &tm.fold_seeds,
+                &setup,
+            )?)
+        } else {
+            None
+        };
+        let chosen = tm.candidates[choice.as_ref().map_or(0, |c| c.best)];
+        let (q, val) = self.request(method, &[chosen])?;
+        let m = EntryModels {
+            candidates: tm.candidates.clone(),
+            fixed_by: "task",
+            choice,
+        };
+        Ok((q, val, m))
+    }
+}

@@ -1,0 +1,37 @@
+//! The WAM task's own candidates (`[models]` of tasks/barrett-wam.toml), fixed in the task file
+//! before any validation figure: chosen by 5-fold CV repeated over four fold seeds on the 216
+//! grid poses, the entry's mean on the 20 random poses is at most 2.75 mm (docs/results.md,
+//! "Candidates fixed before validation").
+
+use crate::common::{calbench_ok, load_json, tmp_dir};
+use crate::task::{task, task_lm};
+
+/// Minutes in a debug build: `cargo test --test cli -- --ignored wam_fixed`.
+#[test]
+#[ignore]
+fn wam_fixed_candidates_choose_on_the_grid_and_score_at_most_2_75_mm() {
+    let d = tmp_dir("cli-wam-fixed");
+    let out = d.join("fixed");
+    task_lm(calbench_ok, &task("barrett-wam"), None, &out);
+    let j = load_json(&out.join("task.json"));
+    assert_eq!(j["candidates_fixed_by"], "task");
+    assert_eq!(j["chosen_by"], "cv");
+    let c = &j["cv_choice"];
+    assert_eq!(c["fold_seeds"], serde_json::json!([0, 1, 2, 3]));
+    let models = c["models"].as_array().unwrap();
+    let names: Vec<&str> = models
+        .iter()
+        .map(|m| m["model"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        names,
+        ["kinematic", "harmonics", "gravity", "gravity+harmonics"]
+    );
+    let best = c["best"].as_u64().unwrap() as usize;
+    let means: Vec<f64> = models.iter().map(|m| m["mean"].as_f64().unwrap()).collect();
+    assert!(means.iter().all(|m| *m >= means[best]), "{means:?}");
+    assert_eq!(j["models"][0], "kinematic");
+    assert_eq!(j["division"], "open");
+    let value = j["value"].as_f64().unwrap();
+    assert!(value <= 2.75, "{value}");
+}

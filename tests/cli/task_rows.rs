@@ -1,0 +1,134 @@
+//! What a task fixes, checked the way a user meets it: `task_hash` covers the bytes of every
+//! file the task names (docs/formats.md § 9.3), and a task whose validation rows repeat
+//! calibration rows is refused naming the rows, whether the rows come from a split file or
+//! from two files (§ 9.1).
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{calbench, calbench_ok, load_json, root, tmp_dir};
+use crate::task::{task, task_lm};
+
+/// The WAM task file rewritten into `dir` with absolute paths, its `[data]` table replaced by
+/// `data` (the lines of the table, paths absolute).
+fn wam_task(dir: &Path, data: &str) -> PathBuf {
+    let text = std::fs::read_to_string(task("barrett-wam")).unwrap();
+    let (head, rest) = text.split_once("[data]").unwrap();
+    let published = &rest[rest.find("[[published]]").unwrap()..];
+    let head = head
+        .replace(
+            "\"../examples/",
+            &format!("\"{}/examples/", root().display()),
+        )
+        .replace(
+            "\"barrett-wam.mapping.toml\"",
+            &format!(
+                "\"{}\"",
+                root().join("tasks/barrett-wam.mapping.toml").display()
+            ),
+        );
+    let p = dir.join("barrett-wam.toml");
+    std::fs::write(&p, format!("{head}[data]\n{data}\n\n{published}")).unwrap();
+    p
+}
+
+fn wam_file(name: &str) -> PathBuf {
+    root().join("data/barrett-wam").join(name)
+}
+
+const GRID: &str = "3D_WAM_uncalibrated_grid_cleaned.csv";
+const RANDOM: &str = "3D_WAM_uncalibrated_random_cleaned.csv";
+
+#[test]
+fn changing_one_row_of_a_data_file_changes_the_task_hash() {
+    let d = tmp_dir("cli-task-hash");
+    let mut hashes = Vec::new();
+    for (i, edit) in [false, true].into_iter().enumerate() {
+        let sub = d.join(format!("t{i}"));
+        std::fs::create_dir_all(&sub).unwrap();
+        let mut text = std::fs::read_to_string(wam_file(RANDOM)).unwrap();
+        if edit {
+            // Row 3's x difference, its last digit changed: the same task file, other data.
+            let line = text.lines().nth(4).unwrap().to_string();
+            let cells: Vec<&str> = line.split(',').collect();
+            let x = cells[4].to_string();
+            let last = x.chars().last().unwrap();
+            let changed = format!(
+                "{}{}",
+                &x[..x.len() - 1],
+                if last == '1' { '2' } else { '1' }
+            );
+            let edited = line.replacen(&x, &changed, 1);
+            assert_ne!(edited, line);
+            text = text.replacen(&line, &edited, 1);
+        }
+        let val = sub.join(RANDOM);
+        std::fs::write(&val, text).unwrap();
+        let t = wam_task(
+            &sub,
+            &format!(
+                "calibration = \"{}\"\nvalidation = \"{}\"",
+                wam_file(GRID).display(),
+                val.display()
+            ),
+        );
+        let out = sub.join("out");
+        task_lm(calbench_ok, &t, Some("kinematic"), &out);
+        hashes.push(load_json(&out.join("task.json"))["task_hash"].clone());
+    }
+    assert_ne!(hashes[0], hashes[1], "one data row changed, the same hash");
+}
+
+#[test]
+fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
+    let d = tmp_dir("cli-task-overlap");
+    // Two files: the committed WAM task with its grid file as validation too.
+    let t = wam_task(
+        &d,
+        &format!(
+            "calibration = \"{}\"\nvalidation = \"{}\"",
+            wam_file(GRID).display(),
+            wam_file(GRID).display()
+        ),
+    );
+    let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+    assert!(
+        !o.status.success(),
+        "a validation file equal to the calibration file ran"
+    );
+    assert!(!d.join("out").exists(), "nothing is written");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("barrett-wam.toml: data")
+            && e.contains("216 validation row(s) repeat a calibration row")
+            && e.contains("calibration row 0 = validation row 0")
+            && e.contains("and 211 more"),
+        "{e}"
+    );
+    // A split of one file whose last row repeats row 5: distinct indices, the same row.
+    let text = std::fs::read_to_string(wam_file(GRID)).unwrap();
+    let row5 = text.lines().nth(6).unwrap();
+    let data = d.join("grid-plus.csv");
+    std::fs::write(&data, format!("{text}{row5}\n")).unwrap();
+    let split = d.join("grid-plus.split");
+    std::fs::write(&split, "rows 217\ncalibration 0-215\nvalidation 216\n").unwrap();
+    let t = wam_task(
+        &d,
+        &format!(
+            "file = \"{}\"\nsplit = \"{}\"",
+            data.display(),
+            split.display()
+        ),
+    );
+    let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+    assert!(!o.status.success(), "a repeated row across the split ran");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("1 validation row(s) repeat a calibration row")
+            && e.contains("calibration row 5 = validation row 216"),
+        "{e}"
+    );
+    // Without the repeat the same split file form runs.
+    std::fs::write(&data, &text).unwrap();
+    std::fs::write(&split, "rows 216\ncalibration 0-199\nvalidation 200-215\n").unwrap();
+    task_lm(calbench_ok, &t, Some("kinematic"), &d.join("ok"));
+}
