@@ -7,13 +7,11 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+mod blocked;
 mod cells;
 mod cli;
 mod cluster;
 mod determinism;
-mod blocked;
-mod cli;
-mod cluster;
 mod fixed_models;
 mod fuzz;
 mod guard;
