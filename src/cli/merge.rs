@@ -28,7 +28,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     writable_folder(out, &super::run::OUTPUTS)?;
     let db = args.record.open()?;
     let r = match calbench::runner::shard::merge(&args.dirs, out)? {
-        calbench::runner::shard::Merged::Run(r) => r,
+        calbench::runner::shard::Merged::Run(r) => *r,
         calbench::runner::shard::Merged::Cells(table) => {
             out!(
                 "{table}\nmerged {} shards; report: {}",

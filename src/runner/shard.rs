@@ -202,7 +202,7 @@ fn missing_commands(
 /// What a merge wrote: a Monte-Carlo run, or the study of cells whose table it gives.
 pub enum Merged {
     /// A Monte-Carlo run's results.
-    Run(RunResult),
+    Run(Box<RunResult>),
     /// A registration or instruments study: the table the terminal shows.
     Cells(String),
 }
@@ -383,7 +383,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
         Ok(())
     })?;
     let r = result.ok_or_else(|| Error::Compute("the merge produced no result".into()))?;
-    Ok(Merged::Run(r))
+    Ok(Merged::Run(Box::new(r)))
 }
 
 /// The merge of a study of cells: every shard's records, checked, into their blocks in

@@ -24,8 +24,8 @@
 
 pub mod claims;
 pub mod instruments;
-pub mod metric;
 pub mod kind;
+pub mod metric;
 pub mod outcome;
 pub mod plan;
 pub mod records;
