@@ -223,7 +223,7 @@ fn steps(a: &Run, b: &Run, tolerance: Real) -> BTreeMap<(String, String), &'stat
 
 /// Every figure of the runs recorded (of `scenario` when given) whose metric is one of
 /// `metrics` (a name or its prefix before a `.`; [`DEFAULT_METRICS`] when empty), series by
-/// series in the order of versions ([`order`]), each with its step from the version before
+/// series in the order of versions (`order`), each with its step from the version before
 /// it.
 pub fn points(
     db: &Db,
@@ -341,7 +341,7 @@ pub struct Regressed {
 }
 
 /// The flagged changes of the latest version, for each scenario (or `scenario`) and machine
-/// with runs of at least two version labels, versions in [`order`]:
+/// with runs of at least two version labels, versions in `order`:
 ///
 /// - **regression**: the latest version (its last record) against the version before it, by
 ///   `check`'s rule at `tolerance`;

@@ -1,6 +1,6 @@
 //! The record format of `records.txt`, in a shard folder and in a checkpoint
 //! (docs/formats.md § 7.3): one line per trial, the serde form of what the trial gave
-//! ([`Record`]: its sweep point, its index and its result), then ` #` and a checksum.
+//! (`Record`: its sweep point, its index and its result), then ` #` and a checksum.
 //!
 //! The serde form is RON (the `ron` crate): it writes every float in its shortest round-trip
 //! form, `NaN` and `inf` included, so a record reads back bit for bit (JSON has no NaN, and a
@@ -12,7 +12,7 @@
 //! record's sweep point and trial, then the text before ` #`. A changed byte, a record of
 //! another run (another scenario's content, another seed, or the same name and seed with other
 //! settings) and a record moved to another sweep point or trial each fail it. A reader
-//! ([`Verifier`]) checks every line's sum and that the lines hold the run's trials in order,
+//! (`Verifier`) checks every line's sum and that the lines hold the run's trials in order,
 //! each once: a changed, foreign, missing, duplicated or reordered record is refused, naming the
 //! file, the line and the trial.
 
