@@ -285,8 +285,8 @@ impl Model {
         if self.gravity {
             let basis = crate::robot::gravity_basis::params(&robot);
             if basis.is_empty() {
-                return Err(Error::setting(
-                    "--models",
+                return Err(Error::option(
+                    crate::error::Opt::Models,
                     format!(
                         "`gravity`: robot \"{}\" has {} joints; the gravity basis needs an \
                          elbow and a wrist centre (at least four joints)",
@@ -300,8 +300,8 @@ impl Model {
         for (j, bits) in self.orders.iter().enumerate() {
             for n in (1..=MAX_HARMONIC_ORDER).filter(|n| bits & (1 << (n - 1)) != 0) {
                 if j >= robot.dof() || robot.joints[j].kind != JointType::Revolute {
-                    return Err(Error::setting(
-                        "--models",
+                    return Err(Error::option(
+                        crate::error::Opt::Models,
                         format!(
                             "`h{n}q{}`: robot \"{}\" has no revolute joint {}",
                             j + 1,

@@ -36,7 +36,7 @@ pub mod external;
 pub mod kind;
 pub mod lm;
 pub mod ls;
-pub mod options;
+pub use crate::numeric::options;
 pub mod qiao;
 pub mod registry;
 pub mod ridge;

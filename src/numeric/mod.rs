@@ -24,6 +24,7 @@ pub(crate) mod gram;
 pub mod linalg;
 pub mod nan;
 pub mod normal;
+pub mod options;
 pub mod rng;
 pub(crate) mod simd;
 pub mod symeig;

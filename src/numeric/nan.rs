@@ -8,9 +8,35 @@ use serde::{Deserialize, Deserializer};
 
 use super::Real;
 
-/// A number, or `null` as NaN.
+/// A number, or `null` as NaN. Read as what the document holds (a format that writes NaN as
+/// a number, as RON in `records.txt` does, gives it back unchanged).
 pub fn real<'de, D: Deserializer<'de>>(d: D) -> Result<Real, D::Error> {
-    Ok(Option::<Real>::deserialize(d)?.unwrap_or(Real::NAN))
+    struct Number;
+    impl<'de> serde::de::Visitor<'de> for Number {
+        type Value = Real;
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a number or null")
+        }
+        fn visit_f64<E>(self, v: f64) -> Result<Real, E> {
+            Ok(v)
+        }
+        fn visit_i64<E>(self, v: i64) -> Result<Real, E> {
+            Ok(v as Real)
+        }
+        fn visit_u64<E>(self, v: u64) -> Result<Real, E> {
+            Ok(v as Real)
+        }
+        fn visit_unit<E>(self) -> Result<Real, E> {
+            Ok(Real::NAN)
+        }
+        fn visit_none<E>(self) -> Result<Real, E> {
+            Ok(Real::NAN)
+        }
+        fn visit_some<S: Deserializer<'de>>(self, d: S) -> Result<Real, S::Error> {
+            d.deserialize_any(Number)
+        }
+    }
+    d.deserialize_any(Number)
 }
 
 /// A map of numbers, each `null` as NaN.

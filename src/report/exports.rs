@@ -35,8 +35,8 @@ pub fn ur_yaml(robot: &Robot) -> Result<String> {
         ));
     }
     if crate::robot::gravity_basis::has_gravity(robot) {
-        return Err(Error::setting(
-            "--export",
+        return Err(Error::option(
+            crate::error::Opt::Export,
             "ur-yaml cannot carry the gravity basis of the chosen model (joint deflections \
              that depend on the pose); export dh-csv or use robot.toml (its `gravity` key)",
         ));

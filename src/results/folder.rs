@@ -12,6 +12,7 @@ use crate::analysis::summary::Summary;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
+use crate::study::metric::Metric;
 use crate::study::scenario::Scenario;
 
 /// What kind of output a record is.
@@ -514,7 +515,7 @@ fn flatten(
 fn signed(metric: &str) -> bool {
     metric.starts_with("eta")
         || metric.starts_with("param_bias.")
-        || metric == "improvement_pct"
+        || metric == Metric::Improvement.key()
         || metric.contains("_axis_mm.")
 }
 

@@ -2,7 +2,7 @@
 //! `[outliers]` and the `region` of `[calibration]` / `[validation]`), as serde structs with
 //! the documented defaults and a `check` that refuses bad values naming the key. `[tracker]`
 //! and `[outliers]` are checked on their fields as the methods' options are
-//! ([`crate::identify::options`]): a value out of range is refused as the scenario is read,
+//! ([`crate::numeric::options`]): a value out of range is refused as the scenario is read,
 //! at its line, and `check` reads settings built in code the same way.
 //!
 //! Every struct denies unknown keys, so a typo in a scenario is refused by name.
@@ -12,10 +12,10 @@ use std::collections::BTreeMap;
 use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::error::{Error, Result};
-use crate::identify::options::{
+use crate::measurement::Measure;
+use crate::numeric::options::{
     finite, non_negative as at_least_0, positive, range, recheck_at, share,
 };
-use crate::measurement::Measure;
 use crate::numeric::Real;
 use crate::robot::Param;
 

@@ -79,11 +79,11 @@ impl Head {
         Ok(head)
     }
 
-    /// Sets `trials` and `seed`, in the table too (`--trials`, `--seed`).
+    /// Sets `trials` and `seed`, in the table too (as the command line's overrides do).
     pub fn set(&mut self, trials: usize, seed: u64) -> Result<()> {
         let big = |key: &str| Error::setting(key, "must be below 2^63");
-        let n = i64::try_from(trials).map_err(|_| big("--trials"))?;
-        let s = i64::try_from(seed).map_err(|_| big("--seed"))?;
+        let n = i64::try_from(trials).map_err(|_| big("trials"))?;
+        let s = i64::try_from(seed).map_err(|_| big("seed"))?;
         self.table.insert("trials".into(), toml::Value::Integer(n));
         self.table.insert("seed".into(), toml::Value::Integer(s));
         (self.trials, self.seed) = (trials, seed);

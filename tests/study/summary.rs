@@ -176,7 +176,11 @@ fn committed_summaries() -> Vec<PathBuf> {
             } else if p.extension().is_some_and(|x| x == "json") {
                 let v: Value = serde_json::from_str(&read(&p)).unwrap();
                 // A run's summary (not a registration study's, nor a score file).
-                if v.get("results").is_some() && v.get("comparisons").is_some() {
+                // A baseline carries its per-trial values beside the summary (`per_trial`).
+                if v.get("results").is_some()
+                    && v.get("comparisons").is_some()
+                    && v.get("per_trial").is_none()
+                {
                     out.push(p);
                 }
             }
@@ -198,12 +202,13 @@ fn committed_summaries_read_back_to_their_bytes() {
     }
 }
 
-/// The oldest committed summary, `results/baselines/ci-guard.json`, was written before the
-/// intervals and comparisons: it loads, its figures as written and its missing intervals
-/// empty. A summary of a later format is refused, naming the format.
+/// A summary written before the intervals and comparisons (`tests/data/summary-before-intervals.json`,
+/// the committed CI baseline as it was until the baselines carried per-trial values): it
+/// loads, its figures as written and its missing intervals empty. A summary of a later format
+/// is refused, naming the format.
 #[test]
 fn an_old_summary_loads_and_a_newer_format_is_refused() {
-    let p = root().join("results/baselines/ci-guard.json");
+    let p = root().join("tests/data/summary-before-intervals.json");
     let v: Value = serde_json::from_str(&read(&p)).unwrap();
     assert!(v.get("comparisons").is_none() && v["results"][0].get("eta_mean_pct_ci95").is_none());
     let s = Summary::read(&p).unwrap();

@@ -53,7 +53,19 @@ pub fn read<T: DeserializeOwned>(t: &toml::Table) -> Result<T, (String, String)>
             .iter()
             .next()
             .map_or(String::new(), |_| e.path().to_string());
-        (key, e.into_inner().to_string().trim_end().to_string())
+        let msg = e.into_inner().to_string().trim_end().to_string();
+        if !key.is_empty() {
+            return (key, msg);
+        }
+        // Where the path stops at the table, toml's message still names the key: a value's
+        // check ends in "in `key`", an unknown key starts "unknown field `key`".
+        if let Some((m, k)) = msg.rsplit_once("\nin `") {
+            return (k.trim_end_matches('`').to_string(), m.to_string());
+        }
+        let unknown = msg
+            .strip_prefix("unknown field `")
+            .and_then(|r| r.split('`').next());
+        (unknown.unwrap_or_default().to_string(), msg.clone())
     })
 }
 
