@@ -298,8 +298,8 @@ def test_simulate_gives_the_cli_measurements(cli, simulated, root):
     truth = json.loads((simulated / "truth.json").read_text())
     assert d["truth"] == truth["errors"] and d["info"] == truth
     assert d["rotations"] is None
-    with pytest.raises(calbench.SettingError, match="trial 8 does not exist"):
-        calbench.simulate(root / CI_GUARD, trial=8)
+    with pytest.raises(calbench.SettingError, match="trial 16 does not exist"):
+        calbench.simulate(root / CI_GUARD, trial=16)
 
 
 # ----- run -------------------------------------------------------------------------------
