@@ -294,6 +294,8 @@ pub struct KindOutcome {
     pub validation: Option<(ErrorStats, ErrorStats)>,
     /// Why the result makes the robot worse (kept with `allow_worse`); empty: it does not.
     pub worse: Vec<String>,
+    /// Why the result cannot be physically right (kept with `allow_implausible`).
+    pub implausible: Vec<String>,
 }
 
 impl KindOutcome {
@@ -374,6 +376,9 @@ impl KindOutcome {
         }
         if !self.worse.is_empty() {
             j[super::record::ALLOWED_WORSE] = json!(self.worse);
+        }
+        if !self.implausible.is_empty() {
+            j[super::plausibility::ALLOWED_IMPLAUSIBLE] = json!(self.implausible);
         }
         j
     }

@@ -22,7 +22,7 @@ use super::record::{
 };
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{self, gross_reading, rms, worse_causes, worse_error};
-use super::{calibrate, Calibrated, Registration};
+use super::{calibrate, plausibility, Calibrated, Registration};
 use crate::error::{Error, Result};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::kind_csv::KindFile;
@@ -126,6 +126,9 @@ pub struct IdentifyRequest {
     pub allow_rank_deficient: bool,
     /// Keep a result that makes the robot worse than the nominal one (with a warning).
     pub allow_worse: bool,
+    /// Keep a result that cannot be physically right ([`super::plausibility`]), with a
+    /// warning.
+    pub allow_implausible: bool,
     /// How the caller's options are named in messages.
     pub spelling: Spelling,
 }
@@ -165,6 +168,9 @@ pub struct TrackerOutcome {
     pub residuals: (Vec<Real>, Vec<Real>),
     /// Why the result makes the robot worse (kept with `allow_worse`); empty: it does not.
     pub worse: Vec<String>,
+    /// Why the result cannot be physically right (kept with `allow_implausible`); empty: it
+    /// can.
+    pub implausible: Vec<String>,
 }
 
 impl IdentifyRequest {
@@ -189,6 +195,7 @@ impl IdentifyRequest {
             seed: 0,
             allow_rank_deficient: false,
             allow_worse: false,
+            allow_implausible: false,
             spelling: Spelling::Cli,
         }
     }
@@ -330,13 +337,13 @@ impl IdentifyRequest {
             c.identified.termination,
             evaluations,
         );
+        let gross = gross_reading(&residuals.1)
+            .map(|g| ("after", g))
+            .or_else(|| gross_reading(&residuals.0).map(|g| ("before", g)))
+            .map(|(at, (i, r))| {
+                format!("point {i} has a residual {r:.0} times the median {at} calibration")
+            });
         if !worse.is_empty() && !self.allow_worse {
-            let gross = gross_reading(&residuals.1)
-                .map(|g| ("after", g))
-                .or_else(|| gross_reading(&residuals.0).map(|g| ("before", g)))
-                .map(|(at, (i, r))| {
-                    format!("point {i} has a residual {r:.0} times the median {at} calibration")
-                });
             return Err(worse_error(
                 &self.source,
                 &worse,
@@ -344,6 +351,8 @@ impl IdentifyRequest {
                 &s.flag("--allow-worse"),
             ));
         }
+        let implausible =
+            self.implausible(&nominal, (&c.robot, &params), &d, &residuals.1, &gross)?;
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
         let diagnostics = diagnose(&Subject {
             nominal: &nominal,
@@ -378,7 +387,31 @@ impl IdentifyRequest {
             practice,
             residuals,
             worse,
+            implausible,
         })
+    }
+
+    /// The plausibility of the robot `identified` (parameters `params`) from the tracker's
+    /// data `d` with residuals `after` ([`plausibility::judge`]): refused unless
+    /// `allow_implausible`; what was found otherwise.
+    fn implausible(
+        &self,
+        nominal: &Robot,
+        (identified, params): (&Robot, &[Param]),
+        d: &Measurements,
+        after: &[Real],
+        gross: &Option<String>,
+    ) -> Result<Vec<String>> {
+        let chain = nominal.chain();
+        let model: Vec<_> = d.qs.iter().map(|q| chain.fk(q).pos).collect();
+        let f = plausibility::judge(
+            (nominal, identified, params),
+            Some((&model, &d.points)),
+            (rms(after), d.sigma_mm.as_deref()),
+            gross.clone(),
+        );
+        let flag = self.spelling.flag("--allow-implausible");
+        plausibility::verdict(f, &self.source, self.allow_implausible, &flag)
     }
 }
 
@@ -403,6 +436,10 @@ impl TrackerOutcome {
         if !self.worse.is_empty() {
             j.insert(ALLOWED_WORSE.into(), serde_json::json!(self.worse));
         }
+        if !self.implausible.is_empty() {
+            let key = plausibility::ALLOWED_IMPLAUSIBLE.into();
+            j.insert(key, serde_json::json!(self.implausible));
+        }
         j
     }
 
@@ -418,7 +455,9 @@ impl TrackerOutcome {
     /// robot.
     pub fn warnings(&self) -> Vec<String> {
         let settle = registration_warning(&self.calibrated, self.registration);
-        settle.into_iter().chain(self.worse_warning()).collect()
+        let implausible = plausibility::implausible_warning(&self.implausible);
+        let worse = self.worse_warning();
+        settle.into_iter().chain(worse).chain(implausible).collect()
     }
 
     /// The warning of a result kept worse than the nominal robot, if it is.
@@ -668,6 +707,15 @@ fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindOutcome> {
             &s.flag("--allow-worse"),
         ));
     }
+    let points = plausibility::target_points(nominal, &file.qs, &file.data);
+    let f = plausibility::judge(
+        (nominal, &fit.robot, &fit.params),
+        points.as_ref().map(|(m, s)| (&m[..], &s[..])),
+        (fit.rms.1, file.sigma_mm.as_deref()),
+        gross(),
+    );
+    let flag = s.flag("--allow-implausible");
+    let implausible = plausibility::verdict(f, &q.source, q.allow_implausible, &flag)?;
     Ok(KindOutcome {
         nominal: nominal.clone(),
         source: q.source.clone(),
@@ -680,5 +728,6 @@ fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindOutcome> {
         fit,
         validation,
         worse,
+        implausible,
     })
 }

@@ -17,7 +17,8 @@ pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
 /// Writes the output folder of the identification `o` and prints its warning, the
 /// validation table (with `--validate`, a tracker's file) and a summary line.
 pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
-    if let Some(w) = o.worse_warning() {
+    let implausible = calbench::calibrate::plausibility::implausible_warning(&o.implausible);
+    for w in o.worse_warning().into_iter().chain(implausible) {
         eprintln!("warning: {w}");
     }
     let [identified, robot_file] = OUTPUTS;

@@ -9,6 +9,7 @@ use serde_json::Value;
 
 use super::output::{Buffered, Figure, Output, Outputs, Text};
 use crate::calibrate::diagnostics::Diagnostics;
+use crate::calibrate::plausibility::implausible_warning;
 use crate::calibrate::record::{tracker_base, IdentifiedJson, TrackerBase};
 pub use crate::calibrate::request::registration_warning;
 use crate::calibrate::request::{worse_warning, TrackerOutcome};
@@ -217,6 +218,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
         ));
     }
     w.extend(worse_warning(&r.worse).map(|t| t + "."));
+    w.extend(implausible_warning(&r.implausible).map(|t| t + "."));
     w
 }
 

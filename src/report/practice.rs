@@ -123,6 +123,12 @@ impl Practice {
 pub fn additions(o: &TrackerOutcome) -> Additions<'_> {
     let mut a = o.practice.additions();
     a.json = o.more_keys();
+    let implausible = crate::calibrate::plausibility::implausible_warning(&o.implausible);
+    if let Some(w) = implausible {
+        a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
+        a.blocks
+            .insert(0, Block::Heading("Cannot be physically right".into()));
+    }
     if let Some(w) = o.worse_warning() {
         a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
         a.blocks

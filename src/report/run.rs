@@ -329,6 +329,9 @@ pub fn report_md(r: &RunResult, plots_written: &[(String, String)]) -> String {
         sc.validation.count,
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
+    if let Some(w) = r.stopping.as_ref().and_then(|st| st.shortfall()) {
+        let _ = writeln!(s, "**Warning:** {w}.\n");
+    }
     let (h, rows) = claims::table(r);
     if !rows.is_empty() {
         s += &noted_table("The paper's claims", claims::NOTE, &h, &rows);

@@ -36,6 +36,38 @@ struct Run {
     document: String,
 }
 
+/// Up to 12 of `names`, comma-separated (`none` when there is none).
+fn listed(names: &[String]) -> String {
+    if names.is_empty() {
+        return "none".into();
+    }
+    let more = names.len().saturating_sub(12);
+    let shown = names[..names.len() - more].join(", ");
+    if more > 0 {
+        format!("{shown} and {more} more")
+    } else {
+        shown
+    }
+}
+
+/// [`runs`] of `scenario`, refused naming it (and the recorded ones) when it has none.
+fn recorded(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
+    let found = runs(db, scenario)?;
+    if let (Some(name), true) = (scenario, found.is_empty()) {
+        let mut known: Vec<String> = runs(db, None)?.into_iter().map(|r| r.scenario).collect();
+        known.sort();
+        known.dedup();
+        return Err(crate::Error::setting(
+            "scenario",
+            format!(
+                "`{name}` has no record in the database (recorded: {})",
+                listed(&known)
+            ),
+        ));
+    }
+    Ok(found)
+}
+
 fn runs(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
     db.query(
         "SELECT id, kind, scenario, label, calbench_version, git_commit, machine, recorded_at, \
@@ -93,7 +125,7 @@ pub fn points(
     metrics: &[String],
     tolerance: Real,
 ) -> Result<Vec<Point>> {
-    let runs = runs(db, scenario)?;
+    let runs = recorded(db, scenario)?;
     let mut step_of: BTreeMap<i64, BTreeMap<(String, String), Status>> = BTreeMap::new();
     for list in series(&runs).values() {
         for w in list.windows(2) {
@@ -129,6 +161,34 @@ pub fn points(
             ))
         },
     )?;
+    let ids: std::collections::BTreeSet<i64> = runs.iter().map(|r| r.id).collect();
+    let mut names: Vec<&String> = figures
+        .iter()
+        .filter(|f| ids.contains(&f.0))
+        .map(|f| &f.2)
+        .collect();
+    names.sort();
+    names.dedup();
+    let matches =
+        |m: &str, n: &str| n == m || n.strip_prefix(m).is_some_and(|r| r.starts_with('.'));
+    if let Some(m) = metrics
+        .iter()
+        .find(|m| !names.iter().any(|n| matches(m, n)))
+    {
+        let heads: Vec<String> = names
+            .iter()
+            .map(|n| n.split('.').next().unwrap_or(n).to_string())
+            .collect();
+        let mut heads = heads;
+        heads.dedup();
+        return Err(crate::Error::setting(
+            "metric",
+            format!(
+                "`{m}` is no recorded metric nor a prefix of one (recorded: {})",
+                listed(&heads)
+            ),
+        ));
+    }
     let mut out = Vec::new();
     for (id, entry, metric, value, lo, hi) in figures {
         let Some(run) = by_id.get(&id) else {
@@ -184,7 +244,7 @@ pub fn regressions(
     scenario: Option<&str>,
     tolerance: Real,
 ) -> Result<(Vec<Regressed>, usize)> {
-    let runs = runs(db, scenario)?;
+    let runs = recorded(db, scenario)?;
     let mut out = Vec::new();
     let mut compared = 0;
     for ((scenario, machine), list) in series(&runs) {

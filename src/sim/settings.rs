@@ -16,7 +16,10 @@ use crate::robot::Param;
 /// Refuses a non-finite or negative number.
 fn non_negative(key: &str, v: Real) -> Result<()> {
     if !v.is_finite() || v < 0.0 {
-        return Err(Error::setting(key, format!("must be ≥ 0, got {v}")));
+        return Err(Error::setting(
+            key,
+            format!("must be ≥ 0, got {}", crate::error::shown(v)),
+        ));
     }
     Ok(())
 }
@@ -170,7 +173,7 @@ impl ErrorSettings {
             if let Some((n, v)) = self.values.iter().find(|(_, v)| !v.is_finite()) {
                 return Err(Error::setting(
                     format!("errors.values.{n}"),
-                    format!("must be a finite number, got {v}"),
+                    format!("must be a finite number, got {}", crate::error::shown(*v)),
                 ));
             }
         } else if !self.values.is_empty() {
@@ -286,7 +289,7 @@ impl TrackerSettings {
         if let Some(v) = self.pose.iter().find(|v| !v.is_finite()) {
             return Err(Error::setting(
                 "tracker.pose",
-                format!("must be 6 finite numbers, got {v}"),
+                format!("must be 6 finite numbers, got {}", crate::error::shown(*v)),
             ));
         }
         non_negative("tracker.mpe_a_um", self.mpe_a_um)?;

@@ -95,6 +95,9 @@ pub fn page(r: &RunResult, plots: &[(String, String)], dir: &Path) -> Result<Pag
         ),
     );
 
+    if let Some(w) = r.stopping.as_ref().and_then(|st| st.shortfall()) {
+        page.warning(&format!("{w}."));
+    }
     let (h, rows) = crate::report::run::claims::table(r);
     if !rows.is_empty() {
         page.section("The paper's claims");
