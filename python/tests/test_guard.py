@@ -82,3 +82,10 @@ def test_run_with_precision_returns_its_shortfall(root):
     assert " / " in stopping["widest_entry"]
     with pytest.raises(calbench.SettingError, match="precision"):
         calbench.run(root / CI_GUARD, trials=10, precision="5")
+
+
+def test_with_errors_beyond_the_model_ranges_is_refused():
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.SettingError, match="errors"):
+        robot.with_errors({"a2": 1e308})
+    robot.with_errors({"a2": 0.5})

@@ -298,10 +298,17 @@ pub fn implausible_error(source: &Path, found: &[String], causes: &[String], all
 
 /// The findings `f` of an identification read from `source`: refused
 /// ([`implausible_error`], naming `flag`) unless `allow`, when they find anything; what was
-/// found otherwise (kept with a warning).
+/// found otherwise, its likely cause last (kept with a warning).
 pub fn verdict(f: Findings, source: &Path, allow: bool, flag: &str) -> crate::Result<Vec<String>> {
-    if f.found.is_empty() || allow {
-        return Ok(f.found);
+    if f.found.is_empty() {
+        return Ok(Vec::new());
+    }
+    if allow {
+        let mut kept = f.found;
+        if !f.causes.is_empty() {
+            kept.push(format!("likely cause: {}", f.causes.join("; ")));
+        }
+        return Ok(kept);
     }
     Err(implausible_error(source, &f.found, &f.causes, flag))
 }

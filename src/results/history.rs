@@ -175,11 +175,10 @@ pub fn points(
         .iter()
         .find(|m| !names.iter().any(|n| matches(m, n)))
     {
-        let heads: Vec<String> = names
+        let mut heads: Vec<String> = names
             .iter()
             .map(|n| n.split('.').next().unwrap_or(n).to_string())
             .collect();
-        let mut heads = heads;
         heads.dedup();
         return Err(crate::Error::setting(
             "metric",
