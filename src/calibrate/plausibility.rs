@@ -313,6 +313,24 @@ pub fn verdict(f: Findings, source: &Path, allow: bool, flag: &str) -> crate::Re
     Err(implausible_error(source, &f.found, &f.causes, flag))
 }
 
+/// [`verdict`] of [`judge`]: the findings on `subject`, refused (read from `source`, naming
+/// `flag`) unless `allow`.
+pub fn check(
+    subject: (&Robot, &Robot, &[Param]),
+    points: Option<(&[Vec3], &[Vec3])>,
+    noise: (Real, Option<&[Real]>),
+    gross: Option<String>,
+    (source, allow, flag): (&Path, bool, &str),
+) -> crate::Result<Vec<String>> {
+    verdict(judge(subject, points, noise, gross), source, allow, flag)
+}
+
+/// The tool points of `robot` at the poses `qs`.
+pub fn tool_points(robot: &Robot, qs: &[Vec<Real>]) -> Vec<Vec3> {
+    let chain = robot.chain();
+    qs.iter().map(|q| chain.fk(q).pos).collect()
+}
+
 /// The warning of a result kept although it cannot be physically right (`found`), if any.
 pub fn implausible_warning(found: &[String]) -> Option<String> {
     (!found.is_empty()).then(|| {

@@ -351,8 +351,17 @@ impl IdentifyRequest {
                 &s.flag("--allow-worse"),
             ));
         }
-        let implausible =
-            self.implausible(&nominal, (&c.robot, &params), &d, &residuals.1, &gross)?;
+        let implausible = plausibility::check(
+            (&nominal, &c.robot, &params),
+            Some((&plausibility::tool_points(&nominal, &d.qs), &d.points)),
+            (rms(&residuals.1), d.sigma_mm.as_deref()),
+            gross,
+            (
+                &self.source,
+                self.allow_implausible,
+                &s.flag("--allow-implausible"),
+            ),
+        )?;
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
         let diagnostics = diagnose(&Subject {
             nominal: &nominal,
@@ -389,29 +398,6 @@ impl IdentifyRequest {
             worse,
             implausible,
         })
-    }
-
-    /// The plausibility of the robot `identified` (parameters `params`) from the tracker's
-    /// data `d` with residuals `after` ([`plausibility::judge`]): refused unless
-    /// `allow_implausible`; what was found otherwise.
-    fn implausible(
-        &self,
-        nominal: &Robot,
-        (identified, params): (&Robot, &[Param]),
-        d: &Measurements,
-        after: &[Real],
-        gross: &Option<String>,
-    ) -> Result<Vec<String>> {
-        let chain = nominal.chain();
-        let model: Vec<_> = d.qs.iter().map(|q| chain.fk(q).pos).collect();
-        let f = plausibility::judge(
-            (nominal, identified, params),
-            Some((&model, &d.points)),
-            (rms(after), d.sigma_mm.as_deref()),
-            gross.clone(),
-        );
-        let flag = self.spelling.flag("--allow-implausible");
-        plausibility::verdict(f, &self.source, self.allow_implausible, &flag)
     }
 }
 
@@ -708,14 +694,17 @@ fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindOutcome> {
         ));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
-    let f = plausibility::judge(
+    let implausible = plausibility::check(
         (nominal, &fit.robot, &fit.params),
         points.as_ref().map(|(m, s)| (&m[..], &s[..])),
         (fit.rms.1, file.sigma_mm.as_deref()),
         gross(),
-    );
-    let flag = s.flag("--allow-implausible");
-    let implausible = plausibility::verdict(f, &q.source, q.allow_implausible, &flag)?;
+        (
+            &q.source,
+            q.allow_implausible,
+            &s.flag("--allow-implausible"),
+        ),
+    )?;
     Ok(KindOutcome {
         nominal: nominal.clone(),
         source: q.source.clone(),
