@@ -71,6 +71,8 @@ pub enum Opt {
     AllowRankDeficient,
     /// Keep a result that makes the robot worse than the nominal one.
     AllowWorse,
+    /// Keep a result that cannot be physically right.
+    AllowImplausible,
     /// The joint compliances identified with the kinematic errors.
     Compliance,
     /// K-fold cross-validation.

@@ -196,6 +196,7 @@ def identify(
     seed=0,
     allow_rank_deficient=False,
     allow_worse=False,
+    allow_implausible=False,
 ):
     """Identify the errors of ``robot`` from measured points or a measurement file:
     ``calbench identify`` with the same options, as keyword arguments.
@@ -228,6 +229,10 @@ def identify(
             instead of raising.
         allow_worse: return a result that makes the robot worse than the nominal one (its
             causes in ``allowed_worse``) instead of raising.
+        allow_implausible: return a result that cannot be physically right (a length moved
+            by a large share of the reach, an angle by more than 5°, points scaled against
+            the nominal robot's; docs/formats.md "Physical plausibility"), its findings in
+            ``allowed_implausible``, instead of raising.
 
     Returns:
         an :class:`IdentifyResult`: the record ``calbench identify`` writes to
@@ -282,6 +287,7 @@ def identify(
         seed=_count("seed", seed),
         allow_rank_deficient=bool(allow_rank_deficient),
         allow_worse=bool(allow_worse),
+        allow_implausible=bool(allow_implausible),
     )
     return IdentifyResult(fields)
 
@@ -429,6 +435,7 @@ def run(
     progress=False,
     shard=None,
     out=None,
+    precision=None,
 ):
     """Run a Monte-Carlo study: ``calbench run`` without the files.
 
@@ -450,6 +457,10 @@ def run(
             ``calbench merge`` merges with the other shards into the bytes of the whole run.
             Not with ``methods`` (the merge rebuilds the scenario from its text).
         out: the shard folder (only with ``shard``).
+        precision: ``"0.5%"`` or ``"0.002mm"``: run until every entry's mean validation
+            error after calibration has a 95 % interval at most that wide, ``trials`` the
+            cap (``calbench run --precision``); ``study.summary["stopping"]`` says where it
+            stopped and, short of the target, the widest entry and the trials it would need.
 
     Returns:
         a :class:`Study`; ``study.summary`` equals the command line's ``summary.json`` for
@@ -457,6 +468,10 @@ def run(
     """
     if methods is not None and not isinstance(methods, dict):
         raise SettingError("setting `methods`: expected a dict label → function")
+    if precision is not None and not isinstance(precision, str):
+        raise SettingError('setting `precision`: expected a target such as "0.5%" or "0.002mm"')
+    if shard is not None and precision is not None:
+        raise SettingError("setting `precision`: not with `shard` (a shard runs its share whole)")
     if shard is not None:
         i, n = _shard(shard)
         if out is None:
@@ -486,6 +501,7 @@ def run(
         threads=_count("threads", threads),
         methods=methods,
         progress=bool(progress),
+        precision=None if precision is None else str(precision),
     )
     return Study(handle)
 

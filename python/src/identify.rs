@@ -164,7 +164,7 @@ fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Me
     payload = None, data = None, method = "lm", options = None, registration = "identify",
     compliance = None, validate = None, holdout = None, cv = None, cv_seed = 0, models = None,
     params = None, fix = None, prior = None, seed = 0, allow_rank_deficient = false,
-    allow_worse = false))]
+    allow_worse = false, allow_implausible = false))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn identify<'py>(
     py: Python<'py>,
@@ -190,6 +190,7 @@ pub(crate) fn identify<'py>(
     seed: u64,
     allow_rank_deficient: bool,
     allow_worse: bool,
+    allow_implausible: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let nominal = &robot.inner;
     let readings = Readings {
@@ -231,6 +232,7 @@ pub(crate) fn identify<'py>(
         seed,
         allow_rank_deficient,
         allow_worse,
+        allow_implausible,
         ..IdentifyRequest::new(nominal.clone(), data, source, spec)
     };
     // The Rust side, timed as a whole: the identification and everything its record holds.

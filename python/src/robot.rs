@@ -149,9 +149,14 @@ impl PyRobot {
             }
             list.push((p, e));
         }
-        Ok(PyRobot {
-            inner: self.inner.with_errors(&list),
-        })
+        // The robot with its errors must stay a robot model (lengths within 1 km, angles
+        // within a turn), as a robot file must.
+        let inner = self.inner.with_errors(&list);
+        if let Err(issue) = inner.check() {
+            let why = format!("gives {}: {}", issue.place, issue.msg);
+            return Err(setting("errors", why));
+        }
+        Ok(PyRobot { inner })
     }
 
     /// The robot as a robot file (TOML), as `calbench identify` writes `robot.toml`.

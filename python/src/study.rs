@@ -235,6 +235,8 @@ impl PyRun {
 
     /// Writes the folder `out` as `calbench run --out` does.
     fn write(&self, py: Python<'_>, out: PathBuf) -> PyResult<()> {
+        calbench::report::guard::guard_out(&out, "out", &[], None::<&std::path::Path>)
+            .map_err(err)?;
         py.detach(|| self.inner.write(&out)).map_err(err)
     }
 }
@@ -242,7 +244,8 @@ impl PyRun {
 /// Runs a study (the Python half documents the arguments).
 #[pyfunction]
 #[pyo3(signature = (scenario, trials = None, seed = None, threads = None, methods = None,
-    progress = false))]
+    progress = false, precision = None))]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
     py: Python<'_>,
     scenario: &Bound<'_, PyAny>,
@@ -251,13 +254,23 @@ pub(crate) fn run(
     threads: Option<usize>,
     methods: Option<Bound<'_, PyDict>>,
     progress: bool,
+    precision: Option<String>,
 ) -> PyResult<PyRun> {
+    let precision = precision
+        .map(|p| {
+            calbench::study::stats::precision::Precision::parse(&p).map_err(|e| match e {
+                calbench::Error::Setting { msg, .. } => {
+                    setting("precision", msg.spell(crate::errors::spell))
+                }
+                e => err(e),
+            })
+        })
+        .transpose()?;
     let mut sc = scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
-    if threads == Some(0) {
-        return Err(setting("threads", "must be at least 1"));
-    }
+    let env = |k: &str| std::env::var(k).ok();
+    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
     if let Some(m) = methods {
         for (label, f) in m.iter() {
             let label: String = label
@@ -279,7 +292,7 @@ pub(crate) fn run(
         out: None,
         progress,
         shard: None,
-        precision: None,
+        precision,
     };
     let inner = py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err)?;
     Ok(PyRun { inner })
@@ -309,9 +322,9 @@ pub(crate) fn run_shard(
             format!("({index}, {count}) is not (i, n) with 0 ≤ i < n, e.g. (0, 8)"),
         ));
     }
-    if threads == Some(0) {
-        return Err(setting("threads", "must be at least 1"));
-    }
+    let env = |k: &str| std::env::var(k).ok();
+    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
+    calbench::report::guard::guard_out(&out, "out", &[], None::<&std::path::Path>).map_err(err)?;
     let sc = scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;

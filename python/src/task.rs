@@ -32,7 +32,13 @@ pub(crate) fn task<'py>(
     name: Option<String>,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let t = Task::load(&task_path(task)).map_err(err)?;
+    let path = task_path(task);
+    let t = Task::load(&path).map_err(err)?;
+    if let Some(out) = &out {
+        let inputs = [&path, &t.robot, &t.mapping];
+        calbench::report::guard::guard_out(out, "out", &["identified.json", "task.json"], inputs)
+            .map_err(err)?;
+    }
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())
     } else if method.is_callable() {

@@ -20,6 +20,7 @@ pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
 pub mod on_kind;
+pub mod plausibility;
 pub mod record;
 pub mod registration;
 pub mod request;

@@ -8,6 +8,7 @@ use std::path::Path;
 
 use nalgebra::DVector;
 
+use super::plausibility;
 use super::record::{names, FrameRecord, IdentifiedRecord};
 use super::registration::register_svd;
 use super::request::{check_names, IdentifyRequest};
@@ -296,9 +297,12 @@ impl KindOutcome {
         r
     }
 
-    /// The warning of a result kept worse than the nominal robot, if it is.
-    pub fn worse_warning(&self) -> Option<Said> {
-        worse_warning(&self.record.allowed_worse)
+    /// The warnings of a result kept worse than the nominal robot or although it cannot be
+    /// physically right, if it is.
+    pub fn warnings(&self) -> Vec<Said> {
+        let worse = worse_warning(&self.record.allowed_worse);
+        let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
+        worse.into_iter().chain(implausible).collect()
     }
 }
 
@@ -484,6 +488,14 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     if !worse.is_empty() && !q.allow_worse {
         return Err(worse_error(&q.source, &worse, gross()));
     }
+    let points = plausibility::target_points(nominal, &file.qs, &file.data);
+    let implausible = plausibility::check(
+        (nominal, &fit.robot, &fit.params),
+        points.as_ref().map(|(m, s)| (&m[..], &s[..])),
+        (fit.rms.1, file.sigma_mm.as_deref()),
+        gross(),
+        (&q.source, q.allow_implausible),
+    )?;
     let mut record =
         IdentifiedRecord::of(&nominal.name, &q.source, q.method.name(), &fit.params, r);
     if let Some((before, after)) = validation {
@@ -491,6 +503,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     }
     let record = IdentifiedRecord {
         fixed: names(&q.fix),
+        allowed_implausible: implausible,
         allowed_worse: worse,
         ..kind_keys(record, &fit, (kind, readings), q.registration)
     };

@@ -67,6 +67,10 @@ pub struct Trace {
 /// keys the file does not have, but `rank`, which is written as `null`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct IdentifiedRecord {
+    /// Why the result cannot be physically right (a result kept although it cannot,
+    /// [`super::plausibility`]), its likely cause last; empty: it can.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub allowed_implausible: Vec<String>,
     /// Why the result makes the robot worse (a result kept although it does); empty: it
     /// does not.
     #[serde(skip_serializing_if = "Vec::is_empty")]

@@ -20,7 +20,7 @@ use super::diagnostics::{diagnose, Subject};
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{self, gross_reading, rms, worse_causes, worse_error};
-use super::{calibrate, Calibrated, Registration};
+use super::{calibrate, plausibility, Calibrated, Registration};
 use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::kind_csv::KindFile;
@@ -82,6 +82,9 @@ pub struct IdentifyRequest {
     pub allow_rank_deficient: bool,
     /// Keep a result that makes the robot worse than the nominal one (with a warning).
     pub allow_worse: bool,
+    /// Keep a result that cannot be physically right ([`super::plausibility`]), with a
+    /// warning.
+    pub allow_implausible: bool,
 }
 
 /// An identification's result: on a tracker's file or on a kind file. Its
@@ -140,6 +143,7 @@ impl IdentifyRequest {
             seed: 0,
             allow_rank_deficient: false,
             allow_worse: false,
+            allow_implausible: false,
         }
     }
 
@@ -282,15 +286,22 @@ impl IdentifyRequest {
             c.identified.termination,
             evaluations,
         );
+        let gross = gross_reading(&after)
+            .map(|g| ("after", g))
+            .or_else(|| gross_reading(&before).map(|g| ("before", g)))
+            .map(|(at, (i, r))| {
+                format!("point {i} has a residual {r:.0} times the median {at} calibration")
+            });
         if !worse.is_empty() && !self.allow_worse {
-            let gross = gross_reading(&after)
-                .map(|g| ("after", g))
-                .or_else(|| gross_reading(&before).map(|g| ("before", g)))
-                .map(|(at, (i, r))| {
-                    format!("point {i} has a residual {r:.0} times the median {at} calibration")
-                });
             return Err(worse_error(&self.source, &worse, gross));
         }
+        let implausible = plausibility::check(
+            (&nominal, &c.robot, &params),
+            Some((&plausibility::tool_points(&nominal, &d.qs), &d.points)),
+            (rms(&after), d.sigma_mm.as_deref()),
+            gross,
+            (&self.source, self.allow_implausible),
+        )?;
         drop((before, after));
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
         let diagnostics = diagnose(&Subject {
@@ -317,6 +328,7 @@ impl IdentifyRequest {
             .map(|(best, cvs)| (Some(cvs), Some(best)))
             .unwrap_or_default();
         let record = IdentifiedRecord {
+            allowed_implausible: implausible,
             allowed_worse: worse,
             convergence_trace: trace,
             covariance: Some(
@@ -378,7 +390,9 @@ impl TrackerOutcome {
     /// robot.
     pub fn warnings(&self) -> Vec<Said> {
         let settle = registration_warning(&self.calibrated, self.registration).map(Said::from);
-        settle.into_iter().chain(self.worse_warning()).collect()
+        let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
+        let worse = self.worse_warning();
+        settle.into_iter().chain(worse).chain(implausible).collect()
     }
 
     /// The warning of a result kept worse than the nominal robot, if it is.

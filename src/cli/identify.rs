@@ -108,6 +108,13 @@ pub struct IdentifyArgs {
     /// the report; without it such a result is refused.
     #[arg(long)]
     pub allow_worse: bool,
+    /// Write the result even when it cannot be physically right (a length moved by a large
+    /// share of the robot's reach, an angle by more than 5°, points scaled against the
+    /// nominal robot's, a residual far below the stated noise; docs/formats.md "Physical
+    /// plausibility"), with a warning in the terminal, identified.json
+    /// (`allowed_implausible`) and the reports; without it such a result is refused.
+    #[arg(long)]
+    pub allow_implausible: bool,
     /// What is written besides robot.toml, comma-separated (default: `urdf` for a URDF
     /// robot, else `toml`): `ur-yaml` writes UR's kinematics_params_file (ur-kinematics.yaml),
     /// `dh-csv` the parameter table with nominal, identified, Δ and σ (dh-table.csv).
@@ -227,6 +234,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         seed: args.seed,
         allow_rank_deficient: args.allow_rank_deficient,
         allow_worse: args.allow_worse,
+        allow_implausible: args.allow_implausible,
         ..IdentifyRequest::new(nominal, data, args.data.clone(), spec)
     };
     if let (IdentifyData::Kind(f), false) = (&request.data, args.export.is_empty()) {

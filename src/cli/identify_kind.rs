@@ -18,7 +18,7 @@ pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
 /// Writes the output folder of the identification `o` and prints its warning, the
 /// validation table (with `--validate`, a tracker's file) and a summary line.
 pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
-    if let Some(w) = o.worse_warning() {
+    for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
     let [_, robot_file] = OUTPUTS;

@@ -132,89 +132,15 @@ pub fn check_out_folder(out: &Path, outputs: &[&str]) -> Result<()> {
     }
 }
 
-/// Refuses, before any work, an output path where the outputs would destroy something: the
-/// root folder, the home folder (`$HOME`), one of the command's `inputs` (a file or folder
-/// it reads), or a folder holding one of them under the name of one of `outputs`, the files
-/// the command writes there (empty for the commands that write the one file `out`). Paths
-/// are compared as the file system resolves them (`.`, `..` and symbolic links). Every
-/// command that writes calls it.
+/// Refuses, before any work, an output path where the outputs would destroy something
+/// ([`calbench::report::guard::guard_out`], the option named `--out`). Every command that
+/// writes calls it.
 pub fn guard_out<P: AsRef<Path>>(
     out: &Path,
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    let refuse = |why: String| Err(Error::setting("--out", why));
-    let at = resolved(out);
-    if at.parent().is_none() {
-        return refuse(format!(
-            "{} is the root folder; give the outputs a folder of their own (nothing was \
-             written)",
-            out.display()
-        ));
-    }
-    if let Some(home) = std::env::var_os("HOME").filter(|h| !h.is_empty()) {
-        if resolved(Path::new(&home)) == at {
-            return refuse(format!(
-                "{} is the home folder; give the outputs a folder of their own (nothing was \
-                 written)",
-                out.display()
-            ));
-        }
-    }
-    for input in inputs {
-        let input = input.as_ref();
-        if !input.exists() {
-            continue;
-        }
-        let it = resolved(input);
-        if it == at {
-            return refuse(format!(
-                "{} is an input of this command; writing the outputs there would destroy it \
-                 (nothing was written)",
-                out.display()
-            ));
-        }
-        if let Some(name) = outputs.iter().find(|n| at.join(n) == it) {
-            return refuse(format!(
-                "{} is an input of this command, and the command writes its {name} there; \
-                 give another output folder (nothing was written)",
-                input.display()
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// `p` as an absolute path with `.` and `..` folded and the longest part that exists
-/// resolved by the file system (symbolic links followed).
-fn resolved(p: &Path) -> std::path::PathBuf {
-    use std::path::Component;
-    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
-    let mut folded = std::path::PathBuf::new();
-    for c in abs.components() {
-        match c {
-            Component::CurDir => {}
-            Component::ParentDir => {
-                folded.pop();
-            }
-            c => folded.push(c),
-        }
-    }
-    let mut rest = Vec::new();
-    let mut head = folded.as_path();
-    loop {
-        if let Ok(mut real) = head.canonicalize() {
-            real.extend(rest.iter().rev());
-            return real;
-        }
-        match (head.parent(), head.file_name()) {
-            (Some(parent), Some(name)) => {
-                rest.push(name.to_os_string());
-                head = parent;
-            }
-            _ => return folded,
-        }
-    }
+    calbench::report::guard::guard_out(out, "--out", outputs, inputs)
 }
 
 /// The files `identify` reads: the data, the validation file and a robot file.

@@ -23,10 +23,10 @@ pub struct RecordArgs {
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
     /// The version label history orders and compares by (default: VERSION+COMMIT).
-    #[arg(long, value_name = "L")]
+    #[arg(long, value_name = "L", value_parser = not_blank)]
     pub label: Option<String>,
     /// The machine's name (default: the host name).
-    #[arg(long, value_name = "NAME")]
+    #[arg(long, value_name = "NAME", value_parser = not_blank)]
     pub machine: Option<String>,
 }
 
@@ -42,7 +42,7 @@ pub struct RecordFlags {
     #[arg(long, value_name = "PATH", requires = "record")]
     pub db: Option<PathBuf>,
     /// With --record: the version label (default: VERSION+COMMIT).
-    #[arg(long, value_name = "L", requires = "record")]
+    #[arg(long, value_name = "L", requires = "record", value_parser = not_blank)]
     pub label: Option<String>,
 }
 
@@ -87,9 +87,22 @@ fn report(record: &Record, done: Recorded, db: &Db) {
     }
 }
 
+/// `--label`, `--machine`: a name that is not empty or blank (history orders and groups by
+/// it).
+fn not_blank(text: &str) -> std::result::Result<String, String> {
+    if text.trim().is_empty() {
+        return Err("must not be empty: history orders and groups the records by it".into());
+    }
+    Ok(text.to_string())
+}
+
 /// Reads every folder first (a bad one is refused before anything is stored), then records
 /// each.
 pub fn run(args: &RecordArgs) -> Result<()> {
+    if let Some(d) = args.dirs.iter().find(|d| !d.exists()) {
+        let why = format!("{} does not exist", d.display());
+        return Err(calbench::Error::setting("DIR", why).into());
+    }
     let records = args
         .dirs
         .iter()

@@ -47,8 +47,9 @@ pub struct RunArgs {
     pub out: Option<PathBuf>,
     /// Run only share I of N (0 ≤ I < N) of the trials and sweep points, writing a
     /// partial result for `calbench merge`. `auto`: I and N from the scheduler (a Slurm job
-    /// array's SLURM_ARRAY_TASK_ID − SLURM_ARRAY_TASK_MIN and SLURM_ARRAY_TASK_COUNT, or a
-    /// Kubernetes Indexed Job's JOB_COMPLETION_INDEX with N from --shard-count).
+    /// array's (SLURM_ARRAY_TASK_ID − SLURM_ARRAY_TASK_MIN) / SLURM_ARRAY_TASK_STEP and
+    /// SLURM_ARRAY_TASK_COUNT, or a Kubernetes Indexed Job's JOB_COMPLETION_INDEX with N
+    /// from --shard-count).
     #[arg(long, value_name = "I/N|auto", value_parser = shard)]
     pub shard: Option<ShardArg>,
     /// With --shard auto: the number of shards (a Kubernetes Job's completions; under Slurm,
@@ -67,9 +68,10 @@ pub struct RunArgs {
     /// checkpoint of another scenario, trial count or seed.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["out", "shard", "precision"])]
     pub resume: Option<PathBuf>,
-    /// With --resume: continue even though the process that wrote the checkpoint seems to
-    /// be running on this host (its pid was taken by another program).
-    #[arg(long, requires = "resume")]
+    /// Write into the folder (with --resume: continue the checkpoint) of a run whose
+    /// process seems to be running on this host (its pid was taken by another program);
+    /// without it such a folder is refused, naming the process.
+    #[arg(long)]
     pub force: bool,
     #[command(flatten)]
     pub record: super::record::RecordFlags,
@@ -117,12 +119,17 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if let Some(dir) = &args.resume {
         return resume(args, dir);
     }
-    if args.threads == Some(0) {
-        return Err(Error::setting("--threads", "must be at least 1").into());
-    }
+    // The thread count is checked (0, a malformed SLURM_CPUS_PER_TASK) before anything runs.
+    threads(args.threads)?;
     let shard = match args.shard {
         None => None,
-        Some(ShardArg::Given(s)) => Some(s),
+        Some(ShardArg::Given(s)) => {
+            if let Some(c) = args.shard_count.filter(|&c| c != s.count as u64) {
+                let why = format!("{c} contradicts --shard {}/{}", s.index, s.count);
+                return Err(Error::setting("--shard-count", why).into());
+            }
+            Some(s)
+        }
         Some(ShardArg::Auto) => Some(auto_shard(args.shard_count, &|k| std::env::var(k).ok())?),
     };
     let sc = match scenario_with_overrides(args)? {
@@ -168,6 +175,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ..opts
     };
     let r = run_study(sc, &opts, &Terminal)?;
+    if let Some(w) = r.stopping.as_ref().and_then(|st| st.shortfall()) {
+        eprintln!("warning: {w}");
+    }
     finished(&r)?;
     let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
     args.record.finish(db, record)
@@ -185,9 +195,6 @@ fn scenario_with_overrides(args: &RunArgs) -> Result<AnyScenario> {
 /// `calbench run --resume DIR`: the killed run into DIR, continued from its checkpoint; a
 /// scenario, `--trials` or `--seed` given too must be those of the checkpoint.
 fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
-    if args.threads == Some(0) {
-        return Err(Error::setting("--threads", "must be at least 1").into());
-    }
     let given = if args.scenario.is_some() {
         Some(scenario_with_overrides(args)?)
     } else {
@@ -201,18 +208,19 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
         }
         None
     };
-    super::guard_out(dir, &OUTPUTS, &args.scenario)?;
+    calbench::report::guard::guard_out_with(dir, "--out", &OUTPUTS, &args.scenario, args.force)?;
     writable_folder(dir, &OUTPUTS)?;
+    let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
     if !matches!(checked.scenario(), AnyScenario::MonteCarlo(_)) {
         eprintln!("resuming the run into {}", dir.display());
         let t0 = std::time::Instant::now();
-        let table = resume_cells(checked, args.threads, &Terminal)?;
+        let table = resume_cells(checked, threads, &Terminal)?;
         return cells_finished(checked_name(dir), &table, t0, dir);
     }
     let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
-    let r = resume_study(checked, args.threads, &Terminal)?;
+    let r = resume_study(checked, threads, &Terminal)?;
     finished(&r)?;
     let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
     args.record.finish(db, record)
@@ -249,7 +257,7 @@ fn out_folder(args: &RunArgs, name: &str, outputs: &[&str]) -> Result<PathBuf> {
         .out
         .clone()
         .unwrap_or_else(|| Path::new("results").join(name));
-    super::guard_out(&out, outputs, &args.scenario)?;
+    calbench::report::guard::guard_out_with(&out, "--out", outputs, &args.scenario, args.force)?;
     Ok(out)
 }
 
@@ -329,28 +337,22 @@ fn cells_finished(_name: String, table: &str, t0: std::time::Instant, out: &Path
     Ok(())
 }
 
-/// `--threads`, else `SLURM_CPUS_PER_TASK` when set (the CPUs Slurm gave the task), else
-/// `None` (one per core).
+/// `--threads` (0 refused), else `SLURM_CPUS_PER_TASK` when set (the CPUs Slurm gave the
+/// task), else `None` (one per core): [`calbench::runner::threads::requested`].
 fn threads(given: Option<usize>) -> Result<Option<usize>> {
-    if given.is_some() {
-        return Ok(given);
-    }
-    match std::env::var("SLURM_CPUS_PER_TASK") {
-        Err(_) => Ok(None),
-        Ok(v) => match v.trim().parse::<usize>() {
-            Ok(n) if n >= 1 => Ok(Some(n)),
-            _ => Err(Error::setting(
-                "--threads",
-                format!("SLURM_CPUS_PER_TASK is \"{v}\", not a whole number ≥ 1"),
-            )
-            .into()),
-        },
-    }
+    let env = |k: &str| std::env::var(k).ok();
+    Ok(calbench::runner::threads::requested(
+        "--threads",
+        given,
+        &env,
+    )?)
 }
 
 /// `--shard auto`: the share from the scheduler's environment (`var` reads a variable).
-/// Slurm: I = `SLURM_ARRAY_TASK_ID` − `SLURM_ARRAY_TASK_MIN`, N = `SLURM_ARRAY_TASK_COUNT`
-/// (`count`, when given, must agree); Kubernetes: I = `JOB_COMPLETION_INDEX`, N = `count`.
+/// Slurm: I = (`SLURM_ARRAY_TASK_ID` − `SLURM_ARRAY_TASK_MIN`) / `SLURM_ARRAY_TASK_STEP`
+/// (1 when unset), N = `SLURM_ARRAY_TASK_COUNT` (`count`, when given, must agree; the array's
+/// IDs must be evenly stepped up to `SLURM_ARRAY_TASK_MAX`); Kubernetes: I =
+/// `JOB_COMPLETION_INDEX` (below `count`), N = `count`.
 fn auto_shard(count: Option<u64>, var: &dyn Fn(&str) -> Option<String>) -> Result<Shard> {
     let refuse = |why: String| -> anyhow::Error { Error::setting("--shard", why).into() };
     let number =
@@ -373,19 +375,38 @@ fn auto_shard(count: Option<u64>, var: &dyn Fn(&str) -> Option<String>) -> Resul
                     .into(),
             ));
         };
-        if id < min || id - min >= n {
+        // A stepped array (--array=0-8:2) holds the IDs MIN, MIN + STEP, …, MAX.
+        let step = number("SLURM_ARRAY_TASK_STEP")?.unwrap_or(1);
+        let max = number("SLURM_ARRAY_TASK_MAX")?;
+        let last = n
+            .checked_sub(1)
+            .and_then(|k| k.checked_mul(step)?.checked_add(min));
+        let regular = step >= 1 && last.is_some() && max.is_none_or(|m| Some(m) == last);
+        if !regular {
             return Err(refuse(format!(
-                "auto: SLURM_ARRAY_TASK_ID {id} is outside the array of \
-                 SLURM_ARRAY_TASK_MIN {min} and SLURM_ARRAY_TASK_COUNT {n}; an array with \
-                 gaps or a step (--array=0-9:2) cannot be shards"
+                "auto: SLURM_ARRAY_TASK_MIN {min}, SLURM_ARRAY_TASK_MAX {}, \
+                 SLURM_ARRAY_TASK_STEP {step} and SLURM_ARRAY_TASK_COUNT {n} are not an \
+                 array of evenly stepped IDs (--array=MIN-MAX:STEP); a list of IDs cannot be \
+                 shards",
+                max.map_or("unset".to_string(), |m| m.to_string())
             )));
         }
+        let off = id
+            .checked_sub(min)
+            .filter(|o| o % step == 0 && o / step < n);
+        let Some(off) = off else {
+            return Err(refuse(format!(
+                "auto: SLURM_ARRAY_TASK_ID {id} is not one of the array's IDs \
+                 (SLURM_ARRAY_TASK_MIN {min}, SLURM_ARRAY_TASK_STEP {step}, \
+                 SLURM_ARRAY_TASK_COUNT {n})"
+            )));
+        };
         if let Some(c) = count.filter(|&c| c != n) {
             return Err(refuse(format!(
                 "auto: --shard-count {c} differs from SLURM_ARRAY_TASK_COUNT {n}"
             )));
         }
-        (id - min, n)
+        (off / step, n)
     } else if let Some(i) = number("JOB_COMPLETION_INDEX")? {
         let Some(n) = count else {
             return Err(refuse(
@@ -394,6 +415,12 @@ fn auto_shard(count: Option<u64>, var: &dyn Fn(&str) -> Option<String>) -> Resul
                     .into(),
             ));
         };
+        if i >= n {
+            return Err(refuse(format!(
+                "auto: JOB_COMPLETION_INDEX {i} is not below --shard-count {n} (the Job's \
+                 completions)"
+            )));
+        }
         (i, n)
     } else {
         return Err(refuse(

@@ -6,6 +6,7 @@ use super::markdown::{fmt_num, table};
 use super::plots;
 
 use super::output::{Buffered, Figure, Output, Outputs, Text};
+use crate::calibrate::plausibility::implausible_warning;
 use crate::calibrate::record::IdentifiedRecord;
 pub use crate::calibrate::request::registration_warning;
 use crate::calibrate::request::{worse_warning, TrackerOutcome};
@@ -188,6 +189,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
         ));
     }
     w.extend(worse_warning(&r.record.allowed_worse).map(|t| t.to_string() + "."));
+    w.extend(implausible_warning(&r.record.allowed_implausible).map(|t| t.to_string() + "."));
     w
 }
 

@@ -19,6 +19,7 @@
 //! libraries, and the same data gives the same bytes.
 
 pub mod exports;
+pub mod guard;
 pub mod html;
 pub mod identified;
 pub mod instruments;
@@ -163,7 +164,8 @@ pub(crate) fn whole_summary(
 /// files there are kept). On failure the temporary folder is removed and `out` is left as it
 /// was, so a failed run leaves nothing half-written; that includes an `out` that is a file,
 /// or that holds a folder named like one of the new files ([`blocked_output`]), which is
-/// refused, naming it, before any file is moved.
+/// refused, naming it, before any file is moved; so is the root or the home folder
+/// ([`guard::guard_folder`]).
 pub fn atomically(
     out: &std::path::Path,
     write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
@@ -182,6 +184,7 @@ pub fn atomically(
             std::io::Error::new(std::io::ErrorKind::AlreadyExists, why),
         )
     };
+    guard::guard_folder(out, "out")?;
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }

@@ -118,6 +118,13 @@ impl IdentifiedRecord {
 /// section, and a result kept worse than the nominal robot (a warning section).
 pub fn additions(o: &TrackerOutcome) -> Additions {
     let mut a = o.record.additions();
+    let implausible =
+        crate::calibrate::plausibility::implausible_warning(&o.record.allowed_implausible);
+    if let Some(w) = implausible {
+        a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
+        a.blocks
+            .insert(0, Block::Heading("Cannot be physically right".into()));
+    }
     if let Some(w) = o.worse_warning() {
         a.blocks.insert(0, Block::Para(format!("Warning: {w}.")));
         a.blocks

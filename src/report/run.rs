@@ -224,6 +224,13 @@ pub fn report_md(r: &RunResult, summary: &Summary, plots_written: &[(String, Str
         sc.validation.count,
         first.params.iter().map(|p| format!("`{p}`")).collect::<Vec<_>>().join(", ")
     );
+    if let Some(w) = summary.stopping.as_ref().and_then(|st| st.shortfall()) {
+        let _ = writeln!(
+            s,
+            "**Warning:** {w}.
+"
+        );
+    }
     let (h, rows) = claims::table(summary);
     if !rows.is_empty() {
         s += &noted_table("The paper's claims", claims::NOTE, &h, &rows);

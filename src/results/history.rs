@@ -49,6 +49,47 @@ struct Run {
     document: String,
 }
 
+/// Whether `name` asks for the recorded metric `metric`: its name, or its prefix before a
+/// `.`.
+fn names_metric(name: &str, metric: &str) -> bool {
+    metric == name
+        || metric
+            .strip_prefix(name)
+            .is_some_and(|r| r.starts_with('.'))
+}
+
+/// Up to 12 of `names`, comma-separated (`none` when there is none).
+fn listed(names: &[String]) -> String {
+    if names.is_empty() {
+        return "none".into();
+    }
+    let more = names.len().saturating_sub(12);
+    let shown = names[..names.len() - more].join(", ");
+    if more > 0 {
+        format!("{shown} and {more} more")
+    } else {
+        shown
+    }
+}
+
+/// [`runs`] of `scenario`, refused naming it (and the recorded ones) when it has none.
+fn recorded(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
+    let found = runs(db, scenario)?;
+    if let (Some(name), true) = (scenario, found.is_empty()) {
+        let mut known: Vec<String> = runs(db, None)?.into_iter().map(|r| r.scenario).collect();
+        known.sort();
+        known.dedup();
+        return Err(crate::Error::setting(
+            "scenario",
+            format!(
+                "`{name}` has no record in the database (recorded: {})",
+                listed(&known)
+            ),
+        ));
+    }
+    Ok(found)
+}
+
 fn runs(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
     db.query(
         "SELECT id, kind, scenario, scenario_text, label, calbench_version, git_commit, \
@@ -231,7 +272,7 @@ pub fn points(
     metrics: &[String],
     tolerance: Real,
 ) -> Result<Vec<Point>> {
-    let runs = runs(db, scenario)?;
+    let runs = recorded(db, scenario)?;
     let mut step_of: BTreeMap<i64, BTreeMap<(String, String), &'static str>> = BTreeMap::new();
     let series = series(&runs);
     for list in series.values() {
@@ -249,12 +290,7 @@ pub fn points(
         if metrics.is_empty() {
             kind == "task" || Metric::from_key(metric).is_some_and(|m| DEFAULT_METRICS.contains(&m))
         } else {
-            metrics.iter().any(|m| {
-                metric == m
-                    || metric
-                        .strip_prefix(m.as_str())
-                        .is_some_and(|r| r.starts_with('.'))
-            })
+            metrics.iter().any(|m| names_metric(m, metric))
         }
     };
     let figures = db.query(
@@ -271,6 +307,31 @@ pub fn points(
             ))
         },
     )?;
+    let ids: std::collections::BTreeSet<i64> = runs.iter().map(|r| r.id).collect();
+    let mut names: Vec<&String> = figures
+        .iter()
+        .filter(|f| ids.contains(&f.0))
+        .map(|f| &f.2)
+        .collect();
+    names.sort();
+    names.dedup();
+    if let Some(m) = metrics
+        .iter()
+        .find(|m| !names.iter().any(|n| names_metric(m, n)))
+    {
+        let mut heads: Vec<String> = names
+            .iter()
+            .map(|n| n.split('.').next().unwrap_or(n).to_string())
+            .collect();
+        heads.dedup();
+        return Err(crate::Error::setting(
+            "metric",
+            format!(
+                "`{m}` is no recorded metric nor a prefix of one (recorded: {})",
+                listed(&heads)
+            ),
+        ));
+    }
     let mut by_run: BTreeMap<i64, Vec<_>> = BTreeMap::new();
     for f in figures {
         by_run.entry(f.0).or_default().push(f);
@@ -359,7 +420,7 @@ pub fn regressions(
     scenario: Option<&str>,
     tolerance: Real,
 ) -> Result<(Vec<Regressed>, usize)> {
-    let runs = runs(db, scenario)?;
+    let runs = recorded(db, scenario)?;
     let mut out = Vec::new();
     let mut pairs = 0;
     for ((scenario, machine), list) in series(&runs) {

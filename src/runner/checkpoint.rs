@@ -29,6 +29,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
+use crate::report::guard::{alive, host};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::reporter::Reporter;
@@ -381,34 +382,6 @@ fn check_records(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
         }
         check.record::<serde::de::IgnoredAny>(&String::from_utf8_lossy(&text))?;
     }
-}
-
-/// The name of this host (empty where it cannot be read).
-fn host() -> String {
-    std::fs::read_to_string("/proc/sys/kernel/hostname")
-        .or_else(|_| std::fs::read_to_string("/etc/hostname"))
-        .or_else(|_| std::env::var("HOSTNAME"))
-        .map(|h| h.trim().to_string())
-        .unwrap_or_default()
-}
-
-/// Whether process `pid` (not this one) is running on this host: its `/proc` entry, not a
-/// zombie, where there is a `/proc`; otherwise `kill -0`.
-fn alive(pid: u32) -> bool {
-    if pid == std::process::id() {
-        return false;
-    }
-    if Path::new("/proc/self").exists() {
-        return std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
-            let state = s.rsplit_once(')').map(|(_, rest)| rest.trim_start());
-            !matches!(state.and_then(|r| r.chars().next()), Some('Z' | 'X') | None)
-        });
-    }
-    std::process::Command::new("kill")
-        .args(["-0", &pid.to_string()])
-        .stderr(std::process::Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success())
 }
 
 /// The trials of a checkpoint's `records.txt`, read back in order ([`Replay`]), each

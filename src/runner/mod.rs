@@ -8,4 +8,5 @@
 pub mod checkpoint;
 pub mod run;
 pub mod shard;
+pub mod threads;
 pub mod whole;

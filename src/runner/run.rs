@@ -18,7 +18,7 @@ use crate::report::{atomically, run as files, run_outputs, write_run};
 use crate::study::kind::AnyScenario;
 use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
 use crate::study::scenario::Scenario;
-use crate::study::stats::precision::{Stopping, BLOCK};
+use crate::study::stats::precision::{widest_and_needed, Stopping, BLOCK};
 use crate::study::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
 use crate::study::{TrialResult, TrialSink, CHUNK};
 
@@ -36,6 +36,7 @@ pub fn run_study(
         .out
         .clone()
         .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    crate::report::guard::guard_folder(&out, "out")?;
     let cp = Checkpoint::start(
         &AnyScenario::MonteCarlo(scenario.clone()),
         opts.shard,
@@ -299,7 +300,7 @@ pub fn run_resumed(
     } else {
         Box::new(NoProgress)
     };
-    let pool = pool(opts.threads)?;
+    let pool = pool(opts.threads, last - first, reporter)?;
     if opts.precision.is_some() {
         refuse_precision(&scenario, opts)?;
     }
@@ -370,24 +371,34 @@ pub fn run_resumed(
         }
     }
     bar.finish();
-    let (scenario, stopping) = match &opts.precision {
-        None => (scenario, None),
+    let (scenario, mut stopping, widest) = match &opts.precision {
+        None => (scenario, None, None),
         Some(p) => {
             let headlines = collector.current().map_or(Vec::new(), |a| a.headlines());
             let n = stop.unwrap_or(seen);
+            let reached = p.reached(&headlines);
+            let (i, needed) = widest_and_needed(p, &headlines, n);
             let stopping = Stopping {
                 rule: "precision".into(),
                 target: p.text.clone(),
-                reached: p.reached(&headlines),
+                reached,
                 trials: n,
                 max_trials: scenario.trials,
                 block: BLOCK,
                 widest: p.widest(&headlines),
+                widest_entry: None,
+                trials_needed: needed.filter(|_| !reached),
             };
-            (scenario.with_run_overrides(Some(n), None)?, Some(stopping))
+            let scenario = scenario.with_run_overrides(Some(n), None)?;
+            (scenario, Some(stopping), i.filter(|_| !reached))
         }
     };
     let blocks = collector.finish(scenario.sweep.as_ref())?;
+    if let (Some(st), Some(i)) = (stopping.as_mut(), widest) {
+        // Entries are in the headlines' order (strategy × method).
+        let entry = blocks.first().and_then(|b| b.entries.get(i));
+        st.widest_entry = entry.map(|e| format!("{} / {}", e.method, e.poses));
+    }
     Ok(RunResult {
         scenario,
         blocks,
@@ -399,12 +410,17 @@ pub fn run_resumed(
 }
 
 /// The worker threads of a run: `threads` of them (`None`: one per core).
-pub(super) fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(t) = threads {
-        builder = builder.num_threads(t);
+pub(super) fn pool(
+    threads: Option<usize>,
+    work: u64,
+    reporter: &dyn Reporter,
+) -> Result<rayon::ThreadPool> {
+    let (threads, note) = super::threads::capped(threads, work, super::threads::cores());
+    if let Some(note) = note {
+        reporter.warning(&note);
     }
-    builder
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
         .build()
         .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))
 }

@@ -101,7 +101,7 @@ pub fn run_cells<C: Cells>(
     let (blocks, trials) = (sc.blocks().0, sc.trials() as u64);
     let total = blocks as u64 * trials;
     let (first, last) = opts.shard.map_or((0, total), |s| s.range(total));
-    let pool = super::run::pool(opts.threads)?;
+    let pool = super::run::pool(opts.threads, last - first, reporter)?;
     let bar: Box<dyn Progress + '_> = match opts.progress {
         true => reporter.progress(last - first),
         false => Box::new(NoProgress),

@@ -92,7 +92,7 @@ impl InstrumentSettings {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(Error::setting(
                     format!("measurement.{k}"),
-                    format!("must be finite and ≥ 0, got {v}"),
+                    format!("must be finite and ≥ 0, got {}", crate::error::shown(v)),
                 ));
             }
         }

@@ -80,8 +80,9 @@ impl ComplianceSettings {
                 return Err(Error::setting(
                     "compliance.stiffness_nm_per_rad",
                     format!(
-                        "joint {}: stiffness must be a finite number > 0, got {v}",
-                        j + 1
+                        "joint {}: stiffness must be a finite number > 0, got {}",
+                        j + 1,
+                        crate::error::shown(*v)
                     ),
                 ));
             }
@@ -95,7 +96,11 @@ impl ComplianceSettings {
             {
                 return Err(Error::setting(
                     "compliance.link_mass_kg",
-                    format!("link {}: mass must be a finite number ≥ 0, got {v}", j + 1),
+                    format!(
+                        "link {}: mass must be a finite number ≥ 0, got {}",
+                        j + 1,
+                        crate::error::shown(*v)
+                    ),
                 ));
             }
         }

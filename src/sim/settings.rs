@@ -22,7 +22,10 @@ use crate::robot::Param;
 /// Refuses a non-finite or negative number.
 fn non_negative(key: &str, v: Real) -> Result<()> {
     if !v.is_finite() || v < 0.0 {
-        return Err(Error::setting(key, format!("must be ≥ 0, got {v}")));
+        return Err(Error::setting(
+            key,
+            format!("must be ≥ 0, got {}", crate::error::shown(v)),
+        ));
     }
     Ok(())
 }
@@ -176,7 +179,7 @@ impl ErrorSettings {
             if let Some((n, v)) = self.values.iter().find(|(_, v)| !v.is_finite()) {
                 return Err(Error::setting(
                     format!("errors.values.{n}"),
-                    format!("must be a finite number, got {v}"),
+                    format!("must be a finite number, got {}", crate::error::shown(*v)),
                 ));
             }
         } else if !self.values.is_empty() {

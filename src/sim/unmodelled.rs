@@ -52,7 +52,10 @@ impl UnmodelledSettings {
             if !(v.is_finite() && (0.0..=0.1).contains(&v)) {
                 return Err(Error::setting(
                     key,
-                    format!("{v}: must be a number from 0 to 0.1 rad"),
+                    format!(
+                        "{}: must be a number from 0 to 0.1 rad",
+                        crate::error::shown(v)
+                    ),
                 ));
             }
         }

@@ -205,7 +205,10 @@ impl RegistrationStudy {
             if !v.is_finite() {
                 return Err(Error::setting(
                     "registration_study",
-                    format!("center_mm and tracker_pose must be finite, got {v}"),
+                    format!(
+                        "center_mm and tracker_pose must be finite, got {}",
+                        crate::error::shown(*v)
+                    ),
                 ));
             }
         }

@@ -1,16 +1,19 @@
 //! `run --shard auto` under the schedulers' conventions: the share from a Slurm job array's
 //! or a Kubernetes Indexed Job's environment, merged into the same bytes as one run; the
 //! refusals when the variables are missing or inconsistent; `SLURM_CPUS_PER_TASK` as the
-//! default of `--threads`.
+//! default of `--threads`; a stepped Slurm array (`--array=0-8:2`) mapped onto its shards;
+//! `--threads` capped at the work.
 
 use std::process::Output;
 
 use crate::common::{bin, calbench_ok, path_arg, read, root, tmp_dir};
 
-const VARS: [&str; 5] = [
+const VARS: [&str; 7] = [
     "SLURM_ARRAY_TASK_ID",
     "SLURM_ARRAY_TASK_MIN",
     "SLURM_ARRAY_TASK_COUNT",
+    "SLURM_ARRAY_TASK_STEP",
+    "SLURM_ARRAY_TASK_MAX",
     "SLURM_CPUS_PER_TASK",
     "JOB_COMPLETION_INDEX",
 ];
@@ -123,7 +126,7 @@ fn shard_auto_reads_slurm_and_kubernetes_and_merges_to_the_bytes_of_one_run() {
             ("SLURM_ARRAY_TASK_COUNT", "2"),
         ],
         &[],
-        &["SLURM_ARRAY_TASK_ID 9", "outside"],
+        &["SLURM_ARRAY_TASK_ID 9", "not one of the array's IDs"],
     );
     refused(
         &[("JOB_COMPLETION_INDEX", "x")],
@@ -143,4 +146,125 @@ fn shard_auto_reads_slurm_and_kubernetes_and_merges_to_the_bytes_of_one_run() {
     );
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("SLURM_CPUS_PER_TASK"));
+}
+
+/// A stepped Slurm array (`sbatch --array=0-8:2`: IDs 0, 2, 4, 6, 8) runs shard ID/2 of 5;
+/// an ID off the step, an array whose MAX is not MIN + (COUNT − 1) × STEP, a
+/// JOB_COMPLETION_INDEX not below --shard-count and a --shard-count against --shard I/N are
+/// refused naming the variables.
+#[test]
+fn a_stepped_slurm_array_maps_onto_its_shards_and_contradictions_are_refused() {
+    let dir = tmp_dir("cli-cluster-step");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let sc = path_arg(&sc);
+    let array = |id: &'static str, max: &'static str| {
+        [
+            ("SLURM_ARRAY_TASK_ID", id),
+            ("SLURM_ARRAY_TASK_MIN", "0"),
+            ("SLURM_ARRAY_TASK_MAX", max),
+            ("SLURM_ARRAY_TASK_STEP", "2"),
+            ("SLURM_ARRAY_TASK_COUNT", "5"),
+        ]
+    };
+    let run = |env: &[(&str, &str)], extra: &[&str]| {
+        let out = dir.join("s");
+        let _ = std::fs::remove_dir_all(&out);
+        let mut args = vec!["run", sc, "--trials", "5", "--out", path_arg(&out)];
+        args.extend_from_slice(extra);
+        run_with(env, &args)
+    };
+    for (id, shard) in [("0", "shard 0/5"), ("4", "shard 2/5"), ("8", "shard 4/5")] {
+        let o = run(&array(id, "8"), &["--shard", "auto"]);
+        assert!(
+            o.status.success(),
+            "{id}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(String::from_utf8_lossy(&o.stdout).contains(shard), "{id}");
+    }
+    let refused = |env: &[(&str, &str)], extra: &[&str], words: &[&str]| {
+        let o = run(env, extra);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(!o.status.success(), "{env:?} {extra:?}");
+        for w in words {
+            assert!(err.contains(w), "{err} lacks {w}");
+        }
+        assert_eq!(err.matches("setting").count(), 1, "one prefix: {err}");
+        assert!(!dir.join("s").join("shard.json").exists());
+    };
+    refused(
+        &array("3", "8"),
+        &["--shard", "auto"],
+        &["SLURM_ARRAY_TASK_ID 3", "SLURM_ARRAY_TASK_STEP 2"],
+    );
+    refused(
+        &array("4", "9"),
+        &["--shard", "auto"],
+        &["SLURM_ARRAY_TASK_MAX 9", "SLURM_ARRAY_TASK_STEP 2"],
+    );
+    refused(
+        &[("JOB_COMPLETION_INDEX", "5")],
+        &["--shard", "auto", "--shard-count", "3"],
+        &["JOB_COMPLETION_INDEX 5", "--shard-count 3"],
+    );
+    refused(
+        &[],
+        &["--shard", "0/2", "--shard-count", "3"],
+        &["--shard-count", "contradicts --shard 0/2"],
+    );
+}
+
+/// `--threads 99999` on 4 trials runs on at most 4 threads, with a note, in about the time
+/// of `--threads 4`, and writes the same bytes.
+#[test]
+fn threads_are_capped_at_the_work() {
+    let dir = tmp_dir("cli-threads-cap");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let run = |threads: &str, name: &str| {
+        let out = dir.join(name);
+        let t0 = std::time::Instant::now();
+        let o = run_with(
+            &[],
+            &[
+                "run",
+                path_arg(&sc),
+                "--trials",
+                "4",
+                "--threads",
+                threads,
+                "--out",
+                path_arg(&out),
+            ],
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        (
+            t0.elapsed().as_secs_f64(),
+            String::from_utf8_lossy(&o.stderr).to_string(),
+            out,
+        )
+    };
+    let (four, _, a) = run("4", "four");
+    let (many, err, b) = run("99999", "many");
+    assert!(err.contains("99999 threads asked for; running on"), "{err}");
+    assert!(
+        many < 3.0 * four + 2.0,
+        "99999 threads: {many:.1} s, 4 threads: {four:.1} s"
+    );
+    assert_eq!(read(&a.join("summary.json")), read(&b.join("summary.json")));
+    let o = run_with(
+        &[("SLURM_CPUS_PER_TASK", "0")],
+        &[
+            "run",
+            path_arg(&sc),
+            "--trials",
+            "2",
+            "--out",
+            path_arg(&dir.join("z")),
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("SLURM_CPUS_PER_TASK"),
+        "{err}"
+    );
 }

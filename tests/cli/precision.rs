@@ -164,3 +164,52 @@ fn bad_precisions_and_runs_it_cannot_stop_are_refused_naming_the_flag() {
     }
     assert!(!out.exists());
 }
+
+/// `--precision 1% --trials 300` on `scenarios/ci-guard.toml` stops at the cap short of its
+/// target and says so on stderr, in report.md and in report.html, naming the widest entry,
+/// its half-width and the trials it would need (summary.json's `stopping`).
+#[test]
+fn a_precision_stop_short_of_its_target_explains_itself() {
+    let dir = tmp_dir("precision-short");
+    let out = dir.join("o");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let o = calbench_ok(&[
+        "run",
+        path_arg(&sc),
+        "--precision",
+        "1%",
+        "--trials",
+        "300",
+        "--out",
+        path_arg(&out),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let s = load_json(&out.join("summary.json"));
+    let st = &s["stopping"];
+    assert_eq!(st["reached"], false, "{st}");
+    assert_eq!(st["trials"], 300);
+    let entry = st["widest_entry"].as_str().unwrap();
+    let needed = st["trials_needed"].as_u64().unwrap();
+    let w = st["widest"].as_f64().unwrap();
+    assert!(needed > 300 && needed.is_multiple_of(32), "{needed}");
+    // The half-width shrinks as 1/√n: the trials needed bring it to the target.
+    let expected = 300.0 * (w / 0.01).powi(2);
+    assert!(
+        (needed as f64) >= expected && (needed as f64) < expected + 32.0,
+        "{needed} {expected}"
+    );
+    let half = format!("±{:.3} %", w * 100.0);
+    for (place, text) in [
+        ("stderr", err.to_string()),
+        ("report.md", read(&out.join("report.md"))),
+        ("report.html", read(&out.join("report.html"))),
+    ] {
+        assert!(
+            text.contains("precision ±1% not reached"),
+            "{place}: {text}"
+        );
+        assert!(text.contains(entry), "{place}: {entry}");
+        assert!(text.contains(&half), "{place}: {half}");
+        assert!(text.contains(&format!("about {needed} trials")), "{place}");
+    }
+}

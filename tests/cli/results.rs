@@ -254,4 +254,58 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
         !o.status.success() && err.contains("task.json") && err.contains("division"),
         "{err}"
     );
+    // A folder that does not exist, an empty --label or --machine: refused, nothing stored.
+    let z = dir.join("z.sqlite");
+    let o = calbench(&[
+        "record",
+        path_arg(&dir.join("nowhere")),
+        "--db",
+        path_arg(&z),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("nowhere does not exist"),
+        "{err}"
+    );
+    std::fs::write(&bad, read(&bad).replace("\"middle\"", "\"closed\"")).unwrap();
+    for flag in ["--label", "--machine"] {
+        let o = calbench(&[
+            "record",
+            path_arg(&dir.join("t")),
+            "--db",
+            path_arg(&z),
+            flag,
+            " ",
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("must not be empty"),
+            "{flag}: {err}"
+        );
+    }
+    assert!(!z.exists());
+    // history of a scenario or a metric the database does not hold: refused, naming it.
+    calbench_ok(&["record", path_arg(&dir.join("t")), "--db", path_arg(&z)]);
+    let out = dir.join("hist");
+    for (flag, typo) in [
+        ("--scenario", "ci-gaurd"),
+        ("--metric", "validation_aftr_mm"),
+    ] {
+        let args = [
+            "history",
+            "--db",
+            path_arg(&z),
+            flag,
+            typo,
+            "--out",
+            path_arg(&out),
+        ];
+        let o = calbench(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(typo) && err.contains("recorded:"),
+            "{err}"
+        );
+        assert!(!out.exists());
+    }
 }

@@ -1,7 +1,9 @@
 //! Identifications that make the robot worse are refused, naming the file and the cause, and
 //! written with a warning under `--allow-worse`: a plane file whose `plane` column is all 1, a
 //! multi-target file whose `x` column is all 0, a tracker's file with a column scaled; a gross
-//! reading is named; and `--export toml,ur-yaml` writes both files.
+//! reading is named; and `--export toml,ur-yaml` writes both files. These results can also be
+//! physically implausible (docs/formats.md "Physical plausibility"), so keeping them takes
+//! `--allow-implausible` too.
 
 use std::path::{Path, PathBuf};
 
@@ -100,7 +102,10 @@ fn a_worse_robot_is_refused_unless_allowed() {
         assert!(err.contains("--allow-worse"), "{err}");
         assert!(!out.exists(), "nothing is written");
         let kept = d.join("kept");
-        let j = written_with_warning(&identify(bad, val, &kept, &["--allow-worse"]), &kept);
+        let j = written_with_warning(
+            &identify(bad, val, &kept, &["--allow-worse", "--allow-implausible"]),
+            &kept,
+        );
         let causes = j["allowed_worse"].as_array().unwrap();
         assert!(
             causes[0].as_str().unwrap().contains("validation RMS"),
@@ -201,7 +206,10 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     );
     assert!(!d.join("refused").exists());
     let kept = d.join("kept");
-    let j = written_with_warning(&run("bad.csv", &kept, &["--allow-worse"]), &kept);
+    let j = written_with_warning(
+        &run("bad.csv", &kept, &["--allow-worse", "--allow-implausible"]),
+        &kept,
+    );
     assert!(j["allowed_worse"][0]
         .as_str()
         .unwrap()

@@ -178,7 +178,7 @@ pub(super) fn check_target(v: Real) -> Result<()> {
     if v.is_nan() || v == Real::INFINITY {
         Err(Error::setting(
             "target",
-            format!("must be below +∞, got {v}"),
+            format!("must be below +∞, got {}", crate::error::shown(v)),
         ))
     } else {
         Ok(())

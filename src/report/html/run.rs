@@ -101,6 +101,9 @@ pub fn page(
         ),
     );
 
+    if let Some(w) = summary.stopping.as_ref().and_then(|st| st.shortfall()) {
+        page.warning(&format!("{w}."));
+    }
     let (h, rows) = crate::report::run::claims::table(summary);
     if !rows.is_empty() {
         page.section("The paper's claims");

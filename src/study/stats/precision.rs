@@ -134,6 +134,62 @@ pub struct Stopping {
     /// or the half-width over the mean (a fraction, 0.005 for 0.5 %); `null` when an entry
     /// had no interval.
     pub widest: Option<Real>,
+    /// When the target was not reached: the entry with the widest interval
+    /// (`method / poses`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub widest_entry: Option<String>,
+    /// When the target was not reached: the trials the widest interval would need, its
+    /// half-width shrinking as 1/√trials, rounded up to a whole [`BLOCK`].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub trials_needed: Option<usize>,
+}
+
+impl Stopping {
+    /// The shortfall in words when the run stopped at its cap short of the target (naming
+    /// the widest entry, its half-width and the trials it would need); `None` when it
+    /// reached the target.
+    pub fn shortfall(&self) -> Option<String> {
+        if self.reached {
+            return None;
+        }
+        let width = self.widest.map_or("no interval".to_string(), |w| {
+            if self.target.trim_end().ends_with('%') {
+                format!("±{:.3} %", w * 100.0)
+            } else {
+                format!("±{w:.4} mm")
+            }
+        });
+        let entry = self.widest_entry.as_deref().unwrap_or("an entry");
+        let needed = self.trials_needed.map_or(String::new(), |n| {
+            format!("; about {n} trials would reach it")
+        });
+        Some(format!(
+            "precision ±{} not reached: stopped at the cap of {} trials with {entry}'s mean \
+             validation error after calibration at {width}{needed}",
+            self.target.trim_start_matches(['±', '+']),
+            self.trials,
+        ))
+    }
+}
+
+/// The index of the widest interval of `headlines` in the target's unit of `p`, and the
+/// trials it would need to reach the target after `n` ([`Stopping::trials_needed`]).
+pub fn widest_and_needed(
+    p: &Precision,
+    headlines: &[(Real, Option<[Real; 2]>)],
+    n: usize,
+) -> (Option<usize>, Option<usize>) {
+    let widths: Vec<Option<Real>> = headlines.iter().map(|&(m, ci)| p.width(m, ci)).collect();
+    let i = (0..widths.len()).max_by(|&a, &b| {
+        let key = |w: Option<Real>| w.unwrap_or(Real::INFINITY);
+        key(widths[a]).total_cmp(&key(widths[b]))
+    });
+    let needed = i.and_then(|i| widths[i]).map(|w| {
+        let raw = (n as Real * (w / p.goal()).powi(2)).ceil();
+        let blocks = (raw / BLOCK as Real).ceil().max(1.0);
+        (blocks as usize).saturating_mul(BLOCK)
+    });
+    (i, needed)
 }
 
 #[cfg(test)]

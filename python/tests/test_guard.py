@@ -1,0 +1,91 @@
+"""Every front end is guarded alike (docs/formats.md § 1, "Output folders"): Python's `run`
+with a shard folder, `study.write` and `task` refuse the root folder, the home folder and
+an input, and write nothing; `identify` refuses an identified robot that cannot be
+physically right unless `allow_implausible=True`; `run(precision=...)` says where it
+stopped."""
+import os
+
+import numpy as np
+import pytest
+
+import calbench
+
+CI_GUARD = "scenarios/ci-guard.toml"
+
+
+def test_a_shard_into_the_root_folder_is_refused_and_writes_nothing(root):
+    before = sorted(os.listdir("/"))
+    with pytest.raises(calbench.Error, match="root folder"):
+        calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out="/")
+    assert sorted(os.listdir("/")) == before
+
+
+def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, monkeypatch):
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    study = calbench.run(root / CI_GUARD, trials=2)
+    for target in (home, str(home), home / "." / ".." / "home"):
+        with pytest.raises(calbench.Error, match="home folder"):
+            study.write(target)
+        assert list(home.iterdir()) == []
+    with pytest.raises(calbench.Error, match="root folder"):
+        study.write("/")
+    with pytest.raises(calbench.Error, match="home folder"):
+        calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out=home)
+    assert list(home.iterdir()) == []
+    study.write(tmp_path / "fine")
+    assert (tmp_path / "fine" / "summary.json").exists()
+
+
+def test_a_task_into_an_input_or_home_is_refused(root, tmp_path, monkeypatch):
+    home = tmp_path / "home"
+    home.mkdir()
+    monkeypatch.setenv("HOME", str(home))
+    with pytest.raises(calbench.Error, match="home folder"):
+        calbench.task("ipa-ur10-series-a", "lm", out=home)
+    assert list(home.iterdir()) == []
+    data = root / "data" / "ipa-ur10-series-a"
+    listing = sorted(os.listdir(data))
+    with pytest.raises(calbench.Error, match="input"):
+        calbench.task("ipa-ur10-series-a", "lm", out=data)
+    assert sorted(os.listdir(data)) == listing
+
+
+def _metres(sim):
+    return sim["points"] / 1000.0
+
+
+def test_identify_refuses_an_implausible_robot_unless_allowed(root):
+    sim = calbench.simulate(root / CI_GUARD, trial=1)
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.Error, match="metres") as e:
+        calbench.identify(robot, q=sim["q"], points=_metres(sim), method="ls")
+    assert "allow_implausible=True" in str(e.value)
+    swapped = sim["points"][:, [1, 0, 2]]
+    with pytest.raises(calbench.Error, match="two columns look swapped"):
+        calbench.identify(robot, q=sim["q"], points=swapped, method="ls")
+    kept = calbench.identify(
+        robot, q=sim["q"], points=_metres(sim), method="ls", allow_implausible=True
+    )
+    assert any("metres" in f for f in kept["allowed_implausible"])
+    good = calbench.identify(robot, q=sim["q"], points=sim["points"], method="ls")
+    assert "allowed_implausible" not in good
+    assert np.isfinite(good["rms_residual_mm"])
+
+
+def test_run_with_precision_returns_its_shortfall(root):
+    study = calbench.run(root / CI_GUARD, trials=10, precision="0.01%")
+    stopping = study.summary["stopping"]
+    assert stopping["reached"] is False and stopping["trials"] == 10
+    assert stopping["trials_needed"] > 10
+    assert " / " in stopping["widest_entry"]
+    with pytest.raises(calbench.SettingError, match="precision"):
+        calbench.run(root / CI_GUARD, trials=10, precision="5")
+
+
+def test_with_errors_beyond_the_model_ranges_is_refused():
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.SettingError, match="errors"):
+        robot.with_errors({"a2": 1e308})
+    robot.with_errors({"a2": 0.5})

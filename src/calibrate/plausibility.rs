@@ -1,0 +1,419 @@
+//! Whether an identified robot can be physically right (docs/formats.md `identify`,
+//! "Physical plausibility"): a calibration corrects a robot by millimetres and fractions of a
+//! degree, so a result whose lengths moved by a large share of the robot's reach, whose
+//! angles turned by degrees, whose readings are scaled against the nominal robot's points
+//! (a file in metres or inches), or whose residual lies far below the instrument's stated
+//! noise while its parameters moved far, comes from the data, not from the robot. Each such
+//! finding is a cause in words, naming the parameter and how far it moved; the refusal adds
+//! what in the data likely caused it (a unit, swapped or constant columns, a gross reading).
+
+use std::path::Path;
+
+use super::registration::register_svd;
+use crate::error::{Error, Opt, Said};
+use crate::measurement::kind::{Instrument, KindData};
+use crate::numeric::{Real, Vec3};
+use crate::robot::{Param, Robot};
+
+/// A joint's length or offset (`a`, `d`) may move by at most this share of the robot's reach
+/// ([`reach`]) …
+pub const LENGTH_SHARE: Real = 0.02;
+
+/// … or by this many millimetres, whichever is larger.
+pub const LENGTH_FLOOR_MM: Real = 10.0;
+
+/// A joint's angle (`theta`, `alpha`, `beta`) or a joint-angle harmonic may move by at most
+/// this many radians (5°).
+pub const ANGLE_RAD: Real = 0.087_266_462_599_716_48;
+
+/// The base's and the tool's lengths may move by at most this share of the reach.
+pub const FRAME_SHARE: Real = 0.5;
+
+/// The measured points' spread may differ from the nominal robot's tool points' by at most
+/// this share.
+pub const SCALE_TOLERANCE: Real = 0.1;
+
+/// A residual RMS below this share of the instrument's stated noise (median `sigma_mm`) …
+pub const NOISE_SHARE: Real = 0.1;
+
+/// … while a length moved by more than this many times that noise is implausible.
+pub const NOISE_MOVES: Real = 100.0;
+
+/// The robot's reach (mm): the sum of its joints' lengths and offsets (`|a| + |d|`) and its
+/// tool's offset, an upper bound of how far its tool point gets from the first joint.
+pub fn reach(robot: &Robot) -> Real {
+    let joints: Real = (0..robot.dof())
+        .map(|j| robot.get(Param::A(j)).abs() + robot.get(Param::D(j)).abs())
+        .sum();
+    let tool = Vec3::new(
+        robot.get(Param::Tool(0)),
+        robot.get(Param::Tool(1)),
+        robot.get(Param::Tool(2)),
+    );
+    joints + tool.norm()
+}
+
+/// The moves of `identified` from `nominal` beyond the bounds, each in words, for the
+/// identified parameters `params` (compliances are not bounded; the base's and the tool's
+/// angles neither: an instrument's frame can be anywhere).
+pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<String> {
+    let reach = reach(nominal);
+    let length = (LENGTH_SHARE * reach).max(LENGTH_FLOOR_MM);
+    let mut out: Vec<(Real, String)> = Vec::new();
+    for &p in params {
+        let moved = identified.get(p) - nominal.get(p);
+        let (bound, what) = match p {
+            Param::Compliance(_) => continue,
+            Param::Base(_) | Param::Tool(_) if !p.is_length() => continue,
+            Param::Base(_) | Param::Tool(_) => (
+                FRAME_SHARE * reach,
+                format!("{:.0} % of the robot's reach, {reach:.0} mm", FRAME_SHARE * 100.0),
+            ),
+            _ if p.is_length() => (
+                length,
+                format!(
+                    "the larger of {:.0} % of the robot's reach, {reach:.0} mm, and {LENGTH_FLOOR_MM:.0} mm",
+                    LENGTH_SHARE * 100.0
+                ),
+            ),
+            _ => (ANGLE_RAD, "5°".to_string()),
+        };
+        if moved.is_finite() && moved.abs() <= bound {
+            continue;
+        }
+        let text = if p.is_length() {
+            format!("{p} moved by {moved:.3} mm (bound {bound:.1} mm: {what})")
+        } else {
+            format!(
+                "{p} moved by {moved:.4} rad ({:.2}°; bound {bound:.4} rad: {what})",
+                moved.to_degrees()
+            )
+        };
+        let over = if moved.is_finite() {
+            moved.abs() / bound
+        } else {
+            Real::INFINITY
+        };
+        out.push((over, text));
+    }
+    // The moves furthest beyond their bounds first; the rest counted.
+    out.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let more = out.len().saturating_sub(MOVES_NAMED);
+    let mut named: Vec<String> = out.into_iter().take(MOVES_NAMED).map(|m| m.1).collect();
+    if more > 0 {
+        named.push(format!("{more} more parameters beyond their bounds"));
+    }
+    named
+}
+
+/// The moves a refusal names, furthest beyond their bounds first.
+pub const MOVES_NAMED: usize = 3;
+
+/// The ratio of the spread of `seen` (the RMS distance from their centroid) to that of
+/// `model`; `None` when either is degenerate.
+fn spread_ratio(model: &[Vec3], seen: &[Vec3]) -> Option<Real> {
+    let spread = |v: &[Vec3]| {
+        let c = v.iter().fold(Vec3::zeros(), |s, p| s + p) / v.len() as Real;
+        (v.iter().map(|p| (p - c).norm_squared()).sum::<Real>() / v.len() as Real).sqrt()
+    };
+    if model.len() < 3 || model.len() != seen.len() {
+        return None;
+    }
+    let (m, s) = (spread(model), spread(seen));
+    (m > 0.0 && s.is_finite() && m.is_finite()).then(|| s / m)
+}
+
+/// The unit a spread ratio of `ratio` points to, when it is one (within 10 %).
+fn unit_of(ratio: Real) -> Option<&'static str> {
+    [
+        (1e-3, "metres"),
+        (1.0 / 25.4, "inches"),
+        (0.1, "centimetres"),
+        (1e3, "micrometres"),
+    ]
+    .into_iter()
+    .find(|(r, _)| (ratio / r - 1.0).abs() <= 0.1)
+    .map(|(_, u)| u)
+}
+
+/// What the measured points `seen` (the instrument's frame) say against the nominal robot's
+/// points `model` at the same poses: a scale beyond [`SCALE_TOLERANCE`] (a finding, with the
+/// unit it points to as a cause when it is one), a column of one value, or mirrored points
+/// (two columns swapped or one's sign flipped: the points fit the nominal robot's much
+/// closer mirrored back; a rigid fit cannot tell which two). The finding, and the causes in
+/// words.
+pub fn data_causes(model: &[Vec3], seen: &[Vec3]) -> (Option<String>, Vec<String>) {
+    let mut causes = Vec::new();
+    let ratio = spread_ratio(model, seen).filter(|r| (r - 1.0).abs() > SCALE_TOLERANCE);
+    let scale = ratio.map(|r| {
+        format!(
+            "the measured points spread {r:.4} times as far as the nominal robot's tool points \
+             (bound ±{:.0} %)",
+            SCALE_TOLERANCE * 100.0
+        )
+    });
+    if let Some(u) = ratio.and_then(unit_of) {
+        causes.push(format!("the file is likely in {u}, not millimetres"));
+    }
+    let axis = ["x", "y", "z"];
+    for (c, name) in axis.iter().enumerate() {
+        let first = seen.first().map(|p| p[c]);
+        if seen.len() >= 3 && seen.iter().all(|p| Some(p[c]) == first) {
+            causes.push(format!(
+                "column {name} holds one value ({}) in every row",
+                first.unwrap_or(Real::NAN)
+            ));
+        }
+    }
+    if causes.is_empty() {
+        let rms = |r: &[Real]| (r.iter().map(|v| v * v).sum::<Real>() / r.len() as Real).sqrt();
+        let fit = |pts: &[Vec3]| {
+            register_svd(model, pts, None)
+                .ok()
+                .map(|r| rms(&r.residuals))
+        };
+        let mirrored: Vec<Vec3> = seen.iter().map(|p| Vec3::new(p.y, p.x, p.z)).collect();
+        if let (Some(plain), Some(back)) = (fit(seen), fit(&mirrored)) {
+            if plain > LENGTH_FLOOR_MM && back < plain / 5.0 {
+                causes.push(format!(
+                    "the points are a mirror image of the robot's: two columns look swapped \
+                     (x and y, say) or one has its sign flipped (they fit the nominal robot's \
+                     within {back:.1} mm RMS mirrored back, {plain:.1} mm as given)"
+                ));
+            }
+        }
+    }
+    (scale, causes)
+}
+
+/// A residual RMS (`rms`, mm) below [`NOISE_SHARE`] of the instrument's stated noise
+/// (`sigma`, the median of its per-reading σ) while a length moved by more than
+/// [`NOISE_MOVES`] times that noise (`largest`: the largest move of a length, mm).
+pub fn below_noise(rms: Real, sigma: Option<&[Real]>, largest: Real) -> Option<String> {
+    let mut s: Vec<Real> = sigma?.iter().copied().filter(|v| v.is_finite()).collect();
+    if s.is_empty() {
+        return None;
+    }
+    s.sort_by(Real::total_cmp);
+    let noise = s[s.len() / 2];
+    (noise > 0.0 && rms < NOISE_SHARE * noise && largest > NOISE_MOVES * noise).then(|| {
+        format!(
+            "the residual RMS {rms:.5} mm lies far below the instrument's stated noise \
+             ({noise:.4} mm) while a length moved by {largest:.3} mm: the data cannot hold \
+             that much information (a unit or a copied column)"
+        )
+    })
+}
+
+/// The largest move of an identified length (mm) of `identified` from `nominal`.
+pub fn largest_length_move(nominal: &Robot, identified: &Robot, params: &[Param]) -> Real {
+    params
+        .iter()
+        .filter(|p| p.is_length())
+        .map(|&p| (identified.get(p) - nominal.get(p)).abs())
+        .fold(0.0, Real::max)
+}
+
+/// What makes an identification implausible (`found`: empty when nothing does) and what in
+/// the data likely caused it (`causes`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Findings {
+    /// The moves beyond the bounds, a scale beyond its tolerance, a residual below the noise.
+    pub found: Vec<String>,
+    /// A unit, a column of one value, swapped columns, a gross reading.
+    pub causes: Vec<String>,
+}
+
+/// Judges the identified robot `identified` (parameters `params`) against `nominal`: its
+/// moves ([`moves`]), the measured points against the nominal robot's (`points`: model,
+/// seen; [`data_causes`]), its residual RMS `rms` against the stated noise `sigma`
+/// ([`below_noise`]); `gross` names a gross reading the residuals point to, a cause.
+pub fn judge(
+    (nominal, identified, params): (&Robot, &Robot, &[Param]),
+    points: Option<(&[Vec3], &[Vec3])>,
+    (rms, sigma): (Real, Option<&[Real]>),
+    gross: Option<String>,
+) -> Findings {
+    let mut found = moves(nominal, identified, params);
+    let largest = largest_length_move(nominal, identified, params);
+    found.extend(below_noise(rms, sigma, largest));
+    let (scale, mut causes) = points.map_or((None, vec![]), |(m, s)| data_causes(m, s));
+    if let Some(scale) = scale {
+        found.push(scale);
+    }
+    if found.is_empty() {
+        return Findings::default();
+    }
+    causes.extend(gross.map(|g| format!("{g} (a gross reading)")));
+    Findings { found, causes }
+}
+
+/// A multi-target file's points (`data`, at the poses `qs`) beside the nominal robot's
+/// target points at those poses (model, seen), for [`judge`]; `None` for the other kinds.
+pub fn target_points(
+    nominal: &Robot,
+    qs: &[Vec<Real>],
+    data: &KindData,
+) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
+    let Instrument::Targets(targets) = &data.instrument else {
+        return None;
+    };
+    let chain = nominal.chain();
+    let model: Vec<Vec3> = qs
+        .iter()
+        .flat_map(|q| {
+            let f = chain.fk(q);
+            targets.iter().map(move |o| f.pos + f.rot * o)
+        })
+        .collect();
+    let seen: Vec<Vec3> = data
+        .values
+        .chunks(3)
+        .map(|c| Vec3::new(c[0], c[1], c[2]))
+        .collect();
+    Some((model, seen))
+}
+
+/// The refusal of an identification that cannot be physically right, read from `source`:
+/// `found` the implausible moves and findings, `causes` what in the data likely caused them;
+/// it names the option that writes it with a warning ([`Opt::AllowImplausible`]).
+pub fn implausible_error(source: &Path, found: &[String], causes: &[String]) -> Error {
+    let cause = if causes.is_empty() {
+        "no single cause was found in the data: check the units, the columns, a gross reading \
+         and the robot model"
+            .to_string()
+    } else {
+        format!("likely cause: {}", causes.join("; "))
+    };
+    let msg = format!(
+        "the identified robot cannot be physically right: {}; {cause}; nothing was written. \
+         Fix the data, or pass ",
+        found.join("; ")
+    );
+    Error::file(
+        source,
+        "data",
+        Said::from(msg)
+            .on(Opt::AllowImplausible)
+            .text(" to write it with a warning"),
+    )
+}
+
+/// The findings `f` of an identification read from `source`: refused
+/// ([`implausible_error`]) unless `allow`, when they find anything; what was found
+/// otherwise, its likely cause last (kept with a warning).
+pub fn verdict(f: Findings, source: &Path, allow: bool) -> crate::Result<Vec<String>> {
+    if f.found.is_empty() {
+        return Ok(Vec::new());
+    }
+    if allow {
+        let mut kept = f.found;
+        if !f.causes.is_empty() {
+            kept.push(format!("likely cause: {}", f.causes.join("; ")));
+        }
+        return Ok(kept);
+    }
+    Err(implausible_error(source, &f.found, &f.causes))
+}
+
+/// [`verdict`] of [`judge`]: the findings on `subject`, refused (read from `source`) unless
+/// `allow`.
+pub fn check(
+    subject: (&Robot, &Robot, &[Param]),
+    points: Option<(&[Vec3], &[Vec3])>,
+    noise: (Real, Option<&[Real]>),
+    gross: Option<String>,
+    (source, allow): (&Path, bool),
+) -> crate::Result<Vec<String>> {
+    verdict(judge(subject, points, noise, gross), source, allow)
+}
+
+/// The tool points of `robot` at the poses `qs`.
+pub fn tool_points(robot: &Robot, qs: &[Vec<Real>]) -> Vec<Vec3> {
+    let chain = robot.chain();
+    qs.iter().map(|q| chain.fk(q).pos).collect()
+}
+
+/// The warning of a result kept although it cannot be physically right (`found`), if any.
+pub fn implausible_warning(found: &[String]) -> Option<Said> {
+    (!found.is_empty()).then(|| {
+        let msg = format!(
+            "the identified robot cannot be physically right ({}); kept because of ",
+            found.join("; ")
+        );
+        Said::from(msg)
+            .name(Opt::AllowImplausible)
+            .text(": do not load it into a controller before checking the data")
+    })
+}
+
+/// The key of `identified.json` listing why a kept result cannot be physically right.
+pub const ALLOWED_IMPLAUSIBLE: &str = "allowed_implausible";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::robot::builtin;
+
+    #[test]
+    fn moves_beyond_the_bounds_are_named_and_within_are_not() {
+        let nominal = builtin::load("irb2600").unwrap();
+        let reach = reach(&nominal);
+        assert!(reach > 1500.0 && reach < 3000.0, "{reach}");
+        let params = [Param::A(1), Param::Theta(2), Param::Tool(0), Param::Tool(4)];
+        let small = nominal.with_errors(&[(Param::A(1), 1.0), (Param::Theta(2), 0.01)]);
+        assert!(moves(&nominal, &small, &params).is_empty());
+        let a2 = nominal.get(Param::A(1));
+        let metres = nominal.with_errors(&[(Param::A(1), a2 / 1000.0 - a2)]);
+        let m = moves(&nominal, &metres, &params);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert!(m[0].starts_with("a2 moved by -"), "{m:?}");
+        let turned = nominal.with_errors(&[(Param::Theta(2), 0.2), (Param::Tool(4), 3.0)]);
+        let m = moves(&nominal, &turned, &params);
+        assert_eq!(m.len(), 1, "the tool's angle is not bounded: {m:?}");
+        assert!(m[0].contains("theta3") && m[0].contains("11.46°"), "{m:?}");
+    }
+
+    fn cloud() -> Vec<Vec3> {
+        (0..30)
+            .map(|i| {
+                let t = i as Real;
+                Vec3::new(
+                    800.0 + 300.0 * (t * 0.7).sin(),
+                    200.0 * (t * 1.3).cos(),
+                    50.0 * t,
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn units_swaps_and_constant_columns_are_told_from_the_points() {
+        let model = cloud();
+        assert_eq!(data_causes(&model, &model), (None, vec![]));
+        let metres: Vec<Vec3> = model.iter().map(|p| p / 1000.0).collect();
+        let (scale, c) = data_causes(&model, &metres);
+        assert!(scale.unwrap().contains("0.0010 times"));
+        assert!(c[0].contains("metres"), "{c:?}");
+        let inches: Vec<Vec3> = model.iter().map(|p| p / 25.4).collect();
+        assert!(data_causes(&model, &inches).1[0].contains("inches"));
+        let swapped: Vec<Vec3> = model.iter().map(|p| Vec3::new(p.x, p.z, p.y)).collect();
+        let (_, c) = data_causes(&model, &swapped);
+        assert!(
+            c.len() == 1 && c[0].contains("two columns look swapped"),
+            "{c:?}"
+        );
+        let flat: Vec<Vec3> = model.iter().map(|p| Vec3::new(0.0, p.y, p.z)).collect();
+        let (_, c) = data_causes(&model, &flat);
+        assert!(c[0].contains("column x holds one value"), "{c:?}");
+    }
+
+    #[test]
+    fn a_residual_below_the_noise_counts_only_with_far_moves() {
+        let sigma = [0.01, 0.02, 0.015];
+        assert!(below_noise(0.0001, Some(&sigma), 600.0).is_some());
+        assert!(below_noise(0.0001, Some(&sigma), 0.5).is_none());
+        assert!(below_noise(0.02, Some(&sigma), 600.0).is_none());
+        assert!(below_noise(0.0001, None, 600.0).is_none());
+    }
+}

@@ -1,0 +1,181 @@
+//! The output-folder guard of every writer (docs/formats.md § 1, "Output folders"): an
+//! output path where the outputs would destroy something is refused before any work — the
+//! root folder, the home folder (`$HOME`), an input of the command (a file or folder it
+//! reads), or a folder holding an input under the name of one of the files written there.
+//! The command line, Python's `run`, `study.write` and `task` and every folder written whole
+//! ([`super::atomically`]) go through [`guard_out`]; the caller names its option (`key`).
+
+use std::path::{Path, PathBuf};
+
+use crate::error::{Error, Result};
+
+/// Refuses, before any work, an output path `out` (the caller's option `key`) where the
+/// outputs would destroy something: the root folder, the home folder (`$HOME`), one of
+/// `inputs` (a file or folder the command reads), or a folder holding one of them under the
+/// name of one of `outputs`, the files written there (empty for the commands that write the
+/// one file `out`). Paths are compared as the file system resolves them (`.`, `..` and
+/// symbolic links); and a folder a live run writes into ([`live_writer`]).
+pub fn guard_out<P: AsRef<Path>>(
+    out: &Path,
+    key: &str,
+    outputs: &[&str],
+    inputs: impl IntoIterator<Item = P>,
+) -> Result<()> {
+    guard_out_with(out, key, outputs, inputs, false)
+}
+
+/// [`guard_out`] without the live run's check.
+fn paths<P: AsRef<Path>>(
+    out: &Path,
+    key: &str,
+    outputs: &[&str],
+    inputs: impl IntoIterator<Item = P>,
+) -> Result<()> {
+    let refuse = |why: String| Err(Error::setting(key, why));
+    let at = resolved(out);
+    if at.parent().is_none() {
+        return refuse(format!(
+            "{} is the root folder; give the outputs a folder of their own (nothing was \
+             written)",
+            out.display()
+        ));
+    }
+    if let Some(home) = std::env::var_os("HOME").filter(|h| !h.is_empty()) {
+        if resolved(Path::new(&home)) == at {
+            return refuse(format!(
+                "{} is the home folder; give the outputs a folder of their own (nothing was \
+                 written)",
+                out.display()
+            ));
+        }
+    }
+    for input in inputs {
+        let input = input.as_ref();
+        if !input.exists() {
+            continue;
+        }
+        let it = resolved(input);
+        if it == at {
+            return refuse(format!(
+                "{} is an input of this command; writing the outputs there would destroy it \
+                 (nothing was written)",
+                out.display()
+            ));
+        }
+        if let Some(name) = outputs.iter().find(|n| at.join(n) == it) {
+            return refuse(format!(
+                "{} is an input of this command, and the command writes its {name} there; \
+                 give another output folder (nothing was written)",
+                input.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// [`guard_out`], where `force` lets a folder a live run writes into pass (`run --force`).
+pub fn guard_out_with<P: AsRef<Path>>(
+    out: &Path,
+    key: &str,
+    outputs: &[&str],
+    inputs: impl IntoIterator<Item = P>,
+    force: bool,
+) -> Result<()> {
+    paths(out, key, outputs, inputs)?;
+    match live_writer(out) {
+        Some(pid) if !force => Err(Error::setting(
+            key,
+            format!(
+                "{} is the output folder of a run still in progress (process {pid} on this \
+                 host, its checkpoint {}); writing there would destroy it (nothing was \
+                 written). Wait for it or stop it (forcing passes when that process \
+                 is not calbench)",
+                out.display(),
+                checkpoint_of(out).display()
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// The checkpoint folder a run into `out` keeps beside it (`.NAME.checkpoint`,
+/// docs/formats.md `run --resume`).
+pub fn checkpoint_of(out: &Path) -> PathBuf {
+    let (parent, name) = super::parent_and_name(out);
+    parent.join(format!(".{name}.checkpoint"))
+}
+
+/// The process of another run writing into `out` that is alive on this host: the `pid` and
+/// `host` of the `checkpoint.json` beside `out` ([`checkpoint_of`]), when that process runs.
+pub fn live_writer(out: &Path) -> Option<u32> {
+    let text = std::fs::read_to_string(checkpoint_of(out).join("checkpoint.json")).ok()?;
+    let meta: serde_json::Value = serde_json::from_str(&text).ok()?;
+    let pid = u32::try_from(meta.get("pid")?.as_u64()?).ok()?;
+    let on_this_host = meta.get("host")?.as_str()? == host();
+    (on_this_host && alive(pid)).then_some(pid)
+}
+
+/// The name of this host (empty where it cannot be read).
+pub fn host() -> String {
+    std::fs::read_to_string("/proc/sys/kernel/hostname")
+        .or_else(|_| std::fs::read_to_string("/etc/hostname"))
+        .or_else(|_| std::env::var("HOSTNAME"))
+        .map(|h| h.trim().to_string())
+        .unwrap_or_default()
+}
+
+/// Whether process `pid` (not this one) is running on this host: its `/proc` entry, not a
+/// zombie, where there is a `/proc`; otherwise `kill -0`.
+pub fn alive(pid: u32) -> bool {
+    if pid == std::process::id() {
+        return false;
+    }
+    if Path::new("/proc/self").exists() {
+        return std::fs::read_to_string(format!("/proc/{pid}/stat")).is_ok_and(|s| {
+            let state = s.rsplit_once(')').map(|(_, rest)| rest.trim_start());
+            !matches!(state.and_then(|r| r.chars().next()), Some('Z' | 'X') | None)
+        });
+    }
+    std::process::Command::new("kill")
+        .args(["-0", &pid.to_string()])
+        .stderr(std::process::Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// [`guard_out`] of a folder written with no input named: the root and the home folder.
+pub fn guard_folder(out: &Path, key: &str) -> Result<()> {
+    paths(out, key, &[], None::<&Path>)
+}
+
+/// `p` as an absolute path with `.` and `..` folded and the longest part that exists
+/// resolved by the file system (symbolic links followed).
+fn resolved(p: &Path) -> PathBuf {
+    use std::path::Component;
+    let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+    let mut folded = PathBuf::new();
+    for c in abs.components() {
+        match c {
+            Component::CurDir => {}
+            Component::ParentDir => {
+                folded.pop();
+            }
+            c => folded.push(c),
+        }
+    }
+    let mut rest = Vec::new();
+    let mut head = folded.as_path();
+    loop {
+        if let Ok(mut real) = head.canonicalize() {
+            real.extend(rest.iter().rev());
+            return real;
+        }
+        match (head.parent(), head.file_name()) {
+            (Some(parent), Some(name)) => {
+                rest.push(name.to_os_string());
+                head = parent;
+            }
+            _ => return folded,
+        }
+    }
+}

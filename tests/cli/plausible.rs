@@ -1,0 +1,173 @@
+//! An identified robot that cannot be physically right is refused before anything is
+//! written (docs/formats.md "Physical plausibility"), naming the parameter, how far it moved
+//! and the likely cause, and written with the warning under `--allow-implausible`: a tracker's
+//! file in metres, one with its x and y columns swapped, a multi-target file whose x is 0,
+//! each identified without validation data; a distance file with one reading of 2000 mm
+//! among 2534 mm readings names that reading's line.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+
+/// `calbench simulate SCENARIO --trial 1 [--measure KIND] --out DIR/NAME`: its measurement
+/// file.
+fn simulated(dir: &Path, scenario: &str, kind: Option<&str>) -> PathBuf {
+    let out = dir.join(format!("sim-{}", kind.unwrap_or("pos")));
+    let sc = root().join(scenario);
+    let mut args = vec!["simulate", path_arg(&sc), "--trial", "1"];
+    if let Some(k) = kind {
+        args.extend_from_slice(&["--measure", k]);
+    }
+    args.extend_from_slice(&["--out", path_arg(&out)]);
+    calbench_ok(&args);
+    out.join("measurements.csv")
+}
+
+/// An edit of a row's cells (given the header's names and the row's index).
+type RowEdit<'a> = dyn Fn(&[&str], &mut Vec<String>, usize) + 'a;
+
+/// `src` with each row's cells passed through `edit`, written to `dst`.
+fn edited(src: &Path, dst: &Path, edit: &RowEdit<'_>) -> PathBuf {
+    let text = read(src);
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = header.join(",") + "\n";
+    for (i, line) in lines.enumerate() {
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        edit(&header, &mut cells, i);
+        out += &(cells.join(",") + "\n");
+    }
+    std::fs::write(dst, out).unwrap();
+    dst.to_path_buf()
+}
+
+/// The index of column `name` of `header`.
+fn col(header: &[&str], name: &str) -> usize {
+    header.iter().position(|c| *c == name).unwrap()
+}
+
+/// `identify --robot irb2600 --data DATA --method ls --out OUT EXTRA…`, no validation data.
+fn identify(data: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+    let mut args = vec!["identify", "--robot", "irb2600", "--data", path_arg(data)];
+    args.extend_from_slice(&["--method", "ls", "--out", path_arg(out)]);
+    args.extend_from_slice(extra);
+    calbench(&args)
+}
+
+/// Refused naming the file, `cause`, a parameter's move and the option; nothing written.
+fn refused(data: &Path, out: &Path, cause: &str) -> String {
+    let o = identify(data, out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "{}: {err}", data.display());
+    for want in [
+        path_arg(data),
+        "cannot be physically right",
+        cause,
+        "--allow-implausible",
+    ] {
+        assert!(err.contains(want), "{want}: {err}");
+    }
+    assert_eq!(err.trim_end().lines().count(), 1, "one line: {err}");
+    assert!(!out.exists(), "nothing is written");
+    err
+}
+
+/// Written under `--allow-implausible`, with the warning on stderr and in identified.json
+/// (and in both reports for a tracker's file).
+fn kept(data: &Path, out: &Path, reports: bool) -> serde_json::Value {
+    let o = identify(data, out, &["--allow-implausible"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the identified robot cannot be physically right"),
+        "{err}"
+    );
+    let j = load_json(&out.join("identified.json"));
+    assert!(
+        !j["allowed_implausible"].as_array().unwrap().is_empty(),
+        "{j}"
+    );
+    if reports {
+        for report in ["report.md", "report.html"] {
+            let text = read(&out.join(report));
+            assert!(text.contains("cannot be physically right"), "{report}");
+        }
+    }
+    j
+}
+
+#[test]
+fn a_tracker_file_in_metres_or_with_swapped_columns_is_refused_unless_allowed() {
+    let d = tmp_dir("cli-plausible-tracker");
+    let pos = simulated(&d, "scenarios/ci-guard.toml", None);
+    let metres = edited(&pos, &d.join("m.csv"), &|h, c, _| {
+        for name in ["x", "y", "z"] {
+            let k = col(h, name);
+            c[k] = format!("{}", c[k].parse::<f64>().unwrap() / 1000.0);
+        }
+    });
+    let swapped = edited(&pos, &d.join("xy.csv"), &|h, c, _| {
+        c.swap(col(h, "x"), col(h, "y"));
+    });
+    let err = refused(&metres, &d.join("o"), "likely in metres");
+    assert!(err.contains(" moved by "), "{err}");
+    refused(&swapped, &d.join("o"), "two columns look swapped");
+    let j = kept(&metres, &d.join("kept-m"), true);
+    let found = j["allowed_implausible"].to_string();
+    assert!(found.contains("metres"), "{found}");
+    kept(&swapped, &d.join("kept-xy"), true);
+    let good = d.join("good");
+    let o = identify(&pos, &good, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(load_json(&good.join("identified.json"))
+        .get("allowed_implausible")
+        .is_none());
+}
+
+#[test]
+fn a_multi_target_file_whose_x_is_0_is_refused_unless_allowed() {
+    let d = tmp_dir("cli-plausible-targets");
+    let targets = simulated(&d, "scenarios/instruments.toml", Some("multi-target"));
+    let x0 = edited(&targets, &d.join("x0.csv"), &|h, c, _| {
+        c[col(h, "x")] = "0".into();
+    });
+    refused(&x0, &d.join("o"), "column x holds one value");
+    kept(&x0, &d.join("kept"), false);
+    let good = d.join("good");
+    let o = identify(&targets, &good, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+#[test]
+fn a_gross_distance_reading_is_refused_naming_its_line() {
+    let d = tmp_dir("cli-plausible-distance");
+    let dist = simulated(&d, "scenarios/instruments.toml", Some("distance"));
+    let text = read(&dist);
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let k = col(&header, "length_mm");
+    let rows: Vec<f64> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(k).unwrap().parse().unwrap())
+        .collect();
+    // A 534 mm misreading, as a tracker's 2000 mm where 2534 mm was measured.
+    let row = rows.len() / 2;
+    let bad = edited(&dist, &d.join("gross.csv"), &|_, c, i| {
+        if i == row {
+            c[k] = format!("{}", rows[row] - 534.0);
+        }
+    });
+    let line = format!("line {}", row + 2);
+    let out = d.join("o");
+    let o = identify(&bad, &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "{err}");
+    assert!(
+        err.contains(&line) && err.contains("gross reading"),
+        "{line}: {err}"
+    );
+    assert!(!out.exists());
+    let good = d.join("good");
+    let o = identify(&dist, &good, &[]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
