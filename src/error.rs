@@ -219,6 +219,23 @@ impl Error {
         }
     }
 
+    /// A refusal of a key of the TOML file whose text is `text`, with the line where the key
+    /// is written (`line 12, claims[0].relation`) when its place names a key that `text`
+    /// writes and no line yet; any other error as it is.
+    pub fn at_key_line(self, text: &str) -> Self {
+        match self {
+            Error::File { file, place, msg } if !place.starts_with("line ") => {
+                let line = toml_key_line(text, &place);
+                Error::File {
+                    file,
+                    place: at_line(line, place),
+                    msg,
+                }
+            }
+            e => e,
+        }
+    }
+
     /// An error about the front end's option `option`.
     pub fn option(option: Opt, msg: impl Into<Said>) -> Self {
         Error::Option {

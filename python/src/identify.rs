@@ -11,7 +11,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
 use calbench::calibrate::cv::{Holdout, Model};
-use calbench::calibrate::request::{IdentifyData, IdentifyOutcome, IdentifyRequest};
+use calbench::calibrate::pipeline::IdentifyOutcome;
+use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;

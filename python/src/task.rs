@@ -8,7 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use calbench::calibrate::cv::Model;
-use calbench::calibrate::request::IdentifyOutcome;
+use calbench::calibrate::pipeline::IdentifyOutcome;
 use calbench::calibrate::task::{task_path, Task, TaskEntry};
 use calbench::identify::{method_by_name, MethodSpec};
 use calbench::report::identified::IdentifyRecord;

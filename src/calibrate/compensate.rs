@@ -7,7 +7,7 @@
 
 use crate::calibrate::validation::rotation_angle_deg;
 use crate::numeric::{Frame, Real};
-use crate::robot::compliance::loaded_fk;
+use crate::robot::loaded::loaded_fk;
 use crate::robot::Robot;
 
 /// What a corrected row must reach to be flagged `ok`: residual_mm and residual_deg.

@@ -5,9 +5,12 @@
 //!
 //! - [`registration`]: SVD (Kabsch/Arun) and Ban's weighted SVD of point sets;
 //! - [`validation`]: validation errors of a model against true (or measured) frames;
-//! - [`request`]: the one identification pipeline of `identify` and the Python module
-//!   ([`request::IdentifyRequest`] → [`request::IdentifyOutcome`]), on a tracker's file or
-//!   a measurement-kind file;
+//! - [`request`]: an identification asked for by `identify` or the Python module
+//!   ([`request::IdentifyRequest`]);
+//! - [`pipeline`]: the one identification pipeline that runs it
+//!   ([`request::IdentifyRequest::run`] → [`pipeline::IdentifyOutcome`]), on a tracker's
+//!   file or a measurement-kind file;
+//! - [`plausibility`]: whether an identified robot can be physically right;
 //! - [`record`]: the identification record (`identified.json`);
 //! - [`verdict`]: whether a result may be written (undetermined data, a worse robot);
 //! - [`on_kind`]: identification on a measurement-kind file (distance, plane, sphere, targets);
@@ -20,6 +23,7 @@ pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
 pub mod on_kind;
+pub mod pipeline;
 pub mod plausibility;
 pub mod record;
 pub mod registration;

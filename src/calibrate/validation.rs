@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::identify::qiao::error_models::attitude_error_deg;
 use crate::measurement::Measurements;
 use crate::numeric::{rotation_vector, Frame, Mat3, Real};
-use crate::robot::compliance::loaded_fk;
+use crate::robot::loaded::loaded_fk;
 use crate::robot::Robot;
 
 /// The keys of the validation errors' statistics in `summary.json` and `identified.json`
@@ -106,7 +106,7 @@ impl PoseErrors {
 /// The errors of `model` against the true frames at the joint values `qs` ([`PoseErrors`]);
 /// the means over the poses of `mm` and `attitude_deg` are Qiao's ACPE and ACAE (§4.1). A
 /// model with joint compliances predicts each pose under its payload (`payloads`, kg; `None`:
-/// no payload) by [`crate::robot::compliance::loaded_fk`]; a rigid model ignores the payloads. Fails
+/// no payload) by [`crate::robot::loaded::loaded_fk`]; a rigid model ignores the payloads. Fails
 /// when the model has compliances but no link masses.
 pub fn validation_errors(
     model: &Robot,
@@ -118,7 +118,7 @@ pub fn validation_errors(
     let mut e = PoseErrors::default();
     for (i, (q, t)) in qs.iter().zip(truth).enumerate() {
         let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
-        let f = crate::robot::compliance::loaded_fk(model, &c, q, load)?;
+        let f = crate::robot::loaded::loaded_fk(model, &c, q, load)?;
         let d = t.pos - f.pos;
         e.mm.push(d.norm());
         e.axis_mm.push(d.sum() / 3.0);

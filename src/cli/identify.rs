@@ -8,9 +8,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use calbench::calibrate::request::{
-    IdentifyData, IdentifyOutcome, IdentifyRequest, TrackerOutcome,
-};
+use calbench::calibrate::pipeline::{IdentifyOutcome, TrackerOutcome};
+use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::{Registration, RoundsEnd};
 use calbench::error::{Error, Opt};
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
@@ -241,7 +240,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         let why = "it applies to the tracker's measurement file (§ 5.1) only";
         let kind = f.data.instrument.kind();
         return Err(
-            calbench::calibrate::request::kind_refusal(&request, kind, Opt::Export, why).into(),
+            calbench::calibrate::on_kind::kind_refusal(&request, kind, Opt::Export, why).into(),
         );
     }
     match request.run()? {

@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::Result;
 
-use calbench::calibrate::request::KindOutcome;
+use calbench::calibrate::on_kind::KindOutcome;
 use calbench::calibrate::ErrorStats;
 use calbench::report::identified::identified_json;
 use calbench::report::output::{folder, RobotToml};

@@ -9,7 +9,8 @@ use anyhow::Result;
 
 use calbench::error::Error;
 use calbench::results::Kind;
-use calbench::runner::run::{refuse_precision, resume_study, run_study, Resumable};
+use calbench::runner::resume::Resumable;
+use calbench::runner::run::{refuse_precision, resume_study, run_study};
 use calbench::runner::whole::{resume_cells, run_cells_study};
 use calbench::study::kind::AnyScenario;
 use calbench::study::reporter::Terminal;

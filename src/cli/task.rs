@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::calibrate::cv::Model;
-use calbench::calibrate::request::IdentifyOutcome;
+use calbench::calibrate::pipeline::IdentifyOutcome;
 use calbench::calibrate::task::{task_path, Task, TaskEntry};
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;

@@ -157,6 +157,18 @@ pub fn read_measurements(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Res
     read_table(path, robot, true)
 }
 
+/// Reads `text`, a measurement CSV for `robot` held in memory (an export as its mapping
+/// reads it, [`super::import::import_text`]), as [`read_measurements`] reads a file; refusals
+/// name `path`.
+pub fn read_measurements_text(
+    path: &Path,
+    text: String,
+    robot: &(impl JointSpace + ?Sized),
+) -> Result<Measurements> {
+    let rows = Rows::of_text(path, text, "q1,…,qn,x,y,z")?;
+    table_of(rows, path, robot, true)
+}
+
 /// Cartesian targets have no joints.
 struct NoJoints;
 
@@ -192,7 +204,16 @@ pub(crate) fn read_table(
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
 ) -> Result<Measurements> {
-    let mut t = Rows::open(path, "q1,…,qn,x,y,z")?;
+    table_of(Rows::open(path, "q1,…,qn,x,y,z")?, path, robot, measured)
+}
+
+/// The measurements (or poses, unless `measured`) of the rows `t` of `path`.
+fn table_of(
+    mut t: Rows,
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+    measured: bool,
+) -> Result<Measurements> {
     let (names, header_line) = (t.names.clone(), t.header_line);
     let bad = |line: u64, place: &str, msg: String| at_line(path, line, place, msg);
     let dof = robot.dof();

@@ -51,7 +51,7 @@ pub(crate) enum Dialect {
 /// names, then each row that is not blank with its line in the file (`#` comment and blank
 /// lines counted), every row of as many fields as the header.
 pub(crate) struct Rows {
-    rd: ::csv::Reader<Uncommented<std::io::BufReader<std::fs::File>>>,
+    rd: ::csv::Reader<Uncommented<Box<dyn std::io::BufRead>>>,
     path: std::path::PathBuf,
     /// The header's column names, trimmed.
     pub names: Vec<String>,
@@ -69,6 +69,28 @@ impl Rows {
     /// Opens `path`, a file of the `dialect`, and reads its header; an empty file is refused,
     /// `expected` saying what header it should have had.
     pub fn open_with(path: &Path, expected: &str, dialect: Dialect) -> Result<Rows> {
+        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+        Rows::read(
+            path,
+            Box::new(std::io::BufReader::new(file)),
+            expected,
+            dialect,
+        )
+    }
+
+    /// The rows of `text`, a measurement CSV held in memory that refusals name `path`.
+    pub fn of_text(path: &Path, text: String, expected: &str) -> Result<Rows> {
+        let text = Box::new(std::io::Cursor::new(text.into_bytes()));
+        Rows::read(path, text, expected, Dialect::Measurement)
+    }
+
+    /// The rows of `input`, read as the `dialect` says, that refusals name `path`.
+    fn read(
+        path: &Path,
+        input: Box<dyn std::io::BufRead>,
+        expected: &str,
+        dialect: Dialect,
+    ) -> Result<Rows> {
         let (delimiter, export) = match dialect {
             Dialect::Measurement => (b',', false),
             Dialect::Export { separator } => (separator, true),
@@ -76,13 +98,12 @@ impl Rows {
         // `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
         // reader), and each line number the reader gives is mapped back to the file's
         // through the lines that are not empty.
-        let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
         let mut rd = ::csv::ReaderBuilder::new()
             .has_headers(true)
             .flexible(true)
             .delimiter(delimiter)
             .trim(::csv::Trim::All)
-            .from_reader(Uncommented::new(std::io::BufReader::new(file), export));
+            .from_reader(Uncommented::new(input, export));
         let header = rd
             .headers()
             .map_err(|e| at_line(path, 1, "", format!("cannot read the header: {e}")))?

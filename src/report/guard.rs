@@ -1,7 +1,8 @@
 //! The output-folder guard of every writer (docs/formats.md § 1, "Output folders"): an
 //! output path where the outputs would destroy something is refused before any work — the
 //! root folder, the home folder (`$HOME`), an input of the command (a file or folder it
-//! reads), or a folder holding an input under the name of one of the files written there.
+//! reads), a folder holding an input under the name of one of the files written there, or a
+//! folder holding another command's results ([`SIGNATURES`]).
 //! The command line, Python's `run`, `study.write` and `task` and every folder written whole
 //! ([`super::atomically`]) go through [`guard_out`]; the caller names its option (`key`).
 
@@ -13,7 +14,8 @@ use crate::error::{Error, Result};
 /// outputs would destroy something: the root folder, the home folder (`$HOME`), one of
 /// `inputs` (a file or folder the command reads), or a folder holding one of them under the
 /// name of one of `outputs`, the files written there (empty for the commands that write the
-/// one file `out`). Paths are compared as the file system resolves them (`.`, `..` and
+/// one file `out`), or a folder holding another command's results ([`SIGNATURES`] that
+/// `outputs` lacks; not checked when `outputs` is empty). Paths are compared as the file system resolves them (`.`, `..` and
 /// symbolic links); and a folder a live run writes into ([`live_writer`]).
 pub fn guard_out<P: AsRef<Path>>(
     out: &Path,
@@ -23,6 +25,16 @@ pub fn guard_out<P: AsRef<Path>>(
 ) -> Result<()> {
     guard_out_with(out, key, outputs, inputs, false)
 }
+
+/// The files that mark a folder as the results of one command, each with what wrote it: a
+/// command that does not write the file refuses to write into such a folder, which would
+/// otherwise hold two results mixed (a run's `summary.json` beside an identification's
+/// `report.md`).
+pub const SIGNATURES: [(&str, &str); 3] = [
+    ("trials.csv", "a study's run"),
+    ("identified.json", "an identification"),
+    ("task.json", "a task's entry"),
+];
 
 /// [`guard_out`] without the live run's check.
 fn paths<P: AsRef<Path>>(
@@ -48,6 +60,16 @@ fn paths<P: AsRef<Path>>(
                 out.display()
             ));
         }
+    }
+    let foreign = SIGNATURES.iter().find(|(file, _)| {
+        !outputs.is_empty() && !outputs.contains(file) && at.join(file).is_file()
+    });
+    if let Some((file, what)) = foreign {
+        return refuse(format!(
+            "{} holds the results of {what} ({file}), which this command does not write; its \
+             files there would mix two results (nothing was written): give another folder",
+            out.display()
+        ));
     }
     for input in inputs {
         let input = input.as_ref();

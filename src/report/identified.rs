@@ -2,15 +2,16 @@
 //! `residuals.csv`, `report.md` and its figures, and the compensated `robot.toml`, each an
 //! [`Output`] ([`outputs`]).
 
-use super::markdown::{fmt_num, table};
+use super::markdown::{fmt_num, inline, table};
 use super::plots;
 
 use super::output::{Buffered, Figure, Output, Outputs, Text};
+use crate::calibrate::pipeline::TrackerOutcome;
 use crate::calibrate::plausibility::implausible_warning;
 use crate::calibrate::record::IdentifiedRecord;
-pub use crate::calibrate::request::registration_warning;
-use crate::calibrate::request::{worse_warning, TrackerOutcome};
 pub use crate::calibrate::validation::{validate_file, FileValidation};
+pub use crate::calibrate::verdict::registration_warning;
+use crate::calibrate::verdict::worse_warning;
 use crate::calibrate::ErrorStats;
 use crate::error::Result;
 use crate::identify::Termination;
@@ -300,7 +301,8 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     let _ = writeln!(
         s,
         "# Identification of {} on {}\n",
-        r.nominal.name, r.record.data
+        inline(&r.nominal.name),
+        inline(&r.record.data)
     );
     let _ = writeln!(
         s,

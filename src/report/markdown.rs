@@ -73,6 +73,29 @@ fn numeric_kind(cell: &str) -> Option<bool> {
     }
 }
 
+/// A name (a robot's, a scenario's, a file's) as Markdown text that reads as written: each
+/// character Markdown would take for emphasis, code, a link, HTML or a table cell (`\`, `` ` ``,
+/// `*`, `_`, `~`, `[`, `]`, `<`, `>`, `|`, `#`) escaped with a backslash, line breaks as spaces.
+///
+/// ```
+/// use calbench::report::markdown::inline;
+/// assert_eq!(inline("arm_*2*"), "arm\\_\\*2\\*");
+/// ```
+pub fn inline(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\\' | '`' | '*' | '_' | '~' | '[' | ']' | '<' | '>' | '|' | '#' => {
+                out.push('\\');
+                out.push(c);
+            }
+            '\r' | '\n' => out.push(' '),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
 /// Escapes a cell for a GitHub table: `|` becomes `\|`, line breaks become spaces.
 fn escape(cell: &str) -> String {
     cell.replace('|', "\\|").replace(['\r', '\n'], " ")

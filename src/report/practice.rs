@@ -5,8 +5,8 @@
 
 use super::identified::{Additions, Block};
 use super::markdown::fmt_num;
+use crate::calibrate::pipeline::TrackerOutcome;
 pub use crate::calibrate::record::{IdentifiedRecord, PriorMove};
-use crate::calibrate::request::TrackerOutcome;
 
 impl IdentifiedRecord {
     /// The section the practice options add to `report.md` and `report.html`; nothing for

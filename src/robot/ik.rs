@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::numeric::rng::Rng;
 use crate::numeric::{rotation_vector, Frame, Real, Vec3};
-use crate::robot::compliance::loaded_fk;
+use crate::robot::loaded::loaded_fk;
 use crate::robot::Robot;
 use rand::Rng as _;
 

@@ -25,6 +25,7 @@ pub mod harmonics;
 pub mod identifiability;
 pub mod ik;
 pub mod jacobian;
+pub mod loaded;
 pub mod names;
 mod param;
 pub mod param_sets;

@@ -5,7 +5,9 @@
 //! [`crate::study`] (the scenario, one trial, the statistics, the record format) and
 //! [`crate::report`] (the files), and nothing below it imports it.
 
+pub mod cells;
 pub mod checkpoint;
+pub mod resume;
 pub mod run;
 pub mod shard;
 pub mod threads;

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use rayon::prelude::*;
 
-use super::checkpoint::{self, Checkpoint};
+use super::checkpoint::Checkpoint;
+use super::resume::{Continued, Resumable};
 use super::shard::{self, Both};
 use crate::analysis::{analyse::analyse, summary::Summary};
 use crate::error::{Error, Result};
@@ -47,37 +48,6 @@ pub fn run_study(
     study_into(scenario, opts, &out, cp, None, reporter)
 }
 
-/// The checkpoint of a killed run, checked and ready to continue ([`resume_study`]).
-pub struct Resumable {
-    pub(super) out: PathBuf,
-    pub(super) checkpoint: Checkpoint,
-    pub(super) scenario: AnyScenario,
-    pub(super) shard: Option<Shard>,
-    pub(super) records: checkpoint::Records,
-}
-
-impl Resumable {
-    /// Opens the checkpoint of the run into `out` that was killed (`calbench run --resume
-    /// DIR`, [`checkpoint`]): it must be of this binary's version and, when `given`, of that
-    /// scenario, its writer no longer running on this host (unless `force`), and every
-    /// record it counts intact. A refused checkpoint is left as it was.
-    pub fn open(out: &Path, given: Option<&AnyScenario>, force: bool) -> Result<Resumable> {
-        let (checkpoint, scenario, shard, records) = Checkpoint::resume(out, given, force)?;
-        Ok(Resumable {
-            out: out.to_path_buf(),
-            checkpoint,
-            scenario,
-            shard,
-            records,
-        })
-    }
-
-    /// The scenario of the killed run.
-    pub fn scenario(&self) -> &AnyScenario {
-        &self.scenario
-    }
-}
-
 /// Continues a killed Monte-Carlo run from its checked checkpoint ([`Resumable::open`]) with
 /// `threads` worker threads: writes the same files as an uninterrupted run (a study of cells
 /// continues with [`super::whole::resume_cells`]).
@@ -86,20 +56,13 @@ pub fn resume_study(
     threads: Option<usize>,
     reporter: &dyn Reporter,
 ) -> Result<RunResult> {
-    let Resumable {
+    let Continued {
         out,
+        opts,
         checkpoint,
         scenario,
-        shard,
         mut records,
-    } = run;
-    let opts = RunOptions {
-        threads,
-        out: Some(out.clone()),
-        progress: true,
-        shard,
-        precision: checkpoint.precision()?,
-    };
+    } = run.continued(threads)?;
     let AnyScenario::MonteCarlo(scenario) = scenario else {
         return Err(Error::Compute("not a Monte-Carlo run".into()));
     };
@@ -300,7 +263,7 @@ pub fn run_resumed(
     } else {
         Box::new(NoProgress)
     };
-    let pool = pool(opts.threads, last - first, reporter)?;
+    let pool = super::threads::pool(opts.threads, last - first, reporter)?;
     if opts.precision.is_some() {
         refuse_precision(&scenario, opts)?;
     }
@@ -407,22 +370,6 @@ pub fn run_resumed(
         shard: opts.shard,
         stopping,
     })
-}
-
-/// The worker threads of a run: `threads` of them (`None`: one per core).
-pub(super) fn pool(
-    threads: Option<usize>,
-    work: u64,
-    reporter: &dyn Reporter,
-) -> Result<rayon::ThreadPool> {
-    let (threads, note) = super::threads::capped(threads, work, super::threads::cores());
-    if let Some(note) = note {
-        reporter.warning(&note);
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))
 }
 
 /// With `--precision`, whether the run stops after `seen` trials: at a whole block of

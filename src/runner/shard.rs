@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use super::whole::{Cells, Instruments};
+use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
 use crate::report::output::{write_all, Outputs, Stream, Text};
 use crate::report::{write_run, TrialsCsv};

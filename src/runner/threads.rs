@@ -5,6 +5,7 @@
 //! `run` and `run_shard`) takes its count from here.
 
 use crate::error::{check_count, Error, Result};
+use crate::study::reporter::Reporter;
 
 /// A study runs on at most this many threads per core of the machine.
 pub const CORE_MULTIPLE: usize = 4;
@@ -98,4 +99,21 @@ mod tests {
             assert!(e.contains(SLURM_CPUS), "{e}");
         }
     }
+}
+
+/// The worker threads of a study of `work` trials or units: `threads` of them (`None`: one
+/// per core), [`capped`] with the note to `reporter`.
+pub fn pool(
+    threads: Option<usize>,
+    work: u64,
+    reporter: &dyn Reporter,
+) -> Result<rayon::ThreadPool> {
+    let (threads, note) = capped(threads, work, cores());
+    if let Some(note) = note {
+        reporter.warning(&note);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))
 }

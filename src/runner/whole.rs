@@ -10,8 +10,9 @@ use rayon::prelude::*;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
+use super::cells::{Cells, Instruments};
 use super::checkpoint::{Checkpoint, Records as Replayed};
-use super::run::Resumable;
+use super::resume::{Continued, Resumable};
 use super::shard;
 use crate::error::{Error, Result};
 use crate::numeric::rng::trial_seed;
@@ -23,66 +24,6 @@ use crate::study::kind::AnyScenario;
 use crate::study::registration_study::RegistrationScenario;
 use crate::study::reporter::{NoProgress, Progress, Reporter};
 use crate::study::{Replay as _, RunOptions, CHUNK};
-
-/// A study whose work units are its blocks' trials, each trial's result a record
-/// ([`crate::study::records`]), its files written from every block's results.
-pub trait Cells: Sync {
-    /// What a block's trials share.
-    type Block: Send + Sync;
-    /// One trial's result.
-    type Trial: Serialize + DeserializeOwned + Send + Sync;
-    /// Block `b`, from the previous one when it is given (what they share is not redone).
-    fn block(&self, b: usize, prev: Option<&Self::Block>) -> Result<Self::Block>;
-    /// Trial `i` of `block`.
-    fn trial(&self, block: &Self::Block, i: usize) -> Result<Self::Trial>;
-    /// The study's files from every block's trials, in order, and the table the terminal
-    /// shows.
-    fn outputs(&self, done: Vec<(Self::Block, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)>;
-}
-
-impl Cells for RegistrationScenario {
-    type Block = ();
-    type Trial = Vec<(Real, Real)>;
-    fn block(&self, _: usize, _: Option<&()>) -> Result<()> {
-        self.registration_study.check()
-    }
-    fn trial(&self, _: &(), i: usize) -> Result<Self::Trial> {
-        self.registration_study
-            .draw(trial_seed(self.head.seed, i as u64))
-    }
-    fn outputs(&self, done: Vec<((), Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
-        let draws = done.into_iter().next().map(|d| d.1).unwrap_or_default();
-        let cells = self.registration_study.cells(&draws);
-        let claims = self.evaluate_claims(&draws);
-        crate::report::registration_study::outputs(self, &cells, &claims)
-    }
-}
-
-/// An instruments study and its nominal robot.
-pub struct Instruments<'a> {
-    /// The study.
-    pub scenario: &'a InstrumentsScenario,
-    /// The nominal robot (`robot` of the scenario).
-    pub robot: Robot,
-}
-
-impl Cells for Instruments<'_> {
-    type Block = CellPlan;
-    type Trial = Option<Trial>;
-    fn block(&self, b: usize, prev: Option<&CellPlan>) -> Result<CellPlan> {
-        self.scenario.plan(&self.robot, b, prev)
-    }
-    fn trial(&self, block: &CellPlan, i: usize) -> Result<Self::Trial> {
-        self.scenario.run_trial(&self.robot, block, i)
-    }
-    fn outputs(&self, done: Vec<(CellPlan, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
-        let cells: Vec<_> = done
-            .iter()
-            .map(|(p, t)| self.scenario.cell_of(p, t))
-            .collect();
-        crate::report::instruments::outputs(self.scenario, &cells)
-    }
-}
 
 /// Runs `cells`, the study `sc` (or its share `opts.shard`), into the folder `out` as a
 /// whole, with its checkpoint `cp` (removed once the run ends) and, when resumed, the records
@@ -101,7 +42,7 @@ pub fn run_cells<C: Cells>(
     let (blocks, trials) = (sc.blocks().0, sc.trials() as u64);
     let total = blocks as u64 * trials;
     let (first, last) = opts.shard.map_or((0, total), |s| s.range(total));
-    let pool = super::run::pool(opts.threads, last - first, reporter)?;
+    let pool = super::threads::pool(opts.threads, last - first, reporter)?;
     let bar: Box<dyn Progress + '_> = match opts.progress {
         true => reporter.progress(last - first),
         false => Box::new(NoProgress),
@@ -184,15 +125,6 @@ pub fn run_cells<C: Cells>(
     Ok(table)
 }
 
-impl<'a> Instruments<'a> {
-    /// The study `scenario` with its nominal robot loaded.
-    pub fn new(scenario: &'a InstrumentsScenario) -> Result<Instruments<'a>> {
-        let chain = crate::robot::urdf::UrdfChain::default();
-        let robot = crate::robot::builtin::load_chain(&scenario.robot, &chain)?;
-        Ok(Instruments { scenario, robot })
-    }
-}
-
 /// Runs `sc`, a registration or instruments study (or its share `opts.shard`), into
 /// `opts.out` (default `results/<name>/`) as a whole, with a checkpoint beside it that
 /// `calbench run --resume` continues from if it is killed; returns the table the terminal
@@ -217,20 +149,13 @@ pub fn resume_cells(
     threads: Option<usize>,
     reporter: &dyn Reporter,
 ) -> Result<String> {
-    let Resumable {
+    let Continued {
         out,
+        opts,
         checkpoint,
         scenario,
-        shard,
         mut records,
-    } = run;
-    let opts = RunOptions {
-        threads,
-        out: Some(out.clone()),
-        progress: true,
-        shard,
-        precision: None,
-    };
+    } = run.continued(threads)?;
     dispatch(
         &scenario,
         &opts,

@@ -54,12 +54,12 @@ impl AnyScenario {
                 "measurement",
                 "a scenario is one study: [registration_study] or [[measurement]], not both",
             )),
-            (Some(_), None) => Ok(AnyScenario::Registration(RegistrationScenario::from_table(
-                table, shown,
-            )?)),
-            (None, Some(_)) => Ok(AnyScenario::Instruments(InstrumentsScenario::from_table(
-                table, shown,
-            )?)),
+            (Some(_), None) => RegistrationScenario::from_table(table, shown)
+                .map(AnyScenario::Registration)
+                .map_err(|e| e.at_key_line(text)),
+            (None, Some(_)) => InstrumentsScenario::from_table(table, shown)
+                .map(AnyScenario::Instruments)
+                .map_err(|e| e.at_key_line(text)),
             (None, None) => Ok(AnyScenario::MonteCarlo(Scenario::parse(text, path)?)),
         }
     }

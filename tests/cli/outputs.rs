@@ -96,3 +96,94 @@ fn the_files_of_run_and_compare_are_those_of_their_outputs() {
     md.write(&dir.join("compare.md")).unwrap();
     assert_eq!(read(&dir.join("compare.md")), read(&cmp.join("compare.md")));
 }
+
+/// A folder holding another command's results (docs/formats.md § 1, "Output folders") is
+/// refused before any work, naming the file that marks it: an identification into a run's
+/// folder, a run into an identification's; each command still writes again into its own.
+#[test]
+fn a_folder_of_another_commands_results_is_refused() {
+    let d = tmp_dir("outputs-foreign");
+    let guard = root().join("scenarios/ci-guard.toml");
+    let (sim, run, id) = (d.join("sim"), d.join("run"), d.join("id"));
+    calbench_ok(&["simulate", path_arg(&guard), "--out", path_arg(&sim)]);
+    let run_into = |out: &Path| {
+        crate::common::calbench(&[
+            "run",
+            path_arg(&guard),
+            "--trials",
+            "2",
+            "--out",
+            path_arg(out),
+        ])
+    };
+    let data = sim.join("measurements.csv");
+    let identify_into = |out: &Path| {
+        crate::common::calbench(&[
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            path_arg(&data),
+            "--method",
+            "ls",
+            "--out",
+            path_arg(out),
+        ])
+    };
+    for (o, what) in [(run_into(&run), "run"), (identify_into(&id), "identify")] {
+        assert!(
+            o.status.success(),
+            "{what}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+    let before = files_in(&run);
+    for (o, marker) in [
+        (identify_into(&run), "(trials.csv)"),
+        (run_into(&id), "(identified.json)"),
+    ] {
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(marker) && err.contains("mix two results"),
+            "{err}"
+        );
+    }
+    assert_eq!(files_in(&run), before, "the run's folder is left as it was");
+    for (o, what) in [(run_into(&run), "run"), (identify_into(&id), "identify")] {
+        assert!(
+            o.status.success(),
+            "{what} again: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}
+
+/// Names written into Markdown read as written: `compare.md` of two runs whose folders'
+/// names hold Markdown's emphasis characters escapes them (`run_*a*` is not italic).
+#[test]
+fn compare_md_writes_names_as_they_are() {
+    let d = tmp_dir("outputs-md-names");
+    let guard = root().join("scenarios/ci-guard.toml");
+    let (a, b) = (d.join("run_*a*"), d.join("b"));
+    for out in [&a, &b] {
+        calbench_ok(&[
+            "run",
+            path_arg(&guard),
+            "--trials",
+            "2",
+            "--out",
+            path_arg(out),
+        ]);
+    }
+    let cmp = d.join("cmp");
+    calbench_ok(&[
+        "compare",
+        path_arg(&a),
+        path_arg(&b),
+        "--out",
+        path_arg(&cmp),
+    ]);
+    let md = read(&cmp.join("compare.md"));
+    assert!(md.contains("run\\_\\*a\\*"), "{md}");
+    assert!(!md.contains("run_*a*"), "{md}");
+}

@@ -496,3 +496,30 @@ fn outputs_never_land_where_they_destroy() {
     assert_eq!(std::fs::read_dir(&inside).unwrap().count(), 1);
     assert_eq!(Path::new("/summary.json").exists(), root_had_summary);
 }
+
+/// A registration study's claim that names another metric is refused naming the scenario,
+/// the line and the claim's key, as a calibration scenario's claims are.
+#[test]
+fn a_registration_study_claim_is_refused_at_its_line() {
+    let d = tmp("registration-claim");
+    let text = std::fs::read_to_string(crate::common::root().join("scenarios/ban-fig3.toml"))
+        .expect("scenarios/ban-fig3.toml");
+    let at = text
+        .find("metric = \"registration_error_mm\"")
+        .expect("a claim's metric");
+    let line = text[..at].lines().count() + 1;
+    let bad = d.join("ban-fig3.toml");
+    let edited = text.replacen(
+        "metric = \"registration_error_mm\"",
+        "metric = \"validation_after_mm\"",
+        1,
+    );
+    std::fs::write(&bad, edited).unwrap();
+    refused(
+        &calbench(&["run", path(&bad), "--out", path(&d.join("out"))]),
+        &[
+            &format!("ban-fig3.toml: line {line}, claims[0].metric"),
+            "validation_after_mm",
+        ],
+    );
+}

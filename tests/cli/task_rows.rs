@@ -132,3 +132,36 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
     std::fs::write(&split, "rows 216\ncalibration 0-199\nvalidation 200-215\n").unwrap();
     task_lm(calbench_ok, &t, Some("kinematic"), &d.join("ok"));
 }
+
+/// A refusal of a task's rows read through its mapping names the data file and the mapping
+/// (docs/formats.md § 9.1), never a temporary file: the WAM task's seven joint columns given
+/// to a six-joint robot.
+#[test]
+fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
+    let d = tmp_dir("cli-task-mapped-refusal");
+    let t = wam_task(
+        &d,
+        &format!(
+            "calibration = \"{}\"\nvalidation = \"{}\"",
+            wam_file(GRID).display(),
+            wam_file(RANDOM).display()
+        ),
+    );
+    let text = std::fs::read_to_string(&t).unwrap();
+    let six = text.replace(
+        "examples/barrett-wam/wam.toml",
+        "examples/ipa-ur10/ur10.toml",
+    );
+    assert_ne!(six, text);
+    std::fs::write(&t, six).unwrap();
+    let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+    assert!(!o.status.success(), "seven joint columns ran on six joints");
+    assert!(!d.join("out").exists(), "nothing is written");
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(&format!("{} as mapped by", wam_file(GRID).display()))
+            && e.contains("barrett-wam.mapping.toml")
+            && !e.contains("calbench-task-"),
+        "{e}"
+    );
+}

@@ -3,9 +3,8 @@
 
 use std::path::Path;
 
-use calbench::robot::compliance::{
-    gravity_loaded_joints, gravity_torques, loaded_fk, CompliancePick,
-};
+use calbench::robot::compliance::{gravity_loaded_joints, gravity_torques, CompliancePick};
+use calbench::robot::loaded::loaded_fk;
 
 use calbench::identify::{solve, LeastSquares, LmOptions, RobotProblem};
 use calbench::measurement::csv::{read_measurements, write_measurements};

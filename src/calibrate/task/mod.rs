@@ -11,17 +11,17 @@ pub mod split;
 pub use entry::{shared_rows, EntryModels};
 
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicUsize, Ordering};
 
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
 
 use super::cv::Model;
-use super::request::{IdentifyData, IdentifyRequest, TrackerOutcome};
+use super::pipeline::TrackerOutcome;
+use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::residual_vectors;
 use crate::error::{line_of, Error, Result};
 use crate::identify::MethodSpec;
-use crate::measurement::csv::read_measurements;
+use crate::measurement::csv::read_measurements_text;
 use crate::measurement::import::{import_text, Mapping};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
@@ -448,19 +448,15 @@ impl Task {
         )
     }
 
-    /// The data file `raw` read through the mapping.
+    /// The data file `raw` read through the mapping; a refusal names both files.
     fn read(&self, raw: &Path, robot: &Robot) -> Result<Measurements> {
-        static N: AtomicUsize = AtomicUsize::new(0);
         let (text, _) = import_text(raw, &self.mapping)?;
-        let tmp = std::env::temp_dir().join(format!(
-            "calbench-task-{}-{}.csv",
-            std::process::id(),
-            N.fetch_add(1, Ordering::Relaxed)
+        let named = PathBuf::from(format!(
+            "{} as mapped by {}",
+            raw.display(),
+            self.mapping.display()
         ));
-        std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
-        let m = read_measurements(&tmp, robot);
-        let _ = std::fs::remove_file(&tmp);
-        m
+        read_measurements_text(&named, text, robot)
     }
 
     /// The identification request of an entry: the nominal robot, the calibration rows, the

@@ -281,7 +281,7 @@ impl<'a> MetaProblem<'a> {
     }
 
     /// The fitness of an elasto-geometric model: the corrected robot's forward kinematics
-    /// under each pose's payload ([`crate::robot::compliance::loaded_fk`]). Builds the robot (this
+    /// under each pose's payload ([`crate::robot::loaded::loaded_fk`]). Builds the robot (this
     /// path allocates); `+∞` when a pose cannot be evaluated.
     fn fitness_loaded(&self, x: &[Real]) -> Real {
         let Ok(robot) = self.robot(x) else {
@@ -291,7 +291,7 @@ impl<'a> MetaProblem<'a> {
         let mut total = 0.0;
         for (j, q) in self.qs.iter().enumerate() {
             let load = self.loads.as_ref().map_or(0.0, |l| l[j]);
-            match crate::robot::compliance::loaded_fk(&robot, &chain, q, load) {
+            match crate::robot::loaded::loaded_fk(&robot, &chain, q, load) {
                 Ok(f) => total += self.term(j, &f.rot, &f.pos),
                 Err(_) => return Real::INFINITY,
             }

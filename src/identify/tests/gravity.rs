@@ -3,8 +3,8 @@
 //! forward kinematics, and noise-free recovery of known coefficients.
 
 use super::*;
-use crate::robot::compliance::loaded_fk;
 use crate::robot::identifiability::identifiable_extension;
+use crate::robot::loaded::loaded_fk;
 use crate::robot::param_sets::identified_params_tool_first;
 
 /// irb2600 with a tool offset; its identifiable kinematic parameters, then the gravity

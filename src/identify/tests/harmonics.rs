@@ -2,7 +2,7 @@
 //! columns against finite differences, and noise-free recovery of known amplitudes.
 
 use super::*;
-use crate::robot::compliance::loaded_fk;
+use crate::robot::loaded::loaded_fk;
 use crate::robot::param_sets::identified_params_tool_first;
 
 /// irb2600 with a tool offset, its identifiable kinematic parameters and the harmonics of

@@ -16,7 +16,7 @@ pub use crate::analysis::regression::Side;
 use crate::analysis::regression::{compare_with, entry_names, Compared, Status};
 use crate::error::Result;
 use crate::numeric::Real;
-use crate::report::markdown::{fmt_num, table};
+use crate::report::markdown::{fmt_num, inline, table};
 use crate::report::output::{Outputs, Text};
 use crate::report::plots::{changes_svg, ChangePoint};
 
@@ -211,8 +211,8 @@ impl Comparison {
     /// `compare.md`.
     pub fn markdown(&self) -> String {
         let mut s = String::from("# Comparison of two runs\n\n");
-        let _ = writeln!(s, "- A: {}", self.runs[0].describe());
-        let _ = writeln!(s, "- B: {}\n", self.runs[1].describe());
+        let _ = writeln!(s, "- A: {}", inline(&self.runs[0].describe()));
+        let _ = writeln!(s, "- B: {}\n", inline(&self.runs[1].describe()));
         let _ = writeln!(s, "{}\n", self.verdict());
         if let Some(n) = self.scenario_note() {
             let _ = writeln!(s, "{n}\n");

@@ -1,0 +1,416 @@
+//! One identification pipeline: an [`IdentifyRequest`] ([`super::request`]) gives an
+//! [`IdentifyOutcome`] (the compensated robot and everything `identified.json` records,
+//! [`super::record`]) by [`IdentifyRequest::run`].
+//!
+//! For a tracker's file (docs/formats.md § 5.1): the held-out split, the parameter set less
+//! the fixed ones (plus compliances), the model choice and cross-validation
+//! ([`super::cv`]), the calibration ([`super::calibrate`]) with its convergence trace, the
+//! refusal of undetermined data, the validation, how each prior moved its estimate (a second
+//! calibration without the priors), the diagnostics, and the refusal of a result that makes
+//! the robot worse ([`super::verdict`]). For a kind file (§ 5.3):
+//! [`super::on_kind::identify_kind`], with the same refusals.
+
+use std::path::PathBuf;
+
+use super::cv;
+use super::diagnostics::{diagnose, Subject};
+use super::on_kind::KindOutcome;
+use super::record::{IdentifiedRecord, PriorMove, Trace};
+use super::request::{IdentifyData, IdentifyRequest};
+use super::validation::{point_residuals, validate_file, FileValidation};
+use super::verdict::{
+    self, gross_reading, registration_warning, rms, worse_causes, worse_error, worse_warning,
+};
+use super::{calibrate, plausibility, Calibrated, Registration};
+use crate::error::{Error, Opt, Result, Said};
+use crate::identify::{MethodSpec, TraceRecorder};
+use crate::measurement::kind_csv::KindFile;
+use crate::measurement::{Measure, Measurements};
+use crate::numeric::{Frame, Real};
+use crate::robot::compliance::CompliancePick;
+use crate::robot::identifiability::{analyse, Identifiability};
+use crate::robot::{param_sets, Param, Robot};
+
+/// An identification's result: on a tracker's file or on a kind file. Its
+/// [`IdentifyOutcome::record`] is `identified.json` (and so is its serialisation).
+pub enum IdentifyOutcome {
+    /// On a tracker's measurements.
+    Tracker(Box<TrackerOutcome>),
+    /// On a measurement-kind file.
+    Kind(Box<KindOutcome>),
+}
+
+/// An identification on a tracker's measurements.
+pub struct TrackerOutcome {
+    /// The nominal robot of the model identified (a `dh` robot read as `dh_beta` for a β
+    /// model).
+    pub nominal: Robot,
+    /// The calibration rows (without held-out ones).
+    pub data: Measurements,
+    /// The registration.
+    pub registration: Registration,
+    /// The identified parameters, in the order of the estimate.
+    pub params: Vec<Param>,
+    /// The calibration.
+    pub calibrated: Calibrated,
+    /// The validation (a separate file or the held-out rows).
+    pub validation: Option<FileValidation>,
+    /// Per calibration point, the residual before and after (mm)
+    /// ([`point_residuals`]).
+    pub residuals: (Vec<Real>, Vec<Real>),
+    /// `identified.json`: the practice options' results, the diagnostics and why the result
+    /// makes the robot worse (kept with `allow_worse`) among the rest.
+    pub record: IdentifiedRecord,
+    /// Which of all the nominal robot's parameters the calibration poses identify.
+    pub identifiability: Identifiability,
+}
+
+impl IdentifyRequest {
+    /// Runs the identification: refuses options that conflict, data that do not determine
+    /// every parameter (unless `allow_rank_deficient`) and a result worse than the nominal
+    /// robot (unless `allow_worse`), naming the file and the cause. The readings move into
+    /// the pipeline (a tracker's rows are not copied).
+    pub fn run(mut self) -> Result<IdentifyOutcome> {
+        use Opt::{Compliance, Holdout, Models, Params, Validate};
+        let conflicts = [
+            (
+                Validate,
+                self.validate.is_some(),
+                Holdout,
+                self.holdout.is_some(),
+            ),
+            (
+                Models,
+                !self.models.is_empty(),
+                Compliance,
+                self.compliance.is_some(),
+            ),
+            (
+                Models,
+                !self.models.is_empty(),
+                Params,
+                !self.params.is_empty(),
+            ),
+        ];
+        if let Some((a, _, b, _)) = conflicts.iter().find(|c| c.1 && c.3) {
+            let why = Said::from("cannot be used with ").name(*a);
+            return Err(Error::option(*b, why));
+        }
+        let empty = IdentifyData::Tracker(Measurements::default());
+        match std::mem::replace(&mut self.data, empty) {
+            IdentifyData::Tracker(d) => self
+                .tracker(d)
+                .map(|o| IdentifyOutcome::Tracker(Box::new(o))),
+            IdentifyData::Kind(f) => {
+                super::on_kind::kind_outcome(&self, &f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
+            }
+        }
+    }
+
+    /// The identification on a tracker's measurements `d`.
+    fn tracker(&self, mut d: Measurements) -> Result<TrackerOutcome> {
+        let nominal = &self.robot;
+        let mut spec = self.method.clone();
+        spec.priors.extend(self.priors.iter().copied());
+        let registration = self.registration;
+        if let Some(k) = self.k {
+            if d.measure() == Measure::Position {
+                let why =
+                    "weighs orientation against position errors; the data hold positions only";
+                return Err(Error::option(Opt::K, why));
+            }
+            crate::error::finite_positive("k", k).map_err(|e| e.of_option(Opt::K))?;
+            spec.k = k;
+        }
+        let mut val = self.validate.clone();
+        if let Some(h) = self.holdout {
+            let (cal, held) = h.split(d.len());
+            val = Some(cv::subset(&d, &held));
+            d = cv::subset(&d, &cal);
+        }
+        let with_base = registration == Registration::Identify;
+        let mut kinematic = if self.params.is_empty() {
+            param_sets::identified_params_tool_first(nominal, d.measure(), with_base)
+        } else {
+            check_names(Opt::Params, nominal, &self.params)?;
+            self.params.clone()
+        };
+        kinematic.retain(|p| !self.fix.contains(p));
+        let mut params = kinematic.clone();
+        if let Some(c) = &self.compliance {
+            let compliances = c.params(nominal, "compliance");
+            params.extend(compliances.map_err(|e| e.of_option(Opt::Compliance))?);
+        }
+        params.retain(|p| !self.fix.contains(p));
+        check_names(Opt::Fix, nominal, &self.fix)?;
+        let setup = cv::CvSetup {
+            method: &spec,
+            registration,
+            seed: self.seed,
+            fold_seed: self.cv_seed,
+            fixed: &self.fix,
+        };
+        // With models the best model by CV is the one identified.
+        let mut robot = nominal.clone();
+        let mut choice = None;
+        if !self.models.is_empty() {
+            let folds = self.cv.unwrap_or(5);
+            let (cvs, best) = cv::choose_model(nominal, &self.models, &d, folds, &setup)?;
+            (robot, params) =
+                self.models[best].robot_and_params(nominal, &d, registration, &self.fix)?;
+            choice = Some((cvs, best));
+        }
+        let nominal = robot;
+        let cross = match (&choice, self.cv) {
+            (Some((cvs, best)), _) => Some(cvs[*best].clone()),
+            (None, Some(k)) => {
+                let model = Model {
+                    compliance: self.compliance.is_some(),
+                    ..Model::KINEMATIC
+                };
+                let model = (&nominal, &params[..], model.name());
+                Some(cv::cross_validate(model, &d, k, &setup)?)
+            }
+            (None, None) => None,
+        };
+        // For real data `known` means the points are already in the base frame.
+        let recorder = TraceRecorder::default();
+        let mut traced = spec.clone();
+        traced.trace = Some(recorder.clone());
+        let c = calibrate_on(&nominal, &params, &d, registration, &traced, self.seed)
+            .map_err(|e| in_data(&self.source, e))?;
+        if verdict::undetermined(&c) && !self.allow_rank_deficient {
+            let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
+            return Err(verdict::undetermined_error(
+                &nominal, all, &c, source, &spec,
+            ));
+        }
+        let validation = val
+            .as_ref()
+            .map(|v| validate_file(&nominal, &c, v))
+            .transpose()?;
+        // The per-point residuals (16 bytes a row) are dropped after the check of a worse
+        // robot and computed again after the diagnostics, which need memory of their own.
+        let (before, after) = point_residuals(&nominal, &c, &d)?;
+        let trace = convergence_trace(&c, &recorder);
+        let evaluations = match (&c.identified.trace, &trace) {
+            (None, Some(t)) => t.trace.first().map(|&f| (f, c.identified.rms_residual)),
+            _ => None,
+        };
+        let worse = worse_causes(
+            validation
+                .as_ref()
+                .map(|v| (v.before_mm.rms, v.after_mm.rms)),
+            (rms(&before), rms(&after)),
+            c.identified.termination,
+            evaluations,
+        );
+        let gross = gross_reading(&after)
+            .map(|g| ("after", g))
+            .or_else(|| gross_reading(&before).map(|g| ("before", g)))
+            .map(|(at, (i, r))| {
+                format!("point {i} has a residual {r:.0} times the median {at} calibration")
+            });
+        if !worse.is_empty() && !self.allow_worse {
+            return Err(worse_error(&self.source, &worse, gross));
+        }
+        let implausible = plausibility::check(
+            (&nominal, &c.robot, &params),
+            Some((&plausibility::tool_points(&nominal, &d.qs), &d.points)),
+            (rms(&after), d.sigma_mm.as_deref()),
+            gross,
+            (&self.source, self.allow_implausible),
+        )?;
+        drop((before, after));
+        let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
+        let diagnostics = diagnose(&Subject {
+            nominal: &nominal,
+            params: &params,
+            data: &d,
+            calibrated: &c,
+            k: spec.k,
+            priors: &spec.precisions(&params)?,
+            validation: val
+                .as_ref()
+                .zip(validation.as_ref())
+                .map(|(v, s)| (v, s.after_mm.rms)),
+        })?;
+        let id = &c.identified;
+        let mut record =
+            IdentifiedRecord::of(&nominal.name, &self.source, spec.name(), &params, id);
+        if let Some(v) = &validation {
+            record = record.validated_file(v);
+        }
+        let covariance = c.identified.covariance();
+        let (cv_models, cv_best) = choice
+            .map(|(cvs, best)| (cvs[best].model.clone(), cvs))
+            .map(|(best, cvs)| (Some(cvs), Some(best)))
+            .unwrap_or_default();
+        let record = IdentifiedRecord {
+            allowed_implausible: implausible,
+            allowed_worse: worse,
+            convergence_trace: trace,
+            covariance: Some(
+                covariance
+                    .row_iter()
+                    .map(|r| r.iter().copied().collect())
+                    .collect(),
+            ),
+            cv: cross,
+            cv_best,
+            cv_models,
+            diagnostics: Some(diagnostics),
+            fixed: super::record::names(&self.fix),
+            holdout: self.holdout.map(|h| format!("{}/{}", h.last, h.every)),
+            priors,
+            registration: Some(registration),
+            registration_frame: Some((&c.frame).into()),
+            registration_last_step_mm: Some(c.rounds.last_step_mm),
+            registration_rounds: Some(c.rounds.rounds),
+            registration_termination: Some(c.rounds.termination),
+            ..record
+        };
+        let residuals = point_residuals(&nominal, &c, &d)?;
+        let identifiability = analyse(&nominal, &nominal.params(), &d.qs, d.measure());
+        Ok(TrackerOutcome {
+            identifiability,
+            nominal,
+            data: d,
+            registration,
+            params,
+            calibrated: c,
+            validation,
+            residuals,
+            record,
+        })
+    }
+}
+
+/// A failure the data read from `source` cause ([`Error::Singular`]: the points do not
+/// determine the registration; [`Error::Diverged`]: the alternation diverged on them) as a
+/// refusal of that file; any other error as it is.
+fn in_data(source: &std::path::Path, e: Error) -> Error {
+    match e {
+        Error::Singular(m) | Error::Diverged(m) => Error::file(source, "data", m),
+        e => e,
+    }
+}
+
+impl TrackerOutcome {
+    /// The compensated robot, named `<nominal>-calibrated`, as `robot.toml` holds it.
+    pub fn compensated(&self) -> Robot {
+        let mut r = self.calibrated.robot.clone();
+        r.name = format!("{}-calibrated", self.nominal.name);
+        r
+    }
+
+    /// The warnings printed when the result is written: a registration that did not settle
+    /// ([`registration_warning`]) and the causes of a result kept worse than the nominal
+    /// robot.
+    pub fn warnings(&self) -> Vec<Said> {
+        let settle = registration_warning(&self.calibrated, self.registration).map(Said::from);
+        let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
+        let worse = self.worse_warning();
+        settle.into_iter().chain(worse).chain(implausible).collect()
+    }
+
+    /// The warning of a result kept worse than the nominal robot, if it is.
+    pub fn worse_warning(&self) -> Option<Said> {
+        worse_warning(&self.record.allowed_worse)
+    }
+}
+
+impl IdentifyOutcome {
+    /// `identified.json`.
+    pub fn record(&self) -> &IdentifiedRecord {
+        match self {
+            IdentifyOutcome::Tracker(o) => &o.record,
+            IdentifyOutcome::Kind(o) => &o.record,
+        }
+    }
+
+    /// The compensated robot, named `<nominal>-calibrated`, as `robot.toml` holds it.
+    pub fn compensated(&self) -> Robot {
+        match self {
+            IdentifyOutcome::Tracker(o) => o.compensated(),
+            IdentifyOutcome::Kind(o) => o.compensated(),
+        }
+    }
+}
+
+/// `identified.json`.
+impl serde::Serialize for IdentifyOutcome {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        self.record().serialize(s)
+    }
+}
+
+/// [`calibrate`] of real data (`known`: the points are in the base frame) with the method's
+/// stream `identify` of `seed`.
+fn calibrate_on(
+    nominal: &Robot,
+    params: &[Param],
+    d: &Measurements,
+    registration: Registration,
+    spec: &MethodSpec,
+    seed: u64,
+) -> Result<Calibrated> {
+    let mut rng = crate::numeric::rng::stream(seed, "identify");
+    calibrate(
+        nominal,
+        params,
+        d,
+        registration,
+        &Frame::identity(),
+        spec,
+        &mut rng,
+    )
+}
+
+/// How each prior moved its parameter's estimate: the same identification without the
+/// priors, against the MAP estimate of `c`.
+fn prior_moves(
+    nominal: &Robot,
+    params: &[Param],
+    d: &Measurements,
+    spec: &MethodSpec,
+    c: &Calibrated,
+    (registration, seed): (Registration, u64),
+) -> Result<Vec<PriorMove>> {
+    if spec.priors.is_empty() {
+        return Ok(Vec::new());
+    }
+    let mut free = spec.clone();
+    free.priors.clear();
+    let f = calibrate_on(nominal, params, d, registration, &free, seed)?;
+    Ok(spec
+        .priors
+        .iter()
+        .filter_map(|&(p, sigma)| {
+            let k = params.iter().position(|q| *q == p)?;
+            Some(PriorMove {
+                parameter: p.to_string(),
+                sigma,
+                without_prior: f.identified.x[k],
+                with_prior: c.identified.x[k],
+            })
+        })
+        .collect())
+}
+
+/// The convergence trace: the searches' best fitness per iteration, or the RMS point
+/// residual (mm) at each evaluation of the Jacobian methods' model (every round of an `svd`
+/// or `wsvd` alternation; adaptive LM's rejected trial steps included).
+fn convergence_trace(c: &Calibrated, recorder: &TraceRecorder) -> Option<Trace> {
+    if let Some(t) = &c.identified.trace {
+        return Some(Trace {
+            values: "best fitness per iteration",
+            trace: t.clone(),
+        });
+    }
+    let t = recorder.lock().ok()?.clone();
+    (!t.is_empty()).then_some(Trace {
+        values: "RMS point residual (mm) per evaluation",
+        trace: t,
+    })
+}

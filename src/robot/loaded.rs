@@ -1,0 +1,45 @@
+//! The forward kinematics of the elasto-geometric model ([`loaded_fk`]): the rigid chain
+//! with each joint deflected under load by its compliance ([`super::compliance`]) and offset
+//! by its joint-angle harmonics ([`super::harmonics`]) and its mass-free gravity basis
+//! ([`super::gravity_basis`]).
+
+use crate::error::Result;
+use crate::numeric::{Frame, Real};
+use crate::robot::compliance::{deflect_vars, gravity_torques, is_compliant};
+use crate::robot::{Chain, Param, Robot, MAX_JOINTS};
+
+/// The tool frame of `robot` under the elasto-geometric model at joint values `q` (internal
+/// units) with `payload_kg` at the tool point: the forward kinematics with every chain
+/// variable `j` deflected by `c_j τ_j(q, payload)` ([`gravity_torques`], the robot's
+/// compliances [`Param::Compliance`]) and offset by its joint-angle harmonics
+/// ([`crate::robot::harmonics`]) and its mass-free gravity basis
+/// ([`crate::robot::gravity_basis`]). The rigid forward kinematics when every compliance,
+/// harmonic and gravity-basis coefficient is zero. Fails when compliances are set but the robot gives no link
+/// masses.
+pub fn loaded_fk(robot: &Robot, chain: &Chain, q: &[Real], payload_kg: Real) -> Result<Frame> {
+    let compliant = is_compliant(robot);
+    let harmonic = crate::robot::harmonics::has_harmonics(robot);
+    let gravity = crate::robot::gravity_basis::has_gravity(robot);
+    if !compliant && !harmonic && !gravity {
+        return Ok(chain.fk(q));
+    }
+    let n = robot.dof();
+    let mut tau = [0.0; MAX_JOINTS];
+    if compliant {
+        gravity_torques(robot, chain, q, payload_kg, &mut tau[..n])?;
+        for (j, t) in tau.iter_mut().enumerate().take(n) {
+            *t *= robot.get(Param::Compliance(j));
+        }
+    }
+    let mut vars = chain.variables(q);
+    if harmonic {
+        crate::robot::harmonics::add_offsets(&robot.values, &vars, &mut tau[..n]);
+    }
+    if gravity {
+        let mut basis = [[0.0; crate::robot::GRAVITY_POINTS]; MAX_JOINTS];
+        crate::robot::gravity_basis::torques(robot, chain, &vars, &mut basis);
+        crate::robot::gravity_basis::add_offsets(&robot.values, &basis, &mut tau[..n]);
+    }
+    deflect_vars(&mut vars, &tau[..n]);
+    Ok(chain.walk_vars(&vars, |_, _, _| {}))
+}

@@ -1,0 +1,84 @@
+//! The studies that run cells rather than calibration trials — Ban fig. 3's registration
+//! study and an instruments study — as the runner sees them ([`Cells`]): blocks of trials,
+//! each trial's result a record, the files written from every block's results. The runner
+//! runs them whole ([`super::whole`]) or in shares merged after ([`super::shard`]).
+
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+use crate::error::Result;
+use crate::numeric::rng::trial_seed;
+use crate::numeric::Real;
+use crate::report::output::Outputs;
+use crate::robot::Robot;
+use crate::study::instruments::{CellPlan, InstrumentsScenario, Trial};
+use crate::study::registration_study::RegistrationScenario;
+
+/// A study whose work units are its blocks' trials, each trial's result a record
+/// ([`crate::study::records`]), its files written from every block's results.
+pub trait Cells: Sync {
+    /// What a block's trials share.
+    type Block: Send + Sync;
+    /// One trial's result.
+    type Trial: Serialize + DeserializeOwned + Send + Sync;
+    /// Block `b`, from the previous one when it is given (what they share is not redone).
+    fn block(&self, b: usize, prev: Option<&Self::Block>) -> Result<Self::Block>;
+    /// Trial `i` of `block`.
+    fn trial(&self, block: &Self::Block, i: usize) -> Result<Self::Trial>;
+    /// The study's files from every block's trials, in order, and the table the terminal
+    /// shows.
+    fn outputs(&self, done: Vec<(Self::Block, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)>;
+}
+
+impl Cells for RegistrationScenario {
+    type Block = ();
+    type Trial = Vec<(Real, Real)>;
+    fn block(&self, _: usize, _: Option<&()>) -> Result<()> {
+        self.registration_study.check()
+    }
+    fn trial(&self, _: &(), i: usize) -> Result<Self::Trial> {
+        self.registration_study
+            .draw(trial_seed(self.head.seed, i as u64))
+    }
+    fn outputs(&self, done: Vec<((), Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
+        let draws = done.into_iter().next().map(|d| d.1).unwrap_or_default();
+        let cells = self.registration_study.cells(&draws);
+        let claims = self.evaluate_claims(&draws);
+        crate::report::registration_study::outputs(self, &cells, &claims)
+    }
+}
+
+/// An instruments study and its nominal robot.
+pub struct Instruments<'a> {
+    /// The study.
+    pub scenario: &'a InstrumentsScenario,
+    /// The nominal robot (`robot` of the scenario).
+    pub robot: Robot,
+}
+
+impl Cells for Instruments<'_> {
+    type Block = CellPlan;
+    type Trial = Option<Trial>;
+    fn block(&self, b: usize, prev: Option<&CellPlan>) -> Result<CellPlan> {
+        self.scenario.plan(&self.robot, b, prev)
+    }
+    fn trial(&self, block: &CellPlan, i: usize) -> Result<Self::Trial> {
+        self.scenario.run_trial(&self.robot, block, i)
+    }
+    fn outputs(&self, done: Vec<(CellPlan, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
+        let cells: Vec<_> = done
+            .iter()
+            .map(|(p, t)| self.scenario.cell_of(p, t))
+            .collect();
+        crate::report::instruments::outputs(self.scenario, &cells)
+    }
+}
+
+impl<'a> Instruments<'a> {
+    /// The study `scenario` with its nominal robot loaded.
+    pub fn new(scenario: &'a InstrumentsScenario) -> Result<Instruments<'a>> {
+        let chain = crate::robot::urdf::UrdfChain::default();
+        let robot = crate::robot::builtin::load_chain(&scenario.robot, &chain)?;
+        Ok(Instruments { scenario, robot })
+    }
+}
