@@ -209,7 +209,9 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
         }
         None
     };
-    calbench::report::guard::guard_out_with(dir, "--out", &OUTPUTS, &args.scenario, args.force)?;
+    // A live writer is refused by the checkpoint's own check (`Resumable::open`), which names
+    // its checkpoint.json and `--force`.
+    calbench::report::guard::guard_out_with(dir, "--resume", &OUTPUTS, &args.scenario, true)?;
     writable_folder(dir, &OUTPUTS)?;
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
