@@ -10,24 +10,21 @@
 //! the robot worse ([`super::verdict`]). For a kind file (§ 5.3):
 //! [`super::on_kind::identify_kind`], with the same refusals.
 
-use std::path::PathBuf;
-
-use super::cv;
+use super::cv::{self, Model};
 use super::diagnostics::{diagnose, Subject};
 use super::on_kind::KindOutcome;
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{
-    self, gross_reading, registration_warning, rms, worse_causes, worse_error, worse_warning,
+    self, check_names, gross_reading, registration_warning, rms, worse_causes, worse_error,
+    worse_warning,
 };
 use super::{calibrate, plausibility, Calibrated, Registration};
 use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, TraceRecorder};
-use crate::measurement::kind_csv::KindFile;
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
-use crate::robot::compliance::CompliancePick;
 use crate::robot::identifiability::{analyse, Identifiability};
 use crate::robot::{param_sets, Param, Robot};
 

@@ -10,7 +10,7 @@ use crate::error::Result;
 use crate::study::kind::AnyScenario;
 use crate::study::{RunOptions, Shard};
 
-/// The checkpoint of a killed run, checked and ready to continue ([`resume_study`]).
+/// The checkpoint of a killed run, checked and ready to continue ([`super::run::resume_study`]).
 pub struct Resumable {
     pub(super) out: PathBuf,
     pub(super) checkpoint: Checkpoint,

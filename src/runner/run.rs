@@ -5,7 +5,7 @@
 //! of it ([`super::shard`]); and a run held in memory ([`InMemoryRun`]). Progress and
 //! warnings go to the [`Reporter`] the caller supplies.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use rayon::prelude::*;
 
@@ -20,14 +20,14 @@ use crate::study::kind::AnyScenario;
 use crate::study::reporter::{NoProgress, Progress, Reporter, Silent, Terminal};
 use crate::study::scenario::Scenario;
 use crate::study::stats::precision::{widest_and_needed, Stopping, BLOCK};
-use crate::study::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Shard, Study};
+use crate::study::{run_trial, BlockInfo, Collector, Replay, RunOptions, RunResult, Study};
 use crate::study::{TrialResult, TrialSink, CHUNK};
 
 /// Runs `scenario` and writes its output folder as a whole ([`atomically`]):
 /// `trials.csv` as trials finish, then `summary.json`, `timing.json`, `report.md` and the
 /// plots; with `opts.shard`, the shard's partial result instead ([`shard`]). A checkpoint
 /// beside the output folder lets `calbench run --resume` continue the run if it is killed
-/// ([`checkpoint`]). Progress and warnings go to `reporter`.
+/// ([`super::checkpoint`]). Progress and warnings go to `reporter`.
 pub fn run_study(
     scenario: Scenario,
     opts: &RunOptions,

@@ -59,6 +59,23 @@ pub fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
+/// The worker threads of a study of `work` trials or units: `threads` of them (`None`: one
+/// per core), [`capped`] with the note to `reporter`.
+pub fn pool(
+    threads: Option<usize>,
+    work: u64,
+    reporter: &dyn Reporter,
+) -> Result<rayon::ThreadPool> {
+    let (threads, note) = capped(threads, work, cores());
+    if let Some(note) = note {
+        reporter.warning(&note);
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -99,21 +116,4 @@ mod tests {
             assert!(e.contains(SLURM_CPUS), "{e}");
         }
     }
-}
-
-/// The worker threads of a study of `work` trials or units: `threads` of them (`None`: one
-/// per core), [`capped`] with the note to `reporter`.
-pub fn pool(
-    threads: Option<usize>,
-    work: u64,
-    reporter: &dyn Reporter,
-) -> Result<rayon::ThreadPool> {
-    let (threads, note) = capped(threads, work, cores());
-    if let Some(note) = note {
-        reporter.warning(&note);
-    }
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| Error::Compute(format!("cannot start the worker threads: {e}")))
 }

@@ -7,21 +7,14 @@
 use std::path::Path;
 
 use rayon::prelude::*;
-use serde::de::DeserializeOwned;
-use serde::Serialize;
 
 use super::cells::{Cells, Instruments};
 use super::checkpoint::{Checkpoint, Records as Replayed};
 use super::resume::{Continued, Resumable};
 use super::shard;
 use crate::error::{Error, Result};
-use crate::numeric::rng::trial_seed;
-use crate::numeric::Real;
-use crate::report::output::{write_all, Outputs};
-use crate::robot::Robot;
-use crate::study::instruments::{CellPlan, InstrumentsScenario, Trial};
+use crate::report::output::write_all;
 use crate::study::kind::AnyScenario;
-use crate::study::registration_study::RegistrationScenario;
 use crate::study::reporter::{NoProgress, Progress, Reporter};
 use crate::study::{Replay as _, RunOptions, CHUNK};
 
