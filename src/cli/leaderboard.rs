@@ -29,7 +29,7 @@ pub fn run(args: &LeaderboardArgs) -> Result<()> {
     super::check_out_folder(&args.out, &OUTPUTS)?;
     let db = Db::open(&db_path(args.db.as_deref()), false)?;
     let rows = board::rows(&db)?;
-    let html = page(&rows);
+    let html = page(&rows, &board::scores(&rows));
     let table = csv(&rows)?;
     folder(
         &args.out,

@@ -1,10 +1,16 @@
 //! The leaderboard of the tasks (docs/formats.md, `calbench leaderboard`): per task and
 //! division, every recorded entry and the authors' published figures, ranked by the task's
-//! metric (lower is better).
+//! metric (lower is better) with their intervals: a row's rank is one more than the rows
+//! whose interval lies wholly below its own, so rows whose intervals overlap share a rank.
+//! Each entry stands against the task's published figure (the difference with its interval);
+//! each entrant's figures across tasks make one score ([`scores`]).
+
+use std::collections::BTreeMap;
 
 use super::Db;
 use crate::error::Result;
-use crate::report::html::leaderboard::Row;
+use crate::numeric::Real;
+use crate::report::html::leaderboard::{Row, Score};
 
 /// The rows of every task, by task, division (`closed` first) and rank.
 pub fn rows(db: &Db) -> Result<Vec<Row>> {
@@ -33,6 +39,7 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
             machine: r.get(11)?,
             recorded_at: r.get(12)?,
             rank: 0,
+            vs_published: None,
         })
     })?;
     let (mut rows, published): (Vec<Row>, Vec<Row>) = all.into_iter().partition(|r| !r.published);
@@ -55,12 +62,72 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
             .then(a.value.total_cmp(&b.value))
             .then(b.published.cmp(&a.published))
     });
-    let mut rank = 0;
-    for i in 0..rows.len() {
-        let same =
-            i > 0 && rows[i - 1].task == rows[i].task && rows[i - 1].division == rows[i].division;
-        rank = if same { rank + 1 } else { 1 };
-        rows[i].rank = rank;
+    let bounds = |r: &Row| r.ci.unwrap_or([r.value, r.value]);
+    let ranks: Vec<usize> = rows
+        .iter()
+        .map(|r| {
+            let lo = bounds(r)[0];
+            let below = rows
+                .iter()
+                .filter(|o| o.task == r.task && o.division == r.division && bounds(o)[1] < lo)
+                .count();
+            below + 1
+        })
+        .collect();
+    // The task's published figure an entry stands against: the lowest one, of any division.
+    let mut published: BTreeMap<String, Real> = BTreeMap::new();
+    for r in rows.iter().filter(|r| r.published) {
+        let p = published.entry(r.task.clone()).or_insert(r.value);
+        *p = p.min(r.value);
+    }
+    for (r, rank) in rows.iter_mut().zip(ranks) {
+        r.rank = rank;
+        if !r.published {
+            r.vs_published = published.get(&r.task).map(|&p| {
+                let ci = r.ci.map(|[lo, hi]| [lo - p, hi - p]);
+                (r.value - p, ci)
+            });
+        }
     }
     Ok(rows)
+}
+
+/// Each entrant's score across the tasks it entered (`rows` of [`rows`]): the geometric mean,
+/// over those tasks, of its best figure there relative to the task's reference — its lowest
+/// published figure, else the best figure recorded (the best known) — so 1 is level with the
+/// reference and 0.9 is 10 % below it on average. Sorted by score, lowest first.
+pub fn scores(rows: &[Row]) -> Vec<Score> {
+    let mut reference: BTreeMap<&str, (bool, Real)> = BTreeMap::new();
+    for r in rows {
+        let e = reference.entry(&r.task).or_insert((r.published, r.value));
+        // A published figure outranks every recorded one as the reference.
+        if (r.published, -r.value) > (e.0, -e.1) {
+            *e = (r.published, r.value);
+        }
+    }
+    let mut best: BTreeMap<(&str, &str), Real> = BTreeMap::new();
+    for r in rows.iter().filter(|r| !r.published) {
+        let b = best.entry((&r.name, &r.task)).or_insert(r.value);
+        *b = b.min(r.value);
+    }
+    let mut by_entrant: BTreeMap<&str, Vec<(&str, Real)>> = BTreeMap::new();
+    for ((name, task), value) in best {
+        by_entrant.entry(name).or_default().push((task, value));
+    }
+    let mut out: Vec<Score> = by_entrant
+        .into_iter()
+        .map(|(name, tasks)| {
+            let logs: Real = tasks
+                .iter()
+                .map(|(t, v)| (v / reference[t].1).ln())
+                .sum::<Real>();
+            Score {
+                name: name.to_string(),
+                tasks: tasks.iter().map(|t| t.0.to_string()).collect(),
+                score: (logs / tasks.len() as Real).exp(),
+            }
+        })
+        .collect();
+    out.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.name.cmp(&b.name)));
+    out
 }

@@ -181,24 +181,82 @@ fn leaderboard_ranks_task_entries_beside_the_published_figures() {
         .collect();
     let pick: Vec<(&str, &str, &str, &str)> =
         rows.iter().map(|r| (r[3], r[4], r[5], r[8])).collect();
+    // The open entry's interval (2.6 – 3.0) holds the published 2.92: one rank for both.
     assert_eq!(
         pick,
         [
             ("closed", "1", "entry", "3.09"),
             ("open", "1", "entry", "2.8"),
-            ("open", "2", "published", "2.92"),
+            ("open", "1", "published", "2.92"),
         ],
         "{csv}"
     );
+    // Every entry, the closed one too, against the published figure: the difference and its
+    // interval (the entry's interval less the published point); none for the published row.
+    let num = |s: &str| s.parse::<f64>().unwrap();
+    for (row, value) in [(&rows[0], 3.09), (&rows[1], 2.80)] {
+        assert!((num(row[14]) - (value - 2.92)).abs() < 1e-12, "{csv}");
+        assert!((num(row[15]) - (value - 0.2 - 2.92)).abs() < 1e-12, "{csv}");
+        assert!((num(row[16]) - (value + 0.2 - 2.92)).abs() < 1e-12, "{csv}");
+    }
+    assert_eq!(&rows[2][14..], ["", "", ""], "{csv}");
     let page = out.join("leaderboard.html");
     let html = self_contained(&page);
     assert!(html.contains("barrett-wam") && html.contains("MDH + learned residual"));
     assert!(html.contains("closed division") && html.contains("open division"));
+    // Each entrant's score across tasks: its best figure over the published 2.92.
+    assert!(html.contains("Across tasks") && html.contains(&format!("{:.4}", 2.80 / 2.92)));
     if let Some(chrome) = chromium() {
         browse(&chrome, &page, &dir.join("browser"), 0);
     } else {
         assert!(!ci(), "no Chromium on the PATH");
     }
+}
+
+/// Intervals that do not overlap rank apart, an empty division says so, and the score across
+/// tasks takes the best figure recorded where no figure is published.
+#[test]
+fn leaderboard_ranks_apart_only_what_the_intervals_separate() {
+    let dir = tmp_dir("cli-results-board-ranks");
+    let db = dir.join("calbench.sqlite");
+    // Two open entries whose intervals (± 0.2) do not meet, a third overlapping the second.
+    task_folder(&dir, "a", 2.00, "open", "\"kinematic\", \"harmonics\"");
+    task_folder(&dir, "b", 2.50, "open", "\"kinematic\", \"gravity\"");
+    task_folder(&dir, "c", 2.60, "open", "\"kinematic\", \"harmonics2\"");
+    for name in ["a", "b", "c"] {
+        calbench_ok(&["record", path_arg(&dir.join(name)), "--db", path_arg(&db)]);
+    }
+    let out = dir.join("board");
+    calbench_ok(&[
+        "leaderboard",
+        "--db",
+        path_arg(&db),
+        "--out",
+        path_arg(&out),
+    ]);
+    let csv = read(&out.join("leaderboard.csv"));
+    let ranks: Vec<(&str, &str, &str)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .map(|r| (r[4], r[5], r[8]))
+        .collect();
+    assert_eq!(
+        ranks,
+        [
+            ("1", "entry", "2"),
+            ("2", "entry", "2.5"),
+            ("2", "entry", "2.6"),
+            // Every entry's interval lies wholly below the published 2.92.
+            ("4", "published", "2.92"),
+        ],
+        "{csv}"
+    );
+    let html = read(&out.join("leaderboard.html"));
+    assert!(
+        html.contains("closed division: no entry recorded."),
+        "{html}"
+    );
 }
 
 #[test]

@@ -1,6 +1,8 @@
 //! `leaderboard.html` and `leaderboard.csv` of `calbench leaderboard` (docs/formats.md): per
 //! task, a closed and an open division, each ranking every recorded entry and the authors'
-//! published figures (fixed rows) by the task's metric, lower first.
+//! published figures (fixed rows) by the task's metric, lower first, rows whose intervals
+//! overlap sharing a rank; each entry against the task's published figure; each entrant's
+//! score across tasks.
 
 use std::collections::BTreeMap;
 
@@ -36,14 +38,31 @@ pub struct Row {
     pub machine: String,
     /// When an entry was recorded.
     pub recorded_at: String,
-    /// The rank in its task and division, from 1.
+    /// The rank in its task and division, from 1: one more than the rows whose interval lies
+    /// wholly below this row's (rows whose intervals overlap share a rank).
     pub rank: usize,
+    /// An entry's figure less the task's (lowest) published figure, and the interval of that
+    /// difference (the entry's interval shifted by the published point); `None` for a
+    /// published row or a task without one.
+    pub vs_published: Option<(Real, Option<[Real; 2]>)>,
+}
+
+/// An entrant's score across the tasks it entered ([`crate::report::html::leaderboard`]):
+/// the geometric mean of its best figure on each task relative to the task's reference.
+#[derive(Clone, Debug)]
+pub struct Score {
+    /// `entrant: method`.
+    pub name: String,
+    /// The tasks it entered.
+    pub tasks: Vec<String>,
+    /// The geometric mean of figure / reference over those tasks (below 1: better).
+    pub score: Real,
 }
 
 /// `leaderboard.csv`: one row per ranked row.
 pub fn csv(rows: &[Row]) -> Result<String> {
     let header = "task,task_hash,metric,division,rank,row,name,models,value,ci_lo,ci_hi,source,\
-                  machine,recorded_at";
+                  machine,recorded_at,vs_published,vs_published_lo,vs_published_hi";
     let header: Vec<&str> = header.split(',').collect();
     csv_text(
         &header,
@@ -60,18 +79,25 @@ pub fn csv(rows: &[Row]) -> Result<String> {
                 hi,
             ]);
             cells.extend([r.source.clone(), r.machine.clone(), r.recorded_at.clone()]);
+            let (d, ci) = r
+                .vs_published
+                .map_or((String::new(), None), |(d, ci)| (d.to_string(), ci));
+            cells.push(d);
+            cells.extend(ci_cells(ci));
             cells
         }),
     )
 }
 
-/// `leaderboard.html`.
-pub fn page(rows: &[Row]) -> String {
+/// `leaderboard.html`: the tasks, then the entrants' scores across tasks (`scores`).
+pub fn page(rows: &[Row], scores: &[Score]) -> String {
     let mut page = Page::new(
         "calbench leaderboard",
         "Per task, every recorded entry ranked by the task's metric (lower is better) beside \
-         the figures its data's authors published (shaded rows). Closed division: kinematic \
-         models only (DH, β, tool, base); open division: any model or method.",
+         the figures its data's authors published (shaded rows); rows whose 95 % intervals \
+         overlap share a rank. Each entry stands against the task's published figure: the \
+         difference and its interval. Closed division: kinematic models only (DH, β, tool, \
+         base); open division: any model or method.",
     );
     let mut tasks: BTreeMap<&str, Vec<&Row>> = BTreeMap::new();
     for r in rows {
@@ -88,14 +114,31 @@ pub fn page(rows: &[Row]) -> String {
         ]);
         for division in ["closed", "open"] {
             let rows: Vec<&&Row> = list.iter().filter(|r| r.division == division).collect();
+            if !rows.iter().any(|r| !r.published) {
+                let published = if rows.is_empty() {
+                    String::new()
+                } else {
+                    " (only the published figures)".to_string()
+                };
+                page.para(&format!(
+                    "{division} division: no entry recorded{published}."
+                ));
+                if rows.is_empty() {
+                    continue;
+                }
+            }
             let table: Vec<Vec<String>> = rows
                 .iter()
                 .map(|r| {
                     let models = if r.published { "published" } else { &r.models };
                     let ci =
                         r.ci.map_or(String::new(), |[a, b]| format!("{a:.4} – {b:.4}"));
+                    let vs = r.vs_published.map_or(String::new(), |(d, ci)| {
+                        let ci = ci.map_or(String::new(), |[a, b]| format!(" ({a:+.4} – {b:+.4})"));
+                        format!("{d:+.4}{ci}")
+                    });
                     let mut row = vec![r.rank.to_string(), r.name.clone(), models.to_string()];
-                    row.extend([format!("{:.4}", r.value), ci, r.source.clone()]);
+                    row.extend([format!("{:.4}", r.value), ci, vs, r.source.clone()]);
                     row.extend([r.machine.clone(), r.recorded_at.clone()]);
                     row
                 })
@@ -109,6 +152,7 @@ pub fn page(rows: &[Row]) -> String {
                     "models",
                     &list[0].metric,
                     "95 % interval",
+                    "vs published (95 % interval)",
                     "version or source",
                     "machine",
                     "recorded",
@@ -117,6 +161,32 @@ pub fn page(rows: &[Row]) -> String {
                 |i| shaded[i].then_some("alone"),
             );
         }
+    }
+    if !scores.is_empty() {
+        page.section("Across tasks");
+        page.para(
+            "Each entrant's best figure on each task it entered, relative to the task's lowest \
+             published figure (else the best figure recorded), as a geometric mean: 1 is level \
+             with the reference, 0.9 is 10 % below it. Scores over different sets of tasks \
+             compare only roughly.",
+        );
+        let table: Vec<Vec<String>> = scores
+            .iter()
+            .map(|s| {
+                vec![
+                    s.name.clone(),
+                    format!("{:.4}", s.score),
+                    s.tasks.len().to_string(),
+                    s.tasks.join(", "),
+                ]
+            })
+            .collect();
+        page.table_with(
+            "scores across tasks",
+            &["entrant", "score", "tasks", "which"],
+            &table,
+            |_| None,
+        );
     }
     page.finish()
 }
