@@ -262,3 +262,102 @@ fn each_metric_key_is_written_once() {
         assert_eq!(places.len(), 1, "\"{field}\" written in {places:?}");
     }
 }
+
+/// The sibling modules (files of the same folder, `mod.rs` aside) that `code` names after
+/// `prefix` (`super::` or `crate::PATH::`): `prefix NAME` and `prefix {NAME, …}`.
+fn siblings_named(code: &str, prefix: &str, siblings: &BTreeSet<String>) -> BTreeSet<String> {
+    let ident = |s: &str| -> String {
+        s.trim()
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut names = BTreeSet::new();
+    for part in code.split(prefix).skip(1) {
+        let items: Vec<String> = match part.strip_prefix('{') {
+            Some(group) => {
+                // The top-level items of the group (a nested `a::{b, c}` names `a`).
+                let (mut depth, mut item, mut items) = (0, String::new(), Vec::new());
+                for c in group.chars() {
+                    match c {
+                        '{' => depth += 1,
+                        '}' if depth == 0 => break,
+                        '}' => depth -= 1,
+                        ',' if depth == 0 => items.push(std::mem::take(&mut item)),
+                        c if depth == 0 => item.push(c),
+                        _ => {}
+                    }
+                }
+                items.push(item);
+                items.iter().map(|i| ident(i)).collect()
+            }
+            None => vec![ident(part)],
+        };
+        names.extend(items.into_iter().filter(|n| siblings.contains(n)));
+    }
+    names
+}
+
+/// No two files of one module import each other, directly or through others (a circle
+/// `run` → `shard` → `whole` → `run` makes three files one): every edge `super::NAME` or
+/// `crate::MODULE::NAME` between the files of a folder points one way.
+#[test]
+fn the_files_of_a_module_import_each_other_in_no_circle() {
+    use std::collections::BTreeMap;
+    let src = root().join("src");
+    let mut folders: BTreeMap<std::path::PathBuf, Vec<(String, String)>> = BTreeMap::new();
+    for (path, code) in code_under(&src) {
+        let p = Path::new(&path);
+        let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+        if stem != "mod" && stem != "lib" && stem != "main" {
+            let folder = p.parent().unwrap().to_path_buf();
+            folders.entry(folder).or_default().push((stem, code));
+        }
+    }
+    let mut circles = Vec::new();
+    for (folder, files) in &folders {
+        let module = folder
+            .strip_prefix(&src)
+            .unwrap()
+            .to_string_lossy()
+            .replace('/', "::");
+        let siblings: BTreeSet<String> = files.iter().map(|f| f.0.clone()).collect();
+        let edges: BTreeMap<&str, BTreeSet<String>> = files
+            .iter()
+            .map(|(stem, code)| {
+                let mut to = siblings_named(code, "super::", &siblings);
+                if !module.is_empty() {
+                    to.extend(siblings_named(
+                        code,
+                        &format!("crate::{module}::"),
+                        &siblings,
+                    ));
+                }
+                to.remove(stem);
+                (stem.as_str(), to)
+            })
+            .collect();
+        // A circle through `start`: a path of edges back to it.
+        for start in edges.keys() {
+            let mut stack = vec![(start.to_string(), vec![start.to_string()])];
+            let mut seen = BTreeSet::new();
+            while let Some((at, path)) = stack.pop() {
+                for next in &edges[at.as_str()] {
+                    if next == start {
+                        let circle = path.join(" → ") + " → " + start;
+                        circles.push(format!("{}: {circle}", folder.display()));
+                    } else if seen.insert(next.clone()) {
+                        let mut p = path.clone();
+                        p.push(next.clone());
+                        stack.push((next.clone(), p));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        circles.is_empty(),
+        "files that import each other in a circle:\n{}",
+        circles.join("\n")
+    );
+}

@@ -479,7 +479,13 @@ fn outputs_never_land_where_they_destroy() {
             .env("HOME", &home)
             .output()
             .unwrap();
-        let err = refused(&o, &["--out", why]);
+        // The option given: `--resume DIR`, else `--out`.
+        let option = if args.contains(&"--resume") {
+            "--resume"
+        } else {
+            "--out"
+        };
+        let err = refused(&o, &[option, why]);
         assert!(err.trim_end().lines().count() == 1, "{args:?}: {err}");
     }
     let after: Vec<String> = [&sc, &raw, &shard.join("shard.json"), &residuals]

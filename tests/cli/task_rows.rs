@@ -134,34 +134,34 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
 }
 
 /// A refusal of a task's rows read through its mapping names the data file and the mapping
-/// (docs/formats.md § 9.1), never a temporary file: the WAM task's seven joint columns given
-/// to a six-joint robot.
+/// (docs/formats.md § 9.1), never a temporary file: a WAM grid pose whose joint 1 lies far
+/// outside its limits.
 #[test]
 fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
     let d = tmp_dir("cli-task-mapped-refusal");
+    let text = std::fs::read_to_string(wam_file(GRID)).unwrap();
+    let line = text.lines().nth(3).unwrap();
+    let cells: Vec<&str> = line.split(',').collect();
+    let far = line.replacen(cells[7], "9000", 1);
+    let grid = d.join(GRID);
+    std::fs::write(&grid, text.replacen(line, &far, 1)).unwrap();
     let t = wam_task(
         &d,
         &format!(
             "calibration = \"{}\"\nvalidation = \"{}\"",
-            wam_file(GRID).display(),
+            grid.display(),
             wam_file(RANDOM).display()
         ),
     );
-    let text = std::fs::read_to_string(&t).unwrap();
-    let six = text.replace(
-        "examples/barrett-wam/wam.toml",
-        "examples/ipa-ur10/ur10.toml",
-    );
-    assert_ne!(six, text);
-    std::fs::write(&t, six).unwrap();
     let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
-    assert!(!o.status.success(), "seven joint columns ran on six joints");
+    assert!(!o.status.success(), "a pose outside the limits ran");
     assert!(!d.join("out").exists(), "nothing is written");
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        e.contains(&format!("{} as mapped by", wam_file(GRID).display()))
+        e.contains(&format!("{} as mapped by", grid.display()))
             && e.contains("barrett-wam.mapping.toml")
+            && e.contains("q1")
             && !e.contains("calbench-task-"),
         "{e}"
-    );
+    )
 }

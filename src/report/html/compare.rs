@@ -215,7 +215,7 @@ impl Comparison {
         let _ = writeln!(s, "- B: {}\n", inline(&self.runs[1].describe()));
         let _ = writeln!(s, "{}\n", self.verdict());
         if let Some(n) = self.scenario_note() {
-            let _ = writeln!(s, "{n}\n");
+            let _ = writeln!(s, "{}\n", inline(&n));
         }
         s += "## Entries in both runs\n\n";
         let (h, rows) = self.table();
