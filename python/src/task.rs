@@ -35,9 +35,13 @@ pub(crate) fn task<'py>(
     let path = task_path(task);
     let t = Task::load(&path).map_err(err)?;
     if let Some(out) = &out {
-        let inputs = [&path, &t.robot, &t.mapping];
-        calbench::report::guard::guard_out(out, "out", &["identified.json", "task.json"], inputs)
-            .map_err(err)?;
+        calbench::report::guard::guard_out(
+            out,
+            "out",
+            &["identified.json", "task.json"],
+            t.inputs(),
+        )
+        .map_err(err)?;
     }
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())

@@ -237,7 +237,9 @@ def test_identify_a_kind_file_returns_the_cli_record(cli, root, tmp_path):
     bad.write_text("\n".join(rows) + "\n")
     with pytest.raises(calbench.FileError, match="makes the robot worse.*allow_worse=True"):
         calbench.identify(robot, data=bad, validate=val, method="lm")
-    kept = calbench.identify(robot, data=bad, validate=val, method="lm", allow_worse=True)
+    # (That robot also moved beyond what a calibration can mean: kept with both.)
+    kept = calbench.identify(robot, data=bad, validate=val, method="lm", allow_worse=True,
+                             allow_implausible=True)
     assert "validation RMS" in kept["allowed_worse"][0]
 
 

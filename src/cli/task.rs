@@ -52,7 +52,7 @@ pub struct TaskArgs {
 pub fn run(args: &TaskArgs) -> Result<()> {
     let path = task_path(&args.task);
     let task = Task::load(&path)?;
-    super::guard_out(&args.out, &OUTPUTS, [&path, &task.robot, &task.mapping])?;
+    super::guard_out(&args.out, &OUTPUTS, task.inputs())?;
     check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
     let (request, val, origin) = task.entry_request(spec, &args.models)?;

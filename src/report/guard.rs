@@ -14,7 +14,8 @@ use crate::error::{Error, Result};
 /// outputs would destroy something: the root folder, the home folder (`$HOME`), one of
 /// `inputs` (a file or folder the command reads), or a folder holding one of them under the
 /// name of one of `outputs`, the files written there (empty for the commands that write the
-/// one file `out`), or a folder holding another command's results ([`SIGNATURES`] that
+/// one file `out`), a folder of outputs that holds an input file, or a folder holding another
+/// command's results ([`SIGNATURES`] that
 /// `outputs` lacks; not checked when `outputs` is empty). Paths are compared as the file system resolves them (`.`, `..` and
 /// symbolic links); and a folder a live run writes into ([`live_writer`]).
 pub fn guard_out<P: AsRef<Path>>(
@@ -82,6 +83,15 @@ fn paths<P: AsRef<Path>>(
                 "{} is an input of this command; writing the outputs there would destroy it \
                  (nothing was written)",
                 out.display()
+            ));
+        }
+        let beside = !outputs.is_empty() && input.is_file() && it.parent() == Some(&at);
+        if beside {
+            return refuse(format!(
+                "{} holds {}, an input of this command; give the outputs a folder of their own \
+                 (nothing was written)",
+                out.display(),
+                input.display()
             ));
         }
         if let Some(name) = outputs.iter().find(|n| at.join(n) == it) {

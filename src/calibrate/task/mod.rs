@@ -209,6 +209,22 @@ pub fn task_path(name_or_path: &str) -> PathBuf {
 }
 
 impl Task {
+    /// Every file the task reads: the task file, the nominal robot, the mapping, the data
+    /// file(s) and the split (what an output folder must not destroy, [`crate::report::guard`]).
+    pub fn inputs(&self) -> Vec<&Path> {
+        let mut files = vec![self.path.as_path(), &self.robot, &self.mapping];
+        match &self.data {
+            TaskData::Split {
+                file, split_path, ..
+            } => files.extend([file.as_path(), split_path]),
+            TaskData::Files {
+                calibration,
+                validation,
+            } => files.extend([calibration.as_path(), validation]),
+        }
+        files
+    }
+
     /// Reads and checks the task file `path`: its keys (an unknown or missing key refused,
     /// naming the file, line and key), the files it names (relative to its folder), the
     /// split, and the published figures (or the `unpublished` note, not both).
