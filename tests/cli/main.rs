@@ -11,6 +11,7 @@ mod blocked;
 mod cells;
 mod cli;
 mod cluster;
+mod committed;
 mod determinism;
 mod fixed_models;
 mod fuzz;

@@ -1,0 +1,52 @@
+//! The committed outputs (every file under `results/`: the papers' run summaries, the CI
+//! guard's baseline, the README's and REPRODUCTION.md's figures and tables) are listed with
+//! their SHA-256 in `results/SHA256SUMS` (the `sha256sum` format), so that a committed output
+//! changes only on purpose: with the list, in the same commit, named in CHANGELOG.md.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use sha2::{Digest, Sha256};
+
+use crate::common::root;
+
+/// Every file under `dir`, as its path relative to `base` (with `/`) and its bytes' SHA-256.
+fn hashes(base: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
+    for e in std::fs::read_dir(dir).expect("results/") {
+        let p = e.expect("entry").path();
+        if p.is_dir() {
+            hashes(base, &p, out);
+        } else {
+            let rel = p
+                .strip_prefix(base)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/");
+            let bytes = std::fs::read(&p).expect("a committed output");
+            let hex: String = Sha256::digest(&bytes)
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect();
+            out.insert(rel, hex);
+        }
+    }
+}
+
+#[test]
+fn every_committed_output_has_the_sha256_its_list_gives() {
+    let results = root().join("results");
+    let listed = std::fs::read_to_string(results.join("SHA256SUMS")).expect("results/SHA256SUMS");
+    let mut got = BTreeMap::new();
+    hashes(&results, &results, &mut got);
+    got.remove("SHA256SUMS");
+    let want: String = got
+        .iter()
+        .map(|(path, hex)| format!("{hex}  {path}\n"))
+        .collect();
+    assert!(got.len() >= 30, "only {} files under results/", got.len());
+    assert_eq!(
+        listed, want,
+        "results/ differs from results/SHA256SUMS: a committed output changed, appeared or \
+         went. If on purpose, name it in CHANGELOG.md and write results/SHA256SUMS as:\n{want}"
+    );
+}
