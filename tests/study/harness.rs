@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use calbench::analysis::regression::{compare, compare_with, read_json, trials_of, Status, Trials};
+use calbench::analysis::regression::{
+    compare, compare_with, read_json, read_summary, trials_of, Status, Trials,
+};
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 
@@ -169,8 +171,9 @@ fn noise_free_study_recovers_the_injected_errors() {
 fn check_fails_on_a_worsened_summary() {
     let out = tmp_dir("harness-check");
     run_to(tiny(), &out, 2);
+    let typed = read_summary(&out.join("summary.json")).unwrap();
+    assert!(compare(&typed, &typed, 0.0).is_empty());
     let s = read_json(&out.join("summary.json")).unwrap();
-    assert!(compare(&s, &s, 0.0).is_empty());
     let mut worse = s.clone();
     let rms = worse["results"][0]["validation_after_mm"]["rms"]
         .as_f64()
@@ -208,10 +211,10 @@ fn ci_guard_matches_the_baseline() {
     let s = Scenario::load(&root().join("scenarios/ci-guard.toml")).unwrap();
     let out = tmp_dir("harness-ci-guard");
     run_to(s, &out, 2);
-    let now = read_json(&out.join("summary.json")).unwrap();
+    let now = read_summary(&out.join("summary.json")).unwrap();
     let path = root().join("results/baselines/ci-guard.json");
-    let base = read_json(&path).unwrap();
-    let tb = trials_of(&base, &path)
+    let base = read_summary(&path).unwrap();
+    let tb = trials_of(&read_json(&path).unwrap(), &path)
         .unwrap()
         .expect("the baseline's per-trial values");
     let tn = Trials::read(&out.join("trials.csv")).unwrap().unwrap();
