@@ -8,6 +8,7 @@ use serde_json::Value;
 
 use super::provenance::sha256_hex;
 use crate::analysis::regression::check_summary;
+use crate::calibrate::task::record::TASK_FILE;
 use crate::calibrate::task::{Division, TaskRecord};
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -336,6 +337,13 @@ impl Record {
         let path = dir.join("task.json");
         let (document, v) = read(&path)?;
         let t = TaskRecord::from_value(v, &path)?;
+        // The task file the entry ran, as its folder carries it (a folder written before it
+        // did has none): the published figures must be its own.
+        let ran = dir.join(TASK_FILE);
+        if ran.is_file() {
+            let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
+            t.check_published((&document, &path), (&text, &ran))?;
+        }
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
         let value = t.value;
         if !value.is_finite() {

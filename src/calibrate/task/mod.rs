@@ -189,6 +189,8 @@ pub struct Task {
     pub name: String,
     /// The task file.
     pub path: PathBuf,
+    /// Its text as read (an entry's folder carries it as `task.toml`).
+    pub text: String,
     /// SHA-256 of its canonical text and of the bytes of every file it fixes (data, split,
     /// mapping, robot; docs/formats.md § 9.3), hex.
     pub hash: String,
@@ -360,6 +362,7 @@ impl Task {
         Ok(Task {
             name,
             path: path.to_path_buf(),
+            text: text.clone(),
             hash: sha256::sha256_hex(canonical.as_bytes()),
             title: keys.title,
             robot,

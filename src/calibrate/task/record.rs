@@ -7,7 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::{Division, Published, TASK_FORMAT};
+use super::{Division, Published, TaskEntry, TASK_FORMAT};
 use crate::calibrate::cv::RepeatedChoice;
 use crate::error::{Error, Result};
 use crate::numeric::nan;
@@ -67,6 +67,94 @@ pub struct TaskRecord {
 
 fn calbench() -> String {
     "calbench".into()
+}
+
+/// The name of the task file as an entry's folder carries it.
+pub const TASK_FILE: &str = "task.toml";
+
+impl TaskEntry<'_> {
+    /// The files an entry's folder holds beside the identify outputs: `task.json` (the
+    /// entry's `json`) and the task file it ran, as read ([`TASK_FILE`]), as a run folder
+    /// holds the scenario it ran.
+    pub fn files(&self, json: &Value) -> Result<[(&'static str, String); 2]> {
+        let text = serde_json::to_string_pretty(json).map_err(|e| Error::Compute(e.to_string()))?;
+        Ok([("task.json", text + "\n"), (TASK_FILE, self.task.text.clone())])
+    }
+}
+
+/// The `[[published]]` rows of the task file `text` (read from `path`).
+fn published_of(text: &str, path: &Path) -> Result<Vec<Published>> {
+    #[derive(Deserialize)]
+    struct Rows {
+        #[serde(default)]
+        published: Vec<Published>,
+    }
+    let rows: Rows = toml::from_str(text)
+        .map_err(|e| Error::file(path, "published", e.message().trim_end().to_string()))?;
+    Ok(rows.published)
+}
+
+/// The 1-based line of `task.json`'s text where the `i`-th published row starts (its
+/// `{` after the `published` key), for a message.
+fn published_line(json: &str, i: usize) -> Option<usize> {
+    let start = json.find("\"published\"")?;
+    let mut depth = 0usize;
+    let mut row = 0usize;
+    for (k, c) in json[start..].char_indices() {
+        match c {
+            '{' if depth == 1 => {
+                if row == i {
+                    return Some(json[..start + k].matches('\n').count() + 1);
+                }
+                row += 1;
+                depth += 1;
+            }
+            '[' | '{' => depth += 1,
+            ']' | '}' => {
+                depth = depth.saturating_sub(1);
+                if depth == 0 {
+                    return None;
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+impl TaskRecord {
+    /// Refuses, naming `json_path` and the line and key of the row, a published row of this
+    /// record (whose text is `json`) that is not a `[[published]]` row of the task file the
+    /// folder carries (`task_text`, read from `task_path`): the data's authors' figures come
+    /// from the task file only.
+    pub fn check_published(
+        &self,
+        (json, json_path): (&str, &Path),
+        (task_text, task_path): (&str, &Path),
+    ) -> Result<()> {
+        let rows = published_of(task_text, task_path)?;
+        for (i, p) in self.published.iter().enumerate() {
+            if !rows.contains(p) {
+                let place = match published_line(json, i) {
+                    Some(l) => format!("line {l}, published[{i}]"),
+                    None => format!("published[{i}]"),
+                };
+                return Err(Error::file(
+                    json_path,
+                    place,
+                    format!(
+                        "\"{}\" ({} mm, {}) is not a [[published]] row of {}, the task file \
+                         this entry ran: published figures come from the task file only",
+                        p.label,
+                        p.value,
+                        p.source,
+                        task_path.display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl TaskRecord {
