@@ -9,9 +9,9 @@ use std::ops::Deref;
 /// takes an interval.
 pub use crate::numeric::dist;
 pub mod ecdf;
-pub mod paired;
 mod figure;
 mod missing;
+pub mod paired;
 pub mod precision;
 
 use super::metric::{Metric, PerTrial};

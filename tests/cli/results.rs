@@ -271,7 +271,11 @@ fn record_refuses_a_published_row_that_is_not_the_task_files() {
     assert_eq!(count(&db, "SELECT COUNT(*) FROM tasks"), 1);
     // The published figure edited in task.json: 2.92 → 1.5.
     let json = dir.join("t/task.json");
-    std::fs::write(&json, read(&json).replace("\"value\": 2.92", "\"value\": 1.5")).unwrap();
+    std::fs::write(
+        &json,
+        read(&json).replace("\"value\": 2.92", "\"value\": 1.5"),
+    )
+    .unwrap();
     let line = read(&json)
         .lines()
         .position(|l| l.contains("\"published\""))

@@ -245,7 +245,10 @@ pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
         Value::Null => "none".to_string(),
         v => v.to_string(),
     };
-    for ((key, a), (_, b)) in agree(&baseline.summary).into_iter().zip(agree(&summary.summary)) {
+    for ((key, a), (_, b)) in agree(&baseline.summary)
+        .into_iter()
+        .zip(agree(&summary.summary))
+    {
         let missing_seed = key == "seed" && a.is_null();
         if a != b || missing_seed {
             return Some(Unpaired::Differs {

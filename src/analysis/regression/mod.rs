@@ -23,9 +23,9 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::analysis::summary::Summary;
-use crate::study::stats::Entry;
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
+use crate::study::stats::Entry;
 pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
 pub use noise::{pairable, Status, Trials};
 
@@ -461,9 +461,8 @@ fn json_key_line(path: &Path, key: &str) -> Option<usize> {
 /// parameters.)
 fn present(e: &Entry, path: &str) -> bool {
     Metric::from_key(path) != Some(Metric::Failures)
-        && e.figure(path).is_some_and(|(v, _)| {
-            !v.is_nan() || Metric::ParamRmse.parameter_of(path).is_some()
-        })
+        && e.figure(path)
+            .is_some_and(|(v, _)| !v.is_nan() || Metric::ParamRmse.parameter_of(path).is_some())
 }
 
 /// Reads a JSON file.
@@ -603,7 +602,10 @@ mod tests {
                     "validation_after_mm": {"mean": 0.1, "rms": 0.1, "std": 0.1}}]}),
                 "max",
             ),
-            (json!({"scenario": "s", "results": [], "format": 2}), "format"),
+            (
+                json!({"scenario": "s", "results": [], "format": 2}),
+                "format",
+            ),
         ] {
             refused(&good, &bad, "old/base.json", key);
             refused(&bad, &good, "new/summary.json", key);
@@ -631,7 +633,8 @@ mod tests {
                 && e.contains("missing: ls / random; here: lm / random"),
             "{e}"
         );
-        let bare = typed(json!({"scenario": "s", "results": [{"method": "ls", "poses": "random"}]}));
+        let bare =
+            typed(json!({"scenario": "s", "results": [{"method": "ls", "poses": "random"}]}));
         let e = comparable(&bare, s, &good, b).unwrap_err().to_string();
         assert!(
             e.starts_with("new/summary.json: results: ") && e.contains("ls / random eta_mean_pct"),

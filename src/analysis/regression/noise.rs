@@ -22,8 +22,8 @@ use crate::error::{Error, Result};
 use crate::numeric::dist;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
-use crate::study::stats::{eta, Entry};
 use crate::study::stats::paired::compare;
+use crate::study::stats::{eta, Entry};
 
 /// What a compared metric did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -233,7 +233,11 @@ pub fn trials_key(e: &Entry, summary: &Summary) -> String {
         return plain;
     };
     let mut seen: Vec<&serde_json::Value> = Vec::new();
-    for x in summary.results.iter().filter_map(|r| r.sweep_value.as_ref()) {
+    for x in summary
+        .results
+        .iter()
+        .filter_map(|r| r.sweep_value.as_ref())
+    {
         if !seen.contains(&x) {
             seen.push(x);
         }

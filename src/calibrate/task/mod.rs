@@ -616,7 +616,11 @@ impl TaskEntry<'_> {
             metric: t.metric.as_str().into(),
             value,
             ci95: ci,
-            division: if open { Division::Open } else { Division::Closed },
+            division: if open {
+                Division::Open
+            } else {
+                Division::Closed
+            },
             method: self.method.to_string(),
             models,
             chosen_by: if considered.len() > 1 { "cv" } else { "given" }.into(),

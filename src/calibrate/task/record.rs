@@ -78,7 +78,10 @@ impl TaskEntry<'_> {
     /// holds the scenario it ran.
     pub fn files(&self, json: &Value) -> Result<[(&'static str, String); 2]> {
         let text = serde_json::to_string_pretty(json).map_err(|e| Error::Compute(e.to_string()))?;
-        Ok([("task.json", text + "\n"), (TASK_FILE, self.task.text.clone())])
+        Ok([
+            ("task.json", text + "\n"),
+            (TASK_FILE, self.task.text.clone()),
+        ])
     }
 }
 
@@ -179,7 +182,11 @@ impl TaskRecord {
         }
         serde_path_to_error::deserialize(v).map_err(|e| {
             let key = e.path().to_string();
-            Error::file(path, key, format!("not a calbench task.json: {}", e.into_inner()))
+            Error::file(
+                path,
+                key,
+                format!("not a calbench task.json: {}", e.into_inner()),
+            )
         })
     }
 }
@@ -213,7 +220,10 @@ mod tests {
             let e = TaskRecord::from_value(v, Path::new("t/task.json"))
                 .unwrap_err()
                 .to_string();
-            assert!(e.starts_with("t/task.json: ") && e.contains(key), "{key}: {e}");
+            assert!(
+                e.starts_with("t/task.json: ") && e.contains(key),
+                "{key}: {e}"
+            );
         };
         let mut v = written();
         v["value"] = "three".into();

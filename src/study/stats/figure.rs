@@ -22,9 +22,9 @@ impl Entry {
             Metric::EtaMedian => return Some((self.eta_median_pct, self.eta_median_pct_ci95)),
             Metric::Failures => return Some((self.failures as Real, None)),
             Metric::Improvement => return Some((self.improvement_pct, None)),
-            Metric::ValidationAfterMean | Metric::ValidationAfterRms | Metric::ValidationAfterMax => {
-                &self.validation_after_mm
-            }
+            Metric::ValidationAfterMean
+            | Metric::ValidationAfterRms
+            | Metric::ValidationAfterMax => &self.validation_after_mm,
             Metric::ValidationBeforeMean | Metric::ValidationBeforeRms => {
                 &self.validation_before_mm
             }
@@ -69,7 +69,10 @@ mod tests {
         }))
         .unwrap();
         assert_eq!(e.figure("eta_mean_pct"), Some((91.5, Some([90.0, 93.0]))));
-        assert_eq!(e.figure("validation_after_mm.rms"), Some((0.2, Some([0.15, 0.25]))));
+        assert_eq!(
+            e.figure("validation_after_mm.rms"),
+            Some((0.2, Some([0.15, 0.25])))
+        );
         assert_eq!(e.figure("validation_after_mm.max"), Some((0.4, None)));
         assert_eq!(e.figure("validation_after_deg.rms"), Some((0.02, None)));
         assert_eq!(e.figure("param_rmse.a2"), Some((0.5, Some([0.4, 0.6]))));

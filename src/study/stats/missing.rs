@@ -6,9 +6,9 @@
 use std::collections::BTreeMap;
 
 use super::{Entry, Figures, Spread};
-use crate::study::metric::PerTrial;
 use crate::calibrate::ErrorStats;
 use crate::numeric::Real;
+use crate::study::metric::PerTrial;
 
 /// Figures a summary lacks: every statistic NaN (as `null` reads), no interval.
 impl Default for Figures {
@@ -64,4 +64,3 @@ impl Default for Entry {
         }
     }
 }
-
