@@ -613,7 +613,8 @@ def task(task, method="lm", *, models=None, name=None, out=None):
         models: candidate models (``["kinematic", "beta"]``), chosen by 5-fold
             cross-validation on the task's calibration rows alone when there are several.
         name: the Python method's name (default: the function's ``__name__``).
-        out: a folder to write the identify outputs and ``task.json`` into.
+        out: a folder to write the identify outputs, ``task.json`` and ``task.toml`` (the task
+            file as run) into.
 
     Returns:
         a dict: ``task`` (the content of ``task.json``), ``record`` (of ``identified.json``)

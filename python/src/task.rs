@@ -83,12 +83,11 @@ pub(crate) fn task<'py>(
                 origin: None,
             };
             let j = entry.json(&o, &val)?;
-            let text = serde_json::to_string_pretty(&j)
-                .map_err(|e| calbench::Error::Compute(e.to_string()))?
-                + "\n";
+            let files = entry.files(&j)?;
+            let text = files[0].1.clone();
             if let Some(out) = &out {
                 let rec = IdentifyRecord::of(&o, None);
-                write_identified_with(out, &rec, &additions(&o), &[("task.json", text.clone())])?;
+                write_identified_with(out, &rec, &additions(&o), &files)?;
             }
             let record = serde_json::to_string(&o.record)
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;

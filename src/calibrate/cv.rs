@@ -401,7 +401,7 @@ pub fn choose_model(
 /// The choice among candidate models by repeated K-fold cross-validation: the same
 /// candidates on the folds of several fold seeds, the best the lowest mean CV RMS over the
 /// seeds, and how stable that choice is (at how many seeds each candidate wins alone).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RepeatedChoice {
     /// Folds per seed.
     pub folds: usize,
@@ -412,19 +412,22 @@ pub struct RepeatedChoice {
     /// The index of the chosen candidate: the lowest mean CV RMS (the first of equals).
     pub best: usize,
     /// The share of the seeds at which the chosen candidate also has the lowest CV RMS.
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub stability: Real,
 }
 
 /// One candidate's cross-validation at every fold seed of a [`RepeatedChoice`].
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RepeatedCv {
     /// The model's name ([`Model::name`]).
     pub model: String,
     /// The number of parameters identified.
     pub parameters: usize,
     /// Its CV RMS (mm) at each fold seed.
+    #[serde(deserialize_with = "crate::numeric::nan::list")]
     pub rms: Vec<Real>,
     /// Their mean (mm).
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub mean: Real,
     /// At how many seeds it has the lowest CV RMS of the candidates.
     pub wins: usize,

@@ -181,12 +181,6 @@ pub fn check_out_file(out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// A scenario file's TOML table (the kind of study is told by its keys).
-pub fn scenario_table(p: &Path) -> Result<toml::Table> {
-    let text = std::fs::read_to_string(p).map_err(|e| Error::io(p, e))?;
-    toml::from_str(&text).map_err(|e| Error::file(p, "TOML", e.to_string().trim_end()))
-}
-
 /// Prints the main table of a run.
 pub fn print_table(r: &RunResult) {
     use calbench::report::columns::*;

@@ -265,12 +265,12 @@ fn out_folder(args: &RunArgs, name: &str, outputs: &[&str]) -> Result<PathBuf> {
 }
 
 /// `calbench run` of a registration study (`[registration_study]`, Ban fig. 3) or an
-/// instruments study (`[[measurement]]`): its cells on the runner of every study (checkpoint,
+/// instruments study (`[instruments_study]`): its cells on the runner of every study (checkpoint,
 /// `--shard`), its files and the table of its cells.
 fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result<()> {
     let what = match sc {
         AnyScenario::Registration(_) => "a registration study (`[registration_study]`)",
-        _ => "an instruments study (`[[measurement]]`)",
+        _ => "an instruments study (`[instruments_study]`)",
     };
     if args.precision.is_some() {
         let fixed = format!("{what} runs its --trials draws in every cell");

@@ -11,6 +11,7 @@ use calbench::measurement::kind::Kind;
 use calbench::report::output::{Json, MeasurementFile};
 use calbench::report::{self, simulated};
 use calbench::study::instruments::InstrumentsScenario;
+use calbench::study::kind::AnyScenario;
 use calbench::study::scenario::Scenario;
 use calbench::study::{trial, Study};
 
@@ -27,7 +28,7 @@ pub struct SimulateArgs {
     /// The trial (0-based).
     #[arg(long, default_value_t = 0)]
     pub trial: usize,
-    /// Instruments studies (`[[measurement]]`): the instrument whose readings are written,
+    /// Instruments studies (`[instruments_study]`): the instrument whose readings are written,
     /// the first entry of this kind (default: the first entry).
     #[arg(long, value_parser = super::named::<Kind>())]
     pub measure: Option<Kind>,
@@ -41,23 +42,24 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     let (out, trial) = (&args.out, args.trial);
     super::guard_out(out, &OUTPUTS, [&args.scenario])?;
     check_out_folder(out, &OUTPUTS)?;
-    let table = super::scenario_table(&args.scenario)?;
-    if InstrumentsScenario::is_one(&table) {
-        let sc = InstrumentsScenario::from_table(table, &args.scenario)?;
-        return instrument(&sc, args);
-    }
+    let sc = match AnyScenario::load(&args.scenario)? {
+        AnyScenario::Instruments(sc) => return instrument(&sc, args),
+        AnyScenario::MonteCarlo(sc) => sc,
+        // Refused as the commands that take a calibration scenario refuse it.
+        AnyScenario::Registration(_) => Scenario::load(&args.scenario)?,
+    };
     if args.measure.is_some() {
         return Err(Error::setting(
             "--measure",
             format!(
-                "{} is not an instruments study ([[measurement]] tables): its measurement is \
+                "{} is not an instruments study ([instruments_study]): its measurement is \
                  the tracker's",
                 args.scenario.display()
             ),
         )
         .into());
     }
-    let study = Study::new(Scenario::load(&args.scenario)?)?;
+    let study = Study::new(sc)?;
     let sim = trial::simulate_trial(&study, trial, "--trial")?;
     let (m, v) = (&sim.calibration, &sim.validation);
     let truth_json = sim.truth_json(&study);

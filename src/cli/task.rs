@@ -1,7 +1,7 @@
 //! `calbench task TASK --method M [--models A,B,…] [--set KEY=VALUE …] --out DIR`: one entry
 //! of a fixed real-data task (docs/formats.md § 9): the task's data and split read, the one
 //! identification pipeline run on the calibration rows, scored on the validation rows; the
-//! identify outputs and `task.json` written.
+//! identify outputs, `task.json` and the task file as run (`task.toml`) written.
 
 use std::path::PathBuf;
 
@@ -18,12 +18,13 @@ use calbench::report::write_identified_with;
 use super::check_out_folder;
 
 /// The files written.
-const OUTPUTS: [&str; 5] = [
+const OUTPUTS: [&str; 6] = [
     "identified.json",
     "residuals.csv",
     "robot.toml",
     "report.md",
     "task.json",
+    calbench::calibrate::task::record::TASK_FILE,
 ];
 
 /// Arguments of `calbench task`.
@@ -71,10 +72,9 @@ pub fn run(args: &TaskArgs) -> Result<()> {
         origin: Some(&origin),
     };
     let j = entry.json(&o, &val)?;
-    let text = calbench::report::run::json_text(&j)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
-    write_identified_with(&args.out, &record, &additions(&o), &[("task.json", text)])?;
+    write_identified_with(&args.out, &record, &additions(&o), &entry.files(&j)?)?;
     if let Some(c) = &origin.choice {
         out!(
             "  the task's candidates, {}-fold CV repeated over fold seeds {:?}:",

@@ -47,6 +47,12 @@ pub fn map<'de, D: Deserializer<'de>>(d: D) -> Result<BTreeMap<String, Real>, D:
         .collect())
 }
 
+/// A list of numbers, each `null` as NaN.
+pub fn list<'de, D: Deserializer<'de>>(d: D) -> Result<Vec<Real>, D::Error> {
+    let v = Vec::<Option<Real>>::deserialize(d)?;
+    Ok(v.into_iter().map(|x| x.unwrap_or(Real::NAN)).collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -7,8 +7,9 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::provenance::sha256_hex;
-use crate::analysis::regression::{check_summary, entry_names};
-use crate::analysis::summary::Summary;
+use crate::analysis::regression::check_summary;
+use crate::calibrate::task::record::TASK_FILE;
+use crate::calibrate::task::{Division, TaskRecord};
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
@@ -174,10 +175,10 @@ impl Record {
             return Record::of_task(dir);
         }
         if dir.join("summary.json").is_file() {
-            let (_, v) = read(&dir.join("summary.json"))?;
-            let name = v.get("scenario").and_then(Value::as_str).unwrap_or("");
-            let trials = v.get("trials").and_then(Value::as_u64).map(|n| n as usize);
-            let seed = v.get("seed").and_then(Value::as_u64);
+            let path = dir.join("summary.json");
+            let (_, v) = read(&path)?;
+            let summary = check_summary(v, &path)?;
+            let (name, trials, seed) = (summary.scenario.as_str(), summary.trials, summary.seed);
             let given = |file: &Path| -> Result<Scenario> {
                 Scenario::load(file)?.with_run_overrides(trials, seed)
             };
@@ -251,8 +252,7 @@ impl Record {
     ) -> Result<Record> {
         let path = dir.join("summary.json");
         let (document, v) = read(&path)?;
-        check_summary(&v, &path)?;
-        let s = Summary::from_value(v.clone(), &path)?;
+        let s = check_summary(v, &path)?;
         let (named, ran_seed) = (s.scenario.as_str(), s.seed);
         if named != name || (ran_seed.is_some() && seed.is_some() && ran_seed != seed) {
             let show = |s: Option<u64>| s.map_or("?".into(), |s| s.to_string());
@@ -267,20 +267,21 @@ impl Record {
                 ),
             ));
         }
-        let names = entry_names(&v);
-        let results = v.get("results").and_then(Value::as_array);
         let mut entries = Vec::new();
         let mut figures = Vec::new();
-        for (name, e) in names.iter().zip(results.into_iter().flatten()) {
-            entries.push(Entry {
-                name: name.clone(),
-                method: e.get("method").and_then(Value::as_str).unwrap_or("").into(),
-            });
-            if let Value::Object(m) = e {
-                flatten(name, "", m, None, &mut figures);
+        for e in &s.results {
+            let name = e.key();
+            // Every figure of the typed entry, as summary.json writes it.
+            let written = serde_json::to_value(e).map_err(|e| Error::Compute(e.to_string()))?;
+            if let Value::Object(m) = &written {
+                flatten(&name, "", m, None, &mut figures);
             }
+            entries.push(Entry {
+                name,
+                method: e.method.clone(),
+            });
         }
-        check_figures(&path, &v, &figures)?;
+        check_figures(&path, s.trials, &figures)?;
         let mut r = Record::new(kind, dir, document, name.to_string(), text);
         r.output.seed = seed.or(ran_seed);
         r.output.trials = trials.map(|n| format!("0..{n}"));
@@ -335,22 +336,20 @@ impl Record {
     fn of_task(dir: &Path) -> Result<Record> {
         let path = dir.join("task.json");
         let (document, v) = read(&path)?;
-        let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
-        if v.get("format").and_then(Value::as_str) != Some("calbench-task-1") {
-            return Err(bad("format", "must be \"calbench-task-1\""));
+        let t = TaskRecord::from_value(v, &path)?;
+        // The task file the entry ran, as its folder carries it (a folder written before it
+        // did has none): the published figures must be its own.
+        let ran = dir.join(TASK_FILE);
+        if ran.is_file() {
+            let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
+            t.check_published((&document, &path), (&text, &ran))?;
         }
-        let text = |key: &str| -> Result<String> {
-            v.get(key)
-                .and_then(Value::as_str)
-                .map(str::to_string)
-                .ok_or_else(|| bad(key, "missing or not a string"))
-        };
-        let value = v
-            .get("value")
-            .and_then(Value::as_f64)
-            .filter(|x| x.is_finite())
-            .ok_or_else(|| bad("value", "missing or not a finite number"))?;
-        let ci = interval(v.get("ci95"));
+        let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
+        let value = t.value;
+        if !value.is_finite() {
+            return Err(bad("value", "missing or not a finite number"));
+        }
+        let ci = t.ci95;
         // The metric is an error (mm): never negative, and inside its own interval.
         if value < 0.0 {
             return Err(bad(
@@ -366,52 +365,27 @@ impl Record {
                 ));
             }
         }
-        let division = text("division")?;
-        if division != "closed" && division != "open" {
-            return Err(bad("division", "must be \"closed\" or \"open\""));
-        }
-        let models = v
-            .get("models")
-            .and_then(Value::as_array)
-            .map(|a| {
-                a.iter()
-                    .filter_map(Value::as_str)
-                    .collect::<Vec<_>>()
-                    .join("+")
-            })
-            .unwrap_or_default();
+        let division = t.division.as_str().to_string();
+        let models = t.models.join("+");
         let mut published = Vec::new();
-        for (i, p) in v
-            .get("published")
-            .and_then(Value::as_array)
-            .into_iter()
-            .flatten()
-            .enumerate()
-        {
-            let key = format!("published[{i}]");
-            let s = |k: &str| p.get(k).and_then(Value::as_str).map(str::to_string);
-            let (Some(label), Some(value)) = (s("label"), p.get("value").and_then(Value::as_f64))
-            else {
-                return Err(bad(&key, "needs a `label` and a numeric `value`"));
-            };
-            if value < 0.0 {
+        for (i, p) in t.published.iter().enumerate() {
+            if p.value < 0.0 {
                 return Err(bad(
-                    &format!("{key}.value"),
+                    &format!("published[{i}].value"),
                     "is negative: an error (mm) is ≥ 0",
                 ));
             }
             published.push((
-                label,
-                value,
-                s("source").unwrap_or_default(),
-                s("division").unwrap_or_else(|| "open".into()),
+                p.label.clone(),
+                p.value,
+                p.source.clone(),
+                p.division.as_str().to_string(),
             ));
         }
-        let (task, metric, method) = (text("task")?, text("metric")?, text("method")?);
-        let entrant = text("entrant").unwrap_or_else(|_| "calbench".into());
+        let (task, metric, method, entrant) = (t.task, t.metric, t.method, t.entrant);
         // The closed division is calbench's kinematic models only (DH, β, tool, base): an
         // entry that says `closed` with another term or entrant would rank among them.
-        if division == "closed" {
+        if t.division == Division::Closed {
             let terms = if models.is_empty() {
                 "kinematic"
             } else {
@@ -435,12 +409,9 @@ impl Record {
         } else {
             format!("{entrant} / {method} / {models}")
         };
-        let ran_with = match (text("calbench_version"), text("git_commit")) {
-            (Ok(v), Ok(c)) => Some((v, c)),
-            _ => None,
-        };
+        let ran_with = t.calbench_version.zip(t.git_commit);
         let mut r = Record::new(Kind::Task, dir, document.clone(), task.clone(), document);
-        r.scenario.hash = text("task_hash")?;
+        r.scenario.hash = t.task_hash;
         r.results.entries = vec![Entry {
             name: entry.clone(),
             method: method.clone(),
@@ -460,7 +431,7 @@ impl Record {
             division,
             method,
             models,
-            chosen_by: text("chosen_by").unwrap_or_default(),
+            chosen_by: t.chosen_by,
             entrant,
             published,
         });
@@ -523,15 +494,13 @@ fn signed(metric: &str) -> bool {
 /// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
 /// a whole number ≥ 0; a figure that must be ≥ 0 below zero ([`signed`]); a figure outside
 /// its own 95 % interval, or an interval whose ends are reversed.
-fn check_figures(path: &Path, v: &Value, figures: &[Figure]) -> Result<()> {
-    if let Some(t) = v.get("trials") {
-        if t.as_u64().is_none_or(|n| n == 0) {
-            return Err(Error::file(
-                path,
-                "trials",
-                format!("is {t}: the trials of a run are a whole number above 0"),
-            ));
-        }
+fn check_figures(path: &Path, trials: Option<usize>, figures: &[Figure]) -> Result<()> {
+    if trials == Some(0) {
+        return Err(Error::file(
+            path,
+            "trials",
+            "is 0: the trials of a run are a whole number above 0",
+        ));
     }
     for f in figures {
         let key = || format!("results ({}), {}", f.entry, f.metric);

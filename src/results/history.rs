@@ -9,11 +9,11 @@
 
 use std::cmp::Ordering;
 use std::collections::BTreeMap;
-
-use serde_json::Value;
+use std::path::Path;
 
 use super::Db;
-use crate::analysis::regression::{compare_with, Compared, Status};
+use crate::analysis::regression::{check_summary, compare_with, Compared, Status};
+use crate::analysis::summary::Summary;
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::html::history::Point;
@@ -234,23 +234,29 @@ fn same_scenario(a: &Run, b: &Run) -> bool {
     scenario_of(a) == scenario_of(b)
 }
 
+/// The summary a record holds (`None` for a record of another kind, whose document is no
+/// summary).
+fn summary_of(r: &Run) -> Option<Summary> {
+    let v = serde_json::from_str(&r.document).ok()?;
+    check_summary(v, Path::new(&r.source)).ok()
+}
+
 /// Every metric compared from run `a` to run `b` by `check`'s rule (unpaired: the records
 /// hold summaries).
 fn compared(a: &Run, b: &Run, tolerance: Real) -> Vec<Compared> {
-    let (Ok(va), Ok(vb)) = (
-        serde_json::from_str::<Value>(&a.document),
-        serde_json::from_str::<Value>(&b.document),
-    ) else {
+    let (Some(sa), Some(sb)) = (summary_of(a), summary_of(b)) else {
         return Vec::new();
     };
-    compare_with(&vb, &va, tolerance, None)
+    compare_with(&sb, &sa, tolerance, None)
 }
 
 /// Each metric's step from `a` to `b`, by (entry, metric): `check`'s status, or
 /// [`SCENARIO_CHANGED`].
 fn steps(a: &Run, b: &Run, tolerance: Real) -> BTreeMap<(String, String), &'static str> {
     if !same_scenario(a, b) {
-        let doc: Value = serde_json::from_str(&b.document).unwrap_or(Value::Null);
+        let Some(doc) = summary_of(b) else {
+            return BTreeMap::new();
+        };
         return crate::analysis::regression::compare_all(&doc, &doc, 0.0)
             .into_iter()
             .map(|c| ((c.metric.entry, c.metric.metric), SCENARIO_CHANGED))

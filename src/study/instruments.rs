@@ -1,7 +1,9 @@
 //! The instruments study: which parameters each measurement kind identifies, and to what
 //! accuracy, on one robot with one error set (docs/instruments.md).
 //!
-//! A scenario holding `[[measurement]]` (or one `[measurement]`) entries runs it: for every
+//! A scenario holding an `[instruments_study]` table (its pose counts, strategies, candidates
+//! and validation poses) and `[[measurement]]` (or one `[measurement]`) entries runs it
+//! (read by serde, [`crate::study::kind`]): for every
 //! instrument, pose count and pose strategy (`random` or `detmax-ide` on the instrument's own
 //! information matrix), each trial draws the true robot, measures the poses with the
 //! instrument (touching its planes or spheres with the true robot, the instrument's noise),
@@ -80,15 +82,13 @@ fn default_validation() -> usize {
 }
 
 impl InstrumentsScenario {
-    /// True when a scenario file's table asks for the instruments study.
-    pub fn is_one(table: &toml::Table) -> bool {
-        table.contains_key("measurement")
-    }
-
-    /// Parses and checks the scenario in `table`, read from `path` (named in errors).
-    pub fn from_table(mut table: toml::Table, path: &std::path::Path) -> Result<Self> {
+    /// Parses and checks the scenario in `table`, read from `path` (named in errors): the
+    /// keys of its `[instruments_study]` table are the study's
+    /// ([`super::kind::instruments_keys`]).
+    pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);
         let whole = table.clone();
+        let mut table = super::kind::instruments_keys(table, path)?;
         let entries = match table.remove("measurement") {
             Some(toml::Value::Array(a)) => a,
             Some(t @ toml::Value::Table(_)) => vec![t],
@@ -109,8 +109,8 @@ impl InstrumentsScenario {
             })?;
             measurement.push(m);
         }
-        let takes = "with [measurement] takes name, description, seed, trials, robot, poses, \
-                     strategies, candidates, validation, [errors] and its [[measurement]] tables";
+        let takes = "with [instruments_study] takes name, description, seed, trials, robot, \
+                     [errors], [instruments_study] and its [[measurement]] tables";
         let trials = (20, 2..=crate::study::scenario::MAX_TRIALS);
         let (head, mut s): (Head, InstrumentsScenario) =
             crate::study::whole::parse(table, path, trials, takes)?;

@@ -1,6 +1,7 @@
 //! Which study a scenario file runs, read by serde from its sections (docs/formats.md § 4): a
-//! `[registration_study]` table is Ban fig. 3's registration study, `[[measurement]]` tables
-//! an instruments study, and a file with neither is a Monte-Carlo study. Every kind runs
+//! `[registration_study]` table is Ban fig. 3's registration study, an `[instruments_study]`
+//! table (with its `[[measurement]]` tables) an instruments study, and a file with neither is
+//! a Monte-Carlo study. Every kind runs
 //! through [`crate::runner`], and what its checkpoint and shards keep of it is its
 //! [`AnyScenario::settings`].
 
@@ -18,7 +19,51 @@ use crate::study::whole::Head;
 #[derive(Deserialize)]
 struct Sections {
     registration_study: Option<toml::Value>,
+    instruments_study: Option<toml::Value>,
     measurement: Option<toml::Value>,
+}
+
+/// The table that makes a scenario an instruments study.
+pub const INSTRUMENTS_STUDY: &str = "instruments_study";
+
+/// The keys of [`INSTRUMENTS_STUDY`].
+const INSTRUMENTS_KEYS: [&str; 4] = ["poses", "strategies", "candidates", "validation"];
+
+/// How a scenario written before [`INSTRUMENTS_STUDY`] existed is migrated.
+const MIGRATE: &str = "an instruments study is declared by an [instruments_study] table \
+    holding its poses, strategies, candidates and validation (CHANGELOG.md, docs/formats.md \
+    § 4.15): add `[instruments_study]` and move those keys under it";
+
+/// An instruments study's `table` with the keys of its `[instruments_study]` table moved to
+/// the top level, where [`InstrumentsScenario`] reads them; `path` names the file in errors.
+/// One of those keys at the top level (the layout before the table), a missing table and a
+/// key the table does not take are refused, naming the key and saying how to migrate.
+pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Table> {
+    let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+    if let Some(key) = INSTRUMENTS_KEYS.iter().find(|k| table.contains_key(**k)) {
+        return Err(ferr(
+            key,
+            format!("{MIGRATE} (`{key}` is at the top level)"),
+        ));
+    }
+    let study = match table.remove(INSTRUMENTS_STUDY) {
+        Some(toml::Value::Table(t)) => t,
+        Some(_) => return Err(ferr(INSTRUMENTS_STUDY, "must be a table".into())),
+        None => return Err(ferr(INSTRUMENTS_STUDY, format!("is missing: {MIGRATE}"))),
+    };
+    for (k, v) in study {
+        if !INSTRUMENTS_KEYS.contains(&k.as_str()) {
+            return Err(ferr(
+                &format!("{INSTRUMENTS_STUDY}.{k}"),
+                format!(
+                    "unknown key: [{INSTRUMENTS_STUDY}] takes {}",
+                    INSTRUMENTS_KEYS.join(", ")
+                ),
+            ));
+        }
+        table.insert(k, v);
+    }
+    Ok(table)
 }
 
 /// A checked scenario of any kind.
@@ -48,19 +93,31 @@ impl AnyScenario {
         let kind: Sections = toml::Value::Table(table.clone())
             .try_into()
             .map_err(|e: toml::de::Error| Error::file(shown, "scenario", e.to_string()))?;
-        match (kind.registration_study, kind.measurement) {
-            (Some(_), Some(_)) => Err(Error::file(
+        let instruments = kind.instruments_study.is_some();
+        match (kind.registration_study, instruments, kind.measurement) {
+            (Some(_), true, _) => Err(Error::file(
+                shown,
+                INSTRUMENTS_STUDY,
+                "a scenario is one study: [registration_study] or [instruments_study], not both",
+            )),
+            (Some(_), false, Some(_)) => Err(Error::file(
                 shown,
                 "measurement",
-                "a scenario is one study: [registration_study] or [[measurement]], not both",
+                "a registration study takes no [[measurement]] tables",
             )),
-            (Some(_), None) => RegistrationScenario::from_table(table, shown)
+            (Some(_), false, None) => RegistrationScenario::from_table(table, shown)
                 .map(AnyScenario::Registration)
                 .map_err(|e| e.at_key_line(text)),
-            (None, Some(_)) => InstrumentsScenario::from_table(table, shown)
+            (None, true, _) => InstrumentsScenario::from_table(table, shown)
                 .map(AnyScenario::Instruments)
                 .map_err(|e| e.at_key_line(text)),
-            (None, None) => Ok(AnyScenario::MonteCarlo(Scenario::parse(text, path)?)),
+            // [[measurement]] tables without the study's table: a file of the layout before,
+            // refused naming the first of the study's keys it has at the top level.
+            (None, false, Some(_)) => {
+                let key = INSTRUMENTS_KEYS.iter().find(|k| table.contains_key(**k));
+                Err(Error::file(shown, *key.unwrap_or(&"measurement"), MIGRATE))
+            }
+            (None, false, None) => Ok(AnyScenario::MonteCarlo(Scenario::parse(text, path)?)),
         }
     }
 

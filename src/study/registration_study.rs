@@ -93,11 +93,6 @@ pub const ENTRIES: [&str; 3] = ["svd", "wsvd", "difference"];
 pub const METRIC: claims::Metric = claims::Metric::RegistrationError;
 
 impl RegistrationScenario {
-    /// True when a scenario file's table asks for the registration study.
-    pub fn is_one(table: &toml::Table) -> bool {
-        table.contains_key("registration_study")
-    }
-
     /// Parses and checks the scenario in `table`, read from `path` (named in errors).
     pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
         let ferr = |place: &str, msg: String| Error::file(path, place, msg);

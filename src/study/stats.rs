@@ -9,6 +9,8 @@ use std::ops::Deref;
 /// takes an interval.
 pub use crate::numeric::dist;
 pub mod ecdf;
+mod figure;
+mod missing;
 pub mod paired;
 pub mod precision;
 
@@ -41,7 +43,7 @@ pub struct EtaStats {
 /// Error statistics averaged over trials ([`ErrorStats`]: mean, RMS, max, s.d. of one
 /// trial's errors), each with the 95 % t interval of its mean over trials (`null` under 2
 /// trials): `mean_ci95` is the interval of `mean`, `rms_ci95` of `rms`, and so on.
-#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Figures {
     /// The statistics, each averaged over trials.
@@ -93,8 +95,9 @@ pub fn median_ranks(n: usize, alpha: Real) -> Option<(usize, usize)> {
 }
 
 /// One `results` entry of `summary.json` (docs/formats.md "summary.json"); a figure an older
-/// summary lacks reads as its default.
-#[derive(Clone, Debug, Default, Serialize, Deserialize)]
+/// summary lacks reads as NaN, as a `null` one does (a reader cannot take it for a value),
+/// an interval or a map it lacks as none.
+#[derive(Clone, Debug, Serialize, Deserialize)]
 #[serde(default)]
 pub struct Entry {
     /// The method's label.

@@ -48,6 +48,8 @@ name = "instruments-resume"
 seed = 11
 trials = 6
 robot = "irb2600"
+
+[instruments_study]
 poses = [40]
 strategies = ["random"]
 candidates = 80

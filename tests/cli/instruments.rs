@@ -60,6 +60,8 @@ name = "instruments-small"
 seed = 5
 trials = 3
 robot = "irb2600"
+
+[instruments_study]
 poses = [40]
 strategies = ["random", "detmax-ide"]
 candidates = 100
@@ -168,22 +170,62 @@ fn instruments_study_refuses_bad_settings() {
         ),
         (STUDY.replace("poses = [40]", "poses = [400]"), "poses"),
         (
+            STUDY.replace("validation = 10\n", "validation = 10\nvalidatoin = 3\n"),
+            "instruments_study.validatoin",
+        ),
+        (
             STUDY.replace("kind = \"plane\"\n", "kind = \"plane\"\nplanes = 0\n"),
             "planes",
         ),
     ] {
-        let sc = write_scenario(&dir, "bad.toml", &bad);
-        let o = calbench(&[
-            "run",
-            sc.to_str().unwrap(),
-            "--out",
-            dir.join("o").to_str().unwrap(),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
+        let err = refused_run(&dir, "bad.toml", &bad);
         assert!(
-            !o.status.success() && err.contains("bad.toml") && err.contains(key),
+            err.contains("bad.toml") && err.contains(key),
             "{key}: {err}"
         );
-        assert!(!dir.join("o").exists());
+    }
+}
+
+/// `calbench run` of the scenario `text` written as `name` in `dir`: it must fail and write
+/// no output folder; its stderr.
+fn refused_run(dir: &std::path::Path, name: &str, text: &str) -> String {
+    let sc = write_scenario(dir, name, text);
+    let out = dir.join("o");
+    let o = calbench(&["run", sc.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!o.status.success() && !out.exists());
+    String::from_utf8_lossy(&o.stderr).to_string()
+}
+
+/// A scenario of the layout before `[instruments_study]` (the study's keys at the top level
+/// beside `[[measurement]]`) is refused, naming the file and the key and saying how to
+/// migrate (CHANGELOG.md, docs/formats.md § 4.15). Migrated, it is `STUDY`, which
+/// `instruments_study_runs_every_kind` runs.
+#[test]
+fn an_instruments_study_of_the_old_layout_is_refused_saying_how_to_migrate() {
+    let dir = tmp_dir("instruments-old-layout");
+    let old = STUDY.replace("\n[instruments_study]\n", "\n");
+    let bare = STUDY
+        .lines()
+        .filter(|l| {
+            ![
+                "[instruments_study]",
+                "poses",
+                "strategies",
+                "candidates",
+                "validation",
+            ]
+            .iter()
+            .any(|k| l.starts_with(k))
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    for (text, key) in [(old, "poses"), (bare, "measurement")] {
+        let err = refused_run(&dir, "old.toml", &text);
+        assert!(
+            err.contains("old.toml")
+                && err.contains(&format!("{key}: "))
+                && err.contains("add `[instruments_study]` and move those keys under it"),
+            "{key}: {err}"
+        );
     }
 }

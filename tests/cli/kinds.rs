@@ -23,6 +23,8 @@ name = "kinds"
 seed = 4
 trials = 2
 robot = "irb2600"
+
+[instruments_study]
 poses = [60]
 strategies = ["random"]
 candidates = 120

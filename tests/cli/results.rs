@@ -368,3 +368,43 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
         assert!(!out.exists());
     }
 }
+
+/// A task folder carries the task file it ran (`task.toml`), and `record` takes the published
+/// figures of `task.json` only from it: a row edited in `task.json` is refused, naming the
+/// file, the line and the row (docs/formats.md § 9.3).
+#[test]
+fn record_refuses_a_published_row_that_is_not_the_task_files() {
+    let dir = tmp_dir("cli-results-published");
+    task_folder(&dir, "t", 3.0, "closed", "\"kinematic\"");
+    let task_toml = "title = \"t\"\n\n[[published]]\nlabel = \"MDH + learned residual\"\n\
+                     value = 2.92\nsource = \"Jacobi 2025, table 3\"\ndivision = \"open\"\n";
+    std::fs::write(dir.join("t/task.toml"), task_toml).unwrap();
+    let db = dir.join("ok.sqlite");
+    calbench_ok(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    assert_eq!(count(&db, "SELECT COUNT(*) FROM tasks"), 1);
+    // The published figure edited in task.json: 2.92 → 1.5.
+    let json = dir.join("t/task.json");
+    std::fs::write(
+        &json,
+        read(&json).replace("\"value\": 2.92", "\"value\": 1.5"),
+    )
+    .unwrap();
+    let line = read(&json)
+        .lines()
+        .position(|l| l.contains("\"published\""))
+        .unwrap()
+        + 1;
+    let db = dir.join("forged.sqlite");
+    let o = calbench(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("task.json")
+            && err.contains(&format!("line {line}, published[0]"))
+            && err.contains("task.toml"),
+        "{err}"
+    );
+    // A folder written before entries carried their task file: recorded as it is.
+    std::fs::remove_file(dir.join("t/task.toml")).unwrap();
+    calbench_ok(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+}

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{calbench, calbench_ok, load_json, path_arg, root, tmp_dir};
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
 
 /// `calbench task TASK --method lm [--models MODELS] --out OUT` through `run` (`calbench`,
 /// or `calbench_ok` to require success).
@@ -111,6 +111,13 @@ fn the_wam_task_scores_the_20_random_poses_beside_the_published_figure() {
     }
     let id = load_json(&out.join("identified.json"));
     assert_eq!(id["validation_after_mm"]["mean"], j["value"]);
+    // The folder carries the task file it ran, as read, and record takes it.
+    assert_eq!(
+        read(&out.join("task.toml")),
+        read(&root().join("tasks/barrett-wam.toml"))
+    );
+    let db = d.join("wam.sqlite");
+    calbench_ok(&["record", path_arg(&out), "--db", path_arg(&db)]);
 }
 
 #[test]

@@ -185,15 +185,16 @@ pub const PAPER_SCENARIOS: [&str; 4] = ["li2018-", "ban-", "guo2024-", "qiao2021
 /// The claims a scenario file states, each with its metric's name: a Monte-Carlo study's
 /// (`calbench::study::metric::Metric`) or a registration study's (Ban fig. 3, `registration_error_mm`).
 pub fn scenario_claims(path: &Path) -> Vec<(calbench::study::claims::Claim, String)> {
-    use calbench::study::registration_study::{RegistrationScenario, METRIC};
-    let table: toml::Table = toml::from_str(&read(path)).unwrap();
-    if RegistrationScenario::is_one(&table) {
-        let sc = RegistrationScenario::from_table(table, path)
-            .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        return sc.claims.into_iter().map(|c| (c, METRIC.key())).collect();
-    }
-    let sc = calbench::study::scenario::Scenario::load(path)
-        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    use calbench::study::kind::AnyScenario;
+    use calbench::study::registration_study::METRIC;
+    let sc = match AnyScenario::load(path) {
+        Ok(AnyScenario::Registration(sc)) => {
+            return sc.claims.into_iter().map(|c| (c, METRIC.key())).collect()
+        }
+        Ok(AnyScenario::MonteCarlo(sc)) => sc,
+        Ok(AnyScenario::Instruments(_)) => panic!("{}: an instruments study", path.display()),
+        Err(e) => panic!("{}: {e}", path.display()),
+    };
     sc.claims
         .into_iter()
         .map(|c| {

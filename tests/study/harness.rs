@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use calbench::analysis::regression::{compare, compare_with, read_json, trials_of, Status, Trials};
+use calbench::analysis::regression::{
+    compare, compare_with, read_json, read_summary, trials_of, Status, Trials,
+};
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 
@@ -169,8 +171,9 @@ fn noise_free_study_recovers_the_injected_errors() {
 fn check_fails_on_a_worsened_summary() {
     let out = tmp_dir("harness-check");
     run_to(tiny(), &out, 2);
+    let typed = read_summary(&out.join("summary.json")).unwrap();
+    assert!(compare(&typed, &typed, 0.0).is_empty());
     let s = read_json(&out.join("summary.json")).unwrap();
-    assert!(compare(&s, &s, 0.0).is_empty());
     let mut worse = s.clone();
     let rms = worse["results"][0]["validation_after_mm"]["rms"]
         .as_f64()
@@ -208,10 +211,10 @@ fn ci_guard_matches_the_baseline() {
     let s = Scenario::load(&root().join("scenarios/ci-guard.toml")).unwrap();
     let out = tmp_dir("harness-ci-guard");
     run_to(s, &out, 2);
-    let now = read_json(&out.join("summary.json")).unwrap();
+    let now = read_summary(&out.join("summary.json")).unwrap();
     let path = root().join("results/baselines/ci-guard.json");
-    let base = read_json(&path).unwrap();
-    let tb = trials_of(&base, &path)
+    let base = read_summary(&path).unwrap();
+    let tb = trials_of(&read_json(&path).unwrap(), &path)
         .unwrap()
         .expect("the baseline's per-trial values");
     let tn = Trials::read(&out.join("trials.csv")).unwrap().unwrap();
@@ -344,25 +347,25 @@ fn every_shipped_scenario_loads() {
     for f in std::fs::read_dir(&dir).unwrap() {
         let p = f.unwrap().path();
         if p.extension().is_some_and(|e| e == "toml") {
-            let text = std::fs::read_to_string(&p).unwrap();
-            let table: toml::Table = toml::from_str(&text).unwrap();
-            if calbench::study::registration_study::RegistrationScenario::is_one(&table) {
-                calbench::study::registration_study::RegistrationScenario::from_table(table, &p)
-                    .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+            use calbench::study::kind::AnyScenario;
+            // The kind read by serde from the file's sections.
+            let kind = match AnyScenario::load(&p) {
+                Ok(AnyScenario::MonteCarlo(_)) => None,
+                Ok(AnyScenario::Registration(_)) => Some("registration study"),
+                Ok(AnyScenario::Instruments(_)) => Some("instruments study"),
+                Err(e) => panic!("{}: {e}", p.display()),
+            };
+            match kind {
                 // Not a calibration scenario, and said so by the commands that take one.
-                let Err(e) = Scenario::load(&p) else {
-                    panic!("a registration study is not a scenario")
-                };
-                assert!(e.to_string().contains("registration study"), "{e}");
-            } else if calbench::study::instruments::InstrumentsScenario::is_one(&table) {
-                calbench::study::instruments::InstrumentsScenario::from_table(table, &p)
-                    .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-                let Err(e) = Scenario::load(&p) else {
-                    panic!("an instruments study is not a scenario")
-                };
-                assert!(e.to_string().contains("instruments study"), "{e}");
-            } else {
-                Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                Some(kind) => {
+                    let Err(e) = Scenario::load(&p) else {
+                        panic!("a {kind} is not a calibration scenario")
+                    };
+                    assert!(e.to_string().contains(kind), "{e}");
+                }
+                None => {
+                    Scenario::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+                }
             }
             n += 1;
         }

@@ -14,6 +14,7 @@ use serde_json::Value;
 
 use super::noise::Trials;
 use super::{check_summary, read_json};
+use crate::analysis::summary::Summary;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 
@@ -122,8 +123,8 @@ impl PerTrial {
 
 /// The baseline document of a run: its `summary` with the per-trial values `trials` (read
 /// from its `trials.csv`) under [`KEY`].
-pub fn baseline_document(summary: &Value, trials: &Trials) -> Result<Value> {
-    let mut doc = summary.clone();
+pub fn baseline_document(summary: &Summary, trials: &Trials) -> Result<Value> {
+    let mut doc = summary.to_value()?;
     let per_trial =
         serde_json::to_value(PerTrial::from(trials)).map_err(|e| Error::Compute(e.to_string()))?;
     match doc.as_object_mut() {
@@ -158,7 +159,7 @@ pub struct Side {
     /// The summary file read.
     pub path: PathBuf,
     /// Its contents.
-    pub summary: Value,
+    pub summary: Summary,
     /// Its per-trial values, when it has them.
     pub trials: Option<Trials>,
 }
@@ -182,9 +183,9 @@ impl Side {
                 ),
             ));
         }
-        let summary = read_json(&file)?;
-        check_summary(&summary, &file)?;
-        let trials = trials_of(&summary, &file)?;
+        let doc = read_json(&file)?;
+        let trials = trials_of(&doc, &file)?;
+        let summary = check_summary(doc, &file)?;
         Ok(Side {
             path: file,
             summary,
@@ -229,11 +230,27 @@ pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
     if summary.trials.is_none() {
         return Some(Unpaired::NoTrials(Which::Summary));
     }
-    for key in ["scenario", "seed", "trials", "sweep_keys", "sweep_values"] {
-        let (a, b) = (baseline.summary.get(key), summary.summary.get(key));
-        let missing_seed = key == "seed" && a.is_none();
+    // What pairing needs to agree, as each summary writes it (`null`: not written).
+    let agree = |s: &Summary| -> [(&'static str, Value); 5] {
+        let json = |v: serde_json::Result<Value>| v.unwrap_or(Value::Null);
+        [
+            ("scenario", Value::String(s.scenario.clone())),
+            ("seed", json(serde_json::to_value(s.seed))),
+            ("trials", json(serde_json::to_value(s.trials))),
+            ("sweep_keys", json(serde_json::to_value(&s.sweep_keys))),
+            ("sweep_values", json(serde_json::to_value(&s.sweep_values))),
+        ]
+    };
+    let show = |v: Value| match v {
+        Value::Null => "none".to_string(),
+        v => v.to_string(),
+    };
+    for ((key, a), (_, b)) in agree(&baseline.summary)
+        .into_iter()
+        .zip(agree(&summary.summary))
+    {
+        let missing_seed = key == "seed" && a.is_null();
         if a != b || missing_seed {
-            let show = |v: Option<&Value>| v.map_or("none".to_string(), Value::to_string);
             return Some(Unpaired::Differs {
                 key,
                 baseline: show(a),

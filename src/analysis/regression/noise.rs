@@ -17,14 +17,13 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use serde_json::Value;
-
+use crate::analysis::summary::Summary;
 use crate::error::{Error, Result};
 use crate::numeric::dist;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
-use crate::study::stats::eta;
 use crate::study::stats::paired::compare;
+use crate::study::stats::{eta, Entry};
 
 /// What a compared metric did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -217,38 +216,30 @@ impl Trials {
 
 /// Whether two runs can be compared trial by trial: the same scenario and seed, and the
 /// same sweep (swept keys and, for one axis, values), if any.
-pub fn pairable(a: &Value, b: &Value) -> bool {
-    a.get("scenario") == b.get("scenario")
-        && a.get("seed").is_some()
-        && a.get("seed") == b.get("seed")
-        && a.get("sweep_keys") == b.get("sweep_keys")
-        && a.get("sweep_values") == b.get("sweep_values")
+pub fn pairable(a: &Summary, b: &Summary) -> bool {
+    a.scenario == b.scenario
+        && a.seed.is_some()
+        && a.seed == b.seed
+        && a.sweep_keys == b.sweep_keys
+        && a.sweep_values == b.sweep_values
 }
 
 /// The key of summary entry `e` of `summary` in its run's [`Trials`]: `method / poses`, and
 /// in a sweep ` @ k`, k the place of the entry's `sweep_value` among the summary's distinct
 /// sweep values in `results` order (the order in which `trials.csv` holds the points).
-pub fn trials_key(e: &Value, summary: &Value) -> String {
-    let s = |k: &str| match e.get(k) {
-        Some(Value::String(s)) => s.clone(),
-        Some(v) => v.to_string(),
-        None => String::new(),
-    };
-    let plain = format!("{} / {}", s("method"), s("poses"));
-    let Some(v) = e.get("sweep_value") else {
+pub fn trials_key(e: &Entry, summary: &Summary) -> String {
+    let plain = format!("{} / {}", e.method, e.poses);
+    let Some(v) = &e.sweep_value else {
         return plain;
     };
-    let mut seen: Vec<&Value> = Vec::new();
-    for r in summary
-        .get("results")
-        .and_then(Value::as_array)
-        .into_iter()
-        .flatten()
+    let mut seen: Vec<&serde_json::Value> = Vec::new();
+    for x in summary
+        .results
+        .iter()
+        .filter_map(|r| r.sweep_value.as_ref())
     {
-        if let Some(x) = r.get("sweep_value") {
-            if !seen.contains(&x) {
-                seen.push(x);
-            }
+        if !seen.contains(&x) {
+            seen.push(x);
         }
     }
     match seen.iter().position(|x| *x == v) {
@@ -319,27 +310,18 @@ fn is_rmse(metric: &str) -> bool {
 }
 
 /// The usable trials of summary entry `e`: `trials` − `failures`.
-fn usable_trials(e: &Value, trials: Option<usize>) -> Option<usize> {
-    let failures = e.get("failures").and_then(Value::as_u64).unwrap_or(0) as usize;
-    trials?.checked_sub(failures)
+fn usable_trials(e: &Entry, trials: Option<usize>) -> Option<usize> {
+    trials?.checked_sub(e.failures)
 }
 
 /// The standard error of a summary's figure at `path` of entry `e` over its `n` usable
-/// trials, from its 95 % interval (`<path>_ci95`, or `param_rmse_ci95.<name>` for an RMSE,
-/// whose interval is compared on the squared scale).
-fn summary_se(e: &Value, path: &str, n: usize) -> Option<Real> {
+/// trials, from its 95 % interval ([`Entry::figure`]: `<path>_ci95`, or
+/// `param_rmse_ci95.<name>` for an RMSE, whose interval is compared on the squared scale).
+fn summary_se(e: &Entry, path: &str, n: usize) -> Option<Real> {
     if n < 2 {
         return None;
     }
-    let ci_path = match Metric::ParamRmse.parameter_of(path) {
-        Some(name) => format!("param_rmse_ci95.{name}"),
-        None => format!("{path}_ci95"),
-    };
-    let ci = ci_path
-        .split('.')
-        .try_fold(e, |v, k| v.get(k))?
-        .as_array()?;
-    let (lo, hi) = (ci.first()?.as_f64()?, ci.get(1)?.as_f64()?);
+    let [lo, hi] = e.figure(path)?.1?;
     let (lo, hi) = if is_rmse(path) {
         (lo * lo, hi * hi)
     } else {
@@ -359,8 +341,8 @@ fn summary_se(e: &Value, path: &str, n: usize) -> Option<Real> {
 /// without one borrows the other's; exact when neither has one. Failures are compared as
 /// proportions of the trials (pooled two-proportion z).
 pub fn unpaired(
-    a: &Value,
-    b: &Value,
+    a: &Entry,
+    b: &Entry,
     metric: &str,
     (va, vb): (Real, Real),
     trials: [Option<usize>; 2],
@@ -377,7 +359,7 @@ pub fn unpaired(
         means: None,
         p_test: None,
     };
-    if metric == "failures" {
+    if Metric::from_key(metric) == Some(Metric::Failures) {
         let (Some(na), Some(nb)) = (trials[0], trials[1]) else {
             return exact;
         };

@@ -5,15 +5,17 @@
 //! ([`IdentifyRequest`]); [`TaskEntry::json`] is the entry's `task.json`.
 
 mod entry;
+pub mod record;
 pub mod sha256;
 pub mod split;
 
 pub use entry::{shared_rows, EntryModels};
+pub use record::TaskRecord;
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use serde_json::{json, Value};
+use serde_json::Value;
 
 use super::cv::Model;
 use super::pipeline::TrackerOutcome;
@@ -87,6 +89,16 @@ pub enum Division {
     Closed,
     /// Any model: compliance, harmonics, a Python method.
     Open,
+}
+
+impl Division {
+    /// Its name in task files and `task.json`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Division::Closed => "closed",
+            Division::Open => "open",
+        }
+    }
 }
 
 /// One of the data's authors' figures on the task, with its source.
@@ -177,6 +189,8 @@ pub struct Task {
     pub name: String,
     /// The task file.
     pub path: PathBuf,
+    /// Its text as read (an entry's folder carries it as `task.toml`).
+    pub text: String,
     /// SHA-256 of its canonical text and of the bytes of every file it fixes (data, split,
     /// mapping, robot; docs/formats.md § 9.3), hex.
     pub hash: String,
@@ -364,6 +378,7 @@ impl Task {
         Ok(Task {
             name,
             path: path.to_path_buf(),
+            text: text.clone(),
             hash: sha256::sha256_hex(canonical.as_bytes()),
             title: keys.title,
             robot,
@@ -605,25 +620,31 @@ impl TaskEntry<'_> {
         open: bool,
     ) -> Value {
         let t = self.task;
-        json!({
-            "format": TASK_FORMAT,
-            "task": t.name,
-            "task_hash": t.hash,
-            "metric": t.metric.as_str(),
-            "value": value,
-            "ci95": ci,
-            "division": if open { Division::Open } else { Division::Closed },
-            "method": self.method,
-            "models": models,
-            "chosen_by": if self.candidates_considered().len() > 1 { "cv" } else { "given" },
-            "candidates": self.candidates_considered().iter().map(Model::name).collect::<Vec<_>>(),
-            "candidates_fixed_by": self.origin.map_or("caller", |o| o.fixed_by),
-            "cv_choice": self.origin.and_then(|o| o.choice.as_ref()),
-            "entrant": self.entrant,
-            "calbench_version": env!("CARGO_PKG_VERSION"),
-            "git_commit": git_commit(t.path.parent().unwrap_or(Path::new("."))),
-            "published": t.published,
-        })
+        let considered = self.candidates_considered();
+        TaskRecord {
+            format: TASK_FORMAT.into(),
+            task: t.name.clone(),
+            task_hash: t.hash.clone(),
+            metric: t.metric.as_str().into(),
+            value,
+            ci95: ci,
+            division: if open {
+                Division::Open
+            } else {
+                Division::Closed
+            },
+            method: self.method.to_string(),
+            models,
+            chosen_by: if considered.len() > 1 { "cv" } else { "given" }.into(),
+            candidates: considered.iter().map(Model::name).collect(),
+            candidates_fixed_by: Some(self.origin.map_or("caller", |o| o.fixed_by).into()),
+            cv_choice: self.origin.and_then(|o| o.choice.clone()),
+            entrant: self.entrant.to_string(),
+            calbench_version: Some(env!("CARGO_PKG_VERSION").into()),
+            git_commit: git_commit(t.path.parent().unwrap_or(Path::new("."))),
+            published: t.published.clone(),
+        }
+        .to_value()
     }
 }
 

@@ -9,8 +9,6 @@
 use std::fmt::Write as _;
 use std::path::Path;
 
-use serde_json::Value;
-
 use super::Page;
 pub use crate::analysis::regression::Side;
 use crate::analysis::regression::{compare_with, entry_names, Compared, Status};
@@ -21,24 +19,18 @@ use crate::report::output::{Outputs, Text};
 use crate::report::plots::{changes_svg, ChangePoint};
 
 impl Side {
+    /// The run as the page names it: its file, scenario, trials and seed (`?` for what the
+    /// summary does not say).
     fn describe(&self) -> String {
+        let s = &self.summary;
+        let or_unknown = |v: Option<String>| v.unwrap_or_else(|| "?".into());
         format!(
             "{} (scenario {}, {} trials, seed {})",
             self.path.display(),
-            self.field("scenario"),
-            self.field("trials"),
-            self.field("seed")
+            s.scenario,
+            or_unknown(s.trials.map(|n| n.to_string())),
+            or_unknown(s.seed.map(|n| n.to_string()))
         )
-    }
-
-    /// The summary's `key` as written: a string as itself (not as JSON, whose escapes would
-    /// show), a number as JSON writes it, `?` when missing.
-    fn field(&self, key: &str) -> String {
-        match self.summary.get(key) {
-            Some(Value::String(s)) => s.clone(),
-            Some(v) => v.to_string(),
-            None => "?".into(),
-        }
     }
 }
 
@@ -185,8 +177,8 @@ impl Comparison {
 
     fn scenario_note(&self) -> Option<String> {
         let (sa, sb) = (
-            self.runs[0].field("scenario"),
-            self.runs[1].field("scenario"),
+            &self.runs[0].summary.scenario,
+            &self.runs[1].summary.scenario,
         );
         (sa != sb).then(|| {
             format!(
@@ -372,7 +364,7 @@ pub fn write(c: &Comparison, out: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use serde_json::{json, Value};
     use std::path::PathBuf;
 
     fn side(eta: Real, methods: &[&str]) -> Side {
@@ -380,12 +372,15 @@ mod tests {
             .iter()
             .map(|m| {
                 json!({"method": m, "poses": "random", "eta_mean_pct": eta,
-                       "validation_after_mm": {"rms": 0.1}, "failures": 0})
+                       "validation_after_mm": {"mean": 0.1, "rms": 0.1, "max": 0.1, "std": 0.0},
+                       "failures": 0})
             })
             .collect();
+        let path = PathBuf::from(format!("{eta}.json"));
+        let doc = json!({"scenario": "s", "trials": 4, "seed": 1, "results": results});
         Side {
-            path: PathBuf::from(format!("{eta}.json")),
-            summary: json!({"scenario": "s", "trials": 4, "seed": 1, "results": results}),
+            summary: crate::analysis::regression::check_summary(doc, &path).unwrap(),
+            path,
             trials: None,
         }
     }

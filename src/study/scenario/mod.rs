@@ -241,13 +241,15 @@ impl Scenario {
                     .into(),
             ));
         }
-        if table.contains_key("measurement") {
-            return Err(ferr(
-                "measurement",
-                "this is an instruments study (docs/formats.md § 4.15), which `calbench run` \
-                 runs on its own; it is not a calibration scenario"
-                    .into(),
-            ));
+        for key in [crate::study::kind::INSTRUMENTS_STUDY, "measurement"] {
+            if table.contains_key(key) {
+                return Err(ferr(
+                    key,
+                    "this is an instruments study (docs/formats.md § 4.15), which `calbench \
+                     run` runs on its own; it is not a calibration scenario"
+                        .into(),
+                ));
+            }
         }
         let raw: RawScenario =
             toml::Value::Table(table.clone())

@@ -1,0 +1,243 @@
+//! `task.json` (docs/formats.md § 9.3), typed: what `calbench task` writes for an entry and
+//! `record` reads back. Written through a JSON tree, so its keys are in byte order whatever
+//! the order of the fields here.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::{Division, Published, TaskEntry, TASK_FORMAT};
+use crate::calibrate::cv::RepeatedChoice;
+use crate::error::{Error, Result};
+use crate::numeric::nan;
+use crate::numeric::Real;
+
+/// An entry's `task.json`. A key an older file lacks takes its default (none, an empty list,
+/// `calbench` for the entrant); a key this calbench does not know is refused, naming it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TaskRecord {
+    /// [`TASK_FORMAT`]; a file of another format is refused.
+    pub format: String,
+    /// The task's name.
+    pub task: String,
+    /// The task's hash (docs/formats.md § 9.1).
+    pub task_hash: String,
+    /// The task's metric (`validation_mean_mm`, `validation_rms_mm`).
+    pub metric: String,
+    /// The entry's figure (mm; `null` when not finite).
+    #[serde(deserialize_with = "nan::real")]
+    pub value: Real,
+    /// Its 95 % interval.
+    #[serde(default)]
+    pub ci95: Option<[Real; 2]>,
+    /// The division.
+    pub division: Division,
+    /// The method.
+    pub method: String,
+    /// The model terms identified.
+    #[serde(default)]
+    pub models: Vec<String>,
+    /// `cv` (chosen among several candidates) or `given`.
+    #[serde(default)]
+    pub chosen_by: String,
+    /// The candidate models considered.
+    #[serde(default)]
+    pub candidates: Vec<String>,
+    /// What fixed them: `task`, `command line`, `default` or `caller`.
+    #[serde(default)]
+    pub candidates_fixed_by: Option<String>,
+    /// The repeated K-fold choice among the candidates.
+    #[serde(default)]
+    pub cv_choice: Option<RepeatedChoice>,
+    /// Who ran it.
+    #[serde(default = "calbench")]
+    pub entrant: String,
+    /// The calbench version that ran it.
+    #[serde(default)]
+    pub calbench_version: Option<String>,
+    /// The commit it ran at.
+    #[serde(default)]
+    pub git_commit: Option<String>,
+    /// The data's authors' figures, from the task file.
+    #[serde(default)]
+    pub published: Vec<Published>,
+}
+
+fn calbench() -> String {
+    "calbench".into()
+}
+
+/// The name of the task file as an entry's folder carries it.
+pub const TASK_FILE: &str = "task.toml";
+
+impl TaskEntry<'_> {
+    /// The files an entry's folder holds beside the identify outputs: `task.json` (the
+    /// entry's `json`) and the task file it ran, as read ([`TASK_FILE`]), as a run folder
+    /// holds the scenario it ran.
+    pub fn files(&self, json: &Value) -> Result<[(&'static str, String); 2]> {
+        let text = serde_json::to_string_pretty(json).map_err(|e| Error::Compute(e.to_string()))?;
+        Ok([
+            ("task.json", text + "\n"),
+            (TASK_FILE, self.task.text.clone()),
+        ])
+    }
+}
+
+/// The `[[published]]` rows of the task file `text` (read from `path`).
+fn published_of(text: &str, path: &Path) -> Result<Vec<Published>> {
+    #[derive(Deserialize)]
+    struct Rows {
+        #[serde(default)]
+        published: Vec<Published>,
+    }
+    let rows: Rows = toml::from_str(text)
+        .map_err(|e| Error::file(path, "published", e.message().trim_end().to_string()))?;
+    Ok(rows.published)
+}
+
+/// The 1-based line of `task.json`'s text where the `i`-th published row starts (its
+/// `{` after the `published` key), for a message.
+fn published_line(json: &str, i: usize) -> Option<usize> {
+    let start = json.find("\"published\"")?;
+    let mut depth = 0usize;
+    let mut row = 0usize;
+    for (k, c) in json[start..].char_indices() {
+        match c {
+            '{' if depth == 1 => {
+                if row == i {
+                    return Some(json[..start + k].matches('\n').count() + 1);
+                }
+                row += 1;
+                depth += 1;
+            }
+            '[' | '{' => depth += 1,
+            ']' | '}' => {
+                depth = depth.saturating_sub(1);
+                if depth == 0 {
+                    return None;
+                }
+            }
+            _ => {}
+        }
+    }
+    None
+}
+
+impl TaskRecord {
+    /// Refuses, naming `json_path` and the line and key of the row, a published row of this
+    /// record (whose text is `json`) that is not a `[[published]]` row of the task file the
+    /// folder carries (`task_text`, read from `task_path`): the data's authors' figures come
+    /// from the task file only.
+    pub fn check_published(
+        &self,
+        (json, json_path): (&str, &Path),
+        (task_text, task_path): (&str, &Path),
+    ) -> Result<()> {
+        let rows = published_of(task_text, task_path)?;
+        for (i, p) in self.published.iter().enumerate() {
+            if !rows.contains(p) {
+                let place = match published_line(json, i) {
+                    Some(l) => format!("line {l}, published[{i}]"),
+                    None => format!("published[{i}]"),
+                };
+                return Err(Error::file(
+                    json_path,
+                    place,
+                    format!(
+                        "\"{}\" ({} mm, {}) is not a [[published]] row of {}, the task file \
+                         this entry ran: published figures come from the task file only",
+                        p.label,
+                        p.value,
+                        p.source,
+                        task_path.display()
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
+
+impl TaskRecord {
+    /// The file's JSON tree (keys in byte order).
+    pub fn to_value(&self) -> Value {
+        serde_json::to_value(self).unwrap_or(Value::Null)
+    }
+
+    /// Reads the `task.json` value `v` of the file `path`, refusing, naming the file and the
+    /// key, a key of the wrong type, a missing or unknown one, and another format.
+    pub fn from_value(v: Value, path: &Path) -> Result<TaskRecord> {
+        let format = v.get("format").cloned();
+        if let Some(f) = format.filter(|f| f.as_str() != Some(TASK_FORMAT)) {
+            return Err(Error::file(
+                path,
+                "format",
+                format!(
+                    "is {f}: this calbench reads task.json of format \"{TASK_FORMAT}\" only \
+                     (a later format is written by a later calbench)"
+                ),
+            ));
+        }
+        serde_path_to_error::deserialize(v).map_err(|e| {
+            let key = e.path().to_string();
+            Error::file(
+                path,
+                key,
+                format!("not a calbench task.json: {}", e.into_inner()),
+            )
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn written() -> Value {
+        serde_json::json!({
+            "format": TASK_FORMAT, "task": "barrett-wam", "task_hash": "0f3c",
+            "metric": "validation_mean_mm", "value": 3.1, "ci95": [2.9, 3.3],
+            "division": "closed", "method": "lm", "models": ["kinematic"], "chosen_by": "given",
+            "entrant": "calbench", "published": [{"label": "MDH", "value": 2.9,
+                "source": "Jacobi 2025", "division": "open"}]
+        })
+    }
+
+    #[test]
+    fn a_task_record_reads_back_as_written() {
+        let r = TaskRecord::from_value(written(), Path::new("t/task.json")).unwrap();
+        assert_eq!(r.division, Division::Closed);
+        assert_eq!(r.published[0].value, 2.9);
+        let again = TaskRecord::from_value(r.to_value(), Path::new("t/task.json")).unwrap();
+        assert_eq!(again, r);
+    }
+
+    #[test]
+    fn a_malformed_or_renamed_key_and_another_format_are_refused_naming_file_and_key() {
+        let refused = |v: Value, key: &str| {
+            let e = TaskRecord::from_value(v, Path::new("t/task.json"))
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.starts_with("t/task.json: ") && e.contains(key),
+                "{key}: {e}"
+            );
+        };
+        let mut v = written();
+        v["value"] = "three".into();
+        refused(v, "value");
+        let mut v = written();
+        let m = v.as_object_mut().unwrap();
+        let d = m.remove("division").unwrap();
+        m.insert("divison".into(), d);
+        refused(v, "divison");
+        let mut v = written();
+        v["published"][0]["value"] = "x".into();
+        refused(v, "published[0].value");
+        let mut v = written();
+        v["format"] = "calbench-task-2".into();
+        refused(v, "format");
+    }
+}

@@ -1,0 +1,88 @@
+//! An entry's figures read by metric, by field (docs/formats.md "summary.json"): what
+//! `check`, `compare`, history and the results database read of a summary's entries.
+
+use super::{Entry, Figures};
+use crate::numeric::Real;
+use crate::study::metric::Metric;
+
+impl Entry {
+    /// The figure of `key` — a metric's key ([`Metric::key`]) or a parameter's RMSE
+    /// (`param_rmse.NAME`) — with its 95 % interval when the summary has one; `None` when
+    /// the entry has no such figure (a parameter it does not list, an optional statistic its
+    /// study lacks, a metric an entry does not carry). A figure written as `null`, or lacking
+    /// from an older file, is NaN.
+    pub fn figure(&self, key: &str) -> Option<(Real, Option<[Real; 2]>)> {
+        if let Some(name) = Metric::ParamRmse.parameter_of(key) {
+            let v = *self.param_rmse.get(name)?;
+            return Some((v, self.param_rmse_ci95.get(name).copied().flatten()));
+        }
+        let m = Metric::from_key(key)?;
+        let figures: &Figures = match m {
+            Metric::EtaMean => return Some((self.eta_mean_pct, self.eta_mean_pct_ci95)),
+            Metric::EtaMedian => return Some((self.eta_median_pct, self.eta_median_pct_ci95)),
+            Metric::Failures => return Some((self.failures as Real, None)),
+            Metric::Improvement => return Some((self.improvement_pct, None)),
+            Metric::ValidationAfterMean
+            | Metric::ValidationAfterRms
+            | Metric::ValidationAfterMax => &self.validation_after_mm,
+            Metric::ValidationBeforeMean | Metric::ValidationBeforeRms => {
+                &self.validation_before_mm
+            }
+            Metric::CalibrationAfterMean | Metric::CalibrationAfterRms => {
+                &self.calibration_after_mm
+            }
+            _ => self.optional.get(m.spec().field)?,
+        };
+        match m.spec().stat? {
+            "mean" => Some((figures.mean, figures.mean_ci95)),
+            "rms" => Some((figures.rms, figures.rms_ci95)),
+            "max" => Some((figures.max, figures.max_ci95)),
+            _ => None,
+        }
+    }
+
+    /// The entry's name in `check` and the results database: `method / poses`, and
+    /// ` / VALUE` at a sweep point (a string value as itself, another as JSON writes it).
+    pub fn key(&self) -> String {
+        match &self.sweep_value {
+            Some(serde_json::Value::String(v)) => format!("{} / {} / {v}", self.method, self.poses),
+            Some(v) => format!("{} / {} / {v}", self.method, self.poses),
+            None => format!("{} / {}", self.method, self.poses),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn figures_are_read_by_field_and_a_lacking_one_is_nan() {
+        let e: Entry = serde_json::from_value(serde_json::json!({
+            "method": "ls", "poses": "random", "eta_mean_pct": 91.5,
+            "eta_mean_pct_ci95": [90.0, 93.0],
+            "validation_after_mm": {"mean": 0.1, "rms": 0.2, "max": 0.4, "std": null,
+                                    "rms_ci95": [0.15, 0.25]},
+            "validation_after_deg": {"mean": 0.01, "rms": 0.02, "max": 0.04, "std": 0.0},
+            "param_rmse": {"a2": 0.5}, "param_rmse_ci95": {"a2": [0.4, 0.6]}, "failures": 2,
+            "sweep_value": 0.5
+        }))
+        .unwrap();
+        assert_eq!(e.figure("eta_mean_pct"), Some((91.5, Some([90.0, 93.0]))));
+        assert_eq!(
+            e.figure("validation_after_mm.rms"),
+            Some((0.2, Some([0.15, 0.25])))
+        );
+        assert_eq!(e.figure("validation_after_mm.max"), Some((0.4, None)));
+        assert_eq!(e.figure("validation_after_deg.rms"), Some((0.02, None)));
+        assert_eq!(e.figure("param_rmse.a2"), Some((0.5, Some([0.4, 0.6]))));
+        assert_eq!(e.figure("param_rmse.d1"), None);
+        assert_eq!(e.figure("failures"), Some((2.0, None)));
+        assert_eq!(e.figure("no_such_metric"), None);
+        // Lacking from the file: NaN, never a value a reader could take for one.
+        assert!(e.figure("eta_median_pct").unwrap().0.is_nan());
+        assert!(e.figure("validation_before_mm.mean").unwrap().0.is_nan());
+        assert_eq!(e.figure("validation_after_attitude_deg.mean"), None);
+        assert_eq!(e.key(), "ls / random / 0.5");
+    }
+}
