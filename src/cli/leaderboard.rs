@@ -19,20 +19,33 @@ pub struct LeaderboardArgs {
     #[arg(long, value_name = "PATH")]
     pub db: Option<PathBuf>,
     /// Output folder.
+    #[arg(long, required_unless_present = "verify")]
+    pub out: Option<PathBuf>,
+    /// Compute every entry's figure again from the per-row errors it recorded and refuse a
+    /// mismatch (before writing anything; without --out, only verify).
     #[arg(long)]
-    pub out: PathBuf,
+    pub verify: bool,
 }
 
 /// Writes the leaderboard and prints where.
 pub fn run(args: &LeaderboardArgs) -> Result<()> {
-    super::guard_out(&args.out, &OUTPUTS, None::<&std::path::Path>)?;
-    super::check_out_folder(&args.out, &OUTPUTS)?;
+    if let Some(out) = &args.out {
+        super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
+        super::check_out_folder(out, &OUTPUTS)?;
+    }
     let db = Db::open(&db_path(args.db.as_deref()), false)?;
+    if args.verify {
+        let n = board::verify(&db)?;
+        eprintln!("{n} task entries verified: each figure is the one its recorded errors give");
+    }
+    let Some(out) = &args.out else {
+        return Ok(());
+    };
     let rows = board::rows(&db)?;
     let html = page(&rows, &board::scores(&rows));
     let table = csv(&rows)?;
     folder(
-        &args.out,
+        out,
         &[
             &Bytes {
                 name: "leaderboard.html",
@@ -49,7 +62,7 @@ pub fn run(args: &LeaderboardArgs) -> Result<()> {
         "{} tasks, {} rows; leaderboard: {}",
         tasks.len(),
         rows.len(),
-        args.out.join("leaderboard.html").display()
+        out.join("leaderboard.html").display()
     );
     Ok(())
 }

@@ -8,7 +8,8 @@
 use std::collections::BTreeMap;
 
 use super::Db;
-use crate::error::Result;
+use crate::calibrate::task::record::TaskRecord;
+use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::report::html::leaderboard::{Row, Score};
 
@@ -130,4 +131,70 @@ pub fn scores(rows: &[Row]) -> Vec<Score> {
         .collect();
     out.sort_by(|a, b| a.score.total_cmp(&b.score).then(a.name.cmp(&b.name)));
     out
+}
+
+/// `leaderboard --verify`: every recorded task entry's figure and interval computed again, by
+/// the task's metric, from the per-row validation errors its `task.json` recorded, and compared
+/// bit for bit with the figure the database ranks and the one the document states. A mismatch
+/// (a figure edited before `record`, a database edited after) or an entry without per-row
+/// errors is refused, naming the folder it was recorded from. Returns the entries verified.
+pub fn verify(db: &Db) -> Result<usize> {
+    let sql = "SELECT r.id, r.source, r.document, t.value, t.ci_lo, t.ci_hi FROM tasks t \
+               JOIN runs r ON r.id = t.run ORDER BY r.id";
+    let entries = db.query(sql, [], |r| {
+        let ci: (Option<f64>, Option<f64>) = (r.get(4)?, r.get(5)?);
+        Ok((
+            r.get::<_, i64>(0)?,
+            r.get::<_, String>(1)?,
+            r.get::<_, String>(2)?,
+            r.get::<_, f64>(3)?,
+            ci.0.zip(ci.1).map(|(l, h)| [l, h]),
+        ))
+    })?;
+    let same = |a: Real, b: Real| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+    let same_ci = |a: Option<[Real; 2]>, b: Option<[Real; 2]>| match (a, b) {
+        (Some(a), Some(b)) => same(a[0], b[0]) && same(a[1], b[1]),
+        (a, b) => a.is_none() && b.is_none(),
+    };
+    for (id, source, document, value, ci) in &entries {
+        let file = std::path::Path::new(source).join("task.json");
+        let text: serde_json::Value = serde_json::from_str(document)
+            .map_err(|e| Error::file(&file, "task.json", format!("recorded as run {id}: {e}")))?;
+        let rec = TaskRecord::from_value(text, &file)?;
+        let Some((again, again_ci)) = rec.recomputed() else {
+            return Err(Error::file(
+                &file,
+                "validation_errors_mm",
+                format!(
+                    "the entry recorded as run {id} holds no per-row validation errors, so its \
+                     figure {value} cannot be computed again; run the task again and record it"
+                ),
+            ));
+        };
+        let stated = [("recorded", *value, *ci), ("stated", rec.value, rec.ci95)];
+        if let Some((what, v, c)) = stated
+            .into_iter()
+            .find(|(_, v, c)| !same(*v, again) || !same_ci(*c, again_ci))
+        {
+            return Err(Error::file(
+                &file,
+                "value",
+                format!(
+                    "the entry recorded as run {id} has the figure {v} {}, but its {} \
+                     validation errors give {again} {} by {}: the figure {what} is not the \
+                     one they give",
+                    shown(c),
+                    rec.validation_errors_mm.len(),
+                    shown(again_ci),
+                    rec.metric
+                ),
+            ));
+        }
+    }
+    Ok(entries.len())
+}
+
+/// An interval as a refusal shows it.
+fn shown(ci: Option<[Real; 2]>) -> String {
+    ci.map_or("(no interval)".into(), |[lo, hi]| format!("({lo} – {hi})"))
 }

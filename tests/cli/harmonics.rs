@@ -186,6 +186,34 @@ fn a_closed_and_an_open_wam_entry_recorded_rank_in_their_divisions_on_the_leader
     }
     let html = read(&board.join("leaderboard.html"));
     assert!(html.contains("kinematic+harmonics") && html.contains("2.92"));
+    // leaderboard --verify: each figure computed again from the per-row errors recorded.
+    let o = calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(said.contains("2 task entries verified"), "{said}");
+    // An entry whose figure was edited before `record` (within its interval, which `record`
+    // cannot tell) is refused by --verify, naming the folder's task.json and the figure.
+    let edited = d.join("edited");
+    std::fs::create_dir_all(&edited).unwrap();
+    for e in std::fs::read_dir(&closed).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, edited.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    let mut j = load_json(&edited.join("task.json"));
+    let v = j["value"].as_f64().unwrap();
+    j["value"] = serde_json::json!(v + 0.001);
+    let text = serde_json::to_string_pretty(&j).unwrap() + "\n";
+    std::fs::write(edited.join("task.json"), text).unwrap();
+    let db2 = d.join("db2/calbench.sqlite");
+    calbench_ok(&["record", path_arg(&edited), "--db", path_arg(&db2)]);
+    let o = calbench(&["leaderboard", "--db", path_arg(&db2), "--verify"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "an edited figure verified: {err}");
+    assert!(
+        err.contains("edited/task.json: value") && err.contains("is not the one they give"),
+        "{err}"
+    );
     // A harmonics entry that calls itself closed is refused: it would rank among the
     // kinematic models.
     let forged = d.join("forged");

@@ -48,6 +48,7 @@ fn check_contract(dir: &Path, name: &str, metric: &str) -> f64 {
         "published",
         "task",
         "task_hash",
+        "validation_errors_mm",
         "value",
     ];
     want.sort();

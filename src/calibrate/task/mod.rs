@@ -44,6 +44,13 @@ pub enum Metric {
 }
 
 impl Metric {
+    /// The metric named `name` in a task file or `task.json`.
+    pub fn from_name(name: &str) -> Option<Metric> {
+        [Metric::ValidationMeanMm, Metric::ValidationRmsMm]
+            .into_iter()
+            .find(|m| m.as_str() == name)
+    }
+
     /// The name in task files and `task.json`.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -595,14 +602,13 @@ impl TaskEntry<'_> {
             .iter()
             .map(|v| v.norm())
             .collect();
-        let (value, ci) = self.task.metric.of(&errors);
         let (models, kinematic) = match self.origin.and_then(|o| o.choice.as_ref()) {
             // The task's candidates, chosen before the request: the request holds one.
             Some(c) => Self::model_terms(outcome, &[self.candidates_considered()[c.best]]),
             None => Self::model_terms(outcome, self.candidates),
         };
         let open = !kinematic || self.entrant != "calbench";
-        Ok(self.record(value, ci, models, open))
+        Ok(self.record(errors, models, open))
     }
 
     /// The candidate models considered: the task's, or the caller's.
@@ -610,16 +616,12 @@ impl TaskEntry<'_> {
         self.origin.map_or(self.candidates, |o| &o.candidates)
     }
 
-    /// `task.json` of an entry with the figure `value` and interval `ci`, the model terms
-    /// `models`, in the open division or not.
-    pub fn record(
-        &self,
-        value: Real,
-        ci: Option<[Real; 2]>,
-        models: Vec<String>,
-        open: bool,
-    ) -> Value {
+    /// `task.json` of an entry whose validation rows have the position errors `errors` (mm;
+    /// its figure and interval the task's metric of them), with the model terms `models`, in
+    /// the open division or not.
+    pub fn record(&self, errors: Vec<Real>, models: Vec<String>, open: bool) -> Value {
         let t = self.task;
+        let (value, ci) = t.metric.of(&errors);
         let considered = self.candidates_considered();
         TaskRecord {
             format: TASK_FORMAT.into(),
@@ -643,6 +645,7 @@ impl TaskEntry<'_> {
             calbench_version: Some(env!("CARGO_PKG_VERSION").into()),
             git_commit: git_commit(t.path.parent().unwrap_or(Path::new("."))),
             published: t.published.clone(),
+            validation_errors_mm: errors,
         }
         .to_value()
     }

@@ -63,6 +63,11 @@ pub struct TaskRecord {
     /// The data's authors' figures, from the task file.
     #[serde(default)]
     pub published: Vec<Published>,
+    /// The position error of each validation row, in the task's order (mm): what the figure
+    /// and its interval are computed from ([`TaskRecord::recomputed`]); empty in a file
+    /// written before calbench recorded them.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub validation_errors_mm: Vec<Real>,
 }
 
 fn calbench() -> String {
@@ -161,6 +166,13 @@ impl TaskRecord {
 }
 
 impl TaskRecord {
+    /// The figure and its interval computed again from the recorded per-row errors by the
+    /// task's metric; `None` when the record holds no per-row errors or names no known metric.
+    pub fn recomputed(&self) -> Option<(Real, Option<[Real; 2]>)> {
+        let metric = super::Metric::from_name(&self.metric)?;
+        (!self.validation_errors_mm.is_empty()).then(|| metric.of(&self.validation_errors_mm))
+    }
+
     /// The file's JSON tree (keys in byte order).
     pub fn to_value(&self) -> Value {
         serde_json::to_value(self).unwrap_or(Value::Null)
