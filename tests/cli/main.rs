@@ -25,6 +25,7 @@ mod layers;
 mod memory;
 mod noise;
 mod outputs;
+mod per_trial;
 mod practice;
 mod precision;
 mod profiles;
