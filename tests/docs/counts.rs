@@ -16,7 +16,10 @@ fn improved(dir: &Path) -> (usize, usize) {
     let (before, after) = (col("residual_before_mm"), col("residual_after_mm"));
     let mut n = (0, 0);
     for l in lines {
-        let f: Vec<f64> = l.split(',').map(|x| x.parse().unwrap_or(f64::NAN)).collect();
+        let f: Vec<f64> = l
+            .split(',')
+            .map(|x| x.parse().unwrap_or(f64::NAN))
+            .collect();
         n.1 += 1;
         if f[after] < f[before] {
             n.0 += 1;
