@@ -31,6 +31,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 #[path = "common/mod.rs"]
 mod common;
 
+#[path = "docs/counts.rs"]
+mod counts;
+
 /// The documents that must exist.
 const REQUIRED: [&str; 4] = [
     "README.md",

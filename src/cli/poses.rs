@@ -4,11 +4,9 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use calbench::calibrate::Registration;
 use calbench::error::Error;
 use calbench::poses::SelectOptions;
 use calbench::report::{self, output::PoseList, Output};
-use calbench::robot::param_sets;
 use calbench::sim::poses::sample_region;
 use calbench::study::plan;
 use calbench::study::scenario::{Scenario, StrategyName};
@@ -96,7 +94,6 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         )
         .into());
     }
-    let with_base = sc.registration == Registration::Identify;
     let mut g = calbench::numeric::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
     let scored = match (full, c.separate) {
@@ -104,9 +101,10 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         (false, true) => plan::ScoredModel::Separated(c.separate_threshold),
         (false, false) => plan::ScoredModel::Plain,
     };
-    let plain = param_sets::identified_params(&nominal, measure, with_base);
+    // The kinematic parameters the scenario identifies, as its study's optimisers see them.
+    let (identified, _) = plan::study_params(&sc, &nominal, measure)?;
     let (model, params, separation) =
-        plan::optimiser_model(&nominal, measure, with_base, &pool, scored, &plain);
+        plan::optimiser_model(&nominal, measure, &pool, scored, &identified);
     let mut opts = SelectOptions::new(count);
     opts.objective = c.objective;
     let sel = calbench::poses::select(&model, &pool, optimiser, &opts, &mut g)?;

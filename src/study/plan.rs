@@ -1,6 +1,8 @@
 //! A study prepared for its trials: everything that depends only on the scenario and the
 //! nominal robot — the identified parameter set, the tracker, the compliance model and the
-//! optimised pose sets — computed once (docs/formats.md `run`; Guo 2024 §3 for the optimised sets).
+//! pose sets fixed for the study — computed once, and the optimiser that chooses a trial's set
+//! when the sets are optimised per trial (docs/formats.md `run`, `calibration.optimise`; Guo
+//! 2024 §3 for the optimised sets).
 
 use crate::error::{Error, Result};
 use crate::measurement::Measure;
@@ -18,7 +20,7 @@ use crate::sim::tracker::Tracker;
 use crate::sim::truth::{draw_errors, selected_params};
 use crate::sim::unmodelled::Unmodelled;
 use crate::sim::SagFn;
-use crate::study::scenario::{PoseStrategy, Registration, Scenario};
+use crate::study::scenario::{OptimiseEach, PoseStrategy, Registration, Scenario};
 use nalgebra::DMatrix;
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -129,8 +131,12 @@ pub struct Study {
     pub tracker: Tracker,
     /// Gravity sag, if modelled.
     pub compliance: Option<Compliance>,
-    /// Per calibration strategy: the fixed pose set, or `None` when drawn per trial.
+    /// Per calibration strategy: the fixed pose set, or `None` when drawn per trial; for a
+    /// set optimised per trial ([`Study::per_trial`]), trial 0's set, which the reports show.
     pub fixed: Vec<Option<FixedSet>>,
+    /// Per calibration strategy: whether its set is optimised anew in every trial
+    /// (`calibration.optimise = "trial"`, [`optimised_set`]).
+    pub per_trial: Vec<bool>,
     /// The ill-conditioned parameter separation (Guo 2024 §3.1) of the first optimised
     /// strategy's candidate pool, when `calibration.separate` is set.
     pub separation: Option<Separation>,
@@ -139,46 +145,47 @@ pub struct Study {
 /// Which model a pose optimiser scores (docs/formats.md `calibration.strategies`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum ScoredModel {
-    /// Guo 2024's full model: every joint parameter with the tool and base parameters of
-    /// [`full_params`] (the `-full` strategies).
+    /// Guo 2024's full model: every joint parameter with the tool and base parameters the
+    /// study identifies (the `-full` strategies; Guo's 21 columns of eq. 7 for its 3T2R arm,
+    /// which identifies no tool parameter).
     Full,
     /// Guo 2024's reconstructed model J_p (eq. 27): the joint parameters without every
     /// ill-conditioned one the separation at this GCN threshold finds
-    /// ([`Separation::ill_conditioned`]), with the base and tool parameters of
-    /// [`identified_params`] (`calibration.separate`).
+    /// ([`Separation::ill_conditioned`]), with the base and tool parameters the study
+    /// identifies (`calibration.separate`).
     Separated(Real),
     /// These parameters as they are.
     Plain,
 }
 
 /// The pose model an optimiser scores over the candidate pool `pool`, its parameters and,
-/// for [`ScoredModel::Separated`], the separation. [`ScoredModel::Plain`] scores `plain`.
+/// for [`ScoredModel::Separated`], the separation. `identified` are the kinematic parameters
+/// the study identifies: [`ScoredModel::Plain`] scores them, the full and the separated models
+/// take their base and tool parameters from them.
 /// The full and the separated models are rank-deficient (Guo's GCNs of 2.9e35 and 2.3e18):
 /// both are scored on their nonzero spectrum ([`RobotPoseModel::on_row_space`] over `pool`),
 /// so that every one of their parameters counts and they differ by the separated ones.
 pub fn optimiser_model(
     robot: &Robot,
     measure: Measure,
-    with_base: bool,
     pool: &[Vec<Real>],
     scored: ScoredModel,
-    plain: &[Param],
+    identified: &[Param],
 ) -> (RobotPoseModel, Vec<Param>, Option<Separation>) {
-    let (params, sep) = match scored {
+    let joints = robot.joint_params();
+    let (mut params, sep) = match scored {
         ScoredModel::Plain => {
-            let model = RobotPoseModel::new(robot, plain, measure);
-            return (model, plain.to_vec(), None);
+            let model = RobotPoseModel::new(robot, identified, measure);
+            return (model, identified.to_vec(), None);
         }
-        ScoredModel::Full => (full_params(robot, measure, with_base), None),
+        ScoredModel::Full => (joints, None),
         ScoredModel::Separated(threshold) => {
-            let joints = robot.joint_params();
             let sep = poses::separate(robot, &joints, pool, measure, threshold);
-            let mut v = sep.reduced(&joints);
-            v.extend(ends(&identified_params(robot, measure, with_base)));
-            v.sort_by_key(|p| p.index(robot.dof()));
-            (v, Some(sep))
+            (sep.reduced(&joints), Some(sep))
         }
     };
+    params.extend(ends(identified));
+    params.sort_by_key(|p| p.index(robot.dof()));
     let model = RobotPoseModel::new(robot, &params, measure).on_row_space(pool);
     (model, params, sep)
 }
@@ -311,33 +318,32 @@ impl Study {
                     poses.truncate(c.count);
                     Some(FixedSet::plain(poses))
                 }
-                PoseStrategy::Optimised(strategy) | PoseStrategy::OptimisedFull(strategy) => {
-                    let mut g = rng::stream(scenario.seed, &format!("optimise/{i}"));
-                    let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
-                    let scored = match (s, c.separate) {
-                        (PoseStrategy::OptimisedFull(_), _) => ScoredModel::Full,
-                        (_, true) => ScoredModel::Separated(c.separate_threshold),
-                        _ => ScoredModel::Plain,
+                PoseStrategy::Optimised(_) | PoseStrategy::OptimisedFull(_) => {
+                    // Per trial: trial 0's set, kept for the reports and for trial 0 itself.
+                    let seed = match c.optimise {
+                        OptimiseEach::Study => scenario.seed,
+                        OptimiseEach::Trial => rng::trial_seed(scenario.seed, 0),
                     };
-                    let (model, _, sep) =
-                        optimiser_model(&nominal, measure, with_base, &pool, scored, &kinematic);
+                    let (set, sep) = optimise(&scenario, &nominal, measure, &kinematic, i, seed)?;
                     if let Some(sep) = sep {
                         separation.get_or_insert(sep);
                     }
-                    let mut opts = SelectOptions::new(c.count);
-                    opts.objective = c.objective;
-                    let sel = poses::select(&model, &pool, *strategy, &opts, &mut g)?;
-                    Some(FixedSet {
-                        poses: sel.poses,
-                        trace: sel.trace,
-                        scores: serde_json::to_value(sel.scores).ok(),
-                        crb_trace: None,
-                        sag: None,
-                    })
+                    Some(set)
                 }
             };
             fixed.push(set);
         }
+        let per_trial = scenario
+            .calibration
+            .strategies
+            .iter()
+            .map(|s| {
+                matches!(
+                    s,
+                    PoseStrategy::Optimised(_) | PoseStrategy::OptimisedFull(_)
+                ) && scenario.calibration.optimise == OptimiseEach::Trial
+            })
+            .collect();
         let mut study = Study {
             scenario,
             nominal,
@@ -348,6 +354,7 @@ impl Study {
             tracker,
             compliance,
             fixed,
+            per_trial,
             separation,
         };
         let traces: Vec<Option<Real>> = study
@@ -365,8 +372,10 @@ impl Study {
             let memos: Vec<Option<Arc<SagMemo>>> = study
                 .fixed
                 .iter()
-                .map(|f| {
+                .zip(&study.per_trial)
+                .map(|(f, &per_trial)| {
                     f.as_ref()
+                        .filter(|_| !per_trial)
                         .map(|f| {
                             let rows = calibration_rows(&study.scenario, &f.poses);
                             SagMemo::new(&truth, &rows, &*sag).map(Arc::new)
@@ -382,6 +391,73 @@ impl Study {
         }
         Ok(study)
     }
+}
+
+/// Optimises strategy `si`'s pose set of `scenario` from `seed` (the study's seed, or a
+/// trial's under `calibration.optimise = "trial"`): a candidate pool of
+/// `calibration.candidates` drawn in `calibration.region` from the stream `optimise/{si}`,
+/// then the strategy's optimiser on the model it scores (the separated one with
+/// `calibration.separate`, the full one for a `-full` strategy, else `kinematic`). Returns
+/// the set and the separation it was optimised on.
+pub fn optimise(
+    scenario: &Scenario,
+    nominal: &Robot,
+    measure: Measure,
+    kinematic: &[Param],
+    si: usize,
+    seed: u64,
+) -> Result<(FixedSet, Option<Separation>)> {
+    let c = &scenario.calibration;
+    let s = &c.strategies[si];
+    let strategy = match s {
+        PoseStrategy::Optimised(o) | PoseStrategy::OptimisedFull(o) => *o,
+        _ => unreachable!("only the optimised strategies are optimised"),
+    };
+    let mut g = rng::stream(seed, &format!("optimise/{si}"));
+    let pool = sample_region(nominal, &c.region, c.candidates, &mut g)?;
+    let scored = match (s, c.separate) {
+        (PoseStrategy::OptimisedFull(_), _) => ScoredModel::Full,
+        (_, true) => ScoredModel::Separated(c.separate_threshold),
+        _ => ScoredModel::Plain,
+    };
+    let (model, _, sep) = optimiser_model(nominal, measure, &pool, scored, kinematic);
+    let mut opts = SelectOptions::new(c.count);
+    opts.objective = c.objective;
+    let sel = poses::select(&model, &pool, strategy, &opts, &mut g)?;
+    let set = FixedSet {
+        poses: sel.poses,
+        trace: sel.trace,
+        scores: serde_json::to_value(sel.scores).ok(),
+        crb_trace: None,
+        sag: None,
+    };
+    Ok((set, sep))
+}
+
+/// The pose set strategy `si` optimises in trial `index` under `calibration.optimise =
+/// "trial"`: [`optimise`] from the trial's seed (trial 0's is the study's `fixed` set).
+pub fn optimised_set(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<Real>>> {
+    if index == 0 {
+        if let Some(set) = &study.fixed[si] {
+            return Ok(set.poses.clone());
+        }
+    }
+    let kinematic: Vec<Param> = study
+        .params
+        .iter()
+        .copied()
+        .filter(|p| !p.is_compliance())
+        .collect();
+    let seed = rng::trial_seed(study.scenario.seed, index as u64);
+    let (set, _) = optimise(
+        &study.scenario,
+        &study.nominal,
+        study.measure,
+        &kinematic,
+        si,
+        seed,
+    )?;
+    Ok(set.poses)
 }
 
 /// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the

@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
-use super::plan::{crb_trace, Study};
+use super::plan::{crb_trace, optimised_set, Study};
 use super::stats::ecdf;
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
@@ -23,10 +23,14 @@ use crate::sim::{measure_poses, Reached, SagFn, Simulated};
 
 pub use super::outcome::{OptionalStats, Outcome, TrialResult, OPTIONAL_STATS};
 
-/// The calibration poses of strategy `si` in trial `index`: the study's fixed set, or a
-/// fresh draw from the trial's seed.
+/// The calibration poses of strategy `si` in trial `index`: the set optimised for the trial
+/// (`calibration.optimise = "trial"`), the study's fixed set, or a fresh draw from the
+/// trial's seed.
 pub fn calibration_poses(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<Real>>> {
     let sc = &study.scenario;
+    if study.per_trial[si] {
+        return optimised_set(study, si, index);
+    }
     if let Some(set) = &study.fixed[si] {
         return Ok(set.poses.clone());
     }
@@ -285,8 +289,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         let cal_nominal = validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
         let cal_before = ErrorStats::of(&cal_nominal.mm);
         crb.push(match &study.fixed[si] {
-            Some(set) => set.crb_trace,
-            None => crb_trace(study, &qs),
+            Some(set) if !study.per_trial[si] => set.crb_trace,
+            _ => crb_trace(study, &qs),
         });
         for (mi, spec) in sc.methods.iter().enumerate() {
             let t0 = Instant::now();

@@ -28,6 +28,7 @@ mod memory;
 mod noise;
 mod outputs;
 mod plausible;
+mod per_trial;
 mod practice;
 mod precision;
 mod profiles;

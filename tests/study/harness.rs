@@ -381,7 +381,7 @@ fn the_memoised_sag_of_a_fixed_pose_set_is_the_one_each_trial_computes() {
     let text = TINY
         .replace("model = \"linear\"", "model = \"rapier\"")
         .replace("count = 30", "count = 12")
-        .replace("candidates = 150", "candidates = 40");
+        .replace("candidates = 150", "candidates = 40\noptimise = \"study\"");
     let mut study = calbench::study::Study::new(Scenario::parse(&text, None).unwrap()).unwrap();
     let fixed = study.fixed[1].as_ref().expect("detmax gives a fixed set");
     assert!(

@@ -34,7 +34,7 @@ use sections::{
     strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
 };
 pub use sections::{
-    Calibration, IdentificationSpec, PoseStrategy, RobotRef, StrategyName, Validation,
+    Calibration, IdentificationSpec, OptimiseEach, PoseStrategy, RobotRef, StrategyName, Validation,
 };
 use serde::Deserialize;
 use sweep::SweepField;
@@ -515,6 +515,7 @@ impl Scenario {
                 objective,
                 separate: c.separate,
                 separate_threshold: c.separate_threshold,
+                optimise: c.optimise,
                 payloads_kg: c.payloads_kg,
             },
             validation: Validation {

@@ -36,6 +36,7 @@ pub(super) struct CalibrationSection {
     pub(super) separate: bool,
     pub(super) separate_threshold: Real,
     pub(super) payloads_kg: Option<Vec<Real>>,
+    pub(super) optimise: OptimiseEach,
 }
 
 impl Default for CalibrationSection {
@@ -50,6 +51,7 @@ impl Default for CalibrationSection {
             separate: false,
             separate_threshold: 1e2,
             payloads_kg: None,
+            optimise: OptimiseEach::Trial,
         }
     }
 }
@@ -112,10 +114,10 @@ pub enum PoseStrategy {
     Grid,
     /// The pose list `calibration.poses_file`.
     File(PathBuf),
-    /// Optimised once per study on the nominal robot (Guo 2024 §3), on the separated model
-    /// when `calibration.separate` is set.
+    /// Optimised on the nominal robot (Guo 2024 §3) per trial or once per study
+    /// (`calibration.optimise`), on the separated model when `calibration.separate` is set.
     Optimised(Optimiser),
-    /// Optimised once per study on the full model, every joint parameter with no separation
+    /// Optimised as [`PoseStrategy::Optimised`] on the full model, every joint parameter with no separation
     /// (Guo 2024 fig. 6 and table 8, "full-parameter model").
     OptimisedFull(Optimiser),
 }
@@ -205,6 +207,20 @@ impl PoseStrategy {
     }
 }
 
+/// How often the optimised pose sets are optimised (docs/formats.md `calibration.optimise`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum OptimiseEach {
+    /// Once per trial, on a candidate pool and with an optimiser drawn from the trial's seed,
+    /// so that the trials vary the set the optimiser happens to choose and every interval
+    /// covers it.
+    #[default]
+    Trial,
+    /// Once per study, from the study's seed: every trial measures the same set, and the
+    /// intervals are conditional on it.
+    Study,
+}
+
 /// Calibration poses: how many, how chosen, from where.
 #[derive(Clone, Debug)]
 pub struct Calibration {
@@ -222,6 +238,8 @@ pub struct Calibration {
     pub separate: bool,
     /// GCN threshold of the separation.
     pub separate_threshold: Real,
+    /// Whether the optimised sets are optimised per trial or once per study.
+    pub optimise: OptimiseEach,
     /// Payloads (kg) under which every calibration pose is measured, once each (docs/formats.md
     /// `calibration.payloads_kg`); `None`: once, under `compliance.payload_kg`.
     pub payloads_kg: Option<Vec<Real>>,
