@@ -338,7 +338,7 @@ fn kind_keys(
         Instrument::Planes(axes) => {
             record.plane_axes = Some(axes.iter().map(|&a| ["x", "y", "z"][a]).collect());
         }
-        Instrument::Spheres(_) => {}
+        Instrument::Spheres(_) | Instrument::Sockets(_) => {}
     }
     record
 }

@@ -269,6 +269,7 @@ mod tests {
             Kind::Plane,
             Kind::Sphere,
             Kind::MultiTarget,
+            Kind::Socket,
         ];
         let mut out = Vec::new();
         for kind in kinds {
@@ -403,15 +404,17 @@ mod tests {
     /// empirical covariance of `ls`'s robot-parameter estimates over 400 noise draws against
     /// σ² trace((JᵀJ)⁻¹) of the robot's block, per kind, at most 1.05. σ = 2 µm keeps every
     /// kind in its linear range: one 25.4 mm sphere seen from 30 poses is so weakly
-    /// conditioned that at σ = 10 µm the estimate's spread is 1.34 times the bound.
+    /// conditioned that at σ = 10 µm the estimate's spread is 1.34 times the bound. Two
+    /// sockets held at 15 poses each leave one weak direction that dominates the trace, whose
+    /// estimate over 400 draws then spreads by about 7 % (it read 1.19): 1600 draws for them.
     #[test]
     fn ls_meets_the_cramer_rao_bound_for_every_kind() {
         use rand::Rng as _;
         let nominal = irb2600();
         let params = candidates(&nominal);
-        let sigma = 0.002;
-        let draws = 400;
         for (kind, qs, g, lay) in setups() {
+            let sigma = 0.002;
+            let draws = if kind == Kind::Socket { 1600 } else { 400 };
             let (qs, g) = (&qs[..30], &g[..30]);
             let data0 = noise_free(&lay.instrument, &nominal, qs, g, &lay.nuisance);
             let ident = identifiability(&nominal, &params, qs, &data0)
@@ -450,6 +453,72 @@ mod tests {
             eprintln!("{kind:?}: CRB ratio {ratio:.4}");
             assert!(ratio <= 1.05 && ratio > 0.9, "{kind:?}: CRB ratio {ratio}");
         }
+    }
+
+    /// The simulated socket study: a robot with errors injected in every parameter the
+    /// sockets identify holds its ball in two sockets 50 mm apart, off their centres by
+    /// 5 µm per coordinate, from 60 poses; `ls` on the nominal robot recovers every injected
+    /// error to within 4 of its standard errors (σ² (JᵀJ)⁻¹), and the sockets' place too.
+    #[test]
+    fn a_simulated_socket_study_recovers_the_injected_errors_within_its_noise() {
+        use crate::sim::instrument::{instrument_poses, measure};
+        let nominal = irb2600();
+        let s = InstrumentSettings {
+            kind: Kind::Socket,
+            noise_um: 5.0,
+            ..InstrumentSettings::default()
+        };
+        let mut rng = crate::numeric::rng::stream(54, "socket study");
+        let (lay, qs, g) = instrument_poses(&s, &nominal, 60, &mut rng).unwrap();
+        let data0 = noise_free(&lay.instrument, &nominal, &qs, &g, &lay.nuisance);
+        let ident = identifiability(&nominal, &nominal.params(), &qs, &data0)
+            .unwrap()
+            .identifiable;
+        assert!(ident.len() >= 15, "{} identifiable", ident.len());
+        let errors: Vec<(Param, Real)> = ident
+            .iter()
+            .enumerate()
+            .map(|(k, &p)| {
+                let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
+                (p, sign * if p.is_length() { 0.5 } else { 2e-3 })
+            })
+            .collect();
+        let truth = nominal.with_errors(&errors);
+        let (tq, data, sigma) = measure(&s, &lay, &truth, &qs, &g, &mut rng).unwrap();
+        assert!(sigma.iter().all(|v| (*v - 0.005).abs() < 1e-15));
+        let kp = KindProblem::new(&nominal, &ident, &tq, &data).unwrap();
+        let lm = LmOptions {
+            adaptive: true,
+            eps: 1e-12,
+            max_iter: 200,
+            ..LmOptions::default()
+        };
+        let out = solve(&lm, &kp, &DVector::zeros(kp.size().params));
+        let cov = out.normal.clone().try_inverse().unwrap() * 0.005 * 0.005;
+        let mut worst: Real = 0.0;
+        for (k, (p, e)) in errors.iter().enumerate() {
+            let z = (out.x[k] - e) / cov[(k, k)].sqrt();
+            worst = worst.max(z.abs());
+            assert!(z.abs() < 4.0, "{p}: {} against {e}, {z:.2} σ", out.x[k]);
+        }
+        // Without the fit, the injected errors would be many standard errors away.
+        let far = errors
+            .iter()
+            .enumerate()
+            .filter(|(k, (_, e))| e.abs() / cov[(*k, *k)].sqrt() > 10.0)
+            .count();
+        assert!(far > errors.len() / 2, "{far} of {} far", errors.len());
+        let t = ident.len();
+        let c = kp.nuisance_at(&out.x);
+        for (k, v) in lay.nuisance.iter().enumerate() {
+            let z = (c[k] - v) / cov[(t + k, t + k)].sqrt();
+            assert!(
+                z.abs() < 4.0,
+                "nuisance {k}: {} against {v}, {z:.2} σ",
+                c[k]
+            );
+        }
+        eprintln!("socket study: {t} parameters, worst {worst:.2} σ");
     }
 
     #[test]

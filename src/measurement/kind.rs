@@ -17,6 +17,11 @@
 //! | `distance` (chain) | `|p_{i+1} − p_i|`, the length between consecutive poses (interferometer along a line) | 1 | none |
 //! | `plane` | `p_k − (c₀ + c₁ p_u + c₂ p_v) = 0` on plane `l` (axis `k`) | 1 | 3 per plane |
 //! | `sphere` | `|p_i − c_l| − ρ_l = 0` on sphere `l` of known radius `ρ_l` | 1 | `c_l` (3 per sphere) |
+//! | `socket` | `p_i − s_l = 0` in socket `l`, `s_l = s_1 + d_l u(θ_l, φ_l)` at the known distance `d_l` from socket 1 | 3 | `s_1` (3), `θ_l, φ_l` (2 per further socket) |
+//!
+//! A socket's direction from socket 1 is `u(θ, φ) = (cos φ cos θ, cos φ sin θ, sin φ)`
+//! (azimuth θ, elevation φ in the base frame), so the known distances hold exactly; the
+//! parametrisation is singular only for sockets straight above or below socket 1.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -41,6 +46,8 @@ pub enum Kind {
     Sphere,
     /// Several tool points per pose (reflectors on one flange).
     MultiTarget,
+    /// The tool point held in one of several sockets at known distances apart.
+    Socket,
 }
 
 impl Kind {
@@ -66,6 +73,9 @@ pub enum Instrument {
     Planes(Vec<usize>),
     /// Spheres of known radius (mm) and unknown centre.
     Spheres(Vec<Real>),
+    /// Sockets: each one's known distance (mm) from socket 1 (0 for socket 1 itself); the
+    /// position of socket 1 and the directions of the others are unknown.
+    Sockets(Vec<Real>),
 }
 
 impl Instrument {
@@ -77,6 +87,7 @@ impl Instrument {
             Instrument::Distance { .. } => Kind::Distance,
             Instrument::Planes(_) => Kind::Plane,
             Instrument::Spheres(_) => Kind::Sphere,
+            Instrument::Sockets(_) => Kind::Socket,
         }
     }
 
@@ -87,6 +98,7 @@ impl Instrument {
             Instrument::Distance { pivot: true } => 3,
             Instrument::Planes(p) => 3 * p.len(),
             Instrument::Spheres(s) => 3 * s.len(),
+            Instrument::Sockets(s) => 1 + 2 * s.len(),
         }
     }
 
@@ -102,6 +114,13 @@ impl Instrument {
             Instrument::Spheres(s) => (1..=s.len())
                 .flat_map(|l| xyz(format!("sphere{l}")))
                 .collect(),
+            Instrument::Sockets(s) => xyz("socket1".into())
+                .into_iter()
+                .chain(
+                    (2..=s.len())
+                        .flat_map(|l| ["azimuth", "elevation"].map(|a| format!("socket{l}_{a}"))),
+                )
+                .collect(),
         }
     }
 
@@ -109,6 +128,7 @@ impl Instrument {
     pub fn rows_per_observation(&self) -> usize {
         match self {
             Instrument::Targets(t) => 3 * t.len(),
+            Instrument::Sockets(_) => 3,
             _ => 1,
         }
     }
@@ -144,7 +164,29 @@ impl Instrument {
                     "needs at least one sphere of finite radius > 0".into(),
                 )
             }
+            Instrument::Sockets(s)
+                if s.is_empty()
+                    || s[0] != 0.0
+                    || s[1..].iter().any(|d| !(d.is_finite() && *d > 0.0)) =>
+            {
+                bad(
+                    "measurement.socket_distance_mm",
+                    "needs at least one socket; socket 1 at distance 0 from itself, every \
+                     other at a finite distance > 0 from it"
+                        .into(),
+                )
+            }
             _ => Ok(()),
+        }
+    }
+
+    /// The number of planes, spheres or sockets (1 for the other kinds).
+    pub fn groups(&self) -> usize {
+        match self {
+            Instrument::Planes(p) => p.len(),
+            Instrument::Spheres(s) => s.len(),
+            Instrument::Sockets(s) => s.len(),
+            _ => 1,
         }
     }
 }
@@ -184,11 +226,7 @@ impl KindData {
                 format!("{m} poses but {} plane or sphere indices", self.group.len()),
             ));
         }
-        let groups = match &self.instrument {
-            Instrument::Planes(p) => p.len(),
-            Instrument::Spheres(s) => s.len(),
-            _ => 1,
-        };
+        let groups = self.instrument.groups();
         if let Some(i) = self.group.iter().position(|&g| g >= groups) {
             return Err(Error::setting(
                 "measurements",
@@ -239,12 +277,32 @@ pub fn model_values(
                 let g = group[i];
                 out.push((p[i] - centre(c, g)).norm() - r[g]);
             }
+            Instrument::Sockets(d) => {
+                let (s, _, _) = socket(d, c, group[i]);
+                out.extend((p[i] - s).iter());
+            }
         }
     }
 }
 
 fn centre(c: &[Real], g: usize) -> Vec3 {
     Vec3::new(c[3 * g], c[3 * g + 1], c[3 * g + 2])
+}
+
+/// Socket `g`'s centre `s_g = s_1 + d_g u(θ_g, φ_g)` from the nuisance values `c`
+/// (`s_1`, then `θ, φ` per further socket) and the known distances `d`, with its derivatives
+/// by `θ_g` and `φ_g` (zero for socket 1).
+pub fn socket(d: &[Real], c: &[Real], g: usize) -> (Vec3, Vec3, Vec3) {
+    let s1 = centre(c, 0);
+    if g == 0 {
+        return (s1, Vec3::zeros(), Vec3::zeros());
+    }
+    let (th, ph) = (c[1 + 2 * g], c[2 + 2 * g]);
+    let (st, ct, sp, cp) = (th.sin(), th.cos(), ph.sin(), ph.cos());
+    let u = Vec3::new(cp * ct, cp * st, sp);
+    let du_th = Vec3::new(-cp * st, cp * ct, 0.0);
+    let du_ph = Vec3::new(-sp * ct, -sp * st, cp);
+    (s1 + d[g] * u, d[g] * du_th, d[g] * du_ph)
 }
 
 /// The plane's normal axis and the two others in cyclic order.
@@ -374,6 +432,22 @@ pub fn rows(
                     j[(i, t + 3 * g + k)] = -u[k];
                 }
             }
+            Instrument::Sockets(d) => {
+                let g = data.group[i];
+                let (s, ds_th, ds_ph) = socket(d, c, g);
+                for k in 0..3 {
+                    let row = 3 * i + k;
+                    r[row] = data.values[row] - (p[i][k] - s[k]);
+                    for col in 0..t {
+                        j[(row, col)] = jp(i, k, col);
+                    }
+                    j[(row, t + k)] = -1.0;
+                    if g > 0 {
+                        j[(row, t + 1 + 2 * g)] = -ds_th[k];
+                        j[(row, t + 2 + 2 * g)] = -ds_ph[k];
+                    }
+                }
+            }
         }
     }
 }
@@ -391,6 +465,7 @@ pub fn nuisance_guess(
 ) -> Result<Vec<Real>> {
     let groups = match inst {
         Instrument::Targets(_) | Instrument::Distance { pivot: false } => return Ok(Vec::new()),
+        Instrument::Sockets(d) => return socket_guess(d, group, p),
         Instrument::Distance { pivot: true } => 1,
         Instrument::Planes(a) => a.len(),
         Instrument::Spheres(s) => s.len(),
@@ -454,6 +529,35 @@ pub fn nuisance_guess(
             .solve(&bv, 1e-12)
             .map_err(|e| Error::Compute(e.to_string()))?;
         out.extend(x.iter().take(3));
+    }
+    Ok(out)
+}
+
+/// The first guess of the sockets' unknowns: socket 1 at the mean of its tool points; each
+/// further socket's direction from socket 1 towards the mean of its own points. Fails when a
+/// socket has no point.
+fn socket_guess(d: &[Real], group: &[usize], p: &[Vec3]) -> Result<Vec<Real>> {
+    let mut means = Vec::with_capacity(d.len());
+    for g in 0..d.len() {
+        let pts: Vec<&Vec3> = p
+            .iter()
+            .zip(group)
+            .filter(|(_, &gi)| gi == g)
+            .map(|(pt, _)| pt)
+            .collect();
+        if pts.is_empty() {
+            return Err(Error::setting(
+                "measurements",
+                format!("socket {} has no pose", g + 1),
+            ));
+        }
+        means.push(pts.iter().fold(Vec3::zeros(), |a, b| a + *b) / pts.len() as Real);
+    }
+    let mut out = vec![means[0].x, means[0].y, means[0].z];
+    for m in &means[1..] {
+        let v = m - means[0];
+        out.push(v.y.atan2(v.x));
+        out.push(v.z.atan2(v.x.hypot(v.y)));
     }
     Ok(out)
 }

@@ -7,6 +7,7 @@
 //! | `distance` between consecutive poses | `step_mm` (empty on the first row) |
 //! | `plane` | `plane` (1, 2, …), optional `offset_mm` |
 //! | `sphere` | `sphere` (1, 2, …), `radius_mm`, optional `offset_mm` |
+//! | `socket` | `socket` (1, 2, …), `socket_distance_mm` (the socket's distance from socket 1) |
 //! | `multi-target` | `target` (1, 2, …), `x`, `y`, `z`, `target_x_mm`, `target_y_mm`, `target_z_mm`: one row per target and pose |
 //!
 //! and, but for targets, optionally `sigma_mm`, the reading's standard deviation. A file
@@ -45,6 +46,10 @@ const RADIUS: &str = "radius_mm";
 const OFFSET: &str = "offset_mm";
 /// The reading's standard deviation.
 const SIGMA: &str = "sigma_mm";
+/// The socket a row's tool point is held in.
+const SOCKET: &str = "socket";
+/// The socket's known distance from socket 1.
+const SOCKET_DISTANCE: &str = "socket_distance_mm";
 /// The target a row measures (multi-target).
 const TARGET: &str = "target";
 /// The measured point of a target, in the tracker's frame.
@@ -57,11 +62,12 @@ pub const MAX_GROUPS: usize = 1000;
 
 /// The columns that make a file one of a kind, with its kind and whether lengths are from a
 /// pivot.
-const KIND_COLUMNS: [(&str, Kind); 5] = [
+const KIND_COLUMNS: [(&str, Kind); 6] = [
     (LENGTH, Kind::Distance),
     (STEP, Kind::Distance),
     (PLANE, Kind::Plane),
     (SPHERE, Kind::Sphere),
+    (SOCKET, Kind::Socket),
     (TARGET, Kind::MultiTarget),
 ];
 
@@ -93,7 +99,10 @@ pub fn file_kind(path: &Path) -> Option<Kind> {
 
 /// Reads a measurement-kind file for `robot` (see the module docs for what is refused).
 pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result<KindFile> {
-    let mut t = Rows::open(path, "q1,…,qn and length_mm, step_mm, plane or sphere")?;
+    let mut t = Rows::open(
+        path,
+        "q1,…,qn and length_mm, step_mm, plane, sphere or socket",
+    )?;
     let names = t.names.clone();
     let find = |n: &str| names.iter().position(|h| h == n);
     let bad = |line: u64, column: &str, msg: String| {
@@ -104,7 +113,9 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
         return Err(t.bad(
             t.header_line,
             "",
-            "no column length_mm, step_mm, plane or sphere: not a measurement-kind file".into(),
+            "no column length_mm, step_mm, plane, sphere or socket: not a measurement-kind \
+             file"
+                .into(),
         ));
     };
     if let Some((other, _)) = present.next() {
@@ -122,14 +133,22 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
     let extra: &[&str] = match reading {
         PLANE => &[OFFSET],
         SPHERE => &[RADIUS, OFFSET],
+        SOCKET => &[SOCKET_DISTANCE],
         _ => &[],
     };
     let known = |n: &str| qnames.iter().any(|q| q == n) || n == reading || n == SIGMA;
     let known = |n: &str| known(n) || extra.contains(&n);
-    let optional: Vec<&str> = extra.iter().copied().filter(|c| *c != RADIUS).collect();
+    let optional: Vec<&str> = extra
+        .iter()
+        .copied()
+        .filter(|c| *c != RADIUS && *c != SOCKET_DISTANCE)
+        .collect();
     let mut expected = format!("q1…q{dof}, {reading}");
     if reading == SPHERE {
         expected += ", radius_mm";
+    }
+    if reading == SOCKET {
+        expected += ", socket_distance_mm";
     }
     for c in optional.iter().chain(&[SIGMA]) {
         let _ = write!(expected, ", optionally {c}");
@@ -138,7 +157,8 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
     let required = qnames
         .iter()
         .map(String::as_str)
-        .chain((reading == SPHERE).then_some(RADIUS));
+        .chain((reading == SPHERE).then_some(RADIUS))
+        .chain((reading == SOCKET).then_some(SOCKET_DISTANCE));
     let mut qcol = Vec::with_capacity(dof);
     for n in required {
         let c = find(n).ok_or_else(|| {
@@ -152,12 +172,13 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
                 ),
             )
         })?;
-        if n != RADIUS {
+        if n != RADIUS && n != SOCKET_DISTANCE {
             qcol.push(c);
         }
     }
     let (read_col, sigma_col) = (find(reading), find(SIGMA));
     let (radius_col, offset_col) = (find(RADIUS), find(OFFSET));
+    let radius_col = radius_col.or(find(SOCKET_DISTANCE));
     let (lim_lo, lim_hi) = user_limits(robot);
     let chain = reading == STEP;
     let mut out = KindFile {
@@ -231,23 +252,41 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
                     let msg = format!("{} mm is beyond ±{MAX_POINT_MM} mm", shown(offset));
                     return Err(bad(line, OFFSET, msg));
                 }
-                out.data.values.push(offset);
+                if reading == SOCKET {
+                    // The tool point is at the socket's centre: three zero readings.
+                    out.data.values.extend([0.0; 3]);
+                } else {
+                    out.data.values.push(offset);
+                }
                 if let Some(rc) = radius_col {
                     let r = num(rc)?;
-                    if !(r > 0.0 && r <= MAX_POINT_MM) {
-                        let msg =
-                            format!("{} is not a radius within (0, {MAX_POINT_MM}] mm", shown(r));
-                        return Err(bad(line, RADIUS, msg));
+                    let (col, what) = if reading == SOCKET {
+                        (SOCKET_DISTANCE, "socket distance")
+                    } else {
+                        (RADIUS, "radius")
+                    };
+                    let ok = if reading == SOCKET && g == 1 {
+                        r == 0.0
+                    } else {
+                        r > 0.0 && r <= MAX_POINT_MM
+                    };
+                    if !ok {
+                        let msg = if reading == SOCKET && g == 1 {
+                            format!("{}: socket 1 is at distance 0 from itself", shown(r))
+                        } else {
+                            format!("{} is not a {what} within (0, {MAX_POINT_MM}] mm", shown(r))
+                        };
+                        return Err(bad(line, col, msg));
                     }
                     match radii[g - 1] {
                         Some((r0, l0)) if r0 != r => {
                             let msg = format!(
-                                "{} mm, but sphere {g} has radius {} mm on line {l0}: one \
-                                 sphere has one radius",
+                                "{} mm, but {reading} {g} has {what} {} mm on line {l0}: one \
+                                 {reading} has one {what}",
                                 shown(r),
                                 shown(r0)
                             );
-                            return Err(bad(line, RADIUS, msg));
+                            return Err(bad(line, col, msg));
                         }
                         _ => radii[g - 1] = Some((r, line)),
                     }
@@ -280,6 +319,7 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
         LENGTH => Instrument::Distance { pivot: true },
         STEP => Instrument::Distance { pivot: false },
         PLANE => Instrument::Planes(vec![2; group_line.len()]),
+        SOCKET => Instrument::Sockets(radii.iter().map(|r| r.map_or(0.0, |r| r.0)).collect()),
         _ => Instrument::Spheres(radii.iter().map(|r| r.map_or(0.0, |r| r.0)).collect()),
     };
     if out.data.group.is_empty() {
@@ -499,6 +539,7 @@ pub fn write_kind_file(
         Instrument::Distance { pivot: false } => STEP,
         Instrument::Planes(_) => "plane,offset_mm",
         Instrument::Spheres(_) => "sphere,radius_mm,offset_mm",
+        Instrument::Sockets(_) => "socket,socket_distance_mm",
         Instrument::Targets(targets) => {
             if sigma_mm.is_some() {
                 return Err(Error::setting(
@@ -536,6 +577,11 @@ pub fn write_kind_file(
             Instrument::Spheres(r) => {
                 let g = data.group[i];
                 let _ = write!(s, ",{},{},{v}", g + 1, fixed(r[g], 9));
+            }
+            Instrument::Sockets(d) => {
+                // The readings are the socket's zeros: the row names its socket.
+                let g = data.group[i];
+                let _ = write!(s, ",{},{}", g + 1, fixed(d[g], 9));
             }
             _ => {
                 let _ = write!(s, ",{v}");

@@ -42,6 +42,10 @@ pub struct InstrumentSettings {
     pub spheres: usize,
     /// Sphere: the radius, mm.
     pub radius_mm: Real,
+    /// Socket: the number of sockets.
+    pub sockets: usize,
+    /// Socket: the distance of each further socket from socket 1, mm.
+    pub socket_distance_mm: Real,
     /// Multi-target: the targets' offsets in the tool frame, mm.
     pub targets_mm: Vec<[Real; 3]>,
     /// Targets: the tracker's position in the base frame (mm), for the range in σ.
@@ -59,6 +63,8 @@ impl Default for InstrumentSettings {
             planes: 3,
             spheres: 1,
             radius_mm: 25.4,
+            sockets: 2,
+            socket_distance_mm: 50.0,
             targets_mm: vec![[0.0, 0.0, 0.0], [100.0, 0.0, 0.0], [0.0, 100.0, 0.0]],
             tracker_mm: [2500.0, 0.0, 500.0],
         }
@@ -76,6 +82,11 @@ impl InstrumentSettings {
             Kind::Distance => Instrument::Distance { pivot: self.pivot },
             Kind::Plane => Instrument::Planes((0..self.planes).map(|l| [2, 0, 1][l % 3]).collect()),
             Kind::Sphere => Instrument::Spheres(vec![self.radius_mm; self.spheres]),
+            Kind::Socket => Instrument::Sockets(
+                (0..self.sockets)
+                    .map(|l| if l == 0 { 0.0 } else { self.socket_distance_mm })
+                    .collect(),
+            ),
             Kind::Pose => {
                 return Err(Error::setting(
                     "measurement.kind",
@@ -120,8 +131,10 @@ pub struct Layout {
 
 /// Lays the instrument out for the candidate poses `qs` of `nominal`: the pivot where the
 /// settings put it; plane `l` through the median of its candidates' points along its axis,
-/// tilted by 0.02 and 0.01; sphere `l` centred at the tool point of its first candidate.
-/// Candidate `i` belongs to plane or sphere `i mod count`.
+/// tilted by 0.02 and 0.01; sphere `l` centred at the tool point of its first candidate;
+/// socket 1 at the tool point of the first candidate, socket `l` at azimuth `0.7 (l − 1)`
+/// rad and elevation 0.05 rad from it. Candidate `i` belongs to plane, sphere or socket
+/// `i mod count`.
 pub fn layout(s: &InstrumentSettings, nominal: &Robot, qs: &[Vec<Real>]) -> Result<Layout> {
     let instrument = s.instrument()?;
     let chain = nominal.chain();
@@ -146,6 +159,14 @@ pub fn layout(s: &InstrumentSettings, nominal: &Robot, qs: &[Vec<Real>]) -> Resu
         Instrument::Spheres(r) => (0..r.len())
             .flat_map(|l| p.get(l).map_or([0.0; 3], |v| [v[0], v[1], v[2]]))
             .collect(),
+        Instrument::Sockets(d) => {
+            let s1 = p.first().copied().unwrap_or_else(Vec3::zeros);
+            let mut v = vec![s1.x, s1.y, s1.z];
+            for l in 1..d.len() {
+                v.extend([0.7 * (l - 1) as Real, 0.05]);
+            }
+            v
+        }
         _ => Vec::new(),
     };
     Ok(Layout {
@@ -154,14 +175,51 @@ pub fn layout(s: &InstrumentSettings, nominal: &Robot, qs: &[Vec<Real>]) -> Resu
     })
 }
 
-/// Plane or sphere of each of `m` poses: `i mod count` (0 for the other kinds).
+/// Plane, sphere or socket of each of `m` poses: `i mod count` (0 for the other kinds).
 pub fn groups_of(inst: &Instrument, m: usize) -> Vec<usize> {
-    let n = match inst {
-        Instrument::Planes(p) => p.len(),
-        Instrument::Spheres(s) => s.len(),
-        _ => 1,
-    };
+    let n = inst.groups();
     (0..m).map(|i| i % n).collect()
+}
+
+/// Moves `robot` from joint values `q` until its tool point is at `target` (minimum-norm
+/// joint steps on the three coordinates, at most 0.2 rad or mm per joint and step): `None`
+/// when it does not get there to 1e-9 mm within the joint limits narrowed by `margin` in 100
+/// steps.
+pub fn reach(robot: &Robot, target: &Vec3, q: &[Real], margin: Real) -> Option<Vec<Real>> {
+    let chain = robot.chain();
+    let mut q = q.to_vec();
+    let h = 1e-6;
+    let n = q.len();
+    for _ in 0..100 {
+        let e = target - chain.fk(&q).pos;
+        if e.norm() < 1e-9 {
+            let inside = robot
+                .joints
+                .iter()
+                .zip(&q)
+                .all(|(j, v)| *v >= j.limits.0 + margin && *v <= j.limits.1 - margin);
+            return inside.then_some(q);
+        }
+        let mut jac = nalgebra::DMatrix::<Real>::zeros(3, n);
+        for k in 0..n {
+            let mut qp = q.clone();
+            qp[k] += h;
+            let mut qm = q.clone();
+            qm[k] -= h;
+            let d = (chain.fk(&qp).pos - chain.fk(&qm).pos) / (2.0 * h);
+            jac.column_mut(k).copy_from(&d);
+        }
+        let jjt = &jac * jac.transpose();
+        let y = jjt.try_inverse()? * nalgebra::DVector::from_column_slice(e.as_slice());
+        let mut step: Vec<Real> = (jac.transpose() * y).iter().copied().collect();
+        let big = step.iter().fold(0.0, |a: Real, s| a.max(s.abs()));
+        let limit = 0.2;
+        if big > limit {
+            step.iter_mut().for_each(|s| *s *= limit / big);
+        }
+        q.iter_mut().zip(&step).for_each(|(v, s)| *v += s);
+    }
+    None
 }
 
 /// The surface constraint `g(p)` of pose `i`'s plane or sphere (0 on the surface, mm) and its
@@ -198,6 +256,10 @@ pub fn touch(
     q: &[Real],
     margin: Real,
 ) -> Option<Vec<Real>> {
+    if let Instrument::Sockets(d) = &lay.instrument {
+        let (target, _, _) = crate::measurement::kind::socket(d, &lay.nuisance, group);
+        return reach(robot, &target, q, margin);
+    }
     if !matches!(
         lay.instrument,
         Instrument::Planes(_) | Instrument::Spheres(_)
@@ -270,6 +332,9 @@ pub fn measure(
     group: &[usize],
     rng: &mut Rng,
 ) -> Result<(Vec<Vec<Real>>, KindData, Vec<Real>)> {
+    if let Instrument::Sockets(d) = &lay.instrument {
+        return measure_sockets(s, lay, d, truth, qs, group, rng);
+    }
     let mut touched = Vec::with_capacity(qs.len());
     for (i, (q, &g)) in qs.iter().zip(group).enumerate() {
         touched.push(touch(truth, lay, g, q, 0.0).ok_or_else(|| {
@@ -317,6 +382,39 @@ pub fn measure(
     Ok((touched, data, sigma))
 }
 
+/// [`measure`] of sockets: the true robot holds its tool point in socket `group[i]` off the
+/// socket's centre by `noise_um` per coordinate (the ball's seat and the robot's
+/// repeatability), from the commanded joint values; the readings are the sockets' zeros.
+fn measure_sockets(
+    s: &InstrumentSettings,
+    lay: &Layout,
+    d: &[Real],
+    truth: &Robot,
+    qs: &[Vec<Real>],
+    group: &[usize],
+    rng: &mut Rng,
+) -> Result<(Vec<Vec<Real>>, KindData, Vec<Real>)> {
+    let sigma_mm = s.noise_um * 1e-3;
+    let mut touched = Vec::with_capacity(qs.len());
+    for (i, (q, &g)) in qs.iter().zip(group).enumerate() {
+        let (centre, _, _) = crate::measurement::kind::socket(d, &lay.nuisance, g);
+        let z = Vec3::from_fn(|_, _| rng.sample::<Real, _>(StandardNormal));
+        let q = reach(truth, &(centre + sigma_mm * z), q, 0.0).ok_or_else(|| {
+            Error::Compute(format!(
+                "pose {i}: the true robot does not reach its socket"
+            ))
+        })?;
+        touched.push(q);
+    }
+    let data = KindData {
+        instrument: lay.instrument.clone(),
+        group: group.to_vec(),
+        values: vec![0.0; 3 * qs.len()],
+    };
+    data.check(touched.len())?;
+    Ok((touched, data, vec![sigma_mm; qs.len()]))
+}
+
 /// Noise-free readings of `robot` at poses `qs` on planes or spheres `group`, with nuisance
 /// values `nuisance`: the data of an identifiability analysis or a recovery test.
 pub fn noise_free(
@@ -332,7 +430,10 @@ pub fn noise_free(
     let rot: Vec<_> = frames.iter().map(|f| f.rot).collect();
     let mut values = Vec::new();
     model_values(inst, group, &p, &rot, nuisance, &mut values);
-    if matches!(inst, Instrument::Planes(_) | Instrument::Spheres(_)) {
+    if matches!(
+        inst,
+        Instrument::Planes(_) | Instrument::Spheres(_) | Instrument::Sockets(_)
+    ) {
         values.iter_mut().for_each(|v| *v = 0.0);
     }
     KindData {

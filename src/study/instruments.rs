@@ -261,7 +261,7 @@ impl PoseModel for KindPoseModel<'_> {
     }
 }
 
-/// The plane or sphere whose surface is nearest to `p`.
+/// The plane or sphere whose surface is nearest to `p` (the socket nearest to it).
 fn nearest(lay: &Layout, p: &Vec3) -> usize {
     let c = &lay.nuisance;
     let dist = |g: usize| match &lay.instrument {
@@ -272,13 +272,10 @@ fn nearest(lay: &Layout, p: &Vec3) -> usize {
         Instrument::Spheres(r) => {
             ((p - Vec3::new(c[3 * g], c[3 * g + 1], c[3 * g + 2])).norm() - r[g]).abs()
         }
+        Instrument::Sockets(d) => (p - crate::measurement::kind::socket(d, c, g).0).norm(),
         _ => 0.0,
     };
-    let n = match &lay.instrument {
-        Instrument::Planes(a) => a.len(),
-        Instrument::Spheres(s) => s.len(),
-        _ => 1,
-    };
+    let n = lay.instrument.groups();
     (0..n)
         .min_by(|&a, &b| dist(a).total_cmp(&dist(b)))
         .unwrap_or(0)
