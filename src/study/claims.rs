@@ -87,9 +87,9 @@ pub struct Claim {
     /// The figure was used to choose a setting of the scenario (an `[unmodelled]` level):
     /// shown, never judged.
     pub calibrated: bool,
-    /// Whether the claim can be judged on this arm: `false` for a paper's figure of the
-    /// arm's error ([`Metric::is_arm_error`], against a number) on an arm with no error
-    /// outside the kinematic model.
+    /// Whether the claim can be judged on this arm: `false` for a paper's point value (`~`)
+    /// of the arm's error ([`Metric::is_arm_error`]) on an arm with no error outside the
+    /// kinematic model.
     pub comparable: bool,
     /// The id of the paper's claim this one tests under another setting (`None`: its own).
     pub family: Option<String>,
@@ -384,8 +384,9 @@ pub fn parse_with(
                 ),
             ));
         }
-        let comparable =
-            names.unmodelled || !metric.is_arm_error() || matches!(bound, Bound::Entry(_));
+        // A paper's figure (a point value) of the arm's error needs an arm that has error
+        // outside the kinematic model to be compared with a real robot's.
+        let comparable = names.unmodelled || !metric.is_arm_error() || op != Op::Near;
         out.push(Claim {
             id: c.id,
             statement: c.statement,
