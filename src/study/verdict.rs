@@ -131,7 +131,8 @@ pub struct ParameterVerdict {
     pub name: String,
     /// Trials usable in both entries.
     pub n: usize,
-    /// The estimate.
+    /// The estimate (`null`, read as NaN, without trials).
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub estimate: Real,
     /// Its 95 % interval.
     pub ci95: Option<[Real; 2]>,
