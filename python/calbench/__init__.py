@@ -312,7 +312,8 @@ def simulate(scenario, trial=0):
 
 
 _COMPARISON_KEYS = ["a", "b", "metric", "n", "diff_mean", "diff_ci95", "ratio", "win_rate",
-                    "p_value", "p_holm"]
+                    "p_value", "p_holm", "test", "estimate", "ci95", "margin", "verdict",
+                    "trials_to_resolve"]
 
 
 def _split_intervals(df):
@@ -373,8 +374,10 @@ class Study:
     def comparisons(self):
         """The paired comparisons of ``summary["comparisons"]`` as a DataFrame, one row per
         comparison with the same keys (``a``, ``b``, ``metric``, ``n``, ``diff_mean``,
-        ``diff_ci95``, ``ratio``, ``win_rate``, ``p_value``, ``p_holm``; ``sweep_value`` in a
-        sweep), ``diff_ci95`` also split into ``diff_ci95_lo`` and ``diff_ci95_hi``."""
+        ``diff_ci95``, ``ratio``, ``win_rate``, ``p_value``, ``p_holm``, and the verdict's
+        ``test``, ``estimate``, ``ci95``, ``margin``, ``verdict``, ``trials_to_resolve``;
+        ``sweep_value`` in a sweep), ``diff_ci95`` also split into ``diff_ci95_lo`` and
+        ``diff_ci95_hi``."""
         if self._comparisons is None:
             import pandas as pd
 

@@ -7,7 +7,7 @@
 
 use crate::numeric::Real;
 use crate::study::metric::Metric;
-use crate::study::stats::paired::{adjust, compare, Comparison};
+use crate::study::stats::paired::{adjust, compare_with, Comparison};
 use crate::study::{Block, Entry, RunResult};
 
 /// The metrics compared.
@@ -87,7 +87,8 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
             let (ea, eb) = (&b.entries[i], &b.entries[j]);
             for metric in METRICS {
                 let per_trial = (&ea.per_trial[metric], &eb.per_trial[metric]);
-                let mut c = compare((&label(ea), &label(eb)), metric, per_trial);
+                let margin = r.scenario.report.margin(metric);
+                let mut c = compare_with((&label(ea), &label(eb)), metric, per_trial, margin);
                 c.sweep_value = ea.sweep_value.clone();
                 all.push(c);
                 views.push((b, i, j, view));
@@ -103,10 +104,11 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
             View::Flipped => {
                 let (ea, eb) = (&b.entries[i], &b.entries[j]);
                 let m = c.metric;
-                let mut f = compare(
+                let mut f = compare_with(
                     (&label(eb), &label(ea)),
                     m,
                     (&eb.per_trial[m], &ea.per_trial[m]),
+                    r.scenario.report.margin(m),
                 );
                 f.sweep_value.clone_from(&c.sweep_value);
                 f.p_holm = c.p_holm;

@@ -1,33 +1,28 @@
 //! A paper's claims as statements a study tests (docs/formats.md "claims"): a scenario's
 //! `[[claims]]` name a per-trial metric and a relation between its entries, for example
-//! `"bas-pso-differential" < "pso-differential"` or `"lm / detmax-ide" / "lm / random" <= 0.5`;
-//! `run` evaluates each on the trials, paired trial by trial, with a 95 % interval, and gives
-//! the verdict `reproduces`, `contradicts` or `unresolved`.
+//! `"bas-pso-differential" < "pso-differential"` (an ordering, judged beyond the metric's
+//! margin of practical relevance) or `"igg3" ~ 0.42` (a point value, judged against the
+//! claim's `tolerance` band); `run` evaluates each on the trials, paired trial by trial, with
+//! a 95 % interval, and gives a verdict ([`Verdict`]; [`super::verdict`] says how).
 //!
 //! The relation's grammar:
 //!
 //! ```text
-//! relation := term op bound
+//! relation := term op bound [ "for every parameter" ]
 //! term     := entry | entry "/" entry
 //! bound    := entry | number          (an entry only after a single-entry term)
 //! entry    := '"' name '"'            (as in `comparisons`: "method / poses"; a method
 //!                                      alone when the study has one strategy, a strategy
 //!                                      alone when it has one method)
-//! op       := "<" | "<=" | ">" | ">="
+//! op       := "<" | "<=" | ">" | ">=" | "~"   ("~": a point value, bound a number)
 //! ```
 //!
-//! What is estimated, and its interval:
-//!
-//! - `"a" op "b"`: the mean over trials of the paired difference a − b, against 0: its t
-//!   interval (the paired interval of the difference, as `comparisons`' `diff_ci95`);
-//! - `"a" / "b" op x`: the ratio of the means of a and b, against x: the paired interval of
-//!   the ratio by the delta method (the ratio R = ā / b̄ ± t₀.₉₇₅,ₙ₋₁ · s(aᵢ − R bᵢ) / (√n b̄),
-//!   Cochran, *Sampling Techniques*, § 6.4);
-//! - `"a" op x`: the mean of a over trials, against x: its t interval.
+//! "for every parameter" (metric `eta`, bound an entry) judges the ordering on each
+//! parameter with an injected error.
 
-use crate::numeric::dist;
 use crate::numeric::Real;
-pub use crate::study::metric::{Metric, Needs};
+pub use crate::study::metric::{Margin, Metric, Needs};
+pub use crate::study::stats::location::About;
 
 /// A relation's comparison.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,6 +35,8 @@ pub enum Op {
     Gt,
     /// `>=`
     Ge,
+    /// `~`: a point value within the claim's tolerance band.
+    Near,
 }
 
 /// The left side of a relation: entries as `(method index, strategy index)`.
@@ -81,6 +78,28 @@ pub struct Claim {
     pub op: Op,
     /// Its right side.
     pub bound: Bound,
+    /// Whether it is about the mean or the median over trials.
+    pub about: About,
+    /// A point value's band: `tolerance` (relative to the value, absolute, the larger).
+    pub tolerance: Option<Margin>,
+    /// An ordering's minimum effect of interest, when not the metric's default.
+    pub margin: Option<Margin>,
+    /// The figure was used to choose a setting of the scenario (an `[unmodelled]` level):
+    /// shown, never judged.
+    pub calibrated: bool,
+    /// Whether the claim can be judged on this arm: `false` for a paper's point value (`~`)
+    /// of the arm's error ([`Metric::is_arm_error`]) on an arm with no error outside the
+    /// kinematic model.
+    pub comparable: bool,
+    /// The id of the paper's claim this one tests under another setting (`None`: its own).
+    pub family: Option<String>,
+    /// The other setting in words (`None`: the paper's setting).
+    pub setting: Option<String>,
+    /// In a sweep: the swept value at the paper's setting (the other points are other
+    /// settings); `None`: every point is the paper's setting.
+    pub paper_point: Option<toml::Value>,
+    /// "for every parameter": judged on each parameter's η.
+    pub every_parameter: bool,
 }
 
 /// `[[claims]]` as written.
@@ -93,6 +112,15 @@ struct RawClaim {
     value: toml::Value,
     metric: String,
     relation: String,
+    #[serde(default)]
+    about: About,
+    tolerance: Option<Margin>,
+    margin: Option<Margin>,
+    #[serde(default)]
+    calibrated: bool,
+    family: Option<String>,
+    setting: Option<String>,
+    paper_point: Option<toml::Value>,
 }
 
 /// The study's entries a relation may name.
@@ -105,6 +133,8 @@ pub struct Names<'a> {
     pub pose: bool,
     /// Whether `validation.axis_errors` is on.
     pub axis: bool,
+    /// Whether the simulated arm has error outside the kinematic model (`[unmodelled]`).
+    pub unmodelled: bool,
 }
 
 impl Names<'_> {
@@ -160,7 +190,9 @@ fn tokens(s: &str) -> Result<Vec<Tok>, String> {
                 .ok()
                 .filter(|x: &Real| x.is_finite())
                 .ok_or_else(|| {
-                    format!("\"{word}\" is neither a quoted entry, a number, '/' nor <, <=, >, >=")
+                    format!(
+                        "\"{word}\" is neither a quoted entry, a number, '/' nor <, <=, >, >=, ~"
+                    )
                 })?;
             out.push(Tok::Number(x));
             rest = &rest[end..];
@@ -171,11 +203,12 @@ fn tokens(s: &str) -> Result<Vec<Tok>, String> {
 }
 
 /// The relation's symbols, the two-character ones first.
-const SYMBOLS: [(&str, Tok); 5] = [
+const SYMBOLS: [(&str, Tok); 6] = [
     ("<=", Tok::Op(Op::Le)),
     (">=", Tok::Op(Op::Ge)),
     ("<", Tok::Op(Op::Lt)),
     (">", Tok::Op(Op::Gt)),
+    ("~", Tok::Op(Op::Near)),
     ("/", Tok::Slash),
 ];
 
@@ -187,10 +220,14 @@ enum Tok {
     Op(Op),
 }
 
-/// Parses `relation` against the study's entries.
+/// The suffix of a relation judged on each parameter.
+pub const EVERY_PARAMETER: &str = "for every parameter";
+
+/// Parses `relation` against the study's entries (without its "for every parameter").
 fn relation(s: &str, names: &Names) -> Result<(Term, Op, Bound), String> {
-    const FORMS: &str = "write \"a\" < \"b\", \"a\" / \"b\" <= 0.5 or \"a\" >= 90 (entries \
-                         quoted; <, <=, >, >=)";
+    const FORMS: &str = "write \"a\" < \"b\", \"a\" / \"b\" <= 0.5, \"a\" ~ 0.42 or \"a\" >= 90 \
+                         (entries quoted; <, <=, >, >=, ~), optionally followed by \
+                         \"for every parameter\"";
     let t = tokens(s)?;
     let parsed = match t.as_slice() {
         [Tok::Name(a), Tok::Op(op), Tok::Name(b)] => (
@@ -217,6 +254,11 @@ fn relation(s: &str, names: &Names) -> Result<(Term, Op, Bound), String> {
             "the relation \"{s}\" compares an entry with itself"
         ));
     }
+    if let (_, Op::Near, Bound::Entry(_)) = &parsed {
+        return Err(format!(
+            "the relation \"{s}\": `~` takes a number (the paper's value), not an entry"
+        ));
+    }
     Ok(parsed)
 }
 
@@ -226,6 +268,7 @@ pub fn parse(raw: &[toml::Table], names: &Names) -> Result<Vec<Claim>, (String, 
     parse_with(raw, names, |name| {
         let metric = Metric::PER_TRIAL
             .into_iter()
+            .chain([Metric::Eta])
             .find(|m| m.key() == name)
             .ok_or_else(|| {
                 let all: Vec<String> = Metric::PER_TRIAL.iter().map(|m| m.key()).collect();
@@ -280,8 +323,70 @@ pub fn parse_with(
             ));
         }
         let metric = metric(&c.metric).map_err(|m| (format!("claims[{i}].metric"), named(m)))?;
-        let (term, op, bound) = relation(&c.relation, names)
-            .map_err(|m| (format!("claims[{i}].relation"), named(m)))?;
+        let key = |k: &str| format!("claims[{i}].{k}");
+        let rel = c.relation.trim();
+        let (rel, every_parameter) = match rel.strip_suffix(EVERY_PARAMETER) {
+            Some(r) => (r.trim_end(), true),
+            None => (rel, false),
+        };
+        let (term, op, bound) = relation(rel, names).map_err(|m| (key("relation"), named(m)))?;
+        if every_parameter != (metric == Metric::Eta) {
+            return Err((
+                key("relation"),
+                named(format!(
+                    "metric \"{}\" goes with a relation ending \"{EVERY_PARAMETER}\", and \
+                     only it",
+                    Metric::Eta
+                )),
+            ));
+        }
+        if every_parameter && !matches!((&term, &bound), (Term::One(_), Bound::Entry(_))) {
+            return Err((
+                key("relation"),
+                named(format!(
+                    "\"{EVERY_PARAMETER}\" takes an ordering of two entries (\"a\" > \"b\")"
+                )),
+            ));
+        }
+        for (k, m) in [("tolerance", &c.tolerance), ("margin", &c.margin)] {
+            if let Some(m) = m {
+                m.check().map_err(|e| (key(k), named(e)))?;
+            }
+        }
+        match (op, &c.tolerance) {
+            (Op::Near, None) => {
+                return Err((
+                    key("tolerance"),
+                    named(
+                        "a point value (`~`) needs its band: tolerance = { relative = 0.25 } \
+                         or { absolute = … } in the metric's unit"
+                            .into(),
+                    ),
+                ))
+            }
+            (Op::Near, Some(_)) | (_, None) => {}
+            (_, Some(_)) => {
+                return Err((
+                    key("tolerance"),
+                    named(
+                        "`tolerance` is the band of a point value: write the relation with `~`"
+                            .into(),
+                    ),
+                ))
+            }
+        }
+        if c.margin.is_some() && !matches!(bound, Bound::Entry(_)) {
+            return Err((
+                key("margin"),
+                named(
+                    "`margin` is an ordering's minimum effect: the relation compares two entries"
+                        .into(),
+                ),
+            ));
+        }
+        // A paper's figure (a point value) of the arm's error needs an arm that has error
+        // outside the kinematic model to be compared with a real robot's.
+        let comparable = names.unmodelled || !metric.is_arm_error() || op != Op::Near;
         out.push(Claim {
             id: c.id,
             statement: c.statement,
@@ -292,143 +397,21 @@ pub fn parse_with(
             term,
             op,
             bound,
+            about: c.about,
+            tolerance: c.tolerance,
+            margin: c.margin,
+            calibrated: c.calibrated,
+            comparable,
+            family: c.family,
+            setting: c.setting,
+            paper_point: c.paper_point,
+            every_parameter,
         });
     }
     Ok(out)
 }
 
-/// A claim's verdict.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Verdict {
-    /// The interval lies wholly on the claimed side.
-    Reproduces,
-    /// The interval lies wholly on the other side.
-    Contradicts,
-    /// The interval straddles the bound (or there is none).
-    Unresolved,
-}
-
-impl Verdict {
-    /// Its name in `summary.json` and the reports.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Verdict::Reproduces => "reproduces",
-            Verdict::Contradicts => "contradicts",
-            Verdict::Unresolved => "unresolved",
-        }
-    }
-}
-
-/// A claim evaluated on a block's trials.
-#[derive(Clone, Debug)]
-pub struct Evaluation {
-    /// What was estimated: `difference`, `ratio` or `mean`.
-    pub interval: &'static str,
-    /// The bound the estimate is compared with (0 for a difference).
-    pub bound: Real,
-    /// Trials usable in every entry the claim names.
-    pub n: usize,
-    /// The estimate.
-    pub estimate: Real,
-    /// Its 95 % interval (`None` under 2 trials).
-    pub ci95: Option<[Real; 2]>,
-    /// The verdict.
-    pub verdict: Verdict,
-    /// For an unresolved claim, the trials at which an interval as wide per trial would just
-    /// exclude the bound: n · (half-width / |estimate − bound|)², rounded up.
-    pub trials_to_resolve: Option<u64>,
-}
-
-/// Evaluates `claim` on per-trial values: `values(method, strategy)` is the claim's metric of
-/// that entry, one value per trial in trial order (NaN where the trial failed).
-pub fn evaluate<'a>(claim: &Claim, values: impl Fn((usize, usize)) -> &'a [Real]) -> Evaluation {
-    let (a, b) = match (&claim.term, &claim.bound) {
-        (Term::One(a), Bound::Entry(b)) | (Term::Ratio(a, b), _) => (values(*a), Some(values(*b))),
-        (Term::One(a), Bound::Number(_)) => (values(*a), None),
-    };
-    let rows: Vec<(Real, Real)> = match b {
-        Some(b) => a
-            .iter()
-            .zip(b)
-            .filter(|(x, y)| x.is_finite() && y.is_finite())
-            .map(|(&x, &y)| (x, y))
-            .collect(),
-        None => a
-            .iter()
-            .filter(|x| x.is_finite())
-            .map(|&x| (x, 0.0))
-            .collect(),
-    };
-    let n = rows.len();
-    let nf = n as Real;
-    let mean = |f: &dyn Fn(&(Real, Real)) -> Real| rows.iter().map(f).sum::<Real>() / nf;
-    let sd = |f: &dyn Fn(&(Real, Real)) -> Real, m: Real| {
-        (rows.iter().map(|r| (f(r) - m).powi(2)).sum::<Real>() / (nf - 1.0)).sqrt()
-    };
-    let (interval, bound, estimate, ci95) = match (&claim.term, &claim.bound) {
-        (Term::One(_), Bound::Entry(_)) => {
-            let d = |r: &(Real, Real)| r.0 - r.1;
-            let m = mean(&d);
-            ("difference", 0.0, m, dist::t_interval(m, sd(&d, m), n))
-        }
-        (Term::One(_), Bound::Number(x)) => {
-            let v = |r: &(Real, Real)| r.0;
-            let m = mean(&v);
-            ("mean", *x, m, dist::t_interval(m, sd(&v, m), n))
-        }
-        (Term::Ratio(..), _) => {
-            let x = match &claim.bound {
-                Bound::Number(x) => *x,
-                Bound::Entry(_) => Real::NAN,
-            };
-            let (ma, mb) = (mean(&|r| r.0), mean(&|r| r.1));
-            let ratio = ma / mb;
-            let e = |r: &(Real, Real)| r.0 - ratio * r.1;
-            // The residuals' mean is 0 by construction of the ratio.
-            let ci = dist::t_interval(ratio, sd(&e, 0.0) / mb.abs(), n);
-            ("ratio", x, ratio, ci)
-        }
-    };
-    let verdict = match ci95 {
-        Some([lo, hi]) if lo.is_finite() && hi.is_finite() => {
-            let (claimed, other) = match claim.op {
-                Op::Lt => (hi < bound, lo >= bound),
-                Op::Le => (hi <= bound, lo > bound),
-                Op::Gt => (lo > bound, hi <= bound),
-                Op::Ge => (lo >= bound, hi < bound),
-            };
-            if claimed {
-                Verdict::Reproduces
-            } else if other {
-                Verdict::Contradicts
-            } else {
-                Verdict::Unresolved
-            }
-        }
-        _ => Verdict::Unresolved,
-    };
-    let trials_to_resolve = match (verdict, ci95) {
-        (Verdict::Unresolved, Some([lo, hi])) => {
-            let gap = (estimate - bound).abs();
-            let half = (hi - lo) / 2.0;
-            (gap > 0.0 && half.is_finite())
-                .then(|| (nf * (half / gap).powi(2)).ceil())
-                .filter(|t| t.is_finite() && *t < 1e15)
-                .map(|t| (t as u64).max(n as u64 + 1))
-        }
-        _ => None,
-    };
-    Evaluation {
-        interval,
-        bound,
-        n,
-        estimate: if n == 0 { Real::NAN } else { estimate },
-        ci95,
-        verdict,
-        trials_to_resolve,
-    }
-}
+pub use super::verdict::{evaluate, evaluate_every, Evaluation, ParameterVerdict, Verdict};
 
 #[cfg(test)]
 mod tests {
@@ -448,6 +431,7 @@ mod tests {
             strategies: &s,
             pose: false,
             axis: false,
+            unmodelled: false,
         };
         let t: toml::Table = toml::from_str(&format!(
             "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
@@ -471,49 +455,20 @@ mod tests {
             r#""lm / random" < "#,
             r#""lm / nowhere" < 1"#,
             r#"1 < "lm / random""#,
+            r#""lm / random" ~ "ls / random""#,
+            r#""lm / random" < "ls / random" for every parameter"#,
         ] {
             let (key, msg) = claim(bad).expect_err(bad);
             assert_eq!(key, "claims[0].relation", "{bad}");
             assert!(msg.starts_with("claim \"c\": "), "{msg}");
         }
-    }
-
-    #[test]
-    fn verdicts_by_hand() {
-        let c = claim(r#""lm / random" < "ls / random""#).expect("c");
-        let a = [1.0, 2.0, 3.0, Real::NAN];
-        let better = [2.0, 3.1, 3.9, 1.0];
-        let e = evaluate(&c, |k| if k == (1, 0) { &a } else { &better });
-        // Differences −1, −1.1, −0.9: mean −1, s 0.1, t₀.₉₇₅,₂ = 4.302652729749464.
-        assert_eq!(e.n, 3);
-        assert!((e.estimate + 1.0).abs() < 1e-12);
-        let h = 4.302652729749464 * 0.1 / 3f64.sqrt();
-        let [lo, hi] = e.ci95.expect("ci");
-        assert!((lo + 1.0 + h).abs() < 1e-9 && (hi + 1.0 - h).abs() < 1e-9);
-        assert_eq!(
-            (e.verdict, e.trials_to_resolve),
-            (Verdict::Reproduces, None)
-        );
-        let e = evaluate(&c, |k| if k == (1, 0) { &better } else { &a });
-        assert_eq!(e.verdict, Verdict::Contradicts);
-        let noisy = [0.0, 4.0, 2.5, 1.0];
-        let e = evaluate(&c, |k| if k == (1, 0) { &a } else { &noisy });
-        assert_eq!(e.verdict, Verdict::Unresolved);
-        // Differences 1, −2, 0.5: mean −1/6, s √2.5833…; (half / gap)² · 3.
-        let s = ((49.0 / 36.0 + 121.0 / 36.0 + 4.0 / 9.0) / 2.0 as Real).sqrt();
-        let half = 4.302652729749464 * s / 3f64.sqrt();
-        let want = (3.0 * (half * 6.0).powi(2)).ceil() as u64;
-        assert_eq!(e.trials_to_resolve, Some(want));
-        // Ratio of means 2 / 3 against 0.5: the delta method's interval.
-        let c = claim(r#""lm / random" / "ls / random" <= 0.5"#).expect("c");
-        let e = evaluate(&c, |k| if k == (1, 0) { &a } else { &better });
-        assert!((e.estimate - 2.0 / 3.0).abs() < 1e-12);
-        assert_eq!((e.interval, e.bound), ("ratio", 0.5));
-        // Residuals a − R b: −1/3, −1/15, 2/5; half-width t · s / (√3 · 3) ≈ 0.307.
-        let s = ((1.0 / 9.0 + 1.0 / 225.0 + 4.0 / 25.0) / 2.0 as Real).sqrt();
-        let h = 4.302652729749464 * s / (3f64.sqrt() * 3.0);
-        let [lo, hi] = e.ci95.expect("ci");
-        assert!((lo - (2.0 / 3.0 - h)).abs() < 1e-9 && (hi - (2.0 / 3.0 + h)).abs() < 1e-9);
-        assert_eq!(e.verdict, Verdict::Unresolved);
+        // A point value needs its band, and only a point value takes one.
+        let (key, msg) = claim(r#""lm / random" ~ 0.4"#).expect_err("no band");
+        assert_eq!(key, "claims[0].tolerance", "{msg}");
+        let unknown = r#""lm / random" ~ 0.4'
+tolerance = { relative = 0.25 }
+x = '"#;
+        let c = claim(unknown).expect_err("unknown key x");
+        assert_eq!(c.0, "claims[0]");
     }
 }

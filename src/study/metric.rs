@@ -9,6 +9,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::numeric::Real;
 use crate::study::outcome::Outcome;
+pub use crate::study::stats::location::Margin;
 
 /// Which way a metric improves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -166,6 +167,9 @@ metrics! {
     ParamRmse = "param_rmse", None, None, Lower, "mm, rad", Nothing, None;
     /// The registration error of Ban's registration study.
     RegistrationError = "registration_error_mm", None, None, Lower, "mm", Registration, None;
+    /// η of each parameter with an injected error (Guo 2024 eq. 29): the metric of a
+    /// claim "for every parameter".
+    Eta = "eta", None, None, Higher, "%", Nothing, None;
 }
 
 impl Metric {
@@ -193,6 +197,39 @@ impl Metric {
     /// The metric of a key (`validation_after_mm.rms`), if there is one.
     pub fn from_key(key: &str) -> Option<Metric> {
         Metric::ALL.into_iter().find(|m| m.key() == key)
+    }
+
+    /// Its default minimum effect of interest (docs/formats.md "Tests and margins"): a
+    /// difference smaller than this is of interest to no one. Position and orientation
+    /// errors: 1 % of the reference, and at least the finest digit the four papers report
+    /// (Qiao 2021's 0.111 mm and 0.0442°: 1 µm, 1e-4°); percentages (η, reductions): the
+    /// papers' 0.01 points (Guo's table 6, Ban's table 4); counts: 1 % and at least 1.
+    pub fn default_margin(self) -> Margin {
+        let (relative, absolute) = match self.spec().unit {
+            "mm" | "mm, rad" => (0.01, 1e-3),
+            "deg" => (0.01, 1e-4),
+            "%" => (0.0, 0.01),
+            _ => (0.01, 1.0),
+        };
+        Margin {
+            relative: (relative > 0.0).then_some(relative),
+            absolute: Some(absolute),
+        }
+    }
+
+    /// Whether it measures the arm's error before or after calibration (positions,
+    /// orientations, their reductions): a figure that, on an arm with no error outside the
+    /// kinematic model, a real robot's cannot be compared with.
+    pub fn is_arm_error(self) -> bool {
+        let s = self.spec();
+        s.needs != Needs::Registration
+            && (matches!(s.unit, "mm" | "deg")
+                || matches!(
+                    self,
+                    Metric::Improvement
+                        | Metric::CalibrationImprovement
+                        | Metric::CalibrationImprovementRms
+                ))
     }
 
     /// Its key in `summary.json`'s entries, `field[.stat]`.

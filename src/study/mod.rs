@@ -35,6 +35,7 @@ pub mod scenario;
 pub mod spill;
 pub mod stats;
 pub mod trial;
+pub mod verdict;
 pub mod whole;
 
 use std::collections::BTreeMap;

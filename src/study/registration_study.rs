@@ -112,6 +112,7 @@ impl RegistrationScenario {
             strategies: &cells,
             pose: false,
             axis: false,
+            unmodelled: false,
         };
         s.claims = claims::parse_with(&s.raw_claims, &names, |m| {
             (m == METRIC.key()).then_some(METRIC).ok_or_else(|| {

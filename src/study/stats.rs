@@ -11,6 +11,7 @@ pub use crate::numeric::dist;
 pub mod ecdf;
 mod figure;
 mod missing;
+pub mod location;
 pub mod paired;
 pub mod precision;
 
@@ -195,6 +196,11 @@ pub struct Entry {
     /// the entries of one block compare (not written as such).
     #[serde(skip)]
     pub per_trial: PerTrial,
+    /// Each parameter's η per trial (the parameters of `eta`), in trial order, NaN where
+    /// the identification failed or the truth was 0: what a claim "for every parameter"
+    /// compares (not written).
+    #[serde(skip)]
+    pub eta_per_trial: BTreeMap<String, Vec<Real>>,
 }
 
 fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
@@ -386,19 +392,24 @@ impl Accumulator {
             names: names.to_vec(),
             methods,
             cells: vec![Cell::default(); cells],
-            spill: Spill::new(cells * (names.len() * 2 + HEADLINES)),
+            spill: Spill::new(cells * (names.len() * 3 + HEADLINES)),
         }
     }
 
     /// The spill streams of cell `c`'s parameter `k`: its errors and its η values.
     fn streams(&self, c: usize, k: usize) -> (usize, usize) {
-        let s = (c * self.names.len() + k) * 2;
+        let s = (c * self.names.len() + k) * 3;
         (s, s + 1)
+    }
+
+    /// The spill stream of cell `c`'s parameter `k`'s η per trial, NaN where there is none.
+    fn eta_stream(&self, c: usize, k: usize) -> usize {
+        (c * self.names.len() + k) * 3 + 2
     }
 
     /// The spill stream of cell `c`'s headline value `h` (see [`HEADLINES`]).
     fn headline(&self, c: usize, h: usize) -> usize {
-        self.cells.len() * self.names.len() * 2 + c * HEADLINES + h
+        self.cells.len() * self.names.len() * 3 + c * HEADLINES + h
     }
 
     /// The per-trial values of headline `h` ([`HEADLINES`]) of `(strategy, method)`, in
@@ -451,6 +462,10 @@ impl Accumulator {
                     let s = self.headline(ci, h);
                     self.spill.push(s, Real::NAN)?;
                 }
+                for k in 0..self.names.len() {
+                    let s = self.eta_stream(ci, k);
+                    self.spill.push(s, Real::NAN)?;
+                }
                 continue;
             }
             self.cells[ci].ok += 1;
@@ -462,7 +477,10 @@ impl Accumulator {
                 }
                 let (se, sn) = self.streams(ci, k);
                 self.spill.push(se, o.identified[k] - t.truth[k])?;
-                if let Some(e) = eta(t.truth[k], o.identified[k]) {
+                let e = eta(t.truth[k], o.identified[k]);
+                self.spill
+                    .push(self.eta_stream(ci, k), e.unwrap_or(Real::NAN))?;
+                if let Some(e) = e {
                     self.spill.push(sn, e)?;
                     eta_sum += e;
                     eta_n += 1;
@@ -577,6 +595,15 @@ impl Accumulator {
                 );
             }
         }
+        let mut eta_per_trial = BTreeMap::new();
+        for (k, name) in self.names.iter().enumerate() {
+            if eta_map.contains_key(name) {
+                let s = self.eta_stream(ci, k);
+                let mut v = Vec::with_capacity(self.spill.len(s));
+                self.spill.for_each(s, |x| v.push(x))?;
+                eta_per_trial.insert(name.clone(), v);
+            }
+        }
         let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
         let eta_median_pct = mean(&eta_map.values().map(|e| e.median).collect::<Vec<_>>());
         let eta_median_pct_ci95 = median_bounds
@@ -625,6 +652,7 @@ impl Accumulator {
                     .map(|h| self.per_trial(strategy, method, h))
                     .collect::<crate::error::Result<_>>()?,
             ),
+            eta_per_trial,
             spread: Spread {
                 after_rms: spread_of(&c.after.0[1], &c.after_rms_sq),
                 eta: mean(&eta_map.values().map(|e| e.std).collect::<Vec<_>>()),

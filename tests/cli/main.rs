@@ -45,4 +45,5 @@ mod strict_inputs;
 mod task;
 mod task_rows;
 mod typed;
+mod verdicts;
 mod worse;

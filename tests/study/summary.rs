@@ -58,18 +58,65 @@ fn json_builder(r: &RunResult) -> Value {
         let mut claims = Vec::new();
         for c in &sc.claims {
             for b in &r.blocks {
+                use calbench::study::claims::{Bound, Term};
                 let n = b.info.methods.len();
-                let e = calbench::study::claims::evaluate(c, |(mi, si)| {
-                    &b.entries[si * n + mi].per_trial[c.metric]
-                });
+                let entry = |(mi, si): (usize, usize)| &b.entries[si * n + mi];
+                let (e, each) = match (&c.term, &c.bound) {
+                    (Term::One(ka), Bound::Entry(kb)) if c.every_parameter => {
+                        let (ea, eb) = (entry(*ka), entry(*kb));
+                        let params: Vec<(String, &[f64], &[f64])> = ea
+                            .eta_per_trial
+                            .iter()
+                            .filter_map(|(k, a)| {
+                                Some((k.clone(), a.as_slice(), eb.eta_per_trial.get(k)?.as_slice()))
+                            })
+                            .collect();
+                        let (e, each) = calbench::study::claims::evaluate_every(c, &params);
+                        (e, Some(each))
+                    }
+                    _ => (
+                        calbench::study::claims::evaluate(c, |k| &entry(k).per_trial[c.metric]),
+                        None,
+                    ),
+                };
                 let mut v = json!({
                     "id": c.id, "statement": c.statement, "paper": c.paper,
                     "value": toml_to_json(&c.value), "metric": c.metric.key(),
                     "relation": c.relation, "interval": e.interval, "bound": e.bound,
                     "n": e.n, "estimate": e.estimate, "ci95": e.ci95,
                     "verdict": e.verdict.as_str(), "trials_to_resolve": e.trials_to_resolve,
+                    "about": c.about.as_str(), "test": e.test.as_str(),
                 });
-                if let Some(sv) = b.entries.first().and_then(|e| e.sweep_value.clone()) {
+                if e.kurtosis.is_finite() {
+                    v["kurtosis"] = json!(e.kurtosis);
+                }
+                if e.p_value.is_finite() {
+                    v["p_value"] = json!(e.p_value);
+                }
+                for (k, x) in [("margin", json!(e.margin)), ("band", json!(e.band))] {
+                    if !x.is_null() {
+                        v[k] = x;
+                    }
+                }
+                if let Some(f) = &c.family {
+                    v["family"] = json!(f);
+                }
+                if let Some(each) = each {
+                    v["parameters"] = json!(each);
+                }
+                let sweep_value = b.entries.first().and_then(|e| e.sweep_value.clone());
+                let setting = match (&sweep_value, &c.paper_point) {
+                    (Some(p), Some(pp)) if *p == toml_to_json(pp) => c.setting.clone(),
+                    (Some(p), _) => Some(match &c.setting {
+                        Some(s) => format!("{s}, sweep value {p}"),
+                        None => format!("sweep value {p}"),
+                    }),
+                    (None, _) => c.setting.clone(),
+                };
+                if let Some(st) = setting {
+                    v["setting"] = json!(st);
+                }
+                if let Some(sv) = sweep_value {
                     v["sweep_value"] = sv;
                 }
                 claims.push(v);

@@ -45,6 +45,7 @@ pub fn headers(sweep: bool) -> Vec<&'static str> {
     h.extend([
         "relation",
         "metric",
+        "test",
         "trials",
         "estimate",
         "95 % CI",
@@ -66,6 +67,7 @@ pub fn row(c: &ClaimResult, sweep_value: Option<String>) -> Vec<String> {
     row.extend([
         c.relation.clone(),
         format!("{} ({})", c.metric, c.interval),
+        bounds(c),
         c.n.to_string(),
         fmt_num(c.estimate, 4),
         fmt_ci(c.ci95, 4),
@@ -75,11 +77,27 @@ pub fn row(c: &ClaimResult, sweep_value: Option<String>) -> Vec<String> {
     row
 }
 
+/// The test, and the margin or band the verdict was judged against.
+fn bounds(c: &ClaimResult) -> String {
+    let mut s = format!("{} ({})", c.test.as_str(), c.about.as_str());
+    if let Some(m) = c.margin {
+        s += &format!(", margin {}", fmt_num(m, 3));
+    }
+    if let Some([lo, hi]) = c.band {
+        s += &format!(", band [{}, {}]", fmt_num(lo, 4), fmt_num(hi, 4));
+    }
+    s
+}
+
 /// What the claims table says, for the reports.
 pub const NOTE: &str = "Each claim of the paper is a relation between the entries' per-trial \
-    values of a metric, evaluated on the same trials: `\"a\" < \"b\"` by the mean of the \
-    paired difference a − b and its 95 % t interval (compared with 0); `\"a\" / \"b\" <= x` \
-    by the ratio of the means and its paired 95 % interval (delta method); `\"a\" < x` by the \
-    mean of a and its t interval. The claim reproduces when the interval lies wholly on the \
-    claimed side, contradicts when wholly on the other, and is unresolved otherwise, with the \
-    trials at which an interval as wide per trial would exclude the bound.";
+    values of a metric, evaluated on the same trials (docs/formats.md \"claims\"): an ordering \
+    `\"a\" < \"b\"` by the paired difference a − b, judged beyond the metric's margin of \
+    practical relevance; a point value `\"a\" ~ x` against its tolerance band; a ratio by the \
+    ratio of the means (delta method). The test is the t interval of the mean, or the sign \
+    test's interval of the median for a claim about the median or heavy-tailed values \
+    (excess kurtosis above 3). A claim reproduces when the 95 % interval lies wholly on the \
+    claimed side (inside the band), contradicts when wholly on the other (outside), and is \
+    unresolved otherwise, with the trials at which an interval as wide per trial would \
+    resolve it; a figure used to choose a setting is `calibrated` and not judged, a figure of \
+    the arm's error on an arm without error outside the model `not comparable";

@@ -10,15 +10,23 @@ use crate::study::metric::Metric;
 
 use super::fmt_ci;
 
-/// The verdict of a comparison in words: which entry is better, or none at the Holm level.
-pub fn verdict(c: &Comparison) -> &'static str {
+/// The verdict of a comparison in words: its margin verdict (better, worse, equivalent,
+/// unresolved: b against a); for a summary written before verdicts, which entry is better at
+/// the Holm level.
+pub fn verdict(c: &Comparison) -> String {
+    if let Some(v) = c.verdict {
+        return match c.trials_to_resolve {
+            Some(t) => format!("{} (about {t} trials would resolve it)", v.as_str()),
+            None => v.as_str().to_string(),
+        };
+    }
     let lower = c.metric.lower_is_better();
     if c.p_holm.is_nan() || c.p_holm >= 0.05 || c.diff_mean == 0.0 {
-        "no significant difference"
+        "no significant difference".into()
     } else if (c.diff_mean < 0.0) == lower {
-        "b better"
+        "b better".into()
     } else {
-        "b worse"
+        "b worse".into()
     }
 }
 
@@ -40,6 +48,8 @@ pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "b wins %",
         "p (Wilcoxon)",
         "p Holm",
+        "margin",
+        "test",
         "verdict",
     ]);
     let rows = s
@@ -65,7 +75,10 @@ pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
                 fmt_num(100.0 * c.win_rate, 3),
                 fmt_num(c.p_value, 3),
                 fmt_num(c.p_holm, 3),
-                verdict(c).to_string(),
+                c.margin.map_or(String::new(), |m| fmt_num(m, 3)),
+                c.verdict
+                    .map_or(String::new(), |_| c.test.as_str().to_string()),
+                verdict(c),
             ]);
             row
         })
@@ -80,7 +93,12 @@ pub const NOTE: &str = "Every method of a study runs on the same trials, so two 
     signed-rank p-value and its Holm adjustment over every comparison of the study \
     (summary.json `comparisons` holds all pairs; this table each entry against the baseline \
     method on its strategy — the scenario's `[report] baseline`, else its first method — and \
-    against the first strategy of its method). Verdict at Holm p < 0.05.";
+    against the first strategy of its method). The verdict is against the metric's margin \
+    of practical relevance m (docs/formats.md \"Tests and margins\"; `[report.margins]` \
+    overrides it): better or worse when the 95 % interval of b − a lies wholly beyond ± m, \
+    equivalent when it lies inside ± m (two one-sided tests), unresolved otherwise, with the \
+    trials that would resolve it; the interval is that of the mean (t), or of the median \
+    (sign test) when the differences are heavy-tailed (excess kurtosis above 3).";
 
 /// The plots of the per-trial differences (stem, title, y label, metric).
 pub const DIFF_PLOTS: [(&str, &str, &str, Metric); 2] = [

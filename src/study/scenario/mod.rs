@@ -485,6 +485,7 @@ impl Scenario {
             strategies: &strategy_names,
             pose: raw.tracker.measure.measure() == crate::measurement::Measure::Pose,
             axis: v.axis_errors,
+            unmodelled: raw.unmodelled.is_active(),
         };
         let claims =
             crate::study::claims::parse(&raw.claims, &names).map_err(|(k, m)| ferr(&k, m))?;

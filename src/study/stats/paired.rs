@@ -6,6 +6,7 @@
 use serde::{Deserialize, Serialize};
 
 use super::dist;
+use super::location::{choose, paired_verdict, About, Located, Margin, Paired, Test};
 use crate::numeric::nan;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
@@ -40,6 +41,27 @@ pub struct Comparison {
     /// `p_value` Holm-adjusted over every comparison of the study.
     #[serde(deserialize_with = "nan::real")]
     pub p_holm: Real,
+    /// The test of the verdict (docs/formats.md "Tests and margins"): `t` (the mean of
+    /// b − a), or `sign` (its median) when the differences are heavy-tailed.
+    #[serde(default)]
+    pub test: Test,
+    /// The test's estimate of b − a (`null` in summaries before verdicts).
+    #[serde(default)]
+    pub estimate: Option<Real>,
+    /// Its 95 % interval.
+    #[serde(default)]
+    pub ci95: Option<[Real; 2]>,
+    /// The margin m of practical relevance, in the metric's unit.
+    #[serde(default)]
+    pub margin: Option<Real>,
+    /// `better`, `worse` (b against a, beyond ± m), `equivalent` (inside ± m) or
+    /// `unresolved`.
+    #[serde(default)]
+    pub verdict: Option<Paired>,
+    /// For an unresolved verdict, the trials at which an interval as wide per trial would
+    /// resolve it.
+    #[serde(default)]
+    pub trials_to_resolve: Option<u64>,
 }
 
 /// The number of subsets of {1, …, n} by their sum: the null distribution of the signed-rank
@@ -135,9 +157,19 @@ pub fn holm(p: &[Real]) -> (Vec<Real>, Vec<usize>) {
 }
 
 /// The paired comparison of `metric` between per-trial values `a` and `b` (aligned by trial,
-/// NaN where a trial failed), the metric's direction saying which way wins; `p_holm` is left NaN
-/// for [`adjust`].
-pub fn compare(labels: (&str, &str), metric: Metric, (a, b): (&[Real], &[Real])) -> Comparison {
+/// NaN where a trial failed), the metric's direction saying which way wins, against the
+/// metric's default margin; `p_holm` is left NaN for [`adjust`].
+pub fn compare(labels: (&str, &str), metric: Metric, values: (&[Real], &[Real])) -> Comparison {
+    compare_with(labels, metric, values, metric.default_margin())
+}
+
+/// [`compare`] against `margin` (relative to a's mean).
+pub fn compare_with(
+    labels: (&str, &str),
+    metric: Metric,
+    (a, b): (&[Real], &[Real]),
+    margin: Margin,
+) -> Comparison {
     let lower_is_better = metric.lower_is_better();
     let pairs: Vec<(Real, Real)> = a
         .iter()
@@ -160,6 +192,9 @@ pub fn compare(labels: (&str, &str), metric: Metric, (a, b): (&[Real], &[Real]))
     } else {
         (d.iter().map(|x| (x - diff_mean).powi(2)).sum::<Real>() / (n - 1) as Real).sqrt()
     };
+    let located = Located::of(&d, choose(About::Mean, &d));
+    let m = margin.at(mean(&mut pairs.iter().map(|p| p.0)));
+    let (verdict, trials_to_resolve) = paired_verdict(&located, m, lower_is_better);
     let wins = pairs
         .iter()
         .filter(|(x, y)| if lower_is_better { y < x } else { y > x })
@@ -182,6 +217,12 @@ pub fn compare(labels: (&str, &str), metric: Metric, (a, b): (&[Real], &[Real]))
         },
         p_value: wilcoxon(&d),
         p_holm: Real::NAN,
+        test: located.test,
+        estimate: Some(located.estimate).filter(|e| e.is_finite()),
+        ci95: located.ci95,
+        margin: Some(m).filter(|m| m.is_finite()),
+        verdict: Some(verdict),
+        trials_to_resolve,
     }
 }
 
