@@ -61,6 +61,7 @@ impl Default for Entry {
             fixed_budget: None,
             spread: Spread::default(),
             per_trial: PerTrial::default(),
+            eta_per_trial: BTreeMap::new(),
         }
     }
 }
