@@ -42,6 +42,7 @@ pub(crate) fn task<'py>(
             t.inputs(),
         )
         .map_err(err)?;
+        calbench::report::guard::guard_data_folder(out, "out", t.data_files()).map_err(err)?;
     }
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())

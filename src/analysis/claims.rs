@@ -5,13 +5,11 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::numeric::{nan, Real};
-use crate::study::claims::{
-    evaluate, evaluate_every, Claim, Evaluation, ParameterVerdict, Verdict,
-};
-use crate::study::claims::{Bound, Term};
+use crate::study::claims::{Bound, Claim, Term};
 use crate::study::metric::Metric;
 use crate::study::stats::location::{About, Test};
 use crate::study::stats::paired::holm;
+use crate::study::verdict::{evaluate, evaluate_every, Evaluation, ParameterVerdict, Verdict};
 use crate::study::{toml_to_json, RunResult};
 
 /// One claim evaluated on one block's trials, as `summary.json`'s `claims` holds it.

@@ -54,6 +54,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let path = task_path(&args.task);
     let task = Task::load(&path)?;
     super::guard_out(&args.out, &OUTPUTS, task.inputs())?;
+    calbench::report::guard::guard_data_folder(&args.out, "--out", task.data_files())?;
     check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
     let (request, val, origin) = task.entry_request(spec, &args.models)?;

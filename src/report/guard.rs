@@ -14,8 +14,7 @@ use crate::error::{Error, Result};
 /// outputs would destroy something: the root folder, the home folder (`$HOME`), one of
 /// `inputs` (a file or folder the command reads), or a folder holding one of them under the
 /// name of one of `outputs`, the files written there (empty for the commands that write the
-/// one file `out`), a folder of outputs that holds an input file, or a folder holding another
-/// command's results ([`SIGNATURES`] that
+/// one file `out`), or a folder holding another command's results ([`SIGNATURES`] that
 /// `outputs` lacks; not checked when `outputs` is empty). Paths are compared as the file system resolves them (`.`, `..` and
 /// symbolic links); and a folder a live run writes into ([`live_writer`]).
 pub fn guard_out<P: AsRef<Path>>(
@@ -83,15 +82,6 @@ fn paths<P: AsRef<Path>>(
                 "{} is an input of this command; writing the outputs there would destroy it \
                  (nothing was written)",
                 out.display()
-            ));
-        }
-        let beside = !outputs.is_empty() && input.is_file() && it.parent() == Some(&at);
-        if beside {
-            return refuse(format!(
-                "{} holds {}, an input of this command; give the outputs a folder of their own \
-                 (nothing was written)",
-                out.display(),
-                input.display()
             ));
         }
         if let Some(name) = outputs.iter().find(|n| at.join(n) == it) {
@@ -210,4 +200,30 @@ fn resolved(p: &Path) -> PathBuf {
             _ => return folded,
         }
     }
+}
+
+/// Refuses, before any work, an output folder `out` (the caller's option `key`) that holds one
+/// of `data`, the measurement files a command reads: a task's outputs written into its data
+/// folder would lie beside the data as if they were part of it.
+pub fn guard_data_folder<P: AsRef<Path>>(
+    out: &Path,
+    key: &str,
+    data: impl IntoIterator<Item = P>,
+) -> Result<()> {
+    let at = resolved(out);
+    for file in data {
+        let file = file.as_ref();
+        if file.is_file() && resolved(file).parent() == Some(&at) {
+            return Err(Error::setting(
+                key,
+                format!(
+                    "{} holds {}, an input of this command (its data); give the outputs a \
+                     folder of their own (nothing was written)",
+                    out.display(),
+                    file.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }

@@ -12,8 +12,9 @@ use super::plots;
 use crate::analysis::claims::ClaimResult;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
-use crate::study::claims::{Claim, Evaluation};
+use crate::study::claims::Claim;
 use crate::study::registration_study::{Cell, RegistrationScenario};
+use crate::study::verdict::Evaluation;
 
 /// `values[row][column]` of `f` over the grid: a row per outlier count, a column per
 /// magnitude.

@@ -411,8 +411,6 @@ pub fn parse_with(
     Ok(out)
 }
 
-pub use super::verdict::{evaluate, evaluate_every, Evaluation, ParameterVerdict, Verdict};
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -10,7 +10,9 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::study::instruments::InstrumentsScenario;
+use crate::study::instruments::{
+    InstrumentsScenario, INSTRUMENTS_KEYS, INSTRUMENTS_STUDY, MIGRATE,
+};
 use crate::study::registration_study::RegistrationScenario;
 use crate::study::scenario::Scenario;
 use crate::study::whole::Head;
@@ -21,49 +23,6 @@ struct Sections {
     registration_study: Option<toml::Value>,
     instruments_study: Option<toml::Value>,
     measurement: Option<toml::Value>,
-}
-
-/// The table that makes a scenario an instruments study.
-pub const INSTRUMENTS_STUDY: &str = "instruments_study";
-
-/// The keys of [`INSTRUMENTS_STUDY`].
-const INSTRUMENTS_KEYS: [&str; 4] = ["poses", "strategies", "candidates", "validation"];
-
-/// How a scenario written before [`INSTRUMENTS_STUDY`] existed is migrated.
-const MIGRATE: &str = "an instruments study is declared by an [instruments_study] table \
-    holding its poses, strategies, candidates and validation (CHANGELOG.md, docs/formats.md \
-    § 4.15): add `[instruments_study]` and move those keys under it";
-
-/// An instruments study's `table` with the keys of its `[instruments_study]` table moved to
-/// the top level, where [`InstrumentsScenario`] reads them; `path` names the file in errors.
-/// One of those keys at the top level (the layout before the table), a missing table and a
-/// key the table does not take are refused, naming the key and saying how to migrate.
-pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Table> {
-    let ferr = |place: &str, msg: String| Error::file(path, place, msg);
-    if let Some(key) = INSTRUMENTS_KEYS.iter().find(|k| table.contains_key(**k)) {
-        return Err(ferr(
-            key,
-            format!("{MIGRATE} (`{key}` is at the top level)"),
-        ));
-    }
-    let study = match table.remove(INSTRUMENTS_STUDY) {
-        Some(toml::Value::Table(t)) => t,
-        Some(_) => return Err(ferr(INSTRUMENTS_STUDY, "must be a table".into())),
-        None => return Err(ferr(INSTRUMENTS_STUDY, format!("is missing: {MIGRATE}"))),
-    };
-    for (k, v) in study {
-        if !INSTRUMENTS_KEYS.contains(&k.as_str()) {
-            return Err(ferr(
-                &format!("{INSTRUMENTS_STUDY}.{k}"),
-                format!(
-                    "unknown key: [{INSTRUMENTS_STUDY}] takes {}",
-                    INSTRUMENTS_KEYS.join(", ")
-                ),
-            ));
-        }
-        table.insert(k, v);
-    }
-    Ok(table)
 }
 
 /// A checked scenario of any kind.

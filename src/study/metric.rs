@@ -8,8 +8,8 @@ use std::fmt;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::numeric::Real;
+pub use crate::study::margin::Margin;
 use crate::study::outcome::Outcome;
-pub use crate::study::stats::location::Margin;
 
 /// Which way a metric improves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

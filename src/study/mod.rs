@@ -25,6 +25,7 @@
 pub mod claims;
 pub mod instruments;
 pub mod kind;
+pub mod margin;
 pub mod metric;
 pub mod outcome;
 pub mod plan;

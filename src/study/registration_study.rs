@@ -25,7 +25,8 @@ use crate::calibrate::registration::{register_svd, register_wsvd, Registration};
 use crate::error::{finite_non_negative, finite_positive, Error, Result};
 use crate::numeric::rng;
 use crate::numeric::{Frame, Real, Vec3};
-use crate::study::claims::{self, Claim, Evaluation};
+use crate::study::claims::{self, Claim};
+use crate::study::verdict::{self, Evaluation};
 use crate::study::whole::Head;
 
 /// The `[registration_study]` table. Defaults are Ban §3's simulation: 50 points, ±0.02 mm
@@ -146,7 +147,7 @@ impl RegistrationScenario {
             .collect();
         self.claims
             .iter()
-            .map(|c| (c, claims::evaluate(c, |(e, k)| &values[e][k])))
+            .map(|c| (c, verdict::evaluate(c, |(e, k)| &values[e][k])))
             .collect()
     }
 }
@@ -405,7 +406,7 @@ mod tests {
             cells[3].difference_mm - cells[0].difference_mm,
             max_relative = 1e-12
         );
-        assert_eq!(below.verdict, claims::Verdict::Reproduces, "{below:?}");
+        assert_eq!(below.verdict, verdict::Verdict::Reproduces, "{below:?}");
     }
 
     /// A claim on an entry the grid lacks, or with another metric, is refused by its key.

@@ -10,8 +10,8 @@ use std::ops::Deref;
 pub use crate::numeric::dist;
 pub mod ecdf;
 mod figure;
-mod missing;
 pub mod location;
+mod missing;
 pub mod paired;
 pub mod precision;
 

@@ -195,7 +195,7 @@ fn the_report_imports_no_statistics() {
     for must in [
         "numeric::dist",
         "study::stats::paired",
-        "study::claims::evaluate",
+        "study::verdict::evaluate",
         "robot::identifiability",
     ] {
         assert!(

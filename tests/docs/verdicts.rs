@@ -133,7 +133,7 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
             let each = c.parameters.as_ref().map_or(String::new(), |p| {
                 let k = p
                     .iter()
-                    .filter(|x| x.verdict == calbench::study::claims::Verdict::Reproduces)
+                    .filter(|x| x.verdict == calbench::study::verdict::Verdict::Reproduces)
                     .count();
                 format!("; {k} of {} parameters reproduce", p.len())
             });
@@ -270,7 +270,7 @@ fn no_point_value_band_admits_a_figure_two_times_off() {
 /// model their figures are not comparable, in the committed summaries and on any values.
 #[test]
 fn kinematic_arm_figures_of_li_and_ban_do_not_reproduce() {
-    use calbench::study::claims::{evaluate, Verdict};
+    use calbench::study::verdict::{evaluate, Verdict};
     for (scenario, summary, id, value) in [
         (
             "li2018-irb2600.toml",

@@ -71,11 +71,11 @@ fn json_builder(r: &RunResult) -> Value {
                                 Some((k.clone(), a.as_slice(), eb.eta_per_trial.get(k)?.as_slice()))
                             })
                             .collect();
-                        let (e, each) = calbench::study::claims::evaluate_every(c, &params);
+                        let (e, each) = calbench::study::verdict::evaluate_every(c, &params);
                         (e, Some(each))
                     }
                     _ => (
-                        calbench::study::claims::evaluate(c, |k| &entry(k).per_trial[c.metric]),
+                        calbench::study::verdict::evaluate(c, |k| &entry(k).per_trial[c.metric]),
                         None,
                     ),
                 };

@@ -234,16 +234,22 @@ impl Task {
     /// file(s) and the split (what an output folder must not destroy, [`crate::report::guard`]).
     pub fn inputs(&self) -> Vec<&Path> {
         let mut files = vec![self.path.as_path(), &self.robot, &self.mapping];
+        files.extend(self.data_files());
+        files
+    }
+
+    /// The task's data: its data file and split, or its calibration and validation files
+    /// (what its outputs must not lie beside, [`crate::report::guard::guard_data_folder`]).
+    pub fn data_files(&self) -> [&Path; 2] {
         match &self.data {
             TaskData::Split {
                 file, split_path, ..
-            } => files.extend([file.as_path(), split_path]),
+            } => [file.as_path(), split_path],
             TaskData::Files {
                 calibration,
                 validation,
-            } => files.extend([calibration.as_path(), validation]),
+            } => [calibration.as_path(), validation],
         }
-        files
     }
 
     /// Reads and checks the task file `path`: its keys (an unknown or missing key refused,

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use super::{dist, median_ranks};
 use crate::numeric::Real;
+pub use crate::study::margin::Margin;
 
 /// What a statement is about.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -231,49 +232,6 @@ pub fn sign_p(k: usize, n: usize) -> Real {
         })
         .sum();
     (2.0 * cdf).min(1.0)
-}
-
-/// A minimum effect of interest, or a tolerance band's half-width: relative to a reference
-/// value, absolute in the metric's unit, the larger of the two counting (docs/formats.md
-/// "Tests and margins").
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Margin {
-    /// A fraction of the reference (0.01: 1 %).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub relative: Option<Real>,
-    /// In the metric's unit.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub absolute: Option<Real>,
-}
-
-impl Margin {
-    /// The half-width at `reference`: max(relative · |reference|, absolute), each 0 when
-    /// absent.
-    pub fn at(&self, reference: Real) -> Real {
-        let r = self.relative.map_or(0.0, |f| f * reference.abs());
-        let a = self.absolute.unwrap_or(0.0);
-        r.max(a)
-    }
-
-    /// Refuses a negative, non-finite or absent-everywhere margin: the message.
-    pub fn check(&self) -> Result<(), String> {
-        if self.relative.is_none() && self.absolute.is_none() {
-            return Err(
-                "give `relative` (a fraction, 0.01 for 1 %), `absolute` (in the \
-                        metric's unit) or both"
-                    .into(),
-            );
-        }
-        for (k, v) in [("relative", self.relative), ("absolute", self.absolute)] {
-            if let Some(v) = v {
-                if !v.is_finite() || v < 0.0 {
-                    return Err(format!("`{k}` must be a finite number ≥ 0, not {v}"));
-                }
-            }
-        }
-        Ok(())
-    }
 }
 
 /// The verdict of a paired comparison b − a against a margin m.
