@@ -3,7 +3,7 @@
 //! `"bas-pso-differential" < "pso-differential"` (an ordering, judged beyond the metric's
 //! margin of practical relevance) or `"igg3" ~ 0.42` (a point value, judged against the
 //! claim's `tolerance` band); `run` evaluates each on the trials, paired trial by trial, with
-//! a 95 % interval, and gives a verdict ([`Verdict`]; [`super::verdict`] says how).
+//! a 95 % interval, and gives a verdict ([`super::verdict::Verdict`]; [`super::verdict`] says how).
 //!
 //! The relation's grammar:
 //!
