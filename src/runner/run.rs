@@ -10,7 +10,7 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::checkpoint::Checkpoint;
-use super::resume::{Continued, Resumable};
+use super::resume::Resumable;
 use super::shard::{self, Both};
 use crate::analysis::{analyse::analyse, summary::Summary};
 use crate::error::{Error, Result};
@@ -56,22 +56,17 @@ pub fn resume_study(
     threads: Option<usize>,
     reporter: &dyn Reporter,
 ) -> Result<RunResult> {
-    let Continued {
-        out,
-        opts,
-        checkpoint,
-        scenario,
-        mut records,
-    } = run.continued(threads)?;
-    let AnyScenario::MonteCarlo(scenario) = scenario else {
+    let mut c = run.continued(threads)?;
+    let AnyScenario::MonteCarlo(scenario) = c.scenario else {
         return Err(Error::Compute("not a Monte-Carlo run".into()));
     };
+    let replay: &mut dyn Replay = &mut c.records;
     study_into(
         scenario,
-        &opts,
-        &out,
-        checkpoint,
-        Some(&mut records),
+        &c.opts,
+        &c.out,
+        c.checkpoint,
+        Some(replay),
         reporter,
     )
 }

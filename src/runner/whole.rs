@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use super::cells::{Cells, Instruments};
 use super::checkpoint::{Checkpoint, Records as Replayed};
-use super::resume::{Continued, Resumable};
+use super::resume::Resumable;
 use super::shard;
 use crate::error::{Error, Result};
 use crate::report::output::write_all;
@@ -142,21 +142,9 @@ pub fn resume_cells(
     threads: Option<usize>,
     reporter: &dyn Reporter,
 ) -> Result<String> {
-    let Continued {
-        out,
-        opts,
-        checkpoint,
-        scenario,
-        mut records,
-    } = run.continued(threads)?;
-    dispatch(
-        &scenario,
-        &opts,
-        &out,
-        checkpoint,
-        Some(&mut records),
-        reporter,
-    )
+    let mut c = run.continued(threads)?;
+    let replay = Some(&mut c.records);
+    dispatch(&c.scenario, &c.opts, &c.out, c.checkpoint, replay, reporter)
 }
 
 /// [`run_cells`] with the study of `sc`'s kind.

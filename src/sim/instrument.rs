@@ -193,12 +193,7 @@ pub fn reach(robot: &Robot, target: &Vec3, q: &[Real], margin: Real) -> Option<V
     for _ in 0..100 {
         let e = target - chain.fk(&q).pos;
         if e.norm() < 1e-9 {
-            let inside = robot
-                .joints
-                .iter()
-                .zip(&q)
-                .all(|(j, v)| *v >= j.limits.0 + margin && *v <= j.limits.1 - margin);
-            return inside.then_some(q);
+            return within(robot, &q, margin).then_some(q);
         }
         let mut jac = nalgebra::DMatrix::<Real>::zeros(3, n);
         for k in 0..n {
@@ -212,12 +207,7 @@ pub fn reach(robot: &Robot, target: &Vec3, q: &[Real], margin: Real) -> Option<V
         let jjt = &jac * jac.transpose();
         let y = jjt.try_inverse()? * nalgebra::DVector::from_column_slice(e.as_slice());
         let mut step: Vec<Real> = (jac.transpose() * y).iter().copied().collect();
-        let big = step.iter().fold(0.0, |a: Real, s| a.max(s.abs()));
-        let limit = 0.2;
-        if big > limit {
-            step.iter_mut().for_each(|s| *s *= limit / big);
-        }
-        q.iter_mut().zip(&step).for_each(|(v, s)| *v += s);
+        take_step(&mut q, &mut step);
     }
     None
 }
@@ -273,12 +263,7 @@ pub fn touch(
         let p = chain.fk(&q).pos;
         let (g, grad) = surface(lay, group, &p)?;
         if g.abs() < 1e-9 {
-            let inside = robot
-                .joints
-                .iter()
-                .zip(&q)
-                .all(|(j, v)| *v >= j.limits.0 + margin && *v <= j.limits.1 - margin);
-            return inside.then_some(q);
+            return within(robot, &q, margin).then_some(q);
         }
         let mut dg = vec![0.0; q.len()];
         for (k, d) in dg.iter_mut().enumerate() {
@@ -293,12 +278,7 @@ pub fn touch(
             return None;
         }
         let mut step: Vec<Real> = dg.iter().map(|d| -g * d / n2).collect();
-        let big = step.iter().fold(0.0, |a: Real, s| a.max(s.abs()));
-        let limit = 0.2;
-        if big > limit {
-            step.iter_mut().for_each(|s| *s *= limit / big);
-        }
-        q.iter_mut().zip(&step).for_each(|(v, s)| *v += s);
+        take_step(&mut q, &mut step);
     }
     None
 }
@@ -477,4 +457,24 @@ pub fn instrument_poses(
     qs.truncate(n);
     groups.truncate(n);
     Ok((lay, qs, groups))
+}
+
+/// Moves the joint values `q` by `step` (rad), scaled down so that no joint moves by more than
+/// 0.2 rad at once (a damped step of the pose searches above).
+fn take_step(q: &mut [Real], step: &mut [Real]) {
+    let big = step.iter().fold(0.0, |a: Real, s| a.max(s.abs()));
+    let limit = 0.2;
+    if big > limit {
+        step.iter_mut().for_each(|s| *s *= limit / big);
+    }
+    q.iter_mut().zip(step.iter()).for_each(|(v, s)| *v += s);
+}
+
+/// Whether every joint value of `q` lies at least `margin` inside its limits.
+fn within(robot: &Robot, q: &[Real], margin: Real) -> bool {
+    robot
+        .joints
+        .iter()
+        .zip(q)
+        .all(|(j, v)| *v >= j.limits.0 + margin && *v <= j.limits.1 - margin)
 }

@@ -72,22 +72,14 @@ fn gravity_and_high_order_columns_match_finite_differences() {
     let mut j = DMatrix::zeros(m, n);
     p.evaluate(&x0, &mut r, &mut j);
     let (mut rp, mut rm, mut jj) = (r.clone(), r.clone(), j.clone());
-    for c in 0..n {
-        // Steps sized to each column: a gravity coefficient moves the point by ~1e3 mm per
-        // unit.
-        let h = 1e-6;
-        let mut xp = x0.clone();
-        xp[c] += h;
-        let mut xm = x0.clone();
-        xm[c] -= h;
-        p.evaluate(&xp, &mut rp, &mut jj);
-        p.evaluate(&xm, &mut rm, &mut jj);
-        let fd = (&rm - &rp) / (2.0 * h);
+    for (c, param) in params.iter().enumerate() {
+        // A gravity coefficient moves the point by ~1e3 mm per unit.
+        let fd = central(&p, &x0, c, (&mut rp, &mut rm, &mut jj));
         let scale = 1.0 + fd.amax();
         let err = (&fd - j.column(c)).amax();
-        assert!(err < 5e-3 * scale, "{}: |J − FD| = {err:e}", params[c]);
-        if matches!(params[c], Param::Gravity(..) | Param::Harmonic(..)) {
-            assert!(fd.amax() > 1.0, "{}: column ≈ 0", params[c]);
+        assert!(err < 5e-3 * scale, "{param}: |J − FD| = {err:e}");
+        if matches!(param, Param::Gravity(..) | Param::Harmonic(..)) {
+            assert!(fd.amax() > 1.0, "{param}: column ≈ 0");
         }
     }
     // At the nominal geometry (x = 0) the basis columns are exact: no geometry error for the
@@ -95,14 +87,7 @@ fn gravity_and_high_order_columns_match_finite_differences() {
     let x0 = DVector::zeros(n);
     p.evaluate(&x0, &mut r, &mut j);
     for c in (0..n).filter(|&c| matches!(params[c], Param::Gravity(..))) {
-        let h = 1e-6;
-        let mut xp = x0.clone();
-        xp[c] += h;
-        let mut xm = x0.clone();
-        xm[c] -= h;
-        p.evaluate(&xp, &mut rp, &mut jj);
-        p.evaluate(&xm, &mut rm, &mut jj);
-        let fd = (&rm - &rp) / (2.0 * h);
+        let fd = central(&p, &x0, c, (&mut rp, &mut rm, &mut jj));
         let err = (&fd - j.column(c)).amax();
         assert!(err < 1e-6 * (1.0 + fd.amax()), "{}: {err:e}", params[c]);
     }
@@ -178,4 +163,23 @@ fn gravity_coefficients_only_where_their_weight_loads_the_joint() {
     assert!(bad.check().unwrap_err().msg.contains("within"));
     bad.set(Param::Gravity(4, 2), 1e-3);
     assert!(bad.check().is_ok());
+}
+
+/// The central difference (step 1e-6) of `p`'s point residual along parameter `c` at `x0`:
+/// the Jacobian column its analytic one must match; `scratch` the residual and Jacobian
+/// buffers it evaluates into.
+fn central(
+    p: &RobotProblem,
+    x0: &DVector<Real>,
+    c: usize,
+    (rp, rm, jj): (&mut DVector<Real>, &mut DVector<Real>, &mut DMatrix<Real>),
+) -> DVector<Real> {
+    let h = 1e-6;
+    let mut xp = x0.clone();
+    xp[c] += h;
+    let mut xm = x0.clone();
+    xm[c] -= h;
+    p.evaluate(&xp, rp, jj);
+    p.evaluate(&xm, rm, jj);
+    (&*rm - &*rp) / (2.0 * h)
 }

@@ -241,7 +241,7 @@ impl Scenario {
                     .into(),
             ));
         }
-        for key in [crate::study::instruments::INSTRUMENTS_STUDY, "measurement"] {
+        for key in ["instruments_study", "measurement"] {
             if table.contains_key(key) {
                 return Err(ferr(
                     key,
