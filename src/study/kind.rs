@@ -10,9 +10,8 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::{Error, Result};
-use crate::study::instruments::{
-    InstrumentsScenario, INSTRUMENTS_KEYS, INSTRUMENTS_STUDY, MIGRATE,
-};
+use crate::study::instruments::InstrumentsScenario;
+use crate::study::instruments_table::{INSTRUMENTS_KEYS, INSTRUMENTS_STUDY, MIGRATE};
 use crate::study::registration_study::RegistrationScenario;
 use crate::study::scenario::Scenario;
 use crate::study::whole::Head;

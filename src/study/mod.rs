@@ -24,6 +24,7 @@
 
 pub mod claims;
 pub mod instruments;
+pub mod instruments_table;
 pub mod kind;
 pub mod margin;
 pub mod metric;

@@ -229,6 +229,25 @@ pub fn task_path(name_or_path: &str) -> PathBuf {
     }
 }
 
+impl TaskData {
+    /// The data files with their keys in the task file: `data.file` and `data.split`, or
+    /// `data.calibration` and `data.validation`.
+    pub fn files(&self) -> [(&'static str, &Path); 2] {
+        match self {
+            TaskData::Split {
+                file, split_path, ..
+            } => [("data.file", file), ("data.split", split_path)],
+            TaskData::Files {
+                calibration,
+                validation,
+            } => [
+                ("data.calibration", calibration),
+                ("data.validation", validation),
+            ],
+        }
+    }
+}
+
 impl Task {
     /// Every file the task reads: the task file, the nominal robot, the mapping, the data
     /// file(s) and the split (what an output folder must not destroy, [`crate::report::guard`]).
@@ -241,15 +260,7 @@ impl Task {
     /// The task's data: its data file and split, or its calibration and validation files
     /// (what its outputs must not lie beside, [`crate::report::guard::guard_data_folder`]).
     pub fn data_files(&self) -> [&Path; 2] {
-        match &self.data {
-            TaskData::Split {
-                file, split_path, ..
-            } => [file.as_path(), split_path],
-            TaskData::Files {
-                calibration,
-                validation,
-            } => [calibration.as_path(), validation],
-        }
+        self.data.files().map(|(_, p)| p)
     }
 
     /// Reads and checks the task file `path`: its keys (an unknown or missing key refused,
@@ -368,18 +379,7 @@ impl Task {
         let mapping = file("mapping", &keys.mapping)?;
         let mut canonical = canonical_text(&toml::Value::Table(table));
         let mut fixed: Vec<(&str, &Path)> = vec![("mapping", &mapping), ("robot", &robot)];
-        match &data {
-            TaskData::Split {
-                file, split_path, ..
-            } => fixed.extend([("data.file", file.as_path()), ("data.split", split_path)]),
-            TaskData::Files {
-                calibration,
-                validation,
-            } => fixed.extend([
-                ("data.calibration", calibration.as_path()),
-                ("data.validation", validation),
-            ]),
-        }
+        fixed.extend(data.files());
         fixed.sort_by_key(|(k, _)| *k);
         for (key, p) in fixed {
             let bytes = std::fs::read(p).map_err(|e| Error::io(p, e))?;
@@ -649,29 +649,12 @@ impl TaskEntry<'_> {
             cv_choice: self.origin.and_then(|o| o.choice.clone()),
             entrant: self.entrant.to_string(),
             calbench_version: Some(env!("CARGO_PKG_VERSION").into()),
-            git_commit: git_commit(t.path.parent().unwrap_or(Path::new("."))),
+            git_commit: record::git_commit(t.path.parent().unwrap_or(Path::new("."))),
             published: t.published.clone(),
             validation_errors_mm: errors,
         }
         .to_value()
     }
-}
-
-/// The commit checked out in the repository holding `dir` (`git rev-parse HEAD`), if any.
-fn git_commit(dir: &Path) -> Option<String> {
-    let dir = if dir.as_os_str().is_empty() {
-        Path::new(".")
-    } else {
-        dir
-    };
-    let o = std::process::Command::new("git")
-        .arg("-C")
-        .arg(dir)
-        .args(["rev-parse", "HEAD"])
-        .output()
-        .ok()?;
-    let s = String::from_utf8(o.stdout).ok()?.trim().to_string();
-    (o.status.success() && s.len() == 40).then_some(s)
 }
 
 #[cfg(test)]

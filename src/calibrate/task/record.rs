@@ -203,6 +203,23 @@ impl TaskRecord {
     }
 }
 
+/// The commit checked out in the repository holding `dir` (`git rev-parse HEAD`), if any.
+pub(super) fn git_commit(dir: &Path) -> Option<String> {
+    let dir = if dir.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        dir
+    };
+    let o = std::process::Command::new("git")
+        .arg("-C")
+        .arg(dir)
+        .args(["rev-parse", "HEAD"])
+        .output()
+        .ok()?;
+    let s = String::from_utf8(o.stdout).ok()?.trim().to_string();
+    (o.status.success() && s.len() == 40).then_some(s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
