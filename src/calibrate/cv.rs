@@ -84,19 +84,23 @@ pub fn folds(n: usize, k: usize, seed: u64) -> Vec<usize> {
 }
 
 /// A K-fold cross-validation's result: position errors (mm) of the held-out points.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CrossValidation {
     /// The model's name ([`Model::name`]).
     pub model: String,
     /// Number of folds.
     pub k: usize,
     /// RMS over every held-out point (each point is held out once).
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub rms: Real,
     /// The RMS of each fold.
+    #[serde(deserialize_with = "crate::numeric::nan::read")]
     pub fold_rms: Vec<Real>,
     /// Mean of the folds' RMS.
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub mean: Real,
     /// Standard deviation (sample, K − 1) of the folds' RMS.
+    #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub sd: Real,
     /// The number of parameters identified.
     pub parameters: usize,
@@ -424,7 +428,7 @@ pub struct RepeatedCv {
     /// The number of parameters identified.
     pub parameters: usize,
     /// Its CV RMS (mm) at each fold seed.
-    #[serde(deserialize_with = "crate::numeric::nan::list")]
+    #[serde(deserialize_with = "crate::numeric::nan::read")]
     pub rms: Vec<Real>,
     /// Their mean (mm).
     #[serde(deserialize_with = "crate::numeric::nan::real")]

@@ -18,7 +18,7 @@ use crate::error::Result;
 use crate::identify::solver::BLOCK_POINTS;
 use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
 use crate::measurement::{Measure, Measurements};
-use crate::numeric::{Real, Vec3};
+use crate::numeric::{nan, Real, Vec3};
 use crate::robot::{Param, Robot};
 
 /// Pairs of parameters whose correlation exceeds this in magnitude are flagged.
@@ -27,53 +27,63 @@ pub const CORRELATION_FLAG: Real = 0.8;
 pub const TOP_POINTS: usize = 10;
 
 /// A flagged pair of parameters.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Pair {
     /// The first parameter.
     pub a: String,
     /// The second parameter.
     pub b: String,
     /// Their correlation.
+    #[serde(deserialize_with = "nan::real")]
     pub rho: Real,
 }
 
 /// An influential point.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Influential {
     /// 0-based data row (as in `residuals.csv`).
     pub row: usize,
     /// Its leverage.
+    #[serde(deserialize_with = "nan::real")]
     pub leverage: Real,
     /// Its Cook's distance.
+    #[serde(deserialize_with = "nan::real")]
     pub cook: Real,
 }
 
 /// The position σ the covariance predicts, against the measured error.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Predicted {
     /// Where: `validation` poses or `calibration` poses.
-    pub at: &'static str,
+    pub at: String,
     /// RMS over the poses of the predicted σ of the model's position, `√trace(J_p C J_pᵀ)`
     /// (mm): the parameters' uncertainty only.
+    #[serde(deserialize_with = "nan::real")]
     pub rms_mm: Real,
     /// Its largest value (mm).
+    #[serde(deserialize_with = "nan::real")]
     pub max_mm: Real,
     /// The measured position RMS at the same poses (validation error, or residual), mm.
+    #[serde(deserialize_with = "nan::real")]
     pub measured_rms_mm: Real,
 }
 
 /// The diagnostics of an identification.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Diagnostics {
     /// σ of each parameter (√ of the covariance's diagonal), in the parameters' order.
+    #[serde(deserialize_with = "nan::read")]
     pub sigma: Vec<Real>,
     /// The correlation matrix.
+    #[serde(deserialize_with = "nan::read")]
     pub correlation: Vec<Vec<Real>>,
     /// The pairs with |ρ| > [`CORRELATION_FLAG`], largest first.
     pub flagged_pairs: Vec<Pair>,
     /// Leverage of each point.
+    #[serde(deserialize_with = "nan::read")]
     pub leverage: Vec<Real>,
     /// Cook's distance of each point.
+    #[serde(deserialize_with = "nan::read")]
     pub cook_distance: Vec<Real>,
     /// The [`TOP_POINTS`] points of largest Cook's distance.
     pub top_points: Vec<Influential>,
@@ -263,7 +273,7 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
     });
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {
-        at,
+        at: at.into(),
         rms_mm: stats.rms,
         max_mm: stats.max,
         measured_rms_mm: measured,

@@ -336,7 +336,7 @@ fn kind_keys(
         }
         Instrument::Distance { pivot } => record.pivot = Some(*pivot),
         Instrument::Planes(axes) => {
-            record.plane_axes = Some(axes.iter().map(|&a| ["x", "y", "z"][a]).collect());
+            record.plane_axes = Some(axes.iter().map(|&a| ["x", "y", "z"][a].into()).collect());
         }
         Instrument::Spheres(_) | Instrument::Sockets(_) => {}
     }

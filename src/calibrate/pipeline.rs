@@ -401,13 +401,13 @@ fn prior_moves(
 fn convergence_trace(c: &Calibrated, recorder: &TraceRecorder) -> Option<Trace> {
     if let Some(t) = &c.identified.trace {
         return Some(Trace {
-            values: "best fitness per iteration",
+            values: "best fitness per iteration".into(),
             trace: t.clone(),
         });
     }
     let t = recorder.lock().ok()?.clone();
     (!t.is_empty()).then_some(Trace {
-        values: "RMS point residual (mm) per evaluation",
+        values: "RMS point residual (mm) per evaluation".into(),
         trace: t,
     })
 }

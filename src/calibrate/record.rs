@@ -11,36 +11,69 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use serde::{Serialize, Serializer};
+use serde::{Deserialize, Serialize, Serializer};
 
 use super::cv::CrossValidation;
 use super::diagnostics::Diagnostics;
 use super::validation::FileValidation;
 use super::{ErrorStats, Registration, RoundsEnd};
+use crate::error::Error;
 use crate::identify::{Identified, Termination};
 use crate::measurement::kind::Kind;
+use crate::numeric::nan;
 use crate::numeric::{Frame, Real};
 use crate::robot::Param;
 
+/// The format of the identification records this calbench writes. Format 1 is the first
+/// and is written without a `format` key (so its files keep their bytes, as `summary.json`'s
+/// format 1 does); a later format writes its number.
+pub const FORMAT: u32 = 1;
+
+/// An identification record's format: a record built here is of [`FORMAT`], a file without
+/// the key of format 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct Format(pub u32);
+
+impl Format {
+    fn first() -> Format {
+        Format(1)
+    }
+
+    fn is_first(&self) -> bool {
+        self.0 == 1
+    }
+}
+
+impl Default for Format {
+    fn default() -> Format {
+        Format(FORMAT)
+    }
+}
+
 /// A prior's effect: the estimate without and with it.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct PriorMove {
     /// The parameter.
     pub parameter: String,
     /// The prior's σ (mm, rad).
     pub sigma: Real,
     /// The estimate without any prior.
+    #[serde(deserialize_with = "nan::real")]
     pub without_prior: Real,
     /// The MAP estimate.
+    #[serde(deserialize_with = "nan::real")]
     pub with_prior: Real,
 }
 
 /// A registration's frame: measured (instrument) coordinates → base frame.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct FrameRecord {
     /// Roll, pitch, yaw (rad).
+    #[serde(deserialize_with = "nan::read")]
     pub rpy_rad: [Real; 3],
     /// Translation (mm).
+    #[serde(deserialize_with = "nan::read")]
     pub xyz_mm: [Real; 3],
 }
 
@@ -52,12 +85,13 @@ impl From<&Frame> for FrameRecord {
 }
 
 /// The convergence trace: what it holds, and its values.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Trace {
     /// The values, one per iteration or evaluation.
+    #[serde(deserialize_with = "nan::read")]
     pub trace: Vec<Real>,
     /// What they are.
-    pub values: &'static str,
+    pub values: String,
 }
 
 /// `identified.json` (docs/formats.md `identify`): the keys of every identification, those of
@@ -65,23 +99,33 @@ pub struct Trace {
 /// diagnostics) and those of a measurement-kind file (`kind`, the instrument's unknowns and
 /// description, `standard_errors`, `unidentifiable`, `readings`). `None` and empty lists are
 /// keys the file does not have, but `rank`, which is written as `null`.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct IdentifiedRecord {
+    /// The format ([`FORMAT`]): written only from format 2 on, so format 1 files have no
+    /// `format` key; a file of a later format than [`FORMAT`] is refused.
+    #[serde(default = "Format::first", skip_serializing_if = "Format::is_first")]
+    pub format: Format,
     /// Why the result cannot be physically right (a result kept although it cannot,
     /// [`super::plausibility`]), its likely cause last; empty: it can.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub allowed_implausible: Vec<String>,
     /// Why the result makes the robot worse (a result kept although it does); empty: it
     /// does not.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub allowed_worse: Vec<String>,
     /// The column-scaled condition number of the solve.
+    #[serde(deserialize_with = "nan::real")]
     pub condition_number: Real,
     /// The convergence trace.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub convergence_trace: Option<Trace>,
     /// The estimate's covariance (tracker's file).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "nan::read",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub covariance: Option<Vec<Vec<Real>>>,
     /// The cross-validation of the model identified.
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
@@ -101,17 +145,22 @@ pub struct IdentifiedRecord {
     )]
     pub diagnostics: Option<Diagnostics>,
     /// The identified robot errors by parameter.
+    #[serde(deserialize_with = "nan::read")]
     pub errors: BTreeMap<String, Real>,
     /// Model evaluations.
     pub evaluations: usize,
     /// Parameters held at their nominal values.
-    #[serde(skip_serializing_if = "Vec::is_empty")]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fixed: Vec<String>,
     /// The rows held out for validation (`LAST/EVERY`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub holdout: Option<String>,
     /// The instrument's unknowns at the solution (kind file).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "nan::read",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub instrument_unknowns: Option<BTreeMap<String, Real>>,
     /// Iterations of the solve.
     pub iterations: usize,
@@ -127,9 +176,13 @@ pub struct IdentifiedRecord {
     pub pivot: Option<bool>,
     /// Planes: the axis each plane is solved for.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub plane_axes: Option<Vec<&'static str>>,
+    pub plane_axes: Option<Vec<String>>,
     /// How each prior moved its estimate.
-    #[serde(skip_serializing_if = "Vec::is_empty", serialize_with = "sorted")]
+    #[serde(
+        default,
+        skip_serializing_if = "Vec::is_empty",
+        serialize_with = "sorted"
+    )]
     pub priors: Vec<PriorMove>,
     /// The rank of the solve (`null`: not known).
     pub rank: Option<usize>,
@@ -143,7 +196,11 @@ pub struct IdentifiedRecord {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub registration_frame: Option<FrameRecord>,
     /// The last frame step of the alternation (mm; tracker's file).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "nan::read",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub registration_last_step_mm: Option<Real>,
     /// Rounds of registration and identification (tracker's file).
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -152,16 +209,26 @@ pub struct IdentifiedRecord {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub registration_termination: Option<RoundsEnd>,
     /// The RMS residual (mm).
+    #[serde(deserialize_with = "nan::real")]
     pub rms_residual_mm: Real,
     /// The nominal robot's name.
     pub robot: String,
     /// The a-posteriori σ₀.
+    #[serde(deserialize_with = "nan::real")]
     pub sigma0: Real,
     /// The standard error of every unknown, robot's and instrument's (kind file).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "nan::read",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub standard_errors: Option<BTreeMap<String, Real>>,
     /// Targets: their offsets on the flange (mm).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        deserialize_with = "nan::read",
+        skip_serializing_if = "Option::is_none"
+    )]
     pub targets_mm: Option<Vec<[Real; 3]>>,
     /// How the solve ended.
     pub termination: Termination,
@@ -250,6 +317,56 @@ impl IdentifiedRecord {
             .as_ref()?
             .iter()
             .position(|m| &m.model == best)
+    }
+}
+
+impl IdentifiedRecord {
+    /// Reads `identified.json` from its text (`path` names it in errors): a key this calbench
+    /// does not know, or of the wrong type, is refused naming the key path; a file of a later
+    /// format than [`FORMAT`] is refused naming the format.
+    pub fn from_json(text: &str, path: &Path) -> crate::Result<IdentifiedRecord> {
+        let mut de = serde_json::Deserializer::from_str(text);
+        let r: IdentifiedRecord = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+            let key = e.path().to_string();
+            let why = format!("not a calbench identified.json: {}", e.into_inner());
+            Error::file(path, key, why)
+        })?;
+        if r.format.0 > FORMAT {
+            let why = format!(
+                "identification record format {} is newer than this calbench reads ({FORMAT})",
+                r.format.0
+            );
+            return Err(Error::file(path, "format", why));
+        }
+        Ok(r)
+    }
+
+    /// What the identification ran on and how, as the file names them: `robot`, `data` and
+    /// `method`, and where the record has them `registration`, `kind`, `holdout` and
+    /// `cv_best` (the results database's settings of an identify folder).
+    pub fn settings(&self) -> BTreeMap<&'static str, String> {
+        let given = [
+            (
+                "registration",
+                self.registration.map(|r| r.as_str().to_string()),
+            ),
+            ("kind", self.kind.map(|k| <&str>::from(k).to_string())),
+            ("holdout", self.holdout.clone()),
+            ("cv_best", self.cv_best.clone()),
+        ];
+        let mut s = BTreeMap::from([
+            ("robot", self.robot.clone()),
+            ("data", self.data.clone()),
+            ("method", self.method.clone()),
+        ]);
+        s.extend(given.into_iter().filter_map(|(k, v)| Some((k, v?))));
+        s
+    }
+
+    /// Reads `identified.json` at `path` ([`IdentifiedRecord::from_json`]).
+    pub fn read(path: &Path) -> crate::Result<IdentifiedRecord> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        IdentifiedRecord::from_json(&text, path)
     }
 }
 

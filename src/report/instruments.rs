@@ -9,6 +9,7 @@ use super::markdown::{fmt_num, table};
 use super::output::{Outputs, Text};
 use crate::error::{Error, Result};
 use crate::study::instruments::{Cell, InstrumentsScenario};
+use crate::study::metric::Metric;
 
 /// The columns of the cells' table.
 const HEADERS: [&str; 10] = [
@@ -21,7 +22,7 @@ const HEADERS: [&str; 10] = [
     "before mm",
     "after mm",
     "CRB ratio",
-    "failures",
+    Metric::Failures.spec().field,
 ];
 
 /// What `report.md` and `report.html` both show: the settings in a sentence, a row per cell,

@@ -61,7 +61,7 @@ impl IdentifiedRecord {
             md.push(Block::Table(headers, rows));
         }
         if let Some(t) = &self.convergence_trace {
-            let (what, values) = (t.values, &t.trace);
+            let (what, values) = (&t.values, &t.trace);
             md.push(Block::Heading("Convergence".into()));
             md.push(Block::Para(format!(
                 "{what}: {} values, from {} to {}.",

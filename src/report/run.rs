@@ -143,9 +143,11 @@ pub mod columns {
         fmt_num(e.crb_ratio.unwrap_or(Real::NAN), 3)
     });
     /// Failed identifications.
-    pub const FAILURES: Column = ("failures", |e| e.failures.to_string());
+    pub const FAILURES: Column = (Metric::Failures.spec().field, |e| e.failures.to_string());
     /// Mean model evaluations per identification (the budget spent).
-    pub const EVALUATIONS: Column = ("evaluations", |e| fmt_num(e.evaluations_mean, 5));
+    pub const EVALUATIONS: Column = (Metric::Evaluations.spec().field, |e| {
+        fmt_num(e.evaluations_mean, 5)
+    });
     /// Wall time per identification.
     pub const MS_PER_IDENTIFICATION: Column = ("ms / identification", |e| {
         fmt_num(e.seconds_per_identification * 1e3, 3)
@@ -314,8 +316,8 @@ pub const METRIC_NOTES: [(&str, &str); 6] = [
     ("before / after", ": position error |Δp| at the validation poses of the nominal and of the compensated robot; mean (MAE), RMS, max."),
     ("improvement", " = (before − after) / before of the mean error."),
     ("CRB ratio", ": trace of the empirical covariance of the identified errors over trials divided by the mean Cramér–Rao trace (JᵀWJ)⁻¹ of the tracker noise; ≈ 1 for an efficient estimator under Gaussian noise, above 1 with outliers and sag."),
-    ("failures", ": identifications that diverged, were singular or gave non-finite values."),
-    ("evaluations", ": model evaluations per identification, mean over trials (residuals for the Jacobian methods, fitness eq. 14 for BAS, PSO and BAS-PSO): the budget each method spent."),
+    (Metric::Failures.spec().field, ": identifications that diverged, were singular or gave non-finite values."),
+    (Metric::Evaluations.spec().field, ": model evaluations per identification, mean over trials (residuals for the Jacobian methods, fitness eq. 14 for BAS, PSO and BAS-PSO): the budget each method spent."),
 ];
 
 /// The η table of block `b`: headers (`parameter`, then one per entry) and one row per
@@ -362,7 +364,7 @@ pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
     let (params, series, intervals) = eta_by_parameter(b0);
     let intervals: Vec<Vec<Option<[Real; 2]>>> = intervals.into_iter().map(|(_, v)| v).collect();
     figs.push(Figure::new(
-        "eta",
+        Metric::Eta.spec().field,
         "η per parameter and method, with the 95 % interval of each mean",
         move |p| {
             plots::grouped_bars_with_intervals(

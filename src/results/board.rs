@@ -186,7 +186,7 @@ pub fn verify(db: &Db) -> Result<usize> {
                     shown(c),
                     rec.validation_errors_mm.len(),
                     shown(again_ci),
-                    rec.metric
+                    rec.metric.as_str()
                 ),
             ));
         }

@@ -8,6 +8,7 @@ use serde_json::Value;
 
 use super::provenance::sha256_hex;
 use crate::analysis::regression::check_summary;
+use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
 use crate::calibrate::task::{Division, TaskRecord};
 use crate::error::{Error, Result};
@@ -291,43 +292,36 @@ impl Record {
 
     fn of_identify(dir: &Path) -> Result<Record> {
         let path = dir.join("identified.json");
-        let (document, v) = read(&path)?;
-        let Value::Object(m) = &v else {
-            return Err(Error::file(&path, "identified.json", "not a JSON object"));
-        };
-        let s = |k: &str| m.get(k).and_then(Value::as_str).unwrap_or("").to_string();
-        let method = s("method");
-        if method.is_empty() {
+        let document = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        let id = IdentifiedRecord::from_json(&document, &path)?;
+        if id.method.is_empty() {
             return Err(Error::file(
                 &path,
                 "method",
                 "missing: not an identify output",
             ));
         }
-        let settings: serde_json::Map<String, Value> = m
-            .iter()
-            .filter(|(_, v)| v.is_string())
-            .filter(|(k, _)| !k.ends_with("termination"))
-            .map(|(k, v)| (k.clone(), v.clone()))
-            .collect();
         let scenario_text =
-            serde_json::to_string(&settings).map_err(|e| Error::Compute(e.to_string()))?;
-        let data = Path::new(&s("data"))
+            serde_json::to_string(&id.settings()).map_err(|e| Error::Compute(e.to_string()))?;
+        let data = Path::new(&id.data)
             .file_name()
             .map_or(String::new(), |f| f.to_string_lossy().into_owned());
-        let mut figures = Vec::new();
-        let kept: serde_json::Map<String, Value> = m
-            .iter()
+        // The figures as identified.json writes them: its numbers and validation errors.
+        let written = serde_json::to_value(&id).map_err(|e| Error::Compute(e.to_string()))?;
+        let kept: serde_json::Map<String, Value> = written
+            .as_object()
+            .into_iter()
+            .flatten()
             .filter(|(k, v)| v.is_number() || k.starts_with("validation_"))
             .map(|(k, v)| (k.clone(), v.clone()))
             .collect();
-        flatten(&method, "", &kept, None, &mut figures);
-        let name = format!("identify {} {data}", s("robot"));
+        let mut figures = Vec::new();
+        flatten(&id.method, "", &kept, None, &mut figures);
+        let name = format!("identify {} {data}", id.robot);
         let mut r = Record::new(Kind::Identify, dir, document, name, scenario_text);
-        r.output.seed = m.get("seed").and_then(Value::as_u64);
         r.results.entries = vec![Entry {
-            name: method.clone(),
-            method,
+            name: id.method.clone(),
+            method: id.method,
         }];
         r.results.figures = figures;
         Ok(r)
@@ -382,7 +376,8 @@ impl Record {
                 p.division.as_str().to_string(),
             ));
         }
-        let (task, metric, method, entrant) = (t.task, t.metric, t.method, t.entrant);
+        let metric = t.metric.as_str().to_string();
+        let (task, method, entrant) = (t.task, t.method, t.entrant);
         // The closed division is calbench's kinematic models only (DH, β, tool, base): an
         // entry that says `closed` with another term or entrant would rank among them.
         if t.division == Division::Closed {
@@ -484,7 +479,7 @@ fn flatten(
 /// bias, the improvement in per cent and a signed error along the tool axis; every other
 /// figure (an error, an RMSE, a spread, a count, a ratio) is ≥ 0.
 fn signed(metric: &str) -> bool {
-    metric.starts_with("eta")
+    metric.starts_with(Metric::Eta.spec().field)
         || metric.starts_with("param_bias.")
         || metric == Metric::Improvement.key()
         || metric.contains("_axis_mm.")
@@ -504,7 +499,7 @@ fn check_figures(path: &Path, trials: Option<usize>, figures: &[Figure]) -> Resu
     }
     for f in figures {
         let key = || format!("results ({}), {}", f.entry, f.metric);
-        let count = f.metric == "failures" || f.metric.starts_with("terminations.");
+        let count = f.metric == Metric::Failures.key() || f.metric.starts_with("terminations.");
         if count && (f.value < 0.0 || f.value.fract() != 0.0) {
             return Err(Error::file(
                 path,

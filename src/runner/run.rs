@@ -332,7 +332,9 @@ pub fn run_resumed(
     let (scenario, mut stopping, widest) = match &opts.precision {
         None => (scenario, None, None),
         Some(p) => {
-            let headlines = collector.current().map_or(Vec::new(), |a| a.headlines());
+            let headlines = collector
+                .current()
+                .map_or(Vec::new(), |a| a.headlines(p.metric));
             let n = stop.unwrap_or(seen);
             let reached = p.reached(&headlines);
             let (i, needed) = widest_and_needed(p, &headlines, n);
@@ -371,7 +373,7 @@ pub fn run_resumed(
 /// [`BLOCK`] trials where every entry's headline interval is narrow enough.
 fn look(opts: &RunOptions, collector: &Collector, seen: usize) -> bool {
     match (&opts.precision, collector.current()) {
-        (Some(p), Some(acc)) => seen.is_multiple_of(BLOCK) && p.reached(&acc.headlines()),
+        (Some(p), Some(acc)) => seen.is_multiple_of(BLOCK) && p.reached(&acc.headlines(p.metric)),
         _ => false,
     }
 }

@@ -74,7 +74,7 @@ macro_rules! metrics {
             pub const ALL: [Metric; [$(Metric::$name),*].len()] = [$(Metric::$name),*];
 
             /// How it is declared.
-            pub fn spec(self) -> Spec {
+            pub const fn spec(self) -> Spec {
                 match self {
                     $(Metric::$name => Spec {
                         field: $field,

@@ -60,6 +60,19 @@ pub struct Figures {
     pub std_ci95: Option<[Real; 2]>,
 }
 
+impl Figures {
+    /// The statistic of metric `m` (its `mean`, `rms` or `max`) with its 95 % interval;
+    /// `None` for a metric that is no such statistic.
+    pub fn stat(&self, m: Metric) -> Option<(Real, Option<[Real; 2]>)> {
+        match m.spec().stat? {
+            "mean" => Some((self.mean, self.mean_ci95)),
+            "rms" => Some((self.rms, self.rms_ci95)),
+            "max" => Some((self.max, self.max_ci95)),
+            _ => None,
+        }
+    }
+}
+
 impl Deref for Figures {
     type Target = ErrorStats;
     fn deref(&self) -> &ErrorStats {
@@ -150,7 +163,7 @@ pub struct Entry {
     pub improvement_pct: Real,
     /// RMSE over trials of each identified parameter error (mm, rad); the base parameters,
     /// which absorb the registration's error, are left out.
-    #[serde(deserialize_with = "nan::map")]
+    #[serde(deserialize_with = "nan::read")]
     pub param_rmse: BTreeMap<String, Real>,
     /// The 95 % interval of each `param_rmse`: the t interval of the mean squared error,
     /// its bounds' square roots (a negative lower bound taken as 0); `null` under 2 trials.
@@ -159,7 +172,7 @@ pub struct Entry {
     /// base left out as for `param_rmse`: the estimator's bias. Where the truth is the same
     /// in every trial (`errors.kind` `paper` or `values`), the mean identified error is the
     /// injected one plus this.
-    #[serde(deserialize_with = "nan::map")]
+    #[serde(deserialize_with = "nan::read")]
     pub param_bias: BTreeMap<String, Real>,
     /// Trace of the empirical covariance of the estimates over the mean Cramér–Rao trace
     /// σ²(JᵀWJ)⁻¹ (`null` without tracker noise or with fewer than 2 trials).
@@ -426,15 +439,17 @@ impl Accumulator {
         Ok(v)
     }
 
-    /// Each cell's headline figure so far, in cell order (strategy × method): the mean
-    /// validation error after compensation and its 95 % interval, as `summary.json` would
-    /// write them now ([`precision`]).
-    pub fn headlines(&self) -> Vec<(Real, Option<[Real; 2]>)> {
+    /// Each cell's figure of `m` so far, in cell order (strategy × method): a statistic of
+    /// the validation errors after compensation ([`precision::HEADLINE`]) and its 95 %
+    /// interval, as `summary.json` would write them now; NaN without an interval for a metric
+    /// of another key.
+    pub fn headlines(&self, m: Metric) -> Vec<(Real, Option<[Real; 2]>)> {
+        let after = m.spec().field == Metric::ValidationAfterMean.spec().field;
         self.cells
             .iter()
             .map(|c| {
-                let f = c.after.average();
-                (f.stats.mean, f.mean_ci95)
+                let f = after.then(|| c.after.average());
+                f.and_then(|f| f.stat(m)).unwrap_or((Real::NAN, None))
             })
             .collect()
     }

@@ -115,9 +115,28 @@ pub fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
 }
 
-/// The JSON document of a file (`summary.json`, `identified.json`, `truth.json`, …).
+/// The JSON document of a file (`summary.json`, `identified.json`, `truth.json`, …). An
+/// `identified.json` is also read through its type ([`identified_round_trip`]).
 pub fn load_json(p: &Path) -> serde_json::Value {
-    serde_json::from_str(&read(p)).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+    let text = read(p);
+    if p.file_name() == Some("identified.json".as_ref()) {
+        identified_round_trip(p, &text);
+    }
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
+}
+
+/// `identified.json`'s `text` (at `p`) read as `calbench::calibrate::record::IdentifiedRecord`
+/// and written again as `identify` writes it: the same bytes (format 1 has no `format` key,
+/// docs/formats.md § 7.6).
+pub fn identified_round_trip(p: &Path, text: &str) {
+    use calbench::calibrate::record::IdentifiedRecord;
+    let r = IdentifiedRecord::from_json(text, p).unwrap_or_else(|e| panic!("{e}"));
+    let again = serde_json::to_string_pretty(&r).unwrap() + "\n";
+    assert!(
+        again == text,
+        "{}: read and written again:\n{again}",
+        p.display()
+    );
 }
 
 /// Writes a scenario as `DIR/NAME.toml` and returns its path.

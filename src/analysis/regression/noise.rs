@@ -174,7 +174,7 @@ impl Trials {
             let truth: Vec<Real> = params.iter().map(|p| num(Some(p.1))).collect();
             let found: Vec<Real> = params.iter().map(|p| num(Some(p.2))).collect();
             let usable = !FAILED.contains(&get(termi))
-                && num(col("after_rms_mm")).is_finite()
+                && num(col(Metric::ValidationAfterRms.column().unwrap_or_default())).is_finite()
                 && found.iter().all(|x| x.is_finite());
             if !usable {
                 continue;

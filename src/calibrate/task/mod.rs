@@ -44,13 +44,6 @@ pub enum Metric {
 }
 
 impl Metric {
-    /// The metric named `name` in a task file or `task.json`.
-    pub fn from_name(name: &str) -> Option<Metric> {
-        [Metric::ValidationMeanMm, Metric::ValidationRmsMm]
-            .into_iter()
-            .find(|m| m.as_str() == name)
-    }
-
     /// The name in task files and `task.json`.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -633,7 +626,7 @@ impl TaskEntry<'_> {
             format: TASK_FORMAT.into(),
             task: t.name.clone(),
             task_hash: t.hash.clone(),
-            metric: t.metric.as_str().into(),
+            metric: t.metric,
             value,
             ci95: ci,
             division: if open {

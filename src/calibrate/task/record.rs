@@ -7,7 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::{Division, Published, TaskEntry, TASK_FORMAT};
+use super::{Division, Metric, Published, TaskEntry, TASK_FORMAT};
 use crate::calibrate::cv::RepeatedChoice;
 use crate::error::{Error, Result};
 use crate::numeric::nan;
@@ -24,8 +24,8 @@ pub struct TaskRecord {
     pub task: String,
     /// The task's hash (docs/formats.md § 9.1).
     pub task_hash: String,
-    /// The task's metric (`validation_mean_mm`, `validation_rms_mm`).
-    pub metric: String,
+    /// The task's metric.
+    pub metric: Metric,
     /// The entry's figure (mm; `null` when not finite).
     #[serde(deserialize_with = "nan::real")]
     pub value: Real,
@@ -167,10 +167,9 @@ impl TaskRecord {
 
 impl TaskRecord {
     /// The figure and its interval computed again from the recorded per-row errors by the
-    /// task's metric; `None` when the record holds no per-row errors or names no known metric.
+    /// task's metric; `None` when the record holds no per-row errors.
     pub fn recomputed(&self) -> Option<(Real, Option<[Real; 2]>)> {
-        let metric = super::Metric::from_name(&self.metric)?;
-        (!self.validation_errors_mm.is_empty()).then(|| metric.of(&self.validation_errors_mm))
+        (!self.validation_errors_mm.is_empty()).then(|| self.metric.of(&self.validation_errors_mm))
     }
 
     /// The file's JSON tree (keys in byte order).

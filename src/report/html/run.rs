@@ -14,11 +14,12 @@ use crate::report::run::{
     columns::*, entry_table, entry_table_by, eta_table, validation_columns, Column,
     INTERVAL_COLUMNS, INTERVAL_NOTE, METRIC_NOTES,
 };
+use crate::study::metric::Metric;
 use crate::study::RunResult;
 
 /// The section a plot of the run belongs to, by its file stem.
 fn section_of(stem: &str) -> &'static str {
-    if stem == "eta" {
+    if stem == Metric::Eta.spec().field {
         "η per parameter"
     } else if stem.starts_with("validation") {
         "Validation before and after"
@@ -281,7 +282,7 @@ pub fn page(
         reasons
             .iter()
             .cloned()
-            .chain(["failures".to_string(), "iterations".to_string()]),
+            .chain([Metric::Failures.key(), Metric::Iterations.key()]),
         |e| {
             reasons
                 .iter()

@@ -33,12 +33,7 @@ impl Entry {
             }
             _ => self.optional.get(m.spec().field)?,
         };
-        match m.spec().stat? {
-            "mean" => Some((figures.mean, figures.mean_ci95)),
-            "rms" => Some((figures.rms, figures.rms_ci95)),
-            "max" => Some((figures.max, figures.max_ci95)),
-            _ => None,
-        }
+        figures.stat(m)
     }
 
     /// The entry's name in `check` and the results database: `method / poses`, and

@@ -11,6 +11,7 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::numeric::Real;
+use crate::study::metric::Metric;
 
 /// Trials between two looks at the intervals.
 pub const BLOCK: usize = 32;
@@ -24,9 +25,15 @@ pub enum Target {
     Absolute(Real),
 }
 
+/// The headline metric a `--precision` target is put on (docs/formats.md "Stopping at a
+/// precision").
+pub const HEADLINE: Metric = Metric::ValidationAfterMean;
+
 /// A `--precision` target, with the text it was given as.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Precision {
+    /// The metric whose interval must be narrow enough ([`HEADLINE`]).
+    pub metric: Metric,
     /// The target.
     pub target: Target,
     /// As given (`0.5%`, `0.002mm`), for `summary.json` and the checkpoint.
@@ -71,6 +78,7 @@ impl Precision {
             Target::Absolute(v)
         };
         Ok(Precision {
+            metric: HEADLINE,
             target,
             text: t.to_string(),
         })
