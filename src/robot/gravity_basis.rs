@@ -17,6 +17,8 @@
 
 use crate::numeric::{Real, Vec3};
 use crate::robot::compliance::masses_with;
+use crate::robot::harmonics::check_terms;
+use crate::robot::param::nonzero_block;
 use crate::robot::{Chain, ChainVars, JointType, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// Largest magnitude of a gravity-basis coefficient, rad per N·m of a 1 N weight's torque: a
@@ -53,15 +55,7 @@ pub fn params(robot: &Robot) -> Vec<Param> {
 /// Whether any gravity-basis coefficient of `robot` is non-zero. A robot whose values do
 /// not hold the block (one being built) has none.
 pub fn has_gravity(robot: &Robot) -> bool {
-    let dof = robot.dof();
-    (0..dof).any(|j| {
-        (0..GRAVITY_POINTS).any(|l| {
-            robot
-                .values
-                .get(Param::Gravity(j, l).index(dof))
-                .is_some_and(|v| *v != 0.0)
-        })
-    })
+    robot.any_term(GRAVITY_POINTS, Param::Gravity)
 }
 
 /// The basis torques at the chain variables `vars` of `chain` (a robot of at least four
@@ -101,11 +95,9 @@ pub fn torques(robot: &Robot, chain: &Chain, vars: &ChainVars, tau: &mut Torques
 pub fn add_offsets(values: &[Real], tau: &Torques, dv: &mut [Real]) {
     let dof = dv.len();
     for (j, d) in dv.iter_mut().enumerate() {
-        let at = Param::Gravity(j, 0).index(dof);
-        let k = &values[at..at + GRAVITY_POINTS];
-        if k.iter().all(|v| *v == 0.0) {
+        let Some(k) = nonzero_block(values, dof, j, (GRAVITY_POINTS, Param::Gravity)) else {
             continue;
-        }
+        };
         *d += k.iter().zip(&tau[j]).map(|(a, b)| a * b).sum::<Real>();
     }
 }
@@ -115,35 +107,16 @@ pub fn add_offsets(values: &[Real], tau: &Torques, dv: &mut [Real]) {
 /// joints, and only where its weight loads the joint.
 pub(crate) fn check(robot: &Robot) -> std::result::Result<(), super::ModelIssue> {
     let allowed = params(robot);
-    for j in 0..robot.dof() {
-        for l in 0..GRAVITY_POINTS {
-            let p = Param::Gravity(j, l);
-            let v = robot.get(p);
-            if v == 0.0 {
-                continue;
-            }
-            let place = super::joint_place(j, "gravity");
-            if !(v.is_finite() && v.abs() <= MAX_GRAVITY_RAD_PER_NM) {
-                return Err(super::ModelIssue {
-                    place,
-                    msg: format!(
-                        "must be finite numbers within ±{MAX_GRAVITY_RAD_PER_NM} rad/(N·m), \
-                         got {v:?}"
-                    ),
-                });
-            }
-            if !allowed.contains(&p) {
-                return Err(super::ModelIssue {
-                    place,
-                    msg: format!(
-                        "`{p}`: the weight at that point does not load this joint (a revolute \
-                         joint before the point, on a robot of at least four joints)"
-                    ),
-                });
-            }
-        }
-    }
-    Ok(())
+    let terms = (GRAVITY_POINTS, Param::Gravity as fn(usize, usize) -> Param);
+    let bound = ("gravity", MAX_GRAVITY_RAD_PER_NM, "rad/(N·m)");
+    check_terms(robot, terms, bound, |_, p| {
+        (!allowed.contains(&p)).then(|| {
+            format!(
+                "`{p}`: the weight at that point does not load this joint (a revolute joint \
+                 before the point, on a robot of at least four joints)"
+            )
+        })
+    })
 }
 
 #[cfg(test)]

@@ -5,6 +5,7 @@
 //! docs/formats.md "Joint-angle harmonics").
 
 use crate::numeric::Real;
+use crate::robot::param::nonzero_block;
 use crate::robot::{ChainVars, Param, Robot, HARMONIC_TERMS, MAX_HARMONIC_ORDER};
 
 /// Largest magnitude of a harmonic coefficient, rad (about 5.7°): far beyond any encoder or
@@ -44,15 +45,7 @@ pub fn orders_used(h: impl Iterator<Item = bool>) -> usize {
 /// Whether any harmonic coefficient of `robot` is non-zero. A robot whose values do not
 /// hold the harmonic block of its joint count (one being built) has none.
 pub fn has_harmonics(robot: &Robot) -> bool {
-    let dof = robot.dof();
-    (0..dof).any(|j| {
-        (0..HARMONIC_TERMS).any(|k| {
-            robot
-                .values
-                .get(Param::Harmonic(j, k).index(dof))
-                .is_some_and(|v| *v != 0.0)
-        })
-    })
+    robot.any_term(HARMONIC_TERMS, Param::Harmonic)
 }
 
 /// Adds to `dv[j]` the harmonic offset of joint `j` at the (undeflected) chain variables
@@ -62,11 +55,9 @@ pub fn has_harmonics(robot: &Robot) -> bool {
 pub fn add_offsets(values: &[Real], vars: &ChainVars, dv: &mut [Real]) {
     let dof = dv.len();
     for (j, d) in dv.iter_mut().enumerate() {
-        let at = Param::Harmonic(j, 0).index(dof);
-        let h = &values[at..at + HARMONIC_TERMS];
-        if h.iter().all(|v| *v == 0.0) {
+        let Some(h) = nonzero_block(values, dof, j, (HARMONIC_TERMS, Param::Harmonic)) else {
             continue;
-        }
+        };
         let (s, c) = vars.1[j];
         let orders = orders_used(h.iter().map(|v| *v != 0.0));
         let f = factors(s, c, orders);
@@ -81,28 +72,43 @@ pub fn add_offsets(values: &[Real], vars: &ChainVars, dv: &mut [Real]) {
 /// Checks the harmonic coefficients of `robot` ([`Robot::check`]): each finite and within
 /// ±[`MAX_HARMONIC_RAD`], and only on revolute joints.
 pub(crate) fn check(robot: &Robot) -> std::result::Result<(), super::ModelIssue> {
+    let terms = (HARMONIC_TERMS, Param::Harmonic as fn(usize, usize) -> Param);
+    check_terms(
+        robot,
+        terms,
+        ("harmonics", MAX_HARMONIC_RAD, "rad"),
+        |j, _| {
+            (robot.joints[j].kind != super::JointType::Revolute).then(|| {
+                "only revolute joints have joint-angle harmonics in calbench's model".into()
+            })
+        },
+    )
+}
+
+/// Checks a per-joint block of model terms of `robot` (`param(j, k)`, `k` below `terms`),
+/// written under the robot file's `key`: each non-zero value finite and within ±`bound`
+/// `unit`, and allowed where it stands (`refused(j, param)` says why it is not).
+pub(crate) fn check_terms(
+    robot: &Robot,
+    (terms, param): (usize, fn(usize, usize) -> Param),
+    (key, bound, unit): (&str, Real, &str),
+    refused: impl Fn(usize, Param) -> Option<String>,
+) -> std::result::Result<(), super::ModelIssue> {
     for j in 0..robot.dof() {
-        for k in 0..HARMONIC_TERMS {
-            let v = robot.get(Param::Harmonic(j, k));
+        for p in (0..terms).map(|k| param(j, k)) {
+            let v = robot.get(p);
             if v == 0.0 {
                 continue;
             }
-            let place = super::joint_place(j, "harmonics");
-            if !(v.is_finite() && v.abs() <= MAX_HARMONIC_RAD) {
-                return Err(super::ModelIssue {
-                    place,
-                    msg: format!(
-                        "must be finite numbers within ±{MAX_HARMONIC_RAD} rad, got {v:?}"
-                    ),
-                });
-            }
-            if robot.joints[j].kind != super::JointType::Revolute {
-                return Err(super::ModelIssue {
-                    place,
-                    msg: "only revolute joints have joint-angle harmonics in calbench's model"
-                        .into(),
-                });
-            }
+            let msg = if !(v.is_finite() && v.abs() <= bound) {
+                format!("must be finite numbers within ±{bound} {unit}, got {v:?}")
+            } else if let Some(why) = refused(j, p) {
+                why
+            } else {
+                continue;
+            };
+            let place = super::joint_place(j, key);
+            return Err(super::ModelIssue { place, msg });
         }
     }
     Ok(())

@@ -429,6 +429,13 @@ impl Robot {
         Frame::from_xyz_rpy([v[0], v[1], v[2]], [v[3], v[4], v[5]])
     }
 
+    /// Whether any value of a per-joint block of parameters (`param(joint, k)`, `k` below
+    /// `terms`) is non-zero; a robot whose values do not hold the block has none.
+    pub fn any_term(&self, terms: usize, param: fn(usize, usize) -> Param) -> bool {
+        let dof = self.dof();
+        (0..dof).any(|j| param::nonzero_block(&self.values, dof, j, (terms, param)).is_some())
+    }
+
     /// The precompiled chain of elementary operations for the current parameter values.
     pub fn chain(&self) -> Chain {
         Chain::new(self)

@@ -260,6 +260,21 @@ impl fmt::Display for Param {
     }
 }
 
+/// Joint `j`'s block of `terms` values (`param(j, 0)`, `param(j, 1)`, … stand one after the
+/// other) in the flat parameter `values` of a robot with `dof` joints: `None` when the
+/// values do not hold it or every one of them is zero. Allocation-free.
+#[inline]
+pub fn nonzero_block(
+    values: &[crate::numeric::Real],
+    dof: usize,
+    j: usize,
+    (terms, param): (usize, fn(usize, usize) -> Param),
+) -> Option<&[crate::numeric::Real]> {
+    let at = param(j, 0).index(dof);
+    let block = values.get(at..at + terms)?;
+    block.iter().any(|v| *v != 0.0).then_some(block)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -71,38 +71,12 @@ impl ComplianceSettings {
     /// payload finite and ≥ 0, one value per joint. Errors name the key.
     pub fn check(&self, dof: usize) -> Result<()> {
         if let Some(k) = &self.stiffness_nm_per_rad {
-            check_len("compliance.stiffness_nm_per_rad", k, dof)?;
-            if let Some((j, v)) = k
-                .iter()
-                .enumerate()
-                .find(|(_, v)| !(v.is_finite() && **v > 0.0))
-            {
-                return Err(Error::setting(
-                    "compliance.stiffness_nm_per_rad",
-                    format!(
-                        "joint {}: stiffness must be a finite number > 0, got {}",
-                        j + 1,
-                        crate::error::shown(*v)
-                    ),
-                ));
-            }
+            let why = ("joint", "stiffness must be a finite number > 0");
+            per_joint("compliance.stiffness_nm_per_rad", k, dof, why, |v| v > 0.0)?;
         }
         if let Some(m) = &self.link_mass_kg {
-            check_len("compliance.link_mass_kg", m, dof)?;
-            if let Some((j, v)) = m
-                .iter()
-                .enumerate()
-                .find(|(_, v)| !(v.is_finite() && **v >= 0.0))
-            {
-                return Err(Error::setting(
-                    "compliance.link_mass_kg",
-                    format!(
-                        "link {}: mass must be a finite number ≥ 0, got {}",
-                        j + 1,
-                        crate::error::shown(*v)
-                    ),
-                ));
-            }
+            let why = ("link", "mass must be a finite number ≥ 0");
+            per_joint("compliance.link_mass_kg", m, dof, why, |v| v >= 0.0)?;
         }
         if !(self.payload_kg.is_finite() && self.payload_kg >= 0.0) {
             return Err(Error::setting(
@@ -114,14 +88,28 @@ impl ComplianceSettings {
     }
 }
 
-fn check_len(key: &str, v: &[Real], dof: usize) -> Result<()> {
+/// Refuses, naming `key`, a list `v` that is not one value per joint of `dof`, or whose
+/// `what` (joint, link) has a value that is not finite or not `ok`: `why` it must be.
+fn per_joint(
+    key: &str,
+    v: &[Real],
+    dof: usize,
+    (what, why): (&str, &str),
+    ok: fn(Real) -> bool,
+) -> Result<()> {
     if v.len() != dof {
         return Err(Error::setting(
             key,
             format!("needs one value per joint ({dof}), got {}", v.len()),
         ));
     }
-    Ok(())
+    match v.iter().position(|&x| !(x.is_finite() && ok(x))) {
+        Some(j) => Err(Error::setting(
+            key,
+            format!("{what} {}: {why}, got {}", j + 1, crate::error::shown(v[j])),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// A compliance model ready to deflect poses of one robot (plain numbers: `Send + Sync`).

@@ -546,23 +546,21 @@ mod tests {
         );
         assert_eq!(e.key(), Some("tracker.mpe_a_um"));
         // Read from a scenario's text, the same value is refused on its field, as it is read.
-        for (text, why) in [
-            ("mpe_a_um = -1.0", "non-negative"),
-            ("coverage = 0.0", "positive"),
-            ("pose = [0.0, 0.0, 0.0, 0.0, 0.0, inf]", "6 finite numbers"),
-        ] {
-            let e = toml::from_str::<TrackerSettings>(text)
-                .unwrap_err()
-                .to_string();
-            assert!(e.contains(why), "{text}: {e}");
-        }
-        for (text, why) in [
-            ("fraction = 1.5", "in [0, 1]"),
-            ("magnitude_mm = [2.0, 1.0]", "lo ≤ hi"),
-        ] {
-            let e = toml::from_str::<OutlierSettings>(text)
-                .unwrap_err()
-                .to_string();
+        let tracker = |text: &str| toml::from_str::<TrackerSettings>(text).err();
+        let outliers = |text: &str| toml::from_str::<OutlierSettings>(text).err();
+        let cases: [(&str, &str, &dyn Fn(&str) -> Option<toml::de::Error>); 5] = [
+            ("mpe_a_um = -1.0", "non-negative", &tracker),
+            ("coverage = 0.0", "positive", &tracker),
+            (
+                "pose = [0.0, 0.0, 0.0, 0.0, 0.0, inf]",
+                "6 finite numbers",
+                &tracker,
+            ),
+            ("fraction = 1.5", "in [0, 1]", &outliers),
+            ("magnitude_mm = [2.0, 1.0]", "lo ≤ hi", &outliers),
+        ];
+        for (text, why, refusal) in cases {
+            let e = refusal(text).unwrap().to_string();
             assert!(e.contains(why), "{text}: {e}");
         }
         let t = TrackerSettings {

@@ -289,6 +289,149 @@ fn measure(truth: &Robot, qs: Vec<Vec<Real>>, sigma: Real, rng: &mut Rng) -> Rob
     }
 }
 
+/// irb2600 with a tool offset and its identifiable kinematic parameters, tool first: the
+/// robot to which the model extensions (harmonics, gravity basis) are added.
+fn irb2600_with_tool() -> (Robot, Vec<Param>) {
+    let mut nominal = builtin::irb2600();
+    nominal.set(Param::Tool(0), 80.0);
+    nominal.set(Param::Tool(2), 120.0);
+    let params =
+        crate::robot::param_sets::identified_params_tool_first(&nominal, Measure::Position, true);
+    (nominal, params)
+}
+
+/// Parameter `i`'s (`p`'s) geometric error: 0.2 mm on a length, 1 mrad on an angle, the
+/// sign alternating.
+fn geometry_error(i: usize, p: &Param) -> Real {
+    let sign = [1.0, -1.0][i % 2];
+    if p.is_length() {
+        0.2 * sign
+    } else {
+        1e-3 * sign
+    }
+}
+
+/// `n` uniform poses of `nominal` (stream `seed`, `purpose`) and the tool points of `truth`
+/// there, through the loaded forward kinematics (its model extensions applied).
+fn loaded_points(nominal: &Robot, truth: &Robot, n: usize, stream: (u64, &str)) -> RobotData {
+    let qs = uniform_joint_poses(nominal, n, &mut rng::stream(stream.0, stream.1));
+    let chain = truth.chain();
+    let points = qs
+        .iter()
+        .map(|q| {
+            crate::robot::loaded::loaded_fk(truth, &chain, q, 0.0)
+                .unwrap()
+                .pos
+        })
+        .collect();
+    RobotData {
+        qs,
+        points,
+        rotations: None,
+    }
+}
+
+/// The largest distance between the tool points of `a` and `b` at `qs`, through the loaded
+/// forward kinematics (NaN when one is not a number).
+fn largest_point_gap(a: &Robot, b: &Robot, qs: &[Vec<Real>]) -> Real {
+    let (ca, cb) = (a.chain(), b.chain());
+    let fk = |r: &Robot, c: &crate::robot::Chain, q: &[Real]| {
+        crate::robot::loaded::loaded_fk(r, c, q, 0.0).unwrap().pos
+    };
+    qs.iter()
+        .map(|q| (fk(a, &ca, q) - fk(b, &cb, q)).norm())
+        .fold(0.0, |m: Real, g| if g > m || g.is_nan() { g } else { m })
+}
+
+/// `nominal` with the errors `want` on `params` identified back, noise-free, by `solver`
+/// from zero on `n` loaded tool points of that truth (poses of `stream`): its residual under
+/// `rms_tol` and every parameter recovered (to 1e-6 mm, 1e-9 rad). The truth, the data and
+/// the identified robot.
+fn recovered(
+    (nominal, params): (&Robot, &[Param]),
+    want: &DVector<Real>,
+    (n, stream): (usize, (u64, &str)),
+    solver: &dyn crate::identify::solver::Solver,
+    rms_tol: Real,
+) -> (Robot, RobotData, Robot) {
+    let index: Vec<usize> = params.iter().map(|p| p.index(nominal.dof())).collect();
+    let truth = nominal.with_added(&index, want.as_slice());
+    let d = loaded_points(nominal, &truth, n, stream);
+    let p = d.problem(nominal, params, Measure::Position).unwrap();
+    let out = solve(solver, &p, &DVector::zeros(params.len()));
+    assert!(out.rms_residual < rms_tol, "rms {:e}", out.rms_residual);
+    for (c, q) in params.iter().enumerate() {
+        let tol = if q.is_length() { 1e-6 } else { 1e-9 };
+        let (got, want) = (out.x[c], want[c]);
+        assert!((got - want).abs() < tol, "{q}: got {got:e}, want {want:e}");
+    }
+    let got = p.robot_with(&out.x);
+    (truth, d, got)
+}
+
+/// How far `got` stands from `truth` at the first ten poses of `d` ([`largest_point_gap`]),
+/// and the RMS residual left on `d` when `solver` identifies, from zero, the `params` of
+/// `nominal` but those `dropped` picks: the size of what those explain.
+fn gap_and_rms_without(
+    d: &RobotData,
+    (got, truth): (&Robot, &Robot),
+    (nominal, params): (&Robot, &[Param]),
+    dropped: fn(&Param) -> bool,
+    solver: &dyn crate::identify::solver::Solver,
+) -> (Real, Real) {
+    let gap = largest_point_gap(got, truth, &d.qs[..10]);
+    let kept: Vec<Param> = params.iter().copied().filter(|p| !dropped(p)).collect();
+    let p = d.problem(nominal, &kept, Measure::Position).unwrap();
+    (
+        gap,
+        solve(solver, &p, &DVector::zeros(kept.len())).rms_residual,
+    )
+}
+
+/// Per parameter of `params`, how far the analytic Jacobian column of `p` (with `rows`
+/// residuals) at `x0` stands from its central difference ([`central`]): the largest
+/// difference over `1 +` the column's largest entry. A column `loaded` picks must move the
+/// point (an entry above 1), or the test fails naming it.
+fn column_errors(
+    p: &RobotProblem,
+    rows: usize,
+    x0: &DVector<Real>,
+    params: &[Param],
+    loaded: fn(&Param) -> bool,
+) -> Vec<Real> {
+    let mut r = DVector::zeros(rows);
+    let mut j = DMatrix::zeros(rows, params.len());
+    p.evaluate(x0, &mut r, &mut j);
+    let (mut rp, mut rm, mut jj) = (r.clone(), r.clone(), j.clone());
+    let mut errs = Vec::with_capacity(params.len());
+    for (c, param) in params.iter().enumerate() {
+        let fd = central(p, x0, c, (&mut rp, &mut rm, &mut jj));
+        assert!(!loaded(param) || fd.amax() > 1.0, "{param}: column ≈ 0");
+        errs.push((&fd - j.column(c)).amax() / (1.0 + fd.amax()));
+    }
+    errs
+}
+
+/// The central difference (step 1e-6) of `p`'s point residual along parameter `c` at `x0`:
+/// the Jacobian column its analytic one must match; `scratch` the residual and Jacobian
+/// buffers it evaluates into.
+fn central(
+    p: &RobotProblem,
+    x0: &DVector<Real>,
+    c: usize,
+    (rp, rm, jj): (&mut DVector<Real>, &mut DVector<Real>, &mut DMatrix<Real>),
+) -> DVector<Real> {
+    let h = 1e-6;
+    let mut xp = x0.clone();
+    xp[c] += h;
+    let mut xm = x0.clone();
+    xm[c] -= h;
+    p.evaluate(&xp, rp, jj);
+    p.evaluate(&xm, rm, jj);
+    // r = measured − model, so the model's derivative is −∂r/∂x.
+    (&*rm - &*rp) / (2.0 * h)
+}
+
 /// Displaces `count` points (the first ones) by 0.5–1 mm in random directions.
 fn add_outliers(d: &mut RobotData, count: usize, rng: &mut Rng) {
     let normal = Normal::new(0.0, 1.0).expect("unit");

@@ -46,10 +46,11 @@ pub struct Point {
     pub source: String,
 }
 
-/// A CSV text of `header` and `rows` (quoted where needed).
-pub(crate) fn csv_text(header: &[&str], rows: impl Iterator<Item = Vec<String>>) -> Result<String> {
+/// A CSV text of `header` (its column names joined by commas) and `rows` (quoted where
+/// needed).
+pub(crate) fn csv_text(header: &str, rows: impl Iterator<Item = Vec<String>>) -> Result<String> {
     let mut w = csv::Writer::from_writer(Vec::new());
-    w.write_record(header)
+    w.write_record(header.split(','))
         .map_err(|e| Error::Compute(e.to_string()))?;
     for row in rows {
         w.write_record(&row)
@@ -70,9 +71,8 @@ pub(crate) fn ci_cells(ci: Option<[Real; 2]>) -> [String; 2] {
 pub fn csv(points: &[Point]) -> Result<String> {
     let header = "scenario,machine,kind,entry,metric,label,calbench_version,git_commit,\
                   recorded_at,value,ci_lo,ci_hi,step";
-    let header: Vec<&str> = header.split(',').collect();
     csv_text(
-        &header,
+        header,
         points.iter().map(|p| {
             let [lo, hi] = ci_cells(p.ci);
             let mut row = vec![p.scenario.clone(), p.machine.clone(), p.kind.clone()];

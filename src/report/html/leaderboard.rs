@@ -63,9 +63,8 @@ pub struct Score {
 pub fn csv(rows: &[Row]) -> Result<String> {
     let header = "task,task_hash,metric,division,rank,row,name,models,value,ci_lo,ci_hi,source,\
                   machine,recorded_at,vs_published,vs_published_lo,vs_published_hi";
-    let header: Vec<&str> = header.split(',').collect();
     csv_text(
-        &header,
+        header,
         rows.iter().map(|r| {
             let [lo, hi] = ci_cells(r.ci);
             let row = if r.published { "published" } else { "entry" };

@@ -18,6 +18,21 @@ fn evals_fmt(v: &Real) -> String {
     fmt_num(*v, 3)
 }
 
+/// Draws the mesh of a chart whose x axis counts evaluations: ticks as [`evals_fmt`],
+/// `x_desc` under the axis and `y_desc` beside the other.
+fn evals_mesh<DB, X, Y>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<X, Y>>,
+    x_desc: &str,
+    y_desc: &str,
+) -> DrawResult<DB>
+where
+    DB: DrawingBackend,
+    X: Ranged<ValueType = Real> + ValueFormatter<Real>,
+    Y: Ranged<ValueType = Real> + ValueFormatter<Real>,
+{
+    styled_mesh(chart, &evals_fmt, y_desc).x_desc(x_desc).draw()
+}
+
 struct Ecdf<'d> {
     title: &'d str,
     series: &'d [EcdfSeries],
@@ -29,13 +44,8 @@ impl Figure for Ecdf<'_> {
         let (x_lo, x_hi) = (x.start, x.end);
         let y = with_headroom(0.0..1.0, self.series.len());
         let mut chart = chart_builder(root, self.title, 50).build_cartesian_2d(x.log_scale(), y)?;
-        styled_mesh(
-            &mut chart,
-            &evals_fmt,
-            "share of (trial, target) pairs reached",
-        )
-        .x_desc("evaluations (log scale)")
-        .draw()?;
+        let y_desc = "share of (trial, target) pairs reached";
+        evals_mesh(&mut chart, "evaluations (log scale)", y_desc)?;
         for (s, (name, v)) in self.series.iter().enumerate() {
             let c = color(s);
             // A step function: 0 before the first hit, each share from its evaluations on.
@@ -82,13 +92,8 @@ impl Figure for Budget<'_> {
         let y_floor = y.start;
         let mut chart =
             chart_builder(root, self.title, 50).build_cartesian_2d(x.log_scale(), y.log_scale())?;
-        styled_mesh(
-            &mut chart,
-            &evals_fmt,
-            "mean best fitness (eq. 14) with its 95 % interval",
-        )
-        .x_desc("budget in evaluations (log scale)")
-        .draw()?;
+        let y_desc = "mean best fitness (eq. 14) with its 95 % interval";
+        evals_mesh(&mut chart, "budget in evaluations (log scale)", y_desc)?;
         for (s, (name, v)) in self.series.iter().enumerate() {
             let c = color(s);
             let pts: Vec<_> = v
