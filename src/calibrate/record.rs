@@ -362,12 +362,6 @@ impl IdentifiedRecord {
         s.extend(given.into_iter().filter_map(|(k, v)| Some((k, v?))));
         s
     }
-
-    /// Reads `identified.json` at `path` ([`IdentifiedRecord::from_json`]).
-    pub fn read(path: &Path) -> crate::Result<IdentifiedRecord> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        IdentifiedRecord::from_json(&text, path)
-    }
 }
 
 /// `v` written through a JSON tree: its keys in byte order.

@@ -546,21 +546,24 @@ mod tests {
         );
         assert_eq!(e.key(), Some("tracker.mpe_a_um"));
         // Read from a scenario's text, the same value is refused on its field, as it is read.
-        let tracker = |text: &str| toml::from_str::<TrackerSettings>(text).err();
-        let outliers = |text: &str| toml::from_str::<OutlierSettings>(text).err();
-        let cases: [(&str, &str, &dyn Fn(&str) -> Option<toml::de::Error>); 5] = [
-            ("mpe_a_um = -1.0", "non-negative", &tracker),
-            ("coverage = 0.0", "positive", &tracker),
+        // (text, why, whether it is the tracker's table or the outliers').
+        for (text, why, tracker) in [
+            ("mpe_a_um = -1.0", "non-negative", true),
+            ("coverage = 0.0", "positive", true),
             (
                 "pose = [0.0, 0.0, 0.0, 0.0, 0.0, inf]",
                 "6 finite numbers",
-                &tracker,
+                true,
             ),
-            ("fraction = 1.5", "in [0, 1]", &outliers),
-            ("magnitude_mm = [2.0, 1.0]", "lo ≤ hi", &outliers),
-        ];
-        for (text, why, refusal) in cases {
-            let e = refusal(text).unwrap().to_string();
+            ("fraction = 1.5", "in [0, 1]", false),
+            ("magnitude_mm = [2.0, 1.0]", "lo ≤ hi", false),
+        ] {
+            let e = if tracker {
+                toml::from_str::<TrackerSettings>(text).err()
+            } else {
+                toml::from_str::<OutlierSettings>(text).err()
+            };
+            let e = e.unwrap().to_string();
             assert!(e.contains(why), "{text}: {e}");
         }
         let t = TrackerSettings {
