@@ -33,9 +33,10 @@ impl Figure for Ecdf<'_> {
             &mut chart,
             &evals_fmt,
             "share of (trial, target) pairs reached",
-        )
-        .x_desc("evaluations (log scale)")
-        .draw()?;
+            |m| {
+                m.x_desc("evaluations (log scale)");
+            },
+        )?;
         for (s, (name, v)) in self.series.iter().enumerate() {
             let c = color(s);
             // A step function: 0 before the first hit, each share from its evaluations on.
@@ -86,9 +87,10 @@ impl Figure for Budget<'_> {
             &mut chart,
             &evals_fmt,
             "mean best fitness (eq. 14) with its 95 % interval",
-        )
-        .x_desc("budget in evaluations (log scale)")
-        .draw()?;
+            |m| {
+                m.x_desc("budget in evaluations (log scale)");
+            },
+        )?;
         for (s, (name, v)) in self.series.iter().enumerate() {
             let c = color(s);
             let pts: Vec<_> = v
