@@ -71,6 +71,9 @@ pub struct Differences {
     pub label: String,
     /// b − a per trial.
     pub values: Vec<Real>,
+    /// The estimate and 95 % interval of the test of the comparison's verdict (the mean and
+    /// its t interval, or the median and its sign-test interval), where it has one.
+    pub mark: Option<(Real, [Real; 2])>,
 }
 
 /// The run's comparisons: all of them (a before b in `results` order), Holm-adjusted
@@ -132,11 +135,21 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
                     .map(|(x, y)| y - x)
                     .filter(|d| d.is_finite())
                     .collect();
-                let label = format!("{} vs {}", label(eb), label(ea));
+                let (la, lb) = (label(ea), label(eb));
+                let mark = shown
+                    .iter()
+                    .find(|c| {
+                        c.metric == metric
+                            && c.a == la
+                            && c.b == lb
+                            && c.sweep_value == ea.sweep_value
+                    })
+                    .and_then(|c| Some((c.estimate?, c.ci95?)));
                 differences.push(Differences {
                     metric,
-                    label,
+                    label: format!("{lb} vs {la}"),
                     values,
+                    mark,
                 });
             }
         }

@@ -100,13 +100,19 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         let line = match c.diff_ci {
             None => format!("{}: {m}", c.status.as_str()),
             Some([lo, hi]) => format!(
-                "{}: {}: {}: {} → {} (change {} in [{}, {}], {}, p Holm {}){}",
+                "{}: {}: {}: {} → {} (change {}{} [{}, {}], {}, p Holm {}){}",
                 c.status.as_str(),
                 m.entry,
                 m.metric,
                 fmt_num(m.baseline, 6),
                 fmt_num(m.value, 6),
                 fmt_num(m.value - m.baseline, 4),
+                // The interval of the report's test of the pair: the median's for the sign test.
+                if c.median {
+                    ", median change (sign test) in"
+                } else {
+                    " in"
+                },
                 fmt_num(lo, 4),
                 fmt_num(hi, 4),
                 if c.paired { "paired" } else { "unpaired" },

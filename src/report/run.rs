@@ -89,8 +89,10 @@ pub mod columns {
 
     /// 95 % interval of the mean η.
     pub const ETA_MEAN_CI: Column = ("η mean 95 % CI", |e| fmt_ci(e.eta_mean_pct_ci95, 4));
-    /// 95 % interval of the median η.
-    pub const ETA_MEDIAN_CI: Column = ("η median 95 % CI", |e| fmt_ci(e.eta_median_pct_ci95, 4));
+    /// 95 % interval of the median η, simultaneous over the parameters.
+    pub const ETA_MEDIAN_CI: Column = ("η median 95 % CI, simultaneous", |e| {
+        fmt_ci(e.eta_median_pct_ci95, 4)
+    });
     /// 95 % interval of the mean validation error after compensation.
     pub const AFTER_MEAN_CI: Column = ("after mean 95 % CI", |e| {
         fmt_ci(e.validation_after_mm.mean_ci95, 4)
@@ -304,9 +306,11 @@ pub const INTERVAL_COLUMNS: [Column; 8] = {
 
 /// What the intervals of the reports are (docs/formats.md "summary.json").
 pub const INTERVAL_NOTE: &str = "95 % intervals of each figure over the Monte-Carlo trials: \
-    the t interval of a mean (mean ± t₀.₉₇₅,ₙ₋₁ · s / √n), and for the median η the \
-    distribution-free interval of order statistics of each parameter's median at level \
-    1 − 0.05 / p, averaged over the p parameters. A difference between two entries whose \
+    the t interval of a mean (mean ± t₀.₉₇₅,ₙ₋₁ · s / √n), and for the median η a \
+    simultaneous interval over the p parameters: the distribution-free interval of order \
+    statistics of each parameter's median at level 1 − 0.05 / p (Bonferroni, so that all p \
+    hold together with 95 %), averaged over the parameters — wider than a 95 % interval of \
+    one parameter's median. A difference between two entries whose \
     intervals overlap may still be real: the entries share their draws, so a paired \
     comparison is far more precise.";
 
@@ -319,6 +323,10 @@ pub const METRIC_NOTES: [(&str, &str); 6] = [
     (Metric::Failures.spec().field, ": identifications that diverged, were singular or gave non-finite values."),
     (Metric::Evaluations.spec().field, ": model evaluations per identification, mean over trials (residuals for the Jacobian methods, fitness eq. 14 for BAS, PSO and BAS-PSO): the budget each method spent."),
 ];
+
+/// The bottom of the η-per-parameter chart (%): a mean η below it (the estimate's error
+/// over three times the injected error) is cut at the axis with its value written.
+pub const ETA_FLOOR_PCT: Real = -200.0;
 
 /// The η table of block `b`: headers (`parameter`, then one per entry) and one row per
 /// parameter with the mean η of each entry (%).
@@ -365,15 +373,44 @@ pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
     let intervals: Vec<Vec<Option<[Real; 2]>>> = intervals.into_iter().map(|(_, v)| v).collect();
     figs.push(Figure::new(
         Metric::Eta.spec().field,
-        "η per parameter and method, with the 95 % interval of each mean",
+        "η per parameter and method, with the 95 % interval of each parameter's mean (η below −200 % cut at the axis, its value written)",
         move |p| {
-            plots::grouped_bars_with_intervals(
+            plots::grouped_bars_with_floor(
                 p,
                 "Identification accuracy per parameter",
                 "mean η (%) with its 95 % interval",
                 &params,
                 &series,
                 &intervals,
+                Some(ETA_FLOOR_PCT),
+            )
+        },
+    ));
+    // The headline figure of each entry with its 95 % interval.
+    let entries: Vec<String> = b0.entries.iter().map(entry_label).collect();
+    let rms = vec![(
+        "mean validation RMS after compensation".to_string(),
+        b0.entries
+            .iter()
+            .map(|e| e.validation_after_mm.rms)
+            .collect::<Vec<Real>>(),
+    )];
+    let rms_ci = vec![b0
+        .entries
+        .iter()
+        .map(|e| e.validation_after_mm.rms_ci95)
+        .collect::<Vec<_>>()];
+    figs.push(Figure::new(
+        "headline_rms",
+        "validation RMS after compensation per method and pose strategy, with the 95 % interval of each mean",
+        move |p| {
+            plots::grouped_bars_with_intervals(
+                p,
+                "Validation RMS after compensation",
+                "RMS (mm) with its 95 % interval",
+                &entries,
+                &rms,
+                &rms_ci,
             )
         },
     ));
@@ -423,16 +460,21 @@ pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
         },
     ));
     // The paired comparisons' per-trial differences, each entry against its baseline.
+    // With the estimate and interval of the test each verdict is judged on.
     for (stem, title, y_label, metric) in comparisons::DIFF_PLOTS {
-        let groups: Vec<(String, Vec<Real>)> = summary
+        let shown: Vec<_> = summary
             .differences
             .iter()
             .filter(|d| d.metric == metric)
+            .collect();
+        let groups: Vec<(String, Vec<Real>)> = shown
+            .iter()
             .map(|d| (d.label.clone(), d.values.clone()))
             .collect();
+        let marks: Vec<Option<plots::Mark>> = shown.iter().map(|d| d.mark).collect();
         if !groups.is_empty() {
             figs.push(Figure::new(stem, title, move |p| {
-                plots::box_plot(p, title, y_label, &groups)
+                plots::box_plot_with_marks(p, title, y_label, &groups, &marks)
             }));
         }
     }

@@ -39,7 +39,15 @@ window.addEventListener('error',function(ev){p.errors.push('uncaught: '+(ev.mess
 document.addEventListener('securitypolicyviolation',function(ev){p.blocked.push(ev.blockedURI+' ('+ev.violatedDirective+')');});
 window.addEventListener('load',function(){setTimeout(function(){
 var svgs=Array.prototype.map.call(document.querySelectorAll('svg'),function(s){var r=s.getBoundingClientRect();return [r.width,r.height];});
-var out={errors:p.errors,blocked:p.blocked,svgs:svgs,
+var broken=[],walk=document.createTreeWalker(document.body,NodeFilter.SHOW_TEXT),node;
+while((node=walk.nextNode())){if(node.parentNode.closest('svg,script,style,pre'))continue;
+var re=/(?<![\w.\u2212-])[-\u2212]?\d[\d.]*(?:e[-+\u2212]?\d+)?%?/g,m;while((m=re.exec(node.data))){var rg=document.createRange();
+rg.setStart(node,m.index);rg.setEnd(node,m.index+m[0].length);var tops={};
+Array.prototype.forEach.call(rg.getClientRects(),function(r){if(r.width>0)tops[Math.round(r.top)]=1;});
+if(Object.keys(tops).length>1)broken.push(m[0]);}}
+var out={errors:p.errors,blocked:p.blocked,svgs:svgs,broken:broken,
+headings:Array.prototype.map.call(document.querySelectorAll('h2'),function(h){return h.textContent;}),
+labels:Array.prototype.map.call(document.querySelectorAll('svg'),function(s){return Array.prototype.map.call(s.querySelectorAll('text'),function(t){return t.textContent.trim();});}),
 resources:performance.getEntriesByType('resource').map(function(r){return r.name;}),
 scrollWidth:document.documentElement.scrollWidth,innerWidth:window.innerWidth};
 var pre=document.createElement('pre');pre.id='calbench-probe';pre.textContent=JSON.stringify(out);document.body.appendChild(pre);},50);});})();
@@ -152,12 +160,56 @@ pub(crate) fn self_contained(page: &Path) -> String {
     html
 }
 
-pub(crate) fn browse(chrome: &Path, page: &Path, work: &Path, plots: usize) {
+/// The tick labels of a plot that are the tick arithmetic's residue where 0 belongs (such
+/// as −2.78e-17 on an axis from −0.18 to 0.02): a label within 10⁻⁹ of the largest of a
+/// plot whose labels hold a negative value (a logarithmic axis holds none).
+pub(crate) fn residues_of_zero(labels: &[String]) -> Vec<String> {
+    let values: Vec<f64> = labels
+        .iter()
+        .filter_map(|l| l.replace('\u{2212}', "-").parse::<f64>().ok())
+        .collect();
+    let largest = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+    if !values.iter().any(|v| *v < 0.0) {
+        return Vec::new();
+    }
+    labels
+        .iter()
+        .filter(|l| {
+            l.replace('\u{2212}', "-")
+                .parse::<f64>()
+                .is_ok_and(|v| v != 0.0 && v.abs() < 1e-9 * largest)
+        })
+        .cloned()
+        .collect()
+}
+
+/// Opens `page` in Chromium at 1280 and 500 px and checks it ([`probe`]): no console error,
+/// no request, `plots` plots of a real size, no sideways scrolling, at 1280 px no number
+/// broken over two lines, no tick label that is a residue of 0 ([`residues_of_zero`]), a
+/// screenshot that is not blank. Gives the section headings in page order.
+pub(crate) fn browse(chrome: &Path, page: &Path, work: &Path, plots: usize) -> Vec<String> {
     std::fs::create_dir_all(work).unwrap();
+    let mut headings = Vec::new();
     // 500 px: the narrowest window headless Chromium lays out (a phone's width).
     for width in [1280, 500] {
         let p = probe(chrome, page, width, work);
         let name = format!("{} at {width} px", page.display());
+        if width == 1280 {
+            assert_eq!(
+                p["broken"],
+                Value::Array(vec![]),
+                "{name}: numbers broken over lines"
+            );
+            headings = serde_json::from_value(p["headings"].clone()).unwrap();
+            for labels in p["labels"].as_array().unwrap() {
+                let labels: Vec<String> = serde_json::from_value(labels.clone()).unwrap();
+                let bad = residues_of_zero(&labels);
+                assert!(
+                    bad.is_empty(),
+                    "{name}: tick labels {bad:?} where 0 belongs"
+                );
+            }
+        }
         assert_eq!(p["errors"], Value::Array(vec![]), "{name}: console errors");
         assert_eq!(p["blocked"], Value::Array(vec![]), "{name}: requests");
         assert_eq!(p["resources"], Value::Array(vec![]), "{name}: requests");
@@ -183,6 +235,40 @@ pub(crate) fn browse(chrome: &Path, page: &Path, work: &Path, plots: usize) {
         page.display(),
         inked
     );
+    headings
+}
+
+#[test]
+fn a_residue_of_zero_among_tick_labels_is_found() {
+    let l = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    assert_eq!(
+        residues_of_zero(&l(&["-0.04", "-0.02", "-2.78e-17", "0.02", "ls / random"])),
+        ["-2.78e-17"]
+    );
+    assert!(residues_of_zero(&l(&["-0.04", "-0.02", "0", "0.02"])).is_empty());
+    // A logarithmic axis: small ticks are values.
+    assert!(residues_of_zero(&l(&["1e-12", "1e-6", "1"])).is_empty());
+}
+
+/// The sections of a run's page in order: the verdicts (the paper's claims, where there are
+/// any, then the paired verdicts and the headline figures) before how they were obtained.
+fn assert_verdicts_lead(name: &str, headings: &[String], claims: bool) {
+    let at = |h: &str| {
+        headings
+            .iter()
+            .position(|x| x == h)
+            .unwrap_or_else(|| panic!("{name}: no section {h:?} in {headings:?}"))
+    };
+    let mut lead = vec!["Paired verdicts", "Headline figures", "Settings", "Results"];
+    if claims {
+        lead.insert(0, "The paper's claims");
+    }
+    let order: Vec<usize> = lead.iter().map(|h| at(h)).collect();
+    assert_eq!(
+        order,
+        (0..lead.len()).collect::<Vec<_>>(),
+        "{name}: {headings:?}"
+    );
 }
 
 #[test]
@@ -202,14 +288,20 @@ fn every_page_is_self_contained_and_renders_in_chromium() {
         "sweep",
         &format!("{SMALL}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n"),
     );
+    let li = root().join("scenarios/li2018-irb2600.toml");
     let mut pages: Vec<(PathBuf, usize)> = Vec::new();
-    for (sc, name) in [(&small, "run"), (&grid, "grid"), (&sweep, "sweep")] {
+    for (sc, name, trials) in [
+        (&small, "run", "2"),
+        (&grid, "grid", "2"),
+        (&sweep, "sweep", "2"),
+        (&li, "li", "8"),
+    ] {
         let out = dir.join(name);
         calbench_ok(&[
             "run",
             path_arg(sc),
             "--trials",
-            "2",
+            trials,
             "--out",
             path_arg(&out),
         ]);
@@ -236,6 +328,27 @@ fn every_page_is_self_contained_and_renders_in_chromium() {
             );
         }
         assert!(html.contains(">Terminations and failures</h2>"), "{name}");
+        // The verdicts lead, in the page's text as in the browser.
+        let headings: Vec<String> = html
+            .split("<h2 id=\"")
+            .skip(1)
+            .filter_map(|h| h.split('>').nth(1)?.split('<').next())
+            .map(|h| h.replace("&apos;", "'"))
+            .collect();
+        assert_verdicts_lead(name, &headings, name == "li");
+        // No Markdown mark shows as text (the notes' `code` and **strong** are elements).
+        let text = html.split("<pre>").next().unwrap();
+        assert!(
+            !text.contains('`') && !text.contains("**"),
+            "{name}: raw Markdown"
+        );
+        if name == "li" {
+            // The paired verdicts' plots carry the interval of the verdict's test.
+            assert!(
+                html.contains("estimate and 95 % interval of the verdict"),
+                "{name}"
+            );
+        }
         if name == "grid" {
             assert!(html.contains("heatmap") || html.contains("Validation RMS after"));
         }
@@ -328,7 +441,10 @@ fn every_page_is_self_contained_and_renders_in_chromium() {
         return;
     };
     for (i, (page, plots)) in pages.iter().enumerate() {
-        browse(&chrome, page, &dir.join(format!("browser-{i}")), *plots);
+        let headings = browse(&chrome, page, &dir.join(format!("browser-{i}")), *plots);
+        if i < 4 {
+            assert_verdicts_lead(&page.display().to_string(), &headings, i == 3);
+        }
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -222,3 +222,80 @@ fn two_sweeps_are_compared_point_by_point_on_their_shared_trials() {
         );
     }
 }
+
+/// A copy of run `a` as run `b` in which entry `method`'s validation RMS after compensation
+/// (`after_rms_mm` in `trials.csv`, `validation_after_mm.rms` in `summary.json`) moves by
+/// `shift(k)` on the k-th trial, the summary's figure the mean of the new values.
+fn shifted_copy(a: &Path, b: &Path, method: &str, shift: impl Fn(usize) -> f64) {
+    std::fs::create_dir_all(b).unwrap();
+    let csv = read(&a.join("trials.csv"));
+    let mut lines = csv.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let (mc, rc) = (col("method"), col("after_rms_mm"));
+    let (mut out, mut values) = (vec![head.join(",")], Vec::new());
+    for l in lines {
+        let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+        if cells[mc] == method {
+            let v = cells[rc].parse::<f64>().unwrap() + shift(values.len());
+            cells[rc] = format!("{v:?}");
+            values.push(v);
+        }
+        out.push(cells.join(","));
+    }
+    std::fs::write(b.join("trials.csv"), out.join("\n") + "\n").unwrap();
+    let mut s = crate::common::load_json(&a.join("summary.json"));
+    let e = s["results"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .find(|e| e["method"] == method)
+        .unwrap();
+    e["validation_after_mm"]["rms"] = (values.iter().sum::<f64>() / values.len() as f64).into();
+    std::fs::write(b.join("summary.json"), s.to_string()).unwrap();
+}
+
+#[test]
+fn a_paired_check_prints_the_interval_of_the_reports_test_of_the_pair() {
+    let dir = tmp_dir("cli-noise-median");
+    let sc = write_scenario(&dir, "small", crate::common::SMALL_STUDY);
+    let a = dir.join("a");
+    calbench_ok(&[
+        "run",
+        path_arg(&sc),
+        "--trials",
+        "30",
+        "--out",
+        path_arg(&a),
+    ]);
+    // Heavy-tailed changes (3 stalls of 0.5 mm among 30 trials of +0.002 mm): the report
+    // would locate their median, and check prints the median's interval, which holds the
+    // typical change and not the stalls' pull on the mean (0.052 mm).
+    let heavy = dir.join("heavy");
+    shifted_copy(&a, &heavy, "ls", |k| if k % 10 == 3 { 0.5 } else { 0.002 });
+    let (_, text) = check(&heavy, &a, &[]);
+    let l = line(&text, "ls / random", "validation_after_mm.rms");
+    let interval = l
+        .split("median change (sign test) in [")
+        .nth(1)
+        .and_then(|r| r.split(']').next())
+        .unwrap_or_else(|| panic!("no median interval: {text}"));
+    let bounds: Vec<f64> = interval.split(", ").map(|x| x.parse().unwrap()).collect();
+    assert!(
+        bounds.iter().all(|b| (b - 0.002).abs() < 1e-6),
+        "{l}: the median change is 0.002"
+    );
+    assert!(l.contains("paired"), "{l}");
+    // Light-tailed changes: the t interval of the mean, as the report's.
+    let light = dir.join("light");
+    shifted_copy(&a, &light, "ls", |k| {
+        0.002 + 0.0004 * ((k * 7 % 11) as f64 - 5.0)
+    });
+    let (_, text) = check(&light, &a, &[]);
+    let l = line(&text, "ls / random", "validation_after_mm.rms");
+    assert!(
+        l.contains(" in [") && !l.contains("median") && l.contains("paired"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

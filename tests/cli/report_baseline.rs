@@ -94,17 +94,31 @@ fn the_reports_compare_against_the_named_baseline_and_the_summary_keeps_every_pa
             ("lm / random", "igg3 / random", "eta_mean_pct"),
         ]
     );
-    // Each row is the summary's pair the other way round: the difference negated, the same
-    // Wilcoxon p-value and Holm adjustment.
+    // Each row is the summary's pair the other way round: the same test, its estimate
+    // negated and its interval mirrored (the mean's t interval, or the median's sign-test
+    // interval: the one the verdict is judged on), the same Wilcoxon p-value and Holm
+    // adjustment.
     for r in &rows {
         let c = pair(&summary, &r[1], &r[0], &r[2]);
         let f = |k: &str| c[k].as_f64().unwrap();
+        let ci = |i: usize| c["ci95"][i].as_f64().unwrap();
         assert_eq!(r[3], c["n"].to_string());
-        assert_eq!(r[4], fmt_num(-f("diff_mean"), 4), "{r:?} vs {c}");
-        assert_eq!(r[8], fmt_num(f("p_value"), 3), "{r:?} vs {c}");
-        assert_eq!(r[9], fmt_num(f("p_holm"), 3), "{r:?} vs {c}");
+        let test = match c["test"].as_str().unwrap() {
+            "t" => "mean (t)",
+            "sign" => "median (sign)",
+            t => panic!("test {t}"),
+        };
+        assert_eq!(r[4], test, "{r:?} vs {c}");
+        assert_eq!(r[5], fmt_num(-f("estimate"), 4), "{r:?} vs {c}");
+        assert_eq!(
+            r[6],
+            format!("[{}, {}]", fmt_num(-ci(1), 4), fmt_num(-ci(0), 4)),
+            "{r:?} vs {c}"
+        );
+        assert_eq!(r[9], fmt_num(f("p_value"), 3), "{r:?} vs {c}");
+        assert_eq!(r[10], fmt_num(f("p_holm"), 3), "{r:?} vs {c}");
         if r[2].starts_with("validation") {
-            assert_eq!(r[6], fmt_num(1.0 / f("ratio"), 4), "{r:?} vs {c}");
+            assert_eq!(r[7], fmt_num(1.0 / f("ratio"), 4), "{r:?} vs {c}");
         }
     }
     let html = read(&based.join("report.html"));

@@ -267,7 +267,9 @@ fn search_ecdfs_are_monotone_shares_and_the_same_bytes_for_threads_shards_and_re
         "the section's figures"
     );
     match chromium() {
-        Some(chrome) => browse(&chrome, &page, &dir.join("browser"), svgs),
+        Some(chrome) => {
+            browse(&chrome, &page, &dir.join("browser"), svgs);
+        }
         None => assert!(
             !ci(),
             "no Chromium on the PATH (CI=true: a missing browser is a failure)"

@@ -27,6 +27,7 @@ use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 use crate::study::stats::Entry;
 pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
+use noise::Change;
 pub use noise::{pairable, Status, Trials};
 
 use crate::study::metric::{Better, Metric};
@@ -135,8 +136,10 @@ pub struct Compared {
     /// What the metric did ([`Status`]); `regressed` is `status == Regression`.
     pub status: Status,
     /// The interval of the change B − A at the Holm-adjusted level of this metric
-    /// ([`ALPHA`] / its Holm step: the interval excludes zero exactly when the step rejects), in
-    /// the metric's units; `None` for a missing metric.
+    /// ([`ALPHA`] / its Holm step), in the metric's units; `None` for a missing metric.
+    /// Unpaired it is the t (Welch) interval, which excludes zero exactly when the step
+    /// rejects; paired it is the interval of the test the report's comparison of the pair
+    /// uses ([`Change::interval`]): of the mean (t), or of the median (sign) — `median`.
     pub diff_ci: Option<[Real; 2]>,
     /// The two-sided p-value of "no change" (NaN for a missing metric).
     pub p_value: Real,
@@ -144,6 +147,10 @@ pub struct Compared {
     pub p_holm: Real,
     /// Whether the change was computed trial by trial (from both runs' `trials.csv`).
     pub paired: bool,
+    /// Whether `diff_ci` is the interval of the median change (paired, where the report's
+    /// comparison of the pair locates the median: the sign test's), not the t interval of
+    /// the mean.
+    pub median: bool,
     /// For an unresolved metric: the trials per run that would detect a change of exactly
     /// the tolerance with 80 % power at the Bonferroni level [`ALPHA`] / m.
     pub trials_needed: Option<usize>,
@@ -200,15 +207,19 @@ pub fn compare_with(
                     .filter(|c| c.matches(base, value))
                     .unwrap_or_else(|| noise::unpaired(b, e, &metric, (base, value), counts))
             });
+            let located = change.as_ref().map(|c| c.sorted.is_some());
             changes.push(change);
             out.push(Compared {
+                median: located == Some(true),
                 higher_is_better: dir == Better::Higher,
                 regressed: !value.is_finite(),
                 status: Status::Regression,
                 diff_ci: None,
                 p_value: Real::NAN,
                 p_holm: Real::NAN,
-                paired: change.is_some_and(|c| c.paired),
+                paired: changes
+                    .last()
+                    .is_some_and(|c| c.as_ref().is_some_and(|c| c.paired)),
                 trials_needed: None,
                 metric: Regression {
                     entry: key.clone(),
@@ -221,12 +232,12 @@ pub fn compare_with(
     }
     let p: Vec<Real> = changes
         .iter()
-        .map(|c| c.map_or(Real::NAN, |c| c.p_value()))
+        .map(|c| c.as_ref().map_or(Real::NAN, Change::p_value))
         .collect();
     let (p_holm, steps) = noise::holm(&p);
     let m = p.iter().filter(|p| !p.is_nan()).count().max(1);
     for (i, c) in out.iter_mut().enumerate() {
-        let Some(change) = changes[i] else {
+        let Some(change) = &changes[i] else {
             continue;
         };
         let dir = if c.higher_is_better {

@@ -22,8 +22,9 @@ use crate::error::{Error, Result};
 use crate::numeric::dist;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
+use crate::study::stats::location::Test;
 use crate::study::stats::paired::compare;
-use crate::study::stats::{eta, Entry};
+use crate::study::stats::{eta, median_ranks, Entry};
 
 /// What a compared metric did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,7 +58,7 @@ impl Status {
 
 /// The statistics of one change: B − A, its standard error and degrees of freedom, or that
 /// it is exact.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Change {
     /// Standard error of the change (0: exact).
     pub se: Real,
@@ -80,6 +81,11 @@ pub struct Change {
     /// differences (1 when every difference is within rounding), which decides; `None`
     /// unpaired (the t or z test of `diff` over `se`).
     pub p_test: Option<Real>,
+    /// Paired, when the location rule of the report's comparison of the pair picks the sign
+    /// test (heavy-tailed differences, docs/formats.md "Tests and margins"): the per-trial
+    /// differences in the tested scale, sorted, whose median and its distribution-free
+    /// interval are the change's interval ([`Change::interval`]); `None`: the t interval.
+    pub sorted: Option<Vec<Real>>,
 }
 
 /// Whether `a` and `b` differ by no more than the rounding of decimal numbers (1e-12 of the
@@ -288,6 +294,12 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
     };
     let means = Some([side(|p| p.0), side(|p| p.1)]);
     let var = d.iter().map(|x| (x - mean).powi(2)).sum::<Real>() / (n - 1) as Real;
+    // The report's test of the pair: where it locates the median, so does the interval.
+    let sorted = (test.test == Test::Sign).then(|| {
+        let mut v = d.clone();
+        v.sort_by(Real::total_cmp);
+        v
+    });
     Some(Change {
         se: (var / n as Real).sqrt(),
         df: (n - 1) as Real,
@@ -301,6 +313,7 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
         } else {
             test.p_value
         }),
+        sorted,
     })
 }
 
@@ -358,6 +371,7 @@ pub fn unpaired(
         diff: vb - va,
         means: None,
         p_test: None,
+        sorted: None,
     };
     if Metric::from_key(metric) == Some(Metric::Failures) {
         let (Some(na), Some(nb)) = (trials[0], trials[1]) else {
@@ -406,6 +420,7 @@ pub fn unpaired(
         diff: if rmse { vb * vb - va * va } else { vb - va },
         means: None,
         p_test: None,
+        sorted: None,
     }
 }
 
@@ -437,14 +452,26 @@ impl Change {
     }
 
     /// The interval of the change at level 1 − `alpha`, in the metric's units (for an RMSE,
-    /// mapped back from the squared errors around A's RMSE).
+    /// mapped back from the squared errors around A's RMSE): the test's of the report's
+    /// comparison of the pair — the t interval of the mean, or, where the report locates
+    /// the median ([`Change::sorted`]), the distribution-free interval of the median
+    /// (order statistics of ranks [`median_ranks`] at that level; the extreme differences
+    /// when even they do not reach it).
     pub fn interval(&self, alpha: Real) -> [Real; 2] {
-        let h = if self.se == 0.0 {
-            0.0
-        } else {
-            dist::t_quantile(1.0 - alpha / 2.0, self.df) * self.se
+        let (lo, hi) = match &self.sorted {
+            Some(v) if !v.is_empty() => {
+                let (l, u) = median_ranks(v.len(), alpha).unwrap_or((0, v.len() - 1));
+                (v[l], v[u])
+            }
+            _ => {
+                let h = if self.se == 0.0 {
+                    0.0
+                } else {
+                    dist::t_quantile(1.0 - alpha / 2.0, self.df) * self.se
+                };
+                (self.diff - h, self.diff + h)
+            }
         };
-        let (lo, hi) = (self.diff - h, self.diff + h);
         match self.mse_a {
             Some(m) => {
                 let r = m.sqrt();
@@ -485,6 +512,76 @@ pub use crate::study::stats::paired::holm;
 mod tests {
     use super::*;
 
+    /// Two runs' per-trial values of one entry: a, and b = a + `d` trial by trial.
+    fn runs(a: &[Real], d: &[Real]) -> (Trials, Trials) {
+        let key = (
+            "ls / random".to_string(),
+            "validation_after_mm.rms".to_string(),
+        );
+        let side = |v: Vec<Real>| {
+            let mut t = Trials::default();
+            t.values
+                .insert(key.clone(), v.into_iter().enumerate().collect());
+            t.trials
+                .insert(key.0.clone(), (0..a.len()).collect::<BTreeSet<_>>());
+            t
+        };
+        let b = a.iter().zip(d).map(|(x, y)| x + y).collect();
+        (side(a.to_vec()), side(b))
+    }
+
+    #[test]
+    fn a_paired_change_has_the_interval_of_the_reports_test_of_the_pair() {
+        let a: Vec<Real> = (0..40).map(|i| 1.0 + 0.01 * i as Real).collect();
+        // Heavy-tailed differences (a few stalls): the report's comparison locates the
+        // median, and so does the change's interval — at 95 % the report's interval itself.
+        let heavy: Vec<Real> = (0..40)
+            .map(|i| {
+                if i % 13 == 0 {
+                    0.75
+                } else {
+                    -0.01 + 1e-4 * i as Real
+                }
+            })
+            .collect();
+        let (ta, tb) = runs(&a, &heavy);
+        let k = "ls / random";
+        let c = paired(&ta, &tb, (k, k), "validation_after_mm.rms").unwrap();
+        let b: Vec<Real> = a.iter().zip(&heavy).map(|(x, y)| x + y).collect();
+        let report = compare((k, k), Metric::ValidationAfterRms, (&a, &b));
+        assert_eq!(report.test, Test::Sign);
+        assert!(c.sorted.is_some());
+        let [lo, hi] = c.interval(0.05);
+        let [rlo, rhi] = report.ci95.unwrap();
+        assert!(
+            (lo - rlo).abs() < 1e-12 && (hi - rhi).abs() < 1e-12,
+            "{lo} {hi} {rlo} {rhi}"
+        );
+        // The t interval of the mean would hold the stalls' pull: far wider and above 0.
+        let mean = Change {
+            sorted: None,
+            ..c.clone()
+        }
+        .interval(0.05);
+        assert!(
+            mean[1] - mean[0] > 3.0 * (hi - lo),
+            "{mean:?} against [{lo}, {hi}]"
+        );
+        // Light-tailed differences: the t interval of the mean, as the report's.
+        let light: Vec<Real> = (0..40)
+            .map(|i| 0.01 * ((i * 7 % 11) as Real - 5.0))
+            .collect();
+        let (ta, tb) = runs(&a, &light);
+        let c = paired(&ta, &tb, (k, k), "validation_after_mm.rms").unwrap();
+        let b: Vec<Real> = a.iter().zip(&light).map(|(x, y)| x + y).collect();
+        let report = compare((k, k), Metric::ValidationAfterRms, (&a, &b));
+        assert_eq!(report.test, Test::T);
+        assert!(c.sorted.is_none());
+        let [lo, hi] = c.interval(0.05);
+        let [rlo, rhi] = report.ci95.unwrap();
+        assert!((lo - rlo).abs() < 1e-12 && (hi - rhi).abs() < 1e-12);
+    }
+
     #[test]
     fn an_exact_change_is_significant_unless_zero() {
         let c = Change {
@@ -496,9 +593,17 @@ mod tests {
             diff: 0.1,
             means: None,
             p_test: None,
+            sorted: None,
         };
         assert_eq!(c.p_value(), 0.0);
-        assert_eq!(Change { diff: 0.0, ..c }.p_value(), 1.0);
+        assert_eq!(
+            Change {
+                diff: 0.0,
+                ..c.clone()
+            }
+            .p_value(),
+            1.0
+        );
     }
 
     #[test]
@@ -512,6 +617,7 @@ mod tests {
             diff: 0.01,
             means: None,
             p_test: None,
+            sorted: None,
         };
         // σ = 0.1, effect 0.02 at α = 0.05: (1.96 + 0.8416)² · 0.01 / 0.0004 = 196.2.
         assert_eq!(c.trials_needed(0.02, 0.05), Some(197));

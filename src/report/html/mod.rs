@@ -23,7 +23,7 @@ use crate::error::{Error, Result};
 const STYLE: &str = "\
 :root{color-scheme:light}\
 body{font:15px/1.45 system-ui,-apple-system,'Segoe UI',sans-serif;color:#1d1d1f;margin:0 auto;\
-max-width:1240px;padding:0 14px 40px;overflow-wrap:anywhere}\
+max-width:1240px;padding:0 14px 40px;overflow-wrap:break-word}\
 h1{font-size:1.55em;margin:.8em 0 .2em}h2{font-size:1.2em;border-bottom:1px solid #ccc;\
 margin-top:1.8em;padding-bottom:.15em}h3{font-size:1.02em;margin:1.2em 0 .3em}\
 p{margin:.4em 0 .7em;max-width:70em}\
@@ -32,10 +32,11 @@ nav{font-size:.92em;margin:.6em 0 1em}nav a{margin-right:.9em;white-space:nowrap
 table{border-collapse:collapse;font-size:13px;font-variant-numeric:tabular-nums}\
 p.cap{font-size:13px;color:#555;margin:.8em 0 .2em}\
 th,td{border:1px solid #d8d8d8;padding:3px 7px;text-align:right;vertical-align:top}\
-th{background:#f1f3f5;cursor:pointer}td.t,th.t{text-align:left}\
+th{background:#f1f3f5;cursor:pointer}td.t,th.t{text-align:left}td:not(.t){white-space:nowrap}\
+code{font-size:.92em;background:#f1f3f5;padding:0 3px;border-radius:3px}\
 tr.regressed td,tr.failed td{background:#fde0e0}tr.regressed td:first-child{border-left:4px solid #c62828}\
 tr.alone td,tr.low td{background:#eef3fb}td.flag{color:#b3261e;font-weight:600}\
-.plots{display:grid;grid-template-columns:repeat(auto-fit,minmax(min(100%,520px),1fr));gap:14px}\
+.plots{display:grid;grid-template-columns:repeat(auto-fill,minmax(min(100%,520px),1fr));gap:14px}\
 figure{margin:0}figure svg{display:block;width:100%;height:auto;border:1px solid #e3e3e3}\
 figcaption{font-size:13px;color:#555;margin-top:3px}\
 .warn{background:#fff4d6;border-left:4px solid #e0a800;padding:6px 10px;margin:.5em 0}\
@@ -62,6 +63,33 @@ rows.forEach(function(r){b.appendChild(r);});});});";
 /// writer uses (quick-xml's, whose entities HTML5 reads the same).
 pub fn escape(text: &str) -> String {
     quick_xml::escape::escape(text).into_owned()
+}
+
+/// Plain text that may hold the two inline marks of the reports' Markdown notes — `` `code` ``
+/// and `**strong**` — as HTML: escaped ([`escape`]), each pair of marks as its element, so
+/// that no mark shows as a character; an unpaired mark stays as written.
+pub fn inline(text: &str) -> String {
+    let mut out = String::with_capacity(text.len() + 16);
+    let mut rest = text;
+    loop {
+        let code = rest.find('`');
+        let strong = rest.find("**");
+        let (at, mark, tag) = match (code, strong) {
+            (Some(c), Some(s)) if s < c => (s, "**", "strong"),
+            (Some(c), _) => (c, "`", "code"),
+            (None, Some(s)) => (s, "**", "strong"),
+            (None, None) => break,
+        };
+        let after = &rest[at + mark.len()..];
+        let Some(end) = after.find(mark) else {
+            break;
+        };
+        out += &escape(&rest[..at]);
+        let _ = write!(out, "<{tag}>{}</{tag}>", escape(&after[..end]));
+        rest = &after[end + mark.len()..];
+    }
+    out += &escape(rest);
+    out
 }
 
 /// Whether a table cell reads as a number (right-aligned) rather than text.
@@ -103,9 +131,9 @@ impl Page {
         let _ = writeln!(self.body, "<h3>{}</h3>", escape(title));
     }
 
-    /// A paragraph of plain text.
+    /// A paragraph of plain text ([`inline`] marks rendered).
     pub fn para(&mut self, text: &str) {
-        let _ = writeln!(self.body, "<p>{}</p>", escape(text));
+        let _ = writeln!(self.body, "<p>{}</p>", inline(text));
     }
 
     /// A warning in plain words, set off from the text.
@@ -113,13 +141,13 @@ impl Page {
         let _ = writeln!(
             self.body,
             "<p class=\"warn\"><strong>Warning:</strong> {}</p>",
-            escape(text)
+            inline(text)
         );
     }
 
     /// A reassuring note (nothing to warn about), set off like a warning.
     pub fn fine(&mut self, text: &str) {
-        let _ = writeln!(self.body, "<p class=\"good\">{}</p>", escape(text));
+        let _ = writeln!(self.body, "<p class=\"good\">{}</p>", inline(text));
     }
 
     /// Lines of plain text folded under a line that opens them (a group of warnings).
@@ -130,7 +158,7 @@ impl Page {
             escape(summary)
         );
         for l in lines {
-            let _ = write!(self.body, "<li>{}</li>", escape(l));
+            let _ = write!(self.body, "<li>{}</li>", inline(l));
         }
         self.body += "</ul></details>\n";
     }
@@ -190,16 +218,11 @@ impl Page {
                 None => s.push_str("<tr>"),
             }
             for cell in row {
-                let _ = write!(
-                    s,
-                    "<td{}>{}</td>",
-                    if numeric_cell(cell) {
-                        ""
-                    } else {
-                        " class=\"t\""
-                    },
-                    escape(cell)
-                );
+                let _ = if numeric_cell(cell) {
+                    write!(s, "<td>{}</td>", escape(cell))
+                } else {
+                    write!(s, "<td class=\"t\">{}</td>", inline(cell))
+                };
             }
             s.push_str("</tr>\n");
         }
@@ -319,5 +342,28 @@ mod tests {
             html.contains("<th scope=\"col\" class=\"t\">name</th><th scope=\"col\">value</th>")
         );
         assert!(html.contains("<td class=\"t\">x</td><td>1.5</td>"));
+    }
+
+    #[test]
+    fn inline_marks_become_elements_and_nothing_of_markdown_is_left() {
+        assert_eq!(
+            inline("a `\"x\" < 1` and **b** `c`"),
+            "a <code>&quot;x&quot; &lt; 1</code> and <strong>b</strong> <code>c</code>"
+        );
+        assert_eq!(inline("no marks <here>"), "no marks &lt;here&gt;");
+        assert_eq!(inline("one ` alone"), "one ` alone");
+        let mut p = Page::new("t", "l");
+        p.para(crate::report::run::claims::NOTE);
+        p.para(crate::report::run::comparisons::NOTE);
+        p.para(crate::report::run::searches::NOTE);
+        p.para(crate::report::run::INTERVAL_NOTE);
+        let html = p.finish();
+        let text: String = html
+            .split("<p>")
+            .skip(2)
+            .map(|s| s.split("</p>").next().unwrap_or(""))
+            .collect();
+        assert!(!text.contains('`') && !text.contains("**"), "{text}");
+        assert!(text.contains("<code>calibrated</code>"), "{text}");
     }
 }

@@ -1,7 +1,8 @@
-//! `report.html` of `calbench run` and `calbench merge`: the scenario's settings, the results
-//! per method × poses (× sweep point), validation before and after, η per parameter, the CRB
-//! ratio, the sweep plots and heat maps, the plots of trial 0, and the terminations and
-//! failures, with every plot of the run inlined.
+//! `report.html` of `calbench run` and `calbench merge`: the verdicts first (the paper's
+//! claims, the paired comparisons, the headline figures with their intervals), then the
+//! scenario's settings, the results per method × poses (× sweep point), validation before
+//! and after, η per parameter, the CRB ratio, the sweep plots and heat maps, the plots of
+//! trial 0, and the terminations and failures, with every plot of the run inlined.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -19,7 +20,9 @@ use crate::study::RunResult;
 
 /// The section a plot of the run belongs to, by its file stem.
 fn section_of(stem: &str) -> &'static str {
-    if stem == Metric::Eta.spec().field {
+    if stem == "headline_rms" {
+        "Headline figures"
+    } else if stem == Metric::Eta.spec().field {
         "η per parameter"
     } else if stem.starts_with("validation") {
         "Validation before and after"
@@ -105,12 +108,30 @@ pub fn page(
     if let Some(w) = summary.stopping.as_ref().and_then(|st| st.shortfall()) {
         page.warning(&format!("{w}."));
     }
+    // The verdicts first: the paper's claims, the paired comparisons, the headline figures
+    // with their intervals; then how they were obtained.
     let (h, rows) = crate::report::run::claims::table(summary);
     if !rows.is_empty() {
         page.section("The paper's claims");
         page.para(crate::report::run::claims::NOTE);
         page.table("Claims and their verdicts", &h, &rows);
     }
+    let (h, rows) = crate::report::run::comparisons::table(summary);
+    if !rows.is_empty() {
+        page.section("Paired verdicts");
+        page.para(crate::report::run::comparisons::NOTE);
+        page.table("Paired comparisons on the shared trials", &h, &rows);
+        figures(&mut page, dir, plots, "Paired comparisons")?;
+    }
+    page.section("Headline figures");
+    page.para(INTERVAL_NOTE);
+    entries(
+        &mut page,
+        r,
+        "Headline figures with their 95 % intervals over trials",
+        &INTERVAL_COLUMNS,
+    );
+    figures(&mut page, dir, plots, "Headline figures")?;
 
     page.section("Settings");
     page.facts(&[
@@ -168,21 +189,6 @@ pub fn page(
             MS_PER_IDENTIFICATION,
         ],
     );
-
-    page.para(INTERVAL_NOTE);
-    entries(
-        &mut page,
-        r,
-        "Headline figures with their 95 % intervals over trials",
-        &INTERVAL_COLUMNS,
-    );
-
-    let (h, rows) = crate::report::run::comparisons::table(summary);
-    if !rows.is_empty() {
-        page.para(crate::report::run::comparisons::NOTE);
-        page.table("Paired comparisons on the shared trials", &h, &rows);
-        figures(&mut page, dir, plots, "Paired comparisons")?;
-    }
 
     let (h, rows) = crate::report::run::searches::table(r);
     if !rows.is_empty() {

@@ -30,7 +30,9 @@ where
     X: Ranged<ValueType = Real> + ValueFormatter<Real>,
     Y: Ranged<ValueType = Real> + ValueFormatter<Real>,
 {
-    styled_mesh(chart, &evals_fmt, y_desc).x_desc(x_desc).draw()
+    styled_mesh(chart, &evals_fmt, y_desc, |m| {
+        m.x_desc(x_desc);
+    })
 }
 
 struct Ecdf<'d> {

@@ -1,132 +1,7 @@
-//! The figures of the reports: grouped bars, before/after residuals, box plots, traces,
-//! sweep curves and heat maps, each drawn by [`super::render`].
+//! The figures of the reports: before/after residuals, box plots, traces, sweep curves and
+//! heat maps, each drawn by [`super::render`] (grouped bars: [`super::bars`]).
 
 use super::*;
-
-// ---------------------------------------------------------------------------------------------
-// Grouped bars
-
-struct GroupedBars<'d> {
-    title: &'d str,
-    y_label: &'d str,
-    categories: &'d [String],
-    series: &'d [(String, Vec<Real>)],
-    /// Per series and category, the interval drawn as an error bar on the bar (none: no bar).
-    intervals: &'d [Vec<Option<[Real; 2]>>],
-}
-
-impl GroupedBars<'_> {
-    /// The finite interval of series `s` at category `i`.
-    fn interval(&self, s: usize, i: usize) -> Option<[Real; 2]> {
-        self.intervals
-            .get(s)
-            .and_then(|v| v.get(i).copied().flatten())
-            .filter(|[lo, hi]| lo.is_finite() && hi.is_finite() && lo <= hi)
-    }
-}
-
-impl Figure for GroupedBars<'_> {
-    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
-        let n = self
-            .series
-            .iter()
-            .map(|(_, v)| v.len())
-            .max()
-            .unwrap_or(0)
-            .max(self.categories.len());
-        let bounds = (0..self.series.len())
-            .flat_map(|s| (0..n).filter_map(move |i| self.interval(s, i)))
-            .flatten();
-        let y = with_headroom(
-            span(
-                self.series
-                    .iter()
-                    .flat_map(|(_, v)| finite(v))
-                    .chain(bounds),
-                true,
-            ),
-            self.series.len(),
-        );
-        let mut chart = categorical_chart(root, self.title, self.y_label, self.categories, n, y)?;
-
-        let m = self.series.len().max(1) as Real;
-        let w = 0.8 / m;
-        for (s, (name, values)) in self.series.iter().enumerate() {
-            let c = color(s);
-            let x0 = -0.4 + s as Real * w;
-            chart
-                .draw_series(
-                    values
-                        .iter()
-                        .enumerate()
-                        .filter(|(_, v)| v.is_finite())
-                        .map(|(i, &v)| {
-                            let left = i as Real + x0;
-                            Rectangle::new([(left, 0.0), (left + w, v)], c.filled())
-                        }),
-                )?
-                .label(name.as_str())
-                .legend(move |(x, y)| Rectangle::new([(x, y - 6), (x + 14, y + 6)], c.filled()));
-        }
-        // The error bars over the bars, in black so that they show on every colour.
-        for (s, (_, values)) in self.series.iter().enumerate() {
-            let x0 = -0.4 + s as Real * w;
-            chart.draw_series(values.iter().enumerate().filter_map(|(i, &v)| {
-                let [lo, hi] = self.interval(s, i)?;
-                let mid = if v.is_finite() { v } else { (lo + hi) / 2.0 };
-                let x = i as Real + x0 + w / 2.0;
-                Some(ErrorBar::new_vertical(
-                    x,
-                    lo,
-                    mid,
-                    hi,
-                    BLACK.stroke_width(1),
-                    6,
-                ))
-            }))?;
-        }
-        legend(&mut chart, !self.series.is_empty())
-    }
-}
-
-/// Grouped bar chart: one group per category (parameter), one bar per series (method or pose
-/// set) — the identification accuracy η_i = (1 − |x_i − x̂_i| / |x_i|) · 100 % per parameter
-/// (Guo 2024, eq. 29) as in Guo 2024, fig. 8. Bars start at zero; a value missing from a
-/// series (or non-finite) leaves a gap. Long category lists are written a quarter turn under
-/// the axis. Writes `<stem>.png` and `<stem>.svg`.
-pub fn grouped_bars(
-    stem: &Path,
-    title: &str,
-    y_label: &str,
-    categories: &[String],
-    series: &[(String, Vec<Real>)],
-) -> Result<()> {
-    grouped_bars_with_intervals(stem, title, y_label, categories, series, &[])
-}
-
-/// [`grouped_bars`] with an error bar on each bar that has an interval: `intervals[s][i]`
-/// is the `[lo, hi]` of series `s` at category `i` (the 95 % interval of a mean), drawn as a
-/// black vertical bar with caps; a missing, non-finite or reversed interval draws none, and
-/// the axis reaches the bounds drawn.
-pub fn grouped_bars_with_intervals(
-    stem: &Path,
-    title: &str,
-    y_label: &str,
-    categories: &[String],
-    series: &[(String, Vec<Real>)],
-    intervals: &[Vec<Option<[Real; 2]>>],
-) -> Result<()> {
-    render(
-        stem,
-        &GroupedBars {
-            title,
-            y_label,
-            categories,
-            series,
-            intervals,
-        },
-    )
-}
 
 // ---------------------------------------------------------------------------------------------
 // Before / after
@@ -159,9 +34,9 @@ impl Figure for BeforeAfter<'_> {
         let y = with_headroom(span(finite(self.before).chain(finite(self.after)), true), 2);
         let mut chart =
             chart_builder(root, self.title, 50).build_cartesian_2d(0.5..n as Real + 0.5, y)?;
-        styled_mesh(&mut chart, &int_fmt, self.y_label)
-            .x_desc("validation point")
-            .draw()?;
+        styled_mesh(&mut chart, &int_fmt, self.y_label, |m| {
+            m.x_desc("validation point");
+        })?;
         for (s, (name, v)) in [("before", self.before), ("after", self.after)]
             .into_iter()
             .enumerate()
@@ -272,13 +147,52 @@ struct BoxPlot<'d> {
     title: &'d str,
     y_label: &'d str,
     groups: &'d [(String, Vec<Real>)],
+    /// Per group, an estimate and its interval drawn as an error bar beside the box.
+    marks: &'d [Option<Mark>],
+}
+
+/// An estimate and its 95 % interval `[lo, hi]`, drawn as a black error bar with a dot.
+pub type Mark = (Real, [Real; 2]);
+
+impl BoxPlot<'_> {
+    /// The finite mark of group `g`.
+    fn mark(&self, g: usize) -> Option<Mark> {
+        self.marks
+            .get(g)
+            .copied()
+            .flatten()
+            .filter(|(m, [lo, hi])| m.is_finite() && lo.is_finite() && hi.is_finite() && lo <= hi)
+    }
 }
 
 impl Figure for BoxPlot<'_> {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> DrawResult<DB> {
         let names: Vec<String> = self.groups.iter().map(|(n, _)| n.clone()).collect();
-        let y = span(self.groups.iter().flat_map(|(_, v)| finite(v)), false);
+        let marked: Vec<Mark> = (0..self.groups.len())
+            .filter_map(|g| self.mark(g))
+            .collect();
+        let y = span(
+            self.groups
+                .iter()
+                .flat_map(|(_, v)| finite(v))
+                .chain(marked.iter().flat_map(|(_, [lo, hi])| [*lo, *hi])),
+            false,
+        );
+        let y = if marked.is_empty() {
+            y
+        } else {
+            with_headroom(y, 1)
+        };
+        let zero = y.start <= 0.0 && y.end >= 0.0 && !marked.is_empty();
         let mut chart = categorical_chart(root, self.title, self.y_label, &names, names.len(), y)?;
+        if zero {
+            // Where b − a is 0: the side of it the interval lies on is the verdict.
+            let n = names.len().max(1) as Real;
+            chart.draw_series(std::iter::once(PathElement::new(
+                vec![(-0.5, 0.0), (n - 0.5, 0.0)],
+                BLACK.mix(0.5).stroke_width(1),
+            )))?;
+        }
 
         for (g, (_, v)) in self.groups.iter().enumerate() {
             let Some(b) = box_stats(v) else { continue };
@@ -307,7 +221,28 @@ impl Figure for BoxPlot<'_> {
                     .map(|y| Circle::new((x, y), 3, c.stroke_width(1))),
             )?;
         }
-        Ok(())
+        // The estimate and interval of each group's test, right of its box.
+        let mut first = true;
+        for g in 0..self.groups.len() {
+            let Some((m, [lo, hi])) = self.mark(g) else {
+                continue;
+            };
+            let x = g as Real + 0.36;
+            let bar = chart.draw_series([ErrorBar::new_vertical(
+                x,
+                lo,
+                m,
+                hi,
+                BLACK.stroke_width(2),
+                10,
+            )])?;
+            if std::mem::take(&mut first) {
+                bar.label("estimate and 95 % interval of the verdict's test")
+                    .legend(|(x, y)| Circle::new((x + 7, y), 4, BLACK.filled()));
+            }
+            chart.draw_series(std::iter::once(Circle::new((x, m), 4, BLACK.filled())))?;
+        }
+        legend(&mut chart, !first)
     }
 }
 
@@ -322,12 +257,28 @@ pub fn box_plot(
     y_label: &str,
     groups: &[(String, Vec<Real>)],
 ) -> Result<()> {
+    box_plot_with_marks(stem, title, y_label, groups, &[])
+}
+
+/// [`box_plot`] with, right of box `g`, the estimate and 95 % interval `marks[g]` (a paired
+/// comparison's test: the mean and its t interval, or the median and its sign-test
+/// interval) as a black error bar with a dot, a legend line saying so, and a grey line at
+/// 0 when the axis holds it; a missing, non-finite or reversed mark draws none, and the
+/// axis reaches the bounds drawn.
+pub fn box_plot_with_marks(
+    stem: &Path,
+    title: &str,
+    y_label: &str,
+    groups: &[(String, Vec<Real>)],
+    marks: &[Option<Mark>],
+) -> Result<()> {
     render(
         stem,
         &BoxPlot {
             title,
             y_label,
             groups,
+            marks,
         },
     )
 }
@@ -360,9 +311,9 @@ impl Traces<'_> {
         let len = self.series.iter().map(|(_, v)| v.len()).max().unwrap_or(0);
         let x = 0.0..(len.max(2) - 1) as Real;
         let mut chart = chart_builder(root, self.title, 50).build_cartesian_2d(x, y)?;
-        styled_mesh(&mut chart, &int_fmt, self.y_label)
-            .x_desc(self.x_label)
-            .draw()?;
+        styled_mesh(&mut chart, &int_fmt, self.y_label, |m| {
+            m.x_desc(self.x_label);
+        })?;
         for (s, (name, v)) in self.series.iter().enumerate() {
             let c = color(s);
             let pts = v
@@ -456,11 +407,12 @@ impl Figure for Sweep<'_> {
             ),
             self.series.len(),
         );
+        let x_axis = x.clone();
         let mut chart = chart_builder(root, self.title, 50).build_cartesian_2d(x, y)?;
-        let x_fmt = |v: &Real| fmt_num(*v, 3);
-        styled_mesh(&mut chart, &x_fmt, self.y_label)
-            .x_desc(self.x_label)
-            .draw()?;
+        let x_fmt = |v: &Real| y_fmt(*v, &x_axis);
+        styled_mesh(&mut chart, &x_fmt, self.y_label, |m| {
+            m.x_desc(self.x_label);
+        })?;
         for (s, ((name, _), p)) in self.series.iter().zip(&pts).enumerate() {
             let c = color(s);
             chart.draw_series(LineSeries::new(

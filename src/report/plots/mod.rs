@@ -6,6 +6,7 @@
 //! draw; it never panics on its data. Output is deterministic: the same data gives the same
 //! bytes (text is laid out with the bundled DejaVu Sans, no system fonts).
 
+mod bars;
 mod changes;
 mod ecdf;
 mod figures;
@@ -26,11 +27,12 @@ use super::markdown::fmt_num;
 use super::output::Output;
 use crate::numeric::Real;
 use crate::{Error, Result};
+pub use bars::{grouped_bars, grouped_bars_with_floor, grouped_bars_with_intervals};
 pub use changes::{changes_svg, ChangePoint};
 pub use ecdf::{fixed_budget, runtime_ecdf, BudgetSeries, EcdfSeries};
 pub use figures::{
-    before_after, before_after_in, box_plot, box_stats, grouped_bars, grouped_bars_with_intervals,
-    heatmap, sweep, traces, BoxStats, SweepSeries,
+    before_after, before_after_in, box_plot, box_plot_with_marks, box_stats, heatmap, sweep,
+    traces, BoxStats, Mark, SweepSeries,
 };
 
 /// Size of every plot in pixels (PNG) or user units (SVG), width × height.
@@ -289,8 +291,16 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .draw()
 }
 
-fn y_fmt(v: &Real) -> String {
-    fmt_num(*v, 3)
+/// The label of a tick at `v` on a value axis spanning `axis`: [`fmt_num`] to 3 digits, and
+/// `0` for a tick within 10⁻⁹ of the span of 0 on an axis that holds 0 — the tick
+/// arithmetic's rounding (−0.02 + 0.02 = −2.78e-17) is no value of the data. A logarithmic
+/// axis never holds 0, so its small ticks keep their value.
+fn y_fmt(v: Real, axis: &Range<Real>) -> String {
+    let (lo, hi) = (axis.start.min(axis.end), axis.start.max(axis.end));
+    if lo <= 0.0 && hi >= 0.0 && v.abs() <= 1e-9 * (hi - lo) {
+        return "0".into();
+    }
+    fmt_num(v, 3)
 }
 
 /// Integer tick labels (point or iteration numbers); blank between integers.
@@ -346,25 +356,30 @@ fn rotated_category_labels<DB: DrawingBackend>(
     Ok(())
 }
 
-/// The mesh every chart shares, ready for what is particular to one chart before `draw`:
-/// tick labels by `x_fmt` and [`y_fmt`], `y_desc` along the y axis, the common fonts.
-fn styled_mesh<'a, 'b, DB, X, Y>(
-    chart: &'b mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
-    x_fmt: &'b dyn Fn(&Real) -> String,
+/// Draws the mesh every chart shares: tick labels by `x_fmt` and [`y_fmt`] (over the chart's
+/// y range), `y_desc` along the y axis, the common fonts, and what `more` sets that is
+/// particular to one chart.
+fn styled_mesh<'a, DB, X, Y>(
+    chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
+    x_fmt: &dyn Fn(&Real) -> String,
     y_desc: &str,
-) -> MeshStyle<'a, 'b, X, Y, DB>
+    more: impl FnOnce(&mut MeshStyle<'a, '_, X, Y, DB>),
+) -> DrawResult<DB>
 where
     DB: DrawingBackend,
     X: Ranged<ValueType = Real> + ValueFormatter<Real>,
     Y: Ranged<ValueType = Real> + ValueFormatter<Real>,
 {
+    let axis = chart.y_range();
+    let ticks = move |v: &Real| y_fmt(*v, &axis);
     let mut mesh = chart.configure_mesh();
     mesh.x_label_formatter(x_fmt)
-        .y_label_formatter(&y_fmt)
+        .y_label_formatter(&ticks)
         .y_desc(y_desc)
         .axis_desc_style((FAMILY, 17))
         .label_style((FAMILY, 14));
-    mesh
+    more(&mut mesh);
+    mesh.draw()
 }
 
 /// A chart of `n` categories along x (named by `names`, blank past the names) over the y
@@ -388,12 +403,105 @@ fn categorical_chart<'a, DB: DrawingBackend>(
             category_label(names, *v)
         }
     };
-    styled_mesh(&mut chart, &x_fmt, y_label)
-        .disable_x_mesh()
-        .x_labels(n.max(1))
-        .draw()?;
+    styled_mesh(&mut chart, &x_fmt, y_label, |m| {
+        m.disable_x_mesh().x_labels(n.max(1));
+    })?;
     if rotate {
         rotated_category_labels(root, &chart, names, y_bottom)?;
     }
     Ok(chart)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The ticks plotters puts on a linear axis over `axis` (the mesh asks for 10).
+    fn ticks(axis: Range<Real>) -> Vec<Real> {
+        RangedCoordf64::from(axis).key_points(10)
+    }
+
+    #[test]
+    fn a_tick_at_zero_reads_0_whatever_the_tick_arithmetic_left() {
+        // Axes whose tick arithmetic leaves a residue at 0 (−0.02 + 0.02 = −2.78e-17): the
+        // paired RMS differences of li2018-irb2600 at 150 trials were on the first.
+        let axes = [-0.1933..0.0293, -0.3..0.1, -0.7..0.15, -1.3..0.2];
+        let mut residues = 0;
+        for axis in axes {
+            for v in ticks(axis.clone()) {
+                if v != 0.0 && v.abs() < 1e-12 {
+                    residues += 1;
+                    assert_eq!(y_fmt(v, &axis), "0", "{v} on {axis:?}");
+                }
+            }
+        }
+        assert!(
+            residues > 0,
+            "no axis left a residue: the check has no teeth"
+        );
+        // Every other tick keeps its value; a logarithmic axis (no 0 on it) keeps its small
+        // ticks.
+        assert_eq!(y_fmt(-0.02, &(-0.1933..0.0293)), "-0.02");
+        assert_eq!(y_fmt(0.0, &(-1.0..1.0)), "0");
+        assert_eq!(y_fmt(1e-12, &(1e-13..1.0)), "1e-12");
+        assert_eq!(y_fmt(3e-9, &(0.0..1.0)), "3e-9");
+        assert_eq!(y_fmt(1e-10, &(0.0..1.0)), "0");
+    }
+
+    #[test]
+    fn a_drawn_box_plot_labels_no_residue_of_zero() {
+        let dir = std::env::temp_dir().join(format!("calbench-ticks-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let stem = dir.join("paired");
+        let near: Vec<Real> = (0..40).map(|i| (i as Real - 20.0) * 2.5e-4).collect();
+        let far: Vec<Real> = (0..40).map(|i| -0.184 + i as Real * 4.5e-3).collect();
+        let groups = vec![("a".to_string(), near), ("b".to_string(), far)];
+        box_plot(&stem, "t", "b − a (mm)", &groups).unwrap();
+        let svg = std::fs::read_to_string(with_suffix(&stem, "svg")).unwrap();
+        let labels: Vec<&str> = svg
+            .split("</text>")
+            .filter_map(|t| t.rsplit('>').next())
+            .map(str::trim)
+            .collect();
+        assert!(labels.contains(&"0"), "{labels:?}");
+        assert!(
+            labels
+                .iter()
+                .all(|l| !l.contains("e-1") && !l.contains("e-2")),
+            "{labels:?}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
+
+#[cfg(test)]
+mod floor_tests {
+    use super::*;
+
+    #[test]
+    fn a_bar_below_the_floor_is_cut_and_its_value_written() {
+        let dir = std::env::temp_dir().join(format!("calbench-floor-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let stem = dir.join("eta");
+        let params: Vec<String> = ["a1", "d6", "theta2"].map(String::from).to_vec();
+        let series = vec![("ls / random".to_string(), vec![95.0, -1615.0, 80.0])];
+        let ci = vec![vec![Some([90.0, 99.0]), Some([-1900.0, -1300.0]), None]];
+        grouped_bars_with_floor(&stem, "t", "η (%)", &params, &series, &ci, Some(-200.0)).unwrap();
+        let svg = std::fs::read_to_string(with_suffix(&stem, "svg")).unwrap();
+        let labels: Vec<Real> = svg
+            .split("</text>")
+            .filter_map(|t| t.rsplit('>').next()?.trim().parse().ok())
+            .collect();
+        assert!(svg.contains("-1615 ▼"), "the cut bar's value is written");
+        let lowest = labels.iter().copied().fold(Real::INFINITY, Real::min);
+        assert!(
+            (-200.0..0.0).contains(&lowest),
+            "the axis stops at the floor: lowest tick {lowest}"
+        );
+        // Without a floor the axis reaches the far value.
+        grouped_bars_with_intervals(&stem, "t", "η (%)", &params, &series, &ci).unwrap();
+        let svg = std::fs::read_to_string(with_suffix(&stem, "svg")).unwrap();
+        assert!(!svg.contains('▼'));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -100,4 +100,4 @@ pub const NOTE: &str = "Each claim of the paper is a relation between the entrie
     claimed side (inside the band), contradicts when wholly on the other (outside), and is \
     unresolved otherwise, with the trials at which an interval as wide per trial would \
     resolve it; a figure used to choose a setting is `calibrated` and not judged, a figure of \
-    the arm's error on an arm without error outside the model `not comparable";
+    the arm's error on an arm without error outside the model `not comparable`.";

@@ -7,6 +7,7 @@ use crate::analysis::summary::Summary;
 use crate::numeric::Real;
 use crate::report::markdown::fmt_num;
 use crate::study::metric::Metric;
+use crate::study::stats::location::Test;
 
 use super::fmt_ci;
 
@@ -30,7 +31,18 @@ pub fn verdict(c: &Comparison) -> String {
     }
 }
 
-/// The reports' comparison table: headers and rows (each entry against its baseline).
+/// A paired test as the reports name it: what it locates, and how.
+pub fn test(t: Test) -> &'static str {
+    match t {
+        Test::T => "mean (t)",
+        Test::Sign => "median (sign)",
+    }
+}
+
+/// The reports' comparison table: headers and rows (each entry against its baseline). The
+/// estimate and interval are those of the test the verdict is judged on (the mean and its t
+/// interval, or the median and its sign-test interval), as `calbench check` prints them; a
+/// summary written before verdicts has the mean and its t interval.
 pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
     let sweep = s.sweep_keys.is_some();
     let mut h = Vec::new();
@@ -42,6 +54,7 @@ pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "b",
         "metric",
         "trials",
+        "test",
         "b − a",
         "95 % CI",
         "ratio b/a",
@@ -49,7 +62,6 @@ pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
         "p (Wilcoxon)",
         "p Holm",
         "margin",
-        "test",
         "verdict",
     ]);
     let rows = s
@@ -69,15 +81,15 @@ pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
                 c.b.clone(),
                 c.metric.to_string(),
                 c.n.to_string(),
-                fmt_num(c.diff_mean, 4),
-                fmt_ci(c.diff_ci95, 4),
+                c.verdict
+                    .map_or(String::new(), |_| test(c.test).to_string()),
+                fmt_num(c.estimate.unwrap_or(c.diff_mean), 4),
+                fmt_ci(c.estimate.and(c.ci95).or(c.diff_ci95), 4),
                 fmt_num(c.ratio.unwrap_or(Real::NAN), 4),
                 fmt_num(100.0 * c.win_rate, 3),
                 fmt_num(c.p_value, 3),
                 fmt_num(c.p_holm, 3),
                 c.margin.map_or(String::new(), |m| fmt_num(m, 3)),
-                c.verdict
-                    .map_or(String::new(), |_| c.test.as_str().to_string()),
                 verdict(c),
             ]);
             row
@@ -88,8 +100,8 @@ pub fn table(s: &Summary) -> (Vec<&'static str>, Vec<Vec<String>>) {
 
 /// What the comparison table says, for the reports.
 pub const NOTE: &str = "Every method of a study runs on the same trials, so two entries are \
-    compared trial by trial: b − a per trial, its mean and 95 % t interval, the ratio of the \
-    means (errors), the share of trials where b is better, the two-sided Wilcoxon \
+    compared trial by trial: b − a per trial, the estimate and 95 % interval of the test the \
+    verdict is judged on, the ratio of the means (errors), the share of trials where b is better, the two-sided Wilcoxon \
     signed-rank p-value and its Holm adjustment over every comparison of the study \
     (summary.json `comparisons` holds all pairs; this table each entry against the baseline \
     method on its strategy — the scenario's `[report] baseline`, else its first method — and \
