@@ -133,14 +133,14 @@ pub fn run(args: &RunArgs) -> Result<()> {
         }
         Some(ShardArg::Auto) => Some(auto_shard(args.shard_count, &|k| std::env::var(k).ok())?),
     };
-    let sc = match scenario_with_overrides(args)? {
-        AnyScenario::MonteCarlo(sc) => sc,
-        cells => return cells_study(&cells, shard, args),
-    };
     if shard.is_some() && args.record.record {
         let why = "a shard is part of a run; record the merged run (`merge --record`)";
         return Err(Error::setting("--record", why).into());
     }
+    let sc = match scenario_with_overrides(args)? {
+        AnyScenario::MonteCarlo(sc) => sc,
+        cells => return cells_study(&cells, shard, args),
+    };
     let opts = RunOptions {
         threads: threads(args.threads)?,
         out: None,
@@ -276,12 +276,8 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         let fixed = format!("{what} runs its --trials draws in every cell");
         return Err(Error::setting("--precision", fixed).into());
     }
-    if args.record.record {
-        let why = "records the runs of Monte-Carlo studies; a registration or instruments \
-                   study has no entries to record";
-        return Err(Error::setting("--record", why).into());
-    }
     let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
+    let db = args.record.open()?;
     writable_folder(&out, &STUDY_OUTPUTS)?;
     let (cells, _) = sc.blocks();
     eprintln!(
@@ -313,7 +309,9 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         );
         return Ok(());
     }
-    cells_finished(sc.name().to_string(), &table, t0, &out)
+    cells_finished(sc.name().to_string(), &table, t0, &out)?;
+    args.record
+        .finish(db, || super::record::of_study(&out, Kind::Run))
 }
 
 /// The name of the folder `dir`.
