@@ -215,13 +215,15 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     writable_folder(dir, &OUTPUTS)?;
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
+    let db = args.record.open()?;
     if !matches!(checked.scenario(), AnyScenario::MonteCarlo(_)) {
         eprintln!("resuming the run into {}", dir.display());
         let t0 = std::time::Instant::now();
         let table = resume_cells(checked, threads, &Terminal)?;
-        return cells_finished(checked_name(dir), &table, t0, dir);
+        cells_finished(checked_name(dir), &table, t0, dir)?;
+        let record = || super::record::of_study(dir, Kind::Run);
+        return args.record.finish(db, record);
     }
-    let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
     let r = resume_study(checked, threads, &Terminal)?;
     finished(&r)?;

@@ -5,7 +5,8 @@
 //! `history` and `leaderboard`.
 
 use crate::common::{
-    calbench, calbench_ok, kill_once_checkpointed, path_arg, read, root, tmp_dir, write_scenario,
+    calbench, calbench_ok, kill_once_checkpointed, one_line_naming, path_arg, read, root, tmp_dir,
+    write_scenario,
 };
 
 /// The files of a registration study.
@@ -42,6 +43,44 @@ fn ban_fig3_in_two_shards_merges_to_the_bytes_of_one_run() {
     let o = calbench(&["merge", path_arg(&s0), "--out", path_arg(&dir.join("half"))]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("1/2"));
+}
+
+/// The records of another registration run with the same name and seed but another trial
+/// count (whose first draws are the same numbers), copied into a shard, are refused by
+/// `merge`, naming `records.txt` and its line, and nothing is written.
+#[test]
+fn merge_refuses_the_records_of_another_registration_run_with_the_same_name_and_seed() {
+    let dir = tmp_dir("cells-foreign");
+    let sc = root().join("scenarios/ban-fig3.toml");
+    let run = |trials: &str, shard: &str, out: &str| {
+        let out = dir.join(out);
+        let args = ["run", path_arg(&sc), "--trials", trials, "--shard", shard];
+        calbench_ok(&[&args[..], &["--out", path_arg(&out)]].concat());
+        out
+    };
+    let (a0, a1) = (run("6", "0/2", "a0"), run("6", "1/2", "a1"));
+    // Shard 0/3 of 9 draws holds draws 0–2, as shard 0/2 of 6 does.
+    let b0 = run("9", "0/3", "b0");
+    let records = a0.join("records.txt");
+    let own = read(&records);
+    let foreign = read(&b0.join("records.txt"));
+    assert_eq!(own.lines().count(), foreign.lines().count());
+    std::fs::write(&records, &foreign).unwrap();
+    let merged = dir.join("merged");
+    let args = [
+        "merge",
+        path_arg(&a0),
+        path_arg(&a1),
+        "--out",
+        path_arg(&merged),
+    ];
+    let o = calbench(&args);
+    assert!(!o.status.success(), "merged the records of another run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    one_line_naming(&err, &records, &["line 1", "another run"]);
+    assert!(!merged.join("summary.json").exists());
+    std::fs::write(&records, &own).unwrap();
+    calbench_ok(&args);
 }
 
 /// Two instruments at 40 random poses: two cells of six trials.
@@ -98,7 +137,21 @@ fn an_instruments_study_killed_and_resumed_gives_the_bytes_of_one_run() {
         "the run ended before it was killed"
     );
     assert!(meta.exists());
-    calbench_ok(&["run", "--resume", path_arg(&killed)]);
+    // Resumed, and recorded as it finishes.
+    let db = dir.join("calbench.sqlite");
+    let o = calbench_ok(&[
+        "run",
+        "--resume",
+        path_arg(&killed),
+        "--record",
+        "--db",
+        path_arg(&db),
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains("as run #1 of instruments-resume (2 entries"),
+        "{said}"
+    );
     assert!(!meta.exists(), "the checkpoint outlived the resumed run");
     for f in ["summary.json", "report.md", "report.html"] {
         assert_eq!(read(&whole.join(f)), read(&killed.join(f)), "{f}");
