@@ -142,7 +142,7 @@ pub struct Record {
     pub results: Results,
 }
 
-fn read(path: &Path) -> Result<(String, Value)> {
+pub(super) fn read(path: &Path) -> Result<(String, Value)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
     Ok((text, v))
@@ -174,37 +174,6 @@ impl Record {
         }
     }
 
-    /// Reads the folder `dir`: a task folder (`task.json`, its files found beside `task`, the
-    /// task file it ran, else `tasks/<task>.toml` under the current folder), a run or merge
-    /// folder (`summary.json`, of a Monte-Carlo study or of one that runs whole, whose
-    /// scenario is found by [`scenario_as_run`]) or an identify folder (`identified.json`).
-    pub fn of_folder(dir: &Path, scenario: Option<&Path>, task: Option<&Path>) -> Result<Record> {
-        if dir.join("task.json").is_file() {
-            return Record::of_task(dir, task);
-        }
-        if dir.join("summary.json").is_file() {
-            let path = dir.join("summary.json");
-            let (document, v) = read(&path)?;
-            if super::whole::is_whole(&v) {
-                return Record::of_whole(dir, (&path, document), v, scenario);
-            }
-            let summary = check_summary(v, &path)?;
-            let run = (summary.scenario.as_str(), summary.trials, summary.seed);
-            let (text, named) = scenario_as_run(dir, run, scenario)?;
-            let (name, seed, trials) = named;
-            return Record::of_run_text(dir, (&name, seed, trials), text, Kind::Run);
-        }
-        if dir.join("identified.json").is_file() {
-            return Record::of_identify(dir);
-        }
-        Err(Error::file(
-            dir,
-            "folder",
-            "holds none of summary.json (run, merge), identified.json (identify) and \
-             task.json (task); nothing to record",
-        ))
-    }
-
     /// The run or merge folder `dir` of the scenario `sc` (as run: overrides applied).
     pub fn of_run(dir: &Path, sc: &Scenario, kind: Kind) -> Result<Record> {
         let text = scenario_file::canonical(sc)?;
@@ -214,7 +183,7 @@ impl Record {
 
     /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
     /// whose canonical text as run is `text`; its `summary.json` checked ([`check_figures`]).
-    fn of_run_text(
+    pub(super) fn of_run_text(
         dir: &Path,
         (name, seed, trials): (&str, Option<u64>, Option<usize>),
         text: String,
@@ -251,7 +220,7 @@ impl Record {
         Ok(r)
     }
 
-    fn of_identify(dir: &Path) -> Result<Record> {
+    pub(super) fn of_identify(dir: &Path) -> Result<Record> {
         let path = dir.join("identified.json");
         let (document, v) = read(&path)?;
         let Value::Object(m) = &v else {
@@ -297,7 +266,7 @@ impl Record {
 
     /// The task folder `dir`, whose task file (`task`, else `tasks/<task>.toml` under the
     /// current folder) has the files its `task.toml` names beside it.
-    fn of_task(dir: &Path, task: Option<&Path>) -> Result<Record> {
+    pub(super) fn of_task(dir: &Path, task: Option<&Path>) -> Result<Record> {
         let path = dir.join("task.json");
         let (document, v) = read(&path)?;
         let t = TaskRecord::from_value(v, &path)?;
