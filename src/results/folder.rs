@@ -387,6 +387,9 @@ impl Record {
     }
 }
 
+/// The name, seed and trials of the scenario a run ran.
+pub(super) type Named = (String, Option<u64>, Option<usize>);
+
 /// The scenario a run or merge folder `dir` ran, as its canonical text, with the name, seed
 /// and trials it names: the text of the folder's `scenario.toml` (its hash line checked; a
 /// scenario file given, with the run's trials and seed applied, must have the same hash,
@@ -397,7 +400,7 @@ pub(super) fn scenario_as_run(
     dir: &Path,
     (name, trials, seed): (&str, Option<usize>, Option<u64>),
     scenario: Option<&Path>,
-) -> Result<(String, (String, Option<u64>, Option<usize>))> {
+) -> Result<(String, Named)> {
     let given = |file: &Path| -> Result<AnyScenario> {
         AnyScenario::load(file)?.with_run_overrides(trials, seed)
     };
@@ -448,7 +451,7 @@ pub(super) fn scenario_as_run(
 pub(super) fn check_ran(
     path: &Path,
     (ran, ran_seed): (&str, Option<u64>),
-    (name, seed, _): &(String, Option<u64>, Option<usize>),
+    (name, seed, _): &Named,
 ) -> Result<()> {
     if ran == name && (ran_seed.is_none() || seed.is_none() || ran_seed == *seed) {
         return Ok(());
