@@ -13,7 +13,8 @@ impl Record {
     /// Reads the folder `dir`: a task folder (`task.json`, its files found beside `task`, the
     /// task file it ran, else `tasks/<task>.toml` under the current folder), a run or merge
     /// folder (`summary.json`, of a Monte-Carlo study or of one that runs whole, whose
-    /// scenario is found by [`scenario_as_run`]) or an identify folder (`identified.json`).
+    /// scenario is the folder's `scenario.toml`, else the file given, else
+    /// `scenarios/<name>.toml`) or an identify folder (`identified.json`).
     pub fn of_folder(dir: &Path, scenario: Option<&Path>, task: Option<&Path>) -> Result<Record> {
         if dir.join("task.json").is_file() {
             return Record::of_task(dir, task);
