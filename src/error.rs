@@ -111,6 +111,8 @@ pub enum Opt {
     Tip,
     /// Joint values given to a command.
     Q,
+    /// The task file a task folder's entry ran.
+    Task,
 }
 
 impl Opt {

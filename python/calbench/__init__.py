@@ -440,7 +440,11 @@ def run(
     out=None,
     precision=None,
 ):
-    """Run a Monte-Carlo study: ``calbench run`` without the files.
+    """Run a study: a Monte-Carlo study is ``calbench run`` without the files; a
+    registration study (``[registration_study]``) or an instruments study
+    (``[instruments_study]``) is ``calbench run SCENARIO --out DIR``, into the folder ``out``
+    (the same bytes as the command line's, its ``summary.json``, ``report.md``, plots and
+    ``scenario.toml``, which ``calbench record`` stores).
 
     Args:
         scenario: a path to a scenario file, or a dict shaped like the TOML file.
@@ -459,7 +463,8 @@ def run(
             as ``calbench run --shard i/n``, into the shard folder ``out`` (required), which
             ``calbench merge`` merges with the other shards into the bytes of the whole run.
             Not with ``methods`` (the merge rebuilds the scenario from its text).
-        out: the shard folder (only with ``shard``).
+        out: the shard folder (only with ``shard``); for a registration or instruments
+            study, its folder (required).
         precision: ``"0.5%"`` or ``"0.002mm"``: run until every entry's mean validation
             error after calibration has a 95 % interval at most that wide, ``trials`` the
             cap (``calbench run --precision``); ``study.summary["stopping"]`` says where it
@@ -467,7 +472,8 @@ def run(
 
     Returns:
         a :class:`Study`; ``study.summary`` equals the command line's ``summary.json`` for
-        the same scenario and options. With ``shard``: the shard folder, a ``pathlib.Path``.
+        the same scenario and options. With ``shard``, and for a registration or instruments
+        study: the folder written, a ``pathlib.Path``.
     """
     if methods is not None and not isinstance(methods, dict):
         raise SettingError("setting `methods`: expected a dict label → function")
@@ -475,6 +481,8 @@ def run(
         raise SettingError('setting `precision`: expected a target such as "0.5%" or "0.002mm"')
     if shard is not None and precision is not None:
         raise SettingError("setting `precision`: not with `shard` (a shard runs its share whole)")
+    if _calbench.study_kind(_scenario(scenario)) != "monte-carlo":
+        return _run_whole(scenario, trials, seed, threads, methods, progress, shard, out, precision)
     if shard is not None:
         i, n = _shard(shard)
         if out is None:
@@ -507,6 +515,36 @@ def run(
         precision=None if precision is None else str(precision),
     )
     return Study(handle)
+
+
+def _run_whole(scenario, trials, seed, threads, methods, progress, shard, out, precision):
+    """:func:`run` of a registration or instruments study: its folder ``out``, written as
+    ``calbench run SCENARIO --out DIR [--shard I/N]`` writes it."""
+    if methods:
+        raise SettingError(
+            "setting `methods`: a registration or instruments study runs its own methods; "
+            "methods written in Python run in a Monte-Carlo study"
+        )
+    if precision is not None:
+        raise SettingError(
+            "setting `precision`: a registration or instruments study runs its `trials` draws "
+            "in every cell"
+        )
+    if out is None:
+        raise SettingError(
+            "setting `out`: a registration or instruments study writes its folder (the files "
+            "of `calbench run --out`); give out="
+        )
+    _calbench.run_whole(
+        _scenario(scenario),
+        os.fspath(out),
+        trials=_count("trials", trials),
+        seed=_count("seed", seed),
+        threads=_count("threads", threads),
+        progress=bool(progress),
+        shard=None if shard is None else _shard(shard),
+    )
+    return pathlib.Path(out)
 
 
 def identifiability(robot, q, measure="position"):

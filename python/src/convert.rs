@@ -12,6 +12,7 @@ use calbench::measurement::csv::measurements_from_arrays;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::robot::Robot;
+use calbench::study::kind::AnyScenario;
 use calbench::study::scenario::Scenario;
 
 use crate::errors::{err, setting};
@@ -214,6 +215,20 @@ pub(crate) fn scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<Scenario> {
         .extract()
         .map_err(|_| setting("scenario", "expected a path to a scenario file or a dict"))?;
     Scenario::load(&path).map_err(err)
+}
+
+/// A scenario of any kind ([`AnyScenario`]): a path to a scenario file, or a dict shaped like
+/// one.
+pub(crate) fn any_scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<AnyScenario> {
+    if let Ok(d) = scenario.cast::<PyDict>() {
+        let text = toml::to_string(&toml_table("", d)?)
+            .map_err(|e| setting("scenario", format!("cannot be written as TOML: {e}")))?;
+        return AnyScenario::parse(&text, Some(Path::new("<scenario dict>"))).map_err(err);
+    }
+    let path: PathBuf = scenario
+        .extract()
+        .map_err(|_| setting("scenario", "expected a path to a scenario file or a dict"))?;
+    AnyScenario::load(&path).map_err(err)
 }
 
 /// A column-major matrix as a (rows, cols) numpy array.

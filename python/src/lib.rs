@@ -89,6 +89,8 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(study::simulate, m)?)?;
     m.add_function(wrap_pyfunction!(study::run, m)?)?;
     m.add_function(wrap_pyfunction!(study::run_shard, m)?)?;
+    m.add_function(wrap_pyfunction!(study::study_kind, m)?)?;
+    m.add_function(wrap_pyfunction!(study::run_whole, m)?)?;
     m.add_function(wrap_pyfunction!(identifiability, m)?)?;
     m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;

@@ -1,5 +1,6 @@
 //! Studies from Python: `simulate`, `run` (with methods written in Python, `Problem`), a
-//! shard of a run (`run_shard`) for `calbench merge`.
+//! shard of a run (`run_shard`) for `calbench merge`, and the studies that run whole
+//! (`study_kind`, `run_whole`: a registration or instruments study into its folder).
 
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -15,10 +16,12 @@ use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::robot::Robot;
 use calbench::runner::run::{run_study, InMemoryRun};
+use calbench::runner::whole::run_cells_study;
+use calbench::study::kind::AnyScenario;
 use calbench::study::reporter::{Silent, Terminal};
 use calbench::study::{trial, RunOptions, Shard, Study};
 
-use crate::convert::{matrix, scenario_of};
+use crate::convert::{any_scenario_of, matrix, scenario_of};
 use crate::errors::{err, setting, ComputeError};
 use crate::robot::PyRobot;
 
@@ -345,4 +348,65 @@ pub(crate) fn run_shard(
         })
         .map_err(err)?;
     Ok(r.seconds)
+}
+
+/// The kind of study a scenario is: `monte-carlo`, `registration` (`[registration_study]`)
+/// or `instruments` (`[instruments_study]`), as its sections say (docs/formats.md § 4).
+#[pyfunction]
+pub(crate) fn study_kind(scenario: &Bound<'_, PyAny>) -> PyResult<&'static str> {
+    if let Ok(d) = scenario.cast::<PyDict>() {
+        if !(d.contains("registration_study")? || d.contains("instruments_study")?) {
+            return Ok("monte-carlo");
+        }
+    }
+    Ok(match any_scenario_of(scenario)? {
+        AnyScenario::MonteCarlo(_) => "monte-carlo",
+        AnyScenario::Registration(_) => "registration",
+        AnyScenario::Instruments(_) => "instruments",
+    })
+}
+
+/// Runs a registration or instruments study (or its share `shard`, (i, n)) into the folder
+/// `out`, the files `calbench run SCENARIO --out DIR` writes (the Python half documents the
+/// arguments).
+#[pyfunction]
+#[pyo3(signature = (scenario, out, trials = None, seed = None, threads = None, progress = false,
+    shard = None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_whole(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    out: PathBuf,
+    trials: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    progress: bool,
+    shard: Option<(usize, usize)>,
+) -> PyResult<()> {
+    let shard = shard
+        .map(|(i, n)| Shard::parse(&format!("{i}/{n}")))
+        .transpose()
+        .map_err(err)?;
+    let env = |k: &str| std::env::var(k).ok();
+    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
+    calbench::report::guard::guard_out(&out, "out", &[], None::<&std::path::Path>).map_err(err)?;
+    let sc = any_scenario_of(scenario)?
+        .with_run_overrides(trials, seed)
+        .map_err(err)?;
+    let opts = RunOptions {
+        threads,
+        out: Some(out),
+        progress,
+        shard,
+        precision: None,
+    };
+    py.detach(|| {
+        if progress {
+            run_cells_study(&sc, &opts, &Terminal)
+        } else {
+            run_cells_study(&sc, &opts, &Silent)
+        }
+    })
+    .map_err(err)?;
+    Ok(())
 }

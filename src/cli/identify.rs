@@ -192,7 +192,7 @@ fn compliance_pick(text: &str) -> std::result::Result<CompliancePick, std::conve
 pub fn run(args: &IdentifyArgs) -> Result<()> {
     let db = args.record.open()?;
     identify(args)?;
-    let record = || Ok(calbench::results::Record::of_folder(&args.out, None)?);
+    let record = || Ok(calbench::results::Record::of_folder(&args.out, None, None)?);
     args.record.finish(db, record)
 }
 

@@ -35,7 +35,8 @@ pub fn run(args: &MergeArgs) -> Result<()> {
                 args.dirs.len(),
                 out.join("report.md").display()
             );
-            return Ok(());
+            let record = || super::record::of_study(out, calbench::results::Kind::Merge);
+            return args.record.finish(db, record);
         }
     };
     print_table(&r);

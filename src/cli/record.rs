@@ -22,6 +22,11 @@ pub struct RecordArgs {
     /// summary.json gives); its trials and seed are those of the run.
     #[arg(long, value_name = "FILE")]
     pub scenario: Option<PathBuf>,
+    /// The task file of the task folders (default: tasks/<task>.toml, the task their
+    /// task.json names): the files their task.toml names are read beside it, and with them it
+    /// must have the task_hash the entry states.
+    #[arg(long, value_name = "FILE")]
+    pub task: Option<PathBuf>,
     /// The version label history orders and compares by (default: VERSION+COMMIT).
     #[arg(long, value_name = "L", value_parser = not_blank)]
     pub label: Option<String>,
@@ -106,7 +111,7 @@ pub fn run(args: &RecordArgs) -> Result<()> {
     let records = args
         .dirs
         .iter()
-        .map(|d| Record::of_folder(d, args.scenario.as_deref()))
+        .map(|d| Record::of_folder(d, args.scenario.as_deref(), args.task.as_deref()))
         .collect::<calbench::Result<Vec<Record>>>()?;
     let mut db = Db::open(&db_path(args.db.as_deref()), true)?;
     let p = Provenance::here(args.label.as_deref(), args.machine.as_deref());
@@ -115,6 +120,14 @@ pub fn run(args: &RecordArgs) -> Result<()> {
         report(r, done, &db);
     }
     Ok(())
+}
+
+/// The record of a finished registration or instruments study (or its merge, `kind`) in
+/// `out`, read from the folder as `calbench record` reads it.
+pub fn of_study(out: &Path, kind: Kind) -> Result<Record> {
+    let mut r = Record::of_folder(out, None, None)?;
+    r.kind = kind;
+    Ok(r)
 }
 
 /// The record of a finished run or merge into `out` of the scenario `sc`.

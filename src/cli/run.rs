@@ -133,14 +133,14 @@ pub fn run(args: &RunArgs) -> Result<()> {
         }
         Some(ShardArg::Auto) => Some(auto_shard(args.shard_count, &|k| std::env::var(k).ok())?),
     };
-    let sc = match scenario_with_overrides(args)? {
-        AnyScenario::MonteCarlo(sc) => sc,
-        cells => return cells_study(&cells, shard, args),
-    };
     if shard.is_some() && args.record.record {
         let why = "a shard is part of a run; record the merged run (`merge --record`)";
         return Err(Error::setting("--record", why).into());
     }
+    let sc = match scenario_with_overrides(args)? {
+        AnyScenario::MonteCarlo(sc) => sc,
+        cells => return cells_study(&cells, shard, args),
+    };
     let opts = RunOptions {
         threads: threads(args.threads)?,
         out: None,
@@ -215,13 +215,15 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     writable_folder(dir, &OUTPUTS)?;
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
+    let db = args.record.open()?;
     if !matches!(checked.scenario(), AnyScenario::MonteCarlo(_)) {
         eprintln!("resuming the run into {}", dir.display());
         let t0 = std::time::Instant::now();
         let table = resume_cells(checked, threads, &Terminal)?;
-        return cells_finished(checked_name(dir), &table, t0, dir);
+        cells_finished(checked_name(dir), &table, t0, dir)?;
+        let record = || super::record::of_study(dir, Kind::Run);
+        return args.record.finish(db, record);
     }
-    let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
     let r = resume_study(checked, threads, &Terminal)?;
     finished(&r)?;
@@ -276,12 +278,8 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         let fixed = format!("{what} runs its --trials draws in every cell");
         return Err(Error::setting("--precision", fixed).into());
     }
-    if args.record.record {
-        let why = "records the runs of Monte-Carlo studies; a registration or instruments \
-                   study has no entries to record";
-        return Err(Error::setting("--record", why).into());
-    }
     let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
+    let db = args.record.open()?;
     writable_folder(&out, &STUDY_OUTPUTS)?;
     let (cells, _) = sc.blocks();
     eprintln!(
@@ -313,7 +311,9 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         );
         return Ok(());
     }
-    cells_finished(sc.name().to_string(), &table, t0, &out)
+    cells_finished(sc.name().to_string(), &table, t0, &out)?;
+    args.record
+        .finish(db, || super::record::of_study(&out, Kind::Run))
 }
 
 /// The name of the folder `dir`.

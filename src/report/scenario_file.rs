@@ -1,4 +1,4 @@
-//! `scenario.toml` of a run or merge folder (docs/formats.md § 7.1): the scenario as the run
+//! `scenario.toml` of a run or merge folder (docs/formats.md § 7.1), of every study kind: the scenario as the run
 //! ran it — the file's table with `trials`, `seed` and every override applied, as TOML — under
 //! one comment line giving the SHA-256 of that text, so that `calbench record` stores what
 //! ran and refuses a scenario file that differs, and an edited copy is told by its hash.
@@ -22,8 +22,13 @@ pub fn canonical(sc: &Scenario) -> Result<String> {
 
 /// The file's text for the scenario `sc`: the hash line, then [`canonical`].
 pub fn text(sc: &Scenario) -> Result<String> {
-    let body = canonical(sc)?;
-    Ok(format!("{HEAD}{}\n{body}", sha256_hex(body.as_bytes())))
+    Ok(with_hash(&canonical(sc)?))
+}
+
+/// The file's text for a scenario whose canonical text (its table as run, as TOML) is `body`:
+/// the hash line, then `body`.
+pub fn with_hash(body: &str) -> String {
+    format!("{HEAD}{}\n{body}", sha256_hex(body.as_bytes()))
 }
 
 /// The canonical text and its hash from the file's `text` read at `path`; refuses, naming

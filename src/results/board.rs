@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 
 use super::Db;
-use crate::calibrate::task::record::TaskRecord;
+use crate::calibrate::task::record::{same_figure, shown, TaskRecord};
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::report::html::leaderboard::{Row, Score};
@@ -151,11 +151,6 @@ pub fn verify(db: &Db) -> Result<usize> {
             ci.0.zip(ci.1).map(|(l, h)| [l, h]),
         ))
     })?;
-    let same = |a: Real, b: Real| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
-    let same_ci = |a: Option<[Real; 2]>, b: Option<[Real; 2]>| match (a, b) {
-        (Some(a), Some(b)) => same(a[0], b[0]) && same(a[1], b[1]),
-        (a, b) => a.is_none() && b.is_none(),
-    };
     for (id, source, document, value, ci) in &entries {
         let file = std::path::Path::new(source).join("task.json");
         let text: serde_json::Value = serde_json::from_str(document)
@@ -174,27 +169,22 @@ pub fn verify(db: &Db) -> Result<usize> {
         let stated = [("recorded", *value, *ci), ("stated", rec.value, rec.ci95)];
         if let Some((what, v, c)) = stated
             .into_iter()
-            .find(|(_, v, c)| !same(*v, again) || !same_ci(*c, again_ci))
+            .find(|(_, v, c)| !same_figure((*v, *c), (again, again_ci)))
         {
             return Err(Error::file(
                 &file,
                 "value",
                 format!(
-                    "the entry recorded as run {id} has the figure {v} {}, but its {} \
-                     validation errors give {again} {} by {}: the figure {what} is not the \
-                     one they give",
-                    shown(c),
+                    "the entry recorded as run {id} has the figure {}, but its {} \
+                     validation errors give {} by {}: the figure {what} is not the one they \
+                     give",
+                    shown((v, c)),
                     rec.validation_errors_mm.len(),
-                    shown(again_ci),
+                    shown((again, again_ci)),
                     rec.metric.as_str()
                 ),
             ));
         }
     }
     Ok(entries.len())
-}
-
-/// An interval as a refusal shows it.
-fn shown(ci: Option<[Real; 2]>) -> String {
-    ci.map_or("(no interval)".into(), |[lo, hi]| format!("({lo} – {hi})"))
 }

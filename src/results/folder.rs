@@ -10,10 +10,11 @@ use super::provenance::sha256_hex;
 use crate::analysis::regression::check_summary;
 use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
-use crate::calibrate::task::{Division, TaskRecord};
+use crate::calibrate::task::{task_path, Division, TaskRecord};
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
+use crate::study::kind::AnyScenario;
 use crate::study::metric::Metric;
 use crate::study::scenario::Scenario;
 
@@ -142,7 +143,7 @@ pub struct Record {
     pub results: Results,
 }
 
-fn read(path: &Path) -> Result<(String, Value)> {
+pub(super) fn read(path: &Path) -> Result<(String, Value)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
     Ok((text, v))
@@ -151,7 +152,13 @@ fn read(path: &Path) -> Result<(String, Value)> {
 impl Record {
     /// A record of `kind` read from `dir` with its `document`, of the scenario `name` whose
     /// canonical text is `text`; no seed, trials, entries, figures or task yet.
-    fn new(kind: Kind, dir: &Path, document: String, name: String, text: String) -> Record {
+    pub(super) fn new(
+        kind: Kind,
+        dir: &Path,
+        document: String,
+        name: String,
+        text: String,
+    ) -> Record {
         Record {
             kind,
             scenario: Canonical {
@@ -168,74 +175,6 @@ impl Record {
         }
     }
 
-    /// Reads the folder `dir`: a task folder (`task.json`), a run or merge folder
-    /// (`summary.json`, whose scenario is `scenario`, else `scenarios/<name>.toml` under the
-    /// current folder) or an identify folder (`identified.json`).
-    pub fn of_folder(dir: &Path, scenario: Option<&Path>) -> Result<Record> {
-        if dir.join("task.json").is_file() {
-            return Record::of_task(dir);
-        }
-        if dir.join("summary.json").is_file() {
-            let path = dir.join("summary.json");
-            let (_, v) = read(&path)?;
-            let summary = check_summary(v, &path)?;
-            let (name, trials, seed) = (summary.scenario.as_str(), summary.trials, summary.seed);
-            let given = |file: &Path| -> Result<Scenario> {
-                Scenario::load(file)?.with_run_overrides(trials, seed)
-            };
-            // The scenario the run ran, as its folder carries it; a scenario file given is
-            // checked against it.
-            let ran = dir.join(scenario_file::NAME);
-            if ran.is_file() {
-                let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
-                let (text, hash) = scenario_file::read(&text, &ran)?;
-                if let Some(file) = scenario {
-                    let other = sha256_hex(scenario_file::canonical(&given(file)?)?.as_bytes());
-                    if other != hash {
-                        return Err(Error::file(
-                            file,
-                            "scenario",
-                            format!(
-                                "is not the scenario the run ran: with the run's trials and \
-                                 seed it has SHA-256 {other}, but {} (the scenario as run) \
-                                 has {hash}; record the folder without a scenario file, or \
-                                 with the one it ran",
-                                ran.display()
-                            ),
-                        ));
-                    }
-                }
-                return Record::of_run_text(dir, (name, seed, trials), text, Kind::Run);
-            }
-            let fallback = Path::new("scenarios").join(format!("{name}.toml"));
-            let file = match scenario {
-                Some(p) => p.to_path_buf(),
-                None if !name.is_empty() && fallback.is_file() => fallback,
-                None => {
-                    return Err(Error::file(
-                        dir,
-                        "summary.json",
-                        format!(
-                            "the folder holds no scenario.toml and the scenario `{name}` of \
-                             this run is not at {}; give its file with --scenario FILE",
-                            fallback.display()
-                        ),
-                    ))
-                }
-            };
-            return Record::of_run(dir, &given(&file)?, Kind::Run);
-        }
-        if dir.join("identified.json").is_file() {
-            return Record::of_identify(dir);
-        }
-        Err(Error::file(
-            dir,
-            "folder",
-            "holds none of summary.json (run, merge), identified.json (identify) and \
-             task.json (task); nothing to record",
-        ))
-    }
-
     /// The run or merge folder `dir` of the scenario `sc` (as run: overrides applied).
     pub fn of_run(dir: &Path, sc: &Scenario, kind: Kind) -> Result<Record> {
         let text = scenario_file::canonical(sc)?;
@@ -245,7 +184,7 @@ impl Record {
 
     /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
     /// whose canonical text as run is `text`; its `summary.json` checked ([`check_figures`]).
-    fn of_run_text(
+    pub(super) fn of_run_text(
         dir: &Path,
         (name, seed, trials): (&str, Option<u64>, Option<usize>),
         text: String,
@@ -254,20 +193,12 @@ impl Record {
         let path = dir.join("summary.json");
         let (document, v) = read(&path)?;
         let s = check_summary(v, &path)?;
-        let (named, ran_seed) = (s.scenario.as_str(), s.seed);
-        if named != name || (ran_seed.is_some() && seed.is_some() && ran_seed != seed) {
-            let show = |s: Option<u64>| s.map_or("?".into(), |s| s.to_string());
-            return Err(Error::file(
-                &path,
-                "scenario",
-                format!(
-                    "the run is of `{named}` with seed {}, the scenario given is `{name}` with \
-                     seed {}",
-                    show(ran_seed),
-                    show(seed)
-                ),
-            ));
-        }
+        let ran_seed = s.seed;
+        check_ran(
+            &path,
+            (&s.scenario, ran_seed),
+            &(name.to_string(), seed, trials),
+        )?;
         let mut entries = Vec::new();
         let mut figures = Vec::new();
         for e in &s.results {
@@ -290,7 +221,7 @@ impl Record {
         Ok(r)
     }
 
-    fn of_identify(dir: &Path) -> Result<Record> {
+    pub(super) fn of_identify(dir: &Path) -> Result<Record> {
         let path = dir.join("identified.json");
         let document = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
         let id = IdentifiedRecord::from_json(&document, &path)?;
@@ -327,17 +258,34 @@ impl Record {
         Ok(r)
     }
 
-    fn of_task(dir: &Path) -> Result<Record> {
+    /// The task folder `dir`, whose task file (`task`, else `tasks/<task>.toml` under the
+    /// current folder) has the files its `task.toml` names beside it.
+    pub(super) fn of_task(dir: &Path, task: Option<&Path>) -> Result<Record> {
         let path = dir.join("task.json");
         let (document, v) = read(&path)?;
         let t = TaskRecord::from_value(v, &path)?;
         // The task file the entry ran, as its folder carries it (a folder written before it
-        // did has none): the published figures must be its own.
+        // did has none): the published figures must be its own, and with the files it fixes
+        // as they are now it must have the hash the entry states.
         let ran = dir.join(TASK_FILE);
         if ran.is_file() {
             let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
             t.check_published((&document, &path), (&text, &ran))?;
+            let file = task.map_or_else(|| task_path(&t.task), Path::to_path_buf);
+            if !file.is_file() {
+                let why = format!(
+                    "cannot be checked: the files {} names lie beside the task file it was \
+                     copied from, and {} is not a file; give the task file the entry ran with ",
+                    ran.display(),
+                    file.display()
+                );
+                let why = crate::error::Said::from(why).name(crate::error::Opt::Task);
+                return Err(Error::file(&path, "task_hash", why));
+            }
+            let beside = file.parent().unwrap_or(Path::new("."));
+            t.check_hash(&path, (&text, &ran), beside)?;
         }
+        t.check_figure(&path)?;
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
         let value = t.value;
         if !value.is_finite() {
@@ -434,6 +382,87 @@ impl Record {
     }
 }
 
+/// The name, seed and trials of the scenario a run ran.
+pub(super) type Named = (String, Option<u64>, Option<usize>);
+
+/// The scenario a run or merge folder `dir` ran, as its canonical text, with the name, seed
+/// and trials it names: the text of the folder's `scenario.toml` (its hash line checked; a
+/// scenario file given, with the run's trials and seed applied, must have the same hash,
+/// else it is refused naming both) with the run's own name, seed and trials (`run`, from its
+/// `summary.json`); for a folder without one, the file given, else `scenarios/<name>.toml`
+/// under the current folder, with the run's trials and seed applied.
+pub(super) fn scenario_as_run(
+    dir: &Path,
+    (name, trials, seed): (&str, Option<usize>, Option<u64>),
+    scenario: Option<&Path>,
+) -> Result<(String, Named)> {
+    let given = |file: &Path| -> Result<AnyScenario> {
+        AnyScenario::load(file)?.with_run_overrides(trials, seed)
+    };
+    let ran = dir.join(scenario_file::NAME);
+    if ran.is_file() {
+        let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
+        let (text, hash) = scenario_file::read(&text, &ran)?;
+        if let Some(file) = scenario {
+            let other = sha256_hex(given(file)?.settings()?.as_bytes());
+            if other != hash {
+                return Err(Error::file(
+                    file,
+                    "scenario",
+                    format!(
+                        "is not the scenario the run ran: with the run's trials and seed it \
+                         has SHA-256 {other}, but {} (the scenario as run) has {hash}; record \
+                         the folder without a scenario file, or with the one it ran",
+                        ran.display()
+                    ),
+                ));
+            }
+        }
+        return Ok((text, (name.to_string(), seed, trials)));
+    }
+    let fallback = Path::new("scenarios").join(format!("{name}.toml"));
+    let file = match scenario {
+        Some(p) => p.to_path_buf(),
+        None if !name.is_empty() && fallback.is_file() => fallback,
+        None => {
+            return Err(Error::file(
+                dir,
+                "summary.json",
+                format!(
+                    "the folder holds no scenario.toml and the scenario `{name}` of this run \
+                     is not at {}; give its file with --scenario FILE",
+                    fallback.display()
+                ),
+            ))
+        }
+    };
+    let sc = given(&file)?;
+    let named = (sc.name().to_string(), Some(sc.seed()), Some(sc.trials()));
+    Ok((sc.settings()?, named))
+}
+
+/// Refuses, naming the summary `path`, a run of the scenario `ran` with the seed `ran_seed`
+/// recorded as the scenario `named` (name, seed, trials) of another name or seed.
+pub(super) fn check_ran(
+    path: &Path,
+    (ran, ran_seed): (&str, Option<u64>),
+    (name, seed, _): &Named,
+) -> Result<()> {
+    if ran == name && (ran_seed.is_none() || seed.is_none() || ran_seed == *seed) {
+        return Ok(());
+    }
+    let show = |s: Option<u64>| s.map_or("?".into(), |s| s.to_string());
+    Err(Error::file(
+        path,
+        "scenario",
+        format!(
+            "the run is of `{ran}` with seed {}, the scenario given is `{name}` with seed {}",
+            show(ran_seed),
+            show(*seed)
+        ),
+    ))
+}
+
 fn interval(v: Option<&Value>) -> Option<[Real; 2]> {
     let a = v?.as_array()?;
     match (a.first()?.as_f64(), a.get(1)?.as_f64()) {
@@ -446,7 +475,7 @@ fn interval(v: Option<&Value>) -> Option<[Real; 2]> {
 /// sibling `<key>_ci95` (or of the same key in `cis`, the `_ci95` sibling of `m` itself, as
 /// `param_rmse_ci95` is of `param_rmse`); objects are walked, `*_ci95`, strings and lists
 /// skipped.
-fn flatten(
+pub(super) fn flatten(
     entry: &str,
     prefix: &str,
     m: &serde_json::Map<String, Value>,
@@ -476,20 +505,22 @@ fn flatten(
 }
 
 /// Whether a figure can be negative: η (an improvement can be a worsening), a parameter's
-/// bias, the improvement in per cent and a signed error along the tool axis; every other
-/// figure (an error, an RMSE, a spread, a count, a ratio) is ≥ 0.
+/// bias, the improvement in per cent, a signed error along the tool axis and a registration
+/// study's difference SVD − weighted SVD; every other figure (an error, an RMSE, a spread, a
+/// count, a ratio) is ≥ 0.
 fn signed(metric: &str) -> bool {
     metric.starts_with(Metric::Eta.spec().field)
         || metric.starts_with("param_bias.")
         || metric == Metric::Improvement.key()
         || metric.contains("_axis_mm.")
+        || metric == "difference_mm"
 }
 
 /// Refuses, naming the summary `path` and the key, a document that cannot be what a run
 /// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
 /// a whole number ≥ 0; a figure that must be ≥ 0 below zero ([`signed`]); a figure outside
 /// its own 95 % interval, or an interval whose ends are reversed.
-fn check_figures(path: &Path, trials: Option<usize>, figures: &[Figure]) -> Result<()> {
+pub(super) fn check_figures(path: &Path, trials: Option<usize>, figures: &[Figure]) -> Result<()> {
     if trials == Some(0) {
         return Err(Error::file(
             path,

@@ -15,6 +15,8 @@ pub mod board;
 pub mod folder;
 pub mod history;
 pub mod provenance;
+mod reader;
+mod whole;
 
 use std::path::{Path, PathBuf};
 

@@ -9,9 +9,11 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::numeric::rng::trial_seed;
 use crate::numeric::Real;
-use crate::report::output::Outputs;
+use crate::report::output::{Outputs, Text};
+use crate::report::scenario_file;
 use crate::robot::Robot;
 use crate::study::instruments::{CellPlan, InstrumentsScenario, Trial};
+use crate::study::kind::AnyScenario;
 use crate::study::registration_study::RegistrationScenario;
 
 /// A study whose work units are its blocks' trials, each trial's result a record
@@ -28,6 +30,22 @@ pub trait Cells: Sync {
     /// The study's files from every block's trials, in order, and the table the terminal
     /// shows.
     fn outputs(&self, done: Vec<(Self::Block, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)>;
+}
+
+/// The study's files ([`Cells::outputs`]) with the scenario as run, `scenario.toml`
+/// ([`crate::report::scenario_file`]), which `record` stores; and the table the terminal
+/// shows.
+pub fn study_files<'c, C: Cells>(
+    cells: &'c C,
+    sc: &AnyScenario,
+    done: Vec<(C::Block, Vec<C::Trial>)>,
+) -> Result<(Outputs<'c>, String)> {
+    let (mut outputs, table) = cells.outputs(done)?;
+    outputs.push(Box::new(Text {
+        name: scenario_file::NAME,
+        text: scenario_file::with_hash(&sc.settings()?),
+    }));
+    Ok((outputs, table))
 }
 
 impl Cells for RegistrationScenario {

@@ -413,7 +413,7 @@ fn merge_cells<C: Cells>(
             }
             records.finish()?;
         }
-        let (outputs, text) = cells.outputs(done)?;
+        let (outputs, text) = super::cells::study_files(cells, sc, done)?;
         table = text;
         write_all(dir, &outputs)
     })?;

@@ -106,7 +106,7 @@ pub fn run_cells<C: Cells>(
         let outputs = match (records, opts.shard) {
             (Some(r), Some(s)) => r.finish_with(sc, s, t0.elapsed().as_secs_f64(), Vec::new())?,
             _ => {
-                let (outputs, text) = cells.outputs(done)?;
+                let (outputs, text) = super::cells::study_files(cells, sc, done)?;
                 table = text;
                 outputs
             }

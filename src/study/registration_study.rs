@@ -153,7 +153,8 @@ impl RegistrationScenario {
 }
 
 /// One cell of the grid: means over the draws.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Cell {
     /// Points with a gross error.
     pub outlier_count: usize,
@@ -167,6 +168,19 @@ pub struct Cell {
     pub difference_mm: Real,
     /// Share of the draws in which the weighted SVD was the better of the two.
     pub wsvd_better_fraction: Real,
+}
+
+/// The name of the cell of `count` points with a gross error of up to `magnitude_mm`, as a
+/// claim names it: `16 × 0–1 mm`.
+fn cell_name(count: usize, magnitude_mm: Real) -> String {
+    format!("{count} × 0–{magnitude_mm} mm")
+}
+
+impl Cell {
+    /// The cell's name, as a claim names it: `16 × 0–1 mm`.
+    pub fn name(&self) -> String {
+        cell_name(self.outlier_count, self.magnitude_mm)
+    }
 }
 
 impl RegistrationStudy {
@@ -220,11 +234,7 @@ impl RegistrationStudy {
     pub fn cell_names(&self) -> Vec<String> {
         self.outlier_counts
             .iter()
-            .flat_map(|c| {
-                self.magnitude_mm
-                    .iter()
-                    .map(move |m| format!("{c} × 0–{m} mm"))
-            })
+            .flat_map(|&c| self.magnitude_mm.iter().map(move |&m| cell_name(c, m)))
             .collect()
     }
 

@@ -1,9 +1,12 @@
 //! The studies of cells on the runner of every study: Ban fig. 3's registration study run as
 //! two shards and merged, and an instruments study killed (SIGKILL) once its checkpoint holds
-//! a finished trial and resumed, each give the bytes of one run.
+//! a finished trial and resumed, each give the bytes of one run; both recorded in the results
+//! database (`run --record`, `record`, `merge --record`), one entry per cell, and read by
+//! `history` and `leaderboard`.
 
 use crate::common::{
-    calbench, calbench_ok, kill_once_checkpointed, path_arg, read, root, tmp_dir, write_scenario,
+    calbench, calbench_ok, kill_once_checkpointed, one_line_naming, path_arg, read, root, tmp_dir,
+    write_scenario,
 };
 
 /// The files of a registration study.
@@ -40,6 +43,44 @@ fn ban_fig3_in_two_shards_merges_to_the_bytes_of_one_run() {
     let o = calbench(&["merge", path_arg(&s0), "--out", path_arg(&dir.join("half"))]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("1/2"));
+}
+
+/// The records of another registration run with the same name and seed but another trial
+/// count (whose first draws are the same numbers), copied into a shard, are refused by
+/// `merge`, naming `records.txt` and its line, and nothing is written.
+#[test]
+fn merge_refuses_the_records_of_another_registration_run_with_the_same_name_and_seed() {
+    let dir = tmp_dir("cells-foreign");
+    let sc = root().join("scenarios/ban-fig3.toml");
+    let run = |trials: &str, shard: &str, out: &str| {
+        let out = dir.join(out);
+        let args = ["run", path_arg(&sc), "--trials", trials, "--shard", shard];
+        calbench_ok(&[&args[..], &["--out", path_arg(&out)]].concat());
+        out
+    };
+    let (a0, a1) = (run("6", "0/2", "a0"), run("6", "1/2", "a1"));
+    // Shard 0/3 of 9 draws holds draws 0–2, as shard 0/2 of 6 does.
+    let b0 = run("9", "0/3", "b0");
+    let records = a0.join("records.txt");
+    let own = read(&records);
+    let foreign = read(&b0.join("records.txt"));
+    assert_eq!(own.lines().count(), foreign.lines().count());
+    std::fs::write(&records, &foreign).unwrap();
+    let merged = dir.join("merged");
+    let args = [
+        "merge",
+        path_arg(&a0),
+        path_arg(&a1),
+        "--out",
+        path_arg(&merged),
+    ];
+    let o = calbench(&args);
+    assert!(!o.status.success(), "merged the records of another run");
+    let err = String::from_utf8_lossy(&o.stderr);
+    one_line_naming(&err, &records, &["line 1", "another run"]);
+    assert!(!merged.join("summary.json").exists());
+    std::fs::write(&records, &own).unwrap();
+    calbench_ok(&args);
 }
 
 /// Two instruments at 40 random poses: two cells of six trials.
@@ -96,9 +137,179 @@ fn an_instruments_study_killed_and_resumed_gives_the_bytes_of_one_run() {
         "the run ended before it was killed"
     );
     assert!(meta.exists());
-    calbench_ok(&["run", "--resume", path_arg(&killed)]);
+    // Resumed, and recorded as it finishes.
+    let db = dir.join("calbench.sqlite");
+    let o = calbench_ok(&[
+        "run",
+        "--resume",
+        path_arg(&killed),
+        "--record",
+        "--db",
+        path_arg(&db),
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains("as run #1 of instruments-resume (2 entries"),
+        "{said}"
+    );
     assert!(!meta.exists(), "the checkpoint outlived the resumed run");
     for f in ["summary.json", "report.md", "report.html"] {
         assert_eq!(read(&whole.join(f)), read(&killed.join(f)), "{f}");
     }
+}
+
+/// `SELECT COUNT(*)`-like `sql` of the database `db`, one number.
+fn number(db: &std::path::Path, sql: &str) -> i64 {
+    let c = rusqlite::Connection::open(db).unwrap();
+    c.query_row(sql, [], |r| r.get(0)).unwrap()
+}
+
+#[test]
+fn registration_and_instruments_studies_are_recorded_and_history_and_the_board_read_them() {
+    let dir = tmp_dir("cells-record");
+    let db = dir.join("calbench.sqlite");
+    let fig3 = root().join("scenarios/ban-fig3.toml");
+    let ins = write_scenario(&dir, "s.toml", INSTRUMENTS);
+    let run = |sc: &std::path::Path, seed: &str, out: &str, more: &[&str]| {
+        let out = dir.join(out);
+        let mut args = vec!["run", path_arg(sc), "--trials", "3", "--seed", seed];
+        args.extend(["--out", path_arg(&out)]);
+        args.extend(more);
+        calbench_ok(&args);
+        out
+    };
+    // A registration study recorded as it finishes, an instruments study by `record`.
+    let v1 = ["--record", "--db", path_arg(&db), "--label", "v1"];
+    let f1 = run(&fig3, "1", "f1", &v1);
+    let i1 = run(&ins, "1", "i1", &[]);
+    calbench_ok(&[
+        "record",
+        path_arg(&i1),
+        "--db",
+        path_arg(&db),
+        "--label",
+        "v1",
+    ]);
+    // One entry per cell: Ban's 8 × 5 grid, two instruments at one pose count and strategy.
+    let entries = |name: &str| {
+        let sql = format!(
+            "SELECT COUNT(*) FROM entries e JOIN runs r ON r.id = e.run WHERE r.scenario = '{name}'"
+        );
+        number(&db, &sql)
+    };
+    assert_eq!(entries("ban-fig3"), 40);
+    assert_eq!(entries("instruments-resume"), 2);
+    // A cell's figure is the summary's, and the scenario stored is the one the folder ran.
+    let summary = crate::common::load_json(&f1.join("summary.json"));
+    let last = summary["cells"].as_array().unwrap().last().unwrap().clone();
+    let c = rusqlite::Connection::open(&db).unwrap();
+    let (value, text): (f64, String) = c
+        .query_row(
+            "SELECT f.value, r.scenario_text FROM figures f JOIN runs r ON r.id = f.run \
+             WHERE f.entry = '16 × 0–1 mm' AND f.metric = 'difference_mm'",
+            [],
+            |r| Ok((r.get(0)?, r.get(1)?)),
+        )
+        .unwrap();
+    assert_eq!(value, last["difference_mm"].as_f64().unwrap());
+    let ran = read(&f1.join("scenario.toml"));
+    assert_eq!(ran.split_once('\n').unwrap().1, text);
+    let fig = |entry: &str, metric: &str| {
+        let sql =
+            format!("SELECT COUNT(*) FROM figures WHERE entry = '{entry}' AND metric = '{metric}'");
+        number(&db, &sql)
+    };
+    assert_eq!(
+        fig("distance / 40 poses / random", "validation_after_mm"),
+        1
+    );
+    assert_eq!(
+        fig("16 × 0–1 mm", "outlier_count"),
+        0,
+        "a setting is no figure"
+    );
+    // A second version of each, the registration study merged from two shards.
+    let s0 = run(&fig3, "2", "s0", &["--shard", "0/2"]);
+    let s1 = run(&fig3, "2", "s1", &["--shard", "1/2"]);
+    let merged = dir.join("f2");
+    calbench_ok(&[
+        "merge",
+        path_arg(&s0),
+        path_arg(&s1),
+        "--out",
+        path_arg(&merged),
+        "--record",
+        "--db",
+        path_arg(&db),
+        "--label",
+        "v2",
+    ]);
+    let i2 = run(
+        &ins,
+        "2",
+        "i2",
+        &["--record", "--db", path_arg(&db), "--label", "v2"],
+    );
+    assert_eq!(
+        number(&db, "SELECT COUNT(*) FROM runs WHERE kind = 'merge'"),
+        1
+    );
+    assert_eq!(number(&db, "SELECT COUNT(*) FROM runs"), 4);
+    // history and the leaderboard read them.
+    let o = calbench_ok(&["history", "--db", path_arg(&db), "--regressions"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("no regression"));
+    let out = dir.join("history");
+    let args = ["history", "--db", path_arg(&db), "--scenario", "ban-fig3"];
+    calbench_ok(&[&args[..], &["--metric", "svd_mm", "--out", path_arg(&out)]].concat());
+    let csv = read(&out.join("history.csv"));
+    assert_eq!(csv.lines().count(), 1 + 2 * 40, "{csv}");
+    calbench_ok(&[
+        "leaderboard",
+        "--db",
+        path_arg(&db),
+        "--out",
+        path_arg(&dir.join("board")),
+    ]);
+    // The scenario file given must be the one the folder ran: refused, naming both hashes.
+    let o = calbench(&[
+        "record",
+        path_arg(&i2),
+        "--db",
+        path_arg(&db),
+        "--scenario",
+        path_arg(&fig3),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("is not the scenario the run ran"),
+        "{err}"
+    );
+    let hashes: std::collections::BTreeSet<&str> = err
+        .split(|c: char| !c.is_ascii_hexdigit())
+        .filter(|w| w.len() == 64)
+        .collect();
+    assert_eq!(hashes.len(), 2, "{err}");
+    // A figure that cannot be what the study wrote: refused, naming the file and the key.
+    let edited = dir.join("edited");
+    std::fs::create_dir_all(&edited).unwrap();
+    for f in ["summary.json", "scenario.toml"] {
+        std::fs::copy(i1.join(f), edited.join(f)).unwrap();
+    }
+    let text = read(&edited.join("summary.json"));
+    let at = text.find("\"validation_after_mm\": ").unwrap() + "\"validation_after_mm\": ".len();
+    std::fs::write(
+        edited.join("summary.json"),
+        format!("{}-{}", &text[..at], &text[at..]),
+    )
+    .unwrap();
+    let o = calbench(&["record", path_arg(&edited), "--db", path_arg(&db)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("edited/summary.json")
+            && err.contains("position / 40 poses / random")
+            && err.contains("validation_after_mm"),
+        "{err}"
+    );
+    assert_eq!(number(&db, "SELECT COUNT(*) FROM runs"), 4);
 }

@@ -190,8 +190,10 @@ fn a_closed_and_an_open_wam_entry_recorded_rank_in_their_divisions_on_the_leader
     let o = calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
     let said = String::from_utf8_lossy(&o.stderr);
     assert!(said.contains("2 task entries verified"), "{said}");
-    // An entry whose figure was edited before `record` (within its interval, which `record`
-    // cannot tell) is refused by --verify, naming the folder's task.json and the figure.
+    // An entry whose figure was edited before `record` (within its interval) is refused by
+    // `record`, which computes it again from the per-row errors as --verify does; one whose
+    // figure was edited in the database after `record` is refused by --verify, naming the
+    // folder's task.json and the figure.
     let edited = d.join("edited");
     std::fs::create_dir_all(&edited).unwrap();
     for e in std::fs::read_dir(&closed).unwrap() {
@@ -206,12 +208,23 @@ fn a_closed_and_an_open_wam_entry_recorded_rank_in_their_divisions_on_the_leader
     let text = serde_json::to_string_pretty(&j).unwrap() + "\n";
     std::fs::write(edited.join("task.json"), text).unwrap();
     let db2 = d.join("db2/calbench.sqlite");
-    calbench_ok(&["record", path_arg(&edited), "--db", path_arg(&db2)]);
+    let o = calbench(&["record", path_arg(&edited), "--db", path_arg(&db2)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("edited/task.json: value"),
+        "an edited figure recorded: {err}"
+    );
+    calbench_ok(&["record", path_arg(&closed), "--db", path_arg(&db2)]);
+    rusqlite::Connection::open(&db2)
+        .unwrap()
+        .execute("UPDATE tasks SET value = value + 0.001", [])
+        .unwrap();
     let o = calbench(&["leaderboard", "--db", path_arg(&db2), "--verify"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success(), "an edited figure verified: {err}");
     assert!(
-        err.contains("edited/task.json: value") && err.contains("is not the one they give"),
+        err.contains("closed/task.json: value")
+            && err.contains("the figure recorded is not the one they give"),
         "{err}"
     );
     // A harmonics entry that calls itself closed is refused: it would rank among the

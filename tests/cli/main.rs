@@ -34,6 +34,7 @@ mod precision;
 mod profiles;
 mod realdata;
 mod record_keys;
+mod record_task;
 mod records;
 mod refusals;
 mod report_baseline;

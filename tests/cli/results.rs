@@ -375,12 +375,21 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
 #[test]
 fn record_refuses_a_published_row_that_is_not_the_task_files() {
     let dir = tmp_dir("cli-results-published");
-    task_folder(&dir, "t", 3.0, "closed", "\"kinematic\"");
-    let task_toml = "title = \"t\"\n\n[[published]]\nlabel = \"MDH + learned residual\"\n\
-                     value = 2.92\nsource = \"Jacobi 2025, table 3\"\ndivision = \"open\"\n";
-    std::fs::write(dir.join("t/task.toml"), task_toml).unwrap();
+    let task = crate::record_task::small_task(&dir);
+    crate::record_task::run_entry(&task, &dir.join("t"));
+    let record = |db: &Path| {
+        let t = dir.join("t");
+        calbench(&[
+            "record",
+            path_arg(&t),
+            "--db",
+            path_arg(db),
+            "--task",
+            path_arg(&task),
+        ])
+    };
     let db = dir.join("ok.sqlite");
-    calbench_ok(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    assert!(record(&db).status.success());
     assert_eq!(count(&db, "SELECT COUNT(*) FROM tasks"), 1);
     // The published figure edited in task.json: 2.92 → 1.5.
     let json = dir.join("t/task.json");
@@ -389,13 +398,14 @@ fn record_refuses_a_published_row_that_is_not_the_task_files() {
         read(&json).replace("\"value\": 2.92", "\"value\": 1.5"),
     )
     .unwrap();
+    // The row's `{`, the line after the key's (1-based).
     let line = read(&json)
         .lines()
         .position(|l| l.contains("\"published\""))
         .unwrap()
-        + 1;
+        + 2;
     let db = dir.join("forged.sqlite");
-    let o = calbench(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    let o = record(&db);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !o.status.success()
@@ -406,5 +416,5 @@ fn record_refuses_a_published_row_that_is_not_the_task_files() {
     );
     // A folder written before entries carried their task file: recorded as it is.
     std::fs::remove_file(dir.join("t/task.toml")).unwrap();
-    calbench_ok(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    assert!(record(&db).status.success());
 }

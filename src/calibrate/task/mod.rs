@@ -4,13 +4,14 @@
 //! figures. [`Task::request`] turns it into the one identification pipeline's request
 //! ([`IdentifyRequest`]); [`TaskEntry::json`] is the entry's `task.json`.
 
+mod canonical;
 mod entry;
 pub mod record;
 pub mod sha256;
 pub mod split;
 
 pub use entry::{shared_rows, EntryModels};
-pub use record::TaskRecord;
+pub use record::{TaskRecord, TASK_FILE};
 
 use std::path::{Path, PathBuf};
 
@@ -21,13 +22,14 @@ use super::cv::Model;
 use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::residual_vectors;
-use crate::error::{line_of, Error, Result};
+use crate::error::{Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::csv::read_measurements_text;
 use crate::measurement::import::{import_text, Mapping};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
 use crate::robot::Robot;
+use canonical::place_of;
 pub use split::Split;
 
 /// The `format` of `task.json`.
@@ -261,12 +263,18 @@ impl Task {
     /// split, and the published figures (or the `unpublished` note, not both).
     pub fn load(path: &Path) -> Result<Task> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Task::parse(text, path, path.parent().unwrap_or(Path::new(".")))
+    }
+
+    /// [`Task::load`] of the task file's `text`, read from `path`, whose files are named
+    /// relative to the folder `dir`: a task file an entry's folder carries ([`TASK_FILE`]),
+    /// whose files lie beside the task file it was copied from.
+    pub fn parse(text: String, path: &Path, dir: &Path) -> Result<Task> {
         let table: toml::Table = toml::from_str(&text)
             .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
         let keys: TaskKeys = toml::from_str(&text)
             .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
         let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
-        let dir = path.parent().unwrap_or(Path::new("."));
         let file = |key: &str, rel: &str| -> Result<PathBuf> {
             let p = dir.join(rel);
             if p.is_file() {
@@ -370,22 +378,14 @@ impl Task {
             .to_string();
         let robot = file("robot", &keys.robot)?;
         let mapping = file("mapping", &keys.mapping)?;
-        let mut canonical = canonical_text(&toml::Value::Table(table));
         let mut fixed: Vec<(&str, &Path)> = vec![("mapping", &mapping), ("robot", &robot)];
         fixed.extend(data.files());
-        fixed.sort_by_key(|(k, _)| *k);
-        for (key, p) in fixed {
-            let bytes = std::fs::read(p).map_err(|e| Error::io(p, e))?;
-            canonical.push_str(&format!(
-                "{key}.sha256 = \"{}\"\n",
-                sha256::sha256_hex(&bytes)
-            ));
-        }
+        let hash = canonical::task_hash(&table, fixed)?;
         Ok(Task {
             name,
             path: path.to_path_buf(),
-            text: text.clone(),
-            hash: sha256::sha256_hex(canonical.as_bytes()),
+            text,
+            hash,
             title: keys.title,
             robot,
             mapping,
@@ -523,43 +523,6 @@ impl Task {
     }
 }
 
-/// `key = value` lines of every leaf of `v`, keys sorted and dotted (arrays of tables
-/// indexed): a task's text without its comments and layout.
-fn canonical_text(v: &toml::Value) -> String {
-    fn walk(prefix: &str, v: &toml::Value, out: &mut String) {
-        match v {
-            toml::Value::Table(t) => {
-                let mut keys: Vec<&String> = t.keys().collect();
-                keys.sort();
-                for k in keys {
-                    let p = if prefix.is_empty() {
-                        k.clone()
-                    } else {
-                        format!("{prefix}.{k}")
-                    };
-                    walk(&p, &t[k], out);
-                }
-            }
-            toml::Value::Array(a) if a.iter().all(toml::Value::is_table) && !a.is_empty() => {
-                for (i, x) in a.iter().enumerate() {
-                    walk(&format!("{prefix}[{i}]"), x, out);
-                }
-            }
-            leaf => out.push_str(&format!("{prefix} = {leaf}\n")),
-        }
-    }
-    let mut out = String::new();
-    walk("", v, &mut out);
-    out
-}
-
-/// `line N` of a TOML error, where it has a place.
-fn place_of(text: &str, e: &toml::de::Error) -> String {
-    e.span().map_or("TOML".into(), |s| {
-        format!("line {}", line_of(text, s.start))
-    })
-}
-
 /// Who ran an entry and with what: for `task.json`.
 pub struct TaskEntry<'a> {
     /// The task.
@@ -667,13 +630,5 @@ mod tests {
         let (r, _) = Metric::ValidationRmsMm.of(&e);
         assert!((r - 7.5f64.sqrt()).abs() < 1e-12);
         assert_eq!(Metric::ValidationRmsMm.of(&[2.0]), (2.0, None));
-    }
-
-    #[test]
-    fn canonical_text_ignores_comments_and_order() {
-        let a: toml::Value = toml::from_str("# x\nb = 1\na = \"s\"\n[[p]]\nv = 2.5\n").unwrap();
-        let b: toml::Value = toml::from_str("a = \"s\" # y\nb = 1\n\n[[p]]\nv = 2.5").unwrap();
-        assert_eq!(canonical_text(&a), canonical_text(&b));
-        assert_eq!(canonical_text(&a), "a = \"s\"\nb = 1\np[0].v = 2.5\n");
     }
 }

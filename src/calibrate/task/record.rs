@@ -165,11 +165,93 @@ impl TaskRecord {
     }
 }
 
+/// A figure with its 95 % interval.
+pub type Figure = (Real, Option<[Real; 2]>);
+
+/// Whether two figures and their intervals are the same bit for bit (a NaN equals a NaN).
+pub fn same_figure((a, a_ci): Figure, (b, b_ci): Figure) -> bool {
+    let same = |a: Real, b: Real| a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan());
+    same(a, b)
+        && match (a_ci, b_ci) {
+            (Some(a), Some(b)) => same(a[0], b[0]) && same(a[1], b[1]),
+            (a, b) => a.is_none() && b.is_none(),
+        }
+}
+
+/// A figure and its interval as a refusal shows them.
+pub fn shown((value, ci): Figure) -> String {
+    let ci = ci.map_or("(no interval)".into(), |[lo, hi]| format!("({lo} – {hi})"));
+    format!("{value} {ci}")
+}
+
 impl TaskRecord {
     /// The figure and its interval computed again from the recorded per-row errors by the
     /// task's metric; `None` when the record holds no per-row errors.
-    pub fn recomputed(&self) -> Option<(Real, Option<[Real; 2]>)> {
+    pub fn recomputed(&self) -> Option<Figure> {
         (!self.validation_errors_mm.is_empty()).then(|| self.metric.of(&self.validation_errors_mm))
+    }
+
+    /// Refuses, naming `path` (this record's file) and `value`, a figure and interval that
+    /// are not, bit for bit, what the recorded per-row errors give ([`TaskRecord::recomputed`]):
+    /// an edited figure. A record without per-row errors passes.
+    pub fn check_figure(&self, path: &Path) -> Result<()> {
+        let Some(again) = self.recomputed() else {
+            return Ok(());
+        };
+        let stated = (self.value, self.ci95);
+        if same_figure(stated, again) {
+            return Ok(());
+        }
+        Err(Error::file(
+            path,
+            "value",
+            format!(
+                "states the figure {}, but its {} validation errors \
+                 (validation_errors_mm) give {} by {}: the figure was edited",
+                shown(stated),
+                self.validation_errors_mm.len(),
+                shown(again),
+                self.metric.as_str()
+            ),
+        ))
+    }
+
+    /// Refuses, naming `path` (this record's file) and `task_hash`, a record whose hash is
+    /// not that of the task file it ran (`task_text`, read from `task_path`) with the files
+    /// it fixes read from `dir` (beside the task file it was copied from) as they are now:
+    /// the task, its data, split, mapping or robot changed since the entry ran.
+    pub fn check_hash(
+        &self,
+        path: &Path,
+        (task_text, task_path): (&str, &Path),
+        dir: &Path,
+    ) -> Result<()> {
+        let task = super::Task::parse(task_text.to_string(), task_path, dir)?;
+        if task.hash == self.task_hash {
+            return Ok(());
+        }
+        let mut fixed: Vec<String> = vec![
+            format!("robot {}", task.robot.display()),
+            format!("mapping {}", task.mapping.display()),
+        ];
+        fixed.extend(
+            task.data
+                .files()
+                .map(|(k, p)| format!("{k} {}", p.display())),
+        );
+        Err(Error::file(
+            path,
+            "task_hash",
+            format!(
+                "is {}, but the task file the entry ran ({}) with the files it fixes as they \
+                 are now ({}) has the hash {}: the task file or one of its files changed \
+                 since the entry ran; run the entry again",
+                self.task_hash,
+                task_path.display(),
+                fixed.join(", "),
+                task.hash
+            ),
+        ))
     }
 
     /// The file's JSON tree (keys in byte order).

@@ -1,0 +1,44 @@
+//! Which reader a recorded folder takes, by the document it holds: `task.json` (a task
+//! entry), `summary.json` of a Monte-Carlo study ([`Record::of_run_text`]) or of a study that
+//! runs whole ([`Record::of_whole`]), or `identified.json` (an identification).
+
+use std::path::Path;
+
+use super::folder::{read, scenario_as_run, Kind, Record};
+use super::whole::is_whole;
+use crate::analysis::regression::check_summary;
+use crate::error::{Error, Result};
+
+impl Record {
+    /// Reads the folder `dir`: a task folder (`task.json`, its files found beside `task`, the
+    /// task file it ran, else `tasks/<task>.toml` under the current folder), a run or merge
+    /// folder (`summary.json`, of a Monte-Carlo study or of one that runs whole, whose
+    /// scenario is the folder's `scenario.toml`, else the file given, else
+    /// `scenarios/<name>.toml`) or an identify folder (`identified.json`).
+    pub fn of_folder(dir: &Path, scenario: Option<&Path>, task: Option<&Path>) -> Result<Record> {
+        if dir.join("task.json").is_file() {
+            return Record::of_task(dir, task);
+        }
+        if dir.join("summary.json").is_file() {
+            let path = dir.join("summary.json");
+            let (document, v) = read(&path)?;
+            if is_whole(&v) {
+                return Record::of_whole(dir, (&path, document), v, scenario);
+            }
+            let summary = check_summary(v, &path)?;
+            let run = (summary.scenario.as_str(), summary.trials, summary.seed);
+            let (text, named) = scenario_as_run(dir, run, scenario)?;
+            let (name, seed, trials) = named;
+            return Record::of_run_text(dir, (&name, seed, trials), text, Kind::Run);
+        }
+        if dir.join("identified.json").is_file() {
+            return Record::of_identify(dir);
+        }
+        Err(Error::file(
+            dir,
+            "folder",
+            "holds none of summary.json (run, merge), identified.json (identify) and \
+             task.json (task); nothing to record",
+        ))
+    }
+}

@@ -1,0 +1,149 @@
+//! `record` of a task folder stores only what ran (docs/formats.md § 2.15, § 9.3): the task
+//! file the folder carries (`task.toml`), with the files it fixes as they are now, must have
+//! the `task_hash` of `task.json`, and the figure must be what the entry's per-row validation
+//! errors give; an entry whose data, task file or figure changed after it ran is refused,
+//! naming the file, the key and both hashes or figures.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+
+/// A user's small task in `dir/tasks/small.toml`: the Barrett WAM's 216 grid rows calibrate
+/// and its 20 random rows validate (copies in `dir/tasks/`, so that the test may edit them),
+/// the robot and the mapping of the shipped task, and one published figure.
+pub(crate) fn small_task(dir: &Path) -> PathBuf {
+    let tasks = dir.join("tasks");
+    std::fs::create_dir_all(&tasks).unwrap();
+    let data = root().join("data/barrett-wam");
+    for (from, to) in [
+        ("3D_WAM_uncalibrated_grid_cleaned.csv", "cal.csv"),
+        ("3D_WAM_uncalibrated_random_cleaned.csv", "val.csv"),
+    ] {
+        std::fs::copy(data.join(from), tasks.join(to)).unwrap();
+    }
+    let file = tasks.join("small.toml");
+    let text = format!(
+        "title = \"A small task\"\nrobot = {:?}\nmapping = {:?}\n\
+         metric = \"validation_mean_mm\"\n\n[data]\ncalibration = \"cal.csv\"\n\
+         validation = \"val.csv\"\n\n[[published]]\nlabel = \"MDH + learned residual\"\n\
+         value = 2.92\nsource = \"Jacobi 2025, table 3\"\ndivision = \"open\"\n",
+        root().join("examples/barrett-wam/wam.toml"),
+        root().join("tasks/barrett-wam.mapping.toml"),
+    );
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// `calbench task TASK --method lm --models kinematic --out OUT`, as a user runs an entry.
+pub(crate) fn run_entry(task: &Path, out: &Path) {
+    calbench_ok(&[
+        "task",
+        path_arg(task),
+        "--method",
+        "lm",
+        "--models",
+        "kinematic",
+        "--out",
+        path_arg(out),
+    ]);
+}
+
+/// `calbench record DIR --db DB [more]`.
+fn record(dir: &Path, db: &Path, more: &[&str]) -> std::process::Output {
+    let mut args = vec!["record", path_arg(dir), "--db", path_arg(db)];
+    args.extend(more);
+    calbench(&args)
+}
+
+/// The refusal of `o`, which must have failed, naming `task.json`'s `task_hash`, the hash
+/// the entry states and another 64-digit hash.
+fn refused_naming_both_hashes(o: &std::process::Output, stated: &str) {
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "recorded a task that changed: {err}");
+    assert!(err.contains("task.json: task_hash: is "), "{err}");
+    let hashes: Vec<&str> = err
+        .split(|c: char| !c.is_ascii_hexdigit())
+        .filter(|w| w.len() == 64)
+        .collect();
+    assert!(
+        hashes.len() == 2 && hashes[0] == stated && hashes[1] != stated,
+        "{err}"
+    );
+}
+
+#[test]
+fn a_task_whose_data_or_task_file_changed_after_the_entry_ran_is_refused_naming_both_hashes() {
+    let dir = tmp_dir("record-task-hash");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let stated = load_json(&out.join("task.json"))["task_hash"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let given = ["--task", path_arg(&task)];
+    // Unedited: recorded.
+    let o = record(&out, &dir.join("ok.sqlite"), &given);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Without the task file: tasks/small.toml is not under the current folder, so the files
+    // cannot be found; refused, saying how to give it.
+    let o = record(&out, &dir.join("none.sqlite"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("task_hash") && err.contains("--task"),
+        "{err}"
+    );
+    // One row of the validation data edited (a measured x, 0.1 mm): refused.
+    let val = dir.join("tasks/val.csv");
+    let rows = read(&val);
+    let mut lines: Vec<String> = rows.lines().map(str::to_string).collect();
+    let mut cells: Vec<String> = lines[2].split(',').map(str::to_string).collect();
+    let x: f64 = cells[1].parse().unwrap();
+    cells[1] = format!("{}", x + 0.1);
+    lines[2] = cells.join(",");
+    std::fs::write(&val, lines.join("\n") + "\n").unwrap();
+    let o = record(&out, &dir.join("data.sqlite"), &given);
+    refused_naming_both_hashes(&o, &stated);
+    assert!(!dir.join("data.sqlite").exists());
+    std::fs::write(&val, &rows).unwrap();
+    // The task file the folder carries edited (its metric): refused.
+    let carried = out.join("task.toml");
+    let text = read(&carried);
+    std::fs::write(
+        &carried,
+        text.replace("validation_mean_mm", "validation_rms_mm"),
+    )
+    .unwrap();
+    let o = record(&out, &dir.join("toml.sqlite"), &given);
+    refused_naming_both_hashes(&o, &stated);
+    std::fs::write(&carried, &text).unwrap();
+    assert!(record(&out, &dir.join("again.sqlite"), &given)
+        .status
+        .success());
+}
+
+#[test]
+fn a_figure_its_per_row_errors_do_not_give_is_refused_naming_file_and_key() {
+    let dir = tmp_dir("record-task-figure");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let json = out.join("task.json");
+    let mut j = load_json(&json);
+    let value = j["value"].as_f64().unwrap();
+    // Within its own interval, which the interval check cannot tell.
+    j["value"] = serde_json::json!(value + 0.001);
+    std::fs::write(&json, serde_json::to_string_pretty(&j).unwrap() + "\n").unwrap();
+    let db = dir.join("calbench.sqlite");
+    let o = record(&out, &db, &["--task", path_arg(&task)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "recorded an edited figure: {err}");
+    assert!(
+        err.contains("entry/task.json: value:")
+            && err.contains(&format!("{}", value + 0.001))
+            && err.contains(&format!("{value}"))
+            && err.contains("validation_errors_mm"),
+        "{err}"
+    );
+    assert!(!db.exists());
+}
