@@ -5,8 +5,10 @@
 //! ([`IdentifyRequest`]); [`TaskEntry::json`] is the entry's `task.json`.
 
 mod entry;
+mod published;
 pub mod record;
 pub mod sha256;
+pub mod socket;
 pub mod split;
 
 pub use entry::{shared_rows, EntryModels};
@@ -41,14 +43,20 @@ pub enum Metric {
     ValidationMeanMm,
     /// The RMS position error (mm).
     ValidationRmsMm,
+    /// A socket task's: the RMS distance of the tool points from their socket's mean (mm).
+    SocketSpreadMm,
 }
 
 impl Metric {
     /// The metric named `name` in a task file or `task.json`.
     pub fn from_name(name: &str) -> Option<Metric> {
-        [Metric::ValidationMeanMm, Metric::ValidationRmsMm]
-            .into_iter()
-            .find(|m| m.as_str() == name)
+        [
+            Metric::ValidationMeanMm,
+            Metric::ValidationRmsMm,
+            Metric::SocketSpreadMm,
+        ]
+        .into_iter()
+        .find(|m| m.as_str() == name)
     }
 
     /// The name in task files and `task.json`.
@@ -56,6 +64,7 @@ impl Metric {
         match self {
             Metric::ValidationMeanMm => "validation_mean_mm",
             Metric::ValidationRmsMm => "validation_rms_mm",
+            Metric::SocketSpreadMm => "socket_spread_mm",
         }
     }
 
@@ -67,7 +76,7 @@ impl Metric {
         let sq: Vec<Real>;
         let x: &[Real] = match self {
             Metric::ValidationMeanMm => e,
-            Metric::ValidationRmsMm => {
+            Metric::ValidationRmsMm | Metric::SocketSpreadMm => {
                 sq = e.iter().map(|v| v * v).collect();
                 &sq
             }
@@ -80,7 +89,7 @@ impl Metric {
         });
         match self {
             Metric::ValidationMeanMm => (mean, ci),
-            Metric::ValidationRmsMm => (
+            Metric::ValidationRmsMm | Metric::SocketSpreadMm => (
                 mean.sqrt(),
                 ci.map(|[lo, hi]| [lo.max(0.0).sqrt(), hi.sqrt()]),
             ),
@@ -305,36 +314,11 @@ impl Task {
                 ))
             }
         };
-        match (keys.published.is_empty(), &keys.unpublished) {
-            (true, None) => {
-                return Err(bad(
-                    "published",
-                    "missing: the data's authors' figures ([[published]] label, value, \
-                     source, division), or `unpublished` saying why there are none"
-                        .into(),
-                ))
-            }
-            (false, Some(_)) => {
-                return Err(bad(
-                    "unpublished",
-                    "given with [[published]] figures: one or the other".into(),
-                ))
-            }
-            _ => {}
+        if keys.metric == Metric::SocketSpreadMm {
+            let msg = "`socket_spread_mm` scores a socket task ([sockets], § 9.4)";
+            return Err(bad("metric", msg.into()));
         }
-        for (i, p) in keys.published.iter().enumerate() {
-            if !(p.value.is_finite() && p.value >= 0.0) {
-                let key = format!("published[{i}].value");
-                return Err(bad(
-                    &key,
-                    format!("{}: a figure in mm, finite and ≥ 0", p.value),
-                ));
-            }
-            if p.source.trim().is_empty() || p.label.trim().is_empty() {
-                let key = format!("published[{i}].source");
-                return Err(bad(&key, "a figure needs its label and its source".into()));
-            }
-        }
+        published::check_published(&keys.published, &keys.unpublished, &bad)?;
         let models = match &keys.models {
             None => None,
             Some(m) => {
@@ -652,6 +636,7 @@ impl TaskEntry<'_> {
             git_commit: record::git_commit(t.path.parent().unwrap_or(Path::new("."))),
             published: t.published.clone(),
             validation_errors_mm: errors,
+            socket: None,
         }
         .to_value()
     }
