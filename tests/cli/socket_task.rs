@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::common::{bin, calbench, load_json, path_arg, read, root, tmp_dir};
+use crate::common::{bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
 
 /// The MUKCa tasks, and whether each has the authors' calibrated model and their kpis.yaml.
 const TASKS: [(&str, bool, bool); 6] = [
@@ -123,6 +123,15 @@ fn every_mukca_task_prints_calbench_beside_the_authors() {
             read(&root().join(format!("tasks/{name}.toml")))
         );
     }
+    // Each entry recorded, and its figure computed again from its per-row distances.
+    let db = dir.join("results.sqlite");
+    let mut args = vec!["record", "--db", path_arg(&db)];
+    let outs: Vec<_> = TASKS.iter().map(|(n, _, _)| dir.join(n)).collect();
+    args.extend(outs.iter().map(|o| path_arg(o)));
+    calbench_ok(&args);
+    let v = calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
+    let said = String::from_utf8_lossy(&v.stdout) + String::from_utf8_lossy(&v.stderr);
+    assert!(said.contains("6 task entries verified"), "{said}");
 }
 
 /// A copy of Panda 6's task with absolute paths, its joint files in `dir`.
