@@ -206,7 +206,7 @@ def identify(
         q: joint values (N, n) in the robot's units.
         points: measured points (N, 3), mm, in the instrument's frame.
         data: instead of ``q`` and ``points``, a measurement file: a tracker's (docs/formats.md
-            § 5.1) or a distance, plane, sphere or multi-target file (§ 5.3).
+            § 5.1) or a distance, plane, sphere, socket or multi-target file (§ 5.3).
         rotations: for full-pose data, the measured orientations as unit quaternions
             (N, 4) ``[qw, qx, qy, qz]`` or rotation matrices (N, 3, 3).
         sigma: standard deviation of each point (N,), mm; points are weighed by 1/σ².

@@ -42,9 +42,10 @@ impl PyRobot {
         }
     }
 
-    /// A robot file: TOML (docs/formats.md) or URDF.
+    /// A robot file: TOML (docs/formats.md) or URDF; `tip`: a URDF's tip link (`--tip`).
     #[staticmethod]
-    fn from_file(path: PathBuf) -> PyResult<PyRobot> {
+    #[pyo3(signature = (path, tip = None))]
+    fn from_file(path: PathBuf, tip: Option<String>) -> PyResult<PyRobot> {
         if !path.is_file() {
             return Err(err(calbench::Error::io(
                 &path,
@@ -52,7 +53,8 @@ impl PyRobot {
             )));
         }
         let shown = path.to_string_lossy().into_owned();
-        builtin::load(&shown)
+        let chain = calbench::robot::urdf::UrdfChain { base: None, tip };
+        builtin::load_chain(&shown, &chain)
             .map(|inner| PyRobot { inner })
             .map_err(err)
     }

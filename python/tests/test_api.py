@@ -474,3 +474,26 @@ def test_errors_are_calbench_errors_with_the_cli_message(cli, tmp_path):
     assert str(e.value) in msg, (str(e.value), msg)
     for cls in (calbench.FileError, calbench.SettingError, calbench.ComputeError, calbench.IoError):
         assert issubclass(cls, calbench.Error)
+
+
+def test_identify_a_socket_file_returns_the_cli_record(cli, root, tmp_path):
+    # MUKCa Panda 6's calibration placement as one socket file (data/mukca/README.md), its
+    # URDF chain to the ball: Python's record is the command line's.
+    front = root / "data" / "mukca" / "panda_6" / "front"
+    rows = ["q1,q2,q3,q4,q5,q6,q7,socket,socket_distance_mm"]
+    for hole, tail in (("hole_0.csv", ",1,0"), ("hole_1.csv", ",2,50")):
+        rows += [r + tail for r in (front / hole).read_text().split()]
+    data = tmp_path / "panda6-front.csv"
+    data.write_text("\n".join(rows) + "\n")
+    urdf = root / "data" / "mukca" / "panda.urdf"
+    cli("identify", "--robot", urdf, "--tip", "ball_link", "--data", data, "--method", "ls",
+        "--fix", "theta7", "--out", tmp_path / "id")
+    ref = json.loads((tmp_path / "id" / "identified.json").read_text())
+    robot = calbench.Robot.from_file(urdf, tip="ball_link")
+    assert robot.joint_count == 7
+    res = calbench.identify(robot, data=data, method="ls", fix=["theta7"])
+    close(res, ref)
+    assert res["kind"] == "socket"
+    assert res.robot.to_toml() == (tmp_path / "id" / "robot.toml").read_text()
+    with pytest.raises(calbench.Error, match="ball_link"):
+        calbench.Robot.from_file(urdf)

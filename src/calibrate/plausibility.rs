@@ -61,7 +61,11 @@ pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<Strin
     let length = (LENGTH_SHARE * reach).max(LENGTH_FLOOR_MM);
     let mut out: Vec<(Real, String)> = Vec::new();
     for &p in params {
-        let moved = identified.get(p) - nominal.get(p);
+        let mut moved = identified.get(p) - nominal.get(p);
+        if matches!(p, Param::Theta(_) | Param::Alpha(_) | Param::Beta(_)) {
+            // A whole turn more or less is the same joint: the move is the nearest angle.
+            moved -= std::f64::consts::TAU * (moved / std::f64::consts::TAU).round();
+        }
         let (bound, what) = match p {
             Param::Compliance(_) => continue,
             Param::Base(_) | Param::Tool(_) if !p.is_length() => continue,
@@ -372,6 +376,13 @@ mod tests {
         let m = moves(&nominal, &turned, &params);
         assert_eq!(m.len(), 1, "the tool's angle is not bounded: {m:?}");
         assert!(m[0].contains("theta3") && m[0].contains("11.46°"), "{m:?}");
+        // A whole turn more is the same joint: the move is what is left of it.
+        let tau = std::f64::consts::TAU;
+        let whole = nominal.with_errors(&[(Param::Theta(2), -tau - 0.01)]);
+        assert!(moves(&nominal, &whole, &params).is_empty());
+        let whole = nominal.with_errors(&[(Param::Theta(2), tau + 0.2)]);
+        let m = moves(&nominal, &whole, &params);
+        assert!(m.len() == 1 && m[0].contains("11.46°"), "{m:?}");
     }
 
     fn cloud() -> Vec<Vec3> {

@@ -52,6 +52,15 @@ pub struct TaskArgs {
 /// Runs the entry and writes its folder; prints the task's figure and the published ones.
 pub fn run(args: &TaskArgs) -> Result<()> {
     let path = task_path(&args.task);
+    if let Some(t) = calbench::calibrate::task::socket::load_socket_task(&path)? {
+        let socket = super::task_socket::SocketArgs {
+            method: args.method.name,
+            options: &args.options,
+            models: !args.models.is_empty(),
+            out: &args.out,
+        };
+        return super::task_socket::run(&socket, &t);
+    }
     let task = Task::load(&path)?;
     super::guard_out(&args.out, &OUTPUTS, task.inputs())?;
     calbench::report::guard::guard_data_folder(&args.out, "--out", task.data_files())?;

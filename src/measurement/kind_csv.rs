@@ -97,12 +97,30 @@ pub fn file_kind(path: &Path) -> Option<Kind> {
         .map(|(_, k)| *k)
 }
 
+/// The header a measurement-kind file is expected to have, as a refusal says it.
+const KIND_HEADER: &str = "q1,…,qn and length_mm, step_mm, plane, sphere or socket";
+
 /// Reads a measurement-kind file for `robot` (see the module docs for what is refused).
 pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result<KindFile> {
-    let mut t = Rows::open(
-        path,
-        "q1,…,qn and length_mm, step_mm, plane, sphere or socket",
-    )?;
+    read_kind_rows(Rows::open(path, KIND_HEADER)?, path, robot)
+}
+
+/// Reads `text`, a measurement-kind file held in memory, for `robot`; refusals name `path`
+/// (a socket task's joint files made into one, docs/formats.md § 9.4).
+pub fn read_kind_text(
+    path: &Path,
+    text: String,
+    robot: &(impl JointSpace + ?Sized),
+) -> Result<KindFile> {
+    read_kind_rows(Rows::of_text(path, text, KIND_HEADER)?, path, robot)
+}
+
+/// [`read_kind_file`] of the rows `t`, read from `path`.
+fn read_kind_rows(
+    mut t: Rows,
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+) -> Result<KindFile> {
     let names = t.names.clone();
     let find = |n: &str| names.iter().position(|h| h == n);
     let bad = |line: u64, column: &str, msg: String| {

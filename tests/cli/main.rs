@@ -41,6 +41,7 @@ mod report_baseline;
 mod results;
 mod results_team;
 mod search_ecdf;
+mod socket_task;
 mod spelled;
 mod strict_inputs;
 mod task;

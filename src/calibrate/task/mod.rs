@@ -6,8 +6,10 @@
 
 mod canonical;
 mod entry;
+mod published;
 pub mod record;
 pub mod sha256;
+pub mod socket;
 pub mod split;
 
 pub use entry::{shared_rows, EntryModels};
@@ -29,7 +31,7 @@ use crate::measurement::import::{import_text, Mapping};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
 use crate::robot::Robot;
-use canonical::place_of;
+use canonical::{place_of, task_hash};
 pub use split::Split;
 
 /// The `format` of `task.json`.
@@ -43,6 +45,8 @@ pub enum Metric {
     ValidationMeanMm,
     /// The RMS position error (mm).
     ValidationRmsMm,
+    /// A socket task's: the RMS distance of the tool points from their socket's mean (mm).
+    SocketSpreadMm,
 }
 
 impl Metric {
@@ -51,6 +55,7 @@ impl Metric {
         match self {
             Metric::ValidationMeanMm => "validation_mean_mm",
             Metric::ValidationRmsMm => "validation_rms_mm",
+            Metric::SocketSpreadMm => "socket_spread_mm",
         }
     }
 
@@ -62,7 +67,7 @@ impl Metric {
         let sq: Vec<Real>;
         let x: &[Real] = match self {
             Metric::ValidationMeanMm => e,
-            Metric::ValidationRmsMm => {
+            Metric::ValidationRmsMm | Metric::SocketSpreadMm => {
                 sq = e.iter().map(|v| v * v).collect();
                 &sq
             }
@@ -75,7 +80,7 @@ impl Metric {
         });
         match self {
             Metric::ValidationMeanMm => (mean, ci),
-            Metric::ValidationRmsMm => (
+            Metric::ValidationRmsMm | Metric::SocketSpreadMm => (
                 mean.sqrt(),
                 ci.map(|[lo, hi]| [lo.max(0.0).sqrt(), hi.sqrt()]),
             ),
@@ -306,36 +311,11 @@ impl Task {
                 ))
             }
         };
-        match (keys.published.is_empty(), &keys.unpublished) {
-            (true, None) => {
-                return Err(bad(
-                    "published",
-                    "missing: the data's authors' figures ([[published]] label, value, \
-                     source, division), or `unpublished` saying why there are none"
-                        .into(),
-                ))
-            }
-            (false, Some(_)) => {
-                return Err(bad(
-                    "unpublished",
-                    "given with [[published]] figures: one or the other".into(),
-                ))
-            }
-            _ => {}
+        if keys.metric == Metric::SocketSpreadMm {
+            let msg = "`socket_spread_mm` scores a socket task ([sockets], § 9.4)";
+            return Err(bad("metric", msg.into()));
         }
-        for (i, p) in keys.published.iter().enumerate() {
-            if !(p.value.is_finite() && p.value >= 0.0) {
-                let key = format!("published[{i}].value");
-                return Err(bad(
-                    &key,
-                    format!("{}: a figure in mm, finite and ≥ 0", p.value),
-                ));
-            }
-            if p.source.trim().is_empty() || p.label.trim().is_empty() {
-                let key = format!("published[{i}].source");
-                return Err(bad(&key, "a figure needs its label and its source".into()));
-            }
-        }
+        published::check_published(&keys.published, &keys.unpublished, &bad)?;
         let models = match &keys.models {
             None => None,
             Some(m) => {
@@ -380,7 +360,7 @@ impl Task {
         let mapping = file("mapping", &keys.mapping)?;
         let mut fixed: Vec<(&str, &Path)> = vec![("mapping", &mapping), ("robot", &robot)];
         fixed.extend(data.files());
-        let hash = canonical::task_hash(&table, fixed)?;
+        let hash = task_hash(&table, fixed)?;
         Ok(Task {
             name,
             path: path.to_path_buf(),
@@ -608,6 +588,7 @@ impl TaskEntry<'_> {
             git_commit: record::git_commit(t.path.parent().unwrap_or(Path::new("."))),
             published: t.published.clone(),
             validation_errors_mm: errors,
+            socket: None,
         }
         .to_value()
     }

@@ -68,6 +68,54 @@ pub struct TaskRecord {
     /// written before calbench recorded them.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub validation_errors_mm: Vec<Real>,
+    /// A socket task's figures of every model on both placements (docs/formats.md § 9.4);
+    /// absent for a tracker's task.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub socket: Option<SocketScores>,
+}
+
+/// The authors' figures of a model on one placement (docs/formats.md § 9.4, [`super::socket`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SocketFigures {
+    /// Per socket, the RMS distance of its tool points from their mean (mm): the square
+    /// root of the sum of the per-axis variances.
+    pub spread_per_socket_mm: Vec<Real>,
+    /// Every socket's tool points pooled: the RMS distance of each from its socket's mean
+    /// (mm), the authors' `std_dev_fk`.
+    pub spread_mm: Real,
+    /// The error of the distance between the sockets' mean points against the known one
+    /// (mm; the RMS over sockets 2, 3, … of each one's distance from socket 1).
+    pub distance_error_mm: Real,
+}
+
+/// A model's figures on the calibration and the validation placement.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Placements {
+    /// On the calibration placement.
+    pub calibration: SocketFigures,
+    /// On the validation placement.
+    pub validation: SocketFigures,
+}
+
+/// `task.json`'s `socket`: every model scored on both placements, and the authors' own
+/// figures.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SocketScores {
+    /// The placements' folder names, calibration then validation.
+    pub placements: [String; 2],
+    /// calbench's identified robot.
+    pub calbench: Placements,
+    /// The nominal robot.
+    pub nominal: Placements,
+    /// The authors' calibrated model, scored by calbench.
+    #[serde(default)]
+    pub authors_model: Option<Placements>,
+    /// The authors' own figures on the calibration placement, from their `kpis.yaml`.
+    #[serde(default)]
+    pub authors_kpis: Option<SocketFigures>,
 }
 
 fn calbench() -> String {

@@ -1,0 +1,508 @@
+//! Socket tasks (docs/formats.md § 9.4): the tool point held in sockets at known distances
+//! from socket 1 (the MUKCa data, Franzese et al. 2024), one placement of the sockets
+//! calibrating and another placement of the same robot validating, a URDF nominal model
+//! with its tip link, and the data's authors' own figures: per socket the spread of the tool
+//! points about their mean, and the error of the distance between the sockets' mean points.
+//! The task's joint files (one per socket, `q1…qn` a row, no header) are read as one socket
+//! file (§ 5.3) per placement; calbench's identified robot, the nominal one and the authors'
+//! calibrated model are scored on both placements, beside the authors' `kpis.yaml`.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+pub use super::record::{Placements, SocketFigures, SocketScores};
+use super::{place_of, task_hash, Metric, Published, TaskRecord, TASK_FORMAT};
+use crate::error::{Error, Result};
+use crate::measurement::kind::{Instrument, KindData};
+use crate::measurement::kind_csv::{read_kind_text, KindFile};
+use crate::numeric::Real;
+use crate::numeric::Vec3;
+use crate::robot::urdf::UrdfChain;
+use crate::robot::{Param, Robot};
+
+/// The keys of a socket task file.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SocketTaskKeys {
+    title: String,
+    robot: String,
+    tip: Option<String>,
+    metric: Metric,
+    #[serde(default)]
+    fix: Vec<String>,
+    sockets: SocketKeys,
+    authors: Option<AuthorKeys>,
+    #[serde(default)]
+    published: Vec<Published>,
+    unpublished: Option<String>,
+}
+
+/// `[sockets]`: each socket's distance from socket 1 and its joint file per placement.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SocketKeys {
+    distances_mm: Vec<Real>,
+    calibration: Vec<String>,
+    validation: Vec<String>,
+}
+
+/// `[authors]`: the data's authors' calibrated model and their own figures.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct AuthorKeys {
+    model: Option<String>,
+    kpis: Option<String>,
+    source: String,
+}
+
+/// A socket task, read and checked.
+#[derive(Clone, Debug)]
+pub struct SocketTask {
+    /// The task's name: its file's stem.
+    pub name: String,
+    /// The task file.
+    pub path: PathBuf,
+    /// Its text as read.
+    pub text: String,
+    /// SHA-256 of its canonical text and of every file it fixes, hex (§ 9.3).
+    pub hash: String,
+    /// What the task is.
+    pub title: String,
+    /// The nominal robot (a URDF or a robot file).
+    pub robot: PathBuf,
+    /// The URDF's tip link.
+    pub tip: Option<String>,
+    /// The parameters held at their nominal values.
+    pub fix: Vec<Param>,
+    /// Each socket's known distance from socket 1 (mm; 0 for socket 1).
+    pub distances_mm: Vec<Real>,
+    /// The calibration placement's joint files, one per socket.
+    pub calibration: Vec<PathBuf>,
+    /// The validation placement's joint files, one per socket.
+    pub validation: Vec<PathBuf>,
+    /// The authors' calibrated model, scored by calbench on both placements.
+    pub authors_model: Option<PathBuf>,
+    /// The authors' own figures on the calibration placement (their `kpis.yaml`).
+    pub authors_kpis: Option<PathBuf>,
+    /// Where the authors' model and figures come from.
+    pub authors_source: Option<String>,
+    /// The data's authors' figures on the validation placement, in the task's metric.
+    pub published: Vec<Published>,
+    /// Why there are none.
+    pub unpublished: Option<String>,
+}
+
+/// Reads the task file `path` as a socket task when it has a `[sockets]` table; `None`
+/// when it has none (a tracker's task, [`super::Task::load`]).
+pub fn load_socket_task(path: &Path) -> Result<Option<SocketTask>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let table: toml::Table = toml::from_str(&text)
+        .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
+    if !table.contains_key("sockets") {
+        return Ok(None);
+    }
+    let keys: SocketTaskKeys = toml::from_str(&text)
+        .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
+    let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let file = |key: &str, rel: &str| -> Result<PathBuf> {
+        let p = dir.join(rel);
+        if p.is_file() {
+            Ok(p)
+        } else {
+            Err(bad(key, format!("{} is not a file", p.display())))
+        }
+    };
+    if keys.metric != Metric::SocketSpreadMm {
+        return Err(bad(
+            "metric",
+            format!(
+                "`{}`: a socket task is scored by `socket_spread_mm`",
+                keys.metric.as_str()
+            ),
+        ));
+    }
+    let s = &keys.sockets;
+    let d = &s.distances_mm;
+    if d.is_empty() || d[0] != 0.0 || d[1..].iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+        return Err(bad(
+            "sockets.distances_mm",
+            "one distance (mm) per socket from socket 1: 0 for socket 1, every other finite \
+             and > 0"
+                .into(),
+        ));
+    }
+    if d.len() < 2 {
+        return Err(bad(
+            "sockets.distances_mm",
+            "a single socket has no distance to score: at least two sockets".into(),
+        ));
+    }
+    let files = |key: &str, rel: &[String]| -> Result<Vec<PathBuf>> {
+        if rel.len() != d.len() {
+            return Err(bad(
+                key,
+                format!(
+                    "{} files for the {} sockets of sockets.distances_mm: one file per socket",
+                    rel.len(),
+                    d.len()
+                ),
+            ));
+        }
+        rel.iter().map(|r| file(key, r)).collect()
+    };
+    let calibration = files("sockets.calibration", &s.calibration)?;
+    let validation = files("sockets.validation", &s.validation)?;
+    if calibration.iter().any(|c| validation.contains(c)) {
+        return Err(bad(
+            "sockets.validation",
+            "a file of the calibration placement: a validation row must not calibrate".into(),
+        ));
+    }
+    super::published::check_published(&keys.published, &keys.unpublished, &bad)?;
+    let mut fix = Vec::with_capacity(keys.fix.len());
+    for (i, f) in keys.fix.iter().enumerate() {
+        let p = Param::parse(f.trim()).ok_or_else(|| {
+            bad(
+                "fix",
+                format!("fix[{i}]: `{f}` is not a parameter name (a2, theta7, …)"),
+            )
+        })?;
+        fix.push(p);
+    }
+    let robot = file("robot", &keys.robot)?;
+    let (authors_model, authors_kpis, authors_source) = match &keys.authors {
+        None => (None, None, None),
+        Some(a) => (
+            a.model
+                .as_deref()
+                .map(|m| file("authors.model", m))
+                .transpose()?,
+            a.kpis
+                .as_deref()
+                .map(|k| file("authors.kpis", k))
+                .transpose()?,
+            Some(a.source.clone()),
+        ),
+    };
+    let mut fixed: Vec<(String, &Path)> = vec![("robot".into(), &robot)];
+    for (key, list) in [
+        ("sockets.calibration", &calibration),
+        ("sockets.validation", &validation),
+    ] {
+        fixed.extend(
+            list.iter()
+                .enumerate()
+                .map(|(i, p)| (format!("{key}[{i}]"), p.as_path())),
+        );
+    }
+    fixed.extend(
+        authors_model
+            .as_deref()
+            .map(|p| ("authors.model".into(), p)),
+    );
+    fixed.extend(authors_kpis.as_deref().map(|p| ("authors.kpis".into(), p)));
+    let hash = task_hash(
+        &table,
+        fixed.iter().map(|(k, p)| (k.as_str(), *p)).collect(),
+    )?;
+    let task = SocketTask {
+        name: path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("task")
+            .to_string(),
+        path: path.to_path_buf(),
+        hash,
+        title: keys.title,
+        robot,
+        tip: keys.tip,
+        fix,
+        distances_mm: d.clone(),
+        calibration,
+        validation,
+        authors_model,
+        authors_kpis,
+        authors_source,
+        published: keys.published,
+        unpublished: keys.unpublished,
+        text,
+    };
+    Ok(Some(task))
+}
+
+impl SocketTask {
+    /// Every file the task reads (what an output folder must not destroy).
+    pub fn inputs(&self) -> Vec<&Path> {
+        let mut v = vec![self.path.as_path(), &self.robot];
+        v.extend(self.data_files());
+        v.extend(self.authors_model.as_deref());
+        v.extend(self.authors_kpis.as_deref());
+        v
+    }
+
+    /// The joint files of both placements (what its outputs must not lie beside).
+    pub fn data_files(&self) -> Vec<&Path> {
+        self.calibration
+            .iter()
+            .chain(&self.validation)
+            .map(PathBuf::as_path)
+            .collect()
+    }
+
+    /// The model `path` (a URDF's chain to the task's tip).
+    pub fn load_model(&self, path: &Path) -> Result<Robot> {
+        let chain = UrdfChain {
+            base: None,
+            tip: self.tip.clone(),
+        };
+        crate::robot::builtin::load_chain(&path.to_string_lossy(), &chain)
+    }
+
+    /// The nominal robot.
+    pub fn load_robot(&self) -> Result<Robot> {
+        self.load_model(&self.robot)
+    }
+
+    /// The placement of `files` as one socket file for `robot`: the i-th file's rows are
+    /// socket i + 1 at its distance from socket 1. Each file is read under a header
+    /// calbench adds, so a refusal names the file and its line plus one.
+    pub fn placement(&self, files: &[PathBuf], robot: &Robot) -> Result<KindFile> {
+        let header: Vec<String> = (1..=robot.dof())
+            .map(|j| format!("q{j}"))
+            .chain(["socket".into(), "socket_distance_mm".into()])
+            .collect();
+        let mut out = KindFile {
+            qs: Vec::new(),
+            data: KindData {
+                instrument: Instrument::Sockets(self.distances_mm.clone()),
+                group: Vec::new(),
+                values: Vec::new(),
+            },
+            sigma_mm: None,
+            lines: Vec::new(),
+        };
+        for (s, f) in files.iter().enumerate() {
+            let raw = std::fs::read_to_string(f).map_err(|e| Error::io(f, e))?;
+            let mut text = header.join(",") + "\n";
+            for line in raw.lines() {
+                let line = line.trim_end();
+                if !line.is_empty() {
+                    text.push_str(line);
+                    text.push_str(",1,0");
+                }
+                text.push('\n');
+            }
+            let named = PathBuf::from(format!(
+                "{} as socket {} (its line n read as line n + 1, under the header {})",
+                f.display(),
+                s + 1,
+                header.join(",")
+            ));
+            let one = read_kind_text(&named, text, robot)?;
+            out.data.group.extend(std::iter::repeat_n(s, one.qs.len()));
+            out.data.values.extend(one.data.values);
+            out.qs.extend(one.qs);
+            out.lines.extend(one.lines.iter().map(|l| l - 1));
+        }
+        out.data.check(out.qs.len())?;
+        Ok(out)
+    }
+
+    /// The figures of `robot` on the placement `k`: per row the distance of its tool point
+    /// from its socket's mean point (mm), and the figures.
+    pub fn figures(&self, robot: &Robot, k: &KindFile) -> (Vec<Real>, SocketFigures) {
+        let chain = robot.chain();
+        let points: Vec<Vec3> = k.qs.iter().map(|q| chain.fk(q).pos).collect();
+        socket_figures(&points, &k.data.group, &self.distances_mm)
+    }
+
+    /// The placement's name: the folder of its first file.
+    pub fn placement_name(files: &[PathBuf]) -> String {
+        files
+            .first()
+            .and_then(|f| f.parent())
+            .and_then(|d| d.file_name())
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned())
+    }
+
+    /// The authors' own figures (their `kpis.yaml`), when the task names them.
+    pub fn kpis(&self) -> Result<Option<SocketFigures>> {
+        self.authors_kpis.as_deref().map(read_kpis).transpose()
+    }
+
+    /// `task.json` of an entry of `method` whose validation rows have the distances
+    /// `errors` from their socket's mean (mm), with every model's `scores`.
+    pub fn record(&self, method: &str, errors: Vec<Real>, scores: SocketScores) -> TaskRecord {
+        let (value, ci95) = Metric::SocketSpreadMm.of(&errors);
+        TaskRecord {
+            format: TASK_FORMAT.into(),
+            task: self.name.clone(),
+            task_hash: self.hash.clone(),
+            metric: Metric::SocketSpreadMm,
+            value,
+            ci95,
+            division: super::Division::Closed,
+            method: method.into(),
+            models: vec!["kinematic".into()],
+            chosen_by: "given".into(),
+            candidates: vec!["kinematic".into()],
+            candidates_fixed_by: Some("default".into()),
+            cv_choice: None,
+            entrant: "calbench".into(),
+            calbench_version: Some(env!("CARGO_PKG_VERSION").into()),
+            git_commit: super::record::git_commit(self.path.parent().unwrap_or(Path::new("."))),
+            published: self.published.clone(),
+            validation_errors_mm: errors,
+            socket: Some(scores),
+        }
+    }
+}
+
+/// The figures of the tool points `points`, each in the socket `group[i]`, the sockets at
+/// `distances` (mm) from socket 1: per row its distance from its socket's mean point, and
+/// the figures (the authors' `evaluate_model`: per socket the square root of the summed
+/// per-axis population variances; pooled, the rows' RMS distance; the distance error).
+pub fn socket_figures(
+    points: &[Vec3],
+    group: &[usize],
+    distances: &[Real],
+) -> (Vec<Real>, SocketFigures) {
+    let n = distances.len();
+    let mut mean = vec![Vec3::zeros(); n];
+    let mut count = vec![0usize; n];
+    for (p, &g) in points.iter().zip(group) {
+        mean[g] += p;
+        count[g] += 1;
+    }
+    for (m, &c) in mean.iter_mut().zip(&count) {
+        *m /= c.max(1) as Real;
+    }
+    let rows: Vec<Real> = points
+        .iter()
+        .zip(group)
+        .map(|(p, &g)| (p - mean[g]).norm())
+        .collect();
+    let mut sq = vec![0.0; n];
+    for (e, &g) in rows.iter().zip(group) {
+        sq[g] += e * e;
+    }
+    let spread_per_socket_mm = sq
+        .iter()
+        .zip(&count)
+        .map(|(s, &c)| (s / c.max(1) as Real).sqrt())
+        .collect();
+    let spread_mm = (sq.iter().sum::<Real>() / rows.len().max(1) as Real).sqrt();
+    let d2: Real = (1..n)
+        .map(|l| ((mean[l] - mean[0]).norm() - distances[l]).powi(2))
+        .sum();
+    let figures = SocketFigures {
+        spread_per_socket_mm,
+        spread_mm,
+        distance_error_mm: (d2 / (n - 1).max(1) as Real).sqrt(),
+    };
+    (rows, figures)
+}
+
+/// The figures of the authors' `kpis.yaml` (m, m²): `var_1`, `var_2` (per-axis variances
+/// of each socket's tool points), `fks_1`, `fks_2` (the points, counted) and `distance`
+/// (the distance's error, signed), in mm.
+pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let mut key = "";
+    let mut var = [Vec::new(), Vec::new()];
+    let mut count = [0usize; 2];
+    let mut distance = None;
+    for (i, line) in text.lines().enumerate() {
+        let at = key;
+        let bad = |msg: String| Error::file(path, format!("line {}, {at}", i + 1), msg);
+        let num = |s: &str| -> Result<Real> {
+            s.trim()
+                .parse::<Real>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| bad(format!("\"{}\" is not a number", s.trim())))
+        };
+        if let Some((k, rest)) = line
+            .split_once(':')
+            .filter(|_| !line.starts_with([' ', '-']))
+        {
+            key = match k {
+                "distance" | "var_1" | "var_2" | "fks_1" | "fks_2" => k,
+                _ => "",
+            };
+            if key == "distance" {
+                distance = Some(num(rest)?);
+            }
+        } else if let Some(v) = line.strip_prefix("- - ") {
+            match key {
+                "fks_1" => count[0] += 1,
+                "fks_2" => count[1] += 1,
+                _ => {}
+            }
+            num(v)?;
+        } else if let Some(v) = line.strip_prefix("- ") {
+            match key {
+                "var_1" => var[0].push(num(v)?),
+                "var_2" => var[1].push(num(v)?),
+                _ => {}
+            }
+        }
+    }
+    let missing = |k: &str| {
+        Error::file(path, k, "missing: the authors' kpis.yaml gives var_1, var_2 (3 each), fks_1, fks_2 and distance")
+    };
+    let distance = distance.ok_or_else(|| missing("distance"))?;
+    for (l, name) in [(0, "var_1"), (1, "var_2")] {
+        if var[l].len() != 3 || count[l] == 0 {
+            return Err(missing(name));
+        }
+    }
+    let v: Vec<Real> = var.iter().map(|v| v.iter().sum::<Real>()).collect();
+    let n = (count[0] + count[1]) as Real;
+    Ok(SocketFigures {
+        spread_per_socket_mm: v.iter().map(|s| s.sqrt() * 1000.0).collect(),
+        spread_mm: ((v[0] * count[0] as Real + v[1] * count[1] as Real) / n).sqrt() * 1000.0,
+        distance_error_mm: distance.abs() * 1000.0,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two sockets 50 mm apart, each point 1 mm (socket 1) or 2 mm (socket 2) from its
+    /// socket's mean, the means 50.5 mm apart: the figures in closed form.
+    #[test]
+    fn figures_in_closed_form() {
+        let v = |x, y, z| Vec3::new(x, y, z);
+        let points = [
+            v(1.0, 0.0, 0.0),
+            v(-1.0, 0.0, 0.0),
+            v(50.5, 2.0, 0.0),
+            v(50.5, -2.0, 0.0),
+            v(50.5, 0.0, 2.0),
+            v(50.5, 0.0, -2.0),
+        ];
+        let (rows, f) = socket_figures(&points, &[0, 0, 1, 1, 1, 1], &[0.0, 50.0]);
+        assert_eq!(rows, vec![1.0, 1.0, 2.0, 2.0, 2.0, 2.0]);
+        assert_eq!(f.spread_per_socket_mm, vec![1.0, 2.0]);
+        assert!((f.spread_mm - (18.0 / 6.0 as Real).sqrt()).abs() < 1e-12);
+        assert!((f.distance_error_mm - 0.5).abs() < 1e-12);
+        // The pooled spread is the metric of the per-row distances.
+        assert!((Metric::SocketSpreadMm.of(&rows).0 - f.spread_mm).abs() < 1e-12);
+    }
+
+    /// Panda 6's kpis.yaml: √(5.5 + 9.5 + 13.1)·10⁻⁹ m² = 0.1676 mm, √(7.8 + 23.1 + 18.8)
+    /// = 0.2229 mm, 31 points each, distance −2.9294 µm.
+    #[test]
+    fn the_authors_kpis_read() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/mukca/panda_6/kpis.yaml");
+        let f = read_kpis(&p).unwrap();
+        assert!((f.spread_per_socket_mm[0] - 28.1e-9f64.sqrt() * 1e3).abs() < 1e-9);
+        assert!((f.spread_per_socket_mm[1] - 49.7e-9f64.sqrt() * 1e3).abs() < 1e-9);
+        assert!((f.spread_mm - (77.8e-9f64 / 2.0).sqrt() * 1e3).abs() < 1e-9);
+        assert!((f.distance_error_mm - 2.9294e-3).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,230 @@
+//! `calbench task` on the MUKCa socket tasks (docs/formats.md § 9.4), run as a user runs them
+//! from the repository's folder: calbench's figures printed beside the authors', `task.json`'s
+//! figure the RMS of its per-row distances, the authors' calibrated model scored by calbench
+//! reproducing their own `kpis.yaml`, the task's hash over every file it fixes, and socket
+//! task files that do not fit refused by key.
+
+use std::path::Path;
+
+use crate::common::{bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+
+/// The MUKCa tasks, and whether each has the authors' calibrated model and their kpis.yaml.
+const TASKS: [(&str, bool, bool); 6] = [
+    ("mukca-panda-2", true, false),
+    ("mukca-panda-3", true, false),
+    ("mukca-panda-4", true, false),
+    ("mukca-panda-6", true, true),
+    ("mukca-panda-7", true, true),
+    ("mukca-iiwa14", false, false),
+];
+
+/// `calbench task NAME --method ls --out OUT` from the repository's folder: its stdout.
+fn run_task(name: &str, out: &Path) -> String {
+    let o = bin()
+        .current_dir(root())
+        .args(["task", name, "--method", "ls", "--out", path_arg(out)])
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "{name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8(o.stdout).unwrap()
+}
+
+/// `spread / distance error` as the table prints it.
+fn cell(f: &serde_json::Value) -> String {
+    format!(
+        "{:.3} / {:.3}",
+        f["spread_mm"].as_f64().unwrap(),
+        f["distance_error_mm"].as_f64().unwrap()
+    )
+}
+
+/// The table's row starting with `label`, and it holds `cells`.
+fn printed(stdout: &str, label: &str, cells: &[String]) {
+    let row = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with(label))
+        .unwrap_or_else(|| panic!("no row \"{label}\":\n{stdout}"));
+    for c in cells {
+        assert!(row.contains(c.as_str()), "{row}: no {c}\n{stdout}");
+    }
+}
+
+#[test]
+fn every_mukca_task_prints_calbench_beside_the_authors() {
+    let dir = tmp_dir("cli-socket-tasks");
+    for (name, model, kpis) in TASKS {
+        let out = dir.join(name);
+        let stdout = run_task(name, &out);
+        let j = load_json(&out.join("task.json"));
+        assert_eq!(j["task"], name);
+        assert_eq!(j["metric"], "socket_spread_mm");
+        assert_eq!(j["division"], "closed");
+        // The figure: the RMS distance of each validation tool point from its socket's mean.
+        let rows: Vec<f64> = j["validation_errors_mm"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect();
+        let rms = (rows.iter().map(|e| e * e).sum::<f64>() / rows.len() as f64).sqrt();
+        let value = j["value"].as_f64().unwrap();
+        assert!((value - rms).abs() < 1e-12, "{name}: {value} {rms}");
+        let s = &j["socket"];
+        let pooled = s["calbench"]["validation"]["spread_mm"].as_f64().unwrap();
+        assert!((pooled - value).abs() < 1e-12, "{name}: {pooled} {value}");
+        // Calibrated far better than the nominal model, on the placement no fit saw.
+        let nominal = s["nominal"]["validation"]["spread_mm"].as_f64().unwrap();
+        assert!(value < nominal / 2.0, "{name}: {value} against {nominal}");
+        assert!(
+            stdout.contains(&format!("socket_spread_mm = {value:.3} mm")),
+            "{stdout}"
+        );
+        let both = |p: &serde_json::Value| [cell(&p["calibration"]), cell(&p["validation"])];
+        printed(&stdout, "nominal", &both(&s["nominal"]));
+        printed(&stdout, "calbench (ls)", &both(&s["calbench"]));
+        assert_eq!(model, !s["authors_model"].is_null(), "{name}");
+        if model {
+            printed(
+                &stdout,
+                "the authors' calibrated model",
+                &both(&s["authors_model"]),
+            );
+        }
+        assert_eq!(kpis, !s["authors_kpis"].is_null(), "{name}");
+        if kpis {
+            printed(
+                &stdout,
+                "the authors' kpis.yaml",
+                &[cell(&s["authors_kpis"])],
+            );
+            // calbench's reading of the authors' calibrated model is their own: per socket
+            // their spreads (kpis.yaml's variances are rounded to two or three digits) and
+            // their distance error.
+            let (a, k) = (&s["authors_model"]["calibration"], &s["authors_kpis"]);
+            for i in 0..2 {
+                let (x, y) = (
+                    a["spread_per_socket_mm"][i].as_f64().unwrap(),
+                    k["spread_per_socket_mm"][i].as_f64().unwrap(),
+                );
+                assert!((x - y).abs() < 0.01 * y, "{name} socket {i}: {x} {y}");
+            }
+            let (x, y) = (
+                a["distance_error_mm"].as_f64().unwrap(),
+                k["distance_error_mm"].as_f64().unwrap(),
+            );
+            assert!((x - y).abs() < 5e-4, "{name}: {x} {y}");
+        }
+        assert_eq!(
+            read(&out.join("task.toml")),
+            read(&root().join(format!("tasks/{name}.toml")))
+        );
+    }
+    // Each entry recorded, and its figure computed again from its per-row distances.
+    let db = dir.join("results.sqlite");
+    let mut args = vec!["record", "--db", path_arg(&db)];
+    let outs: Vec<_> = TASKS.iter().map(|(n, _, _)| dir.join(n)).collect();
+    args.extend(outs.iter().map(|o| path_arg(o)));
+    calbench_ok(&args);
+    let v = calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
+    let said = String::from_utf8_lossy(&v.stdout) + String::from_utf8_lossy(&v.stderr);
+    assert!(said.contains("6 task entries verified"), "{said}");
+}
+
+/// A copy of Panda 6's task with absolute paths, its joint files in `dir`.
+fn copied_task(dir: &Path, extra: &str, metric: &str, name: &str) -> std::path::PathBuf {
+    let data = root().join("data/mukca");
+    for place in ["front", "right"] {
+        for h in ["hole_0.csv", "hole_1.csv"] {
+            let to = dir.join(place);
+            std::fs::create_dir_all(&to).unwrap();
+            std::fs::copy(data.join("panda_6").join(place).join(h), to.join(h)).unwrap();
+        }
+    }
+    let d = dir.display();
+    let text = format!(
+        "title = \"Panda 6\"\nrobot = \"{}\"\ntip = \"ball_link\"\nmetric = \"{metric}\"\n\
+         unpublished = \"none\"\nfix = [\"theta7\"]\n{extra}\n[sockets]\n\
+         distances_mm = [0.0, 50.0]\n\
+         calibration = [\"{d}/front/hole_0.csv\", \"{d}/front/hole_1.csv\"]\n\
+         validation = [\"{d}/right/hole_0.csv\", \"{d}/right/hole_1.csv\"]\n",
+        data.join("panda.urdf").display()
+    );
+    let p = dir.join(format!("{name}.toml"));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
+    let dir = tmp_dir("cli-socket-task-hash");
+    let task = copied_task(&dir, "", "socket_spread_mm", "socket-task");
+    let hash = |out: &str| {
+        let o = dir.join(out);
+        let r = calbench(&[
+            "task",
+            path_arg(&task),
+            "--method",
+            "ls",
+            "--out",
+            path_arg(&o),
+        ]);
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        load_json(&o.join("task.json"))["task_hash"]
+            .as_str()
+            .unwrap()
+            .to_string()
+    };
+    let before = hash("a");
+    // One digit of one validation row changed: another task.
+    let f = dir.join("right/hole_1.csv");
+    let text = read(&f);
+    let at = text.find('.').unwrap() + 3;
+    let digit = if &text[at..=at] == "7" { "8" } else { "7" };
+    std::fs::write(&f, format!("{}{digit}{}", &text[..at], &text[at + 1..])).unwrap();
+    assert_ne!(hash("b"), before);
+    let refused = |task: &Path, want: &[&str]| {
+        let o = dir.join("refused");
+        let r = calbench(&[
+            "task",
+            path_arg(task),
+            "--method",
+            "ls",
+            "--out",
+            path_arg(&o),
+        ]);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success() && !o.exists(), "{err}");
+        for w in want {
+            assert!(err.contains(w), "{err}: no {w}");
+        }
+    };
+    let t = copied_task(&dir, "", "validation_rms_mm", "rms");
+    refused(&t, &["rms.toml", "metric", "socket_spread_mm"]);
+    let t = copied_task(&dir, "tool = \"x\"\n", "socket_spread_mm", "tool");
+    refused(&t, &["tool.toml", "line 7", "tool"]);
+    let text = read(&task).replace("[0.0, 50.0]", "[0.0, 50.0, 70.0]");
+    std::fs::write(&task, text).unwrap();
+    refused(
+        &task,
+        &[
+            "socket-task.toml",
+            "sockets.calibration",
+            "one file per socket",
+        ],
+    );
+    // A tracker's task scored by the socket metric.
+    let wam = read(&root().join("tasks/barrett-wam.toml"))
+        .replace("validation_mean_mm", "socket_spread_mm")
+        .replace("\"../", &format!("\"{}/", root().display()))
+        .replace(
+            "\"barrett-wam.mapping",
+            &format!("\"{}/tasks/barrett-wam.mapping", root().display()),
+        );
+    let t = dir.join("wam.toml");
+    std::fs::write(&t, wam).unwrap();
+    refused(&t, &["wam.toml", "metric", "socket task"]);
+}
