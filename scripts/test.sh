@@ -20,10 +20,11 @@ RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps --workspace
 cargo test
 # The coverage of the 95 % intervals (40 runs of 50 trials against a 4000-trial run, seconds
 # on an idle machine, minutes on a loaded one) and identify's peak memory on 2 000 000 rows
-# (GNU time) are ignored by default; CI runs them.
+# (GNU time) and a study's peak memory flat in its trials are ignored by default; CI runs them.
 if [ "${CI:-}" = "true" ]; then
     cargo test --test study -- --ignored intervals_cover_the_long_run_figure
     cargo test --test cli -- --ignored identify_peak_memory_on_two_million_rows
+    cargo test --test cli -- --ignored a_study_peak_memory_is_flat_in_its_trials
 fi
 
 py=.venv/bin/python

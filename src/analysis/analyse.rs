@@ -92,8 +92,9 @@ pub fn performance_profile(r: &RunResult) -> Option<Profile> {
 
 /// What a run's trials say: its entries with their intervals, every paired comparison
 /// Holm-adjusted together, the claims' verdicts, the searches' ECDFs and fixed-budget curves
-/// (in the entries), the performance profile of a sweep and the stopping record.
-pub fn analyse(r: &RunResult) -> Summary {
+/// (in the entries), the performance profile of a sweep and the stopping record. Fails only
+/// when the per-trial values cannot be read back from the study's scratch file.
+pub fn analyse(r: &RunResult) -> crate::error::Result<Summary> {
     let sc = &r.scenario;
     let first = &r.blocks[0].info;
     let mut fixed_pose_sets = BTreeMap::new();
@@ -113,13 +114,13 @@ pub fn analyse(r: &RunResult) -> Summary {
             );
         }
     }
-    let (comparisons, shown, differences) = comparisons(r);
+    let (comparisons, shown, differences) = comparisons(r)?;
     let sweep = sc.sweep.as_ref();
     let axis = sweep.and_then(|sw| match sw.axes.as_slice() {
         [axis] => Some(axis),
         _ => None,
     });
-    Summary {
+    Ok(Summary {
         format: FORMAT,
         scenario: sc.name.clone(),
         description: sc.description.clone(),
@@ -135,7 +136,11 @@ pub fn analyse(r: &RunResult) -> Summary {
         timing: "timing.json".into(),
         results: r.blocks.iter().flat_map(|b| b.entries.clone()).collect(),
         comparisons,
-        claims: (!sc.claims.is_empty()).then(|| evaluations(r)),
+        claims: if sc.claims.is_empty() {
+            None
+        } else {
+            Some(evaluations(r)?)
+        },
         performance_profile: performance_profile(r),
         stopping: r.stopping.clone(),
         separation: first.separation.clone(),
@@ -147,7 +152,7 @@ pub fn analyse(r: &RunResult) -> Summary {
         sweep_zip: sweep.map(|sw| sw.zip),
         shown,
         differences,
-    }
+    })
 }
 
 #[cfg(test)]

@@ -114,8 +114,10 @@ impl ClaimResult {
 }
 
 /// Every claim evaluated on every block, in claim order then block order, with the block's
-/// swept value: each entry's per-trial values of the claim's metric, paired by trial.
-pub fn evaluations(r: &RunResult) -> Vec<ClaimResult> {
+/// swept value: each entry's per-trial values of the claim's metric, paired by trial, read
+/// from the study's scratch file for one claim and block at a time (fails only when that
+/// file cannot be read).
+pub fn evaluations(r: &RunResult) -> crate::error::Result<Vec<ClaimResult>> {
     let mut out = Vec::new();
     for c in &r.scenario.claims {
         for b in &r.blocks {
@@ -127,25 +129,32 @@ pub fn evaluations(r: &RunResult) -> Vec<ClaimResult> {
                     continue;
                 };
                 let (ea, eb) = (entry(*ka), entry(*kb));
-                let params: Vec<(String, &[Real], &[Real])> = ea
-                    .eta_per_trial
+                let mut read = Vec::new();
+                for (name, a) in &ea.eta_per_trial {
+                    if let Some(b) = eb.eta_per_trial.get(name) {
+                        read.push((name.clone(), a.values()?, b.values()?));
+                    }
+                }
+                let params: Vec<(String, &[Real], &[Real])> = read
                     .iter()
-                    .filter_map(|(name, a)| {
-                        let b = eb.eta_per_trial.get(name)?;
-                        Some((name.clone(), a.as_slice(), b.as_slice()))
-                    })
+                    .map(|(name, a, b)| (name.clone(), a.as_slice(), b.as_slice()))
                     .collect();
                 let (e, each) = evaluate_every(c, &params);
                 let mut r = ClaimResult::new(c, &e, sweep_value);
                 r.parameters = Some(each);
                 out.push(r);
             } else {
-                let e = evaluate(c, |k| &entry(k).per_trial[c.metric]);
+                let values = b
+                    .entries
+                    .iter()
+                    .map(|e| e.per_trial.values(c.metric))
+                    .collect::<crate::error::Result<Vec<_>>>()?;
+                let e = evaluate(c, |(mi, si)| &values[si * n + mi]);
                 out.push(ClaimResult::new(c, &e, sweep_value));
             }
         }
     }
-    out
+    Ok(out)
 }
 
 /// One row of a paper's verdict table: a paper's claim, with its verdict at the paper's

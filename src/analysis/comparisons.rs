@@ -5,6 +5,7 @@
 //! `[report] baseline` method, else its first method, on the same strategy; the first
 //! strategy with the same method).
 
+use crate::error::Result;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
 use crate::study::stats::paired::{adjust, compare_with, Comparison};
@@ -80,8 +81,10 @@ pub struct Differences {
 /// together, and the ones the reports show, each as baseline (a) against entry (b): a pair
 /// whose baseline comes second in `results` is computed the other way round, with the same
 /// Wilcoxon p-value and Holm adjustment (the signed-rank test is symmetric). With the
-/// per-trial differences of the shown pairs of the first block.
-pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Differences>) {
+/// per-trial differences of the shown pairs of the first block. Each pair's per-trial values
+/// are read from the study's scratch file while the pair is compared, one pair at a time;
+/// fails only when that file cannot be read.
+pub fn comparisons(r: &RunResult) -> Result<(Vec<Comparison>, Vec<Comparison>, Vec<Differences>)> {
     let baseline = r.scenario.report.baseline.as_deref();
     let mut all = Vec::new();
     let mut views = Vec::new();
@@ -89,9 +92,9 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
         for (i, j, view) in pairs(b, baseline) {
             let (ea, eb) = (&b.entries[i], &b.entries[j]);
             for metric in METRICS {
-                let per_trial = (&ea.per_trial[metric], &eb.per_trial[metric]);
+                let (va, vb) = (ea.per_trial.values(metric)?, eb.per_trial.values(metric)?);
                 let margin = r.scenario.report.margin(metric);
-                let mut c = compare_with((&label(ea), &label(eb)), metric, per_trial, margin);
+                let mut c = compare_with((&label(ea), &label(eb)), metric, (&va, &vb), margin);
                 c.sweep_value = ea.sweep_value.clone();
                 all.push(c);
                 views.push((b, i, j, view));
@@ -107,10 +110,11 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
             View::Flipped => {
                 let (ea, eb) = (&b.entries[i], &b.entries[j]);
                 let m = c.metric;
+                let (va, vb) = (ea.per_trial.values(m)?, eb.per_trial.values(m)?);
                 let mut f = compare_with(
                     (&label(eb), &label(ea)),
                     m,
-                    (&eb.per_trial[m], &ea.per_trial[m]),
+                    (&vb, &va),
                     r.scenario.report.margin(m),
                 );
                 f.sweep_value.clone_from(&c.sweep_value);
@@ -129,9 +133,11 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
                     View::Flipped => (j, i),
                 };
                 let (ea, eb) = (&b.entries[i], &b.entries[j]);
-                let values = ea.per_trial[metric]
+                let values = ea
+                    .per_trial
+                    .values(metric)?
                     .iter()
-                    .zip(&eb.per_trial[metric])
+                    .zip(&eb.per_trial.values(metric)?)
                     .map(|(x, y)| y - x)
                     .filter(|d| d.is_finite())
                     .collect();
@@ -154,5 +160,5 @@ pub fn comparisons(r: &RunResult) -> (Vec<Comparison>, Vec<Comparison>, Vec<Diff
             }
         }
     }
-    (all, shown, differences)
+    Ok((all, shown, differences))
 }

@@ -90,7 +90,7 @@ fn study_into(
                     let mut both = Both(&mut csv, &mut cp);
                     run_resumed(scenario, opts, &mut both, replay, reporter)?
                 };
-                write_run(&r, &analyse(&r), csv.finish()?, dir)?;
+                write_run(&r, &analyse(&r)?, csv.finish()?, dir)?;
                 r
             }
             Some(_) => {
@@ -154,7 +154,7 @@ impl InMemoryRun {
         };
         let result = run(scenario, &opts, &mut csv, reporter)?;
         Ok(InMemoryRun {
-            summary: analyse(&result),
+            summary: analyse(&result)?,
             result,
             trials_csv: csv.into_bytes(),
         })

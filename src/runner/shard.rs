@@ -375,7 +375,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
         };
         write_run(
             &r,
-            &crate::analysis::analyse::analyse(&r),
+            &crate::analysis::analyse::analyse(&r)?,
             csv.finish()?,
             dir,
         )?;

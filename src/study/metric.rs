@@ -10,6 +10,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 use crate::numeric::Real;
 pub use crate::study::margin::Margin;
 use crate::study::outcome::Outcome;
+use crate::study::spill::Spilled;
 
 /// Which way a metric improves.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -279,24 +280,24 @@ impl<'de> Deserialize<'de> for Metric {
 }
 
 /// Each trial's value of every per-trial metric ([`Metric::PER_TRIAL`]) of one entry, in
-/// trial order, NaN where the identification failed: read by metric.
+/// trial order, NaN where the identification failed: read by metric from the study's
+/// scratch file ([`Spilled`]), so that a finished study holds no list that grows with its
+/// trials.
 #[derive(Clone, Debug, Default)]
-pub struct PerTrial(Vec<Vec<Real>>);
+pub struct PerTrial(Vec<Spilled>);
 
 impl PerTrial {
-    /// The values, one list per metric of [`Metric::PER_TRIAL`] in its order.
-    pub fn new(values: Vec<Vec<Real>>) -> PerTrial {
-        PerTrial(values)
+    /// The streams, one per metric of [`Metric::PER_TRIAL`] in its order.
+    pub fn new(streams: Vec<Spilled>) -> PerTrial {
+        PerTrial(streams)
     }
-}
 
-impl std::ops::Index<Metric> for PerTrial {
-    type Output = [Real];
     /// The per-trial values of `m`; none for a metric a trial does not give.
-    fn index(&self, m: Metric) -> &[Real] {
-        m.per_trial_index()
-            .and_then(|i| self.0.get(i))
-            .map_or(&[], Vec::as_slice)
+    pub fn values(&self, m: Metric) -> crate::error::Result<Vec<Real>> {
+        match m.per_trial_index().and_then(|i| self.0.get(i)) {
+            Some(s) => s.values(),
+            None => Ok(Vec::new()),
+        }
     }
 }
 

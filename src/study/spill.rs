@@ -9,9 +9,13 @@
 //! Reading a stream back goes through its chunks in push order, so every sum over it runs in
 //! the order of an in-memory vector and gives the same bits; the median is the exact order
 //! statistic, found by [`Spill::select`] in a few passes with bounded memory.
+//!
+//! A finished study keeps each trial's numbers as [`Spilled`] handles on the same file, read
+//! back only by the analysis that pairs them ([`crate::analysis`]), one pair at a time.
 
 use std::fs::File;
 use std::io::{Read, Seek, SeekFrom, Write};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -29,13 +33,13 @@ const SELECT_BITS: u32 = 8;
 /// Numbered streams of values, spilled to a scratch file a chunk at a time.
 #[derive(Debug, Default)]
 pub struct Spill {
-    file: Option<File>,
+    file: Option<Arc<Mutex<File>>>,
     end: u64,
     streams: Vec<Stream>,
 }
 
 /// One stream: its full chunks' offsets in the file and its last, partial chunk.
-#[derive(Debug, Default)]
+#[derive(Clone, Debug, Default)]
 struct Stream {
     chunks: Vec<u64>,
     tail: Vec<Real>,
@@ -44,6 +48,42 @@ struct Stream {
 impl Stream {
     fn len(&self) -> usize {
         self.chunks.len() * SPILL_CHUNK + self.tail.len()
+    }
+
+    /// Calls `f` on every value, in push order, reading the full chunks from `file`.
+    fn for_each(&self, file: Option<&Mutex<File>>, mut f: impl FnMut(Real)) -> Result<()> {
+        if !self.chunks.is_empty() {
+            let file = file.expect("chunks are in the file");
+            let mut file = file.lock().unwrap_or_else(PoisonError::into_inner);
+            let mut bytes = vec![0u8; SPILL_CHUNK * 8];
+            for &at in &self.chunks {
+                file.seek(SeekFrom::Start(at))
+                    .and_then(|_| file.read_exact(&mut bytes))
+                    .map_err(scratch_error)?;
+                for b in bytes.chunks_exact(8) {
+                    f(Real::from_le_bytes(b.try_into().expect("8 bytes")));
+                }
+            }
+        }
+        self.tail.iter().for_each(|&x| f(x));
+        Ok(())
+    }
+}
+
+/// One stream of a [`Spill`] as it stood when taken ([`Spill::stream`]): its values stay in
+/// the scratch file (kept open while a handle lives) and are read back on demand.
+#[derive(Clone, Debug, Default)]
+pub struct Spilled {
+    file: Option<Arc<Mutex<File>>>,
+    stream: Stream,
+}
+
+impl Spilled {
+    /// The values, in push order.
+    pub fn values(&self) -> Result<Vec<Real>> {
+        let mut v = Vec::with_capacity(self.stream.len());
+        self.stream.for_each(self.file.as_deref(), |x| v.push(x))?;
+        Ok(v)
     }
 }
 
@@ -86,9 +126,11 @@ impl Spill {
             return Ok(());
         }
         if self.file.is_none() {
-            self.file = Some(scratch_file().map_err(scratch_error)?);
+            let file = scratch_file().map_err(scratch_error)?;
+            self.file = Some(Arc::new(Mutex::new(file)));
         }
-        let mut file = self.file.as_ref().expect("opened");
+        let file = self.file.as_ref().expect("opened");
+        let mut file = file.lock().unwrap_or_else(PoisonError::into_inner);
         let bytes: Vec<u8> = st.tail.iter().flat_map(|v| v.to_le_bytes()).collect();
         file.seek(SeekFrom::Start(self.end))
             .and_then(|_| file.write_all(&bytes))
@@ -110,22 +152,16 @@ impl Spill {
     }
 
     /// Calls `f` on every value of stream `s`, in push order.
-    pub fn for_each(&self, s: usize, mut f: impl FnMut(Real)) -> Result<()> {
-        let st = &self.streams[s];
-        if !st.chunks.is_empty() {
-            let mut file = self.file.as_ref().expect("chunks are in the file");
-            let mut bytes = vec![0u8; SPILL_CHUNK * 8];
-            for &at in &st.chunks {
-                file.seek(SeekFrom::Start(at))
-                    .and_then(|_| file.read_exact(&mut bytes))
-                    .map_err(scratch_error)?;
-                for b in bytes.chunks_exact(8) {
-                    f(Real::from_le_bytes(b.try_into().expect("8 bytes")));
-                }
-            }
+    pub fn for_each(&self, s: usize, f: impl FnMut(Real)) -> Result<()> {
+        self.streams[s].for_each(self.file.as_deref(), f)
+    }
+
+    /// Stream `s` as it stands, to be read back after the spill is gone.
+    pub fn stream(&self, s: usize) -> Spilled {
+        Spilled {
+            file: self.file.clone(),
+            stream: self.streams[s].clone(),
         }
-        st.tail.iter().for_each(|&x| f(x));
-        Ok(())
     }
 
     /// The mean of stream `s`, summed in order from −0 as `Iterator::sum` (NaN when empty).
@@ -289,6 +325,20 @@ mod tests {
         }
         for x in [-3.5, -0.0, 0.0, 2.0, Real::INFINITY, Real::NEG_INFINITY] {
             assert_eq!(unkey(key(x)).to_bits(), x.to_bits());
+        }
+        // a stream taken out, then more pushed into the spill, then the spill dropped: the
+        // handle reads the values as they stood when it was taken
+        let taken: Vec<Spilled> = (0..lengths.len()).map(|s| spill.stream(s)).collect();
+        for i in 0..2 * SPILL_CHUNK {
+            spill.push(lengths.len() - 1, i as Real).expect("push");
+        }
+        drop(spill);
+        for (t, v) in taken.iter().zip(&values) {
+            let back = t.values().expect("read");
+            assert_eq!(
+                back.iter().map(|x| x.to_bits()).collect::<Vec<_>>(),
+                v.iter().map(|x| x.to_bits()).collect::<Vec<_>>()
+            );
         }
     }
 }

@@ -17,7 +17,7 @@ pub mod precision;
 
 use super::metric::{Metric, PerTrial};
 use super::outcome::{Outcome, TrialResult, OPTIONAL_STATS};
-use super::spill::Spill;
+use super::spill::{Spill, Spilled};
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::{nan, Real};
@@ -213,7 +213,7 @@ pub struct Entry {
     /// the identification failed or the truth was 0: what a claim "for every parameter"
     /// compares (not written).
     #[serde(skip)]
-    pub eta_per_trial: BTreeMap<String, Vec<Real>>,
+    pub eta_per_trial: BTreeMap<String, Spilled>,
 }
 
 fn as_null<S: serde::Serializer>(_: &Real, s: S) -> Result<S::Ok, S::Error> {
@@ -426,17 +426,10 @@ impl Accumulator {
     }
 
     /// The per-trial values of headline `h` ([`HEADLINES`]) of `(strategy, method)`, in
-    /// trial order, NaN where the identification failed.
-    pub fn per_trial(
-        &self,
-        strategy: usize,
-        method: usize,
-        h: usize,
-    ) -> crate::error::Result<Vec<Real>> {
-        let s = self.headline(strategy * self.methods + method, h);
-        let mut v = Vec::with_capacity(self.spill.len(s));
-        self.spill.for_each(s, |x| v.push(x))?;
-        Ok(v)
+    /// trial order, NaN where the identification failed, read back when asked for.
+    pub fn per_trial(&self, strategy: usize, method: usize, h: usize) -> Spilled {
+        self.spill
+            .stream(self.headline(strategy * self.methods + method, h))
     }
 
     /// Each cell's figure of `m` so far, in cell order (strategy × method): a statistic of
@@ -613,10 +606,7 @@ impl Accumulator {
         let mut eta_per_trial = BTreeMap::new();
         for (k, name) in self.names.iter().enumerate() {
             if eta_map.contains_key(name) {
-                let s = self.eta_stream(ci, k);
-                let mut v = Vec::with_capacity(self.spill.len(s));
-                self.spill.for_each(s, |x| v.push(x))?;
-                eta_per_trial.insert(name.clone(), v);
+                eta_per_trial.insert(name.clone(), self.spill.stream(self.eta_stream(ci, k)));
             }
         }
         let eta_mean_pct = mean(&eta_map.values().map(|e| e.mean).collect::<Vec<_>>());
@@ -665,7 +655,7 @@ impl Accumulator {
             per_trial: PerTrial::new(
                 (0..Metric::PER_TRIAL.len())
                     .map(|h| self.per_trial(strategy, method, h))
-                    .collect::<crate::error::Result<_>>()?,
+                    .collect(),
             ),
             eta_per_trial,
             spread: Spread {

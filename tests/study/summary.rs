@@ -44,7 +44,7 @@ fn json_builder(r: &RunResult) -> Value {
         let label = format!("{} / {}", first.methods[*mi], first.strategies[*si]);
         convergence.insert(label, json!(trace));
     }
-    let (all, _, _) = comparisons(r);
+    let (all, _, _) = comparisons(r).unwrap();
     let mut s = json!({
         "scenario": sc.name, "description": sc.description, "robot": first.robot,
         "trials": sc.trials, "seed": sc.seed,
@@ -64,20 +64,31 @@ fn json_builder(r: &RunResult) -> Value {
                 let (e, each) = match (&c.term, &c.bound) {
                     (Term::One(ka), Bound::Entry(kb)) if c.every_parameter => {
                         let (ea, eb) = (entry(*ka), entry(*kb));
-                        let params: Vec<(String, &[f64], &[f64])> = ea
+                        let read: Vec<(String, Vec<f64>, Vec<f64>)> = ea
                             .eta_per_trial
                             .iter()
                             .filter_map(|(k, a)| {
-                                Some((k.clone(), a.as_slice(), eb.eta_per_trial.get(k)?.as_slice()))
+                                let b = eb.eta_per_trial.get(k)?.values().unwrap();
+                                Some((k.clone(), a.values().unwrap(), b))
                             })
+                            .collect();
+                        let params: Vec<(String, &[f64], &[f64])> = read
+                            .iter()
+                            .map(|(k, a, b)| (k.clone(), a.as_slice(), b.as_slice()))
                             .collect();
                         let (e, each) = calbench::study::verdict::evaluate_every(c, &params);
                         (e, Some(each))
                     }
-                    _ => (
-                        calbench::study::verdict::evaluate(c, |k| &entry(k).per_trial[c.metric]),
-                        None,
-                    ),
+                    _ => {
+                        let values: Vec<Vec<f64>> = b
+                            .entries
+                            .iter()
+                            .map(|e| e.per_trial.values(c.metric).unwrap())
+                            .collect();
+                        let e =
+                            calbench::study::verdict::evaluate(c, |(mi, si)| &values[si * n + mi]);
+                        (e, None)
+                    }
                 };
                 let mut v = json!({
                     "id": c.id, "statement": c.statement, "paper": c.paper,
