@@ -132,6 +132,21 @@ fn every_mukca_task_prints_calbench_beside_the_authors() {
     let v = calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
     let said = String::from_utf8_lossy(&v.stdout) + String::from_utf8_lossy(&v.stderr);
     assert!(said.contains("6 task entries verified"), "{said}");
+    // A socket task's folder whose task file differs from the one its entry ran is refused,
+    // naming both hashes.
+    let toml = outs[0].join("task.toml");
+    let text = read(&toml);
+    std::fs::write(&toml, text.replacen("title = \"", "title = \"edited ", 1)).unwrap();
+    let db2 = dir.join("edited.sqlite");
+    let o = calbench(&["record", "--db", path_arg(&db2), path_arg(&outs[0])]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let stated = serde_json::from_str::<serde_json::Value>(&read(&outs[0].join("task.json")))
+        .unwrap()["task_hash"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    assert!(!o.status.success(), "an edited socket task was recorded");
+    assert!(err.contains("task_hash") && err.contains(&stated), "{err}");
 }
 
 /// A copy of Panda 6's task with absolute paths, its joint files in `dir`.

@@ -274,19 +274,29 @@ impl TaskRecord {
         (task_text, task_path): (&str, &Path),
         dir: &Path,
     ) -> Result<()> {
-        let task = super::Task::parse(task_text.to_string(), task_path, dir)?;
-        if task.hash == self.task_hash {
+        let (hash, fixed): (String, Vec<String>) =
+            match super::socket::parse_socket_task(task_text.to_string(), task_path, dir)? {
+                Some(t) => {
+                    let files = t.inputs().into_iter().skip(1);
+                    (
+                        t.hash.clone(),
+                        files.map(|p| p.display().to_string()).collect(),
+                    )
+                }
+                None => {
+                    let task = super::Task::parse(task_text.to_string(), task_path, dir)?;
+                    let mut fixed = vec![
+                        format!("robot {}", task.robot.display()),
+                        format!("mapping {}", task.mapping.display()),
+                    ];
+                    let data = task.data.files();
+                    fixed.extend(data.map(|(k, p)| format!("{k} {}", p.display())));
+                    (task.hash, fixed)
+                }
+            };
+        if hash == self.task_hash {
             return Ok(());
         }
-        let mut fixed: Vec<String> = vec![
-            format!("robot {}", task.robot.display()),
-            format!("mapping {}", task.mapping.display()),
-        ];
-        fixed.extend(
-            task.data
-                .files()
-                .map(|(k, p)| format!("{k} {}", p.display())),
-        );
         Err(Error::file(
             path,
             "task_hash",
@@ -297,7 +307,7 @@ impl TaskRecord {
                 self.task_hash,
                 task_path.display(),
                 fixed.join(", "),
-                task.hash
+                hash
             ),
         ))
     }

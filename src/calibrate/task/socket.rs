@@ -97,6 +97,12 @@ pub struct SocketTask {
 /// when it has none (a tracker's task, [`super::Task::load`]).
 pub fn load_socket_task(path: &Path) -> Result<Option<SocketTask>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_socket_task(text, path, path.parent().unwrap_or(Path::new(".")))
+}
+
+/// Reads `text`, the task file `path`, as a socket task when it has a `[sockets]` table, the
+/// files it names taken from `dir` (`None` without the table).
+pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option<SocketTask>> {
     let table: toml::Table = toml::from_str(&text)
         .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
     if !table.contains_key("sockets") {
@@ -105,7 +111,6 @@ pub fn load_socket_task(path: &Path) -> Result<Option<SocketTask>> {
     let keys: SocketTaskKeys = toml::from_str(&text)
         .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
     let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
-    let dir = path.parent().unwrap_or(Path::new("."));
     let file = |key: &str, rel: &str| -> Result<PathBuf> {
         let p = dir.join(rel);
         if p.is_file() {
