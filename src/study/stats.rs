@@ -425,13 +425,6 @@ impl Accumulator {
         self.cells.len() * self.names.len() * 3 + c * HEADLINES + h
     }
 
-    /// The per-trial values of headline `h` ([`HEADLINES`]) of `(strategy, method)`, in
-    /// trial order, NaN where the identification failed, read back when asked for.
-    pub fn per_trial(&self, strategy: usize, method: usize, h: usize) -> Spilled {
-        self.spill
-            .stream(self.headline(strategy * self.methods + method, h))
-    }
-
     /// Each cell's figure of `m` so far, in cell order (strategy × method): a statistic of
     /// the validation errors after compensation ([`precision::HEADLINE`]) and its 95 %
     /// interval, as `summary.json` would write them now; NaN without an interval for a metric
@@ -654,7 +647,7 @@ impl Accumulator {
             fixed_budget: (!c.search.is_empty()).then(|| c.search.fixed_budget()),
             per_trial: PerTrial::new(
                 (0..Metric::PER_TRIAL.len())
-                    .map(|h| self.per_trial(strategy, method, h))
+                    .map(|h| self.spill.stream(self.headline(ci, h)))
                     .collect(),
             ),
             eta_per_trial,
