@@ -42,7 +42,7 @@ fn aggregate(kept: &[(BlockInfo, TrialResult)], like: &RunResult) -> String {
         shard: None,
         stopping: None,
     };
-    analyse(&r).to_json().expect("summary")
+    analyse(&r).expect("analysis").to_json().expect("summary")
 }
 
 fn bench(c: &mut Criterion) {
@@ -76,7 +76,10 @@ fn bench(c: &mut Criterion) {
     // The same bytes as the run's own summary: the bench times what the run does.
     assert_eq!(
         aggregate(&kept.0, &whole),
-        analyse(&whole).to_json().expect("summary")
+        analyse(&whole)
+            .expect("analysis")
+            .to_json()
+            .expect("summary")
     );
     g.bench_function("default-1000-trials-statistics", |b| {
         b.iter(|| aggregate(&kept.0, &whole))
