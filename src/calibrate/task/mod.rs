@@ -34,6 +34,29 @@ use crate::robot::Robot;
 use canonical::{place_of, task_hash};
 pub use split::Split;
 
+/// The hash of `text`, the task file `path` with the files it names taken from `dir`, a
+/// socket task's or a tracker's, and the files it fixes as a refusal lists them.
+pub fn hash_of(text: &str, path: &Path, dir: &Path) -> Result<(String, Vec<String>)> {
+    if let Some(t) = socket::parse_socket_task(text.to_string(), path, dir)? {
+        let files = t.inputs().into_iter().skip(1);
+        return Ok((
+            t.hash.clone(),
+            files.map(|p| p.display().to_string()).collect(),
+        ));
+    }
+    let task = Task::parse(text.to_string(), path, dir)?;
+    let mut fixed = vec![
+        format!("robot {}", task.robot.display()),
+        format!("mapping {}", task.mapping.display()),
+    ];
+    fixed.extend(
+        task.data
+            .files()
+            .map(|(k, p)| format!("{k} {}", p.display())),
+    );
+    Ok((task.hash, fixed))
+}
+
 /// The `format` of `task.json`.
 pub const TASK_FORMAT: &str = "calbench-task-1";
 

@@ -274,26 +274,7 @@ impl TaskRecord {
         (task_text, task_path): (&str, &Path),
         dir: &Path,
     ) -> Result<()> {
-        let (hash, fixed): (String, Vec<String>) =
-            match super::socket::parse_socket_task(task_text.to_string(), task_path, dir)? {
-                Some(t) => {
-                    let files = t.inputs().into_iter().skip(1);
-                    (
-                        t.hash.clone(),
-                        files.map(|p| p.display().to_string()).collect(),
-                    )
-                }
-                None => {
-                    let task = super::Task::parse(task_text.to_string(), task_path, dir)?;
-                    let mut fixed = vec![
-                        format!("robot {}", task.robot.display()),
-                        format!("mapping {}", task.mapping.display()),
-                    ];
-                    let data = task.data.files();
-                    fixed.extend(data.map(|(k, p)| format!("{k} {}", p.display())));
-                    (task.hash, fixed)
-                }
-            };
+        let (hash, fixed) = super::hash_of(task_text, task_path, dir)?;
         if hash == self.task_hash {
             return Ok(());
         }
