@@ -518,83 +518,10 @@ fn declared_rust_version_covers_every_dependency() {
     );
 }
 
-/// Every number in a `calbench` column of a REPRODUCTION.md table that follows a
-/// `<!-- summary: PATH -->` line is a number of that committed summary, as printed (rounded to
-/// the digits quoted): a figure quoted from an old run, or typed by hand, fails. Each paper's
-/// committed summary must exist.
-#[test]
-fn reproduction_numbers_come_from_the_committed_summaries() {
-    let path = root().join("REPRODUCTION.md");
-    let text = std::fs::read_to_string(&path).expect("REPRODUCTION.md");
-    for paper in ["li2018", "ban", "qiao2021", "guo2024"] {
-        let s = root().join(format!("results/reproduction/{paper}/summary.json"));
-        assert!(s.exists(), "{} is not committed", s.display());
-    }
-    fn numbers(v: &serde_json::Value, out: &mut Vec<f64>) {
-        match v {
-            serde_json::Value::Number(n) => out.extend(n.as_f64()),
-            serde_json::Value::Array(a) => a.iter().for_each(|x| numbers(x, out)),
-            serde_json::Value::Object(o) => o.values().for_each(|x| numbers(x, out)),
-            _ => {}
-        }
-    }
-    let number = regex_lite_decimals;
-    let mut checked = 0;
-    let lines: Vec<&str> = text.lines().collect();
-    for (i, line) in lines.iter().enumerate() {
-        let Some(rest) = line.strip_prefix("<!-- summary: ") else {
-            continue;
-        };
-        let file = rest.trim_end_matches("-->").trim();
-        let json: serde_json::Value =
-            serde_json::from_str(&std::fs::read_to_string(root().join(file)).expect(file))
-                .expect(file);
-        let mut values = Vec::new();
-        numbers(&json, &mut values);
-        let table: Vec<&str> = lines[i + 1..]
-            .iter()
-            .skip_while(|l| !l.starts_with('|'))
-            .take_while(|l| l.starts_with('|'))
-            .copied()
-            .collect();
-        let cells = |l: &str| -> Vec<String> {
-            l.trim()
-                .trim_matches('|')
-                .split('|')
-                .map(|c| c.trim().to_string())
-                .collect()
-        };
-        let header = cells(table[0]);
-        let cols: Vec<usize> = (0..header.len())
-            .filter(|&c| header[c].starts_with("calbench"))
-            .collect();
-        assert!(
-            !cols.is_empty(),
-            "{file}: no calbench column after line {}",
-            i + 1
-        );
-        for row in &table[2..] {
-            let row = cells(row);
-            for &c in &cols {
-                for (q, half) in number(&row[c]) {
-                    let half = half * (1.0 + 1e-9);
-                    assert!(
-                        values.iter().any(|v| (v - q).abs() <= half),
-                        "REPRODUCTION.md quotes {q} (row \"{}\") but {file} has no such number",
-                        row[0]
-                    );
-                    checked += 1;
-                }
-            }
-        }
-    }
-    assert!(checked >= 10, "only {checked} numbers checked");
-}
-
 /// The committed output that REPRODUCTION.md's eq. 17 table quotes is what its command writes
 /// today, byte for byte (`gcn_blocks.json` is compared by the CLI test that runs its command;
-/// the study summaries take minutes in a debug build and are checked by the numbers test above
-/// only).
+/// the study summaries take minutes in a debug build and are checked number by number by
+/// `numbers.rs`).
 #[test]
 fn the_committed_eq17_output_is_what_its_command_writes() {
     let dir = scratch("committed");
@@ -621,56 +548,8 @@ fn the_committed_eq17_output_is_what_its_command_writes() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// The decimal numbers of `cell` (an optional sign `-` or `−`, a digit, a point, digits, an
-/// optional exponent `e14` or `e-5`) and the half-width of the last digit quoted.
-fn regex_lite_decimals(cell: &str) -> Vec<(f64, f64)> {
-    let b = cell.as_bytes();
-    let mut out = Vec::new();
-    let mut i = 0;
-    while i < b.len() {
-        if b[i].is_ascii_digit()
-            && (i == 0 || !(b[i - 1].is_ascii_alphanumeric() || b[i - 1] == b'.'))
-        {
-            let negative = cell[..i].ends_with('-') || cell[..i].ends_with('−');
-            let start = i;
-            while i < b.len() && b[i].is_ascii_digit() {
-                i += 1;
-            }
-            if i + 1 < b.len() && b[i] == b'.' && b[i + 1].is_ascii_digit() {
-                i += 1;
-                let frac = i;
-                while i < b.len() && b[i].is_ascii_digit() {
-                    i += 1;
-                }
-                let decimals = i - frac;
-                let mut exponent = 0;
-                let e = i;
-                if e < b.len() && b[e] == b'e' {
-                    let mut k = e + 1;
-                    if k < b.len() && (b[k] == b'-' || b[k] == b'+') {
-                        k += 1;
-                    }
-                    let digits = k;
-                    while k < b.len() && b[k].is_ascii_digit() {
-                        k += 1;
-                    }
-                    if k > digits {
-                        exponent = cell[e + 1..k].parse().unwrap_or(0);
-                        i = k;
-                    }
-                }
-                if let Ok(v) = cell[start..start + (frac - start) + decimals].parse::<f64>() {
-                    let scale = 10f64.powi(exponent);
-                    let value = if negative { -v } else { v } * scale;
-                    out.push((value, 0.5 * 10f64.powi(-(decimals as i32)) * scale));
-                }
-            }
-        } else {
-            i += 1;
-        }
-    }
-    out
-}
+#[path = "docs/numbers.rs"]
+mod numbers;
 
 #[path = "docs/options.rs"]
 mod options;
