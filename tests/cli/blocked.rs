@@ -112,7 +112,12 @@ fn results_md_reports_series_a_and_d_on_both_splits() {
     ];
     let dir = tmp_dir("cli-blocked-docs");
     for (col, name) in tasks.iter().enumerate() {
-        let out = task_lm(calbench_ok, &task(name), Some(&models.join(",")), &dir.join(name));
+        let out = task_lm(
+            calbench_ok,
+            &task(name),
+            Some(&models.join(",")),
+            &dir.join(name),
+        );
         let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
         let mut cv = Vec::new();
         let mut chosen = None;
@@ -127,7 +132,10 @@ fn results_md_reports_series_a_and_d_on_both_splits() {
         }
         assert_eq!(cv.len(), models.len(), "{name}: {stdout}");
         for (row, (model, cv_rms)) in rows.iter().zip(&cv) {
-            assert!(row[0].starts_with(model.as_str()), "{row:?} against {model}");
+            assert!(
+                row[0].starts_with(model.as_str()),
+                "{row:?} against {model}"
+            );
             let one = dir.join(format!("{name}-{model}"));
             task_lm(calbench_ok, &task(name), Some(model), &one);
             let j = load_json(&one.join("task.json"));
@@ -136,7 +144,11 @@ fn results_md_reports_series_a_and_d_on_both_splits() {
             let cell = format!("{cv_rms:.4} / {v:.3} ({lo:.3}–{hi:.3})");
             assert_eq!(row[col + 1], cell, "{name}, {model}");
             let marked = row[0].contains("CV's choice");
-            assert_eq!(marked, chosen.as_deref() == Some(model.as_str()), "{name}: {row:?}");
+            assert_eq!(
+                marked,
+                chosen.as_deref() == Some(model.as_str()),
+                "{name}: {row:?}"
+            );
         }
     }
 }
