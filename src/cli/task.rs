@@ -9,7 +9,7 @@ use anyhow::Result;
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
-use calbench::calibrate::task::{task_path, Task, TaskEntry};
+use calbench::calibrate::task::{task_path, Published, Task, TaskEntry};
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
@@ -84,7 +84,8 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let j = entry.json(&o, &val)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
-    write_identified_with(&args.out, &record, &additions(&o), &entry.files(&j)?)?;
+    let files = task.head.files(&j)?;
+    write_identified_with(&args.out, &record, &additions(&o), &files)?;
     if let Some(c) = &origin.choice {
         out!(
             "  the task's candidates, {}-fold CV repeated over fold seeds {:?}:",
@@ -124,24 +125,29 @@ pub fn run(args: &TaskArgs) -> Result<()> {
         .unwrap_or_default();
     out!(
         "{} {}: {} = {:.3} mm{ci}, {} division; written to {}",
-        task.name,
+        task.head.name,
         args.method.name,
         task.metric.as_str(),
         j["value"].as_f64().unwrap_or(f64::NAN),
         j["division"].as_str().unwrap_or(""),
         args.out.display()
     );
-    for p in &task.published {
+    print_published(&task.head.published);
+    if let Some(u) = &task.head.unpublished {
+        out!("  published: {u}");
+    }
+    Ok(())
+}
+
+/// Prints the data's authors' figures `published`, one line each.
+pub(super) fn print_published(published: &[Published]) {
+    for p in published {
         out!(
             "  published: {} {:.3} mm ({}, {} division)",
             p.label,
             p.value,
             p.source,
-            serde_json::to_value(p.division)?.as_str().unwrap_or("")
+            p.division.as_str()
         );
     }
-    if let Some(u) = &task.unpublished {
-        out!("  published: {u}");
-    }
-    Ok(())
 }

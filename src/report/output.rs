@@ -70,6 +70,17 @@ pub fn file_names<'o, O: std::borrow::Borrow<dyn Output + 'o>>(outputs: &[O]) ->
     names
 }
 
+/// A [`Text`] output of each (name, text) of `files`.
+pub fn texts<'a>(files: &'a [(&str, String)]) -> Outputs<'a> {
+    let text = |(name, text): &'a (&str, String)| {
+        Box::new(Text {
+            name,
+            text: text.clone(),
+        }) as Box<dyn Output>
+    };
+    files.iter().map(text).collect()
+}
+
 /// Writes `text` at `path`.
 pub(crate) fn text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
