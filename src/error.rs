@@ -321,6 +321,12 @@ where
     })
 }
 
+/// `v` as pretty-printed JSON with a final newline: the text of calbench's JSON files.
+pub fn json_text<T: serde::Serialize + ?Sized>(v: &T) -> Result<String> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
+    Ok(s + "\n")
+}
+
 /// Refuses the file `path` of calbench's format `found` of `what` (`summary`,
 /// `identification record`) when it is later than `reads`, the one this calbench reads.
 pub fn newer_format(path: &std::path::Path, what: &str, found: u32, reads: u32) -> Result<()> {

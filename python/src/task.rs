@@ -17,7 +17,7 @@ use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
 use calbench::report::write_identified_with;
 
-use crate::errors::{err, setting, ComputeError};
+use crate::errors::{err, setting};
 use crate::robot::PyRobot;
 use calbench::robot::Robot;
 
@@ -41,7 +41,7 @@ pub(crate) fn task<'py>(
     }
     let t = Task::load(&path).map_err(err)?;
     if let Some(out) = &out {
-        guard(out, t.inputs(), t.data_files())?;
+        guard(out, t.head.inputs(), t.data_files())?;
     }
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())
@@ -83,7 +83,7 @@ pub(crate) fn task<'py>(
                 origin: None,
             };
             let j = entry.json(&o, &val)?;
-            let files = t.head.files(&j)?;
+            let files = t.head.files(&j.to_value())?;
             let text = files[0].1.clone();
             if let Some(out) = &out {
                 let rec = IdentifyRecord::of(&o, None);
@@ -93,10 +93,7 @@ pub(crate) fn task<'py>(
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             Ok((text, record, o.compensated()))
         })
-        .map_err(|e: calbench::Error| match e {
-            calbench::Error::Compute(m) => ComputeError::new_err(m),
-            e => err(e),
-        })?;
+        .map_err(err)?;
     result(py, json, record, robot)
 }
 
@@ -161,9 +158,6 @@ fn socket_task<'py>(
             let [(_, json), _] = files;
             Ok((json, record, e.robot))
         })
-        .map_err(|e: calbench::Error| match e {
-            calbench::Error::Compute(m) => ComputeError::new_err(m),
-            e => err(e),
-        })?;
+        .map_err(err)?;
     result(py, json, record, robot)
 }

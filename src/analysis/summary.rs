@@ -161,9 +161,7 @@ impl Summary {
 
     /// `summary.json`'s text.
     pub fn to_json(&self) -> Result<String> {
-        let s = serde_json::to_string_pretty(&self.to_value()?)
-            .map_err(|e| Error::Compute(e.to_string()))?;
-        Ok(s + "\n")
+        crate::error::json_text(&self.to_value()?)
     }
 
     /// Reads a summary from a JSON value (`path` names it in errors): a summary of a later

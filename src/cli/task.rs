@@ -9,7 +9,7 @@ use anyhow::Result;
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
-use calbench::calibrate::task::{task_path, Published, Task, TaskEntry};
+use calbench::calibrate::task::{task_path, Published, Task, TaskEntry, TaskRecord};
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
@@ -62,7 +62,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
         return super::task_socket::run(&socket, &t);
     }
     let task = Task::load(&path)?;
-    super::guard_out(&args.out, &OUTPUTS, task.inputs())?;
+    super::guard_out(&args.out, &OUTPUTS, task.head.inputs())?;
     calbench::report::guard::guard_data_folder(&args.out, "--out", task.data_files())?;
     check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
@@ -84,7 +84,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let j = entry.json(&o, &val)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
-    let files = task.head.files(&j)?;
+    let files = task.head.files(&j.to_value())?;
     write_identified_with(&args.out, &record, &additions(&o), &files)?;
     if let Some(c) = &origin.choice {
         out!(
@@ -113,30 +113,30 @@ pub fn run(args: &TaskArgs) -> Result<()> {
             );
         }
     }
-    let ci = j["ci95"]
-        .as_array()
-        .map(|c| {
-            format!(
-                " (95 % interval {:.3} to {:.3})",
-                c[0].as_f64().unwrap_or(f64::NAN),
-                c[1].as_f64().unwrap_or(f64::NAN)
-            )
-        })
-        .unwrap_or_default();
-    out!(
-        "{} {}: {} = {:.3} mm{ci}, {} division; written to {}",
-        task.head.name,
-        args.method.name,
-        task.metric.as_str(),
-        j["value"].as_f64().unwrap_or(f64::NAN),
-        j["division"].as_str().unwrap_or(""),
-        args.out.display()
-    );
+    print_figure(&j, "", &args.out);
     print_published(&task.head.published);
     if let Some(u) = &task.head.unpublished {
         out!("  published: {u}");
     }
     Ok(())
+}
+
+/// Prints the entry's figure `r`, its interval and division, `on` saying where it is scored,
+/// and the folder `out` it is written to.
+pub(super) fn print_figure(r: &TaskRecord, on: &str, out: &std::path::Path) {
+    let ci = r
+        .ci95
+        .map(|[lo, hi]| format!(" (95 % interval {lo:.3} to {hi:.3})"))
+        .unwrap_or_default();
+    out!(
+        "{} {}: {} = {:.3} mm{ci}{on}, {} division; written to {}",
+        r.task,
+        r.method,
+        r.metric.as_str(),
+        r.value,
+        r.division.as_str(),
+        out.display()
+    );
 }
 
 /// Prints the data's authors' figures `published`, one line each.

@@ -48,19 +48,7 @@ pub fn run(args: &SocketArgs, task: &SocketTask) -> Result<()> {
     if let Some(scores) = &e.record.socket {
         print_scores(scores, args.method);
     }
-    let ci = e
-        .record
-        .ci95
-        .map(|[lo, hi]| format!(" (95 % interval {lo:.3} to {hi:.3})"))
-        .unwrap_or_default();
-    out!(
-        "{} {}: socket_spread_mm = {:.3} mm{ci} on the validation placement, closed \
-         division; written to {}",
-        head.name,
-        args.method,
-        e.record.value,
-        args.out.display()
-    );
+    super::task::print_figure(&e.record, " on the validation placement", args.out);
     super::task::print_published(&head.published);
     if let Some(u) = &head.unpublished {
         out!("  published on the validation placement: {u}");

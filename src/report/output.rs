@@ -292,11 +292,7 @@ impl Output for Bytes<'_> {
     }
 }
 
-/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
-pub fn json_text(v: &Value) -> Result<String> {
-    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
-    Ok(s + "\n")
-}
+pub use crate::error::json_text;
 
 /// A JSON document, pretty-printed with a final newline ([`json_text`]).
 pub struct Json<'a> {

@@ -78,11 +78,8 @@ impl TaskHead {
     /// entry's `json`) and the task file it ran, as read ([`super::TASK_FILE`]), as a run
     /// folder holds the scenario it ran.
     pub fn files(&self, json: &serde_json::Value) -> Result<[(&'static str, String); 2]> {
-        let text = serde_json::to_string_pretty(json).map_err(|e| Error::Compute(e.to_string()))?;
-        Ok([
-            ("task.json", text + "\n"),
-            (super::TASK_FILE, self.text.clone()),
-        ])
+        let text = crate::error::json_text(json)?;
+        Ok([("task.json", text), (super::TASK_FILE, self.text.clone())])
     }
 
     /// The files it fixes as a refusal lists them: `KEY PATH` each.

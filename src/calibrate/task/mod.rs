@@ -19,7 +19,6 @@ pub use record::{TaskRecord, TASK_FILE};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 
 use super::cv::Model;
 use super::pipeline::TrackerOutcome;
@@ -247,12 +246,6 @@ impl TaskData {
 }
 
 impl Task {
-    /// Every file the task reads: the task file, the nominal robot, the mapping, the data
-    /// file(s) and the split (what an output folder must not destroy, [`crate::report::guard`]).
-    pub fn inputs(&self) -> Vec<&Path> {
-        self.head.inputs()
-    }
-
     /// The task's data: its data file and split, or its calibration and validation files
     /// (what its outputs must not lie beside, [`crate::report::guard::guard_data_folder`]).
     pub fn data_files(&self) -> [&Path; 2] {
@@ -512,8 +505,10 @@ impl TaskEntry<'_> {
     }
 
     /// `task.json` of the entry whose identification is `outcome`, scored on the validation
-    /// rows `val` (docs/formats.md § 9.3).
-    pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<Value> {
+    /// rows `val` (docs/formats.md § 9.3): its figure and interval the task's metric of their
+    /// position errors, in the open division for a model beyond the kinematic one or a method
+    /// not calbench's.
+    pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<TaskRecord> {
         let errors: Vec<Real> = residual_vectors(&outcome.calibrated, val)?
             .iter()
             .map(|v| v.norm())
@@ -524,21 +519,9 @@ impl TaskEntry<'_> {
             None => Self::model_terms(outcome, self.candidates),
         };
         let open = !kinematic || self.entrant != "calbench";
-        Ok(self.record(errors, models, open))
-    }
-
-    /// The candidate models considered: the task's, or the caller's.
-    fn candidates_considered(&self) -> &[Model] {
-        self.origin.map_or(self.candidates, |o| &o.candidates)
-    }
-
-    /// `task.json` of an entry whose validation rows have the position errors `errors` (mm;
-    /// its figure and interval the task's metric of them), with the model terms `models`, in
-    /// the open division or not.
-    pub fn record(&self, errors: Vec<Real>, models: Vec<String>, open: bool) -> Value {
         let t = self.task;
         let considered = self.candidates_considered();
-        TaskRecord {
+        Ok(TaskRecord {
             division: if open {
                 Division::Open
             } else {
@@ -551,8 +534,12 @@ impl TaskEntry<'_> {
             cv_choice: self.origin.and_then(|o| o.choice.clone()),
             entrant: self.entrant.to_string(),
             ..t.head.record(t.metric, &self.method, errors)
-        }
-        .to_value()
+        })
+    }
+
+    /// The candidate models considered: the task's, or the caller's.
+    fn candidates_considered(&self) -> &[Model] {
+        self.origin.map_or(self.candidates, |o| &o.candidates)
     }
 }
 

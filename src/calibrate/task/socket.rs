@@ -342,21 +342,15 @@ impl SocketTask {
             authors_model,
             authors_kpis: self.kpis()?,
         };
-        let record = self.record(name, errors, scores);
+        let record = TaskRecord {
+            socket: Some(scores),
+            ..self.head.record(Metric::SocketSpreadMm, name, errors)
+        };
         Ok(SocketEntry {
             outcome,
             robot,
             record,
         })
-    }
-
-    /// `task.json` of an entry of `method` whose validation rows have the distances
-    /// `errors` from their socket's mean (mm), with every model's `scores`.
-    pub fn record(&self, method: &str, errors: Vec<Real>, scores: SocketScores) -> TaskRecord {
-        TaskRecord {
-            socket: Some(scores),
-            ..self.head.record(Metric::SocketSpreadMm, method, errors)
-        }
     }
 }
 
