@@ -1,21 +1,29 @@
 //! `calbench task TASK --method M [--models A,B,…] [--set KEY=VALUE …] --out DIR`: one entry
 //! of a fixed real-data task (docs/formats.md § 9): the task's data and split read, the one
 //! identification pipeline run on the calibration rows, scored on the validation rows; the
-//! identify outputs, `task.json` and the task file as run (`task.toml`) written.
+//! identify outputs, `task.json` and the task file as run (`task.toml`) written. A socket
+//! task (§ 9.4) identifies its calibration placement and scores every model on both.
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
+use calbench::calibrate::task::record::TASK_FILE;
+use calbench::calibrate::task::socket::{
+    load_socket_task, Placements, SocketFigures, SocketScores, SocketTask,
+};
 use calbench::calibrate::task::{task_path, Published, Task, TaskEntry, TaskRecord};
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
-use calbench::report::write_identified_with;
+use calbench::report::{write_identified_with, write_kind};
 
 use super::check_out_folder;
+
+/// The files written for a socket task.
+const SOCKET_OUTPUTS: [&str; 4] = ["identified.json", "robot.toml", "task.json", TASK_FILE];
 
 /// The files written.
 const OUTPUTS: [&str; 6] = [
@@ -24,7 +32,7 @@ const OUTPUTS: [&str; 6] = [
     "robot.toml",
     "report.md",
     "task.json",
-    calbench::calibrate::task::record::TASK_FILE,
+    TASK_FILE,
 ];
 
 /// Arguments of `calbench task`.
@@ -52,14 +60,8 @@ pub struct TaskArgs {
 /// Runs the entry and writes its folder; prints the task's figure and the published ones.
 pub fn run(args: &TaskArgs) -> Result<()> {
     let path = task_path(&args.task);
-    if let Some(t) = calbench::calibrate::task::socket::load_socket_task(&path)? {
-        let socket = super::task_socket::SocketArgs {
-            method: args.method.name,
-            options: &args.options,
-            models: !args.models.is_empty(),
-            out: &args.out,
-        };
-        return super::task_socket::run(&socket, &t);
+    if let Some(t) = load_socket_task(&path)? {
+        return run_socket(args, &t);
     }
     let task = Task::load(&path)?;
     super::guard_out(&args.out, &OUTPUTS, task.head.inputs())?;
@@ -123,7 +125,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
 
 /// Prints the entry's figure `r`, its interval and division, `on` saying where it is scored,
 /// and the folder `out` it is written to.
-pub(super) fn print_figure(r: &TaskRecord, on: &str, out: &std::path::Path) {
+fn print_figure(r: &TaskRecord, on: &str, out: &std::path::Path) {
     let ci = r
         .ci95
         .map(|[lo, hi]| format!(" (95 % interval {lo:.3} to {hi:.3})"))
@@ -140,7 +142,7 @@ pub(super) fn print_figure(r: &TaskRecord, on: &str, out: &std::path::Path) {
 }
 
 /// Prints the data's authors' figures `published`, one line each.
-pub(super) fn print_published(published: &[Published]) {
+fn print_published(published: &[Published]) {
     for p in published {
         out!(
             "  published: {} {:.3} mm ({}, {} division)",
@@ -149,5 +151,74 @@ pub(super) fn print_published(published: &[Published]) {
             p.source,
             p.division.as_str()
         );
+    }
+}
+
+/// The entry of the socket task `task` (docs/formats.md § 9.4), run by the library
+/// ([`SocketTask::entry`]), its folder written (`identified.json`, `robot.toml`, `task.json`
+/// and the task file as run); prints every model's figures on both placements beside the
+/// authors' `kpis.yaml`.
+fn run_socket(args: &TaskArgs, task: &SocketTask) -> Result<()> {
+    let (head, out, method) = (&task.head, args.out.as_path(), args.method.name);
+    super::guard_out(out, &SOCKET_OUTPUTS, head.inputs())?;
+    calbench::report::guard::guard_data_folder(out, "--out", task.data_files())?;
+    check_out_folder(out, &SOCKET_OUTPUTS)?;
+    if !args.models.is_empty() {
+        bail!(
+            "--models: {} is a socket task, which identifies the kinematic model only",
+            head.path.display()
+        );
+    }
+    let spec = super::identify::method_with_options(method, &args.options)?;
+    let e = task.entry(spec, method)?;
+    for w in e.outcome.warnings() {
+        eprintln!("warning: {}", w.spell(super::spell));
+    }
+    let files = head.files(&e.record.to_value())?;
+    write_kind(out, &e.outcome.record, &e.robot, &files)?;
+    if let Some(scores) = &e.record.socket {
+        print_scores(scores, method);
+    }
+    print_figure(&e.record, " on the validation placement", out);
+    print_published(&head.published);
+    if let Some(u) = &head.unpublished {
+        out!("  published on the validation placement: {u}");
+    }
+    if let Some(s) = &task.authors_source {
+        out!("  the authors' model and figures: {s}");
+    }
+    Ok(())
+}
+
+/// The table of every model's figures: spread (pooled) and distance error, mm, on the
+/// calibration and the validation placement.
+fn print_scores(s: &SocketScores, method: &str) {
+    let [c, v] = &s.placements;
+    out!(
+        "{:<34} {:>24} {:>24}",
+        "spread / distance error (mm)",
+        format!("calibration: {c}"),
+        format!("validation: {v}")
+    );
+    let cell = |f: Option<&SocketFigures>| {
+        f.map_or("—".to_string(), |f| {
+            format!("{:.3} / {:.3}", f.spread_mm, f.distance_error_mm)
+        })
+    };
+    let row = |label: String, p: Option<&Placements>, kpis: Option<&SocketFigures>| {
+        let cal = kpis.or(p.map(|p| &p.calibration));
+        out!(
+            "  {label:<32} {:>24} {:>24}",
+            cell(cal),
+            cell(p.map(|p| &p.validation))
+        );
+    };
+    row("nominal".into(), Some(&s.nominal), None);
+    row(format!("calbench ({method})"), Some(&s.calbench), None);
+    if let Some(a) = &s.authors_model {
+        row("the authors' calibrated model".into(), Some(a), None);
+    }
+    if let Some(k) = &s.authors_kpis {
+        row("the authors' kpis.yaml".into(), None, Some(k));
     }
 }
