@@ -303,6 +303,40 @@ impl Error {
     }
 }
 
+/// Reads calbench's file `what` (`summary.json`, `task.json`) from `de`, `path` naming it: a
+/// missing or unknown key, or one of the wrong type, is refused naming the file and the key
+/// path (`not a calbench WHAT: …`).
+pub fn read_typed<'de, T, D>(de: D, path: &std::path::Path, what: &str) -> Result<T>
+where
+    T: serde::Deserialize<'de>,
+    D: serde::Deserializer<'de>,
+{
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let key = e.path().to_string();
+        Error::file(
+            path,
+            key,
+            format!("not a calbench {what}: {}", e.into_inner()),
+        )
+    })
+}
+
+/// `v` as pretty-printed JSON with a final newline: the text of calbench's JSON files.
+pub fn json_text<T: serde::Serialize + ?Sized>(v: &T) -> Result<String> {
+    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
+    Ok(s + "\n")
+}
+
+/// Refuses the file `path` of calbench's format `found` of `what` (`summary`,
+/// `identification record`) when it is later than `reads`, the one this calbench reads.
+pub fn newer_format(path: &std::path::Path, what: &str, found: u32, reads: u32) -> Result<()> {
+    if found > reads {
+        let why = format!("{what} format {found} is newer than this calbench reads ({reads})");
+        return Err(Error::file(path, "format", why));
+    }
+    Ok(())
+}
+
 /// `place` prefixed with its 1-based line where there is one: `line 14, joints[1].a`.
 pub fn at_line(line: Option<usize>, place: impl Into<String>) -> String {
     let place = place.into();

@@ -31,6 +31,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 #[path = "common/mod.rs"]
 mod common;
 
+#[path = "docs/anchors.rs"]
+mod anchors;
 #[path = "docs/counts.rs"]
 mod counts;
 

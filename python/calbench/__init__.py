@@ -481,10 +481,10 @@ def run(
         raise SettingError('setting `precision`: expected a target such as "0.5%" or "0.002mm"')
     if shard is not None and precision is not None:
         raise SettingError("setting `precision`: not with `shard` (a shard runs its share whole)")
-    if _calbench.study_kind(_scenario(scenario)) != "monte-carlo":
-        return _run_whole(scenario, trials, seed, threads, methods, progress, shard, out, precision)
-    if shard is not None:
-        i, n = _shard(shard)
+    whole = _calbench.study_kind(_scenario(scenario)) != "monte-carlo"
+    if whole:
+        _check_whole(methods, precision, out)
+    elif shard is not None:
         if out is None:
             raise SettingError("setting `out`: a run with `shard` writes a shard folder; give out=")
         if methods:
@@ -492,34 +492,37 @@ def run(
                 "setting `shard`: not with `methods` written in Python (calbench merge "
                 "rebuilds the scenario from its text, which cannot hold them)"
             )
-        _calbench.run_shard(
+    else:
+        if out is not None:
+            raise SettingError(
+                "setting `out`: only with `shard` (write a whole run with study.write(dir))"
+            )
+        handle = _calbench.run(
             _scenario(scenario),
-            i,
-            n,
-            os.fspath(out),
             trials=_count("trials", trials),
             seed=_count("seed", seed),
             threads=_count("threads", threads),
+            methods=methods,
             progress=bool(progress),
+            precision=None if precision is None else str(precision),
         )
-        return pathlib.Path(out)
-    if out is not None:
-        raise SettingError("setting `out`: only with `shard` (write a whole run with study.write(dir))")
-    handle = _calbench.run(
+        return Study(handle)
+    # A folder written as the command line writes it: a shard of a Monte-Carlo study, or a
+    # registration or instruments study (or its shard).
+    (_calbench.run_whole if whole else _calbench.run_shard)(
         _scenario(scenario),
+        os.fspath(out),
         trials=_count("trials", trials),
         seed=_count("seed", seed),
         threads=_count("threads", threads),
-        methods=methods,
         progress=bool(progress),
-        precision=None if precision is None else str(precision),
+        shard=None if shard is None else _shard(shard),
     )
-    return Study(handle)
+    return pathlib.Path(out)
 
 
-def _run_whole(scenario, trials, seed, threads, methods, progress, shard, out, precision):
-    """:func:`run` of a registration or instruments study: its folder ``out``, written as
-    ``calbench run SCENARIO --out DIR [--shard I/N]`` writes it."""
+def _check_whole(methods, precision, out):
+    """The options :func:`run` refuses for a registration or instruments study."""
     if methods:
         raise SettingError(
             "setting `methods`: a registration or instruments study runs its own methods; "
@@ -535,16 +538,6 @@ def _run_whole(scenario, trials, seed, threads, methods, progress, shard, out, p
             "setting `out`: a registration or instruments study writes its folder (the files "
             "of `calbench run --out`); give out="
         )
-    _calbench.run_whole(
-        _scenario(scenario),
-        os.fspath(out),
-        trials=_count("trials", trials),
-        seed=_count("seed", seed),
-        threads=_count("threads", threads),
-        progress=bool(progress),
-        shard=None if shard is None else _shard(shard),
-    )
-    return pathlib.Path(out)
 
 
 def identifiability(robot, q, measure="position"):

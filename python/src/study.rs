@@ -18,7 +18,8 @@ use calbench::robot::Robot;
 use calbench::runner::run::{run_study, InMemoryRun};
 use calbench::runner::whole::run_cells_study;
 use calbench::study::kind::AnyScenario;
-use calbench::study::reporter::{Silent, Terminal};
+use calbench::study::reporter::{Reporter, Silent, Terminal};
+use calbench::study::stats::precision::Precision;
 use calbench::study::{trial, RunOptions, Shard, Study};
 
 use crate::convert::{any_scenario_of, matrix, scenario_of};
@@ -261,7 +262,7 @@ pub(crate) fn run(
 ) -> PyResult<PyRun> {
     let precision = precision
         .map(|p| {
-            calbench::study::stats::precision::Precision::parse(&p).map_err(|e| match e {
+            Precision::parse(&p).map_err(|e| match e {
                 calbench::Error::Setting { msg, .. } => {
                     setting("precision", msg.spell(crate::errors::spell))
                 }
@@ -269,11 +270,10 @@ pub(crate) fn run(
             })
         })
         .transpose()?;
+    let opts = folder_options(None, threads, progress, None, precision)?;
     let mut sc = scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
-    let env = |k: &str| std::env::var(k).ok();
-    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
     if let Some(m) = methods {
         for (label, f) in m.iter() {
             let label: String = label
@@ -290,64 +290,75 @@ pub(crate) fn run(
                 .map_err(err)?;
         }
     }
-    let opts = RunOptions {
-        threads,
-        out: None,
-        progress,
-        shard: None,
-        precision,
-    };
     let inner = py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err)?;
     Ok(PyRun { inner })
 }
 
-/// Runs shard `index`/`count` of a study into the shard folder `out`, the folder
+/// Runs shard `shard` ((i, n)) of a Monte-Carlo study into the shard folder `out`, the folder
 /// `calbench run --shard I/N --out DIR` writes, for `calbench merge` (the Python half
 /// documents the arguments). Returns the run's wall time (s).
 #[pyfunction]
-#[pyo3(signature = (scenario, index, count, out, trials = None, seed = None, threads = None,
-    progress = false))]
+#[pyo3(signature = (scenario, out, trials = None, seed = None, threads = None, progress = false,
+    shard = None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_shard(
     py: Python<'_>,
     scenario: &Bound<'_, PyAny>,
-    index: usize,
-    count: usize,
     out: PathBuf,
     trials: Option<usize>,
     seed: Option<u64>,
     threads: Option<usize>,
     progress: bool,
+    shard: Option<(usize, usize)>,
 ) -> PyResult<f64> {
-    if count == 0 || index >= count {
-        return Err(setting(
-            "shard",
-            format!("({index}, {count}) is not (i, n) with 0 ≤ i < n, e.g. (0, 8)"),
-        ));
+    if shard.is_none() {
+        return Err(setting("shard", "a shard folder is a shard's: give (i, n)"));
     }
-    let env = |k: &str| std::env::var(k).ok();
-    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
-    calbench::report::guard::guard_out(&out, "out", &[], None::<&std::path::Path>).map_err(err)?;
+    let opts = folder_options(Some(out), threads, progress, shard, None)?;
     let sc = scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
-    let opts = RunOptions {
-        threads,
-        out: Some(out),
-        progress,
-        shard: Some(Shard::parse(&format!("{index}/{count}")).map_err(err)?),
-        precision: None,
-    };
     let r = py
-        .detach(|| {
-            if progress {
-                run_study(sc, &opts, &Terminal)
-            } else {
-                run_study(sc, &opts, &Silent)
-            }
-        })
+        .detach(|| run_study(sc, &opts, reporter(progress)))
         .map_err(err)?;
     Ok(r.seconds)
+}
+
+/// The options of a run: `threads` (or the environment's), into the folder `out` (checked:
+/// it must not destroy an input) or held in memory, its share `shard` ((i, n)).
+fn folder_options(
+    out: Option<PathBuf>,
+    threads: Option<usize>,
+    progress: bool,
+    shard: Option<(usize, usize)>,
+    precision: Option<Precision>,
+) -> PyResult<RunOptions> {
+    let env = |k: &str| std::env::var(k).ok();
+    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
+    if let Some(out) = &out {
+        calbench::report::guard::guard_out(out, "out", &[], None::<&std::path::Path>)
+            .map_err(err)?;
+    }
+    let shard = shard
+        .map(|(i, n)| Shard::parse(&format!("{i}/{n}")))
+        .transpose()
+        .map_err(err)?;
+    Ok(RunOptions {
+        threads,
+        out,
+        progress,
+        shard,
+        precision,
+    })
+}
+
+/// The progress bar on a terminal's stderr, or nothing.
+fn reporter(progress: bool) -> &'static dyn Reporter {
+    if progress {
+        &Terminal
+    } else {
+        &Silent
+    }
 }
 
 /// The kind of study a scenario is: `monte-carlo`, `registration` (`[registration_study]`)
@@ -383,30 +394,11 @@ pub(crate) fn run_whole(
     progress: bool,
     shard: Option<(usize, usize)>,
 ) -> PyResult<()> {
-    let shard = shard
-        .map(|(i, n)| Shard::parse(&format!("{i}/{n}")))
-        .transpose()
-        .map_err(err)?;
-    let env = |k: &str| std::env::var(k).ok();
-    let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
-    calbench::report::guard::guard_out(&out, "out", &[], None::<&std::path::Path>).map_err(err)?;
+    let opts = folder_options(Some(out), threads, progress, shard, None)?;
     let sc = any_scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
-    let opts = RunOptions {
-        threads,
-        out: Some(out),
-        progress,
-        shard,
-        precision: None,
-    };
-    py.detach(|| {
-        if progress {
-            run_cells_study(&sc, &opts, &Terminal)
-        } else {
-            run_cells_study(&sc, &opts, &Silent)
-        }
-    })
-    .map_err(err)?;
+    py.detach(|| run_cells_study(&sc, &opts, reporter(progress)))
+        .map_err(err)?;
     Ok(())
 }

@@ -2,21 +2,24 @@
 //! method or by a method written in Python (the open division), through the identify
 //! pipeline; the entry's `task.json` text, and its folder when `out` is given.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
+use calbench::calibrate::task::record::TASK_FILE;
+use calbench::calibrate::task::socket::{load_socket_task, SocketTask};
 use calbench::calibrate::task::{task_path, Task, TaskEntry};
 use calbench::identify::{method_by_name, MethodSpec};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
 use calbench::report::write_identified_with;
 
-use crate::errors::{err, setting, ComputeError};
+use crate::errors::{err, setting};
 use crate::robot::PyRobot;
+use calbench::robot::Robot;
 
 /// Runs the task `task` (a name under `tasks/` or a task file) with `method`: a method's
 /// name, or a Python function given a `Problem` (as `run`'s `methods`), entered as
@@ -33,16 +36,12 @@ pub(crate) fn task<'py>(
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let path = task_path(task);
+    if let Some(t) = load_socket_task(&path).map_err(err)? {
+        return socket_task(py, &t, method, models, out);
+    }
     let t = Task::load(&path).map_err(err)?;
     if let Some(out) = &out {
-        calbench::report::guard::guard_out(
-            out,
-            "out",
-            &["identified.json", "task.json"],
-            t.inputs(),
-        )
-        .map_err(err)?;
-        calbench::report::guard::guard_data_folder(out, "out", t.data_files()).map_err(err)?;
+        guard(out, t.head.inputs(), t.data_files())?;
     }
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())
@@ -84,7 +83,7 @@ pub(crate) fn task<'py>(
                 origin: None,
             };
             let j = entry.json(&o, &val)?;
-            let files = entry.files(&j)?;
+            let files = t.head.files(&j.to_value())?;
             let text = files[0].1.clone();
             if let Some(out) = &out {
                 let rec = IdentifyRecord::of(&o, None);
@@ -94,13 +93,71 @@ pub(crate) fn task<'py>(
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             Ok((text, record, o.compensated()))
         })
-        .map_err(|e: calbench::Error| match e {
-            calbench::Error::Compute(m) => ComputeError::new_err(m),
-            e => err(e),
-        })?;
+        .map_err(err)?;
+    result(py, json, record, robot)
+}
+
+/// The dict `calbench.task` returns.
+fn result(
+    py: Python<'_>,
+    task: String,
+    record: String,
+    robot: Robot,
+) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
-    d.set_item("task", json)?;
+    d.set_item("task", task)?;
     d.set_item("record", record)?;
     d.set_item("robot", PyRobot { inner: robot })?;
     Ok(d)
+}
+
+/// Refuses an output folder `out` that would destroy a task's `inputs` or lie beside its
+/// data files.
+fn guard(
+    out: &Path,
+    inputs: Vec<&Path>,
+    data: impl IntoIterator<Item = impl AsRef<Path>>,
+) -> PyResult<()> {
+    let names = ["identified.json", "task.json", TASK_FILE];
+    calbench::report::guard::guard_out(out, "out", &names, inputs).map_err(err)?;
+    calbench::report::guard::guard_data_folder(out, "out", data).map_err(err)
+}
+
+/// [`task`] on a socket task (docs/formats.md § 9.4): the entry `calbench task` runs
+/// ([`SocketTask::entry`]), its folder the command line's, byte for byte. A socket task
+/// identifies the kinematic model with a calbench method by name.
+fn socket_task<'py>(
+    py: Python<'py>,
+    t: &SocketTask,
+    method: Bound<'py, PyAny>,
+    models: Option<Vec<String>>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let path = t.head.path.display();
+    let Ok(name) = method.extract::<String>() else {
+        let why = format!("{path} is a socket task, identified by a calbench method by name");
+        return Err(setting("method", why));
+    };
+    if models.is_some_and(|m| !m.is_empty()) {
+        let why = format!("{path} is a socket task, which identifies the kinematic model only");
+        return Err(setting("models", why));
+    }
+    if let Some(out) = &out {
+        guard(out, t.head.inputs(), t.data_files())?;
+    }
+    let spec = method_by_name(&name).map_err(err)?;
+    let (json, record, robot) = py
+        .detach(|| {
+            let e = t.entry(spec, &name)?;
+            let files = t.head.files(&e.record.to_value())?;
+            if let Some(out) = &out {
+                calbench::report::write_kind(out, &e.outcome.record, &e.robot, &files)?;
+            }
+            let record = serde_json::to_string(&e.outcome.record)
+                .map_err(|e| calbench::Error::Compute(e.to_string()))?;
+            let [(_, json), _] = files;
+            Ok((json, record, e.robot))
+        })
+        .map_err(err)?;
+    result(py, json, record, robot)
 }

@@ -3,6 +3,7 @@ identify pipeline, scored on the task's validation rows like the command line's 
 import json
 
 import numpy as np
+import pytest
 
 import calbench
 
@@ -41,3 +42,25 @@ def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp
     # A calbench method by name is the command line's entry.
     same = calbench.task(task, "lm")["task"]
     assert same["value"] == lm["value"] and same["division"] == "closed"
+
+
+def test_a_socket_task_runs_from_python_as_the_command_line_runs_it(root, cli, tmp_path):
+    """``calbench.task`` on a socket task (docs/formats.md § 9.4) is ``calbench task``: the
+    same folder, byte for byte, and the returned ``task`` and ``record`` are its files."""
+    task = root / "tasks" / "mukca-panda-6.toml"
+    py = calbench.task(task, "lm", out=tmp_path / "py")
+    cli("task", task, "--method", "lm", "--out", tmp_path / "cli")
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert names == ["identified.json", "robot.toml", "task.json", "task.toml"]
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == names
+    for name in names:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    j = json.loads((tmp_path / "cli" / "task.json").read_text())
+    assert py["task"] == j and j["metric"] == "socket_spread_mm" and "socket" in j
+    assert py["record"] == json.loads((tmp_path / "cli" / "identified.json").read_text())
+    assert py["robot"].joint_count == 7
+    # What a socket task does not take is refused, naming the setting.
+    with pytest.raises(calbench.SettingError, match="method.*socket task"):
+        calbench.task(task, gauss_newton)
+    with pytest.raises(calbench.SettingError, match="models.*kinematic model only"):
+        calbench.task(task, "lm", models=["kinematic", "beta"])

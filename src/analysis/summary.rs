@@ -161,29 +161,14 @@ impl Summary {
 
     /// `summary.json`'s text.
     pub fn to_json(&self) -> Result<String> {
-        let s = serde_json::to_string_pretty(&self.to_value()?)
-            .map_err(|e| Error::Compute(e.to_string()))?;
-        Ok(s + "\n")
+        crate::error::json_text(&self.to_value()?)
     }
 
     /// Reads a summary from a JSON value (`path` names it in errors): a summary of a later
     /// format than [`FORMAT`], or one that is not a calbench summary, is refused.
     pub fn from_value(v: Value, path: &Path) -> Result<Summary> {
-        let s: Summary = serde_path_to_error::deserialize(v).map_err(|e| {
-            let key = e.path().to_string();
-            let why = format!("not a calbench summary.json: {}", e.into_inner());
-            Error::file(path, key, why)
-        })?;
-        if s.format > FORMAT {
-            return Err(Error::file(
-                path,
-                "format",
-                format!(
-                    "summary format {} is newer than this calbench reads ({FORMAT})",
-                    s.format
-                ),
-            ));
-        }
+        let s: Summary = crate::error::read_typed(v, path, "summary.json")?;
+        crate::error::newer_format(path, "summary", s.format, FORMAT)?;
         Ok(s)
     }
 

@@ -351,9 +351,6 @@ pub fn implausible_warning(found: &[String]) -> Option<Said> {
     })
 }
 
-/// The key of `identified.json` listing why a kept result cannot be physically right.
-pub const ALLOWED_IMPLAUSIBLE: &str = "allowed_implausible";
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,7 +17,6 @@ use super::cv::CrossValidation;
 use super::diagnostics::Diagnostics;
 use super::validation::FileValidation;
 use super::{ErrorStats, Registration, RoundsEnd};
-use crate::error::Error;
 use crate::identify::{Identified, Termination};
 use crate::measurement::kind::Kind;
 use crate::numeric::nan;
@@ -326,18 +325,8 @@ impl IdentifiedRecord {
     /// format than [`FORMAT`] is refused naming the format.
     pub fn from_json(text: &str, path: &Path) -> crate::Result<IdentifiedRecord> {
         let mut de = serde_json::Deserializer::from_str(text);
-        let r: IdentifiedRecord = serde_path_to_error::deserialize(&mut de).map_err(|e| {
-            let key = e.path().to_string();
-            let why = format!("not a calbench identified.json: {}", e.into_inner());
-            Error::file(path, key, why)
-        })?;
-        if r.format.0 > FORMAT {
-            let why = format!(
-                "identification record format {} is newer than this calbench reads ({FORMAT})",
-                r.format.0
-            );
-            return Err(Error::file(path, "format", why));
-        }
+        let r: IdentifiedRecord = crate::error::read_typed(&mut de, path, "identified.json")?;
+        crate::error::newer_format(path, "identification record", r.format.0, FORMAT)?;
         Ok(r)
     }
 

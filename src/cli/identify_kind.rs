@@ -9,8 +9,7 @@ use anyhow::Result;
 
 use calbench::calibrate::on_kind::KindOutcome;
 use calbench::calibrate::ErrorStats;
-use calbench::report::identified::identified_json;
-use calbench::report::output::{folder, RobotToml};
+use calbench::report::write_kind;
 
 /// The files written.
 pub const OUTPUTS: [&str; 2] = ["identified.json", "robot.toml"];
@@ -21,18 +20,7 @@ pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
-    let [_, robot_file] = OUTPUTS;
-    let compensated = o.compensated();
-    folder(
-        out,
-        &[
-            &identified_json(&o.record),
-            &RobotToml {
-                name: robot_file,
-                robot: &compensated,
-            },
-        ],
-    )?;
+    write_kind(out, &o.record, &o.compensated(), &[])?;
     if let Some((before, after)) = &o.validation {
         print_validation(before, after);
     }

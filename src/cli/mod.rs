@@ -47,7 +47,6 @@ pub mod robots;
 pub mod run;
 pub mod simulate;
 pub mod task;
-pub mod task_socket;
 
 /// How the command line spells an option the library names ([`calbench::error::Opt`]):
 /// `--allow-worse`, named and turned on alike.

@@ -1,21 +1,29 @@
 //! `calbench task TASK --method M [--models A,B,…] [--set KEY=VALUE …] --out DIR`: one entry
 //! of a fixed real-data task (docs/formats.md § 9): the task's data and split read, the one
 //! identification pipeline run on the calibration rows, scored on the validation rows; the
-//! identify outputs, `task.json` and the task file as run (`task.toml`) written.
+//! identify outputs, `task.json` and the task file as run (`task.toml`) written. A socket
+//! task (§ 9.4) identifies its calibration placement and scores every model on both.
 
 use std::path::PathBuf;
 
-use anyhow::Result;
+use anyhow::{bail, Result};
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
-use calbench::calibrate::task::{task_path, Task, TaskEntry};
+use calbench::calibrate::task::record::TASK_FILE;
+use calbench::calibrate::task::socket::{
+    load_socket_task, Placements, SocketFigures, SocketScores, SocketTask,
+};
+use calbench::calibrate::task::{task_path, Published, Task, TaskEntry, TaskRecord};
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
-use calbench::report::write_identified_with;
+use calbench::report::{write_identified_with, write_kind};
 
 use super::check_out_folder;
+
+/// The files written for a socket task.
+const SOCKET_OUTPUTS: [&str; 4] = ["identified.json", "robot.toml", "task.json", TASK_FILE];
 
 /// The files written.
 const OUTPUTS: [&str; 6] = [
@@ -24,7 +32,7 @@ const OUTPUTS: [&str; 6] = [
     "robot.toml",
     "report.md",
     "task.json",
-    calbench::calibrate::task::record::TASK_FILE,
+    TASK_FILE,
 ];
 
 /// Arguments of `calbench task`.
@@ -52,17 +60,11 @@ pub struct TaskArgs {
 /// Runs the entry and writes its folder; prints the task's figure and the published ones.
 pub fn run(args: &TaskArgs) -> Result<()> {
     let path = task_path(&args.task);
-    if let Some(t) = calbench::calibrate::task::socket::load_socket_task(&path)? {
-        let socket = super::task_socket::SocketArgs {
-            method: args.method.name,
-            options: &args.options,
-            models: !args.models.is_empty(),
-            out: &args.out,
-        };
-        return super::task_socket::run(&socket, &t);
+    if let Some(t) = load_socket_task(&path)? {
+        return run_socket(args, &t);
     }
     let task = Task::load(&path)?;
-    super::guard_out(&args.out, &OUTPUTS, task.inputs())?;
+    super::guard_out(&args.out, &OUTPUTS, task.head.inputs())?;
     calbench::report::guard::guard_data_folder(&args.out, "--out", task.data_files())?;
     check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
@@ -84,7 +86,8 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let j = entry.json(&o, &val)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
-    write_identified_with(&args.out, &record, &additions(&o), &entry.files(&j)?)?;
+    let files = task.head.files(&j.to_value())?;
+    write_identified_with(&args.out, &record, &additions(&o), &files)?;
     if let Some(c) = &origin.choice {
         out!(
             "  the task's candidates, {}-fold CV repeated over fold seeds {:?}:",
@@ -112,36 +115,110 @@ pub fn run(args: &TaskArgs) -> Result<()> {
             );
         }
     }
-    let ci = j["ci95"]
-        .as_array()
-        .map(|c| {
-            format!(
-                " (95 % interval {:.3} to {:.3})",
-                c[0].as_f64().unwrap_or(f64::NAN),
-                c[1].as_f64().unwrap_or(f64::NAN)
-            )
-        })
+    print_figure(&j, "", &args.out);
+    print_published(&task.head.published);
+    if let Some(u) = &task.head.unpublished {
+        out!("  published: {u}");
+    }
+    Ok(())
+}
+
+/// Prints the entry's figure `r`, its interval and division, `on` saying where it is scored,
+/// and the folder `out` it is written to.
+fn print_figure(r: &TaskRecord, on: &str, out: &std::path::Path) {
+    let ci = r
+        .ci95
+        .map(|[lo, hi]| format!(" (95 % interval {lo:.3} to {hi:.3})"))
         .unwrap_or_default();
     out!(
-        "{} {}: {} = {:.3} mm{ci}, {} division; written to {}",
-        task.name,
-        args.method.name,
-        task.metric.as_str(),
-        j["value"].as_f64().unwrap_or(f64::NAN),
-        j["division"].as_str().unwrap_or(""),
-        args.out.display()
+        "{} {}: {} = {:.3} mm{ci}{on}, {} division; written to {}",
+        r.task,
+        r.method,
+        r.metric.as_str(),
+        r.value,
+        r.division.as_str(),
+        out.display()
     );
-    for p in &task.published {
+}
+
+/// Prints the data's authors' figures `published`, one line each.
+fn print_published(published: &[Published]) {
+    for p in published {
         out!(
             "  published: {} {:.3} mm ({}, {} division)",
             p.label,
             p.value,
             p.source,
-            serde_json::to_value(p.division)?.as_str().unwrap_or("")
+            p.division.as_str()
         );
     }
-    if let Some(u) = &task.unpublished {
-        out!("  published: {u}");
+}
+
+/// The entry of the socket task `task` (docs/formats.md § 9.4), run by the library
+/// ([`SocketTask::entry`]), its folder written (`identified.json`, `robot.toml`, `task.json`
+/// and the task file as run); prints every model's figures on both placements beside the
+/// authors' `kpis.yaml`.
+fn run_socket(args: &TaskArgs, task: &SocketTask) -> Result<()> {
+    let (head, out, method) = (&task.head, args.out.as_path(), args.method.name);
+    super::guard_out(out, &SOCKET_OUTPUTS, head.inputs())?;
+    calbench::report::guard::guard_data_folder(out, "--out", task.data_files())?;
+    check_out_folder(out, &SOCKET_OUTPUTS)?;
+    if !args.models.is_empty() {
+        bail!(
+            "--models: {} is a socket task, which identifies the kinematic model only",
+            head.path.display()
+        );
+    }
+    let spec = super::identify::method_with_options(method, &args.options)?;
+    let e = task.entry(spec, method)?;
+    for w in e.outcome.warnings() {
+        eprintln!("warning: {}", w.spell(super::spell));
+    }
+    let files = head.files(&e.record.to_value())?;
+    write_kind(out, &e.outcome.record, &e.robot, &files)?;
+    if let Some(scores) = &e.record.socket {
+        print_scores(scores, method);
+    }
+    print_figure(&e.record, " on the validation placement", out);
+    print_published(&head.published);
+    if let Some(u) = &head.unpublished {
+        out!("  published on the validation placement: {u}");
+    }
+    if let Some(s) = &task.authors_source {
+        out!("  the authors' model and figures: {s}");
     }
     Ok(())
+}
+
+/// The table of every model's figures: spread (pooled) and distance error, mm, on the
+/// calibration and the validation placement.
+fn print_scores(s: &SocketScores, method: &str) {
+    let [c, v] = &s.placements;
+    out!(
+        "{:<34} {:>24} {:>24}",
+        "spread / distance error (mm)",
+        format!("calibration: {c}"),
+        format!("validation: {v}")
+    );
+    let cell = |f: Option<&SocketFigures>| {
+        f.map_or("—".to_string(), |f| {
+            format!("{:.3} / {:.3}", f.spread_mm, f.distance_error_mm)
+        })
+    };
+    let row = |label: String, p: Option<&Placements>, kpis: Option<&SocketFigures>| {
+        let cal = kpis.or(p.map(|p| &p.calibration));
+        out!(
+            "  {label:<32} {:>24} {:>24}",
+            cell(cal),
+            cell(p.map(|p| &p.validation))
+        );
+    };
+    row("nominal".into(), Some(&s.nominal), None);
+    row(format!("calbench ({method})"), Some(&s.calbench), None);
+    if let Some(a) = &s.authors_model {
+        row("the authors' calibrated model".into(), Some(a), None);
+    }
+    if let Some(k) = &s.authors_kpis {
+        row("the authors' kpis.yaml".into(), None, Some(k));
+    }
 }

@@ -92,20 +92,32 @@ pub fn write_identified_with(
     more: &identified::Additions,
     files: &[(&str, String)],
 ) -> crate::Result<()> {
-    let mut outputs: output::Outputs<'_> = files
-        .iter()
-        .map(|(name, text)| {
-            Box::new(output::Text {
-                name,
-                text: text.clone(),
-            }) as Box<dyn Output>
-        })
-        .collect();
+    let mut outputs = output::texts(files);
     outputs.extend(identified::outputs(r, more)?);
     outputs.push(Box::new(output::FromFolder {
         name: "report.html",
         make: Box::new(|dir| Ok(html::identify::page(dir, r, more)?.finish())),
     }));
+    output::folder_of(out, &outputs)
+}
+
+/// Writes the output folder of an identification on a kind file as a whole ([`atomically`]):
+/// `identified.json` of `record`, `robot.toml` of the compensated `robot`, and the `files`
+/// (name, text) beside them (a socket task's `task.json` and `task.toml`).
+pub fn write_kind(
+    out: &std::path::Path,
+    record: &crate::calibrate::record::IdentifiedRecord,
+    robot: &crate::robot::Robot,
+    files: &[(&str, String)],
+) -> crate::Result<()> {
+    let mut outputs: output::Outputs<'_> = vec![
+        Box::new(identified::identified_json(record)),
+        Box::new(output::RobotToml {
+            name: "robot.toml",
+            robot,
+        }),
+    ];
+    outputs.extend(output::texts(files));
     output::folder_of(out, &outputs)
 }
 

@@ -70,6 +70,17 @@ pub fn file_names<'o, O: std::borrow::Borrow<dyn Output + 'o>>(outputs: &[O]) ->
     names
 }
 
+/// A [`Text`] output of each (name, text) of `files`.
+pub fn texts<'a>(files: &'a [(&str, String)]) -> Outputs<'a> {
+    let text = |(name, text): &'a (&str, String)| {
+        Box::new(Text {
+            name,
+            text: text.clone(),
+        }) as Box<dyn Output>
+    };
+    files.iter().map(text).collect()
+}
+
 /// Writes `text` at `path`.
 pub(crate) fn text(path: &Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::io(path, e))
@@ -281,11 +292,7 @@ impl Output for Bytes<'_> {
     }
 }
 
-/// `v` as pretty-printed JSON with a final newline: the text of the JSON files.
-pub fn json_text(v: &Value) -> Result<String> {
-    let s = serde_json::to_string_pretty(v).map_err(|e| Error::Compute(e.to_string()))?;
-    Ok(s + "\n")
-}
+pub use crate::error::json_text;
 
 /// A JSON document, pretty-printed with a final newline ([`json_text`]).
 pub struct Json<'a> {

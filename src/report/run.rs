@@ -404,13 +404,14 @@ pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
         "headline_rms",
         "validation RMS after compensation per method and pose strategy, with the 95 % interval of each mean",
         move |p| {
-            plots::grouped_bars_with_intervals(
+            plots::grouped_bars_with_floor(
                 p,
                 "Validation RMS after compensation",
                 "RMS (mm) with its 95 % interval",
                 &entries,
                 &rms,
                 &rms_ci,
+                None,
             )
         },
     ));

@@ -60,15 +60,8 @@ impl Record {
         v: Value,
         scenario: Option<&Path>,
     ) -> Result<Record> {
-        let not = |e: serde_path_to_error::Error<serde_json::Error>| {
-            let key = e.path().to_string();
-            let why = format!(
-                "not the summary.json of a registration or instruments study: {}",
-                e.into_inner()
-            );
-            Error::file(path, key, why)
-        };
-        let w: Whole = serde_path_to_error::deserialize(v).map_err(not)?;
+        let what = "summary.json of a registration or instruments study";
+        let w: Whole = crate::error::read_typed(v, path, what)?;
         let run = (w.scenario.as_str(), Some(w.trials), Some(w.seed));
         let (text, named) = scenario_as_run(dir, run, scenario)?;
         super::folder::check_ran(path, (&w.scenario, Some(w.seed)), &named)?;

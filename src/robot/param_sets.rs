@@ -73,14 +73,3 @@ pub fn full_params(robot: &Robot, measure: Measure, with_base: bool) -> Vec<Para
     v.sort_by_key(|p| p.index(robot.dof()));
     v
 }
-
-/// The parameters of `params` that pivoted QR finds identifiable over generic poses, in
-/// flat-vector order: the model a pose optimiser scores. The separation works block by block
-/// and leaves dependencies between blocks (Guo's own separated model keeps a GCN of
-/// 2.2749e18); on a rank-deficient Jacobian every observability index is zero (eqs. 9–15),
-/// which would leave the optimisers nothing to compare.
-pub fn optimisable(robot: &Robot, params: &[Param], measure: Measure) -> Vec<Param> {
-    let mut v = identifiable_generic(robot, params, measure);
-    v.sort_by_key(|p| p.index(robot.dof()));
-    v
-}

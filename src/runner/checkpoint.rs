@@ -87,8 +87,8 @@ pub struct Checkpoint {
 fn write_meta(dir: &Path, meta: &Meta) -> Result<()> {
     let path = dir.join("checkpoint.json");
     let tmp = dir.join("checkpoint.json.tmp");
-    let text = serde_json::to_string_pretty(meta).map_err(|e| Error::Compute(e.to_string()))?;
-    std::fs::write(&tmp, text + "\n").map_err(|e| Error::io(&tmp, e))?;
+    let text = crate::error::json_text(meta)?;
+    std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
     std::fs::rename(&tmp, &path).map_err(|e| Error::io(&path, e))
 }
 

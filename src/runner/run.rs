@@ -33,10 +33,7 @@ pub fn run_study(
     opts: &RunOptions,
     reporter: &dyn Reporter,
 ) -> Result<RunResult> {
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    let out = opts.out_or(&scenario.name);
     crate::report::guard::guard_folder(&out, "out")?;
     let cp = Checkpoint::start(
         &AnyScenario::MonteCarlo(scenario.clone()),
@@ -245,10 +242,7 @@ pub fn run_resumed(
     reporter: &dyn Reporter,
 ) -> Result<RunResult> {
     let t0 = std::time::Instant::now();
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("results").join(&scenario.name));
+    let out = opts.out_or(&scenario.name);
     let plans = scenario.sweep_plans()?;
     let trials = scenario.trials as u64;
     let total = plans.len() as u64 * trials;

@@ -121,11 +121,9 @@ impl Records {
             machine: Some(Machine::here()),
             blocks,
         };
-        let text =
-            serde_json::to_string_pretty(&meta).map_err(|e| Error::Compute(e.to_string()))?;
         let meta = Text {
             name: "shard.json",
-            text: text + "\n",
+            text: crate::error::json_text(&meta)?,
         };
         Ok(vec![Box::new(records), Box::new(meta)])
     }

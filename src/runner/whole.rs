@@ -127,10 +127,7 @@ pub fn run_cells_study(
     opts: &RunOptions,
     reporter: &dyn Reporter,
 ) -> Result<String> {
-    let out = opts
-        .out
-        .clone()
-        .unwrap_or_else(|| Path::new("results").join(sc.name()));
+    let out = opts.out_or(sc.name());
     let cp = Checkpoint::start(sc, opts.shard, None, &out, reporter)?;
     dispatch(sc, opts, &out, cp, None, reporter)
 }

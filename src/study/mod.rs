@@ -109,6 +109,14 @@ pub struct RunOptions {
     pub precision: Option<stats::precision::Precision>,
 }
 
+impl RunOptions {
+    /// The output folder of the run of the scenario `name`: `out`, else `results/<name>/`.
+    pub fn out_or(&self, name: &str) -> PathBuf {
+        let default = || std::path::Path::new("results").join(name);
+        self.out.clone().unwrap_or_else(default)
+    }
+}
+
 /// A fixed calibration pose set as the reports show it.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct FixedInfo {

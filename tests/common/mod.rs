@@ -225,7 +225,8 @@ pub fn scenario_claims(path: &Path) -> Vec<(calbench::study::claims::Claim, Stri
 
 /// Starts `calbench ARGS` (a run writing to `out`), waits until its checkpoint holds a
 /// finished trial (at most `limit_s` seconds), kills it (SIGKILL) and returns the path of the
-/// checkpoint's `checkpoint.json`.
+/// checkpoint's `checkpoint.json`. A run that ends before, or outlives the limit, fails the
+/// test at once, naming which.
 pub fn kill_once_checkpointed(args: &[&str], out: &Path, limit_s: u64) -> PathBuf {
     let name = out.file_name().unwrap().to_str().unwrap();
     let meta = out
@@ -239,10 +240,17 @@ pub fn kill_once_checkpointed(args: &[&str], out: &Path, limit_s: u64) -> PathBu
         .unwrap();
     let t0 = std::time::Instant::now();
     while !std::fs::read_to_string(&meta).is_ok_and(|t| !t.contains("\"done\": 0,")) {
-        assert!(
-            t0.elapsed().as_secs() < limit_s,
-            "no checkpoint after {limit_s} s"
-        );
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!(
+                "the run ended ({status}) before a checkpoint with a trial done was seen at {}",
+                meta.display()
+            );
+        }
+        if t0.elapsed().as_secs() >= limit_s {
+            child.kill().unwrap();
+            child.wait().unwrap();
+            panic!("no checkpoint after {limit_s} s");
+        }
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
     child.kill().unwrap();

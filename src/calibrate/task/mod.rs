@@ -6,19 +6,19 @@
 
 mod canonical;
 mod entry;
-mod published;
+mod head;
 pub mod record;
 pub mod sha256;
 pub mod socket;
 pub mod split;
 
 pub use entry::{shared_rows, EntryModels};
+pub use head::TaskHead;
 pub use record::{TaskRecord, TASK_FILE};
 
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
-use serde_json::Value;
 
 use super::cv::Model;
 use super::pipeline::TrackerOutcome;
@@ -31,30 +31,18 @@ use crate::measurement::import::{import_text, Mapping};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
 use crate::robot::Robot;
-use canonical::{place_of, task_hash};
+use head::TaskFile;
 pub use split::Split;
 
-/// The hash of `text`, the task file `path` with the files it names taken from `dir`, a
-/// socket task's or a tracker's, and the files it fixes as a refusal lists them.
-pub fn hash_of(text: &str, path: &Path, dir: &Path) -> Result<(String, Vec<String>)> {
-    if let Some(t) = socket::parse_socket_task(text.to_string(), path, dir)? {
-        let files = t.inputs().into_iter().skip(1);
-        return Ok((
-            t.hash.clone(),
-            files.map(|p| p.display().to_string()).collect(),
-        ));
-    }
-    let task = Task::parse(text.to_string(), path, dir)?;
-    let mut fixed = vec![
-        format!("robot {}", task.robot.display()),
-        format!("mapping {}", task.mapping.display()),
-    ];
-    fixed.extend(
-        task.data
-            .files()
-            .map(|(k, p)| format!("{k} {}", p.display())),
-    );
-    Ok((task.hash, fixed))
+/// The head of `text`, the task file `path` with the files it names taken from `dir`, a
+/// socket task's or a tracker's.
+pub fn head_of(text: &str, path: &Path, dir: &Path) -> Result<TaskHead> {
+    Ok(
+        match socket::parse_socket_task(text.to_string(), path, dir)? {
+            Some(t) => t.head,
+            None => Task::parse(text.to_string(), path, dir)?.head,
+        },
+    )
 }
 
 /// The `format` of `task.json`.
@@ -215,29 +203,15 @@ pub enum TaskData {
 /// A task, read and checked.
 #[derive(Clone, Debug)]
 pub struct Task {
-    /// The task's name: its file's stem.
-    pub name: String,
-    /// The task file.
-    pub path: PathBuf,
-    /// Its text as read (an entry's folder carries it as `task.toml`).
-    pub text: String,
-    /// SHA-256 of its canonical text and of the bytes of every file it fixes (data, split,
-    /// mapping, robot; docs/formats.md § 9.3), hex.
-    pub hash: String,
-    /// What the task is.
-    pub title: String,
-    /// The nominal robot file.
-    pub robot: PathBuf,
+    /// Its name, file, text, hash, title, robot, fixed files and published figures (the
+    /// files fixed: robot, mapping, data, split).
+    pub head: TaskHead,
     /// The mapping that reads the data files (docs/formats.md § 6).
     pub mapping: PathBuf,
     /// The ranking metric.
     pub metric: Metric,
     /// The data and the split.
     pub data: TaskData,
-    /// The data's authors' figures.
-    pub published: Vec<Published>,
-    /// Why there is no published figure.
-    pub unpublished: Option<String>,
     /// The candidate models the task fixes, if it does.
     pub models: Option<TaskModels>,
 }
@@ -272,14 +246,6 @@ impl TaskData {
 }
 
 impl Task {
-    /// Every file the task reads: the task file, the nominal robot, the mapping, the data
-    /// file(s) and the split (what an output folder must not destroy, [`crate::report::guard`]).
-    pub fn inputs(&self) -> Vec<&Path> {
-        let mut files = vec![self.path.as_path(), &self.robot, &self.mapping];
-        files.extend(self.data_files());
-        files
-    }
-
     /// The task's data: its data file and split, or its calibration and validation files
     /// (what its outputs must not lie beside, [`crate::report::guard::guard_data_folder`]).
     pub fn data_files(&self) -> [&Path; 2] {
@@ -298,19 +264,10 @@ impl Task {
     /// relative to the folder `dir`: a task file an entry's folder carries ([`TASK_FILE`]),
     /// whose files lie beside the task file it was copied from.
     pub fn parse(text: String, path: &Path, dir: &Path) -> Result<Task> {
-        let table: toml::Table = toml::from_str(&text)
-            .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
-        let keys: TaskKeys = toml::from_str(&text)
-            .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
-        let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
-        let file = |key: &str, rel: &str| -> Result<PathBuf> {
-            let p = dir.join(rel);
-            if p.is_file() {
-                Ok(p)
-            } else {
-                Err(bad(key, format!("{} is not a file", p.display())))
-            }
-        };
+        let tf = TaskFile::new(text, path, dir)?;
+        let keys: TaskKeys = tf.keys()?;
+        let bad = |key: &str, msg: String| tf.bad(key, msg);
+        let file = |key: &str, rel: &str| tf.file(key, rel);
         let d = &keys.data;
         let data = match (&d.file, &d.split, &d.calibration, &d.validation) {
             (Some(f), Some(s), None, None) => {
@@ -338,7 +295,6 @@ impl Task {
             let msg = "`socket_spread_mm` scores a socket task ([sockets], § 9.4)";
             return Err(bad("metric", msg.into()));
         }
-        published::check_published(&keys.published, &keys.unpublished, &bad)?;
         let models = match &keys.models {
             None => None,
             Some(m) => {
@@ -374,35 +330,23 @@ impl Task {
                 })
             }
         };
-        let name = path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("task")
-            .to_string();
         let robot = file("robot", &keys.robot)?;
         let mapping = file("mapping", &keys.mapping)?;
-        let mut fixed: Vec<(&str, &Path)> = vec![("mapping", &mapping), ("robot", &robot)];
-        fixed.extend(data.files());
-        let hash = task_hash(&table, fixed)?;
+        let mut fixed = vec![("mapping".to_string(), mapping.clone())];
+        fixed.extend(data.files().map(|(k, p)| (k.to_string(), p.to_path_buf())));
+        let published = (keys.published, keys.unpublished);
         Ok(Task {
-            name,
-            path: path.to_path_buf(),
-            text,
-            hash,
-            title: keys.title,
-            robot,
+            head: tf.head(keys.title, robot, fixed, published)?,
             mapping,
             metric: keys.metric,
             data,
-            published: keys.published,
-            unpublished: keys.unpublished,
             models,
         })
     }
 
     /// The nominal robot.
     pub fn load_robot(&self) -> Result<Robot> {
-        crate::robot::builtin::load(&self.robot.to_string_lossy())
+        crate::robot::builtin::load(&self.head.robot.to_string_lossy())
     }
 
     /// The calibration and the validation measurements, read through the mapping; the split
@@ -417,7 +361,7 @@ impl Task {
                     "{} joint columns for the {}-joint robot {}",
                     mapping.joints.columns.len(),
                     robot.dof(),
-                    self.robot.display()
+                    self.head.robot.display()
                 ),
             ));
         }
@@ -474,7 +418,7 @@ impl Task {
             String::new()
         };
         Error::file(
-            &self.path,
+            &self.head.path,
             "data",
             format!(
                 "{} validation row(s) repeat a calibration row (the same joint values and \
@@ -561,8 +505,10 @@ impl TaskEntry<'_> {
     }
 
     /// `task.json` of the entry whose identification is `outcome`, scored on the validation
-    /// rows `val` (docs/formats.md § 9.3).
-    pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<Value> {
+    /// rows `val` (docs/formats.md § 9.3): its figure and interval the task's metric of their
+    /// position errors, in the open division for a model beyond the kinematic one or a method
+    /// not calbench's.
+    pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<TaskRecord> {
         let errors: Vec<Real> = residual_vectors(&outcome.calibrated, val)?
             .iter()
             .map(|v| v.norm())
@@ -573,47 +519,27 @@ impl TaskEntry<'_> {
             None => Self::model_terms(outcome, self.candidates),
         };
         let open = !kinematic || self.entrant != "calbench";
-        Ok(self.record(errors, models, open))
-    }
-
-    /// The candidate models considered: the task's, or the caller's.
-    fn candidates_considered(&self) -> &[Model] {
-        self.origin.map_or(self.candidates, |o| &o.candidates)
-    }
-
-    /// `task.json` of an entry whose validation rows have the position errors `errors` (mm;
-    /// its figure and interval the task's metric of them), with the model terms `models`, in
-    /// the open division or not.
-    pub fn record(&self, errors: Vec<Real>, models: Vec<String>, open: bool) -> Value {
         let t = self.task;
-        let (value, ci) = t.metric.of(&errors);
         let considered = self.candidates_considered();
-        TaskRecord {
-            format: TASK_FORMAT.into(),
-            task: t.name.clone(),
-            task_hash: t.hash.clone(),
-            metric: t.metric,
-            value,
-            ci95: ci,
+        Ok(TaskRecord {
             division: if open {
                 Division::Open
             } else {
                 Division::Closed
             },
-            method: self.method.to_string(),
             models,
             chosen_by: if considered.len() > 1 { "cv" } else { "given" }.into(),
             candidates: considered.iter().map(Model::name).collect(),
             candidates_fixed_by: Some(self.origin.map_or("caller", |o| o.fixed_by).into()),
             cv_choice: self.origin.and_then(|o| o.choice.clone()),
             entrant: self.entrant.to_string(),
-            calbench_version: Some(env!("CARGO_PKG_VERSION").into()),
-            git_commit: record::git_commit(t.path.parent().unwrap_or(Path::new("."))),
-            published: t.published.clone(),
-            validation_errors_mm: errors,
-            socket: None,
-        }
-        .to_value()
+            ..t.head.record(t.metric, &self.method, errors)
+        })
+    }
+
+    /// The candidate models considered: the task's, or the caller's.
+    fn candidates_considered(&self) -> &[Model] {
+        self.origin.map_or(self.candidates, |o| &o.candidates)
     }
 }
 

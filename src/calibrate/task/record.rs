@@ -7,7 +7,7 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::{Division, Metric, Published, TaskEntry, TASK_FORMAT};
+use super::{Division, Metric, Published, TASK_FORMAT};
 use crate::calibrate::cv::RepeatedChoice;
 use crate::error::{Error, Result};
 use crate::numeric::nan;
@@ -124,19 +124,6 @@ fn calbench() -> String {
 
 /// The name of the task file as an entry's folder carries it.
 pub const TASK_FILE: &str = "task.toml";
-
-impl TaskEntry<'_> {
-    /// The files an entry's folder holds beside the identify outputs: `task.json` (the
-    /// entry's `json`) and the task file it ran, as read ([`TASK_FILE`]), as a run folder
-    /// holds the scenario it ran.
-    pub fn files(&self, json: &Value) -> Result<[(&'static str, String); 2]> {
-        let text = serde_json::to_string_pretty(json).map_err(|e| Error::Compute(e.to_string()))?;
-        Ok([
-            ("task.json", text + "\n"),
-            (TASK_FILE, self.task.text.clone()),
-        ])
-    }
-}
 
 /// The `[[published]]` rows of the task file `text` (read from `path`).
 fn published_of(text: &str, path: &Path) -> Result<Vec<Published>> {
@@ -274,7 +261,8 @@ impl TaskRecord {
         (task_text, task_path): (&str, &Path),
         dir: &Path,
     ) -> Result<()> {
-        let (hash, fixed) = super::hash_of(task_text, task_path, dir)?;
+        let head = super::head_of(task_text, task_path, dir)?;
+        let (fixed, hash) = (head.fixed_shown(), head.hash);
         if hash == self.task_hash {
             return Ok(());
         }
@@ -301,25 +289,21 @@ impl TaskRecord {
     /// Reads the `task.json` value `v` of the file `path`, refusing, naming the file and the
     /// key, a key of the wrong type, a missing or unknown one, and another format.
     pub fn from_value(v: Value, path: &Path) -> Result<TaskRecord> {
-        let format = v.get("format").cloned();
-        if let Some(f) = format.filter(|f| f.as_str() != Some(TASK_FORMAT)) {
-            return Err(Error::file(
-                path,
-                "format",
-                format!(
-                    "is {f}: this calbench reads task.json of format \"{TASK_FORMAT}\" only \
-                     (a later format is written by a later calbench)"
-                ),
-            ));
+        if let Some(f) = v.get("format").filter(|f| f.as_str() != Some(TASK_FORMAT)) {
+            // `calbench-task-N`: a later N is a later calbench's; anything else none of its.
+            let n = f.as_str().and_then(|f| f.strip_prefix("calbench-task-"));
+            match n.and_then(|n| n.parse::<u32>().ok()).filter(|&n| n > 1) {
+                Some(n) => crate::error::newer_format(path, "task.json", n, 1)?,
+                None => {
+                    return Err(Error::file(
+                        path,
+                        "format",
+                        format!("not a calbench task.json: {f}"),
+                    ))
+                }
+            }
         }
-        serde_path_to_error::deserialize(v).map_err(|e| {
-            let key = e.path().to_string();
-            Error::file(
-                path,
-                key,
-                format!("not a calbench task.json: {}", e.into_inner()),
-            )
-        })
+        crate::error::read_typed(v, path, "task.json")
     }
 }
 

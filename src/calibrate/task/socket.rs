@@ -11,9 +11,14 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
+use super::head::{TaskFile, TaskHead};
 pub use super::record::{Placements, SocketFigures, SocketScores};
-use super::{place_of, task_hash, Metric, Published, TaskRecord, TASK_FORMAT};
+use super::{Metric, Published, TaskRecord};
+use crate::calibrate::on_kind::KindOutcome;
+use crate::calibrate::pipeline::IdentifyOutcome;
+use crate::calibrate::request::{IdentifyData, IdentifyRequest};
 use crate::error::{Error, Result};
+use crate::identify::MethodSpec;
 use crate::measurement::kind::{Instrument, KindData};
 use crate::measurement::kind_csv::{read_kind_text, KindFile};
 use crate::numeric::Real;
@@ -59,18 +64,10 @@ struct AuthorKeys {
 /// A socket task, read and checked.
 #[derive(Clone, Debug)]
 pub struct SocketTask {
-    /// The task's name: its file's stem.
-    pub name: String,
-    /// The task file.
-    pub path: PathBuf,
-    /// Its text as read.
-    pub text: String,
-    /// SHA-256 of its canonical text and of every file it fixes, hex (§ 9.3).
-    pub hash: String,
-    /// What the task is.
-    pub title: String,
-    /// The nominal robot (a URDF or a robot file).
-    pub robot: PathBuf,
+    /// Its name, file, text, hash, title, nominal robot (a URDF or a robot file), fixed
+    /// files (the robot, the joint files, the authors' model and figures) and published
+    /// figures on the validation placement.
+    pub head: TaskHead,
     /// The URDF's tip link.
     pub tip: Option<String>,
     /// The parameters held at their nominal values.
@@ -87,10 +84,17 @@ pub struct SocketTask {
     pub authors_kpis: Option<PathBuf>,
     /// Where the authors' model and figures come from.
     pub authors_source: Option<String>,
-    /// The data's authors' figures on the validation placement, in the task's metric.
-    pub published: Vec<Published>,
-    /// Why there are none.
-    pub unpublished: Option<String>,
+}
+
+/// An entry of a socket task: its identification, the compensated robot and its
+/// `task.json`, every model scored on both placements.
+pub struct SocketEntry {
+    /// The identification on the calibration placement.
+    pub outcome: Box<KindOutcome>,
+    /// The compensated robot (`robot.toml`).
+    pub robot: Robot,
+    /// Its `task.json`, with every model's scores.
+    pub record: TaskRecord,
 }
 
 /// Reads the task file `path` as a socket task when it has a `[sockets]` table; `None`
@@ -103,22 +107,13 @@ pub fn load_socket_task(path: &Path) -> Result<Option<SocketTask>> {
 /// Reads `text`, the task file `path`, as a socket task when it has a `[sockets]` table, the
 /// files it names taken from `dir` (`None` without the table).
 pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option<SocketTask>> {
-    let table: toml::Table = toml::from_str(&text)
-        .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
-    if !table.contains_key("sockets") {
+    let tf = TaskFile::new(text, path, dir)?;
+    if !tf.table.contains_key("sockets") {
         return Ok(None);
     }
-    let keys: SocketTaskKeys = toml::from_str(&text)
-        .map_err(|e| Error::file(path, place_of(&text, &e), e.message().trim_end()))?;
-    let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
-    let file = |key: &str, rel: &str| -> Result<PathBuf> {
-        let p = dir.join(rel);
-        if p.is_file() {
-            Ok(p)
-        } else {
-            Err(bad(key, format!("{} is not a file", p.display())))
-        }
-    };
+    let keys: SocketTaskKeys = tf.keys()?;
+    let bad = |key: &str, msg: String| tf.bad(key, msg);
+    let file = |key: &str, rel: &str| tf.file(key, rel);
     if keys.metric != Metric::SocketSpreadMm {
         return Err(bad(
             "metric",
@@ -165,7 +160,6 @@ pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option
             "a file of the calibration placement: a validation row must not calibrate".into(),
         ));
     }
-    super::published::check_published(&keys.published, &keys.unpublished, &bad)?;
     let mut fix = Vec::with_capacity(keys.fix.len());
     for (i, f) in keys.fix.iter().enumerate() {
         let p = Param::parse(f.trim()).ok_or_else(|| {
@@ -191,62 +185,32 @@ pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option
             Some(a.source.clone()),
         ),
     };
-    let mut fixed: Vec<(String, &Path)> = vec![("robot".into(), &robot)];
+    let mut fixed: Vec<(String, PathBuf)> = Vec::new();
     for (key, list) in [
         ("sockets.calibration", &calibration),
         ("sockets.validation", &validation),
     ] {
-        fixed.extend(
-            list.iter()
-                .enumerate()
-                .map(|(i, p)| (format!("{key}[{i}]"), p.as_path())),
-        );
+        let keyed = list.iter().enumerate();
+        fixed.extend(keyed.map(|(i, p)| (format!("{key}[{i}]"), p.clone())));
     }
-    fixed.extend(
-        authors_model
-            .as_deref()
-            .map(|p| ("authors.model".into(), p)),
-    );
-    fixed.extend(authors_kpis.as_deref().map(|p| ("authors.kpis".into(), p)));
-    let hash = task_hash(
-        &table,
-        fixed.iter().map(|(k, p)| (k.as_str(), *p)).collect(),
-    )?;
-    let task = SocketTask {
-        name: path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("task")
-            .to_string(),
-        path: path.to_path_buf(),
-        hash,
-        title: keys.title,
-        robot,
+    fixed.extend(authors_model.clone().map(|p| ("authors.model".into(), p)));
+    fixed.extend(authors_kpis.clone().map(|p| ("authors.kpis".into(), p)));
+    let distances_mm = d.clone();
+    let published = (keys.published, keys.unpublished);
+    Ok(Some(SocketTask {
+        head: tf.head(keys.title, robot, fixed, published)?,
         tip: keys.tip,
         fix,
-        distances_mm: d.clone(),
+        distances_mm,
         calibration,
         validation,
         authors_model,
         authors_kpis,
         authors_source,
-        published: keys.published,
-        unpublished: keys.unpublished,
-        text,
-    };
-    Ok(Some(task))
+    }))
 }
 
 impl SocketTask {
-    /// Every file the task reads (what an output folder must not destroy).
-    pub fn inputs(&self) -> Vec<&Path> {
-        let mut v = vec![self.path.as_path(), &self.robot];
-        v.extend(self.data_files());
-        v.extend(self.authors_model.as_deref());
-        v.extend(self.authors_kpis.as_deref());
-        v
-    }
-
     /// The joint files of both placements (what its outputs must not lie beside).
     pub fn data_files(&self) -> Vec<&Path> {
         self.calibration
@@ -267,7 +231,7 @@ impl SocketTask {
 
     /// The nominal robot.
     pub fn load_robot(&self) -> Result<Robot> {
-        self.load_model(&self.robot)
+        self.load_model(&self.head.robot)
     }
 
     /// The placement of `files` as one socket file for `robot`: the i-th file's rows are
@@ -337,31 +301,56 @@ impl SocketTask {
         self.authors_kpis.as_deref().map(read_kpis).transpose()
     }
 
-    /// `task.json` of an entry of `method` whose validation rows have the distances
-    /// `errors` from their socket's mean (mm), with every model's `scores`.
-    pub fn record(&self, method: &str, errors: Vec<Real>, scores: SocketScores) -> TaskRecord {
-        let (value, ci95) = Metric::SocketSpreadMm.of(&errors);
-        TaskRecord {
-            format: TASK_FORMAT.into(),
-            task: self.name.clone(),
-            task_hash: self.hash.clone(),
-            metric: Metric::SocketSpreadMm,
-            value,
-            ci95,
-            division: super::Division::Closed,
-            method: method.into(),
-            models: vec!["kinematic".into()],
-            chosen_by: "given".into(),
-            candidates: vec!["kinematic".into()],
-            candidates_fixed_by: Some("default".into()),
-            cv_choice: None,
-            entrant: "calbench".into(),
-            calbench_version: Some(env!("CARGO_PKG_VERSION").into()),
-            git_commit: super::record::git_commit(self.path.parent().unwrap_or(Path::new("."))),
-            published: self.published.clone(),
-            validation_errors_mm: errors,
+    /// The entry of `method`, named `name`: the calibration placement's joint files
+    /// identified as one socket file (the task's `fix` held at their nominal values), then
+    /// calbench's robot, the nominal one and the authors' calibrated model scored on both
+    /// placements, beside the authors' own figures.
+    pub fn entry(&self, method: MethodSpec, name: &str) -> Result<SocketEntry> {
+        let nominal = self.load_robot()?;
+        let cal = self.placement(&self.calibration, &nominal)?;
+        let val = self.placement(&self.validation, &nominal)?;
+        let data = IdentifyData::Kind(cal.clone());
+        let source = self.calibration[0].clone();
+        let request = IdentifyRequest {
+            fix: self.fix.clone(),
+            ..IdentifyRequest::new(nominal.clone(), data, source, method)
+        };
+        let IdentifyOutcome::Kind(outcome) = request.run()? else {
+            return Err(Error::Compute(
+                "a socket task's data are socket readings".into(),
+            ));
+        };
+        let robot = outcome.compensated();
+        let both = |robot: &Robot| -> (Vec<Real>, Placements) {
+            let (_, calibration) = self.figures(robot, &cal);
+            let (rows, validation) = self.figures(robot, &val);
+            let p = Placements {
+                calibration,
+                validation,
+            };
+            (rows, p)
+        };
+        let (errors, calbench) = both(&robot);
+        let authors_model = match &self.authors_model {
+            Some(p) => Some(both(&self.load_model(p)?).1),
+            None => None,
+        };
+        let scores = SocketScores {
+            placements: [&self.calibration, &self.validation].map(|f| Self::placement_name(f)),
+            calbench,
+            nominal: both(&nominal).1,
+            authors_model,
+            authors_kpis: self.kpis()?,
+        };
+        let record = TaskRecord {
             socket: Some(scores),
-        }
+            ..self.head.record(Metric::SocketSpreadMm, name, errors)
+        };
+        Ok(SocketEntry {
+            outcome,
+            robot,
+            record,
+        })
     }
 }
 
@@ -420,6 +409,16 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
     let mut count = [0usize; 2];
     let mut distance = None;
     for (i, line) in text.lines().enumerate() {
+        // A line `key: …` opens the key it names: its own value is read at that key.
+        let opened = line
+            .split_once(':')
+            .filter(|_| !line.starts_with([' ', '-']));
+        if let Some((k, _)) = opened {
+            key = match k {
+                "distance" | "var_1" | "var_2" | "fks_1" | "fks_2" => k,
+                _ => "",
+            };
+        }
         let at = key;
         let bad = |msg: String| Error::file(path, format!("line {}, {at}", i + 1), msg);
         let num = |s: &str| -> Result<Real> {
@@ -429,14 +428,7 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| bad(format!("\"{}\" is not a number", s.trim())))
         };
-        if let Some((k, rest)) = line
-            .split_once(':')
-            .filter(|_| !line.starts_with([' ', '-']))
-        {
-            key = match k {
-                "distance" | "var_1" | "var_2" | "fks_1" | "fks_2" => k,
-                _ => "",
-            };
+        if let Some((_, rest)) = opened {
             if key == "distance" {
                 distance = Some(num(rest)?);
             }
@@ -497,6 +489,22 @@ mod tests {
         assert!((f.distance_error_mm - 0.5).abs() < 1e-12);
         // The pooled spread is the metric of the per-row distances.
         assert!((Metric::SocketSpreadMm.of(&rows).0 - f.spread_mm).abs() < 1e-12);
+    }
+
+    /// A malformed `distance:` is refused at its own line and key, not the key before it.
+    #[test]
+    fn a_malformed_distance_is_named_at_its_key() {
+        let dir = std::env::temp_dir().join(format!("calbench-kpis-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("kpis.yaml");
+        std::fs::write(&p, "var_1:\n- 1.0e-9\n- 2.0e-9\n- 3.0e-9\ndistance: oops\n").unwrap();
+        let e = read_kpis(&p).unwrap_err().to_string();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(
+            e.contains("line 5, distance") && e.contains("\"oops\""),
+            "{e}"
+        );
+        assert!(!e.contains("var_1"), "{e}");
     }
 
     /// Panda 6's kpis.yaml: √(5.5 + 9.5 + 13.1)·10⁻⁹ m² = 0.1676 mm, √(7.8 + 23.1 + 18.8)

@@ -121,26 +121,14 @@ pub fn grouped_bars(
     categories: &[String],
     series: &[(String, Vec<Real>)],
 ) -> Result<()> {
-    grouped_bars_with_intervals(stem, title, y_label, categories, series, &[])
+    grouped_bars_with_floor(stem, title, y_label, categories, series, &[], None)
 }
 
 /// [`grouped_bars`] with an error bar on each bar that has an interval: `intervals[s][i]`
 /// is the `[lo, hi]` of series `s` at category `i` (the 95 % interval of a mean), drawn as a
 /// black vertical bar with caps; a missing, non-finite or reversed interval draws none, and
-/// the axis reaches the bounds drawn.
-pub fn grouped_bars_with_intervals(
-    stem: &Path,
-    title: &str,
-    y_label: &str,
-    categories: &[String],
-    series: &[(String, Vec<Real>)],
-    intervals: &[Vec<Option<[Real; 2]>>],
-) -> Result<()> {
-    grouped_bars_with_floor(stem, title, y_label, categories, series, intervals, None)
-}
-
-/// [`grouped_bars_with_intervals`] whose axis stops at `floor` when values or bounds lie
-/// below it (η per parameter at −200 %: a parameter whose injected error is tiny against
+/// the axis reaches the bounds drawn. With a `floor`, the axis stops there when values or
+/// bounds lie below it (η per parameter at −200 %: a parameter whose injected error is tiny against
 /// the noise has an η of −1615 % that would flatten every other bar): a bar below is cut at
 /// the axis and its value written at its foot with a ▼, its interval drawn down to the axis.
 pub fn grouped_bars_with_floor(

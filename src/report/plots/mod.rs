@@ -27,7 +27,7 @@ use super::markdown::fmt_num;
 use super::output::Output;
 use crate::numeric::Real;
 use crate::{Error, Result};
-pub use bars::{grouped_bars, grouped_bars_with_floor, grouped_bars_with_intervals};
+pub use bars::{grouped_bars, grouped_bars_with_floor};
 pub use changes::{changes_svg, ChangePoint};
 pub use ecdf::{fixed_budget, runtime_ecdf, BudgetSeries, EcdfSeries};
 pub use figures::{
@@ -499,7 +499,7 @@ mod floor_tests {
             "the axis stops at the floor: lowest tick {lowest}"
         );
         // Without a floor the axis reaches the far value.
-        grouped_bars_with_intervals(&stem, "t", "η (%)", &params, &series, &ci).unwrap();
+        grouped_bars_with_floor(&stem, "t", "η (%)", &params, &series, &ci, None).unwrap();
         let svg = std::fs::read_to_string(with_suffix(&stem, "svg")).unwrap();
         assert!(!svg.contains('▼'));
         std::fs::remove_dir_all(&dir).unwrap();
