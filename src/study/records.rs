@@ -235,6 +235,7 @@ mod tests {
             index: 17,
             truth: vec![0.1, -0.0, 1.0 / 3.0],
             crb_trace: vec![Some(2.5e-7), None],
+            not_determinable: vec![vec![1], vec![]],
             outcomes: vec![Outcome {
                 method: 1,
                 strategy: 0,
@@ -304,6 +305,7 @@ mod tests {
             index,
             truth: vec![0.25, -1.5],
             crb_trace: vec![None],
+            not_determinable: vec![vec![]],
             outcomes: Vec::new(),
         };
         let id = RunId::new(SETTINGS, 9);
