@@ -277,6 +277,7 @@ mod tests {
         assert_eq!(encode(&id, 3, 17, &u).unwrap(), line);
         let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&u.truth), bits(&t.truth));
+        assert_eq!(u.not_determinable, t.not_determinable);
         assert_eq!(
             bits(&u.outcomes[0].identified),
             bits(&t.outcomes[0].identified)

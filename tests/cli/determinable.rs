@@ -91,3 +91,38 @@ fn without_tracker_noise_there_is_no_bound_and_every_error_counts() {
     assert!((m - mean_of_eta(&e)).abs() < 1e-9 * m.abs().max(1.0));
     assert!(!report.contains("Not determinable"));
 }
+
+/// The non-determinable lists travel in the records: threads and a shard split give the same
+/// results (every figure, `eta_not_determinable` included) as one thread.
+#[test]
+fn threads_and_shards_give_the_same_determinable_figures() {
+    let dir = tmp_dir("determinable-shards");
+    let sc = write_scenario(&dir, "s.toml", &STUDY.replace("NOISE", ""));
+    let run = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["run", path_arg(&sc), "--out", path_arg(out)];
+        args.extend_from_slice(extra);
+        calbench_ok(&args);
+    };
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    run(&one, &["--threads", "1"]);
+    run(&two, &["--threads", "2"]);
+    let (s0, s1, merged) = (dir.join("s0"), dir.join("s1"), dir.join("merged"));
+    run(&s0, &["--shard", "0/2"]);
+    run(&s1, &["--shard", "1/2"]);
+    calbench_ok(&[
+        "merge",
+        path_arg(&s0),
+        path_arg(&s1),
+        "--out",
+        path_arg(&merged),
+    ]);
+    let results = |d: &std::path::Path| {
+        let s = load_json(&d.join("summary.json"));
+        (s["results"].clone(), s["comparisons"].clone())
+    };
+    let want = results(&one);
+    assert_eq!(want.0[0]["eta_not_determinable"]["d4"], 8);
+    for d in [&two, &merged] {
+        assert_eq!(results(d), want, "{}", d.display());
+    }
+}
