@@ -36,15 +36,17 @@ fn entry_label(e: &Entry) -> String {
 /// Per entry of a block: its label, and a value per parameter.
 type EtaSeries<T> = Vec<(String, Vec<T>)>;
 
-/// The parameters with an η (those of the first entry) and, per entry of `b`, its label and
-/// mean η of each of those parameters (NaN where it has none), and the 95 % interval of
-/// each mean (`None` where it has none).
+/// The parameters with an η in some entry of `b` (in name order) and, per entry, its label
+/// and mean η of each of those parameters (NaN where it has none: no injected error, or one
+/// that was not determinable), and the 95 % interval of each mean (`None` where it has none).
 fn eta_by_parameter(b: &Block) -> (Vec<String>, EtaSeries<Real>, EtaSeries<Option<[Real; 2]>>) {
     let params: Vec<String> = b
         .entries
-        .first()
-        .map(|e| e.eta.keys().cloned().collect())
-        .unwrap_or_default();
+        .iter()
+        .flat_map(|e| e.eta.keys().cloned())
+        .collect::<std::collections::BTreeSet<_>>()
+        .into_iter()
+        .collect();
     let series = per_parameter(b, &params, |x| x.map_or(Real::NAN, |x| x.mean));
     let intervals = per_parameter(b, &params, |x| x.and_then(|x| x.mean_ci95));
     (params, series, intervals)
@@ -278,6 +280,12 @@ pub fn report_md(r: &RunResult, summary: &Summary, plots_written: &[(String, Str
     if r.blocks.len() > 1 {
         s += "\n(η table of the first swept value.)\n";
     }
+    if let Some((text, lines)) = not_determinable(&r.blocks[0]) {
+        let _ = writeln!(s, "\n{text}\n");
+        for l in lines {
+            let _ = writeln!(s, "- {l}");
+        }
+    }
     s += "\n## Plots\n\n";
     for (file, caption) in plots_written {
         let _ = writeln!(s, "![{caption}]({file})\n");
@@ -316,7 +324,7 @@ pub const INTERVAL_NOTE: &str = "95 % intervals of each figure over the Monte-Ca
 
 /// The metrics of a run's reports, each as its term and the rest of its explanation.
 pub const METRIC_NOTES: [(&str, &str); 6] = [
-    ("η", " = (1 − |x − x̂| / |x|) · 100 % per parameter with a non-zero injected error x (Guo 2024 eq. 29); 100 % is exact recovery."),
+    ("η", " = (1 − |x − x̂| / |x|) · 100 % per parameter with a non-zero injected error x (Guo 2024 eq. 29), counted where x is determinable (|x| above 3 Cramér–Rao σ); 100 % is exact recovery."),
     ("before / after", ": position error |Δp| at the validation poses of the nominal and of the compensated robot; mean (MAE), RMS, max."),
     ("improvement", " = (before − after) / before of the mean error."),
     ("CRB ratio", ": trace of the empirical covariance of the identified errors over trials divided by the mean Cramér–Rao trace (JᵀWJ)⁻¹ of the tracker noise; ≈ 1 for an efficient estimator under Gaussian noise, above 1 with outliers and sag."),
@@ -327,6 +335,41 @@ pub const METRIC_NOTES: [(&str, &str); 6] = [
 /// The bottom of the η-per-parameter chart (%): a mean η below it (the estimate's error
 /// over three times the injected error) is cut at the axis with its value written.
 pub const ETA_FLOOR_PCT: Real = -200.0;
+
+/// The parameters of block `b` whose injected error was not determinable (docs/formats.md
+/// `eta_not_determinable`): a sentence saying what that means, then one line per entry that
+/// has any, naming each parameter and the trials it was not determinable in; `None` when no
+/// entry has any.
+pub fn not_determinable(b: &Block) -> Option<(String, Vec<String>)> {
+    let lines: Vec<String> = b
+        .entries
+        .iter()
+        .filter(|e| !e.eta_not_determinable.is_empty())
+        .map(|e| {
+            let each: Vec<String> = e
+                .eta_not_determinable
+                .iter()
+                .map(|(p, n)| format!("{p} ({n} of {} trials)", n_usable(e)))
+                .collect();
+            format!("{}: {}", entry_label(e), each.join(", "))
+        })
+        .collect();
+    (!lines.is_empty()).then(|| {
+        let k = crate::study::crb::DETERMINABLE_SIGMAS;
+        let text = format!(
+            "Not determinable: an injected error of at most {k} Cramér–Rao σ of its parameter \
+             (the tracker noise at the trial's calibration rows on the true robot) cannot be \
+             told from 0, so its η measures the noise; those trials' η of the parameter is left \
+             out of every η figure, and a parameter not determinable in any trial has no η."
+        );
+        (text, lines)
+    })
+}
+
+/// The usable trials of entry `e` (its trials without the failed identifications).
+fn n_usable(e: &Entry) -> usize {
+    e.terminations.values().sum::<usize>() - e.failures
+}
 
 /// The η table of block `b`: headers (`parameter`, then one per entry) and one row per
 /// parameter with the mean η of each entry (%).

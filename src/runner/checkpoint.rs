@@ -37,7 +37,7 @@ use crate::study::stats::precision::Precision;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`.
-const FORMAT: &str = "calbench-checkpoint-4";
+const FORMAT: &str = "calbench-checkpoint-5";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]

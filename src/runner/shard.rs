@@ -24,7 +24,7 @@ use crate::study::records::{encode, RunId, Verifier};
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-6";
+const FORMAT: &str = "calbench-shard-7";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]

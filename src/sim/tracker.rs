@@ -57,6 +57,11 @@ impl Tracker {
         self.measure
     }
 
+    /// Per-axis σ of the orientation noise (rad; 0 for position-only measurement).
+    pub fn angle_sigma_rad(&self) -> Real {
+        self.angle_sigma_rad
+    }
+
     /// Per-axis σ of the position noise (mm) at a distance of `range_mm` from the tracker.
     pub fn sigma_mm(&self, range_mm: Real) -> Real {
         (self.a_mm + self.b_mm_per_mm * range_mm) / self.coverage

@@ -23,6 +23,7 @@
 //! file ([`spill`]), so memory does not grow with the trials.
 
 pub mod claims;
+pub mod crb;
 pub mod instruments;
 pub mod instruments_table;
 pub mod kind;

@@ -21,8 +21,18 @@ pub struct TrialResult {
     pub truth: Vec<Real>,
     /// The Cramér–Rao trace per strategy (`None` without tracker noise).
     pub crb_trace: Vec<Option<Real>>,
+    /// Per strategy, the study parameters (indices) whose non-zero injected error is not
+    /// determinable in this trial: at most [`crate::study::crb::DETERMINABLE_SIGMAS`]
+    /// Cramér–Rao σ at the strategy's measured rows on the true robot; their η does not
+    /// count. Left out of a record when every list is empty (and read so).
+    #[serde(default, skip_serializing_if = "all_empty")]
+    pub not_determinable: Vec<Vec<usize>>,
     /// One outcome per strategy × method.
     pub outcomes: Vec<Outcome>,
+}
+
+fn all_empty(v: &[Vec<usize>]) -> bool {
+    v.iter().all(Vec::is_empty)
 }
 
 /// The targets' precisions Δ: a search reaches target Δ on a trial when its best fitness is

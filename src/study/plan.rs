@@ -10,7 +10,6 @@ use crate::numeric::rng;
 use crate::numeric::{Frame, Real};
 use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::robot::identifiability::identifiable_generic;
-use crate::robot::jacobian::{jacobian, Columns};
 use crate::robot::param_sets::{ends, full_params, identified_params};
 use crate::robot::{Param, Robot};
 use crate::sim::poses::{read_pose_list, sample_region};
@@ -21,7 +20,6 @@ use crate::sim::truth::{draw_errors, selected_params};
 use crate::sim::unmodelled::Unmodelled;
 use crate::sim::SagFn;
 use crate::study::scenario::{OptimiseEach, PoseStrategy, Registration, Scenario};
-use nalgebra::DMatrix;
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -35,22 +33,19 @@ pub struct FixedSet {
     pub trace: Vec<Real>,
     /// The optimiser's scores of the chosen set, as JSON (empty for grid and file sets).
     pub scores: Option<serde_json::Value>,
-    /// The Cramér–Rao trace of the set (the same in every trial; `None` without noise).
-    pub crb_trace: Option<Real>,
     /// The true arm's deflected tool frames at the set's measured rows, when they are the
     /// same in every trial (see [`SagMemo`]).
     pub sag: Option<Arc<SagMemo>>,
 }
 
 impl FixedSet {
-    /// A set that is not optimised (grid, file): no trace, no scores; the Cramér–Rao trace
-    /// and the sag are filled in by [`Study::new`].
+    /// A set that is not optimised (grid, file): no trace, no scores; the sag is filled in
+    /// by [`Study::new`].
     pub fn plain(poses: Vec<Vec<Real>>) -> FixedSet {
         FixedSet {
             poses,
             trace: Vec::new(),
             scores: None,
-            crb_trace: None,
             sag: None,
         }
     }
@@ -357,16 +352,6 @@ impl Study {
             per_trial,
             separation,
         };
-        let traces: Vec<Option<Real>> = study
-            .fixed
-            .iter()
-            .map(|f| f.as_ref().and_then(|f| crb_trace(&study, &f.poses)))
-            .collect();
-        for (f, t) in study.fixed.iter_mut().zip(traces) {
-            if let Some(f) = f {
-                f.crb_trace = t;
-            }
-        }
         if let (true, Some(sag)) = (study.scenario.errors.kind.is_fixed(), sag_fn(&study)) {
             let (_, truth) = true_robot(&study, 0);
             let memos: Vec<Option<Arc<SagMemo>>> = study
@@ -428,7 +413,6 @@ pub fn optimise(
         poses: sel.poses,
         trace: sel.trace,
         scores: serde_json::to_value(sel.scores).ok(),
-        crb_trace: None,
         sag: None,
     };
     Ok((set, sep))
@@ -458,41 +442,6 @@ pub fn optimised_set(study: &Study, si: usize, index: usize) -> Result<Vec<Vec<R
         seed,
     )?;
     Ok(set.poses)
-}
-
-/// The Cramér–Rao trace `tr (JᵀWJ)⁻¹` for the tracker noise at the calibration poses (in the
-/// base frame, with the nominal Jacobian), or `None` without noise, and for an
-/// elasto-geometric model (its bound would need each pose's payload and torques).
-pub fn crb_trace(study: &Study, qs: &[Vec<Real>]) -> Option<Real> {
-    if study.params.iter().any(|p| p.is_compliance()) {
-        return None;
-    }
-    let cols = Columns::new(&study.params, study.nominal.dof());
-    let mut j = jacobian(&study.nominal, &cols, qs, study.measure);
-    let rows = study.measure.rows();
-    let chain = study.nominal.chain();
-    let tracker_at = study.tracker.frame().pos;
-    for (i, q) in qs.iter().enumerate() {
-        let range = (chain.fk(q).pos - tracker_at).norm();
-        let s = study.tracker.sigma_mm(range);
-        if s <= 0.0 {
-            return None;
-        }
-        let mut block = j.rows_mut(rows * i, 3);
-        block /= s;
-        if rows == 6 {
-            let sa = study.scenario.tracker.angle_noise_deg.to_radians();
-            if sa <= 0.0 {
-                return None;
-            }
-            let mut b = j.rows_mut(rows * i + 3, 3);
-            b /= sa;
-        }
-    }
-    let n: DMatrix<Real> = j.transpose() * &j;
-    n.try_inverse()
-        .map(|inv| inv.trace())
-        .filter(|t| t.is_finite())
 }
 
 /// The injected errors and the true robot of trial `index`.

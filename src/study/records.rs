@@ -235,6 +235,7 @@ mod tests {
             index: 17,
             truth: vec![0.1, -0.0, 1.0 / 3.0],
             crb_trace: vec![Some(2.5e-7), None],
+            not_determinable: vec![vec![1], vec![]],
             outcomes: vec![Outcome {
                 method: 1,
                 strategy: 0,
@@ -276,6 +277,7 @@ mod tests {
         assert_eq!(encode(&id, 3, 17, &u).unwrap(), line);
         let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&u.truth), bits(&t.truth));
+        assert_eq!(u.not_determinable, t.not_determinable);
         assert_eq!(
             bits(&u.outcomes[0].identified),
             bits(&t.outcomes[0].identified)
@@ -304,6 +306,7 @@ mod tests {
             index,
             truth: vec![0.25, -1.5],
             crb_trace: vec![None],
+            not_determinable: vec![vec![]],
             outcomes: Vec::new(),
         };
         let id = RunId::new(SETTINGS, 9);

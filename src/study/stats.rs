@@ -14,6 +14,7 @@ pub mod location;
 mod missing;
 pub mod paired;
 pub mod precision;
+mod sums;
 
 use super::metric::{Metric, PerTrial};
 use super::outcome::{Outcome, TrialResult, OPTIONAL_STATS};
@@ -21,6 +22,7 @@ use super::spill::{Spill, Spilled};
 use crate::calibrate::ErrorStats;
 use crate::identify::Termination;
 use crate::numeric::{nan, Real};
+use sums::{Spread2, StatsSum, Sum};
 
 /// Mean, median and standard deviation of η for one parameter, over trials (%).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
@@ -139,8 +141,16 @@ pub struct Entry {
     /// p hold together with probability ≥ 95 % and so does their mean); `null` when a
     /// parameter has too few trials for its interval.
     pub eta_median_pct_ci95: Option<[Real; 2]>,
-    /// η per parameter with a non-zero injected error.
+    /// η per parameter with a non-zero injected error, over the trials where that error is
+    /// determinable (above [`crate::study::crb::DETERMINABLE_SIGMAS`] Cramér–Rao σ); a
+    /// parameter determinable in no trial has none. Every η figure above is over these.
     pub eta: BTreeMap<String, EtaStats>,
+    /// Each parameter (base left out) whose non-zero injected error was not determinable in
+    /// some usable trial — at most [`crate::study::crb::DETERMINABLE_SIGMAS`] Cramér–Rao σ
+    /// of the trial's calibration — with the number of such trials; those trials' η does not
+    /// count. Absent when there is none (and in a summary written before it).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    pub eta_not_determinable: BTreeMap<String, usize>,
     /// Validation position errors before compensation (mm), each statistic averaged over
     /// trials.
     pub validation_before_mm: Figures,
@@ -233,97 +243,6 @@ pub fn eta(truth: Real, identified: Real) -> Option<Real> {
     (truth != 0.0).then(|| (1.0 - (truth - identified).abs() / truth.abs()) * 100.0)
 }
 
-/// The sum of `v` in order (as `Iterator::sum`, from −0), streamed one value at a time.
-#[derive(Clone, Copy, Debug)]
-struct Sum {
-    total: Real,
-    n: usize,
-}
-
-impl Default for Sum {
-    fn default() -> Self {
-        Sum { total: -0.0, n: 0 }
-    }
-}
-
-impl Sum {
-    fn add(&mut self, x: Real) {
-        self.total += x;
-        self.n += 1;
-    }
-    fn mean(&self) -> Real {
-        if self.n == 0 {
-            Real::NAN
-        } else {
-            self.total / self.n as Real
-        }
-    }
-}
-
-/// The running spread of values in trial order (Welford's update): the sample standard
-/// deviation of an interval without keeping the values.
-#[derive(Clone, Copy, Debug, Default)]
-struct Spread2 {
-    n: usize,
-    mean: Real,
-    m2: Real,
-}
-
-impl Spread2 {
-    fn add(&mut self, x: Real) {
-        self.n += 1;
-        let d = x - self.mean;
-        self.mean += d / self.n as Real;
-        self.m2 += d * (x - self.mean);
-    }
-    /// The sample standard deviation (divisor n − 1; NaN under 2 values).
-    fn sd(&self) -> Real {
-        if self.n < 2 {
-            Real::NAN
-        } else {
-            (self.m2 / (self.n - 1) as Real).sqrt()
-        }
-    }
-    /// The 95 % t interval around `mean` (the in-order mean of the same values).
-    fn interval(&self, mean: Real) -> Option<[Real; 2]> {
-        dist::t_interval(mean, self.sd(), self.n)
-    }
-}
-
-/// Running sums of the four statistics of [`ErrorStats`] over trials, with their spreads.
-#[derive(Clone, Copy, Debug, Default)]
-struct StatsSum([Sum; 4], [Spread2; 4]);
-
-impl StatsSum {
-    fn add(&mut self, s: &ErrorStats) {
-        for ((a, v), x) in self
-            .0
-            .iter_mut()
-            .zip(&mut self.1)
-            .zip([s.mean, s.rms, s.max, s.std])
-        {
-            a.add(x);
-            v.add(x);
-        }
-    }
-    fn average(&self) -> Figures {
-        let stats = ErrorStats {
-            mean: self.0[0].mean(),
-            rms: self.0[1].mean(),
-            max: self.0[2].mean(),
-            std: self.0[3].mean(),
-        };
-        let ci = |i: usize, m: Real| self.1[i].interval(m);
-        Figures {
-            mean_ci95: ci(0, stats.mean),
-            rms_ci95: ci(1, stats.rms),
-            max_ci95: ci(2, stats.max),
-            std_ci95: ci(3, stats.std),
-            stats,
-        }
-    }
-}
-
 /// What one (strategy, method) pair has gathered so far: running sums (per parameter, the
 /// per-trial numbers an exact median and two-pass deviation need, its error and its η, are in
 /// the accumulator's [`Spill`]).
@@ -346,6 +265,8 @@ struct Cell {
     evaluations: Sum,
     /// Each usable trial's mean η over the parameters.
     eta_trial: Spread2,
+    /// Per parameter, the usable trials whose non-zero injected error was not determinable.
+    below: Vec<usize>,
     /// The searches' runtime and fixed-budget numbers.
     search: ecdf::SearchAcc,
 }
@@ -404,7 +325,13 @@ impl Accumulator {
         Accumulator {
             names: names.to_vec(),
             methods,
-            cells: vec![Cell::default(); cells],
+            cells: vec![
+                Cell {
+                    below: vec![0; names.len()],
+                    ..Cell::default()
+                };
+                cells
+            ],
             spill: Spill::new(cells * (names.len() * 3 + HEADLINES)),
         }
     }
@@ -470,6 +397,7 @@ impl Accumulator {
                 continue;
             }
             self.cells[ci].ok += 1;
+            let below: &[usize] = t.not_determinable.get(o.strategy).map_or(&[], |v| v);
             let (mut eta_sum, mut eta_n) = (-0.0, 0usize);
             for k in 0..self.names.len() {
                 // Base parameters absorb the registration's error: nuisance, not compared.
@@ -478,7 +406,11 @@ impl Accumulator {
                 }
                 let (se, sn) = self.streams(ci, k);
                 self.spill.push(se, o.identified[k] - t.truth[k])?;
-                let e = eta(t.truth[k], o.identified[k]);
+                let determinable = !below.contains(&k);
+                if !determinable {
+                    self.cells[ci].below[k] += 1;
+                }
+                let e = eta(t.truth[k], o.identified[k]).filter(|_| determinable);
                 self.spill
                     .push(self.eta_stream(ci, k), e.unwrap_or(Real::NAN))?;
                 if let Some(e) = e {
@@ -624,6 +556,13 @@ impl Accumulator {
             eta_median_pct,
             eta_median_pct_ci95,
             eta: eta_map.clone(),
+            eta_not_determinable: self
+                .names
+                .iter()
+                .zip(&c.below)
+                .filter(|(n, &b)| b > 0 && !n.starts_with("base."))
+                .map(|(n, &b)| (n.clone(), b))
+                .collect(),
             validation_before_mm: before,
             validation_after_mm: after,
             calibration_before_mm: c.calibration[0].average(),

@@ -7,8 +7,9 @@
 
 use std::time::Instant;
 
+use super::crb;
 pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
-use super::plan::{crb_trace, optimised_set, Study};
+use super::plan::{optimised_set, Study};
 use super::stats::ecdf;
 use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
 use crate::error::Result;
@@ -248,7 +249,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     let mut outcomes = Vec::new();
     // Each search's whole trace on this trial, dropped once reduced to its `SearchRun`.
     let mut searches: Vec<Option<(ecdf::Group, Vec<Real>, usize)>> = Vec::new();
-    let mut crb = Vec::new();
+    let mut crb_traces = Vec::new();
+    let mut not_determinable = Vec::new();
     for si in 0..sc.calibration.strategies.len() {
         let qs = calibration_poses(study, si, index)?;
         // The fixed set's frames computed once for the study, where it has them.
@@ -288,10 +290,16 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         let cal_loads = m.data.payload_kg.as_deref();
         let cal_nominal = validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
         let cal_before = ErrorStats::of(&cal_nominal.mm);
-        crb.push(match &study.fixed[si] {
-            Some(set) if !study.per_trial[si] => set.crb_trace,
-            _ => crb_trace(study, &qs),
-        });
+        // The bound at the rows as measured, on the robot they were measured on.
+        let variances = crb::variances(
+            &truth_robot,
+            &study.params,
+            &m.data.qs,
+            study.measure,
+            &study.tracker,
+        );
+        crb_traces.push(variances.as_ref().map(|v| v.iter().sum()));
+        not_determinable.push(crb::not_determinable(&truth, variances.as_deref()));
         for (mi, spec) in sc.methods.iter().enumerate() {
             let t0 = Instant::now();
             let res = calibrate(
@@ -391,7 +399,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
     Ok(TrialResult {
         index,
         truth,
-        crb_trace: crb,
+        crb_trace: crb_traces,
+        not_determinable,
         outcomes,
     })
 }

@@ -12,6 +12,7 @@ mod cells;
 mod cli;
 mod cluster;
 mod committed;
+mod determinable;
 mod determinism;
 mod fixed_models;
 mod fuzz;

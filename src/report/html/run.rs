@@ -12,8 +12,8 @@ use crate::analysis::summary::Summary;
 use crate::error::Result;
 use crate::report::markdown::fmt_num;
 use crate::report::run::{
-    columns::*, entry_table, entry_table_by, eta_table, validation_columns, Column,
-    INTERVAL_COLUMNS, INTERVAL_NOTE, METRIC_NOTES,
+    columns::*, entry_table, entry_table_by, eta_table, not_determinable, validation_columns,
+    Column, INTERVAL_COLUMNS, INTERVAL_NOTE, METRIC_NOTES,
 };
 use crate::study::metric::Metric;
 use crate::study::RunResult;
@@ -219,6 +219,12 @@ pub fn page(
         ""
     };
     page.table(&format!("η per parameter (mean %){which}"), &h, &rows);
+    if let Some((text, lines)) = not_determinable(&r.blocks[0]) {
+        page.para(&text);
+        for l in lines {
+            page.para(&l);
+        }
+    }
     figures(&mut page, dir, plots, "η per parameter")?;
 
     page.section("CRB ratio");

@@ -62,6 +62,7 @@ impl Default for Entry {
             spread: Spread::default(),
             per_trial: PerTrial::default(),
             eta_per_trial: BTreeMap::new(),
+            eta_not_determinable: BTreeMap::new(),
         }
     }
 }

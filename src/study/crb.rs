@@ -1,0 +1,207 @@
+//! The Cramér–Rao bound of a calibration under the tracker's noise model: the covariance
+//! (JᵀWJ)⁻¹ an unbiased estimator of the identified parameters cannot beat (Kay, *Fundamentals
+//! of Statistical Signal Processing*, vol. 1, § 3.7, Gaussian noise), its trace (the
+//! `crb_ratio` of `summary.json`) and each parameter's standard deviation, which decides
+//! whether a parameter's injected error is determinable at all (docs/formats.md
+//! "summary.json", `eta_not_determinable`).
+
+use crate::identify::solver::rank;
+use crate::measurement::Measure;
+use crate::numeric::Real;
+use crate::robot::jacobian::{jacobian, Columns};
+use crate::robot::{Param, Robot};
+use crate::sim::tracker::Tracker;
+
+/// How many Cramér–Rao standard deviations an injected error must exceed for its η to count
+/// (k = 3, fixed from first principles, not from the figures it selects). An estimate of a
+/// parameter whose true error x has |x| ≤ 3σ cannot tell x from 0: the estimate of an
+/// efficient estimator is x + N(0, σ²), and a two-sided test of "x = 0" at the conventional
+/// 3σ level (0.27 %) does not reject. Its η = 1 − |x̂ − x| / |x| then measures the noise, not
+/// the method: the expected |x̂ − x| = σ √(2/π) ≈ 0.8 σ, so the expected η at |x| = kσ is
+/// about 100 (1 − 0.8 / k) % (73 % at k = 3) and without bound below as |x| / σ → 0.
+pub const DETERMINABLE_SIGMAS: Real = 3.0;
+
+/// The diagonal of (JᵀWJ)⁻¹ — each parameter's Cramér–Rao variance (mm², rad²) — for
+/// `params` measured at the joint values `qs` (one row block per value, as the measurement
+/// has them) on `robot`, with `measure`'s rows and the noise of `tracker`: W = diag(1/σ²),
+/// σ the position noise at each point's range from the tracker and, for full poses, its
+/// orientation noise. `None` where there is no bound: a noise-free tracker, an elasto-geometric
+/// model (its bound would need each pose's payload and torques), a JᵀWJ of numerical rank below
+/// the parameters ([`rank`], the identification's test: a parameter the poses do not
+/// determine, or two that only their sum is) or a non-finite result.
+pub fn variances(
+    robot: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+    measure: Measure,
+    tracker: &Tracker,
+) -> Option<Vec<Real>> {
+    if params.iter().any(|p| p.is_compliance()) {
+        return None;
+    }
+    let cols = Columns::new(params, robot.dof());
+    let mut j = jacobian(robot, &cols, qs, measure);
+    let rows = measure.rows();
+    let chain = robot.chain();
+    let tracker_at = tracker.frame().pos;
+    for (i, q) in qs.iter().enumerate() {
+        let range = (chain.fk(q).pos - tracker_at).norm();
+        let s = tracker.sigma_mm(range);
+        if s <= 0.0 {
+            return None;
+        }
+        let mut block = j.rows_mut(rows * i, 3);
+        block /= s;
+        if rows == 6 {
+            let sa = tracker.angle_sigma_rad();
+            if sa <= 0.0 {
+                return None;
+            }
+            let mut b = j.rows_mut(rows * i + 3, 3);
+            b /= sa;
+        }
+    }
+    let n = j.transpose() * &j;
+    // A normal matrix the data leave rank-deficient (dependent parameters, Guo's d2 and d3)
+    // has no bound; its rounded inverse would be noise.
+    if rank(&n) < params.len() {
+        return None;
+    }
+    let inv = n.try_inverse()?;
+    let d: Vec<Real> = inv.diagonal().iter().copied().collect();
+    d.iter().all(|v| v.is_finite() && *v >= 0.0).then_some(d)
+}
+
+/// The study parameters (indices into `truth`) whose non-zero injected error is not
+/// determinable: |x| ≤ [`DETERMINABLE_SIGMAS`] · σ, σ² from `variances` (none without a
+/// bound).
+pub fn not_determinable(truth: &[Real], variances: Option<&[Real]>) -> Vec<usize> {
+    let Some(v) = variances else {
+        return Vec::new();
+    };
+    truth
+        .iter()
+        .zip(v)
+        .enumerate()
+        .filter(|(_, (x, v))| **x != 0.0 && x.abs() <= DETERMINABLE_SIGMAS * v.sqrt())
+        .map(|(k, _)| k)
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::numeric::rng;
+    use crate::robot::builtin;
+    use crate::robot::jacobian::jacobian_fd;
+    use crate::robot::sampling::uniform_joint_poses;
+    use crate::sim::settings::{MeasureSetting, TrackerSettings};
+    use nalgebra::DMatrix;
+
+    /// The same variances built independently: the Jacobian by central finite differences of
+    /// forward kinematics, each row weighed by 1/σ² of its own point written out from the
+    /// tracker's MPE (σ = (a + b·range) / coverage), the normal matrix summed row by row and
+    /// inverted by LU.
+    fn by_hand(
+        robot: &Robot,
+        params: &[Param],
+        qs: &[Vec<Real>],
+        measure: Measure,
+        s: &TrackerSettings,
+    ) -> Vec<Real> {
+        let cols = Columns::new(params, robot.dof());
+        let j = jacobian_fd(robot, &cols, qs, measure, 1e-6);
+        let rows = measure.rows();
+        let at = nalgebra::Vector3::new(s.pose[0], s.pose[1], s.pose[2]);
+        let p = params.len();
+        let mut n = DMatrix::<Real>::zeros(p, p);
+        for (i, q) in qs.iter().enumerate() {
+            let range = (robot.fk(q).pos - at).norm();
+            let sigma = (s.mpe_a_um * 1e-3 + s.mpe_b_um_per_m * 1e-6 * range) / s.coverage;
+            for r in 0..rows {
+                let w = if r < 3 {
+                    sigma.powi(-2)
+                } else {
+                    s.angle_noise_deg.to_radians().powi(-2)
+                };
+                let row = j.row(rows * i + r);
+                n += row.transpose() * row * w;
+            }
+        }
+        let inv = n.lu().try_inverse().expect("a regular normal matrix");
+        (0..p).map(|c| inv[(c, c)]).collect()
+    }
+
+    fn check(measure: MeasureSetting) {
+        let nominal = builtin::irb2600();
+        // A true robot off the nominal one: the bound is taken where the data come from.
+        let robot = nominal.with_errors(&[(Param::A(1), 0.4), (Param::Theta(2), 0.002)]);
+        let params: Vec<Param> = [
+            Param::A(0),
+            Param::A(1),
+            Param::D(0),
+            Param::Theta(1),
+            Param::Theta(2),
+            Param::Alpha(1),
+            Param::D(3),
+        ]
+        .to_vec();
+        let qs = uniform_joint_poses(&nominal, 30, &mut rng::from_seed(5));
+        let settings = TrackerSettings {
+            measure,
+            angle_noise_deg: 0.01,
+            ..TrackerSettings::default()
+        };
+        let tracker = Tracker::new(&settings).expect("tracker");
+        let m = tracker.measures();
+        let got = variances(&robot, &params, &qs, m, &tracker).expect("a bound");
+        let want = by_hand(&robot, &params, &qs, m, &settings);
+        for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert!((g - w).abs() <= 1e-5 * w, "{}: {g} against {w}", params[k]);
+        }
+    }
+
+    #[test]
+    fn each_parameters_variance_is_that_of_a_finite_difference_normal_matrix() {
+        check(MeasureSetting::Position);
+        check(MeasureSetting::Pose);
+    }
+
+    #[test]
+    fn an_error_within_three_sigma_is_not_determinable() {
+        let v = [1.0, 4.0, 0.01, 1.0];
+        // σ = 1, 2, 0.1, 1: 2.9 ≤ 3, 6.5 > 6, 0 is no error, −3 ≤ 3.
+        assert_eq!(
+            not_determinable(&[2.9, 6.5, 0.0, -3.0], Some(&v)),
+            vec![0, 3]
+        );
+        assert!(not_determinable(&[1e-9, 1e-9, 0.0, 0.0], None).is_empty());
+    }
+
+    #[test]
+    fn no_bound_for_dependent_parameters() {
+        // d2 and d3 of the IRB2600 move the wrist centre along the same joint axis: only
+        // their sum is seen, so JᵀWJ is singular up to rounding.
+        let nominal = builtin::irb2600();
+        let tracker = Tracker::new(&TrackerSettings::default()).expect("tracker");
+        let qs = uniform_joint_poses(&nominal, 30, &mut rng::from_seed(2));
+        let m = tracker.measures();
+        let pair = [Param::A(0), Param::D(1), Param::D(2)];
+        assert!(variances(&nominal, &pair, &qs, m, &tracker).is_none());
+        assert!(variances(&nominal, &pair[..2], &qs, m, &tracker).is_some());
+    }
+
+    #[test]
+    fn no_bound_without_noise() {
+        let nominal = builtin::irb2600();
+        let settings = TrackerSettings {
+            mpe_a_um: 0.0,
+            mpe_b_um_per_m: 0.0,
+            ..TrackerSettings::default()
+        };
+        let tracker = Tracker::new(&settings).expect("tracker");
+        let qs = uniform_joint_poses(&nominal, 10, &mut rng::from_seed(1));
+        let m = tracker.measures();
+        assert!(variances(&nominal, &[Param::A(0)], &qs, m, &tracker).is_none());
+    }
+}

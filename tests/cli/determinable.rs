@@ -1,0 +1,128 @@
+//! η only where the injected error is determinable (docs/formats.md § 7.1 "Determinable
+//! parameters"): a parameter whose injected error is far below its Cramér–Rao σ is listed in
+//! `eta_not_determinable`, has no η, and counts in no η figure; without tracker noise there is
+//! no bound and the same parameter has its η again.
+
+use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_scenario};
+
+/// LS on random poses with three injected errors: two far above the tracker noise, and d4 at
+/// 1e-6 mm, thousands of times below the few µm of σ that 25 points of 7.5 µm noise give it.
+const STUDY: &str = r#"
+name = "determinable"
+seed = 4
+trials = 8
+[robot]
+builtin = "irb2600"
+[errors]
+kind = "values"
+[errors.values]
+a2 = 0.5
+alpha3 = 0.002
+d4 = 1e-6
+[tracker]
+pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]
+NOISE
+[outliers]
+count = 0
+magnitude_mm = [0.5, 1.0]
+[compliance]
+model = "none"
+[calibration]
+count = 25
+strategies = ["random"]
+[validation]
+count = 10
+[[methods]]
+name = "ls"
+"#;
+
+fn run(name: &str, noise: &str) -> (serde_json::Value, String) {
+    let dir = tmp_dir(name);
+    let sc = write_scenario(&dir, "s.toml", &STUDY.replace("NOISE", noise));
+    let out = dir.join("out");
+    calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&out)]);
+    let s = load_json(&out.join("summary.json"));
+    let entry = s["results"][0].clone();
+    (entry, read(&out.join("report.md")))
+}
+
+/// The mean of the per-parameter mean η of an entry, over the parameters it has η for.
+fn mean_of_eta(entry: &serde_json::Value) -> f64 {
+    let eta = entry["eta"].as_object().expect("eta");
+    eta.values()
+        .map(|e| e["mean"].as_f64().unwrap())
+        .sum::<f64>()
+        / eta.len() as f64
+}
+
+#[test]
+fn an_error_far_below_its_sigma_is_not_determinable_and_left_out_of_eta() {
+    let (e, report) = run("determinable-noisy", "");
+    let eta = e["eta"].as_object().expect("eta");
+    assert!(
+        eta.contains_key("a2") && eta.contains_key("alpha3"),
+        "{eta:?}"
+    );
+    assert!(!eta.contains_key("d4"), "d4 has an η: {:?}", eta["d4"]);
+    assert_eq!(
+        e["eta_not_determinable"]["d4"], 8,
+        "{}",
+        e["eta_not_determinable"]
+    );
+    assert_eq!(e["eta_not_determinable"].as_object().unwrap().len(), 1);
+    let m = e["eta_mean_pct"].as_f64().unwrap();
+    assert!((m - mean_of_eta(&e)).abs() < 1e-9 * m.abs().max(1.0), "{m}");
+    assert!(
+        m > 50.0,
+        "the determinable errors are recovered: η mean {m}"
+    );
+    assert!(
+        report.contains("Not determinable") && report.contains("- ls / random: d4 (8 of 8 trials)")
+    );
+}
+
+#[test]
+fn without_tracker_noise_there_is_no_bound_and_every_error_counts() {
+    let (e, report) = run("determinable-exact", "mpe_a_um = 0.0\nmpe_b_um_per_m = 0.0");
+    let eta = e["eta"].as_object().expect("eta");
+    assert!(eta.contains_key("d4"), "{eta:?}");
+    assert!(e.get("eta_not_determinable").is_none(), "{e}");
+    let m = e["eta_mean_pct"].as_f64().unwrap();
+    assert!((m - mean_of_eta(&e)).abs() < 1e-9 * m.abs().max(1.0));
+    assert!(!report.contains("Not determinable"));
+}
+
+/// The non-determinable lists travel in the records: threads and a shard split give the same
+/// results (every figure, `eta_not_determinable` included) as one thread.
+#[test]
+fn threads_and_shards_give_the_same_determinable_figures() {
+    let dir = tmp_dir("determinable-shards");
+    let sc = write_scenario(&dir, "s.toml", &STUDY.replace("NOISE", ""));
+    let run = |out: &std::path::Path, extra: &[&str]| {
+        let mut args = vec!["run", path_arg(&sc), "--out", path_arg(out)];
+        args.extend_from_slice(extra);
+        calbench_ok(&args);
+    };
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    run(&one, &["--threads", "1"]);
+    run(&two, &["--threads", "2"]);
+    let (s0, s1, merged) = (dir.join("s0"), dir.join("s1"), dir.join("merged"));
+    run(&s0, &["--shard", "0/2"]);
+    run(&s1, &["--shard", "1/2"]);
+    calbench_ok(&[
+        "merge",
+        path_arg(&s0),
+        path_arg(&s1),
+        "--out",
+        path_arg(&merged),
+    ]);
+    let results = |d: &std::path::Path| {
+        let s = load_json(&d.join("summary.json"));
+        (s["results"].clone(), s["comparisons"].clone())
+    };
+    let want = results(&one);
+    assert_eq!(want.0[0]["eta_not_determinable"]["d4"], 8);
+    for d in [&two, &merged] {
+        assert_eq!(results(d), want, "{}", d.display());
+    }
+}
