@@ -21,6 +21,7 @@ mod harmonics;
 mod html;
 mod instruments;
 mod interchange;
+mod kernel;
 mod kinds;
 mod layers;
 mod live_run;

@@ -23,7 +23,6 @@ use serde_json::Value;
 use super::cv::Model;
 use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
-use super::validation::residual_vectors;
 use crate::error::{Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::csv::read_measurements_text;
@@ -563,10 +562,8 @@ impl TaskEntry<'_> {
     /// `task.json` of the entry whose identification is `outcome`, scored on the validation
     /// rows `val` (docs/formats.md § 9.3).
     pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<Value> {
-        let errors: Vec<Real> = residual_vectors(&outcome.calibrated, val)?
-            .iter()
-            .map(|v| v.norm())
-            .collect();
+        let errors =
+            super::kernel::position_errors(&outcome.calibrated, outcome.kernel.as_ref(), val)?;
         let (models, kinematic) = match self.origin.and_then(|o| o.choice.as_ref()) {
             // The task's candidates, chosen before the request: the request holds one.
             Some(c) => Self::model_terms(outcome, &[self.candidates_considered()[c.best]]),
