@@ -35,7 +35,7 @@ pub const KERNEL_FORMAT: &str = "calbench-kernel-1";
 pub const HYPER_ROWS: usize = 800;
 
 /// L-BFGS steps per starting point.
-pub const ITERATIONS: usize = 60;
+pub const ITERATIONS: usize = 100;
 
 /// The kernel's name in the files.
 pub const KERNEL_NAME: &str = "ard-squared-exponential";
@@ -45,48 +45,48 @@ pub const KERNEL_NAME: &str = "ard-squared-exponential";
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct KernelHyper {
-    /// [`KERNEL_NAME`].
-    pub kernel: String,
-    /// The inputs, in order: `sin q1`, `cos q1`, `sin q2`, … (revolute joints only).
-    pub inputs: Vec<String>,
-    /// The length scale of each input (in the inputs' units: a sine or cosine).
-    pub length_scales: Vec<Real>,
-    /// σ_f (mm).
-    pub signal_sd_mm: Real,
-    /// σ_n (mm).
-    pub noise_sd_mm: Real,
-    /// ε added to the diagonal (mm²; [`gp::JITTER`] times the residuals' mean square).
-    pub jitter_mm2: Real,
-    /// The log marginal likelihood at the hyperparameters on the rows they were fitted on.
-    pub log_marginal_likelihood: Real,
-    /// The rows the hyperparameters were fitted on.
-    pub hyperparameter_rows: usize,
-    /// The rows the weights α were taken on (every calibration row).
-    pub training_rows: usize,
-    /// Which of the starting points ended best (0: every length scale 1; 1: every 0.3).
-    pub start: usize,
     /// Evaluations of the likelihood and its gradient.
     pub evaluations: usize,
+    /// The rows the hyperparameters were fitted on.
+    pub hyperparameter_rows: usize,
+    /// The inputs, in order: `sin q1`, `cos q1`, `sin q2`, … (revolute joints only).
+    pub inputs: Vec<String>,
+    /// ε added to the diagonal (mm²; [`gp::JITTER`] times the residuals' mean square).
+    pub jitter_mm2: Real,
+    /// [`KERNEL_NAME`].
+    pub kernel: String,
+    /// The length scale of each input (in the inputs' units: a sine or cosine).
+    pub length_scales: Vec<Real>,
+    /// The log marginal likelihood at the hyperparameters on the rows they were fitted on.
+    pub log_marginal_likelihood: Real,
+    /// σ_n (mm).
+    pub noise_sd_mm: Real,
+    /// σ_f (mm).
+    pub signal_sd_mm: Real,
+    /// Which of the starting points ended best (0: every length scale 1; 1: every 0.3).
+    pub start: usize,
+    /// The rows the weights α were taken on (every calibration row).
+    pub training_rows: usize,
 }
 
 /// A fitted kernel residual: what `kernel.json` holds.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct KernelResidual {
+    /// The weights α of each training row (x, y, z; mm).
+    pub alpha_mm: Vec<[Real; 3]>,
     /// [`KERNEL_FORMAT`].
     pub format: String,
-    /// The model term: `gp`.
-    pub term: String,
-    /// The compensated robot whose residuals it models (`robot.toml`'s name).
-    pub robot: String,
     /// The hyperparameters.
     pub hyperparameters: KernelHyper,
     /// The joints (1-based) whose sine and cosine are inputs.
     pub joints: Vec<usize>,
     /// The training rows' joint values (rad, the robot's joints in order).
     pub q_rad: Vec<Vec<Real>>,
-    /// The weights α of each training row (x, y, z; mm).
-    pub alpha_mm: Vec<[Real; 3]>,
+    /// The compensated robot whose residuals it models (`robot.toml`'s name).
+    pub robot: String,
+    /// The model term: `gp`.
+    pub term: String,
 }
 
 /// The inputs of a pose: `sin q_j, cos q_j` of each of `joints` (0-based), into `out`.

@@ -300,9 +300,11 @@ pub struct Maximum {
 /// The L-BFGS memory.
 const MEMORY: usize = 7;
 
-/// Maximises `L(θ)` from each of `starts` within the box `[lo, hi]` (projected L-BFGS with
-/// backtracking, at most `iterations` steps per start; it stops when a step gains less than
-/// `1e-7 (1 + |L|)`), and keeps the best end (the first of equals). `None` when no start
+/// Maximises `L(θ)` from each of `starts` within the box `[lo, hi]` (L-BFGS with
+/// backtracking, projected on the box: a hyperparameter held at a bound by the gradient takes
+/// no part in the step; at most `iterations` steps per start; it stops when a step gains less
+/// than `1e-9 (1 + |L|)` or the projected gradient is below `1e-6 (1 + |L|)`), and keeps the
+/// best end (the first of equals). `None` when no start
 /// has a positive definite `K`.
 pub fn maximise(
     data: &GpData,
@@ -317,6 +319,7 @@ pub fn maximise(
     let mut evaluations = 0;
     let (mut g, mut g_new, mut x_new, mut dir) =
         (vec![0.0; p], vec![0.0; p], vec![0.0; p], vec![0.0; p]);
+    let (mut pg, mut active) = (vec![0.0; p], vec![false; p]);
     let mut s_hist = vec![vec![0.0; p]; MEMORY];
     let mut y_hist = vec![vec![0.0; p]; MEMORY];
     let mut rho = [0.0; MEMORY];
@@ -333,8 +336,17 @@ pub fn maximise(
         let mut stored = 0usize;
         let mut newest = 0usize;
         for _ in 0..iterations {
-            // Two-loop recursion: dir = −H g.
-            dir.copy_from_slice(&g);
+            // The bounds that hold a hyperparameter (the descent would leave the box) take
+            // no part in the step: the projected gradient `pg`.
+            for k in 0..p {
+                active[k] = (x[k] <= lo[k] && g[k] > 0.0) || (x[k] >= hi[k] && g[k] < 0.0);
+                pg[k] = if active[k] { 0.0 } else { g[k] };
+            }
+            if pg.iter().fold(0.0 as Real, |a, v| a.max(v.abs())) < 1e-6 * (1.0 + f.abs()) {
+                break;
+            }
+            // Two-loop recursion: dir = −H pg.
+            dir.copy_from_slice(&pg);
             for t in 0..stored {
                 let h = (newest + MEMORY - t) % MEMORY;
                 a_coef[h] = rho[h] * dot(&s_hist[h], &dir);
@@ -354,12 +366,14 @@ pub fn maximise(
                     dir[k] += (a_coef[h] - b) * s_hist[h][k];
                 }
             }
-            dir.iter_mut().for_each(|v| *v = -*v);
-            if dot(&dir, &g) >= 0.0 {
-                // Not a descent direction: restart from the steepest descent.
+            for k in 0..p {
+                dir[k] = if active[k] { 0.0 } else { -dir[k] };
+            }
+            if dot(&dir, &pg) >= 0.0 {
+                // Not a descent direction: restart from the projected steepest descent.
                 stored = 0;
                 for k in 0..p {
-                    dir[k] = -g[k];
+                    dir[k] = -pg[k];
                 }
             }
             // At most one unit in any log-hyperparameter per step.
@@ -405,7 +419,7 @@ pub fn maximise(
             x.copy_from_slice(&x_new);
             g.copy_from_slice(&g_new);
             f = f_new;
-            if gained < 1e-7 * (1.0 + f.abs()) {
+            if gained < 1e-9 * (1.0 + f.abs()) {
                 break;
             }
         }

@@ -1,6 +1,6 @@
 //! The kernel residual `gp` run as a user runs it (docs/formats.md § 5.6, `kernel.json`): on a
 //! small simulated data set whose points carry a smooth error in joint 1's angle that no
-//! kinematic parameter can take (0.5 mm at a period of 90°), `identify --models
+//! kinematic parameter can take (0.5 mm at a period of 120°), `identify --models
 //! kinematic,gp` chooses `gp` by cross-validation on the calibration rows, the validation
 //! error falls well below the kinematic model's, the length scales of `sin q1` and `cos q1`
 //! come out the shortest, `kernel.json` is written beside `robot.toml` with the
@@ -27,8 +27,8 @@ fn write_data(file: &Path, n: usize, seed: u64) {
         .iter()
         .map(|q| {
             let mut p = truth.fk(q).pos;
-            p.x += 0.5 * (4.0 * q[0]).sin() + g.random_range(-0.01..0.01);
-            p.y += 0.3 * (4.0 * q[0]).cos() + g.random_range(-0.01..0.01);
+            p.x += 0.5 * (3.0 * q[0]).sin() + g.random_range(-0.01..0.01);
+            p.y += 0.3 * (3.0 * q[0]).cos() + g.random_range(-0.01..0.01);
             p.z += g.random_range(-0.01..0.01);
             p
         })
@@ -69,7 +69,7 @@ fn identify(cal: &Path, val: &Path, models: &str, out: &Path, export: &str) -> S
 fn the_kernel_residual_is_chosen_by_cv_fitted_written_and_not_carried_by_the_exports() {
     let d = tmp_dir("cli-kernel");
     let (cal, val) = (d.join("cal.csv"), d.join("val.csv"));
-    write_data(&cal, 120, 1);
+    write_data(&cal, 200, 1);
     write_data(&val, 40, 2);
     let gp = d.join("gp");
     let err = identify(&cal, &val, "kinematic,gp", &gp, "dh-csv");
@@ -117,8 +117,8 @@ fn the_kernel_residual_is_chosen_by_cv_fitted_written_and_not_carried_by_the_exp
     assert_eq!(k["format"], "calbench-kernel-1");
     assert_eq!(k["term"], "gp");
     assert_eq!(&k["hyperparameters"], h);
-    assert_eq!(k["q_rad"].as_array().unwrap().len(), 120);
-    assert_eq!(k["alpha_mm"].as_array().unwrap().len(), 120);
+    assert_eq!(k["q_rad"].as_array().unwrap().len(), 200);
+    assert_eq!(k["alpha_mm"].as_array().unwrap().len(), 200);
     // The validation rows: the kernel residual takes most of the error the kinematic model
     // leaves.
     let kin = d.join("kinematic");
