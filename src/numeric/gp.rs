@@ -181,8 +181,8 @@ fn inverse_in_place(l: &mut [Real], u: &mut [Real], n: usize) {
 fn fill(data: &GpData, theta: &[Real], jitter: Real, ws: &mut Workspace) {
     let (n, d) = (data.n, data.d);
     for i in 0..n {
-        for k in 0..d {
-            ws.xs[i * d + k] = data.x[i * d + k] * (-theta[k]).exp();
+        for (k, t) in theta[..d].iter().enumerate() {
+            ws.xs[i * d + k] = data.x[i * d + k] * (-t).exp();
         }
     }
     let sf2 = (2.0 * theta[d]).exp();
@@ -218,13 +218,13 @@ pub fn log_marginal_likelihood(
     for o in 0..m {
         // One output's column through the first row of `w` (scratch until the inverse).
         let col = &mut ws.w[..n];
-        for i in 0..n {
-            col[i] = data.y[i * m + o];
+        for (i, c) in col.iter_mut().enumerate() {
+            *c = data.y[i * m + o];
         }
         cholesky_solve(&ws.l, n, col);
-        for i in 0..n {
-            ws.alpha[i * m + o] = col[i];
-            fit += data.y[i * m + o] * col[i];
+        for (i, c) in col.iter().enumerate() {
+            ws.alpha[i * m + o] = *c;
+            fit += data.y[i * m + o] * c;
         }
     }
     let logdet: Real = 2.0 * (0..n).map(|i| ws.l[i * n + i].ln()).sum::<Real>();
