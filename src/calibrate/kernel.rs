@@ -1,5 +1,5 @@
 //! The kernel residual of the model term `gp` (docs/formats.md `identify`, "Cross-validation
-//! and model choice"; the file `kernel.json`, § 5.6): a Gaussian process on the position
+//! and model choice"; the file `kernel.json`, § 7.6): a Gaussian process on the position
 //! residuals the parametric model leaves, fitted in a second stage on the calibration rows
 //! alone.
 //!

@@ -1,4 +1,4 @@
-//! The kernel residual `gp` run as a user runs it (docs/formats.md § 5.6, `kernel.json`): on a
+//! The kernel residual `gp` run as a user runs it (docs/formats.md § 7.6, `kernel.json`): on a
 //! small simulated data set whose points carry a smooth error in joint 1's angle that no
 //! kinematic parameter can take (0.5 mm at a period of 120°), `identify --models
 //! kinematic,gp` chooses `gp` by cross-validation on the calibration rows, the validation
