@@ -5,6 +5,7 @@
 
 use std::str::FromStr;
 
+use super::kernel::{position_errors, KernelResidual};
 use super::validation::validate_file;
 use super::{calibrate, Registration};
 use crate::error::{Error, Result};
@@ -123,9 +124,10 @@ pub struct CvSetup<'a> {
 
 /// K-fold cross-validation of the errors of `params` of `robot` (the model `name`) on `data`:
 /// per fold, calibrate on the other folds and take the position errors of the fold's points
-/// ([`validate_file`]).
+/// ([`validate_file`]); with `kernel`, a kernel residual fitted on the fold's calibration rows
+/// alone is added to the prediction ([`KernelResidual`]).
 pub fn cross_validate(
-    (robot, params, name): (&Robot, &[Param], String),
+    (robot, params, name, kernel): (&Robot, &[Param], String, bool),
     data: &Measurements,
     k: usize,
     s: &CvSetup,
@@ -152,9 +154,14 @@ pub fn cross_validate(
             s.method,
             &mut stream(s.seed, "identify"),
         )?;
-        let v = validate_file(robot, &c, &te)?;
-        sum_sq += v.after_mm.rms * v.after_mm.rms * te.len() as Real;
-        fold_rms.push(v.after_mm.rms);
+        let after = if kernel {
+            let k = KernelResidual::fit(robot, &c, &tr)?;
+            super::ErrorStats::of(&position_errors(&c, Some(&k), &te)?).rms
+        } else {
+            validate_file(robot, &c, &te)?.after_mm.rms
+        };
+        sum_sq += after * after * te.len() as Real;
+        fold_rms.push(after);
     }
     let mean = fold_rms.iter().sum::<Real>() / k as Real;
     let sd = (fold_rms
@@ -195,6 +202,9 @@ pub struct Model {
     /// Harmonics of chosen orders on chosen joints (`h12q1`: `sin 12q1`, `cos 12q1`): per
     /// joint (0-based), bit `n − 1` for order `n`.
     pub orders: [u16; MAX_JOINTS],
+    /// A kernel residual on the joint angles, fitted on the calibration rows after the
+    /// parametric terms ([`KernelResidual`]; `gp`).
+    pub gp: bool,
 }
 
 impl Model {
@@ -205,16 +215,21 @@ impl Model {
         harmonics: 0,
         gravity: false,
         orders: [0; MAX_JOINTS],
+        gp: false,
     };
 
     /// Whether the model is kinematic only (β included): a task's closed division.
     pub fn is_kinematic(&self) -> bool {
-        !self.compliance && self.harmonics == 0 && !self.gravity && self.orders == [0; MAX_JOINTS]
+        !self.compliance
+            && self.harmonics == 0
+            && !self.gravity
+            && self.orders == [0; MAX_JOINTS]
+            && !self.gp
     }
 
     /// `kinematic`, or its terms joined by `+` in the order `beta`, `compliance`, `gravity`,
-    /// `harmonics`/`harmonics2`, then each `h{n}q{j}` by joint and order
-    /// (`beta+compliance`, `gravity+harmonics+h12q1`).
+    /// `harmonics`/`harmonics2`, then each `h{n}q{j}` by joint and order, then `gp`
+    /// (`beta+compliance`, `gravity+harmonics+h12q1`, `harmonics+gp`).
     pub fn name(&self) -> String {
         let mut terms: Vec<String> = Vec::new();
         if self.beta {
@@ -237,6 +252,9 @@ impl Model {
                     terms.push(format!("h{n}q{}", j + 1));
                 }
             }
+        }
+        if self.gp {
+            terms.push("gp".into());
         }
         if terms.is_empty() {
             "kinematic".into()
@@ -339,8 +357,9 @@ impl FromStr for Model {
 
     /// `kinematic`, `beta`, `compliance`, `gravity` (the mass-free gravity basis),
     /// `harmonics` (first harmonic), `harmonics2` (first and second), `h{n}q{j}` (the
-    /// harmonic of order n, 1 to 16, of joint j), or terms joined by `+` (`beta+compliance`,
-    /// `gravity+harmonics+h12q1`).
+    /// harmonic of order n, 1 to 16, of joint j), `gp` (a kernel residual on the joint
+    /// angles), or terms joined by `+` (`beta+compliance`, `gravity+harmonics+h12q1`,
+    /// `harmonics+gp`).
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let mut m = Model::KINEMATIC;
         for term in s.split('+').map(str::trim) {
@@ -351,12 +370,14 @@ impl FromStr for Model {
                 "gravity" => m.gravity = true,
                 "harmonics" => m.harmonics = m.harmonics.max(1),
                 "harmonics2" => m.harmonics = 2,
+                "gp" => m.gp = true,
                 other => {
                     let Some((n, j)) = order_term(other) else {
                         return Err(format!(
                             "unknown model term `{other}`; known: kinematic, beta, compliance, \
                              gravity, harmonics, harmonics2, h{{n}}q{{j}} (order n of 1 to \
-                             {MAX_HARMONIC_ORDER} on joint j, `h12q1`; joined by +)"
+                             {MAX_HARMONIC_ORDER} on joint j, `h12q1`), gp (a kernel residual); \
+                             joined by +)"
                         ));
                     };
                     m.orders[j - 1] |= 1 << (n - 1);
@@ -393,7 +414,7 @@ pub fn choose_model(
         .iter()
         .map(|m| {
             let (robot, params) = m.robot_and_params(nominal, data, s.registration, s.fixed)?;
-            cross_validate((&robot, &params, m.name()), data, k, s)
+            cross_validate((&robot, &params, m.name(), m.gp), data, k, s)
         })
         .collect::<Result<Vec<_>>>()?;
     let best = (0..cvs.len())
@@ -524,6 +545,9 @@ mod tests {
         let m: Model = "gravity+h12q1+harmonics+h3q2".parse().unwrap();
         assert!(m.gravity && m.harmonics == 1 && !m.is_kinematic());
         assert_eq!(m.name(), "gravity+harmonics+h12q1+h3q2");
+        let m: Model = "gp+harmonics".parse().unwrap();
+        assert!(m.gp && !m.is_kinematic());
+        assert_eq!(m.name(), "harmonics+gp");
         assert_eq!(m.name().parse::<Model>().unwrap(), m);
         for bad in ["h0q1", "h17q1", "h12q0", "h12q17", "h12", "hq1", "h012q1"] {
             assert!(bad.parse::<Model>().is_err(), "{bad}");

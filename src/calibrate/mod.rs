@@ -14,6 +14,8 @@
 //! - [`record`]: the identification record (`identified.json`);
 //! - [`verdict`]: whether a result may be written (undetermined data, a worse robot);
 //! - [`on_kind`]: identification on a measurement-kind file (distance, plane, sphere, targets);
+//! - [`kernel`]: the kernel residual of the model term `gp` (a Gaussian process on the
+//!   parametric model's residuals, `kernel.json`);
 //! - [`cv`]: K-fold cross-validation, held-out splits and model choice (`identify --cv`);
 //! - [`diagnostics`]: parameter σ and correlations, leverage and Cook's distance, predicted
 //!   position σ (`identified.json` `diagnostics`);
@@ -22,6 +24,7 @@
 pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
+pub mod kernel;
 pub mod on_kind;
 pub mod pipeline;
 pub mod plausibility;

@@ -12,6 +12,7 @@
 
 use super::cv::{self, Model};
 use super::diagnostics::{diagnose, Subject};
+use super::kernel::{position_errors, KernelResidual};
 use super::on_kind::KindOutcome;
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
@@ -60,6 +61,9 @@ pub struct TrackerOutcome {
     pub record: IdentifiedRecord,
     /// Which of all the nominal robot's parameters the calibration poses identify.
     pub identifiability: Identifiability,
+    /// The kernel residual of a model with the term `gp` (`kernel.json`), fitted on the
+    /// calibration rows' residuals after the parametric model; `robot.toml` cannot carry it.
+    pub kernel: Option<KernelResidual>,
 }
 
 impl IdentifyRequest {
@@ -150,11 +154,13 @@ impl IdentifyRequest {
         // With models the best model by CV is the one identified.
         let mut robot = nominal.clone();
         let mut choice = None;
+        let mut kernel_term = false;
         if !self.models.is_empty() {
             let folds = self.cv.unwrap_or(5);
             let (cvs, best) = cv::choose_model(nominal, &self.models, &d, folds, &setup)?;
             (robot, params) =
                 self.models[best].robot_and_params(nominal, &d, registration, &self.fix)?;
+            kernel_term = self.models[best].gp;
             choice = Some((cvs, best));
         }
         let nominal = robot;
@@ -165,7 +171,7 @@ impl IdentifyRequest {
                     compliance: self.compliance.is_some(),
                     ..Model::KINEMATIC
                 };
-                let model = (&nominal, &params[..], model.name());
+                let model = (&nominal, &params[..], model.name(), false);
                 Some(cv::cross_validate(model, &d, k, &setup)?)
             }
             (None, None) => None,
@@ -182,9 +188,19 @@ impl IdentifyRequest {
                 &nominal, all, &c, source, &spec,
             ));
         }
+        // The kernel residual's second stage, on the calibration rows' residuals.
+        let kernel = kernel_term
+            .then(|| KernelResidual::fit(&nominal, &c, &d))
+            .transpose()?;
         let validation = val
             .as_ref()
-            .map(|v| validate_file(&nominal, &c, v))
+            .map(|v| -> Result<FileValidation> {
+                let mut f = validate_file(&nominal, &c, v)?;
+                if let Some(k) = &kernel {
+                    f.after_mm = super::ErrorStats::of(&position_errors(&c, Some(k), v)?);
+                }
+                Ok(f)
+            })
             .transpose()?;
         // The per-point residuals (16 bytes a row) are dropped after the check of a worse
         // robot and computed again after the diagnostics, which need memory of their own.
@@ -259,6 +275,7 @@ impl IdentifyRequest {
             diagnostics: Some(diagnostics),
             fixed: super::record::names(&self.fix),
             holdout: self.holdout.map(|h| format!("{}/{}", h.last, h.every)),
+            kernel_residual: kernel.as_ref().map(|k| k.hyperparameters.clone()),
             priors,
             registration: Some(registration),
             registration_frame: Some((&c.frame).into()),
@@ -279,6 +296,7 @@ impl IdentifyRequest {
             validation,
             residuals,
             record,
+            kernel,
         })
     }
 }

@@ -163,6 +163,10 @@ pub struct IdentifiedRecord {
     pub instrument_unknowns: Option<BTreeMap<String, Real>>,
     /// Iterations of the solve.
     pub iterations: usize,
+    /// The kernel residual's hyperparameters (a model with the term `gp`; the residual itself
+    /// is `kernel.json`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kernel_residual: Option<super::kernel::KernelHyper>,
     /// The readings' kind (kind file).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kind: Option<Kind>,

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Result;
 
 use calbench::calibrate::compensate::{compensate_row, compensate_targets};
+use calbench::calibrate::kernel::KERNEL_FILE;
 use calbench::error::Error;
 use calbench::measurement::csv::read_targets;
 use calbench::numeric::Real;
@@ -70,6 +71,16 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
     } else {
         builtin::load(&args.identified)?
     };
+    let kernel = Path::new(&args.identified).with_file_name(KERNEL_FILE);
+    if kernel.is_file() {
+        eprintln!(
+            "warning: {} holds a kernel residual (model term `gp`) that compensate cannot \
+             carry: the program is corrected with {}'s parametric model alone, without the \
+             residual's correction",
+            kernel.display(),
+            args.identified
+        );
+    }
     let (n, m) = (ident.dof(), nominal.dof());
     if n != m {
         let msg = format!("{} has {n} joints, the nominal robot {m}", args.identified);

@@ -24,13 +24,16 @@ use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{Param, Robot};
 
 use super::check_out_folder;
+use calbench::calibrate::kernel::KERNEL_FILE;
 
-/// The files always written (`robot.urdf` and the plots depend on the options).
-const OUTPUTS: [&str; 4] = [
+/// The files always written, and `kernel.json` (`robot.urdf` and the plots depend on the
+/// options; `kernel.json` on the model chosen).
+const OUTPUTS: [&str; 5] = [
     "identified.json",
     "residuals.csv",
     "robot.toml",
     "report.md",
+    KERNEL_FILE,
 ];
 
 /// Arguments of `calbench identify`.
@@ -270,6 +273,20 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         extra.push(("dh-table.csv", table));
     }
     let urdf = compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?;
+    if let Some(k) = &o.kernel {
+        extra.push((KERNEL_FILE, k.to_json()?));
+        let mut carried = vec!["robot.toml"];
+        carried.extend(
+            extra
+                .iter()
+                .map(|(name, _)| *name)
+                .filter(|n| *n != KERNEL_FILE),
+        );
+        if urdf.is_some() {
+            carried.push("robot.urdf");
+        }
+        eprintln!("warning: {}", kernel_not_carried(&carried));
+    }
     let record = IdentifyRecord::of(o, urdf);
     write_identified_with(out, &record, &additions(o), &extra)?;
     if let (Some(cvs), Some(best)) = (&o.record.cv_models, o.record.best_model()) {
@@ -316,6 +333,16 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// What the files `carried` cannot hold of a model with a kernel residual.
+pub(super) fn kernel_not_carried(carried: &[&str]) -> String {
+    format!(
+        "the chosen model's kernel residual `gp` is written to {KERNEL_FILE} only: {} carry the \
+         parametric model without it, and `compensate` and the controller exports cannot apply \
+         it (their predictions lack the residual's correction)",
+        carried.join(", ")
+    )
 }
 
 /// The method `name` with the `--set KEY=VALUE` options, read like a scenario's

@@ -26,7 +26,8 @@ use super::check_out_folder;
 const SOCKET_OUTPUTS: [&str; 4] = ["identified.json", "robot.toml", "task.json", TASK_FILE];
 
 /// The files written.
-const OUTPUTS: [&str; 6] = [
+const OUTPUTS: [&str; 7] = [
+    calbench::calibrate::kernel::KERNEL_FILE,
     "identified.json",
     "residuals.csv",
     "robot.toml",
@@ -44,7 +45,7 @@ pub struct TaskArgs {
     #[arg(long, value_parser = super::entry_of(METHODS, |m| m.name, |m| m.summary))]
     pub method: &'static MethodEntry,
     /// Candidate models (terms `kinematic`, `beta`, `compliance`, `gravity`, `harmonics`,
-    /// `harmonics2`, `h{n}q{j}`, joined by `+`);
+    /// `harmonics2`, `h{n}q{j}`, `gp`, joined by `+`);
     /// several are compared by 5-fold cross-validation on the calibration rows alone and the
     /// best is identified. Default: `kinematic`.
     #[arg(long, value_delimiter = ',')]
@@ -86,7 +87,14 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let j = entry.json(&o, &val)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
-    let files = task.head.files(&j.to_value())?;
+    let mut files = task.head.files(&j.to_value())?.to_vec();
+    if let Some(k) = &o.kernel {
+        files.push((calbench::calibrate::kernel::KERNEL_FILE, k.to_json()?));
+        eprintln!(
+            "warning: {}",
+            super::identify::kernel_not_carried(&["robot.toml"])
+        );
+    }
     write_identified_with(&args.out, &record, &additions(&o), &files)?;
     if let Some(c) = &origin.choice {
         out!(

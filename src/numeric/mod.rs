@@ -7,6 +7,7 @@
 //!   angles, rotation vectors and quaternions (re-exported here).
 //! - `trig`: [`sin_cos_slice`], the sines and cosines of all joint angles of a pose at once,
 //!   and [`sin_cos`], the same bits for one angle.
+//! - [`gp`]: Gaussian-process regression (ARD squared-exponential kernel, marginal likelihood).
 //! - [`linalg`]: the Cholesky factorisation and solve of the normal equations.
 //! - [`symeig`]: eigenvalues of small symmetric matrices, several matrices at once.
 //! - `gram`: the normal equations `JᵀPJ`, `JᵀPr` of the Gauss–Newton methods.
@@ -20,6 +21,7 @@
 
 pub mod dist;
 mod frames;
+pub mod gp;
 pub(crate) mod gram;
 pub mod linalg;
 pub mod nan;

@@ -22,6 +22,7 @@ mod harmonics;
 mod html;
 mod instruments;
 mod interchange;
+mod kernel;
 mod kinds;
 mod layers;
 mod live_run;

@@ -23,7 +23,6 @@ use serde::{Deserialize, Serialize};
 use super::cv::Model;
 use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
-use super::validation::residual_vectors;
 use crate::error::{Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::csv::read_measurements_text;
@@ -506,13 +505,11 @@ impl TaskEntry<'_> {
 
     /// `task.json` of the entry whose identification is `outcome`, scored on the validation
     /// rows `val` (docs/formats.md § 9.3): its figure and interval the task's metric of their
-    /// position errors, in the open division for a model beyond the kinematic one or a method
-    /// not calbench's.
+    /// position errors (with the kernel residual's prediction where the entry has one), in the
+    /// open division for a model beyond the kinematic one or a method not calbench's.
     pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<TaskRecord> {
-        let errors: Vec<Real> = residual_vectors(&outcome.calibrated, val)?
-            .iter()
-            .map(|v| v.norm())
-            .collect();
+        let errors =
+            super::kernel::position_errors(&outcome.calibrated, outcome.kernel.as_ref(), val)?;
         let (models, kinematic) = match self.origin.and_then(|o| o.choice.as_ref()) {
             // The task's candidates, chosen before the request: the request holds one.
             Some(c) => Self::model_terms(outcome, &[self.candidates_considered()[c.best]]),
