@@ -8,9 +8,8 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use sha2::{Digest, Sha256};
-
 use crate::common::root;
+use crate::regenerate::sha256;
 
 /// Every file under `dir`, as its path relative to `base` (with `/`) and its bytes' SHA-256.
 fn hashes(base: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
@@ -25,11 +24,7 @@ fn hashes(base: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
                 .to_string_lossy()
                 .replace('\\', "/");
             let bytes = std::fs::read(&p).expect("a committed output");
-            let hex: String = Sha256::digest(&bytes)
-                .iter()
-                .map(|b| format!("{b:02x}"))
-                .collect();
-            out.insert(rel, hex);
+            out.insert(rel, sha256(&bytes));
         }
     }
 }

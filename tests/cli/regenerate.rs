@@ -67,7 +67,8 @@ fn listed() -> BTreeMap<String, String> {
         .collect()
 }
 
-fn sha256(bytes: &[u8]) -> String {
+/// The SHA-256 of `bytes` in lower-case hex, as `sha256sum` writes it.
+pub fn sha256(bytes: &[u8]) -> String {
     Sha256::digest(bytes)
         .iter()
         .map(|b| format!("{b:02x}"))
