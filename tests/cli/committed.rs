@@ -1,14 +1,15 @@
 //! The committed outputs (every file under `results/`: the papers' run summaries, the CI
 //! guard's baseline, the README's and REPRODUCTION.md's figures and tables) are listed with
 //! their SHA-256 in `results/SHA256SUMS` (the `sha256sum` format), so that a committed output
-//! changes only on purpose: with the list, in the same commit, named in CHANGELOG.md.
+//! changes only on purpose: with the list, in the same commit, named in CHANGELOG.md. Beside
+//! the list, `results/REGENERATE.toml` gives the command that writes each of them
+//! (`regenerate.rs`).
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use sha2::{Digest, Sha256};
-
 use crate::common::root;
+use crate::regenerate::sha256;
 
 /// Every file under `dir`, as its path relative to `base` (with `/`) and its bytes' SHA-256.
 fn hashes(base: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
@@ -23,11 +24,7 @@ fn hashes(base: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
                 .to_string_lossy()
                 .replace('\\', "/");
             let bytes = std::fs::read(&p).expect("a committed output");
-            let hex: String = Sha256::digest(&bytes)
-                .iter()
-                .map(|b| format!("{b:02x}"))
-                .collect();
-            out.insert(rel, hex);
+            out.insert(rel, sha256(&bytes));
         }
     }
 }
@@ -39,6 +36,7 @@ fn every_committed_output_has_the_sha256_its_list_gives() {
     let mut got = BTreeMap::new();
     hashes(&results, &results, &mut got);
     got.remove("SHA256SUMS");
+    got.remove("REGENERATE.toml");
     let want: String = got
         .iter()
         .map(|(path, hex)| format!("{hex}  {path}\n"))

@@ -39,6 +39,7 @@ mod record_keys;
 mod record_task;
 mod records;
 mod refusals;
+mod regenerate;
 mod report_baseline;
 mod results;
 mod results_team;

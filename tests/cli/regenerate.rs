@@ -1,0 +1,318 @@
+//! Every committed output regenerates from its command (docs: REPRODUCTION.md, "Regenerating
+//! the committed outputs"). `results/REGENERATE.toml` gives, for each file of
+//! `results/SHA256SUMS`, the command that writes it and the file of the command's output it is
+//! a copy of. The fast test checks the table against the list, the scenarios and the commands
+//! the documents show; the ignored one runs every command with this build's `calbench` and
+//! compares bytes, naming every file that differs:
+//!
+//! ```text
+//! cargo test --test cli regenerate -- --ignored
+//! CALBENCH_REGENERATE=ban-fig3,li cargo test --test cli regenerate -- --ignored
+//! ```
+//!
+//! (`CALBENCH_REGENERATE`: a comma-separated list of the table's group names; unset, every
+//! group. Qiao's §4.1 groups take 10–20 minutes each in a release build.)
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+use sha2::{Digest, Sha256};
+
+use crate::common::{bin, root, tmp_dir};
+
+/// `results/REGENERATE.toml`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Table {
+    group: Vec<Group>,
+}
+
+/// One run and the committed files it writes.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Group {
+    name: String,
+    #[serde(default)]
+    cwd: Option<String>,
+    #[serde(default)]
+    scenario: Option<Edited>,
+    commands: Vec<Vec<String>>,
+    documented: Vec<(String, String)>,
+    files: BTreeMap<String, String>,
+}
+
+/// A committed scenario with one text replaced (written as `{scenario}`).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Edited {
+    from: String,
+    replace: (String, String),
+}
+
+fn table() -> Table {
+    let path = root().join("results/REGENERATE.toml");
+    let text = std::fs::read_to_string(&path).expect("results/REGENERATE.toml");
+    toml::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// The paths `results/SHA256SUMS` lists, with their SHA-256.
+fn listed() -> BTreeMap<String, String> {
+    let text = std::fs::read_to_string(root().join("results/SHA256SUMS")).expect("SHA256SUMS");
+    text.lines()
+        .map(|l| {
+            let (hex, path) = l.split_once("  ").expect("`HEX  PATH` lines");
+            (path.to_string(), hex.to_string())
+        })
+        .collect()
+}
+
+/// The SHA-256 of `bytes` in lower-case hex, as `sha256sum` writes it.
+pub fn sha256(bytes: &[u8]) -> String {
+    Sha256::digest(bytes)
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+/// A command's arguments as the documents show them: without `--out` and its folder, with
+/// `{scenario}` spelled as the scenario it is made from.
+fn shown(args: &[String], g: &Group) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut it = args.iter();
+    while let Some(a) = it.next() {
+        if a == "--out" {
+            it.next();
+        } else if a == "{scenario}" {
+            out.push(g.scenario.as_ref().expect("[group.scenario]").from.clone());
+        } else {
+            out.push(a.clone());
+        }
+    }
+    out
+}
+
+/// The arguments of a documented command text (`calbench ARGS` or `cargo run --release`).
+fn documented_args(text: &str) -> Vec<String> {
+    let words: Vec<String> = text.split_whitespace().map(str::to_string).collect();
+    if let Some(rest) = words.strip_prefix(&["cargo".into(), "run".into(), "--release".into()]) {
+        return rest.iter().skip_while(|w| *w == "--").cloned().collect();
+    }
+    assert_eq!(
+        words.first().map(String::as_str),
+        Some("calbench"),
+        "{text}"
+    );
+    let mut out = Vec::new();
+    let mut it = words[1..].iter();
+    while let Some(w) = it.next() {
+        if w == "--out" {
+            it.next();
+        } else {
+            out.push(w.clone());
+        }
+    }
+    out
+}
+
+#[test]
+fn every_committed_output_has_one_documented_command_that_writes_it() {
+    let t = table();
+    let listed = listed();
+    let mut owner: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
+    let mut names = BTreeSet::new();
+    let mut problems = Vec::new();
+    for g in &t.group {
+        if !names.insert(g.name.as_str()) {
+            problems.push(format!("group {} appears twice", g.name));
+        }
+        for f in g.files.keys() {
+            owner.entry(f).or_default().push(&g.name);
+        }
+        if g.documented.len() != g.commands.len() {
+            problems.push(format!(
+                "group {}: {} commands, {} documented",
+                g.name,
+                g.commands.len(),
+                g.documented.len()
+            ));
+        }
+        let scenarios = g
+            .commands
+            .iter()
+            .flatten()
+            .filter(|a| a.starts_with("scenarios/"))
+            .chain(g.scenario.as_ref().map(|s| &s.from));
+        for s in scenarios {
+            if !root().join(s).is_file() {
+                problems.push(format!("group {}: {s} does not exist", g.name));
+            }
+        }
+        if let Some(s) = &g.scenario {
+            let text = std::fs::read_to_string(root().join(&s.from)).unwrap_or_default();
+            if text.matches(&s.replace.0).count() != 1 {
+                problems.push(format!(
+                    "group {}: {:?} is not in {} exactly once",
+                    g.name, s.replace.0, s.from
+                ));
+            }
+        }
+        for (args, (doc, text)) in g.commands.iter().zip(&g.documented) {
+            let body = std::fs::read_to_string(root().join(doc)).unwrap_or_default();
+            let flat = body.split_whitespace().collect::<Vec<_>>().join(" ");
+            if !flat.contains(text.as_str()) {
+                problems.push(format!("group {}: {doc} does not show `{text}`", g.name));
+            }
+            let want = documented_args(text);
+            let have = shown(args, g);
+            let same = want.len() == have.len()
+                && want
+                    .iter()
+                    .zip(&have)
+                    .all(|(w, h)| h.contains("{out}") || w == h);
+            if !same {
+                problems.push(format!(
+                    "group {}: the table runs `calbench {}`, {doc} shows `{text}`",
+                    g.name,
+                    have.join(" ")
+                ));
+            }
+        }
+    }
+    for (f, groups) in &owner {
+        if !listed.contains_key(*f) {
+            problems.push(format!(
+                "{f} (group {groups:?}) is not in results/SHA256SUMS"
+            ));
+        } else if groups.len() > 1 {
+            problems.push(format!("{f} is written by groups {groups:?}"));
+        }
+    }
+    for f in listed.keys() {
+        if !owner.contains_key(f.as_str()) {
+            problems.push(format!("{f} has no command in results/REGENERATE.toml"));
+        }
+    }
+    assert!(t.group.len() >= 10, "only {} groups", t.group.len());
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+}
+
+/// `{out}` and `{scenario}` replaced in an argument.
+fn fill(a: &str, out: &Path, scenario: &Path) -> String {
+    a.replace("{out}", out.to_str().unwrap())
+        .replace("{scenario}", scenario.to_str().unwrap())
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        let dest = to.join(p.file_name().unwrap());
+        if p.is_dir() {
+            copy_dir(&p, &dest);
+        } else {
+            std::fs::copy(&p, &dest).unwrap();
+        }
+    }
+}
+
+/// Runs one group into `out`; returns the files that differ from the committed ones.
+fn regenerate(g: &Group, out: &Path, listed: &BTreeMap<String, String>) -> Vec<String> {
+    std::fs::create_dir_all(out).unwrap();
+    // The edited scenario sits where its original does, beside a copy of robots/, so that
+    // its relative paths (`../robots/…`) resolve as in the repository.
+    let mut scenario = PathBuf::new();
+    if let Some(s) = &g.scenario {
+        let text = std::fs::read_to_string(root().join(&s.from)).unwrap();
+        scenario = out.join("edited").join(&s.from);
+        std::fs::create_dir_all(scenario.parent().unwrap()).unwrap();
+        std::fs::write(&scenario, text.replacen(&s.replace.0, &s.replace.1, 1)).unwrap();
+        copy_dir(&root().join("robots"), &out.join("edited/robots"));
+    }
+    let run = out.join("run");
+    let cwd: PathBuf = match &g.cwd {
+        Some(c) => PathBuf::from(fill(c, &run, &scenario)),
+        None => root().to_path_buf(),
+    };
+    std::fs::create_dir_all(&cwd).unwrap();
+    let mut stdout = Vec::new();
+    for args in &g.commands {
+        let args: Vec<String> = args.iter().map(|a| fill(a, &run, &scenario)).collect();
+        let o = bin().args(&args).current_dir(&cwd).output().unwrap();
+        if !o.status.success() {
+            return vec![format!(
+                "group {}: calbench {} failed: {}",
+                g.name,
+                args.join(" "),
+                String::from_utf8_lossy(&o.stderr)
+            )];
+        }
+        stdout = o.stdout;
+    }
+    let mut bad = Vec::new();
+    for (committed, made) in &g.files {
+        let bytes = if made == "{stdout}" {
+            Some(stdout.clone())
+        } else {
+            std::fs::read(run.join(made)).ok()
+        };
+        match bytes {
+            None => bad.push(format!(
+                "{committed}: {made} was not written (group {})",
+                g.name
+            )),
+            Some(b) if listed.get(committed) != Some(&sha256(&b)) => bad.push(format!(
+                "{committed}: differs from {made} of group {} (sha256 {})",
+                g.name,
+                sha256(&b)
+            )),
+            Some(_) => {}
+        }
+    }
+    bad
+}
+
+#[test]
+#[ignore = "minutes to hours: runs every command of results/REGENERATE.toml"]
+fn regenerate_every_committed_output_byte_for_byte() {
+    let t = table();
+    let listed = listed();
+    let only: Option<BTreeSet<String>> = std::env::var("CALBENCH_REGENERATE")
+        .ok()
+        .filter(|v| !v.trim().is_empty())
+        .map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
+    if let Some(only) = &only {
+        let names: BTreeSet<String> = t.group.iter().map(|g| g.name.clone()).collect();
+        let unknown: Vec<_> = only.difference(&names).collect();
+        assert!(
+            unknown.is_empty(),
+            "CALBENCH_REGENERATE names {unknown:?}; the groups are {names:?}"
+        );
+    }
+    let dir = tmp_dir("cli-regenerate");
+    let mut bad = Vec::new();
+    let mut checked = 0;
+    for g in &t.group {
+        if only.as_ref().is_some_and(|o| !o.contains(&g.name)) {
+            continue;
+        }
+        let start = std::time::Instant::now();
+        let b = regenerate(g, &dir.join(&g.name), &listed);
+        eprintln!(
+            "{}: {} of {} files differ ({:.0} s)",
+            g.name,
+            b.len(),
+            g.files.len(),
+            start.elapsed().as_secs_f64()
+        );
+        checked += g.files.len();
+        bad.extend(b);
+    }
+    assert!(checked > 0, "no file checked");
+    assert!(
+        bad.is_empty(),
+        "{} of {checked} committed files do not regenerate:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
+}
