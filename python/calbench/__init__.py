@@ -646,6 +646,8 @@ def task(task, method="lm", *, models=None, name=None, out=None):
             ``methods``. A Python function enters the open division as ``python:<name>``.
         models: candidate models (``["kinematic", "beta"]``), chosen by 5-fold
             cross-validation on the task's calibration rows alone when there are several.
+            Without them (or ``[]``), the task's own ``[models]`` are compared as
+            ``calbench task`` without ``--models`` compares them, else ``kinematic``.
         name: the Python method's name (default: the function's ``__name__``).
         out: a folder to write the identify outputs, ``task.json`` and ``task.toml`` (the task
             file as run) into.

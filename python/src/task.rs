@@ -59,17 +59,19 @@ pub(crate) fn task<'py>(
             "expected a method's name or a Python function",
         ));
     };
-    let candidates = match models {
-        None => vec![Model::KINEMATIC],
-        Some(v) if v.is_empty() => vec![Model::KINEMATIC],
-        Some(v) => v
-            .iter()
-            .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
-            .collect::<PyResult<Vec<_>>>()?,
-    };
+    let given = models
+        .unwrap_or_default()
+        .iter()
+        .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
+        .collect::<PyResult<Vec<_>>>()?;
     let (json, record, robot) = py
         .detach(|| {
-            let (request, val) = t.request(spec, &candidates)?;
+            // The candidates as `calbench task` decides them: the caller's, else the task's
+            // own `[models]` (docs/formats.md § 9.1), else `kinematic`.
+            let (request, val, mut models) = t.entry_request(spec, &given)?;
+            if !given.is_empty() {
+                models.fixed_by = "caller";
+            }
             let IdentifyOutcome::Tracker(o) = request.run()? else {
                 return Err(calbench::Error::Compute(
                     "a task's data are a tracker's measurements".into(),
@@ -78,9 +80,8 @@ pub(crate) fn task<'py>(
             let entry = TaskEntry {
                 task: &t,
                 method: method_name,
-                candidates: &candidates,
+                models: &models,
                 entrant,
-                origin: None,
             };
             let j = entry.json(&o, &val)?;
             let files = t.head.files(&j.to_value())?;

@@ -22,7 +22,8 @@ def gauss_newton(problem):
 
 def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp_path):
     task = root / "tasks" / "barrett-wam.toml"
-    py = calbench.task(task, gauss_newton, out=tmp_path / "py")
+    # The kinematic model alone (the task's own `[models]` would compare four by CV).
+    py = calbench.task(task, gauss_newton, models=["kinematic"], out=tmp_path / "py")
     j = py["task"]
     assert j["format"] == "calbench-task-1"
     assert j["task"] == "barrett-wam"
@@ -40,7 +41,7 @@ def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp
     assert lm["task_hash"] == j["task_hash"]
     assert abs(lm["value"] - j["value"]) < 1e-3 * lm["value"], (lm["value"], j["value"])
     # A calbench method by name is the command line's entry.
-    same = calbench.task(task, "lm")["task"]
+    same = calbench.task(task, "lm", models=["kinematic"])["task"]
     assert same["value"] == lm["value"] and same["division"] == "closed"
 
 
@@ -64,3 +65,35 @@ def test_a_socket_task_runs_from_python_as_the_command_line_runs_it(root, cli, t
         calbench.task(task, gauss_newton)
     with pytest.raises(calbench.SettingError, match="models.*kinematic model only"):
         calbench.task(task, "lm", models=["kinematic", "beta"])
+
+
+def test_a_tasks_own_models_are_compared_from_python_as_on_the_command_line(root, cli, tmp_path):
+    """Without ``models``, ``calbench.task`` compares the task's own ``[models]`` (docs/formats.md
+    § 9.1) as ``calbench task`` without ``--models`` does: the same folder, byte for byte.
+    The IPA UR10 Series D task given two candidates, two folds and two fold seeds, written here
+    so that it runs in seconds in a debug build."""
+    text = (root / "tasks" / "ipa-ur10-series-d.toml").read_text()
+    for rel in ["ipa-ur10.mapping.toml", "ipa-ur10-series-d.split"]:
+        text = text.replace(f'"{rel}"', json.dumps(str(root / "tasks" / rel)))
+    text = text.replace('"../', f'"{root}/')
+    task = tmp_path / "ur10-d-two.toml"
+    task.write_text(
+        text + '\n[models]\ncandidates = ["kinematic", "beta"]\nfolds = 2\nfold_seeds = [0, 1]\n'
+    )
+    py = calbench.task(task, "lm", out=tmp_path / "py")
+    cli("task", task, "--method", "lm", "--out", tmp_path / "cli")
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert {"identified.json", "task.json", "task.toml"} <= set(names)
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == names
+    for name in names:
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    j = json.loads((tmp_path / "cli" / "task.json").read_text())
+    assert py["task"] == j
+    assert j["candidates_fixed_by"] == "task" and j["chosen_by"] == "cv"
+    assert j["candidates"] == ["kinematic", "beta"]
+    assert j["cv_choice"]["fold_seeds"] == [0, 1]
+    assert [m["model"] for m in j["cv_choice"]["models"]] == ["kinematic", "beta"]
+    # Candidates the caller gives replace the task's, named as the caller's.
+    given = calbench.task(task, "lm", models=["kinematic"])["task"]
+    assert given["candidates"] == ["kinematic"] and given["chosen_by"] == "given"
+    assert given["candidates_fixed_by"] == "caller" and given["cv_choice"] is None

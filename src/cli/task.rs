@@ -70,7 +70,6 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
     let (request, val, origin) = task.entry_request(spec, &args.models)?;
-    let candidates = origin.candidates.clone();
     let IdentifyOutcome::Tracker(o) = request.run()? else {
         unreachable!("a task's data are a tracker's measurements")
     };
@@ -80,9 +79,8 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let entry = TaskEntry {
         task: &task,
         method: args.method.name.to_string(),
-        candidates: &candidates,
+        models: &origin,
         entrant: "calbench".into(),
-        origin: Some(&origin),
     };
     let j = entry.json(&o, &val)?;
     let urdf = None;

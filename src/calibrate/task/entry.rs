@@ -34,7 +34,8 @@ pub fn shared_rows(cal: &Measurements, val: &Measurements) -> Vec<(usize, usize)
 pub struct EntryModels {
     /// The candidates considered.
     pub candidates: Vec<Model>,
-    /// `task` (the task file's `[models]`), `command line` or `default` (`kinematic`).
+    /// `task` (the task file's `[models]`), `command line` or `default` (`kinematic`); the
+    /// Python entry names the candidates it is given `caller`.
     pub fixed_by: &'static str,
     /// The repeated K-fold choice among the task's candidates, when there are several.
     pub choice: Option<RepeatedChoice>,

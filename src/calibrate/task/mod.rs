@@ -475,13 +475,11 @@ pub struct TaskEntry<'a> {
     pub task: &'a Task,
     /// The method's name.
     pub method: String,
-    /// The candidate models (`[kinematic]` by default).
-    pub candidates: &'a [Model],
+    /// The candidate models, where they come from and the repeated choice among a task's
+    /// own ([`Task::entry_request`]).
+    pub models: &'a EntryModels,
     /// `calbench`, or `python:<name>` for a Python method.
     pub entrant: String,
-    /// Where the candidates came from and the repeated choice among a task's own
-    /// ([`Task::entry_request`]); `None`: given by the caller.
-    pub origin: Option<&'a EntryModels>,
 }
 
 impl TaskEntry<'_> {
@@ -510,14 +508,14 @@ impl TaskEntry<'_> {
     pub fn json(&self, outcome: &TrackerOutcome, val: &Measurements) -> Result<TaskRecord> {
         let errors =
             super::kernel::position_errors(&outcome.calibrated, outcome.kernel.as_ref(), val)?;
-        let (models, kinematic) = match self.origin.and_then(|o| o.choice.as_ref()) {
+        let considered = &self.models.candidates;
+        let (models, kinematic) = match &self.models.choice {
             // The task's candidates, chosen before the request: the request holds one.
-            Some(c) => Self::model_terms(outcome, &[self.candidates_considered()[c.best]]),
-            None => Self::model_terms(outcome, self.candidates),
+            Some(c) => Self::model_terms(outcome, &[considered[c.best]]),
+            None => Self::model_terms(outcome, considered),
         };
         let open = !kinematic || self.entrant != "calbench";
         let t = self.task;
-        let considered = self.candidates_considered();
         Ok(TaskRecord {
             division: if open {
                 Division::Open
@@ -527,16 +525,11 @@ impl TaskEntry<'_> {
             models,
             chosen_by: if considered.len() > 1 { "cv" } else { "given" }.into(),
             candidates: considered.iter().map(Model::name).collect(),
-            candidates_fixed_by: Some(self.origin.map_or("caller", |o| o.fixed_by).into()),
-            cv_choice: self.origin.and_then(|o| o.choice.clone()),
+            candidates_fixed_by: Some(self.models.fixed_by.into()),
+            cv_choice: self.models.choice.clone(),
             entrant: self.entrant.to_string(),
             ..t.head.record(t.metric, &self.method, errors)
         })
-    }
-
-    /// The candidate models considered: the task's, or the caller's.
-    fn candidates_considered(&self) -> &[Model] {
-        self.origin.map_or(self.candidates, |o| &o.candidates)
     }
 }
 
