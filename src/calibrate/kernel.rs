@@ -92,7 +92,7 @@ pub struct KernelResidual {
 /// The inputs of a pose: `sin q_j, cos q_j` of each of `joints` (0-based), into `out`.
 fn features(q: &[Real], joints: &[usize], out: &mut [Real]) {
     for (k, &j) in joints.iter().enumerate() {
-        let (s, c) = q[j].sin_cos();
+        let (s, c) = crate::numeric::sin_cos(q[j]);
         out[2 * k] = s;
         out[2 * k + 1] = c;
     }

@@ -436,5 +436,5 @@ pub fn maximise(
 }
 
 #[cfg(test)]
-#[path = "gp_tests.rs"]
+#[path = "tests/gp.rs"]
 mod tests;
