@@ -3,7 +3,9 @@
 //! `eta_not_determinable`, has no η, and counts in no η figure; without tracker noise there is
 //! no bound and the same parameter has its η again.
 
-use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_scenario};
+use crate::common::{
+    calbench_ok, load_json, path_arg, read, threads_and_merged_shards, tmp_dir, write_scenario,
+};
 
 /// LS on random poses with three injected errors: two far above the tracker noise, and d4 at
 /// 1e-6 mm, thousands of times below the few µm of σ that 25 points of 7.5 µm noise give it.
@@ -98,24 +100,7 @@ fn without_tracker_noise_there_is_no_bound_and_every_error_counts() {
 fn threads_and_shards_give_the_same_determinable_figures() {
     let dir = tmp_dir("determinable-shards");
     let sc = write_scenario(&dir, "s.toml", &STUDY.replace("NOISE", ""));
-    let run = |out: &std::path::Path, extra: &[&str]| {
-        let mut args = vec!["run", path_arg(&sc), "--out", path_arg(out)];
-        args.extend_from_slice(extra);
-        calbench_ok(&args);
-    };
-    let (one, two) = (dir.join("one"), dir.join("two"));
-    run(&one, &["--threads", "1"]);
-    run(&two, &["--threads", "2"]);
-    let (s0, s1, merged) = (dir.join("s0"), dir.join("s1"), dir.join("merged"));
-    run(&s0, &["--shard", "0/2"]);
-    run(&s1, &["--shard", "1/2"]);
-    calbench_ok(&[
-        "merge",
-        path_arg(&s0),
-        path_arg(&s1),
-        "--out",
-        path_arg(&merged),
-    ]);
+    let [one, two, merged] = threads_and_merged_shards(&dir, &sc);
     let results = |d: &std::path::Path| {
         let s = load_json(&d.join("summary.json"));
         (s["results"].clone(), s["comparisons"].clone())

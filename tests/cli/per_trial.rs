@@ -8,7 +8,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::common::{
-    calbench_ok, kill_once_checkpointed, load_json, path_arg, read, root, tmp_dir, write_scenario,
+    calbench_ok, kill_once_checkpointed, load_json, path_arg, read, root,
+    threads_and_merged_shards, tmp_dir, write_scenario,
 };
 
 /// One strategy, DETMAX over a small pool, so that `simulate` (which measures the first
@@ -90,24 +91,7 @@ fn each_trial_optimises_its_own_set_unless_told_once_per_study() {
 fn sets_optimised_per_trial_give_the_same_bytes_across_threads_shards_and_resume() {
     let dir = tmp_dir("cli-per-trial-bytes");
     let sc = write_scenario(&dir, "s", SMALL);
-    let sc = path_arg(&sc);
-    let run = |out: &Path, extra: &[&str]| {
-        let args = [&["run", sc, "--out", path_arg(out)][..], extra].concat();
-        calbench_ok(&args);
-    };
-    let (one, two) = (dir.join("one"), dir.join("two"));
-    run(&one, &["--threads", "1"]);
-    run(&two, &["--threads", "2"]);
-    let (s0, s1, merged) = (dir.join("s0"), dir.join("s1"), dir.join("merged"));
-    run(&s0, &["--shard", "0/2"]);
-    run(&s1, &["--shard", "1/2"]);
-    calbench_ok(&[
-        "merge",
-        path_arg(&s0),
-        path_arg(&s1),
-        "--out",
-        path_arg(&merged),
-    ]);
+    let [one, two, merged] = threads_and_merged_shards(&dir, &sc);
     // A checkpoint is written every 256 trials: the killed run needs more than that.
     let long = write_scenario(&dir, "long", &SMALL.replace("trials = 40", "trials = 300"));
     let long = path_arg(&long);

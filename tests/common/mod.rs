@@ -140,6 +140,34 @@ pub fn identified_round_trip(p: &Path, text: &str) {
 }
 
 /// Writes a scenario as `DIR/NAME.toml` and returns its path.
+/// Runs `scenario` three ways under `dir`, as a user spreads one run: at one thread
+/// (`one/`), at two threads (`two/`), and as two shards merged (`s0/`, `s1/`, `merged/`).
+/// Returns the three output folders, `[one, two, merged]`, whose results must agree.
+pub fn threads_and_merged_shards(dir: &Path, scenario: &Path) -> [PathBuf; 3] {
+    let run = |out: &Path, extra: &[&str]| {
+        let args = [
+            &["run", path_arg(scenario), "--out", path_arg(out)][..],
+            extra,
+        ]
+        .concat();
+        calbench_ok(&args);
+    };
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    run(&one, &["--threads", "1"]);
+    run(&two, &["--threads", "2"]);
+    let (s0, s1, merged) = (dir.join("s0"), dir.join("s1"), dir.join("merged"));
+    run(&s0, &["--shard", "0/2"]);
+    run(&s1, &["--shard", "1/2"]);
+    calbench_ok(&[
+        "merge",
+        path_arg(&s0),
+        path_arg(&s1),
+        "--out",
+        path_arg(&merged),
+    ]);
+    [one, two, merged]
+}
+
 pub fn write_scenario(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(format!("{name}.toml"));
     std::fs::write(&p, text).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
