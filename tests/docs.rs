@@ -33,8 +33,6 @@ mod common;
 
 #[path = "docs/anchors.rs"]
 mod anchors;
-#[path = "docs/counts.rs"]
-mod counts;
 
 /// The documents that must exist.
 const REQUIRED: [&str; 4] = [

@@ -3,7 +3,8 @@
 //! `results/SHA256SUMS`, the command that writes it and the file of the command's output it is
 //! a copy of. The fast test checks the table against the list, the scenarios and the commands
 //! the documents show; the ignored one runs every command with this build's `calbench` and
-//! compares bytes, naming every file that differs:
+//! compares bytes, naming every file that differs (the trial-0 groups, seconds each, run in the
+//! fast test too):
 //!
 //! ```text
 //! cargo test --test cli regenerate -- --ignored
@@ -76,7 +77,8 @@ pub fn sha256(bytes: &[u8]) -> String {
 }
 
 /// A command's arguments as the documents show them: without `--out` and its folder, with
-/// `{scenario}` spelled as the scenario it is made from.
+/// `{scenario}` spelled as the scenario it is made from and `{root}/PATH` as `PATH` (the
+/// documents run from the project root).
 fn shown(args: &[String], g: &Group) -> Vec<String> {
     let mut out = Vec::new();
     let mut it = args.iter();
@@ -86,7 +88,7 @@ fn shown(args: &[String], g: &Group) -> Vec<String> {
         } else if a == "{scenario}" {
             out.push(g.scenario.as_ref().expect("[group.scenario]").from.clone());
         } else {
-            out.push(a.clone());
+            out.push(a.strip_prefix("{root}/").unwrap_or(a.as_str()).to_string());
         }
     }
     out
@@ -141,8 +143,9 @@ fn every_committed_output_has_one_documented_command_that_writes_it() {
             .commands
             .iter()
             .flatten()
+            .map(|a| a.strip_prefix("{root}/").unwrap_or(a.as_str()))
             .filter(|a| a.starts_with("scenarios/"))
-            .chain(g.scenario.as_ref().map(|s| &s.from));
+            .chain(g.scenario.as_ref().map(|s| s.from.as_str()));
         for s in scenarios {
             if !root().join(s).is_file() {
                 problems.push(format!("group {}: {s} does not exist", g.name));
@@ -197,10 +200,11 @@ fn every_committed_output_has_one_documented_command_that_writes_it() {
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }
 
-/// `{out}` and `{scenario}` replaced in an argument.
+/// `{out}`, `{scenario}` and `{root}` replaced in an argument.
 fn fill(a: &str, out: &Path, scenario: &Path) -> String {
     a.replace("{out}", out.to_str().unwrap())
         .replace("{scenario}", scenario.to_str().unwrap())
+        .replace("{root}", root().to_str().unwrap())
 }
 
 fn copy_dir(from: &Path, to: &Path) {
@@ -272,28 +276,24 @@ fn regenerate(g: &Group, out: &Path, listed: &BTreeMap<String, String>) -> Vec<S
     bad
 }
 
-#[test]
-#[ignore = "minutes to hours: runs every command of results/REGENERATE.toml"]
-fn regenerate_every_committed_output_byte_for_byte() {
+/// Runs the groups `only` names (every group when `None`), each into its own folder under the
+/// scratch folder `tag`; returns the files checked and the problems.
+fn regenerate_groups(only: Option<&BTreeSet<String>>, tag: &str) -> (usize, Vec<String>) {
     let t = table();
     let listed = listed();
-    let only: Option<BTreeSet<String>> = std::env::var("CALBENCH_REGENERATE")
-        .ok()
-        .filter(|v| !v.trim().is_empty())
-        .map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
-    if let Some(only) = &only {
+    if let Some(only) = only {
         let names: BTreeSet<String> = t.group.iter().map(|g| g.name.clone()).collect();
         let unknown: Vec<_> = only.difference(&names).collect();
         assert!(
             unknown.is_empty(),
-            "CALBENCH_REGENERATE names {unknown:?}; the groups are {names:?}"
+            "the groups {unknown:?} are not in results/REGENERATE.toml; it has {names:?}"
         );
     }
-    let dir = tmp_dir("cli-regenerate");
+    let dir = tmp_dir(tag);
     let mut bad = Vec::new();
     let mut checked = 0;
     for g in &t.group {
-        if only.as_ref().is_some_and(|o| !o.contains(&g.name)) {
+        if only.is_some_and(|o| !o.contains(&g.name)) {
             continue;
         }
         let start = std::time::Instant::now();
@@ -308,6 +308,29 @@ fn regenerate_every_committed_output_byte_for_byte() {
         checked += g.files.len();
         bad.extend(b);
     }
+    (checked, bad)
+}
+
+/// The groups that take seconds in a debug build, run by the fast test: the trial-0 outputs
+/// REPRODUCTION.md counts and reads from (Ban's fig. 7 residuals, Li's identification).
+const FAST: [&str; 3] = ["ban-trial0", "ban-unmodelled-trial0", "li-trial0"];
+
+#[test]
+fn the_trial0_outputs_regenerate_byte_for_byte() {
+    let only: BTreeSet<String> = FAST.iter().map(|s| s.to_string()).collect();
+    let (checked, bad) = regenerate_groups(Some(&only), "cli-regenerate-fast");
+    assert_eq!(checked, FAST.len(), "one file per group");
+    assert!(bad.is_empty(), "{}", bad.join("\n"));
+}
+
+#[test]
+#[ignore = "minutes to hours: runs every command of results/REGENERATE.toml"]
+fn regenerate_every_committed_output_byte_for_byte() {
+    let only: Option<BTreeSet<String>> = std::env::var("CALBENCH_REGENERATE")
+        .ok()
+        .filter(|v| !v.trim().is_empty())
+        .map(|v| v.split(',').map(|s| s.trim().to_string()).collect());
+    let (checked, bad) = regenerate_groups(only.as_ref(), "cli-regenerate");
     assert!(checked > 0, "no file checked");
     assert!(
         bad.is_empty(),
