@@ -14,18 +14,16 @@
 //!
 //! [`maximise`] finds θ by L-BFGS on −L in the logs, bounded to a box, from each of the
 //! given starting points (the best end kept; deterministic). One evaluation costs a Cholesky
-//! factorisation, the inverse from it (for the gradient) and an O(n² d) pass: O(n³) in all.
+//! factorisation (the library's one factor, solve and inverse, `numeric::linalg`), the
+//! inverse from it (for the gradient) and an O(n² d) pass: O(n³) in all.
 //! The factor, the inverse and the kernel matrix live in a [`Workspace`] allocated once per
 //! fit; an evaluation allocates nothing.
 
+use super::linalg;
 use super::Real;
 
 /// The jitter added to the diagonal of `K`, relative to the mean square of the outputs.
 pub const JITTER: Real = 1e-10;
-
-/// Rows per block of the blocked factorisation and inverse (each row of the finished part
-/// is read once per block).
-const BLOCK: usize = 16;
 
 /// Training data: `n` inputs of dimension `d` and `n` outputs of dimension `m`, row-major.
 #[derive(Clone, Copy, Debug)]
@@ -94,90 +92,8 @@ fn dot(a: &[Real], b: &[Real]) -> Real {
     r
 }
 
-/// The Cholesky factor `L` (`A = L Lᵀ`) of the symmetric `n × n` matrix whose lower triangle
-/// `a` holds (row-major), in place, by blocks of rows; `false` when `A` is not positive
-/// definite. The upper triangle is not read.
-pub fn cholesky_in_place(a: &mut [Real], n: usize) -> bool {
-    let mut b = 0;
-    while b < n {
-        let e = (b + BLOCK).min(n);
-        let (done, rest) = a.split_at_mut(b * n);
-        // The block's rows against every finished row: each finished row read once.
-        for j in 0..b {
-            let rj = &done[j * n..j * n + j + 1];
-            for i in b..e {
-                let ri = &mut rest[(i - b) * n..(i - b) * n + n];
-                ri[j] = (ri[j] - dot(&ri[..j], &rj[..j])) / rj[j];
-            }
-        }
-        // Within the block.
-        for i in b..e {
-            let (before, row) = rest.split_at_mut((i - b) * n);
-            let ri = &mut row[..n];
-            for j in b..i {
-                let rj = &before[(j - b) * n..(j - b) * n + j + 1];
-                ri[j] = (ri[j] - dot(&ri[..j], &rj[..j])) / rj[j];
-            }
-            let d = ri[i] - dot(&ri[..i], &ri[..i]);
-            if d.is_nan() || d <= 0.0 {
-                return false;
-            }
-            ri[i] = d.sqrt();
-        }
-        b = e;
-    }
-    true
-}
-
-/// Solves `L Lᵀ x = y` in place (`l` the row-major lower factor of
-/// [`cholesky_in_place`]).
-pub fn cholesky_solve(l: &[Real], n: usize, y: &mut [Real]) {
-    for i in 0..n {
-        y[i] = (y[i] - dot(&l[i * n..i * n + i], &y[..i])) / l[i * n + i];
-    }
-    for i in (0..n).rev() {
-        y[i] /= l[i * n + i];
-        let yi = y[i];
-        let row = &l[i * n..i * n + i];
-        for (yk, lk) in y[..i].iter_mut().zip(row) {
-            *yk -= lk * yi;
-        }
-    }
-}
-
-/// `K⁻¹` from its factor `l`: `U = L⁻ᵀ` into `u` (row j of U, from column j on, is column j
-/// of L⁻¹), then `K⁻¹ = U Uᵀ` into the lower triangle of `l` (which it overwrites).
-fn inverse_in_place(l: &mut [Real], u: &mut [Real], n: usize) {
-    let mut b = 0;
-    while b < n {
-        let e = (b + BLOCK).min(n);
-        let block = &mut u[b * n..e * n];
-        for j in b..e {
-            block[(j - b) * n + j] = 1.0 / l[j * n + j];
-        }
-        for i in b + 1..n {
-            let li = &l[i * n..i * n + i + 1];
-            for j in b..e.min(i) {
-                let uj = &mut block[(j - b) * n..(j - b) * n + n];
-                uj[i] = -dot(&li[j..i], &uj[j..i]) / li[i];
-            }
-        }
-        b = e;
-    }
-    let mut b = 0;
-    while b < n {
-        let e = (b + BLOCK).min(n);
-        for j in 0..e {
-            let uj = &u[j * n..j * n + n];
-            for i in b.max(j)..e {
-                l[i * n + j] = dot(&u[i * n + i..i * n + n], &uj[i..]);
-            }
-        }
-        b = e;
-    }
-}
-
-/// Fills the kernel matrix (`kf`, lower triangle, without noise) and `K` (`l`) at `θ`.
+/// Fills the kernel matrix (`kf`, lower triangle row-major, without noise) and `K` (`l`,
+/// lower triangle column-major, as [`linalg::factor`] reads it) at `θ`.
 fn fill(data: &GpData, theta: &[Real], jitter: Real, ws: &mut Workspace) {
     let (n, d) = (data.n, data.d);
     for i in 0..n {
@@ -194,7 +110,7 @@ fn fill(data: &GpData, theta: &[Real], jitter: Real, ws: &mut Workspace) {
             let r2: Real = xi.iter().zip(xj).map(|(a, b)| (a - b) * (a - b)).sum();
             let k = sf2 * (-0.5 * r2).exp();
             ws.kf[i * n + j] = k;
-            ws.l[i * n + j] = k;
+            ws.l[j * n + i] = k;
         }
         ws.l[i * n + i] += sn2 + jitter;
     }
@@ -211,7 +127,9 @@ pub fn log_marginal_likelihood(
 ) -> Option<Real> {
     let (n, d, m) = (data.n, data.d, data.m);
     fill(data, theta, jitter, ws);
-    if !cholesky_in_place(&mut ws.l, n) {
+    // Positive definiteness (pivot tolerance 0) is all the likelihood needs: the jitter keeps
+    // `K` away from singular.
+    if !linalg::factor(&mut ws.l, n, 0.0) {
         return None;
     }
     let mut fit = 0.0;
@@ -221,7 +139,7 @@ pub fn log_marginal_likelihood(
         for (i, c) in col.iter_mut().enumerate() {
             *c = data.y[i * m + o];
         }
-        cholesky_solve(&ws.l, n, col);
+        linalg::solve(&ws.l, n, col);
         for (i, c) in col.iter().enumerate() {
             ws.alpha[i * m + o] = *c;
             fit += data.y[i * m + o] * c;
@@ -232,7 +150,7 @@ pub fn log_marginal_likelihood(
     let value =
         -0.5 * fit - 0.5 * m as Real * logdet - 0.5 * nm * (2.0 * std::f64::consts::PI).ln();
     if let Some(g) = grad {
-        inverse_in_place(&mut ws.l, &mut ws.w, n);
+        linalg::inverse(&mut ws.l, &mut ws.w, n);
         g.iter_mut().for_each(|v| *v = 0.0);
         let sn2 = (2.0 * theta[d + 1]).exp();
         for i in 0..n {

@@ -1,4 +1,5 @@
-//! Allocation-free dense Cholesky factorisation for the normal equations.
+//! Allocation-free dense Cholesky factorisation, solve and inverse: the one factor of the
+//! library, for the normal equations and the Gaussian process's kernel matrix.
 //!
 //! The kernels are plain Rust run through the numeric kernels' one dispatch: compiled for
 //! AVX2 and FMA where the processor has them, with the same bits either way (every update
@@ -12,17 +13,26 @@ use super::Real;
 /// Relative pivot below which a normal matrix counts as singular.
 pub(crate) const PIVOT_TOL: Real = 1e-12;
 
-/// Factorises the symmetric matrix `a = L Lᵀ` in place: L in the lower triangle, and its
-/// transpose below the diagonal mirrored into the upper one (row i of L contiguous, for the
-/// backward sweep of [`cholesky_solve`]). Reads the lower triangle only. Returns false when a
-/// pivot is not positive or falls below [`PIVOT_TOL`] times its own diagonal entry
-/// (numerically singular; the test is invariant to column scaling, so mm and rad columns
-/// compare), or when `a` is not finite.
+/// Factorises the symmetric matrix `a = L Lᵀ` in place by [`factor`] with the pivot test
+/// [`PIVOT_TOL`]: false when `a` is numerically singular or not finite.
 pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
     let n = a.nrows();
+    factor(a.as_mut_slice(), n, PIVOT_TOL)
+}
+
+/// Factorises the symmetric `n × n` matrix `s = L Lᵀ` in place: the one Cholesky factor of
+/// the library (the normal equations through [`cholesky_in_place`], the Gaussian process's
+/// kernel matrix in `numeric::gp`). `s` is column-major and only its lower triangle is
+/// read. On return L is in the lower triangle and mirrored into the upper one, so that `s`
+/// holds L both column-major (column j of L contiguous, `s[j n + i]`, i ≥ j) and row-major
+/// (row i of L contiguous, `s[i n + j]`, j ≤ i). Returns false when a pivot is not positive
+/// or falls below `tol` times its own diagonal entry before the updates (with `tol` > 0 the
+/// test is numerical singularity, invariant to column scaling, so mm and rad columns compare;
+/// with `tol` = 0 it is positive definiteness), or when a diagonal entry is not finite.
+pub(crate) fn factor(s: &mut [Real], n: usize, tol: Real) -> bool {
     let mut dmax: Real = 0.0;
     for i in 0..n {
-        let d = a[(i, i)];
+        let d = s[i * n + i];
         if !d.is_finite() {
             return false;
         }
@@ -31,14 +41,13 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
     if dmax == 0.0 {
         return n == 0;
     }
-    let s = a.as_mut_slice();
     simd::dispatch(
         #[inline(always)]
-        |_| factor_columns(s, n),
+        |_| factor_columns(s, n, tol),
     )
 }
 
-/// The column loop of [`cholesky_in_place`] on the column-major `s` (n × n).
+/// The column loop of [`factor`] on the column-major `s` (n × n).
 ///
 /// Left-looking: column j from row j down, `a_ij ← fma(−L[i,k], L[j,k], a_ij)` for k = 0, 1,
 /// … in turn (one rounding per term), then scaled by the reciprocal of its pivot's square
@@ -47,7 +56,7 @@ pub(crate) fn cholesky_in_place(a: &mut DMatrix<Real>) -> bool {
 /// side by side), then column j is finished, then column j + 1 takes its term k = j and is
 /// finished: every entry's terms in the same order as one column at a time.
 #[inline(always)]
-fn factor_columns(s: &mut [Real], n: usize) -> bool {
+fn factor_columns(s: &mut [Real], n: usize, tol: Real) -> bool {
     let mut j = 0;
     while j < n {
         let pair = j + 1 < n;
@@ -61,7 +70,7 @@ fn factor_columns(s: &mut [Real], n: usize) -> bool {
                 update::<1>(left, &mut right[..n], n, j);
             }
         }
-        if !finish_column(s, n, j, first) {
+        if !finish_column(s, n, j, first, tol) {
             return false;
         }
         if pair {
@@ -71,7 +80,7 @@ fn factor_columns(s: &mut [Real], n: usize) -> bool {
             for (a, &y) in col[j + 1..].iter_mut().zip(&lj[j + 1..]) {
                 *a = y.mul_add(l, *a);
             }
-            if !finish_column(s, n, j + 1, second) {
+            if !finish_column(s, n, j + 1, second, tol) {
                 return false;
             }
         }
@@ -80,13 +89,13 @@ fn factor_columns(s: &mut [Real], n: usize) -> bool {
     true
 }
 
-/// Checks column j's pivot against its diagonal entry before the updates (`ajj`), then
+/// Checks column j's pivot against `tol` times its diagonal entry before the updates (`ajj`), then
 /// replaces the pivot by its square root and scales the rows below by the root's reciprocal,
 /// mirroring them into row j of the upper triangle. False when the pivot fails the check.
 #[inline(always)]
-fn finish_column(s: &mut [Real], n: usize, j: usize, ajj: Real) -> bool {
+fn finish_column(s: &mut [Real], n: usize, j: usize, ajj: Real, tol: Real) -> bool {
     let d = s[j * n + j];
-    if d.is_nan() || d <= PIVOT_TOL * ajj {
+    if d.is_nan() || d <= tol * ajj {
         return false;
     }
     let l = d.sqrt();
@@ -161,23 +170,30 @@ fn update_columns<const C: usize, const B: usize>(
     }
 }
 
-/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`]: the forward sweep
-/// down the contiguous columns of L, the backward one down those of Lᵀ (the mirrored upper
-/// triangle), each as column updates `b_i ← fma(−l_i, x_k, b_i)` with `x_k = b_k · (1/l_kk)`.
+/// Solves `L Lᵀ x = b` in place with the factor from [`cholesky_in_place`] (by [`solve`]).
 pub(crate) fn cholesky_solve(l: &DMatrix<Real>, b: &mut DVector<Real>) {
-    let n = l.nrows();
-    let ls = l.as_slice();
-    let bs = b.as_mut_slice();
+    solve(l.as_slice(), l.nrows(), b.as_mut_slice());
+}
+
+/// Solves `L Lᵀ x = b` in place with the factor `l` (n × n) from [`factor`]: the forward
+/// sweep down the contiguous columns of L, the backward one down those of Lᵀ (the mirrored
+/// upper triangle), each as column updates `b_i ← fma(−l_i, x_k, b_i)` with
+/// `x_k = b_k · (1/l_kk)`.
+pub(crate) fn solve(l: &[Real], n: usize, b: &mut [Real]) {
     simd::dispatch(
         #[inline(always)]
-        |_| substitute(ls, bs, n),
+        |_| {
+            forward(l, b, n, 0);
+            backward(l, b, n);
+        },
     );
 }
 
-/// The two sweeps of [`cholesky_solve`].
+/// The forward sweep of [`solve`] from row `from` on (the rows above hold zeros: `L⁻¹ b` for
+/// a `b` that vanishes above `from`).
 #[inline(always)]
-fn substitute(ls: &[Real], bs: &mut [Real], n: usize) {
-    for k in 0..n {
+fn forward(ls: &[Real], bs: &mut [Real], n: usize, from: usize) {
+    for k in from..n {
         let col = &ls[k * n..(k + 1) * n];
         let v = bs[k] * (1.0 / col[k]);
         bs[k] = v;
@@ -185,6 +201,11 @@ fn substitute(ls: &[Real], bs: &mut [Real], n: usize) {
             *bi = li.mul_add(-v, *bi);
         }
     }
+}
+
+/// The backward sweep of [`solve`].
+#[inline(always)]
+fn backward(ls: &[Real], bs: &mut [Real], n: usize) {
     for i in (0..n).rev() {
         // Column i of the upper triangle: L[i, 0..i].
         let row = &ls[i * n..i * n + i];
@@ -194,6 +215,50 @@ fn substitute(ls: &[Real], bs: &mut [Real], n: usize) {
             *bk = lk.mul_add(-v, *bk);
         }
     }
+}
+
+/// `A⁻¹` from the factor `l` (n × n) of [`factor`], into the lower triangle of `l` read
+/// row-major (`l[i n + j]`, j ≤ i; the rest of `l` is left undefined): first `U = L⁻ᵀ` into
+/// `u` (row j of `u`, from column j on, is column j of L⁻¹, by [`solve`]'s forward sweep on
+/// the unit vector e_j), then `(A⁻¹)_ij = Σ_{k ≥ i} U_ik U_jk` (i ≥ j) as a fused dot product
+/// in four partial sums, `(s0 + s1) + (s2 + s3)` then the remainder.
+pub(crate) fn inverse(l: &mut [Real], u: &mut [Real], n: usize) {
+    simd::dispatch(
+        #[inline(always)]
+        |_| {
+            for j in 0..n {
+                let row = &mut u[j * n..(j + 1) * n];
+                row[j..].fill(0.0);
+                row[j] = 1.0;
+                forward(l, row, n, j);
+            }
+            for i in 0..n {
+                let ui = &u[i * n + i..(i + 1) * n];
+                for j in 0..=i {
+                    l[i * n + j] = fused_dot(ui, &u[j * n + i..(j + 1) * n]);
+                }
+            }
+        },
+    );
+}
+
+/// `Σ a_k b_k` over the shorter length, in four fused partial sums.
+#[inline(always)]
+fn fused_dot(a: &[Real], b: &[Real]) -> Real {
+    let n = a.len().min(b.len());
+    let mut s = [0.0 as Real; 4];
+    let (ac, bc) = (a[..n].chunks_exact(4), b[..n].chunks_exact(4));
+    let (ar, br) = (ac.remainder(), bc.remainder());
+    for (x, y) in ac.zip(bc) {
+        for t in 0..4 {
+            s[t] = x[t].mul_add(y[t], s[t]);
+        }
+    }
+    let mut r = (s[0] + s[1]) + (s[2] + s[3]);
+    for (x, y) in ar.iter().zip(br) {
+        r = x.mul_add(*y, r);
+    }
+    r
 }
 
 /// `trace (L Lᵀ)⁻¹ = ‖L⁻¹‖²_F` from the factor `l` of [`cholesky_in_place`]: the squared
@@ -315,7 +380,7 @@ mod tests {
         }
     }
 
-    /// The factorisation, the solve and the inverse's trace give the same bits on every
+    /// The factorisation, the solve, the inverse and its trace give the same bits on every
     /// instruction set the processor offers.
     #[test]
     fn every_path_gives_the_same_bits() {
@@ -330,8 +395,16 @@ mod tests {
                 let mut x = b.clone();
                 cholesky_solve(&l, &mut x);
                 let trace = cholesky_inverse_trace(&l);
+                let mut inv = l.as_slice().to_vec();
+                let mut u = vec![0.0; n * n];
+                inverse(&mut inv, &mut u, n);
                 let mut bits: Vec<u64> = l.iter().chain(x.iter()).map(|v| v.to_bits()).collect();
                 bits.push(trace.to_bits());
+                bits.extend(
+                    (0..n)
+                        .flat_map(|i| (0..=i).map(move |c| (i, c)))
+                        .map(|(i, c)| inv[i * n + c].to_bits()),
+                );
                 bits
             };
             let portable = simd::forced(simd::Isa::Portable, run);
@@ -340,9 +413,90 @@ mod tests {
             }
             // The trace is that of the inverse.
             let want = a.clone().try_inverse().expect("invertible").trace();
-            let got = f64::from_bits(portable[portable.len() - 1]);
+            let got = f64::from_bits(portable[n * n + n]);
             assert!((got - want).abs() <= 1e-8 * want, "n {n}: {got} vs {want}");
         }
+    }
+
+    /// The factor of a 2 × 2 matrix in closed form, to the bit: A = [[4, 2], [2, 5]] has
+    /// L = [[2, 0], [1, 2]] and A⁻¹ = [[5, −2], [−2, 4]] / 16; the solve of A x = (8, 9)
+    /// gives x = (1.375, 1.25).
+    #[test]
+    fn two_by_two_in_closed_form() {
+        let mut s = vec![4.0, 2.0, 2.0, 5.0];
+        assert!(factor(&mut s, 2, PIVOT_TOL));
+        assert_eq!(s, [2.0, 1.0, 1.0, 2.0]);
+        let mut b = vec![8.0, 9.0];
+        solve(&s, 2, &mut b);
+        assert_relative_eq!(b[0], 1.375, epsilon = 1e-15);
+        assert_relative_eq!(b[1], 1.25, epsilon = 1e-15);
+        let mut u = vec![0.0; 4];
+        inverse(&mut s, &mut u, 2);
+        assert_eq!((s[0], s[2], s[3]), (5.0 / 16.0, -2.0 / 16.0, 4.0 / 16.0));
+    }
+
+    /// On random symmetric positive definite matrices (sizes under, at and over the register
+    /// blocks, columns of very different scales): L Lᵀ rebuilds A, L is mirrored into the
+    /// upper triangle, the solve gives back a known x, and A A⁻¹ is the identity.
+    #[test]
+    fn factor_solve_and_inverse_against_a_rebuilt_a() {
+        let mut next = uniform(3u64);
+        for n in [1, 2, 5, 9, 16, 17, 45] {
+            let j = DMatrix::from_fn(n + 10, n, |_, c| next() * [1.0, 1e3, 1e-2][c % 3]);
+            let a = j.transpose() * &j;
+            let mut s = a.as_slice().to_vec();
+            assert!(factor(&mut s, n, PIVOT_TOL), "n {n}");
+            let l = DMatrix::from_fn(n, n, |i, c| if i >= c { s[c * n + i] } else { 0.0 });
+            for i in 0..n {
+                for c in 0..=i {
+                    assert_eq!(s[i * n + c].to_bits(), s[c * n + i].to_bits(), "mirror");
+                }
+            }
+            let rebuilt = &l * l.transpose();
+            for i in 0..n {
+                for c in 0..n {
+                    let scale = (a[(i, i)] * a[(c, c)]).sqrt();
+                    assert!(
+                        (rebuilt[(i, c)] - a[(i, c)]).abs() <= 1e-13 * scale,
+                        "n {n}"
+                    );
+                }
+            }
+            let x = DVector::from_fn(n, |i, _| 1.0 + i as Real);
+            let mut b = (&a * &x).as_slice().to_vec();
+            solve(&s, n, &mut b);
+            for (got, want) in b.iter().zip(x.iter()) {
+                assert!((got - want).abs() <= 1e-6 * want, "n {n}: {got} vs {want}");
+            }
+            let mut u = vec![0.0; n * n];
+            inverse(&mut s, &mut u, n);
+            let inv = DMatrix::from_fn(n, n, |i, c| s[i.max(c) * n + i.min(c)]);
+            let eye = &a * inv;
+            for i in 0..n {
+                for c in 0..n {
+                    let want = if i == c { 1.0 } else { 0.0 };
+                    // A's columns differ in scale by 1e5: the residual in each column of A A⁻¹
+                    // scales with its condition.
+                    let tol = 1e-9 * (a[(i, i)] / a[(c, c)]).sqrt().max(1.0);
+                    assert!((eye[(i, c)] - want).abs() <= tol, "n {n}: ({i}, {c})");
+                }
+            }
+        }
+    }
+
+    /// Tolerance 0 tests positive definiteness, a positive tolerance numerical singularity:
+    /// a pivot of 1e-14 relative to its diagonal entry passes the first and fails the second.
+    #[test]
+    fn the_tolerance_separates_singular_from_indefinite() {
+        let a = [1.0, 1.0, 1.0, 1.0 + 1e-14];
+        let mut s = a.to_vec();
+        assert!(factor(&mut s, 2, 0.0));
+        let mut s = a.to_vec();
+        assert!(!factor(&mut s, 2, PIVOT_TOL));
+        let mut s = vec![1.0, 2.0, 2.0, 1.0];
+        assert!(!factor(&mut s, 2, 0.0));
+        let mut s = vec![Real::NAN, 0.0, 0.0, 1.0];
+        assert!(!factor(&mut s, 2, 0.0));
     }
 
     #[test]
