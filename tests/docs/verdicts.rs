@@ -6,7 +6,7 @@ use super::{common, root};
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 11] = [
+const CLAIM_PAPERS: [(&str, &str); 13] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
@@ -35,6 +35,14 @@ const CLAIM_PAPERS: [(&str, &str); 11] = [
     (
         "qiao2021/summary-population.json",
         "scenarios/qiao2021-tx60-population.toml",
+    ),
+    (
+        "qiao2021/summary-fig4-evaluations.json",
+        "scenarios/qiao2021-tx60-fig4-evaluations.toml",
+    ),
+    (
+        "qiao2021/summary-fig4-iterations.json",
+        "scenarios/qiao2021-tx60-fig4-iterations.toml",
     ),
 ];
 
@@ -300,5 +308,71 @@ fn kinematic_arm_figures_of_li_and_ban_do_not_reproduce() {
             .and_then(|a| a.iter().find(|x| x["id"] == id))
             .expect("the committed claim");
         assert_eq!(got["verdict"], "not comparable", "{summary}: {got}");
+    }
+}
+
+/// Qiao's fig. 4 under both readings of its horizontal axis (issue 51, deliverable 7): the
+/// committed runs compare BAS, PSO and BAS-PSO on model 2 (the differential error model, as
+/// Qiao §4.1 does), one at an equal budget of evaluations, one at equal iterations, each with
+/// its runtime ECDFs, fixed-budget curves and attitude errors.
+#[test]
+fn qiao_fig4_is_run_on_model_2_at_equal_evaluations_and_at_equal_iterations() {
+    for (reading, key, spread) in [
+        ("evaluations", "evaluations_mean", 120.0),
+        ("iterations", "iterations_mean", 0.0),
+    ] {
+        let scenario = root().join(format!("scenarios/qiao2021-tx60-fig4-{reading}.toml"));
+        let sc: toml::Value =
+            toml::from_str(&std::fs::read_to_string(&scenario).expect("scenario")).expect("toml");
+        let methods = sc["methods"].as_array().expect("methods");
+        let names: Vec<&str> = methods
+            .iter()
+            .map(|m| m["name"].as_str().unwrap())
+            .collect();
+        assert_eq!(names, ["bas-pso", "pso", "bas"], "{reading}");
+        for m in methods {
+            assert_eq!(
+                m["error_model"].as_str(),
+                Some("differential"),
+                "{reading}: {m}"
+            );
+        }
+        let file = root().join(format!(
+            "results/reproduction/qiao2021/summary-fig4-{reading}.json"
+        ));
+        let s: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&file).expect("summary")).expect("json");
+        assert_eq!(s["trials"], sc["trials"].as_integer().unwrap(), "{reading}");
+        let results = s["results"].as_array().expect("results");
+        assert_eq!(results.len(), 3, "{reading}");
+        let counts: Vec<f64> = results
+            .iter()
+            .map(|r| r[key].as_f64().expect(key))
+            .collect();
+        let (lo, hi) = counts
+            .iter()
+            .fold((f64::INFINITY, 0.0_f64), |(l, h), &c| (l.min(c), h.max(c)));
+        assert!(hi - lo <= spread, "{reading}: {key} {counts:?}");
+        for r in results {
+            let m = r["method"].as_str().unwrap();
+            assert!(m.ends_with("-differential"), "{reading}: {m}");
+            assert!(
+                r["search_ecdf"]["all_targets"]
+                    .as_array()
+                    .is_some_and(|a| !a.is_empty()),
+                "{reading}: {m}"
+            );
+            assert_eq!(
+                r["fixed_budget"].as_array().map(Vec::len),
+                Some(4),
+                "{reading}: {m}"
+            );
+            assert!(
+                r["validation_after_attitude_deg"]["mean"]
+                    .as_f64()
+                    .is_some(),
+                "{reading}: {m}"
+            );
+        }
     }
 }
