@@ -3,8 +3,8 @@
 //! `results/SHA256SUMS`, the command that writes it and the file of the command's output it is
 //! a copy of. The fast test checks the table against the list, the scenarios and the commands
 //! the documents show; the ignored one runs every command with this build's `calbench` and
-//! compares bytes, naming every file that differs (the trial-0 groups, seconds each, run in the
-//! fast test too):
+//! compares bytes, naming every file that differs (the trial-0 groups and Qiao's fig. 7, seconds
+//! each, run in the fast test too):
 //!
 //! ```text
 //! cargo test --test cli regenerate -- --ignored
@@ -76,7 +76,14 @@ pub fn sha256(bytes: &[u8]) -> String {
         .collect()
 }
 
-/// A command's arguments as the documents show them: without `--out` and its folder, with
+/// Whether a command is a script of the repository (`examples/…/run.sh`, its arguments after
+/// it) rather than `calbench`'s arguments.
+fn is_script(first: Option<&String>) -> bool {
+    first.is_some_and(|a| a.ends_with(".sh"))
+}
+
+/// A command's arguments as the documents show them: without `--out` and its folder (or a
+/// script's output folder `{out}`, which the documents leave at its default), with
 /// `{scenario}` spelled as the scenario it is made from and `{root}/PATH` as `PATH` (the
 /// documents run from the project root).
 fn shown(args: &[String], g: &Group) -> Vec<String> {
@@ -85,6 +92,8 @@ fn shown(args: &[String], g: &Group) -> Vec<String> {
     while let Some(a) = it.next() {
         if a == "--out" {
             it.next();
+        } else if a == "{out}" && is_script(args.first()) {
+            // The documents run the script with its default output folder.
         } else if a == "{scenario}" {
             out.push(g.scenario.as_ref().expect("[group.scenario]").from.clone());
         } else {
@@ -94,9 +103,13 @@ fn shown(args: &[String], g: &Group) -> Vec<String> {
     out
 }
 
-/// The arguments of a documented command text (`calbench ARGS` or `cargo run --release`).
+/// The arguments of a documented command text (`calbench ARGS`, `cargo run --release` or a
+/// script with its arguments).
 fn documented_args(text: &str) -> Vec<String> {
     let words: Vec<String> = text.split_whitespace().map(str::to_string).collect();
+    if is_script(words.first()) {
+        return words;
+    }
     if let Some(rest) = words.strip_prefix(&["cargo".into(), "run".into(), "--release".into()]) {
         return rest.iter().skip_while(|w| *w == "--").cloned().collect();
     }
@@ -242,12 +255,26 @@ fn regenerate(g: &Group, out: &Path, listed: &BTreeMap<String, String>) -> Vec<S
     let mut stdout = Vec::new();
     for args in &g.commands {
         let args: Vec<String> = args.iter().map(|a| fill(a, &run, &scenario)).collect();
-        let o = bin().args(&args).current_dir(&cwd).output().unwrap();
+        let o = if is_script(args.first()) {
+            std::process::Command::new("bash")
+                .arg(root().join(&args[0]))
+                .args(&args[1..])
+                .env("CALBENCH", env!("CARGO_BIN_EXE_calbench"))
+                .current_dir(&cwd)
+                .output()
+                .unwrap()
+        } else {
+            bin().args(&args).current_dir(&cwd).output().unwrap()
+        };
         if !o.status.success() {
             return vec![format!(
-                "group {}: calbench {} failed: {}",
+                "group {}: {} failed: {}",
                 g.name,
-                args.join(" "),
+                if is_script(args.first()) {
+                    args.join(" ")
+                } else {
+                    format!("calbench {}", args.join(" "))
+                },
                 String::from_utf8_lossy(&o.stderr)
             )];
         }
@@ -312,8 +339,14 @@ fn regenerate_groups(only: Option<&BTreeSet<String>>, tag: &str) -> (usize, Vec<
 }
 
 /// The groups that take seconds in a debug build, run by the fast test: the trial-0 outputs
-/// REPRODUCTION.md counts and reads from (Ban's fig. 7 residuals, Li's identification).
-const FAST: [&str; 3] = ["ban-trial0", "ban-unmodelled-trial0", "li-trial0"];
+/// REPRODUCTION.md counts and reads from (Ban's fig. 7 residuals, Li's identification, Qiao's
+/// fig. 7 runs).
+const FAST: [&str; 4] = [
+    "ban-trial0",
+    "ban-unmodelled-trial0",
+    "li-trial0",
+    "qiao-fig7",
+];
 
 #[test]
 fn the_trial0_outputs_regenerate_byte_for_byte() {

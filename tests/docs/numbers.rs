@@ -33,7 +33,7 @@ use super::root;
 use std::collections::HashMap;
 
 /// The figures whose run is not committed may not grow in number.
-const UNCHECKED_AT_MOST: usize = 64;
+const UNCHECKED_AT_MOST: usize = 49;
 
 /// A number of the document: its line, its text, its value and half its last digit.
 struct Quoted {
