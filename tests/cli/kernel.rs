@@ -43,25 +43,8 @@ fn write_data(file: &Path, n: usize, seed: u64) {
 
 /// `identify` on `cal` with the validation file `val`, the models `models`, 4-fold CV.
 fn identify(cal: &Path, val: &Path, models: &str, out: &Path, export: &str) -> String {
-    let o = calbench_ok(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        path_arg(cal),
-        "--validate",
-        path_arg(val),
-        "--method",
-        "lm",
-        "--models",
-        models,
-        "--cv",
-        "4",
-        "--export",
-        export,
-        "--out",
-        path_arg(out),
-    ]);
+    let extra = ["--models", models, "--cv", "4", "--export", export];
+    let o = crate::readmit::identify_irb2600_lm(cal, val, &extra, out);
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
