@@ -71,8 +71,7 @@ fn the_kernel_residual_is_chosen_by_cv_fitted_written_and_not_carried_by_the_exp
     assert!(
         err.contains("kernel residual")
             && err.contains("kernel.json")
-            && err.contains("robot.toml")
-            && err.contains("dh-table.csv")
+            && err.contains("robot.toml and dh-table.csv carry the parametric model")
             && err.contains("compensate"),
         "{err}"
     );
@@ -155,4 +154,19 @@ fn the_kernel_residual_is_chosen_by_cv_fitted_written_and_not_carried_by_the_exp
         path_arg(&d.join("corrected-kinematic.csv")),
     ]);
     assert!(!String::from_utf8_lossy(&o.stderr).contains("kernel"));
+}
+
+/// The warning's grammar when `robot.toml` is the only file that holds the parametric model
+/// (`--export toml`): "robot.toml carries", not "carry".
+#[test]
+fn the_warning_names_robot_toml_alone_in_the_singular() {
+    let d = tmp_dir("cli-kernel-singular");
+    let (cal, val) = (d.join("cal.csv"), d.join("val.csv"));
+    write_data(&cal, 60, 1);
+    write_data(&val, 10, 2);
+    let err = identify(&cal, &val, "gp", &d.join("gp"), "toml");
+    assert!(
+        err.contains("kernel.json only: robot.toml carries the parametric model without it"),
+        "{err}"
+    );
 }
