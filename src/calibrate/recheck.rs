@@ -12,7 +12,7 @@
 //!
 //! 1. its column has an effect (its norm above 1e-9 of the largest column's, the floor of
 //!    [`crate::robot::identifiability::scale_columns`]),
-//! 2. the normal matrix `JᵀPJ` has full numerical rank ([`inverse_diagonal`]), and
+//! 2. the normal matrix `JᵀPJ` has full numerical rank ([`bound_inverse`]), and
 //! 3. its Cramér–Rao σ, `σ_c = s · √(JᵀPJ)⁻¹_cc`, is at most `B_c / k`: `B_c` the largest
 //!    move a calibration can make of it ([`super::plausibility::bound`]: 5° for an angle or a
 //!    harmonic, the larger of 2 % of the reach and 10 mm for a length), k =
