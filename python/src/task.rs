@@ -84,7 +84,7 @@ pub(crate) fn task<'py>(
                 entrant,
             };
             let j = entry.json(&o, &val)?;
-            let files = t.head.files(&j.to_value())?;
+            let files = t.head.entry_files(&j.to_value(), &o)?;
             let text = files[0].1.clone();
             if let Some(out) = &out {
                 let rec = IdentifyRecord::of(&o, None);

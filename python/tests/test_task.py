@@ -97,3 +97,36 @@ def test_a_tasks_own_models_are_compared_from_python_as_on_the_command_line(root
     given = calbench.task(task, "lm", models=["kinematic"])["task"]
     assert given["candidates"] == ["kinematic"] and given["chosen_by"] == "given"
     assert given["candidates_fixed_by"] == "caller" and given["cv_choice"] is None
+
+
+def test_a_kernel_residual_entry_from_python_is_the_command_lines(root, cli, tmp_path):
+    """The kernel residual term ``gp`` (docs/formats.md § 2.6.1) through the documented Python
+    API: ``calbench.task`` with ``models=["kinematic", "kinematic+gp"]`` on the Barrett WAM's
+    216 grid poses chooses ``gp`` by CV as ``calbench task --models kinematic,kinematic+gp``
+    does, and writes the same folder byte for byte, ``kernel.json`` with it (``task.json`` but
+    for who fixed the candidates: the caller, or the command line); the record's
+    ``kernel_residual`` holds the file's hyperparameters."""
+    task = root / "tasks" / "barrett-wam.toml"
+    models = ["kinematic", "kinematic+gp"]
+    py = calbench.task(task, "lm", models=models, out=tmp_path / "py")
+    cli("task", task, "--method", "lm", "--models", ",".join(models), "--out", tmp_path / "cli")
+    names = sorted(p.name for p in (tmp_path / "cli").iterdir())
+    assert {"identified.json", "kernel.json", "robot.toml", "task.json"} <= set(names)
+    assert sorted(p.name for p in (tmp_path / "py").iterdir()) == names
+    for name in names:
+        if name != "task.json":
+            py_bytes = (tmp_path / "py" / name).read_bytes()
+            assert py_bytes == (tmp_path / "cli" / name).read_bytes(), name
+    j = json.loads((tmp_path / "cli" / "task.json").read_text())
+    assert py["task"]["candidates_fixed_by"] == "caller"
+    assert {**py["task"], "candidates_fixed_by": j["candidates_fixed_by"]} == j
+    assert j["models"] == ["kinematic", "gp"] and j["chosen_by"] == "cv"
+    record = py["record"]
+    assert record == json.loads((tmp_path / "cli" / "identified.json").read_text())
+    assert record["cv_best"] == "gp"
+    cv = {m["model"]: m["rms"] for m in record["cv_models"]}
+    assert cv["gp"] < cv["kinematic"], cv
+    assert py["task"]["division"] == "open"
+    kernel = json.loads((tmp_path / "cli" / "kernel.json").read_text())
+    assert kernel["term"] == "gp" and kernel["hyperparameters"] == record["kernel_residual"]
+    assert len(kernel["alpha_mm"]) == record["kernel_residual"]["training_rows"] == 216

@@ -277,10 +277,7 @@ impl Model {
         registration: Registration,
         fixed: &[Param],
     ) -> Result<(Robot, Vec<Param>)> {
-        let mut robot = nominal.clone();
-        if self.beta && robot.convention == Convention::Dh {
-            robot.convention = Convention::DhBeta;
-        }
+        let robot = self.robot(nominal);
         let with_base = registration == Registration::Identify;
         let mut params =
             param_sets::identified_params_tool_first(&robot, data.measure(), with_base);
@@ -291,6 +288,60 @@ impl Model {
                     .map_err(|e| e.of_option(crate::error::Opt::Models))?,
             );
         }
+        let extra = self.terms(&robot)?;
+        if !extra.is_empty() {
+            params.extend(identifiable_extension(
+                &robot,
+                &params,
+                &extra,
+                data.measure(),
+            ));
+        }
+        params.retain(|p| !fixed.contains(p));
+        Ok((robot, params))
+    }
+
+    /// The robot whose parameters the model identifies: `nominal`, a `dh` robot read as
+    /// `dh_beta` (β = 0, the same kinematics) for a model with `beta`.
+    fn robot(&self, nominal: &Robot) -> Robot {
+        let mut robot = nominal.clone();
+        if self.beta && robot.convention == Convention::Dh {
+            robot.convention = Convention::DhBeta;
+        }
+        robot
+    }
+
+    /// The parameters the model offers that [`Model::robot_and_params`] leaves out of
+    /// `params` (its choice at the nominal robot): the kinematic parameters of the robot's
+    /// model not chosen (the base's only with the `identify` registration) and the harmonic
+    /// and gravity-basis terms not kept, in that order, less the `fixed` ones. Compliances
+    /// are never left out. These are the candidates that identifiability re-checked at the
+    /// identified robot may re-admit ([`super::recheck`]).
+    pub fn left_out(
+        &self,
+        nominal: &Robot,
+        registration: Registration,
+        fixed: &[Param],
+        params: &[Param],
+    ) -> Result<Vec<Param>> {
+        let robot = self.robot(nominal);
+        let with_base = registration == Registration::Identify;
+        let kinematic = robot
+            .params()
+            .into_iter()
+            .filter(|p| with_base || !matches!(p, Param::Base(_)));
+        Ok(kinematic
+            .chain(self.terms(&robot)?)
+            .filter(|p| !params.contains(p) && !fixed.contains(p) && !p.is_compliance())
+            .collect())
+    }
+
+    /// The harmonic and gravity-basis terms the model offers on `robot`, before the choice
+    /// of the identifiable ones: the harmonics of every revolute joint, the gravity basis,
+    /// then the chosen orders. Fails when a chosen order names a joint the robot does not
+    /// have or one that is not revolute, or the gravity basis is asked of a robot of fewer
+    /// than four joints.
+    fn terms(&self, robot: &Robot) -> Result<Vec<Param>> {
         // Every revolute joint's terms that the poses of a generic set can tell apart from
         // the kinematic parameters and from each other: joint 1's harmonics although θ1 is
         // left to base.rz (a constant offset is, sin q1 and cos q1 are not), not the last
@@ -305,7 +356,7 @@ impl Model {
             );
         }
         if self.gravity {
-            let basis = crate::robot::gravity_basis::params(&robot);
+            let basis = crate::robot::gravity_basis::params(robot);
             if basis.is_empty() {
                 return Err(Error::option(
                     crate::error::Opt::Models,
@@ -339,16 +390,7 @@ impl Model {
                 }
             }
         }
-        if !extra.is_empty() {
-            params.extend(identifiable_extension(
-                &robot,
-                &params,
-                &extra,
-                data.measure(),
-            ));
-        }
-        params.retain(|p| !fixed.contains(p));
-        Ok((robot, params))
+        Ok(extra)
     }
 }
 

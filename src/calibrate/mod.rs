@@ -28,6 +28,7 @@ pub mod kernel;
 pub mod on_kind;
 pub mod pipeline;
 pub mod plausibility;
+pub mod recheck;
 pub mod record;
 pub mod registration;
 pub mod request;

@@ -21,9 +21,9 @@ use super::verdict::{
     self, check_names, gross_reading, registration_warning, rms, worse_causes, worse_error,
     worse_warning,
 };
-use super::{calibrate, plausibility, Calibrated, Registration};
+use super::{calibrate, plausibility, recheck, Calibrated, Registration};
 use crate::error::{Error, Opt, Result, Said};
-use crate::identify::{MethodSpec, TraceRecorder};
+use crate::identify::{MethodSpec, Termination, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
 use crate::robot::identifiability::{analyse, Identifiability};
@@ -177,16 +177,61 @@ impl IdentifyRequest {
             (None, None) => None,
         };
         // For real data `known` means the points are already in the base frame.
-        let recorder = TraceRecorder::default();
+        let mut recorder = TraceRecorder::default();
         let mut traced = spec.clone();
         traced.trace = Some(recorder.clone());
-        let c = calibrate_on(&nominal, &params, &d, registration, &traced, self.seed)
+        let mut c = calibrate_on(&nominal, &params, &d, registration, &traced, self.seed)
             .map_err(|e| in_data(&self.source, e))?;
-        if verdict::undetermined(&c) && !self.allow_rank_deficient {
-            let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
-            return Err(verdict::undetermined_error(
-                &nominal, all, &c, source, &spec,
-            ));
+        let undetermined = |c: &Calibrated, params: &[Param]| {
+            if verdict::undetermined(c) && !self.allow_rank_deficient {
+                let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
+                return Err(verdict::undetermined_error(&nominal, all, c, source, &spec));
+            }
+            Ok(())
+        };
+        undetermined(&c, &params)?;
+        // The parameters left out at the nominal robot, re-checked at the identified one
+        // (not for a list of parameters given by name).
+        let mut readmitted = None;
+        if self.params.is_empty() {
+            let model = choice.as_ref().map_or(
+                Model {
+                    compliance: self.compliance.is_some(),
+                    ..Model::KINEMATIC
+                },
+                |(_, best)| self.models[*best],
+            );
+            let candidates = model.left_out(&nominal, registration, &self.fix, &params)?;
+            let on = Subject {
+                nominal: &nominal,
+                params: &params,
+                data: &d,
+                calibrated: &c,
+                k: spec.k,
+                priors: &[],
+                validation: None,
+            };
+            let admitted = recheck::readmit(&on, registration, &candidates)?;
+            if !admitted.is_empty() {
+                let mut more = params.clone();
+                more.extend(admitted.iter().map(|a| a.0));
+                let again = TraceRecorder::default();
+                traced.trace = Some(again.clone());
+                let c2 = calibrate_on(&nominal, &more, &d, registration, &traced, self.seed)
+                    .map_err(|e| in_data(&self.source, e))?;
+                // A re-admission the identification cannot settle (it converged without and
+                // does not with) is given up: the parameters are not determined in practice.
+                let settled = c2.identified.termination == Termination::Converged
+                    || c.identified.termination != Termination::Converged;
+                if settled {
+                    undetermined(&c2, &more)?;
+                    readmitted = Some(recheck::Readmission {
+                        before_rms_residual_mm: c.identified.rms_residual,
+                        parameters: admitted.into_iter().map(|a| a.1).collect(),
+                    });
+                    (c, params, recorder) = (c2, more, again);
+                }
+            }
         }
         // The kernel residual's second stage, on the calibration rows' residuals.
         let kernel = kernel_term
@@ -277,6 +322,7 @@ impl IdentifyRequest {
             holdout: self.holdout.map(|h| format!("{}/{}", h.last, h.every)),
             kernel_residual: kernel.as_ref().map(|k| k.hyperparameters.clone()),
             priors,
+            readmitted,
             registration: Some(registration),
             registration_frame: Some((&c.frame).into()),
             registration_last_step_mm: Some(c.rounds.last_step_mm),

@@ -58,7 +58,6 @@ pub fn reach(robot: &Robot) -> Real {
 /// angles neither: an instrument's frame can be anywhere).
 pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<String> {
     let reach = reach(nominal);
-    let length = (LENGTH_SHARE * reach).max(LENGTH_FLOOR_MM);
     let mut out: Vec<(Real, String)> = Vec::new();
     for &p in params {
         let mut moved = identified.get(p) - nominal.get(p);
@@ -66,21 +65,8 @@ pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<Strin
             // A whole turn more or less is the same joint: the move is the nearest angle.
             moved -= std::f64::consts::TAU * (moved / std::f64::consts::TAU).round();
         }
-        let (bound, what) = match p {
-            Param::Compliance(_) => continue,
-            Param::Base(_) | Param::Tool(_) if !p.is_length() => continue,
-            Param::Base(_) | Param::Tool(_) => (
-                FRAME_SHARE * reach,
-                format!("{:.0} % of the robot's reach, {reach:.0} mm", FRAME_SHARE * 100.0),
-            ),
-            _ if p.is_length() => (
-                length,
-                format!(
-                    "the larger of {:.0} % of the robot's reach, {reach:.0} mm, and {LENGTH_FLOOR_MM:.0} mm",
-                    LENGTH_SHARE * 100.0
-                ),
-            ),
-            _ => (ANGLE_RAD, "5°".to_string()),
+        let Some((bound, what)) = bound_of(p, reach) else {
+            continue;
         };
         if moved.is_finite() && moved.abs() <= bound {
             continue;
@@ -108,6 +94,34 @@ pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<Strin
         named.push(format!("{more} more parameters beyond their bounds"));
     }
     named
+}
+
+/// How far a calibration may move parameter `p` of a robot of reach `reach` (mm), in its
+/// unit, and the bound in words; `None` for a parameter without a bound (a compliance, the
+/// base's and the tool's angles).
+fn bound_of(p: Param, reach: Real) -> Option<(Real, String)> {
+    Some(match p {
+        Param::Compliance(_) => return None,
+        Param::Base(_) | Param::Tool(_) if !p.is_length() => return None,
+        Param::Base(_) | Param::Tool(_) => (
+            FRAME_SHARE * reach,
+            format!("{:.0} % of the robot's reach, {reach:.0} mm", FRAME_SHARE * 100.0),
+        ),
+        _ if p.is_length() => (
+            (LENGTH_SHARE * reach).max(LENGTH_FLOOR_MM),
+            format!(
+                "the larger of {:.0} % of the robot's reach, {reach:.0} mm, and {LENGTH_FLOOR_MM:.0} mm",
+                LENGTH_SHARE * 100.0
+            ),
+        ),
+        _ => (ANGLE_RAD, "5°".to_string()),
+    })
+}
+
+/// How far a calibration may move parameter `p` of `nominal` (mm, rad; the bound of
+/// [`moves`]); `None` for a parameter without a bound.
+pub fn bound(nominal: &Robot, p: Param) -> Option<Real> {
+    bound_of(p, reach(nominal)).map(|b| b.0)
 }
 
 /// The moves a refusal names, furthest beyond their bounds first.

@@ -192,6 +192,10 @@ pub struct IdentifiedRecord {
     /// The number of readings (kind file).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub readings: Option<usize>,
+    /// The parameters left out at the nominal robot and re-admitted at the identified one
+    /// ([`super::recheck`]); absent: none was.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub readmitted: Option<super::recheck::Readmission>,
     /// The registration.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub registration: Option<Registration>,

@@ -335,13 +335,20 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     Ok(())
 }
 
-/// What the files `carried` cannot hold of a model with a kernel residual.
+/// What the files `carried` cannot hold of a model with a kernel residual: "robot.toml
+/// carries", "robot.toml and dh-table.csv carry", "robot.toml, dh-table.csv and robot.urdf
+/// carry".
 pub(super) fn kernel_not_carried(carried: &[&str]) -> String {
+    let files = match carried {
+        [] => "no file carries".to_string(),
+        [a] => format!("{a} carries"),
+        [a, b] => format!("{a} and {b} carry"),
+        [init @ .., a, b] => format!("{}, {a} and {b} carry", init.join(", ")),
+    };
     format!(
-        "the chosen model's kernel residual `gp` is written to {KERNEL_FILE} only: {} carry the \
+        "the chosen model's kernel residual `gp` is written to {KERNEL_FILE} only: {files} the \
          parametric model without it, and `compensate` and the controller exports cannot apply \
-         it (their predictions lack the residual's correction)",
-        carried.join(", ")
+         it (their predictions lack the residual's correction)"
     )
 }
 

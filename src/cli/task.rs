@@ -85,9 +85,8 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let j = entry.json(&o, &val)?;
     let urdf = None;
     let record = IdentifyRecord::of(&o, urdf);
-    let mut files = task.head.files(&j.to_value())?.to_vec();
-    if let Some(k) = &o.kernel {
-        files.push((calbench::calibrate::kernel::KERNEL_FILE, k.to_json()?));
+    let files = task.head.entry_files(&j.to_value(), &o)?;
+    if o.kernel.is_some() {
         eprintln!(
             "warning: {}",
             super::identify::kernel_not_carried(&["robot.toml"])

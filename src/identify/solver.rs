@@ -21,7 +21,9 @@ use crate::numeric::normal::NormalEquations;
 use crate::numeric::Real;
 
 pub(crate) use statistics::finish;
-pub use statistics::{conditioning, rank, RANK_TOLERANCE};
+pub use statistics::{
+    bound_inverse, conditioning, inverse_diagonal, rank, DETERMINABLE_SIGMAS, RANK_TOLERANCE,
+};
 
 /// A column vector of the problems (unknowns, residual).
 pub type Column = DVector<Real>;

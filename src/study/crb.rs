@@ -5,7 +5,7 @@
 //! whether a parameter's injected error is determinable at all (docs/formats.md
 //! "summary.json", `eta_not_determinable`).
 
-use crate::identify::solver::rank;
+use crate::identify::solver::inverse_diagonal;
 use crate::measurement::Measure;
 use crate::numeric::Real;
 use crate::robot::jacobian::{jacobian, Columns};
@@ -13,13 +13,11 @@ use crate::robot::{Param, Robot};
 use crate::sim::tracker::Tracker;
 
 /// How many Cramér–Rao standard deviations an injected error must exceed for its η to count
-/// (k = 3, fixed from first principles, not from the figures it selects). An estimate of a
-/// parameter whose true error x has |x| ≤ 3σ cannot tell x from 0: the estimate of an
-/// efficient estimator is x + N(0, σ²), and a two-sided test of "x = 0" at the conventional
-/// 3σ level (0.27 %) does not reject. Its η = 1 − |x̂ − x| / |x| then measures the noise, not
-/// the method: the expected |x̂ − x| = σ √(2/π) ≈ 0.8 σ, so the expected η at |x| = kσ is
-/// about 100 (1 − 0.8 / k) % (73 % at k = 3) and without bound below as |x| / σ → 0.
-pub const DETERMINABLE_SIGMAS: Real = 3.0;
+/// (k = 3, the identification's [`crate::identify::solver::DETERMINABLE_SIGMAS`], which says
+/// why). Its η = 1 − |x̂ − x| / |x| at |x| ≤ 3σ measures the noise, not the method: the
+/// expected |x̂ − x| = σ √(2/π) ≈ 0.8 σ, so the expected η at |x| = kσ is about
+/// 100 (1 − 0.8 / k) % (73 % at k = 3) and without bound below as |x| / σ → 0.
+pub use crate::identify::solver::DETERMINABLE_SIGMAS;
 
 /// The diagonal of (JᵀWJ)⁻¹ — each parameter's Cramér–Rao variance (mm², rad²) — for
 /// `params` measured at the joint values `qs` (one row block per value, as the measurement
@@ -27,7 +25,7 @@ pub const DETERMINABLE_SIGMAS: Real = 3.0;
 /// σ the position noise at each point's range from the tracker and, for full poses, its
 /// orientation noise. `None` where there is no bound: a noise-free tracker, an elasto-geometric
 /// model (its bound would need each pose's payload and torques), a JᵀWJ of numerical rank below
-/// the parameters ([`rank`], the identification's test: a parameter the poses do not
+/// the parameters ([`inverse_diagonal`], the identification's test: a parameter the poses do not
 /// determine, or two that only their sum is) or a non-finite result.
 pub fn variances(
     robot: &Robot,
@@ -61,15 +59,9 @@ pub fn variances(
             b /= sa;
         }
     }
-    let n = j.transpose() * &j;
     // A normal matrix the data leave rank-deficient (dependent parameters, Guo's d2 and d3)
-    // has no bound; its rounded inverse would be noise.
-    if rank(&n) < params.len() {
-        return None;
-    }
-    let inv = n.try_inverse()?;
-    let d: Vec<Real> = inv.diagonal().iter().copied().collect();
-    d.iter().all(|v| v.is_finite() && *v >= 0.0).then_some(d)
+    // has no bound.
+    inverse_diagonal(&(j.transpose() * &j))
 }
 
 /// The study parameters (indices into `truth`) whose non-zero injected error is not

@@ -43,25 +43,8 @@ fn write_data(file: &Path, n: usize, seed: u64) {
 
 /// `identify` on `cal` with the validation file `val`, the models `models`, 4-fold CV.
 fn identify(cal: &Path, val: &Path, models: &str, out: &Path, export: &str) -> String {
-    let o = calbench_ok(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        path_arg(cal),
-        "--validate",
-        path_arg(val),
-        "--method",
-        "lm",
-        "--models",
-        models,
-        "--cv",
-        "4",
-        "--export",
-        export,
-        "--out",
-        path_arg(out),
-    ]);
+    let extra = ["--models", models, "--cv", "4", "--export", export];
+    let o = crate::readmit::identify_irb2600_lm(cal, val, &extra, out);
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
@@ -88,8 +71,7 @@ fn the_kernel_residual_is_chosen_by_cv_fitted_written_and_not_carried_by_the_exp
     assert!(
         err.contains("kernel residual")
             && err.contains("kernel.json")
-            && err.contains("robot.toml")
-            && err.contains("dh-table.csv")
+            && err.contains("robot.toml and dh-table.csv carry the parametric model")
             && err.contains("compensate"),
         "{err}"
     );
@@ -172,4 +154,19 @@ fn the_kernel_residual_is_chosen_by_cv_fitted_written_and_not_carried_by_the_exp
         path_arg(&d.join("corrected-kinematic.csv")),
     ]);
     assert!(!String::from_utf8_lossy(&o.stderr).contains("kernel"));
+}
+
+/// The warning's grammar when `robot.toml` is the only file that holds the parametric model
+/// (`--export toml`): "robot.toml carries", not "carry".
+#[test]
+fn the_warning_names_robot_toml_alone_in_the_singular() {
+    let d = tmp_dir("cli-kernel-singular");
+    let (cal, val) = (d.join("cal.csv"), d.join("val.csv"));
+    write_data(&cal, 60, 1);
+    write_data(&val, 10, 2);
+    let err = identify(&cal, &val, "gp", &d.join("gp"), "toml");
+    assert!(
+        err.contains("kernel.json only: robot.toml carries the parametric model without it"),
+        "{err}"
+    );
 }

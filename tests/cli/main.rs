@@ -34,6 +34,7 @@ mod plausible;
 mod practice;
 mod precision;
 mod profiles;
+mod readmit;
 mod realdata;
 mod record_keys;
 mod record_task;

@@ -82,6 +82,21 @@ impl TaskHead {
         Ok([("task.json", text), (super::TASK_FILE, self.text.clone())])
     }
 
+    /// [`TaskHead::files`] of a tracker entry whose identification is `o`, with the kernel
+    /// residual's `kernel.json` when the chosen model has one: what the command line and
+    /// Python write beside the identify outputs.
+    pub fn entry_files(
+        &self,
+        json: &serde_json::Value,
+        o: &crate::calibrate::pipeline::TrackerOutcome,
+    ) -> Result<Vec<(&'static str, String)>> {
+        let mut files = self.files(json)?.to_vec();
+        if let Some(k) = &o.kernel {
+            files.push((crate::calibrate::kernel::KERNEL_FILE, k.to_json()?));
+        }
+        Ok(files)
+    }
+
     /// The files it fixes as a refusal lists them: `KEY PATH` each.
     pub fn fixed_shown(&self) -> Vec<String> {
         let shown = |(k, p): &(String, PathBuf)| format!("{k} {}", p.display());

@@ -67,6 +67,38 @@ pub(crate) fn finish(
     }
 }
 
+/// How many Cramér–Rao standard deviations decide whether a parameter's value can be told
+/// from zero (k = 3, fixed from first principles, not from the figures it selects): an
+/// efficient estimate of a parameter whose value is x is x + N(0, σ²), and a two-sided test
+/// of "x = 0" at the conventional 3σ level (0.27 %) does not reject |x| ≤ 3σ. A study's
+/// injected error within it is not determinable (docs/formats.md § 7.1, `eta_not_determinable`);
+/// a parameter `identify` left out at the nominal robot is re-admitted at the identified
+/// robot only when its largest plausible value lies beyond it (§ 2.6.1, "Parameters
+/// re-checked at the identified robot").
+pub const DETERMINABLE_SIGMAS: Real = 3.0;
+
+/// `n⁻¹`, whose diagonal holds each parameter's Cramér–Rao variance when `n = JᵀWJ` is the
+/// normal matrix weighted by the inverse noise variances (Kay, *Fundamentals of Statistical
+/// Signal Processing*, vol. 1, § 3.7, Gaussian noise). `None` where there is no bound: `n` of
+/// numerical rank below its size ([`rank`]: a parameter the data do not determine, or two
+/// that only their sum is; its rounded inverse would be noise), or a diagonal that is not
+/// finite and non-negative.
+pub fn bound_inverse(n: &DMatrix<Real>) -> Option<DMatrix<Real>> {
+    if rank(n) < n.nrows() {
+        return None;
+    }
+    let inv = n.clone().try_inverse()?;
+    inv.diagonal()
+        .iter()
+        .all(|v| v.is_finite() && *v >= 0.0)
+        .then_some(inv)
+}
+
+/// The diagonal of [`bound_inverse`]: each parameter's Cramér–Rao variance.
+pub fn inverse_diagonal(n: &DMatrix<Real>) -> Option<Vec<Real>> {
+    bound_inverse(n).map(|inv| inv.diagonal().iter().copied().collect())
+}
+
 /// Directions whose scaled singular value is below this fraction of the largest are
 /// undetermined by the data (relative eigenvalue of the scaled normal matrix below its
 /// square, 1e-14: a few hundred times the rounding of `JᵀPJ`).
