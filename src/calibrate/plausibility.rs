@@ -97,11 +97,12 @@ pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<Strin
 }
 
 /// How far a calibration may move parameter `p` of a robot of reach `reach` (mm), in its
-/// unit, and the bound in words; `None` for a parameter without a bound (a compliance, the
-/// base's and the tool's angles).
+/// unit, and the bound in words; `None` for a parameter without a bound (a compliance or a
+/// gravity-basis coefficient, whose unit is rad/(N·m), not an angle; the base's and the tool's
+/// angles).
 fn bound_of(p: Param, reach: Real) -> Option<(Real, String)> {
     Some(match p {
-        Param::Compliance(_) => return None,
+        Param::Compliance(_) | Param::Gravity(..) => return None,
         Param::Base(_) | Param::Tool(_) if !p.is_length() => return None,
         Param::Base(_) | Param::Tool(_) => (
             FRAME_SHARE * reach,
@@ -389,6 +390,10 @@ mod tests {
         assert!(m[0].contains("theta3") && m[0].contains("11.46°"), "{m:?}");
         // A whole turn more is the same joint: the move is what is left of it.
         let tau = std::f64::consts::TAU;
+        // A gravity-basis coefficient is rad/(N·m), not an angle: not bounded by 5°.
+        let g = [Param::Gravity(1, 0)];
+        let sagging = nominal.with_errors(&[(g[0], -0.2123)]);
+        assert!(moves(&nominal, &sagging, &g).is_empty());
         let whole = nominal.with_errors(&[(Param::Theta(2), -tau - 0.01)]);
         assert!(moves(&nominal, &whole, &params).is_empty());
         let whole = nominal.with_errors(&[(Param::Theta(2), tau + 0.2)]);

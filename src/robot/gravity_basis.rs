@@ -22,9 +22,11 @@ use crate::robot::param::nonzero_block;
 use crate::robot::{Chain, ChainVars, JointType, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// Largest magnitude of a gravity-basis coefficient, rad per N·m of a 1 N weight's torque: a
-/// compliance of 1e-3 rad/(N·m) times a weight of 100 N, a deflection of 0.1 rad on a lever of
-/// 1 m — far beyond any arm, small enough to stay a correction.
-pub const MAX_GRAVITY_RAD_PER_NM: Real = 0.1;
+/// deflection of 0.1 rad from a lever of 0.1 m. A weight close to a joint's axis exerts a small
+/// torque about it at every pose, so its coefficient can be large while the deflection it gives
+/// stays small (the Barrett WAM task's identified `ge3` is −0.21); still far beyond any arm's
+/// sag, and small enough to stay a correction.
+pub const MAX_GRAVITY_RAD_PER_NM: Real = 1.0;
 
 /// The torques of the basis at one pose: `τ[j][l]`, N·m.
 pub type Torques = [[Real; GRAVITY_POINTS]; MAX_JOINTS];
