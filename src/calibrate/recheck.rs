@@ -23,7 +23,10 @@
 //!    free, `x_c = ((JᵀPJ)⁻¹ JᵀP r)_c` (the other parameters are at their optimum, so this is
 //!    Rao's score test), exceeds k σ_c in size.
 //!
-//! The rule is fixed before any figure, from the 3σ of a study's determinable errors. When
+//! Points 1–3 were fixed before any figure, from the 3σ of a study's determinable errors;
+//! point 4 and the convergence guard below were added after cases were seen (docs/formats.md
+//! § 2.6.1 says which). A parameter without a plausibility bound (the tool's and the base's
+//! angles, a compliance, a gravity-basis coefficient) is not re-admitted. When
 //! the identified robot leaves an exact dependency by a parameter δ that lies m of its own σ
 //! from nominal, the column of c grows like δ and σ_c ≈ s / (|δ| √n) ≈ (lever arm) / m, so a
 //! dependency broken at the noise level (m ≈ 1) gives σ_c of the order of the robot's size
