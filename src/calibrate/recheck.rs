@@ -157,13 +157,21 @@ fn unit_noise(data: &Measurements, sigma0: Real) -> Real {
     }
 }
 
-/// Each point's weight in the fit: the calibration's final weights (a robust method's), else
-/// the file's, else 1.
+/// Each point's weight in the re-check: the file's (else 1) on the points a robust fit kept at
+/// full weight, 0 on those it weighed down. A robust method's weights are per point, or with
+/// IGG3's `per = "coordinate"` each point's mean over its rows, which would let a gross error
+/// in one coordinate into the score at two thirds of its size; so only the points the fit
+/// fully trusted enter.
 fn point_weights(data: &Measurements, fitted: &[Real]) -> Vec<Real> {
+    let mut w = data.weights().unwrap_or_else(|| vec![1.0; data.len()]);
     if fitted.len() == data.len() {
-        return fitted.to_vec();
+        for (w, &f) in w.iter_mut().zip(fitted) {
+            if f < 1.0 {
+                *w = 0.0;
+            }
+        }
     }
-    data.weights().unwrap_or_else(|| vec![1.0; data.len()])
+    w
 }
 
 /// `JᵀPJ` and `JᵀP r` of `params` at `robot` (the identified robot: errors 0) in the
