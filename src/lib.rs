@@ -55,3 +55,25 @@ pub mod results;
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 pub struct ReadmeDoctests;
+
+/// The folder `calbench-NAME-PID` under the system's temporary folder, created, for a unit test.
+#[cfg(test)]
+pub(crate) fn test_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("calbench-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Asserts, for a unit test, that the `analytic` derivative of `what` is within `tol` of its
+/// central difference `fd`, relative to `1 + |fd|`.
+#[cfg(test)]
+#[track_caller]
+pub(crate) fn assert_fd(
+    analytic: numeric::Real,
+    fd: numeric::Real,
+    tol: numeric::Real,
+    what: &str,
+) {
+    let near = (analytic - fd).abs() < tol * (1.0 + fd.abs());
+    assert!(near, "{what}: analytic {analytic}, central difference {fd}");
+}

@@ -15,7 +15,7 @@ use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
 use super::Calibrated;
 use crate::error::Result;
-use crate::identify::solver::BLOCK_POINTS;
+use crate::identify::solver::by_blocks;
 use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{nan, Real, Vec3};
@@ -195,37 +195,27 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
 
 /// Calls `f(i, r_i, H_i)` for each point `i` of `p` at `x`, in order, with its residual rows
 /// and `H_i = J_i M J_iᵀ`, both padded to 6 rows with zeros. The rows are evaluated
-/// [`BLOCK_POINTS`] points at a time ([`LeastSquares::evaluate_points`]) into buffers made
-/// once, and `J M` is formed once a block: memory stays bounded for files of millions of rows,
-/// and nothing is allocated per point.
+/// block by block ([`by_blocks`]), and `J M` is formed once a block: memory stays bounded for
+/// files of millions of rows, and nothing is allocated per point.
 fn by_points(
     p: &dyn LeastSquares,
     x: &DVector<Real>,
     m: &DMatrix<Real>,
     mut f: impl FnMut(usize, Vector6<Real>, Matrix6<Real>),
 ) {
-    let size = p.size();
-    let rows = size.rows_per_point;
-    let (mut r, mut j, mut a) = (
-        DVector::zeros(0),
-        DMatrix::zeros(0, 0),
-        DMatrix::zeros(0, 0),
-    );
-    for first in (0..size.points).step_by(BLOCK_POINTS) {
-        let k = BLOCK_POINTS.min(size.points - first);
-        if r.len() != k * rows {
-            r = DVector::zeros(k * rows);
-            j = DMatrix::zeros(k * rows, size.params);
-            a = DMatrix::zeros(k * rows, m.ncols());
+    let rows = p.size().rows_per_point;
+    let mut a = DMatrix::zeros(0, m.ncols());
+    by_blocks(p, x, |points, r, j| {
+        if a.nrows() != r.len() {
+            a = DMatrix::zeros(r.len(), m.ncols());
         }
-        p.evaluate_points(x, first, &mut r, &mut j);
         j.mul_to(m, &mut a);
-        for i in 0..k {
+        for (i, point) in points.enumerate() {
             let mut ri = Vector6::zeros();
             ri.rows_mut(0, rows).copy_from(&r.rows(i * rows, rows));
-            f(first + i, ri, point_block(&a, &j, i * rows, rows));
+            f(point, ri, point_block(&a, j, i * rows, rows));
         }
-    }
+    });
 }
 
 /// `A_i J_iᵀ` for the point whose `rows` rows start at `row` of `a` and `j`, padded to 6 × 6

@@ -42,7 +42,7 @@ use nalgebra::{DMatrix, DVector};
 use super::diagnostics::Subject;
 use super::Registration;
 use crate::error::Result;
-use crate::identify::solver::{bound_inverse, BLOCK_POINTS, DETERMINABLE_SIGMAS};
+use crate::identify::solver::{bound_inverse, by_blocks, BLOCK_POINTS, DETERMINABLE_SIGMAS};
 use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
 use crate::measurement::Measurements;
 use crate::numeric::normal::NormalEquations;
@@ -184,19 +184,10 @@ fn normal(
 ) -> Result<(DMatrix<Real>, DVector<Real>)> {
     let problem = CalibrationProblem::new(robot, params, id.data, id.calibrated.frame, id.k);
     let rp = RobotProblem::of(&problem)?;
-    let size = rp.size();
-    let rows = size.rows_per_point;
-    let x = DVector::zeros(params.len());
+    let rows = rp.size().rows_per_point;
     let mut sums = NormalEquations::new(params.len(), rows * BLOCK_POINTS);
-    let (mut r, mut j) = (DVector::zeros(0), DMatrix::zeros(0, 0));
-    for first in (0..size.points).step_by(BLOCK_POINTS) {
-        let k = BLOCK_POINTS.min(size.points - first);
-        if r.len() != k * rows {
-            r = DVector::zeros(k * rows);
-            j = DMatrix::zeros(k * rows, params.len());
-        }
-        rp.evaluate_points(&x, first, &mut r, &mut j);
-        sums.add(&j, r.as_slice(), &weights[first..first + k]);
-    }
+    by_blocks(&rp, &DVector::zeros(params.len()), |points, r, j| {
+        sums.add(j, r.as_slice(), &weights[points]);
+    });
     Ok((sums.n().clone(), sums.g().clone()))
 }

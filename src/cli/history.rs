@@ -8,9 +8,10 @@ use anyhow::Result;
 
 use calbench::numeric::Real;
 use calbench::report::html::history::{csv, page, Point, Series};
-use calbench::report::output::{folder, Bytes};
+use calbench::results::history;
 use calbench::results::history::{Flag, Regressed};
-use calbench::results::{db_path, history, Db};
+
+use super::record::DbArg;
 
 /// The files `history` writes.
 const OUTPUTS: [&str; 2] = ["history.html", "history.csv"];
@@ -18,9 +19,8 @@ const OUTPUTS: [&str; 2] = ["history.html", "history.csv"];
 /// Arguments of `calbench history`.
 #[derive(clap::Args)]
 pub struct HistoryArgs {
-    /// The results database (default: $CALBENCH_DB, else results/calbench.sqlite).
-    #[arg(long, value_name = "PATH")]
-    pub db: Option<PathBuf>,
+    #[command(flatten)]
+    pub db: DbArg,
     /// Only this scenario (task, identification).
     #[arg(long, value_name = "NAME")]
     pub scenario: Option<String>,
@@ -49,9 +49,8 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
     }
     if let Some(out) = &args.out {
         super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
-        super::check_out_folder(out, &OUTPUTS)?;
     }
-    let db = Db::open(&db_path(args.db.as_deref()), false)?;
+    let db = args.db.open(false)?;
     let scenario = args.scenario.as_deref();
     let (regressed, compared) = history::regressions(&db, scenario, args.tolerance)?;
     let lines: Vec<String> = regressed.iter().map(line).collect();
@@ -59,24 +58,8 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
         let points = history::points(&db, scenario, &args.metric, args.tolerance)?;
         let html = page(&points, &series(&points, &regressed));
         let table = csv(&points)?;
-        folder(
-            out,
-            &[
-                &Bytes {
-                    name: "history.html",
-                    bytes: html.as_bytes(),
-                },
-                &Bytes {
-                    name: "history.csv",
-                    bytes: table.as_bytes(),
-                },
-            ],
-        )?;
-        out!(
-            "{} points; history: {}",
-            points.len(),
-            out.join("history.html").display()
-        );
+        let page = super::write_page(out, &OUTPUTS, &html, &table)?;
+        out!("{} points; history: {}", points.len(), page.display());
     }
     if args.regressions {
         for l in &lines {

@@ -23,7 +23,6 @@ use calbench::report::write_identified_with;
 use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{Param, Robot};
 
-use super::check_out_folder;
 use calbench::calibrate::kernel::KERNEL_FILE;
 
 /// The files always written, and `kernel.json` (`robot.urdf` and the plots depend on the
@@ -208,7 +207,6 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         &OUTPUTS
     };
     super::guard_out(&args.out, outputs, super::identify_inputs(args))?;
-    check_out_folder(&args.out, outputs)?;
     let nominal = args.chain.load(&args.robot)?;
     let data = if kind {
         IdentifyData::Kind(read_kind_file(&args.data, &nominal)?)

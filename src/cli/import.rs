@@ -22,7 +22,7 @@ pub struct ImportArgs {
 
 /// Imports the export and prints `N rows of RAW written to CSV`.
 pub fn run(args: &ImportArgs) -> Result<()> {
-    super::guard_out(&args.out, &[], [&args.raw, &args.mapping])?;
+    calbench::report::guard::guard_out(&args.out, "--out", &[], [&args.raw, &args.mapping])?;
     check_out_file(&args.out)?;
     let n = calbench::measurement::import::import(&args.raw, &args.mapping, &args.out)?;
     out!(

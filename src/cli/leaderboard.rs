@@ -6,8 +6,9 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::report::html::leaderboard::{csv, page};
-use calbench::report::output::{folder, Bytes};
-use calbench::results::{board, db_path, Db};
+use calbench::results::board;
+
+use super::record::DbArg;
 
 /// The files `leaderboard` writes.
 const OUTPUTS: [&str; 2] = ["leaderboard.html", "leaderboard.csv"];
@@ -15,9 +16,8 @@ const OUTPUTS: [&str; 2] = ["leaderboard.html", "leaderboard.csv"];
 /// Arguments of `calbench leaderboard`.
 #[derive(clap::Args)]
 pub struct LeaderboardArgs {
-    /// The results database (default: $CALBENCH_DB, else results/calbench.sqlite).
-    #[arg(long, value_name = "PATH")]
-    pub db: Option<PathBuf>,
+    #[command(flatten)]
+    pub db: DbArg,
     /// Output folder.
     #[arg(long, required_unless_present = "verify")]
     pub out: Option<PathBuf>,
@@ -31,9 +31,8 @@ pub struct LeaderboardArgs {
 pub fn run(args: &LeaderboardArgs) -> Result<()> {
     if let Some(out) = &args.out {
         super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
-        super::check_out_folder(out, &OUTPUTS)?;
     }
-    let db = Db::open(&db_path(args.db.as_deref()), false)?;
+    let db = args.db.open(false)?;
     if args.verify {
         let n = board::verify(&db)?;
         eprintln!("{n} task entries verified: each figure is the one its recorded errors give");
@@ -44,25 +43,13 @@ pub fn run(args: &LeaderboardArgs) -> Result<()> {
     let rows = board::rows(&db)?;
     let html = page(&rows, &board::scores(&rows));
     let table = csv(&rows)?;
-    folder(
-        out,
-        &[
-            &Bytes {
-                name: "leaderboard.html",
-                bytes: html.as_bytes(),
-            },
-            &Bytes {
-                name: "leaderboard.csv",
-                bytes: table.as_bytes(),
-            },
-        ],
-    )?;
+    let page = super::write_page(out, &OUTPUTS, &html, &table)?;
     let tasks: std::collections::BTreeSet<&str> = rows.iter().map(|r| r.task.as_str()).collect();
     out!(
         "{} tasks, {} rows; leaderboard: {}",
         tasks.len(),
         rows.len(),
-        out.join("leaderboard.html").display()
+        page.display()
     );
     Ok(())
 }

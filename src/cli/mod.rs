@@ -3,7 +3,7 @@
 //! prints to stdout and writes files through [`calbench::report`]. `main.rs` parses the
 //! command line, dispatches and reports errors. This module holds what several commands share.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 
@@ -11,6 +11,7 @@ use calbench::error::{Error, Result};
 use calbench::numeric::Real;
 use calbench::report::entry_table;
 use calbench::report::markdown::table as markdown_table;
+use calbench::report::output::{folder, Bytes};
 use calbench::study::RunResult;
 
 /// `println!` that ignores a closed stdout (`calbench … | head`): results are on disk before
@@ -132,15 +133,28 @@ pub fn check_out_folder(out: &Path, outputs: &[&str]) -> Result<()> {
     }
 }
 
-/// Refuses, before any work, an output path where the outputs would destroy something
-/// ([`calbench::report::guard::guard_out`], the option named `--out`). Every command that
-/// writes calls it.
+/// Refuses, before any work, an output folder where the outputs would destroy something
+/// ([`calbench::report::guard::guard_out`], the option named `--out`) or could not be
+/// written ([`check_out_folder`]). Every command that writes a folder calls it.
 pub fn guard_out<P: AsRef<Path>>(
     out: &Path,
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    calbench::report::guard::guard_out(out, "--out", outputs, inputs)
+    calbench::report::guard::guard_out(out, "--out", outputs, inputs)?;
+    check_out_folder(out, outputs)
+}
+
+/// Writes the page and its table, `outputs` (`NAME.html`, `NAME.csv`), into `out` as a whole;
+/// returns the page's path.
+pub fn write_page(out: &Path, outputs: &[&str; 2], html: &str, csv: &str) -> Result<PathBuf> {
+    let [page, table] = *outputs;
+    let files = [(page, html), (table, csv)].map(|(name, text)| Bytes {
+        name,
+        bytes: text.as_bytes(),
+    });
+    folder(out, &[&files[0], &files[1]])?;
+    Ok(out.join(page))
 }
 
 /// The files `identify` reads: the data, the validation file and a robot file.

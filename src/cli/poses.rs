@@ -12,8 +12,6 @@ use calbench::study::plan;
 use calbench::study::scenario::{Scenario, StrategyName};
 use clap::builder::{PossibleValuesParser, TypedValueParser};
 
-use super::check_out_folder;
-
 /// The files always written (`curve.*` only with `--curve`).
 const OUTPUTS: [&str; 3] = report::poses::FILES;
 
@@ -60,7 +58,6 @@ fn pose_count(text: &str) -> std::result::Result<usize, String> {
 pub fn run(args: &PosesArgs) -> Result<()> {
     let out = &args.out;
     super::guard_out(out, &OUTPUTS, [&args.scenario])?;
-    check_out_folder(out, &OUTPUTS)?;
     let sc = Scenario::load(&args.scenario)?;
     let (optimiser, full) = args
         .strategy

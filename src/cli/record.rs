@@ -15,9 +15,8 @@ pub struct RecordArgs {
     /// task (task.json) outputs.
     #[arg(required = true)]
     pub dirs: Vec<PathBuf>,
-    /// The results database (default: $CALBENCH_DB, else results/calbench.sqlite).
-    #[arg(long, value_name = "PATH")]
-    pub db: Option<PathBuf>,
+    #[command(flatten)]
+    pub db: DbArg,
     /// The scenario file of the run folders (default: scenarios/<name>.toml, the name their
     /// summary.json gives); its trials and seed are those of the run.
     #[arg(long, value_name = "FILE")]
@@ -33,6 +32,21 @@ pub struct RecordArgs {
     /// The machine's name (default: the host name).
     #[arg(long, value_name = "NAME", value_parser = not_blank)]
     pub machine: Option<String>,
+}
+
+/// `--db` of `record`, `history` and `leaderboard`.
+#[derive(clap::Args)]
+pub struct DbArg {
+    /// The results database (default: $CALBENCH_DB, else results/calbench.sqlite).
+    #[arg(long, value_name = "PATH")]
+    pub db: Option<PathBuf>,
+}
+
+impl DbArg {
+    /// The database, opened for writing (created and migrated) or for reading.
+    pub fn open(&self, write: bool) -> Result<Db> {
+        Ok(Db::open(&db_path(self.db.as_deref()), write)?)
+    }
 }
 
 /// `--record`, `--db` and `--label` of `run`, `identify` and `merge`.
@@ -113,7 +127,7 @@ pub fn run(args: &RecordArgs) -> Result<()> {
         .iter()
         .map(|d| Record::of_folder(d, args.scenario.as_deref(), args.task.as_deref()))
         .collect::<calbench::Result<Vec<Record>>>()?;
-    let mut db = Db::open(&db_path(args.db.as_deref()), true)?;
+    let mut db = args.db.open(true)?;
     let p = Provenance::here(args.label.as_deref(), args.machine.as_deref());
     for r in &records {
         let done = db.record(r, &p)?;

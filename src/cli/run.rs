@@ -10,8 +10,8 @@ use anyhow::Result;
 use calbench::error::Error;
 use calbench::results::Kind;
 use calbench::runner::resume::Resumable;
-use calbench::runner::run::{refuse_precision, resume_study, run_study};
-use calbench::runner::whole::{resume_cells, run_cells_study};
+use calbench::runner::run::{refuse_precision, run_study};
+use calbench::runner::whole::{self, run_cells_study, Resumed};
 use calbench::study::kind::AnyScenario;
 use calbench::study::reporter::Terminal;
 use calbench::study::scenario::Scenario;
@@ -216,19 +216,20 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
     let db = args.record.open()?;
-    if !matches!(checked.scenario(), AnyScenario::MonteCarlo(_)) {
-        eprintln!("resuming the run into {}", dir.display());
-        let t0 = std::time::Instant::now();
-        let table = resume_cells(checked, threads, &Terminal)?;
-        cells_finished(checked_name(dir), &table, t0, dir)?;
-        let record = || super::record::of_study(dir, Kind::Run);
-        return args.record.finish(db, record);
-    }
     eprintln!("resuming the run into {}", dir.display());
-    let r = resume_study(checked, threads, &Terminal)?;
-    finished(&r)?;
-    let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
-    args.record.finish(db, record)
+    let t0 = std::time::Instant::now();
+    match whole::resume(checked, threads, &Terminal)? {
+        Resumed::Cells(table) => {
+            cells_finished(&table, t0, dir)?;
+            args.record
+                .finish(db, || super::record::of_study(dir, Kind::Run))
+        }
+        Resumed::Study(r) => {
+            finished(&r)?;
+            let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
+            args.record.finish(db, record)
+        }
+    }
 }
 
 /// Prints a finished run's table and where its report is (or, for a shard, how to merge).
@@ -311,20 +312,14 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         );
         return Ok(());
     }
-    cells_finished(sc.name().to_string(), &table, t0, &out)?;
+    cells_finished(&table, t0, &out)?;
     args.record
         .finish(db, || super::record::of_study(&out, Kind::Run))
 }
 
-/// The name of the folder `dir`.
-fn checked_name(dir: &Path) -> String {
-    dir.file_name()
-        .map_or(String::new(), |n| n.to_string_lossy().into_owned())
-}
-
 /// Prints a finished study of cells' `table` and where its report is (a shard's table is
 /// empty).
-fn cells_finished(_name: String, table: &str, t0: std::time::Instant, out: &Path) -> Result<()> {
+fn cells_finished(table: &str, t0: std::time::Instant, out: &Path) -> Result<()> {
     if table.is_empty() {
         out!(
             "shard written: {}; combine all shards with `calbench merge`",

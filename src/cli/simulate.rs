@@ -15,8 +15,6 @@ use calbench::study::kind::AnyScenario;
 use calbench::study::scenario::Scenario;
 use calbench::study::{trial, Study};
 
-use super::check_out_folder;
-
 /// The files written.
 const OUTPUTS: [&str; 3] = simulated::FILES;
 
@@ -41,7 +39,6 @@ pub struct SimulateArgs {
 pub fn run(args: &SimulateArgs) -> Result<()> {
     let (out, trial) = (&args.out, args.trial);
     super::guard_out(out, &OUTPUTS, [&args.scenario])?;
-    check_out_folder(out, &OUTPUTS)?;
     let sc = match AnyScenario::load(&args.scenario)? {
         AnyScenario::Instruments(sc) => return instrument(&sc, args),
         AnyScenario::MonteCarlo(sc) => sc,

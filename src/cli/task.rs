@@ -20,8 +20,6 @@ use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
 use calbench::report::{write_identified_with, write_kind};
 
-use super::check_out_folder;
-
 /// The files written for a socket task.
 const SOCKET_OUTPUTS: [&str; 4] = ["identified.json", "robot.toml", "task.json", TASK_FILE];
 
@@ -67,7 +65,6 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     let task = Task::load(&path)?;
     super::guard_out(&args.out, &OUTPUTS, task.head.inputs())?;
     calbench::report::guard::guard_data_folder(&args.out, "--out", task.data_files())?;
-    check_out_folder(&args.out, &OUTPUTS)?;
     let spec = super::identify::method_with_options(args.method.name, &args.options)?;
     let (request, val, origin) = task.entry_request(spec, &args.models)?;
     let IdentifyOutcome::Tracker(o) = request.run()? else {
@@ -167,7 +164,6 @@ fn run_socket(args: &TaskArgs, task: &SocketTask) -> Result<()> {
     let (head, out, method) = (&task.head, args.out.as_path(), args.method.name);
     super::guard_out(out, &SOCKET_OUTPUTS, head.inputs())?;
     calbench::report::guard::guard_data_folder(out, "--out", task.data_files())?;
-    check_out_folder(out, &SOCKET_OUTPUTS)?;
     if !args.models.is_empty() {
         bail!(
             "--models: {} is a socket task, which identifies the kinematic model only",

@@ -109,6 +109,30 @@ pub const STREAM_MIN_POINTS: usize = 4096;
 /// positions and thirty parameters, 370 kB) stays in the processor's cache.
 pub const BLOCK_POINTS: usize = 512;
 
+/// Calls `f(points, r, j)` for each block of up to [`BLOCK_POINTS`] points of `p` at `x`, in
+/// order, with the block's residual rows and Jacobian ([`LeastSquares::evaluate_points`]) in
+/// buffers made for the first block and again only for a shorter last one: memory stays
+/// bounded for files of millions of rows. The solvers' own passes over a streamed problem
+/// keep their buffers from one iteration to the next instead.
+pub fn by_blocks(
+    p: &dyn LeastSquares,
+    x: &DVector<Real>,
+    mut f: impl FnMut(std::ops::Range<usize>, &DVector<Real>, &DMatrix<Real>),
+) {
+    let size = p.size();
+    let rows = size.rows_per_point;
+    let (mut r, mut j) = (DVector::zeros(0), DMatrix::zeros(0, 0));
+    for first in (0..size.points).step_by(BLOCK_POINTS) {
+        let k = BLOCK_POINTS.min(size.points - first);
+        if r.len() != k * rows {
+            r = DVector::zeros(k * rows);
+            j = DMatrix::zeros(k * rows, size.params);
+        }
+        p.evaluate_points(x, first, &mut r, &mut j);
+        f(first..first + k, &r, &j);
+    }
+}
+
 /// Whether a problem of `points` points is streamed ([`STREAM_MIN_POINTS`]).
 pub fn streams(points: usize) -> bool {
     points > STREAM_MIN_POINTS

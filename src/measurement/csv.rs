@@ -341,8 +341,7 @@ mod tests {
     use approx::assert_relative_eq;
 
     fn tmp(name: &str) -> std::path::PathBuf {
-        let d = std::env::temp_dir().join(format!("calbench-sim-csv-{}", std::process::id()));
-        std::fs::create_dir_all(&d).unwrap();
+        let d = crate::test_dir("sim-csv");
         d.join(name)
     }
 

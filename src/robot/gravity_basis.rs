@@ -18,7 +18,7 @@
 use crate::numeric::{Real, Vec3};
 use crate::robot::compliance::masses_with;
 use crate::robot::harmonics::check_terms;
-use crate::robot::param::nonzero_block;
+use crate::robot::param::add_block_offsets;
 use crate::robot::{Chain, ChainVars, JointType, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// Largest magnitude of a gravity-basis coefficient, rad per N·m of a 1 N weight's torque: a
@@ -95,13 +95,9 @@ pub fn torques(robot: &Robot, chain: &Chain, vars: &ChainVars, tau: &mut Torques
 /// Allocation-free.
 #[inline]
 pub fn add_offsets(values: &[Real], tau: &Torques, dv: &mut [Real]) {
-    let dof = dv.len();
-    for (j, d) in dv.iter_mut().enumerate() {
-        let Some(k) = nonzero_block(values, dof, j, (GRAVITY_POINTS, Param::Gravity)) else {
-            continue;
-        };
-        *d += k.iter().zip(&tau[j]).map(|(a, b)| a * b).sum::<Real>();
-    }
+    add_block_offsets(values, dv, (GRAVITY_POINTS, Param::Gravity), |j, k| {
+        k.iter().zip(&tau[j]).map(|(a, b)| a * b).sum::<Real>()
+    });
 }
 
 /// Checks the gravity-basis coefficients of `robot` ([`Robot::check`]): each finite and

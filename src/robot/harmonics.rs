@@ -5,7 +5,7 @@
 //! docs/formats.md "Joint-angle harmonics").
 
 use crate::numeric::Real;
-use crate::robot::param::nonzero_block;
+use crate::robot::param::add_block_offsets;
 use crate::robot::{ChainVars, Param, Robot, HARMONIC_TERMS, MAX_HARMONIC_ORDER};
 
 /// Largest magnitude of a harmonic coefficient, rad (about 5.7°): far beyond any encoder or
@@ -53,20 +53,16 @@ pub fn has_harmonics(robot: &Robot) -> bool {
 /// Allocation-free.
 #[inline]
 pub fn add_offsets(values: &[Real], vars: &ChainVars, dv: &mut [Real]) {
-    let dof = dv.len();
-    for (j, d) in dv.iter_mut().enumerate() {
-        let Some(h) = nonzero_block(values, dof, j, (HARMONIC_TERMS, Param::Harmonic)) else {
-            continue;
-        };
+    add_block_offsets(values, dv, (HARMONIC_TERMS, Param::Harmonic), |j, h| {
         let (s, c) = vars.1[j];
         let orders = orders_used(h.iter().map(|v| *v != 0.0));
         let f = factors(s, c, orders);
-        *d += h[..2 * orders]
+        h[..2 * orders]
             .iter()
             .zip(f)
             .map(|(a, b)| a * b)
-            .sum::<Real>();
-    }
+            .sum::<Real>()
+    });
 }
 
 /// Checks the harmonic coefficients of `robot` ([`Robot::check`]): each finite and within

@@ -275,6 +275,24 @@ pub fn nonzero_block(
     block.iter().any(|v| *v != 0.0).then_some(block)
 }
 
+/// Adds to each `dv[j]` the offset `offset(j, block)` of joint `j`'s block of `terms`
+/// ([`nonzero_block`]; none where it is zero) in the flat parameter `values` of a robot with
+/// `dv.len()` joints. Allocation-free.
+#[inline]
+pub fn add_block_offsets(
+    values: &[crate::numeric::Real],
+    dv: &mut [crate::numeric::Real],
+    terms: (usize, fn(usize, usize) -> Param),
+    mut offset: impl FnMut(usize, &[crate::numeric::Real]) -> crate::numeric::Real,
+) {
+    let dof = dv.len();
+    for (j, d) in dv.iter_mut().enumerate() {
+        if let Some(block) = nonzero_block(values, dof, j, terms) {
+            *d += offset(j, block);
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,7 +1,6 @@
 //! The resume of a killed run (`calbench run --resume DIR`): its checkpoint checked
 //! ([`Resumable::open`]) and what continuing it needs ([`Resumable::continued`]), for a
-//! Monte-Carlo study ([`super::run::resume_study`]) and a study of cells
-//! ([`super::whole::resume_cells`]) alike.
+//! Monte-Carlo study and a study of cells alike ([`super::whole::resume`]).
 
 use std::path::{Path, PathBuf};
 
@@ -10,7 +9,7 @@ use crate::error::Result;
 use crate::study::kind::AnyScenario;
 use crate::study::{RunOptions, Shard};
 
-/// The checkpoint of a killed run, checked and ready to continue ([`super::run::resume_study`]).
+/// The checkpoint of a killed run, checked and ready to continue ([`super::whole::resume`]).
 pub struct Resumable {
     pub(super) out: PathBuf,
     pub(super) checkpoint: Checkpoint,
@@ -33,11 +32,6 @@ impl Resumable {
             shard,
             records,
         })
-    }
-
-    /// The scenario of the killed run.
-    pub fn scenario(&self) -> &AnyScenario {
-        &self.scenario
     }
 }
 

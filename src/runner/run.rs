@@ -10,7 +10,6 @@ use std::path::Path;
 use rayon::prelude::*;
 
 use super::checkpoint::Checkpoint;
-use super::resume::Resumable;
 use super::shard::{self, Both};
 use crate::analysis::{analyse::analyse, summary::Summary};
 use crate::error::{Error, Result};
@@ -45,32 +44,9 @@ pub fn run_study(
     study_into(scenario, opts, &out, cp, None, reporter)
 }
 
-/// Continues a killed Monte-Carlo run from its checked checkpoint ([`Resumable::open`]) with
-/// `threads` worker threads: writes the same files as an uninterrupted run (a study of cells
-/// continues with [`super::whole::resume_cells`]).
-pub fn resume_study(
-    run: Resumable,
-    threads: Option<usize>,
-    reporter: &dyn Reporter,
-) -> Result<RunResult> {
-    let mut c = run.continued(threads)?;
-    let AnyScenario::MonteCarlo(scenario) = c.scenario else {
-        return Err(Error::Compute("not a Monte-Carlo run".into()));
-    };
-    let replay: &mut dyn Replay = &mut c.records;
-    study_into(
-        scenario,
-        &c.opts,
-        &c.out,
-        c.checkpoint,
-        Some(replay),
-        reporter,
-    )
-}
-
 /// Runs (or continues) a study into `out` with its checkpoint `cp`, written whole or not at
 /// all; the checkpoint is removed once the run ends, with its output or with an error.
-fn study_into(
+pub(super) fn study_into(
     scenario: Scenario,
     opts: &RunOptions,
     out: &Path,

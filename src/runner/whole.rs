@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::report::output::write_all;
 use crate::study::kind::AnyScenario;
 use crate::study::reporter::{NoProgress, Progress, Reporter};
-use crate::study::{Replay as _, RunOptions, CHUNK};
+use crate::study::{Replay, RunOptions, RunResult, CHUNK};
 
 /// Runs `cells`, the study `sc` (or its share `opts.shard`), into the folder `out` as a
 /// whole, with its checkpoint `cp` (removed once the run ends) and, when resumed, the records
@@ -132,16 +132,27 @@ pub fn run_cells_study(
     dispatch(sc, opts, &out, cp, None, reporter)
 }
 
-/// Continues a killed registration or instruments study from its checked checkpoint with
-/// `threads` worker threads: the same files as an uninterrupted run, and its table.
-pub fn resume_cells(
-    run: Resumable,
-    threads: Option<usize>,
-    reporter: &dyn Reporter,
-) -> Result<String> {
+/// A continued run's result: a Monte-Carlo study's, or the table of a study of cells.
+pub enum Resumed {
+    /// A Monte-Carlo study.
+    Study(Box<RunResult>),
+    /// A registration or instruments study: the table the terminal shows.
+    Cells(String),
+}
+
+/// Continues a killed run of any kind from its checked checkpoint ([`Resumable::open`]) with
+/// `threads` worker threads: writes the same files as an uninterrupted run.
+pub fn resume(run: Resumable, threads: Option<usize>, reporter: &dyn Reporter) -> Result<Resumed> {
     let mut c = run.continued(threads)?;
-    let replay = Some(&mut c.records);
-    dispatch(&c.scenario, &c.opts, &c.out, c.checkpoint, replay, reporter)
+    let (opts, out, cp) = (&c.opts, &c.out, c.checkpoint);
+    match c.scenario {
+        AnyScenario::MonteCarlo(s) => {
+            let replay: &mut dyn Replay = &mut c.records;
+            let r = super::run::study_into(s, opts, out, cp, Some(replay), reporter)?;
+            Ok(Resumed::Study(Box::new(r)))
+        }
+        sc => dispatch(&sc, opts, out, cp, Some(&mut c.records), reporter).map(Resumed::Cells),
+    }
 }
 
 /// [`run_cells`] with the study of `sc`'s kind.

@@ -56,10 +56,8 @@ pub struct ComplianceSettings {
     pub model: ComplianceModel,
     /// Joint stiffness per joint, N·m/rad (N/mm for prismatic joints, which are treated as
     /// rigid). Defaults to the built-in robot's values.
-    #[serde(default)]
     pub stiffness_nm_per_rad: Option<Vec<Real>>,
     /// Link masses per joint, kg. Defaults to the built-in robot's values.
-    #[serde(default)]
     pub link_mass_kg: Option<Vec<Real>>,
     /// Payload at the tool point, kg.
     #[serde(default)]

@@ -419,7 +419,6 @@ pub struct WorkspaceRegion {
     pub cone_deg: Real,
     /// Start of the inverse kinematics, one value per joint in the robot's units (deg, mm);
     /// `None`: zero clamped into each joint's range.
-    #[serde(default)]
     pub start: Option<Vec<Real>>,
 }
 

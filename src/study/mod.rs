@@ -154,7 +154,6 @@ pub struct BlockInfo {
     /// Guo's separation report (`calibration.separate`), if any.
     pub separation: Option<serde_json::Value>,
     /// The simulated arm's joint compliances (name → rad/(N·m)), when it sags.
-    #[serde(default)]
     pub true_compliance: Option<serde_json::Value>,
     /// Whether a method was supplied from outside the scenario file
     /// ([`crate::identify::external`]): `trials.csv` then records each failure's message.
@@ -206,7 +205,6 @@ pub struct Trial0 {
     pub per_point: Option<(usize, usize, Vec<Real>, Vec<Real>)>,
     /// The same outcome's attitude errors per point (Qiao's, deg), before and after, for
     /// full-pose data.
-    #[serde(default)]
     pub per_point_attitude_deg: Option<(Vec<Real>, Vec<Real>)>,
     /// The metaheuristics' best fitness per iteration: (strategy, method, trace).
     pub traces: Vec<(usize, usize, Vec<Real>)>,

@@ -5,8 +5,8 @@
 //! `history` and `leaderboard`.
 
 use crate::common::{
-    calbench, calbench_ok, kill_once_checkpointed, one_line_naming, path_arg, read, root, tmp_dir,
-    write_scenario,
+    calbench, calbench_ok, kill_once_checkpointed, merge, one_line_naming, path_arg, read, root,
+    tmp_dir, write_scenario,
 };
 
 /// The files of a registration study.
@@ -29,13 +29,7 @@ fn ban_fig3_in_two_shards_merges_to_the_bytes_of_one_run() {
     let s1 = run(&["--shard", "1/2", "--threads", "1"], "s1");
     assert!(s0.join("records.txt").exists() && !s0.join("summary.json").exists());
     let merged = dir.join("merged");
-    calbench_ok(&[
-        "merge",
-        path_arg(&s0),
-        path_arg(&s1),
-        "--out",
-        path_arg(&merged),
-    ]);
+    merge(&[&s0, &s1], &merged);
     for f in FIG3 {
         assert_eq!(read(&one.join(f)), read(&merged.join(f)), "{f}");
     }

@@ -114,7 +114,6 @@ fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
 /// a compensated robot as if converged, unless the user asks for the result anyway.
 #[test]
 fn identify_refuses_data_that_do_not_determine_the_parameters() {
-    use calbench::measurement::Measurements;
     let robot = calbench::robot::builtin::irb2600();
     let truth = robot.with_errors(&[(calbench::robot::Param::A(1), 0.5)]);
     let qs: Vec<Vec<f64>> = (0..30)
@@ -124,14 +123,9 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
             q
         })
         .collect();
-    let data = Measurements {
-        points: qs.iter().map(|q| truth.fk(q).pos).collect(),
-        qs,
-        ..Default::default()
-    };
     let dir = tmp_dir("cli-rank");
     let file = dir.join("joint1.csv");
-    calbench::measurement::csv::write_measurements(&file, &robot, &data).unwrap();
+    crate::common::write_points(&file, &robot, qs, |q| truth.fk(q).pos);
     for method in ["ls", "ridge", "igg3", "lm", "bas"] {
         let out = dir.join(method);
         let args = [

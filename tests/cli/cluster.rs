@@ -6,7 +6,7 @@
 
 use std::process::Output;
 
-use crate::common::{bin, calbench_ok, path_arg, read, root, tmp_dir};
+use crate::common::{bin, calbench_ok, merge, path_arg, read, root, tmp_dir};
 
 const VARS: [&str; 7] = [
     "SLURM_ARRAY_TASK_ID",
@@ -70,13 +70,7 @@ fn shard_auto_reads_slurm_and_kubernetes_and_merges_to_the_bytes_of_one_run() {
     ];
     let o = run_with(&k8s, &[&args[..], &[path_arg(&s0)]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    calbench_ok(&[
-        "merge",
-        path_arg(&s0),
-        path_arg(&s1),
-        "--out",
-        path_arg(&merged),
-    ]);
+    merge(&[&s0, &s1], &merged);
     calbench_ok(&["run", sc, "--trials", "4", "--out", path_arg(&full)]);
     for f in ["summary.json", "trials.csv"] {
         assert_eq!(read(&merged.join(f)), read(&full.join(f)), "{f}");

@@ -9,12 +9,11 @@
 
 use std::path::Path;
 
-use calbench::measurement::Measurements;
 use calbench::numeric::rng::stream;
 use calbench::robot::{builtin, sampling::uniform_joint_poses, Param};
 use rand::Rng;
 
-use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir};
+use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_points};
 
 /// `n` poses of the irb2600 with an error in a₁ and the smooth residual in q1, with noise
 /// of 0.01 mm, written to `file`.
@@ -23,22 +22,13 @@ fn write_data(file: &Path, n: usize, seed: u64) {
     let truth = robot.with_errors(&[(Param::A(1), 0.5), (Param::Theta(2), 1e-3)]);
     let mut g = stream(seed, "kernel-cli");
     let qs = uniform_joint_poses(&robot, n, &mut g);
-    let points = qs
-        .iter()
-        .map(|q| {
-            let mut p = truth.fk(q).pos;
-            p.x += 0.5 * (3.0 * q[0]).sin() + g.random_range(-0.01..0.01);
-            p.y += 0.3 * (3.0 * q[0]).cos() + g.random_range(-0.01..0.01);
-            p.z += g.random_range(-0.01..0.01);
-            p
-        })
-        .collect();
-    let data = Measurements {
-        points,
-        qs,
-        ..Default::default()
-    };
-    calbench::measurement::csv::write_measurements(file, &robot, &data).unwrap();
+    write_points(file, &robot, qs, |q| {
+        let mut p = truth.fk(q).pos;
+        p.x += 0.5 * (3.0 * q[0]).sin() + g.random_range(-0.01..0.01);
+        p.y += 0.3 * (3.0 * q[0]).cos() + g.random_range(-0.01..0.01);
+        p.z += g.random_range(-0.01..0.01);
+        p
+    });
 }
 
 /// `identify` on `cal` with the validation file `val`, the models `models`, 4-fold CV.

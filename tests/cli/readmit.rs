@@ -9,12 +9,11 @@
 
 use std::path::Path;
 
-use calbench::measurement::Measurements;
 use calbench::numeric::rng::stream;
 use calbench::robot::{builtin, loaded::loaded_fk, sampling::uniform_joint_poses, Param};
 use rand::Rng;
 
-use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir};
+use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_points};
 use crate::task::{task, task_lm};
 
 /// The injected errors every data set has: lengths and angles of the arm, none on the tool.
@@ -34,24 +33,15 @@ fn write_data(file: &Path, errors: &[(Param, f64)], noise: f64, n: usize, seed: 
     let chain = truth.chain();
     let mut g = stream(seed, "readmit-cli");
     let qs = uniform_joint_poses(&robot, n, &mut g);
-    let points = qs
-        .iter()
-        .map(|q| {
-            let mut p = loaded_fk(&truth, &chain, q, 0.0).unwrap().pos;
-            if noise > 0.0 {
-                for k in 0..3 {
-                    p[k] += g.random_range(-noise..noise);
-                }
+    write_points(file, &robot, qs, |q| {
+        let mut p = loaded_fk(&truth, &chain, q, 0.0).unwrap().pos;
+        if noise > 0.0 {
+            for k in 0..3 {
+                p[k] += g.random_range(-noise..noise);
             }
-            p
-        })
-        .collect();
-    let data = Measurements {
-        points,
-        qs,
-        ..Default::default()
-    };
-    calbench::measurement::csv::write_measurements(file, &robot, &data).unwrap();
+        }
+        p
+    });
 }
 
 /// `identify --robot irb2600 --method lm` of `cal` against `val`, with `extra` arguments,

@@ -6,7 +6,8 @@
 use serde_json::Value;
 
 use crate::common::{
-    calbench_ok, kill_once_checkpointed, load_json, path_arg, read, root, tmp_dir, write_scenario,
+    calbench_ok, kill_once_checkpointed, load_json, merge, path_arg, read, root, tmp_dir,
+    write_scenario,
 };
 use crate::html::{browse, chromium, ci, self_contained};
 
@@ -81,13 +82,7 @@ fn search_ecdfs_are_monotone_shares_and_the_same_bytes_for_threads_shards_and_re
     let s0 = run("s0", &["--shard", "0/2"]);
     let s1 = run("s1", &["--shard", "1/2"]);
     let merged = dir.join("m");
-    calbench_ok(&[
-        "merge",
-        path_arg(&s0),
-        path_arg(&s1),
-        "--out",
-        path_arg(&merged),
-    ]);
+    merge(&[&s0, &s1], &merged);
     let resumed = dir.join("resumed");
     killed_and_resumed(&sc, &resumed);
     for other in [&t2, &merged, &resumed] {

@@ -7,7 +7,7 @@ use std::process::{Command, Output};
 
 use calbench::identify::qiao::poses_in_cube;
 use calbench::numeric::rng::Rng;
-use calbench::numeric::Real;
+use calbench::numeric::{Real, Vec3};
 use calbench::robot::{Param, Robot};
 
 /// A small study: LS and IGG3 on random poses, no sag (fast).
@@ -110,6 +110,31 @@ pub fn path_arg(p: &Path) -> &str {
     p.to_str().unwrap()
 }
 
+/// Writes the measurement file `file` of `robot` at the joint values `qs`, each pose's point
+/// `point(q)`.
+pub fn write_points(
+    file: &Path,
+    robot: &Robot,
+    qs: Vec<Vec<Real>>,
+    point: impl FnMut(&Vec<Real>) -> Vec3,
+) {
+    let points = qs.iter().map(point).collect();
+    let data = calbench::measurement::Measurements {
+        points,
+        qs,
+        ..Default::default()
+    };
+    calbench::measurement::csv::write_measurements(file, robot, &data).unwrap();
+}
+
+/// `calbench merge SHARDS… --out OUT`, which must succeed.
+pub fn merge(shards: &[&Path], out: &Path) -> Output {
+    let mut args = vec!["merge"];
+    args.extend(shards.iter().map(|s| path_arg(s)));
+    args.extend(["--out", path_arg(out)]);
+    calbench_ok(&args)
+}
+
 /// The text of a file; a failure names the file.
 pub fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
@@ -158,13 +183,7 @@ pub fn threads_and_merged_shards(dir: &Path, scenario: &Path) -> [PathBuf; 3] {
     let (s0, s1, merged) = (dir.join("s0"), dir.join("s1"), dir.join("merged"));
     run(&s0, &["--shard", "0/2"]);
     run(&s1, &["--shard", "1/2"]);
-    calbench_ok(&[
-        "merge",
-        path_arg(&s0),
-        path_arg(&s1),
-        "--out",
-        path_arg(&merged),
-    ]);
+    merge(&[&s0, &s1], &merged);
     [one, two, merged]
 }
 

@@ -655,8 +655,7 @@ mod tests {
 
     #[test]
     fn the_line_of_results_is_named() {
-        let dir = std::env::temp_dir().join(format!("calbench-check-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_dir("check");
         let path = dir.join("s.json");
         let text = "{\n  \"a\": {\"results\": 1},\n  \"b\": \"results\",\n  \"results\": []\n}\n";
         std::fs::write(&path, text).unwrap();

@@ -30,7 +30,6 @@ pub struct TaskRecord {
     #[serde(deserialize_with = "nan::real")]
     pub value: Real,
     /// Its 95 % interval.
-    #[serde(default)]
     pub ci95: Option<[Real; 2]>,
     /// The division.
     pub division: Division,
@@ -46,19 +45,15 @@ pub struct TaskRecord {
     #[serde(default)]
     pub candidates: Vec<String>,
     /// What fixed them: `task`, `command line`, `default` or `caller`.
-    #[serde(default)]
     pub candidates_fixed_by: Option<String>,
     /// The repeated K-fold choice among the candidates.
-    #[serde(default)]
     pub cv_choice: Option<RepeatedChoice>,
     /// Who ran it.
     #[serde(default = "calbench")]
     pub entrant: String,
     /// The calbench version that ran it.
-    #[serde(default)]
     pub calbench_version: Option<String>,
     /// The commit it ran at.
-    #[serde(default)]
     pub git_commit: Option<String>,
     /// The data's authors' figures, from the task file.
     #[serde(default)]
@@ -111,10 +106,8 @@ pub struct SocketScores {
     /// The nominal robot.
     pub nominal: Placements,
     /// The authors' calibrated model, scored by calbench.
-    #[serde(default)]
     pub authors_model: Option<Placements>,
     /// The authors' own figures on the calibration placement, from their `kpis.yaml`.
-    #[serde(default)]
     pub authors_kpis: Option<SocketFigures>,
 }
 

@@ -494,8 +494,7 @@ mod tests {
     /// A malformed `distance:` is refused at its own line and key, not the key before it.
     #[test]
     fn a_malformed_distance_is_named_at_its_key() {
-        let dir = std::env::temp_dir().join(format!("calbench-kpis-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_dir("kpis");
         let p = dir.join("kpis.yaml");
         std::fs::write(&p, "var_1:\n- 1.0e-9\n- 2.0e-9\n- 3.0e-9\ndistance: oops\n").unwrap();
         let e = read_kpis(&p).unwrap_err().to_string();

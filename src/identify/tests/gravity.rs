@@ -82,8 +82,7 @@ fn gravity_and_high_order_coefficients_are_recovered_noise_free() {
         text.contains("gravity = [") && text.contains("harmonics = ["),
         "{text}"
     );
-    let dir = std::env::temp_dir().join(format!("calbench-gravity-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::test_dir("gravity");
     let f = dir.join("robot.toml");
     std::fs::write(&f, &text).unwrap();
     let back = crate::robot::read_robot_file(&f).unwrap();

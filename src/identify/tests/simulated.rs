@@ -188,12 +188,7 @@ fn full_pose_jacobian_is_minus_the_derivative_of_the_residual_away_from_the_fit(
         p.evaluate(&xm, &mut rm, &mut scratch);
         for row in 0..n {
             let fd = -(rp[row] - rm[row]) / (2.0 * h);
-            assert!(
-                (fd - j[(row, c)]).abs() < 1e-5 * (1.0 + fd.abs()),
-                "{} row {row}: analytic {} fd {fd}",
-                params[c],
-                j[(row, c)]
-            );
+            crate::assert_fd(j[(row, c)], fd, 1e-5, &format!("{} row {row}", params[c]));
         }
     }
 }

@@ -37,11 +37,7 @@ fn gradient_matches_central_differences() {
         let fu = log_marginal_likelihood(&data, &up, jitter, &mut ws, None).unwrap();
         let fd = log_marginal_likelihood(&data, &down, jitter, &mut ws, None).unwrap();
         let numeric = (fu - fd) / (2.0 * h);
-        assert!(
-            (g[k] - numeric).abs() < 1e-6 * (1.0 + numeric.abs()),
-            "θ{k}: analytic {} numeric {numeric}",
-            g[k]
-        );
+        crate::assert_fd(g[k], numeric, 1e-6, &format!("θ{k}"));
     }
 }
 

@@ -134,8 +134,7 @@ mod tests {
 
     #[test]
     fn the_plots_draw_and_empty_or_odd_data_give_a_chart() {
-        let dir = std::env::temp_dir().join(format!("calbench-ecdf-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_dir("ecdf-plot");
         let ecdf = [
             ("bas".to_string(), vec![(100.0, 0.25), (300.0, 1.0)]),
             ("pso".to_string(), vec![]),

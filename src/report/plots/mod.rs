@@ -450,8 +450,7 @@ mod tests {
 
     #[test]
     fn a_drawn_box_plot_labels_no_residue_of_zero() {
-        let dir = std::env::temp_dir().join(format!("calbench-ticks-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_dir("ticks");
         let stem = dir.join("paired");
         let near: Vec<Real> = (0..40).map(|i| (i as Real - 20.0) * 2.5e-4).collect();
         let far: Vec<Real> = (0..40).map(|i| -0.184 + i as Real * 4.5e-3).collect();
@@ -480,8 +479,7 @@ mod floor_tests {
 
     #[test]
     fn a_bar_below_the_floor_is_cut_and_its_value_written() {
-        let dir = std::env::temp_dir().join(format!("calbench-floor-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        let dir = crate::test_dir("floor");
         let stem = dir.join("eta");
         let params: Vec<String> = ["a1", "d6", "theta2"].map(String::from).to_vec();
         let series = vec![("ls / random".to_string(), vec![95.0, -1615.0, 80.0])];

@@ -150,11 +150,7 @@ fn torques_are_minus_gradient_of_potential() {
             a[j] += h;
             b[j] -= h;
             let fd = -(potential(&a) - potential(&b)) / (2.0 * h);
-            assert!(
-                (t[j] - fd).abs() < 1e-5 * (1.0 + fd.abs()),
-                "j{j}: {} {fd}",
-                t[j]
-            );
+            crate::assert_fd(t[j], fd, 1e-5, &format!("j{j}"));
         }
     }
 }

@@ -46,21 +46,16 @@ pub struct Comparison {
     #[serde(default)]
     pub test: Test,
     /// The test's estimate of b − a (`null` in summaries before verdicts).
-    #[serde(default)]
     pub estimate: Option<Real>,
     /// Its 95 % interval.
-    #[serde(default)]
     pub ci95: Option<[Real; 2]>,
     /// The margin m of practical relevance, in the metric's unit.
-    #[serde(default)]
     pub margin: Option<Real>,
     /// `better`, `worse` (b against a, beyond ± m), `equivalent` (inside ± m) or
     /// `unresolved`.
-    #[serde(default)]
     pub verdict: Option<Paired>,
     /// For an unresolved verdict, the trials at which an interval as wide per trial would
     /// resolve it.
-    #[serde(default)]
     pub trials_to_resolve: Option<u64>,
 }
 
