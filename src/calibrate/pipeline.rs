@@ -273,7 +273,7 @@ impl IdentifyRequest {
             return Err(worse_error(&self.source, &worse, gross));
         }
         let implausible = plausibility::check(
-            (&nominal, &c.robot, &params),
+            (&nominal, &c.robot, &params, &d.qs),
             Some((&plausibility::tool_points(&nominal, &d.qs), &d.points)),
             (rms(&after), d.sigma_mm.as_deref()),
             gross,
