@@ -459,10 +459,15 @@ pub fn choose_model(
             cross_validate((&robot, &params, m.name(), m.gp), data, k, s)
         })
         .collect::<Result<Vec<_>>>()?;
-    let best = (0..cvs.len())
-        .min_by(|&a, &b| cvs[a].rms.total_cmp(&cvs[b].rms))
-        .unwrap_or(0);
+    let best = lowest(&cvs);
     Ok((cvs, best))
+}
+
+/// The index of the lowest CV RMS of `cvs` (the first of equals; 0 when empty).
+pub fn lowest(cvs: &[CrossValidation]) -> usize {
+    (0..cvs.len())
+        .min_by(|&a, &b| cvs[a].rms.total_cmp(&cvs[b].rms))
+        .unwrap_or(0)
 }
 
 /// The choice among candidate models by repeated K-fold cross-validation: the same
@@ -481,6 +486,22 @@ pub struct RepeatedChoice {
     /// The share of the seeds at which the chosen candidate also has the lowest CV RMS.
     #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub stability: Real,
+    /// The chosen candidate's whole cross-validation at each fold seed (not written: `models`
+    /// holds its RMS), for the identification of the chosen model to reuse
+    /// ([`RepeatedChoice::chosen_at`]).
+    #[serde(skip)]
+    pub chosen_cvs: Vec<CrossValidation>,
+}
+
+impl RepeatedChoice {
+    /// The chosen candidate's cross-validation at `fold_seed` on `folds` folds, when this
+    /// choice ran it.
+    pub fn chosen_at(&self, folds: usize, fold_seed: u64) -> Option<&CrossValidation> {
+        let i = self.fold_seeds.iter().position(|&s| s == fold_seed)?;
+        (folds == self.folds)
+            .then(|| self.chosen_cvs.get(i))
+            .flatten()
+    }
 }
 
 /// One candidate's cross-validation at every fold seed of a [`RepeatedChoice`].
@@ -517,6 +538,7 @@ pub fn choose_model_repeated(
         ));
     }
     let mut out: Vec<RepeatedCv> = Vec::with_capacity(models.len());
+    let mut each: Vec<Vec<CrossValidation>> = Vec::with_capacity(fold_seeds.len());
     for &fold_seed in fold_seeds {
         let setup = CvSetup {
             fold_seed,
@@ -526,6 +548,7 @@ pub fn choose_model_repeated(
             seed: s.seed,
         };
         let (cvs, best) = choose_model(nominal, models, data, k, &setup)?;
+        each.push(cvs.clone());
         for (i, cv) in cvs.into_iter().enumerate() {
             if out.len() <= i {
                 out.push(RepeatedCv {
@@ -552,6 +575,7 @@ pub fn choose_model_repeated(
         stability: out[best].wins as Real / fold_seeds.len() as Real,
         models: out,
         best,
+        chosen_cvs: each.into_iter().map(|mut c| c.swap_remove(best)).collect(),
     })
 }
 

@@ -490,7 +490,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
     let implausible = plausibility::check(
-        (nominal, &fit.robot, &fit.params),
+        (nominal, &fit.robot, &fit.params, &file.qs),
         points.as_ref().map(|(m, s)| (&m[..], &s[..])),
         (fit.rms.1, file.sigma_mm.as_deref()),
         gross(),

@@ -157,7 +157,13 @@ impl IdentifyRequest {
         let mut kernel_term = false;
         if !self.models.is_empty() {
             let folds = self.cv.unwrap_or(5);
-            let (cvs, best) = cv::choose_model(nominal, &self.models, &d, folds, &setup)?;
+            let (cvs, best) = match &self.cross_validated {
+                Some(done) if done.len() == self.models.len() => {
+                    let best = cv::lowest(done);
+                    (done.clone(), best)
+                }
+                _ => cv::choose_model(nominal, &self.models, &d, folds, &setup)?,
+            };
             (robot, params) =
                 self.models[best].robot_and_params(nominal, &d, registration, &self.fix)?;
             kernel_term = self.models[best].gp;
@@ -273,7 +279,7 @@ impl IdentifyRequest {
             return Err(worse_error(&self.source, &worse, gross));
         }
         let implausible = plausibility::check(
-            (&nominal, &c.robot, &params),
+            (&nominal, &c.robot, &params, &d.qs),
             Some((&plausibility::tool_points(&nominal, &d.qs), &d.points)),
             (rms(&after), d.sigma_mm.as_deref()),
             gross,

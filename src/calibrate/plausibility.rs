@@ -13,7 +13,7 @@ use super::registration::register_svd;
 use crate::error::{Error, Opt, Said};
 use crate::measurement::kind::{Instrument, KindData};
 use crate::numeric::{Real, Vec3};
-use crate::robot::{Param, Robot};
+use crate::robot::{gravity_basis, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// A joint's length or offset (`a`, `d`) may move by at most this share of the robot's reach
 /// ([`reach`]) …
@@ -55,10 +55,16 @@ pub fn reach(robot: &Robot) -> Real {
 
 /// The moves of `identified` from `nominal` beyond the bounds, each in words, for the
 /// identified parameters `params` (compliances are not bounded; the base's and the tool's
-/// angles neither: an instrument's frame can be anywhere).
-pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<String> {
+/// angles neither: an instrument's frame can be anywhere), and the gravity basis's joint
+/// deflections at the calibration poses `qs` beyond the angle bound ([`gravity_deflections`]).
+pub fn moves(
+    nominal: &Robot,
+    identified: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+) -> Vec<String> {
     let reach = reach(nominal);
-    let mut out: Vec<(Real, String)> = Vec::new();
+    let mut out: Vec<(Real, String)> = gravity_deflections(nominal, identified, params, qs);
     for &p in params {
         let mut moved = identified.get(p) - nominal.get(p);
         if matches!(p, Param::Theta(_) | Param::Alpha(_) | Param::Beta(_)) {
@@ -96,10 +102,76 @@ pub fn moves(nominal: &Robot, identified: &Robot, params: &[Param]) -> Vec<Strin
     named
 }
 
+/// The joint deflections the identified gravity-basis coefficients give beyond [`ANGLE_RAD`]
+/// (5°, the bound of a joint's angle), each with how far beyond (its ratio to the bound) and
+/// in words. A coefficient `k_jl` is rad/(N·m) and bounded by what it does, not by its size:
+/// for each joint `j` with coefficients among `params`, the largest `|Σ_l Δk_jl τ_jl(q)|` over
+/// the poses `qs` (`Δk` the move from `nominal`, `τ` the basis torques of `identified`'s
+/// geometry at `q`, as its forward kinematics apply them). A weight close to a joint's axis
+/// has a small torque about it, so its coefficient can be large while its deflection is small;
+/// one far from the axis turns the joint by degrees with a small coefficient.
+pub fn gravity_deflections(
+    nominal: &Robot,
+    identified: &Robot,
+    params: &[Param],
+    qs: &[Vec<Real>],
+) -> Vec<(Real, String)> {
+    let mut dk = [[0.0; GRAVITY_POINTS]; MAX_JOINTS];
+    let mut any = false;
+    for &p in params {
+        if let Param::Gravity(j, l) = p {
+            dk[j][l] = identified.get(p) - nominal.get(p);
+            any = true;
+        }
+    }
+    if !any {
+        return Vec::new();
+    }
+    let chain = identified.chain();
+    let mut tau = [[0.0; GRAVITY_POINTS]; MAX_JOINTS];
+    // Per joint: the largest deflection in size, signed, and the pose it is at.
+    let mut largest = [(0.0 as Real, 0usize); MAX_JOINTS];
+    for (i, q) in qs.iter().enumerate() {
+        gravity_basis::torques(identified, &chain, &chain.variables(q), &mut tau);
+        for (j, top) in largest.iter_mut().enumerate().take(identified.dof()) {
+            let d: Real = dk[j].iter().zip(&tau[j]).map(|(k, t)| k * t).sum();
+            if d.abs() > top.0.abs() || d.is_nan() {
+                *top = (d, i);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (j, &(d, i)) in largest.iter().enumerate() {
+        if d.is_finite() && d.abs() <= ANGLE_RAD {
+            continue;
+        }
+        let coefficients: Vec<String> = params
+            .iter()
+            .filter(|p| matches!(p, Param::Gravity(k, _) if *k == j))
+            .map(|&p| format!("{p} {:.4}", identified.get(p) - nominal.get(p)))
+            .collect();
+        let over = if d.is_finite() {
+            d.abs() / ANGLE_RAD
+        } else {
+            Real::INFINITY
+        };
+        out.push((
+            over,
+            format!(
+                "the gravity basis turns joint {} by {d:.4} rad ({:.2}°; bound {ANGLE_RAD:.4} rad:                  5°, as a joint's angle) at calibration pose {i} ({} rad/(N·m))",
+                j + 1,
+                d.to_degrees(),
+                coefficients.join(", ")
+            ),
+        ));
+    }
+    out
+}
+
 /// How far a calibration may move parameter `p` of a robot of reach `reach` (mm), in its
 /// unit, and the bound in words; `None` for a parameter without a bound (a compliance or a
-/// gravity-basis coefficient, whose unit is rad/(N·m), not an angle; the base's and the tool's
-/// angles).
+/// gravity-basis coefficient, whose unit is rad/(N·m), not an angle: the latter's deflection
+/// is bounded instead, [`gravity_deflections`]; the base's and the tool's angles).
 fn bound_of(p: Param, reach: Real) -> Option<(Real, String)> {
     Some(match p {
         Param::Compliance(_) | Param::Gravity(..) => return None,
@@ -233,6 +305,10 @@ pub fn largest_length_move(nominal: &Robot, identified: &Robot, params: &[Param]
         .fold(0.0, Real::max)
 }
 
+/// What [`judge`] judges: the nominal robot, the identified one, the parameters identified and
+/// the calibration poses.
+pub type Judged<'a> = (&'a Robot, &'a Robot, &'a [Param], &'a [Vec<Real>]);
+
 /// What makes an identification implausible (`found`: empty when nothing does) and what in
 /// the data likely caused it (`causes`).
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -243,17 +319,17 @@ pub struct Findings {
     pub causes: Vec<String>,
 }
 
-/// Judges the identified robot `identified` (parameters `params`) against `nominal`: its
-/// moves ([`moves`]), the measured points against the nominal robot's (`points`: model,
+/// Judges the identified robot `identified` (parameters `params`, calibration poses `qs`)
+/// against `nominal`: its moves ([`moves`]), the measured points against the nominal robot's (`points`: model,
 /// seen; [`data_causes`]), its residual RMS `rms` against the stated noise `sigma`
 /// ([`below_noise`]); `gross` names a gross reading the residuals point to, a cause.
 pub fn judge(
-    (nominal, identified, params): (&Robot, &Robot, &[Param]),
+    (nominal, identified, params, qs): Judged,
     points: Option<(&[Vec3], &[Vec3])>,
     (rms, sigma): (Real, Option<&[Real]>),
     gross: Option<String>,
 ) -> Findings {
-    let mut found = moves(nominal, identified, params);
+    let mut found = moves(nominal, identified, params, qs);
     let largest = largest_length_move(nominal, identified, params);
     found.extend(below_noise(rms, sigma, largest));
     let (scale, mut causes) = points.map_or((None, vec![]), |(m, s)| data_causes(m, s));
@@ -338,7 +414,7 @@ pub fn verdict(f: Findings, source: &Path, allow: bool) -> crate::Result<Vec<Str
 /// [`verdict`] of [`judge`]: the findings on `subject`, refused (read from `source`) unless
 /// `allow`.
 pub fn check(
-    subject: (&Robot, &Robot, &[Param]),
+    subject: Judged,
     points: Option<(&[Vec3], &[Vec3])>,
     noise: (Real, Option<&[Real]>),
     gross: Option<String>,
@@ -378,14 +454,14 @@ mod tests {
         assert!(reach > 1500.0 && reach < 3000.0, "{reach}");
         let params = [Param::A(1), Param::Theta(2), Param::Tool(0), Param::Tool(4)];
         let small = nominal.with_errors(&[(Param::A(1), 1.0), (Param::Theta(2), 0.01)]);
-        assert!(moves(&nominal, &small, &params).is_empty());
+        assert!(moves(&nominal, &small, &params, &[]).is_empty());
         let a2 = nominal.get(Param::A(1));
         let metres = nominal.with_errors(&[(Param::A(1), a2 / 1000.0 - a2)]);
-        let m = moves(&nominal, &metres, &params);
+        let m = moves(&nominal, &metres, &params, &[]);
         assert_eq!(m.len(), 1, "{m:?}");
         assert!(m[0].starts_with("a2 moved by -"), "{m:?}");
         let turned = nominal.with_errors(&[(Param::Theta(2), 0.2), (Param::Tool(4), 3.0)]);
-        let m = moves(&nominal, &turned, &params);
+        let m = moves(&nominal, &turned, &params, &[]);
         assert_eq!(m.len(), 1, "the tool's angle is not bounded: {m:?}");
         assert!(m[0].contains("theta3") && m[0].contains("11.46°"), "{m:?}");
         // A whole turn more is the same joint: the move is what is left of it.
@@ -393,12 +469,81 @@ mod tests {
         // A gravity-basis coefficient is rad/(N·m), not an angle: not bounded by 5°.
         let g = [Param::Gravity(1, 0)];
         let sagging = nominal.with_errors(&[(g[0], -0.2123)]);
-        assert!(moves(&nominal, &sagging, &g).is_empty());
+        assert!(moves(&nominal, &sagging, &g, &[]).is_empty());
         let whole = nominal.with_errors(&[(Param::Theta(2), -tau - 0.01)]);
-        assert!(moves(&nominal, &whole, &params).is_empty());
+        assert!(moves(&nominal, &whole, &params, &[]).is_empty());
         let whole = nominal.with_errors(&[(Param::Theta(2), tau + 0.2)]);
-        let m = moves(&nominal, &whole, &params);
+        let m = moves(&nominal, &whole, &params, &[]);
         assert!(m.len() == 1 && m[0].contains("11.46°"), "{m:?}");
+    }
+
+    /// The gravity basis is bounded by the deflection it gives at the calibration poses, not
+    /// by its coefficient: on the irb2600 a small `gt2` (0.1 rad/(N·m); a unit weight at the tool
+    /// point has a lever of over a metre about joint 2) turns joint 2 by more than 5° and is
+    /// named with its largest deflection, the torque taken independently from the joint frames;
+    /// a large `gw4` (0.9) loads joint 4 by a weight at the wrist centre, which lies on joint
+    /// 4's axis, and turns it by nothing.
+    #[test]
+    fn gravity_coefficients_are_bounded_by_their_deflection_at_the_poses() {
+        let nominal = builtin::load("irb2600").unwrap();
+        let mut g = crate::numeric::rng::stream(2, "plausibility-gravity");
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 50, &mut g);
+        let gt2 = Param::Gravity(1, 2);
+        let small = nominal.with_errors(&[(gt2, 0.1)]);
+        let chain = small.chain();
+        let tau2 = |q: &[Real]| {
+            let frames = chain.joint_frames(q);
+            let r = (chain.fk(q).pos - frames[1].pos) * 1e-3;
+            frames[1]
+                .rot
+                .column(2)
+                .dot(&r.cross(&Vec3::new(0.0, 0.0, -1.0)))
+        };
+        let (mut want, mut at) = (0.0, 0);
+        for (i, q) in qs.iter().enumerate() {
+            if (0.1 * tau2(q)).abs() > Real::abs(want) {
+                (want, at) = (0.1 * tau2(q), i);
+            }
+        }
+        assert!(Real::abs(want) > ANGLE_RAD, "{want}");
+        let found = gravity_deflections(&nominal, &small, &[gt2], &qs);
+        assert_eq!(found.len(), 1, "{found:?}");
+        assert!(
+            (found[0].0 - Real::abs(want) / ANGLE_RAD).abs() < 1e-9,
+            "{found:?} {want}"
+        );
+        let text = &found[0].1;
+        let words = format!("turns joint 2 by {want:.4} rad");
+        assert!(text.contains(&words), "{text}");
+        assert!(
+            text.contains(&format!("pose {at}")) && text.contains("gt2 0.1000"),
+            "{text}"
+        );
+        let m = moves(&nominal, &small, &[gt2], &qs);
+        assert!(m.len() == 1 && m[0] == *text, "{m:?}");
+        // The same coefficient at the poses where it turns joint 2 by less: nothing found.
+        let within: Vec<Vec<Real>> = qs
+            .iter()
+            .filter(|q| (0.1 * tau2(q)).abs() <= ANGLE_RAD)
+            .cloned()
+            .collect();
+        assert!(
+            within.len() >= 5 && within.len() < qs.len(),
+            "{}",
+            within.len()
+        );
+        assert!(gravity_deflections(&nominal, &small, &[gt2], &within).is_empty());
+        // A large coefficient on a weight near the joint's axis: no deflection to speak of.
+        let gw4 = Param::Gravity(3, 1);
+        let large = nominal.with_errors(&[(gw4, 0.9)]);
+        assert!(gravity_deflections(&nominal, &large, &[gw4], &qs).is_empty());
+        assert!(moves(&nominal, &large, &[gw4], &qs).is_empty());
+        let mut tau = [[0.0; GRAVITY_POINTS]; MAX_JOINTS];
+        let chain = large.chain();
+        for q in &qs {
+            gravity_basis::torques(&large, &chain, &chain.variables(q), &mut tau);
+            assert!((0.9 * tau[3][1]).abs() < 1e-3 * ANGLE_RAD, "{}", tau[3][1]);
+        }
     }
 
     fn cloud() -> Vec<Vec3> {

@@ -43,7 +43,7 @@ use super::diagnostics::Subject;
 use super::Registration;
 use crate::error::Result;
 use crate::identify::solver::{bound_inverse, by_blocks, BLOCK_POINTS, DETERMINABLE_SIGMAS};
-use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
+use crate::identify::{CalibrationProblem, Identified, LeastSquares, RobotProblem};
 use crate::measurement::Measurements;
 use crate::numeric::normal::NormalEquations;
 use crate::numeric::{nan, Real};
@@ -98,7 +98,6 @@ pub fn readmit(
             .collect(),
         Registration::Identify | Registration::Known => Vec::new(),
     };
-    let weights = point_weights(id.data, &c.identified.weights);
     let mut current: Vec<Param> = id.params.to_vec();
     for &p in candidates {
         if current.contains(&p) || nuisance.contains(&p) {
@@ -113,7 +112,7 @@ pub fn readmit(
             .copied()
             .chain([p])
             .collect();
-        let (n, g) = normal(&c.robot, &all, id, &weights)?;
+        let (n, g) = normal(&c.robot, &all, id)?;
         let last = all.len() - 1;
         let largest = (0..all.len())
             .map(|i| n[(i, i)].max(0.0).sqrt())
@@ -157,37 +156,215 @@ fn unit_noise(data: &Measurements, sigma0: Real) -> Real {
     }
 }
 
-/// Each point's weight in the re-check: the file's (else 1) on the points a robust fit kept at
-/// full weight, 0 on those it weighed down. A robust method's weights are per point, or with
-/// IGG3's `per = "coordinate"` each point's mean over its rows, which would let a gross error
-/// in one coordinate into the score at two thirds of its size; so only the points the fit
-/// fully trusted enter.
-fn point_weights(data: &Measurements, fitted: &[Real]) -> Vec<Real> {
-    let mut w = data.weights().unwrap_or_else(|| vec![1.0; data.len()]);
-    if fitted.len() == data.len() {
-        for (w, &f) in w.iter_mut().zip(fitted) {
-            if f < 1.0 {
-                *w = 0.0;
-            }
+/// Each residual row's weight in the re-check, point after point (`rows` rows per point):
+/// the weight the fit gave it, so that `JᵀPJ` is the fit's own with the candidate's column
+/// added. That is the row's own weight when the fit weighed each row on its own (IGG3 with
+/// `per = "coordinate"`: a gross coordinate at 0, its point's other rows kept), else its
+/// point's: the file's weight times a robust method's. A fit that reports no weights of its
+/// own (every weight 1: the searches, external methods, and every solver on unweighted data
+/// that rejected nothing) weighed the rows by the file's weights (1 without `sigma_mm`).
+fn row_weights(data: &Measurements, fitted: &Identified, rows: usize) -> Vec<Real> {
+    if let Some(w) = &fitted.row_weights {
+        if w.len() == data.len() * rows {
+            return w.clone();
         }
     }
-    w
+    let own = fitted.weights.len() == data.len() && fitted.weights.iter().any(|&w| w != 1.0);
+    let point = if own {
+        fitted.weights.clone()
+    } else {
+        data.weights().unwrap_or_else(|| vec![1.0; data.len()])
+    };
+    point
+        .iter()
+        .flat_map(|&w| std::iter::repeat_n(w, rows))
+        .collect()
 }
 
 /// `JᵀPJ` and `JᵀP r` of `params` at `robot` (the identified robot: errors 0) in the
-/// calibration's frame, over the calibration rows, summed [`BLOCK_POINTS`] points at a time.
-fn normal(
-    robot: &Robot,
-    params: &[Param],
-    id: &Subject,
-    weights: &[Real],
-) -> Result<(DMatrix<Real>, DVector<Real>)> {
+/// calibration's frame, over the calibration rows weighed as the fit weighed them
+/// ([`row_weights`]), summed [`BLOCK_POINTS`] points at a time.
+fn normal(robot: &Robot, params: &[Param], id: &Subject) -> Result<(DMatrix<Real>, DVector<Real>)> {
     let problem = CalibrationProblem::new(robot, params, id.data, id.calibrated.frame, id.k);
     let rp = RobotProblem::of(&problem)?;
     let rows = rp.size().rows_per_point;
+    let weights = row_weights(id.data, &id.calibrated.identified, rows);
     let mut sums = NormalEquations::new(params.len(), rows * BLOCK_POINTS);
     by_blocks(&rp, &DVector::zeros(params.len()), |points, r, j| {
-        sums.add(j, r.as_slice(), &weights[points]);
+        sums.add(j, r.as_slice(), &weights[points.start * rows..points.end * rows]);
     });
     Ok((sums.n().clone(), sums.g().clone()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::calibrate::calibrate;
+    use crate::identify::MethodSpec;
+    use crate::numeric::rng::stream;
+    use crate::numeric::Frame;
+    use crate::robot::{builtin, sampling::uniform_joint_poses};
+    use rand::Rng as _;
+
+    /// The identified parameters and the candidate whose column the re-check adds.
+    const PARAMS: [Param; 4] = [Param::A(1), Param::Theta(2), Param::D(3), Param::Alpha(2)];
+    const CANDIDATE: Param = Param::D(4);
+    /// The point and the coordinate (0 x, 1 y, 2 z) displaced by 2 mm.
+    const BAD: (usize, usize) = (7, 1);
+
+    /// 40 poses of the irb2600 with errors in `PARAMS`, measured in its base frame with
+    /// uniform noise of ±5 µm per coordinate; `gross` mm added to the bad coordinate.
+    fn data(gross: Real) -> Measurements {
+        let robot = builtin::irb2600();
+        let truth = robot.with_errors(&[
+            (PARAMS[0], 0.5),
+            (PARAMS[1], 1e-3),
+            (PARAMS[2], 0.3),
+            (PARAMS[3], 5e-4),
+        ]);
+        let chain = truth.chain();
+        let mut g = stream(5, "recheck-rows");
+        let qs = uniform_joint_poses(&robot, 40, &mut g);
+        let mut points: Vec<_> = qs
+            .iter()
+            .map(|q| {
+                let mut p = chain.fk(q).pos;
+                for k in 0..3 {
+                    p[k] += g.random_range(-0.005..0.005);
+                }
+                p
+            })
+            .collect();
+        points[BAD.0][BAD.1] += gross;
+        Measurements {
+            points,
+            qs,
+            ..Default::default()
+        }
+    }
+
+    fn fit(d: &Measurements, method: &str) -> crate::calibrate::Calibrated {
+        let spec = MethodSpec::from_table(&toml::from_str(method).unwrap()).unwrap();
+        let mut rng = stream(0, "identify");
+        let nominal = builtin::irb2600();
+        let c = calibrate(
+            &nominal,
+            &PARAMS,
+            d,
+            Registration::Known,
+            &Frame::identity(),
+            &spec,
+            &mut rng,
+        )
+        .unwrap();
+        assert_eq!(
+            c.identified.termination,
+            crate::identify::Termination::Converged
+        );
+        c
+    }
+
+    /// `JᵀPJ` and `JᵀPr` of the fit's parameters and the candidate at the identified robot,
+    /// built densely from the whole Jacobian with the row weights `p`: the independent build.
+    fn dense(
+        c: &crate::calibrate::Calibrated,
+        d: &Measurements,
+        p: &[Real],
+    ) -> (DMatrix<Real>, DVector<Real>) {
+        let all: Vec<Param> = PARAMS.iter().copied().chain([CANDIDATE]).collect();
+        let problem = CalibrationProblem::new(&c.robot, &all, d, c.frame, 1.0);
+        let rp = RobotProblem::of(&problem).unwrap();
+        let rows = rp.size().rows();
+        assert_eq!(rows, p.len());
+        let (mut r, mut j) = (DVector::zeros(rows), DMatrix::zeros(rows, all.len()));
+        rp.evaluate(&DVector::zeros(all.len()), &mut r, &mut j);
+        let pj = DMatrix::from_fn(rows, all.len(), |i, k| p[i] * j[(i, k)]);
+        (j.transpose() * &pj, pj.transpose() * r)
+    }
+
+    /// The re-check's `JᵀPJ`, `JᵀPr` of the fit `c` on `d`.
+    fn rechecked(
+        c: &crate::calibrate::Calibrated,
+        d: &Measurements,
+    ) -> (DMatrix<Real>, DVector<Real>) {
+        let nominal = builtin::irb2600();
+        let on = Subject {
+            nominal: &nominal,
+            params: &PARAMS,
+            data: d,
+            calibrated: c,
+            k: 1.0,
+            priors: &[],
+            validation: None,
+        };
+        let all: Vec<Param> = PARAMS.iter().copied().chain([CANDIDATE]).collect();
+        normal(&c.robot, &all, &on).unwrap()
+    }
+
+    fn close(a: &DMatrix<Real>, b: &DMatrix<Real>) -> bool {
+        (a - b).amax() <= 1e-9 * b.amax()
+    }
+
+    /// IGG3 per coordinate rejects the one displaced coordinate and keeps its point's other
+    /// two rows; the re-check weighs the rows so: its `JᵀPJ` and `JᵀPr` equal a dense build
+    /// with that row at 0 and every other at 1, not the build that drops the whole point (the
+    /// point's mean weight, 2/3, or the points at full weight only), and its block of the
+    /// fit's parameters is the fit's own normal matrix.
+    #[test]
+    fn a_gross_coordinate_is_left_out_of_the_re_check_and_its_points_other_rows_kept() {
+        let d = data(2.0);
+        let c = fit(&d, "name = \"igg3\"\nxi = 0.0\nper = \"coordinate\"");
+        let bad = 3 * BAD.0 + BAD.1;
+        let rows = c.identified.row_weights.clone().expect("row weights");
+        for (i, &w) in rows.iter().enumerate() {
+            assert_eq!(w, if i == bad { 0.0 } else { 1.0 }, "row {i}");
+        }
+        assert!((c.identified.weights[BAD.0] - 2.0 / 3.0).abs() < 1e-12);
+        let p: Vec<Real> = (0..rows.len()).map(|i| Real::from(i != bad)).collect();
+        let (n, g) = rechecked(&c, &d);
+        let (want_n, want_g) = dense(&c, &d, &p);
+        assert!(close(&n, &want_n), "{n} against {want_n}");
+        assert!(
+            (&g - &want_g).amax() <= 1e-9 * want_g.amax().max(1.0),
+            "{g} {want_g}"
+        );
+        let t = PARAMS.len();
+        let fitted = &c.identified.normal;
+        assert!(
+            (n.view((0, 0), (t, t)) - fitted).amax() <= 1e-6 * fitted.amax(),
+            "{n} against the fit's {fitted}"
+        );
+        // The point's other rows matter: without them, or at its mean weight, another matrix.
+        for other in [
+            (0..rows.len())
+                .map(|i| Real::from(i / 3 != BAD.0))
+                .collect(),
+            (0..rows.len())
+                .map(|i| if i / 3 == BAD.0 { 2.0 / 3.0 } else { 1.0 })
+                .collect::<Vec<Real>>(),
+        ] {
+            let (o, _) = dense(&c, &d, &other);
+            assert!((&o - &want_n).amax() > 1e-6 * want_n.amax());
+        }
+    }
+
+    /// With the file's standard deviations (`sigma_mm`) a least-squares fit weighs each point
+    /// by its prior weight, and so does the re-check: every row of a point at its point's
+    /// weight, those below 1 too.
+    #[test]
+    fn the_files_weights_are_the_re_checks_under_a_method_that_does_not_reweigh() {
+        let mut d = data(0.0);
+        d.sigma_mm = Some(
+            (0..d.len())
+                .map(|i| 0.01 * (1.0 + (i % 4) as Real))
+                .collect(),
+        );
+        let c = fit(&d, "name = \"lm\"");
+        let w = d.weights().unwrap();
+        assert!(w.iter().any(|&v| v < 0.5) && w.iter().any(|&v| v > 1.0));
+        let p: Vec<Real> = w.iter().flat_map(|&v| [v; 3]).collect();
+        let (n, _) = rechecked(&c, &d);
+        let (want, _) = dense(&c, &d, &p);
+        assert!(close(&n, &want), "{n} against {want}");
+    }
 }

@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use super::cv::{Holdout, Model};
+use super::cv::{CrossValidation, Holdout, Model};
 use super::Registration;
 use crate::identify::MethodSpec;
 use crate::measurement::kind_csv::KindFile;
@@ -52,6 +52,11 @@ pub struct IdentifyRequest {
     pub cv_seed: u64,
     /// Candidate models compared by cross-validation; the best is identified.
     pub models: Vec<Model>,
+    /// The cross-validations of `models` already run on the request's folds (`cv` folds, or
+    /// 5, at `cv_seed`, with its method, registration, seed and fixed parameters), taken
+    /// instead of running them again: a task's repeated choice hands over the chosen model's
+    /// ([`super::task::Task::entry_request`]). `None`: run them.
+    pub cross_validated: Option<Vec<CrossValidation>>,
     /// The identified parameters; empty: the identifiable set.
     pub params: Vec<Param>,
     /// Parameters held at their nominal values.
@@ -85,6 +90,7 @@ impl IdentifyRequest {
             cv: None,
             cv_seed: 0,
             models: Vec::new(),
+            cross_validated: None,
             params: Vec::new(),
             fix: Vec::new(),
             compliance: None,

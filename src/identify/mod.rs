@@ -155,8 +155,15 @@ pub struct Identified {
     /// The objective per iteration, where the method records it (the searches' best
     /// fitness, Qiao 2021 fig. 4).
     pub trace: Option<Vec<Real>>,
-    /// Final weight of each point (1 for the non-robust methods).
+    /// Final weight of each point: the prior weights (1 without standard deviations) for a
+    /// solver that does not reweigh, times the robust weight for IGG3, Huber and Tukey; 1 for
+    /// the searches and external methods. With IGG3's `per = "coordinate"`, each point's mean
+    /// over its rows ([`Identified::row_weights`] holds the rows').
     pub weights: Vec<Real>,
+    /// Final weight of each residual row, point after point, when the method weighed each row
+    /// on its own (IGG3 with `per = "coordinate"`); `None` when every row has its point's
+    /// weight ([`Identified::weights`]).
+    pub row_weights: Option<Vec<Real>>,
     /// Numerical rank of the column-scaled, weighted Jacobian at the solution
     /// ([`solver::rank`], [`solver::RANK_TOLERANCE`]); `None` when not computed.
     pub rank: Option<usize>,
@@ -232,6 +239,7 @@ impl Identified {
             termination,
             trace: None,
             weights: vec![1.0; points],
+            row_weights: None,
             normal: DMatrix::zeros(0, 0),
             sigma0: Real::NAN,
             rms_residual: Real::NAN,

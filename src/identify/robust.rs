@@ -145,15 +145,17 @@ impl<'a> Rows<'a> {
     }
 
     /// The solution as one of `inner`: each point's weight is the mean of its rows' weights
-    /// (1 when every row kept its weight, 0 when every row was rejected), and the RMS residual
-    /// is per point again.
+    /// (1 when every row kept its weight, 0 when every row was rejected), the rows' own
+    /// weights are kept ([`Identified::row_weights`]: what the fit weighed each row by), and
+    /// the RMS residual is per point again.
     fn per_point(&self, mut out: Identified) -> Identified {
         let r = self.rows.max(1);
-        out.weights = out
-            .weights
+        let rows = std::mem::take(&mut out.weights);
+        out.weights = rows
             .chunks(r)
             .map(|c| c.iter().sum::<Real>() / r as Real)
             .collect();
+        out.row_weights = Some(rows);
         out.rms_residual *= (r as Real).sqrt();
         out
     }

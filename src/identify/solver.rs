@@ -201,6 +201,7 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         iterations: 0,
         termination: Termination::InvalidInput,
         weights: start_weights(p),
+        row_weights: None,
         normal: DMatrix::from_element(t, t, Real::NAN),
         sigma0: Real::NAN,
         rms_residual: Real::NAN,

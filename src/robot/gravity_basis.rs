@@ -25,7 +25,9 @@ use crate::robot::{Chain, ChainVars, JointType, Param, Robot, GRAVITY_POINTS, MA
 /// deflection of 0.1 rad from a lever of 0.1 m. A weight close to a joint's axis exerts a small
 /// torque about it at every pose, so its coefficient can be large while the deflection it gives
 /// stays small (the Barrett WAM task's identified `ge3` is −0.21); still far beyond any arm's
-/// sag, and small enough to stay a correction.
+/// sag, and small enough to stay a correction. A robot file has no poses; at identification the
+/// coefficients are bounded by the deflection they give at the calibration poses instead
+/// ([`crate::calibrate::plausibility::gravity_deflections`]).
 pub const MAX_GRAVITY_RAD_PER_NM: Real = 1.0;
 
 /// The torques of the basis at one pose: `τ[j][l]`, N·m.

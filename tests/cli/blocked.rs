@@ -79,18 +79,14 @@ fn blocked_splits_hold_no_calibration_position_and_interleaved_ones_do() {
     assert_eq!(shared("d", d, "-blocked"), (0, 189));
 }
 
-/// docs/results.md reports Series A and D on both splits (issue 54, "Series A and D have
-/// blocked splits and report both"): every cell of its blocked-splits table is what
-/// `calbench task` gives, the CV RMS of each candidate from the run with all four (as the page's
-/// commands run it), the validation RMS and its interval from the run with that model alone,
-/// and the row marked as the CV's choice is the one chosen on every task.
-#[test]
-fn results_md_reports_series_a_and_d_on_both_splits() {
+/// The body rows of the table of docs/results.md whose header line starts with `header`, each
+/// row's cells trimmed of spaces and backticks.
+pub(crate) fn results_table(header: &str) -> Vec<Vec<String>> {
     let doc = std::fs::read_to_string(root().join("docs/results.md")).unwrap();
     let start = doc
-        .find("| model | Series A, interleaved |")
-        .expect("docs/results.md has the blocked-splits table");
-    let rows: Vec<Vec<String>> = doc[start..]
+        .find(header)
+        .unwrap_or_else(|| panic!("docs/results.md has a table headed {header}"));
+    doc[start..]
         .lines()
         .take_while(|l| l.starts_with('|'))
         .skip(2)
@@ -98,10 +94,20 @@ fn results_md_reports_series_a_and_d_on_both_splits() {
             l.trim()
                 .trim_matches('|')
                 .split('|')
-                .map(|c| c.trim().to_string())
+                .map(|c| c.trim().trim_matches('`').to_string())
                 .collect()
         })
-        .collect();
+        .collect()
+}
+
+/// docs/results.md reports Series A and D on both splits (issue 54, "Series A and D have
+/// blocked splits and report both"): every cell of its blocked-splits table is what
+/// `calbench task` gives, the CV RMS of each candidate from the run with all four (as the page's
+/// commands run it), the validation RMS and its interval from the run with that model alone,
+/// and the row marked as the CV's choice is the one chosen on every task.
+#[test]
+fn results_md_reports_series_a_and_d_on_both_splits() {
+    let rows = results_table("| model | Series A, interleaved |");
     let models = ["kinematic", "beta", "harmonics", "harmonics2"];
     assert_eq!(rows.len(), models.len(), "{rows:?}");
     let tasks = [

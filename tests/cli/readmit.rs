@@ -27,7 +27,7 @@ const ARM: [(Param, f64); 4] = [
 /// `n` poses of the irb2600 with the errors `errors`, measured with uniform noise of ±`noise`
 /// mm per coordinate (σ = noise/√3), written to `file`. The true points are the library's
 /// forward kinematics with the harmonics (`loaded_fk`).
-fn write_data(file: &Path, errors: &[(Param, f64)], noise: f64, n: usize, seed: u64) {
+pub(crate) fn write_data(file: &Path, errors: &[(Param, f64)], noise: f64, n: usize, seed: u64) {
     let robot = builtin::irb2600();
     let truth = robot.with_errors(errors);
     let chain = truth.chain();

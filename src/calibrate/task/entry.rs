@@ -91,7 +91,23 @@ impl Task {
             None
         };
         let chosen = tm.candidates[choice.as_ref().map_or(0, |c| c.best)];
-        let (q, val) = self.request(method, &[chosen])?;
+        let (mut q, val) = self.request(method, &[chosen])?;
+        // The identification cross-validates the chosen model on its folds (5, at its fold
+        // seed 0) with the choice's setup (the same method, registration, seed and rows): when
+        // the repeated choice ran those folds, it takes that cross-validation (the same
+        // figures, to the bit) instead of running a second one.
+        let same_setup = q.registration == crate::calibrate::Registration::Identify
+            && q.seed == 0
+            && q.fix.is_empty()
+            && q.priors.is_empty()
+            && q.k.is_none();
+        if !q.models.is_empty() && same_setup {
+            let folds = q.cv.unwrap_or(5);
+            q.cross_validated = choice
+                .as_ref()
+                .and_then(|c| c.chosen_at(folds, q.cv_seed))
+                .map(|cv| vec![cv.clone()]);
+        }
         let m = EntryModels {
             candidates: tm.candidates.clone(),
             fixed_by: "task",

@@ -57,6 +57,7 @@ pub(crate) fn finish(
         iterations,
         termination,
         weights,
+        row_weights: None,
         normal: work.n.clone(),
         sigma0,
         rms_residual,
