@@ -21,7 +21,7 @@ pub use super::output::Figure;
 use super::output::{Output, Outputs, Text};
 use crate::error::Result;
 use crate::numeric::Real;
-use crate::study::stats::{Entry, EtaStats};
+use crate::study::stats::{Entry, TrialFigures};
 use crate::study::{Block, RunResult};
 use sweep::{sweep_figures, sweep_tables};
 pub use trials_csv::TrialsCsv;
@@ -62,7 +62,7 @@ fn noted_table(title: &str, note: &str, headers: &[&str], rows: &[Vec<String>]) 
 fn per_parameter<T>(
     b: &Block,
     params: &[String],
-    f: impl Fn(Option<&EtaStats>) -> T,
+    f: impl Fn(Option<&TrialFigures>) -> T,
 ) -> EtaSeries<T> {
     b.entries
         .iter()

@@ -135,6 +135,8 @@ pub struct Names<'a> {
     pub axis: bool,
     /// Whether the simulated arm has error outside the kinematic model (`[unmodelled]`).
     pub unmodelled: bool,
+    /// Whether a method is a search (BAS, PSO, BAS-PSO): what `final_fitness` needs.
+    pub searches: bool,
 }
 
 impl Names<'_> {
@@ -280,6 +282,9 @@ pub fn parse(raw: &[toml::Table], names: &Names) -> Result<Vec<Claim>, (String, 
         match metric.spec().needs {
             Needs::Pose if !names.pose => Some("tracker.measure = \"pose\""),
             Needs::Axis if !names.axis => Some("validation.axis_errors = true"),
+            Needs::Search if !names.searches => {
+                Some("a search among the methods (bas, pso, bas-pso)")
+            }
             _ => None,
         }
         .map_or(Ok(metric), |need| Err(format!("\"{name}\" needs {need}")))
@@ -423,6 +428,11 @@ mod tests {
     }
 
     fn claim(rel: &str) -> Result<Claim, (String, String)> {
+        claim_of("validation_after_mm.rms", rel, false)
+    }
+
+    /// The claim of `metric` and `rel`, in a study with a search among its methods or not.
+    fn claim_of(metric: &str, rel: &str, searches: bool) -> Result<Claim, (String, String)> {
         let (m, s) = names();
         let n = Names {
             methods: &m,
@@ -430,13 +440,24 @@ mod tests {
             pose: false,
             axis: false,
             unmodelled: false,
+            searches,
         };
         let t: toml::Table = toml::from_str(&format!(
             "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
-             metric = \"validation_after_mm.rms\"\nrelation = '{rel}'"
+             metric = \"{metric}\"\nrelation = '{rel}'"
         ))
         .expect("toml");
         parse(&[t], &n).map(|mut v| v.remove(0))
+    }
+
+    #[test]
+    fn a_final_fitness_claim_needs_a_search() {
+        let rel = r#""ls / random" < "lm / random""#;
+        let (key, msg) = claim_of("final_fitness.mean", rel, false).expect_err("no search");
+        assert_eq!(key, "claims[0].metric", "{msg}");
+        assert!(msg.contains("needs a search"), "{msg}");
+        let c = claim_of("final_fitness.mean", rel, true).expect("a search");
+        assert_eq!(c.metric, Metric::FinalFitness);
     }
 
     #[test]

@@ -32,6 +32,8 @@ pub enum Needs {
     Axis,
     /// A `[registration_study]`.
     Registration,
+    /// A search among the methods (BAS, PSO, BAS-PSO).
+    Search,
 }
 
 /// How a metric is declared.
@@ -158,6 +160,10 @@ metrics! {
     /// The iterations of an identification.
     Iterations = "iterations", None, Some("iterations"), Lower, "", Nothing,
         Some(|o, _| o.iterations as Real);
+    /// A search's best fitness at the end of its budget (Qiao 2021 eq. 14, mm with k in
+    /// mm/rad; fig. 4's curves at their end): NaN for the other methods.
+    FinalFitness = "final_fitness", Some("mean"), Some("final_fitness"), Lower, "mm", Search,
+        Some(|o, _| o.search.as_ref().map_or(Real::NAN, |s| s.final_fitness));
     /// The mean over the parameters of the median η.
     EtaMedian = "eta_median_pct", None, None, Higher, "%", Nothing, None;
     /// The orientation RMS after compensation (rotation angle).
@@ -175,10 +181,10 @@ metrics! {
 
 impl Metric {
     /// The metrics a trial's outcome gives, in the order the aggregation keeps them.
-    pub const PER_TRIAL: [Metric; 18] = {
-        let mut out = [Metric::ValidationAfterRms; 18];
+    pub const PER_TRIAL: [Metric; 19] = {
+        let mut out = [Metric::ValidationAfterRms; 19];
         let mut i = 0;
-        while i < 18 {
+        while i < 19 {
             out[i] = Metric::ALL[i];
             i += 1;
         }
@@ -220,10 +226,11 @@ impl Metric {
 
     /// Whether it measures the arm's error before or after calibration (positions,
     /// orientations, their reductions): a figure that, on an arm with no error outside the
-    /// kinematic model, a real robot's cannot be compared with.
+    /// kinematic model, a real robot's cannot be compared with. A search's fitness is a sum
+    /// of the measurements' residuals, not such a figure.
     pub fn is_arm_error(self) -> bool {
         let s = self.spec();
-        s.needs != Needs::Registration
+        !matches!(s.needs, Needs::Registration | Needs::Search)
             && (matches!(s.unit, "mm" | "deg")
                 || matches!(
                     self,
@@ -318,5 +325,7 @@ mod tests {
         assert!(rest.iter().all(|m| m.spec().of_trial.is_none()));
         assert_eq!(Metric::ValidationAfterRms.key(), "validation_after_mm.rms");
         assert_eq!(Metric::ParamRmse.parameter_of("param_rmse.a2"), Some("a2"));
+        assert_eq!(Metric::FinalFitness.key(), "final_fitness.mean");
+        assert!(!Metric::FinalFitness.is_arm_error());
     }
 }

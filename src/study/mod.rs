@@ -159,6 +159,10 @@ pub struct BlockInfo {
     /// ([`crate::identify::external`]): `trials.csv` then records each failure's message.
     #[serde(default)]
     pub external: bool,
+    /// Whether a method is a search (BAS, PSO, BAS-PSO): `trials.csv` then has the column
+    /// `final_fitness`.
+    #[serde(default)]
+    pub searches: bool,
 }
 
 impl BlockInfo {
@@ -193,6 +197,10 @@ impl BlockInfo {
             separation: study.separation.as_ref().map(|s| s.to_json()),
             true_compliance: study.true_compliance_json(),
             external: sc.methods.iter().any(|m| m.is_external()),
+            searches: sc
+                .methods
+                .iter()
+                .any(|m| m.method.fitness_model().is_some()),
         }
     }
 }

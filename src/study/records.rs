@@ -258,6 +258,7 @@ mod tests {
                     budget: 40,
                     hits: [Some(10), None, Some(30), None],
                     at_budget: [Real::NAN, 1.5, 1.0 / 3.0, 0.25],
+                    final_fitness: 0.25,
                 }),
                 iterations: 12,
                 evaluations: 40,

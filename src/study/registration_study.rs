@@ -114,6 +114,7 @@ impl RegistrationScenario {
             pose: false,
             axis: false,
             unmodelled: false,
+            searches: false,
         };
         s.claims = claims::parse_with(&s.raw_claims, &names, |m| {
             (m == METRIC.key()).then_some(METRIC).ok_or_else(|| {

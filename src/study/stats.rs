@@ -24,9 +24,10 @@ use crate::identify::Termination;
 use crate::numeric::{nan, Real};
 use sums::{Spread2, StatsSum, Sum};
 
-/// Mean, median and standard deviation of η for one parameter, over trials (%).
+/// Mean, median and standard deviation over trials of one per-trial value: η of one
+/// parameter (%), a search's final fitness (`final_fitness`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
-pub struct EtaStats {
+pub struct TrialFigures {
     /// Mean η (%).
     #[serde(deserialize_with = "nan::real")]
     pub mean: Real,
@@ -41,6 +42,28 @@ pub struct EtaStats {
     /// Standard deviation of η (%).
     #[serde(deserialize_with = "nan::real")]
     pub std: Real,
+}
+
+impl TrialFigures {
+    /// The figures of the finite values of `v`, as each η's: the mean with its t interval,
+    /// the median with its distribution-free interval ([`median_ranks`]), the standard
+    /// deviation (divisor n); `None` when no value is finite.
+    pub fn of(v: &[Real]) -> Option<TrialFigures> {
+        let v: Vec<Real> = v.iter().copied().filter(|x| x.is_finite()).collect();
+        if v.is_empty() {
+            return None;
+        }
+        let (mean, median) = (location::Located::mean(&v), location::Located::median(&v));
+        let std =
+            (v.iter().map(|x| (x - mean.estimate).powi(2)).sum::<Real>() / v.len() as Real).sqrt();
+        Some(TrialFigures {
+            mean: mean.estimate,
+            mean_ci95: mean.ci95,
+            median: median.estimate,
+            median_ci95: median.ci95,
+            std,
+        })
+    }
 }
 
 /// Error statistics averaged over trials ([`ErrorStats`]: mean, RMS, max, s.d. of one
@@ -144,7 +167,7 @@ pub struct Entry {
     /// η per parameter with a non-zero injected error, over the trials where that error is
     /// determinable (above [`crate::study::crb::DETERMINABLE_SIGMAS`] Cramér–Rao σ); a
     /// parameter determinable in no trial has none. Every η figure above is over these.
-    pub eta: BTreeMap<String, EtaStats>,
+    pub eta: BTreeMap<String, TrialFigures>,
     /// Each parameter (base left out) whose non-zero injected error was not determinable in
     /// some usable trial — at most [`crate::study::crb::DETERMINABLE_SIGMAS`] Cramér–Rao σ
     /// of the trial's calibration — with the number of such trials; those trials' η does not
@@ -211,6 +234,10 @@ pub struct Entry {
     /// ([`ecdf::SearchAcc::fixed_budget`]); absent for the other methods.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub fixed_budget: Option<Vec<ecdf::BudgetPoint>>,
+    /// For a search: its best fitness at the end of its own budget over the usable trials
+    /// (metric `final_fitness.mean`); absent for the other methods.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub final_fitness: Option<TrialFigures>,
     /// Spreads over trials (plots only).
     #[serde(skip)]
     pub spread: Spread,
@@ -514,7 +541,7 @@ impl Accumulator {
                 };
                 eta_map.insert(
                     name.clone(),
-                    EtaStats {
+                    TrialFigures {
                         mean: m,
                         mean_ci95: dist::t_interval(
                             m,
@@ -584,6 +611,12 @@ impl Accumulator {
             seconds_per_identification: c.seconds.mean(),
             search_ecdf: (!c.search.is_empty()).then(|| c.search.ecdf()),
             fixed_budget: (!c.search.is_empty()).then(|| c.search.fixed_budget()),
+            final_fitness: match (c.search.is_empty(), Metric::FinalFitness.per_trial_index()) {
+                (false, Some(h)) => {
+                    TrialFigures::of(&self.spill.stream(self.headline(ci, h)).values()?)
+                }
+                _ => None,
+            },
             per_trial: PerTrial::new(
                 (0..Metric::PER_TRIAL.len())
                     .map(|h| self.spill.stream(self.headline(ci, h)))

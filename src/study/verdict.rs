@@ -367,6 +367,7 @@ mod tests {
             pose: false,
             axis: false,
             unmodelled,
+            searches: false,
         };
         let t: toml::Table = toml::from_str(&format!(
             "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\

@@ -14,6 +14,7 @@ mod cluster;
 mod committed;
 mod determinable;
 mod determinism;
+mod final_fitness;
 mod fixed_models;
 mod fuzz;
 mod guard;

@@ -18,7 +18,7 @@ const TRIALS: &str = "300";
 /// `scenarios/qiao2021-tx60.toml` with 12 calibration and 5 validation poses, its three
 /// searches at 300 evaluations each, BAS-PSO on the differential model (another fitness,
 /// compared apart) and LM, without the claims, written into `dir`.
-fn small_qiao(dir: &std::path::Path) -> std::path::PathBuf {
+pub fn small_qiao(dir: &std::path::Path) -> std::path::PathBuf {
     let text = read(&root().join("scenarios/qiao2021-tx60.toml"));
     let head = text[..text.find("[[methods]]").unwrap()]
         .replace("trials = 20\n", "trials = 20\nclaims = []\n")

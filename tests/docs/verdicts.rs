@@ -6,7 +6,7 @@ use super::{common, root};
 
 /// The runs of REPRODUCTION.md's verdict table: the committed summary (under
 /// `results/reproduction/`) and the scenario that states the paper's claims.
-const CLAIM_PAPERS: [(&str, &str); 13] = [
+const CLAIM_PAPERS: [(&str, &str); 14] = [
     ("li2018/summary.json", "scenarios/li2018-irb2600.toml"),
     (
         "li2018/summary-unmodelled.json",
@@ -24,6 +24,10 @@ const CLAIM_PAPERS: [(&str, &str); 13] = [
         "scenarios/guo2024-3t2r-unmodelled.toml",
     ),
     ("qiao2021/summary.json", "scenarios/qiao2021-tx60.toml"),
+    (
+        "qiao2021/summary-errmodel.json",
+        "scenarios/qiao2021-tx60-errmodel.toml",
+    ),
     (
         "qiao2021/summary-unmodelled.json",
         "scenarios/qiao2021-tx60-unmodelled.toml",
@@ -373,6 +377,39 @@ fn qiao_fig4_is_run_on_model_2_at_equal_evaluations_and_at_equal_iterations() {
                     .is_some(),
                 "{reading}: {m}"
             );
+        }
+        // Fig. 4 itself is judged: BAS-PSO's final fitness against PSO's and BAS's, one
+        // setting each of the paper's two fig. 4 claims (its axis is unnamed: neither reading
+        // is the paper's setting).
+        let claims = s["claims"].as_array().expect("claims");
+        for other in ["pso", "bas"] {
+            let id = format!("qiao-fig4-{reading}-final-below-{other}");
+            let c = claims
+                .iter()
+                .find(|c| c["id"] == id.as_str())
+                .unwrap_or_else(|| panic!("{id}"));
+            assert_eq!(c["metric"], "final_fitness.mean", "{id}");
+            assert_eq!(
+                c["family"],
+                format!("qiao-fig4-final-below-{other}"),
+                "{id}"
+            );
+            assert!(c["setting"].as_str().is_some(), "{id}");
+            assert!(["t", "sign"].contains(&c["test"].as_str().unwrap()), "{id}");
+        }
+        // Read as evaluations BAS-PSO spent the least, so its end is the fixed budget's full
+        // share: the same mean, from the search's other record.
+        if reading == "evaluations" {
+            let bas_pso = &results[0];
+            let full = &bas_pso["fixed_budget"][3];
+            assert_eq!(full["n"], s["trials"], "{reading}");
+            let (a, b) = (
+                bas_pso["final_fitness"]["mean"]
+                    .as_f64()
+                    .expect("final_fitness"),
+                full["fitness_mean"].as_f64().unwrap(),
+            );
+            assert!((a - b).abs() <= 1e-12 * b, "{a} {b}");
         }
     }
 }

@@ -109,7 +109,11 @@ impl TrialsCsv {
             head.extend(["before_mean_deg", "before_rms_deg"].map(String::from));
             head.extend([Metric::DegAfterMean, Metric::DegAfterRms].map(column));
         }
-        head.extend([column(Metric::Iterations), "termination".into()]);
+        head.push(column(Metric::Iterations));
+        if info.searches {
+            head.push(column(Metric::FinalFitness));
+        }
+        head.push("termination".into());
         head.extend(info.params.iter().map(|n| format!("true_{n}")));
         head.extend(info.params.iter().map(|n| format!("identified_{n}")));
         if info.external {
@@ -165,6 +169,12 @@ impl TrialSink for TrialsCsv {
                 }
             }
             row.push(o.iterations.to_string());
+            if info.searches {
+                row.push(num(o
+                    .search
+                    .as_ref()
+                    .map_or(Real::NAN, |s| s.final_fitness)));
+            }
             row.push(o.termination.as_str().into());
             row.extend(t.truth.iter().map(|&v| num(v)));
             row.extend(o.identified.iter().map(|&v| num(v)));

@@ -486,6 +486,7 @@ impl Scenario {
             pose: raw.tracker.measure.measure() == crate::measurement::Measure::Pose,
             axis: v.axis_errors,
             unmodelled: raw.unmodelled.is_active(),
+            searches: methods.iter().any(|m| m.method.fitness_model().is_some()),
         };
         let claims =
             crate::study::claims::parse(&raw.claims, &names).map_err(|(k, m)| ferr(&k, m))?;

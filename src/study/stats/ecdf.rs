@@ -56,6 +56,7 @@ impl SearchRun {
             budget,
             hits,
             at_budget,
+            final_fitness: trace.last().copied().unwrap_or(Real::NAN),
         }
     }
 }
@@ -278,6 +279,9 @@ mod tests {
         // Budgets 4, 10, 20, 40 evaluations.
         assert!(r.at_budget[0].is_nan());
         assert_eq!(r.at_budget[1..], [8.0, 4.0, 2.0]);
+        // The end of its own budget: the last iteration's best fitness.
+        assert_eq!(r.final_fitness, 2.0);
+        assert!(SearchRun::of(&[], 0, 2.0, 40).final_fitness.is_nan());
     }
 
     #[test]
@@ -313,6 +317,7 @@ mod tests {
                 budget: 40,
                 hits,
                 at_budget: [1.0; 4],
+                final_fitness: 1.0,
             });
         }
         let e = acc.ecdf();

@@ -22,6 +22,7 @@ impl Entry {
             Metric::EtaMedian => return Some((self.eta_median_pct, self.eta_median_pct_ci95)),
             Metric::Failures => return Some((self.failures as Real, None)),
             Metric::Improvement => return Some((self.improvement_pct, None)),
+            Metric::FinalFitness => return self.final_fitness.map(|f| (f.mean, f.mean_ci95)),
             Metric::ValidationAfterMean
             | Metric::ValidationAfterRms
             | Metric::ValidationAfterMax => &self.validation_after_mm,

@@ -59,6 +59,7 @@ impl Default for Entry {
             seconds_per_identification: nan,
             search_ecdf: None,
             fixed_budget: None,
+            final_fitness: None,
             spread: Spread::default(),
             per_trial: PerTrial::default(),
             eta_per_trial: BTreeMap::new(),
