@@ -191,7 +191,11 @@ fn normal(robot: &Robot, params: &[Param], id: &Subject) -> Result<(DMatrix<Real
     let weights = row_weights(id.data, &id.calibrated.identified, rows);
     let mut sums = NormalEquations::new(params.len(), rows * BLOCK_POINTS);
     by_blocks(&rp, &DVector::zeros(params.len()), |points, r, j| {
-        sums.add(j, r.as_slice(), &weights[points.start * rows..points.end * rows]);
+        sums.add(
+            j,
+            r.as_slice(),
+            &weights[points.start * rows..points.end * rows],
+        );
     });
     Ok((sums.n().clone(), sums.g().clone()))
 }

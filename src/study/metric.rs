@@ -62,6 +62,8 @@ const CALIBRATION_AFTER: &str = "calibration_after_mm";
 /// Also `trials.csv`'s column of each trial's mean η.
 const ETA_MEAN: &str = "eta_mean_pct";
 const AXIS_AFTER: &str = "validation_after_axis_mm";
+/// Also `trials.csv`'s column of each trial's final fitness.
+const FINAL_FITNESS: &str = "final_fitness";
 
 macro_rules! metrics {
     ($($(#[$doc:meta])* $name:ident = $field:expr, $stat:expr, $column:expr, $better:ident,
@@ -162,7 +164,7 @@ metrics! {
         Some(|o, _| o.iterations as Real);
     /// A search's best fitness at the end of its budget (Qiao 2021 eq. 14, mm with k in
     /// mm/rad; fig. 4's curves at their end): NaN for the other methods.
-    FinalFitness = "final_fitness", Some("mean"), Some("final_fitness"), Lower, "mm", Search,
+    FinalFitness = FINAL_FITNESS, Some("mean"), Some(FINAL_FITNESS), Lower, "mm", Search,
         Some(|o, _| o.search.as_ref().map_or(Real::NAN, |s| s.final_fitness));
     /// The mean over the parameters of the median η.
     EtaMedian = "eta_median_pct", None, None, Higher, "%", Nothing, None;
