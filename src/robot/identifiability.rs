@@ -335,8 +335,7 @@ pub fn analyse_gram(
         }
         sums.add(&j, &zeros[..rows * block.len()], &[1.0]);
     }
-    let n = sums.n();
-    let d = gram_dependence(&n);
+    let d = gram_dependence(sums.n());
     let mut parent = d.parent;
     let groups = collect_groups(params, &d.in_group, &mut parent);
     let (ident_idx, dep_idx, ss) = (d.identifiable, d.dependent, d.scaled);

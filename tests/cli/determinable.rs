@@ -137,7 +137,10 @@ fn a_parameter_that_is_not_estimable_is_not_determinable_whatever_its_error() {
         eta.contains_key("a2") && eta.contains_key("alpha3"),
         "{eta:?}"
     );
-    assert!(!eta.contains_key("d2") && !eta.contains_key("d3"), "{eta:?}");
+    assert!(
+        !eta.contains_key("d2") && !eta.contains_key("d3"),
+        "{eta:?}"
+    );
     let below = e["eta_not_determinable"].as_object().expect("listed");
     assert_eq!(below.len(), 2, "{below:?}");
     assert_eq!((&below["d2"], &below["d3"]), (&8.into(), &8.into()));

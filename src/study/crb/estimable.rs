@@ -97,7 +97,10 @@ fn the_estimable_variances_are_the_pseudo_inverse_on_the_row_space() {
                 Some(v) => {
                     assert!(off < 1e-10, "seed {seed}: parameter {i} off by {off}");
                     let want = pinv[(i, i)];
-                    assert!((v - want).abs() <= 1e-8 * want, "seed {seed}: {v} against {want}");
+                    assert!(
+                        (v - want).abs() <= 1e-8 * want,
+                        "seed {seed}: {v} against {want}"
+                    );
                 }
                 // The null direction D u weighs parameter 2 by about 1e-6 of parameter 1 (their
                 // scales 1e-3 and 1e3), so e₂ is that close to the row space, yet not in it.
