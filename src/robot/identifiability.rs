@@ -132,23 +132,41 @@ fn dependency_groups(
     dep: &[usize],
     combination: impl Fn(usize) -> Option<DVector<Real>>,
 ) -> Vec<Vec<Param>> {
-    let mut parent: Vec<usize> = (0..params.len()).collect();
-    let mut in_group = vec![false; params.len()];
+    let (in_group, mut parent) = dependency_forest(params.len(), ident, dep, combination);
+    collect_groups(params, &in_group, &mut parent)
+}
+
+/// The work of [`dependency_groups`] over `t` columns: which columns take part in a
+/// dependency (weights above [`DEPENDENCE_WEIGHT`]), and the union-find forest joining them.
+fn dependency_forest(
+    t: usize,
+    ident: &[usize],
+    dep: &[usize],
+    combination: impl Fn(usize) -> Option<DVector<Real>>,
+) -> (Vec<bool>, Vec<usize>) {
+    let mut parent: Vec<usize> = (0..t).collect();
+    let mut in_group = vec![false; t];
     for &d in dep {
         in_group[d] = true;
         let Some(x) = combination(d) else {
             continue; // no effect at all: a group of its own
         };
         for (xi, &c) in x.iter().zip(ident) {
-            if xi.abs() > 1e-6 {
+            if xi.abs() > DEPENDENCE_WEIGHT {
                 in_group[c] = true;
                 let (ra, rb) = (find_root(&mut parent, d), find_root(&mut parent, c));
                 parent[ra.max(rb)] = ra.min(rb);
             }
         }
     }
-    collect_groups(params, &in_group, &mut parent)
+    (in_group, parent)
 }
+
+/// The weight above which an identifiable column takes part in a dependent column's
+/// combination (both scaled to unit norm): ten times the scaled columns' rank tolerance
+/// [`RANK_TOL`], far above the rounding of a combination solved on a factor the pivoting kept
+/// well inside that tolerance.
+pub const DEPENDENCE_WEIGHT: Real = 1e-6;
 
 /// The groups of mutually dependent parameters: those `in_group`, one group per root of the
 /// union-find forest `parent`, in parameter order.
@@ -317,7 +335,46 @@ pub fn analyse_gram(
         }
         sums.add(&j, &zeros[..rows * block.len()], &[1.0]);
     }
-    let n = sums.n();
+    let d = gram_dependence(sums.n());
+    let mut parent = d.parent;
+    let groups = collect_groups(params, &d.in_group, &mut parent);
+    let (ident_idx, dep_idx, ss) = (d.identifiable, d.dependent, d.scaled);
+    let k = ident_idx.len();
+    let mut lower: Vec<Real> = (0..k * k).map(|ik| ss[(ik / k, ik % k)]).collect();
+    let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
+    let ok = crate::numeric::symeig::symmetric_eigenvalues(&mut lower, k, &mut ev, &mut scratch);
+    let (mx, mn) = ev.iter().fold((0.0 as Real, Real::INFINITY), |(a, b), &e| {
+        (a.max(e), b.min(e))
+    });
+    let condition_number = if k == 0 || !ok || mn <= 0.0 {
+        Real::INFINITY
+    } else {
+        (mx / mn).sqrt()
+    };
+    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
+}
+
+/// The dependence analysis of [`analyse_gram`] on a Gram matrix `n = JᵀJ` (or a weighted
+/// normal matrix `JᵀWJ`, the Gram matrix of `W^½ J`): which columns pivoted Cholesky of the
+/// column-scaled matrix keeps (a column's remaining norm above [`RANK_TOL`]), which depend on
+/// them, and which take part in a dependency (a dependent column, or a kept one whose weight
+/// in a dependent column's combination exceeds [`DEPENDENCE_WEIGHT`]).
+pub struct GramDependence {
+    /// The kept columns, in column order.
+    pub identifiable: Vec<usize>,
+    /// The other columns, in column order.
+    pub dependent: Vec<usize>,
+    /// Per column, whether it takes part in a dependency (every dependent column does).
+    pub in_group: Vec<bool>,
+    /// The union-find forest of the groups.
+    parent: Vec<usize>,
+    /// The scaled matrix over the kept columns.
+    scaled: DMatrix<Real>,
+}
+
+/// [`GramDependence`] of the symmetric positive semi-definite `n`.
+pub fn gram_dependence(n: &DMatrix<Real>) -> GramDependence {
+    let t = n.nrows();
     // Column norms and the scaled Gram matrix (a column at rounding level is zero).
     let norms: Vec<Real> = (0..t).map(|c| n[(c, c)].max(0.0).sqrt()).collect();
     let largest = norms.iter().fold(0.0, |a: Real, &b| a.max(b));
@@ -349,26 +406,20 @@ pub fn analyse_gram(
     let dep_idx: Vec<usize> = (0..t).filter(|&c| !used[c]).collect();
     let ss = s.select_rows(&ident_idx).select_columns(&ident_idx);
     let chol = ss.clone().cholesky();
-    let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
+    let (in_group, parent) = dependency_forest(t, &ident_idx, &dep_idx, |d| {
         (s[(d, d)].max(0.0).sqrt() >= RANK_TOL).then(|| {
             let b = DVector::from_fn(ident_idx.len(), |i, _| s[(ident_idx[i], d)]);
             chol.as_ref()
                 .map_or_else(|| DVector::zeros(ident_idx.len()), |c| c.solve(&b))
         })
     });
-    let k = ident_idx.len();
-    let mut lower: Vec<Real> = (0..k * k).map(|ik| ss[(ik / k, ik % k)]).collect();
-    let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
-    let ok = crate::numeric::symeig::symmetric_eigenvalues(&mut lower, k, &mut ev, &mut scratch);
-    let (mx, mn) = ev.iter().fold((0.0 as Real, Real::INFINITY), |(a, b), &e| {
-        (a.max(e), b.min(e))
-    });
-    let condition_number = if k == 0 || !ok || mn <= 0.0 {
-        Real::INFINITY
-    } else {
-        (mx / mn).sqrt()
-    };
-    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
+    GramDependence {
+        identifiable: ident_idx,
+        dependent: dep_idx,
+        in_group,
+        parent,
+        scaled: ss,
+    }
 }
 
 #[cfg(test)]

@@ -3,11 +3,15 @@
 //! of Statistical Signal Processing*, vol. 1, § 3.7, Gaussian noise), its trace (the
 //! `crb_ratio` of `summary.json`) and each parameter's standard deviation, which decides
 //! whether a parameter's injected error is determinable at all (docs/formats.md
-//! "summary.json", `eta_not_determinable`).
+//! "summary.json", `eta_not_determinable`). Where JᵀWJ is singular, only the estimable
+//! parameters have a bound ([`estimable_variances`]).
 
-use crate::identify::solver::inverse_diagonal;
+use nalgebra::DMatrix;
+
+use crate::identify::solver::{inverse_diagonal, rank};
 use crate::measurement::Measure;
 use crate::numeric::Real;
+use crate::robot::identifiability::gram_dependence;
 use crate::robot::jacobian::{jacobian, Columns};
 use crate::robot::{Param, Robot};
 use crate::sim::tracker::Tracker;
@@ -19,21 +23,21 @@ use crate::sim::tracker::Tracker;
 /// 100 (1 − 0.8 / k) % (73 % at k = 3) and without bound below as |x| / σ → 0.
 pub use crate::identify::solver::DETERMINABLE_SIGMAS;
 
-/// The diagonal of (JᵀWJ)⁻¹ — each parameter's Cramér–Rao variance (mm², rad²) — for
-/// `params` measured at the joint values `qs` (one row block per value, as the measurement
-/// has them) on `robot`, with `measure`'s rows and the noise of `tracker`: W = diag(1/σ²),
-/// σ the position noise at each point's range from the tracker and, for full poses, its
-/// orientation noise. `None` where there is no bound: a noise-free tracker, an elasto-geometric
-/// model (its bound would need each pose's payload and torques), a JᵀWJ of numerical rank below
-/// the parameters ([`inverse_diagonal`], the identification's test: a parameter the poses do not
-/// determine, or two that only their sum is) or a non-finite result.
+/// Each parameter's Cramér–Rao variance (mm², rad²) where it is estimable, `None` where it is
+/// not: for `params` measured at the joint values `qs` (one row block per value, as the
+/// measurement has them) on `robot`, with `measure`'s rows and the noise of `tracker`:
+/// W = diag(1/σ²), σ the position noise at each point's range from the tracker and, for full
+/// poses, its orientation noise. Of full rank, JᵀWJ gives the diagonal of its inverse; of
+/// lower rank, [`estimable_variances`]. `None` where there is no bound at all: a noise-free
+/// tracker, an elasto-geometric model (its bound would need each pose's payload and torques)
+/// or a non-finite result.
 pub fn variances(
     robot: &Robot,
     params: &[Param],
     qs: &[Vec<Real>],
     measure: Measure,
     tracker: &Tracker,
-) -> Option<Vec<Real>> {
+) -> Option<Vec<Option<Real>>> {
     if params.iter().any(|p| p.is_compliance()) {
         return None;
     }
@@ -59,15 +63,53 @@ pub fn variances(
             b /= sa;
         }
     }
-    // A normal matrix the data leave rank-deficient (dependent parameters, Guo's d2 and d3)
-    // has no bound.
-    inverse_diagonal(&(j.transpose() * &j))
+    estimable_variances(&(j.transpose() * &j))
+}
+
+/// Each parameter's Cramér–Rao variance from the weighted normal matrix `n = JᵀWJ`, `None` for
+/// a parameter that is not estimable (docs/formats.md, **Determinable parameters**).
+///
+/// Parameter i is estimable when the unit vector eᵢ lies in the row space of J (Rao, *Linear
+/// Statistical Inference*, § 4a; Searle, *Linear Models*, § 5.4): then and only then is
+/// x̂ᵢ = eᵢᵀx̂ the same for every solution of the normal equations, and its variance
+/// σᵢ² = eᵢᵀ n⁻ eᵢ the same for every generalised inverse n⁻ of `n`. A parameter of a dependent
+/// group (Guo's d2 and d3, of which the poses see only the sum) is not: its part of the error
+/// can be moved to the others without changing a residual, so no data determine it, whatever
+/// its size.
+///
+/// `n` of full numerical rank ([`rank`], the identification's test) gives the diagonal of its
+/// inverse, exactly as before ([`inverse_diagonal`]). Otherwise the columns are split by
+/// pivoted Cholesky of the column-scaled `n` ([`gram_dependence`], the identifiability
+/// analysis on the Gram matrix: a column is kept while its remaining scaled norm exceeds
+/// [`crate::robot::identifiability::RANK_TOL`] = 1e-7, the relative singular value below which
+/// the solver's [`crate::identify::solver::RANK_TOLERANCE`] calls a direction undetermined).
+/// The kept columns B span the column space of J, and every dependent column d is J_B c_d,
+/// so the null space of J is spanned by the vectors with −c_d on B and 1 at d: eᵢ is orthogonal
+/// to it, i.e. in the row space, exactly when i is kept and no c_d weighs it
+/// (above [`crate::robot::identifiability::DEPENDENCE_WEIGHT`] = 1e-6 on unit-norm columns).
+/// For such an i, the generalised inverse that inverts n_BB and is zero elsewhere gives
+/// σᵢ² = (n_BB⁻¹)ᵢᵢ. `None` overall where n_BB has no bound ([`inverse_diagonal`]).
+pub fn estimable_variances(n: &DMatrix<Real>) -> Option<Vec<Option<Real>>> {
+    let t = n.nrows();
+    if rank(n) == t {
+        return inverse_diagonal(n).map(|v| v.into_iter().map(Some).collect());
+    }
+    let d = gram_dependence(n);
+    let kept = &d.identifiable;
+    let inv = inverse_diagonal(&n.select_rows(kept).select_columns(kept))?;
+    let mut out = vec![None; t];
+    for (&c, v) in kept.iter().zip(inv) {
+        if !d.in_group[c] {
+            out[c] = Some(v);
+        }
+    }
+    Some(out)
 }
 
 /// The study parameters (indices into `truth`) whose non-zero injected error is not
-/// determinable: |x| ≤ [`DETERMINABLE_SIGMAS`] · σ, σ² from `variances` (none without a
-/// bound).
-pub fn not_determinable(truth: &[Real], variances: Option<&[Real]>) -> Vec<usize> {
+/// determinable: a parameter that is not estimable, or one within |x| ≤
+/// [`DETERMINABLE_SIGMAS`] · σ, σ² from `variances` (none without a bound).
+pub fn not_determinable(truth: &[Real], variances: Option<&[Option<Real>]>) -> Vec<usize> {
     let Some(v) = variances else {
         return Vec::new();
     };
@@ -75,10 +117,15 @@ pub fn not_determinable(truth: &[Real], variances: Option<&[Real]>) -> Vec<usize
         .iter()
         .zip(v)
         .enumerate()
-        .filter(|(_, (x, v))| **x != 0.0 && x.abs() <= DETERMINABLE_SIGMAS * v.sqrt())
+        .filter(|(_, (x, v))| {
+            **x != 0.0 && v.is_none_or(|v| x.abs() <= DETERMINABLE_SIGMAS * v.sqrt())
+        })
         .map(|(k, _)| k)
         .collect()
 }
+
+#[cfg(test)]
+mod estimable;
 
 #[cfg(test)]
 mod tests {
@@ -146,7 +193,11 @@ mod tests {
         };
         let tracker = Tracker::new(&settings).expect("tracker");
         let m = tracker.measures();
-        let got = variances(&robot, &params, &qs, m, &tracker).expect("a bound");
+        let got: Vec<Real> = variances(&robot, &params, &qs, m, &tracker)
+            .expect("a bound")
+            .into_iter()
+            .map(|v| v.expect("full rank: every parameter estimable"))
+            .collect();
         let want = by_hand(&robot, &params, &qs, m, &settings);
         for (k, (g, w)) in got.iter().zip(&want).enumerate() {
             assert!((g - w).abs() <= 1e-5 * w, "{}: {g} against {w}", params[k]);
@@ -161,26 +212,32 @@ mod tests {
 
     #[test]
     fn an_error_within_three_sigma_is_not_determinable() {
-        let v = [1.0, 4.0, 0.01, 1.0];
-        // σ = 1, 2, 0.1, 1: 2.9 ≤ 3, 6.5 > 6, 0 is no error, −3 ≤ 3.
+        let v = [Some(1.0), Some(4.0), Some(0.01), Some(1.0), None, None];
+        // σ = 1, 2, 0.1, 1: 2.9 ≤ 3, 6.5 > 6, 0 is no error, −3 ≤ 3; the fifth is not
+        // estimable whatever its error, the sixth has none.
         assert_eq!(
-            not_determinable(&[2.9, 6.5, 0.0, -3.0], Some(&v)),
-            vec![0, 3]
+            not_determinable(&[2.9, 6.5, 0.0, -3.0, 1e6, 0.0], Some(&v)),
+            vec![0, 3, 4]
         );
         assert!(not_determinable(&[1e-9, 1e-9, 0.0, 0.0], None).is_empty());
     }
 
     #[test]
-    fn no_bound_for_dependent_parameters() {
+    fn dependent_parameters_are_not_estimable_and_the_others_keep_their_bound() {
         // d2 and d3 of the IRB2600 move the wrist centre along the same joint axis: only
-        // their sum is seen, so JᵀWJ is singular up to rounding.
+        // their sum is seen, so JᵀWJ is singular up to rounding; a1 stays estimable, with
+        // the variance it has beside only one of the pair (the kept column spans the sum).
         let nominal = builtin::irb2600();
         let tracker = Tracker::new(&TrackerSettings::default()).expect("tracker");
         let qs = uniform_joint_poses(&nominal, 30, &mut rng::from_seed(2));
         let m = tracker.measures();
-        let pair = [Param::A(0), Param::D(1), Param::D(2)];
-        assert!(variances(&nominal, &pair, &qs, m, &tracker).is_none());
-        assert!(variances(&nominal, &pair[..2], &qs, m, &tracker).is_some());
+        let three = [Param::A(0), Param::D(1), Param::D(2)];
+        let got = variances(&nominal, &three, &qs, m, &tracker).expect("a bound");
+        assert!(got[1].is_none() && got[2].is_none(), "{got:?}");
+        let two = variances(&nominal, &three[..2], &qs, m, &tracker).expect("a bound");
+        let (a, b) = (got[0].expect("a1 estimable"), two[0].expect("a1"));
+        assert!((a - b).abs() <= 1e-9 * b, "{a} against {b}");
+        assert!(two.iter().all(Option::is_some));
     }
 
     #[test]

@@ -298,7 +298,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             study.measure,
             &study.tracker,
         );
-        crb_traces.push(variances.as_ref().map(|v| v.iter().sum()));
+        // No trace where a parameter is not estimable: its variance has no bound.
+        crb_traces.push(variances.as_ref().and_then(|v| v.iter().copied().sum()));
         not_determinable.push(crb::not_determinable(&truth, variances.as_deref()));
         for (mi, spec) in sc.methods.iter().enumerate() {
             let t0 = Instant::now();

@@ -111,3 +111,42 @@ fn threads_and_shards_give_the_same_determinable_figures() {
         assert_eq!(results(d), want, "{}", d.display());
     }
 }
+
+/// Two parameters of which the poses see only the sum (the IRB2600's d2 and d3 move the wrist
+/// centre along the same axis), identified by LM, which tolerates the rank deficiency: their
+/// injected errors, 0.5 and 0.3 mm, are a hundred times the tracker noise, yet neither is
+/// estimable (formats.md "Determinable parameters"), so both are listed in every trial and
+/// have no η; a2 and alpha3, estimable, keep theirs.
+#[test]
+fn a_parameter_that_is_not_estimable_is_not_determinable_whatever_its_error() {
+    let dir = tmp_dir("determinable-estimable");
+    let text = STUDY
+        .replace("NOISE", "")
+        .replace("d4 = 1e-6", "d2 = 0.5\nd3 = 0.3")
+        .replace(
+            "[[methods]]\nname = \"ls\"",
+            "[identification]\nparams = [\"a1\", \"a2\", \"d2\", \"d3\", \"alpha3\"]\n\
+             [[methods]]\nname = \"lm\"",
+        );
+    let sc = write_scenario(&dir, "s.toml", &text);
+    let out = dir.join("out");
+    calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&out)]);
+    let e = load_json(&out.join("summary.json"))["results"][0].clone();
+    let eta = e["eta"].as_object().expect("eta");
+    assert!(
+        eta.contains_key("a2") && eta.contains_key("alpha3"),
+        "{eta:?}"
+    );
+    assert!(
+        !eta.contains_key("d2") && !eta.contains_key("d3"),
+        "{eta:?}"
+    );
+    let below = e["eta_not_determinable"].as_object().expect("listed");
+    assert_eq!(below.len(), 2, "{below:?}");
+    assert_eq!((&below["d2"], &below["d3"]), (&8.into(), &8.into()));
+    let report = read(&out.join("report.md"));
+    assert!(
+        report.contains("not estimable") && report.contains("- lm / random: d2 (8 of 8 trials)"),
+        "{report}"
+    );
+}
