@@ -1,5 +1,6 @@
-//! The committed outputs (every file under `results/`: the papers' run summaries, the CI
-//! guard's baseline, the README's and REPRODUCTION.md's figures and tables) are listed with
+//! The committed outputs (every file in the folders of `results/` that `.gitignore` keeps:
+//! the papers' run summaries, the CI guard's baseline, the README's and REPRODUCTION.md's
+//! figures and tables) are listed with
 //! their SHA-256 in `results/SHA256SUMS` (the `sha256sum` format), so that a committed output
 //! changes only on purpose: with the list, in the same commit, named in CHANGELOG.md. Beside
 //! the list, `results/REGENERATE.toml` gives the command that writes each of them
@@ -33,10 +34,19 @@ fn hashes(base: &Path, dir: &Path, out: &mut BTreeMap<String, String>) {
 fn every_committed_output_has_the_sha256_its_list_gives() {
     let results = root().join("results");
     let listed = std::fs::read_to_string(results.join("SHA256SUMS")).expect("results/SHA256SUMS");
+    // The committed folders are those `.gitignore` keeps (`!/results/NAME`): a run's own
+    // output (`cargo run --release` writes results/default/) is not a committed output.
+    let ignore = std::fs::read_to_string(root().join(".gitignore")).expect(".gitignore");
+    let kept: Vec<&str> = ignore
+        .lines()
+        .filter_map(|l| l.trim().strip_prefix("!/results/"))
+        .filter(|name| !matches!(*name, "SHA256SUMS" | "REGENERATE.toml"))
+        .collect();
+    assert!(kept.contains(&"reproduction"), "{kept:?}");
     let mut got = BTreeMap::new();
-    hashes(&results, &results, &mut got);
-    got.remove("SHA256SUMS");
-    got.remove("REGENERATE.toml");
+    for name in kept {
+        hashes(&results, &results.join(name), &mut got);
+    }
     let want: String = got
         .iter()
         .map(|(path, hex)| format!("{hex}  {path}\n"))
