@@ -9,7 +9,11 @@
 //! leverage `h_i = trace H_ii` (the leverages sum to the number of parameters without priors),
 //! and its Cook's distance the block form `D_i = w_i r_iᵀ (I − H_ii)⁻¹ H_ii (I − H_ii)⁻¹ r_i /
 //! (t σ0²)` (Cook & Weisberg 1982, §3.5: the change of the fit when the point is left out, in
-//! units of the parameters' confidence ellipsoid).
+//! units of the parameters' confidence ellipsoid). When the fit weighed each residual row on
+//! its own (IGG3's `per = "coordinate"`, [`crate::identify::Identified::row_weights`]), `w_i`
+//! is the diagonal `W_i` of the point's row weights, in the symmetric form
+//! `H_ii = W_i^½ J_i N⁻¹ J_iᵀ W_i^½` and `D_i = r_iᵀ W_i^½ (I − H_ii)⁻¹ H_ii (I − H_ii)⁻¹
+//! W_i^½ r_i / (t σ0²)`: a coordinate the fit rejected adds neither leverage nor influence.
 
 use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 
@@ -149,10 +153,26 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     let mut leverage = Vec::with_capacity(m);
     let mut cook_distance = Vec::with_capacity(m);
     // Per point, H_ii = w_i J_i N⁻¹ J_iᵀ and (I − H_ii)⁻¹ r_i on the stack (at most 6 rows a
-    // point, padded with the identity).
+    // point, padded with the identity). With a weight per row (IGG3's `per = "coordinate"`),
+    // H_ii = D_i J_i N⁻¹ J_iᵀ D_i and r_i scaled by D_i, D_i = diag(√w_ik): the point's block
+    // of the hat matrix of the fit as it weighed the rows.
+    let rows = rp.size().rows_per_point;
+    let row_weights = id.row_weights.as_deref().filter(|w| w.len() == m * rows);
     by_points(&rp, &id.x, &n_inv, |i, ri, h| {
-        let w = id.weights.get(i).copied().unwrap_or(1.0);
-        let h = h.scale(w);
+        let (h, ri, w) = match row_weights {
+            Some(rw) => {
+                let mut d = Vector6::zeros();
+                for (k, w) in rw[i * rows..(i + 1) * rows].iter().enumerate() {
+                    d[k] = w.sqrt();
+                }
+                let d = Matrix6::from_diagonal(&d);
+                (d * h * d, d * ri, 1.0)
+            }
+            None => {
+                let w = id.weights.get(i).copied().unwrap_or(1.0);
+                (h.scale(w), ri, w)
+            }
+        };
         leverage.push(h.trace());
         let cook = (Matrix6::identity() - h)
             .lu()
@@ -331,5 +351,117 @@ mod tests {
             assert!((d.correlation[i][i] - 1.0).abs() < 1e-9);
         }
         assert!(d.predicted.rms_mm > 0.0 && d.predicted.at == "calibration");
+    }
+
+    /// IGG3 per coordinate on 40 poses with one coordinate moved by 2 mm: the leverage and
+    /// Cook's distance of every point are those of the fit as it weighed the rows, built
+    /// densely apart — leverage `trace(W_i J_i N⁻¹ J_iᵀ)`, Cook's distance from the refit
+    /// without the point, `Δ = (N − J_iᵀ W_i J_i)⁻¹ J_iᵀ W_i r_i`, `Δᵀ N Δ / (t σ0²)` — the
+    /// leverages sum to the parameters, and the bad point, whose bad coordinate the fit
+    /// rejected, is not the most influential, as it would be at its mean weight 2/3.
+    #[test]
+    fn row_weights_give_the_fits_own_leverage_and_influence() {
+        use crate::identify::MethodSpec;
+        use crate::robot::Param;
+        use rand::Rng as _;
+        let params = [Param::A(1), Param::Theta(2), Param::D(3), Param::Alpha(2)];
+        let (bad, axis) = (7, 1);
+        let nominal = crate::robot::builtin::irb2600();
+        let truth = nominal.with_errors(&[
+            (params[0], 0.5),
+            (params[1], 1e-3),
+            (params[2], 0.3),
+            (params[3], 5e-4),
+        ]);
+        let mut g = stream(5, "diag-rows");
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 40, &mut g);
+        let mut points: Vec<Vec3> = qs
+            .iter()
+            .map(|q| truth.fk(q).pos + Vec3::from_fn(|_, _| g.random_range(-0.005..0.005)))
+            .collect();
+        points[bad][axis] += 2.0;
+        let data = Measurements {
+            qs,
+            points,
+            ..Default::default()
+        };
+        let spec = MethodSpec::from_table(
+            &toml::from_str("name = \"igg3\"\nxi = 0.0\nper = \"coordinate\"").unwrap(),
+        )
+        .unwrap();
+        let frame = crate::numeric::Frame::identity();
+        let c = calibrate(
+            &nominal,
+            &params,
+            &data,
+            Registration::Known,
+            &frame,
+            &spec,
+            &mut stream(0, "identify"),
+        )
+        .unwrap();
+        let d = diagnose(&Subject {
+            nominal: &nominal,
+            params: &params,
+            data: &data,
+            calibrated: &c,
+            k: 1.0,
+            priors: &[],
+            validation: None,
+        })
+        .unwrap();
+        let id = &c.identified;
+        let w = id.row_weights.clone().expect("row weights");
+        assert_eq!(w.iter().filter(|&&v| v == 0.0).count(), 1);
+        assert_eq!(w[3 * bad + axis], 0.0);
+        // The dense build.
+        let problem = CalibrationProblem::new(&nominal, &params, &data, frame, 1.0);
+        let rp = RobotProblem::of(&problem).unwrap();
+        let (n_rows, t) = (rp.size().rows(), params.len());
+        let (mut r, mut j) = (DVector::zeros(n_rows), DMatrix::zeros(n_rows, t));
+        rp.evaluate(&id.x, &mut r, &mut j);
+        let wj = DMatrix::from_fn(n_rows, t, |i, k| w[i] * j[(i, k)]);
+        let n = j.transpose() * &wj;
+        assert!((&n - &id.normal).amax() <= 1e-6 * n.amax());
+        let n_inv = n.clone().try_inverse().unwrap();
+        let s0sq = id.sigma0 * id.sigma0;
+        let cook_at = |i: usize, weights: &[Real]| -> Real {
+            let ji = j.rows(3 * i, 3).into_owned();
+            let wi = DMatrix::from_diagonal(&DVector::from_row_slice(&weights[3 * i..3 * i + 3]));
+            let ri = r.rows(3 * i, 3).into_owned();
+            let jw = ji.transpose() * &wi;
+            let delta = (&n - &jw * &ji).try_inverse().unwrap() * (jw * ri);
+            (delta.transpose() * &n * &delta)[(0, 0)] / (t as Real * s0sq)
+        };
+        for i in 0..data.len() {
+            let ji = j.rows(3 * i, 3);
+            let mut h = 0.0;
+            for k in 0..3 {
+                h += w[3 * i + k] * (ji.row(k) * &n_inv * ji.row(k).transpose())[(0, 0)];
+            }
+            assert!(
+                (d.leverage[i] - h).abs() <= 1e-6 * h.abs().max(1e-6),
+                "point {i}"
+            );
+            let cook = cook_at(i, &w);
+            assert!(
+                (d.cook_distance[i] - cook).abs() <= 1e-6 * cook.abs().max(1e-9),
+                "point {i}: {} against {cook}",
+                d.cook_distance[i]
+            );
+        }
+        let sum: Real = d.leverage.iter().sum();
+        assert!((sum - t as Real).abs() < 1e-6, "{sum}");
+        assert_ne!(d.top_points[0].row, bad);
+        // At its mean weight the bad point, its 2 mm included, would lead the influence.
+        let mean: Vec<Real> = w
+            .iter()
+            .enumerate()
+            .map(|(k, _)| if k / 3 == bad { 2.0 / 3.0 } else { 1.0 })
+            .collect();
+        let most = (0..data.len())
+            .max_by(|&a, &b| cook_at(a, &mean).total_cmp(&cook_at(b, &mean)))
+            .unwrap();
+        assert_eq!(most, bad);
     }
 }

@@ -42,7 +42,7 @@ use crate::measurement::Measurements;
 use crate::numeric::rng::Rng;
 use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::{Param, Robot};
-use registration::{register_svd, register_wsvd};
+use registration::{register_rows, register_svd, register_wsvd};
 
 pub use validation::{validation_errors, ErrorStats, PoseErrors};
 
@@ -99,6 +99,22 @@ pub struct Rounds {
     /// The last change of the frame, as the largest displacement it gives a measured point
     /// (mm): translation + RMS radius of the points × rotation angle. 0 without alternation.
     pub last_step_mm: Real,
+    /// How the refits of the frame weighed the measured points.
+    pub weights: RefitWeights,
+}
+
+/// How the refits of an `svd` / `wsvd` alternation weighed the measured points: as the
+/// identification weighed them, a weight per point, or a weight per coordinate when the
+/// identification weighed each residual row on its own ([`Identified::row_weights`]: IGG3
+/// with `per = "coordinate"`; [`registration::register_rows`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum RefitWeights {
+    /// One weight per point (the SVD; also every registration that does not alternate).
+    #[default]
+    Point,
+    /// One weight per coordinate (x, y, z of the base frame).
+    Coordinate,
 }
 
 /// Why the alternation of registration and identification stopped.
@@ -139,8 +155,10 @@ const ANDERSON_DEPTH: usize = 6;
 /// the registration).
 ///
 /// - `svd` and `wsvd`: the nominal robot's registration (SVD, or Ban's weighted SVD) is the
-///   first frame; registration (an SVD weighing the points as the identification did) and
-///   identification then alternate until the frame moves a point by less than
+///   first frame; registration (an SVD weighing the points as the identification did, or
+///   [`registration::register_rows`] weighing each coordinate when the identification
+///   weighed each residual row: IGG3 with `per = "coordinate"`) and identification then
+///   alternate until the frame moves a point by less than
 ///   [`ROUND_TOLERANCE_MM`], or [`MAX_ROUNDS`] rounds (reported in [`Calibrated::rounds`]).
 ///   The kinematic errors first leak into the frame, and each refit of the frame on the
 ///   identified model takes some back; the plain alternation is a block coordinate descent
@@ -207,6 +225,7 @@ pub fn calibrate(
                 rounds: 1,
                 termination: RoundsEnd::Single,
                 last_step_mm: 0.0,
+                weights: RefitWeights::Point,
             },
             identified,
         });
@@ -223,11 +242,20 @@ pub fn calibrate(
         let frame = coords.frame(&u);
         let (identified, robot) = solve(frame)?;
         rounds += 1;
-        let refit = register_svd(
-            &model_points(&robot),
-            &data.points,
-            Some(&identified.weights),
-        )?;
+        // The refit weighs each coordinate as the identification did when it weighed rows on
+        // their own (one sum again, per row), else each point.
+        let model = model_points(&robot);
+        let (refit, weights) = match &identified.row_weights {
+            Some(rows) => {
+                let per = rows.len() / data.points.len().max(1);
+                let r = register_rows(&model, &data.points, rows, per)?;
+                (r, RefitWeights::Coordinate)
+            }
+            None => {
+                let r = register_svd(&model, &data.points, Some(&identified.weights))?;
+                (r, RefitWeights::Point)
+            }
+        };
         let g = coords.of(&refit.frame);
         let step = (g - u).norm();
         let done = step <= ROUND_TOLERANCE_MM;
@@ -243,6 +271,7 @@ pub fn calibrate(
                     RoundsEnd::MaxRounds
                 },
                 last_step_mm: step,
+                weights,
             },
             identified,
         };

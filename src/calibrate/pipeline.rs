@@ -21,7 +21,7 @@ use super::verdict::{
     self, check_names, gross_reading, registration_warning, rms, worse_causes, worse_error,
     worse_warning,
 };
-use super::{calibrate, plausibility, recheck, Calibrated, Registration};
+use super::{calibrate, plausibility, recheck, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, Termination, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
@@ -334,6 +334,8 @@ impl IdentifyRequest {
             registration_last_step_mm: Some(c.rounds.last_step_mm),
             registration_rounds: Some(c.rounds.rounds),
             registration_termination: Some(c.rounds.termination),
+            registration_weights: (c.rounds.weights == RefitWeights::Coordinate)
+                .then_some(RefitWeights::Coordinate),
             ..record
         };
         let residuals = point_residuals(&nominal, &c, &d)?;

@@ -215,6 +215,10 @@ pub struct IdentifiedRecord {
     /// How the alternation ended (tracker's file).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub registration_termination: Option<RoundsEnd>,
+    /// `coordinate` when the registration's refits weighed each coordinate on its own
+    /// (`svd`/`wsvd` with IGG3's `per = "coordinate"`); absent when they weighed points.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub registration_weights: Option<super::RefitWeights>,
     /// The RMS residual (mm).
     #[serde(deserialize_with = "nan::real")]
     pub rms_residual_mm: Real,

@@ -10,7 +10,7 @@ use anyhow::Result;
 
 use calbench::calibrate::pipeline::{IdentifyOutcome, TrackerOutcome};
 use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
-use calbench::calibrate::{Registration, RoundsEnd};
+use calbench::calibrate::{RefitWeights, Registration, RoundsEnd};
 use calbench::error::{Error, Opt};
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
 use calbench::measurement::csv::read_measurements;
@@ -316,9 +316,13 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     let rounds = match c.rounds.termination {
         RoundsEnd::Single => String::new(),
         end => format!(
-            " ({} rounds of {} registration and identification, {})",
+            " ({} rounds of {} registration{} and identification, {})",
             c.rounds.rounds,
             o.registration.as_str(),
+            match c.rounds.weights {
+                RefitWeights::Coordinate => " weighing each coordinate",
+                RefitWeights::Point => "",
+            },
             end.as_str()
         ),
     };

@@ -8,7 +8,7 @@ use std::path::Path;
 use calbench::calibrate::cv::CrossValidation;
 use calbench::calibrate::diagnostics::{Diagnostics, Influential, Pair, Predicted};
 use calbench::calibrate::record::{FrameRecord, IdentifiedRecord, PriorMove, Trace};
-use calbench::calibrate::{ErrorStats, Registration, RoundsEnd};
+use calbench::calibrate::{ErrorStats, RefitWeights, Registration, RoundsEnd};
 use calbench::identify::{Identified, Termination};
 use calbench::measurement::kind::Kind;
 use calbench::numeric::Frame;
@@ -89,6 +89,7 @@ fn keys_are_in_byte_order() {
         registration_last_step_mm: Some(0.0),
         registration_rounds: Some(1),
         registration_termination: Some(RoundsEnd::Single),
+        registration_weights: Some(RefitWeights::Coordinate),
         standard_errors: Some(BTreeMap::from([("a2".into(), 0.1)])),
         targets_mm: Some(vec![[0.0, 1.0, 2.0]]),
         unidentifiable: Some(vec!["theta1".into()]),
@@ -103,7 +104,7 @@ fn keys_are_in_byte_order() {
     let text = serde_json::to_string(&r).unwrap();
     let tree = serde_json::to_value(&r).unwrap();
     assert_eq!(text, serde_json::to_string(&tree).unwrap());
-    assert_eq!(tree.as_object().unwrap().len(), 41, "{text}");
+    assert_eq!(tree.as_object().unwrap().len(), 42, "{text}");
     // Read back, the record is the one written (format 1: no `format` key).
     assert!(!text.contains("\"format\""), "{text}");
     let back = IdentifiedRecord::from_json(&text, Path::new("x")).unwrap();
