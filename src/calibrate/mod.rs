@@ -181,6 +181,24 @@ pub fn calibrate(
     method: &MethodSpec,
     rng: &mut Rng,
 ) -> Result<Calibrated> {
+    let how = (registration, RefitWeights::Coordinate);
+    calibrate_weighing(nominal, params, data, how, known, method, rng)
+}
+
+/// [`calibrate`] with the refits' weights chosen: [`RefitWeights::Coordinate`] weighs each
+/// coordinate when the identification weighed each row (what [`calibrate`] does),
+/// [`RefitWeights::Point`] each point by its rows' mean weight even then (the refit before
+/// [`registration::register_rows`], kept as the baseline the per-coordinate refit is
+/// measured against: tests/cli/registration_rows.rs).
+pub fn calibrate_weighing(
+    nominal: &Robot,
+    params: &[Param],
+    data: &Measurements,
+    (registration, refit_weights): (Registration, RefitWeights),
+    known: &Frame,
+    method: &MethodSpec,
+    rng: &mut Rng,
+) -> Result<Calibrated> {
     let model_points = |robot: &Robot| -> Vec<Vec3> {
         let chain = robot.chain();
         data.qs.iter().map(|q| chain.fk(q).pos).collect()
@@ -245,7 +263,11 @@ pub fn calibrate(
         // The refit weighs each coordinate as the identification did when it weighed rows on
         // their own (one sum again, per row), else each point.
         let model = model_points(&robot);
-        let (refit, weights) = match &identified.row_weights {
+        let rows = identified
+            .row_weights
+            .as_ref()
+            .filter(|_| refit_weights == RefitWeights::Coordinate);
+        let (refit, weights) = match rows {
             Some(rows) => {
                 let per = rows.len() / data.points.len().max(1);
                 let r = register_rows(&model, &data.points, rows, per)?;

@@ -42,6 +42,7 @@ mod record_task;
 mod records;
 mod refusals;
 mod regenerate;
+mod registration_rows;
 mod report_baseline;
 mod results;
 mod results_team;

@@ -17,7 +17,7 @@ use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_point
 use crate::task::{task, task_lm};
 
 /// The injected errors every data set has: lengths and angles of the arm, none on the tool.
-const ARM: [(Param, f64); 4] = [
+pub(crate) const ARM: [(Param, f64); 4] = [
     (Param::A(1), 0.5),
     (Param::Theta(2), 1e-3),
     (Param::D(3), 0.3),
