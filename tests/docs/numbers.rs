@@ -361,8 +361,12 @@ fn every_number_reproduction_md_quotes_has_a_checked_source() {
         eprintln!("unchecked: {u}");
     }
     assert!(errors.is_empty(), "{}", errors.join("\n"));
+    // The bound is 0 now, which clippy sees as a comparison that cannot fail; it stays a
+    // bound, so that raising it is a one-line change that says so.
+    #[allow(clippy::absurd_extreme_comparisons)]
+    let within = unchecked.len() <= UNCHECKED_AT_MOST;
     assert!(
-        unchecked.len() <= UNCHECKED_AT_MOST,
+        within,
         "{} unchecked numbers, at most {UNCHECKED_AT_MOST}",
         unchecked.len()
     );
