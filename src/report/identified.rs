@@ -167,20 +167,69 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     if let Some(text) = registration_warning(&r.calibrated, r.registration) {
         w.push(format!("the {text}."));
     }
-    let rejected: Vec<String> = id
-        .weights
+    let m = r.data.len();
+    if let Some(rows) = id
+        .row_weights
+        .as_deref()
+        .filter(|w| m > 0 && w.len() % m == 0)
+    {
+        w.extend(coordinate_warnings(rows, rows.len() / m));
+    } else {
+        w.extend(point_warnings(&id.weights, m));
+    }
+    w.extend(worse_warning(&r.record.allowed_worse).map(|t| t.to_string() + "."));
+    w.extend(implausible_warning(&r.record.allowed_implausible).map(|t| t.to_string() + "."));
+    w
+}
+
+/// The warnings of a fit that weighed each residual row on its own (IGG3 with
+/// `per = "coordinate"`): the rows rejected (weight 0), each as its data row and coordinate,
+/// and the number weighed down.
+fn coordinate_warnings(rows: &[Real], per: usize) -> Vec<String> {
+    const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
+    let rejected: Vec<String> = rows
+        .iter()
+        .enumerate()
+        .filter(|(_, x)| **x == 0.0)
+        .map(|(k, _)| format!("{} {}", k / per, AXES.get(k % per).copied().unwrap_or("?")))
+        .collect();
+    let lowered = rows.iter().filter(|x| **x > 0.0 && **x < 1.0).count();
+    let mut w = Vec::new();
+    if !rejected.is_empty() {
+        w.push(format!(
+            "{} of the {} coordinates were rejected as outliers (row weight 0; row and \
+             coordinate: {}): they do not count in the result, their points' other coordinates \
+             do. Check those measurements.",
+            rejected.len(),
+            rows.len(),
+            rejected.join(", ")
+        ));
+    }
+    if lowered > 0 {
+        w.push(format!(
+            "{lowered} coordinates were weighed down (row weight between 0 and 1) as suspect."
+        ));
+    }
+    w
+}
+
+/// The warnings of a fit that weighed points: those rejected (weight 0) and the number
+/// weighed down, of `m` points.
+fn point_warnings(weights: &[Real], m: usize) -> Vec<String> {
+    let mut w = Vec::new();
+    let rejected: Vec<String> = weights
         .iter()
         .enumerate()
         .filter(|(_, x)| **x == 0.0)
         .map(|(i, _)| i.to_string())
         .collect();
-    let lowered = id.weights.iter().filter(|x| **x > 0.0 && **x < 1.0).count();
+    let lowered = weights.iter().filter(|x| **x > 0.0 && **x < 1.0).count();
     if !rejected.is_empty() {
         w.push(format!(
             "{} of the {} points were rejected as outliers (final weight 0; rows {}): they do \
              not count in the result. Check those measurements.",
             rejected.len(),
-            r.data.len(),
+            m,
             rejected.join(", ")
         ));
     }
@@ -189,8 +238,6 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
             "{lowered} points were weighed down (final weight between 0 and 1) as suspect."
         ));
     }
-    w.extend(worse_warning(&r.record.allowed_worse).map(|t| t.to_string() + "."));
-    w.extend(implausible_warning(&r.record.allowed_implausible).map(|t| t.to_string() + "."));
     w
 }
 

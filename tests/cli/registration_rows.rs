@@ -99,6 +99,12 @@ fn the_svd_refit_weighs_each_coordinate_and_the_robot_comes_closer_to_the_truth(
             stdout.contains("svd registration weighing each coordinate"),
             "{stdout}"
         );
+        let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+        assert!(
+            html.contains("3 of the 120 coordinates were rejected as outliers")
+                && html.contains("5 x, 17 y, 29 z"),
+            "seed {seed}: the per-coordinate warning"
+        );
         let id = load_json(&out.join("identified.json"));
         assert_eq!(id["registration_weights"], "coordinate", "seed {seed}");
         assert!(id.get("readmitted").is_none(), "seed {seed}");
