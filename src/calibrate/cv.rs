@@ -3,8 +3,15 @@
 //! validation error of each held-out fold after calibrating on the others, a held-out split
 //! rule ([`Holdout`]), and candidate models ([`Model`]) compared on the same folds.
 
+mod key;
+mod model;
+
 use std::str::FromStr;
 
+pub use key::CvKey;
+pub use model::Model;
+
+use super::fit::fit_and_readmit;
 use super::kernel::{position_errors, KernelResidual};
 use super::validation::validate_file;
 use super::{calibrate, Registration};
@@ -13,11 +20,7 @@ use crate::identify::MethodSpec;
 use crate::measurement::Measurements;
 use crate::numeric::rng::stream;
 use crate::numeric::{Frame, Real};
-use crate::robot::compliance::CompliancePick;
-use crate::robot::identifiability::identifiable_extension;
-use crate::robot::{
-    param_sets, Convention, JointType, Param, Robot, MAX_HARMONIC_ORDER, MAX_JOINTS,
-};
+use crate::robot::{Param, Robot};
 
 /// `--holdout LAST/EVERY`: of every `every` consecutive rows, the last `last` are held out
 /// for validation (`3/10`: rows whose 0-based index % 10 ≥ 7).
@@ -105,10 +108,31 @@ pub struct CrossValidation {
     pub sd: Real,
     /// The number of parameters identified.
     pub parameters: usize,
+    /// What it was run on ([`CvKey`]; not written): a cross-validation of an equal key may
+    /// take this one's place. `None`: never.
+    #[serde(skip)]
+    pub key: Option<CvKey>,
 }
 
-/// What one cross-validation runs: the robot and its parameters, the method, the
-/// registration, and the seeds.
+/// The model a cross-validation fits in each fold: the robot, the parameters chosen at the
+/// nominal robot, those the re-check at the identified robot may re-admit (empty: no
+/// re-check), whether a kernel residual follows, and its name.
+pub struct CvModel<'a> {
+    /// The robot whose parameters are identified.
+    pub robot: &'a Robot,
+    /// The parameters identified.
+    pub params: &'a [Param],
+    /// The parameters left out at the nominal robot ([`Model::left_out`]), re-checked at
+    /// each fold's identified robot ([`super::fit`]).
+    pub candidates: &'a [Param],
+    /// A kernel residual fitted on the fold's calibration rows after the parametric model.
+    pub kernel: bool,
+    /// The model's name ([`Model::name`]).
+    pub name: String,
+}
+
+/// What one cross-validation runs: the method, the registration, the seeds, and the
+/// cross-validations already run that it may take instead of running its own.
 pub struct CvSetup<'a> {
     /// The method.
     pub method: &'a MethodSpec,
@@ -120,14 +144,19 @@ pub struct CvSetup<'a> {
     pub fold_seed: u64,
     /// Parameters held at their nominal values (`--fix`), left out of every model.
     pub fixed: &'a [Param],
+    /// Cross-validations already run: one whose [`CvKey`] equals the one to run is taken
+    /// instead (the same figures, to the bit).
+    pub done: &'a [CrossValidation],
 }
 
-/// K-fold cross-validation of the errors of `params` of `robot` (the model `name`) on `data`:
-/// per fold, calibrate on the other folds and take the position errors of the fold's points
-/// ([`validate_file`]); with `kernel`, a kernel residual fitted on the fold's calibration rows
-/// alone is added to the prediction ([`KernelResidual`]).
+/// K-fold cross-validation of the model `m` on `data`: per fold, identify on the other folds
+/// as `identify` does ([`fit_and_readmit`]: the parameters left out at the nominal robot
+/// re-checked at the fold's identified robot) and take the position errors of the fold's
+/// points ([`validate_file`]); with a kernel, a kernel residual fitted on the fold's
+/// calibration rows alone is added to the prediction ([`KernelResidual`]). A
+/// cross-validation of `s.done` with the same [`CvKey`] is taken instead of running it.
 pub fn cross_validate(
-    (robot, params, name, kernel): (&Robot, &[Param], String, bool),
+    m: &CvModel,
     data: &Measurements,
     k: usize,
     s: &CvSetup,
@@ -139,22 +168,33 @@ pub fn cross_validate(
             format!("needs 2 ≤ K ≤ the number of points ({n}), got {k}"),
         ));
     }
+    let key = CvKey::of(m, data, k, s);
+    if let Some(done) = s.done.iter().find(|d| key.is_some() && d.key == key) {
+        return Ok(done.clone());
+    }
+    let (robot, params) = (m.robot, m.params);
     let fold = folds(n, k, s.fold_seed);
     let mut fold_rms = Vec::with_capacity(k);
     let mut sum_sq = 0.0;
     for f in 0..k {
         let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] == f);
         let (tr, te) = (subset(data, &train), subset(data, &test));
-        let c = calibrate(
-            robot,
-            params,
-            &tr,
-            s.registration,
-            &Frame::identity(),
-            s.method,
-            &mut stream(s.seed, "identify"),
-        )?;
-        let after = if kernel {
+        let on = (robot, &tr, s.registration, s.method.k);
+        let mut fit = |p: &[Param]| {
+            let mut rng = stream(s.seed, "identify");
+            calibrate(
+                robot,
+                p,
+                &tr,
+                s.registration,
+                &Frame::identity(),
+                s.method,
+                &mut rng,
+            )
+        };
+        let kept = fit_and_readmit(on, params.to_vec(), m.candidates, &mut fit, &|_, _| Ok(()))?;
+        let c = kept.calibrated;
+        let after = if m.kernel {
             let k = KernelResidual::fit(robot, &c, &tr)?;
             super::ErrorStats::of(&position_errors(&c, Some(&k), &te)?).rms
         } else {
@@ -171,276 +211,15 @@ pub fn cross_validate(
         / (k - 1) as Real)
         .sqrt();
     Ok(CrossValidation {
-        model: name,
+        model: m.name.clone(),
         k,
         rms: (sum_sq / n as Real).sqrt(),
         fold_rms,
         mean,
         sd,
         parameters: params.len(),
+        key,
     })
-}
-
-/// A candidate model of `identify --models`: the kinematic parameters, plus Hayati's β on
-/// the joints where it is identifiable (parallel neighbouring axes) and/or the compliances of
-/// the joints gravity loads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Model {
-    /// β on the joints where it is identifiable (a `dh` robot is read as `dh_beta`, β = 0).
-    pub beta: bool,
-    /// The compliances of the gravity-loaded joints (needs the robot's link masses).
-    pub compliance: bool,
-    /// Joint-angle harmonics up to this order (0: none; 1: `sin q`, `cos q`; 2: also
-    /// `sin 2q`, `cos 2q`) on every revolute joint, each term kept when it is identifiable
-    /// beside the kinematic parameters over generic poses ([`Param::Harmonic`],
-    /// [`identifiable_extension`]).
-    pub harmonics: u8,
-    /// The mass-free gravity basis ([`Param::Gravity`], [`crate::robot::gravity_basis`]):
-    /// the joint deflections of unit weights at the elbow, the wrist centre and the tool
-    /// point, with free coefficients (no masses needed).
-    pub gravity: bool,
-    /// Harmonics of chosen orders on chosen joints (`h12q1`: `sin 12q1`, `cos 12q1`): per
-    /// joint (0-based), bit `n − 1` for order `n`.
-    pub orders: [u16; MAX_JOINTS],
-    /// A kernel residual on the joint angles, fitted on the calibration rows after the
-    /// parametric terms ([`KernelResidual`]; `gp`).
-    pub gp: bool,
-}
-
-impl Model {
-    /// The plain kinematic model.
-    pub const KINEMATIC: Model = Model {
-        beta: false,
-        compliance: false,
-        harmonics: 0,
-        gravity: false,
-        orders: [0; MAX_JOINTS],
-        gp: false,
-    };
-
-    /// Whether the model is kinematic only (β included): a task's closed division.
-    pub fn is_kinematic(&self) -> bool {
-        !self.compliance
-            && self.harmonics == 0
-            && !self.gravity
-            && self.orders == [0; MAX_JOINTS]
-            && !self.gp
-    }
-
-    /// `kinematic`, or its terms joined by `+` in the order `beta`, `compliance`, `gravity`,
-    /// `harmonics`/`harmonics2`, then each `h{n}q{j}` by joint and order, then `gp`
-    /// (`beta+compliance`, `gravity+harmonics+h12q1`, `harmonics+gp`).
-    pub fn name(&self) -> String {
-        let mut terms: Vec<String> = Vec::new();
-        if self.beta {
-            terms.push("beta".into());
-        }
-        if self.compliance {
-            terms.push("compliance".into());
-        }
-        if self.gravity {
-            terms.push("gravity".into());
-        }
-        match self.harmonics {
-            0 => {}
-            1 => terms.push("harmonics".into()),
-            _ => terms.push("harmonics2".into()),
-        }
-        for (j, bits) in self.orders.iter().enumerate() {
-            for n in 1..=MAX_HARMONIC_ORDER {
-                if bits & (1 << (n - 1)) != 0 {
-                    terms.push(format!("h{n}q{}", j + 1));
-                }
-            }
-        }
-        if self.gp {
-            terms.push("gp".into());
-        }
-        if terms.is_empty() {
-            "kinematic".into()
-        } else {
-            terms.join("+")
-        }
-    }
-
-    /// The robot to identify (for β, a `dh` robot as `dh_beta` with β = 0: the same
-    /// kinematics) and the parameters: those `identify` takes for measured data
-    /// ([`param_sets::identified_params_tool_first`]), plus the gravity joints' compliances
-    /// and the identifiable joint-angle harmonics and gravity-basis terms (harmonics first,
-    /// then the gravity basis, then the chosen orders), less the `fixed` ones. Fails when a
-    /// chosen order names a joint the robot does not have or one that is not revolute, or the
-    /// gravity basis is asked of a robot of fewer than four joints.
-    pub fn robot_and_params(
-        &self,
-        nominal: &Robot,
-        data: &Measurements,
-        registration: Registration,
-        fixed: &[Param],
-    ) -> Result<(Robot, Vec<Param>)> {
-        let robot = self.robot(nominal);
-        let with_base = registration == Registration::Identify;
-        let mut params =
-            param_sets::identified_params_tool_first(&robot, data.measure(), with_base);
-        if self.compliance {
-            params.extend(
-                CompliancePick::Gravity
-                    .params(&robot, "models")
-                    .map_err(|e| e.of_option(crate::error::Opt::Models))?,
-            );
-        }
-        let extra = self.terms(&robot)?;
-        if !extra.is_empty() {
-            params.extend(identifiable_extension(
-                &robot,
-                &params,
-                &extra,
-                data.measure(),
-            ));
-        }
-        params.retain(|p| !fixed.contains(p));
-        Ok((robot, params))
-    }
-
-    /// The robot whose parameters the model identifies: `nominal`, a `dh` robot read as
-    /// `dh_beta` (β = 0, the same kinematics) for a model with `beta`.
-    fn robot(&self, nominal: &Robot) -> Robot {
-        let mut robot = nominal.clone();
-        if self.beta && robot.convention == Convention::Dh {
-            robot.convention = Convention::DhBeta;
-        }
-        robot
-    }
-
-    /// The parameters the model offers that [`Model::robot_and_params`] leaves out of
-    /// `params` (its choice at the nominal robot): the kinematic parameters of the robot's
-    /// model not chosen (the base's only with the `identify` registration) and the harmonic
-    /// and gravity-basis terms not kept, in that order, less the `fixed` ones. Compliances
-    /// are never left out. These are the candidates that identifiability re-checked at the
-    /// identified robot may re-admit ([`super::recheck`]).
-    pub fn left_out(
-        &self,
-        nominal: &Robot,
-        registration: Registration,
-        fixed: &[Param],
-        params: &[Param],
-    ) -> Result<Vec<Param>> {
-        let robot = self.robot(nominal);
-        let with_base = registration == Registration::Identify;
-        let kinematic = robot
-            .params()
-            .into_iter()
-            .filter(|p| with_base || !matches!(p, Param::Base(_)));
-        Ok(kinematic
-            .chain(self.terms(&robot)?)
-            .filter(|p| !params.contains(p) && !fixed.contains(p) && !p.is_compliance())
-            .collect())
-    }
-
-    /// The harmonic and gravity-basis terms the model offers on `robot`, before the choice
-    /// of the identifiable ones: the harmonics of every revolute joint, the gravity basis,
-    /// then the chosen orders. Fails when a chosen order names a joint the robot does not
-    /// have or one that is not revolute, or the gravity basis is asked of a robot of fewer
-    /// than four joints.
-    fn terms(&self, robot: &Robot) -> Result<Vec<Param>> {
-        // Every revolute joint's terms that the poses of a generic set can tell apart from
-        // the kinematic parameters and from each other: joint 1's harmonics although θ1 is
-        // left to base.rz (a constant offset is, sin q1 and cos q1 are not), not the last
-        // joint's when the tool point lies on its axis.
-        let mut extra: Vec<Param> = Vec::new();
-        if self.harmonics > 0 {
-            let terms = 2 * usize::from(self.harmonics.min(2));
-            extra.extend(
-                (0..robot.dof())
-                    .filter(|&j| robot.joints[j].kind == JointType::Revolute)
-                    .flat_map(|j| (0..terms).map(move |k| Param::Harmonic(j, k))),
-            );
-        }
-        if self.gravity {
-            let basis = crate::robot::gravity_basis::params(robot);
-            if basis.is_empty() {
-                return Err(Error::option(
-                    crate::error::Opt::Models,
-                    format!(
-                        "`gravity`: robot \"{}\" has {} joints; the gravity basis needs an \
-                         elbow and a wrist centre (at least four joints)",
-                        robot.name,
-                        robot.dof()
-                    ),
-                ));
-            }
-            extra.extend(basis);
-        }
-        for (j, bits) in self.orders.iter().enumerate() {
-            for n in (1..=MAX_HARMONIC_ORDER).filter(|n| bits & (1 << (n - 1)) != 0) {
-                if j >= robot.dof() || robot.joints[j].kind != JointType::Revolute {
-                    return Err(Error::option(
-                        crate::error::Opt::Models,
-                        format!(
-                            "`h{n}q{}`: robot \"{}\" has no revolute joint {}",
-                            j + 1,
-                            robot.name,
-                            j + 1
-                        ),
-                    ));
-                }
-                for k in [2 * (n - 1), 2 * (n - 1) + 1] {
-                    if !extra.contains(&Param::Harmonic(j, k)) {
-                        extra.push(Param::Harmonic(j, k));
-                    }
-                }
-            }
-        }
-        Ok(extra)
-    }
-}
-
-impl FromStr for Model {
-    type Err = String;
-
-    /// `kinematic`, `beta`, `compliance`, `gravity` (the mass-free gravity basis),
-    /// `harmonics` (first harmonic), `harmonics2` (first and second), `h{n}q{j}` (the
-    /// harmonic of order n, 1 to 16, of joint j), `gp` (a kernel residual on the joint
-    /// angles), or terms joined by `+` (`beta+compliance`, `gravity+harmonics+h12q1`,
-    /// `harmonics+gp`).
-    fn from_str(s: &str) -> std::result::Result<Self, String> {
-        let mut m = Model::KINEMATIC;
-        for term in s.split('+').map(str::trim) {
-            match term {
-                "kinematic" => {}
-                "beta" => m.beta = true,
-                "compliance" => m.compliance = true,
-                "gravity" => m.gravity = true,
-                "harmonics" => m.harmonics = m.harmonics.max(1),
-                "harmonics2" => m.harmonics = 2,
-                "gp" => m.gp = true,
-                other => {
-                    let Some((n, j)) = order_term(other) else {
-                        return Err(format!(
-                            "unknown model term `{other}`; known: kinematic, beta, compliance, \
-                             gravity, harmonics, harmonics2, h{{n}}q{{j}} (order n of 1 to \
-                             {MAX_HARMONIC_ORDER} on joint j, `h12q1`), gp (a kernel residual); \
-                             joined by +)"
-                        ));
-                    };
-                    m.orders[j - 1] |= 1 << (n - 1);
-                }
-            }
-        }
-        Ok(m)
-    }
-}
-
-/// `h{n}q{j}`: the order n (1 to [`MAX_HARMONIC_ORDER`]) and the joint j (1 to
-/// [`MAX_JOINTS`]).
-fn order_term(term: &str) -> Option<(usize, usize)> {
-    let (n, j) = term.strip_prefix('h')?.split_once('q')?;
-    let plain =
-        |s: &str| !s.is_empty() && !s.starts_with('0') && s.bytes().all(|b| b.is_ascii_digit());
-    if !plain(n) || !plain(j) {
-        return None;
-    }
-    let (n, j): (usize, usize) = (n.parse().ok()?, j.parse().ok()?);
-    ((1..=MAX_HARMONIC_ORDER).contains(&n) && (1..=MAX_JOINTS).contains(&j)).then_some((n, j))
 }
 
 /// Each model's cross-validation on the same folds, and the index of the best (lowest CV
@@ -455,8 +234,15 @@ pub fn choose_model(
     let cvs = models
         .iter()
         .map(|m| {
-            let (robot, params) = m.robot_and_params(nominal, data, s.registration, s.fixed)?;
-            cross_validate((&robot, &params, m.name(), m.gp), data, k, s)
+            let (robot, params, candidates) = m.for_cv(nominal, data, s.registration, s.fixed)?;
+            let model = CvModel {
+                robot: &robot,
+                params: &params,
+                candidates: &candidates,
+                kernel: m.gp,
+                name: m.name(),
+            };
+            cross_validate(&model, data, k, s)
         })
         .collect::<Result<Vec<_>>>()?;
     let best = lowest(&cvs);
@@ -486,22 +272,11 @@ pub struct RepeatedChoice {
     /// The share of the seeds at which the chosen candidate also has the lowest CV RMS.
     #[serde(deserialize_with = "crate::numeric::nan::real")]
     pub stability: Real,
-    /// The chosen candidate's whole cross-validation at each fold seed (not written: `models`
-    /// holds its RMS), for the identification of the chosen model to reuse
-    /// ([`RepeatedChoice::chosen_at`]).
+    /// The chosen candidate's whole cross-validation at each fold seed, with its key (not
+    /// written: `models` holds its RMS), for the identification of the chosen model to take
+    /// when it runs one of the same setup ([`CvSetup::done`]).
     #[serde(skip)]
     pub chosen_cvs: Vec<CrossValidation>,
-}
-
-impl RepeatedChoice {
-    /// The chosen candidate's cross-validation at `fold_seed` on `folds` folds, when this
-    /// choice ran it.
-    pub fn chosen_at(&self, folds: usize, fold_seed: u64) -> Option<&CrossValidation> {
-        let i = self.fold_seeds.iter().position(|&s| s == fold_seed)?;
-        (folds == self.folds)
-            .then(|| self.chosen_cvs.get(i))
-            .flatten()
-    }
 }
 
 /// One candidate's cross-validation at every fold seed of a [`RepeatedChoice`].
@@ -546,6 +321,7 @@ pub fn choose_model_repeated(
             method: s.method,
             registration: s.registration,
             seed: s.seed,
+            done: s.done,
         };
         let (cvs, best) = choose_model(nominal, models, data, k, &setup)?;
         each.push(cvs.clone());
@@ -640,6 +416,7 @@ mod tests {
             seed: 0,
             fold_seed: 1,
             fixed: &[],
+            done: &[],
         };
         let (cvs, best) = choose_model(&nominal, &[Model::KINEMATIC], &data, 4, &s).unwrap();
         let cv = &cvs[best];
@@ -654,5 +431,77 @@ mod tests {
         let q = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
         assert!((robot.fk(&q).pos - nominal.fk(&q).pos).norm() < 1e-9);
         assert!(choose_model(&nominal, &[Model::KINEMATIC], &data, 1, &s).is_err());
+    }
+
+    /// A cross-validation already run stands for another only on the same setup: marked by
+    /// an RMS no computation gives, it is taken on an equal setup and not when the fold seed,
+    /// the method's seed, a method setting, the fixed parameters, the re-check's candidates or
+    /// one row differ.
+    #[test]
+    fn a_done_cross_validation_is_taken_only_on_the_same_setup() {
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let truth = nominal.with_errors(&[(Param::A(1), 0.4), (Param::Theta(2), 1e-3)]);
+        let mut g = stream(4, "cv-test");
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 40, &mut g);
+        let shift = crate::numeric::Vec3::new(0.01, 0.0, 0.0);
+        let data = Measurements {
+            points: qs.iter().map(|q| truth.fk(q).pos + shift).collect(),
+            qs,
+            ..Default::default()
+        };
+        let lm = crate::identify::method_by_name("lm").unwrap();
+        let mut table = toml::Table::new();
+        table.insert("name".into(), "lm".into());
+        table.insert("max_iter".into(), 7.into());
+        let lm7 = crate::identify::MethodSpec::from_table(&table).unwrap();
+        let setup = |method, seed, fold_seed, fixed| CvSetup {
+            method,
+            registration: Registration::Identify,
+            seed,
+            fold_seed,
+            fixed,
+            done: &[],
+        };
+        let run = |data: &Measurements, s: &CvSetup, recheck: bool, done: &[CrossValidation]| {
+            let (robot, params, candidates) = Model::KINEMATIC
+                .for_cv(&nominal, data, s.registration, s.fixed)
+                .unwrap();
+            assert!(!candidates.is_empty());
+            let m = CvModel {
+                robot: &robot,
+                params: &params,
+                candidates: if recheck { &candidates } else { &[] },
+                kernel: false,
+                name: "kinematic".into(),
+            };
+            let s = CvSetup {
+                done,
+                fixed: s.fixed,
+                ..*s
+            };
+            cross_validate(&m, data, 4, &s).unwrap()
+        };
+        let base = setup(&lm, 0, 0, &[]);
+        let mut marked = run(&data, &base, true, &[]);
+        assert!(marked.key.is_some());
+        marked.rms = -1.0;
+        let done = [marked];
+        assert_eq!(run(&data, &base, true, &done).rms, -1.0, "the same setup");
+        let mut moved = data.clone();
+        moved.points[17].x += 1e-9;
+        let fixed = [Param::D(3)];
+        let others = [
+            (setup(&lm, 0, 1, &[]), &data, true, "fold seed"),
+            (setup(&lm, 1, 0, &[]), &data, true, "seed"),
+            (setup(&lm7, 0, 0, &[]), &data, true, "max_iter"),
+            (setup(&lm, 0, 0, &fixed), &data, true, "fixed"),
+            (setup(&lm, 0, 0, &[]), &moved, true, "one row"),
+            (setup(&lm, 0, 0, &[]), &data, false, "no re-check"),
+        ];
+        for (s, d, recheck, what) in others {
+            let cv = run(d, &s, recheck, &done);
+            assert!(cv.rms > 0.0, "{what}");
+            assert_eq!(cv, run(d, &s, recheck, &[]), "{what}");
+        }
     }
 }

@@ -24,6 +24,7 @@
 pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
+pub mod fit;
 pub mod kernel;
 pub mod on_kind;
 pub mod pipeline;

@@ -12,6 +12,7 @@
 
 use super::cv::{self, Model};
 use super::diagnostics::{diagnose, Subject};
+use super::fit::fit_and_readmit;
 use super::kernel::{position_errors, KernelResidual};
 use super::on_kind::KindOutcome;
 use super::record::{IdentifiedRecord, PriorMove, Trace};
@@ -21,9 +22,9 @@ use super::verdict::{
     self, check_names, gross_reading, registration_warning, rms, worse_causes, worse_error,
     worse_warning,
 };
-use super::{calibrate, plausibility, recheck, Calibrated, RefitWeights, Registration};
+use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
-use crate::identify::{MethodSpec, Termination, TraceRecorder};
+use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
 use crate::robot::identifiability::{analyse, Identifiability};
@@ -150,44 +151,56 @@ impl IdentifyRequest {
             seed: self.seed,
             fold_seed: self.cv_seed,
             fixed: &self.fix,
+            done: self.cross_validated.as_deref().unwrap_or(&[]),
         };
         // With models the best model by CV is the one identified.
         let mut robot = nominal.clone();
         let mut choice = None;
-        let mut kernel_term = false;
+        let mut model = Model {
+            compliance: self.compliance.is_some(),
+            ..Model::KINEMATIC
+        };
         if !self.models.is_empty() {
             let folds = self.cv.unwrap_or(5);
-            let (cvs, best) = match &self.cross_validated {
-                Some(done) if done.len() == self.models.len() => {
-                    let best = cv::lowest(done);
-                    (done.clone(), best)
-                }
-                _ => cv::choose_model(nominal, &self.models, &d, folds, &setup)?,
-            };
-            (robot, params) =
-                self.models[best].robot_and_params(nominal, &d, registration, &self.fix)?;
-            kernel_term = self.models[best].gp;
+            let (cvs, best) = cv::choose_model(nominal, &self.models, &d, folds, &setup)?;
+            model = self.models[best];
+            (robot, params) = model.robot_and_params(nominal, &d, registration, &self.fix)?;
             choice = Some((cvs, best));
         }
         let nominal = robot;
+        let kernel_term = model.gp;
+        // The parameters left out at the nominal robot, re-checked at the identified one
+        // (not for a list of parameters given by name), in every fold of the
+        // cross-validation as in the final fit.
+        let candidates = if self.params.is_empty() {
+            model.left_out(&nominal, registration, &self.fix, &params)?
+        } else {
+            Vec::new()
+        };
         let cross = match (&choice, self.cv) {
             (Some((cvs, best)), _) => Some(cvs[*best].clone()),
             (None, Some(k)) => {
-                let model = Model {
-                    compliance: self.compliance.is_some(),
-                    ..Model::KINEMATIC
+                let model = cv::CvModel {
+                    robot: &nominal,
+                    params: &params,
+                    candidates: &candidates,
+                    kernel: false,
+                    name: model.name(),
                 };
-                let model = (&nominal, &params[..], model.name(), false);
-                Some(cv::cross_validate(model, &d, k, &setup)?)
+                Some(cv::cross_validate(&model, &d, k, &setup)?)
             }
             (None, None) => None,
         };
         // For real data `known` means the points are already in the base frame.
-        let mut recorder = TraceRecorder::default();
-        let mut traced = spec.clone();
-        traced.trace = Some(recorder.clone());
-        let mut c = calibrate_on(&nominal, &params, &d, registration, &traced, self.seed)
-            .map_err(|e| in_data(&self.source, e))?;
+        let mut recorders = Vec::new();
+        let mut fit = |params: &[Param]| {
+            let recorder = TraceRecorder::default();
+            let mut traced = spec.clone();
+            traced.trace = Some(recorder.clone());
+            recorders.push(recorder);
+            calibrate_on(&nominal, params, &d, registration, &traced, self.seed)
+                .map_err(|e| in_data(&self.source, e))
+        };
         let undetermined = |c: &Calibrated, params: &[Param]| {
             if verdict::undetermined(c) && !self.allow_rank_deficient {
                 let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
@@ -195,50 +208,10 @@ impl IdentifyRequest {
             }
             Ok(())
         };
-        undetermined(&c, &params)?;
-        // The parameters left out at the nominal robot, re-checked at the identified one
-        // (not for a list of parameters given by name).
-        let mut readmitted = None;
-        if self.params.is_empty() {
-            let model = choice.as_ref().map_or(
-                Model {
-                    compliance: self.compliance.is_some(),
-                    ..Model::KINEMATIC
-                },
-                |(_, best)| self.models[*best],
-            );
-            let candidates = model.left_out(&nominal, registration, &self.fix, &params)?;
-            let on = Subject {
-                nominal: &nominal,
-                params: &params,
-                data: &d,
-                calibrated: &c,
-                k: spec.k,
-                priors: &[],
-                validation: None,
-            };
-            let admitted = recheck::readmit(&on, registration, &candidates)?;
-            if !admitted.is_empty() {
-                let mut more = params.clone();
-                more.extend(admitted.iter().map(|a| a.0));
-                let again = TraceRecorder::default();
-                traced.trace = Some(again.clone());
-                let c2 = calibrate_on(&nominal, &more, &d, registration, &traced, self.seed)
-                    .map_err(|e| in_data(&self.source, e))?;
-                // A re-admission the identification cannot settle (it converged without and
-                // does not with) is given up: the parameters are not determined in practice.
-                let settled = c2.identified.termination == Termination::Converged
-                    || c.identified.termination != Termination::Converged;
-                if settled {
-                    undetermined(&c2, &more)?;
-                    readmitted = Some(recheck::Readmission {
-                        before_rms_residual_mm: c.identified.rms_residual,
-                        parameters: admitted.into_iter().map(|a| a.1).collect(),
-                    });
-                    (c, params, recorder) = (c2, more, again);
-                }
-            }
-        }
+        let on = (&nominal, &d, registration, spec.k);
+        let kept = fit_and_readmit(on, params, &candidates, &mut fit, &undetermined)?;
+        let recorder = recorders.swap_remove(kept.attempt);
+        let (c, params, readmitted) = (kept.calibrated, kept.params, kept.readmitted);
         // The kernel residual's second stage, on the calibration rows' residuals.
         let kernel = kernel_term
             .then(|| KernelResidual::fit(&nominal, &c, &d))

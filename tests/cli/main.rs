@@ -36,6 +36,7 @@ mod practice;
 mod precision;
 mod profiles;
 mod readmit;
+mod readmit_cv;
 mod realdata;
 mod record_keys;
 mod record_task;

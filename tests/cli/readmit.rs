@@ -44,6 +44,19 @@ pub(crate) fn write_data(file: &Path, errors: &[(Param, f64)], noise: f64, n: us
     });
 }
 
+/// The off-axis case's errors: [`ARM`], the tool point 5.8 mm off joint 6's axis and a
+/// harmonic error of joint 6 (`hs6`, `hc6`).
+pub(crate) fn off_axis_errors(hs: f64, hc: f64) -> Vec<(Param, f64)> {
+    let mut errors = ARM.to_vec();
+    errors.extend([
+        (Param::Tool(0), 5.0),
+        (Param::Tool(1), -3.0),
+        (Param::Harmonic(5, 0), hs),
+        (Param::Harmonic(5, 1), hc),
+    ]);
+    errors
+}
+
 /// `identify --robot irb2600 --method lm` of `cal` against `val`, with `extra` arguments,
 /// into `out` (it must succeed).
 pub(crate) fn identify_irb2600_lm(
@@ -75,7 +88,7 @@ fn identify(cal: &Path, val: &Path, extra: &[&str], out: &Path) -> serde_json::V
     load_json(&out.join("identified.json"))
 }
 
-fn names(id: &serde_json::Value) -> Vec<String> {
+pub(crate) fn names(id: &serde_json::Value) -> Vec<String> {
     id["parameters"]
         .as_array()
         .unwrap()
@@ -145,13 +158,7 @@ fn an_off_axis_tool_re_admits_the_last_joints_harmonics_and_recovers_them() {
     let d = tmp_dir("cli-readmit-off-axis");
     let (cal, val) = (d.join("cal.csv"), d.join("val.csv"));
     let (hs, hc) = (0.01, -0.005);
-    let mut errors = ARM.to_vec();
-    errors.extend([
-        (Param::Tool(0), 5.0),
-        (Param::Tool(1), -3.0),
-        (Param::Harmonic(5, 0), hs),
-        (Param::Harmonic(5, 1), hc),
-    ]);
+    let errors = off_axis_errors(hs, hc);
     write_data(&cal, &errors, 0.01, 200, 3);
     write_data(&val, &errors, 0.01, 40, 4);
     let out = d.join("h");

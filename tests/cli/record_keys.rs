@@ -37,6 +37,7 @@ fn keys_are_in_byte_order() {
         mean: 0.2,
         sd: 0.1,
         parameters: 24,
+        key: None,
     };
     let solve = Identified::plain(vec![0.1], 1, 1, Termination::Converged, 2);
     let r = IdentifiedRecord {

@@ -78,6 +78,7 @@ impl Task {
                 seed: 0,
                 fold_seed: 0,
                 fixed: &[],
+                done: &[],
             };
             Some(choose_model_repeated(
                 &robot,
@@ -92,22 +93,11 @@ impl Task {
         };
         let chosen = tm.candidates[choice.as_ref().map_or(0, |c| c.best)];
         let (mut q, val) = self.request(method, &[chosen])?;
-        // The identification cross-validates the chosen model on its folds (5, at its fold
-        // seed 0) with the choice's setup (the same method, registration, seed and rows): when
-        // the repeated choice ran those folds, it takes that cross-validation (the same
-        // figures, to the bit) instead of running a second one.
-        let same_setup = q.registration == crate::calibrate::Registration::Identify
-            && q.seed == 0
-            && q.fix.is_empty()
-            && q.priors.is_empty()
-            && q.k.is_none();
-        if !q.models.is_empty() && same_setup {
-            let folds = q.cv.unwrap_or(5);
-            q.cross_validated = choice
-                .as_ref()
-                .and_then(|c| c.chosen_at(folds, q.cv_seed))
-                .map(|cv| vec![cv.clone()]);
-        }
+        // The identification cross-validates the chosen model: it takes the repeated
+        // choice's cross-validation of it that ran on the same setup (the same key: model,
+        // method and settings, registration, seeds, folds and rows), if one did, instead of
+        // running it again.
+        q.cross_validated = choice.as_ref().map(|c| c.chosen_cvs.clone());
         let m = EntryModels {
             candidates: tm.candidates.clone(),
             fixed_by: "task",

@@ -1,0 +1,90 @@
+//! One fit of a tracker's identification, as `identify` runs it (docs/formats.md § 2.6.1,
+//! "Parameters re-checked at the identified robot"): calibrate the parameters chosen at the
+//! nominal robot, re-check at the identified robot those left out ([`super::recheck`]), and
+//! calibrate again with the re-admitted ones when the identification settles them. The final
+//! fit of [`super::pipeline`] and the fit of every fold of a cross-validation
+//! ([`super::cv::cross_validate`]) go through it, so a cross-validation measures the model
+//! that is finally identified, re-admitted parameters included.
+
+use super::diagnostics::Subject;
+use super::recheck::{self, Readmission};
+use super::{Calibrated, Registration};
+use crate::error::Result;
+use crate::identify::Termination;
+use crate::measurement::Measurements;
+use crate::numeric::Real;
+use crate::robot::{Param, Robot};
+
+/// The fit kept: its calibration, the parameters it identified (the re-admitted ones last)
+/// and what the re-check changed.
+pub struct Fit {
+    /// The calibration kept.
+    pub calibrated: Calibrated,
+    /// Its parameters, in the order of the estimate.
+    pub params: Vec<Param>,
+    /// The parameters re-admitted and the fit before them; `None`: the first fit is kept.
+    pub readmitted: Option<Readmission>,
+    /// Which call of the calibration was kept: 0 the first, 1 the one with the re-admitted
+    /// parameters.
+    pub attempt: usize,
+}
+
+/// What a fit is of: the nominal robot, the calibration rows, the registration and the
+/// orientation weight (mm per rad).
+pub type FitOn<'a> = (&'a Robot, &'a Measurements, Registration, Real);
+
+/// Calibrates `params` by `calibrate`, then re-checks `candidates` at the identified robot
+/// ([`recheck::readmit`]) and calibrates again with those re-admitted. A re-admission the
+/// identification cannot settle (the first fit converged and the second does not) is given
+/// up: the parameters are not determined in practice. `accept` may refuse each fit kept (the
+/// pipeline's refusal of undetermined data).
+pub fn fit_and_readmit(
+    (nominal, data, registration, k): FitOn,
+    params: Vec<Param>,
+    candidates: &[Param],
+    calibrate: &mut dyn FnMut(&[Param]) -> Result<Calibrated>,
+    accept: &dyn Fn(&Calibrated, &[Param]) -> Result<()>,
+) -> Result<Fit> {
+    let first = calibrate(&params)?;
+    accept(&first, &params)?;
+    let keep = |calibrated, params| Fit {
+        calibrated,
+        params,
+        readmitted: None,
+        attempt: 0,
+    };
+    if candidates.is_empty() {
+        return Ok(keep(first, params));
+    }
+    let on = Subject {
+        nominal,
+        params: &params,
+        data,
+        calibrated: &first,
+        k,
+        priors: &[],
+        validation: None,
+    };
+    let admitted = recheck::readmit(&on, registration, candidates)?;
+    if admitted.is_empty() {
+        return Ok(keep(first, params));
+    }
+    let mut more = params.clone();
+    more.extend(admitted.iter().map(|a| a.0));
+    let second = calibrate(&more)?;
+    let settled = second.identified.termination == Termination::Converged
+        || first.identified.termination != Termination::Converged;
+    if !settled {
+        return Ok(keep(first, params));
+    }
+    accept(&second, &more)?;
+    Ok(Fit {
+        readmitted: Some(Readmission {
+            before_rms_residual_mm: first.identified.rms_residual,
+            parameters: admitted.into_iter().map(|a| a.1).collect(),
+        }),
+        calibrated: second,
+        params: more,
+        attempt: 1,
+    })
+}
