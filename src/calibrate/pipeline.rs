@@ -221,8 +221,13 @@ impl IdentifyRequest {
             if !admitted.is_empty() {
                 let mut more = params.clone();
                 more.extend(admitted.iter().map(|a| a.0));
+                // Started at the identified robot, where the re-check found them determined:
+                // at the nominal one their columns vanish and a Gauss–Newton step in them is
+                // unbounded (the ridge's and the robust ridge's, which do not damp it).
                 let again = TraceRecorder::default();
                 traced.trace = Some(again.clone());
+                traced.start = c.identified.x.iter().copied().collect();
+                traced.start.resize(more.len(), 0.0);
                 let c2 = calibrate_on(&nominal, &more, &d, registration, &traced, self.seed)
                     .map_err(|e| in_data(&self.source, e))?;
                 // A re-admission the identification cannot settle (it converged without and
