@@ -180,15 +180,25 @@ pub fn cross_validate(
         let (test, train): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| fold[i] == f);
         let (tr, te) = (subset(data, &train), subset(data, &test));
         let on = (robot, &tr, s.registration, s.method.k);
-        let mut fit = |p: &[Param]| {
+        let mut fit = |p: &[Param], start: &[Real]| {
             let mut rng = stream(s.seed, "identify");
+            let started;
+            let method = if start.is_empty() {
+                s.method
+            } else {
+                started = MethodSpec {
+                    start: start.to_vec(),
+                    ..s.method.clone()
+                };
+                &started
+            };
             calibrate(
                 robot,
                 p,
                 &tr,
                 s.registration,
                 &Frame::identity(),
-                s.method,
+                method,
                 &mut rng,
             )
         };

@@ -33,8 +33,13 @@ pub struct Fit {
 /// orientation weight (mm per rad).
 pub type FitOn<'a> = (&'a Robot, &'a Measurements, Registration, Real);
 
-/// Calibrates `params` by `calibrate`, then re-checks `candidates` at the identified robot
-/// ([`recheck::readmit`]) and calibrates again with those re-admitted. A re-admission the
+/// Calibrates `params` by `calibrate` (its second argument: where the Jacobian methods
+/// start, [`crate::identify::MethodSpec::start`]; empty, at the nominal robot), then
+/// re-checks `candidates` at the identified robot ([`recheck::readmit`]) and calibrates again
+/// with those re-admitted, started at the identified robot with the re-admitted errors at 0:
+/// at the nominal robot, where they were left out, their columns vanish and a Gauss–Newton
+/// step in them is unbounded (the ridge's and the robust ridge's, which do not damp it). A
+/// re-admission the
 /// identification cannot settle (the first fit converged and the second does not) is given
 /// up: the parameters are not determined in practice. `accept` may refuse each fit kept (the
 /// pipeline's refusal of undetermined data).
@@ -42,10 +47,10 @@ pub fn fit_and_readmit(
     (nominal, data, registration, k): FitOn,
     params: Vec<Param>,
     candidates: &[Param],
-    calibrate: &mut dyn FnMut(&[Param]) -> Result<Calibrated>,
+    calibrate: &mut dyn FnMut(&[Param], &[Real]) -> Result<Calibrated>,
     accept: &dyn Fn(&Calibrated, &[Param]) -> Result<()>,
 ) -> Result<Fit> {
-    let first = calibrate(&params)?;
+    let first = calibrate(&params, &[])?;
     accept(&first, &params)?;
     let keep = |calibrated, params| Fit {
         calibrated,
@@ -71,7 +76,9 @@ pub fn fit_and_readmit(
     }
     let mut more = params.clone();
     more.extend(admitted.iter().map(|a| a.0));
-    let second = calibrate(&more)?;
+    let mut start: Vec<Real> = first.identified.x.iter().copied().collect();
+    start.resize(more.len(), 0.0);
+    let second = calibrate(&more, &start)?;
     let settled = second.identified.termination == Termination::Converged
         || first.identified.termination != Termination::Converged;
     if !settled {

@@ -229,6 +229,7 @@ pub fn calibrate_weighing(
         let mut problem = CalibrationProblem::new(nominal, params, data, frame, method.k);
         problem.priors.clone_from(&precisions);
         problem.trace.clone_from(&method.trace);
+        problem.start.clone_from(&method.start);
         let mut identified = method.method.identify(&problem, rng)?;
         crate::identify::robot::assess(&problem, &mut identified)?;
         let robot = problem.robot_with(identified.x.as_slice());

@@ -193,10 +193,11 @@ impl IdentifyRequest {
         };
         // For real data `known` means the points are already in the base frame.
         let mut recorders = Vec::new();
-        let mut fit = |params: &[Param]| {
+        let mut fit = |params: &[Param], start: &[Real]| {
             let recorder = TraceRecorder::default();
             let mut traced = spec.clone();
             traced.trace = Some(recorder.clone());
+            traced.start = start.to_vec();
             recorders.push(recorder);
             calibrate_on(&nominal, params, &d, registration, &traced, self.seed)
                 .map_err(|e| in_data(&self.source, e))

@@ -34,8 +34,9 @@
 //! (by chance, 0.27 % of the time). Candidates are taken in order and each is checked with
 //! those re-admitted before it. Registration by `svd` or `wsvd` estimates the frame apart: its
 //! six degrees of freedom enter the bound as the base parameters. The pipeline then identifies
-//! again with them ([`super::pipeline`]), and gives the re-admission up when that
-//! identification does not converge although the first did.
+//! again with them ([`super::pipeline`]), started at the identified robot (at the nominal one
+//! their columns vanish and a Gauss–Newton step in them is unbounded), and gives the
+//! re-admission up when that identification does not converge although the first did.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -161,16 +162,15 @@ fn unit_noise(data: &Measurements, sigma0: Real) -> Real {
 /// added. That is the row's own weight when the fit weighed each row on its own (IGG3 with
 /// `per = "coordinate"`: a gross coordinate at 0, its point's other rows kept), else its
 /// point's: the file's weight times a robust method's. A fit that reports no weights of its
-/// own (every weight 1: the searches, external methods, and every solver on unweighted data
-/// that rejected nothing) weighed the rows by the file's weights (1 without `sigma_mm`).
+/// own ([`Identified::own_weights`] false: the searches, external methods) weighed the rows
+/// by the file's weights (1 without `sigma_mm`).
 fn row_weights(data: &Measurements, fitted: &Identified, rows: usize) -> Vec<Real> {
     if let Some(w) = &fitted.row_weights {
         if w.len() == data.len() * rows {
             return w.clone();
         }
     }
-    let own = fitted.weights.len() == data.len() && fitted.weights.iter().any(|&w| w != 1.0);
-    let point = if own {
+    let point = if fitted.own_weights && fitted.weights.len() == data.len() {
         fitted.weights.clone()
     } else {
         data.weights().unwrap_or_else(|| vec![1.0; data.len()])
@@ -204,7 +204,7 @@ fn normal(robot: &Robot, params: &[Param], id: &Subject) -> Result<(DMatrix<Real
 mod tests {
     use super::*;
     use crate::calibrate::calibrate;
-    use crate::identify::MethodSpec;
+    use crate::identify::{MethodSpec, Termination};
     use crate::numeric::rng::stream;
     use crate::numeric::Frame;
     use crate::robot::{builtin, sampling::uniform_joint_poses};
@@ -245,6 +245,12 @@ mod tests {
             qs,
             ..Default::default()
         }
+    }
+
+    /// `d` with standard deviations of 0.01 to 0.04 mm (`sigma_mm`): weights 1/σ² unlike.
+    fn with_sigma(mut d: Measurements) -> Measurements {
+        d.sigma_mm = Some((0..d.len()).map(|i| 0.01 * (1 + i % 4) as Real).collect());
+        d
     }
 
     fn fit(d: &Measurements, method: &str) -> crate::calibrate::Calibrated {
@@ -357,12 +363,7 @@ mod tests {
     /// weight, those below 1 too.
     #[test]
     fn the_files_weights_are_the_re_checks_under_a_method_that_does_not_reweigh() {
-        let mut d = data(0.0);
-        d.sigma_mm = Some(
-            (0..d.len())
-                .map(|i| 0.01 * (1.0 + (i % 4) as Real))
-                .collect(),
-        );
+        let d = with_sigma(data(0.0));
         let c = fit(&d, "name = \"lm\"");
         let w = d.weights().unwrap();
         assert!(w.iter().any(|&v| v < 0.5) && w.iter().any(|&v| v > 1.0));
@@ -370,5 +371,116 @@ mod tests {
         let (n, _) = rechecked(&c, &d);
         let (want, _) = dense(&c, &d, &p);
         assert!(close(&n, &want), "{n} against {want}");
+    }
+
+    /// The fit says whose its point weights are ([`Identified::own_weights`]); the re-check no
+    /// longer guesses it from whether any weight differs from 1. A fit that weighed every
+    /// point alike on a file with `sigma_mm` (own weights, all 1) is re-checked with those,
+    /// where the guess took the file's; a fit that reports no weights of its own (a search:
+    /// `weights` all 1) is re-checked with the file's.
+    #[test]
+    fn the_fit_says_whether_its_point_weights_are_its_own() {
+        let d = with_sigma(data(0.0));
+        let mut c = fit(&d, "name = \"lm\"");
+        assert!(c.identified.own_weights);
+        let file: Vec<Real> = d.weights().unwrap().iter().flat_map(|&v| [v; 3]).collect();
+        let ones = vec![1.0; file.len()];
+        c.identified.weights = vec![1.0; d.len()];
+        for (own, p) in [(true, &ones), (false, &file)] {
+            c.identified.own_weights = own;
+            let (n, _) = rechecked(&c, &d);
+            let (want, _) = dense(&c, &d, p);
+            assert!(close(&n, &want), "own {own}: {n} against {want}");
+            let (other, _) = dense(&c, &d, if own { &file } else { &ones });
+            assert!(!close(&n, &other), "own {own}");
+        }
+    }
+
+    /// The second fit's start: joint 6's harmonics, whose columns vanish at the nominal robot
+    /// (its tool point on joint 6's axis: their `JᵀPJ` diagonal is at the rounding level)
+    /// but not at a robot whose tool sits 5.8 mm off that axis. From the nominal robot the
+    /// robust ridge's first Gauss–Newton step in them is unbounded (neither the data nor the
+    /// ridge, scaled there, hold it) and its iterations do not settle within their limit; from
+    /// the first fit's estimate (the identified robot, the harmonics at 0), where the
+    /// re-check found them determined, they converge to the injected values within 3σ, per
+    /// point and per coordinate alike.
+    #[test]
+    fn a_second_fit_from_the_identified_robot_settles_what_one_from_nominal_cannot() {
+        let (hs, hc) = (0.01, -0.005);
+        let robot = builtin::irb2600();
+        let tool = [Param::Tool(0), Param::Tool(1), Param::Tool(2)];
+        let mut errors: Vec<(Param, Real)> =
+            PARAMS.iter().copied().zip([0.5, 1e-3, 0.3, 5e-4]).collect();
+        errors.extend([(tool[0], 5.0), (tool[1], -3.0)]);
+        errors.extend([(Param::Harmonic(5, 0), hs), (Param::Harmonic(5, 1), hc)]);
+        let truth = robot.with_errors(&errors);
+        let chain = truth.chain();
+        let mut g = stream(6, "recheck-start");
+        let qs = uniform_joint_poses(&robot, 100, &mut g);
+        let points = qs
+            .iter()
+            .map(|q| {
+                let mut p = crate::robot::loaded::loaded_fk(&truth, &chain, q, 0.0)
+                    .unwrap()
+                    .pos;
+                for k in 0..3 {
+                    p[k] += g.random_range(-0.005..0.005);
+                }
+                p
+            })
+            .collect();
+        let d = Measurements {
+            points,
+            qs,
+            ..Default::default()
+        };
+        let first: Vec<Param> = PARAMS.iter().chain(&tool).copied().collect();
+        let second: Vec<Param> = first
+            .iter()
+            .copied()
+            .chain([Param::Harmonic(5, 0), Param::Harmonic(5, 1)])
+            .collect();
+        for per in ["point", "coordinate"] {
+            let toml = format!("name = \"igg3\"\nper = \"{per}\"");
+            let mut spec = MethodSpec::from_table(&toml::from_str(&toml).unwrap()).unwrap();
+            let run = |params: &[Param], spec: &MethodSpec| {
+                let mut rng = stream(0, "identify");
+                let (known, frame) = (Registration::Known, Frame::identity());
+                calibrate(&robot, params, &d, known, &frame, spec, &mut rng).unwrap()
+            };
+            let c1 = run(&first, &spec);
+            assert_eq!(c1.identified.termination, Termination::Converged, "{per}");
+            // At the nominal robot the harmonics' columns are 0 to rounding.
+            let nominal = CalibrationProblem::new(&robot, &second, &d, Frame::identity(), 1.0);
+            let rp = RobotProblem::of(&nominal).unwrap();
+            let (mut r, mut j) = (
+                DVector::zeros(rp.size().rows()),
+                DMatrix::zeros(rp.size().rows(), second.len()),
+            );
+            rp.evaluate(&DVector::zeros(second.len()), &mut r, &mut j);
+            let t = second.len();
+            assert!(j.column(t - 1).norm() < 1e-9 * j.column(0).norm(), "{per}");
+            let from_nominal = run(&second, &spec);
+            assert_eq!(
+                from_nominal.identified.termination,
+                Termination::MaxIterations,
+                "{per}"
+            );
+            spec.start = c1.identified.x.iter().copied().chain([0.0, 0.0]).collect();
+            let c2 = run(&second, &spec);
+            let id = &c2.identified;
+            assert_eq!(id.termination, Termination::Converged, "{per}");
+            let cov = id.covariance();
+            for (k, want) in [(t - 2, hs), (t - 1, hc)] {
+                let sigma = cov[(k, k)].sqrt();
+                assert!(sigma < 1e-3, "{per}: σ {sigma}");
+                assert!(
+                    (id.x[k] - want).abs() <= 3.0 * sigma,
+                    "{per}: {} against {want} (σ {sigma})",
+                    id.x[k]
+                );
+            }
+            assert!(id.rms_residual < 0.5 * c1.identified.rms_residual, "{per}");
+        }
     }
 }

@@ -39,6 +39,6 @@ impl Solver for LsOptions {
     }
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
-        gauss_newton(p, x0, self.eps, self.max_iter, None, None)
+        gauss_newton(p, (x0, x0), self.eps, self.max_iter, None, None)
     }
 }

@@ -164,6 +164,11 @@ pub struct Identified {
     /// on its own (IGG3 with `per = "coordinate"`); `None` when every row has its point's
     /// weight ([`Identified::weights`]).
     pub row_weights: Option<Vec<Real>>,
+    /// Whether [`Identified::weights`] are what the fit weighed its points by (the Jacobian
+    /// methods: the prior weights, times the robust ones); false for a method that reports
+    /// none (the searches and external methods: `weights` are then 1, and the points were
+    /// weighed by the problem's prior weights, [`CalibrationProblem::weights`]).
+    pub own_weights: bool,
     /// Numerical rank of the column-scaled, weighted Jacobian at the solution
     /// ([`solver::rank`], [`solver::RANK_TOLERANCE`]); `None` when not computed.
     pub rank: Option<usize>,
@@ -240,6 +245,7 @@ impl Identified {
             trace: None,
             weights: vec![1.0; points],
             row_weights: None,
+            own_weights: false,
             normal: DMatrix::zeros(0, 0),
             sigma0: Real::NAN,
             rms_residual: Real::NAN,
@@ -280,6 +286,11 @@ pub struct CalibrationProblem<'a> {
     /// Records the RMS point residual (mm) of each evaluation of the kinematic least squares
     /// ([`MethodSpec::trace`]); `None`: not recorded.
     pub trace: Option<TraceRecorder>,
+    /// The errors of `params` the Jacobian methods start from; empty: 0, the nominal robot.
+    /// The ridge's penalty and the priors stay towards 0 ([`solver::solve_from`]); the
+    /// searches ignore it. A second fit with parameters re-admitted at the identified robot
+    /// starts there ([`crate::calibrate::recheck`]).
+    pub start: Vec<Real>,
 }
 
 /// A shared record of the RMS point residual per evaluation (`identify`'s convergence trace).
@@ -308,6 +319,7 @@ impl<'a> CalibrationProblem<'a> {
             weights: data.weights(),
             priors: Vec::new(),
             trace: None,
+            start: Vec::new(),
         }
     }
 

@@ -128,6 +128,9 @@ pub struct MethodSpec {
     /// Where the Jacobian methods record the RMS point residual of each evaluation
     /// (`identify`'s convergence trace); `None`: not recorded.
     pub trace: Option<super::TraceRecorder>,
+    /// Where the Jacobian methods start ([`super::CalibrationProblem::start`]); empty: at the
+    /// nominal robot.
+    pub start: Vec<Real>,
 }
 
 impl MethodSpec {
@@ -189,6 +192,7 @@ impl MethodSpec {
             method,
             priors,
             trace: None,
+            start: Vec::new(),
         })
     }
 
@@ -227,6 +231,7 @@ impl MethodSpec {
             method: Arc::new(method),
             priors: Vec::new(),
             trace: None,
+            start: Vec::new(),
         }
     }
 

@@ -2,7 +2,8 @@
 //!
 //! Iteration k solves `(JᵀPJ + ξ_k D) δx = JᵀP E − ξ_k D (x − x0)` (the Gauss–Newton step of
 //! the ridge objective `EᵀPE + ξ (x − x0)ᵀ D (x − x0)`; from `x0` it is Li's eq. 14). With
-//! [`RidgeOptions::scale`] `D = diag(JᵀPJ)` at `x0`, i.e. ξ acts on the column-scaled problem
+//! [`RidgeOptions::scale`] `D = diag(JᵀPJ)` at the start (`x0`, or a second fit's start:
+//! [`super::solver::solve_from`]), i.e. ξ acts on the column-scaled problem
 //! `A = P^½ J D^-½` whose columns have unit norm, so one ξ means the same for mm and rad
 //! columns; without it `D = I` (Li's literal form, ξ in the units of `JᵀPJ`). ξ is fixed or
 //! chosen anew at every iteration by one of the rules of [`super::xi`].
@@ -10,7 +11,7 @@
 use nalgebra::DVector;
 use serde::{Deserialize, Serialize};
 
-use super::solver::{check_stop, gauss_newton, LeastSquares, RidgeCfg, Solver};
+use super::solver::{check_stop, gauss_newton, Column, LeastSquares, RidgeCfg, Solver};
 use super::xi::XiRule;
 use super::Identified;
 use crate::error::Result;
@@ -62,6 +63,10 @@ impl Solver for RidgeOptions {
     }
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
-        gauss_newton(p, x0, self.eps, self.max_iter, Some(self.cfg()), None)
+        self.run_from(p, (x0, x0))
+    }
+
+    fn run_from(&self, p: &dyn LeastSquares, from: (&Column, &Column)) -> Identified {
+        gauss_newton(p, from, self.eps, self.max_iter, Some(self.cfg()), None)
     }
 }

@@ -13,7 +13,7 @@ use std::cell::RefCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::solver::{
-    self, rank, solve, start_weights, Column, LeastSquares, Matrix, Size, Solver, Work,
+    self, rank, solve, solve_from, start_weights, Column, LeastSquares, Matrix, Size, Solver, Work,
 };
 use super::{CalibrationProblem, Identified, Method, Termination};
 use crate::error::Error;
@@ -478,7 +478,11 @@ pub fn identify_robot(
     problem: &CalibrationProblem,
 ) -> crate::Result<Identified> {
     let rp = RobotProblem::of(problem)?;
-    Ok(solve(solver, &rp, &DVector::zeros(problem.params.len())))
+    let x0 = DVector::zeros(problem.params.len());
+    Ok(match &problem.start[..] {
+        [] => solve(solver, &rp, &x0),
+        s => solve_from(solver, &rp, (&x0, &DVector::from_column_slice(s))),
+    })
 }
 
 /// Fills in what a method that does not form `JᵀPJ` (the searches)

@@ -102,14 +102,25 @@ impl Solver for RobustOptions {
     }
 
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
+        self.run_from(p, (x0, x0))
+    }
+
+    fn run_from(&self, p: &dyn LeastSquares, from: (&Column, &Column)) -> Identified {
         let r = &self.ridge;
         match self.robust.per {
-            Per::Point => gauss_newton(p, x0, r.eps, r.max_iter, Some(r.cfg()), Some(&self.robust)),
+            Per::Point => gauss_newton(
+                p,
+                from,
+                r.eps,
+                r.max_iter,
+                Some(r.cfg()),
+                Some(&self.robust),
+            ),
             Per::Coordinate => {
                 let rows = Rows::of(p);
                 let out = gauss_newton(
                     &rows,
-                    x0,
+                    from,
                     r.eps,
                     r.max_iter,
                     Some(r.cfg()),

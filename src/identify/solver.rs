@@ -146,6 +146,11 @@ pub trait Solver: std::fmt::Debug + Send + Sync {
     fn check(&self) -> Result<()>;
     /// Runs from `x0` on a problem [`solve`] has checked.
     fn run(&self, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified;
+    /// Runs from `start` of `(x0, start)` on a problem [`solve_from`] has checked; `x0` stays
+    /// the point a ridge penalises towards. A method without one runs from `start`.
+    fn run_from(&self, p: &dyn LeastSquares, (_, start): (&Column, &Column)) -> Identified {
+        self.run(p, start)
+    }
     /// See [`super::Method::tolerates_rank_deficiency`].
     fn tolerates_rank_deficiency(&self) -> bool {
         false
@@ -170,10 +175,21 @@ pub(crate) fn check_stop(eps: Real, max_iter: usize) -> Result<()> {
 /// Never panics on bad input: inconsistent sizes, a non-finite start or invalid options give
 /// [`Termination::InvalidInput`] with `x = x0`.
 pub fn solve(solver: &dyn Solver, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
-    if check_problem(p, x0).is_some() || solver.check().is_err() {
+    solve_from(solver, p, (x0, x0))
+}
+
+/// [`solve`] from `start` of `(x0, start)` ([`Solver::run_from`]): a second fit started where
+/// its parameters are determined, `x0` (the nominal robot) staying the ridge's point.
+pub fn solve_from(
+    solver: &dyn Solver,
+    p: &dyn LeastSquares,
+    from: (&Column, &Column),
+) -> Identified {
+    let (x0, start) = from;
+    if check_problem(p, x0).or(check_problem(p, start)).is_some() || solver.check().is_err() {
         return invalid(p, x0);
     }
-    solver.run(p, x0)
+    solver.run_from(p, from)
 }
 
 fn check_problem(p: &dyn LeastSquares, x0: &DVector<Real>) -> Option<&'static str> {
@@ -202,6 +218,7 @@ fn invalid(p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
         termination: Termination::InvalidInput,
         weights: start_weights(p),
         row_weights: None,
+        own_weights: true,
         normal: DMatrix::from_element(t, t, Real::NAN),
         sigma0: Real::NAN,
         rms_residual: Real::NAN,
@@ -510,7 +527,8 @@ enum Phase {
 /// Gauss–Newton step of `EᵀPE + ξ (x − x0)ᵀ D (x − x0)`. From `x = x0` this is exactly Li's
 /// eq. 14; the penalty on the total `x − x0` (rather than on each increment) keeps the
 /// shrinkage when the iterations converge, instead of relaxing to the least-squares answer.
-/// `D = diag(JᵀPJ)` at `x0` (column scaling, so ξ is relative to unit-norm columns) or `I`.
+/// `D = diag(JᵀPJ)` at `start` (column scaling, so ξ is relative to unit-norm columns) or `I`.
+/// The iterations start at `start`, `x0` but for a re-admission's fit (docs/formats.md § 2.6.1).
 ///
 /// With robust weights the iterations run in three phases, all in one loop:
 /// 1. the points keep their prior weights until the step falls below [`SWITCH_STEP`] (the
@@ -538,7 +556,7 @@ enum Phase {
 /// it); the refit gives that back while the gross errors (u > k1) stay out.
 pub(crate) fn gauss_newton(
     p: &dyn LeastSquares,
-    x0: &DVector<Real>,
+    (x0, start): (&DVector<Real>, &DVector<Real>),
     eps: Real,
     max_iter: usize,
     ridge: Option<RidgeCfg>,
@@ -548,7 +566,7 @@ pub(crate) fn gauss_newton(
     let mut work = Work::new(p);
     let mut w = start_weights(p);
     let mut w_prev = w.clone();
-    let mut x = x0.clone();
+    let mut x = start.clone();
     let mut d = DVector::from_element(t, 1.0);
     let mut dev = DVector::zeros(t);
     let mut sort_buf: Vec<Real> = Vec::with_capacity(work.r.len());

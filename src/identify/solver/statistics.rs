@@ -58,6 +58,7 @@ pub(crate) fn finish(
         termination,
         weights,
         row_weights: None,
+        own_weights: true,
         normal: work.n.clone(),
         sigma0,
         rms_residual,
