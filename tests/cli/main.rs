@@ -37,6 +37,7 @@ mod precision;
 mod profiles;
 mod readmit;
 mod realdata;
+mod record_formats;
 mod record_keys;
 mod record_task;
 mod records;
