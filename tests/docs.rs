@@ -518,36 +518,6 @@ fn declared_rust_version_covers_every_dependency() {
     );
 }
 
-/// The committed output that REPRODUCTION.md's eq. 17 table quotes is what its command writes
-/// today, byte for byte (`gcn_blocks.json` is compared by the CLI test that runs its command;
-/// the study summaries take minutes in a debug build and are checked number by number by
-/// `numbers.rs`).
-#[test]
-fn the_committed_eq17_output_is_what_its_command_writes() {
-    let dir = scratch("committed");
-    let out = dir.join("eq17");
-    let o = calbench(
-        &[
-            "poses",
-            "scenarios/li2018-irb2600.toml",
-            "--strategy",
-            "random",
-            "--out",
-            out.to_str().unwrap(),
-        ],
-        root(),
-    );
-    assert!(o.status.success(), "{}", text(&o));
-    let committed = root().join("results/reproduction/li2018/eq17/scores.json");
-    assert_eq!(
-        std::fs::read_to_string(out.join("scores.json")).unwrap(),
-        std::fs::read_to_string(&committed).unwrap(),
-        "{} is not what poses --strategy random writes",
-        committed.display()
-    );
-    std::fs::remove_dir_all(&dir).unwrap();
-}
-
 #[path = "docs/numbers.rs"]
 mod numbers;
 

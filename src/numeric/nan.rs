@@ -8,11 +8,6 @@ use serde::{Deserialize, Deserializer};
 
 use super::Real;
 
-/// NaN: the value of a number a document lacks (`#[serde(default = "…::nan::missing")]`).
-pub fn missing() -> Real {
-    Real::NAN
-}
-
 /// A number, or `null` as NaN. Read as what the document holds (a format that writes NaN as
 /// a number, as RON in `records.txt` does, gives it back unchanged).
 pub fn real<'de, D: Deserializer<'de>>(d: D) -> Result<Real, D::Error> {

@@ -30,14 +30,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
+use crate::runner::shard::FormatOnly;
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::reporter::Reporter;
 use crate::study::stats::precision::Precision;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
-/// The `format` of `checkpoint.json`.
-const FORMAT: &str = "calbench-checkpoint-5";
+/// The `format` of `checkpoint.json`, and so of its `records.txt`: the records of
+/// [`crate::runner::shard::FORMAT`] (docs/formats.md § 7.3.1), a new one with each of its.
+pub const FORMAT: &str = "calbench-checkpoint-6";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -168,8 +170,8 @@ impl Checkpoint {
                 ),
             )
         })?;
-        let mut meta: Meta = serde_json::from_str(&text)
-            .map_err(|e| Error::file(&path, "checkpoint.json", e.to_string()))?;
+        let parse = |e: serde_json::Error| Error::file(&path, "checkpoint.json", e.to_string());
+        let head: FormatOnly = serde_json::from_str(&text).map_err(parse)?;
         let refuse = |what: &str, had: String, now: String| {
             Error::file(
                 &path,
@@ -180,9 +182,10 @@ impl Checkpoint {
                 ),
             )
         };
-        if meta.format != FORMAT {
-            return Err(refuse("format", meta.format, FORMAT.into()));
+        if head.format != FORMAT {
+            return Err(refuse("format", head.format, FORMAT.into()));
         }
+        let mut meta: Meta = serde_json::from_str(&text).map_err(parse)?;
         let version = env!("CARGO_PKG_VERSION");
         if meta.version != version {
             return Err(refuse(

@@ -23,8 +23,11 @@ use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
-/// The `format` of `shard.json`.
-const FORMAT: &str = "calbench-shard-7";
+/// The `format` of `shard.json`, and so of its `records.txt` (docs/formats.md § 7.3): a new one
+/// whenever what a record or `shard.json` holds changes, so that `merge` refuses a shard of an
+/// earlier calbench instead of reading it with a field missing (tests/cli/record_formats.rs
+/// fixes each format's keys).
+pub const FORMAT: &str = "calbench-shard-8";
 
 /// One block of a shard.
 #[derive(Serialize, Deserialize)]
@@ -47,10 +50,9 @@ struct ShardMeta {
     /// The records in `records.txt`: `units.1 - units.0`.
     records: u64,
     seconds: f64,
-    /// The machine that ran the shard (absent in shards written before it was recorded);
-    /// `merge` does not compare it: shards of one run are meant to run on different machines.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    machine: Option<Machine>,
+    /// The machine that ran the shard; `merge` does not compare it: shards of one run are
+    /// meant to run on different machines.
+    machine: Machine,
     blocks: Vec<ShardBlock>,
 }
 
@@ -118,7 +120,7 @@ impl Records {
             units: shard.range(sc.units()),
             records: self.count,
             seconds,
-            machine: Some(Machine::here()),
+            machine: Machine::here(),
             blocks,
         };
         let meta = Text {
@@ -144,6 +146,13 @@ impl TrialSink for Records {
     }
 }
 
+/// The `format` of a document, read first: a file of another format is refused by its format,
+/// not by the first field it lacks.
+#[derive(Deserialize)]
+pub(crate) struct FormatOnly {
+    pub(crate) format: String,
+}
+
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
     let path = dir.join("shard.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
@@ -153,16 +162,21 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
             format!("not a shard folder of `calbench run --shard` ({e})"),
         )
     })?;
-    let meta: ShardMeta =
+    let head: FormatOnly =
         serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;
-    if meta.format != FORMAT {
+    if head.format != FORMAT {
         return Err(Error::file(
             &path,
             "format",
-            format!("\"{}\", expected \"{FORMAT}\"", meta.format),
+            format!(
+                "\"{}\", expected \"{FORMAT}\": the shard was written by another calbench, \
+                 whose records this one does not read; run the shard again with this calbench \
+                 (the same `calbench run … --shard I/N`)",
+                head.format
+            ),
         ));
     }
-    Ok(meta)
+    serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))
 }
 
 /// The commands that run the shards missing from `by_index` (one line each): the scenario

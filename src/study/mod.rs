@@ -157,11 +157,9 @@ pub struct BlockInfo {
     pub true_compliance: Option<serde_json::Value>,
     /// Whether a method was supplied from outside the scenario file
     /// ([`crate::identify::external`]): `trials.csv` then records each failure's message.
-    #[serde(default)]
     pub external: bool,
     /// Whether a method is a search (BAS, PSO, BAS-PSO): `trials.csv` then has the column
     /// `final_fitness`.
-    #[serde(default)]
     pub searches: bool,
 }
 

@@ -58,7 +58,6 @@ pub struct SearchRun {
     pub at_budget: [Real; BUDGET_FRACTIONS.len()],
     /// Its best fitness at the end of its own budget (the last iteration's; NaN without
     /// one): Qiao 2021 fig. 4's curve at its end, the per-trial metric `final_fitness`.
-    #[serde(default = "crate::numeric::nan::missing")]
     pub final_fitness: Real,
 }
 

@@ -78,7 +78,7 @@ fn merge_refuses_the_records_of_another_registration_run_with_the_same_name_and_
 }
 
 /// Two instruments at 40 random poses: two cells of six trials.
-const INSTRUMENTS: &str = r#"
+pub(crate) const INSTRUMENTS: &str = r#"
 name = "instruments-resume"
 seed = 11
 trials = 6

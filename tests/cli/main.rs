@@ -38,6 +38,7 @@ mod profiles;
 mod readmit;
 mod readmit_cv;
 mod realdata;
+mod record_formats;
 mod record_keys;
 mod record_task;
 mod records;

@@ -340,10 +340,11 @@ fn regenerate_groups(only: Option<&BTreeSet<String>>, tag: &str) -> (usize, Vec<
 
 /// The groups that take seconds in a debug build, run by the fast test: the trial-0 outputs
 /// REPRODUCTION.md counts and reads from (Ban's fig. 7 residuals, Li's identification, Qiao's
-/// fig. 7 runs).
-const FAST: [&str; 4] = [
+/// fig. 7 runs) and the scores its eq. 17 table quotes (Li's random poses).
+const FAST: [&str; 5] = [
     "ban-trial0",
     "ban-unmodelled-trial0",
+    "li-eq17",
     "li-trial0",
     "qiao-fig7",
 ];

@@ -13,9 +13,23 @@ pub type EcdfSeries = (String, Vec<(Real, Real)>);
 /// fitness, its 95 % interval)`.
 pub type BudgetSeries = (String, Vec<(Real, Real, Option<[Real; 2]>)>);
 
-/// Evaluation tick labels of a logarithmic axis.
+/// Evaluation tick labels of a logarithmic axis. plotters puts a tick at every multiple of a
+/// decade (10000, 20000, …, 90000), and their labels run into each other towards the decade's
+/// end (40000, 50000, 60000 within a label's width): only the ticks at 1, 2 and 5 of a decade
+/// are labelled, the others keep their grid line.
 fn evals_fmt(v: &Real) -> String {
-    fmt_num(*v, 3)
+    let label = fmt_num(*v, 3);
+    let mantissa = label.split('e').next().unwrap_or("");
+    let mut digits = mantissa
+        .chars()
+        .filter(char::is_ascii_digit)
+        .skip_while(|&c| c == '0');
+    let lead = digits.next();
+    if matches!(lead, Some('1' | '2' | '5')) && digits.all(|c| c == '0') {
+        label
+    } else {
+        String::new()
+    }
 }
 
 /// Draws the mesh of a chart whose x axis counts evaluations: ticks as [`evals_fmt`],
@@ -156,6 +170,31 @@ mod tests {
         }
         let svg = std::fs::read_to_string(dir.join("e0.svg")).unwrap();
         assert!(svg.contains("bas") && svg.contains("pso"));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn an_evaluation_axis_labels_only_1_2_and_5_of_each_decade() {
+        let labelled = |v: Real| !evals_fmt(&v).is_empty();
+        let decade: Vec<Real> = (1..=9).map(|m| m as Real * 1e4).collect();
+        let shown: Vec<Real> = decade.iter().copied().filter(|&v| labelled(v)).collect();
+        assert_eq!(shown, [1e4, 2e4, 5e4]);
+        assert_eq!(evals_fmt(&20000.000000000004), "20000");
+        assert_eq!(evals_fmt(&0.5), "0.5");
+        assert_eq!(evals_fmt(&2e6), "2e6");
+        assert!(!labelled(3e6) && !labelled(1.5e4) && !labelled(Real::NAN));
+        // The span of Qiao's fig. 4 read as evaluations, whose labels ran into each other
+        // (40000, 50000, 60000, 70000): in the drawn figure, only 10000, 20000 and 50000.
+        let dir = crate::test_dir("ecdf-ticks");
+        let series = [("bas".to_string(), vec![(1300.0, 0.25), (65000.0, 1.0)])];
+        runtime_ecdf(&dir.join("e"), "ECDF", &series).unwrap();
+        let svg = std::fs::read_to_string(dir.join("e.svg")).unwrap();
+        let drawn: Vec<Real> = decade
+            .iter()
+            .copied()
+            .filter(|v| svg.contains(&format!(">\n{}\n</text>", fmt_num(*v, 3))))
+            .collect();
+        assert_eq!(drawn, [1e4, 2e4, 5e4], "{svg}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }
