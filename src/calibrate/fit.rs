@@ -33,6 +33,10 @@ pub struct Fit {
 /// orientation weight (mm per rad).
 pub type FitOn<'a> = (&'a Robot, &'a Measurements, Registration, Real);
 
+/// One calibration of the given parameters, started at the given errors (empty: at the
+/// nominal robot).
+pub type CalibrateFrom<'a> = dyn FnMut(&[Param], &[Real]) -> Result<Calibrated> + 'a;
+
 /// Calibrates `params` by `calibrate` (its second argument: where the Jacobian methods
 /// start, [`crate::identify::MethodSpec::start`]; empty, at the nominal robot), then
 /// re-checks `candidates` at the identified robot ([`recheck::readmit`]) and calibrates again
@@ -47,7 +51,7 @@ pub fn fit_and_readmit(
     (nominal, data, registration, k): FitOn,
     params: Vec<Param>,
     candidates: &[Param],
-    calibrate: &mut dyn FnMut(&[Param], &[Real]) -> Result<Calibrated>,
+    calibrate: &mut CalibrateFrom,
     accept: &dyn Fn(&Calibrated, &[Param]) -> Result<()>,
 ) -> Result<Fit> {
     let first = calibrate(&params, &[])?;
