@@ -81,7 +81,10 @@ fn each_fold_of_the_cv_is_identified_with_the_parameters_the_re_check_admits() {
         .collect();
     let (with, rms_with) = folds_by_hand(&cal, &params);
     let (without, rms_without) = folds_by_hand(&cal, &params[..n - 2]);
-    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * b;
+    // The CV's second fit of a fold starts at the fold's identified robot, the fit by hand at
+    // the nominal one: both stop at lm's convergence test, so they agree to about 1e-6 of the
+    // RMS (7e-7 measured), not to rounding; without hs6 and hc6 the folds are 3 times off.
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-5 * b;
     for f in 0..4 {
         assert!(
             close(fold_rms[f], with[f]),
