@@ -323,27 +323,7 @@ mod tests {
             false,
         );
         let method = crate::identify::method_by_name("ls").unwrap();
-        let frame = crate::numeric::Frame::identity();
-        let c = calibrate(
-            &nominal,
-            &params,
-            &data,
-            Registration::Known,
-            &frame,
-            &method,
-            &mut stream(0, "identify"),
-        )
-        .unwrap();
-        let d = diagnose(&Subject {
-            nominal: &nominal,
-            params: &params,
-            data: &data,
-            calibrated: &c,
-            k: 100.0,
-            priors: &[],
-            validation: None,
-        })
-        .unwrap();
+        let (_, d) = fit_and_diagnose(&nominal, &params, &data, &method, 100.0);
         let sum: Real = d.leverage.iter().sum();
         assert!((sum - params.len() as Real).abs() < 1e-6, "{sum}");
         assert_eq!(d.top_points[0].row, 13);
@@ -351,6 +331,39 @@ mod tests {
             assert!((d.correlation[i][i] - 1.0).abs() < 1e-9);
         }
         assert!(d.predicted.rms_mm > 0.0 && d.predicted.at == "calibration");
+    }
+
+    /// `data` calibrated by `method` in a known frame, and its diagnostics at orientation
+    /// weight `k`.
+    fn fit_and_diagnose(
+        nominal: &Robot,
+        params: &[Param],
+        data: &Measurements,
+        method: &crate::identify::MethodSpec,
+        k: Real,
+    ) -> (Calibrated, Diagnostics) {
+        let frame = crate::numeric::Frame::identity();
+        let c = calibrate(
+            nominal,
+            params,
+            data,
+            Registration::Known,
+            &frame,
+            method,
+            &mut stream(0, "identify"),
+        )
+        .unwrap();
+        let d = diagnose(&Subject {
+            nominal,
+            params,
+            data,
+            calibrated: &c,
+            k,
+            priors: &[],
+            validation: None,
+        })
+        .unwrap();
+        (c, d)
     }
 
     /// IGG3 per coordinate on 40 poses with one coordinate moved by 2 mm: the leverage and
@@ -390,26 +403,7 @@ mod tests {
         )
         .unwrap();
         let frame = crate::numeric::Frame::identity();
-        let c = calibrate(
-            &nominal,
-            &params,
-            &data,
-            Registration::Known,
-            &frame,
-            &spec,
-            &mut stream(0, "identify"),
-        )
-        .unwrap();
-        let d = diagnose(&Subject {
-            nominal: &nominal,
-            params: &params,
-            data: &data,
-            calibrated: &c,
-            k: 1.0,
-            priors: &[],
-            validation: None,
-        })
-        .unwrap();
+        let (c, d) = fit_and_diagnose(&nominal, &params, &data, &spec, 1.0);
         let id = &c.identified;
         let w = id.row_weights.clone().expect("row weights");
         assert_eq!(w.iter().filter(|&&v| v == 0.0).count(), 1);

@@ -36,6 +36,22 @@ pub struct Registration {
     pub weights: Vec<Real>,
 }
 
+impl Registration {
+    /// `frame` with its residual at each point and the `weights` it was fitted with.
+    fn of(frame: Frame, base: &[Vec3], measured: &[Vec3], weights: Vec<Real>) -> Registration {
+        let residuals = measured
+            .iter()
+            .zip(base)
+            .map(|(a, b)| (frame.apply(a) - b).norm())
+            .collect();
+        Registration {
+            frame,
+            residuals,
+            weights,
+        }
+    }
+}
+
 /// Rigid registration by SVD (Kabsch/Arun; Ban eqs. 12–21) with the reflection fix:
 /// `base[i] ≈ frame.apply(measured[i])`. `weights` (non-negative, not all zero) default to
 /// 1. Refuses fewer than 3 points, mismatched lengths, non-finite input and collinear points.
@@ -71,11 +87,7 @@ pub fn register_svd(
                     w.len()
                 )));
             }
-            if w.iter().any(|v| !v.is_finite() || *v < 0.0) {
-                return Err(Error::Compute(
-                    "registration: weights must be finite and ≥ 0".into(),
-                ));
-            }
+            check_weights(w)?;
             let s: Real = w.iter().sum();
             if s <= 0.0 {
                 return Err(Error::Singular("registration: all weights are zero".into()));
@@ -118,14 +130,7 @@ pub fn register_svd(
         rot,
         pos: cb - rot * ca,
     };
-    let residuals = (0..m)
-        .map(|i| (frame.apply(&measured[i]) - base[i]).norm())
-        .collect();
-    Ok(Registration {
-        frame,
-        residuals,
-        weights: w,
-    })
+    Ok(Registration::of(frame, base, measured, w))
 }
 
 /// Ban's weighted-SVD registration (eqs. 12–25): an equal-weight fit, weights from each
@@ -171,11 +176,7 @@ pub fn register_rows(
             row_weights.len()
         )));
     }
-    if row_weights.iter().any(|v| !v.is_finite() || *v < 0.0) {
-        return Err(Error::Compute(
-            "registration: weights must be finite and ≥ 0".into(),
-        ));
-    }
+    check_weights(row_weights)?;
     let xyz = |i: usize| -> [Real; 3] {
         let r = &row_weights[i * rows..i * rows + 3];
         [r[0], r[1], r[2]]
@@ -199,14 +200,7 @@ pub fn register_rows(
         return Ok(start);
     }
     let frame = refine(base, measured, &xyz, start.frame)?;
-    let residuals = (0..m)
-        .map(|i| (frame.apply(&measured[i]) - base[i]).norm())
-        .collect();
-    Ok(Registration {
-        frame,
-        residuals,
-        weights: start.weights,
-    })
+    Ok(Registration::of(frame, base, measured, start.weights))
 }
 
 /// The weighted cost `Σ_i Σ_c w_ic ((R a_i + t − b_i)_c)²` of `frame`.
@@ -314,6 +308,16 @@ fn ban_weights(e: &[Real]) -> Vec<Real> {
         .collect();
     let s: Real = w.iter().sum();
     w.iter().map(|v| v * m / s).collect()
+}
+
+/// Refuses weights that are not finite or are negative.
+fn check_weights(w: &[Real]) -> Result<()> {
+    if w.iter().any(|v| !v.is_finite() || *v < 0.0) {
+        return Err(Error::Compute(
+            "registration: weights must be finite and ≥ 0".into(),
+        ));
+    }
+    Ok(())
 }
 
 #[cfg(test)]
