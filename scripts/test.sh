@@ -14,6 +14,9 @@
 # usage: scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# One pass builds everything once, so incremental caches gain nothing and cost disk: they were
+# 5.8 GB of a 9.3 GB target/debug, and a CI machine ran out of space linking the Python module.
+export CARGO_INCREMENTAL=0
 cargo fmt --all --check
 cargo clippy --workspace --all-targets -- -D warnings
 RUSTDOCFLAGS=-Dwarnings cargo doc --no-deps --workspace
