@@ -406,19 +406,26 @@ mod tests {
         }
     }
 
+    /// irb2600 and `n` noise-free points (uniform poses of stream `seed`) of it with an
+    /// error in a2 and θ3, measured in a frame shifted by `shift`.
+    fn exact_data(seed: u64, n: usize, shift: crate::numeric::Vec3) -> (Robot, Measurements) {
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let truth = nominal.with_errors(&[(Param::A(1), 0.4), (Param::Theta(2), 1e-3)]);
+        let mut g = stream(seed, "cv-test");
+        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, n, &mut g);
+        let data = Measurements {
+            points: qs.iter().map(|q| truth.fk(q).pos + shift).collect(),
+            qs,
+            ..Default::default()
+        };
+        (nominal, data)
+    }
+
     /// Noise-free data of a robot with errors: every fold's held-out points are predicted
     /// exactly, so the CV RMS is ~0; a β model on a dh robot keeps its kinematics.
     #[test]
     fn cross_validation_on_exact_data_is_exact() {
-        let nominal = crate::robot::builtin::load("irb2600").unwrap();
-        let truth = nominal.with_errors(&[(Param::A(1), 0.4), (Param::Theta(2), 1e-3)]);
-        let mut g = stream(3, "cv-test");
-        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 60, &mut g);
-        let data = Measurements {
-            points: qs.iter().map(|q| truth.fk(q).pos).collect(),
-            qs,
-            ..Default::default()
-        };
+        let (nominal, data) = exact_data(3, 60, crate::numeric::Vec3::zeros());
         let method = crate::identify::method_by_name("ls").unwrap();
         let s = CvSetup {
             method: &method,
@@ -449,16 +456,7 @@ mod tests {
     /// one row differ.
     #[test]
     fn a_done_cross_validation_is_taken_only_on_the_same_setup() {
-        let nominal = crate::robot::builtin::load("irb2600").unwrap();
-        let truth = nominal.with_errors(&[(Param::A(1), 0.4), (Param::Theta(2), 1e-3)]);
-        let mut g = stream(4, "cv-test");
-        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 40, &mut g);
-        let shift = crate::numeric::Vec3::new(0.01, 0.0, 0.0);
-        let data = Measurements {
-            points: qs.iter().map(|q| truth.fk(q).pos + shift).collect(),
-            qs,
-            ..Default::default()
-        };
+        let (nominal, data) = exact_data(4, 40, crate::numeric::Vec3::new(0.01, 0.0, 0.0));
         let lm = crate::identify::method_by_name("lm").unwrap();
         let mut table = toml::Table::new();
         table.insert("name".into(), "lm".into());

@@ -7,6 +7,14 @@ use super::identified::{Additions, Block};
 use super::markdown::fmt_num;
 use crate::calibrate::pipeline::TrackerOutcome;
 pub use crate::calibrate::record::{IdentifiedRecord, PriorMove};
+use crate::numeric::Real;
+
+/// A table row: `name`, then `values` to `digits` significant digits.
+fn named_row<const N: usize>(name: String, values: [Real; N], digits: usize) -> Vec<String> {
+    std::iter::once(name)
+        .chain(values.map(|v| fmt_num(v, digits)))
+        .collect()
+}
 
 impl IdentifiedRecord {
     /// The section the practice options add to `report.md` and `report.html`; nothing for
@@ -45,18 +53,10 @@ impl IdentifiedRecord {
             md.push(Block::Table(headers, rows));
         }
         if let Some(r) = &self.readmitted {
-            let rows: Vec<Vec<String>> = r
+            let rows = r
                 .parameters
                 .iter()
-                .map(|p| {
-                    vec![
-                        p.parameter.clone(),
-                        fmt_num(p.estimate, 6),
-                        fmt_num(p.sigma, 6),
-                        fmt_num(p.threshold, 6),
-                    ]
-                })
-                .collect();
+                .map(|p| named_row(p.parameter.clone(), [p.estimate, p.sigma, p.threshold], 6));
             md.push(Block::Heading("Re-admitted at the identified robot".into()));
             md.push(Block::Para(format!(
                 "Left out at the nominal robot, determined at the identified one (Cramér–Rao σ \
@@ -68,7 +68,7 @@ impl IdentifiedRecord {
             )));
             md.push(Block::Table(
                 vec!["parameter", "step", "σ", "threshold"],
-                rows,
+                rows.collect(),
             ));
         }
         if !self.fixed.is_empty() {
@@ -78,14 +78,16 @@ impl IdentifiedRecord {
             )));
         }
         if !self.priors.is_empty() {
-            let mut rows = Vec::with_capacity(self.priors.len());
-            for p in &self.priors {
-                let nums = [p.sigma, p.without_prior, p.with_prior].map(|v| fmt_num(v, 4));
-                rows.push(std::iter::once(p.parameter.clone()).chain(nums).collect());
-            }
+            let rows = self.priors.iter().map(|p| {
+                named_row(
+                    p.parameter.clone(),
+                    [p.sigma, p.without_prior, p.with_prior],
+                    4,
+                )
+            });
             md.push(Block::Heading("Priors".into()));
             let headers = vec!["parameter", "σ", "without prior", "with prior"];
-            md.push(Block::Table(headers, rows));
+            md.push(Block::Table(headers, rows.collect()));
         }
         if let Some(t) = &self.convergence_trace {
             let (what, values) = (&t.values, &t.trace);
@@ -112,20 +114,13 @@ impl IdentifiedRecord {
                     pairs.join(", ")
                 }
             )));
-            let rows: Vec<Vec<String>> = d
+            let rows = d
                 .top_points
                 .iter()
-                .map(|p| {
-                    vec![
-                        p.row.to_string(),
-                        fmt_num(p.leverage, 4),
-                        fmt_num(p.cook, 4),
-                    ]
-                })
-                .collect();
+                .map(|p| named_row(p.row.to_string(), [p.leverage, p.cook], 4));
             md.push(Block::Table(
                 vec!["row", "leverage", "Cook's distance"],
-                rows,
+                rows.collect(),
             ));
             let p = &d.predicted;
             md.push(Block::Para(format!(

@@ -32,7 +32,8 @@ pub const DEFAULT_METRICS: [Metric; 5] = [
 /// in `seed` and `trials`): not compared.
 pub const SCENARIO_CHANGED: &str = "scenario changed";
 
-/// One recorded run as history reads it.
+/// One recorded run as history reads it (its columns by name).
+#[derive(serde::Deserialize)]
 struct Run {
     id: i64,
     kind: String,
@@ -40,7 +41,7 @@ struct Run {
     scenario_text: String,
     label: String,
     version: String,
-    commit: String,
+    git_commit: String,
     commit_time: Option<i64>,
     machine: String,
     recorded_at: String,
@@ -91,28 +92,11 @@ fn recorded(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
 }
 
 fn runs(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
-    db.query(
-        "SELECT id, kind, scenario, scenario_text, label, calbench_version, git_commit, \
-         commit_time, machine, recorded_at, source, seed, document FROM runs \
-         WHERE ?1 IS NULL OR scenario = ?1 ORDER BY id",
+    db.query_as(
+        "SELECT id, kind, scenario, scenario_text, label, calbench_version AS version, \
+         git_commit, commit_time, machine, recorded_at, source, seed, document \
+         FROM runs WHERE ?1 IS NULL OR scenario = ?1 ORDER BY id",
         [scenario],
-        |r| {
-            Ok(Run {
-                id: r.get(0)?,
-                kind: r.get(1)?,
-                scenario: r.get(2)?,
-                scenario_text: r.get(3)?,
-                label: r.get(4)?,
-                version: r.get(5)?,
-                commit: r.get(6)?,
-                commit_time: r.get(7)?,
-                machine: r.get(8)?,
-                recorded_at: r.get(9)?,
-                source: r.get(10)?,
-                seed: r.get(11)?,
-                document: r.get(12)?,
-            })
-        },
     )
 }
 
@@ -360,7 +344,7 @@ pub fn points(
                 metric,
                 label: run.label.clone(),
                 version: run.version.clone(),
-                git_commit: run.commit.clone(),
+                git_commit: run.git_commit.clone(),
                 recorded_at: run.recorded_at.clone(),
                 value,
                 ci: lo.zip(hi).map(|(l, h)| [l, h]),

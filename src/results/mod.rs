@@ -20,6 +20,7 @@ mod whole;
 
 use std::path::{Path, PathBuf};
 
+use rusqlite::types::ValueRef;
 use rusqlite::{params, Connection, OpenFlags, OptionalExtension, TransactionBehavior};
 
 pub use folder::{Kind, Record};
@@ -411,5 +412,34 @@ impl Db {
             .collect::<rusqlite::Result<Vec<T>>>()
             .map_err(|e| self.sql_error(e));
         rows
+    }
+
+    /// Runs a query whose rows deserialise to `T` by column name (integers, reals, text and
+    /// NULLs as serde_json reads them), mapping an error to one naming the database.
+    pub fn query_as<T: serde::de::DeserializeOwned>(
+        &self,
+        sql: &str,
+        params: impl rusqlite::Params,
+    ) -> Result<Vec<T>> {
+        let rows = self.query(sql, params, |r| {
+            let names = AsRef::<rusqlite::Statement>::as_ref(r).column_names();
+            let mut row = serde_json::Map::new();
+            for (i, name) in names.into_iter().enumerate() {
+                let v = match r.get_ref(i)? {
+                    ValueRef::Null => serde_json::Value::Null,
+                    ValueRef::Integer(n) => n.into(),
+                    ValueRef::Real(x) => x.into(),
+                    _ => serde_json::Value::String(r.get(i)?),
+                };
+                row.insert(name.to_string(), v);
+            }
+            Ok(serde_json::Value::Object(row))
+        })?;
+        rows.into_iter()
+            .map(|v| {
+                serde_json::from_value(v)
+                    .map_err(|e| Error::file(&self.path, "database", e.to_string()))
+            })
+            .collect()
     }
 }

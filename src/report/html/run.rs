@@ -12,8 +12,8 @@ use crate::analysis::summary::Summary;
 use crate::error::Result;
 use crate::report::markdown::fmt_num;
 use crate::report::run::{
-    columns::*, entry_table, entry_table_by, eta_table, not_determinable, validation_columns,
-    Column, INTERVAL_COLUMNS, INTERVAL_NOTE, METRIC_NOTES,
+    claims, columns::*, comparisons, entry_table, entry_table_by, eta_table, not_determinable,
+    searches, validation_columns, Column, INTERVAL_COLUMNS, INTERVAL_NOTE, METRIC_NOTES,
 };
 use crate::study::metric::Metric;
 use crate::study::RunResult;
@@ -59,6 +59,39 @@ fn figures(page: &mut Page, dir: &Path, plots: &[(String, String)], section: &st
     }
     page.plots_end();
     Ok(())
+}
+
+/// The verdict tables' sections: `[section, note, caption]` ([`noted_table`]).
+const CLAIMS: [&str; 3] = [
+    "The paper's claims",
+    claims::NOTE,
+    "Claims and their verdicts",
+];
+const PAIRED: [&str; 3] = [
+    "Paired verdicts",
+    comparisons::NOTE,
+    "Paired comparisons on the shared trials",
+];
+const SEARCHES: [&str; 3] = [
+    "Searches compared",
+    searches::NOTE,
+    "Targets reached and fitness at the full budget",
+];
+
+/// The table `(headers, rows)` in a section of its own, its note above it:
+/// `[section, note, caption]`; nothing, and `false`, when it has no rows.
+fn noted_table(
+    page: &mut Page,
+    [section, note, caption]: [&str; 3],
+    (headers, rows): (Vec<impl AsRef<str>>, Vec<Vec<String>>),
+) -> bool {
+    if rows.is_empty() {
+        return false;
+    }
+    page.section(section);
+    page.para(note);
+    page.table(caption, &headers, &rows);
+    true
 }
 
 fn stem(file: &str) -> &str {
@@ -110,17 +143,8 @@ pub fn page(
     }
     // The verdicts first: the paper's claims, the paired comparisons, the headline figures
     // with their intervals; then how they were obtained.
-    let (h, rows) = crate::report::run::claims::table(summary);
-    if !rows.is_empty() {
-        page.section("The paper's claims");
-        page.para(crate::report::run::claims::NOTE);
-        page.table("Claims and their verdicts", &h, &rows);
-    }
-    let (h, rows) = crate::report::run::comparisons::table(summary);
-    if !rows.is_empty() {
-        page.section("Paired verdicts");
-        page.para(crate::report::run::comparisons::NOTE);
-        page.table("Paired comparisons on the shared trials", &h, &rows);
+    noted_table(&mut page, CLAIMS, claims::table(summary));
+    if noted_table(&mut page, PAIRED, comparisons::table(summary)) {
         figures(&mut page, dir, plots, "Paired comparisons")?;
     }
     page.section("Headline figures");
@@ -190,11 +214,7 @@ pub fn page(
         ],
     );
 
-    let (h, rows) = crate::report::run::searches::table(r);
-    if !rows.is_empty() {
-        page.section("Searches compared");
-        page.para(crate::report::run::searches::NOTE);
-        page.table("Targets reached and fitness at the full budget", &h, &rows);
+    if noted_table(&mut page, SEARCHES, searches::table(r)) {
         figures(&mut page, dir, plots, "Searches compared")?;
     }
 
