@@ -13,6 +13,7 @@ use crate::study::verdict::{evaluate, evaluate_every, Evaluation, ParameterVerdi
 use crate::study::{toml_to_json, RunResult};
 
 /// One claim evaluated on one block's trials, as `summary.json`'s `claims` holds it.
+#[serde_with::skip_serializing_none]
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct ClaimResult {
     /// The claim's id.
@@ -38,13 +39,14 @@ pub struct ClaimResult {
     #[serde(deserialize_with = "nan::real")]
     pub estimate: Real,
     /// Its 95 % interval.
+    #[serialize_always]
     pub ci95: Option<[Real; 2]>,
     /// The verdict.
     pub verdict: Verdict,
     /// For an unresolved claim, the trials that would resolve it.
+    #[serialize_always]
     pub trials_to_resolve: Option<u64>,
     /// With a sweep: the block's swept value.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep_value: Option<Value>,
     /// Whether the claim is about the mean or the median (older summaries: the mean).
     #[serde(default)]
@@ -53,25 +55,18 @@ pub struct ClaimResult {
     #[serde(default)]
     pub test: Test,
     /// The sample excess kurtosis the test was chosen on (`null`: under 4 trials).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kurtosis: Option<Real>,
     /// An ordering's margin, in the metric's unit.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub margin: Option<Real>,
     /// A point value's tolerance band.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub band: Option<[Real; 2]>,
     /// The two-sided p-value of the boundary that decides the verdict.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub p_value: Option<Real>,
     /// The id of the paper's claim this one tests under another setting.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub family: Option<String>,
     /// The other setting, in words (`null`: the paper's setting).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub setting: Option<String>,
     /// A claim "for every parameter": each parameter's verdict.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parameters: Option<Vec<ParameterVerdict>>,
 }
 

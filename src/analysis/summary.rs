@@ -73,6 +73,7 @@ pub struct Profile {
 /// A run's summary (docs/formats.md "summary.json"). Keys written in sorted order, as
 /// serde_json's map sorts them; read back, a key an older summary lacks takes its default
 /// (only `scenario` and `results` are required).
+#[serde_with::skip_serializing_none]
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Summary {
     /// The format ([`FORMAT`]); a summary of a later format is refused.
@@ -87,10 +88,8 @@ pub struct Summary {
     #[serde(default)]
     pub robot: String,
     /// Trials run.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub trials: Option<usize>,
     /// The seed.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub seed: Option<u64>,
     /// `pose` or `position`.
     #[serde(default)]
@@ -119,31 +118,22 @@ pub struct Summary {
     #[serde(default)]
     pub comparisons: Vec<Comparison>,
     /// The claims evaluated, with a claim per block.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub claims: Option<Vec<ClaimResult>>,
     /// A sweep's performance profile.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub performance_profile: Option<Profile>,
     /// Why a run with `--precision` stopped.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stopping: Option<Stopping>,
     /// The ill-conditioned parameter separation.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub separation: Option<Value>,
     /// The simulated arm's compliances.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub true_compliance: Option<Value>,
     /// A one-axis sweep's key.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep_key: Option<String>,
     /// … and its values.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep_values: Option<Vec<Value>>,
     /// A sweep's keys.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep_keys: Option<Vec<String>>,
     /// Whether the sweep's axes are zipped.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep_zip: Option<bool>,
     /// The comparisons the reports show: each entry against its baseline (not written).
     #[serde(skip)]

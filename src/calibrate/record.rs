@@ -98,6 +98,7 @@ pub struct Trace {
 /// diagnostics) and those of a measurement-kind file (`kind`, the instrument's unknowns and
 /// description, `standard_errors`, `unidentifiable`, `readings`). `None` and empty lists are
 /// keys the file does not have, but `rank`, which is written as `null`.
+#[serde_with::skip_serializing_none]
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IdentifiedRecord {
@@ -117,31 +118,22 @@ pub struct IdentifiedRecord {
     #[serde(deserialize_with = "nan::real")]
     pub condition_number: Real,
     /// The convergence trace.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub convergence_trace: Option<Trace>,
     /// The estimate's covariance (tracker's file).
-    #[serde(
-        default,
-        deserialize_with = "nan::read",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, deserialize_with = "nan::read")]
     pub covariance: Option<Vec<Vec<Real>>>,
     /// The cross-validation of the model identified.
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub cv: Option<CrossValidation>,
     /// The best of the models compared.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub cv_best: Option<String>,
     /// Every model's cross-validation.
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub cv_models: Option<Vec<CrossValidation>>,
     /// Where the readings were read from.
     pub data: String,
     /// The diagnostics (tracker's file).
-    #[serde(
-        skip_serializing_if = "Option::is_none",
-        serialize_with = "diagnostics"
-    )]
+    #[serde(serialize_with = "diagnostics")]
     pub diagnostics: Option<Diagnostics>,
     /// The identified robot errors by parameter.
     #[serde(deserialize_with = "nan::read")]
@@ -152,33 +144,24 @@ pub struct IdentifiedRecord {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub fixed: Vec<String>,
     /// The rows held out for validation (`LAST/EVERY`).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub holdout: Option<String>,
     /// The instrument's unknowns at the solution (kind file).
-    #[serde(
-        default,
-        deserialize_with = "nan::read",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, deserialize_with = "nan::read")]
     pub instrument_unknowns: Option<BTreeMap<String, Real>>,
     /// Iterations of the solve.
     pub iterations: usize,
     /// The kernel residual's hyperparameters (a model with the term `gp`; the residual itself
     /// is `kernel.json`).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub kernel_residual: Option<super::kernel::KernelHyper>,
     /// The readings' kind (kind file).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub kind: Option<Kind>,
     /// The method's name.
     pub method: String,
     /// The identified robot parameters, in the order of the estimate.
     pub parameters: Vec<String>,
     /// Distances: whether from a fixed pivot.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub pivot: Option<bool>,
     /// Planes: the axis each plane is solved for.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub plane_axes: Option<Vec<String>>,
     /// How each prior moved its estimate.
     #[serde(
@@ -188,36 +171,26 @@ pub struct IdentifiedRecord {
     )]
     pub priors: Vec<PriorMove>,
     /// The rank of the solve (`null`: not known).
+    #[serialize_always]
     pub rank: Option<usize>,
     /// The number of readings (kind file).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub readings: Option<usize>,
     /// The parameters left out at the nominal robot and re-admitted at the identified one
     /// ([`super::recheck`]); absent: none was.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub readmitted: Option<super::recheck::Readmission>,
     /// The registration.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub registration: Option<Registration>,
     /// The registration's frame.
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub registration_frame: Option<FrameRecord>,
     /// The last frame step of the alternation (mm; tracker's file).
-    #[serde(
-        default,
-        deserialize_with = "nan::read",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, deserialize_with = "nan::read")]
     pub registration_last_step_mm: Option<Real>,
     /// Rounds of registration and identification (tracker's file).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub registration_rounds: Option<usize>,
     /// How the alternation ended (tracker's file).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub registration_termination: Option<RoundsEnd>,
     /// `coordinate` when the registration's refits weighed each coordinate on its own
     /// (`svd`/`wsvd` with IGG3's `per = "coordinate"`); absent when they weighed points.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub registration_weights: Option<super::RefitWeights>,
     /// The RMS residual (mm).
     #[serde(deserialize_with = "nan::real")]
@@ -228,41 +201,32 @@ pub struct IdentifiedRecord {
     #[serde(deserialize_with = "nan::real")]
     pub sigma0: Real,
     /// The standard error of every unknown, robot's and instrument's (kind file).
-    #[serde(
-        default,
-        deserialize_with = "nan::read",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, deserialize_with = "nan::read")]
     pub standard_errors: Option<BTreeMap<String, Real>>,
     /// Targets: their offsets on the flange (mm).
-    #[serde(
-        default,
-        deserialize_with = "nan::read",
-        skip_serializing_if = "Option::is_none"
-    )]
+    #[serde(default, deserialize_with = "nan::read")]
     pub targets_mm: Option<Vec<[Real; 3]>>,
     /// How the solve ended.
     pub termination: Termination,
     /// Parameters the readings cannot determine (kind file).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub unidentifiable: Option<Vec<String>>,
     /// Qiao's attitude errors after (deg).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub validation_after_attitude_deg: Option<ErrorStats>,
     /// Orientation errors after (deg).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub validation_after_deg: Option<ErrorStats>,
     /// Position errors after (mm).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub validation_after_mm: Option<ErrorStats>,
     /// Qiao's attitude errors before (deg).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub validation_before_attitude_deg: Option<ErrorStats>,
     /// Orientation errors before (deg).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub validation_before_deg: Option<ErrorStats>,
     /// Position errors before (mm).
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "sorted")]
+    #[serde(serialize_with = "sorted")]
     pub validation_before_mm: Option<ErrorStats>,
 }
 

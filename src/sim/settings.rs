@@ -304,14 +304,14 @@ impl TrackerSettings {
 
 /// `[outliers]`: gross errors added to some measured points (Ban §3: 2..16 of 50
 /// points, magnitudes 0–0.2 … 0–1.0 mm).
+#[serde_with::skip_serializing_none]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct OutlierSettings {
     /// Number of displaced points (exclusive with `fraction`); default none (0 outliers).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub count: Option<usize>,
     /// Fraction of displaced points in [0, 1], rounded to the nearest count.
-    #[serde(skip_serializing_if = "Option::is_none", deserialize_with = "share")]
+    #[serde(deserialize_with = "share")]
     pub fraction: Option<Real>,
     /// Range of the displacement magnitude, mm; default `[0.5, 1.0]`.
     #[serde(deserialize_with = "range")]

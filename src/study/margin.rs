@@ -8,14 +8,13 @@ use crate::numeric::Real;
 /// A minimum effect of interest, or a tolerance band's half-width: relative to a reference
 /// value, absolute in the metric's unit, the larger of the two counting (docs/formats.md
 /// "Tests and margins").
+#[serde_with::skip_serializing_none]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Margin {
     /// A fraction of the reference (0.01: 1 %).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relative: Option<Real>,
     /// In the metric's unit.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub absolute: Option<Real>,
 }
 
