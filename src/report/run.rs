@@ -360,9 +360,10 @@ pub fn not_determinable(b: &Block) -> Option<(String, Vec<String>)> {
             "Not determinable: an injected error of at most {k} Cramér–Rao σ of its parameter \
              (the tracker noise at the trial's calibration rows on the true robot) cannot be \
              told from 0, so its η measures the noise, and the error of a parameter that is \
-             not estimable (the poses determine only a combination of it with others) cannot \
-             be told at all, whatever its size; those trials' η of the parameter is left out \
-             of every η figure, and a parameter not determinable in any trial has no η."
+             not estimable (the poses determine only a combination of it with others) can be \
+             told only beyond the share of the whole injected error that the combination can \
+             move onto it; those trials' η of the parameter is left out of every η figure, and \
+             a parameter not determinable in any trial has no η."
         );
         (text, lines)
     })

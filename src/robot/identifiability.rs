@@ -366,6 +366,9 @@ pub struct GramDependence {
     pub dependent: Vec<usize>,
     /// Per column, whether it takes part in a dependency (every dependent column does).
     pub in_group: Vec<bool>,
+    /// Per column, 1 / its norm (√ of its diagonal element), or 0 for a column at rounding
+    /// level: the column scaling of the analysis.
+    pub scale: Vec<Real>,
     /// The union-find forest of the groups.
     parent: Vec<usize>,
     /// The scaled matrix over the kept columns.
@@ -417,6 +420,7 @@ pub fn gram_dependence(n: &DMatrix<Real>) -> GramDependence {
         identifiable: ident_idx,
         dependent: dep_idx,
         in_group,
+        scale,
         parent,
         scaled: ss,
     }

@@ -291,7 +291,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         let cal_nominal = validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
         let cal_before = ErrorStats::of(&cal_nominal.mm);
         // The bound at the rows as measured, on the robot they were measured on.
-        let variances = crb::variances(
+        let bounds = crb::bounds_at(
             &truth_robot,
             &study.params,
             &m.data.qs,
@@ -299,8 +299,8 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             &study.tracker,
         );
         // No trace where a parameter is not estimable: its variance has no bound.
-        crb_traces.push(variances.as_ref().and_then(|v| v.iter().copied().sum()));
-        not_determinable.push(crb::not_determinable(&truth, variances.as_deref()));
+        crb_traces.push(bounds.as_ref().and_then(crb::Bounds::trace));
+        not_determinable.push(crb::not_determinable(&truth, bounds.as_ref()));
         for (mi, spec) in sc.methods.iter().enumerate() {
             let t0 = Instant::now();
             let res = calibrate(

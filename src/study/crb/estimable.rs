@@ -1,22 +1,28 @@
-//! [`super::estimable_variances`] against independent truth: a closed form, a rank-deficient
-//! Jacobian whose estimable parameters are known by construction, and the pseudo-inverse on
-//! the estimable subspace computed apart (nalgebra's SVD and symmetric eigendecomposition).
+//! [`super::bounds`] against independent truth: a closed form, a rank-deficient Jacobian
+//! whose estimable parameters are known by construction, and the pseudo-inverse of the
+//! column-scaled normal matrix computed apart (nalgebra's SVD and symmetric eigendecomposition).
 
-use super::estimable_variances;
+use super::bounds;
 use crate::numeric::{rng, Real};
 use nalgebra::{DMatrix, DVector};
 use rand::Rng;
 
 #[test]
-fn two_parameters_whose_sum_only_is_determined_are_not_estimable() {
-    // Columns c1, c2 = c1 and c3: y = c1 (x1 + x2) + c3 x3. Neither x1 nor x2 is estimable;
-    // x3 is, with the variance of the model in u = x1 + x2 and x3: [cᵀc] = [[5, 1], [1, 10]],
-    // whose inverse has 5 / 49 at (2, 2).
+fn two_parameters_whose_sum_only_is_determined_are_undetermined() {
+    // Columns c1, c2 = c1 and c3: y = c1 (x1 + x2) + c3 x3. Neither x1 nor x2 is estimable:
+    // the null direction (1, −1, 0)/√2 of the scaled columns moves each by 1/√2 per unit
+    // step, over its column norm √5. x3 is, with the variance of the model in u = x1 + x2
+    // and x3: [cᵀc] = [[5, 1], [1, 10]], whose inverse has 5 / 49 at (2, 2).
     let j = DMatrix::from_row_slice(3, 3, &[1.0, 1.0, 1.0, 2.0, 2.0, 0.0, 0.0, 0.0, 3.0]);
-    let got = estimable_variances(&(j.transpose() * &j)).expect("a bound");
-    assert_eq!(got[0], None);
-    assert_eq!(got[1], None);
-    let v = got[2].expect("x3 estimable");
+    let got = bounds(&(j.transpose() * &j)).expect("a bound");
+    assert!(!got.full_rank);
+    for k in [0, 1] {
+        let want = std::f64::consts::FRAC_1_SQRT_2 / 5.0_f64.sqrt();
+        let u = got.undetermined[k];
+        assert!((u - want).abs() <= 1e-14, "{u} against {want}");
+    }
+    assert!(got.undetermined[2] <= 1e-15, "{got:?}");
+    let v = got.variances[2];
     assert!((v - 5.0 / 49.0).abs() <= 1e-14, "{v}");
 }
 
@@ -26,9 +32,10 @@ fn a_full_rank_normal_matrix_keeps_the_diagonal_of_its_inverse_bit_for_bit() {
     let j = DMatrix::from_fn(20, 5, |_, _| g.random_range(-1.0..1.0));
     let n = j.transpose() * &j;
     let want = crate::identify::solver::inverse_diagonal(&n).expect("regular");
-    let got = estimable_variances(&n).expect("a bound");
-    for (w, g) in want.iter().zip(&got) {
-        assert_eq!(Some(w.to_bits()), g.map(Real::to_bits));
+    let got = bounds(&n).expect("a bound");
+    assert!(got.full_rank && got.undetermined.iter().all(|&u| u == 0.0));
+    for (w, g) in want.iter().zip(&got.variances) {
+        assert_eq!(w.to_bits(), g.to_bits());
     }
 }
 
@@ -74,38 +81,58 @@ fn projected(seed: u64) -> (DMatrix<Real>, DMatrix<Real>) {
 fn a_projected_jacobian_gives_the_estimable_set_of_its_construction() {
     for seed in 0..20 {
         let (j, _) = projected(seed);
-        let got = estimable_variances(&(j.transpose() * &j)).expect("a bound");
-        let estimable: Vec<usize> = (0..7).filter(|&k| got[k].is_some()).collect();
-        assert_eq!(estimable, vec![0, 3], "seed {seed}: {got:?}");
+        let got = bounds(&(j.transpose() * &j)).expect("a bound");
+        // Undetermined shares in scaled units: 0 to rounding for the estimable parameters,
+        // at least the smallest weight of u and v (≈ 0.3) for the others.
+        let share: Vec<Real> = (0..7)
+            .map(|k| got.undetermined[k] * got.column_norms[k])
+            .collect();
+        let estimable: Vec<usize> = (0..7).filter(|&k| share[k] < 1e-9).collect();
+        assert_eq!(estimable, vec![0, 3], "seed {seed}: {share:?}");
+        assert!(
+            share.iter().all(|s| !(1e-9..=0.1).contains(s)),
+            "seed {seed}: {share:?}"
+        );
     }
 }
 
 #[test]
-fn the_estimable_variances_are_the_pseudo_inverse_on_the_row_space() {
+fn the_variances_and_shares_are_those_of_the_scaled_pseudo_inverse() {
     for seed in 0..20 {
         let (j, r) = projected(seed);
         let n = j.transpose() * &j;
-        let got = estimable_variances(&n).expect("a bound");
-        // N = R M Rᵀ with M = Rᵀ N R regular on the row space: N⁺ = R M⁻¹ Rᵀ.
-        let m = r.transpose() * &n * &r;
-        let pinv = &r * m.try_inverse().expect("regular on the row space") * r.transpose();
-        // And eᵢ in the row space ⟺ N N⁺ eᵢ = eᵢ (Searle, Linear Models § 5.4).
-        let nn = &n * &pinv;
+        let got = bounds(&n).expect("a bound");
+        // Apart: the column-scaled S = D⁻¹ n D⁻¹, its pseudo-inverse by SVD (singular values
+        // below 1e-9 of the largest dropped), and the projector I − S S⁺ onto its null space.
+        let d: Vec<Real> = (0..7).map(|k| n[(k, k)].sqrt()).collect();
+        let s = DMatrix::from_fn(7, 7, |i, k| n[(i, k)] / (d[i] * d[k]));
+        let pinv = s.clone().pseudo_inverse(1e-9 * s.norm()).expect("an SVD");
+        let null = DMatrix::<Real>::identity(7, 7) - &s * &pinv;
         for i in 0..7 {
-            let off = (nn.column(i) - DVector::from_fn(7, |k, _| Real::from(k == i))).norm();
-            match got[i] {
-                Some(v) => {
-                    assert!(off < 1e-10, "seed {seed}: parameter {i} off by {off}");
-                    let want = pinv[(i, i)];
-                    assert!(
-                        (v - want).abs() <= 1e-8 * want,
-                        "seed {seed}: {v} against {want}"
-                    );
-                }
-                // The null direction D u weighs parameter 2 by about 1e-6 of parameter 1 (their
-                // scales 1e-3 and 1e3), so e₂ is that close to the row space, yet not in it.
-                None => assert!(off > 1e-7, "seed {seed}: parameter {i} off by only {off}"),
-            }
+            let want = pinv[(i, i)] / (d[i] * d[i]);
+            let v = got.variances[i];
+            assert!(
+                (v - want).abs() <= 1e-8 * want,
+                "seed {seed}: parameter {i}: {v} against {want}"
+            );
+            // Squared shares: (I − S S⁺)ᵢᵢ = ‖P ẽᵢ‖², compared where rounding is linear.
+            let (u, share) = (got.undetermined[i] * d[i], null[(i, i)]);
+            assert!(
+                (u * u - share).abs() <= 1e-10,
+                "seed {seed}: parameter {i}: share² {} against {share}",
+                u * u
+            );
+        }
+        // And an estimable parameter's variance is that of the pseudo-inverse of n itself
+        // on the row space (Searle, Linear Models § 5.4): the same for every g-inverse.
+        let m = r.transpose() * &n * &r;
+        let row = &r * m.try_inverse().expect("regular on the row space") * r.transpose();
+        for i in [0, 3] {
+            let (v, want) = (got.variances[i], row[(i, i)]);
+            assert!(
+                (v - want).abs() <= 1e-8 * want,
+                "seed {seed}: {v} against {want}"
+            );
         }
     }
 }
