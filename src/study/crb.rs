@@ -66,6 +66,69 @@ pub fn variances(
     estimable_variances(&(j.transpose() * &j))
 }
 
+/// [`variances`] of a pose set that is the same in every trial, on a true robot that is too
+/// (a fixed set under errors `paper`, `values` or `none`), computed once per study
+/// ([`crate::study::plan::FixedSet::crb`]) instead of once per trial. The bound is a pure
+/// function of the robot, the rows and the study's parameters, measure and tracker, so the
+/// variances served here are the bits the trial would compute; [`Memo::variances`] serves
+/// them only for the same robot values and rows, bit for bit, and computes them otherwise.
+#[derive(Debug)]
+pub struct Memo {
+    /// The true robot's parameter values, as bits.
+    values: Vec<u64>,
+    /// The rows' joint values, as bits.
+    qs: Vec<Vec<u64>>,
+    /// [`variances`] at them.
+    variances: Option<Vec<Option<Real>>>,
+}
+
+fn bits(v: &[Real]) -> impl Iterator<Item = u64> + '_ {
+    v.iter().map(|x| x.to_bits())
+}
+
+impl Memo {
+    /// [`variances`] of `robot` at the rows `qs`, kept with the values they belong to.
+    pub fn new(
+        robot: &Robot,
+        params: &[Param],
+        qs: &[Vec<Real>],
+        measure: Measure,
+        tracker: &Tracker,
+    ) -> Memo {
+        Memo {
+            values: bits(&robot.values).collect(),
+            qs: qs.iter().map(|q| bits(q).collect()).collect(),
+            variances: variances(robot, params, qs, measure, tracker),
+        }
+    }
+
+    /// Whether the memo was computed for `robot` at `qs` (the same bits).
+    fn holds(&self, robot: &Robot, qs: &[Vec<Real>]) -> bool {
+        bits(&robot.values).eq(self.values.iter().copied())
+            && qs.len() == self.qs.len()
+            && qs
+                .iter()
+                .zip(&self.qs)
+                .all(|(q, b)| bits(q).eq(b.iter().copied()))
+    }
+
+    /// [`variances`] of `robot` at `qs` for the study's `params`, `measure` and `tracker`:
+    /// from `memo` where it holds them, else computed.
+    pub fn variances(
+        memo: Option<&Memo>,
+        robot: &Robot,
+        params: &[Param],
+        qs: &[Vec<Real>],
+        measure: Measure,
+        tracker: &Tracker,
+    ) -> Option<Vec<Option<Real>>> {
+        match memo {
+            Some(m) if m.holds(robot, qs) => m.variances.clone(),
+            _ => variances(robot, params, qs, measure, tracker),
+        }
+    }
+}
+
 /// Each parameter's Cramér–Rao variance from the weighted normal matrix `n = JᵀWJ`, `None` for
 /// a parameter that is not estimable (docs/formats.md, **Determinable parameters**).
 ///
@@ -208,6 +271,37 @@ mod tests {
     fn each_parameters_variance_is_that_of_a_finite_difference_normal_matrix() {
         check(MeasureSetting::Position);
         check(MeasureSetting::Pose);
+    }
+
+    #[test]
+    fn the_memo_serves_its_own_robot_and_rows_and_computes_the_others() {
+        let nominal = builtin::irb2600();
+        let robot = nominal.with_errors(&[(Param::A(1), 0.4)]);
+        let params = [Param::A(0), Param::A(1), Param::Theta(2)];
+        let tracker = Tracker::new(&TrackerSettings::default()).expect("tracker");
+        let m = tracker.measures();
+        let qs = uniform_joint_poses(&nominal, 20, &mut rng::from_seed(4));
+        let memo = Memo::new(&robot, &params, &qs, m, &tracker);
+        let direct = |r: &Robot, q: &[Vec<Real>]| variances(r, &params, q, m, &tracker);
+        let served =
+            |r: &Robot, q: &[Vec<Real>]| Memo::variances(Some(&memo), r, &params, q, m, &tracker);
+        let bits = |v: Option<Vec<Option<Real>>>| -> Vec<Option<u64>> {
+            v.expect("a bound")
+                .into_iter()
+                .map(|x| x.map(Real::to_bits))
+                .collect()
+        };
+        assert!(memo.holds(&robot, &qs));
+        assert_eq!(bits(served(&robot, &qs)), bits(direct(&robot, &qs)));
+        // Another robot, other rows, fewer rows: not the memo's, so computed, and different.
+        let other = nominal.with_errors(&[(Param::A(1), 0.5)]);
+        assert!(!memo.holds(&other, &qs));
+        assert_eq!(bits(served(&other, &qs)), bits(direct(&other, &qs)));
+        let mut moved = qs.clone();
+        moved[7][2] += 1e-3;
+        assert!(!memo.holds(&robot, &moved) && !memo.holds(&robot, &qs[..19]));
+        assert_eq!(bits(served(&robot, &moved)), bits(direct(&robot, &moved)));
+        assert_ne!(bits(served(&robot, &moved)), bits(served(&robot, &qs)));
     }
 
     #[test]
