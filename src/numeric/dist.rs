@@ -131,8 +131,8 @@ thread_local! {
 }
 
 /// The quantile of Student's t: the t with P(T ≤ t) = p (bisection on [`t_sf`] to machine
-/// precision, from a bracket that doubles). The last [`T_QUANTILES_KEPT`] are kept per
-/// thread, so a repeated call gives the same bits without the bisection.
+/// precision, from a bracket that doubles). The last 64 are kept per thread, so a repeated
+/// call gives the same bits without the bisection.
 pub fn t_quantile(p: Real, df: Real) -> Real {
     let key = (p.to_bits(), df.to_bits());
     let kept = T_QUANTILES.with(|k| k.borrow().iter().find(|e| e.0 == key).map(|e| e.1));
