@@ -45,7 +45,7 @@ use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::{Param, Robot};
 use registration::{register_rows, register_svd, register_wsvd};
 
-pub use validation::{validation_errors, ErrorStats, PoseErrors};
+pub use validation::{validation_errors, validation_errors_with, ErrorStats, PoseErrors};
 
 /// How the measured points are brought into the robot's base frame (docs/formats.md
 /// `[registration]`).

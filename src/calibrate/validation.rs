@@ -114,17 +114,46 @@ pub fn validation_errors(
     payloads: Option<&[Real]>,
     truth: &[Frame],
 ) -> crate::Result<PoseErrors> {
+    validation_errors_with(model, qs, payloads, truth, true)
+}
+
+/// [`validation_errors`], with the orientation errors (`deg`, `attitude_deg`) only where
+/// `orientation` is set: without it they are left empty, and the position errors are the same
+/// numbers. A study of positions reads no orientation error, and their rotation logarithm and
+/// X-Y-Z angles cost it more than the forward kinematics of the pose.
+pub fn validation_errors_with(
+    model: &Robot,
+    qs: &[Vec<Real>],
+    payloads: Option<&[Real]>,
+    truth: &[Frame],
+    orientation: bool,
+) -> crate::Result<PoseErrors> {
     let c = model.chain();
-    let mut e = PoseErrors::default();
+    let rigid = crate::robot::loaded::is_rigid(model);
+    let n = qs.len().min(truth.len());
+    let angles = if orientation { n } else { 0 };
+    let mut e = PoseErrors {
+        mm: Vec::with_capacity(n),
+        deg: Vec::with_capacity(angles),
+        attitude_deg: Vec::with_capacity(angles),
+        axis_mm: Vec::with_capacity(n),
+        axis_abs_mm: Vec::with_capacity(n),
+    };
     for (i, (q, t)) in qs.iter().zip(truth).enumerate() {
-        let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
-        let f = crate::robot::loaded::loaded_fk(model, &c, q, load)?;
+        let f = if rigid {
+            c.fk(q)
+        } else {
+            let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
+            crate::robot::loaded::loaded_fk(model, &c, q, load)?
+        };
         let d = t.pos - f.pos;
         e.mm.push(d.norm());
         e.axis_mm.push(d.sum() / 3.0);
         e.axis_abs_mm.push(d.abs().sum() / 3.0);
-        e.deg.push(rotation_angle_deg(&f, t));
-        e.attitude_deg.push(attitude_error_deg(t, &f));
+        if orientation {
+            e.deg.push(rotation_angle_deg(&f, t));
+            e.attitude_deg.push(attitude_error_deg(t, &f));
+        }
     }
     Ok(e)
 }
@@ -240,6 +269,56 @@ mod tests {
                 };
                 let deg = rotation_angle_deg(&model, &truth);
                 approx::assert_relative_eq!(deg, 0.05, max_relative = 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn without_orientation_the_position_errors_keep_their_bits() {
+        use crate::robot::Param;
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let qs = crate::robot::sampling::uniform_joint_poses(
+            &nominal,
+            12,
+            &mut crate::numeric::rng::from_seed(7),
+        );
+        let truth: Vec<Frame> = qs
+            .iter()
+            .map(|q| {
+                let mut f = nominal.fk(q);
+                f.pos += Vec3::new(0.3, -0.2, 0.1);
+                f.rot *= rot_x(0.01);
+                f
+            })
+            .collect();
+        let loads: Vec<Real> = (0..qs.len()).map(|i| i as Real).collect();
+        // A rigid model and one whose compliance moves each pose under its payload.
+        let mut soft = nominal.clone();
+        soft.set(Param::Compliance(1), 1.0 / 3.5e6);
+        assert!(crate::robot::loaded::is_rigid(&nominal));
+        assert!(!crate::robot::loaded::is_rigid(&soft));
+        for model in [&nominal, &soft] {
+            let all = validation_errors(model, &qs, Some(&loads), &truth).unwrap();
+            let part = validation_errors_with(model, &qs, Some(&loads), &truth, false).unwrap();
+            let bits = |v: &[Real]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&part.mm), bits(&all.mm));
+            assert_eq!(bits(&part.axis_mm), bits(&all.axis_mm));
+            assert_eq!(bits(&part.axis_abs_mm), bits(&all.axis_abs_mm));
+            assert!(part.deg.is_empty() && part.attitude_deg.is_empty());
+            assert_eq!(all.deg.len(), qs.len());
+            // The position error against the forward kinematics written out: the rigid model
+            // is off by the planted offset, the soft one by that and its sag.
+            let c = model.chain();
+            for (i, (q, t)) in qs.iter().zip(&truth).enumerate() {
+                let f = crate::robot::loaded::loaded_fk(model, &c, q, loads[i]).unwrap();
+                assert_eq!(part.mm[i].to_bits(), (t.pos - f.pos).norm().to_bits());
+            }
+            let planted = Vec3::new(0.3, -0.2, 0.1).norm();
+            let off = (part.mm[5] - planted).abs();
+            if model.values == nominal.values {
+                assert!(off < 1e-9, "{off}");
+            } else {
+                assert!(off > 1e-6, "{off}");
             }
         }
     }

@@ -119,9 +119,39 @@ pub fn t_two_sided(t: Real, df: Real) -> Real {
     (2.0 * t_sf(t.abs(), df)).min(1.0)
 }
 
+/// Most quantiles [`t_quantile`] keeps per thread.
+const T_QUANTILES_KEPT: usize = 64;
+
+thread_local! {
+    /// This thread's quantiles computed last, by the bits of `p` and `df`: a run's summary
+    /// asks for the same one (0.975 at n − 1 degrees of freedom) for each of its hundreds of
+    /// intervals, and each costs a bisection of some hundred incomplete beta functions.
+    static T_QUANTILES: std::cell::RefCell<Vec<((u64, u64), Real)>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
 /// The quantile of Student's t: the t with P(T ≤ t) = p (bisection on [`t_sf`] to machine
-/// precision, from a bracket that doubles).
+/// precision, from a bracket that doubles). The last 64 are kept per thread, so a repeated
+/// call gives the same bits without the bisection.
 pub fn t_quantile(p: Real, df: Real) -> Real {
+    let key = (p.to_bits(), df.to_bits());
+    let kept = T_QUANTILES.with(|k| k.borrow().iter().find(|e| e.0 == key).map(|e| e.1));
+    if let Some(t) = kept {
+        return t;
+    }
+    let t = t_quantile_bisected(p, df);
+    T_QUANTILES.with(|k| {
+        let mut k = k.borrow_mut();
+        if k.len() >= T_QUANTILES_KEPT {
+            k.remove(0);
+        }
+        k.push((key, t));
+    });
+    t
+}
+
+/// [`t_quantile`] computed.
+fn t_quantile_bisected(p: Real, df: Real) -> Real {
     if df.is_infinite() {
         return normal_quantile(p);
     }
@@ -281,6 +311,28 @@ mod tests {
 
     fn close(a: Real, b: Real, rel: Real) -> bool {
         (a - b).abs() <= rel * b.abs().max(1e-300)
+    }
+
+    #[test]
+    fn a_kept_quantile_is_the_bisections_bits_for_its_own_p_and_df() {
+        // More pairs than are kept, asked in turn and then again in another order, with p on
+        // both sides of ½: every answer is the bisection's for its own (p, df).
+        let pairs: Vec<(Real, Real)> = (0..90)
+            .map(|i| {
+                (
+                    0.02 + 0.96 * ((i * 37) % 90) as Real / 90.0,
+                    (1 + i % 13) as Real,
+                )
+            })
+            .collect();
+        for round in 0..3 {
+            for k in 0..pairs.len() {
+                let (p, df) = pairs[(k * (round + 1)) % pairs.len()];
+                let want = t_quantile_bisected(p, df);
+                assert_eq!(t_quantile(p, df).to_bits(), want.to_bits(), "{p} {df}");
+                assert_eq!(t_quantile(p, df).to_bits(), want.to_bits(), "{p} {df}");
+            }
+        }
     }
 
     #[test]

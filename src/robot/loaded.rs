@@ -8,6 +8,15 @@ use crate::numeric::{Frame, Real};
 use crate::robot::compliance::{deflect_vars, gravity_torques, is_compliant};
 use crate::robot::{Chain, Param, Robot, MAX_JOINTS};
 
+/// Whether `robot` has no compliance, harmonic or gravity-basis coefficient: then
+/// [`loaded_fk`] is the rigid forward kinematics `chain.fk(q)` at every pose and payload, so a
+/// caller walking many poses of one robot decides it once.
+pub fn is_rigid(robot: &Robot) -> bool {
+    !is_compliant(robot)
+        && !crate::robot::harmonics::has_harmonics(robot)
+        && !crate::robot::gravity_basis::has_gravity(robot)
+}
+
 /// The tool frame of `robot` under the elasto-geometric model at joint values `q` (internal
 /// units) with `payload_kg` at the tool point: the forward kinematics with every chain
 /// variable `j` deflected by `c_j τ_j(q, payload)` ([`gravity_torques`], the robot's
@@ -17,12 +26,12 @@ use crate::robot::{Chain, Param, Robot, MAX_JOINTS};
 /// harmonic and gravity-basis coefficient is zero. Fails when compliances are set but the robot gives no link
 /// masses.
 pub fn loaded_fk(robot: &Robot, chain: &Chain, q: &[Real], payload_kg: Real) -> Result<Frame> {
+    if is_rigid(robot) {
+        return Ok(chain.fk(q));
+    }
     let compliant = is_compliant(robot);
     let harmonic = crate::robot::harmonics::has_harmonics(robot);
     let gravity = crate::robot::gravity_basis::has_gravity(robot);
-    if !compliant && !harmonic && !gravity {
-        return Ok(chain.fk(q));
-    }
     let n = robot.dof();
     let mut tau = [0.0; MAX_JOINTS];
     if compliant {

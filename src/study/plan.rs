@@ -36,6 +36,9 @@ pub struct FixedSet {
     /// The true arm's deflected tool frames at the set's measured rows, when they are the
     /// same in every trial (see [`SagMemo`]).
     pub sag: Option<Arc<SagMemo>>,
+    /// The Cramér–Rao variances of the set's measured rows on the true arm, when it is the
+    /// same in every trial ([`crate::study::crb::Memo`]).
+    pub crb: Option<Arc<crate::study::crb::Memo>>,
 }
 
 impl FixedSet {
@@ -47,6 +50,7 @@ impl FixedSet {
             trace: Vec::new(),
             scores: None,
             sag: None,
+            crb: None,
         }
     }
 }
@@ -374,7 +378,36 @@ impl Study {
                 }
             }
         }
+        if study.scenario.errors.kind.is_fixed() {
+            study.keep_crb();
+        }
         Ok(study)
+    }
+}
+
+impl Study {
+    /// Computes once the Cramér–Rao variances of every fixed set that is measured the same
+    /// way in every trial (not optimised per trial), on the true robot of a study whose true
+    /// robot does not change between trials ([`crate::study::crb::Memo`]).
+    fn keep_crb(&mut self) {
+        let (_, truth) = true_robot(self, 0);
+        for (f, &per_trial) in self.fixed.iter_mut().zip(&self.per_trial) {
+            let Some(f) = f.as_mut().filter(|_| !per_trial) else {
+                continue;
+            };
+            let rows: Vec<Vec<Real>> = calibration_rows(&self.scenario, &f.poses)
+                .into_iter()
+                .map(|(q, _)| q)
+                .collect();
+            let memo = crate::study::crb::Memo::new(
+                &truth,
+                &self.params,
+                &rows,
+                self.measure,
+                &self.tracker,
+            );
+            f.crb = Some(Arc::new(memo));
+        }
     }
 }
 
@@ -414,6 +447,7 @@ pub fn optimise(
         trace: sel.trace,
         scores: serde_json::to_value(sel.scores).ok(),
         sag: None,
+        crb: None,
     };
     Ok((set, sep))
 }

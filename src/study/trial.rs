@@ -11,7 +11,7 @@ use super::crb;
 pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
 use super::plan::{optimised_set, Study};
 use super::stats::ecdf;
-use crate::calibrate::{calibrate, validation_errors, ErrorStats, PoseErrors};
+use crate::calibrate::{calibrate, validation_errors_with, ErrorStats, PoseErrors};
 use crate::error::Result;
 use crate::identify::Termination;
 use crate::measurement::Measure;
@@ -237,13 +237,18 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         })
         .collect::<Result<_>>()?;
     let vpayload = vec![study.validation_payload(); vqs.len()];
-    let before = validation_errors(&study.nominal, &vqs, Some(&vpayload), &vtruth)?;
+    // Orientation errors only where the study reads them (full poses).
+    let full_pose = study.measure == Measure::Pose;
+    let errors_of = |robot: &Robot, qs: &[Vec<Real>], loads: Option<&[Real]>, truth: &[Frame]| {
+        validation_errors_with(robot, qs, loads, truth, full_pose)
+    };
+    let before = errors_of(&study.nominal, &vqs, Some(&vpayload), &vtruth)?;
+    let before_mm = ErrorStats::of(&before.mm);
     let before_fitted = if sc.validation.before_fitted {
         Some(fitted_before(study, &vqs, &vtruth)?)
     } else {
         None
     };
-    let full_pose = study.measure == Measure::Pose;
     let axis = sc.validation.axis_errors;
 
     let mut outcomes = Vec::new();
@@ -288,10 +293,11 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
             })
             .collect();
         let cal_loads = m.data.payload_kg.as_deref();
-        let cal_nominal = validation_errors(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
+        let cal_nominal = errors_of(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
         let cal_before = ErrorStats::of(&cal_nominal.mm);
         // The bound at the rows as measured, on the robot they were measured on.
-        let bounds = crb::bounds_at(
+        let bounds = crb::Memo::bounds_at(
+            study.fixed[si].as_ref().and_then(|f| f.crb.as_deref()),
             &truth_robot,
             &study.params,
             &m.data.qs,
@@ -322,9 +328,9 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                     // there through the true tracker placement (identity for `known`).
                     let map = c.frame.compose(&study.tracker.frame().inverse());
                     let seen: Vec<Frame> = vtruth.iter().map(|t| map.compose(t)).collect();
-                    let e = validation_errors(&c.robot, &vqs, Some(&vpayload), &seen)?;
+                    let e = errors_of(&c.robot, &vqs, Some(&vpayload), &seen)?;
                     let cal_seen: Vec<Frame> = cal_truth.iter().map(|t| map.compose(t)).collect();
-                    let cal = validation_errors(&c.robot, &m.data.qs, cal_loads, &cal_seen)?;
+                    let cal = errors_of(&c.robot, &m.data.qs, cal_loads, &cal_seen)?;
                     let r = c.identified;
                     full_trace = r.trace.clone().filter(|t| !t.is_empty());
                     if index == 0 {
@@ -352,7 +358,7 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
                 method: mi,
                 strategy: si,
                 identified,
-                before_mm: ErrorStats::of(&before.mm),
+                before_mm,
                 after_mm: ErrorStats::of(&after.mm),
                 calibration_before_mm: cal_before,
                 calibration_after_mm: ErrorStats::of(&cal_after.mm),

@@ -1,6 +1,7 @@
 //! `trials.csv` (docs/formats.md `run`): one row per trial × strategy × method, streamed as
 //! the trials finish ([`crate::report::output::Stream`]).
 
+use std::fmt::Write as _;
 use std::path::Path;
 
 use crate::error::Result;
@@ -11,11 +12,12 @@ use crate::study::scenario::Sweep;
 use crate::study::stats::eta;
 use crate::study::{BlockInfo, TrialResult, TrialSink};
 
-fn num(v: Real) -> String {
+/// Appends `,` and `v` (empty where it is not finite) to the row `out`.
+fn num(out: &mut String, v: Real) {
+    out.push(',');
     if v.is_finite() {
-        format!("{v}")
-    } else {
-        String::new()
+        // Writing into a String cannot fail.
+        let _ = write!(out, "{v}");
     }
 }
 
@@ -130,11 +132,20 @@ impl TrialSink for TrialsCsv {
             out += &self.header(info);
             self.header = true;
         }
-        for o in &t.outcomes {
-            let mut row = vec![t.index.to_string()];
-            if let Some(p) = &info.point {
-                row.extend(p.iter().map(|v| v.to_string().replace(',', ";")));
+        // What every row of the trial repeats: its index and sweep point, and the true
+        // errors, formatted once.
+        let mut lead = t.index.to_string();
+        if let Some(p) = &info.point {
+            for v in p {
+                lead.push(',');
+                lead += &v.to_string().replace(',', ";");
             }
+        }
+        let mut truth = String::new();
+        for &v in &t.truth {
+            num(&mut truth, v);
+        }
+        for o in &t.outcomes {
             let etas: Vec<Real> = t
                 .truth
                 .iter()
@@ -146,8 +157,11 @@ impl TrialSink for TrialsCsv {
             } else {
                 etas.iter().sum::<Real>() / etas.len() as Real
             };
-            row.push(info.methods[o.method].clone());
-            row.push(info.strategies[o.strategy].clone());
+            out += &lead;
+            for text in [&info.methods[o.method], &info.strategies[o.strategy]] {
+                out.push(',');
+                out += text;
+            }
             for v in [
                 eta_mean,
                 o.before_mm.mean,
@@ -157,7 +171,7 @@ impl TrialSink for TrialsCsv {
                 o.after_mm.rms,
                 o.after_mm.max,
             ] {
-                row.push(num(v));
+                num(&mut out, v);
             }
             if info.full_pose {
                 let (bd, ad) = (
@@ -165,23 +179,24 @@ impl TrialSink for TrialsCsv {
                     o.optional.validation_after_deg.unwrap_or_default(),
                 );
                 for v in [bd.mean, bd.rms, ad.mean, ad.rms] {
-                    row.push(num(v));
+                    num(&mut out, v);
                 }
             }
-            row.push(o.iterations.to_string());
+            let _ = write!(out, ",{}", o.iterations);
             if info.searches {
-                row.push(num(o
-                    .search
-                    .as_ref()
-                    .map_or(Real::NAN, |s| s.final_fitness)));
+                let fitness = o.search.as_ref().map_or(Real::NAN, |s| s.final_fitness);
+                num(&mut out, fitness);
             }
-            row.push(o.termination.as_str().into());
-            row.extend(t.truth.iter().map(|&v| num(v)));
-            row.extend(o.identified.iter().map(|&v| num(v)));
+            out.push(',');
+            out += o.termination.as_str();
+            out += &truth;
+            for &v in &o.identified {
+                num(&mut out, v);
+            }
             if info.external {
-                row.push(csv_text(o.error.as_deref().unwrap_or("")));
+                out.push(',');
+                out += &csv_text(o.error.as_deref().unwrap_or(""));
             }
-            out += &row.join(",");
             out.push('\n');
         }
         match &mut self.out {
