@@ -28,8 +28,9 @@ pub use crate::identify::solver::DETERMINABLE_SIGMAS;
 /// the joint values `qs` (one row block per value, as the measurement has them) on `robot`,
 /// with `measure`'s rows and the noise of `tracker`: W = diag(1/σ²), σ the position noise at
 /// each point's range from the tracker and, for full poses, its orientation noise ([`bounds`]
-/// of JᵀWJ). `None` where there is no bound at all: a noise-free tracker, an elasto-geometric model (its bound would need each pose's payload and torques)
-/// or a non-finite result.
+/// of JᵀWJ). `None` where there is no bound at all: a noise-free tracker, an
+/// elasto-geometric model (its bound would need each pose's payload and torques) or a
+/// non-finite result.
 pub fn bounds_at(
     robot: &Robot,
     params: &[Param],
@@ -69,8 +70,8 @@ pub fn bounds_at(
 /// (a fixed set under errors `paper`, `values` or `none`), computed once per study
 /// ([`crate::study::plan::FixedSet::crb`]) instead of once per trial. The bound is a pure
 /// function of the robot, the rows and the study's parameters, measure and tracker, so the
-/// bounds served here are the bits the trial would compute; [`Memo::bounds_at`] serves
-/// them only for the same robot values and rows, bit for bit, and computes them otherwise.
+/// bounds served here are the bits the trial would compute; [`Memo::get`] serves them only
+/// for the same robot values and rows, bit for bit.
 #[derive(Debug)]
 pub struct Memo {
     /// The true robot's parameter values, as bits.
@@ -86,45 +87,26 @@ fn bits(v: &[Real]) -> impl Iterator<Item = u64> + '_ {
 }
 
 impl Memo {
-    /// [`bounds_at`] of `robot` at the rows `qs`, kept with the values they belong to.
-    pub fn new(
-        robot: &Robot,
-        params: &[Param],
-        qs: &[Vec<Real>],
-        measure: Measure,
-        tracker: &Tracker,
-    ) -> Memo {
+    /// Keeps `bounds`, the [`bounds_at`] of `robot` at the rows `qs`, with the values they
+    /// belong to.
+    pub fn new(robot: &Robot, qs: &[Vec<Real>], bounds: Option<Bounds>) -> Memo {
         Memo {
             values: bits(&robot.values).collect(),
             qs: qs.iter().map(|q| bits(q).collect()).collect(),
-            bounds: bounds_at(robot, params, qs, measure, tracker),
+            bounds,
         }
     }
 
-    /// Whether the memo was computed for `robot` at `qs` (the same bits).
-    fn holds(&self, robot: &Robot, qs: &[Vec<Real>]) -> bool {
-        bits(&robot.values).eq(self.values.iter().copied())
+    /// The kept bounds where the memo was computed for `robot` at `qs` (the same bits);
+    /// `None` otherwise, where the caller computes them.
+    pub fn get(&self, robot: &Robot, qs: &[Vec<Real>]) -> Option<Option<Bounds>> {
+        let holds = bits(&robot.values).eq(self.values.iter().copied())
             && qs.len() == self.qs.len()
             && qs
                 .iter()
                 .zip(&self.qs)
-                .all(|(q, b)| bits(q).eq(b.iter().copied()))
-    }
-
-    /// [`bounds_at`] of `robot` at `qs` for the study's `params`, `measure` and `tracker`:
-    /// from `memo` where it holds them, else computed.
-    pub fn bounds_at(
-        memo: Option<&Memo>,
-        robot: &Robot,
-        params: &[Param],
-        qs: &[Vec<Real>],
-        measure: Measure,
-        tracker: &Tracker,
-    ) -> Option<Bounds> {
-        match memo {
-            Some(m) if m.holds(robot, qs) => m.bounds.clone(),
-            _ => bounds_at(robot, params, qs, measure, tracker),
-        }
+                .all(|(q, b)| bits(q).eq(b.iter().copied()));
+        holds.then(|| self.bounds.clone())
     }
 }
 
@@ -351,37 +333,25 @@ mod tests {
     }
 
     #[test]
-    fn the_memo_serves_its_own_robot_and_rows_and_computes_the_others() {
+    fn the_memo_serves_its_own_robot_and_rows_only() {
         let nominal = builtin::irb2600();
         let robot = nominal.with_errors(&[(Param::A(1), 0.4)]);
         let params = [Param::A(0), Param::A(1), Param::Theta(2)];
         let tracker = Tracker::new(&TrackerSettings::default()).expect("tracker");
         let m = tracker.measures();
         let qs = uniform_joint_poses(&nominal, 20, &mut rng::from_seed(4));
-        let memo = Memo::new(&robot, &params, &qs, m, &tracker);
         let direct = |r: &Robot, q: &[Vec<Real>]| bounds_at(r, &params, q, m, &tracker);
-        let served =
-            |r: &Robot, q: &[Vec<Real>]| Memo::bounds_at(Some(&memo), r, &params, q, m, &tracker);
-        let bits = |b: Option<Bounds>| -> Vec<u64> {
-            let b = b.expect("a bound");
-            b.variances
-                .iter()
-                .chain(&b.undetermined)
-                .chain(&b.column_norms)
-                .map(|x| x.to_bits())
-                .collect()
-        };
-        assert!(memo.holds(&robot, &qs));
-        assert_eq!(bits(served(&robot, &qs)), bits(direct(&robot, &qs)));
-        // Another robot, other rows, fewer rows: not the memo's, so computed, and different.
+        let memo = Memo::new(&robot, &qs, direct(&robot, &qs));
+        assert!(memo.get(&robot, &qs).expect("held").is_some());
+        assert_eq!(memo.get(&robot, &qs), Some(direct(&robot, &qs)));
+        // Another robot, other rows, fewer rows: not the memo's, and their bounds differ.
         let other = nominal.with_errors(&[(Param::A(1), 0.5)]);
-        assert!(!memo.holds(&other, &qs));
-        assert_eq!(bits(served(&other, &qs)), bits(direct(&other, &qs)));
         let mut moved = qs.clone();
         moved[7][2] += 1e-3;
-        assert!(!memo.holds(&robot, &moved) && !memo.holds(&robot, &qs[..19]));
-        assert_eq!(bits(served(&robot, &moved)), bits(direct(&robot, &moved)));
-        assert_ne!(bits(served(&robot, &moved)), bits(served(&robot, &qs)));
+        assert_eq!(memo.get(&other, &qs), None);
+        assert_eq!(memo.get(&robot, &moved), None);
+        assert_eq!(memo.get(&robot, &qs[..19]), None);
+        assert_ne!(direct(&robot, &moved), direct(&robot, &qs));
     }
 
     #[test]

@@ -19,6 +19,7 @@ use crate::sim::tracker::Tracker;
 use crate::sim::truth::{draw_errors, selected_params};
 use crate::sim::unmodelled::Unmodelled;
 use crate::sim::SagFn;
+use crate::study::crb;
 use crate::study::scenario::{OptimiseEach, PoseStrategy, Registration, Scenario};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -399,14 +400,8 @@ impl Study {
                 .into_iter()
                 .map(|(q, _)| q)
                 .collect();
-            let memo = crate::study::crb::Memo::new(
-                &truth,
-                &self.params,
-                &rows,
-                self.measure,
-                &self.tracker,
-            );
-            f.crb = Some(Arc::new(memo));
+            let bounds = crb::bounds_at(&truth, &self.params, &rows, self.measure, &self.tracker);
+            f.crb = Some(Arc::new(crb::Memo::new(&truth, &rows, bounds)));
         }
     }
 }

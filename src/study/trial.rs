@@ -296,14 +296,17 @@ pub fn run_trial(study: &Study, index: usize) -> Result<TrialResult> {
         let cal_nominal = errors_of(&study.nominal, &m.data.qs, cal_loads, &cal_truth)?;
         let cal_before = ErrorStats::of(&cal_nominal.mm);
         // The bound at the rows as measured, on the robot they were measured on.
-        let bounds = crb::Memo::bounds_at(
-            study.fixed[si].as_ref().and_then(|f| f.crb.as_deref()),
-            &truth_robot,
-            &study.params,
-            &m.data.qs,
-            study.measure,
-            &study.tracker,
-        );
+        let memo = study.fixed[si].as_ref().and_then(|f| f.crb.as_deref());
+        let bounds = match memo.and_then(|memo| memo.get(&truth_robot, &m.data.qs)) {
+            Some(kept) => kept,
+            None => crb::bounds_at(
+                &truth_robot,
+                &study.params,
+                &m.data.qs,
+                study.measure,
+                &study.tracker,
+            ),
+        };
         // No trace where a parameter is not estimable: its variance has no bound.
         crb_traces.push(bounds.as_ref().and_then(crb::Bounds::trace));
         not_determinable.push(crb::not_determinable(&truth, bounds.as_ref()));
