@@ -107,7 +107,14 @@ scale_um_per_m = 1.0
 #[test]
 fn an_instruments_study_killed_and_resumed_gives_the_bytes_of_one_run() {
     let dir = tmp_dir("cells-instruments");
-    let sc = write_scenario(&dir, "s.toml", INSTRUMENTS);
+    // 600 trials a cell: the checkpoint counts its first trials after 256 of the first cell's
+    // 600, so the kill lands within the 944 trials left (about 1 s) rather than in the few
+    // milliseconds between the first cell's end and the run's (6 trials a cell).
+    let sc = write_scenario(
+        &dir,
+        "s.toml",
+        &INSTRUMENTS.replace("trials = 6\n", "trials = 600\n"),
+    );
     let (whole, killed) = (dir.join("whole"), dir.join("killed"));
     calbench_ok(&[
         "run",
