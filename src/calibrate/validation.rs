@@ -7,7 +7,7 @@ use crate::error::Result;
 use crate::identify::qiao::error_models::attitude_error_deg;
 use crate::measurement::Measurements;
 use crate::numeric::{rotation_vector, Frame, Mat3, Real};
-use crate::robot::loaded::loaded_fk;
+use crate::robot::loaded::LoadedFk;
 use crate::robot::Robot;
 
 /// The keys of the validation errors' statistics in `summary.json` and `identified.json`
@@ -128,8 +128,7 @@ pub fn validation_errors_with(
     truth: &[Frame],
     orientation: bool,
 ) -> crate::Result<PoseErrors> {
-    let c = model.chain();
-    let rigid = crate::robot::loaded::is_rigid(model);
+    let fk = LoadedFk::new(model);
     let n = qs.len().min(truth.len());
     let angles = if orientation { n } else { 0 };
     let mut e = PoseErrors {
@@ -140,12 +139,7 @@ pub fn validation_errors_with(
         axis_abs_mm: Vec::with_capacity(n),
     };
     for (i, (q, t)) in qs.iter().zip(truth).enumerate() {
-        let f = if rigid {
-            c.fk(q)
-        } else {
-            let load = payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0);
-            crate::robot::loaded::loaded_fk(model, &c, q, load)?
-        };
+        let f = fk.at(q, payloads.and_then(|p| p.get(i)).copied().unwrap_or(0.0))?;
         let d = t.pos - f.pos;
         e.mm.push(d.norm());
         e.axis_mm.push(d.sum() / 3.0);
@@ -237,16 +231,13 @@ pub fn point_residuals(
 /// registration: measured (registered) − predicted, mm (the predicted point under the row's
 /// payload when the robot has compliances).
 pub fn residual_vectors(c: &Calibrated, data: &Measurements) -> Result<Vec<crate::numeric::Vec3>> {
-    let cc = c.robot.chain();
+    let fk = LoadedFk::new(&c.robot);
     let loads = data.payload_kg.as_deref();
     data.qs
         .iter()
         .zip(&data.points)
         .enumerate()
-        .map(|(i, (q, p))| {
-            let load = loads.map_or(0.0, |l| l[i]);
-            Ok(c.frame.apply(p) - loaded_fk(&c.robot, &cc, q, load)?.pos)
-        })
+        .map(|(i, (q, p))| Ok(c.frame.apply(p) - fk.at(q, loads.map_or(0.0, |l| l[i]))?.pos))
         .collect()
 }
 

@@ -6,7 +6,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::numeric::rng::Rng;
 use crate::numeric::{rotation_vector, Frame, Real, Vec3};
-use crate::robot::loaded::loaded_fk;
+use crate::robot::loaded::LoadedFk;
 use crate::robot::Robot;
 use rand::Rng as _;
 
@@ -112,10 +112,10 @@ pub fn solve_pose_rows(
     payload_kg: Real,
     rows: usize,
 ) -> crate::Result<Vec<Real>> {
-    let chain = robot.chain();
+    let fk = LoadedFk::new(robot);
     gauss_newton(
         q0,
-        |q| loaded_fk(robot, &chain, q, payload_kg),
+        |q| fk.at(q, payload_kg),
         |f| pose_error(target, f),
         rows,
     )

@@ -17,6 +17,33 @@ pub fn is_rigid(robot: &Robot) -> bool {
         && !crate::robot::gravity_basis::has_gravity(robot)
 }
 
+/// [`loaded_fk`] of one robot at many poses, with [`is_rigid`] decided once instead of at each
+/// pose (it reads every harmonic and gravity-basis coefficient): the same frames, bit for bit.
+pub struct LoadedFk<'a> {
+    robot: &'a Robot,
+    chain: Chain,
+    rigid: bool,
+}
+
+impl<'a> LoadedFk<'a> {
+    /// The forward kinematics of `robot`.
+    pub fn new(robot: &'a Robot) -> LoadedFk<'a> {
+        LoadedFk {
+            robot,
+            chain: robot.chain(),
+            rigid: is_rigid(robot),
+        }
+    }
+
+    /// [`loaded_fk`] at `q` under `payload_kg`.
+    pub fn at(&self, q: &[Real], payload_kg: Real) -> Result<Frame> {
+        if self.rigid {
+            return Ok(self.chain.fk(q));
+        }
+        loaded_fk(self.robot, &self.chain, q, payload_kg)
+    }
+}
+
 /// The tool frame of `robot` under the elasto-geometric model at joint values `q` (internal
 /// units) with `payload_kg` at the tool point: the forward kinematics with every chain
 /// variable `j` deflected by `c_j τ_j(q, payload)` ([`gravity_torques`], the robot's
