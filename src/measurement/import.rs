@@ -205,7 +205,7 @@ impl Mapping {
     fn load_plan(path: &Path) -> Result<(Mapping, Plan)> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let m: Mapping = toml::from_str(&text)
-            .map_err(|e| Error::file(path, "mapping", e.message().to_string()))?;
+            .map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
         let plan = m.plan(path, &text)?;
         Ok((m, plan))
     }

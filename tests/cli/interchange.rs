@@ -208,6 +208,57 @@ fn import_refuses_a_mapping_that_uses_one_column_for_two_fields() {
     }
 }
 
+/// A mapping that is not valid TOML for a mapping (a key given twice, a value of the wrong
+/// type, an array of the wrong length, an unknown key) is refused naming the mapping file and
+/// the line, as a robot or scenario file is.
+#[test]
+fn import_refuses_a_malformed_mapping_naming_its_line() {
+    let d = tmp_dir("interchange-mapping-toml");
+    let mapping = read(Path::new(&ur10_example("mapping.toml")));
+    let cases = [
+        (
+            "unit = \"mm\"\n",
+            "unit = \"mm\"\nunit = \"m\"\n",
+            15,
+            "duplicate key",
+        ),
+        ("unit = \"rad\"", "unit = 1", 9, ""),
+        (
+            "columns = [\"measurement_x\", \"measurement_y\", \"measurement_z\"]",
+            "columns = [\"measurement_x\", \"measurement_y\"]",
+            13,
+            "expected an array of length 3",
+        ),
+        (
+            "sequence = \"xyz\"",
+            "sequenc = \"xyz\"",
+            19,
+            "unknown field `sequenc`",
+        ),
+    ];
+    let out = d.join("out.csv");
+    for (i, (from, to, line, expected)) in cases.iter().enumerate() {
+        assert!(mapping.contains(from), "{from}");
+        let m = d.join(format!("m{i}.toml"));
+        std::fs::write(&m, mapping.replacen(from, to, 1)).unwrap();
+        let o = import(
+            Path::new(&ur10_example("sample-200.csv")),
+            path_arg(&m),
+            &out,
+        );
+        let msg = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{msg}");
+        assert!(
+            msg.contains(&format!(
+                "m{i}.toml: TOML: TOML parse error at line {line},"
+            )),
+            "{msg}"
+        );
+        assert!(msg.contains(expected), "{msg}");
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn a_measurement_file_with_a_byte_order_mark_and_crlf_names_the_right_line() {
     let d = tmp_dir("interchange-crlf-lines");
