@@ -121,7 +121,7 @@ impl IdentifyRequest {
                     "weighs orientation against position errors; the data hold positions only";
                 return Err(Error::option(Opt::K, why));
             }
-            crate::error::finite_positive("k", k).map_err(|e| e.of_option(Opt::K))?;
+            crate::identify::qiao::check_k(k).map_err(|e| e.of_option(Opt::K))?;
             spec.k = k;
         }
         let mut val = self.validate.clone();
