@@ -127,6 +127,16 @@ impl IdentifyRequest {
         let mut val = self.validate.clone();
         if let Some(h) = self.holdout {
             let (cal, held) = h.split(d.len());
+            if held.is_empty() {
+                let why = format!(
+                    "`{0}/{1}` holds out no row: of every {1} rows the last {0} are held out, \
+                     and the data have {2} rows",
+                    h.last,
+                    h.every,
+                    d.len()
+                );
+                return Err(Error::option(Opt::Holdout, why));
+            }
             val = Some(cv::subset(&d, &held));
             d = cv::subset(&d, &cal);
         }
