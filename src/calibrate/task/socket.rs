@@ -251,6 +251,7 @@ impl SocketTask {
             },
             sigma_mm: None,
             lines: Vec::new(),
+            files: Vec::new(),
         };
         for (s, f) in files.iter().enumerate() {
             let raw = std::fs::read_to_string(f).map_err(|e| Error::io(f, e))?;
@@ -274,6 +275,7 @@ impl SocketTask {
             out.data.values.extend(one.data.values);
             out.qs.extend(one.qs);
             out.lines.extend(one.lines.iter().map(|l| l - 1));
+            out.files.push((f.clone(), one.lines.len()));
         }
         out.data.check(out.qs.len())?;
         Ok(out)
