@@ -277,3 +277,32 @@ fn a_gross_reading_is_named_by_its_own_joint_file() {
     );
     assert!(!o.exists());
 }
+
+/// A `tip` the URDF has no link of is refused naming the task file's line and key, not the
+/// command line's `--tip`, which the entry was not given.
+#[test]
+fn a_tip_the_urdf_lacks_is_refused_naming_the_task_key() {
+    let dir = tmp_dir("cli-socket-task-tip");
+    let task = copied_task(&dir, "", "socket_spread_mm", "tip");
+    std::fs::write(
+        &task,
+        read(&task).replace("tip = \"ball_link\"", "tip = \"ball\""),
+    )
+    .unwrap();
+    let o = dir.join("out");
+    let r = calbench(&[
+        "task",
+        path_arg(&task),
+        "--method",
+        "ls",
+        "--out",
+        path_arg(&o),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("tip.toml: line 3, tip: no link \"ball\" in") && !err.contains("--tip"),
+        "{err}"
+    );
+    assert!(!o.exists());
+}

@@ -220,8 +220,18 @@ impl SocketTask {
             .collect()
     }
 
-    /// The model `path` (a URDF's chain to the task's tip).
+    /// The model `path` (a URDF's chain to the task's tip). A tip the URDF has no link of is
+    /// refused naming the task file's `tip`, which gave it.
     pub fn load_model(&self, path: &Path) -> Result<Robot> {
+        if let Some(tip) = &self.tip {
+            let urdf =
+                urdf_rs::read_file(path).map_err(|e| Error::file(path, "URDF", e.to_string()))?;
+            if !urdf.links.iter().any(|l| &l.name == tip) {
+                let h = &self.head;
+                let msg = format!("no link \"{tip}\" in {}", path.display());
+                return Err(Error::toml_file(&h.path, &h.text, "tip", "tip", msg));
+            }
+        }
         let chain = UrdfChain {
             base: None,
             tip: self.tip.clone(),
