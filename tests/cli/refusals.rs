@@ -529,3 +529,46 @@ fn a_registration_study_claim_is_refused_at_its_line() {
         ],
     );
 }
+
+/// A pose or instrument count too large to allocate (`9223372036854775807`) is refused when
+/// the scenario is read, naming the file, the line and the key, where `run` and `simulate`
+/// panicked with "capacity overflow"; nothing is written.
+#[test]
+fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
+    let d = tmp("huge-count");
+    let root = crate::common::root();
+    let huge = "9223372036854775807";
+    let cases = [
+        (
+            "scenarios/ci-guard.toml",
+            "count = 40",
+            "line 26, setting: setting `calibration.count`: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/ci-guard.toml",
+            "count = 30",
+            "line 30, setting: setting `validation.count`: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/instruments.toml",
+            "candidates = 600",
+            "line 26, instruments_study.candidates: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/instruments.toml",
+            "planes = 3",
+            "line 76, measurement[3]: setting `measurement.planes`: must be at most 1000",
+        ),
+    ];
+    for (i, (file, line, expected)) in cases.into_iter().enumerate() {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(text.contains(line), "{line}");
+        let key = line.split(" = ").next().unwrap();
+        let p = d.join(format!("huge{i}.toml"));
+        std::fs::write(&p, text.replacen(line, &format!("{key} = {huge}"), 1)).unwrap();
+        let out = d.join(format!("out{i}"));
+        let o = calbench(&["simulate", path(&p), "--out", path(&out)]);
+        refused(&o, &[&format!("huge{i}.toml: {expected}"), huge]);
+        assert!(!out.exists());
+    }
+}
