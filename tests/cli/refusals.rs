@@ -572,3 +572,38 @@ fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
         assert!(!out.exists());
     }
 }
+
+/// A search's population or iteration count too large to allocate its swarm or its trace is
+/// refused naming the method's key, where `run` panicked with "capacity overflow".
+#[test]
+fn a_search_population_or_iteration_count_too_large_is_refused_at_its_key() {
+    let d = tmp("huge-search");
+    for (method, key, most) in [
+        ("pso", "population", "1000000"),
+        ("bas-pso", "population", "1000000"),
+        ("pso", "iterations", "10000000"),
+        ("bas", "iterations", "10000000"),
+    ] {
+        let p = d.join(format!("{method}-{key}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "name = \"huge\"\nseed = 1\ntrials = 2\n[robot]\nbuiltin = \"tx60\"\n\
+                 [errors]\nkind = \"paper\"\n[tracker]\nmeasure = \"pose\"\n\
+                 [calibration]\ncount = 20\n[[methods]]\nname = \"{method}\"\n\
+                 {key} = 9223372036854775807\n"
+            ),
+        )
+        .unwrap();
+        let out = d.join("out");
+        let o = calbench(&["run", path(&p), "--out", path(&out)]);
+        refused(
+            &o,
+            &[&format!(
+                "{method}-{key}.toml: line 14, methods[0].{key}: must be at most {most}, got \
+                 9223372036854775807"
+            )],
+        );
+        assert!(!out.join("summary.json").exists());
+    }
+}
