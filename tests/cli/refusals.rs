@@ -607,3 +607,40 @@ fn a_search_population_or_iteration_count_too_large_is_refused_at_its_key() {
         assert!(!out.join("summary.json").exists());
     }
 }
+
+/// An injected error beyond a robot file's range (`a2 = 1e308` mm in `errors.values`) is
+/// refused naming the scenario, the line and the key, where `simulate` wrote a measurement
+/// file of `NaN` points with exit status 0.
+#[test]
+fn an_injected_error_beyond_a_robot_files_range_is_refused_at_its_key() {
+    let d = tmp("huge-error");
+    let root = crate::common::root();
+    let text = std::fs::read_to_string(root.join("scenarios/li2018-irb2600.toml")).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("a2 = "))
+        .expect("errors.values.a2")
+        + 1;
+    let edited: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("a2 = ") {
+                "a2 = 1e308".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    let p = d.join("huge-error.toml");
+    std::fs::write(&p, edited.join("\n")).unwrap();
+    let out = d.join("out");
+    let o = calbench(&["simulate", path(&p), "--out", path(&out)]);
+    refused(
+        &o,
+        &[&format!(
+            "huge-error.toml: line {line}, setting: setting `errors.values.a2`: must be within \
+             ±1000000 mm"
+        )],
+    );
+    assert!(!out.exists());
+}
