@@ -435,7 +435,10 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
             let row = i + file.qs.len() - readings;
             file.lines
                 .get(row)
-                .map_or(format!("reading {i}"), |l| format!("line {l}"))
+                .map_or(format!("reading {i}"), |l| match file.file_of(row) {
+                    Some(f) => format!("line {l} of {}", f.display()),
+                    None => format!("line {l}"),
+                })
         }
     };
     let gross = || {

@@ -121,12 +121,22 @@ impl IdentifyRequest {
                     "weighs orientation against position errors; the data hold positions only";
                 return Err(Error::option(Opt::K, why));
             }
-            crate::error::finite_positive("k", k).map_err(|e| e.of_option(Opt::K))?;
+            crate::identify::qiao::check_k(k).map_err(|e| e.of_option(Opt::K))?;
             spec.k = k;
         }
         let mut val = self.validate.clone();
         if let Some(h) = self.holdout {
             let (cal, held) = h.split(d.len());
+            if held.is_empty() {
+                let why = format!(
+                    "`{0}/{1}` holds out no row: of every {1} rows the last {0} are held out, \
+                     and the data have {2} rows",
+                    h.last,
+                    h.every,
+                    d.len()
+                );
+                return Err(Error::option(Opt::Holdout, why));
+            }
             val = Some(cv::subset(&d, &held));
             d = cv::subset(&d, &cal);
         }

@@ -62,6 +62,20 @@ pub fn undetermined_error(
         );
         return Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient));
     }
+    if a.rank >= params.0.len() {
+        // The poses determine every kinematic parameter, yet the solve's rank fell short: no
+        // parameter or group of the analysis to name.
+        let msg = format!(
+            "the poses determine all {} kinematic parameters, yet the solve's rank is {} of \
+             the {} identified: the rows' weights (the orientation weight k, the points' σ) \
+             or the parameters beside the kinematic ones leave the rest undetermined; \
+             {ended}. Check them, or pass ",
+            params.0.len(),
+            c.identified.rank.unwrap_or(a.rank),
+            params.1,
+        );
+        return Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient));
+    }
     let (undetermined, groups) = names_and_groups(&a);
     let msg = format!(
         "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \

@@ -12,8 +12,8 @@ use serde::de::DeserializeOwned;
 
 use super::qiao::method::Metaheuristic;
 use super::{LmOptions, LsOptions, Method, PoseErrorLs, RidgeOptions, RobustOptions};
-use crate::error::{finite_positive, Error, Result};
-use crate::identify::qiao::{BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
+use crate::error::{Error, Result};
+use crate::identify::qiao::{check_k, BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
 use crate::numeric::Real;
 use crate::robot::Param;
 
@@ -162,7 +162,7 @@ impl MethodSpec {
                     .as_float()
                     .or_else(|| v.as_integer().map(|i| i as Real))
                     .ok_or_else(|| ("k".to_string(), format!("must be a number, got {v}")))?;
-                finite_positive("k", k).map_err(split)?;
+                check_k(k).map_err(split)?;
                 k
             }
         };

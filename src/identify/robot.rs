@@ -246,7 +246,7 @@ impl<'a> RobotProblem<'a> {
     /// (about 150 mm/rad for a tracker with 15 µm and 0.005°). Fails unless `k` is finite
     /// and positive.
     pub fn with_orientation_weight(mut self, k: Real) -> crate::Result<Self> {
-        crate::error::finite_positive("k", k)?;
+        crate::identify::qiao::check_k(k)?;
         self.orientation_weight = k;
         Ok(self)
     }

@@ -7,8 +7,10 @@
 //! quaternion's component order) and the per-point standard deviations, which become the
 //! `sigma_mm` weight column (weighted least squares in every method, [`Measurements::weights`]).
 //! A cell that is empty or not a finite number is refused naming the file, the line and the
-//! column; nothing is dropped. Nothing ambiguous is guessed either: a mapped column whose name
-//! the header holds twice, and a mapping that names one column for two fields, are refused.
+//! column, and so is a value the measurement CSV would refuse whatever the robot once it is in
+//! the written units (an overflow, a point beyond 1 km, a σ out of range); nothing is
+//! dropped. Nothing ambiguous is guessed either: a mapped column whose name the header holds
+//! twice, and a mapping that names one column for two fields, are refused.
 //!
 //! [`Measurements::weights`]: crate::measurement::Measurements::weights
 
@@ -17,6 +19,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
+use super::csv::{check_coordinate, check_sigma};
 use super::rows::{at_line, Dialect, Rows};
 use crate::error::{shown, toml_key_line, Error, Result};
 use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
@@ -202,7 +205,7 @@ impl Mapping {
     fn load_plan(path: &Path) -> Result<(Mapping, Plan)> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let m: Mapping = toml::from_str(&text)
-            .map_err(|e| Error::file(path, "mapping", e.message().to_string()))?;
+            .map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
         let plan = m.plan(path, &text)?;
         Ok((m, plan))
     }
@@ -499,14 +502,30 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
         };
         row.clear();
         for &c in &jc {
-            row.push(num(c)? * plan.joints.1);
+            let v = num(c)?;
+            let q = v * plan.joints.1;
+            if !q.is_finite() {
+                return Err(at_line(
+                    raw,
+                    line,
+                    &format!(", column {}", header[c]),
+                    format!(
+                        "{} overflows: it is {q} after its conversion from `joints.unit` to \
+                         `joints.write_unit`",
+                        shown(v)
+                    ),
+                ));
+            }
+            row.push(q);
         }
         for (k, &c) in pc.iter().enumerate() {
             let v = match plus.get(k) {
                 Some(&p) => num(c)? + num(p)?,
                 None => num(c)?,
-            };
-            row.push(v * plan.position.1);
+            } * plan.position.1;
+            check_coordinate(v)
+                .map_err(|m| at_line(raw, line, &format!(", column {}", header[c]), m))?;
+            row.push(v);
         }
         let cells: Vec<String> = row
             .iter()
@@ -553,14 +572,16 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
             let mut acc: Real = 0.0;
             for &c in &sc {
                 let v = num(c)? * scale;
+                let place = format!(", column {}", header[c]);
                 if v <= 0.0 {
                     return Err(at_line(
                         raw,
                         line,
-                        &format!(", column {}", header[c]),
+                        &place,
                         format!("standard deviation {} mm: must be positive", shown(v)),
                     ));
                 }
+                check_sigma(v).map_err(|m| at_line(raw, line, &place, m))?;
                 acc = match combine {
                     Combine::Rms => acc + v * v,
                     Combine::Max => acc.max(v),

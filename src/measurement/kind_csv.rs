@@ -20,7 +20,7 @@
 //! naming the file, the line and the column.
 
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use super::csv::{
     check_coordinate, check_joints, check_sigma, distinct_poses, fixed, joint_cells, joint_header,
@@ -84,6 +84,24 @@ pub struct KindFile {
     pub sigma_mm: Option<Vec<Real>>,
     /// The file line of each row.
     pub lines: Vec<u64>,
+    /// The files of the rows when they were read from several, each with its number of rows,
+    /// in row order (a socket task's placement: one file per socket, each row's line in
+    /// [`Self::lines`] a line of its own file); empty when they come from one file.
+    pub files: Vec<(PathBuf, usize)>,
+}
+
+impl KindFile {
+    /// The file row `row` was read from, when the rows come from several ([`Self::files`]).
+    pub fn file_of(&self, row: usize) -> Option<&Path> {
+        let mut end = 0;
+        self.files
+            .iter()
+            .find(|(_, n)| {
+                end += n;
+                row < end
+            })
+            .map(|(f, _)| f.as_path())
+    }
 }
 
 /// The kind of the measurement file at `path` by its header: `Some` when it has one of the
@@ -208,6 +226,7 @@ fn read_kind_rows(
         },
         sigma_mm: sigma_col.map(|_| Vec::new()),
         lines: Vec::new(),
+        files: Vec::new(),
     };
     // Per plane or sphere: its radius and the line that gave it.
     let mut radii: Vec<Option<(Real, u64)>> = Vec::new();
@@ -511,6 +530,7 @@ fn read_targets(mut t: Rows, robot: &(impl JointSpace + ?Sized), path: &Path) ->
         data,
         sigma_mm: None,
         lines,
+        files: Vec::new(),
     })
 }
 

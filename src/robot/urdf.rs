@@ -23,7 +23,8 @@ use std::path::Path;
 use crate::error::{Error, Opt, Result, Said};
 use crate::numeric::{matrix_rpy, rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
 use crate::robot::{
-    value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Robot, Units,
+    to_internal, value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Quantity,
+    Robot, Units,
 };
 
 /// A robot read from a URDF: the calbench robot and what is needed to write it back.
@@ -55,6 +56,40 @@ fn set_origin(j: &mut urdf_rs::Joint, f: &Frame) {
         m(f.pos.z / 1000.0),
     ]);
     j.origin.rpy = urdf_rs::Vec3(matrix_rpy(&f.rot).map(m));
+}
+
+/// The numbers calbench reads of the URDF joint `j` (moving as `kind`), checked as a robot
+/// file's are after their conversion to mm and rad ([`to_internal`]): the origin's `xyz`
+/// lengths (m) within ±1 km and `rpy` angles within one turn, a moving joint's axis finite,
+/// and its limits (but a continuous joint's, which calbench does not read) within range. A
+/// refusal names the joint and the element.
+fn check_numbers(j: &urdf_rs::Joint, kind: Option<JointType>) -> std::result::Result<(), String> {
+    let at = |what: &str, m: String| format!("joint \"{}\", {what}: {m}", j.name);
+    for &v in j.origin.xyz.iter() {
+        to_internal(Quantity::Length, v, 1000.0, "m").map_err(|m| at("<origin xyz>", m))?;
+    }
+    for &v in j.origin.rpy.iter() {
+        to_internal(Quantity::Angle, v, 1.0, "rad").map_err(|m| at("<origin rpy>", m))?;
+    }
+    let Some(kind) = kind else { return Ok(()) };
+    let a = &j.axis.xyz;
+    if !Vec3::new(a[0], a[1], a[2]).norm().is_finite() {
+        let msg = format!(
+            "must be a direction of finite length, got {:?}",
+            [a[0], a[1], a[2]]
+        );
+        return Err(at("<axis xyz>", msg));
+    }
+    if j.joint_type != urdf_rs::JointType::Continuous {
+        let (quantity, factor, unit) = match kind {
+            JointType::Prismatic => (Quantity::Length, 1000.0, "m"),
+            JointType::Revolute => (Quantity::JointAngle, 1.0, "rad"),
+        };
+        for v in [j.limit.lower, j.limit.upper] {
+            to_internal(quantity, v, factor, unit).map_err(|m| at("<limit>", m))?;
+        }
+    }
+    Ok(())
 }
 
 fn moving(j: &urdf_rs::Joint) -> Result<Option<JointType>> {
@@ -189,8 +224,10 @@ impl UrdfRobot {
         let mut joints = Vec::new();
         for &i in &chain {
             let j = &js[i];
+            let kind = moving(j).map_err(|e| bad(e.to_string()))?;
+            check_numbers(j, kind).map_err(bad)?;
             w = w.compose(&origin(j));
-            if let Some(kind) = moving(j).map_err(|e| bad(e.to_string()))? {
+            if let Some(kind) = kind {
                 let a = Vec3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
                 if a.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
                     return Err(bad(format!("joint \"{}\": zero axis", j.name)));
@@ -271,6 +308,14 @@ impl UrdfRobot {
             beta_joints: None,
             link_mass_kg: None,
         };
+        // Origins within range can still add up beyond it (a base 3 km from the root).
+        robot.check().map_err(|i| {
+            bad(format!(
+                "the robot the chain makes: {}: {} (the DH values and frames calbench derives \
+                 from the joints' origins and axes)",
+                i.place, i.msg
+            ))
+        })?;
         Ok(UrdfRobot {
             robot,
             source,

@@ -366,6 +366,18 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
                     collector.begin(info, t0);
                     current = Some(b);
                 }
+                let info = infos.get(b).and_then(Option::as_ref);
+                if let Some(why) = info.and_then(|(i, _)| i.misfit(&t)) {
+                    return Err(Error::file(
+                        d.join("shard.json"),
+                        "blocks",
+                        format!(
+                            "the record of trial {index} (records.txt, line {}) does not fit \
+                             its block: {why} (the file was altered)",
+                            records.lines()
+                        ),
+                    ));
+                }
                 collector.trial(&t, &mut csv)?;
                 aggregated += 1;
             }

@@ -74,6 +74,19 @@ impl Default for InstrumentSettings {
 impl InstrumentSettings {
     /// The instrument's geometry (kind `pose` is refused: it is the tracker's own path).
     pub fn instrument(&self) -> Result<Instrument> {
+        use crate::measurement::kind_csv::MAX_GROUPS;
+        for (key, n) in [
+            ("planes", self.planes),
+            ("spheres", self.spheres),
+            ("sockets", self.sockets),
+        ] {
+            if n > MAX_GROUPS {
+                return Err(Error::setting(
+                    format!("measurement.{key}"),
+                    format!("must be at most {MAX_GROUPS} (the most a measurement file numbers), got {n}"),
+                ));
+            }
+        }
         let inst = match self.kind {
             Kind::Position => Instrument::Targets(vec![Vec3::zeros()]),
             Kind::MultiTarget => {

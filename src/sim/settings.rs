@@ -182,6 +182,25 @@ impl ErrorSettings {
                     format!("must be a finite number, got {}", crate::error::shown(*v)),
                 ));
             }
+            // An error on a length or an angle within a robot file's range for it: beyond,
+            // the true robot's points are not finite.
+            for (n, v) in &self.values {
+                let Some(p) = Param::parse(n) else { continue };
+                let (most, unit) = match p {
+                    Param::Compliance(_) | Param::Harmonic(..) | Param::Gravity(..) => continue,
+                    _ if p.is_length() => (crate::robot::MAX_LENGTH_MM, "mm"),
+                    _ => (crate::robot::MAX_ANGLE_RAD, "rad"),
+                };
+                if v.abs() > most {
+                    return Err(Error::setting(
+                        format!("errors.values.{n}"),
+                        format!(
+                            "must be within ±{most} {unit} (a robot file's range), got {}",
+                            crate::error::shown(*v)
+                        ),
+                    ));
+                }
+            }
         } else if !self.values.is_empty() {
             return Err(Error::setting(
                 "errors.values",

@@ -201,6 +201,45 @@ impl BlockInfo {
                 .any(|m| m.method.fitness_model().is_some()),
         }
     }
+
+    /// Why the trial `t` cannot be one of this block's, if it cannot: its injected errors,
+    /// identified values, strategies and methods are not those the block lists (a block read
+    /// from an altered file; [`Collector::trial`] would index past them).
+    pub fn misfit(&self, t: &TrialResult) -> Option<String> {
+        let (p, m, s) = (self.params.len(), self.methods.len(), self.strategies.len());
+        if self.fixed.len() != s {
+            return Some(format!(
+                "{} fixed pose sets for {s} strategies",
+                self.fixed.len()
+            ));
+        }
+        if t.truth.len() != p {
+            return Some(format!(
+                "{} injected errors for {p} parameters",
+                t.truth.len()
+            ));
+        }
+        if t.crb_trace.len() != s || t.not_determinable.len() > s {
+            return Some(format!(
+                "{} Cramér–Rao traces for {s} strategies",
+                t.crb_trace.len()
+            ));
+        }
+        if t.not_determinable.iter().flatten().any(|&k| k >= p) {
+            return Some(format!("a parameter index beyond its {p} parameters"));
+        }
+        t.outcomes.iter().find_map(|o| {
+            (o.method >= m || o.strategy >= s || o.identified.len() != p).then(|| {
+                format!(
+                    "an outcome of method {} and strategy {} with {} identified values, for \
+                     {m} methods, {s} strategies and {p} parameters",
+                    o.method,
+                    o.strategy,
+                    o.identified.len()
+                )
+            })
+        })
+    }
 }
 
 /// What trial 0 of a block keeps for the plots and `summary.json`.

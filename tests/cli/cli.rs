@@ -107,6 +107,19 @@ fn identify_takes_an_orientation_weight_for_full_pose_files_only() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains("--k"), "k = {k}: {err}");
     }
+    // A weight whose squared rows overflow (the solve stopped, diverged, before its first
+    // step and the nominal robot was written with exit status 0) is refused.
+    let out = tmp_dir("cli-k-huge").join("o");
+    let o = id(&pose, "tx60-floor", "1e308", &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(
+            "setting `--k`: must be finite, positive and at most 1e6 mm per rad, got 1e308"
+        ),
+        "{err}"
+    );
+    assert!(!out.exists());
 }
 
 /// A file on which only joint 1 moves determines a handful of the parameters: every method

@@ -208,6 +208,57 @@ fn import_refuses_a_mapping_that_uses_one_column_for_two_fields() {
     }
 }
 
+/// A mapping that is not valid TOML for a mapping (a key given twice, a value of the wrong
+/// type, an array of the wrong length, an unknown key) is refused naming the mapping file and
+/// the line, as a robot or scenario file is.
+#[test]
+fn import_refuses_a_malformed_mapping_naming_its_line() {
+    let d = tmp_dir("interchange-mapping-toml");
+    let mapping = read(Path::new(&ur10_example("mapping.toml")));
+    let cases = [
+        (
+            "unit = \"mm\"\n",
+            "unit = \"mm\"\nunit = \"m\"\n",
+            15,
+            "duplicate key",
+        ),
+        ("unit = \"rad\"", "unit = 1", 9, ""),
+        (
+            "columns = [\"measurement_x\", \"measurement_y\", \"measurement_z\"]",
+            "columns = [\"measurement_x\", \"measurement_y\"]",
+            13,
+            "expected an array of length 3",
+        ),
+        (
+            "sequence = \"xyz\"",
+            "sequenc = \"xyz\"",
+            19,
+            "unknown field `sequenc`",
+        ),
+    ];
+    let out = d.join("out.csv");
+    for (i, (from, to, line, expected)) in cases.iter().enumerate() {
+        assert!(mapping.contains(from), "{from}");
+        let m = d.join(format!("m{i}.toml"));
+        std::fs::write(&m, mapping.replacen(from, to, 1)).unwrap();
+        let o = import(
+            Path::new(&ur10_example("sample-200.csv")),
+            path_arg(&m),
+            &out,
+        );
+        let msg = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{msg}");
+        assert!(
+            msg.contains(&format!(
+                "m{i}.toml: TOML: TOML parse error at line {line},"
+            )),
+            "{msg}"
+        );
+        assert!(msg.contains(expected), "{msg}");
+        assert!(!out.exists());
+    }
+}
+
 #[test]
 fn a_measurement_file_with_a_byte_order_mark_and_crlf_names_the_right_line() {
     let d = tmp_dir("interchange-crlf-lines");
@@ -516,4 +567,52 @@ fn import_reads_an_export_with_latin_1_bytes_in_an_unmapped_column() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap());
+}
+
+/// A cell that is a finite number in the export but not in the measurement CSV written from
+/// it — a joint value that overflows on its conversion from rad to deg, a point beyond 1 km, a
+/// standard deviation below 1e-9 mm (written as 0) — is refused naming the export, the line
+/// and the column, as the measurement CSV would be, and nothing is written (no `inf` cell).
+#[test]
+fn import_refuses_a_value_the_measurement_csv_would_refuse() {
+    let d = tmp_dir("interchange-import-range");
+    let (plain, mapping) = comma_export(&d);
+    for (column, at, value, expected) in [
+        (
+            7,
+            "shoulder_pan_joint",
+            "1e308",
+            "1e308 overflows: it is inf",
+        ),
+        (14, "measurement_x", "-2e6", "-2000000.0 mm is out of range"),
+        (
+            15,
+            "measurement_std_x",
+            "1e-300",
+            "1e-300 mm is out of range",
+        ),
+    ] {
+        let text: Vec<String> = plain
+            .lines()
+            .enumerate()
+            .map(|(i, l)| {
+                let mut cells: Vec<String> = l.split(',').map(String::from).collect();
+                if i == 3 {
+                    cells[column] = value.into();
+                }
+                cells.join(",")
+            })
+            .collect();
+        let raw = d.join("range.csv");
+        std::fs::write(&raw, text.join("\n")).unwrap();
+        let out = d.join("out.csv");
+        let o = import(&raw, &mapping, &out);
+        let msg = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{msg}");
+        assert!(
+            msg.contains(&format!("range.csv: line 4, column {at}: {expected}")),
+            "{msg}"
+        );
+        assert!(!out.exists());
+    }
 }

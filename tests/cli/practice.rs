@@ -121,6 +121,21 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     ));
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("LAST/EVERY"));
+    // A rule that holds out no row of the data (a block longer than the file) is refused
+    // naming the option, not as data without points.
+    let bad = calbench(&lm_args(
+        &ex("ur10.toml"),
+        &data,
+        &["--holdout", "1/1000"],
+        &d.join("x"),
+    ));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{msg}");
+    assert!(
+        msg.contains("setting `--holdout`: `1/1000` holds out no row"),
+        "{msg}"
+    );
+    assert!(!d.join("x").exists());
     // ur-yaml of a robot that is not UR-like is refused.
     let bad = calbench(&lm_args(
         "irb2600",

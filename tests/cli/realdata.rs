@@ -233,3 +233,37 @@ fn robot_files_of_every_convention_export_to_a_urdf_with_their_fk() {
         }
     }
 }
+
+/// An orientation weight so small that the solve loses the rank the orientation gave (two of
+/// UR10's 28 full-pose parameters) is refused saying so, not as "the poses determine only 28
+/// of the 28 parameters" with empty lists of undetermined parameters and groups.
+#[test]
+fn a_rank_lost_in_the_solve_is_not_reported_as_undetermined_poses() {
+    let d = tmp_dir("realdata-rank-lost");
+    let data = d.join("m.csv");
+    import_ur10_sample(&ex("mapping.toml"), &data);
+    let out = d.join("out");
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        &ex("ur10.toml"),
+        "--data",
+        path_arg(&data),
+        "--method",
+        "ls",
+        "--k",
+        "1e-6",
+        "--out",
+        path_arg(&out),
+    ]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{msg}");
+    assert!(
+        msg.contains(
+            "data: the poses determine all 28 kinematic parameters, yet the solve's rank is 26 \
+             of the 28 identified"
+        ) && !msg.contains("undetermined: ;"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}

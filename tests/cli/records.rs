@@ -114,3 +114,43 @@ fn resume_refuses_the_records_of_another_run_with_the_same_name_and_seed() {
     assert_eq!(read(&records), foreign);
     assert_eq!(read(&meta), json);
 }
+
+/// A `shard.json` whose block lists other methods or parameters than its records hold (a
+/// method line deleted, a parameter listed twice) is refused naming it, where the merge
+/// panicked indexing past the lists, and nothing is written.
+#[test]
+fn merge_refuses_a_shard_json_whose_blocks_do_not_fit_its_records() {
+    let dir = tmp_dir("records-altered-blocks");
+    let (a0, a1) = (dir.join("a0"), dir.join("a1"));
+    run("4", &["--shard", "0/2"], &a0);
+    run("4", &["--shard", "1/2"], &a1);
+    let meta = a0.join("shard.json");
+    let own = read(&meta);
+    for (from, to, why) in [
+        (
+            "\"methods\": [\n          \"ls\",\n",
+            "\"methods\": [\n",
+            "an outcome of method 2 and strategy 0",
+        ),
+        (
+            "\"params\": [\n          \"a1\",\n",
+            "\"params\": [\n          \"a1\",\n          \"a1\",\n",
+            "injected errors for 25 parameters",
+        ),
+    ] {
+        assert!(own.contains(from), "{from}");
+        std::fs::write(&meta, own.replacen(from, to, 1)).unwrap();
+        let out = dir.join("merged");
+        let o = calbench(&[
+            "merge",
+            path_arg(&a0),
+            path_arg(&a1),
+            "--out",
+            path_arg(&out),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        one_line_naming(&err, &meta, &["blocks", "records.txt, line 1", why]);
+        assert!(!out.join("summary.json").exists());
+    }
+}

@@ -529,3 +529,118 @@ fn a_registration_study_claim_is_refused_at_its_line() {
         ],
     );
 }
+
+/// A pose or instrument count too large to allocate (`9223372036854775807`) is refused when
+/// the scenario is read, naming the file, the line and the key, where `run` and `simulate`
+/// panicked with "capacity overflow"; nothing is written.
+#[test]
+fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
+    let d = tmp("huge-count");
+    let root = crate::common::root();
+    let huge = "9223372036854775807";
+    let cases = [
+        (
+            "scenarios/ci-guard.toml",
+            "count = 40",
+            "line 26, setting: setting `calibration.count`: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/ci-guard.toml",
+            "count = 30",
+            "line 30, setting: setting `validation.count`: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/instruments.toml",
+            "candidates = 600",
+            "line 26, instruments_study.candidates: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/instruments.toml",
+            "planes = 3",
+            "line 76, measurement[3]: setting `measurement.planes`: must be at most 1000",
+        ),
+    ];
+    for (i, (file, line, expected)) in cases.into_iter().enumerate() {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(text.contains(line), "{line}");
+        let key = line.split(" = ").next().unwrap();
+        let p = d.join(format!("huge{i}.toml"));
+        std::fs::write(&p, text.replacen(line, &format!("{key} = {huge}"), 1)).unwrap();
+        let out = d.join(format!("out{i}"));
+        let o = calbench(&["simulate", path(&p), "--out", path(&out)]);
+        refused(&o, &[&format!("huge{i}.toml: {expected}"), huge]);
+        assert!(!out.exists());
+    }
+}
+
+/// A search's population or iteration count too large to allocate its swarm or its trace is
+/// refused naming the method's key, where `run` panicked with "capacity overflow".
+#[test]
+fn a_search_population_or_iteration_count_too_large_is_refused_at_its_key() {
+    let d = tmp("huge-search");
+    for (method, key, most) in [
+        ("pso", "population", "1000000"),
+        ("bas-pso", "population", "1000000"),
+        ("pso", "iterations", "10000000"),
+        ("bas", "iterations", "10000000"),
+    ] {
+        let p = d.join(format!("{method}-{key}.toml"));
+        std::fs::write(
+            &p,
+            format!(
+                "name = \"huge\"\nseed = 1\ntrials = 2\n[robot]\nbuiltin = \"tx60\"\n\
+                 [errors]\nkind = \"paper\"\n[tracker]\nmeasure = \"pose\"\n\
+                 [calibration]\ncount = 20\n[[methods]]\nname = \"{method}\"\n\
+                 {key} = 9223372036854775807\n"
+            ),
+        )
+        .unwrap();
+        let out = d.join("out");
+        let o = calbench(&["run", path(&p), "--out", path(&out)]);
+        refused(
+            &o,
+            &[&format!(
+                "{method}-{key}.toml: line 14, methods[0].{key}: must be at most {most}, got \
+                 9223372036854775807"
+            )],
+        );
+        assert!(!out.join("summary.json").exists());
+    }
+}
+
+/// An injected error beyond a robot file's range (`a2 = 1e308` mm in `errors.values`) is
+/// refused naming the scenario, the line and the key, where `simulate` wrote a measurement
+/// file of `NaN` points with exit status 0.
+#[test]
+fn an_injected_error_beyond_a_robot_files_range_is_refused_at_its_key() {
+    let d = tmp("huge-error");
+    let root = crate::common::root();
+    let text = std::fs::read_to_string(root.join("scenarios/li2018-irb2600.toml")).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("a2 = "))
+        .expect("errors.values.a2")
+        + 1;
+    let edited: Vec<String> = text
+        .lines()
+        .map(|l| {
+            if l.starts_with("a2 = ") {
+                "a2 = 1e308".to_string()
+            } else {
+                l.to_string()
+            }
+        })
+        .collect();
+    let p = d.join("huge-error.toml");
+    std::fs::write(&p, edited.join("\n")).unwrap();
+    let out = d.join("out");
+    let o = calbench(&["simulate", path(&p), "--out", path(&out)]);
+    refused(
+        &o,
+        &[&format!(
+            "huge-error.toml: line {line}, setting: setting `errors.values.a2`: must be within \
+             ±1000000 mm"
+        )],
+    );
+    assert!(!out.exists());
+}

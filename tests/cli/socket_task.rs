@@ -243,3 +243,66 @@ fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
     std::fs::write(&t, wam).unwrap();
     refused(&t, &["wam.toml", "metric", "socket task"]);
 }
+
+/// A gross reading in the second socket's joint file is named by that file and its line: the
+/// refusal names the placement's first file (the data), and the reading's line was read as a
+/// line of that file.
+#[test]
+fn a_gross_reading_is_named_by_its_own_joint_file() {
+    let dir = tmp_dir("cli-socket-task-gross");
+    let task = copied_task(&dir, "", "socket_spread_mm", "gross");
+    let f = dir.join("front/hole_1.csv");
+    let mut lines: Vec<String> = read(&f).lines().map(String::from).collect();
+    let mut cells: Vec<&str> = lines[9].split(',').collect();
+    cells[0] = "0";
+    lines[9] = cells.join(",");
+    std::fs::write(&f, lines.join("\n") + "\n").unwrap();
+    let o = dir.join("out");
+    let r = calbench(&[
+        "task",
+        path_arg(&task),
+        "--method",
+        "ls",
+        "--out",
+        path_arg(&o),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains(&format!(
+            "the reading of line 10 of {} has a residual",
+            f.display()
+        )),
+        "{err}"
+    );
+    assert!(!o.exists());
+}
+
+/// A `tip` the URDF has no link of is refused naming the task file's line and key, not the
+/// command line's `--tip`, which the entry was not given.
+#[test]
+fn a_tip_the_urdf_lacks_is_refused_naming_the_task_key() {
+    let dir = tmp_dir("cli-socket-task-tip");
+    let task = copied_task(&dir, "", "socket_spread_mm", "tip");
+    std::fs::write(
+        &task,
+        read(&task).replace("tip = \"ball_link\"", "tip = \"ball\""),
+    )
+    .unwrap();
+    let o = dir.join("out");
+    let r = calbench(&[
+        "task",
+        path_arg(&task),
+        "--method",
+        "ls",
+        "--out",
+        path_arg(&o),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("tip.toml: line 3, tip: no link \"ball\" in") && !err.contains("--tip"),
+        "{err}"
+    );
+    assert!(!o.exists());
+}

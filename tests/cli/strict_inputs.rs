@@ -64,6 +64,86 @@ fn fk_refuses_a_length_that_overflows_in_mm() {
     );
 }
 
+/// A URDF's numbers are checked as a robot file's: a NaN or 1e308 m origin, an infinite
+/// angle, an axis of infinite length or a limit beyond ten turns is refused naming the URDF,
+/// the joint and the element, where `fk` printed `NaN` and `identify` failed in the
+/// registration without naming the file. So is a chain whose origins add up beyond 1 km.
+#[test]
+fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
+    let d = tmp_dir("strict-urdf");
+    let src = std::fs::read_to_string(root().join("examples/ipa-ur10/ur10.urdf")).unwrap();
+    let fk = |name: &str, from: &str, to: &str| {
+        assert!(src.contains(from), "{from}");
+        let p = d.join(format!("{name}.urdf"));
+        std::fs::write(&p, src.replacen(from, to, 1)).unwrap();
+        let o = calbench(&["fk", "--robot", p.to_str().unwrap(), "--q", "0,0,0,0,0,0"]);
+        assert!(
+            o.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        o
+    };
+    let tool = "<origin xyz=\"0.0 0.0 0.109\"";
+    let o = fk("nan", tool, "<origin xyz=\"0.0 0.0 nan\"");
+    refused(
+        &o,
+        &[
+            "nan.urdf: URDF: joint \"tool_fixed\", <origin xyz>: must be a finite length",
+            "got NaN m",
+        ],
+    );
+    let o = fk("huge", tool, "<origin xyz=\"0.0 0.0 1e308\"");
+    refused(
+        &o,
+        &[
+            "huge.urdf: URDF: joint \"tool_fixed\", <origin xyz>:",
+            "got 1e308 m, which is inf mm",
+        ],
+    );
+    let o = fk(
+        "rpy",
+        "rpy=\"1.5707963267948966 0.0 0.0\"",
+        "rpy=\"inf 0.0 0.0\"",
+    );
+    refused(
+        &o,
+        &[
+            "rpy.urdf: URDF: joint \"shoulder_lift_joint\", <origin rpy>:",
+            "got inf rad",
+        ],
+    );
+    let o = fk("axis", "<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 0 1e308\"/>");
+    refused(
+        &o,
+        &[
+            "axis.urdf: URDF: joint \"shoulder_pan_joint\", <axis xyz>:",
+            "finite length",
+        ],
+    );
+    let o = fk("limit", "upper=\"6.283185307179586\"", "upper=\"1e9\"");
+    refused(
+        &o,
+        &[
+            "limit.urdf: URDF: joint \"shoulder_pan_joint\", <limit>:",
+            "got 1000000000.0 rad",
+        ],
+    );
+    // Two fixed origins of 600 m each put the first joint 1.2 km from the root.
+    let zero = "<origin xyz=\"0.0 0.0 0.0\"";
+    let far = src.replacen(zero, "<origin xyz=\"0.0 0.0 600.0\"", 2);
+    let p = d.join("far.urdf");
+    std::fs::write(&p, far).unwrap();
+    let o = calbench(&["fk", "--robot", p.to_str().unwrap(), "--q", "0,0,0,0,0,0"]);
+    refused(
+        &o,
+        &[
+            "far.urdf: URDF: the robot the chain makes: base.xyz:",
+            "within ±1000000 mm, got 1200000.0 mm",
+        ],
+    );
+}
+
 #[test]
 fn check_refuses_files_that_are_not_comparable_summaries() {
     let d = tmp_dir("strict-check");

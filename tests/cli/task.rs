@@ -318,4 +318,22 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
         e.contains("range.split: line 3") && e.contains("row 632 is out of range"),
         "{e}"
     );
+    // More folds than calibration rows: refused naming the task file's key, not `--cv`, which
+    // the entry was not given.
+    let models =
+        |extra: &str| format!("{src}\n[models]\ncandidates = [\"kinematic\", \"beta\"]\n{extra}\n");
+    let e = refused("folds", &models("folds = 1000"), None);
+    assert!(
+        e.contains("folds.toml: line 15, models.folds: 1000 folds but only 443 calibration rows")
+            && !e.contains("--cv"),
+        "{e}"
+    );
+    // A fold seed given twice repeats the same folds: refused as a candidate given twice is.
+    let e = refused("seeds", &models("fold_seeds = [0, 1, 0]"), None);
+    assert!(
+        e.contains(
+            "seeds.toml: line 15, models.fold_seeds: models.fold_seeds[2]: seed 0 is listed twice"
+        ),
+        "{e}"
+    );
 }

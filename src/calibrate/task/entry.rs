@@ -6,7 +6,7 @@
 use super::Task;
 use crate::calibrate::cv::{choose_model_repeated, Model, RepeatedChoice};
 use crate::calibrate::request::IdentifyRequest;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::Measurements;
 
@@ -72,6 +72,20 @@ impl Task {
         let choice = if tm.candidates.len() > 1 {
             let robot = self.load_robot()?;
             let (cal, _) = self.measurements(&robot)?;
+            if tm.folds > cal.len() {
+                let h = &self.head;
+                return Err(Error::toml_file(
+                    &h.path,
+                    &h.text,
+                    "models.folds",
+                    "models.folds",
+                    format!(
+                        "{} folds but only {} calibration rows: at most one fold per row",
+                        tm.folds,
+                        cal.len()
+                    ),
+                ));
+            }
             let setup = crate::calibrate::cv::CvSetup {
                 method: &method,
                 registration: crate::calibrate::Registration::Identify,

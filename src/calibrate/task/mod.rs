@@ -322,6 +322,17 @@ impl Task {
                 if fold_seeds.is_empty() {
                     return Err(bad("models.fold_seeds", "lists no seed".into()));
                 }
+                for (i, seed) in fold_seeds.iter().enumerate() {
+                    if fold_seeds[..i].contains(seed) {
+                        return Err(bad(
+                            "models.fold_seeds",
+                            format!(
+                                "models.fold_seeds[{i}]: seed {seed} is listed twice (a \
+                                 repetition of the same folds)"
+                            ),
+                        ));
+                    }
+                }
                 Some(TaskModels {
                     candidates,
                     folds,

@@ -24,7 +24,7 @@ use crate::measurement::kind_csv::{read_kind_text, KindFile};
 use crate::numeric::Real;
 use crate::numeric::Vec3;
 use crate::robot::urdf::UrdfChain;
-use crate::robot::{Param, Robot};
+use crate::robot::{Param, Robot, MAX_LENGTH_MM};
 
 /// The keys of a socket task file.
 #[derive(Deserialize)]
@@ -220,8 +220,18 @@ impl SocketTask {
             .collect()
     }
 
-    /// The model `path` (a URDF's chain to the task's tip).
+    /// The model `path` (a URDF's chain to the task's tip). A tip the URDF has no link of is
+    /// refused naming the task file's `tip`, which gave it.
     pub fn load_model(&self, path: &Path) -> Result<Robot> {
+        if let Some(tip) = &self.tip {
+            let urdf =
+                urdf_rs::read_file(path).map_err(|e| Error::file(path, "URDF", e.to_string()))?;
+            if !urdf.links.iter().any(|l| &l.name == tip) {
+                let h = &self.head;
+                let msg = format!("no link \"{tip}\" in {}", path.display());
+                return Err(Error::toml_file(&h.path, &h.text, "tip", "tip", msg));
+            }
+        }
         let chain = UrdfChain {
             base: None,
             tip: self.tip.clone(),
@@ -251,6 +261,7 @@ impl SocketTask {
             },
             sigma_mm: None,
             lines: Vec::new(),
+            files: Vec::new(),
         };
         for (s, f) in files.iter().enumerate() {
             let raw = std::fs::read_to_string(f).map_err(|e| Error::io(f, e))?;
@@ -274,6 +285,7 @@ impl SocketTask {
             out.data.values.extend(one.data.values);
             out.qs.extend(one.qs);
             out.lines.extend(one.lines.iter().map(|l| l - 1));
+            out.files.push((f.clone(), one.lines.len()));
         }
         out.data.check(out.qs.len())?;
         Ok(out)
@@ -428,9 +440,20 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
                 .filter(|v| v.is_finite())
                 .ok_or_else(|| bad(format!("\"{}\" is not a number", s.trim())))
         };
+        // A figure in m (a variance in m²) that stands for a length of at most 1 km.
+        let within = |v: Real, lo: Real, hi: Real, what: &str| -> Result<Real> {
+            if (lo..=hi).contains(&v) {
+                Ok(v)
+            } else {
+                let v = crate::error::shown(v);
+                Err(bad(format!("must be {what}, got {v}")))
+            }
+        };
+        let (km, km2) = (MAX_LENGTH_MM / 1000.0, (MAX_LENGTH_MM / 1000.0).powi(2));
         if let Some((_, rest)) = opened {
             if key == "distance" {
-                distance = Some(num(rest)?);
+                let what = "a distance error within ±1000 m (1 km)";
+                distance = Some(within(num(rest)?, -km, km, what)?);
             }
         } else if let Some(v) = line.strip_prefix("- - ") {
             match key {
@@ -441,8 +464,10 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
             num(v)?;
         } else if let Some(v) = line.strip_prefix("- ") {
             match key {
-                "var_1" => var[0].push(num(v)?),
-                "var_2" => var[1].push(num(v)?),
+                "var_1" | "var_2" => {
+                    let what = "a variance in [0, 1e6] m² (a spread of at most 1 km)";
+                    var[usize::from(key == "var_2")].push(within(num(v)?, 0.0, km2, what)?);
+                }
                 _ => {}
             }
         }
@@ -504,6 +529,45 @@ mod tests {
             "{e}"
         );
         assert!(!e.contains("var_1"), "{e}");
+    }
+
+    /// A negative or huge variance (a NaN or infinite spread) and a distance error beyond
+    /// 1 km are refused at their line and key, not printed as `NaN` or `inf` and written as
+    /// `null` in task.json.
+    #[test]
+    fn a_variance_or_distance_out_of_range_is_refused_at_its_key() {
+        let dir = crate::test_dir("kpis-range");
+        let p = dir.join("kpis.yaml");
+        let fks = "fks_1:\n- - 0.4\nfks_2:\n- - 0.4\n";
+        for (var_1, distance, expected) in [
+            (
+                "-1.0e-9",
+                "1.0e-6",
+                "line 7, var_1: must be a variance in [0, 1e6] m²",
+            ),
+            (
+                "1.0e308",
+                "1.0e-6",
+                "line 7, var_1: must be a variance in [0, 1e6] m²",
+            ),
+            (
+                "1.0e-9",
+                "-1.0e308",
+                "line 1, distance: must be a distance error within",
+            ),
+        ] {
+            let text = format!(
+                "distance: {distance}\n{fks}var_1:\n- {var_1}\n- 2.0e-9\n- 3.0e-9\n\
+                 var_2:\n- 1.0e-9\n- 2.0e-9\n- 3.0e-9\n"
+            );
+            std::fs::write(&p, &text).unwrap();
+            let e = read_kpis(&p).unwrap_err().to_string();
+            assert!(e.contains(expected), "{e}");
+        }
+        std::fs::write(&p, "distance: 1.0e-6\nfks_1:\n- - 0.4\nfks_2:\n- - 0.4\nvar_1:\n- 0.0\n- 2.0e-9\n- 3.0e-9\nvar_2:\n- 1.0e-9\n- 2.0e-9\n- 3.0e-9\n").unwrap();
+        let ok = read_kpis(&p);
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(ok.unwrap().spread_mm.is_finite());
     }
 
     /// Panda 6's kpis.yaml: √(5.5 + 9.5 + 13.1)·10⁻⁹ m² = 0.1676 mm, √(7.8 + 23.1 + 18.8)

@@ -39,7 +39,7 @@ use std::cell::RefCell;
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::error::{finite_positive, Error, Result};
+use crate::error::{Error, Result};
 use crate::identify::solver::{solve, LeastSquares, Size};
 use crate::identify::{Identified, LsOptions};
 use crate::measurement::Measure;
@@ -269,7 +269,7 @@ impl<'a> PoseErrorProblem<'a> {
         measured: &'a [Frame],
         k: Real,
     ) -> Result<Self> {
-        finite_positive("k", k)?;
+        super::check_k(k)?;
         let all = nominal.params();
         if let Some(p) = params.iter().find(|p| !all.contains(p)) {
             return Err(Error::setting(

@@ -34,6 +34,27 @@ pub fn qiao_fitness(measured: &[Frame], model: &[Frame], k: Real) -> Real {
 /// 0.002–0.003) weighs like 0.2–0.3 mm, the order of the position errors of Qiao's TX60.
 pub const DEFAULT_K: Real = 100.0;
 
+/// Largest `k` (mm per rad, or per unit of eq. 14's column differences): an orientation error
+/// of 1 rad then weighs as a position error of 1 km, the bound of a measured coordinate
+/// ([`crate::measurement::csv::MAX_POINT_MM`]). Beyond it the orientation rows outweigh the
+/// position rows so far that a solve loses rank, and from about 1e154 their squares overflow
+/// and it stops, diverged, before its first step.
+pub const MAX_K: Real = 1e6;
+
+/// Refuses `k` unless it is finite, positive and at most [`MAX_K`] (the error names `k`).
+pub fn check_k(k: Real) -> Result<()> {
+    if k.is_finite() && k > 0.0 && k <= MAX_K {
+        return Ok(());
+    }
+    Err(Error::setting(
+        "k",
+        format!(
+            "must be finite, positive and at most {MAX_K:e} mm per rad, got {}",
+            crate::error::shown(k)
+        ),
+    ))
+}
+
 /// Largest flat parameter vector handled by [`MetaProblem`] ([`MAX_JOINTS`] joints).
 const MAX_VALUES: usize = 6 * MAX_JOINTS + 12;
 

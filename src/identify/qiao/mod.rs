@@ -47,7 +47,7 @@ mod pso;
 mod search;
 
 pub use bas::{bas, BasOptions, BasStart};
-pub use fitness::{qiao_fitness, qiao_term, MetaProblem, DEFAULT_K};
+pub use fitness::{check_k, qiao_fitness, qiao_term, MetaProblem, DEFAULT_K, MAX_K};
 pub use pso::{bas_pso, pso, BasPsoOptions, BeetleTerm, PsoOptions, Velocity};
 pub use search::{
     halton, halton_population, halton_population_at, Bounds, Fitness, MetaResult, Schedules,

@@ -5,10 +5,11 @@ use rand::Rng as _;
 use rayon::prelude::*;
 
 use super::search::{
-    check_budget, check_iterations, check_target, halton, offset, primes, random_direction,
-    reached, sane, sign, Bounds, Fitness, Limit, MetaResult, Schedules, HALTON_SKIP,
+    check_budget, check_count_at_most, check_iterations, check_target, halton, offset, primes,
+    random_direction, reached, sane, sign, Bounds, Fitness, Limit, MetaResult, Schedules,
+    HALTON_SKIP, MAX_POPULATION,
 };
-use crate::error::{check_count, finite_non_negative, finite_positive, Error, Result};
+use crate::error::{finite_non_negative, finite_positive, Error, Result};
 use crate::identify::options;
 use crate::numeric::rng::Rng;
 use crate::numeric::Real;
@@ -151,7 +152,7 @@ struct Swarm {
 }
 
 fn check_swarm(s: &Swarm) -> Result<()> {
-    check_count("population", s.population)?;
+    check_count_at_most("population", s.population, MAX_POPULATION)?;
     check_iterations(s.iterations)?;
     check_budget(s.max_evaluations, s.population, s.per_iteration())?;
     let c1 = "c1";

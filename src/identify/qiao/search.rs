@@ -246,7 +246,26 @@ impl Schedules {
 
 /// The options key of a search's iteration count, checked here for every search.
 pub(super) fn check_iterations(n: usize) -> Result<()> {
-    crate::error::check_count("iterations", n)
+    check_count_at_most("iterations", n, MAX_ITERATIONS)
+}
+
+/// The most iterations a search may run (Qiao's longest is 20 000): more would run until
+/// killed, and the trace kept per iteration could not be allocated.
+pub const MAX_ITERATIONS: usize = 10_000_000;
+
+/// The most particles a swarm may have (Qiao's 40).
+pub const MAX_POPULATION: usize = 1_000_000;
+
+/// Refuses the count `n` of `key` below 1 or above `most`.
+pub(super) fn check_count_at_most(key: &str, n: usize, most: usize) -> Result<()> {
+    crate::error::check_count(key, n)?;
+    if n > most {
+        return Err(Error::setting(
+            key,
+            format!("must be at most {most}, got {n}"),
+        ));
+    }
+    Ok(())
 }
 
 /// The `index`-th element of the van der Corput sequence in `base` (the radical inverse of

@@ -181,6 +181,23 @@ impl Source {
 /// killed.
 pub const MAX_TRIALS: usize = 1_000_000_000;
 
+/// The most poses a study may draw per trial (`calibration.count`, `calibration.candidates`,
+/// `validation.count`, an instruments study's `candidates` and `validation`): more is refused
+/// when the scenario is read, not left to fail allocating them (tests/cli/memory.rs simulates
+/// 2 000 000 rows).
+pub const MAX_POSES: usize = 10_000_000;
+
+/// Refuses a pose count `n` of `key` above [`MAX_POSES`].
+pub(crate) fn check_pose_count(key: &str, n: usize) -> Result<()> {
+    if n > MAX_POSES {
+        return Err(Error::setting(
+            key,
+            format!("must be at most {MAX_POSES} poses, got {n}"),
+        ));
+    }
+    Ok(())
+}
+
 /// The built-in default study (`scenarios/default.toml`): what `calbench` runs with no
 /// arguments.
 pub const DEFAULT_SCENARIO: &str = include_str!("../../../scenarios/default.toml");
@@ -307,6 +324,8 @@ impl Scenario {
         if c.count == 0 {
             return Err(ferr("calibration.count", "must be at least 1".into()));
         }
+        check(check_pose_count("calibration.count", c.count))?;
+        check(check_pose_count("calibration.candidates", c.candidates))?;
         if c.strategies.is_empty() {
             return Err(ferr(
                 "calibration.strategies",
@@ -383,6 +402,7 @@ impl Scenario {
         if v.count == 0 {
             return Err(ferr("validation.count", "must be at least 1".into()));
         }
+        check(check_pose_count("validation.count", v.count))?;
         check(v.region.check("validation.region"))?;
         let load = |key: &str, w: Real| {
             if w.is_finite() && w >= 0.0 {
