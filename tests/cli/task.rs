@@ -272,6 +272,18 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
     };
     let e = refused("key", &src.replace("metric =", "metrik ="), None);
     assert!(e.contains("key.toml: line") && e.contains("metrik"), "{e}");
+    // A key of the wrong type, and an unknown key in a table: the line and the key's path.
+    let typed = format!("{src}\n[models]\ncandidates = [\"kinematic\"]\nfolds = \"five\"\n");
+    let e = refused("typed", &typed, None);
+    assert!(
+        e.contains("typed.toml: line 15, models.folds: invalid type: string \"five\""),
+        "{e}"
+    );
+    let e = refused("nested", &src.replace("[data]", "[data]\nfiel = 1"), None);
+    assert!(
+        e.contains("nested.toml: line ") && e.contains(", data.fiel: unknown field `fiel`"),
+        "{e}"
+    );
     let e = refused(
         "metric",
         &src.replace("validation_rms_mm", "validation_p95"),

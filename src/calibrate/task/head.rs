@@ -131,9 +131,20 @@ impl<'a> TaskFile<'a> {
     }
 
     /// Its keys as `K` reads them (an unknown, missing or mistyped key refused naming the
-    /// file, line and key).
+    /// file, line and key path, `line 19, models.folds`).
     pub(super) fn keys<K: DeserializeOwned>(&self) -> Result<K> {
-        toml::from_str(&self.text).map_err(|e| Self::toml(self.path, &self.text, e))
+        let de = toml::Deserializer::parse(&self.text)
+            .map_err(|e| Self::toml(self.path, &self.text, e))?;
+        serde_path_to_error::deserialize(de).map_err(|e| {
+            let key = e.path().to_string();
+            let e = e.into_inner();
+            let line = e.span().map(|s| crate::error::line_of(&self.text, s.start));
+            let place = match key.as_str() {
+                "." => place_of(&self.text, &e),
+                _ => crate::error::at_line(line, key),
+            };
+            Error::file(self.path, place, e.message().trim_end())
+        })
     }
 
     /// The refusal of the value of `key`, at its line.
