@@ -159,6 +159,17 @@ pub struct UrdfChain {
     pub tip: Option<String>,
 }
 
+/// The links of `urdf` that no joint leaves from: the tips a chain can end at.
+pub fn leaf_links(urdf: &urdf_rs::Robot) -> Vec<&str> {
+    let parents: std::collections::HashSet<&str> =
+        urdf.joints.iter().map(|j| j.parent.link.as_str()).collect();
+    urdf.joints
+        .iter()
+        .map(|j| j.child.link.as_str())
+        .filter(|c| !parents.contains(c))
+        .collect()
+}
+
 impl UrdfRobot {
     /// Reads the URDF at `path`: the chain from the root link to the only leaf link.
     pub fn load(path: &Path) -> Result<UrdfRobot> {
@@ -173,13 +184,7 @@ impl UrdfRobot {
         let said = |msg: Said| Error::file(path, "URDF", msg);
         let source = urdf_rs::read_file(path).map_err(|e| bad(e.to_string()))?;
         let js = &source.joints;
-        let parents: std::collections::HashSet<&str> =
-            js.iter().map(|j| j.parent.link.as_str()).collect();
-        let leaves: Vec<&str> = js
-            .iter()
-            .map(|j| j.child.link.as_str())
-            .filter(|c| !parents.contains(c))
-            .collect();
+        let leaves = leaf_links(&source);
         let known = |l: &str| source.links.iter().any(|k| k.name == l);
         for (key, l) in [(Opt::Base, &which.base), (Opt::Tip, &which.tip)] {
             if let Some(l) = l.as_deref().filter(|l| !known(l)) {

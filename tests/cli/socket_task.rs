@@ -306,3 +306,31 @@ fn a_tip_the_urdf_lacks_is_refused_naming_the_task_key() {
     );
     assert!(!o.exists());
 }
+
+/// A socket task without `tip` on a URDF of several leaf links is refused naming the task
+/// file's `tip` and the leaves, not the command line's `--tip`, which a task is not given.
+#[test]
+fn a_task_without_a_tip_on_a_branched_urdf_is_refused_naming_the_task_key() {
+    let dir = tmp_dir("cli-socket-task-no-tip");
+    let task = copied_task(&dir, "", "socket_spread_mm", "notip");
+    std::fs::write(&task, read(&task).replace("tip = \"ball_link\"\n", "")).unwrap();
+    let o = dir.join("out");
+    let r = calbench(&[
+        "task",
+        path_arg(&task),
+        "--method",
+        "ls",
+        "--out",
+        path_arg(&o),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("notip.toml: tip: ")
+            && err.contains("3 leaf links (ball_link, panda_leftfinger, panda_rightfinger)")
+            && err.contains("tip = \"LINK\"")
+            && !err.contains("--tip"),
+        "{err}"
+    );
+    assert!(!o.exists());
+}

@@ -220,23 +220,43 @@ impl SocketTask {
             .collect()
     }
 
-    /// The model `path` (a URDF's chain to the task's tip). A tip the URDF has no link of is
-    /// refused naming the task file's `tip`, which gave it.
+    /// The model `path` (a URDF's chain to the task's tip). A tip the URDF has no link of, or
+    /// no tip where the URDF has more than one leaf link, is refused naming the task file's
+    /// `tip`, which gives it.
     pub fn load_model(&self, path: &Path) -> Result<Robot> {
-        if let Some(tip) = &self.tip {
-            let urdf =
-                urdf_rs::read_file(path).map_err(|e| Error::file(path, "URDF", e.to_string()))?;
-            if !urdf.links.iter().any(|l| &l.name == tip) {
-                let h = &self.head;
-                let msg = format!("no link \"{tip}\" in {}", path.display());
-                return Err(Error::toml_file(&h.path, &h.text, "tip", "tip", msg));
-            }
+        if crate::robot::urdf::is_urdf(&path.to_string_lossy()) {
+            self.check_tip(path)?;
         }
         let chain = UrdfChain {
             base: None,
             tip: self.tip.clone(),
         };
         crate::robot::builtin::load_chain(&path.to_string_lossy(), &chain)
+    }
+
+    /// Refuses, naming the task file's `tip`, a tip the URDF `path` has no link of, or no tip
+    /// where the URDF has more than one leaf link.
+    fn check_tip(&self, path: &Path) -> Result<()> {
+        let urdf =
+            urdf_rs::read_file(path).map_err(|e| Error::file(path, "URDF", e.to_string()))?;
+        let msg = match &self.tip {
+            Some(tip) if !urdf.links.iter().any(|l| &l.name == tip) => {
+                format!("no link \"{tip}\" in {}", path.display())
+            }
+            Some(_) => return Ok(()),
+            None => match crate::robot::urdf::leaf_links(&urdf).as_slice() {
+                [_] => return Ok(()),
+                leaves => format!(
+                    "{} has {} leaf links ({}): calbench takes a serial chain to one tip link; \
+                     name it with tip = \"LINK\"",
+                    path.display(),
+                    leaves.len(),
+                    leaves.join(", ")
+                ),
+            },
+        };
+        let h = &self.head;
+        Err(Error::toml_file(&h.path, &h.text, "tip", "tip", msg))
     }
 
     /// The nominal robot.
