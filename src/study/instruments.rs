@@ -143,10 +143,8 @@ impl InstrumentsScenario {
         if s.validation == 0 {
             return Err(ferr("validation", "must be at least 1".into()));
         }
-        let most = crate::study::scenario::MAX_POSES;
         for (key, n) in [("candidates", s.candidates), ("validation", s.validation)] {
-            if n > most {
-                let msg = format!("must be at most {most} poses, got {n}");
+            if let Some(msg) = crate::study::scenario::pose_count_excess(n) {
                 return Err(ferr(&format!("instruments_study.{key}"), msg));
             }
         }

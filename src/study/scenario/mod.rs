@@ -187,15 +187,14 @@ pub const MAX_TRIALS: usize = 1_000_000_000;
 /// 2 000 000 rows).
 pub const MAX_POSES: usize = 10_000_000;
 
+/// Why a pose count `n` is refused: it is above [`MAX_POSES`].
+pub(crate) fn pose_count_excess(n: usize) -> Option<String> {
+    (n > MAX_POSES).then(|| format!("must be at most {MAX_POSES} poses, got {n}"))
+}
+
 /// Refuses a pose count `n` of `key` above [`MAX_POSES`].
 pub(crate) fn check_pose_count(key: &str, n: usize) -> Result<()> {
-    if n > MAX_POSES {
-        return Err(Error::setting(
-            key,
-            format!("must be at most {MAX_POSES} poses, got {n}"),
-        ));
-    }
-    Ok(())
+    pose_count_excess(n).map_or(Ok(()), |msg| Err(Error::setting(key, msg)))
 }
 
 /// The built-in default study (`scenarios/default.toml`): what `calbench` runs with no
