@@ -7,7 +7,7 @@
 
 use crate::calibrate::validation::rotation_angle_deg;
 use crate::numeric::{Frame, Real};
-use crate::robot::loaded::loaded_fk;
+use crate::robot::loaded::{loaded_fk, LoadedFk};
 use crate::robot::Robot;
 
 /// What a corrected row must reach to be flagged `ok`: residual_mm and residual_deg.
@@ -118,7 +118,7 @@ pub fn compensate_targets(
         .collect();
     let mut g = crate::numeric::rng::stream(0, "compensate-targets");
     let randoms = crate::robot::sampling::uniform_joint_poses(identified, TARGET_STARTS, &mut g);
-    let chain = identified.chain();
+    let fk = LoadedFk::new(identified);
     let rows = if position_only { 3 } else { 6 };
     let mut out: Vec<Corrected> = Vec::with_capacity(targets.len());
     for target in targets {
@@ -133,7 +133,7 @@ pub fn compensate_targets(
                 crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)?;
             wrap_into_limits(identified, &mut q);
             let q = round(&q);
-            let f = loaded_fk(identified, &chain, &q, payload_kg)?;
+            let f = fk.at(&q, payload_kg)?;
             let residual_mm = (f.pos - target.pos).norm();
             let residual_deg = if position_only {
                 0.0
