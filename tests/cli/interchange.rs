@@ -191,21 +191,29 @@ fn import_refuses_a_mapping_that_uses_one_column_for_two_fields() {
             "line 24, sigma.position[0]: column \"measurement_z\" is mapped already by `position.columns[2]`",
         ),
     ];
-    let out = d.join("out.csv");
     for (i, (from, to, expected)) in cases.iter().enumerate() {
-        assert!(mapping.contains(from), "{from}");
-        let m = d.join(format!("m{i}.toml"));
-        std::fs::write(&m, mapping.replacen(from, to, 1)).unwrap();
-        let o = import(
-            Path::new(&ur10_example("sample-200.csv")),
-            path_arg(&m),
-            &out,
-        );
-        let msg = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success());
+        let msg = refused_mapping(&d, &mapping, i, (from, to));
         assert!(msg.contains(&format!("m{i}.toml: {expected}")), "{msg}");
-        assert!(!out.exists());
     }
+}
+
+/// `calbench import` of the UR10 sample through `mapping` with its first `from` replaced by
+/// `to`, written as `m{i}.toml` in `d`: refused (exit status 1), nothing written. Returns its
+/// stderr.
+fn refused_mapping(d: &Path, mapping: &str, i: usize, (from, to): (&str, &str)) -> String {
+    assert!(mapping.contains(from), "{from}");
+    let m = d.join(format!("m{i}.toml"));
+    std::fs::write(&m, mapping.replacen(from, to, 1)).unwrap();
+    let out = d.join("out.csv");
+    let o = import(
+        Path::new(&ur10_example("sample-200.csv")),
+        path_arg(&m),
+        &out,
+    );
+    let msg = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(1), "{msg}");
+    assert!(!out.exists(), "{msg}");
+    msg
 }
 
 /// A mapping that is not valid TOML for a mapping (a key given twice, a value of the wrong
@@ -236,18 +244,8 @@ fn import_refuses_a_malformed_mapping_naming_its_line() {
             "unknown field `sequenc`",
         ),
     ];
-    let out = d.join("out.csv");
     for (i, (from, to, line, expected)) in cases.iter().enumerate() {
-        assert!(mapping.contains(from), "{from}");
-        let m = d.join(format!("m{i}.toml"));
-        std::fs::write(&m, mapping.replacen(from, to, 1)).unwrap();
-        let o = import(
-            Path::new(&ur10_example("sample-200.csv")),
-            path_arg(&m),
-            &out,
-        );
-        let msg = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{msg}");
+        let msg = refused_mapping(&d, &mapping, i, (from, to));
         assert!(
             msg.contains(&format!(
                 "m{i}.toml: TOML: TOML parse error at line {line},"
@@ -255,7 +253,6 @@ fn import_refuses_a_malformed_mapping_naming_its_line() {
             "{msg}"
         );
         assert!(msg.contains(expected), "{msg}");
-        assert!(!out.exists());
     }
 }
 

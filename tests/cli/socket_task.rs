@@ -8,6 +8,23 @@ use std::path::Path;
 
 use crate::common::{bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
 
+/// `calbench task TASK --method ls --out OUT`, refused: exit status 1 and nothing written at
+/// `out`. Returns its stderr.
+fn refused_task(task: &Path, out: &Path) -> String {
+    let r = calbench(&[
+        "task",
+        path_arg(task),
+        "--method",
+        "ls",
+        "--out",
+        path_arg(out),
+    ]);
+    let err = String::from_utf8_lossy(&r.stderr).into_owned();
+    assert_eq!(r.status.code(), Some(1), "{err}");
+    assert!(!out.exists(), "{err}");
+    err
+}
+
 /// The MUKCa tasks, and whether each has the authors' calibrated model and their kpis.yaml.
 const TASKS: [(&str, bool, bool); 6] = [
     ("mukca-panda-2", true, false),
@@ -202,17 +219,7 @@ fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
     std::fs::write(&f, format!("{}{digit}{}", &text[..at], &text[at + 1..])).unwrap();
     assert_ne!(hash("b"), before);
     let refused = |task: &Path, want: &[&str]| {
-        let o = dir.join("refused");
-        let r = calbench(&[
-            "task",
-            path_arg(task),
-            "--method",
-            "ls",
-            "--out",
-            path_arg(&o),
-        ]);
-        let err = String::from_utf8_lossy(&r.stderr);
-        assert!(!r.status.success() && !o.exists(), "{err}");
+        let err = refused_task(task, &dir.join("refused"));
         for w in want {
             assert!(err.contains(w), "{err}: no {w}");
         }
@@ -257,17 +264,7 @@ fn a_gross_reading_is_named_by_its_own_joint_file() {
     cells[0] = "0";
     lines[9] = cells.join(",");
     std::fs::write(&f, lines.join("\n") + "\n").unwrap();
-    let o = dir.join("out");
-    let r = calbench(&[
-        "task",
-        path_arg(&task),
-        "--method",
-        "ls",
-        "--out",
-        path_arg(&o),
-    ]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(1), "{err}");
+    let err = refused_task(&task, &dir.join("out"));
     assert!(
         err.contains(&format!(
             "the reading of line 10 of {} has a residual",
@@ -275,7 +272,6 @@ fn a_gross_reading_is_named_by_its_own_joint_file() {
         )),
         "{err}"
     );
-    assert!(!o.exists());
 }
 
 /// A `tip` the URDF has no link of is refused naming the task file's line and key, not the
@@ -289,22 +285,11 @@ fn a_tip_the_urdf_lacks_is_refused_naming_the_task_key() {
         read(&task).replace("tip = \"ball_link\"", "tip = \"ball\""),
     )
     .unwrap();
-    let o = dir.join("out");
-    let r = calbench(&[
-        "task",
-        path_arg(&task),
-        "--method",
-        "ls",
-        "--out",
-        path_arg(&o),
-    ]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(1), "{err}");
+    let err = refused_task(&task, &dir.join("out"));
     assert!(
         err.contains("tip.toml: line 3, tip: no link \"ball\" in") && !err.contains("--tip"),
         "{err}"
     );
-    assert!(!o.exists());
 }
 
 /// A socket task without `tip` on a URDF of several leaf links is refused naming the task
@@ -314,17 +299,7 @@ fn a_task_without_a_tip_on_a_branched_urdf_is_refused_naming_the_task_key() {
     let dir = tmp_dir("cli-socket-task-no-tip");
     let task = copied_task(&dir, "", "socket_spread_mm", "notip");
     std::fs::write(&task, read(&task).replace("tip = \"ball_link\"\n", "")).unwrap();
-    let o = dir.join("out");
-    let r = calbench(&[
-        "task",
-        path_arg(&task),
-        "--method",
-        "ls",
-        "--out",
-        path_arg(&o),
-    ]);
-    let err = String::from_utf8_lossy(&r.stderr);
-    assert_eq!(r.status.code(), Some(1), "{err}");
+    let err = refused_task(&task, &dir.join("out"));
     assert!(
         err.contains("notip.toml: tip: ")
             && err.contains("3 leaf links (ball_link, panda_leftfinger, panda_rightfinger)")
@@ -332,5 +307,4 @@ fn a_task_without_a_tip_on_a_branched_urdf_is_refused_naming_the_task_key() {
             && !err.contains("--tip"),
         "{err}"
     );
-    assert!(!o.exists());
 }
