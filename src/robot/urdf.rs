@@ -1,16 +1,16 @@
 //! URDF robots in and out (docs/formats.md, "URDF robots").
 //!
-//! A URDF's serial chain, from its root link to its only leaf link (or, in a tree, from the
-//! link [`UrdfChain::base`] names to the link [`UrdfChain::tip`] names), becomes a calbench robot
-//! in the standard DH convention (Li 2018 eq. 1) by the common-normal construction of
-//! Denavit and Hartenberg: at q = 0 every moving joint is a line (its origin and axis in the
-//! root frame); frame i−1 has its z axis on joint i's line and its x axis on the common normal
-//! of lines i−1 and i (for parallel lines: the perpendicular from the previous origin), which
-//! gives θ, d, a, α of every link. The last link keeps θ = d = a = α = 0, so the whole
-//! placement of the tip link after the last joint is the `[tool]` frame; the placement of the
-//! first joint's line in the root frame is the `[base]` frame. Joint values are the URDF's:
-//! radians for revolute and continuous joints, metres for prismatic ones (the robot's units
-//! are rad and m); measured positions stay in mm.
+//! A URDF's serial chain, from its root link to its only leaf link ([`leaf_links`]; or, in a tree,
+//! from the link [`UrdfChain::base`] names to the link [`UrdfChain::tip`] names), becomes a
+//! calbench robot in the standard DH convention (Li 2018 eq. 1) by the common-normal construction
+//! of Denavit and Hartenberg: at q = 0 every moving joint is a line (its origin and axis in the
+//! root frame); frame i−1 has its z axis on joint i's line and its x axis on the common normal of
+//! lines i−1 and i (for parallel lines: the perpendicular from the previous origin), which gives θ,
+//! d, a, α of every link. The last link keeps θ = d = a = α = 0, so the whole placement of the tip
+//! link after the last joint is the `[tool]` frame; the placement of the first joint's line in the
+//! root frame is the `[base]` frame. Joint values are the URDF's: radians for revolute and
+//! continuous joints, metres for prismatic ones (the robot's units are rad and m); measured
+//! positions stay in mm.
 //!
 //! Writing back ([`UrdfRobot::write`]) keeps every element of the source and changes only the
 //! `<origin>` of each moving joint and of the last fixed joint before the tip (one is added
@@ -150,7 +150,7 @@ fn next_frame(prev: &Frame, p: &Vec3, u: &Vec3) -> ([Real; 4], Frame) {
 }
 
 /// Which chain of a URDF tree is the robot (`--base LINK`, `--tip LINK`); by default from the
-/// root link to the only leaf link.
+/// root link to the only leaf link ([`leaf_links`]).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct UrdfChain {
     /// The link the chain starts at (its frame is the robot's base); `None`: the root.
@@ -159,19 +159,43 @@ pub struct UrdfChain {
     pub tip: Option<String>,
 }
 
-/// The links of `urdf` that no joint leaves from: the tips a chain can end at.
+/// The links of `urdf` a chain can end at: the links no joint leaves from, less those that
+/// hang from the root through fixed joints alone (a frame such as ROS-Industrial's `base`,
+/// which no joint moves, cannot be a tool's link). When every leaf hangs so, all of them.
 pub fn leaf_links(urdf: &urdf_rs::Robot) -> Vec<&str> {
     let parents: std::collections::HashSet<&str> =
         urdf.joints.iter().map(|j| j.parent.link.as_str()).collect();
-    urdf.joints
+    let leaves: Vec<&str> = urdf
+        .joints
         .iter()
         .map(|j| j.child.link.as_str())
         .filter(|c| !parents.contains(c))
-        .collect()
+        .collect();
+    // Whether a joint that is not fixed stands between `link` and the root (a loop, refused
+    // when the chain is read, ends the walk).
+    fn moved<'a>(urdf: &'a urdf_rs::Robot, mut link: &'a str) -> bool {
+        for _ in 0..urdf.joints.len() {
+            let Some(j) = urdf.joints.iter().find(|j| j.child.link == link) else {
+                return false;
+            };
+            if j.joint_type != urdf_rs::JointType::Fixed {
+                return true;
+            }
+            link = j.parent.link.as_str();
+        }
+        false
+    }
+    let tips: Vec<&str> = leaves.iter().copied().filter(|l| moved(urdf, l)).collect();
+    if tips.is_empty() {
+        leaves
+    } else {
+        tips
+    }
 }
 
 impl UrdfRobot {
-    /// Reads the URDF at `path`: the chain from the root link to the only leaf link.
+    /// Reads the URDF at `path`: the chain from the root link to the only leaf link
+    /// ([`leaf_links`]).
     pub fn load(path: &Path) -> Result<UrdfRobot> {
         Self::load_chain(path, &UrdfChain::default())
     }

@@ -298,8 +298,38 @@ fn a_urdf_tree_with_tip_gives_the_single_chain() {
         "--json",
     ]);
     assert_eq!(a.stdout, b.stdout);
-    let refused = calbench(&["fk", "--robot", path_arg(&tree), "--q", q]);
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("--tip"));
+    // A leaf that hangs from the root through fixed joints alone (the `base` frame of
+    // ROS-Industrial's URDFs) cannot end the chain: the tree needs no --tip.
+    let c = calbench_ok(&["fk", "--robot", path_arg(&tree), "--q", q, "--json"]);
+    assert_eq!(a.stdout, c.stdout);
+    // A second leaf behind a moving joint (a sensor on a pan axis) does.
+    let pan = "<link name=\"pan\"/><joint name=\"pan_joint\" type=\"revolute\">\
+        <parent link=\"base_link\"/><child link=\"pan\"/><axis xyz=\"0 0 1\"/>\
+        <limit lower=\"-1\" upper=\"1\" effort=\"1\" velocity=\"1\"/></joint>";
+    let two = d.join("two.urdf");
+    std::fs::write(
+        &two,
+        src.replace("</robot>", &format!("{extra}{pan}</robot>")),
+    )
+    .unwrap();
+    let refused = calbench(&["fk", "--robot", path_arg(&two), "--q", q]);
+    assert_eq!(refused.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&refused.stderr);
+    assert!(
+        err.contains(&format!("2 leaf links ({leaf}, pan)")) && err.contains("--tip LINK"),
+        "{err}"
+    );
+    let b2 = calbench_ok(&[
+        "fk",
+        "--robot",
+        path_arg(&two),
+        "--tip",
+        &leaf,
+        "--q",
+        q,
+        "--json",
+    ]);
+    assert_eq!(a.stdout, b2.stdout);
     let refused = calbench(&["fk", "--robot", path_arg(&tree), "--tip", "nope", "--q", q]);
     assert!(String::from_utf8_lossy(&refused.stderr).contains("no link \"nope\""));
     let refused = calbench(&[
