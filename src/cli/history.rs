@@ -115,7 +115,7 @@ fn series(points: &[Point], regressed: &[Regressed]) -> Vec<Series> {
     let mut out: Vec<Series> = Vec::new();
     for p in points
         .iter()
-        .filter(|p| p.kind == "run" || p.kind == "merge")
+        .filter(|p| calbench::results::Kind::is_study(&p.kind))
     {
         if out
             .iter()
