@@ -214,3 +214,38 @@ fn guard_error_rates() {
         }
     }
 }
+
+/// `--tolerance` of `check`, `compare` and `history` is a number from 0 to 10 (1000 %): a
+/// larger, negative or non-finite one is refused naming the option and the range, before any
+/// work; an accepted one is printed in the short number format, never in hundreds of digits.
+#[test]
+fn a_tolerance_out_of_range_is_refused_and_a_tiny_one_printed_short() {
+    let dir = tmp_dir("cli-guard-tolerance");
+    let (base, out) = (committed(), dir.join("cmp"));
+    let (b, o) = (path_arg(&base), path_arg(&out));
+    let db = dir.join("db.sqlite");
+    for t in ["1e308", "10.5", "NaN", "inf", "-0.5"] {
+        let tolerance = format!("--tolerance={t}");
+        let cases: [Vec<&str>; 3] = [
+            vec!["check", b, "--baseline", b, &tolerance],
+            vec!["compare", b, b, "--out", o, &tolerance],
+            vec!["history", "--db", path_arg(&db), "--out", o, &tolerance],
+        ];
+        for args in cases {
+            let r = calbench(&args);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(r.status.code(), Some(1), "{args:?}: {err}");
+            assert!(
+                err.contains("--tolerance") && err.contains("from 0 to 10"),
+                "{args:?}: {err}"
+            );
+        }
+    }
+    assert!(!out.exists() && !db.exists(), "a refused command wrote");
+    let (ok, text) = check(&base, &base, &["--tolerance", "1e-300"]);
+    assert!(ok && text.contains("beyond tolerance 1e-300\n"), "{text}");
+    let text = calbench_ok(&["compare", b, b, "--out", o, "--tolerance", "1e-300"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("(tolerance 1e-300)"), "{text}");
+    assert!(read(&out.join("compare.html")).contains("a tolerance of 1e-300 "));
+}
