@@ -17,6 +17,7 @@
 pub mod baseline;
 pub mod noise;
 pub mod tolerance;
+pub mod trials_csv;
 
 use std::fmt;
 use std::path::Path;
