@@ -147,3 +147,33 @@ fn a_figure_its_per_row_errors_do_not_give_is_refused_naming_file_and_key() {
     );
     assert!(!db.exists());
 }
+
+/// `chosen_by` and `entrant` have been in every `task.json` calbench wrote: a file without
+/// one is refused by `record`, naming the file and the key, where it was recorded as chosen
+/// by nothing, or as calbench's own entry.
+#[test]
+fn a_task_json_without_chosen_by_or_entrant_is_refused_naming_file_and_key() {
+    let dir = tmp_dir("record-task-required");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let json = out.join("task.json");
+    let written = read(&json);
+    let db = dir.join("calbench.sqlite");
+    for key in ["chosen_by", "entrant"] {
+        let mut j: serde_json::Value = serde_json::from_str(&written).unwrap();
+        j.as_object_mut().unwrap().remove(key);
+        std::fs::write(&json, serde_json::to_string_pretty(&j).unwrap() + "\n").unwrap();
+        let o = record(&out, &db, &["--task", path_arg(&task)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success(),
+            "recorded a task.json without {key}: {err}"
+        );
+        assert!(err.contains(&format!("entry/task.json: {key}: ")), "{err}");
+        assert!(!db.exists());
+    }
+    std::fs::write(&json, written).unwrap();
+    let o = record(&out, &db, &["--task", path_arg(&task)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
