@@ -31,32 +31,23 @@ fn a_refused_run_merge_or_resume_leaves_no_folder_it_created() {
     // LS cannot take parameters the data do not determine: refused once the run starts.
     let text = format!("{SMALL_STUDY}[identification]\nparams = \"all\"\n");
     let sc = write_scenario(&dir, "all", &text);
-    let nested = dir.join("new").join("out");
-    let kept = ["all.toml"];
-    let run = ["run", path_arg(&sc), "--threads", "1", "--out"];
-    let params = ["identification.params", "all.toml"];
-    refused_leaving(
-        &[&run[..], &[path_arg(&nested)]].concat(),
-        &params,
-        &dir,
-        &kept,
-    );
-    let missing = dir.join("missing");
-    let merge = ["merge", path_arg(&missing), "--out", path_arg(&nested)];
-    refused_leaving(&merge, &["missing", "shard.json"], &dir, &kept);
-    let resume = ["run", "--resume", path_arg(&nested)];
-    refused_leaving(&resume, &["checkpoint"], &dir, &kept);
-    // An empty folder given as --out was there before: it stays, empty.
-    let empty = dir.join("empty");
-    std::fs::create_dir(&empty).unwrap();
-    let kept = ["all.toml", "empty"];
-    refused_leaving(
-        &[&run[..], &[path_arg(&empty)]].concat(),
-        &params,
-        &dir,
-        &kept,
-    );
-    let merge = ["merge", path_arg(&missing), "--out", path_arg(&empty)];
-    refused_leaving(&merge, &["shard.json"], &dir, &kept);
+    let (missing, empty) = (dir.join("missing"), dir.join("empty"));
+    // A folder and the one holding it made by each command, then an empty folder given as
+    // --out that was there before: it stays, empty.
+    let cases = [
+        (dir.join("new").join("out"), &["all.toml"][..]),
+        (empty.clone(), &["all.toml", "empty"][..]),
+    ];
+    for (out, kept) in cases {
+        if out == empty {
+            std::fs::create_dir(&empty).unwrap();
+        }
+        let o = path_arg(&out);
+        let run = ["run", path_arg(&sc), "--threads", "1", "--out", o];
+        refused_leaving(&run, &["identification.params", "all.toml"], &dir, kept);
+        let merge = ["merge", path_arg(&missing), "--out", o];
+        refused_leaving(&merge, &["missing", "shard.json"], &dir, kept);
+        refused_leaving(&["run", "--resume", o], &["checkpoint"], &dir, kept);
+    }
     assert_eq!(std::fs::read_dir(&empty).unwrap().count(), 0);
 }
