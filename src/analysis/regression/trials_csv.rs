@@ -74,7 +74,7 @@ impl Trials {
     /// Reads a run's `trials.csv`, refusing a malformed one (see the module). In a sweep,
     /// the columns between `trial` and `method` hold the sweep point: the rows of the k-th
     /// point in order of appearance (0-based) are entry `method / poses @ k`
-    /// ([`super::trials_key`]).
+    /// ([`super::noise::trials_key`]).
     pub fn read(path: &Path) -> Result<Trials> {
         let mut r = csv::ReaderBuilder::new()
             .flexible(true)
