@@ -305,19 +305,26 @@ impl Error {
 
 /// Reads calbench's file `what` (`summary.json`, `task.json`) from `de`, `path` naming it: a
 /// missing or unknown key, or one of the wrong type, is refused naming the file and the key
-/// path (`not a calbench WHAT: …`).
+/// path (`not a calbench WHAT: …`); a missing key's path is its own (`chosen_by`,
+/// `published[0].label`), not that of the table it is missing from.
 pub fn read_typed<'de, T, D>(de: D, path: &std::path::Path, what: &str) -> Result<T>
 where
     T: serde::Deserialize<'de>,
     D: serde::Deserializer<'de>,
 {
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let key = e.path().to_string();
-        Error::file(
-            path,
-            key,
-            format!("not a calbench {what}: {}", e.into_inner()),
-        )
+        let mut key = e.path().to_string();
+        let msg = e.into_inner().to_string();
+        let missing = msg
+            .strip_prefix("missing field `")
+            .and_then(|m| m.strip_suffix('`'));
+        if let Some(field) = missing {
+            key = match key.as_str() {
+                "." => field.to_string(),
+                _ => format!("{key}.{field}"),
+            };
+        }
+        Error::file(path, key, format!("not a calbench {what}: {msg}"))
     })
 }
 

@@ -619,7 +619,7 @@ def compare(a, b, *, tolerance=0.05):
     Args:
         a: the baseline run: its folder or its ``summary.json``.
         b: the run compared with it: its folder or its ``summary.json``.
-        tolerance: allowed relative worsening of each metric (0.05 = 5 %).
+        tolerance: allowed relative worsening of each metric (0.05 = 5 %), from 0 to 10.
 
     Returns:
         a :class:`Comparison`: each guarded metric with its status, computed by the library

@@ -8,7 +8,7 @@ use pyo3::types::{PyDict, PyList};
 
 use calbench::report::html::compare::{Comparison, Side};
 
-use crate::errors::{err, setting};
+use crate::errors::err;
 
 /// The comparison of run `b` with run `a` (folders or `summary.json` files) at `tolerance`:
 /// a dict with `metrics` (one dict per compared metric, in A's order), `only_in_a`,
@@ -21,9 +21,7 @@ pub(crate) fn compare<'py>(
     b: PathBuf,
     tolerance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if !(tolerance.is_finite() && tolerance >= 0.0) {
-        return Err(setting("tolerance", "must be a number ≥ 0"));
-    }
+    calbench::analysis::regression::checked_tolerance(tolerance, "tolerance").map_err(err)?;
     let c = py
         .detach(|| -> calbench::Result<Comparison> {
             Ok(Comparison::new(Side::read(&a)?, Side::read(&b)?, tolerance))

@@ -58,3 +58,18 @@ def test_a_shard_needs_out_and_no_python_methods(root, tmp_path):
             methods={"mine": lambda p: p.x0},
         )
     assert not (tmp_path / "s").exists()
+
+
+def test_a_shard_refused_once_it_runs_leaves_no_folder_it_made(tmp_path):
+    # LS cannot take the IRB 2600's parameters that positions do not determine: refused once
+    # the run starts, after its checkpoint is made beside the shard folder.
+    scenario = {
+        "name": "all", "seed": 9, "trials": 2, "robot": {"builtin": "irb2600"},
+        "errors": {"kind": "paper"}, "tracker": {"pose": [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]},
+        "outliers": {"count": 0, "magnitude_mm": [0.5, 1.0]}, "compliance": {"model": "none"},
+        "calibration": {"count": 25, "strategies": ["random"]}, "validation": {"count": 10},
+        "identification": {"params": "all"}, "methods": [{"name": "ls"}],
+    }
+    with pytest.raises(calbench.Error, match="identification.params"):
+        calbench.run(scenario, shard=(0, 2), out=tmp_path / "new" / "s")
+    assert list(tmp_path.iterdir()) == []

@@ -6,7 +6,8 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::analysis::regression::{
-    baseline_document, comparable, compare_with, unpaired_because, Side, Status, Unpaired, Which,
+    baseline_document, checked_tolerance, comparable, compare_with, unpaired_because, Side, Status,
+    Unpaired, Which,
 };
 use calbench::error::Error;
 use calbench::numeric::Real;
@@ -70,14 +71,9 @@ pub struct Tolerance {
 }
 
 impl Tolerance {
-    /// The tolerance, refused unless a finite number ≥ 0.
+    /// The tolerance, refused unless a number from 0 to 10 ([`checked_tolerance`]).
     pub fn checked(&self) -> calbench::Result<Real> {
-        let t = self.tolerance;
-        if t.is_finite() && t >= 0.0 {
-            Ok(t)
-        } else {
-            Err(Error::setting("--tolerance", "must be a number ≥ 0"))
-        }
+        checked_tolerance(self.tolerance, "--tolerance")
     }
 }
 
@@ -146,7 +142,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         eprintln!("{tally}");
         anyhow::bail!("{unres} metric(s) unresolved (--strict)");
     }
-    out!("no regression beyond tolerance {tolerance}");
+    out!("no regression beyond tolerance {}", fmt_num(tolerance, 6));
     out!("{tally}");
     Ok(())
 }

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::analysis::regression::Status;
+use calbench::report::fmt_num;
 use calbench::report::html::compare::{write, Comparison, Side, OUTPUTS};
 
 use super::check::Tolerance;
@@ -34,7 +35,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     let missing = c.all().len() - c.rows().len();
     out!(
         "{} metrics compared: {} regressed ({missing} of them missing in B), {} unresolved, {} \
-         changed within tolerance, {} improved, {} no change (tolerance {tolerance}); {} \
+         changed within tolerance, {} improved, {} no change (tolerance {}); {} \
          entries only in A, {} only in B; report: {}",
         c.all().len(),
         c.count(Status::Regression),
@@ -42,6 +43,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         c.count(Status::Changed),
         c.count(Status::Improved),
         c.count(Status::NoChange),
+        fmt_num(tolerance, 6),
         c.only_in(0).len(),
         c.only_in(1).len(),
         args.out.join("compare.html").display()

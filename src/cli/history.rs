@@ -44,9 +44,7 @@ pub struct HistoryArgs {
 /// Writes the pages and prints the regressions (non-zero exit with `--regressions` when
 /// there is one).
 pub fn run(args: &HistoryArgs) -> Result<()> {
-    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
-        return Err(calbench::Error::setting("--tolerance", "must be a finite number ≥ 0").into());
-    }
+    calbench::analysis::regression::checked_tolerance(args.tolerance, "--tolerance")?;
     if let Some(out) = &args.out {
         super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
     }
@@ -115,7 +113,7 @@ fn series(points: &[Point], regressed: &[Regressed]) -> Vec<Series> {
     let mut out: Vec<Series> = Vec::new();
     for p in points
         .iter()
-        .filter(|p| p.kind == "run" || p.kind == "merge")
+        .filter(|p| calbench::results::Kind::is_study(&p.kind))
     {
         if out
             .iter()

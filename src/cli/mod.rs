@@ -9,9 +9,9 @@ use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 
 use calbench::error::{Error, Result};
 use calbench::numeric::Real;
-use calbench::report::entry_table;
 use calbench::report::markdown::table as markdown_table;
 use calbench::report::output::{folder, Bytes};
+use calbench::report::{entry_table, MadeFolders};
 use calbench::study::RunResult;
 
 /// `println!` that ignores a closed stdout (`calbench … | head`): results are on disk before
@@ -171,13 +171,15 @@ pub fn identify_inputs(args: &identify::IdentifyArgs) -> Vec<&Path> {
 
 /// [`check_out_folder`], then creates `out` and checks that calbench can write in it: for the
 /// commands that run long (`run`, `merge`), so that a folder they cannot write in is refused
-/// before the work rather than after it.
-pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<()> {
+/// before the work rather than after it. The command holds the folders made until it ends: if
+/// it is refused, those still empty are removed ([`MadeFolders`]).
+pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<MadeFolders> {
     check_out_folder(out, outputs)?;
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let made = MadeFolders::create(out)?;
     let probe = out.join(".calbench-write-test");
     std::fs::write(&probe, b"").map_err(|e| Error::io(&probe, e))?;
-    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))
+    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))?;
+    Ok(made)
 }
 
 /// Checks, before any work, that `out` can be the one file a command writes (`import`,

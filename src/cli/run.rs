@@ -153,7 +153,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     }
     let out = out_folder(args, &sc.name, &OUTPUTS)?;
     let db = args.record.open()?;
-    writable_folder(&out, &OUTPUTS)?;
+    let _made = writable_folder(&out, &OUTPUTS)?;
     eprintln!(
         "running {}: {}{} trials{}{}",
         sc.name,
@@ -212,7 +212,7 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     // A live writer is refused by the checkpoint's own check (`Resumable::open`), which names
     // its checkpoint.json and `--force`.
     calbench::report::guard::guard_out_with(dir, "--resume", &OUTPUTS, &args.scenario, true)?;
-    writable_folder(dir, &OUTPUTS)?;
+    let _made = writable_folder(dir, &OUTPUTS)?;
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
     let db = args.record.open()?;
@@ -235,15 +235,11 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
 /// Prints a finished run's table and where its report is (or, for a shard, how to merge).
 fn finished(r: &calbench::study::RunResult) -> Result<()> {
     if let Some(s) = r.shard {
-        out!(
-            "shard {}/{} of {} in {:.1} s: {}; combine all {} shards with `calbench merge`",
-            s.index,
-            s.count,
-            r.scenario.name,
-            r.seconds,
-            r.out.display(),
-            s.count
+        let what = format!(
+            "shard {}/{} of {} in {:.1} s",
+            s.index, s.count, r.scenario.name, r.seconds
         );
+        shard_written(&what, &r.out, Some(s.count));
         return Ok(());
     }
     print_table(r);
@@ -254,6 +250,16 @@ fn finished(r: &calbench::study::RunResult) -> Result<()> {
         r.out.join("report.md").display()
     );
     Ok(())
+}
+
+/// Prints the line of a finished shard: `what` it ran, the folder `out` it wrote and how the
+/// run is completed (merging all `count` shards, when known).
+fn shard_written(what: &str, out: &Path, count: Option<usize>) {
+    let all = count.map_or("all".to_string(), |n| format!("all {n}"));
+    out!(
+        "{what}: {}; combine {all} shards with `calbench merge`",
+        out.display()
+    );
 }
 
 /// `--out`, or `results/<name>/` under the current folder, where a run writing the files
@@ -281,7 +287,7 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
     }
     let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
     let db = args.record.open()?;
-    writable_folder(&out, &STUDY_OUTPUTS)?;
+    let _made = writable_folder(&out, &STUDY_OUTPUTS)?;
     let (cells, _) = sc.blocks();
     eprintln!(
         "running {}: {what}, {cells} cells × {} trials{}",
@@ -302,14 +308,8 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
     let t0 = std::time::Instant::now();
     let table = run_cells_study(sc, &opts, &Terminal)?;
     if let Some(s) = shard {
-        out!(
-            "shard {}/{} of {}: {}; combine all {} shards with `calbench merge`",
-            s.index,
-            s.count,
-            sc.name(),
-            out.display(),
-            s.count
-        );
+        let what = format!("shard {}/{} of {}", s.index, s.count, sc.name());
+        shard_written(&what, &out, Some(s.count));
         return Ok(());
     }
     cells_finished(&table, t0, &out)?;
@@ -321,10 +321,7 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
 /// empty).
 fn cells_finished(table: &str, t0: std::time::Instant, out: &Path) -> Result<()> {
     if table.is_empty() {
-        out!(
-            "shard written: {}; combine all shards with `calbench merge`",
-            out.display()
-        );
+        shard_written("shard written", out, None);
         return Ok(());
     }
     out!(

@@ -170,6 +170,47 @@ pub(crate) fn whole_summary(
     })
 }
 
+/// The folders an output path needed and a command created for it (the output folder or the
+/// folders that hold it, missing ancestors included): when the value is dropped, those still
+/// empty are removed again, the deepest first, so that a command refused after it made its
+/// output folder leaves no folder it created; folders that existed before are never touched,
+/// and a folder that received the outputs is not empty and stays. [`atomically`], the command
+/// line's probe of an output folder and a run's checkpoint make their folders through it.
+#[must_use = "the folders are removed again, when still empty, as soon as this is dropped"]
+pub struct MadeFolders(Vec<std::path::PathBuf>);
+
+impl MadeFolders {
+    /// Creates the folder `dir` and its missing ancestors, and remembers those it created.
+    pub fn create(dir: &std::path::Path) -> crate::Result<MadeFolders> {
+        let missing: Vec<std::path::PathBuf> = dir
+            .ancestors()
+            .filter(|p| !p.as_os_str().is_empty())
+            .take_while(|p| std::fs::symlink_metadata(p).is_err())
+            .map(std::path::Path::to_path_buf)
+            .collect();
+        let mut made = MadeFolders(Vec::new());
+        for p in missing.into_iter().rev() {
+            match std::fs::create_dir(&p) {
+                Ok(()) => made.0.push(p),
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && p.is_dir() => {}
+                Err(e) => return Err(crate::Error::io(&p, e)),
+            }
+        }
+        Ok(made)
+    }
+}
+
+impl Drop for MadeFolders {
+    fn drop(&mut self) {
+        for p in self.0.iter().rev() {
+            match std::fs::remove_dir(p) {
+                Err(e) if e.kind() != std::io::ErrorKind::NotFound => break,
+                _ => {}
+            }
+        }
+    }
+}
+
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
 /// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when
 /// `out` is absent or empty; otherwise each new file replaces its namesake in `out`, other
@@ -177,7 +218,8 @@ pub(crate) fn whole_summary(
 /// was, so a failed run leaves nothing half-written; that includes an `out` that is a file,
 /// or that holds a folder named like one of the new files ([`blocked_output`]), which is
 /// refused, naming it, before any file is moved; so is the root or the home folder
-/// ([`guard::guard_folder`]).
+/// ([`guard::guard_folder`]). The folders made to hold `out` are removed again on failure
+/// ([`MadeFolders`]).
 pub fn atomically(
     out: &std::path::Path,
     write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
@@ -200,7 +242,7 @@ pub fn atomically(
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }
-    std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    let _made = MadeFolders::create(parent)?;
     let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
@@ -241,14 +283,14 @@ mod tests {
         let root = std::env::temp_dir().join(format!("calbench-atomic-{}", std::process::id()));
         let out = root.join("results");
         let _ = std::fs::remove_dir_all(&root);
-        // Failure half-way: neither the folder nor a temporary one is left.
+        // Failure half-way: neither the folder, nor a temporary one, nor the folder made to
+        // hold them is left.
         let r = atomically(&out, |d| {
             std::fs::write(d.join("summary.json"), "{}").unwrap();
             Err(crate::Error::Compute("disk full".into()))
         });
         assert!(r.is_err());
-        assert!(!out.exists());
-        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 0);
+        assert!(!root.exists());
         // Success into an absent folder, then into a folder holding a user's file.
         let write = |d: &std::path::Path| {
             std::fs::write(d.join("summary.json"), "{\"n\": 1}").map_err(|e| crate::Error::io(d, e))

@@ -41,6 +41,12 @@ impl Kind {
             Kind::Task => "task",
         }
     }
+
+    /// Whether `kind`, a name of the database's `kind` column, is that of a study's run
+    /// (`run` or `merge`): the records whose metrics history compares across versions.
+    pub fn is_study(kind: &str) -> bool {
+        [Kind::Run, Kind::Merge].iter().any(|k| k.as_str() == kind)
+    }
 }
 
 /// One entry of a record (`method / poses [/ sweep value]` of a run).

@@ -100,10 +100,6 @@ fn runs(db: &Db, scenario: Option<&str>) -> Result<Vec<Run>> {
     )
 }
 
-fn is_run(r: &Run) -> bool {
-    r.kind == "run" || r.kind == "merge"
-}
-
 /// A version label's place among versions: semantic versioning's precedence (semver.org
 /// § 11) of `MAJOR[.MINOR[.PATCH]][-PRE][+BUILD]`, a leading `v` allowed, missing numbers
 /// taken as 0 and the build metadata ignored; `None` for a label that is not a version.
@@ -195,7 +191,7 @@ fn series(runs: &[Run]) -> BTreeMap<(&str, &str), Vec<&Run>> {
 /// stands for the label in comparisons (its last in [`order`]).
 fn versions<'r>(list: &[&'r Run]) -> Vec<Vec<&'r Run>> {
     let mut out: Vec<Vec<&Run>> = Vec::new();
-    for r in list.iter().filter(|r| is_run(r)) {
+    for r in list.iter().filter(|r| super::Kind::is_study(&r.kind)) {
         match out.last_mut() {
             Some(v) if v[0].label == r.label => v.push(r),
             _ => out.push(vec![r]),

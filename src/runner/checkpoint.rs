@@ -30,6 +30,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
+use crate::report::MadeFolders;
 use crate::runner::shard::FormatOnly;
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
@@ -76,6 +77,9 @@ pub fn folder(out: &Path) -> PathBuf {
 /// already recorded, and rewrites `checkpoint.json` every [`CHUNK`] trials.
 pub struct Checkpoint {
     dir: PathBuf,
+    /// The folders made for it (the checkpoint's and those holding it): the ones still empty
+    /// are removed again when it is.
+    _made: MadeFolders,
     meta: Meta,
     /// What the records' checksums bind.
     id: RunId,
@@ -115,7 +119,7 @@ impl Checkpoint {
             ));
             std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         }
-        std::fs::create_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        let made = MadeFolders::create(&dir)?;
         let settings = scenario.settings()?;
         let id = RunId::new(&settings, scenario.seed());
         let meta = Meta {
@@ -137,6 +141,7 @@ impl Checkpoint {
         let file = std::fs::File::create(&path).map_err(|e| Error::io(&path, e))?;
         write_meta(&dir, &meta)?;
         Ok(Checkpoint {
+            _made: made,
             dir,
             meta,
             id,
@@ -267,6 +272,7 @@ impl Checkpoint {
         write_meta(&dir, &meta)?;
         Ok((
             Checkpoint {
+                _made: MadeFolders::create(&dir)?,
                 dir,
                 meta,
                 id,
@@ -294,7 +300,8 @@ impl Checkpoint {
             .transpose()
     }
 
-    /// Removes the checkpoint once the run's output is written.
+    /// Removes the checkpoint once the run's output is written (or refused), and the folders
+    /// made to hold it that are left empty.
     pub fn finish(self) -> Result<()> {
         drop(self.records);
         std::fs::remove_dir_all(&self.dir).map_err(|e| Error::io(&self.dir, e))

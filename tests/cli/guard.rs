@@ -214,3 +214,100 @@ fn guard_error_rates() {
         }
     }
 }
+
+/// `--tolerance` of `check`, `compare` and `history` is a number from 0 to 10 (1000 %): a
+/// larger, negative or non-finite one is refused naming the option and the range, before any
+/// work; an accepted one is printed in the short number format, never in hundreds of digits.
+#[test]
+fn a_tolerance_out_of_range_is_refused_and_a_tiny_one_printed_short() {
+    let dir = tmp_dir("cli-guard-tolerance");
+    let (base, out) = (committed(), dir.join("cmp"));
+    let (b, o) = (path_arg(&base), path_arg(&out));
+    let db = dir.join("db.sqlite");
+    for t in ["1e308", "10.5", "NaN", "inf", "-0.5"] {
+        let tolerance = format!("--tolerance={t}");
+        let cases: [Vec<&str>; 3] = [
+            vec!["check", b, "--baseline", b, &tolerance],
+            vec!["compare", b, b, "--out", o, &tolerance],
+            vec!["history", "--db", path_arg(&db), "--out", o, &tolerance],
+        ];
+        for args in cases {
+            let r = calbench(&args);
+            let err = String::from_utf8_lossy(&r.stderr);
+            assert_eq!(r.status.code(), Some(1), "{args:?}: {err}");
+            assert!(
+                err.contains("--tolerance") && err.contains("from 0 to 10"),
+                "{args:?}: {err}"
+            );
+        }
+    }
+    assert!(!out.exists() && !db.exists(), "a refused command wrote");
+    let (ok, text) = check(&base, &base, &["--tolerance", "1e-300"]);
+    assert!(ok && text.contains("beyond tolerance 1e-300\n"), "{text}");
+    let text = calbench_ok(&["compare", b, b, "--out", o, "--tolerance", "1e-300"]);
+    let text = String::from_utf8_lossy(&text.stdout);
+    assert!(text.contains("(tolerance 1e-300)"), "{text}");
+    assert!(read(&out.join("compare.html")).contains("a tolerance of 1e-300 "));
+}
+
+/// `check` reads the `trials.csv` beside a summary strictly: an empty file, a column the
+/// comparison reads missing from the header, a row of fewer cells than the header, a cell
+/// that is not a number and a trial given twice for an entry are each refused naming the
+/// file, the line and the column, where they were skipped or taken as no per-trial values.
+#[test]
+fn a_malformed_trials_csv_is_refused_naming_file_line_and_column() {
+    let dir = tmp_dir("cli-guard-trials-csv");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let run_dir = dir.join("run");
+    run(&sc, &run_dir, &["--trials", "2", "--threads", "1"]);
+    let good = read(&run_dir.join("trials.csv"));
+    let lines: Vec<&str> = good.lines().collect();
+    let head: Vec<&str> = lines[0].split(',').collect();
+    let at = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let cells = |l: &str| l.split(',').map(String::from).collect::<Vec<_>>();
+    let with_row = |k: usize, row: &[String]| {
+        let mut ls: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+        ls[k] = row.join(",");
+        ls.join("\n") + "\n"
+    };
+    let mut not_a_number = cells(lines[2]);
+    not_a_number[at("after_rms_mm")] = "0.1x".into();
+    let short = &cells(lines[3])[..head.len() - 2];
+    let termination = at("termination");
+    let no_termination: String = lines
+        .iter()
+        .map(|l| {
+            let mut c = cells(l);
+            c.remove(termination);
+            c.join(",") + "\n"
+        })
+        .collect();
+    let w = |ws: &[&str]| ws.iter().map(|s| s.to_string()).collect::<Vec<String>>();
+    let cases: [(String, Vec<String>); 5] = [
+        (String::new(), w(&["header", "is empty"])),
+        (
+            no_termination,
+            w(&["line 1, termination", "missing from the header"]),
+        ),
+        (
+            with_row(3, short),
+            w(&[&format!("line 4, {}", head[head.len() - 2]), "missing"]),
+        ),
+        (
+            with_row(2, &not_a_number),
+            w(&["line 3, after_rms_mm", "\"0.1x\" is not a number"]),
+        ),
+        (
+            format!("{good}{}\n", lines[1]),
+            w(&[&format!("line {}, trial", lines.len() + 1), "twice"]),
+        ),
+    ];
+    let csv = run_dir.join("trials.csv");
+    for (text, words) in cases {
+        std::fs::write(&csv, &text).unwrap();
+        let (ok, err) = check(&run_dir.join("summary.json"), &committed(), &[]);
+        assert!(!ok, "{text:.200}: accepted");
+        let want: Vec<&str> = words.iter().map(String::as_str).collect();
+        crate::common::one_line_naming(&err, &csv, &want);
+    }
+}

@@ -43,6 +43,7 @@ mod record_keys;
 mod record_task;
 mod records;
 mod refusals;
+mod refused_out;
 mod regenerate;
 mod registration_rows;
 mod report_baseline;

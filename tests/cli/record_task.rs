@@ -122,22 +122,38 @@ fn a_task_whose_data_or_task_file_changed_after_the_entry_ran_is_refused_naming_
         .success());
 }
 
+/// `record` of the entry `out` of `task` with its `task.json` edited by `edit`: it must be
+/// refused and write no database; the file is restored; the refusal.
+fn refused_edit(out: &Path, task: &Path, edit: impl Fn(&mut serde_json::Value)) -> String {
+    let json = out.join("task.json");
+    let written = read(&json);
+    let mut j: serde_json::Value = serde_json::from_str(&written).unwrap();
+    edit(&mut j);
+    std::fs::write(&json, serde_json::to_string_pretty(&j).unwrap() + "\n").unwrap();
+    let db = out.with_extension("sqlite");
+    let o = record(out, &db, &["--task", path_arg(task)]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(!o.status.success(), "recorded an edited task.json: {err}");
+    assert!(!db.exists());
+    std::fs::write(&json, written).unwrap();
+    err
+}
+
+/// An edited figure is refused, naming the file, `value` and the figure the per-row errors
+/// give; and `chosen_by` and `entrant`, in every `task.json` calbench wrote, are required:
+/// a file without one is refused naming the file and the key, where it was recorded as
+/// chosen by nothing, or as calbench's own entry.
 #[test]
-fn a_figure_its_per_row_errors_do_not_give_is_refused_naming_file_and_key() {
+fn an_edited_figure_or_a_missing_key_is_refused_naming_file_and_key() {
     let dir = tmp_dir("record-task-figure");
     let task = small_task(&dir);
     let out = dir.join("entry");
     run_entry(&task, &out);
-    let json = out.join("task.json");
-    let mut j = load_json(&json);
-    let value = j["value"].as_f64().unwrap();
+    let value = load_json(&out.join("task.json"))["value"].as_f64().unwrap();
     // Within its own interval, which the interval check cannot tell.
-    j["value"] = serde_json::json!(value + 0.001);
-    std::fs::write(&json, serde_json::to_string_pretty(&j).unwrap() + "\n").unwrap();
-    let db = dir.join("calbench.sqlite");
-    let o = record(&out, &db, &["--task", path_arg(&task)]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success(), "recorded an edited figure: {err}");
+    let err = refused_edit(&out, &task, |j| {
+        j["value"] = serde_json::json!(value + 0.001)
+    });
     assert!(
         err.contains("entry/task.json: value:")
             && err.contains(&format!("{}", value + 0.001))
@@ -145,5 +161,16 @@ fn a_figure_its_per_row_errors_do_not_give_is_refused_naming_file_and_key() {
             && err.contains("validation_errors_mm"),
         "{err}"
     );
-    assert!(!db.exists());
+    for key in ["chosen_by", "entrant"] {
+        let err = refused_edit(&out, &task, |j| {
+            j.as_object_mut().unwrap().remove(key);
+        });
+        assert!(err.contains(&format!("entry/task.json: {key}: ")), "{err}");
+    }
+    let o = record(
+        &out,
+        &dir.join("calbench.sqlite"),
+        &["--task", path_arg(&task)],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

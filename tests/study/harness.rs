@@ -217,7 +217,7 @@ fn ci_guard_matches_the_baseline() {
     let tb = trials_of(&read_json(&path).unwrap(), &path)
         .unwrap()
         .expect("the baseline's per-trial values");
-    let tn = Trials::read(&out.join("trials.csv")).unwrap().unwrap();
+    let tn = Trials::read(&out.join("trials.csv")).unwrap();
     // The guard's rule at its tolerance (docs/guard.md): every metric that has per-trial
     // values compared trial by trial, and none a regression.
     let all = compare_with(&now, &base, GUARD_TOLERANCE, Some((&tb, &tn)));

@@ -147,7 +147,7 @@ pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
     }
     let csv = path.parent().unwrap_or(Path::new(".")).join("trials.csv");
     if csv.is_file() {
-        Trials::read(&csv)
+        Trials::read(&csv).map(Some)
     } else {
         Ok(None)
     }

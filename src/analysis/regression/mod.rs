@@ -16,6 +16,8 @@
 
 pub mod baseline;
 pub mod noise;
+pub mod tolerance;
+pub mod trials_csv;
 
 use std::fmt;
 use std::path::Path;
@@ -29,6 +31,8 @@ use crate::study::stats::Entry;
 pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
 use noise::Change;
 pub use noise::{pairable, Status, Trials};
+use tolerance::regressed;
+pub use tolerance::{checked_tolerance, MAX_TOLERANCE};
 
 use crate::study::metric::{Better, Metric};
 
@@ -79,19 +83,6 @@ const METRICS: [Metric; 8] = [
 /// The finite figure of `path` in entry `e` (`None` when it lacks it or holds `null`).
 fn lookup(e: &Entry, path: &str) -> Option<Real> {
     e.figure(path).map(|f| f.0).filter(|v| !v.is_nan())
-}
-
-/// Whether `value` is worse than `base` by at least `tolerance` times the baseline's
-/// magnitude, in direction `dir`. A change of exactly the tolerance counts: the comparison
-/// allows 1e-12 of the magnitude for the rounding of decimal numbers. A change of 1e-9 or
-/// less never counts, so equal values, and a zero baseline with rounding noise, pass.
-fn regressed(value: Real, base: Real, tolerance: Real, dir: Better) -> bool {
-    let worse_by = match dir {
-        Better::Higher => base - value,
-        Better::Lower => value - base,
-    };
-    let rounding = 1e-12 * base.abs().max(value.abs());
-    worse_by > 1e-9 && worse_by >= tolerance * base.abs() - rounding
 }
 
 /// The metrics compared for one baseline entry: [`METRICS`] and its `param_rmse` names.

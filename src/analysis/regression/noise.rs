@@ -15,16 +15,14 @@
 //! their size, per trial or in the summaries) is no change.
 
 use std::collections::{BTreeMap, BTreeSet};
-use std::path::Path;
 
 use crate::analysis::summary::Summary;
-use crate::error::{Error, Result};
 use crate::numeric::dist;
 use crate::numeric::Real;
 use crate::study::metric::Metric;
 use crate::study::stats::location::Test;
 use crate::study::stats::paired::compare;
-use crate::study::stats::{eta, median_ranks, Entry};
+use crate::study::stats::{median_ranks, Entry};
 
 /// What a compared metric did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,122 +100,6 @@ pub struct Trials {
     pub values: BTreeMap<(String, String), BTreeMap<usize, Real>>,
     /// Every trial index of each entry, usable or not.
     pub trials: BTreeMap<String, BTreeSet<usize>>,
-}
-
-/// The terminations of `trials.csv` whose identification gave no usable result.
-const FAILED: [&str; 3] = ["diverged", "singular", "invalid-input"];
-
-impl Trials {
-    /// Reads a run's `trials.csv` (`None` for a file without `trial` and `method` columns).
-    /// In a sweep, the columns between `trial` and `method` hold the sweep point: the rows
-    /// of the k-th point in order of appearance (0-based) are entry `method / poses @ k`
-    /// ([`trials_key`]).
-    pub fn read(path: &Path) -> Result<Option<Trials>> {
-        let mut r =
-            csv::Reader::from_path(path).map_err(|e| Error::file(path, "CSV", e.to_string()))?;
-        let head: Vec<String> = r
-            .headers()
-            .map_err(|e| Error::file(path, "header", e.to_string()))?
-            .iter()
-            .map(String::from)
-            .collect();
-        let col = |name: &str| head.iter().position(|h| h == name);
-        let Some(method_col) = col("method").filter(|_| head.first().is_some_and(|h| h == "trial"))
-        else {
-            return Ok(None);
-        };
-        let mut points: Vec<Vec<String>> = Vec::new();
-        let params: Vec<(String, usize, usize)> = head
-            .iter()
-            .enumerate()
-            .filter_map(|(i, h)| {
-                let name = h.strip_prefix("true_")?;
-                Some((name.to_string(), i, col(&format!("identified_{name}"))?))
-            })
-            .collect();
-        let plain = [
-            Metric::ValidationAfterMean,
-            Metric::ValidationAfterRms,
-            Metric::ValidationAfterMax,
-            Metric::DegAfterMean,
-            Metric::DegAfterRms,
-        ]
-        .map(|m| (m.key(), m.column().and_then(col)));
-        let (ti, mi, pi, termi) = (
-            col("trial"),
-            col("method"),
-            col("poses"),
-            col("termination"),
-        );
-        let mut t = Trials::default();
-        for (line, rec) in r.records().enumerate() {
-            let rec =
-                rec.map_err(|e| Error::file(path, format!("line {}", line + 2), e.to_string()))?;
-            let get = |i: Option<usize>| i.and_then(|i| rec.get(i)).unwrap_or("");
-            let num = |i: Option<usize>| get(i).parse::<Real>().unwrap_or(Real::NAN);
-            let index: usize = get(ti).parse().map_err(|_| {
-                Error::file(
-                    path,
-                    format!("line {}, trial", line + 2),
-                    "is not a trial number",
-                )
-            })?;
-            let entry = if method_col > 1 {
-                let point: Vec<String> =
-                    (1..method_col).map(|i| get(Some(i)).to_string()).collect();
-                let k = match points.iter().position(|p| *p == point) {
-                    Some(k) => k,
-                    None => {
-                        points.push(point);
-                        points.len() - 1
-                    }
-                };
-                format!("{} / {} @ {k}", get(mi), get(pi))
-            } else {
-                format!("{} / {}", get(mi), get(pi))
-            };
-            t.trials.entry(entry.clone()).or_default().insert(index);
-            let truth: Vec<Real> = params.iter().map(|p| num(Some(p.1))).collect();
-            let found: Vec<Real> = params.iter().map(|p| num(Some(p.2))).collect();
-            let usable = !FAILED.contains(&get(termi))
-                && num(col(Metric::ValidationAfterRms.column().unwrap_or_default())).is_finite()
-                && found.iter().all(|x| x.is_finite());
-            if !usable {
-                continue;
-            }
-            let mut put = |metric: String, v: Real| {
-                if v.is_finite() {
-                    t.values
-                        .entry((entry.clone(), metric))
-                        .or_default()
-                        .insert(index, v);
-                }
-            };
-            for (m, c) in &plain {
-                if c.is_some() {
-                    put(m.clone(), num(*c));
-                }
-            }
-            let (mut sum, mut n) = (-0.0, 0usize);
-            for (k, (name, _, _)) in params.iter().enumerate() {
-                if name.starts_with("base.") {
-                    continue;
-                }
-                put(
-                    Metric::ParamRmse.of_parameter(name),
-                    (found[k] - truth[k]).powi(2),
-                );
-                if let Some(e) = eta(truth[k], found[k]) {
-                    sum += e;
-                    n += 1;
-                }
-            }
-            if n > 0 {
-                put(Metric::EtaMean.key(), sum / n as Real);
-            }
-        }
-        Ok(Some(t))
-    }
 }
 
 /// Whether two runs can be compared trial by trial: the same scenario and seed, and the

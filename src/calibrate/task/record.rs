@@ -13,8 +13,9 @@ use crate::error::{Error, Result};
 use crate::numeric::nan;
 use crate::numeric::Real;
 
-/// An entry's `task.json`. A key an older file lacks takes its default (none, an empty list,
-/// `calbench` for the entrant); a key this calbench does not know is refused, naming it.
+/// An entry's `task.json`. A key an older file lacks takes its default (none, an empty list);
+/// a key every file has had (`chosen_by`, `entrant`) is required, and a key this calbench
+/// does not know is refused, naming it.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TaskRecord {
@@ -39,7 +40,6 @@ pub struct TaskRecord {
     #[serde(default)]
     pub models: Vec<String>,
     /// `cv` (chosen among several candidates) or `given`.
-    #[serde(default)]
     pub chosen_by: String,
     /// The candidate models considered.
     #[serde(default)]
@@ -48,8 +48,7 @@ pub struct TaskRecord {
     pub candidates_fixed_by: Option<String>,
     /// The repeated K-fold choice among the candidates.
     pub cv_choice: Option<RepeatedChoice>,
-    /// Who ran it.
-    #[serde(default = "calbench")]
+    /// Who ran it: `calbench` or `python:NAME`.
     pub entrant: String,
     /// The calbench version that ran it.
     pub calbench_version: Option<String>,
@@ -109,10 +108,6 @@ pub struct SocketScores {
     pub authors_model: Option<Placements>,
     /// The authors' own figures on the calibration placement, from their `kpis.yaml`.
     pub authors_kpis: Option<SocketFigures>,
-}
-
-fn calbench() -> String {
-    "calbench".into()
 }
 
 /// The name of the task file as an entry's folder carries it.
@@ -365,5 +360,10 @@ mod tests {
         let mut v = written();
         v["format"] = "calbench-task-2".into();
         refused(v, "format");
+        for key in ["chosen_by", "entrant"] {
+            let mut v = written();
+            v.as_object_mut().unwrap().remove(key);
+            refused(v, key);
+        }
     }
 }

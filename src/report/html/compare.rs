@@ -337,7 +337,7 @@ impl Comparison {
              applies to B against the baseline A with a tolerance of {} (strict, it also \
              fails on unresolved). Timing is not compared.",
             fmt_num(100.0 * self.tolerance, 4),
-            self.tolerance
+            fmt_num(self.tolerance, 6)
         ));
         page
     }
