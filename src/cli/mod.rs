@@ -171,13 +171,16 @@ pub fn identify_inputs(args: &identify::IdentifyArgs) -> Vec<&Path> {
 
 /// [`check_out_folder`], then creates `out` and checks that calbench can write in it: for the
 /// commands that run long (`run`, `merge`), so that a folder they cannot write in is refused
-/// before the work rather than after it.
+/// before the work rather than after it. The folders the probe created are removed again
+/// (the output is written as a whole once the work is done), so a command refused after it
+/// leaves no empty folder behind.
 pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<()> {
     check_out_folder(out, outputs)?;
-    std::fs::create_dir_all(out).map_err(|e| Error::io(out, e))?;
+    let made = calbench::report::NewFolders::create(out)?;
     let probe = out.join(".calbench-write-test");
-    std::fs::write(&probe, b"").map_err(|e| Error::io(&probe, e))?;
-    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))
+    let probed = std::fs::write(&probe, b"").and_then(|()| std::fs::remove_file(&probe));
+    made.remove();
+    probed.map_err(|e| Error::io(&probe, e))
 }
 
 /// Checks, before any work, that `out` can be the one file a command writes (`import`,

@@ -200,7 +200,7 @@ pub fn atomically(
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }
-    std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    let made = NewFolders::create(parent)?;
     let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
@@ -228,8 +228,35 @@ pub fn atomically(
     });
     if done.is_err() {
         let _ = std::fs::remove_dir_all(&tmp);
+        made.remove();
     }
     done
+}
+
+/// The folders that [`NewFolders::create`] made for a path (those that did not exist), so
+/// that a command refused after it can remove them again ([`NewFolders::remove`]) and leave
+/// no empty folder behind.
+pub struct NewFolders(Vec<std::path::PathBuf>);
+
+impl NewFolders {
+    /// Creates the folder `dir` and those of its parents that do not exist.
+    pub fn create(dir: &std::path::Path) -> crate::Result<NewFolders> {
+        let new = dir
+            .ancestors()
+            .take_while(|p| !p.as_os_str().is_empty() && !p.exists())
+            .map(std::path::Path::to_path_buf)
+            .collect();
+        std::fs::create_dir_all(dir).map_err(|e| crate::Error::io(dir, e))?;
+        Ok(NewFolders(new))
+    }
+
+    /// Removes the folders it made, the deepest first, and keeps any that is no longer empty
+    /// (something else wrote in it since).
+    pub fn remove(self) {
+        for dir in self.0 {
+            let _ = std::fs::remove_dir(dir);
+        }
+    }
 }
 
 #[cfg(test)]
@@ -241,14 +268,14 @@ mod tests {
         let root = std::env::temp_dir().join(format!("calbench-atomic-{}", std::process::id()));
         let out = root.join("results");
         let _ = std::fs::remove_dir_all(&root);
-        // Failure half-way: neither the folder nor a temporary one is left.
+        // Failure half-way: neither the folder, nor a temporary one, nor the parent created
+        // for them is left.
         let r = atomically(&out, |d| {
             std::fs::write(d.join("summary.json"), "{}").unwrap();
             Err(crate::Error::Compute("disk full".into()))
         });
         assert!(r.is_err());
-        assert!(!out.exists());
-        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 0);
+        assert!(!root.exists());
         // Success into an absent folder, then into a folder holding a user's file.
         let write = |d: &std::path::Path| {
             std::fs::write(d.join("summary.json"), "{\"n\": 1}").map_err(|e| crate::Error::io(d, e))

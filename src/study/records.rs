@@ -154,13 +154,22 @@ impl Verifier {
                 self.trial(self.next)
             ))
         })?;
-        let u = r.point as u64 * self.trials + r.trial as u64;
         if r.trial as u64 >= self.trials {
             return Err(self.err(format!(
                 "trial {} is beyond the run's {} trials",
                 r.trial, self.trials
             )));
         }
+        // A point so large that its units overflow is past any run's last unit.
+        let Some(u) = (r.point as u64)
+            .checked_mul(self.trials)
+            .and_then(|u| u.checked_add(r.trial as u64))
+        else {
+            return Err(self.err(format!(
+                "sweep point {} is beyond the run's sweep points: the record was altered",
+                r.point
+            )));
+        };
         if sum != self.id.checksum(r.point, r.trial, body) {
             return Err(self.err(format!(
                 "the record of {} does not match its checksum: it was altered, or belongs to \
