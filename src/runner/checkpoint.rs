@@ -448,6 +448,14 @@ impl Replay for Records {
         let (point, index, t) = self.next_record::<TrialResult>()?;
         Ok((point, TrialResult { index, ..t }))
     }
+
+    fn unfit(&self, why: &str) -> Error {
+        Error::file(
+            &self.path,
+            format!("line {}", self.check.lines()),
+            format!("the record does not fit its run: {why} (the file was altered)"),
+        )
+    }
 }
 
 impl Records {

@@ -355,6 +355,9 @@ pub trait Replay {
     fn done(&self) -> u64;
     /// The next finished trial and its block.
     fn next(&mut self) -> Result<(usize, TrialResult)>;
+    /// The refusal of the trial last read, which does not fit its block for the reason `why`
+    /// ([`BlockInfo::misfit`]): naming where it was read.
+    fn unfit(&self, why: &str) -> Error;
 }
 
 /// Where each trial goes once it has run, in trial order (per block, blocks in order).

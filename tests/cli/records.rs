@@ -324,15 +324,11 @@ fn resume_refuses_a_checkpoint_it_cannot_replay_before_changing_it() {
     let dir = tmp_dir("records-unreadable-resume");
     let (killed, meta) = killed_run(&dir);
     let (json, records) = (read(&meta), meta.with_file_name("records.txt"));
-    let v = load_json(&meta);
-    let (settings, seed) = (v["settings"].as_str().unwrap(), v["seed"].as_u64().unwrap());
-    let text = read(&records);
-    let (first, rest) = text.split_once('\n').unwrap();
-    let from = first.find("truth:[").unwrap() + "truth:[".len();
-    let end = from + first[from..].find(',').unwrap();
-    let altered = format!("{}\"x\"{}", &first[..from], &first[end..]);
-    let line = format!("{}\n{rest}", resummed(&altered, settings, seed));
-    let bytes = with_field(&json, "bytes", &line.len().to_string());
+    let (line, bytes) = first_record_resummed(&meta, |first| {
+        let from = first.find("truth:[").unwrap() + "truth:[".len();
+        let end = from + first[from..].find(',').unwrap();
+        format!("{}\"x\"{}", &first[..from], &first[end..])
+    });
     let edits = [(records.as_path(), line), (meta.as_path(), bytes)];
     refused_resume(&killed, &edits, &["line 1", "cannot be read"]);
     let at = json.find("count = 40").unwrap();
@@ -354,4 +350,41 @@ fn merge_refuses_altered_settings_naming_shard_json() {
     let bad = |p: &Path| read(p).replace("count = 40", "count = [");
     let edits = [(m0.as_path(), bad(&m0)), (m1.as_path(), bad(&m1))];
     refused_merge(&[&a0, &a1], &edits, &["settings", "TOML parse error"]);
+}
+
+/// The checkpoint `meta`'s `records.txt` with its first record edited by `edit` and its
+/// checksum made to match, and `meta` with `bytes` counting the records so edited.
+fn first_record_resummed(meta: &Path, edit: impl Fn(&str) -> String) -> (String, String) {
+    let v = load_json(meta);
+    let (settings, seed) = (v["settings"].as_str().unwrap(), v["seed"].as_u64().unwrap());
+    let text = read(&meta.with_file_name("records.txt"));
+    let (first, rest) = text.split_once('\n').unwrap();
+    let records = format!("{}\n{rest}", resummed(&edit(first), settings, seed));
+    let bytes = with_field(&read(meta), "bytes", &records.len().to_string());
+    (records, bytes)
+}
+
+/// A record whose checksum was made to match an edit that gives it a method the run does not
+/// have is refused when the replay reaches it, naming `records.txt` and its line, where `run
+/// --resume` panicked indexing past the run's methods; the run ends as a failed run does,
+/// without output.
+#[test]
+fn resume_refuses_a_record_that_does_not_fit_its_run() {
+    let dir = tmp_dir("records-unfit-resume");
+    let (killed, meta) = killed_run(&dir);
+    let records = meta.with_file_name("records.txt");
+    let (line, bytes) =
+        first_record_resummed(&meta, |first| first.replacen("(method:0,", "(method:7,", 1));
+    std::fs::write(&records, line).unwrap();
+    std::fs::write(&meta, bytes).unwrap();
+    let o = calbench(&["run", "--resume", path_arg(&killed)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let last = err.trim_end().lines().last().unwrap();
+    one_line_naming(
+        last,
+        &records,
+        &["line 1", "does not fit its run", "method 7"],
+    );
+    assert!(!killed.join("summary.json").exists());
 }
