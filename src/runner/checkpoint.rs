@@ -450,11 +450,7 @@ impl Replay for Records {
     }
 
     fn unfit(&self, why: &str) -> Error {
-        Error::file(
-            &self.path,
-            format!("line {}", self.check.lines()),
-            format!("the record does not fit its run: {why} (the file was altered)"),
-        )
+        self.check.unfit(why)
     }
 }
 

@@ -478,6 +478,9 @@ fn merge_cells<C: Cells>(
                     let block = cells.block(done.len(), done.last().map(|d| &d.0))?;
                     done.push((block, Vec::new()));
                 }
+                if let Some(why) = cells.misfit(&done[b].0, &t) {
+                    return Err(records.unfit(&why));
+                }
                 done[b].1.push(t);
             }
             records.finish()?;

@@ -203,6 +203,15 @@ impl Verifier {
         Ok((r.point, r.trial, r.result))
     }
 
+    /// The refusal of the record last read, which does not fit its run for the reason `why`
+    /// (its block lists other methods or parameters, a study has other cells): naming the
+    /// file and the line.
+    pub(crate) fn unfit(&self, why: &str) -> Error {
+        self.err(format!(
+            "the record does not fit its run: {why} (the file was altered)"
+        ))
+    }
+
     /// Checks, once every line is read, that no unit is missing at the end.
     pub(crate) fn finish(&self) -> Result<()> {
         if self.next < self.end {
