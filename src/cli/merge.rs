@@ -27,7 +27,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     // The guard of `run` and `run --resume`: the shards are not overwritten, then the folder
     // is checked and probed once (`writable_folder`).
     calbench::report::guard::guard_out(out, "--out", &super::run::OUTPUTS, &args.dirs)?;
-    let _made = writable_folder(out, &super::run::OUTPUTS)?;
+    writable_folder(out, &super::run::OUTPUTS)?;
     let db = args.record.open()?;
     let r = match calbench::runner::shard::merge(&args.dirs, out)? {
         calbench::runner::shard::Merged::Run(r) => *r,

@@ -171,15 +171,15 @@ pub fn identify_inputs(args: &identify::IdentifyArgs) -> Vec<&Path> {
 
 /// [`check_out_folder`], then creates `out` and checks that calbench can write in it: for the
 /// commands that run long (`run`, `merge`), so that a folder they cannot write in is refused
-/// before the work rather than after it. The command holds the folders made until it ends: if
-/// it is refused, those still empty are removed ([`MadeFolders`]).
-pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<MadeFolders> {
+/// before the work rather than after it. The folders made for the probe are removed again
+/// ([`MadeFolders`]): the outputs are written as a whole once the work is done, so a command
+/// refused or killed after the probe leaves no empty folder behind.
+pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<()> {
     check_out_folder(out, outputs)?;
-    let made = MadeFolders::create(out)?;
+    let _made = MadeFolders::create(out)?;
     let probe = out.join(".calbench-write-test");
     std::fs::write(&probe, b"").map_err(|e| Error::io(&probe, e))?;
-    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))?;
-    Ok(made)
+    std::fs::remove_file(&probe).map_err(|e| Error::io(&probe, e))
 }
 
 /// Checks, before any work, that `out` can be the one file a command writes (`import`,

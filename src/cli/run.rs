@@ -153,7 +153,7 @@ pub fn run(args: &RunArgs) -> Result<()> {
     }
     let out = out_folder(args, &sc.name, &OUTPUTS)?;
     let db = args.record.open()?;
-    let _made = writable_folder(&out, &OUTPUTS)?;
+    writable_folder(&out, &OUTPUTS)?;
     eprintln!(
         "running {}: {}{} trials{}{}",
         sc.name,
@@ -212,7 +212,7 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     // A live writer is refused by the checkpoint's own check (`Resumable::open`), which names
     // its checkpoint.json and `--force`.
     calbench::report::guard::guard_out_with(dir, "--resume", &OUTPUTS, &args.scenario, true)?;
-    let _made = writable_folder(dir, &OUTPUTS)?;
+    writable_folder(dir, &OUTPUTS)?;
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
     let db = args.record.open()?;
@@ -287,7 +287,7 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
     }
     let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
     let db = args.record.open()?;
-    let _made = writable_folder(&out, &STUDY_OUTPUTS)?;
+    writable_folder(&out, &STUDY_OUTPUTS)?;
     let (cells, _) = sc.blocks();
     eprintln!(
         "running {}: {what}, {cells} cells × {} trials{}",

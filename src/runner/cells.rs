@@ -27,6 +27,11 @@ pub trait Cells: Sync {
     fn block(&self, b: usize, prev: Option<&Self::Block>) -> Result<Self::Block>;
     /// Trial `i` of `block`.
     fn trial(&self, block: &Self::Block, i: usize) -> Result<Self::Trial>;
+    /// Why `t`, read from a record, cannot be a trial of `block`, if it cannot: a record whose
+    /// values the study's files would index past (its checksum made to match an edit).
+    fn misfit(&self, _block: &Self::Block, _t: &Self::Trial) -> Option<String> {
+        None
+    }
     /// The study's files from every block's trials, in order, and the table the terminal
     /// shows.
     fn outputs(&self, done: Vec<(Self::Block, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)>;
@@ -57,6 +62,16 @@ impl Cells for RegistrationScenario {
     fn trial(&self, _: &(), i: usize) -> Result<Self::Trial> {
         self.registration_study
             .draw(trial_seed(self.head.seed, i as u64))
+    }
+    fn misfit(&self, _: &(), t: &Self::Trial) -> Option<String> {
+        let s = &self.registration_study;
+        let cells = s.outlier_counts.len() * s.magnitude_mm.len();
+        (t.len() != cells).then(|| {
+            format!(
+                "registration errors of {} cells, for a study of {cells}",
+                t.len()
+            )
+        })
     }
     fn outputs(&self, done: Vec<((), Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
         let draws = done.into_iter().next().map(|d| d.1).unwrap_or_default();

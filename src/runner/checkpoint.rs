@@ -26,14 +26,17 @@
 use std::io::{BufRead, Read as _, Write as _};
 use std::path::{Path, PathBuf};
 
+use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
+use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
 use crate::report::MadeFolders;
-use crate::runner::shard::FormatOnly;
+use crate::runner::shard::{scenario_as_run, FormatOnly};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
+use crate::study::registration_study::RegistrationScenario;
 use crate::study::reporter::Reporter;
 use crate::study::stats::precision::Precision;
 use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
@@ -199,7 +202,7 @@ impl Checkpoint {
                 version.to_string(),
             ));
         }
-        let scenario = AnyScenario::parse(&meta.settings, meta.scenario_file.as_deref())?;
+        let scenario = scenario_as_run(&path, &meta.settings, meta.scenario_file.as_deref())?;
         if let Some(g) = given {
             if g.name() != meta.scenario {
                 return Err(refuse(
@@ -245,11 +248,25 @@ impl Checkpoint {
             ));
         }
         let records = dir.join("records.txt");
-        let units = units(&scenario, meta.shard, meta.done);
+        let units = units(&path, &scenario, &meta)?;
         let sweep = scenario.blocks().1;
         let id = RunId::new(&meta.settings, meta.seed);
         let verifier = || Verifier::new(&records, id, meta.trials, sweep, units);
-        check_records(&records, &meta, verifier())?;
+        match &scenario {
+            AnyScenario::MonteCarlo(_) => {
+                check_records::<TrialResult>(&records, &meta, verifier())?;
+            }
+            AnyScenario::Registration(_) => {
+                check_records::<<RegistrationScenario as Cells>::Trial>(
+                    &records,
+                    &meta,
+                    verifier(),
+                )?;
+            }
+            AnyScenario::Instruments(_) => {
+                check_records::<<Instruments as Cells>::Trial>(&records, &meta, verifier())?;
+            }
+        }
         // Checked: from here on the checkpoint is the resumed run's.
         // The temporary output folder of the killed process.
         let (parent, name) = crate::report::parent_and_name(out);
@@ -346,16 +363,42 @@ impl TrialSink for Checkpoint {
     }
 }
 
-/// The work units `[start, start + done)` that the checkpoint of a run of `scenario` (its
-/// share `shard`) counts as done.
-fn units(scenario: &AnyScenario, shard: Option<Shard>, done: u64) -> (u64, u64) {
-    let start = shard.map_or(0, |s| s.range(scenario.units()).0);
-    (start, start + done)
+/// The work units `[start, start + done)` that the checkpoint `meta` (at `path`) of a run of
+/// `scenario` counts as done: its trial count must be the scenario's, and `done` no more than
+/// its share holds.
+fn units(path: &Path, scenario: &AnyScenario, meta: &Meta) -> Result<(u64, u64)> {
+    if meta.trials != scenario.trials() {
+        return Err(Error::file(
+            path,
+            "trials",
+            format!(
+                "{}, where its settings run {} trials: the file was altered",
+                meta.trials,
+                scenario.trials()
+            ),
+        ));
+    }
+    let total = scenario.units();
+    let (start, end) = meta.shard.map_or((0, total), |s| s.range(total));
+    if meta.done > end - start {
+        return Err(Error::file(
+            path,
+            "done",
+            format!(
+                "{} trials complete, where the run's share holds {}: the file was altered",
+                meta.done,
+                end - start
+            ),
+        ));
+    }
+    Ok((start, start + meta.done))
 }
 
 /// Checks, reading only, that `records.txt` at `path` holds at least the `bytes` of `meta`
-/// and that they are its `done` records, whole lines, each verified by `check`.
-fn check_records(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
+/// and that they are its `done` records, whole lines, each verified by `check` and read as
+/// the `T` that the replay reads: a record the replay could not read is refused here, before
+/// anything changes.
+fn check_records<T: DeserializeOwned>(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
     if len < meta.bytes {
@@ -390,7 +433,7 @@ fn check_records(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
                 ),
             ));
         }
-        check.record::<serde::de::IgnoredAny>(&String::from_utf8_lossy(&text))?;
+        check.record::<T>(&String::from_utf8_lossy(&text))?;
     }
 }
 
@@ -411,6 +454,10 @@ impl Replay for Records {
     fn next(&mut self) -> Result<(usize, TrialResult)> {
         let (point, index, t) = self.next_record::<TrialResult>()?;
         Ok((point, TrialResult { index, ..t }))
+    }
+
+    fn unfit(&self, why: &str) -> Error {
+        self.check.unfit(why)
     }
 }
 

@@ -269,12 +269,16 @@ pub fn run_resumed(
             bar.message(&shown.join(", "));
         }
         let study = pool.install(|| Study::new(plan))?;
-        collector.begin(BlockInfo::of(&study, b, point), None);
+        let info = BlockInfo::of(&study, b, point);
+        collector.begin(info.clone(), None);
         let mut range = (from - lo) as usize..(to - lo) as usize;
         if let Some(r) = replay.as_mut() {
             let done = (first + r.done()).clamp(from, to);
             for _ in from..done {
                 let (rb, mut t) = r.next()?;
+                if let Some(why) = info.misfit(&t) {
+                    return Err(r.unfit(&why));
+                }
                 if rb != b {
                     return Err(Error::Compute(format!(
                         "the checkpoint holds a trial of sweep point {rb} where one of point {b} \

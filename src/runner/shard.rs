@@ -153,6 +153,35 @@ pub(crate) struct FormatOnly {
     pub(crate) format: String,
 }
 
+/// The scenario as run that `settings` holds, the key `settings` of `holder` (a `shard.json`
+/// or a `checkpoint.json`), read from `scenario_file`. An error names `holder` and its key on
+/// one line, not the scenario file: the text is the file's, not the user's scenario.
+pub(crate) fn scenario_as_run(
+    holder: &Path,
+    settings: &str,
+    scenario_file: Option<&Path>,
+) -> Result<AnyScenario> {
+    AnyScenario::parse(settings, scenario_file).map_err(|e| {
+        let said = match &e {
+            Error::File { place, msg, .. } => format!("{place}: {msg}"),
+            e => e.to_string(),
+        };
+        let said: Vec<&str> = said
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect();
+        Error::file(
+            holder,
+            "settings",
+            format!(
+                "the scenario as run cannot be read ({}): the file was altered",
+                said.join(" ")
+            ),
+        )
+    })
+}
+
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
     let path = dir.join("shard.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
@@ -297,9 +326,25 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
         ));
     }
     metas.sort_by_key(|(_, m)| m.shard.index);
-    let any = AnyScenario::parse(&metas[0].1.settings, metas[0].1.scenario_file.as_deref())?;
+    let (d0, m0) = &metas[0];
+    let any = scenario_as_run(
+        &d0.join("shard.json"),
+        &m0.settings,
+        m0.scenario_file.as_deref(),
+    )?;
     let total = any.units();
     for (d, m) in &metas {
+        if m.trials != any.trials() {
+            return Err(Error::file(
+                d.join("shard.json"),
+                "trials",
+                format!(
+                    "{}, where its settings run {} trials: the file was altered",
+                    m.trials,
+                    any.trials()
+                ),
+            ));
+        }
         let units = m.shard.range(total);
         if m.units != units || m.records != units.1 - units.0 {
             return Err(Error::file(
@@ -432,6 +477,9 @@ fn merge_cells<C: Cells>(
                 while done.len() <= b {
                     let block = cells.block(done.len(), done.last().map(|d| &d.0))?;
                     done.push((block, Vec::new()));
+                }
+                if let Some(why) = cells.misfit(&done[b].0, &t) {
+                    return Err(records.unfit(&why));
                 }
                 done[b].1.push(t);
             }

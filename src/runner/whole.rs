@@ -70,6 +70,9 @@ pub fn run_cells<C: Cells>(
                 let upto = (first + r.done()).clamp(from, to);
                 while next < upto {
                     let (rb, i, t) = r.next_record::<C::Trial>()?;
+                    if let Some(why) = cells.misfit(&block, &t) {
+                        return Err(r.unfit(&why));
+                    }
                     if (rb, i as u64) != (b, next - lo) {
                         return Err(Error::Compute(format!(
                             "the checkpoint holds trial {i} of block {rb} where trial {} of \

@@ -58,8 +58,10 @@ pub const CHUNK: usize = 256;
 
 /// A share of a run's work (`calbench run --shard I/N`): the work units (sweep point ×
 /// trial, in run order) from ⌊I·W/N⌋ to ⌊(I+1)·W/N⌋ of the W in all, so the N shards cover
-/// every unit once, in contiguous runs.
+/// every unit once, in contiguous runs. Read from a file (`shard.json`, `checkpoint.json`),
+/// it is checked as `--shard` is: a share with I ≥ N or N = 0 is refused, naming it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "ShardFields")]
 pub struct Shard {
     /// I, from 0.
     pub index: usize,
@@ -67,7 +69,31 @@ pub struct Shard {
     pub count: usize,
 }
 
+/// The fields of a [`Shard`] as a file holds them, before they are checked.
+#[derive(Deserialize)]
+struct ShardFields {
+    index: usize,
+    count: usize,
+}
+
+impl TryFrom<ShardFields> for Shard {
+    type Error = String;
+    fn try_from(s: ShardFields) -> std::result::Result<Shard, String> {
+        Shard::new(s.index, s.count).ok_or_else(|| {
+            format!(
+                "shard {}/{} is not I/N with 0 ≤ I < N: the file was altered",
+                s.index, s.count
+            )
+        })
+    }
+}
+
 impl Shard {
+    /// Share `index` of `count`, if 0 ≤ `index` < `count`.
+    pub fn new(index: usize, count: usize) -> Option<Shard> {
+        (index < count).then_some(Shard { index, count })
+    }
+
     /// Parses `I/N` (0 ≤ I < N).
     pub fn parse(text: &str) -> Result<Shard> {
         let bad = || {
@@ -81,10 +107,7 @@ impl Shard {
             i.trim().parse().map_err(|_| bad())?,
             n.trim().parse().map_err(|_| bad())?,
         );
-        if count == 0 || index >= count {
-            return Err(bad());
-        }
-        Ok(Shard { index, count })
+        Shard::new(index, count).ok_or_else(bad)
     }
 
     /// The work units `[start, end)` of this shard out of `total`.
@@ -332,6 +355,9 @@ pub trait Replay {
     fn done(&self) -> u64;
     /// The next finished trial and its block.
     fn next(&mut self) -> Result<(usize, TrialResult)>;
+    /// The refusal of the trial last read, which does not fit its block for the reason `why`
+    /// ([`BlockInfo::misfit`]): naming where it was read.
+    fn unfit(&self, why: &str) -> Error;
 }
 
 /// Where each trial goes once it has run, in trial order (per block, blocks in order).

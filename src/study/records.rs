@@ -154,13 +154,22 @@ impl Verifier {
                 self.trial(self.next)
             ))
         })?;
-        let u = r.point as u64 * self.trials + r.trial as u64;
         if r.trial as u64 >= self.trials {
             return Err(self.err(format!(
                 "trial {} is beyond the run's {} trials",
                 r.trial, self.trials
             )));
         }
+        // A point so large that its units overflow is past any run's last unit.
+        let Some(u) = (r.point as u64)
+            .checked_mul(self.trials)
+            .and_then(|u| u.checked_add(r.trial as u64))
+        else {
+            return Err(self.err(format!(
+                "sweep point {} is beyond the run's sweep points: the record was altered",
+                r.point
+            )));
+        };
         if sum != self.id.checksum(r.point, r.trial, body) {
             return Err(self.err(format!(
                 "the record of {} does not match its checksum: it was altered, or belongs to \
@@ -192,6 +201,15 @@ impl Verifier {
         }
         self.next += 1;
         Ok((r.point, r.trial, r.result))
+    }
+
+    /// The refusal of the record last read, which does not fit its run for the reason `why`
+    /// (its block lists other methods or parameters, a study has other cells): naming the
+    /// file and the line.
+    pub(crate) fn unfit(&self, why: &str) -> Error {
+        self.err(format!(
+            "the record does not fit its run: {why} (the file was altered)"
+        ))
     }
 
     /// Checks, once every line is read, that no unit is missing at the end.

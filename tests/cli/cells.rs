@@ -5,8 +5,8 @@
 //! `history` and `leaderboard`.
 
 use crate::common::{
-    calbench, calbench_ok, kill_once_checkpointed, merge, one_line_naming, path_arg, read, root,
-    tmp_dir, write_scenario,
+    calbench, calbench_ok, kill_once_checkpointed, load_json, merge, one_line_naming, path_arg,
+    read, resummed, root, tmp_dir, write_scenario,
 };
 
 /// The files of a registration study.
@@ -41,7 +41,8 @@ fn ban_fig3_in_two_shards_merges_to_the_bytes_of_one_run() {
 
 /// The records of another registration run with the same name and seed but another trial
 /// count (whose first draws are the same numbers), copied into a shard, are refused by
-/// `merge`, naming `records.txt` and its line, and nothing is written.
+/// `merge`, naming `records.txt` and its line, and nothing is written; so is a draw of other
+/// cells than the study's.
 #[test]
 fn merge_refuses_the_records_of_another_registration_run_with_the_same_name_and_seed() {
     let dir = tmp_dir("cells-foreign");
@@ -72,6 +73,31 @@ fn merge_refuses_the_records_of_another_registration_run_with_the_same_name_and_
     assert!(!o.status.success(), "merged the records of another run");
     let err = String::from_utf8_lossy(&o.stderr);
     one_line_naming(&err, &records, &["line 1", "another run"]);
+    assert!(!merged.exists(), "merge left the folder it made");
+    // A draw of one cell fewer, its checksum made to match: refused naming its line, where
+    // the merge panicked indexing past the draw's cells.
+    let meta = load_json(&a0.join("shard.json"));
+    let (settings, seed) = (
+        meta["settings"].as_str().unwrap(),
+        meta["seed"].as_u64().unwrap(),
+    );
+    let (first, rest) = own.split_once('\n').unwrap();
+    let at = first.find("result:[").unwrap() + "result:[".len();
+    let end = at + first[at..].find("),").unwrap() + 2;
+    let fewer = resummed(
+        &format!("{}{}", &first[..at], &first[end..]),
+        settings,
+        seed,
+    );
+    std::fs::write(&records, format!("{fewer}\n{rest}")).unwrap();
+    let o = calbench(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let want = [
+        "line 1",
+        "registration errors of 39 cells, for a study of 40",
+    ];
+    one_line_naming(&err, &records, &want);
     assert!(!merged.exists(), "merge left the folder it made");
     std::fs::write(&records, &own).unwrap();
     calbench_ok(&args);

@@ -2,12 +2,16 @@
 //! with the same scenario name and seed but other settings (here another trial count, whose
 //! first trials draw the same numbers, so only the run's identity tells them apart), copied
 //! into a shard or a checkpoint, are refused by `merge` and `run --resume`, naming the file
-//! and the line, and nothing is written or changed.
+//! and the line, and nothing is written or changed. So are a `shard.json`, a `checkpoint.json`
+//! or a record altered in other ways (docs/formats.md § 8.3): each refusal is one line naming
+//! the file and its key or line, writes nothing, leaves no output folder and, on `run
+//! --resume`, leaves the checkpoint as it was.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::common::{
-    calbench, calbench_ok, kill_once_checkpointed, one_line_naming, path_arg, read, root, tmp_dir,
+    calbench, calbench_ok, kill_once_checkpointed, load_json, one_line_naming, path_arg, read,
+    resummed, root, tmp_dir,
 };
 
 /// `calbench run ci-guard --trials N --threads 1` with `more` arguments, into `out`.
@@ -70,18 +74,8 @@ fn merge_refuses_the_records_of_another_run_with_the_same_name_and_seed() {
 #[test]
 fn resume_refuses_the_records_of_another_run_with_the_same_name_and_seed() {
     let dir = tmp_dir("records-foreign-resume");
-    let (killed, other) = (dir.join("killed"), dir.join("other"));
-    let sc = root().join("scenarios/ci-guard.toml");
-    let args = ["run", path_arg(&sc), "--trials", "600", "--threads", "1"];
-    let meta = kill_once_checkpointed(
-        &[&args[..], &["--out", path_arg(&killed)]].concat(),
-        &killed,
-        300,
-    );
-    assert!(
-        !killed.join("summary.json").exists(),
-        "the run ended before it was killed"
-    );
+    let other = dir.join("other");
+    let (killed, meta) = killed_run(&dir);
     // 260 trials of a run of 520: as many as the checkpoint counts, with the same numbers.
     run("520", &["--shard", "0/2"], &other);
     let json = read(&meta);
@@ -104,15 +98,8 @@ fn resume_refuses_the_records_of_another_run_with_the_same_name_and_seed() {
         &format!("\"bytes\": {}", foreign.len()),
     );
     std::fs::write(&meta, &json).unwrap();
-    let o = calbench(&["run", "--resume", path_arg(&killed)]);
-    assert!(
-        !o.status.success(),
-        "resumed from the records of another run"
-    );
-    let err = String::from_utf8_lossy(&o.stderr);
-    one_line_naming(&err, &records, &["line 1", "trial 0", "another run"]);
-    assert_eq!(read(&records), foreign);
-    assert_eq!(read(&meta), json);
+    let edits = [(records.as_path(), foreign), (meta.as_path(), json)];
+    refused_resume(&killed, &edits, &["line 1", "trial 0", "another run"]);
 }
 
 /// A `shard.json` whose block lists other methods or parameters than its records hold (a
@@ -121,9 +108,7 @@ fn resume_refuses_the_records_of_another_run_with_the_same_name_and_seed() {
 #[test]
 fn merge_refuses_a_shard_json_whose_blocks_do_not_fit_its_records() {
     let dir = tmp_dir("records-altered-blocks");
-    let (a0, a1) = (dir.join("a0"), dir.join("a1"));
-    run("4", &["--shard", "0/2"], &a0);
-    run("4", &["--shard", "1/2"], &a1);
+    let [a0, a1] = two_shards(&dir);
     let meta = a0.join("shard.json");
     let own = read(&meta);
     for (from, to, why) in [
@@ -139,18 +124,267 @@ fn merge_refuses_a_shard_json_whose_blocks_do_not_fit_its_records() {
         ),
     ] {
         assert!(own.contains(from), "{from}");
-        std::fs::write(&meta, own.replacen(from, to, 1)).unwrap();
-        let out = dir.join("merged");
-        let o = calbench(&[
-            "merge",
-            path_arg(&a0),
-            path_arg(&a1),
-            "--out",
-            path_arg(&out),
-        ]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{err}");
-        one_line_naming(&err, &meta, &["blocks", "records.txt, line 1", why]);
-        assert!(!out.join("summary.json").exists());
+        let edit = [(meta.as_path(), own.replacen(from, to, 1))];
+        refused_merge(&[&a0, &a1], &edit, &["blocks", "records.txt, line 1", why]);
     }
+}
+
+/// Shards 0/2 and 1/2 of ci-guard with 4 trials, in `dir/a0` and `dir/a1`.
+fn two_shards(dir: &Path) -> [PathBuf; 2] {
+    let (a0, a1) = (dir.join("a0"), dir.join("a1"));
+    run("4", &["--shard", "0/2"], &a0);
+    run("4", &["--shard", "1/2"], &a1);
+    [a0, a1]
+}
+
+/// `calbench merge SHARDS --out …/new/merged` after each file of `edits` is given its text:
+/// refused (exit status 1) in one line naming the first file and holding each of `want`,
+/// with nothing written, not even the output folder or its parent; the files then restored.
+fn refused_merge(shards: &[&Path], edits: &[(&Path, String)], want: &[&str]) {
+    let own: Vec<String> = edits.iter().map(|(f, _)| read(f)).collect();
+    for (f, text) in edits {
+        std::fs::write(f, text).unwrap();
+    }
+    let parent = shards[0].with_file_name("new");
+    let out = parent.join("merged");
+    let mut args = vec!["merge"];
+    args.extend(shards.iter().map(|s| path_arg(s)));
+    args.extend(["--out", path_arg(&out)]);
+    let o = calbench(&args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    one_line_naming(&err, edits[0].0, want);
+    assert!(!parent.exists(), "{} was left behind", parent.display());
+    for ((f, _), text) in edits.iter().zip(own) {
+        std::fs::write(f, text).unwrap();
+    }
+}
+
+/// A run of ci-guard (600 trials, one thread) into `dir/killed`, killed once its checkpoint
+/// counts a trial: the output folder and the checkpoint's `checkpoint.json`.
+fn killed_run(dir: &Path) -> (PathBuf, PathBuf) {
+    let killed = dir.join("killed");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let args = ["run", path_arg(&sc), "--trials", "600", "--threads", "1"];
+    let meta = kill_once_checkpointed(
+        &[&args[..], &["--out", path_arg(&killed)]].concat(),
+        &killed,
+        300,
+    );
+    assert!(
+        !killed.join("summary.json").exists(),
+        "the run ended before it was killed"
+    );
+    (killed, meta)
+}
+
+/// `calbench run --resume KILLED` after each file of `edits` (in its checkpoint) is given its
+/// text: refused (exit status 1) in one line naming the first file and holding each of
+/// `want`, the checkpoint's files left as the edits made them and no output folder written;
+/// the files then restored.
+fn refused_resume(killed: &Path, edits: &[(&Path, String)], want: &[&str]) {
+    let own: Vec<String> = edits.iter().map(|(f, _)| read(f)).collect();
+    for (f, text) in edits {
+        std::fs::write(f, text).unwrap();
+    }
+    let checkpoint = edits[0].0.parent().unwrap();
+    let files = ["checkpoint.json", "records.txt"].map(|f| read(&checkpoint.join(f)));
+    let o = calbench(&["run", "--resume", path_arg(killed)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    one_line_naming(&err, edits[0].0, want);
+    let now = ["checkpoint.json", "records.txt"].map(|f| read(&checkpoint.join(f)));
+    assert!(
+        now == files,
+        "the refused resume changed the checkpoint: {err}"
+    );
+    assert!(!killed.exists(), "{} was left behind", killed.display());
+    for ((f, _), text) in edits.iter().zip(own) {
+        std::fs::write(f, text).unwrap();
+    }
+}
+
+/// The first record line of `text` (a `records.txt`) with `from` replaced by `to`.
+fn first_record_with(text: &str, from: &str, to: &str) -> String {
+    let (first, rest) = text.split_once('\n').unwrap();
+    assert!(first.contains(from), "{from}");
+    format!("{}\n{rest}", first.replacen(from, to, 1))
+}
+
+/// A share I ≥ N or N = 0 in `shard.json` and a record whose sweep point is so large that its
+/// work unit overflows are refused naming the file and key or line, where `merge` panicked
+/// (indexing the shards past their count; multiplying the point by the trial count); a trial
+/// count other than the settings' is refused naming `trials`, where it was read as given.
+#[test]
+fn merge_refuses_a_share_trial_count_or_sweep_point_out_of_range() {
+    let dir = tmp_dir("records-range-merge");
+    let [a0, a1] = two_shards(&dir);
+    let (meta, records) = (a0.join("shard.json"), a0.join("records.txt"));
+    let own = read(&meta);
+    let share = |i: &str, n: &str| {
+        own.replace("\"index\": 0", &format!("\"index\": {i}"))
+            .replace("\"count\": 2", &format!("\"count\": {n}"))
+    };
+    refused_merge(
+        &[&a0, &a1],
+        &[(&meta, share("5", "2"))],
+        &["shard 5/2", "0 ≤ I < N"],
+    );
+    refused_merge(
+        &[&a0, &a1],
+        &[(&meta, share("0", "0"))],
+        &["shard 0/0", "0 ≤ I < N"],
+    );
+    let trials = |p: &Path| read(p).replace("\"trials\": 4,", "\"trials\": 5,");
+    let meta1 = a1.join("shard.json");
+    let edits = [
+        (meta.as_path(), trials(&meta)),
+        (meta1.as_path(), trials(&meta1)),
+    ];
+    refused_merge(
+        &[&a0, &a1],
+        &edits,
+        &["trials: 5", "its settings run 4 trials"],
+    );
+    let point = first_record_with(&read(&records), "(point:0,", "(point:18446744073709551615,");
+    refused_merge(
+        &[&a0, &a1],
+        &[(&records, point)],
+        &["line 1", "sweep point 18446744073709551615 is beyond"],
+    );
+}
+
+/// The same for a checkpoint: a share with N = 0, more trials done than the run's share
+/// holds, a trial count other than the settings' and a record's overflowing sweep point are
+/// refused naming `checkpoint.json` and the key, or `records.txt` and the line, where `run
+/// --resume` panicked dividing by the share count or overflowing a unit, or named a missing
+/// trial.
+#[test]
+fn resume_refuses_a_share_trial_count_or_sweep_point_out_of_range() {
+    let dir = tmp_dir("records-range-resume");
+    let (killed, meta) = killed_run(&dir);
+    let (json, records) = (read(&meta), meta.with_file_name("records.txt"));
+    let shard = json.replace("\"shard\": null", "\"shard\": {\"index\": 0, \"count\": 0}");
+    refused_resume(&killed, &[(&meta, shard)], &["shard 0/0", "0 ≤ I < N"]);
+    let done = with_field(&json, "done", "601");
+    refused_resume(&killed, &[(&meta, done)], &["done", "601 trials complete"]);
+    let trials = with_field(&json, "trials", "7");
+    refused_resume(
+        &killed,
+        &[(&meta, trials)],
+        &["trials", "its settings run 600"],
+    );
+    let text = read(&records);
+    let point = first_record_with(&text, "(point:0,", "(point:18446744073709551615,");
+    let bytes = with_field(&json, "bytes", &point.len().to_string());
+    let edits = [(records.as_path(), point), (meta.as_path(), bytes)];
+    refused_resume(
+        &killed,
+        &edits,
+        &["line 1", "sweep point 18446744073709551615"],
+    );
+}
+
+/// `json` (a `checkpoint.json`) with the number of `key` replaced by `value`.
+fn with_field(json: &str, key: &str, value: &str) -> String {
+    let at = json.find(&format!("\"{key}\": ")).unwrap() + key.len() + 4;
+    let end = at + json[at..].find([',', '\n']).unwrap();
+    format!("{}{value}{}", &json[..at], &json[end..])
+}
+
+/// A refused `merge` or `run --resume` leaves no output folder: the folder (and its parents)
+/// that the check of `--out` creates to probe that it can write is removed again, where a
+/// refusal after it left it empty.
+#[test]
+fn a_refused_merge_or_resume_leaves_no_output_folder() {
+    let dir = tmp_dir("records-no-folder");
+    let [a0, _] = two_shards(&dir);
+    let meta = a0.join("shard.json");
+    let format = read(&meta).replace("calbench-shard-8", "calbench-shard-7");
+    refused_merge(&[&a0], &[(&meta, format)], &["format", "calbench-shard-7"]);
+    let out = dir.join("new/killed");
+    let o = calbench(&["run", "--resume", path_arg(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    one_line_naming(&err, &out, &["--resume", "no checkpoint"]);
+    assert!(
+        !dir.join("new").exists(),
+        "the resume left {}",
+        out.display()
+    );
+}
+
+/// A record that its checksum passes but that reads as no trial (a number made a string, the
+/// sum made to match) is refused before the checkpoint changes, naming the line, where the
+/// resume began, failed at that record and removed the checkpoint; the scenario as run that
+/// `checkpoint.json` holds, altered, is refused naming it and `settings`, where the message
+/// named the scenario file, whose line it gave.
+#[test]
+fn resume_refuses_a_checkpoint_it_cannot_replay_before_changing_it() {
+    let dir = tmp_dir("records-unreadable-resume");
+    let (killed, meta) = killed_run(&dir);
+    let (json, records) = (read(&meta), meta.with_file_name("records.txt"));
+    let (line, bytes) = first_record_resummed(&meta, |first| {
+        let from = first.find("truth:[").unwrap() + "truth:[".len();
+        let end = from + first[from..].find(',').unwrap();
+        format!("{}\"x\"{}", &first[..from], &first[end..])
+    });
+    let edits = [(records.as_path(), line), (meta.as_path(), bytes)];
+    refused_resume(&killed, &edits, &["line 1", "cannot be read"]);
+    let at = json.find("count = 40").unwrap();
+    let toml = format!("{}count = \\\"x\\\"{}", &json[..at], &json[at + 10..]);
+    refused_resume(
+        &killed,
+        &[(&meta, toml)],
+        &["settings", "calibration.count"],
+    );
+}
+
+/// `merge` of shards whose scenario as run (`settings`) was altered alike names the first
+/// `shard.json` and `settings`, on one line, where it named the scenario file.
+#[test]
+fn merge_refuses_altered_settings_naming_shard_json() {
+    let dir = tmp_dir("records-settings-merge");
+    let [a0, a1] = two_shards(&dir);
+    let (m0, m1) = (a0.join("shard.json"), a1.join("shard.json"));
+    let bad = |p: &Path| read(p).replace("count = 40", "count = [");
+    let edits = [(m0.as_path(), bad(&m0)), (m1.as_path(), bad(&m1))];
+    refused_merge(&[&a0, &a1], &edits, &["settings", "TOML parse error"]);
+}
+
+/// The checkpoint `meta`'s `records.txt` with its first record edited by `edit` and its
+/// checksum made to match, and `meta` with `bytes` counting the records so edited.
+fn first_record_resummed(meta: &Path, edit: impl Fn(&str) -> String) -> (String, String) {
+    let v = load_json(meta);
+    let (settings, seed) = (v["settings"].as_str().unwrap(), v["seed"].as_u64().unwrap());
+    let text = read(&meta.with_file_name("records.txt"));
+    let (first, rest) = text.split_once('\n').unwrap();
+    let records = format!("{}\n{rest}", resummed(&edit(first), settings, seed));
+    let bytes = with_field(&read(meta), "bytes", &records.len().to_string());
+    (records, bytes)
+}
+
+/// A record whose checksum was made to match an edit that gives it a method the run does not
+/// have is refused when the replay reaches it, naming `records.txt` and its line, where `run
+/// --resume` panicked indexing past the run's methods; the run ends as a failed run does,
+/// without output.
+#[test]
+fn resume_refuses_a_record_that_does_not_fit_its_run() {
+    let dir = tmp_dir("records-unfit-resume");
+    let (killed, meta) = killed_run(&dir);
+    let records = meta.with_file_name("records.txt");
+    let (line, bytes) =
+        first_record_resummed(&meta, |first| first.replacen("(method:0,", "(method:7,", 1));
+    std::fs::write(&records, line).unwrap();
+    std::fs::write(&meta, bytes).unwrap();
+    let o = calbench(&["run", "--resume", path_arg(&killed)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    let last = err.trim_end().lines().last().unwrap();
+    one_line_naming(
+        last,
+        &records,
+        &["line 1", "does not fit its run", "method 7"],
+    );
+    assert!(!killed.join("summary.json").exists());
 }

@@ -323,3 +323,28 @@ pub fn another_digit(line: &str) -> String {
     let other = if &line[at..=at] == "7" { "8" } else { "7" };
     format!("{}{other}{}", &line[..at], &line[at + 1..])
 }
+
+/// `line`, a record of `records.txt` of the run of `settings` and `seed`, with its checksum
+/// computed again for its text (docs/formats.md § 7.3): a record edited and its sum made to
+/// match, which only reading the record can refuse.
+pub fn resummed(line: &str, settings: &str, seed: u64) -> String {
+    use sha2::{Digest, Sha256};
+    let body = line.rsplit_once(" #").map_or(line, |(b, _)| b);
+    let field = |key: &str| -> u64 {
+        let from = body.find(key).expect("a record line") + key.len();
+        let digits = &body[from..];
+        let end = digits.find(|c: char| !c.is_ascii_digit()).unwrap();
+        digits[..end].parse().unwrap()
+    };
+    let mut h = Sha256::new();
+    h.update(Sha256::digest(settings.as_bytes()));
+    h.update(seed.to_le_bytes());
+    h.update(field("(point:").to_le_bytes());
+    h.update(field(",trial:").to_le_bytes());
+    h.update(body.as_bytes());
+    let sum: String = h.finalize()[..16]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect();
+    format!("{body} #{sum}")
+}
