@@ -87,6 +87,9 @@ pub struct Instruments<'a> {
     pub scenario: &'a InstrumentsScenario,
     /// The nominal robot (`robot` of the scenario).
     pub robot: Robot,
+    /// How many errors each trial's true robot carries (`[errors]`), when they can be
+    /// counted: what a record of a trial must hold ([`Trial::misfit`]).
+    errors: Option<usize>,
 }
 
 impl Cells for Instruments<'_> {
@@ -97,6 +100,9 @@ impl Cells for Instruments<'_> {
     }
     fn trial(&self, block: &CellPlan, i: usize) -> Result<Self::Trial> {
         self.scenario.run_trial(&self.robot, block, i)
+    }
+    fn misfit(&self, block: &CellPlan, t: &Self::Trial) -> Option<String> {
+        t.as_ref()?.misfit(block, self.errors)
     }
     fn outputs(&self, done: Vec<(CellPlan, Vec<Self::Trial>)>) -> Result<(Outputs<'_>, String)> {
         let cells: Vec<_> = done
@@ -112,6 +118,19 @@ impl<'a> Instruments<'a> {
     pub fn new(scenario: &'a InstrumentsScenario) -> Result<Instruments<'a>> {
         let chain = crate::robot::urdf::UrdfChain::default();
         let robot = crate::robot::builtin::load_chain(&scenario.robot, &chain)?;
-        Ok(Instruments { scenario, robot })
+        let e = &scenario.errors;
+        let errors = if e.kind == crate::sim::settings::ErrorKind::None {
+            Some(0)
+        } else {
+            let measure = crate::measurement::Measure::Position;
+            crate::sim::truth::selected_params(&robot, &e.selection(), measure, e.key())
+                .ok()
+                .map(|p| p.len())
+        };
+        Ok(Instruments {
+            scenario,
+            robot,
+            errors,
+        })
     }
 }

@@ -32,6 +32,9 @@ use crate::study::instruments_table::instruments_keys;
 use crate::study::scenario::StrategyName;
 use crate::study::whole::Head;
 
+mod trial;
+pub use trial::Trial;
+
 /// A scenario file running the instruments study.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -685,15 +688,4 @@ pub struct Simulated {
     pub seed: u64,
     /// What the trial read (`measured` is `Some`).
     pub reading: Reading,
-}
-
-/// One trial's outcome: the true errors, the identified values, the Cramér–Rao trace and the
-/// validation RMS before and after (its serde form is its record in `records.txt`).
-#[derive(Clone, Debug, serde::Serialize, Deserialize)]
-pub struct Trial {
-    errors: Vec<(Param, Real)>,
-    x: Vec<Real>,
-    crb: Real,
-    before: Real,
-    after: Real,
 }

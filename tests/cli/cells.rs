@@ -185,6 +185,65 @@ fn an_instruments_study_killed_and_resumed_gives_the_bytes_of_one_run() {
     }
 }
 
+/// An instruments study's record edited to hold one identified value or one true error fewer
+/// than its cell, its checksum made to match, is refused by `merge` naming `records.txt` and
+/// the line, where the merge panicked indexing past the record's values; nothing is written.
+#[test]
+fn merge_refuses_an_instruments_record_that_does_not_fit_its_cell() {
+    let dir = tmp_dir("cells-instruments-misfit");
+    let sc = write_scenario(&dir, "s.toml", INSTRUMENTS);
+    let shard = |s: &str, out: &str| {
+        let out = dir.join(out);
+        let args = ["run", path_arg(&sc), "--shard", s, "--threads", "1"];
+        calbench_ok(&[&args[..], &["--out", path_arg(&out)]].concat());
+        out
+    };
+    let (s0, s1) = (shard("0/2", "s0"), shard("1/2", "s1"));
+    let records = s0.join("records.txt");
+    let own = read(&records);
+    let meta = load_json(&s0.join("shard.json"));
+    let (settings, seed) = (
+        meta["settings"].as_str().unwrap(),
+        meta["seed"].as_u64().unwrap(),
+    );
+    let (first, rest) = own.split_once('\n').unwrap();
+    let merged = dir.join("merged");
+    let args = [
+        "merge",
+        path_arg(&s0),
+        path_arg(&s1),
+        "--out",
+        path_arg(&merged),
+    ];
+    // The first value after `key` dropped: `x:[a,b,…]` becomes `x:[b,…]`, and likewise the
+    // first `(name,value)` pair of `errors`.
+    for (key, want) in [
+        ("x:[", "identified values, for a cell of"),
+        ("errors:[", "true errors, for a study of"),
+    ] {
+        let at = first.find(key).unwrap() + key.len();
+        let end = at + first[at..].find(',').unwrap() + 1;
+        let end = if key == "errors:[" {
+            at + first[at..].find("),").unwrap() + 2
+        } else {
+            end
+        };
+        let fewer = resummed(
+            &format!("{}{}", &first[..at], &first[end..]),
+            settings,
+            seed,
+        );
+        std::fs::write(&records, format!("{fewer}\n{rest}")).unwrap();
+        let o = calbench(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        one_line_naming(&err, &records, &["line 1", want]);
+        assert!(!merged.exists(), "merge left the folder it made");
+    }
+    std::fs::write(&records, &own).unwrap();
+    calbench_ok(&args);
+}
+
 /// `SELECT COUNT(*)`-like `sql` of the database `db`, one number.
 fn number(db: &std::path::Path, sql: &str) -> i64 {
     let c = rusqlite::Connection::open(db).unwrap();
