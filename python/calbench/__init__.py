@@ -108,6 +108,32 @@ def _names(name, value):
     return [v.strip() for v in value]
 
 
+def _flag(name, value):
+    """``value`` as a bool: True or False (numpy's too), refused naming ``name`` otherwise
+    rather than read by its truth value (``"no"`` is not False)."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise SettingError(f"setting `{name}`: expected True or False, got {type(value).__name__}")
+
+
+def _text(name, value, what, optional=False):
+    """``value`` as a string (or None when ``optional``), refused naming ``name`` and saying
+    ``what`` it should be otherwise."""
+    if isinstance(value, str) or (optional and value is None):
+        return value
+    raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
+
+
+def _path(name, value, what="a path", optional=False):
+    """``value`` (a str or an os.PathLike) as a path string (None stays None when
+    ``optional``), refused naming ``name`` otherwise."""
+    if isinstance(value, (str, os.PathLike)):
+        return os.fspath(value)
+    if optional and value is None:
+        return None
+    raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
+
+
 def _scenario(scenario):
     """A path (str or os.PathLike) or a dict, as the compiled part takes it."""
     if isinstance(scenario, dict):
@@ -260,10 +286,12 @@ def identify(
             _array("validate.points", validate[1], 2, 3),
             _rotations("validate.rotations", validate[2]) if len(validate) == 3 else None,
         )
-    if isinstance(compliance, (list, tuple)):
-        compliance = ",".join(compliance)
+    if compliance is not None:
+        compliance = ",".join(_names("compliance", compliance))
     if prior is not None and not isinstance(prior, dict):
         raise SettingError("setting `prior`: expected a dict parameter name → σ")
+    if options is not None and not isinstance(options, dict):
+        raise SettingError("setting `options`: expected a dict of the method's options")
     fields = _calbench.identify(
         robot,
         q,
@@ -272,22 +300,22 @@ def identify(
         sigma=None if sigma is None else _array("sigma", sigma, 1),
         payload=None if payload is None else _array("payload", payload, 1),
         data=None if data is None else os.fspath(data),
-        method=method,
+        method=_text("method", method, f"a method's name ({', '.join(methods())})"),
         options=options,
-        registration=registration,
+        registration=_text("registration", registration, "identify, svd, wsvd or known"),
         compliance=compliance,
         validate=val,
-        holdout=holdout,
+        holdout=_text("holdout", holdout, 'LAST/EVERY such as "3/10"', optional=True),
         cv=_count("cv", cv),
-        cv_seed=_count("cv_seed", cv_seed),
+        cv_seed=_count("cv_seed", 0 if cv_seed is None else cv_seed),
         models=_names("models", models),
         params=_names("params", params),
         fix=_names("fix", fix),
         prior=prior,
-        seed=_count("seed", seed),
-        allow_rank_deficient=bool(allow_rank_deficient),
-        allow_worse=bool(allow_worse),
-        allow_implausible=bool(allow_implausible),
+        seed=_count("seed", 0 if seed is None else seed),
+        allow_rank_deficient=_flag("allow_rank_deficient", allow_rank_deficient),
+        allow_worse=_flag("allow_worse", allow_worse),
+        allow_implausible=_flag("allow_implausible", allow_implausible),
     )
     return IdentifyResult(fields)
 
@@ -306,7 +334,7 @@ def simulate(scenario, trial=0):
         loads, ``truth`` (dict parameter → injected error), ``robot`` (the nominal
         :class:`Robot`) and ``info`` (the rest of ``truth.json``).
     """
-    out = _calbench.simulate(_scenario(scenario), _count("trial", trial))
+    out = _calbench.simulate(_scenario(scenario), _count("trial", 0 if trial is None else trial))
     out["info"] = json.loads(out.pop("truth_json"))
     return out
 
@@ -407,7 +435,7 @@ class Study:
         """Write the folder ``out`` with the files ``calbench run --out out`` writes
         (``summary.json``, ``trials.csv``, ``timing.json``, ``report.md``, the plots), as a
         whole: nothing is half-written."""
-        self._run.write(os.fspath(out))
+        self._run.write(_path("out", out, "a folder"))
 
     def __repr__(self):
         s = self.summary
@@ -503,7 +531,7 @@ def run(
             seed=_count("seed", seed),
             threads=_count("threads", threads),
             methods=methods,
-            progress=bool(progress),
+            progress=_flag("progress", progress),
             precision=None if precision is None else str(precision),
         )
         return Study(handle)
@@ -511,11 +539,11 @@ def run(
     # registration or instruments study (or its shard).
     (_calbench.run_whole if whole else _calbench.run_shard)(
         _scenario(scenario),
-        os.fspath(out),
+        _path("out", out, "a folder"),
         trials=_count("trials", trials),
         seed=_count("seed", seed),
         threads=_count("threads", threads),
-        progress=bool(progress),
+        progress=_flag("progress", progress),
         shard=None if shard is None else _shard(shard),
     )
     return pathlib.Path(out)
@@ -659,11 +687,11 @@ def task(task, method="lm", *, models=None, name=None, out=None):
     if models is not None:
         models = _names("models", models)
     d = _calbench.task(
-        os.fspath(task),
+        _path("task", task, "a task's name or the path of a task file"),
         method,
         models=models,
-        name=name,
-        out=None if out is None else os.fspath(out),
+        name=_text("name", name, "a name", optional=True),
+        out=_path("out", out, "a folder", optional=True),
     )
     return {
         "task": json.loads(d["task"]),

@@ -148,12 +148,56 @@ pub(crate) fn measurements(
     .map_err(err)
 }
 
-/// A Python value as a TOML value (scenario dicts, method options).
-pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+/// Whether `v` is a bool: Python's, or numpy's `bool_` (which is not a Python `bool`).
+pub(crate) fn is_bool(v: &Bound<'_, PyAny>) -> PyResult<bool> {
     if v.is_instance_of::<PyBool>() {
-        return Ok(toml::Value::Boolean(v.extract()?));
+        return Ok(true);
     }
-    if v.is_instance_of::<PyInt>() {
+    let numpy = v.py().import("numpy")?;
+    v.is_instance(&numpy.getattr("bool_")?)
+}
+
+/// `v` as a string, refused naming `key` and saying `what` it should be otherwise (where
+/// PyO3 would raise a bare `TypeError`).
+pub(crate) fn text_arg(key: &str, v: &Bound<'_, PyAny>, what: &str) -> PyResult<String> {
+    v.extract()
+        .map_err(|_| setting(key, format!("expected {what}, got {}", type_name(v))))
+}
+
+/// `v` as a path (a `str` or an `os.PathLike`), refused naming `key` otherwise.
+pub(crate) fn path_arg(key: &str, v: &Bound<'_, PyAny>, what: &str) -> PyResult<PathBuf> {
+    v.extract()
+        .map_err(|_| setting(key, format!("expected {what}, got {}", type_name(v))))
+}
+
+/// `v` as a bool (Python's or numpy's), refused naming `key` otherwise rather than read by
+/// its truth value.
+pub(crate) fn flag_arg(key: &str, v: &Bound<'_, PyAny>) -> PyResult<bool> {
+    if is_bool(v)? {
+        return v.is_truthy();
+    }
+    Err(setting(
+        key,
+        format!("expected True or False, got {}", type_name(v)),
+    ))
+}
+
+/// The name of `v`'s type, for a refusal.
+fn type_name(v: &Bound<'_, PyAny>) -> String {
+    v.get_type()
+        .name()
+        .map_or_else(|_| "an object".into(), |n| n.to_string())
+}
+
+/// A Python value as a TOML value (scenario dicts, method options). numpy's scalars are
+/// the TOML values of their Python twins: an integer (`np.int64`) stays an integer, a
+/// `np.bool_` a boolean.
+pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    if is_bool(v)? {
+        return Ok(toml::Value::Boolean(v.is_truthy()?));
+    }
+    // Python's int, and what stands for one (`__index__`: numpy's integers).
+    if v.is_instance_of::<PyInt>() || (!v.is_instance_of::<PyFloat>() && v.hasattr("__index__")?) {
         return Ok(toml::Value::Integer(v.extract().map_err(|_| {
             setting(key, "an integer beyond the 64-bit range")
         })?));

@@ -132,7 +132,11 @@ fn priors(prior: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Param, Real)>> {
             let name: String = k
                 .extract()
                 .map_err(|_| setting("prior", "every key must be a parameter name"))?;
-            let sigma: Option<Real> = v.extract().ok();
+            // A bool is not a standard deviation (`True` would read as 1).
+            let sigma: Option<Real> = v
+                .extract()
+                .ok()
+                .filter(|_| !crate::convert::is_bool(&v).unwrap_or(true));
             calbench::identify::registry::parse_prior(&name, sigma)
                 .map_err(|m| setting(&format!("prior.{name}"), m))
         })

@@ -1,7 +1,5 @@
 //! `calbench.Robot`.
 
-use std::path::PathBuf;
-
 use numpy::ndarray::{Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -10,7 +8,7 @@ use pyo3::types::PyDict;
 use calbench::numeric::{Frame, Real};
 use calbench::robot::{builtin, Param, Robot};
 
-use crate::convert::{float_array2, joint_rows};
+use crate::convert::{flag_arg, float_array2, is_bool, joint_rows, path_arg, text_arg};
 use crate::errors::{err, setting};
 
 /// A robot model with its nominal parameters (lengths in mm, angles in the robot's unit
@@ -25,8 +23,9 @@ pub struct PyRobot {
 impl PyRobot {
     /// The built-in robot `name` (`calbench robots` lists them).
     #[staticmethod]
-    fn builtin(name: &str) -> PyResult<PyRobot> {
-        match builtin::builtin(name) {
+    fn builtin(name: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
+        let name = text_arg("robot", name, "a built-in robot's name")?;
+        match builtin::builtin(&name) {
             Some(b) => Ok(PyRobot { inner: (b.build)() }),
             None => Err(setting(
                 "robot",
@@ -45,7 +44,12 @@ impl PyRobot {
     /// A robot file: TOML (docs/formats.md) or URDF; `tip`: a URDF's tip link (`--tip`).
     #[staticmethod]
     #[pyo3(signature = (path, tip = None))]
-    fn from_file(path: PathBuf, tip: Option<String>) -> PyResult<PyRobot> {
+    fn from_file(path: &Bound<'_, PyAny>, tip: Option<&Bound<'_, PyAny>>) -> PyResult<PyRobot> {
+        let path = path_arg("path", path, "the path of a robot file")?;
+        let tip = tip
+            .filter(|t| !t.is_none())
+            .map(|t| text_arg("tip", t, "the name of a URDF link"))
+            .transpose()?;
         if !path.is_file() {
             return Err(err(calbench::Error::io(
                 &path,
@@ -88,13 +92,14 @@ impl PyRobot {
 
     /// Forward kinematics: joint values `q` (N, n) in the robot's units → tool points
     /// (N, 3) in mm, or with `pose=True` homogeneous tool frames (N, 4, 4).
-    #[pyo3(signature = (q, pose = false))]
+    #[pyo3(signature = (q, pose = None))]
     fn fk<'py>(
         &self,
         py: Python<'py>,
         q: &Bound<'py, PyAny>,
-        pose: bool,
+        pose: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyAny>> {
+        let pose = pose.map(|p| flag_arg("pose", p)).transpose()? == Some(true);
         let q = float_array2("q", q)?;
         let r = &self.inner;
         let qs = joint_rows(r, &q)?;
@@ -123,7 +128,10 @@ impl PyRobot {
     }
 
     /// A copy with errors added to parameters: a dict name → error (mm, rad).
-    fn with_errors(&self, errors: &Bound<'_, PyDict>) -> PyResult<PyRobot> {
+    fn with_errors(&self, errors: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
+        let errors = errors
+            .cast::<PyDict>()
+            .map_err(|_| setting("errors", "expected a dict parameter name → error (mm, rad)"))?;
         let known = self.inner.params();
         let mut list: Vec<(Param, Real)> = Vec::new();
         for (k, v) in errors.iter() {
@@ -144,7 +152,7 @@ impl PyRobot {
             let e: Real = v
                 .extract()
                 .ok()
-                .filter(|_| !v.is_instance_of::<pyo3::types::PyBool>())
+                .filter(|_| !is_bool(&v).unwrap_or(true))
                 .ok_or_else(|| setting(&format!("errors.{name}"), "must be a number"))?;
             if !e.is_finite() {
                 return Err(setting(&format!("errors.{name}"), "must be finite"));

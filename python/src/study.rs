@@ -14,6 +14,7 @@ use calbench::identify::external::{External, ExternalProblem};
 use calbench::identify::MethodSpec;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
+use calbench::report::run::{OUTPUTS, STUDY_OUTPUTS};
 use calbench::robot::Robot;
 use calbench::runner::run::{run_study, InMemoryRun};
 use calbench::runner::whole::run_cells_study;
@@ -237,10 +238,10 @@ impl PyRun {
         self.inner.result.seconds
     }
 
-    /// Writes the folder `out` as `calbench run --out` does.
+    /// Writes the folder `out` as `calbench run --out` does, refusing what it refuses.
     fn write(&self, py: Python<'_>, out: PathBuf) -> PyResult<()> {
-        calbench::report::guard::guard_out(&out, "out", &[], None::<&std::path::Path>)
-            .map_err(err)?;
+        let input = self.inner.result.scenario.path.as_deref();
+        calbench::report::guard::guard_out(&out, "out", &OUTPUTS, input).map_err(err)?;
         py.detach(|| self.inner.write(&out)).map_err(err)
     }
 }
@@ -314,20 +315,33 @@ pub(crate) fn run_shard(
     if shard.is_none() {
         return Err(setting("shard", "a shard folder is a shard's: give (i, n)"));
     }
-    let opts = folder_options(Some(out), threads, progress, shard, None)?;
     let sc = scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
+    let folder = Folder {
+        out,
+        outputs: &OUTPUTS,
+        input: sc.path.as_deref(),
+    };
+    let opts = folder_options(Some(folder), threads, progress, shard, None)?;
     let r = py
         .detach(|| run_study(sc, &opts, reporter(progress)))
         .map_err(err)?;
     Ok(r.seconds)
 }
 
-/// The options of a run: `threads` (or the environment's), into the folder `out` (checked:
-/// it must not destroy an input) or held in memory, its share `shard` ((i, n)).
+/// The output folder of a run, with the files it writes there and its scenario file.
+struct Folder<'a> {
+    out: PathBuf,
+    outputs: &'a [&'a str],
+    input: Option<&'a std::path::Path>,
+}
+
+/// The options of a run: `threads` (or the environment's), into the folder `out` (checked as
+/// the command line checks `--out`: it must not destroy an input) or held in memory, its
+/// share `shard` ((i, n)).
 fn folder_options(
-    out: Option<PathBuf>,
+    out: Option<Folder<'_>>,
     threads: Option<usize>,
     progress: bool,
     shard: Option<(usize, usize)>,
@@ -335,9 +349,8 @@ fn folder_options(
 ) -> PyResult<RunOptions> {
     let env = |k: &str| std::env::var(k).ok();
     let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
-    if let Some(out) = &out {
-        calbench::report::guard::guard_out(out, "out", &[], None::<&std::path::Path>)
-            .map_err(err)?;
+    if let Some(f) = &out {
+        calbench::report::guard::guard_out(&f.out, "out", f.outputs, f.input).map_err(err)?;
     }
     let shard = shard
         .map(|(i, n)| Shard::parse(&format!("{i}/{n}")))
@@ -345,7 +358,7 @@ fn folder_options(
         .map_err(err)?;
     Ok(RunOptions {
         threads,
-        out,
+        out: out.map(|f| f.out),
         progress,
         shard,
         precision,
@@ -394,10 +407,15 @@ pub(crate) fn run_whole(
     progress: bool,
     shard: Option<(usize, usize)>,
 ) -> PyResult<()> {
-    let opts = folder_options(Some(out), threads, progress, shard, None)?;
     let sc = any_scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
+    let folder = Folder {
+        out,
+        outputs: &STUDY_OUTPUTS,
+        input: sc.path(),
+    };
+    let opts = folder_options(Some(folder), threads, progress, shard, None)?;
     py.detach(|| run_cells_study(&sc, &opts, reporter(progress)))
         .map_err(err)?;
     Ok(())

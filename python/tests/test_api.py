@@ -287,6 +287,51 @@ def test_every_refusal_is_a_calbench_error(root):
         calbench.identify(robot, q, np.zeros((4, 3)), cv=-2)
 
 
+@pytest.mark.parametrize("call, key", [
+    (lambda r, q, p: calbench.identify(r, q, p, method=5), "method"),
+    (lambda r, q, p: calbench.identify(r, q, p, method=None), "method"),
+    (lambda r, q, p: calbench.identify(r, q, p, registration=5), "registration"),
+    (lambda r, q, p: calbench.identify(r, q, p, options="max_iter=5"), "options"),
+    (lambda r, q, p: calbench.identify(r, q, p, compliance=["c2", 3]), "compliance"),
+    (lambda r, q, p: calbench.identify(r, q, p, holdout=3), "holdout"),
+    (lambda r, q, p: calbench.identify(r, q, p, allow_worse="no"), "allow_worse"),
+    (lambda r, q, p: calbench.identify(r, q, p, allow_rank_deficient=None),
+     "allow_rank_deficient"),
+    (lambda r, q, p: calbench.identify(r, q, p, allow_implausible=1), "allow_implausible"),
+    (lambda r, q, p: calbench.identify(r, q, p, prior={"d2": True}), "prior.d2"),
+    (lambda r, q, p: r.fk(q, pose="yes"), "pose"),
+    (lambda r, q, p: r.with_errors([("a2", 0.1)]), "errors"),
+    (lambda r, q, p: calbench.Robot.builtin(5), "robot"),
+    (lambda r, q, p: calbench.Robot.from_file(5), "path"),
+    (lambda r, q, p: calbench.Robot.from_file("robots/ban-irb2600.toml", tip=5), "tip"),
+    (lambda r, q, p: calbench.run(CI_GUARD, trials=2, progress="no"), "progress"),
+    (lambda r, q, p: calbench.run(CI_GUARD, trials=2, shard=(0, 2), out=5), "out"),
+    (lambda r, q, p: calbench.task(5), "task"),
+    (lambda r, q, p: calbench.task("barrett-wam", out=5), "out"),
+])
+def test_an_argument_of_the_wrong_type_is_refused_naming_it(simulated, call, key):
+    # A value of the wrong type is a calbench.SettingError naming the argument, never a bare
+    # TypeError, and a flag is True or False, not whatever is truthy ("no" is not False).
+    robot = calbench.Robot.builtin("irb2600")
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    with pytest.raises(calbench.SettingError, match=f"setting `{key}`"):
+        call(robot, q, p)
+
+
+def test_numpy_scalars_are_taken_as_their_python_twins(root, simulated):
+    # An np.int64 option is an integer (not the float 50.0), an np.bool_ flag a bool, and
+    # None for a seed its default.
+    robot = calbench.Robot.builtin("irb2600")
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    want = calbench.identify(robot, q, p, options={"max_iter": 50})
+    got = calbench.identify(robot, q, p, options={"max_iter": np.int64(50)}, seed=None,
+                            cv_seed=None, allow_worse=np.bool_(False))
+    assert got["errors"] == want["errors"]
+    assert robot.fk(q[:2], pose=np.bool_(True)).shape == (2, 4, 4)
+    scenario = dict(load_scenario(root), trials=np.int64(2))
+    assert calbench.run(scenario).summary["trials"] == 2
+
+
 # ----- simulate --------------------------------------------------------------------------
 
 

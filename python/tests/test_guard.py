@@ -38,6 +38,33 @@ def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, mon
     assert (tmp_path / "fine" / "summary.json").exists()
 
 
+def test_writers_refuse_the_scenario_they_would_overwrite_and_another_commands_folder(
+        root, tmp_path, cli):
+    # A scenario named scenario.toml in the output folder is an input the run would
+    # overwrite with its scenario.toml; an identification's folder holds another command's
+    # results. `calbench run --out` refuses both, and so do the Python writers.
+    folder = tmp_path / "own"
+    folder.mkdir()
+    scenario = folder / "scenario.toml"
+    text = (root / CI_GUARD).read_text() + "# the user's own note\n"
+    scenario.write_text(text)
+    study = calbench.run(scenario, trials=2)
+    with pytest.raises(calbench.SettingError, match="`out`: .*scenario.toml"):
+        study.write(folder)
+    with pytest.raises(calbench.SettingError, match="`out`: .*scenario.toml"):
+        calbench.run(scenario, trials=2, shard=(0, 2), out=folder)
+    r = cli("run", scenario, "--trials", "2", "--out", folder, ok=False)
+    assert r.returncode == 1 and "scenario.toml" in r.stderr, r.stderr
+    assert sorted(os.listdir(folder)) == ["scenario.toml"]
+    assert scenario.read_text() == text
+    identified = tmp_path / "identified"
+    identified.mkdir()
+    (identified / "identified.json").write_text("{}\n")
+    with pytest.raises(calbench.SettingError, match="an identification"):
+        study.write(identified)
+    assert sorted(os.listdir(identified)) == ["identified.json"]
+
+
 def test_a_task_into_an_input_or_home_is_refused(root, tmp_path, monkeypatch):
     home = tmp_path / "home"
     home.mkdir()

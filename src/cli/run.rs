@@ -20,11 +20,7 @@ use calbench::study::{RunOptions, Shard};
 
 use super::{print_table, writable_folder};
 
-/// The files of a run checked before it starts (the plots are checked before they land).
-pub const OUTPUTS: [&str; 4] = ["summary.json", "trials.csv", "timing.json", "report.md"];
-
-/// The files of a registration or instruments study checked before it starts.
-const STUDY_OUTPUTS: [&str; 3] = ["summary.json", "report.md", "report.html"];
+pub use calbench::report::run::{OUTPUTS, STUDY_OUTPUTS};
 
 /// Arguments of `calbench run`.
 #[derive(clap::Args, Default)]

@@ -564,6 +564,26 @@ pub fn figures<'a>(r: &'a RunResult, summary: &Summary) -> Vec<Figure<'a>> {
     figs
 }
 
+/// The files of a run checked before it starts, by whoever writes it (`calbench run --out`,
+/// `merge`, the Python module's `study.write`): none may be a folder, and none may be an
+/// input of the run (a scenario named `scenario.toml` in the output folder). The plots are
+/// checked before they land.
+pub const OUTPUTS: [&str; 5] = [
+    "summary.json",
+    "trials.csv",
+    "timing.json",
+    "report.md",
+    super::scenario_file::NAME,
+];
+
+/// [`OUTPUTS`] of a registration or instruments study (docs/formats.md § 4).
+pub const STUDY_OUTPUTS: [&str; 4] = [
+    "summary.json",
+    "report.md",
+    "report.html",
+    super::scenario_file::NAME,
+];
+
 /// The files of a complete run but `trials.csv` (streamed as the trials finished,
 /// [`TrialsCsv`]) and `report.html` ([`super::run_outputs`] adds it), in the order they are
 /// written: `summary.json`, `timing.json`, `scenario.toml` ([`super::scenario_file`]), the

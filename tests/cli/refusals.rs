@@ -415,6 +415,11 @@ fn outputs_never_land_where_they_destroy() {
     std::fs::create_dir_all(&inside).unwrap();
     let residuals = inside.join("residuals.csv");
     std::fs::write(&residuals, "q1\n").unwrap();
+    // A scenario named like the file a run writes beside its results.
+    let named = dir.join("named");
+    std::fs::create_dir_all(&named).unwrap();
+    let named_sc = named.join("scenario.toml");
+    std::fs::copy(&sc, &named_sc).unwrap();
     let (s, r, h) = (path(&sc), path(&raw), path(&home));
     let sh = path(&shard);
     let home_dot = format!("{h}/.");
@@ -423,6 +428,10 @@ fn outputs_never_land_where_they_destroy() {
         (vec!["run", s, "--out", h], "home folder"),
         (vec!["run", s, "--out", &home_dot], "home folder"),
         (vec!["run", s, "--out", s], "input"),
+        (
+            vec!["run", path(&named_sc), "--out", path(&named)],
+            "writes its scenario.toml there",
+        ),
         (vec!["run", "--resume", "/"], "root folder"),
         (vec!["merge", sh, "--out", sh], "input"),
         (vec!["import", r, "--mapping", s, "--out", r], "input"),
@@ -468,7 +477,8 @@ fn outputs_never_land_where_they_destroy() {
             "input",
         ),
     ];
-    let before: Vec<String> = [&sc, &raw, &shard.join("shard.json"), &residuals]
+    let inputs = [&sc, &raw, &shard.join("shard.json"), &residuals, &named_sc];
+    let before: Vec<String> = inputs
         .iter()
         .map(|p| std::fs::read_to_string(p).unwrap())
         .collect();
@@ -488,7 +498,7 @@ fn outputs_never_land_where_they_destroy() {
         let err = refused(&o, &[option, why]);
         assert!(err.trim_end().lines().count() == 1, "{args:?}: {err}");
     }
-    let after: Vec<String> = [&sc, &raw, &shard.join("shard.json"), &residuals]
+    let after: Vec<String> = inputs
         .iter()
         .map(|p| std::fs::read_to_string(p).unwrap())
         .collect();
@@ -500,6 +510,7 @@ fn outputs_never_land_where_they_destroy() {
     );
     assert_eq!(std::fs::read_dir(&shard).unwrap().count(), 1);
     assert_eq!(std::fs::read_dir(&inside).unwrap().count(), 1);
+    assert_eq!(std::fs::read_dir(&named).unwrap().count(), 1);
     assert_eq!(Path::new("/summary.json").exists(), root_had_summary);
 }
 
