@@ -18,15 +18,18 @@ use crate::study::stats::eta;
 const FAILED: [&str; 3] = ["diverged", "singular", "invalid-input"];
 
 /// The columns every run's `trials.csv` has, after `trial` and the sweep's.
-const REQUIRED: [&str; 7] = [
-    "method",
-    "poses",
-    "eta_mean_pct",
-    "after_mean_mm",
-    "after_rms_mm",
-    "after_max_mm",
-    "termination",
-];
+fn required() -> [&'static str; 7] {
+    let column = |m: Metric| m.column().unwrap_or_default();
+    [
+        "method",
+        "poses",
+        column(Metric::EtaMean),
+        column(Metric::ValidationAfterMean),
+        column(Metric::ValidationAfterRms),
+        column(Metric::ValidationAfterMax),
+        "termination",
+    ]
+}
 
 /// The columns that hold text rather than numbers, besides the sweep's.
 const TEXT: [&str; 4] = ["method", "poses", "termination", "error"];
@@ -96,9 +99,9 @@ impl Trials {
             return Err(Error::file(path, header, msg));
         }
         let col = |name: &str| head.iter().position(|h| h == name);
-        if let Some(name) = REQUIRED.iter().find(|n| col(n).is_none()) {
+        if let Some(name) = required().into_iter().find(|n| col(n).is_none()) {
             let msg = "missing from the header, which every run's trials.csv has";
-            return Err(Error::file(path, at_line(Some(1), *name), msg));
+            return Err(Error::file(path, at_line(Some(1), name), msg));
         }
         let method_col = col("method").unwrap_or_default();
         let params = paired_columns(path, &head)?;
