@@ -33,7 +33,7 @@ use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
 use crate::report::MadeFolders;
-use crate::runner::shard::{scenario_as_run, FormatOnly};
+use crate::runner::shard::{scenario_as_run, trials_as_run, FormatOnly};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::registration_study::RegistrationScenario;
@@ -367,17 +367,7 @@ impl TrialSink for Checkpoint {
 /// `scenario` counts as done: its trial count must be the scenario's, and `done` no more than
 /// its share holds.
 fn units(path: &Path, scenario: &AnyScenario, meta: &Meta) -> Result<(u64, u64)> {
-    if meta.trials != scenario.trials() {
-        return Err(Error::file(
-            path,
-            "trials",
-            format!(
-                "{}, where its settings run {} trials: the file was altered",
-                meta.trials,
-                scenario.trials()
-            ),
-        ));
-    }
+    trials_as_run(path, meta.trials, scenario)?;
     let total = scenario.units();
     let (start, end) = meta.shard.map_or((0, total), |s| s.range(total));
     if meta.done > end - start {

@@ -182,6 +182,22 @@ pub(crate) fn scenario_as_run(
     })
 }
 
+/// Refuses, naming the key `trials` of `holder` (a `shard.json` or a `checkpoint.json`), a
+/// trial count that is not that of `scenario`, the scenario as run the same file holds.
+pub(crate) fn trials_as_run(holder: &Path, trials: usize, scenario: &AnyScenario) -> Result<()> {
+    if trials == scenario.trials() {
+        return Ok(());
+    }
+    Err(Error::file(
+        holder,
+        "trials",
+        format!(
+            "{trials}, where its settings run {} trials: the file was altered",
+            scenario.trials()
+        ),
+    ))
+}
+
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
     let path = dir.join("shard.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
@@ -334,17 +350,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     )?;
     let total = any.units();
     for (d, m) in &metas {
-        if m.trials != any.trials() {
-            return Err(Error::file(
-                d.join("shard.json"),
-                "trials",
-                format!(
-                    "{}, where its settings run {} trials: the file was altered",
-                    m.trials,
-                    any.trials()
-                ),
-            ));
-        }
+        trials_as_run(&d.join("shard.json"), m.trials, &any)?;
         let units = m.shard.range(total);
         if m.units != units || m.records != units.1 - units.0 {
             return Err(Error::file(
