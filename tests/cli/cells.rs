@@ -4,6 +4,8 @@
 //! database (`run --record`, `record`, `merge --record`), one entry per cell, and read by
 //! `history` and `leaderboard`.
 
+use std::path::Path;
+
 use crate::common::{
     calbench, calbench_ok, kill_once_checkpointed, load_json, merge, one_line_naming, path_arg,
     read, resummed, root, tmp_dir, write_scenario,
@@ -74,32 +76,11 @@ fn merge_refuses_the_records_of_another_registration_run_with_the_same_name_and_
     let err = String::from_utf8_lossy(&o.stderr);
     one_line_naming(&err, &records, &["line 1", "another run"]);
     assert!(!merged.exists(), "merge left the folder it made");
+    std::fs::write(&records, &own).unwrap();
     // A draw of one cell fewer, its checksum made to match: refused naming its line, where
     // the merge panicked indexing past the draw's cells.
-    let meta = load_json(&a0.join("shard.json"));
-    let (settings, seed) = (
-        meta["settings"].as_str().unwrap(),
-        meta["seed"].as_u64().unwrap(),
-    );
-    let (first, rest) = own.split_once('\n').unwrap();
-    let at = first.find("result:[").unwrap() + "result:[".len();
-    let end = at + first[at..].find("),").unwrap() + 2;
-    let fewer = resummed(
-        &format!("{}{}", &first[..at], &first[end..]),
-        settings,
-        seed,
-    );
-    std::fs::write(&records, format!("{fewer}\n{rest}")).unwrap();
-    let o = calbench(&args);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    let want = [
-        "line 1",
-        "registration errors of 39 cells, for a study of 40",
-    ];
-    one_line_naming(&err, &records, &want);
-    assert!(!merged.exists(), "merge left the folder it made");
-    std::fs::write(&records, &own).unwrap();
+    let want = "registration errors of 39 cells, for a study of 40";
+    merge_refuses_a_cut_record(&a0, ("result:[", "),"), &args, want);
     calbench_ok(&args);
 }
 
@@ -199,14 +180,6 @@ fn merge_refuses_an_instruments_record_that_does_not_fit_its_cell() {
         out
     };
     let (s0, s1) = (shard("0/2", "s0"), shard("1/2", "s1"));
-    let records = s0.join("records.txt");
-    let own = read(&records);
-    let meta = load_json(&s0.join("shard.json"));
-    let (settings, seed) = (
-        meta["settings"].as_str().unwrap(),
-        meta["seed"].as_u64().unwrap(),
-    );
-    let (first, rest) = own.split_once('\n').unwrap();
     let merged = dir.join("merged");
     let args = [
         "merge",
@@ -215,37 +188,50 @@ fn merge_refuses_an_instruments_record_that_does_not_fit_its_cell() {
         "--out",
         path_arg(&merged),
     ];
-    // The first value after `key` dropped: `x:[a,b,…]` becomes `x:[b,…]`, and likewise the
-    // first `(name,value)` pair of `errors`.
-    for (key, want) in [
-        ("x:[", "identified values, for a cell of"),
-        ("errors:[", "true errors, for a study of"),
-    ] {
-        let at = first.find(key).unwrap() + key.len();
-        let end = at + first[at..].find(',').unwrap() + 1;
-        let end = if key == "errors:[" {
-            at + first[at..].find("),").unwrap() + 2
-        } else {
-            end
-        };
-        let fewer = resummed(
-            &format!("{}{}", &first[..at], &first[end..]),
-            settings,
-            seed,
-        );
-        std::fs::write(&records, format!("{fewer}\n{rest}")).unwrap();
-        let o = calbench(&args);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(1), "{err}");
-        one_line_naming(&err, &records, &["line 1", want]);
-        assert!(!merged.exists(), "merge left the folder it made");
+    // The first identified value (`x:[a,b,…]` becomes `x:[b,…]`), then the first
+    // `(name,value)` pair of the true errors.
+    let cuts = [
+        (("x:[", ","), "identified values, for a cell of"),
+        (("errors:[", "),"), "true errors, for a study of"),
+    ];
+    for (cut, want) in cuts {
+        merge_refuses_a_cut_record(&s0, cut, &args, want);
     }
-    std::fs::write(&records, &own).unwrap();
     calbench_ok(&args);
 }
 
+/// `merge ARGS` (whose last argument is the output folder) after the first record of the
+/// shard folder `shard` is edited to lose what follows `key` up to and including the first
+/// `till` after it, its checksum made to match: refused in one line naming `records.txt`, the
+/// line and `want`, and nothing written; the record is then restored.
+fn merge_refuses_a_cut_record(shard: &Path, (key, till): (&str, &str), args: &[&str], want: &str) {
+    let records = shard.join("records.txt");
+    let own = read(&records);
+    let meta = load_json(&shard.join("shard.json"));
+    let (settings, seed) = (
+        meta["settings"].as_str().unwrap(),
+        meta["seed"].as_u64().unwrap(),
+    );
+    let (first, rest) = own.split_once('\n').unwrap();
+    let at = first.find(key).unwrap() + key.len();
+    let end = at + first[at..].find(till).unwrap() + till.len();
+    let fewer = resummed(
+        &format!("{}{}", &first[..at], &first[end..]),
+        settings,
+        seed,
+    );
+    std::fs::write(&records, format!("{fewer}\n{rest}")).unwrap();
+    let o = calbench(args);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    one_line_naming(&err, &records, &["line 1", want]);
+    let merged = Path::new(args.last().unwrap());
+    assert!(!merged.exists(), "merge left the folder it made");
+    std::fs::write(&records, &own).unwrap();
+}
+
 /// `SELECT COUNT(*)`-like `sql` of the database `db`, one number.
-fn number(db: &std::path::Path, sql: &str) -> i64 {
+fn number(db: &Path, sql: &str) -> i64 {
     let c = rusqlite::Connection::open(db).unwrap();
     c.query_row(sql, [], |r| r.get(0)).unwrap()
 }
@@ -256,7 +242,7 @@ fn registration_and_instruments_studies_are_recorded_and_history_and_the_board_r
     let db = dir.join("calbench.sqlite");
     let fig3 = root().join("scenarios/ban-fig3.toml");
     let ins = write_scenario(&dir, "s.toml", INSTRUMENTS);
-    let run = |sc: &std::path::Path, seed: &str, out: &str, more: &[&str]| {
+    let run = |sc: &Path, seed: &str, out: &str, more: &[&str]| {
         let out = dir.join(out);
         let mut args = vec!["run", path_arg(sc), "--trials", "3", "--seed", seed];
         args.extend(["--out", path_arg(&out)]);
