@@ -157,15 +157,12 @@ pub(crate) fn is_bool(v: &Bound<'_, PyAny>) -> PyResult<bool> {
     v.is_instance(&numpy.getattr("bool_")?)
 }
 
-/// `v` as a string, refused naming `key` and saying `what` it should be otherwise (where
-/// PyO3 would raise a bare `TypeError`).
-pub(crate) fn text_arg(key: &str, v: &Bound<'_, PyAny>, what: &str) -> PyResult<String> {
-    v.extract()
-        .map_err(|_| setting(key, format!("expected {what}, got {}", type_name(v))))
-}
-
-/// `v` as a path (a `str` or an `os.PathLike`), refused naming `key` otherwise.
-pub(crate) fn path_arg(key: &str, v: &Bound<'_, PyAny>, what: &str) -> PyResult<PathBuf> {
+/// `v` as a `T` (a string, a path: a `str` or an `os.PathLike`), refused naming `key` and
+/// saying `what` it should be otherwise (where PyO3 would raise a bare `TypeError`).
+pub(crate) fn typed_arg<'a, 'py, T>(key: &str, v: &'a Bound<'py, PyAny>, what: &str) -> PyResult<T>
+where
+    T: FromPyObject<'a, 'py>,
+{
     v.extract()
         .map_err(|_| setting(key, format!("expected {what}, got {}", type_name(v))))
 }

@@ -1,5 +1,7 @@
 //! `calbench.Robot`.
 
+use std::path::PathBuf;
+
 use numpy::ndarray::{Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -8,7 +10,7 @@ use pyo3::types::PyDict;
 use calbench::numeric::{Frame, Real};
 use calbench::robot::{builtin, Param, Robot};
 
-use crate::convert::{flag_arg, float_array2, is_bool, joint_rows, path_arg, text_arg};
+use crate::convert::{flag_arg, float_array2, is_bool, joint_rows, typed_arg};
 use crate::errors::{err, setting};
 
 /// A robot model with its nominal parameters (lengths in mm, angles in the robot's unit
@@ -24,7 +26,7 @@ impl PyRobot {
     /// The built-in robot `name` (`calbench robots` lists them).
     #[staticmethod]
     fn builtin(name: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
-        let name = text_arg("robot", name, "a built-in robot's name")?;
+        let name: String = typed_arg("robot", name, "a built-in robot's name")?;
         match builtin::builtin(&name) {
             Some(b) => Ok(PyRobot { inner: (b.build)() }),
             None => Err(setting(
@@ -45,10 +47,10 @@ impl PyRobot {
     #[staticmethod]
     #[pyo3(signature = (path, tip = None))]
     fn from_file(path: &Bound<'_, PyAny>, tip: Option<&Bound<'_, PyAny>>) -> PyResult<PyRobot> {
-        let path = path_arg("path", path, "the path of a robot file")?;
+        let path: PathBuf = typed_arg("path", path, "the path of a robot file")?;
         let tip = tip
             .filter(|t| !t.is_none())
-            .map(|t| text_arg("tip", t, "the name of a URDF link"))
+            .map(|t| typed_arg::<String>("tip", t, "the name of a URDF link"))
             .transpose()?;
         if !path.is_file() {
             return Err(err(calbench::Error::io(
