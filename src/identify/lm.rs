@@ -5,6 +5,9 @@
 //!
 //! - Fixed damping (Guo 2024 eq. 8, `μ = 1`): every step is taken; stop when `max |Δx| < ε`
 //!   (the statistics then come from the last evaluation, `Work::take_step_in_residual`).
+//!   With `M = I` it converges linearly: per iteration the error along an eigenvector of
+//!   `JᵀJ` with eigenvalue σ² shrinks by `μ / (σ² + μ)`, slowly where σ² is small against μ
+//!   (docs/formats.md `lm`: weakly seen lengths of arms with parallel joints 2 and 3).
 //! - Adaptive damping (Ban: `λ0 = 0.01`, `ε = 1e-5`, `kmax = 50`): a step is accepted when it
 //!   lowers `|ΔP|²`, and λ is then divided by the factor (10); otherwise λ is multiplied by it
 //!   and the step is solved again. Stop when an accepted step has `max |Δx| < ε`

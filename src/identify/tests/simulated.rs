@@ -6,16 +6,18 @@ use nalgebra::{DMatrix, DVector};
 
 use super::*;
 
-#[test]
-fn noise_free_data_recovers_the_paper_errors() {
+/// [`paper_setup`] with noise-free points at `poses` random poses (seed 5).
+fn noise_free_paper_data(poses: usize) -> (Setup, RobotData) {
     let s = paper_setup();
     let mut r = rng::from_seed(5);
-    let data = measure(
-        &s.truth,
-        uniform_joint_poses(&s.nominal, 50, &mut r),
-        0.0,
-        &mut r,
-    );
+    let qs = uniform_joint_poses(&s.nominal, poses, &mut r);
+    let data = measure(&s.truth, qs, 0.0, &mut r);
+    (s, data)
+}
+
+#[test]
+fn noise_free_data_recovers_the_paper_errors() {
+    let (s, data) = noise_free_paper_data(50);
     let before = validation_rms(&s.truth, &s.nominal);
     assert!(before > 10.0, "paper errors move the tool by {before} mm");
     for m in all_methods() {
@@ -26,6 +28,44 @@ fn noise_free_data_recovers_the_paper_errors() {
             assert!((x - e).abs() < 1e-5, "{m:?}: {} {x} vs {e}", s.params[k]);
         }
     }
+}
+
+/// Fixed-damping LM converges linearly: near the solution each iteration multiplies the error
+/// along an eigenvector of `JᵀJ` (eigenvalue σ²) by `μ / (σ² + μ)`. On 20 noise-free random
+/// poses of the IRB2600 (parallel joints 2 and 3) the weakest direction has σ² = 0.18 against
+/// μ = 1, so the 50 iterations end before the error is gone (docs/formats.md, `lm`); the
+/// adaptive λ falls far below σ² and converges.
+#[test]
+fn fixed_damping_contracts_the_weakest_direction_by_mu_over_sigma2_plus_mu() {
+    let (s, data) = noise_free_paper_data(20);
+    let truth = DVector::from_vec(s.errors.clone());
+    let fixed = |max_iter| {
+        let o = LmOptions {
+            max_iter,
+            ..Default::default()
+        };
+        run(&s, &data, &o).0
+    };
+    let (last, before) = (fixed(50), fixed(49));
+    assert_eq!(last.termination, Termination::MaxIterations);
+    let eig = last.normal.clone().symmetric_eigen();
+    let weakest = eig.eigenvalues.imin();
+    let sigma2 = eig.eigenvalues[weakest];
+    let v = eig.eigenvectors.column(weakest);
+    let predicted = 1.0 / (sigma2 + 1.0);
+    let observed = v.dot(&(&last.x - &truth)) / v.dot(&(&before.x - &truth));
+    assert!(
+        (observed - predicted).abs() < 1e-6,
+        "σ² {sigma2}: contraction {observed}, μ/(σ² + μ) {predicted}"
+    );
+    assert!(predicted > 0.8, "σ² {sigma2} is not small against μ = 1");
+    let adaptive = LmOptions {
+        adaptive: true,
+        ..Default::default()
+    };
+    let (out, rms) = run(&s, &data, &adaptive);
+    assert_eq!(out.termination, Termination::Converged);
+    assert!(out.iterations < 10 && rms < 1e-6, "{out:?}: {rms} mm");
 }
 
 /// Noise-free full-pose data of the IRB2600 with the paper error set (+0.5 mm / +0.05 rad)
