@@ -60,6 +60,25 @@ def test_fk_matches_the_cli(cli, root):
     assert np.allclose(T[:, 3], [0, 0, 0, 1])
 
 
+def test_fk_warns_of_joint_values_outside_the_limits_as_the_cli_does(cli, recwarn):
+    # The command line warns on stderr and prints the point; fk computes the points and warns
+    # (calbench.LimitWarning, a UserWarning) naming the rows outside, where it said nothing.
+    r = calbench.Robot.builtin("irb2600")
+    inside, outside = [10, -20, 30, 40, -50, 60], [500, -20, 30, 40, -50, 60]
+    warned = cli("fk", "--robot", "irb2600", "--q", ",".join(map(str, outside)))
+    assert "warning: the joint values lie outside the robot's joint limits" in warned.stderr
+    assert "outside" not in cli("fk", "--robot", "irb2600", "--q", "10,-20,30,40,-50,60").stderr
+    r.fk([inside, inside])
+    assert not recwarn.list
+    with pytest.warns(calbench.LimitWarning,
+                      match=r"outside the robot's joint limits \(q\[1\]\)") as w:
+        p = r.fk([inside, outside, inside])
+    assert len(w) == 1 and issubclass(calbench.LimitWarning, UserWarning)
+    assert p.shape == (3, 3) and np.allclose(p[0], p[2])
+    with pytest.warns(calbench.LimitWarning, match=r"q\[0\], q\[1\], q\[2\] and 2 more rows"):
+        r.fk([outside] * 5, pose=True)
+
+
 def test_with_errors_moves_the_tool_and_to_toml_reads_back(tmp_path):
     r = calbench.Robot.builtin("irb2600")
     q = np.array([[10, -20, 30, 40, -50, 60]], dtype=float)
