@@ -496,6 +496,38 @@ def test_an_exception_in_a_method_is_a_failure_and_the_study_goes_on(root):
         calbench.run(sc, trials=1, methods={"x": 3})
 
 
+def test_a_method_returning_bools_or_complex_numbers_fails_naming_the_dtype(root):
+    # Bools were taken as 0 and 1 and complex numbers cut to their real part (with numpy's
+    # ComplexWarning) as if the method had returned them; now each is a failure of that method,
+    # as a vector of the wrong length is, naming the method and the dtype.
+    def flags(problem):
+        return np.zeros(len(problem.x0), dtype=bool)
+
+    def flag_list(problem):
+        return [False] * len(problem.x0), "converged"
+
+    def complex_(problem):
+        return np.asarray(problem.x0, dtype=complex) + 1j
+
+    sc = load_scenario(root)
+    methods = {"flags": flags, "flag_list": flag_list, "cplx": complex_}
+    study = calbench.run(sc, trials=2, methods=methods)
+    by = {r["method"]: r for r in study.summary["results"]}
+    assert [by[m]["failures"] for m in methods] == [2, 2, 2] and by["ls"]["failures"] == 0
+    t = study.trials.set_index("method")["error"]
+    assert set(t["flags"]) == {"the method `flags` returned a bool array (dtype bool), not real "
+                               "numbers; it must return a 1-D float array (or a tuple of it and "
+                               "a termination name)"}
+    assert t["flag_list"].str.contains("`flag_list` returned a bool array (dtype bool)",
+                                       regex=False).all()
+    assert t["cplx"].str.contains("`cplx` returned a complex array (dtype complex128)",
+                                  regex=False).all()
+    # In a task, as a vector of the wrong length: the entry's ComputeError.
+    with pytest.raises(calbench.ComputeError, match=r"`cplx` returned a complex array"):
+        calbench.task(root / "tasks" / "barrett-wam.toml", complex_, models=["kinematic"],
+                      name="cplx")
+
+
 def test_python_methods_run_in_every_sweep_point(root):
     sc = load_scenario(root)
     sc["sweep"] = {"key": "outliers.count", "values": [0, 2]}
