@@ -19,6 +19,7 @@ from ._calbench import (  # noqa: F401  (re-exported)
     Error,
     FileError,
     IoError,
+    LimitWarning,
     Problem,
     Robot,
     SettingError,
@@ -43,6 +44,7 @@ __all__ = [
     "SettingError",
     "ComputeError",
     "IoError",
+    "LimitWarning",
 ]
 
 

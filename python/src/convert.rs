@@ -26,23 +26,37 @@ pub(crate) fn float_array2<'py>(
     if let Ok(v) = a.extract::<PyReadonlyArray2<'py, f64>>() {
         return Ok(v);
     }
-    let np = a.py().import("numpy")?;
-    let raw = np
-        .call_method1("asarray", (a,))
-        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))?;
-    let kind: String = raw.getattr("dtype")?.getattr("kind")?.extract()?;
-    if kind == "b" || kind == "c" {
-        let what = if kind == "b" { "bool" } else { "complex" };
+    let (raw, unreal) =
+        as_numpy(a).map_err(|e| setting(key, format!("not an array of numbers ({e})")))?;
+    if let Some((what, _)) = unreal {
         return Err(setting(
             key,
             format!("a {what} array is not taken; give real numbers"),
         ));
     }
-    let float = np.getattr("float64")?;
+    let float = a.py().import("numpy")?.getattr("float64")?;
     raw.call_method1("astype", (float,))
         .map_err(|e| setting(key, format!("not an array of numbers ({e})")))?
         .extract::<PyReadonlyArray2<'py, f64>>()
         .map_err(|_| setting(key, "expected a 2-D array (N, n)"))
+}
+
+/// Numbers numpy reads as bools or complex numbers, which are not real numbers: what they are
+/// and the dtype's name (`("bool", "bool")`, `("complex", "complex128")`).
+pub(crate) type Unreal = Option<(&'static str, String)>;
+
+/// `a` as numpy reads it (`numpy.asarray`) and whether its numbers are not real ([`Unreal`]).
+/// A Python error when numpy cannot read it.
+pub(crate) fn as_numpy<'py>(a: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Unreal)> {
+    let raw = a.py().import("numpy")?.call_method1("asarray", (a,))?;
+    let dtype = raw.getattr("dtype")?;
+    let what = match dtype.getattr("kind")?.extract::<String>()?.as_str() {
+        "b" => "bool",
+        "c" => "complex",
+        _ => return Ok((raw, None)),
+    };
+    let name: String = dtype.getattr("name")?.extract()?;
+    Ok((raw, Some((what, name))))
 }
 
 /// The rows of a (N, k) array.

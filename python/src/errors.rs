@@ -1,7 +1,7 @@
 //! The exceptions of `calbench` and how a library error becomes one.
 
 use pyo3::create_exception;
-use pyo3::exceptions::PyException;
+use pyo3::exceptions::{PyException, PyUserWarning};
 use pyo3::prelude::*;
 
 create_exception!(calbench, Error, PyException, "Every error of calbench.");
@@ -22,6 +22,12 @@ create_exception!(
     ComputeError,
     Error,
     "A computation could not be carried out."
+);
+create_exception!(
+    calbench,
+    LimitWarning,
+    PyUserWarning,
+    "Joint values outside the robot's joint limits (`Robot.fk` computes it and warns)."
 );
 create_exception!(
     calbench,

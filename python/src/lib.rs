@@ -21,7 +21,7 @@ use calbench::measurement::Measure;
 use calbench::robot::{builtin, Param};
 
 use convert::joint_rows;
-use errors::{setting, ComputeError, Error, FileError, IoError, SettingError};
+use errors::{setting, ComputeError, Error, FileError, IoError, LimitWarning, SettingError};
 use robot::PyRobot;
 
 /// Rank, identifiable parameters and dependent groups of every parameter of `robot` over
@@ -82,6 +82,7 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("SettingError", py.get_type::<SettingError>())?;
     m.add("ComputeError", py.get_type::<ComputeError>())?;
     m.add("IoError", py.get_type::<IoError>())?;
+    m.add("LimitWarning", py.get_type::<LimitWarning>())?;
     m.add_class::<robot::PyRobot>()?;
     m.add_class::<study::PyProblem>()?;
     m.add_class::<study::PyRun>()?;

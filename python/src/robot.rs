@@ -11,7 +11,33 @@ use calbench::numeric::{Frame, Real};
 use calbench::robot::{builtin, Param, Robot};
 
 use crate::convert::{flag_arg, float_array2, is_bool, joint_rows, typed_arg};
-use crate::errors::{err, setting};
+use crate::errors::{err, setting, LimitWarning};
+
+/// Warns (`calbench.LimitWarning`) of the rows of `qs` (internal units) outside the joint
+/// limits of `robot`, naming the first three (`q[0], q[4], q[7] and 2 more rows`).
+fn warn_outside_limits(py: Python<'_>, robot: &Robot, qs: &[Vec<Real>]) -> PyResult<()> {
+    let outside: Vec<usize> = (0..qs.len())
+        .filter(|&i| !robot.within_limits(&qs[i]))
+        .collect();
+    if outside.is_empty() {
+        return Ok(());
+    }
+    let mut rows: Vec<String> = outside.iter().take(3).map(|i| format!("q[{i}]")).collect();
+    match outside.len() - rows.len() {
+        0 => {}
+        1 => rows.push("1 more row".into()),
+        more => rows.push(format!("{more} more rows")),
+    }
+    let last = rows.pop().unwrap_or_default();
+    let rows = if rows.is_empty() {
+        last
+    } else {
+        format!("{} and {last}", rows.join(", "))
+    };
+    let msg = format!("{} ({rows})", calbench::robot::OUTSIDE_LIMITS);
+    let msg = std::ffi::CString::new(msg).map_err(|e| setting("q", e.to_string()))?;
+    PyErr::warn(py, &py.get_type::<LimitWarning>(), &msg, 1)
+}
 
 /// A robot model with its nominal parameters (lengths in mm, angles in the robot's unit
 /// where joint values are concerned, as in the command line).
@@ -93,7 +119,9 @@ impl PyRobot {
     }
 
     /// Forward kinematics: joint values `q` (N, n) in the robot's units → tool points
-    /// (N, 3) in mm, or with `pose=True` homogeneous tool frames (N, 4, 4).
+    /// (N, 3) in mm, or with `pose=True` homogeneous tool frames (N, 4, 4). Rows outside the
+    /// joint limits are computed and warned of (`calbench.LimitWarning`, naming them), as
+    /// `calbench fk` warns.
     #[pyo3(signature = (q, pose = None))]
     fn fk<'py>(
         &self,
@@ -105,6 +133,7 @@ impl PyRobot {
         let q = float_array2("q", q)?;
         let r = &self.inner;
         let qs = joint_rows(r, &q)?;
+        warn_outside_limits(py, r, &qs)?;
         let chain = r.chain();
         let frames: Vec<Frame> = qs.iter().map(|v| chain.fk(v)).collect();
         if pose {

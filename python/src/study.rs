@@ -175,9 +175,15 @@ impl PyProblem {
     }
 }
 
-/// A Python callable as an external method: called with a `Problem` under the GIL; returns
-/// the vector, or (vector, termination name). An exception is the method's failure.
-pub(crate) fn python_method(f: Py<PyAny>) -> External {
+/// What a method written in Python returns.
+const RETURNS: &str = "a 1-D float array (or a tuple of it and a termination name)";
+
+/// A Python callable as the external method `label`: called with a `Problem` under the GIL;
+/// returns the vector, or (vector, termination name). An exception is the method's failure,
+/// and so is a vector numpy reads as bools or complex numbers (named with its dtype), which
+/// a float conversion would take as 0 and 1 or cut to its real part.
+pub(crate) fn python_method(label: &str, f: Py<PyAny>) -> External {
+    let label = label.to_string();
     External {
         run: Arc::new(move |p: Arc<ExternalProblem>| {
             Python::attach(|py| {
@@ -200,13 +206,17 @@ pub(crate) fn python_method(f: Py<PyAny>) -> External {
                     }
                     _ => (out, None),
                 };
+                if let Ok((_, Some((what, dtype)))) = crate::convert::as_numpy(&x) {
+                    return Err(format!(
+                        "the method `{label}` returned a {what} array (dtype {dtype}), not real \
+                         numbers; it must return {RETURNS}"
+                    ));
+                }
                 let x: Vec<Real> = match x.extract::<PyReadonlyArray1<'_, f64>>() {
                     Ok(a) => a.as_array().to_vec(),
-                    Err(_) => x.extract().map_err(|_| {
-                        "the method must return a 1-D float array (or a tuple of it and a \
-                         termination name)"
-                            .to_string()
-                    })?,
+                    Err(_) => x
+                        .extract()
+                        .map_err(|_| format!("the method must return {RETURNS}"))?,
                 };
                 Ok((x, name))
             })
@@ -287,7 +297,10 @@ pub(crate) fn run(
                 ));
             }
             sc = sc
-                .with_method(MethodSpec::external(&label, python_method(f.unbind())))
+                .with_method(MethodSpec::external(
+                    &label,
+                    python_method(&label, f.unbind()),
+                ))
                 .map_err(err)?;
         }
     }

@@ -50,7 +50,7 @@ pub(crate) fn task<'py>(
             Some(n) => n,
             None => method.getattr("__name__")?.extract()?,
         };
-        let f = crate::study::python_method(method.unbind());
+        let f = crate::study::python_method(&label, method.unbind());
         let spec = MethodSpec::external(&label, f);
         (spec, label.clone(), format!("python:{label}"))
     } else {

@@ -60,6 +60,25 @@ def test_fk_matches_the_cli(cli, root):
     assert np.allclose(T[:, 3], [0, 0, 0, 1])
 
 
+def test_fk_warns_of_joint_values_outside_the_limits_as_the_cli_does(cli, recwarn):
+    # The command line warns on stderr and prints the point; fk computes the points and warns
+    # (calbench.LimitWarning, a UserWarning) naming the rows outside, where it said nothing.
+    r = calbench.Robot.builtin("irb2600")
+    inside, outside = [10, -20, 30, 40, -50, 60], [500, -20, 30, 40, -50, 60]
+    warned = cli("fk", "--robot", "irb2600", "--q", ",".join(map(str, outside)))
+    assert "warning: the joint values lie outside the robot's joint limits" in warned.stderr
+    assert "outside" not in cli("fk", "--robot", "irb2600", "--q", "10,-20,30,40,-50,60").stderr
+    r.fk([inside, inside])
+    assert not recwarn.list
+    with pytest.warns(calbench.LimitWarning,
+                      match=r"outside the robot's joint limits \(q\[1\]\)") as w:
+        p = r.fk([inside, outside, inside])
+    assert len(w) == 1 and issubclass(calbench.LimitWarning, UserWarning)
+    assert p.shape == (3, 3) and np.allclose(p[0], p[2])
+    with pytest.warns(calbench.LimitWarning, match=r"q\[0\], q\[1\], q\[2\] and 2 more rows"):
+        r.fk([outside] * 5, pose=True)
+
+
 def test_with_errors_moves_the_tool_and_to_toml_reads_back(tmp_path):
     r = calbench.Robot.builtin("irb2600")
     q = np.array([[10, -20, 30, 40, -50, 60]], dtype=float)
@@ -475,6 +494,38 @@ def test_an_exception_in_a_method_is_a_failure_and_the_study_goes_on(root):
         calbench.run(sc, trials=1, methods={"ls": boom})
     with pytest.raises(calbench.SettingError, match="function"):
         calbench.run(sc, trials=1, methods={"x": 3})
+
+
+def test_a_method_returning_bools_or_complex_numbers_fails_naming_the_dtype(root):
+    # Bools were taken as 0 and 1 and complex numbers cut to their real part (with numpy's
+    # ComplexWarning) as if the method had returned them; now each is a failure of that method,
+    # as a vector of the wrong length is, naming the method and the dtype.
+    def flags(problem):
+        return np.zeros(len(problem.x0), dtype=bool)
+
+    def flag_list(problem):
+        return [False] * len(problem.x0), "converged"
+
+    def complex_(problem):
+        return np.asarray(problem.x0, dtype=complex) + 1j
+
+    sc = load_scenario(root)
+    methods = {"flags": flags, "flag_list": flag_list, "cplx": complex_}
+    study = calbench.run(sc, trials=2, methods=methods)
+    by = {r["method"]: r for r in study.summary["results"]}
+    assert [by[m]["failures"] for m in methods] == [2, 2, 2] and by["ls"]["failures"] == 0
+    t = study.trials.set_index("method")["error"]
+    assert set(t["flags"]) == {"the method `flags` returned a bool array (dtype bool), not real "
+                               "numbers; it must return a 1-D float array (or a tuple of it and "
+                               "a termination name)"}
+    assert t["flag_list"].str.contains("`flag_list` returned a bool array (dtype bool)",
+                                       regex=False).all()
+    assert t["cplx"].str.contains("`cplx` returned a complex array (dtype complex128)",
+                                  regex=False).all()
+    # In a task, as a vector of the wrong length: the entry's ComputeError.
+    with pytest.raises(calbench.ComputeError, match=r"`cplx` returned a complex array"):
+        calbench.task(root / "tasks" / "barrett-wam.toml", complex_, models=["kinematic"],
+                      name="cplx")
 
 
 def test_python_methods_run_in_every_sweep_point(root):

@@ -63,7 +63,7 @@ pub fn run(args: &FkArgs) -> Result<()> {
         }
     }
     if !robot.within_limits(&q) {
-        eprintln!("warning: the joint values lie outside the robot's joint limits");
+        eprintln!("warning: {}", calbench::robot::OUTSIDE_LIMITS);
     }
     Ok(())
 }

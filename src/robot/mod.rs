@@ -61,6 +61,9 @@ pub const MAX_JOINT_RAD: Real = 20.0 * std::f64::consts::PI;
 /// walking a chain allocates nothing.
 pub const MAX_JOINTS: usize = 16;
 
+/// The warning of forward kinematics at joint values outside the joint limits.
+pub const OUTSIDE_LIMITS: &str = "the joint values lie outside the robot's joint limits";
+
 /// What kind of number a robot-model value is, which sets its unit and its range.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum Quantity {
@@ -680,7 +683,8 @@ impl Robot {
         (self.coupling.is_some() && i < 2) || kind == JointType::Prismatic
     }
 
-    /// Whether `q` (internal units) lies within the joint limits (with a tolerance of 1e-9).
+    /// Whether `q` (internal units) lies within the joint limits (with a tolerance of 1e-9);
+    /// `fk` warns [`OUTSIDE_LIMITS`] when it does not.
     pub fn within_limits(&self, q: &[Real]) -> bool {
         q.iter()
             .zip(&self.joints)

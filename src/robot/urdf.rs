@@ -12,16 +12,19 @@
 //! continuous joints, metres for prismatic ones (the robot's units are rad and m); measured
 //! positions stay in mm.
 //!
-//! Writing back ([`UrdfRobot::write`]) keeps every element of the source and changes only the
-//! `<origin>` of each moving joint and of the last fixed joint before the tip (one is added
-//! when the tip is a moving joint's child), so that the URDF's FK equals the identified
-//! robot's: joint i's frame is the identified DH frame i−1 times the same constant offset as
-//! in the source (a turn about and a shift along the joint axis).
+//! Only the elements calbench reads are parsed ([`read`]). Writing back ([`UrdfRobot::write`])
+//! keeps the source text, every element and comment of it, and changes only the `<origin>` of
+//! each moving joint and of the last fixed joint before the tip (one is added when the tip is
+//! a moving joint's child), so that the URDF's FK equals the identified robot's: joint i's
+//! frame is the identified DH frame i−1 times the same constant offset as in the source (a
+//! turn about and a shift along the joint axis).
+
+mod text;
 
 use std::path::Path;
 
 use crate::error::{Error, Opt, Result, Said};
-use crate::numeric::{matrix_rpy, rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
+use crate::numeric::{rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
 use crate::robot::{
     to_internal, value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Quantity,
     Robot, Units,
@@ -33,6 +36,8 @@ pub struct UrdfRobot {
     /// The calbench robot (standard DH, units rad and m).
     pub robot: Robot,
     source: urdf_rs::Robot,
+    /// The source's text, which [`UrdfRobot::write`] writes back.
+    text: text::Source,
     /// Indices into `source.joints` of the chain, root to tip.
     chain: Vec<usize>,
     /// Per moving joint: DH frame i−1 → the URDF joint frame (constant).
@@ -48,14 +53,13 @@ fn origin(j: &urdf_rs::Joint) -> Frame {
     }
 }
 
-fn set_origin(j: &mut urdf_rs::Joint, f: &Frame) {
-    let m = |v: Real| if v == 0.0 { 0.0 } else { v };
-    j.origin.xyz = urdf_rs::Vec3([
-        m(f.pos.x / 1000.0),
-        m(f.pos.y / 1000.0),
-        m(f.pos.z / 1000.0),
-    ]);
-    j.origin.rpy = urdf_rs::Vec3(matrix_rpy(&f.rot).map(m));
+/// The URDF at `path` as urdf-rs parses the elements calbench reads: the robot's name, its
+/// links' names and its joints' `<origin>`, `<parent>`, `<child>`, `<axis>` and `<limit>`.
+/// Every other element (visuals, collisions, inertials, materials, transmissions, …) is set
+/// aside unparsed, so that one urdf-rs refuses (a `<visual>` with two `<material>` elements)
+/// does not refuse the robot; it is not in the result.
+pub fn read(path: &Path) -> Result<urdf_rs::Robot> {
+    text::read(path).map(|(robot, _)| robot)
 }
 
 /// The numbers calbench reads of the URDF joint `j` (moving as `kind`), checked as a robot
@@ -206,7 +210,7 @@ impl UrdfRobot {
     pub fn load_chain(path: &Path, which: &UrdfChain) -> Result<UrdfRobot> {
         let bad = |msg: String| Error::file(path, "URDF", msg);
         let said = |msg: Said| Error::file(path, "URDF", msg);
-        let source = urdf_rs::read_file(path).map_err(|e| bad(e.to_string()))?;
+        let (source, text) = text::read(path)?;
         let js = &source.joints;
         let leaves = leaf_links(&source);
         let known = |l: &str| source.links.iter().any(|k| k.name == l);
@@ -348,6 +352,7 @@ impl UrdfRobot {
         Ok(UrdfRobot {
             robot,
             source,
+            text,
             chain,
             offsets,
         })
@@ -357,7 +362,7 @@ impl UrdfRobot {
     /// robot with this robot's joints, e.g. the compensated robot of `identify`).
     pub fn write(&self, identified: &Robot) -> Result<String> {
         let n = self.robot.dof();
-        let mut out = self.source.clone();
+        let js = &self.source.joints;
         // DH frames i−1 at q = 0 (without the tool): the frames of the moving joints.
         let mut frames = Vec::with_capacity(n);
         let mut f = identified.base();
@@ -375,11 +380,13 @@ impl UrdfRobot {
         let mut w = Frame::identity(); // the source's frames, updated as joints move
         let mut k = 0;
         let mut last_fixed = None;
+        // The new origin of each joint moved (its index in the source's joints).
+        let mut origins = Vec::with_capacity(n + 1);
         for (pos, &i) in self.chain.iter().enumerate() {
-            let j = &mut out.joints[i];
+            let j = &js[i];
             if moving(j)?.is_some() {
                 let target = frames[k].compose(&self.offsets[k]);
-                set_origin(j, &w.inverse().compose(&target));
+                origins.push((i, w.inverse().compose(&target)));
                 w = target;
                 k += 1;
                 last_fixed = None;
@@ -392,31 +399,22 @@ impl UrdfRobot {
         }
         // The placement of the tip after the last moving joint.
         let before_last = match last_fixed {
-            Some(pos) => w.compose(&origin(&out.joints[self.chain[pos]]).inverse()),
+            Some(pos) => w.compose(&origin(&js[self.chain[pos]]).inverse()),
             None => w,
         };
         let place = before_last.inverse().compose(&tip);
-        match last_fixed {
-            Some(pos) => set_origin(&mut out.joints[self.chain[pos]], &place),
-            None => {
-                let parent = out.joints[*self.chain.last().unwrap_or(&0)]
-                    .child
-                    .link
-                    .clone();
-                let parent = xml_attribute(&parent);
-                let mini = urdf_rs::read_from_string(&format!(
-                    "<robot name=\"t\"><link name=\"{parent}\"/><link name=\"calbench_tool\"/>\
-                     <joint name=\"calbench_tool\" type=\"fixed\"><parent link=\"{parent}\"/>\
-                     <child link=\"calbench_tool\"/></joint></robot>"
-                ))
-                .map_err(|e| Error::Compute(e.to_string()))?;
-                let mut j = mini.joints[0].clone();
-                set_origin(&mut j, &place);
-                out.links.push(mini.links[1].clone());
-                out.joints.push(j);
+        let added = match last_fixed {
+            Some(pos) => {
+                origins.push((self.chain[pos], place));
+                String::new()
             }
-        }
-        urdf_rs::write_to_string(&out).map_err(|e| Error::Compute(e.to_string()))
+            None => {
+                let parent = &js[*self.chain.last().unwrap_or(&0)].child.link;
+                let (name, parent) = ("calbench_tool", xml_attribute(parent));
+                joint_element(name, "fixed", &parent, name, &place, None)
+            }
+        };
+        Ok(self.text.with(&origins, &added))
     }
 }
 
@@ -428,6 +426,32 @@ pub fn xml_attribute(text: &str) -> String {
     s.replace('\t', "&#9;")
         .replace('\n', "&#10;")
         .replace('\r', "&#13;")
+}
+
+/// A `<link>` named `child` and the `<joint>` `name` of type `kind` from `parent` to it, its
+/// origin the frame `o` (mm) and, with `lim` (in the URDF's units), the z axis and those
+/// limits: lines indented as children of `<robot>`. The names are written as given (escaped,
+/// where they need it, by the caller).
+fn joint_element(
+    name: &str,
+    kind: &str,
+    parent: &str,
+    child: &str,
+    o: &Frame,
+    lim: Option<(Real, Real)>,
+) -> String {
+    let mut s = format!(
+        "  <link name=\"{child}\"/>\n  <joint name=\"{name}\" type=\"{kind}\">\n    <parent link=\"{parent}\"/>\n    <child link=\"{child}\"/>\n    {}\n",
+        text::origin_element(o)
+    );
+    if let Some((lo, hi)) = lim {
+        s.push_str(&format!(
+            "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n",
+            text::number(lo),
+            text::number(hi)
+        ));
+    }
+    s + "  </joint>\n"
 }
 
 /// Whether `robot` names a URDF file (by its extension).
@@ -466,37 +490,11 @@ pub fn robot_to_urdf(robot: &Robot) -> Result<String> {
         rot: rot_x(alpha),
         pos: Vec3::new(a, 0.0, 0.0),
     };
-    let f = |x: Real| {
-        let x = if x == 0.0 { 0.0 } else { x };
-        format!("{x:?}")
-    };
     let mut s = format!(
         "<?xml version=\"1.0\"?>\n<robot name=\"{}\">\n  <link name=\"world\"/>\n",
         xml_attribute(&robot.name)
     );
-    let joint = |s: &mut String,
-                 name: &str,
-                 kind: &str,
-                 parent: &str,
-                 child: &str,
-                 o: &Frame,
-                 lim: Option<(Real, Real)>| {
-        let r = matrix_rpy(&o.rot);
-        s.push_str(&format!(
-            "  <link name=\"{child}\"/>\n  <joint name=\"{name}\" type=\"{kind}\">\n    <parent link=\"{parent}\"/>\n    <child link=\"{child}\"/>\n    <origin xyz=\"{} {} {}\" rpy=\"{} {} {}\"/>\n",
-            f(o.pos.x / 1000.0), f(o.pos.y / 1000.0), f(o.pos.z / 1000.0), f(r[0]), f(r[1]), f(r[2])
-        ));
-        if let Some((lo, hi)) = lim {
-            s.push_str(&format!(
-                "    <axis xyz=\"0 0 1\"/>\n    <limit lower=\"{}\" upper=\"{}\" effort=\"0\" velocity=\"0\"/>\n",
-                f(lo),
-                f(hi)
-            ));
-        }
-        s.push_str("  </joint>\n");
-    };
-    joint(
-        &mut s,
+    s += &joint_element(
         "base_placement",
         "fixed",
         "world",
@@ -542,8 +540,7 @@ pub fn robot_to_urdf(robot: &Robot) -> Result<String> {
             ("prismatic", 1e-3)
         };
         let child = format!("link_{}", k + 1);
-        joint(
-            &mut s,
+        s += &joint_element(
             &format!("joint_{}", k + 1),
             kind,
             &parent,
@@ -554,24 +551,8 @@ pub fn robot_to_urdf(robot: &Robot) -> Result<String> {
         parent = child;
         post = next;
     }
-    joint(
-        &mut s,
-        "flange_fixed",
-        "fixed",
-        &parent,
-        "flange",
-        &post,
-        None,
-    );
-    joint(
-        &mut s,
-        "tool_fixed",
-        "fixed",
-        "flange",
-        "tcp",
-        &robot.tool(),
-        None,
-    );
+    s += &joint_element("flange_fixed", "fixed", &parent, "flange", &post, None);
+    s += &joint_element("tool_fixed", "fixed", "flange", "tcp", &robot.tool(), None);
     s.push_str("</robot>\n");
     Ok(s)
 }

@@ -10,7 +10,7 @@ use calbench::robot::urdf::UrdfRobot;
 use calbench::robot::Param;
 
 use crate::common::{
-    calbench, calbench_ok, import_ur10_sample, path_arg, positions_only, tmp_dir,
+    calbench, calbench_ok, import_ur10_sample, path_arg, positions_only, read, tmp_dir,
     ur10_example as ex,
 };
 
@@ -133,11 +133,9 @@ fn a_written_urdf_has_the_fk_of_the_robot_it_was_written_from() {
     assert!(moved > 1.0, "the errors move the tip ({moved} mm)");
 }
 
-/// The worked example's pipeline on the shipped rows: import, identify on the URDF (robot.urdf
-/// written, and equal to robot.toml), compensate.
-#[test]
-fn import_identify_compensate_on_the_shipped_rows() {
-    let d = tmp_dir("realdata-pipeline");
+/// `calbench identify --robot URDF` on the shipped rows (imported in rad, position only) into
+/// `DIR/id`, whose robot.urdf is checked to have the FK of its robot.toml; returns `DIR/id`.
+fn identify_urdf_on_the_shipped_rows(urdf: &str, d: &Path) -> std::path::PathBuf {
     let m = d.join("m.csv");
     let mapping = d.join("mapping-rad.toml");
     let text = std::fs::read_to_string(ex("mapping.toml"))
@@ -152,7 +150,7 @@ fn import_identify_compensate_on_the_shipped_rows() {
     calbench_ok(&[
         "identify",
         "--robot",
-        &ex("ur10.urdf"),
+        urdf,
         "--data",
         path_arg(&p),
         "--method",
@@ -167,6 +165,59 @@ fn import_identify_compensate_on_the_shipped_rows() {
         let (mm, rad) = fk_gap(&toml, &urdf, &q);
         assert!(mm < 1e-8 && rad < 1e-11, "{mm} mm, {rad} rad");
     }
+    out
+}
+
+/// A URDF whose `<visual>` holds two `<material>` elements, as ROS-Industrial's IRB 4600 URDFs
+/// write them, with a transmission and a comment: calbench reads none of them, so `fk` gives
+/// the FK of the URDF without them, and `identify`'s robot.urdf is the source text with only
+/// the joints' `<origin>` lines changed (where urdf-rs refused the robot, "duplicate field
+/// `material`", and robot.urdf was written from what urdf-rs had parsed).
+#[test]
+fn a_urdf_with_two_materials_in_a_visual_is_read_and_written_back_whole() {
+    let d = tmp_dir("realdata-urdf-visuals");
+    let visual = "<link name=\"link_3\">
+    <visual name=\"visual\">
+      <geometry>
+        <mesh filename=\"package://arm/meshes/link_3.dae\"/>
+      </geometry>
+      <material name=\"\">
+        <color rgba=\"0.9254902 0.9254902 0.9058824 1\"/>
+      </material>
+      <material name=\"yellow\"/>
+    </visual>
+  </link>";
+    let tail = "  <!-- not read by calbench -->
+  <transmission name=\"t1\"><type>transmission_interface/SimpleTransmission</type></transmission>
+</robot>";
+    let src = read(Path::new(&ex("ur10.urdf")))
+        .replace("<link name=\"link_3\"/>", visual)
+        .replace("</robot>", tail);
+    assert!(src.contains(visual) && src.contains(tail));
+    let urdf = d.join("arm.urdf");
+    std::fs::write(&urdf, &src).unwrap();
+    let fk = |robot: &str| {
+        let q = "0.1,-1.2,1.3,-1.6,1.2,0.3";
+        calbench_ok(&["fk", "--robot", robot, "--q", q, "--json"]).stdout
+    };
+    assert_eq!(fk(path_arg(&urdf)), fk(&ex("ur10.urdf")));
+    let out = identify_urdf_on_the_shipped_rows(path_arg(&urdf), &d);
+    let written = read(&out.join("robot.urdf"));
+    let kept = |t: &str| -> Vec<String> {
+        let lines = t.lines().filter(|l| !l.contains("<origin "));
+        lines.map(str::to_string).collect()
+    };
+    assert_eq!(kept(&written), kept(&src), "{written}");
+    assert_ne!(written, src, "the origins move");
+}
+
+/// The worked example's pipeline on the shipped rows: import, identify on the URDF (robot.urdf
+/// written, and equal to robot.toml), compensate.
+#[test]
+fn import_identify_compensate_on_the_shipped_rows() {
+    let d = tmp_dir("realdata-pipeline");
+    let out = identify_urdf_on_the_shipped_rows(&ex("ur10.urdf"), &d);
+    let toml = builtin::load(path_arg(&out.join("robot.toml"))).unwrap();
     let prog = d.join("prog.csv");
     std::fs::write(
         &prog,

@@ -67,7 +67,8 @@ fn fk_refuses_a_length_that_overflows_in_mm() {
 /// A URDF's numbers are checked as a robot file's: a NaN or 1e308 m origin, an infinite
 /// angle, an axis of infinite length or a limit beyond ten turns is refused naming the URDF,
 /// the joint and the element, where `fk` printed `NaN` and `identify` failed in the
-/// registration without naming the file. So is a chain whose origins add up beyond 1 km.
+/// registration without naming the file. So is a chain whose origins add up beyond 1 km, and
+/// a file that is not well-formed XML (naming the line).
 #[test]
 fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     let d = tmp_dir("strict-urdf");
@@ -128,6 +129,13 @@ fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
             "limit.urdf: URDF: joint \"shoulder_pan_joint\", <limit>:",
             "got 1000000000.0 rad",
         ],
+    );
+    // Not well-formed XML: the line, where the refusal had none ("Elements not properly
+    // nested").
+    let o = fk("nested", "</joint>", "</joint_>");
+    refused(
+        &o,
+        &["nested.urdf: line 13: ill-formed document: expected `</joint>`, but `</joint_>`"],
     );
     // Two fixed origins of 600 m each put the first joint 1.2 km from the root.
     let zero = "<origin xyz=\"0.0 0.0 0.0\"";

@@ -237,8 +237,7 @@ impl SocketTask {
     /// Refuses, naming the task file's `tip`, a tip the URDF `path` has no link of, or no tip
     /// where the URDF has more than one leaf link.
     fn check_tip(&self, path: &Path) -> Result<()> {
-        let urdf =
-            urdf_rs::read_file(path).map_err(|e| Error::file(path, "URDF", e.to_string()))?;
+        let urdf = crate::robot::urdf::read(path)?;
         let msg = match &self.tip {
             Some(tip) if !urdf.links.iter().any(|l| &l.name == tip) => {
                 format!("no link \"{tip}\" in {}", path.display())
