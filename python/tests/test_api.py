@@ -1,4 +1,5 @@
 """The Python module against the command line: the same numbers, bytes and messages."""
+import csv
 import json
 import math
 import tomllib
@@ -391,6 +392,26 @@ def test_run_of_a_dict_is_the_cli_bytes(cli, root, tmp_path):
     for name in ("summary.json", "trials.csv"):
         assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes()
     assert first.seconds > 0 and "ci-guard" in repr(first)
+
+
+def test_a_sweep_whose_points_differ_in_columns_gives_the_cli_bytes(cli, root, tmp_path):
+    sc = load_scenario(root)
+    sc["sweep"] = [
+        {"key": "tracker.measure", "values": ["position", "pose"], "zip": True},
+        {"key": "identification.compliance", "values": [[], "gravity"]},
+    ]
+    study = calbench.run(sc, trials=2)
+    t = study.trials
+    pose = t["tracker.measure"] == "pose"
+    assert pose.any() and not pose.all()
+    for col in ("after_rms_deg", "true_c2", "identified_c2"):
+        assert t.loc[pose, col].notna().all() and t.loc[~pose, col].isna().all(), col
+    study.write(tmp_path / "py")
+    with open(tmp_path / "py" / "trials.csv", newline="") as f:
+        rows = list(csv.reader(f))
+    assert {len(r) for r in rows} == {len(rows[0])}
+    cli("run", tmp_path / "py" / "scenario.toml", "--trials", "2", "--out", tmp_path / "cli")
+    assert study.trials_csv() == (tmp_path / "cli" / "trials.csv").read_bytes()
 
 
 def test_run_write_is_whole_or_nothing(root, tmp_path):

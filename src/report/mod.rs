@@ -181,22 +181,35 @@ pub struct MadeFolders(Vec<std::path::PathBuf>);
 
 impl MadeFolders {
     /// Creates the folder `dir` and its missing ancestors, and remembers those it created.
+    ///
+    /// Another process may remove an empty folder it made between the look for the missing
+    /// folders and the creation of one inside it (the shards of one run started at once into
+    /// one new folder, each probing its own `--out`): the creation then starts again from the
+    /// folder that vanished.
     pub fn create(dir: &std::path::Path) -> crate::Result<MadeFolders> {
-        let missing: Vec<std::path::PathBuf> = dir
-            .ancestors()
-            .filter(|p| !p.as_os_str().is_empty())
-            .take_while(|p| std::fs::symlink_metadata(p).is_err())
-            .map(std::path::Path::to_path_buf)
-            .collect();
+        const ATTEMPTS: usize = 1000;
         let mut made = MadeFolders(Vec::new());
-        for p in missing.into_iter().rev() {
-            match std::fs::create_dir(&p) {
-                Ok(()) => made.0.push(p),
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && p.is_dir() => {}
-                Err(e) => return Err(crate::Error::io(&p, e)),
+        let mut attempt = 0;
+        'again: loop {
+            let missing: Vec<std::path::PathBuf> = dir
+                .ancestors()
+                .filter(|p| !p.as_os_str().is_empty())
+                .take_while(|p| std::fs::symlink_metadata(p).is_err())
+                .map(std::path::Path::to_path_buf)
+                .collect();
+            for p in missing.into_iter().rev() {
+                match std::fs::create_dir(&p) {
+                    Ok(()) => made.0.push(p),
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && p.is_dir() => {}
+                    Err(e) if e.kind() == std::io::ErrorKind::NotFound && attempt < ATTEMPTS => {
+                        attempt += 1;
+                        continue 'again;
+                    }
+                    Err(e) => return Err(crate::Error::io(&p, e)),
+                }
             }
+            return Ok(made);
         }
-        Ok(made)
     }
 }
 
@@ -242,10 +255,11 @@ pub fn atomically(
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }
-    let _made = MadeFolders::create(parent)?;
     let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).map_err(|e| Error::io(&tmp, e))?;
+    // Made with the folders above it, so that none of them is ever an empty folder another
+    // process may remove before this one is made in it.
+    let _made = MadeFolders::create(&tmp)?;
     let done = write(&tmp).and_then(|()| {
         let written = std::fs::read_dir(&tmp)
             .map_err(|e| Error::io(&tmp, e))?
@@ -319,5 +333,42 @@ mod tests {
             .to_string();
         assert!(e.contains("notes.txt") && e.contains("not a folder"), "{e}");
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// Processes (here threads) that make folders in one new folder at once, each removing
+    /// again what it made once it is empty, as shards started together do: none fails for a
+    /// folder another removed under it. (Which of them made a shared folder is a race, so an
+    /// empty shared folder may stay: only its maker removes it.)
+    #[test]
+    fn folders_made_at_once_in_one_new_folder_do_not_fail_each_other() {
+        let root = std::env::temp_dir().join(format!("calbench-made-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let (threads, rounds) = (8, 300);
+        let start = std::sync::Barrier::new(threads);
+        let failed = std::sync::Mutex::new(Vec::new());
+        std::thread::scope(|s| {
+            for t in 0..threads {
+                let (root, start, failed) = (&root, &start, &failed);
+                s.spawn(move || {
+                    for r in 0..rounds {
+                        let leaf = root.join(format!("{r}/shards/run/{t}"));
+                        start.wait();
+                        match MadeFolders::create(&leaf) {
+                            Ok(made) => drop(made),
+                            Err(e) => failed.lock().unwrap().push(e.to_string()),
+                        }
+                        if leaf.exists() {
+                            failed
+                                .lock()
+                                .unwrap()
+                                .push(format!("{} stays", leaf.display()));
+                        }
+                    }
+                });
+            }
+        });
+        std::fs::remove_dir_all(&root).unwrap();
+        let failed = failed.into_inner().unwrap();
+        assert!(failed.is_empty(), "{} failures: {failed:?}", failed.len());
     }
 }

@@ -266,6 +266,28 @@ pub struct Streamed {
     partial: PathBuf,
 }
 
+impl Streamed {
+    /// Replaces the finished bytes by what `f` writes to its second argument while it reads
+    /// them from its first (once, through a second partial file beside the first).
+    pub fn rewrite(
+        self,
+        f: impl FnOnce(&mut dyn std::io::Read, &mut dyn std::io::Write) -> Result<()>,
+    ) -> Result<Streamed> {
+        let path = self.partial.with_file_name(&self.name);
+        let again = self
+            .partial
+            .with_file_name(format!(".{}.rewrite.partial", self.name));
+        let from = std::fs::File::open(&self.partial).map_err(|e| Error::io(&path, e))?;
+        let to = std::fs::File::create(&again).map_err(|e| Error::io(&path, e))?;
+        let mut to = std::io::BufWriter::new(to);
+        f(&mut std::io::BufReader::new(from), &mut to)?;
+        to.flush().map_err(|e| Error::io(&path, e))?;
+        drop(to);
+        std::fs::rename(&again, &self.partial).map_err(|e| Error::io(&path, e))?;
+        Ok(self)
+    }
+}
+
 impl Output for Streamed {
     fn name(&self) -> &str {
         &self.name

@@ -129,7 +129,7 @@ impl InMemoryRun {
         Ok(InMemoryRun {
             summary: analyse(&result)?,
             result,
-            trials_csv: csv.into_bytes(),
+            trials_csv: csv.into_bytes()?,
         })
     }
 

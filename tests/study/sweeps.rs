@@ -4,6 +4,7 @@
 //! parallel, the README's shard commands) are in `sweeps/examples.rs`, a killed run's resume
 //! in `sweeps/resume.rs`.
 
+mod columns;
 mod examples;
 mod resume;
 
