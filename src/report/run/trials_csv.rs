@@ -33,7 +33,7 @@ pub const NAME: &str = "trials.csv";
 /// The header is the first block's, and every row is written in its block's columns. Where
 /// the blocks of a sweep differ in their columns (a point that identifies more parameters,
 /// measures full pose or runs a search), the finished file is rewritten once in the union of
-/// every block's columns ([`Layout::widen`]), the cells a block does not have left empty:
+/// every block's columns (`Layout::widen`), the cells a block does not have left empty:
 /// a file of one layout is never read back.
 pub struct TrialsCsv {
     out: Rows,
