@@ -49,8 +49,9 @@ __all__ = [
 
 
 def _numbers(name, value):
-    """``value`` as a float64 array; bool and complex arrays are refused naming ``name``
-    (their values are not joint values or millimetres)."""
+    """``value`` as a C-contiguous float64 array of its own dimensions (a scalar stays 0-D,
+    where ``np.ascontiguousarray`` made it one row); bool and complex arrays are refused
+    naming ``name`` (their values are not joint values or millimetres)."""
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as e:
@@ -59,7 +60,7 @@ def _numbers(name, value):
         what = "bool" if raw.dtype.kind == "b" else "complex"
         raise SettingError(f"setting `{name}`: a {what} array is not taken; give real numbers")
     try:
-        return np.ascontiguousarray(raw, dtype=np.float64)
+        return np.asarray(raw, dtype=np.float64, order="C")
     except (TypeError, ValueError) as e:
         raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
 
