@@ -679,7 +679,8 @@ def task(task, method="lm", *, models=None, name=None, out=None):
             cross-validation on the task's calibration rows alone when there are several.
             Without them (or ``[]``), the task's own ``[models]`` are compared as
             ``calbench task`` without ``--models`` compares them, else ``kinematic``.
-        name: the Python method's name (default: the function's ``__name__``).
+        name: the Python method's name (default: the function's ``__name__``); refused
+            with a calbench method, which is entered by its own name.
         out: a folder to write the identify outputs, ``task.json`` and ``task.toml`` (the task
             file as run) into.
 
@@ -689,6 +690,11 @@ def task(task, method="lm", *, models=None, name=None, out=None):
     """
     if models is not None:
         models = _names("models", models)
+    if name is not None and not callable(method):
+        raise SettingError(
+            "setting `name`: names a method written in Python; a calbench method is "
+            f"entered by its own name ({method!r})"
+        )
     d = _calbench.task(
         _path("task", task, "a task's name or the path of a task file"),
         method,
