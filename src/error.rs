@@ -103,6 +103,8 @@ pub enum Opt {
     Shard,
     /// The trial of a study.
     Trial,
+    /// The number of trials of a run.
+    Trials,
     /// A validation measurement.
     Validate,
     /// The base link of a URDF chain.

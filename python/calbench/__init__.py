@@ -49,8 +49,9 @@ __all__ = [
 
 
 def _numbers(name, value):
-    """``value`` as a float64 array; bool and complex arrays are refused naming ``name``
-    (their values are not joint values or millimetres)."""
+    """``value`` as a C-contiguous float64 array of its own dimensions (a scalar stays 0-D,
+    where ``np.ascontiguousarray`` made it one row); bool and complex arrays are refused
+    naming ``name`` (their values are not joint values or millimetres)."""
     try:
         raw = np.asarray(value)
     except (TypeError, ValueError) as e:
@@ -59,7 +60,7 @@ def _numbers(name, value):
         what = "bool" if raw.dtype.kind == "b" else "complex"
         raise SettingError(f"setting `{name}`: a {what} array is not taken; give real numbers")
     try:
-        return np.ascontiguousarray(raw, dtype=np.float64)
+        return np.asarray(raw, dtype=np.float64, order="C")
     except (TypeError, ValueError) as e:
         raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
 
@@ -678,7 +679,8 @@ def task(task, method="lm", *, models=None, name=None, out=None):
             cross-validation on the task's calibration rows alone when there are several.
             Without them (or ``[]``), the task's own ``[models]`` are compared as
             ``calbench task`` without ``--models`` compares them, else ``kinematic``.
-        name: the Python method's name (default: the function's ``__name__``).
+        name: the Python method's name (default: the function's ``__name__``); refused
+            with a calbench method, which is entered by its own name.
         out: a folder to write the identify outputs, ``task.json`` and ``task.toml`` (the task
             file as run) into.
 
@@ -688,6 +690,11 @@ def task(task, method="lm", *, models=None, name=None, out=None):
     """
     if models is not None:
         models = _names("models", models)
+    if name is not None and not callable(method):
+        raise SettingError(
+            "setting `name`: names a method written in Python; a calbench method is "
+            f"entered by its own name ({method!r})"
+        )
     d = _calbench.task(
         _path("task", task, "a task's name or the path of a task file"),
         method,

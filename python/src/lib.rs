@@ -20,12 +20,12 @@ use pyo3::types::PyDict;
 use calbench::measurement::Measure;
 use calbench::robot::{builtin, Param};
 
-use convert::joint_rows;
 use errors::{setting, ComputeError, Error, FileError, IoError, LimitWarning, SettingError};
 use robot::PyRobot;
 
 /// Rank, identifiable parameters and dependent groups of every parameter of `robot` over
-/// the poses `q` (the robot's units) for `measure` ("position" or "pose").
+/// the poses `q` (the robot's units) for `measure` ("position" or "pose"); joint values
+/// outside the limits are refused naming the row and the column.
 #[pyfunction]
 #[pyo3(signature = (robot, q, measure = "position"))]
 fn identifiability<'py>(
@@ -45,7 +45,9 @@ fn identifiability<'py>(
             ))
         }
     };
-    let qs = joint_rows(r, &q)?;
+    // Refused as `calbench identifiability --poses-file` refuses them: the row, the column.
+    let qs = calbench::measurement::csv::joint_rows_from_arrays(r, "q", &convert::rows(&q))
+        .map_err(errors::err)?;
     if qs.is_empty() {
         return Err(setting("q", "no poses"));
     }

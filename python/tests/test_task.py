@@ -130,3 +130,13 @@ def test_a_kernel_residual_entry_from_python_is_the_command_lines(root, cli, tmp
     kernel = json.loads((tmp_path / "cli" / "kernel.json").read_text())
     assert kernel["term"] == "gp" and kernel["hyperparameters"] == record["kernel_residual"]
     assert len(kernel["alpha_mm"]) == record["kernel_residual"]["training_rows"] == 216
+
+
+def test_a_name_with_a_calbench_method_is_refused_naming_it(root, tmp_path):
+    # `name` was dropped without a word when the method was calbench's own ("lm"): the entry
+    # ran as `lm`, not under the name given.
+    out = tmp_path / "entry"
+    with pytest.raises(calbench.SettingError, match=r"^setting `name`: names a method written "
+                                                    r"in Python; .* \('lm'\)$"):
+        calbench.task(root / "tasks" / "barrett-wam.toml", "lm", name="mine", out=out)
+    assert not out.exists()

@@ -24,9 +24,9 @@ use crate::measurement::rows::{at_line, number, Rows};
 use crate::measurement::{JointSpace, Measurements};
 use crate::numeric::{Real, Vec3};
 
-pub use checks::measurements_from_arrays;
 pub(crate) use checks::{check_coordinate, check_joints, check_sigma, distinct_poses, user_limits};
 use checks::{check_payload, unit_quaternion};
+pub use checks::{joint_rows_from_arrays, measurements_from_arrays};
 
 const QUAT: [&str; 4] = ["qw", "qx", "qy", "qz"];
 const XYZ: [&str; 3] = ["x", "y", "z"];

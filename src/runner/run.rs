@@ -12,7 +12,7 @@ use rayon::prelude::*;
 use super::checkpoint::Checkpoint;
 use super::shard::{self, Both};
 use crate::analysis::{analyse::analyse, summary::Summary};
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result, Said};
 use crate::report::output::{write_all, Bytes, Outputs};
 use crate::report::{atomically, run as files, run_outputs, write_run};
 use crate::study::kind::AnyScenario;
@@ -374,18 +374,22 @@ fn look(opts: &RunOptions, collector: &Collector, seen: usize) -> bool {
 /// it starts).
 pub fn refuse_precision(scenario: &Scenario, opts: &RunOptions) -> Result<()> {
     if scenario.sweep.is_some() {
-        return Err(Error::setting(
-            "--precision",
-            "a sweep runs the same trials at every point, one point after the other; give \
-             --trials instead (a run of one point with --precision tells how many are needed)",
-        ));
+        let msg = Said::from(
+            "a sweep runs the same trials at every point, one point after the other; give ",
+        )
+        .name(Opt::Trials)
+        .text(" instead (a run of one point with ")
+        .name(Opt::Precision)
+        .text(" tells how many are needed)");
+        return Err(Error::option(Opt::Precision, msg));
     }
     if opts.shard.is_some() {
-        return Err(Error::setting(
-            "--precision",
-            "a shard's trials are fixed before it starts; find the trial count with a whole \
-             run with --precision, then shard the run with --trials N",
-        ));
+        let msg = Said::from("a shard's trials are fixed before it starts; find the trial count with a whole run with ")
+            .name(Opt::Precision)
+            .text(", then shard the run with ")
+            .name(Opt::Trials)
+            .text(" N");
+        return Err(Error::option(Opt::Precision, msg));
     }
     Ok(())
 }

@@ -141,20 +141,7 @@ pub fn measurements_from_arrays(
         ..Measurements::default()
     };
     for (i, quser) in qs.iter().enumerate() {
-        if quser.len() != dof {
-            return Err(Error::joint_count(
-                what,
-                format_args!("row {i}"),
-                quser.len(),
-                dof,
-            ));
-        }
-        if let Some(j) = quser.iter().position(|v| !v.is_finite()) {
-            finite(i, &format!("q{}", j + 1), quser[j])?;
-        }
-        let q =
-            check_joints(robot, quser, (&lim_lo, &lim_hi)).map_err(|(c, msg)| at(i, &c, msg))?;
-        m.qs.push(q);
+        m.qs.push(joint_row(robot, what, i, quser, (&lim_lo, &lim_hi))?);
         for (k, &v) in points[i].iter().enumerate() {
             check_coordinate(finite(i, XYZ[k], v)?).map_err(|msg| at(i, XYZ[k], msg))?;
         }
@@ -180,6 +167,54 @@ pub fn measurements_from_arrays(
         )));
     }
     Ok(m)
+}
+
+/// Joint values given as an array rather than a file (the Python module's
+/// `identifiability`), in the robot's units: each row checked as a measurement CSV's
+/// ([`super::read_measurements`]), a refusal naming the setting `what`, the row (0-based)
+/// and the column. Returns internal units.
+pub fn joint_rows_from_arrays(
+    robot: &(impl JointSpace + ?Sized),
+    what: &str,
+    qs: &[Vec<Real>],
+) -> Result<Vec<Vec<Real>>> {
+    let (lim_lo, lim_hi) = user_limits(robot);
+    qs.iter()
+        .enumerate()
+        .map(|(i, quser)| joint_row(robot, what, i, quser, (&lim_lo, &lim_hi)))
+        .collect()
+}
+
+/// Row `i` of joint values `quser` (the robot's units) given as an array: as many as the
+/// robot has joints, finite and within the limits (`lim`, the robot's units); returns
+/// internal units, a refusal naming the setting `what`, the row and the column.
+fn joint_row(
+    robot: &(impl JointSpace + ?Sized),
+    what: &str,
+    i: usize,
+    quser: &[Real],
+    lim: (&[Real], &[Real]),
+) -> Result<Vec<Real>> {
+    let dof = robot.dof();
+    if quser.len() != dof {
+        return Err(Error::joint_count(
+            what,
+            format_args!("row {i}"),
+            quser.len(),
+            dof,
+        ));
+    }
+    let at = |column: &str, msg: String| {
+        Error::setting(what, format!("row {i}, column {column}: {msg}"))
+    };
+    if let Some(j) = quser.iter().position(|v| !v.is_finite()) {
+        let v = quser[j];
+        return Err(at(
+            &format!("q{}", j + 1),
+            format!("{v} is not a finite number"),
+        ));
+    }
+    check_joints(robot, quser, lim).map_err(|(c, msg)| at(&c, msg))
 }
 
 /// The joint limits in the robot's units (for messages): (lower, upper).

@@ -1,0 +1,56 @@
+"""Arguments as a user gives them: numpy arrays of any dtype, lists, pandas frames, and
+what is refused naming the argument as Python spells it."""
+import tomllib
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import calbench
+
+CI_GUARD = "scenarios/ci-guard.toml"
+
+
+@pytest.fixture(scope="module")
+def trial(root):
+    return calbench.simulate(root / CI_GUARD, trial=0)
+
+
+def test_identify_takes_frames_and_lists_as_arrays(trial):
+    robot = calbench.Robot.builtin("irb2600")
+    ref = calbench.identify(robot, trial["q"], trial["points"], sigma=np.full(40, 0.02))
+    frame = pd.DataFrame(np.hstack([trial["q"], trial["points"]]),
+                         columns=[f"q{i}" for i in range(1, 7)] + ["x", "y", "z"])
+    got = calbench.identify(robot, frame.iloc[:, :6], frame[["x", "y", "z"]],
+                            sigma=pd.Series([0.02] * 40))
+    assert got.parameters == ref.parameters
+    assert got["data"] == "<arrays>"
+
+
+@pytest.mark.parametrize("name", ["sigma", "payload"])
+def test_a_scalar_for_a_per_point_array_is_refused_naming_it(trial, name):
+    # A scalar sigma or payload was made one row by the conversion and refused as
+    # "setting `data`: 40 joint vectors but 1 rows of sigma", naming neither the argument nor
+    # what was wrong with it.
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.SettingError,
+                       match=rf"^setting `{name}`: expected 1 dimensions, got shape \(\)$"):
+        calbench.identify(robot, trial["q"], trial["points"], **{name: 0.02})
+
+
+def test_precision_with_a_sweep_is_refused_naming_the_keyword_arguments(cli, root, tmp_path):
+    # The refusal named the command line's flags (`--precision`, `--trials`) from Python.
+    with open(root / CI_GUARD, "rb") as f:
+        sc = tomllib.load(f)
+    sc["sweep"] = {"key": "outliers.count", "values": [0, 2]}
+    with pytest.raises(calbench.SettingError) as e:
+        calbench.run(sc, trials=2, precision="5%")
+    msg = str(e.value)
+    assert msg.startswith("setting `precision`: a sweep runs the same trials at every point")
+    assert "give trials instead" in msg and "--" not in msg
+    swept = tmp_path / "swept.toml"
+    swept.write_text((root / CI_GUARD).read_text().replace("[robot]", "[sweep]\nkey = "
+                     "\"outliers.count\"\nvalues = [0, 2]\n\n[robot]"))
+    err = cli("run", swept, "--precision", "5%", "--out", tmp_path / "o", ok=False).stderr
+    assert "setting `--precision`: a sweep runs the same trials" in err
+    assert "give --trials instead" in err and not (tmp_path / "o").exists()
