@@ -77,9 +77,20 @@ pub fn undetermined_error(
         return Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient));
     }
     let (undetermined, groups) = names_and_groups(&a);
+    let rows = data.len() * data.measure().rows();
+    let measure = if rows < params.1 {
+        format!(
+            "{} poses give {rows} readings for {} parameters: measure at least {} poses",
+            data.len(),
+            params.1,
+            params.1.div_ceil(data.measure().rows())
+        )
+    } else {
+        "Measure poses that move every joint".to_string()
+    };
     let msg = format!(
         "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
-         dependent groups: {}); {ended}. Measure poses that move every joint, or pass ",
+         dependent groups: {}); {ended}. {measure}, or pass ",
         a.rank,
         params.1,
         c.identified.rank.unwrap_or(a.rank),

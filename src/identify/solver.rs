@@ -173,7 +173,9 @@ pub(crate) fn check_stop(eps: Real, max_iter: usize) -> Result<()> {
 /// Runs `solver` on `p` from `x0`.
 ///
 /// Never panics on bad input: inconsistent sizes, a non-finite start or invalid options give
-/// [`Termination::InvalidInput`] with `x = x0`.
+/// [`Termination::InvalidInput`] with `x = x0`. Fewer residual rows than unknowns cannot
+/// determine every parameter: [`Termination::RankDeficient`] with `x = x0` and the rows as
+/// the rank's bound, which the callers refuse as they refuse any rank-deficient data.
 pub fn solve(solver: &dyn Solver, p: &dyn LeastSquares, x0: &DVector<Real>) -> Identified {
     solve_from(solver, p, (x0, x0))
 }
@@ -189,6 +191,14 @@ pub fn solve_from(
     if check_problem(p, x0).or(check_problem(p, start)).is_some() || solver.check().is_err() {
         return invalid(p, x0);
     }
+    let rows = p.size().rows();
+    if rows < x0.len() {
+        return Identified {
+            termination: Termination::RankDeficient,
+            rank: Some(rows),
+            ..invalid(p, x0)
+        };
+    }
     solver.run_from(p, from)
 }
 
@@ -203,9 +213,6 @@ fn check_problem(p: &dyn LeastSquares, x0: &DVector<Real>) -> Option<&'static st
     }
     if x0.iter().any(|v| !v.is_finite()) {
         return Some("x0 is not finite");
-    }
-    if size.rows() < t {
-        return Some("fewer residual rows than unknowns");
     }
     None
 }

@@ -330,9 +330,12 @@ pub struct Accumulator {
 
 /// Whether an outcome counts (not a failure). A `rank-deficient` ending counts when the
 /// identified list is known to hold undetermined parameters (`identification.params`): it is
-/// then the expected outcome of a damped method.
+/// then the expected outcome of a damped method, unless the method never started (fewer
+/// readings than parameters: no iteration).
 fn usable(o: &Outcome) -> bool {
-    let undetermined_ok = o.rank_deficient_expected && o.termination == Termination::RankDeficient;
+    let undetermined_ok = o.rank_deficient_expected
+        && o.termination == Termination::RankDeficient
+        && o.iterations > 0;
     (undetermined_ok
         || !matches!(
             o.termination,
@@ -654,6 +657,38 @@ mod tests {
         assert_eq!(median_ranks(1000, 0.05), Some((468, 531)));
         // Bonferroni over 16 parameters.
         assert_eq!(median_ranks(30, 0.05 / 16.0).map(|r| r.0), Some(6));
+    }
+
+    /// A rank-deficient ending expected of the identified list counts, unless the method
+    /// never started (fewer readings than parameters).
+    #[test]
+    fn a_method_that_never_started_is_a_failure() {
+        let stats = crate::calibrate::ErrorStats {
+            rms: 0.1,
+            ..Default::default()
+        };
+        let o = |iterations| Outcome {
+            method: 0,
+            strategy: 0,
+            identified: vec![0.0; 3],
+            before_mm: stats,
+            after_mm: stats,
+            calibration_before_mm: stats,
+            calibration_after_mm: stats,
+            optional: Default::default(),
+            per_point: None,
+            per_point_attitude_deg: None,
+            trace: None,
+            search: None,
+            iterations,
+            evaluations: 0,
+            termination: Termination::RankDeficient,
+            rank_deficient_expected: true,
+            seconds: 0.0,
+            error: None,
+        };
+        assert!(usable(&o(4)));
+        assert!(!usable(&o(0)));
     }
 
     #[test]

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::common::{bin, calbench, calbench_ok, load_json, read, root, tmp_dir};
+use crate::common::{bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
 
 fn scenario() -> String {
     root().join("scenarios/ci-guard.toml").display().to_string()
@@ -186,6 +186,60 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
     assert!(page.contains(&warning), "{warning}");
     assert!(page.contains("No covariance"));
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Five poses give 15 position readings for the 24 parameters: no method can determine them,
+/// so each refuses the data, naming the file and the number of poses needed, instead of
+/// writing the nominal robot as an identification; `--allow-rank-deficient` writes it, its
+/// termination `rank-deficient`.
+#[test]
+fn identify_refuses_fewer_readings_than_parameters() {
+    let robot = calbench::robot::builtin::irb2600();
+    let truth = robot.with_errors(&[(calbench::robot::Param::A(1), 0.5)]);
+    let qs: Vec<Vec<f64>> = (0..5)
+        .map(|i| {
+            let t = 0.2 * i as f64;
+            vec![t - 0.4, 0.3 - t, 0.1 + t, 0.5 - t, t, 0.2 * t]
+        })
+        .collect();
+    let dir = tmp_dir("cli-few");
+    let file = dir.join("five.csv");
+    crate::common::write_points(&file, &robot, qs, |q| truth.fk(q).pos);
+    let data = path_arg(&file);
+    for method in ["ls", "ridge", "igg3", "lm"] {
+        let out = dir.join(method);
+        let args = [
+            "identify", "--robot", "irb2600", "--data", data, "--method", method,
+        ];
+        let o = calbench(&[&args[..], &["--out", path_arg(&out)]].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{method}: {err}");
+        assert!(
+            err.contains("five.csv: data:")
+                && err.contains(
+                    "5 poses give 15 readings for 24 parameters: measure at least 8 poses"
+                )
+                && err.contains("--allow-rank-deficient"),
+            "{method}: {err}"
+        );
+        assert!(!out.exists(), "{method} wrote output");
+    }
+    let out = dir.join("allowed");
+    let args = [
+        "identify", "--robot", "irb2600", "--data", data, "--method", "lm",
+    ];
+    calbench_ok(
+        &[
+            &args[..],
+            &["--allow-rank-deficient", "--out", path_arg(&out)],
+        ]
+        .concat(),
+    );
+    let j = load_json(&out.join("identified.json"));
+    assert_eq!(
+        (&j["termination"], &j["rank"]),
+        (&"rank-deficient".into(), &15.into())
+    );
 }
 
 /// `identify --set KEY=VALUE` sets any option of the method (here the search box of BAS on

@@ -186,6 +186,17 @@ fn bad_input_is_reported_not_panicked() {
     q.a.set_column(1, &c);
     let out = solve(&LsOptions::default(), &q, &DVector::zeros(3));
     assert_eq!(out.termination, Termination::Singular);
+    // Two rows for three unknowns: rank-deficient, of rank at most two, at the start.
+    let wide = Linear {
+        a: p.a.rows(0, 2).into_owned(),
+        b: p.b.rows(0, 2).into_owned(),
+    };
+    let out = solve(&LsOptions::default(), &wide, &DVector::zeros(3));
+    assert_eq!(
+        (out.termination, out.rank),
+        (Termination::RankDeficient, Some(2))
+    );
+    assert_eq!((out.iterations, out.x), (0, DVector::zeros(3)));
 }
 
 #[test]
