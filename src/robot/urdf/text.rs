@@ -37,11 +37,15 @@ pub(super) struct Source {
 /// text that is not well-formed XML is refused naming the file and the line.
 pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    // quick-xml skips a byte order mark without counting it in its offsets: the offsets into
+    // `text` are those of the reader plus its length.
+    let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let base = text.len() - body.len();
     let bad = |at: u64, e: String| {
-        let line = line_of(&text, usize::try_from(at).unwrap_or(usize::MAX));
-        Error::file(path, format!("line {line}"), e)
+        let at = usize::try_from(at).map_or(usize::MAX, |a| a.saturating_add(base));
+        Error::file(path, format!("line {}", line_of(&text, at)), e)
     };
-    let mut reader = quick_xml::Reader::from_str(&text);
+    let mut reader = quick_xml::Reader::from_str(body);
     // The names of the open elements, the robot first.
     let mut open: Vec<Vec<u8>> = Vec::new();
     // The element set aside that is open: its start and its depth.
@@ -52,11 +56,11 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     let mut origin_at = None;
     let mut end = None;
     loop {
-        let at = reader.buffer_position() as usize;
+        let at = base + reader.buffer_position() as usize;
         let event = reader
             .read_event()
             .map_err(|e| bad(reader.error_position(), e.to_string()))?;
-        let after = reader.buffer_position() as usize;
+        let after = base + reader.buffer_position() as usize;
         let (e, empty) = match &event {
             Event::Start(e) => (e, false),
             Event::Empty(e) => (e, true),
