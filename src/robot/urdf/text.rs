@@ -55,6 +55,8 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     // Where the joint's `<origin>` being read began (one written as a start and an end tag).
     let mut origin_at = None;
     let mut end = None;
+    // The offsets of the robot's `<link>` and `<joint>` children, in the order written.
+    let (mut links_at, mut joints_at) = (Vec::new(), Vec::new());
     loop {
         let at = base + reader.buffer_position() as usize;
         let event = reader
@@ -98,7 +100,10 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 cuts.push(at..after);
             } else if !kept {
                 aside = Some((at, open.len()));
+            } else if open.len() == 1 && name == b"link" {
+                links_at.push(at);
             } else if open.len() == 1 && name == b"joint" {
+                joints_at.push(at);
                 origins.push(after..after);
             } else if open.len() == 2 && name == b"origin" {
                 let first = origins.last().is_some_and(Range::is_empty);
@@ -132,8 +137,67 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             origins.len()
         )));
     }
+    let line = |at: usize| line_of(&text, at);
+    let links: Vec<(&str, usize)> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .zip(links_at.iter().map(|&a| line(a)))
+        .collect();
+    let joints: Vec<(&str, usize)> = robot
+        .joints
+        .iter()
+        .map(|j| j.name.as_str())
+        .zip(joints_at.iter().map(|&a| line(a)))
+        .collect();
+    if let Some((at, msg)) = tree_fault(&robot, &links, &joints) {
+        return Err(Error::file(path, format!("line {at}"), msg));
+    }
     let source = Source { text, origins, end };
     Ok((robot, source))
+}
+
+/// The first fault, with its line, of the links and joints of `robot` (each with the line
+/// it starts on) as a tree: a link or joint name given twice, a joint whose parent or child
+/// is not a link of the robot, or a link that is the child of two joints. urdfdom refuses
+/// each of them; calbench would read one of the two and write back the other unchanged.
+fn tree_fault(
+    robot: &urdf_rs::Robot,
+    links: &[(&str, usize)],
+    joints: &[(&str, usize)],
+) -> Option<(usize, String)> {
+    for (what, named) in [("link", links), ("joint", joints)] {
+        for (k, (name, at)) in named.iter().enumerate() {
+            if let Some((_, first)) = named[..k].iter().find(|(n, _)| n == name) {
+                return Some((
+                    *at,
+                    format!("{what} \"{name}\": already declared on line {first}"),
+                ));
+            }
+        }
+    }
+    for (k, (j, &(name, at))) in robot.joints.iter().zip(joints).enumerate() {
+        for (key, link) in [
+            ("<parent link>", &j.parent.link),
+            ("<child link>", &j.child.link),
+        ] {
+            if !links.iter().any(|(l, _)| l == link) {
+                return Some((
+                    at,
+                    format!("joint \"{name}\", {key}: no link \"{link}\" in the URDF"),
+                ));
+            }
+        }
+        let child = &j.child.link;
+        if let Some(i) = robot.joints[..k]
+            .iter()
+            .position(|p| &p.child.link == child)
+        {
+            let (other, first) = joints[i];
+            return Some((at, format!("joint \"{name}\", <child link>: link \"{child}\" is already the child of joint \"{other}\" (line {first})")));
+        }
+    }
+    None
 }
 
 /// A number as a written URDF holds it: every digit, and 0 for −0.
