@@ -192,9 +192,10 @@ fn check_refuses_files_that_are_not_comparable_summaries() {
 /// Found by fuzzing: a URDF whose links and joints do not make a tree was read as some tree,
 /// where urdfdom refuses it. `examples/ipa-ur10/ur10.urdf` with the line `<link name="world"/>`
 /// swapped with the start tag of the joint `wrist_3_joint` (which then holds every link and
-/// joint after it, set aside unread) was read as a one-joint robot; with a joint or a link
-/// written twice, or a second joint to the same child, one of the two was read and `identify`
-/// wrote the other back unchanged. Each is refused naming the file, the line and the joint.
+/// joint after it, set aside unread) was read as a one-joint robot, and so was ROS-Industrial's
+/// KUKA KR 10 R1420 URDF with its first `</joint>` moved to the end; with a joint or
+/// a link written twice, or a second joint to the same child, one of the two was read and
+/// `identify` wrote the other back unchanged. Each is refused naming the file and the line.
 #[test]
 fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
     let d = tmp_dir("strict-urdf-tree");
@@ -212,7 +213,14 @@ fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
         (
             "nested",
             swapped,
-            "nested.urdf: line 7: joint \"wrist_3_joint\", <parent link>: no link \"link_5\"",
+            "nested.urdf: line 8: <link> inside the <joint> of line 7: links and joints are \
+             children of <robot>",
+        ),
+        (
+            "moved",
+            src.replacen("  </joint>\n", "", 1)
+                .replace("</robot>", "  </joint>\n</robot>"),
+            "moved.urdf: line 14: <link> inside the <joint> of line 9",
         ),
         (
             "twice",

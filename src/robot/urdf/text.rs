@@ -41,10 +41,7 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     // `text` are those of the reader plus its length.
     let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let base = text.len() - body.len();
-    let bad = |at: u64, e: String| {
-        let at = usize::try_from(at).map_or(usize::MAX, |a| a.saturating_add(base));
-        Error::file(path, format!("line {}", line_of(&text, at)), e)
-    };
+    let bad = |at: usize, e: String| Error::file(path, format!("line {}", line_of(&text, at)), e);
     let mut reader = quick_xml::Reader::from_str(body);
     // The names of the open elements, the robot first.
     let mut open: Vec<Vec<u8>> = Vec::new();
@@ -61,7 +58,7 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
         let at = base + reader.buffer_position() as usize;
         let event = reader
             .read_event()
-            .map_err(|e| bad(reader.error_position(), e.to_string()))?;
+            .map_err(|e| bad(base + reader.error_position() as usize, e.to_string()))?;
         let after = base + reader.buffer_position() as usize;
         let (e, empty) = match &event {
             Event::Start(e) => (e, false),
@@ -90,6 +87,21 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
         let name = e.name().as_ref().to_vec();
         if aside.is_none() {
             let parent = open.get(1).map(Vec::as_slice);
+            // A link or joint inside another one (a misplaced end tag) would be set aside, and
+            // the robot read without it.
+            if open.len() == 2 && (name == b"link" || name == b"joint") {
+                let (outer, at_outer) = match parent {
+                    Some(b"joint") => ("joint", joints_at.last()),
+                    _ => ("link", links_at.last()),
+                };
+                let msg = format!(
+                    "<{}> inside the <{outer}> of line {}: links and joints are children of \
+                     <robot>",
+                    String::from_utf8_lossy(&name),
+                    line_of(&text, at_outer.copied().unwrap_or(0)),
+                );
+                return Err(bad(at, msg));
+            }
             let kept = match open.len() {
                 0 => true,
                 1 => name == b"link" || name == b"joint",
