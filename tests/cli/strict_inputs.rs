@@ -220,7 +220,7 @@ fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
             "moved",
             src.replacen("  </joint>\n", "", 1)
                 .replace("</robot>", "  </joint>\n</robot>"),
-            "moved.urdf: line 14: <link> inside the <joint> of line 9",
+            "moved.urdf: line 13: <link> inside the <joint> of line 9",
         ),
         (
             "twice",
