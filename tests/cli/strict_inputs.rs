@@ -195,7 +195,9 @@ fn check_refuses_files_that_are_not_comparable_summaries() {
 /// joint after it, set aside unread) was read as a one-joint robot, and so was ROS-Industrial's
 /// KUKA KR 10 R1420 URDF with its first `</joint>` moved to the end; with a joint or
 /// a link written twice, or a second joint to the same child, one of the two was read and
-/// `identify` wrote the other back unchanged. Each is refused naming the file and the line.
+/// `identify` wrote the other back unchanged; two joints' child links exchanged (a loop off
+/// the chain) gave a one-joint robot too, and so did a `</robot>` after the first joint (the
+/// elements after it read as roots of their own). Each is refused naming the file and the line.
 #[test]
 fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
     let d = tmp_dir("strict-urdf-tree");
@@ -240,6 +242,28 @@ fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
             ),
             "parents.urdf: line 38: joint \"e2\", <child link>: link \"link_3\" is already the \
              child of joint \"elbow_joint\" (line 31)",
+        ),
+        (
+            "loop",
+            src.replacen("<child link=\"link_1\"/>", "<child link=\"@\"/>", 1)
+                .replacen("<child link=\"tcp\"/>", "<child link=\"link_1\"/>", 1)
+                .replacen("<child link=\"@\"/>", "<child link=\"tcp\"/>", 1),
+            "loop.urdf: line 47: joint \"wrist_2_joint\": the joints form a loop at link \"link_5\"",
+        ),
+        (
+            "roots",
+            src.replace(
+                "<link name=\"tcp\"/>",
+                "<link name=\"tcp\"/><link name=\"lone\"/>",
+            ),
+            "roots.urdf: line 68: link \"lone\": a second root link (no joint has it as its \
+             child) besides \"world\"",
+        ),
+        (
+            "after",
+            src.replace("</robot>", "")
+                .replacen("  </joint>\n", "  </joint>\n</robot>\n", 1),
+            "after.urdf: line 15: <link> after the end of the root element on line 14",
         ),
         (
             "undeclared",

@@ -37,9 +37,10 @@ pub(super) struct Source {
 /// text that is not well-formed XML is refused naming the file and the line.
 pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    // quick-xml skips a byte order mark without counting it in its offsets: the offsets into
-    // `text` are those of the reader plus its length.
-    let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    // quick-xml skips a byte order mark without counting it in its offsets: the reader reads
+    // the text after the marks (one or more), and the offsets into `text` are its offsets
+    // plus their length.
+    let body = text.trim_start_matches('\u{feff}');
     let base = text.len() - body.len();
     let bad = |at: usize, e: String| Error::file(path, format!("line {}", line_of(&text, at)), e);
     let mut reader = quick_xml::Reader::from_str(body);
@@ -85,6 +86,16 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             _ => continue,
         };
         let name = e.name().as_ref().to_vec();
+        // XML has one root element; quick-xml reads on after its end.
+        if let (true, Some(root_end)) = (open.is_empty(), end) {
+            let msg = format!(
+                "<{}> after the end of the root element on line {}: a URDF is one <robot> \
+                 element",
+                String::from_utf8_lossy(&name),
+                line_of(&text, root_end),
+            );
+            return Err(bad(at, msg));
+        }
         if aside.is_none() {
             let parent = open.get(1).map(Vec::as_slice);
             // A link or joint inside another one (a misplaced end tag) would be set aside, and
@@ -171,7 +182,8 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
 
 /// The first fault, with its line, of the links and joints of `robot` (each with the line
 /// it starts on) as a tree: a link or joint name given twice, a joint whose parent or child
-/// is not a link of the robot, or a link that is the child of two joints. urdfdom refuses
+/// is not a link of the robot, a link that is the child of two joints, a second root link or
+/// a loop. urdfdom refuses
 /// each of them; calbench would read one of the two and write back the other unchanged.
 fn tree_fault(
     robot: &urdf_rs::Robot,
@@ -207,6 +219,32 @@ fn tree_fault(
         {
             let (other, first) = joints[i];
             return Some((at, format!("joint \"{name}\", <child link>: link \"{child}\" is already the child of joint \"{other}\" (line {first})")));
+        }
+    }
+    // Every link hangs from the one root link: no second root, no loop.
+    let parent = |l: &str| {
+        let k = robot.joints.iter().position(|j| j.child.link == l)?;
+        Some((robot.joints[k].parent.link.as_str(), joints[k]))
+    };
+    let mut roots = links.iter().filter(|(l, _)| parent(l).is_none());
+    if let (Some((first, _)), Some((second, at))) = (roots.next(), roots.next()) {
+        let msg = format!(
+            "link \"{second}\": a second root link (no joint has it as its child) besides \
+             \"{first}\""
+        );
+        return Some((*at, msg));
+    }
+    for &(l, _) in links {
+        let mut link = l;
+        for _ in 0..=joints.len() {
+            match parent(link) {
+                Some((up, _)) => link = up,
+                None => break,
+            }
+        }
+        if let Some((_, (name, at))) = parent(link) {
+            let msg = format!("joint \"{name}\": the joints form a loop at link \"{link}\"");
+            return Some((at, msg));
         }
     }
     None
