@@ -1,7 +1,7 @@
 //! Fuzz and property tests of the input parsers: robot files, scenario files and measurement
 //! CSVs get random bytes and structured mutations of valid files (the built-in robots as
 //! `calbench robots NAME` prints them, the shipped `scenarios/*.toml`, CSVs written by
-//! `calbench simulate`). Properties: nothing panics, every error names the file, and what is
+//! `calbench simulate`), URDFs structured mutations of the shipped ones. Properties: nothing panics, every error names the file, and what is
 //! accepted is usable (finite, in range, within the joint limits).
 //!
 //! Each parser gets [`CASES`] cases per property in the normal run, from a fixed seed so the
@@ -25,14 +25,16 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, RngSeed, TestCaseError, TestRunner};
 
 use calbench::measurement::csv::read_measurements;
+use calbench::robot::urdf::{UrdfChain, UrdfRobot};
 use calbench::robot::{parse_robot_file, read_robot_file, robot_to_toml, Robot};
 use calbench::study::scenario::Scenario;
 
 use crate::common::{calbench, path_arg, root, tmp_dir, write_scenario};
 use corpus::{
-    csv_corpus, robot_corpus, robot_keys, scenario_corpus, scenario_keys, write_scenario_robot,
+    csv_corpus, robot_corpus, robot_keys, scenario_corpus, scenario_keys, urdf_corpus,
+    write_scenario_robot, URDFS,
 };
-use mutate::{csv_mutation, mutated, random_bytes, toml_mutation};
+use mutate::{csv_mutation, mutated, random_bytes, toml_mutation, urdf_mutation};
 
 /// Cases per property in the normal run.
 const CASES: u32 = 10_000;
@@ -204,6 +206,44 @@ fn csv_property(bytes: &[u8], robot: &Robot) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// The URDF reader on `bytes`, the chain ending at `tip`: what is read is a usable robot, and
+/// the URDF written back from it (`identify`'s robot.urdf) reads back as the same robot.
+fn urdf_property(bytes: &[u8], tip: Option<&str>) -> Result<(), TestCaseError> {
+    let path = case_file("robot", "urdf");
+    std::fs::write(&path, bytes).unwrap();
+    let chain = UrdfChain {
+        base: None,
+        tip: tip.map(str::to_string),
+    };
+    let u = match UrdfRobot::load_chain(&path, &chain) {
+        Ok(u) => u,
+        Err(e) => return names_file(&e.to_string(), &path),
+    };
+    robot_is_usable(&u.robot)?;
+    let written = u
+        .write(&u.robot)
+        .map_err(|e| TestCaseError::fail(format!("not written back: {e}")))?;
+    let again = case_file("written", "urdf");
+    std::fs::write(&again, &written).unwrap();
+    let back = UrdfRobot::load_chain(&again, &chain)
+        .map_err(|e| TestCaseError::fail(format!("written URDF refused: {e}\n{written}")))?;
+    prop_assert_eq!(back.robot.dof(), u.robot.dof());
+    let q: Vec<f64> = u
+        .robot
+        .joints
+        .iter()
+        .map(|j| 0.5 * (j.limits.0 + j.limits.1))
+        .collect();
+    let (a, b) = (u.robot.fk(&q), back.robot.fk(&q));
+    prop_assert!(
+        (a.pos - b.pos).norm() < 1e-6,
+        "{:?} written back as {:?}",
+        a.pos,
+        b.pos
+    );
+    Ok(())
+}
+
 fn run_robot_bytes(cases: u32, seed: Option<u64>) {
     fuzz(cases, seed, random_bytes(), |b| robot_property(&b.0));
 }
@@ -235,6 +275,11 @@ fn run_csv_mutations(cases: u32, seed: Option<u64>) {
     fuzz(cases, seed, s, |(i, b, _)| csv_property(&b.0, &robots[i]));
 }
 
+fn run_urdf_mutations(cases: u32, seed: Option<u64>) {
+    let s = mutated(urdf_corpus(), urdf_mutation(), false);
+    fuzz(cases, seed, s, |(i, b, _)| urdf_property(&b.0, URDFS[i].1));
+}
+
 // ---------------------------------------------------------------------------------------------
 // The tests
 
@@ -243,6 +288,14 @@ fn corpora_are_valid() {
     for f in robot_corpus() {
         robot_property(f).unwrap();
         parse_robot_file(&String::from_utf8_lossy(f), Path::new("r.toml")).unwrap();
+    }
+    for (f, (name, tip)) in urdf_corpus().iter().zip(URDFS) {
+        urdf_property(f, tip).unwrap();
+        let chain = UrdfChain {
+            base: None,
+            tip: tip.map(str::to_string),
+        };
+        UrdfRobot::load_chain(&root().join(name), &chain).unwrap();
     }
     let beside = write_scenario_robot().with_file_name("s.toml");
     for f in scenario_corpus() {
@@ -256,6 +309,18 @@ fn corpora_are_valid() {
         assert!(!d.qs.is_empty());
     }
     std::fs::remove_dir_all(scratch()).unwrap();
+}
+
+#[test]
+fn urdf_mutations() {
+    run_urdf_mutations(CASES, Some(SEED));
+}
+
+#[test]
+#[ignore = "long fuzz run: cargo test --test cli -- --ignored _long"]
+fn urdf_long() {
+    let (cases, seed) = long_run();
+    run_urdf_mutations(cases, seed);
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Strict inputs on the command line: robot files checked after unit conversion (`fk`), and
 //! `check` refusing files that are not comparable summaries, each naming the file.
 
+use std::path::Path;
 use std::process::Output;
 
 use crate::common::{calbench, load_json, root, tmp_dir};
@@ -69,21 +70,27 @@ fn fk_refuses_a_length_that_overflows_in_mm() {
 /// the joint and the element, where `fk` printed `NaN` and `identify` failed in the
 /// registration without naming the file. So is a chain whose origins add up beyond 1 km, and
 /// a file that is not well-formed XML (naming the line).
+/// `calbench fk --robot DIR/NAME.urdf --q 0,0,0,0,0,0` on the URDF `text`, which prints
+/// nothing to stdout.
+fn fk_on_urdf(d: &Path, name: &str, text: &str) -> Output {
+    let p = d.join(format!("{name}.urdf"));
+    std::fs::write(&p, text).unwrap();
+    let o = calbench(&["fk", "--robot", p.to_str().unwrap(), "--q", "0,0,0,0,0,0"]);
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    o
+}
+
 #[test]
 fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     let d = tmp_dir("strict-urdf");
     let src = std::fs::read_to_string(root().join("examples/ipa-ur10/ur10.urdf")).unwrap();
     let fk = |name: &str, from: &str, to: &str| {
         assert!(src.contains(from), "{from}");
-        let p = d.join(format!("{name}.urdf"));
-        std::fs::write(&p, src.replacen(from, to, 1)).unwrap();
-        let o = calbench(&["fk", "--robot", p.to_str().unwrap(), "--q", "0,0,0,0,0,0"]);
-        assert!(
-            o.stdout.is_empty(),
-            "{}",
-            String::from_utf8_lossy(&o.stdout)
-        );
-        o
+        fk_on_urdf(&d, name, &src.replacen(from, to, 1))
     };
     let tool = "<origin xyz=\"0.0 0.0 0.109\"";
     let o = fk("nan", tool, "<origin xyz=\"0.0 0.0 nan\"");
@@ -180,4 +187,91 @@ fn check_refuses_files_that_are_not_comparable_summaries() {
     }
     let same = calbench(&["check", s, "--baseline", s]);
     assert!(same.status.success());
+}
+
+/// Found by fuzzing: a URDF whose links and joints do not make a tree was read as some tree,
+/// where urdfdom refuses it. `examples/ipa-ur10/ur10.urdf` with the line `<link name="world"/>`
+/// swapped with the start tag of the joint `wrist_3_joint` (which then holds every link and
+/// joint after it, set aside unread) was read as a one-joint robot, and so was ROS-Industrial's
+/// KUKA KR 10 R1420 URDF with its first `</joint>` moved to the end; with a joint or
+/// a link written twice, or a second joint to the same child, one of the two was read and
+/// `identify` wrote the other back unchanged; two joints' child links exchanged (a loop off
+/// the chain) gave a one-joint robot too, and so did a `</robot>` after the first joint (the
+/// elements after it read as roots of their own). Each is refused naming the file and the line.
+#[test]
+fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
+    let d = tmp_dir("strict-urdf-tree");
+    let src = std::fs::read_to_string(root().join("examples/ipa-ur10/ur10.urdf")).unwrap();
+    let world = "  <link name=\"world\"/>";
+    let wrist = "  <joint name=\"wrist_3_joint\" type=\"revolute\">";
+    let swapped = src
+        .replace(world, "@")
+        .replace(wrist, world)
+        .replace('@', wrist);
+    let elbow = src.find("  <joint name=\"elbow_joint\"").unwrap();
+    let elbow = &src[elbow..elbow + src[elbow..].find("</joint>").unwrap() + 8];
+    let link_3 = "<link name=\"link_3\"/>";
+    let cases = [
+        (
+            "nested",
+            swapped,
+            "nested.urdf: line 8: <link> inside the <joint> of line 7: links and joints are \
+             children of <robot>",
+        ),
+        (
+            "moved",
+            src.replacen("  </joint>\n", "", 1)
+                .replace("</robot>", "  </joint>\n</robot>"),
+            "moved.urdf: line 13: <link> inside the <joint> of line 9",
+        ),
+        (
+            "twice",
+            src.replace(elbow, &format!("{elbow}\n{elbow}")),
+            "twice.urdf: line 38: joint \"elbow_joint\": already declared on line 31",
+        ),
+        (
+            "link",
+            src.replace(link_3, &format!("{link_3}{link_3}")),
+            "link.urdf: line 30: link \"link_3\": already declared on line 30",
+        ),
+        (
+            "parents",
+            src.replace(
+                elbow,
+                &format!("{elbow}\n{}", elbow.replace("\"elbow_joint\"", "\"e2\"")),
+            ),
+            "parents.urdf: line 38: joint \"e2\", <child link>: link \"link_3\" is already the \
+             child of joint \"elbow_joint\" (line 31)",
+        ),
+        (
+            "loop",
+            src.replacen("<child link=\"link_1\"/>", "<child link=\"@\"/>", 1)
+                .replacen("<child link=\"tcp\"/>", "<child link=\"link_1\"/>", 1)
+                .replacen("<child link=\"@\"/>", "<child link=\"tcp\"/>", 1),
+            "loop.urdf: line 47: joint \"wrist_2_joint\": the joints form a loop at link \"link_5\"",
+        ),
+        (
+            "roots",
+            src.replace(
+                "<link name=\"tcp\"/>",
+                "<link name=\"tcp\"/><link name=\"lone\"/>",
+            ),
+            "roots.urdf: line 68: link \"lone\": a second root link (no joint has it as its \
+             child) besides \"world\"",
+        ),
+        (
+            "after",
+            src.replace("</robot>", "")
+                .replacen("  </joint>\n", "  </joint>\n</robot>\n", 1),
+            "after.urdf: line 15: <link> after the end of the root element on line 14",
+        ),
+        (
+            "undeclared",
+            src.replace(link_3, ""),
+            "undeclared.urdf: line 31: joint \"elbow_joint\", <child link>: no link \"link_3\"",
+        ),
+    ];
+    for (name, text, want) in cases {
+        refused(&fk_on_urdf(&d, name, &text), &[want]);
+    }
 }

@@ -37,11 +37,13 @@ pub(super) struct Source {
 /// text that is not well-formed XML is refused naming the file and the line.
 pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let bad = |at: u64, e: String| {
-        let line = line_of(&text, usize::try_from(at).unwrap_or(usize::MAX));
-        Error::file(path, format!("line {line}"), e)
-    };
-    let mut reader = quick_xml::Reader::from_str(&text);
+    // quick-xml skips a byte order mark without counting it in its offsets: the reader reads
+    // the text after the marks (one or more), and the offsets into `text` are its offsets
+    // plus their length.
+    let body = text.trim_start_matches('\u{feff}');
+    let base = text.len() - body.len();
+    let bad = |at: usize, e: String| Error::file(path, format!("line {}", line_of(&text, at)), e);
+    let mut reader = quick_xml::Reader::from_str(body);
     // The names of the open elements, the robot first.
     let mut open: Vec<Vec<u8>> = Vec::new();
     // The element set aside that is open: its start and its depth.
@@ -51,12 +53,14 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     // Where the joint's `<origin>` being read began (one written as a start and an end tag).
     let mut origin_at = None;
     let mut end = None;
+    // The offsets of the robot's `<link>` and `<joint>` children, in the order written.
+    let (mut links_at, mut joints_at) = (Vec::new(), Vec::new());
     loop {
-        let at = reader.buffer_position() as usize;
+        let at = base + reader.buffer_position() as usize;
         let event = reader
             .read_event()
-            .map_err(|e| bad(reader.error_position(), e.to_string()))?;
-        let after = reader.buffer_position() as usize;
+            .map_err(|e| bad(base + reader.error_position() as usize, e.to_string()))?;
+        let after = base + reader.buffer_position() as usize;
         let (e, empty) = match &event {
             Event::Start(e) => (e, false),
             Event::Empty(e) => (e, true),
@@ -82,8 +86,33 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             _ => continue,
         };
         let name = e.name().as_ref().to_vec();
+        // XML has one root element; quick-xml reads on after its end.
+        if let (true, Some(root_end)) = (open.is_empty(), end) {
+            let msg = format!(
+                "<{}> after the end of the root element on line {}: a URDF is one <robot> \
+                 element",
+                String::from_utf8_lossy(&name),
+                line_of(&text, root_end),
+            );
+            return Err(bad(at, msg));
+        }
         if aside.is_none() {
             let parent = open.get(1).map(Vec::as_slice);
+            // A link or joint inside another one (a misplaced end tag) would be set aside, and
+            // the robot read without it.
+            if open.len() == 2 && (name == b"link" || name == b"joint") {
+                let (outer, at_outer) = match parent {
+                    Some(b"joint") => ("joint", joints_at.last()),
+                    _ => ("link", links_at.last()),
+                };
+                let msg = format!(
+                    "<{}> inside the <{outer}> of line {}: links and joints are children of \
+                     <robot>",
+                    String::from_utf8_lossy(&name),
+                    line_of(&text, at_outer.copied().unwrap_or(0)),
+                );
+                return Err(bad(at, msg));
+            }
             let kept = match open.len() {
                 0 => true,
                 1 => name == b"link" || name == b"joint",
@@ -94,7 +123,10 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 cuts.push(at..after);
             } else if !kept {
                 aside = Some((at, open.len()));
+            } else if open.len() == 1 && name == b"link" {
+                links_at.push(at);
             } else if open.len() == 1 && name == b"joint" {
+                joints_at.push(at);
                 origins.push(after..after);
             } else if open.len() == 2 && name == b"origin" {
                 let first = origins.last().is_some_and(Range::is_empty);
@@ -128,8 +160,94 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             origins.len()
         )));
     }
+    let line = |at: usize| line_of(&text, at);
+    let links: Vec<(&str, usize)> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .zip(links_at.iter().map(|&a| line(a)))
+        .collect();
+    let joints: Vec<(&str, usize)> = robot
+        .joints
+        .iter()
+        .map(|j| j.name.as_str())
+        .zip(joints_at.iter().map(|&a| line(a)))
+        .collect();
+    if let Some((at, msg)) = tree_fault(&robot, &links, &joints) {
+        return Err(Error::file(path, format!("line {at}"), msg));
+    }
     let source = Source { text, origins, end };
     Ok((robot, source))
+}
+
+/// The first fault, with its line, of the links and joints of `robot` (each with the line
+/// it starts on) as a tree: a link or joint name given twice, a joint whose parent or child
+/// is not a link of the robot, a link that is the child of two joints, a second root link or
+/// a loop. urdfdom refuses
+/// each of them; calbench would read one of the two and write back the other unchanged.
+fn tree_fault(
+    robot: &urdf_rs::Robot,
+    links: &[(&str, usize)],
+    joints: &[(&str, usize)],
+) -> Option<(usize, String)> {
+    for (what, named) in [("link", links), ("joint", joints)] {
+        for (k, (name, at)) in named.iter().enumerate() {
+            if let Some((_, first)) = named[..k].iter().find(|(n, _)| n == name) {
+                return Some((
+                    *at,
+                    format!("{what} \"{name}\": already declared on line {first}"),
+                ));
+            }
+        }
+    }
+    for (k, (j, &(name, at))) in robot.joints.iter().zip(joints).enumerate() {
+        for (key, link) in [
+            ("<parent link>", &j.parent.link),
+            ("<child link>", &j.child.link),
+        ] {
+            if !links.iter().any(|(l, _)| l == link) {
+                return Some((
+                    at,
+                    format!("joint \"{name}\", {key}: no link \"{link}\" in the URDF"),
+                ));
+            }
+        }
+        let child = &j.child.link;
+        if let Some(i) = robot.joints[..k]
+            .iter()
+            .position(|p| &p.child.link == child)
+        {
+            let (other, first) = joints[i];
+            return Some((at, format!("joint \"{name}\", <child link>: link \"{child}\" is already the child of joint \"{other}\" (line {first})")));
+        }
+    }
+    // Every link hangs from the one root link: no second root, no loop.
+    let parent = |l: &str| {
+        let k = robot.joints.iter().position(|j| j.child.link == l)?;
+        Some((robot.joints[k].parent.link.as_str(), joints[k]))
+    };
+    let mut roots = links.iter().filter(|(l, _)| parent(l).is_none());
+    if let (Some((first, _)), Some((second, at))) = (roots.next(), roots.next()) {
+        let msg = format!(
+            "link \"{second}\": a second root link (no joint has it as its child) besides \
+             \"{first}\""
+        );
+        return Some((*at, msg));
+    }
+    for &(l, _) in links {
+        let mut link = l;
+        for _ in 0..=joints.len() {
+            match parent(link) {
+                Some((up, _)) => link = up,
+                None => break,
+            }
+        }
+        if let Some((_, (name, at))) = parent(link) {
+            let msg = format!("joint \"{name}\": the joints form a loop at link \"{link}\"");
+            return Some((at, msg));
+        }
+    }
+    None
 }
 
 /// A number as a written URDF holds it: every digit, and 0 for −0.

@@ -1,6 +1,6 @@
 //! The corpora of the fuzz tests ([`super`]): the built-in robots as `calbench robots NAME`
 //! prints them, the shipped scenarios (and a robot file beside one, and a sweep), the CSVs
-//! `calbench simulate` writes; and the keys the TOML mutations rename to.
+//! `calbench simulate` writes, the shipped URDFs; and the keys the TOML mutations rename to.
 
 use std::path::PathBuf;
 use std::sync::OnceLock;
@@ -162,5 +162,23 @@ pub(super) fn csv_corpus() -> &'static (Vec<Vec<u8>>, Vec<Robot>) {
             std::fs::remove_dir_all(&dir).unwrap();
         }
         (files, robots)
+    })
+}
+
+/// The shipped URDFs, each with the tip link its chain ends at (`None`: the only leaf).
+pub(super) const URDFS: [(&str, Option<&str>); 3] = [
+    ("examples/ipa-ur10/ur10.urdf", None),
+    ("data/mukca/kuka_14/iiwa14.urdf", None),
+    ("data/mukca/panda.urdf", Some("ball_link")),
+];
+
+/// The texts of [`URDFS`].
+pub(super) fn urdf_corpus() -> &'static [Vec<u8>] {
+    static C: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
+    C.get_or_init(|| {
+        URDFS
+            .iter()
+            .map(|(f, _)| std::fs::read(root().join(f)).unwrap())
+            .collect()
     })
 }

@@ -1,5 +1,6 @@
-//! The mutations of the fuzz tests ([`super`]): edits of valid TOML and CSV files (lines,
-//! keys, values, numbers, cells, bytes, line ends) and random bytes, as proptest strategies.
+//! The mutations of the fuzz tests ([`super`]): edits of valid TOML, CSV and URDF files
+//! (lines, keys, values, numbers, cells, bytes, line ends) and random bytes, as proptest
+//! strategies.
 
 use proptest::prelude::*;
 use proptest::sample::Index;
@@ -459,6 +460,47 @@ pub(super) fn csv_mutation() -> impl Strategy<Value = Mutation> {
         1 => (any::<Index>(), any::<u8>()).prop_map(|(a, b)| Mutation::ReplaceByte(a, b)),
         2 => (any::<Index>(), any::<Index>()).prop_map(|(a, b)| Mutation::DeleteCell(a, b)),
         2 => (any::<Index>(), cell).prop_map(|(a, v)| Mutation::AddCell(a, v)),
+        1 => Just(Mutation::CrLf),
+        1 => Just(Mutation::Bom),
+    ]
+}
+
+/// Lines a URDF mutation inserts: elements out of place, comments and sections left open,
+/// numbers calbench refuses, characters of several bytes.
+const URDF_LINES: &[&str] = &[
+    "<joint name=\"j\" type=\"fixed\">",
+    "</joint>",
+    "<link name=\"link_3\"/>",
+    "<joint name=\"x\" type=\"revolute\"><parent link=\"world\"/><child link=\"x\"/></joint>",
+    "<origin xyz=\"nan 0 0\" rpy=\"0 0 inf\"/>",
+    "<axis xyz=\"0 0 0\"/>",
+    "<limit lower=\"1\" upper=\"-1\"/>",
+    "<!--",
+    "-->",
+    "<![CDATA[",
+    "]]>",
+    "<!-- <joint name=\"c\" type=\"fixed\"> -->",
+    "é日本",
+    "&amp;&lt;&#x1F4A5;&foo;",
+    "</robot>",
+    "<robot name=\"r\">",
+];
+
+/// Edits of a URDF: its lines, numbers and bytes, and [`URDF_LINES`] inserted.
+pub(super) fn urdf_mutation() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
+        2 => any::<Index>().prop_map(Mutation::DeleteLine),
+        2 => any::<Index>().prop_map(Mutation::DuplicateLine),
+        2 => (any::<Index>(), any::<Index>()).prop_map(|(a, b)| Mutation::SwapLines(a, b)),
+        4 => (any::<Index>(), prop::sample::select(NUMBERS))
+            .prop_map(|(a, v)| Mutation::ReplaceNumber(a, v.to_string())),
+        3 => (any::<Index>(), prop::sample::select(URDF_LINES))
+            .prop_map(|(a, l)| Mutation::InsertLine(a, l.to_string())),
+        1 => any::<Index>().prop_map(Mutation::Truncate),
+        1 => (any::<Index>(), prop::collection::vec(any::<u8>(), 1..8))
+            .prop_map(|(a, b)| Mutation::InsertBytes(a, b)),
+        1 => (any::<Index>(), 1..16u8).prop_map(|(a, n)| Mutation::DeleteBytes(a, n)),
+        1 => (any::<Index>(), any::<u8>()).prop_map(|(a, b)| Mutation::ReplaceByte(a, b)),
         1 => Just(Mutation::CrLf),
         1 => Just(Mutation::Bom),
     ]
