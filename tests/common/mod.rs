@@ -105,6 +105,23 @@ pub fn calbench_ok(args: &[&str]) -> Output {
     o
 }
 
+/// Runs the scenario `sc` as `n` shards (`dir/s0` …, each with the arguments `extra`) and
+/// merges them into `dir/merged`, which it returns.
+pub fn sharded_and_merged(sc: &str, dir: &Path, n: usize, extra: &[&str]) -> PathBuf {
+    let shards: Vec<PathBuf> = (0..n).map(|i| dir.join(format!("s{i}"))).collect();
+    for (i, d) in shards.iter().enumerate() {
+        let share = format!("{i}/{n}");
+        let args = ["run", sc, "--shard", &share, "--out", path_arg(d)];
+        calbench_ok(&[&args[..], extra].concat());
+    }
+    let merged = dir.join("merged");
+    let mut args = vec!["merge"];
+    args.extend(shards.iter().map(|d| path_arg(d)));
+    args.extend(["--out", path_arg(&merged)]);
+    calbench_ok(&args);
+    merged
+}
+
 /// A path as a command-line argument.
 pub fn path_arg(p: &Path) -> &str {
     p.to_str().unwrap()

@@ -3,7 +3,10 @@
 
 use std::path::Path;
 
-use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_scenario, SMALL_STUDY};
+use crate::common::{
+    calbench_ok, load_json, path_arg, read, sharded_and_merged, tmp_dir, write_scenario,
+    SMALL_STUDY,
+};
 
 fn run(sc: &str, out: &Path, extra: &[&str]) {
     let mut args = vec!["run", sc];
@@ -55,18 +58,7 @@ fn unmodelled_error_remains_after_calibration_and_is_seeded_per_trial() {
     let (rp, ru) = (rms_after(&p), rms_after(&one));
     assert!(ru > 5.0 * rp && ru > 0.02, "{ru} against {rp}");
     // The same bytes whatever the thread count or the shard split.
-    let shards = [dir.join("s0"), dir.join("s1")];
-    for (i, d) in shards.iter().enumerate() {
-        run(sc, d, &["--shard", &format!("{i}/2")]);
-    }
-    let merged = dir.join("merged");
-    calbench_ok(&[
-        "merge",
-        path_arg(&shards[0]),
-        path_arg(&shards[1]),
-        "--out",
-        path_arg(&merged),
-    ]);
+    let merged = sharded_and_merged(sc, &dir, 2, &[]);
     for f in ["summary.json", "trials.csv"] {
         assert_eq!(read(&one.join(f)), read(&two.join(f)), "{f}, threads");
         assert_eq!(read(&one.join(f)), read(&merged.join(f)), "{f}, shards");

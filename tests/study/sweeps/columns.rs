@@ -2,11 +2,10 @@
 //! union of every point's columns, each row as long as it, the cells a point lacks empty;
 //! the same bytes sharded and merged, and `compare` reads the file.
 
-use std::path::PathBuf;
-
 use super::write_small;
 use crate::common::{
-    calbench_ok, kill_once_checkpointed, path_arg, read, tmp_dir, SMALL_STUDY as SMALL,
+    calbench_ok, kill_once_checkpointed, path_arg, read, sharded_and_merged, tmp_dir,
+    SMALL_STUDY as SMALL,
 };
 
 /// Full-pose measurement with joint compliances identified at the middle point only: the
@@ -60,19 +59,7 @@ fn a_sweep_whose_points_differ_in_columns_writes_one_header_for_every_row() {
         "rows of position and of pose points"
     );
 
-    let shards: Vec<PathBuf> = (0..2).map(|i| dir.join(format!("s{i}"))).collect();
-    for (i, d) in shards.iter().enumerate() {
-        let share = format!("{i}/2");
-        calbench_ok(&["run", &sc, "--shard", &share, "--out", path_arg(d)]);
-    }
-    let merged = dir.join("merged");
-    calbench_ok(&[
-        "merge",
-        path_arg(&shards[0]),
-        path_arg(&shards[1]),
-        "--out",
-        path_arg(&merged),
-    ]);
+    let merged = sharded_and_merged(&sc, &dir, 2, &[]);
     for f in ["trials.csv", "summary.json"] {
         assert_eq!(read(&full.join(f)), read(&merged.join(f)), "{f}");
     }
