@@ -422,6 +422,14 @@ pub(super) fn toml_mutation(keys: &'static [String]) -> impl Strategy<Value = Mu
             .prop_map(|(a, v)| Mutation::ReplaceNumber(a, v.to_string())),
         2 => (any::<Index>(), any::<Index>(), key).prop_map(|(a, b, k)| Mutation::RenameKey(a, b, k)),
         3 => (any::<Index>(), toml_line(keys)).prop_map(|(a, l)| Mutation::InsertLine(a, l)),
+        6 => byte_edits(),
+    ]
+}
+
+/// The edits of a file's bytes that every kind of file gets, each as likely: cut short, bytes
+/// inserted, removed or replaced, CR LF line ends, a byte order mark.
+fn byte_edits() -> impl Strategy<Value = Mutation> {
+    prop_oneof![
         1 => any::<Index>().prop_map(Mutation::Truncate),
         1 => (any::<Index>(), prop::collection::vec(any::<u8>(), 1..8))
             .prop_map(|(a, b)| Mutation::InsertBytes(a, b)),
@@ -453,15 +461,9 @@ pub(super) fn csv_mutation() -> impl Strategy<Value = Mutation> {
                 Just(",,,".to_string()),
                 "[ -~]{0,40}",
             ]).prop_map(|(a, l)| Mutation::InsertLine(a, l)),
-        1 => any::<Index>().prop_map(Mutation::Truncate),
-        1 => (any::<Index>(), prop::collection::vec(any::<u8>(), 1..8))
-            .prop_map(|(a, b)| Mutation::InsertBytes(a, b)),
-        1 => (any::<Index>(), 1..16u8).prop_map(|(a, n)| Mutation::DeleteBytes(a, n)),
-        1 => (any::<Index>(), any::<u8>()).prop_map(|(a, b)| Mutation::ReplaceByte(a, b)),
         2 => (any::<Index>(), any::<Index>()).prop_map(|(a, b)| Mutation::DeleteCell(a, b)),
         2 => (any::<Index>(), cell).prop_map(|(a, v)| Mutation::AddCell(a, v)),
-        1 => Just(Mutation::CrLf),
-        1 => Just(Mutation::Bom),
+        6 => byte_edits(),
     ]
 }
 
@@ -496,13 +498,7 @@ pub(super) fn urdf_mutation() -> impl Strategy<Value = Mutation> {
             .prop_map(|(a, v)| Mutation::ReplaceNumber(a, v.to_string())),
         3 => (any::<Index>(), prop::sample::select(URDF_LINES))
             .prop_map(|(a, l)| Mutation::InsertLine(a, l.to_string())),
-        1 => any::<Index>().prop_map(Mutation::Truncate),
-        1 => (any::<Index>(), prop::collection::vec(any::<u8>(), 1..8))
-            .prop_map(|(a, b)| Mutation::InsertBytes(a, b)),
-        1 => (any::<Index>(), 1..16u8).prop_map(|(a, n)| Mutation::DeleteBytes(a, n)),
-        1 => (any::<Index>(), any::<u8>()).prop_map(|(a, b)| Mutation::ReplaceByte(a, b)),
-        1 => Just(Mutation::CrLf),
-        1 => Just(Mutation::Bom),
+        6 => byte_edits(),
     ]
 }
 
