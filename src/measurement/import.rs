@@ -497,7 +497,24 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                 .ok()
                 .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')))
                 .ok_or_else(|| {
-                    at_line(raw, line, &place, format!("\"{f}\" is not a finite number"))
+                    // A number in the other decimal mark: the mapping's `decimal` is the
+                    // likely cause, not the cell.
+                    let other = if plan.decimal == '.' { ',' } else { '.' };
+                    let swapped: String = f
+                        .chars()
+                        .map(|ch| if ch == other { '.' } else { ch })
+                        .collect();
+                    let hint = if f.contains(other)
+                        && swapped.parse::<Real>().is_ok_and(Real::is_finite)
+                    {
+                        format!(
+                            " with the mapping's decimal = \"{}\" (this export writes \"{other}\"?)",
+                            plan.decimal
+                        )
+                    } else {
+                        String::new()
+                    };
+                    at_line(raw, line, &place, format!("\"{f}\" is not a finite number{hint}"))
                 })
         };
         row.clear();

@@ -139,7 +139,10 @@ fn import_refuses_a_bad_cell_in_a_quoted_crlf_file_naming_line_and_column() {
     let msg = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
-        msg.contains("bad.csv: line 5, column measurement_y: \"1,5\" is not a finite number"),
+        msg.contains(
+            "bad.csv: line 5, column measurement_y: \"1,5\" is not a finite number with the \
+             mapping's decimal = \".\" (this export writes \",\"?)"
+        ),
         "{msg}"
     );
     assert!(!out.exists());
