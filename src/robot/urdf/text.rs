@@ -160,24 +160,24 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             origins.len()
         )));
     }
-    let line = |at: usize| line_of(&text, at);
-    let links: Vec<(&str, usize)> = robot
-        .links
-        .iter()
-        .map(|l| l.name.as_str())
-        .zip(links_at.iter().map(|&a| line(a)))
-        .collect();
-    let joints: Vec<(&str, usize)> = robot
-        .joints
-        .iter()
-        .map(|j| j.name.as_str())
-        .zip(joints_at.iter().map(|&a| line(a)))
-        .collect();
+    let links = with_lines(&text, &robot.links, |l| &l.name, &links_at);
+    let joints = with_lines(&text, &robot.joints, |j| &j.name, &joints_at);
     if let Some((at, msg)) = tree_fault(&robot, &links, &joints) {
         return Err(Error::file(path, format!("line {at}"), msg));
     }
     let source = Source { text, origins, end };
     Ok((robot, source))
+}
+
+/// Each item's name with the line of `text` it starts on, from its byte offset in `at`.
+fn with_lines<'a, T>(
+    text: &str,
+    items: &'a [T],
+    name: impl Fn(&'a T) -> &'a String,
+    at: &[usize],
+) -> Vec<(&'a str, usize)> {
+    let lines = at.iter().map(|&a| line_of(text, a));
+    items.iter().map(|i| name(i).as_str()).zip(lines).collect()
 }
 
 /// The first fault, with its line, of the links and joints of `robot` (each with the line
