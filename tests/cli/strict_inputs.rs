@@ -275,3 +275,67 @@ fn a_urdf_that_is_not_a_tree_is_refused_naming_the_line() {
         refused(&fk_on_urdf(&d, name, &text), &[want]);
     }
 }
+
+/// A value urdf-rs refuses inside an element calbench reads was refused naming no line
+/// (`ur10.urdf: URDF: custom: Wrong vector element count, expected 3 found 2 for [0.0 0.1273]`),
+/// and an `xyz` with a word among four numbers (`"0 zero 1 2"`) was read as the three numbers.
+/// Each is refused naming the file, the line, the joint and the element.
+#[test]
+fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
+    let d = tmp_dir("strict-urdf-values");
+    let src = std::fs::read_to_string(root().join("examples/ipa-ur10/ur10.urdf")).unwrap();
+    let limit = "<limit lower=\"-6.283185307179586\"";
+    let cases = [
+        (
+            "short",
+            src.replace("xyz=\"0.0 0.0 0.1273\"", "xyz=\"0.0 0.1273\""),
+            "short.urdf: line 26: joint \"shoulder_lift_joint\", <origin xyz>: \"0.0 0.1273\" \
+             is not three numbers",
+        ),
+        (
+            "word",
+            src.replacen("<axis xyz=\"0 0 1\"/>", "<axis xyz=\"0 zero 1 2\"/>", 1),
+            "word.urdf: line 19: joint \"shoulder_pan_joint\", <axis xyz>: \"0 zero 1 2\" is not \
+             three numbers",
+        ),
+        (
+            "limit",
+            src.replacen(limit, "<limit lower=\"minus\"", 1),
+            "limit.urdf: line 20: joint \"shoulder_pan_joint\", <limit lower>: \"minus\" is not \
+             a number",
+        ),
+        (
+            "entity",
+            src.replacen(limit, "<limit lower=\"&foo;\"", 1),
+            "entity.urdf: line 20: <limit lower>:",
+        ),
+        (
+            "twice",
+            src.replacen(limit, &format!("{limit} lower=\"0\""), 1),
+            "twice.urdf: line 20: <limit>:",
+        ),
+        (
+            "type",
+            src.replacen("type=\"revolute\"", "type=\"revolve\"", 1),
+            "type.urdf: line 15: joint \"shoulder_pan_joint\": unknown variant `revolve`",
+        ),
+        (
+            "parent",
+            src.replacen("<parent link=", "<parent name=", 1),
+            "parent.urdf: line 10: joint \"base_placement\", <parent>: missing field `link`",
+        ),
+        (
+            "origins",
+            src.replacen("</joint>", "<origin xyz=\"0 0 0\"/></joint>", 1),
+            "origins.urdf: line 9: joint \"base_placement\": duplicate field `origin`",
+        ),
+        (
+            "nameless",
+            src.replacen("<link name=\"link_2\"/>", "<link/>", 1),
+            "nameless.urdf: line 22: <link>: missing field `name`",
+        ),
+    ];
+    for (name, text, want) in cases {
+        refused(&fk_on_urdf(&d, name, &text), &[want]);
+    }
+}

@@ -13,7 +13,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use quick_xml::events::Event;
+use quick_xml::events::{BytesStart, Event};
 
 use crate::error::{line_of, Error, Result};
 use crate::numeric::{matrix_rpy, Frame, Real};
@@ -31,6 +31,20 @@ pub(super) struct Source {
     origins: Vec<Range<usize>>,
     /// The offset of the robot's end tag.
     end: usize,
+}
+
+/// A `<link>` or `<joint>` of the robot, where it is written: what a refusal of urdf-rs is
+/// traced to.
+struct Part {
+    /// `link` or `joint`.
+    kind: String,
+    /// Its `name` attribute.
+    name: String,
+    /// The element, and its start tag.
+    span: Range<usize>,
+    tag: Range<usize>,
+    /// A joint's children that calbench reads, each with its name.
+    children: Vec<(Range<usize>, String)>,
 }
 
 /// Reads the URDF at `path`: what calbench reads of it as urdf-rs parses it, and its text. A
@@ -53,8 +67,9 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     // Where the joint's `<origin>` being read began (one written as a start and an end tag).
     let mut origin_at = None;
     let mut end = None;
-    // The offsets of the robot's `<link>` and `<joint>` children, in the order written.
-    let (mut links_at, mut joints_at) = (Vec::new(), Vec::new());
+    // The robot's start tag, and its links and joints as written.
+    let mut robot_tag = 0..0;
+    let mut parts: Vec<Part> = Vec::new();
     loop {
         let at = base + reader.buffer_position() as usize;
         let event = reader
@@ -66,11 +81,21 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             Event::Empty(e) => (e, true),
             Event::End(_) => {
                 open.pop();
-                if let Some((start, depth)) = aside {
-                    if depth == open.len() {
+                match aside {
+                    Some((start, depth)) if depth == open.len() => {
                         cuts.push(start..after);
                         aside = None;
                     }
+                    Some(_) => {}
+                    None => match (open.len(), parts.last_mut()) {
+                        (1, Some(part)) => part.span.end = after,
+                        (2, Some(part)) => {
+                            if let Some((span, _)) = part.children.last_mut() {
+                                span.end = after;
+                            }
+                        }
+                        _ => {}
+                    },
                 }
                 if open.len() == 2 && aside.is_none() {
                     if let (Some(s), Some(o)) = (origin_at.take(), origins.last_mut()) {
@@ -101,15 +126,12 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             // A link or joint inside another one (a misplaced end tag) would be set aside, and
             // the robot read without it.
             if open.len() == 2 && (name == b"link" || name == b"joint") {
-                let (outer, at_outer) = match parent {
-                    Some(b"joint") => ("joint", joints_at.last()),
-                    _ => ("link", links_at.last()),
-                };
+                let outer = parts.last().expect("a link or joint is open");
                 let msg = format!(
-                    "<{}> inside the <{outer}> of line {}: links and joints are children of \
-                     <robot>",
+                    "<{}> inside the <{}> of line {}: links and joints are children of <robot>",
                     String::from_utf8_lossy(&name),
-                    line_of(&text, at_outer.copied().unwrap_or(0)),
+                    outer.kind,
+                    line_of(&text, outer.tag.start),
                 );
                 return Err(bad(at, msg));
             }
@@ -119,14 +141,31 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 2 => parent == Some(b"joint") && JOINT_READS.contains(&name.as_slice()),
                 _ => true,
             };
+            if kept {
+                let part = parts.last().filter(|_| open.len() == 2);
+                check_attributes(e, part).map_err(|msg| bad(at, msg))?;
+                match open.len() {
+                    0 => robot_tag = at..after,
+                    1 => parts.push(Part {
+                        kind: String::from_utf8_lossy(&name).into_owned(),
+                        name: attribute(e, b"name").unwrap_or_default(),
+                        span: at..after,
+                        tag: at..after,
+                        children: Vec::new(),
+                    }),
+                    2 => {
+                        let child = String::from_utf8_lossy(&name).into_owned();
+                        let part = parts.last_mut().expect("a joint is open");
+                        part.children.push((at..after, child));
+                    }
+                    _ => {}
+                }
+            }
             if !kept && empty {
                 cuts.push(at..after);
             } else if !kept {
                 aside = Some((at, open.len()));
-            } else if open.len() == 1 && name == b"link" {
-                links_at.push(at);
             } else if open.len() == 1 && name == b"joint" {
-                joints_at.push(at);
                 origins.push(after..after);
             } else if open.len() == 2 && name == b"origin" {
                 let first = origins.last().is_some_and(Range::is_empty);
@@ -143,15 +182,13 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     }
     // A text without a root element is refused by urdf-rs.
     let end = end.unwrap_or(text.len());
-    let mut read = String::with_capacity(text.len());
-    let mut from = 0;
-    for c in &cuts {
-        read.push_str(&text[from..c.start]);
-        from = c.end;
-    }
-    read.push_str(&text[from..]);
-    let robot =
-        urdf_rs::read_from_string(&read).map_err(|e| Error::file(path, "URDF", e.to_string()))?;
+    let read = without(&text, &cuts, 0..text.len());
+    let robot = urdf_rs::read_from_string(&read).map_err(|e| {
+        match refused_part(&text, &cuts, robot_tag, &parts) {
+            Some((at, msg)) => bad(at, msg),
+            None => Error::file(path, "URDF", e.to_string()),
+        }
+    })?;
     if robot.joints.len() != origins.len() {
         return Err(Error::Compute(format!(
             "{}: urdf-rs read {} joints where the text has {}",
@@ -160,8 +197,8 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             origins.len()
         )));
     }
-    let links = with_lines(&text, &robot.links, |l| &l.name, &links_at);
-    let joints = with_lines(&text, &robot.joints, |j| &j.name, &joints_at);
+    let links = with_lines(&text, robot.links.iter().map(|l| &l.name), &parts, "link");
+    let joints = with_lines(&text, robot.joints.iter().map(|j| &j.name), &parts, "joint");
     if let Some((at, msg)) = tree_fault(&robot, &links, &joints) {
         return Err(Error::file(path, format!("line {at}"), msg));
     }
@@ -169,15 +206,122 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     Ok((robot, source))
 }
 
-/// Each item's name with the line of `text` it starts on, from its byte offset in `at`.
-fn with_lines<'a, T>(
+/// Each of `names`, the names urdf-rs read of the `kind` elements (`link` or `joint`), with the
+/// line of `text` its element starts on.
+fn with_lines<'a>(
     text: &str,
-    items: &'a [T],
-    name: impl Fn(&'a T) -> &'a String,
-    at: &[usize],
+    names: impl Iterator<Item = &'a String>,
+    parts: &[Part],
+    kind: &str,
 ) -> Vec<(&'a str, usize)> {
-    let lines = at.iter().map(|&a| line_of(text, a));
-    items.iter().map(|i| name(i).as_str()).zip(lines).collect()
+    let lines = parts.iter().filter(|p| p.kind == kind);
+    let lines = lines.map(|p| line_of(text, p.tag.start));
+    names.map(String::as_str).zip(lines).collect()
+}
+
+/// The text of `span` of `text` without the `cuts` (sorted, not overlapping) that lie in it.
+fn without(text: &str, cuts: &[Range<usize>], span: Range<usize>) -> String {
+    let mut kept = String::with_capacity(span.len());
+    let mut from = span.start;
+    for c in cuts.iter().filter(|c| span.contains(&c.start)) {
+        kept.push_str(&text[from..c.start]);
+        from = c.end;
+    }
+    kept.push_str(&text[from..span.end]);
+    kept
+}
+
+/// The value of the attribute `key` of `e`, unescaped.
+fn attribute(e: &BytesStart, key: &[u8]) -> Option<String> {
+    let a = e.try_get_attribute(key).ok()??;
+    a.unescape_value().ok().map(|v| v.into_owned())
+}
+
+/// Refuses an element calbench reads whose attributes urdf-rs would misread or refuse
+/// without naming where: an attribute written twice, an entity that is not XML's, a
+/// joint's `<origin>` or `<axis>` whose `xyz` or `rpy` is not three numbers (urdf-rs reads
+/// the numbers among the words, so that `"0 zero 1 2"` would be the vector (0, 1, 2)) and a
+/// `<limit>` value that is not a number. `joint` is the joint an element at depth 2 belongs
+/// to.
+fn check_attributes(e: &BytesStart, joint: Option<&Part>) -> std::result::Result<(), String> {
+    let element = String::from_utf8_lossy(e.name().as_ref()).into_owned();
+    for a in e.attributes() {
+        let a = a.map_err(|err| format!("<{element}>: {err}"))?;
+        let key = String::from_utf8_lossy(a.key.as_ref()).into_owned();
+        let value = a
+            .unescape_value()
+            .map_err(|err| format!("<{element} {key}>: {err}"))?;
+        let Some(joint) = joint else { continue };
+        let numbers = match (element.as_str(), key.as_str()) {
+            ("origin" | "axis", "xyz") | ("origin", "rpy") => 3,
+            ("limit", "lower" | "upper" | "effort" | "velocity") => 1,
+            _ => continue,
+        };
+        let words: Vec<&str> = value.split_whitespace().collect();
+        if words.len() != numbers || words.iter().any(|w| w.parse::<f64>().is_err()) {
+            let what = if numbers == 1 {
+                "a number"
+            } else {
+                "three numbers"
+            };
+            return Err(format!(
+                "joint \"{}\", <{element} {key}>: \"{value}\" is not {what}",
+                joint.name
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Where urdf-rs's refusal of the text lies, which it does not say: the first link or joint
+/// it refuses read alone in the robot's element, and of a joint the first child it refuses
+/// read alone in the joint (beside a stand-in parent and child). The offset of that element
+/// and the refusal, or `None` when urdf-rs refuses the robot's start tag itself.
+fn refused_part(
+    text: &str,
+    cuts: &[Range<usize>],
+    robot_tag: Range<usize>,
+    parts: &[Part],
+) -> Option<(usize, String)> {
+    let refusal = |body: &str| {
+        let doc = format!("{}{body}</robot>", &text[robot_tag.clone()]);
+        let e = urdf_rs::read_from_string(&doc).err()?;
+        Some(e.to_string().trim_start_matches("custom: ").to_string())
+    };
+    if robot_tag.is_empty() || refusal("").is_some() {
+        return None;
+    }
+    let part = parts
+        .iter()
+        .find_map(|p| Some((p, refusal(&without(text, cuts, p.span.clone()))?)))?;
+    let (p, msg) = part;
+    let whole = match p.name.as_str() {
+        "" => format!("<{}>: {msg}", p.kind),
+        name => format!("{} \"{name}\": {msg}", p.kind),
+    };
+    if p.kind != "joint" || p.tag == p.span {
+        return Some((p.tag.start, whole));
+    }
+    let alone = |child: Option<(&str, String)>| {
+        let mut body = text[p.tag.clone()].to_string();
+        for stand_in in ["parent", "child"] {
+            if child.as_ref().is_none_or(|(name, _)| *name != stand_in) {
+                body.push_str(&format!("<{stand_in} link=\"{stand_in}\"/>"));
+            }
+        }
+        body.push_str(&child.map(|(_, text)| text).unwrap_or_default());
+        refusal(&format!("{body}</joint>"))
+    };
+    if alone(None).is_some() {
+        return Some((p.tag.start, whole));
+    }
+    p.children
+        .iter()
+        .find_map(|(span, name)| {
+            let msg = alone(Some((name, without(text, cuts, span.clone()))))?;
+            Some((span.start, format!("joint \"{}\", <{name}>: {msg}", p.name)))
+        })
+        .or(Some((p.tag.start, whole)))
 }
 
 /// The first fault, with its line, of the links and joints of `robot` (each with the line
