@@ -429,6 +429,10 @@ def test_run_refuses_bad_scenarios_naming_the_key(root):
     with pytest.raises(calbench.FileError, match=r"(?s)<scenario dict>.*calibration.count"):
         calbench.run(sc, trials=1)
     sc = load_scenario(root)
+    sc["calibration"]["count"] = 3
+    with pytest.raises(calbench.FileError, match=r"calibration.count: 3 poses give 9 readings"):
+        calbench.run(sc, trials=1)
+    sc = load_scenario(root)
     sc["bogus"] = 1
     with pytest.raises(calbench.Error, match="bogus"):
         calbench.run(sc, trials=1)

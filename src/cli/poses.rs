@@ -99,7 +99,7 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         (false, false) => plan::ScoredModel::Plain,
     };
     // The kinematic parameters the scenario identifies, as its study's optimisers see them.
-    let (identified, _) = plan::study_params(&sc, &nominal, measure)?;
+    let (identified, _) = plan::study_params(&sc, &nominal)?;
     let (model, params, separation) =
         plan::optimiser_model(&nominal, measure, &pool, scored, &identified);
     let mut opts = SelectOptions::new(count);

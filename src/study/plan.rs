@@ -10,7 +10,7 @@ use crate::numeric::rng;
 use crate::numeric::{Frame, Real};
 use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::robot::identifiability::identifiable_generic;
-use crate::robot::param_sets::{ends, full_params, identified_params};
+use crate::robot::param_sets::{ends, identified_params};
 use crate::robot::{Param, Robot};
 use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::sag::Compliance;
@@ -190,26 +190,17 @@ pub fn optimiser_model(
     (model, params, sep)
 }
 
-/// The parameters `scenario` identifies (`identification.params`): [`identified_params`],
-/// [`full_params`] or the listed names in flat-vector order. A list the data cannot all
+/// The parameters `scenario` identifies ([`Scenario::kinematic_params`]). A list the data cannot all
 /// determine is refused when a method of the scenario needs full rank
 /// ([`crate::identify::Method::tolerates_rank_deficiency`]), naming the method and the
 /// undetermined parameters. Also returns the parameters that pivoted QR leaves over (empty
 /// for `"identifiable"`).
-pub fn study_params(
-    scenario: &Scenario,
-    robot: &Robot,
-    measure: Measure,
-) -> Result<(Vec<Param>, Vec<Param>)> {
-    let with_base = scenario.registration == Registration::Identify;
-    let mut params = match &scenario.identification.params {
-        ParamSelection::Identifiable => {
-            return Ok((identified_params(robot, measure, with_base), Vec::new()))
-        }
-        ParamSelection::All => full_params(robot, measure, with_base),
-        ParamSelection::List(names) => names.iter().filter_map(|n| Param::parse(n)).collect(),
-    };
-    params.sort_by_key(|p| p.index(robot.dof()));
+pub fn study_params(scenario: &Scenario, robot: &Robot) -> Result<(Vec<Param>, Vec<Param>)> {
+    let measure = scenario.tracker.measure.measure();
+    let params = scenario.kinematic_params(robot);
+    if scenario.identification.params == ParamSelection::Identifiable {
+        return Ok((params, Vec::new()));
+    }
     let determined = identifiable_generic(robot, &params, measure);
     let undetermined: Vec<Param> = params
         .iter()
@@ -278,7 +269,7 @@ impl Study {
         let nominal = scenario.robot()?;
         let measure = scenario.tracker.measure.measure();
         let with_base = scenario.registration == Registration::Identify;
-        let (mut params, undetermined) = study_params(&scenario, &nominal, measure)?;
+        let (mut params, undetermined) = study_params(&scenario, &nominal)?;
         // The kinematic parameters: what the pose optimisers and the Cramér–Rao bound see.
         let kinematic = params.clone();
         params.extend(

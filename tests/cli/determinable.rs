@@ -4,7 +4,8 @@
 //! no bound and the same parameter has its η again.
 
 use crate::common::{
-    calbench_ok, load_json, path_arg, read, threads_and_merged_shards, tmp_dir, write_scenario,
+    calbench, calbench_ok, load_json, path_arg, read, refused, threads_and_merged_shards, tmp_dir,
+    write_scenario,
 };
 
 /// LS on random poses with three injected errors: two far above the tracker noise, and d4 at
@@ -128,7 +129,7 @@ fn a_parameter_that_is_not_estimable_is_not_determinable_whatever_its_error() {
             "[identification]\nparams = [\"a1\", \"a2\", \"d2\", \"d3\", \"alpha3\"]\n\
              [[methods]]\nname = \"lm\"",
         );
-    let sc = write_scenario(&dir, "s.toml", &text);
+    let sc = write_scenario(&dir, "s", &text);
     let out = dir.join("out");
     calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&out)]);
     let e = load_json(&out.join("summary.json"))["results"][0].clone();
@@ -210,7 +211,7 @@ name = "lm"
         values.join("\n"),
         list.join(", ")
     );
-    let sc = write_scenario(&dir, "s.toml", &text);
+    let sc = write_scenario(&dir, "s", &text);
     let out = dir.join("out");
     calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&out)]);
     let e = load_json(&out.join("summary.json"))["results"][0].clone();
@@ -235,4 +236,58 @@ name = "lm"
         eta.contains_key("alpha2") && eta.contains_key("beta2"),
         "{eta:?}"
     );
+}
+
+/// Calibration sets of fewer readings than parameters ran, every trial of every method a
+/// failure (`rank-deficient` before any iteration), and wrote a summary of failures. They are
+/// refused when the scenario is read, naming the file, the line, the key (or the sweep point)
+/// and the poses needed; nothing is written.
+#[test]
+fn a_set_of_fewer_readings_than_parameters_is_refused_when_read() {
+    let dir = tmp_dir("determinable-few");
+    let study = STUDY
+        .replace("NOISE", "")
+        .replace("[errors.values]\na2 = 0.5\nalpha3 = 0.002\nd4 = 1e-6\n", "");
+    let study = study.replace("kind = \"values\"", "kind = \"paper\"");
+    let poses = dir.join("poses.csv");
+    std::fs::write(
+        &poses,
+        "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,10,10,10,10,10\n",
+    )
+    .unwrap();
+    let cases = [
+        (
+            study.replace("count = 25", "count = 7"),
+            "s.toml: line 18, calibration.count: 7 poses give 21 readings for the 24 parameters \
+             identified: at least 8 poses are needed",
+        ),
+        (
+            study.replace("count = 25", "count = 3\npayloads_kg = [0.0, 50.0]"),
+            "s.toml: line 18, calibration.count: 3 poses under 2 payloads give 18 readings for \
+             the 24 parameters identified: at least 4 poses are needed",
+        ),
+        (
+            study.replace(
+                "strategies = [\"random\"]",
+                "strategies = [\"random\", \"file\"]\nposes_file = \"poses.csv\"",
+            ),
+            "s.toml: line 20, calibration.poses_file: 2 poses give 6 readings",
+        ),
+        (
+            format!("{study}[sweep]\nkey = \"calibration.count\"\nvalues = [25, 5]\n"),
+            "s.toml: sweep (calibration.count = 5): calibration.count: 5 poses give 15 readings",
+        ),
+    ];
+    for (i, (text, want)) in cases.into_iter().enumerate() {
+        let sc = write_scenario(&dir, "s", &text);
+        let out = dir.join(format!("out{i}"));
+        refused(
+            &calbench(&["run", path_arg(&sc), "--out", path_arg(&out)]),
+            &[want],
+        );
+        assert!(!out.exists(), "case {i} wrote {}", out.display());
+    }
+    // Eight poses give the 24 readings the 24 parameters need.
+    let sc = write_scenario(&dir, "s", &study.replace("count = 25", "count = 8"));
+    calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&dir.join("eight"))]);
 }

@@ -8,28 +8,13 @@
 //! - `check` on a summary without results, saying what is missing.
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 use std::time::{Duration, Instant};
 
-use crate::common::{calbench, path_arg as path};
+use crate::common::{calbench, path_arg as path, refused};
 
 /// A fresh folder for one test.
 fn tmp(name: &str) -> crate::common::TmpDir {
     crate::common::tmp_dir(&format!("refusals-{name}"))
-}
-
-/// The message of a refusal (non-zero exit, no panic, nothing on stdout), which must hold
-/// every one of `words`.
-fn refused(o: &Output, words: &[&str]) -> String {
-    let err = String::from_utf8_lossy(&o.stderr).to_string();
-    let out = String::from_utf8_lossy(&o.stdout);
-    assert!(!o.status.success(), "accepted: {out}{err}");
-    assert_ne!(o.status.code(), Some(101), "panicked: {err}");
-    assert!(err.starts_with("error: "), "{err}");
-    for w in words {
-        assert!(err.contains(w), "`{w}` missing from: {err}");
-    }
-    err
 }
 
 /// The built-in TX60 as a robot file, with `edit` applied to the text.

@@ -4,21 +4,7 @@
 use std::path::Path;
 use std::process::Output;
 
-use crate::common::{calbench, load_json, root, tmp_dir};
-
-/// Fails unless `o` is a refusal (non-zero exit, no panic) whose message has every `words`.
-fn refused(o: &Output, words: &[&str]) {
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&o.stdout),
-        String::from_utf8_lossy(&o.stderr)
-    );
-    assert!(!o.status.success(), "accepted: {text}");
-    assert_ne!(o.status.code(), Some(101), "panicked: {text}");
-    for w in words {
-        assert!(text.contains(w), "`{w}` missing from: {text}");
-    }
-}
+use crate::common::{calbench, load_json, refused, root, tmp_dir};
 
 #[test]
 fn fk_refuses_a_length_that_overflows_in_mm() {

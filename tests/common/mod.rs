@@ -94,6 +94,20 @@ pub fn calbench(args: &[&str]) -> Output {
     bin().args(args).output().unwrap()
 }
 
+/// The message of a refusal (non-zero exit, no panic, nothing on stdout), which must hold
+/// every one of `words`.
+pub fn refused(o: &Output, words: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(!o.status.success(), "accepted: {out}{err}");
+    assert_ne!(o.status.code(), Some(101), "panicked: {err}");
+    assert!(err.starts_with("error: "), "{err}");
+    for w in words {
+        assert!(err.contains(w), "`{w}` missing from: {err}");
+    }
+    err
+}
+
 /// Runs `calbench ARGS` and fails, with its standard error, unless it succeeds.
 pub fn calbench_ok(args: &[&str]) -> Output {
     let o = calbench(args);

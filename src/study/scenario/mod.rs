@@ -8,6 +8,7 @@
 //! the whole. Sweeps and command-line overrides edit the parsed TOML and check it again, so a
 //! swept value is held to the same rules as a written one.
 
+mod params;
 mod report;
 mod sections;
 mod sweep;
@@ -629,6 +630,7 @@ impl Scenario {
                 ));
             }
         }
+        keyed(scenario.check_readings(&robot))?;
         if let Some(sw) = &scenario.sweep {
             for point in sw.points() {
                 scenario.plan(&point)?;

@@ -1,0 +1,61 @@
+//! What a scenario identifies, and whether its calibration sets can determine it.
+
+use crate::error::{Error, Result};
+use crate::robot::param_sets::{full_params, identified_params};
+use crate::robot::{Param, Robot};
+use crate::sim::poses::read_pose_list;
+use crate::sim::settings::ParamSelection;
+
+use super::{PoseStrategy, Registration, Scenario};
+
+impl Scenario {
+    /// The kinematic parameters the scenario identifies on `robot` (`identification.params`):
+    /// [`identified_params`], [`full_params`] or the listed names in flat-vector order, with
+    /// the base frame's six when the registration is identified with the robot.
+    pub fn kinematic_params(&self, robot: &Robot) -> Vec<Param> {
+        let measure = self.tracker.measure.measure();
+        let with_base = self.registration == Registration::Identify;
+        let mut params = match &self.identification.params {
+            ParamSelection::Identifiable => return identified_params(robot, measure, with_base),
+            ParamSelection::All => full_params(robot, measure, with_base),
+            ParamSelection::List(names) => names.iter().filter_map(|n| Param::parse(n)).collect(),
+        };
+        params.sort_by_key(|p| p.index(robot.dof()));
+        params
+    }
+
+    /// Refuses calibration sets that give fewer readings than the scenario identifies
+    /// parameters on `robot` (the kinematic ones and `identification.compliance`): every
+    /// trial's identification would end rank-deficient before its first iteration, as
+    /// `identify` refuses such data. The key is `calibration.count`, or
+    /// `calibration.poses_file` for a pose list of too few rows.
+    pub(super) fn check_readings(&self, robot: &Robot) -> Result<()> {
+        let compliance = self.identification.compliance.params(robot, "")?;
+        let params = self.kinematic_params(robot).len() + compliance.len();
+        let c = &self.calibration;
+        let loads = c.payloads_kg.as_ref().map_or(1, Vec::len);
+        let per_pose = loads * self.tracker.measure.measure().rows();
+        for s in &c.strategies {
+            let (key, poses) = match s {
+                PoseStrategy::File(path) => {
+                    ("calibration.poses_file", read_pose_list(path, robot)?.len())
+                }
+                _ => ("calibration.count", c.count),
+            };
+            let readings = poses * per_pose;
+            if readings < params {
+                let under = match loads {
+                    1 => String::new(),
+                    n => format!(" under {n} payloads"),
+                };
+                let msg = format!(
+                    "{poses} poses{under} give {readings} readings for the {params} parameters \
+                     identified: at least {} poses are needed",
+                    params.div_ceil(per_pose)
+                );
+                return Err(Error::setting(key, msg));
+            }
+        }
+        Ok(())
+    }
+}
