@@ -66,14 +66,28 @@ pub fn read(path: &Path) -> Result<urdf_rs::Robot> {
 /// file's are after their conversion to mm and rad ([`to_internal`]): the origin's `xyz`
 /// lengths (m) within ±1 km and `rpy` angles within one turn, a moving joint's axis finite,
 /// and its limits (but a continuous joint's, which calbench does not read) within range. A
-/// refusal names the joint and the element.
-fn check_numbers(j: &urdf_rs::Joint, kind: Option<JointType>) -> std::result::Result<(), String> {
-    let at = |what: &str, m: String| format!("joint \"{}\", {what}: {m}", j.name);
+/// refusal names the joint and the element, and is returned with the element's name (for its
+/// line).
+fn check_numbers(
+    j: &urdf_rs::Joint,
+    kind: Option<JointType>,
+) -> std::result::Result<(), (&'static str, String)> {
+    let at = |element: &'static str, key: &str, m: String| {
+        let key = if key.is_empty() {
+            String::new()
+        } else {
+            format!(" {key}")
+        };
+        (
+            element,
+            format!("joint \"{}\", <{element}{key}>: {m}", j.name),
+        )
+    };
     for &v in j.origin.xyz.iter() {
-        to_internal(Quantity::Length, v, 1000.0, "m").map_err(|m| at("<origin xyz>", m))?;
+        to_internal(Quantity::Length, v, 1000.0, "m").map_err(|m| at("origin", "xyz", m))?;
     }
     for &v in j.origin.rpy.iter() {
-        to_internal(Quantity::Angle, v, 1.0, "rad").map_err(|m| at("<origin rpy>", m))?;
+        to_internal(Quantity::Angle, v, 1.0, "rad").map_err(|m| at("origin", "rpy", m))?;
     }
     let Some(kind) = kind else { return Ok(()) };
     let a = &j.axis.xyz;
@@ -82,7 +96,7 @@ fn check_numbers(j: &urdf_rs::Joint, kind: Option<JointType>) -> std::result::Re
             "must be a direction of finite length, got {:?}",
             [a[0], a[1], a[2]]
         );
-        return Err(at("<axis xyz>", msg));
+        return Err(at("axis", "xyz", msg));
     }
     if j.joint_type != urdf_rs::JointType::Continuous {
         let (quantity, factor, unit) = match kind {
@@ -90,7 +104,7 @@ fn check_numbers(j: &urdf_rs::Joint, kind: Option<JointType>) -> std::result::Re
             JointType::Revolute => (Quantity::JointAngle, 1.0, "rad"),
         };
         for v in [j.limit.lower, j.limit.upper] {
-            to_internal(quantity, v, factor, unit).map_err(|m| at("<limit>", m))?;
+            to_internal(quantity, v, factor, unit).map_err(|m| at("limit", "", m))?;
         }
     }
     Ok(())
@@ -257,13 +271,17 @@ impl UrdfRobot {
         let mut joints = Vec::new();
         for &i in &chain {
             let j = &js[i];
-            let kind = moving(j).map_err(|e| bad(e.to_string()))?;
-            check_numbers(j, kind).map_err(bad)?;
+            // A refusal of the joint's `element` (its start tag for `joint`), on its line.
+            let at = |element: &str, msg: String| {
+                Error::file(path, format!("line {}", text.line(i, element)), msg)
+            };
+            let kind = moving(j).map_err(|e| at("joint", e.to_string()))?;
+            check_numbers(j, kind).map_err(|(element, msg)| at(element, msg))?;
             w = w.compose(&origin(j));
             if let Some(kind) = kind {
                 let a = Vec3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
                 if a.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
-                    return Err(bad(format!("joint \"{}\": zero axis", j.name)));
+                    return Err(at("axis", format!("joint \"{}\": zero axis", j.name)));
                 }
                 let scale = if kind == JointType::Prismatic {
                     1000.0
@@ -276,10 +294,13 @@ impl UrdfRobot {
                     (j.limit.lower * scale, j.limit.upper * scale)
                 };
                 if limits.0.partial_cmp(&limits.1) != Some(std::cmp::Ordering::Less) {
-                    return Err(bad(format!(
-                        "joint \"{}\": limits [{}, {}] are not an interval",
-                        j.name, j.limit.lower, j.limit.upper
-                    )));
+                    return Err(at(
+                        "limit",
+                        format!(
+                            "joint \"{}\": limits [{}, {}] are not an interval",
+                            j.name, j.limit.lower, j.limit.upper
+                        ),
+                    ));
                 }
                 joints.push(Joint { kind, limits });
                 lines.push((w, w.rot * a.normalize()));

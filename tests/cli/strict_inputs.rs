@@ -70,6 +70,7 @@ fn fk_on_urdf(d: &Path, name: &str, text: &str) -> Output {
     o
 }
 
+/// Each refusal names the line of the element (it named `URDF` and no line).
 #[test]
 fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     let d = tmp_dir("strict-urdf");
@@ -83,7 +84,7 @@ fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     refused(
         &o,
         &[
-            "nan.urdf: URDF: joint \"tool_fixed\", <origin xyz>: must be a finite length",
+            "nan.urdf: line 72: joint \"tool_fixed\", <origin xyz>: must be a finite length",
             "got NaN m",
         ],
     );
@@ -91,7 +92,7 @@ fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     refused(
         &o,
         &[
-            "huge.urdf: URDF: joint \"tool_fixed\", <origin xyz>:",
+            "huge.urdf: line 72: joint \"tool_fixed\", <origin xyz>:",
             "got 1e308 m, which is inf mm",
         ],
     );
@@ -103,7 +104,7 @@ fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     refused(
         &o,
         &[
-            "rpy.urdf: URDF: joint \"shoulder_lift_joint\", <origin rpy>:",
+            "rpy.urdf: line 26: joint \"shoulder_lift_joint\", <origin rpy>:",
             "got inf rad",
         ],
     );
@@ -111,7 +112,7 @@ fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     refused(
         &o,
         &[
-            "axis.urdf: URDF: joint \"shoulder_pan_joint\", <axis xyz>:",
+            "axis.urdf: line 19: joint \"shoulder_pan_joint\", <axis xyz>:",
             "finite length",
         ],
     );
@@ -119,7 +120,7 @@ fn a_urdf_with_a_number_out_of_range_is_refused_naming_the_joint() {
     refused(
         &o,
         &[
-            "limit.urdf: URDF: joint \"shoulder_pan_joint\", <limit>:",
+            "limit.urdf: line 20: joint \"shoulder_pan_joint\", <limit>:",
             "got 1000000000.0 rad",
         ],
     );

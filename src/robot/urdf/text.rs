@@ -21,20 +21,20 @@ use crate::numeric::{matrix_rpy, Frame, Real};
 /// The children of a `<joint>` that calbench reads.
 const JOINT_READS: [&[u8]; 5] = [b"origin", b"parent", b"child", b"axis", b"limit"];
 
-/// A URDF's text and where each of its joints' `<origin>` is written.
+/// A URDF's text and where each of its joints and their elements are written.
 #[derive(Clone, Debug)]
 pub(super) struct Source {
     /// The file's text as read.
     text: String,
-    /// Per `<joint>` child of the robot, in the order written: the span of its `<origin>`,
-    /// or, when it has none, an empty span just after its start tag.
-    origins: Vec<Range<usize>>,
+    /// The `<joint>` children of the robot, in the order written (urdf-rs's order).
+    joints: Vec<Part>,
     /// The offset of the robot's end tag.
     end: usize,
 }
 
 /// A `<link>` or `<joint>` of the robot, where it is written: what a refusal of urdf-rs is
-/// traced to.
+/// traced to, and a joint's elements are written over.
+#[derive(Clone, Debug)]
 struct Part {
     /// `link` or `joint`.
     kind: String,
@@ -63,9 +63,6 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     // The element set aside that is open: its start and its depth.
     let mut aside: Option<(usize, usize)> = None;
     let mut cuts: Vec<Range<usize>> = Vec::new();
-    let mut origins = Vec::new();
-    // Where the joint's `<origin>` being read began (one written as a start and an end tag).
-    let mut origin_at = None;
     let mut end = None;
     // The robot's start tag, and its links and joints as written.
     let mut robot_tag = 0..0;
@@ -96,11 +93,6 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                         }
                         _ => {}
                     },
-                }
-                if open.len() == 2 && aside.is_none() {
-                    if let (Some(s), Some(o)) = (origin_at.take(), origins.last_mut()) {
-                        *o = s..after;
-                    }
                 }
                 if open.is_empty() {
                     end = Some(at);
@@ -165,15 +157,6 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 cuts.push(at..after);
             } else if !kept {
                 aside = Some((at, open.len()));
-            } else if open.len() == 1 && name == b"joint" {
-                origins.push(after..after);
-            } else if open.len() == 2 && name == b"origin" {
-                let first = origins.last().is_some_and(Range::is_empty);
-                match (first, empty) {
-                    (true, true) => *origins.last_mut().expect("a joint is open") = at..after,
-                    (true, false) => origin_at = Some(at),
-                    _ => {}
-                }
             }
         }
         if !empty {
@@ -189,12 +172,12 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             None => Error::file(path, "URDF", e.to_string()),
         }
     })?;
-    if robot.joints.len() != origins.len() {
+    let written = parts.iter().filter(|p| p.kind == "joint").count();
+    if robot.joints.len() != written {
         return Err(Error::Compute(format!(
-            "{}: urdf-rs read {} joints where the text has {}",
+            "{}: urdf-rs read {} joints where the text has {written}",
             path.display(),
             robot.joints.len(),
-            origins.len()
         )));
     }
     let links = with_lines(&text, robot.links.iter().map(|l| &l.name), &parts, "link");
@@ -202,7 +185,8 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
     if let Some((at, msg)) = tree_fault(&robot, &links, &joints) {
         return Err(Error::file(path, format!("line {at}"), msg));
     }
-    let source = Source { text, origins, end };
+    let joints = parts.into_iter().filter(|p| p.kind == "joint").collect();
+    let source = Source { text, joints, end };
     Ok((robot, source))
 }
 
@@ -422,6 +406,22 @@ fn indent_at(text: &str, at: usize) -> &str {
 }
 
 impl Source {
+    /// The span of the `<origin>` of the `i`-th joint, or, when it has none, an empty span
+    /// just after its start tag.
+    fn origin(&self, i: usize) -> Range<usize> {
+        let j = &self.joints[i];
+        let origin = j.children.iter().find(|(_, name)| name == "origin");
+        origin.map_or(j.tag.end..j.tag.end, |(span, _)| span.clone())
+    }
+
+    /// The line of the `i`-th joint's first `element` (`origin`, `axis`, `limit`), or of the
+    /// joint's start tag when it has none.
+    pub(super) fn line(&self, i: usize, element: &str) -> usize {
+        let j = &self.joints[i];
+        let at = j.children.iter().find(|(_, name)| name == element);
+        line_of(&self.text, at.map_or(j.tag.start, |(span, _)| span.start))
+    }
+
     /// The text with the `<origin>` of the `i`-th joint set to each `(i, frame)` of
     /// `origins` (added after the joint's start tag where it has none) and `added`, whole
     /// lines of elements, written before the robot's end tag.
@@ -430,7 +430,7 @@ impl Source {
         let mut edits: Vec<(Range<usize>, String)> = origins
             .iter()
             .map(|(i, f)| {
-                let span = self.origins[*i].clone();
+                let span = self.origin(*i);
                 let element = origin_element(f);
                 if span.is_empty() {
                     let inner = format!("{}  ", indent_at(t, span.start));
