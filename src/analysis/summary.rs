@@ -10,7 +10,7 @@ use serde_json::Value;
 
 use super::claims::ClaimResult;
 use super::comparisons::Differences;
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
 pub use crate::study::stats::paired::Comparison;
@@ -164,7 +164,7 @@ impl Summary {
 
     /// Reads `summary.json` at `path`.
     pub fn read(path: &Path) -> Result<Summary> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         let v: Value = serde_json::from_str(&text)
             .map_err(|e| Error::file(path, format!("line {}", e.line()), e.to_string()))?;
         Summary::from_value(v, path)

@@ -21,7 +21,7 @@ use serde::Deserialize;
 
 use super::csv::{check_coordinate, check_sigma};
 use super::rows::{at_line, Dialect, Rows};
-use crate::error::{shown, toml_key_line, Error, Result};
+use crate::error::{read_text, shown, toml_key_line, Error, Result};
 use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
 
 /// A mapping file: how to read one tracker export.
@@ -203,7 +203,7 @@ impl Mapping {
 
     /// Reads and checks a mapping file, and resolves it.
     fn load_plan(path: &Path) -> Result<(Mapping, Plan)> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         let m: Mapping = toml::from_str(&text)
             .map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
         let plan = m.plan(path, &text)?;

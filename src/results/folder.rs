@@ -11,7 +11,7 @@ use crate::analysis::regression::check_summary;
 use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
 use crate::calibrate::task::{task_path, Division, TaskRecord};
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
 use crate::study::kind::AnyScenario;
@@ -150,7 +150,7 @@ pub struct Record {
 }
 
 pub(super) fn read(path: &Path) -> Result<(String, Value)> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text(path)?;
     let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
     Ok((text, v))
 }
@@ -229,7 +229,7 @@ impl Record {
 
     pub(super) fn of_identify(dir: &Path) -> Result<Record> {
         let path = dir.join("identified.json");
-        let document = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        let document = read_text(&path)?;
         let id = IdentifiedRecord::from_json(&document, &path)?;
         if id.method.is_empty() {
             return Err(Error::file(
@@ -275,7 +275,7 @@ impl Record {
         // as they are now it must have the hash the entry states.
         let ran = dir.join(TASK_FILE);
         if ran.is_file() {
-            let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
+            let text = read_text(&ran)?;
             t.check_published((&document, &path), (&text, &ran))?;
             let file = task.map_or_else(|| task_path(&t.task), Path::to_path_buf);
             if !file.is_file() {
@@ -407,7 +407,7 @@ pub(super) fn scenario_as_run(
     };
     let ran = dir.join(scenario_file::NAME);
     if ran.is_file() {
-        let text = std::fs::read_to_string(&ran).map_err(|e| Error::io(&ran, e))?;
+        let text = read_text(&ran)?;
         let (text, hash) = scenario_file::read(&text, &ran)?;
         if let Some(file) = scenario {
             let other = sha256_hex(given(file)?.settings()?.as_bytes());

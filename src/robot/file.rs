@@ -9,7 +9,7 @@ use super::{
     joint_place, to_internal, value_count, AngleUnit, Convention, Coupling, Joint, JointType,
     LengthUnit, Param, Quantity, Robot, Units, GRAVITY_POINTS, HARMONIC_TERMS, MAX_JOINTS,
 };
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
 
 #[derive(Deserialize)]
@@ -469,7 +469,7 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
 
 /// Reads and checks a robot file.
 pub fn read_robot_file(path: &Path) -> Result<Robot> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text(path)?;
     parse_robot_file(&text, path)
 }
 

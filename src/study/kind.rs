@@ -9,7 +9,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::study::instruments::InstrumentsScenario;
 use crate::study::instruments_table::{INSTRUMENTS_KEYS, INSTRUMENTS_STUDY, MIGRATE};
 use crate::study::registration_study::RegistrationScenario;
@@ -39,7 +39,7 @@ pub enum AnyScenario {
 impl AnyScenario {
     /// Reads and checks a scenario file of any kind.
     pub fn load(path: &Path) -> Result<AnyScenario> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         AnyScenario::parse(&text, Some(path))
     }
 

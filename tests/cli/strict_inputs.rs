@@ -326,3 +326,52 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
         refused(&fk_on_urdf(&d, name, &text), &[want]);
     }
 }
+
+/// A text file that is not UTF-8 (a Latin-1 `°` in a comment, as a Windows editor saves it)
+/// was refused as "stream did not contain valid UTF-8", naming no line. Scenario, robot and
+/// mapping files (every text file calbench reads whole) name the line and the byte.
+#[test]
+fn a_file_that_is_not_utf8_is_refused_naming_the_line() {
+    let d = tmp_dir("strict-utf8");
+    let latin1 = |name: &str, from: &Path| {
+        let text = std::fs::read(from).unwrap();
+        let line = text.iter().position(|&b| b == b'\n').unwrap() + 1;
+        let mut bytes = text[..line].to_vec();
+        bytes.extend_from_slice(b"# 20 \xb0C\n");
+        bytes.extend_from_slice(&text[line..]);
+        let p = d.join(name);
+        std::fs::write(&p, bytes).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let want = "line 2: not UTF-8 text: byte 6 of the line is 0xB0; save the file as UTF-8";
+    let sc = latin1("s.toml", &root().join("scenarios/ci-guard.toml"));
+    let out = d.join("out");
+    let out = out.to_str().unwrap();
+    refused(
+        &calbench(&["run", &sc, "--out", out]),
+        &[&format!("s.toml: {want}")],
+    );
+    let robot = latin1("r.toml", &root().join("examples/ipa-ur10/ur10.toml"));
+    let q = ["--q", "0,0,0,0,0,0"];
+    refused(
+        &calbench(&[&["fk", "--robot", &robot], &q[..]].concat()),
+        &[&format!("r.toml: {want}")],
+    );
+    let urdf = latin1("r.urdf", &root().join("examples/ipa-ur10/ur10.urdf"));
+    refused(
+        &calbench(&[&["fk", "--robot", &urdf], &q[..]].concat()),
+        &[&format!("r.urdf: {want}")],
+    );
+    let mapping = latin1("m.toml", &root().join("examples/ipa-ur10/mapping.toml"));
+    let raw = root().join("examples/ipa-ur10/sample-200.csv");
+    let args = [
+        "import",
+        raw.to_str().unwrap(),
+        "--mapping",
+        &mapping,
+        "--out",
+        out,
+    ];
+    refused(&calbench(&args), &[&format!("m.toml: {want}")]);
+    assert!(!Path::new(out).exists());
+}

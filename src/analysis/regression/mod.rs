@@ -25,7 +25,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::analysis::summary::Summary;
-use crate::error::{at_line, Error, Result};
+use crate::error::{at_line, read_text, Error, Result};
 use crate::numeric::Real;
 use crate::study::stats::Entry;
 pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
@@ -469,7 +469,7 @@ fn present(e: &Entry, path: &str) -> bool {
 
 /// Reads a JSON file.
 pub fn read_json(path: &Path) -> Result<Value> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text(path)?;
     serde_json::from_str(&text)
         .map_err(|e| Error::file(path, format!("line {}", e.line()), e.to_string()))
 }

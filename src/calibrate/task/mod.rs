@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use super::cv::Model;
 use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::csv::read_measurements_text;
 use crate::measurement::import::{import_text, Mapping};
@@ -255,7 +255,7 @@ impl Task {
     /// naming the file, line and key), the files it names (relative to its folder), the
     /// split, and the published figures (or the `unpublished` note, not both).
     pub fn load(path: &Path) -> Result<Task> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         Task::parse(text, path, path.parent().unwrap_or(Path::new(".")))
     }
 

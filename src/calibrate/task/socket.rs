@@ -17,7 +17,7 @@ use super::{Metric, Published, TaskRecord};
 use crate::calibrate::on_kind::KindOutcome;
 use crate::calibrate::pipeline::IdentifyOutcome;
 use crate::calibrate::request::{IdentifyData, IdentifyRequest};
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::kind::{Instrument, KindData};
 use crate::measurement::kind_csv::{read_kind_text, KindFile};
@@ -100,7 +100,7 @@ pub struct SocketEntry {
 /// Reads the task file `path` as a socket task when it has a `[sockets]` table; `None`
 /// when it has none (a tracker's task, [`super::Task::load`]).
 pub fn load_socket_task(path: &Path) -> Result<Option<SocketTask>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text(path)?;
     parse_socket_task(text, path, path.parent().unwrap_or(Path::new(".")))
 }
 
@@ -283,7 +283,7 @@ impl SocketTask {
             files: Vec::new(),
         };
         for (s, f) in files.iter().enumerate() {
-            let raw = std::fs::read_to_string(f).map_err(|e| Error::io(f, e))?;
+            let raw = read_text(f)?;
             let mut text = header.join(",") + "\n";
             for line in raw.lines() {
                 let line = line.trim_end();
@@ -434,7 +434,7 @@ pub fn socket_figures(
 /// of each socket's tool points), `fks_1`, `fks_2` (the points, counted) and `distance`
 /// (the distance's error, signed), in mm.
 pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let text = read_text(path)?;
     let mut key = "";
     let mut var = [Vec::new(), Vec::new()];
     let mut count = [0usize; 2];

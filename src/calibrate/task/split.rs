@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{read_text, Error, Result};
 
 /// The rows of a data file that calibrate and those that validate (0-based, in file order).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -21,7 +21,7 @@ impl Split {
     /// `validation A[-B]` lines; `#` comments and blank lines are skipped. Each row below N
     /// lies in exactly one part and each part holds a row. A refusal names the file and line.
     pub fn load(path: &Path) -> Result<Split> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         Split::parse(path, &text)
     }
 

@@ -16,7 +16,7 @@ pub mod run;
 use std::fmt::Write as _;
 use std::path::Path;
 
-use crate::error::{Error, Result};
+use crate::error::{read_text, Result};
 
 /// The style sheet of every page: readable at 1280 px and at phone width (tables scroll
 /// sideways inside their box, plots shrink to the window).
@@ -277,7 +277,7 @@ impl Page {
     /// The plot `<stem>.svg` in `dir` (written by [`super::plots`]) inlined as a figure.
     pub fn figure_file(&mut self, dir: &Path, stem: &str, title: &str, alt: &str) -> Result<()> {
         let path = dir.join(format!("{stem}.svg"));
-        let svg = std::fs::read_to_string(&path).map_err(|e| Error::io(&path, e))?;
+        let svg = read_text(&path)?;
         self.figure(&svg, title, alt);
         Ok(())
     }

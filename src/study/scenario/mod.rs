@@ -16,7 +16,7 @@ mod sweep;
 use std::path::{Path, PathBuf};
 
 pub use crate::calibrate::Registration;
-use crate::error::{at_line, Error, Result};
+use crate::error::{at_line, read_text, Error, Result};
 use crate::identify::registry::method_names;
 pub use crate::identify::MethodSpec;
 use crate::numeric::Real;
@@ -205,7 +205,7 @@ pub const DEFAULT_SCENARIO: &str = include_str!("../../../scenarios/default.toml
 impl Scenario {
     /// Reads and checks a scenario file.
     pub fn load(path: &Path) -> Result<Scenario> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = read_text(path)?;
         Scenario::parse(&text, Some(path))
     }
 
