@@ -640,3 +640,21 @@ fn an_injected_error_beyond_a_robot_files_range_is_refused_at_its_key() {
     );
     assert!(!out.exists());
 }
+
+/// A `[[methods]]` entry without `name` was refused naming no line (`methods[0].name:
+/// missing`): the key is not written, so the refusal now names the entry's line.
+#[test]
+fn a_method_without_a_name_is_refused_naming_the_entry_line() {
+    let d = tmp("method-name");
+    let text =
+        std::fs::read_to_string(crate::common::root().join("scenarios/ci-guard.toml")).unwrap();
+    let entry = text.lines().position(|l| l == "[[methods]]").unwrap() + 1;
+    let sc = d.join("nameless.toml");
+    std::fs::write(&sc, text.replacen("name = \"ls\"\n", "", 1)).unwrap();
+    refused(
+        &calbench(&["run", path(&sc), "--out", path(&d.join("out"))]),
+        &[&format!(
+            "nameless.toml: line {entry}, methods[0].name: missing; allowed: ls,"
+        )],
+    );
+}

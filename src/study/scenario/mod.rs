@@ -449,12 +449,15 @@ impl Scenario {
         let mut methods = Vec::new();
         for (i, t) in raw.methods.iter().enumerate() {
             let m = MethodSpec::from_table(t).map_err(|(k, msg)| {
+                let entry = format!("methods[{i}]");
                 let place = if k.is_empty() {
-                    format!("methods[{i}]")
+                    entry.clone()
                 } else {
-                    format!("methods[{i}].{k}")
+                    format!("{entry}.{k}")
                 };
-                ferr(&place, msg)
+                // A key the entry does not write (a missing `name`): the entry's line.
+                let written = t.contains_key(k.split('.').next().unwrap_or_default());
+                at(if written { &place } else { &entry }, &place, msg)
             })?;
             let position_only = raw.tracker.measure.measure() != crate::measurement::Measure::Pose;
             if position_only && t.contains_key("k") {
