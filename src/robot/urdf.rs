@@ -237,6 +237,10 @@ impl UrdfRobot {
         let tip = match (&which.tip, leaves.as_slice()) {
             (Some(t), _) => t.as_str(),
             (None, [one]) => one,
+            (None, []) if source.links.is_empty() => {
+                return Err(bad("the robot has no <link>".into()))
+            }
+            (None, []) => return Err(bad("the chain has no moving joint".into())),
             (None, _) => {
                 let msg = format!(
                     "{} leaf links ({}): calbench takes a serial chain to one tip link; name \

@@ -321,6 +321,23 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
             src.replacen("<link name=\"link_2\"/>", "<link/>", 1),
             "nameless.urdf: line 22: <link>: missing field `name`",
         ),
+        // A file of no element named urdf-rs's "No elements found"; a root that is not
+        // <robot> and a <robot/> were read as robots of no link ("0 leaf links ()").
+        (
+            "empty",
+            "<?xml version=\"1.0\"?>\n<!-- nothing -->\n".to_string(),
+            "empty.urdf: URDF: no <robot> element",
+        ),
+        (
+            "root",
+            src.replace("<robot name=", "<robt name=").replace("</robot>", "</robt>"),
+            "root.urdf: line 6: the root element is <robt>: a URDF is one <robot> element",
+        ),
+        (
+            "bare",
+            "<robot name=\"bare\"/>\n".to_string(),
+            "bare.urdf: URDF: the robot has no <link>",
+        ),
     ];
     for (name, text, want) in cases {
         refused(&fk_on_urdf(&d, name, &text), &[want]);

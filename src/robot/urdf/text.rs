@@ -119,6 +119,13 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             );
             return Err(bad(at, msg));
         }
+        if open.is_empty() && name != b"robot" {
+            let msg = format!(
+                "the root element is <{}>: a URDF is one <robot> element",
+                String::from_utf8_lossy(&name)
+            );
+            return Err(bad(at, msg));
+        }
         if aside.is_none() {
             let parent = open.get(1).map(Vec::as_slice);
             // A link or joint inside another one (a misplaced end tag) would be set aside, and
@@ -143,7 +150,11 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 let part = parts.last().filter(|_| open.len() == 2);
                 check_attributes(e, part).map_err(|msg| bad(at, msg))?;
                 match open.len() {
-                    0 => robot_tag = at..after,
+                    0 => {
+                        robot_tag = at..after;
+                        // `<robot/>` ends where it starts.
+                        end = end.or(Some(at).filter(|_| empty));
+                    }
                     1 => parts.push(Part {
                         kind: String::from_utf8_lossy(&name).into_owned(),
                         name: attribute(e, b"name").unwrap_or_default(),
@@ -169,8 +180,10 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             open.push(name);
         }
     }
-    // A text without a root element is refused by urdf-rs.
-    let end = end.unwrap_or(text.len());
+    let Some(end) = end.filter(|_| !robot_tag.is_empty()) else {
+        let msg = "no <robot> element: a URDF is one <robot> element";
+        return Err(Error::file(path, "URDF", msg));
+    };
     let read = without(&text, &cuts, 0..text.len());
     let robot = urdf_rs::read_from_string(&read).map_err(|e| {
         match refused_part(&text, &cuts, robot_tag, &parts) {
