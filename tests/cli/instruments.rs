@@ -315,3 +315,39 @@ fn a_simulated_socket_study_recovers_the_injected_errors_to_within_its_noise() {
     );
     assert!(after < before / 10.0, "{after} against {before}");
 }
+
+/// `simulate` of an instruments study whose injected errors keep the true robot off a plane
+/// (`alpha3 = -1` rad) named neither the file nor the entry ("trial 0: the true robot does not
+/// touch its plane …"); it names the file, the `[[measurement]]` entry and its line.
+#[test]
+fn a_plane_the_true_robot_cannot_touch_is_refused_naming_the_entry() {
+    let d = tmp_dir("instruments-touch");
+    let text = read(&crate::common::root().join("scenarios/instruments.toml"));
+    let line = text.lines().position(|l| l == "kind = \"plane\"").unwrap();
+    let edited: String = text
+        .lines()
+        .map(|l| match l.starts_with("alpha3 = ") {
+            true => "alpha3 = -1".to_string(),
+            false => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n");
+    let sc = write_scenario(&d, "far", &edited);
+    let out = d.join("out");
+    let o = calbench(&[
+        "simulate",
+        sc.to_str().unwrap(),
+        "--measure",
+        "plane",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    crate::common::refused(
+        &o,
+        &[&format!(
+            "far.toml: line {line}, measurement[3]: trial 0: the true robot (the nominal one \
+             with the [errors]) does not touch its plane"
+        )],
+    );
+    assert!(!out.exists());
+}

@@ -330,7 +330,8 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
         ),
         (
             "root",
-            src.replace("<robot name=", "<robt name=").replace("</robot>", "</robt>"),
+            src.replace("<robot name=", "<robt name=")
+                .replace("</robot>", "</robt>"),
             "root.urdf: line 6: the root element is <robt>: a URDF is one <robot> element",
         ),
         (
