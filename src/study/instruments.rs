@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 use rand::seq::index::sample;
 use serde::Deserialize;
 
-use crate::error::{at_line, Error, Result};
+use crate::error::{Error, Result};
 use crate::identify::kind::{identifiability, KindProblem};
 use crate::identify::{solve, LeastSquares, LsOptions, Termination};
 use crate::measurement::kind::{Instrument, KindData};
@@ -524,13 +524,12 @@ impl InstrumentsScenario {
         if reading.measured.is_none() {
             let key = format!("measurement[{entry}]");
             let text = crate::error::read_text(&self.head.path).unwrap_or_default();
-            let line = crate::error::toml_key_line(&text, &key);
             let msg = format!(
                 "trial {trial}: the true robot (the nominal one with the [errors]) does not \
                  touch its {} from one of the commanded poses",
                 s.kind.as_str()
             );
-            return Err(Error::file(&self.head.path, at_line(line, key), msg));
+            return Err(Error::toml_file(&self.head.path, &text, &key, &key, msg));
         }
         Ok(Simulated {
             settings: s.clone(),
