@@ -37,7 +37,7 @@ pub(super) struct Source {
 #[derive(Clone, Debug)]
 struct Part {
     /// `link` or `joint`.
-    kind: String,
+    kind: &'static str,
     /// Its `name` attribute.
     name: String,
     /// The element, and its start tag.
@@ -156,7 +156,7 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                         end = end.or(Some(at).filter(|_| empty));
                     }
                     1 => parts.push(Part {
-                        kind: String::from_utf8_lossy(&name).into_owned(),
+                        kind: if name == b"link" { "link" } else { "joint" },
                         name: attribute(e, b"name").unwrap_or_default(),
                         span: at..after,
                         tag: at..after,
@@ -191,34 +191,37 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
             None => Error::file(path, "URDF", e.to_string()),
         }
     })?;
-    let written = parts.iter().filter(|p| p.kind == "joint").count();
-    if robot.joints.len() != written {
+    let (joint_parts, link_parts): (Vec<Part>, Vec<Part>) =
+        parts.into_iter().partition(|p| p.kind == "joint");
+    if robot.joints.len() != joint_parts.len() {
         return Err(Error::Compute(format!(
-            "{}: urdf-rs read {} joints where the text has {written}",
+            "{}: urdf-rs read {} joints where the text has {}",
             path.display(),
             robot.joints.len(),
+            joint_parts.len()
         )));
     }
-    let links = with_lines(&text, robot.links.iter().map(|l| &l.name), &parts, "link");
-    let joints = with_lines(&text, robot.joints.iter().map(|j| &j.name), &parts, "joint");
+    let links = with_lines(&text, robot.links.iter().map(|l| &l.name), &link_parts);
+    let joints = with_lines(&text, robot.joints.iter().map(|j| &j.name), &joint_parts);
     if let Some((at, msg)) = tree_fault(&robot, &links, &joints) {
         return Err(Error::file(path, format!("line {at}"), msg));
     }
-    let joints = parts.into_iter().filter(|p| p.kind == "joint").collect();
-    let source = Source { text, joints, end };
+    let source = Source {
+        text,
+        joints: joint_parts,
+        end,
+    };
     Ok((robot, source))
 }
 
-/// Each of `names`, the names urdf-rs read of the `kind` elements (`link` or `joint`), with the
-/// line of `text` its element starts on.
+/// Each of `names`, the names urdf-rs read of the elements `parts` (all links or all joints),
+/// with the line of `text` its element starts on.
 fn with_lines<'a>(
     text: &str,
     names: impl Iterator<Item = &'a String>,
     parts: &[Part],
-    kind: &str,
 ) -> Vec<(&'a str, usize)> {
-    let lines = parts.iter().filter(|p| p.kind == kind);
-    let lines = lines.map(|p| line_of(text, p.tag.start));
+    let lines = parts.iter().map(|p| line_of(text, p.tag.start));
     names.map(String::as_str).zip(lines).collect()
 }
 
@@ -425,20 +428,30 @@ fn indent_at(text: &str, at: usize) -> &str {
 }
 
 impl Source {
+    /// The span of the `i`-th joint's first `element` (`origin`, `axis`, `limit`), if it has
+    /// one.
+    fn element(&self, i: usize, element: &str) -> Option<&Range<usize>> {
+        let children = &self.joints[i].children;
+        children
+            .iter()
+            .find(|(_, name)| name == element)
+            .map(|(span, _)| span)
+    }
+
     /// The span of the `<origin>` of the `i`-th joint, or, when it has none, an empty span
     /// just after its start tag.
     fn origin(&self, i: usize) -> Range<usize> {
-        let j = &self.joints[i];
-        let origin = j.children.iter().find(|(_, name)| name == "origin");
-        origin.map_or(j.tag.end..j.tag.end, |(span, _)| span.clone())
+        let after = self.joints[i].tag.end;
+        self.element(i, "origin").cloned().unwrap_or(after..after)
     }
 
-    /// The line of the `i`-th joint's first `element` (`origin`, `axis`, `limit`), or of the
-    /// joint's start tag when it has none.
+    /// The line of the `i`-th joint's first `element`, or of the joint's start tag when it has
+    /// none.
     pub(super) fn line(&self, i: usize, element: &str) -> usize {
-        let j = &self.joints[i];
-        let at = j.children.iter().find(|(_, name)| name == element);
-        line_of(&self.text, at.map_or(j.tag.start, |(span, _)| span.start))
+        let at = self
+            .element(i, element)
+            .map_or(self.joints[i].tag.start, |s| s.start);
+        line_of(&self.text, at)
     }
 
     /// The text with the `<origin>` of the `i`-th joint set to each `(i, frame)` of
