@@ -27,13 +27,52 @@ use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, 
 /// whenever what a record or `shard.json` holds changes, so that `merge` refuses a shard of an
 /// earlier calbench instead of reading it with a field missing (tests/cli/record_formats.rs
 /// fixes each format's keys).
-pub const FORMAT: &str = "calbench-shard-8";
+pub const FORMAT: &str = "calbench-shard-9";
 
-/// One block of a shard.
+/// One block of a shard: what the reports need of a sweep point's study and of its trial 0,
+/// and the checksum that binds it to the run as the records' checksums bind them.
 #[derive(Serialize, Deserialize)]
 pub(crate) struct ShardBlock {
     info: BlockInfo,
     trial0: Option<Trial0>,
+    sum: String,
+}
+
+impl ShardBlock {
+    fn new(id: &RunId, info: BlockInfo, trial0: Option<Trial0>) -> Result<ShardBlock> {
+        let sum = id.block_checksum(info.index, &ShardBlock::body(&info, &trial0)?);
+        Ok(ShardBlock { info, trial0, sum })
+    }
+
+    /// The text the checksum covers: the block's `[info, trial0]` as compact JSON with its
+    /// keys sorted, so that it is the same text however `shard.json` is laid out.
+    fn body(info: &BlockInfo, trial0: &Option<Trial0>) -> Result<String> {
+        serde_json::to_value((info, trial0))
+            .map(|v| v.to_string())
+            .map_err(|e| Error::Compute(format!("cannot write a shard's block: {e}")))
+    }
+
+    /// Refuses, naming `holder` (the `shard.json` of the run `id`) and the block's place
+    /// `k` in `blocks`, a block whose checksum its content does not give.
+    fn check(&self, id: &RunId, holder: &Path, k: usize) -> Result<()> {
+        if self.sum
+            == id.block_checksum(
+                self.info.index,
+                &ShardBlock::body(&self.info, &self.trial0)?,
+            )
+        {
+            return Ok(());
+        }
+        Err(Error::file(
+            holder,
+            format!("blocks[{k}]"),
+            format!(
+                "the block of sweep point {} does not match its checksum: it was altered, or \
+                 belongs to another run (another scenario, seed or sweep point)",
+                self.info.index
+            ),
+        ))
+    }
 }
 
 /// `shard.json`.
@@ -91,12 +130,13 @@ impl Records {
     /// The finished `records.txt` and `shard.json` of the run `r`.
     pub fn finish(self, r: &RunResult) -> Result<Outputs<'static>> {
         let shard = r.shard.unwrap_or(Shard { index: 0, count: 1 });
-        let blocks = r.blocks.iter().map(|b| ShardBlock {
-            info: b.info.clone(),
-            trial0: b.trial0.clone(),
-        });
+        let blocks = r
+            .blocks
+            .iter()
+            .map(|b| ShardBlock::new(&self.id, b.info.clone(), b.trial0.clone()))
+            .collect::<Result<_>>()?;
         let sc = AnyScenario::MonteCarlo(r.scenario.clone());
-        self.finish_with(&sc, shard, r.seconds, blocks.collect())
+        self.finish_with(&sc, shard, r.seconds, blocks)
     }
 
     /// The finished `records.txt` and `shard.json` of share `shard` of `sc`, run in
@@ -376,8 +416,10 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     };
     // The reports' view of every block, and trial 0's extras, from the shard that ran it.
     let mut infos: Vec<Option<(BlockInfo, Option<Trial0>)>> = Vec::new();
-    for (_, m) in &metas {
-        for b in &m.blocks {
+    for (d, m) in &metas {
+        let id = RunId::new(&m.settings, m.seed);
+        for (k, b) in m.blocks.iter().enumerate() {
+            b.check(&id, &d.join("shard.json"), k)?;
             let i = b.info.index;
             if infos.len() <= i {
                 infos.resize_with(i + 1, || None);

@@ -14,7 +14,8 @@
 //! settings) and a record moved to another sweep point or trial each fail it. A reader
 //! (`Verifier`) checks every line's sum and that the lines hold the run's trials in order,
 //! each once: a changed, foreign, missing, duplicated or reordered record is refused, naming the
-//! file, the line and the trial.
+//! file, the line and the trial. The same checksum, at a trial index no trial has, binds what
+//! a shard's `shard.json` says of each sweep point (`RunId::block_checksum`).
 
 use std::path::{Path, PathBuf};
 
@@ -49,13 +50,24 @@ impl RunId {
         }
     }
 
+    /// The checksum of `body`, what a shard's `shard.json` says of sweep point `point`
+    /// (docs/formats.md § 7.3 `blocks`): a record's checksum with the trial index `u64::MAX`,
+    /// which no trial has.
+    pub(crate) fn block_checksum(&self, point: usize, body: &str) -> String {
+        self.sum(point as u64, u64::MAX, body)
+    }
+
     /// The checksum of the record text `body` of trial `trial` of sweep point `point`.
     fn checksum(&self, point: usize, trial: usize, body: &str) -> String {
+        self.sum(point as u64, trial as u64, body)
+    }
+
+    fn sum(&self, point: u64, trial: u64, body: &str) -> String {
         let mut h = Sha256::new();
         h.update(self.scenario);
         h.update(self.seed.to_le_bytes());
-        h.update((point as u64).to_le_bytes());
-        h.update((trial as u64).to_le_bytes());
+        h.update(point.to_le_bytes());
+        h.update(trial.to_le_bytes());
         h.update(body.as_bytes());
         h.finalize()[..16]
             .iter()

@@ -11,7 +11,7 @@ use std::path::{Path, PathBuf};
 
 use crate::common::{
     calbench, calbench_ok, kill_once_checkpointed, load_json, one_line_naming, path_arg, read,
-    resummed, root, tmp_dir,
+    reblocked, resummed, root, tmp_dir,
 };
 
 /// `calbench run ci-guard --trials N --threads 1` with `more` arguments, into `out`.
@@ -103,8 +103,8 @@ fn resume_refuses_the_records_of_another_run_with_the_same_name_and_seed() {
 }
 
 /// A `shard.json` whose block lists other methods or parameters than its records hold (a
-/// method line deleted, a parameter listed twice) is refused naming it, where the merge
-/// panicked indexing past the lists, and nothing is written.
+/// method line deleted, a parameter listed twice), its checksum made to match, is refused
+/// naming it, where the merge panicked indexing past the lists, and nothing is written.
 #[test]
 fn merge_refuses_a_shard_json_whose_blocks_do_not_fit_its_records() {
     let dir = tmp_dir("records-altered-blocks");
@@ -124,9 +124,66 @@ fn merge_refuses_a_shard_json_whose_blocks_do_not_fit_its_records() {
         ),
     ] {
         assert!(own.contains(from), "{from}");
-        let edit = [(meta.as_path(), own.replacen(from, to, 1))];
+        let edit = [(meta.as_path(), reblocked(&own.replacen(from, to, 1)))];
         refused_merge(&[&a0, &a1], &edit, &["blocks", "records.txt, line 1", why]);
     }
+}
+
+/// A `shard.json` block is bound to its run as the records are (docs/formats.md § 7.3): one
+/// edited where the records cannot tell (the robot's name, trial 0's first validation error,
+/// which the reports show) or copied from a run of the same name and seed but other settings
+/// is refused naming the file, the block and its checksum, and nothing is written. The sums
+/// computed apart from calbench's code ([`reblocked`]) are the ones it writes.
+#[test]
+fn merge_refuses_a_shard_json_block_altered_or_of_another_run() {
+    let dir = tmp_dir("records-block-sums");
+    let [a0, a1] = two_shards(&dir);
+    let meta = a0.join("shard.json");
+    let own = read(&meta);
+    let sums = |text: &str| -> Vec<serde_json::Value> {
+        let v: serde_json::Value = serde_json::from_str(text).unwrap();
+        v["blocks"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|b| b["sum"].clone())
+            .collect()
+    };
+    assert_eq!(
+        sums(&own),
+        sums(&reblocked(&own)),
+        "the sums of {}",
+        meta.display()
+    );
+    let v: serde_json::Value = serde_json::from_str(&own).unwrap();
+    let first = v["blocks"][0]["trial0"]["per_point"][2][0]
+        .as_f64()
+        .unwrap();
+    for (from, to) in [
+        (
+            "\"robot\": \"irb2600\"".to_string(),
+            "\"robot\": \"irb2400\"".to_string(),
+        ),
+        (format!("{first:?}"), format!("{:?}", first * 0.5)),
+    ] {
+        assert!(own.contains(&from), "{from}");
+        let edit = [(meta.as_path(), own.replacen(&from, &to, 1))];
+        refused_merge(
+            &[&a0, &a1],
+            &edit,
+            &["blocks[0]", "sweep point 0", "checksum"],
+        );
+    }
+    let other = dir.join("other");
+    run("5", &["--shard", "0/2"], &other);
+    let theirs: serde_json::Value = serde_json::from_str(&read(&other.join("shard.json"))).unwrap();
+    let mut copied = v.clone();
+    copied["blocks"] = theirs["blocks"].clone();
+    let edit = [(
+        meta.as_path(),
+        serde_json::to_string_pretty(&copied).unwrap(),
+    )];
+    refused_merge(&[&a0, &a1], &edit, &["blocks[0]", "another run"]);
 }
 
 /// Shards 0/2 and 1/2 of ci-guard with 4 trials, in `dir/a0` and `dir/a1`.
@@ -300,8 +357,8 @@ fn a_refused_merge_or_resume_leaves_no_output_folder() {
     let dir = tmp_dir("records-no-folder");
     let [a0, _] = two_shards(&dir);
     let meta = a0.join("shard.json");
-    let format = read(&meta).replace("calbench-shard-8", "calbench-shard-7");
-    refused_merge(&[&a0], &[(&meta, format)], &["format", "calbench-shard-7"]);
+    let format = read(&meta).replace("calbench-shard-9", "calbench-shard-8");
+    refused_merge(&[&a0], &[(&meta, format)], &["format", "calbench-shard-8"]);
     let out = dir.join("new/killed");
     let o = calbench(&["run", "--resume", path_arg(&out)]);
     let err = String::from_utf8_lossy(&o.stderr);

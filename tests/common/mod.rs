@@ -355,11 +355,26 @@ pub fn another_digit(line: &str) -> String {
     format!("{}{other}{}", &line[..at], &line[at + 1..])
 }
 
+/// The checksum of `body` at sweep point `point` and trial `trial` of the run of `settings`
+/// and `seed` (docs/formats.md § 7.3), computed apart from calbench's code.
+fn run_checksum(settings: &str, seed: u64, point: u64, trial: u64, body: &str) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update(Sha256::digest(settings.as_bytes()));
+    h.update(seed.to_le_bytes());
+    h.update(point.to_le_bytes());
+    h.update(trial.to_le_bytes());
+    h.update(body.as_bytes());
+    h.finalize()[..16]
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
 /// `line`, a record of `records.txt` of the run of `settings` and `seed`, with its checksum
 /// computed again for its text (docs/formats.md § 7.3): a record edited and its sum made to
 /// match, which only reading the record can refuse.
 pub fn resummed(line: &str, settings: &str, seed: u64) -> String {
-    use sha2::{Digest, Sha256};
     let body = line.rsplit_once(" #").map_or(line, |(b, _)| b);
     let field = |key: &str| -> u64 {
         let from = body.find(key).expect("a record line") + key.len();
@@ -367,15 +382,22 @@ pub fn resummed(line: &str, settings: &str, seed: u64) -> String {
         let end = digits.find(|c: char| !c.is_ascii_digit()).unwrap();
         digits[..end].parse().unwrap()
     };
-    let mut h = Sha256::new();
-    h.update(Sha256::digest(settings.as_bytes()));
-    h.update(seed.to_le_bytes());
-    h.update(field("(point:").to_le_bytes());
-    h.update(field(",trial:").to_le_bytes());
-    h.update(body.as_bytes());
-    let sum: String = h.finalize()[..16]
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect();
+    let sum = run_checksum(settings, seed, field("(point:"), field(",trial:"), body);
     format!("{body} #{sum}")
+}
+
+/// `text`, a `shard.json`, with each block's checksum computed again for its content
+/// (docs/formats.md § 7.3: the compact JSON of `[info, trial0]`, keys sorted, at the trial
+/// index 2⁶⁴ − 1): blocks edited and their sums made to match, which only reading the blocks
+/// against the records can refuse.
+pub fn reblocked(text: &str) -> String {
+    let mut v: serde_json::Value = serde_json::from_str(text).unwrap();
+    let settings = v["settings"].as_str().unwrap().to_string();
+    let seed = v["seed"].as_u64().unwrap();
+    for b in v["blocks"].as_array_mut().unwrap() {
+        let body = serde_json::json!([b["info"], b["trial0"]]).to_string();
+        let point = b["info"]["index"].as_u64().unwrap();
+        b["sum"] = run_checksum(&settings, seed, point, u64::MAX, &body).into();
+    }
+    serde_json::to_string_pretty(&v).unwrap()
 }
