@@ -5,6 +5,7 @@ Lengths are in mm, joint values and angles in the robot's units, as on the comma
 Every error is a :class:`calbench.Error` (or a subclass) carrying the command line's message.
 """
 
+import csv
 import io
 import json
 import numbers
@@ -419,11 +420,18 @@ class Study:
 
     @property
     def trials(self):
-        """``trials.csv`` as a DataFrame (empty cells are NaN)."""
+        """``trials.csv`` as a DataFrame (empty cells are NaN; a label such as ``"NA"`` or
+        ``"null"`` stays text)."""
         if self._trials is None:
             import pandas as pd
 
-            self._trials = pd.read_csv(io.BytesIO(self.trials_csv()))
+            # Only an empty cell is missing (docs/formats.md "trials.csv"): pandas' default
+            # missing-value words would turn the method labels "NA" or "null" into NaN.
+            data = self.trials_csv()
+            header = next(csv.reader([data.split(b"\n", 1)[0].decode()]))
+            text = {c: str for c in ("method", "poses", "termination", "error") if c in header}
+            na = {c: [""] for c in header}
+            self._trials = pd.read_csv(io.BytesIO(data), keep_default_na=False, na_values=na, dtype=text)
         return self._trials
 
     def trials_csv(self):

@@ -26,6 +26,14 @@ pub(crate) fn float_array2<'py>(
     if let Ok(v) = a.extract::<PyReadonlyArray2<'py, f64>>() {
         return Ok(v);
     }
+    float64(key, a)?
+        .extract::<PyReadonlyArray2<'py, f64>>()
+        .map_err(|_| setting(key, "expected a 2-D array (N, n)"))
+}
+
+/// `a` as a float64 numpy array of any shape, anything numpy reads as real numbers converted;
+/// bool and complex arrays, and what is not numbers, refused naming `key`.
+pub(crate) fn float64<'py>(key: &str, a: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
     let (raw, unreal) =
         as_numpy(a).map_err(|e| setting(key, format!("not an array of numbers ({e})")))?;
     if let Some((what, _)) = unreal {
@@ -36,9 +44,7 @@ pub(crate) fn float_array2<'py>(
     }
     let float = a.py().import("numpy")?.getattr("float64")?;
     raw.call_method1("astype", (float,))
-        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))?
-        .extract::<PyReadonlyArray2<'py, f64>>()
-        .map_err(|_| setting(key, "expected a 2-D array (N, n)"))
+        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))
 }
 
 /// Numbers numpy reads as bools or complex numbers, which are not real numbers: what they are
@@ -202,10 +208,13 @@ fn type_name(v: &Bound<'_, PyAny>) -> String {
 
 /// A Python value as a TOML value (scenario dicts, method options). numpy's scalars are
 /// the TOML values of their Python twins: an integer (`np.int64`) stays an integer, a
-/// `np.bool_` a boolean.
+/// `np.bool_` a boolean; a numpy array is the list of its values.
 pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
     if is_bool(v)? {
         return Ok(toml::Value::Boolean(v.is_truthy()?));
+    }
+    if v.is_instance(&v.py().import("numpy")?.getattr("ndarray")?)? {
+        return toml_value(key, &v.call_method0("tolist")?);
     }
     // Python's int, and what stands for one (`__index__`: numpy's integers).
     if v.is_instance_of::<PyInt>() || (!v.is_instance_of::<PyFloat>() && v.hasattr("__index__")?) {

@@ -18,7 +18,7 @@ use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
 use calbench::measurement::csv::read_measurements;
 use calbench::measurement::kind_csv::{file_kind, read_kind_file};
-use calbench::measurement::{Measure, Measurements};
+use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{Param, Robot};
@@ -79,22 +79,20 @@ impl Readings<'_, '_> {
 }
 
 /// The method `method` with the `options` dict (the keys of a scenario's `[[methods]]`
-/// entry), refused naming `options.KEY`; `k` refused on position data.
+/// entry), refused naming `options.KEY`; `k` refused where the data give it no orientation
+/// to weigh (`k_refused`: why, [`IdentifyData::k_refusal`]).
 fn method_spec(
     method: &str,
     options: Option<&Bound<'_, PyDict>>,
-    position: bool,
+    k_refused: Option<&str>,
 ) -> PyResult<MethodSpec> {
     let mut entry = match options {
         Some(o) => toml_table("options", o)?,
         None => toml::Table::new(),
     };
     entry.insert("name".into(), toml::Value::String(method.into()));
-    if position && entry.contains_key("k") {
-        return Err(setting(
-            "options.k",
-            "weighs orientation against position errors; the data hold positions only",
-        ));
+    if let Some(why) = k_refused.filter(|_| entry.contains_key("k")) {
+        return Err(setting("options.k", why));
     }
     MethodSpec::from_table(&entry).map_err(|(k, msg)| {
         let key = match k.as_str() {
@@ -207,8 +205,7 @@ pub(crate) fn identify<'py>(
         data,
     };
     let (data, source) = readings.read(nominal)?;
-    let position = matches!(&data, IdentifyData::Tracker(m) if m.measure() == Measure::Position);
-    let spec = method_spec(method, options.as_ref(), position)?;
+    let spec = method_spec(method, options.as_ref(), data.k_refusal())?;
     let registration: Registration = registration.parse().map_err(|_| {
         setting(
             "registration",

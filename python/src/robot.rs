@@ -8,6 +8,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use calbench::numeric::{Frame, Real};
+use calbench::robot::loaded::LoadedFk;
 use calbench::robot::{builtin, Param, Robot};
 
 use crate::convert::{flag_arg, float_array2, is_bool, joint_rows, typed_arg};
@@ -119,7 +120,9 @@ impl PyRobot {
     }
 
     /// Forward kinematics: joint values `q` (N, n) in the robot's units → tool points
-    /// (N, 3) in mm, or with `pose=True` homogeneous tool frames (N, 4, 4). Rows outside the
+    /// (N, 3) in mm, or with `pose=True` homogeneous tool frames (N, 4, 4), of the robot's
+    /// whole model with no payload (its joint-angle harmonics, gravity basis and compliances
+    /// under its own weight included, as `calbench fk`). Rows outside the
     /// joint limits are computed and warned of (`calbench.LimitWarning`, naming them), as
     /// `calbench fk` warns.
     #[pyo3(signature = (q, pose = None))]
@@ -134,8 +137,12 @@ impl PyRobot {
         let r = &self.inner;
         let qs = joint_rows(r, &q)?;
         warn_outside_limits(py, r, &qs)?;
-        let chain = r.chain();
-        let frames: Vec<Frame> = qs.iter().map(|v| chain.fk(v)).collect();
+        let model = LoadedFk::new(r);
+        let frames: Vec<Frame> = qs
+            .iter()
+            .map(|v| model.at(v, 0.0))
+            .collect::<calbench::error::Result<_>>()
+            .map_err(err)?;
         if pose {
             let mut out = Array3::<f64>::zeros((frames.len(), 4, 4));
             for (i, f) in frames.iter().enumerate() {

@@ -108,12 +108,15 @@ pub struct PyProblem {
 }
 
 impl PyProblem {
-    /// `x` as a vector (a numpy array or a sequence of floats).
+    /// `x` as a vector: anything numpy reads as a 1-D array of real numbers (a bool or
+    /// complex array is refused, not taken as 0 and 1 or cut to its real part).
     fn x(x: &Bound<'_, PyAny>) -> PyResult<Vec<Real>> {
         if let Ok(a) = x.extract::<PyReadonlyArray1<'_, f64>>() {
             return Ok(a.as_array().to_vec());
         }
-        x.extract::<Vec<Real>>()
+        crate::convert::float64("x", x)?
+            .extract::<PyReadonlyArray1<'_, f64>>()
+            .map(|a| a.as_array().to_vec())
             .map_err(|_| setting("x", "expected a 1-D array of floats"))
     }
 }

@@ -46,10 +46,25 @@ pub(crate) fn task<'py>(
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())
     } else if method.is_callable() {
-        let label = match name {
-            Some(n) => n,
-            None => method.getattr("__name__")?.extract()?,
-        };
+        // Its name as `task.json` enters it (`python:NAME`): given, or the function's own.
+        let label =
+            match name {
+                Some(n) => n,
+                None => match method
+                    .getattr("__name__")
+                    .and_then(|n| n.extract::<String>())
+                {
+                    Ok(n) => n,
+                    Err(_) => return Err(setting(
+                        "name",
+                        "the method has no `__name__` (a functools.partial, a callable object): \
+                         give it a name with `name=`",
+                    )),
+                },
+            };
+        if label.trim().is_empty() {
+            return Err(setting("name", "the method's name is empty"));
+        }
         let f = crate::study::python_method(&label, method.unbind());
         let spec = MethodSpec::external(&label, f);
         (spec, label.clone(), format!("python:{label}"))

@@ -61,6 +61,21 @@ def test_fk_matches_the_cli(cli, root):
     assert np.allclose(T[:, 3], [0, 0, 0, 1])
 
 
+def test_fk_applies_a_robot_files_whole_model_as_the_cli_does(cli, tmp_path):
+    # docs/formats.md "Joint-angle harmonics", "Gravity basis": fk turns the joints by them.
+    text = cli("robots", "irb2600").stdout
+    joint2 = "theta = -90.0\n"
+    q = [10.0, -20.0, 30.0, 40.0, -50.0, 60.0]
+    rigid = calbench.Robot.builtin("irb2600").fk([q])[0]
+    for extra in ("harmonics = [0.001, -0.002]", "gravity = [0.0005, 0.001, 0.002]"):
+        path = tmp_path / "r.toml"
+        path.write_text(text.replace(joint2, joint2 + extra + "\n", 1))
+        p = calbench.Robot.from_file(path).fk([q])[0]
+        out = json.loads(cli("fk", "--robot", path, "--q", ",".join(map(str, q)), "--json").stdout)
+        assert np.allclose(p, out["position_mm"], atol=1e-9), extra
+        assert np.linalg.norm(p - rigid) > 0.1, extra
+
+
 def test_fk_warns_of_joint_values_outside_the_limits_as_the_cli_does(cli, recwarn):
     # The command line warns on stderr and prints the point; fk computes the points and warns
     # (calbench.LimitWarning, a UserWarning) naming the rows outside, where it said nothing.

@@ -24,6 +24,23 @@ pub enum IdentifyData {
     Kind(KindFile),
 }
 
+impl IdentifyData {
+    /// Why `k`, the weight of orientation against position errors (`--k`, a method's `k`),
+    /// does not apply to these data, if it does not: it applies to a tracker's full poses.
+    pub fn k_refusal(&self) -> Option<&'static str> {
+        match self {
+            IdentifyData::Tracker(m) if m.measure() == crate::measurement::Measure::Position => {
+                Some("weighs orientation against position errors; the data hold positions only")
+            }
+            IdentifyData::Tracker(_) => None,
+            IdentifyData::Kind(_) => Some(
+                "weighs orientation against position errors; it applies to the tracker's \
+                 measurement file (§ 5.1) only",
+            ),
+        }
+    }
+}
+
 /// Everything one identification takes (the options of `calbench identify`,
 /// docs/formats.md `identify`).
 #[derive(Clone)]

@@ -91,7 +91,8 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
         let user: Vec<Real> = nominal
             .q_to_user(q)
             .iter()
-            .map(|&v| cell(v).parse().unwrap_or(v))
+            .enumerate()
+            .map(|(j, &v)| cell(&nominal, j, v).parse().unwrap_or(v))
             .collect();
         nominal.q_from_user(&user)
     };

@@ -1,4 +1,5 @@
-//! `calbench fk --robot R --q Q1,…,QN [--json]`: forward kinematics of the tool point.
+//! `calbench fk --robot R --q Q1,…,QN [--json]`: forward kinematics of the tool point, of the
+//! robot's whole model with no payload (docs/formats.md § 2.11).
 
 use anyhow::Result;
 use serde_json::json;
@@ -41,7 +42,7 @@ pub fn run(args: &FkArgs) -> Result<()> {
     let q = robot
         .q_from_user_checked(&args.q, "q")
         .map_err(|e| e.of_option(calbench::error::Opt::Q))?;
-    let f = robot.fk(&q);
+    let f = calbench::robot::loaded::LoadedFk::new(&robot).at(&q, 0.0)?;
     let rot: Vec<[Real; 3]> = (0..3)
         .map(|i| [f.rot[(i, 0)], f.rot[(i, 1)], f.rot[(i, 2)]])
         .collect();

@@ -214,6 +214,12 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         IdentifyData::Tracker(read_measurements(&args.data, &nominal)?)
     };
     let spec = method_with_options(args.method.name, &args.options)?;
+    if let Some(why) = data
+        .k_refusal()
+        .filter(|_| args.options.iter().any(|(k, _)| k == "k"))
+    {
+        return Err(Error::setting("--set k", why).into());
+    }
     let validate = args
         .validate
         .as_deref()

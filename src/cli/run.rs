@@ -284,7 +284,11 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
     let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
     let db = args.record.open()?;
     writable_folder(&out, &STUDY_OUTPUTS)?;
-    let (cells, _) = sc.blocks();
+    // A registration study's cells are one block: each trial draws every cell.
+    let cells = match sc {
+        AnyScenario::Registration(s) => s.registration_study.cell_names().len(),
+        _ => sc.blocks().0,
+    };
     eprintln!(
         "running {}: {what}, {cells} cells × {} trials{}",
         sc.name(),

@@ -49,6 +49,11 @@ pub trait JointSpace {
     fn q_from_user(&self, q: &[Real]) -> Vec<Real>;
     /// The limits of joint `j` (internal units).
     fn limits(&self, j: usize) -> (Real, Real);
+    /// The decimals that write joint `j`'s value in the file's unit as finely as 9 decimals
+    /// of a degree or a millimetre do.
+    fn decimals(&self, _j: usize) -> usize {
+        9
+    }
 }
 
 /// Measured poses: joint values, measured target points and, for full-pose data, measured

@@ -201,7 +201,14 @@ impl MadeFolders {
                 match std::fs::create_dir(&p) {
                     Ok(()) => made.0.push(p),
                     Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && p.is_dir() => {}
-                    Err(e) if e.kind() == std::io::ErrorKind::NotFound && attempt < ATTEMPTS => {
+                    // NotFound: a folder above vanished; AlreadyExists with nothing there: `p`
+                    // itself was made and removed again between the creation and the look.
+                    Err(e)
+                        if attempt < ATTEMPTS
+                            && (e.kind() == std::io::ErrorKind::NotFound
+                                || (e.kind() == std::io::ErrorKind::AlreadyExists
+                                    && std::fs::symlink_metadata(&p).is_err())) =>
+                    {
                         attempt += 1;
                         continue 'again;
                     }

@@ -1,5 +1,5 @@
 //! The corrected program of `calbench compensate` (docs/formats.md): per row, the joints in
-//! the nominal robot's units with [`DECIMALS`] decimals, the residual of the identified robot
+//! the nominal robot's units (9 decimals of a degree or a millimetre, [`cell`]), the residual of the identified robot
 //! there (mm, deg, three significant digits) and the flag.
 
 use std::path::Path;
@@ -11,12 +11,11 @@ use crate::measurement::csv::fixed;
 use crate::measurement::JointSpace;
 use crate::numeric::Real;
 
-/// The decimals of a joint value in the corrected program.
-pub const DECIMALS: usize = 9;
-
-/// A joint value (user units) as the corrected program writes it.
-pub fn cell(v: Real) -> String {
-    fixed(v, DECIMALS)
+/// Joint `j`'s value `v` (user units) of `robot` as the corrected program writes it: with
+/// [`JointSpace::decimals`], 9 in degrees and millimetres, more in radians and metres, so the
+/// written command reaches its pose within the program's 1e-6 mm in every unit.
+pub fn cell<R: JointSpace + ?Sized>(robot: &R, j: usize, v: Real) -> String {
+    fixed(v, robot.decimals(j))
 }
 
 /// The corrected program: columns q1..qn, `residual_mm`, `residual_deg`, `flag`.
@@ -38,8 +37,8 @@ impl<R: JointSpace + ?Sized> Output for CorrectedProgram<'_, R> {
         let mut s: String = (1..=self.robot.dof()).map(|j| format!("q{j},")).collect();
         s.push_str("residual_mm,residual_deg,flag\n");
         for c in self.rows {
-            for v in self.robot.q_to_user(&c.q) {
-                s.push_str(&cell(v));
+            for (j, v) in self.robot.q_to_user(&c.q).into_iter().enumerate() {
+                s.push_str(&cell(self.robot, j, v));
                 s.push(',');
             }
             let _ = writeln!(s, "{:.3e},{:.3e},{}", c.residual_mm, c.residual_deg, c.flag);

@@ -17,6 +17,44 @@ pub fn is_rigid(robot: &Robot) -> bool {
         && !crate::robot::gravity_basis::has_gravity(robot)
 }
 
+/// What of `robot`'s model a study does not simulate, as a sentence, or `None`: a study's true
+/// robot is the nominal chain with the injected errors, its sag the scenario's `[compliance]`
+/// model, so a robot file's joint-angle harmonics, gravity basis or compliances would be in the
+/// identified model and not in the simulated truth (docs/formats.md § 4.3).
+pub fn unsimulated(robot: &Robot) -> Option<String> {
+    use crate::robot::{Param, GRAVITY_POINTS, HARMONIC_TERMS};
+    // The parameters of joint `j` that a file's key gives.
+    let of = |key: &str, j: usize| -> Vec<Param> {
+        match key {
+            "harmonics" => (0..HARMONIC_TERMS).map(|k| Param::Harmonic(j, k)).collect(),
+            "gravity" => (0..GRAVITY_POINTS).map(|l| Param::Gravity(j, l)).collect(),
+            _ => vec![Param::Compliance(j)],
+        }
+    };
+    let given: Vec<String> = ["harmonics", "gravity", "compliance"]
+        .into_iter()
+        .filter_map(|key| {
+            let joints: Vec<String> = (0..robot.dof())
+                .filter(|&j| of(key, j).iter().any(|&p| robot.get(p) != 0.0))
+                .map(|j| (j + 1).to_string())
+                .collect();
+            let s = if joints.len() > 1 { "s" } else { "" };
+            (!joints.is_empty()).then(|| format!("`{key}` on joint{s} {}", joints.join(", ")))
+        })
+        .collect();
+    if given.is_empty() {
+        return None;
+    }
+    Some(format!(
+        "robot \"{}\" gives {}: a study simulates its true robot as the nominal chain with the \
+         injected errors, and not a robot file's joint-angle harmonics, gravity basis or \
+         compliances, which the identification would model; remove them from the file (a study \
+         adds joint-angle errors with [unmodelled] and gravity sag with [compliance])",
+        robot.name,
+        given.join(", ")
+    ))
+}
+
 /// [`loaded_fk`] of one robot at many poses, with [`is_rigid`] decided once instead of at each
 /// pose (it reads every harmonic and gravity-basis coefficient): the same frames, bit for bit.
 pub struct LoadedFk<'a> {

@@ -330,6 +330,9 @@ impl crate::measurement::JointSpace for Robot {
     fn limits(&self, j: usize) -> (Real, Real) {
         self.joints[j].limits
     }
+    fn decimals(&self, j: usize) -> usize {
+        self.q_decimals(j)
+    }
 }
 
 impl Robot {

@@ -154,6 +154,10 @@ impl InstrumentsScenario {
         s.errors
             .check()
             .map_err(|e| ferr("errors", e.to_string()))?;
+        let robot = crate::robot::builtin::load(&s.robot)?;
+        if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
+            return Err(ferr("robot", msg));
+        }
         Ok(s)
     }
 }

@@ -89,7 +89,12 @@ impl AnyScenario {
             AnyScenario::Instruments(s) => s.head.clone(),
         };
         head.set(trials.unwrap_or(head.trials), seed.unwrap_or(head.seed))?;
-        AnyScenario::parse(&head.settings()?, self.path())
+        // The settings' text is not the file's: a refusal names the option, not a line.
+        AnyScenario::parse(&head.settings()?, self.path()).map_err(|e| {
+            use crate::error::Opt;
+            let e = crate::study::scenario::given(e, "trials", Opt::Trials);
+            crate::study::scenario::given(e, "seed", Opt::Seed)
+        })
     }
 
     /// The head of a study that runs whole (`None` for a Monte-Carlo study).

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::common::{calbench, calbench_ok, path_arg, read, tmp_dir, ur10_example};
+use crate::common::{calbench, calbench_ok, fk_point, path_arg, read, tmp_dir, ur10_example};
 
 /// The shipped UR10 export as a comma-separated file with a `.` decimal mark and a text column
 /// `note` (holding `note`), and the example mapping rewritten for it.
@@ -291,26 +291,6 @@ fn a_measurement_file_with_a_byte_order_mark_and_crlf_names_the_right_line() {
     );
 }
 
-/// The `position_mm` of `calbench fk --robot ROBOT --q Q --json`.
-fn fk(robot: &Path, q: &[f64]) -> Vec<f64> {
-    let q: Vec<String> = q.iter().map(|v| format!("{v:?}")).collect();
-    let o = calbench_ok(&[
-        "fk",
-        "--robot",
-        path_arg(robot),
-        "--q",
-        &q.join(","),
-        "--json",
-    ]);
-    let j: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
-    j["position_mm"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|v| v.as_f64().unwrap())
-        .collect()
-}
-
 /// `calbench robots irb2600` under another name.
 fn renamed_irb2600(dir: &Path, file: &str, name: &str) -> std::path::PathBuf {
     let o = calbench_ok(&["robots", "irb2600"]);
@@ -373,7 +353,10 @@ fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot
         [-1.0, 0.5, -0.2, 2.0, -1.2, 3.0],
     ] {
         let deg: Vec<f64> = q.iter().map(|v: &f64| v.to_degrees()).collect();
-        let (a, b) = (fk(&urdf, &q), fk(&first.join("robot.toml"), &deg));
+        let (a, b) = (
+            fk_point(&urdf, &q),
+            fk_point(&first.join("robot.toml"), &deg),
+        );
         for k in 0..3 {
             assert!((a[k] - b[k]).abs() < 1e-6, "{a:?} against {b:?}");
         }

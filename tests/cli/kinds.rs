@@ -516,6 +516,9 @@ fn what_a_kind_cannot_determine_is_refused() {
             &["--method", "ls", "--compliance", "gravity"][..],
             "--compliance",
         ),
+        (&["--method", "lm", "--k", "10"][..], "--k"),
+        // `k` as a method option weighs nothing here either (it was taken and ignored).
+        (&["--method", "lm", "--set", "k=10"][..], "--set k"),
     ] {
         let (o, out) = run(extra, "o");
         let err = String::from_utf8_lossy(&o.stderr);

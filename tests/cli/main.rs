@@ -49,6 +49,8 @@ mod registration_rows;
 mod report_baseline;
 mod results;
 mod results_team;
+mod robot_model;
+mod run_options;
 mod search_ecdf;
 mod socket_task;
 mod spelled;

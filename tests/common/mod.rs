@@ -371,6 +371,22 @@ fn run_checksum(settings: &str, seed: u64, point: u64, trial: u64, body: &str) -
         .collect()
 }
 
+/// The `position_mm` of `calbench fk --robot ROBOT --q Q --json` (Q in the robot's units).
+pub fn fk_point(robot: &Path, q: &[f64]) -> Vec<f64> {
+    let q: Vec<String> = q.iter().map(|v| format!("{v:?}")).collect();
+    let args = [
+        "fk",
+        "--robot",
+        path_arg(robot),
+        "--q",
+        &q.join(","),
+        "--json",
+    ];
+    let j: serde_json::Value = serde_json::from_slice(&calbench_ok(&args).stdout).unwrap();
+    let p = j["position_mm"].as_array().unwrap();
+    p.iter().map(|v| v.as_f64().unwrap()).collect()
+}
+
 /// `line`, a record of `records.txt` of the run of `settings` and `seed`, with its checksum
 /// computed again for its text (docs/formats.md § 7.3): a record edited and its sum made to
 /// match, which only reading the record can refuse.

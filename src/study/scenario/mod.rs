@@ -24,7 +24,7 @@ use crate::poses::Objective;
 use crate::robot::builtin;
 use crate::robot::Robot;
 use crate::sim::poses::check_region;
-use crate::sim::sag::ComplianceSettings;
+use crate::sim::sag::{Compliance, ComplianceSettings};
 use crate::sim::settings::{
     ErrorSettings, OutlierSettings, ParamSelection, Region, TrackerSettings,
 };
@@ -38,6 +38,7 @@ pub use sections::{
     Calibration, IdentificationSpec, OptimiseEach, PoseStrategy, RobotRef, StrategyName, Validation,
 };
 use serde::Deserialize;
+pub(crate) use sweep::given;
 use sweep::SweepField;
 pub use sweep::{Sweep, SweepAxis};
 
@@ -564,7 +565,18 @@ impl Scenario {
             Error::File { .. } => e,
             other => ferr("robot.file", other.to_string()),
         })?;
-        check(scenario.compliance.check(robot.dof()))?;
+        if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
+            return Err(ferr("robot.file", msg));
+        }
+        // The sag model whole, with the built-in robot's stiffness and masses where none are
+        // given: a value missing is named at the `[compliance]` table's line.
+        Compliance::new(&scenario.compliance, &robot, scenario.builtin()).map_err(|e| match e {
+            Error::Setting { key, msg } => {
+                let given = line(&key).or_else(|| line("compliance"));
+                Error::file(&shown, at_line(given, &key), msg.to_string())
+            }
+            other => other,
+        })?;
         // Regions no pose reaches, refused now rather than after a search in the run.
         let keyed = |r: Result<()>| {
             r.map_err(|e| match e {
@@ -654,6 +666,16 @@ impl Scenario {
                     ));
                 }
                 builtin::load(n)
+            }
+            RobotRef::File(p) if crate::robot::urdf::is_urdf(&p.to_string_lossy()) => {
+                Err(Error::setting(
+                    "robot.file",
+                    format!(
+                        "\"{}\" is a URDF, which a scenario does not take: give a robot file \
+                         in TOML (docs/formats.md § 3.1)",
+                        p.display()
+                    ),
+                ))
             }
             RobotRef::File(p) => crate::robot::read_robot_file(p),
         }

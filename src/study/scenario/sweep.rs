@@ -87,6 +87,17 @@ impl Sweep {
     }
 }
 
+/// `e`, a refusal of a scenario whose `key` a run's option `opt` set (`--trials`, `trials=`),
+/// as a refusal of the option: the value is not the file's, and neither is a line.
+pub(crate) fn given(e: Error, key: &str, opt: crate::error::Opt) -> Error {
+    match e {
+        Error::File { place, msg, .. } if place == key || place.ends_with(&format!(", {key}")) => {
+            Error::option(opt, msg)
+        }
+        e => e,
+    }
+}
+
 impl Scenario {
     /// A copy with one dotted key (`outliers.count`, `trials`, `tracker.mpe_a_um`) set to
     /// `value`, checked again.
@@ -107,12 +118,16 @@ impl Scenario {
     pub fn with_run_overrides(&self, trials: Option<usize>, seed: Option<u64>) -> Result<Scenario> {
         let mut sc = self.clone();
         if let Some(n) = trials {
-            sc = sc.with_override("trials", toml::Value::Integer(n as i64))?;
+            sc = sc
+                .with_override("trials", toml::Value::Integer(n as i64))
+                .map_err(|e| given(e, "trials", crate::error::Opt::Trials))?;
         }
         if let Some(s) = seed {
             let s = i64::try_from(s)
                 .map_err(|_| Error::option(crate::error::Opt::Seed, "must be below 2^63"))?;
-            sc = sc.with_override("seed", toml::Value::Integer(s))?;
+            sc = sc
+                .with_override("seed", toml::Value::Integer(s))
+                .map_err(|e| given(e, "seed", crate::error::Opt::Seed))?;
         }
         Ok(sc)
     }

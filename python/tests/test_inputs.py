@@ -1,0 +1,81 @@
+"""Inputs a script gives as docs/python.md says it may: labels that read like missing values,
+numpy arrays in a scenario dict, callables without a name, and vectors that are not real."""
+import functools
+import tomllib
+
+import numpy as np
+import pytest
+
+import calbench
+
+CI_GUARD = "scenarios/ci-guard.toml"
+
+
+def scenario(root):
+    with open(root / CI_GUARD, "rb") as f:
+        return tomllib.load(f)
+
+
+def test_trials_keep_labels_that_read_like_missing_values(root):
+    sc = scenario(root)
+    sc["methods"][0]["label"] = "NA"
+    sc["methods"][1]["label"] = "null"
+    study = calbench.run(sc, trials=2)
+    assert list(study.trials["method"].unique()) == ["NA", "null", "lm"]
+    # Empty cells are still missing: ci-guard's `error` column is absent, its numbers finite.
+    assert study.trials["after_rms_mm"].notna().all()
+
+
+def test_a_numpy_array_in_a_scenario_dict_is_the_list_of_its_values(root):
+    listed = scenario(root)
+    arrays = scenario(root)
+    arrays["tracker"]["pose"] = np.array(arrays["tracker"]["pose"])
+    arrays["calibration"]["strategies"] = np.array(arrays["calibration"]["strategies"])
+    a = calbench.run(arrays, trials=2)
+    b = calbench.run(listed, trials=2)
+    assert a.summary_json() == b.summary_json()
+    assert a.trials_csv() == b.trials_csv()
+
+
+def test_a_problem_refuses_a_vector_that_is_not_real(root):
+    seen = {}
+
+    def probe(problem):
+        x = np.asarray(problem.x0, dtype=float)
+        for name, bad in (("complex", x.astype(complex)), ("bool", x > 1), ("list", [True] * len(x))):
+            for f in (problem.residual, problem.jacobian):
+                with pytest.raises(calbench.SettingError, match="`x`") as e:
+                    f(bad)
+                seen[name] = str(e.value)
+        return x
+
+    study = calbench.run(scenario(root), trials=1, methods={"probe": probe})
+    assert study.results.set_index("method").loc["probe", "failures"] == 0
+    assert "complex" in seen["complex"] and "bool" in seen["bool"] and "bool" in seen["list"]
+
+
+def test_a_task_method_without_a_name_is_refused_naming_name(root):
+    def fit(problem, scale):
+        return np.asarray(problem.x0) * scale
+
+    task = root / "tasks" / "ipa-ur10-series-d.toml"
+    with pytest.raises(calbench.SettingError, match="`name`.*__name__"):
+        calbench.task(task, functools.partial(fit, scale=1.0), models=["kinematic"])
+    with pytest.raises(calbench.SettingError, match="`name`.*empty"):
+        calbench.task(task, functools.partial(fit, scale=1.0), models=["kinematic"], name="")
+
+
+def test_k_is_refused_where_the_data_hold_no_orientation(cli, tmp_path):
+    # docs/formats.md § 2.6.2: `--k` is refused for distance, plane and sphere files.
+    sc = tmp_path / "d.toml"
+    sc.write_text(
+        'name = "d"\nseed = 2\ntrials = 2\nrobot = "irb2600"\n\n[instruments_study]\n'
+        'poses = [30]\nstrategies = ["random"]\ncandidates = 60\nvalidation = 10\n\n'
+        '[errors]\nkind = "paper"\n\n[[measurement]]\nkind = "distance"\n'
+    )
+    cli("simulate", sc, "--out", tmp_path / "sim")
+    robot = calbench.Robot.builtin("irb2600")
+    data = tmp_path / "sim" / "measurements.csv"
+    assert calbench.identify(robot, data=data, method="lm").rank > 0
+    with pytest.raises(calbench.SettingError, match="`options.k`.*tracker"):
+        calbench.identify(robot, data=data, method="lm", options={"k": 10.0})

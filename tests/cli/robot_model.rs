@@ -1,0 +1,190 @@
+//! A robot file's whole model where a command computes with it (docs/formats.md § 3.1): `fk`
+//! turns a joint by its joint-angle harmonics as `compensate` does, and a study, whose
+//! simulation has no harmonics, gravity basis or compliances of a robot file, refuses such a
+//! file when the scenario is read instead of identifying a model its truth lacks.
+
+use std::f64::consts::{FRAC_PI_2, PI};
+use std::path::{Path, PathBuf};
+
+use crate::common::{
+    calbench, calbench_ok, fk_point, path_arg, refused, root, tmp_dir, write_scenario,
+};
+
+/// The IRB2600 as a robot file in `dir/NAME.toml`, with `extra` (TOML keys) added to joint 2.
+fn irb2600_with(dir: &Path, name: &str, extra: &str) -> PathBuf {
+    let text = String::from_utf8(calbench_ok(&["robots", "irb2600"]).stdout).unwrap();
+    let joint2 = "theta = -90.0\n";
+    assert!(text.contains(joint2), "{text}");
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(
+        &path,
+        text.replacen(joint2, &format!("{joint2}{extra}\n"), 1),
+    )
+    .unwrap();
+    path
+}
+
+/// `fk` of a robot whose joint 2 carries harmonics is the rigid robot's at joint 2 turned by
+/// `Σ a_n sin nq + b_n cos nq` (docs/formats.md "Joint-angle harmonics"), computed here apart
+/// from calbench's code, where it was the rigid robot's, up to 4 mm away.
+#[test]
+fn fk_turns_a_joint_by_its_harmonics() {
+    let dir = tmp_dir("robot-model-fk");
+    let h: [f64; 4] = [0.001, -0.002, 0.0005, 0.0003];
+    let harmonic = irb2600_with(&dir, "harmonic", &format!("harmonics = {h:?}"));
+    let rigid = irb2600_with(&dir, "rigid", "");
+    for q in [
+        [0.0f64, 0.0, 0.0, 0.0, 0.0, 0.0],
+        [10.0, 20.0, 30.0, 40.0, 50.0, 60.0],
+        [-120.0, -60.0, 45.0, 100.0, -30.0, 170.0],
+    ] {
+        let q2 = q[1].to_radians();
+        let turn =
+            h[0] * q2.sin() + h[1] * q2.cos() + h[2] * (2.0 * q2).sin() + h[3] * (2.0 * q2).cos();
+        let mut turned = q;
+        turned[1] = (q2 + turn).to_degrees();
+        let (got, want) = (fk_point(&harmonic, &q), fk_point(&rigid, &turned));
+        for i in 0..3 {
+            assert!(
+                (got[i] - want[i]).abs() < 1e-6,
+                "q {q:?}: {got:?} against {want:?}"
+            );
+        }
+        assert!(
+            (got[2] - fk_point(&rigid, &q)[2]).abs() > 0.1,
+            "q {q:?}: no harmonic offset"
+        );
+    }
+}
+
+/// A scenario whose robot file gives harmonics, a gravity basis or compliances, or names a
+/// URDF, is refused naming the file, the line and `robot.file`; a linear sag without stiffness
+/// for a robot file names the `[compliance]` line and the key; an instruments study on such a
+/// robot names `robot`. Nothing runs.
+#[test]
+fn a_study_refuses_a_robot_model_it_does_not_simulate() {
+    let dir = tmp_dir("robot-model-study");
+    let ci_guard = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
+    let on =
+        |robot: &str| ci_guard.replace("builtin = \"irb2600\"", &format!("file = \"{robot}\""));
+    let cases = [
+        ("harmonics = [0.001, 0.0]", "`harmonics` on joint 2"),
+        ("gravity = [0.0, 0.001, 0.0]", "`gravity` on joint 2"),
+        ("compliance = 3e-7", "`compliance` on joint 2"),
+    ];
+    for (i, (extra, named)) in cases.into_iter().enumerate() {
+        irb2600_with(&dir, &format!("r{i}"), extra);
+        let sc = write_scenario(&dir, &format!("s{i}"), &on(&format!("r{i}.toml")));
+        let out = dir.join(format!("out{i}"));
+        let o = calbench(&["run", path_arg(&sc), "--out", path_arg(&out)]);
+        refused(
+            &o,
+            &[path_arg(&sc), "line 10, robot.file", named, "[unmodelled]"],
+        );
+        assert!(!out.exists(), "{} written", out.display());
+    }
+    std::fs::write(dir.join("arm.urdf"), "<robot name=\"a\"/>").unwrap();
+    let sc = write_scenario(&dir, "urdf", &on("arm.urdf"));
+    let o = calbench(&["run", path_arg(&sc), "--out", path_arg(&dir.join("o"))]);
+    refused(&o, &["line 10, robot.file", "is a URDF", "in TOML"]);
+
+    irb2600_with(&dir, "bare", "");
+    let sc = write_scenario(&dir, "stiff", &on("bare.toml"));
+    let o = calbench(&["run", path_arg(&sc), "--out", path_arg(&dir.join("o"))]);
+    refused(
+        &o,
+        &[
+            "line 22, compliance.stiffness_nm_per_rad",
+            "one value per joint (6)",
+        ],
+    );
+
+    let robot = irb2600_with(&dir, "harmonic", "harmonics = [0.001, 0.0]");
+    let text = format!(
+        "name = \"i\"\nseed = 1\ntrials = 2\nrobot = \"{}\"\n\n[instruments_study]\nposes = [20]\n\
+         strategies = [\"random\"]\ncandidates = 40\nvalidation = 5\n\n[errors]\nkind = \"paper\"\n\n\
+         [[measurement]]\nkind = \"distance\"\n",
+        robot.display()
+    );
+    let sc = write_scenario(&dir, "instruments", &text);
+    let o = calbench(&["run", path_arg(&sc), "--out", path_arg(&dir.join("o"))]);
+    refused(
+        &o,
+        &[path_arg(&sc), "robot: robot", "`harmonics` on joint 2"],
+    );
+}
+
+/// An IRB2600-like arm in metres and radians (joints: α, a, d, θ; limits ±π).
+const ARM_M_RAD: &str =
+    "name = \"arm\"\nconvention = \"dh\"\nlength_unit = \"m\"\nangle_unit = \"rad\"\n";
+const ARM_JOINTS: [[f64; 4]; 6] = [
+    [-FRAC_PI_2, 0.15, 0.445, 0.0],
+    [0.0, 0.9, 0.0, -FRAC_PI_2],
+    [-FRAC_PI_2, 0.15, 0.0, 0.0],
+    [FRAC_PI_2, 0.0, 0.938, 0.0],
+    [-FRAC_PI_2, 0.0, 0.0, 0.0],
+    [0.0, 0.0, 0.2, PI],
+];
+
+/// [`ARM_M_RAD`] with joint 2's `a` made `a2`, and a tool, in `dir/NAME.toml`.
+fn arm_m_rad(dir: &Path, name: &str, a2: f64) -> PathBuf {
+    let mut text = ARM_M_RAD.to_string();
+    for (j, [alpha, a, d, theta]) in ARM_JOINTS.into_iter().enumerate() {
+        let a = if j == 1 { a2 } else { a };
+        text += &format!(
+            "\n[[joints]]\ntype = \"revolute\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
+             theta = {theta:?}\nlimits = [-3.14159, 3.14159]\n"
+        );
+    }
+    text += "\n[tool]\nxyz = [0.01, 0.005, 0.12]\nrpy = [0.26, -0.35, 0.79]\n";
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// `compensate` of a robot in metres and radians writes each command finely enough to reach
+/// its pose within the program's 1e-6 mm (docs/formats.md § 7.8: 11 decimals in radians),
+/// where 9 decimals of a radian (1e-6 mm at a metre's reach) flagged reachable rows `failed`.
+#[test]
+fn compensate_writes_radians_finely_enough_to_reach_the_pose() {
+    let dir = tmp_dir("robot-model-radians");
+    let nominal = arm_m_rad(&dir, "nominal", 0.9);
+    let identified = arm_m_rad(&dir, "identified", 0.9005);
+    let program = dir.join("program.csv");
+    let rows = [
+        "-1.123659223,2.670038818,-0.860808331,-0.647600210,-0.116880514,-1.012686749",
+        "1.681464214,0.766469109,-0.316981096,1.111998572,1.648769217,2.234910654",
+        "0.3,-0.4,0.5,1.2,-0.8,2.5",
+        "-2.5,1.1,-2.0,-1.5,1.9,-0.7",
+        "2.9,-1.2,0.9,2.8,-2.6,0.1",
+    ];
+    std::fs::write(
+        &program,
+        format!("q1,q2,q3,q4,q5,q6\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
+    let out = dir.join("corrected.csv");
+    calbench_ok(&[
+        "compensate",
+        "--robot",
+        path_arg(&nominal),
+        "--identified",
+        path_arg(&identified),
+        "--joints",
+        path_arg(&program),
+        "--out",
+        path_arg(&out),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    for line in text.lines().skip(1) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[8], "ok", "{line}");
+        assert!(
+            cells[..6]
+                .iter()
+                .all(|c| c.split_once('.').unwrap().1.len() == 11),
+            "{line}"
+        );
+        assert!(cells[6].parse::<f64>().unwrap() < 1e-7, "{line}");
+    }
+}
