@@ -485,8 +485,14 @@ impl Robot {
         } else {
             1.0_f64.to_radians()
         };
-        // The unit's size in the finest unit, within rounding of the conversion factors.
-        9 + ((per_unit / finest).log10() - 1e-9).ceil().max(0.0) as usize
+        // A decimal more per factor of ten between the unit and the finest one, within the
+        // rounding of the conversion factors (no library logarithm: docs/architecture.md).
+        let (mut size, mut decimals) = (per_unit / finest, 9);
+        while size > 1.0 + 1e-9 {
+            size /= 10.0;
+            decimals += 1;
+        }
+        decimals
     }
 }
 

@@ -89,10 +89,16 @@ pub(super) fn scenario_corpus() -> &'static [Vec<u8>] {
         // A robot file beside the scenario ([`SCENARIO_ROBOT`]) and a sweep, which no shipped
         // scenario has.
         let guard = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
-        let file = guard.replace(
-            "builtin = \"irb2600\"",
-            &format!("file = \"{SCENARIO_ROBOT}\""),
-        );
+        // A robot file carries no stiffness: its sag model names one per joint.
+        let file = guard
+            .replace(
+                "builtin = \"irb2600\"",
+                &format!("file = \"{SCENARIO_ROBOT}\""),
+            )
+            .replace(
+                "model = \"linear\"",
+                "model = \"linear\"\nstiffness_nm_per_rad = [4e6, 3.5e6, 2.5e6, 4e5, 4e5, 2e5]",
+            );
         assert_ne!(file, guard);
         corpus.push(file.into_bytes());
         corpus.push(
