@@ -47,21 +47,17 @@ pub(crate) fn task<'py>(
         (method_by_name(&m).map_err(err)?, m, "calbench".to_string())
     } else if method.is_callable() {
         // Its name as `task.json` enters it (`python:NAME`): given, or the function's own.
-        let label =
-            match name {
-                Some(n) => n,
-                None => match method
-                    .getattr("__name__")
-                    .and_then(|n| n.extract::<String>())
-                {
-                    Ok(n) => n,
-                    Err(_) => return Err(setting(
-                        "name",
-                        "the method has no `__name__` (a functools.partial, a callable object): \
-                         give it a name with `name=`",
-                    )),
-                },
-            };
+        let own = method
+            .getattr("__name__")
+            .and_then(|n| n.extract::<String>());
+        let label = match (name, own) {
+            (Some(n), _) | (None, Ok(n)) => n,
+            (None, Err(_)) => {
+                let why = "the method has no `__name__` (a functools.partial, a callable \
+                           object): give it a name with `name=`";
+                return Err(setting("name", why));
+            }
+        };
         if label.trim().is_empty() {
             return Err(setting("name", "the method's name is empty"));
         }

@@ -1,6 +1,6 @@
 //! The corrected program of `calbench compensate` (docs/formats.md): per row, the joints in
-//! the nominal robot's units (9 decimals of a degree or a millimetre, [`cell`]), the residual of the identified robot
-//! there (mm, deg, three significant digits) and the flag.
+//! the nominal robot's units (as fine as 9 decimals of a degree or a millimetre, [`cell`]), the
+//! residual of the identified robot there (mm, deg, three significant digits) and the flag.
 
 use std::path::Path;
 

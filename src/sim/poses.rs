@@ -81,13 +81,18 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
             if !workspace(robot, w, 1, key, &mut rng)?.is_empty() {
                 return Ok(());
             }
+            let from = match &w.start {
+                Some(s) => format!("its start {s:?}"),
+                None => "the default start (zero joint values, clamped into the limits)".into(),
+            };
             Err(Error::setting(
                 key,
                 format!(
                     "the workspace box centred at {:?} mm of size {:?} mm with the tool axis \
-                     within {}° of {:?} is out of reach of robot \"{}\": not one of \
-                     {WORKSPACE_TRIES_PER_POSE} random targets is reached within the joint \
-                     limits (the search stops there)",
+                     within {}° of {:?} is out of reach of robot \"{}\" from {from}: not one \
+                     of {WORKSPACE_TRIES_PER_POSE} random targets is reached within the joint \
+                     limits (the search stops there); every target's search starts there, so a \
+                     `start` on the arm's branch that faces the region may reach it",
                     w.center_mm, w.size_mm, w.cone_deg, w.axis, robot.name
                 ),
             ))
@@ -392,6 +397,22 @@ mod tests {
         });
         let e = check_region(&r, &far, 5, "calibration.region").unwrap_err();
         assert_eq!(key_of(&e), "calibration.region");
+        // Within the reach bound but not reached from the start every search starts from: the
+        // message names that start and `start`.
+        let inside = Region::Workspace(WorkspaceRegion {
+            center_mm: [0.0; 3],
+            size_mm: [1.0; 3],
+            axis: [0.0, 0.0, -1.0],
+            cone_deg: 10.0,
+            start: None,
+        });
+        let e = check_region(&r, &inside, 5, "calibration.region")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("from the default start") && e.contains("`start`"),
+            "{e}"
+        );
         let zero = Region::Workspace(WorkspaceRegion {
             center_mm: [1200.0, 0.0, 900.0],
             size_mm: [100.0; 3],
