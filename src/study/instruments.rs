@@ -24,14 +24,13 @@ use crate::numeric::rng::{stream, trial_seed};
 use crate::numeric::{Real, Vec3};
 use crate::poses::{select, PoseModel, SelectOptions, Strategy};
 use crate::robot::{Param, Robot};
-use crate::sim::instrument::{
-    instrument_poses, measure, touch, touching, InstrumentSettings, Layout,
-};
+use crate::sim::instrument::{measure, touch, touching, InstrumentSettings, Layout};
 use crate::sim::settings::ErrorSettings;
 use crate::study::instruments_table::instruments_keys;
 use crate::study::scenario::StrategyName;
 use crate::study::whole::Head;
 
+mod pool;
 mod trial;
 pub use trial::Trial;
 
@@ -372,8 +371,7 @@ impl InstrumentsScenario {
             .into_iter()
             .filter(|p| !matches!(p, Param::Base(_)))
             .collect();
-        let mut rng = stream(self.head.seed, &format!("instruments-pool-{ii}"));
-        let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
+        let (lay, pool, groups) = self.pool(nominal, ii)?;
         let rows = lay.instrument.observations(pool.len()) * lay.instrument.rows_per_observation();
         let pool_data = KindData {
             instrument: lay.instrument.clone(),
@@ -520,8 +518,7 @@ impl InstrumentsScenario {
         let s = all
             .get(entry)
             .ok_or_else(|| Error::setting("measurement", format!("no entry {entry}")))?;
-        let mut rng = stream(self.head.seed, &format!("instruments-pool-{entry}"));
-        let (lay, pool, groups) = instrument_poses(s, nominal, self.candidates, &mut rng)?;
+        let (lay, pool, groups) = self.pool(nominal, entry)?;
         let seed = trial_seed(self.head.seed, trial as u64);
         let count = self.poses[0];
         let reading = self.reading(nominal, (s, &lay), (&pool, &groups), None, count, seed)?;

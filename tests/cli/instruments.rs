@@ -351,3 +351,55 @@ fn a_plane_the_true_robot_cannot_touch_is_refused_naming_the_entry() {
     );
     assert!(!out.exists());
 }
+
+/// An instrument whose surface the robot's draws do not reach (a sphere beside a gantry of
+/// metre travels) is refused naming the scenario file and the `[[measurement]]` entry with its
+/// line, by `run` and by `simulate`, where the message named neither.
+#[test]
+fn an_instrument_the_arm_does_not_reach_is_named() {
+    let dir = tmp_dir("instruments-unreached");
+    let prismatic = |alpha: f64, theta: f64, travel: f64| {
+        format!(
+            "[[joints]]\ntype = \"prismatic\"\nalpha = {alpha:?}\na = 0.0\nd = 0.0\n\
+             theta = {theta:?}\nlimits = [0.0, {travel:?}]\n\n"
+        )
+    };
+    let gantry = format!(
+        "name = \"gantry\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n\n\
+         {}{}{}[[joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 0.0\nd = 100.0\ntheta = 0.0\n\
+         limits = [-180.0, 180.0]\n\n[tool]\nxyz = [50.0, 0.0, 30.0]\n",
+        prismatic(-90.0, 0.0, 2000.0),
+        prismatic(-90.0, -90.0, 1500.0),
+        prismatic(0.0, 0.0, 800.0),
+    );
+    std::fs::write(dir.join("gantry.toml"), gantry).unwrap();
+    let text = format!(
+        "name = \"g\"\nseed = 3\ntrials = 2\nrobot = \"{}\"\n\n[instruments_study]\n\
+         poses = [30]\nstrategies = [\"random\"]\ncandidates = 120\nvalidation = 10\n\n\
+         [errors]\nkind = \"paper\"\n\n[[measurement]]\nkind = \"distance\"\n\n\
+         [[measurement]]\nkind = \"sphere\"\n",
+        dir.join("gantry.toml").display()
+    );
+    let sc = write_scenario(&dir, "g", &text);
+    let sc_arg = sc.to_str().unwrap();
+    for (args, out) in [
+        (vec!["run", sc_arg, "--out"], dir.join("run")),
+        (
+            vec!["simulate", sc_arg, "--measure", "sphere", "--out"],
+            dir.join("sim"),
+        ),
+    ] {
+        let mut args = args;
+        args.push(out.to_str().unwrap());
+        let o = calbench(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(
+            err.contains(sc_arg)
+                && err.contains("line 18, measurement[1]")
+                && err.contains("reach their sphere"),
+            "{args:?}: {err}"
+        );
+        assert!(!out.exists(), "{} written", out.display());
+    }
+}
