@@ -117,9 +117,7 @@ impl IdentifyRequest {
         let registration = self.registration;
         if let Some(k) = self.k {
             if d.measure() == Measure::Position {
-                let why =
-                    "weighs orientation against position errors; the data hold positions only";
-                return Err(Error::option(Opt::K, why));
+                return Err(Error::option(Opt::K, super::request::K_ON_POSITIONS));
             }
             crate::identify::qiao::check_k(k).map_err(|e| e.of_option(Opt::K))?;
             spec.k = k;

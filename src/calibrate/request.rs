@@ -24,13 +24,17 @@ pub enum IdentifyData {
     Kind(KindFile),
 }
 
+/// Why `k` does not apply to a tracker's positions.
+pub(crate) const K_ON_POSITIONS: &str =
+    "weighs orientation against position errors; the data hold positions only";
+
 impl IdentifyData {
     /// Why `k`, the weight of orientation against position errors (`--k`, a method's `k`),
     /// does not apply to these data, if it does not: it applies to a tracker's full poses.
     pub fn k_refusal(&self) -> Option<&'static str> {
         match self {
             IdentifyData::Tracker(m) if m.measure() == crate::measurement::Measure::Position => {
-                Some("weighs orientation against position errors; the data hold positions only")
+                Some(K_ON_POSITIONS)
             }
             IdentifyData::Tracker(_) => None,
             IdentifyData::Kind(_) => Some(
