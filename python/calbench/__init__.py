@@ -15,6 +15,17 @@ import pathlib
 import numpy as np
 
 from . import _calbench
+from ._args import (
+    _array,
+    _count,
+    _flag,
+    _names,
+    _numbers,
+    _path,
+    _rotations,
+    _scenario,
+    _text,
+)
 from ._calbench import (  # noqa: F401  (re-exported)
     ComputeError,
     Error,
@@ -47,104 +58,6 @@ __all__ = [
     "IoError",
     "LimitWarning",
 ]
-
-
-def _numbers(name, value):
-    """``value`` as a C-contiguous float64 array of its own dimensions (a scalar stays 0-D,
-    where ``np.ascontiguousarray`` made it one row); bool and complex arrays are refused
-    naming ``name`` (their values are not joint values or millimetres)."""
-    try:
-        raw = np.asarray(value)
-    except (TypeError, ValueError) as e:
-        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
-    if raw.dtype.kind in "bc":
-        what = "bool" if raw.dtype.kind == "b" else "complex"
-        raise SettingError(f"setting `{name}`: a {what} array is not taken; give real numbers")
-    try:
-        return np.asarray(raw, dtype=np.float64, order="C")
-    except (TypeError, ValueError) as e:
-        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
-
-
-def _array(name, value, ndim, columns=None):
-    """``value`` as a C-contiguous float64 array of ``ndim`` dimensions (and ``columns``
-    columns), refused with a SettingError naming ``name`` otherwise."""
-    a = _numbers(name, value)
-    if a.ndim != ndim:
-        raise SettingError(f"setting `{name}`: expected {ndim} dimensions, got shape {a.shape}")
-    if columns is not None and a.shape[1] != columns:
-        want = ", ".join(["N", str(columns)])
-        raise SettingError(f"setting `{name}`: expected shape ({want}), got {a.shape}")
-    return a
-
-
-def _rotations(name, value):
-    """Orientations as (N, 4) quaternions or (N, 3, 3) matrices, float64."""
-    if value is None:
-        return None
-    a = _numbers(name, value)
-    if a.ndim == 2:
-        return _array(name, a, 2, 4)
-    return _array(name, a, 3)
-
-
-def _count(name, value, least=0):
-    """``value`` as a non-negative 64-bit integer (at least ``least``), or None; refused with
-    a SettingError naming ``name`` otherwise (never a bare OverflowError or TypeError)."""
-    if value is None:
-        return None
-    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
-        raise SettingError(f"setting `{name}`: expected an integer, got {type(value).__name__}")
-    value = int(value)
-    if not least <= value < 2**64:
-        raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^64 - 1)")
-    return value
-
-
-def _names(name, value):
-    """A list of names: a list or tuple of strings, or one comma-separated string."""
-    if value is None:
-        return None
-    if isinstance(value, str):
-        value = value.split(",")
-    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
-        raise SettingError(f"setting `{name}`: expected a list of names or a comma-separated string")
-    return [v.strip() for v in value]
-
-
-def _flag(name, value):
-    """``value`` as a bool: True or False (numpy's too), refused naming ``name`` otherwise
-    rather than read by its truth value (``"no"`` is not False)."""
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    raise SettingError(f"setting `{name}`: expected True or False, got {type(value).__name__}")
-
-
-def _text(name, value, what, optional=False):
-    """``value`` as a string (or None when ``optional``), refused naming ``name`` and saying
-    ``what`` it should be otherwise."""
-    if isinstance(value, str) or (optional and value is None):
-        return value
-    raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
-
-
-def _path(name, value, what="a path", optional=False):
-    """``value`` (a str or an os.PathLike) as a path string (None stays None when
-    ``optional``), refused naming ``name`` otherwise."""
-    if isinstance(value, (str, os.PathLike)):
-        return os.fspath(value)
-    if optional and value is None:
-        return None
-    raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
-
-
-def _scenario(scenario):
-    """A path (str or os.PathLike) or a dict, as the compiled part takes it."""
-    if isinstance(scenario, dict):
-        return scenario
-    if isinstance(scenario, (str, os.PathLike)):
-        return os.fspath(scenario)
-    raise SettingError("setting `scenario`: expected a path to a scenario file or a dict")
 
 
 class IdentifyResult(dict):
@@ -324,23 +237,37 @@ def identify(
     return IdentifyResult(fields)
 
 
-def simulate(scenario, trial=0):
+def simulate(scenario, trial=0, *, measure=None, out=None):
     """The measurements of one trial of a scenario, as ``calbench simulate`` writes them.
 
     Args:
         scenario: a path to a scenario file, or a dict shaped like the TOML file.
         trial: the trial (0-based).
+        measure: an instruments study's (``[instruments_study]``) instrument whose readings
+            are simulated, the first ``[[measurement]]`` entry of that kind (``"distance"``,
+            ``"plane"``, …; default: the first entry); refused for any other study.
+        out: a folder to write the files of ``calbench simulate --out`` to, byte for byte
+            (``measurements.csv``, ``validation.csv``, ``truth.json``); required for an
+            instruments study, whose readings are a measurement-kind file.
 
     Returns:
         a dict with ``q`` (N, n) in the robot's units, ``points`` (N, 3) mm, ``rotations``
         (N, 4) quaternions or None, ``validation_q``, ``validation_points``,
         ``validation_rotations``, ``payload`` / ``validation_payload`` when measured under
         loads, ``truth`` (dict parameter → injected error), ``robot`` (the nominal
-        :class:`Robot`) and ``info`` (the rest of ``truth.json``).
+        :class:`Robot`) and ``info`` (the rest of ``truth.json``). For an instruments
+        study: ``kind``, ``data`` (the readings' file, which :func:`identify` takes as
+        ``data``), ``q`` (the measured poses), the validation poses, ``truth``, ``robot``
+        and ``info``.
     """
-    out = _calbench.simulate(_scenario(scenario), _count("trial", 0 if trial is None else trial))
-    out["info"] = json.loads(out.pop("truth_json"))
-    return out
+    trial = _count("trial", 0 if trial is None else trial)
+    measure = _text("measure", measure, "a measurement kind", optional=True)
+    out = _path("out", out, optional=True)
+    res = _calbench.simulate(_scenario(scenario), trial, measure, out)
+    res["info"] = json.loads(res.pop("truth_json"))
+    if "data" in res:
+        res["data"] = pathlib.Path(res["data"])
+    return res
 
 
 _COMPARISON_KEYS = ["a", "b", "metric", "n", "diff_mean", "diff_ci95", "ratio", "win_rate",

@@ -12,12 +12,16 @@ use pyo3::types::{PyDict, PyTuple};
 
 use calbench::identify::external::{External, ExternalProblem};
 use calbench::identify::MethodSpec;
+use calbench::measurement::kind::Kind;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
+use calbench::report::guard::guard_out;
 use calbench::report::run::{OUTPUTS, STUDY_OUTPUTS};
+use calbench::report::simulated;
 use calbench::robot::Robot;
 use calbench::runner::run::{run_study, InMemoryRun};
 use calbench::runner::whole::run_cells_study;
+use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::kind::AnyScenario;
 use calbench::study::reporter::{Reporter, Silent, Terminal};
 use calbench::study::stats::precision::Precision;
@@ -27,6 +31,17 @@ use crate::convert::{any_scenario_of, matrix, scenario_of};
 use crate::errors::{err, setting, ComputeError};
 use crate::robot::PyRobot;
 
+/// Joint values as an (N, n) array in the robot's units.
+fn q_array<'py>(py: Python<'py>, robot: &Robot, qs: &[Vec<Real>]) -> Bound<'py, PyAny> {
+    let mut q = Array2::<f64>::zeros((qs.len(), robot.dof()));
+    for (i, qi) in qs.iter().enumerate() {
+        for (j, v) in robot.q_to_user(qi).into_iter().enumerate() {
+            q[[i, j]] = v;
+        }
+    }
+    q.into_pyarray(py).into_any()
+}
+
 /// A measurement as arrays in the robot's units: (q, points, quaternions or None).
 fn measurement_arrays<'py>(
     py: Python<'py>,
@@ -35,18 +50,13 @@ fn measurement_arrays<'py>(
     prefix: &str,
     out: &Bound<'py, PyDict>,
 ) -> PyResult<()> {
-    let n = robot.dof();
-    let mut q = Array2::<f64>::zeros((m.len(), n));
     let mut p = Array2::<f64>::zeros((m.len(), 3));
-    for (i, (qi, pi)) in m.qs.iter().zip(&m.points).enumerate() {
-        for (j, v) in robot.q_to_user(qi).into_iter().enumerate() {
-            q[[i, j]] = v;
-        }
+    for (i, pi) in m.points.iter().enumerate() {
         for a in 0..3 {
             p[[i, a]] = pi[a];
         }
     }
-    out.set_item(format!("{prefix}q"), q.into_pyarray(py))?;
+    out.set_item(format!("{prefix}q"), q_array(py, robot, &m.qs))?;
     out.set_item(format!("{prefix}points"), p.into_pyarray(py))?;
     match &m.quats {
         None => out.set_item(format!("{prefix}rotations"), py.None())?,
@@ -63,28 +73,16 @@ fn measurement_arrays<'py>(
     Ok(())
 }
 
-/// The measurements of one trial of a scenario (`calbench simulate`), as a dict of arrays.
-#[pyfunction]
-#[pyo3(signature = (scenario, trial = 0))]
-pub(crate) fn simulate<'py>(
-    py: Python<'py>,
-    scenario: &Bound<'py, PyAny>,
-    trial: usize,
-) -> PyResult<Bound<'py, PyDict>> {
-    let sc = scenario_of(scenario)?;
-    let (study, sim) = py
-        .detach(|| {
-            let study = Study::new(sc)?;
-            let sim = trial::simulate_trial(&study, trial, "trial")?;
-            Ok((study, sim))
-        })
-        .map_err(err)?;
-    let out = PyDict::new(py);
-    let robot = &study.nominal;
-    measurement_arrays(py, robot, &sim.calibration.data, "", &out)?;
-    measurement_arrays(py, robot, &sim.validation.data, "validation_", &out)?;
-    let truth = PyDict::new(py);
-    for (p, e) in &sim.errors {
+/// The truth of a simulated trial: `truth` (parameter → injected error), the nominal `robot`
+/// and the text of `truth.json` (`truth_json`).
+fn truth_items<'py>(
+    out: &Bound<'py, PyDict>,
+    errors: &[(calbench::robot::Param, Real)],
+    robot: &Robot,
+    truth_json: &serde_json::Value,
+) -> PyResult<()> {
+    let truth = PyDict::new(out.py());
+    for (p, e) in errors {
         truth.set_item(p.to_string(), *e)?;
     }
     out.set_item("truth", truth)?;
@@ -94,10 +92,99 @@ pub(crate) fn simulate<'py>(
             inner: robot.clone(),
         },
     )?;
-    let info = serde_json::to_string(&sim.truth_json(&study))
-        .map_err(|e| ComputeError::new_err(e.to_string()))?;
-    out.set_item("truth_json", info)?;
-    Ok(out)
+    let text =
+        serde_json::to_string(truth_json).map_err(|e| ComputeError::new_err(e.to_string()))?;
+    out.set_item("truth_json", text)
+}
+
+/// The measurements of one trial of a scenario (`calbench simulate`), as a dict of arrays;
+/// with `out`, the folder `calbench simulate --out` writes. An instruments study's trial is
+/// measured by the instrument of `measure` and needs `out`: its readings are a file.
+#[pyfunction]
+#[pyo3(signature = (scenario, trial = 0, measure = None, out = None))]
+pub(crate) fn simulate<'py>(
+    py: Python<'py>,
+    scenario: &Bound<'py, PyAny>,
+    trial: usize,
+    measure: Option<String>,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let measure = measure
+        .map(|m| calbench::robot::names::parse::<Kind>("measure", &m))
+        .transpose()
+        .map_err(err)?;
+    let sc = match scenario.cast::<PyDict>() {
+        Ok(d) if !(d.contains("registration_study")? || d.contains("instruments_study")?) => {
+            scenario_of(scenario)?
+        }
+        _ => match any_scenario_of(scenario)? {
+            AnyScenario::Instruments(sc) => {
+                return simulate_instrument(py, &sc, measure, trial, out)
+            }
+            AnyScenario::MonteCarlo(sc) => sc,
+            // Refused as a calibration scenario refuses it.
+            AnyScenario::Registration(_) => scenario_of(scenario)?,
+        },
+    };
+    let path = sc
+        .path
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("<scenario dict>"));
+    if measure.is_some() {
+        return Err(err(simulated::no_instruments(&path)));
+    }
+    if let Some(out) = &out {
+        guard_out(out, "out", &simulated::FILES, sc.path.as_deref()).map_err(err)?;
+    }
+    let (study, sim) = py
+        .detach(|| {
+            let study = Study::new(sc)?;
+            let sim = trial::simulate_trial(&study, trial, "trial")?;
+            if let Some(out) = &out {
+                simulated::trial_folder(out, &study, &sim)?;
+            }
+            Ok((study, sim))
+        })
+        .map_err(err)?;
+    let dict = PyDict::new(py);
+    let robot = &study.nominal;
+    measurement_arrays(py, robot, &sim.calibration.data, "", &dict)?;
+    measurement_arrays(py, robot, &sim.validation.data, "validation_", &dict)?;
+    truth_items(&dict, &sim.errors, robot, &sim.truth_json(&study))?;
+    Ok(dict)
+}
+
+/// Trial `trial` of an instruments study measured by the instrument of `measure`, written to
+/// `out` as `calbench simulate` writes it; the dict holds `kind`, `data` (the readings' file),
+/// `q` (the measured poses), the validation poses and the truth.
+fn simulate_instrument<'py>(
+    py: Python<'py>,
+    sc: &InstrumentsScenario,
+    measure: Option<Kind>,
+    trial: usize,
+    out: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let out = out.ok_or_else(|| {
+        setting(
+            "out",
+            "an instruments study's readings are a measurement-kind file (docs/formats.md \
+             § 5.3): give out=DIR, whose measurements.csv identify(data=...) reads",
+        )
+    })?;
+    guard_out(&out, "out", &simulated::FILES, Some(&sc.head.path)).map_err(err)?;
+    let (robot, sim, truth) = py
+        .detach(|| simulated::instrument_folder(&out, sc, measure, trial))
+        .map_err(err)?;
+    let dict = PyDict::new(py);
+    dict.set_item("kind", sim.layout.instrument.kind().as_str())?;
+    dict.set_item("data", out.join(simulated::FILES[0]))?;
+    if let Some((qs, _, _)) = &sim.reading.measured {
+        dict.set_item("q", q_array(py, &robot, qs))?;
+    }
+    let validation = simulated::validation(&sim);
+    measurement_arrays(py, &robot, &validation, "validation_", &dict)?;
+    truth_items(&dict, &sim.reading.errors, &robot, &truth)?;
+    Ok(dict)
 }
 
 /// The problem a method written in Python solves (see `calbench.run`): the kinematic least

@@ -97,3 +97,58 @@ def test_what_a_study_that_runs_whole_cannot_take_is_refused(root, tmp_path, mor
     with pytest.raises(calbench.SettingError, match=match):
         calbench.run(root / FIG3, trials=3, **more)
     assert not (tmp_path / "x").exists()
+
+
+def test_an_instruments_trial_simulated_from_python_is_the_cli_folder_and_identifies(
+    cli, tmp_path
+):
+    scenario = tmp_path / "instruments.toml"
+    scenario.write_text(INSTRUMENTS)
+    cli("simulate", scenario, "--trial", "1", "--measure", "distance", "--out", tmp_path / "cli")
+    sim = calbench.simulate(scenario, trial=1, measure="distance", out=tmp_path / "py")
+    for name in ("measurements.csv", "validation.csv", "truth.json"):
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "py" / name).read_bytes()
+    assert sim["kind"] == "distance"
+    assert sim["data"] == tmp_path / "py" / "measurements.csv"
+    assert sim["q"].shape == (40, 6) and sim["validation_points"].shape == (10, 3)
+    assert sim["info"]["measurement"] == 1 and sim["info"]["trial"] == 1
+    assert sim["truth"] and set(sim["truth"]) == set(sim["info"]["errors"])
+    # The readings are a distance file, which identify takes as data (the pivot unknown).
+    rec = calbench.identify(
+        sim["robot"], data=sim["data"], method="ls", validate=tmp_path / "py" / "validation.csv"
+    )
+    assert rec.termination == "converged", rec.termination
+    before, after = rec["validation_before_mm"]["rms"], rec["validation_after_mm"]["rms"]
+    assert before > 0.5 and after < 0.02, (before, after)
+    # From the dict of the same file: the first entry when measure is not given.
+    first = calbench.simulate(tomllib.loads(INSTRUMENTS), out=tmp_path / "first")
+    assert first["kind"] == "position"
+
+
+@pytest.mark.parametrize(
+    "more, match",
+    [
+        ({}, "setting `out`"),
+        ({"out": "x", "measure": "sphere"}, "setting `measure`: .* has no \\[\\[measurement\\]\\] of kind sphere \\(it has position, distance\\)"),
+        ({"out": "x", "measure": "laser"}, "setting `measure`: .*laser"),
+        ({"out": "x", "trial": 3}, "setting `trial`: 3 is not below the scenario's trials = 3"),
+    ],
+)
+def test_what_an_instruments_simulation_cannot_take_is_refused(tmp_path, more, match):
+    scenario = tmp_path / "instruments.toml"
+    scenario.write_text(INSTRUMENTS)
+    if "out" in more:
+        more["out"] = tmp_path / more["out"]
+    with pytest.raises(calbench.SettingError, match=match):
+        calbench.simulate(scenario, **more)
+    assert not (tmp_path / "x").exists()
+
+
+def test_a_monte_carlo_trial_simulated_with_out_is_the_cli_folder(cli, root, tmp_path):
+    cli("simulate", "scenarios/ci-guard.toml", "--trial", "2", "--out", tmp_path / "cli")
+    sim = calbench.simulate(root / "scenarios/ci-guard.toml", trial=2, out=tmp_path / "py")
+    for name in ("measurements.csv", "validation.csv", "truth.json"):
+        assert (tmp_path / "cli" / name).read_bytes() == (tmp_path / "py" / name).read_bytes()
+    assert sim["points"].shape[1] == 3
+    with pytest.raises(calbench.SettingError, match="setting `measure`: .*not an instruments study"):
+        calbench.simulate(root / "scenarios/ci-guard.toml", measure="distance")

@@ -6,10 +6,8 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use calbench::error::Error;
 use calbench::measurement::kind::Kind;
-use calbench::report::output::{Json, MeasurementFile};
-use calbench::report::{self, simulated};
+use calbench::report::simulated;
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::kind::AnyScenario;
 use calbench::study::scenario::Scenario;
@@ -46,44 +44,15 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
         AnyScenario::Registration(_) => Scenario::load(&args.scenario)?,
     };
     if args.measure.is_some() {
-        return Err(Error::setting(
-            "--measure",
-            format!(
-                "{} is not an instruments study ([instruments_study]): its measurement is \
-                 the tracker's",
-                args.scenario.display()
-            ),
-        )
-        .into());
+        return Err(simulated::no_instruments(&args.scenario).into());
     }
     let study = Study::new(sc)?;
     let sim = trial::simulate_trial(&study, trial, "--trial")?;
-    let (m, v) = (&sim.calibration, &sim.validation);
-    let truth_json = sim.truth_json(&study);
-    let [measurements, validation, truth] = OUTPUTS;
-    report::output::folder(
-        out,
-        &[
-            &MeasurementFile {
-                name: measurements,
-                robot: &study.nominal,
-                rows: &m.data,
-            },
-            &MeasurementFile {
-                name: validation,
-                robot: &study.nominal,
-                rows: &v.data,
-            },
-            &Json {
-                name: truth,
-                value: &truth_json,
-            },
-        ],
-    )?;
+    simulated::trial_folder(out, &study, &sim)?;
     out!(
         "{} calibration and {} validation poses of trial {trial} written to {}",
-        m.data.len(),
-        v.data.len(),
+        sim.calibration.data.len(),
+        sim.validation.data.len(),
         out.display()
     );
     Ok(())
@@ -94,45 +63,7 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
 /// base frame), the validation poses as a tracker reads them and the truth.
 fn instrument(sc: &InstrumentsScenario, args: &SimulateArgs) -> Result<()> {
     let (out, trial) = (&args.out, args.trial);
-    let all = &sc.measurement;
-    let entry = match args.measure {
-        None => 0,
-        Some(k) => all.iter().position(|s| s.kind == k).ok_or_else(|| {
-            let kinds: Vec<&str> = all.iter().map(|s| s.kind.as_str()).collect();
-            Error::setting(
-                "--measure",
-                format!(
-                    "{} has no [[measurement]] of kind {} (it has {})",
-                    args.scenario.display(),
-                    k.as_str(),
-                    kinds.join(", ")
-                ),
-            )
-        })?,
-    };
-    let nominal = super::ChainArgs::default().load(&sc.robot)?;
-    let sim = sc.simulate(&nominal, entry, trial)?;
-    let truth = simulated::instrument_truth((&sc.head.name, &nominal.name), (entry, trial), &sim);
-    let validation = simulated::validation(&sim);
-    let [_, validation_file, truth_file] = OUTPUTS;
-    report::output::folder(
-        out,
-        &[
-            &simulated::Readings {
-                robot: &nominal,
-                trial: &sim,
-            },
-            &MeasurementFile {
-                name: validation_file,
-                robot: &nominal,
-                rows: &validation,
-            },
-            &Json {
-                name: truth_file,
-                value: &truth,
-            },
-        ],
-    )?;
+    let (_, sim, _) = simulated::instrument_folder(out, sc, args.measure, trial)?;
     let (inst, r) = (&sim.layout.instrument, &sim.reading);
     let Some((qs, data, _)) = &r.measured else {
         unreachable!("InstrumentsScenario::simulate returns readings")

@@ -1,18 +1,21 @@
 //! The files of `calbench simulate` (docs/formats.md § 2.5): a trial's measurements
 //! (`measurements.csv`), its validation poses as a tracker reads them (`validation.csv`)
 //! and the truth (`truth.json`); for an instruments study, the readings of one instrument
-//! ([`Readings`]) and its truth ([`instrument_truth`]).
+//! ([`Readings`]) and its truth ([`instrument_truth`]). [`trial_folder`] and
+//! [`instrument_folder`] write the folder, for the command line and Python alike.
 
 use std::path::Path;
 
 use serde_json::{json, Map, Value};
 
-use super::output::{KindFile, MeasurementFile, Output};
-use crate::error::Result;
+use super::output::{Json, KindFile, MeasurementFile, Output};
+use crate::error::{Error, Opt, Result};
 use crate::measurement::kind::{Instrument, Kind};
 use crate::measurement::Measurements;
 use crate::robot::Robot;
-use crate::study::instruments::Simulated;
+use crate::study::instruments::{InstrumentsScenario, Simulated};
+use crate::study::trial::SimulatedTrial;
+use crate::study::Study;
 
 /// The files written.
 pub const FILES: [&str; 3] = ["measurements.csv", "validation.csv", "truth.json"];
@@ -119,4 +122,96 @@ pub fn instrument_truth(
         truth["pivot"] = json!(pivot);
     }
     truth
+}
+
+/// Writes trial `sim` of the Monte-Carlo study `study` to the folder `out`: the calibration
+/// and validation measurements as the tracker reads them, and the truth.
+pub fn trial_folder(out: &Path, study: &Study, sim: &SimulatedTrial) -> Result<()> {
+    let [measurements, validation, truth] = FILES;
+    let robot = &study.nominal;
+    super::output::folder(
+        out,
+        &[
+            &MeasurementFile {
+                name: measurements,
+                robot,
+                rows: &sim.calibration.data,
+            },
+            &MeasurementFile {
+                name: validation,
+                robot,
+                rows: &sim.validation.data,
+            },
+            &Json {
+                name: truth,
+                value: &sim.truth_json(study),
+            },
+        ],
+    )
+}
+
+/// The refusal of an instrument named for a study that has none: the scenario `path` is a
+/// Monte-Carlo or registration study, measured by the tracker alone.
+pub fn no_instruments(path: &Path) -> Error {
+    Error::option(
+        Opt::Measure,
+        format!(
+            "{} is not an instruments study ([instruments_study]): its measurement is the \
+             tracker's",
+            path.display()
+        ),
+    )
+}
+
+/// Simulates trial `trial` of the instruments study `sc` on its nominal robot, measured by
+/// its first `[[measurement]]` entry of kind `measure` (the first entry when `None`), and
+/// writes it to the folder `out`: the readings ([`Readings`]), the validation poses as a
+/// tracker reads them ([`validation`]) and the truth ([`instrument_truth`]). Returns the
+/// nominal robot, the trial and its truth.
+pub fn instrument_folder(
+    out: &Path,
+    sc: &InstrumentsScenario,
+    measure: Option<Kind>,
+    trial: usize,
+) -> Result<(Robot, Simulated, Value)> {
+    let all = &sc.measurement;
+    let entry = match measure {
+        None => 0,
+        Some(k) => all.iter().position(|s| s.kind == k).ok_or_else(|| {
+            let kinds: Vec<&str> = all.iter().map(|s| s.kind.as_str()).collect();
+            Error::option(
+                Opt::Measure,
+                format!(
+                    "{} has no [[measurement]] of kind {} (it has {})",
+                    sc.head.path.display(),
+                    k.as_str(),
+                    kinds.join(", ")
+                ),
+            )
+        })?,
+    };
+    let chain = crate::robot::urdf::UrdfChain::default();
+    let nominal = crate::robot::builtin::load_chain(&sc.robot, &chain)?;
+    let sim = sc.simulate(&nominal, entry, trial)?;
+    let truth = instrument_truth((&sc.head.name, &nominal.name), (entry, trial), &sim);
+    let [_, validation_file, truth_file] = FILES;
+    super::output::folder(
+        out,
+        &[
+            &Readings {
+                robot: &nominal,
+                trial: &sim,
+            },
+            &MeasurementFile {
+                name: validation_file,
+                robot: &nominal,
+                rows: &validation(&sim),
+            },
+            &Json {
+                name: truth_file,
+                value: &truth,
+            },
+        ],
+    )?;
+    Ok((nominal, sim, truth))
 }

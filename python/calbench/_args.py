@@ -1,0 +1,106 @@
+"""Argument checks of the Python front end: each turns a caller's value into what the
+compiled part takes, or refuses it with a :class:`calbench.SettingError` naming the setting."""
+
+import numbers
+import os
+
+import numpy as np
+
+from ._calbench import SettingError
+
+def _numbers(name, value):
+    """``value`` as a C-contiguous float64 array of its own dimensions (a scalar stays 0-D,
+    where ``np.ascontiguousarray`` made it one row); bool and complex arrays are refused
+    naming ``name`` (their values are not joint values or millimetres)."""
+    try:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as e:
+        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
+    if raw.dtype.kind in "bc":
+        what = "bool" if raw.dtype.kind == "b" else "complex"
+        raise SettingError(f"setting `{name}`: a {what} array is not taken; give real numbers")
+    try:
+        return np.asarray(raw, dtype=np.float64, order="C")
+    except (TypeError, ValueError) as e:
+        raise SettingError(f"setting `{name}`: not an array of numbers ({e})") from None
+
+
+def _array(name, value, ndim, columns=None):
+    """``value`` as a C-contiguous float64 array of ``ndim`` dimensions (and ``columns``
+    columns), refused with a SettingError naming ``name`` otherwise."""
+    a = _numbers(name, value)
+    if a.ndim != ndim:
+        raise SettingError(f"setting `{name}`: expected {ndim} dimensions, got shape {a.shape}")
+    if columns is not None and a.shape[1] != columns:
+        want = ", ".join(["N", str(columns)])
+        raise SettingError(f"setting `{name}`: expected shape ({want}), got {a.shape}")
+    return a
+
+
+def _rotations(name, value):
+    """Orientations as (N, 4) quaternions or (N, 3, 3) matrices, float64."""
+    if value is None:
+        return None
+    a = _numbers(name, value)
+    if a.ndim == 2:
+        return _array(name, a, 2, 4)
+    return _array(name, a, 3)
+
+
+def _count(name, value, least=0):
+    """``value`` as a non-negative 64-bit integer (at least ``least``), or None; refused with
+    a SettingError naming ``name`` otherwise (never a bare OverflowError or TypeError)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+        raise SettingError(f"setting `{name}`: expected an integer, got {type(value).__name__}")
+    value = int(value)
+    if not least <= value < 2**64:
+        raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^64 - 1)")
+    return value
+
+
+def _names(name, value):
+    """A list of names: a list or tuple of strings, or one comma-separated string."""
+    if value is None:
+        return None
+    if isinstance(value, str):
+        value = value.split(",")
+    if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
+        raise SettingError(f"setting `{name}`: expected a list of names or a comma-separated string")
+    return [v.strip() for v in value]
+
+
+def _flag(name, value):
+    """``value`` as a bool: True or False (numpy's too), refused naming ``name`` otherwise
+    rather than read by its truth value (``"no"`` is not False)."""
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    raise SettingError(f"setting `{name}`: expected True or False, got {type(value).__name__}")
+
+
+def _text(name, value, what, optional=False):
+    """``value`` as a string (or None when ``optional``), refused naming ``name`` and saying
+    ``what`` it should be otherwise."""
+    if isinstance(value, str) or (optional and value is None):
+        return value
+    raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
+
+
+def _path(name, value, what="a path", optional=False):
+    """``value`` (a str or an os.PathLike) as a path string (None stays None when
+    ``optional``), refused naming ``name`` otherwise."""
+    if isinstance(value, (str, os.PathLike)):
+        return os.fspath(value)
+    if optional and value is None:
+        return None
+    raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
+
+
+def _scenario(scenario):
+    """A path (str or os.PathLike) or a dict, as the compiled part takes it."""
+    if isinstance(scenario, dict):
+        return scenario
+    if isinstance(scenario, (str, os.PathLike)):
+        return os.fspath(scenario)
+    raise SettingError("setting `scenario`: expected a path to a scenario file or a dict")
