@@ -53,7 +53,9 @@ fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -
 }
 
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
-/// reaches the pose `nominal` gives at `q_nominal`. `round` maps joint values to what is
+/// reaches the pose `nominal` gives at `q_nominal`, a revolute joint outside its limits turned
+/// by whole turns to the value nearest the row's where that is within them
+/// ([`wrap_into_limits`]). `round` maps joint values to what is
 /// written (the output's decimals), so the residuals are those of the written command. The
 /// identified robot carries `payload_kg` at the tool (its sag, when it has compliances; the
 /// nominal robot of a locked controller knows no sag).
@@ -65,7 +67,9 @@ pub fn compensate_row(
     round: impl Fn(&[Real]) -> Vec<Real>,
 ) -> crate::Result<Corrected> {
     let target = nominal.fk(q_nominal);
-    let q = round(&solve(identified, &target, q_nominal, payload_kg)?);
+    let mut q = solve(identified, &target, q_nominal, payload_kg)?;
+    wrap_into_limits(identified, &mut q, Some(q_nominal));
+    let q = round(&q);
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
     let residual_deg = rotation_angle_deg(&f, &target);
@@ -79,18 +83,21 @@ pub fn compensate_row(
 }
 
 /// Turns each revolute joint outside its limits by whole turns into them, where a turn
-/// reaches (the same pose).
-fn wrap_into_limits(robot: &Robot, q: &mut [Real]) {
+/// reaches (the same pose): to the value nearest `near`'s when that is within them, else to
+/// the lowest within them.
+fn wrap_into_limits(robot: &Robot, q: &mut [Real], near: Option<&[Real]>) {
     let turn = 2.0 * std::f64::consts::PI;
-    for (v, j) in q.iter_mut().zip(&robot.joints) {
-        if j.kind != crate::robot::JointType::Revolute {
+    for (i, (v, j)) in q.iter_mut().zip(&robot.joints).enumerate() {
+        let (lo, hi) = j.limits;
+        if j.kind != crate::robot::JointType::Revolute || (lo..=hi).contains(v) {
             continue;
         }
-        let (lo, hi) = j.limits;
-        let k = ((lo - *v) / turn).ceil();
-        let w = *v + k * turn;
-        if (*v < lo || *v > hi) && w <= hi {
+        let nearest = near.map(|r| *v + ((r[i] - *v) / turn).round() * turn);
+        let lowest = *v + ((lo - *v) / turn).ceil() * turn;
+        if let Some(w) = nearest.filter(|w| (lo..=hi).contains(w)) {
             *v = w;
+        } else if lowest <= hi {
+            *v = lowest;
         }
     }
 }
@@ -131,7 +138,7 @@ pub fn compensate_targets(
         for q0 in starts {
             let mut q =
                 crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)?;
-            wrap_into_limits(identified, &mut q);
+            wrap_into_limits(identified, &mut q, None);
             let q = round(&q);
             let f = fk.at(&q, payload_kg)?;
             let residual_mm = (f.pos - target.pos).norm();

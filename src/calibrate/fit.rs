@@ -7,6 +7,7 @@
 //! that is finally identified, re-admitted parameters included.
 
 use super::diagnostics::Subject;
+use super::plausibility::moves;
 use super::recheck::{self, Readmission};
 use super::{Calibrated, Registration};
 use crate::error::Result;
@@ -44,8 +45,10 @@ pub type CalibrateFrom<'a> = dyn FnMut(&[Param], &[Real]) -> Result<Calibrated> 
 /// at the nominal robot, where they were left out, their columns vanish and a Gauss–Newton
 /// step in them is unbounded (the ridge's and the robust ridge's, which do not damp it). A
 /// re-admission the
-/// identification cannot settle (the first fit converged and the second does not) is given
-/// up: the parameters are not determined in practice. `accept` may refuse each fit kept (the
+/// identification cannot settle (the first fit converged and the second does not), or one
+/// that moves a robot the first fit left within the physical bounds beyond them
+/// ([`moves`]: 5° for an angle, 2 % of the reach for a length), is given up: the parameters
+/// are not determined in practice. `accept` may refuse each fit kept (the
 /// pipeline's refusal of undetermined data).
 pub fn fit_and_readmit(
     (nominal, data, registration, k): FitOn,
@@ -85,7 +88,10 @@ pub fn fit_and_readmit(
     let second = calibrate(&more, &start)?;
     let settled = second.identified.termination == Termination::Converged
         || first.identified.termination != Termination::Converged;
-    if !settled {
+    // A re-admission that takes a robot within the physical bounds beyond them moves it
+    // along directions the data barely determine: given up as well.
+    let strays = |c: &Calibrated, p: &[Param]| !moves(nominal, &c.robot, p, &data.qs).is_empty();
+    if !settled || (strays(&second, &more) && !strays(&first, &params)) {
         return Ok(keep(first, params));
     }
     accept(&second, &more)?;

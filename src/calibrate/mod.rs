@@ -414,7 +414,10 @@ impl Anderson {
             dg.set_column(j, &(g1 - g0));
         }
         let rhs = nalgebra::DVector::from_column_slice(f.as_slice());
-        let Ok(gamma) = df.svd(true, true).solve(&rhs, 1e-12 * f.norm().max(1e-300)) else {
+        let tol = 1e-12 * f.norm().max(1e-300);
+        let Some(Ok(gamma)) =
+            crate::numeric::linalg::svd(df, true, true).map(|s| s.solve(&rhs, tol))
+        else {
             return *g;
         };
         let next = g - Coordinates::from_column_slice((dg * gamma).as_slice());

@@ -17,7 +17,7 @@ use calbench::report::program::{cell, CorrectedProgram};
 use calbench::report::Output as _;
 use calbench::robot::builtin;
 
-use super::check_out_file;
+use super::guard_out_file;
 
 /// Arguments of `calbench compensate`.
 #[derive(clap::Args)]
@@ -59,12 +59,10 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
     }
     let robots = [Path::new(&args.robot), Path::new(&args.identified)];
     let programs = [args.joints.as_deref(), args.targets.as_deref()];
-    super::guard_out(
+    guard_out_file(
         &args.out,
-        &[],
         robots.into_iter().chain(programs.into_iter().flatten()),
     )?;
-    check_out_file(&args.out)?;
     let nominal = args.chain.load(&args.robot)?;
     let ident = if calbench::robot::urdf::is_urdf(&args.identified) {
         args.chain.load(&args.identified)?

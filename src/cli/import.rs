@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use super::check_out_file;
+use super::guard_out_file;
 
 /// Arguments of `calbench import`.
 #[derive(clap::Args)]
@@ -22,8 +22,7 @@ pub struct ImportArgs {
 
 /// Imports the export and prints `N rows of RAW written to CSV`.
 pub fn run(args: &ImportArgs) -> Result<()> {
-    calbench::report::guard::guard_out(&args.out, "--out", &[], [&args.raw, &args.mapping])?;
-    check_out_file(&args.out)?;
+    guard_out_file(&args.out, [&args.raw, &args.mapping])?;
     let n = calbench::measurement::import::import(&args.raw, &args.mapping, &args.out)?;
     out!(
         "{n} rows of {} written to {}",

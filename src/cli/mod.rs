@@ -183,8 +183,14 @@ pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<()> {
 }
 
 /// Checks, before any work, that `out` can be the one file a command writes (`import`,
-/// `compensate`): an existing folder is refused, naming it; an existing file is replaced.
-pub fn check_out_file(out: &Path) -> Result<()> {
+/// `compensate`) from `inputs`: not an input, the root or the home folder
+/// ([`calbench::report::guard::guard_out`]), and not an existing folder, which is refused
+/// naming it; an existing file is replaced.
+pub fn guard_out_file<P: AsRef<Path>>(
+    out: &Path,
+    inputs: impl IntoIterator<Item = P>,
+) -> Result<()> {
+    calbench::report::guard::guard_out(out, "--out", &[], inputs)?;
     if out.is_dir() {
         return Err(Error::setting(
             "--out",

@@ -10,6 +10,7 @@ use anyhow::{bail, Result};
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
+use calbench::calibrate::record::IdentifiedRecord;
 use calbench::calibrate::task::record::TASK_FILE;
 use calbench::calibrate::task::socket::{
     load_socket_task, Placements, SocketFigures, SocketScores, SocketTask,
@@ -73,6 +74,7 @@ pub fn run(args: &TaskArgs) -> Result<()> {
     for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
+    unconverged(&o.record);
     let entry = TaskEntry {
         task: &task,
         method: args.method.name.to_string(),
@@ -175,6 +177,7 @@ fn run_socket(args: &TaskArgs, task: &SocketTask) -> Result<()> {
     for w in e.outcome.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
+    unconverged(&e.outcome.record);
     let files = head.files(&e.record.to_value())?;
     write_kind(out, &e.outcome.record, &e.robot, &files)?;
     if let Some(scores) = &e.record.socket {
@@ -221,5 +224,24 @@ fn print_scores(s: &SocketScores, method: &str) {
     }
     if let Some(k) = &s.authors_kpis {
         row("the authors' kpis.yaml".into(), None, Some(k));
+    }
+}
+
+/// Warns when the entry's identification stopped short of convergence (at its iteration
+/// limit, diverging or making no progress): the task's figure is then that of an unconverged
+/// solve, which `task.json` does not say (`identified.json`'s `termination` does).
+fn unconverged(r: &IdentifiedRecord) {
+    use calbench::identify::Termination as T;
+    if matches!(
+        r.termination,
+        T::MaxIterations | T::Diverged | T::NoProgress
+    ) {
+        eprintln!(
+            "warning: the identification ended `{}` after {} iterations (RMS residual {:.4} mm): \
+             the figure is that of a solve that did not converge (identified.json, `termination`)",
+            r.termination.as_str(),
+            r.iterations,
+            r.rms_residual_mm
+        );
     }
 }

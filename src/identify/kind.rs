@@ -223,12 +223,20 @@ pub fn identifiability(
     let mut r = DVector::zeros(size.rows());
     let mut j = DMatrix::zeros(size.rows(), size.params);
     kp.evaluate(&DVector::zeros(size.params), &mut r, &mut j);
+    if !j.iter().all(|v| v.is_finite()) {
+        return Err(Error::Compute(format!(
+            "the {} readings' Jacobian at the nominal robot is not finite: a reading has no \
+             direction there (a tool point on the instrument's pivot, a robot of zero length)",
+            data.instrument.kind().as_str()
+        )));
+    }
     let t = params.len();
     let mut jr = j.columns(0, t).into_owned();
     if size.params > t {
         // Remove the part of each robot column that the nuisance columns explain.
         let n = j.columns(t, size.params - t).into_owned();
-        let svd = n.svd(true, false);
+        let svd = crate::numeric::linalg::svd(n, true, false)
+            .ok_or_else(|| Error::Compute("the SVD of the instrument's columns".into()))?;
         let u = svd.u.as_ref().ok_or_else(|| Error::Compute("SVD".into()))?;
         let big = svd.singular_values.max();
         let keep: Vec<usize> = (0..svd.singular_values.len())

@@ -514,7 +514,8 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                     } else {
                         String::new()
                     };
-                    at_line(raw, line, &place, format!("\"{f}\" is not a finite number{hint}"))
+                    let f = super::rows::quoted(f);
+                    at_line(raw, line, &place, format!("{f} is not a finite number{hint}"))
                 })
         };
         row.clear();

@@ -524,8 +524,8 @@ pub fn nuisance_guess(
         }
         let am = DMatrix::from_fn(a.len(), cols, |i, c| a[i][c]);
         let bv = DVector::from_vec(b);
-        let x = am
-            .svd(true, true)
+        let x = crate::numeric::linalg::svd(am, true, true)
+            .ok_or_else(|| Error::Compute("the SVD of a non-finite system".into()))?
             .solve(&bv, 1e-12)
             .map_err(|e| Error::Compute(e.to_string()))?;
         out.extend(x.iter().take(3));

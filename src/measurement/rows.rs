@@ -13,6 +13,19 @@ pub(crate) fn at_line(path: &Path, line: u64, place: &str, message: String) -> E
     Error::file(path, format!("line {line}{place}"), message)
 }
 
+/// A cell as a message quotes it: in double quotes, control characters escaped (a NUL byte
+/// shown as `\0`, not as a blank a reader takes for a space the reader trims) and a long cell
+/// cut after 40 characters, so that a 10 MB cell is not echoed whole.
+pub(crate) fn quoted(cell: &str) -> String {
+    const SHOWN: usize = 40;
+    let head: String = cell.chars().take(SHOWN).collect();
+    let mut s = head.escape_debug().to_string();
+    if cell.chars().nth(SHOWN).is_some() {
+        s.push_str(&format!("… ({} bytes)", cell.len()));
+    }
+    format!("\"{s}\"")
+}
+
 /// Cell `c` of `rec` as a finite number; a refusal is (place, message), the place naming the
 /// column by its header name.
 pub(crate) fn number(
@@ -27,7 +40,7 @@ pub(crate) fn number(
         .ok_or_else(|| {
             (
                 format!(", column {}", names[c]),
-                format!("\"{t}\" is not a finite number"),
+                format!("{} is not a finite number", quoted(t)),
             )
         })
 }
@@ -250,5 +263,22 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
         out[..n].copy_from_slice(&self.line[self.at..self.at + n]);
         self.at += n;
         Ok(n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::quoted;
+
+    #[test]
+    fn a_quoted_cell_shows_control_characters_and_is_cut() {
+        assert_eq!(quoted("0,25"), "\"0,25\"");
+        assert_eq!(quoted("0,0030775\0"), "\"0,0030775\\0\"");
+        let long = "x".repeat(10_000);
+        let q = quoted(&long);
+        assert!(
+            q.starts_with(&format!("\"{}", "x".repeat(40))) && q.ends_with("… (10000 bytes)\"")
+        );
+        assert!(q.len() < 80, "{q}");
     }
 }

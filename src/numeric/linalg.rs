@@ -5,10 +5,27 @@
 //! AVX2 and FMA where the processor has them, with the same bits either way (every update
 //! is an explicit fused multiply-add in a fixed order).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::linalg::SVD;
+use nalgebra::{DMatrix, DVector, Dyn};
 
 use super::simd;
 use super::Real;
+
+/// The most iterations [`svd`] lets nalgebra's SVD take: orders of magnitude more than a
+/// finite matrix of calbench's needs (a few per singular value).
+const SVD_MAX_ITERATIONS: usize = 100_000;
+
+/// The singular value decomposition of `m` (`u`, `v`: whether to compute U and Vᵀ), as
+/// nalgebra's `svd` computes it (the same tolerance, so the same bits), but bounded: `None`
+/// for an empty matrix, a matrix with a non-finite entry (on which nalgebra's iteration never
+/// ends) or one not converged after [`SVD_MAX_ITERATIONS`]. The one SVD of a dynamic matrix
+/// in the library.
+pub fn svd(m: DMatrix<Real>, u: bool, v: bool) -> Option<SVD<Real, Dyn, Dyn>> {
+    if m.is_empty() || !m.iter().all(|x| x.is_finite()) {
+        return None;
+    }
+    SVD::try_new(m, u, v, Real::EPSILON * 5.0, SVD_MAX_ITERATIONS)
+}
 
 /// Relative pivot below which a normal matrix counts as singular.
 pub(crate) const PIVOT_TOL: Real = 1e-12;

@@ -109,7 +109,10 @@ impl RobotPoseModel {
             self.jacobian_block_into(q, &mut block);
             j.rows_mut(r * i, r).copy_from(&block);
         }
-        let svd = j.svd(false, true);
+        // A Jacobian the SVD cannot take (not finite) keeps the model on its own columns.
+        let Some(svd) = crate::numeric::linalg::svd(j, false, true) else {
+            return self;
+        };
         let v_t = svd.v_t.expect("v_t was requested");
         let max = svd
             .singular_values

@@ -288,8 +288,7 @@ impl Record {
                 let why = crate::error::Said::from(why).name(crate::error::Opt::Task);
                 return Err(Error::file(&path, "task_hash", why));
             }
-            let beside = file.parent().unwrap_or(Path::new("."));
-            t.check_hash(&path, (&text, &ran), beside)?;
+            t.check_ran(&path, (&text, &ran), &file)?;
         }
         t.check_figure(&path)?;
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());

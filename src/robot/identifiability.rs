@@ -279,19 +279,21 @@ pub fn analyse_jacobian(params: &[Param], mut j: DMatrix<Real>) -> Identifiabili
 
     // Groups: each dependent column as a combination of the identifiable ones.
     let a = j.select_columns(&ident_idx);
-    let svd = a.clone().svd(true, true);
+    let svd = crate::numeric::linalg::svd(a.clone(), true, true);
     let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
         let b = j.column(d).into_owned();
         (b.norm() >= RANK_TOL).then(|| {
-            svd.solve(&b, 1e-12)
-                .unwrap_or_else(|_| DVector::zeros(ident_idx.len()))
+            svd.as_ref()
+                .and_then(|svd| svd.solve(&b, 1e-12).ok())
+                .unwrap_or_else(|| DVector::zeros(ident_idx.len()))
         })
     });
 
-    let sv = svd.singular_values;
-    let (mx, mn) = sv
-        .iter()
-        .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)));
+    let (mx, mn) = svd.map_or((0.0, 0.0), |svd| {
+        svd.singular_values
+            .iter()
+            .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)))
+    });
     let condition_number = if ident_idx.is_empty() || mn <= 0.0 {
         f64::INFINITY
     } else {

@@ -42,7 +42,8 @@ fn axis_error(point: &Vec3, axis: &Vec3, f: &Frame) -> [Real; 6] {
 /// Gauss–Newton on the first `rows` rows of `error(pose(q))` (the others count as zero)
 /// from `q0`: central-difference Jacobian, minimum-norm
 /// steps (SVD), until the position error is below [`TOL_MM`] and the rotation below
-/// [`TOL_RAD`] or after [`MAX_ITERATIONS`]. Returns the last iterate, reached or not.
+/// [`TOL_RAD`] or after [`MAX_ITERATIONS`]. Returns the iterate that reached, else the one of
+/// least error, `q0` included: steps that diverge (from a singular start) are not kept.
 fn gauss_newton(
     q0: &[Real],
     pose: impl Fn(&[Real]) -> crate::Result<Frame>,
@@ -53,6 +54,9 @@ fn gauss_newton(
     let mut q = q0.to_vec();
     let mut qh = q.clone();
     let mut jac = DMatrix::<Real>::zeros(rows, n);
+    // The iterate of least squared error so far, and that error.
+    let (mut best, mut least) = (q.clone(), Real::INFINITY);
+    let squared = |e: &[Real; 6]| e[..rows].iter().map(|v| v * v).sum::<Real>();
     for _ in 0..MAX_ITERATIONS {
         let f = pose(&q)?;
         let mut e = error(&f);
@@ -60,7 +64,11 @@ fn gauss_newton(
         let pos = (e[0] * e[0] + e[1] * e[1] + e[2] * e[2]).sqrt();
         let rot = (e[3] * e[3] + e[4] * e[4] + e[5] * e[5]).sqrt() / K_MM_PER_RAD;
         if pos < TOL_MM && rot < TOL_RAD {
-            break;
+            return Ok(q);
+        }
+        if squared(&e) < least {
+            least = squared(&e);
+            best.copy_from_slice(&q);
         }
         // Central differences: J = −∂e/∂q (the pose's derivative); the step solves J·Δq = e.
         let h = 1e-6;
@@ -80,20 +88,24 @@ fn gauss_newton(
             break;
         }
         let rhs = DVector::from_row_slice(&e[..rows]);
-        let Ok(step) = jac.clone().svd(true, true).solve(&rhs, 1e-12) else {
+        let Some(Ok(step)) =
+            crate::numeric::linalg::svd(jac.clone(), true, true).map(|s| s.solve(&rhs, 1e-12))
+        else {
             break;
         };
         for j in 0..n {
             q[j] += step[j];
         }
     }
-    Ok(q)
+    // The last iterate unless an earlier one came closer (or it is not finite).
+    let last = squared(&error(&pose(&q)?));
+    Ok(if last <= least { q } else { best })
 }
 
 /// The joints (internal units) at which `robot` reaches `target` under a payload of
 /// `payload_kg` (its gravity sag, when the robot has joint compliances), starting from `q0`;
-/// the last iterate when the pose is out of reach (the caller checks the residual). Fails
-/// when the robot has compliances but no link masses.
+/// the iterate that came closest, `q0` included, when the pose is out of reach (the caller
+/// checks the residual). Fails when the robot has compliances but no link masses.
 pub fn solve_pose(
     robot: &Robot,
     target: &Frame,

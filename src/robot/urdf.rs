@@ -301,7 +301,9 @@ impl UrdfRobot {
                     return Err(at(
                         "limit",
                         format!(
-                            "joint \"{}\": limits [{}, {}] are not an interval",
+                            "joint \"{}\": limits [{}, {}] are not an interval (a revolute \
+                             or prismatic joint needs <limit lower upper> with lower < upper; \
+                             a missing <limit> reads as [0, 0])",
                             j.name, j.limit.lower, j.limit.upper
                         ),
                     ));

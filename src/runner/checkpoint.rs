@@ -93,6 +93,20 @@ pub struct Checkpoint {
     skip: u64,
 }
 
+/// The `--precision` the checkpoint `path` records, a malformed one refused naming the file
+/// and its key `precision` (checked before a resume touches the checkpoint).
+fn precision_in(path: &Path, meta: &Meta) -> Result<Option<Precision>> {
+    let parse = |p: &str| {
+        Precision::parse(p).map_err(|e| match e {
+            Error::Setting { msg, .. } | Error::Option { msg, .. } => {
+                Error::file(path, "precision", msg)
+            }
+            e => e,
+        })
+    };
+    meta.precision.as_deref().map(parse).transpose()
+}
+
 fn write_meta(dir: &Path, meta: &Meta) -> Result<()> {
     let path = dir.join("checkpoint.json");
     let tmp = dir.join("checkpoint.json.tmp");
@@ -236,6 +250,7 @@ impl Checkpoint {
                 ));
             }
         }
+        precision_in(&path, &meta)?;
         if !force && meta.host == host() && alive(meta.pid) {
             return Err(Error::file(
                 &path,
@@ -310,11 +325,7 @@ impl Checkpoint {
 
     /// The `--precision` of the run it checkpoints.
     pub fn precision(&self) -> Result<Option<Precision>> {
-        self.meta
-            .precision
-            .as_deref()
-            .map(Precision::parse)
-            .transpose()
+        precision_in(&self.dir.join("checkpoint.json"), &self.meta)
     }
 
     /// Removes the checkpoint once the run's output is written (or refused), and the folders

@@ -77,6 +77,7 @@ impl ShardBlock {
 
 /// `shard.json`.
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ShardMeta {
     format: String,
     scenario: String,
@@ -261,7 +262,13 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
             ),
         ));
     }
-    serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))
+    let meta: ShardMeta =
+        serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;
+    if !(meta.seconds.is_finite() && meta.seconds >= 0.0) {
+        let msg = format!("{} is not a run's wall time (finite, ≥ 0 s)", meta.seconds);
+        return Err(Error::file(&path, "seconds", msg));
+    }
+    Ok(meta)
 }
 
 /// The commands that run the shards missing from `by_index` (one line each): the scenario

@@ -59,7 +59,7 @@ pub fn reach_bound_mm(robot: &Robot) -> Real {
 pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Result<()> {
     region.check(key)?;
     match region {
-        Region::Joint => Ok(()),
+        Region::Joint {} => Ok(()),
         Region::Grid { per_joint } => {
             let dof = robot.dof();
             let total = u32::try_from(dof)
@@ -233,7 +233,7 @@ pub fn sample_region_keyed(
 ) -> Result<Vec<Vec<Real>>> {
     region.check(key)?;
     match region {
-        Region::Joint => Ok(uniform_joint_poses(robot, n, rng)),
+        Region::Joint {} => Ok(uniform_joint_poses(robot, n, rng)),
         Region::Box { center_mm, size_mm } => {
             let tries = BOX_TRIES_MIN + BOX_TRIES_PER_POSE * n;
             let out = poses_in_box(robot, n, *center_mm, *size_mm, (tries, BOX_TRIES_MIN), rng);
@@ -509,7 +509,7 @@ mod tests {
         );
         // Reachable regions pass; a grid of too few points does not.
         check_region(&r, &cube([550.0, 0.0, 550.0], 1000.0), 50, "k").unwrap();
-        check_region(&r, &Region::Joint, 10, "k").unwrap();
+        check_region(&r, &Region::Joint {}, 10, "k").unwrap();
         check_region(&r, &Region::Grid { per_joint: 2 }, 64, "k").unwrap();
         let e = check_region(&r, &Region::Grid { per_joint: 2 }, 65, "k").unwrap_err();
         assert!(e.to_string().contains("2^6 = 64 points"), "{e}");
@@ -518,7 +518,7 @@ mod tests {
     #[test]
     fn joint_region_is_within_limits() {
         let r = crate::robot::builtin::irb2600();
-        let qs = sample_region(&r, &Region::Joint, 100, &mut stream(2, "p")).unwrap();
+        let qs = sample_region(&r, &Region::Joint {}, 100, &mut stream(2, "p")).unwrap();
         assert_eq!(qs.len(), 100);
         assert!(qs.iter().all(|q| r.within_limits(q)));
     }

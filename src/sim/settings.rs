@@ -159,8 +159,30 @@ impl ErrorSettings {
     /// Whether a name exists in a given robot is checked by
     /// [`crate::sim::truth::true_errors`].
     pub fn check(&self) -> Result<()> {
-        non_negative("errors.length_mm", self.length_mm)?;
-        non_negative("errors.angle_rad", self.angle_rad)?;
+        // At most a robot file's range, as the values of kind = "values" are: beyond, the
+        // true robot's points are not finite (1e300 mm) or its angles wrap (100 rad).
+        for (key, v, most, unit) in [
+            (
+                "errors.length_mm",
+                self.length_mm,
+                crate::robot::MAX_LENGTH_MM,
+                "mm",
+            ),
+            (
+                "errors.angle_rad",
+                self.angle_rad,
+                crate::robot::MAX_ANGLE_RAD,
+                "rad",
+            ),
+        ] {
+            non_negative(key, v)?;
+            if v > most {
+                let shown = crate::error::shown(v);
+                let msg =
+                    format!("must be at most {most} {unit} (a robot file's range), got {shown}");
+                return Err(Error::setting(key, msg));
+            }
+        }
         if self.kind == ErrorKind::Values {
             if self.values.is_empty() {
                 return Err(Error::setting(
@@ -282,7 +304,7 @@ impl MeasureSetting {
 pub struct TrackerSettings {
     /// The tracker frame in the robot base frame: x, y, z in mm, rx, ry, rz in degrees
     /// (fixed X-Y-Z, as in robot files); default `[2500, 0, 500, 0, 0, 180]`.
-    #[serde(deserialize_with = "finite")]
+    #[serde(deserialize_with = "tracker_pose")]
     pub pose: [Real; 6],
     /// Constant part of the MPE, µm; default 15.
     #[serde(deserialize_with = "at_least_0")]
@@ -313,6 +335,31 @@ impl Default for TrackerSettings {
     }
 }
 
+/// A length a scenario gives beyond a robot file's range ([`crate::robot::MAX_LENGTH_MM`]):
+/// the measured points would not be finite (1e300 mm), and `simulate` would write `inf`.
+fn beyond<E: serde::de::Error>(what: &str, v: &[Real]) -> std::result::Result<(), E> {
+    let most = crate::robot::MAX_LENGTH_MM;
+    match v.iter().find(|x| x.abs() > most) {
+        Some(x) => Err(E::custom(format!(
+            "{what} must be within ±{most} mm (a robot file's range), got {}",
+            crate::error::shown(*x)
+        ))),
+        None => Ok(()),
+    }
+}
+
+/// `[tracker] pose`: six finite numbers, x, y, z within a robot file's range.
+fn tracker_pose<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<[Real; 6], D::Error> {
+    let pose: [Real; 6] = finite(d)?;
+    beyond("x, y, z", &pose[..3]).map(|()| pose)
+}
+
+/// `[outliers] magnitude_mm`: a range ([`range`]) within a robot file's range.
+fn magnitudes<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<[Real; 2], D::Error> {
+    let r = range(d)?;
+    beyond("the magnitudes", &r).map(|()| r)
+}
+
 impl TrackerSettings {
     /// Settings built in code checked as a scenario's are read, on their fields: refuses a
     /// non-finite pose, negative MPE terms or angle noise, and a coverage ≤ 0.
@@ -333,7 +380,7 @@ pub struct OutlierSettings {
     #[serde(deserialize_with = "share")]
     pub fraction: Option<Real>,
     /// Range of the displacement magnitude, mm; default `[0.5, 1.0]`.
-    #[serde(deserialize_with = "range")]
+    #[serde(deserialize_with = "magnitudes")]
     pub magnitude_mm: [Real; 2],
 }
 
@@ -378,12 +425,12 @@ impl OutlierSettings {
 }
 
 /// Where measurement poses are drawn (`region` of `[calibration]` and `[validation]`).
-#[derive(Clone, Debug, Default, PartialEq, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase", deny_unknown_fields)]
 pub enum Region {
-    /// Uniformly within the joint limits (the default).
-    #[default]
-    Joint,
+    /// Uniformly within the joint limits (the default). A variant with no fields rather than
+    /// a unit one, which serde would let take any key unread.
+    Joint {},
     /// Joint configurations whose tool point lies in an axis-aligned box of the base frame
     /// (Qiao 2021 §4: a 1000 mm cube centred at (550, 0, 550) mm; Ban: an 800 mm cube).
     Box {
@@ -403,12 +450,18 @@ pub enum Region {
     },
 }
 
+impl Default for Region {
+    fn default() -> Self {
+        Region::Joint {}
+    }
+}
+
 impl Region {
     /// Refuses a non-finite centre, box sizes ≤ 0 and a grid of 0 values per joint; `key`
     /// names the setting (`calibration.region` or `validation.region`).
     pub fn check(&self, key: &str) -> Result<()> {
         match self {
-            Region::Joint => Ok(()),
+            Region::Joint {} => Ok(()),
             Region::Box { center_mm, size_mm } => check_box(key, center_mm, size_mm),
             Region::Workspace(w) => w.check(key),
             Region::Grid { per_joint } => {
@@ -543,7 +596,7 @@ mod tests {
         .unwrap();
         assert!(matches!(r.region, Region::Box { .. }));
         let r: R = toml::from_str("region = { kind = \"joint\" }").unwrap();
-        assert_eq!(r.region, Region::Joint);
+        assert_eq!(r.region, Region::Joint {});
         let r: R = toml::from_str("region = { kind = \"grid\", per_joint = 3 }").unwrap();
         assert_eq!(r.region, Region::Grid { per_joint: 3 });
         let o: OutlierSettings = toml::from_str("fraction = 0.1").unwrap();

@@ -41,7 +41,7 @@ const KEYS: [&str; 4] = ["name", "description", "seed", "trials"];
 
 impl Head {
     /// Takes [`Head`]'s keys out of `table`, read from `path` (named in errors), and checks
-    /// them: a non-empty name without slashes, and `trials` (`default_trials` when absent)
+    /// them: a name [`folder_name`] accepts, and `trials` (`default_trials` when absent)
     /// within `trials`.
     pub fn take(
         table: &mut toml::Table,
@@ -63,8 +63,7 @@ impl Head {
             .map_err(|e: toml::de::Error| ferr("scenario", e.to_string().trim_end().into()))?;
         head.table = whole;
         head.path = path.to_path_buf();
-        if head.name.trim().is_empty() || head.name.contains(['/', '\\']) {
-            let msg = "must be a non-empty name without slashes";
+        if let Err(msg) = folder_name(&head.name) {
             return Err(ferr("name", msg.into()));
         }
         let n = head.trials;
@@ -114,4 +113,20 @@ pub fn parse<T: serde::de::DeserializeOwned>(
             Error::file(path, "scenario", msg)
         })?;
     Ok((head, rest))
+}
+
+/// Whether `name` can name a study's default output folder `results/<name>/`: not empty,
+/// no slash, no control character, and not `.` or `..` (which would put the run beside or
+/// above `results/`). The refusal otherwise.
+pub fn folder_name(name: &str) -> std::result::Result<(), &'static str> {
+    let t = name.trim();
+    if t.is_empty()
+        || t == "."
+        || t == ".."
+        || name.contains(['/', '\\'])
+        || name.chars().any(char::is_control)
+    {
+        return Err("must be a non-empty name without slashes or control characters, and not `.` or `..`: it names the folder results/<name>/");
+    }
+    Ok(())
 }

@@ -27,6 +27,7 @@ mod kernel;
 mod kinds;
 mod layers;
 mod live_run;
+mod malformed;
 mod memory;
 mod noise;
 mod outputs;

@@ -286,3 +286,34 @@ fn a_re_admission_the_identification_cannot_settle_is_given_up() {
     let value = j["value"].as_f64().unwrap();
     assert!((value - 0.4433).abs() < 0.00005, "{value}");
 }
+
+/// The IPA UR10's Series D and A, kinematic model, with `ls` and `igg3`: the re-check
+/// re-admits `a5`, and the robot identified with it moves `theta5` or `alpha5` by 6–12°,
+/// beyond the 5° bound, where the first identification was plausible: the re-admission is
+/// given up and the entry written, where it was refused as implausible, its validation RMS
+/// `lm`'s within 0.01 mm (docs/results.md).
+#[test]
+fn a_re_admission_that_makes_a_plausible_robot_implausible_is_given_up() {
+    let d = tmp_dir("cli-readmit-implausible");
+    for (name, method, lm_rms) in [
+        ("ipa-ur10-series-d", "ls", 0.396),
+        ("ipa-ur10-series-a-blocked", "igg3", 0.439),
+    ] {
+        let out = d.join(format!("{name}-{method}"));
+        calbench_ok(&[
+            "task",
+            path_arg(&task(name)),
+            "--method",
+            method,
+            "--models",
+            "kinematic",
+            "--out",
+            path_arg(&out),
+        ]);
+        let id = load_json(&out.join("identified.json"));
+        assert!(id.get("readmitted").is_none(), "{}", id["readmitted"]);
+        assert!(!names(&id).contains(&"a5".to_string()));
+        let value = load_json(&out.join("task.json"))["value"].as_f64().unwrap();
+        assert!((value - lm_rms).abs() < 0.01, "{name} {method}: {value}");
+    }
+}

@@ -360,3 +360,45 @@ fn a_rank_lost_in_the_solve_is_not_reported_as_undetermined_poses() {
     );
     assert!(!out.exists());
 }
+
+/// A program row at a singular pose (UR's home pose, elbow and wrist straight) that the
+/// identified robot cannot reach: `compensate` flags it `failed` and writes the commands that
+/// came closest, no farther than the program's own, where the Gauss–Newton steps ran off to a
+/// command 733 mm off and ten turns outside the joint limits.
+#[test]
+fn a_failed_row_keeps_the_commands_that_came_closest() {
+    let d = tmp_dir("realdata-compensate-singular");
+    let identified = crate::common::root().join("tests/data/ur10-series-b-identified.toml");
+    let home = [-179.999847961, -90.000210459, 0.0, -90.000210459, 0.0, 0.0];
+    let prog = d.join("prog.csv");
+    let row: Vec<String> = home.iter().map(|v| v.to_string()).collect();
+    std::fs::write(&prog, format!("q1,q2,q3,q4,q5,q6\n{}\n", row.join(","))).unwrap();
+    let corr = d.join("corr.csv");
+    calbench_ok(&[
+        "compensate",
+        "--robot",
+        &ex("ur10.toml"),
+        "--identified",
+        path_arg(&identified),
+        "--joints",
+        path_arg(&prog),
+        "--out",
+        path_arg(&corr),
+    ]);
+    let c = std::fs::read_to_string(&corr).unwrap();
+    let f: Vec<&str> = c.lines().nth(1).unwrap().split(',').collect();
+    assert_eq!(f[8], "failed", "{c}");
+    let qout: Vec<Real> = f[..6].iter().map(|v| v.parse().unwrap()).collect();
+    assert!(qout.iter().all(|q| q.abs() <= 360.0), "{c}");
+    // The identified robot at the program's own commands, against the nominal pose.
+    let (nominal, id) = (
+        builtin::load(&ex("ur10.toml")).unwrap(),
+        builtin::load(path_arg(&identified)).unwrap(),
+    );
+    let own = fk_gap(&nominal, &id, &nominal.q_from_user(&home)).0;
+    let written: Real = f[6].parse().unwrap();
+    assert!(
+        own > 0.5 && written <= own * 1.01,
+        "{written} mm against {own} mm"
+    );
+}

@@ -140,7 +140,7 @@ fn refused_edit(out: &Path, task: &Path, edit: impl Fn(&mut serde_json::Value)) 
 }
 
 /// An edited figure is refused, naming the file, `value` and the figure the per-row errors
-/// give; and `chosen_by` and `entrant`, in every `task.json` calbench wrote, are required:
+/// give; so are an edited `task` and `metric`; and `chosen_by` and `entrant`, in every `task.json` calbench wrote, are required:
 /// a file without one is refused naming the file and the key, where it was recorded as
 /// chosen by nothing, or as calbench's own entry.
 #[test]
@@ -159,6 +159,23 @@ fn an_edited_figure_or_a_missing_key_is_refused_naming_file_and_key() {
             && err.contains(&format!("{}", value + 0.001))
             && err.contains(&format!("{value}"))
             && err.contains("validation_errors_mm"),
+        "{err}"
+    );
+    // An entry filed under another task or metric: the task is the given file's name, the
+    // metric the task file's, where both were recorded as edited.
+    let err = refused_edit(&out, &task, |j| {
+        j["task"] = serde_json::json!("barrett-wam")
+    });
+    assert!(
+        err.contains("entry/task.json: task: is \"barrett-wam\"") && err.contains("small.toml"),
+        "{err}"
+    );
+    let err = refused_edit(&out, &task, |j| {
+        j["metric"] = serde_json::json!("socket_spread_mm")
+    });
+    assert!(
+        err.contains("entry/task.json: metric: is socket_spread_mm")
+            && err.contains("ranks by validation_mean_mm"),
         "{err}"
     );
     for key in ["chosen_by", "entrant"] {

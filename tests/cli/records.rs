@@ -375,7 +375,7 @@ fn a_refused_merge_or_resume_leaves_no_output_folder() {
 /// sum made to match) is refused before the checkpoint changes, naming the line, where the
 /// resume began, failed at that record and removed the checkpoint; the scenario as run that
 /// `checkpoint.json` holds, altered, is refused naming it and `settings`, where the message
-/// named the scenario file, whose line it gave.
+/// named the scenario file, whose line it gave; so is a malformed `precision`.
 #[test]
 fn resume_refuses_a_checkpoint_it_cannot_replay_before_changing_it() {
     let dir = tmp_dir("records-unreadable-resume");
@@ -395,10 +395,19 @@ fn resume_refuses_a_checkpoint_it_cannot_replay_before_changing_it() {
         &[(&meta, toml)],
         &["settings", "calibration.count"],
     );
+    // A malformed `precision` is named as the checkpoint's key, before the checkpoint is
+    // rewritten, where the resume rewrote it and then blamed `--precision`.
+    let garbage = json.replacen("\"pid\"", "\"precision\": \"garbage\",\n  \"pid\"", 1);
+    refused_resume(
+        &killed,
+        &[(&meta, garbage)],
+        &["checkpoint.json: precision", "has no unit"],
+    );
 }
 
 /// `merge` of shards whose scenario as run (`settings`) was altered alike names the first
-/// `shard.json` and `settings`, on one line, where it named the scenario file.
+/// `shard.json` and `settings`, on one line, where it named the scenario file; a negative
+/// `seconds` and an unknown key are refused naming the file.
 #[test]
 fn merge_refuses_altered_settings_naming_shard_json() {
     let dir = tmp_dir("records-settings-merge");
@@ -407,6 +416,20 @@ fn merge_refuses_altered_settings_naming_shard_json() {
     let bad = |p: &Path| read(p).replace("count = 40", "count = [");
     let edits = [(m0.as_path(), bad(&m0)), (m1.as_path(), bad(&m1))];
     refused_merge(&[&a0, &a1], &edits, &["settings", "TOML parse error"]);
+    // A wall time no run has, which merge summed into timing.json, and a key shard.json
+    // does not have, which merge passed over.
+    let negative = with_field(&read(&m0), "seconds", "-5");
+    refused_merge(
+        &[&a0, &a1],
+        &[(&m0, negative)],
+        &["seconds", "-5 is not a run's wall time"],
+    );
+    let unknown = read(&m0).replacen("\"seconds\"", "\"foo\": 1,\n  \"seconds\"", 1);
+    refused_merge(
+        &[&a0, &a1],
+        &[(&m0, unknown)],
+        &["shard.json", "unknown field `foo`"],
+    );
 }
 
 /// The checkpoint `meta`'s `records.txt` with its first record edited by `edit` and its

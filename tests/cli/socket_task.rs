@@ -228,6 +228,21 @@ fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
     refused(&t, &["rms.toml", "metric", "socket_spread_mm"]);
     let t = copied_task(&dir, "tool = \"x\"\n", "socket_spread_mm", "tool");
     refused(&t, &["tool.toml", "line 7", "tool"]);
+    // A parameter fixed twice is the task file's, where it was blamed on `--fix`.
+    let t = dir.join("twice.toml");
+    std::fs::write(
+        &t,
+        read(&task).replace("[\"theta7\"]", "[\"theta7\", \"theta7\"]"),
+    )
+    .unwrap();
+    refused(
+        &t,
+        &[
+            "twice.toml",
+            "line 6, fix",
+            "`theta7` is given twice (fix[0])",
+        ],
+    );
     let text = read(&task).replace("[0.0, 50.0]", "[0.0, 50.0, 70.0]");
     std::fs::write(&task, text).unwrap();
     refused(

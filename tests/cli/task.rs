@@ -349,3 +349,26 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
         "{e}"
     );
 }
+
+/// Series D's kinematic entry with `lm` stops at its iteration limit; the entry is written
+/// and scored, and a warning says the solve did not converge, which task.json does not.
+#[test]
+fn an_entry_whose_solve_did_not_converge_is_warned_of() {
+    let d = tmp_dir("cli-task-unconverged");
+    let out = d.join("d");
+    let o = task_lm(
+        calbench_ok,
+        &task("ipa-ur10-series-d"),
+        Some("kinematic"),
+        &out,
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(
+        load_json(&out.join("identified.json"))["termination"],
+        "max-iterations"
+    );
+    assert!(
+        err.contains("warning: the identification ended `max-iterations` after 50 iterations"),
+        "{err}"
+    );
+}

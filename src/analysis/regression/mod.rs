@@ -282,12 +282,20 @@ pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
         }
         e => e,
     })?;
-    if let Some(i) = s.results.iter().position(|e| e.method.is_empty()) {
-        return Err(Error::file(
-            path,
-            format!("results[{i}]"),
-            format!("is an entry without a `method` name, {what}"),
-        ));
+    // Entries are paired by their key: a second one of a key would be paired or passed over
+    // by where it stands.
+    for (i, e) in s.results.iter().enumerate() {
+        let first = s.results[..i].iter().position(|f| f.key() == e.key());
+        let why = match first {
+            _ if e.method.is_empty() => format!("is an entry without a `method` name, {what}"),
+            Some(j) => format!(
+                "is a second entry of {} (the first is results[{j}]): a summary has one entry \
+                 per method, poses and sweep value",
+                e.key()
+            ),
+            None => continue,
+        };
+        return Err(Error::file(path, format!("results[{i}]"), why));
     }
     Ok(s)
 }

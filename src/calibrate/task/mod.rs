@@ -33,13 +33,16 @@ use crate::robot::Robot;
 use head::TaskFile;
 pub use split::Split;
 
-/// The head of `text`, the task file `path` with the files it names taken from `dir`, a
-/// socket task's or a tracker's.
-pub fn head_of(text: &str, path: &Path, dir: &Path) -> Result<TaskHead> {
+/// The head and the metric of `text`, the task file `path` with the files it names taken
+/// from `dir`, a socket task's or a tracker's.
+pub fn head_of(text: &str, path: &Path, dir: &Path) -> Result<(TaskHead, Metric)> {
     Ok(
         match socket::parse_socket_task(text.to_string(), path, dir)? {
-            Some(t) => t.head,
-            None => Task::parse(text.to_string(), path, dir)?.head,
+            Some(t) => (t.head, Metric::SocketSpreadMm),
+            None => {
+                let t = Task::parse(text.to_string(), path, dir)?;
+                (t.head, t.metric)
+            }
         },
     )
 }

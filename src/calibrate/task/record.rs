@@ -239,19 +239,41 @@ impl TaskRecord {
         ))
     }
 
-    /// Refuses, naming `path` (this record's file) and `task_hash`, a record whose hash is
-    /// not that of the task file it ran (`task_text`, read from `task_path`) with the files
-    /// it fixes read from `dir` (beside the task file it was copied from) as they are now:
-    /// the task, its data, split, mapping or robot changed since the entry ran.
-    pub fn check_hash(
+    /// Refuses, naming `path` (this record's file) and the key, a record that is not of the
+    /// task file it ran (`task_text`, read from `task_path`), copied from the task file
+    /// `file`: its `task` not `file`'s name (its stem), its hash not that of the task with
+    /// the files it fixes read beside `file` as they are now (the task, its data, split,
+    /// mapping or robot changed since the entry ran), or its `metric` not the task's.
+    pub fn check_ran(
         &self,
         path: &Path,
         (task_text, task_path): (&str, &Path),
-        dir: &Path,
+        file: &Path,
     ) -> Result<()> {
-        let head = super::head_of(task_text, task_path, dir)?;
+        let stem = file.file_stem().map(|s| s.to_string_lossy());
+        if stem.as_deref() != Some(self.task.as_str()) {
+            let msg = format!(
+                "is \"{}\", but the task file given is {}: an entry is recorded under the \
+                 task it ran",
+                self.task,
+                file.display()
+            );
+            return Err(Error::file(path, "task", msg));
+        }
+        let dir = file.parent().unwrap_or(Path::new("."));
+        let (head, metric) = super::head_of(task_text, task_path, dir)?;
         let (fixed, hash) = (head.fixed_shown(), head.hash);
         if hash == self.task_hash {
+            // The hash binds the task file, and with it the metric the entry must have.
+            if metric != self.metric {
+                let msg = format!(
+                    "is {}, but the task file the entry ran ({}) ranks by {}",
+                    self.metric.as_str(),
+                    task_path.display(),
+                    metric.as_str()
+                );
+                return Err(Error::file(path, "metric", msg));
+            }
             return Ok(());
         }
         Err(Error::file(

@@ -168,6 +168,12 @@ pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option
                 format!("fix[{i}]: `{f}` is not a parameter name (a2, theta7, …)"),
             )
         })?;
+        if let Some(j) = fix.iter().position(|q| *q == p) {
+            return Err(bad(
+                "fix",
+                format!("fix[{i}]: `{p}` is given twice (fix[{j}])"),
+            ));
+        }
         fix.push(p);
     }
     let robot = file("robot", &keys.robot)?;

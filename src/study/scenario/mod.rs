@@ -294,11 +294,8 @@ impl Scenario {
             })
         };
 
-        if raw.name.trim().is_empty() || raw.name.contains(['/', '\\']) {
-            return Err(ferr(
-                "name",
-                "must be a non-empty name without slashes".into(),
-            ));
+        if let Err(msg) = crate::study::whole::folder_name(&raw.name) {
+            return Err(ferr("name", msg.into()));
         }
         if raw.trials == 0 || raw.trials > MAX_TRIALS {
             return Err(ferr(
@@ -355,6 +352,10 @@ impl Scenario {
                 }
                 StrategyName::Grid => PoseStrategy::Grid,
                 StrategyName::File => match &c.poses_file {
+                    Some(f) if !dir.join(f).is_file() => {
+                        let msg = format!("{} is not a file", dir.join(f).display());
+                        return Err(ferr("calibration.poses_file", msg));
+                    }
                     Some(f) => PoseStrategy::File(dir.join(f)),
                     None => {
                         return Err(ferr(

@@ -45,7 +45,7 @@ impl Default for CalibrationSection {
             count: 50,
             strategies: vec!["random".into()],
             poses_file: None,
-            region: Region::Joint,
+            region: Region::Joint {},
             candidates: 1000,
             objective: "composite".into(),
             separate: false,
@@ -70,7 +70,7 @@ impl Default for ValidationSection {
     fn default() -> Self {
         ValidationSection {
             count: 50,
-            region: Region::Joint,
+            region: Region::Joint {},
             payload_kg: None,
             before_fitted: false,
             axis_errors: false,

@@ -18,12 +18,23 @@ pub(super) struct SweepSection {
     pub(super) zip: bool,
 }
 
-/// `[sweep]` (one axis) or `[[sweep]]` (a grid of axes).
-#[derive(Deserialize)]
-#[serde(untagged)]
+/// `[sweep]` (one axis) or `[[sweep]]` (a grid of axes), told apart by the value's shape so
+/// that a refusal is the section's own (an unknown key named with the allowed ones), where
+/// an untagged enum said only that no variant matched.
 pub(super) enum SweepField {
     One(SweepSection),
     Grid(Vec<SweepSection>),
+}
+
+impl<'de> Deserialize<'de> for SweepField {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        match toml::Value::deserialize(d)? {
+            v @ toml::Value::Array(_) => v.try_into().map(SweepField::Grid),
+            v => v.try_into().map(SweepField::One),
+        }
+        .map_err(|e: toml::de::Error| D::Error::custom(e.message()))
+    }
 }
 
 /// One axis of a sweep: a dotted key and its values.
@@ -254,6 +265,7 @@ impl Scenario {
         if matches!(parts.first(), Some(&"sweep")) || (parts.is_empty() && last == "name") {
             return Err(Error::setting(key, "cannot be swept or overridden"));
         }
+
         let mut t = &mut table;
         for p in parts {
             t = t
@@ -312,6 +324,23 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
                 format!("{place}.values"),
                 format!("\"{}\": give at least one value", s.key),
             ));
+        }
+        if s.key == "trials" {
+            return Err((
+                format!("{place}.key"),
+                "\"trials\" cannot be swept: every sweep point runs the run's trials".into(),
+            ));
+        }
+        if !zip {
+            if let Some(j) = (1..s.values.len()).find(|&j| s.values[..j].contains(&s.values[j])) {
+                return Err((
+                    format!("{place}.values"),
+                    format!(
+                        "\"{}\": {} is given twice: two sweep points would be one",
+                        s.key, s.values[j]
+                    ),
+                ));
+            }
         }
         if axes.iter().any(|a| a.key == s.key) {
             return Err((
