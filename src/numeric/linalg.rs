@@ -13,7 +13,7 @@ use super::Real;
 
 /// The most iterations [`svd`] lets nalgebra's SVD take: orders of magnitude more than a
 /// finite matrix of calbench's needs (a few per singular value).
-const SVD_MAX_ITERATIONS: usize = 100_000;
+pub const SVD_MAX_ITERATIONS: usize = 100_000;
 
 /// The singular value decomposition of `m` (`u`, `v`: whether to compute U and Vᵀ), as
 /// nalgebra's `svd` computes it (the same tolerance, so the same bits), but bounded: `None`
