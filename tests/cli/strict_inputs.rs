@@ -155,8 +155,15 @@ fn check_refuses_files_that_are_not_comparable_summaries() {
     let mut other = real.clone();
     other["scenario"] = serde_json::json!("another-study");
     let mut unrelated = real.clone();
-    for e in unrelated["results"].as_array_mut().unwrap() {
-        e["method"] = serde_json::json!("pso");
+    // Methods the real summary has none of, one name an entry (a summary has one entry per
+    // method and poses).
+    for (i, e) in unrelated["results"]
+        .as_array_mut()
+        .unwrap()
+        .iter_mut()
+        .enumerate()
+    {
+        e["method"] = serde_json::json!(format!("pso{i}"));
     }
     let cases = [
         ("empty.json", "{}".to_string(), "results"),
