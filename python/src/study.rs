@@ -113,18 +113,17 @@ pub(crate) fn simulate<'py>(
         .map(|m| calbench::robot::names::parse::<Kind>("measure", &m))
         .transpose()
         .map_err(err)?;
-    let sc = match scenario.cast::<PyDict>() {
-        Ok(d) if !(d.contains("registration_study")? || d.contains("instruments_study")?) => {
-            scenario_of(scenario)?
-        }
-        _ => match any_scenario_of(scenario)? {
+    let sc = if monte_carlo_dict(scenario)? {
+        scenario_of(scenario)?
+    } else {
+        match any_scenario_of(scenario)? {
             AnyScenario::Instruments(sc) => {
                 return simulate_instrument(py, &sc, measure, trial, out)
             }
             AnyScenario::MonteCarlo(sc) => sc,
             // Refused as a calibration scenario refuses it.
             AnyScenario::Registration(_) => scenario_of(scenario)?,
-        },
+        }
     };
     let path = sc
         .path
@@ -477,14 +476,22 @@ fn reporter(progress: bool) -> &'static dyn Reporter {
     }
 }
 
+/// Whether `scenario` is the dict of a Monte-Carlo study, one without a
+/// `[registration_study]` or `[instruments_study]` section: read by [`scenario_of`], without
+/// [`any_scenario_of`]'s round trip through TOML text.
+fn monte_carlo_dict(scenario: &Bound<'_, PyAny>) -> PyResult<bool> {
+    match scenario.cast::<PyDict>() {
+        Ok(d) => Ok(!(d.contains("registration_study")? || d.contains("instruments_study")?)),
+        Err(_) => Ok(false),
+    }
+}
+
 /// The kind of study a scenario is: `monte-carlo`, `registration` (`[registration_study]`)
 /// or `instruments` (`[instruments_study]`), as its sections say (docs/formats.md § 4).
 #[pyfunction]
 pub(crate) fn study_kind(scenario: &Bound<'_, PyAny>) -> PyResult<&'static str> {
-    if let Ok(d) = scenario.cast::<PyDict>() {
-        if !(d.contains("registration_study")? || d.contains("instruments_study")?) {
-            return Ok("monte-carlo");
-        }
+    if monte_carlo_dict(scenario)? {
+        return Ok("monte-carlo");
     }
     Ok(match any_scenario_of(scenario)? {
         AnyScenario::MonteCarlo(_) => "monte-carlo",

@@ -66,8 +66,9 @@ fn gauss_newton(
         if pos < TOL_MM && rot < TOL_RAD {
             return Ok(q);
         }
-        if squared(&e) < least {
-            least = squared(&e);
+        let size = squared(&e);
+        if size < least {
+            least = size;
             best.copy_from_slice(&q);
         }
         // Central differences: J = −∂e/∂q (the pose's derivative); the step solves J·Δq = e.

@@ -159,27 +159,12 @@ impl ErrorSettings {
     /// Whether a name exists in a given robot is checked by
     /// [`crate::sim::truth::true_errors`].
     pub fn check(&self) -> Result<()> {
-        // At most a robot file's range, as the values of kind = "values" are: beyond, the
-        // true robot's points are not finite (1e300 mm) or its angles wrap (100 rad).
-        for (key, v, most, unit) in [
-            (
-                "errors.length_mm",
-                self.length_mm,
-                crate::robot::MAX_LENGTH_MM,
-                "mm",
-            ),
-            (
-                "errors.angle_rad",
-                self.angle_rad,
-                crate::robot::MAX_ANGLE_RAD,
-                "rad",
-            ),
+        for (key, v, length) in [
+            ("errors.length_mm", self.length_mm, true),
+            ("errors.angle_rad", self.angle_rad, false),
         ] {
             non_negative(key, v)?;
-            if v > most {
-                let shown = crate::error::shown(v);
-                let msg =
-                    format!("must be at most {most} {unit} (a robot file's range), got {shown}");
+            if let Some(msg) = beyond_range(v, length) {
                 return Err(Error::setting(key, msg));
             }
         }
@@ -204,23 +189,16 @@ impl ErrorSettings {
                     format!("must be a finite number, got {}", crate::error::shown(*v)),
                 ));
             }
-            // An error on a length or an angle within a robot file's range for it: beyond,
-            // the true robot's points are not finite.
             for (n, v) in &self.values {
                 let Some(p) = Param::parse(n) else { continue };
-                let (most, unit) = match p {
-                    Param::Compliance(_) | Param::Harmonic(..) | Param::Gravity(..) => continue,
-                    _ if p.is_length() => (crate::robot::MAX_LENGTH_MM, "mm"),
-                    _ => (crate::robot::MAX_ANGLE_RAD, "rad"),
-                };
-                if v.abs() > most {
-                    return Err(Error::setting(
-                        format!("errors.values.{n}"),
-                        format!(
-                            "must be within ±{most} {unit} (a robot file's range), got {}",
-                            crate::error::shown(*v)
-                        ),
-                    ));
+                if matches!(
+                    p,
+                    Param::Compliance(_) | Param::Harmonic(..) | Param::Gravity(..)
+                ) {
+                    continue;
+                }
+                if let Some(msg) = beyond_range(*v, p.is_length()) {
+                    return Err(Error::setting(format!("errors.values.{n}"), msg));
                 }
             }
         } else if !self.values.is_empty() {
@@ -335,15 +313,25 @@ impl Default for TrackerSettings {
     }
 }
 
-/// A length a scenario gives beyond a robot file's range ([`crate::robot::MAX_LENGTH_MM`]):
-/// the measured points would not be finite (1e300 mm), and `simulate` would write `inf`.
+/// The refusal of a length (`length`) or an angle a scenario gives beyond a robot file's
+/// range for it ([`crate::robot::MAX_LENGTH_MM`], [`crate::robot::MAX_ANGLE_RAD`]): the true
+/// robot's or the measured points would not be finite (1e300 mm), or its angles wrap, and
+/// `simulate` would write `inf`.
+fn beyond_range(v: Real, length: bool) -> Option<String> {
+    let (most, unit) = match length {
+        true => (crate::robot::MAX_LENGTH_MM, "mm"),
+        false => (crate::robot::MAX_ANGLE_RAD, "rad"),
+    };
+    let shown = crate::error::shown(v);
+    (v.abs() > most)
+        .then(|| format!("must be within ±{most} {unit} (a robot file's range), got {shown}"))
+}
+
+/// The first of the lengths `v` beyond a robot file's range ([`beyond_range`]), refused as
+/// `what` (a deserializer's error).
 fn beyond<E: serde::de::Error>(what: &str, v: &[Real]) -> std::result::Result<(), E> {
-    let most = crate::robot::MAX_LENGTH_MM;
-    match v.iter().find(|x| x.abs() > most) {
-        Some(x) => Err(E::custom(format!(
-            "{what} must be within ±{most} mm (a robot file's range), got {}",
-            crate::error::shown(*x)
-        ))),
+    match v.iter().find_map(|x| beyond_range(*x, true)) {
+        Some(msg) => Err(E::custom(format!("{what} {msg}"))),
         None => Ok(()),
     }
 }
