@@ -50,12 +50,10 @@ pub struct CompensateArgs {
 /// Corrects every row of the program and writes the corrected program.
 pub fn run(args: &CompensateArgs) -> Result<()> {
     let payload_kg = args.payload_kg;
-    if !(payload_kg.is_finite() && payload_kg >= 0.0) {
-        return Err(Error::setting(
-            "--payload-kg",
-            format!("must be a finite payload ≥ 0 kg, got {payload_kg}"),
-        )
-        .into());
+    if !calbench::robot::compliance::is_mass(payload_kg) {
+        let most = calbench::robot::compliance::MAX_MASS_KG;
+        let msg = format!("must be a payload from 0 to {most} kg, got {payload_kg}");
+        return Err(Error::setting("--payload-kg", msg).into());
     }
     let robots = [Path::new(&args.robot), Path::new(&args.identified)];
     let programs = [args.joints.as_deref(), args.targets.as_deref()];

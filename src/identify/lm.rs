@@ -82,6 +82,34 @@ fn solve_damped(work: &mut Work, damping: Real, marquardt: bool) -> bool {
     work.dx.iter().all(|v| v.is_finite())
 }
 
+/// The keys of the two dampings: the fixed one's, and the adaptive one's.
+const MU: &str = "mu";
+const LAMBDA0: &str = "lambda0";
+const LAMBDA_FACTOR: &str = "lambda_factor";
+
+/// Refuses, as (key, message), a damping key of the entry `t` (as written) that the form it
+/// chooses does not read: `mu` with `adaptive = true`, `lambda0` or `lambda_factor` without.
+pub(crate) fn refuse_unread(t: &toml::Table) -> std::result::Result<(), (String, String)> {
+    let adaptive = t.get("adaptive").and_then(toml::Value::as_bool) == Some(true);
+    let (unread, why) = match adaptive {
+        true => (
+            &[MU][..],
+            "the adaptive damping starts at lambda0 (drop mu)",
+        ),
+        false => (
+            &[LAMBDA0, LAMBDA_FACTOR][..],
+            "the fixed damping is mu (set adaptive = true, or drop it)",
+        ),
+    };
+    match unread.iter().find(|k| t.contains_key(**k)) {
+        Some(k) => Err((
+            k.to_string(),
+            format!("is not read with adaptive = {adaptive}: {why}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 impl Solver for LmOptions {
     fn tolerates_rank_deficiency(&self) -> bool {
         // μ I (or the adaptive λ) keeps JᵀJ + μI invertible; μ = 0 without adaptation is
@@ -91,11 +119,11 @@ impl Solver for LmOptions {
 
     fn check(&self) -> Result<()> {
         check_stop(self.eps, self.max_iter)?;
-        finite_non_negative("mu", self.mu)?;
-        finite_positive("lambda0", self.lambda0)?;
+        finite_non_negative(MU, self.mu)?;
+        finite_positive(LAMBDA0, self.lambda0)?;
         if !(self.lambda_factor.is_finite() && self.lambda_factor > 1.0) {
             return Err(Error::setting(
-                "lambda_factor",
+                LAMBDA_FACTOR,
                 format!("must be finite and above 1, got {}", self.lambda_factor),
             ));
         }

@@ -55,7 +55,7 @@ pub const METHODS: &[MethodEntry] = &[
     MethodEntry {
         name: "lm",
         summary: "Levenberg–Marquardt (Guo 2024 eq. 8; Ban)",
-        build: options::<LmOptions>,
+        build: lm,
     },
     MethodEntry {
         name: "bas",
@@ -91,6 +91,12 @@ fn ls(t: &toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError> {
     } else {
         options::<LsOptions>(t)
     }
+}
+
+/// `lm`, refusing a damping key its form does not read ([`super::lm::refuse_unread`]).
+fn lm(t: &toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError> {
+    super::lm::refuse_unread(t)?;
+    options::<LmOptions>(t)
 }
 
 /// The reader of a method whose options struct is `M`.
@@ -155,6 +161,10 @@ impl MethodSpec {
             )
         })?;
         let label = string("label")?.unwrap_or_else(|| name.clone());
+        if label.trim().is_empty() {
+            let msg = "must name the method in the reports; leave it out for the method's name";
+            return Err(("label".to_string(), msg.to_string()));
+        }
         let k = match t.get("k") {
             None => DEFAULT_K,
             Some(v) => {

@@ -141,39 +141,45 @@ impl Instrument {
         }
     }
 
-    /// Checks the geometry: at least one target, plane or sphere; finite offsets; plane
-    /// axes 0–2; radii finite and positive.
+    /// Checks the geometry: at least one target, plane or sphere; plane axes 0–2; offsets,
+    /// radii and socket distances within a robot file's range of lengths
+    /// ([`crate::measurement::csv::MAX_POINT_MM`]), radii and distances above 0.
     pub fn check(&self) -> Result<()> {
         let bad = |k: &str, m: String| Err(Error::setting(k, m));
+        // A robot file's range of lengths (mm), that of a measured coordinate.
+        const MOST: Real = crate::measurement::csv::MAX_POINT_MM;
+        let length = |v: Real| v > 0.0 && v <= MOST;
         match self {
             Instrument::Targets(t) if t.is_empty() => {
                 bad("measurement.targets_mm", "needs at least one target".into())
             }
-            Instrument::Targets(t) if t.iter().any(|o| o.iter().any(|v| !v.is_finite())) => {
-                bad("measurement.targets_mm", "offsets must be finite".into())
+            Instrument::Targets(t)
+                if t.iter()
+                    .flatten()
+                    .any(|v| !(v.is_finite() && v.abs() <= MOST)) =>
+            {
+                bad(
+                    "measurement.targets_mm",
+                    format!("offsets must be finite and within ±{MOST} mm (a robot file's range)"),
+                )
             }
             Instrument::Planes(p) if p.is_empty() || p.iter().any(|&a| a > 2) => bad(
                 "measurement.planes",
                 "needs at least one plane, each with an axis x, y or z".into(),
             ),
-            Instrument::Spheres(s)
-                if s.is_empty() || s.iter().any(|r| !(r.is_finite() && *r > 0.0)) =>
-            {
-                bad(
-                    "measurement.radius_mm",
-                    "needs at least one sphere of finite radius > 0".into(),
-                )
-            }
+            Instrument::Spheres(s) if s.is_empty() || s.iter().any(|r| !length(*r)) => bad(
+                "measurement.radius_mm",
+                format!("needs at least one sphere of radius > 0 and ≤ {MOST} mm"),
+            ),
             Instrument::Sockets(s)
-                if s.is_empty()
-                    || s[0] != 0.0
-                    || s[1..].iter().any(|d| !(d.is_finite() && *d > 0.0)) =>
+                if s.is_empty() || s[0] != 0.0 || s[1..].iter().any(|d| !length(*d)) =>
             {
                 bad(
                     "measurement.socket_distance_mm",
-                    "needs at least one socket; socket 1 at distance 0 from itself, every \
-                     other at a finite distance > 0 from it"
-                        .into(),
+                    format!(
+                        "needs at least one socket; socket 1 at distance 0 from itself, every \
+                         other at a distance > 0 and ≤ {MOST} mm from it"
+                    ),
                 )
             }
             _ => Ok(()),

@@ -111,6 +111,13 @@ pub fn rpy_matrix(rpy: [Real; 3]) -> Mat3 {
 
 /// The fixed X-Y-Z angles of a rotation matrix (pitch in [−π/2, π/2]).
 pub fn matrix_rpy(r: &Mat3) -> [Real; 3] {
+    // Near gimbal lock (|cos pitch| < 0.014) the entries below scale with cos pitch and
+    // `asin` loses digits; there pitch and roll are read, after the yaw, from entries of size
+    // 1 ([`near_lock_rpy`]), unless the first column is exactly ±z.
+    let column = r[(0, 0)] != 0.0 || r[(1, 0)] != 0.0;
+    if r[(2, 0)].abs() >= 1.0 - 1e-4 && column {
+        return near_lock_rpy(r);
+    }
     let pitch = (-r[(2, 0)]).clamp(-1.0, 1.0).asin();
     if r[(2, 0)].abs() < 1.0 - 1e-12 {
         [
@@ -122,6 +129,20 @@ pub fn matrix_rpy(r: &Mat3) -> [Real; 3] {
         // Gimbal lock: put the whole rotation about z into yaw.
         [0.0, pitch, (-r[(0, 1)]).atan2(r[(1, 1)])]
     }
+}
+
+/// [`matrix_rpy`] near gimbal lock: the yaw from the first column, then `Ry(pitch) Rx(roll) =
+/// Rz(yaw)ᵀ r`, whose entries (1, 1), (1, 2) and (0, 0), (2, 0) give roll and pitch to full
+/// precision however the yaw fell: the three angles give back `r` to rounding, where reading
+/// roll from entries of size cos pitch moved a URDF's tool by 1e-4 mm.
+fn near_lock_rpy(r: &Mat3) -> [Real; 3] {
+    let yaw = r[(1, 0)].atan2(r[(0, 0)]);
+    let rest = rot_z(yaw).transpose() * r;
+    [
+        (-rest[(1, 2)]).atan2(rest[(1, 1)]),
+        (-rest[(2, 0)]).atan2(rest[(0, 0)]),
+        yaw,
+    ]
 }
 
 /// The rotation vector (axis · angle, rad) of a rotation matrix: the matrix logarithm.
@@ -231,6 +252,28 @@ mod tests {
         let back = matrix_rpy(&rpy_matrix(rpy));
         for i in 0..3 {
             assert_relative_eq!(rpy[i], back[i], epsilon = 1e-12);
+        }
+    }
+
+    /// Near gimbal lock the angles give back the matrix to rounding: pitches from 1e-3 to
+    /// 1e-16 rad off ±90° (the exported URDF origin of a joint with `rpy="-1.5708 -1.5708 0"`
+    /// moved its tool by 1e-4 mm).
+    #[test]
+    fn rpy_near_gimbal_lock_gives_back_the_matrix() {
+        let half = std::f64::consts::FRAC_PI_2;
+        for (off, roll, yaw) in [
+            (7.9e-8, -half + 4.9e-12, 0.0),
+            (1e-3, 0.4, -2.0),
+            (3e-6, 2.5, 1.0),
+            (1e-12, -0.3, 0.2),
+            (0.0, 0.7, -0.1),
+        ] {
+            for sign in [1.0, -1.0] {
+                let r = rpy_matrix([roll, sign * (half - off), yaw]);
+                let back = rpy_matrix(matrix_rpy(&r));
+                let gap = (back - r).abs().max();
+                assert!(gap < 1e-15, "pitch off by {off}: {gap}");
+            }
         }
     }
 

@@ -139,6 +139,20 @@ pub fn non_negative<'de, D: serde::Deserializer<'de>>(
     number(d, |v| v >= 0.0, "non-negative")
 }
 
+/// `v`, a number, refused unless finite and from 0 to `most`, given in `unit` (which may say
+/// where the bound comes from).
+pub fn within<'de, D: serde::Deserializer<'de>>(
+    d: D,
+    most: crate::numeric::Real,
+    unit: &str,
+) -> Result<crate::numeric::Real, D::Error> {
+    number(
+        d,
+        |v| (0.0..=most).contains(&v),
+        &format!("from 0 to {most} {unit}"),
+    )
+}
+
 /// `v`, a number, refused unless in [0, 1).
 pub fn fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<crate::numeric::Real, D::Error> {
     number(d, |v| (0.0..1.0).contains(&v), "in [0, 1)")
@@ -154,7 +168,8 @@ fn number<'de, D: serde::Deserializer<'de>>(
         Ok(v)
     } else {
         Err(de::Error::custom(format!(
-            "must be finite and {what}, got {v}"
+            "must be finite and {what}, got {}",
+            crate::error::shown(v)
         )))
     }
 }

@@ -19,6 +19,16 @@ use crate::robot::{Chain, JointType, Param, Robot, MAX_JOINTS};
 /// Standard gravity, m/s².
 pub const GRAVITY: Real = 9.81;
 
+/// Largest mass of a link or a payload, kg (100 t): far above any arm (the heaviest
+/// industrial payloads are about 2.3 t); a larger one gives a sag that is not a sag.
+pub const MAX_MASS_KG: Real = 1e5;
+
+/// Whether `kg` is a mass a robot, a scenario or a measured point may give: finite, ≥ 0 and
+/// at most [`MAX_MASS_KG`].
+pub fn is_mass(kg: Real) -> bool {
+    (0.0..=MAX_MASS_KG).contains(&kg)
+}
+
 /// Which joint compliances the identification estimates (docs/formats.md `[identification]
 /// compliance`, `identify --compliance`): none (the default: a kinematic model), the joints
 /// gravity loads, or a list of names `c1`…`cn`.
@@ -247,10 +257,10 @@ pub fn gravity_torques(
             q.len()
         )));
     }
-    if !(payload_kg.is_finite() && payload_kg >= 0.0) {
+    if !is_mass(payload_kg) {
         return Err(Error::setting(
             "payload_kg",
-            format!("must be a finite number ≥ 0, got {payload_kg}"),
+            format!("must be a mass from 0 to {MAX_MASS_KG} kg, got {payload_kg}"),
         ));
     }
     gravity_torques_at(robot, mass, payload_kg, &masses(chain, q), out);
@@ -277,7 +287,8 @@ pub(crate) fn gravity_torques_vars(
     );
 }
 
-/// Checks the payloads of `points` measured points (kg): one per point, each finite and ≥ 0.
+/// Checks the payloads of `points` measured points (kg): one per point, each a mass
+/// ([`is_mass`]).
 /// Errors name the key `payload_kg` and the point.
 pub fn check_payloads(loads: &[Real], points: usize) -> Result<()> {
     if loads.len() != points {
@@ -286,14 +297,10 @@ pub fn check_payloads(loads: &[Real], points: usize) -> Result<()> {
             format!("{} payloads but {points} measured points", loads.len()),
         ));
     }
-    match loads
-        .iter()
-        .enumerate()
-        .find(|(_, w)| !(w.is_finite() && **w >= 0.0))
-    {
+    match loads.iter().enumerate().find(|(_, w)| !is_mass(**w)) {
         Some((i, w)) => Err(Error::setting(
             "payload_kg",
-            format!("point {i}: must be a finite payload ≥ 0 kg, got {w}"),
+            format!("point {i}: must be a payload from 0 to {MAX_MASS_KG} kg, got {w}"),
         )),
         None => Ok(()),
     }

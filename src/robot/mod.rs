@@ -592,11 +592,10 @@ impl Robot {
                     format!("{} link masses for {n} joints", m.len()),
                 ));
             }
-            if let Some(j) = m.iter().position(|v| !(v.is_finite() && *v >= 0.0)) {
-                return Err(issue(
-                    joint_place(j, "mass_kg"),
-                    format!("must be a finite mass ≥ 0 kg, got {:?}", m[j]),
-                ));
+            if let Some(j) = m.iter().position(|v| !compliance::is_mass(*v)) {
+                let most = compliance::MAX_MASS_KG;
+                let msg = format!("must be a mass from 0 to {most} kg, got {:?}", m[j]);
+                return Err(issue(joint_place(j, "mass_kg"), msg));
             }
         }
         for j in 0..n {

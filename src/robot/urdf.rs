@@ -6,7 +6,8 @@
 //! of Denavit and Hartenberg: at q = 0 every moving joint is a line (its origin and axis in the
 //! root frame); frame i−1 has its z axis on joint i's line and its x axis on the common normal of
 //! lines i−1 and i (for parallel lines: the perpendicular from the previous origin), which gives θ,
-//! d, a, α of every link. The last link keeps θ = d = a = α = 0, so the whole placement of the tip
+//! d, a, α of every link (Hayati's d = 0 and β where lines a hair from parallel put the common
+//! normal beyond a robot file's lengths; the robot is then `dh_beta`). The last link keeps θ = d = a = α = 0, so the whole placement of the tip
 //! link after the last joint is the `[tool]` frame; the placement of the first joint's line in the
 //! root frame is the `[base]` frame. Joint values are the URDF's: radians for revolute and
 //! continuous joints, metres for prismatic ones (the robot's units are rad and m); measured
@@ -24,16 +25,20 @@ mod text;
 use std::path::Path;
 
 use crate::error::{Error, Opt, Result, Said};
-use crate::numeric::{rot_x, rot_z, rpy_matrix, Frame, Real, Vec3};
+use crate::numeric::{rot_x, rot_y, rot_z, rpy_matrix, Frame, Real, Vec3};
 use crate::robot::{
     to_internal, value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Quantity,
-    Robot, Units,
+    Robot, Units, MAX_LENGTH_MM,
 };
+
+/// The fixed joint and link [`UrdfRobot::write`] adds when the tip is a moving joint's child.
+const ADDED_TOOL: &str = "calbench_tool";
 
 /// A robot read from a URDF: the calbench robot and what is needed to write it back.
 #[derive(Clone, Debug)]
 pub struct UrdfRobot {
-    /// The calbench robot (standard DH, units rad and m).
+    /// The calbench robot (standard DH, with Hayati's β on links of nearly parallel axes;
+    /// units rad and m).
     pub robot: Robot,
     source: urdf_rs::Robot,
     /// The source's text, which [`UrdfRobot::write`] writes back.
@@ -117,11 +122,13 @@ fn moving(j: &urdf_rs::Joint) -> Result<Option<JointType>> {
         U::Revolute | U::Continuous => Some(JointType::Revolute),
         U::Prismatic => Some(JointType::Prismatic),
         _ => {
+            // The file's spelling (`floating`), not the Rust variant's (`Floating`).
+            let kind = format!("{:?}", j.joint_type).to_lowercase();
             return Err(Error::Compute(format!(
-                "joint \"{}\": type {:?} is not a one-axis joint (revolute, continuous, \
+                "joint \"{}\": type {kind} is not a one-axis joint (revolute, continuous, \
                  prismatic, fixed)",
-                j.name, j.joint_type
-            )))
+                j.name
+            )));
         }
     })
 }
@@ -135,9 +142,44 @@ fn dh(theta: Real, d: Real, a: Real, alpha: Real) -> Frame {
     }
 }
 
-/// The DH parameters (θ, d, a, α) of the link from frame `prev` (z on the previous joint's
-/// line) to the frame whose z is on the line (`p`, `u`), and that frame.
-fn next_frame(prev: &Frame, p: &Vec3, u: &Vec3) -> ([Real; 4], Frame) {
+/// The parameters (θ, d, a, α, β) of the link from frame `prev` (z on the previous joint's
+/// line) to the frame whose z is on the line (`p`, `u`), and that frame: DH's (β = 0), or,
+/// where DH's d or a is beyond `far` mm (lines a hair from parallel, whose common normal runs
+/// off to kilometres and whose d the data can hardly determine), Hayati's form (Qiao 2021
+/// eq. 1): d = 0, x along the perpendicular from the previous origin to the line, and the rest
+/// of the turn onto the line as `Ry(β)`.
+fn next_frame(prev: &Frame, p: &Vec3, u: &Vec3, far: Real) -> ([Real; 5], Frame) {
+    let (dh_values, f) = dh_frame(prev, p, u);
+    if dh_values[1].abs() <= far && dh_values[2].abs() <= far {
+        let [theta, d, a, alpha] = dh_values;
+        return ([theta, d, a, alpha, 0.0], f);
+    }
+    let (o0, z0, x0) = (
+        prev.pos,
+        prev.rot.column(2).into_owned(),
+        prev.rot.column(0).into_owned(),
+    );
+    // The point of the line level with the previous origin along z0 (the lines are nearly
+    // parallel, so u·z0 is near 1).
+    let r = p + ((o0 - p).dot(&z0) / u.dot(&z0)) * u - o0;
+    let x1 = if r.norm() > 1e-9 { r.normalize() } else { x0 };
+    let y1 = z0.cross(&x1);
+    let theta = x0.cross(&x1).dot(&z0).atan2(x0.dot(&x1));
+    let a = r.dot(&x1);
+    // Rx(α) Ry(β) ẑ = (sin β, −sin α cos β, cos α cos β) = u in (x1, y1, z0).
+    let (ux, uy, uz) = (u.dot(&x1), u.dot(&y1), u.dot(&z0));
+    let alpha = (-uy).atan2(uz);
+    let beta = ux.atan2((uy * uy + uz * uz).sqrt());
+    let f = prev.compose(&dh(theta, 0.0, a, alpha)).compose(&Frame {
+        rot: rot_y(beta),
+        pos: Vec3::zeros(),
+    });
+    ([theta, 0.0, a, alpha, beta], f)
+}
+
+/// The DH parameters (θ, d, a, α) of [`next_frame`]'s link by the common normal, and the
+/// frame they give.
+fn dh_frame(prev: &Frame, p: &Vec3, u: &Vec3) -> ([Real; 4], Frame) {
     let (o0, z0, x0) = (
         prev.pos,
         prev.rot.column(2).into_owned(),
@@ -251,6 +293,13 @@ impl UrdfRobot {
                 return Err(said(Said::from(msg).name(Opt::Tip).text(" LINK")));
             }
         };
+        // The tool a written URDF added after a tip that is a moving joint's child
+        // ([`UrdfRobot::write`]) ends the chain that tip names, so that `--tip` names the same
+        // chain in the nominal URDF and in the identified one.
+        let tip = js
+            .iter()
+            .find(|j| j.name == ADDED_TOOL && j.parent.link == tip && j.child.link == ADDED_TOOL)
+            .map_or(tip, |j| j.child.link.as_str());
         let mut chain = Vec::new();
         let mut link = tip;
         while which.base.as_deref() != Some(link) {
@@ -331,16 +380,23 @@ impl UrdfRobot {
         let mut values = vec![0.0; value_count(n)];
         let mut frame = base;
         let mut offsets = Vec::with_capacity(n);
+        // The links given Hayati's β ([`next_frame`]): those whose DH length would be beyond
+        // ten times the chain's own length (the sum of its joints' offsets), or a robot
+        // file's range.
+        let mut betas = Vec::new();
+        let length: Real = chain.iter().map(|&i| origin(&js[i]).pos.norm()).sum();
+        let far = (10.0 * length).clamp(1.0, MAX_LENGTH_MM);
         for k in 0..n {
             offsets.push(frame.inverse().compose(&lines[k].0));
             if k + 1 < n {
                 let (wp, u) = lines[k + 1];
-                let (p, f) = next_frame(&frame, &wp.pos, &u);
-                for (c, v) in [Param::Theta(k), Param::D(k), Param::A(k), Param::Alpha(k)]
-                    .into_iter()
-                    .zip(p)
-                {
+                let (p, f) = next_frame(&frame, &wp.pos, &u, far);
+                let link = [Param::Theta(k), Param::D(k), Param::A(k), Param::Alpha(k)];
+                for (c, v) in link.into_iter().chain([Param::Beta(k)]).zip(p) {
                     values[c.index(n)] = v;
+                }
+                if p[4] != 0.0 {
+                    betas.push(k);
                 }
                 frame = f;
             }
@@ -357,7 +413,10 @@ impl UrdfRobot {
         }
         let robot = Robot {
             name: source.name.clone(),
-            convention: Convention::Dh,
+            convention: match betas.is_empty() {
+                true => Convention::Dh,
+                false => Convention::DhBeta,
+            },
             joints,
             values,
             units: Units {
@@ -365,7 +424,7 @@ impl UrdfRobot {
                 angle: AngleUnit::Rad,
             },
             coupling: None,
-            beta_joints: None,
+            beta_joints: (!betas.is_empty()).then_some(betas),
             link_mass_kg: None,
         };
         // Origins within range can still add up beyond it (a base 3 km from the root).
@@ -402,6 +461,12 @@ impl UrdfRobot {
                 v(Param::A(k)),
                 v(Param::Alpha(k)),
             ));
+            if identified.carries_beta(k) {
+                f = f.compose(&Frame {
+                    rot: rot_y(v(Param::Beta(k))),
+                    pos: Vec3::zeros(),
+                });
+            }
         }
         let tip = f.compose(&identified.tool());
         let mut w = Frame::identity(); // the source's frames, updated as joints move
@@ -437,7 +502,7 @@ impl UrdfRobot {
             }
             None => {
                 let parent = &js[*self.chain.last().unwrap_or(&0)].child.link;
-                let (name, parent) = ("calbench_tool", xml_attribute(parent));
+                let (name, parent) = (ADDED_TOOL, xml_attribute(parent));
                 joint_element(name, "fixed", &parent, name, &place, None)
             }
         };

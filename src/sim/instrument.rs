@@ -71,7 +71,46 @@ impl Default for InstrumentSettings {
     }
 }
 
+/// The keys of a `[[measurement]]` entry that only some kinds read, with those kinds
+/// (docs/formats.md § 4.15); the other keys every kind reads.
+const KIND_KEYS: [(&str, &[Kind]); 9] = [
+    ("pivot", &[Kind::Distance]),
+    ("pivot_mm", &[Kind::Distance]),
+    ("planes", &[Kind::Plane]),
+    ("spheres", &[Kind::Sphere]),
+    ("radius_mm", &[Kind::Sphere]),
+    ("sockets", &[Kind::Socket]),
+    ("socket_distance_mm", &[Kind::Socket]),
+    ("targets_mm", &[Kind::MultiTarget]),
+    ("tracker_mm", &[Kind::Position, Kind::MultiTarget]),
+];
+
 impl InstrumentSettings {
+    /// Refuses a key of the entry `given` (as written) that its kind does not read: a plane
+    /// count on a distance instrument would be believed set and never used.
+    pub fn check_keys(&self, given: &toml::Table) -> Result<()> {
+        let unread = KIND_KEYS
+            .iter()
+            .filter(|(_, kinds)| !kinds.contains(&self.kind))
+            .map(|(key, kinds)| (*key, *kinds))
+            .chain((!self.pivot).then_some(("pivot_mm", &[Kind::Distance][..])));
+        for (key, kinds) in unread {
+            if given.contains_key(key) {
+                let by: Vec<&str> = kinds.iter().map(|k| k.as_str()).collect();
+                let msg = match kinds.contains(&self.kind) {
+                    true => "is read only with pivot = true".to_string(),
+                    false => format!(
+                        "is read only by kind = \"{}\" (this entry's kind is \"{}\")",
+                        by.join("\" or \""),
+                        self.kind.as_str()
+                    ),
+                };
+                return Err(Error::setting(format!("measurement.{key}"), msg));
+            }
+        }
+        Ok(())
+    }
+
     /// The instrument's geometry (kind `pose` is refused: it is the tracker's own path).
     pub fn instrument(&self) -> Result<Instrument> {
         use crate::measurement::kind_csv::MAX_GROUPS;
@@ -109,24 +148,30 @@ impl InstrumentSettings {
             }
         };
         inst.check()?;
+        // Within a robot file's range of lengths (mm; µm for the noise): beyond it the
+        // readings are not finite, and the run fails with no key to blame.
+        let most = crate::robot::MAX_LENGTH_MM;
         for (k, v) in [
             ("noise_um", self.noise_um),
             ("scale_um_per_m", self.scale_um_per_m),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::setting(
-                    format!("measurement.{k}"),
-                    format!("must be finite and ≥ 0, got {}", crate::error::shown(v)),
-                ));
+            if !(0.0..=most * 1e3).contains(&v) {
+                let got = crate::error::shown(v);
+                let msg = format!(
+                    "must be from 0 to {} µm (a robot file's range), got {got}",
+                    most * 1e3
+                );
+                return Err(Error::setting(format!("measurement.{k}"), msg));
             }
         }
-        if self
-            .pivot_mm
-            .iter()
-            .chain(&self.tracker_mm)
-            .any(|v| !v.is_finite())
-        {
-            return Err(Error::setting("measurement.pivot_mm", "must be finite"));
+        for (k, p) in [("pivot_mm", self.pivot_mm), ("tracker_mm", self.tracker_mm)] {
+            if let Some(v) = p.iter().find(|v| !(v.is_finite() && v.abs() <= most)) {
+                let got = crate::error::shown(*v);
+                let msg = format!(
+                    "must be finite and within ±{most} mm (a robot file's range), got {got}"
+                );
+                return Err(Error::setting(format!("measurement.{k}"), msg));
+            }
         }
         Ok(inst)
     }

@@ -29,7 +29,7 @@ use serde::Deserialize;
 
 use crate::error::{Error, Result};
 use crate::numeric::{Frame, Real, Vec3};
-use crate::robot::compliance::{gravity_torques_at, masses, Masses};
+use crate::robot::compliance::{self, gravity_torques_at, masses, Masses};
 use crate::robot::{builtin::Builtin, Chain, Coupling, JointType, Param, Robot};
 use crate::sim::rapier::{self, SpringBody};
 
@@ -65,21 +65,34 @@ pub struct ComplianceSettings {
 }
 
 impl ComplianceSettings {
-    /// Checks the settings for a robot with `dof` joints: stiffness finite and > 0, masses and
-    /// payload finite and ≥ 0, one value per joint. Errors name the key.
+    /// Checks the settings for a robot with `dof` joints: one value per joint, each stiffness
+    /// finite and at least 1 N·m/rad (a robot file's compliance range,
+    /// [`crate::robot::MAX_COMPLIANCE`]), the masses and the payload masses
+    /// ([`compliance::is_mass`]). Errors name the key.
     pub fn check(&self, dof: usize) -> Result<()> {
         if let Some(k) = &self.stiffness_nm_per_rad {
-            let why = ("joint", "stiffness must be a finite number > 0");
-            per_joint("compliance.stiffness_nm_per_rad", k, dof, why, |v| v > 0.0)?;
+            let why = ("joint", "stiffness must be a finite number ≥ 1 N·m/rad");
+            let stiff = |v: Real| v * crate::robot::MAX_COMPLIANCE >= 1.0;
+            per_joint("compliance.stiffness_nm_per_rad", k, dof, why, stiff)?;
         }
         if let Some(m) = &self.link_mass_kg {
-            let why = ("link", "mass must be a finite number ≥ 0");
-            per_joint("compliance.link_mass_kg", m, dof, why, |v| v >= 0.0)?;
+            let why = format!("mass must be from 0 to {} kg", compliance::MAX_MASS_KG);
+            per_joint(
+                "compliance.link_mass_kg",
+                m,
+                dof,
+                ("link", &why),
+                compliance::is_mass,
+            )?;
         }
-        if !(self.payload_kg.is_finite() && self.payload_kg >= 0.0) {
+        if !compliance::is_mass(self.payload_kg) {
             return Err(Error::setting(
                 "compliance.payload_kg",
-                format!("must be a finite number ≥ 0, got {}", self.payload_kg),
+                format!(
+                    "must be a mass from 0 to {} kg, got {}",
+                    compliance::MAX_MASS_KG,
+                    crate::error::shown(self.payload_kg)
+                ),
             ));
         }
         Ok(())
@@ -132,7 +145,9 @@ impl Compliance {
     ) -> Result<Option<Compliance>> {
         let dof = robot.dof();
         if s.model == ComplianceModel::None {
-            return Ok(None);
+            // Checked all the same: a value that would be refused with a sag model is not
+            // taken silently because the model is off.
+            return s.check(dof).map(|()| None);
         }
         if dof > 16 {
             return Err(Error::setting(

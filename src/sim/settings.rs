@@ -13,9 +13,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::error::{Error, Result};
 use crate::measurement::Measure;
-use crate::numeric::options::{
-    finite, non_negative as at_least_0, positive, range, recheck_at, share,
-};
+use crate::numeric::options::{finite, positive, range, recheck_at, share, within};
 use crate::numeric::Real;
 use crate::robot::Param;
 
@@ -285,10 +283,10 @@ pub struct TrackerSettings {
     #[serde(deserialize_with = "tracker_pose")]
     pub pose: [Real; 6],
     /// Constant part of the MPE, µm; default 15.
-    #[serde(deserialize_with = "at_least_0")]
+    #[serde(deserialize_with = "mpe_um")]
     pub mpe_a_um: Real,
     /// Range-proportional part of the MPE, µm per m; default 6.
-    #[serde(deserialize_with = "at_least_0")]
+    #[serde(deserialize_with = "mpe_um")]
     pub mpe_b_um_per_m: Real,
     /// Coverage factor: σ = MPE / coverage; default 2.
     #[serde(deserialize_with = "positive")]
@@ -296,7 +294,7 @@ pub struct TrackerSettings {
     /// Position or full pose; default position.
     pub measure: MeasureSetting,
     /// Orientation noise per axis (σ, degrees) for `pose`; default 0.
-    #[serde(deserialize_with = "at_least_0")]
+    #[serde(deserialize_with = "angle_sigma_deg")]
     pub angle_noise_deg: Real,
 }
 
@@ -334,6 +332,21 @@ fn beyond<E: serde::de::Error>(what: &str, v: &[Real]) -> std::result::Result<()
         Some(msg) => Err(E::custom(format!("{what} {msg}"))),
         None => Ok(()),
     }
+}
+
+/// `[tracker] mpe_a_um`, `mpe_b_um_per_m`: from 0 to a robot file's largest length (in µm, µm
+/// per m of range).
+fn mpe_um<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real, D::Error> {
+    within(
+        d,
+        crate::robot::MAX_LENGTH_MM * 1e3,
+        "µm (a robot file's range)",
+    )
+}
+
+/// `[tracker] angle_noise_deg`: a σ from 0 to one turn.
+fn angle_sigma_deg<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real, D::Error> {
+    within(d, crate::robot::MAX_ANGLE_RAD.to_degrees(), "° (one turn)")
 }
 
 /// `[tracker] pose`: six finite numbers, x, y, z within a robot file's range.
@@ -541,154 +554,4 @@ fn check_box(key: &str, center_mm: &[Real; 3], size_mm: &[Real; 3]) -> Result<()
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn defaults_match_formats() {
-        let t: TrackerSettings = toml::from_str("").unwrap();
-        assert_eq!(t, TrackerSettings::default());
-        assert_eq!(t.pose, [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]);
-        assert_eq!((t.mpe_a_um, t.mpe_b_um_per_m, t.coverage), (15.0, 6.0, 2.0));
-        let e: ErrorSettings = toml::from_str("").unwrap();
-        assert_eq!(e.kind, ErrorKind::Paper);
-        assert_eq!(e.params, ParamSelection::Identifiable);
-        let o: OutlierSettings = toml::from_str("").unwrap();
-        assert_eq!(o.count_for(50).unwrap(), 0);
-        t.check().unwrap();
-        e.check().unwrap();
-    }
-
-    #[test]
-    fn formats_examples_parse() {
-        let e: ErrorSettings = toml::from_str(
-            "kind = \"normal\"\nlength_mm = 0.1\nangle_rad = 0.001\nparams = [\"a1\", \"d2\"]",
-        )
-        .unwrap();
-        assert_eq!(e.kind, ErrorKind::Normal);
-        assert_eq!(
-            e.params,
-            ParamSelection::List(vec!["a1".into(), "d2".into()])
-        );
-        e.check().unwrap();
-        let t: TrackerSettings =
-            toml::from_str("pose = [1.0, 2.0, 3.0, 0.0, 0.0, 90.0]\nmeasure = \"pose\"").unwrap();
-        assert_eq!(t.measure.measure(), Measure::Pose);
-        #[derive(Deserialize)]
-        struct R {
-            region: Region,
-        }
-        let r: R = toml::from_str(
-            "region = { kind = \"box\", center_mm = [550.0, 0.0, 550.0], size_mm = [1000.0, 1000.0, 1000.0] }",
-        )
-        .unwrap();
-        assert!(matches!(r.region, Region::Box { .. }));
-        let r: R = toml::from_str("region = { kind = \"joint\" }").unwrap();
-        assert_eq!(r.region, Region::Joint {});
-        let r: R = toml::from_str("region = { kind = \"grid\", per_joint = 3 }").unwrap();
-        assert_eq!(r.region, Region::Grid { per_joint: 3 });
-        let o: OutlierSettings = toml::from_str("fraction = 0.1").unwrap();
-        assert_eq!(o.count_for(50).unwrap(), 5);
-    }
-
-    #[test]
-    fn negative_noise_is_refused_with_its_key() {
-        let t = TrackerSettings {
-            mpe_a_um: -1.0,
-            ..Default::default()
-        };
-        let e = t.check().unwrap_err();
-        assert!(
-            e.to_string()
-                .contains("must be finite and non-negative, got -1"),
-            "{e}"
-        );
-        assert_eq!(e.key(), Some("tracker.mpe_a_um"));
-        // Read from a scenario's text, the same value is refused on its field, as it is read.
-        // (text, why, whether it is the tracker's table or the outliers').
-        for (text, why, tracker) in [
-            ("mpe_a_um = -1.0", "non-negative", true),
-            ("coverage = 0.0", "positive", true),
-            (
-                "pose = [0.0, 0.0, 0.0, 0.0, 0.0, inf]",
-                "6 finite numbers",
-                true,
-            ),
-            ("fraction = 1.5", "in [0, 1]", false),
-            ("magnitude_mm = [2.0, 1.0]", "lo ≤ hi", false),
-        ] {
-            let e = if tracker {
-                toml::from_str::<TrackerSettings>(text).err()
-            } else {
-                toml::from_str::<OutlierSettings>(text).err()
-            };
-            let e = e.unwrap().to_string();
-            assert!(e.contains(why), "{text}: {e}");
-        }
-        let t = TrackerSettings {
-            coverage: 0.0,
-            ..Default::default()
-        };
-        assert_eq!(t.check().unwrap_err().key(), Some("tracker.coverage"));
-        let e = ErrorSettings {
-            length_mm: Real::NAN,
-            ..Default::default()
-        };
-        assert_eq!(e.check().unwrap_err().key(), Some("errors.length_mm"));
-    }
-
-    #[test]
-    fn more_outliers_than_poses_are_refused() {
-        let o = OutlierSettings {
-            count: Some(100),
-            ..Default::default()
-        };
-        o.check().unwrap();
-        assert_eq!(o.count_for(40).unwrap_err().key(), Some("outliers.count"));
-        assert_eq!(o.count_for(100).unwrap(), 100);
-        let o = OutlierSettings {
-            magnitude_mm: [1.0, 0.5],
-            ..Default::default()
-        };
-        assert_eq!(o.check().unwrap_err().key(), Some("outliers.magnitude_mm"));
-        let o = OutlierSettings {
-            count: Some(1),
-            fraction: Some(0.1),
-            ..Default::default()
-        };
-        assert_eq!(o.check().unwrap_err().key(), Some("outliers.fraction"));
-    }
-
-    #[test]
-    fn unknown_keys_and_names_are_refused() {
-        let e = toml::from_str::<TrackerSettings>("mpe_a = 3.0").unwrap_err();
-        assert!(e.to_string().contains("mpe_a"), "{e}");
-        let e = toml::from_str::<OutlierSettings>("cont = 3").unwrap_err();
-        assert!(e.to_string().contains("cont"), "{e}");
-        let e = toml::from_str::<ErrorSettings>("params = \"some\"").unwrap_err();
-        assert!(e.to_string().contains("identifiable"), "{e}");
-        #[derive(Deserialize, Debug)]
-        #[allow(dead_code)]
-        struct R {
-            region: Region,
-        }
-        let e = toml::from_str::<R>("region = { kind = \"box\", center_mm = [0.0, 0.0, 0.0], size_mm = [1.0, 1.0, 1.0], sise = 2 }")
-            .unwrap_err();
-        assert!(e.to_string().contains("sise"), "{e}");
-        let s = ErrorSettings {
-            params: ParamSelection::List(vec!["a1".into(), "thetta2".into()]),
-            ..Default::default()
-        };
-        let e = s.check().unwrap_err();
-        assert!(e.to_string().contains("thetta2"), "{e}");
-        assert_eq!(e.key(), Some("errors.params"));
-        let r = Region::Box {
-            center_mm: [0.0; 3],
-            size_mm: [1.0, 0.0, 1.0],
-        };
-        assert_eq!(
-            r.check("validation.region").unwrap_err().key(),
-            Some("validation.region")
-        );
-    }
-}
+mod tests;

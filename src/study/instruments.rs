@@ -26,7 +26,6 @@ use crate::poses::{select, PoseModel, SelectOptions, Strategy};
 use crate::robot::{Param, Robot};
 use crate::sim::instrument::{measure, touch, touching, InstrumentSettings, Layout};
 use crate::sim::settings::ErrorSettings;
-use crate::study::instruments_table::instruments_keys;
 use crate::study::scenario::StrategyName;
 use crate::study::whole::Head;
 
@@ -84,84 +83,8 @@ fn default_validation() -> usize {
     50
 }
 
-impl InstrumentsScenario {
-    /// Parses and checks the scenario in `table`, read from `path` (named in errors): the
-    /// keys of its `[instruments_study]` table are the study's
-    /// ([`instruments_keys`]).
-    pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
-        let ferr = |place: &str, msg: String| Error::file(path, place, msg);
-        let whole = table.clone();
-        let mut table = instruments_keys(table, path)?;
-        let entries = match table.remove("measurement") {
-            Some(toml::Value::Array(a)) => a,
-            Some(t @ toml::Value::Table(_)) => vec![t],
-            _ => {
-                return Err(ferr(
-                    "measurement",
-                    "must be a [measurement] table or [[measurement]] tables".into(),
-                ))
-            }
-        };
-        let mut measurement = Vec::with_capacity(entries.len());
-        for (i, e) in entries.into_iter().enumerate() {
-            let m: InstrumentSettings = e.try_into().map_err(|e: toml::de::Error| {
-                ferr(
-                    &format!("measurement[{i}]"),
-                    e.to_string().trim_end().to_string(),
-                )
-            })?;
-            measurement.push(m);
-        }
-        let takes = "with [instruments_study] takes name, description, seed, trials, robot, \
-                     [errors], [instruments_study] and its [[measurement]] tables";
-        let trials = (20, 2..=crate::study::scenario::MAX_TRIALS);
-        let (head, mut s): (Head, InstrumentsScenario) =
-            crate::study::whole::parse(table, path, trials, takes)?;
-        s.measurement = measurement;
-        s.head = head;
-        s.head.table = whole;
-        for (i, m) in s.measurement.iter().enumerate() {
-            m.instrument()
-                .map_err(|e| ferr(&format!("measurement[{i}]"), e.to_string()))?;
-        }
-        if s.measurement.is_empty() || s.poses.is_empty() || s.strategies.is_empty() {
-            return Err(ferr(
-                "measurement",
-                "needs at least one instrument, pose count and strategy".into(),
-            ));
-        }
-        for st in &s.strategies {
-            strategy(st).map_err(|e| ferr("strategies", e.to_string()))?;
-        }
-        if s.poses.iter().any(|n| !(10..=s.candidates).contains(n)) {
-            return Err(ferr(
-                "poses",
-                format!(
-                    "each count must be between 10 and candidates = {}",
-                    s.candidates
-                ),
-            ));
-        }
-        if s.validation == 0 {
-            return Err(ferr("validation", "must be at least 1".into()));
-        }
-        for (key, n) in [("candidates", s.candidates), ("validation", s.validation)] {
-            if let Some(msg) = crate::study::scenario::pose_count_excess(n) {
-                return Err(ferr(&format!("instruments_study.{key}"), msg));
-            }
-        }
-        s.errors
-            .check()
-            .map_err(|e| ferr("errors", e.to_string()))?;
-        let robot = crate::robot::builtin::load(&s.robot)?;
-        if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
-            return Err(ferr("robot", msg));
-        }
-        Ok(s)
-    }
-}
-
-fn strategy(name: &str) -> Result<Strategy> {
+/// The strategy `name` an instruments study compares ([`STRATEGIES`]).
+pub(crate) fn strategy(name: &str) -> Result<Strategy> {
     let allowed = |s: &Strategy| STRATEGIES.contains(s);
     match name
         .parse::<StrategyName>()

@@ -1,10 +1,14 @@
 //! The `[instruments_study]` table of an instruments study (docs/formats.md § 4.15): its keys,
-//! moved to the top level where [`super::instruments::InstrumentsScenario`] reads them, and
-//! the refusal of the layout before the table, saying how to migrate.
+//! moved to the top level where [`super::instruments::InstrumentsScenario`] reads them, the
+//! refusal of the layout before the table, saying how to migrate, and the reading of the
+//! whole scenario, each refusal at the key and line it is about.
 
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::sim::instrument::InstrumentSettings;
+use crate::study::instruments::{strategy, InstrumentsScenario};
+use crate::study::whole::Head;
 
 /// The table that makes a scenario an instruments study.
 pub const INSTRUMENTS_STUDY: &str = "instruments_study";
@@ -47,4 +51,105 @@ pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Tab
         table.insert(k, v);
     }
     Ok(table)
+}
+
+impl InstrumentsScenario {
+    /// Parses and checks the scenario in `table`, read from `path` (named in errors): the
+    /// keys of its `[instruments_study]` table are the study's
+    /// ([`instruments_keys`]).
+    pub fn from_table(table: toml::Table, path: &std::path::Path) -> Result<Self> {
+        let ferr = |place: &str, msg: String| Error::file(path, place, msg);
+        let whole = table.clone();
+        let mut table = instruments_keys(table, path)?;
+        // An entry's place: `measurement[i]`, or `measurement` for one `[measurement]` table.
+        let (entries, single) = match table.remove("measurement") {
+            Some(toml::Value::Array(a)) => (a, false),
+            Some(t @ toml::Value::Table(_)) => (vec![t], true),
+            _ => {
+                return Err(ferr(
+                    "measurement",
+                    "must be a [measurement] table or [[measurement]] tables".into(),
+                ))
+            }
+        };
+        let entry = |i: usize| match single {
+            true => "measurement".to_string(),
+            false => format!("measurement[{i}]"),
+        };
+        // A refusal within entry `i`: at its key (`measurement[1].tracker_mm`), at its line.
+        let in_entry = |i: usize, e: Error| match e {
+            Error::Setting { key, msg } => {
+                let key = key.strip_prefix("measurement.").unwrap_or(&key);
+                ferr(&format!("{}.{key}", entry(i)), msg.to_string())
+            }
+            e => ferr(&entry(i), e.to_string()),
+        };
+        let mut measurement = Vec::with_capacity(entries.len());
+        for (i, e) in entries.into_iter().enumerate() {
+            let given = e.as_table().cloned().unwrap_or_default();
+            let m: InstrumentSettings = e.try_into().map_err(|e: toml::de::Error| {
+                ferr(&entry(i), e.to_string().trim_end().to_string())
+            })?;
+            m.check_keys(&given).map_err(|e| in_entry(i, e))?;
+            m.instrument().map_err(|e| in_entry(i, e))?;
+            measurement.push(m);
+        }
+        let takes = "with [instruments_study] takes name, description, seed, trials, robot, \
+                     [errors], [instruments_study] and its [[measurement]] tables";
+        let trials = (20, 2..=crate::study::scenario::MAX_TRIALS);
+        let (head, mut s): (Head, InstrumentsScenario) =
+            crate::study::whole::parse(table, path, trials, takes)?;
+        s.measurement = measurement;
+        s.head = head;
+        s.head.table = whole;
+        for (key, empty, what) in [
+            ("measurement", s.measurement.is_empty(), "an instrument"),
+            (
+                "instruments_study.poses",
+                s.poses.is_empty(),
+                "a pose count",
+            ),
+            (
+                "instruments_study.strategies",
+                s.strategies.is_empty(),
+                "a strategy",
+            ),
+        ] {
+            if empty {
+                return Err(ferr(key, format!("needs at least {what}")));
+            }
+        }
+        for st in &s.strategies {
+            strategy(st).map_err(|e| ferr("instruments_study.strategies", e.to_string()))?;
+        }
+        if s.poses.iter().any(|n| !(10..=s.candidates).contains(n)) {
+            return Err(ferr(
+                "instruments_study.poses",
+                format!(
+                    "each count must be between 10 and candidates = {}",
+                    s.candidates
+                ),
+            ));
+        }
+        if s.validation == 0 {
+            return Err(ferr(
+                "instruments_study.validation",
+                "must be at least 1".into(),
+            ));
+        }
+        for (key, n) in [("candidates", s.candidates), ("validation", s.validation)] {
+            if let Some(msg) = crate::study::scenario::pose_count_excess(n) {
+                return Err(ferr(&format!("instruments_study.{key}"), msg));
+            }
+        }
+        s.errors.check().map_err(|e| match e {
+            Error::Setting { key, msg } => ferr(&key, msg.to_string()),
+            e => ferr("errors", e.to_string()),
+        })?;
+        let robot = crate::robot::builtin::load(&s.robot)?;
+        if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
+            return Err(ferr("robot", msg));
+        }
+        Ok(s)
+    }
 }

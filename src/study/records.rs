@@ -139,6 +139,18 @@ impl Verifier {
         }
     }
 
+    /// Where the line being read stands: `where trial I was expected`, or after the last
+    /// record these records hold (a line appended).
+    fn expected(&self) -> String {
+        match self.next < self.end {
+            true => format!("where {} was expected", self.trial(self.next)),
+            false => {
+                let last = self.trial(self.end.saturating_sub(1));
+                format!("after the last one these records hold ({last})")
+            }
+        }
+    }
+
     fn err(&self, msg: String) -> Error {
         Error::file(&self.path, format!("line {}", self.line), msg)
     }
@@ -154,16 +166,15 @@ impl Verifier {
         self.line += 1;
         let Some((body, sum)) = text.rsplit_once(" #") else {
             return Err(self.err(format!(
-                "the record where {} was expected has no checksum at its end: it was cut short \
-                 or altered",
-                self.trial(self.next)
+                "the record {} has no checksum at its end: it was cut short or altered",
+                self.expected()
             )));
         };
         let r: Record<T> = ron::from_str(body).map_err(|e| {
             self.err(format!(
-                "the record where {} was expected cannot be read ({e}): it was altered, or the \
-                 file is not a calbench record",
-                self.trial(self.next)
+                "the record {} cannot be read ({e}): it was altered, or the file is not a \
+                 calbench record",
+                self.expected()
             ))
         })?;
         if r.trial as u64 >= self.trials {
@@ -384,5 +395,10 @@ mod tests {
         let mut cut = lines.clone();
         cut[3] = cut[3][..cut[3].len() - 8].to_string();
         refused(id, &cut, &["line 4", "trial 3"]);
+        // A line appended after the last record is placed after it, not at a trial 0.
+        let mut garbage = lines.clone();
+        garbage.push("garbage".into());
+        let after = "after the last one these records hold (trial 3) has no checksum";
+        refused(id, &garbage, &["line 5", after]);
     }
 }

@@ -103,9 +103,10 @@ impl RegistrationScenario {
         let (head, mut s): (Head, RegistrationScenario) =
             crate::study::whole::parse(table, path, trials, takes)?;
         s.head = head;
-        s.registration_study
-            .check()
-            .map_err(|e| ferr("setting", e.to_string()))?;
+        s.registration_study.check().map_err(|e| match e {
+            Error::Setting { key, msg } => ferr(&key, msg.to_string()),
+            e => e,
+        })?;
         let methods = ENTRIES.map(String::from);
         let cells = s.registration_study.cell_names();
         let names = claims::Names {
@@ -213,19 +214,35 @@ impl RegistrationStudy {
             finite_non_negative("registration_study.magnitude_mm", *m)?;
         }
         finite_non_negative("registration_study.noise_mm", self.noise_mm)?;
-        for v in self.center_mm.iter().chain(&self.tracker_pose) {
-            if !v.is_finite() {
+        for s in self.size_mm {
+            finite_positive("registration_study.size_mm", s)?;
+        }
+        // Lengths within a robot file's range: beyond it the points' squares overflow and
+        // the registration fails in the run, with no key to blame.
+        let most = crate::robot::MAX_LENGTH_MM;
+        let (xyz, angles) = self.tracker_pose.split_at(3);
+        for (key, v) in [
+            ("magnitude_mm", &self.magnitude_mm[..]),
+            ("noise_mm", &[self.noise_mm]),
+            ("size_mm", &self.size_mm),
+            ("center_mm", &self.center_mm),
+            ("tracker_pose", xyz),
+        ] {
+            if let Some(v) = v.iter().find(|v| !(v.is_finite() && v.abs() <= most)) {
                 return Err(Error::setting(
-                    "registration_study",
+                    format!("registration_study.{key}"),
                     format!(
-                        "center_mm and tracker_pose must be finite, got {}",
+                        "must be finite and within ±{most} mm (a robot file's range), got {}",
                         crate::error::shown(*v)
                     ),
                 ));
             }
         }
-        for s in self.size_mm {
-            finite_positive("registration_study.size_mm", s)?;
+        if let Some(v) = angles.iter().find(|v| !v.is_finite()) {
+            return Err(Error::setting(
+                "registration_study.tracker_pose",
+                format!("must be 6 finite numbers, got {}", crate::error::shown(*v)),
+            ));
         }
         Ok(())
     }

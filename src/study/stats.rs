@@ -24,6 +24,25 @@ use crate::identify::Termination;
 use crate::numeric::{nan, Real};
 use sums::{Spread2, StatsSum, Sum};
 
+/// The optional statistics of an entry ([`OPTIONAL_STATS`]): the keys of the entry no other
+/// field takes. One that is not an optional statistic (a misspelled `eta_mean_pct`) is refused
+/// by its name, where it was refused as "expected struct Figures".
+fn optional_stats<'de, D>(d: D) -> Result<BTreeMap<String, Figures>, D::Error>
+where
+    D: serde::Deserializer<'de>,
+{
+    use serde::de::Error as _;
+    let raw = BTreeMap::<String, serde_json::Value>::deserialize(d)?;
+    raw.into_iter()
+        .map(|(key, v)| match OPTIONAL_STATS.contains(&key.as_str()) {
+            true => Figures::deserialize(v)
+                .map(|f| (key.clone(), f))
+                .map_err(|e| D::Error::custom(format!("`{key}`: {e}"))),
+            false => Err(D::Error::custom(format!("unknown field `{key}`"))),
+        })
+        .collect()
+}
+
 /// Mean, median and standard deviation over trials of one per-trial value: η of one
 /// parameter (%), a search's final fitness (`final_fitness`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
@@ -189,7 +208,7 @@ pub struct Entry {
     /// Qiao's attitude for full-pose data, `validation_before_fitted_mm` with
     /// `validation.before_fitted`, Guo's axis errors with `validation.axis_errors`), each
     /// statistic averaged over trials; a statistic no trial has is absent.
-    #[serde(flatten)]
+    #[serde(flatten, deserialize_with = "optional_stats")]
     pub optional: BTreeMap<String, Figures>,
     /// Improvement of the mean validation error, % ((before − after) / before).
     #[serde(deserialize_with = "nan::real")]

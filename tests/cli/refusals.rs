@@ -553,7 +553,7 @@ fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
         (
             "scenarios/instruments.toml",
             "planes = 3",
-            "line 76, measurement[3]: setting `measurement.planes`: must be at most 1000",
+            "line 80, measurement[3].planes: must be at most 1000",
         ),
     ];
     for (i, (file, line, expected)) in cases.into_iter().enumerate() {

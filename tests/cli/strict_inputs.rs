@@ -346,6 +346,17 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
             "<robot name=\"bare\"/>\n".to_string(),
             "bare.urdf: URDF: the robot has no <link>",
         ),
+        // A file cut short at a tag's end was "no <robot> element", naming no line.
+        (
+            "unclosed",
+            src.replace("</robot>", ""),
+            "the file ends inside <robot>: the <robot> of line 6 is not closed",
+        ),
+        (
+            "cut",
+            src[..src.find("<origin").unwrap()].to_string(),
+            "cut.urdf: line 12: the file ends inside <joint>: the <robot> of line 6 is not closed",
+        ),
     ];
     for (name, text, want) in cases {
         refused(&fk_on_urdf(&d, name, &text), &[want]);

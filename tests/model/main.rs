@@ -11,4 +11,5 @@ mod compliance;
 mod fma;
 mod kinematics;
 mod registration;
+mod urdf_chain;
 mod weights;

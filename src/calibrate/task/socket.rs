@@ -7,6 +7,7 @@
 //! file (§ 5.3) per placement; calbench's identified robot, the nominal one and the authors'
 //! calibrated model are scored on both placements, beside the authors' `kpis.yaml`.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
@@ -445,6 +446,8 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
     let mut var = [Vec::new(), Vec::new()];
     let mut count = [0usize; 2];
     let mut distance = None;
+    // The line of each key read.
+    let mut lines: BTreeMap<&str, usize> = BTreeMap::new();
     for (i, line) in text.lines().enumerate() {
         // A line `key: …` opens the key it names: its own value is read at that key.
         let opened = line
@@ -458,6 +461,16 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
         }
         let at = key;
         let bad = |msg: String| Error::file(path, format!("line {}, {at}", i + 1), msg);
+        if let (Some((_, rest)), false) = (opened, key.is_empty()) {
+            if let Some(first) = lines.insert(key, i + 1) {
+                return Err(bad(format!("given twice (first on line {first})")));
+            }
+            if key != "distance" && !rest.trim().is_empty() {
+                let msg = "a list on the key's line is not read: write one `- value` per \
+                           line below the key, as the authors' files do";
+                return Err(bad(msg.to_string()));
+            }
+        }
         let num = |s: &str| -> Result<Real> {
             s.trim()
                 .parse::<Real>()
@@ -501,9 +514,18 @@ pub fn read_kpis(path: &Path) -> Result<SocketFigures> {
         Error::file(path, k, "missing: the authors' kpis.yaml gives var_1, var_2 (3 each), fks_1, fks_2 and distance")
     };
     let distance = distance.ok_or_else(|| missing("distance"))?;
-    for (l, name) in [(0, "var_1"), (1, "var_2")] {
-        if var[l].len() != 3 || count[l] == 0 {
-            return Err(missing(name));
+    // A key given with the wrong number of values, at its line.
+    let wrong = |k: &str, msg: String| match lines.get(k) {
+        Some(n) => Error::file(path, format!("line {n}, {k}"), msg),
+        None => missing(k),
+    };
+    for l in 0..2 {
+        if var[l].len() != 3 {
+            let msg = format!("{} values where the x, y, z variances are 3", var[l].len());
+            return Err(wrong(["var_1", "var_2"][l], msg));
+        }
+        if count[l] == 0 {
+            return Err(wrong(["fks_1", "fks_2"][l], "no point".to_string()));
         }
     }
     let v: Vec<Real> = var.iter().map(|v| v.iter().sum::<Real>()).collect();
@@ -539,6 +561,51 @@ mod tests {
         assert!((f.distance_error_mm - 0.5).abs() < 1e-12);
         // The pooled spread is the metric of the per-row distances.
         assert!((Metric::SocketSpreadMm.of(&rows).0 - f.spread_mm).abs() < 1e-12);
+    }
+
+    /// A key given in flow style, twice, or with four variances, and a list of no point,
+    /// were each refused as "missing" (the last one naming `var_2`), with no line.
+    #[test]
+    fn a_key_present_but_malformed_is_named_at_its_line() {
+        let dir = crate::test_dir("kpis-malformed");
+        let p = dir.join("kpis.yaml");
+        let var = |k: &str, n: usize| format!("{k}:\n{}", "- 1.0e-9\n".repeat(n));
+        let points = |k: &str| format!("{k}:\n- - 0.4\n  - 0.0\n  - 0.0\n");
+        let good = [
+            var("var_1", 3),
+            var("var_2", 3),
+            points("fks_1"),
+            points("fks_2"),
+        ];
+        let head = "distance: -2.9e-06\n";
+        for (text, want) in [
+            (
+                format!(
+                    "{head}{}var_2: [1e-9, 2e-9, 3e-9]\n{}{}",
+                    good[0], good[2], good[3]
+                ),
+                "line 6, var_2: a list on the key's line is not read",
+            ),
+            (
+                format!("{head}{}{}", good.concat(), good[0]),
+                "line 18, var_1: given twice (first on line 2)",
+            ),
+            (
+                format!("{head}{}{}{}{}", good[0], var("var_2", 4), good[2], good[3]),
+                "line 6, var_2: 4 values where the x, y, z variances are 3",
+            ),
+            (
+                format!("{head}{}{}{}fks_2:\n", good[0], good[1], good[2]),
+                "line 14, fks_2: no point",
+            ),
+        ] {
+            std::fs::write(&p, text).unwrap();
+            let e = read_kpis(&p).unwrap_err().to_string();
+            assert!(e.contains(want), "{e}");
+        }
+        std::fs::write(&p, format!("{head}{}", good.concat())).unwrap();
+        assert!(read_kpis(&p).is_ok());
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// A malformed `distance:` is refused at its own line and key, not the key before it.

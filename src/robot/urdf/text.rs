@@ -181,6 +181,15 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
         }
     }
     let Some(end) = end.filter(|_| !robot_tag.is_empty()) else {
+        if let Some(inner) = open.last().filter(|_| !robot_tag.is_empty()) {
+            let msg = format!(
+                "the file ends inside <{}>: the <robot> of line {} is not closed (a file cut \
+                 short?)",
+                String::from_utf8_lossy(inner),
+                line_of(&text, robot_tag.start)
+            );
+            return Err(bad(text.len(), msg));
+        }
         let msg = "no <robot> element: a URDF is one <robot> element";
         return Err(Error::file(path, "URDF", msg));
     };

@@ -350,6 +350,8 @@ fn bad_settings_are_refused_naming_the_key() {
     for k in [
         vec![1e6, 1e6, 1e6, 1e5, 1e5, 0.0],
         vec![1e6, -1.0, 1e6, 1e5, 1e5, 1e5],
+        // Below 1 N·m/rad: a compliance beyond a robot file's range.
+        vec![1e6, 1e6, 1e6, 1e5, 1e5, 1e-300],
         vec![1e6; 5],
         vec![Real::NAN; 6],
     ] {
@@ -359,18 +361,32 @@ fn bad_settings_are_refused_naming_the_key() {
         };
         assert_eq!(key(s, b), "compliance.stiffness_nm_per_rad");
     }
-    for m in [vec![1.0; 7], vec![1.0, 1.0, -1.0, 1.0, 1.0, 1.0]] {
+    for m in [
+        vec![1.0; 7],
+        vec![1.0, 1.0, -1.0, 1.0, 1.0, 1.0],
+        vec![1.0, 1.0, 1.0, 1.0, 1.0, 2e5],
+    ] {
         let s = ComplianceSettings {
             link_mass_kg: Some(m),
             ..base.clone()
         };
         assert_eq!(key(s, b), "compliance.link_mass_kg");
     }
+    for payload_kg in [-2.0, 1e300, Real::NAN] {
+        let s = ComplianceSettings {
+            payload_kg,
+            ..base.clone()
+        };
+        assert_eq!(key(s, b), "compliance.payload_kg");
+    }
+    // The bounds hold at the edges.
     let s = ComplianceSettings {
-        payload_kg: -2.0,
+        stiffness_nm_per_rad: Some(vec![1.0; 6]),
+        link_mass_kg: Some(vec![crate::robot::compliance::MAX_MASS_KG; 6]),
+        payload_kg: crate::robot::compliance::MAX_MASS_KG,
         ..base.clone()
     };
-    assert_eq!(key(s, b), "compliance.payload_kg");
+    assert!(Compliance::new(&s, &robot, b).unwrap().is_some());
     // A robot file without built-in defaults needs the stiffness, and the masses unless
     // the file gives them (`mass_kg`).
     assert_eq!(key(base.clone(), None), "compliance.stiffness_nm_per_rad");
@@ -386,12 +402,18 @@ fn bad_settings_are_refused_naming_the_key() {
     }
     let c = Compliance::new(&s, &robot, None).unwrap().unwrap();
     assert_eq!(c.link_mass_kg(), robot.link_mass_kg.as_deref().unwrap());
-    // "none" needs nothing.
+    // "none" needs nothing, but what it is given is checked all the same.
     assert!(
         Compliance::new(&settings(ComplianceModel::None), &robot, None)
             .unwrap()
             .is_none()
     );
+    let s = ComplianceSettings {
+        model: ComplianceModel::None,
+        stiffness_nm_per_rad: Some(vec![-1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
+        ..base.clone()
+    };
+    assert_eq!(key(s, None), "compliance.stiffness_nm_per_rad");
     // TOML: unknown keys and models are refused.
     assert!(toml::from_str::<ComplianceSettings>("model = \"rapier\"\nstiff = 1").is_err());
     assert!(toml::from_str::<ComplianceSettings>("model = \"fem\"").is_err());

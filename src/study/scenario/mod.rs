@@ -406,15 +406,13 @@ impl Scenario {
         }
         check(check_pose_count("validation.count", v.count))?;
         check(v.region.check("validation.region"))?;
-        let load = |key: &str, w: Real| {
-            if w.is_finite() && w >= 0.0 {
-                Ok(())
-            } else {
-                Err(ferr(
-                    key,
-                    format!("must be a finite payload ≥ 0 kg, got {w}"),
-                ))
-            }
+        use crate::robot::compliance::{is_mass, MAX_MASS_KG};
+        let load = |key: &str, w: Real| match is_mass(w) {
+            true => Ok(()),
+            false => Err(ferr(
+                key,
+                format!("must be a payload from 0 to {MAX_MASS_KG} kg, got {w}"),
+            )),
         };
         if let Some(p) = &c.payloads_kg {
             if p.is_empty() {
@@ -488,7 +486,10 @@ impl Scenario {
                 ));
             }
             if methods.iter().any(|x: &MethodSpec| x.label == m.label) {
-                return Err(ferr(
+                // At the `label` the entry writes, or at the entry (a default label).
+                let written = ["", ".label"][usize::from(t.contains_key("label"))];
+                return Err(at(
+                    &format!("methods[{i}]{written}"),
                     &format!("methods[{i}].label"),
                     format!(
                         "\"{}\" is used twice: give each method a distinct `label`",

@@ -168,9 +168,13 @@ impl Stopping {
             }
         });
         let entry = self.widest_entry.as_deref().unwrap_or("an entry");
-        let needed = self.trials_needed.map_or(String::new(), |n| {
-            format!("; about {n} trials would reach it")
-        });
+        let most = crate::study::scenario::MAX_TRIALS;
+        let needed = self
+            .trials_needed
+            .map_or(String::new(), |n| match n > most {
+                true => format!("; more than {most} trials, the most a run takes, would reach it"),
+                false => format!("; about {n} trials would reach it"),
+            });
         Some(format!(
             "precision ±{} not reached: stopped at the cap of {} trials with {entry}'s mean \
              validation error after calibration at {width}{needed}",
@@ -237,5 +241,37 @@ mod tests {
         assert_eq!(p.widest(&[ok, (1.0, None)]), None);
         let a = Precision::parse("0.01mm").unwrap();
         assert!(a.reached(&[(5.0, Some([4.99, 5.01]))]));
+    }
+
+    /// `--precision 1e-300mm` printed the saturated count 18446744073709551615 as trials.
+    #[test]
+    fn a_shortfall_beyond_any_run_says_so() {
+        let p = Precision::parse("1e-300mm").unwrap();
+        let (i, needed) = widest_and_needed(&p, &[(1.0, Some([0.9, 1.1]))], 3);
+        assert_eq!((i, needed), (Some(0), Some(usize::MAX)));
+        let st = Stopping {
+            rule: "precision".into(),
+            target: "1e-300mm".into(),
+            reached: false,
+            trials: 3,
+            max_trials: 3,
+            block: BLOCK,
+            widest: Some(0.1),
+            widest_entry: None,
+            trials_needed: needed,
+        };
+        let text = st.shortfall().unwrap();
+        assert!(
+            text.ends_with("; more than 1000000000 trials, the most a run takes, would reach it"),
+            "{text}"
+        );
+        let st = Stopping {
+            trials_needed: Some(500),
+            ..st
+        };
+        assert!(st
+            .shortfall()
+            .unwrap()
+            .ends_with("; about 500 trials would reach it"));
     }
 }
