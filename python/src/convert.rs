@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use numpy::ndarray::{Array2, ShapeBuilder};
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonlyArray3};
 use pyo3::prelude::*;
-use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use pyo3::types::{PyBool, PyComplex, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
 use calbench::measurement::csv::measurements_from_arrays;
 use calbench::measurement::Measurements;
@@ -206,15 +206,40 @@ fn type_name(v: &Bound<'_, PyAny>) -> String {
         .map_or_else(|_| "an object".into(), |n| n.to_string())
 }
 
-/// A Python value as a TOML value (scenario dicts, method options). numpy's scalars are
-/// the TOML values of their Python twins: an integer (`np.int64`) stays an integer, a
-/// `np.bool_` a boolean; a numpy array is the list of its values.
-pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+/// `v` as a real number (a Python or numpy float or integer); `None` for a bool (`True`
+/// would read as 1), a complex, Python's or numpy's (whose `float` drops the imaginary part
+/// with only a warning), and any other object.
+pub(crate) fn real_number(v: &Bound<'_, PyAny>) -> PyResult<Option<f64>> {
+    let complex = v.is_instance_of::<PyComplex>()
+        || v.is_instance(&v.py().import("numpy")?.getattr("complexfloating")?)?;
+    if is_bool(v)? || complex {
+        return Ok(None);
+    }
+    Ok(v.extract::<f64>().ok())
+}
+
+/// The deepest nesting of lists and dicts a scenario dict or the options may have: a TOML
+/// file of calbench's nests a few levels; a list or dict that contains itself, or one nested
+/// thousands deep, overflowed the stack (a segmentation fault, no exception).
+const MAX_DEPTH: usize = 64;
+
+/// A Python value `depth` lists or dicts down as a TOML value (scenario dicts, method
+/// options). numpy's scalars are the TOML values of their Python twins: an integer
+/// (`np.int64`) stays an integer, a `np.bool_` a boolean; a numpy array is the list of its
+/// values.
+fn nested_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::Value> {
+    if depth > MAX_DEPTH {
+        let msg = format!(
+            "nests lists or dicts more than {MAX_DEPTH} deep (a list or dict that contains \
+             itself?)"
+        );
+        return Err(setting(key.split('[').next().unwrap_or(key), msg));
+    }
     if is_bool(v)? {
         return Ok(toml::Value::Boolean(v.is_truthy()?));
     }
     if v.is_instance(&v.py().import("numpy")?.getattr("ndarray")?)? {
-        return toml_value(key, &v.call_method0("tolist")?);
+        return nested_value(key, &v.call_method0("tolist")?, depth);
     }
     // Python's int, and what stands for one (`__index__`: numpy's integers).
     if v.is_instance_of::<PyInt>() || (!v.is_instance_of::<PyFloat>() && v.hasattr("__index__")?) {
@@ -229,18 +254,18 @@ pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Valu
         return Ok(toml::Value::String(v.extract()?));
     }
     if let Ok(d) = v.cast::<PyDict>() {
-        return Ok(toml::Value::Table(toml_table(key, d)?));
+        return Ok(toml::Value::Table(nested_table(key, d, depth + 1)?));
     }
     if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
         let items: Vec<toml::Value> = v
             .try_iter()?
             .enumerate()
-            .map(|(i, x)| toml_value(&format!("{key}[{i}]"), &x?))
+            .map(|(i, x)| nested_value(&format!("{key}[{i}]"), &x?, depth + 1))
             .collect::<PyResult<_>>()?;
         return Ok(toml::Value::Array(items));
     }
     // numpy scalars and other numbers.
-    if let Ok(f) = v.extract::<f64>() {
+    if let Some(f) = real_number(v)? {
         return Ok(toml::Value::Float(f));
     }
     Err(setting(
@@ -252,8 +277,13 @@ pub(crate) fn toml_value(key: &str, v: &Bound<'_, PyAny>) -> PyResult<toml::Valu
     ))
 }
 
-/// A Python dict as a TOML table.
+/// A Python dict as a TOML table ([`nested_value`]).
 pub(crate) fn toml_table(key: &str, d: &Bound<'_, PyDict>) -> PyResult<toml::Table> {
+    nested_table(key, d, 0)
+}
+
+/// [`toml_table`] of a dict `depth` lists or dicts down.
+fn nested_table(key: &str, d: &Bound<'_, PyDict>, depth: usize) -> PyResult<toml::Table> {
     let mut t = toml::Table::new();
     for (k, v) in d.iter() {
         let k: String = k
@@ -264,7 +294,7 @@ pub(crate) fn toml_table(key: &str, d: &Bound<'_, PyDict>) -> PyResult<toml::Tab
         } else {
             format!("{key}.{k}")
         };
-        t.insert(k, toml_value(&dotted, &v)?);
+        t.insert(k, nested_value(&dotted, &v, depth)?);
     }
     Ok(t)
 }

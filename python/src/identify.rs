@@ -130,11 +130,8 @@ fn priors(prior: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Param, Real)>> {
             let name: String = k
                 .extract()
                 .map_err(|_| setting("prior", "every key must be a parameter name"))?;
-            // A bool is not a standard deviation (`True` would read as 1).
-            let sigma: Option<Real> = v
-                .extract()
-                .ok()
-                .filter(|_| !crate::convert::is_bool(&v).unwrap_or(true));
+            // A bool or a complex is not a standard deviation.
+            let sigma: Option<Real> = crate::convert::real_number(&v)?;
             calbench::identify::registry::parse_prior(&name, sigma)
                 .map_err(|m| setting(&format!("prior.{name}"), m))
         })

@@ -11,7 +11,7 @@ use calbench::numeric::{Frame, Real};
 use calbench::robot::loaded::LoadedFk;
 use calbench::robot::{builtin, Param, Robot};
 
-use crate::convert::{flag_arg, float_array2, is_bool, joint_rows, typed_arg};
+use crate::convert::{flag_arg, float_array2, joint_rows, typed_arg};
 use crate::errors::{err, setting, LimitWarning};
 
 /// Warns (`calbench.LimitWarning`) of the rows of `qs` (internal units) outside the joint
@@ -187,10 +187,7 @@ impl PyRobot {
                     ),
                 ));
             };
-            let e: Real = v
-                .extract()
-                .ok()
-                .filter(|_| !is_bool(&v).unwrap_or(true))
+            let e: Real = crate::convert::real_number(&v)?
                 .ok_or_else(|| setting(&format!("errors.{name}"), "must be a number"))?;
             if !e.is_finite() {
                 return Err(setting(&format!("errors.{name}"), "must be finite"));

@@ -79,3 +79,46 @@ def test_k_is_refused_where_the_data_hold_no_orientation(cli, tmp_path):
     assert calbench.identify(robot, data=data, method="lm").rank > 0
     with pytest.raises(calbench.SettingError, match="`options.k`.*tracker"):
         calbench.identify(robot, data=data, method="lm", options={"k": 10.0})
+
+
+def test_a_dict_nested_too_deep_or_containing_itself_is_refused_naming_its_key(root):
+    # A list nested 100 000 deep, or one that contains itself, overflowed the stack (SIGSEGV).
+    deep = []
+    for _ in range(100_000):
+        deep = [deep]
+    looped = []
+    looped.append(looped)
+    for bad in (deep, looped):
+        sc = scenario(root)
+        sc["description"] = bad
+        with pytest.raises(calbench.SettingError, match="`description`: nests lists or dicts"):
+            calbench.run(sc, trials=2)
+    itself = scenario(root)
+    itself["errors"] = itself
+    with pytest.raises(calbench.SettingError, match="nests lists or dicts"):
+        calbench.run(itself, trials=2)
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.random.default_rng(1).uniform(-30.0, 30.0, (20, 6))
+    with pytest.raises(calbench.SettingError, match="`options.max_iter`: nests"):
+        calbench.identify(robot, q, robot.fk(q), method="lm", options={"max_iter": deep})
+
+
+def test_a_numpy_complex_scalar_is_refused_as_a_python_complex_is(root):
+    # numpy's `float` of a complex drops the imaginary part with only a ComplexWarning.
+    sc = scenario(root)
+    sc["tracker"]["mpe_a_um"] = np.complex128(15 + 7j)
+    with pytest.raises(calbench.SettingError, match="`tracker.mpe_a_um`: complex"):
+        calbench.run(sc, trials=2)
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.SettingError, match="`errors.a1`: must be a number"):
+        robot.with_errors({"a1": np.complex64(0.2 + 5j)})
+    q = np.random.default_rng(1).uniform(-30.0, 30.0, (20, 6))
+    with pytest.raises(calbench.SettingError, match="`prior.d2`: σ must be a number"):
+        calbench.identify(robot, q, robot.fk(q), prior={"d2": np.complex128(0.1 + 1j)})
+
+
+def test_a_trial_count_of_2_63_or_more_is_refused_naming_trials(root):
+    # It wrapped to a negative count, refused as the scenario file's.
+    for n in (2**63, 2**64 - 1):
+        with pytest.raises(calbench.SettingError, match=f"`trials`: must be between 1 and 1000000000, got {n}"):
+            calbench.run(str(root / CI_GUARD), trials=n)

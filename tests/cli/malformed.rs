@@ -411,3 +411,18 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
         assert!(!out.exists(), "{name}: a run was written");
     }
 }
+
+/// `--trials` of 2^63 or more wrapped to a negative count, refused as the scenario file's
+/// (`scenario: invalid value: integer -1`); it is refused as the option it is.
+#[test]
+fn a_trial_count_beyond_any_run_is_refused_as_the_option() {
+    let d = tmp_dir("cli-malformed-trials");
+    let sc = root().join("scenarios/ci-guard.toml");
+    for n in ["9223372036854775808", "18446744073709551615"] {
+        let out = d.join(n);
+        let o = calbench(&["run", path_arg(&sc), "--trials", n, "--out", path_arg(&out)]);
+        let want = format!("setting `--trials`: must be between 1 and 1000000000, got {n}");
+        refused(&o, &[&want]);
+        assert!(!out.exists());
+    }
+}

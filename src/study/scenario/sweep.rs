@@ -129,8 +129,14 @@ impl Scenario {
     pub fn with_run_overrides(&self, trials: Option<usize>, seed: Option<u64>) -> Result<Scenario> {
         let mut sc = self.clone();
         if let Some(n) = trials {
+            // 2^63 and more wrapped to a negative count, refused as the file's.
+            let n = i64::try_from(n).map_err(|_| {
+                let most = super::MAX_TRIALS;
+                let msg = format!("must be between 1 and {most}, got {n}");
+                Error::option(crate::error::Opt::Trials, msg)
+            })?;
             sc = sc
-                .with_override("trials", toml::Value::Integer(n as i64))
+                .with_override("trials", toml::Value::Integer(n))
                 .map_err(|e| given(e, "trials", crate::error::Opt::Trials))?;
         }
         if let Some(s) = seed {
