@@ -242,6 +242,15 @@ impl Error {
         }
     }
 
+    /// A refusal of the setting `key` as one of the file `path`, placed at that key (whose
+    /// line [`Error::at_key_line`] adds); any other error as it is.
+    pub fn in_file(self, path: &std::path::Path) -> Self {
+        match self {
+            Error::Setting { key, msg } => Error::file(path, key, msg),
+            e => e,
+        }
+    }
+
     /// An error about the front end's option `option`.
     pub fn option(option: Opt, msg: impl Into<Said>) -> Self {
         Error::Option {
@@ -447,6 +456,21 @@ pub fn finite_positive(key: &str, v: f64) -> Result<()> {
 /// Checks that setting `key` is finite and at least 0.
 pub fn finite_non_negative(key: &str, v: f64) -> Result<()> {
     finite_where(key, v, v >= 0.0, "non-negative")
+}
+
+/// Refuses, as the setting `key`, the first of the lengths `v` (mm) that is not finite or
+/// beyond ±`most` (a robot file's range of lengths).
+pub fn lengths_within(key: &str, v: &[f64], most: f64) -> Result<()> {
+    match v.iter().find(|v| !(v.is_finite() && v.abs() <= most)) {
+        Some(v) => Err(Error::setting(
+            key,
+            format!(
+                "must be finite and within ±{most} mm (a robot file's range), got {}",
+                shown(*v)
+            ),
+        )),
+        None => Ok(()),
+    }
 }
 
 /// Refuses `v` unless it is finite and `holds`, saying it must be finite and `what`.

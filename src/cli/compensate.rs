@@ -50,9 +50,7 @@ pub struct CompensateArgs {
 /// Corrects every row of the program and writes the corrected program.
 pub fn run(args: &CompensateArgs) -> Result<()> {
     let payload_kg = args.payload_kg;
-    if !calbench::robot::compliance::is_mass(payload_kg) {
-        let most = calbench::robot::compliance::MAX_MASS_KG;
-        let msg = format!("must be a payload from 0 to {most} kg, got {payload_kg}");
+    if let Some(msg) = calbench::robot::compliance::not_a_mass(payload_kg) {
         return Err(Error::setting("--payload-kg", msg).into());
     }
     let robots = [Path::new(&args.robot), Path::new(&args.identified)];

@@ -29,6 +29,12 @@ pub fn is_mass(kg: Real) -> bool {
     (0.0..=MAX_MASS_KG).contains(&kg)
 }
 
+/// The refusal of `kg` where it is not a mass ([`is_mass`]); `None` where it is.
+pub fn not_a_mass(kg: Real) -> Option<String> {
+    let got = crate::error::shown(kg);
+    (!is_mass(kg)).then(|| format!("must be a mass from 0 to {MAX_MASS_KG} kg, got {got}"))
+}
+
 /// Which joint compliances the identification estimates (docs/formats.md `[identification]
 /// compliance`, `identify --compliance`): none (the default: a kinematic model), the joints
 /// gravity loads, or a list of names `c1`…`cn`.
@@ -257,11 +263,8 @@ pub fn gravity_torques(
             q.len()
         )));
     }
-    if !is_mass(payload_kg) {
-        return Err(Error::setting(
-            "payload_kg",
-            format!("must be a mass from 0 to {MAX_MASS_KG} kg, got {payload_kg}"),
-        ));
+    if let Some(msg) = not_a_mass(payload_kg) {
+        return Err(Error::setting("payload_kg", msg));
     }
     gravity_torques_at(robot, mass, payload_kg, &masses(chain, q), out);
     Ok(())
@@ -297,11 +300,12 @@ pub fn check_payloads(loads: &[Real], points: usize) -> Result<()> {
             format!("{} payloads but {points} measured points", loads.len()),
         ));
     }
-    match loads.iter().enumerate().find(|(_, w)| !is_mass(**w)) {
-        Some((i, w)) => Err(Error::setting(
-            "payload_kg",
-            format!("point {i}: must be a payload from 0 to {MAX_MASS_KG} kg, got {w}"),
-        )),
+    match loads
+        .iter()
+        .enumerate()
+        .find_map(|(i, w)| Some((i, not_a_mass(*w)?)))
+    {
+        Some((i, msg)) => Err(Error::setting("payload_kg", format!("point {i}: {msg}"))),
         None => Ok(()),
     }
 }

@@ -592,9 +592,9 @@ impl Robot {
                     format!("{} link masses for {n} joints", m.len()),
                 ));
             }
-            if let Some(j) = m.iter().position(|v| !compliance::is_mass(*v)) {
-                let most = compliance::MAX_MASS_KG;
-                let msg = format!("must be a mass from 0 to {most} kg, got {:?}", m[j]);
+            if let Some((j, msg)) =
+                (m.iter().enumerate()).find_map(|(j, v)| Some((j, compliance::not_a_mass(*v)?)))
+            {
                 return Err(issue(joint_place(j, "mass_kg"), msg));
             }
         }

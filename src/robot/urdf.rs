@@ -7,11 +7,11 @@
 //! root frame); frame i−1 has its z axis on joint i's line and its x axis on the common normal of
 //! lines i−1 and i (for parallel lines: the perpendicular from the previous origin), which gives θ,
 //! d, a, α of every link (Hayati's d = 0 and β where lines a hair from parallel put the common
-//! normal beyond a robot file's lengths; the robot is then `dh_beta`). The last link keeps θ = d = a = α = 0, so the whole placement of the tip
-//! link after the last joint is the `[tool]` frame; the placement of the first joint's line in the
-//! root frame is the `[base]` frame. Joint values are the URDF's: radians for revolute and
-//! continuous joints, metres for prismatic ones (the robot's units are rad and m); measured
-//! positions stay in mm.
+//! normal beyond ten times the chain's length; the robot is then `dh_beta`). The last link
+//! keeps θ = d = a = α = 0, so the whole placement of the tip link after the last joint is the
+//! `[tool]` frame; the placement of the first joint's line in the root frame is the `[base]`
+//! frame. Joint values are the URDF's: radians for revolute and continuous joints, metres for
+//! prismatic ones (the robot's units are rad and m); measured positions stay in mm.
 //!
 //! Only the elements calbench reads are parsed ([`read`]). Writing back ([`UrdfRobot::write`])
 //! keeps the source text, every element and comment of it, and changes only the `<origin>` of
@@ -133,6 +133,14 @@ fn moving(j: &urdf_rs::Joint) -> Result<Option<JointType>> {
     })
 }
 
+/// Hayati's turn Ry(β) that ends a `dh_beta` link.
+fn turn_y(beta: Real) -> Frame {
+    Frame {
+        rot: rot_y(beta),
+        pos: Vec3::zeros(),
+    }
+}
+
 /// The DH link transform Rz(θ)Tz(d)Tx(a)Rx(α).
 fn dh(theta: Real, d: Real, a: Real, alpha: Real) -> Frame {
     let rz = rot_z(theta);
@@ -170,10 +178,9 @@ fn next_frame(prev: &Frame, p: &Vec3, u: &Vec3, far: Real) -> ([Real; 5], Frame)
     let (ux, uy, uz) = (u.dot(&x1), u.dot(&y1), u.dot(&z0));
     let alpha = (-uy).atan2(uz);
     let beta = ux.atan2((uy * uy + uz * uz).sqrt());
-    let f = prev.compose(&dh(theta, 0.0, a, alpha)).compose(&Frame {
-        rot: rot_y(beta),
-        pos: Vec3::zeros(),
-    });
+    let f = prev
+        .compose(&dh(theta, 0.0, a, alpha))
+        .compose(&turn_y(beta));
     ([theta, 0.0, a, alpha, beta], f)
 }
 
@@ -462,10 +469,7 @@ impl UrdfRobot {
                 v(Param::Alpha(k)),
             ));
             if identified.carries_beta(k) {
-                f = f.compose(&Frame {
-                    rot: rot_y(v(Param::Beta(k))),
-                    pos: Vec3::zeros(),
-                });
+                f = f.compose(&turn_y(v(Param::Beta(k))));
             }
         }
         let tip = f.compose(&identified.tool());

@@ -165,13 +165,7 @@ impl InstrumentSettings {
             }
         }
         for (k, p) in [("pivot_mm", self.pivot_mm), ("tracker_mm", self.tracker_mm)] {
-            if let Some(v) = p.iter().find(|v| !(v.is_finite() && v.abs() <= most)) {
-                let got = crate::error::shown(*v);
-                let msg = format!(
-                    "must be finite and within ±{most} mm (a robot file's range), got {got}"
-                );
-                return Err(Error::setting(format!("measurement.{k}"), msg));
-            }
+            crate::error::lengths_within(&format!("measurement.{k}"), &p, most)?;
         }
         Ok(inst)
     }

@@ -85,15 +85,8 @@ impl ComplianceSettings {
                 compliance::is_mass,
             )?;
         }
-        if !compliance::is_mass(self.payload_kg) {
-            return Err(Error::setting(
-                "compliance.payload_kg",
-                format!(
-                    "must be a mass from 0 to {} kg, got {}",
-                    compliance::MAX_MASS_KG,
-                    crate::error::shown(self.payload_kg)
-                ),
-            ));
+        if let Some(msg) = compliance::not_a_mass(self.payload_kg) {
+            return Err(Error::setting("compliance.payload_kg", msg));
         }
         Ok(())
     }

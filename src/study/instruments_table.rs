@@ -142,10 +142,8 @@ impl InstrumentsScenario {
                 return Err(ferr(&format!("instruments_study.{key}"), msg));
             }
         }
-        s.errors.check().map_err(|e| match e {
-            Error::Setting { key, msg } => ferr(&key, msg.to_string()),
-            e => ferr("errors", e.to_string()),
-        })?;
+        // `ErrorSettings::check` refuses settings only: each at its key.
+        s.errors.check().map_err(|e| e.in_file(path))?;
         let robot = crate::robot::builtin::load(&s.robot)?;
         if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
             return Err(ferr("robot", msg));

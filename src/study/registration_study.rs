@@ -103,10 +103,7 @@ impl RegistrationScenario {
         let (head, mut s): (Head, RegistrationScenario) =
             crate::study::whole::parse(table, path, trials, takes)?;
         s.head = head;
-        s.registration_study.check().map_err(|e| match e {
-            Error::Setting { key, msg } => ferr(&key, msg.to_string()),
-            e => e,
-        })?;
+        s.registration_study.check().map_err(|e| e.in_file(path))?;
         let methods = ENTRIES.map(String::from);
         let cells = s.registration_study.cell_names();
         let names = claims::Names {
@@ -228,15 +225,7 @@ impl RegistrationStudy {
             ("center_mm", &self.center_mm),
             ("tracker_pose", xyz),
         ] {
-            if let Some(v) = v.iter().find(|v| !(v.is_finite() && v.abs() <= most)) {
-                return Err(Error::setting(
-                    format!("registration_study.{key}"),
-                    format!(
-                        "must be finite and within ±{most} mm (a robot file's range), got {}",
-                        crate::error::shown(*v)
-                    ),
-                ));
-            }
+            crate::error::lengths_within(&format!("registration_study.{key}"), v, most)?;
         }
         if let Some(v) = angles.iter().find(|v| !v.is_finite()) {
             return Err(Error::setting(

@@ -406,13 +406,9 @@ impl Scenario {
         }
         check(check_pose_count("validation.count", v.count))?;
         check(v.region.check("validation.region"))?;
-        use crate::robot::compliance::{is_mass, MAX_MASS_KG};
-        let load = |key: &str, w: Real| match is_mass(w) {
-            true => Ok(()),
-            false => Err(ferr(
-                key,
-                format!("must be a payload from 0 to {MAX_MASS_KG} kg, got {w}"),
-            )),
+        let load = |key: &str, w: Real| match crate::robot::compliance::not_a_mass(w) {
+            None => Ok(()),
+            Some(msg) => Err(ferr(key, msg)),
         };
         if let Some(p) = &c.payloads_kg {
             if p.is_empty() {
