@@ -48,6 +48,6 @@ if ! has_tools; then
     exit 0
 fi
 # The dev profile: its dependencies are those cargo test just built (optimised, as
-# Cargo.toml sets for every dependency).
+# Cargo.toml sets for every dependency), calbench's own code at the test profile's level.
 VIRTUAL_ENV="$PWD/.venv" "$py" -m maturin develop --quiet
 CALBENCH_BIN="${CARGO_TARGET_DIR:-$PWD/target}/debug/calbench" "$py" -m pytest -q python/tests

@@ -11,6 +11,7 @@ import json
 import numbers
 import os
 import pathlib
+import warnings
 
 import numpy as np
 
@@ -28,6 +29,7 @@ from ._args import (
 )
 from ._calbench import (  # noqa: F401  (re-exported)
     ComputeError,
+    ConvergenceWarning,
     Error,
     FileError,
     IoError,
@@ -57,6 +59,7 @@ __all__ = [
     "ComputeError",
     "IoError",
     "LimitWarning",
+    "ConvergenceWarning",
 ]
 
 
@@ -466,7 +469,7 @@ def run(
         handle = _calbench.run(
             _scenario(scenario),
             trials=_count("trials", trials),
-            seed=_count("seed", seed),
+            seed=_count("seed", seed, bits=63),
             threads=_count("threads", threads),
             methods=methods,
             progress=_flag("progress", progress),
@@ -479,7 +482,7 @@ def run(
         _scenario(scenario),
         _path("out", out, "a folder"),
         trials=_count("trials", trials),
-        seed=_count("seed", seed),
+        seed=_count("seed", seed, bits=63),
         threads=_count("threads", threads),
         progress=_flag("progress", progress),
         shard=None if shard is None else _shard(shard),
@@ -621,7 +624,8 @@ def task(task, method="lm", *, models=None, name=None, out=None):
 
     Returns:
         a dict: ``task`` (the content of ``task.json``), ``record`` (of ``identified.json``)
-        and ``robot`` (the compensated :class:`Robot`).
+        and ``robot`` (the compensated :class:`Robot`). An identification that stopped short
+        of convergence warns (:class:`ConvergenceWarning`, the words of ``calbench task``).
     """
     if models is not None:
         models = _names("models", models)
@@ -637,6 +641,8 @@ def task(task, method="lm", *, models=None, name=None, out=None):
         name=_text("name", name, "a name", optional=True),
         out=_path("out", out, "a folder", optional=True),
     )
+    if d["warning"] is not None:
+        warnings.warn(d["warning"], ConvergenceWarning, stacklevel=2)
     return {
         "task": json.loads(d["task"]),
         "record": json.loads(d["record"]),

@@ -47,16 +47,17 @@ def _rotations(name, value):
     return _array(name, a, 3)
 
 
-def _count(name, value, least=0):
-    """``value`` as a non-negative 64-bit integer (at least ``least``), or None; refused with
-    a SettingError naming ``name`` otherwise (never a bare OverflowError or TypeError)."""
+def _count(name, value, least=0, bits=64):
+    """``value`` as a non-negative integer of at most ``bits`` bits (at least ``least``), or
+    None; refused with a SettingError naming ``name`` otherwise (never a bare OverflowError or
+    TypeError). A study's seed has 63 bits: the scenario file's TOML integer holds it."""
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise SettingError(f"setting `{name}`: expected an integer, got {type(value).__name__}")
     value = int(value)
-    if not least <= value < 2**64:
-        raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^64 - 1)")
+    if not least <= value < 2**bits:
+        raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^{bits} - 1)")
     return value
 
 

@@ -286,9 +286,12 @@ pub(crate) fn toml_table(key: &str, d: &Bound<'_, PyDict>) -> PyResult<toml::Tab
 fn nested_table(key: &str, d: &Bound<'_, PyDict>, depth: usize) -> PyResult<toml::Table> {
     let mut t = toml::Table::new();
     for (k, v) in d.iter() {
-        let k: String = k
-            .extract()
-            .map_err(|_| setting(key, "every key must be a string"))?;
+        let k: String = k.extract().map_err(|_| {
+            // A scenario dict's own keys have no path yet: the setting is the scenario.
+            let whose = if key.is_empty() { "scenario" } else { key };
+            let got = k.repr().map_or_else(|_| "?".into(), |r| r.to_string());
+            setting(whose, format!("every key must be a string, got {got}"))
+        })?;
         let dotted = if key.is_empty() {
             k.clone()
         } else {

@@ -31,6 +31,13 @@ create_exception!(
 );
 create_exception!(
     calbench,
+    ConvergenceWarning,
+    PyUserWarning,
+    "An identification that stopped short of convergence (`calbench.task` warns, as \
+     `calbench task` does)."
+);
+create_exception!(
+    calbench,
     IoError,
     Error,
     "Reading or writing a file failed (names the file)."

@@ -20,7 +20,10 @@ use pyo3::types::PyDict;
 use calbench::measurement::Measure;
 use calbench::robot::{builtin, Param};
 
-use errors::{setting, ComputeError, Error, FileError, IoError, LimitWarning, SettingError};
+use errors::{
+    setting, ComputeError, ConvergenceWarning, Error, FileError, IoError, LimitWarning,
+    SettingError,
+};
 use robot::PyRobot;
 
 /// Rank, identifiable parameters and dependent groups of every parameter of `robot` over
@@ -85,6 +88,7 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ComputeError", py.get_type::<ComputeError>())?;
     m.add("IoError", py.get_type::<IoError>())?;
     m.add("LimitWarning", py.get_type::<LimitWarning>())?;
+    m.add("ConvergenceWarning", py.get_type::<ConvergenceWarning>())?;
     m.add_class::<robot::PyRobot>()?;
     m.add_class::<study::PyProblem>()?;
     m.add_class::<study::PyRun>()?;

@@ -11,7 +11,7 @@ use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
 use calbench::calibrate::task::record::TASK_FILE;
 use calbench::calibrate::task::socket::{load_socket_task, SocketTask};
-use calbench::calibrate::task::{task_path, Task, TaskEntry};
+use calbench::calibrate::task::{task_path, unconverged_warning, Task, TaskEntry};
 use calbench::identify::{method_by_name, MethodSpec};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
@@ -24,7 +24,8 @@ use calbench::robot::Robot;
 /// Runs the task `task` (a name under `tasks/` or a task file) with `method`: a method's
 /// name, or a Python function given a `Problem` (as `run`'s `methods`), entered as
 /// `python:<name>`. Returns `task` (the text of `task.json`), `record` (of
-/// `identified.json`) and the compensated `robot`; writes the folder `out` if given.
+/// `identified.json`), the compensated `robot` and `warning` (what `calbench task` warns of
+/// an unconverged identification, or None); writes the folder `out` if given.
 #[pyfunction]
 #[pyo3(signature = (task, method, models = None, name = None, out = None))]
 pub(crate) fn task<'py>(
@@ -75,7 +76,7 @@ pub(crate) fn task<'py>(
         .iter()
         .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
         .collect::<PyResult<Vec<_>>>()?;
-    let (json, record, robot) = py
+    let (entry, warning) = py
         .detach(|| {
             // The candidates as `calbench task` decides them: the caller's, else the task's
             // own `[models]` (docs/formats.md § 9.1), else `kinematic`.
@@ -103,23 +104,24 @@ pub(crate) fn task<'py>(
             }
             let record = serde_json::to_string(&o.record)
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
-            Ok((text, record, o.compensated()))
+            let warning = unconverged_warning(&o.record);
+            Ok(((text, record, o.compensated()), warning))
         })
         .map_err(err)?;
-    result(py, json, record, robot)
+    result(py, entry, warning)
 }
 
 /// The dict `calbench.task` returns.
 fn result(
     py: Python<'_>,
-    task: String,
-    record: String,
-    robot: Robot,
+    (task, record, robot): (String, String, Robot),
+    warning: Option<String>,
 ) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("task", task)?;
     d.set_item("record", record)?;
     d.set_item("robot", PyRobot { inner: robot })?;
+    d.set_item("warning", warning)?;
     Ok(d)
 }
 
@@ -158,7 +160,7 @@ fn socket_task<'py>(
         guard(out, t.head.inputs(), t.data_files())?;
     }
     let spec = method_by_name(&name).map_err(err)?;
-    let (json, record, robot) = py
+    let (entry, warning) = py
         .detach(|| {
             let e = t.entry(spec, &name)?;
             let files = t.head.files(&e.record.to_value())?;
@@ -168,8 +170,9 @@ fn socket_task<'py>(
             let record = serde_json::to_string(&e.outcome.record)
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             let [(_, json), _] = files;
-            Ok((json, record, e.robot))
+            let warning = unconverged_warning(&e.outcome.record);
+            Ok(((json, record, e.robot), warning))
         })
         .map_err(err)?;
-    result(py, json, record, robot)
+    result(py, entry, warning)
 }

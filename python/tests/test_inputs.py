@@ -122,3 +122,31 @@ def test_a_trial_count_of_2_63_or_more_is_refused_naming_trials(root):
     for n in (2**63, 2**64 - 1):
         with pytest.raises(calbench.SettingError, match=f"`trials`: must be between 1 and 1000000000, got {n}"):
             calbench.run(str(root / CI_GUARD), trials=n)
+
+
+def test_a_study_seed_has_63_bits_and_identify_s_seed_64(root):
+    # A study's seed is the scenario file's TOML integer; the message gives that range.
+    for n in (2**63, 2**64 - 1):
+        with pytest.raises(calbench.SettingError, match=r"`seed`: .* out of range \(0 to 2\^63 - 1\)"):
+            calbench.run(str(root / CI_GUARD), trials=2, seed=n)
+    calbench.run(str(root / CI_GUARD), trials=2, seed=2**63 - 1)
+    with pytest.raises(calbench.SettingError, match=r"`seed`: .* out of range \(0 to 2\^64 - 1\)"):
+        calbench.identify(*_pose_data(), method="bas", seed=2**64)
+    calbench.identify(*_pose_data(), method="bas", seed=2**64 - 1, options={"iterations": 5})
+
+
+def _pose_data():
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.random.default_rng(1).uniform(-30.0, 30.0, (20, 6))
+    return robot, q, robot.fk(q)
+
+
+def test_a_key_that_is_not_a_string_is_named_with_its_place(root):
+    sc = scenario(root)
+    sc[7] = 1
+    with pytest.raises(calbench.SettingError, match=r"`scenario`: every key must be a string, got 7"):
+        calbench.run(sc, trials=2)
+    sc = scenario(root)
+    sc["tracker"][(1, 2)] = 1
+    with pytest.raises(calbench.SettingError, match=r"`tracker`: every key must be a string, got \(1, 2\)"):
+        calbench.run(sc, trials=2)

@@ -1,6 +1,7 @@
 """``calbench.task``: a Python method enters a real-data task's open division through the
 identify pipeline, scored on the task's validation rows like the command line's entries."""
 import json
+import warnings
 
 import numpy as np
 import pytest
@@ -41,8 +42,26 @@ def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp
     assert lm["task_hash"] == j["task_hash"]
     assert abs(lm["value"] - j["value"]) < 1e-3 * lm["value"], (lm["value"], j["value"])
     # A calbench method by name is the command line's entry.
-    same = calbench.task(task, "lm", models=["kinematic"])["task"]
+    with warnings.catch_warnings():
+        # It converges: no warning.
+        warnings.simplefilter("error", calbench.ConvergenceWarning)
+        same = calbench.task(task, "lm", models=["kinematic"])["task"]
     assert same["value"] == lm["value"] and same["division"] == "closed"
+
+
+def test_an_entry_that_did_not_converge_warns_as_the_command_line_does(root):
+    def short(problem):
+        x, _ = gauss_newton(problem)
+        return x, "max-iterations"
+
+    task = root / "tasks" / "barrett-wam.toml"
+    with pytest.warns(calbench.ConvergenceWarning) as caught:
+        entry = calbench.task(task, short, models=["kinematic"])
+    assert entry["record"]["termination"] == "max-iterations"
+    (w,) = caught
+    assert str(w.message).startswith("the identification ended `max-iterations` after ")
+    assert "did not converge (identified.json, `termination`)" in str(w.message)
+    assert issubclass(calbench.ConvergenceWarning, UserWarning)
 
 
 def test_a_socket_task_runs_from_python_as_the_command_line_runs_it(root, cli, tmp_path):

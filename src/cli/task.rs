@@ -15,7 +15,9 @@ use calbench::calibrate::task::record::TASK_FILE;
 use calbench::calibrate::task::socket::{
     load_socket_task, Placements, SocketFigures, SocketScores, SocketTask,
 };
-use calbench::calibrate::task::{task_path, Published, Task, TaskEntry, TaskRecord};
+use calbench::calibrate::task::{
+    task_path, unconverged_warning, Published, Task, TaskEntry, TaskRecord,
+};
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
@@ -227,21 +229,10 @@ fn print_scores(s: &SocketScores, method: &str) {
     }
 }
 
-/// Warns when the entry's identification stopped short of convergence (at its iteration
-/// limit, diverging or making no progress): the task's figure is then that of an unconverged
-/// solve, which `task.json` does not say (`identified.json`'s `termination` does).
+/// Warns when the entry's identification stopped short of convergence
+/// ([`unconverged_warning`]).
 fn unconverged(r: &IdentifiedRecord) {
-    use calbench::identify::Termination as T;
-    if matches!(
-        r.termination,
-        T::MaxIterations | T::Diverged | T::NoProgress
-    ) {
-        eprintln!(
-            "warning: the identification ended `{}` after {} iterations (RMS residual {:.4} mm): \
-             the figure is that of a solve that did not converge (identified.json, `termination`)",
-            r.termination.as_str(),
-            r.iterations,
-            r.rms_residual_mm
-        );
+    if let Some(w) = unconverged_warning(r) {
+        eprintln!("warning: {w}");
     }
 }

@@ -16,19 +16,19 @@ use crate::html::{browse, chromium, ci, self_contained};
 const TRIALS: &str = "300";
 
 /// `scenarios/qiao2021-tx60.toml` with 12 calibration and 5 validation poses, its three
-/// searches at 300 evaluations each, BAS-PSO on the differential model (another fitness,
-/// compared apart) and LM, without the claims, written into `dir`.
+/// searches at 160 evaluations each (the least BAS-PSO takes), BAS-PSO on the differential
+/// model (another fitness, compared apart) and LM, without the claims, written into `dir`.
 pub fn small_qiao(dir: &std::path::Path) -> std::path::PathBuf {
     let text = read(&root().join("scenarios/qiao2021-tx60.toml"));
     let head = text[..text.find("[[methods]]").unwrap()]
         .replace("trials = 20\n", "trials = 20\nclaims = []\n")
         .replace("count = 50\n", "count = 12\n")
         .replace("count = 30\n", "count = 5\n");
-    let methods = "[[methods]]\nname = \"bas\"\niterations = 100\nmax_evaluations = 300\n\n\
-                   [[methods]]\nname = \"pso\"\niterations = 10\nmax_evaluations = 300\n\n\
-                   [[methods]]\nname = \"bas-pso\"\nmax_evaluations = 300\n\n\
+    let methods = "[[methods]]\nname = \"bas\"\niterations = 60\nmax_evaluations = 160\n\n\
+                   [[methods]]\nname = \"pso\"\niterations = 6\nmax_evaluations = 160\n\n\
+                   [[methods]]\nname = \"bas-pso\"\nmax_evaluations = 160\n\n\
                    [[methods]]\nname = \"bas-pso\"\nlabel = \"bas-pso-differential\"\n\
-                   error_model = \"differential\"\nmax_evaluations = 300\n\n\
+                   error_model = \"differential\"\nmax_evaluations = 160\n\n\
                    [[methods]]\nname = \"lm\"\nadaptive = true\n";
     write_scenario(dir, "qiao-small", &format!("{head}{methods}"))
 }

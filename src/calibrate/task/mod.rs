@@ -12,7 +12,7 @@ pub mod sha256;
 pub mod socket;
 pub mod split;
 
-pub use entry::{shared_rows, EntryModels};
+pub use entry::{shared_rows, unconverged_warning, EntryModels};
 pub use head::TaskHead;
 pub use record::{TaskRecord, TASK_FILE};
 
