@@ -604,7 +604,7 @@ def compare(a, b, *, tolerance=0.05):
     return Comparison(_calbench.compare(os.fspath(a), os.fspath(b), tolerance), tolerance)
 
 
-def task(task, method="lm", *, models=None, name=None, out=None):
+def task(task, method="lm", *, models=None, name=None, out=None, options=None):
     """One entry of a fixed real-data task: ``calbench task`` (docs/formats.md § 9).
 
     Args:
@@ -621,6 +621,9 @@ def task(task, method="lm", *, models=None, name=None, out=None):
             with a calbench method, which is entered by its own name.
         out: a folder to write the identify outputs, ``task.json`` and ``task.toml`` (the task
             file as run) into.
+        options: dict of a calbench method's options, the keys of a scenario's ``[[methods]]``
+            entry (``{"max_iter": 200}``), as ``calbench task --set``; refused with a method
+            written in Python.
 
     Returns:
         a dict: ``task`` (the content of ``task.json``), ``record`` (of ``identified.json``)
@@ -634,12 +637,15 @@ def task(task, method="lm", *, models=None, name=None, out=None):
             "setting `name`: names a method written in Python; a calbench method is "
             f"entered by its own name ({method!r})"
         )
+    if options is not None and not isinstance(options, dict):
+        raise SettingError("setting `options`: expected a dict of the method's options")
     d = _calbench.task(
         _path("task", task, "a task's name or the path of a task file"),
         method,
         models=models,
         name=_text("name", name, "a name", optional=True),
         out=_path("out", out, "a folder", optional=True),
+        options=options,
     )
     if d["warning"] is not None:
         warnings.warn(d["warning"], ConvergenceWarning, stacklevel=2)

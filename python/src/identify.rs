@@ -81,7 +81,7 @@ impl Readings<'_, '_> {
 /// The method `method` with the `options` dict (the keys of a scenario's `[[methods]]`
 /// entry), refused naming `options.KEY`; `k` refused where the data give it no orientation
 /// to weigh (`k_refused`: why, [`IdentifyData::k_refusal`]).
-fn method_spec(
+pub(crate) fn method_spec(
     method: &str,
     options: Option<&Bound<'_, PyDict>>,
     k_refused: Option<&str>,

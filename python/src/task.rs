@@ -12,22 +12,24 @@ use calbench::calibrate::pipeline::IdentifyOutcome;
 use calbench::calibrate::task::record::TASK_FILE;
 use calbench::calibrate::task::socket::{load_socket_task, SocketTask};
 use calbench::calibrate::task::{task_path, unconverged_warning, Task, TaskEntry};
-use calbench::identify::{method_by_name, MethodSpec};
+use calbench::identify::MethodSpec;
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
 use calbench::report::write_identified_with;
 
 use crate::errors::{err, setting};
+use crate::identify::method_spec;
 use crate::robot::PyRobot;
 use calbench::robot::Robot;
 
 /// Runs the task `task` (a name under `tasks/` or a task file) with `method`: a method's
 /// name, or a Python function given a `Problem` (as `run`'s `methods`), entered as
-/// `python:<name>`. Returns `task` (the text of `task.json`), `record` (of
+/// `python:<name>`; `options` the method's options (the keys of a scenario's `[[methods]]`
+/// entry, as `calbench task --set`), for a calbench method. Returns `task` (the text of `task.json`), `record` (of
 /// `identified.json`), the compensated `robot` and `warning` (what `calbench task` warns of
 /// an unconverged identification, or None); writes the folder `out` if given.
 #[pyfunction]
-#[pyo3(signature = (task, method, models = None, name = None, out = None))]
+#[pyo3(signature = (task, method, models = None, name = None, out = None, options = None))]
 pub(crate) fn task<'py>(
     py: Python<'py>,
     task: &str,
@@ -35,17 +37,22 @@ pub(crate) fn task<'py>(
     models: Option<Vec<String>>,
     name: Option<String>,
     out: Option<PathBuf>,
+    options: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let path = task_path(task);
     if let Some(t) = load_socket_task(&path).map_err(err)? {
-        return socket_task(py, &t, method, models, out);
+        return socket_task(py, &t, (method, options.as_ref()), models, out);
     }
     let t = Task::load(&path).map_err(err)?;
     if let Some(out) = &out {
         guard(out, t.head.inputs(), t.data_files())?;
     }
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
-        (method_by_name(&m).map_err(err)?, m, "calbench".to_string())
+        let spec = method_spec(&m, options.as_ref(), None)?;
+        (spec, m, "calbench".to_string())
+    } else if options.is_some() {
+        let why = "a method written in Python takes no options (its own arguments are its own)";
+        return Err(setting("options", why));
     } else if method.is_callable() {
         // Its name as `task.json` enters it (`python:NAME`): given, or the function's own.
         let own = method
@@ -143,7 +150,7 @@ fn guard(
 fn socket_task<'py>(
     py: Python<'py>,
     t: &SocketTask,
-    method: Bound<'py, PyAny>,
+    (method, options): (Bound<'py, PyAny>, Option<&Bound<'py, PyDict>>),
     models: Option<Vec<String>>,
     out: Option<PathBuf>,
 ) -> PyResult<Bound<'py, PyDict>> {
@@ -159,7 +166,7 @@ fn socket_task<'py>(
     if let Some(out) = &out {
         guard(out, t.head.inputs(), t.data_files())?;
     }
-    let spec = method_by_name(&name).map_err(err)?;
+    let spec = method_spec(&name, options, None)?;
     let (entry, warning) = py
         .detach(|| {
             let e = t.entry(spec, &name)?;

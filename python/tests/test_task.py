@@ -159,3 +159,23 @@ def test_a_name_with_a_calbench_method_is_refused_naming_it(root, tmp_path):
                                                     r"in Python; .* \('lm'\)$"):
         calbench.task(root / "tasks" / "barrett-wam.toml", "lm", name="mine", out=out)
     assert not out.exists()
+
+
+def test_method_options_are_the_command_line_s_set(root, cli, tmp_path):
+    # options={...} as `calbench task --set KEY=VALUE`: the same folder, byte for byte.
+    task = root / "tasks" / "barrett-wam.toml"
+    with pytest.warns(calbench.ConvergenceWarning, match="ended `max-iterations` after 3 "):
+        calbench.task(task, "lm", models=["kinematic"], options={"max_iter": 3}, out=tmp_path / "py")
+    cli("task", task, "--method", "lm", "--models", "kinematic", "--set", "max_iter=3",
+        "--out", tmp_path / "cli")
+    for name in ("identified.json", "robot.toml"):
+        assert (tmp_path / "py" / name).read_bytes() == (tmp_path / "cli" / name).read_bytes(), name
+    py = json.loads((tmp_path / "py" / "task.json").read_text())
+    j = json.loads((tmp_path / "cli" / "task.json").read_text())
+    assert {**py, "candidates_fixed_by": j["candidates_fixed_by"]} == j
+    with pytest.raises(calbench.SettingError, match=r"^setting `options.max_itr`: unknown field"):
+        calbench.task(task, "lm", options={"max_itr": 3})
+    with pytest.raises(calbench.SettingError, match=r"^setting `options`: a method written in Python"):
+        calbench.task(task, gauss_newton, options={"max_iter": 3})
+    with pytest.raises(calbench.SettingError, match=r"^setting `options`: expected a dict"):
+        calbench.task(task, "lm", options=[("max_iter", 3)])
