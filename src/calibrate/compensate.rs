@@ -215,6 +215,36 @@ mod tests {
         assert!(ok >= 25, "only {ok} of 30 rows solved");
     }
 
+    /// A program row at a wrist singularity (q5 = 0: axes 4 and 6 in line) is corrected
+    /// within the limits, every joint less than half a turn from the row's and joints 4 and 6
+    /// together turning the tool about their common axis as the row does, where the step
+    /// along the direction that does not move the tool turned them by 10⁷ rad in opposite
+    /// senses. (The wrist tilt the errors call for sets joint 4 apart from the row's: near the
+    /// singularity a small tilt needs joint 4 turned towards its direction.)
+    #[test]
+    fn a_row_at_a_wrist_singularity_keeps_its_wrist() {
+        let nominal = crate::robot::builtin::load("irb2600").unwrap();
+        let truth = nominal.with_errors(&[(Param::A(1), 0.5), (Param::D(3), -0.3)]);
+        for q in [
+            [0.3, -0.4, 0.5, 1.2, 0.0, 2.5],
+            [1.2, -0.35, 0.6, -1.0, 0.0, 2.6],
+            [-0.7, 0.2, -0.1, 0.0, 0.0, 0.0],
+        ] {
+            let c = compensate_row(&nominal, &truth, &q, 0.0, |q| q.to_vec()).unwrap();
+            assert_eq!(c.flag, "ok", "{q:?}: {:?}", c.q);
+            assert!(
+                (0..6).all(|j| (c.q[j] - q[j]).abs() < std::f64::consts::PI),
+                "{q:?}: {:?}",
+                c.q
+            );
+            let turn = (c.q[3] + c.q[5]) - (q[3] + q[5]);
+            assert!(c.q[4].abs() < 0.01 && turn.abs() < 0.01, "{q:?}: {:?}", c.q);
+            let (f, target) = (truth.fk(&c.q), nominal.fk(&q));
+            assert!((f.pos - target.pos).norm() < 1e-8, "{q:?}");
+            assert!(rotation_angle_deg(&f, &target) < 1e-8, "{q:?}");
+        }
+    }
+
     /// Cartesian targets of the nominal robot (positions, then full poses) are reached by the
     /// identified robot; an unreachable one is flagged.
     #[test]

@@ -72,11 +72,15 @@ struct CouplingEntry {
 /// and refused), including limits whose lower value is not below the upper one.
 ///
 /// A refusal of a value names its line too (`line 14, joint 2 (joints[1]), key \`a\``) where
-/// the file writes the key; TOML errors carry their own line and column.
+/// the file writes the key, else of its joint's table (a key missing on one joint); TOML
+/// errors carry their own line and column.
 pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
     parse_robot_text(text, path).map_err(|e| match e {
         Error::File { file, place, msg } if place != "TOML" => {
-            let line = crate::error::toml_key_line(text, &key_of_place(&place));
+            let key = key_of_place(&place);
+            let joint = key.rsplit_once('.').filter(|(j, _)| j.ends_with(']'));
+            let line = crate::error::toml_key_line(text, &key)
+                .or_else(|| crate::error::toml_key_line(text, joint?.0));
             Error::file(file, crate::error::at_line(line, place), msg)
         }
         other => other,

@@ -14,6 +14,13 @@ use rand::Rng as _;
 const K_MM_PER_RAD: Real = 1000.0;
 /// Newton iterations at most.
 const MAX_ITERATIONS: usize = 50;
+/// Singular values of the full-pose Jacobian below this share of the largest count as zero:
+/// the central differences leave rounding in every entry, so at a singular pose (the wrist's
+/// axes 4 and 6 in line) the direction that does not move the tool keeps a small singular
+/// value instead of zero, and a step divided by it turned joints 4 and 6 by 10⁷ rad in
+/// opposite senses (a compensated program row at q5 = 0), where the minimum-norm step leaves
+/// them.
+const POSE_SINGULAR: Real = 1e-8;
 /// Convergence: position (mm) and orientation (rad) errors below these.
 const TOL_MM: Real = 1e-10;
 const TOL_RAD: Real = 1e-12;
@@ -41,14 +48,15 @@ fn axis_error(point: &Vec3, axis: &Vec3, f: &Frame) -> [Real; 6] {
 
 /// Gauss–Newton on the first `rows` rows of `error(pose(q))` (the others count as zero)
 /// from `q0`: central-difference Jacobian, minimum-norm
-/// steps (SVD), until the position error is below [`TOL_MM`] and the rotation below
+/// steps (SVD; singular values below `singular` times the largest, and below 1e-12, count as
+/// zero), until the position error is below [`TOL_MM`] and the rotation below
 /// [`TOL_RAD`] or after [`MAX_ITERATIONS`]. Returns the iterate that reached, else the one of
 /// least error, `q0` included: steps that diverge (from a singular start) are not kept.
 fn gauss_newton(
     q0: &[Real],
     pose: impl Fn(&[Real]) -> crate::Result<Frame>,
     error: impl Fn(&Frame) -> [Real; 6],
-    rows: usize,
+    (rows, singular): (usize, Real),
 ) -> crate::Result<Vec<Real>> {
     let n = q0.len();
     let mut q = q0.to_vec();
@@ -89,9 +97,10 @@ fn gauss_newton(
             break;
         }
         let rhs = DVector::from_row_slice(&e[..rows]);
-        let Some(Ok(step)) =
-            crate::numeric::linalg::svd(jac.clone(), true, true).map(|s| s.solve(&rhs, 1e-12))
-        else {
+        let Some(Ok(step)) = crate::numeric::linalg::svd(jac.clone(), true, true).map(|s| {
+            let cut = (singular * s.singular_values.max()).max(1e-12);
+            s.solve(&rhs, cut)
+        }) else {
             break;
         };
         for j in 0..n {
@@ -130,7 +139,7 @@ pub fn solve_pose_rows(
         q0,
         |q| fk.at(q, payload_kg),
         |f| pose_error(target, f),
-        rows,
+        (rows, POSE_SINGULAR),
     )
 }
 
@@ -146,7 +155,16 @@ pub fn solve_point_axis(
     (tol_mm, tol_deg): (Real, Real),
 ) -> Option<Vec<Real>> {
     let chain = robot.chain();
-    let q = gauss_newton(q0, |q| Ok(chain.fk(q)), |f| axis_error(point, axis, f), 6).ok()?;
+    // Singular values cut at 1e-12 alone: the turn about the axis is free (rank 5), and the
+    // workspace region's poses are drawn with the turn the iteration leaves.
+    let free = (6, 0.0);
+    let q = gauss_newton(
+        q0,
+        |q| Ok(chain.fk(q)),
+        |f| axis_error(point, axis, f),
+        free,
+    )
+    .ok()?;
     let f = chain.fk(&q);
     // The angle between the flange z axis and `axis` from both its sine and cosine: `acos` of
     // the dot product alone cannot tell angles below about 1e-6° apart (acos(1 − ε) ≈ √(2ε)).

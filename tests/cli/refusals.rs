@@ -658,3 +658,35 @@ fn a_method_without_a_name_is_refused_naming_the_entry_line() {
         )],
     );
 }
+
+/// A key missing on one joint that the others give (`mass_kg` on joint 1 alone) is refused at
+/// the line of that joint's `[[joints]]`, where the file has no line of the key to name.
+#[test]
+fn a_key_missing_on_one_joint_is_refused_at_its_joint_s_line() {
+    let d = tmp("mass-missing");
+    // The TX60's masses on joint 1 alone.
+    let file = tx60_file(&d, "masses.toml", |t| {
+        let mut first = true;
+        let kept = t.lines().filter(|l| {
+            let mass = l.starts_with("mass_kg");
+            let keep = !mass || first;
+            first &= !mass;
+            keep
+        });
+        kept.map(|l| format!("{l}\n")).collect()
+    });
+    let text = std::fs::read_to_string(&file).unwrap();
+    let second = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| *l == "[[joints]]")
+        .nth(1)
+        .map(|(i, _)| i + 1)
+        .unwrap();
+    let place = format!("masses.toml: line {second}, joint 2 (joints[1]), key `mass_kg`: ");
+    let words = [place.as_str(), "give `mass_kg` on every joint or on none"];
+    refused(
+        &calbench(&["fk", "--robot", path(&file), "--q", "0,0,0,0,0,0"]),
+        &words,
+    );
+}

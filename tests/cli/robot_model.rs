@@ -188,3 +188,116 @@ fn compensate_writes_radians_finely_enough_to_reach_the_pose() {
         assert!(cells[6].parse::<f64>().unwrap() < 1e-7, "{line}");
     }
 }
+
+/// Tracker points in an unknown frame do not fix where the robot stands (docs/formats.md
+/// § 4.8): with the default `identify` registration, the program `compensate` corrects with the
+/// identified robot reaches the nominal points on the true robot up to one rigid motion, which
+/// the SVD of the nominal model onto the points leaves in `[base]`; with the points given in
+/// the base frame (`known`) it reaches them. The truth differs from the nominal robot by a2
+/// alone (+0.5 mm), and the data are noise-free.
+#[test]
+fn a_program_compensated_after_a_registration_is_right_up_to_a_rigid_motion() {
+    let dir = tmp_dir("robot-model-gauge");
+    let nominal = arm_m_rad(&dir, "nominal", 0.9);
+    let truth = arm_m_rad(&dir, "truth", 0.9005);
+    // Joint values spread over the limits (a fixed sequence, no generator).
+    let q = |i: usize, j: usize| (((i * 7 + j * 13) % 29) as f64 / 14.0 - 1.0) * 2.8;
+    let rows = |n: usize, from: usize| -> Vec<Vec<f64>> {
+        (from..from + n)
+            .map(|i| (0..6).map(|j| q(i, j)).collect())
+            .collect()
+    };
+    let fmt = |v: &[f64]| {
+        v.iter()
+            .map(|x| format!("{x:?}"))
+            .collect::<Vec<_>>()
+            .join(",")
+    };
+    let mut data = String::from("q1,q2,q3,q4,q5,q6,x,y,z\n");
+    for qs in rows(29, 0) {
+        data += &format!("{},{}\n", fmt(&qs), fmt(&fk_point(&truth, &qs)));
+    }
+    let data_file = dir.join("points.csv");
+    std::fs::write(&data_file, data).unwrap();
+    let program: Vec<Vec<f64>> = rows(5, 3);
+    let program_file = dir.join("program.csv");
+    let lines: Vec<String> = program.iter().map(|q| fmt(q)).collect();
+    std::fs::write(
+        &program_file,
+        format!("q1,q2,q3,q4,q5,q6\n{}\n", lines.join("\n")),
+    )
+    .unwrap();
+    // The true robot's points at the corrected commands, after `identify --registration REG`.
+    let reached = |registration: &str| -> Vec<Vec<f64>> {
+        let out = dir.join(registration);
+        calbench_ok(&[
+            "identify",
+            "--robot",
+            path_arg(&nominal),
+            "--data",
+            path_arg(&data_file),
+            "--method",
+            "ls",
+            "--registration",
+            registration,
+            "--out",
+            path_arg(&out),
+        ]);
+        let corrected = dir.join(format!("{registration}.csv"));
+        calbench_ok(&[
+            "compensate",
+            "--robot",
+            path_arg(&nominal),
+            "--identified",
+            path_arg(&out.join("robot.toml")),
+            "--joints",
+            path_arg(&program_file),
+            "--out",
+            path_arg(&corrected),
+        ]);
+        let text = std::fs::read_to_string(&corrected).unwrap();
+        text.lines()
+            .skip(1)
+            .map(|l| {
+                let q: Vec<f64> = l.split(',').take(6).map(|c| c.parse().unwrap()).collect();
+                fk_point(&truth, &q)
+            })
+            .collect()
+    };
+    let wanted: Vec<Vec<f64>> = program.iter().map(|q| fk_point(&nominal, q)).collect();
+    let dist = |a: &[f64], b: &[f64]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| (x - y).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    };
+    let worst = |got: &[Vec<f64>]| {
+        got.iter()
+            .zip(&wanted)
+            .map(|(g, w)| dist(g, w))
+            .fold(0.0, f64::max)
+    };
+    let known = reached("known");
+    assert!(worst(&known) < 1e-5, "{known:?}");
+    // `svd` alternates registration and identification until the frame moves no point by
+    // more than 1e-4 mm: its robot has the truth's shape to about that.
+    for (registration, shape) in [("identify", 1e-5), ("svd", 1e-3)] {
+        let registered = reached(registration);
+        let off = worst(&registered);
+        assert!(off > 1e-3, "{registration}: {off}");
+        // The same shape: every distance between two reached points is the nominal one.
+        for i in 0..wanted.len() {
+            for j in 0..i {
+                let (g, w) = (
+                    dist(&registered[i], &registered[j]),
+                    dist(&wanted[i], &wanted[j]),
+                );
+                assert!(
+                    (g - w).abs() < shape,
+                    "{registration} {i} {j}: {g} against {w}"
+                );
+            }
+        }
+    }
+}
