@@ -70,15 +70,22 @@ impl PyRobot {
         }
     }
 
-    /// A robot file: TOML (docs/formats.md) or URDF; `tip`: a URDF's tip link (`--tip`).
+    /// A robot file: TOML (docs/formats.md) or URDF; `tip` and `base`: the links a URDF's
+    /// chain ends and starts at (`--tip`, `--base`).
     #[staticmethod]
-    #[pyo3(signature = (path, tip = None))]
-    fn from_file(path: &Bound<'_, PyAny>, tip: Option<&Bound<'_, PyAny>>) -> PyResult<PyRobot> {
+    #[pyo3(signature = (path, tip = None, base = None))]
+    fn from_file(
+        path: &Bound<'_, PyAny>,
+        tip: Option<&Bound<'_, PyAny>>,
+        base: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyRobot> {
         let path: PathBuf = typed_arg("path", path, "the path of a robot file")?;
-        let tip = tip
-            .filter(|t| !t.is_none())
-            .map(|t| typed_arg::<String>("tip", t, "the name of a URDF link"))
-            .transpose()?;
+        let link = |key: &str, v: Option<&Bound<'_, PyAny>>| {
+            v.filter(|t| !t.is_none())
+                .map(|t| typed_arg::<String>(key, t, "the name of a URDF link"))
+                .transpose()
+        };
+        let (tip, base) = (link("tip", tip)?, link("base", base)?);
         if !path.is_file() {
             return Err(err(calbench::Error::io(
                 &path,
@@ -86,7 +93,7 @@ impl PyRobot {
             )));
         }
         let shown = path.to_string_lossy().into_owned();
-        let chain = calbench::robot::urdf::UrdfChain { base: None, tip };
+        let chain = calbench::robot::urdf::UrdfChain { base, tip };
         builtin::load_chain(&shown, &chain)
             .map(|inner| PyRobot { inner })
             .map_err(err)

@@ -633,3 +633,20 @@ def test_identify_a_socket_file_returns_the_cli_record(cli, root, tmp_path):
     assert res.robot.to_toml() == (tmp_path / "id" / "robot.toml").read_text()
     with pytest.raises(calbench.Error, match="ball_link"):
         calbench.Robot.from_file(urdf)
+
+
+def test_a_urdf_chain_from_a_base_link_is_the_command_line_s(cli, root):
+    # Robot.from_file(base=, tip=) as `calbench fk --base --tip`: the chain from panda_link2.
+    urdf = root / "data" / "mukca" / "panda.urdf"
+    robot = calbench.Robot.from_file(urdf, base="panda_link2", tip="panda_hand_tcp")
+    assert robot.joint_count == 5
+    q = [0.1, -0.2, 0.3, 0.4, 0.5]
+    out = cli("fk", "--robot", urdf, "--base", "panda_link2", "--tip", "panda_hand_tcp",
+              "--q", ",".join(map(str, q)), "--json").stdout
+    want = json.loads(out)["position_mm"]
+    got = robot.fk(np.array([q]))[0]
+    assert np.allclose(got, want, rtol=0, atol=1e-9), (got, want)
+    with pytest.raises(calbench.SettingError, match="`base`"):
+        calbench.Robot.from_file(urdf, base=2)
+    with pytest.raises(calbench.Error, match="not one"):
+        calbench.Robot.from_file(root / "robots" / "ban-irb2600.toml", base="link1")
