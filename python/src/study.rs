@@ -3,10 +3,12 @@
 //! (`study_kind`, `run_whole`: a registration or instruments study into its folder).
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
+use pyo3::exceptions::PyKeyboardInterrupt;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -267,14 +269,37 @@ impl PyProblem {
 /// What a method written in Python returns.
 const RETURNS: &str = "a 1-D float array (or a tuple of it and a termination name)";
 
+/// Set when a method written in Python was interrupted (`KeyboardInterrupt`, Ctrl-C): the
+/// rest of the run's calls of Python methods return at once, and the front end raises the
+/// interrupt instead of the run's results ([`Interrupted::raise`]).
+#[derive(Clone, Default)]
+pub(crate) struct Interrupted(Arc<AtomicBool>);
+
+impl Interrupted {
+    /// `result`, or a `KeyboardInterrupt` when a method was interrupted.
+    pub(crate) fn raise<T>(&self, result: PyResult<T>) -> PyResult<T> {
+        if self.0.load(Ordering::SeqCst) {
+            return Err(PyKeyboardInterrupt::new_err(
+                "interrupted in a method written in Python",
+            ));
+        }
+        result
+    }
+}
+
 /// A Python callable as the external method `label`: called with a `Problem` under the GIL;
 /// returns the vector, or (vector, termination name). An exception is the method's failure,
 /// and so is a vector numpy reads as bools or complex numbers (named with its dtype), which
-/// a float conversion would take as 0 and 1 or cut to its real part.
-pub(crate) fn python_method(label: &str, f: Py<PyAny>) -> External {
+/// a float conversion would take as 0 and 1 or cut to its real part. A `KeyboardInterrupt`
+/// (Ctrl-C) sets `stop` and ends the run's calls instead: it is not a failure of the trial.
+pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> External {
     let label = label.to_string();
+    let stop = stop.0.clone();
     External {
         run: Arc::new(move |p: Arc<ExternalProblem>| {
+            if stop.load(Ordering::SeqCst) {
+                return Err("interrupted".to_string());
+            }
             Python::attach(|py| {
                 let text = |e: PyErr| {
                     let name = e
@@ -284,7 +309,12 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>) -> External {
                     format!("{name}: {}", e.value(py))
                 };
                 let problem = Py::new(py, PyProblem { inner: p }).map_err(text)?;
-                let out = f.bind(py).call1((problem,)).map_err(text)?;
+                let out = f.bind(py).call1((problem,)).map_err(|e| {
+                    if e.is_instance_of::<PyKeyboardInterrupt>(py) {
+                        stop.store(true, Ordering::SeqCst);
+                    }
+                    text(e)
+                })?;
                 let (x, name) = match out.cast::<PyTuple>() {
                     Ok(t) if t.len() == 2 => {
                         let name: String = t
@@ -374,6 +404,7 @@ pub(crate) fn run(
     let mut sc = scenario_of(scenario)?
         .with_run_overrides(trials, seed)
         .map_err(err)?;
+    let stop = Interrupted::default();
     if let Some(m) = methods {
         for (label, f) in m.iter() {
             let label: String = label
@@ -388,12 +419,12 @@ pub(crate) fn run(
             sc = sc
                 .with_method(MethodSpec::external(
                     &label,
-                    python_method(&label, f.unbind()),
+                    python_method(&label, f.unbind(), &stop),
                 ))
                 .map_err(err)?;
         }
     }
-    let inner = py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err)?;
+    let inner = stop.raise(py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err))?;
     Ok(PyRun { inner })
 }
 

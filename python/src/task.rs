@@ -20,6 +20,7 @@ use calbench::report::write_identified_with;
 use crate::errors::{err, setting};
 use crate::identify::method_spec;
 use crate::robot::PyRobot;
+use crate::study::Interrupted;
 use calbench::robot::Robot;
 
 /// Runs the task `task` (a name under `tasks/` or a task file) with `method`: a method's
@@ -47,6 +48,7 @@ pub(crate) fn task<'py>(
     if let Some(out) = &out {
         guard(out, t.head.inputs(), t.data_files())?;
     }
+    let stop = Interrupted::default();
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
         let spec = method_spec(&m, options.as_ref(), None)?;
         (spec, m, "calbench".to_string())
@@ -69,7 +71,7 @@ pub(crate) fn task<'py>(
         if label.trim().is_empty() {
             return Err(setting("name", "the method's name is empty"));
         }
-        let f = crate::study::python_method(&label, method.unbind());
+        let f = crate::study::python_method(&label, method.unbind(), &stop);
         let spec = MethodSpec::external(&label, f);
         (spec, label.clone(), format!("python:{label}"))
     } else {
@@ -83,7 +85,7 @@ pub(crate) fn task<'py>(
         .iter()
         .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
         .collect::<PyResult<Vec<_>>>()?;
-    let (entry, warning) = py
+    let entry = py
         .detach(|| {
             // The candidates as `calbench task` decides them: the caller's, else the task's
             // own `[models]` (docs/formats.md § 9.1), else `kinematic`.
@@ -114,7 +116,8 @@ pub(crate) fn task<'py>(
             let warning = unconverged_warning(&o.record);
             Ok(((text, record, o.compensated()), warning))
         })
-        .map_err(err)?;
+        .map_err(err);
+    let (entry, warning) = stop.raise(entry)?;
     result(py, entry, warning)
 }
 

@@ -536,6 +536,31 @@ def test_an_exception_in_a_method_is_a_failure_and_the_study_goes_on(root):
         calbench.run(sc, trials=1, methods={"x": 3})
 
 
+def test_an_interrupt_in_a_method_ends_the_run_as_an_interrupt(root):
+    # Ctrl-C inside a Python method is not a failure of its trial: the run stops calling
+    # Python methods and raises KeyboardInterrupt; the next run is whole.
+    calls = []
+
+    def interrupted(problem):
+        calls.append(1)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+        return problem.x0
+
+    sc = load_scenario(root)
+    with pytest.raises(KeyboardInterrupt):
+        calbench.run(sc, trials=20, threads=1, methods={"i": interrupted})
+    assert len(calls) == 3
+    study = calbench.run(sc, trials=2, methods={"x0": lambda p: p.x0})
+    assert {r["method"]: r["failures"] for r in study.summary["results"]}["x0"] == 0
+
+    def task_interrupted(problem):
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        calbench.task(root / "tasks" / "barrett-wam.toml", task_interrupted, models=["kinematic"])
+
+
 def test_a_method_returning_bools_or_complex_numbers_fails_naming_the_dtype(root):
     # Bools were taken as 0 and 1 and complex numbers cut to their real part (with numpy's
     # ComplexWarning) as if the method had returned them; now each is a failure of that method,
