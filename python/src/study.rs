@@ -269,8 +269,9 @@ impl PyProblem {
 /// What a method written in Python returns.
 const RETURNS: &str = "a 1-D float array (or a tuple of it and a termination name)";
 
-/// Set when a method written in Python was interrupted (`KeyboardInterrupt`, Ctrl-C): the
-/// rest of the run's calls of Python methods return at once, and the front end raises the
+/// Set when the run was interrupted (Ctrl-C while it ran, or a `KeyboardInterrupt` in a
+/// method written in Python): the rest of the run's calls of Python methods return at once,
+/// the run stops taking trials ([`InMemoryRun::run_until`]), and the front end raises the
 /// interrupt instead of the run's results ([`Interrupted::raise`]).
 #[derive(Clone, Default)]
 pub(crate) struct Interrupted(Arc<AtomicBool>);
@@ -279,9 +280,7 @@ impl Interrupted {
     /// `result`, or a `KeyboardInterrupt` when a method was interrupted.
     pub(crate) fn raise<T>(&self, result: PyResult<T>) -> PyResult<T> {
         if self.0.load(Ordering::SeqCst) {
-            return Err(PyKeyboardInterrupt::new_err(
-                "interrupted in a method written in Python",
-            ));
+            return Err(PyKeyboardInterrupt::new_err("the run was interrupted"));
         }
         result
     }
@@ -424,7 +423,24 @@ pub(crate) fn run(
                 .map_err(err)?;
         }
     }
-    let inner = stop.raise(py.detach(|| InMemoryRun::run(sc, &opts)).map_err(err))?;
+    let reporter: &dyn Reporter = if opts.progress { &Terminal } else { &Silent };
+    let flag = &*stop.0;
+    // The run in a thread of its own; this thread looks for Ctrl-C (Python's signal handlers
+    // run on the main thread only) and stops the run when it comes.
+    let inner = py.detach(|| {
+        std::thread::scope(|s| {
+            let run = s.spawn(|| InMemoryRun::run_until(sc, &opts, reporter, flag));
+            while !run.is_finished() {
+                std::thread::sleep(std::time::Duration::from_millis(50));
+                if Python::attach(|py| py.check_signals()).is_err() {
+                    flag.store(true, Ordering::SeqCst);
+                }
+            }
+            run.join()
+                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
+        })
+    });
+    let inner = stop.raise(inner.map_err(err))?;
     Ok(PyRun { inner })
 }
 

@@ -561,6 +561,25 @@ def test_an_interrupt_in_a_method_ends_the_run_as_an_interrupt(root):
         calbench.task(root / "tasks" / "barrett-wam.toml", task_interrupted, models=["kinematic"])
 
 
+def test_ctrl_c_during_a_run_stops_it(root):
+    # SIGINT while the trials run in Rust (no Python method): KeyboardInterrupt within about
+    # two chunks of trials, where the run went on to its end.
+    import signal
+    import threading
+    import time
+
+    sc = load_scenario(root)
+    timer = threading.Timer(0.5, lambda: signal.raise_signal(signal.SIGINT))
+    started = time.monotonic()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            calbench.run(sc, trials=1_000_000, threads=1)
+    finally:
+        timer.cancel()
+    assert time.monotonic() - started < 60
+
+
 def test_a_method_returning_bools_or_complex_numbers_fails_naming_the_dtype(root):
     # Bools were taken as 0 and 1 and complex numbers cut to their real part (with numpy's
     # ComplexWarning) as if the method had returned them; now each is a failure of that method,

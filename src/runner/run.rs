@@ -6,6 +6,7 @@
 //! warnings go to the [`Reporter`] the caller supplies.
 
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use rayon::prelude::*;
 
@@ -120,12 +121,28 @@ impl InMemoryRun {
         opts: &RunOptions,
         reporter: &dyn Reporter,
     ) -> Result<InMemoryRun> {
+        InMemoryRun::run_until(scenario, opts, reporter, &AtomicBool::new(false))
+    }
+
+    /// [`InMemoryRun::run_with`] that ends with an error once `stop` is set (Ctrl-C in the
+    /// Python front end). The flag is read as each trial's result is taken, in order, so the
+    /// trials already running finish first: two chunks of [`CHUNK`] trials at most.
+    pub fn run_until(
+        scenario: Scenario,
+        opts: &RunOptions,
+        reporter: &dyn Reporter,
+        stop: &AtomicBool,
+    ) -> Result<InMemoryRun> {
         let mut csv = files::TrialsCsv::in_memory(scenario.sweep.as_ref());
         let opts = RunOptions {
             shard: None,
             ..opts.clone()
         };
-        let result = run(scenario, &opts, &mut csv, reporter)?;
+        let mut until = Until {
+            sink: &mut csv,
+            stop,
+        };
+        let result = run(scenario, &opts, &mut until, reporter)?;
         Ok(InMemoryRun {
             summary: analyse(&result)?,
             result,
@@ -150,6 +167,21 @@ impl InMemoryRun {
             outputs.extend(run_outputs(&self.result, &self.summary)?);
             write_all(dir, &outputs)
         })
+    }
+}
+
+/// A sink that refuses the next trial once `stop` is set ([`InMemoryRun::run_until`]).
+struct Until<'a> {
+    sink: &'a mut dyn TrialSink,
+    stop: &'a AtomicBool,
+}
+
+impl TrialSink for Until<'_> {
+    fn trial(&mut self, info: &BlockInfo, t: &TrialResult) -> Result<()> {
+        if self.stop.load(Ordering::SeqCst) {
+            return Err(Error::Compute("the run was interrupted".into()));
+        }
+        self.sink.trial(info, t)
     }
 }
 
