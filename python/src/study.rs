@@ -429,15 +429,26 @@ pub(crate) fn run(
     // run on the main thread only) and stops the run when it comes.
     let inner = py.detach(|| {
         std::thread::scope(|s| {
-            let run = s.spawn(|| InMemoryRun::run_until(sc, &opts, reporter, flag));
-            while !run.is_finished() {
-                std::thread::sleep(std::time::Duration::from_millis(50));
-                if Python::attach(|py| py.check_signals()).is_err() {
-                    flag.store(true, Ordering::SeqCst);
+            let (done, result) = std::sync::mpsc::channel();
+            let run = s.spawn(move || {
+                let _ = done.send(InMemoryRun::run_until(sc, &opts, reporter, flag));
+            });
+            let wait = std::time::Duration::from_millis(50);
+            loop {
+                match result.recv_timeout(wait) {
+                    Ok(r) => break r,
+                    Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                        if Python::attach(|py| py.check_signals()).is_err() {
+                            flag.store(true, Ordering::SeqCst);
+                        }
+                    }
+                    // The run panicked before it sent: the panic goes on here.
+                    Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                        let panic = run.join().expect_err("a run that sent nothing panicked");
+                        std::panic::resume_unwind(panic)
+                    }
                 }
             }
-            run.join()
-                .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
         })
     });
     let inner = stop.raise(inner.map_err(err))?;
