@@ -19,6 +19,7 @@ from . import _calbench
 from ._args import (
     _array,
     _count,
+    _dict,
     _flag,
     _names,
     _numbers,
@@ -208,10 +209,8 @@ def identify(
         )
     if compliance is not None:
         compliance = ",".join(_names("compliance", compliance))
-    if prior is not None and not isinstance(prior, dict):
-        raise SettingError("setting `prior`: expected a dict parameter name → σ")
-    if options is not None and not isinstance(options, dict):
-        raise SettingError("setting `options`: expected a dict of the method's options")
+    prior = _dict("prior", prior, "a dict parameter name → σ")
+    options = _dict("options", options, "a dict of the method's options")
     fields = _calbench.identify(
         robot,
         q,
@@ -637,8 +636,7 @@ def task(task, method="lm", *, models=None, name=None, out=None, options=None):
             "setting `name`: names a method written in Python; a calbench method is "
             f"entered by its own name ({method!r})"
         )
-    if options is not None and not isinstance(options, dict):
-        raise SettingError("setting `options`: expected a dict of the method's options")
+    options = _dict("options", options, "a dict of the method's options")
     d = _calbench.task(
         _path("task", task, "a task's name or the path of a task file"),
         method,

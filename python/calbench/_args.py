@@ -88,6 +88,14 @@ def _text(name, value, what, optional=False):
     raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
 
 
+def _dict(name, value, what):
+    """``value`` as a dict, or None; refused naming ``name`` and saying ``what`` it should
+    be otherwise."""
+    if value is None or isinstance(value, dict):
+        return value
+    raise SettingError(f"setting `{name}`: expected {what}")
+
+
 def _path(name, value, what="a path", optional=False):
     """``value`` (a str or an os.PathLike) as a path string (None stays None when
     ``optional``), refused naming ``name`` otherwise."""

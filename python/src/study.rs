@@ -277,7 +277,7 @@ const RETURNS: &str = "a 1-D float array (or a tuple of it and a termination nam
 pub(crate) struct Interrupted(Arc<AtomicBool>);
 
 impl Interrupted {
-    /// `result`, or a `KeyboardInterrupt` when a method was interrupted.
+    /// `result`, or a `KeyboardInterrupt` when the run was interrupted.
     pub(crate) fn raise<T>(&self, result: PyResult<T>) -> PyResult<T> {
         if self.0.load(Ordering::SeqCst) {
             return Err(PyKeyboardInterrupt::new_err("the run was interrupted"));

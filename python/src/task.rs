@@ -26,9 +26,10 @@ use calbench::robot::Robot;
 /// Runs the task `task` (a name under `tasks/` or a task file) with `method`: a method's
 /// name, or a Python function given a `Problem` (as `run`'s `methods`), entered as
 /// `python:<name>`; `options` the method's options (the keys of a scenario's `[[methods]]`
-/// entry, as `calbench task --set`), for a calbench method. Returns `task` (the text of `task.json`), `record` (of
-/// `identified.json`), the compensated `robot` and `warning` (what `calbench task` warns of
-/// an unconverged identification, or None); writes the folder `out` if given.
+/// entry, as `calbench task --set`), for a calbench method. Returns `task` (the text of
+/// `task.json`), `record` (of `identified.json`), the compensated `robot` and `warning` (what
+/// `calbench task` warns of an unconverged identification, or None); writes the folder `out`
+/// if given.
 #[pyfunction]
 #[pyo3(signature = (task, method, models = None, name = None, out = None, options = None))]
 pub(crate) fn task<'py>(
