@@ -436,6 +436,24 @@ pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
     span.map(|s| line_of(text, s.start))
 }
 
+/// A serde error of a TOML value read from a table rather than a text (so without a line):
+/// its message, and the dotted key it is about, which toml writes on a line of its own after
+/// the message (`in `tracker.mpe_a_um``). A refusal shows the key as its place.
+pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
+    let text = e.to_string();
+    let (msg, key) = split_toml_key(&text);
+    (msg.to_string(), key.map(str::to_string))
+}
+
+/// A toml message's text and the key of its last line `in `KEY``, if it has one.
+pub fn split_toml_key(text: &str) -> (&str, Option<&str>) {
+    let text = text.trim_end();
+    match text.rsplit_once("\nin `") {
+        Some((msg, key)) => (msg, Some(key.trim_end_matches('`'))),
+        None => (text, None),
+    }
+}
+
 /// A number as a refusal shows it: as `{}` writes it (`0.5`, `-180`), but in exponent form
 /// (`1e300`, `-2.5e-9`) where that would be a long run of digits (magnitudes from 1e16 on, or
 /// below 1e-5).
@@ -446,6 +464,22 @@ pub fn shown(v: f64) -> String {
     } else {
         format!("{v}")
     }
+}
+
+/// Largest mass of a link or a payload, kg (100 t): far above any arm (the heaviest
+/// industrial payloads are about 2.3 t); a larger one gives a sag that is not a sag.
+pub const MAX_MASS_KG: f64 = 1e5;
+
+/// Whether `kg` is a mass a robot, a scenario or a measured point may give: finite, ≥ 0 and
+/// at most [`MAX_MASS_KG`].
+pub fn is_mass(kg: f64) -> bool {
+    (0.0..=MAX_MASS_KG).contains(&kg)
+}
+
+/// The refusal of `kg` where it is not a mass ([`is_mass`]); `None` where it is.
+pub fn not_a_mass(kg: f64) -> Option<String> {
+    let got = shown(kg);
+    (!is_mass(kg)).then(|| format!("must be a mass from 0 to {MAX_MASS_KG} kg, got {got}"))
 }
 
 /// Refuses a setting `v` unless it is finite and positive (the error names `key`).

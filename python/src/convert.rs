@@ -47,22 +47,47 @@ pub(crate) fn float64<'py>(key: &str, a: &Bound<'py, PyAny>) -> PyResult<Bound<'
         .map_err(|e| setting(key, format!("not an array of numbers ({e})")))
 }
 
-/// Numbers numpy reads as bools or complex numbers, which are not real numbers: what they are
-/// and the dtype's name (`("bool", "bool")`, `("complex", "complex128")`).
+/// Values numpy reads that are not real numbers, though it would convert them: what they are
+/// and the dtype's name (`("bool", "bool")`, `("complex", "complex128")`, `("text", "str64")`).
 pub(crate) type Unreal = Option<(&'static str, String)>;
 
-/// `a` as numpy reads it (`numpy.asarray`) and whether its numbers are not real ([`Unreal`]).
-/// A Python error when numpy cannot read it.
+/// `a` as numpy reads it (`numpy.asarray`) and whether its values are not real numbers
+/// ([`Unreal`]): bools, complex numbers, dates and text (`"10"` would convert to 10, a
+/// column of names to an error about one of them). A Python error when numpy cannot read it.
 pub(crate) fn as_numpy<'py>(a: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Unreal)> {
     let raw = a.py().import("numpy")?.call_method1("asarray", (a,))?;
     let dtype = raw.getattr("dtype")?;
     let what = match dtype.getattr("kind")?.extract::<String>()?.as_str() {
         "b" => "bool",
         "c" => "complex",
+        "U" | "S" => "text",
+        "M" | "m" => "date or time",
+        "O" if holds_text(&raw)? => "text",
         _ => return Ok((raw, None)),
     };
     let name: String = dtype.getattr("name")?.extract()?;
     Ok((raw, Some((what, name))))
+}
+
+/// Whether an object array holds a string or bytes anywhere.
+fn holds_text(raw: &Bound<'_, PyAny>) -> PyResult<bool> {
+    for v in raw.call_method0("ravel")?.try_iter()? {
+        let v = v?;
+        if v.is_instance_of::<PyString>() || v.is_instance_of::<pyo3::types::PyBytes>() {
+            return Ok(true);
+        }
+    }
+    Ok(false)
+}
+
+/// `value` as a float64 numpy array (the Python half's `_numbers`): [`float64`].
+#[pyfunction]
+#[pyo3(name = "_real_array")]
+pub(crate) fn real_array<'py>(
+    name: &str,
+    value: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    float64(name, value)
 }
 
 /// The rows of a (N, k) array.
@@ -70,9 +95,18 @@ pub(crate) fn rows(a: &PyReadonlyArray2<'_, f64>) -> Vec<Vec<Real>> {
     a.as_array().outer_iter().map(|r| r.to_vec()).collect()
 }
 
-/// The rows of `q` as joint values of `robot` in its internal units, each checked
+/// The rows of `q` (N, n) as joint values of `robot` in its internal units: refused naming `q`
+/// and its shape when n is not the robot's joint count, and each row checked
 /// ([`Robot::q_from_user_checked`]; an error names `q[i]`).
 pub(crate) fn joint_rows(robot: &Robot, q: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec<Real>>> {
+    let (n, k) = q.as_array().dim();
+    if k != robot.dof() {
+        let dof = robot.dof();
+        return Err(setting(
+            "q",
+            format!("expected shape (N, {dof}), got ({n}, {k})"),
+        ));
+    }
     rows(q)
         .iter()
         .enumerate()

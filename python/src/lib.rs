@@ -102,5 +102,6 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(compare::compare, m)?)?;
     m.add_function(wrap_pyfunction!(catalogue, m)?)?;
     m.add_function(wrap_pyfunction!(task::task, m)?)?;
+    m.add_function(wrap_pyfunction!(convert::real_array, m)?)?;
     Ok(())
 }

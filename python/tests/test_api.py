@@ -184,8 +184,10 @@ def test_identify_refuses_bad_arrays(simulated):
         calbench.identify(robot, far, p)
     with pytest.raises(calbench.SettingError, match="distinct poses"):
         calbench.identify(robot, np.repeat(q[:1], 5, 0), p[:5])
-    with pytest.raises(calbench.SettingError, match="not an array of numbers"):
+    with pytest.raises(calbench.SettingError, match="`q`: a text array"):
         calbench.identify(robot, [["a"] * 6] * 3, p[:3])
+    with pytest.raises(calbench.SettingError, match="`q`: not an array of numbers"):
+        calbench.identify(robot, [[0.0] * 6, [0.0] * 5], p[:2])
 
 
 def test_identify_full_pose_from_quaternions_and_matrices(root, tmp_path):
@@ -241,6 +243,8 @@ def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_p
     same = calbench.identify(robot, data=simulated / "measurements.csv", method="lm",
                              fix="a2,theta3", prior={"d2": 0.1, "a3": 0.05}, cv=5)
     close(same, ref)
+    assert same == calbench.identify(robot, data=simulated / "measurements.csv", method="lm", cv=5,
+                                     fix=np.array(["a2", "theta3"]), prior={"d2": 0.1, "a3": 0.05})
     with pytest.raises(calbench.SettingError, match="fix"):
         calbench.identify(robot, q, p, fix=["nope"])
     with pytest.raises(calbench.SettingError, match="setting `cv`: needs 2"):

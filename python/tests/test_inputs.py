@@ -150,3 +150,20 @@ def test_a_key_that_is_not_a_string_is_named_with_its_place(root):
     sc["tracker"][(1, 2)] = 1
     with pytest.raises(calbench.SettingError, match=r"`tracker`: every key must be a string, got \(1, 2\)"):
         calbench.run(sc, trials=2)
+
+
+def test_text_and_dates_are_not_numbers_and_a_shape_is_named():
+    robot = calbench.Robot.builtin("irb2600")
+    # Text is not a number, though numpy would read "10" as 10; nor is a date.
+    for text in (np.full((4, 6), "10"), np.full((4, 6), b"10"), np.full((4, 6), "10", object)):
+        with pytest.raises(calbench.SettingError, match="`q`: a text array"):
+            robot.fk(text)
+        with pytest.raises(calbench.SettingError, match="`q`: a text array"):
+            calbench.identify(robot, text, np.zeros((4, 3)))
+        with pytest.raises(calbench.SettingError, match="`q`: a text array"):
+            calbench.identifiability(robot, text)
+    with pytest.raises(calbench.SettingError, match="`q`: a date or time array"):
+        robot.fk(np.zeros((4, 6), "datetime64[s]"))
+    # fk names the array's shape, as identify does, not its first row.
+    with pytest.raises(calbench.SettingError, match=r"`q`: expected shape \(N, 6\), got \(2, 5\)"):
+        robot.fk(np.zeros((2, 5)))

@@ -61,10 +61,18 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
     )?;
     let nominal = args.chain.load(&args.robot)?;
     let ident = if calbench::robot::urdf::is_urdf(&args.identified) {
-        args.chain.load(&args.identified)?
+        args.chain.load(&args.identified)
     } else {
-        builtin::load(&args.identified)?
-    };
+        builtin::load(&args.identified)
+    }
+    // A robot that is not there is refused as the option that named it.
+    .map_err(|e| match e {
+        Error::Setting { key, msg } if key == "robot" => Error::Setting {
+            key: "--identified".into(),
+            msg,
+        },
+        e => e,
+    })?;
     let kernel = Path::new(&args.identified).with_file_name(KERNEL_FILE);
     if kernel.is_file() {
         eprintln!(

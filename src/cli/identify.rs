@@ -90,7 +90,7 @@ pub struct IdentifyArgs {
     /// TOML file of `NAME = σ` lines (repeatable): a MAP estimate, Tikhonov towards the
     /// nominal value, in the Jacobian methods.
     #[arg(long, value_name = "NAME=σ|FILE", value_parser = prior_arg)]
-    pub prior: Vec<Vec<(Param, Real)>>,
+    pub prior: Vec<PriorArg>,
     /// Full-pose data only: weight of orientation against position errors, mm per rad
     /// (default 100; about σ_position / σ_orientation of the instrument).
     #[arg(long)]
@@ -157,18 +157,61 @@ fn param_name(text: &str) -> std::result::Result<Param, String> {
         .ok_or_else(|| format!("`{text}` is not a parameter name (a2, theta3, base.x, …)"))
 }
 
-/// `--prior`: `NAME=σ`, or a TOML file of `NAME = σ` lines.
-fn prior_arg(text: &str) -> std::result::Result<Vec<(Param, Real)>, String> {
+/// One `--prior`: a prior given on the command line, or a file of them, read by
+/// [`prior_file`] once the command runs (so that its refusals name the file and line).
+#[derive(Clone, Debug)]
+pub enum PriorArg {
+    /// `NAME=σ`.
+    One(Param, Real),
+    /// A TOML file of `NAME = σ` lines.
+    File(PathBuf),
+}
+
+/// `--prior`: `NAME=σ`, or the path of a file of priors.
+fn prior_arg(text: &str) -> std::result::Result<PriorArg, String> {
     use calbench::identify::registry::parse_prior;
-    if let Some((name, sigma)) = text.split_once('=') {
-        return parse_prior(name, sigma.trim().parse().ok()).map(|p| vec![p]);
+    match text.split_once('=') {
+        Some((name, sigma)) => {
+            parse_prior(name, sigma.trim().parse().ok()).map(|(p, sigma)| PriorArg::One(p, sigma))
+        }
+        None => Ok(PriorArg::File(text.into())),
     }
-    let body = std::fs::read_to_string(text).map_err(|e| format!("{text}: {e}"))?;
-    let t: toml::Table = toml::from_str(&body).map_err(|e| format!("{text}: {e}"))?;
+}
+
+/// The priors of `--prior` arguments in their order, each file's in its order: a file that
+/// is not TOML, holds no prior, or names a parameter or σ that is not one is refused naming
+/// the file, the line and the key.
+fn priors(args: &[PriorArg]) -> calbench::Result<Vec<(Param, Real)>> {
+    let mut all = Vec::new();
+    for a in args {
+        match a {
+            PriorArg::One(p, sigma) => all.push((*p, *sigma)),
+            PriorArg::File(path) => all.extend(prior_file(path)?),
+        }
+    }
+    Ok(all)
+}
+
+/// The priors of the file `path`: `NAME = σ` lines.
+fn prior_file(path: &Path) -> calbench::Result<Vec<(Param, Real)>> {
+    use calbench::identify::registry::parse_prior;
+    let text = calbench::error::read_text(path)?;
+    let t: toml::Table = toml::from_str(&text).map_err(|e| {
+        let line = e.span().map(|s| calbench::error::line_of(&text, s.start));
+        Error::file(
+            path,
+            calbench::error::at_line(line, "TOML"),
+            e.message().trim_end(),
+        )
+    })?;
+    if t.is_empty() {
+        return Err(Error::file(path, "priors", "holds no `NAME = σ` line"));
+    }
     t.iter()
         .map(|(name, v)| {
             let sigma = v.as_float().or_else(|| v.as_integer().map(|i| i as Real));
-            parse_prior(name, sigma).map_err(|m| format!("{text}: key `{name}`: {m}"))
+            parse_prior(name, sigma)
+                .map_err(|m| Error::toml_file(path, &text, name, format!("key `{name}`"), m))
         })
         .collect()
 }
@@ -228,7 +271,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
     let request = IdentifyRequest {
         registration: args.registration,
         k: args.k,
-        priors: args.prior.iter().flatten().copied().collect(),
+        priors: priors(&args.prior)?,
         validate,
         holdout: args.holdout,
         cv: args.cv,

@@ -65,7 +65,36 @@ pub fn message(e: &anyhow::Error) -> String {
             None => c.to_string(),
         })
         .collect();
-    parts.join(": ")
+    for_terminal(&parts.join(": "))
+}
+
+/// The longest line of an error the terminal is shown, in characters.
+const MAX_LINE: usize = 2000;
+
+/// `text` as a terminal may show it: control characters other than line breaks and tabs
+/// escaped (`\u{1b}`), as a name read from a file may hold any, and a line longer than
+/// [`MAX_LINE`] characters (a header of megabytes, a file of NUL bytes read as one name) cut,
+/// saying by how much.
+pub fn for_terminal(text: &str) -> String {
+    text.split('\n')
+        .map(|line| {
+            let mut out = String::new();
+            let mut chars = line.chars();
+            for c in chars.by_ref().take(MAX_LINE) {
+                match c {
+                    '\t' => out.push(c),
+                    c if c.is_control() => out.extend(c.escape_unicode()),
+                    c => out.push(c),
+                }
+            }
+            let more = chars.count();
+            if more > 0 {
+                out.push_str(&format!("… ({more} characters more)"));
+            }
+            out
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// A value parser for a library enum named by its `strum` derive: it accepts exactly the
@@ -166,6 +195,10 @@ pub fn identify_inputs(args: &identify::IdentifyArgs) -> Vec<&Path> {
     ]
     .into_iter()
     .flatten()
+    .chain(args.prior.iter().filter_map(|p| match p {
+        identify::PriorArg::File(f) => Some(f.as_path()),
+        identify::PriorArg::One(..) => None,
+    }))
     .collect()
 }
 

@@ -226,8 +226,13 @@ fn table_of(
             || n == SIGMA
             || n == PAYLOAD
     };
-    let expected =
-        format!("q1…q{dof}, x, y, z and optionally qw, qx, qy, qz, sigma_mm, payload_kg");
+    // Targets (no joints) name only the Cartesian columns.
+    let joints = if dof == 0 {
+        String::new()
+    } else {
+        format!("q1…q{dof}, ")
+    };
+    let expected = format!("{joints}x, y, z and optionally qw, qx, qy, qz, sigma_mm, payload_kg");
     t.check_columns(known, &expected)?;
     let missing = |n: &str| {
         bad(
@@ -403,7 +408,7 @@ mod tests {
 
     /// The error reading `text` from a file of its own (tests run in parallel threads of one
     /// process: a shared name let one test read another's file).
-    fn read_err(text: &str) -> String {
+    fn read_err(text: impl AsRef<[u8]>) -> String {
         static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let name = format!(
             "bad-{}.csv",
@@ -429,9 +434,7 @@ mod tests {
             assert_relative_eq!(*x, *y, epsilon = 1e-12);
         }
         let h = "q1,q2,q3,q4,q5,q6,x,y,z,sigma_mm\n";
-        let s = read_err(&format!(
-            "{h}0,0,0,0,0,0,1,2,3,0.01\n0,0,0,0,0,0,1,2,3,-1\n"
-        ));
+        let s = read_err(format!("{h}0,0,0,0,0,0,1,2,3,0.01\n0,0,0,0,0,0,1,2,3,-1\n"));
         assert!(s.contains("line 3") && s.contains("column sigma_mm"), "{s}");
     }
 
@@ -439,20 +442,20 @@ mod tests {
     fn bad_lines_are_named() {
         let h = "q1,q2,q3,q4,q5,q6,x,y,z\n";
         let ok = "0,0,0,0,0,0,1,2,3\n";
-        let s = read_err(&format!("{h}{ok}{ok}0,0,0,zero,0,0,1,2,3\n"));
+        let s = read_err(format!("{h}{ok}{ok}0,0,0,zero,0,0,1,2,3\n"));
         assert!(
             s.contains("line 4") && s.contains("column q4") && s.contains("zero"),
             "{s}"
         );
-        let s = read_err(&format!("{h}{ok}0,0,0,0,0,0,1,NaN,3\n"));
+        let s = read_err(format!("{h}{ok}0,0,0,0,0,0,1,NaN,3\n"));
         assert!(s.contains("line 3") && s.contains("column y"), "{s}");
-        let s = read_err(&format!("{h}{ok}0,0,0,0,0,1,2,3\n"));
+        let s = read_err(format!("{h}{ok}0,0,0,0,0,1,2,3\n"));
         assert!(s.contains("line 3") && s.contains("8 fields"), "{s}");
         let s = read_err("q1,q2,q3,q4,q5,x,y,z\n");
         assert!(s.contains("missing column \"q6\""), "{s}");
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,w\n");
         assert!(s.contains("unknown column \"w\""), "{s}");
-        let s = read_err(&format!("{h}0,400,0,0,0,0,1,2,3\n"));
+        let s = read_err(format!("{h}0,400,0,0,0,0,1,2,3\n"));
         assert!(
             s.contains("line 2") && s.contains("column q2") && s.contains("limits"),
             "{s}"
@@ -461,6 +464,23 @@ mod tests {
         assert!(s.contains("line 2") && s.contains("unit quaternion"), "{s}");
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx\n");
         assert!(s.contains("missing column \"qy\""), "{s}");
+        // A payload is a mass from 0 to 100 000 kg, as everywhere a mass is read.
+        for kg in ["-1", "100001", "1e9"] {
+            let s =
+                read_err(format!("{h}0,0,0,0,0,0,1,2,3,{kg}\n").replace(",z\n", ",z,payload_kg\n"));
+            assert!(
+                s.contains("line 2, column payload_kg: must be a mass from 0 to 100000 kg"),
+                "{s}"
+            );
+        }
+        // A cell or a header name that is not UTF-8 (a Latin-1 export) is named by its column.
+        let s = read_err(b"q1,q2,q3,q4,q5,q6,x,y,z\n0,0,\xe9,0,0,0,1,2,3\n");
+        assert!(s.contains("line 2, column q3: not UTF-8 text"), "{s}");
+        let s = read_err(b"# from the tracker\nq1,q2,q3,q4,q5,q\xe96,x,y,z\n");
+        assert!(s.contains("line 2, column 6: not UTF-8 text"), "{s}");
+        // One endless line is refused, not read into memory whole.
+        let s = read_err(vec![b'0'; 3 << 20]);
+        assert!(s.contains("line 1 is longer than 1 MiB"), "{s}");
     }
 
     #[test]
@@ -488,18 +508,18 @@ mod tests {
     fn too_few_distinct_poses_are_refused_naming_the_lines() {
         let h = "q1,q2,q3,q4,q5,q6,x,y,z\n";
         let row = |q1: u32| format!("{q1},10,20,30,40,50,1000,200,300\n");
-        let s = read_err(&format!("{h}{}{}# again\n{}", row(1), row(1), row(1)));
+        let s = read_err(format!("{h}{}{}# again\n{}", row(1), row(1), row(1)));
         assert!(
             s.contains("line 2: all 3 rows (lines 2 to 5) are the same pose"),
             "{s}"
         );
         assert!(s.contains("at least 3 distinct poses"), "{s}");
-        let s = read_err(&format!("{h}{}{}{}{}", row(1), row(2), row(1), row(2)));
+        let s = read_err(format!("{h}{}{}{}{}", row(1), row(2), row(1), row(2)));
         assert!(
             s.contains("line 2: the 4 rows (lines 2 to 5) hold only 2 distinct poses, first seen on lines 2 and 3"),
             "{s}"
         );
-        let s = read_err(&format!("{h}{}", row(1)));
+        let s = read_err(format!("{h}{}", row(1)));
         assert!(s.contains("line 2: the file has one row (line 2)"), "{s}");
         // Three distinct poses are enough, whatever repeats.
         let p = tmp("three.csv");
@@ -523,7 +543,7 @@ mod tests {
             ("3,0,0,0,0,0,1,2,3,1e300", "column sigma_mm"),
             ("1e400,0,0,0,0,0,1,2,3,0.01", "column q1"),
         ] {
-            let s = read_err(&format!("{h}{ok}{row}\n"));
+            let s = read_err(format!("{h}{ok}{row}\n"));
             assert!(s.contains(&format!("line 5, {column}")), "{row}: {s}");
         }
         // Joint values finite in metres overflow in mm.

@@ -286,10 +286,12 @@ impl Mapping {
         }
         let (kind, from) = self.joints.unit.scale();
         let (wkind, to) = self.joints.write_unit.unwrap_or(self.joints.unit).scale();
+        let article = |k: &str| if k == "angle" { "an angle" } else { "a length" };
+        let (wkind, kind) = (article(wkind), article(kind));
         if kind != wkind {
             return Err(bad(
                 "joints.write_unit",
-                format!("an {wkind} unit for joints read in an {kind} unit"),
+                format!("{wkind} unit for joints read in {kind} unit"),
             ));
         }
         let length = |key: &str, u: Unit| match u.scale() {

@@ -3,6 +3,7 @@
 //! crate (quoted fields, CRLF line ends, a UTF-8 byte-order mark), `#` comment and blank lines
 //! skipped but counted, so that every refusal names the file's own line.
 
+use std::io::BufRead;
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -117,10 +118,23 @@ impl Rows {
             .delimiter(delimiter)
             .trim(::csv::Trim::All)
             .from_reader(Uncommented::new(input, export));
-        let header = rd
-            .headers()
-            .map_err(|e| at_line(path, 1, "", format!("cannot read the header: {e}")))?
-            .clone();
+        let header = match rd.headers() {
+            Ok(h) => h.clone(),
+            Err(e) => {
+                let kept = &rd.get_ref().kept;
+                let line = e.position().map_or(1, |p| file_line(kept, p));
+                return Err(match e.kind() {
+                    ::csv::ErrorKind::Utf8 { err, .. } => {
+                        let column = format!(", column {}", err.field() + 1);
+                        at_line(path, line, &column, NOT_UTF8.into())
+                    }
+                    ::csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::InvalidData => {
+                        Error::file(path, "header", io.to_string())
+                    }
+                    _ => at_line(path, line, "", format!("cannot read the header: {e}")),
+                });
+            }
+        };
         let mut rows = Rows {
             rd,
             path: path.to_path_buf(),
@@ -136,12 +150,7 @@ impl Rows {
     }
 
     fn line_of(&self, p: &::csv::Position) -> u64 {
-        let n = p.line();
-        usize::try_from(n)
-            .ok()
-            .and_then(|n| self.rd.get_ref().kept.get(n.checked_sub(1)?))
-            .copied()
-            .unwrap_or(n)
+        file_line(&self.rd.get_ref().kept, p)
     }
 
     /// Refuses a header column that `known` does not accept (naming its position and what
@@ -153,7 +162,7 @@ impl Rows {
                 return Err(self.bad(
                     self.header_line,
                     &format!(", column {}", i + 1),
-                    format!("unknown column \"{n}\" (expected {expected})"),
+                    format!("unknown column {} (expected {expected})", quoted(n)),
                 ));
             }
             if names[..i].contains(n) {
@@ -171,10 +180,7 @@ impl Rows {
     /// another number of fields than the header is refused.
     pub fn next(&mut self, rec: &mut ::csv::StringRecord) -> Result<Option<u64>> {
         loop {
-            let more = self.rd.read_record(rec).map_err(|e| {
-                let line = e.position().map_or(0, |p| self.line_of(p));
-                self.bad(line, "", format!("unreadable row: {e}"))
-            })?;
+            let more = self.rd.read_record(rec).map_err(|e| self.unreadable(&e))?;
             if !more {
                 return Ok(None);
             }
@@ -191,6 +197,26 @@ impl Rows {
                 return Err(self.bad(line, "", msg));
             }
             return Ok(Some(line));
+        }
+    }
+
+    /// The refusal of a row the CSV reader could not read: a cell that is not UTF-8 named by
+    /// its line and column, a line too long by its line, anything else with the reader's
+    /// words.
+    fn unreadable(&self, e: &::csv::Error) -> Error {
+        let line = e.position().map_or(0, |p| self.line_of(p));
+        match e.kind() {
+            ::csv::ErrorKind::Utf8 { err, .. } => {
+                let column = self.names.get(err.field()).map_or_else(
+                    || format!(", column {}", err.field() + 1),
+                    |n| format!(", column {n}"),
+                );
+                self.bad(line, &column, NOT_UTF8.into())
+            }
+            ::csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::InvalidData => {
+                Error::file(&self.path, "rows", io.to_string())
+            }
+            _ => self.bad(line, "", format!("unreadable row: {e}")),
         }
     }
 
@@ -214,8 +240,26 @@ struct Uncommented<R> {
     kept: Vec<u64>,
 }
 
+/// The file line of the reader's position `p`, through the file lines of the lines that are
+/// not empty ([`Uncommented`]'s `kept`).
+fn file_line(kept: &[u64], p: &::csv::Position) -> u64 {
+    let n = p.line();
+    usize::try_from(n)
+        .ok()
+        .and_then(|n| kept.get(n.checked_sub(1)?))
+        .copied()
+        .unwrap_or(n)
+}
+
+/// The refusal of a cell that is not UTF-8.
+const NOT_UTF8: &str = "not UTF-8 text; save the file as UTF-8";
+
 /// The UTF-8 byte-order mark.
 const BOM: &[u8] = b"\xEF\xBB\xBF";
+
+/// The longest line read (bytes): a row of a table is short, and a file of one endless line
+/// (`/dev/zero`, a binary file) is refused rather than read into memory whole.
+const MAX_LINE_BYTES: u64 = 1 << 20;
 
 impl<R: std::io::BufRead> Uncommented<R> {
     fn new(inner: R, export: bool) -> Self {
@@ -235,10 +279,21 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
         while self.at == self.line.len() {
             self.line.clear();
             self.at = 0;
-            if self.inner.read_until(b'\n', &mut self.line)? == 0 {
+            let mut limited = (&mut self.inner).take(MAX_LINE_BYTES + 1);
+            if limited.read_until(b'\n', &mut self.line)? == 0 {
                 return Ok(0);
             }
             self.count += 1;
+            if self.line.len() as u64 > MAX_LINE_BYTES {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    format!(
+                        "line {} is longer than {} MiB: not a table of rows",
+                        self.count,
+                        MAX_LINE_BYTES >> 20
+                    ),
+                ));
+            }
             if self.count == 1 && self.line.starts_with(BOM) {
                 self.line.drain(..BOM.len());
             }

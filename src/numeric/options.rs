@@ -53,14 +53,14 @@ pub fn read<T: DeserializeOwned>(t: &toml::Table) -> Result<T, (String, String)>
             .iter()
             .next()
             .map_or(String::new(), |_| e.path().to_string());
-        let msg = e.into_inner().to_string().trim_end().to_string();
+        let (msg, named) = crate::error::toml_value_error(&e.into_inner());
         if !key.is_empty() {
             return (key, msg);
         }
         // Where the path stops at the table, toml's message still names the key: a value's
         // check ends in "in `key`", an unknown key starts "unknown field `key`".
-        if let Some((m, k)) = msg.rsplit_once("\nin `") {
-            return (k.trim_end_matches('`').to_string(), m.to_string());
+        if let Some(k) = named {
+            return (k, msg);
         }
         let unknown = msg
             .strip_prefix("unknown field `")

@@ -134,6 +134,13 @@ pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
     (parent.to_path_buf(), name)
 }
 
+/// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it, where a
+/// run keeps what it has done until it ends.
+pub fn checkpoint_folder(out: &std::path::Path) -> std::path::PathBuf {
+    let (parent, name) = parent_and_name(out);
+    parent.join(format!(".{name}.checkpoint"))
+}
+
 /// The first path that keeps `out` from being written as a folder holding the files `names`:
 /// `out` itself when it exists and is not a folder, or `out/NAME` when that is a folder
 /// (which no file can replace). `None` when nothing is in the way.

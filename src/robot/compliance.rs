@@ -19,21 +19,9 @@ use crate::robot::{Chain, JointType, Param, Robot, MAX_JOINTS};
 /// Standard gravity, m/s².
 pub const GRAVITY: Real = 9.81;
 
-/// Largest mass of a link or a payload, kg (100 t): far above any arm (the heaviest
-/// industrial payloads are about 2.3 t); a larger one gives a sag that is not a sag.
-pub const MAX_MASS_KG: Real = 1e5;
-
-/// Whether `kg` is a mass a robot, a scenario or a measured point may give: finite, ≥ 0 and
-/// at most [`MAX_MASS_KG`].
-pub fn is_mass(kg: Real) -> bool {
-    (0.0..=MAX_MASS_KG).contains(&kg)
-}
-
-/// The refusal of `kg` where it is not a mass ([`is_mass`]); `None` where it is.
-pub fn not_a_mass(kg: Real) -> Option<String> {
-    let got = crate::error::shown(kg);
-    (!is_mass(kg)).then(|| format!("must be a mass from 0 to {MAX_MASS_KG} kg, got {got}"))
-}
+/// The range of a mass, which the measurement files check too (so it lives in the error
+/// layer below them).
+pub use crate::error::{is_mass, not_a_mass, MAX_MASS_KG};
 
 /// Which joint compliances the identification estimates (docs/formats.md `[identification]
 /// compliance`, `identify --compliance`): none (the default: a kinematic model), the joints

@@ -72,8 +72,7 @@ struct Meta {
 
 /// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it.
 pub fn folder(out: &Path) -> PathBuf {
-    let (parent, name) = crate::report::parent_and_name(out);
-    parent.join(format!(".{name}.checkpoint"))
+    crate::report::checkpoint_folder(out)
 }
 
 /// The checkpoint of a running study: a [`TrialSink`] that records every trial past those
@@ -235,19 +234,10 @@ impl Checkpoint {
                     g.trials().to_string(),
                 ));
             }
-            let table = |t: &str| toml::from_str::<toml::Table>(t).unwrap_or_default();
+            let table = |t: &str| toml::from_str::<toml::Value>(t).ok();
             let (had, now) = (table(&meta.settings), table(&g.settings()?));
-            let differ: Vec<&String> = had
-                .keys()
-                .chain(now.keys())
-                .filter(|k| had.get(*k) != now.get(*k))
-                .collect();
-            if let Some(k) = differ.first() {
-                return Err(refuse(
-                    "scenario settings",
-                    format!("[{k}] = {:?}", had.get(*k)),
-                    format!("{:?}", now.get(*k)),
-                ));
+            if let Some((key, had, now)) = first_difference("", had.as_ref(), now.as_ref()) {
+                return Err(refuse(&format!("`{key}`"), had, now));
             }
         }
         precision_in(&path, &meta)?;
@@ -475,4 +465,31 @@ impl Records {
         }
         self.check.record(text.trim_end_matches('\n'))
     }
+}
+
+/// The first setting where two scenarios' settings differ: its dotted key and its values in
+/// each, as TOML writes them (`not set` where one does not give it).
+fn first_difference(
+    key: &str,
+    a: Option<&toml::Value>,
+    b: Option<&toml::Value>,
+) -> Option<(String, String, String)> {
+    if a == b {
+        return None;
+    }
+    if let (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) = (a, b) {
+        let dotted = |k: &str| {
+            if key.is_empty() {
+                k.to_string()
+            } else {
+                format!("{key}.{k}")
+            }
+        };
+        return x
+            .keys()
+            .chain(y.keys())
+            .find_map(|k| first_difference(&dotted(k), x.get(k), y.get(k)));
+    }
+    let shown = |v: Option<&toml::Value>| v.map_or("not set".to_string(), |v| v.to_string());
+    Some((key.to_string(), shown(a), shown(b)))
 }

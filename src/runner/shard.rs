@@ -242,11 +242,17 @@ pub(crate) fn trials_as_run(holder: &Path, trials: usize, scenario: &AnyScenario
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
     let path = dir.join("shard.json");
     let text = std::fs::read_to_string(&path).map_err(|e| {
-        Error::file(
-            dir,
-            "shard.json",
-            format!("not a shard folder of `calbench run --shard` ({e})"),
-        )
+        // A shard whose run was killed has no folder yet, only its checkpoint beside it.
+        let msg = if crate::report::checkpoint_folder(dir).is_dir() {
+            format!(
+                "this shard's run did not finish: its checkpoint is there, and `calbench run \
+                 --resume {}` finishes it",
+                dir.display()
+            )
+        } else {
+            format!("not a shard folder of `calbench run --shard` ({e})")
+        };
+        Error::file(dir, "shard.json", msg)
     })?;
     let head: FormatOnly =
         serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;

@@ -88,7 +88,11 @@ impl InstrumentsScenario {
         for (i, e) in entries.into_iter().enumerate() {
             let given = e.as_table().cloned().unwrap_or_default();
             let m: InstrumentSettings = e.try_into().map_err(|e: toml::de::Error| {
-                ferr(&entry(i), e.to_string().trim_end().to_string())
+                let (msg, key) = crate::error::toml_value_error(&e);
+                match key {
+                    Some(k) => ferr(&format!("{}.{k}", entry(i)), msg),
+                    None => ferr(&entry(i), msg),
+                }
             })?;
             m.check_keys(&given).map_err(|e| in_entry(i, e))?;
             m.instrument().map_err(|e| in_entry(i, e))?;

@@ -48,9 +48,14 @@ impl AnyScenario {
         let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
         let table: toml::Table = toml::from_str(text)
             .map_err(|e| Error::file(shown, "TOML", e.to_string().trim_end()))?;
-        let kind: Sections = toml::Value::Table(table.clone())
-            .try_into()
-            .map_err(|e: toml::de::Error| Error::file(shown, "scenario", e.to_string()))?;
+        let kind: Sections =
+            toml::Value::Table(table.clone())
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    let (msg, key) = crate::error::toml_value_error(&e);
+                    Error::file(shown, key.unwrap_or_else(|| "scenario".into()), msg)
+                        .at_key_line(text)
+                })?;
         let instruments = kind.instruments_study.is_some();
         match (kind.registration_study, instruments, kind.measurement) {
             (Some(_), true, _) => Err(Error::file(

@@ -58,9 +58,13 @@ impl Head {
         let default_trials = i64::try_from(default_trials).unwrap_or(i64::MAX);
         keys.entry("trials")
             .or_insert(toml::Value::Integer(default_trials));
-        let mut head: Head = toml::Value::Table(keys)
-            .try_into()
-            .map_err(|e: toml::de::Error| ferr("scenario", e.to_string().trim_end().into()))?;
+        let mut head: Head =
+            toml::Value::Table(keys)
+                .try_into()
+                .map_err(|e: toml::de::Error| {
+                    let (msg, key) = crate::error::toml_value_error(&e);
+                    ferr(key.as_deref().unwrap_or("scenario"), msg)
+                })?;
         head.table = whole;
         head.path = path.to_path_buf();
         if let Err(msg) = folder_name(&head.name) {
@@ -109,8 +113,9 @@ pub fn parse<T: serde::de::DeserializeOwned>(
     let rest = toml::Value::Table(table)
         .try_into()
         .map_err(|e: toml::de::Error| {
-            let msg = format!("{} (a scenario {takes})", e.to_string().trim_end());
-            Error::file(path, "scenario", msg)
+            let (msg, key) = crate::error::toml_value_error(&e);
+            let place = key.unwrap_or_else(|| "scenario".into());
+            Error::file(path, place, format!("{msg} (a scenario {takes})"))
         })?;
     Ok((head, rest))
 }

@@ -174,7 +174,7 @@ fn import_refuses_a_mapped_column_named_twice_in_the_header() {
 }
 
 #[test]
-fn import_refuses_a_mapping_that_uses_one_column_for_two_fields() {
+fn import_refuses_a_mapping_that_maps_a_column_twice_or_writes_another_kind_of_unit() {
     let d = tmp_dir("interchange-mapping-twice");
     let mapping = read(Path::new(&ur10_example("mapping.toml")));
     let cases = [
@@ -192,6 +192,11 @@ fn import_refuses_a_mapping_that_uses_one_column_for_two_fields() {
             "position = [\"measurement_std_x\"",
             "position = [\"measurement_z\"",
             "line 24, sigma.position[0]: column \"measurement_z\" is mapped already by `position.columns[2]`",
+        ),
+        (
+            "write_unit = \"deg\"",
+            "write_unit = \"mm\"",
+            "line 10, joints.write_unit: a length unit for joints read in an angle unit",
         ),
     ];
     for (i, (from, to, expected)) in cases.iter().enumerate() {

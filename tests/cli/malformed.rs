@@ -155,6 +155,26 @@ fn compensate_replaces_its_earlier_output() {
         );
         assert!(read(&out).contains(",ok"), "{}", read(&out));
     }
+    // An identified robot that is not there is refused as `--identified`, not `--robot`.
+    let gone = d.join("nope.toml");
+    refused(
+        &calbench(&[
+            "compensate",
+            "--robot",
+            path_arg(&ur10),
+            "--identified",
+            path_arg(&gone),
+            "--joints",
+            path_arg(&prog),
+            "--out",
+            path_arg(&d.join("o.csv")),
+        ]),
+        &[
+            "setting `--identified`",
+            "nope.toml",
+            "nor an existing robot file",
+        ],
+    );
 }
 
 /// A robot of zero length read by a distance instrument: every reading's direction is 0/0.
@@ -209,6 +229,68 @@ fn a_missing_pose_list_is_named_by_its_key() {
             &format!("line {line}, calibration.poses_file"),
             "nope.csv is not a file",
         ],
+    );
+}
+
+/// A name read from a file reaches the terminal with its control characters escaped and cut
+/// to a line of 2000 characters, where an ESC of a CSV header coloured the terminal and a
+/// header of megabytes was printed whole.
+#[test]
+fn names_from_a_file_reach_the_terminal_escaped_and_cut() {
+    let d = tmp_dir("cli-malformed-terminal");
+    let long = "n".repeat(50_000);
+    for (name, column, says) in [
+        (
+            "esc",
+            "a\u{1b}[31mRED\u{7}",
+            "unknown column \"a\\u{1b}[31mRED\\u{7}\"",
+        ),
+        (
+            "long",
+            long.as_str(),
+            "\"nnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnnn… (50000 bytes)\"",
+        ),
+    ] {
+        let csv = d.join(format!("{name}.csv"));
+        std::fs::write(&csv, format!("q1,q2,q3,q4,q5,q6,x,y,z,{column}\n")).unwrap();
+        let o = calbench(&[
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            path_arg(&csv),
+            "--method",
+            "ls",
+            "--out",
+            path_arg(&d.join("o")),
+        ]);
+        refused(&o, &[&format!("{name}.csv"), "line 1, column 10", says]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!err.contains('\u{1b}') && !err.contains('\u{7}'), "{err}");
+        assert!(
+            err.lines().all(|l| l.chars().count() < 2100),
+            "{}",
+            err.len()
+        );
+    }
+    // serde's message quotes a scenario's unknown key whole: the terminal's line is cut.
+    let sc = ci_guard_with(&d, "key", |t| {
+        t.replace("[tracker]\n", &format!("[tracker]\n{long} = 1\n"))
+    });
+    let o = calbench(&["run", path_arg(&sc), "--out", path_arg(&d.join("o"))]);
+    refused(
+        &o,
+        &[
+            "key.toml",
+            "tracker: unknown field `nnnn",
+            "characters more)",
+        ],
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.lines().all(|l| l.chars().count() < 2100),
+        "{}",
+        err.len()
     );
 }
 
@@ -275,9 +357,9 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
                 "[tracker]\nmeasure = \"pose\"\nangle_noise_deg = 1e300\n",
             ),
             "angle_noise_deg",
-            // Refused as the section is read: the place is the scenario (docs/formats.md § 8).
-            "scenario",
-            "from 0 to 360 ° (one turn), got 1e300\nin `tracker.angle_noise_deg`",
+            // Refused as the section is read: the place is the key serde names (§ 8.1).
+            "tracker.angle_noise_deg",
+            "from 0 to 360 ° (one turn), got 1e300",
         ),
         (
             "payload",

@@ -188,6 +188,36 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
         &d.join("bad2"),
     ));
     assert!(!bad.status.success());
+    // A prior file's refusals name the file, the line and the key, as a run's error (exit 1),
+    // not as a malformed command line.
+    for (i, (text, says)) in [
+        (
+            "a2 = 0.1\nzz9 = 0.1\n",
+            "line 2, key `zz9`: `zz9` is not a parameter name",
+        ),
+        ("a2 = 0.1\n\na3 = \"x\"\n", "line 3, key `a3`"),
+        ("a2 = \n", "line 1, TOML"),
+        ("# nothing\n", "priors: holds no `NAME = σ` line"),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let f = d.join(format!("bad-priors-{i}.toml"));
+        std::fs::write(&f, text).unwrap();
+        let o = calbench(&lm_args(
+            &robot,
+            &data,
+            &["--prior", path_arg(&f)],
+            &d.join("bad3"),
+        ));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains(&format!("bad-priors-{i}.toml: {says}")),
+            "{err}"
+        );
+        assert!(!d.join("bad3").exists());
+    }
 }
 
 #[test]
@@ -211,21 +241,26 @@ fn compensate_targets_reaches_cartesian_targets_on_the_identified_robot() {
             f.pos.x, f.pos.y, f.pos.z, q4[0], q4[1], q4[2], q4[3]
         );
     }
-    for (name, text, pose) in [("pos", pos, false), ("full", full, true)] {
-        let t = d.join(format!("{name}.csv"));
-        std::fs::write(&t, text).unwrap();
-        let c = d.join(format!("{name}-out.csv"));
-        calbench_ok(&[
+    let identified = out.join("robot.toml");
+    let compensate = |targets: &Path, corrected: &Path| {
+        calbench(&[
             "compensate",
             "--robot",
             &ex("ur10.toml"),
             "--identified",
-            path_arg(&out.join("robot.toml")),
+            path_arg(&identified),
             "--targets",
-            path_arg(&t),
+            path_arg(targets),
             "--out",
-            path_arg(&c),
-        ]);
+            path_arg(corrected),
+        ])
+    };
+    for (name, text, pose) in [("pos", pos, false), ("full", full, true)] {
+        let t = d.join(format!("{name}.csv"));
+        std::fs::write(&t, text).unwrap();
+        let c = d.join(format!("{name}-out.csv"));
+        let o = compensate(&t, &c);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let written = read(&c);
         let mut lines = written.lines();
         assert_eq!(
@@ -245,21 +280,21 @@ fn compensate_targets_reaches_cartesian_targets_on_the_identified_robot() {
             }
         }
     }
-    // A targets file with joints or without z is refused by line and column.
-    let t = d.join("bad.csv");
-    std::fs::write(&t, "x,y\n1,2\n").unwrap();
-    let bad = calbench(&[
-        "compensate",
-        "--robot",
-        &ex("ur10.toml"),
-        "--identified",
-        path_arg(&out.join("robot.toml")),
-        "--targets",
-        path_arg(&t),
-        "--out",
-        path_arg(&d.join("o.csv")),
-    ]);
-    assert!(String::from_utf8_lossy(&bad.stderr).contains("\"z\""));
+    // A targets file without z, or with a column of its own, is refused by line and column;
+    // the columns expected are the Cartesian ones.
+    for (text, says) in [
+        ("x,y\n1,2\n", "\"z\""),
+        (
+            "x,y,z,w\n1,2,3,4\n",
+            "line 1, column 4: unknown column \"w\" (expected x, y, z and optionally qw",
+        ),
+    ] {
+        let t = d.join("bad.csv");
+        std::fs::write(&t, text).unwrap();
+        let bad = compensate(&t, &d.join("o.csv"));
+        let err = String::from_utf8_lossy(&bad.stderr);
+        assert!(err.contains(says), "{err}");
+    }
 }
 
 #[test]

@@ -403,6 +403,40 @@ fn resume_refuses_a_checkpoint_it_cannot_replay_before_changing_it() {
         &[(&meta, garbage)],
         &["checkpoint.json: precision", "has no unit"],
     );
+    // Resumed with a scenario of other settings: the first setting that differs is named with
+    // its two values as TOML writes them, where the message printed two tables' debug forms.
+    let edited = dir.join("ci-guard.toml");
+    let text = read(&root().join("scenarios/ci-guard.toml"));
+    std::fs::write(&edited, text.replacen("count = 40", "count = 41", 1)).unwrap();
+    let o = calbench(&[
+        "run",
+        "--resume",
+        path_arg(&killed),
+        path_arg(&edited),
+        "--trials",
+        "600",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    one_line_naming(
+        &err,
+        &meta,
+        &["the checkpoint was written with `calibration.count` 40, this run has 41"],
+    );
+    // Merged before its run finished: the folder is named with how to finish it.
+    let o = calbench(&[
+        "merge",
+        path_arg(&killed),
+        "--out",
+        path_arg(&dir.join("m")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("shard.json: this shard's run did not finish")
+            && err.contains(&format!("calbench run --resume {}", killed.display())),
+        "{err}"
+    );
 }
 
 /// `merge` of shards whose scenario as run (`settings`) was altered alike names the first

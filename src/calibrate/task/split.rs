@@ -30,6 +30,8 @@ impl Split {
         let mut rows: Option<usize> = None;
         // The line that put each row in a part, and the part (true: calibration).
         let mut owner: Vec<Option<(usize, bool)>> = Vec::new();
+        // A byte-order mark (an editor's UTF-8) is not a word, as in every other text input.
+        let text = text.strip_prefix('\u{feff}').unwrap_or(text);
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let body = raw.split('#').next().unwrap_or("").trim();
@@ -48,8 +50,14 @@ impl Split {
             }
             let arg = arg.unwrap_or("");
             let number = |s: &str| {
-                s.parse::<usize>()
-                    .map_err(|_| at(line, format!("`{s}` is not a row number")))
+                s.parse::<usize>().map_err(|_| {
+                    let what = if word == "rows" {
+                        "a number of rows"
+                    } else {
+                        "a row number or a range A-B of row numbers"
+                    };
+                    at(line, format!("`{arg}` is not {what}"))
+                })
             };
             match word {
                 "rows" => {
@@ -57,6 +65,12 @@ impl Split {
                         return Err(at(line, "`rows` is given twice".into()));
                     }
                     let n = number(arg)?;
+                    if n < 2 {
+                        return Err(at(
+                            line,
+                            format!("`rows {n}`: a split needs 2 rows or more (one calibrates, one validates)"),
+                        ));
+                    }
                     rows = Some(n);
                     owner = vec![None; n];
                 }
@@ -177,10 +191,22 @@ mod tests {
                 "rows 3\ncalibrate 0-2\n",
                 &["line 2", "unknown word `calibrate`"],
             ),
+            (
+                "rows 5\ncalibration -1-3\n",
+                &["line 2", "`-1-3` is not a row number or a range A-B"],
+            ),
+            ("rows x\n", &["line 1", "`x` is not a number of rows"]),
+            (
+                "rows 0\ncalibration 0\n",
+                &["line 1", "`rows 0`: a split needs 2 rows"],
+            ),
         ] {
             let e = parse(text).unwrap_err().to_string();
             assert!(says.iter().all(|s| e.contains(s)), "{text:?}: {e}");
         }
+        // An editor's byte-order mark is not a word.
+        let bom = parse("\u{feff}rows 3\ncalibration 0-1\nvalidation 2\n").unwrap();
+        assert_eq!((bom.calibration, bom.validation), (vec![0, 1], vec![2]));
         let s = parse("rows 3\ncalibration 0-1\nvalidation 2\n").unwrap();
         let e = s
             .check_rows(Path::new("t.split"), Path::new("d.csv"), 4)

@@ -86,12 +86,10 @@ pub(crate) fn check_sigma(v: Real) -> std::result::Result<(), String> {
     Ok(())
 }
 
-/// A payload (kg) ≥ 0.
+/// A payload (kg): a mass from 0 to [`MAX_MASS_KG`](crate::error::MAX_MASS_KG), as
+/// everywhere a mass is read ([`not_a_mass`](crate::error::not_a_mass)).
 pub(super) fn check_payload(v: Real) -> std::result::Result<(), String> {
-    if v < 0.0 {
-        return Err(format!("{} is not a payload ≥ 0 kg", shown(v)));
-    }
-    Ok(())
+    crate::error::not_a_mass(v).map_or(Ok(()), Err)
 }
 
 /// Measured poses given as arrays rather than a file (the Python module's `identify`):

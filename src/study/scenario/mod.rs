@@ -281,7 +281,9 @@ impl Scenario {
                             let spanned = toml::from_str::<RawScenario>(&s.text).err()?;
                             Some(crate::error::line_of(&s.text, spanned.span()?.start))
                         });
-                    Error::file(&shown, at_line(line, "scenario"), e.to_string().trim_end())
+                    let (msg, key) = crate::error::toml_value_error(&e);
+                    let place = key.unwrap_or_else(|| "scenario".into());
+                    Error::file(&shown, at_line(line, place), msg)
                 })?;
         let dir = path
             .and_then(Path::parent)
