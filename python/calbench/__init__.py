@@ -508,24 +508,39 @@ def _check_whole(methods, precision, out):
         )
 
 
-def identifiability(robot, q, measure="position"):
+def identifiability(robot, q, measure="position", *, between_poses=None, planes=None,
+                    spheres=None):
     """Which parameters of ``robot`` poses ``q`` (N, n; robot's units) can identify.
 
     Args:
         robot: a :class:`Robot`.
         q: joint values (N, n).
-        measure: ``position`` or ``pose``.
+        measure: ``position`` or ``pose`` (the tracker), or another instrument's kind:
+            ``distance``, ``plane``, ``sphere``, ``multi-target`` (``--measure``).
+        between_poses: ``distance``: lengths between consecutive poses, not from a pivot.
+        planes: ``plane``: the number of planes (default 3); the poses are on them in turn.
+        spheres: ``sphere``: the number of spheres (default 1), likewise.
 
     Returns:
         a dict with ``rank``, ``parameters`` (their number), ``identifiable`` and
         ``unidentifiable`` (names), ``groups`` (dependent groups of names) and
-        ``condition_number`` (column-scaled), as ``calbench identifiability --json``.
+        ``condition_number`` (column-scaled), and for another instrument ``measure`` and
+        ``instrument_unknowns`` (its pivot, planes or spheres, projected out), as
+        ``calbench identifiability --json --poses-file``.
     """
     if not isinstance(robot, Robot):
         raise SettingError("setting `robot`: expected a calbench.Robot")
-    if not isinstance(measure, str):
-        raise SettingError("setting `measure`: expected \"position\" or \"pose\"")
-    return _calbench.identifiability(robot, _array("q", q, 2, robot.joint_count), measure)
+    measure = _text("measure", measure, "a measure such as \"position\" or \"distance\"")
+    # Each instrument option is read by one kind only: given with another, it is refused.
+    for name, value, kind in (("between_poses", between_poses, "distance"),
+                              ("planes", planes, "plane"), ("spheres", spheres, "sphere")):
+        if value is not None and measure != kind:
+            raise SettingError(f"setting `{name}`: is read only with measure=\"{kind}\"")
+    return _calbench.identifiability(
+        robot, _array("q", q, 2, robot.joint_count), measure,
+        False if between_poses is None else _flag("between_poses", between_poses),
+        3 if planes is None else _count("planes", planes, least=1),
+        1 if spheres is None else _count("spheres", spheres, least=1))
 
 
 def robots():

@@ -17,8 +17,10 @@ use numpy::PyReadonlyArray2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
+use calbench::measurement::kind::Kind;
 use calbench::measurement::Measure;
 use calbench::robot::{builtin, Param};
+use calbench::sim::instrument::InstrumentSettings;
 
 use errors::{
     setting, ComputeError, ConvergenceWarning, Error, FileError, IoError, LimitWarning,
@@ -27,36 +29,56 @@ use errors::{
 use robot::PyRobot;
 
 /// Rank, identifiable parameters and dependent groups of every parameter of `robot` over
-/// the poses `q` (the robot's units) for `measure` ("position" or "pose"); joint values
-/// outside the limits are refused naming the row and the column.
+/// the poses `q` (the robot's units) for `measure`: the tracker's `position` or `pose`, or
+/// another instrument's kind (`distance`, `plane`, `sphere`, `multi-target`, read with
+/// `between_poses`, `planes`, `spheres` as `calbench identifiability --poses-file` reads
+/// them); joint values outside the limits are refused naming the row and the column.
 #[pyfunction]
-#[pyo3(signature = (robot, q, measure = "position"))]
+#[pyo3(signature = (robot, q, measure = "position", between_poses = false, planes = 3, spheres = 1))]
 fn identifiability<'py>(
     py: Python<'py>,
     robot: &PyRobot,
     q: PyReadonlyArray2<'py, f64>,
     measure: &str,
+    between_poses: bool,
+    planes: usize,
+    spheres: usize,
 ) -> PyResult<Bound<'py, PyDict>> {
     let r = &robot.inner;
-    let measure = match measure {
-        "position" => Measure::Position,
-        "pose" => Measure::Pose,
-        other => {
-            return Err(setting(
-                "measure",
-                format!("\"{other}\" is not a measure; allowed: position, pose"),
-            ))
-        }
-    };
+    let kind = Kind::named("measure", measure).map_err(errors::err)?;
     // Refused as `calbench identifiability --poses-file` refuses them: the row, the column.
     let qs = calbench::measurement::csv::joint_rows_from_arrays(r, "q", &convert::rows(&q))
         .map_err(errors::err)?;
     if qs.is_empty() {
         return Err(setting("q", "no poses"));
     }
-    let a = py.detach(|| calbench::robot::identifiability::analyse(r, &r.params(), &qs, measure));
-    let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     let out = PyDict::new(py);
+    let (a, nuisance) = match kind {
+        Kind::Position | Kind::Pose => {
+            let measure = if kind == Kind::Pose {
+                Measure::Pose
+            } else {
+                Measure::Position
+            };
+            let a = py
+                .detach(|| calbench::robot::identifiability::analyse(r, &r.params(), &qs, measure));
+            (a, None)
+        }
+        kind => {
+            let s = InstrumentSettings {
+                kind,
+                pivot: !between_poses,
+                planes,
+                spheres,
+                ..InstrumentSettings::default()
+            };
+            let (a, nuisance) = py
+                .detach(|| calbench::identify::kind::identifiability_at(r, &qs, &s))
+                .map_err(errors::err)?;
+            (a, Some(nuisance))
+        }
+    };
+    let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
     out.set_item("rank", a.rank)?;
     out.set_item("parameters", r.params().len())?;
     out.set_item("identifiable", names(&a.identifiable))?;
@@ -64,6 +86,10 @@ fn identifiability<'py>(
     let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
     out.set_item("groups", groups)?;
     out.set_item("condition_number", a.condition_number)?;
+    if let Some(nuisance) = nuisance {
+        out.set_item("measure", kind.as_str())?;
+        out.set_item("instrument_unknowns", nuisance)?;
+    }
     Ok(out)
 }
 

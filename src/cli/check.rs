@@ -66,7 +66,7 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
 #[derive(clap::Args)]
 pub struct Tolerance {
     /// Allowed relative worsening of each metric (0.05 = 5 %).
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
     tolerance: Real,
 }
 

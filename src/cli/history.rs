@@ -37,7 +37,12 @@ pub struct HistoryArgs {
     #[arg(long)]
     pub regressions: bool,
     /// Allowed relative worsening, as for `check`.
-    #[arg(long, default_value_t = 0.05, value_name = "X")]
+    #[arg(
+        long,
+        default_value_t = 0.05,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
     pub tolerance: Real,
 }
 

@@ -52,7 +52,7 @@ pub struct IdentifiabilityArgs {
     #[arg(long)]
     pub gcn_blocks: bool,
     /// GCN threshold of the separation (Guo 2024 §3.1: 1e2).
-    #[arg(long, default_value_t = 1e2)]
+    #[arg(long, default_value_t = 1e2, allow_negative_numbers = true)]
     pub gcn_threshold: Real,
     /// Print JSON to stdout.
     #[arg(long)]
@@ -155,26 +155,20 @@ fn instrument(
     };
     // Random poses move onto their planes or spheres; a pose file's poses are taken as
     // they are (they touch, or the fitted surfaces are the instrument's).
-    let (inst, qs, groups) = if args.poses_file.is_some() {
-        let inst = s.instrument()?;
-        let g = calbench::sim::instrument::groups_of(&inst, qs.len());
-        (inst, qs.to_vec(), g)
+    let moved;
+    let ((a, nuisance), qs) = if args.poses_file.is_some() {
+        (
+            calbench::identify::kind::identifiability_at(robot, qs, &s)?,
+            qs,
+        )
     } else {
         let mut rng = calbench::numeric::rng::stream(args.seed, "identifiability");
-        let (lay, qs, g) =
+        let (lay, q, g) =
             calbench::sim::instrument::instrument_poses(&s, robot, args.poses, &mut rng)?;
-        (lay.instrument, qs, g)
+        moved = q;
+        let a = calbench::identify::kind::identifiability_of(robot, &moved, lay.instrument, g)?;
+        (a, &moved[..])
     };
-    let qs = &qs[..];
-    // The Jacobian does not depend on the readings: zeros of the right length.
-    let values = vec![0.0; inst.observations(qs.len()) * inst.rows_per_observation()];
-    let data = calbench::measurement::kind::KindData {
-        instrument: inst,
-        group: groups,
-        values,
-    };
-    let a = calbench::identify::kind::identifiability(robot, &robot.params(), qs, &data)?;
-    let nuisance = data.instrument.nuisance_names();
     if args.json {
         let mut v = analysis_json(&a);
         v["measure"] = json!(kind.as_str());

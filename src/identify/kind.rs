@@ -248,6 +248,40 @@ pub fn identifiability(
     Ok(crate::robot::identifiability::analyse_jacobian(params, jr))
 }
 
+/// Identifiability of every parameter of `robot` for the instrument `s` read at the poses
+/// `qs`, taken as they are (they touch it, or its fitted planes or spheres are the
+/// instrument's, assigned in turn): the analysis ([`identifiability`]) and the names of the
+/// instrument's own unknowns, which it projects out. `calbench identifiability --measure KIND
+/// --poses-file` and Python's `identifiability` call it.
+pub fn identifiability_at(
+    robot: &Robot,
+    qs: &[Vec<Real>],
+    s: &crate::sim::instrument::InstrumentSettings,
+) -> Result<(crate::robot::identifiability::Identifiability, Vec<String>)> {
+    let instrument = s.instrument()?;
+    let group = crate::sim::instrument::groups_of(&instrument, qs.len());
+    identifiability_of(robot, qs, instrument, group)
+}
+
+/// [`identifiability_at`] for an instrument laid out already, each pose's plane or sphere
+/// given (`group`).
+pub fn identifiability_of(
+    robot: &Robot,
+    qs: &[Vec<Real>],
+    instrument: crate::measurement::kind::Instrument,
+    group: Vec<usize>,
+) -> Result<(crate::robot::identifiability::Identifiability, Vec<String>)> {
+    // The Jacobian does not depend on the readings: zeros of the right length.
+    let values = vec![0.0; instrument.observations(qs.len()) * instrument.rows_per_observation()];
+    let data = KindData {
+        instrument,
+        group,
+        values,
+    };
+    let a = identifiability(robot, &robot.params(), qs, &data)?;
+    Ok((a, data.instrument.nuisance_names()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

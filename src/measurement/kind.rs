@@ -55,6 +55,18 @@ impl Kind {
     pub fn as_str(self) -> &'static str {
         self.into()
     }
+
+    /// The kind named `name` (as [`Kind::as_str`] writes it); refused as the setting `key`,
+    /// with the names allowed, otherwise.
+    pub fn named(key: &str, name: &str) -> crate::error::Result<Kind> {
+        name.parse().map_err(|_| {
+            let allowed = <Kind as strum::VariantNames>::VARIANTS.join(", ");
+            crate::error::Error::setting(
+                key,
+                format!("\"{name}\" is not a measure; allowed: {allowed}"),
+            )
+        })
+    }
 }
 
 /// The geometry of one instrument: everything the residual needs besides the tool frames.

@@ -120,10 +120,17 @@ pub fn parse<T: serde::de::DeserializeOwned>(
     Ok((head, rest))
 }
 
+/// The longest study name, in bytes: a folder name may have 255 on the common file systems,
+/// and the run's checkpoint and temporary folders beside `results/<name>/` add to it.
+pub const MAX_NAME_BYTES: usize = 200;
+
 /// Whether `name` can name a study's default output folder `results/<name>/`: not empty,
-/// no slash, no control character, and not `.` or `..` (which would put the run beside or
-/// above `results/`). The refusal otherwise.
+/// no slash, no control character, not `.` or `..` (which would put the run beside or above
+/// `results/`), and at most [`MAX_NAME_BYTES`] bytes. The refusal otherwise.
 pub fn folder_name(name: &str) -> std::result::Result<(), &'static str> {
+    if name.len() > MAX_NAME_BYTES {
+        return Err("must be at most 200 bytes: it names the folder results/<name>/, and a longer name is refused by the file system");
+    }
     let t = name.trim();
     if t.is_empty()
         || t == "."

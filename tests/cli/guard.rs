@@ -224,12 +224,26 @@ fn a_tolerance_out_of_range_is_refused_and_a_tiny_one_printed_short() {
     let (base, out) = (committed(), dir.join("cmp"));
     let (b, o) = (path_arg(&base), path_arg(&out));
     let db = dir.join("db.sqlite");
-    for t in ["1e308", "10.5", "NaN", "inf", "-0.5"] {
-        let tolerance = format!("--tolerance={t}");
+    // `--tolerance -0.5` is the option's value too, not an unknown argument `-0.5`.
+    let forms = |t: &str| {
+        [
+            vec![format!("--tolerance={t}")],
+            vec!["--tolerance".into(), t.into()],
+        ]
+    };
+    for form in ["1e308", "10.5", "NaN", "inf", "-0.5"]
+        .into_iter()
+        .flat_map(forms)
+    {
+        let tolerance: Vec<&str> = form.iter().map(String::as_str).collect();
         let cases: [Vec<&str>; 3] = [
-            vec!["check", b, "--baseline", b, &tolerance],
-            vec!["compare", b, b, "--out", o, &tolerance],
-            vec!["history", "--db", path_arg(&db), "--out", o, &tolerance],
+            [&["check", b, "--baseline", b][..], &tolerance].concat(),
+            [&["compare", b, b, "--out", o][..], &tolerance].concat(),
+            [
+                &["history", "--db", path_arg(&db), "--out", o][..],
+                &tolerance,
+            ]
+            .concat(),
         ];
         for args in cases {
             let r = calbench(&args);

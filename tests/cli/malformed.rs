@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{bin, calbench, calbench_ok, path_arg, read, refused, root, tmp_dir};
+use crate::common::{bin, calbench, path_arg, read, refused, root, tmp_dir};
 
 /// A study name of `.` or `..` would put the run beside or above `results/` (its default
 /// folder is `results/<name>/`): refused with the file, line and key, in a Monte-Carlo and a
@@ -50,6 +50,36 @@ fn a_name_that_is_not_a_folder_is_refused() {
         let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
         assert_eq!(left.len(), 1, "{file} {name}: something was written");
     }
+}
+
+/// A study name longer than a folder name may be is refused at its line, where the run
+/// failed at the end with the file system's "File name too long" for `results/<name>/`.
+#[test]
+fn a_name_longer_than_a_folder_name_is_refused() {
+    let d = tmp_dir("cli-malformed-long-name");
+    let long = "n".repeat(201);
+    let sc = ci_guard_with(&d, "long", |t| {
+        t.replace("name = \"ci-guard\"", &format!("name = \"{long}\""))
+    });
+    let line = read(&sc)
+        .lines()
+        .position(|l| l.starts_with("name = "))
+        .unwrap()
+        + 1;
+    let o = bin()
+        .current_dir(&d)
+        .args(["run", "long.toml", "--trials", "2"])
+        .output()
+        .unwrap();
+    refused(
+        &o,
+        &[
+            "long.toml",
+            &format!("line {line}, name"),
+            "at most 200 bytes",
+        ],
+    );
+    assert!(!d.join("results").exists(), "something was written");
 }
 
 /// `scenarios/ci-guard.toml` with `edit` applied, written to `dir/NAME.toml`; the path.
@@ -138,42 +168,38 @@ fn compensate_replaces_its_earlier_output() {
     std::fs::write(&prog, "q1,q2,q3,q4,q5,q6\n10,-80,20,-90,30,5\n").unwrap();
     let ur10 = root().join("examples/ipa-ur10/ur10.toml");
     let out = d.join("corrected.csv");
-    for _ in 0..2 {
+    let compensate = |identified: &Path, extra: &[&str], out: &Path| {
         let args = [
             "compensate",
             "--robot",
             path_arg(&ur10),
             "--identified",
-            path_arg(&ur10),
-        ];
-        calbench_ok(
-            &[
-                &args[..],
-                &["--joints", path_arg(&prog), "--out", path_arg(&out)],
-            ]
-            .concat(),
-        );
-        assert!(read(&out).contains(",ok"), "{}", read(&out));
-    }
-    // An identified robot that is not there is refused as `--identified`, not `--robot`.
-    let gone = d.join("nope.toml");
-    refused(
-        &calbench(&[
-            "compensate",
-            "--robot",
-            path_arg(&ur10),
-            "--identified",
-            path_arg(&gone),
+            path_arg(identified),
             "--joints",
             path_arg(&prog),
             "--out",
-            path_arg(&d.join("o.csv")),
-        ]),
+            path_arg(out),
+        ];
+        calbench(&[&args[..], extra].concat())
+    };
+    for _ in 0..2 {
+        let o = compensate(&ur10, &[], &out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert!(read(&out).contains(",ok"), "{}", read(&out));
+    }
+    // An identified robot that is not there is refused as `--identified`, not `--robot`.
+    refused(
+        &compensate(&d.join("nope.toml"), &[], &d.join("o.csv")),
         &[
             "setting `--identified`",
             "nope.toml",
             "nor an existing robot file",
         ],
+    );
+    // `--payload-kg -1` is the option's value, refused by its range, not an unknown argument.
+    refused(
+        &compensate(&ur10, &["--payload-kg", "-1"], &d.join("o.csv")),
+        &["setting `--payload-kg`: must be a mass from 0 to 100000 kg, got -1"],
     );
 }
 

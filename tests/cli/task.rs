@@ -272,6 +272,31 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
     };
     let e = refused("key", &src.replace("metric =", "metrik ="), None);
     assert!(e.contains("key.toml: line") && e.contains("metrik"), "{e}");
+    // A mapping of another joint count is refused at the line of its columns.
+    let five = d.join("five.mapping.toml");
+    let mapping = read(&root().join("tasks/ipa-ur10.mapping.toml"));
+    std::fs::write(&five, mapping.replacen(", \"wrist_3_joint\"", "", 1)).unwrap();
+    let text = src.replace(
+        "\"ipa-ur10.mapping.toml\"",
+        &format!("\"{}\"", five.display()),
+    );
+    let e = refused("five", &text, None);
+    assert!(
+        e.contains("five.mapping.toml: line 8, joints.columns: 5 joint columns for the 6-joint"),
+        "{e}"
+    );
+    // A key given twice is named, where toml's words name none.
+    let twice = src.replacen("metric =", "metric = \"validation_rms_mm\"\nmetric =", 1);
+    let line = twice
+        .lines()
+        .position(|l| l.starts_with("metric ="))
+        .unwrap()
+        + 2;
+    let e = refused("twice", &twice, None);
+    assert!(
+        e.contains(&format!("twice.toml: line {line}: duplicate key `metric`")),
+        "{e}"
+    );
     // A key of the wrong type, and an unknown key in a table: the line and the key's path.
     let typed = format!("{src}\n[models]\ncandidates = [\"kinematic\"]\nfolds = \"five\"\n");
     let e = refused("typed", &typed, None);

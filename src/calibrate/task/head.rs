@@ -127,7 +127,13 @@ impl<'a> TaskFile<'a> {
     }
 
     fn toml(path: &Path, text: &str, e: toml::de::Error) -> Error {
-        Error::file(path, place_of(text, &e), e.message().trim_end())
+        let msg = e.message().trim_end();
+        // toml's "duplicate key" names no key; its span is the key's.
+        let msg = match e.span().and_then(|s| text.get(s)) {
+            Some(key) if msg == "duplicate key" => format!("duplicate key `{}`", key.trim()),
+            _ => msg.to_string(),
+        };
+        Error::file(path, place_of(text, &e), msg)
     }
 
     /// Its keys as `K` reads them (an unknown, missing or mistyped key refused naming the

@@ -367,16 +367,15 @@ impl Task {
     pub fn measurements(&self, robot: &Robot) -> Result<(Measurements, Measurements)> {
         let mapping = Mapping::load(&self.mapping)?;
         if mapping.joints.columns.len() != robot.dof() {
-            return Err(Error::file(
-                &self.mapping,
-                "joints.columns",
-                format!(
-                    "{} joint columns for the {}-joint robot {}",
-                    mapping.joints.columns.len(),
-                    robot.dof(),
-                    self.head.robot.display()
-                ),
-            ));
+            let text = crate::error::read_text(&self.mapping)?;
+            let msg = format!(
+                "{} joint columns for the {}-joint robot {}",
+                mapping.joints.columns.len(),
+                robot.dof(),
+                self.head.robot.display()
+            );
+            let key = "joints.columns";
+            return Err(Error::toml_file(&self.mapping, &text, key, key, msg));
         }
         match &self.data {
             TaskData::Split {

@@ -1,0 +1,63 @@
+"""`calbench.identifiability` for every instrument `calbench identifiability --poses-file`
+reads, with the command line's numbers, and its instrument options refused where no kind
+reads them."""
+import json
+
+import numpy as np
+import pytest
+
+import calbench
+
+
+def poses(tmp_path, robot, n=60):
+    """`n` joint vectors within the IRB 2600's limits (deg) and their pose list."""
+    rng = np.random.default_rng(4)
+    q = rng.uniform(-60.0, 60.0, (n, robot.joint_count))
+    f = tmp_path / "poses.csv"
+    header = ",".join(f"q{j + 1}" for j in range(robot.joint_count))
+    np.savetxt(f, q, delimiter=",", header=header, comments="", fmt="%.17g")
+    return q, f
+
+
+@pytest.mark.parametrize("measure, options, flags", [
+    ("position", {}, []),
+    ("pose", {}, []),
+    ("distance", {}, []),
+    ("distance", {"between_poses": True}, ["--between-poses"]),
+    ("plane", {"planes": 4}, ["--planes", "4"]),
+    ("sphere", {"spheres": 2}, ["--spheres", "2"]),
+    ("multi-target", {}, []),
+])
+def test_every_instrument_gives_the_command_lines_analysis(cli, tmp_path, measure, options,
+                                                            flags):
+    robot = calbench.Robot.builtin("irb2600")
+    q, f = poses(tmp_path, robot)
+    got = calbench.identifiability(robot, q, measure, **options)
+    want = json.loads(cli("identifiability", "--robot", "irb2600", "--measure", measure,
+                          "--poses-file", f, "--json", *flags).stdout)
+    assert got.pop("parameters") == len(robot.parameter_names())
+    assert got.keys() == want.keys()
+    for key, value in want.items():
+        assert got[key] == pytest.approx(value, rel=1e-12) if key == "condition_number" \
+            else got[key] == value, key
+    if measure not in ("position", "pose"):
+        # A pivot, planes or spheres are unknowns; consecutive lengths and targets have none.
+        assert got["measure"] == measure
+        assert bool(got["instrument_unknowns"]) == (measure != "multi-target" and not options
+                                                    .get("between_poses"))
+
+
+def test_instrument_options_are_refused_where_no_kind_reads_them():
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.zeros((4, 6)) + np.arange(4)[:, None]
+    for measure, options, says in [
+        ("position", {"planes": 3}, "setting `planes`: is read only with measure=\"plane\""),
+        ("plane", {"spheres": 2}, "setting `spheres`: is read only with measure=\"sphere\""),
+        ("sphere", {"between_poses": True}, "`between_poses`: is read only with measure="),
+        ("plane", {"planes": 0}, "setting `planes`: 0 is out of range"),
+        ("distance", {"between_poses": "yes"}, "setting `between_poses`: expected True"),
+        ("tracker", {}, "setting `measure`: \"tracker\" is not a measure; allowed: position, "
+                        "pose, distance"),
+    ]:
+        with pytest.raises(calbench.SettingError, match=says):
+            calbench.identifiability(robot, q, measure, **options)
