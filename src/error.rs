@@ -441,16 +441,10 @@ pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
 /// the message (`in `tracker.mpe_a_um``). A refusal shows the key as its place.
 pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
     let text = e.to_string();
-    let (msg, key) = split_toml_key(&text);
-    (msg.to_string(), key.map(str::to_string))
-}
-
-/// A toml message's text and the key of its last line `in `KEY``, if it has one.
-pub fn split_toml_key(text: &str) -> (&str, Option<&str>) {
     let text = text.trim_end();
     match text.rsplit_once("\nin `") {
-        Some((msg, key)) => (msg, Some(key.trim_end_matches('`'))),
-        None => (text, None),
+        Some((msg, key)) => (msg.to_string(), Some(key.trim_end_matches('`').to_string())),
+        None => (text.to_string(), None),
     }
 }
 

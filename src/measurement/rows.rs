@@ -121,18 +121,9 @@ impl Rows {
         let header = match rd.headers() {
             Ok(h) => h.clone(),
             Err(e) => {
-                let kept = &rd.get_ref().kept;
-                let line = e.position().map_or(1, |p| file_line(kept, p));
-                return Err(match e.kind() {
-                    ::csv::ErrorKind::Utf8 { err, .. } => {
-                        let column = format!(", column {}", err.field() + 1);
-                        at_line(path, line, &column, NOT_UTF8.into())
-                    }
-                    ::csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::InvalidData => {
-                        Error::file(path, "header", io.to_string())
-                    }
-                    _ => at_line(path, line, "", format!("cannot read the header: {e}")),
-                });
+                let line = e.position().map_or(1, |p| file_line(&rd.get_ref().kept, p));
+                let read = (path, line, &[][..]);
+                return Err(unreadable(read, &e, ("header", "cannot read the header")));
             }
         };
         let mut rows = Rows {
@@ -200,24 +191,14 @@ impl Rows {
         }
     }
 
-    /// The refusal of a row the CSV reader could not read: a cell that is not UTF-8 named by
-    /// its line and column, a line too long by its line, anything else with the reader's
-    /// words.
+    /// The refusal of a row the CSV reader could not read ([`unreadable`]).
     fn unreadable(&self, e: &::csv::Error) -> Error {
         let line = e.position().map_or(0, |p| self.line_of(p));
-        match e.kind() {
-            ::csv::ErrorKind::Utf8 { err, .. } => {
-                let column = self.names.get(err.field()).map_or_else(
-                    || format!(", column {}", err.field() + 1),
-                    |n| format!(", column {n}"),
-                );
-                self.bad(line, &column, NOT_UTF8.into())
-            }
-            ::csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::InvalidData => {
-                Error::file(&self.path, "rows", io.to_string())
-            }
-            _ => self.bad(line, "", format!("unreadable row: {e}")),
-        }
+        unreadable(
+            (&self.path, line, &self.names),
+            e,
+            ("rows", "unreadable row"),
+        )
     }
 
     /// `msg` about line `line`, at `place` (`", column x"` or empty).
@@ -251,8 +232,34 @@ fn file_line(kept: &[u64], p: &::csv::Position) -> u64 {
         .unwrap_or(n)
 }
 
-/// The refusal of a cell that is not UTF-8.
-const NOT_UTF8: &str = "not UTF-8 text; save the file as UTF-8";
+/// The refusal of what the CSV reader could not read at `line` of `path`, the header or a
+/// row: a cell or name that is not UTF-8 named by its column (by `names`, or by its number
+/// before the header is read), a line too long at the place `part` (`header`, `rows`),
+/// anything else with the reader's words after `doing`.
+fn unreadable(
+    (path, line, names): (&Path, u64, &[String]),
+    e: &::csv::Error,
+    (part, doing): (&str, &str),
+) -> Error {
+    match e.kind() {
+        ::csv::ErrorKind::Utf8 { err, .. } => {
+            let column = names.get(err.field()).map_or_else(
+                || format!(", column {}", err.field() + 1),
+                |n| format!(", column {n}"),
+            );
+            at_line(
+                path,
+                line,
+                &column,
+                "not UTF-8 text; save the file as UTF-8".into(),
+            )
+        }
+        ::csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::InvalidData => {
+            Error::file(path, part, io.to_string())
+        }
+        _ => at_line(path, line, "", format!("{doing}: {e}")),
+    }
+}
 
 /// The UTF-8 byte-order mark.
 const BOM: &[u8] = b"\xEF\xBB\xBF";
