@@ -77,6 +77,8 @@ pub enum Opt {
     Compliance,
     /// K-fold cross-validation.
     Cv,
+    /// The seed of the cross-validation's folds.
+    CvSeed,
     /// The compensated robot's formats.
     Export,
     /// Parameters held at their nominal values.

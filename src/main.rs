@@ -87,7 +87,11 @@ fn main() {
         Some(Command::Leaderboard(a)) => cli::leaderboard::run(a),
     };
     if let Err(e) = done {
-        eprintln!("error: {}", cli::message(&e));
+        let spell: calbench::error::Spell = match &cli.command {
+            Some(Command::Task(_)) => cli::task::spell,
+            _ => cli::spell,
+        };
+        eprintln!("error: {}", cli::message(&e, spell));
         std::process::exit(1);
     }
 }

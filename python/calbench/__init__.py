@@ -137,7 +137,7 @@ def identify(
     compliance=None,
     models=None,
     cv=None,
-    cv_seed=0,
+    cv_seed=None,
     validate=None,
     holdout=None,
     seed=0,
@@ -167,7 +167,8 @@ def identify(
         prior: dict name → σ of a prior on that parameter's error (``--prior``).
         compliance: joint compliances identified too: ``"c2,c3"`` or ``"gravity"``.
         models: candidate models compared by K-fold cross-validation (``--models``).
-        cv: K of a K-fold cross-validation (``--cv``); cv_seed: seed of its folds.
+        cv: K of a K-fold cross-validation (``--cv``); cv_seed: seed of its folds (default
+            0; with ``cv`` or ``models`` only).
         validate: a validation measurement: a tracker's file, or ``(q, points)`` /
             ``(q, points, rotations)``.
         holdout: ``"LAST/EVERY"``: rows held out for validation instead (``--holdout``).
@@ -226,7 +227,7 @@ def identify(
         validate=val,
         holdout=_text("holdout", holdout, 'LAST/EVERY such as "3/10"', optional=True),
         cv=_count("cv", cv),
-        cv_seed=_count("cv_seed", 0 if cv_seed is None else cv_seed),
+        cv_seed=_count("cv_seed", cv_seed),
         models=_names("models", models),
         params=_names("params", params),
         fix=_names("fix", fix),

@@ -162,7 +162,7 @@ fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Me
 #[pyfunction]
 #[pyo3(signature = (robot, q = None, points = None, rotations = None, sigma = None,
     payload = None, data = None, method = "lm", options = None, registration = "identify",
-    compliance = None, validate = None, holdout = None, cv = None, cv_seed = 0, models = None,
+    compliance = None, validate = None, holdout = None, cv = None, cv_seed = None, models = None,
     params = None, fix = None, prior = None, seed = 0, allow_rank_deficient = false,
     allow_worse = false, allow_implausible = false))]
 #[allow(clippy::too_many_arguments)]
@@ -182,7 +182,7 @@ pub(crate) fn identify<'py>(
     validate: Option<Bound<'py, PyAny>>,
     holdout: Option<&str>,
     cv: Option<usize>,
-    cv_seed: u64,
+    cv_seed: Option<u64>,
     models: Option<Vec<String>>,
     params: Option<Vec<String>>,
     fix: Option<Vec<String>>,

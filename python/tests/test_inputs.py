@@ -81,6 +81,16 @@ def test_k_is_refused_where_the_data_hold_no_orientation(cli, tmp_path):
         calbench.identify(robot, data=data, method="lm", options={"k": 10.0})
 
 
+def test_a_fold_seed_without_folds_is_refused(root):
+    # docs/formats.md § 2.6: `--cv-seed` seeds the folds of `--cv` or `--models` only.
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.random.default_rng(1).uniform(-60.0, 60.0, (40, 6))
+    p = robot.fk(q) + np.random.default_rng(2).normal(0.0, 0.01, (40, 3))
+    with pytest.raises(calbench.SettingError, match="setting `cv_seed`: seeds the folds of cv or"):
+        calbench.identify(robot, q, p, cv_seed=3)
+    assert calbench.identify(robot, q, p, cv=4, cv_seed=3)["cv"]["k"] == 4
+
+
 def test_a_dict_nested_too_deep_or_containing_itself_is_refused_naming_its_key(root):
     # A list nested 100 000 deep, or one that contains itself, overflowed the stack (SIGSEGV).
     deep = []

@@ -8,7 +8,7 @@
 use crate::calibrate::validation::rotation_angle_deg;
 use crate::numeric::{Frame, Real};
 use crate::robot::loaded::{loaded_fk, LoadedFk};
-use crate::robot::Robot;
+use crate::robot::{Param, Robot};
 
 /// What a corrected row must reach to be flagged `ok`: residual_mm and residual_deg.
 pub const ACCEPT_MM: Real = 1e-6;
@@ -41,6 +41,37 @@ pub fn solve(
     crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, 6)
 }
 
+/// What makes `identified` no calibration of `nominal`, in words (empty when it can be one):
+/// a joint of another kind, or a parameter both robots have moved beyond the bounds of
+/// "Physical plausibility" ([`super::plausibility::moves`]; the gravity basis's deflections
+/// at the program's poses `qs`). A program corrected with another robot's model (a file given
+/// for another), or with one that cannot be physically right, would send the arm far from
+/// every pose it was written for.
+pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>]) -> Vec<String> {
+    let kinds: Vec<String> = nominal
+        .joints
+        .iter()
+        .zip(&identified.joints)
+        .enumerate()
+        .filter(|(_, (n, i))| n.kind != i.kind)
+        .map(|(j, (n, i))| {
+            let (n, i): (&str, &str) = (n.kind.into(), i.kind.into());
+            format!("joint {} is {i}, the nominal robot's {n}", j + 1)
+        })
+        .collect();
+    if !kinds.is_empty() {
+        return kinds;
+    }
+    let theirs = identified.params();
+    let mut shared: Vec<Param> = nominal
+        .params()
+        .into_iter()
+        .filter(|p| theirs.contains(p))
+        .collect();
+    shared.extend(crate::robot::gravity_basis::params(identified));
+    super::plausibility::moves(nominal, identified, &shared, qs)
+}
+
 /// The flag of a written command `q` with its residuals ([`Corrected::flag`]).
 fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -> &'static str {
     if !(residual_mm <= ACCEPT_MM && residual_deg <= ACCEPT_DEG) {
@@ -53,7 +84,8 @@ fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -
 }
 
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
-/// reaches the pose `nominal` gives at `q_nominal`, a revolute joint outside its limits turned
+/// reaches the pose `nominal` gives at `q_nominal` (its position, for an arm of fewer than six
+/// joints: its orientation residual is written, not judged by the flag), a revolute joint outside its limits turned
 /// by whole turns to the value nearest the row's where that is within them
 /// (`wrap_into_limits`). `round` maps joint values to what is
 /// written (the output's decimals), so the residuals are those of the written command. The
@@ -67,13 +99,18 @@ pub fn compensate_row(
     round: impl Fn(&[Real]) -> Vec<Real>,
 ) -> crate::Result<Corrected> {
     let target = nominal.fk(q_nominal);
-    let mut q = solve(identified, &target, q_nominal, payload_kg)?;
+    // An arm of fewer than six joints cannot take the whole pose a changed model asks for
+    // (five joints against six coordinates): it reaches the position.
+    let rows = if identified.dof() < 6 { 3 } else { 6 };
+    let mut q =
+        crate::robot::ik::solve_pose_rows(identified, &target, q_nominal, payload_kg, rows)?;
     wrap_into_limits(identified, &mut q, Some(q_nominal));
     let q = round(&q);
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
     let residual_deg = rotation_angle_deg(&f, &target);
-    let flag = flag(identified, &q, residual_mm, residual_deg);
+    let judged_deg = if rows == 3 { 0.0 } else { residual_deg };
+    let flag = flag(identified, &q, residual_mm, judged_deg);
     Ok(Corrected {
         q,
         residual_mm,

@@ -11,6 +11,7 @@ use super::plausibility::moves;
 use super::recheck::{self, Readmission};
 use super::{Calibrated, Registration};
 use crate::error::Result;
+use crate::identify::solver::DETERMINABLE_SIGMAS;
 use crate::identify::Termination;
 use crate::measurement::Measurements;
 use crate::numeric::Real;
@@ -41,11 +42,11 @@ pub type CalibrateFrom<'a> = dyn FnMut(&[Param], &[Real]) -> Result<Calibrated> 
 /// Calibrates `params` by `calibrate` (its second argument: where the Jacobian methods
 /// start, [`crate::identify::MethodSpec::start`]; empty, at the nominal robot), then
 /// re-checks `candidates` at the identified robot ([`recheck::readmit`]) and calibrates again
-/// with those re-admitted, started at the identified robot with the re-admitted errors at 0:
-/// at the nominal robot, where they were left out, their columns vanish and a Gauss–Newton
-/// step in them is unbounded (the ridge's and the robust ridge's, which do not damp it). A
-/// re-admission the
-/// identification cannot settle (the first fit converged and the second does not), or one
+/// with those re-admitted, started at the identified robot with the re-admitted errors at the
+/// re-check's estimates: at the nominal robot, where they were left out, their columns vanish
+/// and a Gauss–Newton step in them is unbounded (the ridge's and the robust ridge's, which do
+/// not damp it). A re-admission the identification cannot settle (the first fit converged and
+/// the second does not, or a re-admitted error ends more than 3 σ from its estimate), or one
 /// that moves a robot the first fit left within the physical bounds beyond them
 /// ([`moves`]: 5° for an angle, 2 % of the reach for a length), is given up: the parameters
 /// are not determined in practice. `accept` may refuse each fit kept (the
@@ -85,9 +86,29 @@ pub fn fit_and_readmit(
     more.extend(admitted.iter().map(|a| a.0));
     let mut start: Vec<Real> = first.identified.x.iter().copied().collect();
     start.resize(more.len(), 0.0);
+    if let Some(step) = recheck::step(&on, registration, &more)? {
+        start.iter_mut().zip(step).for_each(|(x, s)| *x += s);
+    }
     let second = calibrate(&more, &start)?;
-    let settled = second.identified.termination == Termination::Converged
-        || first.identified.termination != Termination::Converged;
+    // Settled: the second fit converged where the first did, and each re-admitted error
+    // ended within 3 σ of the re-check's estimate. A damped method stops on a small step,
+    // which a parameter whose column the damping swamps takes even far from its optimum.
+    let near_estimates = admitted.iter().enumerate().all(|(i, (_, a))| {
+        let x = second.identified.x[params.len() + i];
+        (x - a.estimate).abs() <= DETERMINABLE_SIGMAS * a.sigma
+    });
+    eprintln!(
+        "DBG {:?} {:?} {:?}",
+        second.identified.termination,
+        second.identified.x.as_slice().last(),
+        admitted
+            .iter()
+            .map(|a| (a.1.estimate, a.1.sigma))
+            .collect::<Vec<_>>()
+    );
+    let settled = (second.identified.termination == Termination::Converged
+        || first.identified.termination != Termination::Converged)
+        && near_estimates;
     // A re-admission that takes a robot within the physical bounds beyond them moves it
     // along directions the data barely determine: given up as well.
     let strays = |c: &Calibrated, p: &[Param]| !moves(nominal, &c.robot, p, &data.qs).is_empty();

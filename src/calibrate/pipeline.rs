@@ -98,6 +98,14 @@ impl IdentifyRequest {
             let why = Said::from("cannot be used with ").name(*a);
             return Err(Error::option(*b, why));
         }
+        if self.cv_seed.is_some() && self.cv.is_none() && self.models.is_empty() {
+            let why = Said::from("seeds the folds of ")
+                .name(Opt::Cv)
+                .text(" or ")
+                .name(Models)
+                .text(", and neither is given");
+            return Err(Error::option(Opt::CvSeed, why));
+        }
         let empty = IdentifyData::Tracker(Measurements::default());
         match std::mem::replace(&mut self.data, empty) {
             IdentifyData::Tracker(d) => self
@@ -123,6 +131,8 @@ impl IdentifyRequest {
             spec.k = k;
         }
         let mut val = self.validate.clone();
+        // Under a holdout, the data's rows of the calibration and of the validation.
+        let mut held_out = None;
         if let Some(h) = self.holdout {
             let (cal, held) = h.split(d.len());
             if held.is_empty() {
@@ -137,6 +147,28 @@ impl IdentifyRequest {
             }
             val = Some(cv::subset(&d, &held));
             d = cv::subset(&d, &cal);
+            held_out = Some((cal, held));
+        }
+        if let Some(v) = &val {
+            let mut shared = d.shared_rows(v);
+            if !shared.is_empty() {
+                let (opt, of) = match &held_out {
+                    Some((cal, held)) => {
+                        shared
+                            .iter_mut()
+                            .for_each(|(c, v)| (*c, *v) = (cal[*c], held[*v]));
+                        (Opt::Holdout, "of the data")
+                    }
+                    None => (Opt::Validate, "of each file"),
+                };
+                let why = format!(
+                    "{} validation row(s) repeat a calibration row (the same joint values and \
+                     measured point; 0-based rows {of}): {}; a validation row must not calibrate",
+                    shared.len(),
+                    crate::measurement::shared_rows_named(&shared)
+                );
+                return Err(Error::option(opt, why));
+            }
         }
         let with_base = registration == Registration::Identify;
         let mut kinematic = if self.params.is_empty() {
@@ -157,7 +189,7 @@ impl IdentifyRequest {
             method: &spec,
             registration,
             seed: self.seed,
-            fold_seed: self.cv_seed,
+            fold_seed: self.cv_seed.unwrap_or(0),
             fixed: &self.fix,
             done: self.cross_validated.as_deref().unwrap_or(&[]),
         };

@@ -92,13 +92,7 @@ pub fn readmit(
     if !(noise.is_finite() && noise >= 0.0) || candidates.is_empty() {
         return Ok(out);
     }
-    let nuisance: Vec<Param> = match registration {
-        Registration::Svd | Registration::Wsvd => (0..6)
-            .map(Param::Base)
-            .filter(|p| !id.params.contains(p))
-            .collect(),
-        Registration::Identify | Registration::Known => Vec::new(),
-    };
+    let nuisance = nuisance(registration, id.params);
     let mut current: Vec<Param> = id.params.to_vec();
     for &p in candidates {
         if current.contains(&p) || nuisance.contains(&p) {
@@ -142,6 +136,38 @@ pub fn readmit(
         }
     }
     Ok(out)
+}
+
+/// The base parameters a registration by `registration` solves outside the fit of `params`,
+/// which the re-check solves along with them.
+fn nuisance(registration: Registration, params: &[Param]) -> Vec<Param> {
+    match registration {
+        Registration::Svd | Registration::Wsvd => (0..6)
+            .map(Param::Base)
+            .filter(|p| !params.contains(p))
+            .collect(),
+        Registration::Identify | Registration::Known => Vec::new(),
+    }
+}
+
+/// The Gauss–Newton step from the identification `id` in `params` (its own followed by the
+/// re-admitted ones, at 0), the registration's nuisance parameters solved along and dropped:
+/// where the fit with the re-admitted errors starts, each at its estimate together with the
+/// errors it is correlated with. Started at its estimate alone, a damped method (`lm`) moves
+/// it back, as its damping costs the correlated errors' larger moves more. `None` where the
+/// normal matrix cannot be inverted.
+pub fn step(
+    id: &Subject,
+    registration: Registration,
+    params: &[Param],
+) -> Result<Option<Vec<Real>>> {
+    let all: Vec<Param> = params
+        .iter()
+        .copied()
+        .chain(nuisance(registration, params))
+        .collect();
+    let (n, g) = normal(&id.calibrated.robot, &all, id)?;
+    Ok(bound_inverse(&n).map(|inv| (inv * g).iter().take(params.len()).copied().collect()))
 }
 
 /// The noise (mm) of a point of weight 1: the fit's unit-weight σ0 and, when the file states

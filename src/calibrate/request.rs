@@ -69,8 +69,9 @@ pub struct IdentifyRequest {
     pub holdout: Option<Holdout>,
     /// K-fold cross-validation (K), and the folds of `models`.
     pub cv: Option<usize>,
-    /// Seed of the folds.
-    pub cv_seed: u64,
+    /// Seed of the folds (0 when `None`); refused without `cv` or `models`, which it would
+    /// not change.
+    pub cv_seed: Option<u64>,
     /// Candidate models compared by cross-validation; the best is identified.
     pub models: Vec<Model>,
     /// The cross-validations of `models` already run on the request's folds (`cv` folds, or
@@ -109,7 +110,7 @@ impl IdentifyRequest {
             validate: None,
             holdout: None,
             cv: None,
-            cv_seed: 0,
+            cv_seed: None,
             models: Vec::new(),
             cross_validated: None,
             params: Vec::new(),

@@ -49,7 +49,15 @@ impl ErrorStats {
         let n = v.len() as Real;
         let mean = v.iter().sum::<Real>() / n;
         let rms = (v.iter().map(|x| x * x).sum::<Real>() / n).sqrt();
-        let max = v.iter().cloned().fold(0.0, Real::max);
+        // NaN if any error is: `Real::max` would pass over it and give 0 for a trial whose
+        // errors are all NaN.
+        let max = v.iter().fold(0.0, |m: Real, &x| {
+            if m.is_nan() || x.is_nan() {
+                Real::NAN
+            } else {
+                m.max(x)
+            }
+        });
         let std = (v.iter().map(|x| (x - mean) * (x - mean)).sum::<Real>() / n).sqrt();
         ErrorStats {
             mean,
@@ -245,6 +253,13 @@ pub fn residual_vectors(c: &Calibrated, data: &Measurements) -> Result<Vec<crate
 mod tests {
     use super::*;
     use crate::numeric::{rot_x, rot_z, rpy_matrix, Vec3};
+
+    #[test]
+    fn an_error_that_is_nan_makes_every_statistic_nan() {
+        let s = ErrorStats::of(&[1.0, Real::NAN, 2.0]);
+        assert!(s.mean.is_nan() && s.rms.is_nan() && s.max.is_nan() && s.std.is_nan());
+        assert_eq!(ErrorStats::of(&[1.0, 3.0, 2.0]).max, 3.0);
+    }
 
     #[test]
     fn orientation_error_is_the_rotation_angle_at_every_pitch() {

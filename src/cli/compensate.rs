@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
-use calbench::calibrate::compensate::{compensate_row, compensate_targets};
+use calbench::calibrate::compensate::{compensate_row, compensate_targets, not_a_calibration_of};
 use calbench::calibrate::kernel::KERNEL_FILE;
 use calbench::error::Error;
 use calbench::measurement::csv::read_targets;
@@ -45,6 +45,10 @@ pub struct CompensateArgs {
     /// The corrected program to write (an existing file is replaced).
     #[arg(long)]
     pub out: PathBuf,
+    /// Correct the program with an identified robot that cannot be a calibration of the
+    /// nominal one (its parameters moved beyond the bounds of a calibration), with a warning.
+    #[arg(long)]
+    pub allow_implausible: bool,
 }
 
 /// Corrects every row of the program and writes the corrected program.
@@ -88,6 +92,27 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
         let msg = format!("{} has {n} joints, the nominal robot {m}", args.identified);
         return Err(Error::setting("--identified", msg).into());
     }
+    let program = match &args.joints {
+        Some(path) => calbench::sim::poses::read_pose_list(path, &nominal)?,
+        None => Vec::new(),
+    };
+    let found = not_a_calibration_of(&nominal, &ident, &program);
+    if !found.is_empty() {
+        let what = format!(
+            "{} cannot be a calibration of the nominal robot: {}; a calibration moves a robot \
+             by millimetres and fractions of a degree",
+            args.identified,
+            found.join("; ")
+        );
+        if !args.allow_implausible {
+            let msg = format!(
+                "{what}. Check that it is what `calbench identify` wrote for --robot, or pass \
+                 --allow-implausible to correct the program with it"
+            );
+            return Err(Error::setting("--identified", msg).into());
+        }
+        eprintln!("warning: {what}; the program is corrected with it (--allow-implausible)");
+    }
     // What is written: the program's decimals in the nominal robot's units.
     let round = |q: &[Real]| -> Vec<Real> {
         let user: Vec<Real> = nominal
@@ -116,8 +141,6 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
             .collect();
         compensate_targets(&ident, &frames, t.quats.is_none(), payload_kg, round)?
     } else {
-        let path = args.joints.as_deref().unwrap_or(std::path::Path::new(""));
-        let program = calbench::sim::poses::read_pose_list(path, &nominal)?;
         program
             .iter()
             .map(|q| compensate_row(&nominal, &ident, q, payload_kg, round))

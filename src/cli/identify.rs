@@ -67,9 +67,9 @@ pub struct IdentifyArgs {
     /// model): per fold, the position RMS of the held-out points; in identified.json `cv`.
     #[arg(long, value_name = "K")]
     pub cv: Option<usize>,
-    /// Seed of the cross-validation folds.
-    #[arg(long, default_value_t = 0)]
-    pub cv_seed: u64,
+    /// Seed of the cross-validation folds (default 0; with --cv or --models only).
+    #[arg(long)]
+    pub cv_seed: Option<u64>,
     /// Candidate models compared by their K-fold CV RMS (K from --cv, default 5): terms
     /// `kinematic`, `beta` (Hayati's β where identifiable), `compliance` (the gravity joints;
     /// needs link masses), `gravity` (the mass-free gravity basis: unit weights at the elbow,

@@ -56,8 +56,9 @@ pub fn spell(opt: calbench::error::Opt, _on: bool) -> String {
 }
 
 /// An error as the command line shows it: its causes joined as `{:#}` joins them, the
-/// library's errors with their options spelled as flags ([`spell`]).
-pub fn message(e: &anyhow::Error) -> String {
+/// library's errors with their options spelled by `spell` ([`spell`], or that of a command
+/// that takes only some of them, [`task::spell`]).
+pub fn message(e: &anyhow::Error, spell: calbench::error::Spell) -> String {
     let parts: Vec<String> = e
         .chain()
         .map(|c| match c.downcast_ref::<Error>() {
@@ -250,6 +251,25 @@ pub fn print_table(r: &RunResult) {
     let (headers, rows) = entry_table(r, &columns);
     let headers: Vec<&str> = headers.iter().map(String::as_str).collect();
     out_raw!("{}", markdown_table(&headers, &rows));
+    // Why entries failed, which the table's count does not say.
+    for e in r.blocks.iter().flat_map(|b| &b.entries) {
+        if e.failures > 0 {
+            let ended: Vec<String> = e
+                .terminations
+                .iter()
+                .map(|(k, n)| format!("{k} {n}"))
+                .collect();
+            out!(
+                "{} / {}: {} of {} identifications failed (ended: {}); their trials are left \
+                 out of the entry's figures, and trials.csv gives each trial's termination",
+                e.method,
+                e.poses,
+                e.failures,
+                e.terminations.values().sum::<usize>(),
+                ended.join(", ")
+            );
+        }
+    }
 }
 
 /// `--base LINK` / `--tip LINK`: the chain of a URDF tree that is the robot.

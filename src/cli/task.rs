@@ -59,6 +59,17 @@ pub struct TaskArgs {
     pub out: PathBuf,
 }
 
+/// How `task` spells an option the library names: its own (`--method`, `--models`) as the
+/// command line does, and one it does not take as `identify`'s, where it is
+/// (`identify's --allow-implausible`): a task's entry has no way past its checks.
+pub fn spell(opt: calbench::error::Opt, on: bool) -> String {
+    use calbench::error::Opt;
+    match opt {
+        Opt::Method | Opt::Models => super::spell(opt, on),
+        _ => format!("identify's {}", super::spell(opt, on)),
+    }
+}
+
 /// Runs the entry and writes its folder; prints the task's figure and the published ones.
 pub fn run(args: &TaskArgs) -> Result<()> {
     let path = task_path(&args.task);

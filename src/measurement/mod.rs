@@ -76,7 +76,42 @@ pub struct Measurements {
     pub payload_kg: Option<Vec<Real>>,
 }
 
+/// Pairs of shared rows ([`Measurements::shared_rows`]) in words, the first five named:
+/// `calibration row 3 = validation row 0, …, and 7 more`.
+pub fn shared_rows_named(rows: &[(usize, usize)]) -> String {
+    let shown: Vec<String> = rows
+        .iter()
+        .take(5)
+        .map(|(c, v)| format!("calibration row {c} = validation row {v}"))
+        .collect();
+    let more = rows.len() - shown.len();
+    if more > 0 {
+        format!("{}, and {more} more", shown.join(", "))
+    } else {
+        shown.join(", ")
+    }
+}
+
 impl Measurements {
+    /// The pairs (calibration row, validation row) of `self` (calibration) and `val` that
+    /// hold the same measurement: the same joint values, measured point and orientation, to
+    /// the bit. In validation-row order.
+    pub fn shared_rows(&self, val: &Measurements) -> Vec<(usize, usize)> {
+        let key = |m: &Measurements, i: usize| -> Vec<u64> {
+            let mut k: Vec<u64> = m.qs[i].iter().map(|v| v.to_bits()).collect();
+            k.extend(m.points[i].iter().map(|v| v.to_bits()));
+            if let Some(q) = &m.quats {
+                k.extend(q[i].iter().map(|v| v.to_bits()));
+            }
+            k
+        };
+        let seen: std::collections::HashMap<Vec<u64>, usize> =
+            (0..self.len()).rev().map(|i| (key(self, i), i)).collect();
+        (0..val.len())
+            .filter_map(|v| seen.get(&key(val, v)).map(|&c| (c, v)))
+            .collect()
+    }
+
     /// Number of measured poses.
     pub fn len(&self) -> usize {
         self.qs.len()

@@ -12,6 +12,7 @@ mod cells;
 mod cli;
 mod cluster;
 mod committed;
+mod compensate;
 mod determinable;
 mod determinism;
 mod final_fitness;

@@ -136,6 +136,50 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         "{msg}"
     );
     assert!(!d.join("x").exists());
+    // A seed of folds without folds would change nothing, and is refused.
+    let bad = calbench(&lm_args(
+        &ex("ur10.toml"),
+        &data,
+        &["--cv-seed", "3"],
+        &d.join("x"),
+    ));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{msg}");
+    assert!(
+        msg.contains("setting `--cv-seed`: seeds the folds of --cv or --models"),
+        "{msg}"
+    );
+    assert!(!d.join("x").exists());
+    // Validation rows that repeat calibration rows are refused, named by their rows: the
+    // data given as their own validation, and a file holding its rows twice held out from.
+    let bad = calbench(&lm_args(
+        &ex("ur10.toml"),
+        &data,
+        &["--validate", &data],
+        &d.join("x"),
+    ));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        msg.contains("setting `--validate`: 199 validation row(s) repeat a calibration row")
+            && msg.contains("calibration row 0 = validation row 0, "),
+        "{msg}"
+    );
+    let text = read(Path::new(&data));
+    let twice = d.join("twice.csv");
+    let rows = text.split_once('\n').unwrap().1;
+    std::fs::write(&twice, format!("{text}{rows}")).unwrap();
+    let bad = calbench(&lm_args(
+        &ex("ur10.toml"),
+        path_arg(&twice),
+        &["--holdout", "3/10"],
+        &d.join("x"),
+    ));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        msg.contains("setting `--holdout`: ") && msg.contains("0-based rows of the data"),
+        "{msg}"
+    );
+    assert!(!d.join("x").exists());
     // ur-yaml of a robot that is not UR-like is refused.
     let bad = calbench(&lm_args(
         "irb2600",

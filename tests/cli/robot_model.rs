@@ -150,7 +150,6 @@ fn compensate_writes_radians_finely_enough_to_reach_the_pose() {
     let dir = tmp_dir("robot-model-radians");
     let nominal = arm_m_rad(&dir, "nominal", 0.9);
     let identified = arm_m_rad(&dir, "identified", 0.9005);
-    let program = dir.join("program.csv");
     let rows = [
         "-1.123659223,2.670038818,-0.860808331,-0.647600210,-0.116880514,-1.012686749",
         "1.681464214,0.766469109,-0.316981096,1.111998572,1.648769217,2.234910654",
@@ -158,24 +157,7 @@ fn compensate_writes_radians_finely_enough_to_reach_the_pose() {
         "-2.5,1.1,-2.0,-1.5,1.9,-0.7",
         "2.9,-1.2,0.9,2.8,-2.6,0.1",
     ];
-    std::fs::write(
-        &program,
-        format!("q1,q2,q3,q4,q5,q6\n{}\n", rows.join("\n")),
-    )
-    .unwrap();
-    let out = dir.join("corrected.csv");
-    calbench_ok(&[
-        "compensate",
-        "--robot",
-        path_arg(&nominal),
-        "--identified",
-        path_arg(&identified),
-        "--joints",
-        path_arg(&program),
-        "--out",
-        path_arg(&out),
-    ]);
-    let text = std::fs::read_to_string(&out).unwrap();
+    let text = crate::compensate::compensate_rows(&dir, &nominal, &identified, &rows);
     for line in text.lines().skip(1) {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells[8], "ok", "{line}");

@@ -165,3 +165,45 @@ fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
         "{e}"
     )
 }
+
+/// A task whose mapping reads millimetres as metres is refused as physically implausible,
+/// and the refusal names the way past it as `identify`'s option: `task` takes none.
+#[test]
+fn an_implausible_entry_names_the_option_as_identify_s() {
+    let d = tmp_dir("cli-task-implausible");
+    let mapping = std::fs::read_to_string(root().join("tasks/barrett-wam.mapping.toml"))
+        .unwrap()
+        .replace("unit = \"mm\"", "unit = \"m\"");
+    std::fs::write(d.join("metres.mapping.toml"), mapping).unwrap();
+    let data = format!(
+        "calibration = \"{}\"\nvalidation = \"{}\"",
+        wam_file(GRID).display(),
+        wam_file(RANDOM).display()
+    );
+    let file = wam_task(&d, &data);
+    let text = std::fs::read_to_string(&file).unwrap().replace(
+        &root()
+            .join("tasks/barrett-wam.mapping.toml")
+            .display()
+            .to_string(),
+        &d.join("metres.mapping.toml").display().to_string(),
+    );
+    std::fs::write(&file, text).unwrap();
+    let out = d.join("out");
+    let o = calbench(&[
+        "task",
+        file.to_str().unwrap(),
+        "--method",
+        "lm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{msg}");
+    assert!(msg.contains("cannot be physically right"), "{msg}");
+    assert!(
+        msg.contains("or pass identify's --allow-implausible to write it"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}

@@ -1,7 +1,7 @@
 //! What an entry of a task compares and on which rows: the candidate models (the command
 //! line's, or the task's own `[models]`, chosen by repeated K-fold cross-validation on the
-//! calibration rows alone), and the check that no validation row repeats a calibration row
-//! (docs/formats.md § 9.1).
+//! calibration rows alone); the check that no validation row repeats a calibration row is
+//! [`Measurements::shared_rows`] (docs/formats.md § 9.1).
 
 use super::Task;
 use crate::calibrate::cv::{choose_model_repeated, Model, RepeatedChoice};
@@ -9,25 +9,6 @@ use crate::calibrate::request::IdentifyRequest;
 use crate::error::{Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::Measurements;
-
-/// The pairs (calibration row, validation row) of `cal` and `val` that hold the same
-/// measurement: the same joint values, measured point and orientation, to the bit. In
-/// validation-row order.
-pub fn shared_rows(cal: &Measurements, val: &Measurements) -> Vec<(usize, usize)> {
-    let key = |m: &Measurements, i: usize| -> Vec<u64> {
-        let mut k: Vec<u64> = m.qs[i].iter().map(|v| v.to_bits()).collect();
-        k.extend(m.points[i].iter().map(|v| v.to_bits()));
-        if let Some(q) = &m.quats {
-            k.extend(q[i].iter().map(|v| v.to_bits()));
-        }
-        k
-    };
-    let seen: std::collections::HashMap<Vec<u64>, usize> =
-        (0..cal.len()).rev().map(|i| (key(cal, i), i)).collect();
-    (0..val.len())
-        .filter_map(|v| seen.get(&key(val, v)).map(|&c| (c, v)))
-        .collect()
-}
 
 /// The candidate models of an entry, where they come from, and the repeated choice among
 /// them when the task fixes them.

@@ -12,7 +12,7 @@ pub mod sha256;
 pub mod socket;
 pub mod split;
 
-pub use entry::{shared_rows, unconverged_warning, EntryModels};
+pub use entry::{unconverged_warning, EntryModels};
 pub use head::TaskHead;
 pub use record::{TaskRecord, TASK_FILE};
 
@@ -389,7 +389,7 @@ impl Task {
                     super::cv::subset(&all, &split.calibration),
                     super::cv::subset(&all, &split.validation),
                 );
-                let shared = shared_rows(&cal, &val);
+                let shared = cal.shared_rows(&val);
                 if !shared.is_empty() {
                     let rows: Vec<(usize, usize)> = shared
                         .iter()
@@ -407,7 +407,7 @@ impl Task {
                     self.read(calibration, robot)?,
                     self.read(validation, robot)?,
                 );
-                let shared = shared_rows(&cal, &val);
+                let shared = cal.shared_rows(&val);
                 if !shared.is_empty() {
                     return Err(self.overlap(&shared, calibration, validation));
                 }
@@ -419,27 +419,17 @@ impl Task {
     /// The refusal of a task whose calibration and validation share the measurements `rows`
     /// (each a calibration row of `cal` and a validation row of `val`, 0-based data rows).
     fn overlap(&self, rows: &[(usize, usize)], cal: &Path, val: &Path) -> Error {
-        let shown: Vec<String> = rows
-            .iter()
-            .take(5)
-            .map(|(c, v)| format!("calibration row {c} = validation row {v}"))
-            .collect();
-        let more = if rows.len() > shown.len() {
-            format!(", and {} more", rows.len() - shown.len())
-        } else {
-            String::new()
-        };
         Error::file(
             &self.head.path,
             "data",
             format!(
                 "{} validation row(s) repeat a calibration row (the same joint values and \
-                 measured point; 0-based data rows of {} and {}): {}{more}; a validation row \
-                 must not calibrate",
+                 measured point; 0-based data rows of {} and {}): {}; a validation row must \
+                 not calibrate",
                 rows.len(),
                 cal.display(),
                 val.display(),
-                shown.join(", ")
+                crate::measurement::shared_rows_named(rows)
             ),
         )
     }

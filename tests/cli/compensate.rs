@@ -1,0 +1,145 @@
+//! `calbench compensate` on robots its other tests do not use, run as a user runs it
+//! (docs/formats.md § 2.8): an arm of five joints reaches each row's position, checked by
+//! `calbench fk` of both robots; another robot given as the identified one is refused.
+
+use std::path::Path;
+
+use crate::common::{calbench, calbench_ok, path_arg, read, refused, tmp_dir};
+
+/// A five-joint arm (DH, mm, deg), `a2` of its second joint and θ of its third as given.
+fn arm5(a2: f64, theta3: f64) -> String {
+    let joint = |alpha: f64, a: f64, d: f64, theta: f64, limit: f64| {
+        format!(
+            "[[joints]]\ntype = \"revolute\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
+             theta = {theta:?}\nlimits = [{:?}, {limit:?}]\n\n",
+            -limit
+        )
+    };
+    format!(
+        "name = \"arm5\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n\n\
+         {}{}{}{}{}[tool]\nxyz = [0.0, 0.0, 80.0]\nrpy = [0.0, 0.0, 0.0]\n",
+        joint(-90.0, 50.0, 300.0, 0.0, 170.0),
+        joint(0.0, a2, 0.0, -90.0, 100.0),
+        joint(0.0, 350.0, 0.0, theta3, 120.0),
+        joint(-90.0, 0.0, 0.0, 90.0, 120.0),
+        joint(0.0, 0.0, 120.0, 0.0, 180.0),
+    )
+}
+
+/// The tool position `calbench fk` prints for `robot` at the joints `q` (a CSV row).
+fn position(robot: &Path, q: &str) -> Vec<f64> {
+    let o = calbench_ok(&["fk", "--robot", path_arg(robot), "--q", q]);
+    let text = String::from_utf8_lossy(&o.stdout).to_string();
+    let line = text
+        .lines()
+        .find_map(|l| l.strip_prefix("position (mm): "))
+        .unwrap_or_else(|| panic!("{text}"));
+    line.split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect()
+}
+
+/// `calbench compensate` of the program `rows` (joint values, the nominal robot's units) for
+/// the robots `nominal` and `identified`, in `dir`: the corrected program's text.
+pub(crate) fn compensate_rows(
+    dir: &Path,
+    nominal: &Path,
+    identified: &Path,
+    rows: &[&str],
+) -> String {
+    let n = rows[0].split(',').count();
+    let header: Vec<String> = (1..=n).map(|j| format!("q{j}")).collect();
+    let program = dir.join("program.csv");
+    std::fs::write(
+        &program,
+        format!("{}\n{}\n", header.join(","), rows.join("\n")),
+    )
+    .unwrap();
+    let out = dir.join("corrected.csv");
+    calbench_ok(&[
+        "compensate",
+        "--robot",
+        path_arg(nominal),
+        "--identified",
+        path_arg(identified),
+        "--joints",
+        path_arg(&program),
+        "--out",
+        path_arg(&out),
+    ]);
+    read(&out)
+}
+
+/// Five joints cannot take the whole pose a changed model asks for: the corrected commands
+/// put the identified arm's tool point where the nominal arm's was (every row `ok`), where
+/// solving for the whole pose had left each row `failed`, millimetres off.
+#[test]
+fn an_arm_of_five_joints_reaches_each_row_s_position() {
+    let d = tmp_dir("cli-compensate-arm5");
+    let (nominal, identified) = (d.join("arm5.toml"), d.join("arm5-id.toml"));
+    std::fs::write(&nominal, arm5(400.0, 0.0)).unwrap();
+    std::fs::write(&identified, arm5(400.8, 0.3)).unwrap();
+    let rows = [
+        "10.0,20.0,-30.0,40.0,50.0",
+        "-60.0,-45.0,15.0,-80.0,120.0",
+        "120.0,70.0,-100.0,20.0,-170.0",
+    ];
+    let text = compensate_rows(&d, &nominal, &identified, &rows);
+    let written: Vec<&str> = text.lines().skip(1).collect();
+    assert_eq!(written.len(), rows.len(), "{text}");
+    for (row, line) in rows.iter().zip(written) {
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(cells[7], "ok", "{line}");
+        let q = cells[..5].join(",");
+        let (want, got) = (position(&nominal, row), position(&identified, &q));
+        let miss: f64 = want
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        // fk prints its positions to 1e-4 mm; the arm moved by about 0.8 mm.
+        assert!(miss < 2e-4, "{row} -> {q}: {miss} mm");
+        assert!(
+            position(&nominal, &q) != want,
+            "{row}: the command did not change"
+        );
+    }
+}
+
+/// Another robot given as the identified one (a built-in robot's name for the result) is
+/// refused naming `--identified` and the moves, and nothing is written; under
+/// `--allow-implausible` the program is corrected with a warning.
+#[test]
+fn another_robot_is_no_calibration_of_the_nominal_one() {
+    let d = tmp_dir("cli-compensate-other");
+    let nominal = d.join("arm5.toml");
+    std::fs::write(&nominal, arm5(400.0, 0.0)).unwrap();
+    let other = d.join("other.toml");
+    std::fs::write(&other, arm5(700.0, 0.0)).unwrap();
+    std::fs::write(d.join("program.csv"), "q1,q2,q3,q4,q5\n10,20,-30,40,50\n").unwrap();
+    let (program, out) = (d.join("program.csv"), d.join("corrected.csv"));
+    let args = [
+        "compensate",
+        "--robot",
+        path_arg(&nominal),
+        "--identified",
+        path_arg(&other),
+        "--joints",
+        path_arg(&program),
+        "--out",
+        path_arg(&out),
+    ];
+    let msg = refused(
+        &calbench(&args),
+        &[
+            "--identified",
+            "cannot be a calibration of the nominal robot",
+        ],
+    );
+    assert!(msg.contains("a2 moved by 300.000 mm"), "{msg}");
+    assert!(!out.exists());
+    let o = calbench_ok(&[&args[..], &["--allow-implausible"]].concat());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("warning: "));
+    assert!(out.exists());
+}
