@@ -16,6 +16,7 @@ mod determinable;
 mod determinism;
 mod final_fitness;
 mod fixed_models;
+mod foreign_db;
 mod fuzz;
 mod guard;
 mod guo;
