@@ -10,10 +10,12 @@ use serde_json::{json, Map, Value};
 
 use super::output::{Json, KindFile, MeasurementFile, Output};
 use crate::error::{Error, Opt, Result};
+use crate::measurement::csv::check_coordinate;
 use crate::measurement::kind::{Instrument, Kind};
 use crate::measurement::Measurements;
 use crate::robot::Robot;
 use crate::study::instruments::{InstrumentsScenario, Simulated};
+use crate::study::scenario::RobotRef;
 use crate::study::trial::SimulatedTrial;
 use crate::study::Study;
 
@@ -129,6 +131,17 @@ pub fn instrument_truth(
 pub fn trial_folder(out: &Path, study: &Study, sim: &SimulatedTrial) -> Result<()> {
     let [measurements, validation, truth] = FILES;
     let robot = &study.nominal;
+    let sc = &study.scenario;
+    let named = match &sc.robot {
+        RobotRef::File(p) => p.display().to_string(),
+        RobotRef::Builtin(n) => format!("the built-in robot {n}"),
+    };
+    for (file, m) in [
+        (measurements, &sim.calibration.data),
+        (validation, &sim.validation.data),
+    ] {
+        within_range((sc.path.as_deref(), &named), file, m)?;
+    }
     super::output::folder(
         out,
         &[
@@ -194,7 +207,26 @@ pub fn instrument_folder(
     let nominal = crate::robot::builtin::load_chain(&sc.robot, &chain)?;
     let sim = sc.simulate(&nominal, entry, trial)?;
     let truth = instrument_truth((&sc.head.name, &nominal.name), (entry, trial), &sim);
-    let [_, validation_file, truth_file] = FILES;
+    let [measurements, validation_file, truth_file] = FILES;
+    let scenario = (Some(sc.head.path.as_path()), sc.robot.as_str());
+    if let Some((_, data, _)) = &sim.reading.measured {
+        if sim.layout.instrument.kind() == Kind::Position {
+            let points: Vec<_> = data
+                .values
+                .chunks(3)
+                .map(|c| [c[0], c[1], c[2]].into())
+                .collect();
+            within_range(
+                scenario,
+                measurements,
+                &Measurements {
+                    points,
+                    ..Measurements::default()
+                },
+            )?;
+        }
+    }
+    within_range(scenario, validation_file, &validation(&sim))?;
     super::output::folder(
         out,
         &[
@@ -214,4 +246,30 @@ pub fn instrument_folder(
         ],
     )?;
     Ok((nominal, sim, truth))
+}
+
+/// Refuses the simulated tracker file `file` (`m`, written as § 5.1 lays it out) of the
+/// scenario `(path, robot)` (its file, when it has one, and its robot named) when a point lies
+/// beyond the range a measurement file is read in ([`check_coordinate`]): `identify` would
+/// refuse the file. A robot file whose lengths are written in mm under `length_unit = "m"` is
+/// the usual cause. Checked before the folder is written: nothing is.
+fn within_range((path, robot): (Option<&Path>, &str), file: &str, m: &Measurements) -> Result<()> {
+    for (i, p) in m.points.iter().enumerate() {
+        for (k, v) in [p.x, p.y, p.z].into_iter().enumerate() {
+            let Err(msg) = check_coordinate(v) else {
+                continue;
+            };
+            let msg = format!(
+                "{robot}: the simulated {file} would hold at line {}, column {}: {msg}; are the \
+                 robot's lengths in its length_unit? (nothing was written)",
+                i + 2,
+                ["x", "y", "z"][k]
+            );
+            return Err(match path {
+                Some(path) => Error::file(path, "robot", msg),
+                None => Error::setting("robot", msg),
+            });
+        }
+    }
+    Ok(())
 }

@@ -105,6 +105,80 @@ CREATE INDEX runs_scenario ON runs (scenario, machine);
     "ALTER TABLE runs ADD COLUMN commit_time INTEGER;",
 ];
 
+/// The tables of the database `conn` (SQLite's own left out), by name, as `(table, columns)`
+/// with each column as `name type`.
+fn tables_of(conn: &Connection) -> rusqlite::Result<Vec<(String, Vec<String>)>> {
+    let names: Vec<String> = conn
+        .prepare(
+            "SELECT name FROM sqlite_schema WHERE type = 'table' AND name NOT LIKE 'sqlite_%' \
+             ORDER BY name",
+        )?
+        .query_map([], |r| r.get(0))?
+        .collect::<rusqlite::Result<_>>()?;
+    names
+        .into_iter()
+        .map(|t| {
+            let cols = conn
+                .prepare("SELECT name, type FROM pragma_table_info(?1) ORDER BY cid")?
+                .query_map([&t], |r| {
+                    Ok(format!(
+                        "{} {}",
+                        r.get::<_, String>(0)?,
+                        r.get::<_, String>(1)?
+                    ))
+                })?
+                .collect::<rusqlite::Result<Vec<String>>>()?;
+            Ok((t, cols))
+        })
+        .collect()
+}
+
+/// Why the database `conn`, of schema version `v` (`0..=SCHEMA_VERSION`), is not a calbench
+/// results database, or `None` when it is one (or is empty: a new database). Reads only: the
+/// tables and their columns must be those of calbench's schema `v` (a database of version 0
+/// has no table); tables beside them are allowed in a database of calbench's.
+fn not_calbench(conn: &Connection, v: i64) -> rusqlite::Result<Option<String>> {
+    let have = tables_of(conn)?;
+    let schema = |v: i64| -> rusqlite::Result<Vec<(String, Vec<String>)>> {
+        let mem = Connection::open_in_memory()?;
+        for sql in &MIGRATIONS[..v as usize] {
+            mem.execute_batch(sql)?;
+        }
+        tables_of(&mem)
+    };
+    if v == 0 {
+        if have.is_empty() {
+            return Ok(None);
+        }
+        let ours = schema(SCHEMA_VERSION)?;
+        if let Some((t, _)) = have.iter().find(|(t, _)| ours.iter().any(|(o, _)| o == t)) {
+            return Ok(Some(format!("table `{t}` has another schema")));
+        }
+        let list = have
+            .iter()
+            .map(|(t, _)| format!("`{t}`"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        return Ok(Some(format!(
+            "no calbench schema: user_version 0, and it holds table {list}"
+        )));
+    }
+    for (t, cols) in schema(v)? {
+        match have.iter().find(|(h, _)| *h == t) {
+            None => {
+                return Ok(Some(format!(
+                    "user_version {v}, but no table `{t}` of calbench's schema {v}"
+                )))
+            }
+            Some((_, h)) if *h != cols => {
+                return Ok(Some(format!("table `{t}` has another schema")));
+            }
+            Some(_) => {}
+        }
+    }
+    Ok(None)
+}
+
 /// An open results database.
 pub struct Db {
     conn: Connection,
@@ -206,6 +280,15 @@ impl Db {
                 path,
                 "user_version",
                 format!("{v} is not a schema version"),
+            ));
+        }
+        // Before anything that writes (the journal mode, a migration): another program's
+        // database, or one whose tables are not calbench's, is refused and left unchanged.
+        if let Some(why) = not_calbench(&conn, v).map_err(bad)? {
+            return Err(Error::file(
+                path,
+                "database",
+                format!("not a calbench results database ({why}); nothing was changed"),
             ));
         }
         if !create {

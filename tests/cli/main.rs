@@ -17,6 +17,7 @@ mod determinable;
 mod determinism;
 mod final_fitness;
 mod fixed_models;
+mod foreign_db;
 mod fuzz;
 mod guard;
 mod guo;

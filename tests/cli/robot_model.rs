@@ -1,7 +1,9 @@
 //! A robot file's whole model where a command computes with it (docs/formats.md § 3.1): `fk`
 //! turns a joint by its joint-angle harmonics as `compensate` does, and a study, whose
 //! simulation has no harmonics, gravity basis or compliances of a robot file, refuses such a
-//! file when the scenario is read instead of identifying a model its truth lacks.
+//! file when the scenario is read instead of identifying a model its truth lacks; `simulate`
+//! refuses a robot whose tool points lie beyond the range a measurement file is read in (a
+//! robot in m written as if in mm) rather than write a file `identify` refuses.
 
 use std::f64::consts::{FRAC_PI_2, PI};
 use std::path::{Path, PathBuf};
@@ -283,3 +285,86 @@ fn a_program_compensated_after_a_registration_is_right_up_to_a_rigid_motion() {
         }
     }
 }
+
+/// A robot file in m whose lengths are written in mm (`a = 400.0` under `length_unit = "m"`):
+/// `simulate` refuses it, naming the robot file and the range of a measured coordinate, and
+/// writes no folder, where it wrote a `validation.csv` that `identify` then refused.
+#[test]
+fn simulate_refuses_tool_points_beyond_the_measurement_range() {
+    let dir = tmp_dir("cli-simulate-range");
+    let robot = dir.join("big.toml");
+    std::fs::write(&robot, BIG_IN_METRES).unwrap();
+    let sc = write_scenario(
+        &dir,
+        "sc-big",
+        "name = \"sc-big\"\nseed = 3\ntrials = 3\n[robot]\nfile = \"big.toml\"\n\
+         [errors]\nkind = \"normal\"\nlength_mm = 0.3\nangle_rad = 0.003\n\
+         params = \"identifiable\"\n[tracker]\nmpe_a_um = 0.0\nmpe_b_um_per_m = 0.0\n\
+         [outliers]\ncount = 0\n[calibration]\ncount = 40\nstrategies = [\"random\"]\n\
+         [validation]\ncount = 20\n[[methods]]\nname = \"lm\"\n",
+    );
+    let out = dir.join("s3");
+    let o = calbench(&["simulate", path_arg(&sc), "--out", path_arg(&out)]);
+    let err = refused(
+        &o,
+        &[
+            "big.toml",
+            "within ±1000000 mm (1 km)",
+            "nothing was written",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.trim_end().lines().count() == 1, "{err}");
+    assert!(!out.exists(), "{err}");
+}
+
+/// A five-joint arm whose lengths (mm) are declared in m.
+const BIG_IN_METRES: &str = r#"name = "arm5"
+convention = "dh"
+length_unit = "m"
+angle_unit = "deg"
+
+[[joints]]
+type = "revolute"
+alpha = -90.0
+a = 50.0
+d = 300.0
+theta = 0.0
+limits = [-170.0, 170.0]
+
+[[joints]]
+type = "revolute"
+alpha = 0.0
+a = 400.0
+d = 0.0
+theta = -90.0
+limits = [-100.0, 100.0]
+
+[[joints]]
+type = "revolute"
+alpha = 0.0
+a = 350.0
+d = 0.0
+theta = 0.0
+limits = [-120.0, 120.0]
+
+[[joints]]
+type = "revolute"
+alpha = -90.0
+a = 0.0
+d = 0.0
+theta = 90.0
+limits = [-120.0, 120.0]
+
+[[joints]]
+type = "revolute"
+alpha = 0.0
+a = 0.0
+d = 120.0
+theta = 0.0
+limits = [-180.0, 180.0]
+
+[tool]
+xyz = [0.0, 0.0, 80.0]
+rpy = [0.0, 0.0, 0.0]
+"#;

@@ -323,3 +323,40 @@ fn a_task_without_a_tip_on_a_branched_urdf_is_refused_naming_the_task_key() {
         "{err}"
     );
 }
+
+/// A socket joint file (header-less: each line the robot's joint values) with a cell that is
+/// not a number, or a line of too few values, is refused naming the file, its own line and
+/// its own count, with nothing written.
+#[test]
+fn a_bad_line_of_a_joint_file_is_named_by_its_own_line() {
+    let dir = tmp_dir("cli-socket-task-bad-line");
+    let task = copied_task(&dir, "", "socket_spread_mm", "socket-task");
+    let f = dir.join("front/hole_0.csv");
+    let good = read(&f);
+    let edited = |n: usize, edit: &dyn Fn(&str) -> String| {
+        let lines: Vec<String> = good
+            .lines()
+            .enumerate()
+            .map(|(i, l)| if i + 1 == n { edit(l) } else { l.to_string() })
+            .collect();
+        std::fs::write(&f, lines.join("\n") + "\n").unwrap();
+    };
+    let at = format!(
+        "{}: line 3, column q4: \"abc\" is not a finite number",
+        f.display()
+    );
+    edited(3, &|l| {
+        let mut cells: Vec<&str> = l.split(',').collect();
+        cells[3] = "abc";
+        cells.join(",")
+    });
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(err.contains(&at) && err.lines().count() == 1, "{err}");
+    let at = format!(
+        "{}: line 5: 6 values, expected 7 (the robot's joints)",
+        f.display()
+    );
+    edited(5, &|l| l.rsplit_once(',').unwrap().0.to_string());
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(err.contains(&at) && err.lines().count() == 1, "{err}");
+}

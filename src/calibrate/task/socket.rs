@@ -14,6 +14,7 @@ use serde::Deserialize;
 
 use super::head::{TaskFile, TaskHead};
 pub use super::record::{Placements, SocketFigures, SocketScores};
+use super::socket_file::read_socket_file;
 use super::{Metric, Published, TaskRecord};
 use crate::calibrate::on_kind::KindOutcome;
 use crate::calibrate::pipeline::IdentifyOutcome;
@@ -21,7 +22,7 @@ use crate::calibrate::request::{IdentifyData, IdentifyRequest};
 use crate::error::{read_text, Error, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::kind::{Instrument, KindData};
-use crate::measurement::kind_csv::{read_kind_text, KindFile};
+use crate::measurement::kind_csv::KindFile;
 use crate::numeric::Real;
 use crate::numeric::Vec3;
 use crate::robot::urdf::UrdfChain;
@@ -271,13 +272,9 @@ impl SocketTask {
     }
 
     /// The placement of `files` as one socket file for `robot`: the i-th file's rows are
-    /// socket i + 1 at its distance from socket 1. Each file is read under a header
-    /// calbench adds, so a refusal names the file and its line plus one.
+    /// socket i + 1 at its distance from socket 1. A refusal names the file and its own line
+    /// ([`read_socket_file`]).
     pub fn placement(&self, files: &[PathBuf], robot: &Robot) -> Result<KindFile> {
-        let header: Vec<String> = (1..=robot.dof())
-            .map(|j| format!("q{j}"))
-            .chain(["socket".into(), "socket_distance_mm".into()])
-            .collect();
         let mut out = KindFile {
             qs: Vec::new(),
             data: KindData {
@@ -290,28 +287,12 @@ impl SocketTask {
             files: Vec::new(),
         };
         for (s, f) in files.iter().enumerate() {
-            let raw = read_text(f)?;
-            let mut text = header.join(",") + "\n";
-            for line in raw.lines() {
-                let line = line.trim_end();
-                if !line.is_empty() {
-                    text.push_str(line);
-                    text.push_str(",1,0");
-                }
-                text.push('\n');
-            }
-            let named = PathBuf::from(format!(
-                "{} as socket {} (its line n read as line n + 1, under the header {})",
-                f.display(),
-                s + 1,
-                header.join(",")
-            ));
-            let one = read_kind_text(&named, text, robot)?;
+            let one = read_socket_file(f, robot)?;
+            out.files.push((f.clone(), one.lines.len()));
             out.data.group.extend(std::iter::repeat_n(s, one.qs.len()));
             out.data.values.extend(one.data.values);
             out.qs.extend(one.qs);
-            out.lines.extend(one.lines.iter().map(|l| l - 1));
-            out.files.push((f.clone(), one.lines.len()));
+            out.lines.extend(one.lines);
         }
         out.data.check(out.qs.len())?;
         Ok(out)
