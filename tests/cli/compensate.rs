@@ -7,7 +7,7 @@ use std::path::Path;
 use crate::common::{calbench, calbench_ok, path_arg, read, refused, tmp_dir};
 
 /// A five-joint arm (DH, mm, deg), `a2` of its second joint and θ of its third as given.
-fn arm5(a2: f64, theta3: f64) -> String {
+pub(crate) fn arm5(a2: f64, theta3: f64) -> String {
     let joint = |alpha: f64, a: f64, d: f64, theta: f64, limit: f64| {
         format!(
             "[[joints]]\ntype = \"revolute\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\

@@ -293,7 +293,9 @@ fn a_program_compensated_after_a_registration_is_right_up_to_a_rigid_motion() {
 fn simulate_refuses_tool_points_beyond_the_measurement_range() {
     let dir = tmp_dir("cli-simulate-range");
     let robot = dir.join("big.toml");
-    std::fs::write(&robot, BIG_IN_METRES).unwrap();
+    // A five-joint arm whose lengths (mm) are declared in m.
+    let metres = crate::compensate::arm5(400.0, 0.0).replace("\"mm\"", "\"m\"");
+    std::fs::write(&robot, metres).unwrap();
     let sc = write_scenario(
         &dir,
         "sc-big",
@@ -317,54 +319,3 @@ fn simulate_refuses_tool_points_beyond_the_measurement_range() {
     assert!(err.trim_end().lines().count() == 1, "{err}");
     assert!(!out.exists(), "{err}");
 }
-
-/// A five-joint arm whose lengths (mm) are declared in m.
-const BIG_IN_METRES: &str = r#"name = "arm5"
-convention = "dh"
-length_unit = "m"
-angle_unit = "deg"
-
-[[joints]]
-type = "revolute"
-alpha = -90.0
-a = 50.0
-d = 300.0
-theta = 0.0
-limits = [-170.0, 170.0]
-
-[[joints]]
-type = "revolute"
-alpha = 0.0
-a = 400.0
-d = 0.0
-theta = -90.0
-limits = [-100.0, 100.0]
-
-[[joints]]
-type = "revolute"
-alpha = 0.0
-a = 350.0
-d = 0.0
-theta = 0.0
-limits = [-120.0, 120.0]
-
-[[joints]]
-type = "revolute"
-alpha = -90.0
-a = 0.0
-d = 0.0
-theta = 90.0
-limits = [-120.0, 120.0]
-
-[[joints]]
-type = "revolute"
-alpha = 0.0
-a = 0.0
-d = 120.0
-theta = 0.0
-limits = [-180.0, 180.0]
-
-[tool]
-xyz = [0.0, 0.0, 80.0]
-rpy = [0.0, 0.0, 0.0]
-"#;
