@@ -204,6 +204,24 @@ pub fn cross_validate(
         };
         let kept = fit_and_readmit(on, params.to_vec(), m.candidates, &mut fit, &|_, _| Ok(()))?;
         let c = kept.calibrated;
+        // A fold whose rows do not determine the model scores a robot the data never fixed,
+        // whose figure could still steer a model choice: refused, as `identify` refuses it.
+        if super::verdict::undetermined(&c) {
+            let rows = tr.len() * tr.measure().rows();
+            let ended: &str = c.identified.termination.into();
+            return Err(Error::option(
+                crate::error::Opt::Cv,
+                format!(
+                    "fold {} of {k}: the model `{}` identified on the other folds' {} points \
+                     ({rows} readings for {} parameters) ended {ended}, its parameters not \
+                     determined; take fewer folds, or measure more poses",
+                    f + 1,
+                    m.name,
+                    tr.len(),
+                    kept.params.len()
+                ),
+            ));
+        }
         let after = if m.kernel {
             let k = KernelResidual::fit(robot, &c, &tr)?;
             super::ErrorStats::of(&position_errors(&c, Some(&k), &te)?).rms

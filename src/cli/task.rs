@@ -60,12 +60,15 @@ pub struct TaskArgs {
 }
 
 /// How `task` spells an option the library names: its own (`--method`, `--models`) as the
-/// command line does, and one it does not take as `identify`'s, where it is
+/// command line does, the K-fold choice among the candidate models (`identify`'s `--cv`) as
+/// `--models`, and one it does not take as `identify`'s
 /// (`identify's --allow-implausible`): a task's entry has no way past its checks.
 pub fn spell(opt: calbench::error::Opt, on: bool) -> String {
     use calbench::error::Opt;
     match opt {
         Opt::Method | Opt::Models => super::spell(opt, on),
+        // The folds of the choice among the candidate models (the task's or `--models`).
+        Opt::Cv => super::spell(Opt::Models, on),
         _ => format!("identify's {}", super::spell(opt, on)),
     }
 }

@@ -49,8 +49,9 @@ pub const MIN_SIGMA_MM: Real = 1e-9;
 /// calibration must move the joints.
 pub const MIN_DISTINCT_POSES: usize = 3;
 
-/// Writes `m` as a measurement CSV. Numbers have a fixed format (9 decimals for joint values
-/// and points, 12 for quaternions), so equal measurements give identical bytes.
+/// Writes `m` as a measurement CSV. Numbers have a fixed format (joint values as finely as 9
+/// decimals of a degree or a millimetre, 9 decimals for points, 12 for quaternions), so equal
+/// measurements give identical bytes.
 pub fn write_measurements(
     path: &Path,
     robot: &(impl JointSpace + ?Sized),
@@ -137,8 +138,16 @@ pub(crate) fn joint_header(s: &mut String, dof: usize) {
     s.push_str(&names.join(","));
 }
 
+/// The joint values `q` (internal units) as the file writes them: in the robot's units, each
+/// as finely as 9 decimals of a degree or a millimetre ([`JointSpace::decimals`]: 11 in
+/// radians, 12 in metres), where 9 decimals of a radian held a point of a 1 m arm to 5e-7 mm.
 pub(crate) fn joint_cells(s: &mut String, robot: &(impl JointSpace + ?Sized), q: &[Real]) {
-    let cells: Vec<String> = robot.q_to_user(q).iter().map(|&v| fixed(v, 9)).collect();
+    let cells: Vec<String> = robot
+        .q_to_user(q)
+        .iter()
+        .enumerate()
+        .map(|(j, &v)| fixed(v, robot.decimals(j)))
+        .collect();
     s.push_str(&cells.join(","));
 }
 

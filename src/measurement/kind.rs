@@ -179,21 +179,23 @@ impl Instrument {
                 "measurement.planes",
                 "needs at least one plane, each with an axis x, y or z".into(),
             ),
-            Instrument::Spheres(s) if s.is_empty() || s.iter().any(|r| !length(*r)) => bad(
-                "measurement.radius_mm",
-                format!("needs at least one sphere of radius > 0 and ≤ {MOST} mm"),
-            ),
-            Instrument::Sockets(s)
-                if s.is_empty() || s[0] != 0.0 || s[1..].iter().any(|d| !length(*d)) =>
-            {
-                bad(
-                    "measurement.socket_distance_mm",
-                    format!(
-                        "needs at least one socket; socket 1 at distance 0 from itself, every \
-                         other at a distance > 0 and ≤ {MOST} mm from it"
-                    ),
-                )
+            Instrument::Spheres(s) if s.is_empty() => {
+                bad("measurement.spheres", "needs at least one sphere".into())
             }
+            Instrument::Sockets(s) if s.is_empty() => {
+                bad("measurement.sockets", "needs at least one socket".into())
+            }
+            Instrument::Spheres(s) if s.iter().any(|r| !length(*r)) => bad(
+                "measurement.radius_mm",
+                format!("each sphere of radius > 0 and ≤ {MOST} mm"),
+            ),
+            Instrument::Sockets(s) if s[0] != 0.0 || s[1..].iter().any(|d| !length(*d)) => bad(
+                "measurement.socket_distance_mm",
+                format!(
+                    "socket 1 at distance 0 from itself, every other at a distance > 0 and \
+                     ≤ {MOST} mm from it"
+                ),
+            ),
             _ => Ok(()),
         }
     }

@@ -398,7 +398,10 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     };
     let _ = writeln!(
         s,
-        "Of all {} parameters: rank {}, condition number {}; not identifiable: {}.\n",
+        "Of all {} parameters: rank {}, condition number {}; not identifiable together with \
+         the rest: {} (one choice among the members of each dependent group below: the \
+         identified set above makes its own, tool parameters first, and may keep one of these \
+         and leave out a partner of its group).\n",
         a.identifiable.len() + a.unidentifiable.len(),
         a.rank,
         fmt_num(a.condition_number, 4),

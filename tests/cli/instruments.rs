@@ -177,6 +177,16 @@ fn instruments_study_refuses_bad_settings() {
             STUDY.replace("kind = \"plane\"\n", "kind = \"plane\"\nplanes = 0\n"),
             "planes",
         ),
+        // No sphere and no socket are named by their count's key and line, not by the
+        // radius or distance beside it.
+        (
+            STUDY.replace("kind = \"sphere\"\n", "kind = \"sphere\"\nspheres = 0\n"),
+            "line 33, measurement[3].spheres: needs at least one sphere",
+        ),
+        (
+            socket_study(13.0).replace("sockets = 2", "sockets = 0"),
+            "line 22, measurement[0].sockets: needs at least one socket",
+        ),
     ] {
         let err = refused_run(&dir, "bad.toml", &bad);
         assert!(

@@ -180,6 +180,25 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         "{msg}"
     );
     assert!(!d.join("x").exists());
+    // Folds whose rows cannot determine the model are refused, not scored: 14 rows in two
+    // folds train on 7 points, 21 readings for the 23 parameters.
+    let few = d.join("few.csv");
+    let head: Vec<&str> = text.lines().take(15).collect();
+    std::fs::write(&few, head.join("\n") + "\n").unwrap();
+    let bad = calbench(&lm_args(
+        &ex("ur10.toml"),
+        path_arg(&few),
+        &["--cv", "2"],
+        &d.join("x"),
+    ));
+    let msg = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{msg}");
+    assert!(
+        msg.contains("setting `--cv`: fold 1 of 2: the model `kinematic` identified on")
+            && msg.contains("(21 readings for 23 parameters)"),
+        "{msg}"
+    );
+    assert!(!d.join("x").exists());
     // ur-yaml of a robot that is not UR-like is refused.
     let bad = calbench(&lm_args(
         "irb2600",

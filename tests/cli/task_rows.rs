@@ -166,8 +166,10 @@ fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
     )
 }
 
-/// A task whose mapping reads millimetres as metres is refused as physically implausible,
-/// and the refusal names the way past it as `identify`'s option: `task` takes none.
+/// A task whose mapping reads millimetres as metres is refused: with its one model (no
+/// cross-validation) as physically implausible, the refusal naming the way past it as
+/// `identify`'s option (`task` takes none); with the task's candidate models, by the
+/// cross-validation's fold that the scaled rows leave undetermined, named as `--models`.
 #[test]
 fn an_implausible_entry_names_the_option_as_identify_s() {
     let d = tmp_dir("cli-task-implausible");
@@ -195,6 +197,8 @@ fn an_implausible_entry_names_the_option_as_identify_s() {
         file.to_str().unwrap(),
         "--method",
         "lm",
+        "--models",
+        "kinematic",
         "--out",
         out.to_str().unwrap(),
     ]);
@@ -203,6 +207,20 @@ fn an_implausible_entry_names_the_option_as_identify_s() {
     assert!(msg.contains("cannot be physically right"), "{msg}");
     assert!(
         msg.contains("or pass identify's --allow-implausible to write it"),
+        "{msg}"
+    );
+    assert!(!out.exists());
+    let o = calbench(&[
+        "task",
+        file.to_str().unwrap(),
+        "--method",
+        "lm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        msg.contains("setting `--models`: fold 1 of 5: the model `"),
         "{msg}"
     );
     assert!(!out.exists());

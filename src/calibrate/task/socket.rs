@@ -273,7 +273,7 @@ impl SocketTask {
 
     /// The placement of `files` as one socket file for `robot`: the i-th file's rows are
     /// socket i + 1 at its distance from socket 1. A refusal names the file and its own line
-    /// ([`read_socket_file`]).
+    /// (`read_socket_file`).
     pub fn placement(&self, files: &[PathBuf], robot: &Robot) -> Result<KindFile> {
         let mut out = KindFile {
             qs: Vec::new(),
