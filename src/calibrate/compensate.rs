@@ -29,18 +29,6 @@ pub struct Corrected {
     pub flag: &'static str,
 }
 
-/// The joints (internal units) at which `identified` reaches `target` under a payload of
-/// `payload_kg` (its gravity sag, when the robot has joint compliances), starting from `q0`.
-/// Fails when the robot has compliances but no link masses.
-pub fn solve(
-    identified: &Robot,
-    target: &Frame,
-    q0: &[Real],
-    payload_kg: Real,
-) -> crate::Result<Vec<Real>> {
-    crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, 6)
-}
-
 /// What makes `identified` no calibration of `nominal`, in words (empty when it can be one):
 /// a joint of another kind, or a parameter both robots have moved beyond the bounds of
 /// "Physical plausibility" ([`super::plausibility::moves`]; the gravity basis's deflections
@@ -100,10 +88,16 @@ pub fn compensate_row(
 ) -> crate::Result<Corrected> {
     let target = nominal.fk(q_nominal);
     // An arm of fewer than six joints cannot take the whole pose a changed model asks for
-    // (five joints against six coordinates): it reaches the position.
+    // (five joints against six coordinates): it reaches the position, started from the
+    // joints that come closest to the whole pose, so that its orientation stays near it.
     let rows = if identified.dof() < 6 { 3 } else { 6 };
-    let mut q =
-        crate::robot::ik::solve_pose_rows(identified, &target, q_nominal, payload_kg, rows)?;
+    let reach = |q0: &[Real], rows| {
+        crate::robot::ik::solve_pose_rows(identified, &target, q0, payload_kg, rows)
+    };
+    let mut q = reach(q_nominal, 6)?;
+    if rows == 3 {
+        q = reach(&q, 3)?;
+    }
     wrap_into_limits(identified, &mut q, Some(q_nominal));
     let q = round(&q);
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
