@@ -97,15 +97,6 @@ pub fn fit_and_readmit(
         let x = second.identified.x[params.len() + i];
         (x - a.estimate).abs() <= DETERMINABLE_SIGMAS * a.sigma
     });
-    eprintln!(
-        "DBG {:?} {:?} {:?}",
-        second.identified.termination,
-        second.identified.x.as_slice().last(),
-        admitted
-            .iter()
-            .map(|a| (a.1.estimate, a.1.sigma))
-            .collect::<Vec<_>>()
-    );
     let settled = (second.identified.termination == Termination::Converged
         || first.identified.termination != Termination::Converged)
         && near_estimates;
