@@ -73,10 +73,10 @@ fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -
 
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
 /// reaches the pose `nominal` gives at `q_nominal` (its position, for an arm of fewer than six
-/// joints: its orientation residual is written, not judged by the flag), a revolute joint outside its limits turned
-/// by whole turns to the value nearest the row's where that is within them
-/// (`wrap_into_limits`). `round` maps joint values to what is
-/// written (the output's decimals), so the residuals are those of the written command. The
+/// joints: its orientation residual is written, not judged by the flag), a revolute joint
+/// outside its limits turned by whole turns to the value nearest the row's where that is
+/// within them (`wrap_into_limits`). `round` maps joint values to what is written (the
+/// output's decimals), so the residuals are those of the written command. The
 /// identified robot carries `payload_kg` at the tool (its sag, when it has compliances; the
 /// nominal robot of a locked controller knows no sag).
 pub fn compensate_row(

@@ -152,21 +152,16 @@ impl IdentifyRequest {
         if let Some(v) = &val {
             let mut shared = d.shared_rows(v);
             if !shared.is_empty() {
-                let (opt, of) = match &held_out {
+                let (opt, numbered) = match &held_out {
                     Some((cal, held)) => {
                         shared
                             .iter_mut()
                             .for_each(|(c, v)| (*c, *v) = (cal[*c], held[*v]));
-                        (Opt::Holdout, "of the data")
+                        (Opt::Holdout, "rows of the data")
                     }
-                    None => (Opt::Validate, "of each file"),
+                    None => (Opt::Validate, "rows of each file"),
                 };
-                let why = format!(
-                    "{} validation row(s) repeat a calibration row (the same joint values and \
-                     measured point; 0-based rows {of}): {}; a validation row must not calibrate",
-                    shared.len(),
-                    crate::measurement::shared_rows_named(&shared)
-                );
+                let why = crate::measurement::shared_rows_refusal(&shared, numbered);
                 return Err(Error::option(opt, why));
             }
         }

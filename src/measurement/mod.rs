@@ -76,20 +76,25 @@ pub struct Measurements {
     pub payload_kg: Option<Vec<Real>>,
 }
 
-/// Pairs of shared rows ([`Measurements::shared_rows`]) in words, the first five named:
-/// `calibration row 3 = validation row 0, …, and 7 more`.
-pub fn shared_rows_named(rows: &[(usize, usize)]) -> String {
+/// The refusal's words for validation rows that repeat calibration rows: `rows`, the pairs
+/// of [`Measurements::shared_rows`] numbered as `numbered` says (`rows of the data`), the
+/// first five named.
+pub fn shared_rows_refusal(rows: &[(usize, usize)], numbered: &str) -> String {
     let shown: Vec<String> = rows
         .iter()
         .take(5)
         .map(|(c, v)| format!("calibration row {c} = validation row {v}"))
         .collect();
-    let more = rows.len() - shown.len();
-    if more > 0 {
-        format!("{}, and {more} more", shown.join(", "))
-    } else {
+    let more = match rows.len() - shown.len() {
+        0 => String::new(),
+        more => format!(", and {more} more"),
+    };
+    format!(
+        "{} validation row(s) repeat a calibration row (the same joint values and measured \
+         point; 0-based {numbered}): {}{more}; a validation row must not calibrate",
+        rows.len(),
         shown.join(", ")
-    }
+    )
 }
 
 impl Measurements {

@@ -121,44 +121,31 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     ));
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("LAST/EVERY"));
+    // `identify` of `data` with `extra` refused with exit status 1 and nothing written: its
+    // stderr.
+    let refusal = |data: &str, extra: &[&str]| {
+        let bad = calbench(&lm_args(&ex("ur10.toml"), data, extra, &d.join("x")));
+        let msg = String::from_utf8_lossy(&bad.stderr).to_string();
+        assert_eq!(bad.status.code(), Some(1), "{msg}");
+        assert!(!d.join("x").exists());
+        msg
+    };
     // A rule that holds out no row of the data (a block longer than the file) is refused
     // naming the option, not as data without points.
-    let bad = calbench(&lm_args(
-        &ex("ur10.toml"),
-        &data,
-        &["--holdout", "1/1000"],
-        &d.join("x"),
-    ));
-    let msg = String::from_utf8_lossy(&bad.stderr);
-    assert_eq!(bad.status.code(), Some(1), "{msg}");
+    let msg = refusal(&data, &["--holdout", "1/1000"]);
     assert!(
         msg.contains("setting `--holdout`: `1/1000` holds out no row"),
         "{msg}"
     );
-    assert!(!d.join("x").exists());
     // A seed of folds without folds would change nothing, and is refused.
-    let bad = calbench(&lm_args(
-        &ex("ur10.toml"),
-        &data,
-        &["--cv-seed", "3"],
-        &d.join("x"),
-    ));
-    let msg = String::from_utf8_lossy(&bad.stderr);
-    assert_eq!(bad.status.code(), Some(1), "{msg}");
+    let msg = refusal(&data, &["--cv-seed", "3"]);
     assert!(
         msg.contains("setting `--cv-seed`: seeds the folds of --cv or --models"),
         "{msg}"
     );
-    assert!(!d.join("x").exists());
     // Validation rows that repeat calibration rows are refused, named by their rows: the
     // data given as their own validation, and a file holding its rows twice held out from.
-    let bad = calbench(&lm_args(
-        &ex("ur10.toml"),
-        &data,
-        &["--validate", &data],
-        &d.join("x"),
-    ));
-    let msg = String::from_utf8_lossy(&bad.stderr);
+    let msg = refusal(&data, &["--validate", &data]);
     assert!(
         msg.contains("setting `--validate`: 199 validation row(s) repeat a calibration row")
             && msg.contains("calibration row 0 = validation row 0, "),
@@ -168,37 +155,22 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     let twice = d.join("twice.csv");
     let rows = text.split_once('\n').unwrap().1;
     std::fs::write(&twice, format!("{text}{rows}")).unwrap();
-    let bad = calbench(&lm_args(
-        &ex("ur10.toml"),
-        path_arg(&twice),
-        &["--holdout", "3/10"],
-        &d.join("x"),
-    ));
-    let msg = String::from_utf8_lossy(&bad.stderr);
+    let msg = refusal(path_arg(&twice), &["--holdout", "3/10"]);
     assert!(
         msg.contains("setting `--holdout`: ") && msg.contains("0-based rows of the data"),
         "{msg}"
     );
-    assert!(!d.join("x").exists());
     // Folds whose rows cannot determine the model are refused, not scored: 14 rows in two
     // folds train on 7 points, 21 readings for the 23 parameters.
     let few = d.join("few.csv");
     let head: Vec<&str> = text.lines().take(15).collect();
     std::fs::write(&few, head.join("\n") + "\n").unwrap();
-    let bad = calbench(&lm_args(
-        &ex("ur10.toml"),
-        path_arg(&few),
-        &["--cv", "2"],
-        &d.join("x"),
-    ));
-    let msg = String::from_utf8_lossy(&bad.stderr);
-    assert_eq!(bad.status.code(), Some(1), "{msg}");
+    let msg = refusal(path_arg(&few), &["--cv", "2"]);
     assert!(
         msg.contains("setting `--cv`: fold 1 of 2: the model `kinematic` identified on")
             && msg.contains("(21 readings for 23 parameters)"),
         "{msg}"
     );
-    assert!(!d.join("x").exists());
     // ur-yaml of a robot that is not UR-like is refused.
     let bad = calbench(&lm_args(
         "irb2600",

@@ -420,18 +420,11 @@ impl Task {
     /// The refusal of a task whose calibration and validation share the measurements `rows`
     /// (each a calibration row of `cal` and a validation row of `val`, 0-based data rows).
     fn overlap(&self, rows: &[(usize, usize)], cal: &Path, val: &Path) -> Error {
+        let numbered = format!("data rows of {} and {}", cal.display(), val.display());
         Error::file(
             &self.head.path,
             "data",
-            format!(
-                "{} validation row(s) repeat a calibration row (the same joint values and \
-                 measured point; 0-based data rows of {} and {}): {}; a validation row must \
-                 not calibrate",
-                rows.len(),
-                cal.display(),
-                val.display(),
-                crate::measurement::shared_rows_named(rows)
-            ),
+            crate::measurement::shared_rows_refusal(rows, &numbered),
         )
     }
 
