@@ -440,15 +440,23 @@ pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
 
 /// A serde error of a TOML value read from a table rather than a text (so without a line):
 /// its message, and the dotted key it is about, which toml writes on a line of its own after
-/// the message (`in `tracker.mpe_a_um``). A refusal shows the key as its place.
+/// the message (`in `tracker.mpe_a_um``). A refusal shows the key as its place. toml's
+/// message for a name given as another type (`kind = 3`), which speaks of serde's "unit
+/// variant", is said as the file should read.
 pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
     let text = e.to_string();
-    let text = text.trim_end();
+    let text = text.trim_end().replace(
+        NOT_A_NAME,
+        "must be a name in double quotes (a TOML string)",
+    );
     match text.rsplit_once("\nin `") {
         Some((msg, key)) => (msg.to_string(), Some(key.trim_end_matches('`').to_string())),
         None => (text.to_string(), None),
     }
 }
+
+/// toml's message (0.9) when a value of any other type stands where a named choice is read.
+const NOT_A_NAME: &str = "invalid type: unit variant, expected string only";
 
 /// A number as a refusal shows it: as `{}` writes it (`0.5`, `-180`), but in exponent form
 /// (`1e300`, `-2.5e-9`) where that would be a long run of digits (magnitudes from 1e16 on, or

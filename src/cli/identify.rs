@@ -319,7 +319,12 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         let table = exports::dh_csv(&o.nominal, &c.robot, &o.params, &sigma);
         extra.push(("dh-table.csv", table));
     }
-    let urdf = compensated_urdf(&args.robot, &args.chain.chain(), &args.export, &c.robot)?;
+    let urdf = compensated_urdf(
+        &args.robot,
+        &args.chain.chain(),
+        &args.export,
+        &o.compensated(),
+    )?;
     if let Some(k) = &o.kernel {
         extra.push((KERNEL_FILE, k.to_json()?));
         let mut carried = vec!["robot.toml"];

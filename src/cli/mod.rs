@@ -15,11 +15,12 @@ use calbench::report::{entry_table, MadeFolders};
 use calbench::study::RunResult;
 
 /// `println!` that ignores a closed stdout (`calbench … | head`): results are on disk before
-/// anything is printed, and a reader that stops early is not an error.
+/// anything is printed, and a reader that stops early is not an error. Control characters are
+/// escaped ([`escaped`]): a robot's or a parameter's name read from a file may hold any.
 macro_rules! out {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = writeln!(std::io::stdout(), $($arg)*);
+        let _ = writeln!(std::io::stdout(), "{}", $crate::cli::escaped(&format!($($arg)*)));
     }};
 }
 
@@ -27,7 +28,7 @@ macro_rules! out {
 macro_rules! out_raw {
     ($($arg:tt)*) => {{
         use std::io::Write as _;
-        let _ = write!(std::io::stdout(), $($arg)*);
+        let _ = write!(std::io::stdout(), "{}", $crate::cli::escaped(&format!($($arg)*)));
     }};
 }
 
@@ -79,15 +80,8 @@ const MAX_LINE: usize = 2000;
 pub fn for_terminal(text: &str) -> String {
     text.split('\n')
         .map(|line| {
-            let mut out = String::new();
             let mut chars = line.chars();
-            for c in chars.by_ref().take(MAX_LINE) {
-                match c {
-                    '\t' => out.push(c),
-                    c if c.is_control() => out.extend(c.escape_unicode()),
-                    c => out.push(c),
-                }
-            }
+            let mut out = escaped(&chars.by_ref().take(MAX_LINE).collect::<String>());
             let more = chars.count();
             if more > 0 {
                 out.push_str(&format!("… ({more} characters more)"));
@@ -96,6 +90,20 @@ pub fn for_terminal(text: &str) -> String {
         })
         .collect::<Vec<_>>()
         .join("\n")
+}
+
+/// `text` with its control characters other than line breaks and tabs escaped (`\u{1b}`):
+/// what stdout is given (results are not cut, unlike an error's lines in [`for_terminal`]).
+pub fn escaped(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '\t' | '\n' => out.push(c),
+            c if c.is_control() => out.extend(c.escape_unicode()),
+            c => out.push(c),
+        }
+    }
+    out
 }
 
 /// A value parser for a library enum named by its `strum` derive: it accepts exactly the

@@ -215,7 +215,9 @@ pub fn separate(
     for (name, mut idx) in offending {
         let mut tag = String::new();
         loop {
-            if idx.len() <= 1 {
+            // A block of one parameter is over the threshold only when its column is zero
+            // (the parameter moves no point): it is removed, leaving an empty block.
+            if idx.is_empty() {
                 break;
             }
             let mut best: Option<((Real, Real), usize)> = None;
@@ -363,5 +365,27 @@ mod tests {
         let sv = one.singular_values();
         assert!(sv.min() <= 1e-12 * sv.max(), "{sv}");
         assert_eq!(analyse(&robot, &params, &qs, Measure::Position).rank, 3);
+    }
+
+    /// A parameter that moves no point is separated even alone in its block: on a one-joint
+    /// robot whose tool point lies on the frame's origin after the joint, α1 (a twist about
+    /// that frame's x axis) moves nothing, and its block's GCN is infinite.
+    #[test]
+    fn a_parameter_alone_in_its_block_that_moves_nothing_is_removed() {
+        let text = "name = \"one\"\nconvention = \"dh\"\nlength_unit = \"mm\"\n\
+                    angle_unit = \"deg\"\n[[joints]]\ntype = \"revolute\"\nalpha = 0.0\n\
+                    a = 300.0\nd = 200.0\ntheta = 0.0\nlimits = [-170.0, 170.0]\n";
+        let robot = crate::robot::parse_robot_file(text, std::path::Path::new("one.toml")).unwrap();
+        let params = robot.joint_params();
+        let qs = uniform_joint_poses(&robot, 20, &mut from_seed(7));
+        let sep = separate(&robot, &params, &qs, Measure::Position, 1e2);
+        assert_eq!(sep.removed, vec![Param::Alpha(0)], "{:?}", sep.table);
+        assert!(sep.ill_conditioned.contains(&Param::Alpha(0)));
+        let alpha = sep.blocks.iter().find(|b| b.name == "alpha").unwrap();
+        assert!(alpha.gcn_before.is_infinite() || alpha.gcn_before.is_nan());
+        assert_eq!(alpha.gcn_after, 0.0);
+        assert!(sep.gcn_separated() <= 1e2, "{:?}", sep.table);
+        // The one-parameter blocks of the rest keep their parameter (GCN 1/m).
+        assert_eq!(sep.kept, vec![Param::Theta(0), Param::D(0), Param::A(0)]);
     }
 }

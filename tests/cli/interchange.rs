@@ -348,7 +348,7 @@ fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot
     let urdf = first.join("robot.urdf");
     let text = read(&urdf);
     assert!(
-        text.contains("<robot name=\"R&amp;D &lt;arm&gt; &quot;x&quot;\">"),
+        text.contains("<robot name=\"R&amp;D &lt;arm&gt; &quot;x&quot;-calibrated\">"),
         "{text}"
     );
     // The URDF is the identified robot: the same tool point at any joint values (the URDF in
@@ -367,7 +367,7 @@ fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot
         }
     }
     // Identified again on the same data from the exported URDF: the robot read back is the
-    // one identified (nothing left to correct), and its name is the name.
+    // one identified (nothing left to correct), named as robot.toml names it.
     let measurements = read(&sim.join("measurements.csv"));
     let rad: String = measurements
         .lines()
@@ -401,7 +401,7 @@ fn a_urdf_export_of_a_robot_with_markup_in_its_name_reads_back_as_the_same_robot
         crate::common::load_json(&first.join("identified.json")),
         crate::common::load_json(&second.join("identified.json")),
     );
-    assert_eq!(b["robot"], name);
+    assert_eq!(b["robot"], format!("{name}-calibrated"));
     let (ra, rb) = (
         a["rms_residual_mm"].as_f64().unwrap(),
         b["rms_residual_mm"].as_f64().unwrap(),
@@ -432,7 +432,7 @@ fn a_hostile_robot_name_gives_no_markup_in_the_urdf() {
     assert_eq!(text.matches("<link ").count(), 10, "{text}");
     assert_eq!(text.matches("<robot ").count(), 1, "{text}");
     let back = calbench::robot::urdf::UrdfRobot::load(&out.join("robot.urdf")).unwrap();
-    assert_eq!(back.robot.name, name);
+    assert_eq!(back.robot.name, format!("{name}-calibrated"));
 }
 
 #[test]

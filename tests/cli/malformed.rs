@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{bin, calbench, path_arg, read, refused, root, tmp_dir};
+use crate::common::{bin, calbench, calbench_ok, path_arg, read, refused, root, tmp_dir};
 
 /// A study name of `.` or `..` would put the run beside or above `results/` (its default
 /// folder is `results/<name>/`): refused with the file, line and key, in a Monte-Carlo and a
@@ -320,6 +320,33 @@ fn names_from_a_file_reach_the_terminal_escaped_and_cut() {
     );
 }
 
+/// A robot's name reaches stdout with its control characters escaped too: a robot file may
+/// hold any name (it reads back as itself), where `identifiability` printed an ESC raw.
+#[test]
+fn a_robot_name_reaches_stdout_escaped() {
+    let d = tmp_dir("cli-malformed-robot-name");
+    let text = String::from_utf8(calbench_ok(&["robots", "irb2600"]).stdout).unwrap();
+    let robot = d.join("esc.toml");
+    std::fs::write(
+        &robot,
+        text.replace("name = \"irb2600\"", "name = \"a\\u001b[31mRED\\u0007\""),
+    )
+    .unwrap();
+    let o = calbench_ok(&[
+        "identifiability",
+        "--robot",
+        path_arg(&robot),
+        "--poses",
+        "20",
+    ]);
+    let out = String::from_utf8(o.stdout).unwrap();
+    assert!(
+        out.contains("robot a\\u{1b}[31mRED\\u{7} (20 poses"),
+        "{out}"
+    );
+    assert!(!out.contains('\u{1b}') && !out.contains('\u{7}'), "{out}");
+}
+
 /// Lengths beyond a robot file's range, which made every trial fail and `simulate` write
 /// `inf`, are refused naming the file and the key.
 #[test]
@@ -416,6 +443,14 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
             "stiffness",
             "compliance.stiffness_nm_per_rad",
             "joint 1: stiffness must be",
+        ),
+        (
+            // toml spoke of a serde "unit variant".
+            "kind",
+            ci.replace("kind = \"paper\"", "kind = 3"),
+            "kind = 3",
+            "errors.kind",
+            "must be a name in double quotes (a TOML string)",
         ),
         (
             "lambda",
