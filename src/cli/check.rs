@@ -62,11 +62,16 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
     Ok(())
 }
 
-/// `--tolerance X`, of `check` and `compare`.
+/// `--tolerance X`, of `check`, `compare` and `history`.
 #[derive(clap::Args)]
 pub struct Tolerance {
     /// Allowed relative worsening of each metric (0.05 = 5 %).
-    #[arg(long, default_value_t = 0.05, allow_negative_numbers = true)]
+    #[arg(
+        long,
+        default_value_t = 0.05,
+        value_name = "X",
+        allow_negative_numbers = true
+    )]
     tolerance: Real,
 }
 

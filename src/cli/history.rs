@@ -6,7 +6,6 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
-use calbench::numeric::Real;
 use calbench::report::html::history::{csv, page, Point, Series};
 use calbench::results::history;
 use calbench::results::history::{Flag, Regressed};
@@ -36,29 +35,23 @@ pub struct HistoryArgs {
     /// the version before it; exit non-zero when there is one.
     #[arg(long)]
     pub regressions: bool,
-    /// Allowed relative worsening, as for `check`.
-    #[arg(
-        long,
-        default_value_t = 0.05,
-        value_name = "X",
-        allow_negative_numbers = true
-    )]
-    pub tolerance: Real,
+    #[command(flatten)]
+    pub tolerance: super::check::Tolerance,
 }
 
 /// Writes the pages and prints the regressions (non-zero exit with `--regressions` when
 /// there is one).
 pub fn run(args: &HistoryArgs) -> Result<()> {
-    calbench::analysis::regression::checked_tolerance(args.tolerance, "--tolerance")?;
+    let tolerance = args.tolerance.checked()?;
     if let Some(out) = &args.out {
         super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
     }
     let db = args.db.open(false)?;
     let scenario = args.scenario.as_deref();
-    let (regressed, compared) = history::regressions(&db, scenario, args.tolerance)?;
+    let (regressed, compared) = history::regressions(&db, scenario, tolerance)?;
     let lines: Vec<String> = regressed.iter().map(line).collect();
     if let Some(out) = &args.out {
-        let points = history::points(&db, scenario, &args.metric, args.tolerance)?;
+        let points = history::points(&db, scenario, &args.metric, tolerance)?;
         let html = page(&points, &series(&points, &regressed));
         let table = csv(&points)?;
         let page = super::write_page(out, &OUTPUTS, &html, &table)?;
