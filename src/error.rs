@@ -2,6 +2,9 @@
 
 use std::path::PathBuf;
 
+mod lines;
+pub use lines::{json_key_line, line_of, toml_key_line};
+
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an
 /// error: it is reported as a termination reason.
 #[derive(Debug, thiserror::Error)]
@@ -231,15 +234,32 @@ impl Error {
     /// is written (`line 12, claims[0].relation`) when its place names a key that `text`
     /// writes and no line yet; any other error as it is.
     pub fn at_key_line(self, text: &str) -> Self {
+        self.at_line_of(|key| toml_key_line(text, key))
+    }
+
+    /// [`Error::at_key_line`] of a JSON file (`line 4, results`, `line 12, per_trial.format`:
+    /// [`json_key_line`]), the file it names read again for the message; an error of a file
+    /// that cannot be read as it is.
+    pub fn at_json_key_line(self) -> Self {
+        let text = match &self {
+            Error::File { file, .. } => std::fs::read_to_string(file).ok(),
+            _ => None,
+        };
+        match text {
+            Some(text) => self.at_line_of(|key| json_key_line(&text, key)),
+            None => self,
+        }
+    }
+
+    /// A refusal of a file whose place names a key and no line yet, with the line `line`
+    /// gives that key; any other error as it is.
+    fn at_line_of(self, line: impl Fn(&str) -> Option<usize>) -> Self {
         match self {
-            Error::File { file, place, msg } if !place.starts_with("line ") => {
-                let line = toml_key_line(text, &place);
-                Error::File {
-                    file,
-                    place: at_line(line, place),
-                    msg,
-                }
-            }
+            Error::File { file, place, msg } if !place.starts_with("line ") => Error::File {
+                file,
+                place: at_line(line(&place), place),
+                msg,
+            },
             e => e,
         }
     }
@@ -388,54 +408,6 @@ pub fn read_text(path: &std::path::Path) -> Result<String> {
         );
         Error::file(path, format!("line {line}"), msg)
     })
-}
-
-/// The 1-based line of the byte offset `at` in `text`.
-pub fn line_of(text: &str, at: usize) -> usize {
-    let end = at.min(text.len());
-    text.as_bytes()[..end]
-        .iter()
-        .filter(|&&b| b == b'\n')
-        .count()
-        + 1
-}
-
-/// The 1-based line where the dotted `key` is written in the TOML `text`: a path of table
-/// keys and array indices such as `calibration.region`, `joints[1].a` or `methods[0].k1`.
-/// The line of the key itself when the path ends in a key, of the element when it ends in an
-/// index (`joints[1]`: the line of that `[[joints]]`). `None` when the text does not parse or
-/// does not write the key (a default, a value set on the command line).
-pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
-    use toml::de::{DeTable, DeValue};
-    let doc = DeTable::parse(text).ok()?;
-    let mut table = doc.get_ref();
-    let mut value: Option<&toml::Spanned<DeValue>> = None;
-    let mut span = None;
-    for part in key.split('.') {
-        let (name, indices) = match part.find('[') {
-            Some(i) => (&part[..i], &part[i..]),
-            None => (part, ""),
-        };
-        if let Some(v) = value {
-            table = match v.get_ref() {
-                DeValue::Table(t) => t,
-                _ => return None,
-            };
-        }
-        let (k, v) = table.get_key_value(name)?;
-        span = Some(k.span());
-        let mut v = v;
-        for index in indices.split('[').skip(1) {
-            let i: usize = index.strip_suffix(']')?.parse().ok()?;
-            v = match v.get_ref() {
-                DeValue::Array(a) => a.get(i)?,
-                _ => return None,
-            };
-            span = Some(v.span());
-        }
-        value = Some(v);
-    }
-    span.map(|s| line_of(text, s.start))
 }
 
 /// A serde error of a TOML value read from a table rather than a text (so without a line):

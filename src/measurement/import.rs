@@ -21,7 +21,7 @@ use serde::Deserialize;
 
 use super::csv::{check_coordinate, check_sigma};
 use super::rows::{at_line, Dialect, Rows};
-use crate::error::{read_text, shown, toml_key_line, Error, Result};
+use crate::error::{read_text, shown, Error, Result};
 use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
 
 /// A mapping file: how to read one tracker export.
@@ -171,6 +171,8 @@ pub struct SigmaColumns {
 /// A checked mapping: an ASCII separator, a decimal mark, resolved conventions, no column
 /// named twice.
 struct Plan {
+    /// The mapping file's text, for the lines of refused keys.
+    text: String,
     /// The field separator, one ASCII byte.
     sep: u8,
     decimal: char,
@@ -206,7 +208,7 @@ impl Mapping {
         let text = read_text(path)?;
         let m: Mapping = toml::from_str(&text)
             .map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
-        let plan = m.plan(path, &text)?;
+        let plan = m.plan(path, text)?;
         Ok((m, plan))
     }
 
@@ -240,11 +242,8 @@ impl Mapping {
             .collect()
     }
 
-    fn plan(&self, path: &Path, text: &str) -> Result<Plan> {
-        let bad = |key: &str, msg: String| {
-            let place = crate::error::at_line(toml_key_line(text, key), key);
-            Error::file(path, place, msg)
-        };
+    fn plan(&self, path: &Path, text: String) -> Result<Plan> {
+        let bad = |key: &str, msg: String| Error::toml_file(path, &text, key, key, msg);
         let named = self.named_columns();
         for (k, (key, name)) in named.iter().enumerate() {
             if let Some((first, _)) = named[..k].iter().find(|(_, n)| n == name) {
@@ -305,7 +304,7 @@ impl Mapping {
         let orientation = self
             .orientation
             .as_ref()
-            .map(|o| o.plan(path, text))
+            .map(|o| o.plan(path, &text))
             .transpose()?;
         let sigma = match &self.sigma {
             Some(s) if s.position.is_empty() => {
@@ -315,6 +314,7 @@ impl Mapping {
             None => None,
         };
         Ok(Plan {
+            text,
             sep,
             decimal,
             joints: (self.joints.columns.clone(), from / to),
@@ -330,8 +330,7 @@ impl OrientationColumns {
     fn plan(&self, path: &Path, text: &str) -> Result<Orient> {
         let bad = |key: &str, msg: &str| {
             let key = format!("orientation.{key}");
-            let place = crate::error::at_line(toml_key_line(text, &key), &key);
-            Error::file(path, place, msg)
+            Error::toml_file(path, text, &key, &key, msg)
         };
         let n = self.columns.len();
         match self.kind {
@@ -432,7 +431,8 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
     let mut t = Rows::open_with(raw, "of column names", dialect)?;
     let header = t.names.clone();
     let header_line = t.header_line;
-    let find = |key: &str, name: &str| -> Result<usize> {
+    // A column is refused at the line of its entry (`joints.columns[2]`), named by its key.
+    let find = |key: &str, entry: usize, name: &str| -> Result<usize> {
         let mut at = header.iter().enumerate().filter(|(_, h)| *h == name);
         match (at.next(), at.next()) {
             (Some((i, _)), None) => Ok(i),
@@ -447,8 +447,10 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                     k + 1
                 ),
             )),
-            (None, _) => Err(Error::file(
+            (None, _) => Err(Error::toml_file(
                 mapping_path,
+                &plan.text,
+                &format!("{key}[{entry}]"),
                 key,
                 format!(
                     "column \"{name}\" is not in the header of {} ({})",
@@ -459,7 +461,11 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
         }
     };
     let cols = |key: &str, names: &[String]| -> Result<Vec<usize>> {
-        names.iter().map(|n| find(key, n)).collect()
+        names
+            .iter()
+            .enumerate()
+            .map(|(i, n)| find(key, i, n))
+            .collect()
     };
     let jc = cols("joints.columns", &plan.joints.0)?;
     let pc = cols("position.columns", &plan.position.0)?;

@@ -14,7 +14,7 @@ use crate::study::instruments::InstrumentsScenario;
 use crate::study::instruments_table::{INSTRUMENTS_KEYS, INSTRUMENTS_STUDY, MIGRATE};
 use crate::study::registration_study::RegistrationScenario;
 use crate::study::scenario::Scenario;
-use crate::study::whole::Head;
+use crate::study::whole::{self, Head};
 
 /// The sections that tell a study's kind (every other key is read by the kind's own parser).
 #[derive(Deserialize)]
@@ -70,10 +70,10 @@ impl AnyScenario {
             )),
             (Some(_), false, None) => RegistrationScenario::from_table(table, shown)
                 .map(AnyScenario::Registration)
-                .map_err(|e| e.at_key_line(text)),
+                .map_err(|e| whole::at_key_line(e, text)),
             (None, true, _) => InstrumentsScenario::from_table(table, shown)
                 .map(AnyScenario::Instruments)
-                .map_err(|e| e.at_key_line(text)),
+                .map_err(|e| whole::at_key_line(e, text)),
             // [[measurement]] tables without the study's table: a file of the layout before,
             // refused naming the first of the study's keys it has at the top level.
             (None, false, Some(_)) => {

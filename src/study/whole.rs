@@ -120,6 +120,23 @@ pub fn parse<T: serde::de::DeserializeOwned>(
     Ok((head, rest))
 }
 
+/// `e`, a refusal of a study's scenario file whose text is `text`, with the line of the key
+/// its place names ([`Error::at_key_line`]); [`parse`]'s refusal of a key the study does not
+/// take at the top level (place `scenario`, "unknown field \`methods\`") with that key's line.
+pub fn at_key_line(e: Error, text: &str) -> Error {
+    match e {
+        Error::File { file, place, msg } if place == "scenario" => {
+            let said = msg.to_string();
+            let key = said
+                .strip_prefix("unknown field `")
+                .and_then(|m| m.split_once('`'));
+            let line = key.and_then(|(k, _)| crate::error::toml_key_line(text, k));
+            Error::file(file, crate::error::at_line(line, place), msg)
+        }
+        e => e.at_key_line(text),
+    }
+}
+
 /// The longest study name, in bytes: a folder name may have 255 on the common file systems,
 /// and the run's checkpoint and temporary folders beside `results/<name>/` add to it.
 pub const MAX_NAME_BYTES: usize = 200;

@@ -255,6 +255,12 @@ fn a_set_of_fewer_readings_than_parameters_is_refused_when_read() {
         "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,10,10,10,10,10\n",
     )
     .unwrap();
+    // The sweep's refused value is named at its line (the last of the file).
+    let swept = format!(
+        "s.toml: line {}, sweep (calibration.count = 5): calibration.count: 5 poses give 15 \
+         readings",
+        study.lines().count() + 3
+    );
     let cases = [
         (
             study.replace("count = 25", "count = 7"),
@@ -275,7 +281,7 @@ fn a_set_of_fewer_readings_than_parameters_is_refused_when_read() {
         ),
         (
             format!("{study}[sweep]\nkey = \"calibration.count\"\nvalues = [25, 5]\n"),
-            "s.toml: sweep (calibration.count = 5): calibration.count: 5 poses give 15 readings",
+            &swept,
         ),
     ];
     for (i, (text, want)) in cases.into_iter().enumerate() {

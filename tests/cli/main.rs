@@ -30,6 +30,7 @@ mod kinds;
 mod layers;
 mod live_run;
 mod malformed;
+mod malformed_lines;
 mod memory;
 mod noise;
 mod outputs;

@@ -83,7 +83,7 @@ fn a_name_longer_than_a_folder_name_is_refused() {
 }
 
 /// `scenarios/ci-guard.toml` with `edit` applied, written to `dir/NAME.toml`; the path.
-fn ci_guard_with(dir: &Path, name: &str, edit: impl Fn(String) -> String) -> PathBuf {
+pub(crate) fn ci_guard_with(dir: &Path, name: &str, edit: impl Fn(String) -> String) -> PathBuf {
     let text = std::fs::read_to_string(root().join("scenarios/ci-guard.toml")).unwrap();
     let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, edit(text)).unwrap();
@@ -382,7 +382,7 @@ fn lengths_beyond_a_robot_files_range_are_refused() {
 }
 
 /// The 1-based line of `text` that starts with `start`.
-fn line_of(text: &str, start: &str) -> usize {
+pub(crate) fn line_of(text: &str, start: &str) -> usize {
     let at = text.lines().position(|l| l.starts_with(start));
     at.unwrap_or_else(|| panic!("no line starts with {start}")) + 1
 }

@@ -5,7 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{calbench, calbench_ok, load_json, root, tmp_dir};
+use crate::common::{calbench, calbench_ok, load_json, read, root, tmp_dir};
+use crate::malformed::line_of;
 use crate::task::{task, task_lm};
 
 /// The WAM task file rewritten into `dir` with absolute paths, its `[data]` table replaced by
@@ -97,8 +98,11 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
     );
     assert!(!d.join("out").exists(), "nothing is written");
     let e = String::from_utf8_lossy(&o.stderr);
+    // At the line of the key that gives the validation rows.
+    let at =
+        |t: &Path, key: &str| format!("barrett-wam.toml: line {}, data: ", line_of(&read(t), key));
     assert!(
-        e.contains("barrett-wam.toml: data")
+        e.contains(&at(&t, "validation = "))
             && e.contains("216 validation row(s) repeat a calibration row")
             && e.contains("calibration row 0 = validation row 0")
             && e.contains("and 211 more"),
@@ -123,7 +127,8 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
     assert!(!o.status.success(), "a repeated row across the split ran");
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        e.contains("1 validation row(s) repeat a calibration row")
+        e.contains(&at(&t, "split = "))
+            && e.contains("1 validation row(s) repeat a calibration row")
             && e.contains("calibration row 5 = validation row 216"),
         "{e}"
     );

@@ -138,12 +138,16 @@ pub fn baseline_document(summary: &Summary, trials: &Trials) -> Result<Value> {
 
 /// The per-trial values behind the summary `doc` read from `path`: its own [`KEY`] (a
 /// baseline file), else the `trials.csv` beside it (a run folder); `None` when it has
-/// neither.
+/// neither. A refusal of its own names the line of the key refused (`line 80,
+/// per_trial.format`).
 pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
     if let Some(v) = doc.get(KEY) {
-        let p: PerTrial =
-            serde_json::from_value(v.clone()).map_err(|e| Error::file(path, KEY, e.to_string()))?;
-        return p.to_trials(path).map(Some);
+        let p = serde_json::from_value::<PerTrial>(v.clone())
+            .map_err(|e| Error::file(path, KEY, e.to_string()));
+        return p
+            .and_then(|p| p.to_trials(path))
+            .map(Some)
+            .map_err(Error::at_json_key_line);
     }
     let csv = path.parent().unwrap_or(Path::new(".")).join("trials.csv");
     if csv.is_file() {

@@ -25,7 +25,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use crate::analysis::summary::Summary;
-use crate::error::{at_line, read_text, Error, Result};
+use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
 use crate::study::stats::Entry;
 pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
@@ -269,18 +269,21 @@ pub fn entry_names(summary: &Summary) -> Vec<String> {
 }
 
 /// Reads the JSON `value` of the file `path` as a calbench summary ([`Summary`], by serde),
-/// refusing, naming the file and the key, what is not one: not an object with a `scenario`
-/// name and `results`, a list of entries each naming its `method`; a figure of the wrong
-/// type; a later format.
+/// refusing, naming the file and the key (with its line where the file writes it), what is
+/// not one: not an object with a `scenario` name and `results`, a list of entries each naming
+/// its `method`; a figure of the wrong type; a later format.
 pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
     let what = "so this is not a calbench summary (summary.json from `calbench run`: an object \
                 with a `scenario` name and `results`, a list of entries with `method`, `poses` \
                 and metrics)";
-    let s = Summary::from_value(value, path).map_err(|e| match e {
-        Error::File { file, place, msg } if place != "format" => {
-            Error::file(file, place, format!("{msg}, {what}"))
+    let s = Summary::from_value(value, path).map_err(|e| {
+        match e {
+            Error::File { file, place, msg } if place != "format" => {
+                Error::file(file, place, format!("{msg}, {what}"))
+            }
+            e => e,
         }
-        e => e,
+        .at_json_key_line()
     })?;
     // Entries are paired by their key: a second one of a key would be paired or passed over
     // by where it stands.
@@ -295,13 +298,13 @@ pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
             ),
             None => continue,
         };
-        return Err(Error::file(path, format!("results[{i}]"), why));
+        return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
     Ok(s)
 }
 
 /// Refuses a summary and a baseline (each read by [`check_summary`]) that cannot be compared,
-/// naming the file and the key (with its line for `results`): they are summaries of
+/// naming the file, the key and its line: they are summaries of
 /// different scenarios (their `scenario` names differ), or they share no
 /// metric — no baseline entry has a compared metric that the summary's entry of the same
 /// method, poses and swept value also has — so a comparison would guard nothing. Which file
@@ -324,7 +327,8 @@ pub fn comparable(
                  from the same scenario",
                 summary_path.display()
             ),
-        ));
+        )
+        .at_json_key_line());
     }
     let (new, old) = (&summary.results, &baseline.results);
     let listed = |v: Vec<String>| {
@@ -335,11 +339,10 @@ pub fn comparable(
         }
     };
     let keys = |v: &[Entry]| listed(v.iter().map(Entry::key).collect());
-    let results = |path: &Path| at_line(json_key_line(path, "results"), "results");
+    let results = |path: &Path, msg: String| Error::file(path, "results", msg).at_json_key_line();
     if old.is_empty() {
-        return Err(Error::file(
+        return Err(results(
             baseline_path,
-            results(baseline_path),
             format!(
                 "is empty: the baseline has no entries, so it shares no metric with {}: \
                  nothing to guard",
@@ -348,9 +351,8 @@ pub fn comparable(
         ));
     }
     if new.is_empty() {
-        return Err(Error::file(
+        return Err(results(
             summary_path,
-            results(summary_path),
             format!(
                 "is empty: the summary has no entries, so it shares no metric with {}: every \
                  baseline entry is missing ({})",
@@ -364,9 +366,8 @@ pub fn comparable(
         .filter(|b| new.iter().any(|e| e.key() == b.key()))
         .collect();
     if matched.is_empty() {
-        return Err(Error::file(
+        return Err(results(
             summary_path,
-            results(summary_path),
             format!(
                 "shares no metric with {}: it has none of the baseline's entries (missing: {}; \
                  here: {}; entries are matched by method, poses and sweep value)",
@@ -398,9 +399,8 @@ pub fn comparable(
             })
             .collect();
         if !wanted.is_empty() {
-            return Err(Error::file(
+            return Err(results(
                 summary_path,
-                results(summary_path),
                 format!(
                     "shares no metric with {}: its entries lack every compared metric the \
                      baseline has (missing: {})",
@@ -409,9 +409,8 @@ pub fn comparable(
                 ),
             ));
         }
-        return Err(Error::file(
+        return Err(results(
             baseline_path,
-            results(baseline_path),
             format!(
                 "shares no metric with {}: nothing to compare (baseline entries: {}; \
                  entries are matched by method, poses and sweep value)",
@@ -421,46 +420,6 @@ pub fn comparable(
         ));
     }
     Ok(())
-}
-
-/// The 1-based line where the top-level `key` of the JSON file at `path` is written (the
-/// file is read again, for a message); `None` when it cannot be read or has no such key.
-fn json_key_line(path: &Path, key: &str) -> Option<usize> {
-    let text = std::fs::read_to_string(path).ok()?;
-    let (mut depth, mut line) = (0usize, 1usize);
-    let mut chars = text.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '\n' => line += 1,
-            '{' | '[' => depth += 1,
-            '}' | ']' => depth = depth.saturating_sub(1),
-            '"' => {
-                let (start, mut word, mut escaped) = (line, String::new(), false);
-                for c in chars.by_ref() {
-                    match c {
-                        _ if escaped => escaped = false,
-                        '\\' => escaped = true,
-                        '"' => break,
-                        '\n' => line += 1,
-                        _ => {}
-                    }
-                    if !escaped && c != '\\' {
-                        word.push(c);
-                    }
-                }
-                while chars.peek().is_some_and(|c| c.is_whitespace()) {
-                    if chars.next() == Some('\n') {
-                        line += 1;
-                    }
-                }
-                if depth == 1 && chars.peek() == Some(&':') && word == key {
-                    return Some(start);
-                }
-            }
-            _ => {}
-        }
-    }
-    None
 }
 
 /// Whether entry `e` carries the figure `path`: a listed parameter's RMSE, or a finite
@@ -658,8 +617,8 @@ mod tests {
         let path = dir.join("s.json");
         let text = "{\n  \"a\": {\"results\": 1},\n  \"b\": \"results\",\n  \"results\": []\n}\n";
         std::fs::write(&path, text).unwrap();
-        assert_eq!(json_key_line(&path, "results"), Some(4));
-        assert_eq!(json_key_line(&path, "scenario"), None);
+        assert_eq!(crate::error::json_key_line(text, "results"), Some(4));
+        assert_eq!(crate::error::json_key_line(text, "scenario"), None);
         let mut v: Value = serde_json::from_str(text).unwrap();
         v["scenario"] = json!("s");
         let e = comparable(&typed(v), &path, &summary(90.0, 0.1), Path::new("b"))

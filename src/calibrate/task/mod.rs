@@ -418,11 +418,15 @@ impl Task {
     }
 
     /// The refusal of a task whose calibration and validation share the measurements `rows`
-    /// (each a calibration row of `cal` and a validation row of `val`, 0-based data rows).
+    /// (each a calibration row of `cal` and a validation row of `val`, 0-based data rows), at
+    /// the line of the key that gives the validation rows (`data.validation`, `data.split`).
     fn overlap(&self, rows: &[(usize, usize)], cal: &Path, val: &Path) -> Error {
         let numbered = format!("data rows of {} and {}", cal.display(), val.display());
-        Error::file(
+        let [_, (validation, _)] = self.data.files();
+        Error::toml_file(
             &self.head.path,
+            &self.head.text,
+            validation,
             "data",
             crate::measurement::shared_rows_refusal(rows, &numbered),
         )

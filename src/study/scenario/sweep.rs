@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use serde::Deserialize;
 
 use super::{Scenario, Source};
-use crate::error::{Error, Result};
+use crate::error::{at_line, Error, Result};
 use crate::identify::MethodSpec;
 
 #[derive(Deserialize)]
@@ -55,6 +55,8 @@ pub struct Sweep {
     pub axes: Vec<SweepAxis>,
     /// The axes' lists are paired (`zip = true` on the first axis) instead of crossed.
     pub zip: bool,
+    /// Written as `[[sweep]]` (axis `i` is `sweep[i]` in the file), not as `[sweep]`.
+    grid: bool,
 }
 
 impl Sweep {
@@ -85,6 +87,50 @@ impl Sweep {
                 .collect();
         }
         points
+    }
+
+    /// The dotted key of `what` (`key`, `values[1]`) of axis `i` as the file writes it:
+    /// `sweep.values[1]`, or `sweep[0].values[1]` in a `[[sweep]]` grid.
+    fn key_of(&self, i: usize, what: &str) -> String {
+        match self.grid {
+            true => format!("sweep[{i}].{what}"),
+            false => format!("sweep.{what}"),
+        }
+    }
+
+    /// The key of the file at whose line a refusal of the sweep point `point` is named,
+    /// `refused` being the key the scenario refused once the point's values were set: where
+    /// `refused` is (or lies in) an axis's key, that axis's value; where it holds one (a
+    /// section that does not take the key, or the scenario refusing a section the sweep
+    /// adds), that axis's `key`; else the one axis's value, or the sweep itself for a grid.
+    fn refused_at(&self, point: &[toml::Value], refused: &str, table: &toml::Table) -> String {
+        let within =
+            |a: &str, b: &str| a.strip_prefix(b).is_some_and(|r| r.starts_with(['.', '[']));
+        let value = |i: usize| {
+            let a = &self.axes[i];
+            let zipped = |k: usize| self.axes.iter().zip(point).all(|(a, v)| a.values[k] == *v);
+            let at = match self.zip {
+                true => (0..a.values.len()).find(|&k| zipped(k)),
+                false => a.values.iter().position(|v| *v == point[i]),
+            };
+            at.map_or_else(
+                || self.key_of(i, "values"),
+                |k| self.key_of(i, &format!("values[{k}]")),
+            )
+        };
+        let keys = || self.axes.iter().map(|a| a.key.as_str()).enumerate();
+        let added = |k: &str| !table.contains_key(k.split('.').next().unwrap_or(k));
+        if let Some((i, _)) = keys().find(|(_, k)| refused == *k || within(refused, k)) {
+            value(i)
+        } else if let Some((i, _)) =
+            keys().find(|(_, k)| within(k, refused) || (refused == "scenario" && added(k)))
+        {
+            self.key_of(i, "key")
+        } else if self.axes.len() == 1 {
+            value(0)
+        } else {
+            "sweep".into()
+        }
     }
 
     /// The number of independent dimensions the results span: 1 for one axis or zipped
@@ -179,7 +225,9 @@ impl Scenario {
     }
 
     /// The study of one sweep point (one value per axis): the scenario with each swept key
-    /// set and no sweep, checked again. A refusal names the file and the swept key.
+    /// set and no sweep, checked again. A refusal names the file, the swept key and the line
+    /// of the sweep's value refused, or of the axis's `key` where the scenario does not take
+    /// the key (docs/formats.md `[sweep]`).
     pub fn plan(&self, point: &[toml::Value]) -> Result<Scenario> {
         let shown = self
             .path
@@ -190,10 +238,16 @@ impl Scenario {
         };
         let mut table = self.table.clone();
         table.remove("sweep");
+        let line = |key: String| self.source.as_ref().and_then(|s| s.line(&key));
         let mut keys = Vec::new();
-        for (axis, v) in sw.axes.iter().zip(point) {
+        for (i, (axis, v)) in sw.axes.iter().zip(point).enumerate() {
             table = self.edited(table, &axis.key, v.clone()).map_err(|e| {
-                Error::file(&shown, format!("sweep key \"{}\"", axis.key), e.to_string())
+                let place = format!("sweep key \"{}\"", axis.key);
+                Error::file(
+                    &shown,
+                    at_line(line(sw.key_of(i, "key")), place),
+                    e.to_string(),
+                )
             })?;
             keys.push(format!("{} = {v}", axis.key));
         }
@@ -207,11 +261,22 @@ impl Scenario {
         Scenario::from_table(table, self.path.as_deref(), source)
             .map(|s| s.keeping_external(self))
             .map_err(|e| {
-                let msg = match e {
-                    Error::File { place, msg, .. } => format!("{place}: {msg}"),
-                    other => other.to_string(),
+                let (msg, refused) = match e {
+                    Error::File { place, msg, .. } => {
+                        let key = place
+                            .split_once(", ")
+                            .filter(|(l, _)| l.starts_with("line "));
+                        let key = key.map_or(place.clone(), |(_, k)| k.to_string());
+                        (format!("{place}: {msg}"), key)
+                    }
+                    other => (other.to_string(), String::new()),
                 };
-                Error::file(&shown, format!("sweep ({})", keys.join(", ")), msg)
+                let at = line(sw.refused_at(point, &refused, &self.table));
+                Error::file(
+                    &shown,
+                    at_line(at, format!("sweep ({})", keys.join(", "))),
+                    msg,
+                )
             })
     }
 
@@ -371,5 +436,5 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
             values: s.values,
         });
     }
-    Ok(Sweep { axes, zip })
+    Ok(Sweep { axes, zip, grid })
 }

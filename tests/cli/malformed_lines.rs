@@ -1,0 +1,194 @@
+//! Refusals the malformed-file corpus found naming the file and the key but not the line,
+//! each now `FILE: line N, KEY: MESSAGE` as every other refusal of a file (docs/formats.md
+//! § 8.1), checked whole, run the way a user runs calbench: from the folder of the files.
+
+use std::path::Path;
+
+use crate::common::{bin, read, refused, root, tmp_dir};
+use crate::malformed::{ci_guard_with, line_of};
+use crate::task::task;
+
+/// The whole message (`error: …` and its newline) of `calbench ARGS` run in `dir`, which
+/// must refuse.
+fn refusal(dir: &Path, args: &[&str]) -> String {
+    let o = bin().current_dir(dir).args(args).output().unwrap();
+    refused(&o, &[])
+}
+
+/// A mapped column the export's header lacks is refused at the line of its entry in the
+/// mapping file (the line after the key where the list goes on), naming the key.
+#[test]
+fn a_mapped_column_not_in_the_header_is_refused_at_its_line() {
+    let d = tmp_dir("cli-lines-import");
+    std::fs::write(d.join("raw.csv"), "q1,q2,q3,x,y,z\n0,0,0,1,2,3\n").unwrap();
+    let mapping = "[joints]\ncolumns = [\"q1\", \"q2\",\n           \"JOINT\"]\nunit = \"deg\"\n\n\
+                   [position]\ncolumns = [\"x\", \"y\", \"POINT\"]\nunit = \"mm\"\n";
+    for (joint, point, want) in [
+        ("q3x", "z", "line 3, joints.columns: column \"q3x\""),
+        ("q3", "zz", "line 7, position.columns: column \"zz\""),
+    ] {
+        let text = mapping.replace("JOINT", joint).replace("POINT", point);
+        std::fs::write(d.join("map.toml"), text).unwrap();
+        let args = [
+            "import",
+            "raw.csv",
+            "--mapping",
+            "map.toml",
+            "--out",
+            "out.csv",
+        ];
+        assert_eq!(
+            refusal(&d, &args),
+            format!(
+                "error: map.toml: {want} is not in the header of raw.csv (q1, q2, q3, x, y, z)\n"
+            )
+        );
+        assert!(!d.join("out.csv").exists());
+    }
+}
+
+/// A sweep point refused once its values are set is named at the line of the value refused,
+/// in a `[sweep]` or a `[[sweep]]` grid (its element's own line in a list of several), and a
+/// swept key the scenario does not take at the line of the axis's `key`.
+#[test]
+fn a_refused_sweep_point_is_named_at_the_line_of_its_value() {
+    let d = tmp_dir("cli-lines-sweep");
+    let count = "outliers.count: COUNT outliers but only 40 calibration poses";
+    let grid = "[[sweep]]\nkey = \"outliers.magnitude_mm\"\nvalues = [[0.2, 0.4]]\n\n[[sweep]]\n\
+                key = \"outliers.count\"\nvalues = [\n  1,\n  80,\n]";
+    let cases = [
+        (
+            "key",
+            "[sweep]\nkey = \"outliers.cont\"\nvalues = [1, 2]".to_string(),
+            "key = ",
+            "sweep (outliers.cont = 1): outliers: unknown field `cont`, expected one of \
+             `count`, `fraction`, `magnitude_mm`"
+                .to_string(),
+        ),
+        (
+            "value",
+            "[sweep]\nkey = \"outliers.count\"\nvalues = [1, 99]".to_string(),
+            "values = ",
+            format!(
+                "sweep (outliers.count = 99): {}",
+                count.replace("COUNT", "99")
+            ),
+        ),
+        (
+            "grid",
+            grid.to_string(),
+            "  80,",
+            format!(
+                "sweep (outliers.magnitude_mm = [0.2, 0.4], outliers.count = 80): {}",
+                count.replace("COUNT", "80")
+            ),
+        ),
+    ];
+    for (name, sweep, at, want) in cases {
+        let sc = ci_guard_with(&d, name, |t| format!("{t}\n{sweep}\n"));
+        let line = line_of(&read(&sc), at);
+        let file = format!("{name}.toml");
+        assert_eq!(
+            refusal(&d, &["run", &file, "--trials", "2", "--out", name]),
+            format!("error: {file}: line {line}, {want}\n")
+        );
+        assert!(!d.join(name).exists());
+    }
+}
+
+/// A registration study (and an instruments study) holding `[[methods]]`, which only a
+/// Monte-Carlo study reads, is refused at the line of that `[[methods]]`.
+#[test]
+fn methods_in_a_study_that_runs_whole_are_refused_at_their_line() {
+    let d = tmp_dir("cli-lines-whole");
+    for (file, takes) in [
+        (
+            "ban-fig3.toml",
+            "expected `registration_study` or `claims` (a scenario with [registration_study] \
+             takes only name, description, seed, trials, that table and [[claims]])",
+        ),
+        (
+            "instruments.toml",
+            "expected one of `robot`, `poses`, `strategies`, `candidates`, `validation`, \
+             `errors` (a scenario with [instruments_study] takes name, description, seed, \
+             trials, robot, [errors], [instruments_study] and its [[measurement]] tables)",
+        ),
+    ] {
+        let text = read(&root().join("scenarios").join(file));
+        let text = format!("{text}\n[[methods]]\nname = \"ls\"\n");
+        std::fs::write(d.join(file), &text).unwrap();
+        let line = line_of(&text, "[[methods]]");
+        assert_eq!(
+            refusal(&d, &["run", file, "--trials", "2", "--out", "o"]),
+            format!("error: {file}: line {line}, scenario: unknown field `methods`, {takes}\n")
+        );
+        assert!(!d.join("o").exists());
+    }
+}
+
+/// A task whose validation file is its calibration file is refused at the line of the key
+/// that gives the validation rows, `data` named as before.
+#[test]
+fn a_task_whose_validation_rows_are_its_calibration_rows_is_refused_at_the_line() {
+    let d = tmp_dir("cli-lines-task");
+    let data = root().join("data/ipa-ur10-series-d/measurements_iso_cubes.csv");
+    let mapping = root().join("tasks/ipa-ur10.mapping.toml");
+    let text = read(&task("ipa-ur10-series-d"))
+        .replace("\"../", &format!("\"{}/", root().display()))
+        .replace(
+            "\"ipa-ur10.mapping.toml\"",
+            &format!("\"{}\"", mapping.display()),
+        );
+    let (head, _) = text.split_once("[data]").unwrap();
+    let data = data.display();
+    let text = format!("{head}[data]\ncalibration = \"{data}\"\nvalidation = \"{data}\"\n");
+    std::fs::write(d.join("t.toml"), &text).unwrap();
+    let pairs: Vec<String> = (0..5)
+        .map(|i| format!("calibration row {i} = validation row {i}"))
+        .collect();
+    assert_eq!(
+        refusal(&d, &["task", "t.toml", "--method", "ls", "--out", "o"]),
+        format!(
+            "error: t.toml: line {}, data: 632 validation row(s) repeat a calibration row (the \
+             same joint values and measured point; 0-based data rows of {data} and {data}): \
+             {}, and 627 more; a validation row must not calibrate\n",
+            line_of(&text, "validation = "),
+            pairs.join(", ")
+        )
+    );
+    assert!(!d.join("o").exists());
+}
+
+/// `check` refuses a summary whose `results` is of the wrong type, and a baseline whose
+/// per-trial values are of another format, at the line of the key.
+#[test]
+fn check_refuses_a_summary_or_baseline_key_at_its_line() {
+    let d = tmp_dir("cli-lines-check");
+    let base = read(&root().join("results/baselines/ci-guard.json"));
+    std::fs::write(d.join("base.json"), &base).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&base).unwrap();
+    v["results"] = serde_json::json!("x");
+    let summary = serde_json::to_string_pretty(&v).unwrap();
+    std::fs::create_dir(d.join("r")).unwrap();
+    std::fs::write(d.join("r/summary.json"), &summary).unwrap();
+    assert_eq!(
+        refusal(&d, &["check", "r/summary.json", "--baseline", "base.json"]),
+        format!(
+            "error: r/summary.json: line {}, results: not a calbench summary.json: invalid type: \
+             string \"x\", expected a sequence, so this is not a calbench summary (summary.json \
+             from `calbench run`: an object with a `scenario` name and `results`, a list of \
+             entries with `method`, `poses` and metrics)\n",
+            line_of(&summary, "  \"results\": ")
+        )
+    );
+    let bl = base.replace("calbench-per-trial-1", "calbench-per-trial-9");
+    std::fs::write(d.join("bl.json"), &bl).unwrap();
+    assert_eq!(
+        refusal(&d, &["check", "base.json", "--baseline", "bl.json"]),
+        format!(
+            "error: bl.json: line {}, per_trial.format: is \"calbench-per-trial-9\", not \
+             \"calbench-per-trial-1\"\n",
+            line_of(&bl, "    \"format\": \"calbench-per-trial-9\"")
+        )
+    );
+}
