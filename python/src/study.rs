@@ -295,6 +295,7 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
     let label = label.to_string();
     let stop = stop.0.clone();
     External {
+        name: label.clone(),
         run: Arc::new(move |p: Arc<ExternalProblem>| {
             if stop.load(Ordering::SeqCst) {
                 return Err("interrupted".to_string());
@@ -316,10 +317,10 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
                 })?;
                 let (x, name) = match out.cast::<PyTuple>() {
                     Ok(t) if t.len() == 2 => {
-                        let name: String = t
-                            .get_item(1)
-                            .and_then(|n| n.extract())
-                            .map_err(|_| "the termination must be a string".to_string())?;
+                        let name: String =
+                            t.get_item(1).and_then(|n| n.extract()).map_err(|_| {
+                                format!("the method `{label}`'s termination must be a string")
+                            })?;
                         (t.get_item(0).map_err(text)?, Some(name))
                     }
                     _ => (out, None),
@@ -334,7 +335,7 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
                     Ok(a) => a.as_array().to_vec(),
                     Err(_) => x
                         .extract()
-                        .map_err(|_| format!("the method must return {RETURNS}"))?,
+                        .map_err(|_| format!("the method `{label}` must return {RETURNS}"))?,
                 };
                 Ok((x, name))
             })

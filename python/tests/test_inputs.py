@@ -177,3 +177,24 @@ def test_text_and_dates_are_not_numbers_and_a_shape_is_named():
     # fk names the array's shape, as identify does, not its first row.
     with pytest.raises(calbench.SettingError, match=r"`q`: expected shape \(N, 6\), got \(2, 5\)"):
         robot.fk(np.zeros((2, 5)))
+
+
+def test_a_python_method_of_the_wrong_length_is_named(root):
+    # Its message named no method: "the method returned 3 values for 24 parameters".
+    def three(problem):
+        return np.zeros(3)
+
+    def nan(problem):
+        return np.full(len(problem.x0), np.nan)
+
+    study = calbench.run(scenario(root), trials=1, methods={"three": three, "nan": nan})
+    t = study.trials
+    (error,) = t[t.method == "three"]["error"]
+    assert error.startswith("the method `three` returned 3 values for "), error
+    (error,) = t[t.method == "nan"]["error"]
+    assert error.startswith("the method `nan` returned a non-finite value for `"), error
+    task = root / "tasks" / "barrett-wam.toml"
+    with pytest.raises(calbench.ComputeError, match=r"^the method `three` returned 3 values for \d+ parameters$"):
+        calbench.task(task, three, models=["kinematic"])
+    with pytest.raises(calbench.ComputeError, match=r"^the method `mine` returned 3 values for "):
+        calbench.task(task, three, models=["kinematic"], name="mine")
