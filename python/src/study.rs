@@ -29,7 +29,7 @@ use calbench::study::reporter::{Reporter, Silent, Terminal};
 use calbench::study::stats::precision::Precision;
 use calbench::study::{trial, RunOptions, Shard, Study};
 
-use crate::convert::{any_scenario_of, matrix, scenario_of};
+use crate::convert::{any_scenario_of, matrix, scenario_of, DICT};
 use crate::errors::{err, setting, ComputeError};
 use crate::robot::PyRobot;
 
@@ -127,10 +127,7 @@ pub(crate) fn simulate<'py>(
             AnyScenario::Registration(_) => scenario_of(scenario)?,
         }
     };
-    let path = sc
-        .path
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("<scenario dict>"));
+    let path = sc.path.clone().unwrap_or_else(|| PathBuf::from(DICT));
     if measure.is_some() {
         return Err(err(simulated::no_instruments(&path)));
     }
