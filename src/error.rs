@@ -273,6 +273,23 @@ impl Error {
         }
     }
 
+    /// A refusal of a place in `path`, a scenario that is no file (a Python dict, shown as
+    /// `path`), as a refusal of the setting at that key, the line of the text it was written
+    /// as dropped (`line 12, measurement[0].kind` is the setting `measurement[0].kind`): the
+    /// inverse of [`Error::in_file`]. Any other error, one of another file included, as it is.
+    pub fn as_setting(self, path: &std::path::Path) -> Self {
+        match self {
+            Error::File { file, place, msg } if file == path => {
+                let key = match place.split_once(", ") {
+                    Some((line, key)) if line.starts_with("line ") => key.to_string(),
+                    _ => place,
+                };
+                Error::Setting { key, msg }
+            }
+            e => e,
+        }
+    }
+
     /// An error about the front end's option `option`.
     pub fn option(option: Opt, msg: impl Into<Said>) -> Self {
         Error::Option {
@@ -530,6 +547,21 @@ mod tests {
     const TEXT: &str = "name = \"x\"\n\n[calibration]\ncount = 5\nregion = { kind = \"box\" }\n\n\
         [[joints]]\na = 1.0\n\n[[joints]]\n# the second\na = 2.0\nlimits = [0.0, 1.0]\n\n\
         [[methods]]\nname = \"ls\"\n";
+
+    #[test]
+    fn a_place_of_a_scenario_that_is_no_file_is_a_setting() {
+        let dict = std::path::Path::new("<scenario dict>");
+        let e =
+            Error::file(dict, "line 12, measurement[0].kind", "unknown variant").as_setting(dict);
+        assert_eq!(
+            e.to_string(),
+            "setting `measurement[0].kind`: unknown variant"
+        );
+        let e = Error::file(dict, "trials", "expected usize").as_setting(dict);
+        assert_eq!(e.key(), Some("trials"));
+        let other = Error::file("robot.toml", "line 3, joints", "bad").as_setting(dict);
+        assert_eq!(other.to_string(), "robot.toml: line 3, joints: bad");
+    }
 
     #[test]
     fn key_lines_are_found() {

@@ -336,11 +336,20 @@ fn nested_table(key: &str, d: &Bound<'_, PyDict>, depth: usize) -> PyResult<toml
     Ok(t)
 }
 
+/// How the refusals of a scenario dict's values would name it as a file.
+pub(crate) const DICT: &str = "<scenario dict>";
+
+/// A refusal of a scenario dict's value as a `SettingError` naming its key (docs/python.md
+/// § The API: a dict is no file); any other error (of a robot file it names) as it is.
+fn dict_err(e: calbench::Error) -> PyErr {
+    err(e.as_setting(Path::new(DICT)))
+}
+
 /// A scenario: a path to its TOML file, or a dict shaped like the file.
 pub(crate) fn scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<Scenario> {
     if let Ok(d) = scenario.cast::<PyDict>() {
         let table = toml_table("", d)?;
-        return Scenario::from_toml_table(table, Path::new("<scenario dict>")).map_err(err);
+        return Scenario::from_toml_table(table, Path::new(DICT)).map_err(dict_err);
     }
     let path: PathBuf = scenario
         .extract()
@@ -354,7 +363,7 @@ pub(crate) fn any_scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<AnyScenar
     if let Ok(d) = scenario.cast::<PyDict>() {
         let text = toml::to_string(&toml_table("", d)?)
             .map_err(|e| setting("scenario", format!("cannot be written as TOML: {e}")))?;
-        return AnyScenario::parse(&text, Some(Path::new("<scenario dict>"))).map_err(err);
+        return AnyScenario::parse(&text, Some(Path::new(DICT))).map_err(dict_err);
     }
     let path: PathBuf = scenario
         .extract()

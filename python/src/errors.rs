@@ -53,9 +53,28 @@ pub(crate) fn spell(opt: calbench::error::Opt, on: bool) -> String {
     }
 }
 
+/// How `calbench.task` spells an option the library names, as `calbench task` spells its
+/// own (docs/python.md, `calbench.task`): its keywords (`method`, `models`) as [`spell`]
+/// does, the K-fold choice among the candidate models (`calbench.identify`'s `cv`) as
+/// `models`, whose folds they are, and an option it does not take as `calbench.identify`'s
+/// (`calbench.identify's allow_implausible=True`): a task's entry has no way past its checks.
+pub(crate) fn task_spell(opt: calbench::error::Opt, on: bool) -> String {
+    use calbench::error::Opt;
+    match opt {
+        Opt::Method | Opt::Models => spell(opt, on),
+        Opt::Cv => spell(Opt::Models, on),
+        _ => format!("calbench.identify's {}", spell(opt, on)),
+    }
+}
+
 /// A library error as the Python exception of its kind, with the command line's message and
 /// the options as keyword arguments ([`spell`]).
 pub(crate) fn err(e: calbench::Error) -> PyErr {
+    err_spelled(e, spell)
+}
+
+/// [`err`] with the options as `spell` writes them ([`task_spell`] for `calbench.task`).
+pub(crate) fn err_spelled(e: calbench::Error, spell: calbench::error::Spell) -> PyErr {
     let msg = e.spelled(spell);
     match e {
         calbench::Error::File { .. } => FileError::new_err(msg),

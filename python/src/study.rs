@@ -29,7 +29,7 @@ use calbench::study::reporter::{Reporter, Silent, Terminal};
 use calbench::study::stats::precision::Precision;
 use calbench::study::{trial, RunOptions, Shard, Study};
 
-use crate::convert::{any_scenario_of, matrix, scenario_of};
+use crate::convert::{any_scenario_of, matrix, scenario_of, DICT};
 use crate::errors::{err, setting, ComputeError};
 use crate::robot::PyRobot;
 
@@ -127,10 +127,7 @@ pub(crate) fn simulate<'py>(
             AnyScenario::Registration(_) => scenario_of(scenario)?,
         }
     };
-    let path = sc
-        .path
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("<scenario dict>"));
+    let path = sc.path.clone().unwrap_or_else(|| PathBuf::from(DICT));
     if measure.is_some() {
         return Err(err(simulated::no_instruments(&path)));
     }
@@ -295,6 +292,7 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
     let label = label.to_string();
     let stop = stop.0.clone();
     External {
+        name: label.clone(),
         run: Arc::new(move |p: Arc<ExternalProblem>| {
             if stop.load(Ordering::SeqCst) {
                 return Err("interrupted".to_string());
@@ -316,10 +314,10 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
                 })?;
                 let (x, name) = match out.cast::<PyTuple>() {
                     Ok(t) if t.len() == 2 => {
-                        let name: String = t
-                            .get_item(1)
-                            .and_then(|n| n.extract())
-                            .map_err(|_| "the termination must be a string".to_string())?;
+                        let name: String =
+                            t.get_item(1).and_then(|n| n.extract()).map_err(|_| {
+                                format!("the method `{label}`'s termination must be a string")
+                            })?;
                         (t.get_item(0).map_err(text)?, Some(name))
                     }
                     _ => (out, None),
@@ -334,7 +332,7 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
                     Ok(a) => a.as_array().to_vec(),
                     Err(_) => x
                         .extract()
-                        .map_err(|_| format!("the method must return {RETURNS}"))?,
+                        .map_err(|_| format!("the method `{label}` must return {RETURNS}"))?,
                 };
                 Ok((x, name))
             })

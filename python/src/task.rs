@@ -17,11 +17,16 @@ use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
 use calbench::report::write_identified_with;
 
-use crate::errors::{err, setting};
+use crate::errors::{err_spelled, setting, task_spell};
 use crate::identify::method_spec;
 use crate::robot::PyRobot;
 use crate::study::Interrupted;
 use calbench::robot::Robot;
+
+/// A library error as `calbench.task` raises it: its options spelled by [`task_spell`].
+fn task_err(e: calbench::Error) -> PyErr {
+    err_spelled(e, task_spell)
+}
 
 /// Runs the task `task` (a name under `tasks/` or a task file) with `method`: a method's
 /// name, or a Python function given a `Problem` (as `run`'s `methods`), entered as
@@ -42,10 +47,10 @@ pub(crate) fn task<'py>(
     options: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let path = task_path(task);
-    if let Some(t) = load_socket_task(&path).map_err(err)? {
+    if let Some(t) = load_socket_task(&path).map_err(task_err)? {
         return socket_task(py, &t, (method, options.as_ref()), models, out);
     }
-    let t = Task::load(&path).map_err(err)?;
+    let t = Task::load(&path).map_err(task_err)?;
     if let Some(out) = &out {
         guard(out, t.head.inputs(), t.data_files())?;
     }
@@ -117,7 +122,7 @@ pub(crate) fn task<'py>(
             let warning = unconverged_warning(&o.record);
             Ok(((text, record, o.compensated()), warning))
         })
-        .map_err(err);
+        .map_err(task_err);
     let (entry, warning) = stop.raise(entry)?;
     result(py, entry, warning)
 }
@@ -144,8 +149,8 @@ fn guard(
     data: impl IntoIterator<Item = impl AsRef<Path>>,
 ) -> PyResult<()> {
     let names = ["identified.json", "task.json", TASK_FILE];
-    calbench::report::guard::guard_out(out, "out", &names, inputs).map_err(err)?;
-    calbench::report::guard::guard_data_folder(out, "out", data).map_err(err)
+    calbench::report::guard::guard_out(out, "out", &names, inputs).map_err(task_err)?;
+    calbench::report::guard::guard_data_folder(out, "out", data).map_err(task_err)
 }
 
 /// [`task`] on a socket task (docs/formats.md § 9.4): the entry `calbench task` runs
@@ -184,6 +189,6 @@ fn socket_task<'py>(
             let warning = unconverged_warning(&e.outcome.record);
             Ok(((json, record, e.robot), warning))
         })
-        .map_err(err)?;
+        .map_err(task_err)?;
     result(py, entry, warning)
 }

@@ -177,3 +177,47 @@ def test_text_and_dates_are_not_numbers_and_a_shape_is_named():
     # fk names the array's shape, as identify does, not its first row.
     with pytest.raises(calbench.SettingError, match=r"`q`: expected shape \(N, 6\), got \(2, 5\)"):
         robot.fk(np.zeros((2, 5)))
+
+
+def test_a_python_method_of_the_wrong_length_is_named(root):
+    # Its message named no method: "the method returned 3 values for 24 parameters".
+    def three(problem):
+        return np.zeros(3)
+
+    def nan(problem):
+        return np.full(len(problem.x0), np.nan)
+
+    study = calbench.run(scenario(root), trials=1, methods={"three": three, "nan": nan})
+    t = study.trials
+    (error,) = t[t.method == "three"]["error"]
+    assert error.startswith("the method `three` returned 3 values for "), error
+    (error,) = t[t.method == "nan"]["error"]
+    assert error.startswith("the method `nan` returned a non-finite value for `"), error
+    task = root / "tasks" / "barrett-wam.toml"
+    with pytest.raises(calbench.ComputeError, match=r"^the method `three` returned 3 values for \d+ parameters$"):
+        calbench.task(task, three, models=["kinematic"])
+    with pytest.raises(calbench.ComputeError, match=r"^the method `mine` returned 3 values for "):
+        calbench.task(task, three, models=["kinematic"], name="mine")
+
+
+def test_a_scenario_dict_value_of_the_wrong_type_is_a_setting_error_naming_its_key(root, tmp_path):
+    # A dict is no file: its values were refused as a FileError of `<scenario dict>`.
+    sc = scenario(root)
+    sc["trials"] = "ten"
+    with pytest.raises(calbench.SettingError, match=r'^setting `trials`: invalid type: string "ten"'):
+        calbench.run(sc)
+    sc = scenario(root)
+    sc["tracker"]["mpe_a_um"] = "x"
+    with pytest.raises(calbench.SettingError, match=r'^setting `tracker.mpe_a_um`: invalid type: string "x"'):
+        calbench.simulate(sc)
+    # An instruments study's dict, read as TOML text: no line of that text is named.
+    study = tomllib.loads(
+        'name = "d"\nseed = 2\ntrials = 2\nrobot = "irb2600"\n\n[instruments_study]\n'
+        'poses = [30]\nstrategies = ["random"]\ncandidates = 60\nvalidation = 10\n\n'
+        '[errors]\nkind = "paper"\n\n[[measurement]]\nkind = "distance"\n'
+    )
+    study["measurement"][0]["noise_um"] = "loud"
+    with pytest.raises(calbench.SettingError, match=r"^setting `measurement\[0\]\.noise_um`: invalid type") as e:
+        calbench.run(study, out=tmp_path / "out")
+    assert "line" not in str(e.value) and "<scenario dict>" not in str(e.value), e.value
+    assert not (tmp_path / "out").exists()

@@ -179,3 +179,38 @@ def test_method_options_are_the_command_line_s_set(root, cli, tmp_path):
         calbench.task(task, gauss_newton, options={"max_iter": 3})
     with pytest.raises(calbench.SettingError, match=r"^setting `options`: expected a dict"):
         calbench.task(task, "lm", options=[("max_iter", 3)])
+
+
+def test_a_refusal_names_what_calbench_task_takes(root, tmp_path):
+    """A refusal of an entry names ``calbench.task``'s own keywords, as ``calbench task``
+    names its flags: the cross-validation among the candidate models by ``models``, whose
+    folds they are (``calbench.identify`` names them ``cv``), and a way past a check that
+    ``calbench.task`` does not take as ``calbench.identify``'s."""
+    # 14 UR10 rows compared by the task's own two candidates on two folds: 7 training points,
+    # 21 readings for the 23 parameters of `kinematic`.
+    text = (root / "tasks" / "ipa-ur10-series-d.toml").read_text()
+    mapping = json.dumps(str(root / "tasks" / "ipa-ur10.mapping.toml"))
+    text = text.replace('"ipa-ur10.mapping.toml"', mapping)
+    text = text.replace('"ipa-ur10-series-d.split"', '"few.split"').replace('"../', f'"{root}/')
+    (tmp_path / "few.split").write_text("rows 632\ncalibration 0-13\nvalidation 14-631\n")
+    few = tmp_path / "few.toml"
+    few.write_text(text + '\n[models]\ncandidates = ["kinematic", "beta"]\nfolds = 2\nfold_seeds = [0]\n')
+    with pytest.raises(calbench.SettingError) as e:
+        calbench.task(few, "lm")
+    assert str(e.value).startswith(
+        "setting `models`: fold 1 of 2: the model `kinematic` identified on the other folds' 7 "
+        "points (21 readings for 23 parameters) ended rank-deficient"
+    ), e.value
+    # The WAM's millimetres read as metres: physically implausible, past which only
+    # calbench.identify goes.
+    mapping = (root / "tasks" / "barrett-wam.mapping.toml").read_text()
+    (tmp_path / "metres.mapping.toml").write_text(mapping.replace('unit = "mm"', 'unit = "m"'))
+    text = (root / "tasks" / "barrett-wam.toml").read_text().replace('"../', f'"{root}/')
+    metres = tmp_path / "metres.toml"
+    metres.write_text(text.replace('"barrett-wam.mapping.toml"', '"metres.mapping.toml"'))
+    with pytest.raises(calbench.FileError, match="cannot be physically right") as e:
+        calbench.task(metres, "lm", models=["kinematic"], out=tmp_path / "out")
+    assert str(e.value).endswith(
+        "or pass calbench.identify's allow_implausible=True to write it with a warning"
+    ), e.value
+    assert not (tmp_path / "out").exists()

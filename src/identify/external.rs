@@ -37,13 +37,15 @@ pub type ExternalFn = dyn Fn(Arc<ExternalProblem>) -> Outcome + Send + Sync;
 /// A method that calls a function supplied from outside.
 #[derive(Clone)]
 pub struct External {
+    /// The method's name, as its refusals name it (`the method `mine` returned …`).
+    pub name: String,
     /// The function.
     pub run: Arc<ExternalFn>,
 }
 
 impl std::fmt::Debug for External {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str("External")
+        write!(f, "External({})", self.name)
     }
 }
 
@@ -54,28 +56,29 @@ impl Method for External {
 
     /// Calls the function on the problem. Its failure, an estimate of the wrong length or
     /// with non-finite values, or an unknown termination name is an `Err` carrying the
-    /// message (in a study: a failure of the method in that trial).
+    /// message, which names the method (in a study: a failure of the method in that trial).
     fn identify(&self, problem: &CalibrationProblem, _: &mut Rng) -> Result<Identified> {
         let p = Arc::new(ExternalProblem::of(problem)?);
         let (x, termination) = (self.run)(p.clone()).map_err(Error::Compute)?;
+        let refused = |what: String| Error::Compute(format!("the method `{}` {what}", self.name));
         let t = p.params.len();
         if x.len() != t {
-            return Err(Error::Compute(format!(
-                "the method returned {} values for {t} parameters",
+            return Err(refused(format!(
+                "returned {} values for {t} parameters",
                 x.len()
             )));
         }
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return Err(Error::Compute(format!(
-                "the method returned a non-finite value for `{}`: {}",
+            return Err(refused(format!(
+                "returned a non-finite value for `{}`: {}",
                 p.params[i], x[i]
             )));
         }
         let termination = match termination {
             None => Termination::Converged,
             Some(name) => name.parse().map_err(|_| {
-                Error::Compute(format!(
-                    "unknown termination \"{name}\"; allowed: {}",
+                refused(format!(
+                    "returned the unknown termination \"{name}\"; allowed: {}",
                     <Termination as strum::VariantNames>::VARIANTS.join(", ")
                 ))
             })?,
