@@ -279,13 +279,10 @@ impl Error {
     /// inverse of [`Error::in_file`]. Any other error, one of another file included, as it is.
     pub fn as_setting(self, path: &std::path::Path) -> Self {
         match self {
-            Error::File { file, place, msg } if file == path => {
-                let key = match place.split_once(", ") {
-                    Some((line, key)) if line.starts_with("line ") => key.to_string(),
-                    _ => place,
-                };
-                Error::Setting { key, msg }
-            }
+            Error::File { file, place, msg } if file == path => Error::Setting {
+                key: without_line(&place).to_string(),
+                msg,
+            },
             e => e,
         }
     }
@@ -402,6 +399,15 @@ pub fn at_line(line: Option<usize>, place: impl Into<String>) -> String {
     match line {
         Some(n) => format!("line {n}, {place}"),
         None => place,
+    }
+}
+
+/// The key of a place [`at_line`] wrote (`line 12, measurement[0].kind` →
+/// `measurement[0].kind`); a place without a line as it is.
+pub fn without_line(place: &str) -> &str {
+    match place.split_once(", ") {
+        Some((line, key)) if line.starts_with("line ") => key,
+        _ => place,
     }
 }
 

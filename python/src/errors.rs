@@ -54,16 +54,13 @@ pub(crate) fn spell(opt: calbench::error::Opt, on: bool) -> String {
 }
 
 /// How `calbench.task` spells an option the library names, as `calbench task` spells its
-/// own (docs/python.md, `calbench.task`): its keywords (`method`, `models`) as [`spell`]
-/// does, the K-fold choice among the candidate models (`calbench.identify`'s `cv`) as
-/// `models`, whose folds they are, and an option it does not take as `calbench.identify`'s
-/// (`calbench.identify's allow_implausible=True`): a task's entry has no way past its checks.
+/// own (docs/python.md, `calbench.task`; `calbench::calibrate::task::task_option`): its
+/// keywords (`method`, `models`, which `cv`'s folds are) as [`spell`] does, and an option it
+/// does not take as `calbench.identify`'s (`calbench.identify's allow_implausible=True`).
 pub(crate) fn task_spell(opt: calbench::error::Opt, on: bool) -> String {
-    use calbench::error::Opt;
-    match opt {
-        Opt::Method | Opt::Models => spell(opt, on),
-        Opt::Cv => spell(Opt::Models, on),
-        _ => format!("calbench.identify's {}", spell(opt, on)),
+    match calbench::calibrate::task::task_option(opt) {
+        Ok(own) => spell(own, on),
+        Err(other) => format!("calbench.identify's {}", spell(other, on)),
     }
 }
 

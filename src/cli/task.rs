@@ -59,17 +59,14 @@ pub struct TaskArgs {
     pub out: PathBuf,
 }
 
-/// How `task` spells an option the library names: its own (`--method`, `--models`) as the
-/// command line does, the K-fold choice among the candidate models (`identify`'s `--cv`) as
-/// `--models`, and one it does not take as `identify`'s
-/// (`identify's --allow-implausible`): a task's entry has no way past its checks.
+/// How `task` spells an option the library names
+/// ([`task_option`](calbench::calibrate::task::task_option)): its own (`--method`,
+/// `--models`, which `--cv`'s folds are) as the command line does, and one it does not take
+/// as `identify`'s (`identify's --allow-implausible`).
 pub fn spell(opt: calbench::error::Opt, on: bool) -> String {
-    use calbench::error::Opt;
-    match opt {
-        Opt::Method | Opt::Models => super::spell(opt, on),
-        // The folds of the choice among the candidate models (the task's or `--models`).
-        Opt::Cv => super::spell(Opt::Models, on),
-        _ => format!("identify's {}", super::spell(opt, on)),
+    match calbench::calibrate::task::task_option(opt) {
+        Ok(own) => super::spell(own, on),
+        Err(other) => format!("identify's {}", super::spell(other, on)),
     }
 }
 

@@ -219,6 +219,21 @@ pub struct Task {
     pub models: Option<TaskModels>,
 }
 
+/// The option a task takes for the library's option `opt`, as its front ends spell a refusal:
+/// `Ok` its own (`method`, `models`; the K-fold choice among the candidate models, `cv`, is
+/// `models`, whose folds they are), `Err(opt)` one a task does not take, which a front end
+/// names as identify's (a task's entry has no way past its checks).
+pub fn task_option(
+    opt: crate::error::Opt,
+) -> std::result::Result<crate::error::Opt, crate::error::Opt> {
+    use crate::error::Opt;
+    match opt {
+        Opt::Method | Opt::Models => Ok(opt),
+        Opt::Cv => Ok(Opt::Models),
+        _ => Err(opt),
+    }
+}
+
 /// `NAME` (a task under `tasks/`) or the path of a task file.
 pub fn task_path(name_or_path: &str) -> PathBuf {
     let p = Path::new(name_or_path);

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use serde::Deserialize;
 
 use super::{Scenario, Source};
-use crate::error::{at_line, Error, Result};
+use crate::error::{at_line, without_line, Error, Result};
 use crate::identify::MethodSpec;
 
 #[derive(Deserialize)]
@@ -263,10 +263,7 @@ impl Scenario {
             .map_err(|e| {
                 let (msg, refused) = match e {
                     Error::File { place, msg, .. } => {
-                        let key = place
-                            .split_once(", ")
-                            .filter(|(l, _)| l.starts_with("line "));
-                        let key = key.map_or(place.clone(), |(_, k)| k.to_string());
+                        let key = without_line(&place).to_string();
                         (format!("{place}: {msg}"), key)
                     }
                     other => (other.to_string(), String::new()),
