@@ -271,7 +271,13 @@ impl Db {
                 ),
             )
         };
-        let v = version(&conn).map_err(bad)?;
+        // The version and the tables are read in one read transaction, so that they are of
+        // one state of the file: read apart, another process creating the database could
+        // commit its tables in between, and they would be judged against version 0.
+        let snapshot = conn
+            .transaction_with_behavior(TransactionBehavior::Deferred)
+            .map_err(bad)?;
+        let v = version(&snapshot).map_err(bad)?;
         if v > SCHEMA_VERSION {
             return Err(newer(v));
         }
@@ -284,7 +290,9 @@ impl Db {
         }
         // Before anything that writes (the journal mode, a migration): another program's
         // database, or one whose tables are not calbench's, is refused and left unchanged.
-        if let Some(why) = not_calbench(&conn, v).map_err(bad)? {
+        let foreign = not_calbench(&snapshot, v).map_err(bad)?;
+        snapshot.finish().map_err(bad)?;
+        if let Some(why) = foreign {
             return Err(Error::file(
                 path,
                 "database",
