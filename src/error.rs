@@ -151,7 +151,7 @@ enum Piece {
 impl Said {
     /// The message with `t` added.
     pub fn text(mut self, t: impl Into<String>) -> Self {
-        self.0.push(Piece::Text(t.into()));
+        self.0.push(Piece::Text(plain_types(t.into())));
         self
     }
 
@@ -453,6 +453,51 @@ pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
 /// toml's message (0.9) when a value of any other type stands where a named choice is read.
 const NOT_A_NAME: &str = "invalid type: unit variant, expected string only";
 
+/// serde's names of the number types a file's value is read as, and what a message says
+/// instead: `expected usize` is `expected a whole number ≥ 0`.
+const NUMBER_TYPES: [(&str, &str); 12] = [
+    ("usize", "a whole number ≥ 0"),
+    ("u64", "a whole number ≥ 0"),
+    ("u32", "a whole number from 0 to 4294967295"),
+    ("u16", "a whole number from 0 to 65535"),
+    ("u8", "a whole number from 0 to 255"),
+    ("isize", "a whole number"),
+    ("i64", "a whole number"),
+    ("i32", "a whole number from -2147483648 to 2147483647"),
+    ("i16", "a whole number from -32768 to 32767"),
+    ("i8", "a whole number from -128 to 127"),
+    ("f64", "a number"),
+    ("f32", "a number"),
+];
+
+/// `text` with serde's Rust type names after `expected ` (`invalid type: string "a",
+/// expected usize`, from a file's or a dict's value) said in words ([`NUMBER_TYPES`]); any
+/// other text as it is.
+fn plain_types(text: String) -> String {
+    const EXPECTED: &str = "expected ";
+    if !text.contains(EXPECTED) {
+        return text;
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text.as_str();
+    while let Some(i) = rest.find(EXPECTED) {
+        let after = &rest[i + EXPECTED.len()..];
+        out.push_str(&rest[..i + EXPECTED.len()]);
+        rest = after;
+        let ends = |name: &str| {
+            after
+                .strip_prefix(name)
+                .is_some_and(|tail| !tail.starts_with(|c: char| c.is_alphanumeric() || c == '_'))
+        };
+        if let Some((name, words)) = NUMBER_TYPES.iter().find(|(name, _)| ends(name)) {
+            out.push_str(words);
+            rest = &after[name.len()..];
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
 /// A number as a refusal shows it: as `{}` writes it (`0.5`, `-180`), but in exponent form
 /// (`1e300`, `-2.5e-9`) where that would be a long run of digits (magnitudes from 1e16 on, or
 /// below 1e-5).
@@ -553,6 +598,37 @@ mod tests {
     const TEXT: &str = "name = \"x\"\n\n[calibration]\ncount = 5\nregion = { kind = \"box\" }\n\n\
         [[joints]]\na = 1.0\n\n[[joints]]\n# the second\na = 2.0\nlimits = [0.0, 1.0]\n\n\
         [[methods]]\nname = \"ls\"\n";
+
+    #[test]
+    fn serde_number_types_are_said_in_words() {
+        let said = |t: &str| Said::from(t).to_string();
+        assert_eq!(
+            said("invalid type: string \"a\", expected usize"),
+            "invalid type: string \"a\", expected a whole number ≥ 0"
+        );
+        assert_eq!(
+            said("invalid type: floating point `6.5`, expected u64\nin `seed`"),
+            "invalid type: floating point `6.5`, expected a whole number ≥ 0\nin `seed`"
+        );
+        assert_eq!(
+            said("invalid value: integer `300`, expected u8"),
+            "invalid value: integer `300`, expected a whole number from 0 to 255"
+        );
+        assert_eq!(
+            said("expected f64, expected i64"),
+            "expected a number, expected a whole number"
+        );
+        // Other words after `expected`, and type names inside longer words, stay.
+        for kept in [
+            "invalid length 2, expected an array of length 6",
+            "expected u64x",
+            "expected f64_pair",
+            "unknown field `a`, expected one of `usize`",
+            "expected",
+        ] {
+            assert_eq!(said(kept), kept);
+        }
+    }
 
     #[test]
     fn a_place_of_a_scenario_that_is_no_file_is_a_setting() {

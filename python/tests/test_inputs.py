@@ -204,11 +204,11 @@ def test_a_scenario_dict_value_of_the_wrong_type_is_a_setting_error_naming_its_k
     # A dict is no file: its values were refused as a FileError of `<scenario dict>`.
     sc = scenario(root)
     sc["trials"] = "ten"
-    with pytest.raises(calbench.SettingError, match=r'^setting `trials`: invalid type: string "ten"'):
+    with pytest.raises(calbench.SettingError, match=r'^setting `trials`: invalid type: string "ten", expected a whole number ≥ 0$'):
         calbench.run(sc)
     sc = scenario(root)
     sc["tracker"]["mpe_a_um"] = "x"
-    with pytest.raises(calbench.SettingError, match=r'^setting `tracker.mpe_a_um`: invalid type: string "x"'):
+    with pytest.raises(calbench.SettingError, match=r'^setting `tracker.mpe_a_um`: invalid type: string "x", expected a number$'):
         calbench.simulate(sc)
     # An instruments study's dict, read as TOML text: no line of that text is named.
     study = tomllib.loads(

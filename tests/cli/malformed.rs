@@ -404,6 +404,21 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
     let cases: Vec<(&str, String, &str, &str, &str)> = vec![
         // (name, text, the line's start, key, words)
         (
+            // serde's type names (`expected usize`, `f64`) are said in words.
+            "count",
+            ci.replace("trials = 16", "trials = 16.5"),
+            "trials",
+            "trials",
+            "invalid type: floating point `16.5`, expected a whole number ≥ 0",
+        ),
+        (
+            "noise",
+            ci.replace("[tracker]\n", "[tracker]\nmpe_a_um = \"15\"\n"),
+            "mpe_a_um",
+            "tracker.mpe_a_um",
+            "invalid type: string \"15\", expected a number",
+        ),
+        (
             "angle",
             ci.replace(
                 "[tracker]\n",
