@@ -6,8 +6,8 @@ use std::path::PathBuf;
 use anyhow::Result;
 
 use calbench::analysis::regression::{
-    baseline_document, checked_tolerance, comparable, compare_with, unpaired_because, Side, Status,
-    Unpaired, Which,
+    baseline_document, checked_tolerance, comparable, compare_with, unpaired_because,
+    unpaired_entries, Side, Status, Unpaired, Which,
 };
 use calbench::error::Error;
 use calbench::numeric::Real;
@@ -92,8 +92,13 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     comparable(&s.summary, &s.path, &b.summary, &b.path)?;
     let pairs = b.trials.as_ref().zip(s.trials.as_ref());
     let all = compare_with(&s.summary, &b.summary, tolerance, pairs);
-    if let Some(why) = unpaired_because(&b, &s) {
-        out!("unpaired: {}", unpaired_text(&why, &b));
+    match unpaired_because(&b, &s) {
+        Some(why) => out!("unpaired: {}", unpaired_text(&why, &b)),
+        None => {
+            for (entry, why) in unpaired_entries(&b, &s) {
+                out!("unpaired: {entry}: {why}, so its metrics are compared from the summaries' intervals");
+            }
+        }
     }
     let count = |st: Status| all.iter().filter(|c| c.status == st).count();
     for c in all.iter().filter(|c| c.status != Status::NoChange) {

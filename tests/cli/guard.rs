@@ -325,3 +325,83 @@ fn a_malformed_trials_csv_is_refused_naming_file_line_and_column() {
         crate::common::one_line_naming(&err, &csv, &want);
     }
 }
+
+/// A run folder's `trials.csv` and a baseline's `per_trial` must be the values behind their
+/// summary: `check` and `baseline` refuse a folder holding another run's `trials.csv`
+/// (naming the file and the column) and a baseline whose values were edited (naming the key's
+/// line); they had been compared from the summaries without a word. An entry whose trials
+/// differ between two runs that otherwise pair gets its `unpaired:` line.
+#[test]
+fn per_trial_values_not_behind_their_summary_are_refused_and_an_unpaired_entry_is_named() {
+    let dir = tmp_dir("cli-guard-behind");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let (a, other) = (dir.join("a"), dir.join("other"));
+    run(&sc, &a, &["--trials", "3", "--seed", "5"]);
+    run(&sc, &other, &["--trials", "3", "--seed", "6"]);
+    let mixed = dir.join("mixed");
+    std::fs::create_dir_all(&mixed).unwrap();
+    std::fs::copy(a.join("summary.json"), mixed.join("summary.json")).unwrap();
+    std::fs::copy(other.join("trials.csv"), mixed.join("trials.csv")).unwrap();
+    let (ok, text) = check(&mixed.join("summary.json"), &a.join("summary.json"), &[]);
+    assert!(
+        !ok && text.contains("mixed/trials.csv: column ") && text.contains("is not of this run"),
+        "{text}"
+    );
+    let o = calbench(&[
+        "baseline",
+        path_arg(&mixed),
+        "--out",
+        path_arg(&dir.join("m.json")),
+    ]);
+    assert!(
+        !o.status.success(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
+    assert!(!dir.join("m.json").exists());
+
+    let base = dir.join("base.json");
+    calbench_ok(&["baseline", path_arg(&a), "--out", path_arg(&base)]);
+    let doc = load_json(&base);
+    let edit = |name: &str, f: &dyn Fn(&mut serde_json::Value)| {
+        let mut d = doc.clone();
+        f(&mut d["per_trial"]["entries"]["lm / random"]);
+        let p = dir.join(name);
+        std::fs::write(&p, serde_json::to_string_pretty(&d).unwrap()).unwrap();
+        p
+    };
+    // Every value 10 % larger: it was paired elsewhere and this entry said "no change".
+    let scaled = edit("scaled.json", &|e| {
+        for row in e["values"].as_object_mut().unwrap().values_mut() {
+            for v in row.as_array_mut().unwrap() {
+                *v = serde_json::json!(v.as_f64().unwrap() * 1.1);
+            }
+        }
+    });
+    let (ok, text) = check(&a.join("summary.json"), &scaled, &[]);
+    let line = read(&scaled)
+        .lines()
+        .position(|l| l.contains("\"lm / random\""))
+        .unwrap();
+    assert!(
+        !ok && text.contains("scaled.json: line ")
+            && text.contains("per_trial.entries.lm / random.values.")
+            && text.contains("where the summary has"),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!("line {}", line + 3)) || text.contains("line "),
+        "{text}"
+    );
+    // Its trials renumbered: the entry is compared unpaired, and check says so.
+    let renumbered = edit("renumbered.json", &|e| {
+        e["trials"] = serde_json::json!([0, 1, 7])
+    });
+    let (ok, text) = check(&a.join("summary.json"), &renumbered, &[]);
+    assert!(ok, "{text}");
+    assert!(
+        text.contains("unpaired: lm / random: its trials differ (3 in the baseline, 3 in this run; trial 2 is in one only)"),
+        "{text}"
+    );
+    assert_eq!(text.matches("unpaired:").count(), 1, "{text}");
+}

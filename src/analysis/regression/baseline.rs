@@ -6,17 +6,19 @@
 //! trials agree; otherwise [`unpaired_because`] says what differs, and so what a paired
 //! comparison would take.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::noise::Trials;
-use super::{check_summary, read_json};
+use super::noise::{figure_of, same_figure, trials_key, Trials};
+use super::{check_summary, entry_metrics, lookup, read_json};
 use crate::analysis::summary::Summary;
+use crate::error::shown;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
+use crate::study::metric::Metric;
 
 /// The key of a baseline's per-trial values in its document.
 pub const KEY: &str = "per_trial";
@@ -188,14 +190,71 @@ impl Side {
             ));
         }
         let doc = read_json(&file)?;
+        let own = doc.get(KEY).is_some();
         let trials = trials_of(&doc, &file)?;
         let summary = check_summary(doc, &file)?;
+        if let Some(t) = &trials {
+            let csv = file.parent().unwrap_or(Path::new(".")).join("trials.csv");
+            behind(&summary, t).map_err(|(entry, metric, why)| match own {
+                true => Error::file(&file, format!("{KEY}.entries.{entry}.values.{metric}"), why)
+                    .at_json_key_line(),
+                false => {
+                    let column = Metric::from_key(&metric).and_then(|m| m.column());
+                    Error::file(
+                        &csv,
+                        format!("column {}", column.unwrap_or(&metric)),
+                        format!(
+                            "{why}: {} is not of this run (entry {entry})",
+                            csv.display()
+                        ),
+                    )
+                }
+            })?;
+        }
         Ok(Side {
             path: file,
             summary,
             trials,
         })
     }
+}
+
+/// Whether the per-trial values `t` are those behind `summary`'s figures: for each entry and
+/// metric they hold whose figure is the mean over trials (the error statistics and the
+/// parameters' RMSE, root of the mean square; not `eta_mean_pct`, whose figure is over each
+/// parameter's determinable trials), the figure they give ([`figure_of`]) is the summary's.
+/// The entry key, the metric and what differs, where one is not (values of another run, or
+/// edited).
+fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, String, String)> {
+    let over_trials = |metric: &str| {
+        Metric::from_key(metric).is_some_and(|m| m.spec().stat.is_some())
+            || Metric::ParamRmse.parameter_of(metric).is_some()
+    };
+    for e in &summary.results {
+        let entry = trials_key(e, summary);
+        for (metric, _) in entry_metrics(e).into_iter().filter(|(m, _)| over_trials(m)) {
+            let (Some(values), Some(figure)) = (
+                t.values.get(&(entry.clone(), metric.clone())),
+                lookup(e, &metric),
+            ) else {
+                continue;
+            };
+            if values.is_empty() {
+                continue;
+            }
+            let given = figure_of(values.values().copied(), &metric);
+            if !same_figure(given, figure) {
+                let why = format!(
+                    "its {} values give {metric} {}, where the summary has {}",
+                    values.len(),
+                    shown(given),
+                    shown(figure)
+                );
+                return Err((entry, metric, why));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Which side of a comparison.
@@ -263,6 +322,44 @@ pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
         }
     }
     None
+}
+
+/// The entries compared from the summaries although the runs pair ([`unpaired_because`] is
+/// `None`), each with why: the entry key and the reason. An entry missing on either side is
+/// not among them (it is a regression, or not compared).
+pub fn unpaired_entries(baseline: &Side, summary: &Side) -> Vec<(String, String)> {
+    let (Some(ta), Some(tb)) = (&baseline.trials, &summary.trials) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    for b in &baseline.summary.results {
+        let Some(e) = summary.summary.results.iter().find(|e| e.key() == b.key()) else {
+            continue;
+        };
+        let (ka, kb) = (
+            trials_key(b, &baseline.summary),
+            trials_key(e, &summary.summary),
+        );
+        let why = match (ta.trials.get(&ka), tb.trials.get(&kb)) {
+            (None, _) => "the baseline's per-trial values have no such entry".to_string(),
+            (_, None) => "this run's per-trial values have no such entry".to_string(),
+            (Some(x), Some(y)) if x != y => {
+                let only =
+                    |x: &BTreeSet<usize>, y: &BTreeSet<usize>| x.difference(y).next().copied();
+                let first = only(x, y).into_iter().chain(only(y, x)).min();
+                format!(
+                    "its trials differ ({} in the baseline, {} in this run; trial {} is in one \
+                     only)",
+                    x.len(),
+                    y.len(),
+                    first.map_or("?".into(), |t| t.to_string())
+                )
+            }
+            _ => continue,
+        };
+        out.push((b.key(), why));
+    }
+    out
 }
 
 #[cfg(test)]

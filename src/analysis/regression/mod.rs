@@ -28,7 +28,9 @@ use crate::analysis::summary::Summary;
 use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
 use crate::study::stats::Entry;
-pub use baseline::{baseline_document, trials_of, unpaired_because, Side, Unpaired, Which};
+pub use baseline::{
+    baseline_document, trials_of, unpaired_because, unpaired_entries, Side, Unpaired, Which,
+};
 use noise::Change;
 pub use noise::{pairable, Status, Trials};
 use tolerance::regressed;

@@ -166,15 +166,10 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
     let test = compare((ka, kb), m, (&xa, &xb));
     let mean = test.diff_mean;
     let d: Vec<Real> = pairs.iter().map(|(x, y)| y - x).collect();
-    let side = |f: fn(&(Real, Real)) -> Real| {
-        let m = pairs.iter().map(f).sum::<Real>() / n as Real;
-        if is_rmse(metric) {
-            m.sqrt()
-        } else {
-            m
-        }
-    };
-    let means = Some([side(|p| p.0), side(|p| p.1)]);
+    let means = Some([
+        figure_of(pairs.iter().map(|p| p.0), metric),
+        figure_of(pairs.iter().map(|p| p.1), metric),
+    ]);
     let var = d.iter().map(|x| (x - mean).powi(2)).sum::<Real>() / (n - 1) as Real;
     // The report's test of the pair: where it locates the median, so does the interval.
     let sorted = (test.test == Test::Sign).then(|| {
@@ -197,6 +192,24 @@ pub fn paired(a: &Trials, b: &Trials, (ka, kb): (&str, &str), metric: &str) -> O
         }),
         sorted,
     })
+}
+
+/// The figure of `metric` that per-trial `values` give, as a summary writes it: their mean,
+/// or for a parameter's RMSE (whose per-trial values are squared errors) the root of it.
+pub fn figure_of(values: impl Iterator<Item = Real>, metric: &str) -> Real {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    let m = sum / n as Real;
+    if is_rmse(metric) {
+        m.sqrt()
+    } else {
+        m
+    }
+}
+
+/// Whether a figure computed from per-trial values is the summary's `b` (to 1e-9 relative:
+/// the summary sums in another order).
+pub fn same_figure(a: Real, b: Real) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs())
 }
 
 /// Whether `metric` is a parameter's RMSE (`param_rmse.NAME`).
@@ -312,8 +325,8 @@ impl Change {
     /// different trials in one folder, an edited summary, or trials whose usability the
     /// file cannot tell; those are compared unpaired.
     pub fn matches(&self, a: Real, b: Real) -> bool {
-        let near = |x: Real, y: Real| (x - y).abs() <= 1e-9 * x.abs().max(y.abs());
-        self.means.is_none_or(|[ma, mb]| near(ma, a) && near(mb, b))
+        self.means
+            .is_none_or(|[ma, mb]| same_figure(ma, a) && same_figure(mb, b))
     }
 
     /// The two-sided p-value of "no change": paired, the Wilcoxon signed-rank test's;
