@@ -86,16 +86,17 @@ pub(crate) fn method_spec(
     options: Option<&Bound<'_, PyDict>>,
     k_refused: Option<&str>,
 ) -> PyResult<MethodSpec> {
-    let mut entry = match options {
+    let entry = match options {
         Some(o) => toml_table("options", o)?,
         None => toml::Table::new(),
     };
-    entry.insert("name".into(), toml::Value::String(method.into()));
     if let Some(why) = k_refused.filter(|_| entry.contains_key("k")) {
         return Err(setting("options.k", why));
     }
-    MethodSpec::from_table(&entry).map_err(|(k, msg)| {
+    let named = entry.contains_key("name");
+    MethodSpec::with_options(method, entry).map_err(|(k, msg)| {
         let key = match k.as_str() {
+            "name" if named => "options.name".to_string(),
             "name" => "method".to_string(),
             "" => "options".to_string(),
             k => format!("options.{k}"),

@@ -179,6 +179,19 @@ def test_method_options_are_the_command_line_s_set(root, cli, tmp_path):
         calbench.task(task, gauss_newton, options={"max_iter": 3})
     with pytest.raises(calbench.SettingError, match=r"^setting `options`: expected a dict"):
         calbench.task(task, "lm", options=[("max_iter", 3)])
+    # The method is chosen by `method`: a `name` among the options was ignored here, and
+    # `--set name=…` ran that method instead of `--method`'s.
+    with pytest.raises(calbench.SettingError,
+                       match=r'^setting `options.name`: "ls" among the options: the method is chosen apart'):
+        calbench.task(task, "lm", options={"name": "ls"})
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.random.default_rng(3).uniform(-30.0, 30.0, (20, 6))
+    with pytest.raises(calbench.SettingError, match=r'^setting `options.name`: "bogus" among'):
+        calbench.identify(robot, q, robot.fk(q), method="lm", options={"name": "bogus"})
+    o = cli("task", task, "--method", "lm", "--set", 'name="ls"', "--out", tmp_path / "named",
+            ok=False)
+    assert o.returncode == 1 and not (tmp_path / "named").exists()
+    assert 'setting `--set name`: "ls" among the options' in o.stderr, o.stderr
 
 
 def test_a_refusal_names_what_calbench_task_takes(root, tmp_path):

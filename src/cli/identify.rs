@@ -417,12 +417,8 @@ pub(super) fn method_with_options(
     if options.is_empty() {
         return method_by_name(name);
     }
-    let mut t = toml::Table::new();
-    t.insert("name".into(), toml::Value::String(name.into()));
-    for (key, value) in options {
-        t.insert(key.clone(), value.clone());
-    }
-    MethodSpec::from_table(&t).map_err(|(k, msg)| Error::setting(format!("--set {k}"), msg))
+    let t = options.iter().cloned().collect();
+    MethodSpec::with_options(name, t).map_err(|(k, msg)| Error::setting(format!("--set {k}"), msg))
 }
 
 /// The compensated robot as a URDF: for a URDF robot (its source with the joint origins

@@ -140,6 +140,25 @@ pub struct MethodSpec {
 }
 
 impl MethodSpec {
+    /// The method `name` with `options`, the keys of a `[[methods]]` entry that a front end
+    /// gives beside its choice of method (the command line's `--set`, Python's `options`).
+    /// Options that name a method themselves are refused (key `name`): the command line had
+    /// run that method instead of the one chosen, and Python had ignored it.
+    pub fn with_options(
+        name: &str,
+        mut options: toml::Table,
+    ) -> std::result::Result<MethodSpec, EntryError> {
+        if let Some(v) = options.get("name") {
+            let msg = format!(
+                "{v} among the options: the method is chosen apart from its options (here \
+                 \"{name}\"); leave `name` out"
+            );
+            return Err(("name".to_string(), msg));
+        }
+        options.insert("name".into(), toml::Value::String(name.into()));
+        MethodSpec::from_table(&options)
+    }
+
     /// Reads one `[[methods]]` entry: `name`, optional `label` and `k`, and the method's
     /// options.
     pub fn from_table(t: &toml::Table) -> std::result::Result<MethodSpec, EntryError> {
