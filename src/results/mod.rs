@@ -365,17 +365,27 @@ impl Db {
             Some((v, c)) => (v.as_str(), c.as_str(), None),
             None => (p.version.as_str(), p.git_commit.as_str(), p.commit_time),
         };
-        let hash = provenance::sha256_hex(
-            [
-                record.kind.as_str(),
-                &record.scenario.hash,
-                &record.output.source_and_document.1,
-                &p.label,
-                &p.machine,
-            ]
-            .join("\u{0}")
-            .as_bytes(),
-        );
+        let hash_as = |kind: Kind| {
+            provenance::sha256_hex(
+                [
+                    kind.as_str(),
+                    &record.scenario.hash,
+                    &record.output.source_and_document.1,
+                    &p.label,
+                    &p.machine,
+                ]
+                .join("\u{0}")
+                .as_bytes(),
+            )
+        };
+        let hash = hash_as(record.kind);
+        // A merged folder holds the bytes of the run it merges, and `record` of it reads it
+        // as a run: the same results, whichever of the two recorded them first.
+        let twin = match record.kind {
+            Kind::Run => hash_as(Kind::Merge),
+            Kind::Merge => hash_as(Kind::Run),
+            _ => hash.clone(),
+        };
         let path = self.path.clone();
         let err = move |e: rusqlite::Error| Error::file(&path, "database", e.to_string());
         // Immediate: the write lock is taken (waiting for another writer) before the
@@ -386,8 +396,8 @@ impl Db {
             .map_err(&err)?;
         let had: Option<i64> = tx
             .query_row(
-                "SELECT id FROM runs WHERE content_hash = ?1",
-                [&hash],
+                "SELECT id FROM runs WHERE content_hash IN (?1, ?2)",
+                [&hash, &twin],
                 |r| r.get(0),
             )
             .optional()

@@ -339,3 +339,52 @@ fn history_orders_versions_by_version_and_flags_a_drift() {
     );
     assert!(!t.contains("regression: "), "{t}");
 }
+
+/// A merged folder holds a run's bytes and `record` reads it as a run: recorded by
+/// `merge --record` and then by `record` (or the reverse) it is one record, where it was two
+/// and `history` listed each point twice.
+#[test]
+fn a_merged_folder_recorded_twice_is_one_record() {
+    let dir = tmp_dir("cli-team-merged");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let shards: Vec<PathBuf> = (0..2)
+        .map(|i| {
+            let out = dir.join(format!("s{i}"));
+            calbench_ok(&[
+                "run",
+                path_arg(&sc),
+                "--trials",
+                "4",
+                "--shard",
+                &format!("{i}/2"),
+                "--out",
+                path_arg(&out),
+            ]);
+            out
+        })
+        .collect();
+    for (name, first_by_merge) in [("m1", true), ("m2", false)] {
+        let (db, out) = (dir.join(format!("{name}.sqlite")), dir.join(name));
+        let mut merge = vec!["merge", path_arg(&shards[0]), path_arg(&shards[1])];
+        merge.extend(["--out", path_arg(&out)]);
+        if first_by_merge {
+            merge.extend(["--record", "--db", path_arg(&db), "--label", "v1"]);
+        }
+        calbench_ok(&merge);
+        let o = record(&out, &db, "v1");
+        assert!(o.status.success(), "{}", text(&o));
+        if !first_by_merge {
+            // The reverse: recorded as a run first, then merged again into another folder
+            // with --record (the same bytes).
+            let again = dir.join(format!("{name}-again"));
+            let mut merge = vec!["merge", path_arg(&shards[0]), path_arg(&shards[1])];
+            merge.extend(["--out", path_arg(&again), "--record", "--db", path_arg(&db)]);
+            merge.extend(["--label", "v1"]);
+            let o = calbench_ok(&merge);
+            assert!(text(&o).contains("nothing added"), "{}", text(&o));
+        } else {
+            assert!(text(&o).contains("nothing added"), "{}", text(&o));
+        }
+        assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 1, "{name}");
+    }
+}
