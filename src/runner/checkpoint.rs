@@ -106,6 +106,13 @@ fn precision_in(path: &Path, meta: &Meta) -> Result<Option<Precision>> {
     meta.precision.as_deref().map(parse).transpose()
 }
 
+/// Removes the temporary output folder a killed process `pid` left beside `out`
+/// ([`crate::report`]'s `.<name>.partial-<pid>`), if any.
+fn remove_partial(out: &Path, pid: u32) {
+    let (parent, name) = crate::report::parent_and_name(out);
+    let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{pid}")));
+}
+
 fn write_meta(dir: &Path, meta: &Meta) -> Result<()> {
     let path = dir.join("checkpoint.json");
     let tmp = dir.join("checkpoint.json.tmp");
@@ -133,6 +140,13 @@ impl Checkpoint {
                 out.display(),
                 out.display()
             ));
+            // The killed run's temporary output folder goes with its checkpoint.
+            let old = std::fs::read_to_string(dir.join("checkpoint.json")).ok();
+            if let Some(m) = old.and_then(|t| serde_json::from_str::<Meta>(&t).ok()) {
+                if m.host == host() && !alive(m.pid) {
+                    remove_partial(out, m.pid);
+                }
+            }
             std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
         }
         let made = MadeFolders::create(&dir)?;
@@ -273,9 +287,7 @@ impl Checkpoint {
             }
         }
         // Checked: from here on the checkpoint is the resumed run's.
-        // The temporary output folder of the killed process.
-        let (parent, name) = crate::report::parent_and_name(out);
-        let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{}", meta.pid)));
+        remove_partial(out, meta.pid);
         let file = std::fs::OpenOptions::new()
             .read(true)
             .write(true)

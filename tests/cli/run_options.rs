@@ -1,8 +1,11 @@
 //! `run`'s `--trials` and `--seed` on every kind of study (docs/formats.md § 2.2): a value out
 //! of range is refused naming the option, not a line of the scenario file, which does not hold
-//! it; and a registration study's start line counts its cells.
+//! it; a registration study's start line counts its cells; and a run started anew where a
+//! killed one left its checkpoint takes the killed run's temporary folder away with it.
 
-use crate::common::{calbench, path_arg, refused, root, tmp_dir};
+use crate::common::{
+    calbench, calbench_ok, kill_once_checkpointed, path_arg, refused, root, tmp_dir,
+};
 
 #[test]
 fn trials_out_of_range_are_refused_naming_the_option() {
@@ -44,4 +47,52 @@ fn a_registration_study_says_how_many_cells_it_runs() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(err.contains("40 cells × 2 trials"), "{err}");
+}
+
+/// A killed run leaves its checkpoint and its temporary output folder (`.NAME.partial-PID`)
+/// beside `--out`; `--resume` took both away, but a new run into the same folder removed the
+/// checkpoint only, and the temporary folder stayed for good (docs/formats.md § 1.7).
+#[test]
+fn a_new_run_over_a_killed_ones_checkpoint_leaves_no_temporary_folder() {
+    let dir = tmp_dir("run-options-anew");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let out = dir.join("z");
+    let args = [
+        "run",
+        path_arg(&sc),
+        "--trials",
+        "100000",
+        "--threads",
+        "1",
+        "--out",
+        path_arg(&out),
+    ];
+    kill_once_checkpointed(&args, &out, 600);
+    let partial = || -> Vec<String> {
+        std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .filter(|n| n.starts_with(".z.partial-"))
+            .collect()
+    };
+    assert_eq!(
+        partial().len(),
+        1,
+        "the killed run left no temporary folder"
+    );
+    let o = calbench_ok(&[
+        "run",
+        path_arg(&sc),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&out),
+    ]);
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("starting anew"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(out.join("summary.json").exists());
+    assert_eq!(partial(), Vec::<String>::new());
 }
