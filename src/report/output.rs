@@ -93,8 +93,22 @@ pub fn json_file(path: &Path, v: &Value) -> Result<()> {
         .file_name()
         .map_or("out".into(), |n| n.to_string_lossy().into_owned());
     let tmp = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
-    let done = text(&tmp, &json_text(v)?)
-        .and_then(|()| std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)));
+    // Any failure is the file's, not the temporary one's the user never named.
+    let done = std::fs::write(&tmp, json_text(v)?)
+        .and_then(|()| std::fs::rename(&tmp, path))
+        .map_err(|e| match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() && !p.is_dir() => Error::io(
+                path,
+                std::io::Error::new(
+                    e.kind(),
+                    match p.exists() {
+                        true => format!("{} is not a folder", p.display()),
+                        false => format!("its folder {} does not exist", p.display()),
+                    },
+                ),
+            ),
+            _ => Error::io(path, e),
+        });
     if done.is_err() {
         let _ = std::fs::remove_file(&tmp);
     }

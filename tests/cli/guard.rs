@@ -137,6 +137,17 @@ fn calbench_baseline_writes_a_baseline_that_pairs_and_refuses_a_lone_summary() {
         "{err}"
     );
     assert!(!dir.join("x.json").exists());
+    // Into a folder that does not exist: the file asked for is named, not the temporary one.
+    let nowhere = dir.join("nowhere/b.json");
+    let o = calbench(&["baseline", path_arg(&a), "--out", path_arg(&nowhere)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.starts_with(&format!("error: {}: its folder ", nowhere.display()))
+            && err.contains("does not exist")
+            && !err.contains("partial"),
+        "{err}"
+    );
     let (ok, text) = check(&a.join("summary.json"), &lone, &[]);
     assert!(ok, "{text}");
     assert!(
