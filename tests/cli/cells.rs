@@ -39,6 +39,23 @@ fn ban_fig3_in_two_shards_merges_to_the_bytes_of_one_run() {
     let o = calbench(&["merge", path_arg(&s0), "--out", path_arg(&dir.join("half"))]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("1/2"));
+    // `check` compares Monte-Carlo summaries: a study of cells is named by its kind (it was
+    // "not a calbench summary.json: missing field `results`").
+    let summary = one.join("summary.json");
+    let o = calbench(&[
+        "check",
+        path_arg(&summary),
+        "--baseline",
+        path_arg(&summary),
+    ]);
+    let line = crate::malformed::line_of(&read(&summary), "  \"kind\"");
+    one_line_naming(
+        &String::from_utf8_lossy(&o.stderr),
+        &summary,
+        &[&format!(
+            "line {line}, kind: is \"registration_study\": the summary of a study of cells"
+        )],
+    );
 }
 
 /// The records of another registration run with the same name and seed but another trial

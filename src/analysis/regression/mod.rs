@@ -275,6 +275,19 @@ pub fn entry_names(summary: &Summary) -> Vec<String> {
 /// not one: not an object with a `scenario` name and `results`, a list of entries each naming
 /// its `method`; a figure of the wrong type; a later format.
 pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
+    // A study of cells writes its `kind` and `cells` where a Monte-Carlo study writes
+    // `results`: a calbench summary, of another kind.
+    if let (Some(kind), None) = (
+        value.get("kind").and_then(Value::as_str),
+        value.get("results"),
+    ) {
+        let msg = format!(
+            "is \"{kind}\": the summary of a study of cells, which `check`, `compare` and \
+             `baseline` do not compare (they compare the `results` of a Monte-Carlo study's \
+             summary); `record` and `history` follow such a study cell by cell"
+        );
+        return Err(Error::file(path, "kind", msg).at_json_key_line());
+    }
     let what = "so this is not a calbench summary (summary.json from `calbench run`: an object \
                 with a `scenario` name and `results`, a list of entries with `method`, `poses` \
                 and metrics)";
