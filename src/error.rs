@@ -118,6 +118,8 @@ pub enum Opt {
     Tip,
     /// Joint values given to a command.
     Q,
+    /// The output folder.
+    Out,
     /// The instrument of an instruments study whose readings a simulation writes.
     Measure,
     /// The task file a task folder's entry ran.

@@ -254,16 +254,14 @@ pub fn atomically(
     use crate::Error;
     let (parent, name) = parent_and_name(out);
     let parent = parent.as_path();
+    // A refusal of the output folder asked for, which each front end names its own way.
     let in_the_way = |p: std::path::PathBuf| {
         let why = if p == out {
             "exists and is not a folder; nothing was written"
         } else {
             "is a folder where an output file of that name is to be written; nothing was written"
         };
-        Error::io(
-            p,
-            std::io::Error::new(std::io::ErrorKind::AlreadyExists, why),
-        )
+        Error::option(crate::error::Opt::Out, format!("{} {why}", p.display()))
     };
     guard::guard_folder(out, "out")?;
     if let Some(p) = blocked_output(out, None::<&str>) {

@@ -220,7 +220,7 @@ pub struct Task {
 }
 
 /// The option a task takes for the library's option `opt`, as its front ends spell a refusal:
-/// `Ok` its own (`method`, `models`; the K-fold choice among the candidate models, `cv`, is
+/// `Ok` its own (`method`, `models`, `out`; the K-fold choice among the candidate models, `cv`, is
 /// `models`, whose folds they are), `Err(opt)` one a task does not take, which a front end
 /// names as identify's (a task's entry has no way past its checks).
 pub fn task_option(
@@ -228,7 +228,7 @@ pub fn task_option(
 ) -> std::result::Result<crate::error::Opt, crate::error::Opt> {
     use crate::error::Opt;
     match opt {
-        Opt::Method | Opt::Models => Ok(opt),
+        Opt::Method | Opt::Models | Opt::Out => Ok(opt),
         Opt::Cv => Ok(Opt::Models),
         _ => Err(opt),
     }
