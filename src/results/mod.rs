@@ -258,18 +258,22 @@ impl Db {
                 ),
             ));
         }
-        let version = |c: &Connection| -> rusqlite::Result<i64> {
-            c.query_row("PRAGMA user_version", [], |r| r.get(0))
-        };
-        let newer = |v: i64| {
-            Error::file(
-                path,
-                "user_version",
-                format!(
-                    "the database has schema version {v}, newer than this calbench's \
-                     {SCHEMA_VERSION}; use a newer calbench (nothing was changed)"
-                ),
-            )
+        // The schema version, refused when newer than this calbench's.
+        let version = |c: &Connection| -> Result<i64> {
+            let v: i64 = c
+                .query_row("PRAGMA user_version", [], |r| r.get(0))
+                .map_err(bad)?;
+            if v > SCHEMA_VERSION {
+                return Err(Error::file(
+                    path,
+                    "user_version",
+                    format!(
+                        "the database has schema version {v}, newer than this calbench's \
+                         {SCHEMA_VERSION}; use a newer calbench (nothing was changed)"
+                    ),
+                ));
+            }
+            Ok(v)
         };
         // The version and the tables are read in one read transaction, so that they are of
         // one state of the file: read apart, another process creating the database could
@@ -277,10 +281,7 @@ impl Db {
         let snapshot = conn
             .transaction_with_behavior(TransactionBehavior::Deferred)
             .map_err(bad)?;
-        let v = version(&snapshot).map_err(bad)?;
-        if v > SCHEMA_VERSION {
-            return Err(newer(v));
-        }
+        let v = version(&snapshot)?;
         if v < 0 {
             return Err(Error::file(
                 path,
@@ -332,10 +333,7 @@ impl Db {
                 .transaction_with_behavior(TransactionBehavior::Immediate)
                 .map_err(bad)?;
             // Another process may have migrated it while this one waited for the lock.
-            let now = version(&tx).map_err(bad)?;
-            if now > SCHEMA_VERSION {
-                return Err(newer(now));
-            }
+            let now = version(&tx)?;
             for (i, sql) in MIGRATIONS.iter().enumerate().skip(now.max(0) as usize) {
                 tx.execute_batch(sql).map_err(bad)?;
                 tx.pragma_update(None, "user_version", (i + 1) as i64)
