@@ -134,6 +134,14 @@ pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
     (parent.to_path_buf(), name)
 }
 
+/// The temporary folder or file `.NAME.partial-PID` beside the output `out` that process `pid`
+/// writes before it becomes `out` ([`atomically`], [`output::json_file`]), and that a killed
+/// run's checkpoint names.
+pub fn partial_path(out: &std::path::Path, pid: u32) -> std::path::PathBuf {
+    let (parent, name) = parent_and_name(out);
+    parent.join(format!(".{name}.partial-{pid}"))
+}
+
 /// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it, where a
 /// run keeps what it has done until it ends.
 pub fn checkpoint_folder(out: &std::path::Path) -> std::path::PathBuf {
@@ -252,8 +260,6 @@ pub fn atomically(
     write: impl FnOnce(&std::path::Path) -> crate::Result<()>,
 ) -> crate::Result<()> {
     use crate::Error;
-    let (parent, name) = parent_and_name(out);
-    let parent = parent.as_path();
     // A refusal of the output folder asked for, which each front end names its own way.
     let in_the_way = |p: std::path::PathBuf| {
         let why = if p == out {
@@ -267,7 +273,7 @@ pub fn atomically(
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }
-    let tmp = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    let tmp = partial_path(out, std::process::id());
     let _ = std::fs::remove_dir_all(&tmp);
     // Made with the folders above it, so that none of them is ever an empty folder another
     // process may remove before this one is made in it.

@@ -89,10 +89,7 @@ pub(crate) fn text(path: &Path, text: &str) -> Result<()> {
 /// Writes the JSON document `v` ([`json_text`]) to the file `path` whole or not at all: into
 /// a temporary file beside it, then renamed over it.
 pub fn json_file(path: &Path, v: &Value) -> Result<()> {
-    let name = path
-        .file_name()
-        .map_or("out".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.partial-{}", std::process::id()));
+    let tmp = super::partial_path(path, std::process::id());
     // Any failure is the file's, not the temporary one's the user never named.
     let done = std::fs::write(&tmp, json_text(v)?)
         .and_then(|()| std::fs::rename(&tmp, path))

@@ -107,10 +107,9 @@ fn precision_in(path: &Path, meta: &Meta) -> Result<Option<Precision>> {
 }
 
 /// Removes the temporary output folder a killed process `pid` left beside `out`
-/// ([`crate::report`]'s `.<name>.partial-<pid>`), if any.
+/// ([`crate::report::partial_path`]), if any.
 fn remove_partial(out: &Path, pid: u32) {
-    let (parent, name) = crate::report::parent_and_name(out);
-    let _ = std::fs::remove_dir_all(parent.join(format!(".{name}.partial-{pid}")));
+    let _ = std::fs::remove_dir_all(crate::report::partial_path(out, pid));
 }
 
 fn write_meta(dir: &Path, meta: &Meta) -> Result<()> {

@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::noise::{figure_of, same_figure, trials_key, Trials};
+use super::noise::{figure_of, is_rmse, same_figure, trials_key, Trials};
 use super::{check_summary, entry_metrics, lookup, read_json};
 use crate::analysis::summary::Summary;
 use crate::error::shown;
@@ -138,6 +138,11 @@ pub fn baseline_document(summary: &Summary, trials: &Trials) -> Result<Value> {
     }
 }
 
+/// The `trials.csv` beside the summary file `path`.
+fn trials_csv(path: &Path) -> PathBuf {
+    path.parent().unwrap_or(Path::new(".")).join("trials.csv")
+}
+
 /// The per-trial values behind the summary `doc` read from `path`: its own [`KEY`] (a
 /// baseline file), else the `trials.csv` beside it (a run folder); `None` when it has
 /// neither. A refusal of its own names the line of the key refused (`line 80,
@@ -151,7 +156,7 @@ pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
             .map(Some)
             .map_err(Error::at_json_key_line);
     }
-    let csv = path.parent().unwrap_or(Path::new(".")).join("trials.csv");
+    let csv = trials_csv(path);
     if csv.is_file() {
         Trials::read(&csv).map(Some)
     } else {
@@ -194,7 +199,7 @@ impl Side {
         let trials = trials_of(&doc, &file)?;
         let summary = check_summary(doc, &file)?;
         if let Some(t) = &trials {
-            let csv = file.parent().unwrap_or(Path::new(".")).join("trials.csv");
+            let csv = trials_csv(&file);
             behind(&summary, t).map_err(|(entry, metric, why)| match own {
                 true => Error::file(&file, format!("{KEY}.entries.{entry}.values.{metric}"), why)
                     .at_json_key_line(),
@@ -227,8 +232,7 @@ impl Side {
 /// edited).
 fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, String, String)> {
     let over_trials = |metric: &str| {
-        Metric::from_key(metric).is_some_and(|m| m.spec().stat.is_some())
-            || Metric::ParamRmse.parameter_of(metric).is_some()
+        Metric::from_key(metric).is_some_and(|m| m.spec().stat.is_some()) || is_rmse(metric)
     };
     for e in &summary.results {
         let entry = trials_key(e, summary);

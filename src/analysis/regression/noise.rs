@@ -213,7 +213,7 @@ pub fn same_figure(a: Real, b: Real) -> bool {
 }
 
 /// Whether `metric` is a parameter's RMSE (`param_rmse.NAME`).
-fn is_rmse(metric: &str) -> bool {
+pub(super) fn is_rmse(metric: &str) -> bool {
     Metric::ParamRmse.parameter_of(metric).is_some()
 }
 
