@@ -7,5 +7,6 @@
 pub mod analyse;
 pub mod claims;
 pub mod comparisons;
+pub mod figures;
 pub mod regression;
 pub mod summary;

@@ -181,9 +181,9 @@ pub fn unpaired_text(why: &Unpaired, baseline: &Side) -> String {
                 _ => "a run of the baseline's scenario and sweep".to_string(),
             };
             format!(
-                "the {key} differs (baseline {a}, this run {b}), so every metric is compared \
-                 from the summaries' intervals; {take} (the baseline's seed, trials and \
-                 sweep) is compared trial by trial"
+                "the runs differ in their {key} (baseline {a}, this run {b}), so every metric \
+                 is compared from the summaries' intervals; {take} (the baseline's seed, \
+                 trials and sweep) is compared trial by trial"
             )
         }
     }

@@ -7,6 +7,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::provenance::sha256_hex;
+use crate::analysis::figures::{self, flatten, Figure};
 use crate::analysis::regression::check_summary;
 use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
@@ -15,7 +16,6 @@ use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
 use crate::study::kind::AnyScenario;
-use crate::study::metric::Metric;
 use crate::study::scenario::Scenario;
 
 /// What kind of output a record is.
@@ -56,19 +56,6 @@ pub struct Entry {
     pub name: String,
     /// Its method.
     pub method: String,
-}
-
-/// One figure: a metric of an entry with its 95 % interval.
-#[derive(Clone, Debug)]
-pub struct Figure {
-    /// The entry's name.
-    pub entry: String,
-    /// The metric's key path, e.g. `validation_after_mm.mean`.
-    pub metric: String,
-    /// Its value.
-    pub value: Real,
-    /// Its 95 % interval, where the output gives one.
-    pub ci: Option<[Real; 2]>,
 }
 
 /// A task entry's result (the contract of `task.json`).
@@ -189,7 +176,7 @@ impl Record {
     }
 
     /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
-    /// whose canonical text as run is `text`; its `summary.json` checked ([`check_figures`]).
+    /// whose canonical text as run is `text`; its `summary.json` checked ([`check_summary`]).
     pub(super) fn of_run_text(
         dir: &Path,
         (name, seed, trials): (&str, Option<u64>, Option<usize>),
@@ -205,21 +192,15 @@ impl Record {
             (&s.scenario, ran_seed),
             &(name.to_string(), seed, trials),
         )?;
-        let mut entries = Vec::new();
-        let mut figures = Vec::new();
-        for e in &s.results {
-            let name = e.key();
-            // Every figure of the typed entry, as summary.json writes it.
-            let written = serde_json::to_value(e).map_err(|e| Error::Compute(e.to_string()))?;
-            if let Value::Object(m) = &written {
-                flatten(&name, "", m, None, &mut figures);
-            }
-            entries.push(Entry {
-                name,
+        let entries = s
+            .results
+            .iter()
+            .map(|e| Entry {
+                name: e.key(),
                 method: e.method.clone(),
-            });
-        }
-        check_figures(&path, s.trials, &figures)?;
+            })
+            .collect();
+        let figures = figures::of_summary(&s)?;
         let mut r = Record::new(kind, dir, document, name.to_string(), text);
         r.output.seed = seed.or(ran_seed);
         r.output.trials = trials.map(|n| format!("0..{n}"));
@@ -406,8 +387,13 @@ pub(super) fn scenario_as_run(
     };
     let ran = dir.join(scenario_file::NAME);
     if ran.is_file() {
-        let text = read_text(&ran)?;
-        let (text, hash) = scenario_file::read(&text, &ran)?;
+        let file_text = read_text(&ran)?;
+        let (text, hash) = scenario_file::read(&file_text, &ran)?;
+        same_run(
+            dir,
+            (name, trials, seed),
+            &AnyScenario::parse(&file_text, Some(&ran))?,
+        )?;
         if let Some(file) = scenario {
             let other = sha256_hex(given(file)?.settings()?.as_bytes());
             if other != hash {
@@ -446,6 +432,39 @@ pub(super) fn scenario_as_run(
     Ok((sc.settings()?, named))
 }
 
+/// Refuses, naming the key of the folder `dir`'s `summary.json` and its line, a summary whose
+/// scenario name, trials or seed (`run`; a missing one is not compared) are not those of the
+/// scenario the folder's `scenario.toml` says was run (`own`): the summary of another run.
+fn same_run(
+    dir: &Path,
+    (name, trials, seed): (&str, Option<usize>, Option<u64>),
+    own: &AnyScenario,
+) -> Result<()> {
+    let said = [
+        ("scenario", Some(name.to_string()), own.name().to_string()),
+        (
+            "trials",
+            trials.map(|t| t.to_string()),
+            own.trials().to_string(),
+        ),
+        ("seed", seed.map(|s| s.to_string()), own.seed().to_string()),
+    ];
+    for (key, summary, ran) in said {
+        match summary {
+            Some(summary) if summary != ran => {
+                let msg = format!(
+                    "is {summary}, but {} (the scenario as run) has {key} {ran}: the summary \
+                     is not of the run beside it",
+                    dir.join(scenario_file::NAME).display()
+                );
+                return Err(Error::file(dir.join("summary.json"), key, msg).at_json_key_line());
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
 /// Refuses, naming the summary `path`, a run of the scenario `ran` with the seed `ran_seed`
 /// recorded as the scenario `named` (name, seed, trials) of another name or seed.
 pub(super) fn check_ran(
@@ -466,104 +485,4 @@ pub(super) fn check_ran(
             show(*seed)
         ),
     ))
-}
-
-fn interval(v: Option<&Value>) -> Option<[Real; 2]> {
-    let a = v?.as_array()?;
-    match (a.first()?.as_f64(), a.get(1)?.as_f64()) {
-        (Some(lo), Some(hi)) => Some([lo, hi]),
-        _ => None,
-    }
-}
-
-/// Every number under `m` as a figure `prefix + key` of `entry`, with the interval of its
-/// sibling `<key>_ci95` (or of the same key in `cis`, the `_ci95` sibling of `m` itself, as
-/// `param_rmse_ci95` is of `param_rmse`); objects are walked, `*_ci95`, strings and lists
-/// skipped.
-pub(super) fn flatten(
-    entry: &str,
-    prefix: &str,
-    m: &serde_json::Map<String, Value>,
-    cis: Option<&Value>,
-    out: &mut Vec<Figure>,
-) {
-    for (k, v) in m {
-        if k.ends_with("_ci95") || (prefix.is_empty() && k == "sweep_value") {
-            continue;
-        }
-        let sibling = m.get(&format!("{k}_ci95"));
-        match v {
-            Value::Number(n) => {
-                if let Some(value) = n.as_f64() {
-                    out.push(Figure {
-                        entry: entry.to_string(),
-                        metric: format!("{prefix}{k}"),
-                        value,
-                        ci: interval(sibling).or_else(|| interval(cis.and_then(|c| c.get(k)))),
-                    });
-                }
-            }
-            Value::Object(inner) => flatten(entry, &format!("{prefix}{k}."), inner, sibling, out),
-            _ => {}
-        }
-    }
-}
-
-/// Whether a figure can be negative: η (an improvement can be a worsening), a parameter's
-/// bias, the improvement in per cent, a signed error along the tool axis and a registration
-/// study's difference SVD − weighted SVD; every other figure (an error, an RMSE, a spread, a
-/// count, a ratio) is ≥ 0.
-fn signed(metric: &str) -> bool {
-    metric.starts_with(Metric::Eta.spec().field)
-        || metric.starts_with("param_bias.")
-        || metric == Metric::Improvement.key()
-        || metric.contains("_axis_mm.")
-        || metric == "difference_mm"
-}
-
-/// Refuses, naming the summary `path` and the key, a document that cannot be what a run
-/// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
-/// a whole number ≥ 0; a figure that must be ≥ 0 below zero ([`signed`]); a figure outside
-/// its own 95 % interval, or an interval whose ends are reversed.
-pub(super) fn check_figures(path: &Path, trials: Option<usize>, figures: &[Figure]) -> Result<()> {
-    if trials == Some(0) {
-        return Err(Error::file(
-            path,
-            "trials",
-            "is 0: the trials of a run are a whole number above 0",
-        ));
-    }
-    for f in figures {
-        let key = || format!("results ({}), {}", f.entry, f.metric);
-        let count = f.metric == Metric::Failures.key() || f.metric.starts_with("terminations.");
-        if count && (f.value < 0.0 || f.value.fract() != 0.0) {
-            return Err(Error::file(
-                path,
-                key(),
-                format!("is {}: a count is a whole number ≥ 0", f.value),
-            ));
-        }
-        if !signed(&f.metric) && f.value < 0.0 {
-            return Err(Error::file(
-                path,
-                key(),
-                format!("is {}: this figure is never negative", f.value),
-            ));
-        }
-        if let Some([lo, hi]) = f.ci {
-            let slack = 1e-9 * f.value.abs().max(lo.abs()).max(hi.abs());
-            if lo > hi || f.value < lo - slack || f.value > hi + slack {
-                return Err(Error::file(
-                    path,
-                    key(),
-                    format!(
-                        "is {} outside its own 95 % interval [{lo}, {hi}]: the figures were \
-                         edited",
-                        f.value
-                    ),
-                ));
-            }
-        }
-    }
-    Ok(())
 }

@@ -206,13 +206,63 @@ pub fn db_path(given: Option<&Path>) -> PathBuf {
         .unwrap_or_else(|| PathBuf::from(DEFAULT_PATH))
 }
 
+/// Whether a reader failed because SQLite could not open or create the write-ahead log's
+/// shared-memory file (`PATH-shm`) beside the database: its folder cannot be written.
+fn cannot_share(e: &rusqlite::Error) -> bool {
+    use rusqlite::ErrorCode::{CannotOpen, ReadOnly};
+    matches!(e, rusqlite::Error::SqliteFailure(f, _) if matches!(f.code, ReadOnly | CannotOpen))
+}
+
+/// The database at `path` opened to read as a file that does not change (SQLite's
+/// `immutable`), for a reader in a folder it cannot write: safe when every commit is in the
+/// file, that is when its write-ahead log (`PATH-wal`) is absent or empty, since no writer can
+/// create one there either. Refused, naming the log, when it holds commits.
+fn unchanging(path: &Path, bad: impl Fn(rusqlite::Error) -> Error) -> Result<Connection> {
+    let mut wal = path.as_os_str().to_owned();
+    wal.push("-wal");
+    let wal = PathBuf::from(wal);
+    if std::fs::metadata(&wal).is_ok_and(|m| m.len() > 0) {
+        return Err(Error::file(
+            &wal,
+            "database",
+            format!(
+                "holds commits not yet written into {}, and its folder cannot be written, so \
+                 SQLite cannot read them (it needs the file -shm beside it); open the database \
+                 once where its folder can be written (nothing was changed)",
+                path.display()
+            ),
+        ));
+    }
+    // A URI: the path's bytes beyond the unreserved ones percent-encoded, an absolute path
+    // after an empty authority (`file:///…`).
+    let mut uri = String::from(if path.is_absolute() {
+        "file://"
+    } else {
+        "file:"
+    });
+    for &b in path.as_os_str().as_encoded_bytes() {
+        match b {
+            b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'-' | b'.' | b'_' | b'~' | b'/' => {
+                uri.push(b as char)
+            }
+            _ => uri.push_str(&format!("%{b:02X}")),
+        }
+    }
+    uri.push_str("?immutable=1");
+    let flags = OpenFlags::SQLITE_OPEN_READ_ONLY
+        | OpenFlags::SQLITE_OPEN_NO_MUTEX
+        | OpenFlags::SQLITE_OPEN_URI;
+    Connection::open_with_flags(uri, flags).map_err(bad)
+}
+
 impl Db {
     /// Opens the database at `path`. With `create` (the commands that record) it is opened
     /// for writing, created with its folder when absent, put in write-ahead-log mode (readers
     /// never block the writer) and migrated to [`SCHEMA_VERSION`] in one immediate
     /// transaction that reads the version again once it holds the lock, so that two processes
     /// creating or migrating the same database at once do it once; without `create` (the
-    /// commands that only read) it is opened read-only and nothing is written to it, and a
+    /// commands that only read) it is opened read-only and nothing is written to it (in a
+    /// folder it cannot write, as a file that does not change: `unchanging`), and a
     /// database of an older schema is refused until a recording command migrates it. Every
     /// connection waits up to [`BUSY_TIMEOUT`] for another writer. Refuses a file that is not
     /// an SQLite database, one whose integrity check fails (damaged pages: it would answer
@@ -243,11 +293,16 @@ impl Db {
             OpenFlags::SQLITE_OPEN_READ_ONLY
         } | OpenFlags::SQLITE_OPEN_NO_MUTEX
             | OpenFlags::SQLITE_OPEN_URI;
+        let quick_check = |c: &Connection| c.query_row("PRAGMA quick_check", [], |r| r.get(0));
         let mut conn = Connection::open_with_flags(path, flags).map_err(bad)?;
         conn.busy_timeout(BUSY_TIMEOUT).map_err(bad)?;
-        let check: String = conn
-            .query_row("PRAGMA quick_check", [], |r| r.get(0))
-            .map_err(bad)?;
+        let check: String = match quick_check(&conn) {
+            Err(e) if !create && cannot_share(&e) => {
+                conn = unchanging(path, bad)?;
+                quick_check(&conn).map_err(bad)?
+            }
+            r => r.map_err(bad)?,
+        };
         if check != "ok" {
             return Err(Error::file(
                 path,

@@ -7,7 +7,8 @@ use std::path::Path;
 use serde::Deserialize;
 use serde_json::{Map, Value};
 
-use super::folder::{check_figures, flatten, scenario_as_run, Entry, Kind, Record};
+use super::folder::{scenario_as_run, Entry, Kind, Record};
+use crate::analysis::figures::{check_figures, flatten};
 use crate::error::{Error, Result};
 use crate::study::registration_study;
 

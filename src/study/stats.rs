@@ -89,7 +89,7 @@ impl TrialFigures {
 /// trial's errors), each with the 95 % t interval of its mean over trials (`null` under 2
 /// trials): `mean_ci95` is the interval of `mean`, `rms_ci95` of `rms`, and so on.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(from = "FiguresRead")]
 pub struct Figures {
     /// The statistics, each averaged over trials.
     #[serde(flatten)]
@@ -102,6 +102,42 @@ pub struct Figures {
     pub max_ci95: Option<[Real; 2]>,
     /// 95 % interval of `std`.
     pub std_ci95: Option<[Real; 2]>,
+}
+
+/// [`Figures`] as `summary.json` holds them, read field by field: `flatten` would read the
+/// statistics from a copy of the object, and a refusal of one of them would name the object
+/// (`validation_after_mm`) and not its key (`validation_after_mm.mean`).
+#[derive(Deserialize)]
+struct FiguresRead {
+    #[serde(deserialize_with = "nan::real")]
+    mean: Real,
+    #[serde(deserialize_with = "nan::real")]
+    rms: Real,
+    #[serde(deserialize_with = "nan::real")]
+    max: Real,
+    #[serde(deserialize_with = "nan::real")]
+    std: Real,
+    mean_ci95: Option<[Real; 2]>,
+    rms_ci95: Option<[Real; 2]>,
+    max_ci95: Option<[Real; 2]>,
+    std_ci95: Option<[Real; 2]>,
+}
+
+impl From<FiguresRead> for Figures {
+    fn from(r: FiguresRead) -> Figures {
+        Figures {
+            stats: ErrorStats {
+                mean: r.mean,
+                rms: r.rms,
+                max: r.max,
+                std: r.std,
+            },
+            mean_ci95: r.mean_ci95,
+            rms_ci95: r.rms_ci95,
+            max_ci95: r.max_ci95,
+            std_ci95: r.std_ci95,
+        }
+    }
 }
 
 impl Figures {

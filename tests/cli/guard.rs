@@ -30,6 +30,17 @@ fn run(scenario: &Path, out: &Path, extra: &[&str]) {
     calbench_ok(&args);
 }
 
+/// A run of `scenarios/ci-guard.toml` with 3 trials and seed 5 into `dir/a`.
+fn three_trials(dir: &Path) -> std::path::PathBuf {
+    let a = dir.join("a");
+    run(
+        &root().join("scenarios/ci-guard.toml"),
+        &a,
+        &["--trials", "3", "--seed", "5"],
+    );
+    a
+}
+
 #[test]
 fn the_tracker_ten_times_noisier_on_the_baselines_seed_fails_against_the_committed_baseline() {
     let dir = tmp_dir("cli-guard-noisy");
@@ -68,7 +79,7 @@ fn the_unchanged_scenario_at_another_seed_passes_against_the_committed_baseline(
     assert!(text.contains("no regression beyond tolerance"), "{text}");
     // Unpaired, and check says why and what would pair it.
     assert!(
-        text.contains("unpaired: the seed differs (baseline 42, this run 7)")
+        text.contains("unpaired: the runs differ in their seed (baseline 42, this run 7)")
             && text.contains("--seed 42"),
         "{text}"
     );
@@ -415,4 +426,95 @@ fn per_trial_values_not_behind_their_summary_are_refused_and_an_unpaired_entry_i
         "{text}"
     );
     assert_eq!(text.matches("unpaired:").count(), 1, "{text}");
+}
+
+/// A summary no run can have written — 0 trials, a figure outside its own interval, an
+/// interval with its ends reversed, a negative RMS — is refused by `check` (as the run and as
+/// the baseline) and by `compare`, naming the file and the key, as `record` refuses it; they
+/// had compared it.
+#[test]
+fn a_summary_no_run_can_have_written_is_refused_by_check_and_compare() {
+    let dir = tmp_dir("cli-guard-impossible");
+    let a = three_trials(&dir);
+    let good = a.join("summary.json");
+    let doc = load_json(&good);
+    type Edit<'a> = (&'a str, &'a str, &'a dyn Fn(&mut serde_json::Value));
+    let edits: [Edit; 4] = [
+        ("zero", "trials", &|d| d["trials"] = 0.into()),
+        ("outside", "validation_after_mm.mean", &|d| {
+            d["results"][0]["validation_after_mm"]["mean"] = 99.0.into()
+        }),
+        ("reversed", "validation_after_mm.rms", &|d| {
+            let ci = &mut d["results"][0]["validation_after_mm"]["rms_ci95"];
+            *ci = serde_json::json!([ci[1], ci[0]]);
+        }),
+        ("negative", "validation_after_mm.rms", &|d| {
+            d["results"][0]["validation_after_mm"]["rms"] = (-0.5).into();
+            d["results"][0]["validation_after_mm"]["rms_ci95"] = serde_json::json!([-0.6, -0.4]);
+        }),
+    ];
+    for (name, key, edit) in edits {
+        let mut d = doc.clone();
+        edit(&mut d);
+        let bad = dir.join(format!("{name}.json"));
+        std::fs::write(&bad, serde_json::to_string_pretty(&d).unwrap()).unwrap();
+        for (summary, base) in [(&bad, &good), (&good, &bad)] {
+            let (ok, text) = check(summary, base, &[]);
+            assert!(
+                !ok && text.contains(&format!("{name}.json")) && text.contains(key),
+                "check {name}: {text}"
+            );
+        }
+        let o = calbench(&[
+            "compare",
+            path_arg(&good),
+            path_arg(&bad),
+            "--out",
+            path_arg(&dir.join(format!("cmp-{name}"))),
+        ]);
+        let text = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && text.contains(&format!("{name}.json")) && text.contains(key),
+            "compare {name}: {text}"
+        );
+        assert!(!dir.join(format!("cmp-{name}")).exists());
+    }
+}
+
+/// A value of the wrong type inside a summary's error statistic or a baseline's per-trial
+/// values is refused naming its own key and line (`results[0].validation_after_mm.mean`,
+/// `per_trial.entries.ls / random.values.…[0]`), where the message named the object around it.
+#[test]
+fn a_bad_value_deep_in_a_summary_or_baseline_is_named_by_its_own_key_and_line() {
+    let dir = tmp_dir("cli-guard-deep");
+    let a = three_trials(&dir);
+    let base = dir.join("base.json");
+    calbench_ok(&["baseline", path_arg(&a), "--out", path_arg(&base)]);
+    let mut s = load_json(&a.join("summary.json"));
+    s["results"][0]["validation_after_mm"]["mean"] = "x".into();
+    let mut b = load_json(&base);
+    let values = &mut b["per_trial"]["entries"]["ls / random"]["values"];
+    let column = values.as_object().unwrap().keys().next().unwrap().clone();
+    values[&column][0] = "x".into();
+    for (name, doc, key) in [
+        (
+            "s.json",
+            s,
+            "results[0].validation_after_mm.mean".to_string(),
+        ),
+        (
+            "b.json",
+            b,
+            format!("per_trial.entries.ls / random.values.{column}[0]"),
+        ),
+    ] {
+        let p = dir.join(name);
+        std::fs::write(&p, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+        let line = read(&p).lines().position(|l| l.contains("\"x\"")).unwrap() + 1;
+        let (ok, text) = check(&p, &a.join("summary.json"), &[]);
+        assert!(
+            !ok && text.contains(&format!("{name}: line {line}, {key}: ")),
+            "{name}: {text}"
+        );
+    }
 }

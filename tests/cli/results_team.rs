@@ -268,6 +268,31 @@ fn record_stores_the_scenario_that_ran_and_refuses_another_or_edited_figures() {
             "{key}: {t}"
         );
     }
+    // The summary and trials of another run (seed 2, or 4 trials) beside this run's
+    // scenario.toml: refused naming the summary's key and its line, which had been recorded
+    // under the other run's seed.
+    for (name, trials, seed, key, said) in [
+        ("seed2", "3", "2", "seed", "is 2, but "),
+        ("four", "4", "1", "trials", "is 4, but "),
+    ] {
+        let other = guard_run(&dir, name, trials, seed);
+        std::fs::copy(run.join("scenario.toml"), other.join("scenario.toml")).unwrap();
+        let o = record(&other, &db, "v5");
+        let t = text(&o);
+        let line = read(&other.join("summary.json"))
+            .lines()
+            .position(|l| l.trim_start().starts_with(&format!("\"{key}\"")))
+            .unwrap();
+        assert!(
+            !o.status.success()
+                && t.contains(&format!(
+                    "{name}/summary.json: line {}, {key}: {said}",
+                    line + 1
+                ))
+                && t.contains("is not of the run beside it"),
+            "{name}: {t}"
+        );
+    }
     assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 2);
 }
 
@@ -387,4 +412,102 @@ fn a_merged_folder_recorded_twice_is_one_record() {
         }
         assert_eq!(count(&db, "SELECT COUNT(*) FROM runs"), 1, "{name}");
     }
+}
+
+/// `calbench ARGS` as a user who cannot write a folder its owner made read-only: this user,
+/// or, under root (which writes anywhere), the user `nobody` through `setpriv`. `None` when
+/// neither can be had outside CI.
+fn unprivileged(args: &[&str]) -> Option<std::process::Output> {
+    let uid = std::process::Command::new("id").arg("-u").output().unwrap();
+    if String::from_utf8_lossy(&uid.stdout).trim() != "0" {
+        return Some(calbench(args));
+    }
+    let bin = env!("CARGO_BIN_EXE_calbench");
+    let mut a = vec!["--reuid=65534", "--regid=65534", "--clear-groups", bin];
+    a.extend(args);
+    match std::process::Command::new("setpriv").args(&a).output() {
+        Ok(o) => Some(o),
+        Err(e) if std::env::var("CI").as_deref() == Ok("true") => panic!("setpriv: {e}"),
+        Err(e) => {
+            eprintln!("skipped: no setpriv to drop root's rights ({e})");
+            None
+        }
+    }
+}
+
+/// A database in a folder its reader cannot write (a shared or published copy) is read by
+/// `history` and `leaderboard`, which had refused it ("attempt to write a readonly database":
+/// SQLite's write-ahead log wants its index file beside it), and nothing is written there; one
+/// whose write-ahead log holds commits is refused, naming the log.
+#[test]
+fn a_database_in_a_folder_that_cannot_be_written_is_read() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tmp_dir("cli-team-readonly");
+    let run = guard_run(&dir, "a", "2", "1");
+    let (ro, outs) = (dir.join("ro"), dir.join("outs"));
+    let db = ro.join("calbench.sqlite");
+    for label in ["v1", "v2"] {
+        assert!(record(&run, &db, label).status.success());
+    }
+    std::fs::create_dir_all(&outs).unwrap();
+    let mode = |p: &Path, m: u32| std::fs::set_permissions(p, PermissionsExt::from_mode(m));
+    mode(&outs, 0o777).unwrap();
+    mode(&ro, 0o555).unwrap();
+    let listing = |p: &Path| -> Vec<(String, Vec<u8>)> {
+        let mut v: Vec<_> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|f| f.unwrap().path())
+            .map(|f| (f.display().to_string(), std::fs::read(&f).unwrap()))
+            .collect();
+        v.sort();
+        v
+    };
+    let before = listing(&ro);
+    for args in [
+        vec!["history", "--regressions"],
+        vec!["history", "--out", path_arg(&outs.join("h"))],
+        vec!["leaderboard", "--out", path_arg(&outs.join("b"))],
+    ] {
+        let mut a = args.clone();
+        a.extend(["--db", path_arg(&db)]);
+        let Some(o) = unprivileged(&a) else { return };
+        assert!(o.status.success(), "{args:?}: {}", text(&o));
+    }
+    assert!(read(&outs.join("h/history.csv")).contains("v2"));
+    assert!(
+        listing(&ro) == before,
+        "a reader wrote into the read-only folder"
+    );
+
+    // A copy taken while a writer held commits in the log: they cannot be read here.
+    let writable = dir.join("w");
+    std::fs::create_dir_all(&writable).unwrap();
+    std::fs::copy(&db, writable.join("calbench.sqlite")).unwrap();
+    let c = rusqlite::Connection::open(writable.join("calbench.sqlite")).unwrap();
+    c.execute_batch("PRAGMA wal_autocheckpoint = 0; UPDATE runs SET label = label || '-edited';")
+        .unwrap();
+    let logged = dir.join("logged");
+    std::fs::create_dir_all(&logged).unwrap();
+    for f in ["calbench.sqlite", "calbench.sqlite-wal"] {
+        std::fs::copy(writable.join(f), logged.join(f)).unwrap();
+    }
+    drop(c);
+    assert!(
+        std::fs::metadata(logged.join("calbench.sqlite-wal"))
+            .unwrap()
+            .len()
+            > 0
+    );
+    mode(&logged, 0o555).unwrap();
+    let db = logged.join("calbench.sqlite");
+    let Some(o) = unprivileged(&["history", "--regressions", "--db", path_arg(&db)]) else {
+        return;
+    };
+    let t = text(&o);
+    assert!(
+        !o.status.success()
+            && t.contains("logged/calbench.sqlite-wal")
+            && t.contains("holds commits not yet written"),
+        "{t}"
+    );
 }

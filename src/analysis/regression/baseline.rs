@@ -148,11 +148,15 @@ fn trials_csv(path: &Path) -> PathBuf {
 /// neither. A refusal of its own names the line of the key refused (`line 80,
 /// per_trial.format`).
 pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
-    if let Some(v) = doc.get(KEY) {
-        let p = serde_json::from_value::<PerTrial>(v.clone())
-            .map_err(|e| Error::file(path, KEY, e.to_string()));
+    if doc.get(KEY).is_some() {
+        /// The baseline's own values, read by their full key path (`per_trial.entries.…`).
+        #[derive(Deserialize)]
+        struct Own {
+            per_trial: PerTrial,
+        }
+        let p = crate::error::read_typed::<Own, _>(doc, path, "baseline");
         return p
-            .and_then(|p| p.to_trials(path))
+            .and_then(|o| o.per_trial.to_trials(path))
             .map(Some)
             .map_err(Error::at_json_key_line);
     }

@@ -24,6 +24,7 @@ use std::path::Path;
 
 use serde_json::Value;
 
+use crate::analysis::figures;
 use crate::analysis::summary::Summary;
 use crate::error::{read_text, Error, Result};
 use crate::numeric::Real;
@@ -315,6 +316,7 @@ pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
         };
         return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
+    figures::check_figures(path, s.trials, &figures::of_summary(&s)?)?;
     Ok(s)
 }
 

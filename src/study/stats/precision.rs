@@ -80,7 +80,8 @@ impl Precision {
         Ok(Precision {
             metric: HEADLINE,
             target,
-            text: t.to_string(),
+            // Without a plus sign, which would be echoed as `±+5%`.
+            text: t.strip_prefix('+').unwrap_or(t).to_string(),
         })
     }
 
@@ -210,6 +211,7 @@ mod tests {
 
     #[test]
     fn targets_parse_and_bad_ones_name_the_flag() {
+        assert_eq!(Precision::parse(" +5%").unwrap().text, "5%");
         assert_eq!(
             Precision::parse("0.5%").unwrap().target,
             Target::Relative(0.005)

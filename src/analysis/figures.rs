@@ -1,0 +1,138 @@
+//! The figures of a summary: every number of an entry with its 95 % interval, as the results
+//! database stores them (docs/formats.md "The results database"), and the refusal of figures
+//! no run can have written, which every reader of a summary applies (`check`, `compare`,
+//! `baseline`, `record`).
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use super::summary::Summary;
+use crate::error::{Error, Result};
+use crate::numeric::Real;
+use crate::study::metric::Metric;
+
+/// One figure: a metric of an entry with its 95 % interval.
+#[derive(Clone, Debug)]
+pub struct Figure {
+    /// The entry's name.
+    pub entry: String,
+    /// The metric's key path, e.g. `validation_after_mm.mean`.
+    pub metric: String,
+    /// Its value.
+    pub value: Real,
+    /// Its 95 % interval, where the output gives one.
+    pub ci: Option<[Real; 2]>,
+}
+
+fn interval(v: Option<&Value>) -> Option<[Real; 2]> {
+    let a = v?.as_array()?;
+    match (a.first()?.as_f64(), a.get(1)?.as_f64()) {
+        (Some(lo), Some(hi)) => Some([lo, hi]),
+        _ => None,
+    }
+}
+
+/// Every number under `m` as a figure `prefix + key` of `entry`, with the interval of its
+/// sibling `<key>_ci95` (or of the same key in `cis`, the `_ci95` sibling of `m` itself, as
+/// `param_rmse_ci95` is of `param_rmse`); objects are walked, `*_ci95`, strings and lists
+/// skipped.
+pub fn flatten(
+    entry: &str,
+    prefix: &str,
+    m: &serde_json::Map<String, Value>,
+    cis: Option<&Value>,
+    out: &mut Vec<Figure>,
+) {
+    for (k, v) in m {
+        if k.ends_with("_ci95") || (prefix.is_empty() && k == "sweep_value") {
+            continue;
+        }
+        let sibling = m.get(&format!("{k}_ci95"));
+        match v {
+            Value::Number(n) => {
+                if let Some(value) = n.as_f64() {
+                    out.push(Figure {
+                        entry: entry.to_string(),
+                        metric: format!("{prefix}{k}"),
+                        value,
+                        ci: interval(sibling).or_else(|| interval(cis.and_then(|c| c.get(k)))),
+                    });
+                }
+            }
+            Value::Object(inner) => flatten(entry, &format!("{prefix}{k}."), inner, sibling, out),
+            _ => {}
+        }
+    }
+}
+
+/// Whether a figure can be negative: η (an improvement can be a worsening), a parameter's
+/// bias, the improvement in per cent, a signed error along the tool axis and a registration
+/// study's difference SVD − weighted SVD; every other figure (an error, an RMSE, a spread, a
+/// count, a ratio) is ≥ 0.
+fn signed(metric: &str) -> bool {
+    metric.starts_with(Metric::Eta.spec().field)
+        || metric.starts_with("param_bias.")
+        || metric == Metric::Improvement.key()
+        || metric.contains("_axis_mm.")
+        || metric == "difference_mm"
+}
+
+/// Refuses, naming the summary `path` and the key, a document that cannot be what a run
+/// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
+/// a whole number ≥ 0; a figure that must be ≥ 0 below zero (`signed`); a figure outside
+/// its own 95 % interval, or an interval whose ends are reversed.
+pub fn check_figures(path: &Path, trials: Option<usize>, figures: &[Figure]) -> Result<()> {
+    if trials == Some(0) {
+        return Err(Error::file(
+            path,
+            "trials",
+            "is 0: the trials of a run are a whole number above 0",
+        ));
+    }
+    for f in figures {
+        let key = || format!("results ({}), {}", f.entry, f.metric);
+        let count = f.metric == Metric::Failures.key() || f.metric.starts_with("terminations.");
+        if count && (f.value < 0.0 || f.value.fract() != 0.0) {
+            return Err(Error::file(
+                path,
+                key(),
+                format!("is {}: a count is a whole number ≥ 0", f.value),
+            ));
+        }
+        if !signed(&f.metric) && f.value < 0.0 {
+            return Err(Error::file(
+                path,
+                key(),
+                format!("is {}: this figure is never negative", f.value),
+            ));
+        }
+        if let Some([lo, hi]) = f.ci {
+            let slack = 1e-9 * f.value.abs().max(lo.abs()).max(hi.abs());
+            if lo > hi || f.value < lo - slack || f.value > hi + slack {
+                return Err(Error::file(
+                    path,
+                    key(),
+                    format!(
+                        "is {} outside its own 95 % interval [{lo}, {hi}]: the figures were \
+                         edited",
+                        f.value
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every figure of the entries of `s`, as its `summary.json` writes them.
+pub fn of_summary(s: &Summary) -> Result<Vec<Figure>> {
+    let mut figures = Vec::new();
+    for e in &s.results {
+        let written = serde_json::to_value(e).map_err(|e| Error::Compute(e.to_string()))?;
+        if let Value::Object(m) = &written {
+            flatten(&e.key(), "", m, None, &mut figures);
+        }
+    }
+    Ok(figures)
+}
