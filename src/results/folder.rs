@@ -176,7 +176,8 @@ impl Record {
     }
 
     /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
-    /// whose canonical text as run is `text`; its `summary.json` checked ([`check_summary`]).
+    /// whose canonical text as run is `text`; its `summary.json` checked ([`check_summary`])
+    /// and its figures unedited ([`figures::Reader::Record`]).
     pub(super) fn of_run_text(
         dir: &Path,
         (name, seed, trials): (&str, Option<u64>, Option<usize>),
@@ -201,6 +202,7 @@ impl Record {
             })
             .collect();
         let figures = figures::of_summary(&s)?;
+        figures::check_figures(&path, s.trials, &figures, figures::Reader::Record)?;
         let mut r = Record::new(kind, dir, document, name.to_string(), text);
         r.output.seed = seed.or(ran_seed);
         r.output.trials = trials.map(|n| format!("0..{n}"));

@@ -8,7 +8,7 @@ use serde::Deserialize;
 use serde_json::{Map, Value};
 
 use super::folder::{scenario_as_run, Entry, Kind, Record};
-use crate::analysis::figures::{check_figures, flatten};
+use crate::analysis::figures::{check_figures, flatten, Reader};
 use crate::error::{Error, Result};
 use crate::study::registration_study;
 
@@ -96,7 +96,7 @@ impl Record {
             flatten(&name, "", &kept, None, &mut figures);
             entries.push(Entry { name, method });
         }
-        check_figures(path, Some(w.trials), &figures)?;
+        check_figures(path, Some(w.trials), &figures, Reader::Record)?;
         let mut r = Record::new(Kind::Run, dir, document, w.scenario.clone(), text);
         r.output.seed = Some(w.seed);
         r.output.trials = Some(format!("0..{}", w.trials));

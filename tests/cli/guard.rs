@@ -428,10 +428,10 @@ fn per_trial_values_not_behind_their_summary_are_refused_and_an_unpaired_entry_i
     assert_eq!(text.matches("unpaired:").count(), 1, "{text}");
 }
 
-/// A summary no run can have written — 0 trials, a figure outside its own interval, an
-/// interval with its ends reversed, a negative RMS — is refused by `check` (as the run and as
-/// the baseline) and by `compare`, naming the file and the key, as `record` refuses it; they
-/// had compared it.
+/// A summary no run can have written — 0 trials, an interval with its ends reversed, a
+/// negative RMS — is refused by `check` (as the run and as the baseline) and by `compare`,
+/// naming the file and the key, as `record` refuses it; they had compared it. A figure scaled
+/// by hand beyond its interval (a "what if") is compared, and found a regression.
 #[test]
 fn a_summary_no_run_can_have_written_is_refused_by_check_and_compare() {
     let dir = tmp_dir("cli-guard-impossible");
@@ -439,11 +439,17 @@ fn a_summary_no_run_can_have_written_is_refused_by_check_and_compare() {
     let good = a.join("summary.json");
     let doc = load_json(&good);
     type Edit<'a> = (&'a str, &'a str, &'a dyn Fn(&mut serde_json::Value));
-    let edits: [Edit; 4] = [
+    let mut outside = doc.clone();
+    outside["results"][0]["validation_after_mm"]["mean"] = 99.0.into();
+    let worse = dir.join("outside.json");
+    std::fs::write(&worse, outside.to_string()).unwrap();
+    let (ok, text) = check(&worse, &good, &[]);
+    assert!(
+        !ok && text.contains("regression: ") && text.contains("validation_after_mm.mean"),
+        "{text}"
+    );
+    let edits: [Edit; 3] = [
         ("zero", "trials", &|d| d["trials"] = 0.into()),
-        ("outside", "validation_after_mm.mean", &|d| {
-            d["results"][0]["validation_after_mm"]["mean"] = 99.0.into()
-        }),
         ("reversed", "validation_after_mm.rms", &|d| {
             let ci = &mut d["results"][0]["validation_after_mm"]["rms_ci95"];
             *ci = serde_json::json!([ci[1], ci[0]]);

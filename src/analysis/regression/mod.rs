@@ -316,7 +316,8 @@ pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
         };
         return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
-    figures::check_figures(path, s.trials, &figures::of_summary(&s)?)?;
+    let reader = figures::Reader::Compare;
+    figures::check_figures(path, s.trials, &figures::of_summary(&s)?, reader)?;
     Ok(s)
 }
 
