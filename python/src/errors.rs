@@ -90,3 +90,52 @@ pub(crate) fn err_spelled(e: calbench::Error, spell: calbench::error::Spell) -> 
 pub(crate) fn setting(key: &str, msg: impl Into<String>) -> PyErr {
     err(calbench::Error::setting(key, msg.into()))
 }
+
+/// The reporter of a run started from Python: the progress bar on a terminal's stderr when
+/// `progress` is asked for, and the run's warnings (the threads capped, a killed run's
+/// checkpoint started over) kept, to be raised as Python warnings (`UserWarning`) on the
+/// calling thread once the run returns ([`Warned::raise`]); they had been dropped without
+/// `progress`, and printed on stderr with it.
+pub(crate) struct Warned {
+    progress: bool,
+    warnings: std::sync::Mutex<Vec<String>>,
+}
+
+impl Warned {
+    pub(crate) fn new(progress: bool) -> Warned {
+        Warned {
+            progress,
+            warnings: std::sync::Mutex::new(Vec::new()),
+        }
+    }
+
+    /// Raises the warnings kept, in their order (an exception where a filter makes one so).
+    pub(crate) fn raise(self, py: Python<'_>) -> PyResult<()> {
+        let warnings = self
+            .warnings
+            .into_inner()
+            .unwrap_or_else(|e| e.into_inner());
+        for w in warnings {
+            let msg = std::ffi::CString::new(w.replace('\0', " "))
+                .map_err(|e| ComputeError::new_err(e.to_string()))?;
+            PyErr::warn(py, &py.get_type::<PyUserWarning>(), &msg, 1)?;
+        }
+        Ok(())
+    }
+}
+
+impl calbench::study::reporter::Reporter for Warned {
+    fn warning(&self, text: &str) {
+        let mut w = self.warnings.lock().unwrap_or_else(|e| e.into_inner());
+        w.push(text.to_string());
+    }
+
+    fn progress(&self, total: u64) -> Box<dyn calbench::study::reporter::Progress + '_> {
+        use calbench::study::reporter::{Silent, Terminal};
+        if self.progress {
+            Terminal.progress(total)
+        } else {
+            Silent.progress(total)
+        }
+    }
+}

@@ -25,12 +25,12 @@ use calbench::runner::run::{run_study, InMemoryRun};
 use calbench::runner::whole::run_cells_study;
 use calbench::study::instruments::InstrumentsScenario;
 use calbench::study::kind::AnyScenario;
-use calbench::study::reporter::{Reporter, Silent, Terminal};
+use calbench::study::reporter::Reporter;
 use calbench::study::stats::precision::Precision;
 use calbench::study::{trial, RunOptions, Shard, Study};
 
 use crate::convert::{any_scenario_of, matrix, scenario_of, DICT};
-use crate::errors::{err, setting, ComputeError};
+use crate::errors::{err, setting, ComputeError, Warned};
 use crate::robot::PyRobot;
 
 /// Joint values as an (N, n) array in the robot's units.
@@ -421,7 +421,8 @@ pub(crate) fn run(
                 .map_err(err)?;
         }
     }
-    let reporter: &dyn Reporter = if opts.progress { &Terminal } else { &Silent };
+    let warned = Warned::new(opts.progress);
+    let reporter: &dyn Reporter = &warned;
     let flag = &*stop.0;
     // The run in a thread of its own; this thread looks for Ctrl-C (Python's signal handlers
     // run on the main thread only) and stops the run when it comes.
@@ -449,6 +450,7 @@ pub(crate) fn run(
             }
         })
     });
+    warned.raise(py)?;
     let inner = stop.raise(inner.map_err(err))?;
     Ok(PyRun { inner })
 }
@@ -482,10 +484,10 @@ pub(crate) fn run_shard(
         input: sc.path.as_deref(),
     };
     let opts = folder_options(Some(folder), threads, progress, shard, None)?;
-    let r = py
-        .detach(|| run_study(sc, &opts, reporter(progress)))
-        .map_err(err)?;
-    Ok(r.seconds)
+    let warned = Warned::new(progress);
+    let r = py.detach(|| run_study(sc, &opts, &warned));
+    warned.raise(py)?;
+    Ok(r.map_err(err)?.seconds)
 }
 
 /// The output folder of a run, with the files it writes there and its scenario file.
@@ -521,15 +523,6 @@ fn folder_options(
         shard,
         precision,
     })
-}
-
-/// The progress bar on a terminal's stderr, or nothing.
-fn reporter(progress: bool) -> &'static dyn Reporter {
-    if progress {
-        &Terminal
-    } else {
-        &Silent
-    }
 }
 
 /// Whether `scenario` is the dict of a Monte-Carlo study, one without a
@@ -582,7 +575,9 @@ pub(crate) fn run_whole(
         input: sc.path(),
     };
     let opts = folder_options(Some(folder), threads, progress, shard, None)?;
-    py.detach(|| run_cells_study(&sc, &opts, reporter(progress)))
-        .map_err(err)?;
+    let warned = Warned::new(progress);
+    let r = py.detach(|| run_cells_study(&sc, &opts, &warned));
+    warned.raise(py)?;
+    r.map_err(err)?;
     Ok(())
 }

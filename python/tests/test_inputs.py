@@ -221,3 +221,19 @@ def test_a_scenario_dict_value_of_the_wrong_type_is_a_setting_error_naming_its_k
         calbench.run(study, out=tmp_path / "out")
     assert "line" not in str(e.value) and "<scenario dict>" not in str(e.value), e.value
     assert not (tmp_path / "out").exists()
+
+
+def test_a_runs_warnings_are_python_warnings(root, tmp_path):
+    # The threads capped (in memory, a shard, a study of cells) and a killed run's checkpoint
+    # started over: a UserWarning with the command line's words, where they had been dropped
+    # (printed on stderr only with progress=True).
+    with pytest.warns(UserWarning, match="99999 threads asked for; running on 2"):
+        calbench.run(root / CI_GUARD, trials=2, threads=99999)
+    with pytest.warns(UserWarning, match="99999 threads asked for"):
+        calbench.run(root / CI_GUARD, trials=2, threads=99999, shard=(0, 2), out=tmp_path / "s")
+    with pytest.warns(UserWarning, match="99999 threads asked for"):
+        calbench.run(root / "scenarios/ban-fig3.toml", trials=1, threads=99999, out=tmp_path / "f")
+    out = tmp_path / "again"
+    (tmp_path / ".again.checkpoint").mkdir()
+    with pytest.warns(UserWarning, match="held the checkpoint of an unfinished run"):
+        calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out=out)
