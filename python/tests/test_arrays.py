@@ -54,3 +54,15 @@ def test_precision_with_a_sweep_is_refused_naming_the_keyword_arguments(cli, roo
     err = cli("run", swept, "--precision", "5%", "--out", tmp_path / "o", ok=False).stderr
     assert "setting `--precision`: a sweep runs the same trials" in err
     assert "give --trials instead" in err and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("method", ["ls", "lm", "igg3"])
+def test_points_the_nominal_robot_fits_exactly_are_no_worsening(root, method):
+    # Before and after, the residuals are the rounding of the points (about 1e-13 mm): a
+    # rise within it had been refused as "makes the robot worse ... 0.0000 mm after against
+    # 0.0000 mm before".
+    robot = calbench.Robot.from_file(root / "robots/ban-irb2600.toml")
+    q = np.random.default_rng(0).uniform(-2, 2, (30, 6))
+    got = calbench.identify(robot, q, robot.fk(q), method=method)
+    assert np.abs(np.asarray(got.residuals)).max() < 1e-9
+    assert got.validation is None or got.validation["after"]["rms"] < 1e-9

@@ -141,10 +141,16 @@ pub fn gross_reading(residuals: &[Real]) -> Option<(usize, Real)> {
     Some((i, ratio))
 }
 
+/// A rise of an RMS error below this (mm, a picometre) is no worsening: the rounding of points
+/// metres from the base (about 1e-13 mm for each), which is all that data the nominal robot
+/// fits exactly leave before and after a solve, and far below any instrument's noise.
+pub const WORSE_FLOOR_MM: Real = 1e-9;
+
 /// Why a result makes the robot worse than the nominal one, each cause in words: a
 /// validation RMS after above the one before, a residual RMS after above the one before (the
 /// readings the robot was identified on), a solve that stopped at its iteration limit with a
-/// cost that grew (`trace`: the RMS residual at each evaluation). Empty: not worse.
+/// cost that grew (`trace`: the RMS residual at each evaluation); each rise by more than
+/// [`WORSE_FLOOR_MM`]. Empty: not worse.
 pub fn worse_causes(
     validation: Option<(Real, Real)>,
     residual: (Real, Real),
@@ -152,20 +158,21 @@ pub fn worse_causes(
     trace: Option<(Real, Real)>,
 ) -> Vec<String> {
     let mut w = Vec::new();
-    if let Some((before, after)) = validation.filter(|(b, a)| a > b) {
+    let rose = |before: Real, after: Real| after > before + WORSE_FLOOR_MM;
+    if let Some((before, after)) = validation.filter(|&(b, a)| rose(b, a)) {
         w.push(format!(
             "the validation RMS is {after:.4} mm after calibration against {before:.4} mm before"
         ));
     }
     let (before, after) = residual;
-    if after > before {
+    if rose(before, after) {
         w.push(format!(
             "the RMS residual on the calibration readings is {after:.4} mm after against \
              {before:.4} mm before"
         ));
     }
     if let (Termination::MaxIterations, Some((first, last))) = (termination, trace) {
-        if last > first {
+        if rose(first, last) {
             w.push(format!(
                 "the solve stopped at its iteration limit with a growing cost (RMS residual \
                  {first:.4} mm at the start, {last:.4} mm at the end)"
@@ -290,6 +297,19 @@ mod tests {
         assert_eq!(w.len(), 2, "{w:?}");
         assert!(
             worse_causes(Some((2.0, 1.0)), (1.0, 1.0), Termination::Converged, None).is_empty()
+        );
+        // Data the nominal robot fits exactly: rounding before and after is no worsening.
+        let rounding = (1.2e-13, 5.8e-13);
+        let w = worse_causes(
+            Some(rounding),
+            rounding,
+            Termination::MaxIterations,
+            Some(rounding),
+        );
+        assert!(w.is_empty(), "{w:?}");
+        assert_eq!(
+            worse_causes(None, (0.0, 2e-9), Termination::Converged, None).len(),
+            1
         );
     }
 }
