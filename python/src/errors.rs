@@ -116,8 +116,8 @@ impl Warned {
             .into_inner()
             .unwrap_or_else(|e| e.into_inner());
         for w in warnings {
-            let msg = std::ffi::CString::new(w.replace('\0', " "))
-                .map_err(|e| ComputeError::new_err(e.to_string()))?;
+            // Without its NUL bytes, the text is a C string.
+            let msg = std::ffi::CString::new(w.replace('\0', " ")).unwrap_or_default();
             PyErr::warn(py, &py.get_type::<PyUserWarning>(), &msg, 1)?;
         }
         Ok(())

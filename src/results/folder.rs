@@ -7,8 +7,8 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::provenance::sha256_hex;
-use crate::analysis::figures::{self, flatten, Figure};
-use crate::analysis::regression::check_summary;
+use crate::analysis::figures::{flatten, Figure, Reader};
+use crate::analysis::regression::check_summary_for;
 use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
 use crate::calibrate::task::{task_path, Division, TaskRecord};
@@ -176,8 +176,8 @@ impl Record {
     }
 
     /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
-    /// whose canonical text as run is `text`; its `summary.json` checked ([`check_summary`])
-    /// and its figures unedited ([`figures::Reader::Record`]).
+    /// whose canonical text as run is `text`; its `summary.json` checked, its figures
+    /// unedited too ([`check_summary_for`] for [`Reader::Record`]).
     pub(super) fn of_run_text(
         dir: &Path,
         (name, seed, trials): (&str, Option<u64>, Option<usize>),
@@ -186,7 +186,7 @@ impl Record {
     ) -> Result<Record> {
         let path = dir.join("summary.json");
         let (document, v) = read(&path)?;
-        let s = check_summary(v, &path)?;
+        let (s, figures) = check_summary_for(v, &path, Reader::Record)?;
         let ran_seed = s.seed;
         check_ran(
             &path,
@@ -201,8 +201,6 @@ impl Record {
                 method: e.method.clone(),
             })
             .collect();
-        let figures = figures::of_summary(&s)?;
-        figures::check_figures(&path, s.trials, &figures, figures::Reader::Record)?;
         let mut r = Record::new(kind, dir, document, name.to_string(), text);
         r.output.seed = seed.or(ran_seed);
         r.output.trials = trials.map(|n| format!("0..{n}"));
@@ -452,16 +450,13 @@ fn same_run(
         ("seed", seed.map(|s| s.to_string()), own.seed().to_string()),
     ];
     for (key, summary, ran) in said {
-        match summary {
-            Some(summary) if summary != ran => {
-                let msg = format!(
-                    "is {summary}, but {} (the scenario as run) has {key} {ran}: the summary \
-                     is not of the run beside it",
-                    dir.join(scenario_file::NAME).display()
-                );
-                return Err(Error::file(dir.join("summary.json"), key, msg).at_json_key_line());
-            }
-            _ => {}
+        if let Some(summary) = summary.filter(|s| *s != ran) {
+            let msg = format!(
+                "is {summary}, but {} (the scenario as run) has {key} {ran}: the summary is \
+                 not of the run beside it",
+                dir.join(scenario_file::NAME).display()
+            );
+            return Err(Error::file(dir.join("summary.json"), key, msg).at_json_key_line());
         }
     }
     Ok(())

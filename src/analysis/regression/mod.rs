@@ -274,8 +274,19 @@ pub fn entry_names(summary: &Summary) -> Vec<String> {
 /// Reads the JSON `value` of the file `path` as a calbench summary ([`Summary`], by serde),
 /// refusing, naming the file and the key (with its line where the file writes it), what is
 /// not one: not an object with a `scenario` name and `results`, a list of entries each naming
-/// its `method`; a figure of the wrong type; a later format.
+/// its `method`; a figure of the wrong type; a later format; figures no run writes
+/// ([`figures::check_figures`] for [`figures::Reader::Compare`]).
 pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
+    check_summary_for(value, path, figures::Reader::Compare).map(|(s, _)| s)
+}
+
+/// [`check_summary`] with its figures checked for `reader`, returned with the summary
+/// ([`figures::of_summary`]).
+pub fn check_summary_for(
+    value: Value,
+    path: &Path,
+    reader: figures::Reader,
+) -> Result<(Summary, Vec<figures::Figure>)> {
     // A study of cells writes its `kind` and `cells` where a Monte-Carlo study writes
     // `results`: a calbench summary, of another kind.
     if let (Some(kind), None) = (
@@ -316,9 +327,9 @@ pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
         };
         return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
-    let reader = figures::Reader::Compare;
-    figures::check_figures(path, s.trials, &figures::of_summary(&s)?, reader)?;
-    Ok(s)
+    let figures = figures::of_summary(&s)?;
+    figures::check_figures(path, s.trials, &figures, reader)?;
+    Ok((s, figures))
 }
 
 /// Refuses a summary and a baseline (each read by [`check_summary`]) that cannot be compared,
