@@ -162,7 +162,8 @@ def identify(
         options: dict of the method's options, the keys of a scenario's ``[[methods]]``
             entry (e.g. ``{"max_iter": 50}``; ``k`` for full poses).
         registration: ``identify``, ``svd``, ``wsvd`` or ``known`` (points in the base frame).
-        params: the identified parameters (names; default: the identifiable set).
+        params: the identified parameters (names; default: the identifiable set; an empty
+            list is refused, as ``--params ""`` is).
         fix: parameters held at their nominal values (``--fix``).
         prior: dict name → σ of a prior on that parameter's error (``--prior``).
         compliance: joint compliances identified too: ``"c2,c3"`` or ``"gravity"``.

@@ -202,6 +202,12 @@ pub(crate) fn identify<'py>(
         payload: payload.as_ref(),
         data,
     };
+    // An empty list is refused as `--params ""` is: left out, the identifiable set is
+    // identified.
+    if params.as_ref().is_some_and(Vec::is_empty) {
+        let why = "names no parameter: leave it out to identify the identifiable set";
+        return Err(setting("params", why));
+    }
     let (data, source) = readings.read(nominal)?;
     let spec = method_spec(method, options.as_ref(), data.k_refusal())?;
     let registration: Registration = registration.parse().map_err(|_| {

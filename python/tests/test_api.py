@@ -255,6 +255,30 @@ def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_p
         calbench.identify(robot, q, p, data=simulated / "measurements.csv")
 
 
+def test_fixing_every_parameter_or_naming_none_is_refused_by_its_own_name(cli, simulated, root,
+                                                                           tmp_path):
+    # Fixing every parameter had been refused as "setting `params`: no parameters to
+    # identify", an option the user never gave; `params=[]` identified the default set.
+    robot = calbench.Robot.builtin("irb2600")
+    everything = ",".join(robot.parameter_names())
+    q, p = read_measurements(simulated / "measurements.csv", 6)
+    left = "leaves no parameter to identify"
+    with pytest.raises(calbench.SettingError, match=f"setting `fix`: {left}"):
+        calbench.identify(robot, q, p, fix=everything)
+    got = cli("identify", "--robot", "irb2600", "--data", simulated / "measurements.csv",
+              "--method", "ls", "--fix", everything, "--out", tmp_path / "id", ok=False)
+    assert got.returncode != 0 and f"setting `--fix`: {left}" in got.stderr, got.stderr
+    assert not (tmp_path / "id").exists()
+    with pytest.raises(calbench.SettingError, match="setting `params`: names no parameter"):
+        calbench.identify(robot, q, p, params=[])
+    # A kind file's identification the same.
+    cli("simulate", root / "scenarios" / "instruments.toml", "--measure", "plane",
+        "--out", tmp_path / "sim")
+    with pytest.raises(calbench.SettingError, match=f"setting `fix`: {left}"):
+        calbench.identify(robot, data=tmp_path / "sim" / "measurements.csv", method="ls",
+                          fix=everything)
+
+
 def test_identify_a_kind_file_returns_the_cli_record(cli, root, tmp_path):
     cli("simulate", root / "scenarios" / "instruments.toml", "--measure", "plane",
         "--out", tmp_path / "sim")

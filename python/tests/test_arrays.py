@@ -66,3 +66,22 @@ def test_points_the_nominal_robot_fits_exactly_are_no_worsening(root, method):
     got = calbench.identify(robot, q, robot.fk(q), method=method)
     assert np.abs(np.asarray(got.residuals)).max() < 1e-9
     assert got.validation is None or got.validation["after"]["rms"] < 1e-9
+
+
+def test_identifiability_and_the_solve_judge_rank_by_one_rule(root):
+    # Poses within ±1° determine the arm's 27 parameters only to a scaled condition number
+    # near 1e7. The analysis had kept all 27 by its pivots' remaining norms (condition
+    # number 2.6e7) while the solve, counting singular values above 1e-7 of the largest,
+    # found rank 26, and its refusal then said "the poses determine all 27 kinematic
+    # parameters, yet the solve's rank is 26".
+    robot = calbench.Robot.from_file(root / "robots/ban-irb2600.toml")
+    q = np.random.default_rng(0).uniform(-1, 1, (30, 6))
+    points = robot.fk(q)
+    analysis = calbench.identifiability(robot, q)
+    assert analysis["condition_number"] < 1e7
+    with pytest.raises(calbench.FileError, match="determine only 26 of the 27 parameters"):
+        calbench.identify(robot, q, points, method="ls")
+    # What the analysis finds identifiable, the solve finds of full rank.
+    kinematic = [p for p in analysis["identifiable"] if not p.startswith("base.")]
+    got = calbench.identify(robot, q, points, method="ls", params=kinematic)
+    assert (got.termination, got.rank) == ("converged", len(kinematic))

@@ -107,6 +107,7 @@ pub fn identify_kind(
         }
     };
     candidates.retain(|p| !fixed.contains(p));
+    super::verdict::check_some_left(&candidates, fixed)?;
     let (qs, on) = on_first_guess(nominal, &file.qs, &data, &p).map_err(in_file)?;
     let analysis = identifiability(nominal, &candidates, &qs, &on).map_err(in_file)?;
     let params = match chosen {

@@ -19,8 +19,8 @@ use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{
-    self, check_names, gross_reading, registration_warning, rms, worse_causes, worse_error,
-    worse_warning,
+    self, check_names, check_some_left, gross_reading, registration_warning, rms, worse_causes,
+    worse_error, worse_warning,
 };
 use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
@@ -180,6 +180,7 @@ impl IdentifyRequest {
         }
         params.retain(|p| !self.fix.contains(p));
         check_names(Opt::Fix, nominal, &self.fix)?;
+        check_some_left(&params, &self.fix)?;
         let setup = cv::CvSetup {
             method: &spec,
             registration,

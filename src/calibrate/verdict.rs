@@ -264,6 +264,16 @@ pub fn check_names(option: Opt, nominal: &Robot, names: &[Param]) -> Result<()> 
     Ok(())
 }
 
+/// Refuses fixed parameters (`fixed`) that leave nothing of `params` to identify, naming the
+/// option that fixed them, where the solver would name the parameters' list.
+pub fn check_some_left(params: &[Param], fixed: &[Param]) -> Result<()> {
+    if params.is_empty() && !fixed.is_empty() {
+        let why = "leaves no parameter to identify: every one to be identified is held";
+        return Err(Error::option(Opt::Fix, why));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -16,8 +16,57 @@ use crate::measurement::Measure;
 use crate::numeric::Real;
 use crate::robot::{Param, Robot};
 
-/// Relative tolerance below which a scaled column counts as dependent.
+/// Relative tolerance of numerical rank, the one rule of the analysis and the identification
+/// ([`crate::identify::solver::RANK_TOLERANCE`] is this constant): a direction of the
+/// column-scaled Jacobian whose singular value is below this fraction of the largest is
+/// undetermined. Pivoting stops at a column whose remaining norm is below it, and the chosen
+/// columns are then cut back until their own scaled singular values all lie above it, so the
+/// identifiable parameters are those the identification, solving for
+/// them alone on the same rows, finds of full rank.
 pub const RANK_TOL: Real = 1e-7;
+
+/// Whether columns whose scaled singular values run from `smallest` to `largest` are all
+/// determined by [`RANK_TOL`]: `smallest > RANK_TOL · largest`, the identification's test of
+/// full rank (its rank counts the singular values above that floor).
+fn determined((largest, smallest): (Real, Real)) -> bool {
+    largest.is_finite() && smallest > RANK_TOL * largest
+}
+
+/// The largest and smallest scaled singular values of a set of columns, with what was computed
+/// to find them.
+type Extremes<T> = Option<((Real, Real), T)>;
+
+/// The largest and smallest singular values of an SVD.
+fn extremes(svd: &nalgebra::SVD<Real, nalgebra::Dyn, nalgebra::Dyn>) -> (Real, Real) {
+    svd.singular_values
+        .iter()
+        .fold((0.0, Real::INFINITY), |(a, b), &s| (a.max(s), b.min(s)))
+}
+
+/// The columns of `pivots` (in the order chosen), sorted, cut back from the last chosen while
+/// `extremes` of the sorted columns, the largest and smallest scaled singular values (`None`
+/// when they cannot be computed: then no cut), are not [`determined`]; with what `extremes`
+/// gave for the columns kept.
+fn cut_to_determined<T>(
+    mut pivots: Vec<usize>,
+    extremes: impl Fn(&[usize]) -> Extremes<T>,
+) -> (Vec<usize>, Extremes<T>) {
+    loop {
+        let mut kept = pivots.clone();
+        kept.sort_unstable();
+        let e = if kept.is_empty() {
+            None
+        } else {
+            extremes(&kept)
+        };
+        match e {
+            Some((sv, _)) if !determined(sv) => {
+                pivots.pop();
+            }
+            _ => return (kept, e),
+        }
+    }
+}
 
 /// The result of an identifiability analysis.
 #[derive(Clone, Debug)]
@@ -222,7 +271,7 @@ pub fn identifiable_extension(
     // Modified Gram-Schmidt, `params` first.
     let mut basis: Vec<DVector<Real>> = Vec::new();
     let mut kept = Vec::new();
-    for (c, p) in all.iter().enumerate() {
+    for (c, _) in all.iter().enumerate() {
         let mut v = j.column(c).into_owned();
         for b in &basis {
             let d = b.dot(&v);
@@ -232,11 +281,22 @@ pub fn identifiable_extension(
         if n > RANK_TOL {
             basis.push(v / n);
             if c >= params.len() {
-                kept.push(*p);
+                kept.push(c);
             }
         }
     }
-    kept
+    // Cut back the terms kept last while `params` and the terms are not determined together;
+    // `params` themselves are not judged here: once they are determined, the cut stops at them.
+    let singular = |cols: &[usize]| {
+        let svd = crate::numeric::linalg::svd(j.select_columns(cols), false, false)?;
+        Some((extremes(&svd), ()))
+    };
+    let base: Vec<usize> = (0..params.len()).collect();
+    if singular(&base).is_none_or(|(sv, ())| determined(sv)) {
+        kept = cut_to_determined(base.into_iter().chain(kept).collect(), singular).0;
+        kept.drain(..params.len());
+    }
+    kept.iter().map(|&c| all[c]).collect()
 }
 
 /// Pose sets larger than this are analysed from the Gram matrix of the Jacobian, summed
@@ -269,31 +329,25 @@ pub fn analyse(
 /// (any measurement kind's rows, with the instrument's own unknowns projected out).
 pub fn analyse_jacobian(params: &[Param], mut j: DMatrix<Real>) -> Identifiability {
     scale_columns(&mut j);
-    let pivots = pivoted_gram_schmidt(&j, RANK_TOL);
-    let mut is_pivot = vec![false; params.len()];
-    for &p in &pivots {
-        is_pivot[p] = true;
-    }
-    let ident_idx: Vec<usize> = (0..params.len()).filter(|&c| is_pivot[c]).collect();
-    let dep_idx: Vec<usize> = (0..params.len()).filter(|&c| !is_pivot[c]).collect();
+    let (ident_idx, svd) = cut_to_determined(pivoted_gram_schmidt(&j, RANK_TOL), |cols| {
+        let svd = crate::numeric::linalg::svd(j.select_columns(cols), true, true)?;
+        Some((extremes(&svd), svd))
+    });
+    let dep_idx: Vec<usize> = (0..params.len())
+        .filter(|c| ident_idx.binary_search(c).is_err())
+        .collect();
 
     // Groups: each dependent column as a combination of the identifiable ones.
-    let a = j.select_columns(&ident_idx);
-    let svd = crate::numeric::linalg::svd(a.clone(), true, true);
     let groups = dependency_groups(params, &ident_idx, &dep_idx, |d| {
         let b = j.column(d).into_owned();
         (b.norm() >= RANK_TOL).then(|| {
             svd.as_ref()
-                .and_then(|svd| svd.solve(&b, 1e-12).ok())
+                .and_then(|(_, svd)| svd.solve(&b, 1e-12).ok())
                 .unwrap_or_else(|| DVector::zeros(ident_idx.len()))
         })
     });
 
-    let (mx, mn) = svd.map_or((0.0, 0.0), |svd| {
-        svd.singular_values
-            .iter()
-            .fold((0.0f64, f64::INFINITY), |(a, b), &s| (a.max(s), b.min(s)))
-    });
+    let (mx, mn) = svd.map_or((0.0, 0.0), |(sv, _)| sv);
     let condition_number = if ident_idx.is_empty() || mn <= 0.0 {
         f64::INFINITY
     } else {
@@ -340,25 +394,23 @@ pub fn analyse_gram(
     let d = gram_dependence(sums.n());
     let mut parent = d.parent;
     let groups = collect_groups(params, &d.in_group, &mut parent);
-    let (ident_idx, dep_idx, ss) = (d.identifiable, d.dependent, d.scaled);
-    let k = ident_idx.len();
-    let mut lower: Vec<Real> = (0..k * k).map(|ik| ss[(ik / k, ik % k)]).collect();
-    let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
-    let ok = crate::numeric::symeig::symmetric_eigenvalues(&mut lower, k, &mut ev, &mut scratch);
-    let (mx, mn) = ev.iter().fold((0.0 as Real, Real::INFINITY), |(a, b), &e| {
-        (a.max(e), b.min(e))
-    });
-    let condition_number = if k == 0 || !ok || mn <= 0.0 {
-        Real::INFINITY
-    } else {
-        (mx / mn).sqrt()
+    let condition_number = match d.eigenvalues {
+        Some((mx, mn)) if mn > 0.0 => (mx / mn).sqrt(),
+        _ => Real::INFINITY,
     };
-    Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
+    Identifiability::of(
+        params,
+        &d.identifiable,
+        &d.dependent,
+        groups,
+        condition_number,
+    )
 }
 
 /// The dependence analysis of [`analyse_gram`] on a Gram matrix `n = JᵀJ` (or a weighted
 /// normal matrix `JᵀWJ`, the Gram matrix of `W^½ J`): which columns pivoted Cholesky of the
-/// column-scaled matrix keeps (a column's remaining norm above [`RANK_TOL`]), which depend on
+/// column-scaled matrix keeps (a column's remaining norm above [`RANK_TOL`], cut back until the
+/// kept columns are determined by [`RANK_TOL`] as the identification judges them), which depend on
 /// them, and which take part in a dependency (a dependent column, or a kept one whose weight
 /// in a dependent column's combination exceeds [`DEPENDENCE_WEIGHT`]).
 pub struct GramDependence {
@@ -373,8 +425,9 @@ pub struct GramDependence {
     pub scale: Vec<Real>,
     /// The union-find forest of the groups.
     parent: Vec<usize>,
-    /// The scaled matrix over the kept columns.
-    scaled: DMatrix<Real>,
+    /// The largest and smallest eigenvalues of the scaled matrix over the kept columns;
+    /// `None` when there are none or they cannot be computed.
+    eigenvalues: Option<(Real, Real)>,
 }
 
 /// [`GramDependence`] of the symmetric positive semi-definite `n`.
@@ -407,8 +460,24 @@ pub fn gram_dependence(n: &DMatrix<Real>) -> GramDependence {
             }
         }
     }
-    let ident_idx: Vec<usize> = (0..t).filter(|&c| used[c]).collect();
-    let dep_idx: Vec<usize> = (0..t).filter(|&c| !used[c]).collect();
+    let (ident_idx, eigenvalues) = cut_to_determined(chosen, |cols| {
+        let k = cols.len();
+        let mut lower: Vec<Real> = (0..k * k)
+            .map(|ik| s[(cols[ik / k], cols[ik % k])])
+            .collect();
+        let (mut ev, mut scratch) = (vec![0.0; k], vec![0.0; k]);
+        crate::numeric::symeig::symmetric_eigenvalues(&mut lower, k, &mut ev, &mut scratch).then(
+            || {
+                let (mx, mn) = ev.iter().fold((0.0 as Real, Real::INFINITY), |(a, b), &e| {
+                    (a.max(e), b.min(e))
+                });
+                ((mx.max(0.0).sqrt(), mn.max(0.0).sqrt()), (mx, mn))
+            },
+        )
+    });
+    let dep_idx: Vec<usize> = (0..t)
+        .filter(|c| ident_idx.binary_search(c).is_err())
+        .collect();
     let ss = s.select_rows(&ident_idx).select_columns(&ident_idx);
     let chol = ss.clone().cholesky();
     let (in_group, parent) = dependency_forest(t, &ident_idx, &dep_idx, |d| {
@@ -424,7 +493,7 @@ pub fn gram_dependence(n: &DMatrix<Real>) -> GramDependence {
         in_group,
         scale,
         parent,
-        scaled: ss,
+        eigenvalues: eigenvalues.map(|(_, e)| e),
     }
 }
 

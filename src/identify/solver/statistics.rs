@@ -103,8 +103,9 @@ pub fn inverse_diagonal(n: &DMatrix<Real>) -> Option<Vec<Real>> {
 
 /// Directions whose scaled singular value is below this fraction of the largest are
 /// undetermined by the data (relative eigenvalue of the scaled normal matrix below its
-/// square, 1e-14: a few hundred times the rounding of `JᵀPJ`).
-pub const RANK_TOLERANCE: Real = 1e-7;
+/// square, 1e-14: a few hundred times the rounding of `JᵀPJ`). The identifiability analysis's
+/// own tolerance, so that the parameters it finds identifiable are of full rank here.
+pub const RANK_TOLERANCE: Real = crate::robot::identifiability::RANK_TOL;
 
 /// The numerical rank of [`conditioning`] without its eigenvalues when the matrix is clearly
 /// of full rank, as almost every calibration's is. With `S = D^-½ n D^-½` (unit diagonal),
@@ -204,6 +205,38 @@ mod tests {
     /// The rank certificate's `trace S⁻¹` (four columns of L⁻¹ at a time) against the trace
     /// of the inverse of the scaled matrix formed by nalgebra, for sizes around the groups of
     /// four and columns of very different scales.
+    /// One rank rule: the parameters the identifiability analysis finds identifiable are of
+    /// full rank by [`rank`] on the same rows, down to pose sets that barely move the joints
+    /// (near the tolerance, where the pivots' remaining norms had kept a column whose scaled
+    /// singular value lay below it).
+    #[test]
+    fn what_identifiability_keeps_the_solve_finds_of_full_rank() {
+        use crate::measurement::Measure;
+        use crate::robot::identifiability::analyse;
+        use crate::robot::jacobian::{jacobian, Columns};
+        let mut checked = 0;
+        for name in ["irb2600", "tx60", "guo-3t2r"] {
+            let robot = crate::robot::builtin::load(name).expect("robot");
+            let mut g = crate::numeric::rng::from_seed(3);
+            let wide = crate::robot::sampling::uniform_joint_poses(&robot, 30, &mut g);
+            for shrink in [1.0, 0.05, 0.02, 0.01, 0.007, 0.005, 0.003] {
+                let qs: Vec<Vec<Real>> = wide
+                    .iter()
+                    .map(|q| q.iter().map(|v| v * shrink).collect())
+                    .collect();
+                for measure in [Measure::Position, Measure::Pose] {
+                    let a = analyse(&robot, &robot.params(), &qs, measure);
+                    let cols = Columns::new(&a.identifiable, robot.dof());
+                    let j = jacobian(&robot, &cols, &qs, measure);
+                    let n = j.transpose() * &j;
+                    assert_eq!(rank(&n), a.rank, "{name} ×{shrink} {measure:?}");
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 42);
+    }
+
     #[test]
     fn scaled_inverse_trace_is_the_trace_of_the_inverse() {
         let mut g = crate::numeric::rng::from_seed(5);
