@@ -136,6 +136,32 @@ pub struct Record {
     pub results: Results,
 }
 
+/// A run or merge folder's `summary.json` as read (`document`) and checked for recording:
+/// its summary and its figures, unedited ([`check_summary_for`] for [`Reader::Record`]).
+pub(super) struct RanSummary {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// Its text.
+    pub document: String,
+    /// The summary.
+    pub summary: crate::analysis::summary::Summary,
+    /// Its figures.
+    pub figures: Vec<Figure>,
+}
+
+impl RanSummary {
+    /// The summary `v` of the file `path`, whose text is `document`, checked for recording.
+    pub(super) fn check(path: &Path, document: String, v: Value) -> Result<RanSummary> {
+        let (summary, figures) = check_summary_for(v, path, Reader::Record)?;
+        Ok(RanSummary {
+            path: path.to_path_buf(),
+            document,
+            summary,
+            figures,
+        })
+    }
+}
+
 pub(super) fn read(path: &Path) -> Result<(String, Value)> {
     let text = read_text(path)?;
     let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
@@ -172,21 +198,28 @@ impl Record {
     pub fn of_run(dir: &Path, sc: &Scenario, kind: Kind) -> Result<Record> {
         let text = scenario_file::canonical(sc)?;
         let trials = Some(sc.trials);
-        Record::of_run_text(dir, (&sc.name, Some(sc.seed), trials), text, kind)
+        let path = dir.join("summary.json");
+        let (document, v) = read(&path)?;
+        let ran = RanSummary::check(&path, document, v)?;
+        Record::of_run_text(dir, (&sc.name, Some(sc.seed), trials), text, kind, ran)
     }
 
     /// The run or merge folder `dir` of the scenario named `name` with its seed and trials,
-    /// whose canonical text as run is `text`; its `summary.json` checked, its figures
-    /// unedited too ([`check_summary_for`] for [`Reader::Record`]).
+    /// whose canonical text as run is `text`, from its `summary.json` as read and checked
+    /// (`ran`), which must name that scenario and seed.
     pub(super) fn of_run_text(
         dir: &Path,
         (name, seed, trials): (&str, Option<u64>, Option<usize>),
         text: String,
         kind: Kind,
+        ran: RanSummary,
     ) -> Result<Record> {
-        let path = dir.join("summary.json");
-        let (document, v) = read(&path)?;
-        let (s, figures) = check_summary_for(v, &path, Reader::Record)?;
+        let RanSummary {
+            path,
+            document,
+            summary: s,
+            figures,
+        } = ran;
         let ran_seed = s.seed;
         check_ran(
             &path,

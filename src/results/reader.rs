@@ -4,9 +4,8 @@
 
 use std::path::Path;
 
-use super::folder::{read, scenario_as_run, Kind, Record};
+use super::folder::{read, scenario_as_run, Kind, RanSummary, Record};
 use super::whole::is_whole;
-use crate::analysis::regression::check_summary;
 use crate::error::{Error, Result};
 
 impl Record {
@@ -25,11 +24,11 @@ impl Record {
             if is_whole(&v) {
                 return Record::of_whole(dir, (&path, document), v, scenario);
             }
-            let summary = check_summary(v, &path)?;
-            let run = (summary.scenario.as_str(), summary.trials, summary.seed);
-            let (text, named) = scenario_as_run(dir, run, scenario)?;
+            let ran = RanSummary::check(&path, document, v)?;
+            let s = &ran.summary;
+            let (text, named) = scenario_as_run(dir, (&s.scenario, s.trials, s.seed), scenario)?;
             let (name, seed, trials) = named;
-            return Record::of_run_text(dir, (&name, seed, trials), text, Kind::Run);
+            return Record::of_run_text(dir, (&name, seed, trials), text, Kind::Run, ran);
         }
         if dir.join("identified.json").is_file() {
             return Record::of_identify(dir);
