@@ -8,7 +8,7 @@ use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2, PyReadonl
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyComplex, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
-use calbench::measurement::csv::measurements_from_arrays;
+use calbench::measurement::csv::{measurements_from_arrays, ArrayKeys};
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::robot::Robot;
@@ -178,23 +178,28 @@ pub(crate) fn quaternions(key: &str, a: &Bound<'_, PyAny>) -> PyResult<Vec<[Real
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn measurements(
     robot: &Robot,
-    what: &str,
+    keys: ArrayKeys<'_>,
     q: &PyReadonlyArray2<'_, f64>,
     points: &PyReadonlyArray2<'_, f64>,
     rotations: Option<&Bound<'_, PyAny>>,
     sigma: Option<&PyReadonlyArray1<'_, f64>>,
     payload: Option<&PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<Measurements> {
+    // An array's shape is refused naming the argument, or its place in the one that gave it.
+    let key = |array: &str| match keys {
+        ArrayKeys::Own => array.to_string(),
+        ArrayKeys::All(what) => format!("{what}.{array}"),
+    };
     let quats = rotations
-        .map(|r| quaternions(&format!("{what}.rotations"), r))
+        .map(|r| quaternions(&key("rotations"), r))
         .transpose()?;
     let sigma = sigma.map(|s| s.as_array().to_vec());
     let payload = payload.map(|s| s.as_array().to_vec());
     measurements_from_arrays(
         robot,
-        what,
+        keys,
         &rows(q),
-        &points3(&format!("{what}.points"), points)?,
+        &points3(&key("points"), points)?,
         quats.as_deref(),
         sigma.as_deref(),
         payload.as_deref(),

@@ -16,7 +16,7 @@ use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
-use calbench::measurement::csv::read_measurements;
+use calbench::measurement::csv::{read_measurements, ArrayKeys};
 use calbench::measurement::kind_csv::{file_kind, read_kind_file};
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
@@ -67,7 +67,7 @@ impl Readings<'_, '_> {
         };
         let m = measurements(
             robot,
-            "data",
+            ArrayKeys::Own,
             q,
             points,
             self.rotations,
@@ -154,7 +154,8 @@ fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Me
             "expected a measurement file or (q, points[, rotations])",
         )
     })?;
-    measurements(robot, "validate", &vq, &vp, vr.as_ref(), None, None).map(Some)
+    let keys = ArrayKeys::All("validate");
+    measurements(robot, keys, &vq, &vp, vr.as_ref(), None, None).map(Some)
 }
 
 /// Identification (the Python half documents the arguments): the dict of `record` (the

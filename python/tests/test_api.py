@@ -172,17 +172,17 @@ def test_identify_refuses_bad_arrays(simulated):
         calbench.identify(robot, q[:, :5], p)
     with pytest.raises(calbench.SettingError, match="shape"):
         calbench.identify(robot, q, p[:, :2])
-    with pytest.raises(calbench.SettingError, match="rows of points"):
+    with pytest.raises(calbench.SettingError, match=r"^setting `points`: 40 joint vectors but 39 rows of points"):
         calbench.identify(robot, q, p[:-1])
     bad = p.copy()
     bad[3, 1] = np.nan
-    with pytest.raises(calbench.SettingError, match="row 3, column y: NaN is not a finite"):
+    with pytest.raises(calbench.SettingError, match=r"^setting `points`: row 3, column y: NaN is not a finite"):
         calbench.identify(robot, q, bad)
     far = q.copy()
     far[2, 1] = 400.0
-    with pytest.raises(calbench.SettingError, match="row 2, column q2: 400 is outside the joint limits"):
+    with pytest.raises(calbench.SettingError, match=r"^setting `q`: row 2, column q2: 400 is outside the joint limits"):
         calbench.identify(robot, far, p)
-    with pytest.raises(calbench.SettingError, match="distinct poses"):
+    with pytest.raises(calbench.SettingError, match=r"^setting `q`: fewer than 3 distinct poses"):
         calbench.identify(robot, np.repeat(q[:1], 5, 0), p[:5])
     with pytest.raises(calbench.SettingError, match="`q`: a text array"):
         calbench.identify(robot, [["a"] * 6] * 3, p[:3])

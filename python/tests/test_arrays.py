@@ -85,3 +85,30 @@ def test_identifiability_and_the_solve_judge_rank_by_one_rule(root):
     kinematic = [p for p in analysis["identifiable"] if not p.startswith("base.")]
     got = calbench.identify(robot, q, points, method="ls", params=kinematic)
     assert (got.termination, got.rank) == ("converged", len(kinematic))
+
+
+def test_a_bad_value_in_an_array_is_refused_naming_that_array(trial):
+    # Every array given to identify was refused as `data` ("setting `data`: row 0, column
+    # sigma_mm: …"), an argument the call did not have; a prior on a parameter not
+    # identified as `priors.d2`, a scenario's key.
+    robot = calbench.Robot.builtin("irb2600")
+    q, points = trial["q"], trial["points"]
+    sigma = np.full(len(q), 0.02)
+    sigma[5] = -1.0
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `sigma`: row 5: -1 is not a positive standard deviation"):
+        calbench.identify(robot, q, points, sigma=sigma)
+    payload = np.full(len(q), 2.0)
+    payload[7] = np.inf
+    with pytest.raises(calbench.SettingError, match=r"^setting `payload`: row 7: inf is not a "):
+        calbench.identify(robot, q, points, payload=payload)
+    with pytest.raises(calbench.SettingError, match=r"^setting `rotations`: 40 joint vectors "):
+        calbench.identify(robot, q, points, rotations=np.tile([1.0, 0, 0, 0], (39, 1)))
+    # validate is one argument: its rows are refused naming it.
+    far = q[:5].copy()
+    far[1, 0] = 500.0
+    with pytest.raises(calbench.SettingError, match=r"^setting `validate`: row 1, column q1: 500"):
+        calbench.identify(robot, q, points, validate=(far, points[:5]))
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `prior`: `d2` is not among the identified parameters"):
+        calbench.identify(robot, q, points, prior={"d2": 0.1}, fix=["d2"])

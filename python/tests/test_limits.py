@@ -29,5 +29,5 @@ def test_identifiability_refuses_joint_values_outside_the_limits_as_the_cli_does
         calbench.identifiability(robot, q.tolist())
     # The same rows as identify's arrays are refused in the same words.
     q[2, 0] = 500.0
-    with pytest.raises(calbench.SettingError, match=r"row 2, column q1: 500 is outside"):
+    with pytest.raises(calbench.SettingError, match=r"^setting `q`: row 2, column q1: 500 is outside"):
         calbench.identify(robot, q, np.zeros((12, 3)))

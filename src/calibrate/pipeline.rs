@@ -19,8 +19,8 @@ use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{
-    self, check_names, check_some_left, gross_reading, registration_warning, rms, worse_causes,
-    worse_error, worse_warning,
+    self, check_names, check_priors_identified, check_some_left, gross_reading,
+    registration_warning, rms, worse_causes, worse_error, worse_warning,
 };
 use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
@@ -213,6 +213,7 @@ impl IdentifyRequest {
         } else {
             Vec::new()
         };
+        check_priors_identified(&self.priors, &params)?;
         let cross = match (&choice, self.cv) {
             (Some((cvs, best)), _) => Some(cvs[*best].clone()),
             (None, Some(k)) => {

@@ -274,6 +274,19 @@ pub fn check_some_left(params: &[Param], fixed: &[Param]) -> Result<()> {
     Ok(())
 }
 
+/// Refuses a prior given to the identification (`--prior`, `priors`) on a parameter it does
+/// not identify (`params`), naming that option, where the method's solve would name its own
+/// `priors.NAME` key.
+pub fn check_priors_identified(priors: &[(Param, Real)], params: &[Param]) -> Result<()> {
+    match priors.iter().find(|(p, _)| !params.contains(p)) {
+        Some((p, _)) => Err(Error::option(
+            Opt::Prior,
+            format!("`{p}` is not among the identified parameters (fixed, or not in the model)"),
+        )),
+        None => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -26,7 +26,7 @@ use crate::numeric::{Real, Vec3};
 
 pub(crate) use checks::{check_coordinate, check_joints, check_sigma, distinct_poses, user_limits};
 use checks::{check_payload, unit_quaternion};
-pub use checks::{joint_rows_from_arrays, measurements_from_arrays};
+pub use checks::{joint_rows_from_arrays, measurements_from_arrays, ArrayKeys};
 
 const QUAT: [&str; 4] = ["qw", "qx", "qy", "qz"];
 const XYZ: [&str; 3] = ["x", "y", "z"];

@@ -92,14 +92,51 @@ pub(super) fn check_payload(v: Real) -> std::result::Result<(), String> {
     crate::error::not_a_mass(v).map_or(Ok(()), Err)
 }
 
+/// The setting a refusal of [`measurements_from_arrays`] names: each array its own (`q`,
+/// `points`, `rotations`, `sigma`, `payload`: the arguments that gave them), or one setting
+/// for them all (a tuple given as one argument).
+#[derive(Clone, Copy, Debug)]
+pub enum ArrayKeys<'a> {
+    /// Each array is named by its own name.
+    Own,
+    /// Every array is named by this one setting.
+    All(&'a str),
+}
+
+impl ArrayKeys<'_> {
+    /// The setting that names `array`.
+    fn of(self, array: &str) -> String {
+        match self {
+            ArrayKeys::Own => array.to_string(),
+            ArrayKeys::All(key) => key.to_string(),
+        }
+    }
+}
+
+/// The array a column of a measurement belongs to: the joint values, the point's
+/// coordinates, the orientation's quaternion, the standard deviation or the payload.
+fn array_of(column: &str) -> &'static str {
+    if XYZ.contains(&column) {
+        "points"
+    } else if QUAT.contains(&column) {
+        "rotations"
+    } else if column == SIGMA {
+        "sigma"
+    } else if column == PAYLOAD {
+        "payload"
+    } else {
+        "q"
+    }
+}
+
 /// Measured poses given as arrays rather than a file (the Python module's `identify`):
 /// joint values in the robot's units, points in mm, optional unit quaternions
 /// `[qw, qx, qy, qz]`, standard deviations (mm) and payloads (kg), one per pose. Every value
 /// is checked as a measurement CSV's ([`super::read_measurements`]), a refusal naming the
-/// setting `what`, the row (0-based) and the column.
+/// array's setting (`keys`), the row (0-based) and the column.
 pub fn measurements_from_arrays(
     robot: &(impl JointSpace + ?Sized),
-    what: &str,
+    keys: ArrayKeys<'_>,
     qs: &[Vec<Real>],
     points: &[[Real; 3]],
     quats: Option<&[[Real; 4]]>,
@@ -107,7 +144,7 @@ pub fn measurements_from_arrays(
     payload_kg: Option<&[Real]>,
 ) -> Result<Measurements> {
     let n = qs.len();
-    let bad = |msg: String| Error::setting(what, msg);
+    let bad = |array: &str, msg: String| Error::setting(keys.of(array), msg);
     let lengths = [
         ("points", Some(points.len())),
         ("rotations", quats.map(<[_]>::len)),
@@ -116,15 +153,22 @@ pub fn measurements_from_arrays(
     ];
     for (name, len) in lengths {
         if let Some(len) = len.filter(|&l| l != n) {
-            return Err(bad(format!("{n} joint vectors but {len} rows of {name}")));
+            return Err(bad(
+                name,
+                format!("{n} joint vectors but {len} rows of {name}"),
+            ));
         }
     }
     if n == 0 {
-        return Err(bad("no poses".into()));
+        return Err(bad("q", "no poses".into()));
     }
     let dof = robot.dof();
     let (lim_lo, lim_hi) = user_limits(robot);
-    let at = |i: usize, column: &str, msg: String| bad(format!("row {i}, column {column}: {msg}"));
+    // A one-dimensional array has no columns to name.
+    let at = |i: usize, column: &str, msg: String| match array_of(column) {
+        array @ ("sigma" | "payload") => bad(array, format!("row {i}: {msg}")),
+        array => bad(array, format!("row {i}, column {column}: {msg}")),
+    };
     let finite = |i: usize, column: &str, v: Real| {
         if v.is_finite() {
             Ok(v)
@@ -139,7 +183,13 @@ pub fn measurements_from_arrays(
         ..Measurements::default()
     };
     for (i, quser) in qs.iter().enumerate() {
-        m.qs.push(joint_row(robot, what, i, quser, (&lim_lo, &lim_hi))?);
+        m.qs.push(joint_row(
+            robot,
+            &keys.of("q"),
+            i,
+            quser,
+            (&lim_lo, &lim_hi),
+        )?);
         for (k, &v) in points[i].iter().enumerate() {
             check_coordinate(finite(i, XYZ[k], v)?).map_err(|msg| at(i, XYZ[k], msg))?;
         }
@@ -159,10 +209,13 @@ pub fn measurements_from_arrays(
     }
     let rows: Vec<u64> = (0..n as u64).collect();
     if distinct_poses(&m.qs, &rows, dof).is_err() {
-        return Err(bad(format!(
-            "fewer than {MIN_DISTINCT_POSES} distinct poses among the {n} rows: the frame \
+        return Err(bad(
+            "q",
+            format!(
+                "fewer than {MIN_DISTINCT_POSES} distinct poses among the {n} rows: the frame \
              cannot be registered nor anything identified"
-        )));
+            ),
+        ));
     }
     Ok(m)
 }
