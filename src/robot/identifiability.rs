@@ -254,7 +254,9 @@ pub fn identifiable_generic(robot: &Robot, candidates: &[Param], measure: Measur
 /// Of `extra`, the parameters that each add a rank to `params` (identifiable among
 /// themselves) over the generic poses of [`identifiable_generic`], taken in their order: a
 /// parameter is kept when its scaled column keeps more than [`RANK_TOL`] of its norm once
-/// projected off the columns of `params` and of the parameters kept before it. Unlike
+/// projected off the columns of `params` and of the parameters kept before it, and the kept
+/// ones are then cut back, the last first, until `params` and they are determined together
+/// by [`RANK_TOL`] as the identification judges them (when `params` alone are). Unlike
 /// [`identifiable_generic`] over `params` and `extra` together, the choice among `params` is
 /// left as it is: a term of a richer model never displaces a kinematic parameter.
 pub fn identifiable_extension(
