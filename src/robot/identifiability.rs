@@ -20,9 +20,8 @@ use crate::robot::{Param, Robot};
 /// ([`crate::identify::solver::RANK_TOLERANCE`] is this constant): a direction of the
 /// column-scaled Jacobian whose singular value is below this fraction of the largest is
 /// undetermined. Pivoting stops at a column whose remaining norm is below it, and the chosen
-/// columns are then cut back until their own scaled singular values all lie above it, so the
-/// identifiable parameters are those the identification, solving for
-/// them alone on the same rows, finds of full rank.
+/// columns are then cut back until their own scaled singular values all lie above it: the
+/// identifiable parameters, identified alone on the same rows, are of full rank.
 pub const RANK_TOL: Real = 1e-7;
 
 /// Whether columns whose scaled singular values run from `smallest` to `largest` are all
@@ -411,10 +410,10 @@ pub fn analyse_gram(
 
 /// The dependence analysis of [`analyse_gram`] on a Gram matrix `n = JᵀJ` (or a weighted
 /// normal matrix `JᵀWJ`, the Gram matrix of `W^½ J`): which columns pivoted Cholesky of the
-/// column-scaled matrix keeps (a column's remaining norm above [`RANK_TOL`], cut back until the
-/// kept columns are determined by [`RANK_TOL`] as the identification judges them), which depend on
-/// them, and which take part in a dependency (a dependent column, or a kept one whose weight
-/// in a dependent column's combination exceeds [`DEPENDENCE_WEIGHT`]).
+/// column-scaled matrix keeps (a column's remaining norm above [`RANK_TOL`], cut back until
+/// the kept columns are determined by [`RANK_TOL`] as the identification judges them), which
+/// depend on them, and which take part in a dependency (a dependent column, or a kept one
+/// whose weight in a dependent column's combination exceeds [`DEPENDENCE_WEIGHT`]).
 pub struct GramDependence {
     /// The kept columns, in column order.
     pub identifiable: Vec<usize>,
