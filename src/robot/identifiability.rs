@@ -286,16 +286,18 @@ pub fn identifiable_extension(
             }
         }
     }
-    // Cut back the terms kept last while `params` and the terms are not determined together;
-    // `params` themselves are not judged here: once they are determined, the cut stops at them.
-    let singular = |cols: &[usize]| {
-        let svd = crate::numeric::linalg::svd(j.select_columns(cols), false, false)?;
-        Some((extremes(&svd), ()))
-    };
-    let base: Vec<usize> = (0..params.len()).collect();
-    if singular(&base).is_none_or(|(sv, ())| determined(sv)) {
-        kept = cut_to_determined(base.into_iter().chain(kept).collect(), singular).0;
-        kept.drain(..params.len());
+    // Cut back the terms kept last while `params` and the terms are not determined together.
+    // `params` themselves are not judged here: a cut that reaches into them says they are not
+    // determined alone, and the terms then stay as pivoting kept them.
+    if !kept.is_empty() {
+        let columns = (0..params.len()).chain(kept.iter().copied()).collect();
+        let (cols, _) = cut_to_determined(columns, |c| {
+            let svd = crate::numeric::linalg::svd(j.select_columns(c), false, false)?;
+            Some((extremes(&svd), ()))
+        });
+        if let Some(terms) = cols.get(params.len()..) {
+            kept = terms.to_vec();
+        }
     }
     kept.iter().map(|&c| all[c]).collect()
 }

@@ -212,8 +212,8 @@ pub fn measurements_from_arrays(
         return Err(bad(
             "q",
             format!(
-                "fewer than {MIN_DISTINCT_POSES} distinct poses among the {n} rows: the frame \
-             cannot be registered nor anything identified"
+                "fewer than {MIN_DISTINCT_POSES} distinct poses among the {n} rows: the \
+                 frame cannot be registered nor anything identified"
             ),
         ));
     }
