@@ -112,3 +112,20 @@ def test_a_bad_value_in_an_array_is_refused_naming_that_array(trial):
     with pytest.raises(calbench.SettingError,
                        match=r"^setting `prior`: `d2` is not among the identified parameters"):
         calbench.identify(robot, q, points, prior={"d2": 0.1}, fix=["d2"])
+
+
+def test_exact_points_from_narrow_poses_converge(root):
+    # On 60 poses within ±2° the arm's parameters are determined to a condition number near
+    # 1e7. On exact points the step at the fit is rounding noise of 1e-8 or more, and ls's
+    # step rule of 1e-9 alone ended after up to 100 iterations, or at max-iterations; the
+    # fit now ends converged at the rounding floor of its data.
+    robot = calbench.Robot.from_file(root / "robots/ban-irb2600.toml")
+    truth = robot.with_errors({"a2": 0.2, "alpha3": 1e-3, "d4": -0.2, "tool.x": 0.1})
+    for seed in range(4):
+        q = np.array([0, 10, 20, 30, 40, 50.0]) + np.random.default_rng(seed).uniform(-2, 2, (60, 6))
+        points = truth.fk(q)
+        for method in ["ls", "ridge", "igg3"]:
+            got = calbench.identify(robot, q, points, method=method, registration="known")
+            assert got.termination == "converged", (seed, method)
+            assert got.iterations <= 10, (seed, method, got.iterations)
+            assert got.rms_residual_mm < 1e-8, (seed, method, got.rms_residual_mm)

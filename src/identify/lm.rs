@@ -19,7 +19,8 @@ use nalgebra::DVector;
 use serde::Deserialize;
 
 use super::solver::{
-    check_stop, finish, max_abs, start_weights, LeastSquares, Solver, Work, DIVERGENCE_FACTOR,
+    at_rounding_floor, check_stop, finish, max_abs, start_weights, LeastSquares, Solver, Work,
+    DIVERGENCE_FACTOR,
 };
 use super::{Identified, Termination};
 use crate::error::{finite_non_negative, finite_positive, Error, Result};
@@ -161,7 +162,7 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         }
         x += &work.dx;
         iterations = it + 1;
-        if max_abs(&work.dx) < o.eps {
+        if max_abs(&work.dx) < o.eps || at_rounding_floor(p, &w, cost, (&work.g, &work.dx)) {
             termination = Termination::Converged;
             work.take_step_in_residual(p);
             break;

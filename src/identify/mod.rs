@@ -107,7 +107,8 @@ pub trait Method: std::fmt::Debug + Send + Sync {
 #[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
 #[strum(serialize_all = "kebab-case")]
 pub enum Termination {
-    /// The step fell below the tolerance (`max |dx| < ε`).
+    /// The step fell below the tolerance (`max |dx| < ε`), or the fit reached the rounding
+    /// floor of its data ([`solver::LeastSquares::rounding_floor`]).
     Converged,
     /// The iteration limit was reached first.
     MaxIterations,

@@ -190,6 +190,11 @@ impl LeastSquares for Rows<'_> {
         self.inner.tikhonov()
     }
 
+    /// The inner problem's floor shared among a point's rows.
+    fn rounding_floor(&self) -> Real {
+        self.inner.rounding_floor() / self.rows.max(1) as Real
+    }
+
     /// The inner problem's blocks, in rows: they start and end on its points.
     fn block_points(&self) -> Option<usize> {
         self.inner.block_points().map(|b| b * self.rows)

@@ -78,6 +78,14 @@ pub trait LeastSquares {
     fn tikhonov(&self) -> Option<&[Real]> {
         None
     }
+    /// The squared norm of one point's residual that is only the rounding of the data and of
+    /// the model's evaluation. Weighed by the points' weights, it is the cost at or below
+    /// which a step is that rounding amplified by the normal equations: a fit there that its
+    /// next step cannot lower by more has converged. 0 (the default): no floor is known, and
+    /// only the step rule stops the solvers.
+    fn rounding_floor(&self) -> Real {
+        0.0
+    }
     /// Whether the problem is large enough that the solvers should evaluate it block by block
     /// ([`LeastSquares::evaluate_points`]) and accumulate the normal equations
     /// ([`crate::numeric::normal::NormalEquations`]) instead of holding the whole Jacobian:
@@ -268,6 +276,22 @@ pub(crate) fn max_abs(v: &DVector<Real>) -> Real {
     v.iter().fold(0.0, |m, x| m.max(x.abs()))
 }
 
+/// Whether the fit stands at the rounding floor of its data: its cost and the decrease that
+/// the step `dx` solved from the gradient `g` promises (`g·dx`, the Gauss–Newton model's
+/// decrease of the objective, the ridge's pull included) both at or below the point weights
+/// `w` times [`LeastSquares::rounding_floor`]. On exact data from poses that determine some parameter
+/// weakly, the step there is rounding noise of 1e-8 or more, and a step rule of 1e-9 alone
+/// never ends.
+pub(crate) fn at_rounding_floor(
+    p: &dyn LeastSquares,
+    w: &[Real],
+    cost: Real,
+    (g, dx): (&DVector<Real>, &DVector<Real>),
+) -> bool {
+    let floor = p.rounding_floor() * w.iter().sum::<Real>();
+    floor > 0.0 && cost <= floor && g.dot(dx) <= floor
+}
+
 /// Cost growth beyond which an iteration counts as diverged.
 pub(crate) const DIVERGENCE_FACTOR: Real = 1e12;
 
@@ -440,15 +464,16 @@ pub(crate) fn gauss_newton(
         }
         iterations = it + 1;
         let step = max_abs(&work.dx);
+        let floor = at_rounding_floor(p, &w, cost, (&work.g, &work.dx));
         let converged = match phase {
             Phase::Prior if robust.is_some() => {
-                if step < switch {
+                if step < switch || floor {
                     phase = Phase::Reweight;
                 }
                 false
             }
             Phase::Reweight => false,
-            Phase::Prior | Phase::Refit => step < eps && !set_changed,
+            Phase::Prior | Phase::Refit => (step < eps || floor) && !set_changed,
         };
         x += &work.dx;
         if converged {

@@ -39,6 +39,36 @@ impl RobotData {
     }
 }
 
+/// A [`RobotProblem`] evaluated whole, the path of every problem of at most
+/// [`solver::STREAM_MIN_POINTS`] points, with its rounding floor or without it (`floor`
+/// false: the step rule alone stops the solvers).
+struct Whole<'a> {
+    p: &'a RobotProblem<'a>,
+    floor: bool,
+}
+
+impl LeastSquares for Whole<'_> {
+    fn size(&self) -> solver::Size {
+        self.p.size()
+    }
+    fn prior(&self) -> Option<&[Real]> {
+        self.p.prior()
+    }
+    fn tikhonov(&self) -> Option<&[Real]> {
+        self.p.tikhonov()
+    }
+    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
+        self.p.evaluate(x, r, j);
+    }
+    fn rounding_floor(&self) -> Real {
+        if self.floor {
+            self.p.rounding_floor()
+        } else {
+            0.0
+        }
+    }
+}
+
 /// A linear problem `model(x) = A x` with data `b`, 1 row per point.
 struct Linear {
     a: DMatrix<Real>,
@@ -556,6 +586,7 @@ fn priors_give_the_closed_form_map_estimate() {
     assert!(free.x[2].abs() > want[2].abs());
 }
 
+mod floor;
 mod gravity;
 mod harmonics;
 mod simulated;

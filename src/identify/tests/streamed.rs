@@ -1,28 +1,9 @@
 //! The streamed identification (normal equations summed block by block) against the
 //! whole-Jacobian path.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::DVector;
 
 use super::*;
-
-/// A problem evaluated whole: [`RobotProblem`]'s rows without its blocks, the path of every
-/// problem of at most [`solver::STREAM_MIN_POINTS`] points.
-struct Whole<'a>(&'a RobotProblem<'a>);
-
-impl LeastSquares for Whole<'_> {
-    fn size(&self) -> solver::Size {
-        self.0.size()
-    }
-    fn prior(&self) -> Option<&[Real]> {
-        self.0.prior()
-    }
-    fn tikhonov(&self) -> Option<&[Real]> {
-        self.0.tikhonov()
-    }
-    fn evaluate(&self, x: &DVector<Real>, r: &mut DVector<Real>, j: &mut DMatrix<Real>) {
-        self.0.evaluate(x, r, j);
-    }
-}
 
 /// Streaming (normal equations summed block by block, the Jacobian never whole) against the
 /// whole-Jacobian path on one large problem with noise and outliers, for every
@@ -61,7 +42,7 @@ fn streamed_problems_agree_with_the_whole_jacobian() {
     {
         assert_eq!(p.block_points(), Some(solver::BLOCK_POINTS));
         let streamed = solve(m.as_ref(), p, &x0);
-        let whole = solve(m.as_ref(), &Whole(p), &x0);
+        let whole = solve(m.as_ref(), &Whole { p, floor: true }, &x0);
         let name = format!("{m:?}, priors {}", p.tikhonov().is_some());
         // Where the two paths accept a different number of steps (a cost comparison decided
         // by rounding near the optimum: the L-curve's corner, or adaptive LM with Marquardt
