@@ -191,6 +191,11 @@ def identify(
         raise SettingError("setting `robot`: expected a calbench.Robot")
     if data is not None and not isinstance(data, (str, os.PathLike)):
         raise SettingError("setting `data`: expected a path to a measurement file")
+    if data is None and (q is None) != (points is None):
+        given, missing = ("q", "points") if points is None else ("points", "q")
+        raise SettingError(f"setting `{missing}`: missing: {given} is given without it")
+    if data is None and q is None:
+        raise SettingError("setting `data`: give q and points, or data (a measurement file)")
     if data is None or q is not None:
         q = _array("q", q, 2, robot.joint_count)
     if data is None or points is not None:

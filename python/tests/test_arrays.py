@@ -114,6 +114,17 @@ def test_a_bad_value_in_an_array_is_refused_naming_that_array(trial):
         calbench.identify(robot, q, points, prior={"d2": 0.1}, fix=["d2"])
 
 
+def test_q_or_points_alone_is_refused_naming_the_missing_one(trial):
+    # Either array alone was refused as "setting `data`: give q and points, or data".
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.raises(calbench.SettingError, match=r"^setting `points`: missing: q is given"):
+        calbench.identify(robot, trial["q"])
+    with pytest.raises(calbench.SettingError, match=r"^setting `q`: missing: points is given"):
+        calbench.identify(robot, points=trial["points"])
+    with pytest.raises(calbench.SettingError, match=r"^setting `data`: give q and points, or data"):
+        calbench.identify(robot)
+
+
 def test_exact_points_from_narrow_poses_converge(root):
     # On 60 poses within ±2° the arm's parameters are determined to a condition number near
     # 1e7. On exact points the step at the fit is rounding noise of 1e-8 or more, and ls's
