@@ -140,3 +140,18 @@ def test_exact_points_from_narrow_poses_converge(root):
             assert got.termination == "converged", (seed, method)
             assert got.iterations <= 10, (seed, method, got.iterations)
             assert got.rms_residual_mm < 1e-8, (seed, method, got.rms_residual_mm)
+
+
+def test_igg3_by_mad_keeps_every_point_of_exact_full_poses_from_the_truth():
+    # Started at the truth, the residuals are rounding (1e-13 mm), and σ0 by MAD, not below
+    # 1e-9 of a start that is itself rounding, weighed that noise: the fit ended
+    # max-iterations, or was refused as rank 12 of 25.
+    robot = calbench.Robot.builtin("irb2600")
+    for seed in range(3):
+        q = np.array([0, 10, 20, 30, 40, 50.0]) + np.random.default_rng(seed).uniform(-2, 2, (60, 6))
+        frames = robot.fk(q, pose=True)
+        got = calbench.identify(robot, q, frames[:, :3, 3], rotations=frames[:, :3, :3],
+                                method="igg3", options={"sigma0": "mad"}, registration="known")
+        assert got.termination == "converged", seed
+        assert got.iterations <= 10, (seed, got.iterations)
+        assert min(got.weights) == 1.0, seed

@@ -24,8 +24,9 @@
 //!   good points are rejected too); or
 //! - [`crate::identify::Sigma0::Mad`]: `1.4826 · median |v_k|` over all residual rows (zero-centred MAD).
 //!
-//! When σ0 falls below `1e-9` times the RMS point residual at the start (consistent,
-//! noise-free data), every point keeps its weight: its prior weight in the first round, and
+//! When σ0 falls below `1e-9` times the RMS point residual at the start, or to the rounding
+//! floor of the data ([`super::solver::LeastSquares::rounding_floor`]; consistent,
+//! noise-free data, also from a start at the truth), every point keeps its weight: its prior weight in the first round, and
 //! after a round that rejected gross errors, the weights of that round (the kept points then
 //! fit exactly).
 //!

@@ -391,6 +391,11 @@ pub(crate) fn gauss_newton(
     } else {
         eps
     };
+    // The σ0 per row of residuals that are only rounding, at the mean prior weight.
+    let mean_prior = p
+        .prior()
+        .map_or(1.0, |q| q.iter().sum::<Real>() / q.len().max(1) as Real);
+    let sigma_floor = (p.rounding_floor() * mean_prior / work.rows as Real).sqrt();
     for it in 0..max_iter {
         let cost = work.evaluate(p, &x, &w);
         if !cost.is_finite() {
@@ -410,6 +415,7 @@ pub(crate) fn gauss_newton(
                 rows: work.rows,
                 t,
                 rms0,
+                sigma_floor,
                 prior: p.prior(),
                 o,
             };

@@ -135,6 +135,10 @@ pub(crate) struct Residuals<'a> {
     pub t: usize,
     /// The RMS point residual at the start (σ0 below `1e-9 rms0` means consistent data).
     pub rms0: Real,
+    /// The σ0 of residuals that are only the rounding of the data
+    /// ([`super::solver::LeastSquares::rounding_floor`] per row, at the mean prior weight):
+    /// σ0 at or below it also means consistent data, as when the fit started at the truth.
+    pub sigma_floor: Real,
     /// The problem's prior point weights; `None`: every point weighs 1.
     pub prior: Option<&'a [Real]>,
     /// The robust settings.
@@ -162,9 +166,10 @@ impl Residuals<'_> {
         }
     }
 
-    /// Whether σ0 says nothing: not finite, or below `1e-9 rms0` (consistent data).
+    /// Whether σ0 says nothing: not finite, or below `1e-9 rms0` or at the rounding floor
+    /// (consistent data).
     fn uninformative(&self, sigma0: Real) -> bool {
-        !sigma0.is_finite() || sigma0 <= 1e-9 * self.rms0
+        !sigma0.is_finite() || sigma0 <= 1e-9 * self.rms0 || sigma0 <= self.sigma_floor
     }
 
     /// Gives every point its prior weight (1 without priors).
@@ -221,8 +226,8 @@ pub(crate) fn point_weights(res: &Residuals, w: &mut [Real], buf: &mut Vec<Real>
 /// until no more points go. σ0 thus comes down from above (the gross errors inflate it at
 /// first) and never rests on a set truncated by a too-small σ0, as the σ0 of the down-weighted
 /// rounds would. Returns whether the kept set differs from the one `w` held (kept: `w > 0`).
-/// Keeps every point when σ0 is not defined (too few rows) or below `1e-9 rms0` (consistent
-/// data).
+/// Keeps every point when σ0 is not defined (too few rows), below `1e-9 rms0` or at the
+/// rounding floor (consistent data).
 pub(crate) fn redecide_inliers(res: &Residuals, w: &mut [Real], before: &mut Vec<bool>) -> bool {
     before.clear();
     before.extend(w.iter().map(|&v| v > 0.0));
