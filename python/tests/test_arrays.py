@@ -133,7 +133,8 @@ def test_exact_points_from_narrow_poses_converge(root):
     robot = calbench.Robot.from_file(root / "robots/ban-irb2600.toml")
     truth = robot.with_errors({"a2": 0.2, "alpha3": 1e-3, "d4": -0.2, "tool.x": 0.1})
     for seed in range(4):
-        q = np.array([0, 10, 20, 30, 40, 50.0]) + np.random.default_rng(seed).uniform(-2, 2, (60, 6))
+        rng = np.random.default_rng(seed)
+        q = np.array([0, 10, 20, 30, 40, 50.0]) + rng.uniform(-2, 2, (60, 6))
         points = truth.fk(q)
         for method in ["ls", "ridge", "igg3"]:
             got = calbench.identify(robot, q, points, method=method, registration="known")
@@ -148,7 +149,8 @@ def test_igg3_by_mad_keeps_every_point_of_exact_full_poses_from_the_truth():
     # max-iterations, or was refused as rank 12 of 25.
     robot = calbench.Robot.builtin("irb2600")
     for seed in range(3):
-        q = np.array([0, 10, 20, 30, 40, 50.0]) + np.random.default_rng(seed).uniform(-2, 2, (60, 6))
+        rng = np.random.default_rng(seed)
+        q = np.array([0, 10, 20, 30, 40, 50.0]) + rng.uniform(-2, 2, (60, 6))
         frames = robot.fk(q, pose=True)
         got = calbench.identify(robot, q, frames[:, :3, 3], rotations=frames[:, :3, :3],
                                 method="igg3", options={"sigma0": "mad"}, registration="known")

@@ -26,9 +26,9 @@
 //!
 //! When σ0 falls below `1e-9` times the RMS point residual at the start, or to the rounding
 //! floor of the data ([`super::solver::LeastSquares::rounding_floor`]; consistent,
-//! noise-free data, also from a start at the truth), every point keeps its weight: its prior weight in the first round, and
-//! after a round that rejected gross errors, the weights of that round (the kept points then
-//! fit exactly).
+//! noise-free data, also from a start at the truth), every point keeps its weight: its prior
+//! weight in the first round, and after a round that rejected gross errors, the weights of
+//! that round (the kept points then fit exactly).
 //!
 //! With `per = "coordinate"` ([`Per::Coordinate`]) every residual row is weighed on its
 //! own, as Li weighs each observation (eq. 16): the same three phases run on the problem

@@ -279,9 +279,9 @@ pub(crate) fn max_abs(v: &DVector<Real>) -> Real {
 /// Whether the fit stands at the rounding floor of its data: its cost and the decrease that
 /// the step `dx` solved from the gradient `g` promises (`g·dx`, the Gauss–Newton model's
 /// decrease of the objective, the ridge's pull included) both at or below the point weights
-/// `w` times [`LeastSquares::rounding_floor`]. On exact data from poses that determine some parameter
-/// weakly, the step there is rounding noise of 1e-8 or more, and a step rule of 1e-9 alone
-/// never ends.
+/// `w` times [`LeastSquares::rounding_floor`]. On exact data from poses that determine some
+/// parameter weakly, the step there is rounding noise of 1e-8 or more, which a step rule of
+/// 1e-9 alone ends only by chance.
 pub(crate) fn at_rounding_floor(
     p: &dyn LeastSquares,
     w: &[Real],

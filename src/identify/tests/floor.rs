@@ -51,8 +51,11 @@ fn exact(truth: &Robot, qs: Vec<Vec<Real>>, measure: Measure) -> RobotData {
 }
 
 /// The methods whose steps the floor ends on exact data: `ls` (first), `ridge` (ξ by the
-/// double-h rule) and `igg3` with either σ0, at their defaults. The other rules of ξ and LM end by
-/// rules of their own.
+/// double-h rule) and `igg3` with either σ0, at their defaults. With ξ by GCV or the L-curve,
+/// chosen anew at each step on a residual near zero, the ridge may take many steps with the
+/// floor or without; adaptive LM stops by its own rule, and fixed-damping LM contracts the
+/// weak directions of poses this narrow too slowly for its 50 iterations
+/// (`fixed_damping_contracts_the_weakest_direction_by_mu_over_sigma2_plus_mu`).
 fn floored_methods() -> Vec<Box<dyn Solver>> {
     let mad = Robustness {
         sigma0: Sigma0::Mad,
@@ -72,13 +75,14 @@ fn floored_methods() -> Vec<Box<dyn Solver>> {
 /// Exact data (evaluated apart from the identification's chain walk, so rounding apart)
 /// from poses within ±2° of (0°, 10°, …), errors of 0.2 mm and 1 mrad on the parameters
 /// `calbench identify` identifies, or none (the fit starts at the truth): `ls`, `ridge` and
-/// `igg3` end converged within 10 iterations, `ls` reproducing the data to 1e-8 mm. From the
-/// truth, `igg3` with σ0 by MAD weighed the rounding noise as residuals (σ0 at 1e-13 mm is
-/// not below 1e-9 of a start that is itself rounding) and ended `singular`, rank-deficient
-/// or at `max-iterations` on full poses. With the step rule alone they take
-/// more than 20 in some case (on Ban's IRB 2600 with its short tool, the set's condition
-/// number near 1e7): there each step of 1e-8 or more is rounding noise that falls below
-/// ε = 1e-9 only by chance.
+/// `igg3` end converged within 10 iterations, `ls` reproducing the data to 1e-8 mm.
+///
+/// With the step rule alone they take more than 20 in some case (on Ban's IRB 2600 with its
+/// short tool, the set's condition number near 1e7): there each step of 1e-8 or more is
+/// rounding noise that falls below ε = 1e-9 only by chance. And from the truth, `igg3` with
+/// σ0 by MAD weighed the rounding noise as residuals (σ0 at 1e-13 mm is not below 1e-9 of a
+/// start that is itself rounding) and ended `singular`, rank-deficient or at
+/// `max-iterations` on full poses.
 #[test]
 fn exact_data_from_narrow_poses_end_converged() {
     let mut step_rule_alone = 0;
