@@ -76,6 +76,18 @@ pub struct Measurements {
     pub payload_kg: Option<Vec<Real>>,
 }
 
+/// Joint values this close (rad, or mm for a prismatic joint) are one pose to
+/// [`Measurements::shared_rows`].
+pub const SAME_JOINT: Real = 1e-6;
+
+/// Measured points this close in each coordinate (mm, 0.1 µm) are one reading to
+/// [`Measurements::shared_rows`]: well below a laser tracker's noise, well above a copy's
+/// rounding to six decimals.
+pub const SAME_POINT_MM: Real = 1e-4;
+
+/// The grid cell (mm) [`Measurements::shared_rows`] sorts points into.
+const SAME_CELL_MM: Real = 1.0;
+
 /// The refusal's words for validation rows that repeat calibration rows: `rows`, the pairs
 /// of [`Measurements::shared_rows`] numbered as `numbered` says (`rows of the data`), the
 /// first five named.
@@ -99,21 +111,52 @@ pub fn shared_rows_refusal(rows: &[(usize, usize)], numbered: &str) -> String {
 
 impl Measurements {
     /// The pairs (calibration row, validation row) of `self` (calibration) and `val` that
-    /// hold the same measurement: the same joint values, measured point and orientation, to
-    /// the bit. In validation-row order.
+    /// hold the same measurement: joint values within [`SAME_JOINT`] and a measured point
+    /// within [`SAME_POINT_MM`] in each coordinate, whatever else the rows carry (an
+    /// orientation, a σ, a payload). A row copied, rounded to a few decimals or nudged is
+    /// thereby the same measurement; a second reading of one pose differs by the instrument's
+    /// noise, micrometres. Each validation row is paired with the first calibration row it
+    /// repeats, in validation-row order.
     pub fn shared_rows(&self, val: &Measurements) -> Vec<(usize, usize)> {
-        let key = |m: &Measurements, i: usize| -> Vec<u64> {
-            let mut k: Vec<u64> = m.qs[i].iter().map(|v| v.to_bits()).collect();
-            k.extend(m.points[i].iter().map(|v| v.to_bits()));
-            if let Some(q) = &m.quats {
-                k.extend(q[i].iter().map(|v| v.to_bits()));
-            }
-            k
+        // The calibration rows by the grid cell of their point ([`SAME_CELL_MM`]), sorted: a
+        // validation point's matches lie in the cells of its coordinates ± the tolerance.
+        let cell = |v: Real| (v / SAME_CELL_MM).floor() as i64;
+        let mut cells: Vec<([i64; 3], usize)> = (0..self.len())
+            .map(|i| (self.points[i].map(cell).into(), i))
+            .collect();
+        cells.sort_unstable();
+        let same = |c: usize, v: usize| {
+            let near = |a: &[Real], b: &[Real], tol: Real| {
+                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+            };
+            near(&self.qs[c], &val.qs[v], SAME_JOINT)
+                && near(
+                    self.points[c].as_slice(),
+                    val.points[v].as_slice(),
+                    SAME_POINT_MM,
+                )
         };
-        let seen: std::collections::HashMap<Vec<u64>, usize> =
-            (0..self.len()).rev().map(|i| (key(self, i), i)).collect();
         (0..val.len())
-            .filter_map(|v| seen.get(&key(val, v)).map(|&c| (c, v)))
+            .filter_map(|v| {
+                let p = val.points[v];
+                let span = |k: usize| [cell(p[k] - SAME_POINT_MM), cell(p[k] + SAME_POINT_MM)];
+                let (xs, ys, zs) = (span(0), span(1), span(2));
+                let mut first: Option<usize> = None;
+                for x in xs[0]..=xs[1] {
+                    for y in ys[0]..=ys[1] {
+                        for z in zs[0]..=zs[1] {
+                            let key = [x, y, z];
+                            let from = cells.partition_point(|e| e.0 < key);
+                            for &(_, c) in cells[from..].iter().take_while(|e| e.0 == key) {
+                                if same(c, v) && first.is_none_or(|f| c < f) {
+                                    first = Some(c);
+                                }
+                            }
+                        }
+                    }
+                }
+                first.map(|c| (c, v))
+            })
             .collect()
     }
 
@@ -229,5 +272,54 @@ mod tests {
         let mut bad = m.clone();
         bad.sigma_mm = Some(vec![0.01, 0.0, 0.01]);
         assert!(bad.check().unwrap_err().to_string().contains("point 1"));
+    }
+
+    /// A validation row is the same measurement as a calibration row when it is a copy, even
+    /// rounded, nudged or carrying other columns; a second reading of the pose is not.
+    #[test]
+    fn shared_rows_are_copies_within_the_tolerances_whatever_else_the_rows_carry() {
+        let q = |i: usize| vec![0.1 * i as Real, -0.3, 1.2 + 1e-3 * i as Real];
+        // Points near the grid's cell borders, so that a match may lie in the next cell.
+        let p = |i: usize| Vec3::new(1.0 - 2e-5, 250.0 * i as Real, -3.0 + 1e-5);
+        let rows = |n: usize| Measurements {
+            qs: (0..n).map(q).collect(),
+            points: (0..n).map(p).collect(),
+            ..Measurements::default()
+        };
+        let cal = rows(6);
+        // 0: copied with an orientation; 1: rounded to 6 decimals (deg and mm, as a text
+        // copy would); 2: x nudged by 3e-5 mm across a cell border; 3: a second reading, 15 µm
+        // off; 4: another pose, 1e-3 rad off; 5: the point of row 4 at the joints of row 5.
+        let round = |v: Real, d: i32| (v * 10f64.powi(d)).round() / 10f64.powi(d);
+        let deg = |v: Real| round(v.to_degrees(), 6).to_radians();
+        let mut val = Measurements {
+            qs: vec![
+                q(0),
+                q(1).into_iter().map(deg).collect(),
+                q(2),
+                q(3),
+                q(4).iter().map(|v| v + 1e-3).collect(),
+                q(5),
+            ],
+            points: vec![
+                p(0),
+                p(1).map(|v| round(v, 6)),
+                p(2) + Vec3::new(3e-5, 0.0, 0.0),
+                p(3) + Vec3::new(0.0, 0.015, 0.0),
+                p(4),
+                p(4),
+            ],
+            quats: Some(vec![[1.0, 0.0, 0.0, 0.0]; 6]),
+            ..Measurements::default()
+        };
+        assert_eq!(cal.shared_rows(&val), [(0, 0), (1, 1), (2, 2)]);
+        // Either way round, and a calibration holding a row twice names its first.
+        val.quats = None;
+        assert_eq!(val.shared_rows(&cal), [(0, 0), (1, 1), (2, 2)]);
+        let mut twice = rows(6);
+        twice.qs.insert(0, q(2));
+        twice.points.insert(0, p(2));
+        assert_eq!(twice.shared_rows(&val), [(1, 0), (2, 1), (0, 2)]);
+        assert!(rows(0).shared_rows(&val).is_empty() && cal.shared_rows(&rows(0)).is_empty());
     }
 }

@@ -151,7 +151,36 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
             && msg.contains("calibration row 0 = validation row 0, "),
         "{msg}"
     );
+    // So are the same rows with their orientation columns (the file they were cut from), and
+    // every tenth row with x nudged by 0.00001 mm: copies, not second readings.
+    let msg = refusal(&data, &["--validate", path_arg(&d.join("all.csv"))]);
+    assert!(
+        msg.contains("setting `--validate`: 199 validation row(s) repeat a calibration row"),
+        "{msg}"
+    );
     let text = read(Path::new(&data));
+    let x = text.lines().next().unwrap().split(',').position(|c| c == "x");
+    let nudged: Vec<String> = text
+        .lines()
+        .enumerate()
+        .filter(|(i, _)| i % 10 == 0)
+        .map(|(i, line)| {
+            let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+            if i > 0 {
+                let x = x.expect("a column x");
+                cells[x] = (cells[x].parse::<f64>().unwrap() + 1e-5).to_string();
+            }
+            cells.join(",")
+        })
+        .collect();
+    let nudged_file = d.join("nudged.csv");
+    std::fs::write(&nudged_file, nudged.join("\n") + "\n").unwrap();
+    let msg = refusal(&data, &["--validate", path_arg(&nudged_file)]);
+    assert!(
+        msg.contains("setting `--validate`: 19 validation row(s) repeat a calibration row")
+            && msg.contains("calibration row 9 = validation row 0, "),
+        "{msg}"
+    );
     let twice = d.join("twice.csv");
     let rows = text.split_once('\n').unwrap().1;
     std::fs::write(&twice, format!("{text}{rows}")).unwrap();
