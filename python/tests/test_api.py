@@ -138,6 +138,12 @@ def test_identify_gives_the_cli_numbers(cli, simulated, tmp_path):
     assert res.termination == ref["termination"]
     assert res.iterations == ref["iterations"] and res.rank == ref["rank"]
     assert res.condition_number == pytest.approx(ref["condition_number"], rel=1e-9)
+    # Validation points in metres, or from another placement of the tracker (turned by 90°
+    # about z and moved by a metre), cannot score the calibration: refused naming `validate`.
+    moved = np.column_stack([1000.0 - vp[:, 1], vp[:, 0], vp[:, 2]])
+    for bad, words in [(vp / 1000.0, "likely in metres"), (moved, "do not lie in one frame")]:
+        with pytest.raises(calbench.SettingError, match=f"setting `validate`: .*{words}"):
+            calbench.identify(robot, q, p, method="lm", validate=(vq, bad))
     rows = np.genfromtxt(tmp_path / "id" / "residuals.csv", delimiter=",", names=True)
     assert res.residuals.shape == (len(q), 3)
     assert np.allclose(np.linalg.norm(res.residuals, axis=1), rows["residual_after_mm"], atol=1e-9)

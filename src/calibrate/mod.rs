@@ -186,6 +186,24 @@ pub fn calibrate(
     calibrate_weighing(nominal, params, data, how, known, method, rng)
 }
 
+/// The frame `registration` starts a calibration of `nominal` on `data` in, which takes the
+/// measured points into the base frame: `known` itself, or the nominal robot's tool points
+/// registered onto the measured ones (by Ban's weighted SVD with `wsvd`, else by SVD with the
+/// measurement's weights).
+pub fn nominal_frame(
+    nominal: &Robot,
+    data: &Measurements,
+    registration: Registration,
+    known: &Frame,
+) -> Result<Frame> {
+    let model = || plausibility::tool_points(nominal, &data.qs);
+    Ok(match registration {
+        Registration::Known => *known,
+        Registration::Wsvd => register_wsvd(&model(), &data.points)?.frame,
+        _ => register_svd(&model(), &data.points, data.weights().as_deref())?.frame,
+    })
+}
+
 /// [`calibrate`] with the refits' weights chosen: [`RefitWeights::Coordinate`] weighs each
 /// coordinate when the identification weighed each row (what [`calibrate`] does),
 /// [`RefitWeights::Point`] each point by its rows' mean weight even then (the refit before
@@ -200,28 +218,13 @@ pub fn calibrate_weighing(
     method: &MethodSpec,
     rng: &mut Rng,
 ) -> Result<Calibrated> {
-    let model_points = |robot: &Robot| -> Vec<Vec3> {
-        let chain = robot.chain();
-        data.qs.iter().map(|q| chain.fk(q).pos).collect()
-    };
     // The first frame is the nominal robot's registration (Ban's weighted SVD with `wsvd`).
     // The refits then weigh the points as the identification did (the measurement's
     // weights, then the method's final ones), so that both halves of the alternation
     // minimise one weighted sum and the rounds have a fixed point: its joint optimum. (Ban's
     // weights, or no weights under a robust method, make two different sums, and the rounds
     // then drift along the directions the frame and the kinematic errors share.)
-    let nominal_frame = match registration {
-        Registration::Known => *known,
-        Registration::Wsvd => register_wsvd(&model_points(nominal), &data.points)?.frame,
-        _ => {
-            register_svd(
-                &model_points(nominal),
-                &data.points,
-                data.weights().as_deref(),
-            )?
-            .frame
-        }
-    };
+    let nominal_frame = nominal_frame(nominal, data, registration, known)?;
     let start = rng.clone();
     let precisions = method.precisions(params)?;
     let mut solve = |frame: Frame| -> Result<(Identified, Robot)> {
@@ -264,7 +267,7 @@ pub fn calibrate_weighing(
         rounds += 1;
         // The refit weighs each coordinate as the identification did when it weighed rows on
         // their own (one sum again, per row), else each point.
-        let model = model_points(&robot);
+        let model = plausibility::tool_points(&robot, &data.qs);
         let rows = identified
             .row_weights
             .as_ref()

@@ -15,6 +15,7 @@ use super::diagnostics::{diagnose, Subject};
 use super::fit::fit_and_readmit;
 use super::kernel::{position_errors, KernelResidual};
 use super::on_kind::KindOutcome;
+use super::plausibility::{misfit, Misfit};
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::{point_residuals, validate_file, FileValidation};
@@ -165,6 +166,7 @@ impl IdentifyRequest {
                 return Err(Error::option(opt, why));
             }
         }
+        check_frames(nominal, &d, val.as_ref(), registration, held_out.is_some())?;
         let with_base = registration == Registration::Identify;
         let mut kinematic = if self.params.is_empty() {
             param_sets::identified_params_tool_first(nominal, d.measure(), with_base)
@@ -423,6 +425,81 @@ impl serde::Serialize for IdentifyOutcome {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         self.record().serialize(s)
     }
+}
+
+/// Refuses points that no calibration can be scored or fitted on as given ([`misfit`]): the
+/// validation rows `val` against the calibration's first frame (`held_out`: rows held out of
+/// the data), and the calibration rows `d` under [`Registration::Known`], which takes them in
+/// the base frame as they are.
+fn check_frames(
+    nominal: &Robot,
+    d: &Measurements,
+    val: Option<&Measurements>,
+    registration: Registration,
+    held_out: bool,
+) -> Result<()> {
+    if registration == Registration::Known {
+        let model = plausibility::tool_points(nominal, &d.qs);
+        match misfit(&model, &d.points, &Frame::identity(), 0.0) {
+            Some(m @ Misfit::Frame { .. }) => {
+                let why = format!(
+                    "`known` takes the points in the robot's base frame as they are, and {}: \
+                     they are in another frame; leave the registration to `identify`, which \
+                     registers them",
+                    m.words("them", "the base frame")
+                );
+                return Err(Error::option(Opt::Registration, why));
+            }
+            // A unit is the identification's plausibility check's to name.
+            Some(Misfit::Scale { .. }) | None => {}
+        }
+    }
+    let opt = if held_out {
+        Opt::Holdout
+    } else {
+        Opt::Validate
+    };
+    match val.and_then(|v| validation_misfit(nominal, d, v, registration)) {
+        Some(why) => Err(Error::option(opt, why)),
+        None => Ok(()),
+    }
+}
+
+/// Why the validation rows `v` cannot score a calibration of `nominal` on the rows `d` under
+/// `registration`, in words: their points against the nominal robot's in the calibration's
+/// first frame ([`misfit`]), beside how far it misses the calibration's own there; `None`
+/// when they can, and when the calibration rows fail as a whole themselves or give no frame
+/// (theirs to refuse). Two files that do not lie in one frame are refused without blame:
+/// either may be the one moved, or distorted (a column scaled about the tracker's origin
+/// moves the rows as a whole).
+pub(crate) fn validation_misfit(
+    nominal: &Robot,
+    d: &Measurements,
+    v: &Measurements,
+    registration: Registration,
+) -> Option<String> {
+    let frame = super::nominal_frame(nominal, d, registration, &Frame::identity()).ok()?;
+    let model = plausibility::tool_points(nominal, &d.qs);
+    if misfit(&model, &d.points, &frame, 0.0).is_some() {
+        return None;
+    }
+    let squares: Real = (model.iter().zip(&d.points))
+        .map(|(m, p)| (frame.apply(p) - m).norm_squared())
+        .sum();
+    let reference = (squares / d.len().max(1) as Real).sqrt();
+    let model = plausibility::tool_points(nominal, &v.qs);
+    let m = misfit(&model, &v.points, &frame, reference)?;
+    let why = m.words("the validation points", "the calibration's frame");
+    Some(match m {
+        Misfit::Scale { .. } => {
+            format!("{why}; validate on points measured as the calibration's were")
+        }
+        Misfit::Frame { .. } => format!(
+            "{why} (and the calibration's by {reference:.1} mm in theirs): the calibration and \
+             validation rows do not lie in one frame; one file was measured from another \
+             placement of the instrument, or has a column scaled or shifted"
+        ),
+    })
 }
 
 /// [`calibrate`] of real data (`known`: the points are in the base frame) with the method's

@@ -12,7 +12,7 @@ use std::path::Path;
 use super::registration::register_svd;
 use crate::error::{Error, Opt, Said};
 use crate::measurement::kind::{Instrument, KindData};
-use crate::numeric::{Real, Vec3};
+use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::{gravity_basis, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// A joint's length or offset (`a`, `d`) may move by at most this share of the robot's reach
@@ -227,6 +227,85 @@ fn unit_of(ratio: Real) -> Option<&'static str> {
     .map(|(_, u)| u)
 }
 
+/// A frame fitted to points alone must bring them within this share of how far the nominal
+/// robot misses them in the frame they are taken in, for them to count as measured in another
+/// frame ([`misfit`]).
+pub const OTHER_FRAME_SHARE: Real = 0.2;
+
+/// How measured points fail the nominal robot's tool points as a whole, before any fit
+/// ([`misfit`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Misfit {
+    /// They spread `ratio` times as far (beyond [`SCALE_TOLERANCE`]); `unit` the unit that
+    /// ratio points to, when it is one.
+    Scale {
+        /// The ratio of the spreads.
+        ratio: Real,
+        /// The unit, when the ratio points to one.
+        unit: Option<&'static str>,
+    },
+    /// The nominal robot misses them by `given` mm RMS in the frame they are taken in, and
+    /// by `own` in a frame fitted to them alone.
+    Frame {
+        /// The RMS miss in the frame given (mm).
+        given: Real,
+        /// The RMS miss in their own frame (mm).
+        own: Real,
+    },
+}
+
+impl Misfit {
+    /// In words: `points` names them (`the validation points`), `frame` the frame they are
+    /// taken in (`the calibration's frame`).
+    pub fn words(&self, points: &str, frame: &str) -> String {
+        match *self {
+            Misfit::Scale { ratio, unit } => {
+                let unit = unit.map_or(String::new(), |u| {
+                    format!(": they are likely in {u}, not millimetres")
+                });
+                format!(
+                    "{points} spread {ratio:.4} times as far as the nominal robot's tool points \
+                     (bound ±{:.0} %){unit}",
+                    SCALE_TOLERANCE * 100.0
+                )
+            }
+            Misfit::Frame { given, own } => format!(
+                "the nominal robot misses {points} by {given:.1} mm RMS in {frame}, but by \
+                 {own:.1} mm in a frame fitted to them alone"
+            ),
+        }
+    }
+}
+
+/// How the measured points `seen` (mm, the instrument's frame; `frame` takes them into the
+/// base frame) fail the nominal robot's tool points `model` at the same poses as a whole: a
+/// spread beyond [`SCALE_TOLERANCE`], or an RMS miss above [`LENGTH_FLOOR_MM`] that a frame
+/// fitted to the points alone cuts below [`OTHER_FRAME_SHARE`] of itself. `reference` is how
+/// far the nominal robot misses the points `frame` was fitted to (RMS, mm; 0 for none): the
+/// miss must also exceed it divided by that share, so that a nominal robot far from the
+/// truth misses both alike. A calibration moves points by millimetres; a rigid motion of the
+/// whole set is the frame's.
+pub fn misfit(model: &[Vec3], seen: &[Vec3], frame: &Frame, reference: Real) -> Option<Misfit> {
+    if let Some(ratio) = spread_ratio(model, seen).filter(|r| (r - 1.0).abs() > SCALE_TOLERANCE) {
+        let unit = unit_of(ratio);
+        return Some(Misfit::Scale { ratio, unit });
+    }
+    let rms = |r: &mut dyn Iterator<Item = Real>| {
+        let (sum, n) = r.fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
+        (sum / n.max(1) as Real).sqrt()
+    };
+    let given = rms(&mut model
+        .iter()
+        .zip(seen)
+        .map(|(m, s)| (frame.apply(s) - m).norm()));
+    // (A NaN miss is no finding: non-finite points are refused where they are read.)
+    if given.is_nan() || given <= LENGTH_FLOOR_MM.max(reference / OTHER_FRAME_SHARE) {
+        return None;
+    }
+    let own = rms(&mut register_svd(model, seen, None).ok()?.residuals.into_iter());
+    (own < OTHER_FRAME_SHARE * given).then_some(Misfit::Frame { given, own })
+}
+
 /// What the measured points `seen` (the instrument's frame) say against the nominal robot's
 /// points `model` at the same poses: a scale beyond [`SCALE_TOLERANCE`] (a finding, with the
 /// unit it points to as a cause when it is one), a column of one value, or mirrored points
@@ -244,7 +323,10 @@ pub fn data_causes(model: &[Vec3], seen: &[Vec3]) -> (Option<String>, Vec<String
         )
     });
     if let Some(u) = ratio.and_then(unit_of) {
-        causes.push(format!("the file is likely in {u}, not millimetres"));
+        causes.push(format!(
+            "the file is likely in {u}, not millimetres (or the robot's lengths are not in \
+             the unit its file declares)"
+        ));
     }
     let axis = ["x", "y", "z"];
     for (c, name) in axis.iter().enumerate() {

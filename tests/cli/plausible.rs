@@ -218,3 +218,57 @@ fn a_gravity_basis_that_turns_a_joint_beyond_5_degrees_is_refused_unless_allowed
     let gt2 = j["errors"]["gt2"].as_f64().unwrap();
     assert!((gt2 - 0.03).abs() < 1e-3, "{gt2}");
 }
+
+/// Points no calibration can be scored or fitted on as given are refused before any
+/// identification, naming the option: a validation file in metres, or measured from another
+/// placement of the instrument (the same rows turned by 90° about z and moved by a metre),
+/// and a tracker's points under `--registration known`, which takes them in the base frame.
+/// The validation file as simulated validates.
+#[test]
+fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_the_base_are_refused()
+{
+    let d = tmp_dir("cli-plausible-frames");
+    let pos = simulated(&d, "scenarios/ci-guard.toml", None);
+    let val = pos.with_file_name("validation.csv");
+    let metres = edited(&val, &d.join("val-m.csv"), &|h, c, _| {
+        for name in ["x", "y", "z"] {
+            let k = col(h, name);
+            c[k] = format!("{}", c[k].parse::<f64>().unwrap() / 1000.0);
+        }
+    });
+    let moved = edited(&val, &d.join("val-moved.csv"), &|h, c, _| {
+        let (x, y) = (col(h, "x"), col(h, "y"));
+        let (vx, vy) = (c[x].parse::<f64>().unwrap(), c[y].parse::<f64>().unwrap());
+        c[x] = format!("{}", -vy + 1000.0);
+        c[y] = format!("{vx}");
+    });
+    let refusal = |extra: &[&str]| {
+        let out = d.join("o");
+        let o = identify(&pos, &out, extra);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(!out.exists(), "{err}");
+        err
+    };
+    let err = refusal(&["--validate", path_arg(&metres)]);
+    assert!(
+        err.contains("error: setting `--validate`: the validation points spread 0.0010 times")
+            && err.contains("they are likely in metres, not millimetres"),
+        "{err}"
+    );
+    let err = refusal(&["--validate", path_arg(&moved)]);
+    assert!(
+        err.contains("error: setting `--validate`: the nominal robot misses the validation points")
+            && err.contains("the calibration and validation rows do not lie in one frame"),
+        "{err}"
+    );
+    let err = refusal(&["--registration", "known"]);
+    assert!(
+        err.contains("error: setting `--registration`: `known` takes the points in the robot's")
+            && err.contains("they are in another frame; leave the registration to `identify`"),
+        "{err}"
+    );
+    let good = d.join("good");
+    let o = identify(&pos, &good, &["--validate", path_arg(&val)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -221,3 +221,68 @@ fn an_implausible_entry_names_the_option_as_identify_s() {
         "{msg}"
     );
 }
+
+/// A validation file of the two-file form in metres, or measured from another placement (the
+/// rows turned by 90° about z and moved by a metre), is refused at the line of `validation`
+/// before any identification: no calibration can be scored on it. (The mapping adds the
+/// columns `x_dif`, … to `x_t`, …: both are edited.)
+#[test]
+fn validation_rows_off_the_calibration_s_unit_or_frame_are_refused_at_their_key() {
+    let d = tmp_dir("cli-task-misfit");
+    let text = std::fs::read_to_string(wam_file(RANDOM)).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|c| *c == name).unwrap();
+    let point = [col("x_t"), col("y_t"), col("z_t")];
+    let dif = [col("x_dif"), col("y_dif"), col("z_dif")];
+    // Each row's point and difference passed through `edit` (the second argument: whether
+    // it is the point, which a move shifts).
+    let edited = |name: &str, edit: &dyn Fn(&mut [f64; 3], bool)| {
+        let mut out = header.join(",") + "\n";
+        for line in text.lines().skip(1) {
+            let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+            for (cols, is_point) in [(point, true), (dif, false)] {
+                let mut v = cols.map(|k| cells[k].parse::<f64>().unwrap());
+                edit(&mut v, is_point);
+                for (k, x) in cols.into_iter().zip(v) {
+                    cells[k] = format!("{x}");
+                }
+            }
+            out += &(cells.join(",") + "\n");
+        }
+        let file = d.join(name);
+        std::fs::write(&file, out).unwrap();
+        file
+    };
+    let metres = edited("metres.csv", &|v, _| {
+        v.iter_mut().for_each(|x| *x /= 1000.0)
+    });
+    let moved = edited("moved.csv", &|v, is_point| {
+        let shift = if is_point { 1000.0 } else { 0.0 };
+        *v = [-v[1] + shift, v[0], v[2]];
+    });
+    for (file, words) in [
+        (&metres, "they are likely in metres, not millimetres"),
+        (
+            &moved,
+            "the calibration and validation rows do not lie in one frame",
+        ),
+    ] {
+        let t = wam_task(
+            &d,
+            &format!(
+                "calibration = \"{}\"\nvalidation = \"{}\"",
+                wam_file(GRID).display(),
+                file.display()
+            ),
+        );
+        let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{e}");
+        assert!(!d.join("out").exists(), "nothing is written");
+        let at = format!(
+            "barrett-wam.toml: line {}, data: the ",
+            line_of(&read(&t), "validation = ")
+        );
+        assert!(e.contains(&at) && e.contains(words), "{e}");
+    }
+}

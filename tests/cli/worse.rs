@@ -161,9 +161,11 @@ fn a_gross_reading_is_named() {
     }
 }
 
-/// A tracker's file whose `y` column is scaled by 0.9: validated on the untouched rows the
-/// robot comes out worse, so it is refused; with `--allow-worse` the warning is on stderr,
-/// in identified.json and in both reports.
+/// A tracker's file whose `y` column is scaled by 0.9 about its mean: validated on the
+/// untouched rows the robot comes out worse, so it is refused; with `--allow-worse` the
+/// warning is on stderr, in identified.json and in both reports. (Scaled about the tracker's
+/// origin, the column also moves the rows by 300 mm as a whole, and the two files are refused
+/// before any identification as not lying in one frame.)
 #[test]
 fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     let d = tmp_dir("cli-worse-tracker");
@@ -174,18 +176,29 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     let text = read(&pos);
     let mut lines = text.lines();
     let header = lines.next().unwrap().to_string();
-    let (mut cal, mut bad, mut val) = (header.clone(), header.clone(), header);
-    for (i, line) in lines.enumerate() {
+    let y = |line: &str| line.split(',').nth(7).unwrap().parse::<f64>().unwrap();
+    let rows: Vec<&str> = lines.collect();
+    let mean = rows.iter().map(|l| y(l)).sum::<f64>() / rows.len() as f64;
+    let (mut cal, mut bad, mut val) = (header.clone(), header.clone(), header.clone());
+    let mut moved = header;
+    for (i, line) in rows.into_iter().enumerate() {
         if i % 10 >= 7 {
             val += &format!("\n{line}");
             continue;
         }
         cal += &format!("\n{line}");
         let mut c: Vec<String> = line.split(',').map(String::from).collect();
-        c[7] = format!("{}", c[7].parse::<f64>().unwrap() * 0.9);
+        c[7] = format!("{}", mean + 0.9 * (y(line) - mean));
         bad += &format!("\n{}", c.join(","));
+        c[7] = format!("{}", 0.9 * y(line));
+        moved += &format!("\n{}", c.join(","));
     }
-    for (name, text) in [("cal.csv", &cal), ("bad.csv", &bad), ("val.csv", &val)] {
+    for (name, text) in [
+        ("cal.csv", &cal),
+        ("bad.csv", &bad),
+        ("val.csv", &val),
+        ("moved.csv", &moved),
+    ] {
         std::fs::write(d.join(name), format!("{text}\n")).unwrap();
     }
     let robot = ex("ur10.toml");
@@ -197,6 +210,14 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
         args.extend_from_slice(extra);
         calbench(&args)
     };
+    let o = run("moved.csv", &d.join("refused"), &["--allow-worse"]);
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    assert!(
+        err.contains("setting `--validate`: the nominal robot misses the validation points")
+            && err.contains("do not lie in one frame"),
+        "{err}"
+    );
+    assert!(!d.join("refused").exists());
     let o = run("bad.csv", &d.join("refused"), &[]);
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(!o.status.success(), "{err}");

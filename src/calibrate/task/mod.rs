@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::cv::Model;
+use super::pipeline::validation_misfit;
 use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
 use crate::error::{read_text, Error, Result};
@@ -437,14 +438,13 @@ impl Task {
     /// the line of the key that gives the validation rows (`data.validation`, `data.split`).
     fn overlap(&self, rows: &[(usize, usize)], cal: &Path, val: &Path) -> Error {
         let numbered = format!("data rows of {} and {}", cal.display(), val.display());
+        self.at_validation(crate::measurement::shared_rows_refusal(rows, &numbered))
+    }
+
+    /// The refusal `msg` of the validation rows, at the line of the key that gives them.
+    fn at_validation(&self, msg: String) -> Error {
         let [_, (validation, _)] = self.data.files();
-        Error::toml_file(
-            &self.head.path,
-            &self.head.text,
-            validation,
-            "data",
-            crate::measurement::shared_rows_refusal(rows, &numbered),
-        )
+        Error::toml_file(&self.head.path, &self.head.text, validation, "data", msg)
     }
 
     /// The data file `raw` read through the mapping; a refusal names both files.
@@ -474,6 +474,11 @@ impl Task {
             TaskData::Files { calibration, .. } => calibration.clone(),
         };
         let mut q = IdentifyRequest::new(robot, IdentifyData::Tracker(cal), source, method);
+        if let IdentifyData::Tracker(cal) = &q.data {
+            if let Some(why) = validation_misfit(&q.robot, cal, &val, q.registration) {
+                return Err(self.at_validation(why));
+            }
+        }
         q.validate = Some(val.clone());
         if models != [Model::KINEMATIC] {
             q.models = models.to_vec();
