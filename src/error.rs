@@ -124,6 +124,10 @@ pub enum Opt {
     Measure,
     /// The task file a task folder's entry ran.
     Task,
+    /// The planes of a plane instrument.
+    Planes,
+    /// The spheres of a sphere instrument.
+    Spheres,
 }
 
 impl Opt {

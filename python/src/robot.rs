@@ -117,7 +117,8 @@ impl PyRobot {
         self.inner.params().iter().map(|p| p.to_string()).collect()
     }
 
-    /// The nominal value of each parameter (mm, rad), by name.
+    /// The nominal value of each parameter (mm, rad): `(name, value)` pairs in flat-vector
+    /// order, as `parameter_names()` lists them; `dict(robot.parameters())` maps them by name.
     fn parameters(&self) -> Vec<(String, Real)> {
         self.inner
             .params()

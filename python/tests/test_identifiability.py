@@ -61,3 +61,23 @@ def test_instrument_options_are_refused_where_no_kind_reads_them():
     ]:
         with pytest.raises(calbench.SettingError, match=says):
             calbench.identifiability(robot, q, measure, **options)
+
+
+def test_more_planes_or_spheres_than_the_poses_fill_are_refused_naming_the_option(cli,
+                                                                                 tmp_path):
+    # 30 poses cannot give 31 planes 4 points each, nor 30 spheres 5: refused naming
+    # `planes` and `spheres` (as the command line names --planes), where a `measurements`
+    # nobody gave was named, with "plane 1 has 1 points".
+    robot = calbench.Robot.builtin("irb2600")
+    q, f = poses(tmp_path, robot, n=30)
+    for kind, option, n, need in [("plane", "planes", 31, 4), ("sphere", "spheres", 30, 5)]:
+        with pytest.raises(calbench.SettingError,
+                           match=rf"^setting `{option}`: {kind} \d+ of {n} holds \d of the 30 "
+                                 rf"poses, and each needs at least {need}: give more poses, or "
+                                 rf"fewer {kind}s \(`?{option}`?\)$"):
+            calbench.identifiability(robot, q, kind, **{option: n})
+    msg = cli("identifiability", "--robot", "irb2600", "--measure", "plane", "--planes", "31",
+              "--poses-file", f, ok=False).stderr
+    assert "setting `--planes`: plane " in msg and "fewer planes (--planes)" in msg, msg
+    # Enough poses a plane: analysed.
+    assert calbench.identifiability(robot, q, "plane", planes=7)["rank"] > 0

@@ -27,6 +27,12 @@ def test_identifiability_refuses_joint_values_outside_the_limits_as_the_cli_does
     q[2, 0] = np.nan
     with pytest.raises(calbench.SettingError, match=r"row 2, column q1: NaN is not a finite"):
         calbench.identifiability(robot, q.tolist())
+    # Joint 5's limits of ±120°, kept in radians, are shown as the robot file gives them.
+    q[2, 0], q[2, 4] = 0.0, 500.0
+    msg = r"^setting `q`: row 2, column q5: 500 is outside the joint limits \[-120, 120\]$"
+    with pytest.raises(calbench.SettingError, match=msg):
+        calbench.identifiability(robot, q)
+    q[2, 4] = 0.0
     # The same rows as identify's arrays are refused in the same words.
     q[2, 0] = 500.0
     with pytest.raises(calbench.SettingError, match=r"^setting `q`: row 2, column q1: 500 is outside"):

@@ -15,7 +15,7 @@ use std::cell::RefCell;
 use nalgebra::{DMatrix, DVector};
 
 use super::solver::{LeastSquares, Size};
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result, Said};
 use crate::measurement::kind::{nuisance_guess, rows, KindData};
 use crate::measurement::Measure;
 use crate::numeric::{Mat3, Real, Vec3};
@@ -271,6 +271,26 @@ pub fn identifiability_of(
     instrument: crate::measurement::kind::Instrument,
     group: Vec<usize>,
 ) -> Result<(crate::robot::identifiability::Identifiability, Vec<String>)> {
+    // Each plane or sphere needs the points of its first guess.
+    if let Some((n, need)) = instrument.surfaces() {
+        let mut held = vec![0; n];
+        group.iter().filter(|&&g| g < n).for_each(|&g| held[g] += 1);
+        if let Some((g, c)) = held.iter().enumerate().find(|(_, &c)| c < need) {
+            let (kind, opt) = match instrument.kind() {
+                crate::measurement::kind::Kind::Plane => ("plane", Opt::Planes),
+                _ => ("sphere", Opt::Spheres),
+            };
+            let why = Said::from(format!(
+                "{kind} {} of {n} holds {c} of the {} poses, and each needs at least {need}: \
+                 give more poses, or fewer {kind}s (",
+                g + 1,
+                qs.len()
+            ))
+            .name(opt)
+            .text(")");
+            return Err(Error::option(opt, why));
+        }
+    }
     // The Jacobian does not depend on the readings: zeros of the right length.
     let values = vec![0.0; instrument.observations(qs.len()) * instrument.rows_per_observation()];
     let data = KindData {

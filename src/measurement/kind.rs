@@ -91,6 +91,16 @@ pub enum Instrument {
 }
 
 impl Instrument {
+    /// The planes or spheres and the points each needs at least for its first guess
+    /// ([`nuisance_guess`]); `None` for the other instruments.
+    pub fn surfaces(&self) -> Option<(usize, usize)> {
+        match self {
+            Instrument::Planes(a) => Some((a.len(), 4)),
+            Instrument::Spheres(s) => Some((s.len(), 5)),
+            _ => None,
+        }
+    }
+
     /// The kind of data this instrument delivers.
     pub fn kind(&self) -> Kind {
         match self {
@@ -525,12 +535,10 @@ pub fn nuisance_guess(
                 })
                 .unzip(),
         };
-        let cols = if matches!(inst, Instrument::Planes(_)) {
-            3
-        } else {
-            4
-        };
-        if a.len() < cols + 1 {
+        // Pivot: 4 unknowns, as a sphere's centre and radius term.
+        let need = inst.surfaces().map_or(5, |s| s.1);
+        let cols = need - 1;
+        if a.len() < need {
             return Err(Error::setting(
                 "measurements",
                 format!(
@@ -538,7 +546,7 @@ pub fn nuisance_guess(
                     inst.kind().as_str(),
                     g + 1,
                     a.len(),
-                    cols + 1
+                    need
                 ),
             ));
         }

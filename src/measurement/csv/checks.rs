@@ -268,11 +268,15 @@ fn joint_row(
     check_joints(robot, quser, lim).map_err(|(c, msg)| at(&c, msg))
 }
 
-/// The joint limits in the robot's units (for messages): (lower, upper).
+/// The joint limits in the robot's units (for messages): (lower, upper), to 12 significant
+/// digits, so that the trip through radians shows a limit of 120° as `120`, not
+/// `119.99999999999999`.
 pub(crate) fn user_limits(robot: &(impl JointSpace + ?Sized)) -> (Vec<Real>, Vec<Real>) {
     let dof = robot.dof();
+    let shown = |v: Real| format!("{v:.11e}").parse::<Real>().unwrap_or(v);
     let side = |k: fn((Real, Real)) -> Real| {
-        robot.q_to_user(&(0..dof).map(|j| k(robot.limits(j))).collect::<Vec<_>>())
+        let user = robot.q_to_user(&(0..dof).map(|j| k(robot.limits(j))).collect::<Vec<_>>());
+        user.into_iter().map(shown).collect::<Vec<_>>()
     };
     (side(|l| l.0), side(|l| l.1))
 }
