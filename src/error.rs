@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 
 mod lines;
+mod text;
 pub use lines::{json_key_line, line_of, toml_key_line};
+pub use text::{read_bounded, read_text, TEXT_CAP_MIB};
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an
 /// error: it is reported as a termination reason.
@@ -415,28 +417,6 @@ pub fn without_line(place: &str) -> &str {
         Some((line, key)) if line.starts_with("line ") => key,
         _ => place,
     }
-}
-
-/// The text of the file `path`. A file that cannot be read is refused with the system's
-/// reason, and one that is not UTF-8 (a Latin-1 `°`, a UTF-16 export) naming the line and the
-/// byte of the first that is not, where the standard library's message named neither.
-pub fn read_text(path: &std::path::Path) -> Result<String> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    String::from_utf8(bytes).map_err(|e| {
-        let good = e.utf8_error().valid_up_to();
-        let bytes = e.as_bytes();
-        let start = bytes[..good]
-            .iter()
-            .rposition(|&b| b == b'\n')
-            .map_or(0, |i| i + 1);
-        let line = bytes[..start].iter().filter(|&&b| b == b'\n').count() + 1;
-        let msg = format!(
-            "not UTF-8 text: byte {} of the line is 0x{:02X}; save the file as UTF-8",
-            good - start + 1,
-            bytes[good]
-        );
-        Error::file(path, format!("line {line}"), msg)
-    })
 }
 
 /// A serde error of a TOML value read from a table rather than a text (so without a line):

@@ -39,8 +39,11 @@ pub struct BaselineArgs {
 }
 
 /// Writes the baseline of a run: its summary with the per-trial values of the guarded
-/// metrics (`per_trial`), read from its trials.csv; refuses a run without them.
+/// metrics (`per_trial`), read from its trials.csv; refuses a run without them, and, before
+/// any work, an `--out` that is one of the files it reads or a folder.
 pub fn baseline(args: &BaselineArgs) -> Result<()> {
+    let [summary, trials] = Side::files(&args.run);
+    super::guard_out_file(&args.out, [args.run.as_path(), &summary, &trials])?;
     let side = Side::read(&args.run)?;
     let Some(trials) = &side.trials else {
         return Err(Error::file(

@@ -225,14 +225,23 @@ pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<()> {
 }
 
 /// Checks, before any work, that `out` can be the one file a command writes (`import`,
-/// `compensate`) from `inputs`: not an input, the root or the home folder
-/// ([`calbench::report::guard::guard_out`]), and not an existing folder, which is refused
-/// naming it; an existing file is replaced.
+/// `compensate`, `baseline`) from `inputs`: not an input, the root or the home folder
+/// ([`calbench::report::guard::guard_out`]), not an existing folder, which is refused
+/// naming it, and not a symbolic link the file system cannot follow (a loop), refused with
+/// the OS error; an existing file is replaced.
 pub fn guard_out_file<P: AsRef<Path>>(
     out: &Path,
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
     calbench::report::guard::guard_out(out, "--out", &[], inputs)?;
+    if out.is_symlink() {
+        match out.metadata() {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                return Err(Error::io(out, e));
+            }
+            _ => {}
+        }
+    }
     if out.is_dir() {
         return Err(Error::setting(
             "--out",

@@ -524,3 +524,49 @@ fn a_bad_value_deep_in_a_summary_or_baseline_is_named_by_its_own_key_and_line() 
         );
     }
 }
+
+/// `baseline --out` one of the files it reads (the run's `summary.json` or `trials.csv`,
+/// given the run's folder or its summary) or the run's folder is refused before any work,
+/// as every command that writes refuses its own inputs, and the run keeps its bytes; an
+/// `--out` that is a symbolic link loop is refused with the OS error, as `compensate` does,
+/// and stays a link.
+#[test]
+fn calbench_baseline_refuses_to_write_over_its_own_inputs() {
+    let dir = tmp_dir("cli-guard-baseline-inputs");
+    let a = dir.join("a");
+    run(
+        &root().join("scenarios/ci-guard.toml"),
+        &a,
+        &["--trials", "2", "--threads", "1"],
+    );
+    let (summary, trials) = (a.join("summary.json"), a.join("trials.csv"));
+    let before = [read(&summary), read(&trials)];
+    for (run, out) in [
+        (&a, &trials),
+        (&a, &summary),
+        (&summary, &trials),
+        (&summary, &summary),
+        (&a, &a),
+    ] {
+        let o = calbench(&["baseline", path_arg(run), "--out", path_arg(out)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{}: {err}", out.display());
+        let words = [
+            "error: setting `--out`: ",
+            "is an input of this command",
+            "(nothing was written)",
+        ];
+        assert!(words.iter().all(|w| err.contains(w)), "{err}");
+        assert_eq!([read(&summary), read(&trials)], before);
+    }
+    let lp = dir.join("loop.json");
+    std::os::unix::fs::symlink(&lp, &lp).unwrap();
+    let o = calbench(&["baseline", path_arg(&a), "--out", path_arg(&lp)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with(&format!("error: {}: ", lp.display())) && err.contains("symbolic links"),
+        "{err}"
+    );
+    assert!(lp.is_symlink());
+}

@@ -180,15 +180,23 @@ pub struct Side {
 }
 
 impl Side {
-    /// Reads a run's summary: `path` is the run's folder (its `summary.json` is read), its
-    /// `summary.json` or a baseline file. Refuses, naming the file, what is not a calbench
-    /// summary, and a missing file.
-    pub fn read(path: &Path) -> Result<Side> {
+    /// The files [`Side::read`] reads for `path`: the summary (`path`, or its `summary.json`
+    /// when `path` is a folder) and the `trials.csv` beside it.
+    pub fn files(path: &Path) -> [PathBuf; 2] {
         let file = if path.is_dir() {
             path.join("summary.json")
         } else {
             path.to_path_buf()
         };
+        let csv = trials_csv(&file);
+        [file, csv]
+    }
+
+    /// Reads a run's summary: `path` is the run's folder (its `summary.json` is read), its
+    /// `summary.json` or a baseline file. Refuses, naming the file, what is not a calbench
+    /// summary, and a missing file.
+    pub fn read(path: &Path) -> Result<Side> {
+        let [file, _] = Side::files(path);
         if !file.exists() {
             return Err(Error::io(
                 &file,

@@ -1,0 +1,56 @@
+//! Files read whole as text (robot, scenario, task, split, mapping and URDF files, a
+//! summary, `identified.json`, `task.json`, a shard's `shard.json`, a checkpoint), each read
+//! through [`read_bounded`]: no more than [`TEXT_CAP_MIB`] MiB, so that a stream without end
+//! (`/dev/zero`) given for one is refused at once rather than filling the memory.
+
+use std::io::Read;
+use std::path::Path;
+
+use super::{Error, Result};
+
+/// The most a text file calbench reads whole may hold, in MiB: far above any real one (the
+/// largest committed summary is under 2 MiB; a robot or scenario file a few kB).
+pub const TEXT_CAP_MIB: u64 = 256;
+
+/// The bytes of the file `path`, refused (an I/O error of kind `InvalidData`: `longer than
+/// 256 MiB: …`) when it holds more than [`TEXT_CAP_MIB`] MiB, which is read no further.
+pub fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
+    let cap = TEXT_CAP_MIB << 20;
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(cap + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > cap {
+        return Err(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "longer than {TEXT_CAP_MIB} MiB: not a robot, scenario, task, mapping or \
+                 results file"
+            ),
+        ));
+    }
+    Ok(bytes)
+}
+
+/// The text of the file `path`. A file that cannot be read is refused with the system's
+/// reason, one longer than [`TEXT_CAP_MIB`] MiB as such ([`read_bounded`]), and one that is
+/// not UTF-8 (a Latin-1 `°`, a UTF-16 export) naming the line and the byte of the first that
+/// is not, where the standard library's message named neither.
+pub fn read_text(path: &Path) -> Result<String> {
+    let bytes = read_bounded(path).map_err(|e| Error::io(path, e))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let good = e.utf8_error().valid_up_to();
+        let bytes = e.as_bytes();
+        let start = bytes[..good]
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        let line = bytes[..start].iter().filter(|&&b| b == b'\n').count() + 1;
+        let msg = format!(
+            "not UTF-8 text: byte {} of the line is 0x{:02X}; save the file as UTF-8",
+            good - start + 1,
+            bytes[good]
+        );
+        Error::file(path, format!("line {line}"), msg)
+    })
+}
