@@ -23,6 +23,7 @@ mod guard;
 mod guo;
 mod harmonics;
 mod html;
+mod impossible;
 mod instruments;
 mod interchange;
 mod kernel;

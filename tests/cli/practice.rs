@@ -159,7 +159,12 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         "{msg}"
     );
     let text = read(Path::new(&data));
-    let x = text.lines().next().unwrap().split(',').position(|c| c == "x");
+    let x = text
+        .lines()
+        .next()
+        .unwrap()
+        .split(',')
+        .position(|c| c == "x");
     let nudged: Vec<String> = text
         .lines()
         .enumerate()

@@ -328,7 +328,11 @@ pub fn check_summary_for(
         return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
     let figures = figures::of_summary(&s)?;
-    figures::check_figures(path, s.trials, &figures, reader)?;
+    let at = |entry: &str| {
+        let i = s.results.iter().position(|e| e.key() == entry)?;
+        Some(format!("results[{i}]"))
+    };
+    figures::check_figures(path, s.trials, &figures, reader, &at)?;
     Ok((s, figures))
 }
 
