@@ -2,7 +2,9 @@
 
 use std::path::PathBuf;
 
+mod json;
 mod lines;
+pub use json::{json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an

@@ -164,7 +164,7 @@ impl RanSummary {
 
 pub(super) fn read(path: &Path) -> Result<(String, Value)> {
     let text = read_text(path)?;
-    let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
+    let v = crate::error::json_value(path, &text)?;
     Ok((text, v))
 }
 

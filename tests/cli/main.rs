@@ -15,6 +15,7 @@ mod committed;
 mod compensate;
 mod determinable;
 mod determinism;
+mod duplicate_keys;
 mod final_fitness;
 mod fixed_models;
 mod foreign_db;

@@ -470,8 +470,7 @@ fn present(e: &Entry, path: &str) -> bool {
 /// Reads a JSON file.
 pub fn read_json(path: &Path) -> Result<Value> {
     let text = read_text(path)?;
-    serde_json::from_str(&text)
-        .map_err(|e| Error::file(path, format!("line {}", e.line()), e.to_string()))
+    crate::error::json_value(path, &text)
 }
 
 /// Reads the summary file `path` ([`check_summary`]).
