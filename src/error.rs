@@ -4,8 +4,10 @@ use std::path::PathBuf;
 
 mod json;
 mod lines;
+mod text;
 pub use json::{json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
+pub use text::is_hidden;
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an
 /// error: it is reported as a termination reason.

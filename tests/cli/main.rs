@@ -63,6 +63,7 @@ mod spelled;
 mod strict_inputs;
 mod task;
 mod task_rows;
+mod terminal_names;
 mod typed;
 mod verdicts;
 mod worse;
