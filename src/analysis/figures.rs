@@ -139,7 +139,10 @@ pub fn check_figures(
         };
         let count = f.metric == Metric::Failures.key() || f.metric.starts_with("terminations.");
         if count && (f.value < 0.0 || f.value.fract() != 0.0) {
-            return refuse(format!("is {}: a count is a whole number ≥ 0", f.value));
+            return refuse(format!(
+                "is {}: a count is a whole number ≥ 0",
+                shown(f.value)
+            ));
         }
         if let Some(n) = trials.filter(|&n| count && f.value > n as Real) {
             return refuse(format!(
@@ -148,7 +151,10 @@ pub fn check_figures(
             ));
         }
         if !signed(&f.metric) && f.value < 0.0 {
-            return refuse(format!("is {}: this figure is never negative", f.value));
+            return refuse(format!(
+                "is {}: this figure is never negative",
+                shown(f.value)
+            ));
         }
         let (eta_value, eta_interval) = eta_bounded(&f.metric);
         if eta_value && f.value > 100.0 {
@@ -159,25 +165,25 @@ pub fn check_figures(
             ));
         }
         let Some([lo, hi]) = f.ci else { continue };
+        let (l, h) = (shown(lo), shown(hi));
         if lo > hi {
             return refuse(format!(
-                "has the 95 % interval [{lo}, {hi}], whose lower end is above its upper: no \
-                 run writes it"
+                "has the 95 % interval [{l}, {h}], whose lower end is above its upper: no run \
+                 writes it"
             ));
         }
         if eta_interval && hi > 100.0 {
             return refuse(format!(
                 "has the 95 % interval [{}, {}], above 100 %: the interval of a median η is \
                  of η values, each at most 100 %: no run writes it",
-                shown(lo),
-                shown(hi)
+                l, h
             ));
         }
         let slack = 1e-9 * f.value.abs().max(lo.abs()).max(hi.abs());
         if reader == Reader::Record && (f.value < lo - slack || f.value > hi + slack) {
             return refuse(format!(
-                "is {} outside its own 95 % interval [{lo}, {hi}]: the figures were edited",
-                f.value
+                "is {} outside its own 95 % interval [{l}, {h}]: the figures were edited",
+                shown(f.value)
             ));
         }
     }

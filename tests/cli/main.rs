@@ -58,6 +58,7 @@ mod results_team;
 mod robot_model;
 mod run_options;
 mod search_ecdf;
+mod shown_numbers;
 mod socket_task;
 mod spelled;
 mod strict_inputs;
