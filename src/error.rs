@@ -2,8 +2,12 @@
 
 use std::path::PathBuf;
 
+mod hidden;
+mod json;
 mod lines;
 mod text;
+pub use hidden::is_hidden;
+pub use json::{json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
 pub use text::{read_bounded, read_text, TEXT_CAP_MIB};
 

@@ -8,7 +8,7 @@ use std::path::Path;
 use serde_json::Value;
 
 use super::summary::Summary;
-use crate::error::{Error, Result};
+use crate::error::{at_line, json_key_line, shown, Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
 
@@ -78,6 +78,26 @@ fn signed(metric: &str) -> bool {
         || metric == "difference_mm"
 }
 
+/// Whether a figure is η (%) of the mean or median kind, which no run writes above 100:
+/// η = 100 · (1 − |x − x̂| / |x|) is at most 100 in every trial, and so are its means and
+/// medians (`eta_mean_pct`, `eta_median_pct`, a parameter's `eta.P.mean` and `eta.P.median`,
+/// an instruments study's `eta.P`); its spread (`eta.P.std`) is not bounded. The second: its
+/// interval is bounded too, as an interval of order statistics is (the medians'); a t
+/// interval of a mean can reach above 100.
+fn eta_bounded(metric: &str) -> (bool, bool) {
+    let median = Metric::EtaMedian.key();
+    let Some(per) = metric
+        .strip_prefix(Metric::Eta.spec().field)
+        .and_then(|m| m.strip_prefix('.'))
+    else {
+        return (
+            metric == Metric::EtaMean.key() || metric == median,
+            metric == median,
+        );
+    };
+    (!per.ends_with(".std"), per.ends_with(".median"))
+}
+
 /// Who reads a summary's figures: what [`check_figures`] refuses depends on it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Reader {
@@ -90,14 +110,16 @@ pub enum Reader {
 
 /// Refuses, naming the summary `path` and the key, a document that cannot be what a run
 /// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
-/// a whole number ≥ 0; a figure that must be ≥ 0 below zero (`signed`); an interval whose
-/// ends are reversed; and, for [`Reader::Record`], a figure outside its own 95 % interval
-/// (edited).
+/// a whole number ≥ 0, or above `trials`; a figure that must be ≥ 0 below zero (`signed`);
+/// η above 100 % (`eta_bounded`); an interval whose ends are reversed; and, for
+/// [`Reader::Record`], a figure outside its own 95 % interval (edited). `at` gives the key
+/// path of an entry by its name (`results[2]`, `cells[0]`), for the line of the refusal.
 pub fn check_figures(
     path: &Path,
     trials: Option<usize>,
     figures: &[Figure],
     reader: Reader,
+    at: &dyn Fn(&str) -> Option<String>,
 ) -> Result<()> {
     if trials == Some(0) {
         return Err(Error::file(
@@ -109,27 +131,59 @@ pub fn check_figures(
     for f in figures {
         let refuse = |msg: String| {
             let key = format!("results ({}), {}", f.entry, f.metric);
-            Err(Error::file(path, key, msg))
+            let line = at(&f.entry).and_then(|e| {
+                let text = std::fs::read_to_string(path).ok()?;
+                json_key_line(&text, &format!("{e}.{}", f.metric))
+            });
+            Err(Error::file(path, at_line(line, key), msg))
         };
         let count = f.metric == Metric::Failures.key() || f.metric.starts_with("terminations.");
         if count && (f.value < 0.0 || f.value.fract() != 0.0) {
-            return refuse(format!("is {}: a count is a whole number ≥ 0", f.value));
+            return refuse(format!(
+                "is {}: a count is a whole number ≥ 0",
+                shown(f.value)
+            ));
+        }
+        if let Some(n) = trials.filter(|&n| count && f.value > n as Real) {
+            return refuse(format!(
+                "is {}, more than the {n} trials of the run: a count is of its trials",
+                shown(f.value)
+            ));
         }
         if !signed(&f.metric) && f.value < 0.0 {
-            return refuse(format!("is {}: this figure is never negative", f.value));
+            return refuse(format!(
+                "is {}: this figure is never negative",
+                shown(f.value)
+            ));
+        }
+        let (eta_value, eta_interval) = eta_bounded(&f.metric);
+        if eta_value && f.value > 100.0 {
+            return refuse(format!(
+                "is {} %: η = 100 · (1 − remaining error / injected error) is at most 100 %, \
+                 and so are its means and medians: no run writes it",
+                shown(f.value)
+            ));
         }
         let Some([lo, hi]) = f.ci else { continue };
+        let (l, h) = (shown(lo), shown(hi));
         if lo > hi {
             return refuse(format!(
-                "has the 95 % interval [{lo}, {hi}], whose lower end is above its upper: no \
-                 run writes it"
+                "has the 95 % interval [{l}, {h}], whose lower end is above its upper: no run \
+                 writes it"
+            ));
+        }
+        if eta_interval && hi > 100.0 {
+            return refuse(format!(
+                "has the 95 % interval [{}, {}], above 100 %: the interval of a median η is \
+                 of η values, each at most 100 %: no run writes it",
+                l, h
             ));
         }
         let slack = 1e-9 * f.value.abs().max(lo.abs()).max(hi.abs());
         if reader == Reader::Record && (f.value < lo - slack || f.value > hi + slack) {
             return refuse(format!(
-                "is {} outside its own 95 % interval [{lo}, {hi}]: the figures were edited",
-                f.value
+                "is {} outside its own 95 % interval [{l}, {h}]: the figures were edited",
+                shown(f.value)
             ));
         }
     }

@@ -165,8 +165,6 @@ impl Summary {
     /// Reads `summary.json` at `path`.
     pub fn read(path: &Path) -> Result<Summary> {
         let text = read_text(path)?;
-        let v: Value = serde_json::from_str(&text)
-            .map_err(|e| Error::file(path, format!("line {}", e.line()), e.to_string()))?;
-        Summary::from_value(v, path)
+        Summary::from_value(crate::error::json_value(path, &text)?, path)
     }
 }

@@ -300,6 +300,7 @@ impl IdentifiedRecord {
     /// does not know, or of the wrong type, is refused naming the key path; a file of a later
     /// format than [`FORMAT`] is refused naming the format.
     pub fn from_json(text: &str, path: &Path) -> crate::Result<IdentifiedRecord> {
+        crate::error::unique_keys(path, text)?;
         let mut de = serde_json::Deserializer::from_str(text);
         let r: IdentifiedRecord = crate::error::read_typed(&mut de, path, "identified.json")?;
         crate::error::newer_format(path, "identification record", r.format.0, FORMAT)?;

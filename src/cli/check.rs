@@ -132,7 +132,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
             ),
         };
         if matches!(c.status, Status::Regression | Status::Unresolved) {
-            eprintln!("{line}");
+            err!("{line}");
         } else {
             out!("{line}");
         }

@@ -24,6 +24,14 @@ macro_rules! out {
     }};
 }
 
+/// `eprintln!` likewise: a line of results on stderr (`check`'s regressions).
+macro_rules! err {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr(), "{}", $crate::cli::escaped(&format!($($arg)*)));
+    }};
+}
+
 /// `print!` likewise.
 macro_rules! out_raw {
     ($($arg:tt)*) => {{
@@ -92,14 +100,16 @@ pub fn for_terminal(text: &str) -> String {
         .join("\n")
 }
 
-/// `text` with its control characters other than line breaks and tabs escaped (`\u{1b}`):
-/// what stdout is given (results are not cut, unlike an error's lines in [`for_terminal`]).
+/// `text` with its control characters other than line breaks and tabs, and its bidirectional
+/// formatting characters, escaped (`\u{1b}`, `\u{202e}`; [`calbench::error::is_hidden`]):
+/// what every line of results on stdout or stderr is given (results are not cut, unlike an
+/// error's lines in [`for_terminal`]).
 pub fn escaped(text: &str) -> String {
     let mut out = String::with_capacity(text.len());
     for c in text.chars() {
         match c {
             '\t' | '\n' => out.push(c),
-            c if c.is_control() => out.extend(c.escape_unicode()),
+            c if calbench::error::is_hidden(c) => out.extend(c.escape_unicode()),
             c => out.push(c),
         }
     }

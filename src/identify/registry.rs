@@ -184,6 +184,12 @@ impl MethodSpec {
             let msg = "must name the method in the reports; leave it out for the method's name";
             return Err(("label".to_string(), msg.to_string()));
         }
+        if label.chars().any(crate::error::is_hidden) {
+            let msg = "must be a name without control characters (bidirectional overrides \
+                       included), as `name` is: it names the method in the reports and on the \
+                       terminal";
+            return Err(("label".to_string(), msg.to_string()));
+        }
         let k = match t.get("k") {
             None => DEFAULT_K,
             Some(v) => {

@@ -12,7 +12,7 @@ use crate::analysis::regression::check_summary_for;
 use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
 use crate::calibrate::task::{task_path, Division, TaskRecord};
-use crate::error::{read_text, Error, Result};
+use crate::error::{read_text, shown, Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
 use crate::study::kind::AnyScenario;
@@ -164,7 +164,7 @@ impl RanSummary {
 
 pub(super) fn read(path: &Path) -> Result<(String, Value)> {
     let text = read_text(path)?;
-    let v = serde_json::from_str(&text).map_err(|e| Error::file(path, "JSON", e.to_string()))?;
+    let v = crate::error::json_value(path, &text)?;
     Ok((text, v))
 }
 
@@ -322,7 +322,12 @@ impl Record {
             if lo > hi || value < lo || value > hi {
                 return Err(bad(
                     "ci95",
-                    &format!("[{lo}, {hi}] does not hold the value {value}: edited figures"),
+                    &format!(
+                        "[{}, {}] does not hold the value {}: edited figures",
+                        shown(lo),
+                        shown(hi),
+                        shown(value)
+                    ),
                 ));
             }
         }

@@ -96,7 +96,11 @@ impl Record {
             flatten(&name, "", &kept, None, &mut figures);
             entries.push(Entry { name, method });
         }
-        check_figures(path, Some(w.trials), &figures, Reader::Record)?;
+        let at = |name: &str| {
+            let i = entries.iter().position(|e| e.name == name)?;
+            Some(format!("cells[{i}]"))
+        };
+        check_figures(path, Some(w.trials), &figures, Reader::Record, &at)?;
         let mut r = Record::new(Kind::Run, dir, document, w.scenario.clone(), text);
         r.output.seed = Some(w.seed);
         r.output.trials = Some(format!("0..{}", w.trials));

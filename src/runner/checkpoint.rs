@@ -207,6 +207,7 @@ impl Checkpoint {
                 )
             })?;
         let parse = |e: serde_json::Error| Error::file(&path, "checkpoint.json", e.to_string());
+        crate::error::unique_keys(&path, &text)?;
         let head: FormatOnly = serde_json::from_str(&text).map_err(parse)?;
         let refuse = |what: &str, had: String, now: String| {
             Error::file(

@@ -256,6 +256,7 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
             };
             Error::file(dir, "shard.json", msg)
         })?;
+    crate::error::unique_keys(&path, &text)?;
     let head: FormatOnly =
         serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;
     if head.format != FORMAT {

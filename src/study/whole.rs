@@ -142,8 +142,9 @@ pub fn at_key_line(e: Error, text: &str) -> Error {
 pub const MAX_NAME_BYTES: usize = 200;
 
 /// Whether `name` can name a study's default output folder `results/<name>/`: not empty,
-/// no slash, no control character, not `.` or `..` (which would put the run beside or above
-/// `results/`), and at most [`MAX_NAME_BYTES`] bytes. The refusal otherwise.
+/// no slash, no control or bidirectional formatting character ([`crate::error::is_hidden`]),
+/// not `.` or `..` (which would put the run beside or above `results/`), and at most
+/// [`MAX_NAME_BYTES`] bytes. The refusal otherwise.
 pub fn folder_name(name: &str) -> std::result::Result<(), &'static str> {
     if name.len() > MAX_NAME_BYTES {
         return Err("must be at most 200 bytes: it names the folder results/<name>/, and a longer name is refused by the file system");
@@ -153,9 +154,9 @@ pub fn folder_name(name: &str) -> std::result::Result<(), &'static str> {
         || t == "."
         || t == ".."
         || name.contains(['/', '\\'])
-        || name.chars().any(char::is_control)
+        || name.chars().any(crate::error::is_hidden)
     {
-        return Err("must be a non-empty name without slashes or control characters, and not `.` or `..`: it names the folder results/<name>/");
+        return Err("must be a non-empty name without slashes or control characters (bidirectional overrides included), and not `.` or `..`: it names the folder results/<name>/");
     }
     Ok(())
 }

@@ -328,7 +328,11 @@ pub fn check_summary_for(
         return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
     let figures = figures::of_summary(&s)?;
-    figures::check_figures(path, s.trials, &figures, reader)?;
+    let at = |entry: &str| {
+        let i = s.results.iter().position(|e| e.key() == entry)?;
+        Some(format!("results[{i}]"))
+    };
+    figures::check_figures(path, s.trials, &figures, reader, &at)?;
     Ok((s, figures))
 }
 
@@ -466,8 +470,7 @@ fn present(e: &Entry, path: &str) -> bool {
 /// Reads a JSON file.
 pub fn read_json(path: &Path) -> Result<Value> {
     let text = read_text(path)?;
-    serde_json::from_str(&text)
-        .map_err(|e| Error::file(path, format!("line {}", e.line()), e.to_string()))
+    crate::error::json_value(path, &text)
 }
 
 /// Reads the summary file `path` ([`check_summary`]).

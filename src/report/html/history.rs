@@ -60,10 +60,21 @@ pub(crate) fn csv_text(header: &str, rows: impl Iterator<Item = Vec<String>>) ->
     String::from_utf8(bytes).map_err(|e| Error::Compute(e.to_string()))
 }
 
+/// A number as a CSV cell: as `{}` writes it (`0.1668`, `1.8e-5` as `0.000018`), but from
+/// 1e16 on in exponent form (`1e300`), as a refusal shows it ([`crate::error::shown`]), where
+/// `{}` would write a run of hundreds of digits.
+pub(crate) fn number_cell(v: Real) -> String {
+    if v.abs() >= 1e16 {
+        crate::error::shown(v)
+    } else {
+        v.to_string()
+    }
+}
+
 /// An interval as two CSV cells (empty without one).
 pub(crate) fn ci_cells(ci: Option<[Real; 2]>) -> [String; 2] {
     ci.map_or([String::new(), String::new()], |[l, h]| {
-        [l.to_string(), h.to_string()]
+        [number_cell(l), number_cell(h)]
     })
 }
 
@@ -83,7 +94,7 @@ pub fn csv(points: &[Point]) -> Result<String> {
                 p.recorded_at.clone(),
             ]);
             row.extend([
-                p.value.to_string(),
+                number_cell(p.value),
                 lo,
                 hi,
                 p.step.unwrap_or("").to_string(),

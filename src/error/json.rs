@@ -1,0 +1,164 @@
+//! The one parse of calbench's JSON files (summaries, baselines, `identified.json`,
+//! `task.json`, `shard.json`, `checkpoint.json`) that refuses a key written twice in one
+//! object, naming the file, the line and the key path, as a TOML file's is refused: serde_json
+//! keeps the last value and a reader would use it without a word.
+
+use std::cell::RefCell;
+use std::fmt;
+use std::path::Path;
+
+use serde::de::{DeserializeSeed, Deserializer, Error as _, MapAccess, SeqAccess, Visitor};
+use serde_json::{Map, Number, Value};
+
+use super::{Error, Result};
+
+/// Builds a [`Value`] as serde_json does, refusing a key written twice in one object; the key
+/// path of the value is `path` (`results[0]`), that of the duplicate is kept in `found`.
+struct Unique<'a> {
+    path: String,
+    found: &'a RefCell<Option<(String, String)>>,
+}
+
+impl<'a> Unique<'a> {
+    fn at(&self, path: String) -> Unique<'a> {
+        Unique {
+            path,
+            found: self.found,
+        }
+    }
+}
+
+impl<'de> DeserializeSeed<'de> for Unique<'_> {
+    type Value = Value;
+    fn deserialize<D: Deserializer<'de>>(self, d: D) -> std::result::Result<Value, D::Error> {
+        d.deserialize_any(self)
+    }
+}
+
+impl<'de> Visitor<'de> for Unique<'_> {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+        f.write_str("a JSON value")
+    }
+    fn visit_bool<E>(self, v: bool) -> std::result::Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+    fn visit_i64<E>(self, v: i64) -> std::result::Result<Value, E> {
+        Ok(Value::Number(v.into()))
+    }
+    fn visit_u64<E>(self, v: u64) -> std::result::Result<Value, E> {
+        Ok(Value::Number(v.into()))
+    }
+    fn visit_f64<E>(self, v: f64) -> std::result::Result<Value, E> {
+        Ok(Number::from_f64(v).map_or(Value::Null, Value::Number))
+    }
+    fn visit_str<E>(self, v: &str) -> std::result::Result<Value, E> {
+        Ok(Value::String(v.to_string()))
+    }
+    fn visit_string<E>(self, v: String) -> std::result::Result<Value, E> {
+        Ok(Value::String(v))
+    }
+    fn visit_unit<E>(self) -> std::result::Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_none<E>(self) -> std::result::Result<Value, E> {
+        Ok(Value::Null)
+    }
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> std::result::Result<Value, A::Error> {
+        let mut out = Vec::new();
+        while let Some(v) =
+            seq.next_element_seed(self.at(format!("{}[{}]", self.path, out.len())))?
+        {
+            out.push(v);
+        }
+        Ok(Value::Array(out))
+    }
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> std::result::Result<Value, A::Error> {
+        let mut out = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            let path = match self.path.as_str() {
+                "" => key.clone(),
+                p => format!("{p}.{key}"),
+            };
+            if out.contains_key(&key) {
+                *self.found.borrow_mut() = Some((path, key));
+                return Err(A::Error::custom("duplicate key"));
+            }
+            let v = map.next_value_seed(self.at(path))?;
+            out.insert(key, v);
+        }
+        Ok(Value::Object(out))
+    }
+}
+
+/// The JSON `text` of the file `path` as a value: text that is not JSON is refused at its line
+/// (`line 3: expected value at line 3 column 5`), and a key written twice in one object at
+/// the line of its second writing, naming its key path (`line 57, results[0].eta_mean_pct:
+/// duplicate key …`).
+pub fn json_value(path: &Path, text: &str) -> Result<Value> {
+    parse(path, text).map_err(|(e, _)| e)
+}
+
+/// Refuses, as [`json_value`] does, a key written twice in one object of the JSON `text` of
+/// the file `path`, for a reader that parses the text into its own types (and says itself
+/// what is not JSON).
+pub fn unique_keys(path: &Path, text: &str) -> Result<()> {
+    match parse(path, text) {
+        Err((e, true)) => Err(e),
+        _ => Ok(()),
+    }
+}
+
+/// [`json_value`], its refusal marked `true` for a duplicate key.
+fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
+    let found = RefCell::new(None);
+    let mut de = serde_json::Deserializer::from_str(text);
+    let parsed = Unique {
+        path: String::new(),
+        found: &found,
+    }
+    .deserialize(&mut de)
+    .and_then(|v| de.end().map(|()| v));
+    parsed.map_err(|e| match found.into_inner() {
+        Some((key_path, key)) => {
+            let msg = format!(
+                "duplicate key `{key}`: it is written a second time in its object, and a \
+                 reader would take one of the two values without a word; no calbench file \
+                 writes a key twice"
+            );
+            (
+                Error::file(path, format!("line {}, {key_path}", e.line()), msg),
+                true,
+            )
+        }
+        None => {
+            let e = Error::file(path, format!("line {}", e.line()), e.to_string());
+            (e, false)
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_key_written_twice_is_refused_at_its_second_line() {
+        let text = "{\n  \"a\": [\n    {\"b\": 1,\n     \"b\": 2}\n  ]\n}\n";
+        let e = json_value(Path::new("s.json"), text)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("s.json: line 4, a[0].b: duplicate key `b`"),
+            "{e}"
+        );
+        assert!(unique_keys(Path::new("s.json"), text).is_err());
+        let same = "{\"a\": [{\"b\": 1.5, \"c\": null}], \"b\": {\"b\": true}}";
+        let v = json_value(Path::new("s.json"), same).unwrap();
+        assert_eq!(v, serde_json::from_str::<Value>(same).unwrap());
+        let e = json_value(Path::new("s.json"), "{\n\"a\": }").unwrap_err();
+        assert!(e.to_string().starts_with("s.json: line 2: "), "{e}");
+        assert!(unique_keys(Path::new("s.json"), "{\n\"a\": }").is_ok());
+    }
+}

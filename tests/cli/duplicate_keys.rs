@@ -1,0 +1,53 @@
+//! A key written twice in one object of a JSON file calbench reads (a summary, a baseline, a
+//! run folder's `summary.json`, `identified.json`) is refused naming the file, the line of its
+//! second writing and the key path, as a TOML file's is (docs/formats.md § 8.1); the last
+//! value had been used without a word.
+
+use crate::common::{calbench, path_arg, read, refused, tmp_dir};
+use crate::impossible::{copy_with_summary, good_run};
+
+/// `text` with `line` inserted after the first line that holds `after`, which follows
+/// `"results"`; and the 1-based number of the inserted line.
+fn with_line_after(text: &str, after: &str, line: &str) -> (String, usize) {
+    let from = text.find("\"results\"").unwrap();
+    let at = from + text[from..].find(after).unwrap();
+    let end = at + text[at..].find('\n').unwrap() + 1;
+    let n = text[..end].matches('\n').count() + 1;
+    (format!("{}{line}\n{}", &text[..end], &text[end..]), n)
+}
+
+#[test]
+fn a_key_written_twice_in_a_summary_is_refused_by_check_and_record_naming_its_line() {
+    let dir = tmp_dir("cli-duplicate-keys");
+    let good = good_run(&dir);
+    let summary = good.join("summary.json");
+    let text = read(&summary);
+    let (twice, line) =
+        with_line_after(&text, "\"eta_mean_pct\": ", "      \"eta_mean_pct\": 1.0,");
+    let bad = dir.join("twice.json");
+    std::fs::write(&bad, &twice).unwrap();
+    let place = format!("{}: line {line}, results[0].eta_mean_pct: ", bad.display());
+    for (s, b) in [(&bad, &summary), (&summary, &bad)] {
+        let o = calbench(&["check", path_arg(s), "--baseline", path_arg(b)]);
+        refused(&o, &[&place, "duplicate key `eta_mean_pct`"]);
+    }
+    // A second `scenario` in the baseline is the baseline's fault, not the summary's.
+    let scenario = format!("  \"scenario\": \"other\",\n{}", &text[2..]);
+    let base = dir.join("scenario-twice.json");
+    std::fs::write(&base, format!("{{\n{scenario}")).unwrap();
+    let o = calbench(&["check", path_arg(&summary), "--baseline", path_arg(&base)]);
+    let err = refused(
+        &o,
+        &[
+            &format!("{}: line ", base.display()),
+            "duplicate key `scenario`",
+        ],
+    );
+    assert!(!err.contains(&summary.display().to_string()), "{err}");
+    // record refuses it, and stores nothing.
+    let folder = copy_with_summary(&good, &dir.join("copy"), &twice);
+    let db = dir.join("x.sqlite");
+    let o = calbench(&["record", path_arg(&folder), "--db", path_arg(&db)]);
+    let place = format!("{}: line {line}, ", folder.join("summary.json").display());
+    refused(&o, &[&place, "results[0].eta_mean_pct", "duplicate key"]);
+}
