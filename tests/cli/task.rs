@@ -365,6 +365,13 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
             && !e.contains("--cv"),
         "{e}"
     );
+    // So with one candidate, whose folds no choice uses: the value enters `task_hash`.
+    let one = format!("{src}\n[models]\ncandidates = [\"kinematic\"]\nfolds = 1000\n");
+    let e = refused("one", &one, None);
+    assert!(
+        e.contains("one.toml: line 15, models.folds: 1000 folds but only 443 calibration rows"),
+        "{e}"
+    );
     // A fold seed given twice repeats the same folds: refused as a candidate given twice is.
     let e = refused("seeds", &models("fold_seeds = [0, 1, 0]"), None);
     assert!(

@@ -32,6 +32,30 @@ impl Task {
         method: MethodSpec,
         given: &[Model],
     ) -> Result<(IdentifyRequest, Measurements, EntryModels)> {
+        // The task's folds are checked against its calibration rows whether they are used or
+        // not: a bad value in the task file is refused, as it enters `task_hash`.
+        let rows = match &self.models {
+            Some(tm) => {
+                let robot = self.load_robot()?;
+                let (cal, _) = self.measurements(&robot)?;
+                if tm.folds > cal.len() {
+                    let h = &self.head;
+                    return Err(Error::toml_file(
+                        &h.path,
+                        &h.text,
+                        "models.folds",
+                        "models.folds",
+                        format!(
+                            "{} folds but only {} calibration rows: at most one fold per row",
+                            tm.folds,
+                            cal.len()
+                        ),
+                    ));
+                }
+                Some((robot, cal))
+            }
+            None => None,
+        };
         if !given.is_empty() {
             let (q, val) = self.request(method, given)?;
             let m = EntryModels {
@@ -50,23 +74,7 @@ impl Task {
             };
             return Ok((q, val, m));
         };
-        let choice = if tm.candidates.len() > 1 {
-            let robot = self.load_robot()?;
-            let (cal, _) = self.measurements(&robot)?;
-            if tm.folds > cal.len() {
-                let h = &self.head;
-                return Err(Error::toml_file(
-                    &h.path,
-                    &h.text,
-                    "models.folds",
-                    "models.folds",
-                    format!(
-                        "{} folds but only {} calibration rows: at most one fold per row",
-                        tm.folds,
-                        cal.len()
-                    ),
-                ));
-            }
+        let choice = if let (true, Some((robot, cal))) = (tm.candidates.len() > 1, &rows) {
             let setup = crate::calibrate::cv::CvSetup {
                 method: &method,
                 registration: crate::calibrate::Registration::Identify,
@@ -76,9 +84,9 @@ impl Task {
                 done: &[],
             };
             Some(choose_model_repeated(
-                &robot,
+                robot,
                 &tm.candidates,
-                &cal,
+                cal,
                 tm.folds,
                 &tm.fold_seeds,
                 &setup,
