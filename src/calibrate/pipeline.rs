@@ -483,10 +483,7 @@ pub(crate) fn validation_misfit(
     if misfit(&model, &d.points, &frame, 0.0).is_some() {
         return None;
     }
-    let squares: Real = (model.iter().zip(&d.points))
-        .map(|(m, p)| (frame.apply(p) - m).norm_squared())
-        .sum();
-    let reference = (squares / d.len().max(1) as Real).sqrt();
+    let reference = plausibility::miss_rms(&model, &d.points, &frame);
     let model = plausibility::tool_points(nominal, &v.qs);
     let m = misfit(&model, &v.points, &frame, reference)?;
     let why = m.words("the validation points", "the calibration's frame");

@@ -290,20 +290,23 @@ pub fn misfit(model: &[Vec3], seen: &[Vec3], frame: &Frame, reference: Real) -> 
         let unit = unit_of(ratio);
         return Some(Misfit::Scale { ratio, unit });
     }
-    let rms = |r: &mut dyn Iterator<Item = Real>| {
-        let (sum, n) = r.fold((0.0, 0usize), |(s, n), v| (s + v * v, n + 1));
-        (sum / n.max(1) as Real).sqrt()
-    };
-    let given = rms(&mut model
-        .iter()
-        .zip(seen)
-        .map(|(m, s)| (frame.apply(s) - m).norm()));
-    // (A NaN miss is no finding: non-finite points are refused where they are read.)
+    let given = miss_rms(model, seen, frame);
+    // (A NaN miss is no finding: non-finite points are refused where they are read, and no
+    // points give no miss.)
     if given.is_nan() || given <= LENGTH_FLOOR_MM.max(reference / OTHER_FRAME_SHARE) {
         return None;
     }
-    let own = rms(&mut register_svd(model, seen, None).ok()?.residuals.into_iter());
+    let own = super::verdict::rms(&register_svd(model, seen, None).ok()?.residuals);
     (own < OTHER_FRAME_SHARE * given).then_some(Misfit::Frame { given, own })
+}
+
+/// How far the nominal robot's tool points `model` miss the measured points `seen` taken
+/// into the base frame by `frame`: the RMS distance (mm); NaN for no points.
+pub fn miss_rms(model: &[Vec3], seen: &[Vec3], frame: &Frame) -> Real {
+    let squares: Real = (model.iter().zip(seen))
+        .map(|(m, s)| (frame.apply(s) - m).norm_squared())
+        .sum();
+    (squares / model.len().min(seen.len()) as Real).sqrt()
 }
 
 /// What the measured points `seen` (the instrument's frame) say against the nominal robot's

@@ -32,6 +32,12 @@ pub fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// [`read_bounded`] as UTF-8 text, for a reader that words its own refusal of the file (a
+/// shard's `shard.json`, a checkpoint): text that is not UTF-8 is an I/O error too.
+pub fn read_bounded_text(path: &Path) -> std::io::Result<String> {
+    String::from_utf8(read_bounded(path)?).map_err(std::io::Error::other)
+}
+
 /// The text of the file `path`. A file that cannot be read is refused with the system's
 /// reason, one longer than [`TEXT_CAP_MIB`] MiB as such ([`read_bounded`]), and one that is
 /// not UTF-8 (a Latin-1 `°`, a UTF-16 export) naming the line and the byte of the first that

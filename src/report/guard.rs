@@ -130,8 +130,7 @@ pub fn checkpoint_of(out: &Path) -> PathBuf {
 /// The process of another run writing into `out` that is alive on this host: the `pid` and
 /// `host` of the `checkpoint.json` beside `out` ([`checkpoint_of`]), when that process runs.
 pub fn live_writer(out: &Path) -> Option<u32> {
-    let text = crate::error::read_bounded(&checkpoint_of(out).join("checkpoint.json")).ok()?;
-    let text = String::from_utf8(text).ok()?;
+    let text = crate::error::read_bounded_text(&checkpoint_of(out).join("checkpoint.json")).ok()?;
     let meta: serde_json::Value = serde_json::from_str(&text).ok()?;
     let pid = u32::try_from(meta.get("pid")?.as_u64()?).ok()?;
     let on_this_host = meta.get("host")?.as_str()? == host();

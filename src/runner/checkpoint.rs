@@ -193,19 +193,17 @@ impl Checkpoint {
     ) -> Result<(Checkpoint, AnyScenario, Option<Shard>, Records)> {
         let dir = folder(out);
         let path = dir.join("checkpoint.json");
-        let text = crate::error::read_bounded(&path)
-            .and_then(|b| String::from_utf8(b).map_err(std::io::Error::other))
-            .map_err(|e| {
-                Error::file(
-                    out,
-                    "--resume",
-                    format!(
+        let text = crate::error::read_bounded_text(&path).map_err(|e| {
+            Error::file(
+                out,
+                "--resume",
+                format!(
                     "no checkpoint of a run into this folder ({}: {e}); a run leaves one while \
                      it runs and removes it when it has finished",
                     path.display()
                 ),
-                )
-            })?;
+            )
+        })?;
         let parse = |e: serde_json::Error| Error::file(&path, "checkpoint.json", e.to_string());
         crate::error::unique_keys(&path, &text)?;
         let head: FormatOnly = serde_json::from_str(&text).map_err(parse)?;

@@ -241,21 +241,19 @@ pub(crate) fn trials_as_run(holder: &Path, trials: usize, scenario: &AnyScenario
 
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
     let path = dir.join("shard.json");
-    let text = crate::error::read_bounded(&path)
-        .and_then(|b| String::from_utf8(b).map_err(std::io::Error::other))
-        .map_err(|e| {
-            // A shard whose run was killed has no folder yet, only its checkpoint beside it.
-            let msg = if crate::report::checkpoint_folder(dir).is_dir() {
-                format!(
-                    "this shard's run did not finish: its checkpoint is there, and `calbench run \
+    let text = crate::error::read_bounded_text(&path).map_err(|e| {
+        // A shard whose run was killed has no folder yet, only its checkpoint beside it.
+        let msg = if crate::report::checkpoint_folder(dir).is_dir() {
+            format!(
+                "this shard's run did not finish: its checkpoint is there, and `calbench run \
                  --resume {}` finishes it",
-                    dir.display()
-                )
-            } else {
-                format!("not a shard folder of `calbench run --shard` ({e})")
-            };
-            Error::file(dir, "shard.json", msg)
-        })?;
+                dir.display()
+            )
+        } else {
+            format!("not a shard folder of `calbench run --shard` ({e})")
+        };
+        Error::file(dir, "shard.json", msg)
+    })?;
     crate::error::unique_keys(&path, &text)?;
     let head: FormatOnly =
         serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;
