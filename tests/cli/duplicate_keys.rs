@@ -51,3 +51,29 @@ fn a_key_written_twice_in_a_summary_is_refused_by_check_and_record_naming_its_li
     let place = format!("{}: line {line}, ", folder.join("summary.json").display());
     refused(&o, &[&place, "results[0].eta_mean_pct", "duplicate key"]);
 }
+
+#[test]
+fn a_summary_saved_with_a_byte_order_mark_reads_as_without() {
+    // An editor that saves UTF-8 with a byte-order mark; TOML, CSV and URDF files read so.
+    let dir = tmp_dir("cli-json-bom");
+    let good = good_run(&dir);
+    let summary = good.join("summary.json");
+    let marked = format!("\u{feff}{}", read(&summary));
+    let folder = copy_with_summary(&good, &dir.join("copy"), &marked);
+    let copy = folder.join("summary.json");
+    let plain = calbench(&[
+        "check",
+        path_arg(&summary),
+        "--baseline",
+        path_arg(&summary),
+    ]);
+    assert!(plain.status.success());
+    for (s, b) in [(&copy, &summary), (&summary, &copy)] {
+        let o = calbench(&["check", path_arg(s), "--baseline", path_arg(b)]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        assert_eq!(o.stdout, plain.stdout);
+    }
+    let db = dir.join("x.sqlite");
+    let o = calbench(&["record", path_arg(&folder), "--db", path_arg(&db)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
