@@ -358,6 +358,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
             );
         }
         if m.settings != m0.settings {
+            // Settings that are not a scenario are that file's fault, not a second run's.
+            for (d, m) in [(d0, m0), (d, m)] {
+                let file = m.scenario_file.as_deref();
+                scenario_as_run(&d.join("shard.json"), &m.settings, file)?;
+            }
             return differ(
                 "settings of scenario",
                 format!("\"{}\"", m0.scenario),

@@ -440,7 +440,8 @@ fn resume_refuses_a_checkpoint_it_cannot_replay_before_changing_it() {
 }
 
 /// `merge` of shards whose scenario as run (`settings`) was altered alike names the first
-/// `shard.json` and `settings`, on one line, where it named the scenario file; a negative
+/// `shard.json` and `settings`, on one line, where it named the scenario file, and altered in
+/// one shard alone names that shard's, where it called them shards of different runs; a negative
 /// `seconds` and an unknown key are refused naming the file.
 #[test]
 fn merge_refuses_altered_settings_naming_shard_json() {
@@ -450,6 +451,9 @@ fn merge_refuses_altered_settings_naming_shard_json() {
     let bad = |p: &Path| read(p).replace("count = 40", "count = [");
     let edits = [(m0.as_path(), bad(&m0)), (m1.as_path(), bad(&m1))];
     refused_merge(&[&a0, &a1], &edits, &["settings", "TOML parse error"]);
+    // Altered in the second shard alone: that file's fault, where merge called the two
+    // "shards of different runs".
+    refused_merge(&[&a0, &a1], &edits[1..], &["settings", "TOML parse error"]);
     // A wall time no run has, which merge summed into timing.json, and a key shard.json
     // does not have, which merge passed over.
     let negative = with_field(&read(&m0), "seconds", "-5");
