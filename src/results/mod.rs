@@ -356,6 +356,16 @@ impl Db {
             ));
         }
         if !create {
+            if v == 0 {
+                // No table (another program's would have been refused above): an empty file,
+                // such as `/dev/null`, which holds no results to read.
+                return Err(Error::file(
+                    path,
+                    "database",
+                    "holds no recorded results (an empty file, not yet a calbench results \
+                     database); record results first (`calbench record DIR --db FILE`)",
+                ));
+            }
             if v < SCHEMA_VERSION {
                 return Err(Error::file(
                     path,

@@ -300,6 +300,32 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
         path_arg(&dir.join("absent.sqlite")),
     ]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("absent.sqlite"));
+    // An empty file (or `/dev/null`) holds no results; it had been called a database of schema
+    // version 0 that `record` migrates.
+    let blank = dir.join("blank.sqlite");
+    std::fs::write(&blank, "").unwrap();
+    for db in [blank.as_path(), Path::new("/dev/null")] {
+        let lb = dir.join("lb");
+        for cmd in [
+            &["history", "--out", path_arg(&lb)][..],
+            &["leaderboard", "--out", path_arg(&lb)][..],
+        ] {
+            let mut args = cmd.to_vec();
+            args.extend(["--db", path_arg(db)]);
+            let o = calbench(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                !o.status.success()
+                    && err.contains(&format!(
+                        "{}: database: holds no recorded results",
+                        db.display()
+                    ))
+                    && !err.contains("migrates"),
+                "{err}"
+            );
+        }
+    }
+    assert_eq!(read(&blank), "");
     let bad = dir.join("t/task.json");
     std::fs::write(&bad, read(&bad).replace("\"closed\"", "\"middle\"")).unwrap();
     let o = calbench(&[
