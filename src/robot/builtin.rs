@@ -116,7 +116,9 @@ pub fn load_chain(name_or_path: &str, which: &crate::robot::urdf::UrdfChain) -> 
     if urdf {
         return Ok(crate::robot::urdf::UrdfRobot::load_chain(path, which)?.robot);
     }
-    if path.exists() {
+    // A path that cannot be resolved (a symlink loop, a folder without permission) is named
+    // with the system's reason, not as a name calbench does not know.
+    if path.try_exists().map_err(|e| Error::io(path, e))? {
         return read_robot_file(path);
     }
     let names: Vec<&str> = BUILTINS.iter().map(|b| b.name).collect();

@@ -690,3 +690,18 @@ fn a_key_missing_on_one_joint_is_refused_at_its_joint_s_line() {
         &words,
     );
 }
+
+/// A robot path the system cannot resolve is named with the system's reason; a symlink loop
+/// had been called "neither a built-in robot … nor an existing robot file".
+#[test]
+fn a_robot_path_that_loops_is_named_with_the_system_s_reason() {
+    let dir = tmp("cli-robot-loop");
+    let lp = dir.join("loop.toml");
+    std::os::unix::fs::symlink(&lp, &lp).unwrap();
+    let o = calbench(&["fk", "--robot", path(&lp), "--q", "0,0,0,0,0,0"]);
+    let err = refused(&o, &[&format!("{}: ", lp.display()), "symbolic links"]);
+    assert!(!err.contains("neither a built-in robot"), "{err}");
+    let gone = dir.join("absent.toml");
+    let o = calbench(&["fk", "--robot", path(&gone), "--q", "0,0,0,0,0,0"]);
+    refused(&o, &["neither a built-in robot"]);
+}
