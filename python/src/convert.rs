@@ -96,8 +96,8 @@ pub(crate) fn rows(a: &PyReadonlyArray2<'_, f64>) -> Vec<Vec<Real>> {
 }
 
 /// The rows of `q` (N, n) as joint values of `robot` in its internal units: refused naming `q`
-/// and its shape when n is not the robot's joint count, and each row checked
-/// ([`Robot::q_from_user_checked`]; an error names `q[i]`).
+/// and its shape when n is not the robot's joint count, and each value checked
+/// ([`Robot::q_internal`]; an error names `q`, the row and the column, as the other arrays').
 pub(crate) fn joint_rows(robot: &Robot, q: &PyReadonlyArray2<'_, f64>) -> PyResult<Vec<Vec<Real>>> {
     let (n, k) = q.as_array().dim();
     if k != robot.dof() {
@@ -110,9 +110,17 @@ pub(crate) fn joint_rows(robot: &Robot, q: &PyReadonlyArray2<'_, f64>) -> PyResu
     rows(q)
         .iter()
         .enumerate()
-        .map(|(i, v)| robot.q_from_user_checked(v, &format!("q[{i}]")))
-        .collect::<calbench::Result<_>>()
-        .map_err(err)
+        .map(|(i, v)| {
+            v.iter()
+                .enumerate()
+                .map(|(j, &x)| {
+                    robot
+                        .q_internal(j, x)
+                        .map_err(|m| setting("q", format!("row {i}, column q{}: {m}", j + 1)))
+                })
+                .collect()
+        })
+        .collect()
 }
 
 /// The rows of a (N, 3) array as points.

@@ -95,6 +95,17 @@ def test_fk_warns_of_joint_values_outside_the_limits_as_the_cli_does(cli, recwar
         r.fk([outside] * 5, pose=True)
 
 
+def test_fk_refuses_a_value_that_is_no_joint_value_at_its_row_and_column():
+    # As every array argument is refused (docs/python.md, Errors); it was `q[1]`: joint 2.
+    r = calbench.Robot.builtin("irb2600")
+    good = [10, -20, 30, 40, -50, 60]
+    for bad, says in [(math.nan, "NaN"), (math.inf, "inf"), (1e300, "")]:
+        with pytest.raises(calbench.SettingError,
+                           match=rf"setting `q`: row 1, column q2: .*{says}") as e:
+            r.fk([good, [10, bad, 30, 40, -50, 60]])
+        assert "joint 2" not in str(e.value)
+
+
 def test_with_errors_moves_the_tool_and_to_toml_reads_back(tmp_path):
     r = calbench.Robot.builtin("irb2600")
     q = np.array([[10, -20, 30, 40, -50, 60]], dtype=float)

@@ -665,19 +665,24 @@ impl Robot {
             ));
         }
         q.iter()
-            .zip(&self.joints)
             .enumerate()
-            .map(|(i, (&v, j))| {
-                let length = self.q_is_length(i, j.kind);
-                let (quantity, unit) = if length {
-                    (Quantity::Length, self.units.length_name())
-                } else {
-                    (Quantity::JointAngle, self.units.angle_name())
-                };
-                to_internal(quantity, v, self.q_factor(i, j.kind), unit)
+            .map(|(i, &v)| {
+                self.q_internal(i, v)
                     .map_err(|m| Error::setting(key, format!("joint {}: {m}", i + 1)))
             })
             .collect()
+    }
+
+    /// Joint `i`'s value `v` given in the robot's units, in internal units, checked as
+    /// [`Robot::q_from_user_checked`] checks it; the refusal's words without a place.
+    pub fn q_internal(&self, i: usize, v: Real) -> std::result::Result<Real, String> {
+        let kind = self.joints[i].kind;
+        let (quantity, unit) = if self.q_is_length(i, kind) {
+            (Quantity::Length, self.units.length_name())
+        } else {
+            (Quantity::JointAngle, self.units.angle_name())
+        };
+        to_internal(quantity, v, self.q_factor(i, kind), unit)
     }
 
     /// Whether joint `i`'s value is a length (prismatic, or a screw travel of a coupling).
