@@ -9,7 +9,7 @@ mod text;
 pub use hidden::is_hidden;
 pub use json::{json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
-pub use text::{read_bounded, read_bounded_text, read_text, TEXT_CAP_MIB};
+pub use text::{read_bounded, read_bounded_text, read_text, read_text_whole, TEXT_CAP_MIB};
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an
 /// error: it is reported as a termination reason.

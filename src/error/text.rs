@@ -38,15 +38,14 @@ pub fn read_bounded_text(path: &Path) -> std::io::Result<String> {
     String::from_utf8(read_bounded(path)?).map_err(std::io::Error::other)
 }
 
-/// The text of the file `path`. A file that cannot be read is refused with the system's
-/// reason, one longer than [`TEXT_CAP_MIB`] MiB as such ([`read_bounded`]), and one that is
-/// not UTF-8 (a Latin-1 `°`, a UTF-16 export) naming the line and the byte of the first that
-/// is not, where the standard library's message named neither. A leading byte-order mark (an
-/// editor's UTF-8) is not part of the text: a JSON file saved with one reads as without, as
-/// TOML, CSV and URDF files do.
-pub fn read_text(path: &Path) -> Result<String> {
+/// The text of the file `path`, every byte of it ([`read_text`] less a byte-order mark), for a
+/// reader that writes the text back whole (a URDF). A file that cannot be read is refused with
+/// the system's reason, one longer than [`TEXT_CAP_MIB`] MiB as such ([`read_bounded`]), and
+/// one that is not UTF-8 (a Latin-1 `°`, a UTF-16 export) naming the line and the byte of the
+/// first that is not, where the standard library's message named neither.
+pub fn read_text_whole(path: &Path) -> Result<String> {
     let bytes = read_bounded(path).map_err(|e| Error::io(path, e))?;
-    let mut text = String::from_utf8(bytes).map_err(|e| {
+    String::from_utf8(bytes).map_err(|e| {
         let good = e.utf8_error().valid_up_to();
         let bytes = e.as_bytes();
         let start = bytes[..good]
@@ -60,7 +59,14 @@ pub fn read_text(path: &Path) -> Result<String> {
             bytes[good]
         );
         Error::file(path, format!("line {line}"), msg)
-    })?;
+    })
+}
+
+/// The text of the file `path` ([`read_text_whole`]) without a leading byte-order mark (an
+/// editor's UTF-8), which is not part of the text: a JSON file saved with one reads as
+/// without, as TOML, CSV and URDF files do.
+pub fn read_text(path: &Path) -> Result<String> {
+    let mut text = read_text_whole(path)?;
     if text.starts_with('\u{feff}') {
         text.drain(..'\u{feff}'.len_utf8());
     }

@@ -15,7 +15,7 @@ use std::path::Path;
 
 use quick_xml::events::{BytesStart, Event};
 
-use crate::error::{line_of, read_text, Error, Result};
+use crate::error::{line_of, read_text_whole, Error, Result};
 use crate::numeric::{matrix_rpy, Frame, Real};
 
 /// The children of a `<joint>` that calbench reads.
@@ -50,7 +50,7 @@ struct Part {
 /// Reads the URDF at `path`: what calbench reads of it as urdf-rs parses it, and its text. A
 /// text that is not well-formed XML is refused naming the file and the line.
 pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
-    let text = read_text(path)?;
+    let text = read_text_whole(path)?;
     // quick-xml skips a byte order mark without counting it in its offsets: the reader reads
     // the text after the marks (one or more), and the offsets into `text` are its offsets
     // plus their length.
