@@ -32,32 +32,26 @@ impl Task {
         method: MethodSpec,
         given: &[Model],
     ) -> Result<(IdentifyRequest, Measurements, EntryModels)> {
+        let robot = self.load_robot()?;
+        let (cal, val) = self.measurements(&robot)?;
         // The task's folds are checked against its calibration rows whether they are used or
         // not: a bad value in the task file is refused, as it enters `task_hash`.
-        let rows = match &self.models {
-            Some(tm) => {
-                let robot = self.load_robot()?;
-                let (cal, _) = self.measurements(&robot)?;
-                if tm.folds > cal.len() {
-                    let h = &self.head;
-                    return Err(Error::toml_file(
-                        &h.path,
-                        &h.text,
-                        "models.folds",
-                        "models.folds",
-                        format!(
-                            "{} folds but only {} calibration rows: at most one fold per row",
-                            tm.folds,
-                            cal.len()
-                        ),
-                    ));
-                }
-                Some((robot, cal))
-            }
-            None => None,
-        };
+        if let Some(tm) = self.models.as_ref().filter(|tm| tm.folds > cal.len()) {
+            let h = &self.head;
+            return Err(Error::toml_file(
+                &h.path,
+                &h.text,
+                "models.folds",
+                "models.folds",
+                format!(
+                    "{} folds but only {} calibration rows: at most one fold per row",
+                    tm.folds,
+                    cal.len()
+                ),
+            ));
+        }
         if !given.is_empty() {
-            let (q, val) = self.request(method, given)?;
+            let (q, val) = self.request((robot, cal, val), method, given)?;
             let m = EntryModels {
                 candidates: given.to_vec(),
                 fixed_by: "command line",
@@ -66,7 +60,7 @@ impl Task {
             return Ok((q, val, m));
         }
         let Some(tm) = &self.models else {
-            let (q, val) = self.request(method, &[Model::KINEMATIC])?;
+            let (q, val) = self.request((robot, cal, val), method, &[Model::KINEMATIC])?;
             let m = EntryModels {
                 candidates: vec![Model::KINEMATIC],
                 fixed_by: "default",
@@ -74,7 +68,7 @@ impl Task {
             };
             return Ok((q, val, m));
         };
-        let choice = if let (true, Some((robot, cal))) = (tm.candidates.len() > 1, &rows) {
+        let choice = if tm.candidates.len() > 1 {
             let setup = crate::calibrate::cv::CvSetup {
                 method: &method,
                 registration: crate::calibrate::Registration::Identify,
@@ -84,9 +78,9 @@ impl Task {
                 done: &[],
             };
             Some(choose_model_repeated(
-                robot,
+                &robot,
                 &tm.candidates,
-                cal,
+                &cal,
                 tm.folds,
                 &tm.fold_seeds,
                 &setup,
@@ -95,7 +89,7 @@ impl Task {
             None
         };
         let chosen = tm.candidates[choice.as_ref().map_or(0, |c| c.best)];
-        let (mut q, val) = self.request(method, &[chosen])?;
+        let (mut q, val) = self.request((robot, cal, val), method, &[chosen])?;
         // The identification cross-validates the chosen model: it takes the repeated
         // choice's cross-validation of it that ran on the same setup (the same key: model,
         // method and settings, registration, seeds, folds and rows), if one did, instead of

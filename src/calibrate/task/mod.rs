@@ -458,17 +458,16 @@ impl Task {
         read_measurements_text(&named, text, robot)
     }
 
-    /// The identification request of an entry: the nominal robot, the calibration rows, the
-    /// validation rows, the method and the candidate models (several: chosen by 5-fold
-    /// cross-validation on the calibration rows alone; one: given). Also returns the
-    /// validation rows.
-    pub fn request(
+    /// The identification request of an entry on the task's nominal `robot`, calibration rows
+    /// `cal` and validation rows `val` ([`Task::load_robot`], [`Task::measurements`]), with
+    /// the method and the candidate models (several: chosen by 5-fold cross-validation on the
+    /// calibration rows alone; one: given). Also returns the validation rows.
+    fn request(
         &self,
+        (robot, cal, val): (Robot, Measurements, Measurements),
         method: MethodSpec,
         models: &[Model],
     ) -> Result<(IdentifyRequest, Measurements)> {
-        let robot = self.load_robot()?;
-        let (cal, val) = self.measurements(&robot)?;
         let source = match &self.data {
             TaskData::Split { file, .. } => file.clone(),
             TaskData::Files { calibration, .. } => calibration.clone(),
