@@ -349,10 +349,26 @@ fn angle_sigma_deg<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real,
     within(d, crate::robot::MAX_ANGLE_RAD.to_degrees(), "° (one turn)")
 }
 
-/// `[tracker] pose`: six finite numbers, x, y, z within a robot file's range.
+/// `[tracker] pose`: six finite numbers, x, y, z within a robot file's range and rx, ry, rz
+/// within one turn ([`beyond_turn`]).
 fn tracker_pose<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<[Real; 6], D::Error> {
     let pose: [Real; 6] = finite(d)?;
-    beyond("x, y, z", &pose[..3]).map(|()| pose)
+    beyond("x, y, z", &pose[..3])?;
+    match beyond_turn(&pose[3..]) {
+        Some(msg) => Err(serde::de::Error::custom(format!("rx, ry, rz {msg}"))),
+        None => Ok(pose),
+    }
+}
+
+/// The first of the angles `deg` (degrees) beyond one turn, as a robot file's angles are
+/// bounded, in words: a tracker's rotation of 1e300° is no placement, and its sine is noise.
+pub(crate) fn beyond_turn(deg: &[Real]) -> Option<String> {
+    let most = crate::robot::MAX_ANGLE_RAD.to_degrees();
+    let v = deg.iter().find(|v| v.abs() > most)?;
+    Some(format!(
+        "must be within ±{most}° (one turn), got {}",
+        crate::error::shown(*v)
+    ))
 }
 
 /// `[outliers] magnitude_mm`: a range ([`range`]) within a robot file's range.

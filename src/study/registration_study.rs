@@ -227,13 +227,18 @@ impl RegistrationStudy {
         ] {
             crate::error::lengths_within(&format!("registration_study.{key}"), v, most)?;
         }
+        let key = "registration_study.tracker_pose";
         if let Some(v) = angles.iter().find(|v| !v.is_finite()) {
+            let shown = crate::error::shown(*v);
             return Err(Error::setting(
-                "registration_study.tracker_pose",
-                format!("must be 6 finite numbers, got {}", crate::error::shown(*v)),
+                key,
+                format!("must be 6 finite numbers, got {shown}"),
             ));
         }
-        Ok(())
+        match crate::sim::settings::beyond_turn(angles) {
+            Some(msg) => Err(Error::setting(key, format!("rx, ry, rz {msg}"))),
+            None => Ok(()),
+        }
     }
 
     /// The cells' names in grid order (outlier counts outer, magnitudes inner), as a claim
@@ -473,6 +478,10 @@ mod tests {
             },
             RegistrationStudy {
                 noise_mm: -1.0,
+                ..RegistrationStudy::default()
+            },
+            RegistrationStudy {
+                tracker_pose: [2500.0, 0.0, 500.0, 0.0, 0.0, 1e300],
                 ..RegistrationStudy::default()
             },
         ];

@@ -379,6 +379,33 @@ fn lengths_beyond_a_robot_files_range_are_refused() {
         refused(&o, &[&format!("{name}.toml"), key, "a robot file's range"]);
         assert!(!out.exists());
     }
+    // A tracker turned beyond one turn, as a robot file's angles are bounded: 1e300° ran.
+    for (name, to) in [
+        ("turned", "pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 1e300]"),
+        (
+            "turned-back",
+            "pose = [2500.0, 0.0, 500.0, -361.0, 0.0, 180.0]",
+        ),
+    ] {
+        let from = "pose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]";
+        let sc = ci_guard_with(&d, name, |t| t.replace(from, to));
+        let out = d.join(name);
+        let o = calbench(&["simulate", path_arg(&sc), "--out", path_arg(&out)]);
+        refused(
+            &o,
+            &[
+                &format!("{name}.toml"),
+                "tracker",
+                "rx, ry, rz must be within ±360° (one turn)",
+            ],
+        );
+        assert!(!out.exists());
+    }
+    let sc = ci_guard_with(&d, "turned-in", |t| {
+        t.replace("0.0, 0.0, 180.0]", "0.0, 0.0, -360.0]")
+    });
+    let o = calbench(&["simulate", path_arg(&sc), "--out", path_arg(&d.join("in"))]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// The 1-based line of `text` that starts with `start`.
