@@ -1,7 +1,7 @@
 //! Fixed real-data tasks (docs/formats.md § 9): a task file names the data, the mapping that
 //! reads them, the nominal robot, the split (a committed file of row indices, or a
 //! calibration file and a validation file), the metric and the data's authors' published
-//! figures. [`Task::request`] turns it into the one identification pipeline's request
+//! figures. [`Task::entry_request`] turns it into the one identification pipeline's request
 //! ([`IdentifyRequest`]); [`TaskEntry::json`] is the entry's `task.json`.
 
 mod canonical;
