@@ -7,7 +7,7 @@ use anyhow::Result;
 
 use calbench::analysis::regression::{
     baseline_document, checked_tolerance, comparable, compare_with, unpaired_because,
-    unpaired_entries, Side, Status, Unpaired, Which,
+    unpaired_entries, Compared, Side, Status, Unpaired, Which,
 };
 use calbench::error::Error;
 use calbench::numeric::Real;
@@ -65,6 +65,20 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
     Ok(())
 }
 
+/// The metrics whose per-trial values paired but were set aside
+/// ([`Compared::not_the_figures`]), entry by entry in the comparison's order.
+fn set_aside(all: &[Compared]) -> Vec<(&str, Vec<&str>)> {
+    let mut out: Vec<(&str, Vec<&str>)> = Vec::new();
+    for c in all.iter().filter(|c| c.not_the_figures) {
+        let (entry, metric) = (c.metric.entry.as_str(), c.metric.metric.as_str());
+        match out.last_mut() {
+            Some((e, m)) if *e == entry => m.push(metric),
+            _ => out.push((entry, vec![metric])),
+        }
+    }
+    out
+}
+
 /// `--tolerance X`, of `check`, `compare` and `history`.
 #[derive(clap::Args)]
 pub struct Tolerance {
@@ -100,6 +114,14 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         None => {
             for (entry, why) in unpaired_entries(&b, &s) {
                 out!("unpaired: {entry}: {why}, so its metrics are compared from the summaries' intervals");
+            }
+            for (entry, metrics) in set_aside(&all) {
+                out!(
+                    "unpaired: {entry}: {}: over the trials usable in both runs their per-trial \
+                     values do not give the summaries' figures (a trial, or a parameter's η, \
+                     counts in one run only), so they are compared from the summaries' intervals",
+                    metrics.join(", ")
+                );
             }
         }
     }

@@ -141,6 +141,10 @@ pub struct Compared {
     pub p_holm: Real,
     /// Whether the change was computed trial by trial (from both runs' `trials.csv`).
     pub paired: bool,
+    /// Whether both runs' per-trial values of the metric pair but were set aside: over the
+    /// trials usable in both they do not give the summaries' figures (a trial, or a
+    /// parameter's η, counted in one run only), so the change is the summaries' (unpaired).
+    pub not_the_figures: bool,
     /// Whether `diff_ci` is the interval of the median change (paired, where the report's
     /// comparison of the pair locates the median: the sign test's), not the t interval of
     /// the mean.
@@ -189,15 +193,17 @@ pub fn compare_with(
                 continue;
             };
             let value = found.and_then(|e| lookup(e, &metric)).unwrap_or(Real::NAN);
+            let mut not_the_figures = false;
             let change = found.filter(|_| value.is_finite()).map(|e| {
-                trials
-                    .and_then(|(ta, tb)| {
-                        let keys = (
-                            noise::trials_key(b, baseline),
-                            noise::trials_key(e, summary),
-                        );
-                        noise::paired(ta, tb, (&keys.0, &keys.1), &metric)
-                    })
+                let paired = trials.and_then(|(ta, tb)| {
+                    let keys = (
+                        noise::trials_key(b, baseline),
+                        noise::trials_key(e, summary),
+                    );
+                    noise::paired(ta, tb, (&keys.0, &keys.1), &metric)
+                });
+                not_the_figures = paired.as_ref().is_some_and(|c| !c.matches(base, value));
+                paired
                     .filter(|c| c.matches(base, value))
                     .unwrap_or_else(|| noise::unpaired(b, e, &metric, (base, value), counts))
             });
@@ -214,6 +220,7 @@ pub fn compare_with(
                 paired: changes
                     .last()
                     .is_some_and(|c| c.as_ref().is_some_and(|c| c.paired)),
+                not_the_figures,
                 trials_needed: None,
                 metric: Regression {
                     entry: key.clone(),

@@ -379,11 +379,14 @@ impl Change {
     /// The trials per run that would detect a change of `effect` (in the metric's units,
     /// positive) with 80 % power at level `alpha` (two-sided): (z₁₋α/₂ + z₀.₈)² σ² /
     /// effect², σ² the per-trial variance behind the standard error. For an RMSE the effect
-    /// is taken on the squared scale at A's RMSE. Paired, at least the trials whose smallest
-    /// Wilcoxon p-value (every difference of one sign, 2 / 2ⁿ) is below `alpha`.
+    /// is taken on the squared scale at A's RMSE, `(√m + e)² − m = e (2√m + e)` (written so
+    /// that an effect of 0 stays 0, where the difference left a rounding error). Paired, at
+    /// least the trials whose smallest Wilcoxon p-value (every difference of one sign,
+    /// 2 / 2ⁿ) is below `alpha`. `None` for an effect of 0, and for a count beyond any whole
+    /// number of trials (≥ 2⁶⁴), which had been shown as 18446744073709551615.
     pub fn trials_needed(&self, effect: Real, alpha: Real) -> Option<usize> {
         let effect = match self.mse_a {
-            Some(m) => (m.sqrt() + effect).powi(2) - m,
+            Some(m) => effect * (2.0 * m.sqrt() + effect),
             None => effect,
         };
         if effect.is_nan() || effect <= 0.0 || self.se == 0.0 || self.n == 0 {
@@ -391,7 +394,11 @@ impl Change {
         }
         let z = dist::normal_quantile(1.0 - alpha / 2.0) + dist::normal_quantile(0.8);
         let var = self.se * self.se * self.n as Real;
-        let by_power = (z * z * var / (effect * effect)).ceil() as usize;
+        let need = (z * z * var / (effect * effect)).ceil();
+        if need.is_nan() || need >= usize::MAX as Real {
+            return None;
+        }
+        let by_power = need as usize;
         let floor = if self.paired {
             (2.0 / alpha).log2().floor() as usize + 1
         } else {
@@ -511,5 +518,20 @@ mod tests {
         };
         // σ = 0.1, effect 0.02 at α = 0.05: (1.96 + 0.8416)² · 0.01 / 0.0004 = 196.2.
         assert_eq!(c.trials_needed(0.02, 0.05), Some(197));
+        // An RMSE (mean squared error 0.0382² at A): a tolerance of 0 resolves nothing, as
+        // for any other metric, where (√m + 0)² − m left a rounding error and a count of
+        // 2⁶⁴ − 1; e = 0.001 is (2 · 0.0382 + 0.001) · 0.001 = 7.74e-5 on the squared scale.
+        let rmse = Change {
+            mse_a: Some(0.0382 * 0.0382),
+            ..c.clone()
+        };
+        assert_eq!(rmse.trials_needed(0.0, 0.05), None);
+        let e2 = 0.001 * (2.0 * 0.0382 + 0.001);
+        let want = (2.8016_f64.powi(2) * 0.01 / (e2 * e2)).ceil();
+        let got = rmse.trials_needed(0.001, 0.05).unwrap() as f64;
+        assert!((got - want).abs() <= want * 1e-3, "{got} {want}");
+        // A count beyond any whole number of trials is none, not 2⁶⁴ − 1.
+        let wide = Change { se: 1e9, ..c };
+        assert_eq!(wide.trials_needed(1e-9, 0.05), None);
     }
 }
