@@ -132,7 +132,7 @@ pub fn check_figures(
         let refuse = |msg: String| {
             let key = format!("results ({}), {}", f.entry, f.metric);
             let line = at(&f.entry).and_then(|e| {
-                let text = std::fs::read_to_string(path).ok()?;
+                let text = crate::error::read_text(path).ok()?;
                 json_key_line(&text, &format!("{e}.{}", f.metric))
             });
             Err(Error::file(path, at_line(line, key), msg))

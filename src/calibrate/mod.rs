@@ -196,11 +196,25 @@ pub fn nominal_frame(
     registration: Registration,
     known: &Frame,
 ) -> Result<Frame> {
-    let model = || plausibility::tool_points(nominal, &data.qs);
+    if registration == Registration::Known {
+        return Ok(*known);
+    }
+    let model = plausibility::tool_points(nominal, &data.qs);
+    frame_onto(&model, data, registration, known)
+}
+
+/// [`nominal_frame`] from the nominal robot's tool points `model` at the poses of `data`, for
+/// a caller that has them already.
+pub(crate) fn frame_onto(
+    model: &[Vec3],
+    data: &Measurements,
+    registration: Registration,
+    known: &Frame,
+) -> Result<Frame> {
     Ok(match registration {
         Registration::Known => *known,
-        Registration::Wsvd => register_wsvd(&model(), &data.points)?.frame,
-        _ => register_svd(&model(), &data.points, data.weights().as_deref())?.frame,
+        Registration::Wsvd => register_wsvd(model, &data.points)?.frame,
+        _ => register_svd(model, &data.points, data.weights().as_deref())?.frame,
     })
 }
 

@@ -27,7 +27,7 @@ use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
-use crate::numeric::{Frame, Real};
+use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::identifiability::{analyse, Identifiability};
 use crate::robot::{param_sets, Param, Robot};
 
@@ -438,8 +438,12 @@ fn check_frames(
     registration: Registration,
     held_out: bool,
 ) -> Result<()> {
+    if registration != Registration::Known && val.is_none() {
+        return Ok(());
+    }
+    // The nominal robot's points at the calibration poses, once for both checks.
+    let model = plausibility::tool_points(nominal, &d.qs);
     if registration == Registration::Known {
-        let model = plausibility::tool_points(nominal, &d.qs);
         match misfit(&model, &d.points, &Frame::identity(), 0.0) {
             Some(m @ Misfit::Frame { .. }) => {
                 let why = format!(
@@ -459,31 +463,31 @@ fn check_frames(
     } else {
         Opt::Validate
     };
-    match val.and_then(|v| validation_misfit(nominal, d, v, registration)) {
+    match val.and_then(|v| validation_misfit(nominal, (d, &model), v, registration)) {
         Some(why) => Err(Error::option(opt, why)),
         None => Ok(()),
     }
 }
 
-/// Why the validation rows `v` cannot score a calibration of `nominal` on the rows `d` under
-/// `registration`, in words: their points against the nominal robot's in the calibration's
-/// first frame ([`misfit`]), beside how far it misses the calibration's own there; `None`
+/// Why the validation rows `v` cannot score a calibration of `nominal` on the rows `d` (with
+/// `model`, the nominal robot's tool points at their poses) under `registration`, in words:
+/// their points against the nominal robot's in the calibration's first frame ([`misfit`]),
+/// beside how far it misses the calibration's own there; `None`
 /// when they can, and when the calibration rows fail as a whole themselves or give no frame
 /// (theirs to refuse). Two files that do not lie in one frame are refused without blame:
 /// either may be the one moved, or distorted (a column scaled about the tracker's origin
 /// moves the rows as a whole).
 pub(crate) fn validation_misfit(
     nominal: &Robot,
-    d: &Measurements,
+    (d, model): (&Measurements, &[Vec3]),
     v: &Measurements,
     registration: Registration,
 ) -> Option<String> {
-    let frame = super::nominal_frame(nominal, d, registration, &Frame::identity()).ok()?;
-    let model = plausibility::tool_points(nominal, &d.qs);
-    if misfit(&model, &d.points, &frame, 0.0).is_some() {
+    let frame = super::frame_onto(model, d, registration, &Frame::identity()).ok()?;
+    if misfit(model, &d.points, &frame, 0.0).is_some() {
         return None;
     }
-    let reference = plausibility::miss_rms(&model, &d.points, &frame);
+    let reference = plausibility::miss_rms(model, &d.points, &frame);
     let model = plausibility::tool_points(nominal, &v.qs);
     let m = misfit(&model, &v.points, &frame, reference)?;
     let why = m.words("the validation points", "the calibration's frame");

@@ -474,7 +474,9 @@ impl Task {
         };
         let mut q = IdentifyRequest::new(robot, IdentifyData::Tracker(cal), source, method);
         if let IdentifyData::Tracker(cal) = &q.data {
-            if let Some(why) = validation_misfit(&q.robot, cal, &val, q.registration) {
+            let model = super::plausibility::tool_points(&q.robot, &cal.qs);
+            let calibration = (cal, model.as_slice());
+            if let Some(why) = validation_misfit(&q.robot, calibration, &val, q.registration) {
                 return Err(self.at_validation(why));
             }
         }
