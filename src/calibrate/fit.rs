@@ -8,7 +8,7 @@
 
 use super::diagnostics::Subject;
 use super::plausibility::moves;
-use super::recheck::{self, Readmission};
+use super::recheck::{Readmission, Recheck};
 use super::{Calibrated, Registration};
 use crate::error::Result;
 use crate::identify::solver::DETERMINABLE_SIGMAS;
@@ -41,7 +41,7 @@ pub type CalibrateFrom<'a> = dyn FnMut(&[Param], &[Real]) -> Result<Calibrated> 
 
 /// Calibrates `params` by `calibrate` (its second argument: where the Jacobian methods
 /// start, [`crate::identify::MethodSpec::start`]; empty, at the nominal robot), then
-/// re-checks `candidates` at the identified robot ([`recheck::readmit`]) and calibrates again
+/// re-checks `candidates` at the identified robot ([`Recheck::readmit`]) and calibrates again
 /// with those re-admitted, started at the identified robot with the re-admitted errors at the
 /// re-check's estimates: at the nominal robot, where they were left out, their columns vanish
 /// and a Gauss–Newton step in them is unbounded (the ridge's and the robust ridge's, which do
@@ -78,7 +78,10 @@ pub fn fit_and_readmit(
         priors: &[],
         validation: None,
     };
-    let admitted = recheck::readmit(&on, registration, candidates)?;
+    let Some(recheck) = Recheck::at(&on, registration, candidates)? else {
+        return Ok(keep(first, params));
+    };
+    let admitted = recheck.readmit(&params);
     if admitted.is_empty() {
         return Ok(keep(first, params));
     }
@@ -86,7 +89,7 @@ pub fn fit_and_readmit(
     more.extend(admitted.iter().map(|a| a.0));
     let mut start: Vec<Real> = first.identified.x.iter().copied().collect();
     start.resize(more.len(), 0.0);
-    if let Some(step) = recheck::step(&on, registration, &more)? {
+    if let Some(step) = recheck.step(&more) {
         start.iter_mut().zip(step).for_each(|(x, s)| *x += s);
     }
     let second = calibrate(&more, &start)?;

@@ -78,64 +78,132 @@ pub struct Readmission {
     pub parameters: Vec<Readmitted>,
 }
 
-/// Of `candidates` (the parameters left out at the nominal robot, [`super::cv::Model::left_out`]),
-/// those re-admitted at the identified robot of the identification `id` (its priors and
-/// validation are not read) registered by `registration`, by the rule of the module, in order.
-pub fn readmit(
-    id: &Subject,
+/// The re-check of an identification: the normal equations at its identified robot of its
+/// parameters, the registration's nuisance parameters and the candidates that may be
+/// re-admitted, formed in one pass over the rows ([`NormalEquations::both_ways`]), from which
+/// [`Recheck::readmit`] and [`Recheck::step`] take each set of parameters they solve, with the
+/// bits of its own pass.
+pub struct Recheck {
     registration: Registration,
-    candidates: &[Param],
-) -> Result<Vec<(Param, Readmitted)>> {
-    let c = id.calibrated;
-    let noise = unit_noise(id.data, c.identified.sigma0);
-    let mut out = Vec::new();
-    if !(noise.is_finite() && noise >= 0.0) || candidates.is_empty() {
-        return Ok(out);
-    }
-    let nuisance = nuisance(registration, id.params);
-    let mut current: Vec<Param> = id.params.to_vec();
-    for &p in candidates {
-        if current.contains(&p) || nuisance.contains(&p) {
-            continue;
+    /// The fit's parameters, the nuisance ones, then the candidates in order.
+    columns: Vec<Param>,
+    /// The candidates and their plausibility bounds, in order.
+    candidates: Vec<(Param, Real)>,
+    sums: NormalEquations,
+    /// The noise of a point of weight 1 ([`unit_noise`]).
+    noise: Real,
+}
+
+impl Recheck {
+    /// The re-check of `candidates` (the parameters left out at the nominal robot,
+    /// [`super::cv::Model::left_out`]) at the identified robot of the identification `id`
+    /// (its priors and validation are not read) registered by `registration`. `None` when
+    /// none can be re-admitted: the noise is not finite, or no candidate is outside the fit's
+    /// and the registration's parameters with a plausibility bound.
+    pub fn at(
+        id: &Subject,
+        registration: Registration,
+        candidates: &[Param],
+    ) -> Result<Option<Recheck>> {
+        let noise = unit_noise(id.data, id.calibrated.identified.sigma0);
+        let nuisance = nuisance(registration, id.params);
+        let mut columns: Vec<Param> = id.params.iter().chain(&nuisance).copied().collect();
+        let mut bounded = Vec::new();
+        for &p in candidates {
+            if columns.contains(&p) {
+                continue;
+            }
+            if let Some(bound) = super::plausibility::bound(id.nominal, p) {
+                columns.push(p);
+                bounded.push((p, bound));
+            }
         }
-        let Some(bound) = super::plausibility::bound(id.nominal, p) else {
-            continue;
-        };
-        let all: Vec<Param> = current
+        if !(noise.is_finite() && noise >= 0.0) || bounded.is_empty() {
+            return Ok(None);
+        }
+        let sums = normal(&id.calibrated.robot, &columns, id)?;
+        Ok(Some(Recheck {
+            registration,
+            columns,
+            candidates: bounded,
+            sums,
+            noise,
+        }))
+    }
+
+    /// Those of the candidates re-admitted, by the rule of the module, in order, each
+    /// checked with the fit's parameters and those re-admitted before it.
+    pub fn readmit(&self, params: &[Param]) -> Vec<(Param, Readmitted)> {
+        let nuisance = nuisance(self.registration, params);
+        let mut current: Vec<Param> = params.to_vec();
+        let mut out = Vec::new();
+        for &(p, bound) in &self.candidates {
+            let all: Vec<Param> = current
+                .iter()
+                .chain(&nuisance)
+                .copied()
+                .chain([p])
+                .collect();
+            let (n, g) = self.normal(&all);
+            let last = all.len() - 1;
+            let largest = (0..all.len())
+                .map(|i| n[(i, i)].max(0.0).sqrt())
+                .fold(0.0, Real::max);
+            if n[(last, last)].max(0.0).sqrt() <= 1e-9 * largest + 1e-12 {
+                continue;
+            }
+            let Some(inv) = bound_inverse(&n) else {
+                continue;
+            };
+            let sigma = self.noise * inv[(last, last)].sqrt();
+            let estimate = inv.row(last).dot(&g.transpose());
+            let threshold = bound / DETERMINABLE_SIGMAS;
+            if sigma <= threshold && estimate.abs() > DETERMINABLE_SIGMAS * sigma {
+                current.push(p);
+                let parameter = p.to_string();
+                out.push((
+                    p,
+                    Readmitted {
+                        estimate,
+                        parameter,
+                        sigma,
+                        threshold,
+                    },
+                ));
+            }
+        }
+        out
+    }
+
+    /// The Gauss–Newton step from the identification in `params` (its own followed by
+    /// re-admitted ones, at 0), the registration's nuisance parameters solved along and
+    /// dropped: where the fit with the re-admitted errors starts, each at its estimate
+    /// together with the errors it is correlated with. Started at its estimate alone, a
+    /// damped method (`lm`) moves it back, as its damping costs the correlated errors' larger
+    /// moves more. `None` where the normal matrix cannot be inverted.
+    pub fn step(&self, params: &[Param]) -> Option<Vec<Real>> {
+        let all: Vec<Param> = params
             .iter()
-            .chain(&nuisance)
             .copied()
-            .chain([p])
+            .chain(nuisance(self.registration, params))
             .collect();
-        let (n, g) = normal(&c.robot, &all, id)?;
-        let last = all.len() - 1;
-        let largest = (0..all.len())
-            .map(|i| n[(i, i)].max(0.0).sqrt())
-            .fold(0.0, Real::max);
-        if n[(last, last)].max(0.0).sqrt() <= 1e-9 * largest + 1e-12 {
-            continue;
-        }
-        let Some(inv) = bound_inverse(&n) else {
-            continue;
-        };
-        let sigma = noise * inv[(last, last)].sqrt();
-        let estimate = inv.row(last).dot(&g.transpose());
-        let threshold = bound / DETERMINABLE_SIGMAS;
-        if sigma <= threshold && estimate.abs() > DETERMINABLE_SIGMAS * sigma {
-            current.push(p);
-            let parameter = p.to_string();
-            out.push((
-                p,
-                Readmitted {
-                    estimate,
-                    parameter,
-                    sigma,
-                    threshold,
-                },
-            ));
-        }
+        let (n, g) = self.normal(&all);
+        bound_inverse(&n).map(|inv| (inv * g).iter().take(params.len()).copied().collect())
     }
-    Ok(out)
+
+    /// `JᵀPJ` and `JᵀP r` of `params` (each one of the columns), in their order.
+    fn normal(&self, params: &[Param]) -> (DMatrix<Real>, DVector<Real>) {
+        let at: Vec<usize> = params
+            .iter()
+            .map(|p| {
+                let i = self.columns.iter().position(|c| c == p);
+                i.expect("a parameter of the re-check's columns")
+            })
+            .collect();
+        let t = at.len();
+        let n = DMatrix::from_fn(t, t, |k, l| self.sums.cross(at[k.max(l)], at[k.min(l)]));
+        (n, DVector::from_fn(t, |k, _| self.sums.g()[at[k]]))
+    }
 }
 
 /// The base parameters a registration by `registration` solves outside the fit of `params`,
@@ -148,26 +216,6 @@ fn nuisance(registration: Registration, params: &[Param]) -> Vec<Param> {
             .collect(),
         Registration::Identify | Registration::Known => Vec::new(),
     }
-}
-
-/// The Gauss–Newton step from the identification `id` in `params` (its own followed by the
-/// re-admitted ones, at 0), the registration's nuisance parameters solved along and dropped:
-/// where the fit with the re-admitted errors starts, each at its estimate together with the
-/// errors it is correlated with. Started at its estimate alone, a damped method (`lm`) moves
-/// it back, as its damping costs the correlated errors' larger moves more. `None` where the
-/// normal matrix cannot be inverted.
-pub fn step(
-    id: &Subject,
-    registration: Registration,
-    params: &[Param],
-) -> Result<Option<Vec<Real>>> {
-    let all: Vec<Param> = params
-        .iter()
-        .copied()
-        .chain(nuisance(registration, params))
-        .collect();
-    let (n, g) = normal(&id.calibrated.robot, &all, id)?;
-    Ok(bound_inverse(&n).map(|inv| (inv * g).iter().take(params.len()).copied().collect()))
 }
 
 /// The noise (mm) of a point of weight 1: the fit's unit-weight σ0 and, when the file states
@@ -209,13 +257,14 @@ fn row_weights(data: &Measurements, fitted: &Identified, rows: usize) -> Vec<Rea
 
 /// `JᵀPJ` and `JᵀP r` of `params` at `robot` (the identified robot: errors 0) in the
 /// calibration's frame, over the calibration rows weighed as the fit weighed them
-/// ([`row_weights`]), summed [`BLOCK_POINTS`] points at a time.
-fn normal(robot: &Robot, params: &[Param], id: &Subject) -> Result<(DMatrix<Real>, DVector<Real>)> {
+/// ([`row_weights`]), summed [`BLOCK_POINTS`] points at a time both ways
+/// ([`NormalEquations::both_ways`]).
+fn normal(robot: &Robot, params: &[Param], id: &Subject) -> Result<NormalEquations> {
     let problem = CalibrationProblem::new(robot, params, id.data, id.calibrated.frame, id.k);
     let rp = RobotProblem::of(&problem)?;
     let rows = rp.size().rows_per_point;
     let weights = row_weights(id.data, &id.calibrated.identified, rows);
-    let mut sums = NormalEquations::new(params.len(), rows * BLOCK_POINTS);
+    let mut sums = NormalEquations::both_ways(params.len(), rows * BLOCK_POINTS);
     by_blocks(&rp, &DVector::zeros(params.len()), |points, r, j| {
         sums.add(
             j,
@@ -223,7 +272,7 @@ fn normal(robot: &Robot, params: &[Param], id: &Subject) -> Result<(DMatrix<Real
             &weights[points.start * rows..points.end * rows],
         );
     });
-    Ok((sums.n().clone(), sums.g().clone()))
+    Ok(sums)
 }
 
 #[cfg(test)]
@@ -334,7 +383,8 @@ mod tests {
             validation: None,
         };
         let all: Vec<Param> = PARAMS.iter().copied().chain([CANDIDATE]).collect();
-        normal(&c.robot, &all, &on).unwrap()
+        let sums = normal(&c.robot, &all, &on).unwrap();
+        (sums.n().clone(), sums.g().clone())
     }
 
     fn close(a: &DMatrix<Real>, b: &DMatrix<Real>) -> bool {

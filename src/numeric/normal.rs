@@ -26,6 +26,9 @@ pub struct NormalEquations {
     block_g: Vec<Real>,
     /// One block's `PJ` (column-major), when some weight differs from 1.
     pj: Vec<Real>,
+    /// With [`NormalEquations::both_ways`]: the sums with `J` and `PJ` swapped, their block
+    /// sums and a block's unused `g`.
+    swapped: Option<(DMatrix<Real>, Vec<Real>, Vec<Real>)>,
 }
 
 impl NormalEquations {
@@ -38,13 +41,33 @@ impl NormalEquations {
             block_n: vec![0.0; params * params],
             block_g: vec![0.0; params],
             pj: Vec::with_capacity(block_rows * params),
+            swapped: None,
         }
+    }
+
+    /// As [`NormalEquations::new`], keeping also the products [`NormalEquations::n`] leaves
+    /// out: [`NormalEquations::cross`] gives `(PJ)_a · J_b` for every `a` and `b`. `n` holds
+    /// at both `(a, b)` and `(b, a)` the one with `PJ` of the later column, the same bits as
+    /// the normal equations of any subset of the columns in the same order give; with weights
+    /// other than 1 the earlier column's differs in the last bit. A subset in another order
+    /// takes its entries from [`NormalEquations::cross`] and has the bits its own sums would.
+    pub fn both_ways(params: usize, block_rows: usize) -> NormalEquations {
+        let mut sums = NormalEquations::new(params, block_rows);
+        sums.swapped = Some((
+            DMatrix::zeros(params, params),
+            vec![0.0; params * params],
+            vec![0.0; params],
+        ));
+        sums
     }
 
     /// Back to zero, for the next pass over the rows.
     pub fn clear(&mut self) {
         self.n.fill(0.0);
         self.g.fill(0.0);
+        if let Some((n, ..)) = &mut self.swapped {
+            n.fill(0.0);
+        }
     }
 
     /// Adds one block of rows: `j` its Jacobian rows (m × t), `r` its residual (length m)
@@ -73,6 +96,12 @@ impl NormalEquations {
         for (a, b) in self.n.as_mut_slice().iter_mut().zip(&self.block_n) {
             *a += b;
         }
+        if let Some((n, block_n, block_g)) = &mut self.swapped {
+            gram::normal_equations(pjs, js, r, block_n, block_g);
+            for (a, b) in n.as_mut_slice().iter_mut().zip(&*block_n) {
+                *a += b;
+            }
+        }
         for (a, b) in self.g.as_mut_slice().iter_mut().zip(&self.block_g) {
             *a += b;
         }
@@ -81,6 +110,16 @@ impl NormalEquations {
     /// `JᵀPJ` so far (exactly symmetric).
     pub fn n(&self) -> &DMatrix<Real> {
         &self.n
+    }
+
+    /// `(PJ)_a · J_b` summed so far, for sums made by [`NormalEquations::both_ways`] (else
+    /// the entry of [`NormalEquations::n`]).
+    pub fn cross(&self, a: usize, b: usize) -> Real {
+        match &self.swapped {
+            // The swapped sums hold `J_a · (PJ)_b` at (a, b) for a ≥ b, mirrored.
+            Some((n, ..)) if a < b => n[(b, a)],
+            _ => self.n[(a, b)],
+        }
     }
 
     /// `JᵀP r` so far.
@@ -125,5 +164,51 @@ mod tests {
             assert!((acc.g() - &want_g).amax() <= 1e-12 * want_g.amax());
             assert_eq!(acc.n(), &acc.n().transpose());
         }
+    }
+
+    /// The normal equations of any subset of the columns, in any order, read off sums made
+    /// both ways have every bit of the subset's own sums: with unequal weights, where the
+    /// entries of the two triangles differ.
+    #[test]
+    fn sums_both_ways_give_every_subset_in_any_order_to_the_bit() {
+        let mut rng = crate::numeric::rng::from_seed(5);
+        let (points, rows, t) = (29, 3, 7);
+        let m = points * rows;
+        let j = DMatrix::from_fn(m, t, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
+        let r = DVector::from_fn(m, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
+        let w: Vec<Real> = (0..points)
+            .map(|_| rand::Rng::random_range(&mut rng, 0.1..3.0))
+            .collect();
+        let sum = |mut acc: NormalEquations, cols: &[usize]| {
+            for first in (0..points).step_by(8) {
+                let k = 8.min(points - first);
+                let jb =
+                    DMatrix::from_fn(k * rows, cols.len(), |i, c| j[(first * rows + i, cols[c])]);
+                acc.add(
+                    &jb,
+                    &r.as_slice()[first * rows..(first + k) * rows],
+                    &w[first..first + k],
+                );
+            }
+            acc
+        };
+        let all: Vec<usize> = (0..t).collect();
+        let both = sum(NormalEquations::both_ways(t, 8 * rows), &all);
+        let mut lopsided = false;
+        for cols in [vec![6, 0, 3], vec![2, 5, 1, 4, 0], vec![1, 0], all.clone()] {
+            let own = sum(NormalEquations::new(cols.len(), 8 * rows), &cols);
+            let n = DMatrix::from_fn(cols.len(), cols.len(), |k, l| {
+                both.cross(cols[k.max(l)], cols[k.min(l)])
+            });
+            assert_eq!(&n, own.n(), "columns {cols:?}");
+            for (k, &c) in cols.iter().enumerate() {
+                assert_eq!(own.g()[k], both.g()[c]);
+            }
+            lopsided |= (0..t).any(|a| (0..a).any(|b| both.cross(a, b) != both.cross(b, a)));
+        }
+        assert!(
+            lopsided,
+            "the weights should make the triangles differ somewhere"
+        );
     }
 }
