@@ -129,8 +129,14 @@ impl CompliancePick {
 
 /// The revolute joints that gravity loads: those whose gravity torque (link masses of the
 /// robot, a 10 kg payload) exceeds 1e-6 of the largest joint torque somewhere among 64 generic
-/// poses. A joint whose axis stays vertical (joint 1 of a floor-mounted arm) carries no
-/// gravity torque, so its compliance cannot show in a static measurement.
+/// poses, and 1e-9 of the largest torque the masses could exert at all (their weight at twice
+/// the reach, [`reach_bound_mm`]). A joint whose axis stays vertical (joint 1 of a
+/// floor-mounted arm) carries no gravity torque, so its compliance cannot show in a static
+/// measurement; on an arm whose every revolute axis stays vertical (a SCARA) the largest
+/// torque is itself rounding (of the order of 1e-16 of the second bound), which the first
+/// bound alone would compare rounding against.
+///
+/// [`reach_bound_mm`]: crate::robot::sampling::reach_bound_mm
 pub fn gravity_loaded_joints(robot: &Robot) -> Result<Vec<usize>> {
     let n = robot.dof();
     let chain = robot.chain();
@@ -148,8 +154,14 @@ pub fn gravity_loaded_joints(robot: &Robot) -> Result<Vec<usize>> {
         }
     }
     let top = peak.iter().copied().fold(0.0, Real::max);
+    let weight: Real = robot.link_mass_kg.iter().flatten().sum::<Real>() + 10.0;
+    let most = weight * GRAVITY * 2.0 * crate::robot::sampling::reach_bound_mm(robot) * 1e-3;
     Ok((0..n)
-        .filter(|&j| robot.joints[j].kind == JointType::Revolute && peak[j] > 1e-6 * top)
+        .filter(|&j| {
+            robot.joints[j].kind == JointType::Revolute
+                && peak[j] > 1e-6 * top
+                && peak[j] > 1e-9 * most
+        })
         .collect())
 }
 

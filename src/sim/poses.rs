@@ -11,42 +11,13 @@ use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
 use crate::robot::ik::{poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
-use crate::robot::sampling::{poses_in_box, uniform_joint_poses};
+use crate::robot::sampling::{poses_in_box, reach_bound_mm, uniform_joint_poses};
 use crate::robot::{Coupling, JointType, Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
 pub const BOX_TRIES_PER_POSE: usize = 5_000;
 /// Minimum number of tries when sampling a box.
 pub const BOX_TRIES_MIN: usize = 200_000;
-
-/// An upper bound of the distance (mm) from the origin of the base frame to the tool point
-/// over every joint configuration: the sum of the lengths of the chain's translations — each
-/// joint's `a` and `d`, the reach of its travel when it slides (prismatic or screw-coupled),
-/// and the tool's offset. Rotations do not change lengths, so no tool point lies farther.
-pub fn reach_bound_mm(robot: &Robot) -> Real {
-    let travel = |j: usize| {
-        let (lo, hi) = robot.joints[j].limits;
-        lo.abs().max(hi.abs())
-    };
-    let coupled = matches!(robot.coupling, Some(Coupling::Differential { .. }));
-    let mut r = 0.0;
-    for (j, joint) in robot.joints.iter().enumerate() {
-        r += robot.get(Param::A(j)).abs() + robot.get(Param::D(j)).abs();
-        if joint.kind == JointType::Prismatic || (coupled && j < 2) {
-            r += travel(j);
-        }
-    }
-    if coupled && robot.dof() >= 2 {
-        // The screw travels combine into the prismatic joint's: count both.
-        r += travel(0).max(travel(1));
-    }
-    let tool = Vec3::new(
-        robot.get(Param::Tool(0)),
-        robot.get(Param::Tool(1)),
-        robot.get(Param::Tool(2)),
-    );
-    r + tool.norm()
-}
 
 /// Refuses, naming `key`, a region that cannot give `n` poses, quickly and before any pose
 /// is drawn (a scenario checks its regions when it is loaded):
