@@ -12,7 +12,7 @@ use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
 use crate::robot::ik::{poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
 use crate::robot::sampling::{poses_in_box, reach_bound_mm, uniform_joint_poses};
-use crate::robot::{Coupling, JointType, Param, Robot};
+use crate::robot::{Param, Robot};
 
 /// Tries allowed per requested pose when sampling a box, on top of [`BOX_TRIES_MIN`].
 pub const BOX_TRIES_PER_POSE: usize = 5_000;

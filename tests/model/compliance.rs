@@ -560,7 +560,7 @@ rpy = [0.0, 0.0, 0.0]
 
 /// An arm whose revolute axes all stay vertical has no gravity-loaded joint: its torques are
 /// rounding, which `"gravity"` once compared with the largest of them (itself rounding) and
-/// so picked joint 4. Tilted by a degree, the arm loads its joints again.
+/// so picked joint 4. Tilted by a degree, the arm loads its last joint again.
 #[test]
 fn gravity_loads_no_joint_of_an_arm_whose_axes_stay_vertical() {
     let joints = |tilt| {
@@ -568,7 +568,8 @@ fn gravity_loads_no_joint_of_an_arm_whose_axes_stay_vertical() {
         gravity_loaded_joints(&r).unwrap()
     };
     assert_eq!(joints(0.0), Vec::<usize>::new());
-    assert_eq!(joints(1.0), vec![0, 3]);
+    // Joint 2's tilt tilts the axes after it (DH: `alpha` of joint 2 turns joint 3's axis).
+    assert_eq!(joints(1.0), vec![3]);
 }
 
 /// A study of that SCARA with `compliance = "gravity"`, as a user runs it: no compliance is
@@ -578,7 +579,7 @@ fn gravity_loads_no_joint_of_an_arm_whose_axes_stay_vertical() {
 #[test]
 fn a_study_of_a_scara_identifies_no_compliance_from_gravity() {
     let dir = tmp_dir("compliance-scara");
-    std::fs::write(dir.join("scara.toml"), scara(0.0)).unwrap();
+    std::fs::write(dir.join("arm.toml"), scara(0.0)).unwrap();
     let scenario = write_scenario(
         &dir,
         "scara",
@@ -586,7 +587,7 @@ fn a_study_of_a_scara_identifies_no_compliance_from_gravity() {
 seed = 9
 trials = 2
 [robot]
-file = "scara.toml"
+file = "arm.toml"
 [errors]
 kind = "paper"
 length_mm = 0.2
@@ -622,7 +623,7 @@ name = "ls"
     let header = trials.lines().next().unwrap();
     assert!(!header.contains("identified_c"), "{header}");
     let summary = load_json(&out.join("summary.json"));
-    let entry = &summary["entries"][0];
+    let entry = &summary["results"][0];
     assert_eq!(entry["failures"], 0);
     let eta = entry["eta_mean_pct"].as_f64().unwrap();
     assert!(eta > 99.0, "η {eta} %");
