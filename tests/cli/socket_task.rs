@@ -390,3 +390,19 @@ fn a_joint_file_of_too_few_poses_is_named_by_its_own_lines() {
         "line 1: empty file: expected rows of joint values q1,…,q7, one pose a line, no header",
     );
 }
+
+/// A parameter in the task file's `fix` that the robot's model lacks is refused naming the
+/// task file, the line and `fix`, as a name given twice is; it was blamed on `identify`'s
+/// `--fix`, an option the entry was not given.
+#[test]
+fn a_fixed_parameter_the_robot_lacks_is_refused_naming_the_task_key() {
+    let dir = tmp_dir("cli-socket-task-fix");
+    let task = copied_task(&dir, "", "socket_spread_mm", "theta9");
+    std::fs::write(&task, read(&task).replace("\"theta7\"", "\"theta9\"")).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(
+        err.contains("theta9.toml: line 6, fix: `theta9` is not a parameter of robot `panda`")
+            && !err.contains("--fix"),
+        "{err}"
+    );
+}
