@@ -78,3 +78,67 @@ fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
         assert!(!out.exists());
     }
 }
+
+/// A value given twice in a study's grid (a registration study's `outlier_counts` or
+/// `magnitude_mm`, an instruments study's `poses`, `strategies`, or one `[[measurement]]`
+/// entry twice) is refused naming the file, the line
+/// and the key, as a sweep's value given twice is; it ran two cells of one name. Nothing is
+/// written.
+#[test]
+fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
+    let d = tmp("grid-twice");
+    let root = crate::common::root();
+    let position = "\n[[measurement]]\nkind = \"position\"\nnoise_um = 7.5\nscale_um_per_m = 3.0\n";
+    let instruments = std::fs::read_to_string(root.join("scenarios/instruments.toml")).unwrap();
+    let entries = instruments.lines().count() + 2;
+    let cases = [
+        (
+            "scenarios/ban-fig3.toml",
+            "outlier_counts = [2, 4, 6, 8, 10, 12, 14, 16]",
+            "outlier_counts = [2, 4, 2]",
+            "line 16, registration_study.outlier_counts: 2 is given twice: two cells would be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/ban-fig3.toml",
+            "magnitude_mm = [0.2, 0.4, 0.6, 0.8, 1.0]",
+            "magnitude_mm = [0.2, 0.20]",
+            "line 17, registration_study.magnitude_mm: 0.2 is given twice: two cells would be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/instruments.toml",
+            "poses = [50, 200]",
+            "poses = [50, 50]",
+            "line 24, instruments_study.poses: 50 is given twice: two cells would be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/instruments.toml",
+            "strategies = [\"random\", \"detmax-ide\"]",
+            "strategies = [\"random\", \"detmax-ide\", \"random\"]",
+            "line 25, instruments_study.strategies: \"random\" is given twice: two cells would \
+             be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/instruments.toml",
+            "socket_distance_mm = 50.0\n",
+            &format!("socket_distance_mm = 50.0\n{position}"),
+            format!(
+                "line {entries}, measurement[6]: the instrument of measurement[0] is given \
+                 twice (every key the same): two cells would be one"
+            ),
+        ),
+    ];
+    for (i, (file, line, twice, expected)) in cases.into_iter().enumerate() {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(text.contains(line), "{line}");
+        let p = d.join(format!("twice{i}.toml"));
+        std::fs::write(&p, text.replacen(line, twice, 1)).unwrap();
+        let out = d.join(format!("out{i}"));
+        let o = calbench(&["run", path(&p), "--out", path(&out)]);
+        refused(&o, &[&format!("twice{i}.toml: {expected}")]);
+        assert!(!out.exists());
+    }
+}
