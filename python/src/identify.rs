@@ -229,6 +229,11 @@ pub(crate) fn identify<'py>(
         registration,
         priors: priors(prior.as_ref())?,
         validate: validation(nominal, validate.as_ref())?,
+        validate_source: validate
+            .as_ref()
+            .filter(|v| v.is_instance_of::<PyString>())
+            .map(|v| v.extract::<PathBuf>())
+            .transpose()?,
         holdout,
         cv,
         cv_seed,

@@ -162,7 +162,16 @@ impl IdentifyRequest {
                     }
                     None => (Opt::Validate, "rows of each file"),
                 };
-                let why = crate::measurement::shared_rows_refusal(&shared, numbered);
+                let mut why = crate::measurement::shared_rows_refusal(&shared, numbered);
+                // A validation file is named (and so is one that is the data's own file),
+                // as every refusal of a file's rows names it.
+                if let (None, Some(v)) = (&held_out, &self.validate_source) {
+                    let same = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+                    why = match same(v).is_some_and(|c| same(&self.source) == Some(c)) {
+                        true => format!("{} is the data's own file: {why}", v.display()),
+                        false => format!("{}: {why}", v.display()),
+                    };
+                }
                 return Err(Error::option(opt, why));
             }
         }

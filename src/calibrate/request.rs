@@ -65,6 +65,8 @@ pub struct IdentifyRequest {
     pub priors: Vec<(Param, Real)>,
     /// A validation measurement (a tracker's).
     pub validate: Option<Measurements>,
+    /// The file `validate` was read from, when it was: named in a refusal of its rows.
+    pub validate_source: Option<PathBuf>,
     /// Rows of the data held out for validation instead.
     pub holdout: Option<Holdout>,
     /// K-fold cross-validation (K), and the folds of `models`.
@@ -108,6 +110,7 @@ impl IdentifyRequest {
             k: None,
             priors: Vec::new(),
             validate: None,
+            validate_source: None,
             holdout: None,
             cv: None,
             cv_seed: None,

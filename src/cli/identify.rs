@@ -273,6 +273,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         k: args.k,
         priors: priors(&args.prior)?,
         validate,
+        validate_source: args.validate.clone(),
         holdout: args.holdout,
         cv: args.cv,
         cv_seed: args.cv_seed,

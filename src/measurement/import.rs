@@ -20,7 +20,7 @@ use std::path::Path;
 use serde::Deserialize;
 
 use super::csv::{check_coordinate, check_sigma};
-use super::rows::{at_line, Dialect, Rows};
+use super::rows::{at_line, quoted, Dialect, Rows};
 use crate::error::{read_text, shown, Error, Result};
 use crate::numeric::{quaternion, rot_x, rot_y, rot_z, Mat3, Real};
 
@@ -250,8 +250,9 @@ impl Mapping {
                 return Err(bad(
                     key,
                     format!(
-                        "column \"{name}\" is mapped already by `{first}`: a column gives one \
-                         field"
+                        "column {} is mapped already by `{first}`: a column gives one \
+                         field",
+                        quoted(name)
                     ),
                 ));
             }
@@ -260,7 +261,7 @@ impl Mapping {
             let mut c = s.chars();
             match (c.next(), c.next()) {
                 (Some(ch), None) => Ok(ch),
-                _ => Err(bad(key, format!("\"{s}\" must be one character"))),
+                _ => Err(bad(key, format!("{} must be one character", quoted(s)))),
             }
         };
         let sep = one_char("separator", &self.separator)?;
@@ -270,14 +271,20 @@ impl Mapping {
             .ok_or_else(|| {
                 bad(
                     "separator",
-                    format!("\"{sep}\": an ASCII character other than the quote and a line break"),
+                    format!(
+                        "{}: an ASCII character other than the quote and a line break",
+                        quoted(&sep.to_string())
+                    ),
                 )
             })?;
         let decimal = one_char("decimal", &self.decimal)?;
         if !matches!(decimal, '.' | ',') || decimal == char::from(sep) {
             return Err(bad(
                 "decimal",
-                format!("\"{decimal}\": \".\" or \",\", and not the separator"),
+                format!(
+                    "{}: \".\" or \",\", and not the separator",
+                    quoted(&decimal.to_string())
+                ),
             ));
         }
         if self.joints.columns.is_empty() {

@@ -123,14 +123,16 @@ pub fn read_kind_file(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result
     read_kind_rows(Rows::open(path, KIND_HEADER)?, path, robot)
 }
 
-/// Reads `text`, a measurement-kind file held in memory, for `robot`; refusals name `path`
-/// (a socket task's joint files made into one, docs/formats.md § 9.4).
-pub fn read_kind_text(
+/// Reads `text`, the rows of a measurement-kind file held in memory without a header line,
+/// whose columns are `names`, for `robot`; refusals name `path` and the lines of `text` (a
+/// socket task's joint file, docs/formats.md § 9.4, whose own lines a refusal names).
+pub fn read_kind_headerless(
     path: &Path,
     text: String,
+    names: Vec<String>,
     robot: &(impl JointSpace + ?Sized),
 ) -> Result<KindFile> {
-    read_kind_rows(Rows::of_text(path, text, KIND_HEADER)?, path, robot)
+    read_kind_rows(Rows::headerless(path, text, names), path, robot)
 }
 
 /// [`read_kind_file`] of the rows `t`, read from `path`.

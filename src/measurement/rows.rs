@@ -69,7 +69,7 @@ pub(crate) struct Rows {
     path: std::path::PathBuf,
     /// The header's column names, trimmed.
     pub names: Vec<String>,
-    /// The header's line in the file.
+    /// The header's line in the file (0 for a file without one, [`Rows::headerless`]).
     pub header_line: u64,
 }
 
@@ -98,6 +98,20 @@ impl Rows {
         Rows::read(path, text, expected, Dialect::Measurement)
     }
 
+    /// The rows of `text`, a measurement CSV held in memory without a header line, whose
+    /// columns are `names`, that refusals name `path`: every line is read as a data row and
+    /// named by its own line in `text` (a socket task's joint file, docs/formats.md § 9.4).
+    /// [`Rows::header_line`] is 0, the line before the first.
+    pub fn headerless(path: &Path, text: String, names: Vec<String>) -> Rows {
+        let text = Box::new(std::io::Cursor::new(text.into_bytes()));
+        Rows {
+            rd: reader(text, Dialect::Measurement, false),
+            path: path.to_path_buf(),
+            names,
+            header_line: 0,
+        }
+    }
+
     /// The rows of `input`, read as the `dialect` says, that refusals name `path`.
     fn read(
         path: &Path,
@@ -105,19 +119,7 @@ impl Rows {
         expected: &str,
         dialect: Dialect,
     ) -> Result<Rows> {
-        let (delimiter, export) = match dialect {
-            Dialect::Measurement => (b',', false),
-            Dialect::Export { separator } => (separator, true),
-        };
-        // `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
-        // reader), and each line number the reader gives is mapped back to the file's
-        // through the lines that are not empty.
-        let mut rd = ::csv::ReaderBuilder::new()
-            .has_headers(true)
-            .flexible(true)
-            .delimiter(delimiter)
-            .trim(::csv::Trim::All)
-            .from_reader(Uncommented::new(input, export));
+        let mut rd = reader(input, dialect, true);
         let header = match rd.headers() {
             Ok(h) => h.clone(),
             Err(e) => {
@@ -205,6 +207,27 @@ impl Rows {
     pub fn bad(&self, line: u64, place: &str, msg: String) -> Error {
         at_line(&self.path, line, place, msg)
     }
+}
+
+/// The CSV reader of `input` as the `dialect` says, its first line read as the header when
+/// `header`. `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
+/// reader), and each line number the reader gives is mapped back to the file's through the
+/// lines that are not empty.
+fn reader(
+    input: Box<dyn std::io::BufRead>,
+    dialect: Dialect,
+    header: bool,
+) -> ::csv::Reader<Uncommented<Box<dyn std::io::BufRead>>> {
+    let (delimiter, export) = match dialect {
+        Dialect::Measurement => (b',', false),
+        Dialect::Export { separator } => (separator, true),
+    };
+    ::csv::ReaderBuilder::new()
+        .has_headers(header)
+        .flexible(true)
+        .delimiter(delimiter)
+        .trim(::csv::Trim::All)
+        .from_reader(Uncommented::new(input, export))
 }
 
 /// A file read a line at a time with a UTF-8 byte-order mark at its start dropped, CRLF line

@@ -123,8 +123,39 @@ impl InstrumentsScenario {
                 return Err(ferr(key, format!("needs at least {what}")));
             }
         }
+        let mut chosen = Vec::with_capacity(s.strategies.len());
         for st in &s.strategies {
-            strategy(st).map_err(|e| ferr("instruments_study.strategies", e.to_string()))?;
+            let one =
+                strategy(st).map_err(|e| ferr("instruments_study.strategies", e.to_string()))?;
+            chosen.push((one, st));
+        }
+        // Each instrument, pose count and strategy is a row of the grid of cells: one given
+        // twice (a strategy compared as parsed, whatever its spelling) would run a cell twice
+        // under one name.
+        let quoted = |(_, st): &(_, &String)| format!("\"{st}\"");
+        let twice = [
+            (
+                "instruments_study.poses",
+                crate::study::given_twice(&s.poses, PartialEq::eq, ToString::to_string, "cells"),
+            ),
+            (
+                "instruments_study.strategies",
+                crate::study::given_twice(&chosen, |a, b| a.0 == b.0, quoted, "cells"),
+            ),
+        ];
+        if let Some((key, Some(msg))) = twice.into_iter().find(|(_, m)| m.is_some()) {
+            return Err(ferr(key, msg));
+        }
+        let same = |j: usize| (0..j).find(|&i| s.measurement[i] == s.measurement[j]);
+        if let Some((i, j)) = (1..s.measurement.len()).find_map(|j| same(j).map(|i| (i, j))) {
+            return Err(ferr(
+                &entry(j),
+                format!(
+                    "the instrument of {} is given twice (every key the same): two cells \
+                     would be one",
+                    entry(i)
+                ),
+            ));
         }
         if s.poses.iter().any(|n| !(10..=s.candidates).contains(n)) {
             return Err(ferr(

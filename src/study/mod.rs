@@ -53,6 +53,25 @@ pub use plan::Study;
 pub use stats::{Accumulator, Entry};
 pub use trial::{run_trial, TrialResult};
 
+/// The refusal of a list of a study's points (a sweep's values, a study's grid: its outlier
+/// counts, magnitudes, pose counts or strategies) that holds one value twice: each value is a
+/// point of its own, and a repeated one would run one point twice under one name. `same`
+/// says whether two values are one point (`==`, or the same strategy however spelled);
+/// the message names the later value as `shown` gives it and what the points are (`sweep
+/// points`, `cells`). `None` when every value is distinct.
+pub(crate) fn given_twice<T>(
+    values: &[T],
+    same: impl Fn(&T, &T) -> bool,
+    shown: impl Fn(&T) -> String,
+    points: &str,
+) -> Option<String> {
+    let j = (1..values.len()).find(|&j| values[..j].iter().any(|v| same(v, &values[j])))?;
+    Some(format!(
+        "{} is given twice: two {points} would be one",
+        shown(&values[j])
+    ))
+}
+
 /// Trials run in parallel at a time: their results are handed on, in order, and dropped.
 pub const CHUNK: usize = 256;
 

@@ -210,6 +210,31 @@ impl RegistrationStudy {
         for m in &self.magnitude_mm {
             finite_non_negative("registration_study.magnitude_mm", *m)?;
         }
+        // Each count and each magnitude is a row or column of the grid of cells (Ban fig. 3):
+        // one given twice would run a cell twice under one name.
+        let twice = [
+            (
+                "outlier_counts",
+                crate::study::given_twice(
+                    &self.outlier_counts,
+                    PartialEq::eq,
+                    ToString::to_string,
+                    "cells",
+                ),
+            ),
+            (
+                "magnitude_mm",
+                crate::study::given_twice(
+                    &self.magnitude_mm,
+                    PartialEq::eq,
+                    ToString::to_string,
+                    "cells",
+                ),
+            ),
+        ];
+        if let Some((key, Some(msg))) = twice.into_iter().find(|(_, m)| m.is_some()) {
+            return Err(Error::setting(format!("registration_study.{key}"), msg));
+        }
         finite_non_negative("registration_study.noise_mm", self.noise_mm)?;
         for s in self.size_mm {
             finite_positive("registration_study.size_mm", s)?;

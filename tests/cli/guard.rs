@@ -622,3 +622,44 @@ fn calbench_baseline_refuses_to_write_over_its_own_inputs() {
     );
     assert!(lp.is_symlink());
 }
+
+/// A baseline whose `per_trial` holds a metric no run writes, or an entry its own summary
+/// has no result of, is refused by `check` naming the file, the line and the key, as its
+/// summary's unknown fields are; both ran with exit status 0 and no word (docs/formats.md
+/// § 2.4.1: the per-trial values are those behind the file's summary).
+#[test]
+fn a_per_trial_key_the_baseline_s_summary_lacks_is_refused_at_its_line() {
+    let dir = tmp_dir("cli-guard-per-trial-keys");
+    let doc = load_json(&committed());
+    let entries = &doc["per_trial"]["entries"];
+    let entry = entries.as_object().unwrap().keys().next().unwrap().clone();
+    let mut metric = doc.clone();
+    metric["per_trial"]["entries"][&entry]["values"]["bogus_metric"] =
+        entries[&entry]["values"]["eta_mean_pct"].clone();
+    let mut extra = doc.clone();
+    extra["per_trial"]["entries"]["nosuch / random"] = entries[&entry].clone();
+    let cases = [
+        (
+            "metric",
+            metric,
+            "\"bogus_metric\"",
+            format!("per_trial.entries.{entry}.values.bogus_metric: unknown metric"),
+        ),
+        (
+            "entry",
+            extra,
+            "\"nosuch / random\"",
+            "per_trial.entries.nosuch / random: is not an entry of the summary's results"
+                .to_string(),
+        ),
+    ];
+    for (name, d, key, why) in cases {
+        let p = dir.join(format!("{name}.json"));
+        let text = serde_json::to_string_pretty(&d).unwrap();
+        std::fs::write(&p, &text).unwrap();
+        let line = text.lines().position(|l| l.contains(key)).unwrap() + 1;
+        let (ok, said) = check(&committed(), &p, &[]);
+        let want = format!("{name}.json: line {line}, {why}");
+        assert!(!ok && said.contains(&want), "{want}: {said}");
+    }
+}

@@ -604,3 +604,35 @@ fn import_refuses_a_value_the_measurement_csv_would_refuse() {
         assert!(!out.exists());
     }
 }
+
+/// A mapping's separator or decimal mark that is a control character is shown escaped in its
+/// refusal (`"\n"`), as a cell of a measurement file is; the line break went raw into the
+/// message, splitting it over two lines.
+#[test]
+fn a_control_character_in_a_mapping_is_shown_escaped() {
+    let dir = tmp_dir("cli-mapping-escaped");
+    let mapping = read(Path::new(&ur10_example("mapping.toml")));
+    let raw = ur10_example("sample-200.csv");
+    for (given, to, said) in [
+        (
+            "separator = \";\"",
+            "separator = \"\\n\"",
+            "line 3, separator: \"\\n\": an ASCII character other than the quote and a line break",
+        ),
+        (
+            "decimal = \",\"",
+            "decimal = \"\\t\"",
+            "line 4, decimal: \"\\t\": \".\" or \",\", and not the separator",
+        ),
+    ] {
+        assert!(mapping.contains(given), "{given}");
+        let m = dir.join("mapping.toml");
+        std::fs::write(&m, mapping.replacen(given, to, 1)).unwrap();
+        let out = dir.join("out.csv");
+        let o = import(Path::new(&raw), path_arg(&m), &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(said), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+}

@@ -63,6 +63,7 @@ mod shown_numbers;
 mod socket_task;
 mod spelled;
 mod strict_inputs;
+mod study_files;
 mod task;
 mod task_rows;
 mod terminal_names;

@@ -143,21 +143,24 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         msg.contains("setting `--cv-seed`: seeds the folds of --cv or --models"),
         "{msg}"
     );
-    // Validation rows that repeat calibration rows are refused, named by their rows: the
-    // data given as their own validation, and a file holding its rows twice held out from.
+    // Validation rows that repeat calibration rows are refused, named by their file and
+    // rows: the data given as their own validation (said to be the data's own file), and a
+    // file holding its rows twice held out from.
     let msg = refusal(&data, &["--validate", &data]);
+    let own = format!("setting `--validate`: {data} is the data's own file: 199 validation row(s)");
     assert!(
-        msg.contains("setting `--validate`: 199 validation row(s) repeat a calibration row")
-            && msg.contains("calibration row 0 = validation row 0, "),
+        msg.contains(&own) && msg.contains("calibration row 0 = validation row 0, "),
         "{msg}"
     );
     // So are the same rows with their orientation columns (the file they were cut from), and
     // every tenth row with x nudged by 0.00001 mm: copies, not second readings.
-    let msg = refusal(&data, &["--validate", path_arg(&d.join("all.csv"))]);
-    assert!(
-        msg.contains("setting `--validate`: 199 validation row(s) repeat a calibration row"),
-        "{msg}"
+    let all = d.join("all.csv");
+    let msg = refusal(&data, &["--validate", path_arg(&all)]);
+    let named = format!(
+        "setting `--validate`: {}: 199 validation row(s) repeat",
+        all.display()
     );
+    assert!(msg.contains(&named), "{msg}");
     let text = read(Path::new(&data));
     let x = text
         .lines()
@@ -182,8 +185,10 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     std::fs::write(&nudged_file, nudged.join("\n") + "\n").unwrap();
     let msg = refusal(&data, &["--validate", path_arg(&nudged_file)]);
     assert!(
-        msg.contains("setting `--validate`: 19 validation row(s) repeat a calibration row")
-            && msg.contains("calibration row 9 = validation row 0, "),
+        msg.contains(&format!(
+            "setting `--validate`: {}: 19 validation row(s) repeat a calibration row",
+            nudged_file.display()
+        )) && msg.contains("calibration row 9 = validation row 0, "),
         "{msg}"
     );
     let twice = d.join("twice.csv");

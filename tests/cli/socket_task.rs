@@ -360,3 +360,49 @@ fn a_bad_line_of_a_joint_file_is_named_by_its_own_line() {
     let err = refused_task(&task, &dir.join("out"));
     assert!(err.contains(&at) && err.lines().count() == 1, "{err}");
 }
+
+/// A joint file of too few distinct poses, or of none, is refused at its own lines (a joint
+/// file has no header, so its first row is line 1) and an empty file is called empty, where
+/// the lines were counted as under a header: "all 5 rows (lines 2 to 6)" of a file of five
+/// lines, "the file has a header but no data rows" at line 0.
+#[test]
+fn a_joint_file_of_too_few_poses_is_named_by_its_own_lines() {
+    let dir = tmp_dir("cli-socket-task-few-poses");
+    let task = copied_task(&dir, "", "socket_spread_mm", "socket-task");
+    let f = dir.join("front/hole_0.csv");
+    let first = read(&f).lines().next().unwrap().to_string();
+    let refused_with = |text: String, want: &str| {
+        std::fs::write(&f, text).unwrap();
+        let err = refused_task(&task, &dir.join("out"));
+        let want = format!("{}: {want}", f.display());
+        assert!(err.contains(&want) && err.lines().count() == 1, "{err}");
+    };
+    refused_with(
+        format!("{first}\n").repeat(5),
+        "line 1: all 5 rows (lines 1 to 5) are the same pose, the joint values of line 1:",
+    );
+    refused_with(
+        format!("# one hold\n\n{first}\n"),
+        "line 3: the file has one row (line 3), one pose:",
+    );
+    refused_with(
+        String::new(),
+        "line 1: empty file: expected rows of joint values q1,…,q7, one pose a line, no header",
+    );
+}
+
+/// A parameter in the task file's `fix` that the robot's model lacks is refused naming the
+/// task file, the line and `fix`, as a name given twice is; it was blamed on `identify`'s
+/// `--fix`, an option the entry was not given.
+#[test]
+fn a_fixed_parameter_the_robot_lacks_is_refused_naming_the_task_key() {
+    let dir = tmp_dir("cli-socket-task-fix");
+    let task = copied_task(&dir, "", "socket_spread_mm", "theta9");
+    std::fs::write(&task, read(&task).replace("\"theta7\"", "\"theta9\"")).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(
+        err.contains("theta9.toml: line 6, fix: `theta9` is not a parameter of robot `panda`")
+            && !err.contains("--fix"),
+        "{err}"
+    );
+}

@@ -19,6 +19,7 @@ use crate::error::shown;
 use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
+use crate::study::stats::Entry;
 
 /// The key of a baseline's per-trial values in its document.
 pub const KEY: &str = "per_trial";
@@ -210,6 +211,10 @@ impl Side {
         let own = doc.get(KEY).is_some();
         let trials = trials_of(&doc, &file)?;
         let summary = check_summary(doc, &file)?;
+        if let (true, Some(t)) = (own, &trials) {
+            own_keys(&summary, t)
+                .map_err(|(key, why)| Error::file(&file, key, why).at_json_key_line())?;
+        }
         if let Some(t) = &trials {
             let csv = trials_csv(&file);
             behind(&summary, t).map_err(|(entry, metric, why)| match own {
@@ -234,6 +239,48 @@ impl Side {
             trials,
         })
     }
+}
+
+/// Refuses a baseline's own per-trial values `t` (docs/formats.md § 2.4.1) with a key its
+/// `summary` cannot be behind: an entry the summary has no result of (an entry one run lacks
+/// is compared unpaired, § 8.4, but one the file's own summary lacks is an edited file), or a
+/// metric that is not a per-trial metric of the entry. The key and why, where one is.
+fn own_keys(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, String)> {
+    // A summary of no results is refused as such, by `check` and `compare`.
+    if summary.results.is_empty() {
+        return Ok(());
+    }
+    let entries: BTreeMap<String, &Entry> = summary
+        .results
+        .iter()
+        .map(|e| (trials_key(e, summary), e))
+        .collect();
+    if let Some(entry) = t.trials.keys().find(|k| !entries.contains_key(*k)) {
+        let names: Vec<&str> = entries.keys().map(String::as_str).collect();
+        let why = format!(
+            "is not an entry of the summary's results ({}): per-trial values are those behind \
+             the summary",
+            names.join(", ")
+        );
+        return Err((format!("{KEY}.entries.{entry}"), why));
+    }
+    // `failures` and `eta_median_pct` are always compared from the summaries (§ 8.4).
+    let unpaired = [Metric::EtaMedian.key(), Metric::Failures.key()];
+    for (entry, metric) in t.values.keys() {
+        let of_entry = entries
+            .get(entry)
+            .map(|e| entry_metrics(e))
+            .unwrap_or_default();
+        if unpaired.contains(metric) || !of_entry.iter().any(|(m, _)| m == metric) {
+            let why = format!(
+                "unknown metric \"{metric}\": the per-trial metrics are eta_mean_pct, \
+                 validation_after_mm.mean, .rms, .max, validation_after_deg.mean, .rms and \
+                 param_rmse.P of each parameter P of the entry's param_rmse"
+            );
+            return Err((format!("{KEY}.entries.{entry}.values.{metric}"), why));
+        }
+    }
+    Ok(())
 }
 
 /// Whether the per-trial values `t` are those behind `summary`'s figures: for each entry and

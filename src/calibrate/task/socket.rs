@@ -19,7 +19,7 @@ use super::{Metric, Published, TaskRecord};
 use crate::calibrate::on_kind::KindOutcome;
 use crate::calibrate::pipeline::IdentifyOutcome;
 use crate::calibrate::request::{IdentifyData, IdentifyRequest};
-use crate::error::{read_text, Error, Result};
+use crate::error::{read_text, Error, Opt, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::kind::{Instrument, KindData};
 use crate::measurement::kind_csv::KindFile;
@@ -242,6 +242,22 @@ impl SocketTask {
         crate::robot::builtin::load_chain(&path.to_string_lossy(), &chain)
     }
 
+    /// A refusal of the parameters held (what `identify` calls `--fix`) as one of the task
+    /// file's `fix`, which gives them (a name the robot's model does not have, every
+    /// parameter held); any other error as it is.
+    fn of_fix(&self, e: Error) -> Error {
+        match e {
+            Error::Option {
+                option: Opt::Fix,
+                msg,
+            } => {
+                let h = &self.head;
+                Error::toml_file(&h.path, &h.text, "fix", "fix", msg)
+            }
+            e => e,
+        }
+    }
+
     /// Refuses, naming the task file's `tip`, a tip the URDF `path` has no link of, or no tip
     /// where the URDF has more than one leaf link.
     fn check_tip(&self, path: &Path) -> Result<()> {
@@ -334,7 +350,7 @@ impl SocketTask {
             fix: self.fix.clone(),
             ..IdentifyRequest::new(nominal.clone(), data, source, method)
         };
-        let IdentifyOutcome::Kind(outcome) = request.run()? else {
+        let IdentifyOutcome::Kind(outcome) = request.run().map_err(|e| self.of_fix(e))? else {
             return Err(Error::Compute(
                 "a socket task's data are socket readings".into(),
             ));

@@ -400,14 +400,14 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
             ));
         }
         if !zip {
-            if let Some(j) = (1..s.values.len()).find(|&j| s.values[..j].contains(&s.values[j])) {
-                return Err((
-                    format!("{place}.values"),
-                    format!(
-                        "\"{}\": {} is given twice: two sweep points would be one",
-                        s.key, s.values[j]
-                    ),
-                ));
+            let twice = crate::study::given_twice(
+                &s.values,
+                PartialEq::eq,
+                ToString::to_string,
+                "sweep points",
+            );
+            if let Some(msg) = twice {
+                return Err((format!("{place}.values"), format!("\"{}\": {msg}", s.key)));
             }
         }
         if axes.iter().any(|a| a.key == s.key) {

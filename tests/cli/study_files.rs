@@ -1,0 +1,144 @@
+//! Refusals of a study's scenario file (a registration study, an instruments study) as a
+//! user meets them: `run` and `simulate` on a copy of a committed scenario with one key
+//! edited, the message naming the file, the line and the key, and nothing written.
+
+use crate::common::{calbench, path_arg as path, refused};
+
+/// A fresh folder for one test.
+fn tmp(name: &str) -> crate::common::TmpDir {
+    crate::common::tmp_dir(&format!("study-files-{name}"))
+}
+
+/// A registration study's claim that names another metric is refused naming the scenario,
+/// the line and the claim's key, as a calibration scenario's claims are.
+#[test]
+fn a_registration_study_claim_is_refused_at_its_line() {
+    let d = tmp("registration-claim");
+    let text = std::fs::read_to_string(crate::common::root().join("scenarios/ban-fig3.toml"))
+        .expect("scenarios/ban-fig3.toml");
+    let at = text
+        .find("metric = \"registration_error_mm\"")
+        .expect("a claim's metric");
+    let line = text[..at].lines().count() + 1;
+    let bad = d.join("ban-fig3.toml");
+    let edited = text.replacen(
+        "metric = \"registration_error_mm\"",
+        "metric = \"validation_after_mm\"",
+        1,
+    );
+    std::fs::write(&bad, edited).unwrap();
+    refused(
+        &calbench(&["run", path(&bad), "--out", path(&d.join("out"))]),
+        &[
+            &format!("ban-fig3.toml: line {line}, claims[0].metric"),
+            "validation_after_mm",
+        ],
+    );
+}
+
+/// A pose or instrument count too large to allocate (`9223372036854775807`) is refused when
+/// the scenario is read, naming the file, the line and the key, where `run` and `simulate`
+/// panicked with "capacity overflow"; nothing is written.
+#[test]
+fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
+    let d = tmp("huge-count");
+    let root = crate::common::root();
+    let huge = "9223372036854775807";
+    let cases = [
+        (
+            "scenarios/ci-guard.toml",
+            "count = 40",
+            "line 26, setting: setting `calibration.count`: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/ci-guard.toml",
+            "count = 30",
+            "line 30, setting: setting `validation.count`: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/instruments.toml",
+            "candidates = 600",
+            "line 26, instruments_study.candidates: must be at most 10000000 poses",
+        ),
+        (
+            "scenarios/instruments.toml",
+            "planes = 3",
+            "line 80, measurement[3].planes: must be at most 1000",
+        ),
+    ];
+    for (i, (file, line, expected)) in cases.into_iter().enumerate() {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(text.contains(line), "{line}");
+        let key = line.split(" = ").next().unwrap();
+        let p = d.join(format!("huge{i}.toml"));
+        std::fs::write(&p, text.replacen(line, &format!("{key} = {huge}"), 1)).unwrap();
+        let out = d.join(format!("out{i}"));
+        let o = calbench(&["simulate", path(&p), "--out", path(&out)]);
+        refused(&o, &[&format!("huge{i}.toml: {expected}"), huge]);
+        assert!(!out.exists());
+    }
+}
+
+/// A value given twice in a study's grid (a registration study's `outlier_counts` or
+/// `magnitude_mm`, an instruments study's `poses`, `strategies`, or one `[[measurement]]`
+/// entry twice) is refused naming the file, the line
+/// and the key, as a sweep's value given twice is; it ran two cells of one name. Nothing is
+/// written.
+#[test]
+fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
+    let d = tmp("grid-twice");
+    let root = crate::common::root();
+    let position = "\n[[measurement]]\nkind = \"position\"\nnoise_um = 7.5\nscale_um_per_m = 3.0\n";
+    let instruments = std::fs::read_to_string(root.join("scenarios/instruments.toml")).unwrap();
+    let entries = instruments.lines().count() + 2;
+    let cases = [
+        (
+            "scenarios/ban-fig3.toml",
+            "outlier_counts = [2, 4, 6, 8, 10, 12, 14, 16]",
+            "outlier_counts = [2, 4, 2]",
+            "line 16, registration_study.outlier_counts: 2 is given twice: two cells would be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/ban-fig3.toml",
+            "magnitude_mm = [0.2, 0.4, 0.6, 0.8, 1.0]",
+            "magnitude_mm = [0.2, 0.20]",
+            "line 17, registration_study.magnitude_mm: 0.2 is given twice: two cells would be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/instruments.toml",
+            "poses = [50, 200]",
+            "poses = [50, 50]",
+            "line 24, instruments_study.poses: 50 is given twice: two cells would be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/instruments.toml",
+            "strategies = [\"random\", \"detmax-ide\"]",
+            "strategies = [\"random\", \"detmax-ide\", \"random\"]",
+            "line 25, instruments_study.strategies: \"random\" is given twice: two cells would \
+             be one"
+                .to_string(),
+        ),
+        (
+            "scenarios/instruments.toml",
+            "socket_distance_mm = 50.0\n",
+            &format!("socket_distance_mm = 50.0\n{position}"),
+            format!(
+                "line {entries}, measurement[6]: the instrument of measurement[0] is given \
+                 twice (every key the same): two cells would be one"
+            ),
+        ),
+    ];
+    for (i, (file, line, twice, expected)) in cases.into_iter().enumerate() {
+        let text = std::fs::read_to_string(root.join(file)).unwrap();
+        assert!(text.contains(line), "{line}");
+        let p = d.join(format!("twice{i}.toml"));
+        std::fs::write(&p, text.replacen(line, twice, 1)).unwrap();
+        let out = d.join(format!("out{i}"));
+        let o = calbench(&["run", path(&p), "--out", path(&out)]);
+        refused(&o, &[&format!("twice{i}.toml: {expected}")]);
+        assert!(!out.exists());
+    }
+}
