@@ -13,7 +13,10 @@ use super::record::{names, FrameRecord, IdentifiedRecord};
 use super::registration::register_svd;
 use super::request::IdentifyRequest;
 use super::validation::ErrorStats;
-use super::verdict::{check_names, gross_reading, worse_causes, worse_error, worse_warning};
+use super::verdict::{
+    check_names, gross_likely, gross_reading, radians_hint, worse_causes, worse_error,
+    worse_warning,
+};
 use super::Registration;
 use crate::error::{Error, Opt, Result, Said};
 use crate::identify::kind::{identifiability, KindProblem};
@@ -490,7 +493,8 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         None,
     );
     if !worse.is_empty() && !q.allow_worse {
-        return Err(worse_error(&q.source, &worse, gross()));
+        let likely = radians_hint(nominal, &file.qs).or_else(|| gross().map(gross_likely));
+        return Err(worse_error(&q.source, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
     let implausible = plausibility::check(

@@ -20,8 +20,8 @@ use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::{point_residuals, validate_file, FileValidation};
 use super::verdict::{
-    self, check_names, check_priors_identified, check_some_left, gross_reading,
-    registration_warning, rms, worse_causes, worse_error, worse_warning,
+    self, check_names, check_priors_identified, check_some_left, gross_likely, gross_reading,
+    radians_hint, registration_warning, rms, worse_causes, worse_error, worse_warning,
 };
 use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
@@ -298,7 +298,8 @@ impl IdentifyRequest {
                 format!("point {i} has a residual {r:.0} times the median {at} calibration")
             });
         if !worse.is_empty() && !self.allow_worse {
-            return Err(worse_error(&self.source, &worse, gross));
+            let likely = radians_hint(&nominal, &d.qs).or_else(|| gross.clone().map(gross_likely));
+            return Err(worse_error(&self.source, &worse, likely));
         }
         let implausible = plausibility::check(
             (&nominal, &c.robot, &params, &d.qs),

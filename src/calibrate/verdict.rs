@@ -45,6 +45,10 @@ pub fn undetermined_error(
         spec.name(),
         c.identified.termination.as_str()
     );
+    let ended = match radians_hint(nominal, &data.qs) {
+        Some(h) => format!("{h}; {ended}"),
+        None => ended,
+    };
     if a.rank >= params.0.len() && c.identified.rank.is_none_or(|k| k >= params.1) {
         let gross = super::validation::point_residuals(nominal, c, data)
             .ok()
@@ -183,14 +187,12 @@ pub fn worse_causes(
 }
 
 /// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
-/// `source`; `gross` names a reading the residuals point to; the refusal names the option
-/// that keeps it ([`Opt::AllowWorse`]).
-pub fn worse_error(source: &Path, causes: &[String], gross: Option<String>) -> Error {
-    let gross = gross.map_or(String::new(), |g| {
-        format!("; {g}: a gross reading is the likely cause")
-    });
+/// `source`; `likely` its likely cause ([`radians_hint`], [`gross_likely`]); the refusal names
+/// the option that keeps it ([`Opt::AllowWorse`]).
+pub fn worse_error(source: &Path, causes: &[String], likely: Option<String>) -> Error {
+    let likely = likely.map_or(String::new(), |l| format!("; {l}"));
     let msg = format!(
-        "the identification makes the robot worse: {}{gross}; nothing was written. Check the \
+        "the identification makes the robot worse: {}{likely}; nothing was written. Check the \
          readings (a column of one value, a unit, a swapped column), or pass ",
         causes.join("; ")
     );
@@ -199,6 +201,45 @@ pub fn worse_error(source: &Path, causes: &[String], gross: Option<String>) -> E
         "data",
         allowing(msg, Opt::AllowWorse).text(" to write it with a warning"),
     )
+}
+
+/// `reading` (a reading the residuals point to, in words) as the likely cause of a refusal.
+pub fn gross_likely(reading: String) -> String {
+    format!("{reading}: a gross reading is the likely cause")
+}
+
+/// The likely cause of a refusal when every revolute joint value of the readings `qs`
+/// (internal units) lies within its joint's limits scaled by π/180, for a `robot` that takes
+/// degrees: joint values in radians read as degrees, so that the poses differ by a few degrees
+/// at most (a nearly singular solve, or one that makes the robot worse). In words; `None`
+/// otherwise.
+pub fn radians_hint(robot: &Robot, qs: &[Vec<Real>]) -> Option<String> {
+    let revolute: Vec<(usize, Real)> = (0..robot.dof())
+        .filter(|&j| robot.joints[j].kind == crate::robot::JointType::Revolute)
+        .map(|j| {
+            let (lo, hi) = robot.joints[j].limits;
+            (j, lo.abs().max(hi.abs()))
+        })
+        .filter(|&(_, reach)| reach > 0.0)
+        .collect();
+    if robot.units.angle != crate::robot::AngleUnit::Deg || revolute.is_empty() || qs.is_empty() {
+        return None;
+    }
+    // The largest share of a joint's limit a value takes: unit-free, so internal units serve.
+    let share = qs
+        .iter()
+        .flat_map(|q| revolute.iter().map(move |&(j, reach)| q[j].abs() / reach))
+        .fold(0.0, Real::max);
+    let radians = std::f64::consts::PI / 180.0;
+    (share <= radians * (1.0 + 1e-9)).then(|| {
+        format!(
+            "every revolute joint value lies within {:.2} % of its joint's limit (π/180 is \
+             1.75 %): the file's joint values are likely in radians, and robot \"{}\" takes \
+             degrees (its file's `angle_unit`)",
+            100.0 * share,
+            robot.name
+        )
+    })
 }
 
 /// The root mean square of `v` (NaN when empty).

@@ -124,6 +124,45 @@ fn a_tracker_file_in_metres_or_with_swapped_columns_is_refused_unless_allowed() 
         .is_none());
 }
 
+/// A tracker's file whose joint values are in radians, for the IRB2600 that takes degrees:
+/// least squares refuses it as undetermined and `lm` as making the robot worse, each naming
+/// radians as the likely cause (the poses then differ by a few degrees at most). The degrees
+/// of the same file are identified without the words.
+#[test]
+fn joint_values_in_radians_for_a_robot_in_degrees_are_named_as_the_likely_cause() {
+    let d = tmp_dir("cli-plausible-radians");
+    let pos = simulated(&d, "scenarios/ci-guard.toml", None);
+    let radians = edited(&pos, &d.join("rad.csv"), &|h, c, _| {
+        for j in 1..=6 {
+            let k = col(h, &format!("q{j}"));
+            c[k] = format!("{}", c[k].parse::<f64>().unwrap().to_radians());
+        }
+    });
+    for method in ["ls", "lm"] {
+        let out = d.join(format!("o-{method}"));
+        let o = calbench(&[
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            path_arg(&radians),
+            "--method",
+            method,
+            "--out",
+            path_arg(&out),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{method}: {err}");
+        for want in [path_arg(&radians), "likely in radians", "takes degrees"] {
+            assert!(err.contains(want), "{method}: {want}: {err}");
+        }
+        assert!(!out.exists(), "nothing is written");
+    }
+    let o = identify(&pos, &d.join("good"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains("radians"), "{err}");
+}
+
 #[test]
 fn a_multi_target_file_whose_x_is_0_is_refused_unless_allowed() {
     let d = tmp_dir("cli-plausible-targets");
