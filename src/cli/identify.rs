@@ -307,6 +307,9 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
+    if let Some(w) = calbench::calibrate::verdict::unconverged_warning(&o.record) {
+        eprintln!("warning: {w}");
+    }
     let c = &o.calibrated;
     let mut extra = Vec::new();
     if args.export.contains(&Export::UrYaml) {

@@ -20,6 +20,9 @@ pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
+    if let Some(w) = calbench::calibrate::verdict::unconverged_warning(&o.record) {
+        eprintln!("warning: {w}");
+    }
     write_kind(out, &o.record, &o.compensated(), &[])?;
     if let Some((before, after)) = &o.validation {
         print_validation(before, after);

@@ -35,15 +35,24 @@ pub(crate) fn number(
     c: usize,
 ) -> std::result::Result<Real, (String, String)> {
     let t = rec.get(c).unwrap_or("");
-    t.parse::<Real>()
+    let place = || format!(", column {}", names[c]);
+    let v = t
+        .parse::<Real>()
         .ok()
         .filter(|v| v.is_finite())
-        .ok_or_else(|| {
-            (
-                format!(", column {}", names[c]),
-                format!("{} is not a finite number", quoted(t)),
-            )
-        })
+        .ok_or_else(|| (place(), format!("{} is not a finite number", quoted(t))))?;
+    // A value below the smallest 64-bit number reads as 0 (`1e-400`): not the value written.
+    let mantissa = t.split(['e', 'E']).next().unwrap_or("");
+    if v == 0.0 && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b)) {
+        return Err((
+            place(),
+            format!(
+                "{} is below the smallest 64-bit number (about 4.9e-324) and would read as 0",
+                quoted(t)
+            ),
+        ));
+    }
+    Ok(v)
 }
 
 /// What a CSV file is.

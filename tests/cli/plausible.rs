@@ -163,6 +163,69 @@ fn joint_values_in_radians_for_a_robot_in_degrees_are_named_as_the_likely_cause(
     assert!(o.status.success() && !err.contains("radians"), "{err}");
 }
 
+/// A cell below the smallest 64-bit number (`1e-400`), which read as 0 and left the file to
+/// a later refusal with no line, is refused at its line and column; `0e-400` is 0.
+#[test]
+fn a_value_below_the_smallest_number_is_refused_at_its_cell() {
+    let d = tmp_dir("cli-plausible-underflow");
+    let pos = simulated(&d, "scenarios/ci-guard.toml", None);
+    let tiny = |value: &'static str, name: &str| {
+        edited(&pos, &d.join(name), &move |h, c, i| {
+            if i == 5 {
+                c[col(h, "q3")] = value.to_string();
+            }
+        })
+    };
+    let out = d.join("o");
+    let o = identify(&tiny("-1e-400", "tiny.csv"), &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    for want in [
+        "tiny.csv: line 7, column q3",
+        "\"-1e-400\"",
+        "below the smallest",
+    ] {
+        assert!(err.contains(want), "{want}: {err}");
+    }
+    assert!(!out.exists(), "nothing is written");
+    let o = identify(&tiny("0e-400", "zero.csv"), &out, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!err.contains("below the smallest"), "{err}");
+}
+
+/// An identification written although it stopped at its iteration limit is warned of on
+/// stderr, as `task` warns of an entry's; a converged one is not.
+#[test]
+fn an_identification_written_at_its_iteration_limit_is_warned_of() {
+    let d = tmp_dir("cli-plausible-unconverged");
+    let pos = simulated(&d, "scenarios/ci-guard.toml", None);
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        path_arg(&pos),
+        "--method",
+        "lm",
+        "--set",
+        "max_iter=2",
+        "--out",
+        path_arg(&d.join("lm")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let want = "warning: the identification ended `max-iterations` after 2 iterations";
+    assert!(err.contains(want), "{err}");
+    let j = load_json(&d.join("lm").join("identified.json"));
+    assert_eq!(j["termination"], "max-iterations");
+    let o = identify(&pos, &d.join("ls"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && !err.contains("did not converge"),
+        "{err}"
+    );
+}
+
 #[test]
 fn a_multi_target_file_whose_x_is_0_is_refused_unless_allowed() {
     let d = tmp_dir("cli-plausible-targets");

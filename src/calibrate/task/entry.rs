@@ -103,24 +103,3 @@ impl Task {
         Ok((q, val, m))
     }
 }
-
-/// What to warn of when an entry's identification stopped short of convergence (at its
-/// iteration limit, diverging or making no progress): the task's figure is then that of an
-/// unconverged solve, which `task.json` does not say (`identified.json`'s `termination` does).
-/// The command line prints it on stderr, Python warns with it.
-pub fn unconverged_warning(r: &crate::calibrate::record::IdentifiedRecord) -> Option<String> {
-    use crate::identify::Termination as T;
-    matches!(
-        r.termination,
-        T::MaxIterations | T::Diverged | T::NoProgress
-    )
-    .then(|| {
-        format!(
-            "the identification ended `{}` after {} iterations (RMS residual {:.4} mm): the \
-             figure is that of a solve that did not converge (identified.json, `termination`)",
-            r.termination.as_str(),
-            r.iterations,
-            r.rms_residual_mm
-        )
-    })
-}
