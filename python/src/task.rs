@@ -149,7 +149,7 @@ fn guard(
     data: impl IntoIterator<Item = impl AsRef<Path>>,
 ) -> PyResult<()> {
     let names = ["identified.json", "task.json", TASK_FILE];
-    calbench::report::guard::guard_out(out, "out", &names, inputs).map_err(task_err)?;
+    calbench::report::guard::guard_out_folder(out, "out", &names, inputs).map_err(task_err)?;
     calbench::report::guard::guard_data_folder(out, "out", data).map_err(task_err)
 }
 

@@ -116,3 +116,26 @@ def test_with_errors_beyond_the_model_ranges_is_refused():
     with pytest.raises(calbench.SettingError, match="errors"):
         robot.with_errors({"a2": 1e308})
     robot.with_errors({"a2": 0.5})
+
+
+def test_a_folder_named_like_an_output_file_is_refused_before_any_work(root, tmp_path):
+    """`out` holding a folder named like one of the files written is refused before the work,
+    with the command line's words (docs/formats.md § 1.7), by every Python writer of a folder:
+    a run's shard, a registration study, `simulate` and `task`. The refusal after the work
+    (the folder written whole) said "an output file of that name is to be written"."""
+    early = "is a folder, where the command writes a file of that name; nothing was written"
+    cases = [
+        ("trials.csv", lambda out: calbench.run(
+            root / CI_GUARD, trials=2000, threads=1, shard=(0, 1), out=out)),
+        ("summary.json", lambda out: calbench.run(
+            root / "scenarios/ban-fig3.toml", trials=2, out=out)),
+        ("truth.json", lambda out: calbench.simulate(root / CI_GUARD, trial=0, out=out)),
+        ("identified.json", lambda out: calbench.task("barrett-wam", "lm", out=out)),
+    ]
+    for name, write in cases:
+        out = tmp_path / f"out-{name}"
+        (out / name).mkdir(parents=True)
+        with pytest.raises(calbench.SettingError, match="out") as e:
+            write(out)
+        assert early in str(e.value), (name, str(e.value))
+        assert sorted(p.name for p in out.iterdir()) == [name], name

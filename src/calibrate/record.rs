@@ -364,3 +364,24 @@ fn diagnostics<S: Serializer>(d: &Option<Diagnostics>, s: S) -> Result<S::Ok, S:
     }
     m.end()
 }
+/// What to warn of when an identification stopped short of convergence (at its iteration
+/// limit, diverging or making no progress) and was written: its result, and a task's figure,
+/// are then those of an unconverged solve (`identified.json`'s `termination` says so). The
+/// command line prints it on stderr after `identify` and `task`; Python's `task` warns with it.
+pub fn unconverged_warning(r: &IdentifiedRecord) -> Option<String> {
+    matches!(
+        r.termination,
+        crate::identify::Termination::MaxIterations
+            | crate::identify::Termination::Diverged
+            | crate::identify::Termination::NoProgress
+    )
+    .then(|| {
+        format!(
+            "the identification ended `{}` after {} iterations (RMS residual {:.4} mm): the \
+             result is that of a solve that did not converge (identified.json, `termination`)",
+            r.termination.as_str(),
+            r.iterations,
+            r.rms_residual_mm
+        )
+    })
+}

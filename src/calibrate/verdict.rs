@@ -242,26 +242,6 @@ pub fn radians_hint(robot: &Robot, qs: &[Vec<Real>]) -> Option<String> {
     })
 }
 
-/// What to warn of when an identification stopped short of convergence (at its iteration
-/// limit, diverging or making no progress) and was written: its result, and a task's figure,
-/// are then those of an unconverged solve (`identified.json`'s `termination` says so). The
-/// command line prints it on stderr after `identify` and `task`; Python's `task` warns with it.
-pub fn unconverged_warning(r: &super::record::IdentifiedRecord) -> Option<String> {
-    matches!(
-        r.termination,
-        Termination::MaxIterations | Termination::Diverged | Termination::NoProgress
-    )
-    .then(|| {
-        format!(
-            "the identification ended `{}` after {} iterations (RMS residual {:.4} mm): the \
-             result is that of a solve that did not converge (identified.json, `termination`)",
-            r.termination.as_str(),
-            r.iterations,
-            r.rms_residual_mm
-        )
-    })
-}
-
 /// The root mean square of `v` (NaN when empty).
 pub fn rms(v: &[Real]) -> Real {
     (v.iter().map(|x| x * x).sum::<Real>() / v.len() as Real).sqrt()

@@ -307,7 +307,7 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
     for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
-    if let Some(w) = calbench::calibrate::verdict::unconverged_warning(&o.record) {
+    if let Some(w) = calbench::calibrate::record::unconverged_warning(&o.record) {
         eprintln!("warning: {w}");
     }
     let c = &o.calibrated;

@@ -20,7 +20,7 @@ pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     for w in o.warnings() {
         eprintln!("warning: {}", w.spell(super::spell));
     }
-    if let Some(w) = calbench::calibrate::verdict::unconverged_warning(&o.record) {
+    if let Some(w) = calbench::calibrate::record::unconverged_warning(&o.record) {
         eprintln!("warning: {w}");
     }
     write_kind(out, &o.record, &o.compensated(), &[])?;

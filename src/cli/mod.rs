@@ -159,26 +159,12 @@ pub fn finite_number(text: &str) -> std::result::Result<Real, String> {
 }
 
 /// Checks, before any work, that `out` can become an output folder holding the files
-/// `outputs` (the fixed names a command writes): `out` must not be a file, and none of
-/// `outputs` a folder in it. The error names the path in the way. Nothing is created; the
-/// output is then written as a whole by [`calbench::report::atomically`], which checks every
-/// file it writes the same way before anything lands in `out`.
+/// `outputs` (the fixed names a command writes) ([`calbench::report::guard::blocked_folder`]).
+/// Nothing is created; the output is then written as a whole by
+/// [`calbench::report::atomically`], which checks every file it writes the same way before
+/// anything lands in `out`.
 pub fn check_out_folder(out: &Path, outputs: &[&str]) -> Result<()> {
-    match calbench::report::blocked_output(out, outputs) {
-        None => Ok(()),
-        Some(p) if p == out => Err(Error::setting(
-            "--out",
-            format!("{} exists and is not a folder", out.display()),
-        )),
-        Some(p) => Err(Error::setting(
-            "--out",
-            format!(
-                "{} is a folder, where the command writes a file of that name; nothing was \
-                 written",
-                p.display()
-            ),
-        )),
-    }
+    calbench::report::guard::blocked_folder(out, "--out", outputs)
 }
 
 /// Refuses, before any work, an output folder where the outputs would destroy something
@@ -189,8 +175,7 @@ pub fn guard_out<P: AsRef<Path>>(
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    calbench::report::guard::guard_out(out, "--out", outputs, inputs)?;
-    check_out_folder(out, outputs)
+    calbench::report::guard::guard_out_folder(out, "--out", outputs, inputs)
 }
 
 /// Writes the page and its table, `outputs` (`NAME.html`, `NAME.csv`), into `out` as a whole;

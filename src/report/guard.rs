@@ -4,7 +4,8 @@
 //! reads), a folder holding an input under the name of one of the files written there, or a
 //! folder holding another command's results ([`SIGNATURES`]).
 //! The command line, Python's `run`, `study.write` and `task` and every folder written whole
-//! ([`super::atomically`]) go through [`guard_out`]; the caller names its option (`key`).
+//! ([`super::atomically`]) go through [`guard_out`]; the caller names its option (`key`). A
+//! command or Python function that writes a folder checks it with [`guard_out_folder`].
 
 use std::path::{Path, PathBuf};
 
@@ -24,6 +25,41 @@ pub fn guard_out<P: AsRef<Path>>(
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
     guard_out_with(out, key, outputs, inputs, false)
+}
+
+/// [`guard_out`] of an output folder, refusing before any work also what its writing
+/// ([`super::atomically`]) would refuse after it: `out` a file, or one of `outputs` (the
+/// fixed names the command writes) a folder in it ([`blocked_folder`]). Every command and
+/// Python function that writes a folder calls it.
+pub fn guard_out_folder<P: AsRef<Path>>(
+    out: &Path,
+    key: &str,
+    outputs: &[&str],
+    inputs: impl IntoIterator<Item = P>,
+) -> Result<()> {
+    guard_out(out, key, outputs, inputs)?;
+    blocked_folder(out, key, outputs)
+}
+
+/// Refuses, naming the path in the way, an output folder `out` (the caller's option `key`)
+/// that cannot hold the files `outputs`: `out` is not a folder, or one of `outputs` is a
+/// folder in it. Nothing is created.
+pub fn blocked_folder(out: &Path, key: &str, outputs: &[&str]) -> Result<()> {
+    match super::blocked_output(out, outputs) {
+        None => Ok(()),
+        Some(p) if p == out => Err(Error::setting(
+            key,
+            format!("{} exists and is not a folder", out.display()),
+        )),
+        Some(p) => Err(Error::setting(
+            key,
+            format!(
+                "{} is a folder, where the command writes a file of that name; nothing was \
+                 written",
+                p.display()
+            ),
+        )),
+    }
 }
 
 /// The files that mark a folder as the results of one command, each with what wrote it: a

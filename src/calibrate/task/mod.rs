@@ -13,7 +13,7 @@ pub mod socket;
 mod socket_file;
 pub mod split;
 
-pub use crate::calibrate::verdict::unconverged_warning;
+pub use crate::calibrate::record::unconverged_warning;
 pub use entry::EntryModels;
 pub use head::TaskHead;
 pub use record::{TaskRecord, TASK_FILE};
