@@ -138,28 +138,51 @@ impl NormalEquations {
 mod tests {
     use super::*;
 
-    /// Block sums against the normal equations of the whole weighted Jacobian, formed by
-    /// nalgebra, for blocks that do not divide the rows evenly.
-    #[test]
-    fn blocks_sum_to_the_whole_normal_equations() {
-        let mut rng = crate::numeric::rng::from_seed(3);
-        let (points, rows, t) = (23, 3, 5);
+    /// A random problem of `points` points of `rows` rows and `t` columns (seed `seed`): its
+    /// Jacobian and residual.
+    fn problem(
+        seed: u64,
+        (points, rows, t): (usize, usize, usize),
+    ) -> (DMatrix<Real>, DVector<Real>) {
+        let mut rng = crate::numeric::rng::from_seed(seed);
         let m = points * rows;
         let j = DMatrix::from_fn(m, t, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
         let r = DVector::from_fn(m, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
+        (j, r)
+    }
+
+    /// `acc` after the columns `cols` of `(j, r)` are added `block` points at a time, the
+    /// points weighed `w` (`rows` rows each).
+    fn summed(
+        mut acc: NormalEquations,
+        (j, r): (&DMatrix<Real>, &DVector<Real>),
+        (w, rows, block): (&[Real], usize, usize),
+        cols: &[usize],
+    ) -> NormalEquations {
+        for first in (0..w.len()).step_by(block) {
+            let k = block.min(w.len() - first);
+            let jb = DMatrix::from_fn(k * rows, cols.len(), |i, c| j[(first * rows + i, cols[c])]);
+            let rb = &r.as_slice()[first * rows..(first + k) * rows];
+            acc.add(&jb, rb, &w[first..first + k]);
+        }
+        acc
+    }
+
+    /// Block sums against the normal equations of the whole weighted Jacobian, formed by
+    /// nalgebra, for blocks that do not divide the rows evenly; cleared, the same again.
+    #[test]
+    fn blocks_sum_to_the_whole_normal_equations() {
+        let (points, rows, t) = (23, 3, 5);
+        let (j, r) = problem(3, (points, rows, t));
         let w: Vec<Real> = (0..points).map(|i| [1.0, 0.5, 0.0][i % 3]).collect();
-        let p = DMatrix::from_diagonal(&DVector::from_fn(m, |i, _| w[i / rows]));
+        let p = DMatrix::from_diagonal(&DVector::from_fn(points * rows, |i, _| w[i / rows]));
         let want_n = j.transpose() * &p * &j;
         let want_g = j.transpose() * &p * &r;
+        let all: Vec<usize> = (0..t).collect();
         let mut acc = NormalEquations::new(t, 7 * rows);
         for _ in 0..2 {
             acc.clear();
-            for first in (0..points).step_by(7) {
-                let k = 7.min(points - first);
-                let jb = j.rows(first * rows, k * rows).into_owned();
-                let rb = &r.as_slice()[first * rows..(first + k) * rows];
-                acc.add(&jb, rb, &w[first..first + k]);
-            }
+            acc = summed(acc, (&j, &r), (&w, rows, 7), &all);
             assert!((acc.n() - &want_n).amax() <= 1e-12 * want_n.amax());
             assert!((acc.g() - &want_g).amax() <= 1e-12 * want_g.amax());
             assert_eq!(acc.n(), &acc.n().transpose());
@@ -171,32 +194,23 @@ mod tests {
     /// entries of the two triangles differ.
     #[test]
     fn sums_both_ways_give_every_subset_in_any_order_to_the_bit() {
-        let mut rng = crate::numeric::rng::from_seed(5);
         let (points, rows, t) = (29, 3, 7);
-        let m = points * rows;
-        let j = DMatrix::from_fn(m, t, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
-        let r = DVector::from_fn(m, |_, _| rand::Rng::random_range(&mut rng, -1.0..1.0));
+        let (j, r) = problem(5, (points, rows, t));
+        let mut rng = crate::numeric::rng::from_seed(6);
         let w: Vec<Real> = (0..points)
             .map(|_| rand::Rng::random_range(&mut rng, 0.1..3.0))
             .collect();
-        let sum = |mut acc: NormalEquations, cols: &[usize]| {
-            for first in (0..points).step_by(8) {
-                let k = 8.min(points - first);
-                let jb =
-                    DMatrix::from_fn(k * rows, cols.len(), |i, c| j[(first * rows + i, cols[c])]);
-                acc.add(
-                    &jb,
-                    &r.as_slice()[first * rows..(first + k) * rows],
-                    &w[first..first + k],
-                );
-            }
-            acc
-        };
         let all: Vec<usize> = (0..t).collect();
-        let both = sum(NormalEquations::both_ways(t, 8 * rows), &all);
+        let both = summed(
+            NormalEquations::both_ways(t, 8 * rows),
+            (&j, &r),
+            (&w, rows, 8),
+            &all,
+        );
         let mut lopsided = false;
         for cols in [vec![6, 0, 3], vec![2, 5, 1, 4, 0], vec![1, 0], all.clone()] {
-            let own = sum(NormalEquations::new(cols.len(), 8 * rows), &cols);
+            let own = NormalEquations::new(cols.len(), 8 * rows);
+            let own = summed(own, (&j, &r), (&w, rows, 8), &cols);
             let n = DMatrix::from_fn(cols.len(), cols.len(), |k, l| {
                 both.cross(cols[k.max(l)], cols[k.min(l)])
             });
