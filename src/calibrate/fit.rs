@@ -81,7 +81,7 @@ pub fn fit_and_readmit(
     let Some(recheck) = Recheck::at(&on, registration, candidates)? else {
         return Ok(keep(first, params));
     };
-    let admitted = recheck.readmit(&params);
+    let admitted = recheck.readmit();
     if admitted.is_empty() {
         return Ok(keep(first, params));
     }

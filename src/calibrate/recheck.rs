@@ -87,6 +87,8 @@ pub struct Recheck {
     registration: Registration,
     /// The fit's parameters, the nuisance ones, then the candidates in order.
     columns: Vec<Param>,
+    /// How many of `columns` are the fit's parameters.
+    fitted: usize,
     /// The candidates and their plausibility bounds, in order.
     candidates: Vec<(Param, Real)>,
     sums: NormalEquations,
@@ -125,6 +127,7 @@ impl Recheck {
         Ok(Some(Recheck {
             registration,
             columns,
+            fitted: id.params.len(),
             candidates: bounded,
             sums,
             noise,
@@ -133,7 +136,8 @@ impl Recheck {
 
     /// Those of the candidates re-admitted, by the rule of the module, in order, each
     /// checked with the fit's parameters and those re-admitted before it.
-    pub fn readmit(&self, params: &[Param]) -> Vec<(Param, Readmitted)> {
+    pub fn readmit(&self) -> Vec<(Param, Readmitted)> {
+        let params = &self.columns[..self.fitted];
         let nuisance = nuisance(self.registration, params);
         let mut current: Vec<Param> = params.to_vec();
         let mut out = Vec::new();
