@@ -1,7 +1,7 @@
 //! The rows of the measurement CSVs (docs/formats.md § 5) and of the raw exports `import`
 //! reads (§ 6): a header of column names, then data rows read a line at a time by the `csv`
-//! crate (quoted fields, CRLF line ends, a UTF-8 byte-order mark), `#` comment and blank lines
-//! skipped but counted, so that every refusal names the file's own line.
+//! crate (quoted fields, LF, CRLF or CR line ends, a UTF-8 byte-order mark), `#` comment and
+//! blank lines skipped but counted, so that every refusal names the file's own line.
 
 use std::io::BufRead;
 use std::path::Path;
@@ -239,8 +239,8 @@ fn reader(
         .from_reader(Uncommented::new(input, export))
 }
 
-/// A file read a line at a time with a UTF-8 byte-order mark at its start dropped, CRLF line
-/// ends read as LF, its lines of blanks and (but for an `export`) its `#` comment lines
+/// A file read a line at a time ([`read_line`]) with a UTF-8 byte-order mark at its start
+/// dropped, CRLF and CR line ends read as LF, its lines of blanks and (but for an `export`) its `#` comment lines
 /// emptied (their line breaks kept), an export's bytes that are not UTF-8 read as U+FFFD,
 /// noting the file line number of each line that is not empty: the
 /// `n`-th non-empty line the CSV reader counts is file line `kept[n - 1]`.
@@ -313,13 +313,45 @@ impl<R: std::io::BufRead> Uncommented<R> {
     }
 }
 
+/// Reads one line of `inner` onto `line`, its end included: LF, CRLF or a lone CR (the line
+/// end of files saved by old Mac programs), no more than `limit` bytes. The bytes read; 0 at
+/// the end of the input.
+fn read_line(inner: &mut impl BufRead, line: &mut Vec<u8>, limit: u64) -> std::io::Result<usize> {
+    let start = line.len();
+    loop {
+        let room = usize::try_from(limit).unwrap_or(usize::MAX) - (line.len() - start);
+        let buf = inner.fill_buf()?;
+        if buf.is_empty() || room == 0 {
+            return Ok(line.len() - start);
+        }
+        let buf = &buf[..buf.len().min(room)];
+        match buf.iter().position(|&b| b == b'\n' || b == b'\r') {
+            None => {
+                let n = buf.len();
+                line.extend_from_slice(buf);
+                inner.consume(n);
+            }
+            Some(i) => {
+                let cr = buf[i] == b'\r';
+                line.extend_from_slice(&buf[..=i]);
+                inner.consume(i + 1);
+                // A CR followed by LF is one line end, though the LF be in the next block.
+                if cr && inner.fill_buf()?.first() == Some(&b'\n') {
+                    line.push(b'\n');
+                    inner.consume(1);
+                }
+                return Ok(line.len() - start);
+            }
+        }
+    }
+}
+
 impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
     fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
         while self.at == self.line.len() {
             self.line.clear();
             self.at = 0;
-            let mut limited = (&mut self.inner).take(MAX_LINE_BYTES + 1);
-            if limited.read_until(b'\n', &mut self.line)? == 0 {
+            if read_line(&mut self.inner, &mut self.line, MAX_LINE_BYTES + 1)? == 0 {
                 return Ok(0);
             }
             self.count += 1;
@@ -336,10 +368,12 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
             if self.count == 1 && self.line.starts_with(BOM) {
                 self.line.drain(..BOM.len());
             }
-            // A CRLF line end is read as LF: the reader counts a CRLF row's line from the
-            // line before.
+            // A CRLF or lone CR line end is read as LF: the reader counts a CRLF row's line
+            // from the line before, and a file of CR line ends as one line.
             if self.line.ends_with(b"\r\n") {
                 self.line.remove(self.line.len() - 2);
+            } else if let Some(end) = self.line.last_mut().filter(|b| **b == b'\r') {
+                *end = b'\n';
             }
             if self.export && std::str::from_utf8(&self.line).is_err() {
                 self.line = String::from_utf8_lossy(&self.line)
@@ -362,7 +396,34 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
 
 #[cfg(test)]
 mod tests {
-    use super::quoted;
+    use super::{quoted, read_line};
+
+    /// The lines [`read_line`] reads from `text` through a buffer of `cap` bytes.
+    fn lines(text: &[u8], cap: usize) -> Vec<Vec<u8>> {
+        let mut r = std::io::BufReader::with_capacity(cap, text);
+        let mut out = Vec::new();
+        loop {
+            let mut line = Vec::new();
+            if read_line(&mut r, &mut line, 64).unwrap() == 0 {
+                return out;
+            }
+            out.push(line);
+        }
+    }
+
+    #[test]
+    fn a_line_ends_at_lf_crlf_or_a_lone_cr_whatever_the_buffer() {
+        let text = b"a,b\r\n1,2\r3,4\n\r\n5,6\r";
+        let want: Vec<&[u8]> = vec![b"a,b\r\n", b"1,2\r", b"3,4\n", b"\r\n", b"5,6\r"];
+        // A buffer of 1 to 4 bytes splits a CRLF between two blocks somewhere.
+        for cap in [1, 2, 3, 4, 64] {
+            assert_eq!(lines(text, cap), want, "buffer of {cap}");
+        }
+        assert_eq!(lines(b"x\ny", 2), vec![b"x\n".to_vec(), b"y".to_vec()]);
+        // No more than the limit: the caller refuses a line that reaches it.
+        let long = [b'x'; 100];
+        assert_eq!(lines(&long, 8)[0].len(), 64);
+    }
 
     #[test]
     fn a_quoted_cell_shows_control_characters_and_is_cut() {

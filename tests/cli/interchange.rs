@@ -83,8 +83,22 @@ fn import_reads_a_byte_order_mark_crlf_and_quoted_fields_as_the_plain_file() {
     )
     .unwrap();
 
-    let (a, b, c) = (d.join("a.csv"), d.join("b.csv"), d.join("c.csv"));
-    for (raw, out) in [(&plain_raw, &a), (&fancy_raw, &b), (&fancy_first, &c)] {
+    // And as an old Mac program saves it, every line ended by a lone CR.
+    let mac_raw = d.join("mac.csv");
+    std::fs::write(&mac_raw, plain.replace('\n', "\r")).unwrap();
+
+    let (a, b, c, m) = (
+        d.join("a.csv"),
+        d.join("b.csv"),
+        d.join("c.csv"),
+        d.join("m.csv"),
+    );
+    for (raw, out) in [
+        (&plain_raw, &a),
+        (&fancy_raw, &b),
+        (&fancy_first, &c),
+        (&mac_raw, &m),
+    ] {
         let o = import(raw, &mapping, out);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         assert!(
@@ -99,6 +113,7 @@ fn import_reads_a_byte_order_mark_crlf_and_quoted_fields_as_the_plain_file() {
         std::fs::read(&b).unwrap(),
         "the same rows, byte for byte"
     );
+    assert_eq!(a, std::fs::read(&m).unwrap(), "CR line ends: the same rows");
     // The export with its first two columns' names swapped reads the joint from the first
     // column, whose cells are the timestamps: same file length, other values.
     let c = read(&c);
@@ -265,7 +280,7 @@ fn import_refuses_a_malformed_mapping_naming_its_line() {
 }
 
 #[test]
-fn a_measurement_file_with_a_byte_order_mark_and_crlf_names_the_right_line() {
+fn a_measurement_file_with_a_byte_order_mark_and_any_line_ends_names_the_right_line() {
     let d = tmp_dir("interchange-crlf-lines");
     let rows = [
         "# exported by the tracker",
@@ -275,25 +290,35 @@ fn a_measurement_file_with_a_byte_order_mark_and_crlf_names_the_right_line() {
         "2,0,0,0,0,0,1,2,3",
         "3,0,0,0,0,0,1,zz,3",
     ];
-    let path = d.join("crlf.csv");
-    std::fs::write(&path, format!("\u{feff}{}\r\n", rows.join("\r\n"))).unwrap();
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        path_arg(&path),
-        "--method",
-        "lm",
-        "--out",
-        path_arg(&d.join("out")),
-    ]);
-    let msg = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success());
-    assert!(
-        msg.contains("crlf.csv: line 6, column y: \"zz\" is not a finite number"),
-        "{msg}"
-    );
+    // CRLF (Windows), a lone CR (old Mac programs), and the two mixed.
+    let mixed = format!("{}\r{}\r\n", rows[..3].join("\r\n"), rows[3..].join("\n"));
+    for (name, text) in [
+        ("crlf", format!("{}\r\n", rows.join("\r\n"))),
+        ("cr", format!("{}\r", rows.join("\r"))),
+        ("mixed", mixed),
+    ] {
+        let path = d.join(format!("{name}.csv"));
+        std::fs::write(&path, format!("\u{feff}{text}")).unwrap();
+        let o = calbench(&[
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            path_arg(&path),
+            "--method",
+            "lm",
+            "--out",
+            path_arg(&d.join("out")),
+        ]);
+        let msg = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success());
+        assert!(
+            msg.contains(&format!(
+                "{name}.csv: line 6, column y: \"zz\" is not a finite number"
+            )),
+            "{msg}"
+        );
+    }
 }
 
 /// `calbench robots irb2600` under another name.
