@@ -32,7 +32,7 @@ pub struct FkArgs {
 }
 
 /// Prints the tool point and the rotation of the tool frame; warns on stderr when the joint
-/// values lie outside the joint limits.
+/// values lie outside the joint limits, naming the first joint outside.
 pub fn run(args: &FkArgs) -> Result<()> {
     let robot = args.chain.load(&args.robot)?;
     if args.q.len() != robot.dof() {
@@ -63,8 +63,8 @@ pub fn run(args: &FkArgs) -> Result<()> {
             out!("  {:>10.6} {:>10.6} {:>10.6}", r[0], r[1], r[2]);
         }
     }
-    if !robot.within_limits(&q) {
-        eprintln!("warning: {}", calbench::robot::OUTSIDE_LIMITS);
+    if let Some(joint) = robot.outside_limits(&q) {
+        eprintln!("warning: {}: {joint}", calbench::robot::OUTSIDE_LIMITS);
     }
     Ok(())
 }

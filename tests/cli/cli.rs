@@ -3,7 +3,9 @@
 
 use std::path::Path;
 
-use crate::common::{bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+use crate::common::{
+    bin, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, ur10_example,
+};
 
 fn scenario() -> String {
     root().join("scenarios/ci-guard.toml").display().to_string()
@@ -443,4 +445,41 @@ fn a_missing_file_is_reported_once() {
     assert!(!o.status.success());
     assert!(err.contains("nope.csv"), "{err}");
     assert_eq!(err.matches("(os error").count(), 1, "{err}");
+}
+
+#[test]
+fn fk_warns_naming_the_first_joint_outside_its_limits_in_the_robots_units() {
+    // The warning said only that some value lay outside; the user had to find which.
+    for (robot, q, joint) in [
+        (
+            "irb2600".to_string(),
+            "10,-20,30,500,-50,-401",
+            "joint 4 is 500 deg, outside its limits [-175, 175]",
+        ),
+        (
+            "irb2600".to_string(),
+            "10,-200,30,40,-50,60",
+            "joint 2 is -200 deg, outside its limits [-95, 155]",
+        ),
+        (
+            ur10_example("ur10.urdf"),
+            "0,0,0,0,0,30",
+            "joint 6 is 30 rad, outside its limits [-6.28318530718, 6.28318530718]",
+        ),
+    ] {
+        let o = calbench_ok(&["fk", "--robot", &robot, "--q", q]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!(
+                "warning: the joint values lie outside the robot's joint limits: {joint}"
+            )),
+            "{robot} at {q}: {err}"
+        );
+    }
+    let o = calbench_ok(&["fk", "--robot", "irb2600", "--q", "10,-20,30,40,-50,60"]);
+    assert!(
+        o.stderr.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
