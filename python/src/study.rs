@@ -18,7 +18,7 @@ use calbench::measurement::kind::Kind;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
 use calbench::report::guard::guard_out_folder;
-use calbench::report::run::{OUTPUTS, STUDY_OUTPUTS};
+use calbench::report::run::{checked_outputs, OUTPUTS};
 use calbench::report::simulated;
 use calbench::robot::Robot;
 use calbench::runner::run::{run_study, InMemoryRun};
@@ -480,7 +480,7 @@ pub(crate) fn run_shard(
         .map_err(err)?;
     let folder = Folder {
         out,
-        outputs: &OUTPUTS,
+        outputs: checked_outputs(true, true),
         input: sc.path.as_deref(),
     };
     let opts = folder_options(Some(folder), threads, progress, shard, None)?;
@@ -572,7 +572,7 @@ pub(crate) fn run_whole(
         .map_err(err)?;
     let folder = Folder {
         out,
-        outputs: &STUDY_OUTPUTS,
+        outputs: checked_outputs(false, shard.is_some()),
         input: sc.path(),
     };
     let opts = folder_options(Some(folder), threads, progress, shard, None)?;

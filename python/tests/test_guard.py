@@ -40,7 +40,7 @@ def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, mon
 
 def test_writers_refuse_the_scenario_they_would_overwrite_and_another_commands_folder(
         root, tmp_path, cli):
-    # A scenario named scenario.toml in the output folder is an input the run would
+    # A scenario named scenario.toml in the output folder is an input a whole run would
     # overwrite with its scenario.toml; an identification's folder holds another command's
     # results. `calbench run --out` refuses both, and so do the Python writers.
     folder = tmp_path / "own"
@@ -51,11 +51,15 @@ def test_writers_refuse_the_scenario_they_would_overwrite_and_another_commands_f
     study = calbench.run(scenario, trials=2)
     with pytest.raises(calbench.SettingError, match="`out`: .*scenario.toml"):
         study.write(folder)
-    with pytest.raises(calbench.SettingError, match="`out`: .*scenario.toml"):
-        calbench.run(scenario, trials=2, shard=(0, 2), out=folder)
     r = cli("run", scenario, "--trials", "2", "--out", folder, ok=False)
     assert r.returncode == 1 and "scenario.toml" in r.stderr, r.stderr
     assert sorted(os.listdir(folder)) == ["scenario.toml"]
+    assert scenario.read_text() == text
+    # A shard writes no scenario.toml (its folder is trials.csv, records.txt, shard.json):
+    # the user's file beside it is kept.
+    calbench.run(scenario, trials=2, shard=(0, 2), out=folder)
+    assert sorted(os.listdir(folder)) == [
+        "records.txt", "scenario.toml", "shard.json", "trials.csv"]
     assert scenario.read_text() == text
     identified = tmp_path / "identified"
     identified.mkdir()
@@ -139,3 +143,25 @@ def test_a_folder_named_like_an_output_file_is_refused_before_any_work(root, tmp
             write(out)
         assert early in str(e.value), (name, str(e.value))
         assert sorted(p.name for p in out.iterdir()) == [name], name
+
+
+def test_a_shard_and_a_whole_run_refuse_each_others_folder(root, tmp_path):
+    # A shard's files beside a whole run's, or a whole run's beside a shard's, would be read
+    # together (a stale summary.json, a stale records.txt for `merge`): refused, as on the
+    # command line, before any work.
+    whole, shard = tmp_path / "whole", tmp_path / "shard"
+    study = calbench.run(root / CI_GUARD, trials=2)
+    study.write(whole)
+    calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out=shard)
+    before = {d: sorted(os.listdir(d)) for d in (whole, shard)}
+    with pytest.raises(calbench.SettingError, match=r"a study's run \(summary.json\)"):
+        calbench.run(root / CI_GUARD, trials=2, shard=(1, 2), out=whole)
+    with pytest.raises(calbench.SettingError, match=r"a shard of a run \(shard.json\)"):
+        study.write(shard)
+    # A study of cells likewise: its shard into its whole run's folder.
+    cells = tmp_path / "cells"
+    calbench.run(root / "scenarios/ban-fig3.toml", trials=1, out=cells)
+    with pytest.raises(calbench.SettingError, match=r"a study's run \(summary.json\)"):
+        calbench.run(root / "scenarios/ban-fig3.toml", trials=1, shard=(0, 2), out=cells)
+    assert {d: sorted(os.listdir(d)) for d in (whole, shard)} == before
+    assert "shard.json" not in os.listdir(cells)

@@ -20,7 +20,7 @@ use calbench::study::{RunOptions, Shard};
 
 use super::{print_table, writable_folder};
 
-pub use calbench::report::run::{OUTPUTS, STUDY_OUTPUTS};
+pub use calbench::report::run::{checked_outputs, OUTPUTS};
 
 /// Arguments of `calbench run`.
 #[derive(clap::Args, Default)]
@@ -147,9 +147,10 @@ pub fn run(args: &RunArgs) -> Result<()> {
     if opts.precision.is_some() {
         refuse_precision(&sc, &opts)?;
     }
-    let out = out_folder(args, &sc.name, &OUTPUTS)?;
+    let outputs = checked_outputs(true, shard.is_some());
+    let out = out_folder(args, &sc.name, outputs)?;
     let db = args.record.open()?;
-    writable_folder(&out, &OUTPUTS)?;
+    writable_folder(&out, outputs)?;
     eprintln!(
         "running {}: {}{} trials{}{}",
         sc.name,
@@ -205,12 +206,18 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
         }
         None
     };
-    // A live writer is refused by the checkpoint's own check (`Resumable::open`), which names
-    // its checkpoint.json and `--force`.
-    calbench::report::guard::guard_out_with(dir, "--resume", &OUTPUTS, &args.scenario, true)?;
-    writable_folder(dir, &OUTPUTS)?;
+    // The root, the home folder and an input are refused before the checkpoint is read;
+    // the files the run writes, once it says whether it is a shard. A live writer is refused
+    // by the checkpoint's own check (`Resumable::open`), which names its checkpoint.json and
+    // `--force`.
+    let guard = |outputs| {
+        calbench::report::guard::guard_out_with(dir, "--resume", outputs, &args.scenario, true)
+    };
+    guard(&[])?;
     let threads = threads(args.threads)?;
     let checked = Resumable::open(dir, given.as_ref(), args.force)?;
+    guard(checked.outputs())?;
+    writable_folder(dir, checked.outputs())?;
     let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
     let t0 = std::time::Instant::now();
@@ -281,9 +288,10 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         let fixed = format!("{what} runs its --trials draws in every cell");
         return Err(Error::setting("--precision", fixed).into());
     }
-    let out = out_folder(args, sc.name(), &STUDY_OUTPUTS)?;
+    let outputs = checked_outputs(false, shard.is_some());
+    let out = out_folder(args, sc.name(), outputs)?;
     let db = args.record.open()?;
-    writable_folder(&out, &STUDY_OUTPUTS)?;
+    writable_folder(&out, outputs)?;
     // A registration study's cells are one block: each trial draws every cell.
     let cells = match sc {
         AnyScenario::Registration(s) => s.registration_study.cell_names().len(),

@@ -66,8 +66,10 @@ pub fn blocked_folder(out: &Path, key: &str, outputs: &[&str]) -> Result<()> {
 /// command that does not write the file refuses to write into such a folder, which would
 /// otherwise hold two results mixed (a run's `summary.json` beside an identification's
 /// `report.md`).
-pub const SIGNATURES: [(&str, &str); 3] = [
+pub const SIGNATURES: [(&str, &str); 5] = [
     ("trials.csv", "a study's run"),
+    ("summary.json", "a study's run"),
+    ("shard.json", "a shard of a run"),
     ("identified.json", "an identification"),
     ("task.json", "a task's entry"),
 ];
@@ -97,16 +99,6 @@ fn paths<P: AsRef<Path>>(
             ));
         }
     }
-    let foreign = SIGNATURES.iter().find(|(file, _)| {
-        !outputs.is_empty() && !outputs.contains(file) && at.join(file).is_file()
-    });
-    if let Some((file, what)) = foreign {
-        return refuse(format!(
-            "{} holds the results of {what} ({file}), which this command does not write; its \
-             files there would mix two results (nothing was written): give another folder",
-            out.display()
-        ));
-    }
     for input in inputs {
         let input = input.as_ref();
         if !input.exists() {
@@ -127,6 +119,17 @@ fn paths<P: AsRef<Path>>(
                 input.display()
             ));
         }
+    }
+    // An input is named first: the more precise refusal.
+    let foreign = SIGNATURES.iter().find(|(file, _)| {
+        !outputs.is_empty() && !outputs.contains(file) && at.join(file).is_file()
+    });
+    if let Some((file, what)) = foreign {
+        return refuse(format!(
+            "{} holds the results of {what} ({file}), which this command does not write; its \
+             files there would mix two results (nothing was written): give another folder",
+            out.display()
+        ));
     }
     Ok(())
 }

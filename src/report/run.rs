@@ -584,6 +584,23 @@ pub const STUDY_OUTPUTS: [&str; 4] = [
     super::scenario_file::NAME,
 ];
 
+/// [`OUTPUTS`] of one shard of a Monte-Carlo study (`--shard I/N`, docs/formats.md § 4.4),
+/// the files `merge` reads; a shard of a study of cells writes all but `trials.csv`.
+pub const SHARD_OUTPUTS: [&str; 3] = ["trials.csv", "records.txt", "shard.json"];
+
+/// The files a run checks before it starts ([`super::guard::guard_out`]): a whole
+/// Monte-Carlo study's [`OUTPUTS`], a study of cells' [`STUDY_OUTPUTS`], a shard's
+/// [`SHARD_OUTPUTS`]. A shard's folder and a whole run's hold other results, and the guard
+/// refuses to write one into the other.
+pub fn checked_outputs(monte_carlo: bool, shard: bool) -> &'static [&'static str] {
+    match (monte_carlo, shard) {
+        (true, false) => &OUTPUTS,
+        (false, false) => &STUDY_OUTPUTS,
+        (true, true) => &SHARD_OUTPUTS,
+        (false, true) => &SHARD_OUTPUTS[1..],
+    }
+}
+
 /// The files of a complete run but `trials.csv` (streamed as the trials finished,
 /// [`TrialsCsv`]) and `report.html` ([`super::run_outputs`] adds it), in the order they are
 /// written: `summary.json`, `timing.json`, `scenario.toml` ([`super::scenario_file`]), the

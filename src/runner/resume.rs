@@ -33,6 +33,13 @@ impl Resumable {
             records,
         })
     }
+
+    /// The files the continued run writes into its folder, checked before it continues
+    /// ([`crate::report::run::checked_outputs`]): a whole run's or a shard's.
+    pub fn outputs(&self) -> &'static [&'static str] {
+        let monte_carlo = matches!(self.scenario, AnyScenario::MonteCarlo(_));
+        crate::report::run::checked_outputs(monte_carlo, self.shard.is_some())
+    }
 }
 
 /// What continuing a killed run needs ([`Resumable::continued`]).

@@ -262,3 +262,85 @@ fn threads_are_capped_at_the_work() {
         "{err}"
     );
 }
+
+/// Every file of `dir` but `shard.json` and `records.txt` (which hold wall times) with a
+/// hash of its bytes, in name order.
+fn files(dir: &std::path::Path) -> Vec<(std::ffi::OsString, u64)> {
+    use std::hash::{Hash, Hasher};
+    let mut all: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_file() && !p.ends_with("shard.json") && !p.ends_with("records.txt"))
+        .map(|p| {
+            let mut h = std::collections::hash_map::DefaultHasher::new();
+            std::fs::read(&p).unwrap().hash(&mut h);
+            (p.file_name().unwrap().to_owned(), h.finish())
+        })
+        .collect();
+    all.sort();
+    all
+}
+
+#[test]
+fn a_shard_and_a_whole_run_refuse_each_others_folder_and_a_shard_resumes_into_its_own() {
+    // A shard written into a whole run's folder replaced its trials.csv beside the run's
+    // summary.json and report; a whole run into a shard's folder left the old records.txt
+    // and shard.json beside it, which `merge` would read. Both are refused, before any work.
+    let dir = tmp_dir("cli-cluster-kinds");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let sc = path_arg(&sc);
+    let (whole, shard) = (dir.join("whole"), dir.join("shard"));
+    calbench_ok(&["run", sc, "--trials", "4", "--out", path_arg(&whole)]);
+    let shard_args = [
+        "run",
+        sc,
+        "--trials",
+        "600",
+        "--threads",
+        "1",
+        "--shard",
+        "0/2",
+    ];
+    calbench_ok(&[&shard_args[..], &["--out", path_arg(&shard)]].concat());
+    let (whole_files, shard_files) = (files(&whole), files(&shard));
+    let kept: std::collections::HashMap<&str, String> = ["shard.json", "records.txt"]
+        .map(|f| (f, read(&shard.join(f))))
+        .into();
+    let refused = |args: &[&str], folder: &std::path::Path, marker: &str| {
+        let o = run_with(&[], args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?}");
+        assert!(
+            err.contains(&format!("{} holds the results of", folder.display()))
+                && err.contains(marker)
+                && err.contains("nothing was written"),
+            "{err}"
+        );
+    };
+    let into_whole = ["run", sc, "--trials", "4", "--shard", "1/2", "--out"];
+    refused(
+        &[&into_whole[..], &[path_arg(&whole)]].concat(),
+        &whole,
+        "a study's run (summary.json)",
+    );
+    let into_shard = ["run", sc, "--trials", "4", "--out", path_arg(&shard)];
+    refused(&into_shard, &shard, "a shard of a run (shard.json)");
+    let merged = ["merge", path_arg(&whole), "--out", path_arg(&shard)];
+    refused(&merged, &shard, "a shard of a run (shard.json)");
+    assert_eq!(files(&whole), whole_files);
+    assert_eq!(files(&shard), shard_files);
+    for f in ["shard.json", "records.txt"] {
+        assert_eq!(read(&shard.join(f)), kept[f], "{f}");
+    }
+
+    // The same shard again into its own folder, killed and resumed there: the same bytes.
+    crate::common::kill_once_checkpointed(
+        &[&shard_args[..], &["--out", path_arg(&shard)]].concat(),
+        &shard,
+        300,
+    );
+    calbench_ok(&["run", "--resume", path_arg(&shard)]);
+    assert_eq!(files(&shard), shard_files);
+    let records = read(&shard.join("records.txt"));
+    assert_eq!(records.lines().count(), kept["records.txt"].lines().count());
+}
