@@ -279,6 +279,24 @@ fn import_refuses_a_malformed_mapping_naming_its_line() {
     }
 }
 
+/// The refusal of `identify --robot ROBOT --data DATA --method lm --out OUT`: it fails, and
+/// its stderr.
+fn refused_lm(robot: &str, data: &Path, out: &Path) -> String {
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        robot,
+        "--data",
+        path_arg(data),
+        "--method",
+        "lm",
+        "--out",
+        path_arg(out),
+    ]);
+    assert!(!o.status.success());
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
 #[test]
 fn a_measurement_file_with_a_byte_order_mark_and_any_line_ends_names_the_right_line() {
     let d = tmp_dir("interchange-crlf-lines");
@@ -299,19 +317,7 @@ fn a_measurement_file_with_a_byte_order_mark_and_any_line_ends_names_the_right_l
     ] {
         let path = d.join(format!("{name}.csv"));
         std::fs::write(&path, format!("\u{feff}{text}")).unwrap();
-        let o = calbench(&[
-            "identify",
-            "--robot",
-            "irb2600",
-            "--data",
-            path_arg(&path),
-            "--method",
-            "lm",
-            "--out",
-            path_arg(&d.join("out")),
-        ]);
-        let msg = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success());
+        let msg = refused_lm("irb2600", &path, &d.join("out"));
         assert!(
             msg.contains(&format!(
                 "{name}.csv: line 6, column y: \"zz\" is not a finite number"
@@ -544,19 +550,7 @@ fn a_huge_number_in_a_refusal_is_written_in_exponent_form() {
         } else {
             "irb2600".to_string()
         };
-        let o = calbench(&[
-            "identify",
-            "--robot",
-            &robot,
-            "--data",
-            path_arg(&path),
-            "--method",
-            "lm",
-            "--out",
-            path_arg(&d.join("out")),
-        ]);
-        let msg = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success());
+        let msg = refused_lm(&robot, &path, &d.join("out"));
         assert!(msg.contains(expected), "{msg}");
         assert!(msg.len() < 300, "{msg}");
     }
