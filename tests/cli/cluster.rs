@@ -291,11 +291,13 @@ fn a_shard_and_a_whole_run_refuse_each_others_folder_and_a_shard_resumes_into_it
     let sc = path_arg(&sc);
     let (whole, shard) = (dir.join("whole"), dir.join("shard"));
     calbench_ok(&["run", sc, "--trials", "4", "--out", path_arg(&whole)]);
+    // A checkpoint is written every 256 trials: the shard runs 2 000, so that the run killed
+    // below is still running well after its first checkpoint, on a loaded machine too.
     let shard_args = [
         "run",
         sc,
         "--trials",
-        "600",
+        "4000",
         "--threads",
         "1",
         "--shard",
