@@ -246,9 +246,10 @@ fn finished(r: &calbench::study::RunResult) -> Result<()> {
         return Ok(());
     }
     print_table(r);
+    let trials = r.scenario.trials * r.blocks.len();
     out!(
-        "\n{} trials in {:.1} s; report: {}",
-        r.scenario.trials * r.blocks.len(),
+        "\n{trials} trial{} in {:.1} s; report: {}",
+        if trials == 1 { "" } else { "s" },
         r.seconds,
         r.out.join("report.md").display()
     );

@@ -483,3 +483,14 @@ fn fk_warns_naming_the_first_joint_outside_its_limits_in_the_robots_units() {
         String::from_utf8_lossy(&o.stderr)
     );
 }
+
+#[test]
+fn a_run_counts_its_trials_in_words() {
+    let dir = tmp_dir("cli-one-trial");
+    for (n, words) in [("1", "\n1 trial in "), ("2", "\n2 trials in ")] {
+        let out = dir.join(n);
+        let o = calbench_ok(&["run", &scenario(), "--trials", n, "--out", path_arg(&out)]);
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains(words), "{text}");
+    }
+}
