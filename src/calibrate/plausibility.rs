@@ -97,7 +97,10 @@ pub fn moves(
     let more = out.len().saturating_sub(MOVES_NAMED);
     let mut named: Vec<String> = out.into_iter().take(MOVES_NAMED).map(|m| m.1).collect();
     if more > 0 {
-        named.push(format!("{more} more parameters beyond their bounds"));
+        named.push(match more {
+            1 => "1 more parameter beyond its bound".to_string(),
+            _ => format!("{more} more parameters beyond their bounds"),
+        });
     }
     named
 }

@@ -110,7 +110,11 @@ fn a_tracker_file_in_metres_or_with_swapped_columns_is_refused_unless_allowed() 
         c.swap(col(h, "x"), col(h, "y"));
     });
     let err = refused(&metres, &d.join("o"), "likely in metres");
-    assert!(err.contains(" moved by "), "{err}");
+    // Three moves named, the fourth counted (in the singular).
+    assert!(
+        err.contains(" moved by ") && err.contains("; 1 more parameter beyond its bound;"),
+        "{err}"
+    );
     refused(&swapped, &d.join("o"), "two columns look swapped");
     let j = kept(&metres, &d.join("kept-m"), true);
     let found = j["allowed_implausible"].to_string();
