@@ -185,7 +185,10 @@ def identify(
 
     Returns:
         an :class:`IdentifyResult`: the record ``calbench identify`` writes to
-        ``identified.json`` for the same data and options, as a dict.
+        ``identified.json`` for the same data and options, as a dict. An identification
+        that stopped short of convergence (``termination`` ``max-iterations``, ``diverged``
+        or ``no-progress``) warns (:class:`ConvergenceWarning`, the words ``calbench
+        identify`` prints on stderr).
     """
     if not isinstance(robot, Robot):
         raise SettingError("setting `robot`: expected a calbench.Robot")
@@ -243,6 +246,9 @@ def identify(
         allow_worse=_flag("allow_worse", allow_worse),
         allow_implausible=_flag("allow_implausible", allow_implausible),
     )
+    warning = fields.pop("warning")
+    if warning is not None:
+        warnings.warn(warning, ConvergenceWarning, stacklevel=2)
     return IdentifyResult(fields)
 
 
@@ -474,7 +480,7 @@ def run(
             )
         handle = _calbench.run(
             _scenario(scenario),
-            trials=_count("trials", trials),
+            trials=_count("trials", trials, least=1),
             seed=_count("seed", seed, bits=63),
             threads=_count("threads", threads),
             methods=methods,
@@ -487,7 +493,7 @@ def run(
     (_calbench.run_whole if whole else _calbench.run_shard)(
         _scenario(scenario),
         _path("out", out, "a folder"),
-        trials=_count("trials", trials),
+        trials=_count("trials", trials, least=1),
         seed=_count("seed", seed, bits=63),
         threads=_count("threads", threads),
         progress=_flag("progress", progress),

@@ -49,7 +49,9 @@ def _count(name, value, least=0, bits=64):
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise SettingError(f"setting `{name}`: expected an integer, got {type(value).__name__}")
     value = int(value)
-    if not least <= value < 2**bits:
+    if value < least:
+        raise SettingError(f"setting `{name}`: must be a whole number ≥ {least}, got {value}")
+    if value >= 2**bits:
         raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^{bits} - 1)")
     return value
 

@@ -12,6 +12,7 @@ use pyo3::types::{PyDict, PyString};
 
 use calbench::calibrate::cv::{Holdout, Model};
 use calbench::calibrate::pipeline::IdentifyOutcome;
+use calbench::calibrate::record::unconverged_warning;
 use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
 use calbench::calibrate::Registration;
@@ -260,6 +261,7 @@ pub(crate) fn identify<'py>(
     let out = PyDict::new(py);
     out.set_item("record", record)?;
     out.set_item("seconds", seconds)?;
+    out.set_item("warning", unconverged_warning(outcome.record()))?;
     match &outcome {
         IdentifyOutcome::Kind(o) => out.set_item(
             "robot",

@@ -350,6 +350,14 @@ def test_every_refusal_is_a_calbench_error(root):
             calbench.run(root / CI_GUARD, **bad)
     with pytest.raises(calbench.SettingError, match="trial"):
         calbench.simulate(root / CI_GUARD, trial=-1)
+    # A negative count is refused with the range the argument takes, not its integer type's.
+    for call, says in [
+        (lambda: calbench.run(root / CI_GUARD, trials=-1), "`trials`: must be a whole number ≥ 1, got -1"),
+        (lambda: calbench.run(root / CI_GUARD, trials=0), "`trials`: must be a whole number ≥ 1, got 0"),
+        (lambda: calbench.simulate(root / CI_GUARD, trial=-1), "`trial`: must be a whole number ≥ 0, got -1"),
+    ]:
+        with pytest.raises(calbench.SettingError, match=f"^setting {says}$"):
+            call()
     with pytest.raises(calbench.SettingError, match="`q`: a complex array"):
         calbench.identify(robot, q + 1j, np.zeros((4, 3)))
     with pytest.raises(calbench.SettingError, match="`points`: a bool array"):

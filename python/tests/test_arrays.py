@@ -1,6 +1,7 @@
 """Arguments as a user gives them: numpy arrays of any dtype, lists, pandas frames, and
 what is refused naming the argument as Python spells it."""
 import tomllib
+import warnings
 
 import numpy as np
 import pandas as pd
@@ -157,3 +158,27 @@ def test_igg3_by_mad_keeps_every_point_of_exact_full_poses_from_the_truth():
         assert got.termination == "converged", seed
         assert got.iterations <= 10, (seed, got.iterations)
         assert min(got.weights) == 1.0, seed
+
+
+def test_an_identification_that_did_not_converge_warns_as_the_command_line_does(
+        root, cli, tmp_path):
+    """``calbench.identify`` of a solve stopped at its iteration limit warns
+    (``ConvergenceWarning``) with the words ``calbench identify`` prints on stderr, on a
+    tracker's file and on a distance file alike; a converged one does not warn."""
+    robot = calbench.Robot.builtin("irb2600")
+    tracker = calbench.simulate(root / CI_GUARD, out=tmp_path / "tracker")
+    distance = calbench.simulate(root / "scenarios/instruments.toml", measure="distance",
+                                 out=tmp_path / "distance")
+    for data in (tmp_path / "tracker" / "measurements.csv", distance["data"]):
+        with pytest.warns(calbench.ConvergenceWarning) as caught:
+            short = calbench.identify(robot, data=data, options={"max_iter": 2})
+        assert short.termination == "max-iterations"
+        r = cli("identify", "--robot", "irb2600", "--data", data, "--method", "lm", "--set",
+                "max_iter=2", "--out", tmp_path / "cli")
+        (w,) = caught
+        assert str(w.message).startswith("the identification ended `max-iterations` after 2 ")
+        assert f"warning: {w.message}\n" in r.stderr
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", calbench.ConvergenceWarning)
+        done = calbench.identify(robot, tracker["q"], tracker["points"])
+    assert done.termination == "converged"

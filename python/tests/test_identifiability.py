@@ -54,7 +54,7 @@ def test_instrument_options_are_refused_where_no_kind_reads_them():
         ("position", {"planes": 3}, "setting `planes`: is read only with measure=\"plane\""),
         ("plane", {"spheres": 2}, "setting `spheres`: is read only with measure=\"sphere\""),
         ("sphere", {"between_poses": True}, "`between_poses`: is read only with measure="),
-        ("plane", {"planes": 0}, "setting `planes`: 0 is out of range"),
+        ("plane", {"planes": 0}, "setting `planes`: must be a whole number ≥ 1, got 0"),
         ("distance", {"between_poses": "yes"}, "setting `between_poses`: expected True"),
         ("tracker", {}, "setting `measure`: \"tracker\" is not a measure; allowed: position, "
                         "pose, distance"),

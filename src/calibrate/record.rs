@@ -367,7 +367,8 @@ fn diagnostics<S: Serializer>(d: &Option<Diagnostics>, s: S) -> Result<S::Ok, S:
 /// What to warn of when an identification stopped short of convergence (at its iteration
 /// limit, diverging or making no progress) and was written: its result, and a task's figure,
 /// are then those of an unconverged solve (`identified.json`'s `termination` says so). The
-/// command line prints it on stderr after `identify` and `task`; Python's `task` warns with it.
+/// command line prints it on stderr after `identify` and `task`; Python's `identify` and
+/// `task` warn with it.
 pub fn unconverged_warning(r: &IdentifiedRecord) -> Option<String> {
     matches!(
         r.termination,
