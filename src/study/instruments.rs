@@ -83,8 +83,9 @@ fn default_validation() -> usize {
     50
 }
 
-/// The strategy `name` an instruments study compares ([`STRATEGIES`]).
-pub(crate) fn strategy(name: &str) -> Result<Strategy> {
+/// The strategy `name` an instruments study compares ([`STRATEGIES`]); `Err`: what is wrong
+/// with it, for the caller to place under its key.
+pub(crate) fn strategy(name: &str) -> std::result::Result<Strategy, String> {
     let allowed = |s: &Strategy| STRATEGIES.contains(s);
     match name
         .parse::<StrategyName>()
@@ -92,14 +93,11 @@ pub(crate) fn strategy(name: &str) -> Result<Strategy> {
         .and_then(|n| n.selection())
     {
         Some((s, false)) if allowed(&s) => Ok(s),
-        _ => Err(Error::setting(
-            "strategies",
-            format!(
-                "unknown strategy \"{name}\" ({})",
-                STRATEGIES
-                    .map(|s| StrategyName::of(s, false).as_str())
-                    .join(", ")
-            ),
+        _ => Err(format!(
+            "unknown strategy \"{name}\"; allowed: {}",
+            STRATEGIES
+                .map(|s| StrategyName::of(s, false).as_str())
+                .join(", ")
         )),
     }
 }
@@ -341,7 +339,7 @@ impl InstrumentsScenario {
             Some(p) => p.prepared.clone(),
             None => std::sync::Arc::new(self.prepare(nominal, ii)?),
         };
-        let strat = strategy(st)?;
+        let strat = strategy(st).map_err(|m| Error::setting("strategies", m))?;
         let fixed = if strat == Strategy::Random {
             None
         } else {

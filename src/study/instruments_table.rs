@@ -124,9 +124,9 @@ impl InstrumentsScenario {
             }
         }
         let mut chosen = Vec::with_capacity(s.strategies.len());
-        for st in &s.strategies {
+        for (i, st) in s.strategies.iter().enumerate() {
             let one =
-                strategy(st).map_err(|e| ferr("instruments_study.strategies", e.to_string()))?;
+                strategy(st).map_err(|m| ferr(&format!("instruments_study.strategies[{i}]"), m))?;
             chosen.push((one, st));
         }
         // Each instrument, pose count and strategy is a row of the grid of cells: one given

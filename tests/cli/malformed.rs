@@ -572,6 +572,16 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
             "needs at least a strategy",
         ),
         (
+            "strategy",
+            ins.replace(
+                "strategies = [\"random\", \"detmax-ide\"]",
+                "strategies = [\"random\", \"ide\"]",
+            ),
+            "strategies",
+            "instruments_study.strategies[1]",
+            "unknown strategy \"ide\"; allowed: random, detmax, detmax-ide",
+        ),
+        (
             "registration",
             ban.replace("noise_mm = 0.02", "noise_mm = 1e300"),
             "noise_mm",
