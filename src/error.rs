@@ -500,6 +500,11 @@ pub fn shown(v: f64) -> String {
     }
 }
 
+/// `n` and its noun, singular for one (`counted(1, "trial", "trials")` is `1 trial`).
+pub fn counted(n: usize, one: &str, many: &str) -> String {
+    format!("{n} {}", if n == 1 { one } else { many })
+}
+
 /// Largest mass of a link or a payload, kg (100 t): far above any arm (the heaviest
 /// industrial payloads are about 2.3 t); a larger one gives a sag that is not a sag.
 pub const MAX_MASS_KG: f64 = 1e5;

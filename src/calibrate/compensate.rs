@@ -34,8 +34,12 @@ pub struct Corrected {
 /// "Physical plausibility" ([`super::plausibility::moves`]; the gravity basis's deflections
 /// at the program's poses `qs`). A program corrected with another robot's model (a file given
 /// for another), or with one that cannot be physically right, would send the arm far from
-/// every pose it was written for.
+/// every pose it was written for. The parameters are compared in the nominal robot's DH form
+/// ([`Robot::normals_as`]): a link whose common normal the identified robot's file points the
+/// other way is the same link.
 pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>]) -> Vec<String> {
+    // A URDF read back can turn a link's common normal over: the same robot, θ moved by π.
+    let identified = &identified.normals_as(nominal);
     let kinds: Vec<String> = nominal
         .joints
         .iter()

@@ -6,6 +6,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
+use calbench::error::counted;
 use calbench::results::{db_path, Db, Kind, Provenance, Record, Recorded};
 
 /// Arguments of `calbench record`.
@@ -90,12 +91,12 @@ impl RecordFlags {
 fn report(record: &Record, done: Recorded, db: &Db) {
     match done {
         Recorded::Added(id) => out!(
-            "recorded {} as {} #{id} of {} ({} entries, {} figures) in {}",
+            "recorded {} as {} #{id} of {} ({}, {}) in {}",
             record.output.source_and_document.0,
             record.kind.as_str(),
             record.scenario.name,
-            record.results.entries.len(),
-            record.results.figures.len(),
+            counted(record.results.entries.len(), "entry", "entries"),
+            counted(record.results.figures.len(), "figure", "figures"),
             db.path().display()
         ),
         Recorded::AlreadyThere(id) => out!(

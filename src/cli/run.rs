@@ -248,8 +248,8 @@ fn finished(r: &calbench::study::RunResult) -> Result<()> {
     print_table(r);
     let trials = r.scenario.trials * r.blocks.len();
     out!(
-        "\n{trials} trial{} in {:.1} s; report: {}",
-        if trials == 1 { "" } else { "s" },
+        "\n{} in {:.1} s; report: {}",
+        calbench::error::counted(trials, "trial", "trials"),
         r.seconds,
         r.out.join("report.md").display()
     );

@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use crate::common::{calbench, calbench_ok, path_arg, read, refused, tmp_dir};
+use crate::common::{calbench, calbench_ok, path_arg, read, refused, root, tmp_dir};
 
 /// A five-joint arm (DH, mm, deg), `a2` of its second joint and θ of its third as given.
 pub(crate) fn arm5(a2: f64, theta3: f64) -> String {
@@ -142,4 +142,51 @@ fn another_robot_is_no_calibration_of_the_nominal_one() {
     let o = calbench_ok(&[&args[..], &["--allow-implausible"]].concat());
     assert!(String::from_utf8_lossy(&o.stderr).contains("warning: "));
     assert!(out.exists());
+}
+
+/// A URDF whose parallel axes 2 and 3 a calibration tilted by a hair is read with the common
+/// normal of that link along z₁ × z₂, which turns over with the tilt's sign: the same robot
+/// read as θ2 and θ3 moved by π and a2 by twice its length. Either sign is a calibration of
+/// the nominal URDF, and the program is corrected as with the robot file of the same robot; an
+/// 11° tilt is not one.
+#[test]
+fn a_urdf_whose_parallel_axes_a_calibration_tilted_either_way_is_a_calibration() {
+    let d = tmp_dir("cli-compensate-tilted-urdf");
+    let nominal = root().join("examples/ipa-ur10/ur10.urdf");
+    let text = read(&nominal);
+    let elbow = "<origin xyz=\"-0.612 0.0 0.0\" rpy=\"0.0 0.0 0.0\"/>";
+    assert_eq!(text.matches(elbow).count(), 1);
+    let rows = ["-0.9,-0.05,-1.9,-1.2,-2.1,0.0", "0.4,-1.2,1.1,-0.7,1.3,0.5"];
+    for tilt in ["0.0003", "-0.0003", "0.2"] {
+        let tilted = d.join(format!("tilted{tilt}.urdf"));
+        let origin = format!("<origin xyz=\"-0.612 0.0 0.0\" rpy=\"{tilt} 0.0 0.0\"/>");
+        std::fs::write(&tilted, text.replace(elbow, &origin)).unwrap();
+        if tilt == "0.2" {
+            let program = d.join("program.csv");
+            std::fs::write(&program, format!("q1,q2,q3,q4,q5,q6\n{}\n", rows[0])).unwrap();
+            let (robot, out) = (path_arg(&nominal), d.join("o.csv"));
+            let o = calbench(&[
+                "compensate",
+                "--robot",
+                robot,
+                "--identified",
+                path_arg(&tilted),
+                "--joints",
+                path_arg(&program),
+                "--out",
+                path_arg(&out),
+            ]);
+            let msg = refused(&o, &["cannot be a calibration of the nominal robot"]);
+            assert!(msg.contains("alpha2 moved by"), "{msg}");
+            assert!(!msg.contains("theta2 moved"), "{msg}");
+            continue;
+        }
+        let corrected = compensate_rows(&d, &nominal, &tilted, &rows);
+        let flags: Vec<&str> = corrected
+            .lines()
+            .skip(1)
+            .map(|l| l.rsplit(',').next().unwrap())
+            .collect();
+        assert_eq!(flags, ["ok", "ok"], "{tilt}: {corrected}");
+    }
 }

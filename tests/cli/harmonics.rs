@@ -123,7 +123,11 @@ fn a_closed_and_an_open_wam_entry_recorded_rank_in_their_divisions_on_the_leader
     for dir in [&closed, &open] {
         let o = calbench_ok(&["record", path_arg(dir), "--db", path_arg(&db)]);
         let s = String::from_utf8_lossy(&o.stdout);
-        assert!(s.contains("recorded") && s.contains("task"), "{s}");
+        // One entry, in the singular.
+        assert!(
+            s.contains("recorded") && s.contains("task") && s.contains(" (1 entry, "),
+            "{s}"
+        );
     }
     let board = d.join("board");
     calbench_ok(&[
