@@ -12,7 +12,7 @@ use std::path::Path;
 use super::registration::register_svd;
 use crate::error::{Error, Opt, Said};
 use crate::measurement::kind::{Instrument, KindData};
-use crate::numeric::{Frame, Real, Vec3};
+use crate::numeric::{nearest_turn, Frame, Real, Vec3};
 use crate::robot::{gravity_basis, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// A joint's length or offset (`a`, `d`) may move by at most this share of the robot's reach
@@ -69,7 +69,7 @@ pub fn moves(
         let mut moved = identified.get(p) - nominal.get(p);
         if matches!(p, Param::Theta(_) | Param::Alpha(_) | Param::Beta(_)) {
             // A whole turn more or less is the same joint: the move is the nearest angle.
-            moved -= std::f64::consts::TAU * (moved / std::f64::consts::TAU).round();
+            moved = nearest_turn(moved);
         }
         let Some((bound, what)) = bound_of(p, reach) else {
             continue;

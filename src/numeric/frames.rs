@@ -83,6 +83,11 @@ impl Frame {
     }
 }
 
+/// The angle `t` (rad) less the whole turns nearest it: the same direction, within [−π, π].
+pub fn nearest_turn(t: Real) -> Real {
+    t - std::f64::consts::TAU * (t / std::f64::consts::TAU).round()
+}
+
 /// Rotation about x by `t` rad.
 #[inline]
 pub fn rot_x(t: Real) -> Mat3 {

@@ -33,8 +33,8 @@ pub mod symeig;
 mod trig;
 
 pub use frames::{
-    matrix_rpy, median, quaternion, quaternion_matrix, rot_x, rot_y, rot_z, rotation_vector,
-    rpy_matrix, skew, so3_right_jacobian_inverse, Frame, Mat3, Real, Vec3,
+    matrix_rpy, median, nearest_turn, quaternion, quaternion_matrix, rot_x, rot_y, rot_z,
+    rotation_vector, rpy_matrix, skew, so3_right_jacobian_inverse, Frame, Mat3, Real, Vec3,
 };
 pub use simd::{simd_forced_scalar, SIMD_VARIABLE};
 pub use trig::{sin_cos, sin_cos_slice};

@@ -8,7 +8,7 @@
 //! although it is the same robot.
 
 use super::{Convention, Param, Robot};
-use crate::numeric::Real;
+use crate::numeric::{nearest_turn, Real};
 
 impl Robot {
     /// The same robot (the same forward kinematics for every joint value) with each link's
@@ -28,42 +28,30 @@ impl Robot {
             .map(|j| like.get(Param::A(j)).abs() + like.get(Param::D(j)).abs())
             .sum::<Real>()
             .max(1.0);
-        let turn = |v: Real| v - std::f64::consts::TAU * (v / std::f64::consts::TAU).round();
+        let pi = std::f64::consts::PI;
         for j in 0..n.saturating_sub(1) {
-            let link = |r: &Robot, flip: bool| {
-                let s = if flip { -1.0 } else { 1.0 };
-                let pi = if flip { std::f64::consts::PI } else { 0.0 };
-                let [theta, a, alpha, beta] = [
-                    Param::Theta(j),
-                    Param::A(j),
-                    Param::Alpha(j),
-                    Param::Beta(j),
-                ]
-                .map(|p| r.get(p));
-                [theta + pi, s * a, s * alpha, s * beta]
-            };
+            let params = [
+                Param::Theta(j),
+                Param::A(j),
+                Param::Alpha(j),
+                Param::Beta(j),
+            ];
+            let kept = params.map(|p| out.get(p));
+            let [theta, a, alpha, beta] = kept;
+            let turned = [theta + pi, -a, -alpha, -beta];
+            let w = params.map(|p| like.get(p));
             let distance = |v: [Real; 4]| {
-                let w = link(like, false);
-                turn(v[0] - w[0]).abs()
+                nearest_turn(v[0] - w[0]).abs()
                     + (v[1] - w[1]).abs() / scale
-                    + turn(v[2] - w[2]).abs()
+                    + nearest_turn(v[2] - w[2]).abs()
                     + (v[3] - w[3]).abs()
             };
-            let turned = link(&out, true);
-            if distance(turned) < distance(link(&out, false)) {
-                for (p, v) in [
-                    Param::Theta(j),
-                    Param::A(j),
-                    Param::Alpha(j),
-                    Param::Beta(j),
-                ]
-                .into_iter()
-                .zip(turned)
-                {
+            if distance(turned) < distance(kept) {
+                for (p, v) in params.into_iter().zip(turned) {
                     out.set(p, v);
                 }
                 let next = Param::Theta(j + 1);
-                out.set(next, out.get(next) + std::f64::consts::PI);
+                out.set(next, out.get(next) + pi);
             }
         }
         out
@@ -121,8 +109,7 @@ mod tests {
             let back = flipped.normals_as(&nominal);
             assert!(fk_gap(&back, &moved) < 1e-9, "{name}: FK changed");
             for p in moved.params() {
-                let d = back.get(p) - moved.get(p);
-                let d = d - std::f64::consts::TAU * (d / std::f64::consts::TAU).round();
+                let d = nearest_turn(back.get(p) - moved.get(p));
                 assert!(
                     d.abs() < 1e-9,
                     "{name}: {p} is {} not {}",
