@@ -27,6 +27,7 @@ pub mod diagnostics;
 pub mod fit;
 pub mod kernel;
 pub mod on_kind;
+pub mod orientations;
 pub mod pipeline;
 pub mod plausibility;
 pub mod recheck;

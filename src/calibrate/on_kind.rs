@@ -501,7 +501,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         (nominal, &fit.robot, &fit.params, &file.qs),
         points.as_ref().map(|(m, s)| (&m[..], &s[..])),
         (fit.rms.1, file.sigma_mm.as_deref()),
-        gross(),
+        || gross().into_iter().map(plausibility::gross_cause).collect(),
         (&q.source, q.allow_implausible),
     )?;
     let mut record =

@@ -15,6 +15,7 @@ use super::diagnostics::{diagnose, Subject};
 use super::fit::fit_and_readmit;
 use super::kernel::{position_errors, KernelResidual};
 use super::on_kind::KindOutcome;
+use super::orientations::convention_hint;
 use super::plausibility::{misfit, Misfit};
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
@@ -297,15 +298,23 @@ impl IdentifyRequest {
             .map(|(at, (i, r))| {
                 format!("point {i} has a residual {r:.0} times the median {at} calibration")
             });
+        // Orientations read with another convention than they were written in: a likely
+        // cause of either refusal (looked for only when one is due).
+        let convention = || convention_hint(&nominal, &d);
         if !worse.is_empty() && !self.allow_worse {
-            let likely = radians_hint(&nominal, &d.qs).or_else(|| gross.clone().map(gross_likely));
+            let likely = radians_hint(&nominal, &d.qs)
+                .or_else(convention)
+                .or_else(|| gross.clone().map(gross_likely));
             return Err(worse_error(&self.source, &worse, likely));
         }
         let implausible = plausibility::check(
             (&nominal, &c.robot, &params, &d.qs),
             Some((&plausibility::tool_points(&nominal, &d.qs), &d.points)),
             (rms(&after), d.sigma_mm.as_deref()),
-            gross,
+            || {
+                let gross = gross.map(plausibility::gross_cause);
+                convention().into_iter().chain(gross).collect()
+            },
             (&self.source, self.allow_implausible),
         )?;
         drop((before, after));

@@ -410,12 +410,13 @@ pub struct Findings {
 /// Judges the identified robot `identified` (parameters `params`, calibration poses `qs`)
 /// against `nominal`: its moves ([`moves`]), the measured points against the nominal robot's (`points`: model,
 /// seen; [`data_causes`]), its residual RMS `rms` against the stated noise `sigma`
-/// ([`below_noise`]); `gross` names a gross reading the residuals point to, a cause.
+/// ([`below_noise`]); `found_causes` what the caller finds in the data, causes in words
+/// ([`gross_cause`], the orientations' convention), asked only when something is found.
 pub fn judge(
     (nominal, identified, params, qs): Judged,
     points: Option<(&[Vec3], &[Vec3])>,
     (rms, sigma): (Real, Option<&[Real]>),
-    gross: Option<String>,
+    found_causes: impl FnOnce() -> Vec<String>,
 ) -> Findings {
     let mut found = moves(nominal, identified, params, qs);
     let largest = largest_length_move(nominal, identified, params);
@@ -427,8 +428,13 @@ pub fn judge(
     if found.is_empty() {
         return Findings::default();
     }
-    causes.extend(gross.map(|g| format!("{g} (a gross reading)")));
+    causes.extend(found_causes());
     Findings { found, causes }
+}
+
+/// A gross reading the residuals point to (`reading`, in words) as a cause for [`judge`].
+pub fn gross_cause(reading: String) -> String {
+    format!("{reading} (a gross reading)")
 }
 
 /// A multi-target file's points (`data`, at the poses `qs`) beside the nominal robot's
@@ -505,10 +511,10 @@ pub fn check(
     subject: Judged,
     points: Option<(&[Vec3], &[Vec3])>,
     noise: (Real, Option<&[Real]>),
-    gross: Option<String>,
+    found_causes: impl FnOnce() -> Vec<String>,
     (source, allow): (&Path, bool),
 ) -> crate::Result<Vec<String>> {
-    verdict(judge(subject, points, noise, gross), source, allow)
+    verdict(judge(subject, points, noise, found_causes), source, allow)
 }
 
 /// The tool points of `robot` at the poses `qs`.

@@ -92,8 +92,9 @@ fn sets_optimised_per_trial_give_the_same_bytes_across_threads_shards_and_resume
     let dir = tmp_dir("cli-per-trial-bytes");
     let sc = write_scenario(&dir, "s", SMALL);
     let [one, two, merged] = threads_and_merged_shards(&dir, &sc);
-    // A checkpoint is written every 256 trials: the killed run needs more than that.
-    let long = write_scenario(&dir, "long", &SMALL.replace("trials = 40", "trials = 300"));
+    // A checkpoint is written every 256 trials: the killed run needs more than that, and
+    // enough after its first checkpoint (344 trials, about 2 s) for the poll to see it.
+    let long = write_scenario(&dir, "long", &SMALL.replace("trials = 40", "trials = 600"));
     let long = path_arg(&long);
     let (whole, killed) = (dir.join("whole"), dir.join("killed"));
     calbench_ok(&["run", long, "--threads", "2", "--out", path_arg(&whole)]);

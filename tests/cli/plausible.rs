@@ -378,3 +378,55 @@ fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_th
     let o = identify(&pos, &good, &["--validate", path_arg(&val)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// The shipped UR10 export imported with its Euler angles read about the fixed axes (the
+/// mapping's `frame = "extrinsic"`, where they were written about the moving ones) is refused
+/// as making the robot worse, and under `--k 1` as implausible, each naming the orientation
+/// convention as the likely cause; the same rows with their quaternions conjugated (each
+/// frame given the other way round) are named as inverses. The right mapping's rows are
+/// identified without the words.
+#[test]
+fn orientations_read_with_another_convention_are_named_as_the_likely_cause() {
+    let d = tmp_dir("cli-plausible-convention");
+    let mapping = read(Path::new(&crate::common::ur10_example("mapping.toml")));
+    let wrong = d.join("extrinsic.toml");
+    std::fs::write(
+        &wrong,
+        mapping.replace("frame = \"intrinsic\"", "frame = \"extrinsic\""),
+    )
+    .unwrap();
+    let (good, bad) = (d.join("good.csv"), d.join("bad.csv"));
+    crate::common::import_ur10_sample(&crate::common::ur10_example("mapping.toml"), &good);
+    crate::common::import_ur10_sample(path_arg(&wrong), &bad);
+    let conjugated = edited(&good, &d.join("inverse.csv"), &|h, c, _| {
+        for name in ["qx", "qy", "qz"] {
+            let k = col(h, name);
+            c[k] = format!("{}", -c[k].parse::<f64>().unwrap());
+        }
+    });
+    let robot = crate::common::ur10_example("ur10.toml");
+    let run = |data: &Path, out: &str, extra: &[&str]| {
+        let mut args = vec!["identify", "--robot", &robot, "--data", path_arg(data)];
+        let out = d.join(out);
+        args.extend_from_slice(&["--method", "ls", "--holdout", "3/10", "--out"]);
+        args.push(path_arg(&out));
+        args.extend_from_slice(extra);
+        (calbench(&args), out)
+    };
+    let convention = "the measured orientations do not turn with the robot";
+    let mapping_words = "an import mapping's [orientation] sequence, frame or unit";
+    for (data, extra, refusal) in [
+        (&bad, &[][..], "makes the robot worse"),
+        (&bad, &["--k", "1"][..], "cannot be physically right"),
+        (&conjugated, &[][..], "makes the robot worse"),
+    ] {
+        let (o, out) = run(data, "refused", extra);
+        let err = crate::common::refused(&o, &[refusal, convention, mapping_words]);
+        let inverses = "taken as their inverses they scatter by";
+        assert_eq!(err.contains(inverses), data == &conjugated, "{err}");
+        assert!(!out.exists(), "nothing is written");
+    }
+    let (o, _) = run(&good, "good", &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains(convention), "{err}");
+}
