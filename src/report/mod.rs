@@ -139,7 +139,37 @@ pub fn parent_and_name(out: &std::path::Path) -> (std::path::PathBuf, String) {
 /// run's checkpoint names.
 pub fn partial_path(out: &std::path::Path, pid: u32) -> std::path::PathBuf {
     let (parent, name) = parent_and_name(out);
-    parent.join(format!(".{name}.partial-{pid}"))
+    parent.join(partial_name(&name, pid))
+}
+
+/// Removes the temporary folders `.NAME.partial-PID` beside the output folder `out` whose
+/// process no longer runs on this host (a `merge` or an `identify` killed before it moved its
+/// files into `out`), unless a run's checkpoint beside `out` keeps one for its resume
+/// (`run --resume` and a new run into `out` remove that one). Best effort: a temporary
+/// folder that cannot be removed stays.
+fn remove_dead_partials(out: &std::path::Path) {
+    if checkpoint_folder(out).exists() {
+        return;
+    }
+    let (parent, name) = parent_and_name(out);
+    let prefix = format!(".{name}.partial-");
+    let Ok(entries) = std::fs::read_dir(&parent) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file = entry.file_name();
+        let pid = file.to_str().and_then(|f| f.strip_prefix(&prefix));
+        let pid = pid.and_then(|p| p.parse::<u32>().ok());
+        let folder = entry.file_type().is_ok_and(|t| t.is_dir());
+        if pid.is_some_and(|p| folder && p != std::process::id() && !guard::alive(p)) {
+            let _ = std::fs::remove_dir_all(entry.path());
+        }
+    }
+}
+
+/// The name of the temporary folder `.NAME.partial-PID` ([`partial_path`]).
+fn partial_name(name: &str, pid: u32) -> String {
+    format!(".{name}.partial-{pid}")
 }
 
 /// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it, where a
@@ -275,6 +305,7 @@ pub fn atomically(
     }
     let tmp = partial_path(out, std::process::id());
     let _ = std::fs::remove_dir_all(&tmp);
+    remove_dead_partials(out);
     // Made with the folders above it, so that none of them is ever an empty folder another
     // process may remove before this one is made in it.
     let _made = MadeFolders::create(&tmp)?;

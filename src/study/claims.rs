@@ -329,6 +329,27 @@ pub fn parse_with(
         }
         let metric = metric(&c.metric).map_err(|m| (format!("claims[{i}].metric"), named(m)))?;
         let key = |k: &str| format!("claims[{i}].{k}");
+        if !matches!(
+            c.value,
+            toml::Value::String(_)
+                | toml::Value::Integer(_)
+                | toml::Value::Float(_)
+                | toml::Value::Array(_)
+        ) {
+            let why = format!(
+                "is a {}: give a string, a number or an array",
+                c.value.type_str()
+            );
+            return Err((key("value"), named(why)));
+        }
+        if let Some(f) = c
+            .family
+            .as_ref()
+            .filter(|f| f.trim().is_empty() || f.contains(char::is_whitespace))
+        {
+            let why = format!("\"{f}\" can be no claim's id: give the id, without spaces, of the paper's claim this one tests");
+            return Err((key("family"), named(why)));
+        }
         let rel = c.relation.trim();
         let (rel, every_parameter) = match rel.strip_suffix(EVERY_PARAMETER) {
             Some(r) => (r.trim_end(), true),

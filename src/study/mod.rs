@@ -450,18 +450,13 @@ impl Collector {
             .map(|(info, acc, trial0, after_rms)| {
                 let (value, map) = match (sweep, &info.point) {
                     (Some(sw), Some(p)) => {
-                        let json: Vec<serde_json::Value> = p.iter().map(toml_to_json).collect();
                         let map: BTreeMap<String, serde_json::Value> = sw
                             .axes
                             .iter()
                             .map(|a| a.key.clone())
-                            .zip(json.iter().cloned())
+                            .zip(p.iter().map(toml_to_json))
                             .collect();
-                        let value = if json.len() == 1 {
-                            json[0].clone()
-                        } else {
-                            serde_json::Value::Array(json)
-                        };
+                        let value = crate::study::scenario::Sweep::point_value(p);
                         (Some(value), Some(map))
                     }
                     _ => (None, None),

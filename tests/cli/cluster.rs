@@ -346,3 +346,30 @@ fn a_shard_and_a_whole_run_refuse_each_others_folder_and_a_shard_resumes_into_it
     let records = read(&shard.join("records.txt"));
     assert_eq!(records.lines().count(), kept["records.txt"].lines().count());
 }
+
+/// A `merge` killed before it moved its files into `--out` leaves its temporary folder
+/// `.OUT.partial-PID` (SIGKILL, or Slurm's SIGTERM on pre-emption); the next merge into the
+/// same `--out` removes it, and keeps one whose process still runs.
+#[test]
+fn a_merge_removes_the_temporary_folder_of_a_killed_merge_into_its_folder() {
+    let dir = tmp_dir("cli-cluster-dead-partial");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let merged = crate::common::sharded_and_merged(path_arg(&sc), &dir, 2, &["--trials", "20"]);
+    // A process that has ended: its pid names the killed merge's temporary folder.
+    let mut gone = std::process::Command::new("true").spawn().unwrap();
+    gone.wait().unwrap();
+    let dead = dir.join(format!(".merged.partial-{}", gone.id()));
+    let live = dir.join(format!(".merged.partial-{}", std::process::id()));
+    for p in [&dead, &live] {
+        std::fs::create_dir(p).unwrap();
+        std::fs::write(p.join("trials.csv"), "half").unwrap();
+    }
+    let o = merge(&[&dir.join("s0"), &dir.join("s1")], &merged);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        !dead.exists(),
+        "the killed merge's temporary folder is removed"
+    );
+    assert!(live.exists(), "a live process's temporary folder is kept");
+    assert!(merged.join("summary.json").exists());
+}

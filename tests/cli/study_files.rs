@@ -142,3 +142,76 @@ fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
         assert!(!out.exists());
     }
 }
+
+/// A claim's `value` that is a table, a `family` that can be no claim's id, and a
+/// `paper_point` given without a sweep or not among the sweep's points are refused when the
+/// scenario is read, naming the file, the line and the claim's key; nothing is written.
+#[test]
+fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line() {
+    let d = tmp("claim-keys");
+    let text = std::fs::read_to_string(crate::common::root().join("scenarios/ci-guard.toml"))
+        .expect("scenarios/ci-guard.toml");
+    let claim = |extra: &str| {
+        format!(
+            "\n[[claims]]\nid = \"ls-rms\"\nstatement = \"LS reaches 0.1 mm\"\npaper = \"none\"\n\
+             value = \"0.1 mm\"\nmetric = \"validation_after_mm.rms\"\n\
+             relation = '\"ls\" ~ 0.1'\ntolerance = {{ relative = 0.25 }}\n{extra}\n"
+        )
+    };
+    let sweep = "\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 1]\n";
+    let cases = [
+        (
+            "value-table",
+            claim("").replace("value = \"0.1 mm\"", "value = { a = 1 }"),
+            "value = {",
+            "claims[0].value",
+            "give a string, a number or an array",
+        ),
+        (
+            "family-words",
+            claim("family = \"two words\""),
+            "family = ",
+            "claims[0].family",
+            "\"two words\"",
+        ),
+        (
+            "point-no-sweep",
+            claim("paper_point = 1"),
+            "paper_point",
+            "claims[0].paper_point",
+            "the scenario has no sweep",
+        ),
+        (
+            "point-not-swept",
+            format!("{sweep}{}", claim("paper_point = 2")),
+            "paper_point",
+            "claims[0].paper_point",
+            "no point of the sweep (its points: 0, 1)",
+        ),
+    ];
+    for (name, added, at, key, why) in cases {
+        let file = format!("{name}.toml");
+        let edited = format!("{text}{added}");
+        let line = edited[..edited.rfind(at).expect(at)].lines().count() + 1;
+        let bad = d.join(&file);
+        std::fs::write(&bad, &edited).unwrap();
+        let out = d.join(format!("out-{name}"));
+        refused(
+            &calbench(&["run", path(&bad), "--out", path(&out)]),
+            &[&format!("{file}: line {line}, {key}"), why],
+        );
+        assert!(!out.exists(), "{name}: nothing is written");
+    }
+    // The same claim at a point of the sweep is accepted: the file reads.
+    let good = d.join("point-swept.toml");
+    std::fs::write(&good, format!("{text}{sweep}{}", claim("paper_point = 1"))).unwrap();
+    let o = calbench(&[
+        "run",
+        path(&good),
+        "--trials",
+        "1",
+        "--out",
+        path(&d.join("out-good")),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -225,14 +225,14 @@ impl Scenario {
             text: text.into(),
             edited: Vec::new(),
         };
-        Scenario::from_table(table, path, Some(source))
+        Scenario::from_table(table, path, Some(source))?.with_paper_points_checked()
     }
 
     /// Checks a scenario given as a table rather than as a file's text (the Python module's
     /// `run` of a dict): refusals name `shown` and the key, without a line; relative file
     /// paths are taken from the current folder.
     pub fn from_toml_table(table: toml::Table, shown: &Path) -> Result<Scenario> {
-        Scenario::from_table(table, Some(shown), None)
+        Scenario::from_table(table, Some(shown), None)?.with_paper_points_checked()
     }
 
     /// Checks the parsed `table` of the file `path`; `source` gives the lines of refused keys

@@ -89,6 +89,47 @@ impl Sweep {
         points
     }
 
+    /// The value a point of the sweep (one value per axis) is named by in `summary.json`
+    /// (`sweep_value`, a claim's `paper_point`): the one axis's value, or the array of the
+    /// axes' values.
+    pub fn point_value(point: &[toml::Value]) -> serde_json::Value {
+        let json: Vec<serde_json::Value> = point.iter().map(crate::study::toml_to_json).collect();
+        match <[_; 1]>::try_from(json) {
+            Ok([one]) => one,
+            Err(all) => serde_json::Value::Array(all),
+        }
+    }
+
+    /// Refuses, as (key, message), a claim's `paper_point` (claim `i` of `claims`) that is no
+    /// point of `sweep`, or given without a sweep: no point would be the paper's setting.
+    fn check_paper_points(
+        sweep: Option<&Sweep>,
+        claims: &[crate::study::claims::Claim],
+    ) -> std::result::Result<(), (String, String)> {
+        for (i, c) in claims.iter().enumerate() {
+            let Some(pp) = &c.paper_point else { continue };
+            let key = format!("claims[{i}].paper_point");
+            let Some(sw) = sweep else {
+                let why =
+                    "is the swept value at the paper's setting, and the scenario has no sweep";
+                return Err((key, format!("claim \"{}\": {why}", c.id)));
+            };
+            let points: Vec<serde_json::Value> =
+                sw.points().iter().map(|p| Sweep::point_value(p)).collect();
+            if !points.contains(&crate::study::toml_to_json(pp)) {
+                let listed: Vec<String> = points.iter().map(|p| p.to_string()).collect();
+                let why = format!(
+                    "claim \"{}\": {pp} is no point of the sweep (its points: {}), so no point \
+                     would be the paper's setting",
+                    c.id,
+                    listed.join(", ")
+                );
+                return Err((key, why));
+            }
+        }
+        Ok(())
+    }
+
     /// The dotted key of `what` (`key`, `values[1]`) of axis `i` as the file writes it:
     /// `sweep.values[1]`, or `sweep[0].values[1]` in a `[[sweep]]` grid.
     fn key_of(&self, i: usize, what: &str) -> String {
@@ -156,6 +197,23 @@ pub(crate) fn given(e: Error, key: &str, opt: crate::error::Opt) -> Error {
 }
 
 impl Scenario {
+    /// The file a refusal names.
+    fn shown(&self) -> PathBuf {
+        self.path
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("<built-in default scenario>"))
+    }
+
+    /// The scenario as read, once its claims' `paper_point`s are found among the sweep's
+    /// points. A file's own check, not a sweep point's: a point's scenario has no sweep.
+    pub(super) fn with_paper_points_checked(self) -> Result<Scenario> {
+        let Err((key, msg)) = Sweep::check_paper_points(self.sweep.as_ref(), &self.claims) else {
+            return Ok(self);
+        };
+        let line = self.source.as_ref().and_then(|s| s.line(&key));
+        Err(Error::file(self.shown(), at_line(line, &key), msg))
+    }
+
     /// A copy with one dotted key (`outliers.count`, `trials`, `tracker.mpe_a_um`) set to
     /// `value`, checked again.
     pub fn with_override(&self, key: &str, value: toml::Value) -> Result<Scenario> {
@@ -229,10 +287,7 @@ impl Scenario {
     /// of the sweep's value refused, or of the axis's `key` where the scenario does not take
     /// the key (docs/formats.md `[sweep]`).
     pub fn plan(&self, point: &[toml::Value]) -> Result<Scenario> {
-        let shown = self
-            .path
-            .clone()
-            .unwrap_or_else(|| PathBuf::from("<built-in default scenario>"));
+        let shown = self.shown();
         let Some(sw) = &self.sweep else {
             return Ok(self.clone());
         };
