@@ -11,7 +11,7 @@ use calbench::analysis::regression::{
 };
 use calbench::error::Error;
 use calbench::numeric::Real;
-use calbench::report::fmt_num;
+use calbench::report::{fmt_num, scenario_file};
 
 /// Arguments of `calbench check`.
 #[derive(clap::Args)]
@@ -54,7 +54,7 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
         )
         .into());
     };
-    let doc = baseline_document(&side.summary, trials)?;
+    let doc = baseline_document(&side.summary, trials, ran(&side)?)?;
     calbench::report::output::json_file(&args.out, &doc)?;
     out!(
         "wrote {}: the summary of {} with the per-trial values of {} entries",
@@ -63,6 +63,40 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
         trials.trials.len()
     );
     Ok(())
+}
+
+/// The scenario a side ran (canonical text): the one its baseline file names, else its
+/// folder's `scenario.toml`; `None` when neither is there.
+fn ran(side: &Side) -> calbench::Result<Option<String>> {
+    match &side.scenario {
+        Some(s) => Ok(Some(s.clone())),
+        None => scenario_file::beside(&side.path),
+    }
+}
+
+/// Refuses, naming the summary, a run of another scenario than the baseline's when both
+/// say what they ran: other settings draw other robots and poses, so the change is not the
+/// program's, and trial `i` of one is not trial `i` of the other. The seed and the trials
+/// may differ (the comparison is then unpaired).
+fn same_scenario(baseline: &Side, summary: &Side) -> calbench::Result<()> {
+    let (Some(a), Some(b)) = (ran(baseline)?, ran(summary)?) else {
+        return Ok(());
+    };
+    let apart = scenario_file::differences(&a, &b);
+    if apart.is_empty() {
+        return Ok(());
+    }
+    Err(Error::file(
+        &summary.path,
+        "scenario",
+        format!(
+            "is the run of another scenario than the baseline {} ({}): check compares one \
+             scenario from version to version; run the baseline's scenario (its seed and \
+             trials may differ), or write a baseline of this one with `calbench baseline`",
+            baseline.path.display(),
+            apart.join("; ")
+        ),
+    ))
 }
 
 /// The metrics whose per-trial values paired but were set aside
@@ -107,6 +141,7 @@ pub fn run(args: &CheckArgs) -> Result<()> {
     let tolerance = args.tolerance.checked()?;
     let (s, b) = (Side::read(&args.summary)?, Side::read(&args.baseline)?);
     comparable(&s.summary, &s.path, &b.summary, &b.path)?;
+    same_scenario(&b, &s)?;
     let pairs = b.trials.as_ref().zip(s.trials.as_ref());
     let all = compare_with(&s.summary, &b.summary, tolerance, pairs);
     match unpaired_because(&b, &s) {

@@ -17,6 +17,7 @@ use crate::analysis::summary::Summary;
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::html::history::Point;
+use crate::report::scenario_file;
 use crate::study::metric::Metric;
 
 /// The metrics shown when none is asked for (a task's ranking metric is always shown).
@@ -200,18 +201,10 @@ fn versions<'r>(list: &[&'r Run]) -> Vec<Vec<&'r Run>> {
     out
 }
 
-/// The scenario a record ran, without the keys that only choose its draws (`seed`,
-/// `trials`): two records whose scenarios differ otherwise are not compared.
-fn scenario_of(r: &Run) -> Option<toml::Table> {
-    let mut t: toml::Table = toml::from_str(&r.scenario_text).ok()?;
-    t.remove("seed");
-    t.remove("trials");
-    Some(t)
-}
-
-/// Whether `a` and `b` ran the same scenario, up to seed and trials.
+/// Whether `a` and `b` ran the same scenario, up to the keys that only choose the draws
+/// (`seed`, `trials`): records whose scenarios differ otherwise are not compared.
 fn same_scenario(a: &Run, b: &Run) -> bool {
-    scenario_of(a) == scenario_of(b)
+    scenario_file::differences(&a.scenario_text, &b.scenario_text).is_empty()
 }
 
 /// The summary a record holds (`None` for a record of another kind, whose document is no

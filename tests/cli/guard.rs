@@ -8,7 +8,8 @@
 use std::path::Path;
 
 use crate::common::{
-    calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario,
+    as_another_version, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir,
+    write_scenario,
 };
 
 fn committed() -> std::path::PathBuf {
@@ -16,7 +17,7 @@ fn committed() -> std::path::PathBuf {
 }
 
 /// `calbench check SUMMARY --baseline BASE`: (success, stdout + stderr).
-fn check(summary: &Path, base: &Path, extra: &[&str]) -> (bool, String) {
+pub(crate) fn check(summary: &Path, base: &Path, extra: &[&str]) -> (bool, String) {
     let mut args = vec!["check", path_arg(summary), "--baseline", path_arg(base)];
     args.extend(extra);
     let o = calbench(&args);
@@ -24,14 +25,14 @@ fn check(summary: &Path, base: &Path, extra: &[&str]) -> (bool, String) {
     (o.status.success(), text)
 }
 
-fn run(scenario: &Path, out: &Path, extra: &[&str]) {
+pub(crate) fn run(scenario: &Path, out: &Path, extra: &[&str]) {
     let mut args = vec!["run", path_arg(scenario), "--out", path_arg(out)];
     args.extend(extra);
     calbench_ok(&args);
 }
 
 /// A run of `scenarios/ci-guard.toml` with 3 trials and seed 5 into `dir/a`.
-fn three_trials(dir: &Path) -> std::path::PathBuf {
+pub(crate) fn three_trials(dir: &Path) -> std::path::PathBuf {
     let a = dir.join("a");
     run(
         &root().join("scenarios/ci-guard.toml"),
@@ -100,6 +101,7 @@ fn metrics_whose_trials_fail_in_one_run_only_are_named_as_compared_unpaired() {
     let (a, b) = (dir.join("a"), dir.join("b"));
     run(&with("1.0"), &a, &[]);
     run(&with("2.0"), &b, &[]);
+    as_another_version(&b);
     let failures = load_json(&b.join("summary.json"))["results"][0]["failures"].clone();
     assert!(
         failures.as_u64().unwrap() > 0,

@@ -16,6 +16,7 @@ mod compensate;
 mod determinable;
 mod determinism;
 mod duplicate_keys;
+mod edited;
 mod endless;
 mod final_fitness;
 mod fixed_models;

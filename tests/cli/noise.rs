@@ -5,7 +5,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{calbench, calbench_ok, path_arg, read, root, tmp_dir, write_scenario};
+use crate::common::{
+    as_another_version, calbench, calbench_ok, path_arg, read, root, tmp_dir, write_scenario,
+};
 
 /// Trials per run: enough for the seed-to-seed noise of the guarded metrics to stay inside
 /// their intervals and for the small change to be significant on paired draws.
@@ -102,6 +104,7 @@ fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
     // error, and check fails.
     let loud = dir.join("loud");
     run(&scenario(&dir, 10.0), "42", &loud);
+    as_another_version(&loud);
     let (ok, text) = check(&loud, &a, &[]);
     assert!(!ok, "{text}");
     let l = line(&text, "lm / random", "validation_after_mm.rms");
@@ -123,6 +126,7 @@ fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
     // 1.5 times: a real change of the validation error within the tolerance.
     let mild = dir.join("mild");
     run(&scenario(&dir, 1.5), "42", &mild);
+    as_another_version(&mild);
     let (_, text) = check(&mild, &a, &[]);
     let l = line(&text, "lm / random", "validation_after_mm.rms");
     assert!(
@@ -173,7 +177,8 @@ fn two_sweeps_are_compared_point_by_point_on_their_shared_trials() {
         "loud",
         &format!("{}{sweep}", read(&scenario(&dir, 10.0))),
     );
-    // The two files must name one scenario: `check` refuses two scenarios.
+    // The two files carry one scenario name, and the loud run stands for another version of
+    // the program on the plain scenario: `check` refuses runs of two scenarios.
     let (a, b, same) = (dir.join("a"), dir.join("b"), dir.join("same"));
     for (sc, out) in [(&plain, &a), (&loud, &b), (&plain, &same)] {
         calbench_ok(&[
@@ -189,6 +194,7 @@ fn two_sweeps_are_compared_point_by_point_on_their_shared_trials() {
             "2",
         ]);
     }
+    as_another_version(&b);
     // The same run again: every metric paired, nothing changed.
     let (ok, text) = check(&same, &a, &[]);
     assert!(ok, "{text}");

@@ -218,6 +218,15 @@ pub fn threads_and_merged_shards(dir: &Path, scenario: &Path) -> [PathBuf; 3] {
     [one, two, merged]
 }
 
+/// Makes the run in `out` stand for a run of the baseline's scenario by another version of the
+/// program: a test that plants a change of the results by editing the scenario removes the
+/// edited run's `scenario.toml`, since `check` refuses a run of another scenario than the
+/// baseline's (docs/formats.md § 2.4) and compares only when a side does not say what it ran.
+pub fn as_another_version(out: &Path) {
+    let p = out.join("scenario.toml");
+    std::fs::remove_file(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+}
+
 pub fn write_scenario(dir: &Path, name: &str, text: &str) -> PathBuf {
     let p = dir.join(format!("{name}.toml"));
     std::fs::write(&p, text).unwrap_or_else(|e| panic!("{}: {e}", p.display()));

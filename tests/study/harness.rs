@@ -214,7 +214,7 @@ fn ci_guard_matches_the_baseline() {
     let now = read_summary(&out.join("summary.json")).unwrap();
     let path = root().join("results/baselines/ci-guard.json");
     let base = read_summary(&path).unwrap();
-    let tb = trials_of(&read_json(&path).unwrap(), &path)
+    let (tb, _) = trials_of(&read_json(&path).unwrap(), &path)
         .unwrap()
         .expect("the baseline's per-trial values");
     let tn = Trials::read(&out.join("trials.csv")).unwrap();

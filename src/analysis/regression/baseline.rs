@@ -35,6 +35,10 @@ pub struct PerTrial {
     pub format: String,
     /// By entry key ([`super::noise::trials_key`]).
     pub entries: BTreeMap<String, EntryTrials>,
+    /// The scenario the run ran, as its folder's `scenario.toml` holds it below the hash
+    /// line, when the run's folder has one: `check` refuses a run of another scenario.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scenario: Option<String>,
 }
 
 /// One entry's trials and values.
@@ -67,6 +71,7 @@ impl From<&Trials> for PerTrial {
         PerTrial {
             format: FORMAT.into(),
             entries,
+            scenario: None,
         }
     }
 }
@@ -125,11 +130,19 @@ impl PerTrial {
 }
 
 /// The baseline document of a run: its `summary` with the per-trial values `trials` (read
-/// from its `trials.csv`) under [`KEY`].
-pub fn baseline_document(summary: &Summary, trials: &Trials) -> Result<Value> {
+/// from its `trials.csv`) and the `scenario` it ran (its canonical text), when known, under
+/// [`KEY`].
+pub fn baseline_document(
+    summary: &Summary,
+    trials: &Trials,
+    scenario: Option<String>,
+) -> Result<Value> {
     let mut doc = summary.to_value()?;
-    let per_trial =
-        serde_json::to_value(PerTrial::from(trials)).map_err(|e| Error::Compute(e.to_string()))?;
+    let per_trial = PerTrial {
+        scenario,
+        ..PerTrial::from(trials)
+    };
+    let per_trial = serde_json::to_value(per_trial).map_err(|e| Error::Compute(e.to_string()))?;
     match doc.as_object_mut() {
         Some(m) => {
             m.insert(KEY.into(), per_trial);
@@ -145,10 +158,10 @@ fn trials_csv(path: &Path) -> PathBuf {
 }
 
 /// The per-trial values behind the summary `doc` read from `path`: its own [`KEY`] (a
-/// baseline file), else the `trials.csv` beside it (a run folder); `None` when it has
-/// neither. A refusal of its own names the line of the key refused (`line 80,
-/// per_trial.format`).
-pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
+/// baseline file, with the scenario it names), else the `trials.csv` beside it (a run
+/// folder); `None` when it has neither. A refusal of its own names the line of the key
+/// refused (`line 80, per_trial.format`).
+pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<(Trials, Option<String>)>> {
     if doc.get(KEY).is_some() {
         /// The baseline's own values, read by their full key path (`per_trial.entries.…`).
         #[derive(Deserialize)]
@@ -157,13 +170,13 @@ pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<Trials>> {
         }
         let p = crate::error::read_typed::<Own, _>(doc, path, "baseline");
         return p
-            .and_then(|o| o.per_trial.to_trials(path))
+            .and_then(|o| Ok((o.per_trial.to_trials(path)?, o.per_trial.scenario)))
             .map(Some)
             .map_err(Error::at_json_key_line);
     }
     let csv = trials_csv(path);
     if csv.is_file() {
-        Trials::read(&csv).map(Some)
+        Trials::read(&csv).map(|t| Some((t, None)))
     } else {
         Ok(None)
     }
@@ -178,6 +191,9 @@ pub struct Side {
     pub summary: Summary,
     /// Its per-trial values, when it has them.
     pub trials: Option<Trials>,
+    /// The scenario the run ran (canonical text), when a baseline file names it
+    /// ([`PerTrial::scenario`]); a run folder's is its `scenario.toml`, which `report` reads.
+    pub scenario: Option<String>,
 }
 
 impl Side {
@@ -209,7 +225,7 @@ impl Side {
         }
         let doc = read_json(&file)?;
         let own = doc.get(KEY).is_some();
-        let trials = trials_of(&doc, &file)?;
+        let (trials, scenario) = trials_of(&doc, &file)?.unzip();
         let summary = check_summary(doc, &file)?;
         if let (true, Some(t)) = (own, &trials) {
             own_keys(&summary, t)
@@ -237,6 +253,7 @@ impl Side {
             path: file,
             summary,
             trials,
+            scenario: scenario.flatten(),
         })
     }
 }
@@ -458,6 +475,7 @@ mod tests {
         let mut p = PerTrial {
             format: FORMAT.into(),
             entries: BTreeMap::new(),
+            scenario: None,
         };
         p.entries.insert(
             "ls / random".into(),

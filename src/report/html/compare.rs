@@ -382,6 +382,7 @@ mod tests {
             summary: crate::analysis::regression::check_summary(doc, &path).unwrap(),
             path,
             trials: None,
+            scenario: None,
         }
     }
 
