@@ -122,9 +122,12 @@ pub fn check_figures(
     at: &dyn Fn(&str) -> Option<String>,
 ) -> Result<()> {
     if trials == Some(0) {
+        let line = crate::error::read_text(path)
+            .ok()
+            .and_then(|text| json_key_line(&text, "trials"));
         return Err(Error::file(
             path,
-            "trials",
+            at_line(line, "trials"),
             "is 0: the trials of a run are a whole number above 0",
         ));
     }

@@ -9,7 +9,7 @@ use calbench::analysis::regression::{
     baseline_document, checked_tolerance, comparable, compare_with, unpaired_because,
     unpaired_entries, Compared, Side, Status, Unpaired, Which,
 };
-use calbench::error::Error;
+use calbench::error::{counted, Error};
 use calbench::numeric::Real;
 use calbench::report::{fmt_num, scenario_file};
 
@@ -57,10 +57,10 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
     let doc = baseline_document(&side.summary, trials, ran(&side)?)?;
     calbench::report::output::json_file(&args.out, &doc)?;
     out!(
-        "wrote {}: the summary of {} with the per-trial values of {} entries",
+        "wrote {}: the summary of {} with the per-trial values of {}",
         args.out.display(),
         side.path.display(),
-        trials.trials.len()
+        counted(trials.trials.len(), "entry", "entries")
     );
     Ok(())
 }

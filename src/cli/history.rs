@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::Result;
 
+use calbench::error::counted;
 use calbench::report::html::history::{csv, page, Point, Series};
 use calbench::results::history;
 use calbench::results::history::{Flag, Regressed};
@@ -63,15 +64,17 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
         }
         let count = |f: Flag| regressed.iter().filter(|r| r.flag == f).count();
         let (reg, drift) = (count(Flag::Regression), count(Flag::Drift));
+        let pairs = counted(compared, "scenario-machine pair", "scenario-machine pairs");
         if reg + drift > 0 {
             anyhow::bail!(
-                "{reg} regressions and {drift} drifts of the latest version ({compared} \
-                 scenario-machine pairs compared)"
+                "{} and {} of the latest version ({pairs} compared)",
+                counted(reg, "regression", "regressions"),
+                counted(drift, "drift", "drifts")
             );
         }
         out!(
-            "no regression or drift of the latest version ({compared} scenario-machine pairs \
-             compared, {} with a changed scenario)",
+            "no regression or drift of the latest version ({pairs} compared, {} with a changed \
+             scenario)",
             count(Flag::ScenarioChanged)
         );
     }

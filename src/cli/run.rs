@@ -220,10 +220,10 @@ fn resume(args: &RunArgs, dir: &Path) -> Result<()> {
     writable_folder(dir, checked.outputs())?;
     let db = args.record.open()?;
     eprintln!("resuming the run into {}", dir.display());
-    let t0 = std::time::Instant::now();
+    let (t0, trials) = (std::time::Instant::now(), checked.trials());
     match whole::resume(checked, threads, &Terminal)? {
         Resumed::Cells(table) => {
-            cells_finished(&table, t0, dir)?;
+            cells_finished(&table, trials, t0, dir)?;
             args.record
                 .finish(db, || super::record::of_study(dir, Kind::Run))
         }
@@ -321,20 +321,21 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         shard_written(&what, &out, Some(s.count));
         return Ok(());
     }
-    cells_finished(&table, t0, &out)?;
+    cells_finished(&table, sc.trials(), t0, &out)?;
     args.record
         .finish(db, || super::record::of_study(&out, Kind::Run))
 }
 
-/// Prints a finished study of cells' `table` and where its report is (a shard's table is
-/// empty).
-fn cells_finished(table: &str, t0: std::time::Instant, out: &Path) -> Result<()> {
+/// Prints a finished study of cells' `table`, its `trials` (each draws every cell) and where
+/// its report is (a shard's table is empty).
+fn cells_finished(table: &str, trials: usize, t0: std::time::Instant, out: &Path) -> Result<()> {
     if table.is_empty() {
         shard_written("shard written", out, None);
         return Ok(());
     }
     out!(
-        "{table}\nin {:.1} s; report: {}",
+        "{table}\n{} in {:.1} s; report: {}",
+        calbench::error::counted(trials, "trial", "trials"),
         t0.elapsed().as_secs_f64(),
         out.join("report.md").display()
     );

@@ -121,16 +121,24 @@ fn moving(j: &urdf_rs::Joint) -> Result<Option<JointType>> {
         U::Fixed => None,
         U::Revolute | U::Continuous => Some(JointType::Revolute),
         U::Prismatic => Some(JointType::Prismatic),
+        // The file's spelling (`floating`), not the Rust variant's (`Floating`).
         _ => {
-            // The file's spelling (`floating`), not the Rust variant's (`Floating`).
             let kind = format!("{:?}", j.joint_type).to_lowercase();
-            return Err(Error::Compute(format!(
-                "joint \"{}\": type {kind} is not a one-axis joint (revolute, continuous, \
-                 prismatic, fixed)",
-                j.name
-            )));
+            return Err(Error::Compute(not_one_axis(&j.name, &kind)));
         }
     })
+}
+
+/// The joint types calbench reads, as a URDF spells them.
+const ONE_AXIS: [&str; 4] = ["revolute", "continuous", "prismatic", "fixed"];
+
+/// The refusal of joint `name` of type `kind`, which is none of [`ONE_AXIS`] (a URDF type
+/// such as `planar`, or none at all: URDF's other types are not offered as a choice).
+fn not_one_axis(name: &str, kind: &str) -> String {
+    format!(
+        "joint \"{name}\": type {kind} is not a one-axis joint ({})",
+        ONE_AXIS.join(", ")
+    )
 }
 
 /// Hayati's turn Ry(β) that ends a `dh_beta` link.

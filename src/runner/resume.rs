@@ -34,6 +34,12 @@ impl Resumable {
         })
     }
 
+    /// The trials of the run (per block of a Monte-Carlo study, of every cell of a study of
+    /// cells).
+    pub fn trials(&self) -> usize {
+        self.scenario.trials()
+    }
+
     /// The files the continued run writes into its folder, checked before it continues
     /// ([`crate::report::run::checked_outputs`]): a whole run's or a shard's.
     pub fn outputs(&self) -> &'static [&'static str] {

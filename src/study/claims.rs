@@ -312,9 +312,11 @@ pub fn parse_with(
                 format!("claim \"{id}\": {m}")
             }
         };
-        let c: RawClaim = toml::Value::Table(t.clone())
-            .try_into()
-            .map_err(|e: toml::de::Error| (format!("claims[{i}]"), named(e.message().into())))?;
+        // The key that failed (`claims[0].about`), or the claim's own when one is missing.
+        let c: RawClaim = crate::numeric::options::read(t).map_err(|(k, m)| match k.as_str() {
+            "" => (format!("claims[{i}]"), named(m)),
+            k => (format!("claims[{i}].{k}"), named(m)),
+        })?;
         if c.id.trim().is_empty() || c.id.contains(char::is_whitespace) {
             return Err((
                 format!("claims[{i}].id"),
@@ -437,6 +439,12 @@ pub fn parse_with(
     Ok(out)
 }
 
+/// The claim a refused key lies in (`claims[0]` of `claims[0].tolerance`), whose
+/// `[[claims]]` line places the refusal of a key the claim lacks (a `~` without its band).
+pub fn claim_of(key: &str) -> &str {
+    key.find("].").map_or(key, |i| &key[..=i])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -508,7 +516,8 @@ mod tests {
         let unknown = r#""lm / random" ~ 0.4'
 tolerance = { relative = 0.25 }
 x = '"#;
+        // An unknown key is named by its own key (it had been the claim's).
         let c = claim(unknown).expect_err("unknown key x");
-        assert_eq!(c.0, "claims[0]");
+        assert_eq!(c.0, "claims[0].x");
     }
 }

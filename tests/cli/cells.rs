@@ -23,10 +23,13 @@ fn ban_fig3_in_two_shards_merges_to_the_bytes_of_one_run() {
         args.extend(more);
         let out = dir.join(out);
         args.extend(["--out", path_arg(&out)]);
-        calbench_ok(&args);
-        out
+        let o = calbench_ok(&args);
+        (out, String::from_utf8_lossy(&o.stdout).into_owned())
     };
-    let one = run(&["--threads", "2"], "one");
+    let (one, said) = run(&["--threads", "2"], "one");
+    // The finish line counts the trials, as a Monte-Carlo run's does (it said "in S s").
+    assert!(said.contains("\n5 trials in "), "{said}");
+    let run = |more: &[&str], out: &str| run(more, out).0;
     let s0 = run(&["--shard", "0/2", "--threads", "1"], "s0");
     let s1 = run(&["--shard", "1/2", "--threads", "1"], "s1");
     assert!(s0.join("records.txt").exists() && !s0.join("summary.json").exists());

@@ -520,8 +520,9 @@ fn a_summary_no_run_can_have_written_is_refused_by_check_and_compare() {
         std::fs::write(&bad, serde_json::to_string_pretty(&d).unwrap()).unwrap();
         for (summary, base) in [(&bad, &good), (&good, &bad)] {
             let (ok, text) = check(summary, base, &[]);
+            // Each at its line (`trials` 0 had been named without one).
             assert!(
-                !ok && text.contains(&format!("{name}.json")) && text.contains(key),
+                !ok && text.contains(&format!("{name}.json: line ")) && text.contains(key),
                 "check {name}: {text}"
             );
         }

@@ -313,7 +313,16 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
         (
             "type",
             src.replacen("type=\"revolute\"", "type=\"revolve\"", 1),
-            "type.urdf: line 15: joint \"shoulder_pan_joint\": unknown variant `revolve`",
+            "type.urdf: line 15: joint \"shoulder_pan_joint\": type revolve is not a one-axis \
+             joint (revolute, continuous, prismatic, fixed)",
+        ),
+        // A URDF type calbench does not read, refused at its line like an unknown one (which
+        // urdf-rs had answered offering `floating`, `planar` and `spherical`).
+        (
+            "planar",
+            src.replacen("type=\"revolute\"", "type=\"planar\"", 1),
+            "planar.urdf: line 15: joint \"shoulder_pan_joint\": type planar is not a one-axis \
+             joint (revolute, continuous, prismatic, fixed)",
         ),
         (
             "parent",

@@ -145,7 +145,9 @@ fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
 
 /// A claim's `value` that is a table, a `family` that can be no claim's id, and a
 /// `paper_point` given without a sweep or not among the sweep's points are refused when the
-/// scenario is read, naming the file, the line and the claim's key; nothing is written.
+/// scenario is read, naming the file, the line and the claim's key; so are a `~` without its
+/// `tolerance` (at the claim's line) and an `about` that is neither mean nor median (at its
+/// own); nothing is written.
 #[test]
 fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line() {
     let d = tmp("claim-keys");
@@ -187,6 +189,22 @@ fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line()
             "paper_point",
             "claims[0].paper_point",
             "no point of the sweep (its points: 0, 1)",
+        ),
+        // A `~` without its band: at the claim's [[claims]] line, the key it lacks named.
+        (
+            "near-no-band",
+            claim("").replace("tolerance = { relative = 0.25 }\n", ""),
+            "[[claims]]",
+            "claims[0].tolerance",
+            "a point value (`~`) needs its band",
+        ),
+        // A value serde refuses: at its own line (it was placed at the [[claims]] line).
+        (
+            "about-mode",
+            claim("about = \"mode\""),
+            "about = ",
+            "claims[0].about",
+            "mode",
         ),
     ];
     for (name, added, at, key, why) in cases {

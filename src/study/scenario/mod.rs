@@ -512,8 +512,10 @@ impl Scenario {
             unmodelled: raw.unmodelled.is_active(),
             searches: methods.iter().any(|m| m.method.fitness_model().is_some()),
         };
-        let claims =
-            crate::study::claims::parse(&raw.claims, &names).map_err(|(k, m)| ferr(&k, m))?;
+        let claims = crate::study::claims::parse(&raw.claims, &names).map_err(|(k, m)| {
+            let on = Some(k.as_str()).filter(|k| line(k).is_some());
+            at(on.unwrap_or(crate::study::claims::claim_of(&k)), &k, m)
+        })?;
 
         let sweep = match raw.sweep {
             None => None,

@@ -130,8 +130,8 @@ pub struct Stopping {
     pub rule: String,
     /// The target as given (`0.5%`, `0.002mm`).
     pub target: String,
-    /// Whether every entry's headline interval reached it (false: the trial cap was hit
-    /// first).
+    /// Whether every entry's headline interval is within it at the stop (false: the run
+    /// stopped at its trial cap with one wider).
     pub reached: bool,
     /// The trials run, the run's `trials`.
     pub trials: usize,
@@ -161,11 +161,11 @@ impl Stopping {
         if self.reached {
             return None;
         }
-        let width = self.widest.map_or("no interval".to_string(), |w| {
+        let width = self.widest.map_or("without an interval".to_string(), |w| {
             if self.target.trim_end().ends_with('%') {
-                format!("±{:.3} %", w * 100.0)
+                format!("at ±{:.3} %", w * 100.0)
             } else {
-                format!("±{w:.4} mm")
+                format!("at ±{w:.4} mm")
             }
         });
         let entry = self.widest_entry.as_deref().unwrap_or("an entry");
@@ -177,10 +177,10 @@ impl Stopping {
                 false => format!("; about {n} trials would reach it"),
             });
         Some(format!(
-            "precision ±{} not reached: stopped at the cap of {} trials with {entry}'s mean \
-             validation error after calibration at {width}{needed}",
+            "precision ±{} not reached: stopped at the cap of {} with {entry}'s mean \
+             validation error after calibration {width}{needed}",
             self.target.trim_start_matches(['±', '+']),
-            self.trials,
+            crate::error::counted(self.trials, "trial", "trials"),
         ))
     }
 }
@@ -193,7 +193,8 @@ pub fn widest_and_needed(
     n: usize,
 ) -> (Option<usize>, Option<usize>) {
     let widths: Vec<Option<Real>> = headlines.iter().map(|&(m, ci)| p.width(m, ci)).collect();
-    let i = (0..widths.len()).max_by(|&a, &b| {
+    // The first of the widest (entries without an interval the widest of all).
+    let i = (0..widths.len()).rev().max_by(|&a, &b| {
         let key = |w: Option<Real>| w.unwrap_or(Real::INFINITY);
         key(widths[a]).total_cmp(&key(widths[b]))
     });
@@ -275,5 +276,34 @@ mod tests {
             .shortfall()
             .unwrap()
             .ends_with("; about 500 trials would reach it"));
+    }
+
+    /// Of equal widths the first entry is named (it was the last, so that a run of one trial,
+    /// where no entry has an interval, named the last entry), and a missing interval is said
+    /// so (the message read "at no interval").
+    #[test]
+    fn the_first_widest_entry_is_named_and_a_missing_interval_said() {
+        let p = Precision::parse("1%").unwrap();
+        let wide = (1.0, Some([0.98, 1.02]));
+        let ok = (1.0, Some([0.995, 1.005]));
+        assert_eq!(widest_and_needed(&p, &[ok, wide, wide], 10).0, Some(1));
+        let (i, needed) = widest_and_needed(&p, &[(1.0, None), (2.0, None)], 1);
+        assert_eq!((i, needed), (Some(0), None));
+        let st = Stopping {
+            rule: "precision".into(),
+            target: "1%".into(),
+            reached: false,
+            trials: 1,
+            max_trials: 1,
+            block: BLOCK,
+            widest: None,
+            widest_entry: Some("ls / random".into()),
+            trials_needed: None,
+        };
+        assert_eq!(
+            st.shortfall().unwrap(),
+            "precision ±1% not reached: stopped at the cap of 1 trial with ls / random's mean \
+             validation error after calibration without an interval"
+        );
     }
 }
