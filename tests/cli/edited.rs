@@ -2,8 +2,8 @@
 //! run of an edited scenario is refused against a run folder and against a `calbench
 //! baseline` file, naming each setting that differs; seed and trials may differ.
 
-use crate::common::{calbench_ok, path_arg, read, root, tmp_dir, write_scenario};
-use crate::guard::{check, run, three_trials};
+use crate::common::{read, root, tmp_dir, write_scenario};
+use crate::guard::{check, run, three_trials_and_baseline};
 
 /// A run of an edited scenario (fewer calibration poses, same name and seed) is refused
 /// against a run folder and against a `calbench baseline` file of the original, naming the
@@ -12,17 +12,15 @@ use crate::guard::{check, run, three_trials};
 #[test]
 fn a_run_of_an_edited_scenario_is_refused_naming_the_setting_that_differs() {
     let dir = tmp_dir("cli-guard-edited");
-    let a = three_trials(&dir);
-    let base = dir.join("base.json");
-    calbench_ok(&["baseline", path_arg(&a), "--out", path_arg(&base)]);
+    let (a, base) = three_trials_and_baseline(&dir);
     let edited = read(&root().join("scenarios/ci-guard.toml"))
         .replace("[calibration]\ncount = 40\n", "[calibration]\ncount = 25\n");
     let edited = write_scenario(&dir, "edited", &edited);
     let b = dir.join("b");
     run(&edited, &b, &["--trials", "3", "--seed", "5"]);
+    let summary = b.join("summary.json");
     for against in [a.join("summary.json"), base.clone()] {
-        let (ok, text) = check(&b.join("summary.json"), &against, &[]);
-        let summary = b.join("summary.json");
+        let (ok, text) = check(&summary, &against, &[]);
         assert!(
             !ok && text.starts_with(&format!("error: {}: scenario: ", summary.display()))
                 && text.contains("calibration.count: 40 → 25")

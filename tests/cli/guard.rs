@@ -5,14 +5,14 @@
 //! another seed is compared from the summaries and passes; `calbench baseline` writes such a
 //! file, and `check` says why a comparison is unpaired and what would pair it.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use crate::common::{
     as_another_version, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir,
     write_scenario,
 };
 
-fn committed() -> std::path::PathBuf {
+fn committed() -> PathBuf {
     root().join("results/baselines/ci-guard.json")
 }
 
@@ -32,7 +32,7 @@ pub(crate) fn run(scenario: &Path, out: &Path, extra: &[&str]) {
 }
 
 /// A run of `scenarios/ci-guard.toml` with 3 trials and seed 5 into `dir/a`.
-pub(crate) fn three_trials(dir: &Path) -> std::path::PathBuf {
+pub(crate) fn three_trials(dir: &Path) -> PathBuf {
     let a = dir.join("a");
     run(
         &root().join("scenarios/ci-guard.toml"),
@@ -40,6 +40,14 @@ pub(crate) fn three_trials(dir: &Path) -> std::path::PathBuf {
         &["--trials", "3", "--seed", "5"],
     );
     a
+}
+
+/// [`three_trials`] and its `calbench baseline` file `dir/base.json`.
+pub(crate) fn three_trials_and_baseline(dir: &Path) -> (PathBuf, PathBuf) {
+    let a = three_trials(dir);
+    let base = dir.join("base.json");
+    calbench_ok(&["baseline", path_arg(&a), "--out", path_arg(&base)]);
+    (a, base)
 }
 
 #[test]
@@ -548,9 +556,7 @@ fn a_summary_no_run_can_have_written_is_refused_by_check_and_compare() {
 #[test]
 fn a_bad_value_deep_in_a_summary_or_baseline_is_named_by_its_own_key_and_line() {
     let dir = tmp_dir("cli-guard-deep");
-    let a = three_trials(&dir);
-    let base = dir.join("base.json");
-    calbench_ok(&["baseline", path_arg(&a), "--out", path_arg(&base)]);
+    let (a, base) = three_trials_and_baseline(&dir);
     let mut s = load_json(&a.join("summary.json"));
     s["results"][0]["validation_after_mm"]["mean"] = "x".into();
     let mut b = load_json(&base);
