@@ -583,6 +583,9 @@ class Comparison:
         regressions: the number of regressions (``calbench check`` fails when it is not 0).
         unresolved: the number of unresolved metrics (``check --strict`` fails on them too).
         verdict: the sentence the compare page leads with.
+        scenario_note: the page's warning when A and B ran different scenarios (by name,
+            or by their settings where both folders say what they ran), which
+            ``calbench check`` refuses to compare; None when they ran one.
         tolerance: the allowed relative worsening.
     """
 
@@ -595,6 +598,7 @@ class Comparison:
         self.regressions = int(fields["regressions"])
         self.unresolved = int((self.metrics["status"] == "unresolved").sum())
         self.verdict = fields["verdict"]
+        self.scenario_note = fields["scenario_note"]
         self.tolerance = tolerance
 
     def __repr__(self):

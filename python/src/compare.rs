@@ -12,7 +12,7 @@ use crate::errors::err;
 
 /// The comparison of run `b` with run `a` (folders or `summary.json` files) at `tolerance`:
 /// a dict with `metrics` (one dict per compared metric, in A's order), `only_in_a`,
-/// `only_in_b`, `regressions` and `verdict`.
+/// `only_in_b`, `regressions`, `verdict` and `scenario_note`.
 #[pyfunction]
 #[pyo3(signature = (a, b, tolerance = 0.05))]
 pub(crate) fn compare<'py>(
@@ -24,7 +24,7 @@ pub(crate) fn compare<'py>(
     calbench::analysis::regression::checked_tolerance(tolerance, "tolerance").map_err(err)?;
     let c = py
         .detach(|| -> calbench::Result<Comparison> {
-            Ok(Comparison::new(Side::read(&a)?, Side::read(&b)?, tolerance))
+            Comparison::new(Side::read(&a)?, Side::read(&b)?, tolerance)
         })
         .map_err(err)?;
     let metrics = PyList::empty(py);
@@ -53,5 +53,6 @@ pub(crate) fn compare<'py>(
     out.set_item("only_in_b", c.only_in(1))?;
     out.set_item("regressions", c.regressions())?;
     out.set_item("verdict", c.verdict())?;
+    out.set_item("scenario_note", c.scenario_note())?;
     Ok(out)
 }

@@ -117,7 +117,14 @@ def test_compare_gives_the_statuses_of_the_command_line(cli, runs, other):
             assert row["trials_needed"] > 0
     assert cmp.regressions == (m["status"] == "regression").sum()
     check = cli("check", b / "summary.json", "--baseline", a / "summary.json", ok=False)
-    assert (check.returncode != 0) == (cmp.regressions > 0), check.stderr
+    if other == "noisy":
+        # check compares one scenario from version to version: the edited tracker is
+        # refused by its setting, which the comparison names too.
+        assert check.returncode != 0 and "tracker.mpe_a_um" in check.stderr, check.stderr
+        assert "tracker.mpe_a_um" in cmp.scenario_note
+    else:
+        assert (check.returncode != 0) == (cmp.regressions > 0), check.stderr
+        assert cmp.scenario_note is None
     # A summary's path is taken as its folder is.
     again = calbench.compare(a / "summary.json", b / "summary.json")
     pd.testing.assert_frame_equal(again.metrics, m)
@@ -139,6 +146,10 @@ def test_compare_tells_noise_from_a_planted_regression(runs):
     assert (rms["status"] == "regression").all() and rms["paired"].all()
     assert (rms["diff_ci_lo"] > 0).all() and (rms["diff"] > 0).all()
     assert noisy.regressions >= 3 and "regressed" in noisy.verdict
+    # Under one name, the edited tracker is named as the page names it.
+    assert noisy.scenario_note.startswith('A and B ran scenario "ci-guard" with other settings (')
+    assert "tracker.mpe_a_um: (none) → 150.0" in noisy.scenario_note
+    assert other.scenario_note is None
     assert f"{noisy.regressions} regressions" in repr(noisy)
 
 

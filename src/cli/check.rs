@@ -54,7 +54,7 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
         )
         .into());
     };
-    let doc = baseline_document(&side.summary, trials, ran(&side)?)?;
+    let doc = baseline_document(&side.summary, trials, scenario_file::ran(&side)?)?;
     calbench::report::output::json_file(&args.out, &doc)?;
     out!(
         "wrote {}: the summary of {} with the per-trial values of {}",
@@ -65,24 +65,12 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
     Ok(())
 }
 
-/// The scenario a side ran (canonical text): the one its baseline file names, else its
-/// folder's `scenario.toml`; `None` when neither is there.
-fn ran(side: &Side) -> calbench::Result<Option<String>> {
-    match &side.scenario {
-        Some(s) => Ok(Some(s.clone())),
-        None => scenario_file::beside(&side.path),
-    }
-}
-
 /// Refuses, naming the summary, a run of another scenario than the baseline's when both
 /// say what they ran: other settings draw other robots and poses, so the change is not the
 /// program's, and trial `i` of one is not trial `i` of the other. The seed and the trials
 /// may differ (the comparison is then unpaired).
 fn same_scenario(baseline: &Side, summary: &Side) -> calbench::Result<()> {
-    let (Some(a), Some(b)) = (ran(baseline)?, ran(summary)?) else {
-        return Ok(());
-    };
-    let apart = scenario_file::differences(&a, &b);
+    let apart = scenario_file::settings_apart(baseline, summary)?;
     if apart.is_empty() {
         return Ok(());
     }

@@ -30,7 +30,7 @@ pub struct CompareArgs {
 pub fn run(args: &CompareArgs) -> Result<()> {
     let tolerance = args.tolerance.checked()?;
     super::guard_out(&args.out, &OUTPUTS, [&args.a, &args.b])?;
-    let c = Comparison::new(Side::read(&args.a)?, Side::read(&args.b)?, tolerance);
+    let c = Comparison::new(Side::read(&args.a)?, Side::read(&args.b)?, tolerance)?;
     write(&c, &args.out)?;
     let missing = c.all().len() - c.rows().len();
     out!(

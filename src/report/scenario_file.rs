@@ -3,6 +3,7 @@
 //! one comment line giving the SHA-256 of that text, so that `calbench record` stores what
 //! ran and refuses a scenario file that differs, and an edited copy is told by its hash.
 
+use crate::analysis::regression::Side;
 use crate::calibrate::task::sha256::sha256_hex;
 use crate::error::{Error, Result};
 use crate::study::scenario::Scenario;
@@ -70,6 +71,25 @@ pub fn beside(summary: &std::path::Path) -> Result<Option<String>> {
     }
     let text = crate::error::read_text(&file)?;
     read(&text, &file).map(|(body, _)| Some(body))
+}
+
+/// The scenario the run of `side` ran (canonical text): the one its baseline file records
+/// ([`Side::scenario`]), else the `scenario.toml` beside its summary ([`beside`]); `None`
+/// when neither says.
+pub fn ran(side: &Side) -> Result<Option<String>> {
+    match &side.scenario {
+        Some(s) => Ok(Some(s.clone())),
+        None => beside(&side.path),
+    }
+}
+
+/// What the runs of `a` and `b` ran differently ([`differences`] of [`ran`]); empty when
+/// they ran one scenario or either does not say what it ran.
+pub fn settings_apart(a: &Side, b: &Side) -> Result<Vec<String>> {
+    Ok(match (ran(a)?, ran(b)?) {
+        (Some(a), Some(b)) => differences(&a, &b),
+        _ => Vec::new(),
+    })
 }
 
 /// What two scenarios as run (canonical texts) set differently, other than the keys that

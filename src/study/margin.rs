@@ -10,7 +10,11 @@ use crate::numeric::Real;
 /// "Tests and margins").
 #[serde_with::skip_serializing_none]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(
+    deny_unknown_fields,
+    expecting = "a table of `relative` (a fraction, 0.01 for 1 %) or `absolute` (in the \
+                 metric's unit) or both, as `{ relative = 0.25 }`"
+)]
 pub struct Margin {
     /// A fraction of the reference (0.01: 1 %).
     pub relative: Option<Real>,

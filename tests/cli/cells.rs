@@ -405,3 +405,43 @@ fn registration_and_instruments_studies_are_recorded_and_history_and_the_board_r
     );
     assert_eq!(number(&db, "SELECT COUNT(*) FROM runs"), 4);
 }
+
+/// A folder named `report.html` in `--out` (docs/formats.md § 1.7): a registration study,
+/// which writes no `report.html`, runs and leaves it; an instruments study finds it once its
+/// work is done, as a Monte-Carlo run finds a plot's name taken, and writes nothing.
+#[test]
+fn a_report_html_folder_concerns_only_the_study_that_writes_one() {
+    let dir = tmp_dir("cells-report-html");
+    let fig3 = root().join("scenarios/ban-fig3.toml");
+    let instruments = write_scenario(&dir, "s.toml", INSTRUMENTS);
+    for (sc, writes) in [(&fig3, false), (&instruments, true)] {
+        let out = dir.join(format!("out-{writes}"));
+        std::fs::create_dir_all(out.join("report.html")).unwrap();
+        let args = ["run", path_arg(sc), "--trials", "2", "--threads", "1"];
+        let o = calbench(&[&args[..], &["--out", path_arg(&out)]].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        let names = |d: &Path| -> Vec<String> {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        if writes {
+            assert!(
+                !o.status.success()
+                    && err.contains(
+                        "report.html is a folder where an output file of that name \
+                                     is to be written; nothing was written"
+                    ),
+                "{err}"
+            );
+            assert_eq!(names(&out), ["report.html"]);
+        } else {
+            assert!(o.status.success(), "{err}");
+            assert!(names(&out).contains(&"summary.json".to_string()));
+            assert!(out.join("report.html").is_dir());
+        }
+    }
+}

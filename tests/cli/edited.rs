@@ -1,8 +1,9 @@
 //! `calbench check` compares one scenario from version to version (docs/formats.md § 2.4): a
 //! run of an edited scenario is refused against a run folder and against a `calbench
-//! baseline` file, naming each setting that differs; seed and trials may differ.
+//! baseline` file, naming each setting that differs; seed and trials may differ. `calbench
+//! compare` (§ 2.13) compares such a pair all the same, warning with the same settings.
 
-use crate::common::{read, root, tmp_dir, write_scenario};
+use crate::common::{calbench_ok, path_arg, read, root, tmp_dir, write_scenario};
 use crate::guard::{check, run, three_trials_and_baseline};
 
 /// A run of an edited scenario (fewer calibration poses, same name and seed) is refused
@@ -28,6 +29,30 @@ fn a_run_of_an_edited_scenario_is_refused_naming_the_setting_that_differs() {
                 && !text.contains("seed:"),
             "{text}"
         );
+    }
+    // compare compares the pair, and its pages name the setting; the same scenario is not
+    // warned of.
+    for (against, warned) in [(&a, false), (&b, true)] {
+        let out = dir.join(format!("compare-{warned}"));
+        calbench_ok(&[
+            "compare",
+            path_arg(&a),
+            path_arg(against),
+            "--out",
+            path_arg(&out),
+        ]);
+        let note = "A and B ran scenario \"ci-guard\" with other settings \
+                    (calibration.count: 40 → 25): calbench check refuses such a pair";
+        for page in ["compare.md", "compare.html"] {
+            let text = read(&out.join(page));
+            assert_eq!(
+                text.contains(
+                    &note.replace('"', if page == "compare.md" { "\"" } else { "&quot;" })
+                ),
+                warned,
+                "{page}: {text}"
+            );
+        }
     }
     // The same scenario on another seed and trial count: compared, unpaired.
     let c = dir.join("c");

@@ -490,8 +490,8 @@ fn per_trial_values_not_behind_their_summary_are_refused_and_an_unpaired_entry_i
     assert_eq!(text.matches("unpaired:").count(), 1, "{text}");
 }
 
-/// A summary no run can have written — 0 trials, an interval with its ends reversed, a
-/// negative RMS — is refused by `check` (as the run and as the baseline) and by `compare`,
+/// A summary no run can have written — 0 trials, a key no summary has, an interval with its
+/// ends reversed, a negative RMS — is refused by `check` (as the run and as the baseline) and by `compare`,
 /// naming the file and the key, as `record` refuses it; they had compared it. A figure scaled
 /// by hand beyond its interval (a "what if") is compared, and found a regression.
 #[test]
@@ -510,8 +510,17 @@ fn a_summary_no_run_can_have_written_is_refused_by_check_and_compare() {
         !ok && text.contains("regression: ") && text.contains("validation_after_mm.mean"),
         "{text}"
     );
-    let edits: [Edit; 3] = [
+    let edits: [Edit; 4] = [
         ("zero", "trials", &|d| d["trials"] = 0.into()),
+        // A misspelt key: passed over, it had left the trials unknown.
+        (
+            "misspelt",
+            "trails: is not a key of a calbench summary",
+            &|d| {
+                let n = d.as_object_mut().unwrap().remove("trials").unwrap();
+                d["trails"] = n;
+            },
+        ),
         ("reversed", "validation_after_mm.rms", &|d| {
             let ci = &mut d["results"][0]["validation_after_mm"]["rms_ci95"];
             *ci = serde_json::json!([ci[1], ci[0]]);

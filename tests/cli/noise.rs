@@ -62,6 +62,73 @@ fn line<'t>(text: &'t str, entry: &str, metric: &str) -> &'t str {
         .unwrap_or("")
 }
 
+/// The README's "Noise or a real difference" quotes these runs (its commands are theirs):
+/// IGG3's and LS's validation RMS after with their intervals from `a`'s summary, their paired
+/// comparison (the mean difference with its interval, the win rate, and the test that
+/// decides with its median, interval and Holm-adjusted p), and `check`'s tally of `b`
+/// against `a` (`check_text`).
+fn readme_quotes(a: &Path, check_text: &str) {
+    let readme = read(&root().join("README.md"));
+    let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
+    let s: serde_json::Value = serde_json::from_str(&read(&a.join("summary.json"))).unwrap();
+    let f4 = |v: &serde_json::Value| format!("{:.4}", v.as_f64().unwrap());
+    let rms = |method: &str| {
+        let e = s["results"].as_array().unwrap().iter();
+        let e = e.clone().find(|e| e["method"] == method).unwrap();
+        let v = &e["validation_after_mm"];
+        let ci = &v["rms_ci95"];
+        (f4(&v["rms"]), f4(&ci[0]), f4(&ci[1]))
+    };
+    let pair = s["comparisons"].as_array().unwrap().iter().find(|c| {
+        c["a"] == "ls / random"
+            && c["b"] == "igg3 / random"
+            && c["metric"] == "validation_after_mm.rms"
+    });
+    let pair = pair.unwrap();
+    let neg = |v: &serde_json::Value| format!("{:.4}", -v.as_f64().unwrap());
+    let (igg3, ls) = (rms("igg3"), rms("ls"));
+    assert_eq!(pair["test"], "sign", "{pair}");
+    let tally = check_text
+        .lines()
+        .find(|l| l.contains(" metrics compared ("));
+    let tally = tally.unwrap_or_else(|| panic!("no tally: {check_text}"));
+    let count = |what: &str| {
+        let at = tally
+            .find(what)
+            .unwrap_or_else(|| panic!("{what}: {tally}"));
+        tally[..at].rsplit([' ', '(']).next().unwrap().to_string()
+    };
+    for quote in [
+        format!("In {TRIALS} trials of `scenarios/ci-guard.toml`"),
+        format!("is {} mm (`rms_ci95` [{}, {}])", igg3.0, igg3.1, igg3.2),
+        format!("against LS's {} mm ([{}, {}])", ls.0, ls.1, ls.2),
+        format!(
+            "lower by {} mm on average [{}, {}] and wins {} % of the trials",
+            neg(&pair["diff_mean"]),
+            neg(&pair["diff_ci95"][1]),
+            neg(&pair["diff_ci95"][0]),
+            (100.0 * pair["win_rate"].as_f64().unwrap()).round()
+        ),
+        format!(
+            "the sign test of their median decides (docs/formats.md, \"Tests and margins\"): {} \
+             mm [{}, {}], Holm-adjusted p = {:.0e}, `{}` in the report's comparison table",
+            f4(&pair["estimate"]),
+            f4(&pair["ci95"][0]),
+            f4(&pair["ci95"][1]),
+            pair["p_holm"].as_f64().unwrap(),
+            pair["verdict"].as_str().unwrap()
+        ),
+        format!(
+            "{} of the {} metrics `no change`, {} parameter RMSEs `unresolved`",
+            count(" no change"),
+            tally.split(' ').next().unwrap(),
+            count(" unresolved")
+        ),
+    ] {
+        assert!(readme.contains(&quote), "README.md does not say: {quote}");
+    }
+}
+
 #[test]
 fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
     let dir = tmp_dir("cli-noise");
@@ -76,6 +143,7 @@ fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
         "{text}"
     );
     assert!(text.contains("(0 paired): 0 regression"), "{text}");
+    readme_quotes(&a, &text);
     let cmp = dir.join("cmp");
     let o = calbench_ok(&[
         "compare",

@@ -88,7 +88,7 @@ fn the_files_of_run_and_compare_are_those_of_their_outputs() {
         "--out",
         path_arg(&cmp),
     ]);
-    let c = Comparison::new(Side::read(&a).unwrap(), Side::read(&b).unwrap(), 0.05);
+    let c = Comparison::new(Side::read(&a).unwrap(), Side::read(&b).unwrap(), 0.05).unwrap();
     let outputs = compare_outputs(&c);
     let names: BTreeSet<String> = file_names(&outputs).into_iter().collect();
     assert_eq!(files_in(&cmp), names);

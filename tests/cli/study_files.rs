@@ -146,8 +146,8 @@ fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
 /// A claim's `value` that is a table, a `family` that can be no claim's id, and a
 /// `paper_point` given without a sweep or not among the sweep's points are refused when the
 /// scenario is read, naming the file, the line and the claim's key; so are a `~` without its
-/// `tolerance` (at the claim's line) and an `about` that is neither mean nor median (at its
-/// own); nothing is written.
+/// `tolerance` (at the claim's line), a `tolerance` that is not a table and an `about` that is
+/// neither mean nor median (at their own); nothing is written.
 #[test]
 fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line() {
     let d = tmp("claim-keys");
@@ -197,6 +197,15 @@ fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line()
             "[[claims]]",
             "claims[0].tolerance",
             "a point value (`~`) needs its band",
+        ),
+        // A band that is not a table: what it should be is said (serde said "expected
+        // struct Margin").
+        (
+            "band-number",
+            claim("").replace("tolerance = { relative = 0.25 }", "tolerance = 0.25"),
+            "tolerance = ",
+            "claims[0].tolerance",
+            "expected a table of `relative` (a fraction, 0.01 for 1 %) or `absolute`",
         ),
         // A value serde refuses: at its own line (it was placed at the [[claims]] line).
         (

@@ -192,8 +192,8 @@ pub struct Side {
     /// Its per-trial values, when it has them.
     pub trials: Option<Trials>,
     /// The scenario the run ran (canonical text), when a baseline file names it
-    /// ([`PerTrial::scenario`]); a run folder's is its `scenario.toml`, which `check` reads
-    /// (`report::scenario_file::beside`, a layer above this one).
+    /// ([`PerTrial::scenario`]); a run folder's is its `scenario.toml`, which `check` and
+    /// `compare` read (`report::scenario_file::ran`, a layer above this one).
     pub scenario: Option<String>,
 }
 

@@ -16,17 +16,15 @@
 
 pub mod baseline;
 pub mod noise;
+mod read;
 pub mod tolerance;
 pub mod trials_csv;
 
 use std::fmt;
 use std::path::Path;
 
-use serde_json::Value;
-
-use crate::analysis::figures;
 use crate::analysis::summary::Summary;
-use crate::error::{read_text, Error, Result};
+use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::study::stats::Entry;
 pub use baseline::{
@@ -34,6 +32,7 @@ pub use baseline::{
 };
 use noise::Change;
 pub use noise::{pairable, Status, Trials};
+pub use read::{check_summary, check_summary_for, read_json, read_summary};
 use tolerance::regressed;
 pub use tolerance::{checked_tolerance, MAX_TOLERANCE};
 
@@ -278,71 +277,6 @@ pub fn entry_names(summary: &Summary) -> Vec<String> {
     summary.results.iter().map(Entry::key).collect()
 }
 
-/// Reads the JSON `value` of the file `path` as a calbench summary ([`Summary`], by serde),
-/// refusing, naming the file and the key (with its line where the file writes it), what is
-/// not one: not an object with a `scenario` name and `results`, a list of entries each naming
-/// its `method`; a figure of the wrong type; a later format; figures no run writes
-/// ([`figures::check_figures`] for [`figures::Reader::Compare`]).
-pub fn check_summary(value: Value, path: &Path) -> Result<Summary> {
-    check_summary_for(value, path, figures::Reader::Compare).map(|(s, _)| s)
-}
-
-/// [`check_summary`] with its figures checked for `reader`, returned with the summary
-/// ([`figures::of_summary`]).
-pub fn check_summary_for(
-    value: Value,
-    path: &Path,
-    reader: figures::Reader,
-) -> Result<(Summary, Vec<figures::Figure>)> {
-    // A study of cells writes its `kind` and `cells` where a Monte-Carlo study writes
-    // `results`: a calbench summary, of another kind.
-    if let (Some(kind), None) = (
-        value.get("kind").and_then(Value::as_str),
-        value.get("results"),
-    ) {
-        let msg = format!(
-            "is \"{kind}\": the summary of a study of cells, which `check`, `compare` and \
-             `baseline` do not compare (they compare the `results` of a Monte-Carlo study's \
-             summary); `record` and `history` follow such a study cell by cell"
-        );
-        return Err(Error::file(path, "kind", msg).at_json_key_line());
-    }
-    let what = "so this is not a calbench summary (summary.json from `calbench run`: an object \
-                with a `scenario` name and `results`, a list of entries with `method`, `poses` \
-                and metrics)";
-    let s = Summary::from_value(value, path).map_err(|e| {
-        match e {
-            Error::File { file, place, msg } if place != "format" => {
-                Error::file(file, place, format!("{msg}, {what}"))
-            }
-            e => e,
-        }
-        .at_json_key_line()
-    })?;
-    // Entries are paired by their key: a second one of a key would be paired or passed over
-    // by where it stands.
-    for (i, e) in s.results.iter().enumerate() {
-        let first = s.results[..i].iter().position(|f| f.key() == e.key());
-        let why = match first {
-            _ if e.method.is_empty() => format!("is an entry without a `method` name, {what}"),
-            Some(j) => format!(
-                "is a second entry of {} (the first is results[{j}]): a summary has one entry \
-                 per method, poses and sweep value",
-                e.key()
-            ),
-            None => continue,
-        };
-        return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
-    }
-    let figures = figures::of_summary(&s)?;
-    let at = |entry: &str| {
-        let i = s.results.iter().position(|e| e.key() == entry)?;
-        Some(format!("results[{i}]"))
-    };
-    figures::check_figures(path, s.trials, &figures, reader, &at)?;
-    Ok((s, figures))
-}
-
 /// Refuses a summary and a baseline (each read by [`check_summary`]) that cannot be compared,
 /// naming the file, the key and its line: they are summaries of
 /// different scenarios (their `scenario` names differ), or they share no
@@ -474,21 +408,10 @@ fn present(e: &Entry, path: &str) -> bool {
             .is_some_and(|(v, _)| !v.is_nan() || Metric::ParamRmse.parameter_of(path).is_some())
 }
 
-/// Reads a JSON file.
-pub fn read_json(path: &Path) -> Result<Value> {
-    let text = read_text(path)?;
-    crate::error::json_value(path, &text)
-}
-
-/// Reads the summary file `path` ([`check_summary`]).
-pub fn read_summary(path: &Path) -> Result<Summary> {
-    check_summary(read_json(path)?, path)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_json::json;
+    use serde_json::{json, Value};
 
     fn doc(eta: Real, rms: Real) -> Value {
         json!({"scenario": "s", "results": [{"method": "ls", "poses": "random", "eta_mean_pct": eta,
@@ -654,7 +577,9 @@ mod tests {
     fn the_line_of_results_is_named() {
         let dir = crate::test_dir("check");
         let path = dir.join("s.json");
-        let text = "{\n  \"a\": {\"results\": 1},\n  \"b\": \"results\",\n  \"results\": []\n}\n";
+        // Two keys before it that hold "results" as a key and as a text.
+        let text = "{\n  \"separation\": {\"results\": 1},\n  \"description\": \"results\",\n  \
+                    \"results\": []\n}\n";
         std::fs::write(&path, text).unwrap();
         assert_eq!(crate::error::json_key_line(text, "results"), Some(4));
         assert_eq!(crate::error::json_key_line(text, "scenario"), None);

@@ -17,6 +17,7 @@ use crate::numeric::Real;
 use crate::report::markdown::{fmt_num, inline, table};
 use crate::report::output::{Outputs, Text};
 use crate::report::plots::{changes_svg, ChangePoint};
+use crate::report::scenario_file;
 
 impl Side {
     /// The run as the page names it: its file, scenario, trials and seed (`?` for what the
@@ -42,18 +43,24 @@ pub struct Comparison {
     /// Allowed relative worsening (0.05 = 5 %).
     pub tolerance: Real,
     all: Vec<Compared>,
+    /// The settings A and B ran differently ([`scenario_file::settings_apart`]).
+    apart: Vec<String>,
 }
 
 impl Comparison {
-    /// Compares run `b` with run `a` at `tolerance`.
-    pub fn new(a: Side, b: Side, tolerance: Real) -> Comparison {
+    /// Compares run `b` with run `a` at `tolerance`, reading what each ran
+    /// ([`scenario_file::ran`]: a `scenario.toml` with a wrong hash line is refused, as by
+    /// `check`).
+    pub fn new(a: Side, b: Side, tolerance: Real) -> Result<Comparison> {
         let pairs = a.trials.as_ref().zip(b.trials.as_ref());
         let all = compare_with(&b.summary, &a.summary, tolerance, pairs);
-        Comparison {
+        let apart = scenario_file::settings_apart(&a, &b)?;
+        Ok(Comparison {
             runs: [a, b],
             tolerance,
             all,
-        }
+            apart,
+        })
     }
 
     /// The entries of run `i` (0: A, 1: B) that the other run lacks. `check` counts each
@@ -175,17 +182,27 @@ impl Comparison {
         }
     }
 
-    fn scenario_note(&self) -> Option<String> {
+    /// The warning the pages give when A and B ran different scenarios (by name, or by
+    /// their settings where both say what they ran), which `check` refuses to compare.
+    pub fn scenario_note(&self) -> Option<String> {
         let (sa, sb) = (
             &self.runs[0].summary.scenario,
             &self.runs[1].summary.scenario,
         );
-        (sa != sb).then(|| {
+        let which = if sa != sb {
+            format!("A is a run of scenario \"{sa}\" and B of scenario \"{sb}\"")
+        } else if !self.apart.is_empty() {
             format!(
-                "A is a run of scenario \"{sa}\" and B of scenario \"{sb}\": calbench check refuses \
-                 such a pair; the entries are compared by name all the same."
+                "A and B ran scenario \"{sa}\" with other settings ({})",
+                self.apart.join("; ")
             )
-        })
+        } else {
+            return None;
+        };
+        Some(format!(
+            "{which}: calbench check refuses such a pair; the entries are compared by name all \
+             the same."
+        ))
     }
 
     /// The entries in only one run: name and `A only` or `B only`.
@@ -390,7 +407,7 @@ mod tests {
     fn regressions_are_those_of_check_and_lone_entries_are_listed() {
         let (a, b) = (side(90.0, &["ls", "lm"]), side(80.0, &["ls", "igg3"]));
         let expected = crate::analysis::regression::compare(&b.summary, &a.summary, 0.05).len();
-        let c = Comparison::new(a, b, 0.05);
+        let c = Comparison::new(a, b, 0.05).unwrap();
         assert_eq!(c.regressions(), expected);
         assert_eq!(c.only_in(0), ["lm / random"]);
         assert_eq!(c.only_in(1), ["igg3 / random"]);
@@ -406,7 +423,7 @@ mod tests {
         let line = |entry: &str| md.lines().find(|l| l.contains(entry)).unwrap_or_default();
         assert!(line("lm / random").contains("A only"), "{md}");
         assert!(line("igg3 / random").contains("B only"), "{md}");
-        let same = Comparison::new(side(90.0, &["ls"]), side(90.0, &["ls"]), 0.05);
+        let same = Comparison::new(side(90.0, &["ls"]), side(90.0, &["ls"]), 0.05).unwrap();
         assert_eq!(same.regressions(), 0);
         assert!(!same.page().finish().contains("class=\"regressed\""));
         assert!(c.page().finish().contains("<tr class=\"regressed\">"));
