@@ -55,6 +55,39 @@ fn check(new: &Path, base: &Path, extra: &[&str]) -> (bool, String) {
     (o.status.success(), text)
 }
 
+/// The rows of a `compare.md` (status, interval of the change, Holm-adjusted p), each
+/// resolved one (a regression, an improvement, a change within tolerance) checked to have an
+/// interval that excludes zero, as docs/formats.md § 8.4 defines them.
+fn statuses_agree_with_their_intervals(md: &str) -> Vec<(String, [f64; 2], f64)> {
+    let mut rows = Vec::new();
+    for line in md.lines() {
+        let cells: Vec<&str> = line.trim_matches('|').split('|').map(str::trim).collect();
+        if cells.len() != 10 || !cells[7].starts_with('[') {
+            continue;
+        }
+        let ci: Vec<f64> = cells[7]
+            .trim_matches(|c| c == '[' || c == ']')
+            .split(", ")
+            .map(|x| x.parse().unwrap())
+            .collect();
+        let resolved = ["regression", "improved", "changed"]
+            .iter()
+            .any(|s| cells[6].starts_with(s));
+        assert!(
+            !resolved || ci[0] > 0.0 || ci[1] < 0.0,
+            "{} beside an interval holding zero: {line}",
+            cells[6]
+        );
+        rows.push((
+            cells[6].to_string(),
+            [ci[0], ci[1]],
+            cells[8].parse().unwrap(),
+        ));
+    }
+    assert!(!rows.is_empty(), "no rows in\n{md}");
+    rows
+}
+
 /// The line of `text` about `metric` of `entry`.
 fn line<'t>(text: &'t str, entry: &str, metric: &str) -> &'t str {
     text.lines()
@@ -110,13 +143,14 @@ fn readme_quotes(a: &Path, check_text: &str) {
             (100.0 * pair["win_rate"].as_f64().unwrap()).round()
         ),
         format!(
-            "the sign test of their median decides (docs/formats.md, \"Tests and margins\"): {} \
-             mm [{}, {}], Holm-adjusted p = {:.0e}, `{}` in the report's comparison table",
+            "the verdict is the sign test's, on their median (docs/formats.md, \"Tests and \
+             margins\"): {} mm [{}, {}], `{}` in the report's comparison table, whose \
+             Holm-adjusted Wilcoxon p is {:.0e}",
             f4(&pair["estimate"]),
             f4(&pair["ci95"][0]),
             f4(&pair["ci95"][1]),
-            pair["p_holm"].as_f64().unwrap(),
-            pair["verdict"].as_str().unwrap()
+            pair["verdict"].as_str().unwrap(),
+            pair["p_holm"].as_f64().unwrap()
         ),
         format!(
             "{} of the {} metrics `no change`, {} parameter RMSEs `unresolved`",
@@ -190,6 +224,28 @@ fn another_seed_is_no_regression_and_a_planted_one_is_caught() {
     ]);
     let md = read(&cmp2.join("compare.md"));
     assert!(md.contains("metrics of B regressed"), "{md}");
+    statuses_agree_with_their_intervals(&md);
+
+    // Three times: the rank test rejects on some parameters' squared errors whose interval
+    // still holds zero; those are unresolved, never a regression beside that interval.
+    let three = dir.join("three");
+    run(&scenario(&dir, 3.0), "42", &three);
+    as_another_version(&three);
+    let cmp3 = dir.join("cmp3");
+    calbench_ok(&[
+        "compare",
+        path_arg(&a),
+        path_arg(&three),
+        "--out",
+        path_arg(&cmp3),
+    ]);
+    let rows = statuses_agree_with_their_intervals(&read(&cmp3.join("compare.md")));
+    assert!(rows.iter().any(|r| r.0 == "regression"), "{rows:?}");
+    assert!(
+        rows.iter()
+            .any(|r| r.0.starts_with("unresolved") && r.2 < 0.01 && r.1[0] <= 0.0),
+        "{rows:?}"
+    );
 
     // 1.5 times: a real change of the validation error within the tolerance.
     let mild = dir.join("mild");

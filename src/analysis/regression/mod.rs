@@ -132,7 +132,9 @@ pub struct Compared {
     /// ([`ALPHA`] / its Holm step), in the metric's units; `None` for a missing metric.
     /// Unpaired it is the t (Welch) interval, which excludes zero exactly when the step
     /// rejects; paired it is the interval of the test the report's comparison of the pair
-    /// uses ([`Change::interval`]): of the mean (t), or of the median (sign) — `median`.
+    /// uses ([`Change::interval`]): of the mean (t), or of the median (sign) — `median`. A
+    /// change is resolved ([`Status`]) when the step rejects and this interval excludes zero.
+    /// (Paired, the step's rank test can reject where it does not.)
     pub diff_ci: Option<[Real; 2]>,
     /// The two-sided p-value of "no change" (NaN for a missing metric).
     pub p_value: Real,
@@ -253,7 +255,13 @@ pub fn compare_with(
             tolerance * base.abs() / value.abs().max(Real::MIN_POSITIVE),
             dir,
         );
-        let significant = p_holm[i] < ALPHA;
+        // Rejected by the Holm step and shown so: the interval at the step's level leaves
+        // zero out. The paired rank test may reject where the interval of the report's test
+        // of the pair (the mean's t, or the median's) still holds zero; such a change is not
+        // resolved.
+        let interval = change.interval(ALPHA / steps[i] as Real);
+        let excludes_zero = interval[0] > 0.0 || interval[1] < 0.0;
+        let significant = p_holm[i] < ALPHA && excludes_zero;
         c.status = match (worse, better, significant) {
             (true, _, true) => Status::Regression,
             (true, _, false) => Status::Unresolved,
@@ -264,7 +272,7 @@ pub fn compare_with(
         c.regressed = c.status == Status::Regression;
         c.p_value = p[i];
         c.p_holm = p_holm[i];
-        c.diff_ci = Some(change.interval(ALPHA / steps[i] as Real));
+        c.diff_ci = Some(interval);
         if c.status == Status::Unresolved {
             c.trials_needed = change.trials_needed(tolerance * base.abs(), ALPHA / m as Real);
         }
