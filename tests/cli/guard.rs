@@ -60,6 +60,9 @@ fn the_tracker_ten_times_noisier_on_the_baselines_seed_fails_against_the_committ
     let noisy = write_scenario(&dir, "noisy", &noisy);
     let out = dir.join("bad");
     run(&noisy, &out, &["--threads", "2"]);
+    // The committed baseline records its scenario: the edited one stands for another
+    // version of the program.
+    as_another_version(&out);
     let base = load_json(&committed());
     assert_eq!(
         load_json(&out.join("summary.json"))["seed"],
