@@ -7,8 +7,8 @@
 use std::path::Path;
 
 use crate::common::{
-    calbench, calbench_ok, kill_once_checkpointed, load_json, merge, one_line_naming, path_arg,
-    read, resummed, root, tmp_dir, write_scenario,
+    calbench, calbench_ok, files_in, kill_once_checkpointed, load_json, merge, one_line_naming,
+    path_arg, read, resummed, root, tmp_dir, write_scenario,
 };
 
 /// The files of a registration study.
@@ -420,14 +420,6 @@ fn a_report_html_folder_concerns_only_the_study_that_writes_one() {
         let args = ["run", path_arg(sc), "--trials", "2", "--threads", "1"];
         let o = calbench(&[&args[..], &["--out", path_arg(&out)]].concat());
         let err = String::from_utf8_lossy(&o.stderr);
-        let names = |d: &Path| -> Vec<String> {
-            let mut v: Vec<String> = std::fs::read_dir(d)
-                .unwrap()
-                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-                .collect();
-            v.sort();
-            v
-        };
         if writes {
             assert!(
                 !o.status.success()
@@ -437,10 +429,10 @@ fn a_report_html_folder_concerns_only_the_study_that_writes_one() {
                     ),
                 "{err}"
             );
-            assert_eq!(names(&out), ["report.html"]);
+            assert_eq!(files_in(&out), ["report.html".to_string()].into());
         } else {
             assert!(o.status.success(), "{err}");
-            assert!(names(&out).contains(&"summary.json".to_string()));
+            assert!(files_in(&out).contains("summary.json"));
             assert!(out.join("report.html").is_dir());
         }
     }

@@ -6,7 +6,8 @@
 use std::path::{Path, PathBuf};
 
 use crate::common::{
-    as_another_version, calbench, calbench_ok, path_arg, read, root, tmp_dir, write_scenario,
+    as_another_version, calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir,
+    write_scenario,
 };
 
 /// Trials per run: enough for the seed-to-seed noise of the guarded metrics to stay inside
@@ -97,17 +98,17 @@ fn line<'t>(text: &'t str, entry: &str, metric: &str) -> &'t str {
 
 /// The README's "Noise or a real difference" quotes these runs (its commands are theirs):
 /// IGG3's and LS's validation RMS after with their intervals from `a`'s summary, their paired
-/// comparison (the mean difference with its interval, the win rate, and the test that
-/// decides with its median, interval and Holm-adjusted p), and `check`'s tally of `b`
+/// comparison (the mean difference with its interval, the win rate, the sign test's median
+/// and interval with the verdict, the Holm-adjusted Wilcoxon p), and `check`'s tally of `b`
 /// against `a` (`check_text`).
 fn readme_quotes(a: &Path, check_text: &str) {
     let readme = read(&root().join("README.md"));
     let readme = readme.split_whitespace().collect::<Vec<_>>().join(" ");
-    let s: serde_json::Value = serde_json::from_str(&read(&a.join("summary.json"))).unwrap();
+    let s = load_json(&a.join("summary.json"));
     let f4 = |v: &serde_json::Value| format!("{:.4}", v.as_f64().unwrap());
     let rms = |method: &str| {
-        let e = s["results"].as_array().unwrap().iter();
-        let e = e.clone().find(|e| e["method"] == method).unwrap();
+        let results = s["results"].as_array().unwrap();
+        let e = results.iter().find(|e| e["method"] == method).unwrap();
         let v = &e["validation_after_mm"];
         let ci = &v["rms_ci95"];
         (f4(&v["rms"]), f4(&ci[0]), f4(&ci[1]))

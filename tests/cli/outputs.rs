@@ -13,15 +13,7 @@ use calbench::runner::run::InMemoryRun;
 use calbench::study::scenario::Scenario;
 use calbench::study::RunOptions;
 
-use crate::common::{calbench_ok, path_arg, read, root, tmp_dir, write_scenario};
-
-/// The names of the files in `dir`.
-fn files_in(dir: &Path) -> BTreeSet<String> {
-    std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect()
-}
+use crate::common::{calbench_ok, files_in, path_arg, read, root, tmp_dir, write_scenario};
 
 /// Runs the scenario `sc` with `calbench run --out OUT` and checks that OUT holds exactly the
 /// files of the run's outputs (the same study held in memory): `trials.csv` and the names of

@@ -6,7 +6,7 @@
 
 use std::path::Path;
 
-use crate::common::{calbench, path_arg, tmp_dir, write_scenario, SMALL_STUDY};
+use crate::common::{calbench, files_in, path_arg, tmp_dir, write_scenario, SMALL_STUDY};
 
 /// Runs `args`, which must be refused naming each of `words`, and checks that `dir` holds
 /// exactly `kept` afterwards.
@@ -17,11 +17,7 @@ fn refused_leaving(args: &[&str], words: &[&str], dir: &Path, kept: &[&str]) {
     for w in words {
         assert!(err.contains(w), "{args:?}: {w} not in {err}");
     }
-    let mut left: Vec<String> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    left.sort();
+    let left: Vec<String> = files_in(dir).into_iter().collect();
     assert_eq!(left, kept, "{args:?} left folders behind");
 }
 

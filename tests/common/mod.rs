@@ -166,6 +166,14 @@ pub fn merge(shards: &[&Path], out: &Path) -> Output {
     calbench_ok(&args)
 }
 
+/// The names of the files in `dir`, sorted.
+pub fn files_in(dir: &Path) -> std::collections::BTreeSet<String> {
+    std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect()
+}
+
 /// The text of a file; a failure names the file.
 pub fn read(p: &Path) -> String {
     std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
