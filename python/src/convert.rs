@@ -53,31 +53,52 @@ pub(crate) type Unreal = Option<(&'static str, String)>;
 
 /// `a` as numpy reads it (`numpy.asarray`) and whether its values are not real numbers
 /// ([`Unreal`]): bools, complex numbers, dates and text (`"10"` would convert to 10, a
-/// column of names to an error about one of them). A Python error when numpy cannot read it.
+/// column of names to an error about one of them), whether the array is of them or only holds
+/// one among numbers: an object array (a DataFrame with a bool column), or nested lists that
+/// numpy would read as numbers (`[[True, 0.5]]` as `[[1.0, 0.5]]`). A Python error when numpy
+/// cannot read it.
 pub(crate) fn as_numpy<'py>(a: &Bound<'py, PyAny>) -> PyResult<(Bound<'py, PyAny>, Unreal)> {
-    let raw = a.py().import("numpy")?.call_method1("asarray", (a,))?;
+    let numpy = a.py().import("numpy")?;
+    let raw = numpy.call_method1("asarray", (a,))?;
     let dtype = raw.getattr("dtype")?;
-    let what = match dtype.getattr("kind")?.extract::<String>()?.as_str() {
-        "b" => "bool",
-        "c" => "complex",
-        "U" | "S" => "text",
-        "M" | "m" => "date or time",
-        "O" if holds_text(&raw)? => "text",
-        _ => return Ok((raw, None)),
+    let kind = dtype.getattr("kind")?.extract::<String>()?;
+    let what = match kind.as_str() {
+        "b" => Some("bool"),
+        "c" => Some("complex"),
+        "U" | "S" => Some("text"),
+        "M" | "m" => Some("date or time"),
+        "O" => held(&raw)?,
+        // Lists and tuples numpy read as numbers, each item as it was given.
+        _ if a.is_instance_of::<PyList>() || a.is_instance_of::<PyTuple>() => {
+            let object = numpy.getattr("object_")?;
+            held(&numpy.call_method1("asarray", (a, object))?)?
+        }
+        _ => None,
+    };
+    let Some(what) = what else {
+        return Ok((raw, None));
     };
     let name: String = dtype.getattr("name")?.extract()?;
     Ok((raw, Some((what, name))))
 }
 
-/// Whether an object array holds a string or bytes anywhere.
-fn holds_text(raw: &Bound<'_, PyAny>) -> PyResult<bool> {
+/// What an object array holds anywhere that is no real number: text (a string or bytes), a
+/// bool (Python's or numpy's) or a complex number.
+fn held(raw: &Bound<'_, PyAny>) -> PyResult<Option<&'static str>> {
+    let complex = raw.py().import("numpy")?.getattr("complexfloating")?;
     for v in raw.call_method0("ravel")?.try_iter()? {
         let v = v?;
         if v.is_instance_of::<PyString>() || v.is_instance_of::<pyo3::types::PyBytes>() {
-            return Ok(true);
+            return Ok(Some("text"));
+        }
+        if is_bool(&v)? {
+            return Ok(Some("bool"));
+        }
+        if v.is_instance_of::<PyComplex>() || v.is_instance(&complex)? {
+            return Ok(Some("complex"));
         }
     }
-    Ok(false)
+    Ok(None)
 }
 
 /// `value` as a float64 numpy array (the Python half's `_numbers`): [`float64`].

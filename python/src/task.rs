@@ -9,7 +9,7 @@ use pyo3::types::PyDict;
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
-use calbench::calibrate::task::record::TASK_FILE;
+use calbench::calibrate::task::record::{OUTPUTS, SOCKET_OUTPUTS};
 use calbench::calibrate::task::socket::{load_socket_task, SocketTask};
 use calbench::calibrate::task::{task_path, unconverged_warning, Task, TaskEntry};
 use calbench::identify::MethodSpec;
@@ -52,7 +52,7 @@ pub(crate) fn task<'py>(
     }
     let t = Task::load(&path).map_err(task_err)?;
     if let Some(out) = &out {
-        guard(out, t.head.inputs(), t.data_files())?;
+        guard(out, &OUTPUTS, t.head.inputs(), t.data_files())?;
     }
     let stop = Interrupted::default();
     let (spec, method_name, entrant) = if let Ok(m) = method.extract::<String>() {
@@ -141,15 +141,15 @@ fn result(
     Ok(d)
 }
 
-/// Refuses an output folder `out` that would destroy a task's `inputs` or lie beside its
-/// data files.
+/// Refuses an output folder `out` that would destroy a task's `inputs` (under one of the
+/// `names` its entry writes) or lie beside its data files.
 fn guard(
     out: &Path,
+    names: &[&str],
     inputs: Vec<&Path>,
     data: impl IntoIterator<Item = impl AsRef<Path>>,
 ) -> PyResult<()> {
-    let names = ["identified.json", "task.json", TASK_FILE];
-    calbench::report::guard::guard_out_folder(out, "out", &names, inputs).map_err(task_err)?;
+    calbench::report::guard::guard_out_folder(out, "out", names, inputs).map_err(task_err)?;
     calbench::report::guard::guard_data_folder(out, "out", data).map_err(task_err)
 }
 
@@ -173,7 +173,7 @@ fn socket_task<'py>(
         return Err(setting("models", why));
     }
     if let Some(out) = &out {
-        guard(out, t.head.inputs(), t.data_files())?;
+        guard(out, &SOCKET_OUTPUTS, t.head.inputs(), t.data_files())?;
     }
     let spec = method_spec(&name, options, None)?;
     let (entry, warning) = py

@@ -4,6 +4,7 @@ import functools
 import tomllib
 
 import numpy as np
+import pandas as pd
 import pytest
 
 import calbench
@@ -174,6 +175,21 @@ def test_text_and_dates_are_not_numbers_and_a_shape_is_named():
             calbench.identifiability(robot, text)
     with pytest.raises(calbench.SettingError, match="`q`: a date or time array"):
         robot.fk(np.zeros((4, 6), "datetime64[s]"))
+    # A bool or a complex number among numbers is no number either: a DataFrame with a bool
+    # column (an object array) and nested lists numpy would read as numbers had been taken
+    # with True as 1 and False as 0.
+    frame = pd.DataFrame({"q1": [True, False, True, False], "q2": [0.0, 10.0, 20.0, 30.0],
+                          "q3": 0.0, "q4": 0.0, "q5": 0.0, "q6": 0.0})
+    for what, mixed in [("bool", frame), ("bool", [[True, 0, 0, 0, 0, 0.0]] * 4),
+                        ("bool", np.array([[np.bool_(True), 0.0, 0, 0, 0, 0]] * 4, object)),
+                        ("complex", [[1j, 0, 0, 0, 0, 0.0]] * 4)]:
+        with pytest.raises(calbench.SettingError, match=f"`q`: a {what} array is not taken"):
+            robot.fk(mixed)
+        with pytest.raises(calbench.SettingError, match=f"`q`: a {what} array is not taken"):
+            calbench.identify(robot, mixed, np.zeros((4, 3)))
+    # Numbers of mixed types are numbers.
+    assert robot.fk([[1, 0.0, 0, 0, 0, 0]] * 4).shape == (4, 3)
+    assert robot.fk(frame.astype(float)).shape == (4, 3)
     # fk names the array's shape, as identify does, not its first row.
     with pytest.raises(calbench.SettingError, match=r"`q`: expected shape \(N, 6\), got \(2, 5\)"):
         robot.fk(np.zeros((2, 5)))

@@ -227,3 +227,23 @@ def test_a_refusal_names_what_calbench_task_takes(root, tmp_path):
         "or pass calbench.identify's allow_implausible=True to write it with a warning"
     ), e.value
     assert not (tmp_path / "out").exists()
+
+
+def test_an_out_holding_the_tasks_robot_under_a_written_name_is_refused(root, tmp_path):
+    # The entry writes robot.toml (and residuals.csv, report.md, kernel.json) as the command
+    # line's does; an out that holds the task's robot under that name is refused before any
+    # work, where only identified.json, task.json and task.toml had been guarded and the
+    # robot was written over by the calibrated one.
+    robot = tmp_path / "robot.toml"
+    robot.write_bytes((root / "examples" / "barrett-wam" / "wam.toml").read_bytes())
+    before = robot.read_bytes()
+    text = (root / "tasks" / "barrett-wam.toml").read_text().replace('"../', f'"{root}/')
+    mapping = json.dumps(str(root / "tasks" / "barrett-wam.mapping.toml"))
+    text = text.replace('"barrett-wam.mapping.toml"', mapping)
+    text = text.replace(f'"{root}/examples/barrett-wam/wam.toml"', '"robot.toml"')
+    task = tmp_path / "t.toml"
+    task.write_text(text)
+    with pytest.raises(calbench.SettingError, match=r"^setting `out`: .*robot\.toml is an input"):
+        calbench.task(task, "lm", models=["kinematic"], out=tmp_path)
+    assert robot.read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["robot.toml", "t.toml"]

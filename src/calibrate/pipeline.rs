@@ -108,6 +108,13 @@ impl IdentifyRequest {
                 .text(", and neither is given");
             return Err(Error::option(Opt::CvSeed, why));
         }
+        // Two names of one model (`gravity+harmonics`, `harmonics+gravity`) would be
+        // cross-validated twice and tie.
+        let twice = (1..self.models.len()).find(|&i| self.models[..i].contains(&self.models[i]));
+        if let Some(i) = twice {
+            let why = format!("`{}` is listed twice", self.models[i].name());
+            return Err(Error::option(Models, why));
+        }
         let empty = IdentifyData::Tracker(Measurements::default());
         match std::mem::replace(&mut self.data, empty) {
             IdentifyData::Tracker(d) => self
@@ -132,6 +139,11 @@ impl IdentifyRequest {
             crate::identify::qiao::check_k(k).map_err(|e| e.of_option(Opt::K))?;
             spec.k = k;
         }
+        let repeated = d.repeated_rows();
+        if !repeated.is_empty() {
+            let why = crate::measurement::repeated_rows_refusal(&repeated);
+            return Err(Error::file(&self.source, "data", why));
+        }
         let mut val = self.validate.clone();
         // Under a holdout, the data's rows of the calibration and of the validation.
         let mut held_out = None;
@@ -151,29 +163,22 @@ impl IdentifyRequest {
             d = cv::subset(&d, &cal);
             held_out = Some((cal, held));
         }
-        if let Some(v) = &val {
-            let mut shared = d.shared_rows(v);
+        // Rows held out of data without copies repeat none of the rest; a validation file's
+        // may.
+        if let (Some(v), None) = (&val, &held_out) {
+            let shared = d.shared_rows(v);
             if !shared.is_empty() {
-                let (opt, numbered) = match &held_out {
-                    Some((cal, held)) => {
-                        shared
-                            .iter_mut()
-                            .for_each(|(c, v)| (*c, *v) = (cal[*c], held[*v]));
-                        (Opt::Holdout, "rows of the data")
-                    }
-                    None => (Opt::Validate, "rows of each file"),
-                };
-                let mut why = crate::measurement::shared_rows_refusal(&shared, numbered);
+                let mut why = crate::measurement::shared_rows_refusal(&shared, "rows of each file");
                 // A validation file is named (and so is one that is the data's own file),
                 // as every refusal of a file's rows names it.
-                if let (None, Some(v)) = (&held_out, &self.validate_source) {
+                if let Some(v) = &self.validate_source {
                     let same = |p: &std::path::Path| std::fs::canonicalize(p).ok();
                     why = match same(v).is_some_and(|c| same(&self.source) == Some(c)) {
                         true => format!("{} is the data's own file: {why}", v.display()),
                         false => format!("{}: {why}", v.display()),
                     };
                 }
-                return Err(Error::option(opt, why));
+                return Err(Error::option(Opt::Validate, why));
             }
         }
         check_frames(nominal, &d, val.as_ref(), registration, held_out.is_some())?;

@@ -316,16 +316,20 @@ pub fn check_some_left(params: &[Param], fixed: &[Param]) -> Result<()> {
 }
 
 /// Refuses a prior given to the identification (`--prior`, `priors`) on a parameter it does
-/// not identify (`params`), naming that option, where the method's solve would name its own
-/// `priors.NAME` key.
+/// not identify (`params`), or twice, naming that option, where the method's solve would name
+/// its own `priors.NAME` key.
 pub fn check_priors_identified(priors: &[(Param, Real)], params: &[Param]) -> Result<()> {
-    match priors.iter().find(|(p, _)| !params.contains(p)) {
-        Some((p, _)) => Err(Error::option(
-            Opt::Prior,
-            format!("`{p}` is not among the identified parameters (fixed, or not in the model)"),
-        )),
-        None => Ok(()),
+    for (i, (p, sigma)) in priors.iter().enumerate() {
+        let why = if !params.contains(p) {
+            "is not among the identified parameters (fixed, or not in the model)".to_string()
+        } else if let Some((_, first)) = priors[..i].iter().find(|(q, _)| q == p) {
+            format!("is given twice (σ = {first}, then σ = {sigma}): one prior per parameter")
+        } else {
+            continue;
+        };
+        return Err(Error::option(Opt::Prior, format!("`{p}` {why}")));
     }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -11,7 +11,7 @@ use anyhow::{bail, Result};
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
 use calbench::calibrate::record::IdentifiedRecord;
-use calbench::calibrate::task::record::TASK_FILE;
+use calbench::calibrate::task::record::{OUTPUTS, SOCKET_OUTPUTS};
 use calbench::calibrate::task::socket::{
     load_socket_task, Placements, SocketFigures, SocketScores, SocketTask,
 };
@@ -22,20 +22,6 @@ use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
 use calbench::report::{write_identified_with, write_kind};
-
-/// The files written for a socket task.
-const SOCKET_OUTPUTS: [&str; 4] = ["identified.json", "robot.toml", "task.json", TASK_FILE];
-
-/// The files written.
-const OUTPUTS: [&str; 7] = [
-    calbench::calibrate::kernel::KERNEL_FILE,
-    "identified.json",
-    "residuals.csv",
-    "robot.toml",
-    "report.md",
-    "task.json",
-    TASK_FILE,
-];
 
 /// Arguments of `calbench task`.
 #[derive(clap::Args)]

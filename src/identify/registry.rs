@@ -282,8 +282,17 @@ pub fn parse_prior(name: &str, sigma: Option<Real>) -> std::result::Result<(Para
     let p = Param::parse(name.trim())
         .ok_or_else(|| format!("`{name}` is not a parameter name (a2, theta3, base.x, …)"))?;
     match sigma {
-        Some(s) if s.is_finite() && s > 0.0 => Ok((p, s)),
-        Some(s) => Err(format!("σ must be finite and above 0, got {s}")),
+        // A σ whose precision 1/σ² overflows would pin the parameter at an infinite weight.
+        Some(s) if s.is_finite() && s > 0.0 && (1.0 / (s * s)).is_finite() => Ok((p, s)),
+        Some(s) if s.is_finite() && s > 0.0 => Err(format!(
+            "σ = {} is too small: its precision 1/σ² overflows (to hold a parameter at its \
+             nominal value, fix it)",
+            crate::error::shown(s)
+        )),
+        Some(s) => Err(format!(
+            "σ must be finite and above 0, got {}",
+            crate::error::shown(s)
+        )),
         None => Err("σ must be a number".to_string()),
     }
 }

@@ -92,21 +92,37 @@ const SAME_CELL_MM: Real = 1.0;
 /// of [`Measurements::shared_rows`] numbered as `numbered` says (`rows of the data`), the
 /// first five named.
 pub fn shared_rows_refusal(rows: &[(usize, usize)], numbered: &str) -> String {
+    format!(
+        "{} validation row(s) repeat a calibration row (the same joint values and measured \
+         point; 0-based {numbered}): {}; a validation row must not calibrate",
+        rows.len(),
+        pairs_named(rows, ["calibration row", "validation row"])
+    )
+}
+
+/// The refusal's words for rows of one file that repeat an earlier row of it: `rows`, the
+/// pairs of [`Measurements::repeated_rows`], the first five named.
+pub fn repeated_rows_refusal(rows: &[(usize, usize)]) -> String {
+    format!(
+        "{} row(s) repeat an earlier row (the same joint values and measured point; 0-based \
+         rows): {}; a copy counts one reading twice, and the fit would state a precision it \
+         does not have (a second reading of a pose differs by the instrument's noise)",
+        rows.len(),
+        pairs_named(rows, ["row", "row"])
+    )
+}
+
+/// The first five pairs of `rows`, each `A a = B b` with `names` [A, B], and how many more.
+fn pairs_named(rows: &[(usize, usize)], [a, b]: [&str; 2]) -> String {
     let shown: Vec<String> = rows
         .iter()
         .take(5)
-        .map(|(c, v)| format!("calibration row {c} = validation row {v}"))
+        .map(|(x, y)| format!("{a} {x} = {b} {y}"))
         .collect();
-    let more = match rows.len() - shown.len() {
-        0 => String::new(),
-        more => format!(", and {more} more"),
-    };
-    format!(
-        "{} validation row(s) repeat a calibration row (the same joint values and measured \
-         point; 0-based {numbered}): {}{more}; a validation row must not calibrate",
-        rows.len(),
-        shown.join(", ")
-    )
+    match rows.len() - shown.len() {
+        0 => shown.join(", "),
+        more => format!("{}, and {more} more", shown.join(", ")),
+    }
 }
 
 impl Measurements {
@@ -118,13 +134,30 @@ impl Measurements {
     /// noise, micrometres. Each validation row is paired with the first calibration row it
     /// repeats, in validation-row order.
     pub fn shared_rows(&self, val: &Measurements) -> Vec<(usize, usize)> {
-        // The calibration rows by the grid cell of their point ([`SAME_CELL_MM`]), sorted: a
-        // validation point's matches lie in the cells of its coordinates ± the tolerance.
+        self.shared_rows_where(val, |_, _| true)
+    }
+
+    /// The pairs (earlier row, row) of `self` that hold the same measurement, as
+    /// [`Measurements::shared_rows`] tells them: each row that repeats an earlier one, with the
+    /// first it repeats, in row order.
+    pub fn repeated_rows(&self) -> Vec<(usize, usize)> {
+        self.shared_rows_where(self, |first, row| first < row)
+    }
+
+    /// [`Measurements::shared_rows`], the pairs `keep` keeps.
+    fn shared_rows_where(
+        &self,
+        val: &Measurements,
+        keep: impl Fn(usize, usize) -> bool,
+    ) -> Vec<(usize, usize)> {
+        // The calibration rows sorted by the grid cell of their point ([`SAME_CELL_MM`]), the
+        // cell computed where it is compared (an index a row, not a cell and an index: 2 000 000
+        // rows hold 16 MB, not 64): a validation point's matches lie in the cells of its
+        // coordinates ± the tolerance.
         let cell = |v: Real| (v / SAME_CELL_MM).floor() as i64;
-        let mut cells: Vec<([i64; 3], usize)> = (0..self.len())
-            .map(|i| (self.points[i].map(cell).into(), i))
-            .collect();
-        cells.sort_unstable();
+        let key = |i: usize| -> [i64; 3] { self.points[i].map(cell).into() };
+        let mut cells: Vec<usize> = (0..self.len()).collect();
+        cells.sort_unstable_by_key(|&i| (key(i), i));
         let same = |c: usize, v: usize| {
             let near = |a: &[Real], b: &[Real], tol: Real| {
                 a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
@@ -145,9 +178,9 @@ impl Measurements {
                 for x in xs[0]..=xs[1] {
                     for y in ys[0]..=ys[1] {
                         for z in zs[0]..=zs[1] {
-                            let key = [x, y, z];
-                            let from = cells.partition_point(|e| e.0 < key);
-                            for &(_, c) in cells[from..].iter().take_while(|e| e.0 == key) {
+                            let at = [x, y, z];
+                            let from = cells.partition_point(|&c| key(c) < at);
+                            for &c in cells[from..].iter().take_while(|&&c| key(c) == at) {
                                 if same(c, v) && first.is_none_or(|f| c < f) {
                                     first = Some(c);
                                 }
@@ -155,7 +188,7 @@ impl Measurements {
                         }
                     }
                 }
-                first.map(|c| (c, v))
+                first.filter(|&c| keep(c, v)).map(|c| (c, v))
             })
             .collect()
     }

@@ -158,7 +158,8 @@ pub fn fraction<'de, D: serde::Deserializer<'de>>(d: D) -> Result<crate::numeric
     number(d, |v| (0.0..1.0).contains(&v), "in [0, 1)")
 }
 
-fn number<'de, D: serde::Deserializer<'de>>(
+/// `v`, a number, refused unless finite and `holds`, saying it must be `what`.
+pub(crate) fn number<'de, D: serde::Deserializer<'de>>(
     d: D,
     holds: impl Fn(crate::numeric::Real) -> bool,
     what: &str,

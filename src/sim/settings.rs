@@ -13,7 +13,7 @@ use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::error::{Error, Result};
 use crate::measurement::Measure;
-use crate::numeric::options::{finite, positive, range, recheck_at, share, within};
+use crate::numeric::options::{finite, number, range, recheck_at, share, within};
 use crate::numeric::Real;
 use crate::robot::Param;
 
@@ -288,8 +288,9 @@ pub struct TrackerSettings {
     /// Range-proportional part of the MPE, µm per m; default 6.
     #[serde(deserialize_with = "mpe_um")]
     pub mpe_b_um_per_m: Real,
-    /// Coverage factor: σ = MPE / coverage; default 2.
-    #[serde(deserialize_with = "positive")]
+    /// Coverage factor: σ = MPE / coverage, at least 1 (below, σ would exceed the maximum
+    /// permissible error); default 2.
+    #[serde(deserialize_with = "coverage")]
     pub coverage: Real,
     /// Position or full pose; default position.
     pub measure: MeasureSetting,
@@ -344,6 +345,16 @@ fn mpe_um<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real, D::Error
     )
 }
 
+/// `[tracker] coverage`: a finite factor of at least 1. The MPE is a maximum: a factor below 1
+/// would make σ exceed it (and 1e-300 a tracker of σ = 1e298 mm).
+fn coverage<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real, D::Error> {
+    number(
+        d,
+        |v| v >= 1.0,
+        "at least 1 (σ = MPE / coverage; below 1, σ would exceed the maximum permissible error)",
+    )
+}
+
 /// `[tracker] angle_noise_deg`: a σ from 0 to one turn.
 fn angle_sigma_deg<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real, D::Error> {
     within(d, crate::robot::MAX_ANGLE_RAD.to_degrees(), "° (one turn)")
@@ -379,7 +390,7 @@ fn magnitudes<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<[Real; 2],
 
 impl TrackerSettings {
     /// Settings built in code checked as a scenario's are read, on their fields: refuses a
-    /// non-finite pose, negative MPE terms or angle noise, and a coverage ≤ 0.
+    /// non-finite pose, negative MPE terms or angle noise, and a coverage below 1.
     pub fn check(&self) -> Result<()> {
         recheck_at("tracker", self)
     }

@@ -143,6 +143,15 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         msg.contains("setting `--cv-seed`: seeds the folds of --cv or --models"),
         "{msg}"
     );
+    // A model listed twice, under one name or two, would be cross-validated twice.
+    for (twice, name) in [
+        ("kinematic,kinematic", "kinematic"),
+        ("beta+gravity,kinematic,gravity+beta", "beta+gravity"),
+    ] {
+        let msg = refusal(&data, &["--models", twice]);
+        let says = format!("setting `--models`: `{name}` is listed twice");
+        assert!(msg.contains(&says), "{msg}");
+    }
     // Validation rows that repeat calibration rows are refused, named by their file and
     // rows: the data given as their own validation (said to be the data's own file), and a
     // file holding its rows twice held out from.
@@ -194,11 +203,29 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     let twice = d.join("twice.csv");
     let rows = text.split_once('\n').unwrap().1;
     std::fs::write(&twice, format!("{text}{rows}")).unwrap();
-    let msg = refusal(path_arg(&twice), &["--holdout", "3/10"]);
-    assert!(
-        msg.contains("setting `--holdout`: ") && msg.contains("0-based rows of the data"),
-        "{msg}"
-    );
+    // A file that holds its rows twice is refused as such, held out from or not: each copy
+    // would count its reading twice and halve the variance the fit states.
+    for extra in [&["--holdout", "3/10"][..], &[]] {
+        let msg = refusal(path_arg(&twice), extra);
+        let says = format!(
+            "{}: data: 199 row(s) repeat an earlier row (the same joint values and measured \
+             point; 0-based rows): row 0 = row 199, row 1 = row 200, ",
+            twice.display()
+        );
+        assert!(
+            msg.contains(&says) && msg.contains(", and 194 more;"),
+            "{msg}"
+        );
+    }
+    // One row copied once, nudged by 0.00001 mm, is a copy too.
+    let lines: Vec<&str> = text.lines().collect();
+    let mut cells: Vec<String> = lines[5].split(',').map(str::to_string).collect();
+    let x = x.expect("a column x");
+    cells[x] = (cells[x].parse::<f64>().unwrap() + 1e-5).to_string();
+    let once = d.join("once.csv");
+    std::fs::write(&once, format!("{text}{}\n", cells.join(","))).unwrap();
+    let msg = refusal(path_arg(&once), &[]);
+    assert!(msg.contains(": data: 1 row(s) repeat an earlier row (the same joint values and measured point; 0-based rows): row 4 = row 199; a copy counts"), "{msg}");
     // Folds whose rows cannot determine the model are refused, not scored: 14 rows in two
     // folds train on 7 points, 21 readings for the 23 parameters.
     let few = d.join("few.csv");
@@ -266,6 +293,43 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
         &d.join("bad2"),
     ));
     assert!(!bad.status.success());
+    // A parameter given two priors (on the command line, or there and in a file) is refused:
+    // neither σ would be the one the estimate used.
+    std::fs::write(d.join("a2.toml"), "a2 = 0.5\n").unwrap();
+    for twice in [
+        ["--prior", "a2=0.1", "--prior", "a2=0.2"],
+        ["--prior", path_arg(&d.join("a2.toml")), "--prior", "a2=0.2"],
+    ] {
+        let o = calbench(&lm_args(&robot, &data, &twice, &d.join("twice")));
+        let said = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            said.contains("setting `--prior`: `a2` is given twice"),
+            "{said}"
+        );
+        assert!(!d.join("twice").exists());
+    }
+    // A σ whose precision 1/σ² overflows is refused at its key, in a file as inline.
+    std::fs::write(d.join("tiny.toml"), "a2 = 1e-300\n").unwrap();
+    for (arg, says) in [
+        (
+            path_arg(&d.join("tiny.toml")),
+            "tiny.toml: line 1, key `a2`: σ = 1e-300 is too small",
+        ),
+        (
+            "a2=1e-300",
+            "σ = 1e-300 is too small: its precision 1/σ² overflows",
+        ),
+    ] {
+        let o = calbench(&lm_args(&robot, &data, &["--prior", arg], &d.join("tiny")));
+        let said = String::from_utf8_lossy(&o.stderr);
+        assert!(said.contains(says), "{said}");
+    }
+    // The smallest σ whose precision is finite still identifies, the parameter held nominal.
+    let held = run(&["--prior", "a2=1e-150"], "held");
+    assert!(
+        held["errors"]["a2"].as_f64().unwrap().abs() < 1e-9,
+        "{held}"
+    );
     // A prior file's refusals name the file, the line and the key, as a run's error (exit 1),
     // not as a malformed command line.
     for (i, (text, says)) in [

@@ -243,6 +243,25 @@ fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
             "`theta7` is given twice (fix[0])",
         ],
     );
+    // One joint file for both sockets is refused at its key, where it was identified as
+    // readings that make the robot worse.
+    let t = dir.join("one-file.toml");
+    let d = dir.display();
+    let one = format!("[\"{d}/front/hole_0.csv\", \"{d}/front/./hole_0.csv\"]");
+    let text = read(&task).replace(
+        &format!("[\"{d}/front/hole_0.csv\", \"{d}/front/hole_1.csv\"]"),
+        &one,
+    );
+    std::fs::write(&t, text).unwrap();
+    refused(
+        &t,
+        &[
+            "one-file.toml",
+            "sockets.calibration",
+            "sockets.calibration[1]: ",
+            "/front/./hole_0.csv` is given twice (sockets.calibration[0]): each socket has its own file",
+        ],
+    );
     let text = read(&task).replace("[0.0, 50.0]", "[0.0, 50.0, 70.0]");
     std::fs::write(&task, text).unwrap();
     refused(

@@ -113,6 +113,21 @@ pub struct SocketScores {
 /// The name of the task file as an entry's folder carries it.
 pub const TASK_FILE: &str = "task.toml";
 
+/// The files a tracker task's entry folder holds (docs/formats.md § 9), which its output guard
+/// keeps an input from being written over, for the command line and Python alike.
+pub const OUTPUTS: [&str; 7] = [
+    crate::calibrate::kernel::KERNEL_FILE,
+    "identified.json",
+    "residuals.csv",
+    "robot.toml",
+    "report.md",
+    "task.json",
+    TASK_FILE,
+];
+
+/// The files a socket task's entry folder holds (docs/formats.md § 9.4).
+pub const SOCKET_OUTPUTS: [&str; 4] = ["identified.json", "robot.toml", "task.json", TASK_FILE];
+
 /// The `[[published]]` rows of the task file `text` (read from `path`).
 fn published_of(text: &str, path: &Path) -> Result<Vec<Published>> {
     #[derive(Deserialize)]

@@ -76,7 +76,9 @@ fn negative_noise_is_refused_with_its_key() {
             "from 0 to 360 ° (one turn)",
             true,
         ),
-        ("coverage = 0.0", "positive", true),
+        ("coverage = 0.0", "at least 1", true),
+        ("coverage = 1e-300", "at least 1", true),
+        ("coverage = 0.999", "below 1, σ would exceed", true),
         (
             "pose = [0.0, 0.0, 0.0, 0.0, 0.0, inf]",
             "6 finite numbers",
