@@ -537,13 +537,20 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
         for &c in &jc {
             let v = num(c)?;
             let q = v * plan.joints.1;
-            if !q.is_finite() {
+            // No robot file takes a joint value beyond a length's range (a point's), whatever
+            // its unit and kind (ten turns of a revolute joint, a prismatic joint's kilometre).
+            let most = super::csv::MAX_POINT_MM;
+            if !q.is_finite() || q.abs() > most {
+                let why = match q.is_finite() {
+                    true => format!("is beyond ±{most}, which no robot's joint reaches"),
+                    false => format!("overflows: it is {q}"),
+                };
                 return Err(at_line(
                     raw,
                     line,
                     &format!(", column {}", header[c]),
                     format!(
-                        "{} overflows: it is {q} after its conversion from `joints.unit` to \
+                        "{} {why} after its conversion from `joints.unit` to \
                          `joints.write_unit`",
                         shown(v)
                     ),
@@ -573,11 +580,20 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                     scale,
                     ..
                 } => {
-                    let v = [
-                        num(oc[0])? * scale,
-                        num(oc[1])? * scale,
-                        num(oc[2])? * scale,
-                    ];
+                    let mut v = [0.0; 3];
+                    for (k, &c) in oc.iter().enumerate() {
+                        v[k] = num(c)? * scale;
+                        // An angle beyond a turn is no tracker's reading (the sine of 1e300
+                        // rad is noise).
+                        if v[k].abs() > std::f64::consts::TAU * (1.0 + 1e-12) {
+                            return Err(at_line(
+                                raw,
+                                line,
+                                &format!(", column {}", header[c]),
+                                format!("{} is beyond one turn", shown(num(c)?)),
+                            ));
+                        }
+                    }
                     quaternion(&euler_matrix(*axes, v, *intrinsic))
                 }
                 Orient::Quat { at, .. } => {

@@ -69,19 +69,24 @@ fn import_reads_a_byte_order_mark_crlf_and_quoted_fields_as_the_plain_file() {
     fancy.extend(b"\r\n");
     let fancy_raw = d.join("fancy.csv");
     std::fs::write(&fancy_raw, &fancy).unwrap();
-    // The first header name is a joint the mapping names: a kept mark would miss it.
-    let first = plain.lines().next().unwrap().split(',').next().unwrap();
-    assert_eq!(first, "Timestamp");
+    // The first header name a joint the mapping names: a kept mark would miss it.
     let fancy = String::from_utf8(fancy).unwrap();
-    let swapped = fancy
-        .replacen("Timestamp", "shoulder_pan_joint_", 1)
-        .replacen(",shoulder_pan_joint,", ",Timestamp,", 1);
+    let mut header = plain.lines().next().unwrap().split(',');
+    let joint = header.position(|c| c == "shoulder_pan_joint").unwrap();
+    // The joint's column moved first, cells and all, behind the mark.
+    let swapped: Vec<String> = fancy
+        .trim_start_matches('\u{feff}')
+        .split("\r\n")
+        .map(|l| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            if cells.len() > joint {
+                cells.swap(0, joint);
+            }
+            cells.join(",")
+        })
+        .collect();
     let fancy_first = d.join("fancy-first.csv");
-    std::fs::write(
-        &fancy_first,
-        swapped.replacen("shoulder_pan_joint_", "shoulder_pan_joint", 1),
-    )
-    .unwrap();
+    std::fs::write(&fancy_first, format!("\u{feff}{}", swapped.join("\r\n"))).unwrap();
 
     // And as an old Mac program saves it, every line ended by a lone CR.
     let mac_raw = d.join("mac.csv");
@@ -114,11 +119,12 @@ fn import_reads_a_byte_order_mark_crlf_and_quoted_fields_as_the_plain_file() {
         "the same rows, byte for byte"
     );
     assert_eq!(a, std::fs::read(&m).unwrap(), "CR line ends: the same rows");
-    // The export with its first two columns' names swapped reads the joint from the first
-    // column, whose cells are the timestamps: same file length, other values.
-    let c = read(&c);
-    assert_eq!(c.lines().count(), 200);
-    assert_ne!(a, c.as_bytes());
+    // The export with the joint's column first, its name behind the mark, gives the same rows.
+    assert_eq!(
+        a,
+        std::fs::read(&c).unwrap(),
+        "a mapped first column: the same rows"
+    );
     // And the shipped semicolon export gives the same rows as its comma form.
     let semicolon = d.join("semicolon.csv");
     calbench_ok(&[
@@ -577,7 +583,8 @@ fn import_reads_an_export_with_latin_1_bytes_in_an_unmapped_column() {
 }
 
 /// A cell that is a finite number in the export but not in the measurement CSV written from
-/// it — a joint value that overflows on its conversion from rad to deg, a point beyond 1 km, a
+/// it — a joint value that overflows on its conversion from rad to deg or that no robot's
+/// joint reaches, an orientation angle beyond a turn, a point beyond 1 km, a
 /// standard deviation below 1e-9 mm (written as 0) — is refused naming the export, the line
 /// and the column, as the measurement CSV would be, and nothing is written (no `inf` cell).
 #[test]
@@ -591,6 +598,15 @@ fn import_refuses_a_value_the_measurement_csv_would_refuse() {
             "1e308",
             "1e308 overflows: it is inf",
         ),
+        // Finite, but beyond what any robot's joint takes; an orientation beyond a turn,
+        // whose quaternion had been written from the sine of 1e300.
+        (
+            7,
+            "shoulder_pan_joint",
+            "1e306",
+            "1e306 is beyond ±1000000, which no robot's joint reaches",
+        ),
+        (20, "measurement_rx", "1e300", "1e300 is beyond one turn"),
         (14, "measurement_x", "-2e6", "-2000000.0 mm is out of range"),
         (
             15,

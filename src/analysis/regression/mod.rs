@@ -555,7 +555,8 @@ mod tests {
     fn a_summary_without_the_baselines_entries_says_what_is_missing() {
         let good = summary(90.0, 0.1);
         let (s, b) = (Path::new("new/summary.json"), Path::new("old/base.json"));
-        let empty = typed(json!({"scenario": "s", "results": []}));
+        // Summaries built in code: a file of no entry is refused when it is read.
+        let empty = Summary::from_value(json!({"scenario": "s", "results": []}), s).unwrap();
         let e = comparable(&empty, s, &good, b).unwrap_err().to_string();
         assert!(
             e.starts_with("new/summary.json: results: is empty")
@@ -593,9 +594,14 @@ mod tests {
         assert_eq!(crate::error::json_key_line(text, "scenario"), None);
         let mut v: Value = serde_json::from_str(text).unwrap();
         v["scenario"] = json!("s");
-        let e = comparable(&typed(v), &path, &summary(90.0, 0.1), Path::new("b"))
-            .unwrap_err()
-            .to_string();
+        let e = comparable(
+            &Summary::from_value(v, &path).unwrap(),
+            &path,
+            &summary(90.0, 0.1),
+            Path::new("b"),
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("s.json: line 4, results: is empty"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }

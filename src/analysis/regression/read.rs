@@ -61,12 +61,29 @@ pub fn check_summary_for(
         .at_json_key_line()
     })?;
     unknown_key(&s, &keys, path)?;
+    // `check` and `compare` name every baseline entry an empty summary lacks; none is stored.
+    if reader == figures::Reader::Record && s.results.is_empty() {
+        let why = "holds no entry: every run writes one per method and pose strategy";
+        return Err(Error::file(path, "results", why).at_json_key_line());
+    }
     // Entries are paired by their key: a second one of a key would be paired or passed over
     // by where it stands.
     for (i, e) in s.results.iter().enumerate() {
         let first = s.results[..i].iter().position(|f| f.key() == e.key());
         let why = match first {
             _ if e.method.is_empty() => format!("is an entry without a `method` name, {what}"),
+            _ if e.poses.is_empty() => format!("is an entry without its `poses` strategy, {what}"),
+            // A scenario refuses such a label; `check` shows one escaped, but none is stored.
+            _ if reader == figures::Reader::Record
+                && e.method
+                    .chars()
+                    .chain(e.poses.chars())
+                    .any(crate::error::is_hidden) =>
+            {
+                "names its method or strategy with a control character (bidirectional \
+                 overrides included), which no run writes"
+                    .to_string()
+            }
             Some(j) => format!(
                 "is a second entry of {} (the first is results[{j}]): a summary has one entry \
                  per method, poses and sweep value",
