@@ -376,10 +376,16 @@ where
     serde_path_to_error::deserialize(de).map_err(|e| {
         let mut key = e.path().to_string();
         let msg = e.into_inner().to_string();
-        let missing = msg
+        // A missing field, and an unknown one (`unknown field `foo`, expected …`), are named
+        // by their own key, so that the refusal stands at that key's line.
+        let field = msg
             .strip_prefix("missing field `")
-            .and_then(|m| m.strip_suffix('`'));
-        if let Some(field) = missing {
+            .and_then(|m| m.strip_suffix('`'))
+            .or_else(|| {
+                let rest = msg.strip_prefix("unknown field `")?;
+                rest.split_once('`').map(|(f, _)| f)
+            });
+        if let Some(field) = field {
             key = match key.as_str() {
                 "." => field.to_string(),
                 _ => format!("{key}.{field}"),

@@ -577,7 +577,7 @@ fn calbench_baseline_refuses_to_write_over_its_own_inputs() {
 
 /// A baseline whose `per_trial` holds a metric no run writes, or an entry its own summary
 /// has no result of, is refused by `check` naming the file, the line and the key, as its
-/// summary's unknown fields are; both ran with exit status 0 and no word (docs/formats.md
+/// summary's unknown fields are (each at its own key's line); both ran with exit status 0 and no word (docs/formats.md
 /// § 2.4.1: the per-trial values are those behind the file's summary).
 #[test]
 fn a_per_trial_key_the_baseline_s_summary_lacks_is_refused_at_its_line() {
@@ -588,6 +588,9 @@ fn a_per_trial_key_the_baseline_s_summary_lacks_is_refused_at_its_line() {
     let mut metric = doc.clone();
     metric["per_trial"]["entries"][&entry]["values"]["bogus_metric"] =
         entries[&entry]["values"]["eta_mean_pct"].clone();
+    // A key an entry has not, at its own line (it had been named at the entry's first line).
+    let mut field = doc.clone();
+    field["results"][0]["foo"] = 1.into();
     let mut extra = doc.clone();
     extra["per_trial"]["entries"]["nosuch / random"] = entries[&entry].clone();
     let cases = [
@@ -596,6 +599,12 @@ fn a_per_trial_key_the_baseline_s_summary_lacks_is_refused_at_its_line() {
             metric,
             "\"bogus_metric\"",
             format!("per_trial.entries.{entry}.values.bogus_metric: unknown metric"),
+        ),
+        (
+            "field",
+            field,
+            "\"foo\"",
+            "results[0].foo: not a calbench summary.json: unknown field `foo`".to_string(),
         ),
         (
             "entry",
