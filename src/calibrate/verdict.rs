@@ -323,7 +323,8 @@ pub fn check_priors_identified(priors: &[(Param, Real)], params: &[Param]) -> Re
         let why = if !params.contains(p) {
             "is not among the identified parameters (fixed, or not in the model)".to_string()
         } else if let Some((_, first)) = priors[..i].iter().find(|(q, _)| q == p) {
-            format!("is given twice (σ = {first}, then σ = {sigma}): one prior per parameter")
+            let [first, then] = [first, sigma].map(|s| crate::error::shown(*s));
+            format!("is given twice (σ = {first}, then σ = {then}): one prior per parameter")
         } else {
             continue;
         };

@@ -582,7 +582,8 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                 } => {
                     let mut v = [0.0; 3];
                     for (k, &c) in oc.iter().enumerate() {
-                        v[k] = num(c)? * scale;
+                        let read = num(c)?;
+                        v[k] = read * scale;
                         // An angle beyond a turn is no tracker's reading (the sine of 1e300
                         // rad is noise).
                         if v[k].abs() > std::f64::consts::TAU * (1.0 + 1e-12) {
@@ -590,7 +591,7 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                                 raw,
                                 line,
                                 &format!(", column {}", header[c]),
-                                format!("{} is beyond one turn", shown(num(c)?)),
+                                format!("{} is beyond one turn", shown(read)),
                             ));
                         }
                     }

@@ -156,8 +156,9 @@ pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option
         // One file for two sockets would make them one: a distance of 0 measured as another.
         let same = |p: &PathBuf| std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
         let real: Vec<PathBuf> = paths.iter().map(same).collect();
-        if let Some(j) = (1..real.len()).find(|&j| real[..j].contains(&real[j])) {
-            let i = real.iter().position(|p| *p == real[j]).unwrap_or(0);
+        let first_twice =
+            (1..real.len()).find_map(|j| Some((real[..j].iter().position(|p| *p == real[j])?, j)));
+        if let Some((i, j)) = first_twice {
             let why = format!(
                 "{key}[{j}]: `{}` is given twice ({key}[{i}]): each socket has its own file",
                 rel[j]
