@@ -26,7 +26,11 @@ fn simulate(c: &mut Criterion) {
     ] {
         let tracker = Tracker::new(&TrackerSettings {
             measure,
-            angle_noise_deg: 0.01,
+            angle_noise_deg: if measure == MeasureSetting::Pose {
+                0.01
+            } else {
+                0.0
+            },
             ..Default::default()
         })
         .expect("valid tracker settings");

@@ -312,7 +312,10 @@ fn nested_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml:
     // Python's int, and what stands for one (`__index__`: numpy's integers).
     if v.is_instance_of::<PyInt>() || (!v.is_instance_of::<PyFloat>() && v.hasattr("__index__")?) {
         return Ok(toml::Value::Integer(v.extract().map_err(|_| {
-            setting(key, "an integer beyond the 64-bit range")
+            setting(
+                key,
+                "must be from -2^63 to 2^63 - 1, the integers a scenario file holds",
+            )
         })?));
     }
     if v.is_instance_of::<PyFloat>() {

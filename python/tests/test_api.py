@@ -582,5 +582,6 @@ def test_a_urdf_chain_from_a_base_link_is_the_command_line_s(cli, root):
     assert np.allclose(got, want, rtol=0, atol=1e-9), (got, want)
     with pytest.raises(calbench.SettingError, match="`base`"):
         calbench.Robot.from_file(urdf, base=2)
-    with pytest.raises(calbench.Error, match="not one"):
+    # Named by the argument given: `base` alone had been refused as `tip`.
+    with pytest.raises(calbench.SettingError, match="setting `base`: .*not one"):
         calbench.Robot.from_file(root / "robots" / "ban-irb2600.toml", base="link1")

@@ -81,3 +81,21 @@ def test_more_planes_or_spheres_than_the_poses_fill_are_refused_naming_the_optio
     assert "setting `--planes`: plane " in msg and "fewer planes (--planes)" in msg, msg
     # Enough poses a plane: analysed.
     assert calbench.identifiability(robot, q, "plane", planes=7)["rank"] > 0
+
+
+def test_counts_and_poses_no_instrument_can_use_are_named_by_their_argument():
+    # A plane count beyond a measurement file's had been named `measurement.planes` (a
+    # study's key), and one pose between poses `data` ("no observations").
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.zeros((30, 6)) + np.linspace(-20.0, 20.0, 30)[:, None]
+    for measure, options, says in [
+        ("plane", {"planes": 2**63}, "^setting `planes`: must be at most 1000"),
+        ("sphere", {"spheres": 5000}, "^setting `spheres`: must be at most 1000"),
+    ]:
+        with pytest.raises(calbench.SettingError, match=says):
+            calbench.identifiability(robot, q, measure, **options)
+    with pytest.raises(calbench.SettingError,
+                       match="^setting `q`: 1 pose gives no distance reading: give more poses$"):
+        calbench.identifiability(robot, q[:1], "distance", between_poses=True)
+    with pytest.raises(calbench.SettingError, match="^setting `q`: distance 1 has 4 points"):
+        calbench.identifiability(robot, q[:4], "distance")

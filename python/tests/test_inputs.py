@@ -141,6 +141,13 @@ def test_a_study_seed_has_63_bits_and_identify_s_seed_64(root):
         with pytest.raises(calbench.SettingError, match=r"`seed`: .* out of range \(0 to 2\^63 - 1\)"):
             calbench.run(str(root / CI_GUARD), trials=2, seed=n)
     calbench.run(str(root / CI_GUARD), trials=2, seed=2**63 - 1)
+    # The same in a scenario given as a dict: it had been called "beyond the 64-bit range".
+    sc = tomllib.loads((root / CI_GUARD).read_text())
+    sc["seed"] = 2**63
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `seed`: must be from -2\^63 to 2\^63 - 1, the integers a "
+                             r"scenario file holds$"):
+        calbench.run(sc, trials=2)
     with pytest.raises(calbench.SettingError, match=r"`seed`: .* out of range \(0 to 2\^64 - 1\)"):
         calbench.identify(*_pose_data(), method="bas", seed=2**64)
     calbench.identify(*_pose_data(), method="bas", seed=2**64 - 1, options={"iterations": 5})
@@ -253,3 +260,11 @@ def test_a_runs_warnings_are_python_warnings(root, tmp_path):
     (tmp_path / ".again.checkpoint").mkdir()
     with pytest.warns(UserWarning, match="held the checkpoint of an unfinished run"):
         calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out=out)
+
+
+def test_an_unknown_option_of_igg3_lists_the_weights_keys_too():
+    # igg3's table feeds the ridge and the weights: the list named the ridge's keys alone.
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `options.bogus`: unknown field `bogus`, expected one of `xi`, "
+                             r"`scale`, `eps`, `max_iter`, `weight`, `k0`, `k1`, `sigma0`, `per`$"):
+        calbench.identify(*_pose_data(), method="igg3", options={"bogus": 1})

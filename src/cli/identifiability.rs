@@ -155,18 +155,31 @@ fn instrument(
     };
     // Random poses move onto their planes or spheres; a pose file's poses are taken as
     // they are (they touch, or the fitted surfaces are the instrument's).
+    // The library names the poses `q`: here they are the file's, or the random count's.
+    let of_poses = |e: Error| match e {
+        Error::Option {
+            option: calbench::error::Opt::Q,
+            msg,
+        } => match args.poses_file {
+            Some(_) => Error::setting("--poses-file", msg.to_string()),
+            None => Error::setting("--poses", msg.to_string()),
+        },
+        e => e,
+    };
     let moved;
     let ((a, nuisance), qs) = if args.poses_file.is_some() {
         (
-            calbench::identify::kind::identifiability_at(robot, qs, &s)?,
+            calbench::identify::kind::identifiability_at(robot, qs, &s).map_err(of_poses)?,
             qs,
         )
     } else {
         let mut rng = calbench::numeric::rng::stream(args.seed, "identifiability");
         let (lay, q, g) =
-            calbench::sim::instrument::instrument_poses(&s, robot, args.poses, &mut rng)?;
+            calbench::sim::instrument::instrument_poses(&s, robot, args.poses, &mut rng)
+                .map_err(calbench::sim::instrument::counts_as_options)?;
         moved = q;
-        let a = calbench::identify::kind::identifiability_of(robot, &moved, lay.instrument, g)?;
+        let a = calbench::identify::kind::identifiability_of(robot, &moved, lay.instrument, g)
+            .map_err(of_poses)?;
         (a, &moved[..])
     };
     if args.json {

@@ -258,7 +258,9 @@ pub fn identifiability_at(
     qs: &[Vec<Real>],
     s: &crate::sim::instrument::InstrumentSettings,
 ) -> Result<(crate::robot::identifiability::Identifiability, Vec<String>)> {
-    let instrument = s.instrument()?;
+    let instrument = s
+        .instrument()
+        .map_err(crate::sim::instrument::counts_as_options)?;
     let group = crate::sim::instrument::groups_of(&instrument, qs.len());
     identifiability_of(robot, qs, instrument, group)
 }
@@ -291,6 +293,13 @@ pub fn identifiability_of(
             return Err(Error::option(opt, why));
         }
     }
+    let kind = instrument.kind().as_str();
+    if instrument.observations(qs.len()) == 0 {
+        let n = qs.len();
+        let gives = if n == 1 { "pose gives" } else { "poses give" };
+        let msg = format!("{n} {gives} no {kind} reading: give more poses");
+        return Err(Error::option(Opt::Q, msg));
+    }
     // The Jacobian does not depend on the readings: zeros of the right length.
     let values = vec![0.0; instrument.observations(qs.len()) * instrument.rows_per_observation()];
     let data = KindData {
@@ -298,7 +307,11 @@ pub fn identifiability_of(
         group,
         values,
     };
-    let a = identifiability(robot, &robot.params(), qs, &data)?;
+    // Too few poses for the instrument's own unknowns (a pivot's five) are the poses' fault.
+    let a = identifiability(robot, &robot.params(), qs, &data).map_err(|e| match e {
+        Error::Setting { key, msg } if key == "measurements" => Error::option(Opt::Q, msg),
+        e => e,
+    })?;
     Ok((a, data.instrument.nuisance_names()))
 }
 

@@ -86,10 +86,13 @@ pub fn method_names() -> String {
 /// `ls` is plain Gauss–Newton, or with the key `error_model` least squares on a pose-error
 /// model.
 fn ls(t: &toml::Table) -> std::result::Result<Arc<dyn Method>, EntryError> {
-    if t.contains_key(crate::identify::qiao::error_models::ERROR_MODEL) {
+    use crate::identify::qiao::error_models::ERROR_MODEL;
+    if t.contains_key(ERROR_MODEL) {
         options::<PoseErrorLs>(t)
     } else {
+        // An unknown key's refusal names `error_model` too, which the entry may also take.
         options::<LsOptions>(t)
+            .map_err(|(k, msg)| (k, super::options::with_taken(msg, &[&[ERROR_MODEL]])))
     }
 }
 
@@ -347,5 +350,38 @@ mod tests {
         assert!(entry("name = \"ls\"\nerror_model = \"direct_fk\"\niterations = 3").is_ok());
         let (k, _) = entry("name = \"ls\"\nerror_model = \"dh\"").unwrap_err();
         assert_eq!(k, "error_model");
+    }
+
+    /// An unknown key of an entry whose table feeds two or more structs is refused listing
+    /// every key the entry takes: igg3's had listed the ridge's alone, not `weight`, `k0`,
+    /// `k1` or `per`.
+    #[test]
+    fn an_unknown_key_lists_every_key_of_the_entry() {
+        for (name, also) in [
+            ("igg3", &["xi", "weight", "k0", "k1", "sigma0", "per"][..]),
+            ("ls", &["eps", "error_model"]),
+            ("bas", &["antenna", "bound_mm", "decay", "error_model"]),
+            ("bas-pso", &["population", "c3", "bound_rad", "step_floor"]),
+        ] {
+            let (k, msg) = entry(&format!("name = \"{name}\"\nbogus = 1")).unwrap_err();
+            assert_eq!(k, "bogus", "{name}");
+            assert!(msg.starts_with("unknown field `bogus`, expected "), "{msg}");
+            for key in also {
+                assert!(
+                    msg.contains(&format!("`{key}`")),
+                    "{name}: {key} missing from {msg}"
+                );
+            }
+            // Every key listed is one the entry takes.
+            for key in msg.split('`').skip(3).step_by(2) {
+                let t = format!("name = \"{name}\"\n{key} = \"?\"");
+                let (k, m) = entry(&t).unwrap_err();
+                assert!(
+                    !m.starts_with("unknown field"),
+                    "{name}: {key} is not taken: {m}"
+                );
+                assert_eq!(k, key, "{name}");
+            }
+        }
     }
 }

@@ -84,8 +84,9 @@ impl<'de> Deserialize<'de> for RobustOptions {
         let mut ridge = toml::Table::deserialize(d)?;
         let robust = options::split::<Robustness>(&mut ridge);
         Ok(RobustOptions {
-            ridge: options::with_defaults(&RobustOptions::default().ridge, ridge)
-                .map_err(D::Error::custom)?,
+            ridge: options::with_defaults(&RobustOptions::default().ridge, ridge).map_err(|e| {
+                D::Error::custom(options::with_taken(e, &[options::fields::<Robustness>()]))
+            })?,
             robust: Robustness::deserialize(toml::Value::Table(robust))
                 .map_err(D::Error::custom)?,
         })

@@ -368,7 +368,7 @@ mod tests {
             } else {
                 MeasureSetting::Position
             },
-            angle_noise_deg: 0.01,
+            angle_noise_deg: if pose { 0.01 } else { 0.0 },
             ..Default::default()
         })
         .unwrap();

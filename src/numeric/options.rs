@@ -183,6 +183,27 @@ pub fn split<T: DeserializeOwned>(table: &mut toml::Table) -> toml::Table {
         .collect()
 }
 
+/// The refusal `e` of the struct that read what [`split`] left of a table, with the keys split
+/// off to the other structs (`taken`) among those an unknown key's refusal expects: they are
+/// keys of the same table (igg3's `weight` beside the ridge's `xi`). Other refusals are `e`'s
+/// words.
+pub fn with_taken(e: impl std::fmt::Display, taken: &[&[&str]]) -> String {
+    let msg = e.to_string();
+    let Some((key, tail)) = msg
+        .strip_prefix("unknown field `")
+        .and_then(|r| r.split_once('`'))
+    else {
+        return msg;
+    };
+    // serde names the expected keys between backticks (`a`, `b` or `c`; none: no fields).
+    let expected = tail.split('`').skip(1).step_by(2);
+    let all: Vec<String> = expected
+        .chain(taken.iter().flat_map(|t| t.iter().copied()))
+        .map(|k| format!("`{k}`"))
+        .collect();
+    format!("unknown field `{key}`, expected one of {}", all.join(", "))
+}
+
 /// `T` read from `given` with the values of `defaults` for the keys `given` lacks: for a
 /// struct whose defaults depend on the method that embeds it.
 pub fn with_defaults<T: Serialize + DeserializeOwned>(

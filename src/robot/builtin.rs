@@ -108,7 +108,12 @@ pub fn load_chain(name_or_path: &str, which: &crate::robot::urdf::UrdfChain) -> 
         let msg = msg.text(format!(
             " choose a chain of a URDF; \"{name_or_path}\" is not one"
         ));
-        return Err(Error::option(crate::error::Opt::Tip, msg));
+        // Named by the option given (the tip when both are).
+        let given = match which.tip {
+            None => crate::error::Opt::Base,
+            Some(_) => crate::error::Opt::Tip,
+        };
+        return Err(Error::option(given, msg));
     }
     if let Some(b) = builtin(name_or_path) {
         return Ok((b.build)());

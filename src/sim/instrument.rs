@@ -12,7 +12,7 @@ use rand::Rng as _;
 use rand_distr::StandardNormal;
 use serde::Deserialize;
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Opt, Result};
 use crate::measurement::kind::{model_values, Instrument, Kind, KindData};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
@@ -85,6 +85,21 @@ const KIND_KEYS: [(&str, &[Kind]); 9] = [
     ("tracker_mm", &[Kind::Position, Kind::MultiTarget]),
 ];
 
+/// A refusal of [`InstrumentSettings`]' plane or sphere count named as the option
+/// ([`Opt::Planes`], [`Opt::Spheres`]) of a caller that takes the counts as its own
+/// (`identifiability --planes`, Python's `planes=`), not as a study's key.
+pub fn counts_as_options(e: Error) -> Error {
+    match e {
+        Error::Setting { key, msg } if key == "measurement.planes" => {
+            Error::option(Opt::Planes, msg)
+        }
+        Error::Setting { key, msg } if key == "measurement.spheres" => {
+            Error::option(Opt::Spheres, msg)
+        }
+        e => e,
+    }
+}
+
 impl InstrumentSettings {
     /// Refuses a key of the entry `given` (as written) that its kind does not read: a plane
     /// count on a distance instrument would be believed set and never used.
@@ -112,6 +127,8 @@ impl InstrumentSettings {
     }
 
     /// The instrument's geometry (kind `pose` is refused: it is the tracker's own path).
+    /// A refusal names a study's key (`measurement.planes`); [`counts_as_options`] names
+    /// the options of a caller that takes the counts as its own.
     pub fn instrument(&self) -> Result<Instrument> {
         use crate::measurement::kind_csv::MAX_GROUPS;
         for (key, n) in [

@@ -335,14 +335,15 @@ fn beyond<E: serde::de::Error>(what: &str, v: &[Real]) -> std::result::Result<()
     }
 }
 
-/// `[tracker] mpe_a_um`, `mpe_b_um_per_m`: from 0 to a robot file's largest length (in µm, µm
-/// per m of range).
+/// The largest MPE term a scenario takes: 1 m (in µm, or µm per m of range), five orders
+/// above a laser tracker's. Up to a robot file's largest length (10⁹ µm), the tracker's noise
+/// carried measured points beyond the range a measurement file holds, and `simulate` blamed
+/// the robot's lengths.
+pub const MAX_MPE_UM: Real = 1e6;
+
+/// `[tracker] mpe_a_um`, `mpe_b_um_per_m`: from 0 to [`MAX_MPE_UM`].
 fn mpe_um<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<Real, D::Error> {
-    within(
-        d,
-        crate::robot::MAX_LENGTH_MM * 1e3,
-        "µm (a robot file's range)",
-    )
+    within(d, MAX_MPE_UM, "µm (1 m, far beyond any tracker's error)")
 }
 
 /// `[tracker] coverage`: a finite factor of at least 1. The MPE is a maximum: a factor below 1
@@ -390,9 +391,19 @@ fn magnitudes<'de, D: Deserializer<'de>>(d: D) -> std::result::Result<[Real; 2],
 
 impl TrackerSettings {
     /// Settings built in code checked as a scenario's are read, on their fields: refuses a
-    /// non-finite pose, negative MPE terms or angle noise, and a coverage below 1.
+    /// non-finite pose, negative MPE terms or angle noise, and a coverage below 1. Refuses
+    /// also an orientation noise with `measure = "position"`, which measures no orientation:
+    /// it would be believed applied and never be.
     pub fn check(&self) -> Result<()> {
-        recheck_at("tracker", self)
+        recheck_at("tracker", self)?;
+        if self.measure == MeasureSetting::Position && self.angle_noise_deg != 0.0 {
+            return Err(Error::setting(
+                "tracker.angle_noise_deg",
+                "is read only with measure = \"pose\" (measure is \"position\", which \
+                 measures no orientation)",
+            ));
+        }
+        Ok(())
     }
 }
 

@@ -312,7 +312,11 @@ mod tests {
         let qs = uniform_joint_poses(&nominal, 30, &mut rng::from_seed(5));
         let settings = TrackerSettings {
             measure,
-            angle_noise_deg: 0.01,
+            angle_noise_deg: if measure == MeasureSetting::Pose {
+                0.01
+            } else {
+                0.0
+            },
             ..TrackerSettings::default()
         };
         let tracker = Tracker::new(&settings).expect("tracker");

@@ -480,17 +480,46 @@ fn per_trial_values_not_behind_their_summary_are_refused_and_an_unpaired_entry_i
         text.contains(&format!("line {}", line + 3)) || text.contains("line "),
         "{text}"
     );
-    // Its trials renumbered: the entry is compared unpaired, and check says so.
+    // Its trials renumbered: no run draws trial 7 of 3 (it had been compared unpaired).
     let renumbered = edit("renumbered.json", &|e| {
         e["trials"] = serde_json::json!([0, 1, 7])
     });
     let (ok, text) = check(&a.join("summary.json"), &renumbered, &[]);
-    assert!(ok, "{text}");
     assert!(
-        text.contains("unpaired: lm / random: its trials differ (3 in the baseline, 3 in this run; trial 2 is in one only)"),
+        !ok && text.contains("renumbered.json: line ")
+            && text.contains(
+                "per_trial.entries.lm / random.trials: holds trial 7 of lm / random, where the \
+                 summary ran trials 0 to 2"
+            ),
         "{text}"
     );
-    assert_eq!(text.matches("unpaired:").count(), 1, "{text}");
+    // A run's trials.csv cut to its header, or to fewer trials than its summary ran, had made
+    // check fall back to the summaries' intervals: it is refused as not the run's whole file.
+    let csv = read(&a.join("trials.csv"));
+    let rows: Vec<&str> = csv.lines().collect();
+    for (name, kept, words) in [
+        (
+            "header",
+            1,
+            "holds 0 of the 3 trials of ls / random that the summary ran",
+        ),
+        (
+            "cut",
+            rows.len() - 1,
+            "holds 2 of the 3 trials of lm / random that the summary ran",
+        ),
+    ] {
+        let cut = dir.join(name);
+        std::fs::create_dir_all(&cut).unwrap();
+        std::fs::copy(a.join("summary.json"), cut.join("summary.json")).unwrap();
+        std::fs::write(cut.join("trials.csv"), rows[..kept].join("\n") + "\n").unwrap();
+        let (ok, text) = check(&cut.join("summary.json"), &a.join("summary.json"), &[]);
+        let want = format!("{name}/trials.csv: column trial: {words}: ");
+        assert!(
+            !ok && text.contains(&want) && !text.contains("unpaired"),
+            "{text}"
+        );
+    }
 }
 
 /// A value of the wrong type inside a summary's error statistic or a baseline's per-trial

@@ -55,6 +55,51 @@ fn identifiability_per_instrument() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("multi-target"));
 }
 
+/// Counts and poses no instrument can use are refused naming the option given: a plane
+/// count beyond a measurement file's had been named `measurement.planes` (a study's key),
+/// and one pose between poses `data` ("no observations").
+#[test]
+fn identifiability_names_the_option_an_instrument_cannot_use() {
+    let d = tmp_dir("cli-instruments-options");
+    let one = d.join("one.csv");
+    std::fs::write(&one, "q1,q2,q3,q4,q5,q6\n0,10,20,0,30,0\n").unwrap();
+    let file = one.to_str().unwrap();
+    for (args, want) in [
+        (
+            &["--measure", "plane", "--planes", "5000"][..],
+            "setting `--planes`: must be at most 1000",
+        ),
+        (
+            &["--measure", "sphere", "--spheres", "5000"],
+            "setting `--spheres`: must be at most 1000",
+        ),
+        (
+            &["--measure", "distance", "--between-poses", "--poses", "1"],
+            "setting `--poses`: 1 pose gives no distance reading",
+        ),
+        (
+            &[
+                "--measure",
+                "distance",
+                "--between-poses",
+                "--poses-file",
+                file,
+            ],
+            "setting `--poses-file`: 1 pose gives no distance reading",
+        ),
+        (
+            &["--measure", "distance", "--poses", "1"],
+            "setting `--poses`: distance 1 has 1 points; it needs at least 5",
+        ),
+    ] {
+        let mut all = vec!["identifiability", "--robot", "irb2600"];
+        all.extend_from_slice(args);
+        let o = calbench(&all);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && e.contains(want), "{args:?}: {e}");
+    }
+}
+
 const STUDY: &str = r#"
 name = "instruments-small"
 seed = 5

@@ -376,7 +376,11 @@ fn lengths_beyond_a_robot_files_range_are_refused() {
         let sc = ci_guard_with(&d, name, |t| t.replace(from, to));
         let out = d.join(name);
         let o = calbench(&["simulate", path_arg(&sc), "--out", path_arg(&out)]);
-        refused(&o, &[&format!("{name}.toml"), key, "a robot file's range"]);
+        let range = match name {
+            "mpe" => "1 m, far beyond any tracker's error",
+            _ => "a robot file's range",
+        };
+        refused(&o, &[&format!("{name}.toml"), key, range]);
         assert!(!out.exists());
     }
     // A tracker turned beyond one turn, as a robot file's angles are bounded: 1e300° ran.
@@ -455,6 +459,26 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
             // Refused as the section is read: the place is the key serde names (§ 8.1).
             "tracker.angle_noise_deg",
             "from 0 to 360 ° (one turn), got 1e300",
+        ),
+        (
+            // An orientation noise where no orientation is measured had been ignored.
+            "angle-unread",
+            ci.replace("[tracker]\n", "[tracker]\nangle_noise_deg = 0.01\n"),
+            "angle_noise_deg",
+            "setting",
+            "setting `tracker.angle_noise_deg`: is read only with measure = \"pose\" (measure \
+             is \"position\"",
+        ),
+        (
+            // An array of the wrong length has no span of its own: it is placed at its key.
+            "magnitudes",
+            ci.replace(
+                "magnitude_mm = [0.5, 1.0]",
+                "magnitude_mm = [0.1, 0.2, 0.3]",
+            ),
+            "magnitude_mm",
+            "outliers.magnitude_mm",
+            "invalid length 3",
         ),
         (
             "payload",

@@ -509,16 +509,24 @@ fn a_urdf_tree_with_tip_gives_the_single_chain() {
     assert_eq!(a.stdout, b2.stdout);
     let refused = calbench(&["fk", "--robot", path_arg(&tree), "--tip", "nope", "--q", q]);
     assert!(String::from_utf8_lossy(&refused.stderr).contains("no link \"nope\""));
-    let refused = calbench(&[
-        "fk",
-        "--robot",
-        "irb2600",
-        "--tip",
-        "x",
-        "--q",
-        "0,0,0,0,0,0",
-    ]);
-    assert!(!refused.status.success());
+    // A chain of a robot that is no URDF, named by the option given (`--base` alone had
+    // been refused as `--tip`).
+    for option in ["--tip", "--base"] {
+        let refused = calbench(&[
+            "fk",
+            "--robot",
+            "irb2600",
+            option,
+            "x",
+            "--q",
+            "0,0,0,0,0,0",
+        ]);
+        let e = String::from_utf8_lossy(&refused.stderr);
+        assert!(
+            e.contains(&format!("setting `{option}`: ")) && e.contains("\"irb2600\" is not one"),
+            "{e}"
+        );
+    }
     // The sensor chain from the root: a fixed chain has no joints.
     assert_eq!(tip.robot.dof(), one.dof());
 }

@@ -425,3 +425,39 @@ fn a_fixed_parameter_the_robot_lacks_is_refused_naming_the_task_key() {
         "{err}"
     );
 }
+
+/// Socket distances in metres (or inches) are refused at their key and line, the nominal
+/// robot's own distance beside them; they had been identified and refused as a robot that
+/// cannot be right, naming the first joint file.
+#[test]
+fn socket_distances_in_another_unit_are_refused_at_their_key() {
+    let dir = tmp_dir("cli-socket-task-unit");
+    for (name, given, way) in [
+        ("metres", "0.05", "farther"),
+        ("inches", "1.9685", "farther"),
+    ] {
+        let task = copied_task(&dir, "", "socket_spread_mm", name);
+        let text = read(&task).replace("[0.0, 50.0]", &format!("[0.0, {given}]"));
+        std::fs::write(&task, &text).unwrap();
+        let line = text
+            .lines()
+            .position(|l| l.starts_with("distances_mm"))
+            .unwrap()
+            + 1;
+        let err = refused_task(&task, &dir.join("out"));
+        let want = format!(
+            "{name}.toml: line {line}, sockets.distances_mm: socket 2 is {given} mm from socket 1, \
+             where the nominal robot puts the tool points of its file "
+        );
+        assert!(
+            err.contains(&want) && err.contains(&format!("times {way}):")),
+            "{err}"
+        );
+        assert!(!err.contains("hole_0.csv"), "{err}");
+    }
+    // A hundred times the distance: nearer.
+    let task = copied_task(&dir, "", "socket_spread_mm", "far");
+    std::fs::write(&task, read(&task).replace("[0.0, 50.0]", "[0.0, 5000.0]")).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(err.contains("times nearer): are these distances"), "{err}");
+}

@@ -326,6 +326,22 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
         e.contains("both.toml: line 7, unpublished") && e.contains("one or the other"),
         "{e}"
     );
+    // Blank text where a reader is told what the task is, or why no figure is given, or
+    // which figure it is: each named at its own key (a blank label was named `source`).
+    let title = src.replace(
+        "title = \"IPA UR10 Series D, positions, interleaved 70/30 split\"",
+        "title = \" \"",
+    );
+    let e = refused("title", &title, None);
+    assert!(e.contains("title.toml: line 3, title: is blank"), "{e}");
+    let why = src.replace("\"not published in a source found\"", "\"\"");
+    let e = refused("why", &why, None);
+    assert!(e.contains("why.toml: line 7, unpublished: is blank"), "{e}");
+    let label = both
+        .replace("unpublished = \"not published in a source found\"\n", "")
+        .replace("label = \"x\"", "label = \"\"");
+    let e = refused("label", &label, None);
+    assert!(e.contains(", published[0].label: is blank"), "{e}");
     let e = refused(
         "rows",
         &src,

@@ -234,6 +234,15 @@ impl Side {
         }
         if let Some(t) = &trials {
             let csv = trials_csv(&file);
+            whole_run(&summary, t).map_err(|(entry, why)| match own {
+                true => Error::file(&file, format!("{KEY}.entries.{entry}.trials"), why)
+                    .at_json_key_line(),
+                false => Error::file(
+                    &csv,
+                    "column trial",
+                    format!("{why}: {} is not this run's whole file", csv.display()),
+                ),
+            })?;
             behind(&summary, t).map_err(|(entry, metric, why)| match own {
                 true => Error::file(&file, format!("{KEY}.entries.{entry}.values.{metric}"), why)
                     .at_json_key_line(),
@@ -334,6 +343,34 @@ fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, Str
                 return Err((entry, metric, why));
             }
         }
+    }
+    Ok(())
+}
+
+/// Whether the per-trial values `t` are a whole run's: for each entry of `summary`, its
+/// trials 0 to N − 1, N the summary's `trials` (each sweep point runs them all). A
+/// `trials.csv` cut short (to its header) would otherwise leave the comparison unpaired, and
+/// rows of trials the run never drew would pair with another run's. The entry key and why,
+/// where one is not.
+fn whole_run(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, String)> {
+    let Some(n) = summary.trials else {
+        return Ok(());
+    };
+    for e in &summary.results {
+        let entry = trials_key(e, summary);
+        let held = t.trials.get(&entry);
+        let count = held.map_or(0, BTreeSet::len);
+        let why = match held.and_then(|h| h.iter().find(|i| **i >= n)) {
+            Some(i) => format!(
+                "holds trial {i} of {entry}, where the summary ran trials 0 to {}",
+                n.saturating_sub(1)
+            ),
+            None if count != n => {
+                format!("holds {count} of the {n} trials of {entry} that the summary ran")
+            }
+            None => continue,
+        };
+        return Err((entry, why));
     }
     Ok(())
 }

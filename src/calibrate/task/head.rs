@@ -179,6 +179,9 @@ impl<'a> TaskFile<'a> {
         more: Vec<(String, PathBuf)>,
         (published, unpublished): (Vec<Published>, Option<String>),
     ) -> Result<TaskHead> {
+        if title.trim().is_empty() {
+            return Err(self.bad("title", "is blank: say what the task is".into()));
+        }
         check_published(&published, &unpublished, &|k, m| self.bad(k, m))?;
         let mut fixed = vec![("robot".to_string(), robot.clone())];
         fixed.extend(more);
@@ -239,10 +242,21 @@ fn check_published(
                 format!("{}: a figure in mm, finite and ≥ 0", p.value),
             ));
         }
-        if p.source.trim().is_empty() || p.label.trim().is_empty() {
-            let key = format!("published[{i}].source");
-            return Err(bad(&key, "a figure needs its label and its source".into()));
+        for (field, text) in [("label", &p.label), ("source", &p.source)] {
+            if text.trim().is_empty() {
+                let key = format!("published[{i}].{field}");
+                return Err(bad(
+                    &key,
+                    "is blank: a figure needs its label and its source".into(),
+                ));
+            }
         }
+    }
+    if unpublished.as_ref().is_some_and(|u| u.trim().is_empty()) {
+        return Err(bad(
+            "unpublished",
+            "is blank: say why the data's authors give no figure".into(),
+        ));
     }
     Ok(())
 }

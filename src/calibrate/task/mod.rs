@@ -10,6 +10,7 @@ mod head;
 pub mod record;
 pub mod sha256;
 pub mod socket;
+mod socket_figures;
 mod socket_file;
 pub mod split;
 

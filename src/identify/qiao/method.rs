@@ -113,7 +113,14 @@ where
             .schedules()
             .is_some()
             .then(|| options::split::<Schedules>(&mut t));
-        let mut search = S::deserialize(toml::Value::Table(t)).map_err(D::Error::custom)?;
+        let taken = [
+            options::fields::<SearchBox>(),
+            schedules
+                .as_ref()
+                .map_or(&[][..], |_| options::fields::<Schedules>()),
+        ];
+        let mut search = S::deserialize(toml::Value::Table(t))
+            .map_err(|e| D::Error::custom(options::with_taken(e, &taken)))?;
         if let (Some(given), Some(s)) = (schedules, search.schedules()) {
             *s = options::with_defaults(&*s, given).map_err(D::Error::custom)?;
         }

@@ -117,7 +117,9 @@ impl<'de> serde::Deserialize<'de> for BasPsoOptions {
         let mut swarm = toml::Table::deserialize(d)?;
         let beetle = options::split::<BeetleTerm>(&mut swarm);
         Ok(BasPsoOptions {
-            swarm: PsoOptions::deserialize(toml::Value::Table(swarm)).map_err(D::Error::custom)?,
+            swarm: PsoOptions::deserialize(toml::Value::Table(swarm)).map_err(|e| {
+                D::Error::custom(options::with_taken(e, &[options::fields::<BeetleTerm>()]))
+            })?,
             beetle: BeetleTerm::deserialize(toml::Value::Table(beetle))
                 .map_err(D::Error::custom)?,
         })

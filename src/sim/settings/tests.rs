@@ -58,7 +58,7 @@ fn negative_noise_is_refused_with_its_key() {
     let e = t.check().unwrap_err();
     assert!(
         e.to_string()
-            .contains("must be finite and from 0 to 1000000000 µm"),
+            .contains("must be finite and from 0 to 1000000 µm"),
         "{e}"
     );
     assert_eq!(e.key(), Some("tracker.mpe_a_um"));
@@ -68,9 +68,13 @@ fn negative_noise_is_refused_with_its_key() {
         ("mpe_a_um = -1.0", "from 0 to", true),
         (
             "mpe_b_um_per_m = 1e308",
-            "1000000000 µm (a robot file's range)",
+            "1000000 µm (1 m, far beyond any tracker's error)",
             true,
         ),
+        // A metre and more had been taken, up to a robot file's range, and `simulate`
+        // then blamed the robot's lengths for the points the noise carried out of range.
+        ("mpe_a_um = 1e9", "from 0 to 1000000 µm", true),
+        ("mpe_a_um = 1000001", "from 0 to 1000000 µm", true),
         (
             "angle_noise_deg = 1e300",
             "from 0 to 360 ° (one turn)",

@@ -11,6 +11,7 @@
 mod params;
 mod report;
 mod sections;
+mod source;
 mod sweep;
 
 use std::path::{Path, PathBuf};
@@ -38,6 +39,7 @@ pub use sections::{
     Calibration, IdentificationSpec, OptimiseEach, PoseStrategy, RobotRef, StrategyName, Validation,
 };
 use serde::Deserialize;
+use source::Source;
 pub(crate) use sweep::given;
 use sweep::SweepField;
 pub use sweep::{Sweep, SweepAxis};
@@ -130,53 +132,6 @@ pub struct Scenario {
     pub claims: Vec<crate::study::claims::Claim>,
     table: toml::Table,
     source: Option<Source>,
-}
-
-/// The text a scenario was read from, for the lines of refused keys, and the keys set since
-/// (by an override or a sweep point), whose values are not the text's: they get no line.
-#[derive(Clone)]
-struct Source {
-    text: std::sync::Arc<str>,
-    edited: Vec<String>,
-}
-
-impl std::fmt::Debug for Source {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Source")
-            .field("lines", &self.text.lines().count())
-            .field("edited", &self.edited)
-            .finish()
-    }
-}
-
-impl Source {
-    /// The line of `key` in the text, unless `key` was edited (or lies in, or holds, an
-    /// edited key).
-    fn line(&self, key: &str) -> Option<usize> {
-        let within = |a: &str, b: &str| {
-            a == b || a.strip_prefix(b).is_some_and(|r| r.starts_with(['.', '[']))
-        };
-        if self.edited.iter().any(|e| within(key, e) || within(e, key)) {
-            return None;
-        }
-        crate::error::toml_key_line(&self.text, key)
-    }
-
-    /// `source` with `keys` edited too. A method's key (`methods.<label>.<key>`) counts as
-    /// an edit of every method: refusals name methods by index.
-    fn edit(source: &Option<Source>, keys: impl IntoIterator<Item = String>) -> Option<Source> {
-        source.as_ref().map(|s| {
-            let mut s = s.clone();
-            s.edited.extend(keys.into_iter().map(|k| {
-                if k.starts_with("methods.") {
-                    "methods".to_string()
-                } else {
-                    k
-                }
-            }));
-            s
-        })
-    }
 }
 
 /// The most trials a study may ask for (docs/formats.md `trials`): more is refused, not run until
@@ -273,8 +228,9 @@ impl Scenario {
             toml::Value::Table(table.clone())
                 .try_into()
                 .map_err(|e: toml::de::Error| {
-                    // The same refusal read from the text has a span: its line.
-                    let line = source
+                    // The same refusal read from the text has a span: its line; one
+                    // without (an array of the wrong length) is placed at its key's line.
+                    let spanned = source
                         .as_ref()
                         .filter(|s| s.edited.is_empty())
                         .and_then(|s| {
@@ -283,7 +239,11 @@ impl Scenario {
                         });
                     let (msg, key) = crate::error::toml_value_error(&e);
                     let place = key.unwrap_or_else(|| "scenario".into());
-                    Error::file(&shown, at_line(line, place), msg)
+                    Error::file(
+                        &shown,
+                        at_line(spanned.or_else(|| line(&place)), place),
+                        msg,
+                    )
                 })?;
         let dir = path
             .and_then(Path::parent)
