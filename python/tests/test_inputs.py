@@ -216,6 +216,19 @@ def test_a_python_method_of_the_wrong_length_is_named(root):
     assert error.startswith("the method `three` returned 3 values for "), error
     (error,) = t[t.method == "nan"]["error"]
     assert error.startswith("the method `nan` returned a non-finite value for `"), error
+    # Finite but no robot's: it had been counted rank-deficient with no error, and identify
+    # had blamed the readings ("the identified robot cannot be physically right").
+    def huge(problem):
+        return np.full(len(problem.x0), 1e200)
+
+    study = calbench.run(scenario(root), trials=1, methods={"huge": huge})
+    t = study.trials
+    (error,) = t[t.method == "huge"]["error"]
+    assert error.startswith("the method `huge` returned an error of `"), error
+    assert error.endswith("(a robot file's range), got 1e200"), error
+    task = root / "tasks" / "barrett-wam.toml"
+    with pytest.raises(calbench.ComputeError, match=r"^the method `huge` returned an error of `"):
+        calbench.task(task, huge, models=["kinematic"])
     task = root / "tasks" / "barrett-wam.toml"
     with pytest.raises(calbench.ComputeError, match=r"^the method `three` returned 3 values for \d+ parameters$"):
         calbench.task(task, three, models=["kinematic"])

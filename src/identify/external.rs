@@ -74,6 +74,17 @@ impl Method for External {
                 p.params[i], x[i]
             )));
         }
+        // An error no robot file can hold is no robot's (compliances and the residual
+        // terms have no such range).
+        let beyond = (0..t).find_map(|i| {
+            let q = p.params[i];
+            let msg =
+                crate::robot::beyond_range(x[i], q.is_length()).filter(|_| q.is_geometric())?;
+            Some(format!("returned an error of `{q}` that {msg}"))
+        });
+        if let Some(what) = beyond {
+            return Err(refused(what));
+        }
         let termination = match termination {
             None => Termination::Converged,
             Some(name) => name.parse().map_err(|_| {

@@ -37,7 +37,8 @@ pub mod urdf;
 pub use chain::{Chain, ChainVars, Lanes, Op, OpKind, OpValues, MAX_OPS};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
 pub use param::{
-    value_count, Param, GRAVITY_POINTS, HARMONIC_TERMS, MAX_HARMONIC_ORDER, PARAMS_PER_JOINT,
+    beyond_range, value_count, Param, GRAVITY_POINTS, HARMONIC_TERMS, MAX_HARMONIC_ORDER,
+    PARAMS_PER_JOINT,
 };
 
 use crate::error::{Error, Result};

@@ -140,6 +140,16 @@ impl Param {
         }
     }
 
+    /// Whether the parameter is one of the geometry's (a joint's θ, d, a, α, β, the base's
+    /// or the tool's), bounded by a robot file's range ([`beyond_range`]); not a compliance,
+    /// a harmonic or a gravity term.
+    pub fn is_geometric(self) -> bool {
+        !matches!(
+            self,
+            Param::Compliance(_) | Param::Harmonic(..) | Param::Gravity(..)
+        )
+    }
+
     /// Whether the parameter is a length (mm); otherwise it is an angle (rad).
     pub fn is_length(self) -> bool {
         match self {
@@ -291,6 +301,20 @@ pub fn add_block_offsets(
             *d += offset(j, block);
         }
     }
+}
+
+/// The refusal of a length (`length`) or an angle beyond a robot file's range for it
+/// ([`super::MAX_LENGTH_MM`], [`super::MAX_ANGLE_RAD`]), given as a robot's error (a
+/// scenario's, or a method's estimate): the robot's points would not be finite (1e300 mm), or
+/// its angles wrap.
+pub fn beyond_range(v: crate::numeric::Real, length: bool) -> Option<String> {
+    let (most, unit) = match length {
+        true => (super::MAX_LENGTH_MM, "mm"),
+        false => (super::MAX_ANGLE_RAD, "rad"),
+    };
+    let shown = crate::error::shown(v);
+    (v.abs() > most)
+        .then(|| format!("must be within ±{most} {unit} (a robot file's range), got {shown}"))
 }
 
 #[cfg(test)]

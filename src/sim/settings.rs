@@ -15,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::measurement::Measure;
 use crate::numeric::options::{finite, number, range, recheck_at, share, within};
 use crate::numeric::Real;
-use crate::robot::Param;
+use crate::robot::{beyond_range, Param};
 
 /// Refuses a non-finite or negative number.
 fn non_negative(key: &str, v: Real) -> Result<()> {
@@ -188,13 +188,9 @@ impl ErrorSettings {
                 ));
             }
             for (n, v) in &self.values {
-                let Some(p) = Param::parse(n) else { continue };
-                if matches!(
-                    p,
-                    Param::Compliance(_) | Param::Harmonic(..) | Param::Gravity(..)
-                ) {
+                let Some(p) = Param::parse(n).filter(|p| p.is_geometric()) else {
                     continue;
-                }
+                };
                 if let Some(msg) = beyond_range(*v, p.is_length()) {
                     return Err(Error::setting(format!("errors.values.{n}"), msg));
                 }
@@ -310,20 +306,6 @@ impl Default for TrackerSettings {
             angle_noise_deg: 0.0,
         }
     }
-}
-
-/// The refusal of a length (`length`) or an angle a scenario gives beyond a robot file's
-/// range for it ([`crate::robot::MAX_LENGTH_MM`], [`crate::robot::MAX_ANGLE_RAD`]): the true
-/// robot's or the measured points would not be finite (1e300 mm), or its angles wrap, and
-/// `simulate` would write `inf`.
-fn beyond_range(v: Real, length: bool) -> Option<String> {
-    let (most, unit) = match length {
-        true => (crate::robot::MAX_LENGTH_MM, "mm"),
-        false => (crate::robot::MAX_ANGLE_RAD, "rad"),
-    };
-    let shown = crate::error::shown(v);
-    (v.abs() > most)
-        .then(|| format!("must be within ±{most} {unit} (a robot file's range), got {shown}"))
 }
 
 /// The first of the lengths `v` beyond a robot file's range ([`beyond_range`]), refused as
