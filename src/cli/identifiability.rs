@@ -153,8 +153,6 @@ fn instrument(
         spheres: args.spheres,
         ..InstrumentSettings::default()
     };
-    // Random poses move onto their planes or spheres; a pose file's poses are taken as
-    // they are (they touch, or the fitted surfaces are the instrument's).
     // The library names the poses `q`: here they are the file's, or the random count's.
     let of_poses = |e: Error| match e {
         Error::Option {
@@ -166,6 +164,8 @@ fn instrument(
         },
         e => e,
     };
+    // Random poses move onto their planes or spheres; a pose file's poses are taken as
+    // they are (they touch, or the fitted surfaces are the instrument's).
     let moved;
     let ((a, nuisance), qs) = if args.poses_file.is_some() {
         (

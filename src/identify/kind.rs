@@ -293,9 +293,8 @@ pub fn identifiability_of(
             return Err(Error::option(opt, why));
         }
     }
-    let kind = instrument.kind().as_str();
     if instrument.observations(qs.len()) == 0 {
-        let n = qs.len();
+        let (n, kind) = (qs.len(), instrument.kind().as_str());
         let gives = if n == 1 { "pose gives" } else { "poses give" };
         let msg = format!("{n} {gives} no {kind} reading: give more poses");
         return Err(Error::option(Opt::Q, msg));
