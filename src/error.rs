@@ -316,6 +316,15 @@ impl Error {
         }
     }
 
+    /// The refused setting `key` as the refusal of the front end's option `option` that gave
+    /// it ([`Error::of_option`] for that key alone); any other error as it is.
+    pub fn setting_as(self, key: &str, option: Opt) -> Self {
+        match &self {
+            Error::Setting { key: k, .. } if k == key => self.of_option(option),
+            _ => self,
+        }
+    }
+
     /// An error about a setting.
     pub fn setting(key: impl Into<String>, msg: impl Into<Said>) -> Self {
         Error::Setting {
@@ -381,10 +390,7 @@ where
         let field = msg
             .strip_prefix("missing field `")
             .and_then(|m| m.strip_suffix('`'))
-            .or_else(|| {
-                let rest = msg.strip_prefix("unknown field `")?;
-                rest.split_once('`').map(|(f, _)| f)
-            });
+            .or_else(|| unknown_field(&msg).map(|(f, _)| f));
         if let Some(field) = field {
             key = match key.as_str() {
                 "." => field.to_string(),
@@ -444,6 +450,12 @@ pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
         Some((msg, key)) => (msg.to_string(), Some(key.trim_end_matches('`').to_string())),
         None => (text.to_string(), None),
     }
+}
+
+/// The key serde's refusal of an unknown field names (`unknown field `foo`, expected one of
+/// …`), and the rest of the message after it; `None` for any other refusal.
+pub fn unknown_field(msg: &str) -> Option<(&str, &str)> {
+    msg.strip_prefix("unknown field `")?.split_once('`')
 }
 
 /// toml's message (0.9) when a value of any other type stands where a named choice is read.

@@ -293,24 +293,23 @@ pub fn identifiability_of(
             return Err(Error::option(opt, why));
         }
     }
-    if instrument.observations(qs.len()) == 0 {
+    let observations = instrument.observations(qs.len());
+    if observations == 0 {
         let (n, kind) = (qs.len(), instrument.kind().as_str());
         let gives = if n == 1 { "pose gives" } else { "poses give" };
         let msg = format!("{n} {gives} no {kind} reading: give more poses");
         return Err(Error::option(Opt::Q, msg));
     }
     // The Jacobian does not depend on the readings: zeros of the right length.
-    let values = vec![0.0; instrument.observations(qs.len()) * instrument.rows_per_observation()];
+    let values = vec![0.0; observations * instrument.rows_per_observation()];
     let data = KindData {
         instrument,
         group,
         values,
     };
     // Too few poses for the instrument's own unknowns (a pivot's five) are the poses' fault.
-    let a = identifiability(robot, &robot.params(), qs, &data).map_err(|e| match e {
-        Error::Setting { key, msg } if key == "measurements" => Error::option(Opt::Q, msg),
-        e => e,
-    })?;
+    let a = identifiability(robot, &robot.params(), qs, &data)
+        .map_err(|e| e.setting_as("measurements", Opt::Q))?;
     Ok((a, data.instrument.nuisance_names()))
 }
 

@@ -62,9 +62,7 @@ pub fn read<T: DeserializeOwned>(t: &toml::Table) -> Result<T, (String, String)>
         if let Some(k) = named {
             return (k, msg);
         }
-        let unknown = msg
-            .strip_prefix("unknown field `")
-            .and_then(|r| r.split('`').next());
+        let unknown = crate::error::unknown_field(&msg).map(|(k, _)| k);
         (unknown.unwrap_or_default().to_string(), msg.clone())
     })
 }
@@ -189,10 +187,7 @@ pub fn split<T: DeserializeOwned>(table: &mut toml::Table) -> toml::Table {
 /// words.
 pub fn with_taken(e: impl std::fmt::Display, taken: &[&[&str]]) -> String {
     let msg = e.to_string();
-    let Some((key, tail)) = msg
-        .strip_prefix("unknown field `")
-        .and_then(|r| r.split_once('`'))
-    else {
+    let Some((key, tail)) = crate::error::unknown_field(&msg) else {
         return msg;
     };
     // serde names the expected keys between backticks (`a`, `b` or `c`; none: no fields).

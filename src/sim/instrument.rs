@@ -89,15 +89,8 @@ const KIND_KEYS: [(&str, &[Kind]); 9] = [
 /// ([`Opt::Planes`], [`Opt::Spheres`]) of a caller that takes the counts as its own
 /// (`identifiability --planes`, Python's `planes=`), not as a study's key.
 pub fn counts_as_options(e: Error) -> Error {
-    match e {
-        Error::Setting { key, msg } if key == "measurement.planes" => {
-            Error::option(Opt::Planes, msg)
-        }
-        Error::Setting { key, msg } if key == "measurement.spheres" => {
-            Error::option(Opt::Spheres, msg)
-        }
-        e => e,
-    }
+    e.setting_as("measurement.planes", Opt::Planes)
+        .setting_as("measurement.spheres", Opt::Spheres)
 }
 
 impl InstrumentSettings {

@@ -127,9 +127,7 @@ pub fn at_key_line(e: Error, text: &str) -> Error {
     match e {
         Error::File { file, place, msg } if place == "scenario" => {
             let said = msg.to_string();
-            let key = said
-                .strip_prefix("unknown field `")
-                .and_then(|m| m.split_once('`'));
+            let key = crate::error::unknown_field(&said);
             let line = key.and_then(|(k, _)| crate::error::toml_key_line(text, k));
             Error::file(file, crate::error::at_line(line, place), msg)
         }
