@@ -177,11 +177,13 @@ def identify(
         allow_rank_deficient: return a result whose data do not determine every parameter
             instead of raising.
         allow_worse: return a result that makes the robot worse than the nominal one (its
-            causes in ``allowed_worse``) instead of raising.
+            causes in ``allowed_worse``) instead of raising, with a ``UserWarning`` (the
+            words ``calbench identify --allow-worse`` prints on stderr).
         allow_implausible: return a result that cannot be physically right (a length moved
             by a large share of the reach, an angle by more than 5°, points scaled against
             the nominal robot's; docs/formats.md "Physical plausibility"), its findings in
-            ``allowed_implausible``, instead of raising.
+            ``allowed_implausible``, instead of raising, with a ``UserWarning`` as for
+            ``allow_worse``.
 
     Returns:
         an :class:`IdentifyResult`: the record ``calbench identify`` writes to
@@ -249,6 +251,8 @@ def identify(
     warning = fields.pop("warning")
     if warning is not None:
         warnings.warn(warning, ConvergenceWarning, stacklevel=2)
+    for kept in fields.pop("kept"):
+        warnings.warn(kept, UserWarning, stacklevel=2)
     return IdentifyResult(fields)
 
 

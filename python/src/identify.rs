@@ -12,9 +12,11 @@ use pyo3::types::{PyDict, PyString};
 
 use calbench::calibrate::cv::{Holdout, Model};
 use calbench::calibrate::pipeline::IdentifyOutcome;
+use calbench::calibrate::plausibility::implausible_warning;
 use calbench::calibrate::record::unconverged_warning;
 use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
+use calbench::calibrate::verdict::worse_warning;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
 use calbench::measurement::csv::{read_measurements, ArrayKeys};
@@ -262,6 +264,15 @@ pub(crate) fn identify<'py>(
     out.set_item("record", record)?;
     out.set_item("seconds", seconds)?;
     out.set_item("warning", unconverged_warning(outcome.record()))?;
+    // A result kept although it makes the robot worse or cannot be physically right: the
+    // warnings `calbench identify` prints, the options spelled as keywords.
+    let r = outcome.record();
+    let kept: Vec<String> = worse_warning(&r.allowed_worse)
+        .into_iter()
+        .chain(implausible_warning(&r.allowed_implausible))
+        .map(|w| w.spell(crate::errors::spell))
+        .collect();
+    out.set_item("kept", kept)?;
     match &outcome {
         IdentifyOutcome::Kind(o) => out.set_item(
             "robot",

@@ -108,6 +108,10 @@ fn catalogue(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 #[pymodule]
 fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
+    // numpy's C API, loaded now: loaded by the first array a function returns, it ran Python
+    // code where a pending Ctrl-C raised, and the numpy crate panics on that error
+    // (`PanicException` where `KeyboardInterrupt` belongs).
+    numpy::PyArray1::<f64>::zeros(py, 0, false);
     m.add("Error", py.get_type::<Error>())?;
     m.add("FileError", py.get_type::<FileError>())?;
     m.add("SettingError", py.get_type::<SettingError>())?;

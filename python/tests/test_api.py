@@ -317,10 +317,18 @@ def test_identify_a_kind_file_returns_the_cli_record(cli, root, tmp_path):
     bad.write_text("\n".join(rows) + "\n")
     with pytest.raises(calbench.FileError, match="makes the robot worse.*allow_worse=True"):
         calbench.identify(robot, data=bad, validate=val, method="lm")
-    # (That robot also moved beyond what a calibration can mean: kept with both.)
-    kept = calbench.identify(robot, data=bad, validate=val, method="lm", allow_worse=True,
-                             allow_implausible=True)
+    # (That robot also moved beyond what a calibration can mean: kept with both, and each
+    # warns as `calbench identify` does on stderr, the options spelled as keywords.)
+    with pytest.warns(UserWarning) as caught:
+        kept = calbench.identify(robot, data=bad, validate=val, method="lm", allow_worse=True,
+                                 allow_implausible=True)
     assert "validation RMS" in kept["allowed_worse"][0]
+    said = [str(w.message) for w in caught if w.category is UserWarning]
+    assert len(said) == 2, said
+    assert said[0].startswith("the identification makes the robot worse (")
+    assert said[0].endswith("); kept because of allow_worse=True"), said
+    assert said[1].startswith("the identified robot cannot be physically right (")
+    assert "kept because of allow_implausible=True: do not load it" in said[1], said
 
 
 def test_refusals_name_the_options_as_each_front_end_spells_them(cli, root, tmp_path):

@@ -96,9 +96,10 @@ def test_identify_refuses_an_implausible_robot_unless_allowed(root):
     swapped = sim["points"][:, [1, 0, 2]]
     with pytest.raises(calbench.Error, match="two columns look swapped"):
         calbench.identify(robot, q=sim["q"], points=swapped, method="ls")
-    kept = calbench.identify(
-        robot, q=sim["q"], points=_metres(sim), method="ls", allow_implausible=True
-    )
+    with pytest.warns(UserWarning, match="kept because of allow_implausible=True"):
+        kept = calbench.identify(
+            robot, q=sim["q"], points=_metres(sim), method="ls", allow_implausible=True
+        )
     assert any("metres" in f for f in kept["allowed_implausible"])
     good = calbench.identify(robot, q=sim["q"], points=sim["points"], method="ls")
     assert "allowed_implausible" not in good

@@ -531,7 +531,7 @@ pub fn implausible_warning(found: &[String]) -> Option<Said> {
             found.join("; ")
         );
         Said::from(msg)
-            .name(Opt::AllowImplausible)
+            .on(Opt::AllowImplausible)
             .text(": do not load it into a controller before checking the data")
     })
 }

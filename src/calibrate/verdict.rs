@@ -254,7 +254,7 @@ pub fn worse_warning(causes: &[String]) -> Option<Said> {
             "the identification makes the robot worse ({}); kept because of ",
             causes.join("; ")
         );
-        Said::from(msg).name(Opt::AllowWorse)
+        Said::from(msg).on(Opt::AllowWorse)
     })
 }
 

@@ -154,21 +154,30 @@ pub fn run(args: &CheckArgs) -> Result<()> {
         let line = match c.diff_ci {
             None => format!("{}: {m}", c.status.as_str()),
             Some([lo, hi]) => format!(
-                "{}: {}: {}: {} → {} (change {}{} [{}, {}], {}, p Holm {}){}",
+                "{}: {}: {}: {} → {} (change {}{}, {}, p Holm {}){}",
                 c.status.as_str(),
                 m.entry,
                 m.metric,
                 fmt_num(m.baseline, 6),
                 fmt_num(m.value, 6),
                 fmt_num(m.value - m.baseline, 4),
-                // The interval of the report's test of the pair: the median's for the sign test.
-                if c.median {
-                    ", median change (sign test) in"
-                } else {
-                    " in"
+                match (lo.is_finite(), hi.is_finite()) {
+                    // A figure whose summaries have no interval at their trials.
+                    (false, false) =>
+                        " with no interval (neither summary has one at its trials)".into(),
+                    // The interval of the report's test of the pair: the median's for the
+                    // sign test.
+                    _ => format!(
+                        "{} [{}, {}]",
+                        if c.median {
+                            ", median change (sign test) in"
+                        } else {
+                            " in"
+                        },
+                        fmt_num(lo, 4),
+                        fmt_num(hi, 4)
+                    ),
                 },
-                fmt_num(lo, 4),
-                fmt_num(hi, 4),
                 if c.paired { "paired" } else { "unpaired" },
                 fmt_num(c.p_holm, 3),
                 c.trials_needed.map_or(String::new(), |n| format!(

@@ -508,30 +508,38 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                 f.chars()
                     .map(|ch| if ch == plan.decimal { '.' } else { ch }),
             );
-            cell.parse::<Real>()
+            let v = cell
+                .parse::<Real>()
                 .ok()
-                .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')))
-                .ok_or_else(|| {
-                    // A number in the other decimal mark: the mapping's `decimal` is the
-                    // likely cause, not the cell.
-                    let other = if plan.decimal == '.' { ',' } else { '.' };
-                    let swapped: String = f
-                        .chars()
-                        .map(|ch| if ch == other { '.' } else { ch })
-                        .collect();
-                    let hint = if f.contains(other)
-                        && swapped.parse::<Real>().is_ok_and(Real::is_finite)
-                    {
+                .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')));
+            if let Some(msg) = v.and_then(|v| super::rows::underflow(&cell, v)) {
+                return Err(at_line(raw, line, &place, msg));
+            }
+            v.ok_or_else(|| {
+                // A number in the other decimal mark: the mapping's `decimal` is the
+                // likely cause, not the cell.
+                let other = if plan.decimal == '.' { ',' } else { '.' };
+                let swapped: String = f
+                    .chars()
+                    .map(|ch| if ch == other { '.' } else { ch })
+                    .collect();
+                let hint =
+                    if f.contains(other) && swapped.parse::<Real>().is_ok_and(Real::is_finite) {
                         format!(
-                            " with the mapping's decimal = \"{}\" (this export writes \"{other}\"?)",
-                            plan.decimal
-                        )
+                        " with the mapping's decimal = \"{}\" (this export writes \"{other}\"?)",
+                        plan.decimal
+                    )
                     } else {
                         String::new()
                     };
-                    let f = super::rows::quoted(f);
-                    at_line(raw, line, &place, format!("{f} is not a finite number{hint}"))
-                })
+                let f = super::rows::quoted(f);
+                at_line(
+                    raw,
+                    line,
+                    &place,
+                    format!("{f} is not a finite number{hint}"),
+                )
+            })
         };
         row.clear();
         for &c in &jc {

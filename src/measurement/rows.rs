@@ -41,18 +41,22 @@ pub(crate) fn number(
         .ok()
         .filter(|v| v.is_finite())
         .ok_or_else(|| (place(), format!("{} is not a finite number", quoted(t))))?;
-    // A value below the smallest 64-bit number reads as 0 (`1e-400`): not the value written.
-    let mantissa = t.split(['e', 'E']).next().unwrap_or("");
-    if v == 0.0 && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b)) {
-        return Err((
-            place(),
-            format!(
-                "{} is below the smallest 64-bit number (about 4.9e-324) and would read as 0",
-                quoted(t)
-            ),
-        ));
+    match underflow(t, v) {
+        Some(msg) => Err((place(), msg)),
+        None => Ok(v),
     }
-    Ok(v)
+}
+
+/// The refusal of a cell `t` read as `v` when it is a number below the smallest 64-bit one,
+/// which reads as 0 (`1e-400`): not the value written. `None` for any other.
+pub(crate) fn underflow(t: &str, v: Real) -> Option<String> {
+    let mantissa = t.split(['e', 'E']).next().unwrap_or("");
+    (v == 0.0 && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b))).then(|| {
+        format!(
+            "{} is below the smallest 64-bit number (about 4.9e-324) and would read as 0",
+            quoted(t)
+        )
+    })
 }
 
 /// What a CSV file is.

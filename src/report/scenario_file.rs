@@ -6,7 +6,7 @@
 use crate::analysis::regression::Side;
 use crate::calibrate::task::sha256::sha256_hex;
 use crate::error::{Error, Result};
-use crate::study::scenario::Scenario;
+use crate::study::scenario::{effect, Scenario};
 
 /// The file's name.
 pub const NAME: &str = "scenario.toml";
@@ -34,7 +34,7 @@ pub fn with_hash(body: &str) -> String {
 
 /// The canonical text and its hash from the file's `text` read at `path`; refuses, naming
 /// the file, a text without the hash line or whose text does not have the hash it states
-/// (an edited copy).
+/// (an edited copy). Line ends turned into CRLF are read as the LF that was written.
 pub fn read(text: &str, path: &std::path::Path) -> Result<(String, String)> {
     let (first, body) = text.split_once('\n').unwrap_or((text, ""));
     let Some(stated) = first.strip_prefix(HEAD) else {
@@ -43,6 +43,12 @@ pub fn read(text: &str, path: &std::path::Path) -> Result<(String, String)> {
             "line 1",
             "is not the hash line calbench writes; this is not a run's scenario.toml",
         ));
+    };
+    // A checkout that turned its line ends into CRLF (git's `core.autocrlf` on Windows)
+    // holds the text that ran.
+    let body = match body.contains("\r\n") {
+        true if sha256_hex(body.as_bytes()) != stated.trim() => body.replace("\r\n", "\n"),
+        _ => body.to_string(),
     };
     let hash = sha256_hex(body.as_bytes());
     if stated.trim() != hash {
@@ -56,7 +62,7 @@ pub fn read(text: &str, path: &std::path::Path) -> Result<(String, String)> {
             ),
         ));
     }
-    Ok((body.to_string(), hash))
+    Ok((body, hash))
 }
 
 /// The canonical text of the `scenario.toml` beside the summary file `summary` (hash line
@@ -95,8 +101,10 @@ pub fn settings_apart(a: &Side, b: &Side) -> Result<Vec<String>> {
 /// What two scenarios as run (canonical texts) set differently, other than the keys that
 /// only choose the draws (`seed`, `trials`): each setting as `key: A → B` by its dotted key
 /// (`calibration.count: 40 → 25`, `methods[1].name: "igg3" → "ridge"`, `(none)` where one
-/// lacks it), in the tables' order; empty for one study. A text that is not TOML differs
-/// from every other as a whole.
+/// lacks it), in the tables' order; empty for one study. One study is one effect
+/// ([`effect`]): settings written another way (`2500` for `2500.0`, a default written out)
+/// are not differences, and a setting that differs only so is left out of a list of those
+/// that matter. A text that is not TOML differs from every other as a whole.
 pub fn differences(a: &str, b: &str) -> Vec<String> {
     let table = |t: &str| -> Option<toml::Table> {
         let mut t: toml::Table = toml::from_str(t).ok()?;
@@ -104,45 +112,143 @@ pub fn differences(a: &str, b: &str) -> Vec<String> {
         t.remove("trials");
         Some(t)
     };
-    let mut out = Vec::new();
-    match (table(a), table(b)) {
-        (Some(a), Some(b)) => apart("", &a.into(), &b.into(), &mut out),
-        _ => out.push("the scenario's text: it is not TOML".into()),
+    let (Some(a), Some(b)) = (table(a), table(b)) else {
+        return vec!["the scenario's text: it is not TOML".into()];
+    };
+    let mut all = Vec::new();
+    apart(
+        &mut Vec::new(),
+        &a.clone().into(),
+        &b.clone().into(),
+        &mut all,
+    );
+    let shown = |apart: &[Apart]| apart.iter().map(Apart::to_string).collect();
+    let Some(of_b) = effect(&b).filter(|_| !all.is_empty()) else {
+        return shown(&all);
+    };
+    if effect(&a).as_ref() == Some(&of_b) {
+        return Vec::new();
     }
-    out
+    // Each setting as `a` writes it in `b`: those that leave `b`'s effect as it is.
+    let matters = |d: &&Apart| {
+        let mut with_a = toml::Value::Table(b.clone());
+        d.put_in(&mut with_a);
+        with_a.as_table().and_then(effect).as_ref() != Some(&of_b)
+    };
+    let kept: Vec<&Apart> = all.iter().filter(matters).collect();
+    match kept.is_empty() {
+        true => shown(&all),
+        false => kept.iter().map(|d| d.to_string()).collect(),
+    }
 }
 
-/// Adds to `out` each setting under the dotted `key` where `a` and `b` differ.
-fn apart(key: &str, a: &toml::Value, b: &toml::Value, out: &mut Vec<String>) {
+/// One step of a setting's place: a table's key or an array's index.
+#[derive(Clone)]
+enum Step {
+    Key(String),
+    Index(usize),
+}
+
+/// A setting the two tables write differently: its place, and its value in each (`None`
+/// where one lacks it).
+struct Apart {
+    at: Vec<Step>,
+    a: Option<toml::Value>,
+    b: Option<toml::Value>,
+}
+
+impl std::fmt::Display for Apart {
+    /// `key: A → B`, the key dotted (`methods[1].name`).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        for (i, step) in self.at.iter().enumerate() {
+            match step {
+                Step::Key(k) if i == 0 => write!(f, "{k}")?,
+                Step::Key(k) => write!(f, ".{k}")?,
+                Step::Index(n) => write!(f, "[{n}]")?,
+            }
+        }
+        let show = |v: &Option<toml::Value>| v.as_ref().map_or("(none)".into(), |v| v.to_string());
+        write!(f, ": {} → {}", show(&self.a), show(&self.b))
+    }
+}
+
+impl Apart {
+    /// Writes the setting into `value` as the first table has it (removed where it lacks it).
+    fn put_in(&self, value: &mut toml::Value) {
+        let Some((last, path)) = self.at.split_last() else {
+            return;
+        };
+        let mut here = value;
+        for step in path {
+            let next = match step {
+                Step::Key(k) => here.get_mut(k.as_str()),
+                Step::Index(n) => here.get_mut(*n),
+            };
+            let Some(next) = next else { return };
+            here = next;
+        }
+        match (last, &self.a, here) {
+            (Step::Key(k), Some(v), toml::Value::Table(t)) => {
+                t.insert(k.clone(), v.clone());
+            }
+            (Step::Key(k), None, toml::Value::Table(t)) => {
+                t.remove(k);
+            }
+            (Step::Index(n), Some(v), toml::Value::Array(a)) if *n < a.len() => {
+                a[*n] = v.clone();
+            }
+            _ => {}
+        }
+    }
+}
+
+/// Adds to `out` each setting under the place `at` where `a` and `b` differ other than in
+/// how they write a number ([`same`]).
+fn apart(at: &mut Vec<Step>, a: &toml::Value, b: &toml::Value, out: &mut Vec<Apart>) {
     use toml::Value::{Array, Table};
-    let at = |k: &str| match key {
-        "" => k.to_string(),
-        _ => format!("{key}.{k}"),
-    };
     match (a, b) {
         (Table(a), Table(b)) => {
             let keys = a.keys().chain(b.keys().filter(|k| !a.contains_key(*k)));
             for k in keys {
+                at.push(Step::Key(k.clone()));
                 match (a.get(k), b.get(k)) {
-                    (Some(x), Some(y)) => apart(&at(k), x, y, out),
-                    (x, y) => out.push(setting(&at(k), x, y)),
+                    (Some(x), Some(y)) => apart(at, x, y, out),
+                    (x, y) => out.push(Apart {
+                        at: at.clone(),
+                        a: x.cloned(),
+                        b: y.cloned(),
+                    }),
                 }
+                at.pop();
             }
         }
         (Array(a), Array(b)) if a.len() == b.len() && a.iter().any(toml::Value::is_table) => {
             for (i, (x, y)) in a.iter().zip(b).enumerate() {
-                apart(&format!("{key}[{i}]"), x, y, out);
+                at.push(Step::Index(i));
+                apart(at, x, y, out);
+                at.pop();
             }
         }
-        (a, b) if a != b => out.push(setting(key, Some(a), Some(b))),
+        (a, b) if !same(a, b) => out.push(Apart {
+            at: at.clone(),
+            a: Some(a.clone()),
+            b: Some(b.clone()),
+        }),
         _ => {}
     }
 }
 
-/// One setting that differs, as `key: A → B`.
-fn setting(key: &str, a: Option<&toml::Value>, b: Option<&toml::Value>) -> String {
-    let show = |v: Option<&toml::Value>| v.map_or("(none)".into(), |v| v.to_string());
-    format!("{key}: {} → {}", show(a), show(b))
+/// `a` and `b` are one value, an integer and a float of the same number counting as one.
+fn same(a: &toml::Value, b: &toml::Value) -> bool {
+    use toml::Value::{Array, Float, Integer, Table};
+    match (a, b) {
+        (Integer(i), Float(f)) | (Float(f), Integer(i)) => *i as f64 == *f,
+        (Array(a), Array(b)) => a.len() == b.len() && a.iter().zip(b).all(|(x, y)| same(x, y)),
+        (Table(a), Table(b)) => {
+            a.len() == b.len() && a.iter().all(|(k, x)| b.get(k).is_some_and(|y| same(x, y)))
+        }
+        _ => a == b,
+    }
 }
 
 #[cfg(test)]
@@ -181,5 +287,62 @@ mod tests {
             differences(a, "not = toml = ["),
             ["the scenario's text: it is not TOML"]
         );
+    }
+
+    #[test]
+    fn settings_written_another_way_are_not_differences() {
+        let a = "name = \"g\"\nseed = 1\n[robot]\nbuiltin = \"irb2600\"\n\
+                 [tracker]\npose = [2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]\n\
+                 [[methods]]\nname = \"lm\"\n";
+        let ints = a.replace(
+            "2500.0, 0.0, 500.0, 0.0, 0.0, 180.0",
+            "2500, 0, 500, 0, 0, 180",
+        );
+        let defaults = a
+            .replace("[tracker]\n", "[tracker]\nmpe_a_um = 15.0\ncoverage = 2\n")
+            .replace(
+                "name = \"lm\"\n",
+                "name = \"lm\"\nlabel = \"lm\"\nmu = 1.0\n",
+            );
+        assert!(differences(a, &ints).is_empty());
+        assert!(differences(a, &defaults).is_empty());
+        assert!(differences(&ints, &defaults).is_empty());
+        // Beside a setting that matters, the defaults written out are left out of the list;
+        // an absent key is shown as `(none)`.
+        let noisier = defaults.replace("mpe_a_um = 15.0", "mpe_a_um = 150.0");
+        assert_eq!(
+            differences(a, &noisier),
+            ["tracker.mpe_a_um: (none) → 150.0"]
+        );
+        assert_eq!(
+            differences(&noisier, &ints),
+            ["tracker.mpe_a_um: 150.0 → (none)"]
+        );
+        let damped = ints.replace("name = \"lm\"\n", "name = \"lm\"\nmu = 2\n");
+        assert_eq!(differences(&defaults, &damped), ["methods[0].mu: 1.0 → 2"]);
+        // Another study kind's table is compared as written.
+        let r = "name = \"r\"\n[registration_study]\nnoise = 1.0\n";
+        assert_eq!(
+            differences(r, &r.replace("1.0", "1")),
+            Vec::<String>::new(),
+            "numbers are compared by value"
+        );
+        assert_eq!(
+            differences(r, &format!("{r}points = 10\n")),
+            ["registration_study.points: (none) → 10"]
+        );
+    }
+
+    #[test]
+    fn line_ends_turned_into_crlf_read_as_written_and_an_edit_is_still_refused() {
+        let body = "name = \"g\"\nseed = 1\n[calibration]\ncount = 40\n";
+        let text = with_hash(body);
+        let path = std::path::Path::new("scenario.toml");
+        let crlf = text.replace('\n', "\r\n");
+        assert_eq!(read(&crlf, path).unwrap(), read(&text, path).unwrap());
+        assert_eq!(read(&text, path).unwrap().0, body);
+        let edited = crlf.replace("count = 40", "count = 41");
+        let e = read(&edited, path).unwrap_err().to_string();
+        assert!(e.contains("the file was edited after the run"), "{e}");
     }
 }

@@ -48,7 +48,7 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
     for p in published {
         let dup = rows.iter().any(|r| {
             r.published
-                && r.task == p.task
+                && r.board() == p.board()
                 && r.division == p.division
                 && r.name == p.name
                 && r.value == p.value
@@ -58,8 +58,8 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
         }
     }
     rows.sort_by(|a, b| {
-        (&a.task, a.division != "closed", &a.division)
-            .cmp(&(&b.task, b.division != "closed", &b.division))
+        (a.board(), a.division != "closed", &a.division)
+            .cmp(&(b.board(), b.division != "closed", &b.division))
             .then(a.value.total_cmp(&b.value))
             .then(b.published.cmp(&a.published))
     });
@@ -70,21 +70,23 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
             let lo = bounds(r)[0];
             let below = rows
                 .iter()
-                .filter(|o| o.task == r.task && o.division == r.division && bounds(o)[1] < lo)
+                .filter(|o| o.board() == r.board() && o.division == r.division && bounds(o)[1] < lo)
                 .count();
             below + 1
         })
         .collect();
-    // The task's published figure an entry stands against: the lowest one, of any division.
-    let mut published: BTreeMap<String, Real> = BTreeMap::new();
+    // The board's published figure an entry stands against: the lowest one, of any division.
+    let mut published: BTreeMap<(String, String), Real> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.published) {
-        let p = published.entry(r.task.clone()).or_insert(r.value);
+        let board = (r.task.clone(), r.task_hash.clone());
+        let p = published.entry(board).or_insert(r.value);
         *p = p.min(r.value);
     }
     for (r, rank) in rows.iter_mut().zip(ranks) {
         r.rank = rank;
         if !r.published {
-            r.vs_published = published.get(&r.task).map(|&p| {
+            let board = (r.task.clone(), r.task_hash.clone());
+            r.vs_published = published.get(&board).map(|&p| {
                 let ci = r.ci.map(|[lo, hi]| [lo - p, hi - p]);
                 (r.value - p, ci)
             });
@@ -96,35 +98,38 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
 /// Each entrant's score across the tasks it entered (`rows` of [`rows`]): the geometric mean,
 /// over those tasks, of its best figure there relative to the task's reference — its lowest
 /// published figure, else the best figure recorded (the best known) — so 1 is level with the
-/// reference and 0.9 is 10 % below it on average. Sorted by score, lowest first.
+/// reference and 0.9 is 10 % below it on average. Sorted by score, lowest first. A task
+/// recorded at several versions ([`Row::board`]) counts once per version.
 pub fn scores(rows: &[Row]) -> Vec<Score> {
-    let mut reference: BTreeMap<&str, (bool, Real)> = BTreeMap::new();
+    let mut reference: BTreeMap<(&str, &str), (bool, Real)> = BTreeMap::new();
     for r in rows {
-        let e = reference.entry(&r.task).or_insert((r.published, r.value));
+        let e = reference.entry(r.board()).or_insert((r.published, r.value));
         // A published figure outranks every recorded one as the reference.
         if (r.published, -r.value) > (e.0, -e.1) {
             *e = (r.published, r.value);
         }
     }
-    let mut best: BTreeMap<(&str, &str), Real> = BTreeMap::new();
+    // Per entrant and board: a row of it, and the entrant's best figure there.
+    type Board<'r> = (&'r str, &'r str);
+    let mut best: BTreeMap<(&str, Board), (&Row, Real)> = BTreeMap::new();
     for r in rows.iter().filter(|r| !r.published) {
-        let b = best.entry((&r.name, &r.task)).or_insert(r.value);
-        *b = b.min(r.value);
+        let b = best.entry((&r.name, r.board())).or_insert((r, r.value));
+        b.1 = b.1.min(r.value);
     }
-    let mut by_entrant: BTreeMap<&str, Vec<(&str, Real)>> = BTreeMap::new();
-    for ((name, task), value) in best {
-        by_entrant.entry(name).or_default().push((task, value));
+    let mut by_entrant: BTreeMap<&str, Vec<(&Row, Real)>> = BTreeMap::new();
+    for ((name, _), row_value) in best {
+        by_entrant.entry(name).or_default().push(row_value);
     }
     let mut out: Vec<Score> = by_entrant
         .into_iter()
         .map(|(name, tasks)| {
             let logs: Real = tasks
                 .iter()
-                .map(|(t, v)| (v / reference[t].1).ln())
+                .map(|(r, v)| (v / reference[&r.board()].1).ln())
                 .sum::<Real>();
             Score {
                 name: name.to_string(),
-                tasks: tasks.iter().map(|t| t.0.to_string()).collect(),
+                tasks: tasks.iter().map(|t| t.0.board_title(rows)).collect(),
                 score: (logs / tasks.len() as Real).exp(),
             }
         })

@@ -520,6 +520,24 @@ fn per_trial_values_not_behind_their_summary_are_refused_and_an_unpaired_entry_i
             "{text}"
         );
     }
+    // A column given twice: which one is the run's is not known (the first had been read).
+    let twice = dir.join("twice");
+    std::fs::create_dir_all(&twice).unwrap();
+    std::fs::copy(a.join("summary.json"), twice.join("summary.json")).unwrap();
+    let extra: Vec<String> = rows
+        .iter()
+        .enumerate()
+        .map(|(i, r)| match i {
+            0 => format!("{r},after_max_mm"),
+            _ => format!("{r},5.0"),
+        })
+        .collect();
+    std::fs::write(twice.join("trials.csv"), extra.join("\n") + "\n").unwrap();
+    let (ok, text) = check(&twice.join("summary.json"), &a.join("summary.json"), &[]);
+    assert!(
+        !ok && text.contains("twice/trials.csv: line 1, column after_max_mm: column \"after_max_mm\" appears twice in the header"),
+        "{text}"
+    );
 }
 
 /// A value of the wrong type inside a summary's error statistic or a baseline's per-trial

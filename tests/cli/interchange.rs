@@ -169,6 +169,29 @@ fn import_refuses_a_bad_cell_in_a_quoted_crlf_file_naming_line_and_column() {
     assert!(!out.exists());
 }
 
+/// A cell below the smallest 64-bit number is refused, as a measurement file refuses it; it
+/// had been written as 0.
+#[test]
+fn import_refuses_a_number_that_would_read_as_zero() {
+    let d = tmp_dir("interchange-underflow");
+    // Line 2's measurement_x (column 15).
+    let raw = read(Path::new(&ur10_example("sample-200.csv")));
+    let path = d.join("tiny.csv");
+    std::fs::write(&path, raw.replacen(";383,97123;", ";1E-400;", 1)).unwrap();
+    let out = d.join("out.csv");
+    let o = import(&path, &ur10_example("mapping.toml"), &out);
+    let msg = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(
+        msg.contains(
+            "tiny.csv: line 2, column measurement_x: \"1E-400\" is below the smallest 64-bit \
+             number (about 4.9e-324) and would read as 0"
+        ),
+        "{msg}"
+    );
+    assert!(!out.exists());
+}
+
 #[test]
 fn import_refuses_a_mapped_column_named_twice_in_the_header() {
     let d = tmp_dir("interchange-repeated-header");

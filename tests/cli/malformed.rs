@@ -320,10 +320,11 @@ fn names_from_a_file_reach_the_terminal_escaped_and_cut() {
     );
 }
 
-/// A robot's name reaches stdout with its control characters escaped too: a robot file may
-/// hold any name (it reads back as itself), where `identifiability` printed an ESC raw.
+/// A robot's name with control characters never reaches the terminal raw: the robot file is
+/// refused at its `name` (`identifiability` had printed the ESC raw, and later escaped it;
+/// an exported URDF could not hold it), and the refusal shows no ESC or BEL.
 #[test]
-fn a_robot_name_reaches_stdout_escaped() {
+fn a_robot_name_with_control_characters_is_refused_without_reaching_the_terminal() {
     let d = tmp_dir("cli-malformed-robot-name");
     let text = String::from_utf8(calbench_ok(&["robots", "irb2600"]).stdout).unwrap();
     let robot = d.join("esc.toml");
@@ -332,19 +333,24 @@ fn a_robot_name_reaches_stdout_escaped() {
         text.replace("name = \"irb2600\"", "name = \"a\\u001b[31mRED\\u0007\""),
     )
     .unwrap();
-    let o = calbench_ok(&[
+    let o = calbench(&[
         "identifiability",
         "--robot",
         path_arg(&robot),
         "--poses",
         "20",
     ]);
-    let out = String::from_utf8(o.stdout).unwrap();
-    assert!(
-        out.contains("robot a\\u{1b}[31mRED\\u{7} (20 poses"),
-        "{out}"
+    let err = refused(
+        &o,
+        &["esc.toml: line ", ", name: must be a name without control"],
     );
-    assert!(!out.contains('\u{1b}') && !out.contains('\u{7}'), "{out}");
+    let out = String::from_utf8_lossy(&o.stdout);
+    for text in [err.as_str(), &out] {
+        assert!(
+            !text.contains('\u{1b}') && !text.contains('\u{7}'),
+            "{text}"
+        );
+    }
 }
 
 /// Lengths beyond a robot file's range, which made every trial fail and `simulate` write

@@ -430,3 +430,30 @@ fn a_paired_check_prints_the_interval_of_the_reports_test_of_the_pair() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Four trials: too few for the interval of a median's η (`eta_median_pct_ci95` is null),
+/// so another seed's change of it is unresolved, its noise not known; it had been taken as
+/// exact, as in a summary written before intervals, and failed `check` with p Holm 0.
+#[test]
+fn a_figure_without_an_interval_at_few_trials_is_unresolved_not_exact() {
+    let dir = tmp_dir("cli-noise-few");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let runs = ["42", "9"].map(|seed| {
+        let out = dir.join(seed);
+        let args = ["--trials", "4", "--seed", seed, "--out", path_arg(&out)];
+        calbench_ok(&[&["run", path_arg(&sc)][..], &args].concat());
+        out
+    });
+    let base = load_json(&runs[0].join("summary.json"));
+    assert!(base["results"][0]["eta_median_pct_ci95"].is_null());
+    assert!(base["results"][0]["eta_mean_pct_ci95"].is_array());
+    let (ok, text) = check(&runs[1], &runs[0], &["--tolerance", "0.01"]);
+    assert!(ok, "{text}");
+    let median = line(&text, "ls / random", "eta_median_pct");
+    assert!(
+        median.starts_with("unresolved: ")
+            && median.contains("with no interval (neither summary has one at its trials)")
+            && median.contains("p Holm 1)"),
+        "{text}"
+    );
+}

@@ -123,12 +123,17 @@ fn recorded_ci_guard_runs_give_a_history_that_catches_a_planted_regression() {
 
 /// A task folder as `calbench task` writes it (the `task.json` contract).
 fn task_folder(dir: &Path, name: &str, value: f64, division: &str, models: &str) {
+    task_folder_at(dir, name, value, division, models, "0f3c");
+}
+
+/// [`task_folder`] of the version `hash` of the task.
+fn task_folder_at(dir: &Path, name: &str, value: f64, division: &str, models: &str, hash: &str) {
     std::fs::create_dir_all(dir.join(name)).unwrap();
     let json = format!(
         r#"{{
   "format": "calbench-task-1",
   "task": "barrett-wam",
-  "task_hash": "0f3c",
+  "task_hash": "{hash}",
   "metric": "validation_mean_mm",
   "value": {value},
   "ci95": [{}, {}],
@@ -258,6 +263,53 @@ fn leaderboard_ranks_apart_only_what_the_intervals_separate() {
         html.contains("closed division: no entry recorded."),
         "{html}"
     );
+}
+
+/// Entries of one task recorded at two versions of what it fixes (its split changed between
+/// the records) are ranked on two boards, each against its own published figure, and count
+/// as two tasks across tasks; they had been ranked together on one board under the first
+/// entry's hash.
+#[test]
+fn leaderboard_ranks_each_version_of_a_task_apart() {
+    let dir = tmp_dir("cli-results-board-versions");
+    let db = dir.join("calbench.sqlite");
+    let (old, new) = ("0f3c0f3c0f3c0f3c", "1a2b1a2b1a2b1a2b");
+    task_folder_at(&dir, "a", 2.00, "open", "\"kinematic\", \"harmonics\"", old);
+    task_folder_at(&dir, "b", 2.50, "open", "\"kinematic\", \"gravity\"", new);
+    for name in ["a", "b"] {
+        calbench_ok(&["record", path_arg(&dir.join(name)), "--db", path_arg(&db)]);
+    }
+    let out = dir.join("board");
+    calbench_ok(&[
+        "leaderboard",
+        "--db",
+        path_arg(&db),
+        "--out",
+        path_arg(&out),
+    ]);
+    let csv = read(&out.join("leaderboard.csv"));
+    let ranks: Vec<(&str, &str, &str, &str)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .map(|r| (r[1], r[4], r[5], r[8]))
+        .collect();
+    assert_eq!(
+        ranks,
+        [
+            (old, "1", "entry", "2"),
+            (old, "2", "published", "2.92"),
+            (new, "1", "entry", "2.5"),
+            (new, "2", "published", "2.92"),
+        ],
+        "{csv}"
+    );
+    let html = read(&out.join("leaderboard.html"));
+    // Each version's board by its title; the one entrant scored over both, as two tasks.
+    let titles = [old, new].map(|h| format!("barrett-wam (task hash {})", &h[..12]));
+    assert!(titles.iter().all(|t| html.contains(t)), "{html}");
+    assert!(html.contains(&titles.join(", ")), "{html}");
+    assert!(html.contains("entries are ranked apart"), "{html}");
 }
 
 #[test]

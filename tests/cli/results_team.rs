@@ -8,7 +8,9 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+use crate::common::{
+    calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, write_scenario,
+};
 
 fn count(db: &Path, sql: &str) -> i64 {
     let c = rusqlite::Connection::open(db).unwrap();
@@ -363,6 +365,51 @@ fn history_orders_versions_by_version_and_flags_a_drift() {
         "{t}"
     );
     assert!(!t.contains("regression: "), "{t}");
+}
+
+/// The guard's scenario written another way (integers for the tracker's pose, a default
+/// written out) runs the same bytes and is the same scenario: `check` compares it with the
+/// baseline, where it had refused it as another scenario's, and `history` flags a planted
+/// regression of it, where it had said "scenario changed" and compared nothing.
+#[test]
+fn a_scenario_written_another_way_is_guarded_as_the_same() {
+    let dir = tmp_dir("cli-team-spelling");
+    let a = guard_run(&dir, "a", "10", "5");
+    let spelled = read(&root().join("scenarios/ci-guard.toml"))
+        .replace(
+            "[2500.0, 0.0, 500.0, 0.0, 0.0, 180.0]",
+            "[2500, 0, 500, 0, 0, 180]",
+        )
+        .replace("[tracker]\n", "[tracker]\nmpe_a_um = 15.0\n");
+    let sc = write_scenario(&dir, "spelled", &spelled);
+    let b = dir.join("b");
+    let args = ["--trials", "10", "--seed", "5", "--threads", "2", "--out"];
+    calbench_ok(&[&["run", path_arg(&sc)][..], &args, &[path_arg(&b)]].concat());
+    assert_eq!(read(&a.join("summary.json")), read(&b.join("summary.json")));
+    assert_ne!(
+        read(&a.join("scenario.toml")),
+        read(&b.join("scenario.toml"))
+    );
+    let base = dir.join("base.json");
+    calbench_ok(&["baseline", path_arg(&a), "--out", path_arg(&base)]);
+    let summary = b.join("summary.json");
+    let o = calbench(&["check", path_arg(&summary), "--baseline", path_arg(&base)]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("no regression beyond tolerance"),
+        "{}",
+        text(&o)
+    );
+    let db = dir.join("spelled.sqlite");
+    assert!(record(&a, &db, "1.0.0").status.success());
+    let worse = planted(&b, &dir, "worse", 2.0);
+    assert!(record(&worse, &db, "1.1.0").status.success());
+    let (ok, t) = regressions(&db);
+    assert!(!ok, "{t}");
+    assert!(
+        t.contains("regression: ci-guard on ") && !t.contains("scenario changed"),
+        "{t}"
+    );
 }
 
 /// A merged folder holds a run's bytes and `record` reads it as a run: recorded by

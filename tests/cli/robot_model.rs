@@ -364,3 +364,28 @@ fn a_simulated_file_in_radians_holds_its_joints_finely_enough_to_recover_the_err
     let rms = id["rms_residual_mm"].as_f64().unwrap();
     assert!(rms < 1e-8, "{rms}");
 }
+
+/// A robot file named with a control character is refused at `name`, as a study's name and
+/// a method's label are: `identify --export urdf` had written it into a URDF no reader takes
+/// (XML 1.0 holds no ESC), and into the reports raw.
+#[test]
+fn a_robot_named_with_a_control_character_is_refused_at_its_name() {
+    let dir = tmp_dir("cli-robot-name");
+    for (stem, name) in [("esc", "arm \\u001b[1m"), ("rlo", "arm \\u202e")] {
+        let text = String::from_utf8(calbench_ok(&["robots", "irb2600"]).stdout).unwrap();
+        let first = text.lines().find(|l| l.starts_with("name = ")).unwrap();
+        let line = text.lines().position(|l| l == first).unwrap() + 1;
+        let path = dir.join(format!("{stem}.toml"));
+        std::fs::write(
+            &path,
+            text.replacen(first, &format!("name = \"{name}\""), 1),
+        )
+        .unwrap();
+        let o = calbench(&["fk", "--robot", path_arg(&path), "--q", "0,0,0,0,0,0"]);
+        let want = format!(
+            "{}: line {line}, name: must be a name without control characters",
+            path.display()
+        );
+        refused(&o, &[&want]);
+    }
+}

@@ -461,3 +461,23 @@ fn socket_distances_in_another_unit_are_refused_at_their_key() {
     let err = refused_task(&task, &dir.join("out"));
     assert!(err.contains("times nearer): are these distances"), "{err}");
 }
+
+/// Socket 2's calibration file holding socket 1's poses is refused by its own name; it had
+/// been refused at `sockets.distances_mm` as "inf times nearer", a unit.
+#[test]
+fn one_sockets_poses_given_twice_are_refused_by_the_second_file() {
+    let dir = tmp_dir("cli-socket-task-twice");
+    let task = copied_task(&dir, "", "socket_spread_mm", "twice");
+    let (first, second) = (dir.join("front/hole_0.csv"), dir.join("front/hole_1.csv"));
+    std::fs::copy(&first, &second).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    let want = format!(
+        "{}: every row: the nominal robot puts the tool points of this file's poses where it \
+         puts those of socket 1's file {} (under 0.05 mm apart), where sockets.distances_mm \
+         puts socket 2 50 mm from socket 1: do the two files hold the same socket's poses?",
+        second.display(),
+        first.display()
+    );
+    assert!(err.contains(&want), "{err}");
+    assert!(!err.contains("inf"), "{err}");
+}

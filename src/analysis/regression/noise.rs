@@ -11,7 +11,9 @@
 //! interval from each side's 95 % interval of the figure (its half-width over t₀.₉₇₅ is the
 //! standard error); a side without intervals (a summary from before they were written) borrows
 //! the other's spread over trials; with neither, the change is taken as exact, as the plain
-//! rule of the tolerance always did. A change within the rounding of the numbers (1e-12 of
+//! rule of the tolerance always did, unless the summaries write intervals and lack only this
+//! figure's (a median's under the trials its interval needs): its noise is then not known,
+//! and the change is never resolved. A change within the rounding of the numbers (1e-12 of
 //! their size, per trial or in the summaries) is no change.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -217,6 +219,12 @@ pub(super) fn is_rmse(metric: &str) -> bool {
     Metric::ParamRmse.parameter_of(metric).is_some()
 }
 
+/// Whether summary entry `e` is of a summary that writes intervals (its validation error's):
+/// one written before them has none.
+fn writes_intervals(e: &Entry) -> bool {
+    e.validation_after_mm.mean_ci95.is_some() || e.eta_mean_pct_ci95.is_some()
+}
+
 /// The usable trials of summary entry `e`: `trials` − `failures`.
 fn usable_trials(e: &Entry, trials: Option<usize>) -> Option<usize> {
     trials?.checked_sub(e.failures)
@@ -297,6 +305,14 @@ pub fn unpaired(
         (Some(x), Some(y)) => (x, y),
         (Some(x), None) => (x, x * (na as Real / nb as Real).sqrt()),
         (None, Some(y)) => (y * (nb as Real / na as Real).sqrt(), y),
+        // Summaries that write intervals but have none of this figure (too few trials for a
+        // median's): its noise is not known, and the change is not resolved.
+        (None, None) if writes_intervals(a) || writes_intervals(b) => {
+            return Change {
+                se: Real::INFINITY,
+                ..exact
+            }
+        }
         (None, None) => return exact,
     };
     let se2 = se_a * se_a + se_b * se_b;
@@ -331,10 +347,14 @@ impl Change {
 
     /// The two-sided p-value of "no change": paired, the Wilcoxon signed-rank test's;
     /// unpaired, the t (z) test's of the change over its standard error, and for an exact
-    /// change 0, or 1 when it is within rounding.
+    /// change 0, or 1 when it is within rounding; 1 for a change whose noise is not known
+    /// (an infinite standard error).
     pub fn p_value(&self) -> Real {
         if let Some(p) = self.p_test {
             return p;
+        }
+        if self.se == Real::INFINITY {
+            return 1.0;
         }
         if self.se == 0.0 || !self.se.is_finite() {
             return if self.diff == 0.0 || self.diff.is_nan() {

@@ -98,6 +98,21 @@ impl Trials {
             let msg = format!("the first column is `{}`, not `trial`", head[0]);
             return Err(Error::file(path, header, msg));
         }
+        for (i, name) in head.iter().enumerate() {
+            if let Some(j) = head[..i].iter().position(|h| h == name) {
+                let msg = format!(
+                    "column \"{name}\" appears twice in the header (columns {} and {}): which \
+                     one holds the run's values is not known",
+                    j + 1,
+                    i + 1
+                );
+                return Err(Error::file(
+                    path,
+                    at_line(Some(1), format!("column {name}")),
+                    msg,
+                ));
+            }
+        }
         let col = |name: &str| head.iter().position(|h| h == name);
         if let Some(name) = required().into_iter().find(|n| col(n).is_none()) {
             let msg = "missing from the header, which every run's trials.csv has";

@@ -68,6 +68,10 @@ struct AuthorKeys {
 /// 1000 times.
 pub const SOCKET_SCALE: Real = 2.0;
 
+/// How near the nominal robot may put two sockets' mean tool points before their files are
+/// taken for one socket's poses (mm): a tenth of a millimetre shown as 0.
+const SAME_PLACE_MM: Real = 0.05;
+
 /// A socket task, read and checked.
 #[derive(Clone, Debug)]
 pub struct SocketTask {
@@ -344,7 +348,9 @@ impl SocketTask {
     /// that the nominal robot's tool points on the placement `k` put at another scale (more
     /// than [`SOCKET_SCALE`] times farther or nearer): distances in metres, or a robot file
     /// whose lengths are, which the identification would take for the robot's errors and
-    /// refuse as a robot that cannot be right, blaming the joint files.
+    /// refuse as a robot that cannot be right, blaming the joint files. Two files whose mean
+    /// tool points are within [`SAME_PLACE_MM`] are refused by the second one's name: one
+    /// socket's poses given twice, not a unit.
     fn check_scale(&self, nominal: &Robot, k: &KindFile) -> Result<()> {
         let chain = nominal.chain();
         let points: Vec<Vec3> = k.qs.iter().map(|q| chain.fk(q).pos).collect();
@@ -353,6 +359,18 @@ impl SocketTask {
             let seen = (mean[l] - mean[0]).norm();
             if (seen / given).max(given / seen) <= SOCKET_SCALE {
                 continue;
+            }
+            if seen < SAME_PLACE_MM {
+                let msg = format!(
+                    "the nominal robot puts the tool points of this file's poses where it puts \
+                     those of socket 1's file {} (under {SAME_PLACE_MM} mm apart), where \
+                     sockets.distances_mm puts socket {} {} mm from socket 1: do the two files \
+                     hold the same socket's poses?",
+                    self.calibration[0].display(),
+                    l + 1,
+                    crate::error::shown(given),
+                );
+                return Err(Error::file(&self.calibration[l], "every row", msg));
             }
             let (factor, way) = match seen > given {
                 true => (seen / given, "farther"),

@@ -47,13 +47,41 @@ pub struct Row {
     pub vs_published: Option<(Real, Option<[Real; 2]>)>,
 }
 
+impl Row {
+    /// The board the row is ranked on: its task at one version of what the task fixes (its
+    /// `task_hash`). Entries of a task whose files changed between records rank apart.
+    pub fn board(&self) -> (&str, &str) {
+        (&self.task, &self.task_hash)
+    }
+
+    /// The board's title among `rows`: the task's name, with the start of its hash when
+    /// `rows` hold more than one version of the task.
+    pub fn board_title(&self, rows: &[Row]) -> String {
+        let several = rows
+            .iter()
+            .any(|r| r.task == self.task && r.task_hash != self.task_hash);
+        match several {
+            true => format!("{} (task hash {})", self.task, short(&self.task_hash)),
+            false => self.task.clone(),
+        }
+    }
+}
+
+/// The first 12 characters of a hash.
+fn short(hash: &str) -> &str {
+    hash.char_indices()
+        .nth(12)
+        .map_or(hash, |(i, _)| &hash[..i])
+}
+
 /// An entrant's score across the tasks it entered ([`crate::report::html::leaderboard`]):
 /// the geometric mean of its best figure on each task relative to the task's reference.
 #[derive(Clone, Debug)]
 pub struct Score {
     /// `entrant: method`.
     pub name: String,
-    /// The tasks it entered.
+    /// The tasks it entered (a task recorded at several versions once per version, by its
+    /// board's title).
     pub tasks: Vec<String>,
     /// The geometric mean of figure / reference over those tasks (below 1: better).
     pub score: Real,
@@ -98,19 +126,27 @@ pub fn page(rows: &[Row], scores: &[Score]) -> String {
          difference and its interval. Closed division: kinematic models only (DH, β, tool, \
          base); open division: any model or method.",
     );
-    let mut tasks: BTreeMap<&str, Vec<&Row>> = BTreeMap::new();
+    let mut boards: BTreeMap<(&str, &str), Vec<&Row>> = BTreeMap::new();
     for r in rows {
-        tasks.entry(&r.task).or_default().push(r);
+        boards.entry(r.board()).or_default().push(r);
     }
-    if tasks.is_empty() {
+    if boards.is_empty() {
         page.para("No task entry is recorded (`calbench record DIR` of a `calbench task` folder).");
     }
-    for (task, list) in &tasks {
-        page.section(task);
+    for list in boards.values() {
+        let title = list[0].board_title(rows);
+        page.section(&title);
         page.facts(&[
             ("metric", list[0].metric.clone()),
             ("task hash", list[0].task_hash.clone()),
         ]);
+        if title != list[0].task {
+            page.para(
+                "What this task fixes (its file, data, split, mapping or robot) changed between \
+                 the records: each version's entries are ranked apart, against that version's \
+                 published figures.",
+            );
+        }
         for division in ["closed", "open"] {
             let rows: Vec<&&Row> = list.iter().filter(|r| r.division == division).collect();
             if !rows.iter().any(|r| !r.published) {

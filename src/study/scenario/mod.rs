@@ -8,6 +8,7 @@
 //! the whole. Sweeps and command-line overrides edit the parsed TOML and check it again, so a
 //! swept value is held to the same rules as a written one.
 
+mod effect;
 mod params;
 mod report;
 mod sections;
@@ -31,6 +32,7 @@ use crate::sim::settings::{
 };
 use crate::sim::truth::selected_params;
 use crate::sim::unmodelled::UnmodelledSettings;
+pub use effect::effect;
 pub use report::ReportSettings;
 use sections::{
     strategy_names, CalibrationSection, RegistrationSection, RobotSection, ValidationSection,
@@ -45,7 +47,7 @@ use sweep::SweepField;
 pub use sweep::{Sweep, SweepAxis};
 
 /// The scenario file, as written. Unknown keys are refused by serde.
-#[derive(Deserialize)]
+#[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawScenario {
     name: String,

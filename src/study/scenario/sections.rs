@@ -10,21 +10,21 @@ use crate::numeric::Real;
 use crate::poses::{Objective, Strategy as Optimiser};
 use crate::sim::settings::{ParamSelection, Region};
 
-#[derive(Deserialize)]
+#[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RobotSection {
     pub(super) builtin: Option<String>,
     pub(super) file: Option<PathBuf>,
 }
 
-#[derive(Deserialize, Default)]
+#[derive(Debug, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RegistrationSection {
     #[serde(default)]
     pub(super) method: Registration,
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub(super) struct CalibrationSection {
     pub(super) count: usize,
@@ -56,7 +56,7 @@ impl Default for CalibrationSection {
     }
 }
 
-#[derive(Deserialize)]
+#[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub(super) struct ValidationSection {
     pub(super) count: usize,

@@ -9,7 +9,7 @@ use super::{Scenario, Source};
 use crate::error::{at_line, without_line, Error, Result};
 use crate::identify::MethodSpec;
 
-#[derive(Deserialize)]
+#[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct SweepSection {
     pub(super) key: String,
@@ -21,6 +21,7 @@ pub(super) struct SweepSection {
 /// `[sweep]` (one axis) or `[[sweep]]` (a grid of axes), told apart by the value's shape so
 /// that a refusal is the section's own (an unknown key named with the allowed ones), where
 /// an untagged enum said only that no variant matched.
+#[derive(Debug)]
 pub(super) enum SweepField {
     One(SweepSection),
     Grid(Vec<SweepSection>),
