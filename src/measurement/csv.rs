@@ -213,7 +213,13 @@ pub(crate) fn read_table(
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
 ) -> Result<Measurements> {
-    table_of(Rows::open(path, "q1,…,qn,x,y,z")?, path, robot, measured)
+    // The header an empty file lacks: a pose list's joints, a target list's point.
+    let expected = match (robot.dof(), measured) {
+        (0, _) => "x,y,z",
+        (_, true) => "q1,…,qn,x,y,z",
+        (_, false) => "q1,…,qn",
+    };
+    table_of(Rows::open(path, expected)?, path, robot, measured)
 }
 
 /// The measurements (or poses, unless `measured`) of the rows `t` of `path`.

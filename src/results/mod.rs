@@ -275,6 +275,13 @@ impl Db {
                 format!("not a usable SQLite database ({e})"),
             )
         };
+        if path.is_dir() {
+            return Err(Error::file(
+                path,
+                "database",
+                "is a folder: give the database's file (results/calbench.sqlite by default)",
+            ));
+        }
         if !path.exists() {
             if !create {
                 return Err(Error::file(

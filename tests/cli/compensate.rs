@@ -189,3 +189,28 @@ fn a_urdf_whose_parallel_axes_a_calibration_tilted_either_way_is_a_calibration()
     assert!(msg.contains("alpha2 moved by"), "{msg}");
     assert!(!msg.contains("theta2 moved"), "{msg}");
 }
+
+/// An empty program or target list says the header it lacks: a program's joints, a target
+/// list's point (both had asked for `q1,…,qn,x,y,z`, columns neither needs).
+#[test]
+fn an_empty_program_or_target_list_names_the_header_it_needs() {
+    let d = tmp_dir("cli-compensate-empty");
+    let empty = d.join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    for (flag, header) in [("--joints", "q1,…,qn"), ("--targets", "x,y,z")] {
+        let o = calbench(&[
+            "compensate",
+            "--robot",
+            "irb2600",
+            "--identified",
+            "irb2600",
+            flag,
+            path_arg(&empty),
+            "--out",
+            path_arg(&d.join("out.csv")),
+        ]);
+        let want = format!("empty.csv: line 1: empty file: expected a header row {header}");
+        let err = refused(&o, &[&want]);
+        assert!(!err.contains(&format!("{header},")), "{err}");
+    }
+}

@@ -180,6 +180,17 @@ fn a_damaged_database_is_refused_and_reading_writes_nothing() {
             "{args:?}: {t}"
         );
     }
+    // A folder given as the database is said to be one (it had been "disk I/O error").
+    let folder = dir.join("b");
+    for args in [
+        vec!["history", "--regressions"],
+        vec!["record", path_arg(&run), "--label", "v3"],
+    ] {
+        let o = calbench(&[&args[..], &["--db", path_arg(&folder)]].concat());
+        let t = text(&o);
+        let want = "b: database: is a folder: give the database's file";
+        assert!(!o.status.success() && t.contains(want), "{args:?}: {t}");
+    }
 }
 
 #[test]
