@@ -263,10 +263,10 @@ pub(crate) fn identify<'py>(
     let out = PyDict::new(py);
     out.set_item("record", record)?;
     out.set_item("seconds", seconds)?;
-    out.set_item("warning", unconverged_warning(outcome.record()))?;
+    let r = outcome.record();
+    out.set_item("warning", unconverged_warning(r))?;
     // A result kept although it makes the robot worse or cannot be physically right: the
     // warnings `calbench identify` prints, the options spelled as keywords.
-    let r = outcome.record();
     let kept: Vec<String> = worse_warning(&r.allowed_worse)
         .into_iter()
         .chain(implausible_warning(&r.allowed_implausible))

@@ -512,7 +512,8 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                 .parse::<Real>()
                 .ok()
                 .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')));
-            if let Some(msg) = v.and_then(|v| super::rows::underflow(&cell, v)) {
+            // Quoted as the export writes it, as every refusal of a cell is.
+            if let Some(msg) = v.and_then(|v| super::rows::underflow(f, v)) {
                 return Err(at_line(raw, line, &place, msg));
             }
             v.ok_or_else(|| {

@@ -44,13 +44,13 @@ pub fn read(text: &str, path: &std::path::Path) -> Result<(String, String)> {
             "is not the hash line calbench writes; this is not a run's scenario.toml",
         ));
     };
+    let (mut body, mut hash) = (body.to_string(), sha256_hex(body.as_bytes()));
     // A checkout that turned its line ends into CRLF (git's `core.autocrlf` on Windows)
     // holds the text that ran.
-    let body = match body.contains("\r\n") {
-        true if sha256_hex(body.as_bytes()) != stated.trim() => body.replace("\r\n", "\n"),
-        _ => body.to_string(),
-    };
-    let hash = sha256_hex(body.as_bytes());
+    if stated.trim() != hash && body.contains("\r\n") {
+        body = body.replace("\r\n", "\n");
+        hash = sha256_hex(body.as_bytes());
+    }
     if stated.trim() != hash {
         return Err(Error::file(
             path,

@@ -75,18 +75,21 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
             below + 1
         })
         .collect();
-    // The board's published figure an entry stands against: the lowest one, of any division.
+    // The board's published figure an entry stands against: the lowest one, of any division;
+    // keyed by the board owned, as the rows are changed below.
+    let owned = |r: &Row| {
+        let (task, hash) = r.board();
+        (task.to_string(), hash.to_string())
+    };
     let mut published: BTreeMap<(String, String), Real> = BTreeMap::new();
     for r in rows.iter().filter(|r| r.published) {
-        let board = (r.task.clone(), r.task_hash.clone());
-        let p = published.entry(board).or_insert(r.value);
+        let p = published.entry(owned(r)).or_insert(r.value);
         *p = p.min(r.value);
     }
     for (r, rank) in rows.iter_mut().zip(ranks) {
         r.rank = rank;
         if !r.published {
-            let board = (r.task.clone(), r.task_hash.clone());
-            r.vs_published = published.get(&board).map(|&p| {
+            r.vs_published = published.get(&owned(r)).map(|&p| {
                 let ci = r.ci.map(|[lo, hi]| [lo - p, hi - p]);
                 (r.value - p, ci)
             });

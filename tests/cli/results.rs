@@ -179,11 +179,7 @@ fn leaderboard_ranks_task_entries_beside_the_published_figures() {
         path_arg(&out),
     ]);
     let csv = read(&out.join("leaderboard.csv"));
-    let rows: Vec<Vec<&str>> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect())
-        .collect();
+    let rows = cells(&csv);
     let pick: Vec<(&str, &str, &str, &str)> =
         rows.iter().map(|r| (r[3], r[4], r[5], r[8])).collect();
     // The open entry's interval (2.6 – 3.0) holds the published 2.92: one rank for both.
@@ -219,6 +215,26 @@ fn leaderboard_ranks_task_entries_beside_the_published_figures() {
     }
 }
 
+/// The task folders `dir/NAME` recorded one by one into `db`, and the leaderboard written
+/// from it into `dir/board` (returned).
+fn recorded_board(dir: &Path, db: &Path, names: &[&str]) -> std::path::PathBuf {
+    for name in names {
+        calbench_ok(&["record", path_arg(&dir.join(name)), "--db", path_arg(db)]);
+    }
+    let out = dir.join("board");
+    calbench_ok(&["leaderboard", "--db", path_arg(db), "--out", path_arg(&out)]);
+    out
+}
+
+/// The cells of each data row of a `leaderboard.csv`, split at every comma (a quoted cell
+/// that holds one is split too).
+fn cells(csv: &str) -> Vec<Vec<&str>> {
+    csv.lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect()
+}
+
 /// Intervals that do not overlap rank apart, an empty division says so, and the score across
 /// tasks takes the best figure recorded where no figure is published.
 #[test]
@@ -229,22 +245,10 @@ fn leaderboard_ranks_apart_only_what_the_intervals_separate() {
     task_folder(&dir, "a", 2.00, "open", "\"kinematic\", \"harmonics\"");
     task_folder(&dir, "b", 2.50, "open", "\"kinematic\", \"gravity\"");
     task_folder(&dir, "c", 2.60, "open", "\"kinematic\", \"harmonics2\"");
-    for name in ["a", "b", "c"] {
-        calbench_ok(&["record", path_arg(&dir.join(name)), "--db", path_arg(&db)]);
-    }
-    let out = dir.join("board");
-    calbench_ok(&[
-        "leaderboard",
-        "--db",
-        path_arg(&db),
-        "--out",
-        path_arg(&out),
-    ]);
+    let out = recorded_board(&dir, &db, &["a", "b", "c"]);
     let csv = read(&out.join("leaderboard.csv"));
-    let ranks: Vec<(&str, &str, &str)> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect::<Vec<_>>())
+    let ranks: Vec<(&str, &str, &str)> = cells(&csv)
+        .into_iter()
         .map(|r| (r[4], r[5], r[8]))
         .collect();
     assert_eq!(
@@ -276,22 +280,10 @@ fn leaderboard_ranks_each_version_of_a_task_apart() {
     let (old, new) = ("0f3c0f3c0f3c0f3c", "1a2b1a2b1a2b1a2b");
     task_folder_at(&dir, "a", 2.00, "open", "\"kinematic\", \"harmonics\"", old);
     task_folder_at(&dir, "b", 2.50, "open", "\"kinematic\", \"gravity\"", new);
-    for name in ["a", "b"] {
-        calbench_ok(&["record", path_arg(&dir.join(name)), "--db", path_arg(&db)]);
-    }
-    let out = dir.join("board");
-    calbench_ok(&[
-        "leaderboard",
-        "--db",
-        path_arg(&db),
-        "--out",
-        path_arg(&out),
-    ]);
+    let out = recorded_board(&dir, &db, &["a", "b"]);
     let csv = read(&out.join("leaderboard.csv"));
-    let ranks: Vec<(&str, &str, &str, &str)> = csv
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').collect::<Vec<_>>())
+    let ranks: Vec<(&str, &str, &str, &str)> = cells(&csv)
+        .into_iter()
         .map(|r| (r[1], r[4], r[5], r[8]))
         .collect();
     assert_eq!(
