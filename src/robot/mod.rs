@@ -500,17 +500,16 @@ impl Robot {
     /// robot fails this check; robots built in code can call it before they are used.
     pub fn check(&self) -> std::result::Result<(), ModelIssue> {
         let n = self.dof();
-        if self.values.len() != value_count(n) {
-            return Err(ModelIssue {
-                place: "joints".into(),
-                msg: format!(
-                    "{} parameter values for {n} joints; expected {}",
-                    self.values.len(),
-                    value_count(n)
-                ),
-            });
-        }
         let issue = |place: String, msg: String| ModelIssue { place, msg };
+        if !(1..=MAX_JOINTS).contains(&n) {
+            let msg = format!("{n} joints: 1 to {MAX_JOINTS} are supported");
+            return Err(issue("joints".into(), msg));
+        }
+        if self.values.len() != value_count(n) {
+            let (got, want) = (self.values.len(), value_count(n));
+            let msg = format!("{got} parameter values for {n} joints; expected {want}");
+            return Err(issue("joints".into(), msg));
+        }
         for p in Param::all(n, true) {
             let v = self.get(p);
             let (place, quantity) = match p {

@@ -28,7 +28,7 @@ use crate::error::{Error, Opt, Result, Said};
 use crate::numeric::{rot_x, rot_y, rot_z, rpy_matrix, Frame, Real, Vec3};
 use crate::robot::{
     to_internal, value_count, AngleUnit, Convention, Joint, JointType, LengthUnit, Param, Quantity,
-    Robot, Units, MAX_LENGTH_MM,
+    Robot, Units, MAX_JOINTS, MAX_LENGTH_MM,
 };
 
 /// The fixed joint and link [`UrdfRobot::write`] adds when the tip is a moving joint's child.
@@ -347,6 +347,15 @@ impl UrdfRobot {
             check_numbers(j, kind).map_err(|(element, msg)| at(element, msg))?;
             w = w.compose(&origin(j));
             if let Some(kind) = kind {
+                if joints.len() == MAX_JOINTS {
+                    let msg = format!(
+                        "joint \"{}\" is moving joint {} of the chain to \"{tip}\": at most \
+                         {MAX_JOINTS} moving joints are supported",
+                        j.name,
+                        MAX_JOINTS + 1
+                    );
+                    return Err(at("joint", msg));
+                }
                 let a = Vec3::new(j.axis.xyz[0], j.axis.xyz[1], j.axis.xyz[2]);
                 if a.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
                     return Err(at("axis", format!("joint \"{}\": zero axis", j.name)));

@@ -287,10 +287,11 @@ fn a_program_compensated_after_a_registration_is_right_up_to_a_rigid_motion() {
 }
 
 /// A robot file in m whose lengths are written in mm (`a = 400.0` under `length_unit = "m"`):
-/// `simulate` refuses it, naming the robot file and the range of a measured coordinate, and
-/// writes no folder, where it wrote a `validation.csv` that `identify` then refused.
+/// its scenario is refused when read, at `robot.file`, naming the reach and the range of a
+/// measured coordinate, by `simulate` (which wrote a `validation.csv` that `identify` then
+/// refused), `run` (which had run it, "before 144613 mm") and `poses`; nothing is written.
 #[test]
-fn simulate_refuses_tool_points_beyond_the_measurement_range() {
+fn a_study_refuses_a_robot_reaching_beyond_the_measurement_range() {
     let dir = tmp_dir("cli-simulate-range");
     let robot = dir.join("big.toml");
     // A five-joint arm whose lengths (mm) are declared in m.
@@ -306,18 +307,21 @@ fn simulate_refuses_tool_points_beyond_the_measurement_range() {
          [validation]\ncount = 20\n[[methods]]\nname = \"lm\"\n",
     );
     let out = dir.join("s3");
-    let o = calbench(&["simulate", path_arg(&sc), "--out", path_arg(&out)]);
-    let err = refused(
-        &o,
-        &[
-            "big.toml",
-            "within ±1000000 mm (1 km)",
-            "nothing was written",
-        ],
+    let at = format!(
+        "{}: line 5, robot.file: robot \"arm5\" may reach ",
+        sc.display()
     );
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.trim_end().lines().count() == 1, "{err}");
-    assert!(!out.exists(), "{err}");
+    let commands: [&[&str]; 3] = [&["simulate"], &["run"], &["poses", "--strategy", "random"]];
+    for command in commands {
+        let o = calbench(&[command, &[path_arg(&sc), "--out", path_arg(&out)]].concat());
+        let err = refused(
+            &o,
+            &[&at, "mm (1 km) a measurement is read in", "length_unit"],
+        );
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(err.trim_end().lines().count() == 1, "{err}");
+        assert!(!out.exists(), "{err}");
+    }
 }
 
 /// A robot in metres and radians: `simulate` writes its joint values with 11 decimals (as
@@ -387,5 +391,53 @@ fn a_robot_named_with_a_control_character_is_refused_at_its_name() {
             path.display()
         );
         refused(&o, &[&want]);
+    }
+}
+
+/// A URDF chain of more moving joints than a robot holds (16, as a robot file's
+/// `[[joints]]`) is refused at the first joint too many, by its line, as a robot file of 17
+/// joints is: `fk`, `identifiability` and `identify` had panicked on one of 17. Sixteen are
+/// read.
+#[test]
+fn a_urdf_chain_of_seventeen_moving_joints_is_refused_at_the_seventeenth() {
+    let dir = tmp_dir("cli-urdf-17");
+    let chain = |n: usize| {
+        let mut xml = String::from("<robot name=\"long\">\n<link name=\"l0\"/>\n");
+        for i in 1..=n {
+            xml += &format!(
+                "<link name=\"l{i}\"/>\n<joint name=\"j{i}\" type=\"revolute\">\n\
+                 <parent link=\"l{}\"/><child link=\"l{i}\"/>\n\
+                 <origin xyz=\"0.1 0 0.05\" rpy=\"0.3 0.2 0\"/><axis xyz=\"0 0 1\"/>\n\
+                 <limit lower=\"-3\" upper=\"3\" effort=\"1\" velocity=\"1\"/>\n</joint>\n",
+                i - 1
+            );
+        }
+        let path = dir.join(format!("chain{n}.urdf"));
+        std::fs::write(&path, xml + "</robot>\n").unwrap();
+        path
+    };
+    let q = |n: usize| vec!["0.1"; n].join(",");
+    let sixteen = chain(16);
+    calbench_ok(&["fk", "--robot", path_arg(&sixteen), "--q", &q(16)]);
+    let long = chain(17);
+    // j17's start tag: 2 lines of the robot and its first link, 6 per joint before it.
+    let want = format!(
+        "{}: line {}: joint \"j17\" is moving joint 17 of the chain to \"l17\": at most \
+         16 moving joints are supported",
+        long.display(),
+        3 + 6 * 16 + 1
+    );
+    let commands: [&[&str]; 2] = [
+        &["fk", "--robot", path_arg(&long), "--q", &q(17)],
+        &[
+            "identifiability",
+            "--robot",
+            path_arg(&long),
+            "--poses",
+            "5",
+        ],
+    ];
+    for args in commands {
+        refused(&calbench(args), &[&want]);
     }
 }

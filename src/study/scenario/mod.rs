@@ -529,7 +529,9 @@ impl Scenario {
             Error::File { .. } => e,
             other => ferr("robot.file", other.to_string()),
         })?;
-        if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
+        if let Some(msg) =
+            crate::robot::loaded::unsimulated(&robot).or_else(|| unmeasurable(&robot))
+        {
             return Err(ferr("robot.file", msg));
         }
         // The sag model whole, with the built-in robot's stiffness and masses where none are
@@ -658,4 +660,27 @@ impl Scenario {
     pub fn table(&self) -> &toml::Table {
         &self.table
     }
+}
+
+/// Why a study cannot measure `robot`, or `None`: its tool points may lie farther from the
+/// base's origin than the range a measurement file is read in (docs/formats.md § 5.1, ±1 km),
+/// which `simulate` refuses in the file it would write. A robot file whose lengths in mm are
+/// declared `length_unit = "m"` is the usual cause.
+fn unmeasurable(robot: &Robot) -> Option<String> {
+    use crate::measurement::csv::MAX_POINT_MM;
+    use crate::robot::Param;
+    let base = (0..3)
+        .map(|c| robot.get(Param::Base(c)).powi(2))
+        .sum::<Real>()
+        .sqrt();
+    let reach = crate::robot::sampling::reach_bound_mm(robot) + base;
+    (reach > MAX_POINT_MM).then(|| {
+        format!(
+            "robot \"{}\" may reach {reach:.0} mm from the world's origin (its base's \
+             offset, its joints' lengths and offsets, its travels and its tool's), beyond the \
+             ±{MAX_POINT_MM} mm (1 km) a measurement is read in; are the robot's lengths in its \
+             length_unit?",
+            robot.name
+        )
+    })
 }
