@@ -326,6 +326,43 @@ impl InstrumentsScenario {
         })
     }
 
+    /// Refuses, as (key, message), a pose count too small for an instrument: its readings
+    /// at `instruments_study.poses` fewer than the parameters it identifies on `nominal` (the
+    /// robot's identifiable ones and the instrument's own), which no strategy's poses could
+    /// determine (docs/formats.md § 4.15).
+    pub(crate) fn check_readings(
+        &self,
+        nominal: &Robot,
+    ) -> std::result::Result<(), (String, String)> {
+        let Some(&fewest) = self.poses.iter().min() else {
+            return Ok(());
+        };
+        for ii in 0..self.measurement.len() {
+            let p = self
+                .prepare(nominal, ii)
+                .map_err(|e| (format!("measurement[{ii}]"), e.to_string()))?;
+            let ins = &p.lay.instrument;
+            let params = p.params.len() + ins.nuisance();
+            let readings = |m: usize| ins.observations(m) * ins.rows_per_observation();
+            if readings(fewest) < params {
+                let need = (fewest..)
+                    .find(|&m| readings(m) >= params)
+                    .unwrap_or(fewest);
+                let msg = format!(
+                    "{fewest} poses give {} readings of measurement[{ii}] ({}) for the {params} \
+                     parameters it identifies ({} of the robot's, {} of the instrument's): at \
+                     least {need} poses are needed",
+                    readings(fewest),
+                    p.label,
+                    p.params.len(),
+                    ins.nuisance()
+                );
+                return Err(("instruments_study.poses".into(), msg));
+            }
+        }
+        Ok(())
+    }
+
     /// Cell `c` (instruments outer, then pose counts, then strategies) on `nominal`, its
     /// instrument's preparation taken from `prev` when it is the same instrument's.
     pub fn plan(&self, nominal: &Robot, c: usize, prev: Option<&CellPlan>) -> Result<CellPlan> {

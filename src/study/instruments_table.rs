@@ -183,6 +183,8 @@ impl InstrumentsScenario {
         if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
             return Err(ferr("robot", msg));
         }
+        s.check_readings(&robot)
+            .map_err(|(key, msg)| ferr(&key, msg))?;
         Ok(s)
     }
 }

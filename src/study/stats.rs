@@ -8,7 +8,9 @@ use std::ops::Deref;
 /// The distributions live with the numerics ([`crate::numeric::dist`]), below every layer that
 /// takes an interval.
 pub use crate::numeric::dist;
+pub use eta::{eta, trial_eta_mean};
 pub mod ecdf;
+mod eta;
 mod figure;
 pub mod location;
 mod missing;
@@ -320,11 +322,6 @@ fn mean(v: &[Real]) -> Real {
     }
 }
 
-/// η_i = (1 − |x_i − x̂_i| / |x_i|) · 100 % (Guo 2024 eq. 29); `None` where x_i = 0.
-pub fn eta(truth: Real, identified: Real) -> Option<Real> {
-    (truth != 0.0).then(|| (1.0 - (truth - identified).abs() / truth.abs()) * 100.0)
-}
-
 /// What one (strategy, method) pair has gathered so far: running sums (per parameter, the
 /// per-trial numbers an exact median and two-pass deviation need, its error and its η, are in
 /// the accumulator's [`Spill`]).
@@ -483,7 +480,6 @@ impl Accumulator {
             }
             self.cells[ci].ok += 1;
             let below: &[usize] = t.not_determinable.get(o.strategy).map_or(&[], |v| v);
-            let (mut eta_sum, mut eta_n) = (-0.0, 0usize);
             for k in 0..self.names.len() {
                 // Base parameters absorb the registration's error: nuisance, not compared.
                 if self.names[k].starts_with("base.") {
@@ -500,22 +496,16 @@ impl Accumulator {
                     .push(self.eta_stream(ci, k), e.unwrap_or(Real::NAN))?;
                 if let Some(e) = e {
                     self.spill.push(sn, e)?;
-                    eta_sum += e;
-                    eta_n += 1;
                 }
             }
-            let eta_trial = if eta_n == 0 {
-                Real::NAN
-            } else {
-                eta_sum / eta_n as Real
-            };
+            let eta_trial = trial_eta_mean(&self.names, (&t.truth, &o.identified), below);
             for (h, m) in Metric::PER_TRIAL.iter().enumerate() {
                 let s = self.headline(ci, h);
                 let of_trial = m.spec().of_trial.unwrap_or(|_, _| Real::NAN);
                 self.spill.push(s, of_trial(o, eta_trial))?;
             }
             let c = &mut self.cells[ci];
-            if eta_n > 0 {
+            if !eta_trial.is_nan() {
                 c.eta_trial.add(eta_trial);
             }
             if let Some(x) = t.crb_trace[o.strategy] {

@@ -297,3 +297,51 @@ fn a_set_of_fewer_readings_than_parameters_is_refused_when_read() {
     let sc = write_scenario(&dir, "s", &study.replace("count = 25", "count = 8"));
     calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&dir.join("eight"))]);
 }
+
+/// `trials.csv`'s `eta_mean_pct` counts what the summary counts: each row the mean η of the
+/// determinable a2 and alpha3 (recomputed here from its `true_P` and `identified_P` cells),
+/// without d4. It had averaged every parameter's η, so `check` of a run against its own
+/// baseline found every trial's mean η "unpaired".
+#[test]
+fn trials_csv_leaves_the_undeterminable_out_of_the_mean_eta_and_a_run_pairs_with_itself() {
+    let dir = tmp_dir("determinable-trials");
+    let sc = write_scenario(&dir, "s.toml", &STUDY.replace("NOISE", ""));
+    let out = dir.join("out");
+    calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&out)]);
+    let text = read(&out.join("trials.csv"));
+    let mut lines = text.lines();
+    let head: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+    let mut rows = 0;
+    for line in lines {
+        let cells: Vec<&str> = line.split(',').collect();
+        let num = |name: &str| cells[col(name)].parse::<f64>().unwrap();
+        let eta = |p: &str| {
+            let (x, y) = (num(&format!("true_{p}")), num(&format!("identified_{p}")));
+            100.0 * (1.0 - (x - y).abs() / x.abs())
+        };
+        let want = (eta("a2") + eta("alpha3")) / 2.0;
+        let got = num("eta_mean_pct");
+        assert!(
+            (got - want).abs() <= 1e-12 * want.abs(),
+            "{line}: {got} vs {want}"
+        );
+        assert!(
+            (eta("d4") - got).abs() > 1.0,
+            "{line}: d4's η is the mean's"
+        );
+        rows += 1;
+    }
+    assert_eq!(rows, 8);
+    let baseline = dir.join("b.json");
+    calbench_ok(&["baseline", path_arg(&out), "--out", path_arg(&baseline)]);
+    let summary = out.join("summary.json");
+    let o = calbench_ok(&[
+        "check",
+        path_arg(&summary),
+        "--baseline",
+        path_arg(&baseline),
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(!said.contains("unpaired"), "{said}");
+}

@@ -232,6 +232,18 @@ fn instruments_study_refuses_bad_settings() {
             socket_study(13.0).replace("sockets = 2", "sockets = 0"),
             "line 22, measurement[0].sockets: needs at least one socket",
         ),
+        // Fewer distances than the 18 robot and 3 pivot parameters they identify: refused
+        // when read, where DETMAX's refusal had come after the run began, naming neither the
+        // file nor the study's key (`calibration.count`).
+        (
+            "name = \"few\"\nseed = 2\ntrials = 2\nrobot = \"irb2600\"\n\
+             [instruments_study]\nposes = [30, 20]\nstrategies = [\"random\", \"detmax\"]\n\
+             candidates = 60\nvalidation = 10\n[[measurement]]\nkind = \"distance\"\n"
+                .to_string(),
+            "line 6, instruments_study.poses: 20 poses give 20 readings of measurement[0] \
+             (distance) for the 21 parameters it identifies (18 of the robot's, 3 of the \
+             instrument's): at least 21 poses are needed",
+        ),
     ] {
         let err = refused_run(&dir, "bad.toml", &bad);
         assert!(

@@ -309,6 +309,21 @@ fn bad_sweeps_are_refused_naming_the_file_and_the_key() {
             "mpe_a_um",
         ),
         ("[sweep]\nkey = \"name\"\nvalues = [\"x\"]\n", "name"),
+        // Every point draws from the run's seeds (`--seed`): a swept seed was run, and the
+        // summary said the run's.
+        (
+            "[sweep]\nkey = \"seed\"\nvalues = [3, 4]\n",
+            "\"seed\" cannot be swept",
+        ),
+        (
+            "[sweep]\nkey = \"outliers.count\"\nvalues = [0, 1]\nzip = true\n",
+            "one [sweep] has none",
+        ),
+        // One point written twice, as an integer and as a float.
+        (
+            "[sweep]\nkey = \"tracker.mpe_a_um\"\nvalues = [5, 5.0]\n",
+            "5.0 is given twice",
+        ),
         (
             "[[sweep]]\nkey = \"outliers.count\"\nvalues = [0, 1]\nzip = true\n\
              [[sweep]]\nkey = \"methods.rob.k0\"\nvalues = [1.0]\n",
@@ -331,6 +346,53 @@ fn bad_sweeps_are_refused_naming_the_file_and_the_key() {
             "`{e}` lacks `{key}` or the file"
         );
     }
+}
+
+/// A swept key's numbers written as integers (`values = [5, 40]` for `tracker.mpe_a_um`, a
+/// claim's `paper_point = 5`) are the points a file writing `5.0` and `40.0` names: the same
+/// `summary.json` and `trials.csv`, byte for byte, and `check` pairs one with the other's
+/// baseline. The integers had named other points ("5" against "5.0"), so that `check` found no
+/// entry in common. An integer-only key (`outliers.count`) keeps its integers.
+#[test]
+fn a_sweep_of_integers_for_a_float_key_names_the_points_of_its_floats() {
+    let dir = tmp_dir("sweeps-typed");
+    let claim = "[[claims]]\nid = \"c\"\nstatement = \"s\"\npaper = \"p\"\nvalue = \"1 mm\"\n\
+                 metric = \"validation_after_mm.mean\"\nrelation = '\"ls\" ~ 1.0'\n\
+                 tolerance = { relative = 0.25 }\n";
+    let written = |name: &str, values: &str, point: &str| {
+        let text = format!(
+            "{SMALL}\n{claim}paper_point = {point}\n[sweep]\nkey = \"tracker.mpe_a_um\"\n\
+             values = {values}\n"
+        )
+        .replace("trials = 5", "trials = 3");
+        let sc = write_scenario(&dir, name, &text);
+        let out = dir.join(name);
+        calbench_ok(&["run", path_arg(&sc), "--out", path_arg(&out)]);
+        out
+    };
+    let ints = written("ints", "[5, 40]", "5");
+    let floats = written("floats", "[5.0, 40.0]", "5.0");
+    for file in ["summary.json", "trials.csv"] {
+        assert_eq!(read(&ints.join(file)), read(&floats.join(file)), "{file}");
+    }
+    let s = load_json(&ints.join("summary.json"));
+    assert_eq!(s["sweep_values"], serde_json::json!([5.0, 40.0]));
+    assert_eq!(s["claims"][0]["sweep_value"], serde_json::json!(5.0));
+    let baseline = dir.join("b.json");
+    calbench_ok(&["baseline", path_arg(&floats), "--out", path_arg(&baseline)]);
+    let summary = ints.join("summary.json");
+    calbench_ok(&[
+        "check",
+        path_arg(&summary),
+        "--baseline",
+        path_arg(&baseline),
+    ]);
+    let counts = format!("{SMALL}\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n");
+    let sc = Scenario::parse(&counts, None).expect("a sweep of counts");
+    assert_eq!(
+        sc.sweep.expect("a sweep").points(),
+        [[toml::Value::Integer(0)], [toml::Value::Integer(2)]]
+    );
 }
 
 /// The streaming statistics of summary.json against trials.csv, computed here directly.

@@ -12,7 +12,6 @@ use super::noise::Trials;
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
-use crate::study::stats::eta;
 
 /// The terminations of `trials.csv` whose identification gave no usable result.
 const FAILED: [&str; 3] = ["diverged", "singular", "invalid-input"];
@@ -121,6 +120,7 @@ impl Trials {
         let method_col = col("method").unwrap_or_default();
         let params = paired_columns(path, &head)?;
         let plain = [
+            Metric::EtaMean,
             Metric::ValidationAfterMean,
             Metric::ValidationAfterRms,
             Metric::ValidationAfterMax,
@@ -216,7 +216,6 @@ impl Trials {
                     put(m.clone(), num(*c));
                 }
             }
-            let (mut sum, mut n) = (-0.0, 0usize);
             for (k, (name, _, _)) in params.iter().enumerate() {
                 if name.starts_with("base.") {
                     continue;
@@ -225,13 +224,6 @@ impl Trials {
                     Metric::ParamRmse.of_parameter(name),
                     (found[k] - truth[k]).powi(2),
                 );
-                if let Some(e) = eta(truth[k], found[k]) {
-                    sum += e;
-                    n += 1;
-                }
-            }
-            if n > 0 {
-                put(Metric::EtaMean.key(), sum / n as Real);
             }
         }
         Ok(t)

@@ -9,7 +9,7 @@ use crate::numeric::Real;
 use crate::report::output::{Bytes, Output, Stream};
 use crate::study::metric::Metric;
 use crate::study::scenario::Sweep;
-use crate::study::stats::eta;
+use crate::study::stats::trial_eta_mean;
 use crate::study::{BlockInfo, TrialResult, TrialSink};
 
 /// Appends `,` and `v` (empty where it is not finite) to the row `out`.
@@ -290,17 +290,9 @@ impl TrialSink for TrialsCsv {
             num(&mut truth, v);
         }
         for o in &t.outcomes {
-            let etas: Vec<Real> = t
-                .truth
-                .iter()
-                .zip(&o.identified)
-                .filter_map(|(&x, &y)| eta(x, y))
-                .collect();
-            let eta_mean = if etas.is_empty() {
-                Real::NAN
-            } else {
-                etas.iter().sum::<Real>() / etas.len() as Real
-            };
+            // As summary.json counts it: without the base's and the undeterminable η.
+            let below = t.not_determinable.get(o.strategy).map_or(&[][..], |v| v);
+            let eta_mean = trial_eta_mean(&info.params, (&t.truth, &o.identified), below);
             out += &lead;
             for text in [&info.methods[o.method], &info.strategies[o.strategy]] {
                 out.push(',');

@@ -115,10 +115,10 @@ impl Sweep {
                     "is the swept value at the paper's setting, and the scenario has no sweep";
                 return Err((key, format!("claim \"{}\": {why}", c.id)));
             };
-            let points: Vec<serde_json::Value> =
-                sw.points().iter().map(|p| Sweep::point_value(p)).collect();
-            if !points.contains(&crate::study::toml_to_json(pp)) {
-                let listed: Vec<String> = points.iter().map(|p| p.to_string()).collect();
+            if !sw.points().iter().any(|p| at_point(pp, p)) {
+                let listed: Vec<String> = (sw.points().iter())
+                    .map(|p| Sweep::point_value(p).to_string())
+                    .collect();
                 let why = format!(
                     "claim \"{}\": {pp} is no point of the sweep (its points: {}), so no point \
                      would be the paper's setting",
@@ -207,12 +207,58 @@ impl Scenario {
 
     /// The scenario as read, once its claims' `paper_point`s are found among the sweep's
     /// points. A file's own check, not a sweep point's: a point's scenario has no sweep.
-    pub(super) fn with_paper_points_checked(self) -> Result<Scenario> {
+    /// An axis's integer values are its key's floats where the key takes a float (`5` for
+    /// `tracker.mpe_a_um` is the point `5.0`, as a run that writes `5.0` names it), and a
+    /// `paper_point` is the point it names, however each writes its numbers.
+    pub(super) fn with_paper_points_checked(mut self) -> Result<Scenario> {
+        self.type_sweep_values();
+        if let Some(sw) = &self.sweep {
+            let points = sw.points();
+            for c in &mut self.claims {
+                let Some(pp) = &c.paper_point else { continue };
+                if let Some(p) = points.iter().find(|p| at_point(pp, p)) {
+                    c.paper_point = Some(match p.as_slice() {
+                        [one] => one.clone(),
+                        all => toml::Value::Array(all.to_vec()),
+                    });
+                }
+            }
+        }
         let Err((key, msg)) = Sweep::check_paper_points(self.sweep.as_ref(), &self.claims) else {
             return Ok(self);
         };
         let line = self.source.as_ref().and_then(|s| s.line(&key));
         Err(Error::file(self.shown(), at_line(line, &key), msg))
+    }
+
+    /// Each axis's integer values made floats where its key takes a float: the first point
+    /// with the axis's first integer as a float is checked as a study ([`Scenario::plan`]);
+    /// a key that takes only integers (`outliers.count`) refuses it and keeps them.
+    fn type_sweep_values(&mut self) {
+        let Some(first) = self
+            .sweep
+            .as_ref()
+            .and_then(|sw| sw.points().into_iter().next())
+        else {
+            return;
+        };
+        let axes = self.sweep.as_ref().map_or(0, |sw| sw.axes.len());
+        for i in 0..axes {
+            let values = &self.sweep.as_ref().expect("a sweep").axes[i].values;
+            let Some(&toml::Value::Integer(v)) = values.iter().find(|v| v.is_integer()) else {
+                continue;
+            };
+            let mut point = first.clone();
+            point[i] = toml::Value::Float(v as f64);
+            if self.plan(&point).is_err() {
+                continue;
+            }
+            for v in &mut self.sweep.as_mut().expect("a sweep").axes[i].values {
+                if let toml::Value::Integer(n) = *v {
+                    *v = toml::Value::Float(n as f64);
+                }
+            }
+        }
     }
 
     /// A copy with one dotted key (`outliers.count`, `trials`, `tracker.mpe_a_um`) set to
@@ -437,11 +483,12 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
         } else {
             "sweep".into()
         };
-        if s.zip && i > 0 {
-            return Err((
-                format!("{place}.zip"),
-                "zip = true belongs on the first axis".into(),
-            ));
+        if s.zip && (i > 0 || !grid) {
+            let why = match grid {
+                true => "zip = true belongs on the first axis",
+                false => "zip = true pairs the axes of a [[sweep]] grid; one [sweep] has none",
+            };
+            return Err((format!("{place}.zip"), why.into()));
         }
         if s.values.is_empty() {
             return Err((
@@ -449,16 +496,24 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
                 format!("\"{}\": give at least one value", s.key),
             ));
         }
-        if s.key == "trials" {
+        // Every point runs the run's trials from the run's seeds (`--trials`, `--seed`).
+        if let Some(what) = match s.key.as_str() {
+            "trials" => Some("trials"),
+            "seed" => Some("seeds, so that the points differ only in the swept settings"),
+            _ => None,
+        } {
             return Err((
                 format!("{place}.key"),
-                "\"trials\" cannot be swept: every sweep point runs the run's trials".into(),
+                format!(
+                    "\"{}\" cannot be swept: every sweep point runs the run's {what}",
+                    s.key
+                ),
             ));
         }
         if !zip {
             let twice = crate::study::given_twice(
                 &s.values,
-                PartialEq::eq,
+                same_value,
                 ToString::to_string,
                 "sweep points",
             );
@@ -490,4 +545,26 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
         });
     }
     Ok(Sweep { axes, zip, grid })
+}
+
+/// Two sweep values alike: equal, or numbers of one value (`5` and `5.0`), element by element
+/// in arrays.
+fn same_value(a: &toml::Value, b: &toml::Value) -> bool {
+    use toml::Value::{Array, Float, Integer};
+    match (a, b) {
+        (Integer(i), Float(f)) | (Float(f), Integer(i)) => *i as f64 == *f,
+        (Array(x), Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same_value(a, b))
+        }
+        _ => a == b,
+    }
+}
+
+/// Whether a claim's `paper_point` `pp` names the sweep point `point`: its one axis's value,
+/// or the array of the axes' values ([`Sweep::point_value`]).
+fn at_point(pp: &toml::Value, point: &[toml::Value]) -> bool {
+    match point {
+        [one] => same_value(pp, one),
+        all => same_value(pp, &toml::Value::Array(all.to_vec())),
+    }
 }
