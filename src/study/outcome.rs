@@ -31,6 +31,17 @@ pub struct TrialResult {
     pub outcomes: Vec<Outcome>,
 }
 
+impl TrialResult {
+    /// The study parameters not determinable in this trial on strategy `strategy`'s
+    /// measurement ([`TrialResult::not_determinable`]; none where a record left the lists
+    /// out).
+    pub fn not_determinable_on(&self, strategy: usize) -> &[usize] {
+        self.not_determinable
+            .get(strategy)
+            .map_or(&[], Vec::as_slice)
+    }
+}
+
 fn all_empty(v: &[Vec<usize>]) -> bool {
     v.iter().all(Vec::is_empty)
 }

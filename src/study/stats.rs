@@ -479,7 +479,7 @@ impl Accumulator {
                 continue;
             }
             self.cells[ci].ok += 1;
-            let below: &[usize] = t.not_determinable.get(o.strategy).map_or(&[], |v| v);
+            let below = t.not_determinable_on(o.strategy);
             for k in 0..self.names.len() {
                 // Base parameters absorb the registration's error: nuisance, not compared.
                 if self.names[k].starts_with("base.") {

@@ -291,7 +291,7 @@ impl TrialSink for TrialsCsv {
         }
         for o in &t.outcomes {
             // As summary.json counts it: without the base's and the undeterminable η.
-            let below = t.not_determinable.get(o.strategy).map_or(&[][..], |v| v);
+            let below = t.not_determinable_on(o.strategy);
             let eta_mean = trial_eta_mean(&info.params, (&t.truth, &o.identified), below);
             out += &lead;
             for text in [&info.methods[o.method], &info.strategies[o.strategy]] {

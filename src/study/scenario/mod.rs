@@ -668,12 +668,7 @@ impl Scenario {
 /// declared `length_unit = "m"` is the usual cause.
 fn unmeasurable(robot: &Robot) -> Option<String> {
     use crate::measurement::csv::MAX_POINT_MM;
-    use crate::robot::Param;
-    let base = (0..3)
-        .map(|c| robot.get(Param::Base(c)).powi(2))
-        .sum::<Real>()
-        .sqrt();
-    let reach = crate::robot::sampling::reach_bound_mm(robot) + base;
+    let reach = crate::robot::sampling::reach_bound_mm(robot) + robot.base().pos.norm();
     (reach > MAX_POINT_MM).then(|| {
         format!(
             "robot \"{}\" may reach {reach:.0} mm from the world's origin (its base's \

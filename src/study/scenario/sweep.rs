@@ -101,22 +101,31 @@ impl Sweep {
         }
     }
 
-    /// Refuses, as (key, message), a claim's `paper_point` (claim `i` of `claims`) that is no
-    /// point of `sweep`, or given without a sweep: no point would be the paper's setting.
-    fn check_paper_points(
+    /// Sets each claim's `paper_point` to the point of `sweep` it names, however each writes
+    /// its numbers ([`at_point`]), or refuses, as (key, message), one (claim `i` of `claims`)
+    /// that is no point of `sweep`, or given without a sweep: no point would be the paper's
+    /// setting.
+    fn place_paper_points(
         sweep: Option<&Sweep>,
-        claims: &[crate::study::claims::Claim],
+        claims: &mut [crate::study::claims::Claim],
     ) -> std::result::Result<(), (String, String)> {
-        for (i, c) in claims.iter().enumerate() {
+        let points = sweep.map(Sweep::points).unwrap_or_default();
+        for (i, c) in claims.iter_mut().enumerate() {
             let Some(pp) = &c.paper_point else { continue };
             let key = format!("claims[{i}].paper_point");
-            let Some(sw) = sweep else {
+            if sweep.is_none() {
                 let why =
                     "is the swept value at the paper's setting, and the scenario has no sweep";
                 return Err((key, format!("claim \"{}\": {why}", c.id)));
-            };
-            if !sw.points().iter().any(|p| at_point(pp, p)) {
-                let listed: Vec<String> = (sw.points().iter())
+            }
+            if let Some(p) = points.iter().find(|p| at_point(pp, p)) {
+                c.paper_point = Some(match p.as_slice() {
+                    [one] => one.clone(),
+                    all => toml::Value::Array(all.to_vec()),
+                });
+            } else {
+                let listed: Vec<String> = points
+                    .iter()
                     .map(|p| Sweep::point_value(p).to_string())
                     .collect();
                 let why = format!(
@@ -212,19 +221,8 @@ impl Scenario {
     /// `paper_point` is the point it names, however each writes its numbers.
     pub(super) fn with_paper_points_checked(mut self) -> Result<Scenario> {
         self.type_sweep_values();
-        if let Some(sw) = &self.sweep {
-            let points = sw.points();
-            for c in &mut self.claims {
-                let Some(pp) = &c.paper_point else { continue };
-                if let Some(p) = points.iter().find(|p| at_point(pp, p)) {
-                    c.paper_point = Some(match p.as_slice() {
-                        [one] => one.clone(),
-                        all => toml::Value::Array(all.to_vec()),
-                    });
-                }
-            }
-        }
-        let Err((key, msg)) = Sweep::check_paper_points(self.sweep.as_ref(), &self.claims) else {
+        let placed = Sweep::place_paper_points(self.sweep.as_ref(), &mut self.claims);
+        let Err((key, msg)) = placed else {
             return Ok(self);
         };
         let line = self.source.as_ref().and_then(|s| s.line(&key));
@@ -235,25 +233,24 @@ impl Scenario {
     /// with the axis's first integer as a float is checked as a study ([`Scenario::plan`]);
     /// a key that takes only integers (`outliers.count`) refuses it and keeps them.
     fn type_sweep_values(&mut self) {
-        let Some(first) = self
-            .sweep
-            .as_ref()
-            .and_then(|sw| sw.points().into_iter().next())
-        else {
+        let Some(sw) = &self.sweep else { return };
+        let Some(first) = sw.points().into_iter().next() else {
             return;
         };
-        let axes = self.sweep.as_ref().map_or(0, |sw| sw.axes.len());
-        for i in 0..axes {
-            let values = &self.sweep.as_ref().expect("a sweep").axes[i].values;
-            let Some(&toml::Value::Integer(v)) = values.iter().find(|v| v.is_integer()) else {
-                continue;
-            };
-            let mut point = first.clone();
-            point[i] = toml::Value::Float(v as f64);
-            if self.plan(&point).is_err() {
-                continue;
-            }
-            for v in &mut self.sweep.as_mut().expect("a sweep").axes[i].values {
+        let floats: Vec<usize> = (0..sw.axes.len())
+            .filter(|&i| {
+                let values = &sw.axes[i].values;
+                let Some(&toml::Value::Integer(v)) = values.iter().find(|v| v.is_integer()) else {
+                    return false;
+                };
+                let mut point = first.clone();
+                point[i] = toml::Value::Float(v as f64);
+                self.plan(&point).is_ok()
+            })
+            .collect();
+        let Some(sw) = &mut self.sweep else { return };
+        for i in floats {
+            for v in &mut sw.axes[i].values {
                 if let toml::Value::Integer(n) = *v {
                     *v = toml::Value::Float(n as f64);
                 }
