@@ -4,13 +4,14 @@
 //! `M = I`, or `M = diag(JᵀJ)` with Marquardt's scaling ([`LmOptions::marquardt`]).
 //!
 //! - Fixed damping (Guo 2024 eq. 8, `μ = 1`): every step is taken; stop when `max |Δx| < ε`
-//!   (the statistics then come from the last evaluation, `Work::take_step_in_residual`).
+//!   and the damping alone did not hold the step small (`converged_step`); the statistics
+//!   then come from the last evaluation, `Work::take_step_in_residual`.
 //!   With `M = I` it converges linearly: per iteration the error along an eigenvector of
 //!   `JᵀJ` with eigenvalue σ² shrinks by `μ / (σ² + μ)`, slowly where σ² is small against μ
 //!   (docs/formats.md `lm`: weakly seen lengths of arms with parallel joints 2 and 3).
 //! - Adaptive damping (Ban: `λ0 = 0.01`, `ε = 1e-5`, `kmax = 50`): a step is accepted when it
 //!   lowers `|ΔP|²`, and λ is then divided by the factor (10); otherwise λ is multiplied by it
-//!   and the step is solved again. Stop when an accepted step has `max |Δx| < ε`
+//!   and the step is solved again. Stop when an accepted step has `max |Δx| < ε` as above
 //!   ([`super::Termination::Converged`], also when a step that small no longer lowers the
 //!   cost), after `kmax` iterations, or when λ exceeds 1e16 without a lower cost
 //!   ([`super::Termination::NoProgress`]).
@@ -81,6 +82,43 @@ fn solve_damped(work: &mut Work, damping: Real, marquardt: bool) -> bool {
     work.dx.copy_from(&work.g);
     cholesky_solve(&work.a, &mut work.dx);
     work.dx.iter().all(|v| v.is_finite())
+}
+
+/// Whether a step `work.dx` solved from `work`'s normal equations with `damping` ends the
+/// solve at `x` (the step taken; `x0` the start): below `eps` (max |Δx|), and not held small
+/// by the damping alone. After the step the linearised gradient is `damping · M Δx`; its ratio
+/// `r` to the gradient before the step is the step's contraction (per direction
+/// `μ / (σ² + μ)`), so the steps still to come add up to about `max |Δx| · r / (1 − r)`. A
+/// solve whose remaining way is longer than the way it has come, `max |x − x0|`, has not
+/// converged however small its step: a damping far above `JᵀJ` (`mu = 1e12`) makes every step
+/// tiny while the cost barely moves, and would otherwise end `converged` at its start.
+fn converged_step(
+    work: &Work,
+    (damping, marquardt): (Real, bool),
+    eps: Real,
+    x: &DVector<Real>,
+    x0: &DVector<Real>,
+) -> bool {
+    let step = max_abs(&work.dx);
+    if step >= eps {
+        return false;
+    }
+    let (mut after, mut before) = (0.0, 0.0);
+    for k in 0..work.dx.len() {
+        let m = if marquardt {
+            work.n[(k, k)].max(Real::MIN_POSITIVE)
+        } else {
+            1.0
+        };
+        after = Real::max(after, (damping * m * work.dx[k]).abs());
+        before = Real::max(before, work.g[k].abs());
+    }
+    let r = if before > 0.0 { after / before } else { 0.0 };
+    let come = x
+        .iter()
+        .zip(x0)
+        .fold(0.0, |m: Real, (a, b)| m.max((a - b).abs()));
+    r < 1.0 && step * r <= come * (1.0 - r)
 }
 
 /// The keys of the two dampings: the fixed one's, and the adaptive one's.
@@ -162,7 +200,9 @@ fn levenberg_marquardt(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) 
         }
         x += &work.dx;
         iterations = it + 1;
-        if max_abs(&work.dx) < o.eps || at_rounding_floor(p, &w, cost, (&work.g, &work.dx)) {
+        if converged_step(&work, (o.mu, o.marquardt), o.eps, &x, x0)
+            || at_rounding_floor(p, &w, cost, (&work.g, &work.dx))
+        {
             termination = Termination::Converged;
             work.take_step_in_residual(p);
             break;
@@ -197,6 +237,7 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
                     x_try.copy_from(&x);
                     x_try += &work.dx;
                     let c = work.evaluate(p, &x_try, &w);
+                    let done = converged_step(&work, (lambda, o.marquardt), o.eps, &x_try, x0);
                     if c.is_finite() && c < cost {
                         std::mem::swap(&mut x, &mut x_try);
                         cost = c;
@@ -204,7 +245,7 @@ fn adaptive(p: &dyn LeastSquares, x0: &DVector<Real>, o: &LmOptions) -> Identifi
                         iterations += 1;
                         work.normal(p, &w);
                         fresh = true;
-                        if step < o.eps {
+                        if done {
                             termination = Termination::Converged;
                             break 'outer;
                         }

@@ -198,30 +198,42 @@ fn a_value_below_the_smallest_number_is_refused_at_its_cell() {
 }
 
 /// An identification written although it stopped at its iteration limit is warned of on
-/// stderr, as `task` warns of an entry's; a converged one is not.
+/// stderr, as `task` warns of an entry's, also where a huge damping kept every step small;
+/// a converged one is not.
 #[test]
 fn an_identification_written_at_its_iteration_limit_is_warned_of() {
     let d = tmp_dir("cli-plausible-unconverged");
     let pos = simulated(&d, "scenarios/ci-guard.toml", None);
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        path_arg(&pos),
-        "--method",
-        "lm",
-        "--set",
-        "max_iter=2",
-        "--out",
-        path_arg(&d.join("lm")),
-    ]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    let want = "warning: the identification ended `max-iterations` after 2 iterations";
-    assert!(err.contains(want), "{err}");
-    let j = load_json(&d.join("lm").join("identified.json"));
-    assert_eq!(j["termination"], "max-iterations");
+    // `lm` with the option `set`, warned of as ending at its limit after `iterations`.
+    let at_limit = |set: &str, iterations: usize| {
+        let out = d.join(set);
+        let o = calbench(&[
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            path_arg(&pos),
+            "--method",
+            "lm",
+            "--set",
+            set,
+            "--out",
+            path_arg(&out),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        let want = format!(
+            "warning: the identification ended `max-iterations` after {iterations} iterations"
+        );
+        assert!(err.contains(&want), "{err}");
+        let j = load_json(&out.join("identified.json"));
+        assert_eq!(j["termination"], "max-iterations");
+        assert_eq!(j["iterations"], iterations);
+    };
+    at_limit("max_iter=2", 2);
+    // A damping that holds every step below `eps` from the start is no convergence
+    // (docs/formats.md `lm`): it ended `converged` after one iteration.
+    at_limit("mu=1e12", 50);
     let o = identify(&pos, &d.join("ls"), &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(

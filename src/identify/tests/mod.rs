@@ -176,6 +176,37 @@ fn linear_problem_matches_the_normal_equations() {
 }
 
 #[test]
+fn a_damping_that_holds_every_step_small_is_not_convergence() {
+    // μ = 1e12 against AᵀA of order 10: every step goes about 1e-12 of the way to the
+    // least-squares answer, far below ε = 1e-5, while the answer is a unit away.
+    let p = linear();
+    let x0 = DVector::zeros(3);
+    let ata = p.a.transpose() * &p.a;
+    let ls_truth = ata.lu().solve(&(p.a.transpose() * &p.b)).expect("regular");
+    let o = LmOptions {
+        mu: 1e12,
+        ..Default::default()
+    };
+    let out = solve(&o, &p, &x0);
+    assert_eq!(out.termination, Termination::MaxIterations);
+    assert_eq!(out.iterations, 50);
+    assert!((&out.x - &ls_truth).amax() > 0.1, "{}", out.x);
+    // The adaptive damping from λ0 = 1e12 falls after each step that lowers the cost, until
+    // its steps reach the answer.
+    let o = LmOptions {
+        adaptive: true,
+        lambda0: 1e12,
+        eps: 1e-12,
+        max_iter: 200,
+        ..Default::default()
+    };
+    let out = solve(&o, &p, &x0);
+    assert_eq!(out.termination, Termination::Converged);
+    assert!(out.iterations > 10, "{} iterations", out.iterations);
+    approx::assert_relative_eq!(out.x, ls_truth, epsilon = 1e-9);
+}
+
+#[test]
 fn hoerl_kennard_baldwin_xi_by_hand() {
     // Orthonormal columns (scaling is then the identity): z_LS = Aᵀb, σ̂² = |b − A z|²/(n − t),
     // ξ = t σ̂² / |z|².
