@@ -16,6 +16,13 @@ pub const INSTRUMENTS_STUDY: &str = "instruments_study";
 /// The keys of [`INSTRUMENTS_STUDY`].
 pub const INSTRUMENTS_KEYS: [&str; 4] = ["poses", "strategies", "candidates", "validation"];
 
+/// The keys an instruments study takes at the top level, beside [`Head`]'s.
+const TOP_KEYS: [&str; 4] = ["robot", "errors", INSTRUMENTS_STUDY, "measurement"];
+
+/// What an instruments study's file takes, as its refusals of another key say.
+const TAKES: &str = "with [instruments_study] takes name, description, seed, \
+    trials, robot, [errors], [instruments_study] and its [[measurement]] tables";
+
 /// How a scenario written before [`INSTRUMENTS_STUDY`] existed is migrated.
 pub const MIGRATE: &str = "an instruments study is declared by an [instruments_study] table \
     holding its poses, strategies, candidates and validation (CHANGELOG.md, docs/formats.md \
@@ -24,7 +31,9 @@ pub const MIGRATE: &str = "an instruments study is declared by an [instruments_s
 /// An instruments study's `table` with the keys of its `[instruments_study]` table moved to
 /// the top level, where [`super::instruments::InstrumentsScenario`] reads them; `path` names the file in errors.
 /// One of those keys at the top level (the layout before the table), a missing table and a
-/// key the table does not take are refused, naming the key and saying how to migrate.
+/// key the table does not take are refused, naming the key and saying how to migrate; so is
+/// another key at the top level, naming what the file takes (not the table's keys, which
+/// the scenario's fields would list once moved).
 pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Table> {
     let ferr = |place: &str, msg: String| Error::file(path, place, msg);
     if let Some(key) = INSTRUMENTS_KEYS.iter().find(|k| table.contains_key(**k)) {
@@ -32,6 +41,12 @@ pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Tab
             key,
             format!("{MIGRATE} (`{key}` is at the top level)"),
         ));
+    }
+    let known = |k: &String| {
+        crate::study::whole::KEYS.contains(&k.as_str()) || TOP_KEYS.contains(&k.as_str())
+    };
+    if let Some(key) = table.keys().find(|k| !known(k)) {
+        return Err(ferr(key, format!("unknown key: a scenario {TAKES}")));
     }
     let study = match table.remove(INSTRUMENTS_STUDY) {
         Some(toml::Value::Table(t)) => t,
@@ -98,11 +113,9 @@ impl InstrumentsScenario {
             m.instrument().map_err(|e| in_entry(i, e))?;
             measurement.push(m);
         }
-        let takes = "with [instruments_study] takes name, description, seed, trials, robot, \
-                     [errors], [instruments_study] and its [[measurement]] tables";
         let trials = (20, 2..=crate::study::scenario::MAX_TRIALS);
         let (head, mut s): (Head, InstrumentsScenario) =
-            crate::study::whole::parse(table, path, trials, takes)?;
+            crate::study::whole::parse(table, path, trials, TAKES)?;
         s.measurement = measurement;
         s.head = head;
         s.head.table = whole;

@@ -37,7 +37,7 @@ fn default_seed() -> u64 {
 }
 
 /// The keys of [`Head`].
-const KEYS: [&str; 4] = ["name", "description", "seed", "trials"];
+pub(crate) const KEYS: [&str; 4] = ["name", "description", "seed", "trials"];
 
 impl Head {
     /// Takes [`Head`]'s keys out of `table`, read from `path` (named in errors), and checks

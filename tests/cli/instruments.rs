@@ -297,6 +297,31 @@ fn an_instruments_study_of_the_old_layout_is_refused_saying_how_to_migrate() {
     }
 }
 
+/// A key an instruments study does not take at the top level is refused at its line, naming
+/// what the file takes; the keys of `[instruments_study]`, which are not top-level ones, are
+/// not offered (serde's list of the scenario's fields had named them).
+#[test]
+fn an_unknown_top_level_key_of_an_instruments_study_is_refused_at_its_line() {
+    let dir = tmp_dir("instruments-unknown-key");
+    let text = STUDY.replacen(
+        "\n[instruments_study]\n",
+        "\nbogus = 1\n\n[instruments_study]\n",
+        1,
+    );
+    let line = 1 + text
+        .lines()
+        .position(|l| l == "bogus = 1")
+        .expect("the key");
+    let err = refused_run(&dir, "unknown", &text);
+    let want = format!(
+        "unknown.toml: line {line}, bogus: unknown key: a scenario with [instruments_study] \
+         takes name, description, seed, trials, robot, [errors], [instruments_study] and its \
+         [[measurement]] tables"
+    );
+    assert!(err.contains(&want), "{err}");
+    assert!(!err.contains("`poses`"), "{err}");
+}
+
 /// A socket study: the tool point held in two sockets 50 mm apart.
 fn socket_study(noise_um: f64) -> String {
     format!(

@@ -104,14 +104,15 @@ fn methods_in_a_study_that_runs_whole_are_refused_at_their_line() {
     for (file, takes) in [
         (
             "ban-fig3.toml",
-            "expected `registration_study` or `claims` (a scenario with [registration_study] \
-             takes only name, description, seed, trials, that table and [[claims]])",
+            "scenario: unknown field `methods`, expected `registration_study` or `claims` (a \
+             scenario with [registration_study] takes only name, description, seed, trials, \
+             that table and [[claims]])",
         ),
         (
             "instruments.toml",
-            "expected one of `robot`, `poses`, `strategies`, `candidates`, `validation`, \
-             `errors` (a scenario with [instruments_study] takes name, description, seed, \
-             trials, robot, [errors], [instruments_study] and its [[measurement]] tables)",
+            "methods: unknown key: a scenario with [instruments_study] takes name, \
+             description, seed, trials, robot, [errors], [instruments_study] and its \
+             [[measurement]] tables",
         ),
     ] {
         let text = read(&root().join("scenarios").join(file));
@@ -120,7 +121,7 @@ fn methods_in_a_study_that_runs_whole_are_refused_at_their_line() {
         let line = line_of(&text, "[[methods]]");
         assert_eq!(
             refusal(&d, &["run", file, "--trials", "2", "--out", "o"]),
-            format!("error: {file}: line {line}, scenario: unknown field `methods`, {takes}\n")
+            format!("error: {file}: line {line}, {takes}\n")
         );
         assert!(!d.join("o").exists());
     }
