@@ -45,7 +45,8 @@ pub struct HistoryArgs {
 pub fn run(args: &HistoryArgs) -> Result<()> {
     let tolerance = args.tolerance.checked()?;
     if let Some(out) = &args.out {
-        super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
+        // The database is an input: a page written over it would destroy it.
+        super::guard_out(out, &OUTPUTS, [args.db.path()])?;
     }
     let db = args.db.open(false)?;
     let scenario = args.scenario.as_deref();

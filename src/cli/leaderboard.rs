@@ -30,7 +30,8 @@ pub struct LeaderboardArgs {
 /// Writes the leaderboard and prints where.
 pub fn run(args: &LeaderboardArgs) -> Result<()> {
     if let Some(out) = &args.out {
-        super::guard_out(out, &OUTPUTS, None::<&std::path::Path>)?;
+        // The database is an input: a page written over it would destroy it.
+        super::guard_out(out, &OUTPUTS, [args.db.path()])?;
     }
     let db = args.db.open(false)?;
     if args.verify {

@@ -44,9 +44,14 @@ pub struct DbArg {
 }
 
 impl DbArg {
+    /// The database's path: `--db`, else $CALBENCH_DB, else results/calbench.sqlite.
+    pub fn path(&self) -> PathBuf {
+        db_path(self.db.as_deref())
+    }
+
     /// The database, opened for writing (created and migrated) or for reading.
     pub fn open(&self, write: bool) -> Result<Db> {
-        Ok(Db::open(&db_path(self.db.as_deref()), write)?)
+        Ok(Db::open(&self.path(), write)?)
     }
 }
 

@@ -488,3 +488,63 @@ fn record_refuses_a_published_row_that_is_not_the_task_files() {
     std::fs::remove_file(dir.join("t/task.toml")).unwrap();
     assert!(record(&db).status.success());
 }
+
+/// `history` and `leaderboard` read the database: an `--out` folder that holds it under the
+/// name of a file they write is refused before any work, and the database is kept (the page's
+/// table had been written over it).
+#[test]
+fn a_page_is_not_written_over_the_database_it_reads() {
+    let dir = tmp_dir("cli-results-db-as-output");
+    task_folder(&dir, "closed", 3.09, "closed", "\"kinematic\"");
+    for (command, file) in [
+        ("history", "history.csv"),
+        ("leaderboard", "leaderboard.csv"),
+    ] {
+        let folder = dir.join(command);
+        let db = folder.join(file);
+        calbench_ok(&[
+            "record",
+            path_arg(&dir.join("closed")),
+            "--db",
+            path_arg(&db),
+        ]);
+        let before = std::fs::read(&db).unwrap();
+        let o = calbench(&[command, "--db", path_arg(&db), "--out", path_arg(&folder)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{command}: {err}");
+        let want = format!("is an input of this command, and the command writes its {file} there");
+        assert!(err.contains(&want), "{command}: {err}");
+        assert_eq!(std::fs::read(&db).unwrap(), before, "{command}");
+        assert!(
+            !folder.join(format!("{command}.html")).exists(),
+            "{command}"
+        );
+    }
+}
+
+/// A `task.json` key that is unknown, or missing, is refused at that key once, as
+/// docs/formats.md § 9.3 names it (`published[0].labl`, not `published[0].labl.labl`;
+/// `division`, not `.`).
+#[test]
+fn a_task_json_key_unknown_or_missing_is_named_once() {
+    let dir = tmp_dir("cli-results-task-keys");
+    let db = dir.join("calbench.sqlite");
+    task_folder(&dir, "t", 3.09, "closed", "\"kinematic\"");
+    let file = dir.join("t").join("task.json");
+    let good = read(&file);
+    for (from, to, place) in [
+        (
+            "\"division\": \"closed\"",
+            "\"divison\": \"closed\"",
+            "divison",
+        ),
+        ("{\"label\"", "{\"labl\"", "published[0].labl"),
+        ("\"division\": \"closed\",", "", "division"),
+    ] {
+        std::fs::write(&file, good.replacen(from, to, 1)).unwrap();
+        let o = calbench(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        let want = format!("task.json: {place}: not a calbench task.json: ");
+        assert!(!o.status.success() && err.contains(&want), "{place}: {err}");
+    }
+}

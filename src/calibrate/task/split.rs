@@ -1,6 +1,7 @@
 //! A task's split file (docs/formats.md § 9.2): which rows of one data file calibrate and
 //! which validate, written out row by row so that every entry is scored on the same rows.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use crate::error::{read_text, Error, Result};
@@ -28,8 +29,9 @@ impl Split {
     fn parse(path: &Path, text: &str) -> Result<Split> {
         let at = |line: usize, msg: String| Error::file(path, format!("line {line}"), msg);
         let mut rows: Option<usize> = None;
-        // The line that put each row in a part, and the part (true: calibration).
-        let mut owner: Vec<Option<(usize, bool)>> = Vec::new();
+        // The ranges given so far, disjoint, by first row: (last row, line, calibration).
+        // Ranges, not a slot per row: `rows N` may be any number a file can write.
+        let mut owner: BTreeMap<usize, (usize, usize, bool)> = BTreeMap::new();
         for (i, raw) in text.lines().enumerate() {
             let line = i + 1;
             let body = raw.split('#').next().unwrap_or("").trim();
@@ -70,7 +72,6 @@ impl Split {
                         ));
                     }
                     rows = Some(n);
-                    owner = vec![None; n];
                 }
                 "calibration" | "validation" => {
                     let n = rows.ok_or_else(|| {
@@ -92,16 +93,21 @@ impl Split {
                             ),
                         ));
                     }
-                    for (r, o) in owner.iter_mut().enumerate().take(b + 1).skip(a) {
-                        if let Some((first, part)) = *o {
-                            let part = if part { "calibration" } else { "validation" };
-                            return Err(at(
-                                line,
-                                format!("row {r} is already in {part} (line {first}): a row lies in one part"),
-                            ));
-                        }
-                        *o = Some((line, word == "calibration"));
+                    // The first row of a..=b that an earlier range holds: a itself, in the
+                    // range starting at or before it, or the first range starting after it.
+                    let before = owner.range(..=a).next_back().filter(|(_, e)| e.0 >= a);
+                    let after = owner.range(a..=b).next();
+                    if let Some((&start, &(_, first, part))) = before.or(after) {
+                        let part = if part { "calibration" } else { "validation" };
+                        return Err(at(
+                            line,
+                            format!(
+                                "row {} is already in {part} (line {first}): a row lies in one part",
+                                start.max(a)
+                            ),
+                        ));
                     }
+                    owner.insert(a, (b, line, word == "calibration"));
                 }
                 other => {
                     return Err(at(
@@ -114,17 +120,39 @@ impl Split {
             }
         }
         let rows = rows.ok_or_else(|| Error::file(path, "rows", "no `rows N` line"))?;
-        if let Some(r) = owner.iter().position(Option::is_none) {
+        // The ranges are disjoint: they cover every row when each starts where the last ended.
+        let mut next = 0;
+        let (mut cal, mut val) = (0, 0);
+        for (&a, &(b, _, c)) in &owner {
+            if a != next {
+                break;
+            }
+            next = b + 1;
+            *(if c { &mut cal } else { &mut val }) += b + 1 - a;
+        }
+        if next != rows {
             return Err(Error::file(
                 path,
                 "rows",
                 format!(
-                    "row {r} is in neither part: every row of the {rows} calibrates or validates"
+                    "row {next} is in neither part: every row of the {rows} calibrates or validates"
                 ),
             ));
         }
-        let (cal, val): (Vec<usize>, Vec<usize>) =
-            (0..rows).partition(|&r| owner[r].is_some_and(|(_, c)| c));
+        let held = |n: usize| {
+            let mut v: Vec<usize> = Vec::new();
+            v.try_reserve_exact(n).map(|()| v).map_err(|_| {
+                Error::file(
+                    path,
+                    "rows",
+                    format!("`rows {rows}`: more rows than this machine's memory can list"),
+                )
+            })
+        };
+        let (mut cal, mut val) = (held(cal)?, held(val)?);
+        for (&a, &(b, _, c)) in &owner {
+            (if c { &mut cal } else { &mut val }).extend(a..=b);
+        }
         for (part, v) in [("calibration", &cal), ("validation", &val)] {
             if v.is_empty() {
                 return Err(Error::file(path, part, "holds no row"));
@@ -193,6 +221,20 @@ mod tests {
                 "rows 5\ncalibration -1-3\n",
                 &["line 2", "`-1-3` is not a row number or a range A-B"],
             ),
+            (
+                "rows 5\ncalibration 2-3\nvalidation 0-4\n",
+                &["line 3", "row 2 is already in calibration (line 2)"],
+            ),
+            // A number of rows no data file has is refused as any gap, with no slot per row.
+            (
+                "rows 18446744073709551615\ncalibration 0\nvalidation 1\n",
+                &["row 2 is in neither part"],
+            ),
+            (
+                "rows 18446744073709551615\ncalibration 0-18446744073709551613\n\
+                 validation 18446744073709551614\n",
+                &["rows: `rows 18446744073709551615`: more rows than this machine's memory"],
+            ),
             ("rows x\n", &["line 1", "`x` is not a number of rows"]),
             (
                 "rows 0\ncalibration 0\n",
@@ -207,6 +249,12 @@ mod tests {
         std::fs::write(&file, "\u{feff}rows 3\ncalibration 0-1\nvalidation 2\n").unwrap();
         let bom = Split::load(&file).unwrap();
         assert_eq!((bom.calibration, bom.validation), (vec![0, 1], vec![2]));
+        let mixed = parse("rows 6\nvalidation 5\ncalibration 2-4\nvalidation 1\ncalibration 0\n");
+        let mixed = mixed.unwrap();
+        assert_eq!(
+            (mixed.calibration, mixed.validation),
+            (vec![0, 2, 3, 4], vec![1, 5])
+        );
         let s = parse("rows 3\ncalibration 0-1\nvalidation 2\n").unwrap();
         let e = s
             .check_rows(Path::new("t.split"), Path::new("d.csv"), 4)
