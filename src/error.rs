@@ -386,14 +386,14 @@ where
         let mut key = e.path().to_string();
         let msg = e.into_inner().to_string();
         // A missing field, and an unknown one (`unknown field `foo`, expected …`), are named
-        // by their own key, so that the refusal stands at that key's line. The path of an
-        // unknown field may end in it already (a JSON reader's does).
-        // serde_json says where after the message (`… at line 1 column 17`).
+        // by their own key, so that the refusal stands at that key's line. serde_json says
+        // where after the message (`… at line 1 column 17`); the path of an unknown field
+        // may end in it already (a JSON reader's does).
         let said = msg.split(" at line ").next().unwrap_or(&msg);
         let field = said
             .strip_prefix("missing field `")
             .and_then(|m| m.strip_suffix('`'))
-            .or_else(|| unknown_field(&msg).map(|(f, _)| f));
+            .or_else(|| unknown_field(said).map(|(f, _)| f));
         let ends_in = |f: &str| key == f || key.ends_with(&format!(".{f}"));
         if let Some(field) = field.filter(|f| !ends_in(f)) {
             key = match key.as_str() {

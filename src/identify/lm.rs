@@ -69,12 +69,7 @@ impl Default for LmOptions {
 fn solve_damped(work: &mut Work, damping: Real, marquardt: bool) -> bool {
     work.a.copy_from(&work.n);
     for k in 0..work.n.nrows() {
-        let m = if marquardt {
-            work.n[(k, k)].max(Real::MIN_POSITIVE)
-        } else {
-            1.0
-        };
-        work.a[(k, k)] += damping * m;
+        work.a[(k, k)] += damping * damping_scale(work, k, marquardt);
     }
     if !cholesky_in_place(&mut work.a) {
         return false;
@@ -82,6 +77,16 @@ fn solve_damped(work: &mut Work, damping: Real, marquardt: bool) -> bool {
     work.dx.copy_from(&work.g);
     cholesky_solve(&work.a, &mut work.dx);
     work.dx.iter().all(|v| v.is_finite())
+}
+
+/// `M`'s diagonal entry `k`: 1, or with Marquardt's scaling `N`'s (at least the smallest
+/// positive number, so that a column of zeros is still damped).
+fn damping_scale(work: &Work, k: usize, marquardt: bool) -> Real {
+    if marquardt {
+        work.n[(k, k)].max(Real::MIN_POSITIVE)
+    } else {
+        1.0
+    }
 }
 
 /// Whether a step `work.dx` solved from `work`'s normal equations with `damping` ends the
@@ -105,11 +110,7 @@ fn converged_step(
     }
     let (mut after, mut before) = (0.0, 0.0);
     for k in 0..work.dx.len() {
-        let m = if marquardt {
-            work.n[(k, k)].max(Real::MIN_POSITIVE)
-        } else {
-            1.0
-        };
+        let m = damping_scale(work, k, marquardt);
         after = Real::max(after, (damping * m * work.dx[k]).abs());
         before = Real::max(before, work.g[k].abs());
     }

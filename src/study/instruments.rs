@@ -64,6 +64,16 @@ pub struct InstrumentsScenario {
     pub measurement: Vec<InstrumentSettings>,
 }
 
+/// The robot's joint and tool parameters: what an instrument may identify of it (the base's
+/// are the instrument's placement).
+fn joint_tool_params(nominal: &Robot) -> Vec<Param> {
+    nominal
+        .params()
+        .into_iter()
+        .filter(|p| !matches!(p, Param::Base(_)))
+        .collect()
+}
+
 fn default_counts() -> Vec<usize> {
     vec![50, 200]
 }
@@ -287,11 +297,7 @@ impl InstrumentsScenario {
     /// Instrument `ii` on `nominal`, prepared for its cells.
     fn prepare(&self, nominal: &Robot, ii: usize) -> Result<Prepared> {
         let s = &self.measurement[ii];
-        let joint_tool: Vec<Param> = nominal
-            .params()
-            .into_iter()
-            .filter(|p| !matches!(p, Param::Base(_)))
-            .collect();
+        let joint_tool = joint_tool_params(nominal);
         let (lay, pool, groups) = self.pool(nominal, ii)?;
         let rows = lay.instrument.observations(pool.len()) * lay.instrument.rows_per_observation();
         let pool_data = KindData {
@@ -339,21 +345,16 @@ impl InstrumentsScenario {
         };
         // The robot's joint and tool parameters bound what an instrument identifies: an
         // instrument whose readings reach that bound needs no preparation to pass.
-        let bound = nominal
-            .params()
-            .iter()
-            .filter(|p| !matches!(p, Param::Base(_)))
-            .count();
+        let bound = joint_tool_params(nominal).len();
         for ii in 0..self.measurement.len() {
             let at = |e: Error| (format!("measurement[{ii}]"), e.to_string());
             let ins = self.measurement[ii].instrument().map_err(at)?;
-            if ins.observations(fewest) * ins.rows_per_observation() >= bound + ins.nuisance() {
+            let readings = |m: usize| ins.observations(m) * ins.rows_per_observation();
+            if readings(fewest) >= bound + ins.nuisance() {
                 continue;
             }
             let p = self.prepare(nominal, ii).map_err(at)?;
-            let ins = &p.lay.instrument;
             let params = p.params.len() + ins.nuisance();
-            let readings = |m: usize| ins.observations(m) * ins.rows_per_observation();
             if readings(fewest) < params {
                 let need = (fewest..)
                     .find(|&m| readings(m) >= params)
