@@ -102,7 +102,9 @@ pub fn rows(db: &Db) -> Result<Vec<Row>> {
 /// over those tasks, of its best figure there relative to the task's reference — its lowest
 /// published figure, else the best figure recorded (the best known) — so 1 is level with the
 /// reference and 0.9 is 10 % below it on average. Sorted by score, lowest first. A task
-/// recorded at several versions ([`Row::board`]) counts once per version.
+/// recorded at several versions ([`Row::board`]) counts once per version; one whose
+/// reference is 0 mm is left out (a figure relative to it is not defined), and an entrant
+/// with no other task has no score.
 pub fn scores(rows: &[Row]) -> Vec<Score> {
     let mut reference: BTreeMap<(&str, &str), (bool, Real)> = BTreeMap::new();
     for r in rows {
@@ -119,9 +121,12 @@ pub fn scores(rows: &[Row]) -> Vec<Score> {
         let b = best.entry((&r.name, r.board())).or_insert((r, r.value));
         b.1 = b.1.min(r.value);
     }
+    // A figure relative to a reference of 0 mm is not defined: that board is left out.
     let mut by_entrant: BTreeMap<&str, Vec<(&Row, Real)>> = BTreeMap::new();
-    for ((name, _), row_value) in best {
-        by_entrant.entry(name).or_default().push(row_value);
+    for ((name, board), row_value) in best {
+        if reference[&board].1 > 0.0 {
+            by_entrant.entry(name).or_default().push(row_value);
+        }
     }
     let mut out: Vec<Score> = by_entrant
         .into_iter()
@@ -164,7 +169,7 @@ pub fn verify(db: &Db) -> Result<usize> {
         let text: serde_json::Value = serde_json::from_str(document)
             .map_err(|e| Error::file(&file, "task.json", format!("recorded as run {id}: {e}")))?;
         let rec = TaskRecord::from_value(text, &file)?;
-        let Some((again, again_ci)) = rec.recomputed() else {
+        let Some((again, again_ci)) = rec.recomputed(&file)? else {
             return Err(Error::file(
                 &file,
                 "validation_errors_mm",

@@ -119,7 +119,8 @@ pub struct Results {
     pub figures: Vec<Figure>,
     /// A task entry's result.
     pub task: Option<TaskResult>,
-    /// The version and commit a task's `task.json` names (the binary that ran it).
+    /// The version and commit a task's `task.json` names (the calbench that ran it;
+    /// `unknown` for one it does not name); none for the other kinds.
     pub ran_with: Option<(String, String)>,
 }
 
@@ -376,7 +377,13 @@ impl Record {
         } else {
             format!("{entrant} / {method} / {models}")
         };
-        let ran_with = t.calbench_version.zip(t.git_commit);
+        // The calbench that ran the entry, never the one recording it: `unknown` where the
+        // entry names none (a task file outside a git repository has no commit).
+        let unknown = || "unknown".to_string();
+        let ran_with = (
+            t.calbench_version.unwrap_or_else(unknown),
+            t.git_commit.unwrap_or_else(unknown),
+        );
         let mut r = Record::new(Kind::Task, dir, document.clone(), task.clone(), document);
         r.scenario.hash = t.task_hash;
         r.results.entries = vec![Entry {
@@ -389,7 +396,7 @@ impl Record {
             value,
             ci,
         }];
-        r.results.ran_with = ran_with;
+        r.results.ran_with = Some(ran_with);
         r.results.task = Some(TaskResult {
             task,
             metric,

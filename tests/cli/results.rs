@@ -463,6 +463,7 @@ fn record_refuses_a_published_row_that_is_not_the_task_files() {
     assert_eq!(count(&db, "SELECT COUNT(*) FROM tasks"), 1);
     // The published figure edited in task.json: 2.92 → 1.5.
     let json = dir.join("t/task.json");
+    let original = read(&json);
     std::fs::write(
         &json,
         read(&json).replace("\"value\": 2.92", "\"value\": 1.5"),
@@ -484,9 +485,91 @@ fn record_refuses_a_published_row_that_is_not_the_task_files() {
             && err.contains("task.toml"),
         "{err}"
     );
+    // The published rows dropped: refused, naming the task file's row that is missing.
+    let mut v: serde_json::Value = serde_json::from_str(&original).unwrap();
+    v["published"] = serde_json::json!([]);
+    std::fs::write(&json, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let o = record(&dir.join("dropped.sqlite"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("task.json: published: lacks") && err.contains("2.92"),
+        "{err}"
+    );
+    // A validation row's error made negative (a distance is ≥ 0): refused at that row.
+    let mut v: serde_json::Value = serde_json::from_str(&original).unwrap();
+    let first = v["validation_errors_mm"][0].as_f64().unwrap();
+    v["validation_errors_mm"][0] = serde_json::json!(-first);
+    std::fs::write(&json, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    let o = record(&dir.join("negative.sqlite"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("task.json: validation_errors_mm[0]: is -"),
+        "{err}"
+    );
     // A folder written before entries carried their task file: recorded as it is.
+    std::fs::write(&json, &original).unwrap();
     std::fs::remove_file(dir.join("t/task.toml")).unwrap();
     assert!(record(&db).status.success());
+}
+
+/// A task record keeps the calbench version and commit its `task.json` names, never the
+/// recording calbench's: a commit it leaves `null` (a task file outside a git repository)
+/// is stored as `unknown`, without a commit time.
+#[test]
+fn a_task_record_keeps_the_version_that_ran_it() {
+    let dir = tmp_dir("cli-results-task-version");
+    let db = dir.join("calbench.sqlite");
+    task_folder(&dir, "t", 3.09, "closed", "\"kinematic\"");
+    let json = dir.join("t/task.json");
+    let text = read(&json).replace(
+        "\"calbench_version\": \"0.1.0\", \"git_commit\": \"abc\"",
+        "\"calbench_version\": \"0.0.9\", \"git_commit\": null",
+    );
+    std::fs::write(&json, text).unwrap();
+    calbench_ok(&["record", path_arg(&dir.join("t")), "--db", path_arg(&db)]);
+    let sql = "SELECT COUNT(*) FROM runs WHERE calbench_version = '0.0.9' \
+               AND git_commit = 'unknown' AND commit_time IS NULL";
+    assert_eq!(count(&db, sql), 1);
+}
+
+/// A published figure of 0 mm is no reference for a score across tasks (a figure relative to
+/// it is not defined): that task is left out, and the entrant is scored on its other task
+/// (the score had been infinite).
+#[test]
+fn a_reference_of_zero_is_left_out_of_the_scores() {
+    let dir = tmp_dir("cli-results-board-zero");
+    let db = dir.join("calbench.sqlite");
+    task_folder_at(
+        &dir,
+        "a",
+        3.00,
+        "open",
+        "\"kinematic\", \"harmonics\"",
+        "0f3c",
+    );
+    task_folder_at(
+        &dir,
+        "z",
+        2.00,
+        "open",
+        "\"kinematic\", \"harmonics\"",
+        "1a2b",
+    );
+    let json = dir.join("z/task.json");
+    std::fs::write(
+        &json,
+        read(&json).replace("\"value\": 2.92", "\"value\": 0"),
+    )
+    .unwrap();
+    let out = recorded_board(&dir, &db, &["a", "z"]);
+    let html = read(&out.join("leaderboard.html"));
+    let scores = &html[html.rfind("Across tasks").expect("a score table")..];
+    let scores = &scores[..scores.find("</table>").unwrap()];
+    assert!(scores.contains(&format!("{:.4}", 3.00 / 2.92)), "{scores}");
+    assert!(
+        !scores.contains("inf") && !scores.contains("NaN"),
+        "{scores}"
+    );
 }
 
 /// `history` and `leaderboard` read the database: an `--out` folder that holds it under the

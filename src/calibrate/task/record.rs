@@ -171,8 +171,8 @@ fn published_line(json: &str, i: usize) -> Option<usize> {
 impl TaskRecord {
     /// Refuses, naming `json_path` and the line and key of the row, a published row of this
     /// record (whose text is `json`) that is not a `[[published]]` row of the task file the
-    /// folder carries (`task_text`, read from `task_path`): the data's authors' figures come
-    /// from the task file only.
+    /// folder carries (`task_text`, read from `task_path`), and a `[[published]]` row of that
+    /// file the record lacks: the data's authors' figures are the task file's, all of them.
     pub fn check_published(
         &self,
         (json, json_path): (&str, &Path),
@@ -199,6 +199,20 @@ impl TaskRecord {
                 ));
             }
         }
+        if let Some(p) = rows.iter().find(|p| !self.published.contains(p)) {
+            return Err(Error::file(
+                json_path,
+                "published",
+                format!(
+                    "lacks \"{}\" ({} mm, {}), a [[published]] row of {}, the task file this \
+                     entry ran: every published figure of the task file is kept beside the entry",
+                    p.label,
+                    p.value,
+                    p.source,
+                    task_path.display()
+                ),
+            ));
+        }
         Ok(())
     }
 }
@@ -224,16 +238,28 @@ pub fn shown((value, ci): Figure) -> String {
 
 impl TaskRecord {
     /// The figure and its interval computed again from the recorded per-row errors by the
-    /// task's metric; `None` when the record holds no per-row errors.
-    pub fn recomputed(&self) -> Option<Figure> {
-        (!self.validation_errors_mm.is_empty()).then(|| self.metric.of(&self.validation_errors_mm))
+    /// task's metric; `None` when the record holds no per-row errors. A negative error (a
+    /// row's error is a distance) is refused, naming `path` (this record's file) and the row.
+    pub fn recomputed(&self, path: &Path) -> Result<Option<Figure>> {
+        let errors = &self.validation_errors_mm;
+        if let Some(i) = errors.iter().position(|e| *e < 0.0) {
+            return Err(Error::file(
+                path,
+                format!("validation_errors_mm[{i}]"),
+                format!(
+                    "is {}: a validation row's error is a distance (mm), ≥ 0",
+                    errors[i]
+                ),
+            ));
+        }
+        Ok((!errors.is_empty()).then(|| self.metric.of(errors)))
     }
 
     /// Refuses, naming `path` (this record's file) and `value`, a figure and interval that
     /// are not, bit for bit, what the recorded per-row errors give ([`TaskRecord::recomputed`]):
     /// an edited figure. A record without per-row errors passes.
     pub fn check_figure(&self, path: &Path) -> Result<()> {
-        let Some(again) = self.recomputed() else {
+        let Some(again) = self.recomputed(path)? else {
             return Ok(());
         };
         let stated = (self.value, self.ci95);

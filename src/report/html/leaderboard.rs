@@ -202,8 +202,8 @@ pub fn page(rows: &[Row], scores: &[Score]) -> String {
         page.para(
             "Each entrant's best figure on each task it entered, relative to the task's lowest \
              published figure (else the best figure recorded), as a geometric mean: 1 is level \
-             with the reference, 0.9 is 10 % below it. Scores over different sets of tasks \
-             compare only roughly.",
+             with the reference, 0.9 is 10 % below it; a task whose reference is 0 mm is left \
+             out. Scores over different sets of tasks compare only roughly.",
         );
         let table: Vec<Vec<String>> = scores
             .iter()
