@@ -67,7 +67,21 @@ def _names(name, value):
         value = value.tolist()
     if not isinstance(value, (list, tuple)) or not all(isinstance(v, str) for v in value):
         raise SettingError(f"setting `{name}`: expected a list of names or a comma-separated string")
-    return [v.strip() for v in value]
+    return [_utf8(name, v).strip() for v in value]
+
+
+def _utf8(name, value):
+    """``value`` (a str), refused naming ``name`` when UTF-8 cannot hold it: a lone surrogate,
+    as ``os.listdir`` or ``sys.argv`` give for a name that is not UTF-8 (it had surfaced as a
+    bare UnicodeEncodeError)."""
+    try:
+        value.encode("utf-8")
+    except UnicodeEncodeError as e:
+        raise SettingError(
+            f"setting `{name}`: {value!r} holds {value[e.start]!r}, a lone surrogate UTF-8 cannot "
+            "hold (a name read from bytes that are not UTF-8?)"
+        ) from None
+    return value
 
 
 def _flag(name, value):
@@ -81,7 +95,9 @@ def _flag(name, value):
 def _text(name, value, what, optional=False):
     """``value`` as a string (or None when ``optional``), refused naming ``name`` and saying
     ``what`` it should be otherwise."""
-    if isinstance(value, str) or (optional and value is None):
+    if isinstance(value, str):
+        return _utf8(name, value)
+    if optional and value is None:
         return value
     raise SettingError(f"setting `{name}`: expected {what}, got {type(value).__name__}")
 

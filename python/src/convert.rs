@@ -251,8 +251,29 @@ pub(crate) fn typed_arg<'a, 'py, T>(key: &str, v: &'a Bound<'py, PyAny>, what: &
 where
     T: FromPyObject<'a, 'py>,
 {
-    v.extract()
-        .map_err(|_| setting(key, format!("expected {what}, got {}", type_name(v))))
+    v.extract().map_err(|_| match utf8(key, v) {
+        Err(e) => e,
+        Ok(_) => setting(key, format!("expected {what}, got {}", type_name(v))),
+    })
+}
+
+/// `v` as a string, refused naming `key` when it is none, or when UTF-8 cannot hold it: a
+/// lone surrogate, as `os.listdir` or `sys.argv` give for a name that is not UTF-8 (it had
+/// surfaced as a bare `UnicodeEncodeError`).
+fn utf8(key: &str, v: &Bound<'_, PyAny>) -> PyResult<String> {
+    let s = v
+        .cast::<PyString>()
+        .map_err(|_| setting(key, format!("expected a str, got {}", type_name(v))))?;
+    s.extract::<String>().map_err(|_| {
+        let shown = s.repr().map_or_else(|_| "it".into(), |r| r.to_string());
+        setting(
+            key,
+            format!(
+                "{shown} holds a lone surrogate UTF-8 cannot hold (a name read from bytes that \
+                 are not UTF-8?)"
+            ),
+        )
+    })
 }
 
 /// `v` as a bool (Python's or numpy's), refused naming `key` otherwise rather than read by
@@ -322,7 +343,7 @@ fn nested_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml:
         return Ok(toml::Value::Float(v.extract()?));
     }
     if v.is_instance_of::<PyString>() {
-        return Ok(toml::Value::String(v.extract()?));
+        return Ok(toml::Value::String(utf8(key, v)?));
     }
     if let Ok(d) = v.cast::<PyDict>() {
         return Ok(toml::Value::Table(nested_table(key, d, depth + 1)?));
@@ -357,12 +378,17 @@ pub(crate) fn toml_table(key: &str, d: &Bound<'_, PyDict>) -> PyResult<toml::Tab
 fn nested_table(key: &str, d: &Bound<'_, PyDict>, depth: usize) -> PyResult<toml::Table> {
     let mut t = toml::Table::new();
     for (k, v) in d.iter() {
-        let k: String = k.extract().map_err(|_| {
-            // A scenario dict's own keys have no path yet: the setting is the scenario.
-            let whose = if key.is_empty() { "scenario" } else { key };
+        // A scenario dict's own keys have no path yet: the setting is the scenario.
+        let whose = if key.is_empty() { "scenario" } else { key };
+        let k: String = if k.is_instance_of::<PyString>() {
+            utf8(whose, &k)?
+        } else {
             let got = k.repr().map_or_else(|_| "?".into(), |r| r.to_string());
-            setting(whose, format!("every key must be a string, got {got}"))
-        })?;
+            return Err(setting(
+                whose,
+                format!("every key must be a string, got {got}"),
+            ));
+        };
         let dotted = if key.is_empty() {
             k.clone()
         } else {

@@ -87,10 +87,19 @@ impl PyRobot {
         };
         let (tip, base) = (link("tip", tip)?, link("base", base)?);
         if !path.is_file() {
-            return Err(err(calbench::Error::io(
-                &path,
-                std::io::Error::new(std::io::ErrorKind::NotFound, "no such robot file"),
-            )));
+            // A folder is refused as the command line refuses it (reading it fails: "Is a
+            // directory"); only a path that is not there is "no such robot file".
+            let why = match std::fs::metadata(&path) {
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    std::io::Error::new(e.kind(), "no such robot file")
+                }
+                Err(e) => e,
+                Ok(m) if m.is_dir() => std::fs::read(&path)
+                    .err()
+                    .unwrap_or_else(|| std::io::Error::other("a folder, not a robot file")),
+                Ok(_) => std::io::Error::other("not a regular file, so not a robot file"),
+            };
+            return Err(err(calbench::Error::io(&path, why)));
         }
         let shown = path.to_string_lossy().into_owned();
         let chain = calbench::robot::urdf::UrdfChain { base, tip };

@@ -550,6 +550,26 @@ def test_errors_are_calbench_errors_with_the_cli_message(cli, tmp_path):
     with pytest.raises(calbench.Error) as e:
         calbench.Robot.from_file(bad)
     assert str(e.value) in msg, (str(e.value), msg)
+    # A name UTF-8 cannot hold (a lone surrogate, as os.listdir gives for bytes that are not
+    # UTF-8) is a SettingError naming the argument, never a bare UnicodeEncodeError.
+    odd = "\udcff"
+    robot = calbench.Robot.builtin("irb2600")
+    for call, key in [
+        (lambda: calbench.identify(robot, data="c.csv", method=odd), "method"),
+        (lambda: calbench.identify(robot, data="c.csv", fix=[odd]), "fix"),
+        (lambda: calbench.simulate({"name": odd}), "name"),
+        (lambda: calbench.simulate({odd: 1}), "scenario"),
+        (lambda: calbench.Robot.builtin(odd), "robot"),
+    ]:
+        with pytest.raises(calbench.SettingError, match=f"setting `{key}`.*lone surrogate"):
+            call()
+    # A folder is not "no such robot file": the command line's own refusal.
+    folder = tmp_path / "folder.toml"
+    folder.mkdir()
+    msg = cli("fk", "--robot", folder, "--q", "0,0,0,0,0,0", ok=False).stderr
+    with pytest.raises(calbench.IoError) as e:
+        calbench.Robot.from_file(folder)
+    assert "no such" not in str(e.value) and str(e.value) in msg, (str(e.value), msg)
     for cls in (calbench.FileError, calbench.SettingError, calbench.ComputeError, calbench.IoError):
         assert issubclass(cls, calbench.Error)
 

@@ -71,6 +71,15 @@ def test_the_problem_is_the_weighted_least_squares_of_ls(root):
     assert "parameters" in seen["repr"]
 
 
+def test_a_label_with_control_characters_is_refused_as_in_a_scenario(root):
+    # A label names the method in every file and on the terminal: an ESC, a line break or a
+    # bidirectional override in it is refused, as a scenario's `label` is.
+    sc = load_scenario(root)
+    for label in ["evil\x1b[31m", "two\nlines", "txt\u202eexe"]:
+        with pytest.raises(calbench.SettingError, match="without control characters"):
+            calbench.run(sc, trials=1, methods={label: gauss_newton})
+
+
 def test_an_exception_in_a_method_is_a_failure_and_the_study_goes_on(root):
     def boom(problem):
         raise RuntimeError("deliberate, with a comma")

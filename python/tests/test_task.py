@@ -35,6 +35,10 @@ def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp
     lo, hi = j["ci95"]
     assert lo < j["value"] < hi
     assert json.loads((tmp_path / "py" / "task.json").read_text()) == j
+    # Recorded as the command line records an entry (its identification's method is
+    # `external`, its own name the entry's).
+    db = tmp_path / "calbench.sqlite"
+    cli("record", tmp_path / "py", "--db", db, "--task", task)
     # The same least squares as the command line's lm, on the same rows: the same figure.
     cli("task", task, "--method", "lm", "--models", "kinematic", "--out", tmp_path / "lm")
     lm = json.loads((tmp_path / "lm" / "task.json").read_text())

@@ -169,13 +169,15 @@ pub fn check_out_folder(out: &Path, outputs: &[&str]) -> Result<()> {
 
 /// Refuses, before any work, an output folder where the outputs would destroy something
 /// ([`calbench::report::guard::guard_out`], the option named `--out`) or could not be
-/// written ([`check_out_folder`]). Every command that writes a folder calls it.
+/// written ([`check_out_folder`]; a folder where the temporary folder beside it cannot be
+/// made, [`calbench::report::probe_partial`]). Every command that writes a folder calls it.
 pub fn guard_out<P: AsRef<Path>>(
     out: &Path,
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    calbench::report::guard::guard_out_folder(out, "--out", outputs, inputs)
+    calbench::report::guard::guard_out_folder(out, "--out", outputs, inputs)?;
+    calbench::report::probe_partial(out)
 }
 
 /// Writes the page and its table, `outputs` (`NAME.html`, `NAME.csv`), into `out` as a whole;
@@ -206,13 +208,15 @@ pub fn identify_inputs(args: &identify::IdentifyArgs) -> Vec<&Path> {
     .collect()
 }
 
-/// [`check_out_folder`], then creates `out` and checks that calbench can write in it: for the
+/// [`check_out_folder`] and [`calbench::report::probe_partial`], then creates `out` and checks
+/// that calbench can write in it: for the
 /// commands that run long (`run`, `merge`), so that a folder they cannot write in is refused
 /// before the work rather than after it. The folders made for the probe are removed again
 /// ([`MadeFolders`]): the outputs are written as a whole once the work is done, so a command
 /// refused or killed after the probe leaves no empty folder behind.
 pub fn writable_folder(out: &Path, outputs: &[&str]) -> Result<()> {
     check_out_folder(out, outputs)?;
+    calbench::report::probe_partial(out)?;
     let _made = MadeFolders::create(out)?;
     let probe = out.join(".calbench-write-test");
     std::fs::write(&probe, b"").map_err(|e| Error::io(&probe, e))?;

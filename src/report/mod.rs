@@ -276,6 +276,32 @@ impl Drop for MadeFolders {
     }
 }
 
+/// Makes the temporary folder `.NAME.partial-PID` beside `out` ([`partial_path`]) with the
+/// folders above it ([`MadeFolders`]), so that none of them is ever an empty folder another
+/// process may remove before this one is made in it. A folder that cannot be made is refused
+/// naming `out`, the folder asked for, rather than the temporary one.
+fn make_partial(out: &std::path::Path) -> crate::Result<(std::path::PathBuf, MadeFolders)> {
+    let tmp = partial_path(out, std::process::id());
+    let made = MadeFolders::create(&tmp).map_err(|e| match e {
+        crate::Error::Io { path, cause } if path == tmp => {
+            let why = format!(
+                "{cause}: the folder is written as a whole, through a temporary folder beside \
+                 it ({})",
+                tmp.file_name().unwrap_or_default().to_string_lossy()
+            );
+            crate::Error::io(out, std::io::Error::new(cause.kind(), why))
+        }
+        e => e,
+    })?;
+    Ok((tmp, made))
+}
+
+/// Checks, before any work, that [`atomically`] can write `out`: its temporary folder is made
+/// beside `out` and removed again, with any folder made to hold it.
+pub fn probe_partial(out: &std::path::Path) -> crate::Result<()> {
+    make_partial(out).map(drop)
+}
+
 /// Writes a folder of outputs as a whole: `write` fills a fresh temporary folder beside `out`
 /// (`.<name>.partial-<pid>`). When it succeeds, the folder becomes `out` (one rename when
 /// `out` is absent or empty; otherwise each new file replaces its namesake in `out`, other
@@ -303,12 +329,9 @@ pub fn atomically(
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }
-    let tmp = partial_path(out, std::process::id());
-    let _ = std::fs::remove_dir_all(&tmp);
+    let _ = std::fs::remove_dir_all(partial_path(out, std::process::id()));
     remove_dead_partials(out);
-    // Made with the folders above it, so that none of them is ever an empty folder another
-    // process may remove before this one is made in it.
-    let _made = MadeFolders::create(&tmp)?;
+    let (tmp, _made) = make_partial(out)?;
     let done = write(&tmp).and_then(|()| {
         let written = std::fs::read_dir(&tmp)
             .map_err(|e| Error::io(&tmp, e))?

@@ -306,6 +306,12 @@ impl Record {
             t.check_ran(&path, (&text, &ran), &file)?;
         }
         t.check_figure(&path)?;
+        let identified = dir.join("identified.json");
+        let beside = match identified.is_file() {
+            true => Some(read(&identified)?.1),
+            false => None,
+        };
+        t.check_choice(&path, beside.as_ref().map(|v| (identified.as_path(), v)))?;
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
         let value = t.value;
         if !value.is_finite() {

@@ -33,6 +33,19 @@ impl Record {
         if dir.join("identified.json").is_file() {
             return Record::of_identify(dir);
         }
+        // The document given in place of its folder (`record run/summary.json`).
+        if dir.is_file() {
+            let parent = dir.parent().filter(|p| !p.as_os_str().is_empty());
+            let folder = parent.map_or(".".into(), |p| p.display().to_string());
+            return Err(Error::file(
+                dir,
+                "folder",
+                format!(
+                    "is a file: record takes the folder that holds summary.json, \
+                     identified.json or task.json (here {folder})"
+                ),
+            ));
+        }
         Err(Error::file(
             dir,
             "folder",

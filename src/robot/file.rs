@@ -101,6 +101,11 @@ fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
     let f: RobotFile =
         toml::from_str(text).map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
     let err = |place: String, msg: String| Error::file(path, place, msg);
+    if f.name.trim().is_empty() {
+        let msg = "is empty: it names the robot in reports, and `identify` names the \
+                   compensated robot `<name>-calibrated`";
+        return Err(err("name".into(), msg.into()));
+    }
     if f.name.chars().any(crate::error::is_hidden) {
         let msg = "must be a name without control characters (bidirectional overrides \
                    included): it names the robot in reports, on the terminal and in a URDF";

@@ -191,3 +191,59 @@ fn an_edited_figure_or_a_missing_key_is_refused_naming_file_and_key() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// An entry whose model was chosen by cross-validation (`--models kinematic,harmonics`) and
+/// whose `task.json` then states another model, or a given one, or another method, is refused
+/// by what `identified.json` beside it chose: it would rank as a model it did not identify
+/// (a kinematic one, in the closed division).
+#[test]
+fn an_entry_stating_another_model_than_it_identified_is_refused() {
+    let dir = tmp_dir("record-task-choice");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    calbench_ok(&[
+        "task",
+        path_arg(&task),
+        "--method",
+        "lm",
+        "--models",
+        "kinematic,harmonics",
+        "--out",
+        path_arg(&out),
+    ]);
+    let chosen = load_json(&out.join("identified.json"))["cv_best"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    let other = if chosen == "kinematic" {
+        "harmonics"
+    } else {
+        "kinematic"
+    };
+    let err = refused_edit(&out, &task, |j| {
+        j["models"] = serde_json::json!(other.split('+').collect::<Vec<_>>());
+        j["division"] = serde_json::json!(if other == "kinematic" {
+            "closed"
+        } else {
+            "open"
+        });
+    });
+    assert!(
+        err.contains("entry/task.json: models: are")
+            && err.contains(&format!("identified `{chosen}` (cv_best)")),
+        "{err}"
+    );
+    let err = refused_edit(&out, &task, |j| j["chosen_by"] = serde_json::json!("given"));
+    assert!(
+        err.contains("entry/task.json: chosen_by: is \"given\""),
+        "{err}"
+    );
+    let err = refused_edit(&out, &task, |j| j["method"] = serde_json::json!("ls"));
+    assert!(err.contains("entry/task.json: method: is \"ls\""), "{err}");
+    let o = record(
+        &out,
+        &dir.join("calbench.sqlite"),
+        &["--task", path_arg(&task)],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -333,6 +333,22 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
         !o.status.success() && err.contains("empty") && err.contains("nothing to record"),
         "{err}"
     );
+    // The document given in place of its folder: named as a file, with the folder to give.
+    let document = dir.join("t/task.json");
+    let o = calbench(&[
+        "record",
+        path_arg(&document),
+        "--db",
+        path_arg(&dir.join("x.sqlite")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = "is a file: record takes the folder that holds summary.json";
+    assert!(
+        !o.status.success()
+            && err.contains(want)
+            && err.contains(&format!("(here {})", dir.join("t").display())),
+        "{err}"
+    );
     assert!(
         !dir.join("x.sqlite").exists()
             || count(&dir.join("x.sqlite"), "SELECT COUNT(*) FROM runs") == 0

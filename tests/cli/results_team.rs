@@ -569,3 +569,50 @@ fn a_database_in_a_folder_that_cannot_be_written_is_read() {
         "{t}"
     );
 }
+
+/// A folder command whose `--out` lies in a folder its user cannot write is refused before
+/// any work, naming `--out`'s path: the temporary folder the outputs are written through is
+/// made beside `--out`, and `task` and `simulate` had been refused only after the work, naming
+/// that temporary folder (`ro/.t.partial-31410: Permission denied`); `run` into a writable
+/// folder inside a read-only one had run its trials first.
+#[test]
+fn an_out_that_cannot_be_written_beside_is_refused_before_the_work() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tmp_dir("cli-team-readonly-out");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let (ro, inside) = (dir.join("ro"), dir.join("ro/inside"));
+    std::fs::create_dir_all(&inside).unwrap();
+    let mode = |p: &Path, m: u32| std::fs::set_permissions(p, PermissionsExt::from_mode(m));
+    mode(&inside, 0o777).unwrap();
+    mode(&ro, 0o555).unwrap();
+    let task = root.join("tasks/barrett-wam.toml");
+    let scenario = root.join("scenarios/ci-guard.toml");
+    let cases: [(Vec<&str>, PathBuf); 3] = [
+        (
+            vec!["task", path_arg(&task), "--method", "ls"],
+            ro.join("t"),
+        ),
+        (vec!["simulate", path_arg(&scenario)], ro.join("s")),
+        (
+            vec!["run", path_arg(&scenario), "--trials", "2"],
+            inside.clone(),
+        ),
+    ];
+    for (args, out) in cases {
+        let mut a = args.clone();
+        a.extend(["--out", path_arg(&out)]);
+        let Some(o) = unprivileged(&a) else { return };
+        let t = text(&o);
+        let want = format!("{}: Permission denied", out.display());
+        assert!(
+            !o.status.success() && t.contains(&want) && !t.contains("trials"),
+            "{args:?}: {t}"
+        );
+    }
+    let left: Vec<_> = std::fs::read_dir(&ro)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["inside"]);
+    assert_eq!(std::fs::read_dir(&inside).unwrap().count(), 0);
+}

@@ -368,6 +368,19 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
             src[..src.find("<origin").unwrap()].to_string(),
             "cut.urdf: line 12: the file ends inside <joint>: the <robot> of line 6 is not closed",
         ),
+        // A robot without a name had been read as "" (`identify` wrote `-calibrated`), and a
+        // name holding a character XML does not take was refused at a position in a piece
+        // of the file ("Syntax: 1:16").
+        (
+            "robotless",
+            src.replacen("<robot name=\"ur10\">", "<robot>", 1),
+            "robotless.urdf: line 6: <robot>: its `name` is missing or empty",
+        ),
+        (
+            "bell",
+            src.replacen("<robot name=\"ur10\">", "<robot name=\"ur&#7;10\">", 1),
+            "bell.urdf: line 6: <robot name>: \"ur\\u{7}10\" holds a control character",
+        ),
     ];
     for (name, text, want) in cases {
         refused(&fk_on_urdf(&d, name, &text), &[want]);

@@ -358,6 +358,103 @@ impl TaskRecord {
     }
 }
 
+impl TaskRecord {
+    /// Refuses, naming `path` (this record's file) and the key, a record whose model is not
+    /// the one its choice gives: `chosen_by` neither `cv` nor `given`; a `cv_choice` whose
+    /// chosen candidate (`best`) is not `models`, whose candidates are not `candidates`, or
+    /// beside `chosen_by` `given`; and, by the `identified.json` written beside it
+    /// (`identified`, its path and document), another `method`, or a model chosen by
+    /// cross-validation (`cv_best`) that is not `models` or beside `given`. An entry that
+    /// states a kinematic model it did not identify would rank in the closed division.
+    pub fn check_choice(&self, path: &Path, identified: Option<(&Path, &Value)>) -> Result<()> {
+        use crate::calibrate::cv::Model;
+        let bad = |key: &str, msg: String| Err(Error::file(path, key, msg));
+        let cv = match self.chosen_by.as_str() {
+            "cv" => true,
+            "given" => false,
+            other => {
+                return bad(
+                    "chosen_by",
+                    format!("is \"{other}\": it is \"cv\" or \"given\""),
+                )
+            }
+        };
+        let terms = if self.models.is_empty() {
+            "kinematic".to_string()
+        } else {
+            self.models.join("+")
+        };
+        // An entrant's own terms need not be calbench's: only calbench's are compared.
+        let Ok(stated) = terms.parse::<Model>() else {
+            return Ok(());
+        };
+        let differs = |chosen: &str| chosen.parse::<Model>() != Ok(stated);
+        if let Some(c) = &self.cv_choice {
+            let Some(best) = c.models.get(c.best) else {
+                let n = c.models.len();
+                return bad(
+                    "cv_choice.best",
+                    format!("is {}, of {n} candidates", c.best),
+                );
+            };
+            if !cv {
+                return bad("chosen_by", "is \"given\", beside a cv_choice".into());
+            }
+            if differs(&best.model) {
+                let msg = format!(
+                    "are `{terms}`, but cv_choice chose `{}` (candidate {})",
+                    best.model, c.best
+                );
+                return bad("models", msg);
+            }
+            let names: Vec<&str> = c.models.iter().map(|m| m.model.as_str()).collect();
+            if !self.candidates.is_empty() && self.candidates != names {
+                let msg = format!(
+                    "are {:?}, but cv_choice compared {names:?}",
+                    self.candidates
+                );
+                return bad("candidates", msg);
+            }
+        }
+        let Some((file, doc)) = identified else {
+            return Ok(());
+        };
+        // A Python entrant's method is `external` in its identification.
+        let identified_by = match self.entrant.starts_with("python:") {
+            true => crate::identify::external::EXTERNAL,
+            false => self.method.as_str(),
+        };
+        let method = doc.get("method").and_then(Value::as_str);
+        if method.is_some_and(|m| m != identified_by) {
+            let msg = format!(
+                "is \"{}\", but {} beside it was identified by \"{}\"",
+                self.method,
+                file.display(),
+                method.unwrap_or_default()
+            );
+            return bad("method", msg);
+        }
+        match doc.get("cv_best").and_then(Value::as_str) {
+            Some(_) if !cv => {
+                let msg = format!(
+                    "is \"given\", but {} beside it chose its model by cross-validation \
+                     (cv_best)",
+                    file.display()
+                );
+                bad("chosen_by", msg)
+            }
+            Some(chosen) if differs(chosen) => {
+                let msg = format!(
+                    "are `{terms}`, but {} beside it identified `{chosen}` (cv_best)",
+                    file.display()
+                );
+                bad("models", msg)
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
 /// The commit checked out in the repository holding `dir` (`git rev-parse HEAD`), if any.
 pub(super) fn git_commit(dir: &Path) -> Option<String> {
     let dir = if dir.as_os_str().is_empty() {
@@ -396,6 +493,73 @@ mod tests {
         assert_eq!(r.published[0].value, 2.9);
         let again = TaskRecord::from_value(r.to_value(), Path::new("t/task.json")).unwrap();
         assert_eq!(again, r);
+    }
+
+    /// An entry whose `models` are not what its choice chose would rank as another model
+    /// (a kinematic one, in the closed division).
+    #[test]
+    fn a_model_that_is_not_the_one_its_choice_gives_is_refused() {
+        let path = Path::new("t/task.json");
+        let mut v = written();
+        v["chosen_by"] = "cv".into();
+        v["candidates"] = serde_json::json!(["kinematic", "harmonics"]);
+        let cv = |model: &str, mean: f64, wins: usize| {
+            serde_json::json!({"model": model, "parameters": 29, "rms": [mean], "mean": mean,
+                "wins": wins})
+        };
+        v["cv_choice"] = serde_json::json!({"folds": 5, "fold_seeds": [0], "best": 1,
+            "stability": 1.0, "models": [cv("kinematic", 2.3, 0), cv("harmonics", 2.1, 1)]});
+        let refused = |v: &Value, identified: Option<&Value>, want: &str| {
+            let r = TaskRecord::from_value(v.clone(), path).unwrap();
+            let beside = identified.map(|d| (Path::new("t/identified.json"), d));
+            let e = r.check_choice(path, beside).unwrap_err().to_string();
+            assert!(
+                e.starts_with("t/task.json: ") && e.contains(want),
+                "{want}: {e}"
+            );
+        };
+        refused(
+            &v,
+            None,
+            "models: are `kinematic`, but cv_choice chose `harmonics`",
+        );
+        v["models"] = serde_json::json!(["kinematic", "harmonics"]);
+        let r = TaskRecord::from_value(v.clone(), path).unwrap();
+        let same = serde_json::json!({"method": "lm", "cv_best": "harmonics"});
+        let beside = Some((Path::new("t/identified.json"), &same));
+        r.check_choice(path, beside).unwrap();
+        let mut w = v.clone();
+        w["candidates"] = serde_json::json!(["kinematic", "gravity"]);
+        refused(&w, None, "candidates: are");
+        let mut w = v.clone();
+        w["chosen_by"] = "given".into();
+        refused(&w, None, "chosen_by: is \"given\", beside a cv_choice");
+        w["chosen_by"] = "guess".into();
+        refused(&w, None, "chosen_by: is \"guess\"");
+        let mut w = v.clone();
+        w["cv_choice"]["best"] = 2.into();
+        refused(&w, None, "cv_choice.best: is 2, of 2 candidates");
+        // By the identified.json beside it: another method, another model chosen.
+        let other = serde_json::json!({"method": "ls", "cv_best": "harmonics"});
+        refused(&v, Some(&other), "method: is \"lm\", but t/identified.json");
+        let other = serde_json::json!({"method": "lm", "cv_best": "gravity"});
+        w = v.clone();
+        w["cv_choice"] = Value::Null;
+        refused(&w, Some(&other), "identified `gravity` (cv_best)");
+        let mut g = written();
+        g["chosen_by"] = "given".into();
+        refused(
+            &g,
+            Some(&same),
+            "chosen_by: is \"given\", but t/identified.json",
+        );
+        // A Python entrant's identification names its method `external`.
+        g["entrant"] = "python:mine".into();
+        g["method"] = "mine".into();
+        let r = TaskRecord::from_value(g, path).unwrap();
+        let external = serde_json::json!({"method": "external"});
+        r.check_choice(path, Some((Path::new("t/identified.json"), &external)))
+            .unwrap();
     }
 
     #[test]

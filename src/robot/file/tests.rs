@@ -185,6 +185,12 @@ fn any_name_reads_back_and_control_characters_are_refused() {
             "{e}"
         );
     }
+    // An empty name had been taken (`identify` named the compensated robot `-calibrated`).
+    for name in ["", "  "] {
+        r.name = name.into();
+        let e = parse_robot_file(&robot_to_toml(&r), Path::new("n.toml")).unwrap_err();
+        assert!(e.to_string().contains("line 1, name: is empty"), "{e}");
+    }
 }
 
 #[test]

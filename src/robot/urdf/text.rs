@@ -152,6 +152,12 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 check_attributes(e, part).map_err(|msg| bad(at, msg))?;
                 match open.len() {
                     0 => {
+                        if attribute(e, b"name").is_none_or(|n| n.trim().is_empty()) {
+                            let msg = "<robot>: its `name` is missing or empty: it names the \
+                                       robot in reports, and `identify` names the compensated \
+                                       robot `<name>-calibrated`";
+                            return Err(bad(at, msg.into()));
+                        }
                         robot_tag = at..after;
                         // `<robot/>` ends where it starts.
                         end = end.or(Some(at).filter(|_| empty));
@@ -268,6 +274,14 @@ fn check_attributes(e: &BytesStart, joint: Option<&Part>) -> std::result::Result
         let value = a
             .unescape_value()
             .map_err(|err| format!("<{element} {key}>: {err}"))?;
+        // A name is shown in reports and on the terminal (and a character XML does not take,
+        // as `&#7;`, was refused by urdf-rs at a position in a piece of the file).
+        if key == "name" && joint.is_none() && value.chars().any(crate::error::is_hidden) {
+            return Err(format!(
+                "<{element} name>: {value:?} holds a control character (bidirectional \
+                 overrides included): a name is shown in reports and on the terminal"
+            ));
+        }
         if element == "joint" && joint.is_none() && key == "type" && !ONE_AXIS.contains(&&*value) {
             let name = attribute(e, b"name").unwrap_or_default();
             return Err(not_one_axis(&name, &value));

@@ -321,6 +321,17 @@ impl Scenario {
                 ),
             ));
         }
+        if spec.label.chars().any(crate::error::is_hidden) {
+            return Err(Error::setting(
+                "methods",
+                format!(
+                    "the label {:?} must be a name without control characters (bidirectional \
+                     overrides included), as a scenario's method label is: it names the method \
+                     in the reports and on the terminal",
+                    spec.label
+                ),
+            ));
+        }
         let mut s = self.clone();
         s.methods.push(spec);
         Ok(s)
