@@ -251,19 +251,19 @@ pub(crate) fn typed_arg<'a, 'py, T>(key: &str, v: &'a Bound<'py, PyAny>, what: &
 where
     T: FromPyObject<'a, 'py>,
 {
-    v.extract().map_err(|_| match utf8(key, v) {
-        Err(e) => e,
-        Ok(_) => setting(key, format!("expected {what}, got {}", type_name(v))),
+    v.extract().map_err(|_| {
+        // A str refused only for a lone surrogate says so; any other value, what it should be.
+        match v.cast::<PyString>().map(|s| utf8(key, s)) {
+            Ok(Err(e)) => e,
+            _ => setting(key, format!("expected {what}, got {}", type_name(v))),
+        }
     })
 }
 
-/// `v` as a string, refused naming `key` when it is none, or when UTF-8 cannot hold it: a
-/// lone surrogate, as `os.listdir` or `sys.argv` give for a name that is not UTF-8 (it had
-/// surfaced as a bare `UnicodeEncodeError`).
-fn utf8(key: &str, v: &Bound<'_, PyAny>) -> PyResult<String> {
-    let s = v
-        .cast::<PyString>()
-        .map_err(|_| setting(key, format!("expected a str, got {}", type_name(v))))?;
+/// `s` as a Rust string, refused naming `key` when UTF-8 cannot hold it: a lone surrogate,
+/// as `os.listdir` or `sys.argv` give for a name that is not UTF-8 (it had surfaced as a
+/// bare `UnicodeEncodeError`).
+fn utf8(key: &str, s: &Bound<'_, PyString>) -> PyResult<String> {
     s.extract::<String>().map_err(|_| {
         let shown = s.repr().map_or_else(|_| "it".into(), |r| r.to_string());
         setting(
@@ -342,8 +342,8 @@ fn nested_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml:
     if v.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(v.extract()?));
     }
-    if v.is_instance_of::<PyString>() {
-        return Ok(toml::Value::String(utf8(key, v)?));
+    if let Ok(s) = v.cast::<PyString>() {
+        return Ok(toml::Value::String(utf8(key, s)?));
     }
     if let Ok(d) = v.cast::<PyDict>() {
         return Ok(toml::Value::Table(nested_table(key, d, depth + 1)?));
@@ -380,8 +380,8 @@ fn nested_table(key: &str, d: &Bound<'_, PyDict>, depth: usize) -> PyResult<toml
     for (k, v) in d.iter() {
         // A scenario dict's own keys have no path yet: the setting is the scenario.
         let whose = if key.is_empty() { "scenario" } else { key };
-        let k: String = if k.is_instance_of::<PyString>() {
-            utf8(whose, &k)?
+        let k: String = if let Ok(k) = k.cast::<PyString>() {
+            utf8(whose, k)?
         } else {
             let got = k.repr().map_or_else(|_| "?".into(), |r| r.to_string());
             return Err(setting(

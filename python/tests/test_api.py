@@ -563,6 +563,9 @@ def test_errors_are_calbench_errors_with_the_cli_message(cli, tmp_path):
     ]:
         with pytest.raises(calbench.SettingError, match=f"setting `{key}`.*lone surrogate"):
             call()
+    # A value that is no str still says what the argument should be.
+    with pytest.raises(calbench.SettingError, match="expected a built-in robot's name, got int"):
+        calbench.Robot.builtin(5)
     # A folder is not "no such robot file": the command line's own refusal.
     folder = tmp_path / "folder.toml"
     folder.mkdir()

@@ -187,10 +187,7 @@ impl MethodSpec {
             let msg = "must name the method in the reports; leave it out for the method's name";
             return Err(("label".to_string(), msg.to_string()));
         }
-        if label.chars().any(crate::error::is_hidden) {
-            let msg = "must be a name without control characters (bidirectional overrides \
-                       included), as `name` is: it names the method in the reports and on the \
-                       terminal";
+        if let Some(msg) = hidden_label(&label) {
             return Err(("label".to_string(), msg.to_string()));
         }
         let k = match t.get("k") {
@@ -305,6 +302,17 @@ pub fn method_by_name(name: &str) -> Result<MethodSpec> {
     let mut t = toml::Table::new();
     t.insert("name".into(), toml::Value::String(name.into()));
     MethodSpec::from_table(&t).map_err(|(_, msg)| Error::option(crate::error::Opt::Method, msg))
+}
+
+/// Why `label` cannot name a method, when it holds a control character (bidirectional
+/// overrides included): a label names the method in the reports and on the terminal. A
+/// scenario's `[[methods]]` entry and a method supplied from outside
+/// ([`crate::study::scenario::Scenario::with_method`]) are refused alike.
+pub(crate) fn hidden_label(label: &str) -> Option<&'static str> {
+    label.chars().any(crate::error::is_hidden).then_some(
+        "must be a name without control characters (bidirectional overrides included), as \
+         `name` is: it names the method in the reports and on the terminal",
+    )
 }
 
 #[cfg(test)]

@@ -340,6 +340,7 @@ impl Record {
         }
         let division = t.division.as_str().to_string();
         let models = t.models.join("+");
+        let terms = t.terms();
         let mut published = Vec::new();
         for (i, p) in t.published.iter().enumerate() {
             if p.value < 0.0 {
@@ -360,11 +361,6 @@ impl Record {
         // The closed division is calbench's kinematic models only (DH, β, tool, base): an
         // entry that says `closed` with another term or entrant would rank among them.
         if t.division == Division::Closed {
-            let terms = if models.is_empty() {
-                "kinematic"
-            } else {
-                &models
-            };
             let kinematic = terms
                 .parse::<crate::calibrate::cv::Model>()
                 .is_ok_and(|m| m.is_kinematic());

@@ -359,6 +359,15 @@ impl TaskRecord {
 }
 
 impl TaskRecord {
+    /// The model's terms joined by `+` (`kinematic+harmonics`); `kinematic` for a record
+    /// that names none.
+    pub fn terms(&self) -> String {
+        match self.models.is_empty() {
+            true => "kinematic".to_string(),
+            false => self.models.join("+"),
+        }
+    }
+
     /// Refuses, naming `path` (this record's file) and the key, a record whose model is not
     /// the one its choice gives: `chosen_by` neither `cv` nor `given`; a `cv_choice` whose
     /// chosen candidate (`best`) is not `models`, whose candidates are not `candidates`, or
@@ -379,11 +388,7 @@ impl TaskRecord {
                 )
             }
         };
-        let terms = if self.models.is_empty() {
-            "kinematic".to_string()
-        } else {
-            self.models.join("+")
-        };
+        let terms = self.terms();
         // An entrant's own terms need not be calbench's: only calbench's are compared.
         let Ok(stated) = terms.parse::<Model>() else {
             return Ok(());

@@ -321,16 +321,9 @@ impl Scenario {
                 ),
             ));
         }
-        if spec.label.chars().any(crate::error::is_hidden) {
-            return Err(Error::setting(
-                "methods",
-                format!(
-                    "the label {:?} must be a name without control characters (bidirectional \
-                     overrides included), as a scenario's method label is: it names the method \
-                     in the reports and on the terminal",
-                    spec.label
-                ),
-            ));
+        if let Some(msg) = crate::identify::registry::hidden_label(&spec.label) {
+            let msg = format!("the label {:?} {msg}", spec.label);
+            return Err(Error::setting("methods", msg));
         }
         let mut s = self.clone();
         s.methods.push(spec);
