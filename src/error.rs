@@ -6,10 +6,12 @@ mod hidden;
 mod json;
 mod lines;
 mod text;
-pub use hidden::is_hidden;
+mod underflow;
+pub use hidden::{is_hidden, quoted};
 pub use json::{json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
 pub use text::{read_bounded, read_bounded_text, read_text, read_text_whole, TEXT_CAP_MIB};
+pub use underflow::{refuse_toml_underflow, toml_underflow, underflow};
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an
 /// error: it is reported as a termination reason.

@@ -204,6 +204,7 @@ fn prior_file(path: &Path) -> calbench::Result<Vec<(Param, Real)>> {
             e.message().trim_end(),
         )
     })?;
+    calbench::error::refuse_toml_underflow(path, &text)?;
     if t.is_empty() {
         return Err(Error::file(path, "priors", "holds no `NAME = σ` line"));
     }
@@ -221,8 +222,12 @@ pub(super) fn method_option(text: &str) -> std::result::Result<(String, toml::Va
     let (key, value) = text
         .split_once('=')
         .ok_or_else(|| "not KEY=VALUE".to_string())?;
-    let v: toml::Table = toml::from_str(&format!("v = {value}"))
-        .map_err(|_| format!("\"{value}\" is not a TOML value"))?;
+    let text = format!("v = {value}");
+    let v: toml::Table =
+        toml::from_str(&text).map_err(|_| format!("\"{value}\" is not a TOML value"))?;
+    if let Some((_, _, msg)) = calbench::error::toml_underflow(&text) {
+        return Err(msg);
+    }
     Ok((key.trim().to_string(), v["v"].clone()))
 }
 

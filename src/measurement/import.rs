@@ -208,6 +208,7 @@ impl Mapping {
         let text = read_text(path)?;
         let m: Mapping = toml::from_str(&text)
             .map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
+        crate::error::refuse_toml_underflow(path, &text)?;
         let plan = m.plan(path, text)?;
         Ok((m, plan))
     }
@@ -513,7 +514,7 @@ pub fn import_text(raw: &Path, mapping_path: &Path) -> Result<(String, usize)> {
                 .ok()
                 .filter(|v| v.is_finite() && !(plan.decimal == ',' && f.contains('.')));
             // Quoted as the export writes it, as every refusal of a cell is.
-            if let Some(msg) = v.and_then(|v| super::rows::underflow(f, v)) {
+            if let Some(msg) = v.and_then(|v| crate::error::underflow(f, v)) {
                 return Err(at_line(raw, line, &place, msg));
             }
             v.ok_or_else(|| {

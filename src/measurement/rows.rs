@@ -14,18 +14,7 @@ pub(crate) fn at_line(path: &Path, line: u64, place: &str, message: String) -> E
     Error::file(path, format!("line {line}{place}"), message)
 }
 
-/// A cell as a message quotes it: in double quotes, control characters escaped (a NUL byte
-/// shown as `\0`, not as a blank a reader takes for a space the reader trims) and a long cell
-/// cut after 40 characters, so that a 10 MB cell is not echoed whole.
-pub(crate) fn quoted(cell: &str) -> String {
-    const SHOWN: usize = 40;
-    let head: String = cell.chars().take(SHOWN).collect();
-    let mut s = head.escape_debug().to_string();
-    if cell.chars().nth(SHOWN).is_some() {
-        s.push_str(&format!("… ({} bytes)", cell.len()));
-    }
-    format!("\"{s}\"")
-}
+pub(crate) use crate::error::quoted;
 
 /// Cell `c` of `rec` as a finite number; a refusal is (place, message), the place naming the
 /// column by its header name.
@@ -41,22 +30,10 @@ pub(crate) fn number(
         .ok()
         .filter(|v| v.is_finite())
         .ok_or_else(|| (place(), format!("{} is not a finite number", quoted(t))))?;
-    match underflow(t, v) {
+    match crate::error::underflow(t, v) {
         Some(msg) => Err((place(), msg)),
         None => Ok(v),
     }
-}
-
-/// The refusal of a cell `t` read as `v` when it is a number below the smallest 64-bit one,
-/// which reads as 0 (`1e-400`): not the value written. `None` for any other.
-pub(crate) fn underflow(t: &str, v: Real) -> Option<String> {
-    let mantissa = t.split(['e', 'E']).next().unwrap_or("");
-    (v == 0.0 && mantissa.bytes().any(|b| (b'1'..=b'9').contains(&b))).then(|| {
-        format!(
-            "{} is below the smallest 64-bit number (about 4.9e-324) and would read as 0",
-            quoted(t)
-        )
-    })
 }
 
 /// What a CSV file is.

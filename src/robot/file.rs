@@ -100,6 +100,7 @@ fn key_of_place(place: &str) -> String {
 fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
     let f: RobotFile =
         toml::from_str(text).map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
+    crate::error::refuse_toml_underflow(path, text)?;
     let err = |place: String, msg: String| Error::file(path, place, msg);
     if f.name.trim().is_empty() {
         let msg = "is empty: it names the robot in reports, and `identify` names the \

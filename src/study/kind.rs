@@ -48,6 +48,7 @@ impl AnyScenario {
         let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
         let table: toml::Table = toml::from_str(text)
             .map_err(|e| Error::file(shown, "TOML", e.to_string().trim_end()))?;
+        crate::error::refuse_toml_underflow(shown, text)?;
         let kind: Sections =
             toml::Value::Table(table.clone())
                 .try_into()

@@ -442,3 +442,111 @@ fn orientations_read_with_another_convention_are_named_as_the_likely_cause() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success() && !err.contains(convention), "{err}");
 }
+
+/// A number below the smallest 64-bit one (`1e-400`) in a robot file, a URDF, a scenario, a
+/// task file, a prior file or a `--set` value, which read as 0, is refused naming the file
+/// (or option), the line and the key, before anything is written.
+#[test]
+fn a_number_below_the_smallest_is_refused_in_every_settings_file() {
+    let d = tmp_dir("cli-plausible-underflow-files");
+    let edit = |from: &str, name: &str, old: &str, new: &str| {
+        let text = read(&root().join(from));
+        assert!(text.contains(old), "{from}: {old}");
+        let path = d.join(name);
+        std::fs::write(&path, text.replacen(old, new, 1)).unwrap();
+        path
+    };
+    let tiny_refused = |args: &[&str], wants: &[&str]| {
+        let o = calbench(args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} accepted: {err}");
+        assert!(err.contains("is below the smallest 64-bit number"), "{err}");
+        for want in wants {
+            assert!(err.contains(want), "{want}: {err}");
+        }
+    };
+    let q = "--q=0,-90,0,0,0,0";
+    let robot = edit(
+        "examples/ipa-ur10/ur10.toml",
+        "ur10.toml",
+        "d = 0.0",
+        "d = 1e-400",
+    );
+    tiny_refused(
+        &["fk", "--robot", path_arg(&robot), q],
+        &["ur10.toml: line 24, joints[1].d", "\"1e-400\""],
+    );
+    let urdf = edit(
+        "examples/ipa-ur10/ur10.urdf",
+        "ur10.urdf",
+        "xyz=\"0.0 0.0 0.1273\"",
+        "xyz=\"0.0 -2e-999 0.1273\"",
+    );
+    tiny_refused(
+        &["fk", "--robot", path_arg(&urdf), q],
+        &["ur10.urdf: line 26", "<origin xyz>", "\"-2e-999\""],
+    );
+    let scenario = edit(
+        "scenarios/ci-guard.toml",
+        "ci.toml",
+        "magnitude_mm = [0.5, 1.0]",
+        "magnitude_mm = [0.5e-400, 1.0]",
+    );
+    let out = d.join("run");
+    tiny_refused(
+        &["run", path_arg(&scenario), "--out", path_arg(&out)],
+        &["ci.toml: line 20, outliers.magnitude_mm[0]", "\"0.5e-400\""],
+    );
+    assert!(!out.exists(), "nothing is written");
+    let task = edit(
+        "tasks/barrett-wam.toml",
+        "wam.toml",
+        "value = 2.92",
+        "value = 2.92e-400",
+    );
+    tiny_refused(
+        &[
+            "task",
+            path_arg(&task),
+            "--method",
+            "ls",
+            "--out",
+            path_arg(&out),
+        ],
+        &["wam.toml: line 15, published[0].value"],
+    );
+    assert!(!out.exists(), "nothing is written");
+    // `identify`'s prior file and `--set`, on data of the default robot.
+    let data = simulated(&d, "scenarios/ci-guard.toml", None);
+    let priors = d.join("priors.toml");
+    std::fs::write(&priors, "# σ\na2 = 1.0\nd3 = 1e-400\n").unwrap();
+    tiny_refused(
+        &["identify", "--robot", "irb2600", "--data", path_arg(&data)]
+            .into_iter()
+            .chain([
+                "--method",
+                "ls",
+                "--prior",
+                path_arg(&priors),
+                "--out",
+                path_arg(&out),
+            ])
+            .collect::<Vec<_>>(),
+        &["priors.toml: line 3, d3"],
+    );
+    tiny_refused(
+        &["identify", "--robot", "irb2600", "--data", path_arg(&data)]
+            .into_iter()
+            .chain([
+                "--method",
+                "ridge",
+                "--set",
+                "xi=1e-999",
+                "--out",
+                path_arg(&out),
+            ])
+            .collect::<Vec<_>>(),
+        &["--set", "\"1e-999\""],
+    );
+    assert!(!out.exists(), "nothing is written");
+}

@@ -118,6 +118,7 @@ impl<'a> TaskFile<'a> {
     /// TOML refused naming the file and line.
     pub(super) fn new(text: String, path: &'a Path, dir: &'a Path) -> Result<TaskFile<'a>> {
         let table = toml::from_str(&text).map_err(|e| Self::toml(path, &text, e))?;
+        crate::error::refuse_toml_underflow(path, &text)?;
         Ok(TaskFile {
             path,
             text,

@@ -304,6 +304,15 @@ fn check_attributes(e: &BytesStart, joint: Option<&Part>) -> std::result::Result
                 joint.name
             ));
         }
+        let tiny = words
+            .iter()
+            .find_map(|w| crate::error::underflow(w, w.parse().ok()?));
+        if let Some(msg) = tiny {
+            return Err(format!(
+                "joint \"{}\", <{element} {key}>: {msg}",
+                joint.name
+            ));
+        }
     }
     Ok(())
 }
