@@ -109,7 +109,8 @@ pub struct Tolerance {
         long,
         default_value_t = 0.05,
         value_name = "X",
-        allow_negative_numbers = true
+        allow_negative_numbers = true,
+        value_parser = super::number
     )]
     tolerance: Real,
 }

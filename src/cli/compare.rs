@@ -32,7 +32,7 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     super::guard_out(&args.out, &OUTPUTS, [&args.a, &args.b])?;
     let c = Comparison::new(Side::read(&args.a)?, Side::read(&args.b)?, tolerance)?;
     write(&c, &args.out)?;
-    let missing = c.all().len() - c.rows().len();
+    let missing = c.missing_in_b();
     out!(
         "{} metrics compared: {} regressed ({missing} of them missing in B), {} unresolved, {} \
          changed within tolerance, {} improved, {} no change (tolerance {}); {} \

@@ -40,7 +40,7 @@ pub struct CompensateArgs {
     pub targets: Option<PathBuf>,
     /// Payload at the tool (kg) while the program runs: a compensated robot with joint
     /// compliances corrects the commands for its gravity sag under this load.
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = super::number)]
     pub payload_kg: Real,
     /// The corrected program to write (an existing file is replaced).
     #[arg(long)]

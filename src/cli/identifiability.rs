@@ -52,7 +52,7 @@ pub struct IdentifiabilityArgs {
     #[arg(long)]
     pub gcn_blocks: bool,
     /// GCN threshold of the separation (Guo 2024 §3.1: 1e2).
-    #[arg(long, default_value_t = 1e2, allow_negative_numbers = true)]
+    #[arg(long, default_value_t = 1e2, allow_negative_numbers = true, value_parser = super::number)]
     pub gcn_threshold: Real,
     /// Print JSON to stdout.
     #[arg(long)]

@@ -93,7 +93,7 @@ pub struct IdentifyArgs {
     pub prior: Vec<PriorArg>,
     /// Full-pose data only: weight of orientation against position errors, mm per rad
     /// (default 100; about σ_position / σ_orientation of the instrument).
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::number)]
     pub k: Option<Real>,
     /// A method option, `KEY=VALUE` in TOML (repeatable): any key of the method's
     /// `[[methods]]` entry, e.g. `--set bound_mm=5 --set iterations=4000`.

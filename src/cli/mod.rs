@@ -151,11 +151,24 @@ pub fn entry_of<T: Sync + 'static>(
 
 /// One element of a comma-separated list of numbers (`--q`), blanks around it ignored.
 pub fn finite_number(text: &str) -> std::result::Result<Real, String> {
-    text.trim()
-        .parse::<Real>()
-        .ok()
-        .filter(|v| v.is_finite())
-        .ok_or_else(|| "not a finite number".to_string())
+    match text.trim().parse::<Real>() {
+        Ok(v) if v.is_finite() => number(text),
+        _ => Err("not a finite number".into()),
+    }
+}
+
+/// A number option as Rust reads a 64-bit number (`nan` and `inf` left to the option's own
+/// check), refused when written below the smallest one (`1e-400`), which would read as 0
+/// ([`calbench::error::underflow`]).
+pub fn number(text: &str) -> std::result::Result<Real, String> {
+    let t = text.trim();
+    let v: Real = t
+        .parse()
+        .map_err(|e: std::num::ParseFloatError| e.to_string())?;
+    match calbench::error::underflow(t, v) {
+        Some(msg) => Err(msg),
+        None => Ok(v),
+    }
 }
 
 /// Checks, before any work, that `out` can become an output folder holding the files

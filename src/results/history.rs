@@ -383,15 +383,17 @@ pub struct Regressed {
 /// The flagged changes of the latest version, for each scenario (or `scenario`) and machine
 /// with runs of at least two version labels, versions in `order`:
 ///
-/// - **regression**: the latest version (its last record) against the version before it, by
-///   `check`'s rule at `tolerance`;
+/// - **regression**: the latest version (its last record) against the version before it
+///   that ran the same scenario (up to `seed` and `trials`; versions between that ran another
+///   are passed over), by `check`'s rule at `tolerance`;
 /// - **drift** (a cumulative rule): for each metric that is not a regression of that step,
 ///   the latest version against every earlier version back to the last step that was a
-///   regression of that metric (a regression already flagged) or the last change of the
-///   scenario; when it is a regression against one of them, the earliest such version is
-///   reported: several steps each within the tolerance that together are beyond it;
-/// - **scenario changed**: the latest version ran another scenario than the version before
-///   it (up to `seed` and `trials`): nothing is compared, and no regression is claimed.
+///   regression of that metric (a regression already flagged), over the versions that ran
+///   the latest's scenario; when it is a regression against one of them, the earliest such
+///   version is reported: several steps each within the tolerance that together are beyond
+///   it;
+/// - **scenario changed**: no earlier version ran the latest's scenario (up to `seed` and
+///   `trials`): nothing is compared, and no regression is claimed.
 ///
 /// Returns them and how many scenario-machine pairs were compared.
 pub fn regressions(
@@ -403,14 +405,22 @@ pub fn regressions(
     let mut out = Vec::new();
     let mut pairs = 0;
     for ((scenario, machine), list) in series(&runs) {
-        let v: Vec<&Run> = versions(&list)
+        let every: Vec<&Run> = versions(&list)
             .into_iter()
             .filter_map(|g| g.last().copied())
             .collect();
-        if v.len() < 2 {
+        let Some((&latest, [.., before])) = every.split_last() else {
             continue;
-        }
+        };
         pairs += 1;
+        // The versions that ran the latest's scenario (up to seed and trials): one between
+        // that ran another is passed over, so that a change of the scenario and back does
+        // not hide a regression against the version before the change.
+        let v: Vec<&Run> = every
+            .iter()
+            .copied()
+            .filter(|r| same_scenario(r, latest))
+            .collect();
         let k = v.len() - 1;
         let flag = |flag, from: &Run, through: &[&Run], what: String| Regressed {
             scenario: scenario.to_string(),
@@ -421,8 +431,8 @@ pub fn regressions(
             to: v[k].label.clone(),
             what,
         };
-        if !same_scenario(v[k - 1], v[k]) {
-            out.push(flag(Flag::ScenarioChanged, v[k - 1], &[], String::new()));
+        if k == 0 {
+            out.push(flag(Flag::ScenarioChanged, before, &[], String::new()));
             continue;
         }
         let describe = |c: &Compared| {
@@ -448,9 +458,6 @@ pub fn regressions(
         let mut stopped: Vec<(String, String)> = done.clone();
         let mut drift: BTreeMap<(String, String), (usize, Compared)> = BTreeMap::new();
         for j in (0..k - 1).rev() {
-            if !same_scenario(v[j], v[j + 1]) {
-                break;
-            }
             for c in compared(v[j], v[j + 1], tolerance) {
                 if c.status == Status::Regression {
                     stopped.push(key(&c));

@@ -23,6 +23,7 @@ mod fixed_models;
 mod foreign_db;
 mod fuzz;
 mod guard;
+mod guard_edits;
 mod guo;
 mod harmonics;
 mod html;

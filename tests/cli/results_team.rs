@@ -376,6 +376,17 @@ fn history_orders_versions_by_version_and_flags_a_drift() {
         "{t}"
     );
     assert!(!t.contains("regression: "), "{t}");
+    // Back to v1.0's scenario, 40 % worse: judged against v1.0, the version before that
+    // ran it (compared with v2.0 alone it had been "scenario changed", and passed).
+    assert!(record(&worse, &db, "v3.0").status.success());
+    let (ok, t) = regressions(&db);
+    assert!(!ok, "{t}");
+    assert!(
+        t.contains("regression: ci-guard on ")
+            && t.contains("v1.0 → v3.0")
+            && t.contains("validation_after_mm"),
+        "{t}"
+    );
 }
 
 /// The guard's scenario written another way (integers for the tracker's pose, a default

@@ -16,7 +16,7 @@ use super::noise::{figure_of, is_rmse, same_figure, trials_key, Trials};
 use super::{check_summary, entry_metrics, lookup, read_json};
 use crate::analysis::summary::Summary;
 use crate::error::shown;
-use crate::error::{Error, Result};
+use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
 use crate::study::stats::Entry;
@@ -234,6 +234,11 @@ impl Side {
         }
         if let Some(t) = &trials {
             let csv = trials_csv(&file);
+            if let (false, Some((entry, why))) = (own, unknown_entry(&summary, t)) {
+                let line = t.first_line.get(&entry).copied();
+                let msg = format!("{entry} {why}: {} is not of this run", csv.display());
+                return Err(Error::file(&csv, at_line(line, "column method"), msg));
+            }
             whole_run(&summary, t).map_err(|(entry, why)| match own {
                 true => Error::file(&file, format!("{KEY}.entries.{entry}.trials"), why)
                     .at_json_key_line(),
@@ -268,6 +273,25 @@ impl Side {
     }
 }
 
+/// The first entry of the per-trial values `t` that `summary` has no result of, and why it is
+/// refused: per-trial values (a baseline's own, or a run's `trials.csv`, which `baseline`
+/// would carry into its file) are those behind the summary. `None` for a summary of no
+/// results, which is refused as such.
+fn unknown_entry(summary: &Summary, t: &Trials) -> Option<(String, String)> {
+    let names: Vec<String> = summary
+        .results
+        .iter()
+        .map(|e| trials_key(e, summary))
+        .collect();
+    let entry = t.trials.keys().find(|k| !names.contains(k))?;
+    let why = format!(
+        "is not an entry of the summary's results ({}): per-trial values are those behind the \
+         summary",
+        names.join(", ")
+    );
+    (!names.is_empty()).then(|| (entry.clone(), why))
+}
+
 /// Refuses a baseline's own per-trial values `t` (docs/formats.md § 2.4.1) with a key its
 /// `summary` cannot be behind: an entry the summary has no result of (an entry one run lacks
 /// is compared unpaired, § 8.4, but one the file's own summary lacks is an edited file), or a
@@ -277,20 +301,14 @@ fn own_keys(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, S
     if summary.results.is_empty() {
         return Ok(());
     }
+    if let Some((entry, why)) = unknown_entry(summary, t) {
+        return Err((format!("{KEY}.entries.{entry}"), why));
+    }
     let entries: BTreeMap<String, &Entry> = summary
         .results
         .iter()
         .map(|e| (trials_key(e, summary), e))
         .collect();
-    if let Some(entry) = t.trials.keys().find(|k| !entries.contains_key(*k)) {
-        let names: Vec<&str> = entries.keys().map(String::as_str).collect();
-        let why = format!(
-            "is not an entry of the summary's results ({}): per-trial values are those behind \
-             the summary",
-            names.join(", ")
-        );
-        return Err((format!("{KEY}.entries.{entry}"), why));
-    }
     // `failures` and `eta_median_pct` are always compared from the summaries (§ 8.4).
     let unpaired = [Metric::EtaMedian.key(), Metric::Failures.key()];
     for (entry, metric) in t.values.keys() {
@@ -323,16 +341,23 @@ fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, Str
     for e in &summary.results {
         let entry = trials_key(e, summary);
         for (metric, _) in entry_metrics(e).into_iter().filter(|(m, _)| over_trials(m)) {
-            let (Some(values), Some(figure)) = (
-                t.values.get(&(entry.clone(), metric.clone())),
-                lookup(e, &metric),
-            ) else {
+            let Some(values) = t.values.get(&(entry.clone(), metric.clone())) else {
                 continue;
             };
             if values.is_empty() {
                 continue;
             }
             let given = figure_of(values.values().copied(), &metric);
+            // A figure the summary lacks beside values that give it: a block deleted, which
+            // would leave the metric unguarded without a word.
+            let Some(figure) = lookup(e, &metric) else {
+                let why = format!(
+                    "its {} values give {metric} {}, where the summary has none",
+                    values.len(),
+                    shown(given)
+                );
+                return Err((entry, metric, why));
+            };
             if !same_figure(given, figure) {
                 let why = format!(
                     "its {} values give {metric} {}, where the summary has {}",
@@ -431,7 +456,10 @@ pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
         .zip(agree(&summary.summary))
     {
         let missing_seed = key == "seed" && a.is_null();
-        if a != b || missing_seed {
+        // A summary that does not say its trials pairs entry by entry, by the trials each
+        // side's per-trial values hold ([`unpaired_entries`]).
+        let unsaid_trials = key == "trials" && (a.is_null() || b.is_null());
+        if (a != b || missing_seed) && !unsaid_trials {
             return Some(Unpaired::Differs {
                 key,
                 baseline: show(a),

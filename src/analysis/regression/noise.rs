@@ -102,6 +102,9 @@ pub struct Trials {
     pub values: BTreeMap<(String, String), BTreeMap<usize, Real>>,
     /// Every trial index of each entry, usable or not.
     pub trials: BTreeMap<String, BTreeSet<usize>>,
+    /// The line of a `trials.csv` where each entry's first row stands (empty for a
+    /// baseline's own values), for a refusal of the entry.
+    pub first_line: BTreeMap<String, usize>,
 }
 
 /// Whether two runs can be compared trial by trial: the same scenario and seed, and the
@@ -293,8 +296,16 @@ pub fn unpaired(
             ..exact
         };
     }
+    // Summaries that write intervals but not of this figure at these trials (too few for a
+    // median's), or not the trials their intervals were taken over (a `trials` deleted): its
+    // noise is not known, and the change is not resolved.
+    let unknown = Change {
+        se: Real::INFINITY,
+        ..exact.clone()
+    };
+    let intervals = writes_intervals(a) || writes_intervals(b);
     let (Some(na), Some(nb)) = (usable_trials(a, trials[0]), usable_trials(b, trials[1])) else {
-        return exact;
+        return if intervals { unknown } else { exact };
     };
     if na < 2 || nb < 2 {
         return exact;
@@ -305,14 +316,7 @@ pub fn unpaired(
         (Some(x), Some(y)) => (x, y),
         (Some(x), None) => (x, x * (na as Real / nb as Real).sqrt()),
         (None, Some(y)) => (y * (nb as Real / na as Real).sqrt(), y),
-        // Summaries that write intervals but have none of this figure (too few trials for a
-        // median's): its noise is not known, and the change is not resolved.
-        (None, None) if writes_intervals(a) || writes_intervals(b) => {
-            return Change {
-                se: Real::INFINITY,
-                ..exact
-            }
-        }
+        (None, None) if intervals => return unknown,
         (None, None) => return exact,
     };
     let se2 = se_a * se_a + se_b * se_b;

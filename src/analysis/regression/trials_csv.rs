@@ -194,6 +194,7 @@ impl Trials {
                     msg,
                 ));
             }
+            t.first_line.entry(entry.clone()).or_insert(line as usize);
             t.trials.entry(entry.clone()).or_default().insert(index);
             let truth: Vec<Real> = params.iter().map(|p| nums[p.1]).collect();
             let found: Vec<Real> = params.iter().map(|p| nums[p.2]).collect();

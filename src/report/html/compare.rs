@@ -93,6 +93,13 @@ impl Comparison {
         self.all.iter().filter(|c| c.regressed).count()
     }
 
+    /// How many of the [`Comparison::regressions`] B lacks: the metrics of the entries only
+    /// in A, and those of an entry in both that B has no value of.
+    pub fn missing_in_b(&self) -> usize {
+        let missing = |c: &&Compared| c.regressed && c.metric.value.is_nan();
+        self.all.iter().filter(missing).count()
+    }
+
     /// The verdict of one compared metric, in words.
     pub fn status(c: &Compared) -> String {
         let m = &c.metric;
@@ -234,6 +241,7 @@ impl Comparison {
             s += "\n## Entries in only one run\n\n";
             s += &table(&["entry", "in"], &only);
         }
+        let _ = write!(s, "\n## How to read this page\n\n{}\n", self.how_to_read());
         s
     }
 
@@ -282,6 +290,24 @@ impl Comparison {
             100.0 * self.tolerance,
         )
         .ok()
+    }
+
+    /// The page's "How to read" text, `compare.html`'s and `compare.md`'s.
+    fn how_to_read(&self) -> String {
+        format!(
+            "η is better higher, errors, parameter RMSE and failures lower. A metric regresses \
+         when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9) \
+         and the interval of the change, Holm-adjusted over the metrics compared, excludes \
+         zero, or when B lacks it; worse by the tolerance within the noise is unresolved \
+         (more trials would tell); a significant change within the tolerance is changed, \
+         within tolerance. The change is paired, trial by trial, when both runs share \
+         scenario, seed and trials and both folders hold trials.csv; otherwise it comes \
+         from the summaries' 95 % intervals (Welch). This is the rule calbench check \
+         applies to B against the baseline A with a tolerance of {} (strict, it also \
+         fails on unresolved). Timing is not compared.",
+            fmt_num(100.0 * self.tolerance, 4),
+            fmt_num(self.tolerance, 6)
+        )
     }
 
     /// `compare.html`.
@@ -342,20 +368,7 @@ impl Comparison {
             });
         }
         page.section("How to read this page");
-        page.para(&format!(
-            "η is better higher, errors, parameter RMSE and failures lower. A metric regresses \
-             when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9) \
-             and the interval of the change, Holm-adjusted over the metrics compared, excludes \
-             zero, or when B lacks it; worse by the tolerance within the noise is unresolved \
-             (more trials would tell); a significant change within the tolerance is changed, \
-             within tolerance. The change is paired, trial by trial, when both runs share \
-             scenario, seed and trials and both folders hold trials.csv; otherwise it comes \
-             from the summaries' 95 % intervals (Welch). This is the rule calbench check \
-             applies to B against the baseline A with a tolerance of {} (strict, it also \
-             fails on unresolved). Timing is not compared.",
-            fmt_num(100.0 * self.tolerance, 4),
-            fmt_num(self.tolerance, 6)
-        ));
+        page.para(&self.how_to_read());
         page
     }
 }

@@ -1,0 +1,163 @@
+//! The guard on files edited by hand or cut (docs/formats.md § 2.4, § 2.13, § 8.4): a
+//! baseline without `trials` leaves the changes it cannot judge unresolved rather than
+//! regressed; a `trials.csv` row of an entry the summary lacks, and a baseline whose summary
+//! lacks a figure its per-trial values give, are refused naming the file, the line and the key;
+//! `compare` counts every metric B lacks and says how to read its page in `compare.md` too;
+//! a tolerance below the smallest 64-bit number is refused.
+
+use std::path::Path;
+
+use serde_json::Value;
+
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir};
+use crate::guard::{check, run, three_trials_and_baseline};
+
+/// `doc` written to `dir/NAME` as a pretty JSON file; its text.
+fn written(dir: &Path, name: &str, doc: &Value) -> String {
+    let text = serde_json::to_string_pretty(doc).unwrap() + "\n";
+    std::fs::write(dir.join(name), &text).unwrap();
+    text
+}
+
+#[test]
+fn a_baseline_without_trials_leaves_changes_unresolved_not_regressed() {
+    let dir = tmp_dir("cli-guard-edits-no-trials");
+    let (a, base) = three_trials_and_baseline(&dir);
+    let mut doc = load_json(&base);
+    doc.as_object_mut().unwrap().remove("trials");
+    written(&dir, "no-trials.json", &doc);
+    let cut = dir.join("no-trials.json");
+    // Another seed: every metric from the summaries, whose intervals no longer say over how
+    // many trials they were taken. Their noise is not known; a change is not a regression
+    // (it had been taken as exact: 27 regressions with p = 0 of an unchanged program).
+    let b = dir.join("b");
+    let sc = root().join("scenarios/ci-guard.toml");
+    run(&sc, &b, &["--trials", "3", "--seed", "6"]);
+    let (ok, said) = check(&b, &cut, &[]);
+    assert!(ok, "{said}");
+    assert!(!said.contains("regression:"), "{said}");
+    assert!(
+        said.contains("unresolved: ") && said.contains("with no interval"),
+        "{said}"
+    );
+    // The baseline's own seed: each entry pairs by the trials its values hold, and the
+    // comparison does not claim to be unpaired for the trials it does not say.
+    let (ok, said) = check(&a, &cut, &[]);
+    assert!(ok, "{said}");
+    assert!(!said.contains("differ in their trials"), "{said}");
+    assert!(!said.contains("(0 paired)"), "{said}");
+}
+
+#[test]
+fn per_trial_values_of_an_entry_or_figure_the_summary_lacks_are_refused() {
+    let dir = tmp_dir("cli-guard-edits-ghost");
+    let (a, base) = three_trials_and_baseline(&dir);
+    // A trials.csv row of an entry the summary has no result of: `check` had passed over it,
+    // `baseline` carried it into a file `check` then refused.
+    let ghost = dir.join("ghost");
+    std::fs::create_dir(&ghost).unwrap();
+    for f in ["summary.json", "scenario.toml"] {
+        std::fs::copy(a.join(f), ghost.join(f)).unwrap();
+    }
+    let csv = read(&a.join("trials.csv"));
+    let row = csv.lines().nth(1).unwrap().replacen(",ls,", ",ghost,", 1);
+    assert!(row.contains(",ghost,"), "{row}");
+    std::fs::write(ghost.join("trials.csv"), format!("{csv}{row}\n")).unwrap();
+    let line = csv.lines().count() + 1;
+    let want = format!(
+        "ghost/trials.csv: line {line}, column method: ghost / random is not an entry of the \
+         summary's results"
+    );
+    let (ok, said) = check(&ghost, &base, &[]);
+    assert!(!ok && said.contains(&want), "{want}: {said}");
+    let out = dir.join("ghost-base.json");
+    let o = calbench(&["baseline", path_arg(&ghost), "--out", path_arg(&out)]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && said.contains(&want), "{said}");
+    assert!(!out.exists(), "nothing is written");
+    // A baseline whose summary lost a figure its per-trial values give: the metric had gone
+    // unguarded without a word.
+    let mut doc = load_json(&base);
+    let entry = doc["per_trial"]["entries"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .find(|k| k.starts_with("ls /"))
+        .unwrap()
+        .clone();
+    let results = doc["results"].as_array_mut().unwrap();
+    let at = results.iter().position(|e| e["method"] == "ls").unwrap();
+    results[at]
+        .as_object_mut()
+        .unwrap()
+        .remove("validation_after_mm");
+    let text = written(&dir, "lost.json", &doc);
+    let key = format!("per_trial.entries.{entry}.values.validation_after_mm.mean");
+    let (ok, said) = check(&a, &dir.join("lost.json"), &[]);
+    // The line of the key: the metric's values under the entry under `per_trial`.
+    let lines: Vec<&str> = text.lines().collect();
+    let after = |from: usize, key: &str| {
+        from + lines[from..]
+            .iter()
+            .position(|l| l.trim_start().starts_with(&format!("\"{key}\"")))
+            .unwrap()
+    };
+    let line = after(
+        after(after(0, "per_trial"), &entry),
+        "validation_after_mm.mean",
+    ) + 1;
+    let want = format!("lost.json: line {line}, {key}: its 3 values give");
+    assert!(!ok && said.contains(&want), "{want}: {said}");
+    assert!(said.contains("where the summary has none"), "{said}");
+}
+
+#[test]
+fn compare_counts_every_metric_b_lacks_and_says_how_to_read_it_in_markdown() {
+    let dir = tmp_dir("cli-guard-edits-compare");
+    let (a, _) = three_trials_and_baseline(&dir);
+    let mut doc = load_json(&a.join("summary.json"));
+    doc["results"][0]["validation_after_mm"]["mean"] = Value::Null;
+    written(&dir, "null-mean.json", &doc);
+    let out = dir.join("cmp");
+    let o = calbench_ok(&[
+        "compare",
+        path_arg(&a.join("summary.json")),
+        path_arg(&dir.join("null-mean.json")),
+        "--out",
+        path_arg(&out),
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        said.contains("1 regressed (1 of them missing in B)"),
+        "{said}"
+    );
+    let md = read(&out.join("compare.md"));
+    assert!(md.contains("regression: missing in B"), "{md}");
+    let how = md
+        .split("## How to read this page\n\n")
+        .nth(1)
+        .unwrap_or("");
+    assert!(
+        how.contains("A metric regresses when B is worse than A"),
+        "{md}"
+    );
+}
+
+#[test]
+fn a_tolerance_below_the_smallest_number_is_refused() {
+    let base = root().join("results/baselines/ci-guard.json");
+    let o = calbench(&[
+        "check",
+        path_arg(&base),
+        "--baseline",
+        path_arg(&base),
+        "--tolerance",
+        "1e-400",
+    ]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{said}");
+    assert!(
+        said.contains("\"1e-400\" is below the smallest 64-bit number"),
+        "{said}"
+    );
+}
