@@ -249,7 +249,7 @@ fn file_line(kept: &[u64], p: &::csv::Position) -> u64 {
 /// row: a cell or name that is not UTF-8 named by its column (by `names`, or by its number
 /// before the header is read), a line too long at the place `part` (`header`, `rows`),
 /// anything else with the reader's words after `doing`.
-fn unreadable(
+pub(crate) fn unreadable(
     (path, line, names): (&Path, u64, &[String]),
     e: &::csv::Error,
     (part, doing): (&str, &str),

@@ -161,3 +161,31 @@ fn a_tolerance_below_the_smallest_number_is_refused() {
         "{said}"
     );
 }
+
+/// A `trials.csv` cell that is not UTF-8 (a Latin-1 `°`) is named by its line and column, as a
+/// measurement file's is; the CSV reader's own words had named a record and a byte.
+#[test]
+fn a_trials_csv_cell_that_is_not_utf8_is_named_at_its_line_and_column() {
+    let dir = tmp_dir("cli-guard-edits-latin1");
+    let (a, base) = three_trials_and_baseline(&dir);
+    let csv = read(&a.join("trials.csv"));
+    let second = csv.lines().nth(2).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "termination").unwrap();
+    let cells: Vec<&str> = second.split(',').collect();
+    let mut bytes = Vec::new();
+    for (i, line) in csv.lines().enumerate() {
+        if i == 2 {
+            let mut row: Vec<Vec<u8>> = cells.iter().map(|c| c.as_bytes().to_vec()).collect();
+            row[column].push(0xB0);
+            bytes.extend(row.join(&b","[..]));
+        } else {
+            bytes.extend(line.as_bytes());
+        }
+        bytes.push(b'\n');
+    }
+    std::fs::write(a.join("trials.csv"), bytes).unwrap();
+    let (ok, said) = check(&a, &base, &[]);
+    let want = "a/trials.csv: line 3, column termination: not UTF-8 text; save the file as UTF-8";
+    assert!(!ok && said.contains(want), "{said}");
+}

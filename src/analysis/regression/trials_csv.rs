@@ -134,7 +134,11 @@ impl Trials {
         let mut first_line: BTreeMap<(String, usize), u64> = BTreeMap::new();
         let mut t = Trials::default();
         for rec in r.records() {
-            let rec = rec.map_err(|e| Error::file(path, "CSV", e.to_string()))?;
+            let rec = rec.map_err(|e| {
+                let line = e.position().map_or(0, |p| p.line());
+                let doing = ("rows", "unreadable row");
+                crate::measurement::rows::unreadable((path, line, &head), &e, doing)
+            })?;
             let line = rec.position().map_or(0, |p| p.line());
             if rec.len() != head.len() {
                 let (place, msg) = match head.get(rec.len()) {
