@@ -113,10 +113,17 @@ fn report(record: &Record, done: Recorded, db: &Db) {
 }
 
 /// `--label`, `--machine`: a name that is not empty or blank (history orders and groups by
-/// it).
+/// it) and holds no control character ([`calbench::error::is_hidden`]).
 fn not_blank(text: &str) -> std::result::Result<String, String> {
     if text.trim().is_empty() {
         return Err("must not be empty: history orders and groups the records by it".into());
+    }
+    if text.chars().any(calbench::error::is_hidden) {
+        return Err(
+            "must be a name without control characters (bidirectional overrides \
+                    included): history shows it on the terminal and in its pages and CSV"
+                .into(),
+        );
     }
     Ok(text.to_string())
 }

@@ -427,6 +427,17 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
             !o.status.success() && err.contains("must not be empty"),
             "{flag}: {err}"
         );
+        // A control character, which history wrote raw into its CSV and onto the terminal.
+        let t = dir.join("t");
+        for name in ["a\nb", "m\u{1b}[31m", "v1\u{202e}"] {
+            let db = path_arg(&z);
+            let o = calbench(&["record", path_arg(&t), "--db", db, flag, name]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(
+                !o.status.success() && err.contains("without control characters"),
+                "{flag} {name:?}: {err}"
+            );
+        }
     }
     assert!(!z.exists());
     // history of a scenario or a metric the database does not hold: refused, naming it.
