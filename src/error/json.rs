@@ -133,10 +133,29 @@ fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
             )
         }
         None => {
-            let e = Error::file(path, format!("line {}", e.line()), e.to_string());
-            (e, false)
+            let place = format!("line {}", e.line());
+            (Error::file(path, place, not_json(text, &e)), false)
         }
     })
+}
+
+/// The parser's refusal `e` of `text`, with what a reader needs that it does not say: that the
+/// file is empty, or that `NaN` and `Infinity` (which Python's `json` writes) are not JSON,
+/// where calbench writes `null` for a figure it has none of.
+fn not_json(text: &str, e: &serde_json::Error) -> String {
+    if text.trim().is_empty() {
+        return "is empty, where a JSON document was expected".into();
+    }
+    let line = text.lines().nth(e.line().saturating_sub(1)).unwrap_or("");
+    // serde_json counts a line's columns in bytes.
+    let at = line.get(e.column().saturating_sub(1)..).unwrap_or("");
+    match ["NaN", "Infinity"].into_iter().find(|w| at.starts_with(w)) {
+        Some(w) => format!(
+            "{e}: `{w}` is not JSON (a file calbench writes holds `null` for a figure it has \
+             none of)"
+        ),
+        None => e.to_string(),
+    }
 }
 
 #[cfg(test)]

@@ -189,3 +189,30 @@ fn a_trials_csv_cell_that_is_not_utf8_is_named_at_its_line_and_column() {
     let want = "a/trials.csv: line 3, column termination: not UTF-8 text; save the file as UTF-8";
     assert!(!ok && said.contains(want), "{said}");
 }
+
+/// A baseline holding `NaN` or `-Infinity` (as Python's `json` writes them) or nothing at all
+/// is refused saying so; the parser's words alone had said "expected value" and "EOF".
+#[test]
+fn a_baseline_with_nan_or_nothing_says_what_is_not_json() {
+    let dir = tmp_dir("cli-guard-edits-not-json");
+    let base = root().join("results/baselines/ci-guard.json");
+    let text = read(&base);
+    let at = text.find("\"max\": ").unwrap() + "\"max\": ".len();
+    let end = at + text[at..].find(',').unwrap();
+    let line = text[..at].lines().count();
+    for (name, word) in [("nan", "NaN"), ("inf", "-Infinity")] {
+        let p = dir.join(format!("{name}.json"));
+        std::fs::write(&p, format!("{}{word}{}", &text[..at], &text[end..])).unwrap();
+        let (ok, said) = check(&base, &p, &[]);
+        let want = format!("{name}.json: line {line}: ");
+        let not = format!("`{}` is not JSON", word.trim_start_matches('-'));
+        assert!(!ok && said.contains(&want) && said.contains(&not), "{said}");
+    }
+    let empty = dir.join("empty.json");
+    std::fs::write(&empty, "").unwrap();
+    let (ok, said) = check(&base, &empty, &[]);
+    assert!(
+        !ok && said.contains("empty.json: line 1: is empty"),
+        "{said}"
+    );
+}
