@@ -151,24 +151,27 @@ pub fn entry_of<T: Sync + 'static>(
 
 /// One element of a comma-separated list of numbers (`--q`), blanks around it ignored.
 pub fn finite_number(text: &str) -> std::result::Result<Real, String> {
-    match text.trim().parse::<Real>() {
-        Ok(v) if v.is_finite() => number(text),
+    let t = text.trim();
+    match t.parse::<Real>() {
+        Ok(v) if v.is_finite() => as_written(t, v),
         _ => Err("not a finite number".into()),
     }
 }
 
 /// A number option as Rust reads a 64-bit number (`nan` and `inf` left to the option's own
-/// check), refused when written below the smallest one (`1e-400`), which would read as 0
-/// ([`calbench::error::underflow`]).
+/// check), refused when written below the smallest one ([`as_written`]).
 pub fn number(text: &str) -> std::result::Result<Real, String> {
     let t = text.trim();
     let v: Real = t
         .parse()
         .map_err(|e: std::num::ParseFloatError| e.to_string())?;
-    match calbench::error::underflow(t, v) {
-        Some(msg) => Err(msg),
-        None => Ok(v),
-    }
+    as_written(t, v)
+}
+
+/// `v`, read from `t`, unless `t` is below the smallest 64-bit number (`1e-400`) and so reads
+/// as 0 ([`calbench::error::underflow`]).
+fn as_written(t: &str, v: Real) -> std::result::Result<Real, String> {
+    calbench::error::underflow(t, v).map_or(Ok(v), Err)
 }
 
 /// Checks, before any work, that `out` can become an output folder holding the files

@@ -119,11 +119,9 @@ fn not_blank(text: &str) -> std::result::Result<String, String> {
         return Err("must not be empty: history orders and groups the records by it".into());
     }
     if text.chars().any(calbench::error::is_hidden) {
-        return Err(
-            "must be a name without control characters (bidirectional overrides \
-                    included): history shows it on the terminal and in its pages and CSV"
-                .into(),
-        );
+        let msg = "must be a name without control characters (bidirectional overrides \
+                   included): history shows it on the terminal and in its pages and CSV";
+        return Err(msg.into());
     }
     Ok(text.to_string())
 }

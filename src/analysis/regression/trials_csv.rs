@@ -131,7 +131,7 @@ impl Trials {
         let (mi, pi, termi) = (col("method"), col("poses"), col("termination"));
         let rms = col(Metric::ValidationAfterRms.column().unwrap_or_default());
         let mut points: Vec<Vec<String>> = Vec::new();
-        let mut first_line: BTreeMap<(String, usize), u64> = BTreeMap::new();
+        let mut line_of_trial: BTreeMap<(String, usize), u64> = BTreeMap::new();
         let mut t = Trials::default();
         for rec in r.records() {
             let rec = rec.map_err(|e| {
@@ -189,7 +189,7 @@ impl Trials {
             } else {
                 format!("{} / {}", get(mi), get(pi))
             };
-            if let Some(first) = first_line.insert((entry.clone(), index), line) {
+            if let Some(first) = line_of_trial.insert((entry.clone(), index), line) {
                 let msg =
                     format!("trial {index} of {entry} is given twice (first on line {first})");
                 return Err(Error::file(

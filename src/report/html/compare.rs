@@ -296,15 +296,15 @@ impl Comparison {
     fn how_to_read(&self) -> String {
         format!(
             "η is better higher, errors, parameter RMSE and failures lower. A metric regresses \
-         when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9) \
-         and the interval of the change, Holm-adjusted over the metrics compared, excludes \
-         zero, or when B lacks it; worse by the tolerance within the noise is unresolved \
-         (more trials would tell); a significant change within the tolerance is changed, \
-         within tolerance. The change is paired, trial by trial, when both runs share \
-         scenario, seed and trials and both folders hold trials.csv; otherwise it comes \
-         from the summaries' 95 % intervals (Welch). This is the rule calbench check \
-         applies to B against the baseline A with a tolerance of {} (strict, it also \
-         fails on unresolved). Timing is not compared.",
+             when B is worse than A by at least {} % of A's magnitude (and by more than 1e-9) \
+             and the interval of the change, Holm-adjusted over the metrics compared, excludes \
+             zero, or when B lacks it; worse by the tolerance within the noise is unresolved \
+             (more trials would tell); a significant change within the tolerance is changed, \
+             within tolerance. The change is paired, trial by trial, when both runs share \
+             scenario, seed and trials and both folders hold trials.csv; otherwise it comes \
+             from the summaries' 95 % intervals (Welch). This is the rule calbench check \
+             applies to B against the baseline A with a tolerance of {} (strict, it also \
+             fails on unresolved). Timing is not compared.",
             fmt_num(100.0 * self.tolerance, 4),
             fmt_num(self.tolerance, 6)
         )
