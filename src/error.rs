@@ -8,7 +8,7 @@ mod lines;
 mod text;
 mod underflow;
 pub use hidden::{is_hidden, quoted};
-pub use json::{json_value, unique_keys};
+pub use json::{json_refusal, json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
 pub use text::{read_bounded, read_bounded_text, read_text, read_text_whole, TEXT_CAP_MIB};
 pub use underflow::{refuse_toml_underflow, toml_underflow, underflow};

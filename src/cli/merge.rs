@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
+use calbench::study::reporter::Terminal;
 
 use super::{print_table, writable_folder};
 
@@ -29,7 +30,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     calbench::report::guard::guard_out(out, "--out", &super::run::OUTPUTS, &args.dirs)?;
     writable_folder(out, &super::run::OUTPUTS)?;
     let db = args.record.open()?;
-    let r = match calbench::runner::shard::merge(&args.dirs, out)? {
+    let r = match calbench::runner::shard::merge(&args.dirs, out, &Terminal)? {
         calbench::runner::shard::Merged::Run(r) => *r,
         calbench::runner::shard::Merged::Cells(table) => {
             out!(

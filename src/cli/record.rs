@@ -71,22 +71,56 @@ pub struct RecordFlags {
     pub label: Option<String>,
 }
 
+/// The database a command records its result in ([`RecordFlags::open`]).
+pub enum Target {
+    /// An existing database, opened.
+    Open(Db),
+    /// A database to create once there is a result.
+    New(PathBuf),
+}
+
 impl RecordFlags {
-    /// The database opened (and migrated) before any work, so that one calbench cannot use
-    /// is refused first; `None` without `--record`.
-    pub fn open(&self) -> Result<Option<Db>> {
+    /// The database of `--record` before any work: one that exists is opened (and migrated)
+    /// so that one calbench cannot use is refused first; one that does not is created only
+    /// when there is a result to record, so that a refused command leaves nothing behind.
+    /// `None` without `--record`.
+    pub fn open(&self) -> Result<Option<Target>> {
         if !self.record {
             return Ok(None);
         }
-        Ok(Some(Db::open(&db_path(self.db.as_deref()), true)?))
+        let path = db_path(self.db.as_deref());
+        if path.exists() {
+            return Ok(Some(Target::Open(Db::open(&path, true)?)));
+        }
+        // The folders to create for it must not meet a file on the way.
+        let mut up = path.parent();
+        while let Some(p) = up.filter(|p| !p.as_os_str().is_empty()) {
+            if p.exists() {
+                if !p.is_dir() {
+                    let why = format!("cannot be created: {} is not a folder", p.display());
+                    return Err(calbench::Error::file(&path, "database", why).into());
+                }
+                break;
+            }
+            up = p.parent();
+        }
+        Ok(Some(Target::New(path)))
     }
 
-    /// Records `record` in `db` (opened by [`RecordFlags::open`]) and says so.
-    pub fn finish(&self, db: Option<Db>, record: impl FnOnce() -> Result<Record>) -> Result<()> {
-        let Some(mut db) = db else {
+    /// Records `record` in `db` (from [`RecordFlags::open`]) and says so.
+    pub fn finish(
+        &self,
+        db: Option<Target>,
+        record: impl FnOnce() -> Result<Record>,
+    ) -> Result<()> {
+        let Some(db) = db else {
             return Ok(());
         };
         let record = record()?;
+        let mut db = match db {
+            Target::Open(db) => db,
+            Target::New(path) => Db::open(&path, true)?,
+        };
         let p = Provenance::here(self.label.as_deref(), None);
         report(&record, db.record(&record, &p)?, &db);
         Ok(())

@@ -110,6 +110,12 @@ pub fn unique_keys(path: &Path, text: &str) -> Result<()> {
     }
 }
 
+/// The refusal `e` of a reader that parses the JSON `text` of the file `path` into its own
+/// types, at its line as [`json_value`] places one (`line 3: missing field …`).
+pub fn json_refusal(path: &Path, text: &str, e: &serde_json::Error) -> Error {
+    Error::file(path, format!("line {}", e.line()), not_json(text, e))
+}
+
 /// [`json_value`], its refusal marked `true` for a duplicate key.
 fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
     let found = RefCell::new(None);
@@ -132,10 +138,7 @@ fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
                 true,
             )
         }
-        None => {
-            let place = format!("line {}", e.line());
-            (Error::file(path, place, not_json(text, &e)), false)
-        }
+        None => (json_refusal(path, text, &e), false),
     })
 }
 

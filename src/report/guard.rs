@@ -24,7 +24,7 @@ pub fn guard_out<P: AsRef<Path>>(
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    guard_out_with(out, key, outputs, inputs, false)
+    guard(out, key, outputs, inputs, None)
 }
 
 /// [`guard_out`] of an output folder, refusing before any work also what its writing
@@ -142,17 +142,31 @@ pub fn guard_out_with<P: AsRef<Path>>(
     inputs: impl IntoIterator<Item = P>,
     force: bool,
 ) -> Result<()> {
+    guard(out, key, outputs, inputs, Some(force))
+}
+
+/// [`guard_out_with`] for a command that has `--force` (`Some`, whether it was given) or not.
+fn guard<P: AsRef<Path>>(
+    out: &Path,
+    key: &str,
+    outputs: &[&str],
+    inputs: impl IntoIterator<Item = P>,
+    force: Option<bool>,
+) -> Result<()> {
     paths(out, key, outputs, inputs)?;
     match live_writer(out) {
-        Some(pid) if !force => Err(Error::setting(
+        Some(pid) if force != Some(true) => Err(Error::setting(
             key,
             format!(
                 "{} is the output folder of a run still in progress (process {pid} on this \
                  host, its checkpoint {}); writing there would destroy it (nothing was \
-                 written). Wait for it or stop it (forcing passes when that process \
-                 is not calbench)",
+                 written). Wait for it or stop it{}",
                 out.display(),
-                checkpoint_of(out).display()
+                checkpoint_of(out).display(),
+                match force {
+                    Some(_) => " (forcing passes when that process is not calbench)",
+                    None => "",
+                }
             ),
         )),
         _ => Ok(()),
@@ -162,18 +176,22 @@ pub fn guard_out_with<P: AsRef<Path>>(
 /// The checkpoint folder a run into `out` keeps beside it (`.NAME.checkpoint`,
 /// docs/formats.md `run --resume`).
 pub fn checkpoint_of(out: &Path) -> PathBuf {
-    let (parent, name) = super::parent_and_name(out);
-    parent.join(format!(".{name}.checkpoint"))
+    super::checkpoint_folder(out)
 }
 
 /// The process of another run writing into `out` that is alive on this host: the `pid` and
 /// `host` of the `checkpoint.json` beside `out` ([`checkpoint_of`]), when that process runs.
 pub fn live_writer(out: &Path) -> Option<u32> {
+    let (pid, on_this_host) = writer(out)?;
+    (on_this_host && alive(pid)).then_some(pid)
+}
+
+/// The process that the checkpoint beside `out` names, and whether it ran on this host.
+pub(crate) fn writer(out: &Path) -> Option<(u32, bool)> {
     let text = crate::error::read_bounded_text(&checkpoint_of(out).join("checkpoint.json")).ok()?;
     let meta: serde_json::Value = serde_json::from_str(&text).ok()?;
     let pid = u32::try_from(meta.get("pid")?.as_u64()?).ok()?;
-    let on_this_host = meta.get("host")?.as_str()? == host();
-    (on_this_host && alive(pid)).then_some(pid)
+    Some((pid, meta.get("host")?.as_str()? == host()))
 }
 
 /// The name of this host (empty where it cannot be read).

@@ -46,6 +46,12 @@ impl Record {
                 ),
             ));
         }
+        if dir.join("shard.json").is_file() {
+            let why = "is a shard of a run (shard.json), a part that holds no results of its \
+                       own: merge the run's shards first (`calbench merge SHARD… --out DIR`, \
+                       or `merge --record`) and record the merged folder";
+            return Err(Error::file(dir, "folder", why));
+        }
         Err(Error::file(
             dir,
             "folder",

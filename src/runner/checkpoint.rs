@@ -33,7 +33,7 @@ use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
 use crate::report::MadeFolders;
-use crate::runner::shard::{scenario_as_run, trials_as_run, FormatOnly};
+use crate::runner::shard::{scenario_as_run, settings_difference, trials_as_run, FormatOnly};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::registration_study::RegistrationScenario;
@@ -130,24 +130,12 @@ impl Checkpoint {
         out: &Path,
         reporter: &dyn Reporter,
     ) -> Result<Checkpoint> {
-        let dir = folder(out);
-        if dir.exists() {
-            reporter.warning(&format!(
-                "{} held the checkpoint of an unfinished run into {}; starting anew \
-                 (`calbench run --resume {}` would have continued it)",
-                dir.display(),
-                out.display(),
-                out.display()
-            ));
-            // The killed run's temporary output folder goes with its checkpoint.
-            let old = std::fs::read_to_string(dir.join("checkpoint.json")).ok();
-            if let Some(m) = old.and_then(|t| serde_json::from_str::<Meta>(&t).ok()) {
-                if m.host == host() && !alive(m.pid) {
-                    remove_partial(out, m.pid);
-                }
-            }
-            std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))?;
+        if let Some(s) = shard {
+            let why = s.fits(scenario.units());
+            why.map_err(|m| Error::option(crate::error::Opt::Shard, m))?;
         }
+        crate::runner::shard::discard_unfinished(out, "starting anew", reporter)?;
+        let dir = folder(out);
         let made = MadeFolders::create(&dir)?;
         let settings = scenario.settings()?;
         let id = RunId::new(&settings, scenario.seed());
@@ -204,7 +192,7 @@ impl Checkpoint {
                 ),
             )
         })?;
-        let parse = |e: serde_json::Error| Error::file(&path, "checkpoint.json", e.to_string());
+        let parse = |e: serde_json::Error| crate::error::json_refusal(&path, &text, &e);
         crate::error::unique_keys(&path, &text)?;
         let head: FormatOnly = serde_json::from_str(&text).map_err(parse)?;
         let refuse = |what: &str, had: String, now: String| {
@@ -230,6 +218,13 @@ impl Checkpoint {
             ));
         }
         let scenario = scenario_as_run(&path, &meta.settings, meta.scenario_file.as_deref())?;
+        if let Some(Err(m)) = meta.shard.map(|s| s.fits(scenario.units())) {
+            return Err(Error::file(
+                &path,
+                "shard",
+                format!("{m} (the file was altered)"),
+            ));
+        }
         if let Some(g) = given {
             if g.name() != meta.scenario {
                 return Err(refuse(
@@ -248,9 +243,7 @@ impl Checkpoint {
                     g.trials().to_string(),
                 ));
             }
-            let table = |t: &str| toml::from_str::<toml::Value>(t).ok();
-            let (had, now) = (table(&meta.settings), table(&g.settings()?));
-            if let Some((key, had, now)) = first_difference("", had.as_ref(), now.as_ref()) {
+            if let Some((key, had, now)) = settings_difference(&meta.settings, &g.settings()?) {
                 return Err(refuse(&format!("`{key}`"), had, now));
             }
         }
@@ -404,17 +397,9 @@ fn units(path: &Path, scenario: &AnyScenario, meta: &Meta) -> Result<(u64, u64)>
 fn check_records<T: DeserializeOwned>(path: &Path, meta: &Meta, mut check: Verifier) -> Result<()> {
     let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
-    if len < meta.bytes {
-        return Err(Error::file(
-            path,
-            format!("byte {len}"),
-            format!(
-                "the file ends before the {} bytes that checkpoint.json counts for its {} \
-                 trials: it was cut short, or checkpoint.json altered",
-                meta.bytes, meta.done
-            ),
-        ));
-    }
+    // A file shorter than its count is read too: the first record missing or changed is
+    // named by its line and trial.
+    let cut = len < meta.bytes;
     let mut lines = std::io::BufReader::new(file.take(meta.bytes));
     let mut text = Vec::new();
     loop {
@@ -422,19 +407,34 @@ fn check_records<T: DeserializeOwned>(path: &Path, meta: &Meta, mut check: Verif
         let n = lines
             .read_until(b'\n', &mut text)
             .map_err(|e| Error::io(path, e))?;
+        let at = format!("line {}", check.lines() + 1);
         if n == 0 {
-            return check.finish();
+            check.finish()?;
+            if !cut {
+                return Ok(());
+            }
+            let why = format!(
+                "the file ends before the {} bytes that checkpoint.json counts for its {} \
+                 trials: checkpoint.json was altered",
+                meta.bytes, meta.done
+            );
+            return Err(Error::file(path, at, why));
         }
-        if text.pop() != Some(b'\n') {
-            return Err(Error::file(
-                path,
-                format!("line {}", check.lines() + 1),
-                format!(
+        let whole = text.last() == Some(&b'\n');
+        if whole {
+            text.pop();
+        }
+        // A record cut at its CR is refused, by the check below, as a CR LF line.
+        if !whole && text.last() != Some(&b'\r') {
+            let why = match cut {
+                true => "the file ends inside this record: it was cut short".to_string(),
+                false => format!(
                     "the {} bytes that checkpoint.json counts end inside a record: it was \
                      altered",
                     meta.bytes
                 ),
-            ));
+            };
+            return Err(Error::file(path, at, why));
         }
         check.record::<T>(&String::from_utf8_lossy(&text))?;
     }
@@ -477,31 +477,4 @@ impl Records {
         }
         self.check.record(text.trim_end_matches('\n'))
     }
-}
-
-/// The first setting where two scenarios' settings differ: its dotted key and its values in
-/// each, as TOML writes them (`not set` where one does not give it).
-fn first_difference(
-    key: &str,
-    a: Option<&toml::Value>,
-    b: Option<&toml::Value>,
-) -> Option<(String, String, String)> {
-    if a == b {
-        return None;
-    }
-    if let (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) = (a, b) {
-        let dotted = |k: &str| {
-            if key.is_empty() {
-                k.to_string()
-            } else {
-                format!("{key}.{k}")
-            }
-        };
-        return x
-            .keys()
-            .chain(y.keys())
-            .find_map(|k| first_difference(&dotted(k), x.get(k), y.get(k)));
-    }
-    let shown = |v: Option<&toml::Value>| v.map_or("not set".to_string(), |v| v.to_string());
-    Some((key.to_string(), shown(a), shown(b)))
 }

@@ -21,6 +21,7 @@ use crate::report::{write_run, TrialsCsv};
 use crate::results::provenance::Machine;
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
+use crate::study::reporter::Reporter;
 use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, TrialSink};
 
 /// The `format` of `shard.json`, and so of its `records.txt` (docs/formats.md § 7.3): a new one
@@ -256,7 +257,7 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
     })?;
     crate::error::unique_keys(&path, &text)?;
     let head: FormatOnly =
-        serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;
+        serde_json::from_str(&text).map_err(|e| crate::error::json_refusal(&path, &text, &e))?;
     if head.format != FORMAT {
         return Err(Error::file(
             &path,
@@ -270,7 +271,7 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
         ));
     }
     let meta: ShardMeta =
-        serde_json::from_str(&text).map_err(|e| Error::file(&path, "shard.json", e.to_string()))?;
+        serde_json::from_str(&text).map_err(|e| crate::error::json_refusal(&path, &text, &e))?;
     if !(meta.seconds.is_finite() && meta.seconds >= 0.0) {
         let msg = format!("{} is not a run's wall time (finite, ≥ 0 s)", meta.seconds);
         return Err(Error::file(&path, "seconds", msg));
@@ -320,8 +321,17 @@ pub enum Merged {
 
 /// `calbench merge DIR… --out DIR`: checks that `dirs` are all the shards of one run (same
 /// scenario, settings and seed, each shard once, none missing) and writes the run's output to
-/// `out`, the same bytes (`summary.json`, `trials.csv`) as the unsharded run.
-pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
+/// `out`, the same bytes (`summary.json`, `trials.csv`) as the unsharded run. The checkpoint
+/// of an unfinished run into `out`, whose `--resume` would overwrite the merge, is then
+/// removed with a warning to `reporter`.
+pub fn merge(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<Merged> {
+    let merged = merge_into(dirs, out)?;
+    let now = "the merged run replaces it";
+    discard_unfinished(out, now, reporter)?;
+    Ok(merged)
+}
+
+fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     if dirs.is_empty() {
         return Err(Error::setting("DIR", "give the shard folders to merge"));
     }
@@ -363,14 +373,24 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
                 let file = m.scenario_file.as_deref();
                 scenario_as_run(&d.join("shard.json"), &m.settings, file)?;
             }
-            return differ(
-                "settings of scenario",
-                format!("\"{}\"", m0.scenario),
-                "others".into(),
-            );
+            let Some((key, a, b)) = settings_difference(&m0.settings, &m.settings) else {
+                let name = format!("\"{}\"", m0.scenario);
+                return differ("settings of scenario", name, "others".into());
+            };
+            return differ(&format!("`{key}`"), a, b);
         }
     }
+    let any = scenario_as_run(
+        &d0.join("shard.json"),
+        &m0.settings,
+        m0.scenario_file.as_deref(),
+    )?;
+    let total = any.units();
     let n = m0.shard.count;
+    if let Err(m) = m0.shard.fits(total) {
+        let msg = format!("{m} (the file was altered)");
+        return Err(Error::file(d0.join("shard.json"), "shard", msg));
+    }
     let mut by_index: Vec<Option<&Path>> = vec![None; n];
     for (d, m) in &metas {
         if let Some(other) = by_index[m.shard.index] {
@@ -401,13 +421,6 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
         ));
     }
     metas.sort_by_key(|(_, m)| m.shard.index);
-    let (d0, m0) = &metas[0];
-    let any = scenario_as_run(
-        &d0.join("shard.json"),
-        &m0.settings,
-        m0.scenario_file.as_deref(),
-    )?;
-    let total = any.units();
     for (d, m) in &metas {
         trials_as_run(&d.join("shard.json"), m.trials, &any)?;
         let units = m.shard.range(total);
@@ -450,7 +463,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
             }
         }
     }
-    let seconds = metas.iter().map(|(_, m)| m.seconds).sum();
+    let seconds: f64 = metas.iter().map(|(_, m)| m.seconds).sum();
+    if !seconds.is_finite() {
+        let msg = "the shards' wall times add up beyond any number: a `seconds` was altered";
+        return Err(Error::file(metas[0].0.join("shard.json"), "seconds", msg));
+    }
     let mut result = None;
     crate::report::atomically(out, |dir| {
         let mut csv = TrialsCsv::create(dir, scenario.sweep.as_ref())?;
@@ -459,13 +476,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
         let mut aggregated = 0u64;
         for (d, m) in &metas {
             let path = d.join("records.txt");
-            let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
             let sweep = scenario.sweep.is_some().then_some("sweep point");
             let id = RunId::new(&m.settings, m.seed);
-            let mut records = Verifier::new(&path, id, m.trials, sweep, m.units);
-            for line in std::io::BufReader::new(file).lines() {
-                let line = line.map_err(|e| Error::io(&path, e))?;
-                let (b, index, t) = records.record(&line)?;
+            let records = Verifier::new(&path, id, m.trials, sweep, m.units);
+            each_record(records, |records, line| {
+                let (b, index, t) = records.record(line)?;
                 let t = TrialResult { index, ..t };
                 if current != Some(b) {
                     let (info, t0) = infos.get(b).cloned().flatten().ok_or_else(|| {
@@ -492,8 +507,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
                 }
                 collector.trial(&t, &mut csv)?;
                 aggregated += 1;
-            }
-            records.finish()?;
+                Ok(())
+            })?;
         }
         // Every shard's units checked and every record read once: the run's trials.
         if aggregated != total {
@@ -535,12 +550,10 @@ fn merge_cells<C: Cells>(
         let mut done: Vec<(C::Block, Vec<C::Trial>)> = Vec::new();
         for (d, m) in metas {
             let path = d.join("records.txt");
-            let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
             let id = RunId::new(&m.settings, m.seed);
-            let mut records = Verifier::new(&path, id, m.trials, sc.blocks().1, m.units);
-            for line in std::io::BufReader::new(file).lines() {
-                let line = line.map_err(|e| Error::io(&path, e))?;
-                let (b, _, t) = records.record::<C::Trial>(&line)?;
+            let records = Verifier::new(&path, id, m.trials, sc.blocks().1, m.units);
+            each_record(records, |records, line| {
+                let (b, _, t) = records.record::<C::Trial>(line)?;
                 while done.len() <= b {
                     let block = cells.block(done.len(), done.last().map(|d| &d.0))?;
                     done.push((block, Vec::new()));
@@ -549,12 +562,105 @@ fn merge_cells<C: Cells>(
                     return Err(records.unfit(&why));
                 }
                 done[b].1.push(t);
-            }
-            records.finish()?;
+                Ok(())
+            })?;
         }
         let (outputs, text) = super::cells::study_files(cells, sc, done)?;
         table = text;
         write_all(dir, &outputs)
     })?;
     Ok(table)
+}
+
+/// Hands each line of the shard's `records.txt` that `records` checks to `f` (which reads it
+/// with `records`), without its line end (LF, or CR LF where a copy converted them), then
+/// checks that none is missing. Blank lines at the end (an editor's) are passed over; one
+/// before a record, or a line that is not UTF-8, is refused at its line.
+fn each_record(
+    mut records: Verifier,
+    mut f: impl FnMut(&mut Verifier, &str) -> Result<()>,
+) -> Result<()> {
+    let path = records.path().to_path_buf();
+    let file = std::fs::File::open(&path).map_err(|e| Error::io(&path, e))?;
+    let mut blank = 0;
+    for line in std::io::BufReader::new(file).split(b'\n') {
+        let mut line = line.map_err(|e| Error::io(&path, e))?;
+        if line.last() == Some(&b'\r') {
+            line.pop();
+        }
+        if line.iter().all(u8::is_ascii_whitespace) {
+            blank += 1;
+            continue;
+        }
+        let at = format!("line {}", records.lines() + 1);
+        if blank > 0 {
+            let why = "a blank line between records, where every line holds one: the file \
+                       was altered";
+            return Err(Error::file(&path, at, why));
+        }
+        let Ok(text) = String::from_utf8(line) else {
+            let why = "the record is not UTF-8 text: the file was altered";
+            return Err(Error::file(&path, at, why));
+        };
+        f(&mut records, &text)?;
+    }
+    records.finish()
+}
+
+/// The first setting where the scenarios as run `a` and `b` (TOML texts, as `shard.json` and
+/// `checkpoint.json` hold them) differ: its dotted key and its value in each.
+pub(super) fn settings_difference(a: &str, b: &str) -> Option<(String, String, String)> {
+    let table = |t: &str| toml::from_str::<toml::Value>(t).ok();
+    first_difference("", table(a).as_ref(), table(b).as_ref())
+}
+
+/// The first setting where two scenarios' settings differ: its dotted key and its values in
+/// each, as TOML writes them (`not set` where one does not give it).
+fn first_difference(
+    key: &str,
+    a: Option<&toml::Value>,
+    b: Option<&toml::Value>,
+) -> Option<(String, String, String)> {
+    if a == b {
+        return None;
+    }
+    if let (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) = (a, b) {
+        let dotted = |k: &str| {
+            if key.is_empty() {
+                k.to_string()
+            } else {
+                format!("{key}.{k}")
+            }
+        };
+        return x
+            .keys()
+            .chain(y.keys())
+            .find_map(|k| first_difference(&dotted(k), x.get(k), y.get(k)));
+    }
+    let shown = |v: Option<&toml::Value>| v.map_or("not set".to_string(), |v| v.to_string());
+    Some((key.to_string(), shown(a), shown(b)))
+}
+
+/// Removes the checkpoint of an unfinished run into `out` (and, when its process has ended on
+/// this host, its temporary output folder), if there is one, with a warning to `reporter`
+/// saying what replaces that run (`now`): a new run into `out`, or a merge, whose output a
+/// later `run --resume` would otherwise overwrite.
+pub fn discard_unfinished(out: &Path, now: &str, reporter: &dyn Reporter) -> Result<()> {
+    let dir = crate::report::checkpoint_folder(out);
+    if !dir.exists() {
+        return Ok(());
+    }
+    reporter.warning(&format!(
+        "{} held the checkpoint of an unfinished run into {}; {now}, it is removed \
+         (`calbench run --resume {}` would have continued that run)",
+        dir.display(),
+        out.display(),
+        out.display()
+    ));
+    if let Some((pid, true)) = crate::report::guard::writer(out) {
+        if !crate::report::guard::alive(pid) {
+            let _ = std::fs::remove_dir_all(crate::report::partial_path(out, pid));
+        }
+    }
+    std::fs::remove_dir_all(&dir).map_err(|e| Error::io(&dir, e))
 }

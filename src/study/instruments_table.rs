@@ -156,8 +156,8 @@ impl InstrumentsScenario {
                 crate::study::given_twice(&chosen, |a, b| a.0 == b.0, quoted, "cells"),
             ),
         ];
-        if let Some((key, Some(msg))) = twice.into_iter().find(|(_, m)| m.is_some()) {
-            return Err(ferr(key, msg));
+        if let Some((key, Some((j, msg)))) = twice.into_iter().find(|(_, m)| m.is_some()) {
+            return Err(ferr(&format!("{key}[{j}]"), msg));
         }
         let same = |j: usize| (0..j).find(|&i| s.measurement[i] == s.measurement[j]);
         if let Some((i, j)) = (1..s.measurement.len()).find_map(|j| same(j).map(|i| (i, j))) {

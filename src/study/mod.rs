@@ -57,19 +57,20 @@ pub use trial::{run_trial, TrialResult};
 /// counts, magnitudes, pose counts or strategies) that holds one value twice: each value is a
 /// point of its own, and a repeated one would run one point twice under one name. `same`
 /// says whether two values are one point (`==`, or the same strategy however spelled);
-/// the message names the later value as `shown` gives it and what the points are (`sweep
-/// points`, `cells`). `None` when every value is distinct.
+/// the later value's index and a message naming it as `shown` gives it and what the points
+/// are (`sweep points`, `cells`). `None` when every value is distinct.
 pub(crate) fn given_twice<T>(
     values: &[T],
     same: impl Fn(&T, &T) -> bool,
     shown: impl Fn(&T) -> String,
     points: &str,
-) -> Option<String> {
+) -> Option<(usize, String)> {
     let j = (1..values.len()).find(|&j| values[..j].iter().any(|v| same(v, &values[j])))?;
-    Some(format!(
+    let msg = format!(
         "{} is given twice: two {points} would be one",
         shown(&values[j])
-    ))
+    );
+    Some((j, msg))
 }
 
 /// Trials run in parallel at a time: their results are handed on, in order, and dropped.
@@ -127,6 +128,19 @@ impl Shard {
             n.trim().parse().map_err(|_| bad())?,
         );
         Shard::new(index, count).ok_or_else(bad)
+    }
+
+    /// Refuses a split of a run of `total` work units into more shares than it has units (a
+    /// share would hold none): why, for the caller to place.
+    pub fn fits(&self, total: u64) -> std::result::Result<(), String> {
+        if self.count as u64 <= total.max(1) {
+            return Ok(());
+        }
+        Err(format!(
+            "{}/{} splits a run of {total} work units (sweep points × trials) into more \
+             shares than it has units, so some would run nothing: give at most {total} shards",
+            self.index, self.count
+        ))
     }
 
     /// The work units `[start, end)` of this shard out of `total`.

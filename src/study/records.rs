@@ -155,6 +155,11 @@ impl Verifier {
         Error::file(&self.path, format!("line {}", self.line), msg)
     }
 
+    /// The file these records are read from.
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+
     /// Records read so far.
     pub(crate) fn lines(&self) -> usize {
         self.line
@@ -164,6 +169,14 @@ impl Verifier {
     /// holds the next unit; returns its sweep point, its trial and what the trial gave.
     pub(crate) fn record<T: DeserializeOwned>(&mut self, text: &str) -> Result<(usize, usize, T)> {
         self.line += 1;
+        if text.ends_with('\r') {
+            return Err(self.err(format!(
+                "the record {} ends in CR LF, where calbench writes LF: the file was \
+                 converted (by an editor or a checkout), and a checkpoint is continued by its \
+                 byte count",
+                self.expected()
+            )));
+        }
         let Some((body, sum)) = text.rsplit_once(" #") else {
             return Err(self.err(format!(
                 "the record {} has no checksum at its end: it was cut short or altered",

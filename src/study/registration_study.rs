@@ -232,8 +232,11 @@ impl RegistrationStudy {
                 ),
             ),
         ];
-        if let Some((key, Some(msg))) = twice.into_iter().find(|(_, m)| m.is_some()) {
-            return Err(Error::setting(format!("registration_study.{key}"), msg));
+        if let Some((key, Some((j, msg)))) = twice.into_iter().find(|(_, m)| m.is_some()) {
+            return Err(Error::setting(
+                format!("registration_study.{key}[{j}]"),
+                msg,
+            ));
         }
         finite_non_negative("registration_study.noise_mm", self.noise_mm)?;
         for s in self.size_mm {

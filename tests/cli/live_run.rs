@@ -28,12 +28,16 @@ fn a_run_into_the_folder_of_a_live_run_is_refused_and_the_live_run_is_unharmed()
     for second in [
         vec!["run", sc, "--trials", "2", "--out", path_arg(&live)],
         vec!["simulate", sc, "--out", path_arg(&live)],
+        vec!["merge", path_arg(&d), "--out", path_arg(&live)],
     ] {
         let o = calbench(&second);
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{second:?}: {err}");
         assert!(err.contains(&format!("process {pid}")), "{err}");
         assert!(err.contains("still in progress"), "{err}");
+        // Forcing is offered only by a command that has `--force` (run), not by merge.
+        let forcing = second[0] == "run";
+        assert_eq!(err.contains("forcing passes"), forcing, "{second:?}: {err}");
     }
     assert!(child.wait().unwrap().success(), "the live run finishes");
     calbench_ok(&[&args[..], &[path_arg(&alone)]].concat());

@@ -61,6 +61,7 @@ mod results_team;
 mod robot_model;
 mod run_options;
 mod search_ecdf;
+mod shard_edges;
 mod shown_numbers;
 mod socket_task;
 mod spelled;

@@ -187,7 +187,7 @@ fn merge_refuses_a_shard_json_block_altered_or_of_another_run() {
 }
 
 /// Shards 0/2 and 1/2 of ci-guard with 4 trials, in `dir/a0` and `dir/a1`.
-fn two_shards(dir: &Path) -> [PathBuf; 2] {
+pub(crate) fn two_shards(dir: &Path) -> [PathBuf; 2] {
     let (a0, a1) = (dir.join("a0"), dir.join("a1"));
     run("4", &["--shard", "0/2"], &a0);
     run("4", &["--shard", "1/2"], &a1);
@@ -197,7 +197,7 @@ fn two_shards(dir: &Path) -> [PathBuf; 2] {
 /// `calbench merge SHARDS --out …/new/merged` after each file of `edits` is given its text:
 /// refused (exit status 1) in one line naming the first file and holding each of `want`,
 /// with nothing written, not even the output folder or its parent; the files then restored.
-fn refused_merge(shards: &[&Path], edits: &[(&Path, String)], want: &[&str]) {
+pub(crate) fn refused_merge(shards: &[&Path], edits: &[(&Path, String)], want: &[&str]) {
     let own: Vec<String> = edits.iter().map(|(f, _)| read(f)).collect();
     for (f, text) in edits {
         std::fs::write(f, text).unwrap();
@@ -219,7 +219,7 @@ fn refused_merge(shards: &[&Path], edits: &[(&Path, String)], want: &[&str]) {
 
 /// A run of ci-guard (600 trials, one thread) into `dir/killed`, killed once its checkpoint
 /// counts a trial: the output folder and the checkpoint's `checkpoint.json`.
-fn killed_run(dir: &Path) -> (PathBuf, PathBuf) {
+pub(crate) fn killed_run(dir: &Path) -> (PathBuf, PathBuf) {
     let killed = dir.join("killed");
     let sc = root().join("scenarios/ci-guard.toml");
     let args = ["run", path_arg(&sc), "--trials", "600", "--threads", "1"];
@@ -239,7 +239,7 @@ fn killed_run(dir: &Path) -> (PathBuf, PathBuf) {
 /// text: refused (exit status 1) in one line naming the first file and holding each of
 /// `want`, the checkpoint's files left as the edits made them and no output folder written;
 /// the files then restored.
-fn refused_resume(killed: &Path, edits: &[(&Path, String)], want: &[&str]) {
+pub(crate) fn refused_resume(killed: &Path, edits: &[(&Path, String)], want: &[&str]) {
     let own: Vec<String> = edits.iter().map(|(f, _)| read(f)).collect();
     for (f, text) in edits {
         std::fs::write(f, text).unwrap();
@@ -343,7 +343,7 @@ fn resume_refuses_a_share_trial_count_or_sweep_point_out_of_range() {
 }
 
 /// `json` (a `checkpoint.json`) with the number of `key` replaced by `value`.
-fn with_field(json: &str, key: &str, value: &str) -> String {
+pub(crate) fn with_field(json: &str, key: &str, value: &str) -> String {
     let at = json.find(&format!("\"{key}\": ")).unwrap() + key.len() + 4;
     let end = at + json[at..].find([',', '\n']).unwrap();
     format!("{}{value}{}", &json[..at], &json[end..])

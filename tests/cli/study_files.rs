@@ -96,28 +96,28 @@ fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
             "scenarios/ban-fig3.toml",
             "outlier_counts = [2, 4, 6, 8, 10, 12, 14, 16]",
             "outlier_counts = [2, 4, 2]",
-            "line 16, registration_study.outlier_counts: 2 is given twice: two cells would be one"
+            "line 16, registration_study.outlier_counts[2]: 2 is given twice: two cells would be one"
                 .to_string(),
         ),
         (
             "scenarios/ban-fig3.toml",
             "magnitude_mm = [0.2, 0.4, 0.6, 0.8, 1.0]",
             "magnitude_mm = [0.2, 0.20]",
-            "line 17, registration_study.magnitude_mm: 0.2 is given twice: two cells would be one"
+            "line 17, registration_study.magnitude_mm[1]: 0.2 is given twice: two cells would be one"
                 .to_string(),
         ),
         (
             "scenarios/instruments.toml",
             "poses = [50, 200]",
             "poses = [50, 50]",
-            "line 24, instruments_study.poses: 50 is given twice: two cells would be one"
+            "line 24, instruments_study.poses[1]: 50 is given twice: two cells would be one"
                 .to_string(),
         ),
         (
             "scenarios/instruments.toml",
             "strategies = [\"random\", \"detmax-ide\"]",
             "strategies = [\"random\", \"detmax-ide\", \"random\"]",
-            "line 25, instruments_study.strategies: \"random\" is given twice: two cells would \
+            "line 25, instruments_study.strategies[2]: \"random\" is given twice: two cells would \
              be one"
                 .to_string(),
         ),

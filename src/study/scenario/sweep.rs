@@ -518,14 +518,30 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
                 ToString::to_string,
                 "sweep points",
             );
-            if let Some(msg) = twice {
-                return Err((format!("{place}.values"), format!("\"{}\": {msg}", s.key)));
+            if let Some((j, msg)) = twice {
+                let msg = format!("\"{}\": {msg}", s.key);
+                return Err((format!("{place}.values[{j}]"), msg));
             }
         }
         if axes.iter().any(|a| a.key == s.key) {
             return Err((
                 format!("{place}.key"),
                 format!("\"{}\" is swept twice", s.key),
+            ));
+        }
+        // A table and a key inside it on two axes: one axis's value would override the other's.
+        let within = |a: &str, b: &str| a.strip_prefix(b).is_some_and(|r| r.starts_with('.'));
+        if let Some(a) = axes
+            .iter()
+            .find(|a| within(&s.key, &a.key) || within(&a.key, &s.key))
+        {
+            return Err((
+                format!("{place}.key"),
+                format!(
+                    "\"{}\" and \"{}\", swept on another axis, are a table and a key inside it: \
+                     one axis's value would override the other's; sweep one of them",
+                    s.key, a.key
+                ),
             ));
         }
         if zip && s.values.len() != axes.first().map_or(s.values.len(), |a| a.values.len()) {
