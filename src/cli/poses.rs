@@ -91,6 +91,12 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         )
         .into());
     }
+    let twice = args.curve.as_deref().and_then(|counts| {
+        calbench::study::given_twice(counts, PartialEq::eq, ToString::to_string, "curve points")
+    });
+    if let Some((_, msg)) = twice {
+        return Err(Error::setting("--curve", msg).into());
+    }
     let mut g = calbench::numeric::rng::stream(sc.seed, "poses-command");
     let pool = sample_region(&nominal, &c.region, c.candidates, &mut g)?;
     let scored = match (full, c.separate) {
@@ -104,7 +110,17 @@ pub fn run(args: &PosesArgs) -> Result<()> {
         plan::optimiser_model(&nominal, measure, &pool, scored, &identified);
     let mut opts = SelectOptions::new(count);
     opts.objective = c.objective;
-    let sel = calbench::poses::select(&model, &pool, optimiser, &opts, &mut g)?;
+    // A pose count refused by the selection names `--count` when that gave it.
+    let sel =
+        calbench::poses::select(&model, &pool, optimiser, &opts, &mut g).map_err(|e| match e {
+            Error::Setting { key, msg } if key == "calibration.count" && args.count.is_some() => {
+                Error::Setting {
+                    key: "--count".into(),
+                    msg,
+                }
+            }
+            e => e,
+        })?;
     // Everything is computed before anything is written, and written as a whole.
     let curve = args
         .curve

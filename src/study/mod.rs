@@ -59,7 +59,7 @@ pub use trial::{run_trial, TrialResult};
 /// says whether two values are one point (`==`, or the same strategy however spelled);
 /// the later value's index and a message naming it as `shown` gives it and what the points
 /// are (`sweep points`, `cells`). `None` when every value is distinct.
-pub(crate) fn given_twice<T>(
+pub fn given_twice<T>(
     values: &[T],
     same: impl Fn(&T, &T) -> bool,
     shown: impl Fn(&T) -> String,

@@ -190,6 +190,21 @@ fn number_lists_take_negative_values_and_refuse_what_is_not_a_number() {
     };
     refused(&poses("20,x"), 2, &["'x'", "--curve"]);
     refused(&poses("20,0"), 1, &["--curve", "\"0\"", "1..="]);
+    // A count given twice would print one point twice.
+    refused(&poses("10,20,10"), 1, &["--curve", "10 is given twice"]);
+    // Too few poses for the parameters: the refusal names `--count`, which gave the count,
+    // not the scenario's `calibration.count`.
+    let few = calbench(&[
+        "poses",
+        &scenario,
+        "--strategy",
+        "detmax",
+        "--count",
+        "5",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    refused(&few, 1, &["setting `--count`: 5 poses give fewer rows"]);
     assert!(!out.exists());
 }
 
