@@ -315,7 +315,7 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         precision: None,
     };
     let t0 = std::time::Instant::now();
-    let table = run_cells_study(sc, &opts, &Terminal)?;
+    let table = run_cells_study(sc, &opts, &Terminal).map_err(|e| in_scenario(e, sc))?;
     if let Some(s) = shard {
         let what = format!("shard {}/{} of {}", s.index, s.count, sc.name());
         shard_written(&what, &out, Some(s.count));
@@ -324,6 +324,23 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
     cells_finished(&table, sc.trials(), t0, &out)?;
     args.record
         .finish(db, || super::record::of_study(&out, Kind::Run))
+}
+
+/// A refusal of the study's own setting, met while it runs (a box that draws collinear
+/// points), placed in the scenario file at that key's line; any other error as it is.
+fn in_scenario(e: Error, sc: &AnyScenario) -> Error {
+    let own = |key: &str| {
+        ["registration_study.", "instruments_study."]
+            .iter()
+            .any(|t| key.starts_with(t))
+    };
+    match (&e, sc.path()) {
+        (Error::Setting { key, .. }, Some(path)) if own(key) => {
+            let text = std::fs::read_to_string(path).unwrap_or_default();
+            e.in_file(path).at_key_line(&text)
+        }
+        _ => e,
+    }
 }
 
 /// Prints a finished study of cells' `table`, its `trials` (each draws every cell) and where

@@ -322,6 +322,23 @@ impl RegistrationStudy {
         cells
     }
 
+    /// A registration of a draw that its points do not determine (`e`), refused as the
+    /// setting that drew them, `size_mm`: a box with no extent in two directions draws
+    /// collinear points.
+    fn blamed(&self, e: Error) -> Error {
+        match e {
+            Error::Singular(msg) => Error::setting(
+                "registration_study.size_mm",
+                format!(
+                    "the points drawn in a box of {:?} mm do not determine the registration \
+                     ({msg}): give the box an extent in at least two directions",
+                    self.size_mm
+                ),
+            ),
+            e => e,
+        }
+    }
+
     /// One draw: the (SVD, weighted SVD) registration errors of every cell, in grid order.
     pub fn draw(&self, seed: u64) -> Result<Vec<(Real, Real)>> {
         let p = &self.tracker_pose;
@@ -357,8 +374,8 @@ impl RegistrationStudy {
                 let mut go = rng::stream(seed, &format!("registration/outliers/{count}/{m}"));
                 crate::sim::add_outliers(&mut measured, count, [0.0, m], &mut go);
                 out.push((
-                    error(&register_svd(&base, &measured, None)?),
-                    error(&register_wsvd(&base, &measured)?),
+                    error(&register_svd(&base, &measured, None).map_err(|e| self.blamed(e))?),
+                    error(&register_wsvd(&base, &measured).map_err(|e| self.blamed(e))?),
                 ));
             }
         }

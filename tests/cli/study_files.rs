@@ -242,3 +242,33 @@ fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line()
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// A registration study whose box has no extent in two directions draws collinear points,
+/// which determine no registration: refused naming the file, the line and `size_mm`, where the
+/// run failed with "registration: the points are (nearly) collinear" and no setting to blame;
+/// nothing is written.
+#[test]
+fn a_registration_box_that_draws_collinear_points_is_refused_at_its_key() {
+    let d = tmp("grid-flat-box");
+    let root = crate::common::root();
+    let text = std::fs::read_to_string(root.join("scenarios/ban-fig3.toml")).unwrap();
+    let size = "size_mm = [800.0, 800.0, 800.0]";
+    assert!(text.contains(size));
+    let line = text.lines().position(|l| l == size).unwrap() + 1;
+    let p = d.join("flat.toml");
+    std::fs::write(
+        &p,
+        text.replacen(size, "size_mm = [800.0, 1e-12, 1e-12]", 1),
+    )
+    .unwrap();
+    let out = d.join("out");
+    let o = calbench(&["run", path(&p), "--trials", "2", "--out", path(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    // The study says what it runs first; the refusal is the last line.
+    let last = err.trim_end().lines().last().unwrap_or("");
+    let at = format!("flat.toml: line {line}, registration_study.size_mm: the points drawn");
+    assert!(last.starts_with("error: ") && last.contains(&at), "{err}");
+    assert!(last.contains("do not determine the registration"), "{err}");
+    assert!(!out.exists());
+}
