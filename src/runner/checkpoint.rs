@@ -34,6 +34,7 @@ use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
 use crate::report::MadeFolders;
 use crate::runner::shard::{scenario_as_run, settings_difference, trials_as_run, FormatOnly};
+use crate::study::inputs::{self, Input};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::registration_study::RegistrationScenario;
@@ -43,7 +44,7 @@ use crate::study::{BlockInfo, Replay, Shard, TrialResult, TrialSink, CHUNK};
 
 /// The `format` of `checkpoint.json`, and so of its `records.txt`: the records of
 /// [`crate::runner::shard::FORMAT`] (docs/formats.md § 7.3.1), a new one with each of its.
-pub const FORMAT: &str = "calbench-checkpoint-6";
+pub const FORMAT: &str = "calbench-checkpoint-7";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -55,6 +56,8 @@ struct Meta {
     scenario_file: Option<PathBuf>,
     /// The scenario as run (overrides applied), TOML.
     settings: String,
+    /// The files the scenario reads, as they were when the run started.
+    inputs: Vec<Input>,
     seed: u64,
     trials: usize,
     shard: Option<Shard>,
@@ -138,13 +141,15 @@ impl Checkpoint {
         let dir = folder(out);
         let made = MadeFolders::create(&dir)?;
         let settings = scenario.settings()?;
-        let id = RunId::new(&settings, scenario.seed());
+        let inputs = inputs::of(scenario)?;
+        let id = RunId::new(&settings, &inputs, scenario.seed());
         let meta = Meta {
             format: FORMAT.into(),
             version: env!("CARGO_PKG_VERSION").into(),
             scenario: scenario.name().to_string(),
             scenario_file: scenario.path().map(Path::to_path_buf),
             settings,
+            inputs,
             seed: scenario.seed(),
             trials: scenario.trials(),
             shard,
@@ -217,7 +222,9 @@ impl Checkpoint {
                 version.to_string(),
             ));
         }
+        inputs::unchanged(&path, &meta.inputs)?;
         let scenario = scenario_as_run(&path, &meta.settings, meta.scenario_file.as_deref())?;
+        inputs::as_run(&path, &meta.inputs, &scenario)?;
         if let Some(Err(m)) = meta.shard.map(|s| s.fits(scenario.units())) {
             return Err(Error::file(
                 &path,
@@ -262,7 +269,7 @@ impl Checkpoint {
         let records = dir.join("records.txt");
         let units = units(&path, &scenario, &meta)?;
         let sweep = scenario.blocks().1;
-        let id = RunId::new(&meta.settings, meta.seed);
+        let id = RunId::new(&meta.settings, &meta.inputs, meta.seed);
         let verifier = || Verifier::new(&records, id, meta.trials, sweep, units);
         match &scenario {
             AnyScenario::MonteCarlo(_) => {

@@ -19,6 +19,7 @@ use crate::error::{Error, Result};
 use crate::report::output::{write_all, Outputs, Stream, Text};
 use crate::report::{write_run, TrialsCsv};
 use crate::results::provenance::Machine;
+use crate::study::inputs::{self, Input};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
 use crate::study::reporter::Reporter;
@@ -28,7 +29,7 @@ use crate::study::{BlockInfo, Collector, RunResult, Shard, Trial0, TrialResult, 
 /// whenever what a record or `shard.json` holds changes, so that `merge` refuses a shard of an
 /// earlier calbench instead of reading it with a field missing (tests/cli/record_formats.rs
 /// fixes each format's keys).
-pub const FORMAT: &str = "calbench-shard-9";
+pub const FORMAT: &str = "calbench-shard-10";
 
 /// One block of a shard: what the reports need of a sweep point's study and of its trial 0,
 /// and the checksum that binds it to the run as the records' checksums bind them.
@@ -84,6 +85,8 @@ struct ShardMeta {
     scenario: String,
     scenario_file: Option<PathBuf>,
     settings: String,
+    /// The files the scenario reads, as they were when the shard started.
+    inputs: Vec<Input>,
     seed: u64,
     trials: usize,
     shard: Shard,
@@ -111,8 +114,10 @@ impl<A: TrialSink, B: TrialSink> TrialSink for Both<'_, A, B> {
 /// and `shard.json`.
 pub struct Records {
     out: Stream,
-    /// The scenario as run (TOML), and what the records' checksums bind.
+    /// The scenario as run (TOML) and the files it reads, and what the records' checksums
+    /// bind.
     settings: String,
+    inputs: Vec<Input>,
     id: RunId,
     count: u64,
 }
@@ -121,10 +126,12 @@ impl Records {
     /// Starts `records.txt` in the output folder `dir` for the records of a run of `scenario`.
     pub fn create(dir: &Path, scenario: &AnyScenario) -> Result<Records> {
         let settings = scenario.settings()?;
+        let inputs = inputs::of(scenario)?;
         Ok(Records {
             out: Stream::create(dir, "records.txt")?,
-            id: RunId::new(&settings, scenario.seed()),
+            id: RunId::new(&settings, &inputs, scenario.seed()),
             settings,
+            inputs,
             count: 0,
         })
     }
@@ -156,6 +163,7 @@ impl Records {
             scenario: sc.name().to_string(),
             scenario_file: sc.path().map(Path::to_path_buf),
             settings: self.settings,
+            inputs: self.inputs,
             seed: sc.seed(),
             trials: sc.trials(),
             shard,
@@ -337,7 +345,9 @@ fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     }
     let mut metas: Vec<(PathBuf, ShardMeta)> = Vec::new();
     for d in dirs {
-        metas.push((d.clone(), read_meta(d)?));
+        let meta = read_meta(d)?;
+        inputs::unchanged(&d.join("shard.json"), &meta.inputs)?;
+        metas.push((d.clone(), meta));
     }
     let (d0, m0) = &metas[0];
     for (d, m) in &metas[1..] {
@@ -423,6 +433,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     metas.sort_by_key(|(_, m)| m.shard.index);
     for (d, m) in &metas {
         trials_as_run(&d.join("shard.json"), m.trials, &any)?;
+        inputs::as_run(&d.join("shard.json"), &m.inputs, &any)?;
         let units = m.shard.range(total);
         if m.units != units || m.records != units.1 - units.0 {
             return Err(Error::file(
@@ -449,7 +460,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
     // The reports' view of every block, and trial 0's extras, from the shard that ran it.
     let mut infos: Vec<Option<(BlockInfo, Option<Trial0>)>> = Vec::new();
     for (d, m) in &metas {
-        let id = RunId::new(&m.settings, m.seed);
+        let id = RunId::new(&m.settings, &m.inputs, m.seed);
         for (k, b) in m.blocks.iter().enumerate() {
             b.check(&id, &d.join("shard.json"), k)?;
             let i = b.info.index;
@@ -477,7 +488,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
         for (d, m) in &metas {
             let path = d.join("records.txt");
             let sweep = scenario.sweep.is_some().then_some("sweep point");
-            let id = RunId::new(&m.settings, m.seed);
+            let id = RunId::new(&m.settings, &m.inputs, m.seed);
             let records = Verifier::new(&path, id, m.trials, sweep, m.units);
             each_record(records, |records, line| {
                 let (b, index, t) = records.record(line)?;
@@ -550,7 +561,7 @@ fn merge_cells<C: Cells>(
         let mut done: Vec<(C::Block, Vec<C::Trial>)> = Vec::new();
         for (d, m) in metas {
             let path = d.join("records.txt");
-            let id = RunId::new(&m.settings, m.seed);
+            let id = RunId::new(&m.settings, &m.inputs, m.seed);
             let records = Verifier::new(&path, id, m.trials, sc.blocks().1, m.units);
             each_record(records, |records, line| {
                 let (b, _, t) = records.record::<C::Trial>(line)?;

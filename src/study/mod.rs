@@ -24,6 +24,7 @@
 
 pub mod claims;
 pub mod crb;
+pub mod inputs;
 pub mod instruments;
 pub mod instruments_table;
 pub mod kind;

@@ -8,7 +8,8 @@
 //!
 //! The checksum binds the record to its run: 32 hexadecimal digits, the first 16 bytes of the
 //! SHA-256 (the `sha2` crate) of the run's identity — the SHA-256 of its scenario as run (the
-//! settings' TOML text that `shard.json` and `checkpoint.json` hold) and its seed — then the
+//! settings' TOML text that `shard.json` and `checkpoint.json` hold, then the SHA-256 of each
+//! file it reads, [`super::inputs`]) and its seed — then the
 //! record's sweep point and trial, then the text before ` #`. A changed byte, a record of
 //! another run (another scenario's content, another seed, or the same name and seed with other
 //! settings) and a record moved to another sweep point or trial each fail it. A reader
@@ -24,6 +25,7 @@ use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::error::{Error, Result};
+use crate::study::inputs::Input;
 
 /// One line of `records.txt` before its checksum: trial `trial` of sweep point `point` (0
 /// without a sweep) and what it gave.
@@ -42,10 +44,17 @@ pub(crate) struct RunId {
 }
 
 impl RunId {
-    /// The run of the scenario whose settings as run are the TOML text `settings`, with `seed`.
-    pub(crate) fn new(settings: &str, seed: u64) -> RunId {
+    /// The run of the scenario whose settings as run are the TOML text `settings`, reading
+    /// the files `inputs` (their hashes bound after the text; none: the text's hash alone),
+    /// with `seed`.
+    pub(crate) fn new(settings: &str, inputs: &[Input], seed: u64) -> RunId {
+        let mut h = Sha256::new();
+        h.update(settings.as_bytes());
+        for i in inputs {
+            h.update(i.sha256.as_bytes());
+        }
         RunId {
-            scenario: Sha256::digest(settings.as_bytes()).into(),
+            scenario: h.finalize().into(),
             seed,
         }
     }
@@ -322,7 +331,7 @@ mod tests {
                 error: Some("a \"quoted\"\nmessage #1".into()),
             }],
         };
-        let id = RunId::new(SETTINGS, 5);
+        let id = RunId::new(SETTINGS, &[], 5);
         let line = encode(&id, 3, 17, &t).unwrap();
         assert_eq!(line.lines().count(), 1, "{line}");
         let mut v = Verifier::new(Path::new("r.txt"), id, 20, Some("sweep point"), (77, 78));
@@ -364,7 +373,7 @@ mod tests {
             not_determinable: vec![vec![]],
             outcomes: Vec::new(),
         };
-        let id = RunId::new(SETTINGS, 9);
+        let id = RunId::new(SETTINGS, &[], 9);
         let lines: Vec<String> = (0..4).map(|i| encode(&id, 0, i, &t(i)).unwrap()).collect();
         let read = |id: RunId, lines: &[String]| -> Result<usize> {
             let mut v = Verifier::new(Path::new("r.txt"), id, 4, None, (0, 4));
@@ -385,11 +394,18 @@ mod tests {
         changed[2] = changed[2].replace("0.25", "0.35");
         refused(id, &changed, &["line 3", "trial 2", "checksum"]);
         refused(
-            RunId::new(SETTINGS, 8),
+            RunId::new(SETTINGS, &[], 8),
             &lines,
             &["line 1", "trial 0", "another run"],
         );
-        let other = RunId::new(&format!("{SETTINGS}trials = 9\n"), 9);
+        let other = RunId::new(&format!("{SETTINGS}trials = 9\n"), &[], 9);
+        refused(other, &lines, &["line 1", "trial 0", "another run"]);
+        // The same settings reading a robot file of other bytes: another run.
+        let robot = crate::study::inputs::Input {
+            path: "robots/arm.toml".into(),
+            sha256: "0".repeat(64),
+        };
+        let other = RunId::new(SETTINGS, &[robot], 9);
         refused(other, &lines, &["line 1", "trial 0", "another run"]);
         let mut moved = lines.clone();
         moved[1] = moved[1].replacen("trial:1", "trial:2", 1);

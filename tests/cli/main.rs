@@ -28,6 +28,7 @@ mod guo;
 mod harmonics;
 mod html;
 mod impossible;
+mod inputs;
 mod instruments;
 mod interchange;
 mod kernel;

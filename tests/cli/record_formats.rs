@@ -168,13 +168,88 @@ const SHARD_KEYS: &[(&str, &str)] = &[
          records.txt:result.truth records.txt:result.x records.txt:trial scenario scenario_file \
          seconds seed settings shard shard.count shard.index trials units",
     ),
+    (
+        "calbench-shard-10",
+        "blocks blocks[].info blocks[].info.error_params blocks[].info.external \
+         blocks[].info.fixed blocks[].info.full_pose blocks[].info.index blocks[].info.methods \
+         blocks[].info.params blocks[].info.point blocks[].info.robot blocks[].info.searches \
+         blocks[].info.separation blocks[].info.strategies blocks[].info.true_compliance \
+         blocks[].sum blocks[].trial0 blocks[].trial0.per_point \
+         blocks[].trial0.per_point_attitude_deg blocks[].trial0.traces format inputs machine \
+         machine.cores machine.cpu machine.host machine.os records records.txt:point \
+         records.txt:result records.txt:result.after records.txt:result.before \
+         records.txt:result.crb records.txt:result.crb_trace records.txt:result.errors \
+         records.txt:result.not_determinable records.txt:result.outcomes \
+         records.txt:result.outcomes[].after_mm records.txt:result.outcomes[].after_mm.max \
+         records.txt:result.outcomes[].after_mm.mean records.txt:result.outcomes[].after_mm.rms \
+         records.txt:result.outcomes[].after_mm.std records.txt:result.outcomes[].before_mm \
+         records.txt:result.outcomes[].before_mm.max records.txt:result.outcomes[].before_mm.mean \
+         records.txt:result.outcomes[].before_mm.rms records.txt:result.outcomes[].before_mm.std \
+         records.txt:result.outcomes[].calibration_after_mm \
+         records.txt:result.outcomes[].calibration_after_mm.max \
+         records.txt:result.outcomes[].calibration_after_mm.mean \
+         records.txt:result.outcomes[].calibration_after_mm.rms \
+         records.txt:result.outcomes[].calibration_after_mm.std \
+         records.txt:result.outcomes[].calibration_before_mm \
+         records.txt:result.outcomes[].calibration_before_mm.max \
+         records.txt:result.outcomes[].calibration_before_mm.mean \
+         records.txt:result.outcomes[].calibration_before_mm.rms \
+         records.txt:result.outcomes[].calibration_before_mm.std \
+         records.txt:result.outcomes[].evaluations records.txt:result.outcomes[].identified \
+         records.txt:result.outcomes[].iterations records.txt:result.outcomes[].method \
+         records.txt:result.outcomes[].optional \
+         records.txt:result.outcomes[].optional.calibration_after_attitude_deg \
+         records.txt:result.outcomes[].optional.calibration_after_attitude_deg.max \
+         records.txt:result.outcomes[].optional.calibration_after_attitude_deg.mean \
+         records.txt:result.outcomes[].optional.calibration_after_attitude_deg.rms \
+         records.txt:result.outcomes[].optional.calibration_after_attitude_deg.std \
+         records.txt:result.outcomes[].optional.calibration_before_attitude_deg \
+         records.txt:result.outcomes[].optional.calibration_before_attitude_deg.max \
+         records.txt:result.outcomes[].optional.calibration_before_attitude_deg.mean \
+         records.txt:result.outcomes[].optional.calibration_before_attitude_deg.rms \
+         records.txt:result.outcomes[].optional.calibration_before_attitude_deg.std \
+         records.txt:result.outcomes[].optional.validation_after_attitude_deg \
+         records.txt:result.outcomes[].optional.validation_after_attitude_deg.max \
+         records.txt:result.outcomes[].optional.validation_after_attitude_deg.mean \
+         records.txt:result.outcomes[].optional.validation_after_attitude_deg.rms \
+         records.txt:result.outcomes[].optional.validation_after_attitude_deg.std \
+         records.txt:result.outcomes[].optional.validation_after_axis_abs_mm \
+         records.txt:result.outcomes[].optional.validation_after_axis_mm \
+         records.txt:result.outcomes[].optional.validation_after_deg \
+         records.txt:result.outcomes[].optional.validation_after_deg.max \
+         records.txt:result.outcomes[].optional.validation_after_deg.mean \
+         records.txt:result.outcomes[].optional.validation_after_deg.rms \
+         records.txt:result.outcomes[].optional.validation_after_deg.std \
+         records.txt:result.outcomes[].optional.validation_before_attitude_deg \
+         records.txt:result.outcomes[].optional.validation_before_attitude_deg.max \
+         records.txt:result.outcomes[].optional.validation_before_attitude_deg.mean \
+         records.txt:result.outcomes[].optional.validation_before_attitude_deg.rms \
+         records.txt:result.outcomes[].optional.validation_before_attitude_deg.std \
+         records.txt:result.outcomes[].optional.validation_before_axis_abs_mm \
+         records.txt:result.outcomes[].optional.validation_before_axis_mm \
+         records.txt:result.outcomes[].optional.validation_before_deg \
+         records.txt:result.outcomes[].optional.validation_before_deg.max \
+         records.txt:result.outcomes[].optional.validation_before_deg.mean \
+         records.txt:result.outcomes[].optional.validation_before_deg.rms \
+         records.txt:result.outcomes[].optional.validation_before_deg.std \
+         records.txt:result.outcomes[].optional.validation_before_fitted_mm \
+         records.txt:result.outcomes[].rank_deficient_expected \
+         records.txt:result.outcomes[].search records.txt:result.outcomes[].search.at_budget \
+         records.txt:result.outcomes[].search.budget \
+         records.txt:result.outcomes[].search.final_fitness \
+         records.txt:result.outcomes[].search.hits records.txt:result.outcomes[].seconds \
+         records.txt:result.outcomes[].strategy records.txt:result.outcomes[].termination \
+         records.txt:result.truth records.txt:result.x records.txt:trial scenario scenario_file \
+         seconds seed settings shard shard.count shard.index trials units",
+    ),
 ];
 
 /// Per `format` of `checkpoint.json`, the keys of a checkpoint of `ci-guard`
 /// ([`checkpoint_keys`]), the same way.
-const CHECKPOINT_KEYS: &[(&str, &str)] = &[(
-    "calbench-checkpoint-6",
-    "bytes done format host pid records.txt:point records.txt:result \
+const CHECKPOINT_KEYS: &[(&str, &str)] = &[
+    (
+        "calbench-checkpoint-6",
+        "bytes done format host pid records.txt:point records.txt:result \
      records.txt:result.crb_trace records.txt:result.outcomes \
      records.txt:result.outcomes[].after_mm records.txt:result.outcomes[].after_mm.max \
      records.txt:result.outcomes[].after_mm.mean records.txt:result.outcomes[].after_mm.rms \
@@ -209,7 +284,46 @@ const CHECKPOINT_KEYS: &[(&str, &str)] = &[(
      records.txt:result.outcomes[].seconds records.txt:result.outcomes[].strategy \
      records.txt:result.outcomes[].termination records.txt:result.truth records.txt:trial \
      scenario scenario_file seed settings shard trials version",
-)];
+    ),
+    (
+        "calbench-checkpoint-7",
+        "bytes done format host inputs pid records.txt:point records.txt:result \
+     records.txt:result.crb_trace records.txt:result.outcomes \
+     records.txt:result.outcomes[].after_mm records.txt:result.outcomes[].after_mm.max \
+     records.txt:result.outcomes[].after_mm.mean records.txt:result.outcomes[].after_mm.rms \
+     records.txt:result.outcomes[].after_mm.std records.txt:result.outcomes[].before_mm \
+     records.txt:result.outcomes[].before_mm.max records.txt:result.outcomes[].before_mm.mean \
+     records.txt:result.outcomes[].before_mm.rms records.txt:result.outcomes[].before_mm.std \
+     records.txt:result.outcomes[].calibration_after_mm \
+     records.txt:result.outcomes[].calibration_after_mm.max \
+     records.txt:result.outcomes[].calibration_after_mm.mean \
+     records.txt:result.outcomes[].calibration_after_mm.rms \
+     records.txt:result.outcomes[].calibration_after_mm.std \
+     records.txt:result.outcomes[].calibration_before_mm \
+     records.txt:result.outcomes[].calibration_before_mm.max \
+     records.txt:result.outcomes[].calibration_before_mm.mean \
+     records.txt:result.outcomes[].calibration_before_mm.rms \
+     records.txt:result.outcomes[].calibration_before_mm.std \
+     records.txt:result.outcomes[].evaluations records.txt:result.outcomes[].identified \
+     records.txt:result.outcomes[].iterations records.txt:result.outcomes[].method \
+     records.txt:result.outcomes[].optional \
+     records.txt:result.outcomes[].optional.calibration_after_attitude_deg \
+     records.txt:result.outcomes[].optional.calibration_before_attitude_deg \
+     records.txt:result.outcomes[].optional.validation_after_attitude_deg \
+     records.txt:result.outcomes[].optional.validation_after_axis_abs_mm \
+     records.txt:result.outcomes[].optional.validation_after_axis_mm \
+     records.txt:result.outcomes[].optional.validation_after_deg \
+     records.txt:result.outcomes[].optional.validation_before_attitude_deg \
+     records.txt:result.outcomes[].optional.validation_before_axis_abs_mm \
+     records.txt:result.outcomes[].optional.validation_before_axis_mm \
+     records.txt:result.outcomes[].optional.validation_before_deg \
+     records.txt:result.outcomes[].optional.validation_before_fitted_mm \
+     records.txt:result.outcomes[].rank_deficient_expected records.txt:result.outcomes[].search \
+     records.txt:result.outcomes[].seconds records.txt:result.outcomes[].strategy \
+     records.txt:result.outcomes[].termination records.txt:result.truth records.txt:trial \
+     scenario scenario_file seed settings shard trials version",
+    ),
+];
 
 /// The format before `format` (`calbench-shard-8` → `calbench-shard-7`), as an earlier
 /// calbench wrote it.

@@ -357,8 +357,8 @@ fn a_refused_merge_or_resume_leaves_no_output_folder() {
     let dir = tmp_dir("records-no-folder");
     let [a0, _] = two_shards(&dir);
     let meta = a0.join("shard.json");
-    let format = read(&meta).replace("calbench-shard-9", "calbench-shard-8");
-    refused_merge(&[&a0], &[(&meta, format)], &["format", "calbench-shard-8"]);
+    let format = read(&meta).replace("calbench-shard-10", "calbench-shard-9");
+    refused_merge(&[&a0], &[(&meta, format)], &["format", "calbench-shard-9"]);
     let out = dir.join("new/killed");
     let o = calbench(&["run", "--resume", path_arg(&out)]);
     let err = String::from_utf8_lossy(&o.stderr);
