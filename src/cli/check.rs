@@ -142,8 +142,9 @@ pub fn run(args: &CheckArgs) -> Result<()> {
             for (entry, metrics) in set_aside(&all) {
                 out!(
                     "unpaired: {entry}: {}: over the trials usable in both runs their per-trial \
-                     values do not give the summaries' figures (a trial, or a parameter's η, \
-                     counts in one run only), so they are compared from the summaries' intervals",
+                     values do not give the summaries' figures (a trial counts in one run only, or a \
+                     parameter's η in one run or in some trials only), so they are compared \
+                     from the summaries' intervals",
                     metrics.join(", ")
                 );
             }
