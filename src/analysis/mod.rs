@@ -8,5 +8,6 @@ pub mod analyse;
 pub mod claims;
 pub mod comparisons;
 pub mod figures;
+pub mod idle;
 pub mod regression;
 pub mod summary;

@@ -64,7 +64,9 @@ pub(super) fn study_into(
                     let mut both = Both(&mut csv, &mut cp);
                     run_resumed(scenario, opts, &mut both, replay, reporter)?
                 };
-                write_run(&r, &analyse(&r)?, csv.finish()?, dir)?;
+                let summary = analyse(&r)?;
+                crate::analysis::idle::warn(&summary, reporter)?;
+                write_run(&r, &summary, csv.finish()?, dir)?;
                 r
             }
             Some(_) => {

@@ -333,13 +333,13 @@ pub enum Merged {
 /// of an unfinished run into `out`, whose `--resume` would overwrite the merge, is then
 /// removed with a warning to `reporter`.
 pub fn merge(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<Merged> {
-    let merged = merge_into(dirs, out)?;
+    let merged = merge_into(dirs, out, reporter)?;
     let now = "the merged run replaces it";
     discard_unfinished(out, now, reporter)?;
     Ok(merged)
 }
 
-fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
+fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<Merged> {
     if dirs.is_empty() {
         return Err(Error::setting("DIR", "give the shard folders to merge"));
     }
@@ -535,12 +535,9 @@ fn merge_into(dirs: &[PathBuf], out: &Path) -> Result<Merged> {
             shard: None,
             stopping: None,
         };
-        write_run(
-            &r,
-            &crate::analysis::analyse::analyse(&r)?,
-            csv.finish()?,
-            dir,
-        )?;
+        let summary = crate::analysis::analyse::analyse(&r)?;
+        crate::analysis::idle::warn(&summary, reporter)?;
+        write_run(&r, &summary, csv.finish()?, dir)?;
         result = Some(r);
         Ok(())
     })?;

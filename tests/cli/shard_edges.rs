@@ -280,3 +280,44 @@ fn swept_refused(dir: &Path, sweep: &str, at_line: &str, key: &str, want: &str) 
     one_line_naming(&err, &sc, &[&format!("line {line}, {key}"), want]);
     assert!(!out.exists());
 }
+
+/// A sweep point whose every entry has an earlier point's figures to the bit (an outlier
+/// magnitude swept with no outliers) is warned of once, by `run` and by `merge` alike, where
+/// the sweep table showed equal rows without a word; a point that differs (outliers drawn) is
+/// not, and the files are those of the sweep as given.
+#[test]
+fn a_sweep_point_that_changed_nothing_is_warned_of() {
+    let dir = tmp_dir("shard-edges-idle");
+    let sweep = "\n[sweep]\nkey = \"outliers\"\nvalues = [\n  { count = 0, magnitude_mm = [0.5, 1.0] },\n  { count = 0, magnitude_mm = [2.0, 3.0] },\n  { count = 2, magnitude_mm = [0.5, 1.0] },\n]\n";
+    let study = read(&root().join("scenarios/ci-guard.toml"));
+    let sc = crate::common::write_scenario(&dir, "idle", &format!("{study}{sweep}"));
+    let warned = |args: &[&str]| {
+        let o = calbench_ok(args);
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        let lines: Vec<&str> = err.lines().filter(|l| l.contains("no effect")).collect();
+        assert_eq!(lines.len(), 1, "{err}");
+        assert!(
+            lines[0].starts_with("warning: sweep point outliers = ")
+                && lines[0].contains("magnitude_mm\":[2.0,3.0]")
+                && lines[0].contains("gave every entry the figures of outliers = "),
+            "{err}"
+        );
+    };
+    let whole = dir.join("whole");
+    let run = ["run", path_arg(&sc), "--trials", "3"];
+    warned(&[&run[..], &["--out", path_arg(&whole)]].concat());
+    let shards: Vec<_> = (0..2).map(|i| dir.join(format!("s{i}"))).collect();
+    for (i, s) in shards.iter().enumerate() {
+        let share = format!("{i}/2");
+        calbench_ok(&[&run[..], &["--shard", &share, "--out", path_arg(s)]].concat());
+    }
+    let merged = dir.join("merged");
+    warned(&[
+        "merge",
+        path_arg(&shards[0]),
+        path_arg(&shards[1]),
+        "--out",
+        path_arg(&merged),
+    ]);
+    assert!(read(&merged.join("summary.json")) == read(&whole.join("summary.json")));
+}
