@@ -490,6 +490,19 @@ def test_a_sweep_whose_points_differ_in_columns_gives_the_cli_bytes(cli, root, t
     assert study.trials_csv() == (tmp_path / "cli" / "trials.csv").read_bytes()
 
 
+def test_a_sweep_point_that_changed_nothing_is_a_user_warning(root):
+    sc = load_scenario(root)
+    sc["sweep"] = {"key": "outliers", "values": [
+        {"count": 0, "magnitude_mm": [0.5, 1.0]},
+        {"count": 0, "magnitude_mm": [2.0, 3.0]},
+        {"count": 2, "magnitude_mm": [0.5, 1.0]},
+    ]}
+    with pytest.warns(UserWarning) as caught:
+        calbench.run(sc, trials=2)
+    idle = [str(w.message) for w in caught if "no effect" in str(w.message)]
+    assert len(idle) == 1 and '"magnitude_mm":[2.0,3.0]' in idle[0], idle
+
+
 def test_run_write_is_whole_or_nothing(root, tmp_path):
     study = calbench.run(root / CI_GUARD, trials=1, progress=True)
     blocker = tmp_path / "out"

@@ -145,8 +145,10 @@ impl InMemoryRun {
             stop,
         };
         let result = run(scenario, &opts, &mut until, reporter)?;
+        let summary = analyse(&result)?;
+        crate::analysis::idle::warn(&summary, reporter)?;
         Ok(InMemoryRun {
-            summary: analyse(&result)?,
+            summary,
             result,
             trials_csv: csv.into_bytes()?,
         })
