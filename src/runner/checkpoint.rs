@@ -73,6 +73,13 @@ struct Meta {
     bytes: u64,
 }
 
+impl Meta {
+    /// What its records' checksums bind.
+    fn id(&self) -> RunId {
+        RunId::new(&self.settings, &self.inputs, self.seed)
+    }
+}
+
 /// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it.
 pub fn folder(out: &Path) -> PathBuf {
     crate::report::checkpoint_folder(out)
@@ -141,15 +148,13 @@ impl Checkpoint {
         let dir = folder(out);
         let made = MadeFolders::create(&dir)?;
         let settings = scenario.settings()?;
-        let inputs = inputs::of(scenario)?;
-        let id = RunId::new(&settings, &inputs, scenario.seed());
         let meta = Meta {
             format: FORMAT.into(),
             version: env!("CARGO_PKG_VERSION").into(),
             scenario: scenario.name().to_string(),
             scenario_file: scenario.path().map(Path::to_path_buf),
             settings,
-            inputs,
+            inputs: inputs::of(scenario)?,
             seed: scenario.seed(),
             trials: scenario.trials(),
             shard,
@@ -165,8 +170,8 @@ impl Checkpoint {
         Ok(Checkpoint {
             _made: made,
             dir,
+            id: meta.id(),
             meta,
-            id,
             records: std::io::BufWriter::new(file),
             seen: 0,
             skip: 0,
@@ -224,7 +229,7 @@ impl Checkpoint {
         }
         inputs::unchanged(&path, &meta.inputs)?;
         let scenario = scenario_as_run(&path, &meta.settings, meta.scenario_file.as_deref())?;
-        inputs::as_run(&path, &meta.inputs, &scenario)?;
+        inputs::as_run(&path, &meta.inputs, &inputs::files(&scenario)?)?;
         if let Some(Err(m)) = meta.shard.map(|s| s.fits(scenario.units())) {
             return Err(Error::file(
                 &path,
@@ -269,7 +274,7 @@ impl Checkpoint {
         let records = dir.join("records.txt");
         let units = units(&path, &scenario, &meta)?;
         let sweep = scenario.blocks().1;
-        let id = RunId::new(&meta.settings, &meta.inputs, meta.seed);
+        let id = meta.id();
         let verifier = || Verifier::new(&records, id, meta.trials, sweep, units);
         match &scenario {
             AnyScenario::MonteCarlo(_) => {

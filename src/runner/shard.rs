@@ -100,6 +100,13 @@ struct ShardMeta {
     blocks: Vec<ShardBlock>,
 }
 
+impl ShardMeta {
+    /// What its records' checksums bind.
+    fn id(&self) -> RunId {
+        RunId::new(&self.settings, &self.inputs, self.seed)
+    }
+}
+
 /// Two sinks in one.
 pub struct Both<'a, A: TrialSink, B: TrialSink>(pub &'a mut A, pub &'a mut B);
 
@@ -431,9 +438,10 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
         ));
     }
     metas.sort_by_key(|(_, m)| m.shard.index);
+    let files = inputs::files(&any)?;
     for (d, m) in &metas {
         trials_as_run(&d.join("shard.json"), m.trials, &any)?;
-        inputs::as_run(&d.join("shard.json"), &m.inputs, &any)?;
+        inputs::as_run(&d.join("shard.json"), &m.inputs, &files)?;
         let units = m.shard.range(total);
         if m.units != units || m.records != units.1 - units.0 {
             return Err(Error::file(
@@ -460,7 +468,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
     // The reports' view of every block, and trial 0's extras, from the shard that ran it.
     let mut infos: Vec<Option<(BlockInfo, Option<Trial0>)>> = Vec::new();
     for (d, m) in &metas {
-        let id = RunId::new(&m.settings, &m.inputs, m.seed);
+        let id = m.id();
         for (k, b) in m.blocks.iter().enumerate() {
             b.check(&id, &d.join("shard.json"), k)?;
             let i = b.info.index;
@@ -488,7 +496,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
         for (d, m) in &metas {
             let path = d.join("records.txt");
             let sweep = scenario.sweep.is_some().then_some("sweep point");
-            let id = RunId::new(&m.settings, &m.inputs, m.seed);
+            let id = m.id();
             let records = Verifier::new(&path, id, m.trials, sweep, m.units);
             each_record(records, |records, line| {
                 let (b, index, t) = records.record(line)?;
@@ -558,7 +566,7 @@ fn merge_cells<C: Cells>(
         let mut done: Vec<(C::Block, Vec<C::Trial>)> = Vec::new();
         for (d, m) in metas {
             let path = d.join("records.txt");
-            let id = RunId::new(&m.settings, &m.inputs, m.seed);
+            let id = m.id();
             let records = Verifier::new(&path, id, m.trials, sc.blocks().1, m.units);
             each_record(records, |records, line| {
                 let (b, _, t) = records.record::<C::Trial>(line)?;

@@ -55,13 +55,15 @@ pub fn of(sc: &AnyScenario) -> Result<Vec<Input>> {
     files(sc)?
         .into_iter()
         .map(|path| {
-            let bytes = std::fs::read(&path).map_err(|e| Error::io(&path, e))?;
-            Ok(Input {
-                sha256: sha256_hex(&bytes),
-                path,
-            })
+            let sha256 = hash(&path).map_err(|e| Error::io(&path, e))?;
+            Ok(Input { path, sha256 })
         })
         .collect()
+}
+
+/// The lowercase hex SHA-256 of the bytes of the file `path`.
+fn hash(path: &Path) -> std::io::Result<String> {
+    std::fs::read(path).map(|bytes| sha256_hex(&bytes))
 }
 
 /// Refuses, naming the key `inputs[k]` of `holder` (a `shard.json` or a `checkpoint.json`),
@@ -70,8 +72,8 @@ pub fn of(sc: &AnyScenario) -> Result<Vec<Input>> {
 pub fn unchanged(holder: &Path, recorded: &[Input]) -> Result<()> {
     for (k, was) in recorded.iter().enumerate() {
         let refuse = |msg: String| Err(Error::file(holder, format!("inputs[{k}]"), msg));
-        let bytes = match std::fs::read(&was.path) {
-            Ok(b) => b,
+        let now = match hash(&was.path) {
+            Ok(h) => h,
             Err(e) => {
                 let hint = if was.path.is_relative() {
                     "; the path is relative to the folder the run started in: run this command \
@@ -85,7 +87,6 @@ pub fn unchanged(holder: &Path, recorded: &[Input]) -> Result<()> {
                 ));
             }
         };
-        let now = sha256_hex(&bytes);
         if now != was.sha256 {
             return refuse(format!(
                 "{} has changed since the run started (SHA-256 {} then, {now} now): its trials \
@@ -98,10 +99,9 @@ pub fn unchanged(holder: &Path, recorded: &[Input]) -> Result<()> {
     Ok(())
 }
 
-/// Refuses, naming the key `inputs` of `holder`, a list of files that is not the one the
-/// scenario as run `sc` reads (the file was altered).
-pub fn as_run(holder: &Path, recorded: &[Input], sc: &AnyScenario) -> Result<()> {
-    let now = files(sc)?;
+/// Refuses, naming the key `inputs` of `holder`, a list of files that is not `now`, the
+/// [`files`] the scenario as run reads (the file was altered).
+pub fn as_run(holder: &Path, recorded: &[Input], now: &[PathBuf]) -> Result<()> {
     if recorded.iter().map(|i| &i.path).eq(now.iter()) {
         return Ok(());
     }
