@@ -485,8 +485,8 @@ const NUMBER_TYPES: [(&str, &str); 12] = [
 ];
 
 /// `text` with serde's Rust type names after `expected ` (`invalid type: string "a",
-/// expected usize`, from a file's or a dict's value) said in words ([`NUMBER_TYPES`]); any
-/// other text as it is.
+/// expected usize`, from a file's or a dict's value) said in words ([`NUMBER_TYPES`], and
+/// `struct NAME` as `a table of keys`); any other text as it is.
 fn plain_types(text: String) -> String {
     const EXPECTED: &str = "expected ";
     if !text.contains(EXPECTED) {
@@ -506,6 +506,11 @@ fn plain_types(text: String) -> String {
         if let Some((name, words)) = NUMBER_TYPES.iter().find(|(name, _)| ends(name)) {
             out.push_str(words);
             rest = &after[name.len()..];
+        } else if let Some(tail) = after.strip_prefix("struct ") {
+            // serde's `expected struct RobotSection`: the section's Rust type.
+            let name = tail.find(|c: char| !c.is_alphanumeric() && c != '_');
+            out.push_str("a table of keys");
+            rest = &tail[name.unwrap_or(tail.len())..];
         }
     }
     out.push_str(rest);
@@ -636,6 +641,11 @@ mod tests {
         assert_eq!(
             said("expected f64, expected i64"),
             "expected a number, expected a whole number"
+        );
+        // A section given as a value: serde names its Rust type.
+        assert_eq!(
+            said("invalid type: string \"irb2600\", expected struct RobotSection"),
+            "invalid type: string \"irb2600\", expected a table of keys"
         );
         // Other words after `expected`, and type names inside longer words, stay.
         for kept in [

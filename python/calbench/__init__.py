@@ -295,7 +295,7 @@ _COMPARISON_KEYS = ["a", "b", "metric", "n", "diff_mean", "diff_ci95", "ratio", 
 
 
 def _split_intervals(df):
-    """``df`` with each interval column — ``…_ci95``, or ``…_ci95.<name>`` as
+    """``df`` with each interval column — ``ci95``, ``…_ci95``, or ``…_ci95.<name>`` as
     ``param_rmse_ci95.d2``; cells ``[lo, hi]`` or None — followed by the columns of its bounds,
     the name with ``_lo`` and ``_hi`` appended (NaN where there is no interval)."""
     import pandas as pd
@@ -303,7 +303,7 @@ def _split_intervals(df):
     columns = {}
     for name in df.columns:
         columns[name] = df[name]
-        if not any(part.endswith("_ci95") for part in str(name).split(".")):
+        if not any(part == "ci95" or part.endswith("_ci95") for part in str(name).split(".")):
             continue
         bounds = [
             (float(v[0]), float(v[1])) if isinstance(v, (list, tuple)) and len(v) == 2
@@ -354,13 +354,17 @@ class Study:
         comparison with the same keys (``a``, ``b``, ``metric``, ``n``, ``diff_mean``,
         ``diff_ci95``, ``ratio``, ``win_rate``, ``p_value``, ``p_holm``, and the verdict's
         ``test``, ``estimate``, ``ci95``, ``margin``, ``verdict``, ``trials_to_resolve``;
-        ``sweep_value`` in a sweep), ``diff_ci95`` also split into ``diff_ci95_lo`` and
-        ``diff_ci95_hi``."""
+        ``sweep_value`` in a sweep, after ``b``), each interval (``diff_ci95``, ``ci95``)
+        also split into its bounds (``diff_ci95_lo``, ``diff_ci95_hi``, ``ci95_lo``,
+        ``ci95_hi``). A run with no comparison gives these columns and no row."""
         if self._comparisons is None:
             import pandas as pd
 
             rows = self.summary.get("comparisons", [])
-            df = pd.DataFrame(rows, columns=None if rows else _COMPARISON_KEYS)
+            keys = list(_COMPARISON_KEYS)
+            if "sweep_key" in self.summary or "sweep_keys" in self.summary:
+                keys.insert(keys.index("b") + 1, "sweep_value")
+            df = pd.DataFrame(rows, columns=None if rows else keys)
             self._comparisons = _split_intervals(df)
         return self._comparisons
 

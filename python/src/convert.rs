@@ -43,8 +43,36 @@ pub(crate) fn float64<'py>(key: &str, a: &Bound<'py, PyAny>) -> PyResult<Bound<'
         ));
     }
     let float = a.py().import("numpy")?.getattr("float64")?;
-    raw.call_method1("astype", (float,))
+    missing_as_nan(raw)?
+        .call_method1("astype", (float,))
         .map_err(|e| setting(key, format!("not an array of numbers ({e})")))
+}
+
+/// An object array's missing values (`None`, pandas' `pd.NA` of a nullable column) as NaN,
+/// which the arrays' checks refuse naming the row and the column, as they refuse a NaN or a
+/// `None` numpy reads as NaN; `pd.NA` had been refused by float conversion, naming neither.
+/// Any other array as it is.
+fn missing_as_nan<'py>(raw: Bound<'py, PyAny>) -> PyResult<Bound<'py, PyAny>> {
+    if raw.getattr("dtype")?.getattr("kind")?.extract::<String>()? != "O" {
+        return Ok(raw);
+    }
+    let py = raw.py();
+    let nan = PyFloat::new(py, f64::NAN).into_any();
+    let cells = raw
+        .call_method0("ravel")?
+        .try_iter()?
+        .map(|v| {
+            let v = v?;
+            let missing = v.is_none() || v.get_type().name()? == "NAType";
+            Ok(if missing { nan.clone() } else { v })
+        })
+        .collect::<PyResult<Vec<_>>>()?;
+    let numpy = py.import("numpy")?;
+    let flat = numpy.call_method1(
+        "array",
+        (PyList::new(py, cells)?, numpy.getattr("object_")?),
+    )?;
+    flat.call_method1("reshape", (raw.getattr("shape")?,))
 }
 
 /// Values numpy reads that are not real numbers, though it would convert them: what they are

@@ -118,7 +118,8 @@ impl Warned {
         for w in warnings {
             // Without its NUL bytes, the text is a C string.
             let msg = std::ffi::CString::new(w.replace('\0', " ")).unwrap_or_default();
-            PyErr::warn(py, &py.get_type::<PyUserWarning>(), &msg, 1)?;
+            // Level 2: the line that called `calbench.run`, whose body calls this module.
+            PyErr::warn(py, &py.get_type::<PyUserWarning>(), &msg, 2)?;
         }
         Ok(())
     }

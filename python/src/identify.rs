@@ -3,7 +3,7 @@
 //! measurement-kind file), with the command line's options as keyword arguments; returns
 //! the record `identified.json` holds, with the compensated robot and the arrays.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1, PyReadonlyArray2};
@@ -39,6 +39,23 @@ struct Readings<'a, 'py> {
     sigma: Option<&'a PyReadonlyArray1<'py, f64>>,
     payload: Option<&'a PyReadonlyArray1<'py, f64>>,
     data: Option<PathBuf>,
+}
+
+/// The source the library names for readings given as arrays: its refusals of the readings
+/// as a whole (`data` of this source) are the setting `points` ([`arrays_refusal`]).
+const ARRAYS: &str = "<arrays>";
+
+/// A refusal of readings given as arrays, which the library places at `data` of the source
+/// [`ARRAYS`] (the points collinear, the poses rank deficient), as the setting `points`: a
+/// caller who gave `q` and `points` gave no `data`.
+fn arrays_refusal(e: calbench::Error) -> calbench::Error {
+    match e.as_setting(Path::new(ARRAYS)) {
+        calbench::Error::Setting { key, msg } if key == "data" => calbench::Error::Setting {
+            key: "points".into(),
+            msg,
+        },
+        e => e,
+    }
 }
 
 impl Readings<'_, '_> {
@@ -77,7 +94,7 @@ impl Readings<'_, '_> {
             self.sigma,
             self.payload,
         )?;
-        Ok((IdentifyData::Tracker(m), PathBuf::from("<arrays>")))
+        Ok((IdentifyData::Tracker(m), PathBuf::from(ARRAYS)))
     }
 }
 
@@ -213,6 +230,7 @@ pub(crate) fn identify<'py>(
         return Err(setting("params", why));
     }
     let (data, source) = readings.read(nominal)?;
+    let from_arrays = source == Path::new(ARRAYS);
     let spec = method_spec(method, options.as_ref(), data.k_refusal())?;
     let registration: Registration = registration.parse().map_err(|_| {
         setting(
@@ -259,7 +277,7 @@ pub(crate) fn identify<'py>(
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             Ok((outcome, record, t0.elapsed().as_secs_f64()))
         })
-        .map_err(err)?;
+        .map_err(|e| err(if from_arrays { arrays_refusal(e) } else { e }))?;
     let out = PyDict::new(py);
     out.set_item("record", record)?;
     out.set_item("seconds", seconds)?;

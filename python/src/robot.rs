@@ -15,7 +15,8 @@ use crate::convert::{flag_arg, float_array2, joint_rows, typed_arg};
 use crate::errors::{err, setting, LimitWarning};
 
 /// Warns (`calbench.LimitWarning`) of the rows of `qs` (internal units) outside the joint
-/// limits of `robot`, naming the first three (`q[0], q[4], q[7] and 2 more rows`).
+/// limits of `robot`, naming the first three (`q[0], q[4], q[7] and 2 more rows`) and the
+/// first row's joint outside, its value and its limits (as `calbench fk` does).
 fn warn_outside_limits(py: Python<'_>, robot: &Robot, qs: &[Vec<Real>]) -> PyResult<()> {
     let outside: Vec<usize> = (0..qs.len())
         .filter(|&i| !robot.within_limits(&qs[i]))
@@ -35,7 +36,13 @@ fn warn_outside_limits(py: Python<'_>, robot: &Robot, qs: &[Vec<Real>]) -> PyRes
     } else {
         format!("{} and {last}", rows.join(", "))
     };
-    let msg = format!("{} ({rows})", calbench::robot::OUTSIDE_LIMITS);
+    // The first row's joint outside, in the words `calbench fk` warns with.
+    let first = outside[0];
+    let joint = robot.outside_limits(&qs[first]).unwrap_or_default();
+    let msg = format!(
+        "{} ({rows}): in q[{first}], {joint}",
+        calbench::robot::OUTSIDE_LIMITS
+    );
     let msg = std::ffi::CString::new(msg).map_err(|e| setting("q", e.to_string()))?;
     PyErr::warn(py, &py.get_type::<LimitWarning>(), &msg, 1)
 }

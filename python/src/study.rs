@@ -4,11 +4,11 @@
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyReadonlyArray1};
-use pyo3::exceptions::PyKeyboardInterrupt;
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
@@ -266,35 +266,56 @@ impl PyProblem {
 /// What a method written in Python returns.
 const RETURNS: &str = "a 1-D float array (or a tuple of it and a termination name)";
 
-/// Set when the run was interrupted (Ctrl-C while it ran, or a `KeyboardInterrupt` in a
-/// method written in Python): the rest of the run's calls of Python methods return at once,
-/// the run stops taking trials ([`InMemoryRun::run_until`]), and the front end raises the
-/// interrupt instead of the run's results ([`Interrupted::raise`]).
+/// Set when the run was interrupted (Ctrl-C while it ran, or a method written in Python
+/// that raised what is no `Exception`: `KeyboardInterrupt`, `SystemExit` from `sys.exit`):
+/// the rest of the run's calls of Python methods return at once, the run stops taking trials
+/// ([`InMemoryRun::run_until`]), and the front end raises the interrupt, or the method's own
+/// exception, instead of the run's results ([`Interrupted::raise`]).
 #[derive(Clone, Default)]
-pub(crate) struct Interrupted(Arc<AtomicBool>);
+pub(crate) struct Interrupted {
+    flag: Arc<AtomicBool>,
+    /// The first exception of a method that stopped the run, raised again as it was.
+    raised: Arc<Mutex<Option<PyErr>>>,
+}
 
 impl Interrupted {
-    /// `result`, or a `KeyboardInterrupt` when the run was interrupted.
+    /// `result`, or, when the run was interrupted, the method's exception that stopped it
+    /// or a `KeyboardInterrupt`.
     pub(crate) fn raise<T>(&self, result: PyResult<T>) -> PyResult<T> {
-        if self.0.load(Ordering::SeqCst) {
-            return Err(PyKeyboardInterrupt::new_err("the run was interrupted"));
+        if self.flag.load(Ordering::SeqCst) {
+            let kept = self.raised.lock().unwrap_or_else(|e| e.into_inner()).take();
+            return Err(
+                kept.unwrap_or_else(|| PyKeyboardInterrupt::new_err("the run was interrupted"))
+            );
         }
         result
+    }
+
+    /// Stops the run on `e`, a method's exception, when it is no `Exception` (a
+    /// `KeyboardInterrupt`, a `SystemExit`): it ends the run rather than fails the trial.
+    fn stop_on(&self, py: Python<'_>, e: &PyErr) {
+        if e.is_instance_of::<PyException>(py) {
+            return;
+        }
+        let mut kept = self.raised.lock().unwrap_or_else(|e| e.into_inner());
+        kept.get_or_insert_with(|| e.clone_ref(py));
+        self.flag.store(true, Ordering::SeqCst);
     }
 }
 
 /// A Python callable as the external method `label`: called with a `Problem` under the GIL;
 /// returns the vector, or (vector, termination name). An exception is the method's failure,
 /// and so is a vector numpy reads as bools or complex numbers (named with its dtype), which
-/// a float conversion would take as 0 and 1 or cut to its real part. A `KeyboardInterrupt`
-/// (Ctrl-C) sets `stop` and ends the run's calls instead: it is not a failure of the trial.
+/// a float conversion would take as 0 and 1 or cut to its real part. An exception that is no
+/// `Exception` (`KeyboardInterrupt`, `SystemExit`) stops the run instead
+/// ([`Interrupted::stop_on`]): it is not a failure of the trial.
 pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> External {
     let label = label.to_string();
-    let stop = stop.0.clone();
+    let stop = stop.clone();
     External {
         name: label.clone(),
         run: Arc::new(move |p: Arc<ExternalProblem>| {
-            if stop.load(Ordering::SeqCst) {
+            if stop.flag.load(Ordering::SeqCst) {
                 return Err("interrupted".to_string());
             }
             Python::attach(|py| {
@@ -307,9 +328,7 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
                 };
                 let problem = Py::new(py, PyProblem { inner: p }).map_err(text)?;
                 let out = f.bind(py).call1((problem,)).map_err(|e| {
-                    if e.is_instance_of::<PyKeyboardInterrupt>(py) {
-                        stop.store(true, Ordering::SeqCst);
-                    }
+                    stop.stop_on(py, &e);
                     text(e)
                 })?;
                 let (x, name) = match out.cast::<PyTuple>() {
@@ -423,7 +442,7 @@ pub(crate) fn run(
     }
     let warned = Warned::new(opts.progress);
     let reporter: &dyn Reporter = &warned;
-    let flag = &*stop.0;
+    let flag = &*stop.flag;
     // The run in a thread of its own; this thread looks for Ctrl-C (Python's signal handlers
     // run on the main thread only) and stops the run when it comes.
     let inner = py.detach(|| {

@@ -77,6 +77,9 @@ pub(crate) fn task<'py>(
         if label.trim().is_empty() {
             return Err(setting("name", "the method's name is empty"));
         }
+        if let Some(why) = calbench::identify::registry::hidden_label(&label) {
+            return Err(setting("name", format!("{label:?} {why}")));
+        }
         let f = crate::study::python_method(&label, method.unbind(), &stop);
         let spec = MethodSpec::external(&label, f);
         (spec, label.clone(), format!("python:{label}"))

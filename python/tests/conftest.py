@@ -3,6 +3,7 @@ binary to compare with, and temporary folders."""
 import os
 import shutil
 import subprocess
+import tomllib
 from pathlib import Path
 
 import pytest
@@ -51,3 +52,10 @@ def cli(binary):
         return r
 
     return run
+
+
+@pytest.fixture
+def ci_guard():
+    """A fresh dict of scenarios/ci-guard.toml, the small study the tests run."""
+    with open(ROOT / "scenarios" / "ci-guard.toml", "rb") as f:
+        return tomllib.load(f)

@@ -87,7 +87,8 @@ def test_fk_warns_of_joint_values_outside_the_limits_as_the_cli_does(cli, recwar
     r.fk([inside, inside])
     assert not recwarn.list
     with pytest.warns(calbench.LimitWarning,
-                      match=r"outside the robot's joint limits \(q\[1\]\)") as w:
+                      match=r"outside the robot's joint limits \(q\[1\]\): in q\[1\], joint 1 "
+                            r"is 500 deg, outside its limits \[-180, 180\]$") as w:
         p = r.fk([inside, outside, inside])
     assert len(w) == 1 and issubclass(calbench.LimitWarning, UserWarning)
     assert p.shape == (3, 3) and np.allclose(p[0], p[2])

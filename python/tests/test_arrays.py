@@ -80,7 +80,8 @@ def test_identifiability_and_the_solve_judge_rank_by_one_rule(root):
     points = robot.fk(q)
     analysis = calbench.identifiability(robot, q)
     assert analysis["condition_number"] < 1e7
-    with pytest.raises(calbench.FileError, match="determine only 26 of the 27 parameters"):
+    with pytest.raises(calbench.SettingError,
+                       match="^setting `points`: the poses determine only 26 of the 27 parameters"):
         calbench.identify(robot, q, points, method="ls")
     # What the analysis finds identifiable, the solve finds of full rank.
     kinematic = [p for p in analysis["identifiable"] if not p.startswith("base.")]

@@ -2,6 +2,7 @@
 numpy gives the η of `ls`, the problem is the weighted least squares of `ls`, and a method
 that raises, is interrupted or returns another dtype is a failure or an interrupt named by
 its label."""
+import sys
 import tomllib
 
 import numpy as np
@@ -128,6 +129,29 @@ def test_an_interrupt_in_a_method_ends_the_run_as_an_interrupt(root):
 
     with pytest.raises(KeyboardInterrupt):
         calbench.task(root / "tasks" / "barrett-wam.toml", task_interrupted, models=["kinematic"])
+
+
+def test_sys_exit_in_a_method_ends_the_run_with_its_code(root):
+    # `sys.exit` (SystemExit, no `Exception`) had been taken for a failed trial and the run
+    # went on; it ends the run and is raised as it was, its code kept, as KeyboardInterrupt is.
+    calls = []
+
+    def leaves(problem):
+        calls.append(1)
+        if len(calls) == 2:
+            sys.exit(3)
+        return problem.x0
+
+    sc = load_scenario(root)
+    with pytest.raises(SystemExit) as ended:
+        calbench.run(sc, trials=20, threads=1, methods={"leaves": leaves})
+    assert ended.value.code == 3 and len(calls) == 2
+    with pytest.raises(SystemExit):
+        calbench.task(root / "tasks" / "barrett-wam.toml", lambda p: sys.exit(4),
+                      models=["kinematic"])
+    # An `Exception` is still the trial's failure, named in trials.csv.
+    study = calbench.run(sc, trials=2, methods={"bad": lambda p: 1 / 0})
+    assert {r["method"]: r["failures"] for r in study.summary["results"]}["bad"] == 2
 
 
 def test_ctrl_c_during_a_run_stops_it(root):

@@ -386,7 +386,7 @@ fn refusal(q: &IdentifyRequest, targets: bool, solver: bool) -> Option<(Opt, Str
     (!solver).then(|| {
         let why = format!(
             "{} is not one of the Jacobian methods (ls, ridge, igg3, lm) that identify them",
-            q.method.name()
+            q.method.shown_name()
         );
         (Opt::Method, why)
     })
@@ -471,7 +471,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
             "the {} readings {cause}{hint}; {} ended {}, so nothing was written. Measure \
              poses that move every joint, leave parameters out with ",
             kind.as_str(),
-            q.method.name(),
+            q.method.shown_name(),
             r.termination.as_str(),
         );
         let msg = Said::from(msg).name(Opt::Fix).text(", or pass ");

@@ -42,7 +42,7 @@ pub fn undetermined_error(
     let a = analyse(nominal, params.0, &data.qs, data.measure());
     let ended = format!(
         "{} ended {}, so nothing was written",
-        spec.name(),
+        spec.shown_name(),
         c.identified.termination.as_str()
     );
     let ended = match radians_hint(nominal, &data.qs) {
@@ -234,7 +234,7 @@ pub fn radians_hint(robot: &Robot, qs: &[Vec<Real>]) -> Option<String> {
     (share <= radians * (1.0 + 1e-9)).then(|| {
         format!(
             "every revolute joint value lies within {:.2} % of its joint's limit (π/180 is \
-             1.75 %): the file's joint values are likely in radians, and robot \"{}\" takes \
+             1.75 %): the joint values are likely in radians, and robot \"{}\" takes \
              degrees (its file's `angle_unit`)",
             100.0 * share,
             robot.name

@@ -270,6 +270,16 @@ impl MethodSpec {
         }
     }
 
+    /// The method as a message names it: its name, or the label of a method supplied from
+    /// outside (a Python function's name), which has no name of calbench's.
+    pub fn shown_name(&self) -> &str {
+        if self.is_external() {
+            &self.label
+        } else {
+            self.name
+        }
+    }
+
     /// Whether the method was supplied from outside rather than read from a scenario.
     pub fn is_external(&self) -> bool {
         self.name == super::external::EXTERNAL
@@ -307,8 +317,9 @@ pub fn method_by_name(name: &str) -> Result<MethodSpec> {
 /// Why `label` cannot name a method, when it holds a control character (bidirectional
 /// overrides included): a label names the method in the reports and on the terminal. A
 /// scenario's `[[methods]]` entry and a method supplied from outside
-/// ([`crate::study::scenario::Scenario::with_method`]) are refused alike.
-pub(crate) fn hidden_label(label: &str) -> Option<&'static str> {
+/// ([`crate::study::scenario::Scenario::with_method`]) and a task's Python method
+/// (`calbench.task(..., name=)`) are refused alike.
+pub fn hidden_label(label: &str) -> Option<&'static str> {
     label.chars().any(crate::error::is_hidden).then_some(
         "must be a name without control characters (bidirectional overrides included), as \
          `name` is: it names the method in the reports and on the terminal",
@@ -321,6 +332,17 @@ mod tests {
 
     fn entry(text: &str) -> std::result::Result<MethodSpec, EntryError> {
         MethodSpec::from_table(&toml::from_str(text).unwrap())
+    }
+
+    #[test]
+    fn a_method_from_outside_is_shown_by_its_label_not_as_external() {
+        let f = super::super::external::External {
+            name: "mine".into(),
+            run: Arc::new(|_| Err("unused".into())),
+        };
+        let spec = MethodSpec::external("mine", f);
+        assert_eq!((spec.name(), spec.shown_name()), ("external", "mine"));
+        assert_eq!(method_by_name("lm").unwrap().shown_name(), "lm");
     }
 
     #[test]

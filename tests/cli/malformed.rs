@@ -471,9 +471,8 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
             "angle-unread",
             ci.replace("[tracker]\n", "[tracker]\nangle_noise_deg = 0.01\n"),
             "angle_noise_deg",
-            "setting",
-            "setting `tracker.angle_noise_deg`: is read only with measure = \"pose\" (measure \
-             is \"position\"",
+            "tracker.angle_noise_deg",
+            "is read only with measure = \"pose\" (measure is \"position\"",
         ),
         (
             // An array of the wrong length has no span of its own: it is placed at its key.

@@ -322,7 +322,7 @@ fn a_region_box_beyond_a_kilometre_is_refused_at_once() {
         assert!(t.elapsed() < Duration::from_secs(10), "{:?}", t.elapsed());
         refused(
             &o,
-            &[&format!("huge{i}.toml: line 13"), "`validation.region`", "e6 mm"],
+            &[&format!("huge{i}.toml: line 13, validation.region: "), "e6 mm"],
         );
     }
 }
@@ -571,7 +571,7 @@ fn an_injected_error_beyond_a_robot_files_range_is_refused_at_its_key() {
     refused(
         &o,
         &[&format!(
-            "huge-error.toml: line {line}, setting: setting `errors.values.a2`: must be within \
+            "huge-error.toml: line {line}, errors.values.a2: must be within \
              ±1000000 mm"
         )],
     );

@@ -48,12 +48,12 @@ fn a_pose_count_too_large_is_refused_naming_file_line_and_key() {
         (
             "scenarios/ci-guard.toml",
             "count = 40",
-            "line 26, setting: setting `calibration.count`: must be at most 10000000 poses",
+            "line 26, calibration.count: must be at most 10000000 poses",
         ),
         (
             "scenarios/ci-guard.toml",
             "count = 30",
-            "line 30, setting: setting `validation.count`: must be at most 10000000 poses",
+            "line 30, validation.count: must be at most 10000000 poses",
         ),
         (
             "scenarios/instruments.toml",

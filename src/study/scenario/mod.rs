@@ -253,9 +253,9 @@ impl Scenario {
             .map(Path::to_path_buf)
             .unwrap_or_default();
         let check = |r: Result<()>| {
-            r.map_err(|e| match &e {
-                Error::Setting { key, .. } => at(key, "setting", e.to_string()),
-                _ => ferr("setting", e.to_string()),
+            r.map_err(|e| match e {
+                Error::Setting { key, msg } => Error::file(&shown, at_line(line(&key), key), msg),
+                e => ferr("setting", e.to_string()),
             })
         };
 

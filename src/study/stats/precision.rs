@@ -66,7 +66,10 @@ impl Precision {
             .trim()
             .parse()
             .map_err(|_| bad("is not a number followed by % or mm"))?;
-        if !v.is_finite() || v <= 0.0 {
+        if !v.is_finite() {
+            return Err(bad("is not a finite number"));
+        }
+        if v <= 0.0 {
             return Err(bad("must be positive"));
         }
         if relative && v >= 100.0 {
@@ -228,6 +231,16 @@ mod tests {
         for bad in ["5", "-1%", "0mm", "nan%", "inf mm", "%", "x%", "100%", ""] {
             let e = Precision::parse(bad).unwrap_err();
             assert_eq!(e.key(), Some("precision"), "{bad}: {e}");
+        }
+        // Each refused with its own reason: not "must be positive" for an infinity or a NaN.
+        for (bad, why) in [
+            ("infmm", "is not a finite number"),
+            ("nan%", "is not a finite number"),
+            ("-1%", "must be positive"),
+            ("0mm", "must be positive"),
+        ] {
+            let e = Precision::parse(bad).unwrap_err().to_string();
+            assert!(e.contains(&format!("\"{bad}\" {why};")), "{bad}: {e}");
         }
     }
 
