@@ -8,6 +8,7 @@ use crate::analysis::summary::Summary;
 use crate::error::{Error, Result};
 use crate::study::reporter::Reporter;
 use crate::study::stats::Entry;
+use crate::study::RunResult;
 
 /// Each sweep point of `s` whose entries are those of an earlier point, as `(earlier, later)`,
 /// each point written as its swept keys and values (`outliers.magnitude_mm = [0.5, 1.0]`).
@@ -45,8 +46,16 @@ fn figures(e: &Entry) -> Result<serde_json::Value> {
     Ok(v)
 }
 
+/// The summary of `r` ([`super::analyse::analyse`]), warning through `reporter` of each sweep
+/// point that changed nothing ([`warn`]): what a run, a resume and a merge each do once.
+pub fn analyse_warning(r: &RunResult, reporter: &dyn Reporter) -> Result<Summary> {
+    let summary = super::analyse::analyse(r)?;
+    warn(&summary, reporter)?;
+    Ok(summary)
+}
+
 /// Warns through `reporter` of each sweep point of `s` that changed nothing ([`idle_points`]).
-pub fn warn(s: &Summary, reporter: &dyn Reporter) -> Result<()> {
+fn warn(s: &Summary, reporter: &dyn Reporter) -> Result<()> {
     for (earlier, later) in idle_points(s)? {
         reporter.warning(&format!(
             "sweep point {later} gave every entry the figures of {earlier}, to the bit: the \

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::checkpoint::Checkpoint;
 use super::shard::{self, Both};
-use crate::analysis::{analyse::analyse, summary::Summary};
+use crate::analysis::{idle::analyse_warning, summary::Summary};
 use crate::error::{Error, Opt, Result, Said};
 use crate::report::output::{write_all, Bytes, Outputs};
 use crate::report::{atomically, run as files, run_outputs, write_run};
@@ -64,8 +64,7 @@ pub(super) fn study_into(
                     let mut both = Both(&mut csv, &mut cp);
                     run_resumed(scenario, opts, &mut both, replay, reporter)?
                 };
-                let summary = analyse(&r)?;
-                crate::analysis::idle::warn(&summary, reporter)?;
+                let summary = analyse_warning(&r, reporter)?;
                 write_run(&r, &summary, csv.finish()?, dir)?;
                 r
             }
@@ -145,8 +144,7 @@ impl InMemoryRun {
             stop,
         };
         let result = run(scenario, &opts, &mut until, reporter)?;
-        let summary = analyse(&result)?;
-        crate::analysis::idle::warn(&summary, reporter)?;
+        let summary = analyse_warning(&result, reporter)?;
         Ok(InMemoryRun {
             summary,
             result,

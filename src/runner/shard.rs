@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::cells::{Cells, Instruments};
+use crate::analysis::idle::analyse_warning;
 use crate::error::{Error, Result};
 use crate::report::output::{write_all, Outputs, Stream, Text};
 use crate::report::{write_run, TrialsCsv};
@@ -543,8 +544,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
             shard: None,
             stopping: None,
         };
-        let summary = crate::analysis::analyse::analyse(&r)?;
-        crate::analysis::idle::warn(&summary, reporter)?;
+        let summary = analyse_warning(&r, reporter)?;
         write_run(&r, &summary, csv.finish()?, dir)?;
         result = Some(r);
         Ok(())
