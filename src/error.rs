@@ -5,11 +5,14 @@ use std::path::PathBuf;
 mod hidden;
 mod json;
 mod lines;
+mod serde_words;
 mod text;
 mod underflow;
 pub use hidden::{is_hidden, quoted};
 pub use json::{json_refusal, json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
+use serde_words::plain_types;
+pub use serde_words::{toml_value_error, unknown_field};
 pub use text::{read_bounded, read_bounded_text, read_text, read_text_whole, TEXT_CAP_MIB};
 pub use underflow::{refuse_toml_underflow, toml_underflow, underflow};
 
@@ -441,82 +444,6 @@ pub fn without_line(place: &str) -> &str {
     }
 }
 
-/// A serde error of a TOML value read from a table rather than a text (so without a line):
-/// its message, and the dotted key it is about, which toml writes on a line of its own after
-/// the message (`in `tracker.mpe_a_um``). A refusal shows the key as its place. toml's
-/// message for a name given as another type (`kind = 3`), which speaks of serde's "unit
-/// variant", is said as the file should read.
-pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
-    let text = e.to_string();
-    let text = text.trim_end().replace(
-        NOT_A_NAME,
-        "must be a name in double quotes (a TOML string)",
-    );
-    match text.rsplit_once("\nin `") {
-        Some((msg, key)) => (msg.to_string(), Some(key.trim_end_matches('`').to_string())),
-        None => (text.to_string(), None),
-    }
-}
-
-/// The key serde's refusal of an unknown field names (`unknown field `foo`, expected one of
-/// …`), and the rest of the message after it; `None` for any other refusal.
-pub fn unknown_field(msg: &str) -> Option<(&str, &str)> {
-    msg.strip_prefix("unknown field `")?.split_once('`')
-}
-
-/// toml's message (0.9) when a value of any other type stands where a named choice is read.
-const NOT_A_NAME: &str = "invalid type: unit variant, expected string only";
-
-/// serde's names of the number types a file's value is read as, and what a message says
-/// instead: `expected usize` is `expected a whole number ≥ 0`.
-const NUMBER_TYPES: [(&str, &str); 12] = [
-    ("usize", "a whole number ≥ 0"),
-    ("u64", "a whole number ≥ 0"),
-    ("u32", "a whole number from 0 to 4294967295"),
-    ("u16", "a whole number from 0 to 65535"),
-    ("u8", "a whole number from 0 to 255"),
-    ("isize", "a whole number"),
-    ("i64", "a whole number"),
-    ("i32", "a whole number from -2147483648 to 2147483647"),
-    ("i16", "a whole number from -32768 to 32767"),
-    ("i8", "a whole number from -128 to 127"),
-    ("f64", "a number"),
-    ("f32", "a number"),
-];
-
-/// `text` with serde's Rust type names after `expected ` (`invalid type: string "a",
-/// expected usize`, from a file's or a dict's value) said in words ([`NUMBER_TYPES`], and
-/// `struct NAME` as `a table of keys`); any other text as it is.
-fn plain_types(text: String) -> String {
-    const EXPECTED: &str = "expected ";
-    if !text.contains(EXPECTED) {
-        return text;
-    }
-    let mut out = String::with_capacity(text.len());
-    let mut rest = text.as_str();
-    while let Some(i) = rest.find(EXPECTED) {
-        let after = &rest[i + EXPECTED.len()..];
-        out.push_str(&rest[..i + EXPECTED.len()]);
-        rest = after;
-        let ends = |name: &str| {
-            after
-                .strip_prefix(name)
-                .is_some_and(|tail| !tail.starts_with(|c: char| c.is_alphanumeric() || c == '_'))
-        };
-        if let Some((name, words)) = NUMBER_TYPES.iter().find(|(name, _)| ends(name)) {
-            out.push_str(words);
-            rest = &after[name.len()..];
-        } else if let Some(tail) = after.strip_prefix("struct ") {
-            // serde's `expected struct RobotSection`: the section's Rust type.
-            let name = tail.find(|c: char| !c.is_alphanumeric() && c != '_');
-            out.push_str("a table of keys");
-            rest = &tail[name.unwrap_or(tail.len())..];
-        }
-    }
-    out.push_str(rest);
-    out
-}
-
 /// A number as a refusal shows it: as `{}` writes it (`0.5`, `-180`), but in exponent form
 /// (`1e300`, `-2.5e-9`) where that would be a long run of digits (magnitudes from 1e16 on, or
 /// below 1e-5).
@@ -622,42 +549,6 @@ mod tests {
     const TEXT: &str = "name = \"x\"\n\n[calibration]\ncount = 5\nregion = { kind = \"box\" }\n\n\
         [[joints]]\na = 1.0\n\n[[joints]]\n# the second\na = 2.0\nlimits = [0.0, 1.0]\n\n\
         [[methods]]\nname = \"ls\"\n";
-
-    #[test]
-    fn serde_number_types_are_said_in_words() {
-        let said = |t: &str| Said::from(t).to_string();
-        assert_eq!(
-            said("invalid type: string \"a\", expected usize"),
-            "invalid type: string \"a\", expected a whole number ≥ 0"
-        );
-        assert_eq!(
-            said("invalid type: floating point `6.5`, expected u64\nin `seed`"),
-            "invalid type: floating point `6.5`, expected a whole number ≥ 0\nin `seed`"
-        );
-        assert_eq!(
-            said("invalid value: integer `300`, expected u8"),
-            "invalid value: integer `300`, expected a whole number from 0 to 255"
-        );
-        assert_eq!(
-            said("expected f64, expected i64"),
-            "expected a number, expected a whole number"
-        );
-        // A section given as a value: serde names its Rust type.
-        assert_eq!(
-            said("invalid type: string \"irb2600\", expected struct RobotSection"),
-            "invalid type: string \"irb2600\", expected a table of keys"
-        );
-        // Other words after `expected`, and type names inside longer words, stay.
-        for kept in [
-            "invalid length 2, expected an array of length 6",
-            "expected u64x",
-            "expected f64_pair",
-            "unknown field `a`, expected one of `usize`",
-            "expected",
-        ] {
-            assert_eq!(said(kept), kept);
-        }
-    }
 
     #[test]
     fn a_place_of_a_scenario_that_is_no_file_is_a_setting() {

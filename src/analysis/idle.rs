@@ -47,7 +47,7 @@ fn figures(e: &Entry) -> Result<serde_json::Value> {
 }
 
 /// The summary of `r` ([`super::analyse::analyse`]), warning through `reporter` of each sweep
-/// point that changed nothing ([`warn`]): what a run, a resume and a merge each do once.
+/// point that changed nothing ([`idle_points`]): what a run, a resume and a merge each do once.
 pub fn analyse_warning(r: &RunResult, reporter: &dyn Reporter) -> Result<Summary> {
     let summary = super::analyse::analyse(r)?;
     warn(&summary, reporter)?;
