@@ -363,3 +363,28 @@ fn the_files_of_a_module_import_each_other_in_no_circle() {
         circles.join("\n")
     );
 }
+
+/// Issue "one results model": no source file of the library, the binary or the Python
+/// module's crate over 700 lines, its tests included (a file that grows past it is split by
+/// what it does, as `error::serde_words` was).
+#[test]
+fn no_source_file_is_over_700_lines() {
+    let mut stack = vec![root().join("src"), root().join("python/src")];
+    let mut long = Vec::new();
+    let mut files = 0;
+    while let Some(d) = stack.pop() {
+        for p in std::fs::read_dir(&d).unwrap().map(|e| e.unwrap().path()) {
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                files += 1;
+                let lines = read(&p).lines().count();
+                if lines > 700 {
+                    long.push(format!("{} ({lines} lines)", p.display()));
+                }
+            }
+        }
+    }
+    assert!(files > 200, "{files} source files found");
+    assert!(long.is_empty(), "over 700 lines: {long:?}");
+}
