@@ -422,6 +422,15 @@ mod tests {
         for bad in ["h0q1", "h17q1", "h12q0", "h12q17", "h12", "hq1", "h012q1"] {
             assert!(bad.parse::<Model>().is_err(), "{bad}");
         }
+        // A term given twice is refused, not merged into another model's name.
+        for (twice, term) in [
+            ("beta+beta", "beta"),
+            ("kinematic+kinematic", "kinematic"),
+            ("h3q2+gp+ h3q2", "h3q2"),
+        ] {
+            let e = twice.parse::<Model>().unwrap_err();
+            assert_eq!(e, format!("`{term}` is given twice in `{twice}`"));
+        }
     }
 
     /// irb2600 and `n` noise-free points (uniform poses of stream `seed`) of it with an

@@ -298,6 +298,14 @@ impl Study {
                 PoseStrategy::Random | PoseStrategy::Box => None,
                 PoseStrategy::File(path) => {
                     let poses = read_pose_list(path, &nominal)?;
+                    if let Some(n) = scenario.outliers.count.filter(|&n| n > poses.len()) {
+                        let msg = format!(
+                            "{n} outliers but the pose list {} gives only {} calibration poses",
+                            path.display(),
+                            poses.len()
+                        );
+                        return Err(scenario.refusal("outliers.count", msg));
+                    }
                     Some(FixedSet::plain(poses))
                 }
                 PoseStrategy::Grid => {

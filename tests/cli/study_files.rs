@@ -272,3 +272,52 @@ fn a_registration_box_that_draws_collinear_points_is_refused_at_its_key() {
     assert!(last.contains("do not determine the registration"), "{err}");
     assert!(!out.exists());
 }
+
+/// More outliers than a pose list's rows had been refused only as the trials ran, as the
+/// setting `outliers.count` of no file or line; it is refused as the study is planned (before
+/// any trial, after the line saying the run starts), naming the scenario's file and the line
+/// of `outliers.count`, and nothing is written. As many outliers as rows run.
+#[test]
+fn more_outliers_than_a_pose_list_s_rows_are_refused_at_the_scenario_s_line() {
+    let d = tmp("outliers-pose-list");
+    let root = crate::common::root();
+    let rows: Vec<String> = (0..39)
+        .map(|i| {
+            let q: Vec<String> = (0..6)
+                .map(|j| format!("{}", ((i * 7 + j * 13) % 80) as f64 - 40.0))
+                .collect();
+            q.join(",")
+        })
+        .collect();
+    std::fs::write(
+        d.join("poses39.csv"),
+        format!("q1,q2,q3,q4,q5,q6\n{}\n", rows.join("\n")),
+    )
+    .unwrap();
+    let text = std::fs::read_to_string(root.join("scenarios/ci-guard.toml")).unwrap();
+    let text = text.replace(
+        "strategies = [\"random\"]",
+        "strategies = [\"file\"]\nposes_file = \"poses39.csv\"",
+    );
+    let line = 1 + text.lines().position(|l| l == "count = 2").unwrap();
+    for (n, ok) in [(40, false), (39, true)] {
+        let sc = d.join(format!("out{n}.toml"));
+        std::fs::write(&sc, text.replace("count = 2\n", &format!("count = {n}\n"))).unwrap();
+        let out = d.join(format!("o{n}"));
+        let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
+        if ok {
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            continue;
+        }
+        // Refused as the study is planned, after the line that says the run starts.
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && o.status.code() != Some(101), "{err}");
+        let said = format!(
+            "error: {}: line {line}, outliers.count: 40 outliers but the pose list ",
+            sc.display()
+        );
+        assert!(err.contains(&said), "{err}");
+        assert!(err.contains("gives only 39 calibration poses"), "{err}");
+        assert!(!out.exists());
+    }
+}

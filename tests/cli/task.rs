@@ -381,13 +381,16 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
             && !e.contains("--cv"),
         "{e}"
     );
-    // So with one candidate, whose folds no choice uses: the value enters `task_hash`.
-    let one = format!("{src}\n[models]\ncandidates = [\"kinematic\"]\nfolds = 1000\n");
-    let e = refused("one", &one, None);
-    assert!(
-        e.contains("one.toml: line 15, models.folds: 1000 folds but only 443 calibration rows"),
-        "{e}"
-    );
+    // One candidate is identified without a cross-validation: folds or fold seeds given
+    // with it would enter `task_hash` and change nothing, and are refused at their line.
+    for (name, extra) in [("one", "folds = 3"), ("seeds1", "fold_seeds = [0, 1]")] {
+        let one = format!("{src}\n[models]\ncandidates = [\"kinematic\"]\n{extra}\n");
+        let e = refused(name, &one, None);
+        let key = extra.split(' ').next().unwrap();
+        let said =
+            format!("{name}.toml: line 15, models.{key}: is read only with two or more candidates");
+        assert!(e.contains(&said), "{e}");
+    }
     // A fold seed given twice repeats the same folds: refused as a candidate given twice is.
     let e = refused("seeds", &models("fold_seeds = [0, 1, 0]"), None);
     assert!(

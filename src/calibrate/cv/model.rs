@@ -251,8 +251,13 @@ impl FromStr for Model {
     /// `harmonics+gp`).
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let mut m = Model::KINEMATIC;
-        for term in s.split('+').map(str::trim) {
-            match term {
+        let terms: Vec<&str> = s.split('+').map(str::trim).collect();
+        for (i, term) in terms.iter().enumerate() {
+            // Merged silently, a term given twice had named a model other than the one fitted.
+            if terms[..i].contains(term) {
+                return Err(format!("`{term}` is given twice in `{s}`"));
+            }
+            match *term {
                 "kinematic" => {}
                 "beta" => m.beta = true,
                 "compliance" => m.compliance = true,

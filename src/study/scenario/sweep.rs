@@ -214,6 +214,14 @@ impl Scenario {
             .unwrap_or_else(|| PathBuf::from("<built-in default scenario>"))
     }
 
+    /// A refusal of the setting `key` as one of the scenario's file, at the line that writes
+    /// it: for a check that needs what the scenario reads (a pose list's rows), made as the
+    /// study is planned, before any trial runs.
+    pub(crate) fn refusal(&self, key: &str, msg: String) -> Error {
+        let line = self.source.as_ref().and_then(|s| s.line(key));
+        Error::file(self.shown(), at_line(line, key), msg)
+    }
+
     /// The scenario as read, once its claims' `paper_point`s are found among the sweep's
     /// points. A file's own check, not a sweep point's: a point's scenario has no sweep.
     /// An axis's integer values are its key's floats where the key takes a float (`5` for
