@@ -456,6 +456,13 @@ pub fn shown(v: f64) -> String {
     }
 }
 
+/// A value converted from the unit a file or a robot writes it in, as [`shown`] shows it to
+/// 12 significant digits: the conversion's last bits are not the user's (`-3240.7562` m is
+/// shown `-3240756.2` mm, not `-3240756.1999999997`).
+pub fn shown_converted(v: f64) -> String {
+    shown(format!("{v:.11e}").parse().unwrap_or(v))
+}
+
 /// `n` and its noun, singular for one (`counted(1, "trial", "trials")` is `1 trial`).
 pub fn counted(n: usize, one: &str, many: &str) -> String {
     format!("{n} {}", if n == 1 { one } else { many })
@@ -542,6 +549,12 @@ mod tests {
         }
         assert_eq!(shown(f64::INFINITY), "inf");
         assert_eq!(shown(f64::NAN), "NaN");
+        // A converted value loses the conversion's last bits, and shows no `.0`.
+        assert_eq!(shown_converted(-3240.7562 * 1000.0), "-3240756.2");
+        assert_eq!(-3240.7562 * 1000.0, -3240756.1999999997);
+        assert_eq!(shown_converted(1e7), "10000000");
+        assert_eq!(shown_converted(1e308), "1e308");
+        assert_eq!(shown_converted(f64::INFINITY), "inf");
     }
 
     use super::*;

@@ -22,11 +22,7 @@ impl Robot {
         } else {
             self.units.angle_name()
         };
-        // In the robot's units, to 12 digits: the conversion's last bits are not the user's.
-        let user = |v: Real| {
-            let v = v / self.q_factor(i, kind);
-            crate::error::shown(format!("{v:.11e}").parse().unwrap_or(v))
-        };
+        let user = |v: Real| crate::error::shown_converted(v / self.q_factor(i, kind));
         let (lo, hi) = self.joints[i].limits;
         Some(format!(
             "joint {} is {} {unit}, outside its limits [{}, {}]",

@@ -630,7 +630,7 @@ fn import_refuses_a_value_the_measurement_csv_would_refuse() {
             "1e306 is beyond ±1000000, which no robot's joint reaches",
         ),
         (20, "measurement_rx", "1e300", "1e300 is beyond one turn"),
-        (14, "measurement_x", "-2e6", "-2000000.0 mm is out of range"),
+        (14, "measurement_x", "-2e6", "-2000000 mm is out of range"),
         (
             15,
             "measurement_std_x",

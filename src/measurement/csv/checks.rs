@@ -5,7 +5,7 @@
 //! ≥ 0, and enough distinct poses.
 
 use super::{MAX_POINT_MM, MIN_DISTINCT_POSES, MIN_SIGMA_MM, PAYLOAD, QUAT, SIGMA, XYZ};
-use crate::error::{shown, Error, Result};
+use crate::error::{shown, shown_converted, Error, Result};
 
 use crate::measurement::{JointSpace, Measurements};
 use crate::numeric::{Real, Vec3};
@@ -53,8 +53,9 @@ pub(crate) fn check_joints(
 pub(crate) fn check_coordinate(v: Real) -> std::result::Result<(), String> {
     if v.abs() > MAX_POINT_MM {
         return Err(format!(
-            "{v:?} mm is out of range: a measured coordinate must be within \
-             ±{MAX_POINT_MM} mm (1 km)"
+            "{} mm is out of range: a measured coordinate must be within \
+             ±{MAX_POINT_MM} mm (1 km)",
+            shown_converted(v)
         ));
     }
     Ok(())
@@ -79,8 +80,9 @@ pub(crate) fn check_sigma(v: Real) -> std::result::Result<(), String> {
     }
     if !(MIN_SIGMA_MM..=MAX_POINT_MM).contains(&v) {
         return Err(format!(
-            "{v:?} mm is out of range: a standard deviation must be within \
-             [{MIN_SIGMA_MM}, {MAX_POINT_MM}] mm (its weight 1/σ² must not overflow)"
+            "{} mm is out of range: a standard deviation must be within \
+             [{MIN_SIGMA_MM}, {MAX_POINT_MM}] mm (its weight 1/σ² must not overflow)",
+            shown_converted(v)
         ));
     }
     Ok(())
