@@ -338,15 +338,16 @@ impl Task {
                 }
                 // One candidate is identified without a cross-validation: its folds and
                 // seeds would be read and hashed, yet change nothing.
-                let given = [
-                    ("models.folds", m.folds.is_some()),
-                    ("models.fold_seeds", m.fold_seeds.is_some()),
-                ];
-                let unread = given.into_iter().find(|g| g.1 && candidates.len() == 1);
-                if let Some((key, _)) = unread {
-                    let why = "is read only with two or more candidates: one candidate is \
-                               identified without a cross-validation";
-                    return Err(bad(key, why.into()));
+                if candidates.len() == 1 {
+                    let given = [
+                        ("models.folds", m.folds.is_some()),
+                        ("models.fold_seeds", m.fold_seeds.is_some()),
+                    ];
+                    if let Some((key, _)) = given.into_iter().find(|g| g.1) {
+                        let why = "is read only with two or more candidates: one candidate is \
+                                   identified without a cross-validation";
+                        return Err(bad(key, why.into()));
+                    }
                 }
                 let folds = m.folds.unwrap_or(5);
                 if folds < 2 {
