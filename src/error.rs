@@ -7,6 +7,7 @@ mod json;
 mod lines;
 mod serde_words;
 mod text;
+mod toml_read;
 mod underflow;
 pub use hidden::{is_hidden, quoted};
 pub use json::{json_refusal, json_value, unique_keys};
@@ -14,6 +15,7 @@ pub use lines::{json_key_line, line_of, toml_key_line};
 use serde_words::plain_types;
 pub use serde_words::{toml_value_error, unknown_field};
 pub use text::{read_bounded, read_bounded_text, read_text, read_text_whole, TEXT_CAP_MIB};
+pub use toml_read::toml_keys;
 pub use underflow::{refuse_toml_underflow, toml_underflow, underflow};
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an
@@ -388,24 +390,10 @@ where
     D: serde::Deserializer<'de>,
 {
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let mut key = e.path().to_string();
+        let key = e.path().to_string();
         let msg = e.into_inner().to_string();
-        // A missing field, and an unknown one (`unknown field `foo`, expected …`), are named
-        // by their own key, so that the refusal stands at that key's line. serde_json says
-        // where after the message (`… at line 1 column 17`); the path of an unknown field
-        // may end in it already (a JSON reader's does).
-        let said = msg.split(" at line ").next().unwrap_or(&msg);
-        let field = said
-            .strip_prefix("missing field `")
-            .and_then(|m| m.strip_suffix('`'))
-            .or_else(|| unknown_field(said).map(|(f, _)| f));
-        let ends_in = |f: &str| key == f || key.ends_with(&format!(".{f}"));
-        if let Some(field) = field.filter(|f| !ends_in(f)) {
-            key = match key.as_str() {
-                "." => field.to_string(),
-                _ => format!("{key}.{field}"),
-            };
-        }
+        // Named by its own key, so that the refusal stands at that key's line.
+        let key = toml_read::own_key(key, &msg);
         Error::file(path, key, format!("not a calbench {what}: {msg}"))
     })
 }

@@ -91,30 +91,49 @@ pub fn compensate_row(
     round: impl Fn(&[Real]) -> Vec<Real>,
 ) -> crate::Result<Corrected> {
     let target = nominal.fk(q_nominal);
-    // An arm of fewer than six joints cannot take the whole pose a changed model asks for
-    // (five joints against six coordinates): it reaches the position, started from the
-    // joints that come closest to the whole pose, so that its orientation stays near it.
-    let rows = if identified.dof() < 6 { 3 } else { 6 };
-    let reach = |q0: &[Real], rows| {
-        crate::robot::ik::solve_pose_rows(identified, &target, q0, payload_kg, rows)
-    };
-    let mut q = reach(q_nominal, 6)?;
-    if rows == 3 {
-        q = reach(&q, 3)?;
-    }
+    let (mut q, judged) = reach(identified, &target, q_nominal, payload_kg, false)?;
     wrap_into_limits(identified, &mut q, Some(q_nominal));
     let q = round(&q);
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
     let residual_deg = rotation_angle_deg(&f, &target);
-    let judged_deg = if rows == 3 { 0.0 } else { residual_deg };
-    let flag = flag(identified, &q, residual_mm, judged_deg);
+    let flag = flag(
+        identified,
+        &q,
+        residual_mm,
+        if judged { residual_deg } else { 0.0 },
+    );
     Ok(Corrected {
         q,
         residual_mm,
         residual_deg,
         flag,
     })
+}
+
+/// The joints at which `identified` (carrying `payload_kg`) reaches `target`, solved from
+/// `q0`, and whether its orientation is judged: the whole pose; the position alone for
+/// `position_only`; and for an arm of fewer than six joints, which cannot take every pose a
+/// changed model asks for (five joints against six coordinates), the position, solved from
+/// the joints that come closest to the whole pose, so that its orientation stays near it.
+fn reach(
+    identified: &Robot,
+    target: &Frame,
+    q0: &[Real],
+    payload_kg: Real,
+    position_only: bool,
+) -> crate::Result<(Vec<Real>, bool)> {
+    let solve = |q0: &[Real], rows| {
+        crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)
+    };
+    if position_only {
+        return Ok((solve(q0, 3)?, false));
+    }
+    let q = solve(q0, 6)?;
+    match identified.dof() < 6 {
+        true => Ok((solve(&q, 3)?, false)),
+        false => Ok((q, true)),
+    }
 }
 
 /// Turns each revolute joint outside its limits by whole turns into them, where a turn
@@ -142,11 +161,13 @@ fn wrap_into_limits(robot: &Robot, q: &mut [Real], near: Option<&[Real]>) {
 pub const TARGET_STARTS: usize = 40;
 
 /// Solves Cartesian tool targets (`compensate --targets`): per target, the joints at which
-/// `identified` reaches it (position only when `position_only`, else the whole pose).
+/// `identified` reaches it (position only when `position_only`, else the whole pose, and
+/// for an arm of fewer than six joints its position, `reach`).
 /// Targets carry no joints, so each is solved from the previous target's solution, then the
 /// middle of the joint limits, then [`TARGET_STARTS`] seeded random poses, until a start
-/// gives a solution within the joint limits to [`ACCEPT_MM`] / [`ACCEPT_DEG`]; otherwise the
-/// closest one is returned, flagged. `round` as in [`compensate_row`].
+/// gives a solution within the joint limits to [`ACCEPT_MM`] / [`ACCEPT_DEG`] (for the whole
+/// pose of an arm of fewer than six joints every start, the nearest orientation kept);
+/// otherwise the closest one is returned, flagged. `round` as in [`compensate_row`].
 pub fn compensate_targets(
     identified: &Robot,
     targets: &[Frame],
@@ -161,7 +182,6 @@ pub fn compensate_targets(
     let mut g = crate::numeric::rng::stream(0, "compensate-targets");
     let randoms = crate::robot::sampling::uniform_joint_poses(identified, TARGET_STARTS, &mut g);
     let fk = LoadedFk::new(identified);
-    let rows = if position_only { 3 } else { 6 };
     let mut out: Vec<Corrected> = Vec::with_capacity(targets.len());
     for target in targets {
         let previous = out.last().map(|c| c.q.clone());
@@ -171,8 +191,7 @@ pub fn compensate_targets(
             .chain(&randoms);
         let mut best: Option<Corrected> = None;
         for q0 in starts {
-            let mut q =
-                crate::robot::ik::solve_pose_rows(identified, target, q0, payload_kg, rows)?;
+            let (mut q, judged) = reach(identified, target, q0, payload_kg, position_only)?;
             wrap_into_limits(identified, &mut q, None);
             let q = round(&q);
             let f = fk.at(&q, payload_kg)?;
@@ -182,18 +201,26 @@ pub fn compensate_targets(
             } else {
                 rotation_angle_deg(&f, target)
             };
-            let flag = flag(identified, &q, residual_mm, residual_deg);
+            let judged_deg = if judged { residual_deg } else { 0.0 };
+            let flag = flag(identified, &q, residual_mm, judged_deg);
             let c = Corrected {
                 q,
                 residual_mm,
                 residual_deg,
                 flag,
             };
-            let rank = |f: &str| ["ok", "limits", "failed"].iter().position(|g| *g == f);
-            let better = best
-                .as_ref()
-                .is_none_or(|b| (rank(c.flag), c.residual_mm) < (rank(b.flag), b.residual_mm));
-            let done = c.flag == "ok";
+            // An arm of fewer than six joints reaches a whole pose's position from most
+            // starts, with an orientation that depends on the start (another branch turns
+            // the tool by 100°): every start is tried, and of the `ok` ones the nearest
+            // orientation kept.
+            let nearest_turn = !position_only && !judged;
+            let rank = |c: &Corrected| {
+                let at = ["ok", "limits", "failed"].iter().position(|g| *g == c.flag);
+                let ok = c.flag == "ok" && nearest_turn;
+                (at, if ok { c.residual_deg } else { c.residual_mm })
+            };
+            let better = best.as_ref().is_none_or(|b| rank(&c) < rank(b));
+            let done = c.flag == "ok" && !nearest_turn;
             if better {
                 best = Some(c);
             }
@@ -346,5 +373,51 @@ mod tests {
         // Without a payload the rigid and the compliant arm differ by the links' own sag only.
         let light = compensate_row(&nominal, &soft, &q, 0.0, |q| q.to_vec()).unwrap();
         assert!(light.q != c.q);
+    }
+
+    /// Full-pose targets of a five-joint arm: it reaches each target's position (the
+    /// orientation a changed model asks for is out of its reach, and not judged), as a
+    /// program row does. It had solved all six coordinates by least squares, missed the
+    /// position by millimetres and written joint 1 turns outside its limits.
+    #[test]
+    fn a_five_joint_arm_reaches_the_position_of_full_pose_targets() {
+        let joint = |alpha: f64, a: f64, d: f64, theta: f64, lim: [f64; 2]| {
+            format!(
+                "[[joints]]\ntype = \"revolute\"\nalpha = {alpha}\na = {a}\nd = {d}\n\
+                 theta = {theta}\nlimits = [{}, {}]\n",
+                lim[0], lim[1]
+            )
+        };
+        let text = [
+            "name = \"arm5\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n"
+                .to_string(),
+            joint(90.0, 33.0, 147.0, 0.0, [-169.0, 169.0]),
+            joint(0.0, 155.0, 0.0, 90.0, [-65.0, 90.0]),
+            joint(0.0, 135.0, 0.0, 0.0, [-150.0, 146.0]),
+            joint(90.0, 0.0, 0.0, 90.0, [-102.0, 102.0]),
+            joint(0.0, 0.0, 218.0, 0.0, [-167.0, 167.0]),
+            "[tool]\nxyz = [0.0, 15.0, 40.0]\nrpy = [0.0, 0.0, 0.0]\n".to_string(),
+        ]
+        .concat();
+        let nominal = crate::robot::parse_robot_file(&text, "arm5.toml".as_ref()).unwrap();
+        let errors: Vec<(Param, Real)> = (0..5)
+            .flat_map(|j| [(Param::A(j), 0.5), (Param::Theta(j), 0.01)])
+            .collect();
+        let identified = nominal.with_errors(&errors);
+        let deg = std::f64::consts::PI / 180.0;
+        let qs = [
+            [10.0, 20.0, -30.0, 40.0, 50.0],
+            [-60.0, 5.0, 70.0, -20.0, 100.0],
+        ];
+        let targets: Vec<Frame> = qs.iter().map(|q| nominal.fk(&q.map(|v| v * deg))).collect();
+        let out = compensate_targets(&identified, &targets, false, 0.0, |q| q.to_vec()).unwrap();
+        for (c, t) in out.iter().zip(&targets) {
+            assert_eq!(c.flag, "ok", "{c:?}");
+            assert!(c.residual_mm < 1e-6, "{c:?}");
+            assert!(c.residual_deg > 0.0 && c.residual_deg < 5.0, "{c:?}");
+            assert!(identified.within_limits(&c.q), "{c:?}");
+            let f = identified.fk(&c.q);
+            assert!((f.pos - t.pos).norm() < 1e-6);
+        }
     }
 }

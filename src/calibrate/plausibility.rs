@@ -13,10 +13,11 @@ use super::registration::register_svd;
 use crate::error::{Error, Opt, Said};
 use crate::measurement::kind::{Instrument, KindData};
 use crate::numeric::{nearest_turn, Frame, Real, Vec3};
+use crate::robot::sampling::reach_bound_mm;
 use crate::robot::{gravity_basis, Param, Robot, GRAVITY_POINTS, MAX_JOINTS};
 
 /// A joint's length or offset (`a`, `d`) may move by at most this share of the robot's reach
-/// ([`reach`]) …
+/// ([`reach_bound_mm`]: with a sliding joint's travel, so that a gantry has one) …
 pub const LENGTH_SHARE: Real = 0.02;
 
 /// … or by this many millimetres, whichever is larger.
@@ -39,20 +40,6 @@ pub const NOISE_SHARE: Real = 0.1;
 /// … while a length moved by more than this many times that noise is implausible.
 pub const NOISE_MOVES: Real = 100.0;
 
-/// The robot's reach (mm): the sum of its joints' lengths and offsets (`|a| + |d|`) and its
-/// tool's offset, an upper bound of how far its tool point gets from the first joint.
-pub fn reach(robot: &Robot) -> Real {
-    let joints: Real = (0..robot.dof())
-        .map(|j| robot.get(Param::A(j)).abs() + robot.get(Param::D(j)).abs())
-        .sum();
-    let tool = Vec3::new(
-        robot.get(Param::Tool(0)),
-        robot.get(Param::Tool(1)),
-        robot.get(Param::Tool(2)),
-    );
-    joints + tool.norm()
-}
-
 /// The moves of `identified` from `nominal` beyond the bounds, each in words, for the
 /// identified parameters `params` (compliances are not bounded; the base's and the tool's
 /// angles neither: an instrument's frame can be anywhere), and the gravity basis's joint
@@ -63,7 +50,7 @@ pub fn moves(
     params: &[Param],
     qs: &[Vec<Real>],
 ) -> Vec<String> {
-    let reach = reach(nominal);
+    let reach = reach_bound_mm(nominal);
     let mut out: Vec<(Real, String)> = gravity_deflections(nominal, identified, params, qs);
     for &p in params {
         let mut moved = identified.get(p) - nominal.get(p);
@@ -197,7 +184,7 @@ fn bound_of(p: Param, reach: Real) -> Option<(Real, String)> {
 /// How far a calibration may move parameter `p` of `nominal` (mm, rad; the bound of
 /// [`moves`]); `None` for a parameter without a bound.
 pub fn bound(nominal: &Robot, p: Param) -> Option<Real> {
-    bound_of(p, reach(nominal)).map(|b| b.0)
+    bound_of(p, reach_bound_mm(nominal)).map(|b| b.0)
 }
 
 /// The moves a refusal names, furthest beyond their bounds first.
@@ -544,7 +531,7 @@ mod tests {
     #[test]
     fn moves_beyond_the_bounds_are_named_and_within_are_not() {
         let nominal = builtin::load("irb2600").unwrap();
-        let reach = reach(&nominal);
+        let reach = reach_bound_mm(&nominal);
         assert!(reach > 1500.0 && reach < 3000.0, "{reach}");
         let params = [Param::A(1), Param::Theta(2), Param::Tool(0), Param::Tool(4)];
         let small = nominal.with_errors(&[(Param::A(1), 1.0), (Param::Theta(2), 0.01)]);

@@ -196,15 +196,7 @@ fn priors(args: &[PriorArg]) -> calbench::Result<Vec<(Param, Real)>> {
 fn prior_file(path: &Path) -> calbench::Result<Vec<(Param, Real)>> {
     use calbench::identify::registry::parse_prior;
     let text = calbench::error::read_text(path)?;
-    let t: toml::Table = toml::from_str(&text).map_err(|e| {
-        let line = e.span().map(|s| calbench::error::line_of(&text, s.start));
-        Error::file(
-            path,
-            calbench::error::at_line(line, "TOML"),
-            e.message().trim_end(),
-        )
-    })?;
-    calbench::error::refuse_toml_underflow(path, &text)?;
+    let t: toml::Table = calbench::error::toml_keys(path, &text)?;
     if t.is_empty() {
         return Err(Error::file(path, "priors", "holds no `NAME = σ` line"));
     }

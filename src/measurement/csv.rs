@@ -302,7 +302,7 @@ fn table_of(
             quser[j] = num(c)?;
         }
         let q = check_joints(robot, &quser, (&lim_lo, &lim_hi))
-            .map_err(|(c, msg)| bad(line, &format!(", column {c}"), msg))?;
+            .map_err(|(j, msg)| bad(line, &format!(", column q{}", j + 1), msg))?;
         qs.push(q);
         lines.push(line);
         if measured {

@@ -385,7 +385,7 @@ fn row_joints(
         quser.push(number(rec, names, c).map_err(|(p, m)| at_line(path, line, &p, m))?);
     }
     check_joints(robot, &quser, lim)
-        .map_err(|(c, msg)| at_line(path, line, &format!(", column {c}"), msg))
+        .map_err(|(j, msg)| at_line(path, line, &format!(", column q{}", j + 1), msg))
 }
 
 /// Reads a multi-target file from its rows `t` (header read): one row per target and pose,

@@ -76,7 +76,7 @@ struct CouplingEntry {
 /// errors carry their own line and column.
 pub fn parse_robot_file(text: &str, path: &Path) -> Result<Robot> {
     parse_robot_text(text, path).map_err(|e| match e {
-        Error::File { file, place, msg } if place != "TOML" => {
+        Error::File { file, place, msg } if !place.starts_with("line ") => {
             let key = key_of_place(&place);
             let joint = key.rsplit_once('.').filter(|(j, _)| j.ends_with(']'));
             let line = crate::error::toml_key_line(text, &key)
@@ -98,9 +98,7 @@ fn key_of_place(place: &str) -> String {
 }
 
 fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
-    let f: RobotFile =
-        toml::from_str(text).map_err(|e| Error::file(path, "TOML", e.to_string().trim_end()))?;
-    crate::error::refuse_toml_underflow(path, text)?;
+    let f: RobotFile = crate::error::toml_keys(path, text)?;
     let err = |place: String, msg: String| Error::file(path, place, msg);
     if f.name.trim().is_empty() {
         let msg = "is empty: it names the robot in reports, and `identify` names the \

@@ -255,7 +255,8 @@ pub struct Cell {
     /// See `validation_before_mm`.
     pub validation_after_mm: Real,
     /// Trace of the empirical covariance of the identified errors over trials divided by the
-    /// mean Cramér–Rao trace `(JᵀWJ)⁻¹` (robot parameters).
+    /// mean Cramér–Rao trace `(JᵀWJ)⁻¹` (robot parameters); NaN (`null`) under two usable
+    /// trials, without the instrument's noise, or where a trial's JᵀWJ is singular.
     pub crb_ratio: Real,
     /// Trials whose identification did not converge or whose poses the true robot could not
     /// touch.
@@ -541,12 +542,15 @@ impl InstrumentsScenario {
         let t = params.len();
         let x: Vec<Real> = out.x.iter().take(t).copied().collect();
         // Cramér–Rao: (JᵀWJ)⁻¹ over the robot's parameters, W = 1/σ² (the normal matrix of
-        // the solution is JᵀPJ with the same weights).
-        let crb = out
-            .normal
-            .clone()
-            .try_inverse()
-            .map_or(Real::NAN, |inv| (0..t).map(|c| inv[(c, c)]).sum());
+        // the solution is JᵀPJ with the same weights); none without noise, which gives no W.
+        let crb = match w {
+            Some(_) => out
+                .normal
+                .clone()
+                .try_inverse()
+                .map_or(Real::NAN, |inv| (0..t).map(|c| inv[(c, c)]).sum()),
+            None => Real::NAN,
+        };
         let ident = kp.robot_with(&out.x);
         let (vq, seen) = &reading.validation;
         // The tracker's sense: the model's points registered onto the measured ones (the
@@ -629,7 +633,12 @@ impl InstrumentsScenario {
             eta_mean_pct,
             validation_before_mm: ok.iter().map(|tr| tr.before).sum::<Real>() / n,
             validation_after_mm: ok.iter().map(|tr| tr.after).sum::<Real>() / n,
-            crb_ratio: trace / crb,
+            // As a run's (docs/formats.md `crb_ratio`): none under two trials, without noise
+            // or where a trial's bound is missing.
+            crb_ratio: match ok.len() >= 2 && ok.iter().all(|tr| tr.crb.is_finite()) {
+                true => trace / crb,
+                false => Real::NAN,
+            },
             failures: trials.len() - ok.len(),
         }
     }

@@ -46,9 +46,7 @@ impl AnyScenario {
     /// Parses and checks a scenario's text of any kind; `path` is the file it came from.
     pub fn parse(text: &str, path: Option<&Path>) -> Result<AnyScenario> {
         let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
-        let table: toml::Table = toml::from_str(text)
-            .map_err(|e| Error::file(shown, "TOML", e.to_string().trim_end()))?;
-        crate::error::refuse_toml_underflow(shown, text)?;
+        let table: toml::Table = crate::error::toml_keys(shown, text)?;
         let kind: Sections =
             toml::Value::Table(table.clone())
                 .try_into()

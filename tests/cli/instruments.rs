@@ -357,7 +357,7 @@ socket_distance_mm = 50.0
 /// validation error is nil; at the 13 µm of scenarios/instruments.toml the identified
 /// parameters' errors are those the noise predicts (their RMS over the trials against the
 /// Cramér–Rao bound, `crb_ratio`, between 0.5 and 2), and the sockets see neither theta1 nor
-/// d1 (a rigid motion of the sockets absorbs them).
+/// d1 (a rigid motion of the sockets absorbs them). Without noise the ratio is `null`.
 #[test]
 fn a_simulated_socket_study_recovers_the_injected_errors_to_within_its_noise() {
     let dir = tmp_dir("instruments-socket");
@@ -397,6 +397,10 @@ fn a_simulated_socket_study_recovers_the_injected_errors_to_within_its_noise() {
             "the sockets should not see {p}"
         );
     }
+
+    // Without noise there is no bound (a run's rule): it read 0.
+    let noiseless = cell(0.0, "noiseless");
+    assert!(noiseless["crb_ratio"].is_null(), "{noiseless}");
 
     let noisy = cell(13.0, "noisy");
     let crb = noisy["crb_ratio"].as_f64().unwrap();

@@ -338,7 +338,7 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
             "line 2, key `zz9`: `zz9` is not a parameter name",
         ),
         ("a2 = 0.1\n\na3 = \"x\"\n", "line 3, key `a3`"),
-        ("a2 = \n", "line 1, TOML"),
+        ("a2 = \n", "line 1: string values must be quoted"),
         ("# nothing\n", "priors: holds no `NAME = σ` line"),
     ]
     .into_iter()

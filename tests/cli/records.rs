@@ -450,10 +450,18 @@ fn merge_refuses_altered_settings_naming_shard_json() {
     let (m0, m1) = (a0.join("shard.json"), a1.join("shard.json"));
     let bad = |p: &Path| read(p).replace("count = 40", "count = [");
     let edits = [(m0.as_path(), bad(&m0)), (m1.as_path(), bad(&m1))];
-    refused_merge(&[&a0, &a1], &edits, &["settings", "TOML parse error"]);
+    refused_merge(
+        &[&a0, &a1],
+        &edits,
+        &["settings", "cannot be read (line 8: unexpected"],
+    );
     // Altered in the second shard alone: that file's fault, where merge called the two
     // "shards of different runs".
-    refused_merge(&[&a0, &a1], &edits[1..], &["settings", "TOML parse error"]);
+    refused_merge(
+        &[&a0, &a1],
+        &edits[1..],
+        &["settings", "cannot be read (line 8: unexpected"],
+    );
     // A wall time no run has, which merge summed into timing.json, and a key shard.json
     // does not have, which merge passed over.
     let negative = with_field(&read(&m0), "seconds", "-5");

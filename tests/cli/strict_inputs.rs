@@ -368,6 +368,15 @@ fn a_urdf_value_that_cannot_be_read_is_refused_naming_the_line() {
             src[..src.find("<origin").unwrap()].to_string(),
             "cut.urdf: line 12: the file ends inside <joint>: the <robot> of line 6 is not closed",
         ),
+        // Cut after a line's newline: its last line is the one the newline ends (it had
+        // been refused at the line after the file's last).
+        (
+            "cut_line",
+            src[..src.find("<origin").unwrap()]
+                .trim_end_matches(' ')
+                .to_string(),
+            "cut_line.urdf: line 11: the file ends inside <joint>",
+        ),
         // A robot without a name had been read as "" (`identify` wrote `-calibrated`), and a
         // name holding a character XML does not take was refused at a position in a piece
         // of the file ("Syntax: 1:16").

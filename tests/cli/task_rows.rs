@@ -140,7 +140,8 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
 
 /// A refusal of a task's rows read through its mapping names the data file and the mapping
 /// (docs/formats.md § 9.1), never a temporary file: a WAM grid pose whose joint 1 lies far
-/// outside its limits.
+/// outside its limits, named by the export's column and its value as the export writes it
+/// (it had been named `column q1`, the measurement CSV's, which the user never sees).
 #[test]
 fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
     let d = tmp_dir("cli-task-mapped-refusal");
@@ -164,11 +165,42 @@ fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
         e.contains(&format!("{} as mapped by", grid.display()))
-            && e.contains("barrett-wam.mapping.toml")
-            && e.contains("q1")
+            && e.contains("barrett-wam.mapping.toml: line 4, column joint_1: 9000 is outside")
+            && !e.contains("written")
             && !e.contains("calbench-task-"),
         "{e}"
-    )
+    );
+    // An export in radians mapped to the robot's degrees: the refusal shows both.
+    let ipa = root().join("data/ipa-ur10-series-a/measurements_grid.csv");
+    let text = std::fs::read_to_string(ipa).unwrap();
+    let line = text.lines().nth(3).unwrap();
+    let cells: Vec<&str> = line.split(';').collect();
+    let far = [&cells[..7], &["-446,788"], &cells[8..]].concat().join(";");
+    let data = d.join("grid.csv");
+    std::fs::write(&data, text.replacen(line, &far, 1)).unwrap();
+    let t = d.join("ipa.toml");
+    let tasks = root().join("tasks");
+    let task = std::fs::read_to_string(tasks.join("ipa-ur10-series-a.toml"))
+        .unwrap()
+        .replace(
+            "../examples",
+            &root().join("examples").display().to_string(),
+        )
+        .replace("\"ipa-ur10", &format!("\"{}/ipa-ur10", tasks.display()))
+        .replace(
+            "../data/ipa-ur10-series-a/measurements_grid.csv",
+            &data.display().to_string(),
+        );
+    std::fs::write(&t, task).unwrap();
+    let o = task_lm(calbench, &t, None, &d.join("ipa-out"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains(
+            "ipa-ur10.mapping.toml: line 4, column shoulder_pan_joint: -25599.0667371 is \
+             outside the joint limits [-360, 360] (written \"-446,788\" rad)"
+        ),
+        "{e}"
+    );
 }
 
 /// A task whose mapping reads millimetres as metres is refused: with its one model (no

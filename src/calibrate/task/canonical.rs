@@ -4,7 +4,7 @@
 use std::path::Path;
 
 use super::sha256::sha256_hex;
-use crate::error::{line_of, Error, Result};
+use crate::error::{Error, Result};
 
 /// The task's hash: SHA-256 (hex) of the canonical text of its table and of one
 /// `KEY.sha256 = "…"` line per file it fixes (`fixed`, each with its key), keys sorted.
@@ -46,13 +46,6 @@ pub(super) fn canonical_text(v: &toml::Value) -> String {
     let mut out = String::new();
     walk("", v, &mut out);
     out
-}
-
-/// `line N` of a TOML error, where it has a place.
-pub(super) fn place_of(text: &str, e: &toml::de::Error) -> String {
-    e.span().map_or("TOML".into(), |s| {
-        format!("line {}", line_of(text, s.start))
-    })
 }
 
 #[cfg(test)]

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use serde::de::DeserializeOwned;
 
-use super::canonical::{place_of, task_hash};
+use super::canonical::task_hash;
 use super::{Division, Metric, Published, TaskRecord, TASK_FORMAT};
 use crate::error::{Error, Result};
 use crate::numeric::Real;
@@ -117,8 +117,7 @@ impl<'a> TaskFile<'a> {
     /// The task file `path`, whose text is `text` and whose files are named from `dir`; its
     /// TOML refused naming the file and line.
     pub(super) fn new(text: String, path: &'a Path, dir: &'a Path) -> Result<TaskFile<'a>> {
-        let table = toml::from_str(&text).map_err(|e| Self::toml(path, &text, e))?;
-        crate::error::refuse_toml_underflow(path, &text)?;
+        let table = crate::error::toml_keys(path, &text)?;
         Ok(TaskFile {
             path,
             text,
@@ -127,31 +126,10 @@ impl<'a> TaskFile<'a> {
         })
     }
 
-    fn toml(path: &Path, text: &str, e: toml::de::Error) -> Error {
-        let msg = e.message().trim_end();
-        // toml's "duplicate key" names no key; its span is the key's.
-        let msg = match e.span().and_then(|s| text.get(s)) {
-            Some(key) if msg == "duplicate key" => format!("duplicate key `{}`", key.trim()),
-            _ => msg.to_string(),
-        };
-        Error::file(path, place_of(text, &e), msg)
-    }
-
     /// Its keys as `K` reads them (an unknown, missing or mistyped key refused naming the
     /// file, line and key path, `line 19, models.folds`).
     pub(super) fn keys<K: DeserializeOwned>(&self) -> Result<K> {
-        let de = toml::Deserializer::parse(&self.text)
-            .map_err(|e| Self::toml(self.path, &self.text, e))?;
-        serde_path_to_error::deserialize(de).map_err(|e| {
-            let key = e.path().to_string();
-            let e = e.into_inner();
-            let line = e.span().map(|s| crate::error::line_of(&self.text, s.start));
-            let place = match key.as_str() {
-                "." => place_of(&self.text, &e),
-                _ => crate::error::at_line(line, key),
-            };
-            Error::file(self.path, place, e.message().trim_end())
-        })
+        crate::error::toml_keys(self.path, &self.text)
     }
 
     /// The refusal of the value of `key`, at its line.

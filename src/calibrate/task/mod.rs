@@ -464,12 +464,19 @@ impl Task {
 
     /// The data file `raw` read through the mapping; a refusal names both files.
     fn read(&self, raw: &Path, robot: &Robot) -> Result<Measurements> {
-        let (text, _) = import_text(raw, &self.mapping)?;
         let named = PathBuf::from(format!(
             "{} as mapped by {}",
             raw.display(),
             self.mapping.display()
         ));
+        let (text, _) = import_text(raw, &self.mapping, Some(robot)).map_err(|e| match e {
+            Error::File { file, place, msg } if file == raw => Error::File {
+                file: named.clone(),
+                place,
+                msg,
+            },
+            e => e,
+        })?;
         read_measurements_text(&named, text, robot)
     }
 

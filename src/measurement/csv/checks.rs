@@ -12,18 +12,17 @@ use crate::numeric::{Real, Vec3};
 
 /// Joint values `quser` (the robot's units) of one pose converted to internal units and
 /// checked: finite after the conversion and within the limits (`lim`: the limits in the
-/// robot's units, for the message). A refusal is (column, message).
+/// robot's units, for the message). A refusal is (the joint's index, message).
 pub(crate) fn check_joints(
     robot: &(impl JointSpace + ?Sized),
     quser: &[Real],
     lim: (&[Real], &[Real]),
-) -> std::result::Result<Vec<Real>, (String, String)> {
+) -> std::result::Result<Vec<Real>, (usize, String)> {
     let q = robot.q_from_user(quser);
     for (j, v) in q.iter().enumerate() {
-        let column = || format!("q{}", j + 1);
         if !v.is_finite() {
             return Err((
-                column(),
+                j,
                 format!(
                     "{} overflows: it is {v} in internal units (mm or rad); the joint \
                      limits are [{}, {}]",
@@ -36,10 +35,10 @@ pub(crate) fn check_joints(
         let (lo, hi) = robot.limits(j);
         if *v < lo - 1e-9 || *v > hi + 1e-9 {
             return Err((
-                column(),
+                j,
                 format!(
                     "{} is outside the joint limits [{}, {}]",
-                    shown(quser[j]),
+                    shown_converted(quser[j]),
                     lim.0[j],
                     lim.1[j]
                 ),
@@ -81,7 +80,7 @@ pub(crate) fn check_sigma(v: Real) -> std::result::Result<(), String> {
     if !(MIN_SIGMA_MM..=MAX_POINT_MM).contains(&v) {
         return Err(format!(
             "{} mm is out of range: a standard deviation must be within \
-             [{MIN_SIGMA_MM}, {MAX_POINT_MM}] mm (its weight 1/σ² must not overflow)",
+             [{MIN_SIGMA_MM:e}, {MAX_POINT_MM}] mm (its weight 1/σ² must not overflow)",
             shown_converted(v)
         ));
     }
@@ -267,7 +266,7 @@ fn joint_row(
             format!("{v} is not a finite number"),
         ));
     }
-    check_joints(robot, quser, lim).map_err(|(c, msg)| at(&c, msg))
+    check_joints(robot, quser, lim).map_err(|(j, msg)| at(&format!("q{}", j + 1), msg))
 }
 
 /// The joint limits in the robot's units (for messages): (lower, upper), to 12 significant

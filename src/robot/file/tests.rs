@@ -72,14 +72,24 @@ fn refusals_name_the_line_of_the_key() {
     refused(&base, "line 13, base.xyz: ");
     let kind = one_joint("mm", JOINT).replace("\"revolute\"", "\"hinge\"");
     refused(&kind, "line 6, joint 1 (joints[0]), key `type`: ");
-    // A key the file does not write has no line; TOML errors carry their own.
+    // A key the file does not write has no line; TOML errors name theirs, and the key.
     let e = refused(
         &format!("{HEAD}length_unit = \"mm\"\njoints = []\n"),
         "joints",
     );
     assert!(e.contains("line 5, joints: "), "{e}");
-    let e = refused(&one_joint("mm", "alpha = 0.0\na = \"x\""), "TOML");
-    assert!(e.contains("line 8"), "{e}");
+    let e = refused(
+        &one_joint("mm", "alpha = 0.0\na = \"x\""),
+        "line 8, joints[0].a: ",
+    );
+    assert!(
+        e.ends_with("invalid type: string \"x\", expected a number"),
+        "{e}"
+    );
+    refused(
+        &format!("{}d = 1.0\n", one_joint("mm", JOINT)),
+        ": duplicate key `d`",
+    );
     assert_eq!(
         key_of_place("joint 12 (joints[11]), key `beta`"),
         "joints[11].beta"

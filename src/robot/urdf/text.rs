@@ -195,7 +195,8 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                 String::from_utf8_lossy(inner),
                 line_of(&text, robot_tag.start)
             );
-            return Err(bad(text.len(), msg));
+            // The file's last line: a final newline ends it and starts none.
+            return Err(bad(text.len() - usize::from(text.ends_with('\n')), msg));
         }
         let msg = "no <robot> element: a URDF is one <robot> element";
         return Err(Error::file(path, "URDF", msg));

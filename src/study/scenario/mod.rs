@@ -176,9 +176,7 @@ impl Scenario {
     /// file it came from.
     pub fn parse(text: &str, path: Option<&Path>) -> Result<Scenario> {
         let shown = path.unwrap_or(Path::new("<built-in default scenario>"));
-        let table: toml::Table = toml::from_str(text)
-            .map_err(|e| Error::file(shown, "TOML", e.to_string().trim_end()))?;
-        crate::error::refuse_toml_underflow(shown, text)?;
+        let table: toml::Table = crate::error::toml_keys(shown, text)?;
         let source = Source {
             text: text.into(),
             edited: Vec::new(),
