@@ -116,8 +116,7 @@ impl Cells for Instruments<'_> {
 impl<'a> Instruments<'a> {
     /// The study `scenario` with its nominal robot loaded.
     pub fn new(scenario: &'a InstrumentsScenario) -> Result<Instruments<'a>> {
-        let chain = crate::robot::urdf::UrdfChain::default();
-        let robot = crate::robot::builtin::load_chain(&scenario.robot, &chain)?;
+        let robot = scenario.load_robot()?;
         let e = &scenario.errors;
         let errors = if e.kind == crate::sim::settings::ErrorKind::None {
             Some(0)

@@ -258,7 +258,8 @@ pub struct Cell {
     /// mean Cramér–Rao trace `(JᵀWJ)⁻¹` (robot parameters); NaN (`null`) under two usable
     /// trials, without the instrument's noise, or where a trial's JᵀWJ is singular.
     pub crb_ratio: Real,
-    /// Trials whose identification did not converge or whose poses the true robot could not
+    /// Trials whose identification did not converge or stopped at a local minimum (a residual
+    /// beyond the readings' noise, [`FIT_GATE`]), or whose poses the true robot could not
     /// touch.
     pub failures: usize,
 }
@@ -511,7 +512,8 @@ impl InstrumentsScenario {
     }
 
     /// Trial `t` of the cell `plan` on `nominal` (its own seed, `trial_seed(seed, t)`):
-    /// `None` when the true robot could not touch or the identification did not converge.
+    /// `None` when the true robot could not touch or the identification did not converge or
+    /// stopped at a local minimum ([`FIT_GATE`]).
     pub fn run_trial(&self, nominal: &Robot, plan: &CellPlan, t: usize) -> Result<Option<Trial>> {
         let (p, seed) = (&plan.prepared, trial_seed(self.head.seed, t as u64));
         let (pool, fixed, params) = ((&p.pool[..], &p.groups[..]), plan.fixed.as_ref(), &p.params);
@@ -536,7 +538,7 @@ impl InstrumentsScenario {
             &kp,
             &DVector::zeros(kp.size().params),
         );
-        if out.termination != Termination::Converged {
+        if out.termination != Termination::Converged || !fits(out.rms_residual, sigma) {
             return Ok(None);
         }
         let t = params.len();
@@ -642,6 +644,26 @@ impl InstrumentsScenario {
             failures: trials.len() - ok.len(),
         }
     }
+}
+
+/// A converged solve whose residual RMS exceeds this many times the readings' RMS σ (plus
+/// [`FIT_FLOOR_MM`]) stopped at a local minimum, not at the readings' fit: the readings come
+/// from the model itself with Gaussian noise σ, whose residual RMS is about σ per coordinate
+/// (√3 σ for a point), so the fit it stopped at is not the least-squares one.
+pub const FIT_GATE: Real = 10.0;
+
+/// … the floor of that bound (mm), for noise-free readings: far above the 1e-9 mm of an exact
+/// solve, far below any figure a study reports.
+pub const FIT_FLOOR_MM: Real = 1e-6;
+
+/// Whether a solve's residual RMS `rms` (mm, per reading) is what readings of standard
+/// deviations `sigma` (mm) leave ([`FIT_GATE`]). A sphere's readings on a 7-axis arm with
+/// errors near the sphere's radius stopped at 2 mm on noise-free data, and the study had
+/// counted the 41 mm after it as a success.
+fn fits(rms: Real, sigma: &[Real]) -> bool {
+    let n = sigma.len().max(1) as Real;
+    let s = (sigma.iter().map(|v| v * v).sum::<Real>() / n).sqrt();
+    rms <= FIT_GATE * s + FIT_FLOOR_MM
 }
 
 /// What one trial reads with an instrument.

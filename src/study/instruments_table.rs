@@ -69,6 +69,18 @@ pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Tab
 }
 
 impl InstrumentsScenario {
+    /// The nominal robot `robot` names: a built-in robot, or a robot file relative to the
+    /// scenario file's folder, as a Monte-Carlo scenario's `[robot] file` is (it had been
+    /// read relative to the folder the run started in).
+    pub fn load_robot(&self) -> Result<crate::robot::Robot> {
+        let builtin = crate::robot::builtin::builtin(&self.robot).is_some();
+        let dir = self.head.path.parent().unwrap_or(std::path::Path::new(""));
+        match builtin {
+            true => crate::robot::builtin::load(&self.robot),
+            false => crate::robot::builtin::load(&dir.join(&self.robot).to_string_lossy()),
+        }
+    }
+
     /// Parses and checks the scenario in `table`, read from `path` (named in errors): the
     /// keys of its `[instruments_study]` table are the study's
     /// ([`instruments_keys`]).
@@ -192,7 +204,7 @@ impl InstrumentsScenario {
         }
         // `ErrorSettings::check` refuses settings only: each at its key.
         s.errors.check().map_err(|e| e.in_file(path))?;
-        let robot = crate::robot::builtin::load(&s.robot)?;
+        let robot = s.load_robot()?;
         if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
             return Err(ferr("robot", msg));
         }

@@ -590,7 +590,22 @@ fn a_database_in_a_folder_that_cannot_be_written_is_read() {
 fn an_out_that_cannot_be_written_beside_is_refused_before_the_work() {
     use std::os::unix::fs::PermissionsExt;
     let dir = tmp_dir("cli-team-readonly-out");
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    // The inputs copied where the unprivileged user reads them: the clone may stand in a
+    // folder only its owner reads (a mkdtemp folder), and the task was then refused for its
+    // own file, not for `--out`.
+    let root = dir.join("repo");
+    for f in [
+        "tasks/barrett-wam.toml",
+        "tasks/barrett-wam.mapping.toml",
+        "examples/barrett-wam/wam.toml",
+        "data/barrett-wam/3D_WAM_uncalibrated_grid_cleaned.csv",
+        "data/barrett-wam/3D_WAM_uncalibrated_random_cleaned.csv",
+        "scenarios/ci-guard.toml",
+    ] {
+        let to = root.join(f);
+        std::fs::create_dir_all(to.parent().unwrap()).unwrap();
+        std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join(f), &to).unwrap();
+    }
     let (ro, inside) = (dir.join("ro"), dir.join("ro/inside"));
     std::fs::create_dir_all(&inside).unwrap();
     let mode = |p: &Path, m: u32| std::fs::set_permissions(p, PermissionsExt::from_mode(m));
