@@ -1,5 +1,5 @@
-//! The files a Monte-Carlo scenario reads besides itself — its robot file and its pose lists,
-//! at every sweep point — each with the SHA-256 of its bytes when the run started
+//! The files a scenario reads besides itself — a Monte-Carlo study's robot file and pose
+//! lists, at every sweep point, and an instruments study's robot file — each with the SHA-256 of its bytes when the run started
 //! (docs/formats.md § 7.3 `inputs`). A shard's `shard.json` and a checkpoint's
 //! `checkpoint.json` hold them, and the records' checksums bind them ([`super::records`]):
 //! `merge` and `run --resume` read the scenario's files again, and refuse one that is missing
@@ -26,10 +26,12 @@ pub struct Input {
 }
 
 /// The files `sc` reads, each once in the order first read: none for a built-in robot and
-/// generated poses, and none for the studies that run whole.
+/// generated poses, and none for a registration study, which reads no file.
 pub fn files(sc: &AnyScenario) -> Result<Vec<PathBuf>> {
-    let AnyScenario::MonteCarlo(s) = sc else {
-        return Ok(Vec::new());
+    let s = match sc {
+        AnyScenario::MonteCarlo(s) => s,
+        AnyScenario::Instruments(s) => return Ok(s.robot_file().into_iter().collect()),
+        AnyScenario::Registration(_) => return Ok(Vec::new()),
     };
     let mut files: Vec<PathBuf> = Vec::new();
     for (_, plan) in s.sweep_plans()? {

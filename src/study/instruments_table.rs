@@ -69,15 +69,20 @@ pub fn instruments_keys(mut table: toml::Table, path: &Path) -> Result<toml::Tab
 }
 
 impl InstrumentsScenario {
-    /// The nominal robot `robot` names: a built-in robot, or a robot file relative to the
-    /// scenario file's folder, as a Monte-Carlo scenario's `[robot] file` is (it had been
-    /// read relative to the folder the run started in).
-    pub fn load_robot(&self) -> Result<crate::robot::Robot> {
-        let builtin = crate::robot::builtin::builtin(&self.robot).is_some();
+    /// The robot file `robot` names, relative to the scenario file's folder as a Monte-Carlo
+    /// scenario's `[robot] file` is (it had been read relative to the folder the run started
+    /// in); `None` for a built-in robot.
+    pub fn robot_file(&self) -> Option<std::path::PathBuf> {
         let dir = self.head.path.parent().unwrap_or(std::path::Path::new(""));
-        match builtin {
-            true => crate::robot::builtin::load(&self.robot),
-            false => crate::robot::builtin::load(&dir.join(&self.robot).to_string_lossy()),
+        let builtin = crate::robot::builtin::builtin(&self.robot).is_some();
+        (!builtin).then(|| dir.join(&self.robot))
+    }
+
+    /// The nominal robot `robot` names: a built-in robot or its [`Self::robot_file`].
+    pub fn load_robot(&self) -> Result<crate::robot::Robot> {
+        match self.robot_file() {
+            Some(f) => crate::robot::builtin::load(&f.to_string_lossy()),
+            None => crate::robot::builtin::load(&self.robot),
         }
     }
 

@@ -194,3 +194,60 @@ fn every_pose_list_a_sweep_reads_is_recorded_and_checked() {
         &["inputs[1]", "b.csv has changed since the run started"],
     );
 }
+
+/// An instruments study's robot file is bound to its shards as a Monte-Carlo study's is: a
+/// shard run on the file as it was, merged after the file changed, is refused naming
+/// `inputs[0]` (its file had been read relative to the folder the run started in and bound
+/// to nothing, so shards of two robots merged).
+#[test]
+fn an_instruments_study_s_robot_file_is_bound_to_its_shards() {
+    let dir = tmp_dir("inputs-instruments");
+    let robot = project(&dir);
+    let text = r#"
+name = "instruments-file-robot"
+seed = 3
+trials = 2
+robot = "../robots/ban-irb2600.toml"
+
+[instruments_study]
+poses = [20]
+strategies = ["random"]
+candidates = 40
+validation = 5
+
+[errors]
+kind = "paper"
+length_mm = 0.5
+angle_rad = 0.001
+
+[[measurement]]
+kind = "position"
+noise_um = 7.5
+scale_um_per_m = 3.0
+"#;
+    write_scenario(&dir.join("scen"), "instruments", text);
+    let shard = |i: usize| {
+        let share = format!("{i}/2");
+        let out = format!("sh/{i}");
+        let args = [
+            "run",
+            "scen/instruments.toml",
+            "--shard",
+            &share,
+            "--out",
+            &out,
+        ];
+        ok(&in_folder(&dir, &args));
+    };
+    shard(0);
+    std::fs::write(&robot, commented(&read(&robot))).unwrap();
+    shard(1);
+    let merge = ["merge", "sh/0", "sh/1", "--out", "merged"];
+    let changed = ["inputs[0]", "has changed since the run started"];
+    refused(
+        &in_folder(&dir, &merge),
+        Path::new("sh/0/shard.json"),
+        &changed,
+    );
+    assert!(!dir.join("merged").exists());
+}

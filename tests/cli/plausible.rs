@@ -609,4 +609,21 @@ fn a_gantry_s_reach_counts_its_travels() {
     let id = load_json(&out.join("identified.json"));
     let rms = id["rms_residual_mm"].as_f64().unwrap();
     assert!(rms < 1e-6, "noise-free points fit exactly: {rms} mm");
+    // Joint-angle harmonics on a robot of no revolute joint add nothing: refused, where the
+    // kinematic model had run labelled `harmonics`.
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        path_arg(&gantry),
+        "--data",
+        path_arg(&data),
+        "--method",
+        "ls",
+        "--models",
+        "harmonics",
+        "--out",
+        path_arg(&d.join("harmonics")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("`harmonics` adds no parameter"), "{err}");
 }

@@ -13,7 +13,7 @@ use calbench::numeric::rng::stream;
 use calbench::robot::{builtin, loaded::loaded_fk, sampling::uniform_joint_poses, Param};
 use rand::Rng;
 
-use crate::common::{calbench_ok, load_json, path_arg, read, tmp_dir, write_points};
+use crate::common::{calbench, calbench_ok, load_json, path_arg, read, tmp_dir, write_points};
 use crate::task::{task, task_lm};
 
 /// The injected errors every data set has: lengths and angles of the arm, none on the tool.
@@ -386,4 +386,25 @@ fn a_re_admitted_error_is_recovered_by_a_damped_method_too() {
             "{method}: {got} against {truth}"
         );
     }
+    // The gravity basis adds nothing to an arm whose revolute axes stay vertical: the model
+    // had run and been labelled `gravity`, the kinematic model under another name.
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        path_arg(&d.join("scara.toml")),
+        "--data",
+        path_arg(&sim.join("measurements.csv")),
+        "--method",
+        "ls",
+        "--models",
+        "kinematic,gravity",
+        "--out",
+        path_arg(&d.join("gravity")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("setting `--models`: `gravity` adds no parameter to robot \"scara\""),
+        "{err}"
+    );
+    assert!(!d.join("gravity").exists());
 }

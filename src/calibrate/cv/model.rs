@@ -121,14 +121,12 @@ impl Model {
             );
         }
         let extra = self.terms(&robot)?;
-        if !extra.is_empty() {
-            params.extend(identifiable_extension(
-                &robot,
-                &params,
-                &extra,
-                data.measure(),
-            ));
-        }
+        let kept = match extra.is_empty() {
+            true => Vec::new(),
+            false => identifiable_extension(&robot, &params, &extra, data.measure()),
+        };
+        self.adds_to(&robot, &kept)?;
+        params.extend(kept);
         params.retain(|p| !fixed.contains(p));
         Ok((robot, params))
     }
@@ -188,6 +186,27 @@ impl Model {
     /// then the chosen orders. Fails when a chosen order names a joint the robot does not
     /// have or one that is not revolute, or the gravity basis is asked of a robot of fewer
     /// than four joints.
+    /// Refuses `harmonics` or `gravity` where none of its terms is among the parameters
+    /// `kept` (those the poses can tell apart, [`identifiable_extension`]): the model would be
+    /// the kinematic one under another name (`gravity` on a SCARA, whose revolute axes gravity
+    /// does not load; `harmonics` on a gantry, which has no revolute joint).
+    fn adds_to(&self, robot: &Robot, kept: &[Param]) -> Result<()> {
+        let none = |is: fn(&Param) -> bool| !kept.iter().any(is);
+        let term = if self.harmonics > 0 && none(|p| matches!(p, Param::Harmonic(..))) {
+            "harmonics"
+        } else if self.gravity && none(|p| matches!(p, Param::Gravity(..))) {
+            "gravity"
+        } else {
+            return Ok(());
+        };
+        let msg = format!(
+            "`{term}` adds no parameter to robot \"{}\" that the poses can tell apart from \
+             the kinematic ones: the model would be `kinematic` under another name",
+            robot.name
+        );
+        Err(Error::option(crate::error::Opt::Models, msg))
+    }
+
     fn terms(&self, robot: &Robot) -> Result<Vec<Param>> {
         // Every revolute joint's terms that the poses of a generic set can tell apart from
         // the kinematic parameters and from each other: joint 1's harmonics although θ1 is
