@@ -589,20 +589,16 @@ fn a_gantry_s_reach_counts_its_travels() {
         "--out",
         path_arg(&sim),
     ]);
-    let out = d.join("id");
-    let gantry = d.join("gantry.toml");
-    let data = sim.join("measurements.csv");
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        path_arg(&gantry),
-        "--data",
-        path_arg(&data),
-        "--method",
-        "ls",
-        "--out",
-        path_arg(&out),
-    ]);
+    let (gantry, data) = (d.join("gantry.toml"), sim.join("measurements.csv"));
+    // `identify --method ls` of the gantry's points, with `extra`, into `d/out`.
+    let identify = |out: &str, extra: &[&str]| {
+        let out = d.join(out);
+        let mut args = vec!["identify", "--robot", path_arg(&gantry), "--data"];
+        args.extend([path_arg(&data), "--method", "ls", "--out", path_arg(&out)]);
+        args.extend(extra);
+        (calbench(&args), out)
+    };
+    let (o, out) = identify("id", &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
     assert!(!err.contains("physically"), "{err}");
@@ -611,19 +607,7 @@ fn a_gantry_s_reach_counts_its_travels() {
     assert!(rms < 1e-6, "noise-free points fit exactly: {rms} mm");
     // Joint-angle harmonics on a robot of no revolute joint add nothing: refused, where the
     // kinematic model had run labelled `harmonics`.
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        path_arg(&gantry),
-        "--data",
-        path_arg(&data),
-        "--method",
-        "ls",
-        "--models",
-        "harmonics",
-        "--out",
-        path_arg(&d.join("harmonics")),
-    ]);
+    let (o, _) = identify("harmonics", &["--models", "harmonics"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("`harmonics` adds no parameter"), "{err}");
 }

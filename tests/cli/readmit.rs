@@ -362,19 +362,18 @@ fn a_re_admitted_error_is_recovered_by_a_damped_method_too() {
         .as_f64()
         .unwrap();
     assert!(truth.abs() > 1e-3, "{truth}");
+    let (robot, data) = (d.join("scara.toml"), sim.join("measurements.csv"));
+    // `identify --method METHOD` of the SCARA's points, with `extra`, into `d/OUT`.
+    let identify = |method: &str, out: &Path, extra: &[&str]| {
+        let mut args = vec!["identify", "--robot", path_arg(&robot), "--data"];
+        args.extend([path_arg(&data), "--method", method, "--out", path_arg(out)]);
+        args.extend(extra);
+        calbench(&args)
+    };
     for method in ["lm", "ls", "igg3"] {
         let out = d.join(method);
-        calbench_ok(&[
-            "identify",
-            "--robot",
-            path_arg(&d.join("scara.toml")),
-            "--data",
-            path_arg(&sim.join("measurements.csv")),
-            "--method",
-            method,
-            "--out",
-            path_arg(&out),
-        ]);
+        let o = identify(method, &out, &[]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let id = load_json(&out.join("identified.json"));
         let readmitted = &id["readmitted"]["parameters"][0];
         assert_eq!(readmitted["parameter"], "theta3", "{method}");
@@ -388,19 +387,7 @@ fn a_re_admitted_error_is_recovered_by_a_damped_method_too() {
     }
     // The gravity basis adds nothing to an arm whose revolute axes stay vertical: the model
     // had run and been labelled `gravity`, the kinematic model under another name.
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        path_arg(&d.join("scara.toml")),
-        "--data",
-        path_arg(&sim.join("measurements.csv")),
-        "--method",
-        "ls",
-        "--models",
-        "kinematic,gravity",
-        "--out",
-        path_arg(&d.join("gravity")),
-    ]);
+    let o = identify("ls", &d.join("gravity"), &["--models", "kinematic,gravity"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         err.contains("setting `--models`: `gravity` adds no parameter to robot \"scara\""),
