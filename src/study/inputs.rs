@@ -1,9 +1,10 @@
 //! The files a scenario reads besides itself — a Monte-Carlo study's robot file and pose
-//! lists, at every sweep point, and an instruments study's robot file — each with the SHA-256 of its bytes when the run started
-//! (docs/formats.md § 7.3 `inputs`). A shard's `shard.json` and a checkpoint's
-//! `checkpoint.json` hold them, and the records' checksums bind them ([`super::records`]):
-//! `merge` and `run --resume` read the scenario's files again, and refuse one that is missing
-//! or has changed since, whose trials would be mixed with the trials of the file as it is now.
+//! lists, at every sweep point, and an instruments study's robot file — each with the
+//! SHA-256 of its bytes when the run started (docs/formats.md § 7.3 `inputs`). A shard's
+//! `shard.json` and a checkpoint's `checkpoint.json` hold them, and the records' checksums
+//! bind them ([`super::records`]): `merge` and `run --resume` read the scenario's files
+//! again, and refuse one that is missing or has changed since, whose trials would be mixed
+//! with the trials of the file as it is now.
 
 use std::path::{Path, PathBuf};
 

@@ -181,11 +181,6 @@ impl Model {
             .collect())
     }
 
-    /// The harmonic and gravity-basis terms the model offers on `robot`, before the choice
-    /// of the identifiable ones: the harmonics of every revolute joint, the gravity basis,
-    /// then the chosen orders. Fails when a chosen order names a joint the robot does not
-    /// have or one that is not revolute, or the gravity basis is asked of a robot of fewer
-    /// than four joints.
     /// Refuses `harmonics` or `gravity` where none of its terms is among the parameters
     /// `kept` (those the poses can tell apart, [`identifiable_extension`]): the model would be
     /// the kinematic one under another name (`gravity` on a SCARA, whose revolute axes gravity
@@ -207,6 +202,11 @@ impl Model {
         Err(Error::option(crate::error::Opt::Models, msg))
     }
 
+    /// The harmonic and gravity-basis terms the model offers on `robot`, before the choice
+    /// of the identifiable ones: the harmonics of every revolute joint, the gravity basis,
+    /// then the chosen orders. Fails when a chosen order names a joint the robot does not
+    /// have or one that is not revolute, or the gravity basis is asked of a robot of fewer
+    /// than four joints.
     fn terms(&self, robot: &Robot) -> Result<Vec<Param>> {
         // Every revolute joint's terms that the poses of a generic set can tell apart from
         // the kinematic parameters and from each other: joint 1's harmonics although θ1 is
