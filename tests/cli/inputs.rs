@@ -46,6 +46,30 @@ fn refused(o: &Output, path: &Path, want: &[&str]) {
     one_line_naming(&err, path, want);
 }
 
+/// `run SCENARIO EXTRA… --shard I/2 --out sh/I` in the folder `dir`, an earlier `sh/I`
+/// removed first; the shard's folder.
+fn shard(dir: &Path, scenario: &str, extra: &[&str], i: usize) -> PathBuf {
+    let (share, out) = (format!("{i}/2"), format!("sh/{i}"));
+    let _ = std::fs::remove_dir_all(dir.join(&out));
+    let mut args = vec!["run", scenario];
+    args.extend(extra);
+    args.extend(["--shard", &share, "--out", &out]);
+    ok(&in_folder(dir, &args));
+    dir.join(out)
+}
+
+/// `merge` of the two shards [`shard`] writes, in the folder it ran in.
+const MERGE: [&str; 5] = ["merge", "sh/0", "sh/1", "--out", "merged"];
+
+/// [`MERGE`] in `dir` refused naming `sh/K/shard.json` and its `inputs[0]` as changed, with
+/// nothing written.
+fn refused_as_changed(dir: &Path, k: usize) {
+    let changed = ["inputs[0]", "has changed since the run started"];
+    let shard_json = format!("sh/{k}/shard.json");
+    refused(&in_folder(dir, &MERGE), Path::new(&shard_json), &changed);
+    assert!(!dir.join("merged").exists());
+}
+
 /// `text` with a comment line added: the same robot, another file.
 fn commented(text: &str) -> String {
     format!("{text}# edited\n")
@@ -61,34 +85,15 @@ fn a_merge_refuses_shards_whose_robot_file_changed_or_cannot_be_found() {
     let dir = tmp_dir("inputs-merge");
     let robot = project(&dir);
     let own = read(&robot);
-    let shard = |i: usize| {
-        let out = format!("sh/{i}");
-        let _ = std::fs::remove_dir_all(dir.join(&out));
-        let share = format!("{i}/2");
-        let args = [
-            "run", SCENARIO, "--trials", "4", "--shard", &share, "--out", &out,
-        ];
-        ok(&in_folder(&dir, &args));
-    };
+    let shard = |i: usize| shard(&dir, SCENARIO, &["--trials", "4"], i);
     shard(0);
     std::fs::write(&robot, commented(&own)).unwrap();
     shard(1);
-    let merge = ["merge", "sh/0", "sh/1", "--out", "merged"];
-    let changed = ["inputs[0]", "has changed since the run started"];
-    refused(
-        &in_folder(&dir, &merge),
-        Path::new("sh/0/shard.json"),
-        &changed,
-    );
+    refused_as_changed(&dir, 0);
     std::fs::write(&robot, &own).unwrap();
-    refused(
-        &in_folder(&dir, &merge),
-        Path::new("sh/1/shard.json"),
-        &changed,
-    );
-    assert!(!dir.join("merged").exists());
+    refused_as_changed(&dir, 1);
     shard(1);
-    ok(&in_folder(&dir, &merge));
+    ok(&in_folder(&dir, &MERGE));
     ok(&in_folder(
         &dir,
         &["run", SCENARIO, "--trials", "4", "--out", "whole"],
@@ -164,16 +169,7 @@ fn every_pose_list_a_sweep_reads_is_recorded_and_checked() {
     );
     let sweep = "\n[sweep]\nkey = \"calibration.poses_file\"\nvalues = [\"a.csv\", \"b.csv\"]\n";
     let sc = write_scenario(&dir, "s", &format!("{study}{sweep}"));
-    let shard = |i: usize| {
-        let share = format!("{i}/2");
-        let out = dir.join(format!("sh{i}"));
-        let args = ["run", path_arg(&sc), "--trials", "2", "--shard", &share];
-        ok(&in_folder(
-            &dir,
-            &[&args[..], &["--out", path_arg(&out)]].concat(),
-        ));
-        out
-    };
+    let shard = |i: usize| shard(&dir, path_arg(&sc), &["--trials", "2"], i);
     let s0 = shard(0);
     let meta: serde_json::Value = serde_json::from_str(&read(&s0.join("shard.json"))).unwrap();
     let paths: Vec<&str> = meta["inputs"]
@@ -226,28 +222,8 @@ noise_um = 7.5
 scale_um_per_m = 3.0
 "#;
     write_scenario(&dir.join("scen"), "instruments", text);
-    let shard = |i: usize| {
-        let share = format!("{i}/2");
-        let out = format!("sh/{i}");
-        let args = [
-            "run",
-            "scen/instruments.toml",
-            "--shard",
-            &share,
-            "--out",
-            &out,
-        ];
-        ok(&in_folder(&dir, &args));
-    };
-    shard(0);
+    shard(&dir, "scen/instruments.toml", &[], 0);
     std::fs::write(&robot, commented(&read(&robot))).unwrap();
-    shard(1);
-    let merge = ["merge", "sh/0", "sh/1", "--out", "merged"];
-    let changed = ["inputs[0]", "has changed since the run started"];
-    refused(
-        &in_folder(&dir, &merge),
-        Path::new("sh/0/shard.json"),
-        &changed,
-    );
-    assert!(!dir.join("merged").exists());
+    shard(&dir, "scen/instruments.toml", &[], 1);
+    refused_as_changed(&dir, 0);
 }
