@@ -174,6 +174,23 @@ pub fn solve_point_axis(
     (reached && q.iter().all(|v| v.is_finite()) && robot.within_limits(&q)).then_some(q)
 }
 
+/// The direction the flange z axis keeps at every joint configuration of `robot`, where it
+/// keeps one: a SCARA or a gantry cannot tilt its tool, so a workspace target whose axis is
+/// not that one is never reached. `None` when the axis turns: within 1e-9 rad over 32 uniform
+/// joint vectors of a fixed stream, and at zero.
+pub fn fixed_tool_axis(robot: &Robot) -> Option<Vec3> {
+    let mut rng = crate::numeric::rng::stream(0, "tool axis");
+    let mut q = vec![0.0; robot.dof()];
+    let z0 = robot.fk(&q).rot.column(2).into_owned();
+    (0..32)
+        .all(|_| {
+            crate::robot::sampling::uniform_joint_pose(robot, &mut rng, &mut q);
+            let z = robot.fk(&q).rot.column(2).into_owned();
+            z.cross(&z0).norm().atan2(z.dot(&z0)) <= 1e-9
+        })
+        .then_some(z0)
+}
+
 /// Tries per requested pose of [`poses_in_workspace`] before it gives up.
 pub const WORKSPACE_TRIES_PER_POSE: usize = 200;
 
@@ -263,6 +280,13 @@ mod tests {
             }
         }
         assert!(hits >= 15, "only {hits} of 20 reached");
+    }
+
+    /// A six-axis arm turns its tool axis, so it keeps none (the SCARA, which keeps one, is
+    /// tests/cli/refusals.rs's).
+    #[test]
+    fn a_six_axis_arm_keeps_no_tool_axis() {
+        assert_eq!(fixed_tool_axis(&crate::robot::builtin::irb2600()), None);
     }
 
     /// An unreachable point (beyond the arm's reach) gives `None`, not a wrong pose.

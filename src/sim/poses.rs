@@ -10,7 +10,7 @@ use super::settings::{Region, WorkspaceRegion};
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
-use crate::robot::ik::{poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
+use crate::robot::ik::{fixed_tool_axis, poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
 use crate::robot::sampling::{poses_in_box, reach_bound_mm, uniform_joint_poses};
 use crate::robot::{Param, Robot};
 
@@ -52,6 +52,9 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
             if !workspace(robot, w, 1, key, &mut rng)?.is_empty() {
                 return Ok(());
             }
+            if let Some(why) = untiltable(robot, w) {
+                return Err(Error::setting(key, why));
+            }
             let from = match &w.start {
                 Some(s) => format!("its start {s:?}"),
                 None => "the default start (zero joint values, clamped into the limits)".into(),
@@ -87,6 +90,38 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
             ))
         }
     }
+}
+
+/// Why no target of the workspace region `w` is reached when `robot` cannot tilt its tool
+/// ([`fixed_tool_axis`]) and `w` asks for another axis than the one it keeps, or a cone
+/// about it (whose targets' axes are drawn, so almost never that one): `None` otherwise.
+fn untiltable(robot: &Robot, w: &WorkspaceRegion) -> Option<String> {
+    let z = fixed_tool_axis(robot)?;
+    let axis = Vec3::from(w.axis).normalize();
+    let off_deg = z.cross(&axis).norm().atan2(z.dot(&axis)).to_degrees();
+    if w.cone_deg == 0.0 && off_deg <= 1e-6 {
+        return None;
+    }
+    let shown = |v: Vec3| {
+        let c = v.map(|x| (x * 1e6).round() / 1e6 + 0.0);
+        format!("[{}, {}, {}]", c.x, c.y, c.z)
+    };
+    let asked = if off_deg > w.cone_deg {
+        format!("{off_deg:.1}° from the region's axis {:?}", w.axis)
+    } else {
+        format!(
+            "and the targets' axes are drawn within {}° of {:?}, so almost none is along it",
+            w.cone_deg, w.axis
+        )
+    };
+    Some(format!(
+        "robot \"{}\" cannot tilt its tool: its flange z axis is along {} at every joint \
+         configuration, {asked}; a workspace region of this robot takes axis = {} and \
+         cone_deg = 0",
+        robot.name,
+        shown(z),
+        shown(z)
+    ))
 }
 
 /// Up to `n` poses of the workspace region `w` ([`poses_in_workspace`]); its `start` is

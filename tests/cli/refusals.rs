@@ -298,6 +298,67 @@ fn a_scenario_region_no_pose_reaches_is_refused_at_once_naming_file_line_and_key
     }
 }
 
+/// A SCARA cannot tilt its tool: a workspace region that asks for another tool axis than the
+/// one it keeps, or for a cone about it, is refused for that cause, with the axis it keeps; the
+/// region along that axis with no cone is run. The refusal had named the search's start.
+#[test]
+fn a_workspace_region_a_scara_cannot_tilt_to_is_refused_for_that_cause() {
+    let d = tmp("scara-tilt");
+    let joint = |kind: &str, alpha: f64, a: f64, d: f64, limits: &str| {
+        format!(
+            "[[joints]]\ntype = \"{kind}\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
+             theta = 0.0\nlimits = {limits}\n\n"
+        )
+    };
+    let robot = format!(
+        "name = \"scara\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n\n\
+         {}{}{}{}[tool]\nxyz = [20.0, 0.0, 30.0]\nrpy = [0.0, 0.0, 0.0]\n",
+        joint("revolute", 0.0, 325.0, 200.0, "[-170.0, 170.0]"),
+        joint("revolute", 180.0, 225.0, 0.0, "[-145.0, 145.0]"),
+        joint("prismatic", 0.0, 0.0, 0.0, "[0.0, 150.0]"),
+        joint("revolute", 0.0, 0.0, 50.0, "[-360.0, 360.0]"),
+    );
+    std::fs::write(d.join("scara.toml"), robot).unwrap();
+    let scenario = |axis: &str, cone: f64| {
+        let region = format!(
+            "region = {{ kind = \"workspace\", center_mm = [350.0, 350.0, 50.0], size_mm = \
+             [100.0, 100.0, 50.0], axis = {axis}, cone_deg = {cone:?}, start = [30.0, 40.0, \
+             75.0, 0.0] }}"
+        );
+        let text = format!(
+            "name = \"tilt\"\nseed = 3\ntrials = 1\n\n[robot]\nfile = \"scara.toml\"\n\n\
+             [calibration]\ncount = 12\n{region}\n\n[[methods]]\nname = \"ls\"\n"
+        );
+        let p = d.join(format!("tilt-{cone}-{}.toml", axis.len()));
+        std::fs::write(&p, text).unwrap();
+        p
+    };
+    let down = "[0.0, 0.0, -1.0]";
+    for (p, why) in [
+        (scenario(down, 10.0), "drawn within 10° of [0.0, 0.0, -1.0]"),
+        (
+            scenario("[0.0, 0.0, 1.0]", 0.0),
+            "180.0° from the region's axis",
+        ),
+    ] {
+        let out = d.join("out");
+        let o = calbench(&["simulate", path(&p), "--out", path(&out)]);
+        refused(
+            &o,
+            &[
+                "line 10, calibration.region: ",
+                "robot \"scara\" cannot tilt its tool: its flange z axis is along [0, 0, -1]",
+                why,
+                "takes axis = [0, 0, -1] and cone_deg = 0",
+            ],
+        );
+        assert!(!out.exists());
+    }
+    let out = d.join("along");
+    let o = calbench(&["simulate", path(&scenario(down, 0.0)), "--out", path(&out)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// Found by the scenario fuzzer: a workspace box of 1.8e308 mm hung the loading (the inverse
 /// kinematics met an overflowing target). Boxes are bounded at 1 km and refused at once.
 #[test]
