@@ -8,7 +8,7 @@
 use crate::calibrate::validation::rotation_angle_deg;
 use crate::numeric::{Frame, Real};
 use crate::robot::loaded::{loaded_fk, LoadedFk};
-use crate::robot::{Param, Robot};
+use crate::robot::{Convention, Param, Robot};
 
 /// What a corrected row must reach to be flagged `ok`: residual_mm and residual_deg.
 pub const ACCEPT_MM: Real = 1e-6;
@@ -54,6 +54,12 @@ pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>
     if !kinds.is_empty() {
         return kinds;
     }
+    // Modified and standard DH name other quantities by the same names: compared by what the
+    // robots do.
+    let modified = |r: &Robot| r.convention == Convention::Mdh;
+    if modified(identified) != modified(nominal) {
+        return tool_points_apart(nominal, identified, qs);
+    }
     let theirs = identified.params();
     let mut shared: Vec<Param> = nominal
         .params()
@@ -62,6 +68,42 @@ pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>
         .collect();
     shared.extend(crate::robot::gravity_basis::params(identified));
     super::plausibility::moves(nominal, identified, &shared, qs)
+}
+
+/// Joint vectors drawn (a fixed stream) where a comparison of two robots has no program rows.
+const DRAWN_POSES: usize = 64;
+
+/// The tool points of `identified` and `nominal` at the program's poses `qs` (or at
+/// [`DRAWN_POSES`] joint vectors drawn within the limits) further apart than a calibration may
+/// move them, in words (empty when they are not): the largest bound of "Physical
+/// plausibility", [`super::plausibility::FRAME_SHARE`] of the reach, which a move of the base
+/// alone may take.
+fn tool_points_apart(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>]) -> Vec<String> {
+    let drawn;
+    let qs = if qs.is_empty() {
+        let mut rng = crate::numeric::rng::stream(0, "compared poses");
+        drawn = crate::robot::sampling::uniform_joint_poses(nominal, DRAWN_POSES, &mut rng);
+        &drawn
+    } else {
+        qs
+    };
+    let reach = crate::robot::sampling::reach_bound_mm(nominal);
+    let bound = super::plausibility::FRAME_SHARE * reach;
+    let gap = qs
+        .iter()
+        .map(|q| (identified.fk(q).pos - nominal.fk(q).pos).norm())
+        .fold(0.0, Real::max);
+    if gap <= bound {
+        return Vec::new();
+    }
+    vec![format!(
+        "its tool point is {gap:.0} mm from the nominal robot's at a pose (bound {bound:.0} mm: \
+         {:.0} % of the robot's reach, {reach:.0} mm; the robots' conventions, {} and {}, \
+         name other quantities alike, so they are compared by their tool points)",
+        super::plausibility::FRAME_SHARE * 100.0,
+        identified.convention.as_str(),
+        nominal.convention.as_str(),
+    )]
 }
 
 /// The flag of a written command `q` with its residuals ([`Corrected::flag`]).

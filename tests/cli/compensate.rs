@@ -190,6 +190,53 @@ fn a_urdf_whose_parallel_axes_a_calibration_tilted_either_way_is_a_calibration()
     assert!(!msg.contains("theta2 moved"), "{msg}");
 }
 
+/// Standard and modified DH name other quantities alike (`a1`, `alpha1`), so robots of the
+/// two conventions are compared by their tool points: the built-in IRB 2600 in modified DH is
+/// a calibration of the one in standard DH (every row `ok`), and the standard table relabelled
+/// `mdh`, a robot whose tool is metres away, is refused naming that. Compared by name, the
+/// first had been refused (`alpha4 moved by 3.1416 rad`) and the second accepted.
+#[test]
+fn robots_of_standard_and_modified_dh_are_compared_by_their_tool_points() {
+    let d = tmp_dir("cli-compensate-conventions");
+    let rows = ["10,-20,30,-40,50,-60", "-5,15,-25,35,-45,55"];
+    let corrected = compensate_rows(&d, Path::new("irb2600"), Path::new("irb2600-mdh"), &rows);
+    let flags: Vec<&str> = corrected
+        .lines()
+        .skip(1)
+        .map(|l| l.rsplit(',').next().unwrap())
+        .collect();
+    assert_eq!(flags, ["ok", "ok"], "{corrected}");
+    let dh = String::from_utf8(calbench_ok(&["robots", "irb2600"]).stdout).unwrap();
+    assert_eq!(dh.matches("convention = \"dh\"").count(), 1);
+    let relabelled = d.join("relabelled.toml");
+    std::fs::write(
+        &relabelled,
+        dh.replace("convention = \"dh\"", "convention = \"mdh\""),
+    )
+    .unwrap();
+    let out = d.join("o.csv");
+    let o = calbench(&[
+        "compensate",
+        "--robot",
+        "irb2600",
+        "--identified",
+        path_arg(&relabelled),
+        "--joints",
+        path_arg(&d.join("program.csv")),
+        "--out",
+        path_arg(&out),
+    ]);
+    refused(
+        &o,
+        &[
+            "--identified",
+            "cannot be a calibration of the nominal robot: its tool point is",
+            "the robots' conventions, mdh and dh",
+        ],
+    );
+    assert!(!out.exists());
+}
+
 /// An empty program or target list says the header it lacks: a program's joints, a target
 /// list's point (both had asked for `q1,…,qn,x,y,z`, columns neither needs).
 #[test]
