@@ -10,7 +10,7 @@ mod text;
 mod toml_read;
 mod underflow;
 pub use hidden::{is_hidden, quoted};
-pub use json::{json_refusal, json_value, unique_keys};
+pub use json::{json_refusal, json_typed, json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
 use serde_words::plain_types;
 pub use serde_words::{toml_value_error, unknown_field};
@@ -64,7 +64,7 @@ pub enum Error {
     /// Reading or writing a file failed. The message carries the operating system's; it
     /// is not also given as a `source`, so that a report of the error chain (`{:#}`) says it
     /// once.
-    #[error("{}: {cause}", path.display())]
+    #[error("{}: {cause}", shown_path(path))]
     Io {
         /// The file or folder.
         path: PathBuf,
@@ -412,6 +412,15 @@ pub fn newer_format(path: &std::path::Path, what: &str, found: u32, reads: u32) 
         return Err(Error::file(path, "format", why));
     }
     Ok(())
+}
+
+/// A path as an I/O error names it: an empty one (an empty argument) said so, where it showed
+/// as nothing before the colon.
+fn shown_path(path: &std::path::Path) -> String {
+    match path.as_os_str().is_empty() {
+        true => "an empty path".into(),
+        false => path.display().to_string(),
+    }
 }
 
 /// `place` prefixed with its 1-based line where there is one: `line 14, joints[1].a`.

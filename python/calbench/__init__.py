@@ -364,7 +364,10 @@ class Study:
             keys = list(_COMPARISON_KEYS)
             if "sweep_key" in self.summary or "sweep_keys" in self.summary:
                 keys.insert(keys.index("b") + 1, "sweep_value")
-            df = pd.DataFrame(rows, columns=None if rows else keys)
+            # The documented order, with or without rows (summary.json writes a row's keys
+            # sorted); a key the list does not name after them.
+            df = pd.DataFrame(rows)
+            df = df.reindex(columns=keys + [c for c in df.columns if c not in keys])
             self._comparisons = _split_intervals(df)
         return self._comparisons
 

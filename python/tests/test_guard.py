@@ -31,6 +31,9 @@ def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, mon
         assert list(home.iterdir()) == []
     with pytest.raises(calbench.Error, match="root folder"):
         study.write("/")
+    # An empty path is not the root folder (it had been refused as one).
+    with pytest.raises(calbench.SettingError, match="`out`: is empty"):
+        study.write("")
     with pytest.raises(calbench.Error, match="home folder"):
         calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out=home)
     assert list(home.iterdir()) == []

@@ -93,6 +93,11 @@ def test_comparisons_split_every_interval_and_keep_their_columns_when_empty(ci_g
     assert len(empty) == 0
     for name in ["a", "b", "sweep_value", "metric", "diff_ci95_lo", "ci95_hi"]:
         assert name in empty.columns, list(empty.columns)
+    # With rows, the columns stand in the same, documented, order (they had come sorted).
+    rows = calbench.run({**sc, "sweep": one["sweep"]}, trials=2).comparisons
+    assert len(rows) > 0
+    assert list(rows.columns) == list(empty.columns)
+    assert list(c.columns[:4]) == ["a", "b", "metric", "n"]
 
 
 def test_a_run_s_warning_points_at_the_caller_s_line(ci_guard):

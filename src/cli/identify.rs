@@ -194,7 +194,7 @@ fn priors(args: &[PriorArg]) -> calbench::Result<Vec<(Param, Real)>> {
 
 /// The priors of the file `path`: `NAME = σ` lines.
 fn prior_file(path: &Path) -> calbench::Result<Vec<(Param, Real)>> {
-    use calbench::identify::registry::parse_prior;
+    use calbench::identify::registry::prior_value;
     let text = calbench::error::read_text(path)?;
     let t: toml::Table = calbench::error::toml_keys(path, &text)?;
     if t.is_empty() {
@@ -202,8 +202,7 @@ fn prior_file(path: &Path) -> calbench::Result<Vec<(Param, Real)>> {
     }
     t.iter()
         .map(|(name, v)| {
-            let sigma = v.as_float().or_else(|| v.as_integer().map(|i| i as Real));
-            parse_prior(name, sigma)
+            prior_value(name, v)
                 .map_err(|m| Error::toml_file(path, &text, name, format!("key `{name}`"), m))
         })
         .collect()

@@ -110,6 +110,19 @@ pub fn unique_keys(path: &Path, text: &str) -> Result<()> {
     }
 }
 
+/// The calbench file `what` (`shard.json`, `checkpoint.json`) at `path`, whose text `text`
+/// [`json_value`] read as `v`, as `T`: a key missing, unknown or of the wrong type is refused
+/// naming the file, the key's line and the key path ([`super::read_typed`]).
+pub fn json_typed<T: serde::de::DeserializeOwned>(
+    v: &Value,
+    path: &Path,
+    text: &str,
+    what: &str,
+) -> Result<T> {
+    super::read_typed(v, path, what)
+        .map_err(|e| e.at_line_of(|key| super::json_key_line(text, key)))
+}
+
 /// The refusal `e` of a reader that parses the JSON `text` of the file `path` into its own
 /// types, at its line as [`json_value`] places one (`line 3: missing field …`).
 pub fn json_refusal(path: &Path, text: &str, e: &serde_json::Error) -> Error {

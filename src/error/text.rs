@@ -32,10 +32,15 @@ pub fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
-/// [`read_bounded`] as UTF-8 text, for a reader that words its own refusal of the file (a
-/// shard's `shard.json`, a checkpoint): text that is not UTF-8 is an I/O error too.
+/// [`read_bounded`] as UTF-8 text without a leading byte-order mark (as [`read_text`]), for a
+/// reader that words its own refusal of the file (a shard's `shard.json`, a checkpoint): text
+/// that is not UTF-8 is an I/O error too.
 pub fn read_bounded_text(path: &Path) -> std::io::Result<String> {
-    String::from_utf8(read_bounded(path)?).map_err(std::io::Error::other)
+    let mut text = String::from_utf8(read_bounded(path)?).map_err(std::io::Error::other)?;
+    if text.starts_with('\u{feff}') {
+        text.drain(..'\u{feff}'.len_utf8());
+    }
+    Ok(text)
 }
 
 /// The text of the file `path`, every byte of it ([`read_text`] less a byte-order mark), for a

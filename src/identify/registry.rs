@@ -205,10 +205,7 @@ impl MethodSpec {
             None => Vec::new(),
             Some(toml::Value::Table(p)) => p
                 .iter()
-                .map(|(name, v)| {
-                    let sigma = v.as_float().or_else(|| v.as_integer().map(|i| i as Real));
-                    parse_prior(name, sigma).map_err(|m| (format!("priors.{name}"), m))
-                })
+                .map(|(name, v)| prior_value(name, v).map_err(|m| (format!("priors.{name}"), m)))
                 .collect::<std::result::Result<_, _>>()?,
             Some(v) => {
                 let msg = format!("must be a table of parameter = σ, got {v}");
@@ -284,6 +281,21 @@ impl MethodSpec {
     pub fn is_external(&self) -> bool {
         self.name == super::external::EXTERNAL
     }
+}
+
+/// One prior `NAME = σ` as TOML reads it ([`parse_prior`]), where TOML reads an unquoted
+/// dotted name `base.x = σ` as the key `x` of a table `base`: refused saying so.
+pub fn prior_value(name: &str, v: &toml::Value) -> std::result::Result<(Param, Real), String> {
+    if let Some((key, _)) = v.as_table().and_then(|t| t.iter().next()) {
+        return Err(format!(
+            "`{name}.{key}` is read by TOML as the key `{key}` of a table `{name}`: quote a \
+             parameter name that holds a dot, \"{name}.{key}\" = σ"
+        ));
+    }
+    parse_prior(
+        name,
+        v.as_float().or_else(|| v.as_integer().map(|i| i as Real)),
+    )
 }
 
 /// One prior `NAME = σ`: a parameter name ([`Param::parse`]) and a finite σ > 0; the message

@@ -253,10 +253,14 @@ fn table_of(
         bad(
             header_line,
             "",
-            format!(
-                "missing column \"{n}\" (robot \"{}\" has {dof} joints)",
-                robot.name()
-            ),
+            match dof {
+                // A target list: no robot's joints.
+                0 => format!("missing column \"{n}\" (a target list has {expected})"),
+                _ => format!(
+                    "missing column \"{n}\" (robot \"{}\" has {dof} joints)",
+                    robot.name()
+                ),
+            },
         )
     };
     let qcol: Vec<usize> = qnames
@@ -278,7 +282,11 @@ fn table_of(
                     .find(|n| find(n).is_none())
                     .copied()
                     .unwrap_or("qw");
-                return Err(missing(n));
+                let msg = format!(
+                    "missing column \"{n}\" (an orientation is the four columns qw, qx, qy, \
+                     qz, or none of them)"
+                );
+                return Err(bad(header_line, "", msg));
             }
         };
         (x, q)
@@ -478,7 +486,20 @@ mod tests {
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx,qy,qz\n0,0,0,0,0,0,1,2,3,1,1,0,0\n");
         assert!(s.contains("line 2") && s.contains("unit quaternion"), "{s}");
         let s = read_err("q1,q2,q3,q4,q5,q6,x,y,z,qw,qx\n");
-        assert!(s.contains("missing column \"qy\""), "{s}");
+        assert!(
+            s.contains("missing column \"qy\" (an orientation is the four"),
+            "{s}"
+        );
+        // A target list names what a target list has, not a robot of no joints.
+        let targets =
+            std::env::temp_dir().join(format!("calbench-targets-{}.csv", std::process::id()));
+        std::fs::write(&targets, "x,y\n1,2\n").unwrap();
+        let s = read_targets(&targets).unwrap_err().to_string();
+        std::fs::remove_file(&targets).unwrap();
+        assert!(
+            s.contains("line 1: missing column \"z\" (a target list has x, y, z"),
+            "{s}"
+        );
         // A payload is a mass from 0 to 100 000 kg, as everywhere a mass is read.
         for kg in ["-1", "100001", "1e9"] {
             let s =

@@ -82,6 +82,11 @@ fn paths<P: AsRef<Path>>(
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
     let refuse = |why: String| Err(Error::setting(key, why));
+    if out.as_os_str().is_empty() {
+        return refuse(
+            "is empty; give the outputs a folder or file name (nothing was written)".into(),
+        );
+    }
     let at = resolved(out);
     if at.parent().is_none() {
         return refuse(format!(

@@ -166,12 +166,15 @@ pub fn solve_point_axis(
     )
     .ok()?;
     let f = chain.fk(&q);
-    // The angle between the flange z axis and `axis` from both its sine and cosine: `acos` of
-    // the dot product alone cannot tell angles below about 1e-6° apart (acos(1 − ε) ≈ √(2ε)).
-    let z = f.rot.column(2);
-    let angle = z.cross(axis).norm().atan2(z.dot(axis)).to_degrees();
+    let angle = angle_deg(&f.rot.column(2).into_owned(), axis);
     let reached = (f.pos - point).norm() <= tol_mm && angle <= tol_deg;
     (reached && q.iter().all(|v| v.is_finite()) && robot.within_limits(&q)).then_some(q)
+}
+
+/// The angle between the directions `a` and `b` (deg), from both its sine and cosine: `acos`
+/// of the dot product alone cannot tell angles below about 1e-6° apart (acos(1 − ε) ≈ √(2ε)).
+pub fn angle_deg(a: &Vec3, b: &Vec3) -> Real {
+    a.cross(b).norm().atan2(a.dot(b)).to_degrees()
 }
 
 /// The direction the flange z axis keeps at every joint configuration of `robot`, where it
@@ -186,7 +189,7 @@ pub fn fixed_tool_axis(robot: &Robot) -> Option<Vec3> {
         .all(|_| {
             crate::robot::sampling::uniform_joint_pose(robot, &mut rng, &mut q);
             let z = robot.fk(&q).rot.column(2).into_owned();
-            z.cross(&z0).norm().atan2(z.dot(&z0)) <= 1e-9
+            angle_deg(&z, &z0) <= 1e-9_f64.to_degrees()
         })
         .then_some(z0)
 }

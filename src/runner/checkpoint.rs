@@ -48,6 +48,7 @@ pub const FORMAT: &str = "calbench-checkpoint-7";
 
 /// `checkpoint.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 struct Meta {
     format: String,
     /// The version of the calbench that wrote it.
@@ -202,9 +203,8 @@ impl Checkpoint {
                 ),
             )
         })?;
-        let parse = |e: serde_json::Error| crate::error::json_refusal(&path, &text, &e);
-        crate::error::unique_keys(&path, &text)?;
-        let head: FormatOnly = serde_json::from_str(&text).map_err(parse)?;
+        let v = crate::error::json_value(&path, &text)?;
+        let head: FormatOnly = crate::error::json_typed(&v, &path, &text, "checkpoint.json")?;
         let refuse = |what: &str, had: String, now: String| {
             Error::file(
                 &path,
@@ -218,7 +218,7 @@ impl Checkpoint {
         if head.format != FORMAT {
             return Err(refuse("format", head.format, FORMAT.into()));
         }
-        let mut meta: Meta = serde_json::from_str(&text).map_err(parse)?;
+        let mut meta: Meta = crate::error::json_typed(&v, &path, &text, "checkpoint.json")?;
         let version = env!("CARGO_PKG_VERSION");
         if meta.version != version {
             return Err(refuse(

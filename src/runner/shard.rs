@@ -35,6 +35,7 @@ pub const FORMAT: &str = "calbench-shard-10";
 /// One block of a shard: what the reports need of a sweep point's study and of its trial 0,
 /// and the checksum that binds it to the run as the records' checksums bind them.
 #[derive(Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub(crate) struct ShardBlock {
     info: BlockInfo,
     trial0: Option<Trial0>,
@@ -271,9 +272,8 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
         };
         Error::file(dir, "shard.json", msg)
     })?;
-    crate::error::unique_keys(&path, &text)?;
-    let head: FormatOnly =
-        serde_json::from_str(&text).map_err(|e| crate::error::json_refusal(&path, &text, &e))?;
+    let v = crate::error::json_value(&path, &text)?;
+    let head: FormatOnly = crate::error::json_typed(&v, &path, &text, "shard.json")?;
     if head.format != FORMAT {
         return Err(Error::file(
             &path,
@@ -286,8 +286,7 @@ fn read_meta(dir: &Path) -> Result<ShardMeta> {
             ),
         ));
     }
-    let meta: ShardMeta =
-        serde_json::from_str(&text).map_err(|e| crate::error::json_refusal(&path, &text, &e))?;
+    let meta: ShardMeta = crate::error::json_typed(&v, &path, &text, "shard.json")?;
     if !(meta.seconds.is_finite() && meta.seconds >= 0.0) {
         let msg = format!("{} is not a run's wall time (finite, ≥ 0 s)", meta.seconds);
         return Err(Error::file(&path, "seconds", msg));

@@ -10,7 +10,7 @@ use super::settings::{Region, WorkspaceRegion};
 use crate::error::{Error, Result};
 use crate::numeric::rng::Rng;
 use crate::numeric::{Real, Vec3};
-use crate::robot::ik::{fixed_tool_axis, poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
+use crate::robot::ik::{angle_deg, fixed_tool_axis, poses_in_workspace, WORKSPACE_TRIES_PER_POSE};
 use crate::robot::sampling::{poses_in_box, reach_bound_mm, uniform_joint_poses};
 use crate::robot::{Param, Robot};
 
@@ -98,7 +98,7 @@ pub fn check_region(robot: &Robot, region: &Region, n: usize, key: &str) -> Resu
 fn untiltable(robot: &Robot, w: &WorkspaceRegion) -> Option<String> {
     let z = fixed_tool_axis(robot)?;
     let axis = Vec3::from(w.axis).normalize();
-    let off_deg = z.cross(&axis).norm().atan2(z.dot(&axis)).to_degrees();
+    let off_deg = angle_deg(&z, &axis);
     if w.cone_deg == 0.0 && off_deg <= 1e-6 {
         return None;
     }

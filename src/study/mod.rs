@@ -92,6 +92,7 @@ pub struct Shard {
 
 /// The fields of a [`Shard`] as a file holds them, before they are checked.
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct ShardFields {
     index: usize,
     count: usize,
@@ -189,6 +190,7 @@ pub struct FixedInfo {
 /// What the reports need of a block's prepared study (kept once the study is dropped, and
 /// carried by shards to the merge).
 #[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct BlockInfo {
     /// The block's place in the run (sweep point index; 0 without a sweep).
     pub index: usize,
@@ -301,6 +303,7 @@ impl BlockInfo {
 
 /// What trial 0 of a block keeps for the plots and `summary.json`.
 #[derive(Clone, Debug, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Trial0 {
     /// The first outcome's validation errors per point, before and after, with its
     /// (strategy, method).

@@ -553,7 +553,11 @@ fn a_bad_value_deep_in_a_summary_or_baseline_is_named_by_its_own_key_and_line() 
     let values = &mut b["per_trial"]["entries"]["ls / random"]["values"];
     let column = values.as_object().unwrap().keys().next().unwrap().clone();
     values[&column][0] = "x".into();
+    // A scenario as run that is not TOML is the baseline's fault, not the other run's.
+    let mut c = load_json(&base);
+    c["per_trial"]["scenario"] = "x".into();
     for (name, doc, key) in [
+        ("c.json", c, "per_trial.scenario".to_string()),
         (
             "s.json",
             s,

@@ -10,8 +10,8 @@ use calbench::numeric::Real;
 use calbench::robot::{builtin, Param};
 
 use crate::common::{
-    calbench, calbench_ok, import_ur10_sample, load_json, path_arg, positions_only, read, root,
-    tmp_dir, ur10_example as ex,
+    calbench, calbench_ok, import_ur10_sample, load_json, path_arg, positions_only, read, refused,
+    root, tmp_dir, ur10_example as ex,
 };
 
 /// The first 200 rows of the UR10 export, positions only, as a measurement CSV in `d`.
@@ -340,6 +340,11 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
         ("a2 = 0.1\n\na3 = \"x\"\n", "line 3, key `a3`"),
         ("a2 = \n", "line 1: string values must be quoted"),
         ("# nothing\n", "priors: holds no `NAME = σ` line"),
+        (
+            "a2 = 0.1\nbase.x = 1.0\n",
+            "line 2, key `base`: `base.x` is read by TOML as the key `x` of a table `base`: \
+             quote a parameter name that holds a dot, \"base.x\" = σ",
+        ),
     ]
     .into_iter()
     .enumerate()
@@ -663,4 +668,24 @@ fn scenario_priors_run_and_bad_ones_are_named() {
         path_arg(&d.join("bad")),
     ]);
     assert!(String::from_utf8_lossy(&bad.stderr).contains("priors.a2"));
+    // An unquoted dotted name is a table to TOML: refused saying to quote it.
+    std::fs::write(&s, text.replace("a2 = 0.001", "base.x = 0.5")).unwrap();
+    let bad = calbench(&["run", path_arg(&s), "--out", path_arg(&d.join("bad"))]);
+    refused(
+        &bad,
+        &[
+            "priors.base: `base.x` is read by TOML as the key `x` of a table",
+            "\"base.x\" = σ",
+        ],
+    );
+    // Quoted, it is the base's x.
+    std::fs::write(&s, text.replace("a2 = 0.001", "\"base.x\" = 0.5")).unwrap();
+    calbench_ok(&[
+        "run",
+        path_arg(&s),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&d.join("quoted")),
+    ]);
 }

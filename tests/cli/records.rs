@@ -325,6 +325,32 @@ fn resume_refuses_a_share_trial_count_or_sweep_point_out_of_range() {
     refused_resume(&killed, &[(&meta, shard)], &["shard 0/0", "0 ≤ I < N"]);
     let done = with_field(&json, "done", "601");
     refused_resume(&killed, &[(&meta, done)], &["done", "601 trials complete"]);
+    // A value of the wrong type, a key the checkpoint does not have (passed over, before),
+    // an unknown key of the share: named by their line and key path.
+    let line = |key: &str| {
+        json.lines()
+            .position(|l| l.contains(&format!("\"{key}\"")))
+            .unwrap()
+            + 1
+    };
+    let seed = with_field(&json, "seed", "\"42\"");
+    let at = format!("line {}, seed", line("seed"));
+    refused_resume(&killed, &[(&meta, seed)], &[&at, "expected a whole number"]);
+    let unknown = json.replacen("\"done\"", "\"bogus\": 1,\n  \"done\"", 1);
+    refused_resume(
+        &killed,
+        &[(&meta, unknown)],
+        &["bogus", "unknown field `bogus`"],
+    );
+    let extra = json.replace(
+        "\"shard\": null",
+        "\"shard\": {\"index\": 0, \"count\": 1, \"x\": 1}",
+    );
+    refused_resume(
+        &killed,
+        &[(&meta, extra)],
+        &["shard.x", "unknown field `x`"],
+    );
     let trials = with_field(&json, "trials", "7");
     refused_resume(
         &killed,
@@ -476,6 +502,32 @@ fn merge_refuses_altered_settings_naming_shard_json() {
         &[(&m0, unknown)],
         &["shard.json", "unknown field `foo`"],
     );
+    // Of the wrong type or unknown deeper down: named by the key's line and path.
+    let text = read(&m0);
+    let line = text
+        .lines()
+        .position(|l| l.contains("\"seconds\""))
+        .unwrap()
+        + 1;
+    let null = with_field(&text, "seconds", "null");
+    let at = format!("line {line}, seconds");
+    refused_merge(&[&a0, &a1], &[(&m0, null)], &[&at, "invalid type: null"]);
+    let index = text.replacen("\"index\": 0,", "\"index\": 0,\n    \"extra\": 1,", 1);
+    refused_merge(
+        &[&a0, &a1],
+        &[(&m0, index)],
+        &["shard.extra", "unknown field `extra`"],
+    );
+    // A byte-order mark (an editor's UTF-8) is not part of the text.
+    std::fs::write(&m0, format!("\u{feff}{text}")).unwrap();
+    calbench_ok(&[
+        "merge",
+        path_arg(&a0),
+        path_arg(&a1),
+        "--out",
+        path_arg(&dir.join("bom")),
+    ]);
+    std::fs::write(&m0, text).unwrap();
 }
 
 /// The checkpoint `meta`'s `records.txt` with its first record edited by `edit` and its

@@ -231,7 +231,7 @@ fn records_txt_line_ends_blank_lines_and_deleted_records() {
     refused_resume(
         &killed,
         &[(&meta, without)],
-        &["json: line ", "missing field `host`"],
+        &["checkpoint.json: host: ", "missing field `host`"],
     );
 }
 

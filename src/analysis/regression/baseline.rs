@@ -170,7 +170,18 @@ pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<(Trials, Option<Stri
         }
         let p = crate::error::read_typed::<Own, _>(doc, path, "baseline");
         return p
-            .and_then(|o| Ok((o.per_trial.to_trials(path)?, o.per_trial.scenario)))
+            .and_then(|o| {
+                let scenario = o.per_trial.scenario.clone();
+                if let Some(Err(e)) = scenario.as_deref().map(toml::from_str::<toml::Table>) {
+                    let msg = format!(
+                        "is not the text of a scenario (TOML: {}): the file was altered; write \
+                         the baseline again with `calbench baseline`",
+                        e.message()
+                    );
+                    return Err(Error::file(path, "per_trial.scenario", msg));
+                }
+                Ok((o.per_trial.to_trials(path)?, scenario))
+            })
             .map(Some)
             .map_err(Error::at_json_key_line);
     }
