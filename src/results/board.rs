@@ -150,25 +150,54 @@ pub fn scores(rows: &[Row]) -> Vec<Score> {
 /// the task's metric, from the per-row validation errors its `task.json` recorded, and compared
 /// bit for bit with the figure the database ranks and the one the document states. A mismatch
 /// (a figure edited before `record`, a database edited after) or an entry without per-row
-/// errors is refused, naming the folder it was recorded from. Returns the entries verified.
+/// errors is refused, naming the folder it was recorded from; so is an entry ranked under
+/// another task than its `task.json` names, and one whose task hash is recorded under
+/// another task's name (an entry filed under a task it did not run). Returns the entries
+/// verified.
 pub fn verify(db: &Db) -> Result<usize> {
-    let sql = "SELECT r.id, r.source, r.document, t.value, t.ci_lo, t.ci_hi FROM tasks t \
-               JOIN runs r ON r.id = t.run ORDER BY r.id";
+    let sql = "SELECT r.id, r.source, r.document, t.value, t.ci_lo, t.ci_hi, t.task, \
+               t.task_hash FROM tasks t JOIN runs r ON r.id = t.run ORDER BY r.id";
     let entries = db.query(sql, [], |r| {
         let ci: (Option<f64>, Option<f64>) = (r.get(4)?, r.get(5)?);
         Ok((
-            r.get::<_, i64>(0)?,
-            r.get::<_, String>(1)?,
+            (r.get::<_, i64>(0)?, r.get::<_, String>(1)?),
             r.get::<_, String>(2)?,
             r.get::<_, f64>(3)?,
             ci.0.zip(ci.1).map(|(l, h)| [l, h]),
+            (r.get::<_, String>(6)?, r.get::<_, String>(7)?),
         ))
     })?;
-    for (id, source, document, value, ci) in &entries {
+    // Each task hash with the first task name it is recorded under, and where.
+    let mut named: BTreeMap<&str, (&str, i64)> = BTreeMap::new();
+    for ((id, source), document, value, ci, (task, hash)) in &entries {
         let file = std::path::Path::new(source).join("task.json");
         let text: serde_json::Value = serde_json::from_str(document)
             .map_err(|e| Error::file(&file, "task.json", format!("recorded as run {id}: {e}")))?;
         let rec = TaskRecord::from_value(text, &file)?;
+        if (rec.task.as_str(), rec.task_hash.as_str()) != (task, hash) {
+            let msg = format!(
+                "the entry recorded as run {id} is ranked as task `{task}` (task hash {hash}), \
+                 but its task.json names `{}` ({}): the database was edited",
+                rec.task, rec.task_hash
+            );
+            return Err(Error::file(&file, "task", msg));
+        }
+        // The hash binds the task file's values, so one hash under two names is an entry
+        // filed under the name of a task it did not run.
+        match named.get(hash.as_str()) {
+            Some((other, first)) if other != task => {
+                let msg = format!(
+                    "the entry recorded as run {id} is of task `{task}`, but its task_hash \
+                     {hash} is that of task `{other}` (recorded as run {first}): one task's \
+                     hash under two names, an entry filed under a task it did not run"
+                );
+                return Err(Error::file(&file, "task", msg));
+            }
+            Some(_) => {}
+            None => {
+                named.insert(hash, (task, *id));
+            }
+        }
         let Some((again, again_ci)) = rec.recomputed(&file)? else {
             return Err(Error::file(
                 &file,

@@ -247,3 +247,67 @@ fn an_entry_stating_another_model_than_it_identified_is_refused() {
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// An entry whose `task.json` names another task than it ran is refused, naming `task`: the
+/// hash it states is that of the task file it carries, not of the task file of the name it
+/// gives (`tasks/<task>.toml` under the current folder, as a user records it), so it would
+/// rank on a board of a task it did not run. `leaderboard --verify` refuses such a row of a
+/// database: one task's hash under two names, or a row whose task is not its `task.json`'s.
+#[test]
+fn an_entry_filed_under_another_task_is_refused_and_verify_refuses_such_a_row() {
+    let dir = tmp_dir("record-task-other");
+    let task = small_task(&dir);
+    let other = dir.join("tasks/other.toml");
+    std::fs::write(&other, read(&task).replace("A small task", "Another task")).unwrap();
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let json = out.join("task.json");
+    let written = read(&json);
+    let renamed = written.replace("\"task\": \"small\"", "\"task\": \"other\"");
+    assert_ne!(renamed, written);
+    std::fs::write(&json, &renamed).unwrap();
+    let db = dir.join("other.sqlite");
+    let o = crate::common::bin()
+        .current_dir(&dir)
+        .args(["record", path_arg(&out), "--db", path_arg(&db)])
+        .output()
+        .unwrap();
+    crate::common::refused(
+        &o,
+        &[
+            "entry/task.json: task: is \"other\", but the task file of that name, \
+             tasks/other.toml, is not the task file the entry ran",
+            "entry/task.toml",
+        ],
+    );
+    assert!(!db.exists());
+    std::fs::write(&json, &written).unwrap();
+    // A database holding the entry twice, the second row filed under the other name.
+    let db = dir.join("calbench.sqlite");
+    for label in ["v1", "v2"] {
+        let given = ["--task", path_arg(&task), "--label", label];
+        assert!(record(&out, &db, &given).status.success());
+    }
+    let verify = || calbench(&["leaderboard", "--db", path_arg(&db), "--verify"]);
+    assert!(verify().status.success());
+    let c = rusqlite::Connection::open(&db).unwrap();
+    c.execute("UPDATE tasks SET task = 'other' WHERE run = 2", [])
+        .unwrap();
+    crate::common::refused(
+        &verify(),
+        &[
+            "entry/task.json: task: the entry recorded as run 2 is ranked as task `other`",
+            "but its task.json names `small`",
+        ],
+    );
+    let sql = "UPDATE runs SET document = replace(document, '\"task\": \"small\"', \
+               '\"task\": \"other\"') WHERE id = 2";
+    c.execute(sql, []).unwrap();
+    crate::common::refused(
+        &verify(),
+        &[
+            "entry/task.json: task: the entry recorded as run 2 is of task `other`",
+            "is that of task `small` (recorded as run 1)",
+        ],
+    );
+}

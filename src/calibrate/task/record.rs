@@ -315,7 +315,7 @@ impl TaskRecord {
                 );
                 return Err(Error::file(path, "metric", msg));
             }
-            return Ok(());
+            return self.check_named(path, (task_text, task_path), file);
         }
         Err(Error::file(
             path,
@@ -328,6 +328,39 @@ impl TaskRecord {
                 task_path.display(),
                 fixed.join(", "),
                 hash
+            ),
+        ))
+    }
+
+    /// Refuses, naming `path` (this record's file) and `task`, a record whose task file by
+    /// name (`file`) is not the task file it ran (`task_text`, read from `task_path`), value for
+    /// value: the hash the entry states is that of the file it carries, so an entry filed under
+    /// another task's name would be ranked on a board of a task it did not run.
+    fn check_named(
+        &self,
+        path: &Path,
+        (task_text, task_path): (&str, &Path),
+        file: &Path,
+    ) -> Result<()> {
+        let canonical = |text: &str, p: &Path| -> Result<String> {
+            let table: toml::Table = crate::error::toml_keys(p, text)?;
+            Ok(super::canonical::canonical_text(&toml::Value::Table(table)))
+        };
+        let named = crate::error::read_text(file)?;
+        if canonical(&named, file)? == canonical(task_text, task_path)? {
+            return Ok(());
+        }
+        Err(Error::file(
+            path,
+            "task",
+            format!(
+                "is \"{}\", but the task file of that name, {}, is not the task file the entry \
+                 ran ({}, which with the files it fixes has the task_hash the entry states): the \
+                 entry ran another task, or the task file changed since it ran; an entry is \
+                 recorded only under the task it ran",
+                self.task,
+                file.display(),
+                task_path.display()
             ),
         ))
     }
