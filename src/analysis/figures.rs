@@ -113,7 +113,9 @@ pub enum Reader {
 /// a whole number ≥ 0, or above `trials`; a figure that must be ≥ 0 below zero (`signed`);
 /// η above 100 % (`eta_bounded`); an interval whose ends are reversed; and, for
 /// [`Reader::Record`], a figure outside its own 95 % interval (edited). `at` gives the key
-/// path of an entry by its name (`results[2]`, `cells[0]`), for the line of the refusal.
+/// path of an entry by its name (`results[2]`, `cells[0]`), for the line of the refusal; an
+/// empty path is the top of the file (an identification's figures), whose figures are named
+/// by their key alone.
 pub fn check_figures(
     path: &Path,
     trials: Option<usize>,
@@ -133,10 +135,18 @@ pub fn check_figures(
     }
     for f in figures {
         let refuse = |msg: String| {
-            let key = format!("results ({}), {}", f.entry, f.metric);
-            let line = at(&f.entry).and_then(|e| {
+            // An entry at the top of its file (an identification's) is named by its key.
+            let entry = at(&f.entry);
+            let (key, full) = match entry.as_deref() {
+                Some("") => (f.metric.clone(), f.metric.clone()),
+                e => (
+                    format!("results ({}), {}", f.entry, f.metric),
+                    format!("{}.{}", e.unwrap_or_default(), f.metric),
+                ),
+            };
+            let line = entry.and_then(|_| {
                 let text = crate::error::read_text(path).ok()?;
-                json_key_line(&text, &format!("{e}.{}", f.metric))
+                json_key_line(&text, &full)
             });
             Err(Error::file(path, at_line(line, key), msg))
         };

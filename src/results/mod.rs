@@ -14,6 +14,7 @@
 pub mod board;
 pub mod folder;
 pub mod history;
+mod identified;
 pub mod provenance;
 mod reader;
 mod whole;

@@ -48,6 +48,7 @@ mod profiles;
 mod readmit;
 mod readmit_cv;
 mod realdata;
+mod record_figures;
 mod record_formats;
 mod record_keys;
 mod record_task;

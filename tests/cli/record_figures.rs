@@ -1,0 +1,100 @@
+//! `record` stores only what calbench writes (docs/formats.md § 2.15): an `identified.json`
+//! whose figures no identification writes (an error or residual below 0, a mean above its RMS,
+//! a rank above the unknowns, a method calbench does not have, an error of a parameter it did
+//! not identify) is refused naming the file, the line and the key, by the rule a summary's
+//! figures are refused by, and nothing is stored.
+
+use std::path::Path;
+
+use crate::common::{calbench_ok, path_arg, read, refused, root, tmp_dir};
+
+/// `calbench simulate` of ci-guard and `identify` of its readings into `dir/id`, as a user
+/// runs them.
+fn identified(dir: &Path) -> std::path::PathBuf {
+    let sim = dir.join("sim");
+    let sc = root().join("scenarios/ci-guard.toml");
+    calbench_ok(&["simulate", path_arg(&sc), "--out", path_arg(&sim)]);
+    let out = dir.join("id");
+    calbench_ok(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        path_arg(&sim.join("measurements.csv")),
+        "--method",
+        "lm",
+        "--validate",
+        path_arg(&sim.join("validation.csv")),
+        "--out",
+        path_arg(&out),
+    ]);
+    out
+}
+
+#[test]
+fn an_identification_with_figures_no_identification_writes_is_refused_naming_the_key() {
+    let dir = tmp_dir("record-figures-identify");
+    let out = identified(&dir);
+    let file = out.join("identified.json");
+    let written = read(&file);
+    let v: serde_json::Value = serde_json::from_str(&written).unwrap();
+    let after = &v["validation_after_mm"];
+    let params = v["parameters"].as_array().unwrap().len();
+    let db = dir.join("calbench.sqlite");
+    // Each edit of one key, with what the refusal must say.
+    let set = |key: &[&str], to: serde_json::Value| {
+        let mut e = v.clone();
+        let mut at = &mut e;
+        for k in key {
+            at = &mut at[*k];
+        }
+        *at = to;
+        e
+    };
+    let mut extra = v.clone();
+    extra["errors"]["zz9"] = serde_json::json!(1.0);
+    let edits = [
+        (
+            set(&["validation_after_mm", "mean"], (-1.0).into()),
+            "validation_after_mm.mean: is -1: this figure is never negative".to_string(),
+        ),
+        (
+            set(&["rms_residual_mm"], (-1.0).into()),
+            "rms_residual_mm: is -1".to_string(),
+        ),
+        (set(&["sigma0"], (-1.0).into()), "sigma0: is -1".to_string()),
+        (
+            set(&["condition_number"], (-5.0).into()),
+            "condition_number: is -5".to_string(),
+        ),
+        (
+            set(&["validation_after_mm", "mean"], 1e300.into()),
+            format!(
+                "validation_after_mm.mean: is 1e300, above the RMS {} of the same errors",
+                after["rms"]
+            ),
+        ),
+        (
+            set(&["rank"], 999.into()),
+            format!("rank: is 999, above the {params} unknowns solved for"),
+        ),
+        (
+            set(&["method"], "zzz".into()),
+            "method: is \"zzz\", which is no identification method (ls,".to_string(),
+        ),
+        (
+            extra,
+            format!("errors.zz9: is not one of the {params} parameters identified"),
+        ),
+    ];
+    for (edited, want) in edits {
+        let text = serde_json::to_string_pretty(&edited).unwrap() + "\n";
+        std::fs::write(&file, text).unwrap();
+        let o = crate::common::calbench(&["record", path_arg(&out), "--db", path_arg(&db)]);
+        let err = refused(&o, &["id/identified.json: line ", &want]);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(!db.exists(), "{want}: stored");
+    }
+    std::fs::write(&file, &written).unwrap();
+    calbench_ok(&["record", path_arg(&out), "--db", path_arg(&db)]);
+}
