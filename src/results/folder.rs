@@ -11,7 +11,7 @@ use crate::analysis::figures::{flatten, Figure, Reader};
 use crate::analysis::regression::check_summary_for;
 use crate::calibrate::record::IdentifiedRecord;
 use crate::calibrate::task::record::TASK_FILE;
-use crate::calibrate::task::{task_path, Division, TaskRecord};
+use crate::calibrate::task::{task_path, TaskRecord};
 use crate::error::{read_text, shown, Error, Result};
 use crate::numeric::Real;
 use crate::report::scenario_file;
@@ -285,7 +285,7 @@ impl Record {
     pub(super) fn of_task(dir: &Path, task: Option<&Path>) -> Result<Record> {
         let path = dir.join("task.json");
         let (document, v) = read(&path)?;
-        let t = TaskRecord::from_value(v, &path)?;
+        let t = TaskRecord::from_value(v.clone(), &path)?;
         // The task file the entry ran, as its folder carries it (a folder written before it
         // did has none): the published figures must be its own, and with the files it fixes
         // as they are now it must have the hash the entry states.
@@ -313,6 +313,7 @@ impl Record {
             false => None,
         };
         t.check_choice(&path, beside.as_ref().map(|v| (identified.as_path(), v)))?;
+        t.check_written(&path, &v)?;
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
         let value = t.value;
         if !value.is_finite() {
@@ -341,7 +342,6 @@ impl Record {
         }
         let division = t.division.as_str().to_string();
         let models = t.models.join("+");
-        let terms = t.terms();
         let mut published = Vec::new();
         for (i, p) in t.published.iter().enumerate() {
             if p.value < 0.0 {
@@ -359,22 +359,6 @@ impl Record {
         }
         let metric = t.metric.as_str().to_string();
         let (task, method, entrant) = (t.task, t.method, t.entrant);
-        // The closed division is calbench's kinematic models only (DH, β, tool, base): an
-        // entry that says `closed` with another term or entrant would rank among them.
-        if t.division == Division::Closed {
-            let kinematic = terms
-                .parse::<crate::calibrate::cv::Model>()
-                .is_ok_and(|m| m.is_kinematic());
-            if !kinematic || entrant != "calbench" {
-                return Err(bad(
-                    "division",
-                    &format!(
-                        "\"closed\" is for calbench's kinematic models (DH, β, tool, base); \
-                         models `{terms}` of entrant `{entrant}` are in the open division"
-                    ),
-                ));
-            }
-        }
         let entry = if models.is_empty() {
             format!("{entrant} / {method}")
         } else {

@@ -311,3 +311,57 @@ fn an_entry_filed_under_another_task_is_refused_and_verify_refuses_such_a_row() 
         ],
     );
 }
+
+/// A `task.json` edit `calbench task` cannot write is refused naming `task.json` and the key:
+/// a calbench kinematic entry in the open division, no model, a choice by cross-validation
+/// of one candidate, no candidates, what fixed them of another name, an entrant that is
+/// neither calbench nor a Python method, and a Python entrant whose identification beside it
+/// is calbench's own method.
+#[test]
+fn a_task_json_calbench_cannot_write_is_refused_naming_the_key() {
+    let dir = tmp_dir("record-task-written");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let edits: [(&str, serde_json::Value, &str); 7] = [
+        (
+            "division",
+            "open".into(),
+            "division: \"open\" is for a model beyond the kinematic one",
+        ),
+        ("models", serde_json::json!([]), "models: are []"),
+        (
+            "chosen_by",
+            "cv".into(),
+            "chosen_by: is \"cv\", but the entry considered 1 candidate model",
+        ),
+        ("candidates", serde_json::json!([]), "candidates: is empty"),
+        (
+            "candidates_fixed_by",
+            "bogus".into(),
+            "candidates_fixed_by: is \"bogus\"",
+        ),
+        (
+            "entrant",
+            "someone".into(),
+            "entrant: is \"someone\": an entry is calbench's",
+        ),
+        (
+            "entrant",
+            "python:foo".into(),
+            "entrant: is \"python:foo\", a Python method's entry, but",
+        ),
+    ];
+    for (key, to, want) in edits {
+        let err = refused_edit(&out, &task, |j| j[key] = to.clone());
+        assert!(
+            err.contains("entry/task.json: ") && err.contains(want),
+            "{err}"
+        );
+    }
+    let err = refused_edit(&out, &task, |j| j["entrant"] = "python:foo".into());
+    assert!(
+        err.contains("identified by calbench's method \"lm\""),
+        "{err}"
+    );
+}

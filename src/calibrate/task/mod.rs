@@ -13,6 +13,7 @@ pub mod socket;
 mod socket_figures;
 mod socket_file;
 pub mod split;
+mod written;
 
 pub use crate::calibrate::record::unconverged_warning;
 pub use entry::EntryModels;

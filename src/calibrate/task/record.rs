@@ -457,20 +457,37 @@ impl TaskRecord {
         let Some((file, doc)) = identified else {
             return Ok(());
         };
-        // A Python entrant's method is `external` in its identification.
-        let identified_by = match self.entrant.starts_with("python:") {
-            true => crate::identify::external::EXTERNAL,
-            false => self.method.as_str(),
-        };
-        let method = doc.get("method").and_then(Value::as_str);
-        if method.is_some_and(|m| m != identified_by) {
-            let msg = format!(
-                "is \"{}\", but {} beside it was identified by \"{}\"",
-                self.method,
-                file.display(),
-                method.unwrap_or_default()
-            );
-            return bad("method", msg);
+        // A Python entrant's method is `external` in its identification, and only its.
+        let external = crate::identify::external::EXTERNAL;
+        let python = self.entrant.starts_with("python:");
+        match doc.get("method").and_then(Value::as_str) {
+            Some(m) if python != (m == external) => {
+                let msg = match python {
+                    true => format!(
+                        "is \"{}\", a Python method's entry, but {} beside it was identified \
+                         by calbench's method \"{m}\" (a Python method's identification is \
+                         \"{external}\")",
+                        self.entrant,
+                        file.display()
+                    ),
+                    false => format!(
+                        "is \"{}\", but {} beside it was identified by a method supplied from \
+                         outside (\"{external}\"): a Python method's entry is \"python:NAME\"",
+                        self.entrant,
+                        file.display()
+                    ),
+                };
+                return bad("entrant", msg);
+            }
+            Some(m) if !python && m != self.method => {
+                let msg = format!(
+                    "is \"{}\", but {} beside it was identified by \"{m}\"",
+                    self.method,
+                    file.display()
+                );
+                return bad("method", msg);
+            }
+            _ => {}
         }
         match doc.get("cv_best").and_then(Value::as_str) {
             Some(_) if !cv => {
