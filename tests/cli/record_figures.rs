@@ -2,7 +2,8 @@
 //! whose figures no identification writes (an error or residual below 0, a mean above its RMS,
 //! a rank above the unknowns, a method calbench does not have, an error of a parameter it did
 //! not identify) is refused naming the file, the line and the key, by the rule a summary's
-//! figures are refused by, and nothing is stored.
+//! figures are refused by, and nothing is stored. A summary that lacks an entry's validation
+//! errors, or whose terminations are no run's, is refused too (by `check` as well).
 
 use std::path::Path;
 
@@ -95,6 +96,71 @@ fn an_identification_with_figures_no_identification_writes_is_refused_naming_the
         assert_eq!(err.lines().count(), 1, "{err}");
         assert!(!db.exists(), "{want}: stored");
     }
+    std::fs::write(&file, &written).unwrap();
+    calbench_ok(&["record", path_arg(&out), "--db", path_arg(&db)]);
+}
+
+/// A `summary.json` whose entry lost its `validation_after_mm` block is refused by `record`
+/// (as `check` refuses the folder); terminations of an unknown name, or that do not add up
+/// to the trials, are refused by `check` and `record` alike, naming the key at its line.
+#[test]
+fn a_summary_without_its_validation_errors_or_with_unknown_terminations_is_refused() {
+    let dir = tmp_dir("record-figures-summary");
+    let out = dir.join("run");
+    let sc = root().join("scenarios/ci-guard.toml");
+    let args = [
+        "run",
+        path_arg(&sc),
+        "--trials",
+        "2",
+        "--out",
+        path_arg(&out),
+    ];
+    calbench_ok(&args);
+    let file = out.join("summary.json");
+    let written = read(&file);
+    let baseline = dir.join("baseline.json");
+    std::fs::write(&baseline, &written).unwrap();
+    let v: serde_json::Value = serde_json::from_str(&written).unwrap();
+    let db = dir.join("calbench.sqlite");
+    let record = || crate::common::calbench(&["record", path_arg(&out), "--db", path_arg(&db)]);
+    let check = || {
+        let b = path_arg(&baseline);
+        crate::common::calbench(&["check", path_arg(&file), "--baseline", b])
+    };
+    let write = |e: &serde_json::Value| {
+        std::fs::write(&file, serde_json::to_string_pretty(e).unwrap() + "\n").unwrap()
+    };
+    let mut e = v.clone();
+    e["results"][0]
+        .as_object_mut()
+        .unwrap()
+        .remove("validation_after_mm");
+    write(&e);
+    refused(
+        &record(),
+        &[
+            "run/summary.json: line ",
+            ", results[0]: lacks `validation_after_mm`",
+        ],
+    );
+    refused(&check(), &["validation_after_mm"]);
+    let mut e = v.clone();
+    e["results"][0]["terminations"] = serde_json::json!({"bogus": 2});
+    write(&e);
+    let want = [
+        "run/summary.json: line ",
+        "results[0].terminations.bogus: is not a termination",
+    ];
+    refused(&record(), &want);
+    refused(&check(), &want);
+    let mut e = v.clone();
+    e["results"][0]["terminations"] = serde_json::json!({"converged": 1});
+    write(&e);
+    let want = ["results[0].terminations: add up to 1, but the run has 2 trials"];
+    refused(&record(), &want);
+    refused(&check(), &want);
+    assert!(!db.exists());
     std::fs::write(&file, &written).unwrap();
     calbench_ok(&["record", path_arg(&out), "--db", path_arg(&db)]);
 }

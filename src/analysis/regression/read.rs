@@ -42,6 +42,8 @@ pub fn check_summary_for(
     let what = "so this is not a calbench summary (summary.json from `calbench run`: an object \
                 with a `scenario` name and `results`, a list of entries with `method`, `poses` \
                 and metrics)";
+    // Every run writes the validation errors of each entry; a block deleted reads as NaN.
+    let lacking = written_blocks(&value);
     let keys: Vec<String> = value
         .as_object()
         .map(|m| {
@@ -93,13 +95,67 @@ pub fn check_summary_for(
         };
         return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
     }
+    if let Some((i, block)) = lacking.filter(|_| reader == figures::Reader::Record) {
+        let why = format!(
+            "lacks `{block}`, which every run writes for each entry: the summary was edited"
+        );
+        return Err(Error::file(path, format!("results[{i}]"), why).at_json_key_line());
+    }
     let figures = figures::of_summary(&s)?;
     let at = |entry: &str| {
         let i = s.results.iter().position(|e| e.key() == entry)?;
         Some(format!("results[{i}]"))
     };
     figures::check_figures(path, s.trials, &figures, reader, &at)?;
+    check_terminations(&s, path)?;
     Ok((s, figures))
+}
+
+/// The first entry of the summary `value` (its index) without one of the blocks of validation
+/// errors every run writes, and that block.
+fn written_blocks(value: &Value) -> Option<(usize, &'static str)> {
+    let entries = value.get("results")?.as_array()?;
+    entries.iter().enumerate().find_map(|(i, e)| {
+        let e = e.as_object()?;
+        use crate::calibrate::validation::keys::{AFTER_MM, BEFORE_MM};
+        [BEFORE_MM, AFTER_MM]
+            .into_iter()
+            .find(|k| !e.contains_key(*k))
+            .map(|k| (i, k))
+    })
+}
+
+/// Refuses, naming the file and the key at its line, an entry's `terminations` that no run
+/// writes: a name that is not a termination ([`crate::identify::Termination`], as
+/// `identified.json` names them), or counts that do not add up to the summary's `trials`
+/// (each trial's identification ends one way). A summary without them is not judged.
+fn check_terminations(s: &Summary, path: &Path) -> Result<()> {
+    use std::str::FromStr as _;
+    for (i, e) in s.results.iter().enumerate() {
+        let t = &e.terminations;
+        if let Some(name) = t
+            .keys()
+            .find(|k| crate::identify::Termination::from_str(k).is_err())
+        {
+            let names = <crate::identify::Termination as strum::VariantNames>::VARIANTS;
+            let why = format!(
+                "is not a termination of an identification ({})",
+                names.join(", ")
+            );
+            let key = format!("results[{i}].terminations.{name}");
+            return Err(Error::file(path, key, why).at_json_key_line());
+        }
+        let sum: usize = t.values().sum();
+        if let Some(n) = s.trials.filter(|&n| !t.is_empty() && sum != n) {
+            let why = format!(
+                "add up to {sum}, but the run has {n} trials: each trial's identification \
+                 ends one way"
+            );
+            let key = format!("results[{i}].terminations");
+            return Err(Error::file(path, key, why).at_json_key_line());
+        }
+    }
+    Ok(())
 }
 
 /// Refuses, naming the file, the key and its line, a top-level key of a summary (`keys`, those
