@@ -86,6 +86,15 @@ pub(crate) fn err_spelled(e: calbench::Error, spell: calbench::error::Spell) -> 
     }
 }
 
+/// The path argument `key`, refused naming it when it is empty: no file has an empty name,
+/// and the reader's refusal would name none.
+pub(crate) fn nonempty(key: &str, path: std::path::PathBuf) -> PyResult<std::path::PathBuf> {
+    match path.as_os_str().is_empty() {
+        true => Err(setting(key, "is empty: give the path of a file")),
+        false => Ok(path),
+    }
+}
+
 /// A refused argument.
 pub(crate) fn setting(key: &str, msg: impl Into<String>) -> PyErr {
     err(calbench::Error::setting(key, msg.into()))

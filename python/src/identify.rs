@@ -27,7 +27,7 @@ use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{Param, Robot};
 
 use crate::convert::{matrix, measurements, toml_table, Validation};
-use crate::errors::{err, setting, ComputeError};
+use crate::errors::{err, nonempty, setting, ComputeError};
 use crate::robot::PyRobot;
 
 /// The measurements of a file (`data`) or of arrays; `q` and `points` are refused beside a
@@ -69,6 +69,7 @@ impl Readings<'_, '_> {
             ("payload", self.payload.is_some()),
         ];
         if let Some(path) = &self.data {
+            let path = &nonempty("data", path.clone())?;
             if let Some((name, _)) = arrays.iter().find(|a| a.1) {
                 let why = format!("is not taken with `data` (the file {})", path.display());
                 return Err(setting(name, why));
@@ -165,7 +166,7 @@ fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Me
         return Ok(None);
     };
     if v.is_instance_of::<PyString>() {
-        let path: PathBuf = v.extract()?;
+        let path = nonempty("validate", v.extract()?)?;
         return read_measurements(&path, robot).map(Some).map_err(err);
     }
     let (vq, vp, vr): Validation<'_> = v.extract().map_err(|_| {

@@ -1,7 +1,5 @@
 //! `calbench.Robot`.
 
-use std::path::PathBuf;
-
 use numpy::ndarray::{Array2, Array3};
 use numpy::IntoPyArray;
 use pyo3::prelude::*;
@@ -12,7 +10,7 @@ use calbench::robot::loaded::LoadedFk;
 use calbench::robot::{builtin, Param, Robot};
 
 use crate::convert::{flag_arg, float_array2, joint_rows, typed_arg};
-use crate::errors::{err, setting, LimitWarning};
+use crate::errors::{err, nonempty, setting, LimitWarning};
 
 /// Warns (`calbench.LimitWarning`) of the rows of `qs` (internal units) outside the joint
 /// limits of `robot`, naming the first three (`q[0], q[4], q[7] and 2 more rows`) and the
@@ -86,7 +84,7 @@ impl PyRobot {
         tip: Option<&Bound<'_, PyAny>>,
         base: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyRobot> {
-        let path: PathBuf = typed_arg("path", path, "the path of a robot file")?;
+        let path = nonempty("path", typed_arg("path", path, "the path of a robot file")?)?;
         let link = |key: &str, v: Option<&Bound<'_, PyAny>>| {
             v.filter(|t| !t.is_none())
                 .map(|t| typed_arg::<String>(key, t, "the name of a URDF link"))

@@ -34,6 +34,12 @@ def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, mon
     # An empty path is not the root folder (it had been refused as one).
     with pytest.raises(calbench.SettingError, match="`out`: is empty"):
         study.write("")
+    # An empty input path is refused naming its argument, where the refusal named none.
+    robot = calbench.Robot.builtin("irb2600")
+    for call, key in [(lambda: calbench.identify(robot, data=""), "data"),
+                      (lambda: calbench.Robot.from_file(""), "path")]:
+        with pytest.raises(calbench.SettingError, match=f"`{key}`: is empty"):
+            call()
     with pytest.raises(calbench.Error, match="home folder"):
         calbench.run(root / CI_GUARD, trials=2, shard=(0, 2), out=home)
     assert list(home.iterdir()) == []

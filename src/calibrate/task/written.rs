@@ -114,7 +114,7 @@ impl TaskRecord {
                 "candidates_fixed_by",
                 format!(
                     "is {by:?}: the candidates are fixed by \"task\" (the task file's \
-                     [models]), \"command line\" (--models), \"default\" or \"caller\" \
+                     [models]), \"command line\" (the command's models), \"default\" or \"caller\" \
                      (Python's models)"
                 ),
             );
