@@ -304,26 +304,12 @@ fn a_scenario_region_no_pose_reaches_is_refused_at_once_naming_file_line_and_key
 #[test]
 fn a_workspace_region_a_scara_cannot_tilt_to_is_refused_for_that_cause() {
     let d = tmp("scara-tilt");
-    let joint = |kind: &str, alpha: f64, a: f64, d: f64, limits: &str| {
-        format!(
-            "[[joints]]\ntype = \"{kind}\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
-             theta = 0.0\nlimits = {limits}\n\n"
-        )
-    };
-    let robot = format!(
-        "name = \"scara\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n\n\
-         {}{}{}{}[tool]\nxyz = [20.0, 0.0, 30.0]\nrpy = [0.0, 0.0, 0.0]\n",
-        joint("revolute", 0.0, 325.0, 200.0, "[-170.0, 170.0]"),
-        joint("revolute", 180.0, 225.0, 0.0, "[-145.0, 145.0]"),
-        joint("prismatic", 0.0, 0.0, 0.0, "[0.0, 150.0]"),
-        joint("revolute", 0.0, 0.0, 50.0, "[-360.0, 360.0]"),
-    );
-    std::fs::write(d.join("scara.toml"), robot).unwrap();
+    std::fs::write(d.join("scara.toml"), crate::readmit::scara()).unwrap();
     let scenario = |axis: &str, cone: f64| {
         let region = format!(
-            "region = {{ kind = \"workspace\", center_mm = [350.0, 350.0, 50.0], size_mm = \
+            "region = {{ kind = \"workspace\", center_mm = [416.0, 485.0, 230.0], size_mm = \
              [100.0, 100.0, 50.0], axis = {axis}, cone_deg = {cone:?}, start = [30.0, 40.0, \
-             75.0, 0.0] }}"
+             100.0, 0.0] }}"
         );
         let text = format!(
             "name = \"tilt\"\nseed = 3\ntrials = 1\n\n[robot]\nfile = \"scara.toml\"\n\n\
