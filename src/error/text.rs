@@ -36,11 +36,16 @@ pub fn read_bounded(path: &Path) -> std::io::Result<Vec<u8>> {
 /// reader that words its own refusal of the file (a shard's `shard.json`, a checkpoint): text
 /// that is not UTF-8 is an I/O error too.
 pub fn read_bounded_text(path: &Path) -> std::io::Result<String> {
-    let mut text = String::from_utf8(read_bounded(path)?).map_err(std::io::Error::other)?;
+    let text = String::from_utf8(read_bounded(path)?).map_err(std::io::Error::other)?;
+    Ok(without_bom(text))
+}
+
+/// `text` without a leading byte-order mark (an editor's UTF-8), which is not part of it.
+fn without_bom(mut text: String) -> String {
     if text.starts_with('\u{feff}') {
         text.drain(..'\u{feff}'.len_utf8());
     }
-    Ok(text)
+    text
 }
 
 /// The text of the file `path`, every byte of it ([`read_text`] less a byte-order mark), for a
@@ -71,9 +76,5 @@ pub fn read_text_whole(path: &Path) -> Result<String> {
 /// editor's UTF-8), which is not part of the text: a JSON file saved with one reads as
 /// without, as TOML, CSV and URDF files do.
 pub fn read_text(path: &Path) -> Result<String> {
-    let mut text = read_text_whole(path)?;
-    if text.starts_with('\u{feff}') {
-        text.drain(..'\u{feff}'.len_utf8());
-    }
-    Ok(text)
+    read_text_whole(path).map(without_bom)
 }
