@@ -645,32 +645,27 @@ fn scenario_priors_run_and_bad_ones_are_named() {
         "name = \"lm\"\n\n[[methods]]\nname = \"lm\"\nlabel = \"lm-prior\"\npriors = { a2 = 0.001 }",
     );
     let s = d.join("s.toml");
-    std::fs::write(&s, &text).unwrap();
-    let out = d.join("out");
-    calbench_ok(&[
-        "run",
-        path_arg(&s),
-        "--trials",
-        "2",
-        "--out",
-        path_arg(&out),
-    ]);
-    let summary = load_json(&out.join("summary.json"));
+    // `calbench run` of the scenario with the entry's priors `priors`, into `d/OUT`.
+    let run = |priors: &str, out: &str| {
+        std::fs::write(&s, text.replace("a2 = 0.001", priors)).unwrap();
+        calbench(&[
+            "run",
+            path_arg(&s),
+            "--trials",
+            "2",
+            "--out",
+            path_arg(&d.join(out)),
+        ])
+    };
+    let o = run("a2 = 0.001", "out");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary = load_json(&d.join("out").join("summary.json"));
     let text_summary = summary.to_string();
     assert!(text_summary.contains("lm-prior"));
-    std::fs::write(&s, text.replace("a2 = 0.001", "a2 = 0")).unwrap();
-    let bad = calbench(&[
-        "run",
-        path_arg(&s),
-        "--trials",
-        "2",
-        "--out",
-        path_arg(&d.join("bad")),
-    ]);
+    let bad = run("a2 = 0", "bad");
     assert!(String::from_utf8_lossy(&bad.stderr).contains("priors.a2"));
     // An unquoted dotted name is a table to TOML: refused saying to quote it.
-    std::fs::write(&s, text.replace("a2 = 0.001", "base.x = 0.5")).unwrap();
-    let bad = calbench(&["run", path_arg(&s), "--out", path_arg(&d.join("bad"))]);
+    let bad = run("base.x = 0.5", "bad");
     refused(
         &bad,
         &[
@@ -679,13 +674,6 @@ fn scenario_priors_run_and_bad_ones_are_named() {
         ],
     );
     // Quoted, it is the base's x.
-    std::fs::write(&s, text.replace("a2 = 0.001", "\"base.x\" = 0.5")).unwrap();
-    calbench_ok(&[
-        "run",
-        path_arg(&s),
-        "--trials",
-        "2",
-        "--out",
-        path_arg(&d.join("quoted")),
-    ]);
+    let o = run("\"base.x\" = 0.5", "quoted");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
