@@ -8,7 +8,7 @@ use pyo3::types::{PyDict, PyList};
 
 use calbench::report::html::compare::{Comparison, Side};
 
-use crate::errors::err;
+use crate::errors::{err, nonempty};
 
 /// The comparison of run `b` with run `a` (folders or `summary.json` files) at `tolerance`:
 /// a dict with `metrics` (one dict per compared metric, in A's order), `only_in_a`,
@@ -22,6 +22,7 @@ pub(crate) fn compare<'py>(
     tolerance: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
     calbench::analysis::regression::checked_tolerance(tolerance, "tolerance").map_err(err)?;
+    let (a, b) = (nonempty("a", a)?, nonempty("b", b)?);
     let c = py
         .detach(|| -> calbench::Result<Comparison> {
             Comparison::new(Side::read(&a)?, Side::read(&b)?, tolerance)

@@ -15,7 +15,7 @@ use calbench::robot::Robot;
 use calbench::study::kind::AnyScenario;
 use calbench::study::scenario::Scenario;
 
-use crate::errors::{err, setting};
+use crate::errors::{err, nonempty, setting};
 
 /// `a` as a 2-D float64 array: a float64 array as it is, anything numpy reads as real
 /// numbers converted; bool and complex arrays, and what is not numbers, refused naming `key`.
@@ -23,7 +23,11 @@ pub(crate) fn float_array2<'py>(
     key: &str,
     a: &Bound<'py, PyAny>,
 ) -> PyResult<PyReadonlyArray2<'py, f64>> {
-    if let Ok(v) = a.extract::<PyReadonlyArray2<'py, f64>>() {
+    if let Some(v) = a
+        .extract::<PyReadonlyArray2<'py, f64>>()
+        .ok()
+        .filter(|_| !masked(a))
+    {
         return Ok(v);
     }
     float64(key, a)?
@@ -43,9 +47,34 @@ pub(crate) fn float64<'py>(key: &str, a: &Bound<'py, PyAny>) -> PyResult<Bound<'
         ));
     }
     let float = a.py().import("numpy")?.getattr("float64")?;
-    missing_as_nan(raw)?
+    let values = missing_as_nan(raw)?
         .call_method1("astype", (float,))
-        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))
+        .map_err(|e| setting(key, format!("not an array of numbers ({e})")))?;
+    masked_as_nan(a, values)
+}
+
+/// The `values` of a numpy masked array `a` with its masked cells as NaN, which the arrays'
+/// checks refuse naming the row and the column, as they refuse a missing value
+/// ([`missing_as_nan`]); numpy reads a masked array as the values under its mask, which had
+/// been taken as they were. Any other array's `values` as they are.
+fn masked_as_nan<'py>(
+    a: &Bound<'py, PyAny>,
+    values: Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyAny>> {
+    if !masked(a) {
+        return Ok(values);
+    }
+    let numpy = a.py().import("numpy")?;
+    let mask = numpy.getattr("ma")?.call_method1("getmaskarray", (a,))?;
+    numpy.call_method1("where", (mask, f64::NAN, values))
+}
+
+/// Whether `a` is a numpy masked array, which a float64 array's reader would take as the
+/// values under its mask ([`masked_as_nan`]).
+pub(crate) fn masked(a: &Bound<'_, PyAny>) -> bool {
+    let ma = a.py().import("numpy").and_then(|n| n.getattr("ma"));
+    ma.and_then(|ma| ma.call_method1("isMaskedArray", (a,))?.extract::<bool>())
+        .unwrap_or(false)
 }
 
 /// An object array's missing values (`None`, pandas' `pd.NA` of a nullable column) as NaN,
@@ -445,7 +474,7 @@ pub(crate) fn scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<Scenario> {
     let path: PathBuf = scenario
         .extract()
         .map_err(|_| setting("scenario", "expected a path to a scenario file or a dict"))?;
-    Scenario::load(&path).map_err(err)
+    Scenario::load(&nonempty("scenario", path)?).map_err(err)
 }
 
 /// A scenario of any kind ([`AnyScenario`]): a path to a scenario file, or a dict shaped like
@@ -459,7 +488,7 @@ pub(crate) fn any_scenario_of(scenario: &Bound<'_, PyAny>) -> PyResult<AnyScenar
     let path: PathBuf = scenario
         .extract()
         .map_err(|_| setting("scenario", "expected a path to a scenario file or a dict"))?;
-    AnyScenario::load(&path).map_err(err)
+    AnyScenario::load(&nonempty("scenario", path)?).map_err(err)
 }
 
 /// A column-major matrix as a (rows, cols) numpy array.

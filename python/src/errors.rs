@@ -90,7 +90,10 @@ pub(crate) fn err_spelled(e: calbench::Error, spell: calbench::error::Spell) -> 
 /// and the reader's refusal would name none.
 pub(crate) fn nonempty(key: &str, path: std::path::PathBuf) -> PyResult<std::path::PathBuf> {
     match path.as_os_str().is_empty() {
-        true => Err(setting(key, "is empty: give the path of a file")),
+        true => Err(setting(
+            key,
+            "is empty: no file or folder has an empty name",
+        )),
         false => Ok(path),
     }
 }

@@ -196,7 +196,11 @@ impl PyProblem {
     /// `x` as a vector: anything numpy reads as a 1-D array of real numbers (a bool or
     /// complex array is refused, not taken as 0 and 1 or cut to its real part).
     fn x(x: &Bound<'_, PyAny>) -> PyResult<Vec<Real>> {
-        if let Ok(a) = x.extract::<PyReadonlyArray1<'_, f64>>() {
+        if let Some(a) = x
+            .extract::<PyReadonlyArray1<'_, f64>>()
+            .ok()
+            .filter(|_| !crate::convert::masked(x))
+        {
             return Ok(a.as_array().to_vec());
         }
         crate::convert::float64("x", x)?

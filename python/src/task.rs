@@ -46,6 +46,10 @@ pub(crate) fn task<'py>(
     out: Option<PathBuf>,
     options: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    if task.is_empty() {
+        let why = "is empty: give a task's name (`tasks/NAME.toml`) or the path of a task file";
+        return Err(setting("task", why));
+    }
     let path = task_path(task);
     if let Some(t) = load_socket_task(&path).map_err(task_err)? {
         return socket_task(py, &t, (method, options.as_ref()), models, out);

@@ -37,7 +37,12 @@ def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, mon
     # An empty input path is refused naming its argument, where the refusal named none.
     robot = calbench.Robot.builtin("irb2600")
     for call, key in [(lambda: calbench.identify(robot, data=""), "data"),
-                      (lambda: calbench.Robot.from_file(""), "path")]:
+                      (lambda: calbench.Robot.from_file(""), "path"),
+                      (lambda: calbench.run(""), "scenario"),
+                      (lambda: calbench.simulate(""), "scenario"),
+                      (lambda: calbench.compare("", root / "results" / "ci-guard"), "a"),
+                      (lambda: calbench.compare(root / "results" / "ci-guard", ""), "b"),
+                      (lambda: calbench.task("", "lm"), "task")]:
         with pytest.raises(calbench.SettingError, match=f"`{key}`: is empty"):
             call()
     with pytest.raises(calbench.Error, match="home folder"):

@@ -66,6 +66,24 @@ def test_a_missing_value_is_refused_at_its_row_and_column():
         calbench.identify(robot, q.fillna(0.0), points, sigma=[0.01] * 5 + [pd.NA] + [0.01] * 34)
 
 
+def test_a_masked_value_is_refused_at_its_row_and_column():
+    # numpy reads a masked array as the values under its mask, which had been taken as they
+    # were (99 here); a masked cell is refused as a missing one is, and an array with nothing
+    # masked is taken as its values.
+    robot = calbench.Robot.builtin("irb2600")
+    rng = np.random.default_rng(3)
+    q = np.ma.masked_array(rng.uniform(-30, 30, (40, 6)), mask=False)
+    q[4, 1] = np.ma.masked
+    q.data[4, 1] = 99.0
+    points = rng.normal(size=(40, 3)) * 500
+    with pytest.raises(calbench.SettingError, match=r"^setting `q`: row 4, column q2: NaN is not"):
+        calbench.identify(robot, q, points)
+    with pytest.raises(calbench.SettingError, match=r"^setting `q`: row 4, column q2: .*NaN"):
+        robot.fk(q)
+    whole = np.ma.masked_array(q.data, mask=False)
+    np.testing.assert_array_equal(robot.fk(whole), robot.fk(q.data))
+
+
 def test_a_precision_that_is_no_finite_number_is_said_so(ci_guard):
     sc = ci_guard
     for bad in ["infmm", "nan%", "inf %"]:

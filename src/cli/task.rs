@@ -27,6 +27,7 @@ use calbench::report::{write_identified_with, write_kind};
 #[derive(clap::Args)]
 pub struct TaskArgs {
     /// A task under `tasks/` by name (`barrett-wam`), or the path of a task file.
+    #[arg(value_parser = clap::builder::NonEmptyStringValueParser::new())]
     pub task: String,
     /// The identification method, with its default options.
     #[arg(long, value_parser = super::entry_of(METHODS, |m| m.name, |m| m.summary))]

@@ -314,6 +314,7 @@ impl Record {
         };
         t.check_choice(&path, beside.as_ref().map(|v| (identified.as_path(), v)))?;
         t.check_written(&path, &v)?;
+        check_ran_with(&t, &path)?;
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());
         let value = t.value;
         if !value.is_finite() {
@@ -398,6 +399,28 @@ impl Record {
         });
         Ok(r)
     }
+}
+
+/// Refuses, naming the `task.json` file `path` and the key, a calbench that ran the entry `t`
+/// no `calbench task` writes: a `calbench_version` that is not a version ([`VersionKey`],
+/// by which history orders), a `git_commit` that is not a commit's 40 hexadecimal digits
+/// (`git rev-parse HEAD`).
+fn check_ran_with(t: &TaskRecord, path: &Path) -> Result<()> {
+    let bad = |key: &str, msg: String| Err(Error::file(path, key, msg).at_json_key_line());
+    if let Some(v) = t.calbench_version.as_deref() {
+        if super::history::VersionKey::parse(v).is_none() || v.chars().any(crate::error::is_hidden)
+        {
+            let msg = format!("is {v:?}, which is no version (MAJOR.MINOR.PATCH[-PRE])");
+            return bad("calbench_version", msg);
+        }
+    }
+    if let Some(c) = t.git_commit.as_deref() {
+        if c.len() != 40 || !c.bytes().all(|b| b.is_ascii_hexdigit()) {
+            let msg = format!("is {c:?}, which is no commit (its 40 hexadecimal digits)");
+            return bad("git_commit", msg);
+        }
+    }
+    Ok(())
 }
 
 /// The name, seed and trials of the scenario a run ran.

@@ -14,7 +14,8 @@ use crate::error::{shown, Error, Result};
 use crate::numeric::Real;
 
 /// Refuses, naming the file `path` and the key (at its line), a record `id` no identification
-/// writes: a `method` that is neither one of calbench's ([`crate::identify::METHODS`]) nor a
+/// writes: a `robot` no robot file may be named (empty, or holding a control character); a
+/// `method` that is neither one of calbench's ([`crate::identify::METHODS`]) nor a
 /// method supplied from outside; an `errors` key that is not one of its `parameters`, or a
 /// parameter without its error; a `rank` above the unknowns solved for (the parameters, with a
 /// kind file's instrument unknowns); a figure (`figures`, of its numbers `kept`) a run's
@@ -37,6 +38,16 @@ pub(super) fn check_identified(
                  supplied from outside)",
                 id.method,
                 crate::identify::registry::method_names()
+            ),
+        );
+    }
+    if id.robot.trim().is_empty() || id.robot.chars().any(crate::error::is_hidden) {
+        return bad(
+            "robot",
+            format!(
+                "is {:?}: an identification names its robot by the robot file's `name`, which \
+                 is not empty and holds no control character",
+                id.robot
             ),
         );
     }

@@ -1,8 +1,8 @@
 //! `record` stores only what calbench writes (docs/formats.md § 2.15): an `identified.json`
 //! whose figures no identification writes (an error or residual below 0, a mean above its RMS,
 //! a rank above the unknowns, a method calbench does not have, an error of a parameter it did
-//! not identify) is refused naming the file, the line and the key, by the rule a summary's
-//! figures are refused by, and nothing is stored. A summary that lacks an entry's validation
+//! not identify, a robot no robot file may be named) is refused naming the file, the line and
+//! the key, by the rule a summary's figures are refused by, and nothing is stored. A summary that lacks an entry's validation
 //! errors, or whose terminations are no run's, is refused too (by `check` as well).
 
 use std::path::Path;
@@ -86,6 +86,14 @@ fn an_identification_with_figures_no_identification_writes_is_refused_naming_the
         (
             extra,
             format!("errors.zz9: is not one of the {params} parameters identified"),
+        ),
+        (
+            set(&["robot"], "".into()),
+            "robot: is \"\": an identification names its robot".to_string(),
+        ),
+        (
+            set(&["robot"], "a\u{7}b".into()),
+            "robot: is \"a\\u{7}b\": an identification names its robot".to_string(),
         ),
     ];
     for (edited, want) in edits {

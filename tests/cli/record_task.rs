@@ -323,7 +323,7 @@ fn a_task_json_calbench_cannot_write_is_refused_naming_the_key() {
     let task = small_task(&dir);
     let out = dir.join("entry");
     run_entry(&task, &out);
-    let edits: [(&str, serde_json::Value, &str); 7] = [
+    let edits: [(&str, serde_json::Value, &str); 10] = [
         (
             "division",
             "open".into(),
@@ -340,6 +340,21 @@ fn a_task_json_calbench_cannot_write_is_refused_naming_the_key() {
             "candidates_fixed_by",
             "bogus".into(),
             "candidates_fixed_by: is \"bogus\"",
+        ),
+        (
+            "candidates_fixed_by",
+            "task".into(),
+            "candidates_fixed_by: is \"task\", but the task file the entry ran",
+        ),
+        (
+            "calbench_version",
+            "banana".into(),
+            "calbench_version: is \"banana\", which is no version",
+        ),
+        (
+            "git_commit",
+            "deadbeef".into(),
+            "git_commit: is \"deadbeef\", which is no commit",
         ),
         (
             "entrant",
@@ -362,6 +377,38 @@ fn a_task_json_calbench_cannot_write_is_refused_naming_the_key() {
     let err = refused_edit(&out, &task, |j| j["entrant"] = "python:foo".into());
     assert!(
         err.contains("identified by calbench's method \"lm\""),
+        "{err}"
+    );
+    // A task whose [models] fixes the candidates: its entry run without the command's models
+    // is fixed by "task", never by "default", and by the task's candidates alone.
+    let fixed = dir.join("tasks/fixed.toml");
+    let text = read(&task) + "\n[models]\ncandidates = [\"kinematic\"]\n";
+    std::fs::write(&fixed, text).unwrap();
+    let out = dir.join("fixed-entry");
+    calbench_ok(&[
+        "task",
+        path_arg(&fixed),
+        "--method",
+        "lm",
+        "--out",
+        path_arg(&out),
+    ]);
+    assert_eq!(
+        load_json(&out.join("task.json"))["candidates_fixed_by"],
+        "task"
+    );
+    assert!(record(
+        &out,
+        &dir.join("fixed.sqlite"),
+        &["--task", path_arg(&fixed)]
+    )
+    .status
+    .success());
+    let err = refused_edit(&out, &fixed, |j| {
+        j["candidates_fixed_by"] = "default".into()
+    });
+    assert!(
+        err.contains("candidates_fixed_by: is \"default\", but the task file the entry ran"),
         "{err}"
     );
 }

@@ -234,6 +234,12 @@ fn the_validation_rows_do_not_change_the_chosen_model() {
 #[test]
 fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
     let d = tmp_dir("cli-task-refusals");
+    // An empty task name is refused as such, where it was looked up as `tasks/.toml`.
+    let out = d.join("empty-name");
+    let o = calbench(&["task", "", "--method", "lm", "--out", path_arg(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("'<TASK>'"), "{err}");
+    assert!(!err.contains("tasks/.toml") && !out.exists(), "{err}");
     let src = std::fs::read_to_string(task("ipa-ur10-series-d")).unwrap();
     let abs = |s: &str| {
         s.replace("\"../", &format!("\"{}/", root().display()))

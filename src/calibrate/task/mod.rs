@@ -39,14 +39,21 @@ use head::TaskFile;
 pub use split::Split;
 
 /// The head and the metric of `text`, the task file `path` with the files it names taken
-/// from `dir`, a socket task's or a tracker's.
-pub fn head_of(text: &str, path: &Path, dir: &Path) -> Result<(TaskHead, Metric)> {
+/// from `dir`, a socket task's or a tracker's, with the candidate models of its `[models]`
+/// (`None` without one; a socket task has none).
+pub fn head_of(
+    text: &str,
+    path: &Path,
+    dir: &Path,
+) -> Result<(TaskHead, Metric, Option<Vec<String>>)> {
     Ok(
         match socket::parse_socket_task(text.to_string(), path, dir)? {
-            Some(t) => (t.head, Metric::SocketSpreadMm),
+            Some(t) => (t.head, Metric::SocketSpreadMm, None),
             None => {
                 let t = Task::parse(text.to_string(), path, dir)?;
-                (t.head, t.metric)
+                let names = |m: &TaskModels| m.candidates.iter().map(Model::name).collect();
+                let models = t.models.as_ref().map(names);
+                (t.head, t.metric, models)
             }
         },
     )

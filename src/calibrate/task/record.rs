@@ -302,7 +302,7 @@ impl TaskRecord {
             return Err(Error::file(path, "task", msg));
         }
         let dir = file.parent().unwrap_or(Path::new("."));
-        let (head, metric) = super::head_of(task_text, task_path, dir)?;
+        let (head, metric, models) = super::head_of(task_text, task_path, dir)?;
         let (fixed, hash) = (head.fixed_shown(), head.hash);
         if hash == self.task_hash {
             // The hash binds the task file, and with it the metric the entry must have.
@@ -315,6 +315,7 @@ impl TaskRecord {
                 );
                 return Err(Error::file(path, "metric", msg));
             }
+            self.check_fixed_by(path, (task_path, models.as_deref()))?;
             return self.check_named(path, (task_text, task_path), file);
         }
         Err(Error::file(

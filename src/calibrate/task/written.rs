@@ -121,4 +121,40 @@ impl TaskRecord {
         }
         Ok(())
     }
+
+    /// Refuses, naming `path` (this record's file) and `candidates_fixed_by`, candidates said to
+    /// be fixed by what did not fix them, by the task file the entry ran (`task_path`, whose
+    /// `[models]` candidates are `models`): `task` where the task file has no `[models]` or
+    /// other candidates than the entry's, `default` where it has one (its candidates are then
+    /// the task's) or where the entry considered other candidates than `kinematic`.
+    pub(super) fn check_fixed_by(
+        &self,
+        path: &Path,
+        (task_path, models): (&Path, Option<&[String]>),
+    ) -> Result<()> {
+        let given = self.candidates.as_slice();
+        let why = match (self.candidates_fixed_by.as_deref(), models) {
+            (Some("task"), None) => format!(
+                "is \"task\", but the task file the entry ran ({}) has no [models]",
+                task_path.display()
+            ),
+            (Some("task"), Some(m)) if !given.is_empty() && given != m => format!(
+                "is \"task\", but the entry considered {given:?} (candidates) and the task \
+                 file it ran ({}) names {m:?} in [models]",
+                task_path.display()
+            ),
+            (Some("default"), Some(m)) => format!(
+                "is \"default\", but the task file the entry ran ({}) names its candidates \
+                 {m:?} in [models]: without the command's models they fix the candidates \
+                 (\"task\")",
+                task_path.display()
+            ),
+            (Some("default"), None) if !given.is_empty() && given != ["kinematic"] => format!(
+                "is \"default\", but the entry considered {given:?} (candidates): the \
+                 default candidate is [\"kinematic\"] alone"
+            ),
+            _ => return Ok(()),
+        };
+        Err(Error::file(path, "candidates_fixed_by", why).at_json_key_line())
+    }
 }
