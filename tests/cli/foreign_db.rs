@@ -24,7 +24,7 @@ fn task_folder(dir: &Path) -> std::path::PathBuf {
   "models": ["kinematic"],
   "chosen_by": "cv",
   "entrant": "calbench",
-  "calbench_version": "0.1.0", "git_commit": "abc",
+  "calbench_version": "0.1.0", "git_commit": "0123456789abcdef0123456789abcdef01234567",
   "published": []
 }
 "#;

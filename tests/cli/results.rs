@@ -142,7 +142,7 @@ fn task_folder_at(dir: &Path, name: &str, value: f64, division: &str, models: &s
   "models": [{models}],
   "chosen_by": "cv",
   "entrant": "calbench",
-  "calbench_version": "0.1.0", "git_commit": "abc",
+  "calbench_version": "0.1.0", "git_commit": "0123456789abcdef0123456789abcdef01234567",
   "published": [ {{"label": "MDH + learned residual", "value": 2.92, "source": "Jacobi 2025, table 3", "division": "open"}} ]
 }}
 "#,
@@ -549,7 +549,7 @@ fn a_task_record_keeps_the_version_that_ran_it() {
     task_folder(&dir, "t", 3.09, "closed", "\"kinematic\"");
     let json = dir.join("t/task.json");
     let text = read(&json).replace(
-        "\"calbench_version\": \"0.1.0\", \"git_commit\": \"abc\"",
+        "\"calbench_version\": \"0.1.0\", \"git_commit\": \"0123456789abcdef0123456789abcdef01234567\"",
         "\"calbench_version\": \"0.0.9\", \"git_commit\": null",
     );
     std::fs::write(&json, text).unwrap();
