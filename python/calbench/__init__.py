@@ -171,7 +171,8 @@ def identify(
         cv: K of a K-fold cross-validation (``--cv``); cv_seed: seed of its folds (default
             0; with ``cv`` or ``models`` only).
         validate: a validation measurement: a tracker's file, or ``(q, points)`` /
-            ``(q, points, rotations)``.
+            ``(q, points, rotations)`` / ``(q, points, rotations or None, payload)``, the
+            payload (N,) in kg; required with ``payload``, as the poses' loads are.
         holdout: ``"LAST/EVERY"``: rows held out for validation instead (``--holdout``).
         seed: seed of the random searches.
         allow_rank_deficient: return a result whose data do not determine every parameter
@@ -209,15 +210,24 @@ def identify(
     if isinstance(validate, (str, os.PathLike)):
         val = os.fspath(validate)
     elif validate is not None:
-        if not isinstance(validate, (tuple, list)) or len(validate) not in (2, 3):
+        if not isinstance(validate, (tuple, list)) or len(validate) not in (2, 3, 4):
             raise SettingError(
-                "setting `validate`: expected a measurement file, (q, points) or "
-                "(q, points, rotations)"
+                "setting `validate`: expected a measurement file, (q, points), "
+                "(q, points, rotations) or (q, points, rotations or None, payload)"
+            )
+        if payload is not None and len(validate) < 4:
+            # The validation poses would be predicted with no load, where the calibration
+            # poses carry one: say the validation's payload, zeros for unloaded poses.
+            raise SettingError(
+                "setting `validate`: the calibration poses carry a payload (`payload`) and "
+                "the validation poses none: give (q, points, rotations or None, payload), "
+                "the payload in kg per validation pose (zeros for poses without one)"
             )
         val = (
             _array("validate.q", validate[0], 2, robot.joint_count),
             _array("validate.points", validate[1], 2, 3),
-            _rotations("validate.rotations", validate[2]) if len(validate) == 3 else None,
+            _rotations("validate.rotations", validate[2]) if len(validate) > 2 else None,
+            _array("validate.payload", validate[3], 1) if len(validate) == 4 else None,
         )
     if compliance is not None:
         compliance = ",".join(_names("compliance", compliance))
@@ -493,7 +503,7 @@ def run(
             _scenario(scenario),
             trials=_count("trials", trials, least=1),
             seed=_count("seed", seed, bits=63),
-            threads=_count("threads", threads),
+            threads=_count("threads", threads, least=1),
             methods=methods,
             progress=_flag("progress", progress),
             precision=None if precision is None else str(precision),
@@ -506,7 +516,7 @@ def run(
         _path("out", out, "a folder"),
         trials=_count("trials", trials, least=1),
         seed=_count("seed", seed, bits=63),
-        threads=_count("threads", threads),
+        threads=_count("threads", threads, least=1),
         progress=_flag("progress", progress),
         shard=None if shard is None else _shard(shard),
     )

@@ -37,6 +37,9 @@ def _rotations(name, value):
     a = _numbers(name, value)
     if a.ndim == 2:
         return _array(name, a, 2, 4)
+    if a.ndim != 3:
+        raise SettingError(f"setting `{name}`: expected (N, 4) quaternions or (N, 3, 3) "
+                           f"rotation matrices, got shape {a.shape}")
     return _array(name, a, 3)
 
 

@@ -498,9 +498,10 @@ pub(crate) fn matrix<'py>(py: Python<'py>, m: &DMatrix<Real>) -> Bound<'py, PyAn
         .unwrap_or_else(|_| PyArray1::<f64>::zeros(py, 0, false).into_any())
 }
 
-/// A validation measurement: (q, points, rotations or None).
+/// A validation measurement: (q, points, rotations or None, payload or None).
 pub(crate) type Validation<'py> = (
     PyReadonlyArray2<'py, f64>,
     PyReadonlyArray2<'py, f64>,
     Option<Bound<'py, PyAny>>,
+    Option<PyReadonlyArray1<'py, f64>>,
 );

@@ -160,7 +160,7 @@ fn priors(prior: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Param, Real)>> {
         .collect()
 }
 
-/// `validate`: a tracker's file, or arrays (q, points[, rotations]).
+/// `validate`: a tracker's file, or arrays (q, points, rotations or None, payload or None).
 fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Measurements>> {
     let Some(v) = v else {
         return Ok(None);
@@ -169,14 +169,14 @@ fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Me
         let path = nonempty("validate", v.extract()?)?;
         return read_measurements(&path, robot).map(Some).map_err(err);
     }
-    let (vq, vp, vr): Validation<'_> = v.extract().map_err(|_| {
+    let (vq, vp, vr, vl): Validation<'_> = v.extract().map_err(|_| {
         setting(
             "validate",
-            "expected a measurement file or (q, points[, rotations])",
+            "expected a measurement file or (q, points[, rotations[, payload]])",
         )
     })?;
     let keys = ArrayKeys::All("validate");
-    measurements(robot, keys, &vq, &vp, vr.as_ref(), None, None).map(Some)
+    measurements(robot, keys, &vq, &vp, vr.as_ref(), None, vl.as_ref()).map(Some)
 }
 
 /// Identification (the Python half documents the arguments): the dict of `record` (the

@@ -351,6 +351,12 @@ pub(crate) fn python_method(label: &str, f: Py<PyAny>, stop: &Interrupted) -> Ex
                          numbers; it must return {RETURNS}"
                     ));
                 }
+                // A masked array's masked cells are missing (NaN, refused as a non-finite
+                // value), not the values under the mask.
+                let x = match crate::convert::masked(&x) {
+                    true => crate::convert::float64("x", &x).map_err(text)?,
+                    false => x,
+                };
                 let x: Vec<Real> = match x.extract::<PyReadonlyArray1<'_, f64>>() {
                     Ok(a) => a.as_array().to_vec(),
                     Err(_) => x

@@ -530,6 +530,10 @@ def test_run_refuses_bad_scenarios_naming_the_key(root):
         calbench.run(root / "missing.toml")
     with pytest.raises(calbench.SettingError, match="threads"):
         calbench.run(root / CI_GUARD, trials=1, threads=0)
+    # One bound whatever the value: -1 had been told "≥ 0", which 0 is not.
+    for bad in (-1, 0):
+        with pytest.raises(calbench.SettingError, match="`threads`: .*≥ 1|at least 1"):
+            calbench.run(root / CI_GUARD, trials=1, threads=bad)
 
 
 # ----- identifiability -------------------------------------------------------------------

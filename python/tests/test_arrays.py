@@ -183,3 +183,26 @@ def test_an_identification_that_did_not_converge_warns_as_the_command_line_does(
         warnings.simplefilter("error", calbench.ConvergenceWarning)
         done = calbench.identify(robot, tracker["q"], tracker["points"])
     assert done.termination == "converged"
+
+
+def test_a_validation_under_a_payload_is_identified_as_from_its_files(root, tmp_path):
+    # The elasto-geometric scenario validates under a 10 kg payload; arrays give it as the
+    # fourth element of `validate`, and the identification is the one of the files. Without
+    # it, where the calibration poses carry a payload, `validate` is refused: the validation
+    # poses had been predicted with no load.
+    sc = root / "scenarios" / "elastogeometric.toml"
+    s = calbench.simulate(sc, 0, out=tmp_path / "sim")
+    assert np.all(s["validation_payload"] == 10.0)
+    common = dict(method="lm", compliance="gravity")
+    files = calbench.identify(s["robot"], data=tmp_path / "sim" / "measurements.csv",
+                              validate=tmp_path / "sim" / "validation.csv", **common)
+    arrays = calbench.identify(
+        s["robot"], s["q"], s["points"], payload=s["payload"],
+        validate=(s["validation_q"], s["validation_points"], None, s["validation_payload"]),
+        **common)
+    assert arrays.validation["after_mm"]["rms"] == pytest.approx(
+        files.validation["after_mm"]["rms"], rel=1e-9)
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `validate`: the calibration poses carry a payload"):
+        calbench.identify(s["robot"], s["q"], s["points"], payload=s["payload"],
+                          validate=(s["validation_q"], s["validation_points"]), **common)

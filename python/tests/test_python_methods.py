@@ -210,6 +210,29 @@ def test_a_method_returning_bools_or_complex_numbers_fails_naming_the_dtype(root
                       name="cplx")
 
 
+def test_a_method_returning_a_masked_array_fails_on_its_masked_cell(root):
+    # The value under the mask had been taken as the method's; a masked cell is missing, a
+    # failure of the method as a NaN is. With nothing masked, the values are taken.
+    def masked(problem):
+        x = np.asarray(problem.x0, dtype=float)
+        return np.ma.masked_array(x, mask=[True] + [False] * (len(x) - 1))
+
+    def unmasked(problem):
+        return np.ma.masked_array(np.asarray(problem.x0, dtype=float), mask=False)
+
+    def plain(problem):
+        return np.asarray(problem.x0, dtype=float)
+
+    sc = load_scenario(root)
+    study = calbench.run(sc, trials=2, methods={"masked": masked, "unmasked": unmasked,
+                                                "plain": plain})
+    by = {r["method"]: r for r in study.summary["results"]}
+    assert by["masked"]["failures"] == 2 and by["unmasked"]["failures"] == 0
+    assert by["unmasked"]["eta_mean_pct"] == by["plain"]["eta_mean_pct"]
+    t = study.trials.set_index("method")["error"]
+    assert t["masked"].str.contains("`masked`", regex=False).all(), t["masked"].tolist()
+
+
 def test_python_methods_run_in_every_sweep_point(root):
     sc = load_scenario(root)
     sc["sweep"] = {"key": "outliers.count", "values": [0, 2]}

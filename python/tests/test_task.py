@@ -53,6 +53,23 @@ def test_a_python_method_enters_the_wam_task_in_the_open_division(root, cli, tmp
     assert same["value"] == lm["value"] and same["division"] == "closed"
 
 
+def test_a_python_method_whose_result_makes_the_robot_worse_is_named_first(root, tmp_path):
+    # The task's readings are sound; the method's vector is not: the refusal names the method
+    # and its result first, where it told to check the readings alone.
+    def far_off(problem):
+        x = np.array(problem.x0, dtype=float)
+        x[0] = 50.0
+        return x
+
+    with pytest.raises(calbench.FileError,
+                       match=r"by the method `far_off`, supplied from outside, makes the robot "
+                             r"worse: .*Check the vector the method returns, then "
+                             r"the readings"):
+        calbench.task(root / "tasks" / "barrett-wam.toml", far_off, models=["kinematic"],
+                      out=tmp_path / "out")
+    assert not (tmp_path / "out").exists()
+
+
 def test_an_entry_that_did_not_converge_warns_as_the_command_line_does(root):
     def short(problem):
         x, _ = gauss_newton(problem)

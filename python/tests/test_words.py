@@ -84,6 +84,15 @@ def test_a_masked_value_is_refused_at_its_row_and_column():
     np.testing.assert_array_equal(robot.fk(whole), robot.fk(q.data))
 
 
+def test_rotations_of_another_shape_name_both_accepted_shapes():
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.zeros((4, 6))
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `rotations`: expected \(N, 4\) quaternions or "
+                             r"\(N, 3, 3\) rotation matrices, got shape \(4,\)"):
+        calbench.identify(robot, q, np.zeros((4, 3)), rotations=np.array([1.0, 0, 0, 0]))
+
+
 def test_a_precision_that_is_no_finite_number_is_said_so(ci_guard):
     sc = ci_guard
     for bad in ["infmm", "nan%", "inf %"]:

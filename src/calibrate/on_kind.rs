@@ -494,7 +494,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     );
     if !worse.is_empty() && !q.allow_worse {
         let likely = radians_hint(nominal, &file.qs).or_else(|| gross().map(gross_likely));
-        return Err(worse_error(&q.source, &worse, likely));
+        return Err(worse_error(&q.source, &q.method, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
     let implausible = plausibility::check(

@@ -310,7 +310,7 @@ impl IdentifyRequest {
             let likely = radians_hint(&nominal, &d.qs)
                 .or_else(convention)
                 .or_else(|| gross.clone().map(gross_likely));
-            return Err(worse_error(&self.source, &worse, likely));
+            return Err(worse_error(&self.source, &self.method, &worse, likely));
         }
         let implausible = plausibility::check(
             (&nominal, &c.robot, &params, &d.qs),

@@ -187,13 +187,28 @@ pub fn worse_causes(
 }
 
 /// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
-/// `source`; `likely` its likely cause ([`radians_hint`], [`gross_likely`]); the refusal names
-/// the option that keeps it ([`Opt::AllowWorse`]).
-pub fn worse_error(source: &Path, causes: &[String], likely: Option<String>) -> Error {
+/// `source` by `method`; `likely` its likely cause ([`radians_hint`], [`gross_likely`]); the
+/// refusal names the option that keeps it ([`Opt::AllowWorse`]). A method supplied from
+/// outside is named first among what to check: its result, not the readings, is the likelier
+/// cause.
+pub fn worse_error(
+    source: &Path,
+    method: &MethodSpec,
+    causes: &[String],
+    likely: Option<String>,
+) -> Error {
     let likely = likely.map_or(String::new(), |l| format!("; {l}"));
+    let readings = "the readings (a column of one value, a unit, a swapped column)";
+    let (by, check) = match method.is_external() {
+        true => (
+            format!(" by the method `{}`, supplied from outside,", method.label),
+            format!("the vector the method returns, then {readings}"),
+        ),
+        false => (String::new(), readings.to_string()),
+    };
     let msg = format!(
-        "the identification makes the robot worse: {}{likely}; nothing was written. Check the \
-         readings (a column of one value, a unit, a swapped column), or pass ",
+        "the identification{by} makes the robot worse: {}{likely}; nothing was written. Check \
+         {check}, or pass ",
         causes.join("; ")
     );
     Error::file(

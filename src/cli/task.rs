@@ -6,7 +6,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 
 use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
@@ -167,10 +167,11 @@ fn run_socket(args: &TaskArgs, task: &SocketTask) -> Result<()> {
     super::guard_out(out, &SOCKET_OUTPUTS, head.inputs())?;
     calbench::report::guard::guard_data_folder(out, "--out", task.data_files())?;
     if !args.models.is_empty() {
-        bail!(
-            "--models: {} is a socket task, which identifies the kinematic model only",
+        let why = format!(
+            "{} is a socket task, which identifies the kinematic model only",
             head.path.display()
         );
+        return Err(calbench::Error::setting("--models", why).into());
     }
     let spec = super::identify::method_with_options(method, &args.options)?;
     let e = task.entry(spec, method)?;

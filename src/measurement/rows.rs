@@ -270,6 +270,9 @@ pub(crate) fn unreadable(
         ::csv::ErrorKind::Io(io) if io.kind() == std::io::ErrorKind::InvalidData => {
             Error::file(path, part, io.to_string())
         }
+        // The file could not be read at all (a folder, a device): an I/O error of the path,
+        // as every other reader's, not a fault at a line of its text.
+        ::csv::ErrorKind::Io(io) => Error::io(path, std::io::Error::new(io.kind(), io.to_string())),
         _ => at_line(path, line, "", format!("{doing}: {e}")),
     }
 }

@@ -205,6 +205,23 @@ fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
             kind,
             limits: (lo, hi),
         });
+        // A prismatic joint is rigid and takes no angle: the three keys of a joint's rotation
+        // are refused on it even at zero, as they are refused at any other value.
+        let revolute_only = [
+            ("compliance", e.compliance.is_some()),
+            ("harmonics", e.harmonics.is_some()),
+            ("gravity", e.gravity.is_some()),
+        ];
+        let given = (revolute_only.iter().find(|(_, given)| *given))
+            .filter(|_| kind == JointType::Prismatic);
+        if let Some((key, _)) = given {
+            let msg = format!(
+                "is for a revolute joint, and joint {} is prismatic (it translates rigidly: no \
+                 compliance, no joint-angle harmonics, no gravity basis)",
+                j + 1
+            );
+            return Err(err(joint_place(j, key), msg));
+        }
         values[Param::Compliance(j).index(n)] = e.compliance.unwrap_or(0.0);
         if let Some(h) = &e.harmonics {
             if h.is_empty() || h.len() % 2 != 0 || h.len() > HARMONIC_TERMS {
@@ -294,12 +311,13 @@ fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
             }
             let mut out: Vec<usize> = Vec::with_capacity(list.len());
             for &j in list {
-                let ok = j >= 1 && (j as usize) <= n && !out.contains(&(j as usize - 1));
-                if !ok {
-                    return Err(err(
-                        "beta_joints".into(),
-                        format!("must list distinct joint numbers from 1 to {n}, got {j}"),
-                    ));
+                let within = j >= 1 && (j as usize) <= n;
+                if !within || out.contains(&(j as usize - 1)) {
+                    let msg = match within {
+                        true => format!("lists joint {j} twice: each joint carries β once"),
+                        false => format!("must list joint numbers from 1 to {n}, got {j}"),
+                    };
+                    return Err(err("beta_joints".into(), msg));
                 }
                 out.push(j as usize - 1);
             }

@@ -246,10 +246,7 @@ impl Units {
 
     /// Factor from this length unit to mm.
     pub fn length_to_mm(self) -> Real {
-        match self.length {
-            LengthUnit::Mm => 1.0,
-            LengthUnit::M => 1000.0,
-        }
+        self.length.to_mm()
     }
 
     /// The length unit's name in robot files: `mm` or `m`.
@@ -264,7 +261,24 @@ impl Units {
 
     /// Factor from this angle unit to rad.
     pub fn angle_to_rad(self) -> Real {
-        match self.angle {
+        self.angle.to_rad()
+    }
+}
+
+impl LengthUnit {
+    /// Factor from this unit to mm.
+    pub fn to_mm(self) -> Real {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::M => 1000.0,
+        }
+    }
+}
+
+impl AngleUnit {
+    /// Factor from this unit to rad.
+    pub fn to_rad(self) -> Real {
+        match self {
             AngleUnit::Deg => std::f64::consts::PI / 180.0,
             AngleUnit::Rad => 1.0,
         }

@@ -295,6 +295,40 @@ fn import_refuses_a_malformed_mapping_naming_its_line() {
             19,
             "unknown field `sequenc`",
         ),
+        // A position's unit is a length's: the refusal lists the lengths alone, where it
+        // listed the angles too and then refused them.
+        (
+            "unit = \"mm\"\n",
+            "unit = \"cm\"\n",
+            14,
+            "unknown variant `cm`, expected `mm` or `m`",
+        ),
+        (
+            "unit = \"mm\"\n",
+            "unit = \"deg\"\n",
+            14,
+            "unknown variant `deg`, expected `mm` or `m`",
+        ),
+        (
+            "\nunit = \"deg\"",
+            "\nunit = \"mm\"",
+            21,
+            "unknown variant `mm`, expected `deg` or `rad`",
+        ),
+        // A separator that is part of a number would split numbers apart.
+        (
+            "separator = \";\"",
+            "separator = \"-\"",
+            3,
+            "\"-\": an ASCII character other than the quote, a line break, a letter",
+        ),
+        // Upper case reads as intrinsic in some libraries, against `frame`.
+        (
+            "sequence = \"xyz\"",
+            "sequence = \"XYZ\"",
+            19,
+            "three of x, y, z in lower case",
+        ),
     ];
     for (i, (from, to, line, expected)) in cases.iter().enumerate() {
         let msg = refused_mapping(&d, &mapping, i, (from, to));

@@ -226,6 +226,22 @@ fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
     };
     let t = copied_task(&dir, "", "validation_rms_mm", "rms");
     refused(&t, &["rms.toml", "metric", "socket_spread_mm"]);
+    // `--models` is refused as every setting is.
+    let o = dir.join("models");
+    let args = [
+        "task",
+        path_arg(&task),
+        "--method",
+        "ls",
+        "--models",
+        "gravity",
+    ];
+    let r = calbench(&[&args[..], &["--out", path_arg(&o)]].concat());
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(
+        err.starts_with("error: setting `--models`: ") && !o.exists(),
+        "{err}"
+    );
     let t = copied_task(&dir, "tool = \"x\"\n", "socket_spread_mm", "tool");
     refused(&t, &["tool.toml", "line 7", "tool"]);
     // A parameter fixed twice is the task file's, where it was blamed on `--fix`.

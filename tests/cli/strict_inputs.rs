@@ -444,3 +444,26 @@ fn a_file_that_is_not_utf8_is_refused_naming_the_line() {
     refused(&calbench(&args), &[&format!("m.toml: {want}")]);
     assert!(!Path::new(out).exists());
 }
+
+#[test]
+fn a_folder_given_as_a_measurement_file_is_an_io_error_of_its_path() {
+    let d = tmp_dir("strict-folder-data");
+    let out = d.join("out");
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        d.to_str().unwrap(),
+        "--method",
+        "lm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    // It had been refused as a fault of its text: `line 1: cannot read the header`.
+    let err = refused(&o, &[&format!("error: {}: ", d.display())]);
+    assert!(
+        !err.contains("line 1") && !err.contains("header") && !out.exists(),
+        "{err}"
+    );
+}

@@ -278,6 +278,16 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
     };
     let e = refused("key", &src.replace("metric =", "metrik ="), None);
     assert!(e.contains("key.toml: line") && e.contains("metrik"), "{e}");
+    // A candidate the robot cannot take is the task file's, named at its key, where the
+    // refusal blamed the command's `--models`, which was not given.
+    let text = src.clone() + "\n[models]\ncandidates = [\"kinematic\", \"h1q9\"]\n";
+    let e = refused("term", &text, None);
+    assert!(
+        e.contains("term.toml: line ")
+            && e.contains(", models.candidates[1]: `h1q9`: robot")
+            && !e.contains("--models"),
+        "{e}"
+    );
     // A mapping of another joint count is refused at the line of its columns.
     let five = d.join("five.mapping.toml");
     let mapping = read(&root().join("tasks/ipa-ur10.mapping.toml"));
@@ -428,4 +438,33 @@ fn an_entry_whose_solve_did_not_converge_is_warned_of() {
         err.contains("warning: the identification ended `max-iterations` after 50 iterations"),
         "{err}"
     );
+}
+
+#[test]
+fn a_published_figure_of_a_hidden_character_or_a_label_given_twice_is_refused() {
+    let d = tmp_dir("cli-task-published");
+    let task = crate::record_task::small_task(&d);
+    let text = read(&task);
+    let figure = "\n[[published]]\nlabel = \"MDH + learned residual\"\nvalue = 3.1\n\
+                  source = \"another paper\"\ndivision = \"open\"\n";
+    for (edited, want) in [
+        (
+            text.clone() + figure,
+            "published[1].label: \"MDH + learned residual\" is the label of published[0] too",
+        ),
+        (
+            text.replace("label = \"MDH", "label = \"\\u001b[31mMDH"),
+            "published[0].label: must be text without control characters",
+        ),
+    ] {
+        std::fs::write(&task, edited).unwrap();
+        let out = d.join("out");
+        let o = task_lm(calbench, &task, None, &out);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("small.toml: line ") && err.contains(want),
+            "{err}"
+        );
+        assert!(!out.exists(), "{err}");
+    }
 }

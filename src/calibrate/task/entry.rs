@@ -68,6 +68,24 @@ impl Task {
             };
             return Ok((q, val, m));
         };
+        // A candidate the robot cannot take (`h1q9` on six joints, `compliance` without link
+        // masses) is the task file's, refused at its key, not the command line's.
+        for (i, c) in tm.candidates.iter().enumerate() {
+            let registration = crate::calibrate::Registration::Identify;
+            if let Err(Error::Option { msg, .. }) =
+                c.robot_and_params(&robot, &cal, registration, &[])
+            {
+                let h = &self.head;
+                let place = format!("models.candidates[{i}]");
+                return Err(Error::toml_file(
+                    &h.path,
+                    &h.text,
+                    "models.candidates",
+                    place,
+                    msg,
+                ));
+            }
+        }
         let choice = if tm.candidates.len() > 1 {
             let setup = crate::calibrate::cv::CvSetup {
                 method: &method,

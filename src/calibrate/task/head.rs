@@ -222,13 +222,27 @@ fn check_published(
             ));
         }
         for (field, text) in [("label", &p.label), ("source", &p.source)] {
+            let key = format!("published[{i}].{field}");
             if text.trim().is_empty() {
-                let key = format!("published[{i}].{field}");
                 return Err(bad(
                     &key,
                     "is blank: a figure needs its label and its source".into(),
                 ));
             }
+            if text.chars().any(crate::error::is_hidden) {
+                let msg = "must be text without control characters (bidirectional overrides \
+                           included): the leaderboard shows it on the terminal and in its page";
+                return Err(bad(&key, msg.into()));
+            }
+        }
+        if let Some(k) = published[..i].iter().position(|q| q.label == p.label) {
+            let key = format!("published[{i}].label");
+            let msg = format!(
+                "{:?} is the label of published[{k}] too: the leaderboard ranks each figure \
+                 by its label",
+                p.label
+            );
+            return Err(bad(&key, msg));
         }
     }
     if unpublished.as_ref().is_some_and(|u| u.trim().is_empty()) {

@@ -50,7 +50,9 @@ impl Split {
             }
             let arg = arg.unwrap_or("");
             let number = |s: &str| {
-                s.parse::<usize>().map_err(|_| {
+                // Digits alone: Rust would read `+0` as 0.
+                let digits = !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+                (s.parse::<usize>().ok().filter(|_| digits)).ok_or_else(|| {
                     let what = if word == "rows" {
                         "a number of rows"
                     } else {
@@ -236,6 +238,11 @@ mod tests {
                 &["rows: `rows 18446744073709551615`: more rows than this machine's memory"],
             ),
             ("rows x\n", &["line 1", "`x` is not a number of rows"]),
+            ("rows +5\n", &["line 1", "`+5` is not a number of rows"]),
+            (
+                "rows 5\ncalibration +0-3\n",
+                &["line 2", "`+0-3` is not a row number or a range A-B"],
+            ),
             (
                 "rows 0\ncalibration 0\n",
                 &["line 1", "`rows 0`: a split needs 2 rows"],

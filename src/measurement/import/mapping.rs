@@ -8,6 +8,7 @@ use serde::Deserialize;
 
 use crate::error::{quoted, read_text, Error, Result};
 use crate::numeric::{rot_x, rot_y, rot_z, Mat3, Real};
+use crate::robot::{AngleUnit, LengthUnit};
 
 /// A mapping file: how to read one tracker export.
 #[derive(Clone, Debug, Deserialize)]
@@ -93,7 +94,7 @@ pub struct PositionColumns {
     /// Column names of x, y, z.
     pub columns: [String; 3],
     /// `"mm"` or `"m"`.
-    pub unit: Unit,
+    pub unit: LengthUnit,
     /// Columns added to x, y, z, in the same unit: an export that gives a target point and
     /// its measured difference.
     pub plus: Option<[String; 3]>,
@@ -134,7 +135,7 @@ pub struct OrientationColumns {
     /// Euler: `"intrinsic"` or `"extrinsic"`.
     pub frame: Option<EulerFrame>,
     /// Euler: `"deg"` or `"rad"`.
-    pub unit: Option<Unit>,
+    pub unit: Option<AngleUnit>,
     /// Quaternion: the components' order, `"wxyz"` or `"xyzw"`.
     pub order: Option<String>,
 }
@@ -157,7 +158,7 @@ pub struct SigmaColumns {
     /// One column (σ of the point) or several (σ per axis), combined by `combine`.
     pub position: Vec<String>,
     /// `"mm"` or `"m"`.
-    pub unit: Unit,
+    pub unit: LengthUnit,
     /// `"rms"` (default) or `"max"`.
     #[serde(default)]
     pub combine: Combine,
@@ -263,11 +264,14 @@ impl Mapping {
         let sep = u8::try_from(sep)
             .ok()
             .filter(|b| b.is_ascii() && !matches!(b, b'"' | b'\r' | b'\n'))
+            // A character of a number would split numbers apart.
+            .filter(|b| !(b.is_ascii_alphanumeric() || matches!(b, b'+' | b'-' | b'.')))
             .ok_or_else(|| {
                 bad(
                     "separator",
                     format!(
-                        "{}: an ASCII character other than the quote and a line break",
+                        "{}: an ASCII character other than the quote, a line break, a letter, \
+                         a digit, a sign and the point, which are parts of numbers",
                         quoted(&sep.to_string())
                     ),
                 )
@@ -295,14 +299,7 @@ impl Mapping {
                 format!("{wkind} unit for joints read in {kind} unit"),
             ));
         }
-        let length = |key: &str, u: Unit| match u.scale() {
-            ("length", f) => Ok(f),
-            _ => Err(bad(key, "must be \"mm\" or \"m\"".into())),
-        };
-        let position = (
-            self.position.columns.clone(),
-            length("position.unit", self.position.unit)?,
-        );
+        let position = (self.position.columns.clone(), self.position.unit.to_mm());
         let orientation = self
             .orientation
             .as_ref()
@@ -312,7 +309,7 @@ impl Mapping {
             Some(s) if s.position.is_empty() => {
                 return Err(bad("sigma.position", "names no column".into()))
             }
-            Some(s) => Some((s.position.clone(), length("sigma.unit", s.unit)?, s.combine)),
+            Some(s) => Some((s.position.clone(), s.unit.to_mm(), s.combine)),
             None => None,
         };
         Ok(Plan {
@@ -349,25 +346,24 @@ impl OrientationColumns {
                     .ok_or_else(|| bad("sequence", "missing: the axis sequence, e.g. \"xyz\""))?;
                 let axes: Vec<usize> = seq
                     .chars()
-                    .map(|c| "xyz".find(c.to_ascii_lowercase()))
+                    .map(|c| "xyz".find(c))
                     .collect::<Option<_>>()
                     .filter(|a: &Vec<usize>| a.len() == 3 && a[0] != a[1] && a[1] != a[2])
                     .ok_or_else(|| {
                         bad(
                             "sequence",
-                            "three of x, y, z, no axis twice in a row (\"xyz\", \"zyz\")",
+                            "three of x, y, z in lower case, no axis twice in a row (\"xyz\", \
+                             \"zyz\"; upper case, which some libraries read as intrinsic, is not \
+                             taken: `frame` says which)",
                         )
                     })?;
                 let frame = self
                     .frame
                     .ok_or_else(|| bad("frame", "missing: \"intrinsic\" or \"extrinsic\""))?;
-                let unit = self
+                let scale = self
                     .unit
-                    .ok_or_else(|| bad("unit", "missing: \"deg\" or \"rad\""))?;
-                let scale = match unit.scale() {
-                    ("angle", f) => f,
-                    _ => return Err(bad("unit", "must be \"deg\" or \"rad\"")),
-                };
+                    .ok_or_else(|| bad("unit", "missing: \"deg\" or \"rad\""))?
+                    .to_rad();
                 Ok(Orient::Euler {
                     cols: self.columns.clone(),
                     axes: [axes[0], axes[1], axes[2]],

@@ -218,3 +218,31 @@ fn tiny_levers_and_ranges_read_back() {
     // Ordinary robots are still written tidied.
     assert!(robot_to_toml(&builtin::irb2600()).contains("alpha = -90.0\n"));
 }
+
+#[test]
+fn a_rotation_key_on_a_prismatic_joint_is_refused_even_at_zero() {
+    let pris = one_joint("mm", JOINT).replace("revolute", "prismatic");
+    for (key, value) in [
+        ("compliance", "0.0"),
+        ("gravity", "[0.0, 0.0, 0.0]"),
+        ("harmonics", "[0.0, 0.0]"),
+    ] {
+        let e = refused(&format!("{pris}{key} = {value}\n"), &format!("key `{key}`"));
+        assert!(e.contains("joint 1 is prismatic"), "{e}");
+        // The same key on a revolute joint is read.
+        let revolute = one_joint("mm", JOINT) + &format!("{key} = {value}\n");
+        let read = parse_robot_file(&revolute, Path::new("r.toml"));
+        assert!(read.is_ok(), "{key}: {read:?}");
+    }
+}
+
+#[test]
+fn beta_joints_naming_a_joint_twice_says_so() {
+    let two = one_joint("mm", JOINT).replace("\"dh\"", "\"dh_beta\"")
+        + "[[joints]]\ntype = \"revolute\"\n"
+        + JOINT;
+    let e = refused(&format!("beta_joints = [2, 2]\n{two}"), "beta_joints");
+    assert!(e.contains("lists joint 2 twice"), "{e}");
+    let e = refused(&format!("beta_joints = [3]\n{two}"), "beta_joints");
+    assert!(e.contains("from 1 to 2, got 3"), "{e}");
+}
