@@ -201,7 +201,7 @@ def test_a_validation_under_a_payload_is_identified_as_from_its_files(root, tmp_
         validate=(s["validation_q"], s["validation_points"], None, s["validation_payload"]),
         **common)
     assert arrays.validation["after_mm"]["rms"] == pytest.approx(
-        files.validation["after_mm"]["rms"], rel=1e-9)
+        files.validation["after_mm"]["rms"], rel=1e-6)  # the files round to 9 decimals
     with pytest.raises(calbench.SettingError,
                        match=r"^setting `validate`: the calibration poses carry a payload"):
         calbench.identify(s["robot"], s["q"], s["points"], payload=s["payload"],

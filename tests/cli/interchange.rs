@@ -709,7 +709,7 @@ fn a_control_character_in_a_mapping_is_shown_escaped() {
         (
             "separator = \";\"",
             "separator = \"\\n\"",
-            "line 3, separator: \"\\n\": an ASCII character other than the quote and a line break",
+            "line 3, separator: \"\\n\": an ASCII character other than the quote, a line break",
         ),
         (
             "decimal = \",\"",
