@@ -27,6 +27,7 @@ from ._args import (
     _rotations,
     _scenario,
     _text,
+    _validation,
 )
 from ._calbench import (  # noqa: F401  (re-exported)
     ComputeError,
@@ -206,29 +207,7 @@ def identify(
         q = _array("q", q, 2, robot.joint_count)
     if data is None or points is not None:
         points = _array("points", points, 2, 3)
-    val = None
-    if isinstance(validate, (str, os.PathLike)):
-        val = os.fspath(validate)
-    elif validate is not None:
-        if not isinstance(validate, (tuple, list)) or len(validate) not in (2, 3, 4):
-            raise SettingError(
-                "setting `validate`: expected a measurement file, (q, points), "
-                "(q, points, rotations) or (q, points, rotations or None, payload)"
-            )
-        if payload is not None and len(validate) < 4:
-            # The validation poses would be predicted with no load, where the calibration
-            # poses carry one: say the validation's payload, zeros for unloaded poses.
-            raise SettingError(
-                "setting `validate`: the calibration poses carry a payload (`payload`) and "
-                "the validation poses none: give (q, points, rotations or None, payload), "
-                "the payload in kg per validation pose (zeros for poses without one)"
-            )
-        val = (
-            _array("validate.q", validate[0], 2, robot.joint_count),
-            _array("validate.points", validate[1], 2, 3),
-            _rotations("validate.rotations", validate[2]) if len(validate) > 2 else None,
-            _array("validate.payload", validate[3], 1) if len(validate) == 4 else None,
-        )
+    val = _validation(validate, robot.joint_count, payload is not None)
     if compliance is not None:
         compliance = ",".join(_names("compliance", compliance))
     prior = _dict("prior", prior, "a dict parameter name → σ")

@@ -130,3 +130,32 @@ def _scenario(scenario):
     if isinstance(scenario, (str, os.PathLike)):
         return os.fspath(scenario)
     raise SettingError("setting `scenario`: expected a path to a scenario file or a dict")
+
+
+def _validation(validate, joints, loaded):
+    """``identify``'s ``validate``: a file's path as a string, or its arrays as the
+    compiled part takes them, ``(q, points, rotations or None, payload or None)`` of a robot
+    of ``joints`` joints; refused with a SettingError naming ``validate`` otherwise, and
+    without a payload when the calibration poses carry one (``loaded``): the validation poses
+    would be predicted with no load."""
+    if validate is None:
+        return None
+    if isinstance(validate, (str, os.PathLike)):
+        return os.fspath(validate)
+    if not isinstance(validate, (tuple, list)) or len(validate) not in (2, 3, 4):
+        raise SettingError(
+            "setting `validate`: expected a measurement file, (q, points), "
+            "(q, points, rotations) or (q, points, rotations or None, payload)"
+        )
+    if loaded and len(validate) < 4:
+        raise SettingError(
+            "setting `validate`: the calibration poses carry a payload (`payload`) and "
+            "the validation poses none: give (q, points, rotations or None, payload), "
+            "the payload in kg per validation pose (zeros for poses without one)"
+        )
+    return (
+        _array("validate.q", validate[0], 2, joints),
+        _array("validate.points", validate[1], 2, 3),
+        _rotations("validate.rotations", validate[2]) if len(validate) > 2 else None,
+        _array("validate.payload", validate[3], 1) if len(validate) == 4 else None,
+    )

@@ -246,7 +246,10 @@ impl Units {
 
     /// Factor from this length unit to mm.
     pub fn length_to_mm(self) -> Real {
-        self.length.to_mm()
+        match self.length {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::M => 1000.0,
+        }
     }
 
     /// The length unit's name in robot files: `mm` or `m`.
@@ -261,24 +264,7 @@ impl Units {
 
     /// Factor from this angle unit to rad.
     pub fn angle_to_rad(self) -> Real {
-        self.angle.to_rad()
-    }
-}
-
-impl LengthUnit {
-    /// Factor from this unit to mm.
-    pub fn to_mm(self) -> Real {
-        match self {
-            LengthUnit::Mm => 1.0,
-            LengthUnit::M => 1000.0,
-        }
-    }
-}
-
-impl AngleUnit {
-    /// Factor from this unit to rad.
-    pub fn to_rad(self) -> Real {
-        match self {
+        match self.angle {
             AngleUnit::Deg => std::f64::consts::PI / 180.0,
             AngleUnit::Rad => 1.0,
         }

@@ -37,6 +37,7 @@ mod layers;
 mod live_run;
 mod malformed;
 mod malformed_lines;
+mod mapping_sets;
 mod memory;
 mod noise;
 mod outputs;
