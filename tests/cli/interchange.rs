@@ -267,41 +267,6 @@ pub(crate) fn refused_mapping(d: &Path, map: &str, i: usize, (from, to): (&str, 
     msg
 }
 
-/// A mapping that is not valid TOML for a mapping (a key given twice, a value of the wrong
-/// type, an array of the wrong length, an unknown key) is refused naming the mapping file and
-/// the line, as a robot or scenario file is.
-#[test]
-fn import_refuses_a_malformed_mapping_naming_its_line() {
-    let d = tmp_dir("interchange-mapping-toml");
-    let mapping = read(Path::new(&ur10_example("mapping.toml")));
-    let cases = [
-        (
-            "unit = \"mm\"\n",
-            "unit = \"mm\"\nunit = \"m\"\n",
-            15,
-            "duplicate key",
-        ),
-        ("unit = \"rad\"", "unit = 1", 9, ""),
-        (
-            "columns = [\"measurement_x\", \"measurement_y\", \"measurement_z\"]",
-            "columns = [\"measurement_x\", \"measurement_y\"]",
-            13,
-            "expected an array of length 3",
-        ),
-        (
-            "sequence = \"xyz\"",
-            "sequenc = \"xyz\"",
-            19,
-            "unknown field `sequenc`",
-        ),
-    ];
-    for (i, (from, to, line, expected)) in cases.iter().enumerate() {
-        let msg = refused_mapping(&d, &mapping, i, (from, to));
-        assert!(msg.contains(&format!("m{i}.toml: line {line}")), "{msg}");
-        assert!(msg.contains(expected), "{msg}");
-    }
-}
-
 /// The refusal of `identify --robot ROBOT --data DATA --method lm --out OUT`: it fails, and
 /// its stderr.
 fn refused_lm(robot: &str, data: &Path, out: &Path) -> String {
