@@ -39,6 +39,25 @@ pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
     Ok(rows)
 }
 
+/// Where the header read as one column holds another usual separator than `sep` (`;`, tab,
+/// `,` or `|`), the words that name it: a `;` export read with `separator = ","`.
+fn other_separator(header: &[String], sep: u8) -> String {
+    let [only] = header else {
+        return String::new();
+    };
+    [b';', b'\t', b',', b'|']
+        .into_iter()
+        .filter(|c| *c != sep)
+        .find(|c| only.contains(char::from(*c)))
+        .map_or(String::new(), |c| {
+            format!(
+                "; the header reads as one column, and holds {:?}: is the mapping's \
+                 `separator` the export's?",
+                char::from(c)
+            )
+        })
+}
+
 /// Reads the export `raw` as `mapping` says: the measurement CSV's text ([`import`]) and its
 /// number of rows. Given the `robot` the rows are for, a joint value outside its limits is
 /// refused here, at the export's column and with the value as the export writes it.
@@ -76,9 +95,10 @@ pub fn import_text(
                 &format!("{key}[{entry}]"),
                 key,
                 format!(
-                    "column \"{name}\" is not in the header of {} ({})",
+                    "column \"{name}\" is not in the header of {} ({}){}",
                     raw.display(),
-                    header.join(", ")
+                    header.join(", "),
+                    other_separator(&header, plan.sep)
                 ),
             )),
         }

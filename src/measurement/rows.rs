@@ -51,6 +51,16 @@ pub(crate) enum Dialect {
     },
 }
 
+impl Dialect {
+    /// The field separator, an ASCII character.
+    fn separator(self) -> char {
+        match self {
+            Dialect::Measurement => ',',
+            Dialect::Export { separator } => char::from(separator),
+        }
+    }
+}
+
 /// The data rows of a CSV file read a line at a time (docs/formats.md § 5): the header's
 /// names, then each row that is not blank with its line in the file (`#` comment and blank
 /// lines counted), every row of as many fields as the header.
@@ -61,6 +71,8 @@ pub(crate) struct Rows {
     pub names: Vec<String>,
     /// The header's line in the file (0 for a file without one, [`Rows::headerless`]).
     pub header_line: u64,
+    /// The field separator.
+    separator: char,
 }
 
 impl Rows {
@@ -99,6 +111,7 @@ impl Rows {
             path: path.to_path_buf(),
             names,
             header_line: 0,
+            separator: Dialect::Measurement.separator(),
         }
     }
 
@@ -123,6 +136,7 @@ impl Rows {
             path: path.to_path_buf(),
             names: header.iter().map(str::to_string).collect(),
             header_line: 1,
+            separator: dialect.separator(),
         };
         rows.header_line = header.position().map_or(1, |p| rows.line_of(p));
         if rows.names.iter().all(|n| n.is_empty()) {
@@ -172,11 +186,24 @@ impl Rows {
                 continue; // blank line
             }
             if rec.len() != self.names.len() {
-                let msg = format!(
+                let mut msg = format!(
                     "{} fields, expected {} as in the header",
                     rec.len(),
                     self.names.len()
                 );
+                // A quote that is not closed where its field ends takes the separators and
+                // line breaks after it into the field, which is then all that was counted.
+                let runs_on = |f: &str| f.contains(self.separator) || f.contains('\n');
+                if let Some(k) = (0..rec.len()).rev().find(|&k| runs_on(&rec[k])) {
+                    let name = self.names.get(k).map_or("", String::as_str);
+                    msg += &format!(
+                        ": field {} (column {}) is quoted and runs on over separators or \
+                         lines; a quote that opens a field must close it, and a quote inside a \
+                         quoted field is written twice (\"\")",
+                        k + 1,
+                        quoted(name)
+                    );
+                }
                 return Err(self.bad(line, "", msg));
             }
             return Ok(Some(line));
@@ -208,14 +235,11 @@ fn reader(
     dialect: Dialect,
     header: bool,
 ) -> ::csv::Reader<Uncommented<Box<dyn std::io::BufRead>>> {
-    let (delimiter, export) = match dialect {
-        Dialect::Measurement => (b',', false),
-        Dialect::Export { separator } => (separator, true),
-    };
+    let export = matches!(dialect, Dialect::Export { .. });
     ::csv::ReaderBuilder::new()
         .has_headers(header)
         .flexible(true)
-        .delimiter(delimiter)
+        .delimiter(dialect.separator() as u8)
         .trim(::csv::Trim::All)
         .from_reader(Uncommented::new(input, export))
 }

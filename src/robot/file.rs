@@ -348,18 +348,26 @@ fn parse_robot_text(text: &str, path: &Path) -> Result<Robot> {
     Ok(robot)
 }
 
-/// Rounds away the last bits of unit conversions (deg → rad → deg) for printing.
-fn tidy(v: Real) -> Real {
-    let r = (v * 1e12).round() / 1e12;
-    if (r - v).abs() <= 1e-9 * v.abs().max(1.0) {
-        r
+/// `value` (mm, rad or kg inside calbench) in a file unit of `factor` mm or rad per unit,
+/// as a robot file writes it. It is rounded to 12 decimals, which takes away the last bits
+/// of a unit conversion (`89.99999999999999` is written `90.0`), only where the rounded
+/// number reads back as the same `value`; elsewhere every digit is written. So tidying never
+/// changes the robot: −π/2 rad is written `-1.5707963267948966`, a compliance of 1e-7 with
+/// all its digits.
+fn num(value: Real, factor: Real) -> String {
+    // Where the division rounded, a neighbour of the quotient may be the number that reads
+    // back as `value` (`raw * factor`, as [`to_internal`] reads it).
+    let q = value / factor;
+    let exact = [q, q.next_down(), q.next_up()]
+        .into_iter()
+        .find(|v| v * factor == value)
+        .unwrap_or(q);
+    let rounded = (exact * 1e12).round() / 1e12;
+    let v = if rounded * factor == exact * factor {
+        rounded
     } else {
-        v
-    }
-}
-
-fn num(v: Real, tidied: bool) -> String {
-    let v = if tidied { tidy(v) } else { v };
+        exact
+    };
     let s = format!("{v:?}");
     if s == "-0.0" {
         "0.0".into()
@@ -389,24 +397,10 @@ fn toml_string(text: &str) -> String {
     s
 }
 
-/// Writes a robot as a robot file in its own units; [`parse_robot_file`] reads it back.
-///
-/// Numbers are tidied (`89.99999999999999` is written `90.0`) unless tidying would make the
-/// file unreadable — a lever or a joint range so small that it rounds to zero — in which
-/// case every number is written exactly. So a robot that passes [`Robot::check`] always
-/// reads back.
+/// Writes a robot as a robot file in its own units; [`parse_robot_file`] reads it back as
+/// the same robot, value for value: numbers are tidied only where tidying changes nothing
+/// read ([`num`]).
 pub fn robot_to_toml(robot: &Robot) -> String {
-    let tidied = write_robot(robot, true);
-    if parse_robot_file(&tidied, Path::new("robot.toml")).is_ok() {
-        tidied
-    } else {
-        write_robot(robot, false)
-    }
-}
-
-/// [`robot_to_toml`] with or without tidied numbers.
-fn write_robot(robot: &Robot, tidied: bool) -> String {
-    let num = |v: Real| num(v, tidied);
     let n = robot.dof();
     let (lu, au) = (robot.units.length_to_mm(), robot.units.angle_to_rad());
     let mut s = String::new();
@@ -424,7 +418,7 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
             "\n# Joints 1 and 2 take the travels of two differential screws (length unit):\n\
              # joint 1 turns by atan((q1 - q2) / l1), joint 2 moves by (q1 + q2) / 2.\n\
              [coupling]\nkind = \"differential\"\nl1 = {}",
-            num(l1_mm / lu)
+            num(l1_mm, lu)
         );
     }
     for (j, joint) in robot.joints.iter().enumerate() {
@@ -437,29 +431,27 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
         };
         let _ = writeln!(s, "\n[[joints]]");
         let _ = writeln!(s, "type = \"{}\"", <&str>::from(joint.kind));
-        let _ = writeln!(s, "alpha = {}", num(g(Param::Alpha(j)) / au));
-        let _ = writeln!(s, "a = {}", num(g(Param::A(j)) / lu));
-        let _ = writeln!(s, "d = {}", num(g(Param::D(j)) / lu));
-        let _ = writeln!(s, "theta = {}", num(g(Param::Theta(j)) / au));
+        let _ = writeln!(s, "alpha = {}", num(g(Param::Alpha(j)), au));
+        let _ = writeln!(s, "a = {}", num(g(Param::A(j)), lu));
+        let _ = writeln!(s, "d = {}", num(g(Param::D(j)), lu));
+        let _ = writeln!(s, "theta = {}", num(g(Param::Theta(j)), au));
         if robot.carries_beta(j) {
-            let _ = writeln!(s, "beta = {}", num(g(Param::Beta(j)) / au));
+            let _ = writeln!(s, "beta = {}", num(g(Param::Beta(j)), au));
         }
         let _ = writeln!(
             s,
             "limits = [{}, {}]",
-            num(joint.limits.0 / qf),
-            num(joint.limits.1 / qf)
+            num(joint.limits.0, qf),
+            num(joint.limits.1, qf)
         );
         if let Some(m) = &robot.link_mass_kg {
-            let _ = writeln!(s, "mass_kg = {}", num(m[j]));
+            let _ = writeln!(s, "mass_kg = {}", num(m[j], 1.0));
         }
-        // Compliances are small numbers (about 1e-7 rad/(N·m)): written exactly.
         let c = g(Param::Compliance(j));
         if c != 0.0 {
-            let _ = writeln!(s, "compliance = {}", self::num(c, false));
+            let _ = writeln!(s, "compliance = {}", num(c, 1.0));
         }
-        // Harmonic coefficients (rad, small): written exactly, every order up to the highest
-        // non-zero one.
+        // Harmonic coefficients: every order up to the highest non-zero one.
         let h: Vec<Real> = (0..HARMONIC_TERMS)
             .map(|k| g(Param::Harmonic(j, k)))
             .collect();
@@ -468,14 +460,14 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
             .rposition(|v| *v != 0.0)
             .map_or(0, |k| 2 * (k / 2 + 1));
         if used > 0 {
-            let list: Vec<String> = h[..used].iter().map(|v| self::num(*v, false)).collect();
+            let list: Vec<String> = h[..used].iter().map(|v| num(*v, 1.0)).collect();
             let _ = writeln!(s, "harmonics = [{}]", list.join(", "));
         }
         let k: Vec<Real> = (0..GRAVITY_POINTS)
             .map(|l| g(Param::Gravity(j, l)))
             .collect();
         if k.iter().any(|v| *v != 0.0) {
-            let list: Vec<String> = k.iter().map(|v| self::num(*v, false)).collect();
+            let list: Vec<String> = k.iter().map(|v| num(*v, 1.0)).collect();
             let _ = writeln!(s, "gravity = [{}]", list.join(", "));
         }
     }
@@ -487,12 +479,12 @@ fn write_robot(robot: &Robot, tidied: bool) -> String {
         let _ = writeln!(
             s,
             "\n[{name}]\nxyz = [{}, {}, {}]\nrpy = [{}, {}, {}]",
-            num(v[0] / lu),
-            num(v[1] / lu),
-            num(v[2] / lu),
-            num(v[3] / au),
-            num(v[4] / au),
-            num(v[5] / au)
+            num(v[0], lu),
+            num(v[1], lu),
+            num(v[2], lu),
+            num(v[3], au),
+            num(v[4], au),
+            num(v[5], au)
         );
     }
     s

@@ -41,6 +41,15 @@ fn a_mapping_key_out_of_its_own_set_is_refused_naming_what_it_takes() {
                 3,
                 "\"-\": an ASCII character other than the quote, a line break, a letter",
             ),
+            // A `;` export read with `,`: its header is one column, which had been listed
+            // as the whole header without a word on the separator.
+            (
+                "separator = \";\"\ndecimal = \",\"",
+                "separator = \",\"\ndecimal = \".\"",
+                7,
+                "the header reads as one column, and holds ';': is the mapping's `separator` the \
+                 export's?",
+            ),
             // Upper case reads as intrinsic in some libraries, against `frame`.
             (
                 "sequence = \"xyz\"",

@@ -467,3 +467,54 @@ fn a_folder_given_as_a_measurement_file_is_an_io_error_of_its_path() {
         "{err}"
     );
 }
+
+/// A quote that opens a field and is not closed takes the separators and lines after it into
+/// that field. The row had been refused by its field count alone; the refusal now names the
+/// field, in a measurement file and in an export `import` reads.
+#[test]
+fn an_unclosed_quote_is_named_by_its_field() {
+    let d = tmp_dir("strict-unclosed-quote");
+    let out = d.join("out");
+    let data = d.join("m.csv");
+    std::fs::write(
+        &data,
+        "q1,q2,q3,q4,q5,q6,x,y,z\n1,2,3,4,5,6,\"7,8,9\n1,2,3,4,5,6,7,8,9\n",
+    )
+    .unwrap();
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        data.to_str().unwrap(),
+        "--method",
+        "lm",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    refused(
+        &o,
+        &["m.csv: line 2: 7 fields, expected 9 as in the header: field 7 (column \"x\") is quoted"],
+    );
+    let raw = std::fs::read_to_string(root().join("examples/ipa-ur10/sample-200.csv")).unwrap();
+    let mut lines: Vec<&str> = raw.lines().take(4).collect();
+    let open = lines[2].replacen(";21,", ";\"21,", 1);
+    assert_ne!(open, lines[2]);
+    lines[2] = &open;
+    let export = d.join("export.csv");
+    std::fs::write(&export, lines.join("\n") + "\n").unwrap();
+    let mapping = root().join("examples/ipa-ur10/mapping.toml");
+    let args = [
+        "import",
+        export.to_str().unwrap(),
+        "--mapping",
+        mapping.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    refused(
+        &calbench(&args),
+        &["export.csv: line 3: 14 fields, expected 26 as in the header: field 14 (column \"measurement_temperature\") is quoted and runs on"],
+    );
+    assert!(!out.exists());
+}

@@ -220,6 +220,56 @@ fn tiny_levers_and_ranges_read_back() {
 }
 
 #[test]
+fn a_written_robot_reads_back_value_for_value_in_every_unit() {
+    // Tidying had rounded every number to 12 decimals: in radians −π/2 was written
+    // -1.570796326795 (1.8e-13 rad off), in metres a length moved by up to 5e-10 mm.
+    let mut r = builtin::irb2600();
+    let mut x: u64 = 0x9e37_79b9_7f4a_7c15;
+    let mut draw = || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as Real / (1u64 << 53) as Real - 0.5
+    };
+    let n = r.dof();
+    for j in 0..n {
+        for (p, scale) in [
+            (Param::Alpha(j), 1e-3),
+            (Param::A(j), 0.5),
+            (Param::D(j), 0.5),
+            (Param::Theta(j), 1e-3),
+        ] {
+            r.values[p.index(n)] += scale * draw();
+        }
+        r.values[Param::Compliance(j).index(n)] = 1e-7 * (1.0 + draw());
+    }
+    for (length, angle) in [
+        (LengthUnit::Mm, AngleUnit::Deg),
+        (LengthUnit::M, AngleUnit::Deg),
+        (LengthUnit::Mm, AngleUnit::Rad),
+        (LengthUnit::M, AngleUnit::Rad),
+    ] {
+        r.units = Units { length, angle };
+        let text = robot_to_toml(&r);
+        let back = parse_robot_file(&text, Path::new("r.toml")).unwrap();
+        for (i, (got, want)) in back.values.iter().zip(&r.values).enumerate() {
+            assert_eq!(
+                got.to_bits(),
+                want.to_bits(),
+                "{length:?} {angle:?} value {i}"
+            );
+        }
+        for (b, j) in back.joints.iter().zip(&r.joints) {
+            assert_eq!(b.limits, j.limits, "{length:?} {angle:?}");
+        }
+    }
+    let mut plain = builtin::irb2600();
+    plain.units.angle = AngleUnit::Rad;
+    let text = robot_to_toml(&plain);
+    assert!(text.contains("alpha = -1.5707963267948966\n"), "{text}");
+}
+
+#[test]
 fn a_rotation_key_on_a_prismatic_joint_is_refused_even_at_zero() {
     let pris = one_joint("mm", JOINT).replace("revolute", "prismatic");
     for (key, value) in [
