@@ -7,6 +7,9 @@
 
 use std::collections::BTreeMap;
 
+use std::path::Path;
+
+use super::folder::{Published, TaskResult};
 use super::Db;
 use crate::calibrate::task::record::{same_figure, shown, TaskRecord};
 use crate::error::{Error, Result};
@@ -146,30 +149,107 @@ pub fn scores(rows: &[Row]) -> Vec<Score> {
     out
 }
 
+/// Refuses the entry recorded as run `id` from `file` where the database ranks it otherwise
+/// than its `task.json` (`stated`) says: `kept`, its metric, division, method, models,
+/// chosen_by and entrant in the `tasks` table, or its published figures in `published`.
+fn check_kept(
+    db: &Db,
+    (id, file): (i64, &Path),
+    kept: &[String; 6],
+    stated: &TaskResult,
+) -> Result<()> {
+    let edited = |key: &str, db: String, doc: String| {
+        let msg = format!(
+            "the entry recorded as run {id} is ranked with {key} {db}, but its task.json \
+             says {doc}: the database was edited"
+        );
+        Err(Error::file(file, key, msg))
+    };
+    let keys = [
+        "metric",
+        "division",
+        "method",
+        "models",
+        "chosen_by",
+        "entrant",
+    ];
+    let doc = [
+        &stated.metric,
+        &stated.division,
+        &stated.method,
+        &stated.models,
+        &stated.chosen_by,
+        &stated.entrant,
+    ];
+    for ((key, db), doc) in keys.iter().zip(kept).zip(doc) {
+        if db != doc {
+            return edited(key, format!("{db:?}"), format!("{doc:?}"));
+        }
+    }
+    let sql = "SELECT label, value, source, division FROM published WHERE run = ?1 ORDER BY rowid";
+    let published: Vec<Published> = db.query(sql, [id], |r| {
+        Ok((r.get(0)?, r.get(1)?, r.get(2)?, r.get(3)?))
+    })?;
+    let n = published.len().max(stated.published.len());
+    let Some(i) = (0..n).find(|&i| published.get(i) != stated.published.get(i)) else {
+        return Ok(());
+    };
+    match (published.get(i), stated.published.get(i)) {
+        (Some(d), Some(t)) => {
+            let parts = [
+                ("label", format!("{:?}", d.0), format!("{:?}", t.0)),
+                ("value", format!("{} mm", d.1), format!("{} mm", t.1)),
+                ("source", format!("{:?}", d.2), format!("{:?}", t.2)),
+                ("division", format!("{:?}", d.3), format!("{:?}", t.3)),
+            ];
+            let (key, d, t) = parts
+                .into_iter()
+                .find(|(_, d, t)| d != t)
+                .unwrap_or_default();
+            edited(&format!("published[{i}].{key}"), d, t)
+        }
+        (d, t) => {
+            let shown = |p: Option<&Published>| p.map_or("none".into(), |p| format!("{:?}", p.0));
+            edited(&format!("published[{i}]"), shown(d), shown(t))
+        }
+    }
+}
+
 /// `leaderboard --verify`: every recorded task entry's figure and interval computed again, by
 /// the task's metric, from the per-row validation errors its `task.json` recorded, and compared
 /// bit for bit with the figure the database ranks and the one the document states. A mismatch
 /// (a figure edited before `record`, a database edited after) or an entry without per-row
 /// errors is refused, naming the folder it was recorded from; so is an entry ranked under
 /// another task than its `task.json` names, and one whose task hash is recorded under
-/// another task's name (an entry filed under a task it did not run). Returns the entries
-/// verified.
+/// another task's name (an entry filed under a task it did not run), and one whose other
+/// ranked values (division, models, published figures…) are not its `task.json`'s
+/// ([`check_kept`]). Returns the entries verified.
 pub fn verify(db: &Db) -> Result<usize> {
     let sql = "SELECT r.id, r.source, r.document, t.value, t.ci_lo, t.ci_hi, t.task, \
-               t.task_hash FROM tasks t JOIN runs r ON r.id = t.run ORDER BY r.id";
+               t.task_hash, t.metric, t.division, t.method, t.models, t.chosen_by, t.entrant \
+               FROM tasks t JOIN runs r ON r.id = t.run ORDER BY r.id";
     let entries = db.query(sql, [], |r| {
         let ci: (Option<f64>, Option<f64>) = (r.get(4)?, r.get(5)?);
+        let kept: [String; 6] = [
+            r.get(8)?,
+            r.get(9)?,
+            r.get(10)?,
+            r.get(11)?,
+            r.get(12)?,
+            r.get(13)?,
+        ];
         Ok((
             (r.get::<_, i64>(0)?, r.get::<_, String>(1)?),
             r.get::<_, String>(2)?,
             r.get::<_, f64>(3)?,
             ci.0.zip(ci.1).map(|(l, h)| [l, h]),
             (r.get::<_, String>(6)?, r.get::<_, String>(7)?),
+            kept,
         ))
     })?;
     // Each task hash with the first task name it is recorded under, and where.
     let mut named: BTreeMap<&str, (&str, i64)> = BTreeMap::new();
-    for ((id, source), document, value, ci, (task, hash)) in &entries {
+    for ((id, source), document, value, ci, (task, hash), kept) in &entries {
         let file = std::path::Path::new(source).join("task.json");
         let text: serde_json::Value = serde_json::from_str(document)
             .map_err(|e| Error::file(&file, "task.json", format!("recorded as run {id}: {e}")))?;
@@ -182,6 +262,7 @@ pub fn verify(db: &Db) -> Result<usize> {
             );
             return Err(Error::file(&file, "task", msg));
         }
+        check_kept(db, (*id, &file), kept, &TaskResult::of(&rec))?;
         // The hash binds the task file's values, so one hash under two names is an entry
         // filed under the name of a task it did not run.
         match named.get(hash.as_str()) {

@@ -59,7 +59,7 @@ pub struct Entry {
 }
 
 /// A task entry's result (the contract of `task.json`).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TaskResult {
     /// The task's name.
     pub task: String,
@@ -79,9 +79,12 @@ pub struct TaskResult {
     pub chosen_by: String,
     /// `calbench` or `python:<name>`.
     pub entrant: String,
-    /// The authors' published figures: label, value, source, division.
-    pub published: Vec<(String, Real, String, String)>,
+    /// The authors' published figures.
+    pub published: Vec<Published>,
 }
+
+/// A published figure as the database keeps it: label, value (mm), source, division.
+pub type Published = (String, Real, String, String);
 
 /// A scenario's (a task's, an identification's) name with its canonical text and the
 /// text's hex SHA-256 (a task's `task_hash`). The text is the scenario as run (TOML,
@@ -341,29 +344,18 @@ impl Record {
                 ));
             }
         }
-        let division = t.division.as_str().to_string();
-        let models = t.models.join("+");
-        let mut published = Vec::new();
-        for (i, p) in t.published.iter().enumerate() {
-            if p.value < 0.0 {
-                return Err(bad(
-                    &format!("published[{i}].value"),
-                    "is negative: an error (mm) is ≥ 0",
-                ));
-            }
-            published.push((
-                p.label.clone(),
-                p.value,
-                p.source.clone(),
-                p.division.as_str().to_string(),
+        if let Some(i) = t.published.iter().position(|p| p.value < 0.0) {
+            return Err(bad(
+                &format!("published[{i}].value"),
+                "is negative: an error (mm) is ≥ 0",
             ));
         }
-        let metric = t.metric.as_str().to_string();
-        let (task, method, entrant) = (t.task, t.method, t.entrant);
+        let result = TaskResult::of(&t);
+        let (method, models) = (&result.method, &result.models);
         let entry = if models.is_empty() {
-            format!("{entrant} / {method}")
+            format!("{} / {method}", result.entrant)
         } else {
-            format!("{entrant} / {method} / {models}")
+            format!("{} / {method} / {models}", result.entrant)
         };
         // The calbench that ran the entry, never the one recording it: `unknown` where the
         // entry names none (a task file outside a git repository has no commit).
@@ -372,7 +364,8 @@ impl Record {
             t.calbench_version.unwrap_or_else(unknown),
             t.git_commit.unwrap_or_else(unknown),
         );
-        let mut r = Record::new(Kind::Task, dir, document.clone(), task.clone(), document);
+        let task = result.task.clone();
+        let mut r = Record::new(Kind::Task, dir, document.clone(), task, document);
         r.scenario.hash = t.task_hash;
         r.results.entries = vec![Entry {
             name: entry.clone(),
@@ -380,24 +373,39 @@ impl Record {
         }];
         r.results.figures = vec![Figure {
             entry,
-            metric: metric.clone(),
+            metric: result.metric.clone(),
             value,
             ci,
         }];
         r.results.ran_with = Some(ran_with);
-        r.results.task = Some(TaskResult {
-            task,
-            metric,
-            value,
-            ci,
-            division,
-            method,
-            models,
-            chosen_by: t.chosen_by,
-            entrant,
-            published,
-        });
+        r.results.task = Some(result);
         Ok(r)
+    }
+}
+
+impl TaskResult {
+    /// What the database keeps of the task entry `t` (its `tasks` and `published` rows):
+    /// what `record` stores and `leaderboard --verify` finds again.
+    pub fn of(t: &TaskRecord) -> TaskResult {
+        TaskResult {
+            task: t.task.clone(),
+            metric: t.metric.as_str().to_string(),
+            value: t.value,
+            ci: t.ci95,
+            division: t.division.as_str().to_string(),
+            method: t.method.clone(),
+            models: t.models.join("+"),
+            chosen_by: t.chosen_by.clone(),
+            entrant: t.entrant.clone(),
+            published: t
+                .published
+                .iter()
+                .map(|p| {
+                    let division = p.division.as_str().to_string();
+                    (p.label.clone(), p.value, p.source.clone(), division)
+                })
+                .collect(),
+        }
     }
 }
 

@@ -312,6 +312,59 @@ fn an_entry_filed_under_another_task_is_refused_and_verify_refuses_such_a_row() 
     );
 }
 
+/// `leaderboard --verify` finds again every value the board shows of an entry: its division,
+/// models and method in `tasks` and the published figures it stands against. An edit of
+/// those had passed it, and the board ranked the edited rows.
+#[test]
+fn verify_refuses_a_database_whose_ranked_rows_were_edited() {
+    let dir = tmp_dir("record-task-verify-rows");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let db = dir.join("calbench.sqlite");
+    assert!(record(&out, &db, &["--task", path_arg(&task)])
+        .status
+        .success());
+    let verify = |db: &Path| calbench(&["leaderboard", "--db", path_arg(db), "--verify"]);
+    assert!(verify(&db).status.success());
+    let edits = [
+        (
+            "UPDATE tasks SET division = 'open'",
+            "division: the entry recorded as run 1 is ranked with division \"open\", but its \
+             task.json says \"closed\"",
+        ),
+        (
+            "UPDATE tasks SET models = 'kinematic+beta'",
+            "models: the entry recorded as run 1 is ranked with models \"kinematic+beta\"",
+        ),
+        (
+            "UPDATE tasks SET method = 'ls'",
+            "method: the entry recorded as run 1 is ranked with method \"ls\"",
+        ),
+        (
+            "UPDATE published SET value = 9.0",
+            "published[0].value: the entry recorded as run 1 is ranked with published[0].value \
+             9 mm, but its task.json says 2.92 mm: the database was edited",
+        ),
+        (
+            "UPDATE published SET division = 'closed'",
+            "published[0].division:",
+        ),
+        (
+            "DELETE FROM published",
+            "published[0]: the entry recorded as run 1 is ranked with published[0] none",
+        ),
+    ];
+    for (i, (sql, says)) in edits.iter().enumerate() {
+        let edited = dir.join(format!("edited-{i}.sqlite"));
+        std::fs::copy(&db, &edited).unwrap();
+        let c = rusqlite::Connection::open(&edited).unwrap();
+        assert_eq!(c.execute(sql, []).unwrap(), 1, "{sql}");
+        drop(c);
+        crate::common::refused(&verify(&edited), &["entry/task.json: ", says]);
+    }
+}
+
 /// A `task.json` edit `calbench task` cannot write is refused naming `task.json` and the key:
 /// a calbench kinematic entry in the open division, no model, a choice by cross-validation
 /// of one candidate, no candidates, what fixed them of another name, an entrant that is
