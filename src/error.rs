@@ -390,8 +390,21 @@ where
     D: serde::Deserializer<'de>,
 {
     serde_path_to_error::deserialize(de).map_err(|e| {
-        let key = e.path().to_string();
-        let msg = e.into_inner().to_string();
+        // serde reads a struct from a list too, field by field in order: a list where a
+        // table of keys stands (every calbench JSON file is one) is said so, not as a field
+        // of the wrong type or a count of elements.
+        let top_list = matches!(
+            e.path().iter().next(),
+            Some(serde_path_to_error::Segment::Seq { .. })
+        );
+        let mut key = e.path().to_string();
+        let mut msg = e.into_inner().to_string();
+        if top_list || (msg.starts_with("invalid length ") && msg.contains(", expected struct ")) {
+            if top_list {
+                key = ".".into();
+            }
+            msg = "is a list, where a table of keys (a JSON object) stands".into();
+        }
         // Named by its own key, so that the refusal stands at that key's line.
         let key = toml_read::own_key(key, &msg);
         Error::file(path, key, format!("not a calbench {what}: {msg}"))

@@ -104,7 +104,8 @@ pub enum Reader {
     /// `check`, `compare` and `baseline`: a figure scaled by hand beyond its interval is
     /// compared (a "what if" of a worse run), since its interval still gives its spread.
     Compare,
-    /// `record`: what is stored must be what a run wrote, so such a figure is refused too.
+    /// `record`: what is stored must be what a run wrote, so such a figure is refused too,
+    /// and so are error statistics out of their order (a mean above its RMS).
     Record,
 }
 
@@ -112,7 +113,8 @@ pub enum Reader {
 /// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
 /// a whole number ≥ 0, or above `trials`; a figure that must be ≥ 0 below zero (`signed`);
 /// η above 100 % (`eta_bounded`); an interval whose ends are reversed; and, for
-/// [`Reader::Record`], a figure outside its own 95 % interval (edited). `at` gives the key
+/// [`Reader::Record`], a figure outside its own 95 % interval (edited) and a block of error
+/// statistics out of order ([`ordered_statistics`]). `at` gives the key
 /// path of an entry by its name (`results[2]`, `cells[0]`), for the line of the refusal; an
 /// empty path is the top of the file (an identification's figures), whose figures are named
 /// by their key alone.
@@ -133,23 +135,24 @@ pub fn check_figures(
             "is 0: the trials of a run are a whole number above 0",
         ));
     }
-    for f in figures {
-        let refuse = |msg: String| {
-            // An entry at the top of its file (an identification's) is named by its key.
-            let entry = at(&f.entry);
-            let (key, full) = match entry.as_deref() {
-                Some("") => (f.metric.clone(), f.metric.clone()),
-                e => (
-                    format!("results ({}), {}", f.entry, f.metric),
-                    format!("{}.{}", e.unwrap_or_default(), f.metric),
-                ),
-            };
-            let line = entry.and_then(|_| {
-                let text = crate::error::read_text(path).ok()?;
-                json_key_line(&text, &full)
-            });
-            Err(Error::file(path, at_line(line, key), msg))
+    // An entry at the top of its file (an identification's) is named by its key.
+    let refuse_at = |f: &Figure, msg: String| {
+        let entry = at(&f.entry);
+        let (key, full) = match entry.as_deref() {
+            Some("") => (f.metric.clone(), f.metric.clone()),
+            e => (
+                format!("results ({}), {}", f.entry, f.metric),
+                format!("{}.{}", e.unwrap_or_default(), f.metric),
+            ),
         };
+        let line = entry.and_then(|_| {
+            let text = crate::error::read_text(path).ok()?;
+            json_key_line(&text, &full)
+        });
+        Err(Error::file(path, at_line(line, key), msg))
+    };
+    for f in figures {
+        let refuse = |msg: String| refuse_at(f, msg);
         let count = f.metric == Metric::Failures.key() || f.metric.starts_with("terminations.");
         if count && (f.value < 0.0 || f.value.fract() != 0.0) {
             return refuse(format!(
@@ -199,6 +202,55 @@ pub fn check_figures(
                 shown(f.value)
             ));
         }
+    }
+    match reader {
+        Reader::Record => ordered_statistics(figures, &refuse_at),
+        Reader::Compare => Ok(()),
+    }
+}
+
+/// Refuses (`refuse`) a block of error statistics whose `mean` is above its `rms`, or, for
+/// errors that are never negative, whose `rms` is above its `max`: so it is in every trial's
+/// errors, and so in their averages over trials (a summary's figures) too. No run or
+/// identification writes such a block; it is refused from what `record` stores, where
+/// `check` and `compare` take a figure scaled by hand as a "what if" ([`Reader`]).
+fn ordered_statistics(
+    figures: &[Figure],
+    refuse: &dyn Fn(&Figure, String) -> Result<()>,
+) -> Result<()> {
+    let by_key: std::collections::HashMap<(&str, &str), &Figure> = figures
+        .iter()
+        .map(|f| ((f.entry.as_str(), f.metric.as_str()), f))
+        .collect();
+    for f in figures {
+        let Some(block) = f.metric.strip_suffix(".rms") else {
+            continue;
+        };
+        let stat = |name: &str| {
+            by_key
+                .get(&(f.entry.as_str(), format!("{block}.{name}").as_str()))
+                .copied()
+        };
+        let above = |a: Real, b: Real| a > b + 1e-9 * a.abs().max(b.abs());
+        let (first, second, a, b) = match (stat("mean"), stat("max")) {
+            (Some(mean), _) if above(mean.value, f.value) => (mean, "RMS", mean.value, f.value),
+            (_, Some(max)) if !signed(&f.metric) && above(f.value, max.value) => {
+                (f, "maximum", f.value, max.value)
+            }
+            _ => continue,
+        };
+        let name = first.metric.rsplit('.').next().unwrap_or_default();
+        return refuse(
+            first,
+            format!(
+                "is {}, above the {second} {} of the same errors: their {} is at most their \
+                 {second} (in each trial, and so in averages over trials), so no run or \
+                 identification writes it",
+                shown(a),
+                shown(b),
+                if name == "rms" { "RMS" } else { name },
+            ),
+        );
     }
     Ok(())
 }

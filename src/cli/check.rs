@@ -142,9 +142,10 @@ pub fn run(args: &CheckArgs) -> Result<()> {
             for (entry, metrics) in set_aside(&all) {
                 out!(
                     "unpaired: {entry}: {}: over the trials usable in both runs their per-trial \
-                     values do not give the summaries' figures (a trial counts in one run only, or a \
-                     parameter's η in one run or in some trials only), so they are compared \
-                     from the summaries' intervals",
+                     values do not give the summaries' figures (a trial counts in one run only, a \
+                     parameter's η in one run or in some trials only, or a trials.csv is of \
+                     another run or edited), so they are compared from the summaries' \
+                     intervals",
                     metrics.join(", ")
                 );
             }

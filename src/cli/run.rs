@@ -133,7 +133,13 @@ pub fn run(args: &RunArgs) -> Result<()> {
         let why = "a shard is part of a run; record the merged run (`merge --record`)";
         return Err(Error::setting("--record", why).into());
     }
-    let sc = match scenario_with_overrides(args)? {
+    let any = scenario_with_overrides(args)?;
+    if let Some(s) = shard {
+        // Before the run is announced, as the checkpoint would refuse it after.
+        let why = s.fits(any.units());
+        why.map_err(|m| Error::option(calbench::error::Opt::Shard, m))?;
+    }
+    let sc = match any {
         AnyScenario::MonteCarlo(sc) => sc,
         cells => return cells_study(&cells, shard, args),
     };

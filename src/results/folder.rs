@@ -272,7 +272,7 @@ impl Record {
             .collect();
         let mut figures = Vec::new();
         flatten(&id.method, "", &kept, None, &mut figures);
-        super::identified::check_identified(&id, &path, (&figures, &kept))?;
+        super::identified::check_identified(&id, &path, &figures)?;
         let name = format!("identify {} {data}", id.robot);
         let mut r = Record::new(Kind::Identify, dir, document, name, scenario_text);
         r.results.entries = vec![Entry {

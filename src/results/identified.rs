@@ -5,27 +5,23 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use serde_json::{Map, Value};
-
 use crate::analysis::figures::{check_figures, Figure, Reader};
 use crate::calibrate::record::IdentifiedRecord;
-use crate::calibrate::ErrorStats;
-use crate::error::{shown, Error, Result};
-use crate::numeric::Real;
+use crate::error::{Error, Result};
 
 /// Refuses, naming the file `path` and the key (at its line), a record `id` no identification
 /// writes: a `robot` no robot file may be named (empty, or holding a control character); a
 /// `method` that is neither one of calbench's ([`crate::identify::METHODS`]) nor a
 /// method supplied from outside; an `errors` key that is not one of its `parameters`, or a
 /// parameter without its error; a `rank` above the unknowns solved for (the parameters, with a
-/// kind file's instrument unknowns); a figure (`figures`, of its numbers `kept`) a run's
-/// summary may not hold either ([`check_figures`]: an error, residual, σ₀ or condition number
-/// below 0); and a block of errors (`validation_after_mm`, …) whose mean is above its RMS or
-/// whose RMS is above its maximum.
+/// kind file's instrument unknowns); and a figure (`figures`) a run's summary may not hold
+/// either ([`check_figures`]: an error, residual, σ₀ or condition number below 0, a block of
+/// errors (`validation_after_mm`, …) whose mean is above its RMS or whose RMS is above its
+/// maximum).
 pub(super) fn check_identified(
     id: &IdentifiedRecord,
     path: &Path,
-    (figures, kept): (&[Figure], &Map<String, Value>),
+    figures: &[Figure],
 ) -> Result<()> {
     let bad = |key: &str, msg: String| Err(Error::file(path, key, msg).at_json_key_line());
     let external = crate::identify::external::EXTERNAL;
@@ -79,27 +75,5 @@ pub(super) fn check_identified(
         figures,
         Reader::Record,
         &|_| Some(String::new()),
-    )?;
-    // The blocks of errors, by their keys as written.
-    for (key, v) in kept.iter().filter(|(_, v)| v.is_object()) {
-        let Ok(s) = serde_json::from_value::<ErrorStats>(v.clone()) else {
-            continue;
-        };
-        let above = |a: Real, b: Real| a > b + 1e-9 * a.abs().max(b.abs());
-        let (what, first, second, a, b) = match () {
-            _ if above(s.mean, s.rms) => ("mean", "mean", "RMS", s.mean, s.rms),
-            _ if above(s.rms, s.max) => ("rms", "RMS", "maximum", s.rms, s.max),
-            _ => continue,
-        };
-        return bad(
-            &format!("{key}.{what}"),
-            format!(
-                "is {}, above the {second} {} of the same errors: their {first} is at most \
-                 their {second}, so no identification writes it",
-                shown(a),
-                shown(b)
-            ),
-        );
-    }
-    Ok(())
+    )
 }

@@ -48,6 +48,7 @@ where
 /// Mean, median and standard deviation over trials of one per-trial value: η of one
 /// parameter (%), a search's final fitness (`final_fitness`).
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TrialFigures {
     /// Mean η (%).
     #[serde(deserialize_with = "nan::real")]
@@ -110,6 +111,7 @@ pub struct Figures {
 /// statistics from a copy of the object, and a refusal of one of them would name the object
 /// (`validation_after_mm`) and not its key (`validation_after_mm.mean`).
 #[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
 struct FiguresRead {
     #[serde(deserialize_with = "nan::real")]
     mean: Real,

@@ -3,7 +3,8 @@
 //! a rank above the unknowns, a method calbench does not have, an error of a parameter it did
 //! not identify, a robot no robot file may be named) is refused naming the file, the line and
 //! the key, by the rule a summary's figures are refused by, and nothing is stored. A summary that lacks an entry's validation
-//! errors, or whose terminations are no run's, is refused too (by `check` as well).
+//! errors, or whose terminations are no run's, is refused too (by `check` as well), and so is
+//! one whose error statistics are out of order (a mean above the RMS), by `record`.
 
 use std::path::Path;
 
@@ -168,6 +169,33 @@ fn a_summary_without_its_validation_errors_or_with_unknown_terminations_is_refus
     let want = ["results[0].terminations: add up to 1, but the run has 2 trials"];
     refused(&record(), &want);
     refused(&check(), &want);
+    // Averaged over trials, a mean stays at most the RMS, and the RMS of errors never
+    // negative at most the maximum: a summary edited otherwise had been stored.
+    let after = &v["results"][0]["validation_after_mm"];
+    let (rms, max) = (
+        after["rms"].as_f64().unwrap(),
+        after["max"].as_f64().unwrap(),
+    );
+    for (stat, value, says) in [
+        (
+            "max",
+            rms / 2.0,
+            format!("validation_after_mm.rms: is {rms}, above the maximum"),
+        ),
+        (
+            "mean",
+            2.0 * max,
+            format!("validation_after_mm.mean: is {}, above the RMS", 2.0 * max),
+        ),
+    ] {
+        let mut e = v.clone();
+        let block = &mut e["results"][0]["validation_after_mm"];
+        block[stat] = value.into();
+        block[format!("{stat}_ci95")] = serde_json::json!([value, value]);
+        write(&e);
+        let want = ["run/summary.json: line ", "results (ls / random), ", &says];
+        refused(&record(), &want);
+    }
     assert!(!db.exists());
     std::fs::write(&file, &written).unwrap();
     calbench_ok(&["record", path_arg(&out), "--db", path_arg(&db)]);

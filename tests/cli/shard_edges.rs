@@ -32,6 +32,8 @@ fn a_split_into_more_shares_than_work_units_is_refused() {
         assert!(err.contains("--shard"), "{err}");
         assert!(err.contains("4 work units"), "{err}");
         assert!(err.contains("at most 4 shards"), "{err}");
+        // Refused before the run is announced, where it said `running ci-guard: …` first.
+        assert_eq!(err.lines().count(), 1, "{err}");
         assert!(!out.exists() && !dir.join(".over.checkpoint").exists());
     }
     calbench_ok(&[

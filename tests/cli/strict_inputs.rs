@@ -167,10 +167,23 @@ fn check_refuses_files_that_are_not_comparable_summaries() {
     {
         e["method"] = serde_json::json!(format!("pso{i}"));
     }
+    // An unknown key inside an entry's block had been passed over, where one in the entry
+    // is refused.
+    let mut nested = real.clone();
+    nested["results"][0]["validation_after_mm"]["bogus"] = 1.into();
+    let mut eta = real.clone();
+    let first = eta["results"][0]["eta"].as_object_mut().unwrap();
+    first.values_mut().next().unwrap()["bogus"] = 1.into();
+    // serde reads a struct from a list too: a list is said so, not by its length or its
+    // second element's type.
+    let list = "is a list, where a table of keys (a JSON object) stands";
     let cases = [
         ("empty.json", "{}".to_string(), "results"),
         ("notlist.json", r#"{"results": 3}"#.to_string(), "results"),
-        ("array.json", "[1, 2]".to_string(), "not a calbench summary"),
+        ("array.json", "[1, 2]".to_string(), list),
+        ("empty-array.json", "[]".to_string(), list),
+        ("nested.json", nested.to_string(), "unknown field `bogus`"),
+        ("eta.json", eta.to_string(), "unknown field `bogus`"),
         ("other.json", other.to_string(), "scenario"),
         ("unrelated.json", unrelated.to_string(), "shares no metric"),
     ];

@@ -69,6 +69,11 @@ impl Precision {
         if !v.is_finite() {
             return Err(bad("is not a finite number"));
         }
+        if crate::error::underflow(number.trim(), v).is_some() {
+            return Err(bad(
+                "is below the smallest 64-bit number (about 4.9e-324) and would read as 0",
+            ));
+        }
         if v <= 0.0 {
             return Err(bad("must be positive"));
         }
@@ -237,6 +242,11 @@ mod tests {
             ("infmm", "is not a finite number"),
             ("nan%", "is not a finite number"),
             ("-1%", "must be positive"),
+            // Below the smallest number: not "must be positive", as it was written so.
+            (
+                "1e-400mm",
+                "is below the smallest 64-bit number (about 4.9e-324) and would read as 0",
+            ),
             ("0mm", "must be positive"),
         ] {
             let e = Precision::parse(bad).unwrap_err().to_string();
