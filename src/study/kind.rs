@@ -13,6 +13,7 @@ use crate::error::{read_text, Error, Result};
 use crate::study::instruments::InstrumentsScenario;
 use crate::study::instruments_table::{INSTRUMENTS_KEYS, INSTRUMENTS_STUDY, MIGRATE};
 use crate::study::registration_study::RegistrationScenario;
+use crate::study::registration_study::REGISTRATION_STUDY;
 use crate::study::scenario::Scenario;
 use crate::study::whole::{self, Head};
 
@@ -79,7 +80,9 @@ impl AnyScenario {
                 let key = INSTRUMENTS_KEYS.iter().find(|k| table.contains_key(**k));
                 Err(Error::file(shown, *key.unwrap_or(&"measurement"), MIGRATE))
             }
-            (None, false, None) => Ok(AnyScenario::MonteCarlo(Scenario::parse(text, path)?)),
+            (None, false, None) => Scenario::parse(text, path)
+                .map(AnyScenario::MonteCarlo)
+                .map_err(other_kinds),
         }
     }
 
@@ -173,5 +176,23 @@ impl AnyScenario {
     /// The work units of the run: blocks × trials.
     pub fn units(&self) -> u64 {
         self.blocks().0 as u64 * self.trials() as u64
+    }
+}
+
+/// A Monte-Carlo scenario's refusal of an unknown top-level key (its place the scenario
+/// itself), naming beside the keys it lists the sections that make a study of another kind,
+/// which [`AnyScenario::parse`] reads the kind from.
+fn other_kinds(e: Error) -> Error {
+    match e {
+        Error::File { file, place, msg }
+            if place.ends_with("scenario") && msg.to_string().contains("unknown field") =>
+        {
+            let msg = msg.text(format!(
+                ", or `{REGISTRATION_STUDY}` or `{INSTRUMENTS_STUDY}`, the section of a study \
+                 of another kind"
+            ));
+            Error::File { file, place, msg }
+        }
+        e => e,
     }
 }

@@ -29,6 +29,9 @@ use crate::study::claims::{self, Claim};
 use crate::study::verdict::{self, Evaluation};
 use crate::study::whole::Head;
 
+/// The section of a scenario that makes it a registration study.
+pub const REGISTRATION_STUDY: &str = "registration_study";
+
 /// The `[registration_study]` table. Defaults are Ban §3's simulation: 50 points, ±0.02 mm
 /// noise, 2, 4, …, 16 gross errors of 0–0.2 … 0–1 mm, in Ban's 800 mm cube.
 #[derive(Clone, Debug, PartialEq, Deserialize, serde::Serialize)]

@@ -96,6 +96,27 @@ fn a_refused_sweep_point_is_named_at_the_line_of_its_value() {
     }
 }
 
+/// A Monte-Carlo scenario's unknown top-level key is refused at its line, naming beside its
+/// keys the sections that make a study of another kind, which the refusal had left out.
+#[test]
+fn an_unknown_scenario_key_names_the_sections_of_the_other_kinds() {
+    let d = tmp_dir("cli-lines-kinds");
+    let sc = ci_guard_with(&d, "trails", |t| t.replacen("\ntrials =", "\ntrails =", 1));
+    let line = line_of(&read(&sc), "trails =");
+    let err = refusal(&d, &["run", "trails.toml", "--out", "o"]);
+    assert!(
+        err.starts_with(&format!(
+            "error: trails.toml: line {line}, scenario: unknown field `trails`, expected one of \
+             `name`, "
+        )) && err.ends_with(
+            ", `claims`, or `registration_study` or `instruments_study`, the section of a study \
+             of another kind\n"
+        ),
+        "{err}"
+    );
+    assert!(!d.join("o").exists());
+}
+
 /// A registration study (and an instruments study) holding `[[methods]]`, which only a
 /// Monte-Carlo study reads, is refused at the line of that `[[methods]]`.
 #[test]
