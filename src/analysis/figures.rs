@@ -114,7 +114,7 @@ pub enum Reader {
 /// a whole number ≥ 0, or above `trials`; a figure that must be ≥ 0 below zero (`signed`);
 /// η above 100 % (`eta_bounded`); an interval whose ends are reversed; and, for
 /// [`Reader::Record`], a figure outside its own 95 % interval (edited) and a block of error
-/// statistics out of order ([`ordered_statistics`]). `at` gives the key
+/// statistics out of order (`ordered_statistics`). `at` gives the key
 /// path of an entry by its name (`results[2]`, `cells[0]`), for the line of the refusal; an
 /// empty path is the top of the file (an identification's figures), whose figures are named
 /// by their key alone.

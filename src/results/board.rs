@@ -223,7 +223,7 @@ fn check_kept(
 /// another task than its `task.json` names, and one whose task hash is recorded under
 /// another task's name (an entry filed under a task it did not run), and one whose other
 /// ranked values (division, models, published figures…) are not its `task.json`'s
-/// ([`check_kept`]). Returns the entries verified.
+/// (`check_kept`). Returns the entries verified.
 pub fn verify(db: &Db) -> Result<usize> {
     let sql = "SELECT r.id, r.source, r.document, t.value, t.ci_lo, t.ci_hi, t.task, \
                t.task_hash, t.metric, t.division, t.method, t.models, t.chosen_by, t.entrant \

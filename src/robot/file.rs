@@ -399,7 +399,7 @@ fn toml_string(text: &str) -> String {
 
 /// Writes a robot as a robot file in its own units; [`parse_robot_file`] reads it back as
 /// the same robot, value for value: numbers are tidied only where tidying changes nothing
-/// read ([`num`]).
+/// read (`num`).
 pub fn robot_to_toml(robot: &Robot) -> String {
     let n = robot.dof();
     let (lu, au) = (robot.units.length_to_mm(), robot.units.angle_to_rad());

@@ -458,21 +458,20 @@ fn a_file_that_is_not_utf8_is_refused_naming_the_line() {
     assert!(!Path::new(out).exists());
 }
 
+/// `calbench identify --robot irb2600 --data DATA --method lm --out OUT`.
+fn identify_lm(data: &Path, out: &Path) -> Output {
+    let (data, out) = (data.to_str().unwrap(), out.to_str().unwrap());
+    let args = [
+        "--robot", "irb2600", "--data", data, "--method", "lm", "--out", out,
+    ];
+    calbench(&[&["identify"][..], &args].concat())
+}
+
 #[test]
 fn a_folder_given_as_a_measurement_file_is_an_io_error_of_its_path() {
     let d = tmp_dir("strict-folder-data");
     let out = d.join("out");
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        d.to_str().unwrap(),
-        "--method",
-        "lm",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = identify_lm(&d, &out);
     // It had been refused as a fault of its text: `line 1: cannot read the header`.
     let err = refused(&o, &[&format!("error: {}: ", d.display())]);
     assert!(
@@ -494,19 +493,8 @@ fn an_unclosed_quote_is_named_by_its_field() {
         "q1,q2,q3,q4,q5,q6,x,y,z\n1,2,3,4,5,6,\"7,8,9\n1,2,3,4,5,6,7,8,9\n",
     )
     .unwrap();
-    let o = calbench(&[
-        "identify",
-        "--robot",
-        "irb2600",
-        "--data",
-        data.to_str().unwrap(),
-        "--method",
-        "lm",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
     refused(
-        &o,
+        &identify_lm(&data, &out),
         &["m.csv: line 2: 7 fields, expected 9 as in the header: field 7 (column \"x\") is quoted"],
     );
     let raw = std::fs::read_to_string(root().join("examples/ipa-ur10/sample-200.csv")).unwrap();
