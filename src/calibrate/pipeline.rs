@@ -139,7 +139,11 @@ impl IdentifyRequest {
             crate::identify::qiao::check_k(k).map_err(|e| e.of_option(Opt::K))?;
             spec.k = k;
         }
-        let repeated = d.repeated_rows();
+        let repeated: Vec<(usize, usize)> = d
+            .repeated_rows()
+            .into_iter()
+            .map(|(a, b)| (self.file_row(None, a), self.file_row(None, b)))
+            .collect();
         if !repeated.is_empty() {
             let why = crate::measurement::repeated_rows_refusal(&repeated);
             return Err(Error::file(&self.source, "data", why));
@@ -159,7 +163,23 @@ impl IdentifyRequest {
                 );
                 return Err(Error::option(Opt::Holdout, why));
             }
-            val = Some(cv::subset(&d, &held));
+            let v = cv::subset(&d, &held);
+            // The rows held out are a validation file's rows, and refused as its are.
+            let rows: Vec<u64> = held.iter().map(|&i| i as u64).collect();
+            if crate::measurement::csv::distinct_poses(&v.qs, &rows, nominal.dof()).is_err() {
+                let why = format!(
+                    "`{}/{}` holds out {} of the data's {} rows, of fewer than {MIN} distinct \
+                     poses: a validation, as a validation file, needs at least {MIN} (rows of \
+                     distinct joint values)",
+                    h.last,
+                    h.every,
+                    held.len(),
+                    d.len(),
+                    MIN = crate::measurement::csv::MIN_DISTINCT_POSES
+                );
+                return Err(Error::option(Opt::Holdout, why));
+            }
+            val = Some(v);
             d = cv::subset(&d, &cal);
             held_out = Some((cal, held));
         }
@@ -301,7 +321,12 @@ impl IdentifyRequest {
             .map(|g| ("after", g))
             .or_else(|| gross_reading(&before).map(|g| ("before", g)))
             .map(|(at, (i, r))| {
-                format!("point {i} has a residual {r:.0} times the median {at} calibration")
+                let cal = held_out.as_ref().map(|(cal, _)| cal.as_slice());
+                format!(
+                    "the point of row {} of the data (0-based) has a residual {r:.0} times the \
+                     median {at} calibration",
+                    self.file_row(cal, i)
+                )
             });
         // Orientations read with another convention than they were written in: a likely
         // cause of either refusal (looked for only when one is due).

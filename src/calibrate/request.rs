@@ -96,6 +96,10 @@ pub struct IdentifyRequest {
     /// Keep a result that cannot be physically right ([`super::plausibility`]), with a
     /// warning.
     pub allow_implausible: bool,
+    /// The row of the data file (0-based) of each row of `data`, where `data` is a selection
+    /// of the file's rows (a task's calibration rows of its split), so that a refusal names a
+    /// row by the file's; `None` where `data` is the file's rows in order.
+    pub data_rows: Option<Vec<usize>>,
 }
 
 impl IdentifyRequest {
@@ -123,6 +127,14 @@ impl IdentifyRequest {
             allow_rank_deficient: false,
             allow_worse: false,
             allow_implausible: false,
+            data_rows: None,
         }
+    }
+
+    /// The data file's row (0-based) of row `i` of the rows identified on: through the
+    /// calibration rows `cal` of a holdout (`None` without one) and [`Self::data_rows`].
+    pub(super) fn file_row(&self, cal: Option<&[usize]>, i: usize) -> usize {
+        let i = cal.map_or(i, |cal| cal[i]);
+        self.data_rows.as_ref().map_or(i, |rows| rows[i])
     }
 }

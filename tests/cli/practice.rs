@@ -137,6 +137,14 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         msg.contains("setting `--holdout`: `1/1000` holds out no row"),
         "{msg}"
     );
+    // A rule that holds out fewer than 3 distinct poses is refused as a validation file of
+    // them is; one row held out had been scored alone.
+    let msg = refusal(&data, &["--holdout", "1/100"]);
+    assert!(
+        msg.contains("setting `--holdout`: `1/100` holds out 1 of the data's 199 rows")
+            && msg.contains("of fewer than 3 distinct poses"),
+        "{msg}"
+    );
     // A seed of folds without folds would change nothing, and is refused.
     let msg = refusal(&data, &["--cv-seed", "3"]);
     assert!(

@@ -312,6 +312,33 @@ fn an_entry_filed_under_another_task_is_refused_and_verify_refuses_such_a_row() 
     );
 }
 
+/// An entry of one model beyond the kinematic one (`--models beta`, as docs/results.md's loop
+/// runs them) is recorded and verified: its identification cross-validates that one model,
+/// which chooses nothing, and its task.json says the model was given. `record` had refused
+/// every such entry, as if the identification had chosen its model.
+#[test]
+fn an_entry_of_one_given_model_is_recorded() {
+    let dir = tmp_dir("record-task-one-model");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    let args = [
+        "--method",
+        "lm",
+        "--models",
+        "beta",
+        "--out",
+        path_arg(&out),
+    ];
+    calbench_ok(&[&["task", path_arg(&task)][..], &args].concat());
+    assert_eq!(load_json(&out.join("task.json"))["chosen_by"], "given");
+    let identified = load_json(&out.join("identified.json"));
+    assert_eq!(identified["cv_models"].as_array().map(Vec::len), Some(1));
+    let db = dir.join("calbench.sqlite");
+    let o = record(&out, &db, &["--task", path_arg(&task)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
+}
+
 /// `leaderboard --verify` finds again every value the board shows of an entry: its division,
 /// models and method in `tasks` and the published figures it stands against. An edit of
 /// those had passed it, and the board ranked the edited rows.

@@ -132,6 +132,21 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
             && e.contains("calibration row 5 = validation row 216"),
         "{e}"
     );
+    // The repeat among the calibration rows is named by the data file's rows, where it had
+    // been named by its place among the calibration rows (`row 0 = row 201`).
+    std::fs::write(
+        &split,
+        "rows 217\nvalidation 0-4\ncalibration 5-199\nvalidation 200-215\ncalibration 216\n",
+    )
+    .unwrap();
+    let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && e.contains("1 row(s) repeat an earlier row")
+            && e.contains("0-based rows): row 5 = row 216;"),
+        "{e}"
+    );
     // Without the repeat the same split file form runs.
     std::fs::write(&data, &text).unwrap();
     std::fs::write(&split, "rows 216\ncalibration 0-199\nvalidation 200-215\n").unwrap();

@@ -511,6 +511,10 @@ impl Task {
             }
         }
         q.validate = Some(val.clone());
+        // A refusal of a calibration row names its row of the data file.
+        if let TaskData::Split { split, .. } = &self.data {
+            q.data_rows = Some(split.calibration.clone());
+        }
         if models != [Model::KINEMATIC] {
             q.models = models.to_vec();
         }

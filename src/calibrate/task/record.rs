@@ -490,11 +490,17 @@ impl TaskRecord {
             }
             _ => {}
         }
+        // A cross-validation of one candidate (`--models beta`) chose nothing: its model was
+        // given.
+        let compared = doc
+            .get("cv_models")
+            .and_then(Value::as_array)
+            .map_or(0, Vec::len);
         match doc.get("cv_best").and_then(Value::as_str) {
-            Some(_) if !cv => {
+            Some(_) if !cv && compared >= 2 => {
                 let msg = format!(
-                    "is \"given\", but {} beside it chose its model by cross-validation \
-                     (cv_best)",
+                    "is \"given\", but {} beside it chose its model among {compared} by \
+                     cross-validation (cv_best)",
                     file.display()
                 );
                 bad("chosen_by", msg)
