@@ -523,7 +523,7 @@ fn check_frames(
 /// their points against the nominal robot's in the calibration's first frame ([`misfit`]),
 /// beside how far it misses the calibration's own there; `None`
 /// when they can, and when the calibration rows fail as a whole themselves or give no frame
-/// (theirs to refuse). Two files that do not lie in one frame are refused without blame:
+/// (theirs to refuse), unless the validation points too are in another unit. Two files that do not lie in one frame are refused without blame:
 /// either may be the one moved, or distorted (a column scaled about the tracker's origin
 /// moves the rows as a whole).
 pub(crate) fn validation_misfit(
@@ -532,12 +532,25 @@ pub(crate) fn validation_misfit(
     v: &Measurements,
     registration: Registration,
 ) -> Option<String> {
-    let frame = super::frame_onto(model, d, registration, &Frame::identity()).ok()?;
+    let own = plausibility::tool_points(nominal, &v.qs);
+    // Points in another unit than the robot's score no robot, whatever the calibration rows
+    // are (a unit is no frame's: the spread is compared).
+    let unit = || match misfit(&own, &v.points, &Frame::identity(), 0.0) {
+        Some(m @ Misfit::Scale { .. }) => Some(format!(
+            "{}; so do the calibration points, but a validation scores the robot on points in \
+             its units",
+            m.words("the validation points", "")
+        )),
+        _ => None,
+    };
+    let Ok(frame) = super::frame_onto(model, d, registration, &Frame::identity()) else {
+        return unit();
+    };
     if misfit(model, &d.points, &frame, 0.0).is_some() {
-        return None;
+        return unit();
     }
     let reference = plausibility::miss_rms(model, &d.points, &frame);
-    let model = plausibility::tool_points(nominal, &v.qs);
+    let model = own;
     let m = misfit(&model, &v.points, &frame, reference)?;
     let why = m.words("the validation points", "the calibration's frame");
     Some(match m {

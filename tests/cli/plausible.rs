@@ -348,12 +348,13 @@ fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_th
     let d = tmp_dir("cli-plausible-frames");
     let pos = simulated(&d, "scenarios/ci-guard.toml", None);
     let val = pos.with_file_name("validation.csv");
-    let metres = edited(&val, &d.join("val-m.csv"), &|h, c, _| {
+    let to_metres: &RowEdit<'_> = &|h, c, _| {
         for name in ["x", "y", "z"] {
             let k = col(h, name);
             c[k] = format!("{}", c[k].parse::<f64>().unwrap() / 1000.0);
         }
-    });
+    };
+    let metres = edited(&val, &d.join("val-m.csv"), to_metres);
     let moved = edited(&val, &d.join("val-moved.csv"), &|h, c, _| {
         let (x, y) = (col(h, "x"), col(h, "y"));
         let (vx, vy) = (c[x].parse::<f64>().unwrap(), c[y].parse::<f64>().unwrap());
@@ -372,6 +373,20 @@ fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_th
     assert!(
         err.contains("error: setting `--validate`: the validation points spread 0.0010 times")
             && err.contains("they are likely in metres, not millimetres"),
+        "{err}"
+    );
+    // Calibration rows in metres too: implausible, which `--allow-implausible` keeps, but
+    // the validation in metres is refused with no way past, where it had scored the robot.
+    let pos_m = edited(&pos, &d.join("pos-m.csv"), to_metres);
+    let out = d.join("o");
+    let extra = ["--validate", path_arg(&metres), "--allow-implausible"];
+    let o = identify(&pos_m, &out, &extra);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && !out.exists()
+            && err.contains("error: setting `--validate`: the validation points spread 0.0010")
+            && err.contains("so do the calibration points, but a validation scores the robot"),
         "{err}"
     );
     let err = refusal(&["--validate", path_arg(&moved)]);

@@ -218,17 +218,16 @@ fn a_refusal_of_mapped_rows_names_the_data_file_and_its_mapping() {
     );
 }
 
-/// A task whose mapping reads millimetres as metres is refused: with its one model (no
-/// cross-validation) as physically implausible, the refusal naming the way past it as
-/// `identify`'s option (`task` takes none); with the task's candidate models, by the
-/// cross-validation's fold that the scaled rows leave undetermined, named as `--models`.
+/// A task whose mapping swaps two position columns (a mirror image of the robot) is refused as
+/// physically implausible, the refusal naming the way past it as `identify`'s option (`task`
+/// takes none), with its one model and with the task's candidate models alike. One that
+/// reads millimetres as metres is refused before any identification, at its data: its
+/// validation points in another unit score no robot (they had gone on to the identification,
+/// which `--allow-implausible` would have kept).
 #[test]
 fn an_implausible_entry_names_the_option_as_identify_s() {
     let d = tmp_dir("cli-task-implausible");
-    let mapping = std::fs::read_to_string(root().join("tasks/barrett-wam.mapping.toml"))
-        .unwrap()
-        .replace("unit = \"mm\"", "unit = \"m\"");
-    std::fs::write(d.join("metres.mapping.toml"), mapping).unwrap();
+    let mapping = std::fs::read_to_string(root().join("tasks/barrett-wam.mapping.toml")).unwrap();
     let data = format!(
         "calibration = \"{}\"\nvalidation = \"{}\"",
         wam_file(GRID).display(),
@@ -240,13 +239,14 @@ fn an_implausible_entry_names_the_option_as_identify_s() {
             .join("tasks/barrett-wam.mapping.toml")
             .display()
             .to_string(),
-        &d.join("metres.mapping.toml").display().to_string(),
+        &d.join("edited.mapping.toml").display().to_string(),
     );
     std::fs::write(&file, text).unwrap();
     let out = d.join("out");
-    // `task FILE --method lm` with `models` (the task's candidates when empty): its stderr,
-    // after an exit status of 1 with no output folder.
-    let refusal = |models: &[&str]| {
+    // `task FILE --method lm` with `models` (the task's candidates when empty) and the mapping
+    // edited by `edit`: its stderr, after an exit status of 1 with no output folder.
+    let refusal = |edit: &dyn Fn(&str) -> String, models: &[&str]| {
+        std::fs::write(d.join("edited.mapping.toml"), edit(&mapping)).unwrap();
         let mut args = vec!["task", file.to_str().unwrap(), "--method", "lm"];
         args.extend(models);
         args.extend(["--out", out.to_str().unwrap()]);
@@ -256,15 +256,30 @@ fn an_implausible_entry_names_the_option_as_identify_s() {
         assert!(!out.exists());
         msg
     };
-    let msg = refusal(&["--models", "kinematic"]);
-    assert!(msg.contains("cannot be physically right"), "{msg}");
+    let mirror = |m: &str| {
+        m.replace("[\"x_t\", \"y_t\"", "[\"y_t\", \"x_t\"")
+            .replace("[\"x_dif\", \"y_dif\"", "[\"y_dif\", \"x_dif\"")
+    };
+    assert_ne!(mirror(&mapping), mapping);
+    for models in [&["--models", "kinematic"][..], &[]] {
+        let msg = refusal(&mirror, models);
+        assert!(
+            msg.contains("cannot be physically right")
+                && msg.contains("the points are a mirror image of the robot's")
+                && msg.contains("or pass identify's --allow-implausible to write it"),
+            "{models:?}: {msg}"
+        );
+    }
+    let metres = |m: &str| m.replace("unit = \"mm\"", "unit = \"m\"");
+    let msg = refusal(&metres, &["--models", "kinematic"]);
+    let line = line_of(&read(&file), "validation = ");
     assert!(
-        msg.contains("or pass identify's --allow-implausible to write it"),
-        "{msg}"
-    );
-    let msg = refusal(&[]);
-    assert!(
-        msg.contains("setting `--models`: fold 1 of 5: the model `"),
+        msg.contains(&format!(
+            "barrett-wam.toml: line {line}, data: the validation points"
+        )) && msg.contains(
+            "they are likely in micrometres, not millimetres; so do the \
+                 calibration points"
+        ),
         "{msg}"
     );
 }

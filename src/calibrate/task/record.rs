@@ -587,7 +587,8 @@ mod tests {
         );
         v["models"] = serde_json::json!(["kinematic", "harmonics"]);
         let r = TaskRecord::from_value(v.clone(), path).unwrap();
-        let same = serde_json::json!({"method": "lm", "cv_best": "harmonics"});
+        let same = serde_json::json!({"method": "lm", "cv_best": "harmonics",
+            "cv_models": [{"model": "kinematic"}, {"model": "harmonics"}]});
         let beside = Some((Path::new("t/identified.json"), &same));
         r.check_choice(path, beside).unwrap();
         let mut w = v.clone();
@@ -613,7 +614,7 @@ mod tests {
         refused(
             &g,
             Some(&same),
-            "chosen_by: is \"given\", but t/identified.json",
+            "chosen_by: is \"given\", but t/identified.json beside it chose its model among 2",
         );
         // A Python entrant's identification names its method `external`.
         g["entrant"] = "python:mine".into();
