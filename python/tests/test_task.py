@@ -235,15 +235,19 @@ def test_a_refusal_names_what_calbench_task_takes(root, tmp_path):
         "setting `models`: fold 1 of 2: the model `kinematic` identified on the other folds' 7 "
         "points (21 readings for 23 parameters) ended rank-deficient"
     ), e.value
-    # The WAM's millimetres read as metres: physically implausible, past which only
-    # calbench.identify goes.
+    # The WAM's x and y columns swapped, a mirror image of the robot: physically implausible,
+    # past which only calbench.identify goes. (Millimetres read as metres are refused before
+    # any identification: validation points in another unit score no robot.)
     mapping = (root / "tasks" / "barrett-wam.mapping.toml").read_text()
-    (tmp_path / "metres.mapping.toml").write_text(mapping.replace('unit = "mm"', 'unit = "m"'))
+    mirrored = mapping.replace('["x_t", "y_t"', '["y_t", "x_t"').replace(
+        '["x_dif", "y_dif"', '["y_dif", "x_dif"')
+    assert mirrored != mapping
+    (tmp_path / "mirror.mapping.toml").write_text(mirrored)
     text = (root / "tasks" / "barrett-wam.toml").read_text().replace('"../', f'"{root}/')
-    metres = tmp_path / "metres.toml"
-    metres.write_text(text.replace('"barrett-wam.mapping.toml"', '"metres.mapping.toml"'))
+    mirror = tmp_path / "mirror.toml"
+    mirror.write_text(text.replace('"barrett-wam.mapping.toml"', '"mirror.mapping.toml"'))
     with pytest.raises(calbench.FileError, match="cannot be physically right") as e:
-        calbench.task(metres, "lm", models=["kinematic"], out=tmp_path / "out")
+        calbench.task(mirror, "lm", models=["kinematic"], out=tmp_path / "out")
     assert str(e.value).endswith(
         "or pass calbench.identify's allow_implausible=True to write it with a warning"
     ), e.value
