@@ -32,7 +32,6 @@ use crate::sim::settings::{
 };
 use crate::sim::truth::selected_params;
 use crate::sim::unmodelled::UnmodelledSettings;
-use crate::study::registration_study::REGISTRATION_STUDY;
 pub use effect::effect;
 pub use report::ReportSettings;
 use sections::{
@@ -208,9 +207,9 @@ impl Scenario {
             Error::file(&shown, at_line(line(key), place), msg)
         };
         let ferr = |place: &str, msg: String| at(place, place, msg);
-        if table.contains_key(REGISTRATION_STUDY) {
+        if table.contains_key("registration_study") {
             return Err(ferr(
-                REGISTRATION_STUDY,
+                "registration_study",
                 "this is a registration study (Ban fig. 3), which `calbench run` runs on its \
                  own; it is not a calibration scenario"
                     .into(),
