@@ -164,9 +164,9 @@ impl IdentifyRequest {
                 return Err(Error::option(Opt::Holdout, why));
             }
             let v = cv::subset(&d, &held);
-            // The rows held out are a validation file's rows, and refused as its are.
-            let rows: Vec<u64> = held.iter().map(|&i| i as u64).collect();
-            if crate::measurement::csv::distinct_poses(&v.qs, &rows, nominal.dof()).is_err() {
+            // The rows held out are a validation file's rows, and refused as its are (with
+            // words of their own: they have no lines of a file).
+            if crate::measurement::csv::distinct_poses(&v.qs, &[], nominal.dof()).is_err() {
                 let why = format!(
                     "`{}/{}` holds out {} of the data's {} rows, of fewer than {MIN} distinct \
                      poses: a validation, as a validation file, needs at least {MIN} (rows of \
@@ -521,11 +521,11 @@ fn check_frames(
 /// Why the validation rows `v` cannot score a calibration of `nominal` on the rows `d` (with
 /// `model`, the nominal robot's tool points at their poses) under `registration`, in words:
 /// their points against the nominal robot's in the calibration's first frame ([`misfit`]),
-/// beside how far it misses the calibration's own there; `None`
-/// when they can, and when the calibration rows fail as a whole themselves or give no frame
-/// (theirs to refuse), unless the validation points too are in another unit. Two files that do not lie in one frame are refused without blame:
-/// either may be the one moved, or distorted (a column scaled about the tracker's origin
-/// moves the rows as a whole).
+/// beside how far it misses the calibration's own there; `None` when they can, and when the
+/// calibration rows fail as a whole themselves or give no frame (theirs to refuse), unless
+/// the validation points too are in another unit. Two files that do not lie in one frame
+/// are refused without blame: either may be the one moved, or distorted (a column scaled
+/// about the tracker's origin moves the rows as a whole).
 pub(crate) fn validation_misfit(
     nominal: &Robot,
     (d, model): (&Measurements, &[Vec3]),
@@ -550,8 +550,7 @@ pub(crate) fn validation_misfit(
         return unit();
     }
     let reference = plausibility::miss_rms(model, &d.points, &frame);
-    let model = own;
-    let m = misfit(&model, &v.points, &frame, reference)?;
+    let m = misfit(&own, &v.points, &frame, reference)?;
     let why = m.words("the validation points", "the calibration's frame");
     Some(match m {
         Misfit::Scale { .. } => {

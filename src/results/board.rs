@@ -6,7 +6,6 @@
 //! each entrant's figures across tasks make one score ([`scores`]).
 
 use std::collections::BTreeMap;
-
 use std::path::Path;
 
 use super::folder::{Published, TaskResult};
@@ -250,7 +249,7 @@ pub fn verify(db: &Db) -> Result<usize> {
     // Each task hash with the first task name it is recorded under, and where.
     let mut named: BTreeMap<&str, (&str, i64)> = BTreeMap::new();
     for ((id, source), document, value, ci, (task, hash), kept) in &entries {
-        let file = std::path::Path::new(source).join("task.json");
+        let file = Path::new(source).join("task.json");
         let text: serde_json::Value = serde_json::from_str(document)
             .map_err(|e| Error::file(&file, "task.json", format!("recorded as run {id}: {e}")))?;
         let rec = TaskRecord::from_value(text, &file)?;

@@ -10,18 +10,9 @@ use calbench::numeric::Real;
 use calbench::robot::{builtin, Param};
 
 use crate::common::{
-    calbench, calbench_ok, import_ur10_sample, load_json, path_arg, positions_only, read, refused,
-    root, tmp_dir, ur10_example as ex,
+    calbench, calbench_ok, load_json, path_arg, read, refused, root, tmp_dir, ur10_example as ex,
+    ur10_positions,
 };
-
-/// The first 200 rows of the UR10 export, positions only, as a measurement CSV in `d`.
-fn ur10_positions(d: &std::path::Path) -> String {
-    let all = d.join("all.csv");
-    import_ur10_sample(&ex("mapping.toml"), &all);
-    let p = d.join("pos.csv");
-    positions_only(&all, &p);
-    p.display().to_string()
-}
 
 /// The arguments of `calbench identify --robot ROBOT --data DATA --method lm EXTRA… --out OUT`.
 fn lm_args<'a>(robot: &'a str, data: &'a str, extra: &[&'a str], out: &'a Path) -> Vec<&'a str> {
@@ -36,7 +27,7 @@ fn lm_args<'a>(robot: &'a str, data: &'a str, extra: &[&'a str], out: &'a Path) 
 #[test]
 fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
     let d = tmp_dir("practice-cv");
-    let data = ur10_positions(&d);
+    let data = ur10_positions(&d).display().to_string();
     let out = d.join("cv");
     let o = calbench_ok(&lm_args(
         &ex("ur10.toml"),
@@ -258,7 +249,7 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
 #[test]
 fn fix_holds_and_a_prior_pulls_towards_nominal() {
     let d = tmp_dir("practice-prior");
-    let data = ur10_positions(&d);
+    let data = ur10_positions(&d).display().to_string();
     let robot = ex("ur10.toml");
     let run = |extra: &[&str], name: &str| {
         let out = d.join(name);
@@ -378,7 +369,7 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
 #[test]
 fn compensate_targets_reaches_cartesian_targets_on_the_identified_robot() {
     let d = tmp_dir("practice-targets");
-    let data = ur10_positions(&d);
+    let data = ur10_positions(&d).display().to_string();
     let out = d.join("id");
     calbench_ok(&lm_args(&ex("ur10.toml"), &data, &[], &out));
     let nominal = builtin::load(&ex("ur10.toml")).unwrap();

@@ -8,8 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::common::{
-    calbench, calbench_ok, import_ur10_sample, load_json, path_arg, positions_only, read, tmp_dir,
-    ur10_example as ex,
+    calbench, calbench_ok, load_json, path_arg, read, tmp_dir, ur10_example as ex, ur10_positions,
 };
 
 /// `simulate scenarios/instruments.toml --measure KIND` into `dir`: the measurement and
@@ -167,10 +166,7 @@ fn a_gross_reading_is_named() {
 #[test]
 fn a_gross_tracker_reading_is_named_by_its_row_of_the_file() {
     let d = tmp_dir("cli-gross-tracker");
-    let all = d.join("all.csv");
-    import_ur10_sample(&ex("mapping.toml"), &all);
-    let pos = d.join("pos.csv");
-    positions_only(&all, &pos);
+    let pos = ur10_positions(&d);
     let text = read(&pos);
     let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
     let mut cells: Vec<String> = lines[21].split(',').map(str::to_string).collect();
@@ -203,10 +199,7 @@ fn a_gross_tracker_reading_is_named_by_its_row_of_the_file() {
 #[test]
 fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     let d = tmp_dir("cli-worse-tracker");
-    let all = d.join("all.csv");
-    import_ur10_sample(&ex("mapping.toml"), &all);
-    let pos = d.join("pos.csv");
-    positions_only(&all, &pos);
+    let pos = ur10_positions(&d);
     let text = read(&pos);
     let mut lines = text.lines();
     let header = lines.next().unwrap().to_string();
@@ -288,10 +281,7 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
 #[test]
 fn export_toml_and_ur_yaml_writes_both() {
     let d = tmp_dir("cli-export-both");
-    let all = d.join("all.csv");
-    import_ur10_sample(&ex("mapping.toml"), &all);
-    let pos = d.join("pos.csv");
-    positions_only(&all, &pos);
+    let pos = ur10_positions(&d);
     let run = |export: &str| {
         let out = d.join(export.replace(',', "-"));
         let robot = ex("ur10.toml");

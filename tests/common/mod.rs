@@ -293,6 +293,16 @@ pub fn positions_only(csv: &Path, out: &Path) {
     std::fs::write(out, text).unwrap_or_else(|e| panic!("{}: {e}", out.display()));
 }
 
+/// The first 200 rows of the UR10 export, positions only, as a measurement CSV in `d`
+/// (`pos.csv`, beside the full import `all.csv`): its path.
+pub fn ur10_positions(d: &Path) -> std::path::PathBuf {
+    let all = d.join("all.csv");
+    import_ur10_sample(&ur10_example("mapping.toml"), &all);
+    let pos = d.join("pos.csv");
+    positions_only(&all, &pos);
+    pos
+}
+
 /// The file-name prefixes of the scenarios named after a paper.
 pub const PAPER_SCENARIOS: [&str; 4] = ["li2018-", "ban-", "guo2024-", "qiao2021-"];
 
