@@ -1,7 +1,8 @@
 //! The one parse of calbench's JSON files (summaries, baselines, `identified.json`,
 //! `task.json`, `shard.json`, `checkpoint.json`) that refuses a key written twice in one
-//! object, naming the file, the line and the key path, as a TOML file's is refused: serde_json
-//! keeps the last value and a reader would use it without a word.
+//! object and a number below the smallest 64-bit one (`1e-400`), naming the file, the line
+//! and the key path, as a TOML file's are refused: serde_json keeps the last value of a key,
+//! reads such a number as 0, and a reader would use either without a word.
 
 use std::cell::RefCell;
 use std::fmt;
@@ -12,15 +13,26 @@ use serde_json::{Map, Number, Value};
 
 use super::{Error, Result};
 
+/// What [`Unique`] saw that serde_json does not say: a key written twice (its key path and
+/// the key), the key paths of the floats that read as 0 in the text's order, and the key path
+/// of the value being read (where serde_json's own refusal of a number stands).
+#[derive(Default)]
+struct Found {
+    duplicate: Option<(String, String)>,
+    zeros: Vec<String>,
+    reading: String,
+}
+
 /// Builds a [`Value`] as serde_json does, refusing a key written twice in one object; the key
-/// path of the value is `path` (`results[0]`), that of the duplicate is kept in `found`.
+/// path of the value is `path` (`results[0]`), what it finds is kept in `found`.
 struct Unique<'a> {
     path: String,
-    found: &'a RefCell<Option<(String, String)>>,
+    found: &'a RefCell<Found>,
 }
 
 impl<'a> Unique<'a> {
     fn at(&self, path: String) -> Unique<'a> {
+        self.found.borrow_mut().reading.clone_from(&path);
         Unique {
             path,
             found: self.found,
@@ -51,6 +63,9 @@ impl<'de> Visitor<'de> for Unique<'_> {
         Ok(Value::Number(v.into()))
     }
     fn visit_f64<E>(self, v: f64) -> std::result::Result<Value, E> {
+        if v == 0.0 {
+            self.found.borrow_mut().zeros.push(self.path);
+        }
         Ok(Number::from_f64(v).map_or(Value::Null, Value::Number))
     }
     fn visit_str<E>(self, v: &str) -> std::result::Result<Value, E> {
@@ -82,7 +97,7 @@ impl<'de> Visitor<'de> for Unique<'_> {
                 p => format!("{p}.{key}"),
             };
             if out.contains_key(&key) {
-                *self.found.borrow_mut() = Some((path, key));
+                self.found.borrow_mut().duplicate = Some((path, key));
                 return Err(A::Error::custom("duplicate key"));
             }
             let v = map.next_value_seed(self.at(path))?;
@@ -129,9 +144,36 @@ pub fn json_refusal(path: &Path, text: &str, e: &serde_json::Error) -> Error {
     Error::file(path, format!("line {}", e.line()), not_json(text, e))
 }
 
-/// [`json_value`], its refusal marked `true` for a duplicate key.
+/// The number literals of the JSON `text` outside its strings, with their byte offsets.
+fn numbers(text: &str) -> Vec<(usize, &str)> {
+    let (bytes, mut out, mut i) = (text.as_bytes(), Vec::new(), 0);
+    while i < bytes.len() {
+        match bytes[i] {
+            b'"' => {
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+                i += 1;
+            }
+            b'-' | b'0'..=b'9' => {
+                let len = bytes[i..]
+                    .iter()
+                    .take_while(|b| matches!(b, b'0'..=b'9' | b'-' | b'+' | b'.' | b'e' | b'E'))
+                    .count();
+                out.push((i, &text[i..i + len]));
+                i += len;
+            }
+            _ => i += 1,
+        }
+    }
+    out
+}
+
+/// [`json_value`], its refusal marked `true` for one serde_json does not make: a key written
+/// twice, or a number below the smallest 64-bit one.
 fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
-    let found = RefCell::new(None);
+    let found = RefCell::new(Found::default());
     let mut de = serde_json::Deserializer::from_str(text);
     let parsed = Unique {
         path: String::new(),
@@ -139,7 +181,8 @@ fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
     }
     .deserialize(&mut de)
     .and_then(|v| de.end().map(|()| v));
-    parsed.map_err(|e| match found.into_inner() {
+    let found = found.into_inner();
+    let parsed = parsed.map_err(|e| match found.duplicate {
         Some((key_path, key)) => {
             let msg = format!(
                 "duplicate key `{key}`: it is written a second time in its object, and a \
@@ -151,8 +194,34 @@ fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
                 true,
             )
         }
+        None if !found.reading.is_empty() && e.to_string().starts_with("number out of range") => (
+            Error::file(
+                path,
+                format!("line {}, {}", e.line(), found.reading),
+                not_json(text, &e),
+            ),
+            false,
+        ),
         None => (json_refusal(path, text, &e), false),
-    })
+    })?;
+    // Every float that reads as 0 (serde_json reads `0` alone as an integer), in order: the
+    // one whose text has a digit other than 0 was below the smallest 64-bit number.
+    if found.zeros.is_empty() {
+        return Ok(parsed);
+    }
+    let written = numbers(text)
+        .into_iter()
+        .filter(|(_, t)| *t != "0" && t.parse::<f64>() == Ok(0.0));
+    for (key_path, (at, t)) in found.zeros.iter().zip(written) {
+        if let Some(msg) = super::underflow(t, 0.0) {
+            let line = text[..at].matches('\n').count() + 1;
+            return Err((
+                Error::file(path, format!("line {line}, {key_path}"), msg),
+                true,
+            ));
+        }
+    }
+    Ok(parsed)
 }
 
 /// The parser's refusal `e` of `text`, with what a reader needs that it does not say: that the
@@ -195,5 +264,28 @@ mod tests {
         let e = json_value(Path::new("s.json"), "{\n\"a\": }").unwrap_err();
         assert!(e.to_string().starts_with("s.json: line 2: "), "{e}");
         assert!(unique_keys(Path::new("s.json"), "{\n\"a\": }").is_ok());
+    }
+
+    #[test]
+    fn a_number_below_the_smallest_double_is_refused_at_its_line_and_key() {
+        // Strings, `0`, `-0`, `0.0` and `0e-400` read as 0 and are zero; a subnormal is kept.
+        let text = "{\"s\": \"1e-400 \\\" 2e-999\", \"z\": [0, -0, 0.0, 0e-400, 4.9e-324],\n\
+                    \"r\": [{\"a\": 1.5}, {\"b\": [2, 1e-400]}]}";
+        let e = json_value(Path::new("s.json"), text).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "s.json: line 2, r[1].b[1]: \"1e-400\" is below the smallest 64-bit number (about \
+             4.9e-324) and would read as 0"
+        );
+        assert!(unique_keys(Path::new("s.json"), text).is_err());
+        let fine = text.replace("1e-400]", "1e-300]");
+        assert!(json_value(Path::new("s.json"), &fine).is_ok());
+        // A number beyond the largest is refused by the parser, at its key.
+        let e = json_value(Path::new("s.json"), "{\"a\": {\"b\":\n 1e400}}").unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("s.json: line 2, a.b: number out of range"),
+            "{e}"
+        );
     }
 }

@@ -77,3 +77,39 @@ fn a_summary_saved_with_a_byte_order_mark_reads_as_without() {
     let o = calbench(&["record", path_arg(&folder), "--db", path_arg(&db)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+#[test]
+fn a_number_below_the_smallest_double_in_a_summary_is_refused_naming_its_line() {
+    // serde_json reads `1e-400` as 0: check had reported a regression of η to 0, compare and
+    // record had taken it.
+    let dir = tmp_dir("cli-json-underflow");
+    let good = good_run(&dir);
+    let summary = good.join("summary.json");
+    let text = read(&summary);
+    let from = text.find("\"results\"").unwrap();
+    let at = from + text[from..].find("\"eta_mean_pct\": ").unwrap() + "\"eta_mean_pct\": ".len();
+    let end = at + text[at..].find([',', '\n']).unwrap();
+    let line = text[..at].matches('\n').count() + 1;
+    let tiny = format!("{}1e-400{}", &text[..at], &text[end..]);
+    let folder = copy_with_summary(&good, &dir.join("copy"), &tiny);
+    let bad = folder.join("summary.json");
+    let place = format!("{}: line {line}, results[0].eta_mean_pct: ", bad.display());
+    let words = "\"1e-400\" is below the smallest 64-bit number";
+    for (s, b) in [(&bad, &summary), (&summary, &bad)] {
+        let o = calbench(&["check", path_arg(s), "--baseline", path_arg(b)]);
+        refused(&o, &[&place, words]);
+    }
+    let out = dir.join("compared");
+    let o = calbench(&[
+        "compare",
+        path_arg(&good),
+        path_arg(&folder),
+        "--out",
+        path_arg(&out),
+    ]);
+    refused(&o, &[&place, words]);
+    assert!(!out.exists());
+    let db = dir.join("x.sqlite");
+    let o = calbench(&["record", path_arg(&folder), "--db", path_arg(&db)]);
+    refused(&o, &[&place, words]);
+}
