@@ -312,10 +312,17 @@ impl Record {
         t.check_figure(&path)?;
         let identified = dir.join("identified.json");
         let beside = match identified.is_file() {
-            true => Some(read(&identified)?.1),
+            true => Some(read(&identified)?),
             false => None,
         };
-        t.check_choice(&path, beside.as_ref().map(|v| (identified.as_path(), v)))?;
+        t.check_choice(
+            &path,
+            beside.as_ref().map(|(_, v)| (identified.as_path(), v)),
+        )?;
+        if let Some((text, _)) = &beside {
+            let id = IdentifiedRecord::from_json(text, &identified)?;
+            t.check_identified_figure(&path, &identified, id.validation_after_mm)?;
+        }
         t.check_written(&path, &v)?;
         check_ran_with(&t, &path)?;
         let bad = |key: &str, what: &str| Error::file(&path, key, what.to_string());

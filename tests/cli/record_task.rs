@@ -140,7 +140,7 @@ fn refused_edit(out: &Path, task: &Path, edit: impl Fn(&mut serde_json::Value)) 
 }
 
 /// An edited figure is refused, naming the file, `value` and the figure the per-row errors
-/// give; so are an edited `task` and `metric`; and `chosen_by` and `entrant`, in every `task.json` calbench wrote, are required:
+/// give, or without them the figure of `identified.json`; so are an edited `task` and `metric`; and `chosen_by` and `entrant`, in every `task.json` calbench wrote, are required:
 /// a file without one is refused naming the file and the key, where it was recorded as
 /// chosen by nothing, or as calbench's own entry.
 #[test]
@@ -159,6 +159,18 @@ fn an_edited_figure_or_a_missing_key_is_refused_naming_file_and_key() {
             && err.contains(&format!("{}", value + 0.001))
             && err.contains(&format!("{value}"))
             && err.contains("validation_errors_mm"),
+        "{err}"
+    );
+    // With its per-row errors removed too (a file of before they were recorded), the figure
+    // is still the validation mean of the identified.json beside it.
+    let err = refused_edit(&out, &task, |j| {
+        j["value"] = serde_json::json!(value + 0.001);
+        j["validation_errors_mm"] = serde_json::json!([]);
+    });
+    assert!(
+        err.contains("entry/task.json: value: states the figure")
+            && err.contains("entry/identified.json beside it gives the validation mean")
+            && err.contains(&format!("{value}")),
         "{err}"
     );
     // An entry filed under another task or metric: the task is the given file's name, the

@@ -280,6 +280,37 @@ impl TaskRecord {
         ))
     }
 
+    /// Refuses, naming `path` (this record's file) and `value`, a tracker task's figure that
+    /// is not, bit for bit, the validation figure (`after`, its `mean` or `rms` by the
+    /// metric) of the identification written beside it (`file`): a figure edited with its
+    /// per-row errors removed, which [`TaskRecord::check_figure`] cannot recompute.
+    pub fn check_identified_figure(
+        &self,
+        path: &Path,
+        file: &Path,
+        after: Option<crate::calibrate::ErrorStats>,
+    ) -> Result<()> {
+        let Some(after) = after else {
+            return Ok(());
+        };
+        let (there, key) = match self.metric {
+            Metric::ValidationMeanMm => (after.mean, "mean"),
+            Metric::ValidationRmsMm => (after.rms, "rms"),
+            Metric::SocketSpreadMm => return Ok(()),
+        };
+        if same_figure((self.value, None), (there, None)) {
+            return Ok(());
+        }
+        let msg = format!(
+            "states the figure {}, but {} beside it gives the validation {key} {}: the figure \
+             was edited",
+            shown((self.value, self.ci95)),
+            file.display(),
+            there
+        );
+        Err(Error::file(path, "value", msg))
+    }
+
     /// Refuses, naming `path` (this record's file) and the key, a record that is not of the
     /// task file it ran (`task_text`, read from `task_path`), copied from the task file
     /// `file`: its `task` not `file`'s name (its stem), its hash not that of the task with
