@@ -53,6 +53,12 @@ fn a_method_that_never_started_is_a_failure() {
     };
     assert!(usable(&o(4)));
     assert!(!usable(&o(0)));
+    // Poses that happen to leave an identifiable list undetermined: a failure, damped or not.
+    let unexpected = Outcome {
+        rank_deficient_expected: false,
+        ..o(4)
+    };
+    assert!(!usable(&unexpected));
 }
 
 #[test]
