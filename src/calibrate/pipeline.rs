@@ -279,7 +279,11 @@ impl IdentifyRequest {
         let undetermined = |c: &Calibrated, params: &[Param]| {
             if verdict::undetermined(c) && !self.allow_rank_deficient {
                 let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
-                return Err(verdict::undetermined_error(&nominal, all, c, source, &spec));
+                let cal = held_out.as_ref().map(|(cal, _)| cal.as_slice());
+                let row = |i| self.file_row(cal, i);
+                return Err(verdict::undetermined_error(
+                    &nominal, all, c, source, &spec, &row,
+                ));
             }
             Ok(())
         };

@@ -31,13 +31,15 @@ pub fn undetermined_termination(t: Termination) -> bool {
 /// (`params`: the kinematic parameters, which [`analyse`] can judge, and the number of all
 /// identified). The refusal names the option that accepts such a result. When the poses do
 /// determine every parameter (a solve made singular by the readings themselves), the
-/// message says so and names the gross reading the residuals point to, if any.
+/// message says so and names the gross reading the residuals point to, if any, by its row of
+/// the data file (`row`: the file's row of a row of `data`).
 pub fn undetermined_error(
     nominal: &Robot,
     params: (&[Param], usize),
     c: &Calibrated,
     (source, data): (&Path, &Measurements),
     spec: &MethodSpec,
+    row: &dyn Fn(usize) -> usize,
 ) -> Error {
     let a = analyse(nominal, params.0, &data.qs, data.measure());
     let ended = format!(
@@ -49,16 +51,21 @@ pub fn undetermined_error(
         Some(h) => format!("{h}; {ended}"),
         None => ended,
     };
-    if a.rank >= params.0.len() && c.identified.rank.is_none_or(|k| k >= params.1) {
-        let gross = super::validation::point_residuals(nominal, c, data)
+    let gross = || {
+        super::validation::point_residuals(nominal, c, data)
             .ok()
             .and_then(|(before, _)| gross_reading(&before))
             .map_or(String::new(), |(i, ratio)| {
                 format!(
-                    "; point {i} lies {ratio:.0} times the median distance from the nominal \
-                     robot's: a gross reading is the likely cause"
+                    "; the point of row {} of the data (0-based) lies {ratio:.0} times the \
+                     median distance from the nominal robot's: a gross reading is the likely \
+                     cause",
+                    row(i)
                 )
-            });
+            })
+    };
+    if a.rank >= params.0.len() && c.identified.rank.is_none_or(|k| k >= params.1) {
+        let gross = gross();
         let msg = format!(
             "the poses determine all {} parameters, yet the solve did not settle{gross}; \
              {ended}. Check the readings, or pass ",
@@ -72,11 +79,12 @@ pub fn undetermined_error(
         let msg = format!(
             "the poses determine all {} kinematic parameters, yet the solve's rank is {} of \
              the {} identified: the rows' weights (the orientation weight k, the points' σ) \
-             or the parameters beside the kinematic ones leave the rest undetermined; \
+             or the parameters beside the kinematic ones leave the rest undetermined{}; \
              {ended}. Check them, or pass ",
             params.0.len(),
             c.identified.rank.unwrap_or(a.rank),
             params.1,
+            gross(),
         );
         return Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient));
     }

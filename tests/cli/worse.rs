@@ -162,32 +162,32 @@ fn a_gross_reading_is_named() {
 
 /// A tracker's reading moved by 300 mm (row 20 of the data, 0-based) is named by its row
 /// of the data file under `--holdout`, where it had been named by its place among the
-/// calibration rows (`point 14`).
+/// calibration rows (`point 14`); so is one moved by 900 m, which leaves the solve singular.
 #[test]
 fn a_gross_tracker_reading_is_named_by_its_row_of_the_file() {
     let d = tmp_dir("cli-gross-tracker");
     let pos = ur10_positions(&d);
     let text = read(&pos);
-    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
-    let mut cells: Vec<String> = lines[21].split(',').map(str::to_string).collect();
-    cells[7] = (cells[7].parse::<f64>().unwrap() + 300.0).to_string();
-    lines[21] = cells.join(",");
-    let bad = d.join("gross.csv");
-    std::fs::write(&bad, lines.join("\n") + "\n").unwrap();
-    for split in [&["--holdout", "3/10"][..], &["--holdout", "1/4"][..]] {
-        let out = d.join("out");
-        let mut args = vec!["identify", "--robot"];
-        let (robot, data) = (ex("ur10.toml"), path_arg(&bad).to_string());
-        args.extend([robot.as_str(), "--data", &data, "--method", "ls"]);
-        args.extend(split);
-        args.extend(["--out", path_arg(&out)]);
-        let o = calbench(&args);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(!o.status.success() && !out.exists(), "{split:?}: {err}");
-        assert!(
-            err.contains("the point of row 20 of the data (0-based) has a residual"),
-            "{split:?}: {err}"
-        );
+    for (moved, said) in [(300.0, "has a residual"), (9e5, "lies")] {
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        let mut cells: Vec<String> = lines[21].split(',').map(str::to_string).collect();
+        cells[7] = (cells[7].parse::<f64>().unwrap() + moved).to_string();
+        lines[21] = cells.join(",");
+        let bad = d.join("gross.csv");
+        std::fs::write(&bad, lines.join("\n") + "\n").unwrap();
+        for split in [&["--holdout", "3/10"][..], &["--holdout", "1/4"][..]] {
+            let out = d.join("out");
+            let mut args = vec!["identify", "--robot"];
+            let (robot, data) = (ex("ur10.toml"), path_arg(&bad).to_string());
+            args.extend([robot.as_str(), "--data", &data, "--method", "ls"]);
+            args.extend(split);
+            args.extend(["--out", path_arg(&out)]);
+            let o = calbench(&args);
+            let err = String::from_utf8_lossy(&o.stderr);
+            assert!(!o.status.success() && !out.exists(), "{split:?}: {err}");
+            let row = format!("the point of row 20 of the data (0-based) {said}");
+            assert!(err.contains(&row), "{moved} {split:?}: {err}");
+        }
     }
 }
 
