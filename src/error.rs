@@ -13,9 +13,9 @@ pub use hidden::{is_hidden, quoted};
 pub use json::{json_refusal, json_typed, json_value, unique_keys};
 pub use lines::{json_key_line, line_of, toml_key_line};
 use serde_words::plain_types;
-pub use serde_words::{toml_value_error, unknown_field};
+pub use serde_words::{scenario_value_error, toml_value_error, unknown_field};
 pub use text::{read_bounded, read_bounded_text, read_text, read_text_whole, TEXT_CAP_MIB};
-pub use toml_read::toml_keys;
+pub use toml_read::{toml_error_line, toml_keys};
 pub use underflow::{refuse_toml_underflow, toml_underflow, underflow};
 
 /// Everything that can go wrong in the library. Non-convergence of an identification is not an

@@ -18,6 +18,18 @@ pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
     }
 }
 
+/// [`toml_value_error`] of a scenario's value, with the place its refusal names: the key, a
+/// key missing from the scenario itself by its own name (`name`), else `scenario`.
+pub fn scenario_value_error(e: &toml::de::Error) -> (String, String) {
+    let (msg, key) = toml_value_error(e);
+    let missing = msg
+        .strip_prefix("missing field `")
+        .and_then(|m| m.split_once('`'))
+        .map(|(field, _)| field.to_string());
+    let place = key.or(missing).unwrap_or_else(|| "scenario".into());
+    (msg, place)
+}
+
 /// The key serde's refusal of an unknown field names (`unknown field `foo`, expected one of
 /// …`), and the rest of the message after it; `None` for any other refusal.
 pub fn unknown_field(msg: &str) -> Option<(&str, &str)> {

@@ -37,7 +37,7 @@ pub fn toml_keys<K: DeserializeOwned>(path: &Path, text: &str) -> Result<K> {
         let key = e.path().to_string();
         let e = e.into_inner();
         let msg = e.message().trim_end();
-        let line = e.span().map(|s| line_of(text, s.start));
+        let line = toml_error_line(text, &e);
         let place = match own_key(key, msg) {
             key if key == "." => toml_place(text, &e),
             key => at_line(line, key),
@@ -46,6 +46,15 @@ pub fn toml_keys<K: DeserializeOwned>(path: &Path, text: &str) -> Result<K> {
     })?;
     refuse_toml_underflow(path, text)?;
     Ok(k)
+}
+
+/// The line of a TOML refusal `e` of `text`; none for a key missing from the document
+/// itself, which toml places at the empty span at its start (line 1 would name a line that
+/// has nothing to do with it).
+pub fn toml_error_line(text: &str, e: &toml::de::Error) -> Option<usize> {
+    e.span()
+        .filter(|s| !(s.is_empty() && s.start == 0))
+        .map(|s| line_of(text, s.start))
 }
 
 /// The key path a serde refusal `msg` at the path `key` is about: a missing field's and an

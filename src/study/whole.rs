@@ -62,8 +62,8 @@ impl Head {
             toml::Value::Table(keys)
                 .try_into()
                 .map_err(|e: toml::de::Error| {
-                    let (msg, key) = crate::error::toml_value_error(&e);
-                    ferr(key.as_deref().unwrap_or("scenario"), msg)
+                    let (msg, place) = crate::error::scenario_value_error(&e);
+                    ferr(&place, msg)
                 })?;
         head.table = whole;
         head.path = path.to_path_buf();
@@ -113,8 +113,7 @@ pub fn parse<T: serde::de::DeserializeOwned>(
     let rest = toml::Value::Table(table)
         .try_into()
         .map_err(|e: toml::de::Error| {
-            let (msg, key) = crate::error::toml_value_error(&e);
-            let place = key.unwrap_or_else(|| "scenario".into());
+            let (msg, place) = crate::error::scenario_value_error(&e);
             Error::file(path, place, format!("{msg} (a scenario {takes})"))
         })?;
     Ok((head, rest))

@@ -214,3 +214,54 @@ fn check_refuses_a_summary_or_baseline_key_at_its_line() {
         )
     );
 }
+
+/// A key missing from a file itself (a scenario's `name`, a task's `title`, a robot file's
+/// `convention`) is named by the key with no line, where line 1 had been named (a comment,
+/// or another key, stands there); one missing from a table keeps the line of that table.
+#[test]
+fn a_key_missing_from_the_file_itself_is_named_without_a_line() {
+    let d = tmp_dir("cli-lines-missing");
+    let drop = |src: &Path, to: &str, key: &str| {
+        let text = read(src);
+        let text: Vec<&str> = text
+            .lines()
+            .filter(|l| !l.starts_with(&format!("{key} = ")))
+            .collect();
+        std::fs::write(d.join(to), text.join("\n") + "\n").unwrap();
+    };
+    let scenarios = root().join("scenarios");
+    drop(&scenarios.join("ci-guard.toml"), "s.toml", "name");
+    drop(&scenarios.join("ban-fig3.toml"), "b.toml", "name");
+    drop(&task("barrett-wam"), "t.toml", "title");
+    drop(
+        &root().join("robots/ban-irb2600.toml"),
+        "r.toml",
+        "convention",
+    );
+    let q = "--q=0,0,0,0,0,0";
+    for (args, want) in [
+        (&["run", "s.toml"][..], "s.toml: name: missing field `name`"),
+        (&["run", "b.toml"][..], "b.toml: name: missing field `name`"),
+        (
+            &["task", "t.toml", "--method", "ls", "--out", "o"][..],
+            "t.toml: title: missing field `title`",
+        ),
+        (
+            &["fk", "--robot", "r.toml", q][..],
+            "r.toml: convention: missing field `convention`",
+        ),
+    ] {
+        assert_eq!(refusal(&d, args), format!("error: {want}\n"), "{args:?}");
+    }
+    // A key missing from a table: at the line of the table's header.
+    let text = read(&root().join("robots/ban-irb2600.toml"));
+    let second = text.match_indices("[[joints]]").nth(1).unwrap().0;
+    let line = text[..second].lines().count() + 1;
+    let (head, tail) = text.split_at(second);
+    let tail = tail.replacen("\nd = ", "\n# d = ", 1);
+    std::fs::write(d.join("r2.toml"), format!("{head}{tail}")).unwrap();
+    assert_eq!(
+        refusal(&d, &["fk", "--robot", "r2.toml", q]),
+        format!("error: r2.toml: line {line}, joints[1].d: missing field `d`\n")
+    );
+}

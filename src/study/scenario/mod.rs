@@ -236,10 +236,9 @@ impl Scenario {
                         .filter(|s| s.edited.is_empty())
                         .and_then(|s| {
                             let spanned = toml::from_str::<RawScenario>(&s.text).err()?;
-                            Some(crate::error::line_of(&s.text, spanned.span()?.start))
+                            crate::error::toml_error_line(&s.text, &spanned)
                         });
-                    let (msg, key) = crate::error::toml_value_error(&e);
-                    let place = key.unwrap_or_else(|| "scenario".into());
+                    let (msg, place) = crate::error::scenario_value_error(&e);
                     Error::file(
                         &shown,
                         at_line(spanned.or_else(|| line(&place)), place),
