@@ -290,8 +290,23 @@ fn strict_fails_on_unresolved() {
 fn two_sweeps_are_compared_point_by_point_on_their_shared_trials() {
     // A sweep of the outlier count, run twice on one seed: the second with a tracker ten
     // times noisier. Each entry is paired at its own sweep point.
-    let dir = tmp_dir("cli-noise-sweep");
     let sweep = "\n[sweep]\nkey = \"outliers.count\"\nvalues = [0, 2]\n";
+    sweeps_compared_point_by_point("cli-noise-sweep", sweep, ["0", "2"]);
+}
+
+#[test]
+fn sweep_points_that_identify_other_parameters_are_paired_too() {
+    // Full-pose data identify the tool's orientation too: `trials.csv` has columns the
+    // position point leaves empty, which had left that point's every metric unpaired.
+    let sweep = "\n[sweep]\nkey = \"tracker.measure\"\nvalues = [\"position\", \"pose\"]\n";
+    sweeps_compared_point_by_point("cli-noise-measure", sweep, ["position", "pose"]);
+}
+
+/// ci-guard with `sweep` run on one seed, twice as it is and once with a tracker ten times
+/// noisier (as another version): the same run has every metric but the always unpaired
+/// ones paired and nothing changed; the noisier one regresses at both `points`, paired.
+fn sweeps_compared_point_by_point(name: &str, sweep: &str, points: [&str; 2]) {
+    let dir = tmp_dir(name);
     let plain = write_scenario(
         &dir,
         "plain",
@@ -341,7 +356,7 @@ fn two_sweeps_are_compared_point_by_point_on_their_shared_trials() {
     // The noisier tracker: the validation error regresses at both sweep points, paired.
     let (ok, text) = check(&b, &a, &[]);
     assert!(!ok, "{text}");
-    for point in ["0", "2"] {
+    for point in points {
         let l = line(
             &text,
             &format!("lm / random / {point}"),

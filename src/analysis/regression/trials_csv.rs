@@ -202,9 +202,14 @@ impl Trials {
             t.trials.entry(entry.clone()).or_default().insert(index);
             let truth: Vec<Real> = params.iter().map(|p| nums[p.1]).collect();
             let found: Vec<Real> = params.iter().map(|p| nums[p.2]).collect();
+            // A parameter the row's sweep point does not identify has both cells empty
+            // (the header is the union over the points): it does not make the row unusable.
             let usable = !FAILED.contains(&get(termi))
                 && num(rms).is_finite()
-                && found.iter().all(|x| x.is_finite());
+                && found
+                    .iter()
+                    .zip(&truth)
+                    .all(|(x, t)| x.is_finite() || t.is_nan());
             if !usable {
                 continue;
             }
