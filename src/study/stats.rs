@@ -9,6 +9,7 @@ use std::ops::Deref;
 /// takes an interval.
 pub use crate::numeric::dist;
 pub use eta::{eta, trial_eta_mean};
+pub use figure::same_json;
 pub mod ecdf;
 mod eta;
 mod figure;

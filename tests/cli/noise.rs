@@ -472,3 +472,68 @@ fn a_figure_without_an_interval_at_few_trials_is_unresolved_not_exact() {
         "{text}"
     );
 }
+
+/// One sweep written with floats in one run and integers of the same values in the other
+/// (`15.0` and `15`) is one scenario: `check` and `compare` match its entries point by point
+/// and pair them, where every entry had been missing on the other side.
+#[test]
+fn sweep_values_written_as_integer_or_float_are_one_point() {
+    let dir = tmp_dir("cli-noise-int-float");
+    let text = read(&root().join("scenarios/ci-guard.toml"));
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    for (values, out) in [("[15.0, 60.0]", &a), ("[15, 60]", &b)] {
+        let sweep = format!("\n[sweep]\nkey = \"tracker.mpe_a_um\"\nvalues = {values}\n");
+        let file = write_scenario(
+            &dir,
+            out.file_name().unwrap().to_str().unwrap(),
+            &format!("{text}{sweep}"),
+        );
+        calbench_ok(&[
+            "run",
+            path_arg(&file),
+            "--trials",
+            "10",
+            "--out",
+            path_arg(out),
+        ]);
+    }
+    let (ok, text) = check(&b, &a, &[]);
+    assert!(ok, "{text}");
+    assert!(
+        text.contains(" 0 regression, 0 unresolved, 0 changed within tolerance, 0 improved"),
+        "{text}"
+    );
+    assert!(!text.contains("unpaired"), "{text}");
+    let cmp = dir.join("cmp");
+    let o = calbench(&[
+        "compare",
+        path_arg(&a),
+        path_arg(&b),
+        "--out",
+        path_arg(&cmp),
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && said.contains("0 entries only in A, 0 only in B"),
+        "{said}"
+    );
+    // Recorded as two versions, the history finds no step between them (it had found every
+    // metric missing).
+    let db = dir.join("h.sqlite");
+    for (run, label) in [(&a, "1.0.0"), (&b, "2.0.0")] {
+        calbench_ok(&[
+            "record",
+            path_arg(run),
+            "--db",
+            path_arg(&db),
+            "--label",
+            label,
+        ]);
+    }
+    let o = calbench(&["history", "--db", path_arg(&db), "--regressions"]);
+    let said = String::from_utf8_lossy(&o.stdout).to_string() + &String::from_utf8_lossy(&o.stderr);
+    assert!(
+        o.status.success() && said.contains("no regression or drift"),
+        "{said}"
+    );
+}

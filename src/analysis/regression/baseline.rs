@@ -19,7 +19,7 @@ use crate::error::shown;
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
-use crate::study::stats::Entry;
+use crate::study::stats::{same_json, Entry};
 
 /// The key of a baseline's per-trial values in its document.
 pub const KEY: &str = "per_trial";
@@ -470,7 +470,7 @@ pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
         // A summary that does not say its trials pairs entry by entry, by the trials each
         // side's per-trial values hold ([`unpaired_entries`]).
         let unsaid_trials = key == "trials" && (a.is_null() || b.is_null());
-        if (a != b || missing_seed) && !unsaid_trials {
+        if (!same_json(&a, &b) || missing_seed) && !unsaid_trials {
             return Some(Unpaired::Differs {
                 key,
                 baseline: show(a),
@@ -490,7 +490,7 @@ pub fn unpaired_entries(baseline: &Side, summary: &Side) -> Vec<(String, String)
     };
     let mut out = Vec::new();
     for b in &baseline.summary.results {
-        let Some(e) = summary.summary.results.iter().find(|e| e.key() == b.key()) else {
+        let Some(e) = summary.summary.results.iter().find(|e| e.same_entry(b)) else {
             continue;
         };
         let (ka, kb) = (

@@ -188,7 +188,7 @@ pub fn compare_with(
     let mut changes = Vec::new();
     for b in &baseline.results {
         let key = b.key();
-        let found = new.iter().find(|e| e.key() == key);
+        let found = new.iter().find(|e| e.same_entry(b));
         for (metric, dir) in entry_metrics(b) {
             let Some(base) = lookup(b, &metric) else {
                 continue;
@@ -280,11 +280,6 @@ pub fn compare_with(
     out
 }
 
-/// The entry names (`method / poses [/ sweep value]`) of a summary, in its order.
-pub fn entry_names(summary: &Summary) -> Vec<String> {
-    summary.results.iter().map(Entry::key).collect()
-}
-
 /// Refuses a summary and a baseline (each read by [`check_summary`]) that cannot be compared,
 /// naming the file, the key and its line: they are summaries of
 /// different scenarios (their `scenario` names differ), or they share no
@@ -345,7 +340,7 @@ pub fn comparable(
     }
     let matched: Vec<&Entry> = old
         .iter()
-        .filter(|b| new.iter().any(|e| e.key() == b.key()))
+        .filter(|b| new.iter().any(|e| e.same_entry(b)))
         .collect();
     if matched.is_empty() {
         return Err(results(
@@ -364,10 +359,9 @@ pub fn comparable(
             .iter()
             .any(|(m, _)| present(b, m) && present(e, m))
     };
-    let shared = matched.iter().any(|b| {
-        let key = b.key();
-        new.iter().filter(|e| e.key() == key).any(|e| has(e, b))
-    });
+    let shared = matched
+        .iter()
+        .any(|b| new.iter().filter(|e| e.same_entry(b)).any(|e| has(e, b)));
     if !shared {
         // The baseline's matched entries have metrics the summary's lack: the summary is short.
         let wanted: Vec<String> = matched

@@ -24,7 +24,7 @@ use crate::numeric::Real;
 use crate::study::metric::Metric;
 use crate::study::stats::location::Test;
 use crate::study::stats::paired::compare;
-use crate::study::stats::{median_ranks, Entry};
+use crate::study::stats::{median_ranks, same_json, Entry};
 
 /// What a compared metric did.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -114,7 +114,12 @@ pub fn pairable(a: &Summary, b: &Summary) -> bool {
         && a.seed.is_some()
         && a.seed == b.seed
         && a.sweep_keys == b.sweep_keys
-        && a.sweep_values == b.sweep_values
+        && match (&a.sweep_values, &b.sweep_values) {
+            (Some(x), Some(y)) => {
+                x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same_json(x, y))
+            }
+            (x, y) => x.is_none() && y.is_none(),
+        }
 }
 
 /// The key of summary entry `e` of `summary` in its run's [`Trials`]: `method / poses`, and

@@ -11,13 +11,14 @@ use std::path::Path;
 
 use super::Page;
 pub use crate::analysis::regression::Side;
-use crate::analysis::regression::{compare_with, entry_names, Compared, Status};
+use crate::analysis::regression::{compare_with, Compared, Status};
 use crate::error::Result;
 use crate::numeric::Real;
 use crate::report::markdown::{fmt_num, inline, table};
 use crate::report::output::{Outputs, Text};
 use crate::report::plots::{changes_svg, ChangePoint};
 use crate::report::scenario_file;
+use crate::study::stats::Entry;
 
 impl Side {
     /// The run as the page names it: its file, scenario, trials and seed (`?` for what the
@@ -66,10 +67,13 @@ impl Comparison {
     /// The entries of run `i` (0: A, 1: B) that the other run lacks. `check` counts each
     /// metric of an entry only in A as a regression.
     pub fn only_in(&self, i: usize) -> Vec<String> {
-        let theirs = entry_names(&self.runs[1 - i].summary);
-        entry_names(&self.runs[i].summary)
-            .into_iter()
-            .filter(|k| !theirs.contains(k))
+        let theirs = &self.runs[1 - i].summary.results;
+        self.runs[i]
+            .summary
+            .results
+            .iter()
+            .filter(|e| !theirs.iter().any(|t| t.same_entry(e)))
+            .map(Entry::key)
             .collect()
     }
 

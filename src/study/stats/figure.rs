@@ -37,6 +37,18 @@ impl Entry {
         figures.stat(m)
     }
 
+    /// Whether `other` (an entry of another run) is this entry: the same method, poses and
+    /// sweep value, numbers compared by value (`15` and `15.0` are one point, as a
+    /// scenario's settings are compared by what they set, docs/formats.md § 2.4).
+    pub fn same_entry(&self, other: &Entry) -> bool {
+        self.method == other.method
+            && self.poses == other.poses
+            && match (&self.sweep_value, &other.sweep_value) {
+                (Some(a), Some(b)) => same_json(a, b),
+                (a, b) => a.is_none() && b.is_none(),
+            }
+    }
+
     /// The entry's name in `check` and the results database: `method / poses`, and
     /// ` / VALUE` at a sweep point (a string value as itself, another as JSON writes it).
     pub fn key(&self) -> String {
@@ -45,6 +57,24 @@ impl Entry {
             Some(v) => format!("{} / {} / {v}", self.method, self.poses),
             None => format!("{} / {}", self.method, self.poses),
         }
+    }
+}
+
+/// Whether two JSON values of a sweep say the same: numbers by value (`15` and `15.0`),
+/// arrays and tables element by element, anything else as written.
+pub fn same_json(a: &serde_json::Value, b: &serde_json::Value) -> bool {
+    use serde_json::Value;
+    match (a, b) {
+        (Value::Number(x), Value::Number(y)) => x.as_f64() == y.as_f64(),
+        (Value::Array(x), Value::Array(y)) => {
+            x.len() == y.len() && x.iter().zip(y).all(|(a, b)| same_json(a, b))
+        }
+        (Value::Object(x), Value::Object(y)) => {
+            x.len() == y.len()
+                && x.iter()
+                    .all(|(k, v)| y.get(k).is_some_and(|w| same_json(v, w)))
+        }
+        _ => a == b,
     }
 }
 
@@ -80,5 +110,21 @@ mod tests {
         assert!(e.figure("validation_before_mm.mean").unwrap().0.is_nan());
         assert_eq!(e.figure("validation_after_attitude_deg.mean"), None);
         assert_eq!(e.key(), "ls / random / 0.5");
+    }
+
+    #[test]
+    fn an_integer_and_a_float_of_one_value_are_one_sweep_point() {
+        let entry = |v: serde_json::Value| -> Entry {
+            serde_json::from_value(serde_json::json!({
+                "method": "ls", "poses": "random", "sweep_value": v
+            }))
+            .unwrap()
+        };
+        let json = |t: &str| serde_json::from_str::<serde_json::Value>(t).unwrap();
+        assert!(entry(json("15")).same_entry(&entry(json("15.0"))));
+        assert!(entry(json("[1, {\"a\": 2.0}]")).same_entry(&entry(json("[1.0, {\"a\": 2}]"))));
+        assert!(!entry(json("15")).same_entry(&entry(json("15.5"))));
+        assert!(!entry(json("\"15\"")).same_entry(&entry(json("15"))));
+        assert!(!entry(json("[1, 2]")).same_entry(&entry(json("[1]"))));
     }
 }
