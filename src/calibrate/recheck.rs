@@ -84,7 +84,9 @@ pub struct Readmission {
 /// [`Recheck::readmit`] and [`Recheck::step`] take each set of parameters they solve, with the
 /// bits of its own pass.
 pub struct Recheck {
-    registration: Registration,
+    /// The registration's nuisance parameters that the fit's do not already hold
+    /// ([`Recheck::at`]).
+    nuisance: Vec<Param>,
     /// The fit's parameters, the nuisance ones, then the candidates in order.
     columns: Vec<Param>,
     /// How many of `columns` are the fit's parameters.
@@ -124,30 +126,37 @@ impl Recheck {
             return Ok(None);
         }
         let sums = normal(&id.calibrated.robot, &columns, id)?;
-        Ok(Some(Recheck {
-            registration,
+        let mut recheck = Recheck {
+            nuisance: Vec::new(),
             columns,
             fitted: id.params.len(),
             candidates: bounded,
             sums,
             noise,
-        }))
+        };
+        // A frame parameter the fit's already span (θ1 turns the robot about the base's z as
+        // base.rz does, d1 moves it along z as base.z does) would make every normal matrix
+        // singular, and no candidate could then be re-admitted: each is solved along only
+        // where it adds a direction of its own.
+        for b in nuisance {
+            let mut with: Vec<Param> = id.params.iter().chain(&recheck.nuisance).copied().collect();
+            with.push(b);
+            if bound_inverse(&recheck.normal(&with).0).is_some() {
+                recheck.nuisance.push(b);
+            }
+        }
+        Ok(Some(recheck))
     }
 
     /// Those of the candidates re-admitted, by the rule of the module, in order, each
     /// checked with the fit's parameters and those re-admitted before it.
     pub fn readmit(&self) -> Vec<(Param, Readmitted)> {
         let params = &self.columns[..self.fitted];
-        let nuisance = nuisance(self.registration, params);
+        let nuisance = &self.nuisance;
         let mut current: Vec<Param> = params.to_vec();
         let mut out = Vec::new();
         for &(p, bound) in &self.candidates {
-            let all: Vec<Param> = current
-                .iter()
-                .chain(&nuisance)
-                .copied()
-                .chain([p])
-                .collect();
+            let all: Vec<Param> = current.iter().chain(nuisance).copied().chain([p]).collect();
             let (n, g) = self.normal(&all);
             let last = all.len() - 1;
             let largest = (0..all.len())
@@ -189,7 +198,7 @@ impl Recheck {
         let all: Vec<Param> = params
             .iter()
             .copied()
-            .chain(nuisance(self.registration, params))
+            .chain(self.nuisance.iter().copied())
             .collect();
         let (n, g) = self.normal(&all);
         bound_inverse(&n).map(|inv| (inv * g).iter().take(params.len()).copied().collect())
