@@ -431,6 +431,18 @@ mod tests {
             let e = twice.parse::<Model>().unwrap_err();
             assert_eq!(e, format!("`{term}` is given twice in `{twice}`"));
         }
+        // An order that `harmonics` or `harmonics2` gives already is merged into it, as
+        // `harmonics` is into `harmonics2`; a higher one is kept.
+        for (given, name) in [
+            ("harmonics+h1q2", "harmonics"),
+            ("harmonics2+h2q2+h1q5", "harmonics2"),
+            ("harmonics+h2q2", "harmonics+h2q2"),
+            ("harmonics2+harmonics", "harmonics2"),
+        ] {
+            let m: Model = given.parse().unwrap();
+            assert_eq!(m.name(), name, "{given}");
+            assert_eq!(name.parse::<Model>().unwrap(), m);
+        }
     }
 
     /// irb2600 and `n` noise-free points (uniform poses of stream `seed`) of it with an

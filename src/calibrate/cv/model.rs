@@ -297,6 +297,13 @@ impl FromStr for Model {
                 }
             }
         }
+        // An order `harmonics` (1) or `harmonics2` (1 and 2) already gives every revolute
+        // joint is merged into it, as `harmonics` is into `harmonics2`: named again, it would
+        // list a term that adds nothing.
+        let given = (1u16 << m.harmonics) - 1;
+        for bits in &mut m.orders {
+            *bits &= !given;
+        }
         Ok(m)
     }
 }
