@@ -211,7 +211,10 @@ pub fn paper_rows(claims: &[ClaimResult]) -> Vec<PaperRow> {
         .iter()
         .map(
             |r| match (r.at_paper_setting, r.claim.verdict.is_judged()) {
-                (true, true) => r.claim.p_value.unwrap_or(Real::NAN),
+                // A judged claim without a p-value (an `unresolved` one whose test gives
+                // none) is in the family all the same, with p = 1: left out, it would lower
+                // every other claim's adjustment.
+                (true, true) => r.claim.p_value.unwrap_or(1.0),
                 _ => Real::NAN,
             },
         )
@@ -298,5 +301,13 @@ mod tests {
         let rows = paper_rows(&more);
         assert_eq!(rows[1].verdict, Unresolved);
         assert_eq!(rows[2].verdict, Unresolved);
+        // A judged claim without a p-value is in the family (p = 1): a's adjustment is over 4.
+        let mut unsaid = claims.to_vec();
+        let mut f = result("f", None, None, Unresolved, 0.0);
+        f.p_value = None;
+        unsaid.push(f);
+        let rows = paper_rows(&unsaid);
+        assert!((rows[0].p_holm.unwrap() - 0.004).abs() < 1e-15);
+        assert_eq!((rows[4].verdict, rows[4].p_holm), (Unresolved, Some(1.0)));
     }
 }
