@@ -276,13 +276,13 @@ impl IdentifyRequest {
             calibrate_on(&nominal, params, &d, registration, &traced, self.seed)
                 .map_err(|e| in_data(&self.source, e))
         };
+        // The data file's row of row `i` of the rows identified on, as refusals name it.
+        let file_row = |i| self.file_row(held_out.as_ref().map(|(cal, _)| cal.as_slice()), i);
         let undetermined = |c: &Calibrated, params: &[Param]| {
             if verdict::undetermined(c) && !self.allow_rank_deficient {
                 let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
-                let cal = held_out.as_ref().map(|(cal, _)| cal.as_slice());
-                let row = |i| self.file_row(cal, i);
                 return Err(verdict::undetermined_error(
-                    &nominal, all, c, source, &spec, &row,
+                    &nominal, all, c, source, &spec, &file_row,
                 ));
             }
             Ok(())
@@ -325,11 +325,10 @@ impl IdentifyRequest {
             .map(|g| ("after", g))
             .or_else(|| gross_reading(&before).map(|g| ("before", g)))
             .map(|(at, (i, r))| {
-                let cal = held_out.as_ref().map(|(cal, _)| cal.as_slice());
                 format!(
                     "the point of row {} of the data (0-based) has a residual {r:.0} times the \
                      median {at} calibration",
-                    self.file_row(cal, i)
+                    file_row(i)
                 )
             });
         // Orientations read with another convention than they were written in: a likely

@@ -22,12 +22,17 @@ pub fn toml_value_error(e: &toml::de::Error) -> (String, Option<String>) {
 /// key missing from the scenario itself by its own name (`name`), else `scenario`.
 pub fn scenario_value_error(e: &toml::de::Error) -> (String, String) {
     let (msg, key) = toml_value_error(e);
-    let missing = msg
-        .strip_prefix("missing field `")
-        .and_then(|m| m.split_once('`'))
-        .map(|(field, _)| field.to_string());
+    let missing = missing_field(&msg).map(String::from);
     let place = key.or(missing).unwrap_or_else(|| "scenario".into());
     (msg, place)
+}
+
+/// The key serde's refusal of a missing field names (`missing field `name``); `None` for any
+/// other refusal.
+pub(super) fn missing_field(msg: &str) -> Option<&str> {
+    msg.strip_prefix("missing field `")?
+        .split_once('`')
+        .map(|(field, _)| field)
 }
 
 /// The key serde's refusal of an unknown field names (`unknown field `foo`, expected one of

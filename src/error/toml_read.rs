@@ -64,9 +64,7 @@ pub(super) fn own_key(key: String, msg: &str) -> String {
     // serde_json says where after the message (`… at line 1 column 17`); the path of an
     // unknown field may end in it already (a JSON reader's does).
     let said = msg.split(" at line ").next().unwrap_or(msg);
-    let field = said
-        .strip_prefix("missing field `")
-        .and_then(|m| m.strip_suffix('`'))
+    let field = super::serde_words::missing_field(said)
         .or_else(|| super::unknown_field(said).map(|(f, _)| f));
     let ends_in = |f: &str| key == f || key.ends_with(&format!(".{f}"));
     match field.filter(|f| !ends_in(f)) {

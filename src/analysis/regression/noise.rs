@@ -114,12 +114,10 @@ pub fn pairable(a: &Summary, b: &Summary) -> bool {
         && a.seed.is_some()
         && a.seed == b.seed
         && a.sweep_keys == b.sweep_keys
-        && match (&a.sweep_values, &b.sweep_values) {
-            (Some(x), Some(y)) => {
-                x.len() == y.len() && x.iter().zip(y).all(|(x, y)| same_json(x, y))
-            }
-            (x, y) => x.is_none() && y.is_none(),
-        }
+        && same_json(
+            &serde_json::json!(a.sweep_values),
+            &serde_json::json!(b.sweep_values),
+        )
 }
 
 /// The key of summary entry `e` of `summary` in its run's [`Trials`]: `method / poses`, and
