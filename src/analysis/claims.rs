@@ -130,6 +130,19 @@ pub fn evaluations(r: &RunResult) -> crate::error::Result<Vec<ClaimResult>> {
                         read.push((name.clone(), a.values()?, b.values()?));
                     }
                 }
+                // The claim's own parameters, in its order; one without an η in either entry
+                // is judged on no trials.
+                if let Some(listed) = &c.parameters {
+                    read = listed
+                        .iter()
+                        .map(|n| {
+                            read.iter()
+                                .find(|(name, ..)| name == n)
+                                .cloned()
+                                .unwrap_or_else(|| (n.clone(), Vec::new(), Vec::new()))
+                        })
+                        .collect();
+                }
                 let params: Vec<(String, &[Real], &[Real])> = read
                     .iter()
                     .map(|(name, a, b)| (name.clone(), a.as_slice(), b.as_slice()))

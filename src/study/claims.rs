@@ -100,6 +100,9 @@ pub struct Claim {
     pub paper_point: Option<toml::Value>,
     /// "for every parameter": judged on each parameter's η.
     pub every_parameter: bool,
+    /// With "for every parameter": the parameters the paper's claim names, each judged (one
+    /// with no η in a trial on that trial's absence); `None`: every parameter with an η.
+    pub parameters: Option<Vec<String>>,
 }
 
 /// `[[claims]]` as written.
@@ -121,6 +124,7 @@ struct RawClaim {
     family: Option<String>,
     setting: Option<String>,
     paper_point: Option<toml::Value>,
+    parameters: Option<Vec<String>>,
 }
 
 /// The study's entries a relation may name.
@@ -376,6 +380,23 @@ pub fn parse_with(
                 )),
             ));
         }
+        if let Some(p) = &c.parameters {
+            let why = if !every_parameter {
+                Some(format!(
+                    "`parameters` names the parameters of a relation ending \"{EVERY_PARAMETER}\""
+                ))
+            } else if p.is_empty() {
+                Some("give at least one parameter name".into())
+            } else {
+                p.iter()
+                    .enumerate()
+                    .find(|(j, x)| p[..*j].contains(x))
+                    .map(|(_, x)| format!("\"{x}\" is named twice"))
+            };
+            if let Some(why) = why {
+                return Err((key("parameters"), named(why)));
+            }
+        }
         for (k, m) in [("tolerance", &c.tolerance), ("margin", &c.margin)] {
             if let Some(m) = m {
                 m.check().map_err(|e| (key(k), named(e)))?;
@@ -434,9 +455,36 @@ pub fn parse_with(
             setting: c.setting,
             paper_point: c.paper_point,
             every_parameter,
+            parameters: c.parameters,
         });
     }
     Ok(out)
+}
+
+/// Refuses a claim's `parameters` name that is not one of `robot`'s parameters: the key
+/// (`claims[i].parameters`) and a message naming the claim's id.
+pub fn check_parameters(
+    claims: &[Claim],
+    robot: &crate::robot::Robot,
+) -> Result<(), (String, String)> {
+    let all = robot.params();
+    for (i, c) in claims.iter().enumerate() {
+        if let Some(n) = c
+            .parameters
+            .iter()
+            .flatten()
+            .find(|n| !crate::robot::Param::parse(n).is_some_and(|p| all.contains(&p)))
+        {
+            return Err((
+                format!("claims[{i}].parameters"),
+                format!(
+                    "claim \"{}\": \"{n}\" is not a parameter of robot \"{}\"",
+                    c.id, robot.name
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The claim a refused key lies in (`claims[0]` of `claims[0].tolerance`), whose

@@ -148,7 +148,9 @@ pub struct ParameterVerdict {
 /// no adjustment), `contradicts` when one contradicts at the Bonferroni level 0.05 / p (its
 /// p-value below it), `unresolved` otherwise. The estimate is the smallest parameter
 /// estimate on the claimed side, the p-value the largest (all must hold) or the smallest
-/// times p (one contradicts).
+/// times p (one contradicts). A parameter without trials (a claim's listed parameter that no
+/// trial determines) is `unresolved`, and so is the claim, with no count of trials that
+/// would resolve it.
 pub fn evaluate_every(
     claim: &Claim,
     params: &[(String, &[Real], &[Real])],
@@ -175,8 +177,9 @@ pub fn evaluate_every(
     }
     let p = evals.len().max(1) as Real;
     let claimed_down = matches!(claim.op, Op::Lt | Op::Le);
-    // The parameter nearest to failing the claim: the smallest estimate on the claimed side.
-    let worst = evals.iter().min_by(|x, y| {
+    // The parameter nearest to failing the claim: the smallest estimate on the claimed side,
+    // among those with trials.
+    let worst = evals.iter().filter(|e| e.n > 0).min_by(|x, y| {
         let (x, y) = if claimed_down {
             (-x.estimate, -y.estimate)
         } else {
@@ -203,7 +206,8 @@ pub fn evaluate_every(
     let e = Evaluation {
         verdict: overridden(claim, verdict),
         p_value,
-        trials_to_resolve: (verdict == Verdict::Unresolved)
+        // No count of trials resolves a parameter that no trial determines.
+        trials_to_resolve: (verdict == Verdict::Unresolved && evals.iter().all(|e| e.n > 0))
             .then(|| evals.iter().filter_map(|e| e.trials_to_resolve).max())
             .flatten(),
         ..worst
@@ -416,6 +420,74 @@ mod tests {
         let [lo, hi] = e.ci95.expect("ci");
         assert!((lo - (2.0 / 3.0 - h)).abs() < 1e-9 && (hi - (2.0 / 3.0 + h)).abs() < 1e-9);
         assert_eq!(e.verdict, Verdict::Unresolved);
+    }
+
+    /// A claim "for every parameter" with `parameters` on a study of ls, lm × random, detmax-ide.
+    fn every(more: &str) -> Result<Claim, (String, String)> {
+        let (m, s): (Vec<String>, Vec<String>) = (
+            vec!["ls".into(), "lm".into()],
+            vec!["random".into(), "detmax-ide".into()],
+        );
+        let n = Names {
+            methods: &m,
+            strategies: &s,
+            pose: false,
+            axis: false,
+            unmodelled: false,
+            searches: false,
+        };
+        let t: toml::Table = toml::from_str(&format!(
+            "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\nmetric = \"eta\"\n\
+             relation = '\"lm / detmax-ide\" > \"lm / random\" for every parameter'\n{more}"
+        ))
+        .expect("toml");
+        parse(&[t], &n).map(|mut v| v.remove(0))
+    }
+
+    /// A listed parameter that no trial determines leaves the claim `unresolved`, whatever the
+    /// others give, with no count of trials that would resolve it; the estimate is the others'.
+    #[test]
+    fn a_listed_parameter_without_trials_leaves_the_claim_unresolved() {
+        let c = every("parameters = [\"alpha4\", \"d2\"]").expect("claim");
+        assert_eq!(c.parameters, Some(vec!["alpha4".into(), "d2".into()]));
+        let a: Vec<Real> = (0..20).map(|i| 0.99 + 1e-4 * (i % 3) as Real).collect();
+        let b: Vec<Real> = (0..20).map(|i| 0.49 + 1e-3 * (i % 5) as Real).collect();
+        let (e, each) = evaluate_every(&c, &[("alpha4".into(), &a, &b)]);
+        assert_eq!(e.verdict, Verdict::Reproduces, "{e:?}");
+        let (e, each2) = evaluate_every(&c, &[("alpha4".into(), &a, &b), ("d2".into(), &[], &[])]);
+        assert_eq!(
+            (e.verdict, e.trials_to_resolve),
+            (Verdict::Unresolved, None)
+        );
+        assert_eq!((e.n, e.estimate), (each[0].n, each[0].estimate));
+        assert_eq!((each2[1].n, each2[1].verdict), (0, Verdict::Unresolved));
+        assert!(each2[1].estimate.is_nan() && each2[1].ci95.is_none());
+        // `parameters` goes with "for every parameter", names each once, and names one.
+        for (more, why) in [
+            ("parameters = []", "at least one"),
+            ("parameters = [\"d2\", \"d2\"]", "named twice"),
+        ] {
+            let (key, msg) = every(more).expect_err(more);
+            assert_eq!(key, "claims[0].parameters");
+            assert!(msg.contains(why), "{msg}");
+        }
+        let t: toml::Table = toml::from_str(
+            "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
+             metric = \"validation_after_mm.rms\"\nrelation = '\"lm / random\" < \"ls / random\"'\n\
+             parameters = [\"d2\"]",
+        )
+        .expect("toml");
+        let (m, s) = (vec!["ls".into(), "lm".into()], vec!["random".into()]);
+        let n = Names {
+            methods: &m,
+            strategies: &s,
+            pose: false,
+            axis: false,
+            unmodelled: false,
+            searches: false,
+        };
+        let (key, msg) = parse(&[t], &n).map(|_| ()).expect_err("an ordering");
+        assert_eq!(key, "claims[0].parameters", "{msg}");
     }
 
     /// Must hold (issue 51): no point-value claim reproduces when the estimate is 2× off.

@@ -143,8 +143,9 @@ fn a_value_given_twice_in_a_study_s_grid_is_refused_at_its_key() {
     }
 }
 
-/// A claim's `value` that is a table, a `family` that can be no claim's id, and a
-/// `paper_point` given without a sweep or not among the sweep's points are refused when the
+/// A claim's `value` that is a table, a `family` that can be no claim's id, a `paper_point`
+/// given without a sweep or not among the sweep's points, and `parameters` the robot lacks or
+/// given with an ordering are refused when the
 /// scenario is read, naming the file, the line and the claim's key; so are a `~` without its
 /// `tolerance` (at the claim's line), a `tolerance` that is not a table and an `about` that is
 /// neither mean nor median (at their own); nothing is written.
@@ -206,6 +207,27 @@ fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line()
             "tolerance = ",
             "claims[0].tolerance",
             "expected a table of `relative` (a fraction, 0.01 for 1 %) or `absolute`",
+        ),
+        // A claim's `parameters` must be the robot's (irb2600 has six joints).
+        (
+            "parameters-unknown",
+            claim("parameters = [\"alpha4\", \"d7\"]")
+                .replace("validation_after_mm.rms", "eta")
+                .replace("'\"ls\" ~ 0.1'", "'\"lm\" > \"ls\" for every parameter'")
+                .replace("tolerance = { relative = 0.25 }\n", ""),
+            "parameters = ",
+            "claims[0].parameters",
+            "\"d7\" is not a parameter of robot \"irb2600\"",
+        ),
+        // … and given with "for every parameter" only.
+        (
+            "parameters-ordering",
+            claim("parameters = [\"alpha4\"]")
+                .replace("'\"ls\" ~ 0.1'", "'\"lm\" < \"ls\"'")
+                .replace("tolerance = { relative = 0.25 }\n", ""),
+            "parameters = ",
+            "claims[0].parameters",
+            "`parameters` names the parameters of a relation ending \"for every parameter\"",
         ),
         // A value serde refuses: at its own line (it was placed at the [[claims]] line).
         (

@@ -110,9 +110,16 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
                 let mine: Vec<&ClaimResult> = got.iter().filter(|g| g.id == c.id).collect();
                 // A summary committed before its scenario's claim was written as it is now
                 // is stale: its rows say so, with the command that regenerates it.
+                let listed = |g: &ClaimResult| {
+                    c.parameters.as_ref().is_none_or(|want| {
+                        let got = g.parameters.iter().flatten().map(|p| &p.name);
+                        got.eq(want.iter())
+                    })
+                };
                 let stale = before_tests
                     || mine.iter().any(|g| {
                         (&g.relation, &g.family, g.about) != (&c.relation, &c.family, c.about)
+                            || !listed(g)
                     });
                 if mine.is_empty() || stale {
                     let why = if stale {
@@ -147,7 +154,12 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
                     .iter()
                     .filter(|x| x.verdict == calbench::study::verdict::Verdict::Reproduces)
                     .count();
-                format!("; {k} of {} parameters reproduce", p.len())
+                let none = p.iter().filter(|x| x.n == 0).count();
+                let none = match none {
+                    0 => String::new(),
+                    z => format!(", {z} determined in no trial"),
+                };
+                format!("; {k} of {} parameters reproduce{none}", p.len())
             });
             let verdict = match r.p_holm {
                 Some(p) => format!("{} (Holm p {})", r.verdict.as_str(), fmt_num(p, 2)),

@@ -64,7 +64,7 @@ fn json_builder(r: &RunResult) -> Value {
                 let (e, each) = match (&c.term, &c.bound) {
                     (Term::One(ka), Bound::Entry(kb)) if c.every_parameter => {
                         let (ea, eb) = (entry(*ka), entry(*kb));
-                        let read: Vec<(String, Vec<f64>, Vec<f64>)> = ea
+                        let mut read: Vec<(String, Vec<f64>, Vec<f64>)> = ea
                             .eta_per_trial
                             .iter()
                             .filter_map(|(k, a)| {
@@ -72,6 +72,16 @@ fn json_builder(r: &RunResult) -> Value {
                                 Some((k.clone(), a.values().unwrap(), b))
                             })
                             .collect();
+                        // The claim's listed parameters only, one without an η on no trials.
+                        if let Some(listed) = &c.parameters {
+                            read = listed
+                                .iter()
+                                .map(|n| match read.iter().find(|(k, ..)| k == n) {
+                                    Some(r) => r.clone(),
+                                    None => (n.clone(), vec![], vec![]),
+                                })
+                                .collect();
+                        }
                         let params: Vec<(String, &[f64], &[f64])> = read
                             .iter()
                             .map(|(k, a, b)| (k.clone(), a.as_slice(), b.as_slice()))

@@ -609,6 +609,8 @@ impl Scenario {
                 ));
             }
         }
+        crate::study::claims::check_parameters(&scenario.claims, &robot)
+            .map_err(|(k, m)| ferr(&k, m))?;
         keyed(scenario.check_readings(&robot))?;
         if let Some(sw) = &scenario.sweep {
             for point in sw.points() {
