@@ -243,6 +243,10 @@ pub fn paper_rows(claims: &[ClaimResult]) -> Vec<PaperRow> {
         r.p_holm = Some(a);
         if a >= FAMILY_ALPHA && r.verdict.is_judged() {
             r.verdict = Verdict::Unresolved;
+            // The settings it holds under count the paper's setting as adjusted.
+            if r.claim.verdict == Verdict::Reproduces {
+                r.holds.0 -= 1;
+            }
         }
     }
     rows
@@ -311,9 +315,19 @@ mod tests {
         // With one more claim at 0.03, b and c lose their verdicts.
         let mut more = claims.to_vec();
         more.push(result("e", None, None, Reproduces, 0.03));
+        more.push(result(
+            "c-pop",
+            Some("c"),
+            Some("population = 20"),
+            Reproduces,
+            0.01,
+        ));
         let rows = paper_rows(&more);
         assert_eq!(rows[1].verdict, Unresolved);
         assert_eq!(rows[2].verdict, Unresolved);
+        // c reproduces on its own at the paper's setting, not after the adjustment: it holds
+        // under its other setting only.
+        assert_eq!(rows[2].holds, (1, 2));
         // A judged claim without a p-value is in the family (p = 1): a's adjustment is over 4.
         let mut unsaid = claims.to_vec();
         let mut f = result("f", None, None, Unresolved, 0.0);
