@@ -12,14 +12,14 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::noise::{figure_of, is_rmse, same_figure, trials_key, Trials};
+use super::noise::{differs, figure_of, is_rmse, same_figure, trials_key, Trials};
 use super::{check_summary, entry_metrics, lookup, read_json};
 use crate::analysis::summary::Summary;
 use crate::error::shown;
 use crate::error::{at_line, Error, Result};
 use crate::numeric::Real;
 use crate::study::metric::Metric;
-use crate::study::stats::{same_json, Entry};
+use crate::study::stats::Entry;
 
 /// The key of a baseline's per-trial values in its document.
 pub const KEY: &str = "per_trial";
@@ -447,38 +447,15 @@ pub fn unpaired_because(baseline: &Side, summary: &Side) -> Option<Unpaired> {
     if summary.trials.is_none() {
         return Some(Unpaired::NoTrials(Which::Summary));
     }
-    // What pairing needs to agree, as each summary writes it (`null`: not written).
-    let agree = |s: &Summary| -> [(&'static str, Value); 5] {
-        let json = |v: serde_json::Result<Value>| v.unwrap_or(Value::Null);
-        [
-            ("scenario", Value::String(s.scenario.clone())),
-            ("seed", json(serde_json::to_value(s.seed))),
-            ("trials", json(serde_json::to_value(s.trials))),
-            ("sweep_keys", json(serde_json::to_value(&s.sweep_keys))),
-            ("sweep_values", json(serde_json::to_value(&s.sweep_values))),
-        ]
-    };
     let show = |v: Value| match v {
         Value::Null => "none".to_string(),
         v => v.to_string(),
     };
-    for ((key, a), (_, b)) in agree(&baseline.summary)
-        .into_iter()
-        .zip(agree(&summary.summary))
-    {
-        let missing_seed = key == "seed" && a.is_null();
-        // A summary that does not say its trials pairs entry by entry, by the trials each
-        // side's per-trial values hold ([`unpaired_entries`]).
-        let unsaid_trials = key == "trials" && (a.is_null() || b.is_null());
-        if (!same_json(&a, &b) || missing_seed) && !unsaid_trials {
-            return Some(Unpaired::Differs {
-                key,
-                baseline: show(a),
-                summary: show(b),
-            });
-        }
-    }
-    None
+    differs(&baseline.summary, &summary.summary).map(|(key, a, b)| Unpaired::Differs {
+        key,
+        baseline: show(a),
+        summary: show(b),
+    })
 }
 
 /// The entries compared from the summaries although the runs pair ([`unpaired_because`] is

@@ -18,6 +18,8 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use serde_json::Value;
+
 use crate::analysis::summary::Summary;
 use crate::numeric::dist;
 use crate::numeric::Real;
@@ -107,17 +109,37 @@ pub struct Trials {
     pub first_line: BTreeMap<String, usize>,
 }
 
-/// Whether two runs can be compared trial by trial: the same scenario and seed, and the
-/// same sweep (swept keys and, for one axis, values), if any.
+/// Whether two runs can be compared trial by trial: [`differs`] finds nothing.
 pub fn pairable(a: &Summary, b: &Summary) -> bool {
-    a.scenario == b.scenario
-        && a.seed.is_some()
-        && a.seed == b.seed
-        && a.sweep_keys == b.sweep_keys
-        && same_json(
-            &serde_json::json!(a.sweep_values),
-            &serde_json::json!(b.sweep_values),
-        )
+    differs(a, b).is_none()
+}
+
+/// The first key in which two runs differ that keeps them from being compared trial by
+/// trial, with `a`'s value and `b`'s as each summary writes it (`null`: not written): the
+/// scenario, the seed (which `a` must give), the trial count when both give it, the swept
+/// keys and their values (compared by value). `None`: they pair, each entry by the trials it
+/// holds on both sides.
+pub fn differs(a: &Summary, b: &Summary) -> Option<(&'static str, Value, Value)> {
+    let agree = |s: &Summary| -> [(&'static str, Value); 5] {
+        let json = |v: serde_json::Result<Value>| v.unwrap_or(Value::Null);
+        [
+            ("scenario", Value::String(s.scenario.clone())),
+            ("seed", json(serde_json::to_value(s.seed))),
+            ("trials", json(serde_json::to_value(s.trials))),
+            ("sweep_keys", json(serde_json::to_value(&s.sweep_keys))),
+            ("sweep_values", json(serde_json::to_value(&s.sweep_values))),
+        ]
+    };
+    agree(a)
+        .into_iter()
+        .zip(agree(b))
+        .find(|((key, x), (_, y))| {
+            let missing_seed = *key == "seed" && x.is_null();
+            // A summary that does not say its trials pairs entry by entry.
+            let unsaid_trials = *key == "trials" && (x.is_null() || y.is_null());
+            (!same_json(x, y) || missing_seed) && !unsaid_trials
+        })
+        .map(|((key, x), (_, y))| (key, x, y))
 }
 
 /// The key of summary entry `e` of `summary` in its run's [`Trials`]: `method / poses`, and
