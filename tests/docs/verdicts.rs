@@ -161,7 +161,9 @@ fn verdict_table(why: &std::collections::BTreeMap<String, String>) -> String {
                 };
                 format!("; {k} of {} parameters reproduce{none}", p.len())
             });
+            // A claim with no run at the paper's setting is outside the family: no verdict.
             let verdict = match r.p_holm {
+                _ if !r.at_paper_setting => "no verdict".to_string(),
                 Some(p) => format!("{} (Holm p {})", r.verdict.as_str(), fmt_num(p, 2)),
                 None => r.verdict.as_str().to_string(),
             };
