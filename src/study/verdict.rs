@@ -361,6 +361,16 @@ mod tests {
 
     /// Claim `rel` with the extra keys `more` on a study of ls, lm × random, detmax-ide.
     pub(crate) fn claim_with(rel: &str, more: &str, unmodelled: bool) -> Claim {
+        parsed("validation_after_mm.rms", rel, more, unmodelled).expect("claim")
+    }
+
+    /// [`claim_with`] of `metric`, or why it is refused.
+    fn parsed(
+        metric: &str,
+        rel: &str,
+        more: &str,
+        unmodelled: bool,
+    ) -> std::result::Result<Claim, (String, String)> {
         let (m, s): (Vec<String>, Vec<String>) = (
             vec!["ls".into(), "lm".into()],
             vec!["random".into(), "detmax-ide".into()],
@@ -375,10 +385,10 @@ mod tests {
         };
         let t: toml::Table = toml::from_str(&format!(
             "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
-             metric = \"validation_after_mm.rms\"\nrelation = '{rel}'\n{more}"
+             metric = \"{metric}\"\nrelation = '{rel}'\n{more}"
         ))
         .expect("toml");
-        parse(&[t], &n).expect("claim").remove(0)
+        parse(&[t], &n).map(|mut v| v.remove(0))
     }
 
     #[test]
@@ -422,26 +432,10 @@ mod tests {
         assert_eq!(e.verdict, Verdict::Unresolved);
     }
 
-    /// A claim "for every parameter" with `parameters` on a study of ls, lm × random, detmax-ide.
-    fn every(more: &str) -> Result<Claim, (String, String)> {
-        let (m, s): (Vec<String>, Vec<String>) = (
-            vec!["ls".into(), "lm".into()],
-            vec!["random".into(), "detmax-ide".into()],
-        );
-        let n = Names {
-            methods: &m,
-            strategies: &s,
-            pose: false,
-            axis: false,
-            unmodelled: false,
-            searches: false,
-        };
-        let t: toml::Table = toml::from_str(&format!(
-            "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\nmetric = \"eta\"\n\
-             relation = '\"lm / detmax-ide\" > \"lm / random\" for every parameter'\n{more}"
-        ))
-        .expect("toml");
-        parse(&[t], &n).map(|mut v| v.remove(0))
+    /// A claim "for every parameter" with the extra keys `more`.
+    fn every(more: &str) -> std::result::Result<Claim, (String, String)> {
+        let rel = r#""lm / detmax-ide" > "lm / random" for every parameter"#;
+        parsed("eta", rel, more, false)
     }
 
     /// A listed parameter that no trial determines leaves the claim `unresolved`, whatever the
@@ -471,22 +465,14 @@ mod tests {
             assert_eq!(key, "claims[0].parameters");
             assert!(msg.contains(why), "{msg}");
         }
-        let t: toml::Table = toml::from_str(
-            "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
-             metric = \"validation_after_mm.rms\"\nrelation = '\"lm / random\" < \"ls / random\"'\n\
-             parameters = [\"d2\"]",
+        let rel = r#""lm / random" < "ls / random""#;
+        let (key, msg) = parsed(
+            "validation_after_mm.rms",
+            rel,
+            "parameters = [\"d2\"]",
+            false,
         )
-        .expect("toml");
-        let (m, s) = (vec!["ls".into(), "lm".into()], vec!["random".into()]);
-        let n = Names {
-            methods: &m,
-            strategies: &s,
-            pose: false,
-            axis: false,
-            unmodelled: false,
-            searches: false,
-        };
-        let (key, msg) = parse(&[t], &n).map(|_| ()).expect_err("an ordering");
+        .expect_err("an ordering");
         assert_eq!(key, "claims[0].parameters", "{msg}");
     }
 
