@@ -494,7 +494,7 @@ pub fn claim_of(key: &str) -> &str {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn names() -> (Vec<String>, Vec<String>) {
@@ -510,18 +510,30 @@ mod tests {
 
     /// The claim of `metric` and `rel`, in a study with a search among its methods or not.
     fn claim_of(metric: &str, rel: &str, searches: bool) -> Result<Claim, (String, String)> {
+        parsed(metric, rel, "", false, searches)
+    }
+
+    /// The claim of `metric` and `rel` with the extra keys `more`, on a study of ls, lm ×
+    /// random, detmax-ide whose arm has error outside the model or not, with a search or not.
+    pub(crate) fn parsed(
+        metric: &str,
+        rel: &str,
+        more: &str,
+        unmodelled: bool,
+        searches: bool,
+    ) -> Result<Claim, (String, String)> {
         let (m, s) = names();
         let n = Names {
             methods: &m,
             strategies: &s,
             pose: false,
             axis: false,
-            unmodelled: false,
+            unmodelled,
             searches,
         };
         let t: toml::Table = toml::from_str(&format!(
             "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
-             metric = \"{metric}\"\nrelation = '{rel}'"
+             metric = \"{metric}\"\nrelation = '{rel}'\n{more}"
         ))
         .expect("toml");
         parse(&[t], &n).map(|mut v| v.remove(0))

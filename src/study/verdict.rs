@@ -357,7 +357,6 @@ fn judge(claim: &Claim, rows: &[(Real, Real)]) -> Evaluation {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::study::claims::{parse, Names};
 
     /// Claim `rel` with the extra keys `more` on a study of ls, lm × random, detmax-ide.
     pub(crate) fn claim_with(rel: &str, more: &str, unmodelled: bool) -> Claim {
@@ -371,24 +370,7 @@ mod tests {
         more: &str,
         unmodelled: bool,
     ) -> std::result::Result<Claim, (String, String)> {
-        let (m, s): (Vec<String>, Vec<String>) = (
-            vec!["ls".into(), "lm".into()],
-            vec!["random".into(), "detmax-ide".into()],
-        );
-        let n = Names {
-            methods: &m,
-            strategies: &s,
-            pose: false,
-            axis: false,
-            unmodelled,
-            searches: false,
-        };
-        let t: toml::Table = toml::from_str(&format!(
-            "id = \"c\"\nstatement = \"s\"\npaper = \"§1\"\nvalue = 1\n\
-             metric = \"{metric}\"\nrelation = '{rel}'\n{more}"
-        ))
-        .expect("toml");
-        parse(&[t], &n).map(|mut v| v.remove(0))
+        crate::study::claims::tests::parsed(metric, rel, more, unmodelled, false)
     }
 
     #[test]
