@@ -7,6 +7,9 @@ SCRIPT = """
 import os, signal, sys, threading
 import calbench
 robot = calbench.Robot.builtin("irb2600")
+# A process started in the background by a shell without job control inherits SIGINT
+# ignored, and Python then installs no handler: Ctrl-C as a terminal delivers it needs one.
+signal.signal(signal.SIGINT, signal.default_int_handler)
 threading.Timer(0.3, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
 try:
     calbench.identify(robot, data=sys.argv[1], method="pso",
