@@ -461,26 +461,30 @@ pub fn parse_with(
     Ok(out)
 }
 
-/// Refuses a claim's `parameters` name that is not one of `robot`'s parameters: the key
-/// (`claims[i].parameters`) and a message naming the claim's id.
+/// Refuses a claim's `parameters` name that is not one of `robot`'s parameters, or that can
+/// have no η: not among `injected` (the parameters the scenario gives an error), or a base
+/// parameter (η leaves the base out). The key (`claims[i].parameters`) and a message naming
+/// the claim's id.
 pub fn check_parameters(
     claims: &[Claim],
     robot: &crate::robot::Robot,
+    injected: &[crate::robot::Param],
 ) -> Result<(), (String, String)> {
+    use crate::robot::Param;
     let all = robot.params();
     for (i, c) in claims.iter().enumerate() {
-        if let Some(n) = c
-            .parameters
-            .iter()
-            .flatten()
-            .find(|n| !crate::robot::Param::parse(n).is_some_and(|p| all.contains(&p)))
-        {
+        for n in c.parameters.iter().flatten() {
+            let why = match Param::parse(n).filter(|p| all.contains(p)) {
+                None => format!("is not a parameter of robot \"{}\"", robot.name),
+                Some(Param::Base(_)) => "is a base parameter, which η leaves out".to_string(),
+                Some(p) if !injected.contains(&p) => {
+                    "has no injected error (`errors`), so no trial gives it an η".to_string()
+                }
+                Some(_) => continue,
+            };
             return Err((
                 format!("claims[{i}].parameters"),
-                format!(
-                    "claim \"{}\": \"{n}\" is not a parameter of robot \"{}\"",
-                    c.id, robot.name
-                ),
+                format!("claim \"{}\": \"{n}\" {why}", c.id),
             ));
         }
     }

@@ -10,17 +10,17 @@ use crate::numeric::rng;
 use crate::numeric::{Frame, Real};
 use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::robot::identifiability::identifiable_generic;
-use crate::robot::param_sets::{ends, identified_params};
+use crate::robot::param_sets::ends;
 use crate::robot::{Param, Robot};
 use crate::sim::poses::{read_pose_list, sample_region};
 use crate::sim::sag::Compliance;
-use crate::sim::settings::{ErrorKind, ParamSelection, Region};
+use crate::sim::settings::{ParamSelection, Region};
 use crate::sim::tracker::Tracker;
-use crate::sim::truth::{draw_errors, selected_params};
+use crate::sim::truth::draw_errors;
 use crate::sim::unmodelled::Unmodelled;
 use crate::sim::SagFn;
 use crate::study::crb;
-use crate::study::scenario::{OptimiseEach, PoseStrategy, Registration, Scenario};
+use crate::study::scenario::{OptimiseEach, PoseStrategy, Scenario};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -268,7 +268,6 @@ impl Study {
     pub fn new(scenario: Scenario) -> Result<Study> {
         let nominal = scenario.robot()?;
         let measure = scenario.tracker.measure.measure();
-        let with_base = scenario.registration == Registration::Identify;
         let (mut params, undetermined) = study_params(&scenario, &nominal)?;
         // The kinematic parameters: what the pose optimisers and the Cramér–Rao bound see.
         let kinematic = params.clone();
@@ -278,15 +277,7 @@ impl Study {
                 .compliance
                 .params(&nominal, "identification.compliance")?,
         );
-        let error_params = match (&scenario.errors.kind, scenario.errors.selection()) {
-            (ErrorKind::None, _) => Vec::new(),
-            (_, ParamSelection::Identifiable) => identified_params(&nominal, measure, with_base)
-                .iter()
-                .copied()
-                .filter(|p| !matches!(p, Param::Base(_)))
-                .collect(),
-            (_, sel) => selected_params(&nominal, &sel, measure, scenario.errors.key())?,
-        };
+        let error_params = scenario.error_params(&nominal)?;
         let tracker = Tracker::new(&scenario.tracker)?;
         let compliance = Compliance::new(&scenario.compliance, &nominal, scenario.builtin())?;
 

@@ -219,6 +219,28 @@ fn a_claim_with_a_malformed_value_family_or_paper_point_is_refused_at_its_line()
             "claims[0].parameters",
             "\"d7\" is not a parameter of robot \"irb2600\"",
         ),
+        // … with an η possible: an injected error (irb2600's identifiable set leaves out θ6 on
+        // position data), not the base's.
+        (
+            "parameters-no-error",
+            claim("parameters = [\"alpha4\", \"theta6\"]")
+                .replace("validation_after_mm.rms", "eta")
+                .replace("'\"ls\" ~ 0.1'", "'\"lm\" > \"ls\" for every parameter'")
+                .replace("tolerance = { relative = 0.25 }\n", ""),
+            "parameters = ",
+            "claims[0].parameters",
+            "\"theta6\" has no injected error (`errors`), so no trial gives it an η",
+        ),
+        (
+            "parameters-base",
+            claim("parameters = [\"base.x\"]")
+                .replace("validation_after_mm.rms", "eta")
+                .replace("'\"ls\" ~ 0.1'", "'\"lm\" > \"ls\" for every parameter'")
+                .replace("tolerance = { relative = 0.25 }\n", ""),
+            "parameters = ",
+            "claims[0].parameters",
+            "\"base.x\" is a base parameter, which η leaves out",
+        ),
         // … and given with "for every parameter" only.
         (
             "parameters-ordering",

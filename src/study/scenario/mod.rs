@@ -609,8 +609,11 @@ impl Scenario {
                 ));
             }
         }
-        crate::study::claims::check_parameters(&scenario.claims, &robot)
-            .map_err(|(k, m)| ferr(&k, m))?;
+        if scenario.claims.iter().any(|c| c.parameters.is_some()) {
+            let injected = scenario.error_params(&robot)?;
+            crate::study::claims::check_parameters(&scenario.claims, &robot, &injected)
+                .map_err(|(k, m)| ferr(&k, m))?;
+        }
         keyed(scenario.check_readings(&robot))?;
         if let Some(sw) = &scenario.sweep {
             for point in sw.points() {

@@ -4,7 +4,8 @@ use crate::error::{Error, Result};
 use crate::robot::param_sets::{full_params, identified_params};
 use crate::robot::{Param, Robot};
 use crate::sim::poses::read_pose_list;
-use crate::sim::settings::ParamSelection;
+use crate::sim::settings::{ErrorKind, ParamSelection};
+use crate::sim::truth::selected_params;
 
 use super::{PoseStrategy, Registration, Scenario};
 
@@ -22,6 +23,22 @@ impl Scenario {
         };
         params.sort_by_key(|p| p.index(robot.dof()));
         params
+    }
+
+    /// The parameters each trial draws an error for on `robot` (`errors`): none for
+    /// `kind = "none"`, the identified ones but the base's for the default selection, else the
+    /// selected ones.
+    pub fn error_params(&self, robot: &Robot) -> Result<Vec<Param>> {
+        let measure = self.tracker.measure.measure();
+        let with_base = self.registration == Registration::Identify;
+        Ok(match (&self.errors.kind, self.errors.selection()) {
+            (ErrorKind::None, _) => Vec::new(),
+            (_, ParamSelection::Identifiable) => identified_params(robot, measure, with_base)
+                .into_iter()
+                .filter(|p| !matches!(p, Param::Base(_)))
+                .collect(),
+            (_, sel) => selected_params(robot, &sel, measure, self.errors.key())?,
+        })
     }
 
     /// Refuses calibration sets that give fewer readings than the scenario identifies
