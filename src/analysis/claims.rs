@@ -124,24 +124,21 @@ pub fn evaluations(r: &RunResult) -> crate::error::Result<Vec<ClaimResult>> {
                     continue;
                 };
                 let (ea, eb) = (entry(*ka), entry(*kb));
+                // The claim's own parameters, in its order (one without an η in either entry
+                // is judged on no trials), else every parameter with an η in both; only
+                // those are read from the scratch file.
+                let (ka, kb) = (&ea.eta_per_trial, &eb.eta_per_trial);
+                let names: Vec<&String> = match &c.parameters {
+                    Some(listed) => listed.iter().collect(),
+                    None => ka.keys().filter(|k| kb.contains_key(*k)).collect(),
+                };
                 let mut read = Vec::new();
-                for (name, a) in &ea.eta_per_trial {
-                    if let Some(b) = eb.eta_per_trial.get(name) {
-                        read.push((name.clone(), a.values()?, b.values()?));
-                    }
-                }
-                // The claim's own parameters, in its order; one without an η in either entry
-                // is judged on no trials.
-                if let Some(listed) = &c.parameters {
-                    read = listed
-                        .iter()
-                        .map(|n| {
-                            read.iter()
-                                .find(|(name, ..)| name == n)
-                                .cloned()
-                                .unwrap_or_else(|| (n.clone(), Vec::new(), Vec::new()))
-                        })
-                        .collect();
+                for name in names {
+                    let (a, b) = match (ka.get(name), kb.get(name)) {
+                        (Some(a), Some(b)) => (a.values()?, b.values()?),
+                        _ => (Vec::new(), Vec::new()),
+                    };
+                    read.push((name.clone(), a, b));
                 }
                 let params: Vec<(String, &[Real], &[Real])> = read
                     .iter()
