@@ -147,11 +147,6 @@ impl<'a> KindProblem<'a> {
         Ok(self)
     }
 
-    /// The robot's parameters (the first `params().len()` unknowns).
-    pub fn params(&self) -> &[Param] {
-        &self.params
-    }
-
     /// The nuisance values at the unknowns `x` (first guess plus correction).
     pub fn nuisance_at(&self, x: &DVector<Real>) -> Vec<Real> {
         let t = self.params.len();

@@ -316,16 +316,6 @@ impl<'a> RobotProblem<'a> {
         })
     }
 
-    /// The parameters, one per entry of `x`.
-    pub fn params(&self) -> &[Param] {
-        &self.params
-    }
-
-    /// The measure (rows per point).
-    pub fn measure(&self) -> Measure {
-        self.measure
-    }
-
     /// The compensated robot: the nominal robot with the errors `x` added.
     pub fn robot_with(&self, x: &DVector<Real>) -> Robot {
         self.nominal.with_added(&self.index, x.as_slice())

@@ -56,14 +56,13 @@ pub trait PoseModel: Sync {
 }
 
 /// A [`PoseModel`] over a robot's identification Jacobian ([`crate::robot::jacobian::pose_rows`],
-/// Guo 2024 eq. 7), with optional column scaling.
+/// Guo 2024 eq. 7).
 #[derive(Clone, Debug)]
 pub struct RobotPoseModel {
     chain: Chain,
     cols: Columns,
     measure: Measure,
     limits: Vec<(Real, Real)>,
-    scale: Option<Vec<Real>>,
     /// An orthonormal basis (k × r) of the row space of the parameters' Jacobian: the model's
     /// columns are J·basis ([`RobotPoseModel::on_row_space`]).
     basis: Option<DMatrix<Real>>,
@@ -85,13 +84,12 @@ impl RobotPoseModel {
             cols: Columns::new(params, robot.dof()),
             measure,
             limits: robot.joints.iter().map(|j| j.limits).collect(),
-            scale: None,
             basis: None,
         }
     }
 
     /// The same model scored on its nonzero spectrum: the Jacobian J of the parameters
-    /// (scaled, when set) is replaced by J·V, V an orthonormal basis of J's row space over the
+    /// is replaced by J·V, V an orthonormal basis of J's row space over the
     /// poses `qs` (the right singular vectors whose singular values exceed 1e-9 of the
     /// largest). A structurally rank-deficient model (Guo 2024's full model, eq. 7, and its
     /// reconstructed model J_p, eq. 27) has singular values that are zero at every pose set,
@@ -129,41 +127,10 @@ impl RobotPoseModel {
         self
     }
 
-    /// The same model with column `c` multiplied by `scale[c]` (e.g. the inverse column norms
-    /// of [`crate::robot::identifiability::scale_columns`] over a reference pose set, so that mm and
-    /// rad columns compare). Fails when the length differs from the parameter count or a
-    /// factor is not finite and positive.
-    pub fn with_column_scale(mut self, scale: Vec<Real>) -> crate::Result<Self> {
-        if scale.len() != self.cols.len() {
-            return Err(Error::setting(
-                "column_scale",
-                format!("{} factors for {} parameters", scale.len(), self.cols.len()),
-            ));
-        }
-        if scale.iter().any(|s| !(s.is_finite() && *s > 0.0)) {
-            return Err(Error::setting(
-                "column_scale",
-                "every factor must be finite and positive",
-            ));
-        }
-        self.scale = Some(scale);
-        Ok(self)
-    }
-
-    /// The parameters, one per column (before any [`RobotPoseModel::on_row_space`]).
-    pub fn params(&self) -> &[Param] {
-        self.cols.params()
-    }
-
-    /// The Jacobian block of the parameters, scaled when set (no basis).
+    /// The Jacobian block of the parameters (no basis).
     fn raw_block(&self, q: &[Real], out: &mut DMatrix<Real>) {
         out.fill(0.0);
         pose_rows(&self.chain, &self.cols, q, self.measure, out, 0);
-        if let Some(sc) = &self.scale {
-            for (mut c, f) in out.column_iter_mut().zip(sc) {
-                c *= *f;
-            }
-        }
     }
 }
 

@@ -143,6 +143,5 @@ fn bad_inputs_are_errors() {
     let mut o = SelectOptions::new(3);
     o.ide.population = 3;
     assert!(select(&model, &cands, Strategy::Ide, &o, &mut rng).is_err());
-    assert!(model.clone().with_column_scale(vec![1.0; 3]).is_err());
     assert!(objective_curve(&model, &cands, &[0], &o, &mut rng).is_err());
 }

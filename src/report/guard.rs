@@ -167,7 +167,7 @@ fn guard<P: AsRef<Path>>(
                  host, its checkpoint {}); writing there would destroy it (nothing was \
                  written). Wait for it or stop it{}",
                 out.display(),
-                checkpoint_of(out).display(),
+                super::checkpoint_folder(out).display(),
                 match force {
                     Some(_) => " (forcing passes when that process is not calbench)",
                     None => "",
@@ -178,14 +178,8 @@ fn guard<P: AsRef<Path>>(
     }
 }
 
-/// The checkpoint folder a run into `out` keeps beside it (`.NAME.checkpoint`,
-/// docs/formats.md `run --resume`).
-pub fn checkpoint_of(out: &Path) -> PathBuf {
-    super::checkpoint_folder(out)
-}
-
 /// The process of another run writing into `out` that is alive on this host: the `pid` and
-/// `host` of the `checkpoint.json` beside `out` ([`checkpoint_of`]), when that process runs.
+/// `host` of the `checkpoint.json` beside `out` ([`super::checkpoint_folder`]), when that process runs.
 pub fn live_writer(out: &Path) -> Option<u32> {
     let (pid, on_this_host) = writer(out)?;
     (on_this_host && alive(pid)).then_some(pid)
@@ -193,7 +187,9 @@ pub fn live_writer(out: &Path) -> Option<u32> {
 
 /// The process that the checkpoint beside `out` names, and whether it ran on this host.
 pub(crate) fn writer(out: &Path) -> Option<(u32, bool)> {
-    let text = crate::error::read_bounded_text(&checkpoint_of(out).join("checkpoint.json")).ok()?;
+    let text =
+        crate::error::read_bounded_text(&super::checkpoint_folder(out).join("checkpoint.json"))
+            .ok()?;
     let meta: serde_json::Value = serde_json::from_str(&text).ok()?;
     let pid = u32::try_from(meta.get("pid")?.as_u64()?).ok()?;
     Some((pid, meta.get("host")?.as_str()? == host()))

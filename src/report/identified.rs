@@ -9,7 +9,7 @@ use super::output::{Buffered, Figure, Output, Outputs, Text};
 use crate::calibrate::pipeline::TrackerOutcome;
 use crate::calibrate::plausibility::implausible_warning;
 use crate::calibrate::record::IdentifiedRecord;
-pub use crate::calibrate::validation::{validate_file, FileValidation};
+pub use crate::calibrate::validation::FileValidation;
 pub use crate::calibrate::verdict::registration_warning;
 use crate::calibrate::verdict::worse_warning;
 use crate::calibrate::ErrorStats;

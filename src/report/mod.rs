@@ -75,16 +75,8 @@ pub fn write_run(
 }
 
 /// Writes the output folder of `calbench identify` as a whole ([`atomically`]): the files of
-/// [`identified::outputs`], then `report.html` ([`html::identify`]).
-pub fn write_identified(
-    out: &std::path::Path,
-    r: &identified::IdentifyRecord,
-) -> crate::Result<()> {
-    write_identified_with(out, r, &Default::default(), &[])
-}
-
-/// [`write_identified`] with `more` keys added to `identified.json` and a section to
-/// `report.md` (cross-validation, priors, diagnostics: [`practice`]), and the `files`
+/// [`identified::outputs`], then `report.html` ([`html::identify`]); with `more` keys added
+/// to `identified.json` and a section to `report.md` (cross-validation, priors, diagnostics: [`practice`]), and the `files`
 /// (name, text) written beside them (the controller exports, [`exports`]).
 pub fn write_identified_with(
     out: &std::path::Path,

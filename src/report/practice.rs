@@ -6,7 +6,7 @@
 use super::identified::{Additions, Block};
 use super::markdown::fmt_num;
 use crate::calibrate::pipeline::TrackerOutcome;
-pub use crate::calibrate::record::{IdentifiedRecord, PriorMove};
+pub use crate::calibrate::record::IdentifiedRecord;
 use crate::numeric::Real;
 
 /// A table row: `name`, then `values` to `digits` significant digits.

@@ -420,11 +420,6 @@ impl Db {
         })
     }
 
-    /// The connection, for the queries of [`history`] and [`board`].
-    pub fn conn(&self) -> &Connection {
-        &self.conn
-    }
-
     fn sql_error(&self, e: rusqlite::Error) -> Error {
         Error::file(&self.path, "database", e.to_string())
     }

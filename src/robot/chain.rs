@@ -334,8 +334,8 @@ impl Chain {
         self.dof
     }
 
-    /// Chain variables from joint values (see [`Robot::chain_values`]);
-    /// `q.len()` ≤ [`MAX_JOINTS`].
+    /// Chain variables (the value each joint adds to θ or d) from joint values `q`
+    /// (internal units; `q` itself without a coupling); `q.len()` ≤ [`MAX_JOINTS`].
     #[inline]
     fn vars(&self, q: &[Real]) -> [Real; MAX_JOINTS] {
         let mut c = [0.0; MAX_JOINTS];

@@ -112,21 +112,12 @@ fn gauss_newton(
     Ok(if last <= least { q } else { best })
 }
 
-/// The joints (internal units) at which `robot` reaches `target` under a payload of
-/// `payload_kg` (its gravity sag, when the robot has joint compliances), starting from `q0`;
-/// the iterate that came closest, `q0` included, when the pose is out of reach (the caller
-/// checks the residual). Fails when the robot has compliances but no link masses.
-pub fn solve_pose(
-    robot: &Robot,
-    target: &Frame,
-    q0: &[Real],
-    payload_kg: Real,
-) -> crate::Result<Vec<Real>> {
-    solve_pose_rows(robot, target, q0, payload_kg, 6)
-}
-
-/// [`solve_pose`] on the first `rows` rows of the error: 6 for the pose, 3 for the position
-/// only (the orientation is free; the step is the least-norm one).
+/// The joints (internal units) at which `robot` reaches `target` on the first `rows` rows of
+/// the error (6 for the pose; 3 for the position only, the orientation free and the step the
+/// least-norm one) under a payload of `payload_kg` (its gravity sag, when the robot has joint
+/// compliances), starting from `q0`; the iterate that came closest, `q0` included, when the
+/// pose is out of reach (the caller checks the residual). Fails when the robot has compliances
+/// but no link masses.
 pub fn solve_pose_rows(
     robot: &Robot,
     target: &Frame,

@@ -450,16 +450,6 @@ impl Robot {
         Chain::new(self)
     }
 
-    /// Chain variables (the value each joint adds to θ or d) from joint values `q`
-    /// (internal units). Without a coupling they are `q` itself.
-    pub fn chain_values(&self, q: &[Real], out: &mut [Real]) {
-        out.copy_from_slice(q);
-        if let Some(Coupling::Differential { l1_mm }) = self.coupling {
-            out[0] = ((q[0] - q[1]) / l1_mm).atan();
-            out[1] = 0.5 * (q[0] + q[1]);
-        }
-    }
-
     /// Forward kinematics: the tool frame in the world for joint values `q` (rad / mm).
     /// Convenience over [`Chain::fk`]; hot loops should build the chain once.
     pub fn fk(&self, q: &[Real]) -> Frame {

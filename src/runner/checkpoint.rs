@@ -81,11 +81,6 @@ impl Meta {
     }
 }
 
-/// The checkpoint folder of the output folder `out`: `.NAME.checkpoint` beside it.
-pub fn folder(out: &Path) -> PathBuf {
-    crate::report::checkpoint_folder(out)
-}
-
 /// The checkpoint of a running study: a [`TrialSink`] that records every trial past those
 /// already recorded, and rewrites `checkpoint.json` every [`CHUNK`] trials.
 pub struct Checkpoint {
@@ -146,7 +141,7 @@ impl Checkpoint {
             why.map_err(|m| Error::option(crate::error::Opt::Shard, m))?;
         }
         crate::runner::shard::discard_unfinished(out, "starting anew", reporter)?;
-        let dir = folder(out);
+        let dir = crate::report::checkpoint_folder(out);
         let made = MadeFolders::create(&dir)?;
         let settings = scenario.settings()?;
         let meta = Meta {
@@ -190,7 +185,7 @@ impl Checkpoint {
         given: Option<&AnyScenario>,
         force: bool,
     ) -> Result<(Checkpoint, AnyScenario, Option<Shard>, Records)> {
-        let dir = folder(out);
+        let dir = crate::report::checkpoint_folder(out);
         let path = dir.join("checkpoint.json");
         let text = crate::error::read_bounded_text(&path).map_err(|e| {
             Error::file(

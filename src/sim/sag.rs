@@ -191,16 +191,6 @@ impl Compliance {
         }))
     }
 
-    /// The model in use.
-    pub fn model(&self) -> ComplianceModel {
-        self.model
-    }
-
-    /// Joint stiffness in use, N·m/rad.
-    pub fn stiffness(&self) -> &[Real] {
-        &self.stiffness
-    }
-
     /// Link masses in use, kg.
     pub fn link_mass_kg(&self) -> &[Real] {
         &self.link_mass

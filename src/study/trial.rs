@@ -22,7 +22,7 @@ use crate::sim::poses::{sample_region, sample_region_keyed};
 use crate::sim::unmodelled::Unmodelled;
 use crate::sim::{measure_poses, Reached, SagFn, Simulated};
 
-pub use super::outcome::{OptionalStats, Outcome, TrialResult, OPTIONAL_STATS};
+pub use super::outcome::{OptionalStats, Outcome, TrialResult};
 
 /// The calibration poses of strategy `si` in trial `index`: the set optimised for the trial
 /// (`calibration.optimise = "trial"`), the study's fixed set, or a fresh draw from the

@@ -3,7 +3,6 @@
 
 use super::search::Bounds;
 use crate::error::{Error, Result};
-use crate::measurement::Measure;
 use crate::numeric::{Frame, Mat3, Real, Vec3};
 use crate::robot::jacobian::LANES;
 use crate::robot::{Chain, ChainVars, Param, Robot, MAX_JOINTS};
@@ -230,30 +229,6 @@ impl<'a> MetaProblem<'a> {
         let points = measured.iter().map(|f| f.pos).collect();
         let rots = measured.iter().map(|f| f.rot).collect();
         MetaProblem::new(nominal, params, qs, points, Some(rots), k)
-    }
-
-    /// The parameters whose errors are searched, in the order of `x`.
-    pub fn params(&self) -> &[Param] {
-        &self.params
-    }
-
-    /// The nominal robot.
-    pub fn nominal(&self) -> &Robot {
-        self.nominal
-    }
-
-    /// The joint values of the poses.
-    pub fn poses(&self) -> &[Vec<Real>] {
-        &self.qs
-    }
-
-    /// What the data measure: position, or full pose.
-    pub fn measure(&self) -> Measure {
-        if self.rotations.is_some() {
-            Measure::Pose
-        } else {
-            Measure::Position
-        }
     }
 
     /// The nominal robot with the errors `x` added (the identified robot).
