@@ -32,12 +32,12 @@ pub struct IdentifiabilityArgs {
     /// `distance`: lengths between consecutive poses instead of from a pivot.
     #[arg(long)]
     pub between_poses: bool,
-    /// `plane`: the number of planes.
-    #[arg(long, default_value_t = 3)]
-    pub planes: usize,
-    /// `sphere`: the number of spheres.
-    #[arg(long, default_value_t = 1)]
-    pub spheres: usize,
+    /// `plane`: the number of planes (default 3).
+    #[arg(long)]
+    pub planes: Option<usize>,
+    /// `sphere`: the number of spheres (default 1).
+    #[arg(long)]
+    pub spheres: Option<usize>,
     /// Number of random poses within the joint limits.
     #[arg(long, default_value_t = 100)]
     pub poses: usize,
@@ -52,8 +52,8 @@ pub struct IdentifiabilityArgs {
     #[arg(long)]
     pub gcn_blocks: bool,
     /// GCN threshold of the separation (Guo 2024 §3.1: 1e2).
-    #[arg(long, default_value_t = 1e2, allow_negative_numbers = true, value_parser = super::number)]
-    pub gcn_threshold: Real,
+    #[arg(long, requires = "gcn_blocks", allow_negative_numbers = true, value_parser = super::number)]
+    pub gcn_threshold: Option<Real>,
     /// Print JSON to stdout.
     #[arg(long)]
     pub json: bool,
@@ -61,8 +61,19 @@ pub struct IdentifiabilityArgs {
 
 /// Analyses every parameter of the robot's model over the poses and prints the result.
 pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
+    // An instrument's option with a kind that does not read it is refused, not ignored.
+    for (given, option, kind) in [
+        (args.between_poses, "--between-poses", Kind::Distance),
+        (args.planes.is_some(), "--planes", Kind::Plane),
+        (args.spheres.is_some(), "--spheres", Kind::Sphere),
+    ] {
+        if given && args.measure != kind {
+            let why = format!("is read only with --measure {}", kind.as_str());
+            return Err(Error::setting(option, why).into());
+        }
+    }
     let robot = args.chain.load(&args.robot)?;
-    let gcn_blocks = args.gcn_blocks.then_some(args.gcn_threshold);
+    let gcn_blocks = args.gcn_blocks.then(|| args.gcn_threshold.unwrap_or(1e2));
     if let Some(t) = gcn_blocks {
         if !(t.is_finite() && t > 0.0) {
             return Err(Error::setting(
@@ -149,8 +160,8 @@ fn instrument(
     let s = InstrumentSettings {
         kind,
         pivot: !args.between_poses,
-        planes: args.planes,
-        spheres: args.spheres,
+        planes: args.planes.unwrap_or(3),
+        spheres: args.spheres.unwrap_or(1),
         ..InstrumentSettings::default()
     };
     // The library names the poses `q`: here they are the file's, or the random count's.

@@ -409,13 +409,26 @@ pub(super) fn kernel_not_carried(carried: &[&str]) -> String {
 }
 
 /// The method `name` with the `--set KEY=VALUE` options, read like a scenario's
-/// `[[methods]]` entry.
+/// `[[methods]]` entry: a key given twice is refused, as a scenario refuses a duplicate key.
 pub(super) fn method_with_options(
     name: &str,
     options: &[(String, toml::Value)],
 ) -> calbench::Result<MethodSpec> {
     if options.is_empty() {
         return method_by_name(name);
+    }
+    if let Some(j) = (1..options.len()).find(|&j| options[..j].iter().any(|o| o.0 == options[j].0))
+    {
+        let (key, second) = &options[j];
+        let first = &options
+            .iter()
+            .find(|o| o.0 == *key)
+            .expect("found before j")
+            .1;
+        return Err(Error::setting(
+            format!("--set {key}"),
+            format!("is given twice ({first}, then {second}): one value per option"),
+        ));
     }
     let t = options.iter().cloned().collect();
     MethodSpec::with_options(name, t).map_err(|(k, msg)| Error::setting(format!("--set {k}"), msg))

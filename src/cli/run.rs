@@ -51,7 +51,7 @@ pub struct RunArgs {
     pub shard: Option<ShardArg>,
     /// With --shard auto: the number of shards (a Kubernetes Job's completions; under Slurm,
     /// checked against SLURM_ARRAY_TASK_COUNT).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", requires = "shard")]
     pub shard_count: Option<u64>,
     /// Run trials in blocks of 32 until every entry's 95 % interval of the mean validation
     /// error after compensation has at most this half-width: relative to the mean (`0.5%`)

@@ -228,8 +228,20 @@ fn parse(path: &Path, text: &str) -> std::result::Result<Value, (Error, bool)> {
 /// file is empty, or that `NaN` and `Infinity` (which Python's `json` writes) are not JSON,
 /// where calbench writes `null` for a figure it has none of.
 fn not_json(text: &str, e: &serde_json::Error) -> String {
-    if text.trim().is_empty() {
+    let start = text.trim_start();
+    if start.is_empty() {
         return "is empty, where a JSON document was expected".into();
+    }
+    // Another kind of file (a CSV, a TOML) given for a JSON one: say so, not the parser's
+    // "expected ident".
+    if !start.starts_with(['{', '[']) {
+        let first = start.lines().next().unwrap_or("");
+        let shown: String = first.chars().take(40).collect();
+        let more = if shown.len() < first.len() { "…" } else { "" };
+        return format!(
+            "is not JSON: it begins `{}{more}`, where a JSON document begins with `{{` ({e})",
+            shown.escape_debug()
+        );
     }
     let line = text.lines().nth(e.line().saturating_sub(1)).unwrap_or("");
     // serde_json counts a line's columns in bytes.
@@ -263,6 +275,14 @@ mod tests {
         assert_eq!(v, serde_json::from_str::<Value>(same).unwrap());
         let e = json_value(Path::new("s.json"), "{\n\"a\": }").unwrap_err();
         assert!(e.to_string().starts_with("s.json: line 2: "), "{e}");
+        // Another kind of file is named as such, at its first line.
+        let csv = "trial,strategy,method,validation_after_mean_mm_mean_over_the_trials\n0,random\n";
+        let e = json_value(Path::new("s.json"), csv).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "s.json: line 1: is not JSON: it begins `trial,strategy,method,validation_after_m…`, \
+             where a JSON document begins with `{` (expected ident at line 1 column 3)"
+        );
         assert!(unique_keys(Path::new("s.json"), "{\n\"a\": }").is_ok());
     }
 

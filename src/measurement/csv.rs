@@ -163,7 +163,7 @@ pub fn fixed(v: Real, d: usize) -> String {
 
 /// Reads a measurement CSV for `robot` (see the module docs for what is refused).
 pub fn read_measurements(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result<Measurements> {
-    read_table(path, robot, true)
+    read_table(path, robot, true, true)
 }
 
 /// Reads `text`, a measurement CSV for `robot` held in memory (an export as its mapping
@@ -175,7 +175,7 @@ pub fn read_measurements_text(
     robot: &(impl JointSpace + ?Sized),
 ) -> Result<Measurements> {
     let rows = Rows::of_text(path, text, "q1,…,qn,x,y,z")?;
-    table_of(rows, path, robot, true)
+    table_of(rows, path, robot, true, true)
 }
 
 /// Cartesian targets have no joints.
@@ -203,15 +203,16 @@ impl JointSpace for NoJoints {
 /// columns without the joints, `x,y,z` (mm) and optionally `qw,qx,qy,qz`, in the robot's base
 /// frame. Refused like a measurement file (unknown or missing columns, bad values, by line).
 pub fn read_targets(path: &Path) -> Result<Measurements> {
-    read_table(path, &NoJoints, true)
+    read_table(path, &NoJoints, true, true)
 }
 
 /// Reads a measurement CSV (`measured`) or a pose list (measured columns optional and
-/// ignored).
+/// ignored), refusing with `distinct` fewer than [`MIN_DISTINCT_POSES`] distinct poses.
 pub(crate) fn read_table(
     path: &Path,
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
+    distinct: bool,
 ) -> Result<Measurements> {
     // The header an empty file lacks: a pose list's joints, a target list's point.
     let expected = match (robot.dof(), measured) {
@@ -219,15 +220,17 @@ pub(crate) fn read_table(
         (_, true) => "q1,…,qn,x,y,z",
         (_, false) => "q1,…,qn",
     };
-    table_of(Rows::open(path, expected)?, path, robot, measured)
+    table_of(Rows::open(path, expected)?, path, robot, measured, distinct)
 }
 
-/// The measurements (or poses, unless `measured`) of the rows `t` of `path`.
+/// The measurements (or poses, unless `measured`) of the rows `t` of `path`, of at least
+/// [`MIN_DISTINCT_POSES`] distinct poses with `distinct`.
 fn table_of(
     mut t: Rows,
     path: &Path,
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
+    distinct: bool,
 ) -> Result<Measurements> {
     let (names, header_line) = (t.names.clone(), t.header_line);
     let bad = |line: u64, place: &str, msg: String| at_line(path, line, place, msg);
@@ -347,7 +350,7 @@ fn table_of(
             "the file has a header but no data rows".into(),
         ));
     }
-    if measured && dof > 0 {
+    if distinct && dof > 0 {
         distinct_poses(&qs, &lines, dof).map_err(|(place, msg)| bad(place, "", msg))?;
     }
     Ok(Measurements {

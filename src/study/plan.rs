@@ -12,7 +12,7 @@ use crate::poses::{self, RobotPoseModel, SelectOptions, Separation};
 use crate::robot::identifiability::identifiable_generic;
 use crate::robot::param_sets::ends;
 use crate::robot::{Param, Robot};
-use crate::sim::poses::{read_pose_list, sample_region};
+use crate::sim::poses::{read_calibration_poses, sample_region};
 use crate::sim::sag::Compliance;
 use crate::sim::settings::{ParamSelection, Region};
 use crate::sim::tracker::Tracker;
@@ -288,7 +288,7 @@ impl Study {
             let set = match s {
                 PoseStrategy::Random | PoseStrategy::Box => None,
                 PoseStrategy::File(path) => {
-                    let poses = read_pose_list(path, &nominal)?;
+                    let poses = read_calibration_poses(path, &nominal)?;
                     if let Some(n) = scenario.outliers.count.filter(|&n| n > poses.len()) {
                         let msg = format!(
                             "{n} outliers but the pose list {} gives only {} calibration poses",

@@ -279,6 +279,17 @@ fn identify_takes_method_options_and_identifiability_the_users_poses() {
     let o = identify(&["--set", "iterationz=50"], "bad");
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("iterationz"));
+    // A key given twice is refused, as a scenario's duplicate key is: not the last one kept.
+    let o = identify(
+        &["--set", "iterations=50", "--set", "iterations=60"],
+        "twice",
+    );
+    assert!(!o.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&o.stderr).trim(),
+        "error: setting `--set iterations`: is given twice (50, then 60): one value per option"
+    );
+    assert!(!dir.join("twice").exists());
     let o = calbench_ok(&[
         "identifiability",
         "--robot",

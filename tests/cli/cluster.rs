@@ -140,6 +140,25 @@ fn shard_auto_reads_slurm_and_kubernetes_and_merges_to_the_bytes_of_one_run() {
     );
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("SLURM_CPUS_PER_TASK"));
+    // --shard-count without --shard is refused, not ignored while the whole study runs.
+    let alone = dir.join("alone");
+    let o = run_with(
+        &[],
+        &[
+            "run",
+            sc,
+            "--trials",
+            "2",
+            "--shard-count",
+            "2",
+            "--out",
+            path_arg(&alone),
+        ],
+    );
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("--shard <I/N|auto>"), "{err}");
+    assert!(!alone.exists());
 }
 
 /// A stepped Slurm array (`sbatch --array=0-8:2`: IDs 0, 2, 4, 6, 8) runs shard ID/2 of 5;

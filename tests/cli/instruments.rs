@@ -57,7 +57,8 @@ fn identifiability_per_instrument() {
 
 /// Counts and poses no instrument can use are refused naming the option given: a plane
 /// count beyond a measurement file's had been named `measurement.planes` (a study's key),
-/// and one pose between poses `data` ("no observations").
+/// and one pose between poses `data` ("no observations"); so is an instrument's option with
+/// a kind that does not read it, and `--gcn-threshold` without `--gcn-blocks`.
 #[test]
 fn identifiability_names_the_option_an_instrument_cannot_use() {
     let d = tmp_dir("cli-instruments-options");
@@ -90,6 +91,23 @@ fn identifiability_names_the_option_an_instrument_cannot_use() {
         (
             &["--measure", "distance", "--poses", "1"],
             "setting `--poses`: distance 1 has 1 points; it needs at least 5",
+        ),
+        // An instrument's option with a kind that does not read it is refused, not ignored.
+        (
+            &["--measure", "position", "--spheres", "3"],
+            "setting `--spheres`: is read only with --measure sphere",
+        ),
+        (
+            &["--measure", "sphere", "--planes", "2"],
+            "setting `--planes`: is read only with --measure plane",
+        ),
+        (
+            &["--measure", "pose", "--between-poses"],
+            "setting `--between-poses`: is read only with --measure distance",
+        ),
+        (
+            &["--gcn-threshold", "5"],
+            "the following required arguments were not provided:\n  --gcn-blocks",
         ),
     ] {
         let mut all = vec!["identifiability", "--robot", "irb2600"];

@@ -365,3 +365,58 @@ fn more_outliers_than_a_pose_list_s_rows_are_refused_at_the_scenario_s_line() {
         assert!(!out.exists());
     }
 }
+
+/// A scenario's calibration pose list of fewer than three distinct poses had been accepted,
+/// and every trial then failed with exit 0; one in radians for a robot in degrees had every
+/// trial "converged" on a robot made worse. Both are refused before any trial: the first at
+/// the pose list's line, as a measurement CSV is, the second at the scenario's line of
+/// `calibration.poses_file`, with the cause `identify` names. Nothing is written.
+#[test]
+fn a_pose_list_of_one_pose_or_in_radians_is_refused_before_any_trial() {
+    let d = tmp("pose-list-distinct");
+    let root = crate::common::root();
+    let text = std::fs::read_to_string(root.join("scenarios/ci-guard.toml")).unwrap();
+    let text = text.replace(
+        "strategies = [\"random\"]",
+        "strategies = [\"file\"]\nposes_file = \"poses.csv\"",
+    );
+    let line = 1 + text
+        .lines()
+        .position(|l| l.starts_with("poses_file"))
+        .unwrap();
+    let sc = d.join("s.toml");
+    std::fs::write(&sc, &text).unwrap();
+    // The same pose 40 times; then 40 distinct poses, each within a degree of zero.
+    let same = "10,20,30,40,50,60\n".repeat(40);
+    let radians: String = (0..40)
+        .map(|i| {
+            let q: Vec<String> = (0..6)
+                .map(|j| format!("{:.4}", 0.02 * (((i * 7 + j * 13) % 50) as f64 - 25.0)))
+                .collect();
+            q.join(",") + "\n"
+        })
+        .collect();
+    for (rows, said) in [
+        (
+            same,
+            "poses.csv: line 2: all 40 rows (lines 2 to 41) are the same pose".to_string(),
+        ),
+        (
+            radians,
+            format!(
+                "{}: line {line}, calibration.poses_file: {}: every revolute joint value lies \
+                 within",
+                sc.display(),
+                d.join("poses.csv").display()
+            ),
+        ),
+    ] {
+        std::fs::write(d.join("poses.csv"), format!("q1,q2,q3,q4,q5,q6\n{rows}")).unwrap();
+        let out = d.join("o");
+        let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && o.status.code() != Some(101), "{err}");
+        assert!(err.contains(&said), "{err} lacks {said}");
+        assert!(!out.exists());
+    }
+}

@@ -3,7 +3,7 @@
 use crate::error::{Error, Result};
 use crate::robot::param_sets::{full_params, identified_params};
 use crate::robot::{Param, Robot};
-use crate::sim::poses::read_pose_list;
+use crate::sim::poses::read_calibration_poses;
 use crate::sim::settings::{ErrorKind, ParamSelection};
 use crate::sim::truth::selected_params;
 
@@ -45,7 +45,9 @@ impl Scenario {
     /// parameters on `robot` (the kinematic ones and `identification.compliance`): every
     /// trial's identification would end rank-deficient before its first iteration, as
     /// `identify` refuses such data. The key is `calibration.count`, or
-    /// `calibration.poses_file` for a pose list of too few rows.
+    /// `calibration.poses_file` for a pose list of too few rows, of fewer than three distinct
+    /// poses ([`read_calibration_poses`]), or whose joint values look like radians for a robot
+    /// in degrees ([`crate::calibrate::verdict::radians_hint`], as `identify` names that cause).
     pub(super) fn check_readings(&self, robot: &Robot) -> Result<()> {
         let compliance = self.identification.compliance.params(robot, "")?;
         let params = self.kinematic_params(robot).len() + compliance.len();
@@ -55,7 +57,12 @@ impl Scenario {
         for s in &c.strategies {
             let (key, poses) = match s {
                 PoseStrategy::File(path) => {
-                    ("calibration.poses_file", read_pose_list(path, robot)?.len())
+                    let qs = read_calibration_poses(path, robot)?;
+                    if let Some(why) = crate::calibrate::verdict::radians_hint(robot, &qs) {
+                        let msg = format!("{}: {why}", path.display());
+                        return Err(Error::setting("calibration.poses_file", msg));
+                    }
+                    ("calibration.poses_file", qs.len())
                 }
                 _ => ("calibration.count", c.count),
             };
