@@ -489,7 +489,9 @@ pub fn noise_free(
 /// limits from `rng` ([`crate::robot::sampling::uniform_joint_poses`]), laid out by [`layout`]
 /// on the first draw, moved onto their planes or spheres by [`touching`] (those that do not
 /// reach theirs are dropped and more are drawn); with each pose's plane or sphere. Fails
-/// when 20 draws of `4n` candidates do not give `n` poses.
+/// when 20 draws of `4n` candidates do not give `n` poses, or when a plane, sphere or
+/// socket has none of them (one the arm does not reach: its readings would be missing from
+/// the file, which no identification could then read).
 pub fn instrument_poses(
     s: &InstrumentSettings,
     nominal: &Robot,
@@ -500,14 +502,33 @@ pub fn instrument_poses(
     let first = crate::robot::sampling::uniform_joint_poses(nominal, batch, rng);
     let lay = layout(s, nominal, &first)?;
     let (mut qs, mut groups) = touching(nominal, &lay, &first, &groups_of(&lay.instrument, batch));
+    let mut drawn = batch;
     for _ in 1..20 {
         if qs.len() >= n {
             break;
         }
+        drawn += batch;
         let more = crate::robot::sampling::uniform_joint_poses(nominal, batch, rng);
         let (q, g) = touching(nominal, &lay, &more, &groups_of(&lay.instrument, batch));
         qs.extend(q);
         groups.extend(g);
+    }
+    // A plane, sphere or socket that no pose reaches would be missing from the readings
+    // (the only one unreached is said below, as too few poses).
+    let (kind, count) = (s.kind.as_str(), lay.instrument.groups());
+    let grouped = count > 1
+        && matches!(
+            lay.instrument,
+            Instrument::Planes(_) | Instrument::Spheres(_) | Instrument::Sockets(_)
+        );
+    let missing = |g: &[usize]| (0..count).find(|l| grouped && !g.contains(l));
+    if let Some(l) = missing(&groups) {
+        return Err(Error::Compute(format!(
+            "{kind} {} of {count} is reached by none of the {} candidate poses drawn for it \
+             ({drawn} in all): the arm does not reach it within its joint limits",
+            l + 1,
+            drawn / count
+        )));
     }
     if qs.len() < n {
         return Err(Error::Compute(format!(
@@ -518,6 +539,13 @@ pub fn instrument_poses(
     }
     qs.truncate(n);
     groups.truncate(n);
+    if let Some(l) = missing(&groups) {
+        return Err(Error::Compute(format!(
+            "{kind} {} of {count} has none of the {n} poses: too few of the candidates drawn \
+             for it reach it to be among the first {n} that reach theirs",
+            l + 1
+        )));
+    }
     Ok((lay, qs, groups))
 }
 

@@ -468,10 +468,38 @@ fn a_plane_the_true_robot_cannot_touch_is_refused_naming_the_entry() {
 
 /// An instrument whose surface the robot's draws do not reach (a sphere beside a gantry of
 /// metre travels) is refused naming the scenario file and the `[[measurement]]` entry with its
-/// line, by `run` and by `simulate`, where the message named neither.
+/// line, by `run` and by `simulate`, where the message named neither. So is a socket of
+/// several that the arm does not reach (3 m from socket 1): `simulate` had written a file of
+/// the other sockets' rows, which `identify` refused, and `run` had refused it as the setting
+/// `measurements`, of no file or line.
 #[test]
 fn an_instrument_the_arm_does_not_reach_is_named() {
     let dir = tmp_dir("instruments-unreached");
+    let far =
+        socket_study(13.0).replace("socket_distance_mm = 50.0", "socket_distance_mm = 3000.0");
+    let line = 1 + far.lines().position(|l| l == "[[measurement]]").unwrap();
+    let sc = write_scenario(&dir, "far", &far);
+    let sc_arg = sc.to_str().unwrap();
+    for (args, out) in [
+        (vec!["run", sc_arg, "--out"], dir.join("far-run")),
+        (vec!["simulate", sc_arg, "--out"], dir.join("far-sim")),
+    ] {
+        let mut args = args;
+        args.push(out.to_str().unwrap());
+        let o = calbench(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        let said = format!(
+            "{sc_arg}: line {line}, measurement[0]: socket 2 of 2 is reached by none of the"
+        );
+        assert!(err.contains(&said), "{args:?}: {err}");
+        assert!(!out.exists(), "{} written", out.display());
+    }
+    unreached_sphere(&dir);
+}
+
+/// The sphere of [`an_instrument_the_arm_does_not_reach_is_named`].
+fn unreached_sphere(dir: &std::path::Path) {
     let prismatic = |alpha: f64, theta: f64, travel: f64| {
         format!(
             "[[joints]]\ntype = \"prismatic\"\nalpha = {alpha:?}\na = 0.0\nd = 0.0\n\
