@@ -192,7 +192,8 @@ def identify(
         ``identified.json`` for the same data and options, as a dict. An identification
         that stopped short of convergence (``termination`` ``max-iterations``, ``diverged``
         or ``no-progress``) warns (:class:`ConvergenceWarning`, the words ``calbench
-        identify`` prints on stderr).
+        identify`` prints on stderr); a registration that did not settle, and a chosen
+        kernel residual ``gp`` that the returned ``robot`` lacks, warn (``UserWarning``).
     """
     if not isinstance(robot, Robot):
         raise SettingError("setting `robot`: expected a calbench.Robot")
@@ -659,7 +660,10 @@ def task(task, method="lm", *, models=None, name=None, out=None, options=None):
     Returns:
         a dict: ``task`` (the content of ``task.json``), ``record`` (of ``identified.json``)
         and ``robot`` (the compensated :class:`Robot`). An identification that stopped short
-        of convergence warns (:class:`ConvergenceWarning`, the words of ``calbench task``).
+        of convergence warns (:class:`ConvergenceWarning`, the words of ``calbench task``);
+        its other warnings (a registration that did not settle, a result kept worse or
+        implausible, a chosen kernel residual ``gp`` that ``robot`` lacks) are
+        ``UserWarning``.
     """
     if models is not None:
         models = _names("models", models)
@@ -679,6 +683,8 @@ def task(task, method="lm", *, models=None, name=None, out=None, options=None):
     )
     if d["warning"] is not None:
         warnings.warn(d["warning"], ConvergenceWarning, stacklevel=2)
+    for kept in d["kept"]:
+        warnings.warn(kept, UserWarning, stacklevel=2)
     return {
         "task": json.loads(d["task"]),
         "record": json.loads(d["record"]),

@@ -12,11 +12,9 @@ use pyo3::types::{PyDict, PyString};
 
 use calbench::calibrate::cv::{Holdout, Model};
 use calbench::calibrate::pipeline::IdentifyOutcome;
-use calbench::calibrate::plausibility::implausible_warning;
 use calbench::calibrate::record::unconverged_warning;
 use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
-use calbench::calibrate::verdict::worse_warning;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
 use calbench::measurement::csv::{read_measurements, ArrayKeys};
@@ -27,6 +25,12 @@ use calbench::robot::compliance::CompliancePick;
 use calbench::robot::{Param, Robot};
 
 use crate::convert::{matrix, measurements, toml_table, Validation};
+
+/// The warning of a chosen model with a kernel residual, which the returned robot lacks (as
+/// `calbench identify` and `calbench task` warn that their files lack it).
+pub(crate) const KERNEL_NOT_IN_ROBOT: &str = "the chosen model's kernel residual `gp` is not in \
+    `robot`: its forward kinematics are the parametric model's, without the residual's \
+    correction, while the record's validation figures are the model's with it";
 use crate::errors::{err, nonempty, setting, ComputeError};
 use crate::robot::PyRobot;
 
@@ -284,13 +288,18 @@ pub(crate) fn identify<'py>(
     out.set_item("seconds", seconds)?;
     let r = outcome.record();
     out.set_item("warning", unconverged_warning(r))?;
-    // A result kept although it makes the robot worse or cannot be physically right: the
-    // warnings `calbench identify` prints, the options spelled as keywords.
-    let kept: Vec<String> = worse_warning(&r.allowed_worse)
+    // The warnings `calbench identify` prints (a registration that did not settle, a result
+    // kept although it makes the robot worse or cannot be physically right), the options
+    // spelled as keywords; and that `robot` lacks a chosen kernel residual, as the command
+    // says its files do.
+    let mut kept: Vec<String> = outcome
+        .warnings()
         .into_iter()
-        .chain(implausible_warning(&r.allowed_implausible))
         .map(|w| w.spell(crate::errors::spell))
         .collect();
+    if matches!(&outcome, IdentifyOutcome::Tracker(o) if o.kernel.is_some()) {
+        kept.push(KERNEL_NOT_IN_ROBOT.into());
+    }
     out.set_item("kept", kept)?;
     match &outcome {
         IdentifyOutcome::Kind(o) => out.set_item(

@@ -127,24 +127,38 @@ pub(crate) fn task<'py>(
             let record = serde_json::to_string(&o.record)
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             let warning = unconverged_warning(&o.record);
-            Ok(((text, record, o.compensated()), warning))
+            let mut kept = spelled(o.warnings());
+            if o.kernel.is_some() {
+                kept.push(crate::identify::KERNEL_NOT_IN_ROBOT.into());
+            }
+            Ok(((text, record, o.compensated()), (warning, kept)))
         })
         .map_err(task_err);
     let (entry, warning) = stop.raise(entry)?;
     result(py, entry, warning)
 }
 
-/// The dict `calbench.task` returns.
+/// The warnings `calbench task` prints, the options spelled as keywords.
+fn spelled(warnings: Vec<calbench::error::Said>) -> Vec<String> {
+    warnings
+        .into_iter()
+        .map(|w| w.spell(crate::errors::spell))
+        .collect()
+}
+
+/// The dict `calbench.task` returns: with `warning` (an unconverged identification's) and
+/// `kept` (the other warnings `calbench task` prints).
 fn result(
     py: Python<'_>,
     (task, record, robot): (String, String, Robot),
-    warning: Option<String>,
+    (warning, kept): (Option<String>, Vec<String>),
 ) -> PyResult<Bound<'_, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("task", task)?;
     d.set_item("record", record)?;
     d.set_item("robot", PyRobot { inner: robot })?;
     d.set_item("warning", warning)?;
+    d.set_item("kept", kept)?;
     Ok(d)
 }
 
@@ -194,7 +208,10 @@ fn socket_task<'py>(
                 .map_err(|e| calbench::Error::Compute(e.to_string()))?;
             let [(_, json), _] = files;
             let warning = unconverged_warning(&e.outcome.record);
-            Ok(((json, record, e.robot), warning))
+            Ok((
+                (json, record, e.robot),
+                (warning, spelled(e.outcome.warnings())),
+            ))
         })
         .map_err(task_err)?;
     result(py, entry, warning)

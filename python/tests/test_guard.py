@@ -120,14 +120,45 @@ def test_identify_refuses_an_implausible_robot_unless_allowed(root):
     assert np.isfinite(good["rms_residual_mm"])
 
 
-def test_run_with_precision_returns_its_shortfall(root):
-    study = calbench.run(root / CI_GUARD, trials=10, precision="0.01%")
+def test_run_with_precision_returns_its_shortfall(root, cli, tmp_path):
+    # The shortfall is raised as a UserWarning in `calbench run --precision`'s words; it had
+    # been printed by the command line alone.
+    with pytest.warns(UserWarning, match=r"^precision ±0.01% not reached: stopped at the cap "
+                                         r"of 10 trials") as caught:
+        study = calbench.run(root / CI_GUARD, trials=10, precision="0.01%")
+    r = cli("run", root / CI_GUARD, "--trials", "10", "--precision", "0.01%", "--out",
+            tmp_path / "cli")
+    assert f"warning: {caught[0].message}\n" in r.stderr
     stopping = study.summary["stopping"]
     assert stopping["reached"] is False and stopping["trials"] == 10
     assert stopping["trials_needed"] > 10
     assert " / " in stopping["widest_entry"]
     with pytest.raises(calbench.SettingError, match="precision"):
         calbench.run(root / CI_GUARD, trials=10, precision="5")
+
+
+def test_a_registration_that_did_not_settle_warns_as_the_command_line_does(root, cli, tmp_path):
+    # `calbench identify` printed that the registration did not settle; Python had said
+    # nothing of it (only the identification's own non-convergence).
+    calbench.simulate(root / CI_GUARD, out=tmp_path / "sim")
+    data = tmp_path / "sim" / "measurements.csv"
+    robot = calbench.Robot.builtin("irb2600")
+    with pytest.warns(UserWarning) as caught:
+        r = calbench.identify(robot, data=data, method="igg3", registration="svd",
+                              options={"max_iter": 2})
+    assert r["registration_termination"] == "max-rounds"
+    said = [str(w.message) for w in caught if w.category is UserWarning]
+    assert len(said) == 1 and said[0].startswith("svd registration and identification did "
+                                                 "not settle"), said
+    out = cli("identify", "--robot", "irb2600", "--data", data, "--method", "igg3",
+              "--registration", "svd", "--set", "max_iter=2", "--out", tmp_path / "cli")
+    assert f"warning: {said[0]}\n" in out.stderr
+    # A chosen kernel residual, which the returned robot lacks, as robot.toml does.
+    with pytest.warns(UserWarning, match=r"kernel residual `gp` is not in `robot`"):
+        calbench.identify(robot, data=data, method="lm", models="kinematic+gp")
+    out = cli("identify", "--robot", "irb2600", "--data", data, "--method", "lm", "--models",
+              "kinematic+gp", "--out", tmp_path / "gp")
+    assert "warning: the chosen model's kernel residual `gp` is written to kernel.json" in out.stderr
 
 
 def test_with_errors_beyond_the_model_ranges_is_refused():

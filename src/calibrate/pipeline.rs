@@ -463,6 +463,16 @@ impl IdentifyOutcome {
         }
     }
 
+    /// The warnings `calbench identify` prints before its own of the files it writes: a
+    /// registration that did not settle, a result kept worse than the nominal robot or
+    /// physically implausible.
+    pub fn warnings(&self) -> Vec<Said> {
+        match self {
+            IdentifyOutcome::Tracker(o) => o.warnings(),
+            IdentifyOutcome::Kind(o) => o.warnings(),
+        }
+    }
+
     /// The compensated robot, named `<nominal>-calibrated`, as `robot.toml` holds it.
     pub fn compensated(&self) -> Robot {
         match self {

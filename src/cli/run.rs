@@ -179,9 +179,6 @@ pub fn run(args: &RunArgs) -> Result<()> {
         ..opts
     };
     let r = run_study(sc, &opts, &Terminal)?;
-    if let Some(w) = r.stopping.as_ref().and_then(|st| st.shortfall()) {
-        eprintln!("warning: {w}");
-    }
     finished(&r)?;
     let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
     args.record.finish(db, record)

@@ -384,6 +384,10 @@ pub fn run_resumed(
         let entry = blocks.first().and_then(|b| b.entries.get(i));
         st.widest_entry = entry.map(|e| format!("{} / {}", e.method, e.poses));
     }
+    // A run that stopped at its cap short of the target says so, to the terminal and to Python.
+    if let Some(w) = stopping.as_ref().and_then(Stopping::shortfall) {
+        reporter.warning(&w);
+    }
     Ok(RunResult {
         scenario,
         blocks,

@@ -522,7 +522,7 @@ fn unreached_sphere(dir: &std::path::Path) {
          [[measurement]]\nkind = \"sphere\"\n",
         dir.join("gantry.toml").display()
     );
-    let sc = write_scenario(&dir, "g", &text);
+    let sc = write_scenario(dir, "g", &text);
     let sc_arg = sc.to_str().unwrap();
     for (args, out) in [
         (vec!["run", sc_arg, "--out"], dir.join("run")),
