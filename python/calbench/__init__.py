@@ -172,8 +172,8 @@ def identify(
         cv: K of a K-fold cross-validation (``--cv``); cv_seed: seed of its folds (default
             0; with ``cv`` or ``models`` only).
         validate: a validation measurement: a tracker's file, or ``(q, points)`` /
-            ``(q, points, rotations)`` / ``(q, points, rotations or None, payload)``, the
-            payload (N,) in kg; required with ``payload``, as the poses' loads are.
+            ``(q, points, rotations)`` / ``(q, points, rotations or None, payload or None)``,
+            the payload (N,) in kg; required with ``payload``, as the poses' loads are.
         holdout: ``"LAST/EVERY"``: rows held out for validation instead (``--holdout``).
         seed: seed of the random searches.
         allow_rank_deficient: return a result whose data do not determine every parameter

@@ -145,9 +145,10 @@ def _validation(validate, joints, loaded):
     if not isinstance(validate, (tuple, list)) or len(validate) not in (2, 3, 4):
         raise SettingError(
             "setting `validate`: expected a measurement file, (q, points), "
-            "(q, points, rotations) or (q, points, rotations or None, payload)"
+            "(q, points, rotations) or (q, points, rotations or None, payload or None)"
         )
-    if loaded and len(validate) < 4:
+    payload = validate[3] if len(validate) == 4 else None
+    if loaded and payload is None:
         raise SettingError(
             "setting `validate`: the calibration poses carry a payload (`payload`) and "
             "the validation poses none: give (q, points, rotations or None, payload), "
@@ -157,5 +158,5 @@ def _validation(validate, joints, loaded):
         _array("validate.q", validate[0], 2, joints),
         _array("validate.points", validate[1], 2, 3),
         _rotations("validate.rotations", validate[2]) if len(validate) > 2 else None,
-        _array("validate.payload", validate[3], 1) if len(validate) == 4 else None,
+        None if payload is None else _array("validate.payload", payload, 1),
     )

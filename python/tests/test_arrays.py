@@ -202,7 +202,15 @@ def test_a_validation_under_a_payload_is_identified_as_from_its_files(root, tmp_
         **common)
     assert arrays.validation["after_mm"]["rms"] == pytest.approx(
         files.validation["after_mm"]["rms"], rel=1e-6)  # the files round to 9 decimals
-    with pytest.raises(calbench.SettingError,
-                       match=r"^setting `validate`: the calibration poses carry a payload"):
-        calbench.identify(s["robot"], s["q"], s["points"], payload=s["payload"],
-                          validate=(s["validation_q"], s["validation_points"]), **common)
+    for short in ((s["validation_q"], s["validation_points"]),
+                  (s["validation_q"], s["validation_points"], None, None)):
+        with pytest.raises(calbench.SettingError,
+                           match=r"^setting `validate`: the calibration poses carry a payload"):
+            calbench.identify(s["robot"], s["q"], s["points"], payload=s["payload"],
+                              validate=short, **common)
+    # Without a payload for the calibration, a payload of None is none: it had been refused
+    # as "expected 1 dimensions, got shape ()".
+    v = (s["validation_q"], s["validation_points"])
+    a = calbench.identify(s["robot"], s["q"], s["points"], validate=v, **common)
+    b = calbench.identify(s["robot"], s["q"], s["points"], validate=(*v, None, None), **common)
+    assert a.validation == b.validation
