@@ -36,7 +36,10 @@ pub struct Corrected {
 /// for another), or with one that cannot be physically right, would send the arm far from
 /// every pose it was written for. The parameters are compared in the nominal robot's DH form
 /// ([`Robot::normals_as`]): a link whose common normal the identified robot's file points the
-/// other way is the same link.
+/// other way is the same link. Parameters beyond their bounds whose robot does what a
+/// calibration's would ([`tool_points_apart`] finds nothing: the same arm in other parameters,
+/// coincident axes traded, a URDF's own frames) are no refusal; robots of the two DH families,
+/// which name other quantities alike, are compared by that alone.
 pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>]) -> Vec<String> {
     // A URDF read back can turn a link's common normal over: the same robot, θ moved by π.
     let identified = &identified.normals_as(nominal);
@@ -58,7 +61,7 @@ pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>
     // robots do.
     let modified = |r: &Robot| r.convention == Convention::Mdh;
     if modified(identified) != modified(nominal) {
-        return tool_points_apart(nominal, identified, qs);
+        return tool_points_apart(nominal, identified, qs, true);
     }
     let theirs = identified.params();
     let mut shared: Vec<Param> = nominal
@@ -67,42 +70,56 @@ pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>
         .filter(|p| theirs.contains(p))
         .collect();
     shared.extend(crate::robot::gravity_basis::params(identified));
-    super::plausibility::moves(nominal, identified, &shared, qs)
+    let found = super::plausibility::moves(nominal, identified, &shared, qs);
+    if found.is_empty() || tool_points_apart(nominal, identified, qs, false).is_empty() {
+        return Vec::new();
+    }
+    found
 }
 
 /// Joint vectors drawn (a fixed stream) where a comparison of two robots has no program rows.
 const DRAWN_POSES: usize = 64;
 
-/// The tool points of `identified` and `nominal` at the program's poses `qs` (or at
-/// [`DRAWN_POSES`] joint vectors drawn within the limits) further apart than a calibration may
-/// move them, in words (empty when they are not): the largest bound of "Physical
-/// plausibility", [`super::plausibility::FRAME_SHARE`] of the reach, which a move of the base
-/// alone may take.
-fn tool_points_apart(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>]) -> Vec<String> {
-    let drawn;
-    let qs = if qs.is_empty() {
-        let mut rng = crate::numeric::rng::stream(0, "compared poses");
-        drawn = crate::robot::sampling::uniform_joint_poses(nominal, DRAWN_POSES, &mut rng);
-        &drawn
-    } else {
-        qs
-    };
+/// The tool points of `identified` and `nominal` at the program's poses `qs` and at
+/// [`DRAWN_POSES`] joint vectors drawn within the limits further apart than a calibration
+/// moves them, in words (empty when they are not): by more than a link's length may move in
+/// "Physical plausibility", the larger of [`super::plausibility::LENGTH_SHARE`] of the reach
+/// and [`super::plausibility::LENGTH_FLOOR_MM`]. A calibration moves a tool point by
+/// millimetres; another arm's model (a KR 16's against an IRB 2600's) by hundreds. `families`:
+/// the robots are of the two DH families, and the words say why they are compared so.
+fn tool_points_apart(
+    nominal: &Robot,
+    identified: &Robot,
+    qs: &[Vec<Real>],
+    families: bool,
+) -> Vec<String> {
+    use super::plausibility::{LENGTH_FLOOR_MM, LENGTH_SHARE};
+    let mut rng = crate::numeric::rng::stream(0, "compared poses");
+    let drawn = crate::robot::sampling::uniform_joint_poses(nominal, DRAWN_POSES, &mut rng);
     let reach = crate::robot::sampling::reach_bound_mm(nominal);
-    let bound = super::plausibility::FRAME_SHARE * reach;
+    let bound = (LENGTH_SHARE * reach).max(LENGTH_FLOOR_MM);
     let gap = qs
         .iter()
+        .chain(&drawn)
         .map(|q| (identified.fk(q).pos - nominal.fk(q).pos).norm())
         .fold(0.0, Real::max);
     if gap <= bound {
         return Vec::new();
     }
+    let why = match families {
+        true => format!(
+            "; the robots' conventions, {} and {}, name other quantities alike, so they are \
+             compared by their tool points",
+            identified.convention.as_str(),
+            nominal.convention.as_str(),
+        ),
+        false => String::new(),
+    };
     vec![format!(
         "its tool point is {gap:.0} mm from the nominal robot's at a pose (bound {bound:.0} mm: \
-         {:.0} % of the robot's reach, {reach:.0} mm; the robots' conventions, {} and {}, \
-         name other quantities alike, so they are compared by their tool points)",
-        super::plausibility::FRAME_SHARE * 100.0,
-        identified.convention.as_str(),
-        nominal.convention.as_str(),
+         the larger of {:.0} % of the robot's reach, {reach:.0} mm, and {LENGTH_FLOOR_MM:.0} mm, \
+         as a link's length{why})",
+        LENGTH_SHARE * 100.0,
     )]
 }
 

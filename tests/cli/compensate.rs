@@ -237,6 +237,80 @@ fn robots_of_standard_and_modified_dh_are_compared_by_their_tool_points() {
     assert!(!out.exists());
 }
 
+/// A KUKA KR 16 (standard DH, a textbook table) whose program is corrected with the built-in
+/// IRB 2600 in modified DH: another arm of much the same size, its tool point 872 mm from the
+/// KR 16's at a pose. Within half the reach (the bound of a base's move, 1217 mm) it had been
+/// taken for a calibration and every row rewritten, joints by up to 345°; a tool point is now
+/// compared against a link's length bound (49 mm), and it is refused. The same arm written
+/// otherwise, examples/ipa-ur10's ur10.toml and ur10.urdf (θ1 and θ6 by 180° and d6 apart,
+/// their tool points together to 1e-12 mm), had been refused by those parameters; every row of
+/// a program is `ok`, its commands unchanged.
+#[test]
+fn another_arm_is_refused_and_the_same_arm_written_otherwise_is_not() {
+    let d = tmp_dir("cli-compensate-other-arm");
+    let joint = |alpha: f64, a: f64, dd: f64, theta: f64, lim: f64| {
+        format!(
+            "[[joints]]\ntype = \"revolute\"\nalpha = {alpha:?}\na = {a:?}\nd = {dd:?}\n\
+             theta = {theta:?}\nlimits = [{:?}, {lim:?}]\n\n",
+            -lim
+        )
+    };
+    let kr16 = format!(
+        "name = \"kr16\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n\n\
+         {}{}{}{}{}{}",
+        joint(-90.0, 260.0, 675.0, 0.0, 185.0),
+        joint(0.0, 680.0, 0.0, -90.0, 155.0),
+        joint(90.0, -35.0, 0.0, 0.0, 130.0),
+        joint(-90.0, 0.0, -670.0, 0.0, 350.0),
+        joint(90.0, 0.0, 0.0, 0.0, 130.0),
+        joint(180.0, 0.0, -115.0, 0.0, 350.0),
+    );
+    std::fs::write(d.join("kr16.toml"), kr16).unwrap();
+    let program = d.join("program.csv");
+    std::fs::write(
+        &program,
+        "q1,q2,q3,q4,q5,q6\n-61.3,11.3,57.3,-168.5,-45.8,-40.9\n15.7,-48.4,54.1,120.6,-7.9,1.9\n",
+    )
+    .unwrap();
+    let out = d.join("o.csv");
+    let o = calbench(&[
+        "compensate",
+        "--robot",
+        path_arg(&d.join("kr16.toml")),
+        "--identified",
+        "irb2600-mdh",
+        "--joints",
+        path_arg(&program),
+        "--out",
+        path_arg(&out),
+    ]);
+    let msg = refused(
+        &o,
+        &[
+            "--identified",
+            "cannot be a calibration of the nominal robot: its tool point is",
+            "(bound 49 mm: the larger of 2 % of the robot's reach",
+            "the robots' conventions, mdh and dh",
+        ],
+    );
+    assert!(!out.exists(), "{msg}");
+    let ur10 = root().join("examples/ipa-ur10");
+    let rows = ["10,-80,60,-20,45,30", "-30,-100,90,10,-60,120"];
+    let corrected = compensate_rows(&d, &ur10.join("ur10.toml"), &ur10.join("ur10.urdf"), &rows);
+    for (line, row) in corrected.lines().skip(1).zip(rows) {
+        assert!(line.ends_with(",ok"), "{corrected}");
+        let q: Vec<f64> = line
+            .split(',')
+            .take(6)
+            .map(|v| v.parse().unwrap())
+            .collect();
+        let given: Vec<f64> = row.split(',').map(|v| v.parse().unwrap()).collect();
+        for (a, b) in q.iter().zip(&given) {
+            assert!((a - b).abs() < 1e-9, "{corrected}");
+        }
+    }
+}
+
 /// An empty program or target list says the header it lacks: a program's joints, a target
 /// list's point (both had asked for `q1,…,qn,x,y,z`, columns neither needs).
 #[test]

@@ -252,7 +252,7 @@ fn a_set_of_fewer_readings_than_parameters_is_refused_when_read() {
     let poses = dir.join("poses.csv");
     std::fs::write(
         &poses,
-        "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,10,10,10,10,10\n",
+        "q1,q2,q3,q4,q5,q6\n0,0,0,0,0,0\n10,10,10,10,10,10\n20,-20,20,-20,20,-20\n",
     )
     .unwrap();
     // The sweep's refused value is named at its line (the last of the file).
@@ -277,7 +277,7 @@ fn a_set_of_fewer_readings_than_parameters_is_refused_when_read() {
                 "strategies = [\"random\"]",
                 "strategies = [\"random\", \"file\"]\nposes_file = \"poses.csv\"",
             ),
-            "s.toml: line 20, calibration.poses_file: 2 poses give 6 readings",
+            "s.toml: line 20, calibration.poses_file: 3 poses give 9 readings",
         ),
         (
             format!("{study}[sweep]\nkey = \"calibration.count\"\nvalues = [25, 5]\n"),
