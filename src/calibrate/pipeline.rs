@@ -536,7 +536,9 @@ fn check_frames(
 /// their points against the nominal robot's in the calibration's first frame ([`misfit`]),
 /// beside how far it misses the calibration's own there; `None` when they can, and when the
 /// calibration rows fail as a whole themselves or give no frame (theirs to refuse), unless
-/// the validation points too are in another unit. Two files that do not lie in one frame
+/// the validation points are in another unit (a spread ratio that names one: a spread off by
+/// no unit's ratio, a tool the nominal robot lacks or joint values in radians, is the
+/// calibration rows' finding too, which `--allow-implausible` takes). Two files that do not lie in one frame
 /// are refused without blame: either may be the one moved, or distorted (a column scaled
 /// about the tracker's origin moves the rows as a whole).
 pub(crate) fn validation_misfit(
@@ -549,7 +551,7 @@ pub(crate) fn validation_misfit(
     // Points in another unit than the robot's score no robot, whatever the calibration rows
     // are (a unit is no frame's: the spread is compared).
     let unit = || match misfit(&own, &v.points, &Frame::identity(), 0.0) {
-        Some(m @ Misfit::Scale { .. }) => Some(format!(
+        Some(m @ Misfit::Scale { unit: Some(_), .. }) => Some(format!(
             "{}; so do the calibration points, but a validation scores the robot on points in \
              its units",
             m.words("the validation points", "")

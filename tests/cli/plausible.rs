@@ -404,6 +404,31 @@ fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_th
     let good = d.join("good");
     let o = identify(&pos, &good, &["--validate", path_arg(&val)]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Both files spread 1.11 times as far, a ratio that names no unit (a tool the nominal
+    // robot lacks gives one): the calibration rows' finding, refused as implausible and kept
+    // with `--allow-implausible`, where the validation had been refused with no way past as
+    // "points in its units".
+    let stretch: &RowEdit<'_> = &|h, c, _| {
+        for name in ["x", "y", "z"] {
+            let k = col(h, name);
+            c[k] = format!("{}", c[k].parse::<f64>().unwrap() * 1.11);
+        }
+    };
+    let (pos_s, val_s) = (
+        edited(&pos, &d.join("pos-s.csv"), stretch),
+        edited(&val, &d.join("val-s.csv"), stretch),
+    );
+    let out = d.join("s");
+    let o = identify(&pos_s, &out, &["--validate", path_arg(&val_s)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && !out.exists(), "{err}");
+    assert!(
+        !err.contains("setting `--validate`") && err.contains("cannot be physically right"),
+        "{err}"
+    );
+    let extra = ["--validate", path_arg(&val_s), "--allow-implausible"];
+    let o = identify(&pos_s, &out, &extra);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// The shipped UR10 export imported with its Euler angles read about the fixed axes (the
