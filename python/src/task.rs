@@ -11,7 +11,7 @@ use calbench::calibrate::cv::Model;
 use calbench::calibrate::pipeline::IdentifyOutcome;
 use calbench::calibrate::task::record::{OUTPUTS, SOCKET_OUTPUTS};
 use calbench::calibrate::task::socket::{load_socket_task, SocketTask};
-use calbench::calibrate::task::{task_path, unconverged_warning, Task, TaskEntry};
+use calbench::calibrate::task::{task_file, unconverged_warning, Task, TaskEntry};
 use calbench::identify::MethodSpec;
 use calbench::report::identified::IdentifyRecord;
 use calbench::report::practice::additions;
@@ -50,7 +50,7 @@ pub(crate) fn task<'py>(
         let why = "is empty: give a task's name (`tasks/NAME.toml`) or the path of a task file";
         return Err(setting("task", why));
     }
-    let path = task_path(task);
+    let path = task_file(task).map_err(task_err)?;
     if let Some(t) = load_socket_task(&path).map_err(task_err)? {
         return socket_task(py, &t, (method, options.as_ref()), models, out);
     }

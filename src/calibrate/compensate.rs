@@ -37,9 +37,10 @@ pub struct Corrected {
 /// every pose it was written for. The parameters are compared in the nominal robot's DH form
 /// ([`Robot::normals_as`]): a link whose common normal the identified robot's file points the
 /// other way is the same link. Parameters beyond their bounds whose robot does what a
-/// calibration's would ([`tool_points_apart`] finds nothing: the same arm in other parameters,
-/// coincident axes traded, a URDF's own frames) are no refusal; robots of the two DH families,
-/// which name other quantities alike, are compared by that alone.
+/// calibration's would (its tool points within a link's length bound of the nominal's: the
+/// same arm in other parameters, coincident axes traded, a URDF's own frames) are no refusal;
+/// robots of the two DH families, which name other quantities alike, are compared by that
+/// alone.
 pub fn not_a_calibration_of(nominal: &Robot, identified: &Robot, qs: &[Vec<Real>]) -> Vec<String> {
     // A URDF read back can turn a link's common normal over: the same robot, θ moved by π.
     let identified = &identified.normals_as(nominal);

@@ -16,7 +16,7 @@ use calbench::calibrate::task::socket::{
     load_socket_task, Placements, SocketFigures, SocketScores, SocketTask,
 };
 use calbench::calibrate::task::{
-    task_path, unconverged_warning, Published, Task, TaskEntry, TaskRecord,
+    task_file, unconverged_warning, Published, Task, TaskEntry, TaskRecord,
 };
 use calbench::identify::{MethodEntry, METHODS};
 use calbench::report::identified::IdentifyRecord;
@@ -59,7 +59,7 @@ pub fn spell(opt: calbench::error::Opt, on: bool) -> String {
 
 /// Runs the entry and writes its folder; prints the task's figure and the published ones.
 pub fn run(args: &TaskArgs) -> Result<()> {
-    let path = task_path(&args.task);
+    let path = task_file(&args.task)?;
     if let Some(t) = load_socket_task(&path)? {
         return run_socket(args, &t);
     }

@@ -468,3 +468,27 @@ fn a_published_figure_of_a_hidden_character_or_a_label_given_twice_is_refused() 
         assert!(!out.exists(), "{err}");
     }
 }
+
+/// A task's name is looked up under tasks/ of the current folder: run elsewhere, it had been
+/// refused as "tasks/barrett-wam.toml: No such file or directory", saying neither that it was
+/// taken for a name nor where names are found. The refusal says both; the task file's path
+/// runs from anywhere.
+#[test]
+fn a_task_name_outside_the_repository_says_where_names_are_looked_up() {
+    let d = tmp_dir("task-name-elsewhere");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_calbench"))
+        .args(["task", "barrett-wam", "--method", "lm", "--out", "entry"])
+        .current_dir(&d)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with(
+            "error: setting `task`: no task named \"barrett-wam\": tasks/barrett-wam.toml is \
+             not a file (a task's name is looked up under tasks/ of the current folder"
+        ),
+        "{err}"
+    );
+    assert!(!d.join("entry").exists());
+}

@@ -255,6 +255,22 @@ pub fn task_path(name_or_path: &str) -> PathBuf {
     }
 }
 
+/// [`task_path`] of a task to run: a name whose file is not under `tasks/` of the current
+/// folder is refused saying where names are looked up (a path is read, and refused, as given).
+pub fn task_file(name_or_path: &str) -> Result<PathBuf> {
+    let path = task_path(name_or_path);
+    if path != Path::new(name_or_path) && !path.is_file() {
+        let why = format!(
+            "no task named \"{name_or_path}\": {} is not a file (a task's name is looked up \
+             under tasks/ of the current folder, which calbench's repository holds: run from \
+             its root, or give the task file's path)",
+            path.display()
+        );
+        return Err(Error::setting("task", why));
+    }
+    Ok(path)
+}
+
 impl TaskData {
     /// The data files with their keys in the task file: `data.file` and `data.split`, or
     /// `data.calibration` and `data.validation`.
