@@ -516,11 +516,10 @@ fn read_targets(mut t: Rows, robot: &(impl JointSpace + ?Sized), path: &Path) ->
         }
     }
     let m = qs.len();
-    let targets: Vec<Vec3> = offsets
+    let targets = offsets
         .iter()
         .map(|o| o.map_or(Vec3::zeros(), |o| o.0))
         .collect();
-    rigid(&targets, &values, &lines).map_err(|(line, msg)| bad(line, OFFSETS[0], msg))?;
     let data = KindData {
         instrument: Instrument::Targets(targets),
         group: vec![0; m],
@@ -535,44 +534,6 @@ fn read_targets(mut t: Rows, robot: &(impl JointSpace + ?Sized), path: &Path) ->
         lines,
         files: Vec::new(),
     })
-}
-
-/// Refuses target offsets that the readings contradict: the targets sit on one flange, so the
-/// distance between two targets' points is that between their offsets at every pose, whatever
-/// the robot's errors. A pair whose median mismatch over the poses (`values`: 3 per target and
-/// pose; a gross reading moves no median) exceeds 5 mm + 5 % of the offsets' distance is
-/// refused at the line of the first pose, where a tracker reads a distance to a fraction of a
-/// millimetre: the identification could not fit such a file, and would end "converged" far
-/// from it. (line, message).
-fn rigid(
-    targets: &[Vec3],
-    values: &[Real],
-    lines: &[u64],
-) -> std::result::Result<(), (u64, String)> {
-    let n = targets.len();
-    let point = |i: usize, t: usize| Vec3::from_column_slice(&values[3 * (n * i + t)..][..3]);
-    for a in 0..n {
-        for b in a + 1..n {
-            let by_offsets = (targets[a] - targets[b]).norm();
-            let mut read: Vec<Real> = (0..lines.len())
-                .map(|i| (point(i, a) - point(i, b)).norm())
-                .collect();
-            read.sort_by(Real::total_cmp);
-            let median = read[read.len() / 2];
-            if (median - by_offsets).abs() > 5.0 + 0.05 * by_offsets {
-                let msg = format!(
-                    "targets {} and {} are {by_offsets:.3} mm apart by their offsets but \
-                     {median:.3} mm apart in the readings (the median over the poses): the \
-                     targets sit on one flange, so the offsets must be those of the targets \
-                     measured",
-                    a + 1,
-                    b + 1,
-                );
-                return Err((lines[0], msg));
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Writes the points `values` (3 per target and pose) of `targets` at joint values `qs` as a
