@@ -538,9 +538,9 @@ fn check_frames(
 /// calibration rows fail as a whole themselves or give no frame (theirs to refuse), unless
 /// the validation points are in another unit (a spread ratio that names one: a spread off by
 /// no unit's ratio, a tool the nominal robot lacks or joint values in radians, is the
-/// calibration rows' finding too, which `--allow-implausible` takes). Two files that do not lie in one frame
-/// are refused without blame: either may be the one moved, or distorted (a column scaled
-/// about the tracker's origin moves the rows as a whole).
+/// calibration rows' finding too, which `--allow-implausible` takes). Two files that do not
+/// lie in one frame are refused without blame: either may be the one moved, or distorted (a
+/// column scaled about the tracker's origin moves the rows as a whole).
 pub(crate) fn validation_misfit(
     nominal: &Robot,
     (d, model): (&Measurements, &[Vec3]),

@@ -157,12 +157,13 @@ fn instrument(
         )
         .into());
     }
+    let default = InstrumentSettings::default();
     let s = InstrumentSettings {
         kind,
         pivot: !args.between_poses,
-        planes: args.planes.unwrap_or(3),
-        spheres: args.spheres.unwrap_or(1),
-        ..InstrumentSettings::default()
+        planes: args.planes.unwrap_or(default.planes),
+        spheres: args.spheres.unwrap_or(default.spheres),
+        ..default
     };
     // The library names the poses `q`: here they are the file's, or the random count's.
     let of_poses = |e: Error| match e {
