@@ -17,7 +17,7 @@ use calbench::identify::MethodSpec;
 use calbench::measurement::kind::Kind;
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
-use calbench::report::guard::guard_out_folder;
+use calbench::report::guard::guard_out;
 use calbench::report::run::{checked_outputs, OUTPUTS};
 use calbench::report::simulated;
 use calbench::robot::Robot;
@@ -132,7 +132,7 @@ pub(crate) fn simulate<'py>(
         return Err(err(simulated::no_instruments(&path)));
     }
     if let Some(out) = &out {
-        guard_out_folder(out, "out", &simulated::FILES, sc.path.as_deref()).map_err(err)?;
+        guard_out(out, "out", &simulated::FILES, sc.path.as_deref()).map_err(err)?;
     }
     let (study, sim) = py
         .detach(|| {
@@ -169,7 +169,7 @@ fn simulate_instrument<'py>(
              § 5.3): give out=DIR, whose measurements.csv identify(data=...) reads",
         )
     })?;
-    guard_out_folder(&out, "out", &simulated::FILES, Some(&sc.head.path)).map_err(err)?;
+    guard_out(&out, "out", &simulated::FILES, Some(&sc.head.path)).map_err(err)?;
     let (robot, sim, truth) = py
         .detach(|| simulated::instrument_folder(&out, sc, measure, trial))
         .map_err(err)?;
@@ -396,7 +396,7 @@ impl PyRun {
     /// Writes the folder `out` as `calbench run --out` does, refusing what it refuses.
     fn write(&self, py: Python<'_>, out: PathBuf) -> PyResult<()> {
         let input = self.inner.result.scenario.path.as_deref();
-        calbench::report::guard::guard_out_folder(&out, "out", &OUTPUTS, input).map_err(err)?;
+        calbench::report::guard::guard_out(&out, "out", &OUTPUTS, input).map_err(err)?;
         py.detach(|| self.inner.write(&out)).map_err(err)
     }
 }
@@ -539,8 +539,7 @@ fn folder_options(
     let env = |k: &str| std::env::var(k).ok();
     let threads = calbench::runner::threads::requested("threads", threads, &env).map_err(err)?;
     if let Some(f) = &out {
-        calbench::report::guard::guard_out_folder(&f.out, "out", f.outputs, f.input)
-            .map_err(err)?;
+        calbench::report::guard::guard_out(&f.out, "out", f.outputs, f.input).map_err(err)?;
     }
     let shard = shard
         .map(|(i, n)| Shard::parse(&format!("{i}/{n}")))

@@ -170,7 +170,7 @@ fn guard(
     inputs: Vec<&Path>,
     data: impl IntoIterator<Item = impl AsRef<Path>>,
 ) -> PyResult<()> {
-    calbench::report::guard::guard_out_folder(out, "out", names, inputs).map_err(task_err)?;
+    calbench::report::guard::guard_out(out, "out", names, inputs).map_err(task_err)?;
     calbench::report::guard::guard_data_folder(out, "out", data).map_err(task_err)
 }
 

@@ -297,6 +297,7 @@ pub fn compensate_targets(
 mod tests {
     use super::*;
     use crate::numeric::rng::stream;
+    use crate::robot::sampling::uniform_joint_poses;
     use crate::robot::Param;
 
     /// Simulation: a true robot (nominal + errors) identified exactly reaches, at the corrected
@@ -319,7 +320,7 @@ mod tests {
             .collect();
         let truth = nominal.with_errors(&errors);
         let mut g = stream(7, "compensate-test");
-        let qs = crate::robot::sampling::uniform_joint_poses(&nominal, 30, &mut g);
+        let qs = uniform_joint_poses(&nominal, 30, &mut g);
         let mut ok = 0;
         for q in &qs {
             let c = compensate_row(&nominal, &truth, q, 0.0, |q| q.to_vec()).unwrap();
@@ -371,12 +372,8 @@ mod tests {
     /// identified robot; an unreachable one is flagged.
     #[test]
     fn cartesian_targets_are_reached_on_the_identified_robot() {
-        let nominal = crate::robot::builtin::load("irb2600").unwrap();
-        let qs = crate::robot::sampling::uniform_joint_poses(
-            &nominal,
-            12,
-            &mut stream(9, "targets-test"),
-        );
+        let nominal = crate::robot::builtin::irb2600();
+        let qs = uniform_joint_poses(&nominal, 12, &mut stream(9, "targets-test"));
         let truth = nominal.with_errors(&[(Param::A(1), 0.7), (Param::Theta(2), 2e-3)]);
         let mut targets: Vec<Frame> = qs.iter().map(|q| nominal.fk(q)).collect();
         for only in [true, false] {

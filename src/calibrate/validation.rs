@@ -253,6 +253,7 @@ pub fn residual_vectors(c: &Calibrated, data: &Measurements) -> Result<Vec<crate
 mod tests {
     use super::*;
     use crate::numeric::{rot_x, rot_z, rpy_matrix, Vec3};
+    use crate::robot::sampling::uniform_joint_poses;
 
     #[test]
     fn an_error_that_is_nan_makes_every_statistic_nan() {
@@ -282,12 +283,8 @@ mod tests {
     #[test]
     fn without_orientation_the_position_errors_keep_their_bits() {
         use crate::robot::Param;
-        let nominal = crate::robot::builtin::load("irb2600").unwrap();
-        let qs = crate::robot::sampling::uniform_joint_poses(
-            &nominal,
-            12,
-            &mut crate::numeric::rng::from_seed(7),
-        );
+        let nominal = crate::robot::builtin::irb2600();
+        let qs = uniform_joint_poses(&nominal, 12, &mut crate::numeric::rng::from_seed(7));
         let truth: Vec<Frame> = qs
             .iter()
             .map(|q| {

@@ -192,7 +192,7 @@ pub fn guard_out<P: AsRef<Path>>(
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    calbench::report::guard::guard_out_folder(out, "--out", outputs, inputs)?;
+    calbench::report::guard::guard_out(out, "--out", outputs, inputs)?;
     calbench::report::probe_partial(out)
 }
 

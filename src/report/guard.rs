@@ -4,8 +4,7 @@
 //! reads), a folder holding an input under the name of one of the files written there, or a
 //! folder holding another command's results ([`SIGNATURES`]).
 //! The command line, Python's `run`, `study.write` and `task` and every folder written whole
-//! ([`super::atomically`]) go through [`guard_out`]; the caller names its option (`key`). A
-//! command or Python function that writes a folder checks it with [`guard_out_folder`].
+//! ([`super::atomically`]) go through [`guard_out`]; the caller names its option (`key`).
 
 use std::path::{Path, PathBuf};
 
@@ -16,28 +15,21 @@ use crate::error::{Error, Result};
 /// `inputs` (a file or folder the command reads), or a folder holding one of them under the
 /// name of one of `outputs`, the files written there (empty for the commands that write the
 /// one file `out`), or a folder holding another command's results ([`SIGNATURES`] that
-/// `outputs` lacks; not checked when `outputs` is empty). Paths are compared as the file system resolves them (`.`, `..` and
-/// symbolic links); and a folder a live run writes into ([`live_writer`]).
+/// `outputs` lacks; not checked when `outputs` is empty). Paths are compared as the file
+/// system resolves them (`.`, `..` and symbolic links); and a folder a live run writes into
+/// ([`live_writer`]). An output folder (`outputs` not empty) is also refused for what its
+/// writing ([`super::atomically`]) would refuse after the work: `out` a file, or one of
+/// `outputs` a folder in it ([`blocked_folder`]).
 pub fn guard_out<P: AsRef<Path>>(
     out: &Path,
     key: &str,
     outputs: &[&str],
     inputs: impl IntoIterator<Item = P>,
 ) -> Result<()> {
-    guard(out, key, outputs, inputs, None)
-}
-
-/// [`guard_out`] of an output folder, refusing before any work also what its writing
-/// ([`super::atomically`]) would refuse after it: `out` a file, or one of `outputs` (the
-/// fixed names the command writes) a folder in it ([`blocked_folder`]). Every command and
-/// Python function that writes a folder calls it.
-pub fn guard_out_folder<P: AsRef<Path>>(
-    out: &Path,
-    key: &str,
-    outputs: &[&str],
-    inputs: impl IntoIterator<Item = P>,
-) -> Result<()> {
-    guard_out(out, key, outputs, inputs)?;
+    guard(out, key, outputs, inputs, None)?;
+    if outputs.is_empty() {
+        return Ok(());
+    }
     blocked_folder(out, key, outputs)
 }
 

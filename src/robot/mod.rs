@@ -204,7 +204,7 @@ pub struct Joint {
     pub limits: (Real, Real),
 }
 
-/// Length unit of a robot file and its joint values.
+/// Length unit of a robot file and its joint values, and of a mapping's length columns.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 #[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
@@ -216,7 +216,7 @@ pub enum LengthUnit {
     M,
 }
 
-/// Angle unit of a robot file and its joint values.
+/// Angle unit of a robot file and its joint values, and of a mapping's Euler angles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 #[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
@@ -246,10 +246,7 @@ impl Units {
 
     /// Factor from this length unit to mm.
     pub fn length_to_mm(self) -> Real {
-        match self.length {
-            LengthUnit::Mm => 1.0,
-            LengthUnit::M => 1000.0,
-        }
+        self.length.to_mm()
     }
 
     /// The length unit's name in robot files: `mm` or `m`.
@@ -264,7 +261,24 @@ impl Units {
 
     /// Factor from this angle unit to rad.
     pub fn angle_to_rad(self) -> Real {
-        match self.angle {
+        self.angle.to_rad()
+    }
+}
+
+impl LengthUnit {
+    /// The factor to mm.
+    pub fn to_mm(self) -> Real {
+        match self {
+            LengthUnit::Mm => 1.0,
+            LengthUnit::M => 1000.0,
+        }
+    }
+}
+
+impl AngleUnit {
+    /// The factor to rad.
+    pub fn to_rad(self) -> Real {
+        match self {
             AngleUnit::Deg => std::f64::consts::PI / 180.0,
             AngleUnit::Rad => 1.0,
         }

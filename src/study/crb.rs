@@ -264,14 +264,14 @@ mod tests {
     /// The same variances built independently: the Jacobian by central finite differences of
     /// forward kinematics, each row weighed by 1/σ² of its own point written out from the
     /// tracker's MPE (σ = (a + b·range) / coverage), the normal matrix summed row by row and
-    /// inverted by LU.
+    /// inverted by LU. The rows are those of the settings' `measure`.
     fn by_hand(
         robot: &Robot,
         params: &[Param],
         qs: &[Vec<Real>],
-        measure: Measure,
         s: &TrackerSettings,
     ) -> Vec<Real> {
+        let measure = s.measure.measure();
         let cols = Columns::new(params, robot.dof());
         let j = jacobian_fd(robot, &cols, qs, measure, 1e-6);
         let rows = measure.rows();
@@ -324,7 +324,7 @@ mod tests {
         let b = bounds_at(&robot, &params, &qs, m, &tracker).expect("a bound");
         assert!(b.full_rank && b.undetermined.iter().all(|&u| u == 0.0));
         let got = b.variances;
-        let want = by_hand(&robot, &params, &qs, m, &settings);
+        let want = by_hand(&robot, &params, &qs, &settings);
         for (k, (g, w)) in got.iter().zip(&want).enumerate() {
             assert!((g - w).abs() <= 1e-5 * w, "{}: {g} against {w}", params[k]);
         }

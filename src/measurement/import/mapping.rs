@@ -8,6 +8,7 @@ use serde::Deserialize;
 
 use crate::error::{quoted, read_text, Error, Result};
 use crate::numeric::{rot_x, rot_y, rot_z, Mat3, Real};
+use crate::robot::{AngleUnit, LengthUnit};
 
 /// A mapping file: how to read one tracker export.
 #[derive(Clone, Debug, Deserialize)]
@@ -70,49 +71,6 @@ impl Unit {
             Unit::Mm => ("length", 1.0),
             Unit::M => ("length", 1000.0),
         }
-    }
-}
-
-/// The unit of a length column (the position, its σ): a [`Unit`] of lengths alone, so that
-/// a refusal lists only these.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum LengthUnit {
-    /// Millimetres.
-    Mm,
-    /// Metres.
-    M,
-}
-
-/// The unit of an angle column (Euler angles): a [`Unit`] of angles alone.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum AngleUnit {
-    /// Degrees.
-    Deg,
-    /// Radians.
-    Rad,
-}
-
-impl LengthUnit {
-    /// The factor to mm.
-    fn to_mm(self) -> Real {
-        let unit = match self {
-            LengthUnit::Mm => Unit::Mm,
-            LengthUnit::M => Unit::M,
-        };
-        unit.scale().1
-    }
-}
-
-impl AngleUnit {
-    /// The factor to rad.
-    fn to_rad(self) -> Real {
-        let unit = match self {
-            AngleUnit::Deg => Unit::Deg,
-            AngleUnit::Rad => Unit::Rad,
-        };
-        unit.scale().1
     }
 }
 
