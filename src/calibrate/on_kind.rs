@@ -310,6 +310,31 @@ impl KindOutcome {
     }
 }
 
+/// Two targets' points may be further from their offsets' distance than this many mm …
+const TARGETS_APART_MM: Real = 5.0;
+
+/// … plus this share of it, before the offsets count as contradicted.
+const TARGETS_APART_SHARE: Real = 0.05;
+
+/// A multi-target file whose readings contradict its target offsets
+/// ([`KindData::contradicted_targets`]), as a plausibility finding and its cause in words:
+/// the identification cannot fit such a file, and would end "converged" far from it.
+fn contradicted_offsets(data: &KindData) -> Option<(String, String)> {
+    let tolerance = |d: Real| TARGETS_APART_MM + TARGETS_APART_SHARE * d;
+    let (a, b, by_offsets, read) = data.contradicted_targets(tolerance)?;
+    let found = format!(
+        "targets {} and {} are {by_offsets:.3} mm apart by their offsets but {read:.3} mm \
+         apart in the readings (the median over the poses), where targets on one flange keep \
+         their distance",
+        a + 1,
+        b + 1
+    );
+    let cause = "the offsets (target_x_mm, target_y_mm, target_z_mm) are not those of the \
+                 targets measured"
+        .to_string();
+    Some((found, cause))
+}
+
 /// The keys of `identified.json` that a kind file adds to those of every identification:
 /// the kind, the readings, the instrument's unknowns and standard errors, and what describes
 /// the instrument (targets' offsets and registration, the pivot, the planes' axes).
@@ -497,13 +522,17 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         return Err(worse_error(&q.source, &q.method, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
-    let implausible = plausibility::check(
+    let mut findings = plausibility::judge(
         (nominal, &fit.robot, &fit.params, &file.qs),
         points.as_ref().map(|(m, s)| (&m[..], &s[..])),
         (fit.rms.1, file.sigma_mm.as_deref()),
         || gross().into_iter().map(plausibility::gross_cause).collect(),
-        (&q.source, q.allow_implausible),
-    )?;
+    );
+    if let Some((found, cause)) = contradicted_offsets(&file.data) {
+        findings.found.push(found);
+        findings.causes.push(cause);
+    }
+    let implausible = plausibility::verdict(findings, &q.source, q.allow_implausible)?;
     let mut record =
         IdentifiedRecord::of(&nominal.name, &q.source, q.method.name(), &fit.params, r);
     if let Some((before, after)) = validation {

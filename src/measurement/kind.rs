@@ -274,6 +274,41 @@ impl KindData {
         }
         Ok(())
     }
+
+    /// For targets on one flange, the pair the readings contradict most: two targets' points
+    /// are as far apart as their offsets at every pose, whatever the robot's errors. Per
+    /// pair, the median over the poses of their points' distance (a gross reading moves no
+    /// median) against their offsets'; `(a, b, by offsets, read)` of the pair furthest
+    /// beyond `tolerance(by offsets)` (mm), `None` when every pair is within it or the
+    /// instrument is not targets.
+    pub fn contradicted_targets(
+        &self,
+        tolerance: impl Fn(Real) -> Real,
+    ) -> Option<(usize, usize, Real, Real)> {
+        let Instrument::Targets(t) = &self.instrument else {
+            return None;
+        };
+        let n = t.len();
+        let poses = self.values.len() / (3 * n).max(1);
+        let point =
+            |i: usize, k: usize| Vec3::from_column_slice(&self.values[3 * (n * i + k)..][..3]);
+        let mut worst: Option<(Real, (usize, usize, Real, Real))> = None;
+        for a in 0..n {
+            for b in a + 1..n {
+                let by_offsets = (t[a] - t[b]).norm();
+                let mut read: Vec<Real> = (0..poses)
+                    .map(|i| (point(i, a) - point(i, b)).norm())
+                    .collect();
+                read.sort_by(Real::total_cmp);
+                let &median = read.get(poses / 2)?;
+                let beyond = (median - by_offsets).abs() - tolerance(by_offsets);
+                if beyond > 0.0 && worst.is_none_or(|w| beyond > w.0) {
+                    worst = Some((beyond, (a, b, by_offsets, median)));
+                }
+            }
+        }
+        worst.map(|w| w.1)
+    }
 }
 
 /// The model's value of observation `i` for tool points `p` (and rotations `rot`, for
@@ -588,4 +623,36 @@ fn socket_guess(d: &[Real], group: &[usize], p: &[Vec3]) -> Result<Vec<Real>> {
         out.push(v.z.atan2(v.x.hypot(v.y)));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two targets 100 mm apart on a flange at five poses: read 100 mm apart (one pose
+    /// misread by a metre, which moves no median) they agree; read 150 mm apart they are
+    /// named with both distances; within the tolerance they agree.
+    #[test]
+    fn the_pair_the_readings_contradict_is_named_by_its_median() {
+        let offsets = vec![Vec3::zeros(), Vec3::new(100.0, 0.0, 0.0)];
+        let data = |apart: Real| KindData {
+            instrument: Instrument::Targets(offsets.clone()),
+            group: vec![0; 5],
+            values: (0..5)
+                .flat_map(|i| {
+                    let p = Vec3::new(500.0 + i as Real, 20.0, 30.0);
+                    let far = if i == 2 { 1000.0 } else { apart };
+                    let q = p + Vec3::new(0.0, far, 0.0);
+                    [p.x, p.y, p.z, q.x, q.y, q.z]
+                })
+                .collect(),
+        };
+        let tolerance = |d: Real| 5.0 + 0.05 * d;
+        assert_eq!(data(100.0).contradicted_targets(tolerance), None);
+        assert_eq!(data(109.0).contradicted_targets(tolerance), None);
+        assert_eq!(
+            data(150.0).contradicted_targets(tolerance),
+            Some((0, 1, 100.0, 150.0))
+        );
+    }
 }

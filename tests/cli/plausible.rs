@@ -256,6 +256,31 @@ fn a_multi_target_file_whose_x_is_0_is_refused_unless_allowed() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
+/// Targets on one flange keep their distance at every pose: a file whose offsets say 0 mm
+/// where the readings put its targets 100 and 141 mm apart is refused naming the pair, and
+/// written with the warning under `--allow-implausible`; it had been identified as
+/// `converged` with a residual of a hundred millimetres and no word.
+#[test]
+fn a_multi_target_file_whose_offsets_the_readings_contradict_is_refused_unless_allowed() {
+    let d = tmp_dir("cli-plausible-offsets");
+    let targets = simulated(&d, "scenarios/instruments.toml", Some("multi-target"));
+    let zero = edited(&targets, &d.join("zero.csv"), &|h, c, _| {
+        for k in ["target_x_mm", "target_y_mm", "target_z_mm"] {
+            c[col(h, k)] = "0".into();
+        }
+    });
+    let err = refused(&zero, &d.join("o"), "are not those of the targets measured");
+    assert!(
+        err.contains("targets 2 and 3 are 0.000 mm apart by their offsets but 141.4"),
+        "{err}"
+    );
+    let j = kept(&zero, &d.join("kept"), false);
+    assert!(j["allowed_implausible"][0]
+        .as_str()
+        .unwrap()
+        .starts_with("targets 2 and 3"));
+}
+
 #[test]
 fn a_gross_distance_reading_is_refused_naming_its_line() {
     let d = tmp_dir("cli-plausible-distance");
