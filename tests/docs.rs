@@ -34,6 +34,9 @@ mod common;
 #[path = "docs/anchors.rs"]
 mod anchors;
 
+#[path = "docs/tasks.rs"]
+mod tasks;
+
 /// The documents that must exist.
 const REQUIRED: [&str; 4] = [
     "README.md",

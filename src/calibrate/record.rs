@@ -378,10 +378,10 @@ pub fn unconverged_warning(r: &IdentifiedRecord) -> Option<String> {
     )
     .then(|| {
         format!(
-            "the identification ended `{}` after {} iterations (RMS residual {:.4} mm): the \
+            "the identification ended `{}` after {} (RMS residual {:.4} mm): the \
              result is that of a solve that did not converge (identified.json, `termination`)",
             r.termination.as_str(),
-            r.iterations,
+            crate::error::counted(r.iterations, "iteration", "iterations"),
             r.rms_residual_mm
         )
     })

@@ -381,11 +381,11 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         ),
     };
     out!(
-        "{} on {} points: {} after {} iterations{rounds}; written to {}",
+        "{} on {} points: {} after {}{rounds}; written to {}",
         o.record.method,
         o.data.len(),
         r.termination.as_str(),
-        r.iterations,
+        calbench::error::counted(r.iterations, "iteration", "iterations"),
         out.display()
     );
     Ok(())

@@ -43,11 +43,11 @@ pub fn write(out: &Path, o: &KindOutcome) -> Result<()> {
     }
     let r = &o.fit.identified;
     out!(
-        "{} on {} {kind} readings: {} after {} iterations; written to {}",
+        "{} on {} {kind} readings: {} after {}; written to {}",
         o.record.method,
         o.readings,
         r.termination.as_str(),
-        r.iterations,
+        calbench::error::counted(r.iterations, "iteration", "iterations"),
         out.display()
     );
     Ok(())

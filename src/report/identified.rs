@@ -353,7 +353,7 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     );
     let _ = writeln!(
         s,
-        "{} on {} points ({}), registration {}: {} after {} iterations; condition number \
+        "{} on {} points ({}), registration {}: {} after {}; condition number \
          (column-scaled) {}, rank {} of {} parameters.\n",
         r.record.method,
         r.data.len(),
@@ -364,7 +364,7 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
         },
         r.registration.as_str(),
         id.termination.as_str(),
-        id.iterations,
+        crate::error::counted(id.iterations, "iteration", "iterations"),
         fmt_num(id.condition_number(), 4),
         id.rank.map_or("—".to_string(), |k| k.to_string()),
         r.params.len(),

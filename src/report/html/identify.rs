@@ -128,9 +128,9 @@ fn result_section(page: &mut Page, v: &View) -> Result<()> {
         (
             "termination",
             format!(
-                "{} after {} iterations ({} evaluations)",
+                "{} after {} ({} evaluations)",
                 id.termination.as_str(),
-                id.iterations,
+                crate::error::counted(id.iterations, "iteration", "iterations"),
                 id.evaluations
             ),
         ),
