@@ -29,6 +29,7 @@ use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real, Vec3};
+use crate::robot::compliance::CompliancePick;
 use crate::robot::identifiability::{analyse, Identifiability};
 use crate::robot::{param_sets, Param, Robot};
 
@@ -213,7 +214,21 @@ impl IdentifyRequest {
         let mut params = kinematic.clone();
         if let Some(c) = &self.compliance {
             let compliances = c.params(nominal, "compliance");
-            params.extend(compliances.map_err(|e| e.of_option(Opt::Compliance))?);
+            let compliances = compliances.map_err(|e| e.of_option(Opt::Compliance))?;
+            if compliances.is_empty() && *c == CompliancePick::Gravity {
+                // A study identifies none then (tests/model/compliance.rs); an identification
+                // asked for them would write a kinematic model without a word.
+                return Err(Error::option(
+                    Opt::Compliance,
+                    format!(
+                        "\"gravity\" picks no joint of robot \"{}\": gravity loads none of its \
+                         revolute joints (their axes stay vertical), so no compliance shows in \
+                         static readings; identify without it",
+                        nominal.name
+                    ),
+                ));
+            }
+            params.extend(compliances);
         }
         params.retain(|p| !self.fix.contains(p));
         check_names(Opt::Fix, nominal, &self.fix)?;

@@ -627,4 +627,38 @@ name = "ls"
     assert_eq!(entry["failures"], 0);
     let eta = entry["eta_mean_pct"].as_f64().unwrap();
     assert!(eta > 99.0, "η {eta} %");
+    // `identify --compliance gravity` on that arm's readings is refused saying why: it had
+    // written a kinematic model without a word.
+    // With a tracker's noise: noise-free, a pose read at both payloads gives one row twice.
+    let text = std::fs::read_to_string(&scenario).unwrap();
+    let noisy = write_scenario(
+        &dir,
+        "noisy",
+        &text.replace("mpe_a_um = 0.0", "mpe_a_um = 15.0"),
+    );
+    let sim = dir.join("sim");
+    let (sc, sim_arg) = (noisy.to_str().unwrap(), sim.to_str().unwrap());
+    calbench_ok(&["simulate", sc, "--trial", "0", "--out", sim_arg]);
+    let data = sim.join("measurements.csv");
+    let (arm, data) = (dir.join("arm.toml"), data.to_str().unwrap().to_string());
+    let id = dir.join("identified");
+    let mut args = vec![
+        "identify",
+        "--robot",
+        arm.to_str().unwrap(),
+        "--data",
+        &data,
+    ];
+    args.extend(["--method", "ls", "--out", id.to_str().unwrap()]);
+    let o = calbench(&[&args[..], &["--compliance", "gravity"]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--compliance")
+            && err.contains("\"gravity\" picks no joint of robot \"scara\""),
+        "{err}"
+    );
+    assert!(!id.exists());
+    // The kinematic model of the same readings is identified.
+    calbench_ok(&args);
 }
