@@ -231,6 +231,43 @@ impl PyRobot {
         calbench::robot::robot_to_toml(&self.inner)
     }
 
+    /// The robot of a robot file's text (TOML, docs/formats.md § 3), as `to_toml` writes
+    /// it; a refusal names the line and key as for a file, the file called `text`.
+    #[staticmethod]
+    fn from_toml(text: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
+        let text: String = typed_arg("text", text, "a robot file's text (TOML)")?;
+        calbench::robot::parse_robot_file(&text, std::path::Path::new("text"))
+            .map(|inner| PyRobot { inner })
+            .map_err(err)
+    }
+
+    /// Two robots are equal when every part of their models is: name, convention, joints
+    /// and limits, parameter values to the bit, units, coupling, β joints and link masses.
+    fn __eq__(&self, other: &Bound<'_, PyAny>) -> bool {
+        other
+            .cast::<PyRobot>()
+            .is_ok_and(|o| o.get().inner == self.inner)
+    }
+
+    /// The hash of its name and parameter values (−0 as 0): equal robots hash alike (a robot
+    /// is frozen).
+    fn __hash__(&self) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        self.inner.name.hash(&mut h);
+        for v in &self.inner.values {
+            (v + 0.0).to_bits().hash(&mut h);
+        }
+        h.finish()
+    }
+
+    /// Pickled (and copied) as its robot file, which reads back to the same robot
+    /// (`Robot.from_toml`).
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
+        let restore = py.get_type::<PyRobot>().getattr("from_toml")?;
+        Ok((restore, (self.to_toml(),)))
+    }
+
     fn __repr__(&self) -> String {
         format!(
             "calbench.Robot(\"{}\", {} joints)",
