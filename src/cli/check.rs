@@ -1,7 +1,7 @@
 //! `calbench check SUMMARY --baseline BASELINE [--tolerance X] [--strict]`: the regression
 //! guard.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 
@@ -40,10 +40,20 @@ pub struct BaselineArgs {
 
 /// Writes the baseline of a run: its summary with the per-trial values of the guarded
 /// metrics (`per_trial`), read from its trials.csv; refuses a run without them, and, before
-/// any work, an `--out` that is one of the files it reads or a folder.
+/// any work, an `--out` that is one of the files it reads (the summary, `trials.csv`, the
+/// run's `scenario.toml`), another of the run's results beside them, or a folder.
 pub fn baseline(args: &BaselineArgs) -> Result<()> {
     let [summary, trials] = Side::files(&args.run);
-    super::guard_out_file(&args.out, [args.run.as_path(), &summary, &trials])?;
+    let folder = summary.parent().unwrap_or(Path::new("."));
+    let results = super::run::OUTPUTS.iter().chain(&["report.html"]);
+    let beside: Vec<PathBuf> = results.map(|name| folder.join(name)).collect();
+    let inputs = [args.run.as_path(), &summary, &trials];
+    super::guard_out_file(
+        &args.out,
+        inputs
+            .into_iter()
+            .chain(beside.iter().map(PathBuf::as_path)),
+    )?;
     let side = Side::read(&args.run)?;
     let Some(trials) = &side.trials else {
         return Err(Error::file(

@@ -224,6 +224,19 @@ fn calbench_baseline_writes_a_baseline_that_pairs_and_refuses_a_lone_summary() {
             && !err.contains("partial"),
         "{err}"
     );
+    // Not over the run's own files: its scenario.toml (which `check` reads) or its report
+    // had been replaced, and the run could no longer be checked or recorded.
+    for name in ["scenario.toml", "report.md", "timing.json", "summary.json"] {
+        let file = a.join(name);
+        let before = std::fs::read(&file).unwrap();
+        let o = calbench(&["baseline", path_arg(&a), "--out", path_arg(&file)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains("is an input of this command"),
+            "{name}: {err}"
+        );
+        assert_eq!(std::fs::read(&file).unwrap(), before, "{name}");
+    }
     let (ok, text) = check(&a.join("summary.json"), &lone, &[]);
     assert!(ok, "{text}");
     assert!(
