@@ -417,14 +417,13 @@ impl TaskResult {
 }
 
 /// Refuses, naming the `task.json` file `path` and the key, a calbench that ran the entry `t`
-/// no `calbench task` writes: a `calbench_version` that is not a version ([`VersionKey`],
-/// by which history orders), a `git_commit` that is not a commit's 40 hexadecimal digits
+/// no `calbench task` writes: a `calbench_version` that is not a version as calbench writes
+/// its own ([`VersionKey::is_release`]), a `git_commit` that is not a commit's 40 hexadecimal digits
 /// (`git rev-parse HEAD`).
 fn check_ran_with(t: &TaskRecord, path: &Path) -> Result<()> {
     let bad = |key: &str, msg: String| Err(Error::file(path, key, msg).at_json_key_line());
     if let Some(v) = t.calbench_version.as_deref() {
-        if super::history::VersionKey::parse(v).is_none() || v.chars().any(crate::error::is_hidden)
-        {
+        if !super::history::VersionKey::is_release(v) {
             let msg = format!("is {v:?}, which is no version (MAJOR.MINOR.PATCH[-PRE])");
             return bad("calbench_version", msg);
         }

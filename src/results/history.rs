@@ -129,6 +129,31 @@ impl VersionKey {
         numbers.resize(3, 0);
         Some(VersionKey { numbers, pre })
     }
+
+    /// Whether `v` is a version as a calbench writes its own: `MAJOR.MINOR.PATCH[-PRE]` of
+    /// semantic versioning (semver.org § 2 and § 9), each number without a leading zero, each
+    /// pre-release identifier of ASCII letters, digits and `-` (a number without a leading
+    /// zero); no `v`, no build metadata.
+    pub fn is_release(v: &str) -> bool {
+        let number = |n: &str| {
+            !n.is_empty()
+                && n.bytes().all(|b| b.is_ascii_digit())
+                && (n == "0" || !n.starts_with('0'))
+        };
+        let (core, pre) = match v.split_once('-') {
+            Some((c, p)) => (c, Some(p)),
+            None => (v, None),
+        };
+        let parts: Vec<&str> = core.split('.').collect();
+        let identifier = |i: &str| {
+            !i.is_empty()
+                && i.bytes().all(|b| b.is_ascii_alphanumeric() || b == b'-')
+                && (!i.bytes().all(|b| b.is_ascii_digit()) || number(i))
+        };
+        parts.len() == 3
+            && parts.iter().all(|n| number(n))
+            && pre.is_none_or(|p| p.split('.').all(identifier))
+    }
 }
 
 impl Ord for VersionKey {
@@ -495,6 +520,20 @@ mod tests {
         assert!(k("2.0.0-1") < k("2.0.0-alpha"));
         assert!(k("0.1.0+abc") == k("0.1.0+def"));
         assert!(VersionKey::parse("nightly").is_none());
+        for v in [
+            "0.1.0",
+            "1.20.3",
+            "2.0.0-rc.1",
+            "1.0.0-alpha-2.x",
+            "10.0.0-0",
+        ] {
+            assert!(VersionKey::is_release(v), "{v}");
+        }
+        for v in [
+            "9.9", "01.2.3", "1.2.3.4", "v1.2.3", "1.2.3+b", "1.2.3-", "1.2.3-01", "1..3",
+        ] {
+            assert!(!VersionKey::is_release(v), "{v}");
+        }
         assert!(VersionKey::parse("1.2.3.4").is_none());
     }
 }

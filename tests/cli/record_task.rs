@@ -415,7 +415,7 @@ fn a_task_json_calbench_cannot_write_is_refused_naming_the_key() {
     let task = small_task(&dir);
     let out = dir.join("entry");
     run_entry(&task, &out);
-    let edits: [(&str, serde_json::Value, &str); 10] = [
+    let edits: [(&str, serde_json::Value, &str); 12] = [
         (
             "division",
             "open".into(),
@@ -442,6 +442,16 @@ fn a_task_json_calbench_cannot_write_is_refused_naming_the_key() {
             "calbench_version",
             "banana".into(),
             "calbench_version: is \"banana\", which is no version",
+        ),
+        (
+            "calbench_version",
+            "9.9".into(),
+            "calbench_version: is \"9.9\", which is no version",
+        ),
+        (
+            "calbench_version",
+            "01.2.3".into(),
+            "calbench_version: is \"01.2.3\", which is no version",
         ),
         (
             "git_commit",
