@@ -497,14 +497,27 @@ pub fn sag_fn(study: &Study) -> Option<Box<SagFn>> {
 }
 
 /// The rows [`super::trial::measure_calibration`] measures for the poses `qs`: each pose with the payload
-/// its row passes to the sag model (`None` without `calibration.payloads_kg`), in the same
-/// order.
+/// its row passes to the sag model and records (without `calibration.payloads_kg`, the one
+/// payload of [`sagging_payload`]), in the same order.
 pub fn calibration_rows(sc: &Scenario, qs: &[Vec<Real>]) -> Vec<(Vec<Real>, Option<Real>)> {
     match &sc.calibration.payloads_kg {
-        None => qs.iter().map(|q| (q.clone(), None)).collect(),
+        None => {
+            let load = sagging_payload(sc);
+            qs.iter().map(|q| (q.clone(), load)).collect()
+        }
         Some(p) => p
             .iter()
             .flat_map(|&w| qs.iter().map(move |q| (q.clone(), Some(w))))
             .collect(),
     }
+}
+
+/// The payload every calibration row sags under without `calibration.payloads_kg`:
+/// `compliance.payload_kg` when the arm sags (a compliance model) under a payload other than
+/// 0, which the rows then record (docs/formats.md § 7.5) so that an identification of
+/// compliances computes their torques under it; `None` otherwise (no payload).
+pub fn sagging_payload(sc: &Scenario) -> Option<Real> {
+    let c = &sc.compliance;
+    (c.model != crate::sim::sag::ComplianceModel::None && c.payload_kg != 0.0)
+        .then_some(c.payload_kg)
 }

@@ -8,7 +8,7 @@
 use std::time::Instant;
 
 use super::crb;
-pub use super::plan::{calibration_rows, sag_fn, true_robot, unmodelled};
+pub use super::plan::{calibration_rows, sag_fn, sagging_payload, true_robot, unmodelled};
 use super::plan::{optimised_set, Study};
 use super::stats::ecdf;
 use crate::calibrate::{calibrate, validation_errors_with, ErrorStats, PoseErrors};
@@ -76,9 +76,9 @@ pub fn measure_calibration(
 ) -> Result<Simulated> {
     let sc = &study.scenario;
     let expanded;
-    let (qs, loads) = match &sc.calibration.payloads_kg {
-        None => (qs, None),
-        Some(_) => {
+    let (qs, loads) = match (&sc.calibration.payloads_kg, sagging_payload(sc)) {
+        (None, None) => (qs, None),
+        _ => {
             let (q, l): (Vec<_>, Vec<_>) = calibration_rows(sc, qs).into_iter().unzip();
             expanded = (q, l.into_iter().flatten().collect::<Vec<Real>>());
             (&expanded.0[..], Some(&expanded.1[..]))
@@ -139,7 +139,9 @@ pub fn simulate_trial(study: &Study, trial: usize, key: &str) -> Result<Simulate
     let um = unmodelled(study, trial);
     let calibration = measure_calibration(study, &truth, &qs, (sag_ref, um.as_ref()), &mut gm)?;
     // The validation measurement records its payload when the scenario measures under loads.
-    let loaded = sc.calibration.payloads_kg.is_some() || sc.validation.payload_kg.is_some();
+    let loaded = sc.calibration.payloads_kg.is_some()
+        || sc.validation.payload_kg.is_some()
+        || sagging_payload(sc).is_some();
     let vloads = loaded.then(|| vec![study.validation_payload(); vqs.len()]);
     let vactual = um.as_ref().map(|u| u.actual(&vqs));
     let reached = Reached {
