@@ -11,6 +11,7 @@ pub mod import;
 pub mod kind;
 pub mod kind_csv;
 pub(crate) mod rows;
+pub mod units;
 
 use crate::error::{Error, Result};
 use crate::numeric::{quaternion_matrix, Frame, Mat3, Real, Vec3};

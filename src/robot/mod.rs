@@ -34,6 +34,7 @@ pub mod param_sets;
 pub mod sampling;
 pub mod urdf;
 
+pub use crate::measurement::units::{AngleUnit, LengthUnit};
 pub use chain::{Chain, ChainVars, Lanes, Op, OpKind, OpValues, MAX_OPS};
 pub use file::{parse_robot_file, read_robot_file, robot_to_toml};
 pub use param::{
@@ -204,30 +205,6 @@ pub struct Joint {
     pub limits: (Real, Real),
 }
 
-/// Length unit of a robot file and its joint values, and of a mapping's length columns.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
-#[strum(serialize_all = "lowercase")]
-pub enum LengthUnit {
-    /// Millimetres.
-    Mm,
-    /// Metres.
-    M,
-}
-
-/// Angle unit of a robot file and its joint values, and of a mapping's Euler angles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-#[derive(strum::IntoStaticStr, strum::EnumString, strum::VariantNames, strum::EnumIter)]
-#[strum(serialize_all = "lowercase")]
-pub enum AngleUnit {
-    /// Degrees.
-    Deg,
-    /// Radians.
-    Rad,
-}
-
 /// The units in which a robot's file and its joint values (measurement CSV, `--q`) are given.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Units {
@@ -262,26 +239,6 @@ impl Units {
     /// Factor from this angle unit to rad.
     pub fn angle_to_rad(self) -> Real {
         self.angle.to_rad()
-    }
-}
-
-impl LengthUnit {
-    /// The factor to mm.
-    pub fn to_mm(self) -> Real {
-        match self {
-            LengthUnit::Mm => 1.0,
-            LengthUnit::M => 1000.0,
-        }
-    }
-}
-
-impl AngleUnit {
-    /// The factor to rad.
-    pub fn to_rad(self) -> Real {
-        match self {
-            AngleUnit::Deg => std::f64::consts::PI / 180.0,
-            AngleUnit::Rad => 1.0,
-        }
     }
 }
 

@@ -7,8 +7,8 @@ use std::path::Path;
 use serde::Deserialize;
 
 use crate::error::{quoted, read_text, Error, Result};
+use crate::measurement::units::{AngleUnit, LengthUnit};
 use crate::numeric::{rot_x, rot_y, rot_z, Mat3, Real};
-use crate::robot::{AngleUnit, LengthUnit};
 
 /// A mapping file: how to read one tracker export.
 #[derive(Clone, Debug, Deserialize)]
