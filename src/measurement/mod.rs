@@ -93,9 +93,15 @@ const SAME_CELL_MM: Real = 1.0;
 /// of [`Measurements::shared_rows`] numbered as `numbered` says (`rows of the data`), the
 /// first five named.
 pub fn shared_rows_refusal(rows: &[(usize, usize)], numbered: &str) -> String {
+    repeated_readings_refusal(rows, "the same joint values and measured point", numbered)
+}
+
+/// [`shared_rows_refusal`] of readings that are the same when `same` holds (`the same joint
+/// values` for a socket's, which has no measured point).
+pub fn repeated_readings_refusal(rows: &[(usize, usize)], same: &str, numbered: &str) -> String {
     format!(
-        "{} validation row(s) repeat a calibration row (the same joint values and measured \
-         point; 0-based {numbered}): {}; a validation row must not calibrate",
+        "{} validation row(s) repeat a calibration row ({same}; 0-based {numbered}): {}; a \
+         validation row must not calibrate",
         rows.len(),
         pairs_named(rows, ["calibration row", "validation row"])
     )

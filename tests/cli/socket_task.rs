@@ -497,3 +497,22 @@ fn one_sockets_poses_given_twice_are_refused_by_the_second_file() {
     assert!(err.contains(&want), "{err}");
     assert!(!err.contains("inf"), "{err}");
 }
+
+/// The validation placement's files copies of the calibration placement's, under other
+/// names: refused at `sockets.validation`, naming the rows; the validation figure had been
+/// the calibration fit's (0.194 mm where Panda 6's right placement gives 0.306).
+#[test]
+fn a_validation_placement_that_repeats_the_calibration_rows_is_refused() {
+    let dir = tmp_dir("cli-socket-task-copied");
+    let task = copied_task(&dir, "", "socket_spread_mm", "copied");
+    for h in ["hole_0.csv", "hole_1.csv"] {
+        std::fs::copy(dir.join("front").join(h), dir.join("right").join(h)).unwrap();
+    }
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(
+        err.contains("sockets.validation: ")
+            && err.contains("validation row(s) repeat a calibration row (the same joint values;")
+            && err.contains("calibration row 0 = validation row 0"),
+        "{err}"
+    );
+}

@@ -23,6 +23,7 @@ use crate::error::{read_text, Error, Opt, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::kind::{Instrument, KindData};
 use crate::measurement::kind_csv::KindFile;
+use crate::measurement::{repeated_readings_refusal, SAME_JOINT};
 use crate::numeric::Real;
 use crate::numeric::Vec3;
 use crate::robot::urdf::UrdfChain;
@@ -336,6 +337,25 @@ impl SocketTask {
         Ok(out)
     }
 
+    /// Refuses, at the task file's `sockets.validation`, a validation placement with a row
+    /// of the calibration placement's joint values (each within [`SAME_JOINT`]): a socket
+    /// reading is its joint values alone, so such a row is the same reading, and the
+    /// validation figure would be the fit's (files copied under other names; two placements
+    /// reach no pose alike to a micro-radian).
+    fn check_disjoint(&self, cal: &KindFile, val: &KindFile) -> Result<()> {
+        let same =
+            |a: &[Real], b: &[Real]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= SAME_JOINT);
+        let rows: Vec<(usize, usize)> = (val.qs.iter().enumerate())
+            .filter_map(|(v, q)| cal.qs.iter().position(|c| same(c, q)).map(|c| (c, v)))
+            .collect();
+        if rows.is_empty() {
+            return Ok(());
+        }
+        let numbered = "rows of each placement, its files in order";
+        let msg = repeated_readings_refusal(&rows, "the same joint values", numbered);
+        Err(Error::file(&self.head.path, "sockets.validation", msg).at_key_line(&self.head.text))
+    }
+
     /// The figures of `robot` on the placement `k`: per row the distance of its tool point
     /// from its socket's mean point (mm), and the figures.
     pub fn figures(&self, robot: &Robot, k: &KindFile) -> (Vec<Real>, SocketFigures) {
@@ -415,6 +435,7 @@ impl SocketTask {
         let nominal = self.load_robot()?;
         let cal = self.placement(&self.calibration, &nominal)?;
         let val = self.placement(&self.validation, &nominal)?;
+        self.check_disjoint(&cal, &val)?;
         self.check_scale(&nominal, &cal)?;
         let data = IdentifyData::Kind(cal.clone());
         let source = self.calibration[0].clone();
