@@ -308,6 +308,7 @@ impl Record {
                 return Err(Error::file(&path, "task_hash", why));
             }
             t.check_ran(&path, (&text, &ran), &file)?;
+            check_rows(&t, &path, (&text, &ran), &file)?;
         }
         t.check_figure(&path)?;
         let identified = dir.join("identified.json");
@@ -414,6 +415,25 @@ impl TaskResult {
                 .collect(),
         }
     }
+}
+
+/// Refuses, naming the `task.json` file `path` and `validation_errors_mm`, per-row errors
+/// that are not one for each validation row of the task file the entry ran (`text`, read
+/// from `ran`, its files beside the task file `file` it was copied from): rows dropped,
+/// whose figure [`TaskRecord::check_figure`] recomputes as stated. An entry without them
+/// (written before calbench recorded them) passes.
+fn check_rows(t: &TaskRecord, path: &Path, (text, ran): (&str, &Path), file: &Path) -> Result<()> {
+    let dir = file.parent().unwrap_or(Path::new("."));
+    let n = t.validation_errors_mm.len();
+    let rows = crate::calibrate::task::validation_rows(text, ran, dir)?;
+    if n == 0 || n == rows {
+        return Ok(());
+    }
+    let msg = format!(
+        "holds {n} errors, but the task validates on {rows} rows, one error each: rows were \
+         dropped or added, and the figure is not the task's"
+    );
+    Err(Error::file(path, "validation_errors_mm", msg).at_json_key_line())
 }
 
 /// Refuses, naming the `task.json` file `path` and the key, a calbench that ran the entry `t`

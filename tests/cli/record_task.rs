@@ -173,6 +173,21 @@ fn an_edited_figure_or_a_missing_key_is_refused_naming_file_and_key() {
             && err.contains(&format!("{value}")),
         "{err}"
     );
+    // Rows dropped from the per-row errors (its figure recomputed from those left would be
+    // stated as they give): one error for each of the task's 20 validation rows.
+    let err = refused_edit(&out, &task, |j| {
+        j["validation_errors_mm"]
+            .as_array_mut()
+            .unwrap()
+            .truncate(17);
+    });
+    assert!(
+        err.contains("entry/task.json: line ")
+            && err.contains(
+                "validation_errors_mm: holds 17 errors, but the task validates on 20 rows"
+            ),
+        "{err}"
+    );
     // An entry filed under another task or metric: the task is the given file's name, the
     // metric the task file's, where both were recorded as edited.
     let err = refused_edit(&out, &task, |j| {

@@ -59,6 +59,22 @@ pub fn head_of(
     )
 }
 
+/// The number of validation rows of the task file `text` (read from `path`, its files
+/// beside it in `dir`): a split's validation rows, the validation file's rows as the mapping
+/// reads them, or a socket task's validation placement's rows: one error each in an entry's
+/// `validation_errors_mm`.
+pub fn validation_rows(text: &str, path: &Path, dir: &Path) -> Result<usize> {
+    if let Some(t) = socket::parse_socket_task(text.to_string(), path, dir)? {
+        let robot = t.load_robot()?;
+        return Ok(t.placement(&t.validation, &robot)?.qs.len());
+    }
+    let t = Task::parse(text.to_string(), path, dir)?;
+    match &t.data {
+        TaskData::Split { split, .. } => Ok(split.validation.len()),
+        TaskData::Files { .. } => Ok(t.measurements(&t.load_robot()?)?.1.qs.len()),
+    }
+}
+
 /// The `format` of `task.json`.
 pub const TASK_FORMAT: &str = "calbench-task-1";
 
