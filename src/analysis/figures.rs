@@ -112,7 +112,7 @@ pub enum Reader {
 /// Refuses, naming the summary `path` and the key, a document that cannot be what a run
 /// wrote: `trials` not a positive whole number; a count (`failures`, `terminations.*`) not
 /// a whole number ≥ 0, or above `trials`; a figure that must be ≥ 0 below zero (`signed`);
-/// η above 100 % (`eta_bounded`); an interval whose ends are reversed; and, for
+/// η (`eta_bounded`) and the improvement in per cent above 100 %; an interval whose ends are reversed; and, for
 /// [`Reader::Record`], a figure outside its own 95 % interval (edited) and a block of error
 /// statistics out of order (`ordered_statistics`). `at` gives the key
 /// path of an entry by its name (`results[2]`, `cells[0]`), for the line of the refusal; an
@@ -169,6 +169,13 @@ pub fn check_figures(
         if !signed(&f.metric) && f.value < 0.0 {
             return refuse(format!(
                 "is {}: this figure is never negative",
+                shown(f.value)
+            ));
+        }
+        if f.metric == Metric::Improvement.key() && f.value > 100.0 {
+            return refuse(format!(
+                "is {} %: the improvement 100 · (before − after) / before of errors ≥ 0 is at \
+                 most 100 %: no run writes it",
                 shown(f.value)
             ));
         }

@@ -196,6 +196,16 @@ fn a_summary_without_its_validation_errors_or_with_unknown_terminations_is_refus
         let want = ["run/summary.json: line ", "results (ls / random), ", &says];
         refused(&record(), &want);
     }
+    // An improvement of errors ≥ 0 is at most 100 %: one of 1000 % had been stored.
+    let mut e = v.clone();
+    e["results"][0]["improvement_pct"] = 1000.0.into();
+    write(&e);
+    let want = [
+        "run/summary.json: line ",
+        "improvement_pct: is 1000 %: the improvement",
+    ];
+    refused(&record(), &want);
+    refused(&check(), &want);
     assert!(!db.exists());
     std::fs::write(&file, &written).unwrap();
     calbench_ok(&["record", path_arg(&out), "--db", path_arg(&db)]);
