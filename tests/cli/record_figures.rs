@@ -196,6 +196,19 @@ fn a_summary_without_its_validation_errors_or_with_unknown_terminations_is_refus
         let want = ["run/summary.json: line ", "results (ls / random), ", &says];
         refused(&record(), &want);
     }
+    // A trial's termination in trials.csv of no name an identification ends with: it had
+    // been read as a usable trial.
+    write(&v);
+    let csv = out.join("trials.csv");
+    let rows = read(&csv);
+    let edited = rows.replacen(",converged,", ",bogus,", 1);
+    assert_ne!(edited, rows);
+    std::fs::write(&csv, &edited).unwrap();
+    refused(
+        &check(),
+        &["run/trials.csv: line 2, termination: is \"bogus\", which is not a termination"],
+    );
+    std::fs::write(&csv, &rows).unwrap();
     // An improvement of errors ≥ 0 is at most 100 %: one of 1000 % had been stored.
     let mut e = v.clone();
     e["results"][0]["improvement_pct"] = 1000.0.into();

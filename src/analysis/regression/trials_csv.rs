@@ -171,6 +171,16 @@ impl Trials {
             }
             let get = |i: Option<usize>| i.and_then(|i| rec.get(i)).unwrap_or("");
             let num = |i: Option<usize>| i.map_or(Real::NAN, |i| nums[i]);
+            if termi.is_some() && get(termi).parse::<crate::identify::Termination>().is_err() {
+                let names = <crate::identify::Termination as strum::VariantNames>::VARIANTS;
+                let msg = format!(
+                    "is {:?}, which is not a termination of an identification ({})",
+                    get(termi),
+                    names.join(", ")
+                );
+                let place = at_line(Some(line as usize), "termination");
+                return Err(Error::file(path, place, msg));
+            }
             let index: usize = get(Some(0)).parse().map_err(|_| {
                 let place = at_line(Some(line as usize), "trial");
                 Error::file(path, place, "is not a trial number")
