@@ -284,19 +284,26 @@ impl Record {
     }
 
     /// The task folder `dir`, whose task file (`task`, else `tasks/<task>.toml` under the
-    /// current folder) has the files its `task.toml` names beside it.
+    /// current folder) has the files its `task.toml` names beside it; a folder without
+    /// `task.toml` (written before entries carried it) is checked against `task` when given,
+    /// and recorded as it is without.
     pub(super) fn of_task(dir: &Path, task: Option<&Path>) -> Result<Record> {
         let path = dir.join("task.json");
         let (document, v) = read(&path)?;
         let t = TaskRecord::from_value(v.clone(), &path)?;
-        // The task file the entry ran, as its folder carries it (a folder written before it
-        // did has none): the published figures must be its own, and with the files it fixes
-        // as they are now it must have the hash the entry states.
-        let ran = dir.join(TASK_FILE);
-        if ran.is_file() {
+        // The task file the entry ran, as its folder carries it: the published figures must
+        // be its own, and with the files it fixes as they are now it must have the hash the
+        // entry states. A folder written before it carried one is checked against the task
+        // file given (`--task`), which it then must have run, and recorded as it is without.
+        let carried = dir.join(TASK_FILE);
+        let file = task.map_or_else(|| task_path(&t.task), Path::to_path_buf);
+        if carried.is_file() || task.is_some() {
+            let ran = match carried.is_file() {
+                true => carried,
+                false => file.clone(),
+            };
             let text = read_text(&ran)?;
             t.check_published((&document, &path), (&text, &ran))?;
-            let file = task.map_or_else(|| task_path(&t.task), Path::to_path_buf);
             if !file.is_file() {
                 let why = format!(
                     "cannot be checked: the files {} names lie beside the task file it was \

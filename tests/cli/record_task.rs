@@ -188,6 +188,21 @@ fn an_edited_figure_or_a_missing_key_is_refused_naming_file_and_key() {
             ),
         "{err}"
     );
+    // Without the task file it carries, an entry is checked against the one `--task`
+    // gives, where its hash and published figures had not been checked at all.
+    let carried = out.join("task.toml");
+    let kept = read(&carried);
+    std::fs::remove_file(&carried).unwrap();
+    let err = refused_edit(&out, &task, |j| j["task_hash"] = "0".repeat(64).into());
+    assert!(err.contains("entry/task.json: task_hash: is 0000"), "{err}");
+    let err = refused_edit(&out, &task, |j| {
+        j["published"][0]["value"] = serde_json::json!(0.1)
+    });
+    assert!(
+        err.contains("entry/task.json: line ") && err.contains("published[0]"),
+        "{err}"
+    );
+    std::fs::write(&carried, kept).unwrap();
     // An entry filed under another task or metric: the task is the given file's name, the
     // metric the task file's, where both were recorded as edited.
     let err = refused_edit(&out, &task, |j| {
