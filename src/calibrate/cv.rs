@@ -307,6 +307,61 @@ pub struct RepeatedChoice {
     pub chosen_cvs: Vec<CrossValidation>,
 }
 
+impl RepeatedChoice {
+    /// What a choice written by hand gets wrong, as (key under `cv_choice`, why): a
+    /// candidate's `rms` not one per fold seed, its `mean` not theirs, its `wins` not the
+    /// seeds at which its RMS is the lowest (the first of equals), `best` not the lowest mean
+    /// (the first of equals), `stability` not the share of the seeds `best` wins; `None`
+    /// when it is what [`choose_model_repeated`] writes.
+    pub fn inconsistency(&self) -> Option<(String, String)> {
+        let n = self.fold_seeds.len();
+        let lowest = |v: &mut dyn Iterator<Item = Real>| {
+            v.enumerate()
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(i, _)| i)
+        };
+        let mut wins = vec![0; self.models.len()];
+        for (i, m) in self.models.iter().enumerate() {
+            if m.rms.len() != n {
+                let why = format!("holds {} values for {n} fold seeds", m.rms.len());
+                return Some((format!("models[{i}].rms"), why));
+            }
+            let mean = m.rms.iter().sum::<Real>() / n as Real;
+            if mean.to_bits() != m.mean.to_bits() && !(mean.is_nan() && m.mean.is_nan()) {
+                return Some((
+                    format!("models[{i}].mean"),
+                    format!("is {}, but its rms give {mean}", m.mean),
+                ));
+            }
+        }
+        for s in 0..n {
+            if let Some(w) = lowest(&mut self.models.iter().map(|m| m.rms[s])) {
+                wins[w] += 1;
+            }
+        }
+        if let Some(i) = (0..wins.len()).find(|&i| wins[i] != self.models[i].wins) {
+            let why = format!(
+                "is {}, but its rms are the lowest at {} seeds",
+                self.models[i].wins, wins[i]
+            );
+            return Some((format!("models[{i}].wins"), why));
+        }
+        let best = lowest(&mut self.models.iter().map(|m| m.mean)).unwrap_or(0);
+        if best != self.best {
+            let why = format!("is {}, but candidate {best} has the lowest mean", self.best);
+            return Some(("best".into(), why));
+        }
+        let stability = wins.get(best).map_or(Real::NAN, |&w| w as Real / n as Real);
+        (stability.to_bits() != self.stability.to_bits()).then(|| {
+            let why = format!(
+                "is {}, but the chosen candidate wins {stability} of the seeds",
+                self.stability
+            );
+            ("stability".into(), why)
+        })
+    }
+}
+
 /// One candidate's cross-validation at every fold seed of a [`RepeatedChoice`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RepeatedCv {

@@ -56,6 +56,47 @@ fn wam_fixed_candidates_choose_on_the_grid_and_score_at_most_2_75_mm() {
     let id = load_json(&out.join("identified.json"));
     let cv = id["cv"]["rms"].as_f64().unwrap();
     assert_eq!(cv, models[best]["rms"][0].as_f64().unwrap(), "{id}");
+    // `record` takes the entry, and refuses a choice edited to disagree with itself: a
+    // candidate's mean or wins not its RMS's, a stability not the chosen one's wins.
+    let task_file = crate::common::root().join("tasks/barrett-wam.toml");
+    let record = |db: &str| {
+        let db = d.join(db);
+        let args = [
+            "record",
+            out.to_str().unwrap(),
+            "--db",
+            db.to_str().unwrap(),
+        ];
+        crate::common::calbench(&[&args[..], &["--task", task_file.to_str().unwrap()]].concat())
+    };
+    assert!(record("ok.sqlite").status.success());
+    let json = out.join("task.json");
+    let written = read(&json);
+    let edits: [(&str, fn(&mut serde_json::Value)); 4] = [
+        ("cv_choice.models[0].mean", |c| {
+            c["models"][0]["mean"] = 1.0.into()
+        }),
+        ("cv_choice.models[1].mean", |c| {
+            c["models"][1]["rms"][0] = 1.0.into()
+        }),
+        ("cv_choice.models[0].wins", |c| {
+            c["models"][0]["wins"] = 9.into()
+        }),
+        ("cv_choice.stability", |c| c["stability"] = 0.1.into()),
+    ];
+    for (key, edit) in edits {
+        let mut v: serde_json::Value = serde_json::from_str(&written).unwrap();
+        edit(&mut v["cv_choice"]);
+        std::fs::write(&json, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+        let o = record("edited.sqlite");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            !o.status.success() && err.contains(&format!("task.json: {key}: ")),
+            "{key}: {err}"
+        );
+        assert!(err.contains("the choice was edited"), "{err}");
+    }
+    std::fs::write(&json, written).unwrap();
 }
 
 /// Series C's candidates (`[models]` of tasks/ipa-ur10-series-c.toml: `harmonics2`,

@@ -470,6 +470,12 @@ impl TaskRecord {
             if !cv {
                 return bad("chosen_by", "is \"given\", beside a cv_choice".into());
             }
+            if let Some((key, why)) = c.inconsistency() {
+                return bad(
+                    &format!("cv_choice.{key}"),
+                    format!("{why}: the choice was edited"),
+                );
+            }
             if differs(&best.model) {
                 let msg = format!(
                     "are `{terms}`, but cv_choice chose `{}` (candidate {})",
