@@ -72,7 +72,8 @@ fn wam_fixed_candidates_choose_on_the_grid_and_score_at_most_2_75_mm() {
     assert!(record("ok.sqlite").status.success());
     let json = out.join("task.json");
     let written = read(&json);
-    let edits: [(&str, fn(&mut serde_json::Value)); 4] = [
+    type Edit = fn(&mut serde_json::Value);
+    let edits: [(&str, Edit); 4] = [
         ("cv_choice.models[0].mean", |c| {
             c["models"][0]["mean"] = 1.0.into()
         }),
