@@ -705,3 +705,25 @@ fn a_study_whose_identifications_all_fail_says_how_they_ended() {
         assert!(row[col("before_max_mm")].parse::<f64>().unwrap() > 0.0);
     }
 }
+
+/// The strategy "box" without a box region is refused at the strategy's line, where the
+/// refusal named `calibration.region`, which the file does not write, with no line.
+#[test]
+fn a_box_strategy_without_its_region_is_named_at_its_line() {
+    let d = tmp_dir("cli-malformed-box");
+    let sc = ci_guard_with(&d, "box", |t| {
+        t.replace("strategies = [\"random\"]", "strategies = [\"box\"]")
+    });
+    let line = read(&sc)
+        .lines()
+        .position(|l| l.starts_with("strategies"))
+        .unwrap()
+        + 1;
+    refused(
+        &calbench(&["run", path_arg(&sc), "--out", path_arg(&d.join("o"))]),
+        &[
+            "box.toml",
+            &format!("line {line}, calibration.strategies[0]: strategy \"box\" needs"),
+        ],
+    );
+}

@@ -306,8 +306,9 @@ impl Scenario {
                 StrategyName::Box => {
                     if !matches!(c.region, Region::Box { .. }) {
                         return Err(ferr(
-                            "calibration.region",
-                            "strategy \"box\" needs region = { kind = \"box\", … }".into(),
+                            &key,
+                            "strategy \"box\" needs calibration.region = { kind = \"box\", … }"
+                                .into(),
                         ));
                     }
                     PoseStrategy::Box
