@@ -256,22 +256,6 @@ fn a_missing_pose_list_is_named_by_its_key() {
             "nope.csv is not a file",
         ],
     );
-    // Without the strategy "file" the list (there or not) had been passed over, the poses
-    // drawn at random with no word.
-    let sc = ci_guard_with(&d, "unlisted", |t| {
-        t.replace(
-            "strategies = [\"random\"]",
-            "strategies = [\"random\"]\nposes_file = \"nope.csv\"",
-        )
-    });
-    refused(
-        &calbench(&["run", path_arg(&sc), "--out", path_arg(&d.join("o"))]),
-        &[
-            "unlisted.toml",
-            &format!("line {line}, calibration.poses_file"),
-            "is read by the strategy \"file\" alone, which calibration.strategies does not list",
-        ],
-    );
 }
 
 /// A name read from a file reaches the terminal with its control characters escaped and cut

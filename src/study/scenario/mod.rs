@@ -344,19 +344,6 @@ impl Scenario {
             }
             strategies.push(st);
         }
-        if c.poses_file.is_some()
-            && !strategies
-                .iter()
-                .any(|s| matches!(s, PoseStrategy::File(_)))
-        {
-            return Err(ferr(
-                "calibration.poses_file",
-                "is read by the strategy \"file\" alone, which calibration.strategies does not \
-                 list: the poses would be drawn by the strategies listed and the list passed \
-                 over; add \"file\" to the strategies, or leave the key out"
-                    .into(),
-            ));
-        }
         let optimised = strategies
             .iter()
             .any(|s| matches!(s, PoseStrategy::Optimised(_)));
