@@ -279,9 +279,17 @@ pub fn choose_model(
 
 /// The index of the lowest CV RMS of `cvs` (the first of equals; 0 when empty).
 pub fn lowest(cvs: &[CrossValidation]) -> usize {
-    (0..cvs.len())
-        .min_by(|&a, &b| cvs[a].rms.total_cmp(&cvs[b].rms))
-        .unwrap_or(0)
+    lowest_of(cvs.iter().map(|c| c.rms))
+}
+
+/// The index of the lowest of `values` by [`Real::total_cmp`] (the first of equals; 0 when
+/// empty): the rule of every choice among candidates here, and of its check
+/// ([`RepeatedChoice::inconsistency`]).
+pub fn lowest_of(values: impl Iterator<Item = Real>) -> usize {
+    values
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(0, |(i, _)| i)
 }
 
 /// The choice among candidate models by repeated K-fold cross-validation: the same
@@ -315,11 +323,6 @@ impl RepeatedChoice {
     /// when it is what [`choose_model_repeated`] writes.
     pub fn inconsistency(&self) -> Option<(String, String)> {
         let n = self.fold_seeds.len();
-        let lowest = |v: &mut dyn Iterator<Item = Real>| {
-            v.enumerate()
-                .min_by(|a, b| a.1.total_cmp(&b.1))
-                .map(|(i, _)| i)
-        };
         let mut wins = vec![0; self.models.len()];
         for (i, m) in self.models.iter().enumerate() {
             if m.rms.len() != n {
@@ -334,10 +337,8 @@ impl RepeatedChoice {
                 ));
             }
         }
-        for s in 0..n {
-            if let Some(w) = lowest(&mut self.models.iter().map(|m| m.rms[s])) {
-                wins[w] += 1;
-            }
+        for s in (0..n).filter(|_| !self.models.is_empty()) {
+            wins[lowest_of(self.models.iter().map(|m| m.rms[s]))] += 1;
         }
         if let Some(i) = (0..wins.len()).find(|&i| wins[i] != self.models[i].wins) {
             let why = format!(
@@ -346,7 +347,7 @@ impl RepeatedChoice {
             );
             return Some((format!("models[{i}].wins"), why));
         }
-        let best = lowest(&mut self.models.iter().map(|m| m.mean)).unwrap_or(0);
+        let best = lowest_of(self.models.iter().map(|m| m.mean));
         if best != self.best {
             let why = format!("is {}, but candidate {best} has the lowest mean", self.best);
             return Some(("best".into(), why));
@@ -425,9 +426,7 @@ pub fn choose_model_repeated(
     for m in &mut out {
         m.mean = m.rms.iter().sum::<Real>() / m.rms.len() as Real;
     }
-    let best = (0..out.len())
-        .min_by(|&a, &b| out[a].mean.total_cmp(&out[b].mean))
-        .unwrap_or(0);
+    let best = lowest_of(out.iter().map(|m| m.mean));
     Ok(RepeatedChoice {
         folds: k,
         fold_seeds: fold_seeds.to_vec(),
