@@ -66,10 +66,10 @@ impl Unit {
     /// `(kind, factor to rad or mm)`.
     fn scale(self) -> (&'static str, Real) {
         match self {
-            Unit::Rad => ("angle", 1.0),
-            Unit::Deg => ("angle", std::f64::consts::PI / 180.0),
-            Unit::Mm => ("length", 1.0),
-            Unit::M => ("length", 1000.0),
+            Unit::Rad => ("angle", AngleUnit::Rad.to_rad()),
+            Unit::Deg => ("angle", AngleUnit::Deg.to_rad()),
+            Unit::Mm => ("length", LengthUnit::Mm.to_mm()),
+            Unit::M => ("length", LengthUnit::M.to_mm()),
         }
     }
 }
