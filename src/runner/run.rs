@@ -280,6 +280,9 @@ pub fn run_resumed(
         Box::new(NoProgress)
     };
     let pool = super::threads::pool(opts.threads, last - first, reporter)?;
+    for w in scenario.unused_settings() {
+        reporter.warning(&w);
+    }
     if opts.precision.is_some() {
         refuse_precision(&scenario, opts)?;
     }

@@ -82,4 +82,53 @@ impl Scenario {
         }
         Ok(())
     }
+
+    /// What the scenario's `[calibration]` sets that none of its strategies reads, one line
+    /// each for the run's warnings: a pose list `poses_file` without the strategy `file`, and
+    /// the optimisers' settings without an optimised strategy. Such a key is allowed (a
+    /// scenario may keep it for another run), but a run that ignores it says so.
+    pub fn unused_settings(&self) -> Vec<String> {
+        let Some(toml::Value::Table(c)) = self.table.get("calibration") else {
+            return Vec::new();
+        };
+        let strategies = &self.calibration.strategies;
+        let file = strategies
+            .iter()
+            .any(|s| matches!(s, PoseStrategy::File(_)));
+        let optimised = strategies.iter().any(|s| {
+            matches!(
+                s,
+                PoseStrategy::Optimised(_) | PoseStrategy::OptimisedFull(_)
+            )
+        });
+        let mut unused = Vec::new();
+        if !file && c.contains_key("poses_file") {
+            unused.push(("poses_file", "\"file\""));
+        }
+        let optimiser_keys = [
+            "candidates",
+            "objective",
+            "separate",
+            "separate_threshold",
+            "optimise",
+        ];
+        if !optimised {
+            let optimisers = "an optimised one (detmax, ide, …)";
+            unused.extend(
+                optimiser_keys
+                    .iter()
+                    .filter(|k| c.contains_key(**k))
+                    .map(|k| (*k, optimisers)),
+            );
+        }
+        unused
+            .into_iter()
+            .map(|(key, needs)| {
+                format!(
+                    "calibration.{key} is not used: no strategy of calibration.strategies is \
+                     {needs}"
+                )
+            })
+            .collect()
+    }
 }
