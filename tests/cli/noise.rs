@@ -537,3 +537,47 @@ fn sweep_values_written_as_integer_or_float_are_one_point() {
         "{said}"
     );
 }
+
+/// A run of one trial has no spread to tell its figures' noise by. Two such runs of other
+/// seeds had been compared as exact, every difference a certain change (`change 0.1477 in
+/// [0.1477, 0.1477], p Holm 0`): `check` failed with 30 regressions. Now the change of two
+/// one-trial runs is of unknown noise (never resolved), and a one-trial run against a
+/// baseline of 40 trials borrows the baseline's spread, as a summary without intervals does.
+#[test]
+fn a_run_of_one_trial_is_not_compared_as_exact() {
+    let dir = tmp_dir("noise-one-trial");
+    let guard = root().join("scenarios/ci-guard.toml");
+    let runs = [("1", "3"), ("1", "5"), ("40", "7")].map(|(trials, seed)| {
+        let out = dir.join(format!("t{trials}-s{seed}"));
+        calbench_ok(&[
+            "run",
+            path_arg(&guard),
+            "--trials",
+            trials,
+            "--seed",
+            seed,
+            "--out",
+            path_arg(&out),
+        ]);
+        out
+    });
+    for (new, base) in [(&runs[1], &runs[0]), (&runs[0], &runs[2])] {
+        let (ok, text) = check(new, base, &[]);
+        assert!(ok, "{text}");
+        assert!(!text.contains("regression:"), "{text}");
+        assert!(!text.contains("p Holm 0)"), "{text}");
+    }
+    // Against the baseline of 40 trials the change has an interval of non-zero width.
+    let (_, text) = check(&runs[0], &runs[2], &["--strict"]);
+    let widths: Vec<f64> = text
+        .split(" in [")
+        .skip(1)
+        .filter_map(|s| {
+            let (lo, rest) = s.split_once(", ")?;
+            let hi = rest.split(']').next()?;
+            Some(hi.parse::<f64>().ok()? - lo.parse::<f64>().ok()?)
+        })
+        .collect();
+    assert!(!widths.is_empty(), "{text}");
+    assert!(widths.iter().all(|w| *w > 0.0), "{text}");
+}

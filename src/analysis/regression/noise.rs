@@ -10,10 +10,11 @@
 //! their mean on n − 1 degrees of freedom. Otherwise unpaired, from the summaries: Welch's
 //! interval from each side's 95 % interval of the figure (its half-width over t₀.₉₇₅ is the
 //! standard error); a side without intervals (a summary from before they were written) borrows
-//! the other's spread over trials; with neither, the change is taken as exact, as the plain
-//! rule of the tolerance always did, unless the summaries write intervals and lack only this
-//! figure's (a median's under the trials its interval needs): its noise is then not known,
-//! and the change is never resolved. A change within the rounding of the numbers (1e-12 of
+//! the other's spread over trials, as does a side of a single usable trial, which has none;
+//! with neither, the change is taken as exact, as the plain rule of the tolerance always did,
+//! unless the summaries write intervals and lack only this figure's (a median's under the
+//! trials its interval needs) or a side has a single usable trial: its noise is then not
+//! known, and the change is never resolved. A change within the rounding of the numbers (1e-12 of
 //! their size, per trial or in the summaries) is no change.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -282,7 +283,8 @@ fn summary_se(e: &Entry, path: &str, n: usize) -> Option<Real> {
 
 /// The unpaired change of `metric` from the baseline entry `a` (value `va`) to `b` (`vb`),
 /// with `trials` the `trials` of each summary: Welch from the two standard errors; a side
-/// without one borrows the other's; exact when neither has one. Failures are compared as
+/// without one borrows the other's; exact when neither has one and neither writes intervals
+/// nor is of a single usable trial, else of unknown noise (never resolved). Failures are compared as
 /// proportions of the trials (pooled two-proportion z).
 pub fn unpaired(
     a: &Entry,
@@ -332,20 +334,29 @@ pub fn unpaired(
     let (Some(na), Some(nb)) = (usable_trials(a, trials[0]), usable_trials(b, trials[1])) else {
         return if intervals { unknown } else { exact };
     };
-    if na < 2 || nb < 2 {
-        return exact;
+    // A single usable trial (or none) says nothing of the figure's spread, in a summary of
+    // any format: it had been taken as exact, so that two one-trial runs of other seeds gave
+    // certain regressions.
+    let single = na < 2 || nb < 2;
+    if na == 0 || nb == 0 {
+        return unknown;
     }
     // A side without an interval borrows the other's spread over trials, scaled to its own
-    // number of trials.
+    // number of trials; of a single trial, with the degrees of freedom of the spread it
+    // borrows.
     let (se_a, se_b) = match (summary_se(a, metric, na), summary_se(b, metric, nb)) {
         (Some(x), Some(y)) => (x, y),
         (Some(x), None) => (x, x * (na as Real / nb as Real).sqrt()),
         (None, Some(y)) => (y * (nb as Real / na as Real).sqrt(), y),
-        (None, None) if intervals => return unknown,
+        (None, None) if intervals || single => return unknown,
         (None, None) => return exact,
     };
+    let (df_a, df_b) = match (na - 1, nb - 1) {
+        (0, d) | (d, 0) => (d, d),
+        dfs => dfs,
+    };
     let se2 = se_a * se_a + se_b * se_b;
-    let den = se_a.powi(4) / (na - 1) as Real + se_b.powi(4) / (nb - 1) as Real;
+    let den = se_a.powi(4) / df_a as Real + se_b.powi(4) / df_b as Real;
     let rmse = is_rmse(metric);
     Change {
         se: se2.sqrt(),
