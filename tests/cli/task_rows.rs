@@ -348,3 +348,44 @@ fn validation_rows_off_the_calibration_s_unit_or_frame_are_refused_at_their_key(
         assert!(e.contains(&at) && e.contains(words), "{e}");
     }
 }
+
+/// A split whose validation part holds fewer than 3 distinct poses had been run and scored
+/// (two rows of the real export in metres gave `validation_rms_mm = 2783.865` and exit 0),
+/// where the same rows as a validation file are refused, as a `--validate` file or a
+/// `--holdout` of such rows is. Each part of a split is now refused as a file of its rows,
+/// at the line of `split`; three distinct validation rows run.
+#[test]
+fn a_split_part_of_fewer_than_three_distinct_poses_is_refused() {
+    let d = tmp_dir("task-rows-split-part");
+    let split = d.join("grid.split");
+    let t = wam_task(
+        &d,
+        &format!(
+            "file = \"{}\"\nsplit = \"{}\"",
+            wam_file(GRID).display(),
+            split.display()
+        ),
+    );
+    for (text, part) in [
+        (
+            "rows 216\ncalibration 0-213\nvalidation 214-215\n",
+            "validation",
+        ),
+        ("rows 216\ncalibration 0\nvalidation 1-215\n", "calibration"),
+    ] {
+        std::fs::write(&split, text).unwrap();
+        let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{text}: {e}");
+        let said = format!("the {part} rows of {} (", split.display());
+        let at = format!(
+            "barrett-wam.toml: line {}, data: ",
+            line_of(&read(&t), "split = ")
+        );
+        assert!(e.contains(&at) && e.contains(&said), "{e}");
+        assert!(e.contains("hold fewer than 3 distinct poses"), "{e}");
+        assert!(!d.join("out").exists());
+    }
+    std::fs::write(&split, "rows 216\ncalibration 0-212\nvalidation 213-215\n").unwrap();
+    task_lm(calbench_ok, &t, Some("kinematic"), &d.join("ok"));
+}

@@ -30,7 +30,7 @@ use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
 use crate::error::{read_text, Error, Result};
 use crate::identify::MethodSpec;
-use crate::measurement::csv::read_measurements_text;
+use crate::measurement::csv::{distinct_poses, read_measurements_text, MIN_DISTINCT_POSES};
 use crate::measurement::import::{import_text, Mapping};
 use crate::measurement::Measurements;
 use crate::numeric::Real;
@@ -468,6 +468,25 @@ impl Task {
                         .map(|&(c, v)| (split.calibration[c], split.validation[v]))
                         .collect();
                     return Err(self.overlap(&rows, file, file));
+                }
+                // Each part is refused as a file of its rows would be.
+                for (part, m, rows) in [
+                    ("calibration", &cal, &split.calibration),
+                    ("validation", &val, &split.validation),
+                ] {
+                    if distinct_poses(&m.qs, &[], robot.dof()).is_err() {
+                        let msg = format!(
+                            "the {part} rows of {} ({} of the {} data rows of {}) hold fewer \
+                             than {MIN_DISTINCT_POSES} distinct poses: a {part}, as a {part} \
+                             file, needs at least {MIN_DISTINCT_POSES} (rows of distinct joint \
+                             values)",
+                            split_path.display(),
+                            rows.len(),
+                            all.len(),
+                            file.display()
+                        );
+                        return Err(self.at_validation(msg));
+                    }
                 }
                 Ok((cal, val))
             }
