@@ -7,7 +7,7 @@ use pyo3::types::PyDict;
 
 use calbench::numeric::{Frame, Real};
 use calbench::robot::loaded::LoadedFk;
-use calbench::robot::{builtin, Param, Robot};
+use calbench::robot::{builtin, Coupling, Param, Robot};
 
 use crate::convert::{flag_arg, float_array2, joint_rows, typed_arg};
 use crate::errors::{err, nonempty, setting, LimitWarning};
@@ -261,11 +261,22 @@ impl PyRobot {
         h.finish()
     }
 
-    /// Pickled (and copied) as its robot file, which reads back to the same robot
-    /// (`Robot.from_toml`).
-    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<(Bound<'py, PyAny>, (String,))> {
-        let restore = py.get_type::<PyRobot>().getattr("from_toml")?;
-        Ok((restore, (self.to_toml(),)))
+    /// Pickled (and copied) as its robot file with the numbers it holds to the bit
+    /// ([`exact_numbers`]), which read back to the same robot.
+    fn __reduce__<'py>(&self, py: Python<'py>) -> PyResult<Pickled<'py>> {
+        let restore = py.get_type::<PyRobot>().getattr("_from_pickle")?;
+        Ok((restore, (self.to_toml(), exact_numbers(&self.inner))))
+    }
+
+    /// The robot of a pickle: the robot file's text and its numbers to the bit
+    /// ([`exact_numbers`]), each of which must be the file's value up to its last digits.
+    #[staticmethod]
+    fn _from_pickle(text: &str, numbers: Vec<Real>) -> PyResult<PyRobot> {
+        let file =
+            calbench::robot::parse_robot_file(text, std::path::Path::new("text")).map_err(err)?;
+        with_exact_numbers(file, &numbers)
+            .map(|inner| PyRobot { inner })
+            .ok_or_else(|| setting("numbers", "are not the robot file's values"))
     }
 
     fn __repr__(&self) -> String {
@@ -275,4 +286,40 @@ impl PyRobot {
             self.inner.dof()
         )
     }
+}
+
+/// What a robot pickles as: the function that restores it, with the robot file's text and
+/// its [`exact_numbers`].
+type Pickled<'py> = (Bound<'py, PyAny>, (String, Vec<Real>));
+
+/// Every number of `robot`'s model in its internal units (mm, rad), in a fixed order: the
+/// parameter values, each joint's limits, the coupling's L1. A robot file holds them in its
+/// own units, from which not every value converts back to the bit (degrees reach only about
+/// nine radian values in ten: their spacing times π/180 exceeds the radians' where an angle
+/// in degrees has one more binary digit), so a pickle carries them beside the file.
+fn exact_numbers(robot: &Robot) -> Vec<Real> {
+    let mut numbers = robot.values.clone();
+    numbers.extend(robot.joints.iter().flat_map(|j| [j.limits.0, j.limits.1]));
+    numbers.extend(robot.coupling.map(|Coupling::Differential { l1_mm }| l1_mm));
+    numbers
+}
+
+/// `robot` (read from its file) with the [`exact_numbers`] `numbers` in place of the file's
+/// values; `None` when they are not as many, or one is not the file's value up to its last
+/// digits (1e-12 of its size).
+fn with_exact_numbers(mut robot: Robot, numbers: &[Real]) -> Option<Robot> {
+    let file = exact_numbers(&robot);
+    let close = |(a, b): (&Real, &Real)| (a - b).abs() <= 1e-12 * a.abs().max(b.abs());
+    if file.len() != numbers.len() || !file.iter().zip(numbers).all(close) {
+        return None;
+    }
+    let (values, rest) = numbers.split_at(robot.values.len());
+    robot.values.copy_from_slice(values);
+    for (j, l) in robot.joints.iter_mut().zip(rest.chunks_exact(2)) {
+        j.limits = (l[0], l[1]);
+    }
+    if let Some(Coupling::Differential { l1_mm }) = &mut robot.coupling {
+        *l1_mm = *rest.last()?;
+    }
+    Some(robot)
 }
