@@ -209,7 +209,8 @@ impl InstrumentsScenario {
         }
         // `ErrorSettings::check` refuses settings only: each at its key.
         s.errors.check().map_err(|e| e.in_file(path))?;
-        let robot = s.load_robot()?;
+        // A robot neither built in nor a file is refused at the scenario's `robot`.
+        let robot = s.load_robot().map_err(|e| e.in_file(path))?;
         if let Some(msg) = crate::robot::loaded::unsimulated(&robot) {
             return Err(ferr("robot", msg));
         }

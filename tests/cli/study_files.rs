@@ -461,3 +461,31 @@ fn calibration_keys_no_strategy_reads_are_named_in_a_warning() {
         std::fs::remove_dir_all(&out).unwrap();
     }
 }
+
+/// An instruments study's `robot` that is neither built in nor a file had been refused as the
+/// bare setting `robot`, naming neither the scenario nor its line, where a Monte-Carlo
+/// scenario's robot is refused at its file, line and key.
+#[test]
+fn an_instruments_study_s_unknown_robot_is_refused_at_its_line() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let d = tmp("instruments_robot");
+    let text = std::fs::read_to_string(root.join("scenarios/instruments.toml")).unwrap();
+    let line = 1 + text
+        .lines()
+        .position(|l| l.starts_with("robot = "))
+        .unwrap();
+    for robot in ["nosuch", "nope/x.toml"] {
+        let sc = d.join("i.toml");
+        let edited = text.replace("robot = \"irb2600\"", &format!("robot = \"{robot}\""));
+        std::fs::write(&sc, edited).unwrap();
+        for cmd in ["run", "simulate"] {
+            let out = d.join("o");
+            let o = calbench(&[cmd, path(&sc), "--out", path(&out)]);
+            let err = String::from_utf8_lossy(&o.stderr);
+            let said = format!("{}: line {line}, robot: \"", sc.display());
+            assert!(!o.status.success() && err.contains(&said), "{cmd}: {err}");
+            assert!(err.contains("is neither a built-in robot"), "{err}");
+            assert!(!out.exists());
+        }
+    }
+}
