@@ -137,9 +137,10 @@ fn flag(identified: &Robot, q: &[Real], residual_mm: Real, residual_deg: Real) -
 
 /// Corrects one program row `q_nominal` (internal units): the joints at which `identified`
 /// reaches the pose `nominal` gives at `q_nominal` (its position, for an arm of fewer than six
-/// joints: its orientation residual is written, not judged by the flag), a revolute joint
-/// outside its limits turned by whole turns to the value nearest the row's where that is
-/// within them (`wrap_into_limits`). `round` maps joint values to what is written (the
+/// joints: its orientation residual is written, not judged by the flag), each revolute joint
+/// turned by whole turns to the value nearest the row's (`nearest_turns`) and judged against
+/// the limits there: a solution just past a limit is flagged `limits`, not turned into the
+/// limits a whole turn from the row's. `round` maps joint values to what is written (the
 /// output's decimals), so the residuals are those of the written command. The
 /// identified robot carries `payload_kg` at the tool (its sag, when it has compliances; the
 /// nominal robot of a locked controller knows no sag).
@@ -152,7 +153,7 @@ pub fn compensate_row(
 ) -> crate::Result<Corrected> {
     let target = nominal.fk(q_nominal);
     let (mut q, judged) = reach(identified, &target, q_nominal, payload_kg, false)?;
-    wrap_into_limits(identified, &mut q, Some(q_nominal));
+    nearest_turns(identified, &mut q, q_nominal);
     let q = round(&q);
     let f = loaded_fk(identified, &identified.chain(), &q, payload_kg)?;
     let residual_mm = (f.pos - target.pos).norm();
@@ -196,21 +197,31 @@ fn reach(
     }
 }
 
-/// Turns each revolute joint outside its limits by whole turns into them, where a turn
-/// reaches (the same pose): to the value nearest `near`'s when that is within them, else to
-/// the lowest within them.
-fn wrap_into_limits(robot: &Robot, q: &mut [Real], near: Option<&[Real]>) {
+/// Turns each revolute joint by whole turns (the same pose) to the value nearest `near`'s,
+/// within half a turn of it, inside its limits or not: the command a program row's arm moves
+/// least to. (Turned into the limits instead, a row at 359° whose correction is +1° with
+/// limits of ±360° had been written −359.96°, a turn and more away, and flagged `ok`.)
+fn nearest_turns(robot: &Robot, q: &mut [Real], near: &[Real]) {
     let turn = 2.0 * std::f64::consts::PI;
-    for (i, (v, j)) in q.iter_mut().zip(&robot.joints).enumerate() {
+    for ((v, j), r) in q.iter_mut().zip(&robot.joints).zip(near) {
+        if j.kind == crate::robot::JointType::Revolute {
+            *v += ((r - *v) / turn).round() * turn;
+        }
+    }
+}
+
+/// Turns each revolute joint outside its limits by whole turns into them, where a turn
+/// reaches (the same pose): to the lowest value within them (a Cartesian target has no
+/// command to stay near).
+fn wrap_into_limits(robot: &Robot, q: &mut [Real]) {
+    let turn = 2.0 * std::f64::consts::PI;
+    for (v, j) in q.iter_mut().zip(&robot.joints) {
         let (lo, hi) = j.limits;
         if j.kind != crate::robot::JointType::Revolute || (lo..=hi).contains(v) {
             continue;
         }
-        let nearest = near.map(|r| *v + ((r[i] - *v) / turn).round() * turn);
         let lowest = *v + ((lo - *v) / turn).ceil() * turn;
-        if let Some(w) = nearest.filter(|w| (lo..=hi).contains(w)) {
-            *v = w;
-        } else if lowest <= hi {
+        if lowest <= hi {
             *v = lowest;
         }
     }
@@ -252,7 +263,7 @@ pub fn compensate_targets(
         let mut best: Option<Corrected> = None;
         for q0 in starts {
             let (mut q, judged) = reach(identified, target, q0, payload_kg, position_only)?;
-            wrap_into_limits(identified, &mut q, None);
+            wrap_into_limits(identified, &mut q);
             let q = round(&q);
             let f = fk.at(&q, payload_kg)?;
             let residual_mm = (f.pos - target.pos).norm();

@@ -4,7 +4,9 @@
 
 use std::path::Path;
 
-use crate::common::{calbench, calbench_ok, path_arg, read, refused, root, tmp_dir};
+use crate::common::{
+    calbench, calbench_ok, import_ur10_sample, path_arg, read, refused, root, tmp_dir, ur10_example,
+};
 
 /// A five-joint arm (DH, mm, deg), `a2` of its second joint and θ of its third as given.
 pub(crate) fn arm5(a2: f64, theta3: f64) -> String {
@@ -309,6 +311,58 @@ fn another_arm_is_refused_and_the_same_arm_written_otherwise_is_not() {
             assert!((a - b).abs() < 1e-9, "{corrected}");
         }
     }
+}
+
+/// A UR10 identified from the shipped rows as docs/formats.md § 2.8 does, and a program
+/// whose rows stand a degree inside the ±360° limits of joints 1 and 6, where the corrections
+/// (+1.04° on joint 1, −0.99° on joint 6) take them past the limits: each row's solution nearest
+/// its command is written and flagged `limits`. They had been turned by a whole turn into the
+/// limits (q1 −359.96, q6 −0.94) and flagged `ok`, a move of 719° and 359° on the arm. A row
+/// well inside the limits is corrected by about a degree and `ok`.
+#[test]
+fn a_correction_past_a_limit_is_flagged_not_turned_into_the_limits() {
+    let d = tmp_dir("cli-compensate-past-limit");
+    let data = d.join("ur10.csv");
+    import_ur10_sample(&ur10_example("mapping.toml"), &data);
+    let (robot, out) = (ur10_example("ur10.toml"), d.join("ur10-id"));
+    calbench_ok(&[
+        "identify",
+        "--robot",
+        &robot,
+        "--data",
+        path_arg(&data),
+        "--method",
+        "lm",
+        "--out",
+        path_arg(&out),
+    ]);
+    let rows = [
+        "359,-80,80,-90,90,0",
+        "0,-80,80,-90,90,-359.95",
+        "10,-80,80,-90,90,30",
+    ];
+    let text = compensate_rows(&d, Path::new(&robot), &out.join("robot.toml"), &rows);
+    let written: Vec<Vec<&str>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    assert_eq!(written.len(), rows.len(), "{text}");
+    let flags: Vec<&str> = written.iter().map(|c| c[8]).collect();
+    assert_eq!(flags, ["limits", "limits", "ok"], "{text}");
+    for (row, cells) in rows.iter().zip(&written) {
+        let given: Vec<f64> = row.split(',').map(|v| v.parse().unwrap()).collect();
+        let q: Vec<f64> = cells[..6].iter().map(|v| v.parse().unwrap()).collect();
+        // Every joint within a few degrees of the row's: no whole turn.
+        for (a, b) in q.iter().zip(&given) {
+            assert!((a - b).abs() < 3.0, "{row}: {text}");
+        }
+        // Reached: the flag judges the limits, not the residuals.
+        let residual: f64 = cells[6].parse().unwrap();
+        assert!(residual < 1e-6, "{row}: {text}");
+    }
+    assert!(written[0][0].parse::<f64>().unwrap() > 360.0, "{text}");
+    assert!(written[1][5].parse::<f64>().unwrap() < -360.0, "{text}");
 }
 
 /// An empty program or target list says the header it lacks: a program's joints, a target
