@@ -197,14 +197,14 @@ fn reach(
     }
 }
 
-/// Turns each revolute joint by whole turns (the same pose) to the value nearest `near`'s,
-/// within half a turn of it, inside its limits or not: the command a program row's arm moves
-/// least to. (Turned into the limits instead, a row at 359° whose correction is +1° with
+/// Turns each revolute joint ([`Robot::q_turns`]: not a coupling's screw travel) by whole
+/// turns (the same pose) to the value nearest `near`'s, within half a turn of it, inside its
+/// limits or not: the command a program row's arm moves least to. (Turned into the limits instead, a row at 359° whose correction is +1° with
 /// limits of ±360° had been written −359.96°, a turn and more away, and flagged `ok`.)
 fn nearest_turns(robot: &Robot, q: &mut [Real], near: &[Real]) {
     let turn = 2.0 * std::f64::consts::PI;
-    for ((v, j), r) in q.iter_mut().zip(&robot.joints).zip(near) {
-        if j.kind == crate::robot::JointType::Revolute {
+    for (i, (v, r)) in q.iter_mut().zip(near).enumerate() {
+        if robot.q_turns(i) {
             *v += ((r - *v) / turn).round() * turn;
         }
     }
@@ -215,9 +215,9 @@ fn nearest_turns(robot: &Robot, q: &mut [Real], near: &[Real]) {
 /// command to stay near).
 fn wrap_into_limits(robot: &Robot, q: &mut [Real]) {
     let turn = 2.0 * std::f64::consts::PI;
-    for (v, j) in q.iter_mut().zip(&robot.joints) {
+    for (i, (v, j)) in q.iter_mut().zip(&robot.joints).enumerate() {
         let (lo, hi) = j.limits;
-        if j.kind != crate::robot::JointType::Revolute || (lo..=hi).contains(v) {
+        if !robot.q_turns(i) || (lo..=hi).contains(v) {
             continue;
         }
         let lowest = *v + ((lo - *v) / turn).ceil() * turn;
@@ -307,9 +307,32 @@ pub fn compensate_targets(
 #[cfg(test)]
 mod tests {
     use super::*;
+
     use crate::numeric::rng::stream;
     use crate::robot::sampling::uniform_joint_poses;
     use crate::robot::Param;
+
+    /// A whole turn leaves an angle's pose and moves a screw travel: Guo's arm's joints 1 and
+    /// 2 (screw travels, mm) are never turned, whatever their drift, and its angles are, to
+    /// the value nearest the command.
+    #[test]
+    fn only_angles_are_turned() {
+        let guo = crate::robot::builtin::load("guo-3t2r").unwrap();
+        let turn = 2.0 * std::f64::consts::PI;
+        let near = vec![0.0; guo.dof()];
+        let mut q: Vec<Real> = (0..guo.dof()).map(|_| 4.0).collect();
+        nearest_turns(&guo, &mut q, &near);
+        for (i, v) in q.iter().enumerate() {
+            let want = if guo.q_turns(i) { 4.0 - turn } else { 4.0 };
+            assert_eq!(*v, want, "joint {}", i + 1);
+        }
+        assert!(!guo.q_turns(0) && !guo.q_turns(1) && guo.q_turns(2));
+        // Screw travels a little past their limits stay there (they had been moved 2π mm).
+        let mut q: Vec<Real> = guo.joints.iter().map(|j| j.limits.1 + 1.0).collect();
+        let before = q.clone();
+        wrap_into_limits(&guo, &mut q);
+        assert_eq!(q[..2], before[..2]);
+    }
 
     /// Simulation: a true robot (nominal + errors) identified exactly reaches, at the corrected
     /// joints, the poses the nominal model promised; the nominal joints miss them by the error.

@@ -652,4 +652,10 @@ impl Robot {
     fn q_is_length(&self, i: usize, kind: JointType) -> bool {
         (self.coupling.is_some() && i < 2) || kind == JointType::Prismatic
     }
+
+    /// Whether joint `i`'s value is an angle, which a whole turn leaves at the same pose (a
+    /// revolute joint but a coupling's screw travel).
+    pub fn q_turns(&self, i: usize) -> bool {
+        !self.q_is_length(i, self.joints[i].kind)
+    }
 }
