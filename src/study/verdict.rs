@@ -96,8 +96,9 @@ pub struct Evaluation {
     pub p_value: Real,
     /// The verdict.
     pub verdict: Verdict,
-    /// For an unresolved claim, the trials at which an interval as wide per trial would
-    /// clear the nearer boundary: n · (half-width / distance)², rounded up.
+    /// For an unresolved claim (or a calibrated one that would be unresolved), the trials at
+    /// which an interval as wide per trial would clear the nearer boundary:
+    /// n · (half-width / distance)², rounded up.
     pub trials_to_resolve: Option<u64>,
 }
 
