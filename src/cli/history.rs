@@ -50,7 +50,7 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
     }
     let db = args.db.open(false)?;
     let scenario = args.scenario.as_deref();
-    let (regressed, compared) = history::regressions(&db, scenario, tolerance)?;
+    let (regressed, compared, unjudged) = history::regressions(&db, scenario, tolerance)?;
     let lines: Vec<String> = regressed.iter().map(line).collect();
     if let Some(out) = &args.out {
         let points = history::points(&db, scenario, &args.metric, tolerance)?;
@@ -66,16 +66,26 @@ pub fn run(args: &HistoryArgs) -> Result<()> {
         let count = |f: Flag| regressed.iter().filter(|r| r.flag == f).count();
         let (reg, drift) = (count(Flag::Regression), count(Flag::Drift));
         let pairs = counted(compared, "scenario-machine pair", "scenario-machine pairs");
+        // A registration or instruments study's pairs are said not to be judged, never
+        // counted as compared.
+        let unjudged = match unjudged {
+            0 => String::new(),
+            n => format!(
+                "; {} of a registration or instruments study not judged: check's rule \
+                 compares the entries of Monte-Carlo summaries only",
+                counted(n, "pair", "pairs")
+            ),
+        };
         if reg + drift > 0 {
             anyhow::bail!(
-                "{} and {} of the latest version ({pairs} compared)",
+                "{} and {} of the latest version ({pairs} compared{unjudged})",
                 counted(reg, "regression", "regressions"),
                 counted(drift, "drift", "drifts")
             );
         }
         out!(
             "no regression or drift of the latest version ({pairs} compared, {} with a changed \
-             scenario)",
+             scenario{unjudged})",
             count(Flag::ScenarioChanged)
         );
     }

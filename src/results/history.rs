@@ -420,15 +420,16 @@ pub struct Regressed {
 /// - **scenario changed**: no earlier version ran the latest's scenario (up to `seed` and
 ///   `trials`): nothing is compared, and no regression is claimed.
 ///
-/// Returns them and how many scenario-machine pairs were compared.
+/// Returns them, how many scenario-machine pairs were compared, and how many were not judged:
+/// a registration or instruments study's, whose cells `check`'s rule does not compare.
 pub fn regressions(
     db: &Db,
     scenario: Option<&str>,
     tolerance: Real,
-) -> Result<(Vec<Regressed>, usize)> {
+) -> Result<(Vec<Regressed>, usize, usize)> {
     let runs = recorded(db, scenario)?;
     let mut out = Vec::new();
-    let mut pairs = 0;
+    let (mut pairs, mut unjudged) = (0, 0);
     for ((scenario, machine), list) in series(&runs) {
         let every: Vec<&Run> = versions(&list)
             .into_iter()
@@ -437,6 +438,10 @@ pub fn regressions(
         let Some((&latest, [.., before])) = every.split_last() else {
             continue;
         };
+        if summary_of(latest).is_none() {
+            unjudged += 1;
+            continue;
+        }
         pairs += 1;
         // The versions that ran the latest's scenario (up to seed and trials): one between
         // that ran another is passed over, so that a change of the scenario and back does
@@ -501,7 +506,7 @@ pub fn regressions(
             out.push(flag(Flag::Drift, v[j], &v[j + 1..k], describe(&c)));
         }
     }
-    Ok((out, pairs))
+    Ok((out, pairs, unjudged))
 }
 
 #[cfg(test)]
