@@ -14,6 +14,8 @@
 # usage: scripts/test.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# CI as the Rust tests read it: `true` or `1`.
+ci() { [ "${CI:-}" = "true" ] || [ "${CI:-}" = "1" ]; }
 # One pass builds everything once, so incremental caches gain nothing and cost disk: they were
 # 5.8 GB of a 9.3 GB target/debug, and a CI machine ran out of space linking the Python module.
 export CARGO_INCREMENTAL=0
@@ -24,14 +26,14 @@ cargo test
 # The coverage of the 95 % intervals (40 runs of 50 trials against a 4000-trial run, seconds
 # on an idle machine, minutes on a loaded one) and identify's peak memory on 2 000 000 rows
 # (GNU time) and a study's peak memory flat in its trials are ignored by default; CI runs them.
-if [ "${CI:-}" = "true" ]; then
+if ci; then
     cargo test --test study -- --ignored intervals_cover_the_long_run_figure
     cargo test --test cli -- --ignored identify_peak_memory_on_two_million_rows
     cargo test --test cli -- --ignored a_study_peak_memory_is_flat_in_its_trials
 fi
 
 py=.venv/bin/python
-has_tools() { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas, scipy" 2>/dev/null; }
+has_tools() { [ -x "$py" ] && "$py" -c "import maturin, pytest, numpy, pandas, matplotlib, scipy" 2>/dev/null; }
 if ! has_tools; then
     # A fresh clone: make the environment (PyPI), as the README's set-up promises.
     echo "making .venv/ with maturin, pytest, numpy, pandas, matplotlib and scipy from PyPI" >&2
@@ -39,8 +41,8 @@ if ! has_tools; then
         "$py" -m pip install --quiet --upgrade maturin pytest numpy pandas matplotlib scipy >&2 || true
 fi
 if ! has_tools; then
-    msg="the Python module's tests need .venv/ with maturin, pytest, numpy, pandas and scipy, which could not be made (python3 -m venv, pip install from PyPI)"
-    if [ "${CI:-}" = "true" ]; then
+    msg="the Python module's tests need .venv/ with maturin, pytest, numpy, pandas, matplotlib and scipy, which could not be made (python3 -m venv, pip install from PyPI)"
+    if ci; then
         echo "error: $msg" >&2
         exit 1
     fi

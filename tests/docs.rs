@@ -37,12 +37,31 @@ mod anchors;
 #[path = "docs/tasks.rs"]
 mod tasks;
 
-/// The documents that must exist.
-const REQUIRED: [&str; 4] = [
+/// The documents that must exist: every one the repository has, so that a document lost
+/// takes its examples out of these tests with a failure, not in silence.
+const REQUIRED: [&str; 10] = [
     "README.md",
+    "REPRODUCTION.md",
     "docs/formats.md",
     "docs/architecture.md",
+    "docs/guard.md",
+    "docs/instruments.md",
     "docs/performance.md",
+    "docs/python.md",
+    "docs/references.md",
+    "docs/results.md",
+];
+
+/// The languages a fenced block of the documents may have, each with what runs it: a block of
+/// another (`console`, `shell`, none) would be passed over by every test without a word.
+const LANGUAGES: [(&str, &str); 7] = [
+    ("sh", "shell_examples_run"),
+    ("bash", "shell_examples_run"),
+    ("toml", "toml_examples_run"),
+    ("python", "python/tests/test_docs.py (docs/python.md only)"),
+    ("rust", "the doctest of README.md (src/lib.rs)"),
+    ("text", "nothing: output, synopses and messages shown"),
+    ("json", "nothing: output shown"),
 ];
 
 /// What a shell example may read: the tracked folders a user's clone has.
@@ -380,6 +399,36 @@ fn shell_examples_run() {
     assert!(
         real_data,
         "the README's real-data example (`calbench import …`) did not run"
+    );
+}
+
+/// Every fenced block names one of [`LANGUAGES`], and the blocks of a language that one file's
+/// test runs stand in that file: a Python block elsewhere than docs/python.md, or Rust
+/// elsewhere than README.md, would be shown and never run.
+#[test]
+fn every_block_is_of_a_language_a_test_runs_or_shows() {
+    let mut wrong = Vec::new();
+    for doc in documents() {
+        for b in blocks(&doc) {
+            let known = LANGUAGES.iter().any(|(l, _)| *l == b.lang);
+            let placed = match b.lang.as_str() {
+                "python" => b.doc == "docs/python.md",
+                "rust" => b.doc == "README.md",
+                _ => true,
+            };
+            if !known || !placed {
+                wrong.push(b.name());
+            }
+        }
+    }
+    let known: Vec<String> = LANGUAGES
+        .iter()
+        .map(|(l, by)| format!("{l} ({by})"))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "blocks no test runs or knows: {wrong:?}; the languages are {}",
+        known.join(", ")
     );
 }
 
