@@ -146,7 +146,10 @@ impl IdentifyRequest {
             .map(|(a, b)| (self.file_row(None, a), self.file_row(None, b)))
             .collect();
         if !repeated.is_empty() {
-            let why = crate::measurement::repeated_rows_refusal(&repeated);
+            let why = crate::measurement::repeated_rows_refusal(
+                &repeated,
+                crate::measurement::REPEATED_CALIBRATION,
+            );
             return Err(Error::file(&self.source, "data", why));
         }
         let mut val = self.validate.clone();
@@ -187,6 +190,19 @@ impl IdentifyRequest {
         // Rows held out of data without copies repeat none of the rest; a validation file's
         // may.
         if let (Some(v), None) = (&val, &held_out) {
+            // A validation's rows repeated would weigh their points twice in its figures.
+            let repeated = v.repeated_rows();
+            if !repeated.is_empty() {
+                let why = crate::measurement::repeated_rows_refusal(
+                    &repeated,
+                    crate::measurement::REPEATED_VALIDATION,
+                );
+                let why = match &self.validate_source {
+                    Some(v) => format!("{}: {why}", v.display()),
+                    None => why,
+                };
+                return Err(Error::option(Opt::Validate, why));
+            }
             let shared = d.shared_rows(v);
             if !shared.is_empty() {
                 let mut why = crate::measurement::shared_rows_refusal(&shared, "rows of each file");

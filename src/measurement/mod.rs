@@ -107,13 +107,23 @@ pub fn repeated_readings_refusal(rows: &[(usize, usize)], same: &str, numbered: 
     )
 }
 
+/// The words a calibration's repeated rows are refused with ([`repeated_rows_refusal`]).
+pub const REPEATED_CALIBRATION: &str = "a copy counts one reading twice, and the fit would \
+     state a precision it does not have (a second reading of a pose differs by the \
+     instrument's noise)";
+
+/// The words a validation's repeated rows are refused with ([`repeated_rows_refusal`]).
+pub const REPEATED_VALIDATION: &str =
+    "a copy weighs one point twice in the validation's figures (a second reading of a pose \
+     differs by the instrument's noise)";
+
 /// The refusal's words for rows of one file that repeat an earlier row of it: `rows`, the
-/// pairs of [`Measurements::repeated_rows`], the first five named.
-pub fn repeated_rows_refusal(rows: &[(usize, usize)]) -> String {
+/// pairs of [`Measurements::repeated_rows`], the first five named, and `why` a copy is refused
+/// ([`REPEATED_CALIBRATION`], [`REPEATED_VALIDATION`]).
+pub fn repeated_rows_refusal(rows: &[(usize, usize)], why: &str) -> String {
     format!(
         "{} row(s) repeat an earlier row (the same joint values and measured point; 0-based \
-         rows): {}; a copy counts one reading twice, and the fit would state a precision it \
-         does not have (a second reading of a pose differs by the instrument's noise)",
+         rows): {}; {why}",
         rows.len(),
         pairs_named(rows, ["row", "row"])
     )

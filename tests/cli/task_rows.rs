@@ -389,3 +389,34 @@ fn a_split_part_of_fewer_than_three_distinct_poses_is_refused() {
     std::fs::write(&split, "rows 216\ncalibration 0-212\nvalidation 213-215\n").unwrap();
     task_lm(calbench_ok, &t, Some("kinematic"), &d.join("ok"));
 }
+
+/// A split that puts two copies of a row in its validation part had its point counted twice;
+/// the copies are refused at the line of `split`, named by the data file's rows.
+#[test]
+fn repeated_validation_rows_of_a_split_are_refused_naming_the_data_rows() {
+    let d = tmp_dir("task-rows-split-repeats");
+    let text = std::fs::read_to_string(wam_file(GRID)).unwrap();
+    let row210 = text.lines().nth(211).unwrap();
+    let data = d.join("grid-plus.csv");
+    std::fs::write(&data, format!("{text}{row210}\n")).unwrap();
+    let split = d.join("grid.split");
+    std::fs::write(&split, "rows 217\ncalibration 0-199\nvalidation 200-216\n").unwrap();
+    let t = wam_task(
+        &d,
+        &format!(
+            "file = \"{}\"\nsplit = \"{}\"",
+            data.display(),
+            split.display()
+        ),
+    );
+    let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
+    let e = String::from_utf8_lossy(&o.stderr);
+    let at = format!(
+        "barrett-wam.toml: line {}, data: {}: 1 row(s) repeat an earlier row",
+        line_of(&read(&t), "split = "),
+        data.display()
+    );
+    assert!(!o.status.success() && e.contains(&at), "{e}");
+    assert!(e.contains("row 210 = row 216;"), "{e}");
+    assert!(!d.join("out").exists());
+}

@@ -469,6 +469,20 @@ impl Task {
                         .collect();
                     return Err(self.overlap(&rows, file, file));
                 }
+                // A validation row repeated would weigh its point twice, named by the data
+                // file's rows as the pipeline would name them by the validation's.
+                let repeated = val.repeated_rows();
+                if !repeated.is_empty() {
+                    let rows: Vec<(usize, usize)> = repeated
+                        .iter()
+                        .map(|&(a, b)| (split.validation[a], split.validation[b]))
+                        .collect();
+                    let msg = crate::measurement::repeated_rows_refusal(
+                        &rows,
+                        crate::measurement::REPEATED_VALIDATION,
+                    );
+                    return Err(self.at_validation(format!("{}: {msg}", file.display())));
+                }
                 // Each part is refused as a file of its rows would be.
                 for (part, m, rows) in [
                     ("calibration", &cal, &split.calibration),
