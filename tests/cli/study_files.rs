@@ -460,6 +460,18 @@ fn calibration_keys_no_strategy_reads_are_named_in_a_warning() {
         }
         std::fs::remove_dir_all(&out).unwrap();
     }
+    // A sweep of the strategies reads the pose list at its points of `file`: no warning.
+    let swept = "poses_file = \"poses.csv\"";
+    let with = format!("strategies = [\"random\"]\n{swept}");
+    let sweep =
+        "\n[sweep]\nkey = \"calibration.strategies\"\nvalues = [[\"random\"], [\"file\"]]\n";
+    let sc = d.join("s.toml");
+    let text = text.replace("strategies = [\"random\"]", &with) + sweep;
+    std::fs::write(&sc, text).unwrap();
+    let out = d.join("o");
+    let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success() && !err.contains("is not used"), "{err}");
 }
 
 /// An instruments study's `robot` that is neither built in nor a file had been refused as the

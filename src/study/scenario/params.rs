@@ -91,6 +91,11 @@ impl Scenario {
         let Some(toml::Value::Table(c)) = self.table.get("calibration") else {
             return Vec::new();
         };
+        // A sweep of the strategies may read them at some of its points.
+        let axes = self.sweep.iter().flat_map(|s| &s.axes);
+        if axes.into_iter().any(|a| a.key == "calibration.strategies") {
+            return Vec::new();
+        }
         let strategies = &self.calibration.strategies;
         let file = strategies
             .iter()
