@@ -199,8 +199,9 @@ fn reach(
 
 /// Turns each revolute joint ([`Robot::q_turns`]: not a coupling's screw travel) by whole
 /// turns (the same pose) to the value nearest `near`'s, within half a turn of it, inside its
-/// limits or not: the command a program row's arm moves least to. (Turned into the limits instead, a row at 359° whose correction is +1° with
-/// limits of ±360° had been written −359.96°, a turn and more away, and flagged `ok`.)
+/// limits or not: the command a program row's arm moves least to. (Turned into the limits
+/// instead, a row at 359° whose correction is +1° with limits of ±360° had been written
+/// −359.96°, a turn and more away, and flagged `ok`.)
 fn nearest_turns(robot: &Robot, q: &mut [Real], near: &[Real]) {
     let turn = 2.0 * std::f64::consts::PI;
     for (i, (v, r)) in q.iter_mut().zip(near).enumerate() {

@@ -190,32 +190,33 @@ impl IdentifyRequest {
         // Rows held out of data without copies repeat none of the rest; a validation file's
         // may.
         if let (Some(v), None) = (&val, &held_out) {
+            // A refusal of the validation's rows names its file, as every refusal of a file's
+            // rows does (and says when it is the data's own file).
+            let refused = |why: String| {
+                let why = match &self.validate_source {
+                    Some(v) => {
+                        let same = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+                        match same(v).is_some_and(|c| same(&self.source) == Some(c)) {
+                            true => format!("{} is the data's own file: {why}", v.display()),
+                            false => format!("{}: {why}", v.display()),
+                        }
+                    }
+                    None => why,
+                };
+                Err(Error::option(Opt::Validate, why))
+            };
             // A validation's rows repeated would weigh their points twice in its figures.
             let repeated = v.repeated_rows();
             if !repeated.is_empty() {
-                let why = crate::measurement::repeated_rows_refusal(
-                    &repeated,
-                    crate::measurement::REPEATED_VALIDATION,
-                );
-                let why = match &self.validate_source {
-                    Some(v) => format!("{}: {why}", v.display()),
-                    None => why,
-                };
-                return Err(Error::option(Opt::Validate, why));
+                let why = crate::measurement::REPEATED_VALIDATION;
+                return refused(crate::measurement::repeated_rows_refusal(&repeated, why));
             }
             let shared = d.shared_rows(v);
             if !shared.is_empty() {
-                let mut why = crate::measurement::shared_rows_refusal(&shared, "rows of each file");
-                // A validation file is named (and so is one that is the data's own file),
-                // as every refusal of a file's rows names it.
-                if let Some(v) = &self.validate_source {
-                    let same = |p: &std::path::Path| std::fs::canonicalize(p).ok();
-                    why = match same(v).is_some_and(|c| same(&self.source) == Some(c)) {
-                        true => format!("{} is the data's own file: {why}", v.display()),
-                        false => format!("{}: {why}", v.display()),
-                    };
-                }
-                return Err(Error::option(Opt::Validate, why));
+                return refused(crate::measurement::shared_rows_refusal(
+                    &shared,
+                    "rows of each file",
+                ));
             }
         }
         check_frames(nominal, &d, val.as_ref(), registration, held_out.is_some())?;

@@ -353,7 +353,10 @@ fn registration_and_instruments_studies_are_recorded_and_history_and_the_board_r
     let o = calbench_ok(&["history", "--db", path_arg(&db), "--regressions"]);
     let said = String::from_utf8_lossy(&o.stdout);
     assert!(
-        said.contains("(0 scenario-machine pairs compared, 0 with a changed scenario; 2 pairs of a registration or instruments study not judged"),
+        said.contains(
+            "(0 scenario-machine pairs compared, 0 with a changed scenario; 2 pairs of a \
+             registration or instruments study not judged"
+        ),
         "{said}"
     );
     let out = dir.join("history");

@@ -314,11 +314,11 @@ fn another_arm_is_refused_and_the_same_arm_written_otherwise_is_not() {
 }
 
 /// A UR10 identified from the shipped rows as docs/formats.md § 2.8 does, and a program
-/// whose rows stand a degree inside the ±360° limits of joints 1 and 6, where the corrections
-/// (+1.04° on joint 1, −0.99° on joint 6) take them past the limits: each row's solution nearest
-/// its command is written and flagged `limits`. They had been turned by a whole turn into the
-/// limits (q1 −359.96, q6 −0.94) and flagged `ok`, a move of 719° and 359° on the arm. A row
-/// well inside the limits is corrected by about a degree and `ok`.
+/// whose rows stand a degree inside the ±360° limits of joints 1 and 6, where the
+/// corrections (+1.04° on joint 1, −0.99° on joint 6) take them past the limits: each row's
+/// solution nearest its command is written and flagged `limits`. They had been turned by a
+/// whole turn into the limits (q1 −359.96, q6 −0.94) and flagged `ok`, a move of 719° and
+/// 359° on the arm. A row well inside the limits is corrected by about a degree and `ok`.
 #[test]
 fn a_correction_past_a_limit_is_flagged_not_turned_into_the_limits() {
     let d = tmp_dir("cli-compensate-past-limit");

@@ -36,6 +36,30 @@ fn wam_file(name: &str) -> PathBuf {
     root().join("data/barrett-wam").join(name)
 }
 
+/// The WAM task of one data file `data` split by `split`, written into `dir`.
+fn split_task(dir: &Path, data: &Path, split: &Path) -> PathBuf {
+    let form = format!(
+        "file = \"{}\"\nsplit = \"{}\"",
+        data.display(),
+        split.display()
+    );
+    wam_task(dir, &form)
+}
+
+/// The WAM grid file with a copy of its data row `row` (0-based) appended, as `dir/name`.
+fn grid_with_copy(dir: &Path, name: &str, row: usize) -> PathBuf {
+    let text = std::fs::read_to_string(wam_file(GRID)).unwrap();
+    let copy = text.lines().nth(row + 1).unwrap();
+    let data = dir.join(name);
+    std::fs::write(&data, format!("{text}{copy}\n")).unwrap();
+    data
+}
+
+/// Where task `t` refuses its rows: `barrett-wam.toml: line N, data: ` at the line of `key`.
+fn at(t: &Path, key: &str) -> String {
+    format!("barrett-wam.toml: line {}, data: ", line_of(&read(t), key))
+}
+
 const GRID: &str = "3D_WAM_uncalibrated_grid_cleaned.csv";
 const RANDOM: &str = "3D_WAM_uncalibrated_random_cleaned.csv";
 
@@ -99,8 +123,6 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
     assert!(!d.join("out").exists(), "nothing is written");
     let e = String::from_utf8_lossy(&o.stderr);
     // At the line of the key that gives the validation rows.
-    let at =
-        |t: &Path, key: &str| format!("barrett-wam.toml: line {}, data: ", line_of(&read(t), key));
     assert!(
         e.contains(&at(&t, "validation = "))
             && e.contains("216 validation row(s) repeat a calibration row")
@@ -109,20 +131,10 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
         "{e}"
     );
     // A split of one file whose last row repeats row 5: distinct indices, the same row.
-    let text = std::fs::read_to_string(wam_file(GRID)).unwrap();
-    let row5 = text.lines().nth(6).unwrap();
-    let data = d.join("grid-plus.csv");
-    std::fs::write(&data, format!("{text}{row5}\n")).unwrap();
+    let data = grid_with_copy(&d, "grid-plus.csv", 5);
     let split = d.join("grid-plus.split");
     std::fs::write(&split, "rows 217\ncalibration 0-215\nvalidation 216\n").unwrap();
-    let t = wam_task(
-        &d,
-        &format!(
-            "file = \"{}\"\nsplit = \"{}\"",
-            data.display(),
-            split.display()
-        ),
-    );
+    let t = split_task(&d, &data, &split);
     let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
     assert!(!o.status.success(), "a repeated row across the split ran");
     let e = String::from_utf8_lossy(&o.stderr);
@@ -148,7 +160,7 @@ fn validation_rows_that_repeat_calibration_rows_are_refused_naming_them() {
         "{e}"
     );
     // Without the repeat the same split file form runs.
-    std::fs::write(&data, &text).unwrap();
+    std::fs::copy(wam_file(GRID), &data).unwrap();
     std::fs::write(&split, "rows 216\ncalibration 0-199\nvalidation 200-215\n").unwrap();
     task_lm(calbench_ok, &t, Some("kinematic"), &d.join("ok"));
 }
@@ -341,10 +353,7 @@ fn validation_rows_off_the_calibration_s_unit_or_frame_are_refused_at_their_key(
         let e = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(1), "{e}");
         assert!(!d.join("out").exists(), "nothing is written");
-        let at = format!(
-            "barrett-wam.toml: line {}, data: the ",
-            line_of(&read(&t), "validation = ")
-        );
+        let at = format!("{}the ", at(&t, "validation = "));
         assert!(e.contains(&at) && e.contains(words), "{e}");
     }
 }
@@ -358,14 +367,7 @@ fn validation_rows_off_the_calibration_s_unit_or_frame_are_refused_at_their_key(
 fn a_split_part_of_fewer_than_three_distinct_poses_is_refused() {
     let d = tmp_dir("task-rows-split-part");
     let split = d.join("grid.split");
-    let t = wam_task(
-        &d,
-        &format!(
-            "file = \"{}\"\nsplit = \"{}\"",
-            wam_file(GRID).display(),
-            split.display()
-        ),
-    );
+    let t = split_task(&d, &wam_file(GRID), &split);
     for (text, part) in [
         (
             "rows 216\ncalibration 0-213\nvalidation 214-215\n",
@@ -378,11 +380,7 @@ fn a_split_part_of_fewer_than_three_distinct_poses_is_refused() {
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success(), "{text}: {e}");
         let said = format!("the {part} rows of {} (", split.display());
-        let at = format!(
-            "barrett-wam.toml: line {}, data: ",
-            line_of(&read(&t), "split = ")
-        );
-        assert!(e.contains(&at) && e.contains(&said), "{e}");
+        assert!(e.contains(&at(&t, "split = ")) && e.contains(&said), "{e}");
         assert!(e.contains("hold fewer than 3 distinct poses"), "{e}");
         assert!(!d.join("out").exists());
     }
@@ -395,28 +393,18 @@ fn a_split_part_of_fewer_than_three_distinct_poses_is_refused() {
 #[test]
 fn repeated_validation_rows_of_a_split_are_refused_naming_the_data_rows() {
     let d = tmp_dir("task-rows-split-repeats");
-    let text = std::fs::read_to_string(wam_file(GRID)).unwrap();
-    let row210 = text.lines().nth(211).unwrap();
-    let data = d.join("grid-plus.csv");
-    std::fs::write(&data, format!("{text}{row210}\n")).unwrap();
+    let data = grid_with_copy(&d, "grid-plus.csv", 210);
     let split = d.join("grid.split");
     std::fs::write(&split, "rows 217\ncalibration 0-199\nvalidation 200-216\n").unwrap();
-    let t = wam_task(
-        &d,
-        &format!(
-            "file = \"{}\"\nsplit = \"{}\"",
-            data.display(),
-            split.display()
-        ),
-    );
+    let t = split_task(&d, &data, &split);
     let o = task_lm(calbench, &t, Some("kinematic"), &d.join("out"));
     let e = String::from_utf8_lossy(&o.stderr);
-    let at = format!(
-        "barrett-wam.toml: line {}, data: {}: 1 row(s) repeat an earlier row",
-        line_of(&read(&t), "split = "),
+    let said = format!(
+        "{}{}: 1 row(s) repeat an earlier row",
+        at(&t, "split = "),
         data.display()
     );
-    assert!(!o.status.success() && e.contains(&at), "{e}");
+    assert!(!o.status.success() && e.contains(&said), "{e}");
     assert!(e.contains("row 210 = row 216;"), "{e}");
     assert!(!d.join("out").exists());
 }

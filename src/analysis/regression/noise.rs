@@ -14,8 +14,8 @@
 //! with neither, the change is taken as exact, as the plain rule of the tolerance always did,
 //! unless the summaries write intervals and lack only this figure's (a median's under the
 //! trials its interval needs) or a side has a single usable trial: its noise is then not
-//! known, and the change is never resolved. A change within the rounding of the numbers (1e-12 of
-//! their size, per trial or in the summaries) is no change.
+//! known, and the change is never resolved. A change within the rounding of the numbers
+//! (1e-12 of their size, per trial or in the summaries) is no change.
 
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -284,8 +284,8 @@ fn summary_se(e: &Entry, path: &str, n: usize) -> Option<Real> {
 /// The unpaired change of `metric` from the baseline entry `a` (value `va`) to `b` (`vb`),
 /// with `trials` the `trials` of each summary: Welch from the two standard errors; a side
 /// without one borrows the other's; exact when neither has one and neither writes intervals
-/// nor is of a single usable trial, else of unknown noise (never resolved). Failures are compared as
-/// proportions of the trials (pooled two-proportion z).
+/// nor is of a single usable trial, else of unknown noise (never resolved). Failures are
+/// compared as proportions of the trials (pooled two-proportion z).
 pub fn unpaired(
     a: &Entry,
     b: &Entry,

@@ -92,8 +92,8 @@ impl Scenario {
             return Vec::new();
         };
         // A sweep of the strategies may read them at some of its points.
-        let axes = self.sweep.iter().flat_map(|s| &s.axes);
-        if axes.into_iter().any(|a| a.key == "calibration.strategies") {
+        let mut axes = self.sweep.iter().flat_map(|s| &s.axes);
+        if axes.any(|a| a.key == "calibration.strategies") {
             return Vec::new();
         }
         let strategies = &self.calibration.strategies;
