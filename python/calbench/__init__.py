@@ -397,7 +397,10 @@ class Study:
 
 
 def _shard(shard):
-    """``shard`` as (i, n) with 0 <= i < n, or a SettingError naming it."""
+    """``shard`` as (i, n) with 0 <= i < n, or a SettingError naming it: a tuple, a list or a
+    one-dimensional numpy array of two integers."""
+    if isinstance(shard, np.ndarray) and shard.ndim == 1:
+        shard = shard.tolist()
     if (
         not isinstance(shard, (tuple, list))
         or len(shard) != 2

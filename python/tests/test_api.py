@@ -156,6 +156,10 @@ def test_identify_gives_the_cli_numbers(cli, simulated, tmp_path):
     for bad, words in [(vp / 1000.0, "likely in metres"), (moved, "do not lie in one frame")]:
         with pytest.raises(calbench.SettingError, match=f"setting `validate`: .*{words}"):
             calbench.identify(robot, q, p, method="lm", validate=(vq, bad))
+    # An array of the wrong shape is named by its place in `validate` (docs/python.md).
+    for bad, name in [((vq[:, :5], vp), "validate.q"), ((vq, vp[:, :2]), "validate.points")]:
+        with pytest.raises(calbench.SettingError, match=f"setting `{name}`: expected shape"):
+            calbench.identify(robot, q, p, method="lm", validate=bad)
     rows = np.genfromtxt(tmp_path / "id" / "residuals.csv", delimiter=",", names=True)
     assert res.residuals.shape == (len(q), 3)
     assert np.allclose(np.linalg.norm(res.residuals, axis=1), rows["residual_after_mm"], atol=1e-9)

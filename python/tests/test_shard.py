@@ -3,6 +3,7 @@ the bytes of the whole run; bad shards refused."""
 import json
 import tomllib
 
+import numpy as np
 import pytest
 
 import calbench
@@ -14,9 +15,10 @@ def test_two_python_shards_merge_into_the_bytes_of_one_cli_run(cli, root, tmp_pa
     cli("run", CI_GUARD, "--trials", "5", "--seed", "11", "--out", tmp_path / "whole")
     with open(root / CI_GUARD, "rb") as f:
         as_dict = tomllib.load(f)
-    # One shard from the file, one from the dict, with different thread counts.
+    # One shard from the file, one from the dict, with different thread counts; the second's
+    # (i, n) as a numpy array.
     s0 = calbench.run(root / CI_GUARD, trials=5, seed=11, threads=1, shard=(0, 2), out=tmp_path / "s0")
-    s1 = calbench.run(as_dict, trials=5, seed=11, threads=2, shard=(1, 2), out=tmp_path / "s1")
+    s1 = calbench.run(as_dict, trials=5, seed=11, threads=2, shard=np.array([1, 2]), out=tmp_path / "s1")
     assert s0 == tmp_path / "s0" and s1 == tmp_path / "s1"
     meta = json.loads((s1 / "shard.json").read_text())
     assert meta["shard"] == {"index": 1, "count": 2}
@@ -36,6 +38,9 @@ def test_two_python_shards_merge_into_the_bytes_of_one_cli_run(cli, root, tmp_pa
         ("0/2", "shard"),
         ((True, 2), "shard"),
         ((0.0, 2), "shard"),
+        (np.array([0.0, 2.0]), "shard"),
+        (np.array([[0, 2]]), "shard"),
+        (np.array([True, True]), "shard"),
     ],
 )
 def test_bad_shards_are_refused(root, tmp_path, shard, match):
