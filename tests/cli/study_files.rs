@@ -474,6 +474,39 @@ fn calibration_keys_no_strategy_reads_are_named_in_a_warning() {
     assert!(o.status.success() && !err.contains("is not used"), "{err}");
 }
 
+/// `[errors]` sizes the kind does not read (`length_mm`, `angle_rad` with `none` or `values`,
+/// `params` with `none`) had been ignored without a word: a run with `kind = "none"` and
+/// `length_mm = 0.3` simulated a perfect robot. The run goes on and names each such key; a
+/// kind that reads them, or a sweep of the kind, says nothing of them.
+#[test]
+fn error_sizes_the_kind_does_not_read_are_named_in_a_warning() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let d = tmp("unused_errors");
+    let text = std::fs::read_to_string(root.join("scenarios/ci-guard.toml")).unwrap();
+    assert!(text.contains("\nkind = \"paper\"\n"));
+    let sizes = "length_mm = 0.3\nangle_rad = 0.01\nparams = \"all\"";
+    let sweep = "\n[sweep]\nkey = \"errors.kind\"\nvalues = [\"none\", \"paper\"]\n";
+    for (kind, swept, warned) in [
+        ("none", false, &["length_mm", "angle_rad", "params"][..]),
+        ("paper", false, &[]),
+        ("none", true, &[]),
+    ] {
+        let sc = d.join("s.toml");
+        let with = format!("\nkind = \"{kind}\"\n{sizes}\n");
+        let edited = text.replace("\nkind = \"paper\"\n", &with);
+        std::fs::write(&sc, if swept { edited + sweep } else { edited }).unwrap();
+        let out = d.join("o");
+        let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{err}");
+        for key in ["length_mm", "angle_rad", "params"] {
+            let said = format!("warning: errors.{key} is not used: errors.kind is \"{kind}\"");
+            assert_eq!(err.contains(&said), warned.contains(&key), "{kind}: {err}");
+        }
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+}
+
 /// An instruments study's `robot` that is neither built in nor a file had been refused as the
 /// bare setting `robot`, naming neither the scenario nor its line, where a Monte-Carlo
 /// scenario's robot is refused at its file, line and key.

@@ -83,19 +83,56 @@ impl Scenario {
         Ok(())
     }
 
-    /// What the scenario's `[calibration]` sets that none of its strategies reads, one line
-    /// each for the run's warnings: a pose list `poses_file` without the strategy `file`, and
-    /// the optimisers' settings without an optimised strategy. Such a key is allowed (a
-    /// scenario may keep it for another run), but a run that ignores it says so.
+    /// What the scenario sets that it does not read, one line each for the run's warnings:
+    /// in `[calibration]`, a pose list `poses_file` without the strategy `file` and the
+    /// optimisers' settings without an optimised strategy; in `[errors]`, the sizes
+    /// `length_mm` and `angle_rad` with `kind = "none"` or `"values"`, and `params` with
+    /// `kind = "none"`. Such a key is allowed (a scenario may keep it for another run), but a
+    /// run that ignores it says so; a sweep of the key that decides (`calibration.strategies`,
+    /// `errors.kind`) may read it at some of its points, and is not warned of.
     pub fn unused_settings(&self) -> Vec<String> {
+        let swept = |key: &str| {
+            let mut axes = self.sweep.iter().flat_map(|s| &s.axes);
+            axes.any(|a| a.key == key)
+        };
+        let mut out = Vec::new();
+        if !swept("calibration.strategies") {
+            out.extend(self.unused_calibration());
+        }
+        if !swept("errors.kind") {
+            out.extend(self.unused_errors());
+        }
+        out
+    }
+
+    /// The `[errors]` keys of [`Self::unused_settings`].
+    fn unused_errors(&self) -> Vec<String> {
+        let Some(toml::Value::Table(e)) = self.table.get("errors") else {
+            return Vec::new();
+        };
+        let kind = self.errors.kind;
+        let unused: &[&str] = match kind {
+            ErrorKind::None => &["length_mm", "angle_rad", "params"],
+            ErrorKind::Values => &["length_mm", "angle_rad"],
+            _ => &[],
+        };
+        unused
+            .iter()
+            .filter(|k| e.contains_key(**k))
+            .map(|k| {
+                format!(
+                    "errors.{k} is not used: errors.kind is \"{}\"",
+                    kind.as_str()
+                )
+            })
+            .collect()
+    }
+
+    /// The `[calibration]` keys of [`Self::unused_settings`].
+    fn unused_calibration(&self) -> Vec<String> {
         let Some(toml::Value::Table(c)) = self.table.get("calibration") else {
             return Vec::new();
         };
-        // A sweep of the strategies may read them at some of its points.
-        let mut axes = self.sweep.iter().flat_map(|s| &s.axes);
-        if axes.any(|a| a.key == "calibration.strategies") {
-            return Vec::new();
-        }
         let strategies = &self.calibration.strategies;
         let file = strategies
             .iter()
