@@ -485,11 +485,10 @@ pub(super) fn scenario_as_run(
     if ran.is_file() {
         let file_text = read_text(&ran)?;
         let (text, hash) = scenario_file::read(&file_text, &ran)?;
-        same_run(
-            dir,
-            (name, trials, seed),
-            &AnyScenario::parse(&file_text, Some(&ran))?,
-        )?;
+        // Its name, trials and seed, read from its text alone: its other settings may name
+        // files by paths relative to the scenario's own folder, which the run folder is not.
+        let own: toml::Table = crate::error::toml_keys(&ran, &text)?;
+        same_run(dir, (name, trials, seed), &own)?;
         if let Some(file) = scenario {
             let other = sha256_hex(given(file)?.settings()?.as_bytes());
             if other != hash {
@@ -530,20 +529,32 @@ pub(super) fn scenario_as_run(
 
 /// Refuses, naming the key of the folder `dir`'s `summary.json` and its line, a summary whose
 /// scenario name, trials or seed (`run`; a missing one is not compared) are not those of the
-/// scenario the folder's `scenario.toml` says was run (`own`): the summary of another run.
+/// scenario the folder's `scenario.toml` says was run (`own`, its table as run: `name`,
+/// `trials` and `seed` at its top, the last two absent only from a Monte-Carlo study that
+/// ran with their defaults): the summary of another run.
 fn same_run(
     dir: &Path,
     (name, trials, seed): (&str, Option<usize>, Option<u64>),
-    own: &AnyScenario,
+    own: &toml::Table,
 ) -> Result<()> {
+    use crate::study::scenario::{DEFAULT_SEED, DEFAULT_TRIALS};
+    let shown = |key: &str, default: String| match own.get(key) {
+        Some(toml::Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => default,
+    };
     let said = [
-        ("scenario", Some(name.to_string()), own.name().to_string()),
+        ("scenario", Some(name.to_string()), shown("name", "".into())),
         (
             "trials",
             trials.map(|t| t.to_string()),
-            own.trials().to_string(),
+            shown("trials", DEFAULT_TRIALS.to_string()),
         ),
-        ("seed", seed.map(|s| s.to_string()), own.seed().to_string()),
+        (
+            "seed",
+            seed.map(|s| s.to_string()),
+            shown("seed", DEFAULT_SEED.to_string()),
+        ),
     ];
     for (key, summary, ran) in said {
         if let Some(summary) = summary.filter(|s| *s != ran) {

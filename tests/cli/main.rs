@@ -52,6 +52,7 @@ mod realdata;
 mod record_figures;
 mod record_formats;
 mod record_keys;
+mod record_layout;
 mod record_task;
 mod records;
 mod refusals;

@@ -84,11 +84,17 @@ struct RawScenario {
     claims: Vec<toml::Table>,
 }
 
+/// A Monte-Carlo scenario's seed and trials when its file gives none; its table as run
+/// (`scenario.toml`) then has no such key either.
+pub const DEFAULT_SEED: u64 = 1;
+/// See [`DEFAULT_SEED`].
+pub const DEFAULT_TRIALS: usize = 100;
+
 fn default_seed() -> u64 {
-    1
+    DEFAULT_SEED
 }
 fn default_trials() -> usize {
-    100
+    DEFAULT_TRIALS
 }
 
 /// A checked scenario: every value in range, ready to run.
