@@ -175,8 +175,8 @@ pub fn compensate_row(
 /// The joints at which `identified` (carrying `payload_kg`) reaches `target`, solved from
 /// `q0`, and whether its orientation is judged: the whole pose; the position alone for
 /// `position_only`; and for an arm of fewer than six joints, which cannot take every pose a
-/// changed model asks for (five joints against six coordinates), the position, solved from
-/// the joints that come closest to the whole pose, so that its orientation stays near it.
+/// changed model asks for (five joints against six coordinates), the position, solved both
+/// from `q0` and from the joints that come closest to the whole pose ([`nearest_pose`]).
 fn reach(
     identified: &Robot,
     target: &Frame,
@@ -191,10 +191,55 @@ fn reach(
         return Ok((solve(q0, 3)?, false));
     }
     let q = solve(q0, 6)?;
-    match identified.dof() < 6 {
-        true => Ok((solve(&q, 3)?, false)),
-        false => Ok((q, true)),
+    if identified.dof() >= 6 {
+        return Ok((q, true));
     }
+    let candidates = [solve(q0, 3)?, solve(&q, 3)?];
+    Ok((
+        nearest_pose(identified, target, q0, payload_kg, candidates)?,
+        false,
+    ))
+}
+
+/// Of an arm's joint vectors that reach a target's position (`candidates`: from the start
+/// `q0`, then from the joints closest to the whole pose), the one to keep: the position
+/// reached ([`ACCEPT_MM`]) first, then within the limits (each revolute joint nearest `q0`'s
+/// by whole turns); of two alike, a later one only where it turns the tool nearer the
+/// target's orientation and moves no joint further from `q0` (by the share of its range).
+/// The whole pose's solve of an arm of fewer than six joints minimises position and
+/// orientation together, with no pose to reach exactly, and can end on another branch: on a
+/// five-joint arm with a sliding joint it had sent the slide to 1401 mm past its 300 mm limit,
+/// turned a tool 4.9° from the pose where the row's own position solve left it 0.6° away, and
+/// moved joints by 50° to gain 0.1°.
+fn nearest_pose<const N: usize>(
+    robot: &Robot,
+    target: &Frame,
+    q0: &[Real],
+    payload_kg: Real,
+    candidates: [Vec<Real>; N],
+) -> crate::Result<Vec<Real>> {
+    let fk = LoadedFk::new(robot);
+    let mut best: Option<((bool, bool), Real, Real, Vec<Real>)> = None;
+    for q in candidates {
+        let f = fk.at(&q, payload_kg)?;
+        let mut turned = q.clone();
+        nearest_turns(robot, &mut turned, q0);
+        let fails = (
+            (f.pos - target.pos).norm() > ACCEPT_MM,
+            !robot.within_limits(&turned),
+        );
+        let turn = rotation_angle_deg(&f, target);
+        let moved = (turned.iter().zip(q0).zip(&robot.joints))
+            .map(|((v, r), j)| (v - r).abs() / (j.limits.1 - j.limits.0))
+            .fold(0.0, Real::max);
+        let better = best.as_ref().is_none_or(|(b_fails, b_turn, b_moved, _)| {
+            fails < *b_fails || (fails == *b_fails && turn < *b_turn && moved <= *b_moved)
+        });
+        if better {
+            best = Some((fails, turn, moved, q));
+        }
+    }
+    Ok(best.map_or_else(|| q0.to_vec(), |b| b.3))
 }
 
 /// Turns each revolute joint ([`Robot::q_turns`]: not a coupling's screw travel) by whole
