@@ -13,7 +13,8 @@ pub fn line_of(text: &str, at: usize) -> usize {
 }
 
 /// The 1-based line where the dotted `key` is written in the TOML `text`: a path of table
-/// keys and array indices such as `calibration.region`, `joints[1].a` or `methods[0].k1`.
+/// keys and array indices such as `calibration.region`, `joints[1].a` or `methods[0].k1`, a
+/// key with a dot in double quotes (`errors.values."tool.z"`).
 /// The line of the key itself when the path ends in a key, of the element when it ends in an
 /// index (`joints[1]`: the line of that `[[joints]]`). `None` when the text does not parse or
 /// does not write the key (a default, a value set on the command line).
@@ -23,7 +24,8 @@ pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
     let mut table = doc.get_ref();
     let mut value: Option<&toml::Spanned<DeValue>> = None;
     let mut span = None;
-    for part in key.split('.') {
+    for part in dotted_parts(key) {
+        let part = part.as_str();
         let (name, indices) = match part.find('[') {
             Some(i) => (&part[..i], &part[i..]),
             None => (part, ""),
@@ -48,6 +50,21 @@ pub fn toml_key_line(text: &str, key: &str) -> Option<usize> {
         value = Some(v);
     }
     span.map(|s| line_of(text, s.start))
+}
+
+/// The parts of a dotted key path, split at the dots outside double quotes, the quotes
+/// dropped: `errors.values."tool.z"` is `errors`, `values`, `tool.z`.
+fn dotted_parts(key: &str) -> Vec<String> {
+    let (mut parts, mut part, mut quoted) = (Vec::new(), String::new(), false);
+    for c in key.chars() {
+        match c {
+            '"' => quoted = !quoted,
+            '.' if !quoted => parts.push(std::mem::take(&mut part)),
+            c => part.push(c),
+        }
+    }
+    parts.push(part);
+    parts
 }
 
 /// The 1-based line where the key path `key` is written in the JSON `text`: keys joined by

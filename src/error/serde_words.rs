@@ -66,6 +66,9 @@ const NUMBER_TYPES: [(&str, &str); 12] = [
 /// `struct NAME` as `a table of keys`); any other text as it is.
 pub(super) fn plain_types(text: String) -> String {
     const EXPECTED: &str = "expected ";
+    if let Some(said) = beyond_toml(&text) {
+        return said;
+    }
     if !text.contains(EXPECTED) {
         return text;
     }
@@ -94,6 +97,20 @@ pub(super) fn plain_types(text: String) -> String {
     out
 }
 
+/// toml's refusals of a whole number beyond the 64-bit integers TOML has (`u64 value was too
+/// large`; `invalid type: integer `N` as i128, expected any valid TOML value`), said with the
+/// range; `None` for any other text.
+fn beyond_toml(text: &str) -> Option<String> {
+    const RANGE: &str = "beyond TOML's whole numbers, -9223372036854775808 to \
+                         9223372036854775807 (2^63 − 1)";
+    if text == "u64 value was too large" {
+        return Some(format!("the whole number is {RANGE}"));
+    }
+    let (head, tail) = text.split_once(" as i128, expected any valid TOML value")?;
+    let n = head.strip_prefix("invalid type: integer ")?;
+    Some(format!("{n} is {RANGE}{tail}"))
+}
+
 #[cfg(test)]
 mod tests {
     use crate::error::Said;
@@ -108,6 +125,16 @@ mod tests {
         assert_eq!(
             said("invalid type: floating point `6.5`, expected u64\nin `seed`"),
             "invalid type: floating point `6.5`, expected a whole number ≥ 0\nin `seed`"
+        );
+        assert_eq!(
+            said("u64 value was too large"),
+            "the whole number is beyond TOML's whole numbers, -9223372036854775808 to 9223372036854775807 \
+             (2^63 − 1)"
+        );
+        assert_eq!(
+            said("invalid type: integer `99999999999999999999` as i128, expected any valid TOML value"),
+            "`99999999999999999999` is beyond TOML's whole numbers, -9223372036854775808 to \
+             9223372036854775807 (2^63 − 1)"
         );
         assert_eq!(
             said("invalid value: integer `300`, expected u8"),

@@ -100,6 +100,17 @@ impl<'de> Deserialize<'de> for ParamSelection {
     }
 }
 
+/// The key that names the parameter `name` listed by `key`: a list's own key
+/// (`errors.params`), or the name's key in a table whose keys are the names
+/// (`errors.values.a9`).
+pub fn name_key(key: &str, name: &str) -> String {
+    match key {
+        "errors.values" if name.contains('.') => format!("{key}.\"{name}\""),
+        "errors.values" => format!("{key}.{name}"),
+        key => key.to_string(),
+    }
+}
+
 /// The parameters of an `errors.params` list, in list order: `param` reads one name (or
 /// gives the error for a name it does not know); a name listed twice is refused.
 pub(crate) fn listed_params(
@@ -183,7 +194,7 @@ impl ErrorSettings {
             }
             if let Some((n, v)) = self.values.iter().find(|(_, v)| !v.is_finite()) {
                 return Err(Error::setting(
-                    format!("errors.values.{n}"),
+                    name_key("errors.values", n),
                     format!("must be a finite number, got {}", crate::error::shown(*v)),
                 ));
             }
@@ -192,7 +203,7 @@ impl ErrorSettings {
                     continue;
                 };
                 if let Some(msg) = beyond_range(*v, p.is_length()) {
-                    return Err(Error::setting(format!("errors.values.{n}"), msg));
+                    return Err(Error::setting(name_key("errors.values", n), msg));
                 }
             }
         } else if !self.values.is_empty() {
@@ -215,7 +226,7 @@ impl ErrorSettings {
             listed_params(names, |n| {
                 Param::parse(n).ok_or_else(|| {
                     Error::setting(
-                        self.key(),
+                        name_key(self.key(), n),
                         format!(
                             "unknown parameter \"{n}\" (names are theta1, d1, a1, alpha1, beta1, …, \
                              base.x … base.rz, tool.x … tool.rz)"

@@ -31,7 +31,8 @@ pub fn identifiable_params(robot: &Robot, measure: Measure) -> Vec<Param> {
 }
 
 /// The parameters selected by `sel` for `robot`: refuses names that are not parameters of
-/// the robot's model (naming `key`, the scenario key that listed them).
+/// the robot's model, naming `key`, the scenario key that listed them (a list), or the name's
+/// own key in it (the table `errors.values`, whose keys are the names).
 pub fn selected_params(
     robot: &Robot,
     sel: &ParamSelection,
@@ -50,7 +51,7 @@ pub fn selected_params(
             listed_params(names, |n| {
                 Param::parse(n).filter(|p| all.contains(p)).ok_or_else(|| {
                     Error::setting(
-                        key,
+                        crate::sim::settings::name_key(key, n),
                         format!(
                             "\"{n}\" is not a parameter of robot \"{}\" ({} convention, {} joints)",
                             robot.name,

@@ -265,3 +265,57 @@ fn a_key_missing_from_the_file_itself_is_named_without_a_line() {
         format!("error: r2.toml: line {line}, joints[1].d: missing field `d`\n")
     );
 }
+
+/// A name `[errors.values]` does not know is refused at its own line and key, where it had
+/// been refused at the table's header (docs/formats.md § 4.4: "refused by its key"), a name
+/// with a dot by its quoted key; and a whole number beyond TOML's 64 bits is refused saying
+/// so, where toml's words were `u64 value was too large` and `as i128, expected any valid
+/// TOML value`.
+#[test]
+fn an_unknown_error_name_and_a_number_beyond_toml_are_refused_at_their_line() {
+    let d = tmp_dir("cli-lines-values");
+    let range = "beyond TOML's whole numbers, -9223372036854775808 to 9223372036854775807";
+    let values = |names: &'static str| {
+        move |t: String| {
+            t.replace(
+                "kind = \"paper\"",
+                &format!("kind = \"values\"\n[errors.values]\na2 = 0.1\n{names}"),
+            )
+        }
+    };
+    let seed = |v: &'static str| move |t: String| t.replace("seed = 42", &format!("seed = {v}"));
+    let cases: [(&str, Box<dyn Fn(String) -> String>, &str, String); 4] = [
+        (
+            "a9",
+            Box::new(values("a9 = 0.1")),
+            "a9 = ",
+            "errors.values.a9: \"a9\" is not a parameter of robot \"irb2600\"".into(),
+        ),
+        (
+            "dotted",
+            Box::new(values("\"tool.q\" = 0.1")),
+            "\"tool.q\"",
+            "errors.values.\"tool.q\": unknown parameter \"tool.q\"".into(),
+        ),
+        (
+            "u64",
+            Box::new(seed("9223372036854775808")),
+            "seed = ",
+            format!("seed: the whole number is {range}"),
+        ),
+        (
+            "i128",
+            Box::new(seed("99999999999999999999")),
+            "seed = ",
+            format!("seed: `99999999999999999999` is {range}"),
+        ),
+    ];
+    for (name, edit, start, want) in cases {
+        let sc = ci_guard_with(&d, name, edit);
+        let line = line_of(&read(&sc), start);
+        let said = refusal(&d, &["run", &format!("{name}.toml"), "--out", "o"]);
+        let at = format!("error: {name}.toml: line {line}, {want}");
+        assert!(said.starts_with(&at), "{said}\nwanted: {at}");
+        assert!(!d.join("o").exists());
+    }
+}
