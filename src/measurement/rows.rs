@@ -228,8 +228,8 @@ impl Rows {
 
 /// The CSV reader of `input` as the `dialect` says, its first line read as the header when
 /// `header`. `#` comment lines are emptied by [`Uncommented`] (rather than skipped by the
-/// reader), and each line number the reader gives is mapped back to the file's through the
-/// lines that are not empty.
+/// reader), and each record's line is the first line that is not empty from the position
+/// the reader gives ([`file_line`]).
 fn reader(
     input: Box<dyn std::io::BufRead>,
     dialect: Dialect,
@@ -247,8 +247,8 @@ fn reader(
 /// A file read a line at a time ([`read_line`]) with a UTF-8 byte-order mark at its start
 /// dropped, CRLF and CR line ends read as LF, its lines of blanks and (but for an `export`) its `#` comment lines
 /// emptied (their line breaks kept), an export's bytes that are not UTF-8 read as U+FFFD,
-/// noting the file line number of each line that is not empty: the
-/// `n`-th non-empty line the CSV reader counts is file line `kept[n - 1]`.
+/// noting the file line number of each line that is not empty (`kept`): the lines keep their
+/// line breaks, so that the CSV reader counts the file's lines.
 struct Uncommented<R> {
     inner: R,
     export: bool,
@@ -258,13 +258,14 @@ struct Uncommented<R> {
     kept: Vec<u64>,
 }
 
-/// The file line of the reader's position `p`, through the file lines of the lines that are
-/// not empty ([`Uncommented`]'s `kept`).
+/// The file line of the record at the reader's position `p`, through the file lines of the
+/// lines that are not empty ([`Uncommented`]'s `kept`). The reader counts every line, the
+/// emptied ones too, and a record's position is where the reader stood when the record
+/// before it ended: before the blank and comment lines ahead of it. The record starts on the
+/// first line from there that is not empty.
 fn file_line(kept: &[u64], p: &::csv::Position) -> u64 {
     let n = p.line();
-    usize::try_from(n)
-        .ok()
-        .and_then(|n| kept.get(n.checked_sub(1)?))
+    kept.get(kept.partition_point(|&l| l < n))
         .copied()
         .unwrap_or(n)
 }
@@ -404,7 +405,8 @@ impl<R: std::io::BufRead> std::io::Read for Uncommented<R> {
 
 #[cfg(test)]
 mod tests {
-    use super::{quoted, read_line};
+    use super::{quoted, read_line, Rows};
+    use std::path::Path;
 
     /// The lines [`read_line`] reads from `text` through a buffer of `cap` bytes.
     fn lines(text: &[u8], cap: usize) -> Vec<Vec<u8>> {
@@ -431,6 +433,32 @@ mod tests {
         // No more than the limit: the caller refuses a line that reaches it.
         let long = [b'x'; 100];
         assert_eq!(lines(&long, 8)[0].len(), 64);
+    }
+
+    /// Each row is named by its own line, whatever blank and comment lines come before the
+    /// header and between the rows (the reader's position of a row is the line after the row
+    /// before it).
+    #[test]
+    fn rows_are_named_by_their_lines_past_blank_and_comment_lines() {
+        let cases = [
+            ("a,b\n1,2\n3,4\n", vec![1, 2, 3]),
+            ("# c\na,b\n1,2\n# c\n3,4\n5,6\n", vec![2, 3, 5, 6]),
+            ("\na,b\n1,2\n\n3,4\n5,6\n", vec![2, 3, 5, 6]),
+            (
+                "# c\n\na,b\n1,2\n\n# c\n\n3,4\r\n# c\r\n5,6\r\n",
+                vec![3, 4, 8, 10],
+            ),
+            ("a,b\n\n\n1,\"2\n2\"\n# c\n3,4\n", vec![1, 4, 7]),
+        ];
+        for (text, want) in cases {
+            let mut r = Rows::of_text(Path::new("t.csv"), text.into(), "a,b").unwrap();
+            let mut rec = ::csv::StringRecord::new();
+            let mut got = vec![r.header_line];
+            while let Some(line) = r.next(&mut rec).unwrap() {
+                got.push(line);
+            }
+            assert_eq!(got, want, "{text:?}");
+        }
     }
 
     #[test]

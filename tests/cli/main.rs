@@ -46,6 +46,7 @@ mod plausible;
 mod practice;
 mod precision;
 mod profiles;
+mod reading_lines;
 mod readmit;
 mod readmit_cv;
 mod realdata;
