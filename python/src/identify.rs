@@ -17,7 +17,7 @@ use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
-use calbench::measurement::csv::{read_measurements, ArrayKeys};
+use calbench::measurement::csv::{read_measurements, read_measurements_at_lines, ArrayKeys};
 use calbench::measurement::kind_csv::{file_kind, read_kind_file};
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
@@ -63,8 +63,9 @@ fn arrays_refusal(e: calbench::Error) -> calbench::Error {
 }
 
 impl Readings<'_, '_> {
-    /// The readings and their source (the file, or `<arrays>`).
-    fn read(&self, robot: &Robot) -> PyResult<(IdentifyData, PathBuf)> {
+    /// The readings, their source (the file, or `<arrays>`) and the line of a tracker's file
+    /// of each of its rows.
+    fn read(&self, robot: &Robot) -> PyResult<(IdentifyData, PathBuf, Option<Vec<u64>>)> {
         let arrays = [
             ("q", self.q.is_some()),
             ("points", self.points.is_some()),
@@ -78,11 +79,12 @@ impl Readings<'_, '_> {
                 let why = format!("is not taken with `data` (the file {})", path.display());
                 return Err(setting(name, why));
             }
-            let data = match file_kind(path) {
-                Some(_) => IdentifyData::Kind(read_kind_file(path, robot).map_err(err)?),
-                None => IdentifyData::Tracker(read_measurements(path, robot).map_err(err)?),
-            };
-            return Ok((data, path.clone()));
+            if file_kind(path).is_some() {
+                let data = IdentifyData::Kind(read_kind_file(path, robot).map_err(err)?);
+                return Ok((data, path.clone(), None));
+            }
+            let (m, lines) = read_measurements_at_lines(path, robot).map_err(err)?;
+            return Ok((IdentifyData::Tracker(m), path.clone(), Some(lines)));
         }
         let (Some(q), Some(points)) = (self.q, self.points) else {
             return Err(setting(
@@ -99,7 +101,7 @@ impl Readings<'_, '_> {
             self.sigma,
             self.payload,
         )?;
-        Ok((IdentifyData::Tracker(m), PathBuf::from(ARRAYS)))
+        Ok((IdentifyData::Tracker(m), PathBuf::from(ARRAYS), None))
     }
 }
 
@@ -234,7 +236,7 @@ pub(crate) fn identify<'py>(
         let why = "names no parameter: leave it out to identify the identifiable set";
         return Err(setting("params", why));
     }
-    let (data, source) = readings.read(nominal)?;
+    let (data, source, data_lines) = readings.read(nominal)?;
     let from_arrays = source == Path::new(ARRAYS);
     let spec = method_spec(method, options.as_ref(), data.k_refusal())?;
     let registration: Registration = registration.parse().map_err(|_| {
@@ -271,6 +273,7 @@ pub(crate) fn identify<'py>(
         allow_rank_deficient,
         allow_worse,
         allow_implausible,
+        data_lines,
         ..IdentifyRequest::new(nominal.clone(), data, source, spec)
     };
     // The Rust side, timed as a whole: the identification and everything its record holds.

@@ -308,13 +308,14 @@ impl IdentifyRequest {
             calibrate_on(&nominal, params, &d, registration, &traced, self.seed)
                 .map_err(|e| in_data(&self.source, e))
         };
-        // The data file's row of row `i` of the rows identified on, as refusals name it.
-        let file_row = |i| self.file_row(held_out.as_ref().map(|(cal, _)| cal.as_slice()), i);
+        // The point of row `i` of the rows identified on, by its line of the data file, as
+        // refusals name it.
+        let point = |i| self.point_named(held_out.as_ref().map(|(cal, _)| cal.as_slice()), i);
         let undetermined = |c: &Calibrated, params: &[Param]| {
             if verdict::undetermined(c) && !self.allow_rank_deficient {
                 let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
                 return Err(verdict::undetermined_error(
-                    &nominal, all, c, source, &spec, &file_row,
+                    &nominal, all, c, source, &spec, &point,
                 ));
             }
             Ok(())
@@ -358,9 +359,8 @@ impl IdentifyRequest {
             .or_else(|| gross_reading(&before).map(|g| ("before", g)))
             .map(|(at, (i, r))| {
                 format!(
-                    "the point of row {} of the data (0-based) has a residual {r:.0} times the \
-                     median {at} calibration",
-                    file_row(i)
+                    "{} has a residual {r:.0} times the median {at} calibration",
+                    point(i)
                 )
             });
         // Orientations read with another convention than they were written in: a likely

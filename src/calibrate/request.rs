@@ -100,6 +100,11 @@ pub struct IdentifyRequest {
     /// of the file's rows (a task's calibration rows of its split), so that a refusal names a
     /// row by the file's; `None` where `data` is the file's rows in order.
     pub data_rows: Option<Vec<usize>>,
+    /// The line of `source` of each of its data rows, in file order, where the data were read
+    /// from a file ([`crate::measurement::csv::read_measurements_at_lines`], a task's export
+    /// through its mapping): a refusal names a reading by its line; `None` (arrays) by its
+    /// row.
+    pub data_lines: Option<Vec<u64>>,
 }
 
 impl IdentifyRequest {
@@ -128,6 +133,7 @@ impl IdentifyRequest {
             allow_worse: false,
             allow_implausible: false,
             data_rows: None,
+            data_lines: None,
         }
     }
 
@@ -136,5 +142,16 @@ impl IdentifyRequest {
     pub(super) fn file_row(&self, cal: Option<&[usize]>, i: usize) -> usize {
         let i = cal.map_or(i, |cal| cal[i]);
         self.data_rows.as_ref().map_or(i, |rows| rows[i])
+    }
+
+    /// The point of row `i` of the rows identified on ([`Self::file_row`]) in words: by its
+    /// line of the file (`the point on line 17 of cal.csv`), or by its 0-based row of data
+    /// that came from no file.
+    pub(super) fn point_named(&self, cal: Option<&[usize]>, i: usize) -> String {
+        let row = self.file_row(cal, i);
+        match self.data_lines.as_ref().and_then(|lines| lines.get(row)) {
+            Some(line) => format!("the point on line {line} of {}", self.source.display()),
+            None => format!("the point of row {row} of the data (0-based)"),
+        }
     }
 }

@@ -31,15 +31,15 @@ pub fn undetermined_termination(t: Termination) -> bool {
 /// (`params`: the kinematic parameters, which [`analyse`] can judge, and the number of all
 /// identified). The refusal names the option that accepts such a result. When the poses do
 /// determine every parameter (a solve made singular by the readings themselves), the
-/// message says so and names the gross reading the residuals point to, if any, by its row of
-/// the data file (`row`: the file's row of a row of `data`).
+/// message says so and names the gross reading the residuals point to, if any (`point`: the
+/// point of a row of `data` in words, by its line of the file it was read from).
 pub fn undetermined_error(
     nominal: &Robot,
     params: (&[Param], usize),
     c: &Calibrated,
     (source, data): (&Path, &Measurements),
     spec: &MethodSpec,
-    row: &dyn Fn(usize) -> usize,
+    point: &dyn Fn(usize) -> String,
 ) -> Error {
     let a = analyse(nominal, params.0, &data.qs, data.measure());
     let ended = format!(
@@ -57,10 +57,9 @@ pub fn undetermined_error(
             .and_then(|(before, _)| gross_reading(&before))
             .map_or(String::new(), |(i, ratio)| {
                 format!(
-                    "; the point of row {} of the data (0-based) lies {ratio:.0} times the \
-                     median distance from the nominal robot's: a gross reading is the likely \
-                     cause",
-                    row(i)
+                    "; {} lies {ratio:.0} times the median distance from the nominal robot's: \
+                     a gross reading is the likely cause",
+                    point(i)
                 )
             })
     };

@@ -13,7 +13,7 @@ use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::{RefitWeights, Registration, RoundsEnd};
 use calbench::error::{Error, Opt};
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
-use calbench::measurement::csv::read_measurements;
+use calbench::measurement::csv::{read_measurements, read_measurements_at_lines};
 use calbench::measurement::kind_csv::read_kind_file;
 use calbench::numeric::Real;
 use calbench::report::exports;
@@ -247,10 +247,14 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
     };
     super::guard_out(&args.out, outputs, super::identify_inputs(args))?;
     let nominal = args.chain.load(&args.robot)?;
-    let data = if kind {
-        IdentifyData::Kind(read_kind_file(&args.data, &nominal)?)
+    let (data, data_lines) = if kind {
+        (
+            IdentifyData::Kind(read_kind_file(&args.data, &nominal)?),
+            None,
+        )
     } else {
-        IdentifyData::Tracker(read_measurements(&args.data, &nominal)?)
+        let (m, lines) = read_measurements_at_lines(&args.data, &nominal)?;
+        (IdentifyData::Tracker(m), Some(lines))
     };
     let spec = method_with_options(args.method.name, &args.options)?;
     if let Some(why) = data
@@ -281,6 +285,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         allow_rank_deficient: args.allow_rank_deficient,
         allow_worse: args.allow_worse,
         allow_implausible: args.allow_implausible,
+        data_lines,
         ..IdentifyRequest::new(nominal, data, args.data.clone(), spec)
     };
     if let (IdentifyData::Kind(f), false) = (&request.data, args.export.is_empty()) {

@@ -163,6 +163,15 @@ pub fn fixed(v: Real, d: usize) -> String {
 
 /// Reads a measurement CSV for `robot` (see the module docs for what is refused).
 pub fn read_measurements(path: &Path, robot: &(impl JointSpace + ?Sized)) -> Result<Measurements> {
+    read_table(path, robot, true, true).map(|(m, _)| m)
+}
+
+/// [`read_measurements`], with the line of the file each data row was read from (`#` comment
+/// and blank lines counted), by which a refusal names a reading.
+pub fn read_measurements_at_lines(
+    path: &Path,
+    robot: &(impl JointSpace + ?Sized),
+) -> Result<(Measurements, Vec<u64>)> {
     read_table(path, robot, true, true)
 }
 
@@ -175,7 +184,7 @@ pub fn read_measurements_text(
     robot: &(impl JointSpace + ?Sized),
 ) -> Result<Measurements> {
     let rows = Rows::of_text(path, text, "q1,…,qn,x,y,z")?;
-    table_of(rows, path, robot, true, true)
+    table_of(rows, path, robot, true, true).map(|(m, _)| m)
 }
 
 /// Cartesian targets have no joints.
@@ -203,17 +212,18 @@ impl JointSpace for NoJoints {
 /// columns without the joints, `x,y,z` (mm) and optionally `qw,qx,qy,qz`, in the robot's base
 /// frame. Refused like a measurement file (unknown or missing columns, bad values, by line).
 pub fn read_targets(path: &Path) -> Result<Measurements> {
-    read_table(path, &NoJoints, true, true)
+    read_table(path, &NoJoints, true, true).map(|(m, _)| m)
 }
 
 /// Reads a measurement CSV (`measured`) or a pose list (measured columns optional and
-/// ignored), refusing with `distinct` fewer than [`MIN_DISTINCT_POSES`] distinct poses.
+/// ignored), refusing with `distinct` fewer than [`MIN_DISTINCT_POSES`] distinct poses; with
+/// the line of each row.
 pub(crate) fn read_table(
     path: &Path,
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
     distinct: bool,
-) -> Result<Measurements> {
+) -> Result<(Measurements, Vec<u64>)> {
     // The header an empty file lacks: a pose list's joints, a target list's point.
     let expected = match (robot.dof(), measured) {
         (0, _) => "x,y,z",
@@ -224,14 +234,14 @@ pub(crate) fn read_table(
 }
 
 /// The measurements (or poses, unless `measured`) of the rows `t` of `path`, of at least
-/// [`MIN_DISTINCT_POSES`] distinct poses with `distinct`.
+/// [`MIN_DISTINCT_POSES`] distinct poses with `distinct`, and the line of each row.
 fn table_of(
     mut t: Rows,
     path: &Path,
     robot: &(impl JointSpace + ?Sized),
     measured: bool,
     distinct: bool,
-) -> Result<Measurements> {
+) -> Result<(Measurements, Vec<u64>)> {
     let (names, header_line) = (t.names.clone(), t.header_line);
     let bad = |line: u64, place: &str, msg: String| at_line(path, line, place, msg);
     let dof = robot.dof();
@@ -353,13 +363,14 @@ fn table_of(
     if distinct && dof > 0 {
         distinct_poses(&qs, &lines, dof).map_err(|(place, msg)| bad(place, "", msg))?;
     }
-    Ok(Measurements {
+    let m = Measurements {
         qs,
         points,
         quats: qtcol.map(|_| quats),
         sigma_mm: sigma_col.map(|_| sigma),
         payload_kg: payload_col.map(|_| payload),
-    })
+    };
+    Ok((m, lines))
 }
 
 #[cfg(test)]

@@ -34,9 +34,9 @@ use crate::numeric::{quaternion, Real};
 /// (docs/formats.md § 5.1): quoted fields, CRLF line ends and a UTF-8 byte-order mark; its
 /// header is its first line that is not blank.
 pub fn import(raw: &Path, mapping_path: &Path, out: &Path) -> Result<usize> {
-    let (s, rows) = import_text(raw, mapping_path, None)?;
+    let (s, lines) = import_text(raw, mapping_path, None)?;
     std::fs::write(out, s).map_err(|e| Error::io(out, e))?;
-    Ok(rows)
+    Ok(lines.len())
 }
 
 /// Where the header read as one column holds another usual separator than `sep` (`;`, tab,
@@ -58,14 +58,15 @@ fn other_separator(header: &[String], sep: u8) -> String {
         })
 }
 
-/// Reads the export `raw` as `mapping` says: the measurement CSV's text ([`import`]) and its
-/// number of rows. Given the `robot` the rows are for, a joint value outside its limits is
-/// refused here, at the export's column and with the value as the export writes it.
+/// Reads the export `raw` as `mapping` says: the measurement CSV's text ([`import`]) and the
+/// line of the export each of its rows was read from, by which a refusal names a reading.
+/// Given the `robot` the rows are for, a joint value outside its limits is refused here, at
+/// the export's column and with the value as the export writes it.
 pub fn import_text(
     raw: &Path,
     mapping_path: &Path,
     robot: Option<&dyn JointSpace>,
-) -> Result<(String, usize)> {
+) -> Result<(String, Vec<u64>)> {
     let (_, plan) = Mapping::load_plan(mapping_path)?;
     let dialect = Dialect::Export {
         separator: plan.sep,
@@ -131,7 +132,7 @@ pub fn import_text(
     let mut s = String::with_capacity(128 * 1024);
     let optional = (plan.orientation.is_some(), plan.sigma.is_some(), false);
     super::csv::header(&mut s, dof, optional);
-    let mut rows = 0;
+    let mut lines = Vec::new();
     let mut cell = String::new();
     let mut rec = ::csv::StringRecord::new();
     let mut row = Vec::with_capacity(dof + 3);
@@ -306,14 +307,14 @@ pub fn import_text(
             let _ = write!(s, ",{}", crate::measurement::csv::fixed(sigma, 9));
         }
         s.push('\n');
-        rows += 1;
+        lines.push(line);
     }
-    if rows == 0 {
+    if lines.is_empty() {
         return Err(Error::file(
             raw,
             "rows",
             "the export has a header and no data rows",
         ));
     }
-    Ok((s, rows))
+    Ok((s, lines))
 }

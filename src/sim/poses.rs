@@ -339,7 +339,7 @@ fn grid(robot: &Robot, k: usize, n: usize, key: &str, rng: &mut Rng) -> Result<V
 /// non-finite value or a value outside the joint limits is refused naming the file, the line
 /// and the column.
 pub fn read_pose_list(path: &Path, robot: &Robot) -> Result<Vec<Vec<Real>>> {
-    let table = crate::measurement::csv::read_table(path, robot, false, false)?;
+    let (table, _) = crate::measurement::csv::read_table(path, robot, false, false)?;
     Ok(table.qs)
 }
 
@@ -348,7 +348,7 @@ pub fn read_pose_list(path: &Path, robot: &Robot) -> Result<Vec<Vec<Real>>> {
 /// [`crate::measurement::csv::MIN_DISTINCT_POSES`] distinct poses, which every trial would
 /// measure and no registration could place.
 pub fn read_calibration_poses(path: &Path, robot: &Robot) -> Result<Vec<Vec<Real>>> {
-    let table = crate::measurement::csv::read_table(path, robot, false, true)?;
+    let (table, _) = crate::measurement::csv::read_table(path, robot, false, true)?;
     Ok(table.qs)
 }
 

@@ -61,3 +61,52 @@ fn a_bad_cell_after_comment_lines_is_refused_at_its_own_line() {
         format!("error: {data}: line 16, column x: \"2x\" is not a finite number\n"),
     );
 }
+
+/// A reading moved by 5 m after comment lines, in a tracker's file: the refusal's likely
+/// cause names it by its line in the file, with or without `--holdout` (row 10 calibrates
+/// under `3/10`, as the calibration's eighth row): it had been `the point of row 10 of the
+/// data (0-based)`.
+#[test]
+fn a_gross_reading_is_named_by_its_line_in_the_tracker_file() {
+    let d = tmp_dir("cli-reading-lines-gross");
+    let (data, line) = commented(&d, "gross.csv", 10, |x| (x + 5000.0).to_string());
+    let point = format!("the point on line {line} of {data} has a residual");
+    for extra in [&[][..], &["--holdout", "3/10"][..]] {
+        let err = refused(&identify(&d, &data, extra), &[&point, "a gross reading"]);
+        assert!(err.starts_with(&format!("error: {data}: data: ")), "{err}");
+        assert!(!err.contains("0-based"), "{err}");
+    }
+}
+
+/// A reading moved by 5 m in a task's export (the WAM grid through its mapping), after blank
+/// lines, on row 50 of the data, which the split makes the calibration's row 30: named by its
+/// line in the export.
+#[test]
+fn a_gross_reading_of_a_task_is_named_by_its_line_in_the_export() {
+    use crate::task::task_lm;
+    use crate::task_rows::{split_task, wam_file, GRID};
+    let d = tmp_dir("cli-reading-lines-task");
+    let text = read(&wam_file(GRID));
+    let mut lines = vec![String::new()];
+    for (i, line) in text.lines().enumerate() {
+        let mut line = line.to_string();
+        if i == 51 {
+            lines.extend([String::new(), String::new()]);
+            let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+            cells[4] = (cells[4].parse::<f64>().unwrap() + 5000.0).to_string();
+            line = cells.join(",");
+        }
+        lines.push(line);
+    }
+    let data = d.join("grid.csv");
+    std::fs::write(&data, lines.join("\n") + "\n").unwrap();
+    let split = d.join("grid.split");
+    std::fs::write(&split, "rows 216\nvalidation 0-19\ncalibration 20-215\n").unwrap();
+    let t = split_task(&d, &data, &split);
+    let out = d.join("out");
+    let err = refused(&task_lm(calbench, &t, Some("kinematic"), &out), &[]);
+    // A blank line, the header, rows 0 to 49, two blank lines: row 50 is on line 55.
+    let point = format!("the point on line 55 of {}", data.display());
+    assert!(err.contains(&point) && !err.contains("0-based"), "{err}");
+    assert!(!out.exists());
+}

@@ -303,7 +303,7 @@ fn the_hash_covers_every_joint_file_and_bad_socket_tasks_are_refused_by_key() {
 
 /// A gross reading in the second socket's joint file is named by that file and its line: the
 /// refusal names the placement's first file (the data), and the reading's line was read as a
-/// line of that file.
+/// line of that file, a comment line before its first and a blank one before it counted.
 #[test]
 fn a_gross_reading_is_named_by_its_own_joint_file() {
     let dir = tmp_dir("cli-socket-task-gross");
@@ -313,11 +313,13 @@ fn a_gross_reading_is_named_by_its_own_joint_file() {
     let mut cells: Vec<&str> = lines[9].split(',').collect();
     cells[0] = "0";
     lines[9] = cells.join(",");
+    lines.insert(9, String::new());
+    lines.insert(0, "# the holds of the second socket".into());
     std::fs::write(&f, lines.join("\n") + "\n").unwrap();
     let err = refused_task(&task, &dir.join("out"));
     assert!(
         err.contains(&format!(
-            "the reading of line 10 of {} has a residual",
+            "the reading of line 12 of {} has a residual",
             f.display()
         )),
         "{err}"

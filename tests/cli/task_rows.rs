@@ -32,12 +32,12 @@ fn wam_task(dir: &Path, data: &str) -> PathBuf {
     p
 }
 
-fn wam_file(name: &str) -> PathBuf {
+pub(crate) fn wam_file(name: &str) -> PathBuf {
     root().join("data/barrett-wam").join(name)
 }
 
 /// The WAM task of one data file `data` split by `split`, written into `dir`.
-fn split_task(dir: &Path, data: &Path, split: &Path) -> PathBuf {
+pub(crate) fn split_task(dir: &Path, data: &Path, split: &Path) -> PathBuf {
     let form = format!(
         "file = \"{}\"\nsplit = \"{}\"",
         data.display(),
@@ -60,7 +60,7 @@ fn at(t: &Path, key: &str) -> String {
     format!("barrett-wam.toml: line {}, data: ", line_of(&read(t), key))
 }
 
-const GRID: &str = "3D_WAM_uncalibrated_grid_cleaned.csv";
+pub(crate) const GRID: &str = "3D_WAM_uncalibrated_grid_cleaned.csv";
 const RANDOM: &str = "3D_WAM_uncalibrated_random_cleaned.csv";
 
 #[test]

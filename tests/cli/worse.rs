@@ -160,11 +160,12 @@ fn a_gross_reading_is_named() {
     }
 }
 
-/// A tracker's reading moved by 300 mm (row 20 of the data, 0-based) is named by its row
-/// of the data file under `--holdout`, where it had been named by its place among the
-/// calibration rows (`point 14`); so is one moved by 900 m, which leaves the solve singular.
+/// A tracker's reading moved by 300 mm (row 20 of the data, 0-based, on line 22) is named by
+/// its line of the data file under `--holdout`, where it had been named by its place among
+/// the calibration rows (`point 14`); so is one moved by 900 m, which leaves the solve
+/// singular.
 #[test]
-fn a_gross_tracker_reading_is_named_by_its_row_of_the_file() {
+fn a_gross_tracker_reading_is_named_by_its_line_of_the_file() {
     let d = tmp_dir("cli-gross-tracker");
     let pos = ur10_positions(&d);
     let text = read(&pos);
@@ -185,7 +186,7 @@ fn a_gross_tracker_reading_is_named_by_its_row_of_the_file() {
             let o = calbench(&args);
             let err = String::from_utf8_lossy(&o.stderr);
             assert!(!o.status.success() && !out.exists(), "{split:?}: {err}");
-            let row = format!("the point of row 20 of the data (0-based) {said}");
+            let row = format!("the point on line 22 of {} {said}", bad.display());
             assert!(err.contains(&row), "{moved} {split:?}: {err}");
         }
     }

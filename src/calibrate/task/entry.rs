@@ -33,7 +33,7 @@ impl Task {
         given: &[Model],
     ) -> Result<(IdentifyRequest, Measurements, EntryModels)> {
         let robot = self.load_robot()?;
-        let (cal, val) = self.measurements(&robot)?;
+        let (cal, val, lines) = self.measurements(&robot)?;
         // The task's folds are checked against its calibration rows whether they are used or
         // not: a bad value in the task file is refused, as it enters `task_hash`.
         if let Some(tm) = self.models.as_ref().filter(|tm| tm.folds > cal.len()) {
@@ -51,7 +51,7 @@ impl Task {
             ));
         }
         if !given.is_empty() {
-            let (q, val) = self.request((robot, cal, val), method, given)?;
+            let (q, val) = self.request((robot, cal, val, lines), method, given)?;
             let m = EntryModels {
                 candidates: given.to_vec(),
                 fixed_by: "command line",
@@ -60,7 +60,7 @@ impl Task {
             return Ok((q, val, m));
         }
         let Some(tm) = &self.models else {
-            let (q, val) = self.request((robot, cal, val), method, &[Model::KINEMATIC])?;
+            let (q, val) = self.request((robot, cal, val, lines), method, &[Model::KINEMATIC])?;
             let m = EntryModels {
                 candidates: vec![Model::KINEMATIC],
                 fixed_by: "default",
@@ -107,7 +107,7 @@ impl Task {
             None
         };
         let chosen = tm.candidates[choice.as_ref().map_or(0, |c| c.best)];
-        let (mut q, val) = self.request((robot, cal, val), method, &[chosen])?;
+        let (mut q, val) = self.request((robot, cal, val, lines), method, &[chosen])?;
         // The identification cross-validates the chosen model: it takes the repeated
         // choice's cross-validation of it that ran on the same setup (the same key: model,
         // method and settings, registration, seeds, folds and rows), if one did, instead of

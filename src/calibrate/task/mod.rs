@@ -434,9 +434,10 @@ impl Task {
         crate::robot::builtin::load(&self.head.robot.to_string_lossy())
     }
 
-    /// The calibration and the validation measurements, read through the mapping; the split
-    /// is checked against the data's row count.
-    pub fn measurements(&self, robot: &Robot) -> Result<(Measurements, Measurements)> {
+    /// The calibration and the validation measurements, read through the mapping, and the
+    /// line of the calibration's export (the data file's under a split) of each of its rows;
+    /// the split is checked against the data's row count.
+    pub fn measurements(&self, robot: &Robot) -> Result<(Measurements, Measurements, Vec<u64>)> {
         let mapping = Mapping::load(&self.mapping)?;
         if mapping.joints.columns.len() != robot.dof() {
             let text = crate::error::read_text(&self.mapping)?;
@@ -455,7 +456,7 @@ impl Task {
                 split_path,
                 split,
             } => {
-                let all = self.read(file, robot)?;
+                let (all, lines) = self.read(file, robot)?;
                 split.check_rows(split_path, file, all.len())?;
                 let (cal, val) = (
                     super::cv::subset(&all, &split.calibration),
@@ -502,13 +503,13 @@ impl Task {
                         return Err(self.at_validation(msg));
                     }
                 }
-                Ok((cal, val))
+                Ok((cal, val, lines))
             }
             TaskData::Files {
                 calibration,
                 validation,
             } => {
-                let (cal, val) = (
+                let ((cal, lines), (val, _)) = (
                     self.read(calibration, robot)?,
                     self.read(validation, robot)?,
                 );
@@ -516,7 +517,7 @@ impl Task {
                 if !shared.is_empty() {
                     return Err(self.overlap(&shared, calibration, validation));
                 }
-                Ok((cal, val))
+                Ok((cal, val, lines))
             }
         }
     }
@@ -535,14 +536,15 @@ impl Task {
         Error::toml_file(&self.head.path, &self.head.text, validation, "data", msg)
     }
 
-    /// The data file `raw` read through the mapping; a refusal names both files.
-    fn read(&self, raw: &Path, robot: &Robot) -> Result<Measurements> {
+    /// The data file `raw` read through the mapping, with the line of `raw` of each row; a
+    /// refusal names both files.
+    fn read(&self, raw: &Path, robot: &Robot) -> Result<(Measurements, Vec<u64>)> {
         let named = PathBuf::from(format!(
             "{} as mapped by {}",
             raw.display(),
             self.mapping.display()
         ));
-        let (text, _) = import_text(raw, &self.mapping, Some(robot)).map_err(|e| match e {
+        let (text, lines) = import_text(raw, &self.mapping, Some(robot)).map_err(|e| match e {
             Error::File { file, place, msg } if file == raw => Error::File {
                 file: named.clone(),
                 place,
@@ -550,16 +552,17 @@ impl Task {
             },
             e => e,
         })?;
-        read_measurements_text(&named, text, robot)
+        Ok((read_measurements_text(&named, text, robot)?, lines))
     }
 
     /// The identification request of an entry on the task's nominal `robot`, calibration rows
-    /// `cal` and validation rows `val` ([`Task::load_robot`], [`Task::measurements`]), with
-    /// the method and the candidate models (several: chosen by 5-fold cross-validation on the
-    /// calibration rows alone; one: given). Also returns the validation rows.
+    /// `cal` (at `lines` of the calibration's export) and validation rows `val`
+    /// ([`Task::load_robot`], [`Task::measurements`]), with the method and the candidate models
+    /// (several: chosen by 5-fold cross-validation on the calibration rows alone; one: given).
+    /// Also returns the validation rows.
     fn request(
         &self,
-        (robot, cal, val): (Robot, Measurements, Measurements),
+        (robot, cal, val, lines): (Robot, Measurements, Measurements, Vec<u64>),
         method: MethodSpec,
         models: &[Model],
     ) -> Result<(IdentifyRequest, Measurements)> {
@@ -576,7 +579,8 @@ impl Task {
             }
         }
         q.validate = Some(val.clone());
-        // A refusal of a calibration row names its row of the data file.
+        q.data_lines = Some(lines);
+        // A refusal of a calibration row names its line of the data file.
         if let TaskData::Split { split, .. } = &self.data {
             q.data_rows = Some(split.calibration.clone());
         }
