@@ -17,7 +17,7 @@ use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::validation::residual_vectors;
 use calbench::calibrate::Registration;
 use calbench::identify::MethodSpec;
-use calbench::measurement::csv::{read_measurements, read_measurements_at_lines, ArrayKeys};
+use calbench::measurement::csv::{read_measurements_at_lines, ArrayKeys};
 use calbench::measurement::kind_csv::{file_kind, read_kind_file};
 use calbench::measurement::Measurements;
 use calbench::numeric::Real;
@@ -166,14 +166,19 @@ fn priors(prior: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Param, Real)>> {
         .collect()
 }
 
-/// `validate`: a tracker's file, or arrays (q, points, rotations or None, payload or None).
-fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Measurements>> {
+/// `validate`: a tracker's file, or arrays (q, points, rotations or None, payload or None);
+/// with the line of a file of each of its rows.
+fn validation(
+    robot: &Robot,
+    v: Option<&Bound<'_, PyAny>>,
+) -> PyResult<(Option<Measurements>, Option<Vec<u64>>)> {
     let Some(v) = v else {
-        return Ok(None);
+        return Ok((None, None));
     };
     if v.is_instance_of::<PyString>() {
         let path = nonempty("validate", v.extract()?)?;
-        return read_measurements(&path, robot).map(Some).map_err(err);
+        let (m, lines) = read_measurements_at_lines(&path, robot).map_err(err)?;
+        return Ok((Some(m), Some(lines)));
     }
     let (vq, vp, vr, vl): Validation<'_> = v.extract().map_err(|_| {
         setting(
@@ -182,7 +187,8 @@ fn validation(robot: &Robot, v: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Me
         )
     })?;
     let keys = ArrayKeys::All("validate");
-    measurements(robot, keys, &vq, &vp, vr.as_ref(), None, vl.as_ref()).map(Some)
+    let m = measurements(robot, keys, &vq, &vp, vr.as_ref(), None, vl.as_ref())?;
+    Ok((Some(m), None))
 }
 
 /// Identification (the Python half documents the arguments): the dict of `record` (the
@@ -253,10 +259,14 @@ pub(crate) fn identify<'py>(
         .iter()
         .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
         .collect::<PyResult<Vec<_>>>()?;
+    // The priors are refused before the validation is read.
+    let priors = priors(prior.as_ref())?;
+    let (validated, validate_lines) = validation(nominal, validate.as_ref())?;
     let request = IdentifyRequest {
         registration,
-        priors: priors(prior.as_ref())?,
-        validate: validation(nominal, validate.as_ref())?,
+        priors,
+        validate: validated,
+        validate_lines,
         validate_source: validate
             .as_ref()
             .filter(|v| v.is_instance_of::<PyString>())

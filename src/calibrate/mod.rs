@@ -25,6 +25,7 @@ pub mod compensate;
 pub mod cv;
 pub mod diagnostics;
 pub mod fit;
+pub mod frames;
 pub mod kernel;
 pub mod on_kind;
 pub mod orientations;

@@ -13,10 +13,10 @@
 use super::cv::{self, Model};
 use super::diagnostics::{diagnose, Subject};
 use super::fit::fit_and_readmit;
+use super::frames::{check_frames, Validation};
 use super::kernel::{position_errors, KernelResidual};
 use super::on_kind::KindOutcome;
 use super::orientations::convention_hint;
-use super::plausibility::{misfit, Misfit};
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
 use super::validation::{point_residuals, validate_file, FileValidation};
@@ -28,7 +28,7 @@ use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
-use crate::numeric::{Frame, Real, Vec3};
+use crate::numeric::{Frame, Real};
 use crate::robot::compliance::CompliancePick;
 use crate::robot::identifiability::{analyse, Identifiability};
 use crate::robot::{param_sets, Param, Robot};
@@ -219,7 +219,25 @@ impl IdentifyRequest {
                 ));
             }
         }
-        check_frames(nominal, &d, val.as_ref(), registration, held_out.is_some())?;
+        // A held-out row is a row of the data file; a validation file's, of its own.
+        let point = |i| match &held_out {
+            Some((_, held)) => self.point_named(Some(held.as_slice()), i),
+            None => self.validation_point(i),
+        };
+        let validation = val.as_ref().map(|rows| Validation {
+            rows,
+            opt: if held_out.is_some() {
+                Opt::Holdout
+            } else {
+                Opt::Validate
+            },
+            file: self
+                .validate_source
+                .as_deref()
+                .filter(|_| held_out.is_none()),
+            point: &point,
+        });
+        check_frames(nominal, &d, validation, registration)?;
         let with_base = registration == Registration::Identify;
         let mut kinematic = if self.params.is_empty() {
             param_sets::identified_params_tool_first(nominal, d.measure(), with_base)
@@ -519,96 +537,6 @@ impl serde::Serialize for IdentifyOutcome {
     fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
         self.record().serialize(s)
     }
-}
-
-/// Refuses points that no calibration can be scored or fitted on as given ([`misfit`]): the
-/// validation rows `val` against the calibration's first frame (`held_out`: rows held out of
-/// the data), and the calibration rows `d` under [`Registration::Known`], which takes them in
-/// the base frame as they are.
-fn check_frames(
-    nominal: &Robot,
-    d: &Measurements,
-    val: Option<&Measurements>,
-    registration: Registration,
-    held_out: bool,
-) -> Result<()> {
-    if registration != Registration::Known && val.is_none() {
-        return Ok(());
-    }
-    // The nominal robot's points at the calibration poses, once for both checks.
-    let model = plausibility::tool_points(nominal, &d.qs);
-    if registration == Registration::Known {
-        match misfit(&model, &d.points, &Frame::identity(), 0.0) {
-            Some(m @ Misfit::Frame { .. }) => {
-                let why = format!(
-                    "`known` takes the points in the robot's base frame as they are, and {}: \
-                     they are in another frame; leave the registration to `identify`, which \
-                     registers them",
-                    m.words("them", "the base frame")
-                );
-                return Err(Error::option(Opt::Registration, why));
-            }
-            // A unit is the identification's plausibility check's to name.
-            Some(Misfit::Scale { .. }) | None => {}
-        }
-    }
-    let opt = if held_out {
-        Opt::Holdout
-    } else {
-        Opt::Validate
-    };
-    match val.and_then(|v| validation_misfit(nominal, (d, &model), v, registration)) {
-        Some(why) => Err(Error::option(opt, why)),
-        None => Ok(()),
-    }
-}
-
-/// Why the validation rows `v` cannot score a calibration of `nominal` on the rows `d` (with
-/// `model`, the nominal robot's tool points at their poses) under `registration`, in words:
-/// their points against the nominal robot's in the calibration's first frame ([`misfit`]),
-/// beside how far it misses the calibration's own there; `None` when they can, and when the
-/// calibration rows fail as a whole themselves or give no frame (theirs to refuse), unless
-/// the validation points are in another unit (a spread ratio that names one: a spread off by
-/// no unit's ratio, a tool the nominal robot lacks or joint values in radians, is the
-/// calibration rows' finding too, which `--allow-implausible` takes). Two files that do not
-/// lie in one frame are refused without blame: either may be the one moved, or distorted (a
-/// column scaled about the tracker's origin moves the rows as a whole).
-pub(crate) fn validation_misfit(
-    nominal: &Robot,
-    (d, model): (&Measurements, &[Vec3]),
-    v: &Measurements,
-    registration: Registration,
-) -> Option<String> {
-    let own = plausibility::tool_points(nominal, &v.qs);
-    // Points in another unit than the robot's score no robot, whatever the calibration rows
-    // are (a unit is no frame's: the spread is compared).
-    let unit = || match misfit(&own, &v.points, &Frame::identity(), 0.0) {
-        Some(m @ Misfit::Scale { unit: Some(_), .. }) => Some(format!(
-            "{}; so do the calibration points, but a validation scores the robot on points in \
-             its units",
-            m.words("the validation points", "")
-        )),
-        _ => None,
-    };
-    let Ok(frame) = super::frame_onto(model, d, registration, &Frame::identity()) else {
-        return unit();
-    };
-    if misfit(model, &d.points, &frame, 0.0).is_some() {
-        return unit();
-    }
-    let reference = plausibility::miss_rms(model, &d.points, &frame);
-    let m = misfit(&own, &v.points, &frame, reference)?;
-    let why = m.words("the validation points", "the calibration's frame");
-    Some(match m {
-        Misfit::Scale { .. } => {
-            format!("{why}; validate on points measured as the calibration's were")
-        }
-        Misfit::Frame { .. } => format!(
-            "{why} (and the calibration's by {reference:.1} mm in theirs): the calibration and \
-             validation rows do not lie in one frame; one file was measured from another \
-             placement of the instrument, or has a column scaled or shifted"
-        ),
-    })
 }
 
 /// [`calibrate`] of real data (`known`: the points are in the base frame) with the method's

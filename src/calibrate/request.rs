@@ -67,6 +67,8 @@ pub struct IdentifyRequest {
     pub validate: Option<Measurements>,
     /// The file `validate` was read from, when it was: named in a refusal of its rows.
     pub validate_source: Option<PathBuf>,
+    /// The line of `validate_source` of each of its rows, by which a refusal names a reading.
+    pub validate_lines: Option<Vec<u64>>,
     /// Rows of the data held out for validation instead.
     pub holdout: Option<Holdout>,
     /// K-fold cross-validation (K), and the folds of `models`.
@@ -120,6 +122,7 @@ impl IdentifyRequest {
             priors: Vec::new(),
             validate: None,
             validate_source: None,
+            validate_lines: None,
             holdout: None,
             cv: None,
             cv_seed: None,
@@ -142,6 +145,16 @@ impl IdentifyRequest {
     pub(super) fn file_row(&self, cal: Option<&[usize]>, i: usize) -> usize {
         let i = cal.map_or(i, |cal| cal[i]);
         self.data_rows.as_ref().map_or(i, |rows| rows[i])
+    }
+
+    /// The point of row `i` of the validation file ([`Self::validate`]) in words: by its line
+    /// of the file, or by its 0-based row of rows that came from no file.
+    pub(super) fn validation_point(&self, i: usize) -> String {
+        let line = self.validate_lines.as_ref().and_then(|lines| lines.get(i));
+        match (&self.validate_source, line) {
+            (Some(f), Some(line)) => format!("the point on line {line} of {}", f.display()),
+            _ => format!("the point of validation row {i} (0-based)"),
+        }
     }
 
     /// The point of row `i` of the rows identified on ([`Self::file_row`]) in words: by its

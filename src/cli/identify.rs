@@ -13,7 +13,7 @@ use calbench::calibrate::request::{IdentifyData, IdentifyRequest};
 use calbench::calibrate::{RefitWeights, Registration, RoundsEnd};
 use calbench::error::{Error, Opt};
 use calbench::identify::{method_by_name, MethodEntry, MethodSpec, METHODS};
-use calbench::measurement::csv::{read_measurements, read_measurements_at_lines};
+use calbench::measurement::csv::read_measurements_at_lines;
 use calbench::measurement::kind_csv::read_kind_file;
 use calbench::numeric::Real;
 use calbench::report::exports;
@@ -263,17 +263,20 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
     {
         return Err(Error::setting("--set k", why).into());
     }
-    let validate = args
-        .validate
-        .as_deref()
-        .map(|p| read_measurements(p, &nominal))
-        .transpose()?;
+    let (validate, validate_lines) = match args.validate.as_deref() {
+        Some(p) => {
+            let (m, lines) = read_measurements_at_lines(p, &nominal)?;
+            (Some(m), Some(lines))
+        }
+        None => (None, None),
+    };
     let request = IdentifyRequest {
         registration: args.registration,
         k: args.k,
         priors: priors(&args.prior)?,
         validate,
         validate_source: args.validate.clone(),
+        validate_lines,
         holdout: args.holdout,
         cv: args.cv,
         cv_seed: args.cv_seed,

@@ -395,11 +395,9 @@ fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_th
         err
     };
     let err = refusal(&["--validate", path_arg(&metres)]);
-    assert!(
-        err.contains("error: setting `--validate`: the validation points spread 0.0010 times")
-            && err.contains("they are likely in metres, not millimetres"),
-        "{err}"
-    );
+    let at = format!("error: {}: data: the validation", metres.display());
+    let all = err.contains("points spread 0.0010 times") && err.contains("millimetres (all ");
+    assert!(err.starts_with(&at) && all, "{err}");
     // Calibration rows in metres too: implausible, which `--allow-implausible` keeps, but
     // the validation in metres is refused with no way past, where it had scored the robot.
     let pos_m = edited(&pos, &d.join("pos-m.csv"), to_metres);
@@ -410,7 +408,7 @@ fn validation_points_off_the_calibration_s_unit_or_frame_and_known_points_off_th
     assert!(
         !o.status.success()
             && !out.exists()
-            && err.contains("error: setting `--validate`: the validation points spread 0.0010")
+            && err.starts_with(&at)
             && err.contains("so do the calibration points, but a validation scores the robot"),
         "{err}"
     );

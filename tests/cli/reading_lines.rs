@@ -110,3 +110,58 @@ fn a_gross_reading_of_a_task_is_named_by_its_line_in_the_export() {
     assert!(err.contains(&point) && !err.contains("0-based"), "{err}");
     assert!(!out.exists());
 }
+
+/// The UR10 positions split as docs/formats.md § 2.6 splits them (rows whose index % 10 < 7
+/// calibrate), the validation rows' points edited by `edit` (the row's index among them and
+/// its cells), after a comment line: `dir/cal.csv` and `dir/NAME`.
+fn split_edited(dir: &Path, name: &str, edit: impl Fn(usize, &mut [String])) -> (String, String) {
+    let text = read(&ur10_positions(dir));
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let (mut cal, mut val) = (vec![header.clone()], vec!["# validation".into(), header]);
+    for (i, line) in lines.enumerate() {
+        if i % 10 < 7 {
+            cal.push(line.to_string());
+            continue;
+        }
+        let mut cells: Vec<String> = line.split(',').map(String::from).collect();
+        edit(val.len() - 2, &mut cells);
+        val.push(cells.join(","));
+    }
+    let write = |n: &str, l: &[String]| {
+        std::fs::write(dir.join(n), l.join("\n") + "\n").unwrap();
+        dir.join(n).display().to_string()
+    };
+    (write("cal.csv", &cal), write(name, &val))
+}
+
+/// A `--validate` file in metres had been refused as `setting --validate` naming neither the
+/// file nor its rows; it is refused at the file, all its rows named. One row of it in metres
+/// is named by its line.
+#[test]
+fn a_validation_file_in_metres_is_refused_naming_the_file_and_the_rows() {
+    let d = tmp_dir("cli-reading-lines-metres");
+    let metres = |c: &mut [String]| {
+        for v in &mut c[6..9] {
+            *v = (v.parse::<f64>().unwrap() / 1000.0).to_string();
+        }
+    };
+    let (cal, val) = split_edited(&d, "val-m.csv", |_, c| metres(c));
+    let err = refused(&identify(&d, &cal, &["--validate", &val]), &[]);
+    let want = format!(
+        "error: {val}: data: the validation points spread 0.0010 times as far as the nominal \
+         robot's tool points (bound ±10 %): they are likely in metres, not millimetres (all 59 \
+         rows); validate on points measured as the calibration's were\n"
+    );
+    assert_eq!(err, want);
+    // Validation row 3: a comment line, the header, rows 0 to 2.
+    let (cal, val) = split_edited(&d, "val-1.csv", |i, c| {
+        if i == 3 {
+            metres(c)
+        }
+    });
+    let err = refused(&identify(&d, &cal, &["--validate", &val]), &[]);
+    let at = format!("error: {val}: data: the validation points spread ");
+    let row = format!("; the point on line 6 of {val} stands out: its distance from the points'");
+    assert!(err.starts_with(&at) && err.contains(&row), "{err}");
+}

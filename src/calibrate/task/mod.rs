@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use super::cv::Model;
-use super::pipeline::validation_misfit;
+use super::frames::validation_misfit;
 use super::pipeline::TrackerOutcome;
 use super::request::{IdentifyData, IdentifyRequest};
 use crate::error::{read_text, Error, Result};
@@ -574,7 +574,9 @@ impl Task {
         if let IdentifyData::Tracker(cal) = &q.data {
             let model = super::plausibility::tool_points(&q.robot, &cal.qs);
             let calibration = (cal, model.as_slice());
-            if let Some(why) = validation_misfit(&q.robot, calibration, &val, q.registration) {
+            if let Some((_, why)) =
+                validation_misfit(&q.robot, calibration, &val, q.registration, None)
+            {
                 return Err(self.at_validation(why));
             }
         }
