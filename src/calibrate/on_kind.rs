@@ -511,15 +511,12 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         .as_ref()
         .map(|v| validate_positions(nominal, &fit.robot, v))
         .transpose()?;
-    let worse = worse_causes(
-        validation.as_ref().map(|(b, a)| (b.rms, a.rms)),
-        fit.rms,
-        r.termination,
-        None,
-    );
+    let validated = validation.as_ref().map(|(b, a)| (b.rms, a.rms));
+    let worse = worse_causes(validated, fit.rms, r.termination, None);
     if !worse.is_empty() && !q.allow_worse {
         let likely = radians_hint(nominal, &file.qs).or_else(|| gross().map(gross_likely));
-        return Err(worse_error(&q.source, &q.method, &worse, likely));
+        let val_file = q.validate_source.as_deref().zip(validated);
+        return Err(worse_error(&q.source, val_file, &q.method, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
     let mut findings = plausibility::judge(

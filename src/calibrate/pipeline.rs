@@ -364,10 +364,11 @@ impl IdentifyRequest {
             (None, Some(t)) => t.trace.first().map(|&f| (f, c.identified.rms_residual)),
             _ => None,
         };
+        let validated = validation
+            .as_ref()
+            .map(|v| (v.before_mm.rms, v.after_mm.rms));
         let worse = worse_causes(
-            validation
-                .as_ref()
-                .map(|v| (v.before_mm.rms, v.after_mm.rms)),
+            validated,
             (rms(&before), rms(&after)),
             c.identified.termination,
             evaluations,
@@ -388,7 +389,14 @@ impl IdentifyRequest {
             let likely = radians_hint(&nominal, &d.qs)
                 .or_else(convention)
                 .or_else(|| gross.clone().map(gross_likely));
-            return Err(worse_error(&self.source, &self.method, &worse, likely));
+            let val_file = self.validate_source.as_deref().zip(validated);
+            return Err(worse_error(
+                &self.source,
+                val_file,
+                &self.method,
+                &worse,
+                likely,
+            ));
         }
         let implausible = plausibility::check(
             (&nominal, &c.robot, &params, &d.qs),

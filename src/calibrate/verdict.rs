@@ -169,7 +169,6 @@ pub fn worse_causes(
     trace: Option<(Real, Real)>,
 ) -> Vec<String> {
     let mut w = Vec::new();
-    let rose = |before: Real, after: Real| after > before + WORSE_FLOOR_MM;
     if let Some((before, after)) = validation.filter(|&(b, a)| rose(b, a)) {
         w.push(format!(
             "the validation RMS is {after:.4} mm after calibration against {before:.4} mm before"
@@ -193,33 +192,52 @@ pub fn worse_causes(
     w
 }
 
+/// Whether an RMS error rose from `before` to `after` by more than [`WORSE_FLOOR_MM`].
+fn rose(before: Real, after: Real) -> bool {
+    after > before + WORSE_FLOOR_MM
+}
+
 /// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
 /// `source` by `method`; `likely` its likely cause ([`radians_hint`], [`gross_likely`]); the
-/// refusal names the option that keeps it ([`Opt::AllowWorse`]). A method supplied from
-/// outside is named first among what to check: its result, not the readings, is the likelier
-/// cause.
+/// refusal names the option that keeps it ([`Opt::AllowWorse`]). `validation`: the file of the
+/// validation rows, where they came from one, with their RMS error before and after: when
+/// that rose, both files' readings are to check, and when it is the one cause (the
+/// calibration's figures did not rise) the refusal is at the validation file, naming
+/// `source` as the file identified on. A method supplied from outside is named first among
+/// what to check: its result, not the readings, is the likelier cause.
 pub fn worse_error(
     source: &Path,
+    validation: Option<(&Path, (Real, Real))>,
     method: &MethodSpec,
     causes: &[String],
     likely: Option<String>,
 ) -> Error {
     let likely = likely.map_or(String::new(), |l| format!("; {l}"));
-    let readings = "the readings (a column of one value, a unit, a swapped column)";
+    let validation = validation
+        .filter(|&(_, (before, after))| rose(before, after))
+        .map(|(v, _)| v);
+    // The validation's figure is the first cause ([`worse_causes`]); the others are the
+    // calibration's.
+    let at_validation = validation.filter(|_| causes.len() == 1);
+    let on = at_validation.map_or(String::new(), |_| format!(" on {}", source.display()));
+    let of = validation.map_or(String::new(), |v| {
+        format!(" of {} and {}", source.display(), v.display())
+    });
+    let readings = format!("the readings{of} (a column of one value, a unit, a swapped column)");
     let (by, check) = match method.is_external() {
         true => (
             format!(" by the method `{}`, supplied from outside,", method.label),
             format!("the vector the method returns, then {readings}"),
         ),
-        false => (String::new(), readings.to_string()),
+        false => (String::new(), readings),
     };
     let msg = format!(
-        "the identification{by} makes the robot worse: {}{likely}; nothing was written. Check \
-         {check}, or pass ",
+        "the identification{on}{by} makes the robot worse: {}{likely}; nothing was written. \
+         Check {check}, or pass ",
         causes.join("; ")
     );
     Error::file(
-        source,
+        at_validation.unwrap_or(source),
         "data",
         allowing(msg, Opt::AllowWorse).text(" to write it with a warning"),
     )

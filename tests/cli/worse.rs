@@ -78,9 +78,11 @@ fn written_with_warning(o: &std::process::Output, out: &Path) -> serde_json::Val
     load_json(&out.join("identified.json"))
 }
 
-/// Each bad file: refused (exit non-zero, the file and the validation named, nothing
-/// written); with `--allow-worse` written, the warning on stderr and the causes in
-/// identified.json's `allowed_worse`. The untouched file passes as before.
+/// Each bad file: refused (exit non-zero, nothing written) at the validation file, whose
+/// figure is the one worse, naming the file identified on (it had been refused at the data
+/// file, naming the validation only as `the validation RMS`); with `--allow-worse` written,
+/// the warning on stderr and the causes in identified.json's `allowed_worse`. The untouched
+/// file passes as before.
 #[test]
 fn a_worse_robot_is_refused_unless_allowed() {
     let d = tmp_dir("cli-worse");
@@ -95,9 +97,11 @@ fn a_worse_robot_is_refused_unless_allowed() {
         let o = identify(bad, val, &out, &[]);
         let err = String::from_utf8_lossy(&o.stderr).to_string();
         assert!(!o.status.success(), "{err}");
-        assert!(err.contains(path_arg(bad)), "{err}");
-        assert!(err.contains("makes the robot worse"), "{err}");
-        assert!(err.contains("validation RMS"), "{err}");
+        let (b, v) = (bad.display(), val.display());
+        let at = format!("error: {v}: data: the identification on {b} makes the robot worse");
+        assert!(err.starts_with(&at), "{err}");
+        assert!(err.contains(": the validation RMS is "), "{err}");
+        assert!(err.contains(&format!("Check the readings of {b} and {v} (")));
         assert!(err.contains("--allow-worse"), "{err}");
         assert!(!out.exists(), "nothing is written");
         let kept = d.join("kept");
@@ -193,10 +197,12 @@ fn a_gross_tracker_reading_is_named_by_its_line_of_the_file() {
 }
 
 /// A tracker's file whose `y` column is scaled by 0.9 about its mean: validated on the
-/// untouched rows the robot comes out worse, so it is refused; with `--allow-worse` the
-/// warning is on stderr, in identified.json and in both reports. (Scaled about the tracker's
-/// origin, the column also moves the rows by 300 mm as a whole, and the two files are refused
-/// before any identification as not lying in one frame.)
+/// untouched rows the robot comes out worse, so it is refused at the validation file, naming
+/// the data file; with `--allow-worse` the warning is on stderr, in identified.json and in
+/// both reports. (Scaled about the tracker's origin, the column also moves the rows by 300 mm
+/// as a whole, and the two files are refused before any identification as not lying in one
+/// frame.) A search cut short that leaves both the validation and the calibration figures
+/// worse is refused at the data file, naming both files' readings.
 #[test]
 fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     let d = tmp_dir("cli-worse-tracker");
@@ -233,8 +239,10 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     let run = |data: &str, out: &Path, extra: &[&str]| {
         let (data, val) = (d.join(data), d.join("val.csv"));
         let mut args = vec!["identify", "--robot", &robot, "--data", path_arg(&data)];
-        args.extend_from_slice(&["--validate", path_arg(&val), "--method", "lm"]);
-        args.extend_from_slice(&["--out", path_arg(out)]);
+        args.extend_from_slice(&["--validate", path_arg(&val), "--out", path_arg(out)]);
+        if !extra.contains(&"--method") {
+            args.extend_from_slice(&["--method", "lm"]);
+        }
         args.extend_from_slice(extra);
         calbench(&args)
     };
@@ -249,10 +257,39 @@ fn a_worse_robot_from_a_tracker_file_is_refused_unless_allowed() {
     let o = run("bad.csv", &d.join("refused"), &[]);
     let err = String::from_utf8_lossy(&o.stderr).to_string();
     assert!(!o.status.success(), "{err}");
+    let [bad, val, cal] =
+        ["bad.csv", "val.csv", "cal.csv"].map(|f| d.join(f).display().to_string());
+    let at = format!("error: {val}: data: the identification on {bad} makes the robot worse: ");
     assert!(
-        err.contains("bad.csv") && err.contains("makes the robot worse"),
+        err.starts_with(&format!("{at}the validation RMS is ")),
         "{err}"
     );
+    assert!(err.contains(&format!("Check the readings of {bad} and {val} (")));
+    assert!(!d.join("refused").exists());
+    let search = [
+        "--set",
+        "max_evaluations=80",
+        "--set",
+        "bound_mm=20",
+        "--seed",
+        "1",
+    ];
+    let o = run(
+        "cal.csv",
+        &d.join("refused"),
+        &[&["--method", "pso"][..], &search].concat(),
+    );
+    let err = String::from_utf8_lossy(&o.stderr).to_string();
+    let at = format!("error: {cal}: data: the identification makes the robot worse: ");
+    assert!(
+        err.starts_with(&format!("{at}the validation RMS is ")),
+        "{err}"
+    );
+    assert!(
+        err.contains("; the RMS residual on the calibration readings is "),
+        "{err}"
+    );
+    assert!(err.contains(&format!("Check the readings of {cal} and {val} (")));
     assert!(!d.join("refused").exists());
     let kept = d.join("kept");
     let j = written_with_warning(
