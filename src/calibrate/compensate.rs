@@ -219,7 +219,9 @@ fn nearest_pose<const N: usize>(
     candidates: [Vec<Real>; N],
 ) -> crate::Result<Vec<Real>> {
     let fk = LoadedFk::new(robot);
-    let mut best: Option<((bool, bool), Real, Real, Vec<Real>)> = None;
+    // The kept one's failures (position, limits), tool turn (deg) and largest move.
+    let mut best: Option<((bool, bool), Real, Real)> = None;
+    let mut kept = q0.to_vec();
     for q in candidates {
         let f = fk.at(&q, payload_kg)?;
         let mut turned = q.clone();
@@ -232,14 +234,15 @@ fn nearest_pose<const N: usize>(
         let moved = (turned.iter().zip(q0).zip(&robot.joints))
             .map(|((v, r), j)| (v - r).abs() / (j.limits.1 - j.limits.0))
             .fold(0.0, Real::max);
-        let better = best.as_ref().is_none_or(|(b_fails, b_turn, b_moved, _)| {
-            fails < *b_fails || (fails == *b_fails && turn < *b_turn && moved <= *b_moved)
+        let better = best.is_none_or(|(b_fails, b_turn, b_moved)| {
+            fails < b_fails || (fails == b_fails && turn < b_turn && moved <= b_moved)
         });
         if better {
-            best = Some((fails, turn, moved, q));
+            best = Some((fails, turn, moved));
+            kept = q;
         }
     }
-    Ok(best.map_or_else(|| q0.to_vec(), |b| b.3))
+    Ok(kept)
 }
 
 /// Turns each revolute joint ([`Robot::q_turns`]: not a coupling's screw travel) by whole

@@ -182,7 +182,8 @@ mod tests {
         assert_eq!(key(&both), "errors.params");
         let mut foreign = s.clone();
         foreign.values.insert("beta2".into(), 0.01);
-        assert_eq!(key(&foreign), "errors.values");
+        // A name the robot does not have: at its own key, as a bad value is.
+        assert_eq!(key(&foreign), "errors.values.beta2");
         let mut nan = s.clone();
         nan.values.insert("d4".into(), Real::NAN);
         assert_eq!(key(&nan), "errors.values.d4");
