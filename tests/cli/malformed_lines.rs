@@ -316,3 +316,51 @@ fn an_unknown_error_name_and_a_number_beyond_toml_are_refused_at_their_line() {
         assert!(!d.join("o").exists());
     }
 }
+
+/// A value of the wrong type or an unknown key in `[sweep]` or `[[sweep]]` is refused at its
+/// own line (and, in `[sweep]`, its key), where every such refusal had named the line of the
+/// first section's header.
+#[test]
+fn a_sweep_s_malformed_value_is_refused_at_its_line() {
+    let d = tmp_dir("cli-lines-sweep-type");
+    let ci = read(&root().join("scenarios/ci-guard.toml"));
+    let one = "[sweep]\nkey = \"outliers.count\"\n";
+    let grid = "[[sweep]]\nkey = \"outliers.count\"\nvalues = [0, 1]\n\n[[sweep]]\n\
+                key = \"outliers.magnitude_mm\"\n";
+    for (name, sweep, start, words) in [
+        (
+            "values",
+            format!("{one}values = \"0,1\"\n"),
+            "values = \"",
+            "sweep.values: invalid type: string \"0,1\", expected a sequence",
+        ),
+        (
+            "unknown",
+            format!("{one}values = [0, 1]\nzap = 3\n"),
+            "zap = ",
+            "sweep: unknown field `zap`, expected one of `key`, `values`, `zip`",
+        ),
+        (
+            "grid",
+            format!("{grid}values = \"x\"\n"),
+            "values = \"",
+            "invalid type: string \"x\", expected a sequence",
+        ),
+        (
+            "zip",
+            format!("{grid}values = [[0.1, 0.2]]\nzip = 3\n"),
+            "zip = ",
+            "invalid type: integer `3`, expected a boolean",
+        ),
+    ] {
+        let text = format!("{ci}\n{sweep}");
+        std::fs::write(d.join(format!("{name}.toml")), &text).unwrap();
+        let at = format!("error: {name}.toml: line {}, ", line_of(&text, start));
+        let said = refusal(&d, &["run", &format!("{name}.toml"), "--out", "o"]);
+        assert!(
+            said.starts_with(&at) && said.contains(words),
+            "{said}\nwanted: {at}…{words}"
+        );
+        assert!(!d.join("o").exists());
+    }
+}

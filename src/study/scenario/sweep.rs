@@ -20,7 +20,9 @@ pub(super) struct SweepSection {
 
 /// `[sweep]` (one axis) or `[[sweep]]` (a grid of axes), told apart by the value's shape so
 /// that a refusal is the section's own (an unknown key named with the allowed ones), where
-/// an untagged enum said only that no variant matched.
+/// an untagged enum said only that no variant matched. The section is read from the file's
+/// own deserialiser, so that a refusal of a value in it names that value's key and line
+/// (`sweep.values`), not the section's header.
 #[derive(Debug)]
 pub(super) enum SweepField {
     One(SweepSection),
@@ -29,12 +31,27 @@ pub(super) enum SweepField {
 
 impl<'de> Deserialize<'de> for SweepField {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
-        use serde::de::Error as _;
-        match toml::Value::deserialize(d)? {
-            v @ toml::Value::Array(_) => v.try_into().map(SweepField::Grid),
-            v => v.try_into().map(SweepField::One),
+        use serde::de::value::{MapAccessDeserializer, SeqAccessDeserializer};
+        struct Shape;
+        impl<'de> serde::de::Visitor<'de> for Shape {
+            type Value = SweepField;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a table [sweep] or tables [[sweep]]")
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                seq: A,
+            ) -> std::result::Result<SweepField, A::Error> {
+                Vec::deserialize(SeqAccessDeserializer::new(seq)).map(SweepField::Grid)
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                map: A,
+            ) -> std::result::Result<SweepField, A::Error> {
+                SweepSection::deserialize(MapAccessDeserializer::new(map)).map(SweepField::One)
+            }
         }
-        .map_err(|e: toml::de::Error| D::Error::custom(e.message()))
+        d.deserialize_any(Shape)
     }
 }
 
