@@ -156,7 +156,7 @@ fn a_five_joint_arm_with_a_slide_is_corrected_near_each_row() {
     let (nominal, identified) = (d.join("slide5.toml"), d.join("slide5-id.toml"));
     std::fs::write(&nominal, arm(0.0)).unwrap();
     std::fs::write(&identified, arm(1.0)).unwrap();
-    // Rows drawn once within the limits (the probe that found the branch jumps).
+    // Rows drawn once within the limits, on which the branch jumps were found.
     let rows = [
         "138.708431905,-1.722512593,26.075373719,220.666483659,-21.735545866",
         "-150.708201987,62.719599720,-11.747164649,86.430755152,-82.910263082",
