@@ -220,7 +220,7 @@ impl IdentifyRequest {
             }
         }
         // A held-out row is a row of the data file; a validation file's, of its own.
-        let point = |i| match &held_out {
+        let validation_row = |i| match &held_out {
             Some((_, held)) => self.point_named(Some(held.as_slice()), i),
             None => self.validation_point(i),
         };
@@ -235,7 +235,7 @@ impl IdentifyRequest {
                 .validate_source
                 .as_deref()
                 .filter(|_| held_out.is_none()),
-            point: &point,
+            point: &validation_row,
         });
         check_frames(nominal, &d, validation, registration)?;
         let with_base = registration == Registration::Identify;

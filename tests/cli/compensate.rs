@@ -41,6 +41,16 @@ fn position(robot: &Path, q: &str) -> Vec<f64> {
         .collect()
 }
 
+/// How far (mm) the tool point of `identified` at the joints `q` is from that of `nominal`
+/// at `row` (CSV rows), by `calbench fk` of each.
+fn miss_mm((nominal, row): (&Path, &str), (identified, q): (&Path, &str)) -> f64 {
+    let (want, got) = (position(nominal, row), position(identified, q));
+    (want.iter().zip(&got))
+        .map(|(a, b)| (a - b).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
 /// `calbench compensate` of the program `rows` (joint values, the nominal robot's units) for
 /// the robots `nominal` and `identified`, in `dir`: the corrected program's text.
 pub(crate) fn compensate_rows(
@@ -93,17 +103,11 @@ fn an_arm_of_five_joints_reaches_each_row_s_position() {
         let cells: Vec<&str> = line.split(',').collect();
         assert_eq!(cells[7], "ok", "{line}");
         let q = cells[..5].join(",");
-        let (want, got) = (position(&nominal, row), position(&identified, &q));
-        let miss: f64 = want
-            .iter()
-            .zip(&got)
-            .map(|(a, b)| (a - b).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let miss = miss_mm((&nominal, row), (&identified, &q));
         // fk prints its positions to 1e-4 mm; the arm moved by about 0.8 mm.
         assert!(miss < 2e-4, "{row} -> {q}: {miss} mm");
         assert!(
-            position(&nominal, &q) != want,
+            position(&nominal, &q) != position(&nominal, row),
             "{row}: the command did not change"
         );
     }
@@ -194,11 +198,8 @@ fn a_five_joint_arm_with_a_slide_is_corrected_near_each_row() {
         // The tool point, by `calbench fk` of both robots (every fifth row: a process each).
         if i % 5 == 0 {
             let q = cells[..5].join(",");
-            let (want, got) = (position(&nominal, row), position(&identified, &q));
-            let miss = (want.iter().zip(&got))
-                .map(|(a, b)| (a - b).powi(2))
-                .sum::<f64>();
-            assert!(miss.sqrt() < 2e-4, "{row} -> {q}: {} mm", miss.sqrt());
+            let miss = miss_mm((&nominal, row), (&identified, &q));
+            assert!(miss < 2e-4, "{row} -> {q}: {miss} mm");
         }
     }
 }

@@ -446,10 +446,7 @@ fn calibration_keys_no_strategy_reads_are_named_in_a_warning() {
         let sc = d.join("s.toml");
         let with = format!("strategies = {strategies}\n{unused}");
         std::fs::write(&sc, text.replace("strategies = [\"random\"]", &with)).unwrap();
-        let out = d.join("o");
-        let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(o.status.success(), "{err}");
+        let err = warnings_of_a_run(&sc, &d.join("o"));
         for key in ["poses_file", "candidates", "separate"] {
             let said = format!("warning: calibration.{key} is not used: no strategy of ");
             assert_eq!(
@@ -458,7 +455,6 @@ fn calibration_keys_no_strategy_reads_are_named_in_a_warning() {
                 "{strategies}: {err}"
             );
         }
-        std::fs::remove_dir_all(&out).unwrap();
     }
     // A sweep of the strategies reads the pose list at its points of `file`: no warning.
     let swept = "poses_file = \"poses.csv\"";
@@ -468,10 +464,18 @@ fn calibration_keys_no_strategy_reads_are_named_in_a_warning() {
     let sc = d.join("s.toml");
     let text = text.replace("strategies = [\"random\"]", &with) + sweep;
     std::fs::write(&sc, text).unwrap();
-    let out = d.join("o");
-    let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success() && !err.contains("is not used"), "{err}");
+    let err = warnings_of_a_run(&sc, &d.join("o"));
+    assert!(!err.contains("is not used"), "{err}");
+}
+
+/// The standard error of a one-trial `calbench run` of the scenario `sc` into `out`, which
+/// must succeed (the folder is removed again).
+fn warnings_of_a_run(sc: &std::path::Path, out: &std::path::Path) -> String {
+    let o = calbench(&["run", path(sc), "--trials", "1", "--out", path(out)]);
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(o.status.success(), "{err}");
+    std::fs::remove_dir_all(out).unwrap();
+    err
 }
 
 /// `[errors]` sizes the kind does not read (`length_mm`, `angle_rad` with `none` or `values`,
@@ -495,15 +499,11 @@ fn error_sizes_the_kind_does_not_read_are_named_in_a_warning() {
         let with = format!("\nkind = \"{kind}\"\n{sizes}\n");
         let edited = text.replace("\nkind = \"paper\"\n", &with);
         std::fs::write(&sc, if swept { edited + sweep } else { edited }).unwrap();
-        let out = d.join("o");
-        let o = calbench(&["run", path(&sc), "--trials", "1", "--out", path(&out)]);
-        let err = String::from_utf8_lossy(&o.stderr);
-        assert!(o.status.success(), "{err}");
+        let err = warnings_of_a_run(&sc, &d.join("o"));
         for key in ["length_mm", "angle_rad", "params"] {
             let said = format!("warning: errors.{key} is not used: errors.kind is \"{kind}\"");
             assert_eq!(err.contains(&said), warned.contains(&key), "{kind}: {err}");
         }
-        std::fs::remove_dir_all(&out).unwrap();
     }
 }
 
