@@ -567,11 +567,27 @@ fn joint_element(
     s + "  </joint>\n"
 }
 
-/// Whether `robot` names a URDF file (by its extension).
+/// Whether `robot` names a URDF file: by its extension `.urdf`, or a file whose text begins
+/// with `<` (XML under another name, `.xml` as ROS tools write it; no TOML file begins so).
 pub fn is_urdf(robot: &str) -> bool {
-    Path::new(robot)
-        .extension()
+    let path = Path::new(robot);
+    path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
+        || begins_as_xml(path)
+}
+
+/// Whether the file `path` begins, past a byte-order mark and white space, with `<`; `false`
+/// for a file that cannot be read (its reader names why).
+fn begins_as_xml(path: &Path) -> bool {
+    use std::io::Read;
+    let mut head = [0u8; 256];
+    let Ok(n) = std::fs::File::open(path).and_then(|mut f| f.read(&mut head)) else {
+        return false;
+    };
+    let head = head[..n]
+        .strip_prefix(b"\xEF\xBB\xBF")
+        .unwrap_or(&head[..n]);
+    head.iter().find(|b| !b.is_ascii_whitespace()) == Some(&b'<')
 }
 
 /// A URDF of a calbench robot (`identify --export urdf` on a robot file): root link `world`, a

@@ -402,3 +402,23 @@ fn a_failed_row_keeps_the_commands_that_came_closest() {
         "{written} mm against {own} mm"
     );
 }
+
+/// A URDF under another name (`ur10.xml`, as ROS tools write one) is read as a URDF by its
+/// text (docs/formats.md § 1.4): `fk` gives the `.urdf` file's pose, where the file had been
+/// read as TOML and refused at line 1 ("key with no value"), and `identify` writes its
+/// `robot.urdf` with the FK of its `robot.toml`. A TOML robot file keeps its reading under any
+/// name.
+#[test]
+fn a_urdf_named_xml_is_read_as_a_urdf() {
+    let d = tmp_dir("realdata-urdf-xml");
+    let xml = d.join("ur10.xml");
+    std::fs::copy(ex("ur10.urdf"), &xml).unwrap();
+    let fk = |robot: &str, q: &str| calbench_ok(&["fk", "--robot", robot, "--q", q]).stdout;
+    let q = "0.1,-1.2,1.3,0.4,-0.5,0.6";
+    assert_eq!(fk(path_arg(&xml), q), fk(&ex("ur10.urdf"), q));
+    let toml = d.join("dh.xml");
+    std::fs::copy(ex("ur10.toml"), &toml).unwrap();
+    let q = "10,-70,80,20,-30,40";
+    assert_eq!(fk(path_arg(&toml), q), fk(&ex("ur10.toml"), q));
+    identify_urdf_on_the_shipped_rows(path_arg(&xml), &d);
+}
