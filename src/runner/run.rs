@@ -280,7 +280,7 @@ pub fn run_resumed(
         Box::new(NoProgress)
     };
     let pool = super::threads::pool(opts.threads, last - first, reporter)?;
-    for w in scenario.unused_settings() {
+    for w in scenario.warnings() {
         reporter.warning(&w);
     }
     if opts.precision.is_some() {

@@ -534,3 +534,52 @@ fn an_instruments_study_s_unknown_robot_is_refused_at_its_line() {
         }
     }
 }
+
+/// A robot file in metres declared in millimetres (`length_unit = "mm"`, `a = -0.612`) is a
+/// robot 1000 times too small; a study of it ran without a word, its 0.5 mm errors a third of
+/// the arm. The run goes on and says so, with the arm's size; the robots the repository ships
+/// (each built-in, and each robot file) say nothing.
+#[test]
+fn a_robot_too_small_for_its_length_unit_is_named_in_a_warning() {
+    let root = crate::common::root();
+    let d = tmp("small-robot");
+    let scenario = |robot: &str| {
+        let sc = d.join("s.toml");
+        let text = format!("name = \"s\"\n[robot]\n{robot}\n[[methods]]\nname = \"lm\"\n");
+        std::fs::write(&sc, text).unwrap();
+        warnings_of_a_run(&sc, &d.join("o"))
+    };
+    let ur10 = std::fs::read_to_string(root.join("examples/ipa-ur10/ur10.toml")).unwrap();
+    let mut in_m = String::new();
+    for line in ur10.lines() {
+        let metres = |v: &str| format!("{}", v.parse::<f64>().unwrap() / 1000.0);
+        in_m += &match line.split_once(" = ") {
+            Some((k @ ("a" | "d"), v)) => format!("{k} = {}", metres(v)),
+            _ => line.to_string(),
+        };
+        in_m.push('\n');
+    }
+    assert!(in_m.contains("a = -0.612\n"), "{in_m}");
+    let small = d.join("ur10-m.toml");
+    std::fs::write(&small, in_m).unwrap();
+    let err = scenario(&format!("file = {:?}", path(&small)));
+    assert!(
+        err.contains(
+            "warning: robot \"ur10\": its joints' lengths, offsets and travels add up to 1.683 \
+             mm (its tool's 109.0 mm not counted): are its lengths in its length_unit (\"mm\")?"
+        ),
+        "{err}"
+    );
+    let robots = String::from_utf8(crate::common::calbench_ok(&["robots"]).stdout).unwrap();
+    let builtins = robots.lines().filter_map(|l| l.split_whitespace().next());
+    let shipped = [
+        "examples/ipa-ur10/ur10.toml",
+        "examples/barrett-wam/wam.toml",
+    ];
+    let files = (shipped.into_iter().chain(["robots/ban-irb2600.toml"]))
+        .map(|f| format!("file = {:?}", path(&root.join(f))));
+    for robot in builtins.map(|b| format!("builtin = {b:?}")).chain(files) {
+        let err = scenario(&robot);
+        assert!(!err.contains("warning"), "{robot}: {err}");
+    }
+}

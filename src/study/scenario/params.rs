@@ -83,14 +83,23 @@ impl Scenario {
         Ok(())
     }
 
-    /// What the scenario sets that it does not read, one line each for the run's warnings:
-    /// in `[calibration]`, a pose list `poses_file` without the strategy `file` and the
-    /// optimisers' settings without an optimised strategy; in `[errors]`, the sizes
-    /// `length_mm` and `angle_rad` with `kind = "none"` or `"values"`, and `params` with
-    /// `kind = "none"`. Such a key is allowed (a scenario may keep it for another run), but a
-    /// run that ignores it says so; a sweep of the key that decides (`calibration.strategies`,
-    /// `errors.kind`) may read it at some of its points, and is not warned of.
-    pub fn unused_settings(&self) -> Vec<String> {
+    /// The run's warnings, one line each: what the scenario sets that it does not read
+    /// ([`Self::unused_settings`]), and a robot too small for its length unit
+    /// ([`small_robot`]).
+    pub fn warnings(&self) -> Vec<String> {
+        let mut out = self.unused_settings();
+        out.extend(self.robot().ok().as_ref().and_then(small_robot));
+        out
+    }
+
+    /// What the scenario sets that it does not read: in `[calibration]`, a pose list
+    /// `poses_file` without the strategy `file` and the optimisers' settings without an
+    /// optimised strategy; in `[errors]`, the sizes `length_mm` and `angle_rad` with
+    /// `kind = "none"` or `"values"`, and `params` with `kind = "none"`. Such a key is allowed
+    /// (a scenario may keep it for another run), but a run that ignores it says so; a sweep of
+    /// the key that decides (`calibration.strategies`, `errors.kind`) may read it at some of
+    /// its points, and is not warned of.
+    fn unused_settings(&self) -> Vec<String> {
         let swept = |key: &str| {
             let mut axes = self.sweep.iter().flat_map(|s| &s.axes);
             axes.any(|a| a.key == key)
@@ -173,4 +182,28 @@ impl Scenario {
             })
             .collect()
     }
+}
+
+/// Below this, the lengths, offsets and travels of a robot's joints (mm, its tool's not
+/// counted) are taken for a robot file written in metres and declared in millimetres: the
+/// smallest arm a calibration of the papers' kind concerns reaches hundreds of millimetres.
+pub const SMALL_ARM_MM: crate::numeric::Real = 10.0;
+
+/// Why `robot` looks too small for its length unit, or `None`: its joints' lengths, offsets
+/// and travels add up to less than [`SMALL_ARM_MM`], where a robot in metres written as if in
+/// millimetres lands (a UR10's add up to 1.7 mm so). A warning, not a refusal: a study of so
+/// small an arm runs, but its injected errors (0.5 mm by default) are then a share of it.
+pub fn small_robot(robot: &Robot) -> Option<String> {
+    use crate::robot::sampling::reach_bound_mm;
+    let tool = robot.tool().pos.norm();
+    let arm = reach_bound_mm(robot) - tool;
+    (arm < SMALL_ARM_MM).then(|| {
+        format!(
+            "robot \"{}\": its joints' lengths, offsets and travels add up to {arm:.3} mm (its \
+             tool's {tool:.1} mm not counted): are its lengths in its length_unit (\"{}\")? A \
+             robot file in m declared in mm is 1000 times too small",
+            robot.name,
+            robot.units.length_name()
+        )
+    })
 }
