@@ -515,7 +515,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     let worse = worse_causes(validated, fit.rms, r.termination, None);
     if !worse.is_empty() && !q.allow_worse {
         let likely = radians_hint(nominal, &file.qs).or_else(|| gross().map(gross_likely));
-        let val_file = q.validate_source.as_deref().zip(validated);
+        let val_file = q.validate_source.as_deref();
         return Err(worse_error(&q.source, val_file, &q.method, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
@@ -538,7 +538,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     let record = IdentifiedRecord {
         fixed: names(&q.fix),
         allowed_implausible: implausible,
-        allowed_worse: worse,
+        allowed_worse: worse.iter().map(ToString::to_string).collect(),
         ..kind_keys(record, &fit, (kind, readings), q.registration)
     };
     Ok(KindOutcome {

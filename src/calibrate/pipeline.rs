@@ -389,7 +389,7 @@ impl IdentifyRequest {
             let likely = radians_hint(&nominal, &d.qs)
                 .or_else(convention)
                 .or_else(|| gross.clone().map(gross_likely));
-            let val_file = self.validate_source.as_deref().zip(validated);
+            let val_file = self.validate_source.as_deref();
             return Err(worse_error(
                 &self.source,
                 val_file,
@@ -435,7 +435,7 @@ impl IdentifyRequest {
             .unwrap_or_default();
         let record = IdentifiedRecord {
             allowed_implausible: implausible,
-            allowed_worse: worse,
+            allowed_worse: worse.iter().map(ToString::to_string).collect(),
             convergence_trace: trace,
             covariance: Some(
                 covariance

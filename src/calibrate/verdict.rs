@@ -157,39 +157,62 @@ pub fn gross_reading(residuals: &[Real]) -> Option<(usize, Real)> {
 /// fits exactly leave before and after a solve, and far below any instrument's noise.
 pub const WORSE_FLOOR_MM: Real = 1e-9;
 
-/// Why a result makes the robot worse than the nominal one, each cause in words: a
-/// validation RMS after above the one before, a residual RMS after above the one before (the
-/// readings the robot was identified on), a solve that stopped at its iteration limit with a
-/// cost that grew (`trace`: the RMS residual at each evaluation); each rise by more than
+/// One way a result makes the robot worse than the nominal one ([`worse_causes`]); its
+/// `Display` is the cause in words.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Worse {
+    /// The validation RMS (mm) rose from the first to the second.
+    Validation(Real, Real),
+    /// The RMS residual (mm) on the readings the robot was identified on rose.
+    Residual(Real, Real),
+    /// The solve stopped at its iteration limit with a cost that grew: the RMS residual (mm)
+    /// at the first evaluation and at the last.
+    GrowingCost(Real, Real),
+}
+
+impl std::fmt::Display for Worse {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Worse::Validation(before, after) => write!(
+                f,
+                "the validation RMS is {after:.4} mm after calibration against {before:.4} mm \
+                 before"
+            ),
+            Worse::Residual(before, after) => write!(
+                f,
+                "the RMS residual on the calibration readings is {after:.4} mm after against \
+                 {before:.4} mm before"
+            ),
+            Worse::GrowingCost(first, last) => write!(
+                f,
+                "the solve stopped at its iteration limit with a growing cost (RMS residual \
+                 {first:.4} mm at the start, {last:.4} mm at the end)"
+            ),
+        }
+    }
+}
+
+/// Why a result makes the robot worse than the nominal one: a validation RMS after above the
+/// one before, a residual RMS after above the one before (the readings the robot was
+/// identified on), a solve that stopped at its iteration limit with a cost that grew
+/// (`trace`: the RMS residual at the first evaluation and the last); each rise by more than
 /// [`WORSE_FLOOR_MM`]. Empty: not worse.
 pub fn worse_causes(
     validation: Option<(Real, Real)>,
     residual: (Real, Real),
     termination: Termination,
     trace: Option<(Real, Real)>,
-) -> Vec<String> {
-    let mut w = Vec::new();
-    if let Some((before, after)) = validation.filter(|&(b, a)| rose(b, a)) {
-        w.push(format!(
-            "the validation RMS is {after:.4} mm after calibration against {before:.4} mm before"
-        ));
-    }
-    let (before, after) = residual;
-    if rose(before, after) {
-        w.push(format!(
-            "the RMS residual on the calibration readings is {after:.4} mm after against \
-             {before:.4} mm before"
-        ));
-    }
-    if let (Termination::MaxIterations, Some((first, last))) = (termination, trace) {
-        if rose(first, last) {
-            w.push(format!(
-                "the solve stopped at its iteration limit with a growing cost (RMS residual \
-                 {first:.4} mm at the start, {last:.4} mm at the end)"
-            ));
-        }
-    }
-    w
+) -> Vec<Worse> {
+    let growing = trace.filter(|_| termination == Termination::MaxIterations);
+    let causes = [
+        validation.map(|(b, a)| Worse::Validation(b, a)),
+        Some(Worse::Residual(residual.0, residual.1)),
+        growing.map(|(first, last)| Worse::GrowingCost(first, last)),
+    ];
+    let rises = |w: &Worse| match *w {
+        Worse::Validation(b, a) | Worse::Residual(b, a) | Worse::GrowingCost(b, a) => rose(b, a),
+    };
+    causes.into_iter().flatten().filter(rises).collect()
 }
 
 /// Whether an RMS error rose from `before` to `after` by more than [`WORSE_FLOOR_MM`].
@@ -200,25 +223,22 @@ fn rose(before: Real, after: Real) -> bool {
 /// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
 /// `source` by `method`; `likely` its likely cause ([`radians_hint`], [`gross_likely`]); the
 /// refusal names the option that keeps it ([`Opt::AllowWorse`]). `validation`: the file of the
-/// validation rows, where they came from one, with their RMS error before and after: when
-/// that rose, both files' readings are to check, and when it is the one cause (the
-/// calibration's figures did not rise) the refusal is at the validation file, naming
-/// `source` as the file identified on. A method supplied from outside is named first among
-/// what to check: its result, not the readings, is the likelier cause.
+/// validation rows, where they came from one: when their RMS rose, both files' readings are
+/// to check, and when that is the one cause (the calibration's figures did not rise) the
+/// refusal is at the validation file, naming `source` as the file identified on. A method
+/// supplied from outside is named first among what to check: its result, not the readings,
+/// is the likelier cause.
 pub fn worse_error(
     source: &Path,
-    validation: Option<(&Path, (Real, Real))>,
+    validation: Option<&Path>,
     method: &MethodSpec,
-    causes: &[String],
+    causes: &[Worse],
     likely: Option<String>,
 ) -> Error {
     let likely = likely.map_or(String::new(), |l| format!("; {l}"));
-    let validation = validation
-        .filter(|&(_, (before, after))| rose(before, after))
-        .map(|(v, _)| v);
-    // The validation's figure is the first cause ([`worse_causes`]); the others are the
-    // calibration's.
-    let at_validation = validation.filter(|_| causes.len() == 1);
+    let of_validation = |w: &Worse| matches!(w, Worse::Validation(..));
+    let validation = validation.filter(|_| causes.iter().any(of_validation));
+    let at_validation = validation.filter(|_| causes.iter().all(of_validation));
     let on = at_validation.map_or(String::new(), |_| format!(" on {}", source.display()));
     let of = validation.map_or(String::new(), |v| {
         format!(" of {} and {}", source.display(), v.display())
@@ -231,6 +251,7 @@ pub fn worse_error(
         ),
         false => (String::new(), readings),
     };
+    let causes: Vec<String> = causes.iter().map(Worse::to_string).collect();
     let msg = format!(
         "the identification{on}{by} makes the robot worse: {}{likely}; nothing was written. \
          Check {check}, or pass ",
@@ -396,7 +417,8 @@ mod tests {
             None,
         );
         assert_eq!(w.len(), 1);
-        assert!(w[0].contains("1327.7000 mm after"), "{w:?}");
+        assert_eq!(w, [Worse::Validation(2.9, 1327.7)]);
+        assert!(w[0].to_string().contains("1327.7000 mm after"), "{w:?}");
         let w = worse_causes(
             None,
             (0.1, 0.2),
