@@ -20,7 +20,7 @@ use nalgebra::{DMatrix, DVector, Matrix6, Vector6};
 use super::Calibrated;
 use crate::error::Result;
 use crate::identify::solver::by_blocks;
-use crate::identify::{CalibrationProblem, LeastSquares, RobotProblem};
+use crate::identify::{standard_error, CalibrationProblem, LeastSquares, RobotProblem};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{nan, Real, Vec3};
 use crate::robot::{Param, Robot};
@@ -118,7 +118,7 @@ pub fn diagnose(s: &Subject) -> Result<Diagnostics> {
     let id = &s.calibrated.identified;
     let t = s.params.len();
     let cov = id.covariance();
-    let sigma: Vec<Real> = (0..t).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
+    let sigma: Vec<Real> = (0..t).map(|i| standard_error(&cov, i)).collect();
     let correlation: Vec<Vec<Real>> = (0..t)
         .map(|i| {
             (0..t)
@@ -279,7 +279,13 @@ fn predicted_sigma(s: &Subject, cov: &DMatrix<Real>) -> Result<Predicted> {
     .with_payloads(data.payload_kg.as_deref())?;
     let mut sigmas = Vec::with_capacity(data.len());
     by_points(&rp, &id.x, cov, |_, _, h| {
-        sigmas.push(h.trace().max(0.0).sqrt())
+        // NaN without a covariance (a search's): no σ is predicted, where `max` gave 0.
+        let trace = h.trace();
+        sigmas.push(if trace.is_nan() {
+            trace
+        } else {
+            trace.max(0.0).sqrt()
+        })
     });
     let stats = super::ErrorStats::of(&sigmas);
     Ok(Predicted {

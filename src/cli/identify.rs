@@ -320,10 +320,7 @@ fn write(args: &IdentifyArgs, o: &TrackerOutcome) -> Result<()> {
         extra.push(("ur-kinematics.yaml", exports::ur_yaml(&c.robot)?));
     }
     if args.export.contains(&Export::DhCsv) {
-        let cov = c.identified.covariance();
-        let sigma: Vec<Real> = (0..o.params.len())
-            .map(|i| cov[(i, i)].max(0.0).sqrt())
-            .collect();
+        let sigma = c.identified.standard_errors();
         let table = exports::dh_csv(&o.nominal, &c.robot, &o.params, &sigma);
         extra.push(("dh-table.csv", table));
     }

@@ -229,6 +229,12 @@ impl Identified {
         cov
     }
 
+    /// The standard error of each parameter ([`standard_error`] of [`Self::covariance`]).
+    pub fn standard_errors(&self) -> Vec<Real> {
+        let cov = self.covariance();
+        (0..cov.nrows()).map(|i| standard_error(&cov, i)).collect()
+    }
+
     /// A result without the statistics of the Jacobian methods (no covariance, condition
     /// number or residual): for methods that do not form `JᵀPJ`.
     pub fn plain(
@@ -354,3 +360,13 @@ impl<'a> CalibrationProblem<'a> {
 
 #[cfg(test)]
 mod tests;
+
+/// The standard error of parameter `i`: the square root of the covariance's diagonal; NaN
+/// where the covariance is not given (its entries NaN: a method that forms no `JᵀPJ`, a
+/// rank below full) or lacks the parameter, never 0, which would claim it known exactly.
+pub fn standard_error(covariance: &DMatrix<Real>, i: usize) -> Real {
+    covariance
+        .get((i, i))
+        .filter(|v| v.is_finite())
+        .map_or(Real::NAN, |v| v.max(0.0).sqrt())
+}

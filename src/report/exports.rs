@@ -133,6 +133,7 @@ pub fn dh_csv(nominal: &Robot, identified: &Robot, params: &[Param], sigma: &[Re
             .iter()
             .position(|q| *q == p)
             .and_then(|k| sigma.get(k))
+            .filter(|v| v.is_finite())
             .map_or(String::new(), |v| (v / scale).to_string());
         s += &format!(
             "{},{bare},{unit},{a},{b},{},{sd}\n",

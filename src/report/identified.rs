@@ -14,7 +14,7 @@ pub use crate::calibrate::verdict::registration_warning;
 use crate::calibrate::verdict::worse_warning;
 use crate::calibrate::ErrorStats;
 use crate::error::Result;
-use crate::identify::Termination;
+use crate::identify::{standard_error, Termination};
 use crate::numeric::Real;
 use crate::robot::{robot_to_toml, Param};
 
@@ -239,15 +239,6 @@ fn point_warnings(weights: &[Real], m: usize) -> Vec<String> {
         ));
     }
     w
-}
-
-/// The standard error of parameter `i`: the square root of the covariance's diagonal; NaN
-/// where the covariance is not given (its entries NaN) or lacks the parameter.
-pub fn standard_error(covariance: &nalgebra::DMatrix<Real>, i: usize) -> Real {
-    covariance
-        .get((i, i))
-        .filter(|v| v.is_finite())
-        .map_or(Real::NAN, |v| v.max(0.0).sqrt())
 }
 
 /// The headers of [`validation_rows`].

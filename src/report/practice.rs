@@ -123,12 +123,18 @@ impl IdentifiedRecord {
                 rows.collect(),
             ));
             let p = &d.predicted;
+            let predicted = match p.rms_mm.is_nan() {
+                true => "none, as there is no covariance".to_string(),
+                false => format!(
+                    "RMS {} mm, max {} mm",
+                    fmt_num(p.rms_mm, 4),
+                    fmt_num(p.max_mm, 4)
+                ),
+            };
             md.push(Block::Para(format!(
-                "Predicted position σ from the covariance at the {} poses: RMS {} mm, max {} \
-                 mm; measured RMS there {} mm.",
+                "Predicted position σ from the covariance at the {} poses: {predicted}; \
+                 measured RMS there {} mm.",
                 p.at,
-                fmt_num(p.rms_mm, 4),
-                fmt_num(p.max_mm, 4),
                 fmt_num(p.measured_rms_mm, 4)
             )));
         }

@@ -149,3 +149,63 @@ fn final_fitness_is_each_searchs_last_best_fitness_and_only_where_a_search_ran()
     let err = String::from_utf8_lossy(&o.stderr);
     one_line_naming(&err, &refused, &["claims[0].metric", "needs a search"]);
 }
+
+/// A search estimates no covariance: `identified.json` gives no σ for its parameters and no
+/// predicted position σ (`null`), `report.md` says so, and `dh-table.csv` leaves `sigma`
+/// empty. All three had said 0 (`f64::max` of the covariance's NaN), a σ that claims the
+/// parameters known exactly. Least squares on the same data gives them.
+#[test]
+fn a_search_writes_no_standard_errors() {
+    let d = tmp_dir("search-sigma");
+    let sim = d.join("pos");
+    let scenario = crate::common::root().join("scenarios/ci-guard.toml");
+    calbench_ok(&[
+        "simulate",
+        path_arg(&scenario),
+        "--trial",
+        "1",
+        "--out",
+        path_arg(&sim),
+    ]);
+    let data = sim.join("measurements.csv");
+    for (method, given) in [("pso", false), ("ls", true)] {
+        let out = d.join(method);
+        calbench_ok(&[
+            "identify",
+            "--robot",
+            "irb2600",
+            "--data",
+            path_arg(&data),
+            "--method",
+            method,
+            "--export",
+            "dh-csv",
+            "--out",
+            path_arg(&out),
+        ]);
+        let record = load_json(&out.join("identified.json"));
+        let diagnostics = &record["diagnostics"];
+        let sigma = diagnostics["sigma"].as_array().unwrap();
+        assert!(!sigma.is_empty());
+        // Given: a positive σ; not given: `null`, never 0.
+        let given_as = |v: &Value| match given {
+            true => v.as_f64().is_some_and(|v| v > 0.0),
+            false => v.is_null(),
+        };
+        assert!(sigma.iter().all(given_as), "{method}: {sigma:?}");
+        let predicted = &diagnostics["predicted"];
+        assert!(given_as(&predicted["rms_mm"]), "{method}: {predicted}");
+        assert!(given_as(&predicted["max_mm"]), "{method}: {predicted}");
+        let report = read(&out.join("report.md"));
+        let none = "the calibration poses: none, as there is no covariance; measured RMS there";
+        assert_eq!(report.contains(none), !given, "{report}");
+        let csv = read(&out.join("dh-table.csv"));
+        let (header, rows) = table(&csv);
+        let col = header.iter().position(|h| h == "sigma").unwrap();
+        let a2 = rows
+            .iter()
+            .find(|r| r[0] == "2" && r[1] == "a")
+            .expect("a2's row");
+        assert_eq!(a2[col].is_empty(), !given, "{method}: {csv}");
+    }
+}

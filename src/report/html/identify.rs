@@ -14,9 +14,10 @@ use nalgebra::DMatrix;
 
 use super::Page;
 use crate::error::Result;
+use crate::identify::standard_error;
 use crate::numeric::Real;
 use crate::report::identified::{
-    standard_error, validation_rows, warnings, Additions, Block, IdentifyRecord, VALIDATION_HEADERS,
+    validation_rows, warnings, Additions, Block, IdentifyRecord, VALIDATION_HEADERS,
 };
 use crate::report::markdown::fmt_num;
 
