@@ -272,10 +272,7 @@ pub(crate) fn measurements(
     payload: Option<&PyReadonlyArray1<'_, f64>>,
 ) -> PyResult<Measurements> {
     // An array's shape is refused naming the argument, or its place in the one that gave it.
-    let key = |array: &str| match keys {
-        ArrayKeys::Own => array.to_string(),
-        ArrayKeys::All(what) => format!("{what}.{array}"),
-    };
+    let key = |array: &str| keys.of(array);
     let quats = rotations
         .map(|r| quaternions(&key("rotations"), r))
         .transpose()?;

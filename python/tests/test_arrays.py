@@ -106,11 +106,27 @@ def test_a_bad_value_in_an_array_is_refused_naming_that_array(trial):
         calbench.identify(robot, q, points, payload=payload)
     with pytest.raises(calbench.SettingError, match=r"^setting `rotations`: 40 joint vectors "):
         calbench.identify(robot, q, points, rotations=np.tile([1.0, 0, 0, 0], (39, 1)))
-    # validate is one argument: its rows are refused naming it.
+    # validate is one argument: a row of one of its arrays is refused naming that array by its
+    # place in it (docs/python.md), as an array of the wrong shape is; a cell had been named
+    # `validate` alone, which left q or points to guess.
     far = q[:5].copy()
     far[1, 0] = 500.0
-    with pytest.raises(calbench.SettingError, match=r"^setting `validate`: row 1, column q1: 500"):
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `validate.q`: row 1, column q1: 500"):
         calbench.identify(robot, q, points, validate=(far, points[:5]))
+    gap = points[:5].copy()
+    gap[4, 1] = np.nan
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `validate.points`: row 4, column y: NaN is not a finite"):
+        calbench.identify(robot, q, points, validate=(q[:5], gap))
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `validate.rotations`: row 0, column qw: the quaternion"):
+        calbench.identify(robot, q, points,
+                          validate=(q[:5], points[:5], np.tile([2.0, 0, 0, 0], (5, 1))))
+    with pytest.raises(calbench.SettingError,
+                       match=r"^setting `validate.payload`: row 0: must be a mass"):
+        calbench.identify(robot, q, points, payload=np.zeros(len(q)),
+                          validate=(q[:5], points[:5], None, -np.ones(5)))
     with pytest.raises(calbench.SettingError,
                        match=r"^setting `prior`: `d2` is not among the identified parameters"):
         calbench.identify(robot, q, points, prior={"d2": 0.1}, fix=["d2"])

@@ -94,22 +94,23 @@ pub(super) fn check_payload(v: Real) -> std::result::Result<(), String> {
 }
 
 /// The setting a refusal of [`measurements_from_arrays`] names: each array its own (`q`,
-/// `points`, `rotations`, `sigma`, `payload`: the arguments that gave them), or one setting
-/// for them all (a tuple given as one argument).
+/// `points`, `rotations`, `sigma`, `payload`: the arguments that gave them), or each by its
+/// place in the one setting that gave them all (a tuple given as one argument:
+/// `validate.points`).
 #[derive(Clone, Copy, Debug)]
 pub enum ArrayKeys<'a> {
     /// Each array is named by its own name.
     Own,
-    /// Every array is named by this one setting.
+    /// Every array is named by its place in this one setting (`KEY.points`).
     All(&'a str),
 }
 
 impl ArrayKeys<'_> {
     /// The setting that names `array`.
-    fn of(self, array: &str) -> String {
+    pub fn of(self, array: &str) -> String {
         match self {
             ArrayKeys::Own => array.to_string(),
-            ArrayKeys::All(key) => key.to_string(),
+            ArrayKeys::All(key) => format!("{key}.{array}"),
         }
     }
 }
