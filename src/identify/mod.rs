@@ -98,6 +98,11 @@ pub trait Method: std::fmt::Debug + Send + Sync {
     fn fitness_model(&self) -> Option<qiao::error_models::ErrorModel> {
         None
     }
+
+    /// For a search, the box it explores around the nominal values; `None` for the others.
+    fn search_box(&self) -> Option<&qiao::method::SearchBox> {
+        None
+    }
 }
 
 /// Why an identification stopped. The names (serde, kebab-case) are those of reports and

@@ -246,19 +246,8 @@ impl<'a> MetaProblem<'a> {
     /// Bounds of half width `length_mm` on length parameters, `angle_rad` on angles and
     /// `compliance` (rad/(N·m)) on joint compliances.
     pub fn bounds(&self, length_mm: Real, angle_rad: Real, compliance: Real) -> Bounds {
-        let w: Vec<Real> = self
-            .params
-            .iter()
-            .map(|p| {
-                if p.is_compliance() {
-                    compliance
-                } else if p.is_length() {
-                    length_mm
-                } else {
-                    angle_rad
-                }
-            })
-            .collect();
+        let widths = (length_mm, angle_rad, compliance);
+        let w: Vec<Real> = self.params.iter().map(|&p| half_width(p, widths)).collect();
         Bounds::symmetric(&w)
     }
 
@@ -339,6 +328,18 @@ impl<'a> MetaProblem<'a> {
         let r = self.robot(x)?;
         let chain = r.chain();
         Ok(self.qs.iter().map(|q| chain.fk(q)).collect())
+    }
+}
+
+/// The half-width of a search box on parameter `p`, of the box's half-widths on lengths (mm),
+/// angles (rad) and joint compliances (rad/(N·m)).
+pub fn half_width(p: Param, (length_mm, angle_rad, compliance): (Real, Real, Real)) -> Real {
+    if p.is_compliance() {
+        compliance
+    } else if p.is_length() {
+        length_mm
+    } else {
+        angle_rad
     }
 }
 

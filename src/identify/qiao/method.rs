@@ -18,6 +18,7 @@ use crate::identify::qiao::{
 use crate::identify::{CalibrationProblem, Identified, Method, Termination};
 use crate::numeric::rng::Rng;
 use crate::numeric::Real;
+use crate::robot::Param;
 
 /// A search over a box: the options of one of [`bas`], [`pso`], [`bas_pso`].
 pub trait Search: std::fmt::Debug + Send + Sync {
@@ -97,6 +98,28 @@ impl SearchBox {
     pub fn fitness_model(&self) -> ErrorModel {
         self.error_model.unwrap_or(ErrorModel::DirectFk)
     }
+
+    /// The half-width of the box on parameter `p` (mm, rad or rad/(N·m)).
+    pub fn half_width(&self, p: Param) -> Real {
+        let widths = (self.bound_mm, self.bound_rad, self.bound_compliance);
+        super::fitness::half_width(p, widths)
+    }
+
+    /// The parameters of `params` whose errors `x` (in their order) lie on the box's edge,
+    /// within a millionth of its half-width: where a search ends when the minimum lies
+    /// beyond the box, so that the result is the box's corner, not the data's answer.
+    pub fn at_edge(&self, params: &[Param], x: &[Real]) -> Vec<Param> {
+        let on_edge = |(&p, &v): (&Param, &Real)| {
+            let w = self.half_width(p);
+            v.abs() >= w * (1.0 - 1e-6)
+        };
+        params
+            .iter()
+            .zip(x)
+            .filter(|&px| on_edge(px))
+            .map(|(&p, _)| p)
+            .collect()
+    }
 }
 
 impl<'de, S> Deserialize<'de> for Metaheuristic<S>
@@ -142,6 +165,10 @@ impl<S: Search> Method for Metaheuristic<S> {
 
     fn fitness_model(&self) -> Option<ErrorModel> {
         Some(self.bounds.fitness_model())
+    }
+
+    fn search_box(&self) -> Option<&SearchBox> {
+        Some(&self.bounds)
     }
 
     /// The search's best point; [`Termination::TargetReached`] when it stopped at its target
