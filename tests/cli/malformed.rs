@@ -651,45 +651,6 @@ fn a_trial_count_beyond_any_run_is_refused_as_the_option() {
     }
 }
 
-/// A robot whose tool point never moves (every length and offset zero): a study runs, every
-/// identification fails, and the terminal says why; a failed trial's largest validation error
-/// is an empty cell, as its mean and RMS are, not 0 (a perfect result).
-#[test]
-fn a_study_whose_identifications_all_fail_says_how_they_ended() {
-    let d = tmp_dir("cli-malformed-dot");
-    let joint = "[[joints]]\ntype = \"revolute\"\nalpha = 0.0\na = 0.0\nd = 0.0\ntheta = 0.0\n\
-                 limits = [-180.0, 180.0]\n\n";
-    let robot = format!(
-        "name = \"dot\"\nconvention = \"dh\"\nlength_unit = \"mm\"\nangle_unit = \"deg\"\n\n{}",
-        joint.repeat(6)
-    );
-    std::fs::write(d.join("dot.toml"), robot).unwrap();
-    std::fs::write(
-        d.join("s.toml"),
-        "name = \"dot\"\nseed = 3\ntrials = 3\n[robot]\nfile = \"dot.toml\"\n[errors]\n\
-         kind = \"normal\"\nlength_mm = 0.3\nangle_rad = 0.003\n[calibration]\ncount = 40\n\
-         strategies = [\"random\"]\n[validation]\ncount = 20\n[[methods]]\nname = \"lm\"\n",
-    )
-    .unwrap();
-    let out = d.join("r");
-    let o = calbench(&["run", path_arg(&d.join("s.toml")), "--out", path_arg(&out)]);
-    let text = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{text}");
-    assert!(
-        text.contains("lm / random: 3 of 3 identifications failed (ended: invalid-input 3)"),
-        "{text}"
-    );
-    let trials = read(&out.join("trials.csv"));
-    let mut rows = csv::Reader::from_reader(trials.as_bytes());
-    let header = rows.headers().unwrap().clone();
-    let col = |name: &str| header.iter().position(|h| h == name).unwrap();
-    for row in rows.records().map(Result::unwrap) {
-        assert_eq!(&row[col("termination")], "invalid-input");
-        assert_eq!(&row[col("after_max_mm")], "", "{row:?}");
-        assert!(row[col("before_max_mm")].parse::<f64>().unwrap() > 0.0);
-    }
-}
-
 /// The strategy "box" without a box region is refused at the strategy's line, where the
 /// refusal named `calibration.region`, which the file does not write, with no line.
 #[test]

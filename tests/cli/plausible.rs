@@ -11,7 +11,7 @@ use crate::common::{calbench, calbench_ok, load_json, path_arg, read, root, tmp_
 
 /// `calbench simulate SCENARIO --trial 1 [--measure KIND] --out DIR/NAME`: its measurement
 /// file.
-fn simulated(dir: &Path, scenario: &str, kind: Option<&str>) -> PathBuf {
+pub(crate) fn simulated(dir: &Path, scenario: &str, kind: Option<&str>) -> PathBuf {
     let out = dir.join(format!("sim-{}", kind.unwrap_or("pos")));
     let sc = root().join(scenario);
     let mut args = vec!["simulate", path_arg(&sc), "--trial", "1"];
@@ -47,7 +47,7 @@ fn col(header: &[&str], name: &str) -> usize {
 }
 
 /// `identify --robot irb2600 --data DATA --method ls --out OUT EXTRA…`, no validation data.
-fn identify(data: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
+pub(crate) fn identify(data: &Path, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec!["identify", "--robot", "irb2600", "--data", path_arg(data)];
     args.extend_from_slice(&["--method", "ls", "--out", path_arg(out)]);
     args.extend_from_slice(extra);
@@ -673,32 +673,4 @@ fn a_gantry_s_reach_counts_its_travels() {
     let (o, _) = identify("harmonics", &["--models", "harmonics"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("`harmonics` adds no parameter"), "{err}");
-}
-
-/// A validation file with rows copied had its copies counted again in its figures; it is
-/// refused naming the file and the rows, as the data's own copies are, and runs without them.
-#[test]
-fn a_validation_file_with_repeated_rows_is_refused_naming_them() {
-    let d = tmp_dir("cli-plausible-val-repeats");
-    let pos = simulated(&d, "scenarios/ci-guard.toml", None);
-    let val = pos.with_file_name("validation.csv");
-    let text = read(&val);
-    let rows: Vec<&str> = text.lines().collect();
-    let copied = d.join("val-copied.csv");
-    std::fs::write(&copied, format!("{text}{}\n{}\n", rows[1], rows[3])).unwrap();
-    let n = rows.len() - 1;
-    let out = d.join("out");
-    let o = identify(&pos, &out, &["--validate", path_arg(&copied)]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(!o.status.success() && !out.exists(), "{err}");
-    let said = format!(
-        "setting `--validate`: {}: 2 row(s) repeat an earlier row (the same joint values and \
-         measured point; 0-based rows): row 0 = row {n}, row 2 = row {};",
-        copied.display(),
-        n + 1
-    );
-    assert!(err.contains(&said), "{err}");
-    assert!(err.contains("weighs one point twice"), "{err}");
-    let o = identify(&pos, &out, &["--validate", path_arg(&val)]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }

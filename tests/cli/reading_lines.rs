@@ -165,3 +165,31 @@ fn a_validation_file_in_metres_is_refused_naming_the_file_and_the_rows() {
     let row = format!("; the point on line 6 of {val} stands out: its distance from the points'");
     assert!(err.starts_with(&at) && err.contains(&row), "{err}");
 }
+
+/// A validation file with rows copied had its copies counted again in its figures; it is
+/// refused naming the file and the rows, as the data's own copies are, and runs without them.
+#[test]
+fn a_validation_file_with_repeated_rows_is_refused_naming_them() {
+    let d = tmp_dir("cli-plausible-val-repeats");
+    let pos = crate::plausible::simulated(&d, "scenarios/ci-guard.toml", None);
+    let val = pos.with_file_name("validation.csv");
+    let text = read(&val);
+    let rows: Vec<&str> = text.lines().collect();
+    let copied = d.join("val-copied.csv");
+    std::fs::write(&copied, format!("{text}{}\n{}\n", rows[1], rows[3])).unwrap();
+    let n = rows.len() - 1;
+    let out = d.join("out");
+    let o = crate::plausible::identify(&pos, &out, &["--validate", path_arg(&copied)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && !out.exists(), "{err}");
+    let said = format!(
+        "setting `--validate`: {}: 2 row(s) repeat an earlier row (the same joint values and \
+         measured point; 0-based rows): row 0 = row {n}, row 2 = row {};",
+        copied.display(),
+        n + 1
+    );
+    assert!(err.contains(&said), "{err}");
+    assert!(err.contains("weighs one point twice"), "{err}");
+    let o = crate::plausible::identify(&pos, &out, &["--validate", path_arg(&val)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

@@ -7,6 +7,7 @@ mod common;
 
 mod alloc;
 mod compliance;
+mod compliance_payload;
 #[cfg(all(target_arch = "x86_64", target_os = "linux", target_env = "gnu"))]
 mod fma;
 mod kinematics;

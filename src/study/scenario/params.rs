@@ -83,9 +83,9 @@ impl Scenario {
         Ok(())
     }
 
-    /// The run's warnings, one line each: what the scenario sets that it does not read
-    /// ([`Self::unused_settings`]), and a robot too small for its length unit
-    /// ([`small_robot`]).
+    /// The run's warnings, one line each: what the scenario sets that it does not read, and a
+    /// robot too small for its length unit (its joints adding up to less than
+    /// 10 mm, `SMALL_ARM_MM`).
     pub fn warnings(&self) -> Vec<String> {
         let mut out = self.unused_settings();
         out.extend(self.robot().ok().as_ref().and_then(small_robot));
@@ -187,13 +187,13 @@ impl Scenario {
 /// Below this, the lengths, offsets and travels of a robot's joints (mm, its tool's not
 /// counted) are taken for a robot file written in metres and declared in millimetres: the
 /// smallest arm a calibration of the papers' kind concerns reaches hundreds of millimetres.
-pub const SMALL_ARM_MM: crate::numeric::Real = 10.0;
+const SMALL_ARM_MM: crate::numeric::Real = 10.0;
 
 /// Why `robot` looks too small for its length unit, or `None`: its joints' lengths, offsets
 /// and travels add up to less than [`SMALL_ARM_MM`], where a robot in metres written as if in
 /// millimetres lands (a UR10's add up to 1.7 mm so). A warning, not a refusal: a study of so
 /// small an arm runs, but its injected errors (0.5 mm by default) are then a share of it.
-pub fn small_robot(robot: &Robot) -> Option<String> {
+fn small_robot(robot: &Robot) -> Option<String> {
     use crate::robot::sampling::reach_bound_mm;
     let tool = robot.tool().pos.norm();
     let arm = reach_bound_mm(robot) - tool;
