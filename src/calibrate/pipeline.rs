@@ -26,6 +26,7 @@ use super::verdict::{
 };
 use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
+use crate::identify::qiao::method::SearchBox;
 use crate::identify::{MethodSpec, TraceRecorder};
 use crate::measurement::{Measure, Measurements};
 use crate::numeric::{Frame, Real};
@@ -68,9 +69,8 @@ pub struct TrackerOutcome {
     /// The kernel residual of a model with the term `gp` (`kernel.json`), fitted on the
     /// calibration rows' residuals after the parametric model; `robot.toml` cannot carry it.
     pub kernel: Option<KernelResidual>,
-    /// For a search, the parameters it left on the edge of its box, with the box's
-    /// half-widths (mm, rad, rad/(N·m)): empty otherwise.
-    pub at_box_edge: (Vec<Param>, [Real; 3]),
+    /// For a search, the box it explored (`None` for the other methods).
+    pub search_box: Option<SearchBox>,
 }
 
 impl IdentifyRequest {
@@ -466,15 +466,8 @@ impl IdentifyRequest {
         };
         let residuals = point_residuals(&nominal, &c, &d)?;
         let identifiability = analyse(&nominal, &nominal.params(), &d.qs, d.measure());
-        let at_box_edge = spec.method.search_box().map_or_else(Default::default, |b| {
-            let x = c.identified.x.as_slice();
-            (
-                b.at_edge(&params, x),
-                [b.bound_mm, b.bound_rad, b.bound_compliance],
-            )
-        });
         Ok(TrackerOutcome {
-            at_box_edge,
+            search_box: spec.method.search_box().cloned(),
             identifiability,
             nominal,
             data: d,
@@ -514,7 +507,10 @@ impl TrackerOutcome {
         let settle = registration_warning(&self.calibrated, self.registration).map(Said::from);
         let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
         let worse = self.worse_warning();
-        let edge = box_edge_warning(&self.at_box_edge.0, self.at_box_edge.1).map(Said::from);
+        let x = self.calibrated.identified.x.as_slice();
+        let edge = (self.search_box.as_ref())
+            .and_then(|b| b.edge_warning(&self.params, x))
+            .map(Said::from);
         let others = worse.into_iter().chain(implausible).chain(edge);
         settle.into_iter().chain(others).collect()
     }
@@ -628,42 +624,4 @@ fn convergence_trace(c: &Calibrated, recorder: &TraceRecorder) -> Option<Trace> 
         values: "RMS point residual (mm) per evaluation".into(),
         trace: t,
     })
-}
-
-/// The warning for a search that ended with `params` on the edge of its box of half-widths
-/// `widths` (`bound_mm`, `bound_rad`, `bound_compliance`): its minimum may lie beyond the box.
-fn box_edge_warning(params: &[Param], widths: [Real; 3]) -> Option<String> {
-    if params.is_empty() {
-        return None;
-    }
-    let kinds = [
-        ("bound_mm", widths[0], params.iter().any(|p| p.is_length())),
-        (
-            "bound_rad",
-            widths[1],
-            params.iter().any(|p| !p.is_length() && !p.is_compliance()),
-        ),
-        (
-            "bound_compliance",
-            widths[2],
-            params.iter().any(|p| p.is_compliance()),
-        ),
-    ];
-    let used: Vec<(&str, Real)> = kinds.iter().filter(|k| k.2).map(|k| (k.0, k.1)).collect();
-    let values: Vec<String> = used
-        .iter()
-        .map(|(key, w)| format!("{key} = {}", crate::error::shown(*w)))
-        .collect();
-    let keys: Vec<&str> = used.iter().map(|k| k.0).collect();
-    let names: Vec<String> = params.iter().map(Param::to_string).collect();
-    Some(format!(
-        "the search ended with {} of its parameters on the edge of its box ({}; {}): the \
-         errors may lie beyond it, and the result is then the box's, not the data's; widen the \
-         box (the method's {} {})",
-        names.len(),
-        names.join(", "),
-        values.join(", "),
-        if keys.len() == 1 { "option" } else { "options" },
-        keys.join(" and ")
-    ))
 }

@@ -157,7 +157,7 @@ fn final_fitness_is_each_searchs_last_best_fitness_and_only_where_a_search_ran()
 #[test]
 fn a_search_writes_no_standard_errors() {
     let d = tmp_dir("search-sigma");
-    let data = simulated(&d);
+    let data = crate::plausible::simulated(&d, "scenarios/ci-guard.toml", None);
     for (method, given) in [("pso", false), ("ls", true)] {
         let out = d.join(method);
         calbench_ok(&[
@@ -200,23 +200,6 @@ fn a_search_writes_no_standard_errors() {
     }
 }
 
-/// `DIR/pos/measurements.csv`: trial 1 of `scenarios/ci-guard.toml` (the IRB2600 with the
-/// papers' errors, 0.05 rad on every angle), as `calbench simulate` writes it.
-fn simulated(dir: &std::path::Path) -> std::path::PathBuf {
-    let sim = dir.join("pos");
-    let scenario = crate::common::root().join("scenarios/ci-guard.toml");
-    let args = [
-        "simulate",
-        path_arg(&scenario),
-        "--trial",
-        "1",
-        "--out",
-        path_arg(&sim),
-    ];
-    calbench_ok(&args);
-    sim.join("measurements.csv")
-}
-
 /// A search whose box holds the errors' minimum nowhere inside ends on the box's edge: its
 /// result is the box's corner, not the data's answer. `pso`'s default box (±2 mm, ±0.02 rad)
 /// on the papers' 0.05 rad errors ended 87 mm from the readings with nothing said but the
@@ -226,7 +209,7 @@ fn simulated(dir: &std::path::Path) -> std::path::PathBuf {
 #[test]
 fn a_search_that_ends_on_the_edge_of_its_box_says_so() {
     let d = tmp_dir("search-box");
-    let data = simulated(&d);
+    let data = crate::plausible::simulated(&d, "scenarios/ci-guard.toml", None);
     let run = |method: &str, set: &[&str]| {
         let out = d.join(format!("{method}-{}", set.len()));
         let mut args = vec!["identify", "--robot", "irb2600", "--data", path_arg(&data)];

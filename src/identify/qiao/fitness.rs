@@ -246,8 +246,8 @@ impl<'a> MetaProblem<'a> {
     /// Bounds of half width `length_mm` on length parameters, `angle_rad` on angles and
     /// `compliance` (rad/(N·m)) on joint compliances.
     pub fn bounds(&self, length_mm: Real, angle_rad: Real, compliance: Real) -> Bounds {
-        let widths = (length_mm, angle_rad, compliance);
-        let w: Vec<Real> = self.params.iter().map(|&p| half_width(p, widths)).collect();
+        let widths = [length_mm, angle_rad, compliance];
+        let w: Vec<Real> = self.params.iter().map(|&p| widths[box_side(p)]).collect();
         Bounds::symmetric(&w)
     }
 
@@ -331,15 +331,15 @@ impl<'a> MetaProblem<'a> {
     }
 }
 
-/// The half-width of a search box on parameter `p`, of the box's half-widths on lengths (mm),
-/// angles (rad) and joint compliances (rad/(N·m)).
-pub fn half_width(p: Param, (length_mm, angle_rad, compliance): (Real, Real, Real)) -> Real {
+/// Which of a search box's three half-widths bounds parameter `p`: 0 on lengths (mm), 1 on
+/// angles (rad), 2 on joint compliances (rad/(N·m)).
+pub fn box_side(p: Param) -> usize {
     if p.is_compliance() {
-        compliance
+        2
     } else if p.is_length() {
-        length_mm
+        0
     } else {
-        angle_rad
+        1
     }
 }
 

@@ -99,18 +99,23 @@ impl SearchBox {
         self.error_model.unwrap_or(ErrorModel::DirectFk)
     }
 
-    /// The half-width of the box on parameter `p` (mm, rad or rad/(N·m)).
-    pub fn half_width(&self, p: Param) -> Real {
-        let widths = (self.bound_mm, self.bound_rad, self.bound_compliance);
-        super::fitness::half_width(p, widths)
+    /// The box's half-widths, in [`super::fitness::box_side`]'s order, with the options that
+    /// set them.
+    fn sides(&self) -> [(&'static str, Real); 3] {
+        [
+            ("bound_mm", self.bound_mm),
+            ("bound_rad", self.bound_rad),
+            ("bound_compliance", self.bound_compliance),
+        ]
     }
 
     /// The parameters of `params` whose errors `x` (in their order) lie on the box's edge,
     /// within a millionth of its half-width: where a search ends when the minimum lies
     /// beyond the box, so that the result is the box's corner, not the data's answer.
     pub fn at_edge(&self, params: &[Param], x: &[Real]) -> Vec<Param> {
+        let sides = self.sides();
         let on_edge = |(&p, &v): (&Param, &Real)| {
-            let w = self.half_width(p);
+            let w = sides[super::fitness::box_side(p)].1;
             v.abs() >= w * (1.0 - 1e-6)
         };
         params
@@ -119,6 +124,35 @@ impl SearchBox {
             .filter(|&px| on_edge(px))
             .map(|(&p, _)| p)
             .collect()
+    }
+
+    /// The warning for a search that ended with parameters of `params` on the edge of the
+    /// box ([`Self::at_edge`] of the errors `x`), naming them and the options that widen it;
+    /// `None` when none is.
+    pub fn edge_warning(&self, params: &[Param], x: &[Real]) -> Option<String> {
+        let edge = self.at_edge(params, x);
+        if edge.is_empty() {
+            return None;
+        }
+        let mut used: Vec<usize> = edge.iter().map(|&p| super::fitness::box_side(p)).collect();
+        used.sort_unstable();
+        used.dedup();
+        let sides = self.sides();
+        let values: Vec<String> = (used.iter())
+            .map(|&k| format!("{} = {}", sides[k].0, crate::error::shown(sides[k].1)))
+            .collect();
+        let keys: Vec<&str> = used.iter().map(|&k| sides[k].0).collect();
+        let names: Vec<String> = edge.iter().map(Param::to_string).collect();
+        Some(format!(
+            "the search ended with {} of its parameters on the edge of its box ({}; {}): the \
+             errors may lie beyond it, and the result is then the box's, not the data's; widen \
+             the box (the method's {} {})",
+            names.len(),
+            names.join(", "),
+            values.join(", "),
+            if keys.len() == 1 { "option" } else { "options" },
+            keys.join(" and ")
+        ))
     }
 }
 
