@@ -191,10 +191,10 @@ where
 impl<S: Search> Method for Metaheuristic<S> {
     fn check(&self) -> Result<()> {
         self.search.check()?;
-        let b = &self.bounds;
-        finite_positive("bound_mm", b.bound_mm)?;
-        finite_positive("bound_rad", b.bound_rad)?;
-        finite_positive("bound_compliance", b.bound_compliance)
+        for (key, half_width) in self.bounds.sides() {
+            finite_positive(key, half_width)?;
+        }
+        Ok(())
     }
 
     fn fitness_model(&self) -> Option<ErrorModel> {
