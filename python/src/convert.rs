@@ -351,14 +351,23 @@ fn type_name(v: &Bound<'_, PyAny>) -> String {
 
 /// `v` as a real number (a Python or numpy float or integer); `None` for a bool (`True`
 /// would read as 1), a complex, Python's or numpy's (whose `float` drops the imaginary part
-/// with only a warning), and any other object.
+/// with only a warning), and any other object. An integer beyond a float's range (`10**400`)
+/// is the infinity of its sign, so that its refusal says it is not finite rather than not a
+/// number.
 pub(crate) fn real_number(v: &Bound<'_, PyAny>) -> PyResult<Option<f64>> {
     let complex = v.is_instance_of::<PyComplex>()
         || v.is_instance(&v.py().import("numpy")?.getattr("complexfloating")?)?;
     if is_bool(v)? || complex {
         return Ok(None);
     }
-    Ok(v.extract::<f64>().ok())
+    if let Ok(f) = v.extract::<f64>() {
+        return Ok(Some(f));
+    }
+    if v.is_instance_of::<PyInt>() {
+        let sign = if v.lt(0)? { -1.0 } else { 1.0 };
+        return Ok(Some(sign * f64::INFINITY));
+    }
+    Ok(None)
 }
 
 /// The deepest nesting of lists and dicts a scenario dict or the options may have: a TOML

@@ -121,12 +121,17 @@ def test_with_errors_moves_the_tool_and_to_toml_reads_back(tmp_path):
         r.with_errors({"nope": 1.0})
     with pytest.raises(calbench.Error):
         r.with_errors({"a1": float("nan")})
+    # An integer beyond a float's range is a number, and not finite.
+    for huge in (10**400, -(10**400)):
+        with pytest.raises(calbench.SettingError, match=r"errors\.a1.*must be finite"):
+            r.with_errors({"a1": huge})
+    with pytest.raises(calbench.SettingError, match=r"errors\.a1.*must be a number"):
+        r.with_errors({"a1": "1.0"})
 
 
 def test_robot_from_urdf(root):
     urdfs = sorted(root.glob("examples/**/*.urdf"))
-    if not urdfs:
-        pytest.skip("no URDF in the repository")
+    assert urdfs, "the repository ships example URDFs under examples/"
     r = calbench.Robot.from_file(urdfs[0])
     assert r.joint_count >= 1
     assert r.fk(np.zeros((1, r.joint_count))).shape == (1, 3)

@@ -82,7 +82,12 @@ pub fn identify_kind(
     (chosen, fixed, register): (Chosen, &[Param], bool),
     solver: &dyn Solver,
 ) -> Result<KindFit> {
-    let in_file = |e: Error| Error::file(source, "data", e.to_string());
+    // The readings' refusal is the file's: the library's name for them (the setting
+    // `measurements`) is not repeated after the file's.
+    let in_file = |e: Error| match e {
+        Error::Setting { msg, .. } => Error::file(source, "data", msg),
+        e => Error::file(source, "data", e.to_string()),
+    };
     let mut data = file.data.clone();
     let chain = nominal.chain();
     let p: Vec<Vec3> = file.qs.iter().map(|q| chain.fk(q).pos).collect();

@@ -171,23 +171,30 @@ impl IdentifyRequest {
                 return Err(Error::option(Opt::Holdout, why));
             }
             let v = cv::subset(&d, &held);
-            // The rows held out are a validation file's rows, and refused as its are (with
-            // words of their own: they have no lines of a file).
-            if crate::measurement::csv::distinct_poses(&v.qs, &[], nominal.dof()).is_err() {
-                let why = format!(
-                    "`{}/{}` holds out {} of the data's {} rows, of fewer than {MIN} distinct \
-                     poses: a validation, as a validation file, needs at least {MIN} (rows of \
-                     distinct joint values)",
-                    h.last,
-                    h.every,
-                    held.len(),
-                    d.len(),
-                    MIN = crate::measurement::csv::MIN_DISTINCT_POSES
-                );
-                return Err(Error::option(Opt::Holdout, why));
+            let c = cv::subset(&d, &cal);
+            // The rows held out are a validation file's rows, and the rows left a data
+            // file's, each refused as a file of theirs would be (with words of their own:
+            // they have no lines of a file).
+            let sides = [
+                (&v, "holds out", "a validation, as a validation file"),
+                (&c, "leaves", "a calibration, as a data file"),
+            ];
+            for (rows, does, what) in sides {
+                if crate::measurement::csv::distinct_poses(&rows.qs, &[], nominal.dof()).is_err() {
+                    let why = format!(
+                        "`{}/{}` {does} {} of the data's {} rows, of fewer than {MIN} distinct \
+                         poses: {what}, needs at least {MIN} (rows of distinct joint values)",
+                        h.last,
+                        h.every,
+                        rows.len(),
+                        d.len(),
+                        MIN = crate::measurement::csv::MIN_DISTINCT_POSES
+                    );
+                    return Err(Error::option(Opt::Holdout, why));
+                }
             }
             val = Some(v);
-            d = cv::subset(&d, &cal);
+            d = c;
             held_out = Some((cal, held));
         }
         // Rows held out of data without copies repeat none of the rest; a validation file's
@@ -507,12 +514,16 @@ impl TrackerOutcome {
         let settle = registration_warning(&self.calibrated, self.registration).map(Said::from);
         let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
         let worse = self.worse_warning();
-        let x = self.calibrated.identified.x.as_slice();
-        let edge = (self.search_box.as_ref())
-            .and_then(|b| b.edge_warning(&self.params, x))
-            .map(Said::from);
+        let edge = self.edge_warning().map(Said::from);
         let others = worse.into_iter().chain(implausible).chain(edge);
         settle.into_iter().chain(others).collect()
+    }
+
+    /// The warning of a search that ended with parameters on the edge of its box
+    /// ([`SearchBox::edge_warning`]), if it did.
+    pub fn edge_warning(&self) -> Option<String> {
+        let x = self.calibrated.identified.x.as_slice();
+        (self.search_box.as_ref()).and_then(|b| b.edge_warning(&self.params, x))
     }
 
     /// The warning of a result kept worse than the nominal robot, if it is.

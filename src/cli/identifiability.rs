@@ -86,6 +86,7 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
     if args.poses == 0 {
         return Err(Error::setting("--poses", "must be at least 1").into());
     }
+    calbench::study::scenario::check_pose_count("--poses", args.poses)?;
     let qs = match &args.poses_file {
         Some(p) => calbench::sim::poses::read_pose_list(p, &robot)?,
         None => {

@@ -145,7 +145,8 @@ pub fn outputs<'a>(r: &'a IdentifyRecord, more: &'a Additions) -> Result<Outputs
 /// The warnings of an identification, in plain words: data that do not determine every
 /// parameter (a result kept with `--allow-rank-deficient`), a registration that did not
 /// settle ([`registration_warning`]), points a robust method rejected (weight 0) or
-/// weighed down, and a result kept although it makes the robot worse.
+/// weighed down, a result kept although it makes the robot worse, and a search that ended
+/// on the edge of its box.
 pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     let id = &r.calibrated.identified;
     let n = r.params.len();
@@ -179,6 +180,7 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     }
     w.extend(worse_warning(&r.record.allowed_worse).map(|t| t.to_string() + "."));
     w.extend(implausible_warning(&r.record.allowed_implausible).map(|t| t.to_string() + "."));
+    w.extend(r.edge_warning().map(|t| t + "."));
     w
 }
 

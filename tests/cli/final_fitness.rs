@@ -220,18 +220,29 @@ fn a_search_that_ends_on_the_edge_of_its_box_says_so() {
         let rms = load_json(&out.join("identified.json"))["rms_residual_mm"]
             .as_f64()
             .unwrap();
-        (String::from_utf8_lossy(&o.stderr).into_owned(), rms)
+        let page = std::fs::read_to_string(out.join("report.html")).unwrap();
+        let on_page = page.contains("the search ended with ");
+        (
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+            rms,
+            on_page,
+        )
     };
-    let (err, rms) = run("pso", &[]);
+    let (err, rms, on_page) = run("pso", &[]);
     let edge = "warning: the search ended with ";
     assert!(err.contains(edge) && rms > 10.0, "{rms} mm: {err}");
+    // The page's warnings say it too.
+    assert!(on_page);
     assert!(
         err.contains("; bound_mm = 2, bound_rad = 0.02): the errors may lie beyond it")
             && err.contains("widen the box (the method's options bound_mm and bound_rad)"),
         "{err}"
     );
-    let (err, rms) = run("pso", &["bound_mm=5", "bound_rad=0.1"]);
-    assert!(!err.contains(edge) && rms < 0.5, "{rms} mm: {err}");
-    let (err, _) = run("ls", &[]);
-    assert!(!err.contains(edge), "{err}");
+    let (err, rms, on_page) = run("pso", &["bound_mm=5", "bound_rad=0.1"]);
+    assert!(
+        !err.contains(edge) && !on_page && rms < 0.5,
+        "{rms} mm: {err}"
+    );
+    let (err, _, on_page) = run("ls", &[]);
+    assert!(!err.contains(edge) && !on_page, "{err}");
 }

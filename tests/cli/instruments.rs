@@ -109,12 +109,26 @@ fn identifiability_names_the_option_an_instrument_cannot_use() {
             &["--gcn-threshold", "5"],
             "the following required arguments were not provided:\n  --gcn-blocks",
         ),
+        // A pose count beyond a study's is refused, not left to fail allocating the poses
+        // (a panic on capacity overflow, an abort on 2.4 TB).
+        (
+            &["--poses", "18446744073709551615"],
+            "setting `--poses`: must be at most 10000000 poses, got 18446744073709551615",
+        ),
+        (
+            &["--measure", "distance", "--poses", "100000000000"],
+            "setting `--poses`: must be at most 10000000 poses, got 100000000000",
+        ),
     ] {
         let mut all = vec!["identifiability", "--robot", "irb2600"];
         all.extend_from_slice(args);
         let o = calbench(&all);
         let e = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && e.contains(want), "{args:?}: {e}");
+        assert_eq!(
+            o.status.code(),
+            Some(if want.contains("required") { 2 } else { 1 })
+        );
     }
 }
 

@@ -452,9 +452,10 @@ fn malformed_kind_files_are_refused_by_line_and_column() {
         ),
         (format!("{q},plane\n"), "line 1", "no data rows"),
         (
+            // The file's refusal, not the library's setting `measurements` after it.
             format!("{q},plane\n{}", plane_rows(&["1", "1", "2", "2", "2"])),
-            "data",
-            "plane 1 has 2 points",
+            "data: plane 1 has 2 points",
+            "it needs at least 4",
         ),
     ];
     for (i, (text, place, says)) in cases.iter().enumerate() {

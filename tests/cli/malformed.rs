@@ -611,6 +611,14 @@ fn values_and_keys_a_study_cannot_use_are_refused_at_their_line() {
             "unknown strategy \"ide\"; allowed: random, detmax, detmax-ide",
         ),
         (
+            // The key lacking has no line: the strategy that needs it has.
+            "file",
+            ci.replace("strategies = [\"random\"", "strategies = [\"file\""),
+            "strategies",
+            "calibration.strategies[0]",
+            "strategy \"file\" needs a pose list: calibration.poses_file",
+        ),
+        (
             "registration",
             ban.replace("noise_mm = 0.02", "noise_mm = 1e300"),
             "noise_mm",

@@ -136,6 +136,14 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
             && msg.contains("of fewer than 3 distinct poses"),
         "{msg}"
     );
+    // So is one that leaves fewer than 3 distinct poses to calibrate, naming the option: the
+    // data file had been blamed ("registration needs at least 3 points").
+    let msg = refusal(&data, &["--holdout", "198/199"]);
+    assert!(
+        msg.contains("setting `--holdout`: `198/199` leaves 1 of the data's 199 rows")
+            && msg.contains("of fewer than 3 distinct poses: a calibration, as a data file"),
+        "{msg}"
+    );
     // A seed of folds without folds would change nothing, and is refused.
     let msg = refusal(&data, &["--cv-seed", "3"]);
     assert!(

@@ -344,6 +344,42 @@ fn a_tip_the_urdf_lacks_is_refused_naming_the_task_key() {
     );
 }
 
+/// With a `tip`, a robot or an authors' model that is not a URDF (a robot file) is refused
+/// naming the task file's line and key: it had been refused as the command line's `--base`
+/// and `--tip`, which a task is not given, naming neither the file nor the key.
+#[test]
+fn a_tip_with_a_model_that_is_not_a_urdf_is_refused_naming_the_task_key() {
+    let dir = tmp_dir("cli-socket-task-toml-model");
+    let robot_file = root().join("robots/ban-irb2600.toml");
+    let authors = format!(
+        "\n[authors]\nmodel = \"{}\"\nsource = \"a test\"\n",
+        robot_file.display()
+    );
+    let task = copied_task(&dir, "", "socket_spread_mm", "model");
+    let text = read(&task) + &authors;
+    std::fs::write(&task, &text).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    let line = text.lines().position(|l| l.starts_with("model =")).unwrap() + 1;
+    assert!(
+        err.contains(&format!("model.toml: line {line}, authors.model: "))
+            && err.contains("ban-irb2600.toml is not a URDF, and `tip` names a link of a URDF")
+            && !err.contains("--tip"),
+        "{err}"
+    );
+    let task = copied_task(&dir, "", "socket_spread_mm", "robot");
+    let urdf = root().join("data/mukca/panda.urdf");
+    let text = read(&task).replace(
+        &urdf.display().to_string(),
+        &robot_file.display().to_string(),
+    );
+    std::fs::write(&task, &text).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    assert!(
+        err.contains("robot.toml: line 2, robot: ") && err.contains("is not a URDF"),
+        "{err}"
+    );
+}
+
 /// A socket task without `tip` on a URDF of several leaf links is refused naming the task
 /// file's `tip` and the leaves, not the command line's `--tip`, which a task is not given.
 #[test]

@@ -251,12 +251,20 @@ impl SocketTask {
             .collect()
     }
 
-    /// The model `path` (a URDF's chain to the task's tip). A tip the URDF has no link of, or
-    /// no tip where the URDF has more than one leaf link, is refused naming the task file's
-    /// `tip`, which gives it.
-    pub fn load_model(&self, path: &Path) -> Result<Robot> {
+    /// The model `path`, given by the task file's `key` (a URDF's chain to the task's tip). A
+    /// tip the URDF has no link of, or no tip where the URDF has more than one leaf link, is
+    /// refused naming the task file's `tip`, which gives it; a tip given for a model that is
+    /// not a URDF, naming `key`.
+    pub fn load_model(&self, key: &str, path: &Path) -> Result<Robot> {
         if crate::robot::urdf::is_urdf(&path.to_string_lossy()) {
             self.check_tip(path)?;
+        } else if self.tip.is_some() {
+            let msg = format!(
+                "{} is not a URDF, and `tip` names a link of a URDF: give the URDF, or no tip",
+                path.display()
+            );
+            let h = &self.head;
+            return Err(Error::toml_file(&h.path, &h.text, key, key, msg));
         }
         let chain = UrdfChain {
             base: None,
@@ -307,7 +315,7 @@ impl SocketTask {
 
     /// The nominal robot.
     pub fn load_robot(&self) -> Result<Robot> {
-        self.load_model(&self.head.robot)
+        self.load_model("robot", &self.head.robot)
     }
 
     /// The placement of `files` as one socket file for `robot`: the i-th file's rows are
@@ -460,7 +468,7 @@ impl SocketTask {
         };
         let (errors, calbench) = both(&robot);
         let authors_model = match &self.authors_model {
-            Some(p) => Some(both(&self.load_model(p)?).1),
+            Some(p) => Some(both(&self.load_model("authors.model", p)?).1),
             None => None,
         };
         let scores = SocketScores {

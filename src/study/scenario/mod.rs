@@ -158,7 +158,7 @@ pub(crate) fn pose_count_excess(n: usize) -> Option<String> {
 }
 
 /// Refuses a pose count `n` of `key` above [`MAX_POSES`].
-pub(crate) fn check_pose_count(key: &str, n: usize) -> Result<()> {
+pub fn check_pose_count(key: &str, n: usize) -> Result<()> {
     pose_count_excess(n).map_or(Ok(()), |msg| Err(Error::setting(key, msg)))
 }
 
@@ -326,10 +326,12 @@ impl Scenario {
                         return Err(ferr("calibration.poses_file", msg));
                     }
                     Some(f) => PoseStrategy::File(dir.join(f)),
+                    // Refused at the strategy, which the file writes, rather than at the
+                    // key it lacks, which has no line.
                     None => {
                         return Err(ferr(
-                            "calibration.poses_file",
-                            "strategy \"file\" needs a pose list".into(),
+                            &key,
+                            "strategy \"file\" needs a pose list: calibration.poses_file".into(),
                         ))
                     }
                 },
