@@ -76,5 +76,6 @@ mod task;
 mod task_rows;
 mod terminal_names;
 mod typed;
+mod validation_kind;
 mod verdicts;
 mod worse;
