@@ -64,10 +64,14 @@ def test_a_python_method_whose_result_makes_the_robot_worse_is_named_first(root,
     with pytest.raises(calbench.FileError,
                        match=r"by the method `far_off`, supplied from outside, makes the robot "
                              r"worse: .*Check the vector the method returns, then "
-                             r"the readings"):
+                             r"the readings") as refused:
         calbench.task(root / "tasks" / "barrett-wam.toml", far_off, models=["kinematic"],
                       out=tmp_path / "out")
     assert not (tmp_path / "out").exists()
+    # No way past is offered: calbench.identify, whose allow_worse lets a worse result be
+    # written, takes calbench's methods alone.
+    said = str(refused.value)
+    assert "allow_worse" not in said and said.endswith("swapped column).")
 
 
 def test_an_entry_that_did_not_converge_warns_as_the_command_line_does(root):

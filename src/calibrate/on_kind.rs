@@ -534,7 +534,11 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         findings.found.push(found);
         findings.causes.push(cause);
     }
-    let implausible = plausibility::verdict(findings, &q.source, q.allow_implausible)?;
+    let implausible = plausibility::verdict(
+        findings,
+        &q.source,
+        (q.allow_implausible, q.method.is_external()),
+    )?;
     let mut record =
         IdentifiedRecord::of(&nominal.name, &q.source, q.method.name(), &fit.params, r);
     if let Some((before, after)) = validation {

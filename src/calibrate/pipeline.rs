@@ -427,7 +427,11 @@ impl IdentifyRequest {
                 let gross = gross.map(plausibility::gross_cause);
                 convention().into_iter().chain(gross).collect()
             },
-            (&self.source, self.allow_implausible),
+            (
+                &self.source,
+                self.allow_implausible,
+                self.method.is_external(),
+            ),
         )?;
         drop((before, after));
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;

@@ -452,8 +452,15 @@ pub fn target_points(
 
 /// The refusal of an identification that cannot be physically right, read from `source`:
 /// `found` the implausible moves and findings, `causes` what in the data likely caused them;
-/// it names the option that writes it with a warning ([`Opt::AllowImplausible`]).
-pub fn implausible_error(source: &Path, found: &[String], causes: &[String]) -> Error {
+/// it names the option that writes it with a warning ([`Opt::AllowImplausible`]), unless
+/// `external`: the result of a method supplied from outside, which runs only where no option
+/// lets it through (a task's entry; `identify` takes calbench's methods alone).
+pub fn implausible_error(
+    source: &Path,
+    found: &[String],
+    causes: &[String],
+    external: bool,
+) -> Error {
     let cause = if causes.is_empty() {
         "no single cause was found in the data: check the units, the columns, a gross reading \
          and the robot model"
@@ -463,22 +470,25 @@ pub fn implausible_error(source: &Path, found: &[String], causes: &[String]) -> 
     };
     let msg = format!(
         "the identified robot cannot be physically right: {}; {cause}; nothing was written. \
-         Fix the data, or pass ",
+         Fix the data",
         found.join("; ")
     );
-    Error::file(
-        source,
-        "data",
-        Said::from(msg)
-            .on(Opt::AllowImplausible)
-            .text(" to write it with a warning"),
-    )
+    if external {
+        return Error::file(source, "data", msg + ".");
+    }
+    let msg = Said::from(msg + ", or pass ").on(Opt::AllowImplausible);
+    Error::file(source, "data", msg.text(" to write it with a warning"))
 }
 
 /// The findings `f` of an identification read from `source`: refused
 /// ([`implausible_error`]) unless `allow`, when they find anything; what was found
-/// otherwise, its likely cause last (kept with a warning).
-pub fn verdict(f: Findings, source: &Path, allow: bool) -> crate::Result<Vec<String>> {
+/// otherwise, its likely cause last (kept with a warning). `external`: the result is a
+/// method's supplied from outside ([`implausible_error`]).
+pub fn verdict(
+    f: Findings,
+    source: &Path,
+    (allow, external): (bool, bool),
+) -> crate::Result<Vec<String>> {
     if f.found.is_empty() {
         return Ok(Vec::new());
     }
@@ -489,19 +499,23 @@ pub fn verdict(f: Findings, source: &Path, allow: bool) -> crate::Result<Vec<Str
         }
         return Ok(kept);
     }
-    Err(implausible_error(source, &f.found, &f.causes))
+    Err(implausible_error(source, &f.found, &f.causes, external))
 }
 
 /// [`verdict`] of [`judge`]: the findings on `subject`, refused (read from `source`) unless
-/// `allow`.
+/// `allow`, offering no way past for a method supplied from outside (`external`).
 pub fn check(
     subject: Judged,
     points: Option<(&[Vec3], &[Vec3])>,
     noise: (Real, Option<&[Real]>),
     found_causes: impl FnOnce() -> Vec<String>,
-    (source, allow): (&Path, bool),
+    (source, allow, external): (&Path, bool, bool),
 ) -> crate::Result<Vec<String>> {
-    verdict(judge(subject, points, noise, found_causes), source, allow)
+    verdict(
+        judge(subject, points, noise, found_causes),
+        source,
+        (allow, external),
+    )
 }
 
 /// The tool points of `robot` at the poses `qs`.
@@ -527,6 +541,22 @@ pub fn implausible_warning(found: &[String]) -> Option<Said> {
 mod tests {
     use super::*;
     use crate::robot::builtin;
+
+    #[test]
+    fn a_method_supplied_from_outside_is_offered_no_way_past() {
+        let found = ["a2 moved 900 mm".to_string()];
+        let said = |external| {
+            let e = implausible_error(Path::new("d.csv"), &found, &[], external);
+            e.spelled(|_, _| "--allow-implausible".to_string())
+        };
+        assert!(said(false)
+            .ends_with("Fix the data, or pass --allow-implausible to write it with a warning"));
+        assert!(
+            said(true).ends_with("nothing was written. Fix the data."),
+            "{}",
+            said(true)
+        );
+    }
 
     #[test]
     fn moves_beyond_the_bounds_are_named_and_within_are_not() {

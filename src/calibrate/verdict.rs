@@ -254,14 +254,17 @@ pub fn worse_error(
     let causes: Vec<String> = causes.iter().map(Worse::to_string).collect();
     let msg = format!(
         "the identification{on}{by} makes the robot worse: {}{likely}; nothing was written. \
-         Check {check}, or pass ",
+         Check {check}",
         causes.join("; ")
     );
-    Error::file(
-        at_validation.unwrap_or(source),
-        "data",
-        allowing(msg, Opt::AllowWorse).text(" to write it with a warning"),
-    )
+    let file = at_validation.unwrap_or(source);
+    // A method supplied from outside runs only where no option lets a worse result through
+    // (a task's entry; `identify` takes calbench's methods alone): no way past is offered.
+    if method.is_external() {
+        return Error::file(file, "data", msg + ".");
+    }
+    let msg = allowing(msg + ", or pass ", Opt::AllowWorse);
+    Error::file(file, "data", msg.text(" to write it with a warning"))
 }
 
 /// `reading` (a reading the residuals point to, in words) as the likely cause of a refusal.
