@@ -84,7 +84,7 @@ class IdentifyResult(dict):
             for full poses ``*_deg``), when the data were validated; else None.
         seconds: wall time of the identification in Rust, s.
 
-        For a tracker's data also:
+        For a tracker's data also (None for the other kinds of data):
 
         covariance: ndarray (t, t), σ0² (JᵀPJ)⁻¹ at the solution (NaN where undefined).
         residuals: ndarray (N, 3), measured (registered) − predicted points after
@@ -111,6 +111,8 @@ class IdentifyResult(dict):
             }
         if "registration_matrix" in fields:
             fields["registration_frame"] = fields.pop("registration_matrix")
+        for key in ("covariance", "residuals", "weights", "registration_frame"):
+            setattr(self, key, None)
         self.__dict__.update(fields)
 
     def __repr__(self):

@@ -317,6 +317,9 @@ def test_identify_a_kind_file_returns_the_cli_record(cli, root, tmp_path):
     res = calbench.identify(robot, data=str(data), validate=str(val), method="ls", fix=["a2"])
     close(res, ref)
     assert res["kind"] == "plane" and res.validation["after_mm"]["rms"] < 1.0
+    # A tracker's arrays are None for a kind file, not missing attributes.
+    for name in ("covariance", "residuals", "weights", "registration_frame"):
+        assert getattr(res, name) is None, name
     assert res.robot.to_toml() == (tmp_path / "id" / "robot.toml").read_text()
     # A plane column of one value makes the robot worse: refused, or kept with allow_worse.
     text = data.read_text().splitlines()
