@@ -168,7 +168,8 @@ def identify(
         params: the identified parameters (names; default: the identifiable set; an empty
             list is refused, as ``--params ""`` is).
         fix: parameters held at their nominal values (``--fix``).
-        prior: dict name → σ of a prior on that parameter's error (``--prior``).
+        prior: dict name → σ of a prior on that parameter's error (``--prior``), or the
+            path of a file of ``NAME = σ`` lines (``--prior FILE``).
         compliance: joint compliances identified too: ``"c2,c3"`` or ``"gravity"``.
         models: candidate models compared by K-fold cross-validation (``--models``).
         cv: K of a K-fold cross-validation (``--cv``); cv_seed: seed of its folds (default
@@ -213,7 +214,10 @@ def identify(
     val = _validation(validate, robot.joint_count, payload is not None)
     if compliance is not None:
         compliance = ",".join(_names("compliance", compliance))
-    prior = _dict("prior", prior, "a dict parameter name → σ")
+    if isinstance(prior, (str, os.PathLike)):
+        prior = _path("prior", prior)
+    else:
+        prior = _dict("prior", prior, "a dict parameter name → σ, or the path of a file of priors")
     options = _dict("options", options, "a dict of the method's options")
     fields = _calbench.identify(
         robot,

@@ -148,10 +148,19 @@ fn param_list(key: &str, names: Option<Vec<String>>) -> PyResult<Vec<Param>> {
         .collect()
 }
 
-/// `prior`: a dict name → σ.
-fn priors(prior: Option<&Bound<'_, PyDict>>) -> PyResult<Vec<(Param, Real)>> {
-    let Some(d) = prior else {
+/// `prior`: a dict name → σ, or the path of a file of priors (as `--prior FILE`).
+fn priors(prior: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(Param, Real)>> {
+    let Some(prior) = prior else {
         return Ok(Vec::new());
+    };
+    let Ok(d) = prior.cast::<PyDict>() else {
+        let path: std::path::PathBuf = prior.extract().map_err(|_| {
+            setting(
+                "prior",
+                "expected a dict parameter name → σ, or the path of a file of priors",
+            )
+        })?;
+        return calbench::identify::registry::prior_file(&path).map_err(err);
     };
     d.iter()
         .map(|(k, v)| {
@@ -221,7 +230,7 @@ pub(crate) fn identify<'py>(
     models: Option<Vec<String>>,
     params: Option<Vec<String>>,
     fix: Option<Vec<String>>,
-    prior: Option<Bound<'py, PyDict>>,
+    prior: Option<Bound<'py, PyAny>>,
     seed: u64,
     allow_rank_deficient: bool,
     allow_worse: bool,

@@ -272,6 +272,20 @@ def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_p
     close(same, ref)
     assert same == calbench.identify(robot, data=simulated / "measurements.csv", method="lm", cv=5,
                                      fix=np.array(["a2", "theta3"]), prior={"d2": 0.1, "a3": 0.05})
+    # A file of priors, as `--prior FILE` (its priors in the order of their names, as TOML's
+    # table holds them): the record of the same priors; a bad one refused at its line.
+    priors = tmp_path / "priors.toml"
+    priors.write_text("d2 = 0.1\na3 = 0.05\n")
+    sorted_same = calbench.identify(robot, data=simulated / "measurements.csv", method="lm",
+                                    cv=5, fix="a2,theta3", prior={"a3": 0.05, "d2": 0.1})
+    for path in (priors, str(priors)):
+        assert sorted_same == calbench.identify(robot, data=simulated / "measurements.csv",
+                                                method="lm", cv=5, fix="a2,theta3", prior=path)
+    priors.write_text("d2 = 0.1\nnope = 0.05\n")
+    with pytest.raises(calbench.FileError, match=r"priors.toml: line 2, key `nope`"):
+        calbench.identify(robot, q, p, prior=priors)
+    with pytest.raises(calbench.SettingError, match="setting `prior`: expected a dict"):
+        calbench.identify(robot, q, p, prior=[("d2", 0.1)])
     with pytest.raises(calbench.SettingError, match="fix"):
         calbench.identify(robot, q, p, fix=["nope"])
     with pytest.raises(calbench.SettingError, match="setting `cv`: needs 2"):

@@ -158,7 +158,7 @@ fn param_name(text: &str) -> std::result::Result<Param, String> {
 }
 
 /// One `--prior`: a prior given on the command line, or a file of them, read by
-/// [`prior_file`] once the command runs (so that its refusals name the file and line).
+/// [`calbench::identify::registry::prior_file`] once the command runs (so that its refusals name the file and line).
 #[derive(Clone, Debug)]
 pub enum PriorArg {
     /// `NAME=σ`.
@@ -178,7 +178,7 @@ fn prior_arg(text: &str) -> std::result::Result<PriorArg, String> {
     }
 }
 
-/// The priors of `--prior` arguments in their order, each file's in its order: a file that
+/// The priors of `--prior` arguments in their order, each file's by name: a file that
 /// is not TOML, holds no prior, or names a parameter or σ that is not one is refused naming
 /// the file, the line and the key.
 fn priors(args: &[PriorArg]) -> calbench::Result<Vec<(Param, Real)>> {
@@ -186,26 +186,10 @@ fn priors(args: &[PriorArg]) -> calbench::Result<Vec<(Param, Real)>> {
     for a in args {
         match a {
             PriorArg::One(p, sigma) => all.push((*p, *sigma)),
-            PriorArg::File(path) => all.extend(prior_file(path)?),
+            PriorArg::File(path) => all.extend(calbench::identify::registry::prior_file(path)?),
         }
     }
     Ok(all)
-}
-
-/// The priors of the file `path`: `NAME = σ` lines.
-fn prior_file(path: &Path) -> calbench::Result<Vec<(Param, Real)>> {
-    use calbench::identify::registry::prior_value;
-    let text = calbench::error::read_text(path)?;
-    let t: toml::Table = calbench::error::toml_keys(path, &text)?;
-    if t.is_empty() {
-        return Err(Error::file(path, "priors", "holds no `NAME = σ` line"));
-    }
-    t.iter()
-        .map(|(name, v)| {
-            prior_value(name, v)
-                .map_err(|m| Error::toml_file(path, &text, name, format!("key `{name}`"), m))
-        })
-        .collect()
 }
 
 /// One `--set KEY=VALUE`: the key, and the value read as TOML.

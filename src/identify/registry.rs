@@ -298,6 +298,23 @@ pub fn prior_value(name: &str, v: &toml::Value) -> std::result::Result<(Param, R
     )
 }
 
+/// The priors of the file `path`, `NAME = σ` lines (TOML), by name (`--prior FILE`,
+/// Python's `prior=PATH`): a file that is not TOML, holds no prior, or names a parameter or σ
+/// that is not one is refused naming the file, the line and the key.
+pub fn prior_file(path: &std::path::Path) -> Result<Vec<(Param, Real)>> {
+    let text = crate::error::read_text(path)?;
+    let t: toml::Table = crate::error::toml_keys(path, &text)?;
+    if t.is_empty() {
+        return Err(Error::file(path, "priors", "holds no `NAME = σ` line"));
+    }
+    t.iter()
+        .map(|(name, v)| {
+            prior_value(name, v)
+                .map_err(|m| Error::toml_file(path, &text, name, format!("key `{name}`"), m))
+        })
+        .collect()
+}
+
 /// One prior `NAME = σ`: a parameter name ([`Param::parse`]) and a finite σ > 0; the message
 /// says what is wrong.
 pub fn parse_prior(name: &str, sigma: Option<Real>) -> std::result::Result<(Param, Real), String> {
