@@ -28,6 +28,14 @@ pub(crate) fn arm5(a2: f64, theta3: f64) -> String {
     )
 }
 
+/// A `[[joints]]` entry of a robot file (mm, deg).
+fn joint(kind: &str, alpha: f64, a: f64, d: f64, theta: f64, (lo, hi): (f64, f64)) -> String {
+    format!(
+        "[[joints]]\ntype = \"{kind}\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
+         theta = {theta:?}\nlimits = [{lo:?}, {hi:?}]\n\n"
+    )
+}
+
 /// The tool position `calbench fk` prints for `robot` at the joints `q` (a CSV row).
 fn position(robot: &Path, q: &str) -> Vec<f64> {
     let o = calbench_ok(&["fk", "--robot", path_arg(robot), "--q", q]);
@@ -121,12 +129,6 @@ fn an_arm_of_five_joints_reaches_each_row_s_position() {
 #[test]
 fn a_five_joint_arm_with_a_slide_is_corrected_near_each_row() {
     let d = tmp_dir("cli-compensate-slide");
-    let joint = |kind: &str, alpha: f64, a: f64, d: f64, theta: f64, (lo, hi): (f64, f64)| {
-        format!(
-            "[[joints]]\ntype = \"{kind}\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
-             theta = {theta:?}\nlimits = [{lo:?}, {hi:?}]\n\n"
-        )
-    };
     // The nominal arm, and a calibration of it: every length and angle moved a little.
     let arm = |e: f64| {
         format!(
@@ -211,12 +213,6 @@ fn a_five_joint_arm_with_a_slide_is_corrected_near_each_row() {
 #[test]
 fn a_scara_keeps_the_yaw_nearer_for_a_micrometre_of_slide() {
     let d = tmp_dir("cli-compensate-scara");
-    let joint = |kind: &str, alpha: f64, a: f64, d: f64, theta: f64, (lo, hi): (f64, f64)| {
-        format!(
-            "[[joints]]\ntype = \"{kind}\"\nalpha = {alpha:?}\na = {a:?}\nd = {d:?}\n\
-             theta = {theta:?}\nlimits = [{lo:?}, {hi:?}]\n\n"
-        )
-    };
     // The nominal arm (`e` = 0) and a calibration of it (`e` = 1).
     let arm = |e: f64| {
         format!(
