@@ -215,17 +215,6 @@ impl IdentifyRequest {
                 };
                 Err(Error::option(Opt::Validate, why))
             };
-            // Orientations the calibration does not determine would be scored: positions
-            // leave the tool's rotation to its nominal values, so a full-pose validation of
-            // them reported degrees of orientation error that measure nothing the data fixed.
-            if v.quats.is_some() && d.quats.is_none() {
-                return refused(
-                    "holds orientations and the calibration data positions only, which do \
-                     not determine the tool's orientation: the validation's orientation errors \
-                     would not measure the calibration; validate on its positions alone"
-                        .into(),
-                );
-            }
             // A validation's rows repeated would weigh their points twice in its figures.
             let repeated = v.repeated_rows();
             if !repeated.is_empty() {
@@ -238,6 +227,18 @@ impl IdentifyRequest {
                     &shared,
                     "rows of each file",
                 ));
+            }
+            // Orientations the calibration does not determine would be scored (a file of
+            // other rows: copies of the data's are refused as such, above): positions
+            // leave the tool's rotation to its nominal values, so a full-pose validation of
+            // them reported degrees of orientation error that measure nothing the data fixed.
+            if v.quats.is_some() && d.quats.is_none() {
+                return refused(
+                    "holds orientations and the calibration data positions only, which do \
+                     not determine the tool's orientation: the validation's orientation errors \
+                     would not measure the calibration; validate on its positions alone"
+                        .into(),
+                );
             }
         }
         // A held-out row is a row of the data file; a validation file's, of its own.

@@ -543,22 +543,6 @@ mod tests {
     use crate::robot::builtin;
 
     #[test]
-    fn a_method_supplied_from_outside_is_offered_no_way_past() {
-        let found = ["a2 moved 900 mm".to_string()];
-        let said = |external| {
-            let e = implausible_error(Path::new("d.csv"), &found, &[], external);
-            e.spelled(|_, _| "--allow-implausible".to_string())
-        };
-        assert!(said(false)
-            .ends_with("Fix the data, or pass --allow-implausible to write it with a warning"));
-        assert!(
-            said(true).ends_with("nothing was written. Fix the data."),
-            "{}",
-            said(true)
-        );
-    }
-
-    #[test]
     fn moves_beyond_the_bounds_are_named_and_within_are_not() {
         let nominal = builtin::load("irb2600").unwrap();
         let reach = reach_bound_mm(&nominal);

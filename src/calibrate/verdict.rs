@@ -401,6 +401,24 @@ pub fn check_priors_identified(priors: &[(Param, Real)], params: &[Param]) -> Re
 mod tests {
     use super::*;
 
+    /// A refusal of an implausible result offers the option that writes it, except for a
+    /// method supplied from outside, which runs where no option does (a task's entry).
+    #[test]
+    fn a_method_supplied_from_outside_is_offered_no_way_past() {
+        use crate::calibrate::plausibility::implausible_error;
+        let found = ["a2 moved 900 mm".to_string()];
+        let said = |external| {
+            let e = implausible_error(Path::new("d.csv"), &found, &[], external);
+            e.spelled(|_, _| "OPTION".to_string())
+        };
+        assert!(said(false).ends_with("Fix the data, or pass OPTION to write it with a warning"));
+        assert!(
+            said(true).ends_with("nothing was written. Fix the data."),
+            "{}",
+            said(true)
+        );
+    }
+
     #[test]
     fn a_gross_reading_stands_out_and_a_drift_does_not() {
         let mut r: Vec<Real> = (0..20).map(|i| 0.1 + 0.01 * i as Real).collect();

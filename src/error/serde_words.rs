@@ -98,15 +98,18 @@ pub(super) fn plain_types(text: String) -> String {
 }
 
 /// toml's refusals of a whole number beyond the 64-bit integers TOML has (`u64 value was too
-/// large`; `invalid type: integer `N` as i128, expected any valid TOML value`), said with the
-/// range; `None` for any other text.
+/// large`; `invalid type: integer `N` as i128, expected any valid TOML value`, or `expected a
+/// number` where a robot file's length is read), said with the range; `None` for any other
+/// text.
 fn beyond_toml(text: &str) -> Option<String> {
     const RANGE: &str = "beyond TOML's whole numbers, -9223372036854775808 to \
                          9223372036854775807 (2^63 − 1)";
     if text == "u64 value was too large" {
         return Some(format!("the whole number is {RANGE}"));
     }
-    let (head, tail) = text.split_once(" as i128, expected any valid TOML value")?;
+    // Whatever the key expected (any value, a number): the number is none of TOML's.
+    let (head, expected) = text.split_once(" as i128, expected ")?;
+    let tail = expected.find('\n').map_or("", |i| &expected[i..]);
     let n = head.strip_prefix("invalid type: integer ")?;
     Some(format!("{n} is {RANGE}{tail}"))
 }
@@ -135,6 +138,12 @@ mod tests {
             said("invalid type: integer `99999999999999999999` as i128, expected any valid TOML value"),
             "`99999999999999999999` is beyond TOML's whole numbers, -9223372036854775808 to \
              9223372036854775807 (2^63 − 1)"
+        );
+        // A robot file's number: the same words, not the parser's type.
+        assert_eq!(
+            said("invalid type: integer `99999999999999999999` as i128, expected a number\nin `a`"),
+            "`99999999999999999999` is beyond TOML's whole numbers, -9223372036854775808 to \
+             9223372036854775807 (2^63 − 1)\nin `a`"
         );
         assert_eq!(
             said("invalid value: integer `300`, expected u8"),
