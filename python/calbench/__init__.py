@@ -177,7 +177,8 @@ def identify(
         validate: a validation measurement: a tracker's file, or ``(q, points)`` /
             ``(q, points, rotations)`` / ``(q, points, rotations or None, payload or None)``,
             the payload (N,) in kg; required with ``payload``, as the poses' loads are.
-        holdout: ``"LAST/EVERY"``: rows held out for validation instead (``--holdout``).
+        holdout: ``"LAST/EVERY"`` or ``(last, every)``: rows held out for validation instead
+            (``--holdout``).
         seed: seed of the random searches.
         allow_rank_deficient: return a result whose data do not determine every parameter
             instead of raising.
@@ -232,7 +233,7 @@ def identify(
         registration=_text("registration", registration, "identify, svd, wsvd or known"),
         compliance=compliance,
         validate=val,
-        holdout=_text("holdout", holdout, 'LAST/EVERY such as "3/10"', optional=True),
+        holdout=_holdout(holdout),
         cv=_count("cv", cv),
         cv_seed=_count("cv_seed", cv_seed),
         models=_names("models", models),
@@ -400,6 +401,21 @@ class Study:
     def __repr__(self):
         s = self.summary
         return f"Study({s['scenario']!r}, {s['trials']} trials, {len(s['results'])} entries)"
+
+
+def _holdout(holdout):
+    """``holdout`` as the text ``LAST/EVERY`` of ``--holdout`` (None stays None): that text,
+    or two integers (last, every) as a tuple, a list or a one-dimensional numpy array."""
+    if isinstance(holdout, np.ndarray) and holdout.ndim == 1:
+        holdout = holdout.tolist()
+    if isinstance(holdout, (tuple, list)):
+        if len(holdout) != 2 or any(
+            isinstance(v, bool) or not isinstance(v, numbers.Integral) for v in holdout
+        ):
+            raise SettingError(
+                f"setting `holdout`: expected (last, every), two integers, got {holdout!r}")
+        return "/".join(str(int(v)) for v in holdout)
+    return _text("holdout", holdout, 'LAST/EVERY such as "3/10", or (3, 10)', optional=True)
 
 
 def _shard(shard):

@@ -378,7 +378,7 @@ const MAX_DEPTH: usize = 64;
 /// A Python value `depth` lists or dicts down as a TOML value (scenario dicts, method
 /// options). numpy's scalars are the TOML values of their Python twins: an integer
 /// (`np.int64`) stays an integer, a `np.bool_` a boolean; a numpy array is the list of its
-/// values.
+/// values; a path (`pathlib.Path`) its text.
 fn nested_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml::Value> {
     if depth > MAX_DEPTH {
         let msg = format!(
@@ -407,6 +407,13 @@ fn nested_value(key: &str, v: &Bound<'_, PyAny>, depth: usize) -> PyResult<toml:
     }
     if let Ok(s) = v.cast::<PyString>() {
         return Ok(toml::Value::String(utf8(key, s)?));
+    }
+    // A path (`pathlib.Path`, any `os.PathLike` of text) is the string a file would hold.
+    if v.is_instance(&v.py().import("os")?.getattr("PathLike")?)? {
+        let text = v.py().import("os")?.getattr("fspath")?.call1((v,))?;
+        if let Ok(s) = text.cast::<PyString>() {
+            return Ok(toml::Value::String(utf8(key, s)?));
+        }
     }
     if let Ok(d) = v.cast::<PyDict>() {
         return Ok(toml::Value::Table(nested_table(key, d, depth + 1)?));

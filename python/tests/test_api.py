@@ -292,6 +292,13 @@ def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_p
         calbench.identify(robot, q, p, cv=1)
     with pytest.raises(calbench.SettingError, match="setting `holdout`: cannot be used with validate"):
         calbench.identify(robot, q, p, holdout="3/10", validate=(q, p))
+    # The holdout as two integers, as `shard` takes them: the same record as its text.
+    held = calbench.identify(robot, q, p, method="ls", holdout="3/10")
+    for pair in ((3, 10), [3, 10], np.array([3, 10])):
+        assert calbench.identify(robot, q, p, method="ls", holdout=pair) == held
+    for bad in ((3,), (3.0, 10), (True, 10)):
+        with pytest.raises(calbench.SettingError, match="setting `holdout`: expected"):
+            calbench.identify(robot, q, p, holdout=bad)
     with pytest.raises(calbench.SettingError, match="`q`: is not taken with `data`"):
         calbench.identify(robot, q, p, data=simulated / "measurements.csv")
 
@@ -660,3 +667,15 @@ def test_a_urdf_chain_from_a_base_link_is_the_command_line_s(cli, root):
     # Named by the argument given: `base` alone had been refused as `tip`.
     with pytest.raises(calbench.SettingError, match="setting `base`: .*not one"):
         calbench.Robot.from_file(root / "robots" / "ban-irb2600.toml", base="link1")
+
+
+def test_a_path_in_a_scenario_dict_is_its_text(root):
+    # A pathlib.Path where a scenario file writes a path's text: the same study.
+    sc = load_scenario(root)
+    sc.pop("compliance")  # its stiffnesses are the built-in robot's
+    robot_file = root / "robots" / "ban-irb2600.toml"
+    sc["robot"] = {"file": robot_file}
+    a = calbench.simulate(sc, trial=0)
+    sc["robot"] = {"file": str(robot_file)}
+    b = calbench.simulate(sc, trial=0)
+    assert np.array_equal(a["points"], b["points"]) and np.array_equal(a["q"], b["q"])
