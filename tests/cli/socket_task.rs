@@ -366,6 +366,21 @@ fn a_tip_with_a_model_that_is_not_a_urdf_is_refused_naming_the_task_key() {
             && !err.contains("--tip"),
         "{err}"
     );
+    // An [authors] of a source alone scores nothing, and is refused at its header.
+    let task = copied_task(
+        &dir,
+        "\n[authors]\nsource = \"a test\"\n",
+        "socket_spread_mm",
+        "empty",
+    );
+    let err = refused_task(&task, &dir.join("out"));
+    let line = read(&task).lines().position(|l| l == "[authors]").unwrap() + 1;
+    assert!(
+        err.contains(&format!(
+            "empty.toml: line {line}, authors: names neither `model` nor `kpis`"
+        )),
+        "{err}"
+    );
     let task = copied_task(&dir, "", "socket_spread_mm", "robot");
     let urdf = root().join("data/mukca/panda.urdf");
     let text = read(&task).replace(

@@ -204,6 +204,12 @@ pub fn parse_socket_task(text: String, path: &Path, dir: &Path) -> Result<Option
     let robot = file("robot", &keys.robot)?;
     let (authors_model, authors_kpis, authors_source) = match &keys.authors {
         None => (None, None, None),
+        // A source of nothing would be hashed and printed, yet score nothing.
+        Some(a) if a.model.is_none() && a.kpis.is_none() => {
+            let msg = "names neither `model` nor `kpis`: give the authors' model or figures, \
+                       or leave [authors] out";
+            return Err(bad("authors", msg.into()));
+        }
         Some(a) => (
             a.model
                 .as_deref()
