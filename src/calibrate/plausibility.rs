@@ -453,8 +453,7 @@ pub fn target_points(
 /// The refusal of an identification that cannot be physically right, read from `source`:
 /// `found` the implausible moves and findings, `causes` what in the data likely caused them;
 /// it names the option that writes it with a warning ([`Opt::AllowImplausible`]), unless
-/// `external`: the result of a method supplied from outside, which runs only where no option
-/// lets it through (a task's entry; `identify` takes calbench's methods alone).
+/// `external`, a method supplied from outside ([`super::verdict::way_past`]).
 pub fn implausible_error(
     source: &Path,
     found: &[String],
@@ -473,11 +472,8 @@ pub fn implausible_error(
          Fix the data",
         found.join("; ")
     );
-    if external {
-        return Error::file(source, "data", msg + ".");
-    }
-    let msg = Said::from(msg + ", or pass ").on(Opt::AllowImplausible);
-    Error::file(source, "data", msg.text(" to write it with a warning"))
+    let msg = super::verdict::way_past(msg, Opt::AllowImplausible, external);
+    Error::file(source, "data", msg)
 }
 
 /// The findings `f` of an identification read from `source`: refused

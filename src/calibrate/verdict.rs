@@ -116,6 +116,17 @@ pub fn allowing(msg: String, allow: Opt) -> Said {
     Said::from(msg).on(allow)
 }
 
+/// The end of a refusal that a front end's option `allow` would let through: `msg`, then
+/// `, or pass` the option `to write it with a warning`. A method supplied from outside
+/// (`external`) runs only where no option lets its result through (a task's entry; `identify`
+/// takes calbench's methods alone), so no way past is offered: `msg.`
+pub fn way_past(msg: String, allow: Opt, external: bool) -> Said {
+    if external {
+        return Said::from(msg + ".");
+    }
+    allowing(msg + ", or pass ", allow).text(" to write it with a warning")
+}
+
 /// The undetermined parameters of an analysis, space-separated, and its dependent groups
 /// (`[a b] [c d]`), as refusals name them.
 pub fn names_and_groups(a: &Identifiability) -> (String, String) {
@@ -257,14 +268,11 @@ pub fn worse_error(
          Check {check}",
         causes.join("; ")
     );
-    let file = at_validation.unwrap_or(source);
-    // A method supplied from outside runs only where no option lets a worse result through
-    // (a task's entry; `identify` takes calbench's methods alone): no way past is offered.
-    if method.is_external() {
-        return Error::file(file, "data", msg + ".");
-    }
-    let msg = allowing(msg + ", or pass ", Opt::AllowWorse);
-    Error::file(file, "data", msg.text(" to write it with a warning"))
+    Error::file(
+        at_validation.unwrap_or(source),
+        "data",
+        way_past(msg, Opt::AllowWorse, method.is_external()),
+    )
 }
 
 /// `reading` (a reading the residuals point to, in words) as the likely cause of a refusal.

@@ -158,7 +158,8 @@ fn param_name(text: &str) -> std::result::Result<Param, String> {
 }
 
 /// One `--prior`: a prior given on the command line, or a file of them, read by
-/// [`calbench::identify::registry::prior_file`] once the command runs (so that its refusals name the file and line).
+/// [`calbench::identify::registry::prior_file`] once the command runs (so that its refusals
+/// name the file and line).
 #[derive(Clone, Debug)]
 pub enum PriorArg {
     /// `NAME=σ`.
