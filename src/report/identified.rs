@@ -7,11 +7,10 @@ use super::plots;
 
 use super::output::{Buffered, Figure, Output, Outputs, Text};
 use crate::calibrate::pipeline::TrackerOutcome;
-use crate::calibrate::plausibility::implausible_warning;
+use crate::calibrate::record::unconverged_warning;
 use crate::calibrate::record::IdentifiedRecord;
 pub use crate::calibrate::validation::FileValidation;
 pub use crate::calibrate::verdict::registration_warning;
-use crate::calibrate::verdict::worse_warning;
 use crate::calibrate::ErrorStats;
 use crate::error::Result;
 use crate::identify::{standard_error, Termination};
@@ -143,10 +142,11 @@ pub fn outputs<'a>(r: &'a IdentifyRecord, more: &'a Additions) -> Result<Outputs
 }
 
 /// The warnings of an identification, in plain words: data that do not determine every
-/// parameter (a result kept with `--allow-rank-deficient`), a registration that did not
-/// settle ([`registration_warning`]), points a robust method rejected (weight 0) or
-/// weighed down, a result kept although it makes the robot worse, and a search that ended
-/// on the edge of its box.
+/// parameter (a result kept with `--allow-rank-deficient`), points a robust method rejected
+/// (weight 0) or weighed down, then those `identify` prints ([`TrackerOutcome::warnings`]: a
+/// registration that did not settle, a result kept although it makes the robot worse or
+/// cannot be physically right, a search that ended on the edge of its box) and a solve that
+/// stopped short of convergence ([`unconverged_warning`]), each a sentence.
 pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     let id = &r.calibrated.identified;
     let n = r.params.len();
@@ -165,9 +165,6 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
             id.termination.as_str()
         ));
     }
-    if let Some(text) = registration_warning(&r.calibrated, r.registration) {
-        w.push(format!("the {text}."));
-    }
     let m = r.data.len();
     if let Some(rows) = id
         .row_weights
@@ -178,9 +175,12 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
     } else {
         w.extend(point_warnings(&id.weights, m));
     }
-    w.extend(worse_warning(&r.record.allowed_worse).map(|t| t.to_string() + "."));
-    w.extend(implausible_warning(&r.record.allowed_implausible).map(|t| t.to_string() + "."));
-    w.extend(r.edge_warning().map(|t| t + "."));
+    let printed = r.outcome.warnings().into_iter().map(|t| t.to_string());
+    w.extend(
+        printed
+            .chain(unconverged_warning(&r.record))
+            .map(|t| t + "."),
+    );
     w
 }
 
@@ -328,8 +328,9 @@ fn histogram(series: &[&[Real]]) -> (Vec<String>, Vec<Vec<Real>>) {
     (labels, counts)
 }
 
-/// `report.md` of `identify` on real data, showing its [`figures`]: residual per calibration
-/// point before and after, their histogram, the identified errors with standard errors (the
+/// `report.md` of `identify` on real data, showing its [`figures`]: the [`warnings`] of
+/// `report.html` (a section only when there is one), residual per calibration point before and
+/// after, their histogram, the identified errors with standard errors (the
 /// square roots of the covariance's diagonal), the condition number and the dependent groups of
 /// the parameters the robot offers, and, for a robust method (IGG3, Qiao 2021 eq. 15), the final
 /// point weights.
@@ -362,6 +363,14 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
         id.rank.map_or("—".to_string(), |k| k.to_string()),
         r.params.len(),
     );
+    let w = warnings(r);
+    if !w.is_empty() {
+        s += "## Warnings\n\n";
+        for text in &w {
+            let _ = writeln!(s, "- {}", inline(text));
+        }
+        s.push('\n');
+    }
     if let Some(v) = &r.validation {
         s += "## Validation\n\n";
         s += &table(&VALIDATION_HEADERS, &validation_rows(v, false));

@@ -220,8 +220,13 @@ fn a_search_that_ends_on_the_edge_of_its_box_says_so() {
         let rms = load_json(&out.join("identified.json"))["rms_residual_mm"]
             .as_f64()
             .unwrap();
-        let page = std::fs::read_to_string(out.join("report.html")).unwrap();
-        let on_page = page.contains("the search ended with ");
+        // The warning is said on the page and in report.md alike, or in neither.
+        let said = |file: &str| {
+            let text = std::fs::read_to_string(out.join(file)).unwrap();
+            text.contains("the search ended with ")
+        };
+        let on_page = said("report.html");
+        assert_eq!(said("report.md"), on_page);
         (
             String::from_utf8_lossy(&o.stderr).into_owned(),
             rms,
@@ -231,8 +236,16 @@ fn a_search_that_ends_on_the_edge_of_its_box_says_so() {
     let (err, rms, on_page) = run("pso", &[]);
     let edge = "warning: the search ended with ";
     assert!(err.contains(edge) && rms > 10.0, "{rms} mm: {err}");
-    // The page's warnings say it too.
+    // The page's warnings say it too, and report.md's, with the solve stopped at its
+    // iteration limit, as identify says on stderr.
     assert!(on_page);
+    let stopped = "after 500 iterations (RMS residual";
+    assert!(err.contains(stopped), "{err}");
+    for file in ["report.md", "report.html"] {
+        let text = std::fs::read_to_string(d.join("pso-0").join(file)).unwrap();
+        assert!(text.contains(stopped), "{file}: {text}");
+        assert!(text.contains("a solve that did not converge"), "{file}: {text}");
+    }
     assert!(
         err.contains("; bound_mm = 2, bound_rad = 0.02): the errors may lie beyond it")
             && err.contains("widen the box (the method's options bound_mm and bound_rad)"),
