@@ -184,23 +184,42 @@ pub enum Worse {
 impl std::fmt::Display for Worse {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match *self {
-            Worse::Validation(before, after) => write!(
-                f,
-                "the validation RMS is {after:.4} mm after calibration against {before:.4} mm \
-                 before"
-            ),
-            Worse::Residual(before, after) => write!(
-                f,
-                "the RMS residual on the calibration readings is {after:.4} mm after against \
-                 {before:.4} mm before"
-            ),
-            Worse::GrowingCost(first, last) => write!(
-                f,
-                "the solve stopped at its iteration limit with a growing cost (RMS residual \
-                 {first:.4} mm at the start, {last:.4} mm at the end)"
-            ),
+            Worse::Validation(before, after) => {
+                let (before, after) = apart(before, after);
+                write!(
+                    f,
+                    "the validation RMS is {after} mm after calibration against {before} mm \
+                     before"
+                )
+            }
+            Worse::Residual(before, after) => {
+                let (before, after) = apart(before, after);
+                write!(
+                    f,
+                    "the RMS residual on the calibration readings is {after} mm after against \
+                     {before} mm before"
+                )
+            }
+            Worse::GrowingCost(first, last) => {
+                let (first, last) = apart(first, last);
+                write!(
+                    f,
+                    "the solve stopped at its iteration limit with a growing cost (RMS residual \
+                     {first} mm at the start, {last} mm at the end)"
+                )
+            }
         }
     }
+}
+
+/// Two RMS figures (mm) written with 4 decimals, or with as many more as tell them apart (up
+/// to 12, a thousandth of [`WORSE_FLOOR_MM`]): a rise of half a micrometre reads as one.
+fn apart(a: Real, b: Real) -> (String, String) {
+    let mut d = 4;
+    while d < 12 && format!("{a:.d$}") == format!("{b:.d$}") {
+        d += 1;
+    }
+    (format!("{a:.d$}"), format!("{b:.d$}"))
 }
 
 /// Why a result makes the robot worse than the nominal one: a validation RMS after above the
@@ -408,6 +427,19 @@ pub fn check_priors_identified(priors: &[(Param, Real)], params: &[Param]) -> Re
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A rise the fourth decimal cannot show is written with the decimals that show it; one it
+    /// can show keeps four.
+    #[test]
+    fn a_worsening_is_written_with_the_decimals_that_show_it() {
+        let small = Worse::Validation(0.494438, 0.494438 + 4.8e-7).to_string();
+        assert_eq!(
+            small,
+            "the validation RMS is 0.4944385 mm after calibration against 0.4944380 mm before"
+        );
+        let large = Worse::Residual(3.038, 1418.41749).to_string();
+        assert!(large.contains("1418.4175 mm after against 3.0380 mm"), "{large}");
+    }
 
     /// A refusal of an implausible result offers the option that writes it, except for a
     /// method supplied from outside, which runs where no option does (a task's entry).

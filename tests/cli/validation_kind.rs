@@ -80,5 +80,18 @@ fn a_full_pose_validation_of_a_position_calibration_is_refused() {
             "{name}"
         );
         assert_eq!(r["validation_after_deg"].is_object(), degrees, "{name}");
+        // `rms_residual_mm` holds a full pose's orientation rows too (§ 7.6), where
+        // residuals.csv's `residual_after_mm` is the position part.
+        let after: Vec<f64> = read(&out.join("residuals.csv"))
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+            .collect();
+        let positions = (after.iter().map(|v| v * v).sum::<f64>() / after.len() as f64).sqrt();
+        let rms = r["rms_residual_mm"].as_f64().unwrap();
+        match data == &pose_cal {
+            true => assert!(rms > positions * 1.001, "{name}: {rms} {positions}"),
+            false => assert!((rms - positions).abs() <= 1e-12 * rms, "{name}: {rms} {positions}"),
+        }
     }
 }
