@@ -98,8 +98,13 @@ pub fn settings_apart(a: &Side, b: &Side) -> Result<Vec<String>> {
     })
 }
 
+/// The keys of a scenario that change no trial: `seed` and `trials` only choose the draws, and
+/// `description`, `[[claims]]` and `[report]` say how the results are read (docs/formats.md
+/// § 4.16, § 4.17). Two runs apart only in them ran one study.
+const NOT_THE_STUDY: [&str; 5] = ["seed", "trials", "description", "claims", "report"];
+
 /// What two scenarios as run (canonical texts) set differently, other than the keys that
-/// only choose the draws (`seed`, `trials`): each setting as `key: A → B` by its dotted key
+/// change no trial ([`NOT_THE_STUDY`]): each setting as `key: A → B` by its dotted key
 /// (`calibration.count: 40 → 25`, `methods[1].name: "igg3" → "ridge"`, `(none)` where one
 /// lacks it), in the tables' order; empty for one study. One study is one effect
 /// ([`effect`]): settings written another way (`2500` for `2500.0`, a default written out)
@@ -108,8 +113,9 @@ pub fn settings_apart(a: &Side, b: &Side) -> Result<Vec<String>> {
 pub fn differences(a: &str, b: &str) -> Vec<String> {
     let table = |t: &str| -> Option<toml::Table> {
         let mut t: toml::Table = toml::from_str(t).ok()?;
-        t.remove("seed");
-        t.remove("trials");
+        for key in NOT_THE_STUDY {
+            t.remove(key);
+        }
         Some(t)
     };
     let (Some(a), Some(b)) = (table(a), table(b)) else {
@@ -265,6 +271,14 @@ mod tests {
         assert!(
             differences(a, &b).is_empty(),
             "seed and trials only choose the draws"
+        );
+        let read = format!(
+            "description = \"other words\"\n{a}[report]\nbaseline = \"igg3\"\n\
+             [[claims]]\nid = \"c\"\n"
+        );
+        assert!(
+            differences(a, &read).is_empty(),
+            "the description, the claims and the report change no trial"
         );
         let c = a
             .replace("count = 40", "count = 25")

@@ -396,6 +396,18 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
             };
             return differ(&format!("`{key}`"), a, b);
         }
+        // One file may be named by other paths (the scenario started from another folder, or
+        // a copy of it): its bytes, which the records' checksums bind, are what must agree.
+        let bytes = |m: &ShardMeta| m.inputs.iter().map(|i| i.sha256.clone()).collect::<Vec<_>>();
+        if bytes(m) != bytes(m0) {
+            let names = |m: &ShardMeta| {
+                let each: Vec<String> = (m.inputs.iter())
+                    .map(|i| format!("{} (SHA-256 {})", i.path.display(), i.sha256))
+                    .collect();
+                format!("[{}]", each.join(", "))
+            };
+            return differ("files read", names(m0), names(m));
+        }
     }
     let any = scenario_as_run(
         &d0.join("shard.json"),
@@ -437,11 +449,19 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
             ),
         ));
     }
+    let any_file = m0.scenario_file.clone();
     metas.sort_by_key(|(_, m)| m.shard.index);
     let files = inputs::files(&any)?;
     for (d, m) in &metas {
-        trials_as_run(&d.join("shard.json"), m.trials, &any)?;
-        inputs::as_run(&d.join("shard.json"), &m.inputs, &files)?;
+        let holder = d.join("shard.json");
+        trials_as_run(&holder, m.trials, &any)?;
+        // Its files as its own scenario file names them.
+        if m.scenario_file == any_file {
+            inputs::as_run(&holder, &m.inputs, &files)?;
+        } else {
+            let own = scenario_as_run(&holder, &m.settings, m.scenario_file.as_deref())?;
+            inputs::as_run(&holder, &m.inputs, &inputs::files(&own)?)?;
+        }
         let units = m.shard.range(total);
         if m.units != units || m.records != units.1 - units.0 {
             return Err(Error::file(

@@ -115,6 +115,47 @@ fn a_merge_refuses_shards_whose_robot_file_changed_or_cannot_be_found() {
     assert!(!elsewhere.join("merged").exists());
 }
 
+/// Shards of one scenario started by other paths (a relative one and an absolute one), or
+/// from a copy of the project holding the same bytes, merge to the bytes of one run: the
+/// files' bytes are what the records bind, where `merge` had refused the second shard's
+/// `inputs` as altered for naming the robot file by another path. A copy whose robot file
+/// holds other bytes is refused as another run's, naming the files read.
+#[test]
+fn shards_started_by_other_paths_to_the_same_files_merge() {
+    let dir = tmp_dir("inputs-paths");
+    project(&dir);
+    let copy = dir.join("copy");
+    let copied_robot = project(&copy);
+    shard(&dir, SCENARIO, &["--trials", "4"], 0);
+    let absolute = dir.join(SCENARIO);
+    shard(&dir, path_arg(&absolute), &["--trials", "4"], 1);
+    ok(&in_folder(&dir, &MERGE));
+    ok(&in_folder(
+        &dir,
+        &["run", SCENARIO, "--trials", "4", "--out", "whole"],
+    ));
+    for f in ["summary.json", "trials.csv"] {
+        let (a, b) = (dir.join("merged").join(f), dir.join("whole").join(f));
+        assert!(read(&a) == read(&b), "{f} differs from one run's");
+    }
+    let from_copy = copy.join(SCENARIO);
+    shard(&dir, path_arg(&from_copy), &["--trials", "4"], 1);
+    let again = ["merge", "sh/0", "sh/1", "--out", "merged-copy"];
+    ok(&in_folder(&dir, &again));
+    let (a, b) = (dir.join("merged-copy/trials.csv"), dir.join("whole/trials.csv"));
+    assert!(read(&a) == read(&b));
+    std::fs::write(&copied_robot, commented(&read(&copied_robot))).unwrap();
+    shard(&dir, path_arg(&from_copy), &["--trials", "4"], 1);
+    let o = in_folder(&dir, &["merge", "sh/0", "sh/1", "--out", "refused"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("are shards of different runs: files read") && err.contains("SHA-256"),
+        "{err}"
+    );
+    assert!(!dir.join("refused").exists());
+}
+
 /// A killed run whose robot file then changed is refused by `run --resume` naming its
 /// `checkpoint.json` and `inputs[0]`, its checkpoint untouched; with the file restored it
 /// resumes.
