@@ -438,7 +438,10 @@ mod tests {
             "the validation RMS is 0.4944385 mm after calibration against 0.4944380 mm before"
         );
         let large = Worse::Residual(3.038, 1418.41749).to_string();
-        assert!(large.contains("1418.4175 mm after against 3.0380 mm"), "{large}");
+        assert!(
+            large.contains("1418.4175 mm after against 3.0380 mm"),
+            "{large}"
+        );
     }
 
     /// A refusal of an implausible result offers the option that writes it, except for a

@@ -246,6 +246,7 @@ pub fn unpaired_text(why: &Unpaired, baseline: &Side) -> String {
             summary: b,
         } => {
             let take = match *key {
+                _ if a == "none" => "a run of the baseline's scenario".to_string(),
                 "seed" => format!("a run with --seed {a}"),
                 "trials" => format!("a run with --trials {a}"),
                 _ => "a run of the baseline's scenario and sweep".to_string(),

@@ -33,7 +33,9 @@ use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
 use crate::report::MadeFolders;
-use crate::runner::shard::{scenario_as_run, settings_difference, trials_as_run, FormatOnly};
+use crate::runner::shard::{
+    one_effect, scenario_as_run, settings_difference, trials_as_run, FormatOnly,
+};
 use crate::study::inputs::{self, Input};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};
@@ -250,7 +252,12 @@ impl Checkpoint {
                     g.trials().to_string(),
                 ));
             }
-            if let Some((key, had, now)) = settings_difference(&meta.settings, &g.settings()?) {
+            // Settings written otherwise (`2500` for `2500.0`, a default written out) set the
+            // same: the run goes on as its checkpoint's text wrote them.
+            let now = g.settings()?;
+            if let Some((key, had, now)) = settings_difference(&meta.settings, &now)
+                .filter(|_| !one_effect(&meta.settings, &now))
+            {
                 return Err(refuse(&format!("`{key}`"), had, now));
             }
         }

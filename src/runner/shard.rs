@@ -307,6 +307,14 @@ fn missing_commands(
         || format!("{}.toml", m0.scenario),
         |p| p.display().to_string(),
     );
+    // A relative path is the one the shards were started with, from their folder.
+    let from = match &m0.scenario_file {
+        Some(p) if p.is_relative() && !p.exists() => format!(
+            "\n(from the folder the shards were run in: {} is relative to it)",
+            p.display()
+        ),
+        _ => String::new(),
+    };
     let by_index_names = d0
         .file_name()
         .is_some_and(|f| f.to_string_lossy() == m0.shard.index.to_string());
@@ -324,6 +332,7 @@ fn missing_commands(
         })
         .collect::<Vec<_>>()
         .join("\n")
+        + &from
 }
 
 /// What a merge wrote: a Monte-Carlo run, or the study of cells whose table it gives.
@@ -394,11 +403,30 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
                 let name = format!("\"{}\"", m0.scenario);
                 return differ("settings of scenario", name, "others".into());
             };
+            if one_effect(&m0.settings, &m.settings) {
+                return Err(Error::setting(
+                    "DIR",
+                    format!(
+                        "{} and {} ran scenario texts that write `{key}` otherwise ({a} against \
+                         {b}): they set the same, but the shards of one run come from one text, \
+                         which its scenario.toml holds; run {} again from the scenario {} ran",
+                        d0.display(),
+                        d.display(),
+                        d.display(),
+                        d0.display()
+                    ),
+                ));
+            }
             return differ(&format!("`{key}`"), a, b);
         }
         // One file may be named by other paths (the scenario started from another folder, or
         // a copy of it): its bytes, which the records' checksums bind, are what must agree.
-        let bytes = |m: &ShardMeta| m.inputs.iter().map(|i| i.sha256.clone()).collect::<Vec<_>>();
+        let bytes = |m: &ShardMeta| {
+            m.inputs
+                .iter()
+                .map(|i| i.sha256.clone())
+                .collect::<Vec<_>>()
+        };
         if bytes(m) != bytes(m0) {
             let names = |m: &ShardMeta| {
                 let each: Vec<String> = (m.inputs.iter())
@@ -647,6 +675,16 @@ fn each_record(
 pub(super) fn settings_difference(a: &str, b: &str) -> Option<(String, String, String)> {
     let table = |t: &str| toml::from_str::<toml::Value>(t).ok();
     first_difference("", table(a).as_ref(), table(b).as_ref())
+}
+
+/// Whether the scenarios as run `a` and `b` (TOML texts) set the same, written otherwise
+/// ([`crate::study::scenario::effect`]).
+pub(super) fn one_effect(a: &str, b: &str) -> bool {
+    let effect = |t: &str| {
+        let table: toml::Table = toml::from_str(t).ok()?;
+        crate::study::scenario::effect(&table)
+    };
+    effect(a).is_some_and(|e| Some(e) == effect(b))
 }
 
 /// The first setting where two scenarios' settings differ: its dotted key and its values in

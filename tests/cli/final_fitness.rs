@@ -244,7 +244,10 @@ fn a_search_that_ends_on_the_edge_of_its_box_says_so() {
     for file in ["report.md", "report.html"] {
         let text = std::fs::read_to_string(d.join("pso-0").join(file)).unwrap();
         assert!(text.contains(stopped), "{file}: {text}");
-        assert!(text.contains("a solve that did not converge"), "{file}: {text}");
+        assert!(
+            text.contains("a solve that did not converge"),
+            "{file}: {text}"
+        );
     }
     assert!(
         err.contains("; bound_mm = 2, bound_rad = 0.02): the errors may lie beyond it")

@@ -46,6 +46,15 @@ fn a_baseline_without_trials_leaves_changes_unresolved_not_regressed() {
     assert!(ok, "{said}");
     assert!(!said.contains("differ in their trials"), "{said}");
     assert!(!said.contains("(0 paired)"), "{said}");
+    // A baseline without its `seed`: the run that would pair is the baseline scenario's, not
+    // a run "with --seed none".
+    doc.as_object_mut().unwrap().remove("seed");
+    written(&dir, "no-seed.json", &doc);
+    let (_, said) = check(&b, &dir.join("no-seed.json"), &[]);
+    assert!(
+        said.contains("a run of the baseline's scenario") && !said.contains("--seed none"),
+        "{said}"
+    );
 }
 
 #[test]

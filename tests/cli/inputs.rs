@@ -142,7 +142,10 @@ fn shards_started_by_other_paths_to_the_same_files_merge() {
     shard(&dir, path_arg(&from_copy), &["--trials", "4"], 1);
     let again = ["merge", "sh/0", "sh/1", "--out", "merged-copy"];
     ok(&in_folder(&dir, &again));
-    let (a, b) = (dir.join("merged-copy/trials.csv"), dir.join("whole/trials.csv"));
+    let (a, b) = (
+        dir.join("merged-copy/trials.csv"),
+        dir.join("whole/trials.csv"),
+    );
     assert!(read(&a) == read(&b));
     std::fs::write(&copied_robot, commented(&read(&copied_robot))).unwrap();
     shard(&dir, path_arg(&from_copy), &["--trials", "4"], 1);

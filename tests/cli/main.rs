@@ -79,3 +79,4 @@ mod typed;
 mod validation_kind;
 mod verdicts;
 mod worse;
+mod written_otherwise;

@@ -427,14 +427,21 @@ fn a_scenario_written_another_way_is_guarded_as_the_same() {
     // trial (docs/formats.md § 2.4): `check` compares such a run too.
     let read_another_way = spelled
         .replace("description = \"", "description = \"edited: ")
-        .replace("[calibration]\n", "[report]\nbaseline = \"lm\"\n\n[calibration]\n");
+        .replace(
+            "[calibration]\n",
+            "[report]\nbaseline = \"lm\"\n\n[calibration]\n",
+        );
     let sc = write_scenario(&dir, "described", &read_another_way);
     let c = dir.join("c");
     calbench_ok(&[&["run", path_arg(&sc)][..], &args, &[path_arg(&c)]].concat());
     assert_eq!(read(&a.join("trials.csv")), read(&c.join("trials.csv")));
     let summary = c.join("summary.json");
     let o = calbench(&["check", path_arg(&summary), "--baseline", path_arg(&base)]);
-    assert!(text(&o).contains("no regression beyond tolerance"), "{}", text(&o));
+    assert!(
+        text(&o).contains("no regression beyond tolerance"),
+        "{}",
+        text(&o)
+    );
     let db = dir.join("spelled.sqlite");
     assert!(record(&a, &db, "1.0.0").status.success());
     let worse = planted(&b, &dir, "worse", 2.0);

@@ -91,7 +91,10 @@ fn a_full_pose_validation_of_a_position_calibration_is_refused() {
         let rms = r["rms_residual_mm"].as_f64().unwrap();
         match data == &pose_cal {
             true => assert!(rms > positions * 1.001, "{name}: {rms} {positions}"),
-            false => assert!((rms - positions).abs() <= 1e-12 * rms, "{name}: {rms} {positions}"),
+            false => assert!(
+                (rms - positions).abs() <= 1e-12 * rms,
+                "{name}: {rms} {positions}"
+            ),
         }
     }
 }
