@@ -231,6 +231,17 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         &OUTPUTS
     };
     super::guard_out(&args.out, outputs, super::identify_inputs(args))?;
+    if args.export.contains(&Export::UrYaml) && calbench::robot::urdf::is_urdf(&args.robot) {
+        return Err(Error::option(
+            Opt::Export,
+            "ur-yaml writes the robot's own DH frames, and a URDF's joints are read into DH \
+             frames of calbench's choosing, not UR's (the UR10 example's: joint 1 turned by \
+             180°, the last link's offset in the tool): a UR driver would read another arm; \
+             export ur-yaml with a robot file in UR's DH frames (examples/ipa-ur10/ur10.toml), \
+             or use robot.urdf",
+        )
+        .into());
+    }
     let nominal = args.chain.load(&args.robot)?;
     let (data, data_lines) = if kind {
         (

@@ -252,6 +252,22 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
         &d.join("y"),
     ));
     assert!(!bad.status.success());
+    // Nor of a URDF robot, read into DH frames that are not UR's: from the UR10's URDF the
+    // file described another arm (joint 1 turned by 180°, d6 in the tool), 176 mm apart.
+    let urdf = ex("ur10.urdf");
+    let o = calbench(&lm_args(
+        &urdf,
+        &data,
+        &["--export", "ur-yaml"],
+        &d.join("urdf-yaml"),
+    ));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("a URDF's joints are read into DH frames of calbench's choosing, not UR's"),
+        "{err}"
+    );
+    assert!(!d.join("urdf-yaml").exists());
 }
 
 #[test]
