@@ -7,7 +7,9 @@
 
 use std::path::Path;
 
-use crate::common::{calbench, load_json, path_arg, read, root, tmp_dir};
+use crate::common::{
+    calbench, calbench_ok, load_json, path_arg, read, root, tmp_dir, ur10_example, ur10_positions,
+};
 
 /// `file` without its orientation columns, written to `to`.
 fn positions_of(file: &Path, to: &Path) {
@@ -97,4 +99,41 @@ fn a_full_pose_validation_of_a_position_calibration_is_refused() {
             ),
         }
     }
+}
+
+/// `residuals.csv` under `--holdout 3/10` counts the calibration rows (docs/formats.md § 7.6):
+/// it is the file of the same identification on the rows left after the held-out ones, cut
+/// from the data by hand and validated on the rest with `--validate`; its row 7 is the data's
+/// row 10.
+#[test]
+fn residual_rows_under_a_holdout_count_the_calibration_rows() {
+    let d = tmp_dir("cli-holdout-rows");
+    let data = ur10_positions(&d);
+    let text = read(&data);
+    let (head, rows) = text.split_once('\n').unwrap();
+    let part = |held: bool| -> String {
+        let kept = rows
+            .lines()
+            .enumerate()
+            .filter(|(i, _)| (i % 10 >= 7) == held);
+        let lines: Vec<&str> = kept.map(|(_, l)| l).collect();
+        format!("{head}\n{}\n", lines.join("\n"))
+    };
+    let (cal, val) = (d.join("cal.csv"), d.join("val.csv"));
+    std::fs::write(&cal, part(false)).unwrap();
+    std::fs::write(&val, part(true)).unwrap();
+    let robot = ur10_example("ur10.toml");
+    let identify = |data: &Path, extra: &[&str], out: &str| {
+        let out = d.join(out);
+        let mut args = vec!["identify", "--robot", &robot, "--data", path_arg(data)];
+        args.extend(extra);
+        args.extend(["--method", "lm", "--out", path_arg(&out)]);
+        calbench_ok(&args);
+        read(&out.join("residuals.csv"))
+    };
+    let held = identify(&data, &["--holdout", "3/10"], "held");
+    let cut = identify(&cal, &["--validate", path_arg(&val)], "cut");
+    assert_eq!(held, cut);
+    assert_eq!(held.lines().count(), 1 + 140);
+    assert!(held.lines().nth(8).unwrap().starts_with("7,"));
 }
