@@ -54,6 +54,11 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
             .into_iter()
             .chain(beside.iter().map(PathBuf::as_path)),
     )?;
+    if let Some(e) =
+        calbench::results::a_shard(&args.run, "write the baseline of the merged folder")
+    {
+        return Err(e.into());
+    }
     let side = Side::read(&args.run)?;
     let Some(trials) = &side.trials else {
         return Err(Error::file(

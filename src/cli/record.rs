@@ -93,17 +93,7 @@ impl RecordFlags {
             return Ok(Some(Target::Open(Db::open(&path, true)?)));
         }
         // The folders to create for it must not meet a file on the way.
-        let mut up = path.parent();
-        while let Some(p) = up.filter(|p| !p.as_os_str().is_empty()) {
-            if p.exists() {
-                if !p.is_dir() {
-                    let why = format!("cannot be created: {} is not a folder", p.display());
-                    return Err(calbench::Error::file(&path, "database", why).into());
-                }
-                break;
-            }
-            up = p.parent();
-        }
+        Db::creatable(&path)?;
         Ok(Some(Target::New(path)))
     }
 

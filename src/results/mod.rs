@@ -17,6 +17,7 @@ pub mod history;
 mod identified;
 pub mod provenance;
 mod reader;
+pub use reader::a_shard;
 mod whole;
 
 use std::path::{Path, PathBuf};
@@ -257,6 +258,23 @@ fn unchanging(path: &Path, bad: impl Fn(rusqlite::Error) -> Error) -> Result<Con
 }
 
 impl Db {
+    /// Refuses, naming `path` and its key `database`, a database that cannot be created
+    /// because a folder to hold it is a file.
+    pub fn creatable(path: &Path) -> Result<()> {
+        let mut up = path.parent();
+        while let Some(p) = up.filter(|p| !p.as_os_str().is_empty()) {
+            if p.exists() {
+                if !p.is_dir() {
+                    let why = format!("cannot be created: {} is not a folder", p.display());
+                    return Err(Error::file(path, "database", why));
+                }
+                break;
+            }
+            up = p.parent();
+        }
+        Ok(())
+    }
+
     /// Opens the database at `path`. With `create` (the commands that record) it is opened
     /// for writing, created with its folder when absent, put in write-ahead-log mode (readers
     /// never block the writer) and migrated to [`SCHEMA_VERSION`] in one immediate
@@ -291,6 +309,7 @@ impl Db {
                     "does not exist; record results first (`calbench record DIR`)",
                 ));
             }
+            Db::creatable(path)?;
             if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
                 std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
             }

@@ -46,11 +46,8 @@ impl Record {
                 ),
             ));
         }
-        if dir.join("shard.json").is_file() {
-            let why = "is a shard of a run (shard.json), a part that holds no results of its \
-                       own: merge the run's shards first (`calbench merge SHARD… --out DIR`, \
-                       or `merge --record`) and record the merged folder";
-            return Err(Error::file(dir, "folder", why));
+        if let Some(e) = a_shard(dir, "record the merged folder") {
+            return Err(e);
         }
         Err(Error::file(
             dir,
@@ -59,4 +56,17 @@ impl Record {
              task.json (task); nothing to record",
         ))
     }
+}
+
+/// The refusal of the folder `dir` of a shard (it holds `shard.json`) where a whole run's is
+/// taken, `then` saying what to do with the merged folder; `None` for another folder.
+pub fn a_shard(dir: &Path, then: &str) -> Option<Error> {
+    dir.join("shard.json").is_file().then(|| {
+        let why = format!(
+            "is a shard of a run (shard.json), a part that holds no results of its own: merge \
+             the run's shards first (`calbench merge SHARD… --out DIR`, or `merge --record`) \
+             and {then}"
+        );
+        Error::file(dir, "folder", why)
+    })
 }

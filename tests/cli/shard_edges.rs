@@ -162,6 +162,7 @@ fn a_refused_command_with_record_creates_no_database() {
     one_line_naming(&err, &through, &["database", "is not a folder"]);
     assert!(!out.exists(), "the run ran before its database was refused");
     let [a0, a1] = two_shards(&dir);
+
     let err = refused(&["record", path_arg(&a0), "--db", path_arg(&db)]);
     one_line_naming(
         &err,
@@ -181,6 +182,26 @@ fn a_refused_command_with_record_creates_no_database() {
         path_arg(&db),
     ]);
     assert!(db.is_file(), "the merge recorded nothing");
+    // `baseline` of a shard says what it is, as `record` does, where it had said that its
+    // summary.json did not exist.
+    let err = refused(&[
+        "baseline",
+        path_arg(&a0),
+        "--out",
+        path_arg(&dir.join("b.json")),
+    ]);
+    one_line_naming(
+        &err,
+        &a0,
+        &["is a shard of a run", "the baseline of the merged folder"],
+    );
+    // `record` says so as `run --record` does, where it had said "File exists".
+    let err = refused(&["record", path_arg(&merged), "--db", path_arg(&through)]);
+    one_line_naming(
+        &err,
+        &through,
+        &["database", "cannot be created: ", "is not a folder"],
+    );
 }
 
 /// `text` with `extra` inserted before its line `n` (from 0).
