@@ -104,7 +104,7 @@ pub fn settings_apart(a: &Side, b: &Side) -> Result<Vec<String>> {
 const NOT_THE_STUDY: [&str; 5] = ["seed", "trials", "description", "claims", "report"];
 
 /// What two scenarios as run (canonical texts) set differently, other than the keys that
-/// change no trial ([`NOT_THE_STUDY`]): each setting as `key: A → B` by its dotted key
+/// change no trial (`NOT_THE_STUDY`): each setting as `key: A → B` by its dotted key
 /// (`calibration.count: 40 → 25`, `methods[1].name: "igg3" → "ridge"`, `(none)` where one
 /// lacks it), in the tables' order; empty for one study. One study is one effect
 /// ([`effect`]): settings written another way (`2500` for `2500.0`, a default written out)

@@ -33,9 +33,8 @@ use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
 use crate::report::guard::{alive, host};
 use crate::report::MadeFolders;
-use crate::runner::shard::{
-    one_effect, scenario_as_run, settings_difference, trials_as_run, FormatOnly,
-};
+use crate::runner::as_run::{one_effect, scenario_as_run, settings_difference, trials_as_run};
+use crate::runner::shard::FormatOnly;
 use crate::study::inputs::{self, Input};
 use crate::study::kind::AnyScenario;
 use crate::study::records::{encode, RunId, Verifier};

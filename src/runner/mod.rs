@@ -5,6 +5,7 @@
 //! [`crate::study`] (the scenario, one trial, the statistics, the record format) and
 //! [`crate::report`] (the files), and nothing below it imports it.
 
+mod as_run;
 pub mod cells;
 pub mod checkpoint;
 pub mod resume;
