@@ -89,26 +89,35 @@ pub fn undetermined_error(
     }
     let (undetermined, groups) = names_and_groups(&a);
     let rows = data.len() * data.measure().rows();
-    let measure = if rows < params.1 {
-        format!(
-            "{} poses give {rows} readings for {} parameters: measure at least {} poses",
-            data.len(),
-            params.1,
-            params.1.div_ceil(data.measure().rows())
-        )
-    } else {
-        "Measure poses that move every joint".to_string()
-    };
     let msg = format!(
         "the poses determine only {} of the {} parameters (rank {}; undetermined: {}; \
-         dependent groups: {}); {ended}. {measure}, or pass ",
+         dependent groups: {}); {ended}. ",
         a.rank,
         params.1,
         c.identified.rank.unwrap_or(a.rank),
         undetermined,
         groups,
     );
-    Error::file(source, "data", allowing(msg, Opt::AllowRankDeficient))
+    let said = if rows < params.1 {
+        Said::from(format!(
+            "{msg}{} poses give {rows} readings for {} parameters: measure at least {} poses, \
+             or pass ",
+            data.len(),
+            params.1,
+            params.1.div_ceil(data.measure().rows())
+        ))
+    } else {
+        // Poses that do not tell the undetermined apart from their groups, or a robot whose
+        // groups no poses tell apart well (axes nearly parallel, as a calibrated arm's are):
+        // held at their values, the rest is determined.
+        let fixed = undetermined.replace(' ', ",");
+        Said::from(format!(
+            "{msg}Measure poses that move every joint, hold them with "
+        ))
+        .name(Opt::Fix)
+        .text(format!(" {fixed}, or pass "))
+    };
+    Error::file(source, "data", said.on(Opt::AllowRankDeficient))
 }
 
 /// `msg` followed by how the option `allow` is turned on.

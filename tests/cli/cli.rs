@@ -161,6 +161,26 @@ fn identify_refuses_data_that_do_not_determine_the_parameters() {
             err.contains("joint1.csv") && err.contains("undetermined") && err.contains("theta2"),
             "{method}: {err}"
         );
+        // The undetermined parameters, as `--fix` takes them, hold the rest determined.
+        let fix = err
+            .split("hold them with --fix ")
+            .nth(1)
+            .and_then(|t| t.split(", or pass").next());
+        let fix = fix.unwrap_or_else(|| panic!("{method}: no --fix offered: {err}"));
+        let held = dir.join(format!("{method}-held"));
+        let args = ["identify", "--robot", "irb2600", "--data", path_arg(&file)];
+        let o = calbench(
+            &[
+                &args[..],
+                &["--method", method, "--fix", fix, "--out", path_arg(&held)],
+            ]
+            .concat(),
+        );
+        assert!(
+            o.status.success(),
+            "{method} --fix {fix}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
         assert!(!out.exists(), "{method} wrote output");
     }
     let out = dir.join("allowed");
