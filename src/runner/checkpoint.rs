@@ -253,9 +253,9 @@ impl Checkpoint {
             }
             // Settings written otherwise (`2500` for `2500.0`, a default written out) set the
             // same: the run goes on as its checkpoint's text wrote them.
-            let now = g.settings()?;
-            if let Some((key, had, now)) = settings_difference(&meta.settings, &now)
-                .filter(|_| !one_effect(&meta.settings, &now))
+            let given = g.settings()?;
+            if let Some((key, had, now)) = settings_difference(&meta.settings, &given)
+                .filter(|_| !one_effect(&meta.settings, &given))
             {
                 return Err(refuse(&format!("`{key}`"), had, now));
             }

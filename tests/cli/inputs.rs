@@ -150,12 +150,8 @@ fn shards_started_by_other_paths_to_the_same_files_merge() {
     std::fs::write(&copied_robot, commented(&read(&copied_robot))).unwrap();
     shard(&dir, path_arg(&from_copy), &["--trials", "4"], 1);
     let o = in_folder(&dir, &["merge", "sh/0", "sh/1", "--out", "refused"]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("are shards of different runs: files read") && err.contains("SHA-256"),
-        "{err}"
-    );
+    let want = ["are shards of different runs: files read", "SHA-256"];
+    refused(&o, Path::new("sh/0"), &want);
     assert!(!dir.join("refused").exists());
 }
 

@@ -7,7 +7,9 @@
 
 use std::path::Path;
 
-use crate::common::{bin, calbench_ok, kill_once_checkpointed, path_arg, read, root, tmp_dir};
+use crate::common::{
+    bin, calbench_ok, kill_once_checkpointed, path_arg, read, refused, root, tmp_dir,
+};
 
 /// The guard's scenario with the tracker's pose written in integers, in `dir`.
 fn written_otherwise(dir: &Path) -> std::path::PathBuf {
@@ -61,14 +63,15 @@ fn a_shard_of_the_scenario_written_otherwise_is_asked_for_again() {
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
     let o = in_dir(&["merge", "sh/0", "sh/1", "--out", "merged"]);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("write `tracker.pose` otherwise")
-            && err.contains("they set the same")
-            && err.contains("run sh/1 again from the scenario sh/0 ran"),
-        "{err}"
+    let err = refused(
+        &o,
+        &[
+            "write `tracker.pose` otherwise",
+            "they set the same",
+            "run sh/1 again from the scenario sh/0 ran",
+        ],
     );
+    assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(!dir.join("merged").exists());
     // Shard 1 missing, merged from another folder: the scenario path shard 0 was started
     // with is relative to its own folder.
@@ -79,13 +82,12 @@ fn a_shard_of_the_scenario_written_otherwise_is_asked_for_again() {
         .args(["merge", "../sh/0", "--out", "merged"])
         .output()
         .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(
-        err.contains("calbench run scen/guard.toml --trials 4 --seed 42 --shard 1/2 --out ../sh/1")
-            && err.contains(
-                "(from the folder the shards were run in: scen/guard.toml is relative to it)"
-            ),
-        "{err}"
+    let err = refused(
+        &o,
+        &[
+            "calbench run scen/guard.toml --trials 4 --seed 42 --shard 1/2 --out ../sh/1",
+            "(from the folder the shards were run in: scen/guard.toml is relative to it)",
+        ],
     );
+    assert_eq!(o.status.code(), Some(1), "{err}");
 }
