@@ -61,7 +61,15 @@ enum Command {
 }
 
 fn main() {
-    let cli = Cli::parse();
+    // clap's refusal repeats the value it refuses: printed escaped, as every error is, so that
+    // a control character in it (`--label $'v1\u{202e}'`) does not reach the terminal raw.
+    let cli = Cli::try_parse().unwrap_or_else(|e| match e.use_stderr() {
+        false => e.exit(),
+        true => {
+            eprint!("{}", cli::for_terminal(&e.to_string()));
+            std::process::exit(e.exit_code())
+        }
+    });
     if let Err(e) = calbench::numeric::simd_forced_scalar() {
         eprintln!("error: {e}");
         std::process::exit(1);

@@ -440,11 +440,15 @@ fn check_records<T: DeserializeOwned>(path: &Path, meta: &Meta, mut check: Verif
         // A record cut at its CR is refused, by the check below, as a CR LF line.
         if !whole && text.last() != Some(&b'\r') {
             let why = match cut {
-                true => "the file ends inside this record: it was cut short".to_string(),
+                true => format!(
+                    "the file ends inside the record {}: it was cut short",
+                    check.expected()
+                ),
                 false => format!(
-                    "the {} bytes that checkpoint.json counts end inside a record: it was \
-                     altered",
-                    meta.bytes
+                    "the {} bytes that checkpoint.json counts end inside the record {}: it \
+                     was altered",
+                    meta.bytes,
+                    check.expected()
                 ),
             };
             return Err(Error::file(path, at, why));

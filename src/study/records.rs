@@ -150,7 +150,7 @@ impl Verifier {
 
     /// Where the line being read stands: `where trial I was expected`, or after the last
     /// record these records hold (a line appended).
-    fn expected(&self) -> String {
+    pub(crate) fn expected(&self) -> String {
         match self.next < self.end {
             true => format!("where {} was expected", self.trial(self.next)),
             false => {
@@ -238,7 +238,8 @@ impl Verifier {
         }
         if u > self.next {
             return Err(self.err(format!(
-                "{} where {} was expected: the records from {} are missing",
+                "{} where {} was expected: the records from {} are missing, or out of \
+                 order (a run writes them in order)",
                 self.trial(u),
                 self.trial(self.next),
                 self.trial(self.next)
@@ -421,6 +422,13 @@ mod tests {
         let mut twice = lines.clone();
         twice.insert(2, lines[1].clone());
         refused(id, &twice, &["line 3", "trial 1 again", "duplicated"]);
+        let mut swapped = lines.clone();
+        swapped.swap(1, 2);
+        refused(
+            id,
+            &swapped,
+            &["line 2", "trial 2 where trial 1", "out of order"],
+        );
         let mut cut = lines.clone();
         cut[3] = cut[3][..cut[3].len() - 8].to_string();
         refused(id, &cut, &["line 4", "trial 3"]);

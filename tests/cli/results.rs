@@ -437,6 +437,11 @@ fn a_database_of_a_newer_schema_or_a_folder_of_nothing_is_refused() {
                 !o.status.success() && err.contains("without control characters"),
                 "{flag} {name:?}: {err}"
             );
+            // The refusal repeats the value escaped, never the character itself.
+            assert!(
+                !err.contains(['\u{1b}', '\u{202e}']),
+                "{flag} {name:?}: {err:?}"
+            );
         }
     }
     assert!(!z.exists());

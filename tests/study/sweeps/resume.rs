@@ -142,7 +142,7 @@ fn refused_checkpoints_stay_as_they_were(dir: &Path, meta: &Path) {
             records[..bytes / 2].to_string(),
             json.clone(),
             "records.txt",
-            &["cut short"],
+            &["cut short", "inside the record where trial"],
         ),
         // `done` of at least 256 raised by a leading 1 is more than the share's 1200 trials.
         (
