@@ -60,6 +60,13 @@ pub fn baseline(args: &BaselineArgs) -> Result<()> {
         return Err(e.into());
     }
     let side = Side::read(&args.run)?;
+    // `check` refuses a baseline of no entries: nothing is written that it would refuse.
+    if side.summary.results.is_empty() {
+        let why = "is empty: the summary has no entries, so a baseline of it guards nothing";
+        return Err(Error::file(&side.path, "results", why)
+            .at_json_key_line()
+            .into());
+    }
     let Some(trials) = &side.trials else {
         return Err(Error::file(
             &side.path,

@@ -3,6 +3,8 @@
 //! one comment line giving the SHA-256 of that text, so that `calbench record` stores what
 //! ran and refuses a scenario file that differs, and an edited copy is told by its hash.
 
+use std::path::Path;
+
 use crate::analysis::regression::Side;
 use crate::calibrate::task::sha256::sha256_hex;
 use crate::error::{Error, Result};
@@ -72,6 +74,10 @@ pub fn beside(summary: &std::path::Path) -> Result<Option<String>> {
         .parent()
         .unwrap_or(std::path::Path::new("."))
         .join(NAME);
+    if file.is_dir() {
+        let why = "is a folder, where a run's scenario.toml is the file of the scenario it ran";
+        return Err(Error::io(&file, std::io::Error::other(why)));
+    }
     if !file.is_file() {
         return Ok(None);
     }
@@ -83,10 +89,59 @@ pub fn beside(summary: &std::path::Path) -> Result<Option<String>> {
 /// ([`Side::scenario`]), else the `scenario.toml` beside its summary ([`beside`]); `None`
 /// when neither says.
 pub fn ran(side: &Side) -> Result<Option<String>> {
-    match &side.scenario {
-        Some(s) => Ok(Some(s.clone())),
-        None => beside(&side.path),
+    if let Some(s) = &side.scenario {
+        return Ok(Some(s.clone()));
     }
+    let Some(text) = beside(&side.path)? else {
+        return Ok(None);
+    };
+    // A summary of another run than the scenario.toml beside it: one of the two was edited.
+    let own: toml::Table = crate::error::toml_keys(&side.path.with_file_name(NAME), &text)?;
+    let s = &side.summary;
+    same_run(&side.path, (&s.scenario, s.trials, s.seed), &own)?;
+    Ok(Some(text))
+}
+
+/// Refuses, naming the key of the `summary` file and its line, a summary whose
+/// scenario name, trials or seed (`run`; a missing one is not compared) are not those of the
+/// scenario the `scenario.toml` beside it says was run (`own`, its table as run: `name`,
+/// `trials` and `seed` at its top, the last two absent only from a Monte-Carlo study that
+/// ran with their defaults): the summary of another run.
+pub fn same_run(
+    summary_file: &Path,
+    (name, trials, seed): (&str, Option<usize>, Option<u64>),
+    own: &toml::Table,
+) -> Result<()> {
+    use crate::study::scenario::{DEFAULT_SEED, DEFAULT_TRIALS};
+    let shown = |key: &str, default: String| match own.get(key) {
+        Some(toml::Value::String(s)) => s.clone(),
+        Some(v) => v.to_string(),
+        None => default,
+    };
+    let said = [
+        ("scenario", Some(name.to_string()), shown("name", "".into())),
+        (
+            "trials",
+            trials.map(|t| t.to_string()),
+            shown("trials", DEFAULT_TRIALS.to_string()),
+        ),
+        (
+            "seed",
+            seed.map(|s| s.to_string()),
+            shown("seed", DEFAULT_SEED.to_string()),
+        ),
+    ];
+    for (key, summary, ran) in said {
+        if let Some(summary) = summary.filter(|s| *s != ran) {
+            let msg = format!(
+                "is {summary}, but {} (the scenario as run) has {key} {ran}: the summary is \
+                 not of the run beside it",
+                summary_file.with_file_name(NAME).display()
+            );
+            return Err(Error::file(summary_file, key, msg).at_json_key_line());
+        }
+    }
+    Ok(())
 }
 
 /// What the runs of `a` and `b` ran differently ([`differences`] of [`ran`]); empty when

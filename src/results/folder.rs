@@ -488,7 +488,7 @@ pub(super) fn scenario_as_run(
         // Its name, trials and seed, read from its text alone: its other settings may name
         // files by paths relative to the scenario's own folder, which the run folder is not.
         let own: toml::Table = crate::error::toml_keys(&ran, &text)?;
-        same_run(dir, (name, trials, seed), &own)?;
+        scenario_file::same_run(&dir.join("summary.json"), (name, trials, seed), &own)?;
         if let Some(file) = scenario {
             let other = sha256_hex(given(file)?.settings()?.as_bytes());
             if other != hash {
@@ -525,48 +525,6 @@ pub(super) fn scenario_as_run(
     let sc = given(&file)?;
     let named = (sc.name().to_string(), Some(sc.seed()), Some(sc.trials()));
     Ok((sc.settings()?, named))
-}
-
-/// Refuses, naming the key of the folder `dir`'s `summary.json` and its line, a summary whose
-/// scenario name, trials or seed (`run`; a missing one is not compared) are not those of the
-/// scenario the folder's `scenario.toml` says was run (`own`, its table as run: `name`,
-/// `trials` and `seed` at its top, the last two absent only from a Monte-Carlo study that
-/// ran with their defaults): the summary of another run.
-fn same_run(
-    dir: &Path,
-    (name, trials, seed): (&str, Option<usize>, Option<u64>),
-    own: &toml::Table,
-) -> Result<()> {
-    use crate::study::scenario::{DEFAULT_SEED, DEFAULT_TRIALS};
-    let shown = |key: &str, default: String| match own.get(key) {
-        Some(toml::Value::String(s)) => s.clone(),
-        Some(v) => v.to_string(),
-        None => default,
-    };
-    let said = [
-        ("scenario", Some(name.to_string()), shown("name", "".into())),
-        (
-            "trials",
-            trials.map(|t| t.to_string()),
-            shown("trials", DEFAULT_TRIALS.to_string()),
-        ),
-        (
-            "seed",
-            seed.map(|s| s.to_string()),
-            shown("seed", DEFAULT_SEED.to_string()),
-        ),
-    ];
-    for (key, summary, ran) in said {
-        if let Some(summary) = summary.filter(|s| *s != ran) {
-            let msg = format!(
-                "is {summary}, but {} (the scenario as run) has {key} {ran}: the summary is \
-                 not of the run beside it",
-                dir.join(scenario_file::NAME).display()
-            );
-            return Err(Error::file(dir.join("summary.json"), key, msg).at_json_key_line());
-        }
-    }
-    Ok(())
 }
 
 /// Refuses, naming the summary `path`, a run of the scenario `ran` with the seed `ran_seed`

@@ -80,6 +80,28 @@ impl ShardBlock {
     }
 }
 
+/// Refuses, naming `holder` (its `shard.json`), a shard `m` whose `blocks` lack a sweep
+/// point its units run trials of: the reports' view of that point (trial 0's plots) would be
+/// lost without a word.
+fn every_block(m: &ShardMeta, holder: &Path) -> Result<()> {
+    let per = m.trials.max(1) as u64;
+    let (start, end) = m.units;
+    let points = match start < end {
+        true => start / per..(end - 1) / per + 1,
+        false => 0..0,
+    };
+    for p in points {
+        if !m.blocks.iter().any(|b| b.info.index as u64 == p) {
+            let msg = format!(
+                "holds no block of sweep point {p}, whose trials the shard ran (its \
+                 records.txt holds them): the file was altered"
+            );
+            return Err(Error::file(holder, "blocks", msg));
+        }
+    }
+    Ok(())
+}
+
 /// `shard.json`.
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -473,6 +495,7 @@ fn merge_into(dirs: &[PathBuf], out: &Path, reporter: &dyn Reporter) -> Result<M
     let mut infos: Vec<Option<(BlockInfo, Option<Trial0>)>> = Vec::new();
     for (d, m) in &metas {
         let id = m.id();
+        every_block(m, &d.join("shard.json"))?;
         for (k, b) in m.blocks.iter().enumerate() {
             b.check(&id, &d.join("shard.json"), k)?;
             let i = b.info.index;

@@ -118,6 +118,34 @@ fn per_trial_values_of_an_entry_or_figure_the_summary_lacks_are_refused() {
     let want = format!("lost.json: line {line}, {key}: its 3 values give");
     assert!(!ok && said.contains(&want), "{want}: {said}");
     assert!(said.contains("where the summary has none"), "{said}");
+    // So is η, whose figure its per-trial values do not give (it is over each parameter's
+    // determinable trials), when the summary lacks it: by `check` and by `baseline` of a run
+    // folder whose summary.json lost it.
+    let mut doc = load_json(&base);
+    let results = doc["results"].as_array_mut().unwrap();
+    let at = results.iter().position(|e| e["method"] == "ls").unwrap();
+    results[at].as_object_mut().unwrap().remove("eta_mean_pct");
+    written(&dir, "no-eta.json", &doc);
+    let (ok, said) = check(&a, &dir.join("no-eta.json"), &[]);
+    let want = format!("per_trial.entries.{entry}.values.eta_mean_pct: its 3 finite values");
+    assert!(!ok && said.contains(&want), "{want}: {said}");
+    let run = dir.join("no-eta-run");
+    std::fs::create_dir_all(&run).unwrap();
+    for f in ["summary.json", "trials.csv", "scenario.toml"] {
+        std::fs::copy(a.join(f), run.join(f)).unwrap();
+    }
+    let mut doc = load_json(&run.join("summary.json"));
+    let results = doc["results"].as_array_mut().unwrap();
+    let at = results.iter().position(|e| e["method"] == "ls").unwrap();
+    results[at].as_object_mut().unwrap().remove("eta_mean_pct");
+    std::fs::write(run.join("summary.json"), doc.to_string()).unwrap();
+    let out = dir.join("no-eta-base.json");
+    let o = calbench(&["baseline", path_arg(&run), "--out", path_arg(&out)]);
+    let said = String::from_utf8_lossy(&o.stderr);
+    let want = "trials.csv: column eta_mean_pct";
+    assert!(!o.status.success() && said.contains(want), "{want}: {said}");
+    assert!(said.contains("where the summary has none"), "{said}");
+    assert!(!out.exists(), "nothing is written");
 }
 
 #[test]
@@ -222,6 +250,49 @@ fn a_baseline_with_nan_or_nothing_says_what_is_not_json() {
     let (ok, said) = check(&base, &empty, &[]);
     assert!(
         !ok && said.contains("empty.json: line 1: is empty"),
+        "{said}"
+    );
+}
+
+/// `baseline` writes nothing `check` would refuse: a summary of no entries, or one whose
+/// `scenario` is not the scenario its `scenario.toml` ran, is refused naming the key and its
+/// line; and `check` refuses a folder named `scenario.toml`, which it had taken for none.
+#[test]
+fn baseline_and_check_refuse_a_run_folder_edited_by_hand() {
+    let dir = tmp_dir("cli-guard-edits-folder");
+    let (a, _) = three_trials_and_baseline(&dir);
+    let copy = |name: &str, edit: &dyn Fn(&mut Value)| {
+        let run = dir.join(name);
+        std::fs::create_dir_all(&run).unwrap();
+        for f in ["trials.csv", "scenario.toml"] {
+            std::fs::copy(a.join(f), run.join(f)).unwrap();
+        }
+        let mut doc = load_json(&a.join("summary.json"));
+        edit(&mut doc);
+        written(&run, "summary.json", &doc);
+        run
+    };
+    let empty = copy("empty", &|d| d["results"] = Value::Array(Vec::new()));
+    let other = copy("other", &|d| d["scenario"] = "other".into());
+    for (run, want) in [
+        (&empty, "results: is empty: the summary has no entries"),
+        (&other, "scenario: is other, but "),
+    ] {
+        let out = dir.join("b.json");
+        let o = calbench(&["baseline", path_arg(run), "--out", path_arg(&out)]);
+        let said = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && said.contains(want), "{want}: {said}");
+        assert!(said.contains("summary.json: line "), "{said}");
+        let beside = "the summary is not of the run beside it";
+        assert!(run == &empty || said.contains(beside), "{said}");
+        assert!(!out.exists(), "nothing is written");
+    }
+    let folder = copy("folder", &|_| ());
+    std::fs::remove_file(folder.join("scenario.toml")).unwrap();
+    std::fs::create_dir(folder.join("scenario.toml")).unwrap();
+    let (ok, said) = check(&folder, &a.join("summary.json"), &[]);
+    assert!(
+        !ok && said.contains("folder/scenario.toml: is a folder"),
         "{said}"
     );
 }

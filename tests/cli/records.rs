@@ -133,7 +133,8 @@ fn merge_refuses_a_shard_json_whose_blocks_do_not_fit_its_records() {
 /// edited where the records cannot tell (the robot's name, trial 0's first validation error,
 /// which the reports show) or copied from a run of the same name and seed but other settings
 /// is refused naming the file, the block and its checksum, and nothing is written. The sums
-/// computed apart from calbench's code ([`reblocked`]) are the ones it writes.
+/// computed apart from calbench's code ([`reblocked`]) are the ones it writes. So is one whose
+/// blocks were deleted.
 #[test]
 fn merge_refuses_a_shard_json_block_altered_or_of_another_run() {
     let dir = tmp_dir("records-block-sums");
@@ -184,6 +185,14 @@ fn merge_refuses_a_shard_json_block_altered_or_of_another_run() {
         serde_json::to_string_pretty(&copied).unwrap(),
     )];
     refused_merge(&[&a0, &a1], &edit, &["blocks[0]", "another run"]);
+    // Its blocks deleted: the merge had dropped trial 0's plots from report.md without a word.
+    copied["blocks"] = serde_json::json!([]);
+    let edit = [(
+        meta.as_path(),
+        serde_json::to_string_pretty(&copied).unwrap(),
+    )];
+    let want = ["blocks", "no block of sweep point 0", "altered"];
+    refused_merge(&[&a0, &a1], &edit, &want);
 }
 
 /// Shards 0/2 and 1/2 of ci-guard with 4 trials, in `dir/a0` and `dir/a1`.

@@ -340,35 +340,45 @@ fn own_keys(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, S
 }
 
 /// Whether the per-trial values `t` are those behind `summary`'s figures: for each entry and
-/// metric they hold whose figure is the mean over trials (the error statistics and the
-/// parameters' RMSE, root of the mean square; not `eta_mean_pct`, whose figure is over each
-/// parameter's determinable trials), the figure they give ([`figure_of`]) is the summary's.
-/// The entry key, the metric and what differs, where one is not (values of another run, or
-/// edited).
+/// metric they hold, the summary has the figure; and where it is the mean over trials (the
+/// error statistics and the parameters' RMSE, root of the mean square; not `eta_mean_pct`,
+/// whose figure is over each parameter's determinable trials), the figure they give
+/// ([`figure_of`]) is the summary's. The entry key, the metric and what differs, where one is
+/// not (values of another run, or edited).
 fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, String, String)> {
     let over_trials = |metric: &str| {
         Metric::from_key(metric).is_some_and(|m| m.spec().stat.is_some()) || is_rmse(metric)
     };
     for e in &summary.results {
         let entry = trials_key(e, summary);
-        for (metric, _) in entry_metrics(e).into_iter().filter(|(m, _)| over_trials(m)) {
+        for (metric, _) in entry_metrics(e) {
             let Some(values) = t.values.get(&(entry.clone(), metric.clone())) else {
                 continue;
             };
-            if values.is_empty() {
+            let finite = values.values().filter(|v| v.is_finite()).count();
+            if values.is_empty() || !over_trials(&metric) && finite == 0 {
                 continue;
             }
             let given = figure_of(values.values().copied(), &metric);
-            // A figure the summary lacks beside values that give it: a block deleted, which
+            // A figure the summary lacks beside values that give it: a key deleted, which
             // would leave the metric unguarded without a word.
             let Some(figure) = lookup(e, &metric) else {
-                let why = format!(
-                    "its {} values give {metric} {}, where the summary has none",
-                    values.len(),
-                    shown(given)
-                );
+                let why = match over_trials(&metric) {
+                    true => format!(
+                        "its {} values give {metric} {}, where the summary has none",
+                        values.len(),
+                        shown(given)
+                    ),
+                    false => format!(
+                        "its {finite} finite values are behind {metric}, where the summary \
+                         has none"
+                    ),
+                };
                 return Err((entry, metric, why));
             };
+            if !over_trials(&metric) {
+                continue;
+            }
             if !same_figure(given, figure) {
                 let why = format!(
                     "its {} values give {metric} {}, where the summary has {}",
