@@ -506,7 +506,7 @@ def run(
             )
         handle = _calbench.run(
             _scenario(scenario),
-            trials=_count("trials", trials, least=1),
+            trials=_count("trials", trials, least=1, most=_calbench.MAX_TRIALS),
             seed=_count("seed", seed, bits=63),
             threads=_count("threads", threads, least=1),
             methods=methods,
@@ -519,7 +519,7 @@ def run(
     (_calbench.run_whole if whole else _calbench.run_shard)(
         _scenario(scenario),
         _path("out", out, "a folder"),
-        trials=_count("trials", trials, least=1),
+        trials=_count("trials", trials, least=1, most=_calbench.MAX_TRIALS),
         seed=_count("seed", seed, bits=63),
         threads=_count("threads", threads, least=1),
         progress=_flag("progress", progress),

@@ -43,10 +43,11 @@ def _rotations(name, value):
     return _array(name, a, 3)
 
 
-def _count(name, value, least=0, bits=64):
-    """``value`` as a non-negative integer of at most ``bits`` bits (at least ``least``), or
-    None; refused with a SettingError naming ``name`` otherwise (never a bare OverflowError or
-    TypeError). A study's seed has 63 bits: the scenario file's TOML integer holds it."""
+def _count(name, value, least=0, bits=64, most=None):
+    """``value`` as a non-negative integer of at most ``bits`` bits (at least ``least``, at
+    most ``most``), or None; refused with a SettingError naming ``name`` otherwise (never a
+    bare OverflowError or TypeError). A study's seed has 63 bits: the scenario file's TOML
+    integer holds it."""
     if value is None:
         return None
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
@@ -54,6 +55,8 @@ def _count(name, value, least=0, bits=64):
     value = int(value)
     if value < least:
         raise SettingError(f"setting `{name}`: must be a whole number ≥ {least}, got {value}")
+    if most is not None and value > most:
+        raise SettingError(f"setting `{name}`: must be between {least} and {most}, got {value}")
     if value >= 2**bits:
         raise SettingError(f"setting `{name}`: {value} is out of range ({least} to 2^{bits} - 1)")
     return value

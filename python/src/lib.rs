@@ -119,6 +119,8 @@ fn _calbench(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("IoError", py.get_type::<IoError>())?;
     m.add("LimitWarning", py.get_type::<LimitWarning>())?;
     m.add("ConvergenceWarning", py.get_type::<ConvergenceWarning>())?;
+    // The most trials a study runs, so that a count beyond 64 bits is refused with that range.
+    m.add("MAX_TRIALS", calbench::study::scenario::MAX_TRIALS)?;
     m.add_class::<robot::PyRobot>()?;
     m.add_class::<study::PyProblem>()?;
     m.add_class::<study::PyRun>()?;

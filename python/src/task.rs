@@ -39,18 +39,18 @@ fn task_err(e: calbench::Error) -> PyErr {
 #[pyo3(signature = (task, method, models = None, name = None, out = None, options = None))]
 pub(crate) fn task<'py>(
     py: Python<'py>,
-    task: &str,
+    task: PathBuf,
     method: Bound<'py, PyAny>,
     models: Option<Vec<String>>,
     name: Option<String>,
     out: Option<PathBuf>,
     options: Option<Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    if task.is_empty() {
+    if task.as_os_str().is_empty() {
         let why = "is empty: give a task's name (`tasks/NAME.toml`) or the path of a task file";
         return Err(setting("task", why));
     }
-    let path = task_file(task).map_err(task_err)?;
+    let path = task_file(&task).map_err(task_err)?;
     if let Some(t) = load_socket_task(&path).map_err(task_err)? {
         return socket_task(py, &t, (method, options.as_ref()), models, out);
     }

@@ -34,6 +34,12 @@ def test_study_write_into_home_is_refused_and_writes_nothing(root, tmp_path, mon
     # An empty path is not the root folder (it had been refused as one).
     with pytest.raises(calbench.SettingError, match="`out`: is empty"):
         study.write("")
+    # A NUL byte, which no file name holds: the argument's, where the refusal was an IoError
+    # naming the outputs' temporary folder.
+    with pytest.raises(calbench.SettingError, match=r'`out`: "a\\0b" holds a NUL byte') as e:
+        study.write("a\x00b")
+    assert "partial" not in str(e.value)
+    assert not os.path.exists("a")
     # An empty input path is refused naming its argument, where the refusal named none.
     robot = calbench.Robot.builtin("irb2600")
     for call, key in [(lambda: calbench.identify(robot, data=""), "data"),

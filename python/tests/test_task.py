@@ -1,6 +1,7 @@
 """``calbench.task``: a Python method enters a real-data task's open division through the
 identify pipeline, scored on the task's validation rows like the command line's entries."""
 import json
+import os
 import warnings
 
 import numpy as np
@@ -281,3 +282,21 @@ def test_an_out_holding_the_tasks_robot_under_a_written_name_is_refused(root, tm
         calbench.task(task, "lm", models=["kinematic"], out=tmp_path)
     assert robot.read_bytes() == before
     assert sorted(p.name for p in tmp_path.iterdir()) == ["robot.toml", "t.toml"]
+
+
+def test_a_task_file_at_a_path_utf8_cannot_hold_is_read_as_any_path(root, tmp_path):
+    """A task file under a folder whose name is not UTF-8 (``os.listdir`` gives such bytes as
+    lone surrogates) is read as ``run``'s and ``identify``'s paths are, where ``calbench.task``
+    raised a bare UnicodeEncodeError; one that is not there is a calbench.Error."""
+    text = (root / "tasks" / "barrett-wam.toml").read_text().replace('"../', f'"{root}/')
+    mapping = json.dumps(str(root / "tasks" / "barrett-wam.mapping.toml"))
+    text = text.replace('"barrett-wam.mapping.toml"', mapping)
+    odd = tmp_path / os.fsdecode(b"t\xfe")
+    odd.mkdir()
+    (odd / "wam.toml").write_text(text)
+    (tmp_path / "wam.toml").write_text(text)
+    a = calbench.task(odd / "wam.toml", "lm", models=["kinematic"])
+    b = calbench.task(tmp_path / "wam.toml", "lm", models=["kinematic"])
+    assert a["task"]["value"] == b["task"]["value"]
+    with pytest.raises(calbench.Error, match="missing.toml"):
+        calbench.task(os.fspath(odd / "missing.toml"), "lm")

@@ -79,6 +79,13 @@ fn paths<P: AsRef<Path>>(
             "is empty; give the outputs a folder or file name (nothing was written)".into(),
         );
     }
+    // A path from Python may hold a NUL byte, which no file name can: refused as the key's,
+    // where the system's refusal named the temporary folder of the outputs.
+    if out.as_os_str().as_encoded_bytes().contains(&0) {
+        return refuse(format!(
+            "{out:?} holds a NUL byte, which no file or folder name can (nothing was written)"
+        ));
+    }
     let at = resolved(out);
     if at.parent().is_none() {
         return refuse(format!(

@@ -17,7 +17,7 @@ pub mod history;
 mod identified;
 pub mod provenance;
 mod reader;
-pub use reader::a_shard;
+pub use crate::analysis::regression::a_shard;
 mod whole;
 
 use std::path::{Path, PathBuf};

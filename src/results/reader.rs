@@ -6,6 +6,7 @@ use std::path::Path;
 
 use super::folder::{read, scenario_as_run, Kind, RanSummary, Record};
 use super::whole::is_whole;
+use crate::analysis::regression::a_shard;
 use crate::error::{Error, Result};
 
 impl Record {
@@ -56,17 +57,4 @@ impl Record {
              task.json (task); nothing to record",
         ))
     }
-}
-
-/// The refusal of the folder `dir` of a shard (it holds `shard.json`) where a whole run's is
-/// taken, `then` saying what to do with the merged folder; `None` for another folder.
-pub fn a_shard(dir: &Path, then: &str) -> Option<Error> {
-    dir.join("shard.json").is_file().then(|| {
-        let why = format!(
-            "is a shard of a run (shard.json), a part that holds no results of its own: merge \
-             the run's shards first (`calbench merge SHARD… --out DIR`, or `merge --record`) \
-             and {then}"
-        );
-        Error::file(dir, "folder", why)
-    })
 }

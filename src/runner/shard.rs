@@ -237,19 +237,24 @@ pub(crate) struct FormatOnly {
 
 fn read_meta(dir: &Path) -> Result<ShardMeta> {
     let path = dir.join("shard.json");
-    let text = crate::error::read_bounded_text(&path).map_err(|e| {
-        // A shard whose run was killed has no folder yet, only its checkpoint beside it.
-        let msg = if crate::report::checkpoint_folder(dir).is_dir() {
-            format!(
-                "this shard's run did not finish: its checkpoint is there, and `calbench run \
-                 --resume {}` finishes it",
-                dir.display()
-            )
-        } else {
-            format!("not a shard folder of `calbench run --shard` ({e})")
-        };
-        Error::file(dir, "shard.json", msg)
-    })?;
+    // A shard.json that is there but cannot be read is refused as every text file is (one
+    // that is not UTF-8 at its line and byte).
+    let text = match path.is_file() {
+        true => crate::error::read_text(&path),
+        false => crate::error::read_bounded_text(&path).map_err(|e| {
+            // A shard whose run was killed has no folder yet, only its checkpoint beside it.
+            let msg = if crate::report::checkpoint_folder(dir).is_dir() {
+                format!(
+                    "this shard's run did not finish: its checkpoint is there, and \
+                     `calbench run --resume {}` finishes it",
+                    dir.display()
+                )
+            } else {
+                format!("not a shard folder of `calbench run --shard` ({e})")
+            };
+            Error::file(dir, "shard.json", msg)
+        }),
+    }?;
     let v = crate::error::json_value(&path, &text)?;
     let head: FormatOnly = crate::error::json_typed(&v, &path, &text, "shard.json")?;
     if head.format != FORMAT {

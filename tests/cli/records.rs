@@ -511,6 +511,25 @@ fn merge_refuses_altered_settings_naming_shard_json() {
         &[(&m0, unknown)],
         &["shard.json", "unknown field `foo`"],
     );
+    // A byte that is not UTF-8, which was "not a shard folder", naming no line.
+    let own = read(&m0);
+    let mut bytes = own.clone().into_bytes();
+    let at = own.find("\"seconds\"").unwrap() + 2;
+    bytes[at] = 0xFE;
+    std::fs::write(&m0, &bytes).unwrap();
+    let o = calbench(&[
+        "merge",
+        path_arg(&a0),
+        path_arg(&a1),
+        "--out",
+        path_arg(&dir.join("m")),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let line = own[..at].lines().count();
+    let want = format!("shard.json: line {line}: not UTF-8 text: byte");
+    assert!(!o.status.success() && err.contains(&want), "{want}: {err}");
+    assert!(!err.contains("not a shard folder"), "{err}");
+    std::fs::write(&m0, own).unwrap();
     // Of the wrong type or unknown deeper down: named by the key's line and path.
     let text = read(&m0);
     let line = text

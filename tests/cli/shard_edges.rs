@@ -195,6 +195,24 @@ fn a_refused_command_with_record_creates_no_database() {
         &a0,
         &["is a shard of a run", "the baseline of the merged folder"],
     );
+    // So do `compare` and `check`, either side, where they said that its summary.json did not
+    // exist.
+    let whole = path_arg(&merged);
+    let summary = merged.join("summary.json");
+    let cmp = dir.join("cmp");
+    for args in [
+        vec!["compare", whole, path_arg(&a0), "--out", path_arg(&cmp)],
+        vec!["check", path_arg(&summary), "--baseline", path_arg(&a0)],
+        vec!["check", path_arg(&a0), "--baseline", path_arg(&summary)],
+    ] {
+        let err = refused(&args);
+        one_line_naming(
+            &err,
+            &a0,
+            &["is a shard of a run", "give the merged folder"],
+        );
+    }
+    assert!(!cmp.exists());
     // `record` says so as `run --record` does, where it had said "File exists".
     let err = refused(&["record", path_arg(&merged), "--db", path_arg(&through)]);
     one_line_naming(

@@ -369,6 +369,30 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
             && e.contains("has 632"),
         "{e}"
     );
+    // A count above the data file's, with parts that cover the data's rows: the count at its
+    // line, where it was "row 632 is in neither part" at no line.
+    let e = refused(
+        "more",
+        &src,
+        Some("rows 633\ncalibration 0-400\nvalidation 401-631\n"),
+    );
+    assert!(
+        e.contains("more.split: line 1: `rows 633`, but the parts end at row 631")
+            && e.contains("the data file's number of rows"),
+        "{e}"
+    );
+    // A split that is a link to itself: the system's reason, where it was "is not a file".
+    let looped = d.join("loop.split");
+    std::os::unix::fs::symlink(&looped, &looped).unwrap();
+    let text = src.replace(
+        "\"ipa-ur10-series-d.split\"",
+        &format!("\"{}\"", looped.display()),
+    );
+    let e = refused("loop", &text, None);
+    assert!(
+        e.contains("loop.toml: line ") && e.contains("symbolic links"),
+        "{e}"
+    );
     let e = refused(
         "overlap",
         &src,

@@ -193,6 +193,19 @@ pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<(Trials, Option<Stri
     }
 }
 
+/// The refusal of the folder `dir` of a shard (it holds `shard.json`) where a whole run's is
+/// taken, `then` saying what to do with the merged folder; `None` for another folder.
+pub fn a_shard(dir: &Path, then: &str) -> Option<Error> {
+    dir.join("shard.json").is_file().then(|| {
+        let why = format!(
+            "is a shard of a run (shard.json), a part that holds no results of its own: merge \
+             the run's shards first (`calbench merge SHARD… --out DIR`, or `merge --record`) \
+             and {then}"
+        );
+        Error::file(dir, "folder", why)
+    })
+}
+
 /// One side of a comparison: where its summary was read from, the summary, and its
 /// per-trial values ([`trials_of`]).
 pub struct Side {
@@ -226,6 +239,9 @@ impl Side {
     /// summary, and a missing file.
     pub fn read(path: &Path) -> Result<Side> {
         let [file, _] = Side::files(path);
+        if let Some(e) = a_shard(path, "give the merged folder").filter(|_| !file.exists()) {
+            return Err(e);
+        }
         if !file.exists() {
             return Err(Error::io(
                 &file,

@@ -28,7 +28,8 @@ use crate::error::{Error, Result};
 use crate::numeric::Real;
 use crate::study::stats::Entry;
 pub use baseline::{
-    baseline_document, trials_of, unpaired_because, unpaired_entries, Side, Unpaired, Which,
+    a_shard, baseline_document, trials_of, unpaired_because, unpaired_entries, Side, Unpaired,
+    Which,
 };
 use noise::Change;
 pub use noise::{pairable, Status, Trials};

@@ -141,10 +141,11 @@ impl<'a> TaskFile<'a> {
     /// a file.
     pub(super) fn file(&self, key: &str, rel: &str) -> Result<PathBuf> {
         let p = self.dir.join(rel);
-        if p.is_file() {
-            Ok(p)
-        } else {
-            Err(self.bad(key, format!("{} is not a file", p.display())))
+        // Why it is not, where the system says (a link that loops, a folder it may not read).
+        match std::fs::metadata(&p) {
+            Ok(m) if m.is_file() => Ok(p),
+            Ok(_) => Err(self.bad(key, format!("{} is not a file", p.display()))),
+            Err(e) => Err(self.bad(key, format!("{} is not a file ({e})", p.display()))),
         }
     }
 

@@ -262,24 +262,28 @@ pub fn task_option(
 }
 
 /// `NAME` (a task under `tasks/`) or the path of a task file.
-pub fn task_path(name_or_path: &str) -> PathBuf {
-    let p = Path::new(name_or_path);
+pub fn task_path(name_or_path: impl AsRef<Path>) -> PathBuf {
+    let p = name_or_path.as_ref();
     if p.extension().is_some_and(|e| e == "toml") || p.components().count() > 1 {
         p.to_path_buf()
     } else {
-        Path::new("tasks").join(format!("{name_or_path}.toml"))
+        let mut file = p.as_os_str().to_owned();
+        file.push(".toml");
+        Path::new("tasks").join(file)
     }
 }
 
 /// [`task_path`] of a task to run: a name whose file is not under `tasks/` of the current
 /// folder is refused saying where names are looked up (a path is read, and refused, as given).
-pub fn task_file(name_or_path: &str) -> Result<PathBuf> {
-    let path = task_path(name_or_path);
-    if path != Path::new(name_or_path) && !path.is_file() {
+pub fn task_file(name_or_path: impl AsRef<Path>) -> Result<PathBuf> {
+    let given = name_or_path.as_ref();
+    let path = task_path(given);
+    if path != given && !path.is_file() {
         let why = format!(
-            "no task named \"{name_or_path}\": {} is not a file (a task's name is looked up \
+            "no task named \"{}\": {} is not a file (a task's name is looked up \
              under tasks/ of the current folder, which calbench's repository holds: run from \
              its root, or give the task file's path)",
+            given.display(),
             path.display()
         );
         return Err(Error::setting("task", why));

@@ -28,7 +28,7 @@ impl Split {
 
     fn parse(path: &Path, text: &str) -> Result<Split> {
         let at = |line: usize, msg: String| Error::file(path, format!("line {line}"), msg);
-        let mut rows: Option<usize> = None;
+        let mut rows: Option<(usize, usize)> = None;
         // The ranges given so far, disjoint, by first row: (last row, line, calibration).
         // Ranges, not a slot per row: `rows N` may be any number a file can write.
         let mut owner: BTreeMap<usize, (usize, usize, bool)> = BTreeMap::new();
@@ -73,10 +73,10 @@ impl Split {
                             format!("`rows {n}`: a split needs 2 rows or more (one calibrates, one validates)"),
                         ));
                     }
-                    rows = Some(n);
+                    rows = Some((n, line));
                 }
                 "calibration" | "validation" => {
-                    let n = rows.ok_or_else(|| {
+                    let (n, _) = rows.ok_or_else(|| {
                         at(line, "the `rows N` line must come before the rows".into())
                     })?;
                     let (a, b) = match arg.split_once('-') {
@@ -121,7 +121,8 @@ impl Split {
                 }
             }
         }
-        let rows = rows.ok_or_else(|| Error::file(path, "rows", "no `rows N` line"))?;
+        let (rows, rows_line) =
+            rows.ok_or_else(|| Error::file(path, "rows", "no `rows N` line"))?;
         // The ranges are disjoint: they cover every row when each starts where the last ended.
         let mut next = 0;
         let (mut cal, mut val) = (0, 0);
@@ -133,13 +134,24 @@ impl Split {
             *(if c { &mut cal } else { &mut val }) += b + 1 - a;
         }
         if next != rows {
-            return Err(Error::file(
-                path,
-                "rows",
-                format!(
-                    "row {next} is in neither part: every row of the {rows} calibrates or validates"
+            // Every range ends before `next`: the parts stop short of `rows N`, not a gap.
+            let short = owner.range(next..).next().is_none();
+            let missing = match next + 1 == rows {
+                true => format!("row {next} is"),
+                false => format!("rows {next} to {} are", rows - 1),
+            };
+            let why = match short {
+                true => format!(
+                    "`rows {rows}`, but the parts end at row {}: {missing} in neither part \
+                     (is {rows} the data file's number of rows?)",
+                    next.saturating_sub(1),
                 ),
-            ));
+                false => format!(
+                    "row {next} is in neither part: every row of the {rows} calibrates or \
+                     validates"
+                ),
+            };
+            return Err(at(rows_line, why));
         }
         let held = |n: usize| {
             let mut v: Vec<usize> = Vec::new();
@@ -212,7 +224,7 @@ mod tests {
             ),
             (
                 "rows 5\ncalibration 0-2\nvalidation 4\n",
-                &["row 3 is in neither part"],
+                &["line 1", "row 3 is in neither part: every row"],
             ),
             ("rows 3\ncalibration 0-2\n", &["validation: holds no row"]),
             (
@@ -230,7 +242,18 @@ mod tests {
             // A number of rows no data file has is refused as any gap, with no slot per row.
             (
                 "rows 18446744073709551615\ncalibration 0\nvalidation 1\n",
-                &["row 2 is in neither part"],
+                &[
+                    "line 1",
+                    "rows 2 to 18446744073709551614 are in neither part",
+                ],
+            ),
+            // Parts that stop short of `rows N`: the count, at its line, not a gap.
+            (
+                "# c\nrows 6\ncalibration 0-2\nvalidation 3-4\n",
+                &[
+                    "line 2",
+                    "`rows 6`, but the parts end at row 4: row 5 is in neither",
+                ],
             ),
             (
                 "rows 18446744073709551615\ncalibration 0-18446744073709551613\n\
