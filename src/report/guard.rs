@@ -158,7 +158,20 @@ fn guard<P: AsRef<Path>>(
     force: Option<bool>,
 ) -> Result<()> {
     paths(out, key, outputs, inputs)?;
+    let checkpoint = super::checkpoint_folder(out);
     match live_writer(out) {
+        // Forcing passes a number another program took, never the run that is writing.
+        Some(pid) if force == Some(true) && writing(pid, &checkpoint) => Err(Error::setting(
+            key,
+            format!(
+                "{} is the output folder of a run still in progress: process {pid} holds its \
+                 checkpoint's records.txt open ({}), so it is that run, not another program \
+                 that took its number, and --force does not pass it (nothing was written). \
+                 Wait for it or stop it",
+                out.display(),
+                checkpoint.display(),
+            ),
+        )),
         Some(pid) if force != Some(true) => Err(Error::setting(
             key,
             format!(
@@ -182,6 +195,20 @@ fn guard<P: AsRef<Path>>(
 pub fn live_writer(out: &Path) -> Option<u32> {
     let (pid, on_this_host) = writer(out)?;
     (on_this_host && alive(pid)).then_some(pid)
+}
+
+/// Whether process `pid` holds the file `records.txt` of the checkpoint folder `checkpoint`
+/// open (its `/proc/PID/fd` links, where they can be read): the run that writes it, as every
+/// run keeps its records open while it runs. `false` where it cannot be told.
+pub fn writing(pid: u32, checkpoint: &Path) -> bool {
+    let Ok(records) = checkpoint.join("records.txt").canonicalize() else {
+        return false;
+    };
+    let Ok(fds) = std::fs::read_dir(format!("/proc/{pid}/fd")) else {
+        return false;
+    };
+    fds.flatten()
+        .any(|fd| std::fs::read_link(fd.path()).is_ok_and(|l| l == records))
 }
 
 /// The process that the checkpoint beside `out` names, and whether it ran on this host.

@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
-use crate::report::guard::{alive, host};
+use crate::report::guard::{alive, host, writing};
 use crate::report::MadeFolders;
 use crate::runner::as_run::{one_effect, scenario_as_run, settings_difference, trials_as_run};
 use crate::runner::shard::FormatOnly;
@@ -261,16 +261,24 @@ impl Checkpoint {
             }
         }
         precision_in(&path, &meta)?;
-        if !force && meta.host == host() && alive(meta.pid) {
-            return Err(Error::file(
-                &path,
-                "pid",
-                format!(
-                    "the run that writes this checkpoint is still running (process {} on this \
-                     host): stop it first, or give --force if that process is not calbench",
-                    meta.pid
-                ),
-            ));
+        if meta.host == host() && alive(meta.pid) {
+            // Forcing passes a number another program took, never the run that is writing.
+            let pid = meta.pid;
+            let why = match (force, writing(pid, &dir)) {
+                (_, true) => Some(format!(
+                    "process {pid} holds its records.txt open: stop it first (--force passes \
+                     only a number another program took)"
+                )),
+                (false, false) => Some(format!(
+                    "process {pid} on this host: stop it first, or give --force if that \
+                     process is not calbench"
+                )),
+                (true, false) => None,
+            };
+            if let Some(why) = why {
+                let msg = format!("the run that writes this checkpoint is still running ({why})");
+                return Err(Error::file(&path, "pid", msg));
+            }
         }
         let records = dir.join("records.txt");
         let units = units(&path, &scenario, &meta)?;

@@ -11,7 +11,7 @@ fn a_run_into_the_folder_of_a_live_run_is_refused_and_the_live_run_is_unharmed()
     let sc = path_arg(&sc);
     let (live, alone) = (d.join("live"), d.join("alone"));
     let meta = d.join(".live.checkpoint").join("checkpoint.json");
-    let args = ["run", sc, "--trials", "48", "--threads", "1", "--out"];
+    let args = ["run", sc, "--trials", "2000", "--threads", "1", "--out"];
     let mut child = bin()
         .args(args)
         .arg(&live)
@@ -39,6 +39,31 @@ fn a_run_into_the_folder_of_a_live_run_is_refused_and_the_live_run_is_unharmed()
         let forcing = second[0] == "run";
         assert_eq!(err.contains("forcing passes"), forcing, "{second:?}: {err}");
     }
+    // Forcing passes a number another program took, never the run itself, which holds its
+    // records open: a forced run had removed its checkpoint and killed it ("No such file").
+    let forced = [
+        "run",
+        sc,
+        "--trials",
+        "2",
+        "--force",
+        "--out",
+        path_arg(&live),
+    ];
+    let resumed = ["run", "--resume", path_arg(&live), "--force"];
+    for (second, says) in [
+        (&forced[..], "--force does not pass it"),
+        (&resumed[..], "--force does not pass it"),
+    ] {
+        let o = calbench(second);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{second:?}: {err}");
+        assert!(
+            err.contains(&format!("process {pid}")) && err.contains(says),
+            "{err}"
+        );
+    }
+    assert!(meta.exists(), "the live run's checkpoint is left");
     assert!(child.wait().unwrap().success(), "the live run finishes");
     calbench_ok(&[&args[..], &[path_arg(&alone)]].concat());
     for f in ["summary.json", "trials.csv"] {
