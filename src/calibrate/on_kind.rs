@@ -88,31 +88,11 @@ pub fn identify_kind(
         Error::Setting { msg, .. } => Error::file(source, "data", msg),
         e => Error::file(source, "data", e.to_string()),
     };
-    let mut data = file.data.clone();
-    let chain = nominal.chain();
-    let p: Vec<Vec3> = file.qs.iter().map(|q| chain.fk(q).pos).collect();
-    choose_plane_axes(&mut data, &p);
+    let (data, registration, p) = prepared(nominal, file, register).map_err(in_file)?;
     let targets = matches!(data.instrument, Instrument::Targets(_));
-    let registration = if targets && register {
-        Some(register_targets(nominal, &file.qs, &mut data).map_err(in_file)?)
-    } else {
-        None
-    };
     let mut candidates: Vec<Param> = match chosen {
         Chosen::Given(ps, _) => ps.to_vec(),
-        Chosen::Identifiable => {
-            // Targets in the base frame (`known`) leave the base as it is, as the tracker's.
-            let all: Vec<Param> = nominal
-                .params()
-                .into_iter()
-                .filter(|p| !p.is_compliance())
-                .filter(|p| !(targets && !register && matches!(p, Param::Base(_))))
-                .collect();
-            let first = |p: &Param| matches!(p, Param::Base(_) | Param::Tool(_));
-            let head = all.iter().copied().filter(first);
-            head.chain(all.iter().copied().filter(|p| !first(p)))
-                .collect()
-        }
+        Chosen::Identifiable => candidates(nominal, targets && !register),
     };
     candidates.retain(|p| !fixed.contains(p));
     super::verdict::check_some_left(&candidates, fixed)?;
@@ -159,6 +139,56 @@ pub fn identify_kind(
     })
 }
 
+/// The readings of `file` as the identification reads them, with the nominal robot's tool
+/// points at its poses: each plane's normal axis chosen from its points, and multi-target
+/// points registered into the base frame when `register` (with that registration's frame).
+fn prepared(
+    nominal: &Robot,
+    file: &KindFile,
+    register: bool,
+) -> Result<(KindData, Option<Frame>, Vec<Vec3>)> {
+    let mut data = file.data.clone();
+    let chain = nominal.chain();
+    let p: Vec<Vec3> = file.qs.iter().map(|q| chain.fk(q).pos).collect();
+    choose_plane_axes(&mut data, &p);
+    let targets = matches!(data.instrument, Instrument::Targets(_));
+    let registration = match targets && register {
+        true => Some(register_targets(nominal, &file.qs, &mut data)?),
+        false => None,
+    };
+    Ok((data, registration, p))
+}
+
+/// The parameters a kind file's identification chooses from, base and tool first: every one
+/// but the compliances, and but the base's when it is `fixed_base` (targets in the base frame
+/// leave the base as it is, as the tracker's `known` registration does).
+fn candidates(nominal: &Robot, fixed_base: bool) -> Vec<Param> {
+    let all: Vec<Param> = nominal
+        .params()
+        .into_iter()
+        .filter(|p| !p.is_compliance())
+        .filter(|p| !(fixed_base && matches!(p, Param::Base(_))))
+        .collect();
+    let first = |p: &Param| matches!(p, Param::Base(_) | Param::Tool(_));
+    let head = all.iter().copied().filter(first);
+    head.chain(all.iter().copied().filter(|p| !first(p)))
+        .collect()
+}
+
+/// What the readings of the kind file `file` determine of `nominal`'s parameters (every one
+/// but the compliances), judged as `identify` judges them (docs/formats.md § 2.12): the same
+/// poses, moved into the instrument's first guess ([`on_first_guess`]), the instrument's
+/// unknowns projected out; with those unknowns' names.
+pub fn file_identifiability(
+    nominal: &Robot,
+    file: &KindFile,
+) -> Result<(Identifiability, Vec<String>)> {
+    let (data, _, p) = prepared(nominal, file, true)?;
+    let (qs, on) = on_first_guess(nominal, &file.qs, &data, &p)?;
+    let a = identifiability(nominal, &candidates(nominal, false), &qs, &on)?;
+    Ok((a, data.instrument.nuisance_names()))
+}
+
 /// Each reading's residual (mm, the norm of its rows) of `kp` at `x` (`None`: zero errors,
 /// the instrument's first guess).
 fn reading_residuals(kp: &KindProblem, x: Option<&DVector<Real>>, inst: &Instrument) -> Vec<Real> {
@@ -178,13 +208,16 @@ fn reading_residuals(kp: &KindProblem, x: Option<&DVector<Real>>, inst: &Instrum
         .collect()
 }
 
-/// The file's poses moved, by the nominal robot, onto the planes or spheres of the first
-/// guess of the instrument's unknowns from the nominal tool points `p`
+/// The file's poses moved, by the nominal robot, onto the planes, spheres or sockets of the
+/// first guess of the instrument's unknowns from the nominal tool points `p`
 /// ([`nuisance_guess`], [`touch`]), with their readings: where the model's points lie on its
-/// own surfaces, so that the identifiability is the structure's. At the file's poses
-/// themselves the nominal points lie off the fitted planes by the robot's errors, and a
-/// parameter that a plane's tilt absorbs exactly (a base rotation) would look determined by
-/// them. Poses that cannot be moved so are left out; the other kinds keep every pose.
+/// own surfaces or in its own sockets, so that the identifiability is the structure's. At
+/// the file's poses themselves the nominal points lie off the fitted planes, or apart from
+/// their socket, by the robot's errors, and a parameter that the instrument's unknowns absorb
+/// exactly (a base rotation, which turns the planes or the sockets with it) would look
+/// determined by the direction of those gaps: a socket fit then turned the base by a degree
+/// or two, 40 mm at the tool, at no cost to its residuals. Poses that cannot be moved so are
+/// left out; the other kinds keep every pose.
 fn on_first_guess(
     nominal: &Robot,
     qs: &[Vec<Real>],
@@ -192,7 +225,11 @@ fn on_first_guess(
     p: &[Vec3],
 ) -> Result<(Vec<Vec<Real>>, KindData)> {
     let inst = &data.instrument;
-    if !matches!(inst, Instrument::Planes(_) | Instrument::Spheres(_)) {
+    let moved_kinds = matches!(
+        inst,
+        Instrument::Planes(_) | Instrument::Spheres(_) | Instrument::Sockets(_)
+    );
+    if !moved_kinds {
         return Ok((qs.to_vec(), data.clone()));
     }
     let lay = Layout {
@@ -203,11 +240,12 @@ fn on_first_guess(
     on.group.clear();
     on.values.clear();
     let mut moved = Vec::with_capacity(qs.len());
-    for ((q, &g), &v) in qs.iter().zip(&data.group).zip(&data.values) {
+    let per = inst.rows_per_observation();
+    for ((q, &g), v) in qs.iter().zip(&data.group).zip(data.values.chunks(per)) {
         if let Some(t) = touch(nominal, &lay, g, q, 0.0) {
             moved.push(t);
             on.group.push(g);
-            on.values.push(v);
+            on.values.extend_from_slice(v);
         }
     }
     Ok((moved, on))

@@ -10,6 +10,7 @@ use serde_json::json;
 
 use calbench::error::Error;
 use calbench::measurement::kind::Kind;
+use calbench::measurement::kind_csv::file_kind;
 use calbench::numeric::Real;
 use calbench::robot::identifiability::{analyse, Identifiability};
 use calbench::robot::Param;
@@ -87,6 +88,14 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
         return Err(Error::setting("--poses", "must be at least 1").into());
     }
     calbench::study::scenario::check_pose_count("--poses", args.poses)?;
+    // A measurement-kind file's readings are analysed as `identify` analyses them.
+    let kind_file = args
+        .poses_file
+        .as_deref()
+        .and_then(|p| file_kind(p).map(|k| (p, k)));
+    if let Some((path, kind)) = kind_file {
+        return of_kind_file(args, &robot, path, kind);
+    }
     let qs = match &args.poses_file {
         Some(p) => calbench::sim::poses::read_pose_list(p, &robot)?,
         None => {
@@ -140,6 +149,61 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
             sep.gcn_mean_separated()
         );
     }
+    Ok(())
+}
+
+/// `--poses-file` of a measurement-kind file (docs/formats.md § 5.3) of `kind`: its readings
+/// on the file's own instrument (its planes, spheres, sockets or targets), judged as
+/// `identify` judges them. `--measure` must name that kind; the instrument's options come
+/// from the file and are refused.
+fn of_kind_file(
+    args: &IdentifiabilityArgs,
+    robot: &calbench::robot::Robot,
+    path: &std::path::Path,
+    kind: Kind,
+) -> Result<()> {
+    if args.measure != kind {
+        let why = format!(
+            "{} is a {} file (docs/formats.md § 5.3): give --measure {}, which analyses its \
+             readings as identify does",
+            path.display(),
+            kind.as_str(),
+            kind.as_str()
+        );
+        return Err(Error::setting("--measure", why).into());
+    }
+    for (given, option) in [
+        (args.between_poses, "--between-poses"),
+        (args.planes.is_some(), "--planes"),
+        (args.spheres.is_some(), "--spheres"),
+        (args.gcn_blocks, "--gcn-blocks"),
+    ] {
+        if given {
+            let why = format!(
+                "is not read with a {} file: its instrument is the file's",
+                kind.as_str()
+            );
+            return Err(Error::setting(option, why).into());
+        }
+    }
+    let file = calbench::measurement::kind_csv::read_kind_file(path, robot)?;
+    let (a, nuisance) = calbench::calibrate::on_kind::file_identifiability(robot, &file)?;
+    if args.json {
+        let mut v = analysis_json(&a);
+        v["measure"] = json!(kind.as_str());
+        v["instrument_unknowns"] = json!(nuisance);
+        out!("{v}");
+        return Ok(());
+    }
+    out!(
+        "robot {} ({} poses of {}, {})",
+        robot.name,
+        file.qs.len(),
+        path.display(),
+        kind.as_str()
+    );
+    out!("instrument unknowns: {}", nuisance.join(" "));
+    print_analysis(robot, &a);
     Ok(())
 }
 

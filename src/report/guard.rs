@@ -166,7 +166,7 @@ fn guard<P: AsRef<Path>>(
             format!(
                 "{} is the output folder of a run still in progress: process {pid} holds its \
                  checkpoint's records.txt open ({}), so it is that run, not another program \
-                 that took its number, and --force does not pass it (nothing was written). \
+                 that took its number, and forcing does not pass it (nothing was written). \
                  Wait for it or stop it",
                 out.display(),
                 checkpoint.display(),

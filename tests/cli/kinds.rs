@@ -530,3 +530,81 @@ fn what_a_kind_cannot_determine_is_refused() {
         assert!(!out.exists());
     }
 }
+
+/// Sockets cannot see the base's rotations (a turned base turns the sockets' unknown places
+/// with it): `identify` leaves them at their nominal values and lists them, as
+/// `identifiability --measure socket` does, and refuses them when given. Its choice had been
+/// made where the nominal points lie apart from their socket, whose direction made the gauge
+/// look determined: the base came out turned by a degree or two, tens of mm at the tool.
+#[test]
+fn a_socket_file_leaves_the_base_rotations_nominal() {
+    let dir = tmp_dir("cli-kinds-socket-base");
+    let entry = "[[measurement]]\nkind = \"socket\"\nnoise_um = 13.0";
+    let data = simulate(&dir, "s", entry, &[]).join("measurements.csv");
+    let rotations = ["base.rx", "base.ry", "base.rz"];
+    let out = dir.join("ls");
+    calbench_ok(&identify_args(&data, &out, &["--method", "ls"]));
+    let id = load_json(&out.join("identified.json"));
+    let listed = |key: &str| -> Vec<String> {
+        let names = id[key].as_array().unwrap().iter();
+        names.map(|v| v.as_str().unwrap().to_string()).collect()
+    };
+    let (fitted, unseen) = (listed("parameters"), listed("unidentifiable"));
+    for r in rotations {
+        assert!(!fitted.iter().any(|p| p == r), "{r} fitted: {fitted:?}");
+        assert!(unseen.iter().any(|p| p == r), "{r} not listed: {unseen:?}");
+    }
+    let o = calbench(&[
+        "identifiability",
+        "--robot",
+        "irb2600",
+        "--measure",
+        "socket",
+    ]);
+    let said = String::from_utf8_lossy(&o.stdout);
+    let line = said
+        .lines()
+        .find(|l| l.starts_with("unidentifiable:"))
+        .unwrap();
+    assert!(rotations.iter().all(|r| line.contains(r)), "{said}");
+    // `identifiability --poses-file` of the file judges its readings as `identify` does (it
+    // refused the file's `socket` column, and its poses cut to their joints were scored
+    // against another layout of sockets).
+    let args = [
+        "identifiability",
+        "--robot",
+        "irb2600",
+        "--poses-file",
+        path_arg(&data),
+    ];
+    let o = calbench_ok(&[&args[..], &["--measure", "socket", "--json"]].concat());
+    let a: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let mut seen: Vec<String> = a["identifiable"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_str().unwrap().to_string())
+        .collect();
+    let mut fitted = fitted.clone();
+    seen.sort();
+    fitted.sort();
+    assert_eq!(seen, fitted);
+    let o = calbench(&[&args[..], &["--measure", "plane"]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("`--measure`") && err.contains("is a socket file"),
+        "{err}"
+    );
+    let given = dir.join("given");
+    let o = calbench(&identify_args(
+        &data,
+        &given,
+        &["--method", "ls", "--params", "a2,base.rx"],
+    ));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("undetermined: base.rx"),
+        "{err}"
+    );
+    assert!(!given.exists());
+}

@@ -52,8 +52,8 @@ fn a_run_into_the_folder_of_a_live_run_is_refused_and_the_live_run_is_unharmed()
     ];
     let resumed = ["run", "--resume", path_arg(&live), "--force"];
     for (second, says) in [
-        (&forced[..], "--force does not pass it"),
-        (&resumed[..], "--force does not pass it"),
+        (&forced[..], "forcing does not pass it"),
+        (&resumed[..], "forcing does not pass it"),
     ] {
         let o = calbench(second);
         let err = String::from_utf8_lossy(&o.stderr);
