@@ -177,7 +177,7 @@ fn candidates(nominal: &Robot, fixed_base: bool) -> Vec<Param> {
 
 /// What the readings of the kind file `file` determine of `nominal`'s parameters (every one
 /// but the compliances), judged as `identify` judges them (docs/formats.md § 2.12): the same
-/// poses, moved into the instrument's first guess ([`on_first_guess`]), the instrument's
+/// poses, moved into the instrument's first guess (`on_first_guess`), the instrument's
 /// unknowns projected out; with those unknowns' names.
 pub fn file_identifiability(
     nominal: &Robot,
