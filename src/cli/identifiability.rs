@@ -188,23 +188,30 @@ fn of_kind_file(
     }
     let file = calbench::measurement::kind_csv::read_kind_file(path, robot)?;
     let (a, nuisance) = calbench::calibrate::on_kind::file_identifiability(robot, &file)?;
+    let poses = format!("{} poses of {}", file.qs.len(), path.display());
+    print_instrument(args, robot, kind, (&a, &nuisance), &poses);
+    Ok(())
+}
+
+/// The analysis `a` of an instrument of `kind` with its unknowns `nuisance`, over `poses`
+/// (how many and whence), as JSON with `--json` or as text.
+fn print_instrument(
+    args: &IdentifiabilityArgs,
+    robot: &calbench::robot::Robot,
+    kind: Kind,
+    (a, nuisance): (&Identifiability, &[String]),
+    poses: &str,
+) {
     if args.json {
-        let mut v = analysis_json(&a);
+        let mut v = analysis_json(a);
         v["measure"] = json!(kind.as_str());
         v["instrument_unknowns"] = json!(nuisance);
         out!("{v}");
-        return Ok(());
+        return;
     }
-    out!(
-        "robot {} ({} poses of {}, {})",
-        robot.name,
-        file.qs.len(),
-        path.display(),
-        kind.as_str()
-    );
+    out!("robot {} ({poses}, {})", robot.name, kind.as_str());
     out!("instrument unknowns: {}", nuisance.join(" "));
-    print_analysis(robot, &a);
-    Ok(())
+    print_analysis(robot, a);
 }
 
 /// `--measure distance|plane|sphere|multi-target`: the kind's Jacobian at the nominal robot
@@ -259,21 +266,8 @@ fn instrument(
             .map_err(of_poses)?;
         (a, &moved[..])
     };
-    if args.json {
-        let mut v = analysis_json(&a);
-        v["measure"] = json!(kind.as_str());
-        v["instrument_unknowns"] = json!(nuisance);
-        out!("{v}");
-        return Ok(());
-    }
-    out!(
-        "robot {} ({} poses, {})",
-        robot.name,
-        qs.len(),
-        kind.as_str()
-    );
-    out!("instrument unknowns: {}", nuisance.join(" "));
-    print_analysis(robot, &a);
+    let poses = format!("{} poses", qs.len());
+    print_instrument(args, robot, kind, (&a, &nuisance), &poses);
     Ok(())
 }
 
