@@ -73,6 +73,13 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
             return Err(Error::setting(option, why).into());
         }
     }
+    if args.gcn_blocks && !matches!(args.measure, Kind::Position | Kind::Pose) {
+        return Err(Error::setting(
+            "--gcn-blocks",
+            "Guo 2024's separation is for the tracker's `position` and `pose` only",
+        )
+        .into());
+    }
     let robot = args.chain.load(&args.robot)?;
     let gcn_blocks = args.gcn_blocks.then(|| args.gcn_threshold.unwrap_or(1e2));
     if let Some(t) = gcn_blocks {
@@ -176,7 +183,6 @@ fn of_kind_file(
         (args.between_poses, "--between-poses"),
         (args.planes.is_some(), "--planes"),
         (args.spheres.is_some(), "--spheres"),
-        (args.gcn_blocks, "--gcn-blocks"),
     ] {
         if given {
             let why = format!(
@@ -222,13 +228,6 @@ fn instrument(
     qs: &[Vec<Real>],
     kind: Kind,
 ) -> Result<()> {
-    if args.gcn_blocks {
-        return Err(Error::setting(
-            "--gcn-blocks",
-            "Guo 2024's separation is for the tracker's `position` and `pose` only",
-        )
-        .into());
-    }
     let default = InstrumentSettings::default();
     let s = InstrumentSettings {
         kind,

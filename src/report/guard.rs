@@ -179,7 +179,7 @@ fn guard<P: AsRef<Path>>(
                  host, its checkpoint {}); writing there would destroy it (nothing was \
                  written). Wait for it or stop it{}",
                 out.display(),
-                super::checkpoint_folder(out).display(),
+                checkpoint.display(),
                 match force {
                     Some(_) => " (forcing passes when that process is not calbench)",
                     None => "",

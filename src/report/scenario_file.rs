@@ -37,7 +37,7 @@ pub fn with_hash(body: &str) -> String {
 /// The canonical text and its hash from the file's `text` read at `path`; refuses, naming
 /// the file, a text without the hash line or whose text does not have the hash it states
 /// (an edited copy). Line ends turned into CRLF are read as the LF that was written.
-pub fn read(text: &str, path: &std::path::Path) -> Result<(String, String)> {
+pub fn read(text: &str, path: &Path) -> Result<(String, String)> {
     let (first, body) = text.split_once('\n').unwrap_or((text, ""));
     let Some(stated) = first.strip_prefix(HEAD) else {
         return Err(Error::file(
@@ -69,11 +69,8 @@ pub fn read(text: &str, path: &std::path::Path) -> Result<(String, String)> {
 
 /// The canonical text of the `scenario.toml` beside the summary file `summary` (hash line
 /// checked, [`read`]); `None` when there is none (a baseline file, a summary copied alone).
-pub fn beside(summary: &std::path::Path) -> Result<Option<String>> {
-    let file = summary
-        .parent()
-        .unwrap_or(std::path::Path::new("."))
-        .join(NAME);
+pub fn beside(summary: &Path) -> Result<Option<String>> {
+    let file = summary.parent().unwrap_or(Path::new(".")).join(NAME);
     if file.is_dir() {
         let why = "is a folder, where a run's scenario.toml is the file of the scenario it ran";
         return Err(Error::io(&file, std::io::Error::other(why)));

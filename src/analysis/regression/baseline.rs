@@ -239,10 +239,10 @@ impl Side {
     /// summary, and a missing file.
     pub fn read(path: &Path) -> Result<Side> {
         let [file, _] = Side::files(path);
-        if let Some(e) = a_shard(path, "give the merged folder").filter(|_| !file.exists()) {
-            return Err(e);
-        }
         if !file.exists() {
+            if let Some(e) = a_shard(path, "give the merged folder") {
+                return Err(e);
+            }
             return Err(Error::io(
                 &file,
                 std::io::Error::new(
@@ -371,19 +371,20 @@ fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, Str
             let Some(values) = t.values.get(&(entry.clone(), metric.clone())) else {
                 continue;
             };
+            let over = over_trials(&metric);
             let finite = values.values().filter(|v| v.is_finite()).count();
-            if values.is_empty() || !over_trials(&metric) && finite == 0 {
+            if values.is_empty() || !over && finite == 0 {
                 continue;
             }
-            let given = figure_of(values.values().copied(), &metric);
+            let given = || figure_of(values.values().copied(), &metric);
             // A figure the summary lacks beside values that give it: a key deleted, which
             // would leave the metric unguarded without a word.
             let Some(figure) = lookup(e, &metric) else {
-                let why = match over_trials(&metric) {
+                let why = match over {
                     true => format!(
                         "its {} values give {metric} {}, where the summary has none",
                         values.len(),
-                        shown(given)
+                        shown(given())
                     ),
                     false => format!(
                         "its {finite} finite values are behind {metric}, where the summary \
@@ -392,9 +393,10 @@ fn behind(summary: &Summary, t: &Trials) -> std::result::Result<(), (String, Str
                 };
                 return Err((entry, metric, why));
             };
-            if !over_trials(&metric) {
+            if !over {
                 continue;
             }
+            let given = given();
             if !same_figure(given, figure) {
                 let why = format!(
                     "its {} values give {metric} {}, where the summary has {}",
