@@ -564,7 +564,8 @@ def identifiability(robot, q, measure="position", *, between_poses=None, planes=
         a dict with ``rank``, ``parameters`` (their number), ``identifiable`` and
         ``unidentifiable`` (names), ``groups`` (dependent groups of names) and
         ``condition_number`` (column-scaled), and for another instrument ``measure`` and
-        ``instrument_unknowns`` (its pivot, planes or spheres, projected out), as
+        ``instrument_unknowns`` (its pivot, planes or spheres, projected out) and
+        ``undetermined_instrument_unknowns`` (those the poses leave free by themselves), as
         ``calbench identifiability --json --poses-file``.
     """
     if not isinstance(robot, Robot):

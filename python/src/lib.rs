@@ -72,10 +72,10 @@ fn identifiability<'py>(
                 spheres,
                 ..InstrumentSettings::default()
             };
-            let (a, nuisance) = py
+            let a = py
                 .detach(|| calbench::identify::kind::identifiability_at(r, &qs, &s))
                 .map_err(errors::err)?;
-            (a, Some(nuisance))
+            (a.robot, Some((a.unknowns, a.undetermined)))
         }
     };
     let names = |v: &[Param]| v.iter().map(|p| p.to_string()).collect::<Vec<_>>();
@@ -86,9 +86,10 @@ fn identifiability<'py>(
     let groups: Vec<Vec<String>> = a.groups.iter().map(|g| names(g)).collect();
     out.set_item("groups", groups)?;
     out.set_item("condition_number", a.condition_number)?;
-    if let Some(nuisance) = nuisance {
+    if let Some((unknowns, undetermined)) = nuisance {
         out.set_item("measure", kind.as_str())?;
-        out.set_item("instrument_unknowns", nuisance)?;
+        out.set_item("instrument_unknowns", unknowns)?;
+        out.set_item("undetermined_instrument_unknowns", undetermined)?;
     }
     Ok(out)
 }

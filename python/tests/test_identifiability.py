@@ -47,6 +47,17 @@ def test_every_instrument_gives_the_command_lines_analysis(cli, tmp_path, measur
                                                     .get("between_poses"))
 
 
+def test_a_plane_touched_at_one_point_leaves_its_tilt_free():
+    robot = calbench.Robot.builtin("irb2600")
+    q = np.random.default_rng(3).uniform(-60, 60, (30, 6))
+    got = calbench.identifiability(robot, q, "plane")
+    assert got["undetermined_instrument_unknowns"] == []
+    q[0::3] = q[0]  # the poses of plane 1 (every third) all at its first
+    got = calbench.identifiability(robot, q, "plane")
+    free = got["undetermined_instrument_unknowns"]
+    assert len(free) == 2 and all(n.startswith("plane1_") for n in free), free
+
+
 def test_instrument_options_are_refused_where_no_kind_reads_them():
     robot = calbench.Robot.builtin("irb2600")
     q = np.zeros((4, 6)) + np.arange(4)[:, None]

@@ -14,12 +14,12 @@ use super::registration::register_svd;
 use super::request::IdentifyRequest;
 use super::validation::ErrorStats;
 use super::verdict::{
-    check_names, gross_likely, gross_reading, radians_hint, worse_causes, worse_error,
+    allowing, check_names, gross_likely, gross_reading, radians_hint, worse_causes, worse_error,
     worse_warning,
 };
 use super::Registration;
 use crate::error::{Error, Opt, Result, Said};
-use crate::identify::kind::{identifiability, KindProblem};
+use crate::identify::kind::{identifiability, KindAnalysis, KindProblem};
 use crate::identify::{solve, Identified, LeastSquares, Solver};
 use crate::measurement::kind::Kind;
 use crate::measurement::kind::{choose_plane_axes, nuisance_guess, Instrument, KindData};
@@ -29,6 +29,9 @@ use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::identifiability::Identifiability;
 use crate::robot::{Param, Robot};
 use crate::sim::instrument::{touch, Layout};
+use unfixed::{repeated, too_few, undetermined, unknowns_free};
+
+mod unfixed;
 
 /// What the parameters to identify are: the identifiable set, or the user's.
 #[derive(Clone, Copy, Debug)]
@@ -53,6 +56,8 @@ pub struct KindFit {
     /// The analysis of the candidates on the file's poses (the instrument's unknowns
     /// projected out).
     pub analysis: Identifiability,
+    /// The instrument's own unknowns the readings leave free ([`KindAnalysis::undetermined`]).
+    pub undetermined_unknowns: Vec<String>,
     /// The solver's result: robot errors, then the corrections of the instrument's unknowns.
     pub identified: Identified,
     /// The compensated robot.
@@ -97,7 +102,11 @@ pub fn identify_kind(
     candidates.retain(|p| !fixed.contains(p));
     super::verdict::check_some_left(&candidates, fixed)?;
     let (qs, on) = on_first_guess(nominal, &file.qs, &data, &p).map_err(in_file)?;
-    let analysis = identifiability(nominal, &candidates, &qs, &on).map_err(in_file)?;
+    let KindAnalysis {
+        robot: analysis,
+        undetermined: undetermined_unknowns,
+        ..
+    } = identifiability(nominal, &candidates, &qs, &on).map_err(in_file)?;
     let params = match chosen {
         Chosen::Given(_, allow) => {
             if !analysis.unidentifiable.is_empty() && !allow {
@@ -131,6 +140,7 @@ pub fn identify_kind(
         data,
         params,
         analysis,
+        undetermined_unknowns,
         identified,
         robot,
         nuisance,
@@ -178,15 +188,11 @@ fn candidates(nominal: &Robot, fixed_base: bool) -> Vec<Param> {
 /// What the readings of the kind file `file` determine of `nominal`'s parameters (every one
 /// but the compliances), judged as `identify` judges them (docs/formats.md § 2.12): the same
 /// poses, moved into the instrument's first guess (`on_first_guess`), the instrument's
-/// unknowns projected out; with those unknowns' names.
-pub fn file_identifiability(
-    nominal: &Robot,
-    file: &KindFile,
-) -> Result<(Identifiability, Vec<String>)> {
+/// unknowns projected out.
+pub fn file_identifiability(nominal: &Robot, file: &KindFile) -> Result<KindAnalysis> {
     let (data, _, p) = prepared(nominal, file, true)?;
     let (qs, on) = on_first_guess(nominal, &file.qs, &data, &p)?;
-    let a = identifiability(nominal, &candidates(nominal, false), &qs, &on)?;
-    Ok((a, data.instrument.nuisance_names()))
+    identifiability(nominal, &candidates(nominal, false), &qs, &on)
 }
 
 /// Each reading's residual (mm, the norm of its rows) of `kp` at `x` (`None`: zero errors,
@@ -232,10 +238,7 @@ fn on_first_guess(
     if !moved_kinds {
         return Ok((qs.to_vec(), data.clone()));
     }
-    let lay = Layout {
-        instrument: inst.clone(),
-        nuisance: nuisance_guess(inst, &data.group, p, &data.values)?,
-    };
+    let lay = first_guess(data, p)?;
     let mut on = data.clone();
     on.group.clear();
     on.values.clear();
@@ -248,7 +251,42 @@ fn on_first_guess(
             on.values.extend_from_slice(v);
         }
     }
+    // A surface whose poses mostly cannot be moved onto it: its first guess is not a
+    // surface through its points.
+    if let Some((surfaces, need)) = inst.surfaces() {
+        for g in 0..surfaces {
+            let count = |of: &[usize]| of.iter().filter(|&&x| x == g).count();
+            let (held, kept) = (count(&data.group), count(&on.group));
+            if kept < need && held >= need {
+                let kind = inst.kind().as_str();
+                let of = match inst {
+                    Instrument::Spheres(r) => format!(" of the file's radius {} mm", r[g]),
+                    _ => String::new(),
+                };
+                return Err(Error::setting(
+                    "measurements",
+                    format!(
+                        "{kept} of the {held} poses of {kind} {} reach the {kind} fitted to \
+                         their nominal tool points (its first guess), and it needs at least \
+                         {need}: the points lie far from one {kind}{of} (a length in another \
+                         unit, a {kind} column that mixes surfaces)",
+                        g + 1
+                    ),
+                ));
+            }
+        }
+    }
     Ok((moved, on))
+}
+
+/// The instrument of `data` at its first guess from the nominal tool points `p`
+/// ([`nuisance_guess`]).
+fn first_guess(data: &KindData, p: &[Vec3]) -> Result<Layout> {
+    let inst = &data.instrument;
+    Ok(Layout {
+        instrument: inst.clone(),
+        nuisance: nuisance_guess(inst, &data.group, p, &data.values)?,
+    })
 }
 
 /// Registers the targets' points of `data` (the instrument's frame) onto the nominal robot's
@@ -277,21 +315,6 @@ fn register_targets(nominal: &Robot, qs: &[Vec<Real>], data: &mut KindData) -> R
         .flat_map(|p| frame.apply(p).iter().copied().collect::<Vec<_>>())
         .collect();
     Ok(frame)
-}
-
-/// The refusal of given parameters that `data` cannot determine (`count` given).
-fn undetermined(source: &Path, data: &KindData, a: &Identifiability, count: usize) -> Error {
-    let (names, groups) = super::verdict::names_and_groups(a);
-    let msg = format!(
-        "{} readings on these poses determine only {} of the {count} parameters (undetermined: \
-         {names}; dependent groups: {groups}), with the instrument's own unknowns ({}); nothing \
-         was written. Leave the undetermined ones out of ",
-        data.instrument.kind().as_str(),
-        a.rank,
-        data.instrument.nuisance_names().join(" "),
-    );
-    let msg = Said::from(msg).name(Opt::Params).text(", or pass ");
-    Error::file(source, "data", msg.on(Opt::AllowRankDeficient))
 }
 
 /// The validation of `nominal` and `compensated` on a tracker's file `v`
@@ -486,13 +509,22 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         .unwrap_or_else(|| unreachable!("refusal() refuses the methods that are not solvers"));
     check_names(Opt::Params, nominal, &q.params)?;
     check_names(Opt::Fix, nominal, &q.fix)?;
+    repeated(q, file)?;
     let chosen = if q.params.is_empty() {
         Chosen::Identifiable
     } else {
         Chosen::Given(&q.params, q.allow_rank_deficient)
     };
     let register = q.registration == Registration::Identify;
+    if matches!(chosen, Chosen::Identifiable) && !q.allow_rank_deficient {
+        let mut among = candidates(nominal, targets && !register);
+        among.retain(|p| !q.fix.contains(p));
+        too_few(q, file, &among, register)?;
+    }
     let fit = identify_kind(nominal, file, &q.source, (chosen, &q.fix, register), solver)?;
+    if !fit.undetermined_unknowns.is_empty() && !q.allow_rank_deficient {
+        return Err(unknowns_free(q, kind, &fit.undetermined_unknowns));
+    }
     let r = &fit.identified;
     let readings = fit.data.instrument.observations(file.qs.len());
     // The file row of reading `i` (a step of distances is read at its second row).
@@ -524,29 +556,33 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         ))
     };
     if super::verdict::undetermined_termination(r.termination) && !q.allow_rank_deficient {
+        // The parameters and the instrument's unknowns are determined at its first guess
+        // (the others were refused above): the solve went where they are not.
         let total = r.x.len();
         let cause = match r.rank {
-            Some(k) if k < total => {
-                format!("do not determine every parameter (rank {k} of {total})")
-            }
-            Some(_) => "determine every parameter, yet the solve did not settle".to_string(),
-            None => "do not give a finite solve".to_string(),
+            Some(k) if k < total => format!("yet the solve's rank fell to {k}"),
+            Some(_) => "yet the solve did not settle".to_string(),
+            None => "yet the solve is not finite".to_string(),
         };
         let hint = gross().map_or(String::new(), |g| {
             format!("; {g}: a gross reading is the likely cause")
         });
         let msg = format!(
-            "the {} readings {cause}{hint}; {} ended {}, so nothing was written. Measure \
-             poses that move every joint, leave parameters out with ",
+            "the {} readings determine all {total} unknowns at the instrument's first guess \
+             (the robot's {} parameters and the instrument's {}), {cause}{hint}; {} ended {}, \
+             so nothing was written. Check the readings (a radius, length or offset in \
+             another unit, a plane or sphere column that mixes surfaces, a gross reading), or \
+             pass ",
             kind.as_str(),
+            fit.params.len(),
+            total - fit.params.len(),
             q.method.shown_name(),
             r.termination.as_str(),
         );
-        let msg = Said::from(msg).name(Opt::Fix).text(", or pass ");
         return Err(Error::file(
             &q.source,
             "data",
-            msg.on(Opt::AllowRankDeficient),
+            allowing(msg, Opt::AllowRankDeficient),
         ));
     }
     let validation = q

@@ -151,6 +151,7 @@ impl IdentifyRequest {
         if !repeated.is_empty() {
             let why = crate::measurement::repeated_rows_refusal(
                 &repeated,
+                crate::measurement::SAME_MEASUREMENT,
                 crate::measurement::REPEATED_CALIBRATION,
             );
             return Err(Error::file(&self.source, "data", why));
@@ -219,7 +220,9 @@ impl IdentifyRequest {
             let repeated = v.repeated_rows();
             if !repeated.is_empty() {
                 let why = crate::measurement::REPEATED_VALIDATION;
-                return refused(crate::measurement::repeated_rows_refusal(&repeated, why));
+                let same = crate::measurement::SAME_MEASUREMENT;
+                let msg = crate::measurement::repeated_rows_refusal(&repeated, same, why);
+                return refused(msg);
             }
             let shared = d.shared_rows(v);
             if !shared.is_empty() {

@@ -9,6 +9,7 @@ use anyhow::Result;
 use serde_json::json;
 
 use calbench::error::Error;
+use calbench::identify::kind::KindAnalysis;
 use calbench::measurement::kind::Kind;
 use calbench::measurement::kind_csv::file_kind;
 use calbench::numeric::Real;
@@ -193,31 +194,38 @@ fn of_kind_file(
         }
     }
     let file = calbench::measurement::kind_csv::read_kind_file(path, robot)?;
-    let (a, nuisance) = calbench::calibrate::on_kind::file_identifiability(robot, &file)?;
+    let a = calbench::calibrate::on_kind::file_identifiability(robot, &file)?;
     let poses = format!("{} poses of {}", file.qs.len(), path.display());
-    print_instrument(args, robot, kind, (&a, &nuisance), &poses);
+    print_instrument(args, robot, kind, &a, &poses);
     Ok(())
 }
 
-/// The analysis `a` of an instrument of `kind` with its unknowns `nuisance`, over `poses`
-/// (how many and whence), as JSON with `--json` or as text.
+/// The analysis `a` of an instrument of `kind`, over `poses` (how many and whence), as JSON
+/// with `--json` or as text.
 fn print_instrument(
     args: &IdentifiabilityArgs,
     robot: &calbench::robot::Robot,
     kind: Kind,
-    (a, nuisance): (&Identifiability, &[String]),
+    a: &KindAnalysis,
     poses: &str,
 ) {
     if args.json {
-        let mut v = analysis_json(a);
+        let mut v = analysis_json(&a.robot);
         v["measure"] = json!(kind.as_str());
-        v["instrument_unknowns"] = json!(nuisance);
+        v["instrument_unknowns"] = json!(a.unknowns);
+        v["undetermined_instrument_unknowns"] = json!(a.undetermined);
         out!("{v}");
         return;
     }
     out!("robot {} ({poses}, {})", robot.name, kind.as_str());
-    out!("instrument unknowns: {}", nuisance.join(" "));
-    print_analysis(robot, a);
+    out!("instrument unknowns: {}", a.unknowns.join(" "));
+    if !a.undetermined.is_empty() {
+        out!(
+            "undetermined instrument unknowns: {} (the poses leave them free)",
+            a.undetermined.join(" ")
+        );
+    }
+    print_analysis(robot, &a.robot);
 }
 
 /// `--measure distance|plane|sphere|multi-target`: the kind's Jacobian at the nominal robot
@@ -250,7 +258,7 @@ fn instrument(
     // Random poses move onto their planes or spheres; a pose file's poses are taken as
     // they are (they touch, or the fitted surfaces are the instrument's).
     let moved;
-    let ((a, nuisance), qs) = if args.poses_file.is_some() {
+    let (a, qs) = if args.poses_file.is_some() {
         (
             calbench::identify::kind::identifiability_at(robot, qs, &s).map_err(of_poses)?,
             qs,
@@ -266,7 +274,7 @@ fn instrument(
         (a, &moved[..])
     };
     let poses = format!("{} poses", qs.len());
-    print_instrument(args, robot, kind, (&a, &nuisance), &poses);
+    print_instrument(args, robot, kind, &a, &poses);
     Ok(())
 }
 

@@ -19,6 +19,7 @@ use crate::error::{Error, Opt, Result, Said};
 use crate::measurement::kind::{nuisance_guess, rows, KindData};
 use crate::measurement::Measure;
 use crate::numeric::{Mat3, Real, Vec3};
+use crate::robot::identifiability::Identifiability;
 use crate::robot::jacobian::{pose_rows_vars, Columns};
 use crate::robot::{Chain, ChainVars, Param, Robot};
 
@@ -202,17 +203,30 @@ impl LeastSquares for KindProblem<'_> {
     }
 }
 
+/// What the readings of an instrument determine ([`identifiability`]).
+#[derive(Clone, Debug)]
+pub struct KindAnalysis {
+    /// The robot's parameters, the instrument's own unknowns projected out.
+    pub robot: Identifiability,
+    /// The instrument's own unknowns ([`crate::measurement::kind::Instrument::nuisance_names`]).
+    pub unknowns: Vec<String>,
+    /// Those of them the readings leave free whatever the robot (a plane's points on one
+    /// line or at one point, a sphere's on one great circle): a solve then ends singular.
+    pub undetermined: Vec<String>,
+}
+
 /// Identifiability of `params` of `robot` for the instrument of `data` read at poses `qs`
 /// ([`crate::robot::identifiability::analyse_jacobian`]): the kind's Jacobian at the nominal
 /// robot with the instrument's own unknowns projected out (a parameter counts as identifiable
 /// when the data separate it from the pivot, planes or spheres as well as from the other
-/// parameters).
+/// parameters), and which of those unknowns the readings leave free by the same rule
+/// ([`crate::robot::identifiability::determined_columns`] of their own columns).
 pub fn identifiability(
     robot: &Robot,
     params: &[Param],
     qs: &[Vec<Real>],
     data: &KindData,
-) -> Result<crate::robot::identifiability::Identifiability> {
+) -> Result<KindAnalysis> {
     let kp = KindProblem::new(robot, params, qs, data)?;
     let size = kp.size();
     let mut r = DVector::zeros(size.rows());
@@ -226,10 +240,17 @@ pub fn identifiability(
         )));
     }
     let t = params.len();
+    let unknowns = data.instrument.nuisance_names();
     let mut jr = j.columns(0, t).into_owned();
+    let mut undetermined = Vec::new();
     if size.params > t {
         // Remove the part of each robot column that the nuisance columns explain.
         let n = j.columns(t, size.params - t).into_owned();
+        let kept = crate::robot::identifiability::determined_columns(n.clone());
+        undetermined = (0..n.ncols())
+            .filter(|c| kept.binary_search(c).is_err())
+            .map(|c| unknowns[c].clone())
+            .collect();
         let svd = crate::numeric::linalg::svd(n, true, false)
             .ok_or_else(|| Error::Compute("the SVD of the instrument's columns".into()))?;
         let u = svd.u.as_ref().ok_or_else(|| Error::Compute("SVD".into()))?;
@@ -240,19 +261,47 @@ pub fn identifiability(
         let q = u.select_columns(&keep);
         jr -= &q * (q.transpose() * &jr);
     }
-    Ok(crate::robot::identifiability::analyse_jacobian(params, jr))
+    Ok(KindAnalysis {
+        robot: crate::robot::identifiability::analyse_jacobian(params, jr),
+        unknowns,
+        undetermined,
+    })
+}
+
+/// How many of `params` of `robot` the readings of the instrument laid out as `lay` determine
+/// at poses spread over the workspace: [`identifiability`] at the fixed random poses of
+/// [`crate::robot::identifiability::identifiable_generic`], dealt to the planes, spheres or
+/// sockets in turn and moved onto them ([`crate::sim::instrument::touching`]; those that do
+/// not reach theirs are dropped). What a file of that instrument determines when it holds
+/// enough poses.
+pub fn generic_rank(
+    robot: &Robot,
+    params: &[Param],
+    lay: &crate::sim::instrument::Layout,
+) -> Result<usize> {
+    use crate::robot::identifiability::GENERIC_POSES;
+    use crate::sim::instrument::{groups_of, touching};
+    let mut g = crate::numeric::rng::stream(0x1D, "identifiability");
+    let pool = crate::robot::sampling::uniform_joint_poses(robot, GENERIC_POSES, &mut g);
+    let (qs, group) = touching(robot, lay, &pool, &groups_of(&lay.instrument, pool.len()));
+    let inst = &lay.instrument;
+    let data = KindData {
+        instrument: inst.clone(),
+        group,
+        values: vec![0.0; inst.observations(qs.len()) * inst.rows_per_observation()],
+    };
+    Ok(identifiability(robot, params, &qs, &data)?.robot.rank)
 }
 
 /// Identifiability of every parameter of `robot` for the instrument `s` read at the poses
 /// `qs`, taken as they are (they touch it, or its fitted planes or spheres are the
-/// instrument's, assigned in turn): the analysis ([`identifiability`]) and the names of the
-/// instrument's own unknowns, which it projects out. `calbench identifiability --measure KIND
+/// instrument's, assigned in turn): [`identifiability`] of every parameter. `calbench identifiability --measure KIND
 /// --poses-file` and Python's `identifiability` call it.
 pub fn identifiability_at(
     robot: &Robot,
     qs: &[Vec<Real>],
     s: &crate::sim::instrument::InstrumentSettings,
-) -> Result<(crate::robot::identifiability::Identifiability, Vec<String>)> {
+) -> Result<KindAnalysis> {
     let instrument = s
         .instrument()
         .map_err(crate::sim::instrument::counts_as_options)?;
@@ -267,7 +316,7 @@ pub fn identifiability_of(
     qs: &[Vec<Real>],
     instrument: crate::measurement::kind::Instrument,
     group: Vec<usize>,
-) -> Result<(crate::robot::identifiability::Identifiability, Vec<String>)> {
+) -> Result<KindAnalysis> {
     // Each plane or sphere needs the points of its first guess.
     if let Some((n, need)) = instrument.surfaces() {
         let mut held = vec![0; n];
@@ -303,9 +352,8 @@ pub fn identifiability_of(
         values,
     };
     // Too few poses for the instrument's own unknowns (a pivot's five) are the poses' fault.
-    let a = identifiability(robot, &robot.params(), qs, &data)
-        .map_err(|e| e.setting_as("measurements", Opt::Q))?;
-    Ok((a, data.instrument.nuisance_names()))
+    identifiability(robot, &robot.params(), qs, &data)
+        .map_err(|e| e.setting_as("measurements", Opt::Q))
 }
 
 #[cfg(test)]
@@ -432,7 +480,9 @@ mod tests {
         ];
         for (kind, qs, g, lay) in setups() {
             let data0 = noise_free(&lay.instrument, &nominal, &qs, &g, &lay.nuisance);
-            let a = identifiability(&nominal, &params, &qs, &data0).unwrap();
+            let a = identifiability(&nominal, &params, &qs, &data0)
+                .unwrap()
+                .robot;
             let ident = a.identifiable.clone();
             let errors: Vec<(Param, Real)> = ident
                 .iter()
@@ -487,6 +537,7 @@ mod tests {
             let data0 = noise_free(&lay.instrument, &nominal, qs, g, &lay.nuisance);
             let ident = identifiability(&nominal, &params, qs, &data0)
                 .unwrap()
+                .robot
                 .identifiable;
             let errors: Vec<(Param, Real)> = ident
                 .iter()
@@ -541,6 +592,7 @@ mod tests {
         let data0 = noise_free(&lay.instrument, &nominal, &qs, &g, &lay.nuisance);
         let ident = identifiability(&nominal, &nominal.params(), &qs, &data0)
             .unwrap()
+            .robot
             .identifiable;
         assert!(ident.len() >= 15, "{} identifiable", ident.len());
         let errors: Vec<(Param, Real)> = ident
@@ -597,12 +649,43 @@ mod tests {
             .find(|(k, _, _, _)| *k == Kind::Distance)
             .unwrap();
         let data = noise_free(&lay.instrument, &robot, &qs, &g, &lay.nuisance);
-        let a = identifiability(&robot, &robot.params(), &qs, &data).unwrap();
+        let a = identifiability(&robot, &robot.params(), &qs, &data)
+            .unwrap()
+            .robot;
         let base: Vec<_> = a
             .unidentifiable
             .iter()
             .filter(|p| matches!(p, Param::Base(_)))
             .collect();
         assert_eq!(base.len(), 6, "{:?}", a.unidentifiable);
+    }
+
+    /// The rank at poses spread over the workspace is the rank at the poses that touch the
+    /// instrument; a plane touched at one point leaves its tilt free, and nothing else.
+    #[test]
+    fn generic_rank_and_free_unknowns() {
+        let robot = irb2600();
+        for (kind, qs, g, lay) in setups() {
+            let data = noise_free(&lay.instrument, &robot, &qs, &g, &lay.nuisance);
+            let a = identifiability(&robot, &robot.params(), &qs, &data).unwrap();
+            let generic = generic_rank(&robot, &robot.params(), &lay).unwrap();
+            assert_eq!(generic, a.robot.rank, "{kind:?}");
+            assert!(a.undetermined.is_empty(), "{kind:?}: {:?}", a.undetermined);
+            if kind != Kind::Plane {
+                continue;
+            }
+            // Every pose of plane 1 moved to its first one: one point.
+            let first = g.iter().position(|&p| p == 0).unwrap();
+            let qs: Vec<Vec<Real>> = (0..qs.len())
+                .map(|i| match g[i] {
+                    0 => qs[first].clone(),
+                    _ => qs[i].clone(),
+                })
+                .collect();
+            let data = noise_free(&lay.instrument, &robot, &qs, &g, &lay.nuisance);
+            let a = identifiability(&robot, &robot.params(), &qs, &data).unwrap();
+            assert_eq!(a.undetermined.len(), 2, "{:?}", a.undetermined);
+            assert!(a.undetermined.iter().all(|n| n.starts_with("plane1_")));
+        }
     }
 }

@@ -587,9 +587,14 @@ pub fn nuisance_guess(
         }
         let am = DMatrix::from_fn(a.len(), cols, |i, c| a[i][c]);
         let bv = DVector::from_vec(b);
-        let x = crate::numeric::linalg::svd(am, true, true)
-            .ok_or_else(|| Error::Compute("the SVD of a non-finite system".into()))?
-            .solve(&bv, 1e-12)
+        // Points that do not fix the surface (a plane's on one line or at one point) give
+        // the least-norm fit through them: directions below 1e-12 of the largest are left
+        // out, relative so that coordinates of metres do not make rounding a direction.
+        let svd = crate::numeric::linalg::svd(am, true, true)
+            .ok_or_else(|| Error::Compute("the SVD of a non-finite system".into()))?;
+        let floor = 1e-12 * svd.singular_values.max();
+        let x = svd
+            .solve(&bv, floor)
             .map_err(|e| Error::Compute(e.to_string()))?;
         out.extend(x.iter().take(3));
     }

@@ -91,6 +91,50 @@ pub struct KindFile {
 }
 
 impl KindFile {
+    /// The pairs (earlier row, row) of rows that hold the same reading: joint values within
+    /// [`super::SAME_JOINT`], the same plane, sphere or socket, and readings within
+    /// [`super::SAME_POINT_MM`] (a step file's first row has none), whatever σ they carry,
+    /// as [`super::Measurements::repeated_rows`] tells a tracker's: each row that repeats an
+    /// earlier one, with the first it repeats, in row order.
+    pub fn repeated_rows(&self) -> Vec<(usize, usize)> {
+        let (n, inst) = (self.qs.len(), &self.data.instrument);
+        let per = inst.rows_per_observation();
+        let unread = n - inst.observations(n);
+        let reading = |r: usize| (r >= unread).then(|| (r - unread) * per);
+        let near = |a: &[Real], b: &[Real], tol: Real| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+        };
+        let values = &self.data.values;
+        let same = |a: usize, b: usize| {
+            self.data.group.get(a) == self.data.group.get(b)
+                && near(&self.qs[a], &self.qs[b], super::SAME_JOINT)
+                && match (reading(a), reading(b)) {
+                    (Some(x), Some(y)) => near(
+                        &values[x..x + per],
+                        &values[y..y + per],
+                        super::SAME_POINT_MM,
+                    ),
+                    _ => false,
+                }
+        };
+        // Rows sorted by their first joint value: a row's repeats follow it within the
+        // tolerance.
+        let first_joint = |r: usize| self.qs[r].first().copied().unwrap_or(0.0);
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| first_joint(a).total_cmp(&first_joint(b)).then(a.cmp(&b)));
+        let mut first: Vec<Option<usize>> = vec![None; n];
+        for (k, &a) in order.iter().enumerate() {
+            let within = |b: &&usize| first_joint(**b) - first_joint(a) <= super::SAME_JOINT;
+            for &b in order[k + 1..].iter().take_while(within) {
+                let (lo, hi) = (a.min(b), a.max(b));
+                if same(a, b) && first[hi].is_none_or(|f| lo < f) {
+                    first[hi] = Some(lo);
+                }
+            }
+        }
+        (0..n).filter_map(|r| first[r].map(|f| (f, r))).collect()
+    }
+
     /// The file row `row` was read from, when the rows come from several ([`Self::files`]).
     pub fn file_of(&self, row: usize) -> Option<&Path> {
         let mut end = 0;

@@ -93,8 +93,11 @@ const SAME_CELL_MM: Real = 1.0;
 /// of [`Measurements::shared_rows`] numbered as `numbered` says (`rows of the data`), the
 /// first five named.
 pub fn shared_rows_refusal(rows: &[(usize, usize)], numbered: &str) -> String {
-    repeated_readings_refusal(rows, "the same joint values and measured point", numbered)
+    repeated_readings_refusal(rows, SAME_MEASUREMENT, numbered)
 }
+
+/// What makes two tracker rows the same measurement, as refusals say it.
+pub const SAME_MEASUREMENT: &str = "the same joint values and measured point";
 
 /// [`shared_rows_refusal`] of readings that are the same when `same` holds (`the same joint
 /// values` for a socket's, which has no measured point).
@@ -118,12 +121,12 @@ pub const REPEATED_VALIDATION: &str =
      differs by the instrument's noise)";
 
 /// The refusal's words for rows of one file that repeat an earlier row of it: `rows`, the
-/// pairs of [`Measurements::repeated_rows`], the first five named, and `why` a copy is refused
-/// ([`REPEATED_CALIBRATION`], [`REPEATED_VALIDATION`]).
-pub fn repeated_rows_refusal(rows: &[(usize, usize)], why: &str) -> String {
+/// pairs of [`Measurements::repeated_rows`] (or of a kind file's), the first five named, what
+/// makes them the same (`same`: [`SAME_MEASUREMENT`] for a tracker's), and `why` a
+/// copy is refused ([`REPEATED_CALIBRATION`], [`REPEATED_VALIDATION`]).
+pub fn repeated_rows_refusal(rows: &[(usize, usize)], same: &str, why: &str) -> String {
     format!(
-        "{} row(s) repeat an earlier row (the same joint values and measured point; 0-based \
-         rows): {}; {why}",
+        "{} row(s) repeat an earlier row ({same}; 0-based rows): {}; {why}",
         rows.len(),
         pairs_named(rows, ["row", "row"])
     )

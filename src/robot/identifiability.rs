@@ -36,7 +36,7 @@ fn determined((largest, smallest): (Real, Real)) -> bool {
 type Extremes<T> = Option<((Real, Real), T)>;
 
 /// The largest and smallest singular values of an SVD.
-fn extremes(svd: &nalgebra::SVD<Real, nalgebra::Dyn, nalgebra::Dyn>) -> (Real, Real) {
+fn extremes(svd: &Svd) -> (Real, Real) {
     svd.singular_values
         .iter()
         .fold((0.0, Real::INFINITY), |(a, b), &s| (a.max(s), b.min(s)))
@@ -332,10 +332,7 @@ pub fn analyse(
 /// (any measurement kind's rows, with the instrument's own unknowns projected out).
 pub fn analyse_jacobian(params: &[Param], mut j: DMatrix<Real>) -> Identifiability {
     scale_columns(&mut j);
-    let (ident_idx, svd) = cut_to_determined(pivoted_gram_schmidt(&j, RANK_TOL), |cols| {
-        let svd = crate::numeric::linalg::svd(j.select_columns(cols), true, true)?;
-        Some((extremes(&svd), svd))
-    });
+    let (ident_idx, svd) = determined_scaled(&j);
     let dep_idx: Vec<usize> = (0..params.len())
         .filter(|c| ident_idx.binary_search(c).is_err())
         .collect();
@@ -357,6 +354,26 @@ pub fn analyse_jacobian(params: &[Param], mut j: DMatrix<Real>) -> Identifiabili
         mx / mn
     };
     Identifiability::of(params, &ident_idx, &dep_idx, groups, condition_number)
+}
+
+/// The columns of the column-scaled `j` that [`analyse_jacobian`] keeps as determined, in
+/// column order, with the SVD of those columns (`None` when none is kept or it fails).
+fn determined_scaled(j: &DMatrix<Real>) -> (Vec<usize>, Extremes<Svd>) {
+    cut_to_determined(pivoted_gram_schmidt(j, RANK_TOL), |cols| {
+        let svd = crate::numeric::linalg::svd(j.select_columns(cols), true, true)?;
+        Some((extremes(&svd), svd))
+    })
+}
+
+/// The SVD of a dynamic matrix.
+type Svd = nalgebra::SVD<Real, nalgebra::Dyn, nalgebra::Dyn>;
+
+/// The columns of `j` (any unknowns, one column each) that the rows determine by the rule of
+/// [`analyse_jacobian`] (column-scaled, pivoted, cut back to full rank by [`RANK_TOL`]), in
+/// column order; the others depend on them or have no effect.
+pub fn determined_columns(mut j: DMatrix<Real>) -> Vec<usize> {
+    scale_columns(&mut j);
+    determined_scaled(&j).0
 }
 
 /// [`analyse`] from the Gram matrix `JᵀJ` of the Jacobian, summed over blocks of

@@ -307,7 +307,7 @@ impl InstrumentsScenario {
             group: groups.clone(),
             values: vec![0.0; rows],
         };
-        let a = identifiability(nominal, &joint_tool, &pool, &pool_data)?;
+        let a = identifiability(nominal, &joint_tool, &pool, &pool_data)?.robot;
         let label = match lay.instrument {
             Instrument::Distance { pivot: false } => "distance-chain".to_string(),
             _ => s.kind.as_str().to_string(),

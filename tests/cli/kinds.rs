@@ -59,7 +59,12 @@ const METHODS: [&[&str]; 4] = [
     ],
 ];
 
-fn simulate(dir: &Path, name: &str, entry: &str, measure: &[&str]) -> std::path::PathBuf {
+pub(crate) fn simulate(
+    dir: &Path,
+    name: &str,
+    entry: &str,
+    measure: &[&str],
+) -> std::path::PathBuf {
     let sc = write_scenario(dir, name, &scenario(entry));
     let out = dir.join(format!("sim-{name}"));
     let mut args = vec!["simulate", path_arg(&sc), "--out", path_arg(&out)];
@@ -169,7 +174,7 @@ fn noise_free_round_trip_per_kind() {
 }
 
 /// The arguments `identify --robot irb2600 --data DATA --out OUT EXTRA…`.
-fn identify_args<'a>(data: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
+pub(crate) fn identify_args<'a>(data: &'a Path, out: &'a Path, extra: &[&'a str]) -> Vec<&'a str> {
     let mut args = vec![
         "identify",
         "--robot",

@@ -32,6 +32,7 @@ mod inputs;
 mod instruments;
 mod interchange;
 mod kernel;
+mod kind_counts;
 mod kinds;
 mod layers;
 mod live_run;

@@ -484,6 +484,7 @@ impl Task {
                         .collect();
                     let msg = crate::measurement::repeated_rows_refusal(
                         &rows,
+                        crate::measurement::SAME_MEASUREMENT,
                         crate::measurement::REPEATED_VALIDATION,
                     );
                     return Err(self.at_validation(format!("{}: {msg}", file.display())));
