@@ -571,8 +571,8 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
             "the {} readings determine all {total} unknowns at the instrument's first guess \
              (the robot's {} parameters and the instrument's {}), {cause}{hint}; {} ended {}, \
              so nothing was written. Check the readings (a radius, length or offset in \
-             another unit, a plane or sphere column that mixes surfaces, a gross reading), or \
-             pass ",
+             another unit, a plane or sphere column that mixes surfaces, a step file's rows \
+             out of their measured order, a gross reading), or pass ",
             kind.as_str(),
             fit.params.len(),
             total - fit.params.len(),

@@ -119,7 +119,14 @@ fn a_radius_in_another_unit_is_refused_as_such() {
             1000.0,
             "the points lie far from one sphere of the file's radius 25400 mm",
         ),
-        (100.0, "unknowns at the instrument's first guess"),
+        (
+            100.0,
+            "unknowns at the instrument's first guess (the robot's 18 parameters and the \
+             instrument's 3), yet the solve's rank fell to 20; ls ended singular, so nothing \
+             was written. Check the readings (a radius, length or offset in another unit, a \
+             plane or sphere column that mixes surfaces, a step file's rows out of their \
+             measured order, a gross reading)",
+        ),
     ] {
         let mut lines = csv.lines();
         let header = lines.next().unwrap();
