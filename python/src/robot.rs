@@ -106,9 +106,8 @@ impl PyRobot {
             };
             return Err(err(calbench::Error::io(&path, why)));
         }
-        let shown = path.to_string_lossy().into_owned();
         let chain = calbench::robot::urdf::UrdfChain { base, tip };
-        builtin::load_chain(&shown, &chain)
+        builtin::load_chain(&path, &chain)
             .map(|inner| PyRobot { inner })
             .map_err(err)
     }

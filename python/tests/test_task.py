@@ -300,3 +300,22 @@ def test_a_task_file_at_a_path_utf8_cannot_hold_is_read_as_any_path(root, tmp_pa
     assert a["task"]["value"] == b["task"]["value"]
     with pytest.raises(calbench.Error, match="missing.toml"):
         calbench.task(os.fspath(odd / "missing.toml"), "lm")
+
+
+def test_a_robot_file_at_a_path_utf8_cannot_hold_is_read(root, tmp_path):
+    """A robot file under a folder whose name is not UTF-8 is read, by ``Robot.from_file`` and
+    as a task's robot, where its name had been made lossy and then called "neither a built-in
+    robot nor an existing robot file"."""
+    odd = tmp_path / os.fsdecode(b"r\xfe")
+    odd.mkdir()
+    wam = root / "examples" / "barrett-wam" / "wam.toml"
+    (odd / "wam.toml").write_bytes(wam.read_bytes())
+    assert calbench.Robot.from_file(odd / "wam.toml") == calbench.Robot.from_file(wam)
+    text = (root / "tasks" / "barrett-wam.toml").read_text().replace('"../', f'"{root}/')
+    text = text.replace(f'robot = "{root}/examples/barrett-wam/wam.toml"', 'robot = "wam.toml"')
+    assert 'robot = "wam.toml"' in text
+    mapping = json.dumps(str(root / "tasks" / "barrett-wam.mapping.toml"))
+    (odd / "t.toml").write_text(text.replace('"barrett-wam.mapping.toml"', mapping))
+    a = calbench.task(odd / "t.toml", "lm", models=["kinematic"])
+    b = calbench.task(root / "tasks" / "barrett-wam.toml", "lm", models=["kinematic"])
+    assert a["task"]["value"] == b["task"]["value"]

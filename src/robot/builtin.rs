@@ -91,15 +91,19 @@ pub fn builtin(name: &str) -> Option<&'static Builtin> {
 }
 
 /// A robot by built-in name or robot-file path.
-pub fn load(name_or_path: &str) -> Result<Robot> {
+pub fn load(name_or_path: impl AsRef<Path>) -> Result<Robot> {
     load_chain(name_or_path, &crate::robot::urdf::UrdfChain::default())
 }
 
 /// [`load`], a URDF's chain chosen by `which` (`--base`, `--tip`; refused for a robot that
 /// is not a URDF).
-pub fn load_chain(name_or_path: &str, which: &crate::robot::urdf::UrdfChain) -> Result<Robot> {
-    let path = Path::new(name_or_path);
-    let urdf = path.exists() && crate::robot::urdf::is_urdf(name_or_path);
+pub fn load_chain(
+    name_or_path: impl AsRef<Path>,
+    which: &crate::robot::urdf::UrdfChain,
+) -> Result<Robot> {
+    let path = name_or_path.as_ref();
+    let name_or_path = path.display();
+    let urdf = path.exists() && crate::robot::urdf::is_urdf(path);
     if !urdf && *which != crate::robot::urdf::UrdfChain::default() {
         let msg = crate::error::Said::default()
             .name(crate::error::Opt::Base)
@@ -115,7 +119,7 @@ pub fn load_chain(name_or_path: &str, which: &crate::robot::urdf::UrdfChain) -> 
         };
         return Err(Error::option(given, msg));
     }
-    if let Some(b) = builtin(name_or_path) {
+    if let Some(b) = path.to_str().and_then(builtin) {
         return Ok((b.build)());
     }
     if urdf {

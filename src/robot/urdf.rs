@@ -569,8 +569,8 @@ fn joint_element(
 
 /// Whether `robot` names a URDF file: by its extension `.urdf`, or a file whose text begins
 /// with `<` (XML under another name, `.xml` as ROS tools write it; no TOML file begins so).
-pub fn is_urdf(robot: &str) -> bool {
-    let path = Path::new(robot);
+pub fn is_urdf(robot: impl AsRef<Path>) -> bool {
+    let path = robot.as_ref();
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("urdf"))
         || begins_as_xml(path)

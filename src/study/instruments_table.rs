@@ -81,7 +81,7 @@ impl InstrumentsScenario {
     /// The nominal robot `robot` names: a built-in robot or its [`Self::robot_file`].
     pub fn load_robot(&self) -> Result<crate::robot::Robot> {
         match self.robot_file() {
-            Some(f) => crate::robot::builtin::load(&f.to_string_lossy()),
+            Some(f) => crate::robot::builtin::load(f),
             None => crate::robot::builtin::load(&self.robot),
         }
     }

@@ -396,7 +396,7 @@ fn compensate_targets_reaches_cartesian_targets_on_the_identified_robot() {
     let data = ur10_positions(&d).display().to_string();
     let out = d.join("id");
     calbench_ok(&lm_args(&ex("ur10.toml"), &data, &[], &out));
-    let nominal = builtin::load(&ex("ur10.toml")).unwrap();
+    let nominal = builtin::load(ex("ur10.toml")).unwrap();
     let ident = builtin::load(out.join("robot.toml").to_str().unwrap()).unwrap();
     let mut g = stream(4, "targets");
     let qs = calbench::robot::sampling::uniform_joint_poses(&nominal, 8, &mut g);
@@ -475,7 +475,7 @@ fn a_urdf_tree_with_tip_gives_the_single_chain() {
         <parent link=\"base_link\"/><child link=\"sensor\"/><origin xyz=\"0.1 0 0\" rpy=\"0 0 0\"/></joint>";
     let tree = d.join("tree.urdf");
     std::fs::write(&tree, src.replace("</robot>", &format!("{extra}</robot>"))).unwrap();
-    let one = builtin::load(&ex("ur10.urdf")).unwrap();
+    let one = builtin::load(ex("ur10.urdf")).unwrap();
     let tip =
         calbench::robot::urdf::UrdfRobot::load(std::path::Path::new(&ex("ur10.urdf"))).unwrap();
     let leaf = {

@@ -90,8 +90,8 @@ fn import_reads_the_leica_export_and_refuses_bad_cells_by_line_and_column() {
 
 #[test]
 fn the_ur10_urdf_has_the_fk_of_the_dh_file() {
-    let dh = builtin::load(&ex("ur10.toml")).unwrap();
-    let urdf = builtin::load(&ex("ur10.urdf")).unwrap();
+    let dh = builtin::load(ex("ur10.toml")).unwrap();
+    let urdf = builtin::load(ex("ur10.urdf")).unwrap();
     let mut g = calbench::numeric::rng::stream(3, "urdf-test");
     for q in calbench::robot::sampling::uniform_joint_poses(&dh, 50, &mut g) {
         let (mm, rad) = fk_gap(&dh, &urdf, &q);
@@ -284,7 +284,7 @@ fn import_identify_compensate_on_the_shipped_rows() {
         rows.next().unwrap(),
         "q1,q2,q3,q4,q5,q6,residual_mm,residual_deg,flag"
     );
-    let nominal = builtin::load(&ex("ur10.urdf")).unwrap();
+    let nominal = builtin::load(ex("ur10.urdf")).unwrap();
     for (row, qin) in rows.zip([
         [0.1, -1.2, 1.3, -1.6, 1.2, 0.3],
         [-2.0, -2.1, 1.8, -2.2, 0.9, 0.1],
@@ -392,7 +392,7 @@ fn a_failed_row_keeps_the_commands_that_came_closest() {
     assert!(qout.iter().all(|q| q.abs() <= 360.0), "{c}");
     // The identified robot at the program's own commands, against the nominal pose.
     let (nominal, id) = (
-        builtin::load(&ex("ur10.toml")).unwrap(),
+        builtin::load(ex("ur10.toml")).unwrap(),
         builtin::load(path_arg(&identified)).unwrap(),
     );
     let own = fk_gap(&nominal, &id, &nominal.q_from_user(&home)).0;

@@ -435,7 +435,7 @@ impl Task {
 
     /// The nominal robot.
     pub fn load_robot(&self) -> Result<Robot> {
-        crate::robot::builtin::load(&self.head.robot.to_string_lossy())
+        crate::robot::builtin::load(&self.head.robot)
     }
 
     /// The calibration and the validation measurements, read through the mapping, and the

@@ -262,7 +262,7 @@ impl SocketTask {
     /// refused naming the task file's `tip`, which gives it; a tip given for a model that is
     /// not a URDF, naming `key`.
     pub fn load_model(&self, key: &str, path: &Path) -> Result<Robot> {
-        if crate::robot::urdf::is_urdf(&path.to_string_lossy()) {
+        if crate::robot::urdf::is_urdf(path) {
             self.check_tip(path)?;
         } else if self.tip.is_some() {
             let msg = format!(
@@ -276,7 +276,7 @@ impl SocketTask {
             base: None,
             tip: self.tip.clone(),
         };
-        crate::robot::builtin::load_chain(&path.to_string_lossy(), &chain)
+        crate::robot::builtin::load_chain(path, &chain)
     }
 
     /// A refusal of the parameters held (what `identify` calls `--fix`) as one of the task

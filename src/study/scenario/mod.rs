@@ -645,16 +645,14 @@ impl Scenario {
                 }
                 builtin::load(n)
             }
-            RobotRef::File(p) if crate::robot::urdf::is_urdf(&p.to_string_lossy()) => {
-                Err(Error::setting(
-                    "robot.file",
-                    format!(
-                        "\"{}\" is a URDF, which a scenario does not take: give a robot file \
+            RobotRef::File(p) if crate::robot::urdf::is_urdf(p) => Err(Error::setting(
+                "robot.file",
+                format!(
+                    "\"{}\" is a URDF, which a scenario does not take: give a robot file \
                          in TOML (docs/formats.md § 3.1)",
-                        p.display()
-                    ),
-                ))
-            }
+                    p.display()
+                ),
+            )),
             RobotRef::File(p) => crate::robot::read_robot_file(p),
         }
     }
