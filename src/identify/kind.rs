@@ -295,8 +295,8 @@ pub fn generic_rank(
 
 /// Identifiability of every parameter of `robot` for the instrument `s` read at the poses
 /// `qs`, taken as they are (they touch it, or its fitted planes or spheres are the
-/// instrument's, assigned in turn): [`identifiability`] of every parameter. `calbench identifiability --measure KIND
-/// --poses-file` and Python's `identifiability` call it.
+/// instrument's, assigned in turn): [`identifiability`] of every parameter. `calbench
+/// identifiability --measure KIND --poses-file` and Python's `identifiability` call it.
 pub fn identifiability_at(
     robot: &Robot,
     qs: &[Vec<Real>],

@@ -101,15 +101,12 @@ impl KindFile {
         let per = inst.rows_per_observation();
         let unread = n - inst.observations(n);
         let reading = |r: usize| (r >= unread).then(|| (r - unread) * per);
-        let near = |a: &[Real], b: &[Real], tol: Real| {
-            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
-        };
         let values = &self.data.values;
         let same = |a: usize, b: usize| {
             self.data.group.get(a) == self.data.group.get(b)
-                && near(&self.qs[a], &self.qs[b], super::SAME_JOINT)
+                && super::within(&self.qs[a], &self.qs[b], super::SAME_JOINT)
                 && match (reading(a), reading(b)) {
-                    (Some(x), Some(y)) => near(
+                    (Some(x), Some(y)) => super::within(
                         &values[x..x + per],
                         &values[y..y + per],
                         super::SAME_POINT_MM,

@@ -89,6 +89,12 @@ pub const SAME_POINT_MM: Real = 1e-4;
 /// The grid cell (mm) [`Measurements::shared_rows`] sorts points into.
 const SAME_CELL_MM: Real = 1.0;
 
+/// Whether `a` and `b` have the same length and each value of `a` lies within `tol` of
+/// `b`'s: the test of a repeated reading's joint values and measured values.
+pub fn within(a: &[Real], b: &[Real], tol: Real) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+}
+
 /// The refusal's words for validation rows that repeat calibration rows: `rows`, the pairs
 /// of [`Measurements::shared_rows`] numbered as `numbered` says (`rows of the data`), the
 /// first five named.
@@ -179,11 +185,8 @@ impl Measurements {
         let mut cells: Vec<usize> = (0..self.len()).collect();
         cells.sort_unstable_by_key(|&i| (key(i), i));
         let same = |c: usize, v: usize| {
-            let near = |a: &[Real], b: &[Real], tol: Real| {
-                a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
-            };
-            near(&self.qs[c], &val.qs[v], SAME_JOINT)
-                && near(
+            within(&self.qs[c], &val.qs[v], SAME_JOINT)
+                && within(
                     self.points[c].as_slice(),
                     val.points[v].as_slice(),
                     SAME_POINT_MM,

@@ -357,8 +357,7 @@ impl SocketTask {
     /// validation figure would be the fit's (files copied under other names; two placements
     /// reach no pose alike to a micro-radian).
     fn check_disjoint(&self, cal: &KindFile, val: &KindFile) -> Result<()> {
-        let same =
-            |a: &[Real], b: &[Real]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= SAME_JOINT);
+        let same = |a: &[Real], b: &[Real]| crate::measurement::within(a, b, SAME_JOINT);
         let rows: Vec<(usize, usize)> = (val.qs.iter().enumerate())
             .filter_map(|(v, q)| cal.qs.iter().position(|c| same(c, q)).map(|c| (c, v)))
             .collect();
