@@ -555,7 +555,7 @@ def identifiability(robot, q, measure="position", *, between_poses=None, planes=
         robot: a :class:`Robot`.
         q: joint values (N, n).
         measure: ``position`` or ``pose`` (the tracker), or another instrument's kind:
-            ``distance``, ``plane``, ``sphere``, ``multi-target`` (``--measure``).
+            ``distance``, ``plane``, ``sphere``, ``socket``, ``multi-target`` (``--measure``).
         between_poses: ``distance``: lengths between consecutive poses, not from a pivot.
         planes: ``plane``: the number of planes (default 3); the poses are on them in turn.
         spheres: ``sphere``: the number of spheres (default 1), likewise.
@@ -658,7 +658,12 @@ def compare(a, b, *, tolerance=0.05):
             raise SettingError(f"setting `{name}`: expected a run's folder or its summary.json")
     if isinstance(tolerance, bool) or not isinstance(tolerance, numbers.Real):
         raise SettingError("setting `tolerance`: expected a number ≥ 0")
-    tolerance = float(tolerance)
+    try:
+        tolerance = float(tolerance)
+    except OverflowError:
+        raise SettingError(
+            f"setting `tolerance`: {tolerance} is beyond a 64-bit number; expected 0 to 10"
+        ) from None
     return Comparison(_calbench.compare(os.fspath(a), os.fspath(b), tolerance), tolerance)
 
 

@@ -149,7 +149,7 @@ fn param_list(key: &str, names: Option<Vec<String>>) -> PyResult<Vec<Param>> {
 }
 
 /// `prior`: a dict name → σ, or the path of a file of priors (as `--prior FILE`).
-fn priors(prior: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(Param, Real)>> {
+fn priors(prior: Option<&Bound<'_, PyAny>>, robot: &Robot) -> PyResult<Vec<(Param, Real)>> {
     let Some(prior) = prior else {
         return Ok(Vec::new());
     };
@@ -160,7 +160,7 @@ fn priors(prior: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<(Param, Real)>> {
                 "expected a dict parameter name → σ, or the path of a file of priors",
             )
         })?;
-        return calbench::identify::registry::prior_file(&path).map_err(err);
+        return calbench::identify::registry::prior_file(&path, robot).map_err(err);
     };
     d.iter()
         .map(|(k, v)| {
@@ -269,7 +269,7 @@ pub(crate) fn identify<'py>(
         .map(|m| m.parse::<Model>().map_err(|e| setting("models", e)))
         .collect::<PyResult<Vec<_>>>()?;
     // The priors are refused before the validation is read.
-    let priors = priors(prior.as_ref())?;
+    let priors = priors(prior.as_ref(), nominal)?;
     let (validated, validate_lines) = validation(nominal, validate.as_ref())?;
     let request = IdentifyRequest {
         registration,

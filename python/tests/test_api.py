@@ -299,6 +299,9 @@ def test_identify_with_fix_prior_cv_returns_the_cli_record(cli, simulated, tmp_p
     for bad in ((3,), (3.0, 10), (True, 10)):
         with pytest.raises(calbench.SettingError, match="setting `holdout`: expected"):
             calbench.identify(robot, q, p, holdout=bad)
+    # Integers too large for a count are said to be so (0 < LAST < EVERY holds for them).
+    with pytest.raises(calbench.SettingError, match="18446744073709551616 is too large for a count"):
+        calbench.identify(robot, q, p, holdout=(2**64, 2**65))
     with pytest.raises(calbench.SettingError, match="`q`: is not taken with `data`"):
         calbench.identify(robot, q, p, data=simulated / "measurements.csv")
 

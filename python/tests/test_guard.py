@@ -217,3 +217,41 @@ def test_a_shard_and_a_whole_run_refuse_each_others_folder(root, tmp_path):
         calbench.run(root / "scenarios/ban-fig3.toml", trials=1, shard=(0, 2), out=cells)
     assert {d: sorted(os.listdir(d)) for d in (whole, shard)} == before
     assert "shard.json" not in os.listdir(cells)
+
+
+def test_two_threads_writing_one_folder_leave_one_studys_folder(root, tmp_path):
+    """Two threads of one process write two studies into one folder at once: each writes
+    the folder whole or is refused as another thread's folder. They had shared one temporary
+    folder (named by the process), and one write failed while the other left a folder of
+    both studies' files."""
+    import threading
+
+    studies = [calbench.run(root / CI_GUARD, trials=20, seed=s) for s in (1, 2)]
+    alone = []
+    for i, s in enumerate(studies):
+        s.write(tmp_path / f"alone{i}")
+        alone.append(tmp_path / f"alone{i}")
+    names = sorted(p.name for p in alone[0].iterdir() if p.name != "timing.json")
+    for attempt in range(3):
+        out = tmp_path / f"both{attempt}"
+        start = threading.Barrier(2)
+        errors = []
+
+        def write(study):
+            start.wait()
+            try:
+                study.write(out)
+            except calbench.Error as e:
+                errors.append(str(e))
+
+        threads = [threading.Thread(target=write, args=(s,)) for s in studies]
+        for t in threads:
+            t.start()
+        for t in threads:
+            t.join()
+        assert all("another thread writes it" in e for e in errors), errors
+        assert len(errors) < 2
+        got = {n: (out / n).read_bytes() for n in names}
+        whole = [all(got[n] == (a / n).read_bytes() for n in names) for a in alone]
+        assert any(whole), (attempt, errors)
+        assert not [p for p in tmp_path.iterdir() if ".partial-" in p.name]

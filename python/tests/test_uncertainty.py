@@ -160,7 +160,8 @@ def test_compare_refuses_bad_arguments(runs, tmp_path):
     bad.write_text('{"results": []}')
     with pytest.raises(calbench.FileError, match="bad.json.*not a calbench summary"):
         calbench.compare(runs["a"], bad)
-    for tol in (-0.1, float("nan"), float("inf"), 10.5, 1e308, "5 %", True):
+    # 10**400 is beyond a float: refused as the setting, not a bare OverflowError.
+    for tol in (-0.1, float("nan"), float("inf"), 10.5, 1e308, "5 %", True, 10**400, -10**400):
         with pytest.raises(calbench.SettingError, match="tolerance"):
             calbench.compare(runs["a"], runs["b"], tolerance=tol)
     with pytest.raises(calbench.SettingError, match="`a`"):

@@ -38,10 +38,17 @@ impl FromStr for Holdout {
     fn from_str(s: &str) -> std::result::Result<Self, String> {
         let bad = || format!("`{s}` is not LAST/EVERY with 0 < LAST < EVERY, e.g. 3/10");
         let (a, b) = s.split_once('/').ok_or_else(bad)?;
-        let (last, every) = (
-            a.trim().parse::<usize>().map_err(|_| bad())?,
-            b.trim().parse::<usize>().map_err(|_| bad())?,
-        );
+        // A whole number too large for a count is said to be so, not to break the rule.
+        let count = |t: &str| match t.trim().parse::<usize>() {
+            Ok(n) => Ok(n),
+            Err(e) if *e.kind() == std::num::IntErrorKind::PosOverflow => Err(format!(
+                "`{s}`: {} is too large for a count of rows (at most {})",
+                t.trim(),
+                usize::MAX
+            )),
+            Err(_) => Err(bad()),
+        };
+        let (last, every) = (count(a)?, count(b)?);
         if last == 0 || last >= every {
             return Err(bad());
         }

@@ -145,12 +145,23 @@ pub(crate) fn validation_misfit(
 /// The row of the measured points `seen` that stands out of their spread against `model`
 /// (the nominal robot's tool points at the same poses): the one whose distance from the
 /// points' centroid is off the nominal robot's point's from theirs ([`gross_reading`] of
-/// those differences, which no frame changes); its index and ratio to the median row's.
+/// those differences, which no frame changes); its index and ratio to the median row's. The
+/// centroids leave out the row furthest off at first: a row metres away moves the centroid
+/// of a few rows so far that every row's distance changes, and none stood out.
 pub fn spread_outlier(model: &[Vec3], seen: &[Vec3]) -> Option<(usize, Real)> {
-    let centroid = |v: &[Vec3]| v.iter().fold(Vec3::zeros(), |s, p| s + p) / v.len() as Real;
-    let (cm, cs) = (centroid(model), centroid(seen));
-    let off: Vec<Real> = (model.iter().zip(seen))
-        .map(|(m, s)| (s - cs).norm() - (m - cm).norm())
-        .collect();
-    gross_reading(&off)
+    let off = |skip: Option<usize>| -> Vec<Real> {
+        let kept = |v: &[Vec3]| {
+            let sum = (v.iter().enumerate())
+                .filter(|&(i, _)| Some(i) != skip)
+                .fold(Vec3::zeros(), |s, (_, p)| s + p);
+            sum / (v.len() - usize::from(skip.is_some())).max(1) as Real
+        };
+        let (cm, cs) = (kept(model), kept(seen));
+        (model.iter().zip(seen))
+            .map(|(m, s)| (s - cs).norm() - (m - cm).norm())
+            .collect()
+    };
+    let first = off(None);
+    let furthest = (0..first.len()).max_by(|&a, &b| first[a].abs().total_cmp(&first[b].abs()))?;
+    gross_reading(&off(Some(furthest)))
 }

@@ -29,7 +29,7 @@ use crate::numeric::{Frame, Real, Vec3};
 use crate::robot::identifiability::Identifiability;
 use crate::robot::{Param, Robot};
 use crate::sim::instrument::{touch, Layout};
-use unfixed::{repeated, too_few, undetermined, unknowns_free};
+use unfixed::{misplaced_sockets, repeated, too_few, undetermined, unknowns_free};
 
 mod unfixed;
 
@@ -357,6 +357,8 @@ pub struct KindOutcome {
     /// `identified.json`, with why the result makes the robot worse (kept with
     /// `allow_worse`) among the rest.
     pub record: IdentifiedRecord,
+    /// The warning of a gross reading the fit kept ([`super::verdict::gross_kept`]).
+    pub gross: Option<String>,
 }
 
 impl KindOutcome {
@@ -368,11 +370,12 @@ impl KindOutcome {
     }
 
     /// The warnings of a result kept worse than the nominal robot or although it cannot be
-    /// physically right, if it is.
+    /// physically right, and of a gross reading the fit kept.
     pub fn warnings(&self) -> Vec<Said> {
         let worse = worse_warning(&self.record.allowed_worse);
         let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
-        worse.into_iter().chain(implausible).collect()
+        let gross = self.gross.clone().map(Said::from);
+        worse.into_iter().chain(implausible).chain(gross).collect()
     }
 }
 
@@ -510,6 +513,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     check_names(Opt::Params, nominal, &q.params)?;
     check_names(Opt::Fix, nominal, &q.fix)?;
     repeated(q, file)?;
+    misplaced_sockets(q, file)?;
     let chosen = if q.params.is_empty() {
         Chosen::Identifiable
     } else {
@@ -613,6 +617,8 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         &q.source,
         (q.allow_implausible, q.method.is_external()),
     )?;
+    let residuals = (&fit.residuals.0[..], &fit.residuals.1[..]);
+    let gross = super::verdict::gross_kept(residuals, r, |i| format!("the reading of {}", line(i)));
     let mut record =
         IdentifiedRecord::of(&nominal.name, &q.source, q.method.name(), &fit.params, r);
     if let Some((before, after)) = validation {
@@ -632,5 +638,6 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         fit,
         validation,
         record,
+        gross,
     })
 }

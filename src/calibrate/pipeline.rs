@@ -71,6 +71,8 @@ pub struct TrackerOutcome {
     pub kernel: Option<KernelResidual>,
     /// For a search, the box it explored (`None` for the other methods).
     pub search_box: Option<SearchBox>,
+    /// The warning of a gross reading the fit kept ([`verdict::gross_kept`]).
+    pub gross: Option<String>,
 }
 
 impl IdentifyRequest {
@@ -120,14 +122,28 @@ impl IdentifyRequest {
             return Err(Error::option(Models, why));
         }
         let empty = IdentifyData::Tracker(Measurements::default());
-        match std::mem::replace(&mut self.data, empty) {
+        let outcome = match std::mem::replace(&mut self.data, empty) {
             IdentifyData::Tracker(d) => self
                 .tracker(d)
                 .map(|o| IdentifyOutcome::Tracker(Box::new(o))),
             IdentifyData::Kind(f) => {
                 super::on_kind::kind_outcome(&self, &f).map(|o| IdentifyOutcome::Kind(Box::new(o)))
             }
+        }?;
+        // `robot.toml` reads back as the robot identified (docs/formats.md § 3.1): a value
+        // beyond a robot file's range (a search's box of a billion mm, kept past every
+        // refusal) would be written as a file no command reads.
+        if let Err(issue) = outcome.compensated().check() {
+            let msg = format!(
+                "{} identified a robot that no robot file holds ({}: {}), so nothing was \
+                 written",
+                self.method.shown_name(),
+                issue.place,
+                issue.msg
+            );
+            return Err(Error::file(&self.source, "data", msg));
         }
+        Ok(outcome)
     }
 
     /// The identification on a tracker's measurements `d`.
@@ -326,6 +342,11 @@ impl IdentifyRequest {
             Vec::new()
         };
         check_priors_identified(&self.priors, &params)?;
+        if !self.allow_rank_deficient {
+            let poses = (d.len(), d.measure().rows());
+            let priors = !self.priors.is_empty();
+            verdict::as_many_readings_as_parameters(&self.source, poses, params.len(), priors)?;
+        }
         let cross = match (&choice, self.cv) {
             (Some((cvs, best)), _) => Some(cvs[*best].clone()),
             (None, Some(k)) => {
@@ -357,8 +378,18 @@ impl IdentifyRequest {
         let undetermined = |c: &Calibrated, params: &[Param]| {
             if verdict::undetermined(c) && !self.allow_rank_deficient {
                 let (all, source) = ((&kinematic[..], params.len()), (self.source.as_path(), &d));
+                // What the readings show against the nominal robot's points.
+                let shown = || {
+                    let model = plausibility::tool_points(&nominal, &d.qs);
+                    plausibility::data_causes(&model, &d.points).1
+                };
                 return Err(verdict::undetermined_error(
-                    &nominal, all, c, source, &spec, &point,
+                    &nominal,
+                    all,
+                    c,
+                    source,
+                    &spec,
+                    (&point, &shown),
                 ));
             }
             Ok(())
@@ -437,6 +468,7 @@ impl IdentifyRequest {
                 self.method.is_external(),
             ),
         )?;
+        let kept_gross = verdict::gross_kept((&before, &after), &c.identified, point);
         drop((before, after));
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
         let diagnostics = diagnose(&Subject {
@@ -504,6 +536,7 @@ impl IdentifyRequest {
             residuals,
             record,
             kernel,
+            gross: kept_gross,
         })
     }
 }
@@ -534,7 +567,12 @@ impl TrackerOutcome {
         let implausible = plausibility::implausible_warning(&self.record.allowed_implausible);
         let worse = self.worse_warning();
         let edge = self.edge_warning().map(Said::from);
-        let others = worse.into_iter().chain(implausible).chain(edge);
+        let gross = self.gross.clone().map(Said::from);
+        let others = worse
+            .into_iter()
+            .chain(implausible)
+            .chain(edge)
+            .chain(gross);
         settle.into_iter().chain(others).collect()
     }
 

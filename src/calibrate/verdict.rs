@@ -32,14 +32,16 @@ pub fn undetermined_termination(t: Termination) -> bool {
 /// identified). The refusal names the option that accepts such a result. When the poses do
 /// determine every parameter (a solve made singular by the readings themselves), the
 /// message says so and names the gross reading the residuals point to, if any (`point`: the
-/// point of a row of `data` in words, by its line of the file it was read from).
+/// point of a row of `data` in words, by its line of the file it was read from), and what
+/// the readings show against the nominal robot's points (`shown`: a unit, a column of one
+/// value, two columns swapped; [`super::plausibility::data_causes`]).
 pub fn undetermined_error(
     nominal: &Robot,
     params: (&[Param], usize),
     c: &Calibrated,
     (source, data): (&Path, &Measurements),
     spec: &MethodSpec,
-    point: &dyn Fn(usize) -> String,
+    (point, shown): (&dyn Fn(usize) -> String, &dyn Fn() -> Vec<String>),
 ) -> Error {
     let a = analyse(nominal, params.0, &data.qs, data.measure());
     let ended = format!(
@@ -74,12 +76,28 @@ pub fn undetermined_error(
     }
     if a.rank >= params.0.len() {
         // The poses determine every kinematic parameter, yet the solve's rank fell short: no
-        // parameter or group of the analysis to name.
+        // parameter or group of the analysis to name. What can take rank beside the poses is
+        // named where the identification has it; the readings themselves are judged against
+        // the nominal robot's points (a unit, a column of one value, two columns swapped).
+        let mut beside = Vec::new();
+        if data.quats.is_some() {
+            beside.push("the orientation weight k");
+        }
+        if data.sigma_mm.is_some() {
+            beside.push("the points' σ");
+        }
+        if params.1 > params.0.len() {
+            beside.push("the parameters beside the kinematic ones");
+        }
+        let causes = shown();
+        let what = match (beside.is_empty(), causes.is_empty()) {
+            (_, false) => causes.join("; "),
+            (false, true) => format!("{} leave the rest undetermined", beside.join(" or ")),
+            (true, true) => "the readings themselves leave it short".to_string(),
+        };
         let msg = format!(
             "the poses determine all {} kinematic parameters, yet the solve's rank is {} of \
-             the {} identified: the rows' weights (the orientation weight k, the points' σ) \
-             or the parameters beside the kinematic ones leave the rest undetermined{}; \
-             {ended}. Check them, or pass ",
+             the {} identified: {what}{}; {ended}. Check the readings, or pass ",
             params.0.len(),
             c.identified.rank.unwrap_or(a.rank),
             params.1,
@@ -104,7 +122,7 @@ pub fn undetermined_error(
              or pass ",
             data.len(),
             params.1,
-            params.1.div_ceil(data.measure().rows())
+            params.1 / data.measure().rows() + 1
         ))
     } else {
         // Poses that do not tell the undetermined apart from their groups, or a robot whose
@@ -118,6 +136,33 @@ pub fn undetermined_error(
         .text(format!(" {fixed}, or pass "))
     };
     Error::file(source, "data", said.on(Opt::AllowRankDeficient))
+}
+
+/// Refuses `poses` poses of `per_pose` readings each (read from `source`) that give exactly
+/// as many readings as the `params` parameters, without priors (`priors`: whether there are
+/// any, which add readings of their own): a fit matches each reading whatever the robot and
+/// leaves none to check it, as a kind file's is refused (`on_kind::unfixed::too_few`). Fewer
+/// end rank-deficient and are refused after the solve, with what they leave undetermined.
+pub fn as_many_readings_as_parameters(
+    source: &Path,
+    (poses, per_pose): (usize, usize),
+    params: usize,
+    priors: bool,
+) -> Result<()> {
+    if poses * per_pose != params || priors {
+        return Ok(());
+    }
+    let msg = format!(
+        "{poses} poses give {params} readings for {params} parameters: a fit would match every \
+         reading and leave none to check it, so nothing was written. Measure at least {} \
+         poses, or pass ",
+        params / per_pose + 1
+    );
+    Err(Error::file(
+        source,
+        "data",
+        allowing(msg, Opt::AllowRankDeficient),
+    ))
 }
 
 /// `msg` followed by how the option `allow` is turned on.
@@ -303,6 +348,39 @@ pub fn worse_error(
     )
 }
 
+/// The warning of a fit that kept a gross reading: the reading that stands out
+/// ([`gross_reading`], above [`WORSE_FLOOR_MM`], the rounding of an exact fit) among the
+/// residuals (one per reading) after calibration, or else before it (a fit of few readings
+/// per unknown spreads one reading's error over the rest), while the fit `id` gave it a
+/// weight (0 for one a robust method rejected; a method that reports no weights weighed
+/// every reading); `named` names the reading in words (`the point on line 55 of grid.csv`).
+pub fn gross_kept(
+    (before, after): (&[Real], &[Real]),
+    id: &crate::identify::Identified,
+    named: impl Fn(usize) -> String,
+) -> Option<String> {
+    let weight = |i: usize| match id.own_weights {
+        true => id.weights.get(i).copied().unwrap_or(1.0),
+        false => 1.0,
+    };
+    let stands_out = |residuals: &[Real], at: &'static str| {
+        gross_reading(residuals)
+            .filter(|&(i, _)| residuals[i].abs() > WORSE_FLOOR_MM)
+            .map(|(i, ratio)| (i, ratio, residuals[i].abs(), at))
+    };
+    let (i, ratio, residual, at) =
+        stands_out(after, "after").or_else(|| stands_out(before, "before"))?;
+    (weight(i) != 0.0).then(|| {
+        format!(
+            "{} has a residual of {residual:.3} mm {at} calibration, {ratio:.0} times the \
+             median, and the fit kept it: one gross reading pulls a least-squares fit towards \
+             it. Check that reading and leave it out, or identify with a robust method (igg3), \
+             which rejects it",
+            named(i),
+        )
+    })
+}
+
 /// `reading` (a reading the residuals point to, in words) as the likely cause of a refusal.
 pub fn gross_likely(reading: String) -> String {
     format!("{reading}: a gross reading is the likely cause")
@@ -340,6 +418,21 @@ pub fn radians_hint(robot: &Robot, qs: &[Vec<Real>]) -> Option<String> {
             robot.name
         )
     })
+}
+
+/// Refuses joint values read from `path` (a program, a pose list) that look like radians for
+/// a `robot` in degrees ([`radians_hint`]), naming the file: read as degrees they are poses a
+/// few degrees from the zero pose, which a program corrected or an analysis would take as
+/// given. A list of fewer than [`crate::measurement::csv::MIN_DISTINCT_POSES`] distinct poses
+/// is no evidence (a program of the zero pose) and is taken.
+pub fn radians_refused(path: &Path, robot: &Robot, qs: &[Vec<Real>]) -> Result<()> {
+    if crate::measurement::csv::distinct_poses(qs, &[], robot.dof()).is_err() {
+        return Ok(());
+    }
+    match radians_hint(robot, qs) {
+        Some(why) => Err(Error::file(path, "joint values", why)),
+        None => Ok(()),
+    }
 }
 
 /// The root mean square of `v` (NaN when empty).

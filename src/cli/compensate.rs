@@ -93,7 +93,11 @@ pub fn run(args: &CompensateArgs) -> Result<()> {
         return Err(Error::setting("--identified", msg).into());
     }
     let program = match &args.joints {
-        Some(path) => calbench::sim::poses::read_pose_list(path, &nominal)?,
+        Some(path) => {
+            let qs = calbench::sim::poses::read_pose_list(path, &nominal)?;
+            calbench::calibrate::verdict::radians_refused(path, &nominal, &qs)?;
+            qs
+        }
         None => Vec::new(),
     };
     let found = not_a_calibration_of(&nominal, &ident, &program);

@@ -105,7 +105,11 @@ pub fn run(args: &IdentifiabilityArgs) -> Result<()> {
         return of_kind_file(args, &robot, path, kind);
     }
     let qs = match &args.poses_file {
-        Some(p) => calbench::sim::poses::read_pose_list(p, &robot)?,
+        Some(p) => {
+            let qs = calbench::sim::poses::read_pose_list(p, &robot)?;
+            calbench::calibrate::verdict::radians_refused(p, &robot, &qs)?;
+            qs
+        }
         None => {
             let mut rng = calbench::numeric::rng::stream(args.seed, "identifiability");
             calbench::robot::sampling::uniform_joint_poses(&robot, args.poses, &mut rng)

@@ -182,12 +182,14 @@ fn prior_arg(text: &str) -> std::result::Result<PriorArg, String> {
 /// The priors of `--prior` arguments in their order, each file's by name: a file that
 /// is not TOML, holds no prior, or names a parameter or σ that is not one is refused naming
 /// the file, the line and the key.
-fn priors(args: &[PriorArg]) -> calbench::Result<Vec<(Param, Real)>> {
+fn priors(args: &[PriorArg], robot: &Robot) -> calbench::Result<Vec<(Param, Real)>> {
     let mut all = Vec::new();
     for a in args {
         match a {
             PriorArg::One(p, sigma) => all.push((*p, *sigma)),
-            PriorArg::File(path) => all.extend(calbench::identify::registry::prior_file(path)?),
+            PriorArg::File(path) => {
+                all.extend(calbench::identify::registry::prior_file(path, robot)?);
+            }
         }
     }
     Ok(all)
@@ -269,7 +271,7 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
     let request = IdentifyRequest {
         registration: args.registration,
         k: args.k,
-        priors: priors(&args.prior)?,
+        priors: priors(&args.prior, &nominal)?,
         validate,
         validate_source: args.validate.clone(),
         validate_lines,

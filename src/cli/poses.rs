@@ -59,6 +59,10 @@ pub fn run(args: &PosesArgs) -> Result<()> {
     let out = &args.out;
     super::guard_out(out, &OUTPUTS, [&args.scenario])?;
     let sc = Scenario::load(&args.scenario)?;
+    // As `run` warns of it: a robot too small for its length unit.
+    for w in sc.warnings() {
+        eprintln!("warning: {w}");
+    }
     let (optimiser, full) = args
         .strategy
         .selection()

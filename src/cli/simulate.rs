@@ -46,6 +46,10 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if args.measure.is_some() {
         return Err(simulated::no_instruments(&args.scenario).into());
     }
+    // As `run` warns of them: a robot too small for its length unit, settings not read.
+    for w in sc.warnings() {
+        eprintln!("warning: {w}");
+    }
     let study = Study::new(sc)?;
     let sim = trial::simulate_trial(&study, trial, "--trial")?;
     simulated::trial_folder(out, &study, &sim)?;

@@ -15,7 +15,7 @@ use super::{LmOptions, LsOptions, Method, PoseErrorLs, RidgeOptions, RobustOptio
 use crate::error::{Error, Result};
 use crate::identify::qiao::{check_k, BasOptions, BasPsoOptions, PsoOptions, DEFAULT_K};
 use crate::numeric::Real;
-use crate::robot::Param;
+use crate::robot::{Param, Robot};
 
 /// A refused `[[methods]]` entry: the key (empty when the entry as a whole is wrong) and
 /// what is wrong.
@@ -298,18 +298,28 @@ pub fn prior_value(name: &str, v: &toml::Value) -> std::result::Result<(Param, R
     )
 }
 
-/// The priors of the file `path`, `NAME = σ` lines (TOML), by name (`--prior FILE`,
-/// Python's `prior=PATH`): a file that is not TOML, holds no prior, or names a parameter or σ
-/// that is not one is refused naming the file, the line and the key.
-pub fn prior_file(path: &std::path::Path) -> Result<Vec<(Param, Real)>> {
+/// The priors of the file `path` for `robot`, `NAME = σ` lines (TOML), by name (`--prior
+/// FILE`, Python's `prior=PATH`): a file that is not TOML, holds no prior, or names a
+/// parameter or σ that is not one, or a parameter `robot` does not have (`theta9` of a
+/// six-joint arm; a joint's compliance `cN` is the compliance model's), is refused naming
+/// the file, the line and the key.
+pub fn prior_file(path: &std::path::Path, robot: &Robot) -> Result<Vec<(Param, Real)>> {
     let text = crate::error::read_text(path)?;
     let t: toml::Table = crate::error::toml_keys(path, &text)?;
     if t.is_empty() {
         return Err(Error::file(path, "priors", "holds no `NAME = σ` line"));
     }
+    let known = robot.params();
     t.iter()
         .map(|(name, v)| {
             prior_value(name, v)
+                .and_then(|(p, sigma)| match known.contains(&p) || p.is_compliance() {
+                    true => Ok((p, sigma)),
+                    false => Err(format!(
+                        "`{p}` is not a parameter of robot `{}`",
+                        robot.name
+                    )),
+                })
                 .map_err(|m| Error::toml_file(path, &text, name, format!("key `{name}`"), m))
         })
         .collect()

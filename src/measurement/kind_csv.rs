@@ -143,6 +143,23 @@ impl KindFile {
             })
             .map(|(f, _)| f.as_path())
     }
+
+    /// Row `row` in a refusal's words: `line L of FILE` when the rows come from several files
+    /// ([`Self::files`]: a 0-based row would count across them), else `row R` (0-based).
+    pub fn row_named(&self, row: usize) -> String {
+        match (self.file_of(row), self.lines.get(row)) {
+            (Some(f), Some(line)) => format!("line {line} of {}", f.display()),
+            _ => format!("row {row}"),
+        }
+    }
+
+    /// How [`Self::row_named`] numbers the rows, as a refusal says it.
+    pub fn rows_numbered(&self) -> &'static str {
+        match self.files.is_empty() {
+            true => "0-based rows",
+            false => "each by its file's line",
+        }
+    }
 }
 
 /// The kind of the measurement file at `path` by its header: `Some` when it has one of the

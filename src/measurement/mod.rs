@@ -108,11 +108,26 @@ pub const SAME_MEASUREMENT: &str = "the same joint values and measured point";
 /// [`shared_rows_refusal`] of readings that are the same when `same` holds (`the same joint
 /// values` for a socket's, which has no measured point).
 pub fn repeated_readings_refusal(rows: &[(usize, usize)], same: &str, numbered: &str) -> String {
+    let (cal, val) = (
+        |r: usize| format!("calibration row {r}"),
+        |r: usize| format!("validation row {r}"),
+    );
+    repeated_readings_named(rows, same, &format!("0-based {numbered}"), [&cal, &val])
+}
+
+/// [`repeated_readings_refusal`] of rows each side names in its own words (`names`: the
+/// calibration's, the validation's; `line 4 of s2.csv`), as `numbered` says.
+pub fn repeated_readings_named(
+    rows: &[(usize, usize)],
+    same: &str,
+    numbered: &str,
+    names: [&dyn Fn(usize) -> String; 2],
+) -> String {
     format!(
-        "{} validation row(s) repeat a calibration row ({same}; 0-based {numbered}): {}; a \
-         validation row must not calibrate",
+        "{} validation row(s) repeat a calibration row ({same}; {numbered}): {}; a validation \
+         row must not calibrate",
         rows.len(),
-        pairs_named(rows, ["calibration row", "validation row"])
+        pairs_named(rows, names)
     )
 }
 
@@ -131,19 +146,32 @@ pub const REPEATED_VALIDATION: &str =
 /// makes them the same (`same`: [`SAME_MEASUREMENT`] for a tracker's), and `why` a
 /// copy is refused ([`REPEATED_CALIBRATION`], [`REPEATED_VALIDATION`]).
 pub fn repeated_rows_refusal(rows: &[(usize, usize)], same: &str, why: &str) -> String {
+    let row = |r: usize| format!("row {r}");
+    repeated_rows_named(rows, same, "0-based rows", &row, why)
+}
+
+/// [`repeated_rows_refusal`] of rows named by `name` (`line 4 of s2.csv`), as `numbered` says.
+pub fn repeated_rows_named(
+    rows: &[(usize, usize)],
+    same: &str,
+    numbered: &str,
+    name: &dyn Fn(usize) -> String,
+    why: &str,
+) -> String {
     format!(
-        "{} row(s) repeat an earlier row ({same}; 0-based rows): {}; {why}",
+        "{} row(s) repeat an earlier row ({same}; {numbered}): {}; {why}",
         rows.len(),
-        pairs_named(rows, ["row", "row"])
+        pairs_named(rows, [name, name])
     )
 }
 
-/// The first five pairs of `rows`, each `A a = B b` with `names` [A, B], and how many more.
-fn pairs_named(rows: &[(usize, usize)], [a, b]: [&str; 2]) -> String {
+/// The first five pairs of `rows`, each `a = b` as `names` [a's, b's] name them, and how many
+/// more.
+fn pairs_named(rows: &[(usize, usize)], [a, b]: [&dyn Fn(usize) -> String; 2]) -> String {
     let shown: Vec<String> = rows
         .iter()
         .take(5)
-        .map(|(x, y)| format!("{a} {x} = {b} {y}"))
+        .map(|&(x, y)| format!("{} = {}", a(x), b(y)))
         .collect();
     match rows.len() - shown.len() {
         0 => shown.join(", "),

@@ -249,6 +249,60 @@ pub fn alive(pid: u32) -> bool {
         .is_ok_and(|s| s.success())
 }
 
+/// The output folders (resolved) this process writes, each with the thread that writes it
+/// ([`Writing`]).
+static WRITING: std::sync::Mutex<Vec<(PathBuf, std::thread::ThreadId)>> =
+    std::sync::Mutex::new(Vec::new());
+
+/// A thread's hold on an output folder while it writes it: a run from its checkpoint to its
+/// last file, a folder written as a whole ([`super::atomically`]). Another thread of this
+/// process is refused the folder until the hold is dropped, as another process is refused a
+/// folder whose checkpoint names it ([`live_writer`]): both would write one temporary folder
+/// and one checkpoint (named by the process), and the second would remove the first's as a
+/// killed run's. The thread that holds a folder may hold it again (a run's checkpoint, then
+/// its output).
+#[must_use = "the folder is released as soon as this is dropped"]
+pub struct Writing(Option<PathBuf>);
+
+impl Writing {
+    /// Holds `out` for this thread, or refuses it when another thread of this process holds
+    /// it.
+    pub fn hold(out: &Path) -> Result<Writing> {
+        let path = resolved(out);
+        let me = std::thread::current().id();
+        let mut held = WRITING
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        match held.iter().find(|(p, _)| *p == path) {
+            Some((_, t)) if *t == me => Ok(Writing(None)),
+            Some(_) => Err(Error::option(
+                crate::error::Opt::Out,
+                format!(
+                    "{} is the output folder of a run still in progress in this process (another \
+                     thread writes it); writing there would destroy it (nothing was written). \
+                     Wait for it",
+                    out.display()
+                ),
+            )),
+            None => {
+                held.push((path.clone(), me));
+                Ok(Writing(Some(path)))
+            }
+        }
+    }
+}
+
+impl Drop for Writing {
+    fn drop(&mut self) {
+        if let Some(path) = self.0.take() {
+            let mut held = WRITING
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            held.retain(|(p, _)| *p != path);
+        }
+    }
+}
+
 /// [`guard_out`] of a folder written with no input named: the root and the home folder.
 pub fn guard_folder(out: &Path, key: &str) -> Result<()> {
     paths(out, key, &[], None::<&Path>)
@@ -310,4 +364,29 @@ pub fn guard_data_folder<P: AsRef<Path>>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Writing;
+
+    /// A folder held by one thread is refused to another until the hold is dropped; the
+    /// thread that holds it may hold it again (a run's checkpoint, then its output), and that
+    /// second hold does not release it.
+    #[test]
+    fn a_folder_one_thread_writes_is_refused_to_another_until_released() {
+        let out = std::env::temp_dir().join(format!("calbench-hold-{}", std::process::id()));
+        let other = |out: std::path::PathBuf| {
+            std::thread::spawn(move || Writing::hold(&out).map(drop).map_err(|e| e.to_string()))
+                .join()
+                .unwrap()
+        };
+        let first = Writing::hold(&out).unwrap();
+        let again = Writing::hold(&out.join(".")).unwrap();
+        drop(again);
+        let refused = other(out.clone()).unwrap_err();
+        assert!(refused.contains("another thread writes it"), "{refused}");
+        drop(first);
+        other(out).unwrap();
+    }
 }

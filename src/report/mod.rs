@@ -318,6 +318,7 @@ pub fn atomically(
         Error::option(crate::error::Opt::Out, format!("{} {why}", p.display()))
     };
     guard::guard_folder(out, "out")?;
+    let _writing = guard::Writing::hold(out)?;
     if let Some(p) = blocked_output(out, None::<&str>) {
         return Err(in_the_way(p));
     }

@@ -31,7 +31,7 @@ use serde::{Deserialize, Serialize};
 
 use super::cells::{Cells, Instruments};
 use crate::error::{Error, Result};
-use crate::report::guard::{alive, host, writing};
+use crate::report::guard::{alive, host, writing, Writing};
 use crate::report::MadeFolders;
 use crate::runner::as_run::{one_effect, scenario_as_run, settings_difference, trials_as_run};
 use crate::runner::shard::FormatOnly;
@@ -86,6 +86,8 @@ impl Meta {
 /// already recorded, and rewrites `checkpoint.json` every [`CHUNK`] trials.
 pub struct Checkpoint {
     dir: PathBuf,
+    /// The output folder held for this thread while the run writes it.
+    _writing: Writing,
     /// The folders made for it (the checkpoint's and those holding it): the ones still empty
     /// are removed again when it is.
     _made: MadeFolders,
@@ -141,6 +143,7 @@ impl Checkpoint {
             let why = s.fits(scenario.units());
             why.map_err(|m| Error::option(crate::error::Opt::Shard, m))?;
         }
+        let held = Writing::hold(out)?;
         crate::runner::shard::discard_unfinished(out, "starting anew", reporter)?;
         let dir = crate::report::checkpoint_folder(out);
         let made = MadeFolders::create(&dir)?;
@@ -166,6 +169,7 @@ impl Checkpoint {
         write_meta(&dir, &meta)?;
         Ok(Checkpoint {
             _made: made,
+            _writing: held,
             dir,
             id: meta.id(),
             meta,
@@ -186,6 +190,7 @@ impl Checkpoint {
         given: Option<&AnyScenario>,
         force: bool,
     ) -> Result<(Checkpoint, AnyScenario, Option<Shard>, Records)> {
+        let held = Writing::hold(out)?;
         let dir = crate::report::checkpoint_folder(out);
         let path = dir.join("checkpoint.json");
         let text = crate::error::read_bounded_text(&path).map_err(|e| {
@@ -321,6 +326,7 @@ impl Checkpoint {
         Ok((
             Checkpoint {
                 _made: MadeFolders::create(&dir)?,
+                _writing: held,
                 dir,
                 meta,
                 id,

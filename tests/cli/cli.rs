@@ -239,7 +239,7 @@ fn identify_refuses_fewer_readings_than_parameters() {
         assert!(
             err.contains("five.csv: data:")
                 && err.contains(
-                    "5 poses give 15 readings for 24 parameters: measure at least 8 poses"
+                    "5 poses give 15 readings for 24 parameters: measure at least 9 poses"
                 )
                 && err.contains("--allow-rank-deficient"),
             "{method}: {err}"
@@ -262,6 +262,62 @@ fn identify_refuses_fewer_readings_than_parameters() {
         (&j["termination"], &j["rank"]),
         (&"rank-deficient".into(), &15.into())
     );
+}
+
+/// Eight poses of positions give 24 readings for the IRB2600's 24 parameters: refused before
+/// any solve, as a kind file of as many readings as unknowns is; `ls` had matched every
+/// reading and written `sigma0` null. A prior on one parameter, or
+/// `--allow-rank-deficient`, writes it.
+#[test]
+fn identify_refuses_as_many_readings_as_parameters() {
+    let robot = calbench::robot::builtin::irb2600();
+    let truth = robot.with_errors(&[(calbench::robot::Param::A(1), 0.5)]);
+    // Poses spread over the joints' ranges (rad), as no formula of one variable spreads them.
+    let qs: Vec<Vec<f64>> = (0..8)
+        .map(|i| {
+            let joint = |j: usize| 1.2 * (1.7 * i as f64 + 2.3 * j as f64 + 0.5).sin();
+            (0..6).map(joint).collect()
+        })
+        .collect();
+    let dir = tmp_dir("cli-exact-count");
+    let file = dir.join("eight.csv");
+    crate::common::write_points(&file, &robot, qs, |q| truth.fk(q).pos);
+    let prior = dir.join("prior.toml");
+    std::fs::write(&prior, "a2 = 0.5\n").unwrap();
+    let identify = |extra: &[&str], out: &str| {
+        let args = ["identify", "--robot", "irb2600", "--data", path_arg(&file)];
+        let out = dir.join(out);
+        let o = calbench(
+            &[
+                &args[..],
+                &["--method", "ls", "--out", path_arg(&out)],
+                extra,
+            ]
+            .concat(),
+        );
+        (o, out)
+    };
+    let (o, out) = identify(&[], "refused");
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = "eight.csv: data: 8 poses give 24 readings for 24 parameters: a fit would match \
+                every reading and leave none to check it, so nothing was written. Measure at \
+                least 9 poses, or pass --allow-rank-deficient";
+    assert!(
+        !o.status.success() && err.contains(want) && !out.exists(),
+        "{err}"
+    );
+    for (extra, name) in [
+        (&["--prior", path_arg(&prior)][..], "prior"),
+        (&["--allow-rank-deficient"][..], "allowed"),
+    ] {
+        let (o, out) = identify(extra, name);
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(out.join("identified.json").exists());
+    }
 }
 
 /// `identify --set KEY=VALUE` sets any option of the method (here the search box of BAS on

@@ -558,3 +558,76 @@ fn an_empty_program_or_target_list_names_the_header_it_needs() {
         assert!(!err.contains(&format!("{header},")), "{err}");
     }
 }
+
+/// A program in radians for the IRB2600, which takes degrees, is refused by `compensate` and
+/// by `identifiability --poses-file`, naming the file: read as degrees it is poses a few
+/// degrees from zero, which `compensate` had corrected onto other arm configurations (joint
+/// moves of 170°, each flagged `ok`). The same program in degrees is taken, and so is a
+/// program of the zero pose alone.
+#[test]
+fn a_program_in_radians_for_a_robot_in_degrees_is_refused_naming_the_file() {
+    let d = tmp_dir("cli-compensate-radians");
+    let degrees = [
+        [10.0, 20.0, -30.0, 40.0, 50.0, -60.0],
+        [-35.0, 5.0, 15.0, -80.0, 30.0, 90.0],
+        [60.0, -25.0, 40.0, 10.0, -45.0, 120.0],
+        [120.0, 35.0, -10.0, -150.0, 70.0, -20.0],
+    ];
+    let write = |name: &str, rows: Vec<Vec<f64>>| {
+        let text: String = rows
+            .iter()
+            .map(|q| {
+                q.iter()
+                    .map(|v| format!("{v:.9}"))
+                    .collect::<Vec<_>>()
+                    .join(",")
+                    + "\n"
+            })
+            .collect();
+        let path = d.join(name);
+        std::fs::write(&path, format!("q1,q2,q3,q4,q5,q6\n{text}")).unwrap();
+        path
+    };
+    let deg = write("deg.csv", degrees.iter().map(|q| q.to_vec()).collect());
+    let rad = write(
+        "rad.csv",
+        degrees
+            .iter()
+            .map(|q| q.iter().map(|v| v.to_radians()).collect())
+            .collect(),
+    );
+    let zero = write("zero.csv", vec![vec![0.0; 6]]);
+    let compensate = |program: &Path, out: &Path| {
+        let args = [
+            "compensate",
+            "--robot",
+            "irb2600",
+            "--identified",
+            "irb2600",
+        ];
+        let rest = ["--joints", path_arg(program), "--out", path_arg(out)];
+        calbench(&[&args[..], &rest[..]].concat())
+    };
+    let out = d.join("corrected.csv");
+    let o = compensate(&rad, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = format!(
+        "{}: joint values: every revolute joint value lies within",
+        rad.display()
+    );
+    assert!(!o.status.success() && err.contains(&want), "{err}");
+    assert!(err.contains("likely in radians") && !out.exists(), "{err}");
+    let o = calbench(&[
+        "identifiability",
+        "--robot",
+        "irb2600",
+        "--poses-file",
+        path_arg(&rad),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains(&want), "{err}");
+    for program in [&deg, &zero] {
+        let o = compensate(program, &out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+}

@@ -188,3 +188,51 @@ fn repeated_kind_rows_are_refused() {
     calbench_ok(&identify_args(&second, &out, &["--method", "ls"]));
     assert!(out.join("identified.json").exists());
 }
+
+/// A socket file whose socket 2 is given 10 times its distance (500 mm for 50) is refused at
+/// the line of socket 2's first row and its column, as a socket task's `sockets.distances_mm`
+/// is: the rows that could not reach socket 2 there had been dropped, and the file refused as
+/// "socket 2 has no pose" although it has.
+#[test]
+fn a_socket_distance_in_another_unit_is_refused_at_its_column() {
+    let dir = tmp_dir("cli-kinds-socket-unit");
+    let entry = "[[measurement]]\nkind = \"socket\"\nsockets = 2\nsocket_distance_mm = 50.0";
+    let sim = simulate(&dir, "s", entry, &["--measure", "socket"]);
+    let csv = read(&sim.join("measurements.csv"));
+    let mut lines: Vec<String> = csv.lines().map(str::to_string).collect();
+    let header: Vec<String> = lines[0].split(',').map(str::to_string).collect();
+    let (s, k) = (
+        header.iter().position(|c| c == "socket").unwrap(),
+        header
+            .iter()
+            .position(|c| c == "socket_distance_mm")
+            .unwrap(),
+    );
+    let mut first = None;
+    for (i, line) in lines.iter_mut().enumerate().skip(1) {
+        let mut cells: Vec<String> = line.split(',').map(str::to_string).collect();
+        if cells[s] == "2" {
+            first.get_or_insert(i + 1);
+            cells[k] = format!("{}", cells[k].parse::<f64>().unwrap() * 10.0);
+        }
+        *line = cells.join(",");
+    }
+    let data = dir.join("tenfold.csv");
+    std::fs::write(&data, lines.join("\n") + "\n").unwrap();
+    let out = dir.join("out");
+    let o = calbench(&identify_args(&data, &out, &["--method", "lm"]));
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = format!(
+        "tenfold.csv: line {}, column socket_distance_mm: socket 2 is 500 mm from socket 1, \
+         where the nominal robot puts the tool points of its rows ",
+        first.unwrap()
+    );
+    assert!(
+        !o.status.success() && err.contains(&want) && !out.exists(),
+        "{err}"
+    );
+    assert!(
+        err.contains("10 times nearer): are the file's distances"),
+        "{err}"
+    );
+}

@@ -47,6 +47,7 @@ mod plausible;
 mod practice;
 mod precision;
 mod profiles;
+mod rank_causes;
 mod reading_lines;
 mod readmit;
 mod readmit_cv;

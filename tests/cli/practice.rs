@@ -331,12 +331,18 @@ fn fix_holds_and_a_prior_pulls_towards_nominal() {
         );
         assert!(!d.join("twice").exists());
     }
-    // A σ whose precision 1/σ² overflows is refused at its key, in a file as inline.
+    // A σ whose precision 1/σ² overflows is refused at its key, in a file as inline; so is
+    // a parameter the robot lacks, in a file (it had been refused as `--prior`'s alone).
     std::fs::write(d.join("tiny.toml"), "a2 = 1e-300\n").unwrap();
+    std::fs::write(d.join("nine.toml"), "a2 = 0.5\ntheta9 = 1.0\n").unwrap();
     for (arg, says) in [
         (
             path_arg(&d.join("tiny.toml")),
             "tiny.toml: line 1, key `a2`: σ = 1e-300 is too small",
+        ),
+        (
+            path_arg(&d.join("nine.toml")),
+            "nine.toml: line 2, key `theta9`: `theta9` is not a parameter of robot",
         ),
         (
             "a2=1e-300",

@@ -164,6 +164,26 @@ fn a_validation_file_in_metres_is_refused_naming_the_file_and_the_rows() {
     let at = format!("error: {val}: data: the validation points spread ");
     let row = format!("; the point on line 6 of {val} stands out: its distance from the points'");
     assert!(err.starts_with(&at) && err.contains(&row), "{err}");
+    // Twelve rows, row 3's x 40 m off: it had moved the rows' centroid so far that every
+    // row's distance changed, and the refusal named "all 12 rows".
+    let (cal, val) = split_edited(&d, "val-12.csv", |i, c| {
+        if i == 3 {
+            c[6] = (c[6].parse::<f64>().unwrap() + 40_000.0).to_string();
+        }
+    });
+    let kept: Vec<String> = read(Path::new(&val))
+        .lines()
+        .take(14)
+        .map(String::from)
+        .collect();
+    std::fs::write(&val, kept.join("\n") + "\n").unwrap();
+    let err = refused(&identify(&d, &cal, &["--validate", &val]), &[]);
+    let row = format!("; the point on line 6 of {val} stands out: its distance from the points'");
+    assert!(
+        err.starts_with(&at.replace("val-1.csv", "val-12.csv")),
+        "{err}"
+    );
+    assert!(err.contains(&row) && !err.contains("all 12 rows"), "{err}");
 }
 
 /// A validation file with rows copied had its copies counted again in its figures; it is

@@ -606,7 +606,38 @@ fn a_validation_placement_that_repeats_the_calibration_rows_is_refused() {
     assert!(
         err.contains("sockets.validation: ")
             && err.contains("validation row(s) repeat a calibration row (the same joint values;")
-            && err.contains("calibration row 0 = validation row 0"),
+            && err.contains("each by its file's line): "),
         "{err}"
     );
+    // Each row by its own file's line (headerless files: the first row is on line 1).
+    let line = |place: &str, l: usize| {
+        format!(
+            "line {l} of {}",
+            dir.join(place).join("hole_0.csv").display()
+        )
+    };
+    assert!(
+        err.contains(&format!("{} = {}", line("front", 1), line("right", 1))),
+        "{err}"
+    );
+}
+
+/// A row of socket 2's calibration file repeated at its end is refused, named by that file's
+/// lines: a 0-based row had counted across the placement's files.
+#[test]
+fn a_placement_row_repeated_is_refused_by_its_files_line() {
+    let dir = tmp_dir("cli-socket-task-repeated-row");
+    let task = copied_task(&dir, "", "socket_spread_mm", "repeated");
+    let file = dir.join("front/hole_1.csv");
+    let text = read(&file);
+    let lines: Vec<&str> = text.lines().collect();
+    std::fs::write(&file, format!("{text}{}\n", lines[2])).unwrap();
+    let err = refused_task(&task, &dir.join("out"));
+    let want = format!(
+        "1 row(s) repeat an earlier row (the same joint values and socket; each by its file's \
+         line): line 3 of {0} = line {1} of {0}; a copy counts one reading twice",
+        file.display(),
+        lines.len() + 1
+    );
+    assert!(err.contains(&want), "{err}");
 }

@@ -504,7 +504,20 @@ fn error_sizes_the_kind_does_not_read_are_named_in_a_warning() {
             let said = format!("warning: errors.{key} is not used: errors.kind is \"{kind}\"");
             assert_eq!(err.contains(&said), warned.contains(&key), "{kind}: {err}");
         }
+        assert!(!err.contains("draws angle errors"), "{kind}: {err}");
     }
+    // An angle error of 3 rad (degrees meant) is named: the run had printed η of -34873 %
+    // without a word.
+    let sc = d.join("s.toml");
+    let degrees = text.replace(
+        "\nkind = \"paper\"\n",
+        "\nkind = \"paper\"\nangle_rad = 3.0\n",
+    );
+    std::fs::write(&sc, degrees).unwrap();
+    let err = warnings_of_a_run(&sc, &d.join("o"));
+    let said = "warning: errors.angle_rad = 3 rad (171.9°) draws angle errors beyond the 5° a \
+                calibration moves: is it in degrees?";
+    assert!(err.contains(said), "{err}");
 }
 
 /// An instruments study's `robot` that is neither built in nor a file had been refused as the
@@ -570,6 +583,17 @@ fn a_robot_too_small_for_its_length_unit_is_named_in_a_warning() {
         ),
         "{err}"
     );
+    // `simulate` and `poses` of that scenario say so too (they had said nothing).
+    let sc = d.join("s.toml");
+    for command in ["simulate", "poses"] {
+        let out = d.join(command);
+        let mut args = vec![command, path(&sc), "--out", path(&out)];
+        if command == "poses" {
+            args.extend(["--strategy", "random"]);
+        }
+        let said = String::from_utf8_lossy(&calbench(&args).stderr).to_string();
+        assert!(said.contains("add up to 1.683 mm"), "{command}: {said}");
+    }
     let robots = String::from_utf8(crate::common::calbench_ok(&["robots"]).stdout).unwrap();
     let builtins = robots.lines().filter_map(|l| l.split_whitespace().next());
     let shipped = [

@@ -350,3 +350,96 @@ fn export_toml_and_ur_yaml_writes_both() {
         read(&yaml.join("robot.toml"))
     );
 }
+
+/// A tracker reading moved by 20 mm (line 22) is kept by `ls`, which the fit does not make
+/// worse: the result is written with a warning naming the reading's line, on stderr and in
+/// `report.md`; `igg3` rejects the reading, and warns of nothing. A distance file with a
+/// reading 50 mm long is written by `lm` with the same warning, naming its line.
+#[test]
+fn a_gross_reading_the_fit_keeps_is_warned_of() {
+    let d = tmp_dir("cli-gross-kept");
+    let pos = ur10_positions(&d);
+    let text = read(&pos);
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut cells: Vec<String> = lines[21].split(',').map(str::to_string).collect();
+    cells[7] = (cells[7].parse::<f64>().unwrap() + 20.0).to_string();
+    lines[21] = cells.join(",");
+    let bad = d.join("gross.csv");
+    std::fs::write(&bad, lines.join("\n") + "\n").unwrap();
+    let said = format!(
+        "warning: the point on line 22 of {} has a residual of ",
+        bad.display()
+    );
+    for (method, warned) in [("ls", true), ("igg3", false)] {
+        let out = d.join(format!("out-{method}"));
+        let robot = ex("ur10.toml");
+        let args = ["identify", "--robot", &robot, "--data", path_arg(&bad)];
+        let o = calbench(&[&args[..], &["--method", method, "--out", path_arg(&out)]].concat());
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{method}: {err}");
+        assert_eq!(err.contains(&said), warned, "{method}: {err}");
+        if warned {
+            assert!(err.contains("and the fit kept it"), "{err}");
+            let report = read(&out.join("report.md"));
+            assert!(
+                report.contains("## Warnings") && report.contains("line 22 of"),
+                "{report}"
+            );
+        }
+    }
+    // The distance file's line 12 (its 11th length from the pivot) read 50 mm longer.
+    let (dist, _) = simulated(&d, "distance");
+    let text = read(&dist);
+    let header = text.lines().next().unwrap();
+    let k = header.split(',').position(|c| c.ends_with("_mm")).unwrap();
+    let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+    let mut cells: Vec<String> = lines[11].split(',').map(str::to_string).collect();
+    cells[k] = (cells[k].parse::<f64>().unwrap() + 50.0).to_string();
+    lines[11] = cells.join(",");
+    let bad = d.join("gross-distance.csv");
+    std::fs::write(&bad, lines.join("\n") + "\n").unwrap();
+    let out = d.join("out-distance");
+    let args = ["identify", "--robot", "irb2600", "--data", path_arg(&bad)];
+    let o = calbench(&[&args[..], &["--method", "lm", "--out", path_arg(&out)]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the reading of line 12 has a residual of "),
+        "{err}"
+    );
+}
+
+/// A search's box of 1e20 mm, its worse and implausible result kept: the robot identified
+/// has lengths no robot file holds, and is refused naming the value's place; it had been
+/// written as a `robot.toml` that `fk` then refused.
+#[test]
+fn a_robot_no_robot_file_holds_is_not_written() {
+    let d = tmp_dir("cli-unwritable-robot");
+    let sc = crate::common::root().join("scenarios/ci-guard.toml");
+    let sim = d.join("sim");
+    calbench_ok(&["simulate", path_arg(&sc), "--out", path_arg(&sim)]);
+    let data = sim.join("measurements.csv");
+    let out = d.join("out");
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        "irb2600",
+        "--data",
+        path_arg(&data),
+        "--method",
+        "bas-pso",
+        "--set",
+        "bound_mm=1e20",
+        "--allow-worse",
+        "--allow-implausible",
+        "--out",
+        path_arg(&out),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    let want = "data: bas-pso identified a robot that no robot file holds (joint ";
+    assert!(!o.status.success() && err.contains(want), "{err}");
+    assert!(
+        err.contains("must be a finite length within ±1000000 mm") && !out.exists(),
+        "{err}"
+    );
+}

@@ -7,7 +7,7 @@ use std::path::Path;
 use super::{first_guess, prepared, IdentifyRequest};
 use crate::calibrate::verdict::allowing;
 use crate::error::{Error, Opt, Result, Said};
-use crate::measurement::kind::{Kind, KindData};
+use crate::measurement::kind::{Instrument, Kind, KindData};
 use crate::measurement::kind_csv::KindFile;
 use crate::robot::identifiability::Identifiability;
 use crate::robot::Param;
@@ -26,12 +26,36 @@ pub(super) fn repeated(q: &IdentifyRequest, file: &KindFile) -> Result<()> {
         Kind::Socket => "the same joint values and socket",
         _ => "the same joint values and measured points",
     };
-    let why = crate::measurement::repeated_rows_refusal(
+    let why = crate::measurement::repeated_rows_named(
         &repeated,
         same,
+        file.rows_numbered(),
+        &|r| file.row_named(r),
         crate::measurement::REPEATED_CALIBRATION,
     );
     Err(Error::file(&q.source, "data", why))
+}
+
+/// Refuses a socket file whose `socket_distance_mm` the nominal robot's tool points put at
+/// another scale ([`crate::calibrate::task::socket::misplaced_socket`], as a socket task's
+/// `sockets.distances_mm` is refused), at the first row of that socket: the rows that cannot
+/// reach a socket so far were dropped, and the file had been refused as "socket 2 has no
+/// pose" although it has.
+pub(super) fn misplaced_sockets(q: &IdentifyRequest, file: &KindFile) -> Result<()> {
+    let Instrument::Sockets(distances) = &file.data.instrument else {
+        return Ok(());
+    };
+    let group = &file.data.group;
+    let Some(m) =
+        crate::calibrate::task::socket::misplaced_socket(&q.robot, &file.qs, group, distances)
+    else {
+        return Ok(());
+    };
+    let row = group.iter().position(|&g| g == m.socket).unwrap_or(0);
+    let line = file.lines.get(row).copied().unwrap_or(0);
+    let msg = m.said("its rows", "the file's distances");
+    let place = format!("line {line}, column socket_distance_mm");
+    Err(Error::file(&q.source, place, msg))
 }
 
 /// The refusal of given parameters that `data` cannot determine (`count` given).

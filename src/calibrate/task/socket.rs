@@ -23,7 +23,7 @@ use crate::error::{read_text, Error, Opt, Result};
 use crate::identify::MethodSpec;
 use crate::measurement::kind::{Instrument, KindData};
 use crate::measurement::kind_csv::KindFile;
-use crate::measurement::{repeated_readings_refusal, SAME_JOINT};
+use crate::measurement::{repeated_readings_named, SAME_JOINT};
 use crate::numeric::Real;
 use crate::numeric::Vec3;
 use crate::robot::urdf::UrdfChain;
@@ -68,6 +68,62 @@ struct AuthorKeys {
 /// two sockets' tool points: a nominal model is off by millimetres, a unit by 10, 25.4 or
 /// 1000 times.
 pub const SOCKET_SCALE: Real = 2.0;
+
+/// A socket whose distance from socket 1 the nominal robot's tool points put more than
+/// [`SOCKET_SCALE`] times farther or nearer than given ([`misplaced_socket`]).
+pub struct Misplaced {
+    /// The socket, 0-based (socket 1 is 0).
+    pub socket: usize,
+    /// Its distance from socket 1 as given (mm).
+    pub given: Real,
+    /// The distance of its mean tool point from socket 1's (mm).
+    pub seen: Real,
+}
+
+impl Misplaced {
+    /// In words: `rows` names where its poses are (`its file`), `distances` what gave the
+    /// distance (`these distances`).
+    pub fn said(&self, rows: &str, distances: &str) -> String {
+        let (factor, way) = match self.seen > self.given {
+            true => (self.seen / self.given, "farther"),
+            false => (self.given / self.seen, "nearer"),
+        };
+        let tenth = |v: Real| crate::error::shown((v * 10.0).round() / 10.0);
+        format!(
+            "socket {} is {} mm from socket 1, where the nominal robot puts the tool points of \
+             {rows} {} mm from socket 1's ({} times {way}): are {distances}, or the robot's \
+             lengths, in another unit?",
+            self.socket + 1,
+            crate::error::shown(self.given),
+            tenth(self.seen),
+            tenth(factor),
+        )
+    }
+}
+
+/// The first socket of `distances` (mm from socket 1) whose poses (`qs`, each of the socket
+/// `group` names) the nominal robot puts more than [`SOCKET_SCALE`] times farther from socket
+/// 1's or nearer: distances in another unit, or a robot file whose lengths are.
+pub fn misplaced_socket(
+    nominal: &Robot,
+    qs: &[Vec<Real>],
+    group: &[usize],
+    distances: &[Real],
+) -> Option<Misplaced> {
+    let chain = nominal.chain();
+    let points: Vec<Vec3> = qs.iter().map(|q| chain.fk(q).pos).collect();
+    let mean = socket_means(&points, group, distances.len()).0;
+    let (socket, &given) = (distances.iter().enumerate().skip(1)).find(|&(l, &given)| {
+        let seen = (mean[l] - mean[0]).norm();
+        (seen / given).max(given / seen) > SOCKET_SCALE
+    })?;
+    let seen = (mean[socket] - mean[0]).norm();
+    Some(Misplaced {
+        socket,
+        given,
+        seen,
+    })
+}
 
 /// How near the nominal robot may put two sockets' mean tool points before their files are
 /// taken for one socket's poses (mm): a tenth of a millimetre shown as 0.
@@ -364,8 +420,9 @@ impl SocketTask {
         if rows.is_empty() {
             return Ok(());
         }
-        let numbered = "rows of each placement, its files in order";
-        let msg = repeated_readings_refusal(&rows, "the same joint values", numbered);
+        let (c, v) = (|r| cal.row_named(r), |r| val.row_named(r));
+        let numbered = "each by its file's line";
+        let msg = repeated_readings_named(&rows, "the same joint values", numbered, [&c, &v]);
         Err(Error::file(&self.head.path, "sockets.validation", msg).at_key_line(&self.head.text))
     }
 
@@ -385,45 +442,25 @@ impl SocketTask {
     /// tool points are within [`SAME_PLACE_MM`] are refused by the second one's name: one
     /// socket's poses given twice, not a unit.
     fn check_scale(&self, nominal: &Robot, k: &KindFile) -> Result<()> {
-        let chain = nominal.chain();
-        let points: Vec<Vec3> = k.qs.iter().map(|q| chain.fk(q).pos).collect();
-        let mean = socket_means(&points, &k.data.group, self.distances_mm.len()).0;
-        for (l, &given) in self.distances_mm.iter().enumerate().skip(1) {
-            let seen = (mean[l] - mean[0]).norm();
-            if (seen / given).max(given / seen) <= SOCKET_SCALE {
-                continue;
-            }
-            if seen < SAME_PLACE_MM {
-                let msg = format!(
-                    "the nominal robot puts the tool points of this file's poses where it puts \
-                     those of socket 1's file {} (under {SAME_PLACE_MM} mm apart), where \
-                     sockets.distances_mm puts socket {} {} mm from socket 1: do the two files \
-                     hold the same socket's poses?",
-                    self.calibration[0].display(),
-                    l + 1,
-                    crate::error::shown(given),
-                );
-                return Err(Error::file(&self.calibration[l], "every row", msg));
-            }
-            let (factor, way) = match seen > given {
-                true => (seen / given, "farther"),
-                false => (given / seen, "nearer"),
-            };
-            let tenth = |v: Real| crate::error::shown((v * 10.0).round() / 10.0);
+        let distances = &self.distances_mm;
+        let Some(m) = misplaced_socket(nominal, &k.qs, &k.data.group, distances) else {
+            return Ok(());
+        };
+        if m.seen < SAME_PLACE_MM {
             let msg = format!(
-                "socket {} is {} mm from socket 1, where the nominal robot puts the tool points \
-                 of its file {} mm from socket 1's ({} times {way}): are these distances, or \
-                 the robot's lengths, in another unit?",
-                l + 1,
-                crate::error::shown(given),
-                tenth(seen),
-                tenth(factor),
+                "the nominal robot puts the tool points of this file's poses where it puts those \
+                 of socket 1's file {} (under {SAME_PLACE_MM} mm apart), where \
+                 sockets.distances_mm puts socket {} {} mm from socket 1: do the two files hold \
+                 the same socket's poses?",
+                self.calibration[0].display(),
+                m.socket + 1,
+                crate::error::shown(m.given),
             );
-            let h = &self.head;
-            let key = "sockets.distances_mm";
-            return Err(Error::toml_file(&h.path, &h.text, key, key, msg));
+            return Err(Error::file(&self.calibration[m.socket], "every row", msg));
         }
-        Ok(())
+        let (h, key) = (&self.head, "sockets.distances_mm");
+        let msg = m.said("its file", "these distances");
+        Err(Error::toml_file(&h.path, &h.text, key, key, msg))
     }
 
     /// The placement's name: the folder of its first file.

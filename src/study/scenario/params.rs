@@ -89,7 +89,27 @@ impl Scenario {
     pub fn warnings(&self) -> Vec<String> {
         let mut out = self.unused_settings();
         out.extend(self.robot().ok().as_ref().and_then(small_robot));
+        out.extend(self.large_angle_errors());
         out
+    }
+
+    /// Angle errors drawn beyond what a calibration moves (`errors.angle_rad` above the 5° of
+    /// "Physical plausibility", [`crate::calibrate::plausibility::ANGLE_RAD`]): degrees
+    /// written for radians, a study whose η judges no calibration. A warning: a study of such
+    /// errors runs.
+    fn large_angle_errors(&self) -> Option<String> {
+        use crate::calibrate::plausibility::ANGLE_RAD;
+        let e = &self.errors;
+        let drawn = !matches!(e.kind, ErrorKind::None | ErrorKind::Values);
+        (drawn && e.angle_rad > ANGLE_RAD).then(|| {
+            format!(
+                "errors.angle_rad = {} rad ({:.1}°) draws angle errors beyond the {:.0}° a \
+                 calibration moves: is it in degrees? (radians are meant)",
+                crate::error::shown(e.angle_rad),
+                e.angle_rad.to_degrees(),
+                ANGLE_RAD.to_degrees()
+            )
+        })
     }
 
     /// What the scenario sets that it does not read: in `[calibration]`, a pose list
