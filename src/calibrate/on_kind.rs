@@ -539,15 +539,9 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
                 format!("target {target} of the pose that starts on line {l}")
             })
         }
-        _ => {
-            let row = i + file.qs.len() - readings;
-            file.lines
-                .get(row)
-                .map_or(format!("reading {i}"), |l| match file.file_of(row) {
-                    Some(f) => format!("line {l} of {}", f.display()),
-                    None => format!("line {l}"),
-                })
-        }
+        _ => file
+            .line_named(i + file.qs.len() - readings)
+            .unwrap_or_else(|| format!("reading {i}")),
     };
     let gross = || {
         let (before, after) = &fit.residuals;

@@ -122,7 +122,7 @@ pub fn undetermined_error(
              or pass ",
             data.len(),
             params.1,
-            params.1 / data.measure().rows() + 1
+            least_poses(params.1, data.measure().rows())
         ))
     } else {
         // Poses that do not tell the undetermined apart from their groups, or a robot whose
@@ -156,13 +156,18 @@ pub fn as_many_readings_as_parameters(
         "{poses} poses give {params} readings for {params} parameters: a fit would match every \
          reading and leave none to check it, so nothing was written. Measure at least {} \
          poses, or pass ",
-        params / per_pose + 1
+        least_poses(params, per_pose)
     );
     Err(Error::file(
         source,
         "data",
         allowing(msg, Opt::AllowRankDeficient),
     ))
+}
+
+/// The fewest poses of `per_pose` readings each that give more readings than `params`.
+fn least_poses(params: usize, per_pose: usize) -> usize {
+    params / per_pose + 1
 }
 
 /// `msg` followed by how the option `allow` is turned on.

@@ -32,6 +32,8 @@ use super::JointSpace;
 use crate::error::{shown, Error, Result};
 use crate::numeric::{Real, Vec3};
 
+mod named;
+
 /// The length from the pivot (`distance`).
 const LENGTH: &str = "length_mm";
 /// The length from the previous row's tool point (`distance` between consecutive poses).
@@ -130,35 +132,6 @@ impl KindFile {
             }
         }
         (0..n).filter_map(|r| first[r].map(|f| (f, r))).collect()
-    }
-
-    /// The file row `row` was read from, when the rows come from several ([`Self::files`]).
-    pub fn file_of(&self, row: usize) -> Option<&Path> {
-        let mut end = 0;
-        self.files
-            .iter()
-            .find(|(_, n)| {
-                end += n;
-                row < end
-            })
-            .map(|(f, _)| f.as_path())
-    }
-
-    /// Row `row` in a refusal's words: `line L of FILE` when the rows come from several files
-    /// ([`Self::files`]: a 0-based row would count across them), else `row R` (0-based).
-    pub fn row_named(&self, row: usize) -> String {
-        match (self.file_of(row), self.lines.get(row)) {
-            (Some(f), Some(line)) => format!("line {line} of {}", f.display()),
-            _ => format!("row {row}"),
-        }
-    }
-
-    /// How [`Self::row_named`] numbers the rows, as a refusal says it.
-    pub fn rows_numbered(&self) -> &'static str {
-        match self.files.is_empty() {
-            true => "0-based rows",
-            false => "each by its file's line",
-        }
     }
 }
 

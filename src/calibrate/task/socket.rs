@@ -113,16 +113,13 @@ pub fn misplaced_socket(
     let chain = nominal.chain();
     let points: Vec<Vec3> = qs.iter().map(|q| chain.fk(q).pos).collect();
     let mean = socket_means(&points, group, distances.len()).0;
-    let (socket, &given) = (distances.iter().enumerate().skip(1)).find(|&(l, &given)| {
-        let seen = (mean[l] - mean[0]).norm();
-        (seen / given).max(given / seen) > SOCKET_SCALE
-    })?;
-    let seen = (mean[socket] - mean[0]).norm();
-    Some(Misplaced {
-        socket,
-        given,
-        seen,
-    })
+    (distances.iter().enumerate().skip(1))
+        .map(|(socket, &given)| Misplaced {
+            socket,
+            given,
+            seen: (mean[socket] - mean[0]).norm(),
+        })
+        .find(|m| (m.seen / m.given).max(m.given / m.seen) > SOCKET_SCALE)
 }
 
 /// How near the nominal robot may put two sockets' mean tool points before their files are
