@@ -116,9 +116,7 @@ pub fn register_svd(
     // Singular values are sorted in decreasing order by nalgebra.
     let s = svd.singular_values;
     if s[1].is_nan() || s[1] <= 1e-12 * s[0].max(Real::MIN_POSITIVE) {
-        return Err(Error::Singular(
-            "registration: the points are (nearly) collinear; the rotation is undetermined".into(),
-        ));
+        return Err(Error::Singular(collinear(base, cb, measured, ca, &w)));
     }
     let mut v = vt.transpose();
     if (v * u.transpose()).determinant() < 0.0 {
@@ -131,6 +129,32 @@ pub fn register_svd(
         pos: cb - rot * ca,
     };
     Ok(Registration::of(frame, base, measured, w))
+}
+
+/// Which of the two point sets leaves the rotation undetermined, in words: a set of points on
+/// one line, or at one point, spreads in fewer than two directions about its centroid `c`
+/// (the second singular value of its weighted scatter below 1e-12 of the first, as
+/// [`register_svd`] tests `H`). The base points are the model's: a robot of no length puts
+/// every pose's point at one place, which the data are not to blame for.
+fn collinear(base: &[Vec3], cb: Vec3, measured: &[Vec3], ca: Vec3, w: &[Real]) -> String {
+    let flat = |points: &[Vec3], c: Vec3| {
+        let scatter = (points.iter().zip(w)).fold(Matrix3::zeros(), |s, (p, w)| {
+            s + (p - c) * (p - c).transpose() * *w
+        });
+        let v = scatter.symmetric_eigenvalues();
+        let (hi, mid) = (v.max(), v.sum() - v.max() - v.min());
+        hi <= 0.0 || mid <= 1e-24 * hi
+    };
+    let model = "the model's points (the robot's at these joint values) are (nearly) collinear: \
+                 its lengths and offsets put every pose's point on one line or at one place, \
+                 whatever was measured";
+    match (flat(base, cb), flat(measured, ca)) {
+        (true, true) => format!("registration: {model}, and so are the measured points"),
+        (true, false) => format!("registration: {model}"),
+        _ => "registration: the measured points are (nearly) collinear; the rotation is \
+              undetermined"
+            .into(),
+    }
 }
 
 /// Ban's weighted-SVD registration (eqs. 12–25): an equal-weight fit, weights from each
@@ -399,6 +423,22 @@ mod tests {
             .map(|i| Vec3::new(i as Real, 2.0 * i as Real, 0.0))
             .collect();
         assert!(register_svd(&line, &line, None).is_err());
+        // The refusal names the set that is collinear: a robot of no length puts every
+        // model point at one place, and the measured points are then not to blame.
+        let said = |base: &[Vec3], measured: &[Vec3]| {
+            register_svd(base, measured, None).unwrap_err().to_string()
+        };
+        let one_place = vec![Vec3::new(1.0, 2.0, 3.0); 5];
+        let model = "the model's points (the robot's at these joint values) are (nearly) collinear";
+        assert!(
+            said(&one_place, &a).contains(model),
+            "{}",
+            said(&one_place, &a)
+        );
+        assert!(!said(&one_place, &a).contains("measured points"));
+        assert!(said(&line, &a).contains(model));
+        assert!(said(&a, &line).contains("the measured points are (nearly) collinear"));
+        assert!(said(&line, &line).contains("and so are the measured points"));
         assert!(register_svd(&a, &a, Some(&[0.0; 5])).is_err());
         assert!(register_svd(&a, &a, Some(&[1.0, -1.0, 1.0, 1.0, 1.0])).is_err());
         let mut nan = a.clone();

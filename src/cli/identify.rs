@@ -245,6 +245,9 @@ fn identify(args: &IdentifyArgs) -> Result<()> {
         .into());
     }
     let nominal = args.chain.load(&args.robot)?;
+    if args.export.contains(&Export::UrYaml) {
+        exports::ur_like(&nominal)?;
+    }
     let (data, data_lines) = if kind {
         (
             IdentifyData::Kind(read_kind_file(&args.data, &nominal)?),

@@ -178,7 +178,9 @@ pub fn run(args: &RunArgs) -> Result<()> {
         out: Some(out),
         ..opts
     };
-    let r = run_study(sc, &opts, &Terminal)?;
+    let path = sc.path.clone();
+    let own = ["calibration.", "validation."];
+    let r = run_study(sc, &opts, &Terminal).map_err(|e| in_scenario(e, path.as_deref(), &own))?;
     finished(&r)?;
     let record = || super::record::of_run(&r.out, &r.scenario, Kind::Run);
     args.record.finish(db, record)
@@ -318,7 +320,9 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         precision: None,
     };
     let t0 = std::time::Instant::now();
-    let table = run_cells_study(sc, &opts, &Terminal).map_err(|e| in_scenario(e, sc))?;
+    let own = ["registration_study.", "instruments_study."];
+    let table =
+        run_cells_study(sc, &opts, &Terminal).map_err(|e| in_scenario(e, sc.path(), &own))?;
     if let Some(s) = shard {
         let what = format!("shard {}/{} of {}", s.index, s.count, sc.name());
         shard_written(&what, &out, Some(s.count));
@@ -329,15 +333,12 @@ fn cells_study(sc: &AnyScenario, shard: Option<Shard>, args: &RunArgs) -> Result
         .finish(db, || super::record::of_study(&out, Kind::Run))
 }
 
-/// A refusal of the study's own setting, met while it runs (a box that draws collinear
-/// points), placed in the scenario file at that key's line; any other error as it is.
-fn in_scenario(e: Error, sc: &AnyScenario) -> Error {
-    let own = |key: &str| {
-        ["registration_study.", "instruments_study."]
-            .iter()
-            .any(|t| key.starts_with(t))
-    };
-    match (&e, sc.path()) {
+/// A refusal of the study's own setting (a key under one of the tables `own`), met while it
+/// runs (a box that draws collinear points, a region that yields too few poses), placed in
+/// the scenario file `path` at that key's line; any other error as it is.
+fn in_scenario(e: Error, path: Option<&Path>, own: &[&str]) -> Error {
+    let own = |key: &str| own.iter().any(|t| key.starts_with(t));
+    match (&e, path) {
         (Error::Setting { key, .. }, Some(path)) if own(key) => {
             let text = std::fs::read_to_string(path).unwrap_or_default();
             e.in_file(path).at_key_line(&text)

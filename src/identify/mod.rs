@@ -144,6 +144,16 @@ impl Termination {
     pub fn as_str(self) -> &'static str {
         self.into()
     }
+
+    /// Whether an identification that ended so gave no result at all: it diverged, was
+    /// singular or had invalid input (a rank-deficient one may still be used, where the
+    /// deficiency was expected).
+    pub fn gives_nothing(self) -> bool {
+        matches!(
+            self,
+            Termination::Diverged | Termination::Singular | Termination::InvalidInput
+        )
+    }
 }
 
 /// The outcome of an identification, the same for every method.

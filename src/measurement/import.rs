@@ -68,6 +68,19 @@ pub fn import_text(
     robot: Option<&dyn JointSpace>,
 ) -> Result<(String, Vec<u64>)> {
     let (_, plan) = Mapping::load_plan(mapping_path)?;
+    let (written, key) = plan.written;
+    if let (Some(robot), Some(unit)) = (robot, written.angle()) {
+        if robot.angle_unit().is_some_and(|u| u != unit) {
+            let takes: &str = robot.angle_unit().map_or("", |u| u.into());
+            let msg = format!(
+                "writes the joint values in {}, and robot \"{}\" takes its joint angles in \
+                 {takes}: they would be read as {takes}; write them in {takes}",
+                written.name(),
+                robot.name()
+            );
+            return Err(Error::toml_file(mapping_path, &plan.text, key, key, msg));
+        }
+    }
     let dialect = Dialect::Export {
         separator: plan.sep,
     };

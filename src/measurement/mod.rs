@@ -55,6 +55,10 @@ pub trait JointSpace {
     fn decimals(&self, _j: usize) -> usize {
         9
     }
+    /// The unit its revolute joints' values are written in, `None` without one.
+    fn angle_unit(&self) -> Option<units::AngleUnit> {
+        None
+    }
 }
 
 /// Measured poses: joint values, measured target points and, for full-pose data, measured

@@ -17,6 +17,25 @@ const UR_SEGMENTS: [&str; 6] = [
     "wrist_3",
 ];
 
+/// Refuses a robot whose frames `ur-yaml` cannot write: it needs six revolute, uncoupled
+/// joints in the `dh` or `dh_beta` convention. An identification keeps these, so the nominal
+/// robot is checked before one runs.
+pub fn ur_like(robot: &Robot) -> Result<()> {
+    let six_revolute =
+        robot.dof() == 6 && robot.joints.iter().all(|j| j.kind == JointType::Revolute);
+    if !six_revolute || robot.convention == Convention::Mdh || robot.coupling.is_some() {
+        return Err(Error::option(
+            crate::error::Opt::Export,
+            format!(
+                "ur-yaml needs a UR-like robot: six revolute, uncoupled joints in the dh or \
+                 dh_beta convention; robot \"{}\" is not",
+                robot.name
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// `ur-yaml`: the robot's joint frames as UR's `kinematics_params_file` (the format
 /// `ur_calibration` writes and the UR ROS drivers read): per joint `i` the transform from joint
 /// `i − 1`'s frame to joint `i`'s, `Tx(a_{i−1}) Rx(α_{i−1}) Ry(β_{i−1}) Tz(d_i) Rz(θ_i)`, as
@@ -41,18 +60,7 @@ pub fn ur_yaml(robot: &Robot) -> Result<String> {
              that depend on the pose); export dh-csv or use robot.toml (its `gravity` key)",
         ));
     }
-    let six_revolute =
-        robot.dof() == 6 && robot.joints.iter().all(|j| j.kind == JointType::Revolute);
-    if !six_revolute || robot.convention == Convention::Mdh || robot.coupling.is_some() {
-        return Err(Error::option(
-            crate::error::Opt::Export,
-            format!(
-                "ur-yaml needs a UR-like robot: six revolute, uncoupled joints in the dh or \
-                 dh_beta convention; robot \"{}\" is not",
-                robot.name
-            ),
-        ));
-    }
+    ur_like(robot)?;
     // The name in double quotes with its quotes, backslashes and line breaks escaped, so
     // that no name can end the comment line.
     let mut s = format!(

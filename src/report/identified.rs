@@ -166,14 +166,15 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
         ));
     }
     let m = r.data.len();
+    let prior = r.data.weights();
     if let Some(rows) = id
         .row_weights
         .as_deref()
         .filter(|w| m > 0 && w.len() % m == 0)
     {
-        w.extend(coordinate_warnings(rows, rows.len() / m));
+        w.extend(coordinate_warnings(rows, prior.as_deref(), rows.len() / m));
     } else {
-        w.extend(point_warnings(&id.weights, m));
+        w.extend(point_warnings(&id.weights, prior.as_deref(), m));
     }
     let printed = r.outcome.warnings().into_iter().map(|t| t.to_string());
     w.extend(
@@ -186,8 +187,8 @@ pub fn warnings(r: &IdentifyRecord) -> Vec<String> {
 
 /// The warnings of a fit that weighed each residual row on its own (IGG3 with
 /// `per = "coordinate"`): the rows rejected (weight 0), each as its data row and coordinate,
-/// and the number weighed down.
-fn coordinate_warnings(rows: &[Real], per: usize) -> Vec<String> {
+/// and the number weighed down below their point's `prior` weight ([`lowered`]).
+fn coordinate_warnings(rows: &[Real], prior: Option<&[Real]>, per: usize) -> Vec<String> {
     const AXES: [&str; 6] = ["x", "y", "z", "rx", "ry", "rz"];
     let rejected: Vec<String> = rows
         .iter()
@@ -195,7 +196,7 @@ fn coordinate_warnings(rows: &[Real], per: usize) -> Vec<String> {
         .filter(|(_, x)| **x == 0.0)
         .map(|(k, _)| format!("{} {}", k / per, AXES.get(k % per).copied().unwrap_or("?")))
         .collect();
-    let lowered = rows.iter().filter(|x| **x > 0.0 && **x < 1.0).count();
+    let lowered = lowered(rows, |k| k / per, prior);
     let mut w = Vec::new();
     if !rejected.is_empty() {
         w.push(format!(
@@ -209,15 +210,16 @@ fn coordinate_warnings(rows: &[Real], per: usize) -> Vec<String> {
     }
     if lowered > 0 {
         w.push(format!(
-            "{lowered} coordinates were weighed down (row weight between 0 and 1) as suspect."
+            "{lowered} coordinates were weighed down (row weight between 0 and their point's \
+             weight before the fit) as suspect."
         ));
     }
     w
 }
 
 /// The warnings of a fit that weighed points: those rejected (weight 0) and the number
-/// weighed down, of `m` points.
-fn point_warnings(weights: &[Real], m: usize) -> Vec<String> {
+/// weighed down below its `prior` weight ([`lowered`]), of `m` points.
+fn point_warnings(weights: &[Real], prior: Option<&[Real]>, m: usize) -> Vec<String> {
     let mut w = Vec::new();
     let rejected: Vec<String> = weights
         .iter()
@@ -225,7 +227,7 @@ fn point_warnings(weights: &[Real], m: usize) -> Vec<String> {
         .filter(|(_, x)| **x == 0.0)
         .map(|(i, _)| i.to_string())
         .collect();
-    let lowered = weights.iter().filter(|x| **x > 0.0 && **x < 1.0).count();
+    let lowered = lowered(weights, |i| i, prior);
     if !rejected.is_empty() {
         w.push(format!(
             "{} of the {} points were rejected as outliers (final weight 0; rows {}): they do \
@@ -237,10 +239,28 @@ fn point_warnings(weights: &[Real], m: usize) -> Vec<String> {
     }
     if lowered > 0 {
         w.push(format!(
-            "{lowered} points were weighed down (final weight between 0 and 1) as suspect."
+            "{lowered} points were weighed down (final weight between 0 and their weight \
+             before the fit) as suspect."
         ));
     }
     w
+}
+
+/// How many of the final `weights` lie between 0 and the `prior` weight of their point
+/// (`point` of a weight's index; [`weighed_down`]).
+fn lowered(weights: &[Real], point: impl Fn(usize) -> usize, prior: Option<&[Real]>) -> usize {
+    let prior_of = |i: usize| prior.and_then(|p| p.get(point(i))).copied();
+    (weights.iter().enumerate())
+        .filter(|&(i, x)| *x > 0.0 && weighed_down(*x, prior_of(i)))
+        .count()
+}
+
+/// Whether a final weight `w` is below its point's `prior` weight (1/σ², mean 1; 1 without
+/// σ): the method weighed the point down. A method that does not reweigh (`ls`, `lm`) ends on
+/// the prior weights, which differ from 1 but judge no point; the rounding of the product of
+/// prior and robust weight is no weighing down.
+pub fn weighed_down(w: Real, prior: Option<Real>) -> bool {
+    w < prior.unwrap_or(1.0) * (1.0 - 1e-9)
 }
 
 /// The headers of [`validation_rows`].
@@ -413,16 +433,14 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
         let _ = writeln!(s, "- dependent group: {}", names(g));
     }
     if igg3_weights(r) {
-        let low: Vec<String> = id
-            .weights
-            .iter()
-            .enumerate()
-            .filter(|(_, w)| **w < 1.0)
+        let prior = r.data.weights();
+        let low: Vec<String> = (id.weights.iter().enumerate())
+            .filter(|&(i, w)| weighed_down(*w, prior.as_ref().map(|p| p[i])))
             .map(|(i, w)| format!("{i} ({})", fmt_num(*w, 3)))
             .collect();
         let _ = writeln!(
             s,
-            "\n## IGG3 final weights\n\n![weights](weights.png)\n\nPoints weighed below 1 (row, weight): {}\n",
+            "\n## IGG3 final weights\n\n![weights](weights.png)\n\nPoints weighed below their weight before the fit (1/σ², mean 1; 1 without σ) (row, final weight): {}\n",
             if low.is_empty() { "none".to_string() } else { low.join(", ") }
         );
     }

@@ -307,6 +307,11 @@ impl crate::measurement::JointSpace for Robot {
     fn decimals(&self, j: usize) -> usize {
         self.q_decimals(j)
     }
+    fn angle_unit(&self) -> Option<AngleUnit> {
+        (0..self.dof())
+            .any(|j| self.q_turns(j))
+            .then_some(self.units.angle)
+    }
 }
 
 impl Robot {

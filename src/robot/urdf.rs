@@ -246,21 +246,23 @@ pub fn leaf_links(urdf: &urdf_rs::Robot) -> Vec<&str> {
         .map(|j| j.child.link.as_str())
         .filter(|c| !parents.contains(c))
         .collect();
-    // Whether a joint that is not fixed stands between `link` and the root (a loop, refused
+    // Whether a joint that is not fixed stands between `leaf` and the root (a loop, refused
     // when the chain is read, ends the walk).
-    fn moved<'a>(urdf: &'a urdf_rs::Robot, mut link: &'a str) -> bool {
+    let joint_to = text::child_joints(urdf);
+    let moved = |leaf: &str| {
+        let mut joint = joint_to.get(leaf).copied();
         for _ in 0..urdf.joints.len() {
-            let Some(j) = urdf.joints.iter().find(|j| j.child.link == link) else {
+            let Some(j) = joint.map(|i| &urdf.joints[i]) else {
                 return false;
             };
             if j.joint_type != urdf_rs::JointType::Fixed {
                 return true;
             }
-            link = j.parent.link.as_str();
+            joint = joint_to.get(j.parent.link.as_str()).copied();
         }
         false
-    }
-    let tips: Vec<&str> = leaves.iter().copied().filter(|l| moved(urdf, l)).collect();
+    };
+    let tips: Vec<&str> = leaves.iter().copied().filter(|l| moved(l)).collect();
     if tips.is_empty() {
         leaves
     } else {
@@ -317,8 +319,10 @@ impl UrdfRobot {
             .map_or(tip, |j| j.child.link.as_str());
         let mut chain = Vec::new();
         let mut link = tip;
+        let joint_to = text::child_joints(&source);
+        let mut walked = vec![false; js.len()];
         while which.base.as_deref() != Some(link) {
-            let Some(i) = js.iter().position(|j| j.child.link == link) else {
+            let Some(&i) = joint_to.get(link) else {
                 if let Some(b) = &which.base {
                     let msg =
                         format!(": link \"{b}\" is not on the chain from the root to \"{tip}\"");
@@ -326,9 +330,10 @@ impl UrdfRobot {
                 }
                 break;
             };
-            if chain.contains(&i) || chain.len() > js.len() {
+            if walked[i] || chain.len() > js.len() {
                 return Err(bad(format!("the joints form a loop at link \"{link}\"")));
             }
+            walked[i] = true;
             chain.push(i);
             link = js[i].parent.link.as_str();
         }

@@ -392,13 +392,7 @@ fn usable(o: &Outcome) -> bool {
         && o.termination == Termination::RankDeficient
         && o.iterations > 0;
     (undetermined_ok
-        || !matches!(
-            o.termination,
-            Termination::Diverged
-                | Termination::Singular
-                | Termination::RankDeficient
-                | Termination::InvalidInput
-        ))
+        || !(o.termination.gives_nothing() || o.termination == Termination::RankDeficient))
         && o.identified.iter().all(|x| x.is_finite())
         && o.after_mm.rms.is_finite()
 }

@@ -244,14 +244,21 @@ fn cv_models_holdout_diagnostics_and_exports_on_the_ur10_rows() {
             && msg.contains("(21 readings for 23 parameters)"),
         "{msg}"
     );
-    // ur-yaml of a robot that is not UR-like is refused.
+    // ur-yaml of a robot that is not UR-like (an mdh robot) is refused before its data are
+    // read: on these 5 rows, outside its limits, it had been the rows that were refused, and
+    // on rows it takes it was refused only after the identification.
+    let five = d.join("five.csv");
+    std::fs::write(&five, head[..6].join("\n") + "\n").unwrap();
     let bad = calbench(&lm_args(
-        "irb2600",
-        &data,
+        "irb2600-mdh",
+        path_arg(&five),
         &["--export", "ur-yaml"],
         &d.join("y"),
     ));
-    assert!(!bad.status.success());
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(1), "{err}");
+    assert!(err.contains("ur-yaml needs a UR-like robot"), "{err}");
+    assert!(!d.join("y").exists());
     // Nor of a URDF robot, read into DH frames that are not UR's: from the UR10's URDF the
     // file described another arm (joint 1 turned by 180°, d6 in the tool), 176 mm apart.
     let urdf = ex("ur10.urdf");

@@ -4,6 +4,14 @@
 
 use crate::common::{calbench, calbench_ok, path_arg, read, root, tmp_dir};
 
+/// The measurements of `scenarios/ci-guard.toml`, simulated into `dir/sim`.
+fn simulated(dir: &std::path::Path) -> std::path::PathBuf {
+    let sim = dir.join("sim");
+    let sc = root().join("scenarios/ci-guard.toml");
+    calbench_ok(&["simulate", path_arg(&sc), "--out", path_arg(&sim)]);
+    sim.join("measurements.csv")
+}
+
 /// The simulated file of `scenarios/ci-guard.toml` with its x and y columns swapped: `ls`
 /// ends singular and is refused naming the mirror image, where it had blamed "the rows'
 /// weights (the orientation weight k, the points' σ) or the parameters beside the kinematic
@@ -11,10 +19,7 @@ use crate::common::{calbench, calbench_ok, path_arg, read, root, tmp_dir};
 #[test]
 fn a_rank_that_falls_short_names_the_readings_cause() {
     let d = tmp_dir("cli-rank-causes");
-    let sim = d.join("sim");
-    let sc = root().join("scenarios/ci-guard.toml");
-    calbench_ok(&["simulate", path_arg(&sc), "--out", path_arg(&sim)]);
-    let text = read(&sim.join("measurements.csv"));
+    let text = read(&simulated(&d));
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
     let (x, y) = (
@@ -38,4 +43,45 @@ fn a_rank_that_falls_short_names_the_readings_cause() {
                 of the robot's: two columns look swapped";
     assert!(err.contains(want), "{err}");
     assert!(!err.contains("weight") && !err.contains("σ"), "{err}");
+}
+
+/// A robot file of no length (every `a`, `d` and the tool's offset 0) puts the model's point
+/// of every pose at one place. The refusal had called the measured points collinear, which
+/// they are not; it now names the model's points.
+#[test]
+fn a_robot_of_no_length_is_named_not_the_data() {
+    let d = tmp_dir("cli-rank-no-length");
+    let data = simulated(&d);
+    let text = read(&root().join("robots/ban-irb2600.toml"));
+    let zero: String = (text.lines())
+        .map(|l| match l.split_once(" = ") {
+            Some(("a" | "d", _)) => format!("{} = 0.0\n", &l[..1]),
+            Some(("xyz", _)) => "xyz = [0.0, 0.0, 0.0]\n".into(),
+            _ => format!("{l}\n"),
+        })
+        .collect();
+    assert!(!zero.contains("445") && zero.contains("d = 0.0"), "{zero}");
+    let robot = d.join("zero.toml");
+    std::fs::write(&robot, zero).unwrap();
+    let out = d.join("out");
+    let o = calbench(&[
+        "identify",
+        "--robot",
+        path_arg(&robot),
+        "--data",
+        path_arg(&data),
+        "--method",
+        "ls",
+        "--out",
+        path_arg(&out),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && !out.exists(), "{err}");
+    assert!(
+        err.contains(
+            "the model's points (the robot's at these joint values) are (nearly) collinear"
+        ),
+        "{err}"
+    );
+    assert!(!err.contains("measured points are"), "{err}");
 }

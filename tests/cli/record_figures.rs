@@ -169,6 +169,18 @@ fn a_summary_without_its_validation_errors_or_with_unknown_terminations_is_refus
     let want = ["results[0].terminations: add up to 1, but the run has 2 trials"];
     refused(&record(), &want);
     refused(&check(), &want);
+    // A trial that diverged gave no result: `failures` edited below the count had been
+    // stored.
+    let mut e = v.clone();
+    e["results"][0]["terminations"] = serde_json::json!({"converged": 1, "diverged": 1});
+    e["results"][0]["failures"] = 0.into();
+    write(&e);
+    let want = [
+        "run/summary.json: line ",
+        "results[0].failures: is 0, but 1 trial ended diverged, singular or with invalid input",
+    ];
+    refused(&record(), &want);
+    refused(&check(), &want);
     // Averaged over trials, a mean stays at most the RMS, and the RMS of errors never
     // negative at most the maximum: a summary edited otherwise had been stored.
     let after = &v["results"][0]["validation_after_mm"];

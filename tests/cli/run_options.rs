@@ -1,7 +1,8 @@
 //! `run`'s `--trials` and `--seed` on every kind of study (docs/formats.md § 2.2): a value out
 //! of range is refused naming the option, not a line of the scenario file, which does not hold
 //! it; a registration study's start line counts its cells; and a run started anew where a
-//! killed one left its checkpoint takes the killed run's temporary folder away with it.
+//! killed one left its checkpoint takes the killed run's temporary folder away with it; a
+//! region that yields too few poses while the study runs is refused at its line.
 
 use crate::common::{
     calbench, calbench_ok, kill_once_checkpointed, path_arg, refused, root, tmp_dir,
@@ -95,4 +96,28 @@ fn a_new_run_over_a_killed_ones_checkpoint_leaves_no_temporary_folder() {
     );
     assert!(out.join("summary.json").exists());
     assert_eq!(partial(), Vec::<String>::new());
+}
+
+/// A box only partly reachable passes the load's check (some pose reaches it) and then yields
+/// too few poses while the study runs: the refusal names the scenario's line of the key, as
+/// a refusal at load does (it had named the key alone), and leaves no output folder.
+#[test]
+fn a_region_too_few_poses_reach_is_refused_at_its_line() {
+    let dir = tmp_dir("run-options-region");
+    let sc = dir.join("box.toml");
+    let text = "name = \"box\"\ntrials = 1\n[robot]\nbuiltin = \"irb2600\"\n[calibration]\n\
+                strategies = [\"box\"]\ncount = 200\nregion = { kind = \"box\", center_mm = \
+                [1000.0, 0.0, 900.0], size_mm = [100.0, 100.0, 100.0] }\n[[methods]]\n\
+                name = \"ls\"\n";
+    std::fs::write(&sc, text).unwrap();
+    let out = dir.join("out");
+    let o = calbench(&["run", path_arg(&sc), "--out", path_arg(&out)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("box.toml: line 8, calibration.region: only ")
+            && err.contains("of 200 poses found with the tool point in the box"),
+        "{err}"
+    );
+    assert!(!out.exists());
 }

@@ -550,8 +550,9 @@ fn an_instruments_study_s_unknown_robot_is_refused_at_its_line() {
 
 /// A robot file in metres declared in millimetres (`length_unit = "mm"`, `a = -0.612`) is a
 /// robot 1000 times too small; a study of it ran without a word, its 0.5 mm errors a third of
-/// the arm. The run goes on and says so, with the arm's size; the robots the repository ships
-/// (each built-in, and each robot file) say nothing.
+/// the arm. The run goes on and says so, with the arm's size; so it does of a robot in degrees
+/// whose limits are written in radians. The robots the repository ships (each built-in, and
+/// each robot file) say nothing.
 #[test]
 fn a_robot_too_small_for_its_length_unit_is_named_in_a_warning() {
     let root = crate::common::root();
@@ -594,6 +595,20 @@ fn a_robot_too_small_for_its_length_unit_is_named_in_a_warning() {
         let said = String::from_utf8_lossy(&calbench(&args).stderr).to_string();
         assert!(said.contains("add up to 1.683 mm"), "{command}: {said}");
     }
+    // Limits written in radians in a robot in degrees: poses drawn within ±6.28° barely move
+    // the arm, and the study had run without a word.
+    let in_rad = ur10.replace("limits = [-360.0, 360.0]", "limits = [-6.2832, 6.2832]");
+    assert!(!in_rad.contains("360.0"), "{in_rad}");
+    let rad = d.join("ur10-rad.toml");
+    std::fs::write(&rad, in_rad).unwrap();
+    let err = scenario(&format!("file = {:?}", path(&rad)));
+    assert!(
+        err.contains(
+            "warning: robot \"ur10\": every revolute joint's limits lie within ±6.35° (2π and \
+             1 %): are they written in radians?"
+        ),
+        "{err}"
+    );
     let robots = String::from_utf8(crate::common::calbench_ok(&["robots"]).stdout).unwrap();
     let builtins = robots.lines().filter_map(|l| l.split_whitespace().next());
     let shipped = [

@@ -282,6 +282,17 @@ fn an_implausible_entry_names_the_option_as_identify_s() {
             "{models:?}: {msg}"
         );
     }
+    // Joint values written in rad for a robot in degrees: refused at the mapping's key,
+    // before any row is read as degrees.
+    let rad = |m: &str| m.replacen("unit = \"deg\"", "unit = \"deg\"\nwrite_unit = \"rad\"", 1);
+    let msg = refusal(&rad, &["--models", "kinematic"]);
+    assert!(
+        msg.contains(
+            "edited.mapping.toml: line 6, joints.write_unit: writes the joint values in rad, \
+             and robot \"barrett-wam\" takes its joint angles in deg"
+        ),
+        "{msg}"
+    );
     let metres = |m: &str| m.replace("unit = \"mm\"", "unit = \"m\"");
     let msg = refusal(&metres, &["--models", "kinematic"]);
     let line = line_of(&read(&file), "validation = ");

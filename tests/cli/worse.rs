@@ -443,3 +443,66 @@ fn a_robot_no_robot_file_holds_is_not_written() {
         "{err}"
     );
 }
+
+/// The UR10 sample with its standard deviations (`sigma_mm`): `ls` and `lm` weigh its points
+/// by 1/σ² and reweigh none, yet `report.md` had called 135 of its 199 points "weighed down
+/// as suspect" (their prior weights, normalised to mean 1, are below 1). A point is weighed
+/// down only below its prior weight: `igg3`, which reweighs, may still say so, and then of
+/// fewer points than the prior weights below 1; so does its list of the points it weighed
+/// down.
+#[test]
+fn prior_weights_are_not_called_suspect() {
+    let d = tmp_dir("cli-prior-weights");
+    ur10_positions(&d);
+    let all = d.join("all.csv");
+    let below_one = read(&all)
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.rsplit(',').next()?.parse::<f64>().ok())
+        .collect::<Vec<_>>();
+    let mean_w = below_one.iter().map(|s| 1.0 / (s * s)).sum::<f64>() / below_one.len() as f64;
+    let priors_below_one = below_one
+        .iter()
+        .filter(|s| 1.0 / (*s * *s) / mean_w < 1.0)
+        .count();
+    assert!(priors_below_one > 100, "{priors_below_one}");
+    for method in ["ls", "lm", "igg3"] {
+        let out = d.join(method);
+        calbench_ok(&[
+            "identify",
+            "--robot",
+            &ex("ur10.toml"),
+            "--data",
+            path_arg(&all),
+            "--method",
+            method,
+            "--k",
+            "100",
+            "--out",
+            path_arg(&out),
+        ]);
+        let report = read(&out.join("report.md"));
+        let said = report
+            .lines()
+            .find(|l| l.contains("weighed down"))
+            .map(str::to_string);
+        match (method, said) {
+            ("igg3", Some(l)) => {
+                let n: usize = l.split_whitespace().find_map(|w| w.parse().ok()).unwrap();
+                assert!(n < priors_below_one, "{l}");
+            }
+            ("igg3", None) => {}
+            (_, said) => assert_eq!(said, None, "{method}"),
+        }
+        // IGG3's list of the points it weighed down: its rejections, and fewer than the
+        // prior weights below 1.
+        if method == "igg3" {
+            let list = report
+                .lines()
+                .find_map(|l| l.strip_prefix("Points weighed below their weight before the fit"))
+                .unwrap();
+            let listed = list.matches(" (").count() - 2;
+            assert!(list.contains(" (0)") && listed < priors_below_one, "{list}");
+        }
+    }
+}

@@ -127,8 +127,9 @@ fn written_blocks(value: &Value) -> Option<(usize, &'static str)> {
 
 /// Refuses, naming the file and the key at its line, an entry's `terminations` that no run
 /// writes: a name that is not a termination ([`crate::identify::Termination`], as
-/// `identified.json` names them), or counts that do not add up to the summary's `trials`
-/// (each trial's identification ends one way). A summary without them is not judged.
+/// `identified.json` names them), counts that do not add up to the summary's `trials`
+/// (each trial's identification ends one way), or `failures` fewer than the trials that ended
+/// with no result. A summary without them is not judged.
 fn check_terminations(s: &Summary, path: &Path) -> Result<()> {
     use std::str::FromStr as _;
     for (i, e) in s.results.iter().enumerate() {
@@ -152,6 +153,24 @@ fn check_terminations(s: &Summary, path: &Path) -> Result<()> {
                  ends one way"
             );
             let key = format!("results[{i}].terminations");
+            return Err(Error::file(path, key, why).at_json_key_line());
+        }
+        // A trial that diverged, was singular or had invalid input gave no result, so it is a
+        // failure (one rank-deficient may still be used, and one of finite termination may not).
+        let unusable: usize = (t.iter())
+            .filter(|(k, _)| {
+                crate::identify::Termination::from_str(k).is_ok_and(|t| t.gives_nothing())
+            })
+            .map(|(_, n)| n)
+            .sum();
+        if e.failures < unusable {
+            let why = format!(
+                "is {}, but {} ended diverged, singular or with invalid input (its \
+                 `terminations`), and none of those gives a result: each is a failure",
+                e.failures,
+                crate::error::counted(unusable, "trial", "trials")
+            );
+            let key = format!("results[{i}].failures");
             return Err(Error::file(path, key, why).at_json_key_line());
         }
     }

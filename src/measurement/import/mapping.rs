@@ -53,6 +53,15 @@ pub enum Unit {
 }
 
 impl Unit {
+    /// The angle unit it is, `None` for a length unit.
+    pub(super) fn angle(self) -> Option<AngleUnit> {
+        match self {
+            Unit::Rad => Some(AngleUnit::Rad),
+            Unit::Deg => Some(AngleUnit::Deg),
+            Unit::Mm | Unit::M => None,
+        }
+    }
+
     /// As a mapping writes it.
     pub(super) fn name(self) -> &'static str {
         match self {
@@ -174,6 +183,9 @@ pub(super) struct Plan {
     pub(super) decimal: char,
     /// The joint columns, the factor from their unit to the written one, their unit.
     pub(super) joints: (Vec<String>, Real, Unit),
+    /// The unit the joint values are written in, and the key that gives it
+    /// (`joints.write_unit`, else `joints.unit`).
+    pub(super) written: (Unit, &'static str),
     pub(super) position: ([String; 3], Real),
     pub(super) plus: Vec<String>,
     pub(super) orientation: Option<Orient>,
@@ -317,6 +329,10 @@ impl Mapping {
             sep,
             decimal,
             joints: (self.joints.columns.clone(), from / to, self.joints.unit),
+            written: match self.joints.write_unit {
+                Some(u) => (u, "joints.write_unit"),
+                None => (self.joints.unit, "joints.unit"),
+            },
             position,
             plus: self.position.plus.clone().map_or(Vec::new(), Vec::from),
             orientation,

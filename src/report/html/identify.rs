@@ -17,7 +17,7 @@ use crate::error::Result;
 use crate::identify::standard_error;
 use crate::numeric::Real;
 use crate::report::identified::{
-    validation_rows, warnings, Additions, Block, IdentifyRecord, VALIDATION_HEADERS,
+    validation_rows, warnings, weighed_down, Additions, Block, IdentifyRecord, VALIDATION_HEADERS,
 };
 use crate::report::markdown::fmt_num;
 
@@ -265,6 +265,7 @@ fn parameters_section(page: &mut Page, v: &View) -> Result<()> {
 fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
     let r = v.record;
     let weights = &r.calibrated.identified.weights;
+    let prior = r.data.weights();
     let mean = |x: &[Real]| x.iter().sum::<Real>() / x.len().max(1) as Real;
     page.plots_begin();
     page.figure_file(
@@ -322,16 +323,23 @@ fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
     let caption = if n > TABLE_ROWS {
         format!(
             "Residual per point (mm) and final weight: the {TABLE_ROWS} largest after of {n} \
-             points (residuals.csv holds all; rows weighed below 1 are marked)"
+             points (residuals.csv holds all; rows weighed below their weight before the fit are \
+             marked)"
         )
     } else {
-        "Residual per point (mm) and final weight (rows weighed below 1 are marked)".to_string()
+        "Residual per point (mm) and final weight (rows weighed below their weight before the \
+         fit are marked)"
+            .to_string()
     };
     page.table_with(
         &caption,
         &["row", "before mm", "after mm", "weight"],
         &rows,
-        |k| (weights.get(shown[k]).is_some_and(|w| *w < 1.0)).then_some("low"),
+        |k| {
+            let i = shown[k];
+            let prior = prior.as_ref().map(|p| p[i]);
+            (weights.get(i).is_some_and(|w| weighed_down(*w, prior))).then_some("low")
+        },
     );
     Ok(())
 }

@@ -238,7 +238,20 @@ fn with_lines<'a>(
     names: impl Iterator<Item = &'a String>,
     parts: &[Part],
 ) -> Vec<(&'a str, usize)> {
-    let lines = parts.iter().map(|p| line_of(text, p.tag.start));
+    // The parts stand in the text's order: each line is counted on from the last part's.
+    let (mut at, mut line) = (0, 1);
+    let lines = parts.iter().map(|p| {
+        let start = p.tag.start.min(text.len());
+        if start < at {
+            (at, line) = (0, 1);
+        }
+        line += text.as_bytes()[at..start]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        at = start;
+        line
+    });
     names.map(String::as_str).zip(lines).collect()
 }
 
@@ -379,22 +392,26 @@ fn tree_fault(
     links: &[(&str, usize)],
     joints: &[(&str, usize)],
 ) -> Option<(usize, String)> {
+    use std::collections::HashMap;
     for (what, named) in [("link", links), ("joint", joints)] {
-        for (k, (name, at)) in named.iter().enumerate() {
-            if let Some((_, first)) = named[..k].iter().find(|(n, _)| n == name) {
+        let mut first_at = HashMap::with_capacity(named.len());
+        for &(name, at) in named {
+            if let Some(first) = first_at.insert(name, at) {
                 return Some((
-                    *at,
+                    at,
                     format!("{what} \"{name}\": already declared on line {first}"),
                 ));
             }
         }
     }
+    let known: std::collections::HashSet<&str> = links.iter().map(|(l, _)| *l).collect();
+    let child_of = child_joints(robot);
     for (k, (j, &(name, at))) in robot.joints.iter().zip(joints).enumerate() {
         for (key, link) in [
             ("<parent link>", &j.parent.link),
             ("<child link>", &j.child.link),
         ] {
-            if !links.iter().any(|(l, _)| l == link) {
+            if !known.contains(link.as_str()) {
                 return Some((
                     at,
                     format!("joint \"{name}\", {key}: no link \"{link}\" in the URDF"),
@@ -402,17 +419,14 @@ fn tree_fault(
             }
         }
         let child = &j.child.link;
-        if let Some(i) = robot.joints[..k]
-            .iter()
-            .position(|p| &p.child.link == child)
-        {
+        if let Some(&i) = child_of.get(child.as_str()).filter(|&&i| i < k) {
             let (other, first) = joints[i];
             return Some((at, format!("joint \"{name}\", <child link>: link \"{child}\" is already the child of joint \"{other}\" (line {first})")));
         }
     }
     // Every link hangs from the one root link: no second root, no loop.
     let parent = |l: &str| {
-        let k = robot.joints.iter().position(|j| j.child.link == l)?;
+        let &k = child_of.get(l)?;
         Some((robot.joints[k].parent.link.as_str(), joints[k]))
     };
     let mut roots = links.iter().filter(|(l, _)| parent(l).is_none());
@@ -423,13 +437,25 @@ fn tree_fault(
         );
         return Some((*at, msg));
     }
+    // A link whose walk up reaches the root is known to hang from it, and so is every link on
+    // the way: each is walked once while none loops.
+    let mut hangs = std::collections::HashSet::with_capacity(links.len());
     for &(l, _) in links {
         let mut link = l;
+        let mut path = Vec::new();
         for _ in 0..=joints.len() {
+            if hangs.contains(link) {
+                break;
+            }
+            path.push(link);
             match parent(link) {
                 Some((up, _)) => link = up,
                 None => break,
             }
+        }
+        if hangs.contains(link) || parent(link).is_none() {
+            hangs.extend(path);
+            continue;
         }
         if let Some((_, (name, at))) = parent(link) {
             let msg = format!("joint \"{name}\": the joints form a loop at link \"{link}\"");
@@ -437,6 +463,16 @@ fn tree_fault(
         }
     }
     None
+}
+
+/// The joint of each child link, by its index in `urdf.joints`: the first, where a link is
+/// the child of several (which [`read`] refuses).
+pub(super) fn child_joints(urdf: &urdf_rs::Robot) -> std::collections::HashMap<&str, usize> {
+    let mut map = std::collections::HashMap::with_capacity(urdf.joints.len());
+    for (i, j) in urdf.joints.iter().enumerate() {
+        map.entry(j.child.link.as_str()).or_insert(i);
+    }
+    map
 }
 
 /// A number as a written URDF holds it: every digit, and 0 for −0.

@@ -83,12 +83,15 @@ impl Scenario {
         Ok(())
     }
 
-    /// The run's warnings, one line each: what the scenario sets that it does not read, and a
+    /// The run's warnings, one line each: what the scenario sets that it does not read, a
     /// robot too small for its length unit (its joints adding up to less than
-    /// 10 mm, `SMALL_ARM_MM`).
+    /// 10 mm, `SMALL_ARM_MM`), and a robot in degrees whose limits look written in radians.
     pub fn warnings(&self) -> Vec<String> {
         let mut out = self.unused_settings();
-        out.extend(self.robot().ok().as_ref().and_then(small_robot));
+        if let Ok(robot) = self.robot() {
+            out.extend(small_robot(&robot));
+            out.extend(radian_limits(&robot));
+        }
         out.extend(self.large_angle_errors());
         out
     }
@@ -202,6 +205,29 @@ impl Scenario {
             })
             .collect()
     }
+}
+
+/// Why the joint limits of a robot in degrees look written in radians, or `None`: every
+/// revolute joint's limits within ±2π (written rounded up, as 6.2832: 1 % is allowed), and
+/// some limit not 0. Poses drawn within them barely move the arm: a study of such a robot
+/// runs, so this is a warning.
+fn radian_limits(robot: &Robot) -> Option<String> {
+    use crate::robot::AngleUnit;
+    let bound = 1.01 * std::f64::consts::TAU;
+    let revolute: Vec<_> = (0..robot.dof()).filter(|&j| robot.q_turns(j)).collect();
+    let small = |j: &usize| {
+        let (lo, hi) = robot.joints[*j].limits;
+        lo.to_degrees().abs() <= bound && hi.to_degrees().abs() <= bound
+    };
+    (robot.units.angle == AngleUnit::Deg && !revolute.is_empty() && revolute.iter().all(small))
+        .then(|| {
+            format!(
+                "robot \"{}\": every revolute joint's limits lie within ±{bound:.2}° (2π and \
+                 1 %): are they written in radians? Its angle_unit is \"deg\", and poses drawn \
+                 within them barely move the arm",
+                robot.name
+            )
+        })
 }
 
 /// Below this, the lengths, offsets and travels of a robot's joints (mm, its tool's not
