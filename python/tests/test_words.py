@@ -42,7 +42,7 @@ def test_readings_given_as_arrays_are_refused_as_the_points_setting():
     q = np.random.default_rng(1).uniform(-30, 30, (40, 6))
     line = np.outer(np.arange(40.0), [1.0, 0.0, 0.0])
     with pytest.raises(calbench.SettingError,
-                       match=r"^setting `points`: registration: the points are \(nearly\) "
+                       match=r"^setting `points`: registration: the measured points are \(nearly\) "
                              r"collinear"):
         calbench.identify(robot, q, line)
 

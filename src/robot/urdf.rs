@@ -132,6 +132,11 @@ fn moving(j: &urdf_rs::Joint) -> Result<Option<JointType>> {
 /// The joint types calbench reads, as a URDF spells them.
 const ONE_AXIS: [&str; 4] = ["revolute", "continuous", "prismatic", "fixed"];
 
+/// URDF's other joint types: a file may hold them off the chain calbench reads (a mobile
+/// base's `floating` joint above `--base`, a sensor on another branch), and [`moving`] refuses
+/// one on the chain.
+const OFF_CHAIN: [&str; 2] = ["floating", "planar"];
+
 /// The refusal of joint `name` of type `kind`, which is none of [`ONE_AXIS`] (a URDF type
 /// such as `planar`, or none at all: URDF's other types are not offered as a choice).
 fn not_one_axis(name: &str, kind: &str) -> String {

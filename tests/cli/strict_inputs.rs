@@ -519,3 +519,35 @@ fn an_unclosed_quote_is_named_by_its_field() {
     );
     assert!(!out.exists());
 }
+
+/// A URDF whose base hangs from its world by a `floating` joint (a mobile manipulator's): the
+/// chain below `--base` is read as the same file with that joint fixed, where the whole file
+/// had been refused for a joint the chain does not hold; the chain through it is still
+/// refused, at that joint's line.
+#[test]
+fn a_floating_joint_off_the_chain_is_not_read() {
+    let d = tmp_dir("strict-floating");
+    let ur10 = root().join("examples/ipa-ur10/ur10.urdf");
+    let src = std::fs::read_to_string(&ur10).unwrap();
+    let floating = src.replacen(
+        "<joint name=\"base_placement\" type=\"fixed\">",
+        "<joint name=\"base_placement\" type=\"floating\">",
+        1,
+    );
+    assert_ne!(floating, src);
+    let file = d.join("floating.urdf");
+    std::fs::write(&file, floating).unwrap();
+    let q = "0.1,-0.5,0.7,-1.2,0.4,2.0";
+    let fk = |robot: &Path| {
+        let robot = robot.to_str().unwrap();
+        calbench(&["fk", "--robot", robot, "--base", "base_link", "--q", q])
+    };
+    let (o, want) = (fk(&file), fk(&ur10));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.stdout, want.stdout);
+    let whole = calbench(&["fk", "--robot", file.to_str().unwrap(), "--q", q]);
+    refused(
+        &whole,
+        &["floating.urdf: line 9: joint \"base_placement\": type floating is not a one-axis joint"],
+    );
+}

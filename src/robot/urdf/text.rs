@@ -15,7 +15,7 @@ use std::path::Path;
 
 use quick_xml::events::{BytesStart, Event};
 
-use super::{not_one_axis, ONE_AXIS};
+use super::{not_one_axis, OFF_CHAIN, ONE_AXIS};
 use crate::error::{line_of, read_text_whole, Error, Result};
 use crate::numeric::{matrix_rpy, Frame, Real};
 
@@ -277,8 +277,9 @@ fn attribute(e: &BytesStart, key: &[u8]) -> Option<String> {
 /// without naming where: an attribute written twice, an entity that is not XML's, a
 /// joint's `<origin>` or `<axis>` whose `xyz` or `rpy` is not three numbers (urdf-rs reads
 /// the numbers among the words, so that `"0 zero 1 2"` would be the vector (0, 1, 2)) and a
-/// `<limit>` value that is not a number; and a joint of a type calbench does not read
-/// (urdf-rs would offer `floating`, `planar` and `spherical` for a type it does not know).
+/// `<limit>` value that is not a number; and a joint of a type URDF does not define (urdf-rs
+/// would offer `floating`, `planar` and `spherical` for a type it does not know). URDF's
+/// `floating` and `planar` pass: off the chain they are not read, and on it they are refused.
 /// `joint` is the joint an element at depth 2 belongs to.
 fn check_attributes(e: &BytesStart, joint: Option<&Part>) -> std::result::Result<(), String> {
     let element = String::from_utf8_lossy(e.name().as_ref()).into_owned();
@@ -296,7 +297,8 @@ fn check_attributes(e: &BytesStart, joint: Option<&Part>) -> std::result::Result
                  overrides included): a name is shown in reports and on the terminal"
             ));
         }
-        if element == "joint" && joint.is_none() && key == "type" && !ONE_AXIS.contains(&&*value) {
+        let known = |t: &str| ONE_AXIS.contains(&t) || OFF_CHAIN.contains(&t);
+        if element == "joint" && joint.is_none() && key == "type" && !known(&value) {
             let name = attribute(e, b"name").unwrap_or_default();
             return Err(not_one_axis(&name, &value));
         }
