@@ -59,7 +59,8 @@ pub fn run(args: &PosesArgs) -> Result<()> {
     let out = &args.out;
     super::guard_out(out, &OUTPUTS, [&args.scenario])?;
     let sc = Scenario::load(&args.scenario)?;
-    // As `run` warns of it: a robot too small for its length unit.
+    // As `run` warns of them (`Scenario::warnings`): a robot too small for its length unit or
+    // with limits in radians, settings not read.
     for w in sc.warnings() {
         eprintln!("warning: {w}");
     }

@@ -46,7 +46,8 @@ pub fn run(args: &SimulateArgs) -> Result<()> {
     if args.measure.is_some() {
         return Err(simulated::no_instruments(&args.scenario).into());
     }
-    // As `run` warns of them: a robot too small for its length unit, settings not read.
+    // As `run` warns of them (`Scenario::warnings`): a robot too small for its length unit or
+    // with limits in radians, settings not read.
     for w in sc.warnings() {
         eprintln!("warning: {w}");
     }

@@ -70,8 +70,8 @@ pub fn import_text(
     let (_, plan) = Mapping::load_plan(mapping_path)?;
     let (written, key) = plan.written;
     if let (Some(robot), Some(unit)) = (robot, written.angle()) {
-        if robot.angle_unit().is_some_and(|u| u != unit) {
-            let takes: &str = robot.angle_unit().map_or("", |u| u.into());
+        if let Some(takes) = robot.angle_unit().filter(|u| *u != unit) {
+            let takes: &str = takes.into();
             let msg = format!(
                 "writes the joint values in {}, and robot \"{}\" takes its joint angles in \
                  {takes}: they would be read as {takes}; write them in {takes}",

@@ -249,18 +249,17 @@ fn point_warnings(weights: &[Real], prior: Option<&[Real]>, m: usize) -> Vec<Str
 /// How many of the final `weights` lie between 0 and the `prior` weight of their point
 /// (`point` of a weight's index; [`weighed_down`]).
 fn lowered(weights: &[Real], point: impl Fn(usize) -> usize, prior: Option<&[Real]>) -> usize {
-    let prior_of = |i: usize| prior.and_then(|p| p.get(point(i))).copied();
     (weights.iter().enumerate())
-        .filter(|&(i, x)| *x > 0.0 && weighed_down(*x, prior_of(i)))
+        .filter(|&(i, x)| *x > 0.0 && weighed_down(*x, prior, point(i)))
         .count()
 }
 
-/// Whether a final weight `w` is below its point's `prior` weight (1/σ², mean 1; 1 without
-/// σ): the method weighed the point down. A method that does not reweigh (`ls`, `lm`) ends on
-/// the prior weights, which differ from 1 but judge no point; the rounding of the product of
-/// prior and robust weight is no weighing down.
-pub fn weighed_down(w: Real, prior: Option<Real>) -> bool {
-    w < prior.unwrap_or(1.0) * (1.0 - 1e-9)
+/// Whether a final weight `w` is below the `prior` weight of its point `point` (1/σ², mean 1;
+/// 1 without σ): the method weighed the point down. A method that does not reweigh (`ls`,
+/// `lm`) ends on the prior weights, which differ from 1 but judge no point; the rounding of
+/// the product of prior and robust weight is no weighing down.
+pub fn weighed_down(w: Real, prior: Option<&[Real]>, point: usize) -> bool {
+    w < prior.and_then(|p| p.get(point)).copied().unwrap_or(1.0) * (1.0 - 1e-9)
 }
 
 /// The headers of [`validation_rows`].
@@ -435,7 +434,7 @@ pub fn report_md(r: &IdentifyRecord) -> Result<String> {
     if igg3_weights(r) {
         let prior = r.data.weights();
         let low: Vec<String> = (id.weights.iter().enumerate())
-            .filter(|&(i, w)| weighed_down(*w, prior.as_ref().map(|p| p[i])))
+            .filter(|&(i, w)| weighed_down(*w, prior.as_deref(), i))
             .map(|(i, w)| format!("{i} ({})", fmt_num(*w, 3)))
             .collect();
         let _ = writeln!(

@@ -415,10 +415,7 @@ fn a_gross_reading_the_fit_keeps_is_warned_of() {
 #[test]
 fn a_robot_no_robot_file_holds_is_not_written() {
     let d = tmp_dir("cli-unwritable-robot");
-    let sc = crate::common::root().join("scenarios/ci-guard.toml");
-    let sim = d.join("sim");
-    calbench_ok(&["simulate", path_arg(&sc), "--out", path_arg(&sim)]);
-    let data = sim.join("measurements.csv");
+    let data = crate::plausible::simulated(&d, "scenarios/ci-guard.toml", None);
     let out = d.join("out");
     let o = calbench(&[
         "identify",

@@ -337,8 +337,10 @@ fn residuals_section(page: &mut Page, v: &View) -> Result<()> {
         &rows,
         |k| {
             let i = shown[k];
-            let prior = prior.as_ref().map(|p| p[i]);
-            (weights.get(i).is_some_and(|w| weighed_down(*w, prior))).then_some("low")
+            (weights
+                .get(i)
+                .is_some_and(|w| weighed_down(*w, prior.as_deref(), i)))
+            .then_some("low")
         },
     );
     Ok(())

@@ -394,7 +394,7 @@ fn tree_fault(
     links: &[(&str, usize)],
     joints: &[(&str, usize)],
 ) -> Option<(usize, String)> {
-    use std::collections::HashMap;
+    use std::collections::{HashMap, HashSet};
     for (what, named) in [("link", links), ("joint", joints)] {
         let mut first_at = HashMap::with_capacity(named.len());
         for &(name, at) in named {
@@ -406,7 +406,7 @@ fn tree_fault(
             }
         }
     }
-    let known: std::collections::HashSet<&str> = links.iter().map(|(l, _)| *l).collect();
+    let known: HashSet<&str> = links.iter().map(|(l, _)| *l).collect();
     let child_of = child_joints(robot);
     for (k, (j, &(name, at))) in robot.joints.iter().zip(joints).enumerate() {
         for (key, link) in [
@@ -441,7 +441,7 @@ fn tree_fault(
     }
     // A link whose walk up reaches the root is known to hang from it, and so is every link on
     // the way: each is walked once while none loops.
-    let mut hangs = std::collections::HashSet::with_capacity(links.len());
+    let mut hangs = HashSet::with_capacity(links.len());
     for &(l, _) in links {
         let mut link = l;
         let mut path = Vec::new();
@@ -455,13 +455,12 @@ fn tree_fault(
                 None => break,
             }
         }
-        if hangs.contains(link) || parent(link).is_none() {
-            hangs.extend(path);
-            continue;
-        }
-        if let Some((_, (name, at))) = parent(link) {
-            let msg = format!("joint \"{name}\": the joints form a loop at link \"{link}\"");
-            return Some((at, msg));
+        match parent(link) {
+            Some((_, (name, at))) if !hangs.contains(link) => {
+                let msg = format!("joint \"{name}\": the joints form a loop at link \"{link}\"");
+                return Some((at, msg));
+            }
+            _ => hangs.extend(path),
         }
     }
     None

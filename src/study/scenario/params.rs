@@ -208,9 +208,9 @@ impl Scenario {
 }
 
 /// Why the joint limits of a robot in degrees look written in radians, or `None`: every
-/// revolute joint's limits within ±2π (written rounded up, as 6.2832: 1 % is allowed), and
-/// some limit not 0. Poses drawn within them barely move the arm: a study of such a robot
-/// runs, so this is a warning.
+/// revolute joint's limits within ±2π (written rounded up, as 6.2832: 1 % is allowed; a
+/// robot's lower limit is below its upper, so they are not all 0). Poses drawn within them
+/// barely move the arm: a study of such a robot runs, so this is a warning.
 fn radian_limits(robot: &Robot) -> Option<String> {
     use crate::robot::AngleUnit;
     let bound = 1.01 * std::f64::consts::TAU;
