@@ -380,6 +380,16 @@ impl Error {
     }
 }
 
+/// Whether `path` exists: `false` where nothing is there (or a file stands where a folder of
+/// it would), and refused with the system's words where it cannot be told (a link that loops,
+/// a folder not searchable), which [`std::path::Path::exists`] would call missing.
+pub fn exists(path: &std::path::Path) -> Result<bool> {
+    match path.try_exists() {
+        Err(e) if e.kind() == std::io::ErrorKind::NotADirectory => Ok(false),
+        r => r.map_err(|e| Error::io(path, e)),
+    }
+}
+
 /// Reads calbench's file `what` (`summary.json`, `task.json`) from `de`, `path` naming it: a
 /// missing or unknown key, or one of the wrong type, is refused naming the file and the key
 /// path (`not a calbench WHAT: …`); a missing key's path is its own (`chosen_by`,

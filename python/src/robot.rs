@@ -58,11 +58,11 @@ impl PyRobot {
     /// The built-in robot `name` (`calbench robots` lists them).
     #[staticmethod]
     fn builtin(name: &Bound<'_, PyAny>) -> PyResult<PyRobot> {
-        let name: String = typed_arg("robot", name, "a built-in robot's name")?;
+        let name: String = typed_arg("name", name, "a built-in robot's name")?;
         match builtin::builtin(&name) {
             Some(b) => Ok(PyRobot { inner: (b.build)() }),
             None => Err(setting(
-                "robot",
+                "name",
                 format!(
                     "\"{name}\" is not a built-in robot ({})",
                     builtin::BUILTINS

@@ -434,7 +434,7 @@ def test_every_refusal_is_a_calbench_error(root):
     (lambda r, q, p: calbench.identify(r, q, p, prior={"d2": True}), "prior.d2"),
     (lambda r, q, p: r.fk(q, pose="yes"), "pose"),
     (lambda r, q, p: r.with_errors([("a2", 0.1)]), "errors"),
-    (lambda r, q, p: calbench.Robot.builtin(5), "robot"),
+    (lambda r, q, p: calbench.Robot.builtin(5), "name"),
     (lambda r, q, p: calbench.Robot.from_file(5), "path"),
     (lambda r, q, p: calbench.Robot.from_file("robots/ban-irb2600.toml", tip=5), "tip"),
     (lambda r, q, p: calbench.run(CI_GUARD, trials=2, progress="no"), "progress"),
@@ -596,8 +596,11 @@ def test_identifiability_matches_the_cli(cli, simulated):
 def test_errors_are_calbench_errors_with_the_cli_message(cli, tmp_path):
     with pytest.raises(calbench.IoError, match="no-such-robot.toml"):
         calbench.Robot.from_file(tmp_path / "no-such-robot.toml")
-    with pytest.raises(calbench.SettingError, match="not a built-in robot"):
+    # Named by the argument, `name` (it had been `robot`).
+    with pytest.raises(calbench.SettingError, match=r"^setting `name`: \"r2d2\" is not a built-in robot"):
         calbench.Robot.builtin("r2d2")
+    with pytest.raises(calbench.SettingError, match=r"^setting `name`: expected a built-in robot's name"):
+        calbench.Robot.builtin(name=3)
     bad = tmp_path / "bad.toml"
     bad.write_text("name = 3\n")
     msg = cli("identify", "--robot", bad, "--data", "x.csv", "--method", "ls", "--out", tmp_path / "o", ok=False).stderr
@@ -613,7 +616,7 @@ def test_errors_are_calbench_errors_with_the_cli_message(cli, tmp_path):
         (lambda: calbench.identify(robot, data="c.csv", fix=[odd]), "fix"),
         (lambda: calbench.simulate({"name": odd}), "name"),
         (lambda: calbench.simulate({odd: 1}), "scenario"),
-        (lambda: calbench.Robot.builtin(odd), "robot"),
+        (lambda: calbench.Robot.builtin(odd), "name"),
     ]:
         with pytest.raises(calbench.SettingError, match=f"setting `{key}`.*lone surrogate"):
             call()

@@ -224,6 +224,16 @@ def test_a_validation_under_a_payload_is_identified_as_from_its_files(root, tmp_
                            match=r"^setting `validate`: the calibration poses carry a payload"):
             calbench.identify(s["robot"], s["q"], s["points"], payload=s["payload"],
                               validate=short, **common)
+    # Calibration rows read from a file with their payloads: a validation without one is
+    # refused by the identification itself, arrays and files alike.
+    bare = tmp_path / "bare.csv"
+    bare.write_text("".join(",".join(l.split(",")[:9]) + "\n" for l in
+                            (tmp_path / "sim" / "validation.csv").read_text().splitlines()))
+    for short in ((s["validation_q"], s["validation_points"]), bare):
+        with pytest.raises(calbench.SettingError,
+                           match=r"^setting `validate`: .*gives no payload, and the calibration"):
+            calbench.identify(s["robot"], data=tmp_path / "sim" / "measurements.csv",
+                              validate=short, **common)
     # Without a payload for the calibration, a payload of None is none: it had been refused
     # as "expected 1 dimensions, got shape ()".
     v = (s["validation_q"], s["validation_points"])

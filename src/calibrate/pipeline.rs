@@ -19,7 +19,7 @@ use super::on_kind::KindOutcome;
 use super::orientations::convention_hint;
 use super::record::{IdentifiedRecord, PriorMove, Trace};
 use super::request::{IdentifyData, IdentifyRequest};
-use super::validation::{point_residuals, validate_file, FileValidation};
+use super::validation::{check_validation_rows, point_residuals, validate_file, FileValidation};
 use super::verdict::{
     self, check_names, check_priors_identified, check_some_left, gross_likely, gross_reading,
     radians_hint, registration_warning, rms, worse_causes, worse_error, worse_warning,
@@ -217,48 +217,9 @@ impl IdentifyRequest {
         // Rows held out of data without copies repeat none of the rest; a validation file's
         // may.
         if let (Some(v), None) = (&val, &held_out) {
-            // A refusal of the validation's rows names its file, as every refusal of a file's
-            // rows does (and says when it is the data's own file).
-            let refused = |why: String| {
-                let why = match &self.validate_source {
-                    Some(v) => {
-                        let same = |p: &std::path::Path| std::fs::canonicalize(p).ok();
-                        match same(v).is_some_and(|c| same(&self.source) == Some(c)) {
-                            true => format!("{} is the data's own file: {why}", v.display()),
-                            false => format!("{}: {why}", v.display()),
-                        }
-                    }
-                    None => why,
-                };
-                Err(Error::option(Opt::Validate, why))
-            };
-            // A validation's rows repeated would weigh their points twice in its figures.
-            let repeated = v.repeated_rows();
-            if !repeated.is_empty() {
-                let why = crate::measurement::REPEATED_VALIDATION;
-                let same = crate::measurement::SAME_MEASUREMENT;
-                let msg = crate::measurement::repeated_rows_refusal(&repeated, same, why);
-                return refused(msg);
-            }
-            let shared = d.shared_rows(v);
-            if !shared.is_empty() {
-                return refused(crate::measurement::shared_rows_refusal(
-                    &shared,
-                    "rows of each file",
-                ));
-            }
-            // Orientations the calibration does not determine would be scored (a file of
-            // other rows: copies of the data's are refused as such, above): positions
-            // leave the tool's rotation to its nominal values, so a full-pose validation of
-            // them reported degrees of orientation error that measure nothing the data fixed.
-            if v.quats.is_some() && d.quats.is_none() {
-                return refused(
-                    "holds orientations and the calibration data positions only, which do \
-                     not determine the tool's orientation: the validation's orientation errors \
-                     would not measure the calibration; validate on its positions alone"
-                        .into(),
-                );
-            }
+            let file = self.validate_source.as_deref();
+            let compliance = self.compliance.is_some();
+            check_validation_rows((nominal, compliance), (&d, &self.source), (v, file))?;
         }
         // A held-out row is a row of the data file; a validation file's, of its own.
         let validation_row = |i| match &held_out {

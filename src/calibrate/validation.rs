@@ -2,11 +2,14 @@
 //! against true (or measured) frames, their statistics, the validation on a measurement file
 //! and the residual of each calibration point. The reports only format what is computed here.
 
+use std::path::Path;
+
 use super::Calibrated;
-use crate::error::Result;
+use crate::error::{Error, Opt, Result};
 use crate::identify::qiao::error_models::attitude_error_deg;
 use crate::measurement::Measurements;
 use crate::numeric::{rotation_vector, Frame, Mat3, Real};
+use crate::robot::compliance::is_compliant;
 use crate::robot::loaded::LoadedFk;
 use crate::robot::Robot;
 
@@ -247,6 +250,77 @@ pub fn residual_vectors(c: &Calibrated, data: &Measurements) -> Result<Vec<crate
         .enumerate()
         .map(|(i, (q, p))| Ok(c.frame.apply(p) - fk.at(q, loads.map_or(0.0, |l| l[i]))?.pos))
         .collect()
+}
+
+/// Refuses a validation file's rows (`v`, read from `file` where they came from one, beside
+/// the calibration data `d` read from `source` for `nominal`) that would not measure the
+/// calibration: rows repeated or shared with the data, full poses of a position calibration,
+/// poses without the payload under which compliances (`compliance`: identified) are. A
+/// refusal names the file, as the refusal of `--validate`.
+pub(super) fn check_validation_rows(
+    (nominal, compliance): (&Robot, bool),
+    (d, source): (&Measurements, &Path),
+    (v, file): (&Measurements, Option<&Path>),
+) -> Result<()> {
+    // A refusal of the validation's rows names its file, as every refusal of a file's
+    // rows does (and says when it is the data's own file).
+    let refused = |why: String| {
+        let why = match file {
+            Some(v) => {
+                let same = |p: &Path| std::fs::canonicalize(p).ok();
+                match same(v).is_some_and(|c| same(source) == Some(c)) {
+                    true => format!("{} is the data's own file: {why}", v.display()),
+                    false => format!("{}: {why}", v.display()),
+                }
+            }
+            None => why,
+        };
+        Err(Error::option(Opt::Validate, why))
+    };
+    // A validation's rows repeated would weigh their points twice in its figures.
+    let repeated = v.repeated_rows();
+    if !repeated.is_empty() {
+        let why = crate::measurement::REPEATED_VALIDATION;
+        let same = crate::measurement::SAME_MEASUREMENT;
+        let msg = crate::measurement::repeated_rows_refusal(&repeated, same, why);
+        return refused(msg);
+    }
+    let shared = d.shared_rows(v);
+    if !shared.is_empty() {
+        return refused(crate::measurement::shared_rows_refusal(
+            &shared,
+            "rows of each file",
+        ));
+    }
+    // Orientations the calibration does not determine would be scored (a file of
+    // other rows: copies of the data's are refused as such, above): positions
+    // leave the tool's rotation to its nominal values, so a full-pose validation of
+    // them reported degrees of orientation error that measure nothing the data fixed.
+    if v.quats.is_some() && d.quats.is_none() {
+        return refused(
+            "holds orientations and the calibration data positions only, which do \
+             not determine the tool's orientation: the validation's orientation errors \
+             would not measure the calibration; validate on its positions alone"
+                .into(),
+        );
+    }
+    // A robot with joint compliances predicts each pose under its payload: validation
+    // poses without one would be predicted unloaded, their errors the sag's.
+    let loaded = d
+        .payload_kg
+        .as_ref()
+        .is_some_and(|p| p.iter().any(|&w| w != 0.0));
+    let sags = compliance || is_compliant(nominal);
+    if loaded && sags && v.payload_kg.is_none() {
+        return refused(
+            "gives no payload, and the calibration rows carry one under which the \
+             joint compliances are identified: the validation poses would be predicted \
+             with no load; give each validation row its payload (`payload_kg`, 0 for a \
+             pose without one)"
+                .into(),
+        );
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -301,7 +301,7 @@ impl Db {
                 "is a folder: give the database's file (results/calbench.sqlite by default)",
             ));
         }
-        if !path.exists() {
+        if !crate::error::exists(path)? {
             if !create {
                 return Err(Error::file(
                     path,

@@ -357,6 +357,7 @@ impl UrdfRobot {
             check_numbers(j, kind).map_err(|(element, msg)| at(element, msg))?;
             w = w.compose(&origin(j));
             if let Some(kind) = kind {
+                text.uncoupled(path, i, tip)?;
                 if joints.len() == MAX_JOINTS {
                     let msg = format!(
                         "joint \"{}\" is moving joint {} of the chain to \"{tip}\": at most \

@@ -639,6 +639,49 @@ fn calbench_baseline_refuses_to_write_over_its_own_inputs() {
     assert!(lp.is_symlink());
 }
 
+/// A path that cannot be told present or missing (a link that loops, a folder where a file is
+/// read) is refused with the system's words, naming it: `check` had compared a run whose
+/// `trials.csv` is such a path from the summaries alone, saying the folder held none, and a
+/// summary or a results database behind a looping link was called missing.
+#[test]
+fn paths_that_cannot_be_read_are_not_called_missing() {
+    let dir = tmp_dir("cli-guard-unreadable");
+    let a = dir.join("a");
+    run(
+        &root().join("scenarios/ci-guard.toml"),
+        &a,
+        &["--trials", "2", "--threads", "1"],
+    );
+    let trials = a.join("trials.csv");
+    std::fs::remove_file(&trials).unwrap();
+    std::fs::create_dir(&trials).unwrap();
+    let base = committed();
+    let o = calbench(&["check", path_arg(&a), "--baseline", path_arg(&base)]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with(&format!("error: {}: ", trials.display())),
+        "{err}"
+    );
+    let looped = dir.join("loop.json");
+    std::os::unix::fs::symlink(&looped, &looped).unwrap();
+    let db = dir.join("loop.sqlite");
+    std::os::unix::fs::symlink(&db, &db).unwrap();
+    for args in [
+        vec!["check", path_arg(&looped), "--baseline", path_arg(&base)],
+        vec!["history", "--db", path_arg(&db), "--regressions"],
+    ] {
+        let o = calbench(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("symbolic links") && !err.contains("does not exist"),
+            "{err}"
+        );
+        assert!(!err.contains("no such file"), "{err}");
+    }
+}
+
 /// A baseline whose `per_trial` holds a metric no run writes, or an entry its own summary
 /// has no result of, is refused by `check` naming the file, the line and the key, as its
 /// summary's unknown fields are (each at its own key's line); both ran with exit status 0 and no word (docs/formats.md

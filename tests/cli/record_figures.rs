@@ -181,6 +181,16 @@ fn a_summary_without_its_validation_errors_or_with_unknown_terminations_is_refus
     ];
     refused(&record(), &want);
     refused(&check(), &want);
+    // A measure or a registration no run writes had been accepted by both.
+    for (key, value) in [("measure", "posture"), ("registration", "best")] {
+        let mut e = v.clone();
+        e[key] = value.into();
+        write(&e);
+        let says = format!("{key}: is \"{value}\", which no run writes");
+        let want = ["run/summary.json: line ", says.as_str()];
+        refused(&record(), &want);
+        refused(&check(), &want);
+    }
     // Averaged over trials, a mean stays at most the RMS, and the RMS of errors never
     // negative at most the maximum: a summary edited otherwise had been stored.
     let after = &v["results"][0]["validation_after_mm"];

@@ -300,6 +300,25 @@ fn a_sweep_value_given_twice_or_a_table_and_its_key_on_two_axes_are_refused() {
         "sweep[1].key",
         inside,
     );
+    // A grid of 10⁹ points is refused at the values that take it past 10⁶ points, at once:
+    // each point had been checked as a scenario, 8 GB and more before a word.
+    let list = |from: u32| {
+        let v: Vec<String> = (from..from + 1000).map(|v| v.to_string()).collect();
+        format!("[{}]", v.join(", "))
+    };
+    let grid = format!(
+        "\n[[sweep]]\nkey = \"calibration.count\"\nvalues = {}\n\n[[sweep]]\n\
+         key = \"validation.count\"\nvalues = {}\n\n[[sweep]]\nkey = \"outliers.count\"\n\
+         values = {}\n",
+        list(30),
+        list(30),
+        list(0)
+    );
+    let at = format!("values = {}", list(0));
+    let started = std::time::Instant::now();
+    let past = "\"outliers.count\": 1000 values make a grid of 1000000000 points";
+    swept_refused(&dir, &grid, &at, "sweep[2].values", past);
+    assert!(started.elapsed().as_secs() < 20, "{:?}", started.elapsed());
 }
 
 /// ci-guard with `sweep` appended, run: refused in one line naming the line `at_line` (its

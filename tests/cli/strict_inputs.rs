@@ -551,3 +551,50 @@ fn a_floating_joint_off_the_chain_is_not_read() {
         &["floating.urdf: line 9: joint \"base_placement\": type floating is not a one-axis joint"],
     );
 }
+
+/// A URDF joint with a `<mimic>` moves with another joint: on the chain it is refused at its
+/// `<mimic>`'s line, where it had been read as a joint of its own (a seventh variable the data
+/// do not give); off the chain (a gripper's second finger) it is not read.
+#[test]
+fn a_mimic_joint_is_refused_on_the_chain_only() {
+    let d = tmp_dir("strict-mimic");
+    let ur10 = root().join("examples/ipa-ur10/ur10.urdf");
+    let src = std::fs::read_to_string(&ur10).unwrap();
+    let mimic = "<mimic joint=\"wrist_2_joint\" multiplier=\"1\" offset=\"0\"/>";
+    let child = "<child link=\"link_6\"/>";
+    let on_chain = src.replacen(child, &format!("{child}\n    {mimic}"), 1);
+    assert_ne!(on_chain, src);
+    let fingers = "  <link name=\"finger_1\"/>\n  <link name=\"finger_2\"/>\n  \
+        <joint name=\"finger_1_joint\" type=\"prismatic\">\n    <parent link=\"flange\"/>\n    \
+        <child link=\"finger_1\"/>\n    <axis xyz=\"1 0 0\"/>\n    \
+        <limit lower=\"0\" upper=\"0.04\" effort=\"1\" velocity=\"1\"/>\n  </joint>\n  \
+        <joint name=\"finger_2_joint\" type=\"prismatic\">\n    <parent link=\"flange\"/>\n    \
+        <child link=\"finger_2\"/>\n    <axis xyz=\"-1 0 0\"/>\n    \
+        <limit lower=\"0\" upper=\"0.04\" effort=\"1\" velocity=\"1\"/>\n    \
+        <mimic joint=\"finger_1_joint\"/>\n  </joint>\n</robot>";
+    let gripper = src.replacen("</robot>", fingers, 1);
+    let (on_chain_file, gripper_file) = (d.join("mimic.urdf"), d.join("gripper.urdf"));
+    std::fs::write(&on_chain_file, on_chain).unwrap();
+    std::fs::write(&gripper_file, gripper).unwrap();
+    let q = "0.1,-0.5,0.7,-1.2,0.4,2.0";
+    let fk = |robot: &Path, tip: &[&str]| {
+        let mut args = vec!["fk", "--robot", robot.to_str().unwrap(), "--q", q];
+        args.extend(tip);
+        calbench(&args)
+    };
+    refused(
+        &fk(&on_chain_file, &[]),
+        &[
+            "mimic.urdf: line 58: joint \"wrist_3_joint\" on the chain to \"tcp\" mimics joint \
+             \"wrist_2_joint\"",
+            "--tip",
+        ],
+    );
+    let (o, want) = (fk(&gripper_file, &["--tip", "tcp"]), fk(&ur10, &[]));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.stdout, want.stdout);
+    refused(
+        &fk(&gripper_file, &["--tip", "finger_2"]),
+        &["gripper.urdf: line 87: joint \"finger_2_joint\" on the chain to \"finger_2\" mimics joint \"finger_1_joint\""],
+    );
+}

@@ -369,6 +369,24 @@ fn task_files_and_splits_that_do_not_fit_are_refused_by_name() {
             && e.contains("has 632"),
         "{e}"
     );
+    // A count far beyond what the data file can hold is refused before its rows are listed
+    // (2·10⁹ rows had taken 16 GB and 40 s before the data were read).
+    let e = refused(
+        "huge",
+        &src,
+        Some(
+            "rows 2000000000
+calibration 0-999999999
+validation 1000000000-1999999999
+",
+        ),
+    );
+    assert!(
+        e.contains("huge.split: line 1: `rows 2000000000`: ")
+            && e.contains("measurements_iso_cubes.csv is ")
+            && e.contains("bytes, too short for that many rows"),
+        "{e}"
+    );
     // A count above the data file's, with parts that cover the data's rows: the count at its
     // line, where it was "row 632 is in neither part" at no line.
     let e = refused(

@@ -186,7 +186,7 @@ pub fn trials_of(doc: &Value, path: &Path) -> Result<Option<(Trials, Option<Stri
             .map_err(Error::at_json_key_line);
     }
     let csv = trials_csv(path);
-    if csv.is_file() {
+    if crate::error::exists(&csv)? {
         Trials::read(&csv).map(|t| Some((t, None)))
     } else {
         Ok(None)
@@ -239,7 +239,7 @@ impl Side {
     /// summary, and a missing file.
     pub fn read(path: &Path) -> Result<Side> {
         let [file, _] = Side::files(path);
-        if !file.exists() {
+        if !crate::error::exists(&file)? {
             if let Some(e) = a_shard(path, "give the merged folder") {
                 return Err(e);
             }

@@ -63,6 +63,7 @@ pub fn check_summary_for(
         .at_json_key_line()
     })?;
     unknown_key(&s, &keys, path)?;
+    named_values(&s, path)?;
     // `check` and `compare` name every baseline entry an empty summary lacks; none is stored.
     if reader == figures::Reader::Record && s.results.is_empty() {
         let why = "holds no entry: every run writes one per method and pose strategy";
@@ -109,6 +110,24 @@ pub fn check_summary_for(
     figures::check_figures(path, s.trials, &figures, reader, &at)?;
     check_terminations(&s, path)?;
     Ok((s, figures))
+}
+
+/// Refuses, naming the file and the key at its line, a `measure` or a `registration` that no
+/// run writes (a summary without them, written before the keys, reads them as empty).
+fn named_values(s: &Summary, path: &Path) -> Result<()> {
+    use crate::calibrate::Registration;
+    use strum::VariantNames as _;
+    let registrations = Registration::VARIANTS;
+    for (key, value, names) in [
+        ("measure", &s.measure, &["pose", "position"][..]),
+        ("registration", &s.registration, registrations),
+    ] {
+        if !value.is_empty() && !names.contains(&value.as_str()) {
+            let why = format!("is \"{value}\", which no run writes ({})", names.join(", "));
+            return Err(Error::file(path, key, why).at_json_key_line());
+        }
+    }
+    Ok(())
 }
 
 /// The first entry of the summary `value` (its index) without one of the blocks of validation

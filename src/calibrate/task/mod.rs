@@ -336,10 +336,10 @@ impl Task {
         let d = &keys.data;
         let data = match (&d.file, &d.split, &d.calibration, &d.validation) {
             (Some(f), Some(s), None, None) => {
-                let split_path = file("data.split", s)?;
+                let (file, split_path) = (file("data.file", f)?, file("data.split", s)?);
                 TaskData::Split {
-                    file: file("data.file", f)?,
-                    split: Split::load(&split_path)?,
+                    split: Split::load(&split_path, &file)?,
+                    file,
                     split_path,
                 }
             }

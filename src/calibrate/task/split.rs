@@ -21,12 +21,19 @@ impl Split {
     /// Reads and checks a split file: a `rows N` line, then `calibration A[-B]` and
     /// `validation A[-B]` lines; `#` comments and blank lines are skipped. Each row below N
     /// lies in exactly one part and each part holds a row. A refusal names the file and line.
-    pub fn load(path: &Path) -> Result<Split> {
+    ///
+    /// The rows are listed only when the data file `data` is long enough to hold them (a row
+    /// takes two bytes at the least), so that a `rows N` written for other data is refused
+    /// before N rows are listed.
+    pub fn load(path: &Path, data: &Path) -> Result<Split> {
         let text = read_text(path)?;
-        Split::parse(path, &text)
+        let bytes = std::fs::metadata(data)
+            .map_err(|e| Error::io(data, e))?
+            .len();
+        Split::parse(path, &text, Some((data, bytes)))
     }
 
-    fn parse(path: &Path, text: &str) -> Result<Split> {
+    fn parse(path: &Path, text: &str, data: Option<(&Path, u64)>) -> Result<Split> {
         let at = |line: usize, msg: String| Error::file(path, format!("line {line}"), msg);
         let mut rows: Option<(usize, usize)> = None;
         // The ranges given so far, disjoint, by first row: (last row, line, calibration).
@@ -153,6 +160,14 @@ impl Split {
             };
             return Err(at(rows_line, why));
         }
+        if let Some((data, bytes)) = data.filter(|&(_, b)| rows as u64 > b / 2) {
+            let msg = format!(
+                "`rows {rows}`: {} is {bytes} bytes, too short for that many rows: the split \
+                 was written for other data",
+                data.display()
+            );
+            return Err(at(rows_line, msg));
+        }
         let held = |n: usize| {
             let mut v: Vec<usize> = Vec::new();
             v.try_reserve_exact(n).map(|()| v).map_err(|_| {
@@ -201,7 +216,7 @@ mod tests {
     use super::*;
 
     fn parse(text: &str) -> Result<Split> {
-        Split::parse(Path::new("t.split"), text)
+        Split::parse(Path::new("t.split"), text, None)
     }
 
     #[test]
@@ -277,8 +292,21 @@ mod tests {
         // An editor's byte-order mark is not a word (`read_text` drops it).
         let file = crate::test_dir("split-bom").join("t.split");
         std::fs::write(&file, "\u{feff}rows 3\ncalibration 0-1\nvalidation 2\n").unwrap();
-        let bom = Split::load(&file).unwrap();
+        let bom = Split::load(&file, &file).unwrap();
         assert_eq!((bom.calibration, bom.validation), (vec![0, 1], vec![2]));
+        // A data file of 9 bytes holds 4 rows at the most: 5 are refused at their line.
+        let (five, data) = (
+            file.with_file_name("t5.split"),
+            file.with_file_name("data.csv"),
+        );
+        std::fs::write(&five, "rows 5\ncalibration 0-3\nvalidation 4\n").unwrap();
+        std::fs::write(&data, "1\n2\n3\n4\n\n").unwrap();
+        let e = Split::load(&five, &data).unwrap_err().to_string();
+        assert!(
+            e.contains("t5.split: line 1: `rows 5`: ")
+                && e.contains("data.csv is 9 bytes, too short"),
+            "{e}"
+        );
         let mixed = parse("rows 6\nvalidation 5\ncalibration 2-4\nvalidation 1\ncalibration 0\n");
         let mixed = mixed.unwrap();
         assert_eq!(

@@ -16,7 +16,7 @@ use std::path::Path;
 use quick_xml::events::{BytesStart, Event};
 
 use super::{not_one_axis, OFF_CHAIN, ONE_AXIS};
-use crate::error::{line_of, read_text_whole, Error, Result};
+use crate::error::{line_of, read_text_whole, Error, Opt, Result, Said};
 use crate::numeric::{matrix_rpy, Frame, Real};
 
 /// The children of a `<joint>` that calbench reads.
@@ -46,6 +46,8 @@ struct Part {
     tag: Range<usize>,
     /// A joint's children that calbench reads, each with its name.
     children: Vec<(Range<usize>, String)>,
+    /// A joint's `<mimic>`, set aside unread: where it starts, and the joint it names.
+    mimic: Option<(usize, String)>,
 }
 
 /// Reads the URDF at `path`: what calbench reads of it as urdf-rs parses it, and its text. A
@@ -168,6 +170,7 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                         span: at..after,
                         tag: at..after,
                         children: Vec::new(),
+                        mimic: None,
                     }),
                     2 => {
                         let child = String::from_utf8_lossy(&name).into_owned();
@@ -176,6 +179,10 @@ pub(super) fn read(path: &Path) -> Result<(urdf_rs::Robot, Source)> {
                     }
                     _ => {}
                 }
+            }
+            if open.len() == 2 && parent == Some(b"joint") && name == b"mimic" {
+                let part = parts.last_mut().expect("a joint is open");
+                part.mimic = Some((at, attribute(e, b"joint").unwrap_or_default()));
             }
             if !kept && empty {
                 cuts.push(at..after);
@@ -528,6 +535,26 @@ impl Source {
             .element(i, element)
             .map_or(self.joints[i].tag.start, |s| s.start);
         line_of(&self.text, at)
+    }
+
+    /// Refuses the `i`-th joint, a moving joint of the chain to `tip`, at the line of its
+    /// `<mimic>` if it has one: calbench does not model a joint coupled to another.
+    pub(super) fn uncoupled(&self, path: &Path, i: usize, tip: &str) -> Result<()> {
+        let Some((at, other)) = &self.joints[i].mimic else {
+            return Ok(());
+        };
+        let msg = format!(
+            "joint \"{}\" on the chain to \"{tip}\" mimics joint \"{other}\": calbench reads \
+             each moving joint of the chain as a variable of its own and does not model a joint \
+             coupled to another (a parallelogram's, a gripper finger's); a tool on a finger is \
+             read with ",
+            self.joints[i].name
+        );
+        let msg = Said::from(msg)
+            .name(Opt::Tip)
+            .text(" naming a link before it");
+        let line = format!("line {}", line_of(&self.text, *at));
+        Err(Error::file(path, line, msg))
     }
 
     /// The text with the `<origin>` of the `i`-th joint set to each `(i, frame)` of

@@ -146,6 +146,10 @@ pub struct Scenario {
 /// killed.
 pub const MAX_TRIALS: usize = 1_000_000_000;
 
+/// The most points a sweep may have (docs/formats.md § 4.13): each is checked as a scenario
+/// before any trial runs, and a grid of a few lists of a thousand values each would be 10⁹.
+pub const MAX_SWEEP_POINTS: usize = 1_000_000;
+
 /// The most poses a study may draw per trial (`calibration.count`, `calibration.candidates`,
 /// `validation.count`, an instruments study's `candidates` and `validation`): more is refused
 /// when the scenario is read, not left to fail allocating them (tests/cli/memory.rs simulates

@@ -581,6 +581,18 @@ pub(super) fn check_sweep(field: SweepField) -> std::result::Result<Sweep, (Stri
                 ),
             ));
         }
+        let points = axes.iter().map(|a| a.values.len()).product::<usize>();
+        if !zip && points.saturating_mul(s.values.len()) > super::MAX_SWEEP_POINTS {
+            let most = super::MAX_SWEEP_POINTS;
+            let msg = format!(
+                "\"{}\": {} values make a grid of {} points with the axes before: at most \
+                 {most} are run",
+                s.key,
+                s.values.len(),
+                points as u128 * s.values.len() as u128
+            );
+            return Err((format!("{place}.values"), msg));
+        }
         axes.push(SweepAxis {
             key: s.key,
             values: s.values,
