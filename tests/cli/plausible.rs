@@ -504,6 +504,25 @@ fn orientations_read_with_another_convention_are_named_as_the_likely_cause() {
     let (o, _) = run(&good, "good", &[]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success() && !err.contains(convention), "{err}");
+    // IPA's Series D read about the fixed axes comes near its inverse (1.6°), which is not the
+    // fix (identified inverted it fits worse than read right): the inverse is what may be, where
+    // it was called the likely cause.
+    let series_d = d.join("series-d.csv");
+    let export = root().join("data/ipa-ur10-series-d/measurements_iso_cubes.csv");
+    let (export, out) = (path_arg(&export), path_arg(&series_d));
+    calbench_ok(&[
+        "import",
+        export,
+        "--mapping",
+        path_arg(&wrong),
+        "--out",
+        out,
+    ]);
+    let (o, _) = run(&series_d, "series-d", &[]);
+    let may = "taken as their inverses they scatter by 1.6°, so the file may hold the \
+               instrument's frame in the measured one, or another convention may come near";
+    let err = crate::common::refused(&o, &["makes the robot worse", convention, may]);
+    assert!(!err.contains("likely holds"), "{err}");
 }
 
 /// A number below the smallest 64-bit one (`1e-400`) in a robot file, a URDF, a scenario, a
