@@ -127,7 +127,7 @@ pub fn analyse(r: &RunResult) -> crate::error::Result<Summary> {
         robot: first.robot.clone(),
         trials: Some(sc.trials),
         seed: Some(sc.seed),
-        measure: if first.full_pose { "pose" } else { "position" }.into(),
+        measure: Summary::MEASURES[usize::from(first.full_pose)].into(),
         registration: sc.registration.as_str().into(),
         parameters: first.params.clone(),
         error_parameters: first.error_params.clone(),

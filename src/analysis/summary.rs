@@ -91,7 +91,7 @@ pub struct Summary {
     pub trials: Option<usize>,
     /// The seed.
     pub seed: Option<u64>,
-    /// `pose` or `position`.
+    /// `pose` or `position` ([`Summary::MEASURES`]).
     #[serde(default)]
     pub measure: String,
     /// The registration.
@@ -144,6 +144,9 @@ pub struct Summary {
 }
 
 impl Summary {
+    /// The `measure` of a run of positions, and of one of full poses.
+    pub const MEASURES: [&'static str; 2] = ["position", "pose"];
+
     /// The summary as a JSON value (object keys sorted).
     pub fn to_value(&self) -> Result<Value> {
         serde_json::to_value(self).map_err(|e| Error::Compute(e.to_string()))

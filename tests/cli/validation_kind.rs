@@ -140,22 +140,13 @@ fn residual_rows_under_a_holdout_count_the_calibration_rows() {
 
 /// A validation file without a `payload_kg` column, beside calibration rows under a payload
 /// whose compliances are identified, is refused naming the file: its poses had been predicted
-/// with no load (the simulated elasto-geometric IRB 2600 validated at 0.093 mm RMS against
-/// 0.059 mm under its 10 kg). With the payload, or with a rigid model, it is scored.
+/// with no load (trial 0 of the simulated elasto-geometric IRB 2600 validated at 0.093 mm RMS
+/// against 0.059 mm under its 10 kg). With the payload, or with a rigid model, it is scored.
 #[test]
 fn a_validation_without_the_payload_of_a_compliant_calibration_is_refused() {
     let d = tmp_dir("cli-validation-payload");
-    let sim = d.join("sim");
-    let sc = root().join("scenarios/elastogeometric.toml");
-    calbench_ok(&[
-        "simulate",
-        path_arg(&sc),
-        "--trial",
-        "0",
-        "--out",
-        path_arg(&sim),
-    ]);
-    let (data, val) = (sim.join("measurements.csv"), sim.join("validation.csv"));
+    let data = crate::plausible::simulated(&d, "scenarios/elastogeometric.toml", None);
+    let val = data.with_file_name("validation.csv");
     let text = read(&val);
     assert!(
         text.starts_with("q1,q2,q3,q4,q5,q6,x,y,z,payload_kg\n"),

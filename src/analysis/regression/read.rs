@@ -119,7 +119,7 @@ fn named_values(s: &Summary, path: &Path) -> Result<()> {
     use strum::VariantNames as _;
     let registrations = Registration::VARIANTS;
     for (key, value, names) in [
-        ("measure", &s.measure, &["pose", "position"][..]),
+        ("measure", &s.measure, &Summary::MEASURES[..]),
         ("registration", &s.registration, registrations),
     ] {
         if !value.is_empty() && !names.contains(&value.as_str()) {
