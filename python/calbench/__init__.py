@@ -131,7 +131,7 @@ def identify(
     rotations=None,
     sigma=None,
     payload=None,
-    method="lm",
+    method="ls",
     options=None,
     registration="identify",
     params=None,
@@ -161,7 +161,9 @@ def identify(
             (N, 4) ``[qw, qx, qy, qz]`` or rotation matrices (N, 3, 3).
         sigma: standard deviation of each point (N,), mm; points are weighed by 1/σ².
         payload: payload of each pose (N,), kg (elasto-geometric model).
-        method: ``ls``, ``ridge``, ``igg3``, ``lm``, ``bas``, ``pso`` or ``bas-pso``.
+        method: ``ls``, ``ridge``, ``igg3``, ``lm``, ``bas``, ``pso`` or ``bas-pso``
+            (default ``ls``, Gauss–Newton; ``lm``'s default is Guo's fixed damping μ = 1,
+            which converges linearly and on an IRB 2600 stops at its 50 iterations).
         options: dict of the method's options, the keys of a scenario's ``[[methods]]``
             entry (e.g. ``{"max_iter": 50}``; ``k`` for full poses).
         registration: ``identify``, ``svd``, ``wsvd`` or ``known`` (points in the base frame).

@@ -205,7 +205,7 @@ fn validation(
 /// `covariance`, `weights`, `residuals` and `registration_matrix`.
 #[pyfunction]
 #[pyo3(signature = (robot, q = None, points = None, rotations = None, sigma = None,
-    payload = None, data = None, method = "lm", options = None, registration = "identify",
+    payload = None, data = None, method = "ls", options = None, registration = "identify",
     compliance = None, validate = None, holdout = None, cv = None, cv_seed = None, models = None,
     params = None, fix = None, prior = None, seed = 0, allow_rank_deficient = false,
     allow_worse = false, allow_implausible = false))]

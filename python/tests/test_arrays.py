@@ -57,6 +57,39 @@ def test_precision_with_a_sweep_is_refused_naming_the_keyword_arguments(cli, roo
     assert "give --trials instead" in err and not (tmp_path / "o").exists()
 
 
+def test_the_default_method_is_gauss_newton_which_converges_where_lm_stops(root):
+    # `lm`'s default, Guo's fixed μ = 1, converges linearly: on the IRB 2600 of the Ban
+    # scenario it stops at its 50 iterations, and the default had been `lm`, so the simplest
+    # call warned of a solve that did not converge.
+    t = calbench.simulate(root / "scenarios/ban-irb2600.toml", trial=0)
+    robot = t["robot"]
+    with pytest.warns(calbench.ConvergenceWarning):
+        lm = calbench.identify(robot, t["q"], t["points"], method="lm")
+    assert lm.termination == "max-iterations" and lm.iterations == 50
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        got = calbench.identify(robot, t["q"], t["points"])
+    assert got["method"] == "ls" and got.termination == "converged", got.termination
+    assert got.iterations < 10
+    assert got == calbench.identify(robot, t["q"], t["points"], method="ls")
+
+
+def test_a_worsening_seen_only_on_validation_arrays_names_validate(trial):
+    # Calibration points of an arm with errors, validation points of the nominal one, both in
+    # the base frame: the fit improves the calibration and worsens only the validation. The
+    # refusal had named `points`, the calibration arrays, which are right.
+    robot = calbench.Robot.builtin("irb2600")
+    arm = robot.with_errors(trial["truth"])
+    validate = (trial["validation_q"], robot.fk(trial["validation_q"]))
+    with pytest.raises(calbench.SettingError) as e:
+        calbench.identify(robot, trial["q"], arm.fk(trial["q"]), method="ls",
+                          registration="known", validate=validate)
+    msg = str(e.value)
+    assert msg.startswith("setting `validate`: the identification makes the robot worse: "
+                          "the validation RMS is "), msg
+    assert msg.endswith("or pass allow_worse=True to write it with a warning"), msg
+
+
 @pytest.mark.parametrize("method", ["ls", "lm", "igg3"])
 def test_points_the_nominal_robot_fits_exactly_are_no_worsening(root, method):
     # Before and after, the residuals are the rounding of the points (about 1e-13 mm): a
@@ -188,7 +221,7 @@ def test_an_identification_that_did_not_converge_warns_as_the_command_line_does(
                                  out=tmp_path / "distance")
     for data in (tmp_path / "tracker" / "measurements.csv", distance["data"]):
         with pytest.warns(calbench.ConvergenceWarning) as caught:
-            short = calbench.identify(robot, data=data, options={"max_iter": 2})
+            short = calbench.identify(robot, data=data, method="lm", options={"max_iter": 2})
         assert short.termination == "max-iterations"
         r = cli("identify", "--robot", "irb2600", "--data", data, "--method", "lm", "--set",
                 "max_iter=2", "--out", tmp_path / "cli")

@@ -15,7 +15,7 @@ use super::request::IdentifyRequest;
 use super::validation::ErrorStats;
 use super::verdict::{
     allowing, check_names, gross_likely, gross_reading, radians_hint, worse_causes, worse_error,
-    worse_warning,
+    worse_warning, ValidationRows,
 };
 use super::Registration;
 use crate::error::{Error, Opt, Result, Said};
@@ -591,9 +591,21 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
     let validated = validation.as_ref().map(|(b, a)| (b.rms, a.rms));
     let worse = worse_causes(validated, fit.rms, r.termination, None);
     if !worse.is_empty() && !q.allow_worse {
-        let likely = radians_hint(nominal, &file.qs).or_else(|| gross().map(gross_likely));
-        let val_file = q.validate_source.as_deref();
-        return Err(worse_error(&q.source, val_file, &q.method, &worse, likely));
+        // Offsets the readings contradict are a cause the fit cannot undo, and spread the
+        // readings' error over the rest like a gross reading.
+        let offsets = || {
+            contradicted_offsets(&file.data)
+                .map(|(found, cause)| format!("{found}; likely cause: {cause}"))
+        };
+        let likely = radians_hint(nominal, &file.qs)
+            .or_else(offsets)
+            .or_else(|| gross().map(gross_likely));
+        let rows = match (q.validate_source.as_deref(), &q.validate) {
+            (Some(f), _) => ValidationRows::File(f),
+            (None, Some(_)) => ValidationRows::Given,
+            (None, None) => ValidationRows::OfData,
+        };
+        return Err(worse_error(&q.source, rows, &q.method, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);
     let mut findings = plausibility::judge(

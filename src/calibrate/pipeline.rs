@@ -23,6 +23,7 @@ use super::validation::{check_validation_rows, point_residuals, validate_file, F
 use super::verdict::{
     self, check_names, check_priors_identified, check_some_left, gross_likely, gross_reading,
     radians_hint, registration_warning, rms, worse_causes, worse_error, worse_warning,
+    ValidationRows,
 };
 use super::{calibrate, plausibility, Calibrated, RefitWeights, Registration};
 use crate::error::{Error, Opt, Result, Said};
@@ -406,10 +407,14 @@ impl IdentifyRequest {
             let likely = radians_hint(&nominal, &d.qs)
                 .or_else(convention)
                 .or_else(|| gross.clone().map(gross_likely));
-            let val_file = self.validate_source.as_deref();
+            let rows = match (&held_out, self.validate_source.as_deref()) {
+                (None, Some(f)) => ValidationRows::File(f),
+                (None, None) if val.is_some() => ValidationRows::Given,
+                _ => ValidationRows::OfData,
+            };
             return Err(worse_error(
                 &self.source,
-                val_file,
+                rows,
                 &self.method,
                 &worse,
                 likely,
@@ -432,7 +437,7 @@ impl IdentifyRequest {
         let kept_gross = verdict::gross_kept((&before, &after), &c.identified, point);
         drop((before, after));
         let priors = prior_moves(&nominal, &params, &d, &spec, &c, (registration, self.seed))?;
-        let diagnostics = diagnose(&Subject {
+        let (diagnostics, left_out) = diagnose(&Subject {
             nominal: &nominal,
             params: &params,
             data: &d,
@@ -444,6 +449,9 @@ impl IdentifyRequest {
                 .zip(validation.as_ref())
                 .map(|(v, s)| (v, s.after_mm.rms)),
         })?;
+        let spread = |l| verdict::gross_left_out(l, &c.identified, point);
+        let kept_gross = kept_gross.or_else(|| left_out.as_ref().and_then(spread));
+        drop(left_out);
         let id = &c.identified;
         let mut record =
             IdentifiedRecord::of(&nominal.name, &self.source, spec.name(), &params, id);

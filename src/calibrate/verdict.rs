@@ -309,25 +309,42 @@ fn rose(before: Real, after: Real) -> bool {
     after > before + WORSE_FLOOR_MM
 }
 
+/// Where the validation rows of an identification came from, as a refusal names them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ValidationRows<'a> {
+    /// None, or rows held out of the data identified on: the data's refusal names them.
+    OfData,
+    /// A validation file.
+    File(&'a Path),
+    /// Rows given without a file (Python's `validate` arrays): [`Opt::Validate`] names them.
+    Given,
+}
+
 /// The refusal of a result that makes the robot worse ([`worse_causes`]), read from
 /// `source` by `method`; `likely` its likely cause ([`radians_hint`], [`gross_likely`]); the
-/// refusal names the option that keeps it ([`Opt::AllowWorse`]). `validation`: the file of the
-/// validation rows, where they came from one: when their RMS rose, both files' readings are
-/// to check, and when that is the one cause (the calibration's figures did not rise) the
-/// refusal is at the validation file, naming `source` as the file identified on. A method
+/// refusal names the option that keeps it ([`Opt::AllowWorse`]). `rows`: where the
+/// validation rows came from. From a file of their own: when their RMS rose, both files'
+/// readings are to check, and when that is the one cause (the calibration's figures did not
+/// rise) the refusal is at the validation file, naming `source` as the file identified on.
+/// Given without a file, that one cause is a refusal of [`Opt::Validate`]. A method
 /// supplied from outside is named first among what to check: its result, not the readings,
 /// is the likelier cause.
 pub fn worse_error(
     source: &Path,
-    validation: Option<&Path>,
+    rows: ValidationRows<'_>,
     method: &MethodSpec,
     causes: &[Worse],
     likely: Option<String>,
 ) -> Error {
     let likely = likely.map_or(String::new(), |l| format!("; {l}"));
     let of_validation = |w: &Worse| matches!(w, Worse::Validation(..));
-    let validation = validation.filter(|_| causes.iter().any(of_validation));
-    let at_validation = validation.filter(|_| causes.iter().all(of_validation));
+    let only_validation = causes.iter().all(of_validation);
+    let file = match rows {
+        ValidationRows::File(f) => Some(f),
+        _ => None,
+    };
+    let validation = file.filter(|_| causes.iter().any(of_validation));
+    let at_validation = validation.filter(|_| only_validation);
     let on = at_validation.map_or(String::new(), |_| format!(" on {}", source.display()));
     let of = validation.map_or(String::new(), |v| {
         format!(" of {} and {}", source.display(), v.display())
@@ -346,11 +363,11 @@ pub fn worse_error(
          Check {check}",
         causes.join("; ")
     );
-    Error::file(
-        at_validation.unwrap_or(source),
-        "data",
-        way_past(msg, Opt::AllowWorse, method.is_external()),
-    )
+    let said = way_past(msg, Opt::AllowWorse, method.is_external());
+    match rows {
+        ValidationRows::Given if only_validation => Error::option(Opt::Validate, said),
+        _ => Error::file(at_validation.unwrap_or(source), "data", said),
+    }
 }
 
 /// The warning of a fit that kept a gross reading: the reading that stands out
@@ -364,10 +381,6 @@ pub fn gross_kept(
     id: &crate::identify::Identified,
     named: impl Fn(usize) -> String,
 ) -> Option<String> {
-    let weight = |i: usize| match id.own_weights {
-        true => id.weights.get(i).copied().unwrap_or(1.0),
-        false => 1.0,
-    };
     let stands_out = |residuals: &[Real], at: &'static str| {
         gross_reading(residuals)
             .filter(|&(i, _)| residuals[i].abs() > WORSE_FLOOR_MM)
@@ -375,13 +388,46 @@ pub fn gross_kept(
     };
     let (i, ratio, residual, at) =
         stands_out(after, "after").or_else(|| stands_out(before, "before"))?;
-    (weight(i) != 0.0).then(|| {
+    kept_by(id, i).then(|| {
         format!(
             "{} has a residual of {residual:.3} mm {at} calibration, {ratio:.0} times the \
-             median, and the fit kept it: one gross reading pulls a least-squares fit towards \
-             it. Check that reading and leave it out, or identify with a robust method (igg3), \
-             which rejects it",
+             median, and the fit kept it: {GROSS_PULLS}",
             named(i),
+        )
+    })
+}
+
+/// What a gross reading the fit kept does, and what to do.
+const GROSS_PULLS: &str = "one gross reading pulls a least-squares fit towards it. Check that \
+     reading and leave it out, or identify with a robust method (igg3), which rejects it";
+
+/// Whether the fit `id` gave reading `i` a weight: 0 for one a robust method rejected; a
+/// method that reports no weights weighed every reading.
+fn kept_by(id: &crate::identify::Identified, i: usize) -> bool {
+    !id.own_weights || id.weights.get(i).copied().unwrap_or(1.0) != 0.0
+}
+
+/// The warning of a gross reading the fit kept and spread, where [`gross_kept`] finds none:
+/// the most influential reading left out of the fit (`left_out`, to first order:
+/// [`crate::calibrate::diagnostics::LeftOut`]) stands out by the same rule
+/// ([`gross_reading`]) among the residuals of the fit without it, its own distance from
+/// that fit in its place. A fit of few readings per unknown moves towards one far reading
+/// until its residual is a few times the others', whose residuals it raises. `named` names
+/// the reading.
+pub fn gross_left_out(
+    left_out: &crate::calibrate::diagnostics::LeftOut,
+    id: &crate::identify::Identified,
+    named: impl Fn(usize) -> String,
+) -> Option<String> {
+    let residuals = &left_out.residuals_mm;
+    let (i, ratio) = gross_reading(residuals)
+        .filter(|&(i, _)| i == left_out.point && residuals[i] > WORSE_FLOOR_MM)?;
+    kept_by(id, i).then(|| {
+        format!(
+            "{} lies {:.3} mm from the fit of the other readings, {ratio:.0} times the median \
+             residual of that fit, and the fit kept it: {GROSS_PULLS}",
+            named(i),
+            residuals[i],
         )
     })
 }

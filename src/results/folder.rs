@@ -248,31 +248,12 @@ impl Record {
     pub(super) fn of_identify(dir: &Path) -> Result<Record> {
         let path = dir.join("identified.json");
         let document = read_text(&path)?;
-        let id = IdentifiedRecord::from_json(&document, &path)?;
-        if id.method.is_empty() {
-            return Err(Error::file(
-                &path,
-                "method",
-                "missing: not an identify output",
-            ));
-        }
+        let (id, figures) = identified(&document, &path)?;
         let scenario_text =
             serde_json::to_string(&id.settings()).map_err(|e| Error::Compute(e.to_string()))?;
         let data = Path::new(&id.data)
             .file_name()
             .map_or(String::new(), |f| f.to_string_lossy().into_owned());
-        // The figures as identified.json writes them: its numbers and validation errors.
-        let written = serde_json::to_value(&id).map_err(|e| Error::Compute(e.to_string()))?;
-        let kept: serde_json::Map<String, Value> = written
-            .as_object()
-            .into_iter()
-            .flatten()
-            .filter(|(k, v)| v.is_number() || k.starts_with("validation_"))
-            .map(|(k, v)| (k.clone(), v.clone()))
-            .collect();
-        let mut figures = Vec::new();
-        flatten(&id.method, "", &kept, None, &mut figures);
-        super::identified::check_identified(&id, &path, &figures)?;
         let name = format!("identify {} {data}", id.robot);
         let mut r = Record::new(Kind::Identify, dir, document, name, scenario_text);
         r.results.entries = vec![Entry {
@@ -328,7 +309,7 @@ impl Record {
             beside.as_ref().map(|(_, v)| (identified.as_path(), v)),
         )?;
         if let Some((text, _)) = &beside {
-            let id = IdentifiedRecord::from_json(text, &identified)?;
+            let (id, _) = self::identified(text, &identified)?;
             t.check_identified_figure(&path, &identified, id.validation_after_mm)?;
         }
         t.check_written(&path, &v)?;
@@ -422,6 +403,33 @@ impl TaskResult {
                 .collect(),
         }
     }
+}
+
+/// The identification record `text` of the file `path` (an identify folder's
+/// `identified.json`, or a task folder's beside its `task.json`), with the figures it holds
+/// (its numbers and validation errors), refused where no identification writes it
+/// ([`super::identified::check_identified`]).
+fn identified(text: &str, path: &Path) -> Result<(IdentifiedRecord, Vec<Figure>)> {
+    let id = IdentifiedRecord::from_json(text, path)?;
+    if id.method.is_empty() {
+        return Err(Error::file(
+            path,
+            "method",
+            "missing: not an identify output",
+        ));
+    }
+    let written = serde_json::to_value(&id).map_err(|e| Error::Compute(e.to_string()))?;
+    let kept: serde_json::Map<String, Value> = written
+        .as_object()
+        .into_iter()
+        .flatten()
+        .filter(|(k, v)| v.is_number() || k.starts_with("validation_"))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
+    let mut figures = Vec::new();
+    flatten(&id.method, "", &kept, None, &mut figures);
+    super::identified::check_identified(&id, path, &figures)?;
+    Ok((id, figures))
 }
 
 /// Refuses, naming the `task.json` file `path` and `validation_errors_mm`, per-row errors

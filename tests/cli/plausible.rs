@@ -279,6 +279,29 @@ fn a_multi_target_file_whose_offsets_the_readings_contradict_is_refused_unless_a
         .as_str()
         .unwrap()
         .starts_with("targets 2 and 3"));
+    // Offsets a tenth of those measured (centimetres read as millimetres): `igg3` makes the
+    // robot worse, a refusal due before the plausibility's, which names the same cause,
+    // where it had said only to check the readings.
+    let tenth = edited(&targets, &d.join("tenth.csv"), &|h, c, _| {
+        for k in ["target_x_mm", "target_y_mm", "target_z_mm"] {
+            let v: f64 = c[col(h, k)].parse().unwrap();
+            c[col(h, k)] = format!("{}", v / 10.0);
+        }
+    });
+    let out = d.join("tenth");
+    let args = ["identify", "--robot", "irb2600", "--data", path_arg(&tenth)];
+    let o = calbench(&[&args[..], &["--method", "igg3", "--out", path_arg(&out)]].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success(), "{err}");
+    for want in [
+        "makes the robot worse: the RMS residual on the calibration readings is ",
+        "targets 2 and 3 are 14.142 mm apart by their offsets but 141.4",
+        "likely cause: the offsets (target_x_mm, target_y_mm, target_z_mm) are not those of \
+         the targets measured; nothing was written",
+        "--allow-worse",
+    ] {
+        assert!(err.contains(want), "{want}: {err}");
+    }
 }
 
 #[test]

@@ -381,6 +381,45 @@ fn an_entry_of_one_given_model_is_recorded() {
     calbench_ok(&["leaderboard", "--db", path_arg(&db), "--verify"]);
 }
 
+/// The `identified.json` beside a task entry is held to what an identification writes, as
+/// an identify folder's is (docs/formats.md § 2.15): only its validation mean had been
+/// compared, and a rank above the unknowns or an error of no identified parameter was stored.
+#[test]
+fn the_identified_json_beside_an_entry_is_checked_as_an_identify_folders() {
+    let dir = tmp_dir("record-task-identified");
+    let task = small_task(&dir);
+    let out = dir.join("entry");
+    run_entry(&task, &out);
+    let file = out.join("identified.json");
+    let written = read(&file);
+    let j: serde_json::Value = serde_json::from_str(&written).unwrap();
+    let mut rank = j.clone();
+    rank["rank"] = 999.into();
+    let mut extra = j.clone();
+    extra["errors"]["zz9"] = serde_json::json!(0.0);
+    let db = dir.join("calbench.sqlite");
+    for (edited, want) in [
+        (rank, "rank: is 999, above the "),
+        (extra, "errors.zz9: is not one of the"),
+    ] {
+        std::fs::write(&file, serde_json::to_string_pretty(&edited).unwrap() + "\n").unwrap();
+        let o = record(&out, &db, &["--task", path_arg(&task)]);
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(
+            !o.status.success(),
+            "recorded an edited identified.json: {err}"
+        );
+        assert!(
+            err.contains("entry/identified.json: line ") && err.contains(want),
+            "{want}: {err}"
+        );
+        assert!(!db.exists(), "{want}: stored");
+    }
+    std::fs::write(&file, &written).unwrap();
+    let o = record(&out, &db, &["--task", path_arg(&task)]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
 /// `leaderboard --verify` finds again every value the board shows of an entry: its division,
 /// models and method in `tasks` and the published figures it stands against. An edit of
 /// those had passed it, and the board ranked the edited rows.

@@ -409,6 +409,75 @@ fn a_gross_reading_the_fit_keeps_is_warned_of() {
     );
 }
 
+/// A tracker reading 50 mm off among 30, which `ls` spreads over the rest (its residual after
+/// calibration a few times the median, too few to stand out, and the error before
+/// calibration is the arm's own, as large): the distance of its point from the fit of the
+/// other readings names it, and the result is written with the warning; `igg3` rejects the
+/// reading and warns of nothing, and the clean file warns of nothing. It had been written
+/// with no word.
+#[test]
+fn a_gross_reading_the_fit_spreads_is_warned_of() {
+    let d = tmp_dir("cli-gross-spread");
+    // The CI guard's arm without its two injected outliers (0.5 to 1 mm, themselves gross
+    // readings against its 15 µm noise).
+    let scenario = d.join("no-outliers.toml");
+    let guard = read(&crate::common::root().join("scenarios/ci-guard.toml"));
+    let no_outliers = guard.replace("[outliers]\ncount = 2\n", "[outliers]\ncount = 0\n");
+    assert_ne!(guard, no_outliers);
+    std::fs::write(&scenario, no_outliers).unwrap();
+    let sim = d.join("sim");
+    calbench_ok(&["simulate", path_arg(&scenario), "--out", path_arg(&sim)]);
+    let text = read(&sim.join("measurements.csv"));
+    let mut lines: Vec<String> = text.lines().take(31).map(str::to_string).collect();
+    let clean = d.join("clean.csv");
+    std::fs::write(&clean, lines.join("\n") + "\n").unwrap();
+    let mut cells: Vec<String> = lines[15].split(',').map(str::to_string).collect();
+    cells[6] = (cells[6].parse::<f64>().unwrap() + 50.0).to_string();
+    lines[15] = cells.join(",");
+    let bad = d.join("gross.csv");
+    std::fs::write(&bad, lines.join("\n") + "\n").unwrap();
+    let identify = |file: &Path, method: &str| {
+        let out = d.join(format!(
+            "out-{method}-{}",
+            file.file_stem().unwrap().to_string_lossy()
+        ));
+        let args = ["identify", "--robot", "irb2600", "--data", path_arg(file)];
+        let o = calbench(&[&args[..], &["--method", method, "--out", path_arg(&out)]].concat());
+        let err = String::from_utf8_lossy(&o.stderr).to_string();
+        assert!(o.status.success(), "{method}: {err}");
+        (err, out)
+    };
+    // docs/formats.md § 8.5 gives this warning and the 9.8 times of the residual after.
+    let said = format!(
+        "warning: the point on line 16 of {} lies 49.961 mm from the fit of the other \
+         readings, 332 times the median residual of that fit, and the fit kept it: one gross \
+         reading pulls a least-squares fit towards it. Check that reading and leave it out, or \
+         identify with a robust method (igg3), which rejects it\n",
+        bad.display()
+    );
+    let (err, out) = identify(&bad, "ls");
+    assert!(err.contains(&said), "{err}");
+    let residuals = read(&out.join("residuals.csv"));
+    let mut after: Vec<f64> = residuals
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').nth(2).unwrap().parse().unwrap())
+        .collect();
+    let gross = after[14];
+    after.sort_by(f64::total_cmp);
+    let ratio = gross / after[after.len() / 2];
+    assert!((9.75..9.85).contains(&ratio), "{ratio}");
+    assert!(read(&out.join("report.md")).contains("line 16 of"));
+    for (file, method) in [(&bad, "igg3"), (&clean, "ls"), (&clean, "lm")] {
+        let (err, _) = identify(file, method);
+        assert!(
+            !err.contains("warning"),
+            "{method} {}: {err}",
+            file.display()
+        );
+    }
+}
+
 /// A search's box of 1e20 mm, its worse and implausible result kept: the robot identified
 /// has lengths no robot file holds, and is refused naming the value's place; it had been
 /// written as a `robot.toml` that `fk` then refused.
