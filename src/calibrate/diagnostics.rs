@@ -205,26 +205,6 @@ pub fn diagnose(s: &Subject) -> Result<(Diagnostics, Option<LeftOut>)> {
             suspect = Some((i, cook, v.fixed_rows::<3>(0).norm()));
         }
     });
-    let left_out = suspect.map(|(point, _, distance)| {
-        let mut residuals_mm = Vec::with_capacity(m);
-        let mut moved = DVector::zeros(0);
-        by_blocks(&rp, &id.x, |points, r, j| {
-            if moved.len() != r.len() {
-                moved = DVector::zeros(r.len());
-            }
-            moved.copy_from(r);
-            moved.gemv(1.0, j, &delta, 1.0);
-            for k in 0..points.len() {
-                let at = moved.rows(k * rows, rows.min(3));
-                residuals_mm.push(at.norm());
-            }
-        });
-        residuals_mm[point] = distance;
-        LeftOut {
-            point,
-            residuals_mm,
-        }
-    });
     let mut order: Vec<usize> = (0..m).collect();
     order.sort_by(|&a, &b| {
         let key = |i: usize| -> Real {
@@ -246,6 +226,28 @@ pub fn diagnose(s: &Subject) -> Result<(Diagnostics, Option<LeftOut>)> {
             cook: cook_distance[row],
         })
         .collect();
+    // The order's memory (a word a point) serves the pass without the suspect.
+    drop(order);
+    let left_out = suspect.map(|(point, _, distance)| {
+        let mut residuals_mm = Vec::with_capacity(m);
+        let mut moved = DVector::zeros(0);
+        by_blocks(&rp, &id.x, |points, r, j| {
+            if moved.len() != r.len() {
+                moved = DVector::zeros(r.len());
+            }
+            moved.copy_from(r);
+            moved.gemv(1.0, j, &delta, 1.0);
+            for k in 0..points.len() {
+                let at = moved.rows(k * rows, rows.min(3));
+                residuals_mm.push(at.norm());
+            }
+        });
+        residuals_mm[point] = distance;
+        LeftOut {
+            point,
+            residuals_mm,
+        }
+    });
     let predicted = predicted_sigma(s, &cov)?;
     let diagnostics = Diagnostics {
         sigma,

@@ -449,9 +449,10 @@ impl IdentifyRequest {
                 .zip(validation.as_ref())
                 .map(|(v, s)| (v, s.after_mm.rms)),
         })?;
-        let spread = |l| verdict::gross_left_out(l, &c.identified, point);
-        let kept_gross = kept_gross.or_else(|| left_out.as_ref().and_then(spread));
-        drop(left_out);
+        let kept_gross = match (kept_gross, left_out) {
+            (None, Some(l)) => verdict::gross_left_out(l, &c.identified, point),
+            (kept, _) => kept,
+        };
         let id = &c.identified;
         let mut record =
             IdentifiedRecord::of(&nominal.name, &self.source, spec.name(), &params, id);

@@ -207,19 +207,25 @@ pub const GROSS_RATIO: Real = 20.0;
 /// largest, when it is at least [`GROSS_RATIO`] times the median and the next largest is
 /// not (one reading, not a drift); its index and its ratio to the median.
 pub fn gross_reading(residuals: &[Real]) -> Option<(usize, Real)> {
-    let mut sorted: Vec<Real> = residuals.iter().map(|r| r.abs()).collect();
-    if sorted.len() < 5 || sorted.iter().any(|r| !r.is_finite()) {
+    let (top, ratio) = standing_out(residuals.iter().map(|r| r.abs()).collect())?;
+    let i = residuals.iter().position(|r| r.abs() == top)?;
+    Some((i, ratio))
+}
+
+/// The largest of `magnitudes` and its ratio to their median, when it stands out by
+/// [`gross_reading`]'s rule; sorts them in place.
+fn standing_out(mut magnitudes: Vec<Real>) -> Option<(Real, Real)> {
+    if magnitudes.len() < 5 || magnitudes.iter().any(|r| !r.is_finite()) {
         return None;
     }
-    sorted.sort_by(Real::total_cmp);
-    let median = sorted[sorted.len() / 2];
-    let (top, next) = (sorted[sorted.len() - 1], sorted[sorted.len() - 2]);
+    magnitudes.sort_by(Real::total_cmp);
+    let n = magnitudes.len();
+    let (median, top, next) = (magnitudes[n / 2], magnitudes[n - 1], magnitudes[n - 2]);
     let ratio = top / median;
     if median <= 0.0 || ratio < GROSS_RATIO || next >= top / 2.0 {
         return None;
     }
-    let i = residuals.iter().position(|r| r.abs() == top)?;
-    Some((i, ratio))
+    Some((top, ratio))
 }
 
 /// A rise of an RMS error below this (mm, a picometre) is no worsening: the rounding of points
@@ -413,21 +419,20 @@ fn kept_by(id: &crate::identify::Identified, i: usize) -> bool {
 /// ([`gross_reading`]) among the residuals of the fit without it, its own distance from
 /// that fit in its place. A fit of few readings per unknown moves towards one far reading
 /// until its residual is a few times the others', whose residuals it raises. `named` names
-/// the reading.
+/// the reading. The residuals are sorted in place: a file of millions of points holds them
+/// once.
 pub fn gross_left_out(
-    left_out: &crate::calibrate::diagnostics::LeftOut,
+    left_out: crate::calibrate::diagnostics::LeftOut,
     id: &crate::identify::Identified,
     named: impl Fn(usize) -> String,
 ) -> Option<String> {
-    let residuals = &left_out.residuals_mm;
-    let (i, ratio) = gross_reading(residuals)
-        .filter(|&(i, _)| i == left_out.point && residuals[i] > WORSE_FLOOR_MM)?;
-    kept_by(id, i).then(|| {
+    let (i, distance) = (left_out.point, left_out.residuals_mm[left_out.point]);
+    let (top, ratio) = standing_out(left_out.residuals_mm)?;
+    (top == distance && distance > WORSE_FLOOR_MM && kept_by(id, i)).then(|| {
         format!(
-            "{} lies {:.3} mm from the fit of the other readings, {ratio:.0} times the median \
-             residual of that fit, and the fit kept it: {GROSS_PULLS}",
+            "{} lies {distance:.3} mm from the fit of the other readings, {ratio:.0} times the \
+             median residual of that fit, and the fit kept it: {GROSS_PULLS}",
             named(i),
-            residuals[i],
         )
     })
 }
