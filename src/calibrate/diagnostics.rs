@@ -262,9 +262,9 @@ pub fn diagnose(s: &Subject) -> Result<(Diagnostics, Option<LeftOut>)> {
 }
 
 /// Calls `f(i, r_i, H_i, A_i)` for each point `i` of `p` at `x`, in order, with its residual
-/// rows and `H_i = J_i M J_iᵀ`, both padded to 6 rows with zeros, and its rows `A_i = J_i M`. The rows are evaluated
-/// block by block ([`by_blocks`]), and `J M` is formed once a block: memory stays bounded for
-/// files of millions of rows, and nothing is allocated per point.
+/// rows and `H_i = J_i M J_iᵀ`, both padded to 6 rows with zeros, and its rows `A_i = J_i M`.
+/// The rows are evaluated block by block ([`by_blocks`]), and `J M` is formed once a block:
+/// memory stays bounded for files of millions of rows, and nothing is allocated per point.
 fn by_points(
     p: &dyn LeastSquares,
     x: &DVector<Real>,
@@ -362,7 +362,7 @@ mod tests {
         let nominal = crate::robot::builtin::load("irb2600").unwrap();
         let (data, params) = one_gross_point(&nominal, &nominal);
         let method = crate::identify::method_by_name("ls").unwrap();
-        let (_, d) = fit_and_diagnose(&nominal, &params, &data, &method, 100.0);
+        let (_, d, _) = fit_and_diagnose(&nominal, &params, &data, &method, 100.0);
         let sum: Real = d.leverage.iter().sum();
         assert!((sum - params.len() as Real).abs() < 1e-6, "{sum}");
         assert_eq!(d.top_points[0].row, 13);
@@ -400,20 +400,8 @@ mod tests {
     }
 
     /// `data` calibrated by `method` in a known frame, and its diagnostics at orientation
-    /// weight `k`.
+    /// weight `k` with the fit without its most influential point ([`diagnose`]).
     fn fit_and_diagnose(
-        nominal: &Robot,
-        params: &[Param],
-        data: &Measurements,
-        method: &crate::identify::MethodSpec,
-        k: Real,
-    ) -> (Calibrated, Diagnostics) {
-        let (c, d, _) = fit_and_diagnose_left_out(nominal, params, data, method, k);
-        (c, d)
-    }
-
-    /// [`fit_and_diagnose`], with each point's residual were it left out ([`diagnose`]).
-    fn fit_and_diagnose_left_out(
         nominal: &Robot,
         params: &[Param],
         data: &Measurements,
@@ -455,13 +443,13 @@ mod tests {
         let truth = nominal.with_errors(&[(Param::A(1), 0.4), (Param::D(3), -0.3)]);
         let (data, params) = one_gross_point(&nominal, &truth);
         let method = crate::identify::method_by_name("ls").unwrap();
-        let (c, _, left_out) = fit_and_diagnose_left_out(&nominal, &params, &data, &method, 1.0);
+        let (c, _, left_out) = fit_and_diagnose(&nominal, &params, &data, &method, 1.0);
         let left_out = left_out.unwrap();
         assert_eq!(left_out.point, 13);
         let mut without = data.clone();
         without.qs.remove(13);
         without.points.remove(13);
-        let (refit, _) = fit_and_diagnose(&nominal, &params, &without, &method, 1.0);
+        let (refit, _, _) = fit_and_diagnose(&nominal, &params, &without, &method, 1.0);
         let residual =
             |c: &Calibrated, i: usize| (data.points[i] - c.robot.fk(&data.qs[i]).pos).norm();
         for i in 0..data.len() {
@@ -518,7 +506,7 @@ mod tests {
         )
         .unwrap();
         let frame = crate::numeric::Frame::identity();
-        let (c, d) = fit_and_diagnose(&nominal, &params, &data, &spec, 1.0);
+        let (c, d, _) = fit_and_diagnose(&nominal, &params, &data, &spec, 1.0);
         let id = &c.identified;
         let w = id.row_weights.clone().expect("row weights");
         assert_eq!(w.iter().filter(|&&v| v == 0.0).count(), 1);

@@ -15,7 +15,7 @@ use super::request::IdentifyRequest;
 use super::validation::ErrorStats;
 use super::verdict::{
     allowing, check_names, gross_likely, gross_reading, radians_hint, worse_causes, worse_error,
-    worse_warning, ValidationRows,
+    worse_warning,
 };
 use super::Registration;
 use crate::error::{Error, Opt, Result, Said};
@@ -600,11 +600,7 @@ pub(super) fn kind_outcome(q: &IdentifyRequest, file: &KindFile) -> Result<KindO
         let likely = radians_hint(nominal, &file.qs)
             .or_else(offsets)
             .or_else(|| gross().map(gross_likely));
-        let rows = match (q.validate_source.as_deref(), &q.validate) {
-            (Some(f), _) => ValidationRows::File(f),
-            (None, Some(_)) => ValidationRows::Given,
-            (None, None) => ValidationRows::OfData,
-        };
+        let rows = q.validation_rows();
         return Err(worse_error(&q.source, rows, &q.method, &worse, likely));
     }
     let points = plausibility::target_points(nominal, &file.qs, &file.data);

@@ -407,10 +407,9 @@ impl IdentifyRequest {
             let likely = radians_hint(&nominal, &d.qs)
                 .or_else(convention)
                 .or_else(|| gross.clone().map(gross_likely));
-            let rows = match (&held_out, self.validate_source.as_deref()) {
-                (None, Some(f)) => ValidationRows::File(f),
-                (None, None) if val.is_some() => ValidationRows::Given,
-                _ => ValidationRows::OfData,
+            let rows = match held_out {
+                Some(_) => ValidationRows::OfData,
+                None => self.validation_rows(),
             };
             return Err(worse_error(
                 &self.source,

@@ -7,6 +7,7 @@
 use std::path::PathBuf;
 
 use super::cv::{CrossValidation, Holdout, Model};
+use super::verdict::ValidationRows;
 use super::Registration;
 use crate::identify::MethodSpec;
 use crate::measurement::kind_csv::KindFile;
@@ -145,6 +146,16 @@ impl IdentifyRequest {
     pub(super) fn file_row(&self, cal: Option<&[usize]>, i: usize) -> usize {
         let i = cal.map_or(i, |cal| cal[i]);
         self.data_rows.as_ref().map_or(i, |rows| rows[i])
+    }
+
+    /// Where the rows of [`Self::validate`] came from, as a refusal names them: its file, the
+    /// arrays of a caller that gave no file, or none.
+    pub(super) fn validation_rows(&self) -> ValidationRows<'_> {
+        match (self.validate_source.as_deref(), &self.validate) {
+            (Some(f), _) => ValidationRows::File(f),
+            (None, Some(_)) => ValidationRows::Given,
+            (None, None) => ValidationRows::OfData,
+        }
     }
 
     /// The point of row `i` of the validation file ([`Self::validate`]) in words: by its line
